@@ -1,0 +1,268 @@
+"""Physical parameters of the Alpes hand: loading and validation of the TOML parameter file.
+
+The shipped file ``alpes_dyn/data/alpes_hand.toml`` holds the report's Table 1.2 (``source =
+"report"``) and, marked ``source = "assumed"`` with a one-line reason each, every value the report
+does not give. :func:`load_params` validates it; any defect is a :class:`~alpes_dyn.ModelError`
+that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from .errors import ModelError
+
+__all__ = ["Param", "ChainParams", "HandParams", "load_params", "default_params_path"]
+
+# field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
+_SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
+    "finger": {
+        "L": (3, "pos"), "s": (3, "pos"), "m": (3, "pos"), "I": (3, "pos"), "r": (None, "pos"),
+        "K": (3, "nonneg"), "b": (None, "nonneg"), "radius": (None, "pos"),
+        "lower": (None, "any"), "upper": (None, "any"),
+    },
+    "thumb": {
+        "L": (2, "pos"), "s": (2, "pos"), "m": (2, "pos"), "I": (2, "pos"), "K": (2, "nonneg"),
+        "radius": (None, "pos"), "base_mass": (None, "pos"), "abduction_K": (None, "nonneg"), "abduction_axis": (3, "unit"),
+        "abduction_lower": (None, "any"), "abduction_upper": (None, "any"),
+    },
+    "palm": {
+        "finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"),
+        "thumb_xyz": (3, "any"), "thumb_yaw": (None, "any"),
+    },
+    "transmission": {
+        "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
+        "N": (None, "pos"), "encoder_counts": (None, "pos"),
+    },
+    "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
+    "environment": {"gravity": (3, "any")},
+}
+_ENTRY_KEYS = {"value", "unit", "source", "reason", "description"}
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: its value, unit, provenance (``report`` or ``assumed``) and, if assumed, why."""
+
+    value: Any
+    unit: str
+    source: str
+    reason: str = ""
+    description: str = ""
+
+
+@dataclass(frozen=True)
+class ChainParams:
+    """A serial planar chain of phalanges (a finger or the thumb's flexion chain).
+
+    Arrays have one entry per phalanx, proximal first. Units: m, kg, kg m^2, N m/rad.
+    ``I`` is the inertia about the phalanx's own (proximal) joint axis, as in the report's table;
+    ``I_com = I - m d^2`` with ``d = L - s`` the COM distance to that joint.
+    """
+
+    L: np.ndarray
+    s: np.ndarray
+    m: np.ndarray
+    I: np.ndarray
+    K: np.ndarray
+    radius: float
+
+    @property
+    def n(self) -> int:
+        """Number of phalanges."""
+        return int(self.L.shape[0])
+
+    @property
+    def com_from_joint(self) -> np.ndarray:
+        """Distance d_i = L_i - s_i from joint i to the COM of phalanx i (m)."""
+        return self.L - self.s
+
+    @property
+    def I_com(self) -> np.ndarray:
+        """Inertia about the COM, perpendicular to the phalanx: I_i - m_i d_i^2 (kg m^2)."""
+        return self.I - self.m * self.com_from_joint**2
+
+
+@dataclass(frozen=True)
+class HandParams:
+    """All parameters of the hand, as loaded from a parameter file.
+
+    ``raw`` keeps every :class:`Param` (with its unit, source and reason) by ``"section.field"``.
+    """
+
+    finger: ChainParams
+    thumb: ChainParams
+    r: float
+    b: float
+    r_m: float
+    J_m: float
+    N: float
+    abduction_ratio: float
+    encoder_counts: float
+    F_s: float
+    F_v: float
+    smooth_velocity: float
+    gravity: np.ndarray
+    finger_lower: float
+    finger_upper: float
+    abduction_K: float
+    thumb_base_mass: float
+    abduction_axis: np.ndarray
+    abduction_lower: float
+    abduction_upper: float
+    finger_names: tuple[str, ...]
+    finger_xy: np.ndarray  # (4, 2)
+    thumb_xyz: np.ndarray
+    thumb_yaw: float
+    path: str = ""
+    raw: dict[str, Param] = field(default_factory=dict, repr=False)
+
+    @property
+    def transmission_ratio(self) -> float:
+        """Pulley to motor-shaft ratio r / r_m of the tendon transmission (Section 3)."""
+        return self.r / self.r_m
+
+    def assumptions(self) -> list[tuple[str, Param]]:
+        """The parameters the report does not give, with their reasons, in file order."""
+        return [(k, p) for k, p in self.raw.items() if p.source == "assumed"]
+
+
+def default_params_path() -> Path:
+    """Path of the parameter file shipped with the package."""
+    return Path(str(resources.files("alpes_dyn") / "data" / "alpes_hand.toml"))
+
+
+def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
+    if kind == "str":
+        if not (isinstance(value, list) and len(value) == length and all(isinstance(v, str) and v for v in value)):
+            raise ModelError(f"{name}: value must be a list of {length} non-empty strings (got {value!r})")
+        if len(set(value)) != len(value):
+            raise ModelError(f"{name}: names must be unique (got {value!r})")
+        return tuple(value)
+    if length is None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ModelError(f"{name}: value must be a number (got {value!r})")
+        arr = np.array([float(value)])
+    else:
+        if not isinstance(value, list) or len(value) != length:
+            raise ModelError(f"{name}: value must be a list of {length} numbers (got {value!r})")
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
+            raise ModelError(f"{name}: value must be a list of {length} numbers (got {value!r})")
+        arr = np.array(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"{name}: value must be finite (got {value!r})")
+    if kind == "pos" and np.any(arr <= 0):
+        i = int(np.argmax(arr <= 0))
+        raise ModelError(f"{name}: value must be > 0 (got {arr[i]:g} at index {i})")
+    if kind == "nonneg" and np.any(arr < 0):
+        i = int(np.argmax(arr < 0))
+        raise ModelError(f"{name}: value must be >= 0 (got {arr[i]:g} at index {i})")
+    if kind == "unit" and not math.isclose(float(np.linalg.norm(arr)), 1.0, rel_tol=1e-9):
+        raise ModelError(f"{name}: value must be a unit vector (norm {np.linalg.norm(arr):g})")
+    return float(arr[0]) if length is None else arr
+
+
+def _parse(data: dict[str, Any]) -> dict[str, Param]:
+    out: dict[str, Param] = {}
+    for section in data:
+        if section not in _SCHEMA:
+            raise ModelError(f"{section}: unknown section (expected one of {', '.join(_SCHEMA)})")
+    for section, fields in _SCHEMA.items():
+        if section not in data:
+            raise ModelError(f"{section}: missing section")
+        table = data[section]
+        if not isinstance(table, dict):
+            raise ModelError(f"{section}: must be a table")
+        for key in table:
+            if key not in fields:
+                raise ModelError(f"{section}.{key}: unknown key (expected one of {', '.join(fields)})")
+        for key, (length, kind) in fields.items():
+            name = f"{section}.{key}"
+            if key not in table:
+                raise ModelError(f"{name}: missing field")
+            entry = table[key]
+            if not isinstance(entry, dict):
+                raise ModelError(f"{name}: must be a table with value, unit, source")
+            for k in entry:
+                if k not in _ENTRY_KEYS:
+                    raise ModelError(f"{name}.{k}: unknown key (expected one of {', '.join(sorted(_ENTRY_KEYS))})")
+            for k in ("value", "unit", "source"):
+                if k not in entry:
+                    raise ModelError(f"{name}.{k}: missing field")
+            source = entry["source"]
+            if source not in ("report", "assumed"):
+                raise ModelError(f"{name}.source: must be 'report' or 'assumed' (got {source!r})")
+            reason = entry.get("reason", "")
+            if source == "assumed" and not (isinstance(reason, str) and reason.strip()):
+                raise ModelError(f"{name}.reason: an assumed value needs a one-line reason")
+            value = _check_value(name, entry["value"], length, kind)
+            out[name] = Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")))
+    return out
+
+
+def _chain(raw: dict[str, Param], sec: str, K: np.ndarray) -> ChainParams:
+    L, s, m, I = (raw[f"{sec}.{k}"].value for k in ("L", "s", "m", "I"))
+    if np.any(s > L):
+        i = int(np.argmax(s > L))
+        raise ModelError(f"{sec}.s: COM distance s must not exceed L (s={s[i]:g} > L={L[i]:g} at index {i})")
+    d = L - s
+    I_com = I - m * d**2
+    if np.any(I_com <= 0):
+        i = int(np.argmax(I_com <= 0))
+        raise ModelError(
+            f"{sec}.I: not physically consistent: I about the joint must exceed m d^2 = {m[i] * d[i] ** 2:.4g} "
+            f"(parallel-axis theorem, d = L - s) but is {I[i]:.4g} at index {i}"
+        )
+    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=raw[f"{sec}.radius"].value)
+
+
+def load_params(path: str | Path | None = None) -> HandParams:
+    """Load and validate a parameter file.
+
+    Parameters
+    ----------
+    path:
+        TOML file; ``None`` loads the shipped ``alpes_hand.toml``.
+
+    Raises
+    ------
+    ModelError
+        Unreadable file, TOML syntax error, missing or unknown section/field, wrong length, a
+        non-positive length or mass, or an inertia that violates the parallel-axis theorem.
+    """
+    p = Path(path) if path is not None else default_params_path()
+    try:
+        text = p.read_text()
+    except OSError as exc:
+        raise ModelError(f"parameter file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelError(f"parameter file {str(p)!r}: invalid TOML ({exc})") from None
+    raw = _parse(data)
+    v = {k: prm.value for k, prm in raw.items()}
+    if v["finger.lower"] >= v["finger.upper"]:
+        raise ModelError("finger.lower: must be below finger.upper")
+    if v["thumb.abduction_lower"] >= v["thumb.abduction_upper"]:
+        raise ModelError("thumb.abduction_lower: must be below thumb.abduction_upper")
+    return HandParams(
+        finger=_chain(raw, "finger", v["finger.K"]),
+        thumb=_chain(raw, "thumb", v["thumb.K"]),
+        r=v["finger.r"], b=v["finger.b"], r_m=v["transmission.r_m"], J_m=v["transmission.J_m"],
+        N=v["transmission.N"], abduction_ratio=v["transmission.abduction_ratio"],
+        encoder_counts=v["transmission.encoder_counts"],
+        F_s=v["friction.F_s"], F_v=v["friction.F_v"], smooth_velocity=v["friction.smooth_velocity"],
+        gravity=v["environment.gravity"], finger_lower=v["finger.lower"], finger_upper=v["finger.upper"],
+        abduction_K=v["thumb.abduction_K"], thumb_base_mass=v["thumb.base_mass"], abduction_axis=v["thumb.abduction_axis"],
+        abduction_lower=v["thumb.abduction_lower"], abduction_upper=v["thumb.abduction_upper"],
+        finger_names=v["palm.finger_names"],
+        finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
+        thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=str(p), raw=raw,
+    )

@@ -1,0 +1,204 @@
+"""Symbolic (CasADi) dynamics of a :class:`~alpes_dyn.Model`, from the same URDF and extras.
+
+One small interface, two backends:
+
+* ``pinocchio.casadi`` (Pinocchio's CRBA/RNEA templated on ``casadi.SX``) whenever it imports --
+  it is not in the ``pin`` wheels on PyPI (pinocchio issues #2578, #2759);
+* otherwise ``adam-robotics``' CasADi backend on the model's URDF string, fixed base: the joint
+  block of its floating-base mass matrix and bias force at identity base pose and zero base
+  velocity, with the model's gravity (ADAM's default is 9.80665 m/s^2; Pinocchio's 9.81).
+
+Both give A(q) (without rotor inertia), the bias b(q, qd) = C(q, qd) qd + gravity torque, and
+tip positions/Jacobians. The extras (springs, friction, rotor inertia) are applied here once,
+through :class:`~alpes_dyn.extras.JointExtras` with ``xp=casadi``, exactly as the numeric model
+applies them with ``xp=numpy``. Forward dynamics solves eq. 3.3 block by block: the mass matrix
+of a fixed-base tree is block diagonal over the branches from the root (one per finger), and each
+block is solved on its own, which keeps the expressions of the 15-DoF hand small.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from .errors import ModelError
+from .model import Model
+
+__all__ = ["SymbolicDynamics", "available_backends", "block_solve"]
+
+
+def available_backends() -> tuple[str, ...]:
+    """Symbolic backends importable here, preferred first."""
+    out = []
+    try:
+        import pinocchio.casadi  # noqa: F401
+
+        out.append("pinocchio.casadi")
+    except ImportError:
+        pass
+    try:
+        import adam.casadi  # noqa: F401
+
+        out.append("adam")
+    except ImportError:
+        pass
+    return tuple(out)
+
+
+def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
+    """Solve M x = b for a symbolic M, block by block over its structural strongly connected components."""
+    n = M.shape[0]
+    nb, perm, offsets = M.sparsity().scc()
+    if nb <= 1:
+        return cs.solve(M, b)
+    x = [None] * n
+    for k in range(nb):
+        rows = list(perm[offsets[k]:offsets[k + 1]])
+        xs = cs.solve(M[rows, rows], b[rows])
+        for i, r in enumerate(rows):
+            x[r] = xs[i]
+    return cs.vertcat(*x)
+
+
+class _Adam:
+    name = "adam"
+
+    def __init__(self, model: Model) -> None:
+        from adam.casadi import KinDynComputations
+
+        g6 = np.concatenate([model.gravity, np.zeros(3)])
+        try:
+            self.kd = KinDynComputations(model.urdf, list(model.joint_names), gravity=g6)
+        except Exception as exc:  # adam raises assorted errors on bad URDFs
+            raise ModelError(f"URDF could not be loaded by ADAM: {str(exc).splitlines()[0] if str(exc) else exc}") from None
+        self.H = cs.SX.eye(4)
+        self.vb = cs.SX.zeros(6)
+
+    def mass_matrix(self, q: cs.SX) -> cs.SX:
+        return self.kd.mass_matrix(self.H, q)[6:, 6:]
+
+    def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
+        return self.kd.bias_force(self.H, q, self.vb, v)[6:]
+
+    def gravity(self, q: cs.SX) -> cs.SX:
+        return self.kd.gravity_term(self.H, q)[6:]
+
+    def tip_position(self, q: cs.SX, frame: str) -> cs.SX:
+        return self.kd.forward_kinematics(frame, self.H, q)[:3, 3]
+
+
+
+class _PinCasadi:  # pragma: no cover - pinocchio.casadi is not in the PyPI wheels used in CI
+    name = "pinocchio.casadi"
+
+    def __init__(self, model: Model) -> None:
+        import pinocchio as pin
+        import pinocchio.casadi as cpin
+
+        self.pin, self.cpin = pin, cpin
+        m = model.pin_model.copy()
+        m.armature[:] = 0.0
+        self.cmodel = cpin.Model(m)
+        self.cdata = self.cmodel.createData()
+        self.frames = {f.name: i for i, f in enumerate(m.frames)}
+
+    def mass_matrix(self, q: cs.SX) -> cs.SX:
+        M = self.cpin.crba(self.cmodel, self.cdata, q)
+        return cs.triu(M) + cs.triu(M, False).T
+
+    def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
+        return self.cpin.nonLinearEffects(self.cmodel, self.cdata, q, v)
+
+    def gravity(self, q: cs.SX) -> cs.SX:
+        return self.cpin.computeGeneralizedGravity(self.cmodel, self.cdata, q)
+
+    def tip_position(self, q: cs.SX, frame: str) -> cs.SX:
+        self.cpin.framesForwardKinematics(self.cmodel, self.cdata, q)
+        return self.cdata.oMf[self.frames[frame]].translation
+
+
+class SymbolicDynamics:
+    """CasADi SX expressions of a model's dynamics (eq. 2.10, 3.3).
+
+    Parameters
+    ----------
+    model:
+        The numeric model; its URDF, gravity and extras are reused as they are.
+    backend:
+        ``"auto"`` (``pinocchio.casadi`` if it imports, else ``"adam"``), ``"adam"`` or
+        ``"pinocchio.casadi"``.
+
+    Every method takes ``casadi.SX`` columns (q, v, tau of length n) and returns SX.
+    """
+
+    def __init__(self, model: Model, backend: str = "auto") -> None:
+        have = available_backends()
+        if backend == "auto":
+            if not have:
+                raise ModelError("no symbolic backend: install adam-robotics (or a pinocchio with casadi)")
+            backend = have[0]
+        if backend not in ("adam", "pinocchio.casadi"):
+            raise ModelError(f"unknown symbolic backend {backend!r} (expected auto, adam or pinocchio.casadi)")
+        if backend not in have:
+            raise ModelError(f"symbolic backend {backend!r} is not importable here (have: {', '.join(have) or 'none'})")
+        self.model = model
+        self.n = model.n
+        self._be: Any = _PinCasadi(model) if backend == "pinocchio.casadi" else _Adam(model)
+        self.backend: str = self._be.name
+        self.extras = model.extras
+
+    def _tip(self, tip: str | None) -> str:
+        self.model.frame_id(tip)  # validates
+        return tip if tip is not None else self.model.tips[0]
+
+    def inertia_matrix(self, q: cs.SX) -> cs.SX:
+        """A(q) + I_a (n, n): the rigid-body mass matrix plus rotor inertia N^2 J_m (eq. 2.8)."""
+        M = self._be.mass_matrix(q)
+        if np.any(self.extras.armature != 0):
+            M = M + cs.diag(cs.DM(self.extras.armature))
+        return M
+
+    def bias_torque(self, q: cs.SX, v: cs.SX) -> cs.SX:
+        """C(q, qd) qd + gravity torque (no springs), (n,)."""
+        return self._be.bias(q, v)
+
+    def gravity_torque(self, q: cs.SX) -> cs.SX:
+        """G(q) of eq. 2.11: gravity plus springs, (n,)."""
+        return self._be.gravity(q) + self.extras.spring_torque(q, cs)
+
+    def fingertip_position(self, q: cs.SX, tip: str | None = None) -> cs.SX:
+        """Tip position in the base frame, (3,)."""
+        return self._be.tip_position(q, self._tip(tip))
+
+    def fingertip_jacobian(self, q: cs.SX, tip: str | None = None) -> cs.SX:
+        """Linear Jacobian of a tip in the base frame, (3, n) (Section 2.2), by AD of its position."""
+        if not isinstance(q, cs.SX) or not q.is_valid_input():
+            qs = cs.SX.sym("q", self.n)
+            J = cs.jacobian(self.fingertip_position(qs, tip), qs)
+            return cs.substitute(J, qs, q)
+        return cs.jacobian(self.fingertip_position(q, tip), q)
+
+    def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, F: Any = None, tip: str | None = None,
+                         smooth: bool = True) -> cs.SX:
+        """qdd = (A + I_a)^-1 (tau + J^T F - C qd - G - friction) (eq. 3.3, 3.12), (n,).
+
+        ``smooth`` (default True) uses tanh for the Coulomb sign so that the result is differentiable.
+        ``F`` is a 3-vector (SX or numbers) at ``tip`` in the base frame, or None.
+        """
+        rhs = tau - self.bias_torque(q, v) - self.extras.passive_torque(q, v, smooth, cs)
+        if F is not None:
+            rhs = rhs + cs.mtimes(self.fingertip_jacobian(q, tip).T, F)
+        return block_solve(self.inertia_matrix(q), rhs)
+
+    def forward_dynamics_function(self, with_force: bool = False, tip: str | None = None,
+                                  smooth: bool = True) -> cs.Function:
+        """``casadi.Function`` ``fd(q, v, tau[, F]) -> qdd``."""
+        q, v, tau = (cs.SX.sym(s, self.n) for s in ("q", "v", "tau"))
+        if with_force:
+            F = cs.SX.sym("F", 3)
+            return cs.Function("forward_dynamics", [q, v, tau, F],
+                               [self.forward_dynamics(q, v, tau, F, tip, smooth)], ["q", "v", "tau", "F"], ["qdd"])
+        return cs.Function("forward_dynamics", [q, v, tau], [self.forward_dynamics(q, v, tau, None, tip, smooth)],
+                           ["q", "v", "tau"], ["qdd"])
