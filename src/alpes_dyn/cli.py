@@ -47,7 +47,6 @@ def parse_vector(text: str, name: str) -> np.ndarray:
 def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     """Turn ``--q -0.1,0.2`` into ``--q=-0.1,0.2`` (argparse would read -0.1,0.2 as an option)."""
     out: list[str] = []
-    it = iter(range(len(argv)))
     i = 0
     while i < len(argv):
         a = argv[i]
@@ -57,7 +56,6 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
             continue
         out.append(a)
         i += 1
-    del it
     return out
 
 

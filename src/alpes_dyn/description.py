@@ -196,7 +196,7 @@ def example_robot_urdf(robot: str, urdf: str | None = None) -> Path:
     """Path of a URDF shipped by ``example-robot-data`` (6.x has no Python module).
 
     ``robot`` is a folder name without ``_description`` (``"ur"``, ``"panda"``, ``"double_pendulum"``...);
-    ``urdf`` picks a file inside its ``urdf/`` folder (default: the first one, sorted).
+    ``urdf`` picks a file by name (default: the first one, by name, preferring the ``urdf/`` folder).
     """
     import sys
     import sysconfig
@@ -207,11 +207,11 @@ def example_robot_urdf(robot: str, urdf: str | None = None) -> Path:
         base = root / "cmeel.prefix" / "share" / "example-robot-data" / "robots"
         if not base.is_dir():
             continue
-        folder = base / f"{robot}_description" / "urdf"
+        folder = base / f"{robot}_description"
         if not folder.is_dir():
             names = sorted(p.name.removesuffix("_description") for p in base.iterdir() if p.is_dir())
             raise ModelError(f"unknown example-robot-data robot {robot!r} (have: {', '.join(names)})")
-        files = sorted(folder.glob("*.urdf"))
+        files = sorted(folder.rglob("*.urdf"), key=lambda f: (f.parent.name != "urdf", f.name))
         if urdf is not None:
             files = [f for f in files if f.name in (urdf, f"{urdf}.urdf")]
         if not files:

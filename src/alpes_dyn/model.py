@@ -103,6 +103,7 @@ class Model:
         self._k = np.asarray(self.extras.stiffness, dtype=float)
         self._spring = self.extras.has_spring
         self._friction = self.extras.has_friction
+        self._lower = np.tril_indices(n, -1)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
         if layout is not None:
             self.tips: tuple[str, ...] = layout.tips
@@ -170,8 +171,10 @@ class Model:
     def vector(self, x: object, name: str, n: int | None = None) -> np.ndarray:
         """``x`` as a finite float vector of length n (default the model's), else :class:`InputError`."""
         n = self.n if n is None else n
-        if type(x) is np.ndarray and x.dtype == np.float64 and x.shape == (n,):
+        if x.__class__ is _ND and x.dtype is _F64 and x.shape == (n,):  # fast path, no copy
             a = x
+            if math.isfinite(a.dot(a)):  # one BLAS call; overflow falls through to the exact test
+                return a
         else:
             try:
                 a = np.asarray(x, dtype=float)
@@ -206,8 +209,9 @@ class Model:
     def inertia_matrix(self, q: np.ndarray) -> np.ndarray:
         """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8)."""
         q = self.vector(q, "q")
-        M = pin.crba(self.pin_model, self.pin_data, q)
-        return np.triu(M) + np.triu(M, 1).T
+        M = pin.crba(self.pin_model, self.pin_data, q).copy()
+        M[self._lower] = M.T[self._lower]  # CRBA fills the upper triangle
+        return M
 
     def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """C(q, qd), (n, n), N m s: C qd are the Coriolis/centrifugal torques (eq. 2.4-2.5), A_dot - 2C skew."""

@@ -1,0 +1,84 @@
+"""The alpes-dyn command line: outputs equal the library's, bad input exits 2 with one line."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.cli import main
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run(capsys, *argv):
+    code = main(list(argv))
+    out, err = capsys.readouterr()
+    return code, out, err
+
+
+@pytest.mark.parametrize("name", ad.MODELS)
+def test_urdf_command(capsys, tmp_path, name):
+    code, out, _ = run(capsys, "urdf", name)
+    assert code == 0 and out == (ROOT / "urdf" / f"{name}.urdf").read_text()
+    dest = tmp_path / "x.urdf"
+    assert run(capsys, "urdf", name, "-o", str(dest))[0] == 0
+    assert dest.read_text() == out
+
+
+@pytest.mark.parametrize("qarg", [["--q=-0.1,0.2,0.3"], ["--q", "-0.1,0.2,0.3"]])
+def test_dynamics_json_negative_vectors(capsys, qarg):
+    code, out, err = run(capsys, "dynamics", "--model", "finger3", *qarg, "--v=0.5,-1,2", "--tau", "-0.01,0,0.002",
+                         "--force=0,0,1.5", "--spring", "report", "--json")
+    assert code == 0, err
+    d = json.loads(out)
+    assert {"model", "q", "v", "tau", "A", "C", "G", "J", "qdd"} <= set(d)
+    m = ad.Model.alpes("finger3", spring="report")
+    q, v, tau = np.array([-0.1, 0.2, 0.3]), np.array([0.5, -1, 2.0]), np.array([-0.01, 0, 0.002])
+    assert d["q"] == q.tolist()
+    assert np.allclose(d["A"], m.inertia_matrix(q), rtol=1e-15)
+    assert np.allclose(d["C"], m.coriolis_matrix(q, v), rtol=1e-15)
+    assert np.allclose(d["G"], m.gravity_torque(q), rtol=1e-15)
+    assert np.allclose(d["J"], m.fingertip_jacobian(q), rtol=1e-15)
+    assert np.allclose(d["qdd"], m.forward_dynamics(q, v, tau, [0, 0, 1.5]), rtol=1e-15)
+
+
+def test_dynamics_readable_and_hand_tip(capsys):
+    code, out, _ = run(capsys, "dynamics", "--model", "hand", "--tip", "thumb_tip")
+    assert code == 0
+    assert "A(q) [kg m^2]" in out and "thumb_tip" in out
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["dynamics", "--model", "finger9"], "unknown model 'finger9'"),
+    (["dynamics", "--q=0.1,0.2"], "--q: model 'finger3' has 3 joints, got 2 values"),
+    (["dynamics", "--q=0.1,x,0.2"], "--q: expected comma-separated numbers"),
+    (["dynamics", "--q=0.1,nan,0.2"], "--q: contains NaN or inf"),
+    (["dynamics", "--force=0,1"], "--force: expected 3 values"),
+    (["dynamics", "--tip", "nail"], "unknown tip/frame 'nail'"),
+    (["dynamics", "--spring", "cubic"], "invalid choice: 'cubic'"),
+    (["dynamics", "--params", "/nonexistent.toml"], "cannot be read"),
+    (["dynamics", "--model", "/nonexistent.urdf"], "cannot be read"),
+    (["urdf", "finger7"], "unknown model 'finger7'"),
+    (["frobnicate"], "invalid choice"),
+])
+def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
+    code, out, err = run(capsys, *argv)
+    assert code == 2
+    assert out == ""
+    assert err.count("\n") == 1 and needle in err
+    assert "Traceback" not in err
+
+
+def test_console_script_help_shows_negative_vectors():
+    exe = Path(sys.executable).with_name("alpes-dyn")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "alpes_dyn.cli"]
+    r = subprocess.run(cmd + ["dynamics", "--help"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0 and "--q=-0.1,0.2,0.3" in r.stdout
+    r = subprocess.run(cmd + ["dynamics", "--q", "-0.1,0.2"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
