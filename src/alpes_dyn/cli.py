@@ -187,17 +187,89 @@ def cmd_report(args: argparse.Namespace) -> int:
 
 # ---- owned by the observability work (issue 3): replace the body, keep the signature
 def _observability_summary(args: argparse.Namespace) -> dict[str, Any]:
-    return {"lines": ["  (not implemented yet)"]}
+    """Observability of finger2, finger3 and the hand in the report's setting (u = joint torques,
+    y = sum of joint angles), with the report's spring law (eq. 2.14) and the torsional one."""
+    from .observability import observability
+
+    lines = ["  model    spring     states outputs  rank  observable  index  min sv    condition  at rest  parts"]
+    results: dict[str, Any] = {}
+    for spring in ("report", "torsional"):
+        for name in ("finger2", "finger3", "hand"):
+            r = observability(name, input="joint", output="sum", spring=spring, points=args.points, seed=args.seed)
+            d = r.to_dict()
+            d.pop("rank_drops", None)
+            results[f"{name}/{spring}"] = d
+            cond = f"{r.condition:9.2e}" if np.isfinite(r.condition) else "      inf"
+            parts = ", ".join(f"{p.model} {p.rank}/{p.n_states}" for p in r.parts)
+            lines.append(f"  {name:8s} {spring:10s} {r.n_states:6d} {r.n_outputs:7d} {f'{r.rank}/{r.n_states}':>5s}  "
+                         f"{'yes' if r.observable else 'NO':10s} {r.index:6d}  {r.min_singular_value:9.2e} {cond} "
+                         f"{f'{r.rank_at_rest}/{r.n_states}':>7s}  {parts}")
+    lines.append("  (report: finger2 rank 4 of 4, finger3 rank 6 of 6, both observable. Fingers: O up to y^(n-1) as in "
+                 "the report; hand: up to y^(5), where its rank is already full. min sv = median over "
+                 f"{args.points} random points of s_n/s_1 of the row-normalised O)")
+    return {"lines": lines, "input": "joint", "output": "sum", "points": args.points, "seed": args.seed,
+            "results": results}
 
 
 # ---- owned by the observability work (issue 3)
 def cmd_observability(args: argparse.Namespace) -> int:
-    raise InputError("observability: not implemented yet")
+    from .observability import observability
+
+    if args.points < 1:
+        raise InputError(f"--points: expected a positive integer, got {args.points}")
+    order: str | int = getattr(args, "order", "auto")
+    if order not in ("auto", "report"):
+        try:
+            order = int(order)
+        except ValueError:
+            raise InputError(f"--order: expected auto, report or a non-negative integer, got {order!r}") from None
+        if order < 0:
+            raise InputError(f"--order: expected auto, report or a non-negative integer, got {order}")
+    model = _model_from_args(args)
+    rep = observability(model, input=args.input, output=args.output, points=args.points, seed=args.seed,
+                        constant_input=getattr(args, "constant_input", False), order=order)
+    _emit(rep.to_dict(), rep.to_text(), args.json)
+    return 0
 
 
 # ---- owned by the observers work (issue 4)
 def cmd_estimate(args: argparse.Namespace) -> int:
-    raise InputError("estimate: not implemented yet")
+    """Simulate the default scenario (alpes_dyn.scenario) and estimate the joints from the motor encoder."""
+    from .observers import OBSERVERS
+    from .scenario import SCENARIO_MODELS, plot_estimation, run_estimation
+
+    if args.model not in SCENARIO_MODELS:
+        raise InputError(f"--model: the estimation scenario is defined for one finger ({', '.join(SCENARIO_MODELS)}), "
+                         f"got {args.model!r}")
+    if args.observer not in OBSERVERS:
+        raise InputError(f"--observer: unknown observer {args.observer!r} (expected one of {', '.join(OBSERVERS)})")
+    t0 = time.perf_counter()
+    res = run_estimation(args.observer, model=args.model, spring=args.spring, params=args.params,
+                         mismatch=args.mismatch, duration=args.duration, seed=args.seed)
+    if args.plot:
+        plot_estimation(res, args.plot)
+    obj = res.to_dict()
+    obj["seconds"] = time.perf_counter() - t0
+    if args.plot:
+        obj["plot"] = args.plot
+    deg = np.degrees
+    lines = [
+        f"{res.scenario.model}: joints estimated from the motor encoder by {args.observer} "
+        f"(mismatch {args.mismatch:g}, {args.duration:g} s, seed {args.seed})",
+        f"  encoder {res.counts_per_rev:g} counts/rev + {res.scenario.encoder_noise_counts:g} count noise; "
+        f"motor torque noise {res.scenario.torque_noise:g} N m",
+        f"  {f'RMSE after {res.scenario.transient_s:g} s [deg]:':30s}"
+        + "  ".join(f"{j} {deg(e):.3f}" for j, e in zip(res.joint_names, res.rmse)),
+        f"  {'final error [deg]:':30s}"
+        + "  ".join(f"{j} {deg(e):.3f}" for j, e in zip(res.joint_names, res.final_error)),
+    ]
+    for name, p in res.parameters.items():
+        lines.append(f"  {name}: estimated {p['estimate']:.4f}, true {p['true']:.4f}")
+    if args.plot:
+        lines.append(f"  figure: {args.plot}")
+    lines.append(f"  {obj['seconds']:.1f} s")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
 
 
 # ----------------------------------------------------------------------------- parser
@@ -244,6 +316,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--output", default="sum", choices=("sum", "encoder"), help="y = sum of joint angles or encoders")
     s.add_argument("--points", type=int, default=8, help="random points for the generic rank (default %(default)s)")
     s.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--order", default="auto", help="highest derivative order: auto (until the rank stops growing, "
+                   "default), report (y..y^(n-1), eq. 3.8) or an integer")
+    s.add_argument("--constant-input", action="store_true", help="inputs constant (u' = u'' = ... = 0)")
     s.set_defaults(func=cmd_observability)
 
     s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder")
