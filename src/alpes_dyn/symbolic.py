@@ -13,7 +13,8 @@ tip positions/Jacobians. The extras (springs, friction, rotor inertia) are appli
 through :class:`~alpes_dyn.extras.JointExtras` with ``xp=casadi``, exactly as the numeric model
 applies them with ``xp=numpy``. Forward dynamics solves eq. 3.3 block by block: the mass matrix
 of a fixed-base tree is block diagonal over the branches from the root (one per finger), and each
-block is solved on its own, which keeps the expressions of the 15-DoF hand small.
+block is solved on its own by an unrolled LDL^T (:func:`block_solve`), which keeps the expressions
+of the 15-DoF hand small.
 """
 
 from __future__ import annotations
@@ -48,17 +49,32 @@ def available_backends() -> tuple[str, ...]:
 
 
 def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
-    """Solve M x = b for a symbolic M, block by block over its structural strongly connected components."""
-    n = M.shape[0]
+    """Solve M x = b for a symbolic symmetric positive definite M (a mass matrix).
+
+    Block by block over the structural strongly connected components of M (one per finger of the
+    hand), each by an unrolled LDL^T factorisation: no square root, one division per pivot, fewer
+    operations than a QR in generated code, and expressions that stay small under AD.
+    """
     nb, perm, offsets = M.sparsity().scc()
-    if nb <= 1:
-        return cs.solve(M, b)
-    x = [None] * n
-    for k in range(nb):
-        rows = list(perm[offsets[k]:offsets[k + 1]])
-        xs = cs.solve(M[rows, rows], b[rows])
-        for i, r in enumerate(rows):
-            x[r] = xs[i]
+    x: list[Any] = [None] * M.shape[0]
+    zero = cs.SX(0)
+    for blk in range(nb):
+        rows = list(perm[offsets[blk]:offsets[blk + 1]])
+        A, r, n = M[rows, rows], b[rows], len(rows)
+        L = [[zero] * n for _ in range(n)]
+        D: list[Any] = [None] * n
+        for j in range(n):
+            D[j] = A[j, j] - sum((L[j][k] * L[j][k] * D[k] for k in range(j)), zero)
+            for i in range(j + 1, n):
+                L[i][j] = (A[i, j] - sum((L[i][k] * L[j][k] * D[k] for k in range(j)), zero)) / D[j]
+        y: list[Any] = [None] * n
+        for i in range(n):
+            y[i] = r[i] - sum((L[i][k] * y[k] for k in range(i)), zero)
+        xs: list[Any] = [None] * n
+        for i in reversed(range(n)):
+            xs[i] = y[i] / D[i] - sum((L[k][i] * xs[k] for k in range(i + 1, n)), zero)
+        for i, row in enumerate(rows):
+            x[row] = xs[i]
     return cs.vertcat(*x)
 
 

@@ -1,0 +1,769 @@
+"""Time simulation of the state space x' = f(x, u[, F]) (report eq. 3.1, 3.3) and fast batched rollouts.
+
+Two entry points:
+
+* :func:`simulate` -- one trajectory, fixed-step RK4 or an adaptive/implicit CasADi integrator
+  (``"cvodes"``: variable-order BDF; ``"idas"``: the same as a DAE), inputs given as arrays or as
+  callables of time (joint or motor torques, the contact force F), friction with the smooth sign
+  ``tanh(qd / v_s)`` (eq. 2.6-2.7).
+* :class:`CompiledRollout` / :func:`compile_rollout` -- many trajectories at once: the RK4 step is
+  generated as C by CasADi, wrapped in a small C driver that loops over steps, advances two
+  trajectories per SIMD lane pair and splits the batch over POSIX threads, compiled once with
+  the system C compiler (``$CC``, default gcc, ``-O3``) and cached on disk (directory
+  ``$ALPES_DYN_CACHE``, default ``~/.cache/alpes_dyn``) under a hash of the generated source.
+
+The right-hand side is the state space's (eq. 3.3): A(q) + I_a, C qd + gravity, springs,
+friction and J^T F from ``StateSpace.sym``, the mass matrix solved by the unrolled LDL^T of
+:func:`alpes_dyn.symbolic.block_solve` (fewer operations than a QR in generated code).
+
+Inputs are held constant over each step (zero-order hold, as a sampled current loop does): the
+input of step k, on [t_k, t_k + dt), is ``inputs[k]`` for an array and ``inputs(t_k)`` for a
+callable. :func:`simulate` with ``method="rk4"`` (CasADi's virtual machine) and the compiled
+rollout evaluate the same CasADi expression of one RK4 step, with the same operations in the
+same order: they agree to the last bit in practice (to rounding in any case).
+"""
+
+from __future__ import annotations
+
+import ctypes
+import hashlib
+import math
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+import weakref
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable, Sequence, Union
+
+import casadi as cs
+import numpy as np
+
+from .errors import AlpesDynError, InputError, ModelError
+from .model import Model
+from .statespace import StateSpace
+
+__all__ = [
+    "METHODS", "SimulationResult", "simulate", "rk4_step_function", "as_statespace", "CompiledRollout",
+    "compile_rollout", "CompiledStepLoop", "cache_dir", "CompilerError", "joint_accelerations",
+]
+
+METHODS: tuple[str, ...] = ("rk4", "cvodes", "idas")
+
+InputLike = Union[None, float, Sequence[float], np.ndarray, Callable[[float], Any]]
+
+
+class CompilerError(AlpesDynError, RuntimeError):
+    """The C compiler is missing or failed on generated code."""
+
+
+# ----------------------------------------------------------------------------- state space helpers
+_SS_CACHE: "weakref.WeakKeyDictionary[Model, dict[tuple, StateSpace]]" = weakref.WeakKeyDictionary()
+
+
+def as_statespace(system: Model | StateSpace, input: str = "joint", output: Any = "sum", force: bool = False,
+                  smooth: bool = True) -> StateSpace:
+    """``system`` itself if it is a :class:`~alpes_dyn.statespace.StateSpace`, else a (cached) one of the model.
+
+    The cache holds one state space per model and option set (string outputs only), because
+    building the symbolic dynamics takes a fraction of a second.
+    """
+    if isinstance(system, StateSpace):
+        return system
+    if not isinstance(system, Model):
+        raise InputError(f"system: expected an alpes_dyn Model or StateSpace, got {type(system).__name__}")
+    if not isinstance(output, str):
+        return StateSpace(system, input=input, output=output, force=force, smooth=smooth)
+    key = (input, output, bool(force), bool(smooth))
+    per_model = _SS_CACHE.setdefault(system, {})
+    if key not in per_model:
+        per_model[key] = StateSpace(system, input=input, output=output, force=force, smooth=smooth)
+    return per_model[key]
+
+
+def _n_known_inputs(ss: StateSpace) -> int:
+    return ss.n_inputs + (3 if ss.force else 0)
+
+
+def joint_accelerations(ss: StateSpace, q: cs.SX, v: cs.SX, tau: cs.SX, F: Any = None) -> cs.SX:
+    """qdd of eq. 3.3 for joint torques ``tau``: the state space's symbolic forward dynamics
+    (:meth:`SymbolicDynamics.forward_dynamics <alpes_dyn.symbolic.SymbolicDynamics.forward_dynamics>`,
+    the same expression as ``ss.f_expr``) with its tip and smooth-sign setting."""
+    return ss.sym.forward_dynamics(q, v, tau, F, ss.tip, ss.smooth)
+
+
+def _rhs_function(ss: StateSpace) -> cs.Function:
+    """f(x, w) = [qd; qdd] with w = [u; F] (F only when the state space has the contact force as input)."""
+    w = cs.SX.sym("w", _n_known_inputs(ss))
+    n = ss.n
+    q, v = ss.x[:n], ss.x[n:]
+    tau = cs.mtimes(cs.DM(ss.B), w[: ss.n_inputs])
+    qdd = joint_accelerations(ss, q, v, tau, w[ss.n_inputs:] if ss.force else None)
+    return cs.Function("f", [ss.x, w], [cs.vertcat(v, qdd)], ["x", "w"], ["xdot"])
+
+
+def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step") -> cs.Function:
+    """One classical Runge-Kutta step of x' = f(x, w) with w held constant: ``step(x, w) -> x_next``.
+
+    Parameters
+    ----------
+    system: the state space; w = [u; F] has ``n_inputs`` (+3 with ``force=True``) entries.
+    dt: step, s (> 0).
+
+    Returns
+    -------
+    casadi.Function ``step(x (2n,), w (m[+3],)) -> x_next (2n,)``, an SX function (inlined
+    expression), cached on the state space per ``dt``.
+    """
+    dt = _check_dt(dt)
+    cache = system.__dict__.setdefault("_rk4_cache", {})
+    key = (float(dt), name)
+    if key in cache:
+        return cache[key]
+    f = _rhs_function(system)
+    x = cs.SX.sym("x", system.n_states)
+    w = cs.SX.sym("w", _n_known_inputs(system))
+    k1 = f(x, w)
+    k2 = f(x + 0.5 * dt * k1, w)
+    k3 = f(x + 0.5 * dt * k2, w)
+    k4 = f(x + dt * k3, w)
+    xn = x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    # common-subexpression elimination: the symbolic dynamics repeat sin/cos of the same angles
+    step = cs.Function(name, [x, w], [cs.cse(xn)], ["x", "w"], ["x_next"])
+    cache[key] = step
+    return step
+
+
+# ----------------------------------------------------------------------------- input checks
+def _check_dt(dt: Any) -> float:
+    try:
+        d = float(dt)
+    except (TypeError, ValueError):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}") from None
+    if not math.isfinite(d) or d <= 0:
+        raise InputError(f"dt: expected a positive finite number of seconds, got {dt!r}")
+    return d
+
+
+def _n_steps(duration: Any, dt: float) -> int:
+    try:
+        T = float(duration)
+    except (TypeError, ValueError):
+        raise InputError(f"duration: expected a positive number of seconds, got {duration!r}") from None
+    if not math.isfinite(T) or T <= 0:
+        raise InputError(f"duration: expected a positive finite number of seconds, got {duration!r}")
+    N = int(round(T / dt))
+    if N < 1 or abs(N * dt - T) > 1e-9 * max(T, dt):
+        raise InputError(f"duration: {T:g} s is not a whole number of steps dt = {dt:g} s")
+    return N
+
+
+def _finite(a: np.ndarray, name: str) -> np.ndarray:
+    if not np.isfinite(a).all():
+        raise InputError(f"{name}: contains NaN or inf")
+    return a
+
+
+def _sample(inputs: InputLike, t: np.ndarray, m: int, name: str) -> np.ndarray:
+    """(N, m) zero-order-hold samples of ``inputs`` at the step starts ``t`` (N,)."""
+    N = t.shape[0]
+    if inputs is None:
+        return np.zeros((N, m))
+    if callable(inputs):
+        rows = []
+        for tk in t:  # a user's Python callable: sampled once per step
+            try:
+                v = np.asarray(inputs(float(tk)), dtype=float).reshape(-1)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"{name}: the callable must return {m} numbers ({exc})") from None
+            if v.shape != (m,):
+                raise InputError(f"{name}: the callable returned {v.size} values at t = {tk:g} s, expected {m}")
+            rows.append(v)
+        return _finite(np.array(rows), f"{name}(t)")
+    try:
+        a = np.asarray(inputs, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected an array of numbers or a callable of time, "
+                         f"got {type(inputs).__name__}") from None
+    if a.ndim == 0 or a.shape == (m,):
+        a = np.broadcast_to(a, (N, m)).copy()
+    elif m == 1 and a.shape == (N,):
+        a = a.reshape(N, 1)
+    elif a.shape != (N, m):
+        raise InputError(f"{name}: expected shape ({N}, {m}) (steps, inputs) or ({m},), got {a.shape}")
+    return _finite(a, name)
+
+
+def _sample_force(force: InputLike, t: np.ndarray) -> np.ndarray:
+    """(N, 3) contact forces; scalars / (N,) series / callables returning a scalar are F_z (eq. 2.13)."""
+    N = t.shape[0]
+    if callable(force):
+        out = np.zeros((N, 3))
+        for k, tk in enumerate(t):
+            try:
+                v = np.asarray(force(float(tk)), dtype=float).reshape(-1)
+            except (TypeError, ValueError) as exc:
+                raise InputError(f"force: the callable must return F_z or (Fx, Fy, Fz) ({exc})") from None
+            if v.size == 1:
+                out[k, 2] = v[0]
+            elif v.size == 3:
+                out[k] = v
+            else:
+                raise InputError(f"force: the callable returned {v.size} values at t = {tk:g} s, expected 1 or 3")
+        return _finite(out, "force(t)")
+    a = np.asarray(force, dtype=float)
+    if a.ndim == 0 or a.shape == (N,):
+        out = np.zeros((N, 3))
+        out[:, 2] = a
+        return _finite(out, "force")
+    if a.shape == (3,) or a.shape == (N, 3):
+        return _finite(np.broadcast_to(a, (N, 3)).copy(), "force")
+    raise InputError(f"force: expected F_z (scalar or ({N},)), (3,) or ({N}, 3), got shape {a.shape}")
+
+
+# ----------------------------------------------------------------------------- simulate
+@dataclass
+class SimulationResult:
+    """A simulated trajectory.
+
+    Attributes
+    ----------
+    t: (N+1,) times, s.
+    x: (N+1, 2n) states [q, qd] (rad, rad/s).
+    y: (N+1, p) outputs h(x) (rad).
+    u: (N, m) inputs applied on each step (N m), zero-order hold.
+    F: (N, 3) contact forces (N) or None.
+    system: the :class:`~alpes_dyn.statespace.StateSpace` simulated.
+    method: integration method.
+    """
+
+    t: np.ndarray
+    x: np.ndarray
+    y: np.ndarray
+    u: np.ndarray
+    F: np.ndarray | None
+    system: StateSpace
+    method: str
+
+    @property
+    def q(self) -> np.ndarray:
+        """(N+1, n) joint angles, rad."""
+        return self.x[:, : self.system.n]
+
+    @property
+    def v(self) -> np.ndarray:
+        """(N+1, n) joint velocities, rad/s."""
+        return self.x[:, self.system.n:]
+
+
+def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, inputs: InputLike = None,
+             duration: float = 1.0, dt: float = 1e-3, method: str = "rk4", *, force: InputLike = None,
+             input: str = "joint", output: Any = "sum", smooth: bool = True, rtol: float = 1e-10,
+             atol: float = 1e-12) -> SimulationResult:
+    """Simulate x' = f(x, u[, F]) (eq. 3.3) from ``x0`` over ``duration`` seconds.
+
+    Parameters
+    ----------
+    system:
+        A :class:`~alpes_dyn.Model` (its state space is built with ``input``, ``output``, ``smooth``
+        and ``force=force is not None``) or a :class:`~alpes_dyn.statespace.StateSpace`.
+    x0:
+        Initial state [q; qd], (2n,), rad and rad/s.
+    inputs:
+        Joint torques Gamma (n) or motor torques tau_m (m), N m, per the state space's input:
+        ``None`` (zero), a constant (m,), an array (N, m) with N = duration / dt, or a callable
+        ``u(t) -> (m,)``. Held constant over each step.
+    duration, dt:
+        Simulated time and step (the output grid), s; duration must be a whole number of steps.
+    method:
+        ``"rk4"`` (fixed step, classical Runge-Kutta), ``"cvodes"`` (adaptive BDF, SUNDIALS) or
+        ``"idas"`` (adaptive implicit DAE solver, SUNDIALS); the last two honour ``rtol``/``atol``.
+    force:
+        Measured contact force at the state space's tip, N, base frame (eq. 2.9, 2.13): a scalar,
+        an (N,) series or a callable returning F_z, or (3,), (N, 3), or a callable returning 3 values.
+    input, output, smooth:
+        Options of the state space built from a Model (ignored for a StateSpace).
+
+    Returns
+    -------
+    SimulationResult with t (N+1,), x (N+1, 2n), y (N+1, p), u (N, m), F (N, 3) or None.
+
+    Raises
+    ------
+    InputError: bad shapes, NaN, non-positive duration/dt, unknown method, a state space without
+    force input given a force, or an integrator failure.
+    """
+    if method not in METHODS:
+        raise InputError(f"method: unknown integration method {method!r} (expected one of {', '.join(METHODS)})")
+    ss = as_statespace(system, input, output, force is not None, smooth)
+    if force is not None and not ss.force:
+        raise InputError("force: this state space has no contact-force input (build it with force=True)")
+    if force is None and ss.force:
+        raise InputError("force: this state space has the contact force as an input; pass force=")
+    dt = _check_dt(dt)
+    N = _n_steps(duration, dt)
+    x0 = ss.model.vector(x0, "x0", ss.n_states)
+    t = dt * np.arange(N + 1)
+    U = _sample(inputs, t[:-1], ss.n_inputs, "inputs")
+    Fs = _sample_force(force, t[:-1]) if ss.force else None
+    W = U if Fs is None else np.hstack([U, Fs])
+    if method == "rk4":
+        step = rk4_step_function(ss, dt)
+        X = np.array(step.mapaccum("rk4_traj", N)(x0, W.T))
+    else:
+        X = _integrate_sundials(ss, x0, W, t, method, rtol, atol)
+    x = np.vstack([x0, X.T])
+    if not np.isfinite(x).all():
+        k = int(np.argmax(~np.isfinite(x).all(axis=1)))
+        raise InputError(f"simulation diverged (non-finite state at t = {t[k]:g} s); reduce dt or the inputs")
+    y = np.array(ss.h_function.map(N + 1)(x[:, : 2 * ss.n].T)).T
+    return SimulationResult(t=t, x=x, y=y, u=U, F=Fs, system=ss, method=method)
+
+
+def _integrate_sundials(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.ndarray, method: str,
+                        rtol: float, atol: float) -> np.ndarray:
+    f = _rhs_function(ss)
+    w = cs.SX.sym("w", W.shape[1])
+    dae = {"x": ss.x, "u": w, "ode": f(ss.x, w)}
+    opts: dict[str, Any] = {"abstol": float(atol), "reltol": float(rtol), "max_num_steps": 1_000_000}
+    try:
+        integ = cs.integrator("sim", method, dae, 0.0, list(t[1:]), opts)
+        res = integ(x0=x0, u=W.T)
+    except RuntimeError as exc:
+        msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else "failed"
+        raise InputError(f"integrator {method}: {msg}") from None
+    return np.array(res["xf"])
+
+
+# ----------------------------------------------------------------------------- C compilation and cache
+def cache_dir() -> Path:
+    """Directory of compiled libraries: ``$ALPES_DYN_CACHE`` or ``~/.cache/alpes_dyn``."""
+    env = os.environ.get("ALPES_DYN_CACHE")
+    return Path(env) if env else Path.home() / ".cache" / "alpes_dyn"
+
+
+_CFLAGS = ("-O3", "-fno-math-errno", "-shared", "-fPIC", "-pthread")
+_LANES = 2
+
+
+def _compiler() -> str:
+    cc = os.environ.get("CC", "gcc")
+    path = shutil.which(cc) or shutil.which("cc")
+    if path is None:
+        raise CompilerError(f"C compiler {cc!r} not found (install gcc or set CC); it builds the compiled rollout")
+    return path
+
+
+def _build_library(source: str, stem: str) -> tuple[Path, bool, float]:
+    """Compile ``source`` to a shared library in the cache (once); return (path, compiled_now, seconds)."""
+    cc = _compiler()
+    key = hashlib.sha256((source + "\0" + " ".join(_CFLAGS) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
+    d = cache_dir()
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CompilerError(f"cache directory {str(d)!r}: cannot be created ({exc.strerror or exc})") from None
+    lib = d / f"{stem}_{key}.so"
+    if lib.exists():
+        return lib, False, 0.0
+    t0 = time.perf_counter()
+    with tempfile.TemporaryDirectory(dir=d) as tmp:
+        c = Path(tmp) / f"{stem}.c"
+        c.write_text(source)
+        out = Path(tmp) / f"{stem}.so"
+        proc = subprocess.run([cc, *_CFLAGS, str(c), "-o", str(out), "-lm"], capture_output=True, text=True)
+        if proc.returncode != 0:
+            first = (proc.stderr.strip().splitlines() or ["unknown error"])[0]
+            raise CompilerError(f"compiling {stem}.c failed: {first}")
+        os.replace(out, lib)  # atomic: concurrent processes never load a half-written file
+    return lib, True, time.perf_counter() - t0
+
+
+_DRIVER = r"""
+/* ---- alpes_dyn batched rollout driver (appended to the CasADi-generated step) ---- */
+#include <pthread.h>
+#include <string.h>
+
+#define NX {nx}
+#define NW {nw}
+#define SZ_ARG {sz_arg}
+#define SZ_RES {sz_res}
+#define SZ_IW {sz_iw}
+#define SZ_W {sz_w}
+#define LANES {lanes}
+
+typedef struct {{ const double* W; double* X; long b0, b1, ntot, k0, k1; int status; }} alpes_job;
+
+{vector_code}
+
+static void alpes_run(alpes_job* j) {{
+  long b, k;
+#if LANES > 1
+  /* LANES trajectories at once, one per SIMD lane; a short last group repeats its last trajectory */
+  vd xs[NX], xn[NX], w[NW];
+  double* Xp[LANES];
+  const double* Wp[LANES];
+  int i, l;
+  for (b = j->b0; b < j->b1; b += LANES) {{
+    for (l = 0; l < LANES; ++l) {{
+      long bl = b + l < j->b1 ? b + l : j->b1 - 1;
+      Xp[l] = j->X + bl * (j->ntot + 1) * NX;
+      Wp[l] = j->W + bl * j->ntot * NW;
+    }}
+    for (i = 0; i < NX; ++i) for (l = 0; l < LANES; ++l) xs[i][l] = Xp[l][j->k0 * NX + i];
+    for (k = j->k0; k < j->k1; ++k) {{
+      for (i = 0; i < NW; ++i) for (l = 0; l < LANES; ++l) w[i][l] = Wp[l][k * NW + i];
+      alpes_vstep(xs, w, xn);
+      for (i = 0; i < NX; ++i) {{
+        xs[i] = xn[i];
+        for (l = LANES - 1; l >= 0; --l) Xp[l][(k + 1) * NX + i] = xn[i][l];
+      }}
+    }}
+  }}
+#else
+  const casadi_real* arg[SZ_ARG];
+  casadi_real* res[SZ_RES];
+  casadi_int iw[SZ_IW + 1];
+  casadi_real w[SZ_W + 1];
+  for (b = j->b0; b < j->b1; ++b) {{
+    double* X = j->X + b * (j->ntot + 1) * NX;
+    const double* W = j->W + b * j->ntot * NW;
+    for (k = j->k0; k < j->k1; ++k) {{
+      arg[0] = X + k * NX;
+      arg[1] = W + k * NW;
+      res[0] = X + (k + 1) * NX;
+      if ({step}(arg, res, iw, w, 0)) {{ j->status = 1; return; }}
+    }}
+  }}
+#endif
+  j->status = 0;
+}}
+
+static void* alpes_worker(void* p) {{ alpes_run((alpes_job*) p); return 0; }}
+
+/* X: (B, ntot+1, NX) with X[b, k0] set; W: (B, ntot, NW); advances steps k0..k1-1 of every trajectory. */
+CASADI_SYMBOL_EXPORT int alpes_rollout(const double* W, double* X, long B, long ntot, long k0, long k1,
+                                       int nthreads) {{
+  alpes_job jobs[64];
+  pthread_t th[64];
+  int t, started[64], status = 0;
+  long groups = (B + LANES - 1) / LANES;
+  if (nthreads < 1) nthreads = 1;
+  if (nthreads > 64) nthreads = 64;
+  if (nthreads > groups) nthreads = (int) groups;
+  for (t = 0; t < nthreads; ++t) {{
+    jobs[t].W = W; jobs[t].X = X; jobs[t].ntot = ntot; jobs[t].k0 = k0; jobs[t].k1 = k1; jobs[t].status = 0;
+    jobs[t].b0 = LANES * (groups * t / nthreads);
+    jobs[t].b1 = LANES * (groups * (t + 1) / nthreads);
+    if (jobs[t].b1 > B) jobs[t].b1 = B;
+  }}
+  if (nthreads == 1) {{ alpes_run(&jobs[0]); return jobs[0].status; }}
+  for (t = 1; t < nthreads; ++t) started[t] = pthread_create(&th[t], 0, alpes_worker, &jobs[t]) == 0;
+  alpes_run(&jobs[0]);
+  for (t = 1; t < nthreads; ++t) {{
+    if (started[t]) pthread_join(th[t], 0); else alpes_run(&jobs[t]);
+    status |= jobs[t].status;
+  }}
+  return status | jobs[0].status;
+}}
+"""
+
+_VEC_UNARY = ("sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "exp", "log", "log10", "sqrt",
+              "fabs", "floor", "ceil", "erf", "casadi_sq", "casadi_fabs", "casadi_sign")
+_VEC_BINARY = ("atan2", "pow", "fmod", "casadi_fmin", "casadi_fmax", "copysign")
+_ASSIGN = re.compile(r"^\s*(a\d+)=(.*);$")
+_TRIG = re.compile(r"^\s*(a\d+)=(sin|cos)\((a\d+)\);$")
+
+
+def _fuse_sincos(lines: list[str]) -> tuple[list[str], int]:
+    """Pair sin(a) and cos(a) of the same value into one sincos call (as gcc does for scalar code)."""
+    lines = list(lines)
+    done: set[int] = set()
+    nt = 0
+    for i, line in enumerate(lines):
+        mt = _TRIG.match(line)
+        if not mt or i in done:
+            continue
+        k, fn, a = mt.groups()
+        if k == a:
+            continue
+        other = "cos" if fn == "sin" else "sin"
+        for j in range(i + 1, len(lines)):
+            m2 = _TRIG.match(lines[j])
+            if m2 and m2.group(2) == other and m2.group(3) == a and j not in done:
+                t = f"alpes_t{nt}"
+                nt += 1
+                s_, c_ = (k, t) if fn == "sin" else (t, k)
+                lines[i] = f"  v_sincos({a}, &{s_}, &{c_});"
+                lines[j] = f"  {m2.group(1)}={t};"
+                done.add(j)
+                break
+            ma = _ASSIGN.match(lines[j])
+            if ma and ma.group(1) == a:  # the argument changes: no partner
+                break
+    return lines, nt
+
+
+def _vector_step(source: str, lanes: int) -> str | None:
+    """SIMD version (GCC vector extension, one trajectory per lane) of the generated step ``casadi_f0``.
+
+    The body of CasADi's scalar SX code is rewritten statement by statement with the same
+    operations in the same order, so each lane computes bit for bit what the scalar code computes
+    (IEEE + - * / and sqrt are exact per lane; libm functions are called per lane). Returns None
+    when the body uses something not handled (work arrays, conditionals, other calls): the
+    scalar driver is used then.
+    """
+    try:
+        i = source.index("static int casadi_f0(")
+        j = source.index("\n}\n", i)
+    except ValueError:
+        return None
+    body = source[source.index("{", i) + 1: j]
+    if "casadi_f1" in source or re.search(r"\b(i?w)\[", body):
+        return None
+    lines, nt = _fuse_sincos(body.split("\n"))
+    b = "\n".join(lines)
+    b = re.sub(r"\bcasadi_real\b", "vd", b)
+    b = re.sub(r"arg\[0\]\? arg\[0\]\[(\d+)\] : 0", r"X[\1]", b)
+    b = re.sub(r"arg\[1\]\? arg\[1\]\[(\d+)\] : 0", r"W[\1]", b)
+    b = re.sub(r"if \(res\[0\]!=0\) res\[0\]\[(\d+)\]=", r"Y[\1]=", b)
+    b = re.sub(r"^(\s*a\d+)=([-+]?[0-9.]+(?:[eE][-+]?\d+)?);$", r"\1=VB(\2);", b, flags=re.M)
+    for name in _VEC_UNARY + _VEC_BINARY:
+        b = re.sub(rf"\b{name}\(", f"v_{name}(", b)
+    calls = set(re.findall(r"\b([A-Za-z_]\w*)\(", b))
+    if calls - {f"v_{n}" for n in _VEC_UNARY + _VEC_BINARY} - {"v_sincos", "VB"}:
+        return None
+    if re.search(r"[?<>!]|==|&&|\|\||\barg\b|\bres\b", b):
+        return None
+    decl = ("  vd " + ", ".join(f"alpes_t{k}" for k in range(nt)) + ";\n") if nt else ""
+    lane = ", ".join("(c)" for _ in range(lanes))
+    helpers = [
+        f"typedef double vd __attribute__((vector_size({8 * lanes})));",
+        f"#define VB(c) ((vd){{{lane}}})",
+        "#define VL for (l = 0; l < LANES; ++l)",
+        "static inline void v_sincos(vd x, vd* s, vd* c) { int l; double a, b; "
+        "VL { sincos(x[l], &a, &b); (*s)[l] = a; (*c)[l] = b; } }",
+    ]
+    helpers += [f"static inline vd v_{n}(vd x) {{ vd r; int l; VL r[l] = {n}(x[l]); return r; }}" for n in _VEC_UNARY]
+    helpers += [f"static inline vd v_{n}(vd x, vd y) {{ vd r; int l; VL r[l] = {n}(x[l], y[l]); return r; }}"
+                for n in _VEC_BINARY]
+    return ("\n".join(helpers) + "\nstatic int alpes_vstep(const vd* X, const vd* W, vd* Y) {\n" + decl + b
+            + "\n}\n")
+
+
+def _default_threads() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class _Progress:
+    """A minimal progress bar on stderr (no dependency): ``[#####     ] 50% 1.2 s``."""
+
+    def __init__(self, total: int, label: str, enabled: bool) -> None:
+        self.total, self.label, self.enabled = total, label, enabled
+        self.t0 = time.perf_counter()
+        self.done = 0
+
+    def update(self, n: int) -> None:
+        self.done += n
+        if self.enabled:
+            frac = self.done / self.total
+            bar = "#" * int(30 * frac)
+            sys.stderr.write(f"\r{self.label} [{bar:<30s}] {100 * frac:3.0f}% {time.perf_counter() - self.t0:6.1f} s")
+            sys.stderr.flush()
+
+    def close(self) -> None:
+        if self.enabled:
+            sys.stderr.write("\n")
+            sys.stderr.flush()
+
+
+class CompiledStepLoop:
+    """x_{k+1} = step(x_k, w_k) for B sequences of N steps, in compiled C, threaded over the sequences.
+
+    Parameters
+    ----------
+    step:
+        A ``casadi.Function`` ``(x (nx,), w (nw,)) -> x_next (nx,)`` (dense columns).
+    label:
+        Stem of the cached library's file name.
+    threads:
+        Worker threads (default: the CPUs this process may use).
+    vectorize:
+        Advance two sequences at once in SIMD lanes (GCC vector extensions; the same operations
+        in the same order as the scalar code, so the same bits); falls back to scalar code when
+        the step uses a construct the rewrite does not handle (``lanes`` tells which was built).
+
+    The C source is CasADi's code of ``step`` plus a driver looping over steps and splitting the
+    sequences over POSIX threads; it is compiled once with ``$CC`` (default gcc) ``-O3`` and cached
+    in :func:`cache_dir` under a hash of the source, so a later construction (in any process) only
+    loads it. ``compile_seconds`` is this instance's compilation time (0 when loaded from the cache),
+    ``library`` the path of the shared library.
+    """
+
+    def __init__(self, step: cs.Function, label: str = "steploop", threads: int | None = None,
+                 vectorize: bool = True) -> None:
+        if step.n_in() != 2 or step.n_out() != 1:
+            raise ModelError(f"step: expected a function (x, w) -> x_next, got {step}")
+        self.nx = int(step.size1_in(0))
+        self.nw = int(step.size1_in(1))
+        if step.size_out(0) != (self.nx, 1) or step.size2_in(0) != 1 or step.size2_in(1) != 1:
+            raise ModelError(f"step: x, w and x_next must be columns with x_next like x, got {step}")
+        self.threads = int(threads) if threads is not None else _default_threads()
+        if self.threads < 1:
+            raise InputError(f"threads: expected a positive integer, got {threads!r}")
+        ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
+        step = cs.Function("alpes_step", ins, step.call(ins))  # fixed C symbol name for the driver
+        cg = cs.CodeGenerator("alpes_steploop.c", {"with_header": False})
+        cg.add(step)
+        generated = "#define _GNU_SOURCE\n" + cg.dump()
+        fmt = dict(nx=self.nx, nw=self.nw, sz_arg=step.sz_arg(), sz_res=step.sz_res(), sz_iw=step.sz_iw(),
+                   sz_w=step.sz_w(), step="alpes_step")
+        vector = _vector_step(generated, _LANES) if vectorize else None
+        self.lanes = 1
+        if vector is not None:
+            try:
+                self.library, self.compiled, self.compile_seconds = _build_library(
+                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label)
+                self.lanes = _LANES
+            except CompilerError:  # a compiler without GCC vector extensions: the scalar driver
+                vector = None
+        if vector is None:
+            self.library, self.compiled, self.compile_seconds = _build_library(
+                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label)
+        self._lib = ctypes.CDLL(str(self.library))
+        fn = self._lib.alpes_rollout
+        dp = ctypes.POINTER(ctypes.c_double)
+        fn.argtypes = [dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
+        fn.restype = ctypes.c_int
+        self._fn = fn
+        self._dp = dp
+
+    def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
+        """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), both float64 (checked by the caller)."""
+        x0 = np.asarray(x0, dtype=float)
+        W = np.ascontiguousarray(W, dtype=float)
+        B, N = W.shape[0], W.shape[1]
+        if x0.shape != (B, self.nx) or W.shape != (B, N, self.nw):
+            raise InputError(f"x0/W: expected ({B}, {self.nx}) and ({B}, N, {self.nw}), got {x0.shape} and {W.shape}")
+        X = np.empty((B, N + 1, self.nx))
+        X[:, 0] = x0
+        chunks = 50 if progress else 1
+        bar = _Progress(N, label, progress)
+        edges = np.linspace(0, N, chunks + 1).astype(int)
+        wp, xp = W.ctypes.data_as(self._dp), X.ctypes.data_as(self._dp)
+        for k0, k1 in zip(edges[:-1], edges[1:]):
+            if k1 > k0:
+                if self._fn(wp, xp, B, N, int(k0), int(k1), self.threads) != 0:
+                    raise InputError(f"{label}: the compiled step failed")
+                bar.update(int(k1 - k0))
+        bar.close()
+        return X
+
+
+class CompiledRollout:
+    """Batched fixed-step RK4 rollouts of a state space in compiled C, threaded over the batch.
+
+    Parameters
+    ----------
+    system:
+        A :class:`~alpes_dyn.statespace.StateSpace` (or a Model, with ``input`` and ``force``).
+    dt:
+        RK4 step, s, fixed at compile time.
+    threads:
+        Worker threads (default: the CPUs this process may use).
+
+    The step is :func:`rk4_step_function` (the one :func:`simulate` evaluates with
+    ``method="rk4"``), compiled by :class:`CompiledStepLoop`: results equal :func:`simulate`'s to
+    rounding. ``compile_seconds`` (0 when loaded from the cache) and ``library`` describe the build.
+    """
+
+    def __init__(self, system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
+                 threads: int | None = None) -> None:
+        out: Any = "sum"
+        if isinstance(system, Model) and system.transmission is None:
+            out = np.eye(system.n)[:1]  # any output: a rollout returns states
+        ss = as_statespace(system, input, out, force)
+        self.system = ss
+        self.dt = _check_dt(dt)
+        self.nx = ss.n_states
+        self.nw = _n_known_inputs(ss)
+        self._loop = CompiledStepLoop(rk4_step_function(ss, self.dt), f"rollout_{ss.model.name}", threads)
+        self.threads = self._loop.threads
+        self.library, self.compiled, self.compile_seconds = (self._loop.library, self._loop.compiled,
+                                                             self._loop.compile_seconds)
+
+    def __repr__(self) -> str:
+        return (f"CompiledRollout({self.system.model.name!r}, dt={self.dt:g}, states={self.nx}, inputs={self.nw}, "
+                f"threads={self.threads})")
+
+    def rollout(self, x0_batch: np.ndarray, U_batch: np.ndarray, F_batch: np.ndarray | None = None, *,
+                progress: bool | None = None) -> np.ndarray:
+        """Roll out B trajectories of N RK4 steps.
+
+        Parameters
+        ----------
+        x0_batch: (B, 2n) initial states [q; qd] (rad, rad/s); (2n,) is broadcast over the batch.
+        U_batch: (B, N, m) inputs per step, N m (zero-order hold); (N, m) is broadcast over x0_batch.
+        F_batch: (B, N, 3) contact forces, N (base frame), when the state space has ``force=True``.
+        progress: show a progress bar on stderr (default: when stderr is a terminal and B N >= 1e6).
+
+        Returns
+        -------
+        (B, N+1, 2n) states, X[:, 0] = x0_batch.
+        """
+        x0 = np.asarray(x0_batch, dtype=float)
+        U = np.asarray(U_batch, dtype=float)
+        m = self.system.n_inputs
+        if x0.ndim == 1:
+            x0 = x0[None, :]
+        if U.ndim == 2:
+            U = U[None]
+        if x0.ndim != 2 or x0.shape[1] != self.nx:
+            raise InputError(f"x0_batch: expected shape (B, {self.nx}), got {np.shape(x0_batch)}")
+        if U.ndim != 3 or U.shape[2] != m:
+            raise InputError(f"U_batch: expected shape (B, N, {m}), got {np.shape(U_batch)}")
+        N = U.shape[1]
+        if N < 1:
+            raise InputError("U_batch: needs at least one step")
+        batched = [(x0, "x0_batch"), (U, "U_batch")]
+        if self.system.force:
+            if F_batch is None:
+                raise InputError("F_batch: this rollout has the contact force as an input; pass (B, N, 3)")
+            F = np.asarray(F_batch, dtype=float)
+            if F.ndim == 2:
+                F = F[None]
+            if F.ndim != 3 or F.shape[1:] != (N, 3):
+                raise InputError(f"F_batch: expected shape (B, {N}, 3), got {np.shape(F_batch)}")
+            batched.append((F, "F_batch"))
+        elif F_batch is not None:
+            raise InputError("F_batch: this rollout has no contact-force input (build it with force=True)")
+        B = max(a.shape[0] for a, _ in batched)
+        for a, name in batched:
+            if a.shape[0] not in (1, B):
+                raise InputError(f"{name}: batch size {a.shape[0]} does not match {B}")
+        W = np.broadcast_to(U, (B, N, m))
+        if self.system.force:
+            W = np.concatenate([W, np.broadcast_to(F, (B, N, 3))], axis=2)
+        W = _finite(np.ascontiguousarray(W, dtype=float), "U_batch")
+        x0 = _finite(np.ascontiguousarray(np.broadcast_to(x0, (B, self.nx))), "x0_batch")
+        if progress is None:
+            progress = B * N >= 1_000_000 and sys.stderr.isatty()
+        X = self._loop.run(x0, W, progress, f"rollout {self.system.model.name} B={B} N={N}")
+        if not np.isfinite(X[:, -1]).all():
+            raise InputError("rollout diverged (non-finite states); reduce dt or the inputs")
+        return X
+
+    __call__ = rollout
+
+
+def compile_rollout(system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
+                    threads: int | None = None) -> CompiledRollout:
+    """Build (or load from the cache) a :class:`CompiledRollout`; see there."""
+    return CompiledRollout(system, dt, input=input, force=force, threads=threads)
