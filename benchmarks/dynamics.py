@@ -24,10 +24,6 @@ import pinocchio as pin
 import alpes_dyn as ad
 
 
-def best_us(fn, number: int, repeat: int) -> float:
-    return min(timeit.repeat(fn, number=number, repeat=repeat)) / number * 1e6
-
-
 def bench(name: str, number: int, repeat: int) -> dict[str, float]:
     m = ad.Model.alpes(name)
     rng = np.random.default_rng(0)
@@ -41,10 +37,11 @@ def bench(name: str, number: int, repeat: int) -> dict[str, float]:
     }
     out: dict[str, float] = {}
     for key, (ours, raw) in pairs.items():
-        # interleave to share any drift of the machine's speed
-        t_raw = best_us(raw, number, repeat)
-        t_ours = best_us(ours, number, repeat)
-        t_raw = min(t_raw, best_us(raw, number, repeat))
+        # interleaved rounds, best of each kept, so that both see the same state of the machine
+        t_raw = t_ours = float("inf")
+        for _ in range(repeat):
+            t_raw = min(t_raw, timeit.timeit(raw, number=number) / number * 1e6)
+            t_ours = min(t_ours, timeit.timeit(ours, number=number) / number * 1e6)
         out[f"{key}_us"] = t_ours
         out[f"{key}_raw_us"] = t_raw
         out[f"{key}_ratio"] = t_ours / t_raw

@@ -33,6 +33,8 @@ __all__ = ["Model", "DEFAULT_GRAVITY"]
 DEFAULT_GRAVITY = np.array([0.0, 0.0, -9.81])
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
+_aba = pin.aba
+_isfinite = math.isfinite
 _WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 
 
@@ -104,6 +106,7 @@ class Model:
         self._spring = self.extras.has_spring
         self._friction = self.extras.has_friction
         self._lower = np.tril_indices(n, -1)
+        self._shape = (n,)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
         if layout is not None:
             self.tips: tuple[str, ...] = layout.tips
@@ -268,9 +271,8 @@ class Model:
         checked once on the result (NaN/inf in any input propagates to it); a non-finite result
         raises :class:`InputError` naming the offending input.
         """
-        n = self.n
         if not (q.__class__ is _ND and v.__class__ is _ND and tau.__class__ is _ND and q.dtype is _F64
-                and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == (n,)):
+                and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == self._shape):
             q, v, tau = self.vector(q, "q"), self.vector(v, "v"), self.vector(tau, "tau")
         if self._spring:
             tau = tau - self._k * q
@@ -278,8 +280,8 @@ class Model:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
             tau = tau + self.contact_torque(q, F, tip)
-        qdd = pin.aba(self.pin_model, self.pin_data, q, v, tau)
-        if not math.isfinite(qdd.dot(qdd)):
+        qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
+        if not _isfinite(qdd.dot(qdd)):
             for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
                 self.vector(x, name)
             if not np.isfinite(qdd).all():

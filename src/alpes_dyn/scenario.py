@@ -189,7 +189,7 @@ def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_va
     """Observer noise settings for the scenario (the keyword arguments of a Kalman filter).
 
     Measurement: the encoder's quantisation plus its noise (``meas_var``, rad^2). Known input: the
-    motor torque noise ``torque_noise``^2 on each of the m motors. Process noise per step: 1e-9 rad on q (numerical),
+    motor torque noise ``torque_noise`` squared on each of the m motors. Process noise per step: 1e-9 rad on q (numerical),
     2e-4 rad/s on qd (unmodelled accelerations, 0.2 rad/s^2 over a 1 ms step) and 2e-5 per step on
     each gain (a random walk: the gains may drift by 1e-3 in a second).
     """
