@@ -66,6 +66,9 @@ def test_dynamics_readable_and_hand_tip(capsys):
     (["dynamics", "--model", "/nonexistent.urdf"], "cannot be read"),
     (["urdf", "finger7"], "unknown model 'finger7'"),
     (["frobnicate"], "invalid choice"),
+    (["estimate", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
+    (["observability", "--points", "0"], "--points: expected an integer >= 1, got 0"),
+    (["report", "--points", "x"], "--points: expected an integer >= 1, got 'x'"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
     code, out, err = run(capsys, *argv)
@@ -82,3 +85,14 @@ def test_console_script_help_shows_negative_vectors():
     assert r.returncode == 0 and "--q=-0.1,0.2,0.3" in r.stdout
     r = subprocess.run(cmd + ["dynamics", "--q", "-0.1,0.2"], capture_output=True, text=True, timeout=60)
     assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
+
+
+def test_estimate_help_lists_every_observer(capsys):
+    from alpes_dyn.observers import OBSERVERS
+
+    with pytest.raises(SystemExit) as e:
+        main(["estimate", "--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert e.value.code == 0
+    for name in OBSERVERS:
+        assert name in out

@@ -31,6 +31,24 @@ class _UsageError(Exception):
     pass
 
 
+def _int_at_least(low: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}") from None
+        if value < low:
+            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {value}")
+        return value
+
+    parse.__name__ = f"integer >= {low}"
+    return parse
+
+
+_SEED = _int_at_least(0)
+_POINTS = _int_at_least(1)
+
+
 def parse_vector(text: str, name: str) -> np.ndarray:
     """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise."""
     parts = [p.strip() for p in text.split(",")]
@@ -215,8 +233,6 @@ def _observability_summary(args: argparse.Namespace) -> dict[str, Any]:
 def cmd_observability(args: argparse.Namespace) -> int:
     from .observability import observability
 
-    if args.points < 1:
-        raise InputError(f"--points: expected a positive integer, got {args.points}")
     order: str | int = getattr(args, "order", "auto")
     if order not in ("auto", "report"):
         try:
@@ -305,8 +321,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_dynamics)
 
     s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")
-    s.add_argument("--points", type=int, default=20, help="random states per check (default %(default)s)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--points", type=_POINTS, default=20, help="random states per check (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_report)
 
@@ -314,19 +330,28 @@ def build_parser() -> argparse.ArgumentParser:
     common(s)
     s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
     s.add_argument("--output", default="sum", choices=("sum", "encoder"), help="y = sum of joint angles or encoders")
-    s.add_argument("--points", type=int, default=8, help="random points for the generic rank (default %(default)s)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--order", default="auto", help="highest derivative order: auto (until the rank stops growing, "
                    "default), report (y..y^(n-1), eq. 3.8) or an integer")
     s.add_argument("--constant-input", action="store_true", help="inputs constant (u' = u'' = ... = 0)")
     s.set_defaults(func=cmd_observability)
 
-    s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder")
+    s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder",
+                       epilog="Example: alpes-dyn estimate --model finger3 --observer ekf-params --mismatch 0.1 "
+                              "--plot estimate.png")
     common(s)
-    s.add_argument("--observer", default="ekf", help="observer (default %(default)s)")
-    s.add_argument("--mismatch", type=float, default=0.0, help="relative error of the observer's springs and masses")
+    s.set_defaults(model="finger3")
+    for a in s._actions:
+        if a.dest == "model":
+            a.help = "finger2 or finger3 (default %(default)s)"
+    s.add_argument("--observer", default="ekf",
+                   help="ekf, ukf, or ekf-params, ukf-params (which also estimate the input and spring gains: use "
+                        "them with --mismatch) (default %(default)s)")
+    s.add_argument("--mismatch", type=float, default=0.0,
+                   help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
     s.add_argument("--duration", type=float, default=5.0, help="simulated time, s (default %(default)s)")
-    s.add_argument("--seed", type=int, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints")
     s.set_defaults(func=cmd_estimate)
     return p
