@@ -50,7 +50,7 @@ import casadi as cs
 import numpy as np
 
 from .errors import InputError, ModelError
-from .simulation import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations
+from .simulation import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from .statespace import StateSpace
 
 __all__ = [
@@ -111,11 +111,7 @@ class DiscreteModel:
         z = cs.SX.sym("z", self.nz)
         w = cs.SX.sym("w", self.nw)
         zdot = cs.Function("zdot", [z, w], [self._rhs(z, w)])
-        k1 = zdot(z, w)
-        k2 = zdot(z + 0.5 * self.dt * k1, w)
-        k3 = zdot(z + 0.5 * self.dt * k2, w)
-        k4 = zdot(z + self.dt * k3, w)
-        zn = z + (self.dt / 6.0) * (k1 + 2 * k2 + 2 * k3 + k4)
+        zn = rk4_expression(zdot, z, w, self.dt)
         self.step = cs.Function("step", [z, w], [cs.cse(zn)], ["z", "w"], ["z_next"])
         self.output = cs.Function("h", [z], [system.h_function(z[: self.nx])], ["z"], ["y"])
 

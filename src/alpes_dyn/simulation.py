@@ -48,7 +48,7 @@ from .model import Model
 from .statespace import StateSpace
 
 __all__ = [
-    "METHODS", "SimulationResult", "simulate", "rk4_step_function", "as_statespace", "CompiledRollout",
+    "METHODS", "SimulationResult", "simulate", "rk4_expression", "rk4_step_function", "as_statespace", "CompiledRollout",
     "compile_rollout", "CompiledStepLoop", "cache_dir", "CompilerError", "joint_accelerations",
 ]
 
@@ -106,6 +106,15 @@ def _rhs_function(ss: StateSpace) -> cs.Function:
     return cs.Function("f", [ss.x, w], [cs.vertcat(v, qdd)], ["x", "w"], ["xdot"])
 
 
+def rk4_expression(f: cs.Function, x: cs.SX, w: cs.SX, dt: float) -> cs.SX:
+    """One classical Runge-Kutta step of x' = f(x, w), w held over the step: x + dt/6 (k1 + 2 k2 + 2 k3 + k4)."""
+    k1 = f(x, w)
+    k2 = f(x + 0.5 * dt * k1, w)
+    k3 = f(x + 0.5 * dt * k2, w)
+    k4 = f(x + dt * k3, w)
+    return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+
+
 def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step") -> cs.Function:
     """One classical Runge-Kutta step of x' = f(x, w) with w held constant: ``step(x, w) -> x_next``.
 
@@ -127,11 +136,7 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step") -> 
     f = _rhs_function(system)
     x = cs.SX.sym("x", system.n_states)
     w = cs.SX.sym("w", _n_known_inputs(system))
-    k1 = f(x, w)
-    k2 = f(x + 0.5 * dt * k1, w)
-    k3 = f(x + 0.5 * dt * k2, w)
-    k4 = f(x + dt * k3, w)
-    xn = x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
+    xn = rk4_expression(f, x, w, dt)
     # common-subexpression elimination: the symbolic dynamics repeat sin/cos of the same angles
     step = cs.Function(name, [x, w], [cs.cse(xn)], ["x", "w"], ["x_next"])
     cache[key] = step
