@@ -84,10 +84,10 @@ def draw_hand(ax, model: ad.Model, q: np.ndarray, title: str) -> None:
 # A grasp
 # -------
 # Each finger flexes its three joints through one tendon; here the four fingers close around an
-# object and the thumb flexes toward them. (``configuration(hand, index=0.55)`` sets the three
+# object and the thumb swings toward them (ab/adduction) and flexes. (``configuration(hand, index=0.55)`` sets the three
 # index joints to 0.55 rad.)
 
-grasp = configuration(hand, index=0.55, middle=0.6, ring=0.65, little=0.7, thumb=0.8)
+grasp = configuration(hand, index=0.55, middle=0.6, ring=0.65, little=0.7, thumb_abd=0.9, thumb=0.6)
 fig = plt.figure(figsize=(6.4, 5.2))
 ax = fig.add_subplot(projection="3d")
 draw_hand(ax, hand, grasp, "grasp")
