@@ -79,6 +79,15 @@ def test_gravity_is_gradient_of_potential(name, rng):
     assert np.max(np.abs(grad - m.gravity_torque(q))) < 1e-8
 
 
+@pytest.mark.parametrize("name", ad.MODELS)
+def test_gravity_jacobian_matches_finite_differences(name, rng):
+    m = ad.Model.alpes(name)
+    q, _ = m.random_state(rng)
+    h = 1e-6
+    fd = np.column_stack([(m.gravity_torque(q + h * e) - m.gravity_torque(q - h * e)) / (2 * h) for e in np.eye(m.n)])
+    assert np.max(np.abs(m.gravity_jacobian(q) - fd)) < 1e-8 * max(1.0, np.max(np.abs(fd)))
+
+
 def test_hand_fingers_equal_finger3_and_decouple(rng):
     """The hand's index block equals finger3 (same orientation, gravity and springs); blocks do not couple."""
     hand = ad.Model.alpes("hand")

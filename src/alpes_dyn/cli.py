@@ -259,6 +259,11 @@ def cmd_estimate(args: argparse.Namespace) -> int:
                          f"got {args.model!r}")
     if args.observer not in OBSERVERS:
         raise InputError(f"--observer: unknown observer {args.observer!r} (expected one of {', '.join(OBSERVERS)})")
+    if args.plot:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
     t0 = time.perf_counter()
     res = run_estimation(args.observer, model=args.model, spring=args.spring, params=args.params,
                          mismatch=args.mismatch, duration=args.duration, seed=args.seed)

@@ -231,6 +231,13 @@ class Model:
         g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, q)
         return g + self._k * q if self._spring else g.copy()
 
+    def gravity_jacobian(self, q: np.ndarray) -> np.ndarray:
+        """dG/dq (n, n), N m/rad: Pinocchio's analytic gravity derivatives plus the spring stiffness diag(k)."""
+        q = self.vector(q, "q")
+        dG = pin.computeGeneralizedGravityDerivatives(self.pin_model, self.pin_data, q).copy()
+        dG[np.diag_indices(self.n)] += self._k
+        return dG
+
     def friction_torque(self, v: np.ndarray, smooth: bool = False) -> np.ndarray:
         """Friction F_v qd + f_s (eq. 2.6-2.7), (n,), N m; ``smooth`` uses tanh(qd / v_s) for sign."""
         return self.extras.friction_torque(self.vector(v, "v"), smooth)

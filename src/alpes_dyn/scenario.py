@@ -157,17 +157,16 @@ class EstimationResult:
 def static_equilibrium(model: Model, tau: np.ndarray, q: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
     """Joint angles q (rad) where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
 
-    Newton's method from ``q`` (default 0) with a central-difference Jacobian of G; raises
+    Newton's method from ``q`` (default 0) with the analytic Jacobian of G
+    (:meth:`Model.gravity_jacobian <alpes_dyn.Model.gravity_jacobian>`); raises
     :class:`~alpes_dyn.InputError` if it does not converge in 50 iterations.
     """
     q = np.zeros(model.n) if q is None else np.array(q, dtype=float)
-    h = 1e-7
     for _ in range(50):
         r = model.gravity_torque(q) - tau
         if np.max(np.abs(r)) < tol:
             return q
-        J = np.column_stack([(model.gravity_torque(q + h * e) - model.gravity_torque(q - h * e)) / (2 * h)
-                             for e in np.eye(model.n)])
+        J = model.gravity_jacobian(q)
         try:
             dq = np.linalg.solve(J, -r)
         except np.linalg.LinAlgError:
