@@ -319,9 +319,12 @@ class Model:
         """Joint upper limits from the URDF (rad)."""
         return self.pin_model.upperPositionLimit.copy()
 
-    def random_state(self, rng: np.random.Generator, speed: float = 2.0) -> tuple[np.ndarray, np.ndarray]:
-        """A random (q, v): q uniform within the joint limits, v uniform in [-speed, speed] rad/s."""
+    def random_state(self, rng: np.random.Generator, speed: float = 2.0,
+                     size: int | None = None) -> tuple[np.ndarray, np.ndarray]:
+        """A random (q, v): q uniform within the joint limits (+-pi where a limit is missing or huge),
+        v uniform in [-speed, speed] rad/s; shapes (n,), or (size, n) for ``size`` states at once."""
         lo, hi = self.lower, self.upper
         lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.pi)
         hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
-        return rng.uniform(lo, hi), rng.uniform(-speed, speed, self.n)
+        shape = self.n if size is None else (size, self.n)
+        return rng.uniform(lo, hi, size=None if size is None else shape), rng.uniform(-speed, speed, shape)

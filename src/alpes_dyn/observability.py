@@ -251,13 +251,7 @@ def _order(k: Any) -> int:
 def sample_points(ss: StateSpace, points: int, rng: np.random.Generator, order: int,
                   constant_input: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Random points (X (N, n_states), W (N, w_size)) for the generic rank, see the module doc."""
-    model = ss.model
-    n = ss.n
-    lo, hi = model.lower, model.upper
-    lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.pi)
-    hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
-    q = rng.uniform(lo, hi, size=(points, n))
-    v = rng.uniform(-_SPEED, _SPEED, size=(points, n))
+    q, v = ss.model.random_state(rng, _SPEED, size=points)
     scale = _input_scale(ss, q)
     reps = 1 if constant_input else max(order, 1)
     W = rng.uniform(-1.0, 1.0, size=(points, reps * scale.size)) * np.tile(scale, reps)

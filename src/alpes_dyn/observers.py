@@ -221,17 +221,17 @@ class KalmanFilter:
         P = cs.SX.sym("P", mdl.nz, mdl.nz)
         w = cs.SX.sym("w", mdl.nw)
         y = cs.SX.sym("y", mdl.ny)
-        zp, Pp = self._predict_sym(z, P, w)
-        zp, Pp = cs.SX(zp), cs.SX(Pp)
-        zu, Pu = self._update_sym(zp, Pp, y)
-        zu0, Pu0 = self._update_sym(z, P, y)
         nz = mdl.nz
-        self._predict = cs.Function("predict", [z, P, w], [zp, Pp], ["z", "P", "w"], ["z_pred", "P_pred"])
-        self._update = cs.Function("update", [z, P, y], [zu0, Pu0], ["z", "P", "y"], ["z_upd", "P_upd"])
-        s = cs.vertcat(z, cs.vec(P))
-        r = cs.vertcat(w, y)
-        zs, Ps = s[:nz], cs.reshape(s[nz:], nz, nz)
-        out = cs.Function("tmp", [z, P, w, y], [cs.vertcat(zu, cs.vec(Pu))])(zs, Ps, r[: mdl.nw], r[mdl.nw:])
+        self._predict = cs.Function("predict", [z, P, w], list(self._predict_sym(z, P, w)), ["z", "P", "w"],
+                                    ["z_pred", "P_pred"])
+        self._update = cs.Function("update", [z, P, y], list(self._update_sym(z, P, y)), ["z", "P", "y"],
+                                   ["z_upd", "P_upd"])
+        # one step on s = [z; vec P] and [w; y]: the two SX functions called on symbols are inlined
+        s = cs.SX.sym("s", nz + nz * nz)
+        r = cs.SX.sym("wy", mdl.nw + mdl.ny)
+        zp, Pp = self._predict(s[:nz], cs.reshape(s[nz:], nz, nz), r[: mdl.nw])
+        zu, Pu = self._update(zp, Pp, r[mdl.nw:])
+        out = cs.vertcat(zu, cs.vec(Pu))
         self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [cs.cse(out)], ["s", "wy"], ["s_next"])
         self._loop: CompiledStepLoop | None = None
         self.backend = "casadi"
