@@ -143,12 +143,19 @@ class Model:
                 K[idx[ch.abduction]] = lay.abduction_stiffness
                 arm[idx[ch.abduction]] = p.abduction_ratio**2 * p.J_m
         k = spring_stiffness(K, spring, p.b, p.r)
-        ones = np.ones(m.n)
+        Fs, Fv = np.full(m.n, p.F_s), np.full(m.n, p.F_v)
+        for ch in lay.chains:  # per-joint friction of a chain, where the file gives it
+            chain = p.thumb if ch.abduction else p.finger
+            cols = [idx[j] for j in ch.joints]
+            if chain.F_s is not None:
+                Fs[cols] = chain.F_s[: len(cols)]
+            if chain.F_v is not None:
+                Fv[cols] = chain.F_v[: len(cols)]
         extras = JointExtras(
             stiffness=k,
             armature=arm if rotor_inertia else np.zeros(m.n),
-            coulomb=p.F_s * ones if friction else np.zeros(m.n),
-            viscous=p.F_v * ones if friction else np.zeros(m.n),
+            coulomb=Fs if friction else np.zeros(m.n),
+            viscous=Fv if friction else np.zeros(m.n),
             smooth_velocity=p.smooth_velocity,
         )
         return cls(m.urdf, extras=extras, gravity=p.gravity, name=model, layout=lay, params=p, spring=spring)
