@@ -8,7 +8,7 @@ Start with :meth:`alpes_dyn.Model.alpes`::
 """
 
 from .description import MODELS, example_robot_urdf, layout, urdf_string, write_urdfs
-from .errors import AlpesDynError, InputError, ModelError
+from .errors import AlpesDynError, InputError, ModelError, RecordingError
 from .extras import SPRING_MODELS, JointExtras
 from .model import Model
 from .observability import ObservabilityReport, observability
@@ -19,6 +19,6 @@ from .transmission import Transmission
 __version__ = "0.1.0"
 
 __all__ = [
-    "AlpesDynError", "InputError", "ModelError", "Model", "JointExtras", "Transmission", "HandParams",
+    "AlpesDynError", "InputError", "ModelError", "RecordingError", "Model", "JointExtras", "Transmission", "HandParams",
     "StateSpace", "observability", "ObservabilityReport", "load_params", "urdf_string", "layout", "write_urdfs", "example_robot_urdf", "MODELS", "SPRING_MODELS",
 ]

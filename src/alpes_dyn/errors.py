@@ -13,3 +13,7 @@ class ModelError(AlpesDynError, ValueError):
 
 class InputError(AlpesDynError, ValueError):
     """A numeric input (vector, matrix, time step...) has the wrong shape or is not finite."""
+
+
+class RecordingError(InputError):
+    """A recording (CSV of an experiment) is missing a column, has wrong units, is too short or unexcited."""

@@ -1,0 +1,410 @@
+"""Identification of a finger's physical parameters from a recording (output-error, multiple shooting).
+
+Problem. With the recording's measured motor torques as the known input, find the parameters theta
+(:mod:`alpes_dyn.parametric`: K_i, m_i with I_i, F_s_i, F_v_i, ...) and the initial states that make the
+model's encoder reading q_m = S q (Section 3, eq. 3.13) -- and, where the recording has them, the
+camera's joint angles -- match the recording in the least-squares sense:
+
+    min  sum_k |S q_k - y_k|^2 / sigma_y^2 + sum_(k, i measured) (q_k,i - q^meas_k,i)^2 / sigma_q^2.
+
+Method: direct multiple shooting (Bock): the record is cut into intervals of ``interval`` seconds,
+each starting from its own state s_j; continuity s_j+1 = x(end of interval j) is an equality
+constraint. A lightly damped, stiff-ish system makes single shooting's cost landscape rugged; multiple
+shooting keeps every interval short, so the problem stays close to linear and converges from the
+nominal parameters. Each iteration is a constrained Gauss-Newton step (Levenberg-Marquardt damped,
+l1-merit line search) on the exact Jacobians of the RK4-discretised model, all intervals simulated
+with their sensitivities at once in compiled C (:class:`~alpes_dyn.sensitivity.SensitivityModel`).
+Parameters are fitted as log theta: every iterate is physical (masses, springs and friction
+positive, inertias scaled with their masses). The standard errors are those of the Gauss-Newton
+covariance at the solution scaled by the residual variance (a posteriori), by the delta method on
+theta = theta_0 exp(rho).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from .errors import InputError, ModelError, RecordingError
+from .model import Model
+from .params import HandParams, Param, with_values, write_params
+from .recording import Recording, check_recording
+from .scenario import static_equilibrium
+from .sensitivity import SensitivityModel
+from .simulation import _Progress
+
+__all__ = ["IdentificationResult", "identify", "identified_params", "project_torque"]
+
+
+@dataclass
+class IdentificationResult:
+    """Estimates and diagnostics of :func:`identify`.
+
+    Attributes
+    ----------
+    names: parameter names (p,). values, std, initial: (p,) in their units. units: (p,).
+    correlation: (p, p). residual_rms: RMS encoder residual, counts. iterations, converged.
+    seconds: wall time of the fit; compile_seconds: of it, compiling the sensitivity code (0 when
+    cached). states: (S, 2n) fitted states at the shooting nodes; node_times (S,) s.
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    std: np.ndarray
+    initial: np.ndarray
+    units: tuple[str, ...]
+    correlation: np.ndarray
+    residual_rms: float
+    iterations: int
+    converged: bool
+    seconds: float
+    compile_seconds: float
+    states: np.ndarray
+    node_times: np.ndarray
+    model: Model = field(repr=False)
+    recording_path: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``alpes-dyn identify --json``."""
+        return {
+            "parameters": {n: {"value": float(v), "std": float(s), "initial": float(i), "unit": u}
+                           for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
+            "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
+            "converged": self.converged, "seconds": self.seconds, "compile_seconds": self.compile_seconds,
+            "model": self.model.name,
+        }
+
+    def params(self, base: HandParams | None = None) -> HandParams:
+        """The parameter set with the fitted values (see :func:`identified_params`)."""
+        return identified_params(self, base)
+
+    def write(self, path: str | Path, base: HandParams | None = None) -> Path:
+        """Write the identified parameter file (the base file with each fitted value ``identified``)."""
+        return write_params(self.params(base), path,
+                            header=f"Identified by alpes_dyn from {self.recording_path or 'a recording'} "
+                                   f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+
+
+def identified_params(result: IdentificationResult, base: HandParams | None = None) -> HandParams:
+    """``base`` (default: the model's parameter file) with the fitted values of a finger model.
+
+    K_i -> ``finger.K``, m_i -> ``finger.m`` and ``finger.I`` (scaled with the mass), F_s_i, F_v_i ->
+    ``finger.F_s``, ``finger.F_v``; each marked ``source = "identified"`` with its standard error.
+    """
+    p = base if base is not None else result.model.params
+    if p is None:
+        raise ModelError("identified parameters: the model has no parameter file; pass base=")
+    if result.model.name not in ("finger2", "finger3"):
+        raise ModelError(f"identified parameters: writing a parameter file is supported for finger2 and finger3, "
+                         f"not {result.model.name!r}")
+    n = result.model.n
+    reason = (f"identified from {result.recording_path or 'a recording'} by multiple shooting "
+              f"({result.residual_rms:.3g} counts RMS residual)")
+    f = p.finger
+    arrays = {"K": f.K.copy(), "m": f.m.copy(), "I": f.I.copy(),
+              "F_s": (f.F_s if f.F_s is not None else np.full(3, p.F_s)).copy(),
+              "F_v": (f.F_v if f.F_v is not None else np.full(3, p.F_v)).copy()}
+    stds = {k: np.zeros(3) for k in arrays}
+    touched = set()
+    for name, value, sd in zip(result.names, result.values, result.std):
+        kind, _, idx = name.rpartition("_")
+        if kind not in ("K", "m", "F_s", "F_v") or not idx.isdigit() or not 1 <= int(idx) <= n:
+            raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
+        i = int(idx) - 1
+        if kind == "m":
+            scale = value / arrays["m"][i]
+            arrays["I"][i] *= scale
+            stds["I"][i] = arrays["I"][i] * sd / value
+            touched.add("I")
+        arrays[kind][i] = value
+        stds[kind][i] = sd
+        touched.add(kind)
+    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad"}
+    upd = {}
+    for k in touched:
+        old = p.raw.get(f"finger.{k}")
+        desc = old.description if old is not None else f"per-joint {k}"
+        upd[f"finger.{k}"] = Param(arrays[k], units[k], "identified", reason, desc, stds[k])
+    return with_values(p, upd)
+
+
+def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
+    """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
+    ``frequencies`` (Hz): the excitation without the measurement noise off its lines."""
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
+    t = np.asarray(t, dtype=float)
+    fs = 1.0 / ((t[-1] - t[0]) / (t.shape[0] - 1))
+    if np.any(f >= 0.5 * fs):
+        raise InputError(f"excitation: frequencies must be below the Nyquist frequency {0.5 * fs:g} Hz")
+    if 2 * f.size + 1 >= t.shape[0] // 4:
+        raise InputError(f"excitation: {f.size} frequencies are too many for {t.shape[0]} samples")
+    w = 2 * np.pi * f[None, :] * (t - t[0])[:, None]
+    A = np.hstack([np.ones((t.shape[0], 1)), np.sin(w), np.cos(w)])
+    coef, *_ = np.linalg.lstsq(A, torque, rcond=None)
+    return A @ coef
+
+
+def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Recording, str]:
+    if isinstance(recording, Recording):
+        return check_recording(recording), ""
+    from .recording import read_recording
+
+    return read_recording(recording, model), str(recording)
+
+
+def identify(model: Model, recording: Recording | str | Path, parameters: str | Sequence[str] | None = None, *,
+             excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int = 4,
+             torque_noise: float = 0.0, camera_noise: float = math.radians(0.1),
+             max_iterations: int = 50, tol: float = 1e-10, threads: int | None = None,
+             progress: bool | None = None) -> IdentificationResult:
+    """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
+
+    Parameters
+    ----------
+    model: the finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``);
+        parameters not fitted keep its values.
+    recording: a :class:`~alpes_dyn.recording.Recording` or a CSV path (:func:`~alpes_dyn.recording.read_recording`).
+    parameters: selection (:func:`~alpes_dyn.parametric.select_parameters`), default K, m and friction.
+    excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().frequencies``):
+        the measured torque is replaced by its least-squares fit on a constant and these sines and
+        cosines, which removes all but ~(2 n_f + 1) / N of the torque noise (periodic-excitation
+        identification). None: the measured torque as it is.
+    interval: multiple-shooting interval, s. substeps: RK4 steps per sample.
+    torque_noise: standard deviation of the recorded torque's white noise, N m (default: the estimation
+        scenario's 5e-4). With a positive value each interval gets a constant torque correction with prior
+        sigma = torque_noise / sqrt(samples per interval) (errors in variables: near its gravity balance
+        a finger turns even in-band torque noise into degrees); 0 takes the torque as exact.
+    camera_noise: standard deviation of the recording's joint-angle measurements, rad (weights them
+        against the encoder, whose noise is its quantisation step / sqrt(12) plus the fit's residual).
+    max_iterations, tol: Gauss-Newton stopping rule (relative change of the cost and of log theta).
+    progress: a progress line on stderr (default: when stderr is a terminal).
+
+    Returns
+    -------
+    :class:`IdentificationResult`. Raises :class:`~alpes_dyn.errors.RecordingError` for a recording
+    that does not fit the model, :class:`~alpes_dyn.InputError` for bad settings.
+    """
+    t_start = time.perf_counter()
+    if not isinstance(model, Model):
+        raise InputError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+    if model.transmission is None:
+        raise ModelError(f"model {model.name!r} has no tendon transmission: nothing to read the encoder with")
+    rec, rec_path = _as_recording(recording, model)
+    if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or tuple(rec.joint_names) != model.joint_names:
+        raise RecordingError(f"recording: motors {rec.motor_names} / joints {rec.joint_names} do not match model "
+                             f"{model.name!r}")
+    for name, v in (("interval", interval), ("camera_noise", camera_noise), ("tol", tol)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise InputError(f"{name}: expected a positive number, got {v!r}")
+    if not isinstance(max_iterations, int) or max_iterations < 1:
+        raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
+    dt = rec.dt
+    L = int(round(interval / dt))
+    N = rec.n_samples - 1
+    if L < 2 or L > N:
+        raise InputError(f"interval: {interval:g} s must hold 2 to {N} samples of {dt:g} s")
+    if not (isinstance(torque_noise, (int, float)) and math.isfinite(torque_noise) and torque_noise >= 0):
+        raise InputError(f"torque_noise: expected a non-negative number of N m, got {torque_noise!r}")
+    eiv = torque_noise > 0
+    sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads, input_offset=eiv)
+    nx, p, nu, n = sens.nx, sens.p, sens.nu, sens.n
+    no = sens.no
+    nb = nx + no  # local variables of an interval: its start state and its torque correction
+    tr = model.transmission
+    S_enc = np.asarray(tr.S, dtype=float)
+    ny = S_enc.shape[0]
+    step = 2 * np.pi / tr.counts_per_rev
+    y = rec.encoder * step  # motor angle, rad
+    sig_y = step / math.sqrt(12.0)
+    sig_off = torque_noise / math.sqrt(L) if eiv else 1.0  # the mean of L white samples
+    U = rec.torque[:-1] if excitation is None else project_torque(rec.t, rec.torque, excitation)[:-1]
+    G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (N, 3))
+    n_int = -(-N // L)
+    pad = n_int * L - N
+    Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
+    Gb = np.concatenate([G, np.repeat(G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+    # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
+    k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
+    valid = k_idx <= N
+    valid[:-1, L] = False  # an interval's end is the next one's start
+    kk = np.minimum(k_idx, N)
+    Yb = y[kk]  # (S, L+1, m)
+    Qm = rec.q[kk] if rec.q is not None else None  # (S, L+1, n) with NaN
+    q_mask = np.isfinite(Qm) & valid[:, :, None] if Qm is not None else None
+
+    theta0 = sens.nominal.copy()
+    if np.any(theta0 <= 0):
+        bad = sens.names[int(np.argmax(theta0 <= 0))]
+        raise ModelError(f"parameters: {bad} has the starting value {theta0[np.argmax(theta0 <= 0)]:g}; a fitted "
+                         "parameter needs a positive starting value (use a model with that term switched on)")
+
+    # initial guess: the model's own response from its static equilibrium, cut at the nodes
+    q0 = static_equilibrium(model, tr.joint_torque(U[0])) if rec.gravity is None else np.zeros(n)
+    x_nom, _ = sens.run(np.concatenate([q0, np.zeros(n)])[None], U[None], G[None], theta0,
+                        np.zeros((1, no)) if eiv else None)
+    nodes = x_nom[0, np.arange(n_int) * L].copy()
+    if not np.isfinite(nodes).all():
+        nodes[:] = np.concatenate([q0, np.zeros(n)])
+    offs = np.zeros((n_int, no))
+    rho = np.zeros(p)
+    iv, ip, io = slice(0, nx), slice(nx, nx + p), slice(nx + p, nx + p + no)
+
+    def evaluate(nodes: np.ndarray, offs: np.ndarray, rho: np.ndarray):
+        """Residuals r (S, R), their Jacobians J (S, R, nb + p) with respect to the interval's local
+        variables and log theta, continuity c (S-1, nx) and its Jacobians Cv (S-1, nx, nb), Cr (S-1, nx, p)."""
+        theta = theta0 * np.exp(rho)
+        xs, X = sens.run(nodes, Ub, Gb, theta, offs if eiv else None)
+        Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1)  # (S, L+1, nx, nb)
+        Xr = X[..., ip] * theta  # d/d rho
+        q = xs[:, :, :n]
+        r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
+        w = valid[:, :, None, None] / sig_y
+        res = [r_enc.reshape(n_int, -1)]
+        jac = [np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
+                               np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1).__mul__(w)
+               .reshape(n_int, -1, nb + p)]
+        if Qm is not None:
+            rq = np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise
+            Jq = np.concatenate([Xv[:, :, :n], Xr[:, :, :n]], axis=-1) / camera_noise * q_mask[:, :, :, None]
+            res.append(rq.reshape(n_int, -1))
+            jac.append(Jq.reshape(n_int, -1, nb + p))
+        if eiv:  # the torque corrections' prior: zero mean, sigma_u / sqrt(L)
+            res.append(offs / sig_off)
+            Jo = np.zeros((n_int, no, nb + p))
+            Jo[:, :, nx:nb] = np.eye(no) / sig_off
+            jac.append(Jo)
+        r = np.concatenate(res, axis=1)
+        J = np.concatenate(jac, axis=1)
+        c = xs[:-1, L] - nodes[1:]
+        return r, J, c, Xv[:-1, L], Xr[:-1, L], xs
+
+    nv = n_int * nb
+    nz = nv + p
+    nc = (n_int - 1) * nx
+
+    def kkt(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float) -> np.ndarray:
+        """Normal equations of the interval-structured least squares, with the continuity constraints."""
+        A, P = J[:, :, :nb], J[:, :, nb:]
+        H = np.zeros((nz, nz))
+        AA = np.einsum("ski,skj->sij", A, A)
+        AP = np.einsum("ski,skj->sij", A, P)
+        for j in range(n_int):  # one block per interval: a loop over intervals, not time steps
+            sl = slice(j * nb, (j + 1) * nb)
+            H[sl, sl] = AA[j]
+            H[sl, nv:] = AP[j]
+        H[nv:, nv:] = np.einsum("ski,skj->ij", P, P)
+        H = np.triu(H) + np.triu(H, 1).T
+        D = np.diag(H).copy()
+        H[np.diag_indices(nz)] += mu * np.maximum(D, 1e-12 * max(D.max(), 1.0))
+        C = np.zeros((nc, nz))
+        for j in range(n_int - 1):
+            rows = slice(j * nx, (j + 1) * nx)
+            C[rows, j * nb:(j + 1) * nb] = Cv[j]
+            C[rows, (j + 1) * nb:(j + 1) * nb + nx] = -np.eye(nx)
+            C[rows, nv:] = Cr[j]
+        K = np.zeros((nz + nc, nz + nc))
+        K[:nz, :nz], K[:nz, nz:], K[nz:, :nz] = H, C.T, C
+        return K
+
+    def grad(r: np.ndarray, J: np.ndarray) -> np.ndarray:
+        gs = np.einsum("sk,skd->sd", r, J)
+        return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0)])
+
+    # stage 1: the nodes alone (theta fixed, intervals decoupled), from the nominal states shifted onto the
+    # measured encoder: a start close to the data, where Gauss-Newton on the whole problem converges
+    k_nodes = np.arange(n_int) * L
+    Sp = np.linalg.pinv(S_enc)
+    nodes[:, :n] += (y[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
+    nodes[:, n:] += (np.gradient(y, dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+    mu_n = 1e-2 * np.ones(n_int)
+    for _ in range(8):
+        r, J, *_ = evaluate(nodes, offs, rho)
+        A = J[:, :, :nx]
+        Hn = np.einsum("ski,skj->sij", A, A)
+        gn = np.einsum("sk,ski->si", r, A)
+        Dn = np.einsum("sii->si", Hn)
+        dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)), gn[:, :, None])
+        r2, *_ = evaluate(nodes + dn[:, :, 0], offs, rho)
+        better = np.sum(r2**2, axis=1) < np.sum(r**2, axis=1)
+        nodes[better] += dn[better, :, 0]
+        mu_n = np.where(better, mu_n / 10, mu_n * 10)
+
+    max_log_step = 0.3  # at most a 35 % change of any parameter per iteration
+    c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)  # per state component
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    bar = _Progress(max_iterations, "identify", show)
+    r, J, c, Cv, Cr, xs = evaluate(nodes, offs, rho)
+    nu_merit = 1.0
+    mu = 1e-3
+    converged = False
+    it = 0
+    for it in range(1, max_iterations + 1):
+        cost = 0.5 * float(np.sum(r**2))
+        K = kkt(J, Cv, Cr, mu)
+        rhs = np.concatenate([-grad(r, J), -c.reshape(-1)])
+        try:
+            sol = np.linalg.solve(K, rhs)
+        except np.linalg.LinAlgError:
+            sol = np.linalg.lstsq(K, rhs, rcond=None)[0]
+        d, lam = sol[:nz], sol[nz:]
+        nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
+        merit = cost + nu_merit * float(np.sum(np.abs(c)))
+        dv, drho = d[:nv].reshape(n_int, nb), d[nv:]
+        big = float(np.max(np.abs(drho), initial=0.0))
+        if big > max_log_step:  # a trust region on log theta: no jump into a far basin
+            dv, drho = dv * (max_log_step / big), drho * (max_log_step / big)
+        accepted = False
+        for alpha in (1.0, 0.5, 0.25, 0.1, 0.03):
+            trial = evaluate(nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], rho + alpha * drho)
+            if not (np.isfinite(trial[0]).all() and np.isfinite(trial[2]).all()):
+                continue
+            m_new = 0.5 * float(np.sum(trial[0] ** 2)) + nu_merit * float(np.sum(np.abs(trial[2])))
+            if m_new < merit:
+                accepted = True
+                break
+        bar.update(1)
+        if not accepted:
+            mu *= 10.0
+            if mu > 1e8:
+                break
+            continue
+        step_rho = float(np.max(np.abs(alpha * drho), initial=0.0))
+        nodes, offs, rho = nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], rho + alpha * drho
+        r, J, c, Cv, Cr, xs = trial
+        mu = max(mu / 10.0, 1e-9) if alpha == 1.0 else min(mu * 3.0, 1e6)
+        viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
+        small_change = abs(merit - m_new) <= tol * max(merit, 1e-300) and step_rho < 1e-6
+        if viol < 1e-8 and (small_change or step_rho < 1e-10):
+            converged = True
+            break
+    bar.close()
+
+    # covariance: the Gauss-Newton KKT inverse at the solution, scaled by the residual variance
+    K0 = kkt(J, Cv, Cr, 0.0)
+    try:
+        Kinv = np.linalg.inv(K0)
+    except np.linalg.LinAlgError:
+        Kinv = np.linalg.pinv(K0)
+    n_res = int(valid.sum()) * ny + (int(q_mask.sum()) if q_mask is not None else 0) + n_int * no
+    dof = max(n_res - (nz - nc), 1)
+    s2 = float(np.sum(r**2)) / dof
+    P_rho = Kinv[nv:nz, nv:nz] * s2
+    theta = theta0 * np.exp(rho)
+    sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
+    corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
+    enc_res = r[:, : (L + 1) * ny] * sig_y / step
+    rms = float(np.sqrt(np.sum(enc_res**2) / max(int(valid.sum()) * ny, 1)))
+    return IdentificationResult(
+        names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
+        units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
+        converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
+        states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)

@@ -1,0 +1,124 @@
+"""Identification: parametric dynamics, recordings, the experiment, the multiple-shooting fit."""
+
+from __future__ import annotations
+
+import math
+
+import casadi as cs
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import ModelError, RecordingError
+from alpes_dyn.experiment import ExperimentDesign, experiment, perturbed_params
+from alpes_dyn.identification import identify, project_torque
+from alpes_dyn.parametric import ParametricDynamics, select_parameters
+from alpes_dyn.params import load_params, write_params
+from alpes_dyn.recording import read_recording, write_recording
+
+
+@pytest.fixture(scope="module")
+def finger2():
+    return ad.Model.alpes("finger2", friction=True)
+
+
+def test_parametric_dynamics_equal_pinocchio_with_other_parameters(rng):
+    """qdd with theta = a perturbed parameter set equals Pinocchio on a model built from that set."""
+    nominal = ad.Model.alpes("finger3", friction=True, rotor_inertia=True)
+    pd = ParametricDynamics(nominal, None, gravity_input=True)
+    true = perturbed_params(spread=0.2, seed=4)
+    g = np.array([1.0, -2.0, -9.5])
+    m = ad.Model.alpes("finger3", friction=True, rotor_inertia=True, params=true)
+    m = ad.Model(m.urdf, m.extras, g, m.name, m.layout, m.params, m.spring)
+    theta = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]
+    assert pd.names == ("K_1", "K_2", "K_3", "m_1", "m_2", "m_3", "F_s_1", "F_s_2", "F_s_3", "F_v_1", "F_v_2",
+                        "F_v_3")
+    q, v, tau = (cs.SX.sym(s, 3) for s in "qvt")
+    f = cs.Function("f", [q, v, tau, pd.theta, pd.g], [pd.forward_dynamics(q, v, tau, pd.theta, pd.g)])
+    for _ in range(5):
+        qq, vv = m.random_state(rng)
+        tt = rng.normal(scale=0.05, size=3)
+        ref = m.forward_dynamics(qq, vv, tt, smooth=True)
+        assert np.max(np.abs(np.array(f(qq, vv, tt, theta, g)).ravel() - ref)) < 1e-12 * np.max(np.abs(ref))
+
+
+def test_parameter_selection(finger2):
+    assert [p.name for p in select_parameters(finger2, "K")] == ["K_1", "K_2"]
+    assert [p.name for p in select_parameters(finger2, "m_2,friction")] == ["m_2", "F_s_1", "F_s_2", "F_v_1", "F_v_2"]
+    with pytest.raises(ModelError, match="unknown parameter 'K_9'"):
+        select_parameters(finger2, "K_9")
+    with pytest.raises(ModelError, match="selected twice"):
+        select_parameters(finger2, "K,K_1")
+    with pytest.raises(ModelError, match="selects nothing"):
+        select_parameters(ad.Model.alpes("finger2"), "friction")
+
+
+def test_identified_parameter_file_round_trip(tmp_path):
+    p = perturbed_params(spread=0.2, seed=1)
+    path = write_params(p, tmp_path / "true.toml")
+    q = load_params(path)
+    for k in ("K", "m", "I", "F_s", "F_v"):
+        assert np.array_equal(getattr(q.finger, k), getattr(p.finger, k))
+    assert ad.Model.alpes("finger3", friction=True, params=q).extras.coulomb.tolist() == p.finger.F_s.tolist()
+
+
+def test_recording_round_trip_and_torque_projection(tmp_path):
+    rec = experiment("finger2", perturbed_params(seed=2), ExperimentDesign(duration=0.5, camera_times=(0.25,)), seed=2)
+    path = write_recording(rec, tmp_path / "rec.csv")
+    back = read_recording(path, ad.Model.alpes("finger2"))
+    assert np.array_equal(back.encoder, rec.encoder) and np.array_equal(back.torque, rec.torque)
+    assert np.array_equal(np.isnan(back.q), np.isnan(rec.q)) and np.nansum(np.abs(back.q - rec.q)) == 0
+    # the projection on the design's lines removes the torque noise off them
+    design = ExperimentDesign(duration=0.5)
+    clean = experiment("finger2", perturbed_params(seed=2), ExperimentDesign(duration=0.5, torque_noise=0.0), seed=2)
+    proj = project_torque(rec.t, rec.torque, design.frequencies)
+    assert np.std(proj - clean.torque) < 0.25 * np.std(rec.torque - clean.torque)
+
+
+@pytest.mark.parametrize("edit,pattern", [
+    (lambda h, r: (h.replace("encoder_finger", "encoder_thumb"), r), r"unknown column 'encoder_thumb'"),
+    (lambda h, r: (h.replace(",torque_finger", ""), [x.rsplit(",", 1)[0] if False else ",".join(
+        x.split(",")[:2] + x.split(",")[3:]) for x in r]), r"needs exactly one of 'torque_finger'"),
+    (lambda h, r: (h, [r[0].replace(r[0].split(",")[1], "abc", 1)] + r[1:]), r"'encoder_finger' line 2: not a number"),
+    (lambda h, r: (h, [r[1]] + [r[0]] + r[2:]), r"t is not strictly increasing"),
+    (lambda h, r: (h, r[:50]), r"too short \(50 samples"),
+    (lambda h, r: (h, [",".join(x.split(",")[:1] + [str(float(x.split(",")[1]) * 0 + 7)] + x.split(",")[2:])
+                       for x in r]), r"no excitation"),
+])
+def test_recording_errors(tmp_path, edit, pattern):
+    rec = experiment("finger2", None, ExperimentDesign(duration=0.3, torque_noise=0.0, frequencies=(2.0,),
+                                                       torque_amplitude=0.0), seed=0)
+    lines = write_recording(rec, tmp_path / "ok.csv").read_text().splitlines()
+    header, rows = edit(lines[0], lines[1:])
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join([header] + rows) + "\n")
+    with pytest.raises(RecordingError, match=pattern) as exc:
+        read_recording(bad, ad.Model.alpes("finger2"))
+    assert "\n" not in str(exc.value)
+
+
+def test_recording_unit_errors(tmp_path):
+    rec = experiment("finger2", None, ExperimentDesign(duration=0.3), seed=0)
+    rec.true_q = np.degrees(rec.true_q)
+    with pytest.raises(RecordingError, match="must be in rad, not degrees"):
+        write_recording(rec, tmp_path / "x.csv")
+    assert not (tmp_path / "x.csv").exists()
+
+
+def test_identify_recovers_exact_parameters_from_noise_free_data(finger2):
+    """No sensor noise, unquantised encoder: the fit lands on the truth (K, m, friction within 1e-6)."""
+    true = perturbed_params(spread=0.2, seed=3)
+    design = ExperimentDesign(duration=1.0, encoder_noise_counts=0.0, torque_noise=0.0)
+    rec = experiment("finger2", true, design, seed=3)
+    tr = finger2.transmission
+    rec.encoder = rec.true_q @ tr.S.T / (2 * math.pi / tr.counts_per_rev)  # unquantised
+    res = identify(finger2, rec, progress=False)
+    truth = np.r_[true.finger.K[:2], true.finger.m[:2], true.finger.F_s[:2], true.finger.F_v[:2]]
+    assert res.names == ("K_1", "K_2", "m_1", "m_2", "F_s_1", "F_s_2", "F_v_1", "F_v_2")
+    assert res.converged
+    assert np.max(np.abs(res.values / truth - 1)) < 1e-6
+    assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # it did move
+    assert res.residual_rms < 1e-6
+    ident = res.params()
+    assert ident.raw["finger.K"].source == "identified" and ident.raw["finger.K"].std is not None
+    assert np.allclose(ident.finger.I[:2] / ident.finger.m[:2], true.finger.I[:2] / true.finger.m[:2], rtol=1e-12)
