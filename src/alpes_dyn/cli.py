@@ -17,6 +17,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .errors import AlpesDynError, InputError, ModelError
+from .observability import MAX_INSTRUCTIONS
 
 VECTOR_OPTIONS = ("--q", "--v", "--tau", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
@@ -243,7 +244,8 @@ def cmd_observability(args: argparse.Namespace) -> int:
             raise InputError(f"--order: expected auto, report or a non-negative integer, got {order}")
     model = _model_from_args(args)
     rep = observability(model, input=args.input, output=args.output, points=args.points, seed=args.seed,
-                        constant_input=getattr(args, "constant_input", False), order=order)
+                        constant_input=getattr(args, "constant_input", False), order=order,
+                        max_operations=args.max_operations)
     _emit(rep.to_dict(), rep.to_text(), args.json)
     return 0
 
@@ -340,6 +342,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--order", default="auto", help="highest derivative order: auto (until the rank stops growing, "
                    "default), report (y..y^(n-1), eq. 3.8) or an integer")
     s.add_argument("--constant-input", action="store_true", help="inputs constant (u' = u'' = ... = 0)")
+    s.add_argument("--max-operations", type=_int_at_least(1), default=MAX_INSTRUCTIONS,
+                   help="size cap of one derivative order's function, CasADi operations (default %(default)s)")
     s.set_defaults(func=cmd_observability)
 
     s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder",
