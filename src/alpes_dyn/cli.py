@@ -96,6 +96,16 @@ def _fmt_matrix(M: np.ndarray) -> str:
     return "\n".join("  " + " ".join(f"{x: .6e}" for x in row) for row in np.atleast_2d(M))
 
 
+def _fmt_table(M: np.ndarray, rows: Sequence[str], cols: Sequence[str]) -> str:
+    """A matrix with a header of column names and each row led by its name."""
+    M = np.atleast_2d(M)
+    w = max([len(r) for r in rows] + [1])
+    cw = max([len(c) for c in cols] + [13])
+    head = "  " + " " * w + " " + " ".join(f"{c:>{cw}s}" for c in cols)
+    return "\n".join([head] + ["  " + f"{r:<{w}s} " + " ".join(f"{x:>{cw}.6e}" for x in row)
+                               for r, row in zip(rows, M)])
+
+
 # ----------------------------------------------------------------------------- urdf
 def cmd_urdf(args: argparse.Namespace) -> int:
     from .description import urdf_string
@@ -136,17 +146,15 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     obj = {"model": m.name, "q": q.tolist(), "v": v.tolist(), "tau": tau.tolist(), "A": A.tolist(),
            "C": C.tolist(), "G": G.tolist(), "J": J.tolist(), "qdd": qdd.tolist(), "tip": tip,
            "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist()}
+    joints = m.joint_names
     text = "\n".join([
-        f"model {m.name} ({n} joints: {', '.join(m.joint_names)}), spring model {m.spring}",
-        f"q   [rad]      {np.array2string(q, precision=6)}",
-        f"v   [rad/s]    {np.array2string(v, precision=6)}",
-        f"tau [N m]      {np.array2string(tau, precision=6)}",
-        f"F   [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
-        "A(q) [kg m^2]:", _fmt_matrix(A),
-        "C(q, v) [N m s]:", _fmt_matrix(C),
-        "G(q) = gravity + springs [N m]:", _fmt_matrix(G),
-        f"J(q) fingertip {tip} [m]:", _fmt_matrix(J),
-        "qdd [rad/s^2]:", _fmt_matrix(qdd),
+        f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}",
+        f"F [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
+        "per joint: q [rad], v [rad/s], tau [N m], G(q) = gravity + springs [N m], qdd [rad/s^2]:",
+        _fmt_table(np.column_stack([q, v, tau, G, qdd]), joints, ("q", "v", "tau", "G", "qdd")),
+        "A(q) [kg m^2]:", _fmt_table(A, joints, joints),
+        "C(q, v) [N m s]:", _fmt_table(C, joints, joints),
+        f"J(q) fingertip {tip}, linear, base axes [m]:", _fmt_table(J, ("x", "y", "z"), joints),
     ])
     _emit(obj, text, args.json)
     return 0

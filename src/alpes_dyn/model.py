@@ -72,6 +72,13 @@ class Model:
 
     All vectors are 1-D float arrays of length ``n`` (joints in :attr:`joint_names` order), in SI
     units (rad, rad/s, rad/s^2, N m, N).
+
+    Joint order. Pinocchio's: depth first from the root, a joint's whole subtree before its next
+    sibling, siblings in the order the URDF parser (urdfdom) keeps them, which is by child link name
+    -- not the order of the URDF file, nor an anatomical one (the Alpes hand comes as index, little,
+    middle, ring, thumb). Motors (:attr:`motor_names`) keep the order of the transmission, tips
+    (:attr:`tip_names`) the order given by the layout or spec (else the URDF's, leaf frames in
+    Pinocchio's frame order). Use :meth:`joint_index` rather than positions.
     """
 
     def __init__(self, urdf: str, extras: JointExtras | None = None, gravity: Sequence[float] | None = None,
@@ -169,6 +176,31 @@ class Model:
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, n={self.n}, spring={self.spring!r}, tips={list(self.tips)})"
+
+    # ------------------------------------------------------------------ names
+    @property
+    def motor_names(self) -> tuple[str, ...]:
+        """Motor names in transmission order (empty without a transmission)."""
+        return self.transmission.motor_names if self.transmission is not None else ()
+
+    @property
+    def tip_names(self) -> tuple[str, ...]:
+        """Tip frame names (the same as :attr:`tips`); the first is the default tip."""
+        return tuple(self.tips)
+
+    def joint_index(self, name: str) -> int:
+        """Position of joint ``name`` in :attr:`joint_names` (and in q, v, tau, the rows of A...)."""
+        try:
+            return self.joint_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown joint {name!r} (joints: {', '.join(self.joint_names)})") from None
+
+    def motor_index(self, name: str) -> int:
+        """Position of motor ``name`` in :attr:`motor_names` (and in tau_m, the encoder vector q_m)."""
+        try:
+            return self.motor_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown motor {name!r} (motors: {', '.join(self.motor_names) or 'none'})") from None
 
     # ------------------------------------------------------------------ input checks
     def vector(self, x: object, name: str, n: int | None = None) -> np.ndarray:
