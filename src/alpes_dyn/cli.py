@@ -19,7 +19,7 @@ import numpy as np
 from .errors import AlpesDynError, InputError, ModelError
 from .observability import MAX_INSTRUCTIONS
 
-VECTOR_OPTIONS = ("--q", "--v", "--tau", "--force")
+VECTOR_OPTIONS = ("--q", "--v", "--tau", "--tau-m", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
 
 
@@ -78,14 +78,35 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
+def _is_urdf_path(model: str) -> bool:
+    return model.endswith(".urdf") or "/" in model
+
+
+_ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--friction"),
+               ("rotor_inertia", "--rotor-inertia"))
+
+
+def _check_model_options(args: argparse.Namespace) -> None:
+    """Refuse, with one line, the options that do not apply to the kind of --model given (never ignore them)."""
+    if _is_urdf_path(args.model):
+        for dest, flag in _ALPES_ONLY:
+            if getattr(args, dest, None) not in (None, False):
+                raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand); for a URDF --model "
+                                 "put springs, friction and rotor inertia in a --spec file")
+    elif getattr(args, "spec", None) is not None:
+        raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its transmission "
+                         "from --params")
+
+
 def _model_from_args(args: argparse.Namespace):
     from .model import Model
 
-    spring = getattr(args, "spring", "torsional")
-    if args.model.endswith(".urdf") or "/" in args.model:
-        return Model.from_urdf_file(args.model)
-    return Model.alpes(args.model, spring=spring, friction=getattr(args, "friction", False),
-                       rotor_inertia=getattr(args, "rotor_inertia", False), params=getattr(args, "params", None))
+    _check_model_options(args)
+    if _is_urdf_path(args.model):
+        return Model.from_urdf_file(args.model, getattr(args, "spec", None))
+    return Model.alpes(args.model, spring=getattr(args, "spring", None) or "torsional",
+                       friction=getattr(args, "friction", False), rotor_inertia=getattr(args, "rotor_inertia", False),
+                       params=getattr(args, "params", None))
 
 
 def _emit(obj: dict[str, Any], text: str, as_json: bool) -> None:
@@ -132,6 +153,17 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
         if x.shape != (n,):
             raise InputError(f"--{name}: model {m.name!r} has {n} joints, got {x.size} values")
+    tau_m = None
+    if args.tau_m is not None:
+        if m.transmission is None:
+            raise InputError(f"--tau-m: model {m.name!r} has no motors (give a URDF --model a --spec with [[motor]])")
+        if args.tau is not None:
+            raise InputError("--tau-m: give joint torques --tau or motor torques --tau-m, not both")
+        tau_m = parse_vector(args.tau_m, "tau-m")
+        if tau_m.shape != (m.transmission.n_motors,):
+            raise InputError(f"--tau-m: model {m.name!r} has {m.transmission.n_motors} motors "
+                             f"({', '.join(m.motor_names)}), got {tau_m.size} values")
+        tau = m.transmission.joint_torque(tau_m)  # Gamma = S^T tau_m (eq. 3.13)
     F = None
     if args.force is not None:
         F = parse_vector(args.force, "force")
@@ -145,8 +177,19 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     qdd = m.forward_dynamics(q, v, tau, F, tip)
     obj = {"model": m.name, "q": q.tolist(), "v": v.tolist(), "tau": tau.tolist(), "A": A.tolist(),
            "C": C.tolist(), "G": G.tolist(), "J": J.tolist(), "qdd": qdd.tolist(), "tip": tip,
-           "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist()}
+           "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist(),
+           "motors": list(m.motor_names), "tips": list(m.tip_names)}
     joints = m.joint_names
+    motor_lines: list[str] = []
+    if m.transmission is not None:
+        q_m = m.transmission.motor_positions(q)
+        obj["q_m"] = q_m.tolist()
+        obj["tau_m"] = None if tau_m is None else tau_m.tolist()
+        cols = ("q_m", "tau_m") if tau_m is not None else ("q_m",)
+        vals = np.column_stack([q_m, tau_m]) if tau_m is not None else q_m[:, None]
+        motor_lines = ["per motor: encoder angle q_m = S q [rad]" + (", motor torque tau_m [N m] (tau = S^T tau_m)"
+                                                                     if tau_m is not None else "") + ":",
+                       _fmt_table(vals, m.motor_names, cols)]
     text = "\n".join([
         f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}",
         f"F [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
@@ -155,6 +198,7 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         "A(q) [kg m^2]:", _fmt_table(A, joints, joints),
         "C(q, v) [N m s]:", _fmt_table(C, joints, joints),
         f"J(q) fingertip {tip}, linear, base axes [m]:", _fmt_table(J, ("x", "y", "z"), joints),
+        *motor_lines,
     ])
     _emit(obj, text, args.json)
     return 0
@@ -264,6 +308,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     from .observers import OBSERVERS
     from .scenario import SCENARIO_MODELS, plot_estimation, run_estimation
 
+    _check_model_options(args)
     if args.model not in SCENARIO_MODELS:
         raise InputError(f"--model: the estimation scenario is defined for one finger ({', '.join(SCENARIO_MODELS)}), "
                          f"got {args.model!r}")
@@ -275,7 +320,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         except ImportError:
             raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
     t0 = time.perf_counter()
-    res = run_estimation(args.observer, model=args.model, spring=args.spring, params=args.params,
+    res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional", params=args.params,
                          mismatch=args.mismatch, duration=args.duration, seed=args.seed)
     if args.plot:
         plot_estimation(res, args.plot)
@@ -312,9 +357,14 @@ def build_parser() -> argparse.ArgumentParser:
     def common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") -> None:
         sp.add_argument("--model", default=model_default, required=model_default is None,
                         help="finger2, finger3, hand, or a path to a fixed-base URDF file (default %(default)s)")
-        sp.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
-                        help="spring model: torsional 1/2 K q^2 (default), report (eq. 2.14 literally), none")
-        sp.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+        sp.add_argument("--spec", default=None, metavar="FILE.toml",
+                        help="transmission spec of a URDF --model: motors, ratios, encoder, springs, friction, "
+                             "rotor inertia (see the user guide, 'Your own robot')")
+        sp.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
+                        help="Alpes models: spring model torsional 1/2 K q^2 (default), report (eq. 2.14 literally), "
+                             "none")
+        sp.add_argument("--params", default=None, metavar="FILE",
+                        help="Alpes models: parameter file (default: the shipped one)")
         sp.add_argument("--json", action="store_true", help="print one JSON object")
 
     s = sub.add_parser("urdf", help="print or write the URDF of a model")
@@ -329,10 +379,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--q", help="joint angles, rad, e.g. --q=-0.1,0.2,0.3 (default zeros)")
     s.add_argument("--v", help="joint velocities, rad/s (default zeros)")
     s.add_argument("--tau", help="joint torques Gamma, N m (default zeros)")
+    s.add_argument("--tau-m", help="motor torques tau_m, N m, in motor order: Gamma = S^T tau_m (instead of --tau)")
     s.add_argument("--force", help="contact force Fx,Fy,Fz at the tip, N, base frame (eq. 2.9, 2.13)")
     s.add_argument("--tip", help="tip frame name (default: the first tip)")
-    s.add_argument("--friction", action="store_true", help="switch on friction (eq. 2.6-2.7)")
-    s.add_argument("--rotor-inertia", action="store_true", help="switch on rotor inertia N^2 J_m (eq. 2.8)")
+    s.add_argument("--friction", action="store_true", help="Alpes models: switch on friction (eq. 2.6-2.7)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on rotor inertia N^2 J_m "
+                                                                "(eq. 2.8)")
     s.set_defaults(func=cmd_dynamics)
 
     s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")

@@ -24,8 +24,9 @@ import pinocchio as pin
 
 from .description import Layout, check_model_name, layout, urdf_string
 from .errors import InputError, ModelError
-from .extras import JointExtras, spring_stiffness
+from .extras import JointExtras
 from .params import HandParams, load_params
+from .spec import TransmissionSpec, alpes_spec, load_spec
 from .transmission import Transmission
 
 __all__ = ["Model", "DEFAULT_GRAVITY"]
@@ -61,14 +62,20 @@ class Model:
     ----------
     urdf:
         URDF text (not a path; see :meth:`from_urdf_file`).
-    extras:
-        Springs, friction, rotor inertia in joint order (default: none).
+    spec:
+        What the URDF cannot hold: motors and their joints with ratios, encoder, per-joint springs,
+        friction, rotor inertia (:class:`~alpes_dyn.spec.TransmissionSpec`, or the path of its TOML
+        file; default: none of them). The Alpes models are built through it (:meth:`alpes`).
     gravity:
-        Gravity vector in the base frame, m/s^2, shape (3,) (default (0, 0, -9.81)).
+        Gravity vector in the base frame, m/s^2, shape (3,) (default: the spec's, else (0, 0, -9.81)).
     name:
-        A label (default: the robot name of the URDF).
+        A label (default: the spec's name, else the robot name of the URDF).
     layout, params:
-        Set by :meth:`alpes`: the chains/tips/transmission of an Alpes model and its parameters.
+        Set by :meth:`alpes`: the chains of an Alpes model and its parameters.
+    spring:
+        Label of the spring law (default: the spec's).
+    extras:
+        Springs, friction, rotor inertia as arrays in joint order, instead of a spec (no motors).
 
     All vectors are 1-D float arrays of length ``n`` (joints in :attr:`joint_names` order), in SI
     units (rad, rad/s, rad/s^2, N m, N).
@@ -81,9 +88,18 @@ class Model:
     Pinocchio's frame order). Use :meth:`joint_index` rather than positions.
     """
 
-    def __init__(self, urdf: str, extras: JointExtras | None = None, gravity: Sequence[float] | None = None,
-                 name: str | None = None, layout: Layout | None = None, params: HandParams | None = None,
-                 spring: str = "none") -> None:
+    def __init__(self, urdf: str, spec: TransmissionSpec | str | Path | None = None,
+                 gravity: Sequence[float] | None = None, name: str | None = None, layout: Layout | None = None,
+                 params: HandParams | None = None, spring: str | None = None, *,
+                 extras: JointExtras | None = None) -> None:
+        if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
+            spec, extras = None, spec if extras is None else extras
+        if isinstance(spec, (str, Path)):
+            spec = load_spec(spec)
+        if spec is not None and not isinstance(spec, TransmissionSpec):
+            raise ModelError(f"spec: expected a TransmissionSpec or the path of its TOML file, got {type(spec).__name__}")
+        if spec is not None and extras is not None:
+            raise ModelError("extras: given together with a spec, which holds them already")
         if not isinstance(urdf, str) or "<robot" not in urdf:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
         self.urdf: str = urdf
@@ -91,15 +107,25 @@ class Model:
         n = self.pin_model.nv
         self.n: int = n
         self.joint_names: tuple[str, ...] = tuple(self.pin_model.names[1:])
-        self.name: str = name or self.pin_model.name
+        self.spec: TransmissionSpec | None = spec
+        if spec is not None:
+            spec.check(self.joint_names, [f.name for f in self.pin_model.frames])
+            extras = spec.extras(self.joint_names)
+            if gravity is not None and spec.gravity is not None and not np.array_equal(
+                    np.asarray(gravity, dtype=float), np.asarray(spec.gravity)):
+                raise ModelError("gravity: given both as an argument and in the spec, with different values")
+            gravity = spec.gravity if gravity is None else gravity
+        self.name: str = name or (spec.name if spec is not None and spec.name else None) or self.pin_model.name
         self.layout = layout
         self.params = params
-        self.spring = spring
+        self.spring = spring if spring is not None else (spec.spring if spec is not None else "none")
         g = DEFAULT_GRAVITY if gravity is None else np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
         self.gravity: np.ndarray = g.copy()
         self.pin_model.gravity.linear = g
+        if extras is not None and not isinstance(extras, JointExtras):
+            raise ModelError(f"extras: expected JointExtras, got {type(extras).__name__}")
         self.extras: JointExtras = extras if extras is not None else JointExtras.zeros(n)
         for fname in ("stiffness", "armature", "coulomb", "viscous"):
             a = getattr(self.extras, fname)
@@ -115,16 +141,15 @@ class Model:
         self._lower = np.tril_indices(n, -1)
         self._shape = (n,)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
-        if layout is not None:
-            self.tips: tuple[str, ...] = layout.tips
+        if spec is not None and spec.tips is not None:
+            self.tips: tuple[str, ...] = spec.tips
+        elif layout is not None:
+            self.tips = layout.tips
         else:
             parents = {self.pin_model.frames[i].parentFrame for i in range(len(self.pin_model.frames))}
             self.tips = tuple(f.name for i, f in enumerate(self.pin_model.frames)
                               if i not in parents and f.type == pin.FrameType.BODY)
-        self.transmission: Transmission | None = None
-        if layout is not None and params is not None:
-            self.transmission = Transmission.from_layout(
-                layout, self.joint_names, params.transmission_ratio, params.abduction_ratio, params.encoder_counts)
+        self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -138,41 +163,29 @@ class Model:
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)
         lay = layout(model, p)
-        m = cls(urdf_string(model, p), gravity=p.gravity, name=model, layout=lay, params=p, spring=spring)
-        names = m.joint_names
-        K = np.zeros(m.n)
-        arm = np.zeros(m.n)
-        idx = {j: i for i, j in enumerate(names)}
-        for ch in lay.chains:
-            K[[idx[j] for j in ch.joints]] = ch.stiffness
-            arm[[idx[j] for j in ch.joints]] = p.N**2 * p.J_m
-            if ch.abduction:
-                K[idx[ch.abduction]] = lay.abduction_stiffness
-                arm[idx[ch.abduction]] = p.abduction_ratio**2 * p.J_m
-        k = spring_stiffness(K, spring, p.b, p.r)
-        ones = np.ones(m.n)
-        extras = JointExtras(
-            stiffness=k,
-            armature=arm if rotor_inertia else np.zeros(m.n),
-            coulomb=p.F_s * ones if friction else np.zeros(m.n),
-            viscous=p.F_v * ones if friction else np.zeros(m.n),
-            smooth_velocity=p.smooth_velocity,
-        )
-        return cls(m.urdf, extras=extras, gravity=p.gravity, name=model, layout=lay, params=p, spring=spring)
+        spec = alpes_spec(lay, p, spring, friction, rotor_inertia)
+        return cls(urdf_string(model, p), spec, name=model, layout=lay, params=p)
 
     @classmethod
-    def from_urdf_file(cls, path: str | Path, **kwargs) -> "Model":
-        """Load any fixed-base URDF file (e.g. one of example-robot-data); extras default to none."""
+    def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
+        """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
+        (:class:`~alpes_dyn.spec.TransmissionSpec` or the path of its TOML file); without one the
+        model has no motors, springs, friction or rotor inertia."""
         p = Path(path)
         try:
             text = p.read_text()
         except OSError as exc:
             raise ModelError(f"URDF file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
-        return cls(text, **kwargs)
+        except UnicodeDecodeError:
+            raise ModelError(f"URDF file {str(p)!r}: not UTF-8 text") from None
+        return cls(text, spec, **kwargs)
 
     def copy(self) -> "Model":
         """An independent model (own Pinocchio data), e.g. for another thread."""
-        return Model(self.urdf, self.extras, self.gravity, self.name, self.layout, self.params, self.spring)
+        if self.spec is not None:
+            return Model(self.urdf, self.spec, self.gravity, self.name, self.layout, self.params, self.spring)
+        return Model(self.urdf, None, self.gravity, self.name, self.layout, self.params, self.spring,
+                     extras=self.extras)
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, n={self.n}, spring={self.spring!r}, tips={list(self.tips)})"
