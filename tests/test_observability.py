@@ -227,7 +227,7 @@ def test_bad_input():
         observability("finger2", output="tip")
     with pytest.raises(ad.ModelError, match=r"unknown input 'current'"):
         observability("finger2", input="current")
-    with pytest.raises(ad.ModelError, match=r"output matrix: expected a finite \(p, 2\) array, got shape \(1, 3\)"):
+    with pytest.raises(ad.ModelError, match=r"output matrix: expected a finite \(p, 2\) or \(p, 4\) array, got shape \(1, 3\)"):
         observability("finger2", output=np.ones((1, 3)))
     with pytest.raises(ad.ModelError, match=r"unknown model 'finger4'"):
         observability("finger4")

@@ -16,8 +16,9 @@ it is not thread-safe (use :meth:`Model.copy` per thread).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pinocchio as pin
@@ -29,7 +30,7 @@ from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, load_spec
 from .transmission import Transmission
 
-__all__ = ["Model", "DEFAULT_GRAVITY"]
+__all__ = ["Model", "DEFAULT_GRAVITY", "Contact", "REFERENCE_FRAMES", "as_contacts"]
 
 DEFAULT_GRAVITY = np.array([0.0, 0.0, -9.81])
 _F64 = np.dtype(np.float64)
@@ -37,6 +38,54 @@ _ND = np.ndarray
 _aba = pin.aba
 _isfinite = math.isfinite
 _WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
+    "world": pin.ReferenceFrame.WORLD, "local": pin.ReferenceFrame.LOCAL,
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+}
+"""Pinocchio's reference frames by name: a frame's velocity (v, w) or a wrench (f, tau) expressed
+``"local"`` in the frame's own axes at its origin, ``"local_world_aligned"`` at its origin in the base
+(world) axes, ``"world"`` at the base origin in the base axes (spatial velocity)."""
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A contact at a frame: a force (``dim=3``, N, applied at the frame origin) or a wrench
+    (``dim=6``: [force (N); torque (N m)], Pinocchio's order) expressed in ``reference``
+    (:data:`REFERENCE_FRAMES`; default ``"local_world_aligned"``: base axes, as eq. 2.13).
+    Its joint torque is J^T F with J the frame Jacobian in the same reference (eq. 2.9)."""
+
+    frame: str
+    dim: int = 3
+    reference: str = "local_world_aligned"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.frame, str) or not self.frame:
+            raise ModelError(f"contact frame: expected a frame name, got {self.frame!r}")
+        if self.dim not in (3, 6) or isinstance(self.dim, bool):
+            raise ModelError(f"contact {self.frame!r}: dim must be 3 (force) or 6 (wrench), got {self.dim!r}")
+        if self.reference not in REFERENCE_FRAMES:
+            raise ModelError(f"contact {self.frame!r}: unknown reference {self.reference!r} "
+                             f"(expected one of {', '.join(REFERENCE_FRAMES)})")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Labels of its components: F_x_<frame>, ... and, for a wrench, M_x_<frame>, ..."""
+        comps = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_z")[: self.dim]
+        return tuple(f"{c}_{self.frame}" for c in comps)
+
+
+def as_contacts(contacts: Any) -> tuple[Contact, ...]:
+    """A tuple of :class:`Contact` from Contacts and frame names (a name is a 3-D force in base axes)."""
+    if isinstance(contacts, (str, Contact)):
+        contacts = (contacts,)
+    if not isinstance(contacts, (list, tuple)):
+        raise ModelError(f"contacts: expected a list of Contact or frame names, got {contacts!r}")
+    out = tuple(c if isinstance(c, Contact) else Contact(c) for c in contacts)
+    frames = [c.frame for c in out]
+    dup = next((f for f in frames if frames.count(f) > 1), None)
+    if dup is not None:
+        raise ModelError(f"contacts: frame {dup!r} appears twice")
+    return out
 
 
 def _build_pinocchio(urdf: str) -> pin.Model:
@@ -53,6 +102,21 @@ def _build_pinocchio(urdf: str) -> pin.Model:
             "revolute/prismatic joints are supported"
         )
     return model
+
+
+def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:
+    """Newton's method for residual(q) = 0 (N m) from q0, steps capped at 0.5 rad; :class:`InputError` on failure."""
+    q = np.array(q0, dtype=float)
+    for _ in range(iterations):
+        r = residual(q)
+        if np.max(np.abs(r)) < tol:
+            return q
+        try:
+            dq = np.linalg.solve(jacobian(q), -r)
+        except np.linalg.LinAlgError:
+            raise InputError("static equilibrium: singular stiffness (a joint without spring?)") from None
+        q = q + dq * min(1.0, 0.5 / max(float(np.max(np.abs(dq))), 1e-300))  # at most 0.5 rad per step
+    raise InputError("static equilibrium: Newton's method did not converge (torque beyond the springs' range?)")
 
 
 class Model:
@@ -300,9 +364,61 @@ class Model:
         fid = self.frame_id(tip)
         return pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, _WORLD)[:3].copy()
 
-    def contact_torque(self, q: np.ndarray, F: object = None, tip: str | None = None) -> np.ndarray:
-        """J^T F (eq. 2.9), (n,), N m, for a force F (N, base frame; a scalar means [0, 0, F_z], eq. 2.13)."""
-        return self.fingertip_jacobian(q, tip).T @ self._force(F)
+    def frame_placement(self, q: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
+        """(R (3, 3), p (3,)): orientation and position (m) of ``frame`` in the base frame."""
+        q = self.vector(q, "q")
+        fid = self.frame_id(frame)
+        pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
+        M = self.pin_data.oMf[fid]
+        return M.rotation.copy(), M.translation.copy()
+
+    def frame_jacobian(self, q: np.ndarray, frame: str | None = None, reference: str = "local_world_aligned",
+                       dim: int = 6) -> np.ndarray:
+        """Jacobian of ``frame`` (default: the first tip) as Pinocchio's ``getFrameJacobian``: (6, n)
+        [linear (m/rad); angular (1)] rows, or (3, n) linear rows with ``dim=3``, in ``reference``:
+        ``"local_world_aligned"`` (default; the frame origin's velocity in base axes), ``"local"``
+        (frame axes) or ``"world"`` (spatial velocity at the base origin), see :data:`REFERENCE_FRAMES`."""
+        q = self.vector(q, "q")
+        fid = self.frame_id(frame)
+        if reference not in REFERENCE_FRAMES:
+            raise ModelError(f"reference: unknown {reference!r} (expected one of {', '.join(REFERENCE_FRAMES)})")
+        if dim not in (3, 6) or isinstance(dim, bool):
+            raise ModelError(f"dim: expected 3 (linear rows) or 6 (linear and angular), got {dim!r}")
+        J = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, REFERENCE_FRAMES[reference])
+        return J[:dim].copy()
+
+    def contact_torque(self, q: np.ndarray, F: object = None, tip: str | None = None,
+                       contacts: Any = None) -> np.ndarray:
+        """Sum of J_c^T F_c over the contacts (eq. 2.9), (n,), N m.
+
+        * one force at ``tip``: F (3,) in N, base axes (a scalar means [0, 0, F_z], eq. 2.13);
+        * several: ``contacts`` (a list of :class:`Contact` or frame names) and F their stacked
+          forces/wrenches, (sum of dims,); or F a dict {frame: force (3,) or wrench (6,)} in base axes.
+        """
+        if isinstance(F, dict):
+            if contacts is not None:
+                raise ModelError("contacts: give either contacts= with a stacked F or F as a dict, not both")
+            for f, x in F.items():
+                if np.size(x) not in (3, 6):
+                    raise InputError(f"F[{f!r}]: expected a force (3 values) or a wrench (6), got {np.size(x)} values")
+            contacts = tuple(Contact(f, int(np.size(x))) for f, x in F.items())
+            try:
+                F = np.concatenate([np.ravel(np.asarray(x, dtype=float)) for x in F.values()]) if F else np.zeros(0)
+            except (TypeError, ValueError):
+                raise InputError(f"F: expected numbers for every frame, got {F!r}") from None
+        if contacts is None:
+            return self.fingertip_jacobian(q, tip).T @ self._force(F)
+        cts = as_contacts(contacts)
+        F = self.vector(F, "F", sum(c.dim for c in cts))
+        q = self.vector(q, "q")
+        out = np.zeros(self.n)
+        k = 0
+        for c in cts:
+            J = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, self.frame_id(c.frame),
+                                         REFERENCE_FRAMES[c.reference])
+            out += J[: c.dim].T @ F[k: k + c.dim]
+            k += c.dim
+        return out
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """E = 1/2 qd^T (A + I_a) qd (eq. 2.3), J."""
@@ -315,10 +431,12 @@ class Model:
         return float(pin.computePotentialEnergy(self.pin_model, self.pin_data, q)) + float(self.extras.spring_energy(q))
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, F: object = None,
-                         tip: str | None = None, smooth: bool = False) -> np.ndarray:
+                         tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint accelerations qdd (n,), rad/s^2, solving eq. 2.10 (ABA + extras).
 
-        ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z).
+        ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
+        or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
+        :meth:`contact_torque`).
         This is the hot path: float64 arrays of the right shape skip conversion, and finiteness is
         checked once on the result (NaN/inf in any input propagates to it); a non-finite result
         raises :class:`InputError` naming the offending input.
@@ -331,7 +449,7 @@ class Model:
         if self._friction:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
-            tau = tau + self.contact_torque(q, F, tip)
+            tau = tau + self.contact_torque(q, F, tip, contacts)
         qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
         if not _isfinite(qdd.dot(qdd)):
             for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
@@ -341,7 +459,7 @@ class Model:
         return qdd
 
     def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, F: object = None,
-                         tip: str | None = None, smooth: bool = False) -> np.ndarray:
+                         tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint torques Gamma (n,), N m, that produce accelerations ``a`` (eq. 2.10; RNEA + extras)."""
         q, v, a = self.vector(q, "q"), self.vector(v, "v"), self.vector(a, "a")
         tau = pin.rnea(self.pin_model, self.pin_data, q, v, a).copy()
@@ -350,8 +468,19 @@ class Model:
         if self._friction:
             tau += self.extras.friction_torque(v, smooth)
         if F is not None:
-            tau -= self.contact_torque(q, F, tip)
+            tau -= self.contact_torque(q, F, tip, contacts)
         return tau
+
+    def static_equilibrium(self, tau: np.ndarray, q0: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
+        """Joint angles q (n,), rad, where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
+
+        Newton's method from ``q0`` (default 0) with the analytic Jacobian of G (:meth:`gravity_jacobian`),
+        at most 0.5 rad per step, until max |G(q) - tau| < ``tol`` (N m); raises
+        :class:`~alpes_dyn.InputError` if the stiffness is singular or it does not converge in 50 iterations.
+        """
+        tau = self.vector(tau, "tau")
+        q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
+        return newton_equilibrium(lambda q: self.gravity_torque(q) - tau, self.gravity_jacobian, q0, tol)
 
     # ------------------------------------------------------------------ helpers
     @property

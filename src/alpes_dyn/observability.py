@@ -156,7 +156,7 @@ class ObservabilityMatrix:
         self.n_states = ss.n_states
         self.n_outputs = ss.n_outputs
         self.m = int(v.shape[0])  # known inputs (u and, with force=True, F)
-        self.input_names = tuple(ss.input_names) + (("F_x", "F_y", "F_z") if ss.force else ())
+        self.input_names = tuple(ss.input_names) + tuple(ss.force_names)
         self._V: list[cs.SX] = [v]  # v, v', v'', ... symbols
         self._phi: list[cs.SX] = [ss.h_expr]  # y, y', ... as SX
         self._blocks: list[cs.Function] = []
@@ -292,7 +292,7 @@ def _input_scale(ss: StateSpace, q: np.ndarray) -> np.ndarray:
         fallback = gmax / np.where(B.max(axis=0) > 0, B.max(axis=0), 1.0)
     s = np.where(s > 0, s, fallback)
     if ss.force:
-        s = np.concatenate([s, np.ones(3)])  # contact force, N
+        s = np.concatenate([s, np.ones(ss.n_force)])  # contact forces, N (wrench torques N m)
     return s
 
 
@@ -451,22 +451,42 @@ def _analyse(name: str, blocks: list[np.ndarray], rows: np.ndarray, cols: np.nda
         singular_values=s[:-1], coupled=coupled)
 
 
+def tree_parts(model: Model) -> dict[str, tuple[str, ...]]:
+    """The subtrees hanging from the root body, {name: joint names}: the parts that move independently
+    (the mass matrix of a fixed-base tree is block diagonal over them). A part is named after the first
+    motor driving one of its joints (parts in motor order: the Alpes hand's index, middle, ring, little,
+    thumb), else after its first joint."""
+    pm = model.pin_model
+    root_of = {}
+    for j in range(1, pm.njoints):
+        k = j
+        while pm.parents[k] != 0:
+            k = pm.parents[k]
+        root_of.setdefault(k, []).append(pm.names[j])
+    S = model.transmission.S if model.transmission is not None else np.zeros((0, model.n))
+    named = []
+    for joints in root_of.values():
+        cols = [model.joint_index(j) for j in joints]
+        motors = np.flatnonzero(np.any(S[:, cols] != 0, axis=1))
+        key = (0, int(motors[0])) if motors.size else (1, cols[0])
+        named.append((key, model.motor_names[motors[0]] if motors.size else joints[0], tuple(joints)))
+    return {name: joints for _, name, joints in sorted(named)}
+
+
 def _parts(ss: StateSpace, parts: Any) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """(name, output rows, state columns) of each part; [] for a single chain."""
     n = ss.n
     if parts is None or parts is False:
         return []
     if parts == "auto":
-        lay = ss.model.layout
-        if lay is None or len(lay.chains) < 2:
+        spec = tree_parts(ss.model)
+        if len(spec) < 2:
             return []
-        spec = {ch.name: tuple(ch.joints) + ((ch.abduction,) if ch.abduction else ()) for ch in lay.chains}
     elif isinstance(parts, dict):
         spec = {str(k): tuple(v) for k, v in parts.items()}
     else:
         raise ModelError(f"parts: expected 'auto', None or a dict name -> joint names, got {parts!r}")
-    if ss.H is None:
-        return []
+    support = np.array(cs.DM(cs.jacobian(ss.h_expr, ss.x).sparsity(), 1)) != 0  # (p, 2n): y_i depends on x_j
     idx = {j: i for i, j in enumerate(ss.model.joint_names)}
     out = []
     for name, joints in spec.items():
@@ -474,9 +494,8 @@ def _parts(ss: StateSpace, parts: Any) -> list[tuple[str, np.ndarray, np.ndarray
         if bad:
             raise ModelError(f"parts: unknown joint {bad[0]!r} in part {name!r} (joints: {', '.join(idx)})")
         jj = np.array(sorted(idx[j] for j in joints), dtype=int)
-        mask = np.zeros(n, bool)
-        mask[jj] = True
-        support = ss.H != 0
+        mask = np.zeros(2 * n, bool)
+        mask[jj] = mask[jj + n] = True
         rows = np.flatnonzero(support.any(axis=1) & ~(support & ~mask).any(axis=1))
         out.append((name, rows, np.concatenate([jj, jj + n])))
     return out
@@ -499,7 +518,8 @@ def check_observability(system: Model | StateSpace | str, input: str | None = No
     constant_input: u' = u'' = ... = 0 instead of free input derivatives.
     order: ``"auto"`` (stop at full rank or when the filtration stops growing, see the module doc),
         ``"report"`` (y .. y^(n-1), eq. 3.8, stopping early only at full rank) or an int.
-    parts: ``"auto"`` (the chains of an Alpes tree), None, or {name: joint names}.
+    parts: ``"auto"`` (the subtrees from the root, :func:`tree_parts`: the Alpes hand's fingers and thumb),
+        None, or {name: joint names}.
     max_operations: size cap of one derivative order's CasADi function (default
         :data:`MAX_INSTRUCTIONS`); above it :class:`~alpes_dyn.InputError` says so. Raise it for
         large trees whose outputs need high orders.
