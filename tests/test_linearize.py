@@ -136,3 +136,41 @@ def test_bad_input():
         StateSpace(ad.Model.alpes("finger2"), force=True).linearize(x, u)
     with pytest.raises(ad.InputError, match=r"static equilibrium: singular stiffness"):
         StateSpace(ad.Model(OSC, gravity=[0.0, 0.0, 0.0]), output="joints").equilibrium([0.1])
+
+
+# ----------------------------------------------------------------------------- command line
+def test_cli_linearize(capsys):
+    import json
+
+    from alpes_dyn.cli import main
+
+    argv = ["linearize", "--model", str(URDF), "--spec", str(example_spec_path()), "--input", "motor",
+            "--output", "encoder", "--u=" + ",".join(["0.02"] * 8), "--dt", "0.001", "--json"]
+    assert main(argv) == 0
+    d = json.loads(capsys.readouterr().out)
+    ss = allegro_ss()
+    x0 = ss.equilibrium(0.02 * np.ones(8))
+    Ad, Bd, Cd, _ = ss.linearize(x0, 0.02 * np.ones(8), dt=1e-3)
+    assert np.allclose(d["x0"], x0, rtol=0, atol=1e-15) and np.allclose(d["A"], Ad, rtol=1e-14, atol=1e-15)
+    assert np.allclose(d["B"], Bd, rtol=1e-14, atol=1e-18) and np.allclose(d["C"], Cd, rtol=0, atol=0)
+    assert d["inputs"][0] == "tau_m_index" and d["states"][16] == "qd_joint_0.0"
+    assert main(["linearize", "--model", "finger2", "--output", "joints+tip_position:tip"]) == 0
+    out = capsys.readouterr().out
+    assert "  z_tip " in out and "  qd_j2 " in out
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["--u=1,2,3"], "--u: input 'joint' of model 'finger2' has 2 entries (tau_j1, tau_j2), got 3 values"),
+    (["--v=0,0"], "--v: give --q with it"),
+    (["--q=0,0,0"], "--q: model 'finger2' has 2 joints, got 3 values"),
+    (["--dt", "-1"], "--dt: expected a positive number of seconds, got -1.0"),
+    (["--dt", "x"], "argument --dt: invalid float value: 'x'"),
+    (["--output", "nose"], "unknown output 'nose'"),
+    (["--output", "sum+"], "expected output names joined by '+'"),
+])
+def test_cli_linearize_errors(capsys, argv, needle):
+    from alpes_dyn.cli import main
+
+    assert main(["linearize", "--model", "finger2", *argv]) == 2
+    out, err = capsys.readouterr()
+    assert out == "" and err.count("\n") == 1 and needle in err

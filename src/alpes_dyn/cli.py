@@ -19,7 +19,7 @@ import numpy as np
 from .errors import AlpesDynError, InputError, ModelError
 from .observability import MAX_INSTRUCTIONS
 
-VECTOR_OPTIONS = ("--q", "--v", "--tau", "--tau-m", "--force")
+VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
 
 
@@ -107,6 +107,62 @@ def _model_from_args(args: argparse.Namespace):
     return Model.alpes(args.model, spring=getattr(args, "spring", None) or "torsional",
                        friction=getattr(args, "friction", False), rotor_inertia=getattr(args, "rotor_inertia", False),
                        params=getattr(args, "params", None))
+
+
+OUTPUT_HELP = ("y: sum (of each motor's joint angles, default), encoder (q_m = S q), joints, joints:<a>,<b>, "
+               "tip_position:<frame>; several joined by '+', e.g. encoder+tip_position:tip")
+
+
+def _outputs(text: str) -> list[str]:
+    parts = [p.strip() for p in text.split("+")]
+    if not all(parts):
+        raise argparse.ArgumentTypeError(f"expected output names joined by '+', got {text!r}")
+    return parts
+
+
+def _one_or_list(outputs: list[str]) -> str | list[str]:
+    return outputs[0] if len(outputs) == 1 else outputs
+
+
+def cmd_linearize(args: argparse.Namespace) -> int:
+    """(A, B, C, D) at a state and input (default: the rest state under the input), every row and column named."""
+    from .statespace import StateSpace
+
+    m = _model_from_args(args)
+    ss = StateSpace(m, input=args.input, output=_one_or_list(args.output))
+    u = parse_vector(args.u, "u") if args.u is not None else np.zeros(ss.n_inputs)
+    if u.shape != (ss.n_inputs,):
+        raise InputError(f"--u: input {args.input!r} of model {m.name!r} has {ss.n_inputs} entries "
+                         f"({', '.join(ss.input_names)}), got {u.size} values")
+    if args.q is None and args.v is not None:
+        raise InputError("--v: give --q with it (without --q the point is the rest state under --u)")
+    if args.q is None:
+        x0 = ss.equilibrium(u)
+        where = "the rest state under u (f(x0, u) = 0)"
+    else:
+        q = parse_vector(args.q, "q")
+        v = parse_vector(args.v, "v") if args.v is not None else np.zeros(m.n)
+        for x, name in ((q, "q"), (v, "v")):
+            if x.shape != (m.n,):
+                raise InputError(f"--{name}: model {m.name!r} has {m.n} joints, got {x.size} values")
+        x0 = np.concatenate([q, v])
+        where = "the given state"
+    if args.dt is not None and not (np.isfinite(args.dt) and args.dt > 0):
+        raise InputError(f"--dt: expected a positive number of seconds, got {args.dt!r}")
+    A, B, C, D = ss.linearize(x0, u, dt=args.dt)
+    kind = "continuous" if args.dt is None else f"discrete, zero-order hold, dt = {args.dt:g} s"
+    obj = {"model": m.name, "input": args.input, "output": args.output, "dt": args.dt, "x0": x0.tolist(),
+           "u0": u.tolist(), "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist(),
+           "states": list(ss.state_names), "inputs": list(ss.input_names), "outputs": list(ss.output_names)}
+    xs, us, ys = ss.state_names, ss.input_names, ss.output_names
+    text = "\n".join([
+        f"Linearisation of {m.name} ({kind}) at {where}: input {args.input} ({ss.n_inputs}), "
+        f"output {'+'.join(args.output)} ({ss.n_outputs})",
+        "x0:", _fmt_table(x0[None], ("x0",), xs), "A:", _fmt_table(A, xs, xs), "B:", _fmt_table(B, xs, us),
+        "C:", _fmt_table(C, ys, xs), "D:", _fmt_table(D, ys, us),
+    ])
+    _emit(obj, text, args.json)
+    return 0
 
 
 def _emit(obj: dict[str, Any], text: str, as_json: bool) -> None:
@@ -295,7 +351,7 @@ def cmd_observability(args: argparse.Namespace) -> int:
         if order < 0:
             raise InputError(f"--order: expected auto, report or a non-negative integer, got {order}")
     model = _model_from_args(args)
-    rep = observability(model, input=args.input, output=args.output, points=args.points, seed=args.seed,
+    rep = observability(model, input=args.input, output=_one_or_list(args.output), points=args.points, seed=args.seed,
                         constant_input=getattr(args, "constant_input", False), order=order,
                         max_operations=args.max_operations)
     _emit(rep.to_dict(), rep.to_text(), args.json)
@@ -396,7 +452,7 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("observability", help="nonlinear observability rank test (eq. 3.4-3.8)")
     common(s)
     s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
-    s.add_argument("--output", default="sum", choices=("sum", "encoder"), help="y = sum of joint angles or encoders")
+    s.add_argument("--output", default="sum", type=_outputs, help=OUTPUT_HELP)
     s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--order", default="auto", help="highest derivative order: auto (until the rank stops growing, "
@@ -405,6 +461,17 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--max-operations", type=_int_at_least(1), default=MAX_INSTRUCTIONS,
                    help="size cap of one derivative order's function, CasADi operations (default %(default)s)")
     s.set_defaults(func=cmd_observability)
+
+    s = sub.add_parser("linearize", help="A, B, C, D of the state space at a point (continuous, or discrete with --dt)",
+                       epilog="Example: alpes-dyn linearize --model finger3 --input motor --output encoder --u 0.02")
+    common(s)
+    s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
+    s.add_argument("--output", default="sum", type=_outputs, help=OUTPUT_HELP)
+    s.add_argument("--u", help="input u0 (joint or motor torques, N m; default zeros)")
+    s.add_argument("--q", help="joint angles of x0, rad (default: the rest state under --u)")
+    s.add_argument("--v", help="joint velocities of x0, rad/s (default zeros; needs --q)")
+    s.add_argument("--dt", type=float, default=None, help="time step, s: discretise with a zero-order hold")
+    s.set_defaults(func=cmd_linearize)
 
     s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder",
                        epilog="Example: alpes-dyn estimate --model finger3 --observer ekf-params --mismatch 0.1 "
