@@ -69,6 +69,13 @@ def test_dynamics_readable_and_hand_tip(capsys):
     (["estimate", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
     (["observability", "--points", "0"], "--points: expected an integer >= 1, got 0"),
     (["report", "--points", "x"], "--points: expected an integer >= 1, got 'x'"),
+    (["dynamics", "--spec", "/nonexistent.toml"], "--spec: applies to a URDF --model"),
+    (["dynamics", "--model", "/nonexistent.urdf", "--friction"], "--friction: applies to the Alpes models"),
+    (["dynamics", "--tau-m=0.1,0.2"], "--tau-m: model 'finger3' has 1 motors (finger), got 2 values"),
+    (["observability", "--max-operations", "0"], "--max-operations: expected an integer >= 1, got 0"),
+    (["observability", "--output", "encoder+"], "expected output names joined by '+'"),
+    (["linearize", "--u=1,2"], "--u: input 'joint' of model 'finger3' has 3 entries"),
+    (["linearize", "--model", "finger2", "--spec", "x.toml"], "--spec: applies to a URDF --model"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
     code, out, err = run(capsys, *argv)
