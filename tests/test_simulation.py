@@ -7,6 +7,8 @@ References: the closed-form damped harmonic oscillator; energy conservation comp
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -103,8 +105,11 @@ def _pinocchio_rk4(m: ad.Model, x0, U, F, dt):
 
 
 def test_motor_input_friction_and_contact_force_match_pinocchio():
-    m = ad.Model.alpes("finger3", friction=True)
-    dt, N = 2e-5, 250  # the smooth Coulomb friction is stiff: small explicit steps
+    m0 = ad.Model.alpes("finger3", friction=True)
+    # a stiff smooth Coulomb sign (v_s = 0.01 rad/s, ten times the file's): small explicit steps
+    m = ad.Model(m0.urdf, dataclasses.replace(m0.extras, smooth_velocity=0.01), m0.gravity, m0.name, m0.layout,
+                 m0.params, m0.spring)
+    dt, N = 2e-5, 250
     x0 = np.array([0.2, 0.4, 0.3, 0.5, -0.2, 0.1])
     tau_m = lambda t: [0.02 + 0.01 * np.sin(40 * t)]  # noqa: E731
     Fz = lambda t: -0.3 * t / (N * dt)  # noqa: E731

@@ -214,6 +214,9 @@ class Model:
             self.tips = tuple(f.name for i, f in enumerate(self.pin_model.frames)
                               if i not in parents and f.type == pin.FrameType.BODY)
         self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
+        if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
+            self.transmission = Transmission.from_layout(layout, self.joint_names, params.transmission_ratio,
+                                                         params.abduction_ratio, params.encoder_counts)
 
     # ------------------------------------------------------------------ construction
     @classmethod

@@ -8,7 +8,9 @@ that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)`
 
 from __future__ import annotations
 
+import json
 import math
+import os
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -19,19 +21,22 @@ import numpy as np
 
 from .errors import ModelError
 
-__all__ = ["Param", "ChainParams", "HandParams", "load_params", "default_params_path"]
+__all__ = [
+    "Param", "ChainParams", "HandParams", "SOURCES", "load_params", "default_params_path", "params_toml", "with_values",
+    "write_params",
+]
 
 # field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
 _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "finger": {
         "L": (3, "pos"), "s": (3, "pos"), "m": (3, "pos"), "I": (3, "pos"), "r": (None, "pos"),
         "K": (3, "nonneg"), "b": (None, "nonneg"), "radius": (None, "pos"),
-        "lower": (None, "any"), "upper": (None, "any"),
+        "lower": (None, "any"), "upper": (None, "any"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
     },
     "thumb": {
         "L": (2, "pos"), "s": (2, "pos"), "m": (2, "pos"), "I": (2, "pos"), "K": (2, "nonneg"),
         "radius": (None, "pos"), "base_mass": (None, "pos"), "abduction_K": (None, "nonneg"), "abduction_axis": (3, "unit"),
-        "abduction_lower": (None, "any"), "abduction_upper": (None, "any"),
+        "abduction_lower": (None, "any"), "abduction_upper": (None, "any"), "F_s": (2, "nonneg"), "F_v": (2, "nonneg"),
     },
     "palm": {
         "finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"),
@@ -44,18 +49,23 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
     "environment": {"gravity": (3, "any")},
 }
-_ENTRY_KEYS = {"value", "unit", "source", "reason", "description"}
+# per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
+_OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v"}
+_ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
+SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
 
 
 @dataclass(frozen=True)
 class Param:
-    """One parameter: its value, unit, provenance (``report`` or ``assumed``) and, if assumed, why."""
+    """One parameter: its value, unit, provenance (``report``, ``assumed`` or ``identified``), why if
+    assumed (or how if identified), and for an identified value its standard error ``std`` (same shape)."""
 
     value: Any
     unit: str
     source: str
     reason: str = ""
     description: str = ""
+    std: Any = None
 
 
 @dataclass(frozen=True)
@@ -64,7 +74,8 @@ class ChainParams:
 
     Arrays have one entry per phalanx, proximal first. Units: m, kg, kg m^2, N m/rad.
     ``I`` is the inertia about the phalanx's own (proximal) joint axis, as in the report's table;
-    ``I_com = I - m d^2`` with ``d = L - s`` the COM distance to that joint.
+    ``I_com = I - m d^2`` with ``d = L - s`` the COM distance to that joint. ``F_s``, ``F_v``: per-joint
+    friction (N m, N m s/rad) when the file gives it per phalanx, else None (``friction.F_s``/``F_v`` apply).
     """
 
     L: np.ndarray
@@ -73,6 +84,8 @@ class ChainParams:
     I: np.ndarray
     K: np.ndarray
     radius: float
+    F_s: np.ndarray | None = None
+    F_v: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -186,6 +199,8 @@ def _parse(data: dict[str, Any]) -> dict[str, Param]:
         for key, (length, kind) in fields.items():
             name = f"{section}.{key}"
             if key not in table:
+                if name in _OPTIONAL:
+                    continue
                 raise ModelError(f"{name}: missing field")
             entry = table[key]
             if not isinstance(entry, dict):
@@ -197,18 +212,24 @@ def _parse(data: dict[str, Any]) -> dict[str, Param]:
                 if k not in entry:
                     raise ModelError(f"{name}.{k}: missing field")
             source = entry["source"]
-            if source not in ("report", "assumed"):
-                raise ModelError(f"{name}.source: must be 'report' or 'assumed' (got {source!r})")
+            if source not in SOURCES:
+                raise ModelError(f"{name}.source: must be one of {', '.join(repr(x) for x in SOURCES)} (got {source!r})")
             reason = entry.get("reason", "")
-            if source == "assumed" and not (isinstance(reason, str) and reason.strip()):
-                raise ModelError(f"{name}.reason: an assumed value needs a one-line reason")
+            if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
+                raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
             value = _check_value(name, entry["value"], length, kind)
-            out[name] = Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")))
+            std = None
+            if "std" in entry:
+                if source != "identified":
+                    raise ModelError(f"{name}.std: only an identified value has a standard error")
+                std = _check_value(f"{name}.std", entry["std"], length, "nonneg" if kind != "str" else kind)
+            out[name] = Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")), std)
     return out
 
 
 def _chain(raw: dict[str, Param], sec: str, K: np.ndarray) -> ChainParams:
     L, s, m, I = (raw[f"{sec}.{k}"].value for k in ("L", "s", "m", "I"))
+    Fs, Fv = (raw[f"{sec}.{k}"].value if f"{sec}.{k}" in raw else None for k in ("F_s", "F_v"))
     if np.any(s > L):
         i = int(np.argmax(s > L))
         raise ModelError(f"{sec}.s: COM distance s must not exceed L (s={s[i]:g} > L={L[i]:g} at index {i})")
@@ -220,7 +241,7 @@ def _chain(raw: dict[str, Param], sec: str, K: np.ndarray) -> ChainParams:
             f"{sec}.I: not physically consistent: I about the joint must exceed m d^2 = {m[i] * d[i] ** 2:.4g} "
             f"(parallel-axis theorem, d = L - s) but is {I[i]:.4g} at index {i}"
         )
-    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=raw[f"{sec}.radius"].value)
+    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=raw[f"{sec}.radius"].value, F_s=Fs, F_v=Fv)
 
 
 def load_params(path: str | Path | None = None) -> HandParams:
@@ -242,10 +263,14 @@ def load_params(path: str | Path | None = None) -> HandParams:
         text = p.read_text()
     except OSError as exc:
         raise ModelError(f"parameter file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
+    return _from_text(text, str(p))
+
+
+def _from_text(text: str, path: str) -> HandParams:
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
-        raise ModelError(f"parameter file {str(p)!r}: invalid TOML ({exc})") from None
+        raise ModelError(f"parameter file {path!r}: invalid TOML ({exc})") from None
     raw = _parse(data)
     v = {k: prm.value for k, prm in raw.items()}
     if v["finger.lower"] >= v["finger.upper"]:
@@ -264,5 +289,65 @@ def load_params(path: str | Path | None = None) -> HandParams:
         abduction_lower=v["thumb.abduction_lower"], abduction_upper=v["thumb.abduction_upper"],
         finger_names=v["palm.finger_names"],
         finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
-        thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=str(p), raw=raw,
+        thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw,
     )
+
+
+# ----------------------------------------------------------------------------- writing
+def _toml_value(x: Any) -> str:
+    if isinstance(x, (tuple, list, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in x) + "]"
+    if isinstance(x, str):
+        return json.dumps(x)  # a TOML basic string: JSON's escapes are TOML's
+    if isinstance(x, (bool, np.bool_)):
+        raise ModelError(f"parameter value {x!r}: booleans are not parameters")
+    return repr(float(x))
+
+
+def params_toml(raw: dict[str, Param], header: str = "") -> str:
+    """TOML text of a parameter set (``HandParams.raw``), in the schema's order; loads back to the same."""
+    lines = [f"# {h}" for h in header.splitlines()] + ([""] if header else [])
+    for section, fields in _SCHEMA.items():
+        lines.append(f"[{section}]")
+        for key in fields:
+            prm = raw.get(f"{section}.{key}")
+            if prm is None:
+                continue
+            items = [f"value = {_toml_value(prm.value)}", f"unit = {_toml_value(prm.unit)}",
+                     f"source = {_toml_value(prm.source)}"]
+            if prm.reason:
+                items.append(f"reason = {_toml_value(prm.reason)}")
+            if prm.std is not None:
+                items.append(f"std = {_toml_value(prm.std)}")
+            if prm.description:
+                items.append(f"description = {_toml_value(prm.description)}")
+            lines.append(f"{key} = {{ " + ", ".join(items) + " }")
+        lines.append("")
+    return "\n".join(lines)
+
+
+def with_values(params: HandParams, updates: dict[str, Param], header: str = "") -> HandParams:
+    """``params`` with the entries ``updates`` ("section.field" -> :class:`Param`) replaced, validated
+    exactly as a file is (the result is what :func:`load_params` reads from :func:`params_toml`)."""
+    raw = dict(params.raw)
+    for name, prm in updates.items():
+        section, _, key = name.partition(".")
+        if section not in _SCHEMA or key not in _SCHEMA[section]:
+            raise ModelError(f"{name}: unknown parameter field")
+        raw[name] = prm
+    text = params_toml(raw, header)
+    return _from_text(text, params.path or "<updated>")
+
+
+def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:
+    """Write ``params`` as a parameter file (atomically: a temporary file renamed into place)."""
+    p = Path(path)
+    text = params_toml(params.raw, header)
+    tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, p)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ModelError(f"parameter file {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
+    return p

@@ -64,6 +64,7 @@ class EstimationScenario:
 
     model: str = "finger3"
     spring: str = "torsional"
+    friction: bool = False
     duration: float = 5.0
     dt: float = 1e-3
     substeps: int = 4
@@ -204,7 +205,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     if observer not in OBSERVERS:
         raise InputError(f"unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
     p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
-    truth = Model.alpes(sc.model, spring=sc.spring, params=p)
+    truth = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p)
     rng = np.random.default_rng(sc.seed)
     n, m = truth.n, truth.transmission.n_motors
     N = int(round(sc.duration / sc.dt))
@@ -235,7 +236,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
         mass_scale = spring_scale = float("nan")
     else:
         p_obs = mismatched_params(p, mass_scale, spring_scale) if d != 0 else p
-    obs_model = Model.alpes(sc.model, spring=sc.spring, params=p_obs)
+    obs_model = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p_obs)
     ss = StateSpace(obs_model, input="motor", output="encoder")
     pars = tuple(sc.parameters) if observer.endswith("-params") else ()
     n_params = len(pars)

@@ -332,28 +332,35 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
 
     One motor per chain (ratio r/r_m on each of its flexion joints), one for the thumb's
     ab/adduction (``transmission.abduction_ratio``); springs K_i under the ``spring`` law (eq. 2.14);
-    with ``friction`` F_s and F_v on every joint (eq. 2.6-2.7); with ``rotor_inertia`` N^2 J_m on
+    with ``friction`` F_s and F_v on every joint (eq. 2.6-2.7; a chain's per-joint ``F_s``/``F_v``
+    where the file gives them); with ``rotor_inertia`` N^2 J_m on
     every flexion joint and abduction_ratio^2 J_m on the ab/adduction joint (eq. 2.8).
     """
     ratio, abd = params.transmission_ratio, params.abduction_ratio
     motors = alpes_motors(lay, ratio, abd)
     K: dict[str, float] = {}
     arm: dict[str, float] = {}
+    Fs: dict[str, float] = {}
+    Fv: dict[str, float] = {}
     for ch in lay.chains:
-        for j, k in zip(ch.joints, ch.stiffness):
+        chain = params.thumb if ch.abduction else params.finger  # per-joint chain friction where the file gives it
+        for i, (j, k) in enumerate(zip(ch.joints, ch.stiffness)):
             K[j] = k
             arm[j] = params.N**2 * params.J_m
+            Fs[j] = float(chain.F_s[i]) if getattr(chain, "F_s", None) is not None else params.F_s
+            Fv[j] = float(chain.F_v[i]) if getattr(chain, "F_v", None) is not None else params.F_v
         if ch.abduction:
             K[ch.abduction] = lay.abduction_stiffness
             arm[ch.abduction] = abd**2 * params.J_m
+            Fs[ch.abduction], Fv[ch.abduction] = params.F_s, params.F_v
     joints = list(K)
     k = spring_stiffness(np.array([K[j] for j in joints]), spring, params.b, params.r)
     zeros: dict[str, float] = {}
     return TransmissionSpec(
         motors=tuple(motors),
         stiffness={j: float(x) for j, x in zip(joints, k)},
-        coulomb={j: params.F_s for j in joints} if friction else zeros,
-        viscous={j: params.F_v for j in joints} if friction else zeros,
+        coulomb=Fs if friction else zeros,
+        viscous=Fv if friction else zeros,
         armature=arm if rotor_inertia else zeros,
         encoder_counts=params.encoder_counts, smooth_velocity=params.smooth_velocity,
         gravity=tuple(float(x) for x in params.gravity), tips=lay.tips, name=lay.model, spring=spring,
