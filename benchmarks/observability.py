@@ -3,7 +3,7 @@
 For finger2, finger3 and hand (u = joint torques, y = sum of joint angles, torsional springs, time-
 varying input, 8 random points) times
 
-* ``alpes_dyn.observability.observability(name)``: the whole check (state space built with ADAM,
+* ``alpes_dyn.check_observability(name)``: the whole check (state space built with ADAM,
   Lie derivatives and O by CasADi AD, O evaluated at the points, row-normalised SVDs), best of
   ``--repeat`` runs in this process (libraries already imported);
 * the CLI ``alpes-dyn observability --model hand`` as a new process, start-up included (goal: < 2 s);
@@ -110,7 +110,7 @@ def run_sympy(name: str, timeout: float) -> dict[str, Any]:
 
 # ----------------------------------------------------------------------------- ours
 def run_ours(name: str, repeat: int) -> dict[str, Any]:
-    from alpes_dyn.observability import observability
+    from alpes_dyn.observability import check_observability as observability
 
     times = []
     rep = None

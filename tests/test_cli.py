@@ -69,6 +69,13 @@ def test_dynamics_readable_and_hand_tip(capsys):
     (["estimate", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
     (["observability", "--points", "0"], "--points: expected an integer >= 1, got 0"),
     (["report", "--points", "x"], "--points: expected an integer >= 1, got 'x'"),
+    (["dynamics", "--spec", "/nonexistent.toml"], "--spec: applies to a URDF --model"),
+    (["dynamics", "--model", "/nonexistent.urdf", "--friction"], "--friction: applies to the Alpes models"),
+    (["dynamics", "--tau-m=0.1,0.2"], "--tau-m: model 'finger3' has 1 motors (finger), got 2 values"),
+    (["observability", "--max-operations", "0"], "--max-operations: expected an integer >= 1, got 0"),
+    (["observability", "--output", "encoder+"], "expected output names joined by '+'"),
+    (["linearize", "--u=1,2"], "--u: input 'joint' of model 'finger3' has 3 entries"),
+    (["linearize", "--model", "finger2", "--spec", "x.toml"], "--spec: applies to a URDF --model"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
     code, out, err = run(capsys, *argv)
@@ -96,3 +103,20 @@ def test_estimate_help_lists_every_observer(capsys):
     assert e.value.code == 0
     for name in OBSERVERS:
         assert name in out
+
+
+def test_dynamics_text_labels_rows_and_columns(capsys):
+    """Every printed row and column carries its joint (or axis) name, and the numbers are the library's."""
+    code, out, _ = run(capsys, "dynamics", "--model", "hand", "--q=" + ",".join(["0.1"] * 15))
+    assert code == 0
+    m = ad.Model.alpes("hand")
+    lines = out.splitlines()
+    a = lines.index("A(q) [kg m^2]:")
+    header = lines[a + 1].split()
+    assert tuple(header) == m.joint_names
+    row = lines[a + 1 + 1 + m.joint_index("thumb_abd")].split()
+    assert row[0] == "thumb_abd"
+    A = m.inertia_matrix(np.full(15, 0.1))
+    assert np.allclose([float(x) for x in row[1:]], A[m.joint_index("thumb_abd")], rtol=1e-6, atol=0)
+    j = lines.index("J(q) fingertip index_tip, linear, base axes [m]:")
+    assert [ln.split()[0] for ln in lines[j + 2: j + 5]] == ["x", "y", "z"]

@@ -32,7 +32,8 @@ def finger():
     (np.zeros((3, 1)), r"q: expected shape \(3,\)"),
 ])
 def test_bad_vectors(finger, q, pattern):
-    for method in (finger.inertia_matrix, finger.gravity_torque, finger.fingertip_jacobian):
+    for method in (finger.inertia_matrix, finger.gravity_torque, finger.fingertip_jacobian,
+                   lambda q: finger.frame_jacobian(q, "tip", "local"), lambda q: finger.frame_placement(q, "tip")):
         with pytest.raises(ad.InputError) as e:
             method(q)
         assert re.search(pattern, one_line(e))

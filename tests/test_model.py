@@ -175,3 +175,29 @@ def test_gravity_is_passed_once():
     m2 = ad.Model(m.urdf, gravity=[0.0, 0.0, -9.80665])
     q = np.array([0.3, 0.2, 0.1])
     assert np.allclose(m2.gravity_torque(q) / m.gravity_torque(q), 9.80665 / 9.81, rtol=1e-13)
+
+
+def test_names_and_indices():
+    """Joint order is Pinocchio's (depth first, siblings by child link name); motors and tips keep theirs."""
+    import pinocchio as pin
+
+    hand = ad.Model.alpes("hand")
+    raw = pin.buildModelFromXML(hand.urdf)
+    assert hand.joint_names == tuple(raw.names[1:])
+    assert hand.joint_names[:4] == ("index_j1", "index_j2", "index_j3", "little_j1")  # not anatomical
+    assert hand.motor_names == ("index", "middle", "ring", "little", "thumb", "thumb_abduction")
+    assert hand.tip_names == ("index_tip", "middle_tip", "ring_tip", "little_tip", "thumb_tip")
+    for j in ("thumb_abd", "ring_j2", "index_j1"):
+        assert hand.joint_index(j) == raw.getJointId(j) - 1
+    assert hand.motor_index("thumb") == 4
+    # the column of a joint in S is the one joint_index names
+    S = hand.transmission.S
+    assert S[hand.motor_index("thumb_abduction"), hand.joint_index("thumb_abd")] == 1.0
+    with pytest.raises(ad.ModelError, match=r"unknown joint 'thumb_j3' \(joints: index_j1, "):
+        hand.joint_index("thumb_j3")
+    with pytest.raises(ad.ModelError, match=r"unknown motor 'pinky' \(motors: index, "):
+        hand.motor_index("pinky")
+    ur = ad.Model.from_urdf_file(ad.example_robot_urdf("ur", "ur5_robot"))
+    assert ur.motor_names == ()
+    with pytest.raises(ad.ModelError, match=r"unknown motor 'm' \(motors: none\)"):
+        ur.motor_index("m")

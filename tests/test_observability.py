@@ -227,7 +227,7 @@ def test_bad_input():
         observability("finger2", output="tip")
     with pytest.raises(ad.ModelError, match=r"unknown input 'current'"):
         observability("finger2", input="current")
-    with pytest.raises(ad.ModelError, match=r"output matrix: expected a finite \(p, 2\) array, got shape \(1, 3\)"):
+    with pytest.raises(ad.ModelError, match=r"output matrix: expected a finite \(p, 2\) or \(p, 4\) array, got shape \(1, 3\)"):
         observability("finger2", output=np.ones((1, 3)))
     with pytest.raises(ad.ModelError, match=r"unknown model 'finger4'"):
         observability("finger4")
@@ -267,7 +267,7 @@ def test_cli_json_and_text(capsys):
 @pytest.mark.parametrize("argv,pattern", [
     (["--points", "0"], r"--points: expected an integer >= 1, got 0"),
     (["--order", "x"], r"--order: expected auto, report or a non-negative integer, got 'x'"),
-    (["--output", "tip"], r"argument --output: invalid choice: 'tip'"),
+    (["--output", "tip"], r"unknown output 'tip'"),
     (["--input", "current"], r"argument --input: invalid choice: 'current'"),
 ])
 def test_cli_errors(argv, pattern, capsys):
@@ -281,3 +281,33 @@ def test_cli_urdf_without_transmission(capsys):
     path = str(ad.example_robot_urdf("double_pendulum"))
     assert cli.main(["observability", "--model", path]) == 2
     assert "output 'sum' needs a tendon transmission" in capsys.readouterr().err
+
+
+# ----------------------------------------------------------------------------- names and the size cap
+def test_module_is_reachable_and_function_renamed():
+    import importlib
+
+    mod = importlib.import_module("alpes_dyn.observability")
+    assert ad.observability is mod and mod.__name__ == "alpes_dyn.observability"
+    assert ad.check_observability is mod.check_observability is mod.observability is observability
+    r = ad.observability("finger2", points=2)  # the former spelling still works (the module is callable)
+    assert (r.rank, r.n_states) == (4, 4)
+
+
+def test_operation_cap_is_a_parameter_with_a_true_message():
+    """finger3 needs orders past y^(3); a tiny cap stops it with a message naming the parameter, not order."""
+    ss = StateSpace(ad.Model.alpes("finger3"))
+    small = ObservabilityMatrix(ss, max_operations=10)
+    for k in range(3):
+        small.block(k)  # the first orders are never refused (the estimate needs three of them)
+    need = 3 * small.block(2).n_instructions()
+    with pytest.raises(ad.InputError, match=rf"max_operations: d y\^\(3\)/dx would need about {need} operations, "
+                                            r"more than max_operations=10 \(raise it"):
+        small.block(3)
+    with pytest.raises(ad.InputError, match=r"max_operations: d y\^\(3\)/dx would need"):
+        observability("finger3", max_operations=10)  # order='auto' is in use: the message does not suggest it
+    assert ObservabilityMatrix(ss, max_operations=need).block(3).n_instructions() > 0
+    with pytest.raises(ad.InputError, match=r"max_operations: expected a positive integer, got 0"):
+        observability("finger3", max_operations=0)
+    assert cli.main(["observability", "--model", "finger3", "--max-operations", "10"]) == 2
+    assert cli.main(["observability", "--model", "finger3", "--max-operations", "x"]) == 2

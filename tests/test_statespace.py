@@ -104,7 +104,7 @@ def test_bad_input():
         StateSpace(m, input="current")
     with pytest.raises(ad.ModelError, match=r"unknown output 'tip'"):
         StateSpace(m, output="tip")
-    with pytest.raises(ad.ModelError, match=r"output matrix: expected a finite \(p, 3\) array, got shape \(1, 2\)"):
+    with pytest.raises(ad.ModelError, match=r"output matrix: expected a finite \(p, 3\) or \(p, 6\) array, got shape \(1, 2\)"):
         StateSpace(m, output=np.ones((1, 2)))
     ur = ad.Model.from_urdf_file(ad.example_robot_urdf("ur", "ur5_robot"))
     with pytest.raises(ad.ModelError, match=r"input 'motor' needs a tendon transmission"):

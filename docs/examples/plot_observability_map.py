@@ -15,7 +15,7 @@ import numpy as np
 from matplotlib.colors import LogNorm
 
 import alpes_dyn as ad
-from alpes_dyn.observability import ObservabilityMatrix, normalised_singular_values, observability
+from alpes_dyn.observability import ObservabilityMatrix, check_observability, normalised_singular_values
 from alpes_dyn.statespace import StateSpace
 
 # %%
@@ -24,7 +24,7 @@ from alpes_dyn.statespace import StateSpace
 # In the report's setting: u = Gamma (the joint torques), y = q_1 + ... + q_k.
 
 for name in ("finger2", "finger3"):
-    print(observability(name).to_text(), end="\n\n")
+    print(check_observability(name).to_text(), end="\n\n")
 
 # %%
 # A map over the joint space

@@ -11,7 +11,8 @@ from .description import MODELS, example_robot_urdf, layout, urdf_string, write_
 from .errors import AlpesDynError, InputError, ModelError, RecordingError
 from .extras import SPRING_MODELS, JointExtras
 from .model import Model
-from .observability import ObservabilityReport, observability
+from . import observability
+from .observability import ObservabilityReport, check_observability
 from .params import HandParams, load_params
 from .statespace import StateSpace
 from .transmission import Transmission
@@ -20,5 +21,6 @@ __version__ = "0.1.0"
 
 __all__ = [
     "AlpesDynError", "InputError", "ModelError", "RecordingError", "Model", "JointExtras", "Transmission", "HandParams",
-    "StateSpace", "observability", "ObservabilityReport", "load_params", "urdf_string", "layout", "write_urdfs", "example_robot_urdf", "MODELS", "SPRING_MODELS",
+    "StateSpace", "check_observability", "observability", "ObservabilityReport", "load_params", "urdf_string", "layout",
+    "write_urdfs", "example_robot_urdf", "MODELS", "SPRING_MODELS",
 ]

@@ -17,8 +17,9 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from .errors import AlpesDynError, InputError, ModelError
+from .observability import MAX_INSTRUCTIONS
 
-VECTOR_OPTIONS = ("--q", "--v", "--tau", "--force")
+VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
 
 
@@ -77,14 +78,91 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
+def _is_urdf_path(model: str) -> bool:
+    return model.endswith(".urdf") or "/" in model
+
+
+_ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--friction"),
+               ("rotor_inertia", "--rotor-inertia"))
+
+
+def _check_model_options(args: argparse.Namespace) -> None:
+    """Refuse, with one line, the options that do not apply to the kind of --model given (never ignore them)."""
+    if _is_urdf_path(args.model):
+        for dest, flag in _ALPES_ONLY:
+            if getattr(args, dest, None) not in (None, False):
+                raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand); for a URDF --model "
+                                 "put springs, friction and rotor inertia in a --spec file")
+    elif getattr(args, "spec", None) is not None:
+        raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its transmission "
+                         "from --params")
+
+
 def _model_from_args(args: argparse.Namespace):
     from .model import Model
 
-    spring = getattr(args, "spring", "torsional")
-    if args.model.endswith(".urdf") or "/" in args.model:
-        return Model.from_urdf_file(args.model)
-    return Model.alpes(args.model, spring=spring, friction=getattr(args, "friction", False),
-                       rotor_inertia=getattr(args, "rotor_inertia", False), params=getattr(args, "params", None))
+    _check_model_options(args)
+    if _is_urdf_path(args.model):
+        return Model.from_urdf_file(args.model, getattr(args, "spec", None))
+    return Model.alpes(args.model, spring=getattr(args, "spring", None) or "torsional",
+                       friction=getattr(args, "friction", False), rotor_inertia=getattr(args, "rotor_inertia", False),
+                       params=getattr(args, "params", None))
+
+
+OUTPUT_HELP = ("y: sum (of each motor's joint angles, default), encoder (q_m = S q), joints, joints:<a>,<b>, "
+               "tip_position:<frame>; several joined by '+', e.g. encoder+tip_position:tip")
+
+
+def _outputs(text: str) -> list[str]:
+    parts = [p.strip() for p in text.split("+")]
+    if not all(parts):
+        raise argparse.ArgumentTypeError(f"expected output names joined by '+', got {text!r}")
+    return parts
+
+
+def _one_or_list(outputs: list[str]) -> str | list[str]:
+    return outputs[0] if len(outputs) == 1 else outputs
+
+
+def cmd_linearize(args: argparse.Namespace) -> int:
+    """(A, B, C, D) at a state and input (default: the rest state under the input), every row and column named."""
+    from .statespace import StateSpace
+
+    m = _model_from_args(args)
+    ss = StateSpace(m, input=args.input, output=_one_or_list(args.output))
+    u = parse_vector(args.u, "u") if args.u is not None else np.zeros(ss.n_inputs)
+    if u.shape != (ss.n_inputs,):
+        raise InputError(f"--u: input {args.input!r} of model {m.name!r} has {ss.n_inputs} entries "
+                         f"({', '.join(ss.input_names)}), got {u.size} values")
+    if args.q is None and args.v is not None:
+        raise InputError("--v: give --q with it (without --q the point is the rest state under --u)")
+    if args.q is None:
+        x0 = ss.equilibrium(u)
+        where = "the rest state under u (f(x0, u) = 0)"
+    else:
+        q = parse_vector(args.q, "q")
+        v = parse_vector(args.v, "v") if args.v is not None else np.zeros(m.n)
+        for x, name in ((q, "q"), (v, "v")):
+            if x.shape != (m.n,):
+                raise InputError(f"--{name}: model {m.name!r} has {m.n} joints, got {x.size} values")
+        x0 = np.concatenate([q, v])
+        where = "the given state"
+    if args.dt is not None and not (np.isfinite(args.dt) and args.dt > 0):
+        raise InputError(f"--dt: expected a positive number of seconds, got {args.dt!r}")
+    A, B, C, D = ss.linearize(x0, u, dt=args.dt)
+    kind = "continuous" if args.dt is None else f"discrete, zero-order hold, dt = {args.dt:g} s"
+    obj = {"model": m.name, "input": args.input, "output": args.output, "dt": args.dt, "x0": x0.tolist(),
+           "u0": u.tolist(), "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist(),
+           "states": list(ss.state_names), "inputs": list(ss.input_names), "outputs": list(ss.output_names)}
+    xs, us, ys = ss.state_names, ss.input_names, ss.output_names
+    text = "\n".join([
+        f"Linearisation of {m.name} ({kind}) at {where}: input {args.input} ({ss.n_inputs}), "
+        f"output {'+'.join(args.output)} ({ss.n_outputs})",
+        "x0:", _fmt_table(x0[None], ("x0",), xs), "A:", _fmt_table(A, xs, xs), "B:", _fmt_table(B, xs, us),
+        "C:", _fmt_table(C, ys, xs), "D:", _fmt_table(D, ys, us),
+    ])
+    _emit(obj, text, args.json)
+    return 0
 
 
 def _emit(obj: dict[str, Any], text: str, as_json: bool) -> None:
@@ -93,6 +171,16 @@ def _emit(obj: dict[str, Any], text: str, as_json: bool) -> None:
 
 def _fmt_matrix(M: np.ndarray) -> str:
     return "\n".join("  " + " ".join(f"{x: .6e}" for x in row) for row in np.atleast_2d(M))
+
+
+def _fmt_table(M: np.ndarray, rows: Sequence[str], cols: Sequence[str]) -> str:
+    """A matrix with a header of column names and each row led by its name."""
+    M = np.atleast_2d(M)
+    w = max([len(r) for r in rows] + [1])
+    cw = max([len(c) for c in cols] + [13])
+    head = "  " + " " * w + " " + " ".join(f"{c:>{cw}s}" for c in cols)
+    return "\n".join([head] + ["  " + f"{r:<{w}s} " + " ".join(f"{x:>{cw}.6e}" for x in row)
+                               for r, row in zip(rows, M)])
 
 
 # ----------------------------------------------------------------------------- urdf
@@ -121,6 +209,17 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
         if x.shape != (n,):
             raise InputError(f"--{name}: model {m.name!r} has {n} joints, got {x.size} values")
+    tau_m = None
+    if args.tau_m is not None:
+        if m.transmission is None:
+            raise InputError(f"--tau-m: model {m.name!r} has no motors (give a URDF --model a --spec with [[motor]])")
+        if args.tau is not None:
+            raise InputError("--tau-m: give joint torques --tau or motor torques --tau-m, not both")
+        tau_m = parse_vector(args.tau_m, "tau-m")
+        if tau_m.shape != (m.transmission.n_motors,):
+            raise InputError(f"--tau-m: model {m.name!r} has {m.transmission.n_motors} motors "
+                             f"({', '.join(m.motor_names)}), got {tau_m.size} values")
+        tau = m.transmission.joint_torque(tau_m)  # Gamma = S^T tau_m (eq. 3.13)
     F = None
     if args.force is not None:
         F = parse_vector(args.force, "force")
@@ -134,18 +233,28 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     qdd = m.forward_dynamics(q, v, tau, F, tip)
     obj = {"model": m.name, "q": q.tolist(), "v": v.tolist(), "tau": tau.tolist(), "A": A.tolist(),
            "C": C.tolist(), "G": G.tolist(), "J": J.tolist(), "qdd": qdd.tolist(), "tip": tip,
-           "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist()}
+           "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist(),
+           "motors": list(m.motor_names), "tips": list(m.tip_names)}
+    joints = m.joint_names
+    motor_lines: list[str] = []
+    if m.transmission is not None:
+        q_m = m.transmission.motor_positions(q)
+        obj["q_m"] = q_m.tolist()
+        obj["tau_m"] = None if tau_m is None else tau_m.tolist()
+        cols = ("q_m", "tau_m") if tau_m is not None else ("q_m",)
+        vals = np.column_stack([q_m, tau_m]) if tau_m is not None else q_m[:, None]
+        motor_lines = ["per motor: encoder angle q_m = S q [rad]" + (", motor torque tau_m [N m] (tau = S^T tau_m)"
+                                                                     if tau_m is not None else "") + ":",
+                       _fmt_table(vals, m.motor_names, cols)]
     text = "\n".join([
-        f"model {m.name} ({n} joints: {', '.join(m.joint_names)}), spring model {m.spring}",
-        f"q   [rad]      {np.array2string(q, precision=6)}",
-        f"v   [rad/s]    {np.array2string(v, precision=6)}",
-        f"tau [N m]      {np.array2string(tau, precision=6)}",
-        f"F   [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
-        "A(q) [kg m^2]:", _fmt_matrix(A),
-        "C(q, v) [N m s]:", _fmt_matrix(C),
-        "G(q) = gravity + springs [N m]:", _fmt_matrix(G),
-        f"J(q) fingertip {tip} [m]:", _fmt_matrix(J),
-        "qdd [rad/s^2]:", _fmt_matrix(qdd),
+        f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}",
+        f"F [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
+        "per joint: q [rad], v [rad/s], tau [N m], G(q) = gravity + springs [N m], qdd [rad/s^2]:",
+        _fmt_table(np.column_stack([q, v, tau, G, qdd]), joints, ("q", "v", "tau", "G", "qdd")),
+        "A(q) [kg m^2]:", _fmt_table(A, joints, joints),
+        "C(q, v) [N m s]:", _fmt_table(C, joints, joints),
+        f"J(q) fingertip {tip}, linear, base axes [m]:", _fmt_table(J, ("x", "y", "z"), joints),
+        *motor_lines,
     ])
     _emit(obj, text, args.json)
     return 0
@@ -242,8 +351,9 @@ def cmd_observability(args: argparse.Namespace) -> int:
         if order < 0:
             raise InputError(f"--order: expected auto, report or a non-negative integer, got {order}")
     model = _model_from_args(args)
-    rep = observability(model, input=args.input, output=args.output, points=args.points, seed=args.seed,
-                        constant_input=getattr(args, "constant_input", False), order=order)
+    rep = observability(model, input=args.input, output=_one_or_list(args.output), points=args.points, seed=args.seed,
+                        constant_input=getattr(args, "constant_input", False), order=order,
+                        max_operations=args.max_operations)
     _emit(rep.to_dict(), rep.to_text(), args.json)
     return 0
 
@@ -254,6 +364,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     from .observers import OBSERVERS
     from .scenario import SCENARIO_MODELS, plot_estimation, run_estimation
 
+    _check_model_options(args)
     if args.model not in SCENARIO_MODELS:
         raise InputError(f"--model: the estimation scenario is defined for one finger ({', '.join(SCENARIO_MODELS)}), "
                          f"got {args.model!r}")
@@ -265,7 +376,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         except ImportError:
             raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
     t0 = time.perf_counter()
-    res = run_estimation(args.observer, model=args.model, spring=args.spring, params=args.params,
+    res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional", params=args.params,
                          mismatch=args.mismatch, duration=args.duration, seed=args.seed)
     if args.plot:
         plot_estimation(res, args.plot)
@@ -302,9 +413,14 @@ def build_parser() -> argparse.ArgumentParser:
     def common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") -> None:
         sp.add_argument("--model", default=model_default, required=model_default is None,
                         help="finger2, finger3, hand, or a path to a fixed-base URDF file (default %(default)s)")
-        sp.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
-                        help="spring model: torsional 1/2 K q^2 (default), report (eq. 2.14 literally), none")
-        sp.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+        sp.add_argument("--spec", default=None, metavar="FILE.toml",
+                        help="transmission spec of a URDF --model: motors, ratios, encoder, springs, friction, "
+                             "rotor inertia (see the user guide, 'Your own robot')")
+        sp.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
+                        help="Alpes models: spring model torsional 1/2 K q^2 (default), report (eq. 2.14 literally), "
+                             "none")
+        sp.add_argument("--params", default=None, metavar="FILE",
+                        help="Alpes models: parameter file (default: the shipped one)")
         sp.add_argument("--json", action="store_true", help="print one JSON object")
 
     s = sub.add_parser("urdf", help="print or write the URDF of a model")
@@ -319,10 +435,12 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--q", help="joint angles, rad, e.g. --q=-0.1,0.2,0.3 (default zeros)")
     s.add_argument("--v", help="joint velocities, rad/s (default zeros)")
     s.add_argument("--tau", help="joint torques Gamma, N m (default zeros)")
+    s.add_argument("--tau-m", help="motor torques tau_m, N m, in motor order: Gamma = S^T tau_m (instead of --tau)")
     s.add_argument("--force", help="contact force Fx,Fy,Fz at the tip, N, base frame (eq. 2.9, 2.13)")
     s.add_argument("--tip", help="tip frame name (default: the first tip)")
-    s.add_argument("--friction", action="store_true", help="switch on friction (eq. 2.6-2.7)")
-    s.add_argument("--rotor-inertia", action="store_true", help="switch on rotor inertia N^2 J_m (eq. 2.8)")
+    s.add_argument("--friction", action="store_true", help="Alpes models: switch on friction (eq. 2.6-2.7)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on rotor inertia N^2 J_m "
+                                                                "(eq. 2.8)")
     s.set_defaults(func=cmd_dynamics)
 
     s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")
@@ -334,13 +452,26 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("observability", help="nonlinear observability rank test (eq. 3.4-3.8)")
     common(s)
     s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
-    s.add_argument("--output", default="sum", choices=("sum", "encoder"), help="y = sum of joint angles or encoders")
+    s.add_argument("--output", default="sum", type=_outputs, help=OUTPUT_HELP)
     s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--order", default="auto", help="highest derivative order: auto (until the rank stops growing, "
                    "default), report (y..y^(n-1), eq. 3.8) or an integer")
     s.add_argument("--constant-input", action="store_true", help="inputs constant (u' = u'' = ... = 0)")
+    s.add_argument("--max-operations", type=_int_at_least(1), default=MAX_INSTRUCTIONS,
+                   help="size cap of one derivative order's function, CasADi operations (default %(default)s)")
     s.set_defaults(func=cmd_observability)
+
+    s = sub.add_parser("linearize", help="A, B, C, D of the state space at a point (continuous, or discrete with --dt)",
+                       epilog="Example: alpes-dyn linearize --model finger3 --input motor --output encoder --u 0.02")
+    common(s)
+    s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
+    s.add_argument("--output", default="sum", type=_outputs, help=OUTPUT_HELP)
+    s.add_argument("--u", help="input u0 (joint or motor torques, N m; default zeros)")
+    s.add_argument("--q", help="joint angles of x0, rad (default: the rest state under --u)")
+    s.add_argument("--v", help="joint velocities of x0, rad/s (default zeros; needs --q)")
+    s.add_argument("--dt", type=float, default=None, help="time step, s: discretise with a zero-order hold")
+    s.set_defaults(func=cmd_linearize)
 
     s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder",
                        epilog="Example: alpes-dyn estimate --model finger3 --observer ekf-params --mismatch 0.1 "

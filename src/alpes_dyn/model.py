@@ -16,19 +16,21 @@ it is not thread-safe (use :meth:`Model.copy` per thread).
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from .description import Layout, check_model_name, layout, urdf_string
 from .errors import InputError, ModelError
-from .extras import JointExtras, spring_stiffness
+from .extras import JointExtras
 from .params import HandParams, load_params
+from .spec import TransmissionSpec, alpes_spec, load_spec
 from .transmission import Transmission
 
-__all__ = ["Model", "DEFAULT_GRAVITY"]
+__all__ = ["Model", "DEFAULT_GRAVITY", "Contact", "REFERENCE_FRAMES", "as_contacts"]
 
 DEFAULT_GRAVITY = np.array([0.0, 0.0, -9.81])
 _F64 = np.dtype(np.float64)
@@ -36,6 +38,54 @@ _ND = np.ndarray
 _aba = pin.aba
 _isfinite = math.isfinite
 _WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
+REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
+    "world": pin.ReferenceFrame.WORLD, "local": pin.ReferenceFrame.LOCAL,
+    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
+}
+"""Pinocchio's reference frames by name: a frame's velocity (v, w) or a wrench (f, tau) expressed
+``"local"`` in the frame's own axes at its origin, ``"local_world_aligned"`` at its origin in the base
+(world) axes, ``"world"`` at the base origin in the base axes (spatial velocity)."""
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A contact at a frame: a force (``dim=3``, N, applied at the frame origin) or a wrench
+    (``dim=6``: [force (N); torque (N m)], Pinocchio's order) expressed in ``reference``
+    (:data:`REFERENCE_FRAMES`; default ``"local_world_aligned"``: base axes, as eq. 2.13).
+    Its joint torque is J^T F with J the frame Jacobian in the same reference (eq. 2.9)."""
+
+    frame: str
+    dim: int = 3
+    reference: str = "local_world_aligned"
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.frame, str) or not self.frame:
+            raise ModelError(f"contact frame: expected a frame name, got {self.frame!r}")
+        if self.dim not in (3, 6) or isinstance(self.dim, bool):
+            raise ModelError(f"contact {self.frame!r}: dim must be 3 (force) or 6 (wrench), got {self.dim!r}")
+        if self.reference not in REFERENCE_FRAMES:
+            raise ModelError(f"contact {self.frame!r}: unknown reference {self.reference!r} "
+                             f"(expected one of {', '.join(REFERENCE_FRAMES)})")
+
+    @property
+    def names(self) -> tuple[str, ...]:
+        """Labels of its components: F_x_<frame>, ... and, for a wrench, M_x_<frame>, ..."""
+        comps = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_z")[: self.dim]
+        return tuple(f"{c}_{self.frame}" for c in comps)
+
+
+def as_contacts(contacts: Any) -> tuple[Contact, ...]:
+    """A tuple of :class:`Contact` from Contacts and frame names (a name is a 3-D force in base axes)."""
+    if isinstance(contacts, (str, Contact)):
+        contacts = (contacts,)
+    if not isinstance(contacts, (list, tuple)):
+        raise ModelError(f"contacts: expected a list of Contact or frame names, got {contacts!r}")
+    out = tuple(c if isinstance(c, Contact) else Contact(c) for c in contacts)
+    frames = [c.frame for c in out]
+    dup = next((f for f in frames if frames.count(f) > 1), None)
+    if dup is not None:
+        raise ModelError(f"contacts: frame {dup!r} appears twice")
+    return out
 
 
 def _build_pinocchio(urdf: str) -> pin.Model:
@@ -54,6 +104,21 @@ def _build_pinocchio(urdf: str) -> pin.Model:
     return model
 
 
+def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:
+    """Newton's method for residual(q) = 0 (N m) from q0, steps capped at 0.5 rad; :class:`InputError` on failure."""
+    q = np.array(q0, dtype=float)
+    for _ in range(iterations):
+        r = residual(q)
+        if np.max(np.abs(r)) < tol:
+            return q
+        try:
+            dq = np.linalg.solve(jacobian(q), -r)
+        except np.linalg.LinAlgError:
+            raise InputError("static equilibrium: singular stiffness (a joint without spring?)") from None
+        q = q + dq * min(1.0, 0.5 / max(float(np.max(np.abs(dq))), 1e-300))  # at most 0.5 rad per step
+    raise InputError("static equilibrium: Newton's method did not converge (torque beyond the springs' range?)")
+
+
 class Model:
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
@@ -61,22 +126,44 @@ class Model:
     ----------
     urdf:
         URDF text (not a path; see :meth:`from_urdf_file`).
-    extras:
-        Springs, friction, rotor inertia in joint order (default: none).
+    spec:
+        What the URDF cannot hold: motors and their joints with ratios, encoder, per-joint springs,
+        friction, rotor inertia (:class:`~alpes_dyn.spec.TransmissionSpec`, or the path of its TOML
+        file; default: none of them). The Alpes models are built through it (:meth:`alpes`).
     gravity:
-        Gravity vector in the base frame, m/s^2, shape (3,) (default (0, 0, -9.81)).
+        Gravity vector in the base frame, m/s^2, shape (3,) (default: the spec's, else (0, 0, -9.81)).
     name:
-        A label (default: the robot name of the URDF).
+        A label (default: the spec's name, else the robot name of the URDF).
     layout, params:
-        Set by :meth:`alpes`: the chains/tips/transmission of an Alpes model and its parameters.
+        Set by :meth:`alpes`: the chains of an Alpes model and its parameters.
+    spring:
+        Label of the spring law (default: the spec's).
+    extras:
+        Springs, friction, rotor inertia as arrays in joint order, instead of a spec (no motors).
 
     All vectors are 1-D float arrays of length ``n`` (joints in :attr:`joint_names` order), in SI
     units (rad, rad/s, rad/s^2, N m, N).
+
+    Joint order. Pinocchio's: depth first from the root, a joint's whole subtree before its next
+    sibling, siblings in the order the URDF parser (urdfdom) keeps them, which is by child link name
+    -- not the order of the URDF file, nor an anatomical one (the Alpes hand comes as index, little,
+    middle, ring, thumb). Motors (:attr:`motor_names`) keep the order of the transmission, tips
+    (:attr:`tip_names`) the order given by the layout or spec (else the URDF's, leaf frames in
+    Pinocchio's frame order). Use :meth:`joint_index` rather than positions.
     """
 
-    def __init__(self, urdf: str, extras: JointExtras | None = None, gravity: Sequence[float] | None = None,
-                 name: str | None = None, layout: Layout | None = None, params: HandParams | None = None,
-                 spring: str = "none") -> None:
+    def __init__(self, urdf: str, spec: TransmissionSpec | str | Path | None = None,
+                 gravity: Sequence[float] | None = None, name: str | None = None, layout: Layout | None = None,
+                 params: HandParams | None = None, spring: str | None = None, *,
+                 extras: JointExtras | None = None) -> None:
+        if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
+            spec, extras = None, spec if extras is None else extras
+        if isinstance(spec, (str, Path)):
+            spec = load_spec(spec)
+        if spec is not None and not isinstance(spec, TransmissionSpec):
+            raise ModelError(f"spec: expected a TransmissionSpec or the path of its TOML file, got {type(spec).__name__}")
+        if spec is not None and extras is not None:
+            raise ModelError("extras: given together with a spec, which holds them already")
         if not isinstance(urdf, str) or "<robot" not in urdf:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
         self.urdf: str = urdf
@@ -84,15 +171,25 @@ class Model:
         n = self.pin_model.nv
         self.n: int = n
         self.joint_names: tuple[str, ...] = tuple(self.pin_model.names[1:])
-        self.name: str = name or self.pin_model.name
+        self.spec: TransmissionSpec | None = spec
+        if spec is not None:
+            spec.check(self.joint_names, [f.name for f in self.pin_model.frames])
+            extras = spec.extras(self.joint_names)
+            if gravity is not None and spec.gravity is not None and not np.array_equal(
+                    np.asarray(gravity, dtype=float), np.asarray(spec.gravity)):
+                raise ModelError("gravity: given both as an argument and in the spec, with different values")
+            gravity = spec.gravity if gravity is None else gravity
+        self.name: str = name or (spec.name if spec is not None and spec.name else None) or self.pin_model.name
         self.layout = layout
         self.params = params
-        self.spring = spring
+        self.spring = spring if spring is not None else (spec.spring if spec is not None else "none")
         g = DEFAULT_GRAVITY if gravity is None else np.asarray(gravity, dtype=float)
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
         self.gravity: np.ndarray = g.copy()
         self.pin_model.gravity.linear = g
+        if extras is not None and not isinstance(extras, JointExtras):
+            raise ModelError(f"extras: expected JointExtras, got {type(extras).__name__}")
         self.extras: JointExtras = extras if extras is not None else JointExtras.zeros(n)
         for fname in ("stiffness", "armature", "coulomb", "viscous"):
             a = getattr(self.extras, fname)
@@ -108,16 +205,18 @@ class Model:
         self._lower = np.tril_indices(n, -1)
         self._shape = (n,)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
-        if layout is not None:
-            self.tips: tuple[str, ...] = layout.tips
+        if spec is not None and spec.tips is not None:
+            self.tips: tuple[str, ...] = spec.tips
+        elif layout is not None:
+            self.tips = layout.tips
         else:
             parents = {self.pin_model.frames[i].parentFrame for i in range(len(self.pin_model.frames))}
             self.tips = tuple(f.name for i, f in enumerate(self.pin_model.frames)
                               if i not in parents and f.type == pin.FrameType.BODY)
-        self.transmission: Transmission | None = None
-        if layout is not None and params is not None:
-            self.transmission = Transmission.from_layout(
-                layout, self.joint_names, params.transmission_ratio, params.abduction_ratio, params.encoder_counts)
+        self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
+        if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
+            self.transmission = Transmission.from_layout(layout, self.joint_names, params.transmission_ratio,
+                                                         params.abduction_ratio, params.encoder_counts)
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -131,51 +230,57 @@ class Model:
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)
         lay = layout(model, p)
-        m = cls(urdf_string(model, p), gravity=p.gravity, name=model, layout=lay, params=p, spring=spring)
-        names = m.joint_names
-        K = np.zeros(m.n)
-        arm = np.zeros(m.n)
-        idx = {j: i for i, j in enumerate(names)}
-        for ch in lay.chains:
-            K[[idx[j] for j in ch.joints]] = ch.stiffness
-            arm[[idx[j] for j in ch.joints]] = p.N**2 * p.J_m
-            if ch.abduction:
-                K[idx[ch.abduction]] = lay.abduction_stiffness
-                arm[idx[ch.abduction]] = p.abduction_ratio**2 * p.J_m
-        k = spring_stiffness(K, spring, p.b, p.r)
-        Fs, Fv = np.full(m.n, p.F_s), np.full(m.n, p.F_v)
-        for ch in lay.chains:  # per-joint friction of a chain, where the file gives it
-            chain = p.thumb if ch.abduction else p.finger
-            cols = [idx[j] for j in ch.joints]
-            if chain.F_s is not None:
-                Fs[cols] = chain.F_s[: len(cols)]
-            if chain.F_v is not None:
-                Fv[cols] = chain.F_v[: len(cols)]
-        extras = JointExtras(
-            stiffness=k,
-            armature=arm if rotor_inertia else np.zeros(m.n),
-            coulomb=Fs if friction else np.zeros(m.n),
-            viscous=Fv if friction else np.zeros(m.n),
-            smooth_velocity=p.smooth_velocity,
-        )
-        return cls(m.urdf, extras=extras, gravity=p.gravity, name=model, layout=lay, params=p, spring=spring)
+        spec = alpes_spec(lay, p, spring, friction, rotor_inertia)
+        return cls(urdf_string(model, p), spec, name=model, layout=lay, params=p)
 
     @classmethod
-    def from_urdf_file(cls, path: str | Path, **kwargs) -> "Model":
-        """Load any fixed-base URDF file (e.g. one of example-robot-data); extras default to none."""
+    def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
+        """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
+        (:class:`~alpes_dyn.spec.TransmissionSpec` or the path of its TOML file); without one the
+        model has no motors, springs, friction or rotor inertia."""
         p = Path(path)
         try:
             text = p.read_text()
         except OSError as exc:
             raise ModelError(f"URDF file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
-        return cls(text, **kwargs)
+        except UnicodeDecodeError:
+            raise ModelError(f"URDF file {str(p)!r}: not UTF-8 text") from None
+        return cls(text, spec, **kwargs)
 
     def copy(self) -> "Model":
         """An independent model (own Pinocchio data), e.g. for another thread."""
-        return Model(self.urdf, self.extras, self.gravity, self.name, self.layout, self.params, self.spring)
+        if self.spec is not None:
+            return Model(self.urdf, self.spec, self.gravity, self.name, self.layout, self.params, self.spring)
+        return Model(self.urdf, None, self.gravity, self.name, self.layout, self.params, self.spring,
+                     extras=self.extras)
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, n={self.n}, spring={self.spring!r}, tips={list(self.tips)})"
+
+    # ------------------------------------------------------------------ names
+    @property
+    def motor_names(self) -> tuple[str, ...]:
+        """Motor names in transmission order (empty without a transmission)."""
+        return self.transmission.motor_names if self.transmission is not None else ()
+
+    @property
+    def tip_names(self) -> tuple[str, ...]:
+        """Tip frame names (the same as :attr:`tips`); the first is the default tip."""
+        return tuple(self.tips)
+
+    def joint_index(self, name: str) -> int:
+        """Position of joint ``name`` in :attr:`joint_names` (and in q, v, tau, the rows of A...)."""
+        try:
+            return self.joint_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown joint {name!r} (joints: {', '.join(self.joint_names)})") from None
+
+    def motor_index(self, name: str) -> int:
+        """Position of motor ``name`` in :attr:`motor_names` (and in tau_m, the encoder vector q_m)."""
+        try:
+            return self.motor_names.index(name)
+        except ValueError:
+            raise ModelError(f"unknown motor {name!r} (motors: {', '.join(self.motor_names) or 'none'})") from None
 
     # ------------------------------------------------------------------ input checks
     def vector(self, x: object, name: str, n: int | None = None) -> np.ndarray:
@@ -262,9 +367,61 @@ class Model:
         fid = self.frame_id(tip)
         return pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, _WORLD)[:3].copy()
 
-    def contact_torque(self, q: np.ndarray, F: object = None, tip: str | None = None) -> np.ndarray:
-        """J^T F (eq. 2.9), (n,), N m, for a force F (N, base frame; a scalar means [0, 0, F_z], eq. 2.13)."""
-        return self.fingertip_jacobian(q, tip).T @ self._force(F)
+    def frame_placement(self, q: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
+        """(R (3, 3), p (3,)): orientation and position (m) of ``frame`` in the base frame."""
+        q = self.vector(q, "q")
+        fid = self.frame_id(frame)
+        pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
+        M = self.pin_data.oMf[fid]
+        return M.rotation.copy(), M.translation.copy()
+
+    def frame_jacobian(self, q: np.ndarray, frame: str | None = None, reference: str = "local_world_aligned",
+                       dim: int = 6) -> np.ndarray:
+        """Jacobian of ``frame`` (default: the first tip) as Pinocchio's ``getFrameJacobian``: (6, n)
+        [linear (m/rad); angular (1)] rows, or (3, n) linear rows with ``dim=3``, in ``reference``:
+        ``"local_world_aligned"`` (default; the frame origin's velocity in base axes), ``"local"``
+        (frame axes) or ``"world"`` (spatial velocity at the base origin), see :data:`REFERENCE_FRAMES`."""
+        q = self.vector(q, "q")
+        fid = self.frame_id(frame)
+        if reference not in REFERENCE_FRAMES:
+            raise ModelError(f"reference: unknown {reference!r} (expected one of {', '.join(REFERENCE_FRAMES)})")
+        if dim not in (3, 6) or isinstance(dim, bool):
+            raise ModelError(f"dim: expected 3 (linear rows) or 6 (linear and angular), got {dim!r}")
+        J = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, REFERENCE_FRAMES[reference])
+        return J[:dim].copy()
+
+    def contact_torque(self, q: np.ndarray, F: object = None, tip: str | None = None,
+                       contacts: Any = None) -> np.ndarray:
+        """Sum of J_c^T F_c over the contacts (eq. 2.9), (n,), N m.
+
+        * one force at ``tip``: F (3,) in N, base axes (a scalar means [0, 0, F_z], eq. 2.13);
+        * several: ``contacts`` (a list of :class:`Contact` or frame names) and F their stacked
+          forces/wrenches, (sum of dims,); or F a dict {frame: force (3,) or wrench (6,)} in base axes.
+        """
+        if isinstance(F, dict):
+            if contacts is not None:
+                raise ModelError("contacts: give either contacts= with a stacked F or F as a dict, not both")
+            for f, x in F.items():
+                if np.size(x) not in (3, 6):
+                    raise InputError(f"F[{f!r}]: expected a force (3 values) or a wrench (6), got {np.size(x)} values")
+            contacts = tuple(Contact(f, int(np.size(x))) for f, x in F.items())
+            try:
+                F = np.concatenate([np.ravel(np.asarray(x, dtype=float)) for x in F.values()]) if F else np.zeros(0)
+            except (TypeError, ValueError):
+                raise InputError(f"F: expected numbers for every frame, got {F!r}") from None
+        if contacts is None:
+            return self.fingertip_jacobian(q, tip).T @ self._force(F)
+        cts = as_contacts(contacts)
+        F = self.vector(F, "F", sum(c.dim for c in cts))
+        q = self.vector(q, "q")
+        out = np.zeros(self.n)
+        k = 0
+        for c in cts:
+            J = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, self.frame_id(c.frame),
+                                         REFERENCE_FRAMES[c.reference])
+            out += J[: c.dim].T @ F[k: k + c.dim]
+            k += c.dim
+        return out
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """E = 1/2 qd^T (A + I_a) qd (eq. 2.3), J."""
@@ -277,10 +434,12 @@ class Model:
         return float(pin.computePotentialEnergy(self.pin_model, self.pin_data, q)) + float(self.extras.spring_energy(q))
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, F: object = None,
-                         tip: str | None = None, smooth: bool = False) -> np.ndarray:
+                         tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint accelerations qdd (n,), rad/s^2, solving eq. 2.10 (ABA + extras).
 
-        ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z).
+        ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
+        or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
+        :meth:`contact_torque`).
         This is the hot path: float64 arrays of the right shape skip conversion, and finiteness is
         checked once on the result (NaN/inf in any input propagates to it); a non-finite result
         raises :class:`InputError` naming the offending input.
@@ -293,7 +452,7 @@ class Model:
         if self._friction:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
-            tau = tau + self.contact_torque(q, F, tip)
+            tau = tau + self.contact_torque(q, F, tip, contacts)
         qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
         if not _isfinite(qdd.dot(qdd)):
             for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
@@ -303,7 +462,7 @@ class Model:
         return qdd
 
     def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, F: object = None,
-                         tip: str | None = None, smooth: bool = False) -> np.ndarray:
+                         tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint torques Gamma (n,), N m, that produce accelerations ``a`` (eq. 2.10; RNEA + extras)."""
         q, v, a = self.vector(q, "q"), self.vector(v, "v"), self.vector(a, "a")
         tau = pin.rnea(self.pin_model, self.pin_data, q, v, a).copy()
@@ -312,8 +471,19 @@ class Model:
         if self._friction:
             tau += self.extras.friction_torque(v, smooth)
         if F is not None:
-            tau -= self.contact_torque(q, F, tip)
+            tau -= self.contact_torque(q, F, tip, contacts)
         return tau
+
+    def static_equilibrium(self, tau: np.ndarray, q0: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
+        """Joint angles q (n,), rad, where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
+
+        Newton's method from ``q0`` (default 0) with the analytic Jacobian of G (:meth:`gravity_jacobian`),
+        at most 0.5 rad per step, until max |G(q) - tau| < ``tol`` (N m); raises
+        :class:`~alpes_dyn.InputError` if the stiffness is singular or it does not converge in 50 iterations.
+        """
+        tau = self.vector(tau, "tau")
+        q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
+        return newton_equilibrium(lambda q: self.gravity_torque(q) - tau, self.gravity_jacobian, q0, tol)
 
     # ------------------------------------------------------------------ helpers
     @property

@@ -41,7 +41,8 @@ This keeps the 30-state hand cheap (each finger needs y..y^(5), not y..y^(29)).
 ``order="report"`` builds the report's O = d(y, ..., y^(n-1))/dx (eq. 3.6, 3.8, 3.14), stopping early
 only once the rank is n (more rows cannot change it); an integer builds exactly that order. Each order
 costs about 3 times the previous one (finger3: 2e4 operations at y^(5), 1.7e6 at y^(9)); an order whose
-function exceeds :data:`MAX_INSTRUCTIONS` operations raises :class:`~alpes_dyn.InputError`.
+function would exceed ``max_operations`` operations (default :data:`MAX_INSTRUCTIONS`) raises
+:class:`~alpes_dyn.InputError` naming the order, the estimate and how to raise the cap.
 
 Parts. A tree whose chains move independently (the hand: four fingers and the thumb; the mass matrix is
 block diagonal per chain) is also analysed part by part: the rows of the part's outputs and the
@@ -50,14 +51,23 @@ part's figures assume those states known).
 
 One call::
 
-    from alpes_dyn.observability import observability
-    rep = observability("finger3")            # Model.alpes("finger3"), u = joint torques, y = q1 + q2 + q3
+    import alpes_dyn as ad
+    rep = ad.check_observability("finger3")   # Model.alpes("finger3"), u = joint torques, y = q1 + q2 + q3
     rep.rank, rep.observable, rep.index       # 6, True, 5
     print(rep.to_text()); rep.to_dict()
+
+Names. The function is :func:`check_observability`; the module is ``alpes_dyn.observability``. The
+function used to be exported by the package as ``alpes_dyn.observability``, which hid this module
+(``import alpes_dyn.observability`` then gave the function). The function was renamed rather than the
+module because the module name is the one the documentation, the command (``alpes-dyn observability``)
+and the other modules' imports use. The old spellings keep working: ``observability`` is an alias of
+:func:`check_observability` in this module, and the module itself is callable
+(``alpes_dyn.observability("finger3")`` forwards to :func:`check_observability`).
 """
 
 from __future__ import annotations
 
+import sys
 import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
@@ -70,12 +80,14 @@ from .model import Model
 from .statespace import StateSpace
 
 __all__ = [
-    "ObservabilityMatrix", "ObservabilityReport", "observability", "normalised_singular_values",
+    "ObservabilityMatrix", "ObservabilityReport", "check_observability", "observability", "MAX_INSTRUCTIONS",
+    "normalised_singular_values",
     "numerical_rank", "sample_points",
 ]
 
 _EPS = float(np.finfo(float).eps)
-MAX_INSTRUCTIONS = 2_000_000  # size cap of one derivative order's function (each order costs ~3x the last)
+MAX_INSTRUCTIONS = 2_000_000
+"""Default size cap (CasADi operations) of one derivative order's function; each order costs ~3x the last."""
 _SPEED = 2.0  # rad/s, bound of the sampled joint velocities (as Model.random_state)
 
 
@@ -125,15 +137,18 @@ class ObservabilityMatrix:
     ss: the state space x' = f(x, u[, F]), y = h(x). With ``force=True`` the contact force F is a
         known input like u (w below holds [u; F] and its derivatives).
     constant_input: u' = u'' = ... = 0 (default False: the input derivatives are free symbols).
+    max_operations: size cap of one derivative order's function (CasADi operations, default
+        :data:`MAX_INSTRUCTIONS`); an order estimated above it raises :class:`~alpes_dyn.InputError`.
 
     Every function of order k takes ``(x, w)``: x (n_states,) and w = [v; v'; ...; v^(K-1)] with
     v = [u; F], K = max(k, 1) (time-varying input) or w = v (constant input); see :meth:`w_size`.
     Rows are ordered by derivative order: the p outputs' y, then their y', ... (eq. 3.14).
     """
 
-    def __init__(self, ss: StateSpace, constant_input: bool = False) -> None:
+    def __init__(self, ss: StateSpace, constant_input: bool = False, max_operations: int = MAX_INSTRUCTIONS) -> None:
         if not isinstance(ss, StateSpace):
             raise ModelError(f"ObservabilityMatrix: expected a StateSpace, got {type(ss).__name__}")
+        self.max_operations = _max_operations(max_operations)
         self.ss = ss
         self.constant_input = bool(constant_input)
         self.x: cs.SX = ss.x
@@ -141,7 +156,7 @@ class ObservabilityMatrix:
         self.n_states = ss.n_states
         self.n_outputs = ss.n_outputs
         self.m = int(v.shape[0])  # known inputs (u and, with force=True, F)
-        self.input_names = tuple(ss.input_names) + (("F_x", "F_y", "F_z") if ss.force else ())
+        self.input_names = tuple(ss.input_names) + tuple(ss.force_names)
         self._V: list[cs.SX] = [v]  # v, v', v'', ... symbols
         self._phi: list[cs.SX] = [ss.h_expr]  # y, y', ... as SX
         self._blocks: list[cs.Function] = []
@@ -193,9 +208,11 @@ class ObservabilityMatrix:
         k = _order(k)
         while len(self._blocks) <= k:
             j = len(self._blocks)
-            if j >= 3 and 3 * self._blocks[-1].n_instructions() > MAX_INSTRUCTIONS:  # ~3x per order
-                raise InputError(f"order: d y^({j})/dx would need about {3 * self._blocks[-1].n_instructions()} "
-                                 f"operations (more than {MAX_INSTRUCTIONS}); use order='auto', which gives the same rank")
+            need = 3 * self._blocks[-1].n_instructions() if j >= 3 else 0  # ~3x per order
+            if need > self.max_operations:
+                raise InputError(f"max_operations: d y^({j})/dx would need about {need} operations, more than "
+                                 f"max_operations={self.max_operations} (raise it, or --max-operations on the "
+                                 f"command line; time and memory grow with it)")
             J = cs.jacobian(self.lie_derivative(j), self.x)
             self._blocks.append(cs.Function(f"dy{j}", [self.x, self._w(j)], [J], ["x", "w"], ["dy"]))
         return self._blocks[k]
@@ -241,6 +258,12 @@ class ObservabilityMatrix:
         return int(numerical_rank(self.evaluate(order, x, w)))
 
 
+def _max_operations(cap: Any) -> int:
+    if isinstance(cap, (bool, np.bool_)) or not isinstance(cap, (int, np.integer)) or cap < 1:
+        raise InputError(f"max_operations: expected a positive integer, got {cap!r}")
+    return int(cap)
+
+
 def _order(k: Any) -> int:
     if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or k < 0:
         raise InputError(f"order: expected a non-negative integer, got {k!r}")
@@ -269,7 +292,7 @@ def _input_scale(ss: StateSpace, q: np.ndarray) -> np.ndarray:
         fallback = gmax / np.where(B.max(axis=0) > 0, B.max(axis=0), 1.0)
     s = np.where(s > 0, s, fallback)
     if ss.force:
-        s = np.concatenate([s, np.ones(3)])  # contact force, N
+        s = np.concatenate([s, np.ones(ss.n_force)])  # contact forces, N (wrench torques N m)
     return s
 
 
@@ -428,22 +451,42 @@ def _analyse(name: str, blocks: list[np.ndarray], rows: np.ndarray, cols: np.nda
         singular_values=s[:-1], coupled=coupled)
 
 
+def tree_parts(model: Model) -> dict[str, tuple[str, ...]]:
+    """The subtrees hanging from the root body, {name: joint names}: the parts that move independently
+    (the mass matrix of a fixed-base tree is block diagonal over them). A part is named after the first
+    motor driving one of its joints (parts in motor order: the Alpes hand's index, middle, ring, little,
+    thumb), else after its first joint."""
+    pm = model.pin_model
+    root_of = {}
+    for j in range(1, pm.njoints):
+        k = j
+        while pm.parents[k] != 0:
+            k = pm.parents[k]
+        root_of.setdefault(k, []).append(pm.names[j])
+    S = model.transmission.S if model.transmission is not None else np.zeros((0, model.n))
+    named = []
+    for joints in root_of.values():
+        cols = [model.joint_index(j) for j in joints]
+        motors = np.flatnonzero(np.any(S[:, cols] != 0, axis=1))
+        key = (0, int(motors[0])) if motors.size else (1, cols[0])
+        named.append((key, model.motor_names[motors[0]] if motors.size else joints[0], tuple(joints)))
+    return {name: joints for _, name, joints in sorted(named)}
+
+
 def _parts(ss: StateSpace, parts: Any) -> list[tuple[str, np.ndarray, np.ndarray]]:
     """(name, output rows, state columns) of each part; [] for a single chain."""
     n = ss.n
     if parts is None or parts is False:
         return []
     if parts == "auto":
-        lay = ss.model.layout
-        if lay is None or len(lay.chains) < 2:
+        spec = tree_parts(ss.model)
+        if len(spec) < 2:
             return []
-        spec = {ch.name: tuple(ch.joints) + ((ch.abduction,) if ch.abduction else ()) for ch in lay.chains}
     elif isinstance(parts, dict):
         spec = {str(k): tuple(v) for k, v in parts.items()}
     else:
         raise ModelError(f"parts: expected 'auto', None or a dict name -> joint names, got {parts!r}")
-    if ss.H is None:
-        return []
+    support = np.array(cs.DM(cs.jacobian(ss.h_expr, ss.x).sparsity(), 1)) != 0  # (p, 2n): y_i depends on x_j
     idx = {j: i for i, j in enumerate(ss.model.joint_names)}
     out = []
     for name, joints in spec.items():
@@ -451,17 +494,17 @@ def _parts(ss: StateSpace, parts: Any) -> list[tuple[str, np.ndarray, np.ndarray
         if bad:
             raise ModelError(f"parts: unknown joint {bad[0]!r} in part {name!r} (joints: {', '.join(idx)})")
         jj = np.array(sorted(idx[j] for j in joints), dtype=int)
-        mask = np.zeros(n, bool)
-        mask[jj] = True
-        support = ss.H != 0
+        mask = np.zeros(2 * n, bool)
+        mask[jj] = mask[jj + n] = True
         rows = np.flatnonzero(support.any(axis=1) & ~(support & ~mask).any(axis=1))
         out.append((name, rows, np.concatenate([jj, jj + n])))
     return out
 
 
-def observability(system: Model | StateSpace | str, input: str | None = None, output: Any = None, *,
-                  spring: str | None = None, points: int = 8, seed: int = 0, constant_input: bool = False,
-                  order: str | int = "auto", parts: Any = "auto") -> ObservabilityReport:
+def check_observability(system: Model | StateSpace | str, input: str | None = None, output: Any = None, *,
+                        spring: str | None = None, points: int = 8, seed: int = 0, constant_input: bool = False,
+                        order: str | int = "auto", parts: Any = "auto",
+                        max_operations: int = MAX_INSTRUCTIONS) -> ObservabilityReport:
     """Nonlinear observability of a model's state space, in one call (eq. 3.4-3.8, 3.14).
 
     Parameters
@@ -475,7 +518,13 @@ def observability(system: Model | StateSpace | str, input: str | None = None, ou
     constant_input: u' = u'' = ... = 0 instead of free input derivatives.
     order: ``"auto"`` (stop at full rank or when the filtration stops growing, see the module doc),
         ``"report"`` (y .. y^(n-1), eq. 3.8, stopping early only at full rank) or an int.
-    parts: ``"auto"`` (the chains of an Alpes tree), None, or {name: joint names}.
+    parts: ``"auto"`` (the subtrees from the root, :func:`tree_parts`: the Alpes hand's fingers and thumb),
+        None, or {name: joint names}.
+    max_operations: size cap of one derivative order's CasADi function (default
+        :data:`MAX_INSTRUCTIONS`); above it :class:`~alpes_dyn.InputError` says so. Raise it for
+        large trees whose outputs need high orders.
+
+    Also available as ``observability`` (the former name, kept as an alias).
     """
     t0 = time.perf_counter()
     if isinstance(points, (bool, np.bool_)) or not isinstance(points, (int, np.integer)) or points < 1:
@@ -501,7 +550,7 @@ def observability(system: Model | StateSpace | str, input: str | None = None, ou
         kmax = _order(order) if not isinstance(order, str) else -1
         if kmax < 0:
             raise InputError(f"order: expected 'auto', 'report' or a non-negative integer, got {order!r}")
-    om = ObservabilityMatrix(ss, constant_input)
+    om = ObservabilityMatrix(ss, constant_input, max_operations)
     rng = np.random.default_rng(int(seed))
     X, W = sample_points(ss, int(points), rng, kmax, constant_input)
     Xa = np.vstack([X, np.zeros((1, n))])
@@ -529,3 +578,16 @@ def observability(system: Model | StateSpace | str, input: str | None = None, ou
         "points": int(points), "seed": int(seed), "force": ss.force,
     }
     return whole
+
+
+observability = check_observability  # the former name (``from alpes_dyn.observability import observability``)
+
+
+class _CallableModule(type(sys.modules[__name__])):  # type: ignore[misc]
+    """``alpes_dyn.observability(...)`` (the package used to export the function under the module's name)."""
+
+    def __call__(self, *args: Any, **kwargs: Any) -> ObservabilityReport:
+        return check_observability(*args, **kwargs)
+
+
+sys.modules[__name__].__class__ = _CallableModule

@@ -158,22 +158,10 @@ class EstimationResult:
 def static_equilibrium(model: Model, tau: np.ndarray, q: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
     """Joint angles q (rad) where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
 
-    Newton's method from ``q`` (default 0) with the analytic Jacobian of G
-    (:meth:`Model.gravity_jacobian <alpes_dyn.Model.gravity_jacobian>`); raises
-    :class:`~alpes_dyn.InputError` if it does not converge in 50 iterations.
+    Kept for compatibility: :meth:`Model.static_equilibrium <alpes_dyn.Model.static_equilibrium>` (and
+    :meth:`StateSpace.equilibrium <alpes_dyn.statespace.StateSpace.equilibrium>` for a state and an input).
     """
-    q = np.zeros(model.n) if q is None else np.array(q, dtype=float)
-    for _ in range(50):
-        r = model.gravity_torque(q) - tau
-        if np.max(np.abs(r)) < tol:
-            return q
-        J = model.gravity_jacobian(q)
-        try:
-            dq = np.linalg.solve(J, -r)
-        except np.linalg.LinAlgError:
-            raise InputError("static equilibrium: singular stiffness (a joint without spring?)") from None
-        q = q + dq * min(1.0, 0.5 / max(float(np.max(np.abs(dq))), 1e-300))  # at most 0.5 rad per step
-    raise InputError("static equilibrium: Newton's method did not converge (torque beyond the springs' range?)")
+    return model.static_equilibrium(tau, q, tol)
 
 
 def _torque(sc: EstimationScenario, t: np.ndarray, m: int) -> np.ndarray:

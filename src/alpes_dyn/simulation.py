@@ -86,13 +86,15 @@ def as_statespace(system: Model | StateSpace, input: str = "joint", output: Any 
 
 
 def _n_known_inputs(ss: StateSpace) -> int:
-    return ss.n_inputs + (3 if ss.force else 0)
+    return ss.n_inputs + ss.n_force
 
 
 def joint_accelerations(ss: StateSpace, q: cs.SX, v: cs.SX, tau: cs.SX, F: Any = None) -> cs.SX:
     """qdd of eq. 3.3 for joint torques ``tau``: the state space's symbolic forward dynamics
     (:meth:`SymbolicDynamics.forward_dynamics <alpes_dyn.symbolic.SymbolicDynamics.forward_dynamics>`,
     the same expression as ``ss.f_expr``) with its tip and smooth-sign setting."""
+    if F is not None and not ss._legacy_force:
+        return ss.sym.forward_dynamics(q, v, tau, F, None, ss.smooth, ss.contacts)
     return ss.sym.forward_dynamics(q, v, tau, F, ss.tip, ss.smooth)
 
 
@@ -203,9 +205,12 @@ def _sample(inputs: InputLike, t: np.ndarray, m: int, name: str) -> np.ndarray:
     return _finite(a, name)
 
 
-def _sample_force(force: InputLike, t: np.ndarray) -> np.ndarray:
-    """(N, 3) contact forces; scalars / (N,) series / callables returning a scalar are F_z (eq. 2.13)."""
+def _sample_force(force: InputLike, t: np.ndarray, k: int = 3) -> np.ndarray:
+    """(N, k) contact forces. k = 3 (one force): scalars / (N,) series / callables returning a scalar are F_z
+    (eq. 2.13); several contacts (k = n_force): (k,), (N, k) or a callable returning k values."""
     N = t.shape[0]
+    if k != 3:
+        return _sample(force, t, k, "force")
     if callable(force):
         out = np.zeros((N, 3))
         for k, tk in enumerate(t):
@@ -314,7 +319,7 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     x0 = ss.model.vector(x0, "x0", ss.n_states)
     t = dt * np.arange(N + 1)
     U = _sample(inputs, t[:-1], ss.n_inputs, "inputs")
-    Fs = _sample_force(force, t[:-1]) if ss.force else None
+    Fs = _sample_force(force, t[:-1], ss.n_force) if ss.force else None
     W = U if Fs is None else np.hstack([U, Fs])
     if method == "rk4":
         step = rk4_step_function(ss, dt)
@@ -738,14 +743,15 @@ class CompiledRollout:
         if N < 1:
             raise InputError("U_batch: needs at least one step")
         batched = [(x0, "x0_batch"), (U, "U_batch")]
+        nf = self.system.n_force
         if self.system.force:
             if F_batch is None:
-                raise InputError("F_batch: this rollout has the contact force as an input; pass (B, N, 3)")
+                raise InputError(f"F_batch: this rollout has the contact force as an input; pass (B, N, {nf})")
             F = np.asarray(F_batch, dtype=float)
             if F.ndim == 2:
                 F = F[None]
-            if F.ndim != 3 or F.shape[1:] != (N, 3):
-                raise InputError(f"F_batch: expected shape (B, {N}, 3), got {np.shape(F_batch)}")
+            if F.ndim != 3 or F.shape[1:] != (N, nf):
+                raise InputError(f"F_batch: expected shape (B, {N}, {nf}), got {np.shape(F_batch)}")
             batched.append((F, "F_batch"))
         elif F_batch is not None:
             raise InputError("F_batch: this rollout has no contact-force input (build it with force=True)")
@@ -755,7 +761,7 @@ class CompiledRollout:
                 raise InputError(f"{name}: batch size {a.shape[0]} does not match {B}")
         W = np.broadcast_to(U, (B, N, m))
         if self.system.force:
-            W = np.concatenate([W, np.broadcast_to(F, (B, N, 3))], axis=2)
+            W = np.concatenate([W, np.broadcast_to(F, (B, N, nf))], axis=2)
         W = _finite(np.ascontiguousarray(W, dtype=float), "U_batch")
         x0 = _finite(np.ascontiguousarray(np.broadcast_to(x0, (B, self.nx))), "x0_batch")
         if progress is None:

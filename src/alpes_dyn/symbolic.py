@@ -25,7 +25,7 @@ import casadi as cs
 import numpy as np
 
 from .errors import ModelError
-from .model import Model
+from .model import REFERENCE_FRAMES, Model, as_contacts
 
 __all__ = ["SymbolicDynamics", "available_backends", "block_solve"]
 
@@ -104,6 +104,9 @@ class _Adam:
     def tip_position(self, q: cs.SX, frame: str) -> cs.SX:
         return self.kd.forward_kinematics(frame, self.H, q)[:3, 3]
 
+    def frame_pose(self, q: cs.SX, frame: str) -> tuple[cs.SX, cs.SX]:
+        T = self.kd.forward_kinematics(frame, self.H, q)
+        return T[:3, :3], T[:3, 3]
 
 
 class _PinCasadi:  # pragma: no cover - pinocchio.casadi is not in the PyPI wheels used in CI
@@ -133,6 +136,11 @@ class _PinCasadi:  # pragma: no cover - pinocchio.casadi is not in the PyPI whee
     def tip_position(self, q: cs.SX, frame: str) -> cs.SX:
         self.cpin.framesForwardKinematics(self.cmodel, self.cdata, q)
         return self.cdata.oMf[self.frames[frame]].translation
+
+    def frame_pose(self, q: cs.SX, frame: str) -> tuple[cs.SX, cs.SX]:
+        self.cpin.framesForwardKinematics(self.cmodel, self.cdata, q)
+        M = self.cdata.oMf[self.frames[frame]]
+        return M.rotation, M.translation
 
 
 class SymbolicDynamics:
@@ -196,15 +204,63 @@ class SymbolicDynamics:
             return cs.substitute(J, qs, q)
         return cs.jacobian(self.fingertip_position(q, tip), q)
 
+    def frame_pose(self, q: cs.SX, frame: str) -> tuple[cs.SX, cs.SX]:
+        """(R (3, 3), p (3,)) of ``frame`` in the base frame."""
+        return self._be.frame_pose(q, self._tip(frame))
+
+    def frame_jacobian(self, q: cs.SX, frame: str | None = None, reference: str = "local_world_aligned",
+                       dim: int = 6) -> cs.SX:
+        """Frame Jacobian (6, n) [linear; angular] or (3, n) linear rows, in Pinocchio's ``reference``
+        (:data:`~alpes_dyn.model.REFERENCE_FRAMES`), by AD of the frame pose (R, p):
+        J_v = dp/dq, column j of the angular part in base axes vee((dR/dq_j) R^T); ``local`` rotates
+        both by R^T, ``world`` moves the linear part to the base origin, J_v + [p]x J_w."""
+        if reference not in REFERENCE_FRAMES:
+            raise ModelError(f"reference: unknown {reference!r} (expected one of {', '.join(REFERENCE_FRAMES)})")
+        if dim not in (3, 6) or isinstance(dim, bool):
+            raise ModelError(f"dim: expected 3 (linear rows) or 6 (linear and angular), got {dim!r}")
+        if not isinstance(q, cs.SX) or not q.is_valid_input():
+            qs = cs.SX.sym("q", self.n)
+            return cs.substitute(self.frame_jacobian(qs, frame, reference, dim), qs, q)
+        R, p = self.frame_pose(q, frame)
+        Jv = cs.jacobian(p, q)
+        if reference == "local_world_aligned" and dim == 3:
+            return Jv
+        dR = cs.jacobian(cs.vec(R), q)  # (9, n), column-major vec
+        cols = []
+        for j in range(self.n):
+            W = cs.mtimes(cs.reshape(dR[:, j], 3, 3), R.T)
+            cols.append(cs.vertcat(W[2, 1], W[0, 2], W[1, 0]))
+        Jw = cs.horzcat(*cols)
+        if reference == "local":
+            Jv, Jw = cs.mtimes(R.T, Jv), cs.mtimes(R.T, Jw)
+        elif reference == "world":
+            Jv = Jv + cs.mtimes(cs.skew(p), Jw)
+        return cs.vertcat(Jv, Jw)[:dim, :]
+
+    def contact_torque(self, q: cs.SX, F: Any, contacts: Any) -> cs.SX:
+        """Sum of J_c^T F_c (eq. 2.9), (n,), for ``contacts`` (:class:`~alpes_dyn.model.Contact` or frame
+        names) and their stacked forces/wrenches F (sum of dims,)."""
+        cts = as_contacts(contacts)
+        out = cs.SX.zeros(self.n)
+        k = 0
+        for c in cts:
+            J = self.frame_jacobian(q, c.frame, c.reference, c.dim)
+            out = out + cs.mtimes(J.T, F[k: k + c.dim])
+            k += c.dim
+        return out
+
     def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, F: Any = None, tip: str | None = None,
-                         smooth: bool = True) -> cs.SX:
+                         smooth: bool = True, contacts: Any = None) -> cs.SX:
         """qdd = (A + I_a)^-1 (tau + J^T F - C qd - G - friction) (eq. 3.3, 3.12), (n,).
 
         ``smooth`` (default True) uses tanh for the Coulomb sign so that the result is differentiable.
-        ``F`` is a 3-vector (SX or numbers) at ``tip`` in the base frame, or None.
+        ``F`` is a 3-vector (SX or numbers) at ``tip`` in the base frame, or None; with ``contacts``
+        (several frames, forces or wrenches, see :meth:`contact_torque`) the stacked F of them all.
         """
         rhs = tau - self.bias_torque(q, v) - self.extras.passive_torque(q, v, smooth, cs)
-        if F is not None:
+        if F is not None and contacts is not None:
+            rhs = rhs + self.contact_torque(q, F, contacts)
+        elif F is not None:
             rhs = rhs + cs.mtimes(self.fingertip_jacobian(q, tip).T, F)
         return block_solve(self.inertia_matrix(q), rhs)
 

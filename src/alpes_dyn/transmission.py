@@ -39,22 +39,15 @@ class Transmission:
     @classmethod
     def from_layout(cls, lay: Layout, joint_names: tuple[str, ...], ratio: float,
                     abduction_ratio: float = 1.0, counts_per_rev: float = 4096.0) -> "Transmission":
-        idx = {n: i for i, n in enumerate(joint_names)}
-        rows, sums, names = [], [], []
-        for ch in lay.chains:
-            s = np.zeros(len(joint_names))
-            s[[idx[j] for j in ch.joints]] = 1.0
-            rows.append(ratio * s)
-            sums.append(s)
-            names.append(ch.name)
-        for ch in lay.chains:
-            if ch.abduction:
-                s = np.zeros(len(joint_names))
-                s[idx[ch.abduction]] = 1.0
-                rows.append(abduction_ratio * s)
-                sums.append(s)
-                names.append(f"{ch.name}_abduction")
-        return cls(tuple(names), np.array(rows), np.array(sums), float(counts_per_rev))
+        """The transmission of an Alpes layout: one motor per chain (``ratio`` on each of its joints),
+        one per ab/adduction joint (``abduction_ratio``). The same motors as
+        :func:`alpes_dyn.spec.alpes_spec` (which :meth:`Model.alpes <alpes_dyn.Model.alpes>` uses)."""
+        from .spec import TransmissionSpec, alpes_motors
+
+        motors = alpes_motors(lay, ratio, abduction_ratio)
+        tr = TransmissionSpec(motors=motors, encoder_counts=counts_per_rev).transmission(joint_names)
+        assert tr is not None
+        return tr
 
     @property
     def n_motors(self) -> int:
