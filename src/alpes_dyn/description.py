@@ -18,12 +18,14 @@ I_i is about the joint axis; with s_i = L_i/2 this is the report's I_i - m_i s_i
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
-from .errors import ModelError
+from .errors import InputError, ModelError
+from .fileio import atomic_write
 from .params import ChainParams, HandParams, load_params
 
 __all__ = ["MODELS", "ChainLayout", "Layout", "urdf_string", "layout", "write_urdfs", "example_robot_urdf"]
@@ -181,14 +183,22 @@ def layout(model: str, params: HandParams | None = None) -> Layout:
 
 
 def write_urdfs(directory: str | Path, params: HandParams | None = None) -> list[Path]:
-    """Write ``<model>.urdf`` for every model into ``directory``; return the paths."""
+    """Write ``<model>.urdf`` for every model into ``directory`` (created if needed), each file atomically
+    (:func:`alpes_dyn.fileio.atomic_write`); return the paths. Raises :class:`~alpes_dyn.InputError` if
+    ``directory`` is a file or cannot be created or written."""
+    if not isinstance(directory, (str, os.PathLike)) or not str(directory).strip():
+        raise InputError(f"directory: expected a folder path, got {directory!r}")
     d = Path(directory)
-    d.mkdir(parents=True, exist_ok=True)
+    if d.exists() and not d.is_dir():
+        raise InputError(f"directory: {str(d)!r} exists and is not a folder")
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise InputError(f"directory: {str(d)!r} cannot be created ({exc.strerror or exc})") from None
+    texts = {m: urdf_string(m, params) for m in MODELS}  # all generated before any file is written
     out = []
-    for m in MODELS:
-        path = d / f"{m}.urdf"
-        path.write_text(urdf_string(m, params))
-        out.append(path)
+    for m, text in texts.items():
+        out.append(atomic_write(d / f"{m}.urdf", text, "directory"))
     return out
 
 

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ModelError
+from .fileio import read_text
 
 __all__ = ["Param", "ChainParams", "HandParams", "load_params", "default_params_path"]
 
@@ -234,14 +235,11 @@ def load_params(path: str | Path | None = None) -> HandParams:
     Raises
     ------
     ModelError
-        Unreadable file, TOML syntax error, missing or unknown section/field, wrong length, a
+        Empty file name, unreadable or non-UTF-8 file, TOML syntax error, missing or unknown section/field, wrong length, a
         non-positive length or mass, or an inertia that violates the parallel-axis theorem.
     """
+    text = read_text(path if path is not None else default_params_path(), "parameter file", ModelError)
     p = Path(path) if path is not None else default_params_path()
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ModelError(f"parameter file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:

@@ -44,6 +44,7 @@ import numpy as np
 
 from .buildcache import CompilerError, build_library
 from .errors import InputError, ModelError
+from .limits import check_bytes
 from .model import Model
 from .statespace import StateSpace
 
@@ -296,7 +297,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     Raises
     ------
     InputError: bad shapes, NaN, non-positive duration/dt, unknown method, a state space without
-    force input given a force, or an integrator failure.
+    force input given a force, an integrator failure, or arrays over the size limit
+    (:mod:`alpes_dyn.limits`, 2 GiB by default).
     """
     if method not in METHODS:
         raise InputError(f"method: unknown integration method {method!r} (expected one of {', '.join(METHODS)})")
@@ -307,6 +309,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
         raise InputError("force: this state space has the contact force as an input; pass force=")
     dt = _check_dt(dt)
     N = _n_steps(duration, dt)
+    check_bytes(8.0 * (N + 1) * (2 * ss.n_states + ss.n_outputs + _n_known_inputs(ss)), "duration",
+                f"{N} steps of {ss.n_states} states")
     x0 = ss.model.vector(x0, "x0", ss.n_states)
     t = dt * np.arange(N + 1)
     U = _sample(inputs, t[:-1], ss.n_inputs, "inputs")
@@ -737,6 +741,7 @@ class CompiledRollout:
         for a, name in batched:
             if a.shape[0] not in (1, B):
                 raise InputError(f"{name}: batch size {a.shape[0]} does not match {B}")
+        check_bytes(8.0 * B * ((N + 1) * self.nx + N * self.nw), "U_batch", f"{B} trajectories of {N} steps")
         W = np.broadcast_to(U, (B, N, m))
         if self.system.force:
             W = np.concatenate([W, np.broadcast_to(F, (B, N, 3))], axis=2)

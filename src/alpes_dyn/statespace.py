@@ -40,6 +40,31 @@ INPUTS = ("joint", "motor")
 OUTPUTS = ("sum", "encoder")
 
 
+def _output_matrix(output: Any, n: int) -> np.ndarray:
+    """An output matrix H (p, n) of finite numbers, else a ModelError saying what is wrong."""
+    try:
+        H = np.atleast_2d(np.asarray(output, dtype=float))
+    except (TypeError, ValueError):
+        raise ModelError(f"output matrix: expected a (p, {n}) array of numbers, got {output!r}") from None
+    if H.ndim != 2 or H.shape[1] != n or H.shape[0] < 1:
+        raise ModelError(f"output matrix: expected a finite (p, {n}) array, got shape {H.shape}")
+    if not np.isfinite(H).all():
+        raise ModelError("output matrix: contains NaN or inf")
+    return H
+
+
+def _output_expression(y: Any) -> cs.SX:
+    """The column of what an output callable returned for a CasADi symbol (SX, numbers or a list of them)."""
+    items = list(y) if isinstance(y, (list, tuple)) else [y]
+    try:
+        if not items or any(v is None or isinstance(v, (str, bytes)) for v in items):
+            raise TypeError
+        return cs.vec(cs.vertcat(*[cs.vec(cs.SX(v)) for v in items]))
+    except (TypeError, NotImplementedError, RuntimeError, ValueError):
+        raise ModelError(f"output function: returned {type(y).__name__} {y!r:.60}, expected CasADi expressions "
+                         "or numbers") from None
+
+
 class StateSpace:
     """x' = f(x, u[, F]), y = h(x) for a :class:`~alpes_dyn.Model`.
 
@@ -93,9 +118,7 @@ class StateSpace:
             self._g = output
             self.output_name = getattr(output, "__name__", "custom")
         else:
-            H = np.atleast_2d(np.asarray(output, dtype=float))
-            if H.ndim != 2 or H.shape[1] != n or not np.isfinite(H).all():
-                raise ModelError(f"output matrix: expected a finite (p, {n}) array, got shape {H.shape}")
+            H = _output_matrix(output, n)
             self.H = H
             self.output_names = tuple(f"y{i}" for i in range(H.shape[0]))
             self.output_name = "matrix"
@@ -147,8 +170,9 @@ class StateSpace:
         try:
             y = self._g(q, cs)
         except Exception as exc:
-            raise ModelError(f"output function failed on a CasADi symbol: {exc}") from None
-        return cs.vec(cs.SX(y))
+            first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+            raise ModelError(f"output function failed on a CasADi symbol: {first}") from None
+        return _output_expression(y)
 
     # ---------------------------------------------------------------- numeric f, h
     def _check_x(self, x: Any) -> np.ndarray:
@@ -170,4 +194,10 @@ class StateSpace:
         q = x[: self.n]
         if self._g is None:
             return self.H @ q
-        return np.asarray(self._g(q, np), dtype=float).reshape(-1)
+        try:
+            y = np.asarray(self._g(q, np), dtype=float).reshape(-1)
+        except (TypeError, ValueError) as exc:
+            raise ModelError(f"output function: expected numbers for a numeric q ({exc})") from None
+        if y.shape != (self.n_outputs,):
+            raise ModelError(f"output function: returned {y.size} values for a numeric q, {self.n_outputs} symbolically")
+        return y
