@@ -75,7 +75,8 @@ class JointExtras:
             except (TypeError, ValueError):
                 a = None
             if a is None or a.ndim != 1:
-                raise ModelError(f"extras.{fname}: expected a 1-D array of numbers, got {x!r}")
+                got = f"shape {a.shape}" if a is not None else f"{type(x).__name__} {np.asarray(x).dtype}"
+                raise ModelError(f"extras.{fname}: expected a 1-D array of numbers, got {got}")
             if n is not None and a.shape != (n,):
                 raise ModelError(f"extras.{fname}: expected shape ({n},) like extras.stiffness, got {a.shape}")
             n = a.shape[0]

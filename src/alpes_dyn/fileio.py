@@ -121,6 +121,8 @@ def check_output_path(path: str | None, what: str, extensions: Sequence[str] | N
             raise InputError(f"{what}: {str(p)!r} has {'extension ' + repr(ext) if ext else 'no extension'}; "
                              f"expected one of {', '.join('.' + e for e in extensions)}")
     parent = p.parent if str(p.parent) else Path(".")
+    if parent.exists() and not parent.is_dir():
+        raise InputError(f"{what}: {str(parent)!r} in {str(p)!r} is not a directory")
     if not parent.is_dir():
         raise InputError(f"{what}: directory {str(parent)!r} of {str(p)!r} does not exist")
     if not os.access(parent, os.W_OK | os.X_OK):

@@ -53,5 +53,5 @@ def check_bytes(nbytes: float, field: str, detail: str) -> None:
     """
     limit = max_bytes()
     if not nbytes <= limit:
-        raise InputError(f"{field}: {detail} need about {_human(float(nbytes))} of arrays, over the limit of "
+        raise InputError(f"{field}: {detail} would take about {_human(float(nbytes))} of arrays, over the limit of "
                          f"{_human(limit)} (set ALPES_DYN_MAX_BYTES to change it)")

@@ -23,6 +23,7 @@ import numpy as np
 import pinocchio as pin
 
 from .description import Layout, check_model_name, layout, urdf_string
+from .checks import as_float_array
 from .errors import InputError, ModelError
 from .extras import JointExtras, spring_stiffness
 from .fileio import native_stderr_to, read_text
@@ -85,17 +86,6 @@ def _check_mass_matrix(model: pin.Model, data: pin.Data, names: Sequence[str]) -
         raise ModelError("A(q) is singular at a generic configuration (massless links?)") from None
 
 
-def _as_float(x: object, name: str, expected: str) -> np.ndarray:
-    """``x`` as a float array; complex values, strings and other non-numbers are an InputError."""
-    try:
-        a = np.asarray(x)
-        if a.dtype.kind != "c":
-            return a.astype(float, copy=False) if a.dtype.kind in "fiub" else np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected {expected}, got {x!r}") from None
-    raise InputError(f"{name}: complex values are not supported, got {x!r}")
-
-
 class Model:
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
@@ -136,7 +126,7 @@ class Model:
         self.params = params
         self.spring = spring
         try:
-            g = DEFAULT_GRAVITY if gravity is None else _as_float(gravity, "gravity", "3 finite numbers")
+            g = DEFAULT_GRAVITY if gravity is None else as_float_array(gravity, "gravity", "3 finite numbers")
         except InputError as exc:
             raise ModelError(str(exc)) from None
         if g.shape != (3,) or not np.all(np.isfinite(g)):
@@ -227,7 +217,7 @@ class Model:
             if math.isfinite(a.dot(self._tiny if n == self.n else np.full(n, _TINY))):  # one BLAS call
                 return a
         else:
-            a = _as_float(x, name, f"{n} numbers")
+            a = as_float_array(x, name, f"{n} numbers")
             if a.shape != (n,):
                 raise InputError(f"{name}: expected shape ({n},), got {a.shape}")
         if not np.isfinite(a).all():
@@ -248,7 +238,7 @@ class Model:
     def _force(self, F: object) -> np.ndarray:
         if F is None:
             return np.zeros(3)
-        a = _as_float(F, "F", "F_z or 3 numbers Fx, Fy, Fz")
+        a = as_float_array(F, "F", "F_z or 3 numbers Fx, Fy, Fz")
         if a.shape == ():
             return np.array([0.0, 0.0, float(self.vector(np.atleast_1d(a), "F", 1)[0])])  # F_z only (eq. 2.13)
         return self.vector(a, "F", 3)
