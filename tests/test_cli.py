@@ -67,8 +67,8 @@ def test_dynamics_readable_and_hand_tip(capsys):
     (["urdf", "finger7"], "unknown model 'finger7'"),
     (["frobnicate"], "invalid choice"),
     (["estimate", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
-    (["observability", "--points", "0"], "--points: expected an integer >= 1, got 0"),
-    (["report", "--points", "x"], "--points: expected an integer >= 1, got 'x'"),
+    (["observability", "--points", "0"], "--points: expected an integer from 1 to 10000, got 0"),
+    (["report", "--points", "x"], "--points: expected an integer from 1 to 10000, got 'x'"),
 ])
 def test_bad_input_exits_2_with_one_line(capsys, argv, needle):
     code, out, err = run(capsys, *argv)
