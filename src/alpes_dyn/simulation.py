@@ -297,8 +297,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     Raises
     ------
     InputError: bad shapes, NaN, non-positive duration/dt, unknown method, a state space without
-    force input given a force, an integrator failure, or arrays over the size limit
-    (:mod:`alpes_dyn.limits`, 2 GiB by default).
+        force input given a force, an integrator failure, or arrays over the size limit
+        (:mod:`alpes_dyn.limits`, 2 GiB by default).
     """
     if method not in METHODS:
         raise InputError(f"method: unknown integration method {method!r} (expected one of {', '.join(METHODS)})")
