@@ -265,7 +265,7 @@ def test_cli_json_and_text(capsys):
 
 
 @pytest.mark.parametrize("argv,pattern", [
-    (["--points", "0"], r"--points: expected an integer >= 1, got 0"),
+    (["--points", "0"], r"--points: expected an integer from 1 to 10000, got 0"),
     (["--order", "x"], r"--order: expected auto, report or a non-negative integer, got 'x'"),
     (["--output", "tip"], r"unknown output 'tip'"),
     (["--input", "current"], r"argument --input: invalid choice: 'current'"),

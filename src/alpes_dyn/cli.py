@@ -11,13 +11,16 @@ import json
 import re
 import sys
 import time
-from pathlib import Path
+import warnings
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from . import __version__
 from .errors import AlpesDynError, InputError, ModelError
 from .observability import MAX_INSTRUCTIONS
+from .fileio import atomic_write, native_stderr_to
+from .limits import MAX_POINTS
 
 VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
@@ -32,22 +35,24 @@ class _UsageError(Exception):
     pass
 
 
-def _int_at_least(low: int) -> Callable[[str], int]:
+def _int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
+    want = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
+
     def parse(text: str) -> int:
         try:
             value = int(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {text!r}") from None
-        if value < low:
-            raise argparse.ArgumentTypeError(f"expected an integer >= {low}, got {value}")
+            raise argparse.ArgumentTypeError(f"expected {want}, got {text!r}") from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"expected {want}, got {value}")
         return value
 
-    parse.__name__ = f"integer >= {low}"
+    parse.__name__ = want
     return parse
 
 
 _SEED = _int_at_least(0)
-_POINTS = _int_at_least(1)
+_POINTS = _int_at_least(1, MAX_POINTS)
 
 
 def parse_vector(text: str, name: str) -> np.ndarray:
@@ -189,11 +194,8 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     from .params import load_params
 
     text = urdf_string(args.model, load_params(args.params))
-    if args.output:
-        try:
-            Path(args.output).write_text(text)
-        except OSError as exc:
-            raise InputError(f"-o: cannot write {args.output!r} ({exc.strerror or exc})") from None
+    if args.output is not None:
+        atomic_write(args.output, text, "-o")  # never a partial file (full disk, killed process)
     else:
         sys.stdout.write(text)
     return 0
@@ -362,7 +364,7 @@ def cmd_observability(args: argparse.Namespace) -> int:
 def cmd_estimate(args: argparse.Namespace) -> int:
     """Simulate the default scenario (alpes_dyn.scenario) and estimate the joints from the motor encoder."""
     from .observers import OBSERVERS
-    from .scenario import SCENARIO_MODELS, plot_estimation, run_estimation
+    from .scenario import SCENARIO_MODELS, check_plot_path, plot_estimation, run_estimation
 
     _check_model_options(args)
     if args.model not in SCENARIO_MODELS:
@@ -370,19 +372,16 @@ def cmd_estimate(args: argparse.Namespace) -> int:
                          f"got {args.model!r}")
     if args.observer not in OBSERVERS:
         raise InputError(f"--observer: unknown observer {args.observer!r} (expected one of {', '.join(OBSERVERS)})")
-    if args.plot:
-        try:
-            import matplotlib  # noqa: F401
-        except ImportError:
-            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
+    if args.plot is not None:
+        check_plot_path(args.plot)  # before the run: matplotlib, a writable file name, a known format
     t0 = time.perf_counter()
     res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional", params=args.params,
                          mismatch=args.mismatch, duration=args.duration, seed=args.seed)
-    if args.plot:
+    if args.plot is not None:
         plot_estimation(res, args.plot)
     obj = res.to_dict()
     obj["seconds"] = time.perf_counter() - t0
-    if args.plot:
+    if args.plot is not None:
         obj["plot"] = args.plot
     deg = np.degrees
     lines = [
@@ -397,7 +396,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     ]
     for name, p in res.parameters.items():
         lines.append(f"  {name}: estimated {p['estimate']:.4f}, true {p['true']:.4f}")
-    if args.plot:
+    if args.plot is not None:
         lines.append(f"  figure: {args.plot}")
     lines.append(f"  {obj['seconds']:.1f} s")
     _emit(obj, "\n".join(lines), args.json)
@@ -408,6 +407,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="alpes-dyn", description=__doc__.splitlines()[0],
                 epilog="Vectors: comma-separated numbers; negative values as --q=-0.1,0.2 (or --q -0.1,0.2).")
+    p.add_argument("--version", action="version", version=f"alpes-dyn {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
 
     def common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") -> None:
@@ -488,30 +488,53 @@ def build_parser() -> argparse.ArgumentParser:
                    help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
     s.add_argument("--duration", type=float, default=5.0, help="simulated time, s (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
-    s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints")
+    s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints (format by "
+                   "extension: .png, .pdf, .svg...)")
     s.set_defaults(func=cmd_estimate)
     return p
 
 
-def main(argv: Sequence[str] | None = None) -> int:
-    argv = list(sys.argv[1:] if argv is None else argv)
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())
+
+
+def _run(argv: list[str]) -> tuple[int, str | None]:
+    """(exit code, error line or None) of one command."""
     try:
         args = build_parser().parse_args(_join_negative_vectors(argv))
         func: Callable[[argparse.Namespace], int] = args.func
-        return func(args)
+        return func(args), None
     except _UsageError as exc:
-        print(str(exc), file=sys.stderr)
-        return 2
+        return 2, _one_line(str(exc))
     except AlpesDynError as exc:
-        print(f"alpes-dyn: error: {exc}", file=sys.stderr)
-        return 2
+        return 2, f"alpes-dyn: error: {_one_line(str(exc))}"
     except KeyboardInterrupt:
-        print("alpes-dyn: interrupted", file=sys.stderr)
-        return 130
+        return 130, "alpes-dyn: interrupted"
     except Exception as exc:  # never a traceback for a user
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
-        print(f"alpes-dyn: internal error: {type(exc).__name__}: {msg}", file=sys.stderr)
-        return 1
+        return 1, f"alpes-dyn: internal error: {type(exc).__name__}: {_one_line(msg)}"
+
+
+def main(argv: Sequence[str] | None = None) -> int:
+    """Run one command; exit code 0, 2 for bad input (one line on stderr), 1 for an internal error.
+
+    Whatever Python warnings (e.g. numpy's RuntimeWarning) and native libraries (urdfdom, CasADi) would
+    print on stderr is captured: it is appended to the error line, or, after a successful command,
+    summarised in one ``alpes-dyn: warning:`` line. stderr never gets more than one line.
+    """
+    argv = list(sys.argv[1:] if argv is None else argv)
+    printed: list[str] = []
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        with native_stderr_to(printed):
+            code, error = _run(argv)
+    notes = [_one_line(f"{w.category.__name__}: {w.message}") for w in caught] + [_one_line(p) for p in printed]
+    more = f" (+{len(notes) - 1} more)" if len(notes) > 1 else ""
+    if error is not None:
+        print(error + (f" [{notes[0]}{more}]" if notes else ""), file=sys.stderr)
+    elif notes:
+        print(f"alpes-dyn: warning: {notes[0]}{more}", file=sys.stderr)
+    return code
 
 
 if __name__ == "__main__":  # pragma: no cover

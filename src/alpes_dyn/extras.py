@@ -53,6 +53,9 @@ class JointExtras:
 
     stiffness: k (N m/rad); armature: N^2 J_m (kg m^2); coulomb: F_s (N m); viscous: F_v (N m s/rad);
     smooth_velocity: v_s (rad/s) of the smooth sign tanh(v/v_s).
+
+    Validated on construction (:class:`~alpes_dyn.ModelError` naming the field): the four arrays
+    are 1-D of one length, finite and >= 0, and are stored as read-only float arrays; v_s > 0.
     """
 
     stiffness: np.ndarray
@@ -60,6 +63,37 @@ class JointExtras:
     coulomb: np.ndarray
     viscous: np.ndarray
     smooth_velocity: float = 0.01
+
+    def __post_init__(self) -> None:
+        """Every array 1-D, of one length, finite and >= 0 (a negative stiffness, friction or rotor
+        inertia would inject energy); ``smooth_velocity`` finite and > 0. Arrays are stored as float."""
+        n = None
+        for fname in ("stiffness", "armature", "coulomb", "viscous"):
+            x = getattr(self, fname)
+            try:
+                a = np.array(x, dtype=float) if np.asarray(x).dtype.kind != "c" else None
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 1:
+                got = f"shape {a.shape}" if a is not None else f"{type(x).__name__} {np.asarray(x).dtype}"
+                raise ModelError(f"extras.{fname}: expected a 1-D array of numbers, got {got}")
+            if n is not None and a.shape != (n,):
+                raise ModelError(f"extras.{fname}: expected shape ({n},) like extras.stiffness, got {a.shape}")
+            n = a.shape[0]
+            if not np.isfinite(a).all():
+                raise ModelError(f"extras.{fname}: contains NaN or inf")
+            if np.any(a < 0):
+                i = int(np.argmax(a < 0))
+                raise ModelError(f"extras.{fname}: must be >= 0 (got {a[i]:g} at index {i})")
+            a.flags.writeable = False
+            object.__setattr__(self, fname, a)
+        try:
+            vs = float(self.smooth_velocity)
+        except (TypeError, ValueError):
+            vs = float("nan")
+        if not (np.isfinite(vs) and vs > 0):
+            raise ModelError(f"extras.smooth_velocity: expected a finite number > 0 rad/s, got {self.smooth_velocity!r}")
+        object.__setattr__(self, "smooth_velocity", vs)
 
     @classmethod
     def zeros(cls, n: int) -> "JointExtras":

@@ -24,8 +24,11 @@ import numpy as np
 import pinocchio as pin
 
 from .description import Layout, check_model_name, layout, urdf_string
+from .checks import as_float_array
 from .errors import InputError, ModelError
 from .extras import JointExtras
+from .fileio import native_stderr_to, read_text
+from .inertial import check_inertials
 from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, load_spec
 from .transmission import Transmission
@@ -88,12 +91,18 @@ def as_contacts(contacts: Any) -> tuple[Contact, ...]:
     return out
 
 
+_TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
+
+
 def _build_pinocchio(urdf: str) -> pin.Model:
+    printed: list[str] = []  # urdfdom prints its parse errors on the process's stderr: into the message
     try:
-        model = pin.buildModelFromXML(urdf)
+        with native_stderr_to(printed):
+            model = pin.buildModelFromXML(urdf)
     except Exception as exc:  # pinocchio raises ValueError/RuntimeError with multi-line text
+        errors = [line.removeprefix("Error:").strip() for line in printed if line.startswith("Error:")]
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ModelError(f"URDF could not be parsed by Pinocchio: {first}") from None
+        raise ModelError(f"URDF could not be parsed by Pinocchio: {errors[0] if errors else first}") from None
     if model.nv == 0:
         raise ModelError("URDF has no movable joint")
     if model.nq != model.nv:
@@ -119,6 +128,31 @@ def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, i
     raise InputError("static equilibrium: Newton's method did not converge (torque beyond the springs' range?)")
 
 
+def _generic_configuration(model: pin.Model) -> np.ndarray:
+    """A fixed, generic q inside the joint limits (golden-ratio fractions of each range)."""
+    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+    lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.pi)
+    hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
+    frac = np.mod(0.5 + 0.6180339887498949 * np.arange(1, model.nv + 1), 1.0)
+    return lo + frac * (hi - lo)
+
+
+def _check_mass_matrix(model: pin.Model, data: pin.Data, names: Sequence[str]) -> None:
+    """ModelError if A(q) + I_a is singular at a generic q: a joint that moves only massless links."""
+    A = pin.crba(model, data, _generic_configuration(model))
+    A = np.triu(A) + np.triu(A, 1).T
+    d = np.diag(A)
+    scale = float(np.max(np.abs(d))) if d.size else 0.0
+    for i, name in enumerate(names):
+        if not d[i] > 1e-14 * scale:
+            raise ModelError(f"joint {name!r} moves no mass: the links it carries are massless, so A(q) is singular "
+                             "(give them a mass and inertia, or make the joint fixed)")
+    try:
+        np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:
+        raise ModelError("A(q) is singular at a generic configuration (massless links?)") from None
+
+
 class Model:
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
@@ -134,6 +168,10 @@ class Model:
         Gravity vector in the base frame, m/s^2, shape (3,) (default: the spec's, else (0, 0, -9.81)).
     name:
         A label (default: the spec's name, else the robot name of the URDF).
+    check_inertia:
+        ``"relaxed"`` (default) or ``"strict"``: how the URDF's inertials are validated
+        (:func:`alpes_dyn.inertial.check_inertials`: masses and inertias positive (semi)definite;
+        strict adds the triangle inequality, which real URDFs such as the Allegro hand's break).
     layout, params:
         Set by :meth:`alpes`: the chains of an Alpes model and its parameters.
     spring:
@@ -155,7 +193,7 @@ class Model:
     def __init__(self, urdf: str, spec: TransmissionSpec | str | Path | None = None,
                  gravity: Sequence[float] | None = None, name: str | None = None, layout: Layout | None = None,
                  params: HandParams | None = None, spring: str | None = None, *,
-                 extras: JointExtras | None = None) -> None:
+                 extras: JointExtras | None = None, check_inertia: str = "relaxed") -> None:
         if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
             spec, extras = None, spec if extras is None else extras
         if isinstance(spec, (str, Path)):
@@ -168,6 +206,8 @@ class Model:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
         self.urdf: str = urdf
         self.pin_model: pin.Model = _build_pinocchio(urdf)
+        check_inertials(urdf, check_inertia)
+        self.check_inertia = check_inertia
         n = self.pin_model.nv
         self.n: int = n
         self.joint_names: tuple[str, ...] = tuple(self.pin_model.names[1:])
@@ -183,7 +223,10 @@ class Model:
         self.layout = layout
         self.params = params
         self.spring = spring if spring is not None else (spec.spring if spec is not None else "none")
-        g = DEFAULT_GRAVITY if gravity is None else np.asarray(gravity, dtype=float)
+        try:
+            g = DEFAULT_GRAVITY if gravity is None else as_float_array(gravity, "gravity", "3 finite numbers")
+        except InputError as exc:
+            raise ModelError(str(exc)) from None
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
         self.gravity: np.ndarray = g.copy()
@@ -199,11 +242,13 @@ class Model:
             raise ModelError("extras.armature: must be >= 0")
         self.pin_model.armature = np.asarray(self.extras.armature, dtype=float).copy()
         self.pin_data: pin.Data = self.pin_model.createData()
+        _check_mass_matrix(self.pin_model, self.pin_data, self.joint_names)
         self._k = np.asarray(self.extras.stiffness, dtype=float)
         self._spring = self.extras.has_spring
         self._friction = self.extras.has_friction
         self._lower = np.tril_indices(n, -1)
         self._shape = (n,)
+        self._tiny = np.full(n, _TINY)  # x . tiny is finite iff x is, and never overflows (no numpy warning)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
         if spec is not None and spec.tips is not None:
             self.tips: tuple[str, ...] = spec.tips
@@ -238,21 +283,15 @@ class Model:
         """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
         (:class:`~alpes_dyn.spec.TransmissionSpec` or the path of its TOML file); without one the
         model has no motors, springs, friction or rotor inertia."""
-        p = Path(path)
-        try:
-            text = p.read_text()
-        except OSError as exc:
-            raise ModelError(f"URDF file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
-        except UnicodeDecodeError:
-            raise ModelError(f"URDF file {str(p)!r}: not UTF-8 text") from None
-        return cls(text, spec, **kwargs)
+        return cls(read_text(path, "URDF file", ModelError), spec, **kwargs)
 
     def copy(self) -> "Model":
         """An independent model (own Pinocchio data), e.g. for another thread."""
         if self.spec is not None:
-            return Model(self.urdf, self.spec, self.gravity, self.name, self.layout, self.params, self.spring)
+            return Model(self.urdf, self.spec, self.gravity, self.name, self.layout, self.params, self.spring,
+                         check_inertia=self.check_inertia)
         return Model(self.urdf, None, self.gravity, self.name, self.layout, self.params, self.spring,
-                     extras=self.extras)
+                     extras=self.extras, check_inertia=self.check_inertia)
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, n={self.n}, spring={self.spring!r}, tips={list(self.tips)})"
@@ -288,13 +327,10 @@ class Model:
         n = self.n if n is None else n
         if x.__class__ is _ND and x.dtype is _F64 and x.shape == (n,):  # fast path, no copy
             a = x
-            if math.isfinite(a.dot(a)):  # one BLAS call; overflow falls through to the exact test
+            if math.isfinite(a.dot(self._tiny if n == self.n else np.full(n, _TINY))):  # one BLAS call
                 return a
         else:
-            try:
-                a = np.asarray(x, dtype=float)
-            except (TypeError, ValueError):
-                raise InputError(f"{name}: expected {n} numbers, got {x!r}") from None
+            a = as_float_array(x, name, f"{n} numbers")
             if a.shape != (n,):
                 raise InputError(f"{name}: expected shape ({n},), got {a.shape}")
         if not np.isfinite(a).all():
@@ -315,7 +351,7 @@ class Model:
     def _force(self, F: object) -> np.ndarray:
         if F is None:
             return np.zeros(3)
-        a = np.asarray(F, dtype=float) if not isinstance(F, np.ndarray) else F.astype(float, copy=False)
+        a = as_float_array(F, "F", "F_z or 3 numbers Fx, Fy, Fz")
         if a.shape == ():
             return np.array([0.0, 0.0, float(self.vector(np.atleast_1d(a), "F", 1)[0])])  # F_z only (eq. 2.13)
         return self.vector(a, "F", 3)
@@ -454,7 +490,7 @@ class Model:
         if F is not None:
             tau = tau + self.contact_torque(q, F, tip, contacts)
         qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
-        if not _isfinite(qdd.dot(qdd)):
+        if not _isfinite(qdd.dot(self._tiny)):
             for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
                 self.vector(x, name)
             if not np.isfinite(qdd).all():
@@ -496,12 +532,35 @@ class Model:
         """Joint upper limits from the URDF (rad)."""
         return self.pin_model.upperPositionLimit.copy()
 
-    def random_state(self, rng: np.random.Generator, speed: float = 2.0,
+    def random_state(self, rng: np.random.Generator | int | None, speed: float = 2.0,
                      size: int | None = None) -> tuple[np.ndarray, np.ndarray]:
         """A random (q, v): q uniform within the joint limits (+-pi where a limit is missing or huge),
-        v uniform in [-speed, speed] rad/s; shapes (n,), or (size, n) for ``size`` states at once."""
+        v uniform in [-speed, speed] rad/s; shapes (n,), or (size, n) for ``size`` states at once.
+
+        ``rng`` is a ``numpy.random.Generator``, or a seed (an integer >= 0, or None for fresh
+        entropy) given to ``numpy.random.default_rng``.
+        """
+        rng, speed, size = _check_random_args(rng, speed, size)
         lo, hi = self.lower, self.upper
         lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.pi)
         hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
         shape = self.n if size is None else (size, self.n)
         return rng.uniform(lo, hi, size=None if size is None else shape), rng.uniform(-speed, speed, shape)
+
+
+def _check_random_args(rng: object, speed: object, size: object) -> tuple[np.random.Generator, float, int | None]:
+    if not isinstance(rng, np.random.Generator):
+        if rng is not None and (isinstance(rng, (bool, np.bool_)) or not isinstance(rng, (int, np.integer))
+                                or rng < 0):
+            raise InputError(f"rng: expected a numpy Generator, an integer seed >= 0 or None, got {rng!r}")
+        rng = np.random.default_rng(rng)
+    try:
+        s = float(speed)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        s = float("nan")
+    if not (math.isfinite(s) and s >= 0):
+        raise InputError(f"speed: expected a finite number >= 0 rad/s, got {speed!r}")
+    if size is not None and (isinstance(size, (bool, np.bool_)) or not isinstance(size, (int, np.integer))
+                             or size < 0):
+        raise InputError(f"size: expected an integer >= 0 or None, got {size!r}")
+    return rng, s, None if size is None else int(size)

@@ -76,6 +76,7 @@ import casadi as cs
 import numpy as np
 
 from .errors import InputError, ModelError
+from .limits import MAX_POINTS
 from .model import Model
 from .statespace import StateSpace
 
@@ -514,7 +515,8 @@ def check_observability(system: Model | StateSpace | str, input: str | None = No
     input, output: of the :class:`StateSpace` built for a model (default ``"joint"``, ``"sum"``: the
         report's u = Gamma, y = sum q); not allowed with a StateSpace (it has its own).
     spring: spring model for a model name (default ``"torsional"``).
-    points: random points for the generic rank (>= 1). seed: their seed.
+    points: random points for the generic rank (1 to :data:`alpes_dyn.limits.MAX_POINTS` = 10000).
+        seed: their seed (an integer >= 0).
     constant_input: u' = u'' = ... = 0 instead of free input derivatives.
     order: ``"auto"`` (stop at full rank or when the filtration stops growing, see the module doc),
         ``"report"`` (y .. y^(n-1), eq. 3.8, stopping early only at full rank) or an int.
@@ -529,8 +531,10 @@ def check_observability(system: Model | StateSpace | str, input: str | None = No
     t0 = time.perf_counter()
     if isinstance(points, (bool, np.bool_)) or not isinstance(points, (int, np.integer)) or points < 1:
         raise InputError(f"points: expected a positive integer, got {points!r}")
-    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)):
-        raise InputError(f"seed: expected an integer, got {seed!r}")
+    if isinstance(seed, (bool, np.bool_)) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise InputError(f"seed: expected an integer >= 0, got {seed!r}")
+    if points > MAX_POINTS:
+        raise InputError(f"points: at most {MAX_POINTS} random points (alpes_dyn.limits.MAX_POINTS), got {points}")
     if isinstance(system, str):
         system = Model.alpes(system, spring=spring or "torsional")
     elif spring is not None:

@@ -50,6 +50,7 @@ import casadi as cs
 import numpy as np
 
 from .errors import InputError, ModelError
+from .limits import check_bytes
 from .simulation import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from .statespace import StateSpace
 
@@ -128,6 +129,16 @@ class DiscreteModel:
         F = a * w[ss.n_inputs:] if ss.force else None
         qdd = joint_accelerations(ss, q, v, tau, F)
         return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))
+
+
+def _finite_number(x: Any, name: str) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not np.isfinite(v):
+        raise InputError(f"{name}: expected a finite number, got {x!r}")
+    return v
 
 
 def _cov(value: Any, n: int, name: str) -> np.ndarray:
@@ -305,6 +316,8 @@ class KalmanFilter:
         if W.ndim != 2 or W.shape[1] != self.nw or W.shape[0] < 1:
             raise InputError(f"W: expected shape (N, {self.nw}), got {W.shape}")
         N = W.shape[0]
+        check_bytes(16.0 * (N + 1) * (self.nz + self.nz * self.nz), "W",
+                    f"{N} samples of {self.nz} states and their covariance")
         if Y.shape != (N + 1, self.ny):
             raise InputError(f"Y: expected shape ({N + 1}, {self.ny}) (one more sample than W), got {Y.shape}")
         for a, name in ((W, "W"), (Y, "Y")):
@@ -372,14 +385,16 @@ class UnscentedKalmanFilter(KalmanFilter):
     plus G Sigma_w G^T + Q (G = dF/dw at the mean, by AD). The measurement is linear in the state
     for the encoder, so the update is the Kalman update of :class:`KalmanFilter`.
 
-    Extra parameters: ``alpha`` (default 1), ``beta`` (2, optimal for Gaussians), ``kappa`` (0).
+    Extra parameters: ``alpha`` (default 1, > 0), ``beta`` (2, optimal for Gaussians), ``kappa`` (0; with
+    alpha^2 (nz + kappa) > 0), all finite.
     """
 
     kind = "ukf"
 
     def __init__(self, system: StateSpace, dt: float, *, alpha: float = 1.0, beta: float = 2.0,
                  kappa: float = 0.0, **kwargs: Any) -> None:
-        self.alpha, self.beta, self.kappa = float(alpha), float(beta), float(kappa)
+        self.alpha, self.beta, self.kappa = (_finite_number(x, name) for x, name in
+                                             ((alpha, "alpha"), (beta, "beta"), (kappa, "kappa")))
         if not self.alpha > 0:
             raise InputError(f"alpha: expected a positive number, got {alpha!r}")
         super().__init__(system, dt, **kwargs)
@@ -387,6 +402,9 @@ class UnscentedKalmanFilter(KalmanFilter):
     def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
         n = self.model.nz
         lam = self.alpha**2 * (n + self.kappa) - n
+        if not n + lam > 0:  # the sigma points' spread sqrt(n + lambda) and the weights 1 / (n + lambda)
+            raise InputError(f"kappa: alpha^2 (nz + kappa) must be > 0 (nz = {n}, alpha = {self.alpha:g}, "
+                             f"kappa = {self.kappa:g})")
         c = np.sqrt(n + lam)
         Wm = np.full(2 * n + 1, 0.5 / (n + lam))
         Wc = Wm.copy()

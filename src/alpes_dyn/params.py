@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 
 from .errors import ModelError
+from .fileio import read_text
 
 __all__ = [
     "Param", "ChainParams", "HandParams", "SOURCES", "load_params", "default_params_path", "params_toml", "with_values",
@@ -255,15 +256,12 @@ def load_params(path: str | Path | None = None) -> HandParams:
     Raises
     ------
     ModelError
-        Unreadable file, TOML syntax error, missing or unknown section/field, wrong length, a
+        Empty file name, unreadable or non-UTF-8 file, TOML syntax error, missing or unknown section/field, wrong length, a
         non-positive length or mass, or an inertia that violates the parallel-axis theorem.
     """
-    p = Path(path) if path is not None else default_params_path()
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ModelError(f"parameter file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
-    return _from_text(text, str(p))
+    src = path if path is not None else default_params_path()
+    text = read_text(src, "parameter file", ModelError)
+    return _from_text(text, str(src))
 
 
 def _from_text(text: str, path: str) -> HandParams:

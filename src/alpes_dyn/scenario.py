@@ -29,11 +29,14 @@ from __future__ import annotations
 
 import dataclasses
 from dataclasses import dataclass, field
+from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from .errors import InputError
+from .fileio import atomic_path, check_output_path
+from .limits import check_bytes
 from .model import Model
 from .observers import OBSERVERS, PARAMETERS, Estimate, make_observer, true_gains
 from .params import HandParams, load_params
@@ -44,8 +47,30 @@ SCENARIO_MODELS: tuple[str, ...] = ("finger2", "finger3")
 
 __all__ = [
     "SCENARIO_MODELS", "EstimationScenario", "EstimationResult", "run_estimation", "mismatched_params",
-    "plot_estimation", "static_equilibrium", "default_noise",
+    "plot_estimation", "check_plot_path", "static_equilibrium", "default_noise",
 ]
+
+
+def _check_settings(sc: "EstimationScenario") -> None:
+    """Types and ranges of the numeric settings (before any arithmetic with them)."""
+    for name in ("duration", "dt", "mismatch", "transient", "q0_offset", "encoder_noise_counts", "torque_noise",
+                 "torque_bias"):
+        x = getattr(sc, name)
+        if x is None and name == "transient":
+            continue
+        if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+            raise InputError(f"{name}: expected a number, got {x!r}")
+        if not np.isfinite(x):
+            raise InputError(f"{name}: expected a finite number, got {x!r}")
+    if not sc.dt > 0:
+        raise InputError(f"dt: expected a positive number of seconds, got {sc.dt!r}")
+    for name in ("q0_offset", "encoder_noise_counts", "torque_noise"):
+        if getattr(sc, name) < 0:
+            raise InputError(f"{name}: expected a number >= 0, got {getattr(sc, name)!r}")
+    for name, low in (("substeps", 1), ("seed", 0)):
+        x = getattr(sc, name)
+        if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, np.integer)) or x < low:
+            raise InputError(f"{name}: expected an integer >= {low}, got {x!r}")
 
 
 def mismatched_params(params: HandParams, mass_scale: float, spring_scale: float) -> HandParams:
@@ -94,6 +119,7 @@ class EstimationScenario:
         if self.spring != "torsional":
             raise InputError(f"spring: the scenario's torque profile is balanced by the torsional springs; "
                              f"got spring model {self.spring!r}")
+        _check_settings(self)
         if not (np.isfinite(self.duration) and self.duration > 0):
             raise InputError(f"duration: expected a positive number of seconds, got {self.duration!r}")
         if not (np.isfinite(self.mismatch) and -0.5 < self.mismatch < 0.5):
@@ -209,8 +235,15 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     rng = np.random.default_rng(sc.seed)
     n, m = truth.n, truth.transmission.n_motors
     N = int(round(sc.duration / sc.dt))
-    if N < 2 or abs(N * sc.dt - sc.duration) > 1e-9 * sc.duration:
+    if N < 2:
+        raise InputError(f"duration: {sc.duration:g} s is shorter than two samples of dt = {sc.dt:g} s")
+    if abs(N * sc.dt - sc.duration) > 1e-9 * sc.duration:
         raise InputError(f"duration: {sc.duration:g} s is not a whole number of samples dt = {sc.dt:g} s")
+    # the arrays kept per sample (truth at dt / substeps, filter states and covariances), times 6 for the
+    # copies CasADi and numpy make on the way (measured: 7.3 kB per sample for finger3 and the EKF)
+    nz = 2 * n + (len(sc.parameters) if observer.endswith("-params") else 0)
+    check_bytes(48.0 * (N + 1) * (sc.substeps * (4 * n + 2 * m + 1) + 2 * (nz + nz * nz) + 4 * n + 3 * m), "duration",
+                f"{sc.duration:g} s at dt = {sc.dt:g} s ({N} samples)")
 
     # truth: RK4 at dt / substeps, the motor torque held over each sample period
     t = sc.dt * np.arange(N + 1)
@@ -259,18 +292,28 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     return res
 
 
-def plot_estimation(result: EstimationResult, path: str) -> None:
-    """Write a figure (PNG) of the true and estimated q_i over time with the estimate's +-2 sigma band.
-
-    One panel per joint (degrees), a vertical line at the end of the transient; needs matplotlib.
-    """
+def check_plot_path(path: str) -> Path:
+    """Validate a figure file name before a run (:class:`~alpes_dyn.InputError` naming ``--plot``): matplotlib
+    installed, not empty, not a directory, an existing writable directory, a format matplotlib writes
+    (by extension: .png, .pdf, .svg, ...)."""
     try:
-        import matplotlib
-
-        matplotlib.use("Agg")
-        import matplotlib.pyplot as plt
+        from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:
         raise InputError("--plot: matplotlib is not installed (pip install matplotlib)") from None
+    return check_output_path(path, "--plot", sorted(FigureCanvasBase.get_supported_filetypes()))
+
+
+def plot_estimation(result: EstimationResult, path: str) -> None:
+    """Write a figure of the true and estimated q_i over time with the estimate's +-2 sigma band.
+
+    One panel per joint (degrees), a vertical line at the end of the transient; needs matplotlib. The
+    format follows the extension (PNG, PDF, SVG...); the file is written atomically (never partial).
+    """
+    dest = check_plot_path(path)
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
     n = len(result.joint_names)
     t = result.t
     sd = result.estimate.std[:, :n]
@@ -304,8 +347,7 @@ def plot_estimation(result: EstimationResult, path: str) -> None:
                  f"seed {sc.seed})", fontsize=10)
     fig.tight_layout()
     try:
-        fig.savefig(path, dpi=110)
-    except OSError as exc:
-        raise InputError(f"--plot: cannot write {path!r} ({exc.strerror or exc})") from None
+        with atomic_path(dest, "--plot") as tmp:
+            fig.savefig(tmp, dpi=110, format=dest.suffix.lower().lstrip("."))
     finally:
         plt.close(fig)

@@ -10,7 +10,9 @@ Two entry points:
   generated as C by CasADi, wrapped in a small C driver that loops over steps, advances two
   trajectories per SIMD lane pair and splits the batch over POSIX threads, compiled once with
   the system C compiler (``$CC``, default gcc, ``-O3``) and cached on disk (directory
-  ``$ALPES_DYN_CACHE``, default ``~/.cache/alpes_dyn``) under a hash of the generated source.
+  ``$ALPES_DYN_CACHE``, default ``~/.cache/alpes_dyn``) under a hash of the generated source; the
+  cache is checked before loading, locked while building and heals itself
+  (:mod:`alpes_dyn.buildcache`).
 
 The right-hand side is the state space's (eq. 3.3): A(q) + I_a, C qd + gravity, springs,
 friction and J^T F from ``StateSpace.sym``, the mass matrix solved by the unrolled LDL^T of
@@ -26,14 +28,11 @@ same order: they agree to the last bit in practice (to rounding in any case).
 from __future__ import annotations
 
 import ctypes
-import hashlib
 import math
 import os
 import re
 import shutil
-import subprocess
 import sys
-import tempfile
 import time
 import weakref
 from dataclasses import dataclass
@@ -43,7 +42,9 @@ from typing import Any, Callable, Sequence, Union
 import casadi as cs
 import numpy as np
 
-from .errors import AlpesDynError, InputError, ModelError
+from .buildcache import CompilerError, build_library
+from .errors import InputError, ModelError
+from .limits import check_bytes
 from .model import Model
 from .statespace import StateSpace
 
@@ -55,10 +56,6 @@ __all__ = [
 METHODS: tuple[str, ...] = ("rk4", "cvodes", "idas")
 
 InputLike = Union[None, float, Sequence[float], np.ndarray, Callable[[float], Any]]
-
-
-class CompilerError(AlpesDynError, RuntimeError):
-    """The C compiler is missing or failed on generated code."""
 
 
 # ----------------------------------------------------------------------------- state space helpers
@@ -305,7 +302,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     Raises
     ------
     InputError: bad shapes, NaN, non-positive duration/dt, unknown method, a state space without
-    force input given a force, or an integrator failure.
+        force input given a force, an integrator failure, or arrays over the size limit
+        (:mod:`alpes_dyn.limits`, 2 GiB by default).
     """
     if method not in METHODS:
         raise InputError(f"method: unknown integration method {method!r} (expected one of {', '.join(METHODS)})")
@@ -316,6 +314,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
         raise InputError("force: this state space has the contact force as an input; pass force=")
     dt = _check_dt(dt)
     N = _n_steps(duration, dt)
+    check_bytes(8.0 * (N + 1) * (2 * ss.n_states + ss.n_outputs + _n_known_inputs(ss)), "duration",
+                f"{N} steps of {ss.n_states} states")
     x0 = ss.model.vector(x0, "x0", ss.n_states)
     t = dt * np.arange(N + 1)
     U = _sample(inputs, t[:-1], ss.n_inputs, "inputs")
@@ -368,29 +368,11 @@ def _compiler() -> str:
     return path
 
 
-def _build_library(source: str, stem: str) -> tuple[Path, bool, float]:
-    """Compile ``source`` to a shared library in the cache (once); return (path, compiled_now, seconds)."""
-    cc = _compiler()
-    key = hashlib.sha256((source + "\0" + " ".join(_CFLAGS) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
-    d = cache_dir()
-    try:
-        d.mkdir(parents=True, exist_ok=True)
-    except OSError as exc:
-        raise CompilerError(f"cache directory {str(d)!r}: cannot be created ({exc.strerror or exc})") from None
-    lib = d / f"{stem}_{key}.so"
-    if lib.exists():
-        return lib, False, 0.0
-    t0 = time.perf_counter()
-    with tempfile.TemporaryDirectory(dir=d) as tmp:
-        c = Path(tmp) / f"{stem}.c"
-        c.write_text(source)
-        out = Path(tmp) / f"{stem}.so"
-        proc = subprocess.run([cc, *_CFLAGS, str(c), "-o", str(out), "-lm"], capture_output=True, text=True)
-        if proc.returncode != 0:
-            first = (proc.stderr.strip().splitlines() or ["unknown error"])[0]
-            raise CompilerError(f"compiling {stem}.c failed: {first}")
-        os.replace(out, lib)  # atomic: concurrent processes never load a half-written file
-    return lib, True, time.perf_counter() - t0
+def _build_library(source: str, stem: str) -> tuple[Path, bool, float, ctypes.CDLL]:
+    """Compile ``source`` to a shared library in the cache (once) and load it; return (path,
+    compiled_now, seconds, library). The cache is checked, locked and self-healing:
+    :mod:`alpes_dyn.buildcache`."""
+    return build_library(source, stem, _compiler(), _CFLAGS, cache_dir())
 
 
 _DRIVER = r"""
@@ -565,6 +547,15 @@ def _vector_step(source: str, lanes: int) -> str | None:
             + "\n}\n")
 
 
+def _check_threads(threads: Any) -> int:
+    """``threads`` as an integer in 1..64 (the driver's maximum), default: the CPUs this process may use."""
+    if threads is None:
+        return _default_threads()
+    if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)) or not 1 <= threads <= 64:
+        raise InputError(f"threads: expected an integer from 1 to 64, got {threads!r}")
+    return int(threads)
+
+
 def _default_threads() -> int:
     try:
         return max(1, len(os.sched_getaffinity(0)))
@@ -604,7 +595,7 @@ class CompiledStepLoop:
     label:
         Stem of the cached library's file name.
     threads:
-        Worker threads (default: the CPUs this process may use).
+        Worker threads, 1 to 64 (default: the CPUs this process may use).
     vectorize:
         Advance two sequences at once in SIMD lanes (GCC vector extensions; the same operations
         in the same order as the scalar code, so the same bits); falls back to scalar code when
@@ -625,9 +616,7 @@ class CompiledStepLoop:
         self.nw = int(step.size1_in(1))
         if step.size_out(0) != (self.nx, 1) or step.size2_in(0) != 1 or step.size2_in(1) != 1:
             raise ModelError(f"step: x, w and x_next must be columns with x_next like x, got {step}")
-        self.threads = int(threads) if threads is not None else _default_threads()
-        if self.threads < 1:
-            raise InputError(f"threads: expected a positive integer, got {threads!r}")
+        self.threads = _check_threads(threads)
         ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
         step = cs.Function("alpes_step", ins, step.call(ins))  # fixed C symbol name for the driver
         cg = cs.CodeGenerator("alpes_steploop.c", {"with_header": False})
@@ -639,15 +628,14 @@ class CompiledStepLoop:
         self.lanes = 1
         if vector is not None:
             try:
-                self.library, self.compiled, self.compile_seconds = _build_library(
+                self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
                     generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label)
                 self.lanes = _LANES
             except CompilerError:  # a compiler without GCC vector extensions: the scalar driver
                 vector = None
         if vector is None:
-            self.library, self.compiled, self.compile_seconds = _build_library(
+            self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
                 generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label)
-        self._lib = ctypes.CDLL(str(self.library))
         fn = self._lib.alpes_rollout
         dp = ctypes.POINTER(ctypes.c_double)
         fn.argtypes = [dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
@@ -687,7 +675,7 @@ class CompiledRollout:
     dt:
         RK4 step, s, fixed at compile time.
     threads:
-        Worker threads (default: the CPUs this process may use).
+        Worker threads, 1 to 64 (default: the CPUs this process may use).
 
     The step is :func:`rk4_step_function` (the one :func:`simulate` evaluates with
     ``method="rk4"``), compiled by :class:`CompiledStepLoop`: results equal :func:`simulate`'s to
@@ -759,6 +747,7 @@ class CompiledRollout:
         for a, name in batched:
             if a.shape[0] not in (1, B):
                 raise InputError(f"{name}: batch size {a.shape[0]} does not match {B}")
+        check_bytes(8.0 * B * ((N + 1) * self.nx + N * self.nw), "U_batch", f"{B} trajectories of {N} steps")
         W = np.broadcast_to(U, (B, N, m))
         if self.system.force:
             W = np.concatenate([W, np.broadcast_to(F, (B, N, nf))], axis=2)

@@ -55,6 +55,31 @@ class _Output(NamedTuple):
     matrix: np.ndarray | None
 
 
+def _output_matrix(output: Any, n: int) -> np.ndarray:
+    """An output matrix H (p, n) of finite numbers, else a ModelError saying what is wrong."""
+    try:
+        H = np.atleast_2d(np.asarray(output, dtype=float))
+    except (TypeError, ValueError):
+        raise ModelError(f"output matrix: expected a (p, {n}) array of numbers, got {output!r}") from None
+    if H.ndim != 2 or H.shape[1] != n or H.shape[0] < 1:
+        raise ModelError(f"output matrix: expected a finite (p, {n}) array, got shape {H.shape}")
+    if not np.isfinite(H).all():
+        raise ModelError("output matrix: contains NaN or inf")
+    return H
+
+
+def _output_expression(y: Any) -> cs.SX:
+    """The column of what an output callable returned for a CasADi symbol (SX, numbers or a list of them)."""
+    items = list(y) if isinstance(y, (list, tuple)) else [y]
+    try:
+        if not items or any(v is None or isinstance(v, (str, bytes)) for v in items):
+            raise TypeError
+        return cs.vec(cs.vertcat(*[cs.vec(cs.SX(v)) for v in items]))
+    except (TypeError, NotImplementedError, RuntimeError, ValueError):
+        raise ModelError(f"output function: returned {type(y).__name__} {y!r:.60}, expected CasADi expressions "
+                         "or numbers") from None
+
+
 class StateSpace:
     """x' = f(x, u[, F]), y = h(x) for a :class:`~alpes_dyn.Model`.
 
@@ -143,7 +168,7 @@ class StateSpace:
         pieces = self._outputs(output)
         self._pieces = pieces
         self.output_name: str = _output_label(output)
-        self.h_expr: cs.SX = cs.vertcat(*(cs.vec(cs.SX(pc.sym(q, v))) for pc in pieces)) if pieces else cs.SX(0, 1)
+        self.h_expr: cs.SX = cs.vertcat(*(_output_expression(pc.sym(q, v)) for pc in pieces)) if pieces else cs.SX(0, 1)
         self.output_names = tuple(nm for pc in pieces for nm in pc.names)
         if len(self.output_names) != self.h_expr.shape[0]:  # callables: row names once the size is known
             self.output_names = tuple(f"y{i}" for i in range(self.h_expr.shape[0]))
@@ -199,8 +224,10 @@ class StateSpace:
             H = np.atleast_2d(np.asarray(output, dtype=float))
         except (TypeError, ValueError):
             raise ModelError(f"output: expected a preset name, a matrix or a callable, got {output!r}") from None
-        if H.ndim != 2 or H.shape[1] not in (n, 2 * n) or not np.isfinite(H).all():
+        if H.ndim != 2 or H.shape[1] not in (n, 2 * n) or H.shape[0] < 1:
             raise ModelError(f"output matrix: expected a finite (p, {n}) or (p, {2 * n}) array, got shape {H.shape}")
+        if not np.isfinite(H).all():
+            raise ModelError("output matrix: contains NaN or inf")
         if H.shape[1] == n:
             H = np.hstack([H, np.zeros_like(H)])
         return [self._linear(H, tuple(f"y{i}" for i in range(H.shape[0])))]

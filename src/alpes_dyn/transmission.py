@@ -13,6 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .checks import as_float_array
 from .description import Layout
 from .errors import InputError
 
@@ -60,14 +61,14 @@ class Transmission:
 
     def motor_positions(self, q: np.ndarray) -> np.ndarray:
         """Encoder angles q_m = S q (rad), q: (n,) or (..., n) -> (m,) or (..., m)."""
-        q = np.asarray(q, dtype=float)
+        q = as_float_array(q, "q", "joint angles")
         if q.shape[-1:] != (self.S.shape[1],):
             raise InputError(f"q: expected last dimension {self.S.shape[1]}, got shape {q.shape}")
         return q @ self.S.T
 
     def joint_torque(self, tau_m: np.ndarray) -> np.ndarray:
         """Joint torques S^T tau_m (N m) from motor torques tau_m (N m), (m,) or (..., m)."""
-        tau_m = np.asarray(tau_m, dtype=float)
+        tau_m = as_float_array(tau_m, "tau_m", "motor torques")
         if tau_m.shape[-1:] != (self.n_motors,):
             raise InputError(f"tau_m: expected last dimension {self.n_motors}, got shape {tau_m.shape}")
         return tau_m @ self.S
@@ -75,4 +76,4 @@ class Transmission:
     def quantize(self, q_m: np.ndarray) -> np.ndarray:
         """Encoder reading: q_m rounded to the encoder's resolution 2 pi / counts_per_rev (rad)."""
         step = 2.0 * np.pi / self.counts_per_rev
-        return np.round(np.asarray(q_m, dtype=float) / step) * step
+        return np.round(as_float_array(q_m, "q_m", "motor angles") / step) * step

@@ -1,0 +1,476 @@
+"""Bad input, table-driven: every CLI subcommand and every public API.
+
+CLI rows: exit code 2, nothing on stdout, exactly one line on stderr (captured at the file-descriptor
+level, so text printed by native libraries counts) containing the row's needle, no traceback, and no
+file left behind in the working folder or next to an output file.
+
+API rows: a typed error (a subclass of :class:`alpes_dyn.AlpesDynError`, and the row's class) whose
+one-line message contains the row's needle.
+
+To add a command or an API: add rows to ``CLI`` / ``API``; ``test_every_command_has_rows`` and
+``test_every_public_api_has_rows`` fail until you do. Placeholders in CLI arguments (``{dir}``,
+``{binary_toml}``...) name the files that :func:`bad_files` writes in the row's temporary folder.
+"""
+
+from __future__ import annotations
+
+import argparse
+import inspect
+import os
+import re
+import resource
+import subprocess
+import sys
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Callable
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn import cli
+from alpes_dyn.errors import AlpesDynError, InputError, ModelError
+from alpes_dyn.params import default_params_path
+
+BASE_TOML = default_params_path().read_text(encoding="utf-8")
+FINGER3 = ad.urdf_string("finger3")
+
+
+def _with_p3_inertial(mass: str, inertia: str) -> str:
+    """finger3's URDF with the inertial of its last phalanx p3 replaced."""
+    out, n = re.subn(r'(<link name="p3">.*?<mass value=")[^"]*("/>\s*<inertia )[^/]*/>',
+                     rf'\g<1>{mass}\g<2>{inertia}/>', FINGER3, flags=re.S)
+    assert n == 1
+    return out
+
+
+ZERO_I = 'ixx="0" ixy="0" ixz="0" iyy="0" iyz="0" izz="0"'
+URDFS = {
+    "negmass_urdf": _with_p3_inertial("-0.023", 'ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"'),
+    "massless_urdf": _with_p3_inertial("0.0", ZERO_I),  # p3 massless: joint j3 moves nothing
+    "zero_mass_inertia_urdf": _with_p3_inertial("0.0", 'ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"'),
+    "triangle_urdf": _with_p3_inertial("0.023", 'ixx="1e-7" ixy="0" ixz="0" iyy="1e-7" iyz="0" izz="1e-6"'),
+    "indefinite_urdf": _with_p3_inertial("0.023", 'ixx="1e-6" ixy="2e-6" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"'),
+    "nan_urdf": _with_p3_inertial("nan", ZERO_I),
+    "no_limits_urdf": "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
+                      "<parent link='a'/><child link='b'/></joint></robot>",
+    "truncated_urdf": FINGER3[: len(FINGER3) // 2],
+}
+
+
+def bad_files(d: Path) -> dict[str, str]:
+    """Write the broken inputs into ``d``; return {placeholder: path}."""
+    files: dict[str, bytes] = {
+        "binary_toml": bytes(range(256)) * 4,
+        "latin1_toml": ("# r\xe9glage\n" + BASE_TOML).encode("latin-1"),
+        "binary_urdf": b"\x89PNG\r\n\x1a\n" + bytes(range(256)),
+        "latin1_urdf": FINGER3.replace("Generated", "G\xe9n\xe9r\xe9").encode("latin-1"),
+        "negative_k_toml": BASE_TOML.replace("K = { value = [0.04, 0.05, 0.06]", "K = { value = [-0.04, 0.05, 0.06]",
+                                             1).encode(),
+    }
+    files.update({k: v.encode() for k, v in URDFS.items()})
+    out = {}
+    for name, data in files.items():
+        ext = name.rsplit("_", 1)[1]
+        p = d / f"{name.rsplit('_', 1)[0]}.{ext}"
+        p.write_bytes(data)
+        out[name] = str(p)
+    (d / "dir").mkdir()
+    (d / "file").write_text("not a directory\n")
+    out.update(dir=str(d / "dir"), file=str(d / "file"), tmp=str(d))
+    return out
+
+
+@dataclass(frozen=True)
+class Cli:
+    """One bad command line: ``argv`` (placeholders in braces), a substring of the one stderr line."""
+
+    argv: tuple[str, ...]
+    needle: str
+    fsize: int | None = None  # run in a subprocess whose files may not exceed this many bytes (a full disk)
+
+
+def C(*argv: str, needle: str, fsize: int | None = None) -> Cli:
+    return Cli(tuple(argv), needle, fsize)
+
+
+CLI: dict[str, list[Cli]] = {
+    "linearize": [
+        C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
+        C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),
+        C("linearize", "--q=nan,0,0", needle="--q: contains NaN or inf"),
+    ],
+    "(global)": [
+        C(needle="the following arguments are required: command"),
+        C("frobnicate", needle="invalid choice: 'frobnicate'"),
+        C("--bogus", needle="the following arguments are required"),
+    ],
+    "urdf": [
+        C("urdf", "finger7", needle="unknown model 'finger7'"),
+        C("urdf", "hand", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
+        C("urdf", "hand", "-o", "", needle="-o: empty file name"),
+        C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: cannot write"),
+        C("urdf", "hand", "-o", "{file}/hand.urdf", needle="-o: cannot write"),
+        C("urdf", "hand", "-o", "{tmp}/hand.urdf", needle="-o: cannot write", fsize=4096),  # full disk
+        C("urdf", "finger3", "--params", "{binary_toml}", needle="not UTF-8 text (byte 0x80 at offset 128)"),
+        C("urdf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text (byte 0xe9"),
+        C("urdf", "finger3", "--params", "", needle="parameter file: empty file name"),
+        C("urdf", "finger3", "--params", "{dir}", needle="is a directory"),
+        C("urdf", "finger3", "--params", "{negative_k_toml}", needle="finger.K: value must be >= 0"),
+    ],
+    "dynamics": [
+        C("dynamics", "--model", "finger9", needle="unknown model 'finger9'"),
+        C("dynamics", "--q=0.1,0.2", needle="--q: model 'finger3' has 3 joints, got 2 values"),
+        C("dynamics", "--q=0.1,x,0.2", needle="--q: expected comma-separated numbers"),
+        C("dynamics", "--q=0.1,nan,0.2", needle="--q: contains NaN or inf"),
+        C("dynamics", "--v=1e400,0,0", needle="--v: contains NaN or inf"),
+        C("dynamics", "--tau=1e308,1e308,1e308", needle="non-finite accelerations"),  # no numpy warning line
+        C("dynamics", "--force=0,1", needle="--force: expected 3 values"),
+        C("dynamics", "--tip", "nail", needle="unknown tip/frame 'nail'"),
+        C("dynamics", "--spring", "cubic", needle="invalid choice: 'cubic'"),
+        C("dynamics", "--params", "/nonexistent.toml", needle="cannot be read"),
+        C("dynamics", "--params", "", needle="parameter file: empty file name"),
+        C("dynamics", "--params", "{binary_toml}", needle="not UTF-8 text"),
+        C("dynamics", "--model", "/nonexistent.urdf", needle="cannot be read"),
+        C("dynamics", "--model", "{binary_urdf}", needle="not UTF-8 text (byte 0x89 at offset 0)"),
+        C("dynamics", "--model", "{latin1_urdf}", needle="not UTF-8 text (byte 0xe9"),
+        C("dynamics", "--model", "{negmass_urdf}", needle="link 'p3': mass must be >= 0 kg, got -0.023"),
+        C("dynamics", "--model", "{massless_urdf}", needle="joint 'j3' moves no mass"),
+        C("dynamics", "--model", "{zero_mass_inertia_urdf}", needle="link 'p3': zero mass with a non-zero inertia"),
+        C("dynamics", "--model", "{indefinite_urdf}", needle="not positive semidefinite"),
+        C("dynamics", "--model", "{indefinite_urdf}", needle="link 'p3': inertia is not positive semidefinite"),
+        C("dynamics", "--model", "{nan_urdf}", needle="link 'p3': mass: must be finite, got 'nan'"),
+        C("dynamics", "--model", "{no_limits_urdf}", needle="does not specify limits"),  # urdfdom's stderr
+        C("dynamics", "--model", "{truncated_urdf}", needle="URDF could not be parsed"),
+    ],
+    "report": [
+        C("report", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
+        C("report", "--points", "100000000", needle="--points: expected an integer from 1 to 10000"),
+        C("report", "--points", "x", needle="--points: expected an integer from 1 to 10000, got 'x'"),
+        C("report", "--seed", "-1", needle="--seed: expected an integer >= 0, got -1"),
+    ],
+    "observability": [
+        C("observability", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
+        C("observability", "--points", "10000001", needle="--points: expected an integer from 1 to 10000"),
+        C("observability", "--seed", "-1", needle="--seed: expected an integer >= 0"),
+        C("observability", "--order", "x", needle="--order: expected auto, report or a non-negative integer"),
+        C("observability", "--order", "-1", needle="--order: expected auto, report or a non-negative integer"),
+        C("observability", "--model", "{negmass_urdf}", needle="mass must be >= 0"),
+        C("observability", "--model", "{binary_urdf}", needle="not UTF-8 text"),
+        C("observability", "--input", "torque", needle="invalid choice: 'torque'"),
+    ],
+    "estimate": [
+        C("estimate", "--plot", "{dir}", needle="--plot: '{dir}' is a directory"),
+        C("estimate", "--plot", "", needle="--plot: empty file name"),
+        C("estimate", "--plot", "out.xyz", needle="--plot: 'out.xyz' has extension 'xyz'; expected one of"),
+        C("estimate", "--plot", "out", needle="--plot: 'out' has no extension"),
+        C("estimate", "--plot", "{tmp}/missing/x.png", needle="--plot: directory"),
+        C("estimate", "--plot", "{file}/x.png", needle="is not a directory"),
+        C("estimate", "--duration", "1e12", needle="duration: 1e+12 s at dt = 0.001 s"),
+        C("estimate", "--duration", "0.001", needle="duration: 0.001 s is shorter than two samples"),
+        C("estimate", "--duration", "0.0015", needle="not a whole number of samples"),
+        C("estimate", "--duration", "nan", needle="duration: expected a finite number"),
+        C("estimate", "--duration", "-1", needle="duration: expected a positive number"),
+        C("estimate", "--duration", "x", needle="--duration: invalid float value"),
+        C("estimate", "--mismatch", "0.7", needle="mismatch: expected a fraction in (-0.5, 0.5)"),
+        C("estimate", "--mismatch", "inf", needle="mismatch: expected a finite number"),
+        C("estimate", "--params", "", needle="parameter file: empty file name"),
+        C("estimate", "--params", "{latin1_toml}", needle="not UTF-8 text"),
+        C("estimate", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
+        C("estimate", "--model", "hand", needle="--model: the estimation scenario is defined for one finger"),
+        C("estimate", "--seed", "-1", needle="--seed: expected an integer >= 0, got -1"),
+        C("estimate", "--spring", "report", needle="spring: the scenario's torque profile"),
+    ],
+}
+
+CLI_ROWS = [(cmd, row) for cmd, rows in CLI.items() for row in rows]
+
+
+def test_every_command_has_rows():
+    sub = next(a for a in cli.build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    assert set(sub.choices) <= set(CLI), f"commands without bad-input rows: {set(sub.choices) - set(CLI)}"
+
+
+def _files_under(*dirs: Path) -> set[str]:
+    return {str(p) for d in dirs for p in d.rglob("*")}
+
+
+def _one_stderr_line(code: int, out: str, err: str, needle: str) -> None:
+    assert code == 2, (code, err)
+    assert out == ""
+    assert err.endswith("\n") and err.count("\n") == 1, f"expected one stderr line, got {err!r}"
+    assert needle in err, err
+    assert "Traceback" not in err and "Warning" not in err
+
+
+@pytest.mark.parametrize("cmd,row", CLI_ROWS, ids=[f"{c}:{' '.join(r.argv) or '-'}" for c, r in CLI_ROWS])
+def test_cli_bad_input(cmd, row, tmp_path, monkeypatch, capfd):
+    work = tmp_path / "work"
+    work.mkdir()
+    paths = bad_files(tmp_path)
+    argv = [a.format(**paths) for a in row.argv]
+    needle = row.needle.format(**paths)
+    monkeypatch.chdir(work)
+    before = _files_under(tmp_path)
+    if row.fsize is None:
+        code = cli.main(argv)
+        out, err = capfd.readouterr()
+    else:
+        def limit() -> None:
+            resource.setrlimit(resource.RLIMIT_FSIZE, (row.fsize, row.fsize))
+
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), PYTHONDONTWRITEBYTECODE="1")
+        r = subprocess.run([sys.executable, "-m", "alpes_dyn.cli", *argv], capture_output=True, text=True,
+                           preexec_fn=limit, env=env, timeout=120)
+        code, out, err = r.returncode, r.stdout, r.stderr
+    _one_stderr_line(code, out, err, needle)
+    assert _files_under(tmp_path) == before, "a file was left behind"
+
+
+def test_version(capsys):
+    with pytest.raises(SystemExit) as e:
+        cli.main(["--version"])
+    assert e.value.code == 0
+    assert capsys.readouterr().out.strip() == f"alpes-dyn {ad.__version__}"
+
+
+def test_cli_warning_becomes_one_line(capfd, monkeypatch):
+    """A numpy warning and native stderr text during a failing command end up in its one error line."""
+    import warnings
+
+    def noisy(args):
+        os.write(2, b"Error:   something native\n   at line 1\n")
+        warnings.warn("overflow encountered in multiply", RuntimeWarning)
+        raise InputError("q: bad")
+
+    parser = cli.build_parser
+
+    def build():
+        p = parser()
+        sub = next(a for a in p._actions if isinstance(a, argparse._SubParsersAction))
+        sub.choices["dynamics"].set_defaults(func=noisy)
+        return p
+
+    monkeypatch.setattr(cli, "build_parser", build)
+    code = cli.main(["dynamics"])
+    out, err = capfd.readouterr()
+    assert code == 2 and out == "" and err.count("\n") == 1
+    assert err == "alpes-dyn: error: q: bad [RuntimeWarning: overflow encountered in multiply (+2 more)]\n"
+
+
+# ----------------------------------------------------------------------------- API
+@dataclass(frozen=True)
+class Api:
+    """One bad call: the public name it exercises, the call (given the fixture namespace), the error."""
+
+    api: str
+    call: Callable[[Any], Any]
+    error: type[AlpesDynError]
+    needle: str
+
+
+def A(api: str, call: Callable[[Any], Any], error: type[AlpesDynError], needle: str) -> Api:
+    return Api(api, call, error, needle)
+
+
+class Ctx:
+    """What the API rows work on: finger3, its state space, the broken files."""
+
+    def __init__(self, d: Path) -> None:
+        from alpes_dyn.statespace import StateSpace
+
+        self.d = d
+        self.f = bad_files(d)
+        self.m = ad.Model.alpes("finger3")
+        self.ss = StateSpace(self.m, input="motor", output="encoder")
+        self.z = np.zeros(3)
+
+
+def _ekf(c, **kw):
+    from alpes_dyn.observers import ExtendedKalmanFilter
+
+    return ExtendedKalmanFilter(c.ss, 1e-3, **{"process_noise": 1e-9, "measurement_noise": 1e-7, **kw})
+
+
+def _ukf(c, **kw):
+    from alpes_dyn.observers import UnscentedKalmanFilter
+
+    return UnscentedKalmanFilter(c.ss, 1e-3, process_noise=1e-9, measurement_noise=1e-7, **kw)
+
+
+def _sim(c, **kw):
+    from alpes_dyn.simulation import simulate
+
+    return simulate(c.m, np.zeros(6), **{"duration": 0.01, "dt": 1e-3, **kw})
+
+
+def _est(**kw):
+    from alpes_dyn.scenario import run_estimation
+
+    return run_estimation("ekf", **kw)
+
+
+def _rollout(c, **kw):
+    from alpes_dyn.simulation import compile_rollout
+
+    return compile_rollout(c.m, **{"dt": 1e-3, **kw})
+
+
+API: list[Api] = [
+    # Model construction and files
+    A("Model", lambda c: ad.Model(FINGER3, gravity="abc"), ModelError, "gravity: expected 3 finite numbers"),
+    A("Model", lambda c: ad.Model(FINGER3, gravity=[0.0, -9.81]), ModelError, "gravity: expected 3 finite numbers"),
+    A("Model", lambda c: ad.Model(FINGER3, gravity=[0, 0, 1j]), ModelError, "gravity: complex values"),
+    A("Model", lambda c: ad.Model(123), ModelError, "urdf: expected URDF text"),
+    A("Model", lambda c: ad.Model(URDFS["negmass_urdf"]), ModelError, "link 'p3': mass must be >= 0 kg"),
+    A("Model", lambda c: ad.Model(URDFS["massless_urdf"]), ModelError, "joint 'j3' moves no mass"),
+    A("Model", lambda c: ad.Model(URDFS["zero_mass_inertia_urdf"]), ModelError, "zero mass with a non-zero inertia"),
+    A("Model", lambda c: ad.Model(URDFS["triangle_urdf"], check_inertia="strict"), ModelError, "triangle inequality"),
+    A("Model", lambda c: ad.Model(URDFS["triangle_urdf"], check_inertia="loose"), ModelError,
+      "check_inertia: unknown mode 'loose'"),
+    A("Model", lambda c: ad.Model(URDFS["indefinite_urdf"], check_inertia="relaxed"), ModelError,
+      "not positive semidefinite"),
+    A("Model", lambda c: ad.Model(URDFS["no_limits_urdf"]), ModelError, "does not specify limits"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["binary_urdf"]), ModelError, "not UTF-8 text"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["latin1_urdf"]), ModelError, "not UTF-8 text (byte 0xe9"),
+    A("Model", lambda c: ad.Model.from_urdf_file(""), ModelError, "URDF file: empty file name"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["dir"]), ModelError, "is a directory"),
+    A("Model", lambda c: ad.Model.from_urdf_file(None), ModelError, "expected a file path"),
+    A("Model", lambda c: ad.Model.alpes("finger4"), ModelError, "unknown model 'finger4'"),
+    A("Model", lambda c: ad.Model.alpes("finger3", spring="linear"), ModelError, "unknown spring model"),
+    A("Model", lambda c: ad.Model.alpes("finger3", params=c.f["binary_toml"]), ModelError, "not UTF-8 text"),
+    A("Model", lambda c: ad.Model.alpes("finger3", params=""), ModelError, "parameter file: empty file name"),
+    # Model evaluation
+    A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F="abc"), InputError, "F: expected F_z or 3 numbers"),
+    A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F=[0, 0, np.nan]), InputError, "F: contains NaN"),
+    A("Model", lambda c: c.m.forward_dynamics(np.array([0.1 + 1j, 0, 0]), c.z, c.z), InputError,
+      "q: complex values are not supported"),
+    A("Model", lambda c: c.m.inertia_matrix([0.1j, 0, 0]), InputError, "q: complex values are not supported"),
+    A("Model", lambda c: c.m.inverse_dynamics(c.z, c.z, "abc"), InputError, "a: expected 3 numbers"),
+    A("Model", lambda c: c.m.gravity_torque(np.zeros(4)), InputError, r"q: expected shape (3,), got (4,)"),
+    A("Model", lambda c: c.m.fingertip_jacobian(c.z, "nail"), ModelError, "unknown tip/frame 'nail'"),
+    A("Model", lambda c: c.m.random_state("abc"), InputError, "rng: expected a numpy Generator"),
+    A("Model", lambda c: c.m.random_state(-1), InputError, "rng: expected a numpy Generator"),
+    A("Model", lambda c: c.m.random_state(0, speed=-1.0), InputError, "speed: expected a finite number >= 0"),
+    A("Model", lambda c: c.m.random_state(0, size=-2), InputError, "size: expected an integer >= 0"),
+    # JointExtras
+    A("JointExtras", lambda c: ad.JointExtras(-np.ones(3), c.z, c.z, c.z), ModelError,
+      "extras.stiffness: must be >= 0 (got -1 at index 0)"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, c.z, c.z, np.array([0, -0.1, 0])), ModelError,
+      "extras.viscous: must be >= 0 (got -0.1 at index 1)"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, c.z, np.array([0, np.nan, 0]), c.z), ModelError,
+      "extras.coulomb: contains NaN"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, -c.z - 1, c.z, c.z), ModelError, "extras.armature: must be >= 0"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, np.zeros(2), c.z, c.z), ModelError,
+      "extras.armature: expected shape (3,)"),
+    A("JointExtras", lambda c: ad.JointExtras(np.zeros((3, 1)), c.z, c.z, c.z), ModelError,
+      "extras.stiffness: expected a 1-D array"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z + 1j, c.z, c.z, c.z), ModelError, "extras.stiffness: expected a 1-D"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, c.z, c.z, c.z, smooth_velocity=0.0), ModelError,
+      "extras.smooth_velocity: expected a finite number > 0"),
+    A("JointExtras", lambda c: ad.Model(FINGER3, extras=ad.JointExtras.zeros(2)), ModelError,
+      "extras.stiffness: expected shape (3,)"),
+    # parameter files and URDF generation
+    A("load_params", lambda c: ad.load_params(c.f["binary_toml"]), ModelError, "not UTF-8 text (byte 0x80"),
+    A("load_params", lambda c: ad.load_params(c.f["latin1_toml"]), ModelError, "not UTF-8 text (byte 0xe9"),
+    A("load_params", lambda c: ad.load_params(""), ModelError, "parameter file: empty file name"),
+    A("load_params", lambda c: ad.load_params(c.f["dir"]), ModelError, "is a directory"),
+    A("load_params", lambda c: ad.load_params(c.f["negative_k_toml"]), ModelError, "finger.K: value must be >= 0"),
+    A("urdf_string", lambda c: ad.urdf_string("palm"), ModelError, "unknown model 'palm'"),
+    A("layout", lambda c: ad.layout("palm"), ModelError, "unknown model 'palm'"),
+    A("write_urdfs", lambda c: ad.write_urdfs(c.f["file"]), InputError, "exists and is not a folder"),
+    A("write_urdfs", lambda c: ad.write_urdfs(""), InputError, "directory: expected a folder path"),
+    A("write_urdfs", lambda c: ad.write_urdfs(c.d / "w", params=c.f["dir"]), ModelError, "is a directory"),
+    A("urdf_string", lambda c: ad.urdf_string("finger3", params=42), ModelError, "expected a file path, got int"),
+    A("example_robot_urdf", lambda c: ad.example_robot_urdf("r2d2"), ModelError,
+      "unknown example-robot-data robot 'r2d2'"),
+    A("Transmission", lambda c: c.m.transmission.motor_positions("abc"), InputError, "q: expected joint angles"),
+    A("Transmission", lambda c: c.m.transmission.joint_torque([1j]), InputError, "tau_m: complex values"),
+    A("Transmission", lambda c: c.m.transmission.quantize("x"), InputError, "q_m: expected motor angles"),
+    # state space, observability
+    A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
+      "output function: returned str 'abc'"),
+    A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: 1 / 0), ModelError,
+      "output function failed on a CasADi symbol: division by zero"),
+    A("StateSpace", lambda c: ad.StateSpace(c.m, output=np.array([[1.0, np.nan, 0.0]])), ModelError,
+      "output matrix: contains NaN or inf"),
+    A("StateSpace", lambda c: ad.StateSpace(c.m, output=np.array([["a", "b", "c"]], dtype=object)), ModelError,
+      "output: expected a preset name, a matrix or a callable"),
+    A("StateSpace", lambda c: ad.StateSpace(c.m, input="tendon"), ModelError, "unknown input 'tendon'"),
+    A("observability", lambda c: ad.observability("finger3", seed=-1), InputError, "seed: expected an integer >= 0"),
+    A("check_observability", lambda c: ad.check_observability("finger3", seed=-1), InputError,
+      "seed: expected an integer >= 0"),
+    A("check_observability", lambda c: ad.check_observability("finger3", max_operations=0), InputError,
+      "max_operations"),
+    A("observability", lambda c: ad.observability("finger3", points=10_001), InputError, "points: at most 10000"),
+    A("observability", lambda c: ad.observability("finger3", points=0), InputError, "points: expected a positive"),
+    A("observability", lambda c: ad.observability("finger3", seed=1.5), InputError, "seed: expected an integer"),
+    # simulation and compiled rollouts
+    A("simulate", lambda c: _sim(c, duration=1e12), InputError, "duration: 1000000000000000 steps of 6 states"),
+    A("simulate", lambda c: _sim(c, dt=0.0), InputError, "dt: expected a positive finite number"),
+    A("simulate", lambda c: _sim(c, dt="abc"), InputError, "dt: expected a positive number"),
+    A("simulate", lambda c: _sim(c, method="euler"), InputError, "method: unknown integration method 'euler'"),
+    A("simulate", lambda c: _sim(c, inputs=lambda t: "abc"), InputError, "inputs: the callable must return 3"),
+    A("compile_rollout", lambda c: _rollout(c, threads="a"), InputError, "threads: expected an integer from 1 to 64"),
+    A("compile_rollout", lambda c: _rollout(c, threads=0), InputError, "threads: expected an integer from 1 to 64"),
+    A("compile_rollout", lambda c: _rollout(c, dt=float("nan")), InputError, "dt: expected a positive finite"),
+    A("compile_rollout", lambda c: _rollout(c).rollout(np.zeros(6), np.broadcast_to(0.0, (1, 10**9, 3))), InputError,
+      "U_batch: 1 trajectories of 1000000000 steps would take about"),
+    # observers and the estimation scenario
+    A("UnscentedKalmanFilter", lambda c: _ukf(c, kappa=-6), InputError, "kappa: alpha^2 (nz + kappa) must be > 0"),
+    A("UnscentedKalmanFilter", lambda c: _ukf(c, beta=float("nan")), InputError, "beta: expected a finite number"),
+    A("UnscentedKalmanFilter", lambda c: _ukf(c, alpha="x"), InputError, "alpha: expected a finite number"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c, process_noise=[np.nan] * 6), InputError,
+      "process_noise: contains NaN or inf"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c, measurement_noise=-1.0), InputError,
+      "measurement_noise: covariance must be positive semidefinite"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), np.ones(6), np.zeros((10**9, 1)), np.zeros((1, 1))),
+      InputError, "W: 1000000000 samples of 6 states and their covariance would take about"),
+    A("run_estimation", lambda c: _est(dt=0), InputError, "dt: expected a positive number of seconds, got 0"),
+    A("run_estimation", lambda c: _est(dt=float("nan")), InputError, "dt: expected a finite number, got nan"),
+    A("run_estimation", lambda c: _est(duration=1e12), InputError, "duration: 1e+12 s at dt = 0.001 s"),
+    A("run_estimation", lambda c: _est(duration=0.001), InputError, "shorter than two samples"),
+    A("run_estimation", lambda c: _est(duration="5"), InputError, "duration: expected a number, got '5'"),
+    A("run_estimation", lambda c: _est(seed=-1), InputError, "seed: expected an integer >= 0, got -1"),
+    A("run_estimation", lambda c: _est(substeps="a"), InputError, "substeps: expected an integer >= 1"),
+    A("run_estimation", lambda c: _est(params=""), ModelError, "parameter file: empty file name"),
+    A("run_estimation", lambda c: _est(params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
+    A("run_estimation", lambda c: _est(model="hand"), InputError, "model: the estimation scenario"),
+    A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
+    A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
+]
+
+
+def _plot_path(p):
+    from alpes_dyn.scenario import check_plot_path
+
+    return check_plot_path(p)
+
+
+# Public names that take no user input of their own (records returned by the library, constants, errors)
+NOT_CALLED = {"AlpesDynError", "InputError", "ModelError", "RecordingError", "HandParams", "ObservabilityReport", "MODELS",
+              "SPRING_MODELS"}
+
+
+def test_every_public_api_has_rows():
+    public = set(ad.__all__) - NOT_CALLED
+    covered = {row.api for row in API}
+    assert public <= covered, f"public names without bad-input rows: {sorted(public - covered)}"
+
+
+@pytest.fixture(scope="module")
+def ctx(tmp_path_factory):
+    return Ctx(tmp_path_factory.mktemp("bad_api"))
+
+
+@pytest.mark.parametrize("row", API, ids=[f"{r.api}:{i}" for i, r in enumerate(API)])
+def test_api_bad_input(ctx, row):
+    before = _files_under(ctx.d)
+    with pytest.raises(row.error) as e:
+        row.call(ctx)
+    assert isinstance(e.value, AlpesDynError)
+    msg = str(e.value)
+    assert "\n" not in msg and msg.strip() == msg and msg
+    assert row.needle.format(**ctx.f) in msg, msg
+    assert _files_under(ctx.d) == before, "a file was left behind"

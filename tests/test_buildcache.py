@@ -1,0 +1,143 @@
+"""The compiled-library cache heals itself: broken libraries are never loaded but rebuilt, killed builds
+are cleaned up, concurrent processes compile once (alpes_dyn.buildcache)."""
+
+from __future__ import annotations
+
+import ctypes
+import fcntl
+import os
+import shutil
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import casadi as cs
+import numpy as np
+import pytest
+
+from alpes_dyn.buildcache import CompilerError, build_library, verify_library
+from alpes_dyn.simulation import CompiledStepLoop, _CFLAGS, _compiler
+
+SOURCE = "int alpes_answer(void) { return 42; }\n"
+
+
+def build(d: Path, source: str = SOURCE, cc: str | None = None):
+    return build_library(source, "answer", cc or _compiler(), _CFLAGS, d)
+
+
+def answer(lib: ctypes.CDLL) -> int:
+    return int(lib.alpes_answer())
+
+
+def entries(d: Path) -> set[str]:
+    return {p.name for p in d.iterdir()}
+
+
+def test_built_once_then_loaded_verified(tmp_path):
+    path, compiled, seconds, lib = build(tmp_path)
+    assert compiled and seconds > 0 and answer(lib) == 42
+    assert verify_library(path)
+    assert entries(tmp_path) == {path.name, path.name + ".sha256", path.stem + ".lock"}
+    path2, compiled2, seconds2, lib2 = build(tmp_path)
+    assert (path2, compiled2, seconds2) == (path, False, 0.0) and answer(lib2) == 42
+
+
+def built_elsewhere(tmp_path: Path, source: str = SOURCE) -> tuple[Path, Path]:
+    """A library built (and loaded) in cache ``a``, then the cache copied to ``b``: this process has never
+    loaded ``b``'s files (the dynamic loader would hand back a library it already has by path or inode)."""
+    a, b = tmp_path / "a", tmp_path / "b"
+    path = build(a, source)[0]
+    shutil.copytree(a, b)
+    return b, b / path.name
+
+
+@pytest.mark.parametrize("damage", ["truncate", "flip", "no_record", "empty"])
+def test_broken_library_is_rebuilt_not_loaded(tmp_path, damage):
+    d, path = built_elsewhere(tmp_path, SOURCE + f"/* {damage} */\n")
+    data = bytearray(path.read_bytes())
+    if damage == "truncate":  # a full disk or a killed copy: loading it would be a bus error
+        os.truncate(path, 1000)
+    elif damage == "flip":  # loading it could be a segmentation fault
+        data[len(data) // 2] ^= 0xFF
+        path.write_bytes(bytes(data))
+    elif damage == "no_record":
+        (d / (path.name + ".sha256")).unlink()
+    else:
+        os.truncate(path, 0)
+    assert not verify_library(path)
+    path2, compiled, _, lib = build(d, SOURCE + f"/* {damage} */\n")
+    assert path2 == path and compiled and verify_library(path) and answer(lib) == 42
+
+
+def test_truncated_rollout_library_is_rebuilt(tmp_path, monkeypatch):
+    """The issue's case: a cached step library truncated on disk, then a construction needing it."""
+    x, w = cs.SX.sym("x", 2), cs.SX.sym("w", 1)
+    step = cs.Function("f", [x, w], [cs.vertcat(x[0] + 0.5 * x[1], x[1] + w[0])])
+    monkeypatch.setenv("ALPES_DYN_CACHE", str(tmp_path / "a"))
+    first = CompiledStepLoop(step, "trunc", threads=1)
+    shutil.copytree(tmp_path / "a", tmp_path / "b")
+    monkeypatch.setenv("ALPES_DYN_CACHE", str(tmp_path / "b"))
+    os.truncate(tmp_path / "b" / first.library.name, 1000)
+    again = CompiledStepLoop(step, "trunc", threads=1)
+    assert again.compiled and again.library == tmp_path / "b" / first.library.name
+    X = again.run(np.array([[1.0, 2.0]]), np.ones((1, 3, 1)))
+    assert X[0].tolist() == [[1.0, 2.0], [2.0, 3.0], [3.5, 4.0], [5.5, 5.0]]
+
+
+def test_killed_builds_are_cleaned(tmp_path):
+    path, _, _, _ = build(tmp_path)
+    name = path.stem
+    own = tmp_path / f".build@{name}@killed1"  # a build of this library killed by kill -9
+    other = tmp_path / ".build@other_0123@killed2"  # another library's, its lock free: also dead
+    busy = tmp_path / ".build@busy_4567@running"  # another library being built right now: kept
+    legacy_old, legacy_new = tmp_path / "tmpold", tmp_path / "tmpnew"  # folders of versions before the lock
+    for d in (own, other, busy, legacy_old, legacy_new):
+        d.mkdir()
+        (d / "x.c").write_text("int x;\n")
+    old = time.time() - 2 * 3600
+    os.utime(legacy_old, (old, old))
+    (tmp_path / (path.name + ".sha256")).unlink()  # force a build (the cleaning runs under the build lock)
+    fd = os.open(tmp_path / "busy_4567.lock", os.O_RDWR | os.O_CREAT)
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX)
+        assert build(tmp_path)[1]
+    finally:
+        os.close(fd)
+    left = entries(tmp_path)
+    assert not {own.name, other.name, legacy_old.name} & left
+    assert {busy.name, legacy_new.name} <= left
+
+
+def test_compile_error_is_one_line_and_leaves_nothing(tmp_path):
+    with pytest.raises(CompilerError) as e:
+        build(tmp_path, "int broken( {\n")
+    msg = str(e.value)
+    assert "\n" not in msg and msg.startswith("compiling answer.c failed:")
+    assert not any(n.endswith(".so") or n.startswith(".build@") for n in entries(tmp_path))
+
+
+def test_unwritable_cache_is_a_compiler_error(tmp_path):
+    (tmp_path / "file").write_text("x")
+    with pytest.raises(CompilerError, match="cache directory .* cannot be created"):
+        build(tmp_path / "file" / "cache")
+
+
+def test_concurrent_processes_compile_once(tmp_path):
+    """Three processes need the same library at once: one compiles (slowly), the others wait and load it."""
+    cc = tmp_path / "slow-cc"
+    cc.write_text(f"#!/bin/sh\nsleep 1\nexec {shutil.which(_compiler())} \"$@\"\n")
+    cc.chmod(0o755)
+    cache = tmp_path / "cache"
+    code = ("import sys; from pathlib import Path; from alpes_dyn.buildcache import build_library; "
+            "from alpes_dyn.simulation import _CFLAGS; "
+            f"p, c, s, lib = build_library({SOURCE!r}, 'answer', {str(cc)!r}, _CFLAGS, Path({str(cache)!r})); "
+            "print(int(c), lib.alpes_answer())")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))
+    procs = [subprocess.Popen([sys.executable, "-c", code], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                              env=env) for _ in range(3)]
+    outs = [p.communicate(timeout=120) for p in procs]
+    assert all(p.returncode == 0 for p in procs), outs
+    results = sorted(o.split() for o, _ in outs)
+    assert results == [["0", "42"], ["0", "42"], ["1", "42"]]
+    assert not any(n.startswith(".build@") for n in entries(cache))
