@@ -111,6 +111,24 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- mjcf (issue 9)
+def cmd_mjcf(args: argparse.Namespace) -> int:
+    from .mjcf import mjcf_string
+    from .params import load_params
+
+    text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
+                       rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
+                       scene=args.scene, palm_down=args.palm_down)
+    if args.output:
+        try:
+            Path(args.output).write_text(text)
+        except OSError as exc:
+            raise InputError(f"-o: cannot write {args.output!r} ({exc.strerror or exc})") from None
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
 # ----------------------------------------------------------------------------- dynamics
 def cmd_dynamics(args: argparse.Namespace) -> int:
     m = _model_from_args(args)
@@ -312,6 +330,22 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.set_defaults(func=cmd_urdf)
+
+    s = sub.add_parser("mjcf", help="print or write the MuJoCo model (MJCF) of a model: springs, stops, tendons, "
+                       "motors, sensors", epilog="Example: alpes-dyn mjcf finger3 --scene block -o finger3.xml")
+    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--scene", default="none", choices=("none", "block", "cylinder"),
+                   help="add a fixed block on a finger's pad (finger2, finger3) or a cylinder in the hand")
+    s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
+                   help="spring model (default %(default)s)")
+    s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
+    s.add_argument("--rotor-inertia", action="store_true", help="joint armature N^2 J_m (eq. 2.8)")
+    s.add_argument("--no-limits", action="store_true", help="no joint stops")
+    s.add_argument("--no-contact", action="store_true", help="collisions disabled")
+    s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
+    s.set_defaults(func=cmd_mjcf)
 
     s = sub.add_parser("dynamics", help="A, C, G, J and forward dynamics at one state",
                        epilog="Example: alpes-dyn dynamics --model finger3 --q=-0.1,0.2,0.3 --v=0,0,0 --tau=0.01,0,0")
