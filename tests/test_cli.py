@@ -96,3 +96,12 @@ def test_estimate_help_lists_every_observer(capsys):
     assert e.value.code == 0
     for name in OBSERVERS:
         assert name in out
+
+
+def test_dynamics_flags_q_outside_limits(capsys):
+    code, out, _ = run(capsys, "dynamics", "--q=-0.1,0.2,1.7", "--json")
+    assert code == 0 and json.loads(out)["outside_limits"] == ["j1", "j3"]
+    code, out, _ = run(capsys, "dynamics", "--q=0.1,0.2,0.3")
+    assert code == 0 and "outside the joint limits" not in out
+    code, out, _ = run(capsys, "dynamics", "--q=0.1,0.2,1.7")
+    assert "WARNING: q outside the joint limits at j3" in out

@@ -153,6 +153,8 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
     obj = {"model": m.name, "q": q.tolist(), "v": v.tolist(), "tau": tau.tolist(), "A": A.tolist(),
            "C": C.tolist(), "G": G.tolist(), "J": J.tolist(), "qdd": qdd.tolist(), "tip": tip,
            "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist()}
+    outside = [j for j, x, lo, hi in zip(m.joint_names, q, m.lower, m.upper) if x < lo or x > hi]
+    obj["outside_limits"] = outside  # joints whose q is outside the URDF limits (no stop in eq. 2.10)
     text = "\n".join([
         f"model {m.name} ({n} joints: {', '.join(m.joint_names)}), spring model {m.spring}",
         f"q   [rad]      {np.array2string(q, precision=6)}",
@@ -164,7 +166,8 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         "G(q) = gravity + springs [N m]:", _fmt_matrix(G),
         f"J(q) fingertip {tip} [m]:", _fmt_matrix(J),
         "qdd [rad/s^2]:", _fmt_matrix(qdd),
-    ])
+    ] + ([f"WARNING: q outside the joint limits at {', '.join(outside)} (the model has no joint stop: "
+          "these terms hold as if the joints could go there)"] if outside else []))
     _emit(obj, text, args.json)
     return 0
 
