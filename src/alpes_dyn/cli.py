@@ -314,6 +314,72 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- control (issue 9)
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
+_positive_seconds.__name__ = "seconds"
+
+
+def cmd_control(args: argparse.Namespace) -> int:
+    """Closed loop on MuJoCo: a finger presses a block with the force asked for."""
+    from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
+
+    if args.model not in CONTROL_MODELS:
+        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}), "
+                         f"got {args.model!r}")
+    if args.controller not in CONTROLLERS:
+        raise InputError(f"--controller: unknown controller {args.controller!r} (expected one of {', '.join(CONTROLLERS)})")
+    if args.reference not in REFERENCES:
+        raise InputError(f"--reference: unknown reference {args.reference!r} (expected one of {', '.join(REFERENCES)})")
+    if args.plot:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
+    for opt, path in (("--log", args.log), ("--plot", args.plot)):
+        if path and not Path(path).resolve().parent.is_dir():
+            raise InputError(f"{opt}: cannot write {path!r} (no such directory)")
+    res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
+                      seed=args.seed, params=args.params, plant_params=args.plant_params)
+    if args.log:
+        res.to_csv(args.log)
+    if args.plot:
+        plot_control(res, args.plot)
+    obj = res.to_dict()
+    for k, v in (("log", args.log), ("plot", args.plot)):
+        if v:
+            obj[k] = v
+
+    def f(x: Any, fmt: str) -> str:
+        return "n/a" if x is None else format(x, fmt)
+
+    lines = [
+        f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
+        f"({args.duration:g} s, seed {args.seed})",
+        f"  force RMSE {res.force_rmse:.4f} N; steady-state error {f(res.steady_state_error, '.2%')}; "
+        f"overshoot {f(res.overshoot, '.1%')}; 10-90 % rise {f(res.rise_time_s, '.3f')} s",
+        "  joints observed during contact, RMSE [deg]: "
+        + ("n/a (no observer)" if res.q_rmse_deg is None else
+           "  ".join(f"{j} {e:.2f}" for j, e in zip(res.joint_names, res.q_rmse_deg))),
+        f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
+        f"loop {res.realtime_ratio:.1f}x faster than real time",
+    ]
+    if args.log:
+        lines.append(f"  log: {args.log}")
+    if args.plot:
+        lines.append(f"  figure: {args.plot}")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
 # ----------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="alpes-dyn", description=__doc__.splitlines()[0],
@@ -396,6 +462,26 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints")
     s.set_defaults(func=cmd_estimate)
+
+    s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
+                       epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
+                              "--plot control.png")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--controller", default="sensor",
+                   help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
+                        "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
+    s.add_argument("--reference", default="step",
+                   help="step (0.2, 1.0, 0.5 N), ramp (0.2 to 1.0 N in 1 s), sine (0.3-0.8 N at 1 Hz) "
+                        "(default %(default)s)")
+    s.add_argument("--params", default=None, metavar="FILE", help="the controller's parameter file (default: shipped)")
+    s.add_argument("--plant-params", default=None, metavar="FILE",
+                   help="the plant's parameter file (default: the controller's)")
+    s.add_argument("--duration", type=_positive_seconds, default=3.0, help="simulated time, s (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
+    s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_control)
     return p
 
 

@@ -24,9 +24,10 @@ bodies, joints, frames, COMs and inertias about the COM) plus what URDF cannot h
   (hand only), contacts between the palm and the proximal phalanges excluded;
 * a ``site`` at every tip frame (named as the URDF frame), for checks and rendering.
 
-Scenes (``scene=``): ``"block"`` (finger2/finger3) adds a fixed, frictionless box whose face is
-tangent to the fingertip pad at the configuration ``contact_q`` (the block pushes the pad along the
-face's normal n: F = -F_z n with F_z >= 0 the FlexiForce reading); ``"cylinder"`` (hand) adds a
+Scenes (``scene=``): ``"block"`` (finger2/finger3) adds a fixed, frictionless box whose face meets
+the fingertip at the configuration ``contact_q``, at an angle ``block_tilt`` to the distal phalanx
+(the block pushes the fingertip along the face's normal n, :func:`block_normal`: F = -F_z n with
+F_z >= 0 the FlexiForce reading); ``"cylinder"`` (hand) adds a
 fixed cylinder across the fingers, in front of the palm, that the hand can grasp. With the
 parameter file's gravity (palm up) the fingers lift their own weight; ``palm_down=True`` reverses
 it, the fingers then press down on the object, as in :mod:`alpes_dyn.control`.
@@ -50,11 +51,14 @@ from .extras import spring_stiffness
 from .params import ChainParams, HandParams, load_params
 
 __all__ = ["SCENES", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
+           "block_normal", "BLOCK_TILT",
            "BLOCK_CONTACT_Q", "CYLINDER"]
 
 SCENES: tuple[str, ...] = ("none", "block", "cylinder")
 #: Default configuration (rad) at which the block's lower face touches the fingertip pad.
 BLOCK_CONTACT_Q: tuple[float, ...] = (0.9, 0.5, 0.5)
+#: Angle (rad) between the distal phalanx at :data:`BLOCK_CONTACT_Q` and the block's face.
+BLOCK_TILT: float = 0.15
 #: The cylinder of the hand scene: centre (m, palm frame), radius (m), half-length (m); its axis is y.
 CYLINDER = {"center": (0.062, 0.0, 0.052), "radius": 0.022, "half_length": 0.05}
 
@@ -77,6 +81,14 @@ def palm_down_params(params: HandParams) -> HandParams:
     import dataclasses
 
     return dataclasses.replace(params, gravity=-np.asarray(params.gravity, dtype=float))
+
+
+def block_normal(contact_q: Sequence[float], tilt: float = BLOCK_TILT) -> np.ndarray:
+    """Unit normal n (3,) of the block scene's face, base frame, pointing from the fingertip into the block:
+    the pad's normal at ``contact_q`` turned back by ``tilt`` (rad) so that the fingertip's end, not
+    the side of the distal phalanx, meets the face. The block pushes the finger with F = -F_z n."""
+    b = float(np.sum(np.asarray(contact_q, dtype=float))) - float(tilt)
+    return np.array([-math.sin(b), 0.0, math.cos(b)])
 
 
 def contact_tip_position(chain: ChainParams, q: Sequence[float]) -> np.ndarray:
@@ -144,7 +156,7 @@ class _Writer:
 def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, spring: str = "torsional",
                 friction: bool = False, rotor_inertia: bool = False, limits: bool = True, contact: bool = True,
                 scene: str = "none", contact_q: Sequence[float] | None = None,
-                block_friction: float = 0.0, palm_down: bool = False, timestep: float = 2.5e-4) -> str:
+                block_friction: float = 0.0, block_tilt: float = BLOCK_TILT, palm_down: bool = False, timestep: float = 2.5e-4) -> str:
     """MJCF text of ``model`` (``finger2``, ``finger3`` or ``hand``) built from ``params``.
 
     Parameters
@@ -157,8 +169,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, sp
     contact: collisions (default on); ``False`` writes ``<flag contact="disable"/>``.
     scene: ``"none"``, ``"block"`` (finger2/finger3: a fixed block on the fingertip pad at
         ``contact_q``) or ``"cylinder"`` (hand: a fixed cylinder across the fingers, :data:`CYLINDER`).
-    contact_q: joint angles (rad) at which the block touches the pad (default :data:`BLOCK_CONTACT_Q`).
-        The block's face is tangent to the pad there (tilted with the distal phalanx).
+    contact_q: joint angles (rad) at which the block touches the fingertip (default :data:`BLOCK_CONTACT_Q`).
+    block_tilt: angle (rad) between the distal phalanx there and the block's face (:func:`block_normal`).
     block_friction: friction coefficient of the block (default 0: frictionless, ``condim="1"``, so the
         contact force is normal to the block, the report's no-sliding F = [0, 0, F_z] of eq. 2.13 in the
         block's frame).
@@ -215,12 +227,13 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, sp
             cq = np.asarray(BLOCK_CONTACT_Q[:n] if contact_q is None else contact_q, dtype=float)
             if cq.shape != (n,) or not np.isfinite(cq).all():
                 raise InputError(f"contact_q: expected {n} finite joint angles, got {np.asarray(contact_q).tolist()!r}")
-            x, z = contact_tip_position(f, cq)
-            a = float(np.sum(cq))  # orientation of the distal phalanx: its pad faces +z_local
-            ex, ez = np.array([math.cos(a), math.sin(a)]), np.array([-math.sin(a), math.cos(a)])
+            (x, z), nrm = contact_tip_position(f, cq), block_normal(cq, block_tilt)
+            fz = np.array([nrm[0], nrm[2]])  # the face's normal, from the finger into the block
+            fx = np.array([fz[1], -fz[0]])   # along the face, toward the fingertip's free end
             half = (0.035, 0.02, 0.01)
-            c = np.array([x, z]) + (f.radius + half[2]) * ez + 0.02 * ex
-            quat = (math.cos(a / 2), 0.0, -math.sin(a / 2), 0.0)
+            c = np.array([x, z]) + (f.radius + half[2]) * fz + 0.015 * fx
+            b = float(np.sum(cq)) - block_tilt
+            quat = (math.cos(b / 2), 0.0, -math.sin(b / 2), 0.0)
             body.append(f'    <geom name="block" type="box" pos="{_v((c[0], 0.0, c[1]))}" quat="{_v(quat)}" '
                         f'size="{_v(half)}" condim="{block_condim}" friction="{_f(block_friction)} 0.005 0.0001" '
                         'priority="1" rgba="0.4 0.6 0.8 1"/>\n')
