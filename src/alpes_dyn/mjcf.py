@@ -60,7 +60,7 @@ BLOCK_CONTACT_Q: tuple[float, ...] = (0.9, 0.5, 0.5)
 #: Angle (rad) between the distal phalanx at :data:`BLOCK_CONTACT_Q` and the block's face.
 BLOCK_TILT: float = 0.15
 #: The cylinder of the hand scene: centre (m, palm frame), radius (m), half-length (m); its axis is y.
-CYLINDER = {"center": (0.062, 0.0, 0.052), "radius": 0.022, "half_length": 0.05}
+CYLINDER = {"center": (0.07, 0.0, 0.07), "radius": 0.02, "half_length": 0.05}
 
 
 def _f(x: float) -> str:
