@@ -218,7 +218,8 @@ class ControlScenario:
     """Settings of the closed loop of :func:`run_control` (all SI units).
 
     The plant: MuJoCo stepping the MJCF of ``model`` with the ``"block"`` scene (a fixed, frictionless
-    block tangent to the fingertip pad at ``contact_q``), contact and joint stops on, joint friction on
+    block met by the fingertip at ``contact_q``, :func:`~alpes_dyn.mjcf.block_normal`), contact and joint
+    stops on, joint friction on
     (damping F_v, frictionloss F_s of the parameter file), the hand palm down (gravity reversed: the
     finger flexes with gravity toward the block under it), at ``dt / substeps``; its parameters are
     ``plant_params`` (default: the controller's). The controller's model is
@@ -231,7 +232,13 @@ class ControlScenario:
     (a 10-bit reading of a 4.4 N -- 1 lb -- FlexiForce A201: 4.3 mN).
 
     The reference (:func:`reference_profile`): ``levels`` (N) and a 1 Hz sine between ``sine[0]`` and
-    ``sine[1]``; metrics over the levels after ``settle`` s (see :class:`ControlResult`).
+    ``sine[1]``; metrics over the levels after ``settle`` s (see :class:`ControlResult`). The sensorless
+    loop low-passes its force estimate with ``force_filter_s``. ``gains`` override
+    :data:`DEFAULT_GAINS` (any :class:`ForceController` field). ``compiled``: the EKF step in compiled C
+    (cached; CasADi's virtual machine if no C compiler), the same numbers.
+
+    Initial state: the finger at rest on its springs (static equilibrium, motor off); the EKF starts
+    there too, with standard deviations 0.05 rad and 0.1 rad/s.
     """
 
     model: str = "finger3"
