@@ -365,7 +365,8 @@ def cmd_control(args: argparse.Namespace) -> int:
         f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
         f"({args.duration:g} s, seed {args.seed})",
         f"  force RMSE {res.force_rmse:.4f} N; steady-state error {f(res.steady_state_error, '.2%')}; "
-        f"overshoot {f(res.overshoot, '.1%')}; 10-90 % rise {f(res.rise_time_s, '.3f')} s",
+        f"overshoot {f(res.overshoot, '.1%')}; 10-90 % rise "
+        f"{'n/a' if res.rise_time_s is None else f'{res.rise_time_s:.3f} s'}",
         "  joints observed during contact, RMSE [deg]: "
         + ("n/a (no observer)" if res.q_rmse_deg is None else
            "  ".join(f"{j} {e:.2f}" for j, e in zip(res.joint_names, res.q_rmse_deg))),
