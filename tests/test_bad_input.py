@@ -96,6 +96,18 @@ def C(*argv: str, needle: str, fsize: int | None = None) -> Cli:
 
 
 CLI: dict[str, list[Cli]] = {
+    "mjcf": [
+        C("mjcf", "finger7", needle="unknown model 'finger7'"),
+        C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
+        C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: cannot write"),
+        C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
+    ],
+    "control": [
+        C("control", "--controller", "pid", needle="unknown controller 'pid'"),
+        C("control", "--reference", "square", needle="unknown reference 'square'"),
+        C("control", "--log", "/nonexistent/x.csv", needle="--log: directory '/nonexistent'"),
+        C("control", "--plot", "{tmp}/x.xyz", needle="--plot:"),
+    ],
     "linearize": [
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
         C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),

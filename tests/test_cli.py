@@ -120,3 +120,12 @@ def test_dynamics_text_labels_rows_and_columns(capsys):
     assert np.allclose([float(x) for x in row[1:]], A[m.joint_index("thumb_abd")], rtol=1e-6, atol=0)
     j = lines.index("J(q) fingertip index_tip, linear, base axes [m]:")
     assert [ln.split()[0] for ln in lines[j + 2: j + 5]] == ["x", "y", "z"]
+
+
+def test_dynamics_flags_q_outside_limits(capsys):
+    code, out, _ = run(capsys, "dynamics", "--q=-0.1,0.2,1.7", "--json")
+    assert code == 0 and json.loads(out)["outside_limits"] == ["j1", "j3"]
+    code, out, _ = run(capsys, "dynamics", "--q=0.1,0.2,0.3")
+    assert code == 0 and "outside the joint limits" not in out
+    code, out, _ = run(capsys, "dynamics", "--q=0.1,0.2,1.7")
+    assert "WARNING: q outside the joint limits at j3" in out

@@ -238,3 +238,37 @@ def test_step_loop_simd_lanes_equal_scalar_code(cache):
     X = loop.run(np.array([[0.5, 2.0], [-1.0, 1.0]]), np.full((2, 3, 1), 0.5))
     assert np.allclose(X[0, :, 0], [0.5, 1.0, 1.5, 2.0]) and np.allclose(X[1, :, 0], [-1.0, 1.0, 1.5, 2.0])
     assert np.allclose(X[0, :, 1], [2.0, 1.0, 0.5, 0.25])
+
+
+def test_joint_range_warns_errs_and_stops_hold():
+    """0.02 N m on every hand motor for 1 s: without stops thumb_abd turns by > 100 rad and simulate warns
+    (or errs); with JointStops no joint goes more than 10 degrees past a stop, even on impact (stiffness 2 N m/rad)."""
+    from alpes_dyn.stops import JointRangeWarning, JointStops
+
+    m = ad.Model.alpes("hand")
+    x0 = np.zeros(2 * m.n)
+    with pytest.warns(JointRangeWarning, match=r"left its range .*worst: 'thumb_abd' 1\d\d rad outside"):
+        simulate(m, x0, 0.02, duration=1.0, dt=1e-3, input="motor")
+    with pytest.raises(InputError, match=r"joint '.*' left its range"):
+        simulate(m, x0, 0.02, duration=0.1, dt=1e-3, input="motor", joint_range="error")
+    r = simulate(m, x0, 0.02, duration=1.0, dt=1e-3, input="motor", stops=JointStops.of(m))
+    assert np.all(r.q >= m.lower - np.radians(10)) and np.all(r.q <= m.upper + np.radians(10))
+    # the stop holds thumb_abd against its motor: k * penetration = abduction_ratio * 0.02 N m (no spring)
+    k = list(m.joint_names).index("thumb_abd")
+    assert np.mean(r.q[-200:, k]) - m.upper[k] == pytest.approx(0.02 * m.params.abduction_ratio / 2.0, rel=0.05)
+    with pytest.raises(InputError, match="joint_range: expected one of warn, error, ignore"):
+        simulate(m, x0, 0.0, duration=0.01, dt=1e-3, input="motor", joint_range="clip")
+
+
+def test_stop_torque_numpy_equals_casadi():
+    import casadi as cs
+
+    from alpes_dyn.stops import JointStops
+
+    st = JointStops(np.zeros(3), np.full(3, 1.5), 2.0, 4e-3)
+    q, v = np.array([-0.1, 0.7, 1.6]), np.array([-0.5, 1.0, 2.0])
+    tn = st.torque(q, v)
+    assert np.allclose(tn, [2.0 * 0.1 + 4e-3 * 0.5, 0.0, -(2.0 * 0.1 + 4e-3 * 2.0)])
+    qs, vs = cs.SX.sym("q", 3), cs.SX.sym("v", 3)
+    f = cs.Function("f", [qs, vs], [st.torque(qs, vs, cs)])
+    assert np.allclose(np.array(f(q, v)).ravel(), tn, rtol=1e-15)

@@ -19,7 +19,7 @@ import numpy as np
 from . import __version__
 from .errors import AlpesDynError, InputError, ModelError
 from .observability import MAX_INSTRUCTIONS
-from .fileio import atomic_write, native_stderr_to
+from .fileio import atomic_write, check_output_path, native_stderr_to
 from .limits import MAX_POINTS
 
 VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
@@ -201,6 +201,21 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- mjcf (issue 9)
+def cmd_mjcf(args: argparse.Namespace) -> int:
+    from .mjcf import mjcf_string
+    from .params import load_params
+
+    text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
+                       rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
+                       scene=args.scene, palm_down=args.palm_down)
+    if args.output is not None:
+        atomic_write(args.output, text, "-o")
+    else:
+        sys.stdout.write(text)
+    return 0
+
+
 # ----------------------------------------------------------------------------- dynamics
 def cmd_dynamics(args: argparse.Namespace) -> int:
     m = _model_from_args(args)
@@ -237,6 +252,8 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
            "C": C.tolist(), "G": G.tolist(), "J": J.tolist(), "qdd": qdd.tolist(), "tip": tip,
            "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist(),
            "motors": list(m.motor_names), "tips": list(m.tip_names)}
+    outside = [j for j, x, lo, hi in zip(m.joint_names, q, m.lower, m.upper) if x < lo or x > hi]
+    obj["outside_limits"] = outside  # joints whose q is outside the URDF limits (no stop in eq. 2.10)
     joints = m.joint_names
     motor_lines: list[str] = []
     if m.transmission is not None:
@@ -257,7 +274,8 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         "C(q, v) [N m s]:", _fmt_table(C, joints, joints),
         f"J(q) fingertip {tip}, linear, base axes [m]:", _fmt_table(J, ("x", "y", "z"), joints),
         *motor_lines,
-    ])
+    ] + ([f"WARNING: q outside the joint limits at {', '.join(outside)} (the model has no joint stop: "
+          "these terms hold as if the joints could go there)"] if outside else []))
     _emit(obj, text, args.json)
     return 0
 
@@ -403,6 +421,73 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     return 0
 
 
+# ----------------------------------------------------------------------------- control (issue 9)
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
+_positive_seconds.__name__ = "seconds"
+
+
+def cmd_control(args: argparse.Namespace) -> int:
+    """Closed loop on MuJoCo: a finger presses a block with the force asked for."""
+    from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
+
+    if args.model not in CONTROL_MODELS:
+        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}), "
+                         f"got {args.model!r}")
+    if args.controller not in CONTROLLERS:
+        raise InputError(f"--controller: unknown controller {args.controller!r} (expected one of {', '.join(CONTROLLERS)})")
+    if args.reference not in REFERENCES:
+        raise InputError(f"--reference: unknown reference {args.reference!r} (expected one of {', '.join(REFERENCES)})")
+    if args.plot:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
+    for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
+        if path is not None:
+            check_output_path(path, opt, ext)
+    res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
+                      seed=args.seed, params=args.params, plant_params=args.plant_params)
+    if args.log:
+        res.to_csv(args.log)
+    if args.plot:
+        plot_control(res, args.plot)
+    obj = res.to_dict()
+    for k, v in (("log", args.log), ("plot", args.plot)):
+        if v:
+            obj[k] = v
+
+    def f(x: Any, fmt: str) -> str:
+        return "n/a" if x is None else format(x, fmt)
+
+    lines = [
+        f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
+        f"({args.duration:g} s, seed {args.seed})",
+        f"  force RMSE {res.force_rmse:.4f} N; steady-state error {f(res.steady_state_error, '.2%')}; "
+        f"overshoot {f(res.overshoot, '.1%')}; 10-90 % rise "
+        f"{'n/a' if res.rise_time_s is None else f'{res.rise_time_s:.3f} s'}",
+        "  joints observed during contact, RMSE [deg]: "
+        + ("n/a (no observer)" if res.q_rmse_deg is None else
+           "  ".join(f"{j} {e:.2f}" for j, e in zip(res.joint_names, res.q_rmse_deg))),
+        f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
+        f"loop {res.realtime_ratio:.1f}x faster than real time",
+    ]
+    if args.log:
+        lines.append(f"  log: {args.log}")
+    if args.plot:
+        lines.append(f"  figure: {args.plot}")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
 # ----------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="alpes-dyn", description=__doc__.splitlines()[0],
@@ -428,6 +513,22 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.set_defaults(func=cmd_urdf)
+
+    s = sub.add_parser("mjcf", help="print or write the MuJoCo model (MJCF) of a model: springs, stops, tendons, "
+                       "motors, sensors", epilog="Example: alpes-dyn mjcf finger3 --scene block -o finger3.xml")
+    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--scene", default="none", choices=("none", "block", "cylinder"),
+                   help="add a fixed block on a finger's pad (finger2, finger3) or a cylinder in the hand")
+    s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
+                   help="spring model (default %(default)s)")
+    s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
+    s.add_argument("--rotor-inertia", action="store_true", help="joint armature N^2 J_m (eq. 2.8)")
+    s.add_argument("--no-limits", action="store_true", help="no joint stops")
+    s.add_argument("--no-contact", action="store_true", help="collisions disabled")
+    s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
+    s.set_defaults(func=cmd_mjcf)
 
     s = sub.add_parser("dynamics", help="A, C, G, J and forward dynamics at one state",
                        epilog="Example: alpes-dyn dynamics --model finger3 --q=-0.1,0.2,0.3 --v=0,0,0 --tau=0.01,0,0")
@@ -491,6 +592,26 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints (format by "
                    "extension: .png, .pdf, .svg...)")
     s.set_defaults(func=cmd_estimate)
+
+    s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
+                       epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
+                              "--plot control.png")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--controller", default="sensor",
+                   help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
+                        "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
+    s.add_argument("--reference", default="step",
+                   help="step (0.2, 1.0, 0.5 N), ramp (0.2 to 1.0 N in 1 s), sine (0.3-0.8 N at 1 Hz) "
+                        "(default %(default)s)")
+    s.add_argument("--params", default=None, metavar="FILE", help="the controller's parameter file (default: shipped)")
+    s.add_argument("--plant-params", default=None, metavar="FILE",
+                   help="the plant's parameter file (default: the controller's)")
+    s.add_argument("--duration", type=_positive_seconds, default=3.0, help="simulated time, s (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
+    s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_control)
     return p
 
 

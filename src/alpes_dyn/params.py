@@ -45,7 +45,7 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     },
     "transmission": {
         "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
-        "N": (None, "pos"), "encoder_counts": (None, "pos"),
+        "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
     },
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
     "environment": {"gravity": (3, "any")},
@@ -120,6 +120,7 @@ class HandParams:
     N: float
     abduction_ratio: float
     encoder_counts: float
+    tau_max: float
     F_s: float
     F_v: float
     smooth_velocity: float
@@ -280,7 +281,7 @@ def _from_text(text: str, path: str) -> HandParams:
         thumb=_chain(raw, "thumb", v["thumb.K"]),
         r=v["finger.r"], b=v["finger.b"], r_m=v["transmission.r_m"], J_m=v["transmission.J_m"],
         N=v["transmission.N"], abduction_ratio=v["transmission.abduction_ratio"],
-        encoder_counts=v["transmission.encoder_counts"],
+        encoder_counts=v["transmission.encoder_counts"], tau_max=v["transmission.tau_max"],
         F_s=v["friction.F_s"], F_v=v["friction.F_v"], smooth_velocity=v["friction.smooth_velocity"],
         gravity=v["environment.gravity"], finger_lower=v["finger.lower"], finger_upper=v["finger.upper"],
         abduction_K=v["thumb.abduction_K"], thumb_base_mass=v["thumb.base_mass"], abduction_axis=v["thumb.abduction_axis"],

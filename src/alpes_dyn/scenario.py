@@ -252,7 +252,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
         -sc.q0_offset, sc.q0_offset, size=n)
     x0 = np.concatenate([q0, np.zeros(n)])
     sim = simulate(truth, x0, np.repeat(u_true, sc.substeps, axis=0), sc.duration, sc.dt / sc.substeps,
-                   "rk4", input="motor", output="encoder")
+                   "rk4", input="motor", output="encoder", joint_range="ignore")  # no stop, as documented above
     x_true = sim.x[:: sc.substeps]
     # sensors
     step = 2 * np.pi / truth.transmission.counts_per_rev

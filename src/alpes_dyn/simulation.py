@@ -47,6 +47,7 @@ from .errors import InputError, ModelError
 from .limits import check_bytes
 from .model import Model
 from .statespace import StateSpace
+from .stops import JointStops, check_range
 
 __all__ = [
     "METHODS", "SimulationResult", "simulate", "rk4_expression", "rk4_step_function", "as_statespace", "CompiledRollout",
@@ -95,12 +96,15 @@ def joint_accelerations(ss: StateSpace, q: cs.SX, v: cs.SX, tau: cs.SX, F: Any =
     return ss.sym.forward_dynamics(q, v, tau, F, ss.tip, ss.smooth)
 
 
-def _rhs_function(ss: StateSpace) -> cs.Function:
-    """f(x, w) = [qd; qdd] with w = [u; F] (F only when the state space has the contact force as input)."""
+def _rhs_function(ss: StateSpace, stops: JointStops | None = None) -> cs.Function:
+    """f(x, w) = [qd; qdd] with w = [u; F] (F only when the state space has the contact force as input);
+    ``stops`` adds the joint-stop torques (:mod:`alpes_dyn.stops`)."""
     w = cs.SX.sym("w", _n_known_inputs(ss))
     n = ss.n
     q, v = ss.x[:n], ss.x[n:]
     tau = cs.mtimes(cs.DM(ss.B), w[: ss.n_inputs])
+    if stops is not None:
+        tau = tau + stops.torque(q, v, cs)
     qdd = joint_accelerations(ss, q, v, tau, w[ss.n_inputs:] if ss.force else None)
     return cs.Function("f", [ss.x, w], [cs.vertcat(v, qdd)], ["x", "w"], ["xdot"])
 
@@ -114,13 +118,15 @@ def rk4_expression(f: cs.Function, x: cs.SX, w: cs.SX, dt: float) -> cs.SX:
     return x + (dt / 6.0) * (k1 + 2.0 * k2 + 2.0 * k3 + k4)
 
 
-def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step") -> cs.Function:
+def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
+                      stops: JointStops | None = None) -> cs.Function:
     """One classical Runge-Kutta step of x' = f(x, w) with w held constant: ``step(x, w) -> x_next``.
 
     Parameters
     ----------
     system: the state space; w = [u; F] has ``n_inputs`` (+3 with ``force=True``) entries.
     dt: step, s (> 0).
+    stops: joint stops added to the dynamics (default none, eq. 3.3 as it is).
 
     Returns
     -------
@@ -129,10 +135,11 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step") -> 
     """
     dt = _check_dt(dt)
     cache = system.__dict__.setdefault("_rk4_cache", {})
-    key = (float(dt), name)
+    key = (float(dt), name) if stops is None else (float(dt), name, tuple(stops.lower), tuple(stops.upper),
+                                                   stops.stiffness, stops.damping)
     if key in cache:
         return cache[key]
-    f = _rhs_function(system)
+    f = _rhs_function(system, stops)
     x = cs.SX.sym("x", system.n_states)
     w = cs.SX.sym("w", _n_known_inputs(system))
     xn = rk4_expression(f, x, w, dt)
@@ -270,7 +277,7 @@ class SimulationResult:
 def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, inputs: InputLike = None,
              duration: float = 1.0, dt: float = 1e-3, method: str = "rk4", *, force: InputLike = None,
              input: str = "joint", output: Any = "sum", smooth: bool = True, rtol: float = 1e-10,
-             atol: float = 1e-12) -> SimulationResult:
+             atol: float = 1e-12, stops: JointStops | None = None, joint_range: str = "warn") -> SimulationResult:
     """Simulate x' = f(x, u[, F]) (eq. 3.3) from ``x0`` over ``duration`` seconds.
 
     Parameters
@@ -294,6 +301,13 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
         an (N,) series or a callable returning F_z, or (3,), (N, 3), or a callable returning 3 values.
     input, output, smooth:
         Options of the state space built from a Model (ignored for a StateSpace).
+    stops:
+        Joint stops (:class:`~alpes_dyn.stops.JointStops`, e.g. ``JointStops.of(model)``): stiff
+        unilateral spring-dampers at the joint limits. Default ``None``: no stop, the report's model.
+    joint_range:
+        Without stops, what happens if a joint leaves its URDF range: ``"warn"`` (default, a
+        :class:`~alpes_dyn.stops.JointRangeWarning` naming the joint and the time), ``"error"``
+        (:class:`~alpes_dyn.InputError`) or ``"ignore"``.
 
     Returns
     -------
@@ -307,6 +321,9 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     """
     if method not in METHODS:
         raise InputError(f"method: unknown integration method {method!r} (expected one of {', '.join(METHODS)})")
+    if stops is not None and not isinstance(stops, JointStops):
+        raise InputError(f"stops: expected a JointStops or None, got {type(stops).__name__}")
+    check_range(np.zeros(1), np.zeros((1, 0)), np.zeros(0), np.zeros(0), (), joint_range)  # validates the mode
     ss = as_statespace(system, input, output, force is not None, smooth)
     if force is not None and not ss.force:
         raise InputError("force: this state space has no contact-force input (build it with force=True)")
@@ -322,21 +339,24 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     Fs = _sample_force(force, t[:-1], ss.n_force) if ss.force else None
     W = U if Fs is None else np.hstack([U, Fs])
     if method == "rk4":
-        step = rk4_step_function(ss, dt)
+        step = rk4_step_function(ss, dt, stops=stops)
         X = np.array(step.mapaccum("rk4_traj", N)(x0, W.T))
     else:
-        X = _integrate_sundials(ss, x0, W, t, method, rtol, atol)
+        X = _integrate_sundials(ss, x0, W, t, method, rtol, atol, stops)
     x = np.vstack([x0, X.T])
     if not np.isfinite(x).all():
         k = int(np.argmax(~np.isfinite(x).all(axis=1)))
         raise InputError(f"simulation diverged (non-finite state at t = {t[k]:g} s); reduce dt or the inputs")
+    if stops is None and joint_range != "ignore":
+        m = ss.model
+        check_range(t, x[:, : ss.n], m.lower, m.upper, m.joint_names, joint_range)
     y = np.array(ss.h_function.map(N + 1)(x[:, : 2 * ss.n].T)).T
     return SimulationResult(t=t, x=x, y=y, u=U, F=Fs, system=ss, method=method)
 
 
 def _integrate_sundials(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.ndarray, method: str,
-                        rtol: float, atol: float) -> np.ndarray:
-    f = _rhs_function(ss)
+                        rtol: float, atol: float, stops: JointStops | None = None) -> np.ndarray:
+    f = _rhs_function(ss, stops)
     w = cs.SX.sym("w", W.shape[1])
     dae = {"x": ss.x, "u": w, "ode": f(ss.x, w)}
     opts: dict[str, Any] = {"abstol": float(atol), "reltol": float(rtol), "max_num_steps": 1_000_000}

@@ -1,0 +1,119 @@
+"""Effort control: the static balance against MuJoCo, the controller's logic, and short closed loops.
+
+References: MuJoCo's touch sensor at a contact equilibrium (an independent contact solver); the
+closed loop's force measured by MuJoCo, not by the controller.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import sys
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.cli import main
+from alpes_dyn.control import (ForceController, reference_profile, run_control, static_contact_force,
+                               static_motor_torque)
+from alpes_dyn.mjcf import BLOCK_CONTACT_Q, block_normal, load_mujoco, mjcf_string, palm_down_params
+
+mujoco = pytest.importorskip("mujoco")
+
+
+@pytest.fixture(scope="module")
+def finger():
+    return ad.Model.alpes("finger3", params=palm_down_params(ad.load_params()))
+
+
+def test_static_balance_against_mujoco(finger):
+    """At MuJoCo's contact equilibrium under 0.035 N m, static_contact_force = the touch sensor, and
+    static_motor_torque gives back the motor torque for that force."""
+    p = finger.params
+    mj = load_mujoco(mjcf_string("finger3", p, scene="block", friction=True))
+    d = mujoco.MjData(mj)
+    for k in range(8000):
+        d.ctrl[0] = 0.035 * min(1.0, k / 4000)
+        mujoco.mj_step(mj, d)
+    F, q, n = d.sensor("flexiforce_finger").data[0], d.qpos.copy(), block_normal(BLOCK_CONTACT_Q)
+    assert 0.7 < F < 1.0
+    assert static_contact_force(finger, q, np.array([0.035]), n) == pytest.approx(F, rel=1e-4)
+    assert static_motor_torque(finger, q, F, n) == pytest.approx(0.035, rel=1e-4)
+
+
+def test_controller_approach_bumpless_and_limits(finger):
+    n = block_normal(BLOCK_CONTACT_Q)
+    q = np.array([0.9, 0.5, 0.5])
+    c = ForceController("sensor", finger, n, 1e-3, 0.05, prefilter_s=0.0)
+    taus = [c.update(0.5, 0.0, q) for _ in range(100)]
+    assert np.allclose(np.diff(taus), 0.03e-3) and not c.in_contact  # approach: 0.03 N m/s
+    before = taus[-1]
+    after = c.update(0.5, 0.1, q)  # contact: the PI starts where the approach ended
+    assert c.in_contact and abs(after - before) < 1e-4
+    for _ in range(3000):
+        tau = c.update(5.0, 0.1, q)  # unreachable force: saturates at tau_max, no windup beyond it
+    assert tau == 0.05 and c.integral < 0.05
+    assert c.update(0.0, 3.0, q) == 0.0  # a cable cannot push: never below 0
+    with pytest.raises(ad.InputError, match="controller: unknown controller 'pid'"):
+        ForceController("pid", finger, n, 1e-3, 0.05)
+
+
+def test_reference_profiles():
+    t = np.array([0.0, 0.99, 1.0, 1.5, 2.0, 2.5])
+    assert np.allclose(reference_profile("step", t), [0.2, 0.2, 1.0, 1.0, 0.5, 0.5])
+    assert np.allclose(reference_profile("ramp", t), [0.2, 0.2, 0.2, 0.6, 1.0, 1.0])
+    assert np.allclose(reference_profile("sine", np.array([1.25, 1.75])), [0.8, 0.3])
+    with pytest.raises(ad.InputError, match="reference: unknown reference 'square'"):
+        reference_profile("square", t)
+
+
+def test_closed_loop_step_reaches_the_reference():
+    """finger3 on MuJoCo with the FlexiForce loop: 0.2 N then 1.0 N at t = 1 s, held within 2 %."""
+    r = run_control("sensor", duration=2.0)
+    late = r.t >= 1.8
+    assert abs(np.mean(r.F_true[late]) - 1.0) < 0.02
+    assert r.steady_state_error < 0.02 and r.rise_time_s < 0.15
+    assert max(r.q_rmse_deg) < 3.0  # the EKF follows the joints during contact
+    assert np.all((r.tau_cmd >= 0) & (r.tau_cmd <= r.tau_max))
+
+
+def test_saturation_and_pull_only_respected():
+    r = run_control("pi", duration=1.6, levels=(0.2, 3.0, 0.5))  # 3 N is beyond the motor's 0.05 N m
+    assert np.all(r.tau_cmd >= 0.0) and np.all(r.tau_cmd <= r.tau_max)
+    assert np.all(r.tau_meas <= r.tau_max + 5 * 5e-4)
+    assert r.tau_cmd.max() == r.tau_max and r.saturated > 0.01  # it did saturate
+
+
+def test_cli_control_json_log(capsys, tmp_path):
+    log = tmp_path / "c.csv"
+    code = main(["control", "--controller", "pi", "--duration", "0.6", "--log", str(log), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    d = json.loads(out)
+    assert {"controller", "plant", "force_rmse", "steady_state_error", "overshoot", "rise_time_s",
+            "q_rmse_deg"} <= set(d)
+    assert d["controller"] == "pi" and d["plant"] == "mujoco" and d["q_rmse_deg"] is None
+    rows = list(csv.reader(log.open()))
+    assert rows[0][:3] == ["t_s", "F_ref_N", "F_mujoco_N"] and len(rows) == 601
+
+
+@pytest.mark.parametrize("argv,needle", [
+    (["control", "--controller", "pid"], "--controller: unknown controller 'pid'"),
+    (["control", "--reference", "square"], "--reference: unknown reference 'square'"),
+    (["control", "--model", "hand"], "--model: the control scenario is defined for one finger"),
+    (["control", "--duration", "0"], "--duration: expected a positive number of seconds"),
+    (["control", "--log", "/nonexistent/x.csv"], "--log: directory '/nonexistent'"),
+    (["control", "--params", "/nonexistent.toml"], "cannot be read"),
+])
+def test_cli_control_bad_input(capsys, argv, needle):
+    code = main(argv)
+    out, err = capsys.readouterr()
+    assert code == 2 and out == "" and err.count("\n") == 1 and needle in err
+
+
+def test_missing_mujoco_one_line(capsys, monkeypatch):
+    monkeypatch.setitem(sys.modules, "mujoco", None)
+    code = main(["control"])
+    out, err = capsys.readouterr()
+    assert code == 2 and err.count("\n") == 1 and "pip install 'alpes_dyn[mujoco]'" in err
