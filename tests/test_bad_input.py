@@ -30,7 +30,7 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn import cli
-from alpes_dyn.errors import AlpesDynError, InputError, ModelError
+from alpes_dyn.errors import AlpesDynError, InputError, ModelError, RecordingError
 from alpes_dyn.params import default_params_path
 
 BASE_TOML = default_params_path().read_text(encoding="utf-8")
@@ -96,6 +96,25 @@ def C(*argv: str, needle: str, fsize: int | None = None) -> Cli:
 
 
 CLI: dict[str, list[Cli]] = {
+    "experiment": [
+        C("experiment", needle="the following arguments are required: -o/--output"),
+        C("experiment", "--model", "hand", "-o", "{tmp}/r.csv", needle="defined for one finger"),
+        C("experiment", "--duration", "0.01", "-o", "{tmp}/r.csv", needle="duration: expected a whole number of at least 100"),
+        C("experiment", "--perturb", "1.5", "-o", "{tmp}/r.csv", needle="spread: expected a fraction in [0, 1)"),
+        C("experiment", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv", needle="goes with --perturb"),
+        C("experiment", "-o", "{tmp}", needle="is a directory"),
+        C("experiment", "--params", "{latin1_toml}", "-o", "{tmp}/r.csv", needle="not UTF-8 text"),
+    ],
+    "identify": [
+        C("identify", needle="the following arguments are required: --data"),
+        C("identify", "--data", "{tmp}/none.csv", needle="cannot be read"),
+        C("identify", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("identify", "--data", "{binary_toml}", needle="recording"),
+        C("identify", "--model", "hand", "--data", "x.csv", needle="identification is defined for one finger"),
+        C("identify", "--data", "{latin1_toml}", "--parameters", "K_9", needle="recording"),
+        C("identify", "--data", "x.csv", "-o", "{tmp}", needle="is a directory"),
+        C("identify", "--data", "x.csv", "--excitation", "a,b", needle="--excitation: expected comma-separated"),
+    ],
     "mjcf": [
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
@@ -193,6 +212,9 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--model", "hand", needle="--model: the estimation scenario is defined for one finger"),
         C("estimate", "--seed", "-1", needle="--seed: expected an integer >= 0, got -1"),
         C("estimate", "--spring", "report", needle="spring: the scenario's torque profile"),
+        C("estimate", "--true-params", "{latin1_toml}", needle="not UTF-8 text"),
+        C("estimate", "--observer-params", "", needle="parameter file: empty file name"),
+        C("estimate", "--observer-params", "x.toml", "--mismatch", "0.1", needle="either --mismatch or --observer-params"),
     ],
 }
 
@@ -329,6 +351,38 @@ def _rollout(c, **kw):
     return compile_rollout(c.m, **{"dt": 1e-3, **kw})
 
 
+def _design(**kw):
+    from alpes_dyn.experiment import ExperimentDesign
+
+    return ExperimentDesign(**{"duration": 0.2, **kw})
+
+
+def _exp(**kw):
+    from alpes_dyn.experiment import experiment
+
+    return experiment(**{"model": "finger2", "design": _design(), **kw})
+
+
+def _pp(**kw):
+    from alpes_dyn.experiment import perturbed_params
+
+    return perturbed_params(**kw)
+
+
+def _ident(c, recording=None, **kw):
+    from alpes_dyn.identification import identify
+
+    if recording is None:
+        recording = _exp()
+    return identify(ad.Model.alpes("finger2", friction=True), recording, **kw)
+
+
+def _pdyn(c, parameters):
+    from alpes_dyn.parametric import ParametricDynamics
+
+    return ParametricDynamics(c.m, parameters)
+
+
 API: list[Api] = [
     # Model construction and files
     A("Model", lambda c: ad.Model(FINGER3, gravity="abc"), ModelError, "gravity: expected 3 finite numbers"),
@@ -411,6 +465,20 @@ API: list[Api] = [
       "output: expected a preset name, a matrix or a callable"),
     A("StateSpace", lambda c: ad.StateSpace(c.m, input="tendon"), ModelError, "unknown input 'tendon'"),
     A("observability", lambda c: ad.observability("finger3", seed=-1), InputError, "seed: expected an integer >= 0"),
+    A("experiment", lambda c: _exp(seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("experiment", lambda c: _exp(model="hand"), InputError, "defined for one finger"),
+    A("experiment", lambda c: _exp(design=_design(frequencies=(600.0,))), InputError, "below Nyquist"),
+    A("experiment", lambda c: _exp(design=_design(orientations=((0.0, 0.0),))), InputError, "orientations"),
+    A("perturbed_params", lambda c: _pp(spread=1.0), InputError, "spread: expected a fraction in [0, 1)"),
+    A("perturbed_params", lambda c: _pp(kinds=("L",)), InputError, "kinds: unknown kind 'L'"),
+    A("identify", lambda c: _ident(c, interval=0.0), InputError, "interval: expected a positive number"),
+    A("identify", lambda c: _ident(c, interval=10.0), InputError, "interval: 10 s must hold 2 to"),
+    A("identify", lambda c: _ident(c, parameters="K_7"), ModelError, "unknown parameter 'K_7'"),
+    A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
+    A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
+    A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("ParametricDynamics", lambda c: _pdyn(c, "m_9"), ModelError, "unknown parameter 'm_9'"),
+    A("ParametricDynamics", lambda c: _pdyn(c, "friction"), ModelError, "selects nothing"),
     A("check_observability", lambda c: ad.check_observability("finger3", seed=-1), InputError,
       "seed: expected an integer >= 0"),
     A("check_observability", lambda c: ad.check_observability("finger3", max_operations=0), InputError,

@@ -393,7 +393,13 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.plot is not None:
         check_plot_path(args.plot)  # before the run: matplotlib, a writable file name, a known format
     t0 = time.perf_counter()
-    res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional", params=args.params,
+    if args.true_params is not None and args.params is not None:
+        raise InputError("--true-params: give either --params or --true-params (the simulated finger's file)")
+    if args.observer_params is not None and args.mismatch != 0:
+        raise InputError("--observer-params: give either --mismatch or --observer-params, not both")
+    res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional",
+                         params=args.true_params if args.true_params is not None else args.params,
+                         observer_params=args.observer_params, friction=args.friction,
                          mismatch=args.mismatch, duration=args.duration, seed=args.seed)
     if args.plot is not None:
         plot_estimation(res, args.plot)
@@ -484,6 +490,71 @@ def cmd_control(args: argparse.Namespace) -> int:
         lines.append(f"  log: {args.log}")
     if args.plot:
         lines.append(f"  figure: {args.plot}")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+# ----------------------------------------------------------------------------- identification (issue 8)
+def cmd_experiment(args: argparse.Namespace) -> int:
+    """Simulate the documented identification experiment and write its recording."""
+    from .experiment import ExperimentDesign, experiment, perturbed_params
+    from .params import load_params, write_params
+
+    check_output_path(args.output, "-o")
+    if args.true_params_out is not None:
+        check_output_path(args.true_params_out, "--true-params-out")
+    if args.perturb is None and args.true_params_out is not None:
+        raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
+    truth = load_params(args.params)
+    if args.perturb is not None:
+        truth = perturbed_params(truth, args.perturb, args.seed)
+    rec = experiment(args.model, truth, ExperimentDesign(duration=args.duration), seed=args.seed,
+                     nominal_params=args.params, path=args.output)
+    if args.true_params_out is not None:
+        write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment "
+                                                        f"(spread {args.perturb:g}, seed {args.seed})")
+    obj = {"model": args.model, "output": args.output, "samples": rec.n_samples, "duration_s": rec.duration,
+           "dt_s": rec.dt, "columns": list(rec.columns()), "true_params": args.true_params_out}
+    text = (f"{args.model}: identification experiment, {rec.n_samples} samples over {rec.duration:g} s "
+            f"written to {args.output}" + (f"; true parameters in {args.true_params_out}"
+                                            if args.true_params_out else ""))
+    _emit(obj, text, args.json)
+    return 0
+
+
+def cmd_identify(args: argparse.Namespace) -> int:
+    """Fit the parameters of a finger to a recording; write the identified parameter file."""
+    from .experiment import ExperimentDesign
+    from .identification import identify
+    from .model import Model
+    from .scenario import SCENARIO_MODELS
+
+    if args.model not in SCENARIO_MODELS:
+        raise InputError(f"--model: identification is defined for one finger ({', '.join(SCENARIO_MODELS)}), "
+                         f"got {args.model!r}")
+    if args.output is not None:
+        check_output_path(args.output, "-o")
+    exc = args.excitation
+    if exc == "documented":
+        freqs = ExperimentDesign().frequencies
+    elif exc == "none":
+        freqs = None
+    else:
+        freqs = tuple(parse_vector(exc, "excitation"))
+    model = Model.alpes(args.model, friction=True, params=args.params)
+    res = identify(model, args.data, args.parameters, excitation=freqs, torque_noise=args.torque_noise)
+    if args.output is not None:
+        res.write(args.output)
+    obj = res.to_dict()
+    obj["output"] = args.output
+    lines = [f"{args.model}: parameters identified from {args.data} ({res.iterations} Gauss-Newton iterations, "
+             f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s)",
+             f"  {'parameter':10s} {'value':>12s} {'std':>10s} {'start':>12s}  unit"]
+    for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
+        lines.append(f"  {n:10s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
+    lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
+    if args.output is not None:
+        lines.append(f"  written to {args.output}")
     _emit(obj, "\n".join(lines), args.json)
     return 0
 
@@ -591,7 +662,47 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints (format by "
                    "extension: .png, .pdf, .svg...)")
+    s.add_argument("--true-params", default=None, metavar="FILE",
+                   help="parameter file of the simulated (true) finger, e.g. from a perturbed draw")
+    s.add_argument("--observer-params", default=None, metavar="FILE",
+                   help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify'")
+    s.add_argument("--friction", action="store_true",
+                   help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
     s.set_defaults(func=cmd_estimate)
+
+    s = sub.add_parser("experiment", help="simulate the identification experiment on a finger, write a recording CSV",
+                       epilog="Example: alpes-dyn experiment --model finger3 --params true.toml --seed 1 -o rec.csv")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--params", default=None, metavar="FILE",
+                   help="the finger's true parameter file (default: the shipped one)")
+    s.add_argument("--perturb", type=float, default=None, metavar="SPREAD",
+                   help="draw the true finger from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
+                        "per link (seeded by --seed); write it with --true-params-out")
+    s.add_argument("--true-params-out", default=None, metavar="FILE", help="write the (drawn) true parameters there")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
+    s.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="the recording to write")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_experiment)
+
+    s = sub.add_parser("identify", help="fit a finger's springs, masses and friction to a recording",
+                       epilog="Example: alpes-dyn identify --model finger3 --data rec.csv -o ident.toml")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
+    s.add_argument("--params", default=None, metavar="FILE",
+                   help="parameter file to start from, and the base of the written file (default: the shipped one)")
+    s.add_argument("--parameters", default=None,
+                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... "
+                        "(default K,m,friction)")
+    s.add_argument("--excitation", default="documented",
+                   help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
+                        "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
+    s.add_argument("--torque-noise", type=float, default=0.0,
+                   help="white noise of the recorded torque, N m: estimate a torque correction per interval "
+                        "(errors in variables; default 0: the torque is taken as exact)")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_identify)
 
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
                        epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "

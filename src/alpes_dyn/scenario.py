@@ -274,7 +274,9 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     pars = tuple(sc.parameters) if observer.endswith("-params") else ()
     n_params = len(pars)
     noise = default_noise(sc, n, m, n_params, meas_var)
-    filt = make_observer(observer, ss, sc.dt, compiled=compiled, parameters=pars, **noise)
+    # with friction the observer's model needs the truth's RK4 substeps (h lambda of the smooth sign)
+    filt = make_observer(observer, ss, sc.dt, compiled=compiled, parameters=pars,
+                         substeps=sc.substeps if sc.friction else 1, **noise)
     z0 = np.concatenate([np.zeros(2 * n), np.ones(n_params)])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * n_params)
     est = filt.run(z0, P0, u_meas, y)
