@@ -55,6 +55,18 @@ _SEED = _int_at_least(0)
 _POINTS = _int_at_least(1, MAX_POINTS)
 
 
+def _one_of(value: str, choices: Sequence[str], option: str, kind: str) -> None:
+    """InputError ``<option>: unknown <kind> 'x' (expected one of ...)`` unless ``value`` is a choice."""
+    if value not in choices:
+        raise InputError(f"{option}: unknown {kind} {value!r} (expected one of {', '.join(choices)})")
+
+
+def _one_finger(model: str, models: Sequence[str], what: str) -> None:
+    """InputError unless ``model`` is one of the one-finger ``models`` ``what`` is defined for."""
+    if model not in models:
+        raise InputError(f"--model: {what} is defined for one finger ({', '.join(models)}), got {model!r}")
+
+
 def parse_vector(text: str, name: str) -> np.ndarray:
     """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise."""
     parts = [p.strip() for p in text.split(",")]
@@ -385,11 +397,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     from .scenario import SCENARIO_MODELS, check_plot_path, plot_estimation, run_estimation
 
     _check_model_options(args)
-    if args.model not in SCENARIO_MODELS:
-        raise InputError(f"--model: the estimation scenario is defined for one finger ({', '.join(SCENARIO_MODELS)}), "
-                         f"got {args.model!r}")
-    if args.observer not in OBSERVERS:
-        raise InputError(f"--observer: unknown observer {args.observer!r} (expected one of {', '.join(OBSERVERS)})")
+    _one_finger(args.model, SCENARIO_MODELS, "the estimation scenario")
+    _one_of(args.observer, OBSERVERS, "--observer", "observer")
     if args.plot is not None:
         check_plot_path(args.plot)  # before the run: matplotlib, a writable file name, a known format
     t0 = time.perf_counter()
@@ -445,13 +454,9 @@ def cmd_control(args: argparse.Namespace) -> int:
     """Closed loop on MuJoCo: a finger presses a block with the force asked for."""
     from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
 
-    if args.model not in CONTROL_MODELS:
-        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}), "
-                         f"got {args.model!r}")
-    if args.controller not in CONTROLLERS:
-        raise InputError(f"--controller: unknown controller {args.controller!r} (expected one of {', '.join(CONTROLLERS)})")
-    if args.reference not in REFERENCES:
-        raise InputError(f"--reference: unknown reference {args.reference!r} (expected one of {', '.join(REFERENCES)})")
+    _one_finger(args.model, CONTROL_MODELS, "the control scenario")
+    _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+    _one_of(args.reference, REFERENCES, "--reference", "reference")
     if args.plot:
         try:
             import matplotlib  # noqa: F401
@@ -529,9 +534,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from .model import Model
     from .scenario import SCENARIO_MODELS
 
-    if args.model not in SCENARIO_MODELS:
-        raise InputError(f"--model: identification is defined for one finger ({', '.join(SCENARIO_MODELS)}), "
-                         f"got {args.model!r}")
+    _one_finger(args.model, SCENARIO_MODELS, "identification")
     if args.output is not None:
         check_output_path(args.output, "-o")
     exc = args.excitation
