@@ -18,15 +18,15 @@ experiment) instead of the model's constant.
 Parameters are named after the joint they belong to (``K_1`` for joint ``j1`` of a finger,
 ``K_index_j1`` on the hand):
 
-========== =========================================================== ==========
-kind       meaning                                                     unit
-========== =========================================================== ==========
-``K``      spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
-``m``      mass of the body a joint moves, inertia scaled with it      kg
-``F_s``    Coulomb friction of a joint (eq. 2.6)                       N m
-``F_v``    viscous friction of a joint (eq. 2.6)                       N m s/rad
-``input_gain`` scale of the known torques (r/r_m, the torque constant)  --
-========== =========================================================== ==========
+================ =========================================================== ==========
+kind             meaning                                                     unit
+================ =========================================================== ==========
+``K``            spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
+``m``            mass of the body a joint moves, inertia scaled with it      kg
+``F_s``          Coulomb friction of a joint (eq. 2.6)                       N m
+``F_v``          viscous friction of a joint (eq. 2.6)                       N m s/rad
+``input_gain``   scale of the known torques (r/r_m, the torque constant)     --
+================ =========================================================== ==========
 """
 
 from __future__ import annotations
