@@ -28,8 +28,8 @@ def test_parametric_dynamics_equal_pinocchio_with_other_parameters(rng):
     pd = ParametricDynamics(nominal, None, gravity_input=True)
     true = perturbed_params(spread=0.2, seed=4)
     g = np.array([1.0, -2.0, -9.5])
-    m = ad.Model.alpes("finger3", friction=True, rotor_inertia=True, params=true)
-    m = ad.Model(m.urdf, m.extras, g, m.name, m.layout, m.params, m.spring)
+    m = ad.Model.alpes("finger3", friction=True, rotor_inertia=True, params=true).copy(gravity=g)
+    assert np.array_equal(m.gravity, g) and m.motor_names == ("finger",)
     theta = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]
     assert pd.names == ("K_1", "K_2", "K_3", "m_1", "m_2", "m_3", "F_s_1", "F_s_2", "F_s_3", "F_v_1", "F_v_2",
                         "F_v_3")

@@ -17,7 +17,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from . import __version__
-from .errors import AlpesDynError, InputError, ModelError
+from .errors import AlpesDynError, InputError
 from .observability import MAX_INSTRUCTIONS
 from .fileio import atomic_write, check_output_path, native_stderr_to
 from .limits import MAX_POINTS

@@ -30,7 +30,7 @@ import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 
@@ -92,9 +92,13 @@ class ExperimentDesign:
         return self
 
 
+def _oriented(model: Model, gravity: np.ndarray) -> Model:
+    """``model`` itself, or a copy of it with another gravity vector (the hand turned)."""
+    return model if np.array_equal(model.gravity, gravity) else model.copy(gravity=gravity)
+
+
 def _mean_equilibrium(model: Model, tau_m: float, gravity: np.ndarray) -> np.ndarray:
-    m = model if np.array_equal(model.gravity, gravity) else Model(
-        model.urdf, model.extras, gravity, model.name, model.layout, model.params, model.spring)
+    m = _oriented(model, gravity)
     return static_equilibrium(m, m.transmission.joint_torque(np.array([tau_m])))
 
 
@@ -161,8 +165,7 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
         stop = start + 1
         while stop < N and seg[stop] == seg[start]:
             stop += 1
-        m = truth if np.array_equal(truth.gravity, G[start]) else Model(
-            truth.urdf, truth.extras, G[start], truth.name, truth.layout, truth.params, truth.spring)
+        m = _oriented(truth, G[start])
         k = stop - start
         sim = simulate(m, x[start], np.repeat(u[start:stop, None], design.substeps, axis=0), k * design.dt,
                        design.dt / design.substeps, "rk4", input="motor", output="encoder")

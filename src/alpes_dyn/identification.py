@@ -22,7 +22,6 @@ theta = theta_0 exp(rho).
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import sys
 import time
@@ -269,9 +268,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
         w = valid[:, :, None, None] / sig_y
         res = [r_enc.reshape(n_int, -1)]
-        jac = [np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
-                               np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1).__mul__(w)
-               .reshape(n_int, -1, nb + p)]
+        J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
+                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1) * w
+        jac = [J_enc.reshape(n_int, -1, nb + p)]
         if Qm is not None:
             rq = np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise
             Jq = np.concatenate([Xv[:, :, :n], Xr[:, :, :n]], axis=-1) / camera_noise * q_mask[:, :, :, None]

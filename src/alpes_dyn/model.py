@@ -15,6 +15,8 @@ it is not thread-safe (use :meth:`Model.copy` per thread).
 
 from __future__ import annotations
 
+import dataclasses
+
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -285,12 +287,17 @@ class Model:
         model has no motors, springs, friction or rotor inertia."""
         return cls(read_text(path, "URDF file", ModelError), spec, **kwargs)
 
-    def copy(self) -> "Model":
-        """An independent model (own Pinocchio data), e.g. for another thread."""
+    def copy(self, gravity: Sequence[float] | None = None) -> "Model":
+        """An independent model (own Pinocchio data), e.g. for another thread; with ``gravity`` (3,),
+        m/s^2, the same robot in another orientation (the spec's gravity replaced too)."""
+        g = self.gravity if gravity is None else gravity
         if self.spec is not None:
-            return Model(self.urdf, self.spec, self.gravity, self.name, self.layout, self.params, self.spring,
+            spec = self.spec
+            if gravity is not None and spec.gravity is not None:
+                spec = dataclasses.replace(spec, gravity=None)
+            return Model(self.urdf, spec, g, self.name, self.layout, self.params, self.spring,
                          check_inertia=self.check_inertia)
-        return Model(self.urdf, None, self.gravity, self.name, self.layout, self.params, self.spring,
+        return Model(self.urdf, None, g, self.name, self.layout, self.params, self.spring,
                      extras=self.extras, check_inertia=self.check_inertia)
 
     def __repr__(self) -> str:

@@ -184,7 +184,7 @@ class ParametricDynamics:
         from .symbolic import _Adam
 
         self.model = model
-        self.n = n = model.n
+        self.n = model.n
         self.parameters = select_parameters(model, parameters)
         self.names = tuple(p.name for p in self.parameters)
         self.nominal = np.array([p.nominal for p in self.parameters])
