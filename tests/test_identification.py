@@ -118,7 +118,7 @@ def test_identify_recovers_exact_parameters_from_noise_free_data(finger2):
     assert res.converged
     assert np.max(np.abs(res.values / truth - 1)) < 1e-6
     assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # it did move
-    assert res.residual_rms < 1e-6
+    assert res.residual_rms < 1e-3  # counts; the stopping rule ends at chi^2 changes below 0.1
     ident = res.params()
     assert ident.raw["finger.K"].source == "identified" and ident.raw["finger.K"].std is not None
     assert np.allclose(ident.finger.I[:2] / ident.finger.m[:2], true.finger.I[:2] / true.finger.m[:2], rtol=1e-12)

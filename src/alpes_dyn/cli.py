@@ -700,9 +700,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
-    s.add_argument("--torque-noise", type=float, default=0.0,
-                   help="white noise of the recorded torque, N m: estimate a torque correction per interval "
-                        "(errors in variables; default 0: the torque is taken as exact)")
+    s.add_argument("--torque-noise", type=float, default=None,
+                   help="white noise of the recorded torque, N m (errors in variables). Default: estimated from "
+                        "the torque off the excitation's lines; with --excitation none, 0 (the torque taken as exact)")
     s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identify)

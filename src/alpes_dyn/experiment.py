@@ -9,6 +9,10 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
   mean joint angle mid-range, the amplitude a is the largest that keeps the nominal finger's static
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
+* the bias trimmed on the hand (``trim_bias``, default on): before recording, a slow loop on the
+  measured encoder moves the bias until the finger rests where the nominal one would (the real finger,
+  not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
+  q_1 past its 90 degree stop);
 * optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
   ``camera_noise`` (rad);
 * the sensors of the estimation scenario (:mod:`alpes_dyn.scenario`): encoder quantised to
@@ -60,6 +64,8 @@ class ExperimentDesign:
     camera_noise: float = math.radians(0.1)
     encoder_noise_counts: float = 0.5
     torque_noise: float = 5e-4
+    trim_bias: bool = True
+    amplitude_fraction: float = 0.6
 
     @property
     def n_samples(self) -> int:
@@ -82,6 +88,8 @@ class ExperimentDesign:
         g = np.asarray(self.orientations, dtype=float)
         if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] < 1 or not np.isfinite(g).all():
             raise InputError(f"orientations: expected gravity vectors (3 numbers each), got {self.orientations!r}")
+        if not (math.isfinite(self.amplitude_fraction) and 0 < self.amplitude_fraction <= 1):
+            raise InputError(f"amplitude_fraction: expected a number in (0, 1], got {self.amplitude_fraction!r}")
         for name in ("encoder_noise_counts", "torque_noise", "camera_noise", "margin"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -142,7 +150,29 @@ def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float]:
             if np.all((q >= lo) & (q <= hi)):
                 break
             amp *= 0.85
+        amp *= design.amplitude_fraction
     return float(bias), float(amp)
+
+
+def trimmed_bias(truth: Model, nominal: Model, bias: float, gravity: np.ndarray) -> float:
+    """The motor torque at which the finger ``truth`` rests with the encoder reading that ``nominal``
+    has at ``bias`` (N m): what an experimenter gets by trimming the bias with a slow loop on the
+    measured encoder before recording (the encoder is all it uses)."""
+    S = nominal.transmission.S
+
+    def reading(m: Model, tau: float) -> float:
+        return float(np.sum(S @ _mean_equilibrium(m, tau, gravity)))
+
+    target = reading(nominal, bias)
+    a, b = 0.0, max(4.0 * bias, 0.2)
+    for _ in range(60):
+        c = 0.5 * (a + b)
+        try:
+            above = reading(truth, c) > target
+        except InputError:
+            above = True
+        a, b = (a, c) if above else (c, b)
+    return 0.5 * (a + b)
 
 
 def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -212,6 +242,8 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     nominal = Model.alpes(model, friction=True, params=p_nom)
     bias, amp = excitation(nominal, design)
     truth = Model.alpes(model, friction=True, params=p_true)
+    if design.trim_bias and design.torque_bias is None:
+        bias = trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float))
     rng = np.random.default_rng(seed)
     t, seg, G = _schedule(design)
     N = t.shape[0] - 1

@@ -6,13 +6,18 @@ as the estimation scenario and the observers do), the augmented step
 
     x_{k+1} = F(x_k, w_k; theta),     X_{k+1} = F_x X_k + [0 | F_theta],     X_0 = [I | 0],
 
-propagates X = dx/d(x_0, theta) (2n x (2n + p)) with the state (with ``input_offset=True`` also the
-derivative with respect to a constant correction of the input over the segment): forward sensitivities by CasADi's
+propagates X = dx/d(x_0, theta) (2n x (2n + p)) with the state: forward sensitivities by CasADi's
 automatic differentiation of the step, so the Jacobians are exact for the discretised model. The
 step is compiled once by :class:`~alpes_dyn.simulation.CompiledStepLoop` (cached on disk, keyed by
 the model's structure and the parameter selection: the parameter *values* are inputs) and runs many
 segments at once on threads: the multiple-shooting intervals of a fit, or the designs of a Fisher
 information study.
+
+Input corrections. With ``input_basis=b`` the input is u_k + C phi_k, where phi_k (b,) are known basis
+values per sample (e.g. 1, sin 2 pi f t, cos 2 pi f t of a multisine's lines) and C (nu x b) constant
+coefficients per segment, and X also holds dx/d vec(C) (column-major): the errors-in-variables fits of
+:func:`~alpes_dyn.identification.identify` fit the true torque as the measured one plus such a
+correction. ``input_offset=True`` is ``input_basis=1`` with phi = 1: a constant correction per segment.
 """
 
 from __future__ import annotations
@@ -39,16 +44,20 @@ class SensitivityModel:
     parameters: selection for :func:`~alpes_dyn.parametric.select_parameters`.
     dt: sample period, s. substeps: RK4 steps per sample (default 4: the smooth friction is fast).
     threads: worker threads of the compiled loop.
+    input_basis: number b of basis functions of an input correction (see the module docstring);
+    input_offset: True is ``input_basis=1`` (a constant correction per segment).
 
     Attributes
     ----------
     dynamics: the :class:`~alpes_dyn.parametric.ParametricDynamics`; names, nominal (p,): parameters.
-    nx = 2n, p, nu (inputs: motors or joints), nd = nx + p (sensitivity directions).
+    nx = 2n, p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
+    coefficients), nd = nx + p + no (sensitivity directions).
     compile_seconds: time spent compiling now (0 when the library came from the cache).
     """
 
     def __init__(self, model: Model, parameters: str | Sequence[str] | None = None, dt: float = 1e-3,
-                 substeps: int = 4, threads: int | None = None, input_offset: bool = False) -> None:
+                 substeps: int = 4, threads: int | None = None, input_offset: bool = False,
+                 input_basis: int = 0) -> None:
         self.model = model
         self.dt = _check_dt(dt)
         if not isinstance(substeps, (int, np.integer)) or substeps < 1:
@@ -63,14 +72,20 @@ class SensitivityModel:
         Bm = tr.actuation_matrix if tr is not None else np.eye(n)
         self.B = np.asarray(Bm, dtype=float)
         self.nu = self.B.shape[1]
-        self.input_offset = bool(input_offset)
-        self.no = self.nu if self.input_offset else 0
+        if not isinstance(input_basis, (int, np.integer)) or isinstance(input_basis, bool) or not 0 <= input_basis <= 64:
+            raise InputError(f"input_basis: expected an integer in [0, 64], got {input_basis!r}")
+        if input_offset and input_basis not in (0, 1):
+            raise InputError("input_offset: a constant offset is input_basis=1; pass one of them")
+        self.nb = 1 if input_offset else int(input_basis)
+        self.input_offset = self.nb > 0
+        self.no = self.nu * self.nb
         self.nd = self.nx + self.p + self.no
         x = cs.SX.sym("x", self.nx)
         u = cs.SX.sym("u", self.nu)
-        off = cs.SX.sym("offset", self.no)
-        w = cs.vertcat(u, pd.g, pd.theta, off)
-        u_eff = u + off if self.input_offset else u
+        phi = cs.SX.sym("phi", self.nb)
+        off = cs.SX.sym("coef", self.no)
+        w = cs.vertcat(u, pd.g, pd.theta, phi, off)
+        u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
         qdd = pd.forward_dynamics(x[:n], x[n:], cs.mtimes(cs.DM(self.B), u_eff), pd.theta, pd.g)
         f = cs.Function("f", [x, w], [cs.vertcat(x[n:], qdd)])
         xn = rk4_expression(f, x, w, self.dt / self.substeps)
@@ -79,25 +94,27 @@ class SensitivityModel:
                                                            cs.jacobian(xn, off))
         self.step = cs.Function("sens_step", [cs.vertcat(x, cs.vec(X)), w], [cs.cse(cs.vertcat(xn, cs.vec(Xn)))])
         self.plain_step = cs.Function("step", [x, w], [xn])
-        label = f"sens_{model.name}_{'-'.join(self.names)}{'_off' if self.input_offset else ''}"[:90]
+        label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._loop = CompiledStepLoop(self.step, label, threads)
         self.compile_seconds = self._loop.compile_seconds
-        self.nw = self.nu + 3 + self.p + self.no
+        self.nw = self.nu + 3 + self.p + self.nb + self.no
 
     def run(self, x0: np.ndarray, U: np.ndarray, G: np.ndarray, theta: np.ndarray, offset: np.ndarray | None = None,
-            progress: bool = False) -> tuple[np.ndarray, np.ndarray]:
+            progress: bool = False, basis: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
         """States and sensitivities at the samples of B segments of N samples.
 
         Parameters
         ----------
         x0: (B, 2n) initial states. U: (B, N, nu) inputs (N m), U[:, k] held on sample period k.
         G: (B, N, 3) gravity (m/s^2, base frame) per sample period. theta: (p,) parameter values.
-        offset: (B, nu) constant input corrections per segment (with ``input_offset=True``; default 0).
+        offset: the correction coefficients C, (B, nu, nb) per segment or (nu, nb) for all (with
+        ``input_offset=True`` also (B, nu)); default 0. basis: phi, (B, N, nb) per sample (default: ones,
+        which only makes sense for a constant offset).
 
         Returns
         -------
-        x: (B, N+1, 2n) states at the samples; X: (B, N+1, 2n, 2n + p) their derivatives with respect
-        to (x0, theta[, offset]).
+        x: (B, N+1, 2n) states at the samples; X: (B, N+1, 2n, nd) their derivatives with respect
+        to (x0, theta[, vec C]).
         """
         x0 = np.asarray(x0, dtype=float)
         U = np.asarray(U, dtype=float)
@@ -111,8 +128,23 @@ class SensitivityModel:
         W[:, :, : self.nu] = np.repeat(U, s, axis=1)
         W[:, :, self.nu: self.nu + 3] = np.repeat(G, s, axis=1)
         W[:, :, self.nu + 3: self.nu + 3 + self.p] = theta
-        if self.input_offset:
-            W[:, :, self.nu + 3 + self.p:] = 0.0 if offset is None else np.asarray(offset, dtype=float)[:, None, :]
+        if self.nb:
+            j = self.nu + 3 + self.p
+            if basis is None:
+                W[:, :, j: j + self.nb] = 1.0
+            else:
+                basis = np.asarray(basis, dtype=float)
+                if basis.shape != (B, N, self.nb):
+                    raise InputError(f"basis: expected shape {(B, N, self.nb)}, got {basis.shape}")
+                W[:, :, j: j + self.nb] = np.repeat(basis, s, axis=1)
+            if offset is None:
+                W[:, :, j + self.nb:] = 0.0
+            else:
+                C = np.asarray(offset, dtype=float)
+                if C.shape == (B, self.nu) and self.nb == 1:
+                    C = C[:, :, None]
+                C = np.broadcast_to(C, (B, self.nu, self.nb))
+                W[:, :, j + self.nb:] = C.transpose(0, 2, 1).reshape(B, 1, self.no)  # vec, column-major
         s0 = np.zeros((B, self.nx + self.nx * self.nd))
         s0[:, : self.nx] = x0
         s0[:, self.nx: self.nx + self.nx * self.nx] = np.eye(self.nx).ravel(order="F")
