@@ -185,6 +185,8 @@ class IdentifiabilityReport:
         the absent parameters excluded (they are listed in ``absent``).
     combinations: one text per column of ``null_directions`` (see :func:`name_direction`).
     state_in_null: whether some unidentifiable direction also moves the initial state.
+    truncated: the next derivative order would exceed ``max_operations``: ``rank`` is a lower bound
+        (the null directions are those of the orders built).
     settings: input, output, points, seed, gravity.
     """
 
@@ -202,6 +204,7 @@ class IdentifiabilityReport:
     null_directions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
     combinations: tuple[str, ...] = ()
     state_in_null: bool = False
+    truncated: bool = False
     seconds: float = 0.0
     settings: dict[str, Any] = field(default_factory=dict)
 
@@ -223,7 +226,7 @@ class IdentifiabilityReport:
             "condition": self.condition if math.isfinite(self.condition) else None,
             "ranks_by_order": list(self.ranks_by_order), "order": self.order, "absent": list(self.absent),
             "null_directions": self.null_directions.T.tolist(), "combinations": list(self.combinations),
-            "state_in_null": self.state_in_null, "seconds": self.seconds, **self.settings,
+            "state_in_null": self.state_in_null, "truncated": self.truncated, "seconds": self.seconds, **self.settings,
         }
 
     def to_text(self) -> str:
@@ -231,7 +234,7 @@ class IdentifiabilityReport:
         lines = [f"Structural identifiability of {', '.join(self.parameters)} on {self.model}: parameters as "
                  f"constant states, input {st.get('input')} (time-varying), output {st.get('output')}",
                  f"  rank {self.rank}/{self.dimension} (2n + p = {self.n_states} + {len(self.parameters)}), "
-                 f"{'identifiable' if self.identifiable else 'NOT identifiable'}; smallest normalised singular "
+                 f"{'identifiable' if self.identifiable else ('undecided' if self.truncated else 'NOT identifiable')}; smallest normalised singular "
                  f"value {self.min_singular_value:.2e} (median over {st.get('points')} points, seed {st.get('seed')})",
                  "  rank by derivative order: " + " ".join(str(r) for r in self.ranks_by_order)]
         for a in self.absent:
@@ -240,6 +243,9 @@ class IdentifiabilityReport:
             lines.append(f"  unidentifiable: {c}")
         if self.state_in_null:
             lines.append("  (some unidentifiable direction also moves the initial state)")
+        if self.truncated:
+            lines.append(f"  rank is a lower bound: y^({self.order + 1}) would exceed max_operations "
+                         f"({self.settings.get('max_operations')} CasADi operations)")
         lines.append(f"  {self.seconds:.2f} s")
         return "\n".join(lines)
 
@@ -330,7 +336,15 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
     colscale = np.concatenate([np.ones(n2), th if coordinates == "log" else np.ones(pd.p)])  # d/d log theta = theta d/d theta
     blocks: list[np.ndarray] = []
     ranks: list[int] = []
+    truncated = False
     for k in range(kmax + 1):
+        try:
+            om.block(k)
+        except InputError:
+            if order is not None or k == 0:
+                raise
+            truncated = True  # the next order is over max_operations: the rank found is a lower bound
+            break
         b = om._eval_block(k, Z, W) * colscale
         if not np.isfinite(b).all():
             raise InputError(f"identifiability: O is not finite at derivative order {k} (model too stiff?)")
@@ -352,7 +366,7 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
     On = np.divide(O, nrm, out=np.zeros_like(O), where=nrm > floor)
     colmax = np.linalg.norm(On, axis=1).max(axis=0)  # (nz,)
     tol = max(O.shape[1:]) * _EPS * 1e3
-    absent_idx = [j for j in range(pd.p) if colmax[n2 + j] <= tol * max(colmax.max(), 1e-300)]
+    absent_idx = [] if truncated else [j for j in range(pd.p) if colmax[n2 + j] <= tol * max(colmax.max(), 1e-300)]
     keep = np.array([j for j in range(nz) if j < n2 or (j - n2) not in absent_idx], dtype=int)
     null = np.zeros((pd.p, 0))
     combos: list[str] = []
@@ -360,7 +374,7 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
     best = int(np.argmax(numerical_rank(O, rs)))
     A = On[best][:, keep]
     r_keep = int(numerical_rank(A))
-    if r_keep < keep.size:
+    if r_keep < keep.size and not truncated:  # (a truncated O's null space holds undecided directions too)
         _, _, Vt = np.linalg.svd(A)
         N = Vt[r_keep:].T  # (len(keep), k)
         state_in_null = bool(np.any(np.abs(N[: n2]) > 1e-6))
@@ -375,9 +389,9 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
         model=model.name, parameters=pd.names, nominal=th, n_states=n2, dimension=nz, rank=rank,
         ranks_by_order=tuple(ranks), order=len(blocks) - 1, min_singular_value=smin if rank == nz else 0.0,
         singular_values=s, absent=tuple(pd.names[j] for j in absent_idx), null_directions=null,
-        combinations=tuple(combos), state_in_null=state_in_null, seconds=time.perf_counter() - t0,
+        combinations=tuple(combos), state_in_null=state_in_null, truncated=truncated, seconds=time.perf_counter() - t0,
         settings={"input": input, "output": base.output_name, "points": points, "seed": seed,
-                  "coordinates": coordinates, "friction": bool(model.extras.has_friction),
+                  "max_operations": om.max_operations, "coordinates": coordinates, "friction": bool(model.extras.has_friction),
                   "gravity": np.asarray(model.gravity, dtype=float).tolist()})
 
 
