@@ -496,12 +496,13 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
                        encoder_noise_counts: float | None = None, quantisation: bool = True,
                        camera_times: Sequence[float] | None = None, camera_noise: float | None = None,
                        initial_state: str = "unknown", substeps: int | None = None,
-                       sensitivity: Any = None) -> FisherReport:
+                       sensitivity: Any = None, counts_per_rev: float | None = None) -> FisherReport:
     """Fisher information and Cramér-Rao bounds of ``parameters`` for one experiment (see the module doc).
 
     Parameters
     ----------
-    model: the finger (:class:`~alpes_dyn.Model` with a transmission: the motor input, the encoder output).
+    model: the finger (:class:`~alpes_dyn.Model` with a transmission: the motor input, the encoder output
+        y = S q; a model without one: joint torques in, joint encoders y = q out, ``counts_per_rev`` given).
     parameters: selection for :func:`~alpes_dyn.parametric.select_parameters`.
     U: (N,) or (N, motors) motor torques, N m, held over each of the N sample periods.
     G: gravity, m/s^2 (base frame): (3,) for the whole experiment or (N, 3) per period (several hand
@@ -520,6 +521,7 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     substeps: RK4 steps per sample period (default 4).
     sensitivity: a :class:`~alpes_dyn.sensitivity.SensitivityModel` of the same model, parameters, dt
         and substeps to reuse (its compiled code), else one is built.
+    counts_per_rev: encoder resolution (default the transmission's; required without a transmission).
     """
     from .sensitivity import SensitivityModel
 
@@ -540,8 +542,13 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     if initial_state not in INITIAL_STATES:
         raise InputError(f"initial_state: expected one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
     tr = model.transmission
-    if tr is None:
-        raise ModelError(f"model: the encoder output needs a tendon transmission; model {model.name!r} has none")
+    if tr is None and counts_per_rev is None:
+        raise ModelError(f"model: {model.name!r} has no transmission: give counts_per_rev (its joint encoders)")
+    if counts_per_rev is not None and (isinstance(counts_per_rev, (bool, np.bool_)) or not isinstance(
+            counts_per_rev, (int, float, np.integer, np.floating)) or not (math.isfinite(counts_per_rev)
+                                                                          and counts_per_rev > 0)):
+        raise InputError(f"counts_per_rev: expected a positive number, got {counts_per_rev!r}")
+    n_in = tr.n_motors if tr is not None else model.n
     if U is None:
         raise InputError("U: the motor torques of the experiment are required, (N,) or (N, motors) N m")
     U = np.asarray(U, dtype=float) if isinstance(U, np.ndarray) else U
@@ -549,8 +556,8 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     if Ua.ndim == 1:
         Ua = Ua[:, None]
     N, nu = Ua.shape
-    if nu != tr.n_motors:
-        raise InputError(f"U: expected {tr.n_motors} motor torque column(s), got {nu}")
+    if nu != n_in:
+        raise InputError(f"U: expected {n_in} {'motor' if tr is not None else 'joint'} torque column(s), got {nu}")
     if N < 2:
         raise InputError(f"U: expected at least 2 sample periods, got {N}")
     if sensitivity is None:
@@ -577,7 +584,8 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     th = _theta(theta, sm.nominal, sm.names)
     if x0 is None:
         m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
-        x0a = np.concatenate([m0.static_equilibrium(tr.joint_torque(Ua[0])), np.zeros(n)])
+        tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
+        x0a = np.concatenate([m0.static_equilibrium(tau0), np.zeros(n)])
     else:
         x0a = _array(x0, "x0", 1)
         if x0a.shape != (nx,):
@@ -588,14 +596,14 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         if not 0 <= k <= N or abs(k * dt - float(tc)) > 1e-6 * dt + 1e-12:
             raise InputError(f"camera_times: {tc!r} is not a sample time in [0, {N * dt:g}] s")
         cam_idx.append(int(k))
-    step = 2.0 * np.pi / tr.counts_per_rev
+    step = 2.0 * np.pi / float(counts_per_rev if counts_per_rev is not None else tr.counts_per_rev)
     sigma = math.sqrt((noise * step) ** 2 + (step ** 2 / 12.0 if quantisation else 0.0))
     if sigma <= 0 and not cam_idx:
         raise InputError("encoder_noise_counts: zero noise without quantisation gives infinite information")
     _, X = sm.run(x0a[None], Ua[None], Ga[None], th)
     X = X[0]  # (N+1, nx, nx + p): d x_k / d(x0, theta)
     cols = np.concatenate([np.arange(nx, nx + p), np.arange(nx)])  # (theta, x0)
-    S = np.asarray(tr.S, dtype=float)
+    S = np.asarray(tr.S, dtype=float) if tr is not None else np.eye(n)
     Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols]).reshape(-1, p + nx)
     Jy[:, :p] *= th  # log coordinates inside (well scaled), converted back below
     F = Jy.T @ Jy / sigma ** 2 if sigma > 0 else np.zeros((p + nx, p + nx))
