@@ -575,15 +575,15 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
     _one_finger(args.model, SCENARIO_MODELS, "identifiability")
     _one_of(args.design, DESIGNS, "--design", "design")
     spec = args.parameters if args.parameters is not None else "K,m,friction"
-    cams = tuple(parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
+    cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
+    design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
     friction = any(k in spec for k in ("F_s", "F_v", "friction"))
     model = Model.alpes(args.model, friction=friction, params=args.params)
     rep = identifiability(model, spec, output=args.output, points=args.points, seed=args.seed,
                           max_operations=args.max_operations)
     obj: dict[str, Any] = {"structural": rep.to_dict(), "design": args.design, "practical": None}
     lines = [rep.to_text()]
-    if args.design != "none":
-        design = ExperimentDesign(duration=args.duration, camera_times=cams).check()
+    if design is not None:
         t, _, G = _schedule(design)
         if args.design == "documented":
             nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params)

@@ -524,6 +524,7 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     counts_per_rev: encoder resolution (default the transmission's; required without a transmission).
     """
     from .sensitivity import SensitivityModel
+    from .simulation import _check_dt
 
     t0 = time.perf_counter()
     if not isinstance(model, Model):
@@ -534,7 +535,7 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
             return value
         return getattr(design, name, default) if design is not None else default
 
-    dt = pick(dt, "dt", 1e-3)
+    dt = _check_dt(pick(dt, "dt", 1e-3))
     substeps = pick(substeps, "substeps", 4)
     noise = _nonneg(pick(encoder_noise_counts, "encoder_noise_counts", 0.5), "encoder_noise_counts")
     cam_times = tuple(pick(camera_times, "camera_times", ()))
@@ -551,8 +552,7 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     n_in = tr.n_motors if tr is not None else model.n
     if U is None:
         raise InputError("U: the motor torques of the experiment are required, (N,) or (N, motors) N m")
-    U = np.asarray(U, dtype=float) if isinstance(U, np.ndarray) else U
-    Ua = _array(U, "U", np.ndim(U) if np.ndim(U) in (1, 2) else 2)
+    Ua = _array(U, "U", 1 if np.ndim(U) == 1 else 2)
     if Ua.ndim == 1:
         Ua = Ua[:, None]
     N, nu = Ua.shape
@@ -560,6 +560,23 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         raise InputError(f"U: expected {n_in} {'motor' if tr is not None else 'joint'} torque column(s), got {nu}")
     if N < 2:
         raise InputError(f"U: expected at least 2 sample periods, got {N}")
+    n, nx = model.n, 2 * model.n
+    if G is None:
+        Ga = np.tile(np.asarray(model.gravity, dtype=float), (N, 1))
+    else:
+        Ga = _array(G, "G", np.ndim(G) if np.ndim(G) in (1, 2) else 2)
+        Ga = np.tile(Ga, (N, 1)) if Ga.ndim == 1 else Ga
+        if Ga.shape != (N, 3):
+            raise InputError(f"G: expected (3,) or ({N}, 3) gravity vectors, got {np.shape(G)}")
+    cam_idx = []
+    for tc in cam_times:
+        try:
+            k = round(float(tc) / dt) if math.isfinite(float(tc)) else -1
+        except (TypeError, ValueError):
+            raise InputError(f"camera_times: expected times in s, got {tc!r}") from None
+        if not 0 <= k <= N or abs(k * dt - float(tc)) > 1e-6 * dt + 1e-12:
+            raise InputError(f"camera_times: {tc!r} is not a sample time in [0, {N * dt:g}] s")
+        cam_idx.append(int(k))
     if sensitivity is None:
         sm = SensitivityModel(model, parameters, dt, substeps)
     else:
@@ -573,14 +590,7 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
             names = tuple(p.name for p in select_parameters(model, parameters))
             if names != sm.names:
                 raise InputError(f"sensitivity: its parameters {', '.join(sm.names)} are not {', '.join(names)}")
-    n, nx, p = model.n, sm.nx, sm.p
-    if G is None:
-        Ga = np.tile(np.asarray(model.gravity, dtype=float), (N, 1))
-    else:
-        Ga = _array(G, "G", np.ndim(G) if np.ndim(G) in (1, 2) else 2)
-        Ga = np.tile(Ga, (N, 1)) if Ga.ndim == 1 else Ga
-        if Ga.shape != (N, 3):
-            raise InputError(f"G: expected (3,) or ({N}, 3) gravity vectors, got {np.shape(G)}")
+    p = sm.p
     th = _theta(theta, sm.nominal, sm.names)
     if x0 is None:
         m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
@@ -590,12 +600,6 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         x0a = _array(x0, "x0", 1)
         if x0a.shape != (nx,):
             raise InputError(f"x0: expected {nx} values (q, qd), got {x0a.shape[0]}")
-    cam_idx = []
-    for tc in cam_times:
-        k = round(float(tc) / dt) if math.isfinite(float(tc)) else -1
-        if not 0 <= k <= N or abs(k * dt - float(tc)) > 1e-6 * dt + 1e-12:
-            raise InputError(f"camera_times: {tc!r} is not a sample time in [0, {N * dt:g}] s")
-        cam_idx.append(int(k))
     step = 2.0 * np.pi / float(counts_per_rev if counts_per_rev is not None else tr.counts_per_rev)
     sigma = math.sqrt((noise * step) ** 2 + (step ** 2 / 12.0 if quantisation else 0.0))
     if sigma <= 0 and not cam_idx:
