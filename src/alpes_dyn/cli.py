@@ -571,6 +571,7 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
     from .identifiability import fisher_information, identifiability
     from .model import Model
     from .scenario import SCENARIO_MODELS, EstimationScenario, _torque
+    from .stops import JointRangeWarning
 
     _one_finger(args.model, SCENARIO_MODELS, "identifiability")
     _one_of(args.design, DESIGNS, "--design", "design")
@@ -587,7 +588,9 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
         t, _, G = _schedule(design)
         if args.design == "documented":
             nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params)
-            bias, amp = excitation(nominal, design)
+            with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
+                warnings.simplefilter("ignore", JointRangeWarning)
+                bias, amp = excitation(nominal, design)
             U = _profile(design, t, bias, amp)[:-1, None]
         else:
             U = _torque(EstimationScenario(model=args.model), t[:-1], model.transmission.n_motors)

@@ -410,8 +410,10 @@ class FisherReport:
     model: model name. parameters: names (p); theta (p,): the values (their units); units (p,).
     fim: (p, p) Fisher information of theta (the initial state marginalised when unknown), 1/unit^2.
     fim_full: (p + 2n, p + 2n) information of (theta, x0) before marginalisation.
-    covariance: (p, p) Cramér-Rao bound fim^-1 (pseudo-inverse where singular: ``rank`` < p).
-    std: (p,) Cramér-Rao standard deviations (units); relative_std: std / |theta|.
+    covariance: (p, p) Cramér-Rao bound fim^-1; where the information is singular (``rank`` < p) the
+        parameters along a zero-information direction get an infinite variance (NaN covariances).
+    std: (p,) Cramér-Rao standard deviations (units, inf when not identifiable from this experiment);
+        relative_std: std / |theta|.
     correlation: (p, p) correlation matrix of the bound.
     rank: numerical rank of ``fim`` (log scale); eigenvalues of the relative information, ascending.
     encoder_std: the encoder's noise standard deviation used (rad, noise and quantisation);
@@ -441,10 +443,10 @@ class FisherReport:
         """JSON-able dict: parameters {name: {value, unit, std, relative_std}}, correlation, fim, settings."""
         return {
             "model": self.model,
-            "parameters": {n: {"value": float(v), "unit": u, "std": float(s), "relative_std": float(r)}
+            "parameters": {n: {"value": float(v), "unit": u, "std": _num(s), "relative_std": _num(r)}
                            for n, v, u, s, r in zip(self.parameters, self.theta, self.units, self.std,
                                                     self.relative_std)},
-            "correlation": self.correlation.tolist(), "fim": self.fim.tolist(), "rank": self.rank,
+            "correlation": [[_num(c) for c in row] for row in self.correlation], "fim": self.fim.tolist(), "rank": self.rank,
             "encoder_std_rad": self.encoder_std, "samples": self.samples, "camera_samples": self.camera_samples,
             "duration_s": self.duration, "initial_state": self.initial_state, "seconds": self.seconds,
         }
@@ -458,18 +460,28 @@ class FisherReport:
                     f"; information rank {self.rank}/{len(self.parameters)}"),
                  f"  {'parameter':12s} {'value':>11s} {'std':>10s} {'rel. std':>9s}  unit"]
         for n, v, u, s, r in zip(self.parameters, self.theta, self.units, self.std, self.relative_std):
-            lines.append(f"  {n:12s} {v:11.5g} {s:10.3g} {r:9.2%}  {u}")
+            rs = f"{r:9.2%}" if np.isfinite(r) else "unbounded"
+            lines.append(f"  {n:12s} {v:11.5g} {s:10.3g} {rs:>9s}  {u}")
         p = len(self.parameters)
-        if p > 1:
-            C = self.correlation
-            iu = np.triu_indices(p, 1)
-            k = int(np.nanargmax(np.abs(C[iu]))) if np.isfinite(C[iu]).any() else 0
+        C = self.correlation
+        iu = np.triu_indices(p, 1)
+        if p > 1 and np.isfinite(C[iu]).any():
+            a = np.where(np.isfinite(C[iu]), np.abs(C[iu]), -1.0)
+            k = int(np.argmax(a))
             i, j = iu[0][k], iu[1][k]
             lines.append(f"  largest correlation: {self.parameters[i]}, {self.parameters[j]} {C[i, j]:+.4f}")
+        if self.rank < p:
+            lines.append("  unbounded: along a direction this experiment gives no information on "
+                         "(see identifiability() for its name)")
         return "\n".join(lines)
 
     def __str__(self) -> str:
         return self.to_text()
+
+
+def _num(x: float) -> float | None:
+    """JSON number, None for inf/NaN (not identifiable from the experiment)."""
+    return float(x) if np.isfinite(x) else None
 
 
 def _array(a: Any, name: str, ndim: int) -> np.ndarray:
@@ -628,12 +640,18 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     d = np.sqrt(np.clip(np.diag(Flog), 0, None))
     dn = np.where(d > 0, d, 1.0)
     Fs = Flog / np.outer(dn, dn)
-    w = np.linalg.eigvalsh(Fs)
-    rank = int(np.sum(w > max(p, 1) * 1e3 * _EPS * max(w.max(), 0)))
+    w, V = np.linalg.eigh(Fs)
+    tol = max(p, 1) * 1e3 * _EPS * max(w.max(), 0)
+    rank = int(np.sum(w > tol))
     cov_log = np.linalg.pinv(Fs, rcond=1e-12, hermitian=True) / np.outer(dn, dn)
     rel = np.sqrt(np.clip(np.diag(cov_log), 0, None))
-    if rank < p:
-        rel = np.where(d > 0, rel, np.inf)
+    if rank < p:  # a parameter with a component along a zero-information direction: unbounded
+        V0 = V[:, w <= tol]
+        free = (np.linalg.norm(V0, axis=1) > 1e-6) | (d == 0)
+        rel = np.where(free, np.inf, rel)
+        cov_log[free, :] = np.nan
+        cov_log[:, free] = np.nan
+        np.fill_diagonal(cov_log, np.where(free, np.inf, np.diag(cov_log)))
     sd = rel * np.abs(th)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov_log / np.outer(rel, rel)
