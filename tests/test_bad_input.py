@@ -105,6 +105,18 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "-o", "{tmp}", needle="is a directory"),
         C("experiment", "--params", "{latin1_toml}", "-o", "{tmp}/r.csv", needle="not UTF-8 text"),
     ],
+    "identifiability": [
+        C("identifiability", "--model", "hand", needle="--model: identifiability is defined for one finger"),
+        C("identifiability", "--design", "wiggle", needle="--design: unknown design 'wiggle'"),
+        C("identifiability", "--parameters", "K_9", needle="unknown parameter 'K_9'"),
+        C("identifiability", "--points", "0", needle="--points: expected an integer from 1 to 10000"),
+        C("identifiability", "--seed", "-1", needle="--seed: expected an integer >= 0"),
+        C("identifiability", "--camera-times", "a", "--parameters", "K", needle="--camera-times: expected comma-separated"),
+        C("identifiability", "--parameters", "K", "--duration", "0.01",
+          needle="duration: expected a whole number of at least 100"),
+        C("identifiability", "--parameters", "K", "--camera-times", "9", needle="camera_times: 9.0 is outside"),
+        C("identifiability", "--output", "elbow", "--parameters", "K", needle="unknown output 'elbow'"),
+    ],
     "identify": [
         C("identify", needle="the following arguments are required: --data"),
         C("identify", "--data", "{tmp}/none.csv", needle="cannot be read"),
@@ -383,6 +395,25 @@ def _pdyn(c, parameters):
     return ParametricDynamics(c.m, parameters)
 
 
+def _idf(**kw):
+    from alpes_dyn.identifiability import identifiability
+
+    return identifiability(**{"system": "finger2", "parameters": "K", **kw})
+
+
+def _fim(c, **kw):
+    from alpes_dyn.identifiability import fisher_information
+
+    kw = {"model": c.m, "parameters": "K", "U": np.full(10, 0.02), **kw}
+    return fisher_information(**kw)
+
+
+def _nd(v, names):
+    from alpes_dyn.identifiability import name_direction
+
+    return name_direction(v, names)
+
+
 API: list[Api] = [
     # Model construction and files
     A("Model", lambda c: ad.Model(FINGER3, gravity="abc"), ModelError, "gravity: expected 3 finite numbers"),
@@ -477,6 +508,34 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("identifiability", lambda c: _idf(points=0), InputError, "points: expected an integer from 1 to 10000"),
+    A("identifiability", lambda c: _idf(seed=-1), InputError, "seed: expected an integer >= 0"),
+    A("identifiability", lambda c: _idf(parameters="K_9"), ModelError, "unknown parameter 'K_9'"),
+    A("identifiability", lambda c: _idf(coordinates="polar"), InputError, "coordinates: expected 'log' or 'absolute'"),
+    A("identifiability", lambda c: _idf(theta=[0.04, -1.0]), InputError, "theta: K_2 must be a finite positive"),
+    A("identifiability", lambda c: _idf(theta=[1.0]), InputError, "theta: expected 2 values"),
+    A("identifiability", lambda c: _idf(order=-1), InputError, "order: expected an integer >= 0"),
+    A("identifiability", lambda c: _idf(system=3), ModelError, "system: expected a Model or an Alpes model name"),
+    A("identifiability", lambda c: _idf(system=c.m, friction=True), ModelError, "friction: only with a model name"),
+    A("fisher_information", lambda c: _fim(c, U=None), InputError, "U: the motor torques of the experiment are"),
+    A("fisher_information", lambda c: _fim(c, U=np.zeros((10, 2))), InputError, "U: expected 1 motor torque column"),
+    A("fisher_information", lambda c: _fim(c, U=[np.nan] * 10), InputError, "U: contains NaN or inf"),
+    A("fisher_information", lambda c: _fim(c, U="abc"), InputError, "U: expected an array of numbers"),
+    A("fisher_information", lambda c: _fim(c, U=np.zeros(1)), InputError, "U: expected at least 2 sample periods"),
+    A("fisher_information", lambda c: _fim(c, G=np.zeros((3, 3))), InputError, "G: expected (3,) or (10, 3)"),
+    A("fisher_information", lambda c: _fim(c, dt=0.0), InputError, "dt: expected a positive"),
+    A("fisher_information", lambda c: _fim(c, initial_state="free"), InputError, "initial_state: expected one of"),
+    A("fisher_information", lambda c: _fim(c, encoder_noise_counts=-1.0), InputError,
+      "encoder_noise_counts: expected a non-negative number"),
+    A("fisher_information", lambda c: _fim(c, camera_times=(0.5,)), InputError,
+      "camera_times: 0.5 is not a sample time in [0, 0.01] s"),
+    A("fisher_information", lambda c: _fim(c, camera_times=("x",)), InputError, "camera_times: expected times in s"),
+    A("fisher_information", lambda c: _fim(c, parameters="K_9"), ModelError, "unknown parameter 'K_9'"),
+    A("fisher_information", lambda c: _fim(c, model="finger3"), ModelError, "model: expected an alpes_dyn Model"),
+    A("fisher_information", lambda c: _fim(c, counts_per_rev=-1), InputError,
+      "counts_per_rev: expected a positive number"),
+    A("name_direction", lambda c: _nd([0, 0], ("K_1", "m_1")), InputError, "v: expected a finite, non-zero"),
+    A("name_direction", lambda c: _nd([1, 0, 0], ("K_1", "m_1")), InputError, "v: expected 2 components"),
     A("ParametricDynamics", lambda c: _pdyn(c, "m_9"), ModelError, "unknown parameter 'm_9'"),
     A("ParametricDynamics", lambda c: _pdyn(c, "friction"), ModelError, "selects nothing"),
     A("check_observability", lambda c: ad.check_observability("finger3", seed=-1), InputError,

@@ -562,6 +562,46 @@ def cmd_identify(args: argparse.Namespace) -> int:
     return 0
 
 
+DESIGNS = ("documented", "scenario", "none")
+
+
+def cmd_identifiability(args: argparse.Namespace) -> int:
+    """Structural identifiability of physical parameters, and the Cramér-Rao bounds of an experiment."""
+    from .experiment import ExperimentDesign, _profile, _schedule, excitation
+    from .identifiability import fisher_information, identifiability
+    from .model import Model
+    from .scenario import SCENARIO_MODELS, EstimationScenario, _torque
+    from .stops import JointRangeWarning
+
+    _one_finger(args.model, SCENARIO_MODELS, "identifiability")
+    _one_of(args.design, DESIGNS, "--design", "design")
+    spec = args.parameters if args.parameters is not None else "K,m,friction"
+    cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
+    design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
+    friction = any(k in spec for k in ("F_s", "F_v", "friction"))
+    model = Model.alpes(args.model, friction=friction, params=args.params)
+    rep = identifiability(model, spec, output=args.output, points=args.points, seed=args.seed,
+                          max_operations=args.max_operations)
+    obj: dict[str, Any] = {"structural": rep.to_dict(), "design": args.design, "practical": None}
+    lines = [rep.to_text()]
+    if design is not None:
+        t, _, G = _schedule(design)
+        if args.design == "documented":
+            nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params)
+            with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
+                warnings.simplefilter("ignore", JointRangeWarning)
+                bias, amp = excitation(nominal, design)
+            U = _profile(design, t, bias, amp)[:-1, None]
+        else:
+            U = _torque(EstimationScenario(model=args.model), t[:-1], model.transmission.n_motors)
+        fim = fisher_information(model, spec, U=U, G=G[:-1], design=design)
+        obj["practical"] = fim.to_dict()
+        lines += [f"Practical identifiability, design {args.design!r} ({args.duration:g} s)"
+                  + (" with the camera" if cams else "") + ":", fim.to_text()]
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
 # ----------------------------------------------------------------------------- parser
 def build_parser() -> argparse.ArgumentParser:
     p = _Parser(prog="alpes-dyn", description=__doc__.splitlines()[0],
@@ -706,6 +746,29 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identify)
+
+    s = sub.add_parser("identifiability", help="which physical parameters a finger's encoder can identify: "
+                       "structural rank and Cramér-Rao bounds of an experiment",
+                       epilog="Example: alpes-dyn identifiability --model finger3 --parameters K,m --design documented")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--parameters", default=None,
+                   help="kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... (default K,m,friction; "
+                        "the finger has friction when friction parameters are chosen)")
+    s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
+    s.add_argument("--design", default="documented",
+                   help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
+                        "scenario (the estimation scenario's small torque wiggle) or none (structural only)")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--camera-times", default=None, metavar="T1,T2,...",
+                   help="times (s) where a camera or a jig measures every joint angle once (noise 0.1 degree)")
+    s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--max-operations", type=_int_at_least(1), default=MAX_INSTRUCTIONS,
+                   help="size cap of one derivative order's function, CasADi operations (default %(default)s); "
+                        "above it the rank is a lower bound")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_identifiability)
 
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
                        epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "

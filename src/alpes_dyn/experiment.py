@@ -20,9 +20,10 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   sampled at 1 kHz.
 
 Why this design (measured with :func:`~alpes_dyn.identifiability.fisher_information`, the Cramér-Rao
-bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data): the estimation scenario's small torque
-wiggle leaves F_v_3 at 10 % and the masses at 0.6 %; the multisine across the joint range brings every
-parameter below 0.35 %. See the identification user guide for the full comparison.
+bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
+the estimation scenario's small torque wiggle leaves F_v_3 at 10 % and the masses at up to 0.64 %; the
+multisine across the joint range brings every parameter below 0.8 % (masses 0.08-0.26 %). See the
+identification user guide for the full comparison.
 
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
 (and writes) a :class:`~alpes_dyn.recording.Recording` with the true joint angles in ``true_q_*``.
