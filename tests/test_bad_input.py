@@ -15,7 +15,6 @@ To add a command or an API: add rows to ``CLI`` / ``API``; ``test_every_command_
 from __future__ import annotations
 
 import argparse
-import inspect
 import os
 import re
 import resource

@@ -22,7 +22,6 @@ import os
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 
 from .errors import InputError, ModelError
 from .fileio import atomic_write

@@ -204,8 +204,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         balance a finger turns 3e-5 N m of in-band torque error into 13 counts of encoder misfit.
     camera_noise: standard deviation of the recording's joint-angle measurements, rad (weights them
         against the encoder, whose noise is its quantisation step / sqrt(12) plus the fit's residual).
-    max_iterations, tol: Gauss-Newton stopping rule: continuous to 1e-6 and a predicted decrease of the
-        cost below max(tol * cost, 0.05) (chi^2 by 0.1, parameters by a fraction of their standard errors).
+    max_iterations, tol: Gauss-Newton stopping rule: continuous to 1e-6 and a predicted or realised
+        change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1: the parameters would move by a
+        fraction of their standard errors), or chi^2 down by less than 1 over five iterations.
     progress: a progress line on stderr (default: when stderr is a terminal).
 
     Returns
@@ -457,6 +458,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         nu_merit = 1.0
         mu = 1e-3
         converged = False
+        history: list[float] = []
         it = 0
         for it in range(1, max_iterations + 1):
             cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2))
@@ -500,8 +502,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             r, J, c, Cv, Cr, rg, xs = trial
             mu = max(mu / 10.0, 1e-9) if alpha == 1.0 else min(mu * 3.0, 1e6)
             viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
-            small_change = abs(cost - cost_new) <= tol * max(cost, 1e-300) and step_g < 1e-3
-            if viol < 1e-6 and (small_change or step_g < tol):
+            small_change = abs(cost - cost_new) <= max(tol * cost, 0.05)  # chi^2 by less than 0.1
+            history.append(cost_new)
+            stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
+            if viol < 1e-6 and (small_change or stalled or step_g < tol):
                 converged = True
                 break
         return nodes, offs, glob, (r, J, c, Cv, Cr, rg, xs), it, converged
