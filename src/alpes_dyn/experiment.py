@@ -33,6 +33,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Sequence
@@ -45,6 +46,7 @@ from .params import HandParams, Param, load_params, with_values
 from .recording import Recording, write_recording
 from .scenario import SCENARIO_MODELS, static_equilibrium
 from .simulation import simulate
+from .stops import JointRangeWarning
 
 __all__ = ["ExperimentDesign", "experiment", "excitation", "perturbed_params"]
 
@@ -147,7 +149,9 @@ def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float]:
         # resonances swing the finger further than its static equilibria: shrink until a nominal run stays in range
         t, seg, G = _schedule(design)
         for _ in range(30):
-            q = _simulate(model, design, _profile(design, t, bias, amp), G, seg)[:, : model.n]
+            with warnings.catch_warnings():  # a trial amplitude may leave the range: that is what is tested
+                warnings.simplefilter("ignore", JointRangeWarning)
+                q = _simulate(model, design, _profile(design, t, bias, amp), G, seg)[:, : model.n]
             if np.all((q >= lo) & (q <= hi)):
                 break
             amp *= 0.85
