@@ -36,7 +36,7 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Sequence
+from typing import Callable, Sequence
 
 import numpy as np
 
@@ -126,17 +126,9 @@ def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float]:
             return False
 
     bias = design.torque_bias
-    if bias is None:  # mean joint angle mid-range: bisection on the motor torque
-        mid = float(np.mean(0.5 * (model.lower + model.upper)))
-        a, b = 0.0, 0.2
-        for _ in range(60):
-            c = 0.5 * (a + b)
-            try:
-                above = float(np.mean(_mean_equilibrium(model, c, g0))) > mid
-            except InputError:
-                above = True
-            a, b = (a, c) if above else (c, b)
-        bias = 0.5 * (a + b)
+    if bias is None:  # mean joint angle mid-range
+        bias = _rest_torque(model, lambda q: float(np.mean(q)), float(np.mean(0.5 * (model.lower + model.upper))),
+                            g0, 0.2)
     amp = design.torque_amplitude
     if amp is None:
         if not within(bias):
@@ -159,25 +151,33 @@ def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float]:
     return float(bias), float(amp)
 
 
-def trimmed_bias(truth: Model, nominal: Model, bias: float, gravity: np.ndarray) -> float:
+def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: float, gravity: np.ndarray,
+                 upper: float) -> float:
+    """The motor torque in [0, upper] N m at which ``reading`` of the finger's static equilibrium (a
+    quantity that grows with the torque) equals ``target``: bisection, a torque that leaves the
+    equilibrium undefined counting as too much."""
+    a, b = 0.0, upper
+    for _ in range(60):
+        c = 0.5 * (a + b)
+        try:
+            above = reading(_mean_equilibrium(model, c, gravity)) > target
+        except InputError:
+            above = True
+        a, b = (a, c) if above else (c, b)
+    return 0.5 * (a + b)
+
+
+def _trimmed_bias(truth: Model, nominal: Model, bias: float, gravity: np.ndarray) -> float:
     """The motor torque at which the finger ``truth`` rests with the encoder reading that ``nominal``
     has at ``bias`` (N m): what an experimenter gets by trimming the bias with a slow loop on the
     measured encoder before recording (the encoder is all it uses)."""
     S = nominal.transmission.S
 
-    def reading(m: Model, tau: float) -> float:
-        return float(np.sum(S @ _mean_equilibrium(m, tau, gravity)))
+    def encoder(q: np.ndarray) -> float:
+        return float(np.sum(S @ q))
 
-    target = reading(nominal, bias)
-    a, b = 0.0, max(4.0 * bias, 0.2)
-    for _ in range(60):
-        c = 0.5 * (a + b)
-        try:
-            above = reading(truth, c) > target
-        except InputError:
-            above = True
-        a, b = (a, c) if above else (c, b)
-    return 0.5 * (a + b)
+    return _rest_torque(truth, encoder, encoder(_mean_equilibrium(nominal, bias, gravity)), gravity,
+                        max(4.0 * bias, 0.2))
 
 
 def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -248,7 +248,7 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     bias, amp = excitation(nominal, design)
     truth = Model.alpes(model, friction=True, params=p_true)
     if design.trim_bias and design.torque_bias is None:
-        bias = trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float))
+        bias = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float))
     rng = np.random.default_rng(seed)
     t, seg, G = _schedule(design)
     N = t.shape[0] - 1

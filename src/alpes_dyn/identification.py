@@ -161,12 +161,15 @@ def _line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
     return np.hstack([np.ones((t.shape[0], 1)), np.sin(w), np.cos(w)])
 
 
+def _project(Q: np.ndarray, torque: np.ndarray) -> np.ndarray:
+    """The least-squares fit of each column of ``torque`` on the orthonormal basis Q."""
+    return Q @ (Q.T @ torque)
+
+
 def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
     """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
     ``frequencies`` (Hz): the excitation without the measurement noise off its lines."""
-    A = _line_basis(t, frequencies)
-    coef, *_ = np.linalg.lstsq(A, torque, rcond=None)
-    return A @ coef
+    return _project(np.linalg.qr(_line_basis(t, frequencies))[0], np.asarray(torque, dtype=float))
 
 
 def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Recording, str]:
@@ -236,11 +239,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if torque_noise is not None and not (isinstance(torque_noise, (int, float)) and not isinstance(torque_noise, bool)
                                          and math.isfinite(torque_noise) and torque_noise >= 0):
         raise InputError(f"torque_noise: expected a non-negative number of N m, got {torque_noise!r}")
-    lines = excitation is not None
     if excitation is not None:
         Phi = _line_basis(rec.t, excitation)[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
         Q, _ = np.linalg.qr(Phi)
-        U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
+        U = _project(Q, rec.torque[:-1])  # the measured torque projected on the lines
         if torque_noise is None:  # what is off the lines is the noise: its standard deviation
             off_lines = rec.torque[:-1] - U
             torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
@@ -250,7 +252,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # errors in variables. With the lines: the true torque is U + sigma_u Q c, c ~ N(0, I) a priori (exactly the
     # projection's error, whitened), c fitted with the parameters. Without them: a constant per interval.
     eiv = torque_noise > 0
-    lines = lines and eiv
+    lines = eiv and excitation is not None
     nphi = Q.shape[1] if lines else 0
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=eiv and not lines, input_basis=nphi)
@@ -408,6 +410,12 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)  # per state component
     show = sys.stderr.isatty() if progress is None else bool(progress)
     bar = _Progress(max_iterations, "identify", show)
+
+    def encoder_rms(r: np.ndarray) -> float:
+        """RMS of the encoder residuals in r, counts."""
+        enc = r[:, : (L + 1) * ny] * sig_y / step
+        return float(np.sqrt(np.sum(enc**2) / max(int(valid.sum()) * ny, 1)))
+
     def limited(dv: np.ndarray, dg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """A trust region (no jump into a far basin): log theta by at most max_log_step, the line
         corrections by at most max_coef_step prior standard deviations, the whole step scaled down."""
@@ -520,9 +528,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         nodes, offs, glob, state, it, converged = solve(*[a.copy() for a in start], freeze)
         total_its += it
         r, J, c, Cv, Cr, rg, xs = state
-        enc = r[:, : (L + 1) * ny] * sig_y / step
-        rms = float(np.sqrt(np.sum(enc**2) / max(int(valid.sum()) * ny, 1)))
-        if rms <= 3.0 / math.sqrt(12.0):
+        if encoder_rms(r) <= 3.0 / math.sqrt(12.0):
             break
     it = total_its
     bar.close()
@@ -540,8 +546,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     theta = theta0 * np.exp(glob[:p])
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
-    enc_res = r[:, : (L + 1) * ny] * sig_y / step
-    rms = float(np.sqrt(np.sum(enc_res**2) / max(int(valid.sum()) * ny, 1)))
+    rms = encoder_rms(r)
     return IdentificationResult(
         names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
