@@ -67,6 +67,10 @@ def bad_files(d: Path) -> dict[str, str]:
         "latin1_urdf": FINGER3.replace("Generated", "G\xe9n\xe9r\xe9").encode("latin-1"),
         "negative_k_toml": BASE_TOML.replace("K = { value = [0.04, 0.05, 0.06]", "K = { value = [-0.04, 0.05, 0.06]",
                                              1).encode(),
+        "pinky_toml": BASE_TOML.replace("[thumb]", '[finger.pinky]\nK = { value = [0.04, 0.05, 0.06], unit = "N m/rad", '
+                                        'source = "report" }\n\n[thumb]', 1).encode(),
+        "short_index_toml": BASE_TOML.replace("[thumb]", '[finger.index]\nK = { value = [0.04, 0.05], '
+                                              'unit = "N m/rad", source = "report" }\n\n[thumb]', 1).encode(),
     }
     files.update({k: v.encode() for k, v in URDFS.items()})
     out = {}
@@ -437,6 +441,10 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model.alpes("finger3", spring="linear"), ModelError, "unknown spring model"),
     A("Model", lambda c: ad.Model.alpes("finger3", params=c.f["binary_toml"]), ModelError, "not UTF-8 text"),
     A("Model", lambda c: ad.Model.alpes("finger3", params=""), ModelError, "parameter file: empty file name"),
+    A("Model", lambda c: ad.Model.alpes("finger3", chain="pinky"), ModelError,
+      "chain: unknown finger 'pinky' (expected one of index, middle, ring, little)"),
+    A("Model", lambda c: ad.Model.alpes("hand", chain="index"), ModelError, "chain: only a finger model"),
+    A("Model", lambda c: ad.Model.alpes("thumb", chain="thumb"), ModelError, "chain: only a finger model"),
     # Model evaluation
     A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F="abc"), InputError, "F: expected F_z or 3 numbers"),
     A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F=[0, 0, np.nan]), InputError, "F: contains NaN"),
@@ -473,6 +481,9 @@ API: list[Api] = [
     A("load_params", lambda c: ad.load_params(""), ModelError, "parameter file: empty file name"),
     A("load_params", lambda c: ad.load_params(c.f["dir"]), ModelError, "is a directory"),
     A("load_params", lambda c: ad.load_params(c.f["negative_k_toml"]), ModelError, "finger.K: value must be >= 0"),
+    A("load_params", lambda c: ad.load_params(c.f["pinky_toml"]), ModelError, "finger.pinky: unknown key"),
+    A("load_params", lambda c: ad.load_params(c.f["short_index_toml"]), ModelError,
+      "finger.index.K: value must be a list of 3 numbers"),
     A("urdf_string", lambda c: ad.urdf_string("palm"), ModelError, "unknown model 'palm'"),
     A("layout", lambda c: ad.layout("palm"), ModelError, "unknown model 'palm'"),
     A("write_urdfs", lambda c: ad.write_urdfs(c.f["file"]), InputError, "exists and is not a folder"),

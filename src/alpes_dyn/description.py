@@ -1,11 +1,19 @@
 """Kinematic description: the URDF of the Alpes models, generated from the parameter file.
 
-Three models (report Fig. 2.1, 3.1 and Section 1.1):
+Four models (report Fig. 2.1, 3.1 and Section 1.1):
 
 * ``finger2`` -- the report's two-phalanx simplification (phalanges 1 and 2 of Table 1.2);
 * ``finger3`` -- one complete finger;
 * ``hand`` -- the 15-DoF tree: four 3-phalanx fingers, the thumb's ab/adduction joint and its two
-  flexion phalanges, root frame ``palm`` at the middle of the palm.
+  flexion phalanges, root frame ``palm`` at the middle of the palm;
+* ``thumb`` -- the hand's thumb alone on its fixed palm: the same links, joints (``thumb_abd``,
+  ``thumb_j1``, ``thumb_j2``), frames and root frame ``palm`` as in ``hand``, so that gravity in the
+  palm frame is the hand's and its dynamics are the thumb's block of the hand's (the chains of a
+  hand on a fixed palm are dynamically independent).
+
+A finger model can be built from one finger of the hand (``chain=``: a name of ``palm.finger_names``):
+its parameters are then the shared ``[finger]`` values with that finger's own ``[finger.<name>]``
+values (:func:`~alpes_dyn.params.chain_params`); the hand uses each finger's own values.
 
 Conventions (report Section 2.2): a finger moves in its x-z plane, its joint axes point along -y so
 that a positive q turns +x toward +z, gravity acts along -z of the base frame. In ``finger2`` and
@@ -25,11 +33,12 @@ from pathlib import Path
 
 from .errors import InputError, ModelError
 from .fileio import atomic_write
-from .params import ChainParams, HandParams, load_params
+from .params import ChainParams, HandParams, chain_params, load_params
 
-__all__ = ["MODELS", "ChainLayout", "Layout", "urdf_string", "layout", "write_urdfs", "example_robot_urdf"]
+__all__ = ["MODELS", "FINGER_MODELS", "model_params", "ChainLayout", "Layout", "urdf_string", "layout", "write_urdfs", "example_robot_urdf"]
 
-MODELS: tuple[str, ...] = ("finger2", "finger3", "hand")
+MODELS: tuple[str, ...] = ("finger2", "finger3", "hand", "thumb")
+FINGER_MODELS: tuple[str, ...] = ("finger2", "finger3")
 
 
 @dataclass(frozen=True)
@@ -53,6 +62,7 @@ class Layout:
     model: str
     chains: tuple[ChainLayout, ...]
     abduction_stiffness: float = 0.0
+    chain: str | None = None  # the hand's chain whose parameters a finger model has (None: the shared [finger])
 
     @property
     def tips(self) -> tuple[str, ...]:
@@ -121,9 +131,40 @@ def _chain(prefix: str, parent: str, ch: ChainParams, n: int, origin, rpy, lower
     return "".join(out)
 
 
-def _finger_chain(p: HandParams, n: int) -> ChainParams:
-    f = p.finger
+def _finger_chain(f: ChainParams, n: int) -> ChainParams:
     return ChainParams(L=f.L[:n], s=f.s[:n], m=f.m[:n], I=f.I[:n], K=f.K[:n], radius=f.radius)
+
+
+def _thumb_parts(p: HandParams) -> list[str]:
+    """Links and joints of the thumb on the palm: its base (ab/adduction body) and two phalanges."""
+    t = p.thumb
+    rb = t.radius
+    ib = 0.4 * p.thumb_base_mass * rb**2
+    return [
+        '  <link name="thumb_base">\n    <inertial>\n      <origin xyz="0.0 0.0 0.0" rpy="0.0 0.0 0.0"/>\n'
+        f'      <mass value="{_f(p.thumb_base_mass)}"/>\n'
+        f'      <inertia ixx="{_f(ib)}" ixy="0.0" ixz="0.0" iyy="{_f(ib)}" iyz="0.0" izz="{_f(ib)}"/>\n'
+        "    </inertial>\n  </link>\n",
+        _revolute("thumb_abd", "palm", "thumb_base", p.thumb_xyz, (0, 0, p.thumb_yaw), p.abduction_axis,
+                  p.abduction_lower, p.abduction_upper),
+        _chain("thumb_", "thumb_base", t, 2, (0, 0, 0), (0, 0, 0), p.finger_lower, p.finger_upper),
+    ]
+
+
+def model_params(model: str, params: HandParams | str | Path | None = None, chain: str | None = None) -> HandParams:
+    """The parameters ``model`` is built from: ``params`` (default the shipped file), for a finger model with
+    ``chain`` (a finger's name) that finger's (:func:`~alpes_dyn.params.chain_params`). ``chain`` is
+    only for finger models (``"thumb"`` is a model of its own); :class:`ModelError` otherwise."""
+    check_model_name(model)
+    p = params if isinstance(params, HandParams) else load_params(params)
+    if chain is None:
+        return p
+    if model not in FINGER_MODELS:
+        raise ModelError(f"chain: only a finger model ({', '.join(FINGER_MODELS)}) is built from one chain of the "
+                         f"hand, not {model!r} (the thumb is model 'thumb')")
+    if not isinstance(chain, str) or chain not in p.finger_names:
+        raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
+    return chain_params(p, chain)
 
 
 def check_model_name(model: str) -> str:
@@ -132,51 +173,40 @@ def check_model_name(model: str) -> str:
     return model
 
 
-def urdf_string(model: str, params: HandParams | str | Path | None = None) -> str:
-    """URDF text of ``model`` (``finger2``, ``finger3`` or ``hand``) built from ``params`` (parameters or
-    a parameter file; default the shipped one).
+def urdf_string(model: str, params: HandParams | str | Path | None = None, chain: str | None = None) -> str:
+    """URDF text of ``model`` (``finger2``, ``finger3``, ``hand`` or ``thumb``) built from ``params``
+    (parameters or a parameter file; default the shipped one); a finger model with ``chain`` is that
+    finger of the hand (:func:`model_params`).
 
     The output is deterministic: the checked-in ``urdf/*.urdf`` files equal it for the shipped
     parameter file.
     """
-    check_model_name(model)
-    p = params if isinstance(params, HandParams) else load_params(params)
+    p = model_params(model, params, chain)
     head = f'<?xml version="1.0"?>\n<!-- Generated by alpes_dyn from {Path(p.path).name}; do not edit. -->\n'
     lo, hi = p.finger_lower, p.finger_upper
-    if model in ("finger2", "finger3"):
+    if model in FINGER_MODELS:
         n = 2 if model == "finger2" else 3
-        body = '  <link name="base"/>\n' + _chain("", "base", _finger_chain(p, n), n, (0, 0, 0), (0, 0, 0), lo, hi)
+        body = '  <link name="base"/>\n' + _chain("", "base", _finger_chain(p.finger, n), n, (0, 0, 0), (0, 0, 0),
+                                                  lo, hi)
         return head + f'<robot name="alpes_{model}">\n{body}</robot>\n'
     parts = ['  <link name="palm"/>\n']
-    f3 = _finger_chain(p, 3)
-    for name, (x, y) in zip(p.finger_names, p.finger_xy):
-        parts.append(_chain(f"{name}_", "palm", f3, 3, (x, y, 0.0), (0, 0, 0), lo, hi))
-    t = p.thumb
-    rb = t.radius
-    ib = 0.4 * p.thumb_base_mass * rb**2
-    parts.append(
-        '  <link name="thumb_base">\n    <inertial>\n      <origin xyz="0.0 0.0 0.0" rpy="0.0 0.0 0.0"/>\n'
-        f'      <mass value="{_f(p.thumb_base_mass)}"/>\n'
-        f'      <inertia ixx="{_f(ib)}" ixy="0.0" ixz="0.0" iyy="{_f(ib)}" iyz="0.0" izz="{_f(ib)}"/>\n'
-        "    </inertial>\n  </link>\n"
-    )
-    parts.append(_revolute("thumb_abd", "palm", "thumb_base", p.thumb_xyz, (0, 0, p.thumb_yaw), p.abduction_axis,
-                           p.abduction_lower, p.abduction_upper))
-    parts.append(_chain("thumb_", "thumb_base", t, 2, (0, 0, 0), (0, 0, 0), lo, hi))
-    return head + '<robot name="alpes_hand">\n' + "".join(parts) + "</robot>\n"
+    if model == "hand":
+        for name, (x, y) in zip(p.finger_names, p.finger_xy):
+            parts.append(_chain(f"{name}_", "palm", _finger_chain(p.chain(name), 3), 3, (x, y, 0.0), (0, 0, 0), lo, hi))
+    parts += _thumb_parts(p)
+    return head + f'<robot name="alpes_{model}">\n' + "".join(parts) + "</robot>\n"
 
 
-def layout(model: str, params: HandParams | str | Path | None = None) -> Layout:
-    """Chains, springs (report's K_i) and tips of an Alpes model, by joint name."""
-    check_model_name(model)
-    p = params if isinstance(params, HandParams) else load_params(params)
-    if model in ("finger2", "finger3"):
+def layout(model: str, params: HandParams | str | Path | None = None, chain: str | None = None) -> Layout:
+    """Chains, springs (report's K_i) and tips of an Alpes model, by joint name (``chain``: see :func:`urdf_string`)."""
+    p = model_params(model, params, chain)
+    if model in FINGER_MODELS:
         n = 2 if model == "finger2" else 3
         joints = tuple(f"j{i + 1}" for i in range(n))
-        return Layout(model, (ChainLayout("finger", joints, tuple(p.finger.K[:n]), "tip"),))
+        return Layout(model, (ChainLayout("finger", joints, tuple(p.finger.K[:n]), "tip"),), chain=chain)
     chains = [
-        ChainLayout(name, tuple(f"{name}_j{i + 1}" for i in range(3)), tuple(p.finger.K), f"{name}_tip")
-        for name in p.finger_names
+        ChainLayout(name, tuple(f"{name}_j{i + 1}" for i in range(3)), tuple(p.chain(name).K), f"{name}_tip")
+        for name in (p.finger_names if model == "hand" else ())
     ]
     chains.append(ChainLayout("thumb", ("thumb_j1", "thumb_j2"), tuple(p.thumb.K), "thumb_tip", abduction="thumb_abd"))
     return Layout(model, tuple(chains), abduction_stiffness=p.abduction_K)

@@ -45,7 +45,7 @@ from typing import Sequence
 
 import numpy as np
 
-from .description import check_model_name, layout
+from .description import check_model_name, layout, model_params
 from .errors import InputError, ModelError
 from .extras import spring_stiffness
 from .params import ChainParams, HandParams, load_params
@@ -111,7 +111,9 @@ class _Writer:
         self.limits = limits
         self.lines: list[str] = []
 
-    def joint(self, name: str, axis: Sequence[float], k: float, armature: float, lo: float, hi: float, ind: str) -> str:
+    def joint(self, name: str, axis: Sequence[float], k: float, armature: float, lo: float, hi: float, ind: str,
+              F_s: float | None = None, F_v: float | None = None) -> str:
+        """A hinge; friction F_s, F_v (default: the file's ``[friction]`` values)."""
         attrs = [f'name="{name}"', 'type="hinge"', f'axis="{_v(axis)}"', 'pos="0 0 0"',
                  f'stiffness="{_f(k)}"', 'springref="0"']
         if self.limits:
@@ -121,7 +123,9 @@ class _Writer:
         if self.rotor_inertia and armature > 0:
             attrs.append(f'armature="{_f(armature)}"')
         if self.friction:
-            attrs += [f'damping="{_f(self.p.F_v)}"', f'frictionloss="{_f(self.p.F_s)}"']
+            Fv = self.p.F_v if F_v is None else F_v
+            Fs = self.p.F_s if F_s is None else F_s
+            attrs += [f'damping="{_f(Fv)}"', f'frictionloss="{_f(Fs)}"']
         return f"{ind}<joint {' '.join(attrs)}/>\n"
 
     def chain(self, prefix: str, ch: ChainParams, n: int, K: np.ndarray, pos: Sequence[float], quat: Sequence[float],
@@ -138,7 +142,8 @@ class _Writer:
             out.append(f'{cur}<body name="{prefix}p{i + 1}" pos="{_v(bpos)}"{bquat}>\n')
             inner = cur + "  "
             out.append(self.joint(f"{prefix}j{i + 1}", (0, -1, 0), k[i], p.N**2 * p.J_m, p.finger_lower, p.finger_upper,
-                                  inner))
+                                  inner, None if ch.F_s is None else float(ch.F_s[i]),
+                                  None if ch.F_v is None else float(ch.F_v[i])))
             ixx = 0.5 * ch.m[i] * ch.radius**2
             out.append(f'{inner}<inertial pos="{_v((d[i], 0, 0))}" mass="{_f(ch.m[i])}" '
                        f'diaginertia="{_v((ixx, I_com[i], I_com[i]))}"/>\n')
@@ -153,7 +158,8 @@ class _Writer:
         return "".join(out)
 
 
-def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, spring: str = "torsional",
+def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, chain: str | None = None,
+                spring: str = "torsional",
                 friction: bool = False, rotor_inertia: bool = False, limits: bool = True, contact: bool = True,
                 scene: str = "none", contact_q: Sequence[float] | None = None,
                 block_friction: float = 0.0, block_tilt: float = BLOCK_TILT, palm_down: bool = False, timestep: float = 2.5e-4) -> str:
@@ -161,8 +167,10 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, sp
 
     Parameters
     ----------
-    model: ``finger2``, ``finger3`` or ``hand``.
+    model: ``finger2``, ``finger3``, ``hand`` or ``thumb``.
     params: a :class:`~alpes_dyn.HandParams`, a parameter file, or ``None`` for the shipped one.
+    chain: a finger model built from that finger of the hand (as :meth:`Model.alpes <alpes_dyn.Model.alpes>`);
+        the hand uses each finger's own values (``[finger.<name>]``), everywhere: inertias, springs, friction.
     spring, friction, rotor_inertia: as :meth:`Model.alpes <alpes_dyn.Model.alpes>`, so that the MuJoCo
         model and ``Model.alpes(model, spring, friction, rotor_inertia, params)`` are the same system.
     limits: joint stops (``range``, ``limited``) from the parameter file's limits (default on).
@@ -189,15 +197,15 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, sp
         raise ModelError(f"unknown spring model {spring!r} (expected one of {', '.join(SPRING_MODELS)})")
     if scene not in SCENES:
         raise ModelError(f"unknown scene {scene!r} (expected one of {', '.join(SCENES)})")
-    if scene == "block" and model == "hand":
-        raise ModelError("scene 'block' is for one finger (finger2, finger3); the hand's scene is 'cylinder'")
+    if scene == "block" and model in ("hand", "thumb"):
+        raise ModelError(f"scene 'block' is for one finger (finger2, finger3), not {model!r}")
     if scene == "cylinder" and model != "hand":
-        raise ModelError("scene 'cylinder' is for the hand; a finger's scene is 'block'")
+        raise ModelError(f"scene 'cylinder' is for the hand, not {model!r}; a finger's scene is 'block'")
     if not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
         raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
     if not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction) and block_friction >= 0):
         raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
-    p = _params(params)
+    p = model_params(model, _params(params), chain)
     if palm_down:
         p = palm_down_params(p)
     lay = layout(model, p)
@@ -238,10 +246,10 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, sp
                         f'size="{_v(half)}" condim="{block_condim}" friction="{_f(block_friction)} 0.005 0.0001" '
                         'priority="1" rgba="0.4 0.6 0.8 1"/>\n')
     else:
-        f3 = p.finger
         body.append('    <body name="palm">\n'
                     '      <geom name="palm" type="box" pos="0 0 -0.012" size="0.045 0.036 0.012" rgba="0.6 0.6 0.65 1"/>\n')
-        for name, (x, y) in zip(p.finger_names, p.finger_xy):
+        for name, (x, y) in zip(p.finger_names if model == "hand" else (), p.finger_xy):
+            f3 = p.chain(name)  # the finger's own values where the file gives them
             body.append(w.chain(f"{name}_", f3, 3, f3.K, (x, y, 0.0), (1, 0, 0, 0), "      ", finger_rgba))
             excludes.append(("palm", f"{name}_p1"))
         t = p.thumb
@@ -252,7 +260,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, sp
         body.append(f'      <body name="thumb_base" pos="{_v(p.thumb_xyz)}" quat="{_v(quat)}">\n')
         body.append(w.joint("thumb_abd", p.abduction_axis, spring_stiffness(np.array([p.abduction_K]), spring, p.b,
                                                                             p.r)[0],
-                            p.abduction_ratio**2 * p.J_m, p.abduction_lower, p.abduction_upper, "        "))
+                            p.abduction_ratio**2 * p.J_m, p.abduction_lower, p.abduction_upper, "        ",
+                            p.F_s, p.F_v))
         body.append(f'        <inertial pos="0 0 0" mass="{_f(p.thumb_base_mass)}" diaginertia="{_v((ib, ib, ib))}"/>\n')
         body.append(f'        <geom name="thumb_base" type="sphere" size="{_f(rb)}" contype="0" conaffinity="0" '
                     f'rgba="{finger_rgba}"/>\n')

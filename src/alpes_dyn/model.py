@@ -25,7 +25,7 @@ from typing import Any, Sequence
 import numpy as np
 import pinocchio as pin
 
-from .description import Layout, check_model_name, layout, urdf_string
+from .description import Layout, check_model_name, layout, model_params, urdf_string
 from .checks import as_float_array
 from .errors import InputError, ModelError
 from .extras import JointExtras
@@ -268,17 +268,32 @@ class Model:
     # ------------------------------------------------------------------ construction
     @classmethod
     def alpes(cls, model: str = "finger3", spring: str = "torsional", friction: bool = False,
-              rotor_inertia: bool = False, params: HandParams | str | Path | None = None) -> "Model":
-        """An Alpes model (``finger2``, ``finger3`` or ``hand``) built from the parameter file.
+              rotor_inertia: bool = False, params: HandParams | str | Path | None = None,
+              chain: str | None = None) -> "Model":
+        """An Alpes model (``finger2``, ``finger3``, ``hand`` or ``thumb``) built from the parameter file.
 
         ``spring`` is ``"torsional"`` (default), ``"report"`` (eq. 2.14 literally) or ``"none"``;
         ``friction`` and ``rotor_inertia`` switch on eq. 2.6-2.7 and eq. 2.8 with the file's values.
+        ``chain``: a finger model built from that finger of the hand (a name of ``palm.finger_names``:
+        the shared ``[finger]`` values with its own ``[finger.<name>]`` ones); :attr:`chain` keeps it and
+        :attr:`params` the whole file.
         """
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)
-        lay = layout(model, p)
-        spec = alpes_spec(lay, p, spring, friction, rotor_inertia)
-        return cls(urdf_string(model, p), spec, name=model, layout=lay, params=p)
+        pc = model_params(model, p, chain)
+        lay = layout(model, pc, None)
+        if chain is not None:
+            lay = dataclasses.replace(lay, chain=chain)
+        spec = alpes_spec(lay, pc, spring, friction, rotor_inertia)
+        return cls(urdf_string(model, pc), spec, name=model, layout=lay, params=p)
+
+    @property
+    def chain(self) -> str | None:
+        """The hand's chain this model is: a finger's name for a finger model built with ``chain=``,
+        ``"thumb"`` for the thumb model, else None (a finger model of the shared ``[finger]`` values)."""
+        if self.layout is None:
+            return None
+        return "thumb" if self.layout.model == "thumb" else self.layout.chain
 
     @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":

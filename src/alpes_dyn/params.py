@@ -8,6 +8,7 @@ that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)`
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import math
 import os
@@ -23,8 +24,8 @@ from .errors import ModelError
 from .fileio import read_text
 
 __all__ = [
-    "Param", "ChainParams", "HandParams", "SOURCES", "load_params", "default_params_path", "params_toml", "with_values",
-    "write_params",
+    "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
+    "params_toml", "with_values", "write_params", "chain_params",
 ]
 
 # field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
@@ -53,6 +54,12 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
 _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v"}
 _ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
+# per-finger overrides: a table [finger.<name>] (name from palm.finger_names) with any of these fields, which
+# replace the shared [finger] values on that finger only (a real hand's fingers differ link by link)
+OVERRIDE_FIELDS: dict[str, tuple[int, str]] = {
+    "K": (3, "nonneg"), "m": (3, "pos"), "I": (3, "pos"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
+}
+"""Fields a per-finger section ``[finger.<name>]`` may hold: 3-arrays, one entry per phalanx."""
 SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
 
 
@@ -138,6 +145,29 @@ class HandParams:
     thumb_yaw: float
     path: str = ""
     raw: dict[str, Param] = field(default_factory=dict, repr=False)
+    fingers: dict[str, ChainParams] = field(default_factory=dict, repr=False)
+
+    def chain(self, name: str) -> ChainParams:
+        """The parameters of one chain: a finger by its name (``palm.finger_names``, the shared ``[finger]``
+        values with that finger's ``[finger.<name>]`` overrides), ``"thumb"``, or ``"finger"`` (the shared
+        values). :class:`~alpes_dyn.ModelError` for another name."""
+        if name == "thumb":
+            return self.thumb
+        if name == "finger":
+            return self.finger
+        if isinstance(name, str) and name in self.finger_names:
+            return self.fingers.get(name, self.finger)
+        raise ModelError(f"chain: unknown chain {name!r} (expected one of {', '.join(self.chain_names)})")
+
+    @property
+    def chain_names(self) -> tuple[str, ...]:
+        """The hand's chains, one per motor's tendon: the fingers (``palm.finger_names``), then ``thumb``."""
+        return tuple(self.finger_names) + ("thumb",)
+
+    def overrides(self, finger: str) -> dict[str, Param]:
+        """The ``[finger.<finger>]`` entries of the file, by field (empty if the finger has none)."""
+        pre = f"finger.{finger}."
+        return {k[len(pre):]: prm for k, prm in self.raw.items() if k.startswith(pre)}
 
     @property
     def transmission_ratio(self) -> float:
@@ -196,42 +226,72 @@ def _parse(data: dict[str, Any]) -> dict[str, Param]:
         if not isinstance(table, dict):
             raise ModelError(f"{section}: must be a table")
         for key in table:
-            if key not in fields:
-                raise ModelError(f"{section}.{key}: unknown key (expected one of {', '.join(fields)})")
+            sub = table[key]
+            if key in fields or (section == "finger" and isinstance(sub, dict) and "value" not in sub):
+                continue  # a field, or a per-finger table [finger.<name>], checked once the names are known
+            raise ModelError(f"{section}.{key}: unknown key (expected one of {', '.join(fields)})")
         for key, (length, kind) in fields.items():
             name = f"{section}.{key}"
             if key not in table:
                 if name in _OPTIONAL:
                     continue
                 raise ModelError(f"{name}: missing field")
-            entry = table[key]
-            if not isinstance(entry, dict):
-                raise ModelError(f"{name}: must be a table with value, unit, source")
-            for k in entry:
-                if k not in _ENTRY_KEYS:
-                    raise ModelError(f"{name}.{k}: unknown key (expected one of {', '.join(sorted(_ENTRY_KEYS))})")
-            for k in ("value", "unit", "source"):
-                if k not in entry:
-                    raise ModelError(f"{name}.{k}: missing field")
-            source = entry["source"]
-            if source not in SOURCES:
-                raise ModelError(f"{name}.source: must be one of {', '.join(repr(x) for x in SOURCES)} (got {source!r})")
-            reason = entry.get("reason", "")
-            if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
-                raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
-            value = _check_value(name, entry["value"], length, kind)
-            std = None
-            if "std" in entry:
-                if source != "identified":
-                    raise ModelError(f"{name}.std: only an identified value has a standard error")
-                std = _check_value(f"{name}.std", entry["std"], length, "nonneg" if kind != "str" else kind)
-            out[name] = Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")), std)
+            out[name] = _entry(name, table[key], length, kind)
+    names = out["palm.finger_names"].value
+    for nm in names:
+        if nm in _SCHEMA["finger"] or nm in _SCHEMA or nm == "thumb":
+            raise ModelError(f"palm.finger_names: {nm!r} is a field or section name; a finger needs another name")
+    for key, sub in data["finger"].items():
+        if key in _SCHEMA["finger"]:
+            continue
+        if key not in names:  # not a field of [finger] nor a finger: the unknown-key error of the section
+            raise ModelError(f"finger.{key}: unknown key (expected one of {', '.join(_SCHEMA['finger'])}, "
+                             f"or a finger name for its own values: {', '.join(names)})")
+        for k, entry in sub.items():
+            if k not in OVERRIDE_FIELDS:
+                raise ModelError(f"finger.{key}.{k}: unknown key (a finger's own values are "
+                                 f"{', '.join(OVERRIDE_FIELDS)})")
+            out[f"finger.{key}.{k}"] = _entry(f"finger.{key}.{k}", entry, *OVERRIDE_FIELDS[k])
     return out
 
 
-def _chain(raw: dict[str, Param], sec: str, K: np.ndarray) -> ChainParams:
-    L, s, m, I = (raw[f"{sec}.{k}"].value for k in ("L", "s", "m", "I"))
-    Fs, Fv = (raw[f"{sec}.{k}"].value if f"{sec}.{k}" in raw else None for k in ("F_s", "F_v"))
+def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
+    """One ``{ value, unit, source, ... }`` entry, validated."""
+    if not isinstance(entry, dict):
+        raise ModelError(f"{name}: must be a table with value, unit, source")
+    for k in entry:
+        if k not in _ENTRY_KEYS:
+            raise ModelError(f"{name}.{k}: unknown key (expected one of {', '.join(sorted(_ENTRY_KEYS))})")
+    for k in ("value", "unit", "source"):
+        if k not in entry:
+            raise ModelError(f"{name}.{k}: missing field")
+    source = entry["source"]
+    if source not in SOURCES:
+        raise ModelError(f"{name}.source: must be one of {', '.join(repr(x) for x in SOURCES)} (got {source!r})")
+    reason = entry.get("reason", "")
+    if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
+        raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
+    value = _check_value(name, entry["value"], length, kind)
+    std = None
+    if "std" in entry:
+        if source != "identified":
+            raise ModelError(f"{name}.std: only an identified value has a standard error")
+        std = _check_value(f"{name}.std", entry["std"], length, "nonneg" if kind != "str" else kind)
+    return Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")), std)
+
+
+def _chain(raw: dict[str, Param], sec: str, K: np.ndarray, over: str = "") -> ChainParams:
+    """The chain of section ``sec``; with ``over`` (``finger.<name>``) that finger's own values replace them."""
+    def get(k: str) -> Any:
+        for name in ((f"{over}.{k}",) if over else ()) + (f"{sec}.{k}",):
+            if name in raw:
+                return raw[name].value
+        return None
+
+    L, s, m, I = (get(k) for k in ("L", "s", "m", "I"))
+    K = get("K") if over else K
+    Fs, Fv, radius = get("F_s"), get("F_v"), get("radius")
+    sec = over or sec
     if np.any(s > L):
         i = int(np.argmax(s > L))
         raise ModelError(f"{sec}.s: COM distance s must not exceed L (s={s[i]:g} > L={L[i]:g} at index {i})")
@@ -243,7 +303,7 @@ def _chain(raw: dict[str, Param], sec: str, K: np.ndarray) -> ChainParams:
             f"{sec}.I: not physically consistent: I about the joint must exceed m d^2 = {m[i] * d[i] ** 2:.4g} "
             f"(parallel-axis theorem, d = L - s) but is {I[i]:.4g} at index {i}"
         )
-    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=raw[f"{sec}.radius"].value, F_s=Fs, F_v=Fv)
+    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=radius, F_s=Fs, F_v=Fv)
 
 
 def load_params(path: str | Path | None = None) -> HandParams:
@@ -276,8 +336,11 @@ def _from_text(text: str, path: str) -> HandParams:
         raise ModelError("finger.lower: must be below finger.upper")
     if v["thumb.abduction_lower"] >= v["thumb.abduction_upper"]:
         raise ModelError("thumb.abduction_lower: must be below thumb.abduction_upper")
+    finger = _chain(raw, "finger", v["finger.K"])
+    fingers = {nm: (_chain(raw, "finger", v["finger.K"], f"finger.{nm}")
+                    if any(k.startswith(f"finger.{nm}.") for k in raw) else finger) for nm in v["palm.finger_names"]}
     return HandParams(
-        finger=_chain(raw, "finger", v["finger.K"]),
+        finger=finger,
         thumb=_chain(raw, "thumb", v["thumb.K"]),
         r=v["finger.r"], b=v["finger.b"], r_m=v["transmission.r_m"], J_m=v["transmission.J_m"],
         N=v["transmission.N"], abduction_ratio=v["transmission.abduction_ratio"],
@@ -288,7 +351,7 @@ def _from_text(text: str, path: str) -> HandParams:
         abduction_lower=v["thumb.abduction_lower"], abduction_upper=v["thumb.abduction_upper"],
         finger_names=v["palm.finger_names"],
         finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
-        thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw,
+        thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
     )
 
 
@@ -306,7 +369,8 @@ def _toml_value(x: Any) -> str:
 def params_toml(raw: dict[str, Param], header: str = "") -> str:
     """TOML text of a parameter set (``HandParams.raw``), in the schema's order; loads back to the same."""
     lines = [f"# {h}" for h in header.splitlines()] + ([""] if header else [])
-    for section, fields in _SCHEMA.items():
+
+    def section_lines(section: str, fields) -> None:
         lines.append(f"[{section}]")
         for key in fields:
             prm = raw.get(f"{section}.{key}")
@@ -322,6 +386,14 @@ def params_toml(raw: dict[str, Param], header: str = "") -> str:
                 items.append(f"description = {_toml_value(prm.description)}")
             lines.append(f"{key} = {{ " + ", ".join(items) + " }")
         lines.append("")
+
+    names = raw["palm.finger_names"].value if "palm.finger_names" in raw else ()
+    for section, fields in _SCHEMA.items():
+        section_lines(section, fields)
+        if section == "finger":  # the per-finger tables, in palm.finger_names order
+            for nm in names:
+                if any(k.startswith(f"finger.{nm}.") for k in raw):
+                    section_lines(f"finger.{nm}", OVERRIDE_FIELDS)
     return "\n".join(lines)
 
 
@@ -331,7 +403,9 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "")
     raw = dict(params.raw)
     for name, prm in updates.items():
         section, _, key = name.partition(".")
-        if section not in _SCHEMA or key not in _SCHEMA[section]:
+        finger, _, field_ = key.partition(".")
+        if not (section in _SCHEMA and key in _SCHEMA[section]) and not (
+                section == "finger" and finger in params.finger_names and field_ in OVERRIDE_FIELDS):
             raise ModelError(f"{name}: unknown parameter field")
         raw[name] = prm
     text = params_toml(raw, header)
@@ -350,3 +424,20 @@ def write_params(params: HandParams, path: str | Path, header: str = "") -> Path
         tmp.unlink(missing_ok=True)
         raise ModelError(f"parameter file {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
     return p
+
+
+def chain_params(params: HandParams, chain: str) -> HandParams:
+    """``params`` as seen by one chain: for a finger, the hand whose shared ``[finger]`` values are that
+    finger's (its ``[finger.<name>]`` values merged in, every finger's own table dropped), so that
+    ``finger2``/``finger3`` built from it is that finger; for ``"thumb"`` or ``"finger"``, ``params``
+    without per-finger values. Both the arrays and ``raw`` (what :func:`write_params` writes) change."""
+    own = params.chain(chain)  # an unknown chain: ModelError
+    raw = {k: prm for k, prm in params.raw.items() if not (k.startswith("finger.") and k.count(".") == 2)}
+    finger = params.finger
+    if chain in params.finger_names:
+        finger = own
+        for field_, prm in params.overrides(chain).items():
+            base = params.raw.get(f"finger.{field_}")
+            desc = prm.description or (base.description if base is not None else "")
+            raw[f"finger.{field_}"] = Param(prm.value, prm.unit, prm.source, prm.reason, desc, prm.std)
+    return dataclasses.replace(params, finger=finger, fingers={nm: finger for nm in params.finger_names}, raw=raw)

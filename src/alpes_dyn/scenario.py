@@ -74,11 +74,13 @@ def _check_settings(sc: "EstimationScenario") -> None:
 
 
 def mismatched_params(params: HandParams, mass_scale: float, spring_scale: float) -> HandParams:
-    """``params`` with finger and thumb masses and inertias times ``mass_scale``, springs times ``spring_scale``."""
+    """``params`` with finger (each finger's own values too) and thumb masses and inertias times ``mass_scale``,
+    springs times ``spring_scale``."""
     def chain(c):
         return dataclasses.replace(c, m=c.m * mass_scale, I=c.I * mass_scale, K=c.K * spring_scale)
 
     return dataclasses.replace(params, finger=chain(params.finger), thumb=chain(params.thumb),
+                               fingers={k: chain(c) for k, c in params.fingers.items()},
                                thumb_base_mass=params.thumb_base_mass * mass_scale,
                                abduction_K=params.abduction_K * spring_scale)
 

@@ -343,7 +343,7 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
     Fs: dict[str, float] = {}
     Fv: dict[str, float] = {}
     for ch in lay.chains:
-        chain = params.thumb if ch.abduction else params.finger  # per-joint chain friction where the file gives it
+        chain = params.chain(ch.name)  # per-joint chain friction where the file gives it (a finger's own first)
         for i, (j, k) in enumerate(zip(ch.joints, ch.stiffness)):
             K[j] = k
             arm[j] = params.N**2 * params.J_m

@@ -1,0 +1,204 @@
+"""The hand chain by chain: per-finger parameters in the file, a finger or the thumb as a model of its own.
+
+References: the hand model (Pinocchio on the whole 15-DoF tree) for the chain models -- on a fixed palm
+the chains are dynamically independent, so a chain's mass matrix, gravity and accelerations are the
+hand's block; MuJoCo on the exported MJCF for the per-finger values there.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import ModelError
+from alpes_dyn.params import Param, chain_params, load_params, params_toml, with_values, write_params
+
+R = "drawn for a test"
+
+
+def _hand_with_overrides() -> ad.HandParams:
+    """The shipped file with the index's springs, masses (inertias with them) and friction, and the ring's
+    Coulomb friction of its own."""
+    p = load_params()
+    f = p.finger
+    return with_values(p, {
+        "finger.index.K": Param(f.K * np.array([1.15, 0.85, 1.1]), "N m/rad", "identified", R, "", np.full(3, 1e-4)),
+        "finger.index.m": Param(f.m * np.array([1.1, 0.9, 1.2]), "kg", "assumed", R),
+        "finger.index.I": Param(f.I * np.array([1.1, 0.9, 1.2]), "kg m^2", "assumed", R),
+        "finger.index.F_v": Param(np.array([1e-4, 2e-4, 3e-4]), "N m s/rad", "assumed", R),
+        "finger.ring.F_s": Param(np.array([4e-4, 5e-4, 6e-4]), "N m", "assumed", R),
+    })
+
+
+@pytest.fixture(scope="module")
+def hand_params():
+    return _hand_with_overrides()
+
+
+def test_overrides_round_trip_through_the_file(hand_params, tmp_path):
+    p = hand_params
+    path = write_params(p, tmp_path / "hand.toml")
+    text = path.read_text()
+    assert text.index("[finger]") < text.index("[finger.index]") < text.index("[finger.ring]") < text.index("[thumb]")
+    assert "[finger.middle]" not in text
+    q = load_params(path)
+    assert params_toml(q.raw) == params_toml(p.raw)
+    assert q.raw["finger.index.K"].source == "identified" and q.raw["finger.index.K"].std.tolist() == [1e-4] * 3
+    for name in p.finger_names:
+        for k in ("K", "m", "I"):
+            assert np.array_equal(getattr(q.chain(name), k), getattr(p.chain(name), k))
+    assert np.array_equal(q.chain("index").K, load_params().finger.K * np.array([1.15, 0.85, 1.1]))
+    assert q.chain("middle") is q.finger and q.chain("ring").F_s.tolist() == [4e-4, 5e-4, 6e-4]
+    assert q.chain("index").F_s is None and q.chain("index").F_v.tolist() == [1e-4, 2e-4, 3e-4]
+    # the shipped file has no per-finger values, and the projection on a chain merges the finger's own
+    assert not any(k.count(".") == 2 for k in load_params().raw)
+    c = chain_params(q, "index")
+    assert not any(k.count(".") == 2 for k in c.raw)
+    assert np.array_equal(c.finger.K, q.chain("index").K) and np.array_equal(c.raw["finger.m"].value, q.chain("index").m)
+    assert load_params(write_params(c, tmp_path / "index.toml")).finger.I.tolist() == q.chain("index").I.tolist()
+
+
+def test_hand_uses_each_fingers_values(hand_params):
+    """Springs, friction and link masses of the hand model and of its URDF are each finger's own."""
+    p = hand_params
+    h = ad.Model.alpes("hand", friction=True, params=p)
+    for name in p.finger_names:
+        own = p.chain(name)
+        idx = [h.joint_index(f"{name}_j{i}") for i in (1, 2, 3)]
+        assert np.array_equal(h.extras.stiffness[idx], own.K)
+        assert np.array_equal(h.extras.coulomb[idx], own.F_s if own.F_s is not None else np.full(3, p.F_s))
+        assert np.array_equal(h.extras.viscous[idx], own.F_v if own.F_v is not None else np.full(3, p.F_v))
+        masses = [h.pin_model.inertias[h.pin_model.getJointId(f"{name}_j{i}")].mass for i in (1, 2, 3)]
+        assert np.allclose(masses, own.m, rtol=1e-15)
+    assert h.extras.stiffness[h.joint_index("index_j1")] == pytest.approx(0.046, rel=1e-12)
+
+
+def _block(h: ad.Model, names: tuple[str, ...]) -> np.ndarray:
+    return np.array([h.joint_index(j) for j in names])
+
+
+@pytest.mark.parametrize("chain", ["index", "ring", "thumb"])
+def test_chain_model_is_the_hands_block(hand_params, chain, rng):
+    """A(q), G(q) (gravity + springs), the Coriolis torques and the forward dynamics (friction on) of the
+    chain model equal the hand's block, and the hand has no coupling between chains, for random states,
+    palm up and tilted."""
+    p = hand_params
+    hand = ad.Model.alpes("hand", friction=True, params=p)
+    if chain == "thumb":
+        m = ad.Model.alpes("thumb", friction=True, params=p)
+        names = ("thumb_abd", "thumb_j1", "thumb_j2")
+        assert m.joint_names == names and m.motor_names == ("thumb", "thumb_abduction") and m.chain == "thumb"
+    else:
+        m = ad.Model.alpes("finger3", friction=True, params=p, chain=chain)
+        names = tuple(f"{chain}_j{i}" for i in (1, 2, 3))
+        assert m.chain == chain and m.params is p and m.motor_names == ("finger",)
+    idx = _block(hand, names)
+    rest = np.setdiff1d(np.arange(hand.n), idx)
+    rows = [hand.motor_index(k) for k in (("thumb", "thumb_abduction") if chain == "thumb" else (chain,))]
+    assert np.array_equal(hand.transmission.S[np.ix_(rows, idx)], m.transmission.S)
+    assert np.array_equal(m.extras.stiffness, hand.extras.stiffness[idx])
+    for g in (None, np.array([1.5, -2.0, -9.5])):
+        h, c = (hand, m) if g is None else (hand.copy(gravity=g), m.copy(gravity=g))
+        assert c.chain == m.chain
+        for _ in range(4):
+            qh, vh = h.random_state(rng, speed=3.0)
+            tau = rng.normal(scale=0.02, size=hand.n)
+            q, v = qh[idx], vh[idx]
+            A = h.inertia_matrix(qh)
+            assert np.allclose(A[np.ix_(idx, idx)], c.inertia_matrix(q), rtol=1e-12, atol=1e-16)
+            assert np.max(np.abs(A[np.ix_(idx, rest)])) == 0.0
+            assert np.allclose(h.gravity_torque(qh)[idx], c.gravity_torque(q), rtol=1e-12, atol=1e-15)
+            Cv = h.coriolis_matrix(qh, vh) @ vh
+            assert np.allclose(Cv[idx], c.coriolis_matrix(q, v) @ v, rtol=1e-12, atol=1e-15)
+            a_h = h.forward_dynamics(qh, vh, tau, smooth=True)[idx]
+            a_c = c.forward_dynamics(q, v, tau[idx], smooth=True)
+            assert np.allclose(a_h, a_c, rtol=1e-10, atol=1e-9 * np.max(np.abs(a_c)))
+
+
+def test_finger_chain_differs_from_the_shared_finger(hand_params):
+    """The index built from its own values is not the shared finger; the middle (no own values) is."""
+    p = hand_params
+    q = np.array([0.3, 0.5, 0.4])
+    shared = ad.Model.alpes("finger3", params=p)
+    index = ad.Model.alpes("finger3", params=p, chain="index")
+    middle = ad.Model.alpes("finger3", params=p, chain="middle")
+    assert index.urdf != shared.urdf and middle.urdf == shared.urdf
+    assert abs(index.gravity_torque(q)[0] / shared.gravity_torque(q)[0] - 1) > 0.01
+    assert np.array_equal(middle.gravity_torque(q), shared.gravity_torque(q))
+
+
+def test_thumb_urdf_is_the_hands_thumb():
+    """The thumb model's URDF holds exactly the hand's thumb links and joints (text for text)."""
+    hand, thumb = ad.urdf_string("hand"), ad.urdf_string("thumb")
+    start = hand.index('  <link name="thumb_base">')
+    assert thumb.endswith(hand[start:]) and '<robot name="alpes_thumb">' in thumb
+    assert "index_" not in thumb
+
+
+def test_mjcf_uses_each_fingers_values(hand_params):
+    """MuJoCo's stiffness, damping, frictionloss and body masses on the exported hand are each finger's own;
+    with friction and stops off, its qacc is the library's."""
+    mujoco = pytest.importorskip("mujoco")
+    from alpes_dyn.mjcf import joint_permutation, load_mujoco, mjcf_string
+
+    p = hand_params
+    h = ad.Model.alpes("hand", friction=True, params=p)
+    mj = load_mujoco(mjcf_string("hand", p, friction=True))
+    for j, name in enumerate(h.joint_names):
+        jid = mj.joint(name).id
+        dof = mj.jnt_dofadr[jid]
+        assert mj.jnt_stiffness[jid] == h.extras.stiffness[j]
+        assert mj.dof_damping[dof] == h.extras.viscous[j] and mj.dof_frictionloss[dof] == h.extras.coulomb[j]
+        assert mj.body_mass[mj.jnt_bodyid[jid]] == pytest.approx(
+            h.pin_model.inertias[h.pin_model.getJointId(name)].mass, rel=1e-15)
+    m0 = ad.Model.alpes("hand", params=p)
+    mj0 = load_mujoco(mjcf_string("hand", p, limits=False, contact=False))
+    d = mujoco.MjData(mj0)
+    perm = joint_permutation(mj0, m0.joint_names)
+    q, v = m0.random_state(np.random.default_rng(3))
+    d.qpos[perm], d.qvel[perm] = q, v
+    mujoco.mj_forward(mj0, d)
+    a = m0.forward_dynamics(q, v, np.zeros(m0.n))
+    assert np.max(np.abs(d.qacc[perm] - a)) <= 1e-9 * np.max(np.abs(a))
+    # a finger model of one chain is exported with that finger's values
+    f = load_mujoco(mjcf_string("finger3", p, chain="index"))
+    assert f.jnt_stiffness.tolist() == p.chain("index").K.tolist()
+
+
+@pytest.mark.parametrize("edit,pattern", [
+    ("[finger.pinky]\nK = { value = [0.04, 0.05, 0.06], unit = \"N m/rad\", source = \"report\" }\n",
+     r"finger\.pinky: unknown key \(expected one of L, s, .*or a finger name for its own values: index, middle"),
+    ("[finger.index]\nK = { value = [0.04, 0.05], unit = \"N m/rad\", source = \"report\" }\n",
+     r"finger\.index\.K: value must be a list of 3 numbers"),
+    ("[finger.index]\nL = { value = [0.04, 0.05, 0.02], unit = \"m\", source = \"report\" }\n",
+     r"finger\.index\.L: unknown key \(a finger's own values are K, m, I, F_s, F_v\)"),
+    ("[finger.index]\nm = { value = [0.3, 0.02, 0.023], unit = \"kg\", source = \"report\" }\n",
+     r"finger\.index\.I: not physically consistent"),
+    ("[finger.index]\nF_s = { value = [0.001, -0.001, 0.0], unit = \"N m\", source = \"report\" }\n",
+     r"finger\.index\.F_s: value must be >= 0 \(got -0.001 at index 1\)"),
+    ("[finger.index]\nK = { value = [0.04, 0.05, 0.06], unit = \"N m/rad\", source = \"report\", std = [0, 0, 0] }\n",
+     r"finger\.index\.K\.std: only an identified value has a standard error"),
+])
+def test_bad_per_finger_values(tmp_path, edit, pattern):
+    text = open(load_params().path, encoding="utf-8").read()
+    bad = text.replace("[thumb]", edit + "\n[thumb]", 1)
+    path = tmp_path / "bad.toml"
+    path.write_text(bad)
+    with pytest.raises(ModelError, match=pattern) as e:
+        load_params(path)
+    assert "\n" not in str(e.value)
+
+
+def test_bad_chain_names(hand_params):
+    with pytest.raises(ModelError, match=r"chain: unknown finger 'pinky' \(expected one of index, middle, ring, little\)"):
+        ad.Model.alpes("finger3", chain="pinky")
+    with pytest.raises(ModelError, match=r"chain: only a finger model .* not 'hand' \(the thumb is model 'thumb'\)"):
+        ad.Model.alpes("hand", chain="index")
+    with pytest.raises(ModelError, match=r"chain: unknown finger 'thumb'"):
+        ad.Model.alpes("finger2", chain="thumb")
+    with pytest.raises(ModelError, match=r"chain: unknown chain 'pinky' \(expected one of index, middle, ring, little, "
+                                         r"thumb\)"):
+        chain_params(hand_params, "pinky")
+    with pytest.raises(ModelError, match=r"finger\.pinky\.K: unknown parameter field"):
+        with_values(hand_params, {"finger.pinky.K": hand_params.raw["finger.K"]})
