@@ -202,3 +202,93 @@ def test_bad_chain_names(hand_params):
         chain_params(hand_params, "pinky")
     with pytest.raises(ModelError, match=r"finger\.pinky\.K: unknown parameter field"):
         with_values(hand_params, {"finger.pinky.K": hand_params.raw["finger.K"]})
+
+
+def _result(model: ad.Model, names: tuple[str, ...], values: list[float], std: list[float]):
+    """An IdentificationResult as identify() returns it (the fit itself is tested elsewhere)."""
+    from alpes_dyn.identification import IdentificationResult
+
+    p = len(names)
+    return IdentificationResult(names=names, values=np.array(values), std=np.array(std), initial=np.array(values),
+                                units=("",) * p, correlation=np.eye(p), residual_rms=0.6, iterations=3, converged=True,
+                                seconds=1.0, compile_seconds=0.0, states=np.zeros((1, 2 * model.n)),
+                                node_times=np.zeros(1), model=model, recording_path="rec.csv")
+
+
+def test_identified_values_go_to_the_chains_table(hand_params, tmp_path):
+    """A finger model of the ring writes [finger.ring] (the fitted fields; its other own values and the shared
+    [finger] untouched), and the hand built from the file has those values on the ring only."""
+    from alpes_dyn.identification import identified_params
+
+    p = hand_params
+    ring = ad.Model.alpes("finger3", friction=True, params=p, chain="ring")
+    res = _result(ring, ("K_2", "m_3", "F_v_1"), [0.061, 0.025, 1.3e-4], [1e-4, 2e-4, 1e-6])
+    out = identified_params(res)
+    assert out.raw["finger.ring.K"].source == "identified" and out.raw["finger.ring.K"].std.tolist() == [0, 1e-4, 0]
+    assert out.chain("ring").K.tolist() == [p.finger.K[0], 0.061, p.finger.K[2]]
+    assert out.chain("ring").m[2] == 0.025 and out.chain("ring").I[2] == pytest.approx(p.finger.I[2] * 0.025 / 0.023)
+    assert out.chain("ring").F_s.tolist() == [4e-4, 5e-4, 6e-4]  # its own, not fitted: kept
+    assert out.chain("ring").F_v.tolist() == [1.3e-4, p.F_v, p.F_v]
+    assert params_toml({k: v for k, v in out.raw.items() if not k.startswith("finger.ring.")}) == params_toml(
+        {k: v for k, v in p.raw.items() if not k.startswith("finger.ring.")})
+    back = load_params(write_params(out, tmp_path / "ident.toml"))
+    h = ad.Model.alpes("hand", friction=True, params=back)
+    assert h.extras.stiffness[h.joint_index("ring_j2")] == 0.061
+    assert h.extras.stiffness[h.joint_index("middle_j2")] == p.finger.K[1]
+    # another finger's table on request; the shared one without a chain
+    assert identified_params(res, chain="little").chain("little").K[1] == 0.061
+    shared = identified_params(_result(ad.Model.alpes("finger3", friction=True, params=p), ("K_2",), [0.07], [1e-4]))
+    assert shared.finger.K[1] == 0.07 and shared.chain("ring").K[1] == 0.07 and shared.chain("index").K[1] != 0.07
+    with pytest.raises(ModelError, match=r"chain: unknown finger 'thumb'"):
+        identified_params(res, chain="thumb")
+
+
+def test_identified_thumb_values_go_to_the_thumb(hand_params):
+    from alpes_dyn.identification import identified_params
+
+    p = hand_params
+    th = ad.Model.alpes("thumb", friction=True, params=p)
+    res = _result(th, ("K_thumb_j2", "m_thumb_j1", "m_thumb_abd", "F_s_thumb_abd", "F_v_thumb_abd", "F_v_thumb_j2"),
+                  [0.055, 0.03, 0.006, 6e-4, 2e-4, 1.5e-4], [1e-4, 1e-4, 5e-3, 1e-5, 4e-5, 1e-6])
+    out = identified_params(res)
+    assert out.thumb.K.tolist() == [p.thumb.K[0], 0.055]
+    assert out.thumb.m[0] == 0.03 and out.thumb.I[0] == pytest.approx(p.thumb.I[0] * 0.03 / 0.025, rel=1e-12)
+    assert out.thumb_base_mass == 0.006 and out.raw["thumb.base_mass"].std == 5e-3
+    assert (out.abduction_F_s, out.abduction_F_v) == (6e-4, 2e-4)
+    assert out.thumb.F_v.tolist() == [p.F_v, 1.5e-4]
+    m = ad.Model.alpes("thumb", friction=True, params=out)
+    assert m.extras.coulomb.tolist() == [6e-4, p.F_s, p.F_s] and m.extras.viscous.tolist() == [2e-4, p.F_v, 1.5e-4]
+    h = ad.Model.alpes("hand", friction=True, params=out)
+    assert h.extras.coulomb[h.joint_index("thumb_abd")] == 6e-4
+    with pytest.raises(ModelError, match=r"chain: the thumb model's values go to the thumb, not 'index'"):
+        identified_params(res, chain="index")
+
+
+def test_experiment_and_identify_cli_on_one_finger(tmp_path, capsys):
+    """experiment --chain draws and simulates that finger; identify --chain fits it and writes its own table."""
+    import json
+
+    from alpes_dyn.cli import main
+
+    p = load_params()
+    base = write_params(with_values(p, {"finger.index.K": Param(p.finger.K * 1.2, "N m/rad", "assumed", R),
+                                        "finger.ring.F_s": Param(np.full(3, 4e-4), "N m", "assumed", R)}),
+                        tmp_path / "hand.toml")
+    rec, true, ident = tmp_path / "rec.csv", tmp_path / "true.toml", tmp_path / "ident.toml"
+    assert main(["experiment", "--model", "finger2", "--chain", "index", "--params", str(base), "--perturb", "0.1",
+                 "--seed", "2", "--duration", "1", "--true-params-out", str(true), "-o", str(rec), "--json"]) == 0
+    capsys.readouterr()
+    t = load_params(true)
+    assert not np.array_equal(t.chain("index").K, p.finger.K * 1.2) and np.array_equal(t.finger.K, p.finger.K)
+    assert np.all(np.abs(t.chain("index").K / (p.finger.K * 1.2) - 1) <= 0.1)
+    assert t.chain("ring").F_s.tolist() == [4e-4] * 3
+    assert main(["identify", "--model", "finger2", "--chain", "index", "--params", str(base), "--data", str(rec),
+                 "--parameters", "K", "-o", str(ident), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["chain"] == "index" and set(res["parameters"]) == {"K_1", "K_2"}
+    q = load_params(ident)
+    assert q.raw["finger.index.K"].source == "identified" and q.raw["finger.K"].source == "report"
+    fitted = [res["parameters"][k]["value"] for k in ("K_1", "K_2")]
+    assert q.chain("index").K.tolist() == fitted + [p.finger.K[2] * 1.2]
+    assert np.all(np.abs(np.array(fitted) / t.chain("index").K[:2] - 1) < 0.1)
+    assert q.chain("ring").F_s.tolist() == [4e-4] * 3 and np.array_equal(q.finger.K, p.finger.K)

@@ -61,6 +61,18 @@ def _one_of(value: str, choices: Sequence[str], option: str, kind: str) -> None:
         raise InputError(f"{option}: unknown {kind} {value!r} (expected one of {', '.join(choices)})")
 
 
+THUMB_PARAMETERS = "K,m_thumb_j1,m_thumb_j2,friction"
+"""What ``alpes-dyn identify --model thumb`` fits by default: springs, the phalanges' masses, friction (the base's
+mass m_thumb_abd sits on the ab/adduction axis: nothing the encoders see depends on it, its standard error 100 %)."""
+
+
+def _one_chain(model: str, models: Sequence[str], what: str) -> None:
+    """InputError unless ``model`` is one of the one-chain ``models`` ``what`` is defined for."""
+    if model not in models:
+        raise InputError(f"--model: {what} is defined for one chain ({', '.join(models)}; a finger of the hand "
+                         f"with --chain), got {model!r}")
+
+
 def _one_finger(model: str, models: Sequence[str], what: str) -> None:
     """InputError unless ``model`` is one of the one-finger ``models`` ``what`` is defined for."""
     if model not in models:
@@ -502,19 +514,23 @@ def cmd_control(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------- identification (issue 8)
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Simulate the documented identification experiment and write its recording."""
-    from .experiment import ExperimentDesign, experiment, perturbed_params
+    from .description import model_params
+    from .experiment import EXPERIMENT_MODELS, ExperimentDesign, experiment, perturbed_params
     from .params import load_params, write_params
 
+    _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
     check_output_path(args.output, "-o")
     if args.true_params_out is not None:
         check_output_path(args.true_params_out, "--true-params-out")
     if args.perturb is None and args.true_params_out is not None:
         raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
     truth = load_params(args.params)
-    if args.perturb is not None:
-        truth = perturbed_params(truth, args.perturb, args.seed)
+    model_params(args.model, truth, args.chain)  # a bad --chain: one line, before any work
+    if args.perturb is not None:  # the chain's own values drawn (the thumb's, a finger's, or the shared finger's)
+        chains = ("thumb",) if args.model == "thumb" else ((args.chain,) if args.chain else None)
+        truth = perturbed_params(truth, args.perturb, args.seed, chains=chains)
     rec = experiment(args.model, truth, ExperimentDesign(duration=args.duration), seed=args.seed,
-                     nominal_params=args.params, path=args.output)
+                     nominal_params=args.params, path=args.output, chain=args.chain)
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment "
                                                         f"(spread {args.perturb:g}, seed {args.seed})")
@@ -529,12 +545,11 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
-    from .experiment import ExperimentDesign
+    from .experiment import EXPERIMENT_MODELS, ExperimentDesign
     from .identification import identify
     from .model import Model
-    from .scenario import SCENARIO_MODELS
 
-    _one_finger(args.model, SCENARIO_MODELS, "identification")
+    _one_chain(args.model, EXPERIMENT_MODELS, "identification")
     if args.output is not None:
         check_output_path(args.output, "-o")
     exc = args.excitation
@@ -544,17 +559,23 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    model = Model.alpes(args.model, friction=True, params=args.params)
-    res = identify(model, args.data, args.parameters, excitation=freqs, torque_noise=args.torque_noise)
+    model = Model.alpes(args.model, friction=True, params=args.params, chain=args.chain)
+    parameters = args.parameters
+    if parameters is None and args.model == "thumb":
+        parameters = THUMB_PARAMETERS
+    res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise)
     if args.output is not None:
         res.write(args.output)
     obj = res.to_dict()
     obj["output"] = args.output
-    lines = [f"{args.model}: parameters identified from {args.data} ({res.iterations} Gauss-Newton iterations, "
+    obj["chain"] = model.chain
+    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
+             f"({res.iterations} Gauss-Newton iterations, "
              f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s)",
-             f"  {'parameter':10s} {'value':>12s} {'std':>10s} {'start':>12s}  unit"]
+             f"  {'parameter':{max(10, *(len(n) for n in res.names))}s} {'value':>12s} {'std':>10s} {'start':>12s}  unit"]
+    w = max(10, *(len(n) for n in res.names))
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
-        lines.append(f"  {n:10s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
+        lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
     if args.output is not None:
         lines.append(f"  written to {args.output}")
@@ -713,14 +734,20 @@ def build_parser() -> argparse.ArgumentParser:
                    help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
     s.set_defaults(func=cmd_estimate)
 
-    s = sub.add_parser("experiment", help="simulate the identification experiment on a finger, write a recording CSV",
-                       epilog="Example: alpes-dyn experiment --model finger3 --params true.toml --seed 1 -o rec.csv")
-    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s = sub.add_parser("experiment", help="simulate the identification experiment on a finger or the thumb, write a "
+                       "recording CSV",
+                       epilog="Example: alpes-dyn experiment --model finger3 --chain index --params true.toml --seed 1 "
+                              "-o rec.csv")
+    s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
+                        "values in --params)")
     s.add_argument("--params", default=None, metavar="FILE",
-                   help="the finger's true parameter file (default: the shipped one)")
+                   help="the true parameter file (default: the shipped one)")
     s.add_argument("--perturb", type=float, default=None, metavar="SPREAD",
-                   help="draw the true finger from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
-                        "per link (seeded by --seed); write it with --true-params-out")
+                   help="draw the true chain from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
+                        "per link (seeded by --seed): the --chain finger's own values, the thumb's, or the shared "
+                        "finger's; write it with --true-params-out")
     s.add_argument("--true-params-out", default=None, metavar="FILE", help="write the (drawn) true parameters there")
     s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
@@ -728,15 +755,19 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_experiment)
 
-    s = sub.add_parser("identify", help="fit a finger's springs, masses and friction to a recording",
-                       epilog="Example: alpes-dyn identify --model finger3 --data rec.csv -o ident.toml")
-    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s = sub.add_parser("identify", help="fit a finger's or the thumb's springs, masses and friction to a recording",
+                       epilog="Example: alpes-dyn identify --model finger3 --chain index --data rec.csv -o ident.toml")
+    s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand: starts from its own values and writes the fit "
+                        "into its [finger.<name>] table (the thumb's go to [thumb])")
     s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
                    help="what to fit: kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... "
-                        "(default K,m,friction)")
+                        f"(default K,m,friction; on the thumb {THUMB_PARAMETERS}: its base's mass sits on the "
+                        "ab/adduction axis, nothing measured depends on it)")
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")

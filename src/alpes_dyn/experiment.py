@@ -44,11 +44,13 @@ from .errors import InputError
 from .model import Model
 from .params import HandParams, Param, load_params, with_values
 from .recording import Recording, write_recording
-from .scenario import SCENARIO_MODELS, static_equilibrium
 from .simulation import simulate
 from .stops import JointRangeWarning
 
-__all__ = ["ExperimentDesign", "experiment", "excitation", "perturbed_params"]
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "excitation", "perturbed_params"]
+
+EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
+"""The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
 
 
 @dataclass(frozen=True)
@@ -108,76 +110,162 @@ def _oriented(model: Model, gravity: np.ndarray) -> Model:
     return model if np.array_equal(model.gravity, gravity) else model.copy(gravity=gravity)
 
 
-def _mean_equilibrium(model: Model, tau_m: float, gravity: np.ndarray) -> np.ndarray:
+def _held(model: Model) -> tuple[str, ...]:
+    """Joints without a spring (the thumb's ab/adduction): their own motor holds them, at mid-range."""
+    return tuple(j for j, k in zip(model.joint_names, model.extras.stiffness) if k == 0)
+
+
+def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """The static equilibrium under the motor torques ``tau_m`` (m,) (a number for one motor), the joints
+    without spring held mid-range."""
     m = _oriented(model, gravity)
-    return static_equilibrium(m, m.transmission.joint_torque(np.array([tau_m])))
+    held = _held(m)
+    q0 = np.zeros(m.n)
+    for j in held:
+        i = m.joint_index(j)
+        q0[i] = 0.5 * (m.lower[i] + m.upper[i])
+    return m.static_equilibrium(m.transmission.joint_torque(np.atleast_1d(np.asarray(tau_m, dtype=float))), q0,
+                                fixed=held)
 
 
-def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float]:
-    """(tau_b, a): the multisine's bias and amplitude for ``model`` (see the module docstring), N m."""
+def _motor_groups(model: Model) -> tuple[list[np.ndarray], list[int], list[int]]:
+    """Each motor's joints, the motors whose joints all have springs (a tendon against its return springs) and
+    the others (a motor driving springless joints both ways, held at mid-range by its bias)."""
+    S = model.transmission.S
+    held = {model.joint_index(j) for j in _held(model)}
+    joints = [np.flatnonzero(S[k]) for k in range(S.shape[0])]
+    sprung = [k for k, js in enumerate(joints) if not held.intersection(js.tolist())]
+    return joints, sprung, [k for k in range(S.shape[0]) if k not in sprung]
+
+
+def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[np.ndarray],
+                  gravity: np.ndarray) -> np.ndarray:
+    """``bias`` with each motor of ``free`` set to the torque that balances gravity on its (held) joints."""
+    out = bias.copy()
+    if not free:
+        return out
+    q = _mean_equilibrium(model, out, gravity)
+    m = _oriented(model, gravity)
+    G = m.gravity_torque(q) - m.transmission.joint_torque(out)  # what the held joints still need
+    S = m.transmission.S
+    for k in free:
+        js = joints[k]
+        out[k] += float(S[k, js] @ G[js] / (S[k, js] @ S[k, js]))
+    return out
+
+
+def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | tuple[np.ndarray, np.ndarray]:
+    """(tau_b, a): the multisine's bias and amplitude for ``model`` (see the module docstring), N m; numbers
+    for a one-motor model, arrays (m,) per motor otherwise (the thumb: flexion and ab/adduction)."""
+    bias, amp = _excitation(model, design)
+    if model.transmission.n_motors == 1:
+        return float(bias[0]), float(amp[0])
+    return bias, amp
+
+
+def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray]:
+    """Bias and amplitude per motor (m,), N m. A motor against springs: bias putting the mean of its joints
+    mid-range, amplitude the largest keeping the static equilibria in range; a motor on springless joints
+    (the thumb's ab/adduction): bias balancing gravity there, amplitude from the motor's limit down.
+    Then every amplitude whose joints a nominal run takes out of range shrinks by 15 % until none does."""
     lo, hi = model.lower + design.margin, model.upper - design.margin
     g0 = np.asarray(design.orientations[0], dtype=float)
+    n_m = model.transmission.n_motors
+    joints, sprung, free = _motor_groups(model)
 
-    def within(tau: float) -> bool:
+    def within(tau: np.ndarray) -> bool:
         try:
             return all(np.all((q >= lo) & (q <= hi)) for q in
                        (_mean_equilibrium(model, tau, np.asarray(g, dtype=float)) for g in design.orientations))
         except InputError:
             return False
 
-    bias = design.torque_bias
-    if bias is None:  # mean joint angle mid-range
-        bias = _rest_torque(model, lambda q: float(np.mean(q)), float(np.mean(0.5 * (model.lower + model.upper))),
-                            g0, 0.2)
-    amp = design.torque_amplitude
-    if amp is None:
-        if not within(bias):
-            raise InputError(f"torque_bias: the nominal finger's equilibrium at {bias:g} N m leaves its joint range")
-        a, b = 0.0, bias
+    bias = np.zeros(n_m)
+    for k in sprung:
+        if design.torque_bias is not None:
+            bias[k] = design.torque_bias
+        else:  # mean joint angle of the motor's joints mid-range
+            js = joints[k]
+            bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])),
+                                   float(np.mean(0.5 * (model.lower + model.upper)[js])), g0, 0.2,
+                                   lambda c, k=k: _with(bias, k, c))
+    bias = _holding_bias(model, bias, free, joints, g0)
+    if design.torque_amplitude is not None:
+        return bias, np.full(n_m, float(design.torque_amplitude))
+    if not within(bias):
+        raise InputError(f"torque_bias: the nominal finger's equilibrium at {_fmt(bias)} N m leaves its joint range")
+    amp = np.zeros(n_m)
+    for k in sprung:
+        a, b = 0.0, bias[k]
         for _ in range(40):
             c = 0.5 * (a + b)
-            a, b = (c, b) if within(bias + c) and within(bias - c) else (a, c)
-        amp = a
-        # resonances swing the finger further than its static equilibria: shrink until a nominal run stays in range
-        t, seg, G = _schedule(design)
-        for _ in range(30):
+            a, b = (c, b) if within(_with(bias, k, bias[k] + c)) and within(_with(bias, k, bias[k] - c)) else (a, c)
+        amp[k] = a
+    cap = float(model.params.tau_max) if model.params is not None else 0.05
+    S = model.transmission.S
+    for k in free:  # from 4 x the breakaway torque (Coulomb friction) of its joints: a larger one runs away
+        js = joints[k]
+        breakaway = float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
+        amp[k] = min(cap, 4.0 * breakaway) if breakaway > 0 else cap
+    # resonances swing the finger further than its static equilibria: shrink until a nominal run stays in range.
+    # First the springless joints' motors alone (a wild swing there also throws the other joints out of range),
+    # then every motor whose joints leave the range.
+    t, seg, G = _schedule(design)
+    for shrinking in ((free,) if free else ()) + (tuple(range(n_m)),):
+        for _ in range(60):
             with warnings.catch_warnings():  # a trial amplitude may leave the range: that is what is tested
                 warnings.simplefilter("ignore", JointRangeWarning)
-                q = _simulate(model, design, _profile(design, t, bias, amp), G, seg)[:, : model.n]
-            if np.all((q >= lo) & (q <= hi)):
+                q = _simulate(model, design, _profiles(design, t, bias, amp), G, seg)[:, : model.n]
+            out = np.any((q < lo) | (q > hi), axis=0)
+            hit = [k for k in shrinking if out[joints[k]].any()]
+            if not hit:
                 break
-            amp *= 0.85
-        amp *= design.amplitude_fraction
-    return float(bias), float(amp)
+            for k in hit:
+                amp[k] *= 0.85
+    return bias, amp * design.amplitude_fraction
+
+
+def _with(x: np.ndarray, k: int, value: float) -> np.ndarray:
+    out = x.copy()
+    out[k] = value
+    return out
+
+
+def _fmt(x: np.ndarray) -> str:
+    return f"{x[0]:g}" if x.size == 1 else "[" + ", ".join(f"{v:g}" for v in x) + "]"
 
 
 def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: float, gravity: np.ndarray,
-                 upper: float) -> float:
-    """The motor torque in [0, upper] N m at which ``reading`` of the finger's static equilibrium (a
+                 upper: float, torques: Callable[[float], np.ndarray] | None = None) -> float:
+    """The motor torque c in [0, upper] N m at which ``reading`` of the finger's static equilibrium (a
     quantity that grows with the torque) equals ``target``: bisection, a torque that leaves the
-    equilibrium undefined counting as too much."""
+    equilibrium undefined counting as too much. ``torques(c)``: the motor torques with c on the motor
+    searched (default: the one motor)."""
+    torques = torques or (lambda c: np.array([c]))
     a, b = 0.0, upper
     for _ in range(60):
         c = 0.5 * (a + b)
         try:
-            above = reading(_mean_equilibrium(model, c, gravity)) > target
+            above = reading(_mean_equilibrium(model, torques(c), gravity)) > target
         except InputError:
             above = True
         a, b = (a, c) if above else (c, b)
     return 0.5 * (a + b)
 
 
-def _trimmed_bias(truth: Model, nominal: Model, bias: float, gravity: np.ndarray) -> float:
-    """The motor torque at which the finger ``truth`` rests with the encoder reading that ``nominal``
-    has at ``bias`` (N m): what an experimenter gets by trimming the bias with a slow loop on the
-    measured encoder before recording (the encoder is all it uses)."""
+def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
+    (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
+    with a slow loop on its measured encoder before recording (the encoders are all it uses). The
+    motors of springless joints keep their bias (their joints are placed mid-range by hand)."""
     S = nominal.transmission.S
-
-    def encoder(q: np.ndarray) -> float:
-        return float(np.sum(S @ q))
-
-    return _rest_torque(truth, encoder, encoder(_mean_equilibrium(nominal, bias, gravity)), gravity,
-                        max(4.0 * bias, 0.2))
+    joints, sprung, free = _motor_groups(nominal)
+    target = S @ _mean_equilibrium(nominal, bias, gravity)
+    out = np.asarray(bias, dtype=float).copy()
+    for k in sprung:
+        out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity,
+                              max(4.0 * out[k], 0.2), lambda c, k=k: _with(out, k, c))
+    return out
 
 
 def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -190,8 +278,8 @@ def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """States (N+1, 2n) from the static equilibrium at u[0], RK4 with substeps, the torque held per sample,
-    segment by segment of constant gravity."""
+    """States (N+1, 2n) from the static equilibrium at u[0], RK4 with substeps, the torques u (N+1, m) held per
+    sample, segment by segment of constant gravity."""
     N = u.shape[0] - 1
     x = np.zeros((N + 1, 2 * truth.n))
     x[0, : truth.n] = _mean_equilibrium(truth, u[0], G[0])
@@ -202,64 +290,79 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
             stop += 1
         m = _oriented(truth, G[start])
         k = stop - start
-        sim = simulate(m, x[start], np.repeat(u[start:stop, None], design.substeps, axis=0), k * design.dt,
+        sim = simulate(m, x[start], np.repeat(u[start:stop], design.substeps, axis=0), k * design.dt,
                        design.dt / design.substeps, "rk4", input="motor", output="encoder")
         x[start + 1: stop + 1] = sim.x[design.substeps:: design.substeps]
         start = stop
     return x
 
 
-def _profile(design: ExperimentDesign, t: np.ndarray, bias: float, amp: float) -> np.ndarray:
+def _profile(design: ExperimentDesign, t: np.ndarray, bias: float, amp: float, motor: int = 0,
+             n_motors: int = 1) -> np.ndarray:
+    """One motor's multisine (len(t),), N m: Schroeder phases (a low crest factor), shifted by pi k i / m on
+    line i for motor k of m (the motors of one chain excited at once, out of phase)."""
     f = np.asarray(design.frequencies, dtype=float)
     k = np.arange(1, f.size + 1)
-    phases = -np.pi * k * (k - 1) / f.size  # Schroeder: a low crest factor
+    phases = -np.pi * k * (k - 1) / f.size - np.pi * motor * k / n_motors
     s = np.sin(2 * np.pi * f[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
     return bias + amp * s / math.sqrt(f.size / 2)
 
 
+def _profiles(design: ExperimentDesign, t: np.ndarray, bias: np.ndarray, amp: np.ndarray) -> np.ndarray:
+    """(len(t), m): every motor's multisine."""
+    m = len(bias)
+    return np.column_stack([_profile(design, t, float(bias[k]), float(amp[k]), k, m) for k in range(m)])
+
+
 def experiment(model: str, true_params: HandParams | str | Path | None = None,
                design: ExperimentDesign | None = None, seed: int = 0, path: str | Path | None = None,
-               nominal_params: HandParams | str | Path | None = None) -> Recording:
-    """Simulate the identification experiment on a finger with ``true_params`` (friction included).
+               nominal_params: HandParams | str | Path | None = None, chain: str | None = None) -> Recording:
+    """Simulate the identification experiment on a finger (or the thumb) with ``true_params`` (friction included).
 
     Parameters
     ----------
-    model: ``"finger2"`` or ``"finger3"``.
-    true_params: the finger's true parameters (a :class:`~alpes_dyn.params.HandParams` or a file).
+    model: ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors
+        are excited at once, each with the multisine (phases shifted between them): the flexion tendon
+        about a bias that holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about
+        the torque that balances gravity there, its joint starting mid-range, its amplitude the largest
+        that keeps the nominal thumb in range (x ``amplitude_fraction``).
+    true_params: the true parameters (a :class:`~alpes_dyn.params.HandParams` or a file).
     design: the :class:`ExperimentDesign` (default: the documented one).
     seed: seed of the sensor noise. path: write the recording there as CSV too.
     nominal_params: the parameters the experimenter knows, from which the excitation is designed
         (default: the shipped file).
+    chain: for a finger model, the hand's finger it is (its own ``[finger.<name>]`` values, in the true
+        and the nominal file; see :meth:`Model.alpes <alpes_dyn.Model.alpes>`).
 
     Returns
     -------
     :class:`~alpes_dyn.recording.Recording` with encoder counts, measured torque, the camera's joint
     angles (if any), gravity (when not the model's constant) and the true joint angles.
     """
-    if model not in SCENARIO_MODELS:
-        raise InputError(f"model: the identification experiment is defined for one finger "
-                         f"({', '.join(SCENARIO_MODELS)}), got {model!r}")
+    if model not in EXPERIMENT_MODELS:
+        raise InputError(f"model: the identification experiment is defined for one chain "
+                         f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
     design = (design or ExperimentDesign()).check()
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
-    nominal = Model.alpes(model, friction=True, params=p_nom)
-    bias, amp = excitation(nominal, design)
-    truth = Model.alpes(model, friction=True, params=p_true)
+    nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
+    bias, amp = _excitation(nominal, design)
+    truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
     if design.trim_bias and design.torque_bias is None:
         bias = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float))
     rng = np.random.default_rng(seed)
     t, seg, G = _schedule(design)
     N = t.shape[0] - 1
     n_or = len(design.orientations)
-    u = _profile(design, t, bias, amp)
+    u = _profiles(design, t, bias, amp)
     x = _simulate(truth, design, u, G, seg)
     tr = truth.transmission
     step = 2 * np.pi / tr.counts_per_rev
     qm = x[:, : truth.n] @ tr.S.T
     counts = np.round((qm + design.encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step)
-    torque = u[:, None] + design.torque_noise * rng.standard_normal((N + 1, 1))
+    torque = u + design.torque_noise * rng.standard_normal(u.shape)
     q_meas = None
     if design.camera_times:
         q_meas = np.full((N + 1, truth.n), np.nan)
@@ -275,12 +378,17 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
 
 
 def perturbed_params(params: HandParams | None = None, spread: float = 0.2, seed: int = 0,
-                     kinds: Sequence[str] = ("K", "m", "friction")) -> HandParams:
+                     kinds: Sequence[str] = ("K", "m", "friction"), chains: Sequence[str] | None = None) -> HandParams:
     """``params`` with the finger's springs K_i, masses m_i (inertias I_i with them) and per-joint
     friction F_s, F_v each multiplied by an independent factor uniform in [1 - spread, 1 + spread].
 
+    ``chains``: which chains are drawn, each independently (one seeded generator, in the order given):
+    None (default) the shared ``[finger]`` values; finger names (``palm.finger_names``) give each of those
+    fingers values of its own (``[finger.<name>]``, drawn around its current ones); ``"thumb"`` draws the
+    thumb's flexion springs, masses (its base's too) and friction, and its ab/adduction friction.
+
     The result is a valid parameter set (the changed entries marked ``assumed`` with the draw as reason),
-    e.g. the "true" finger of a simulated identification experiment.
+    e.g. the "true" finger (or hand) of a simulated identification experiment.
     """
     if not (math.isfinite(spread) and 0 <= spread < 1):
         raise InputError(f"spread: expected a fraction in [0, 1), got {spread!r}")
@@ -288,25 +396,49 @@ def perturbed_params(params: HandParams | None = None, spread: float = 0.2, seed
         if k not in ("K", "m", "friction"):
             raise InputError(f"kinds: unknown kind {k!r} (expected K, m, friction)")
     p = params if params is not None else load_params()
+    if chains is None:
+        chains = ("finger",)
+    elif isinstance(chains, str):
+        chains = (chains,)
+    for c in chains:
+        if c != "finger" and c not in p.chain_names:
+            raise InputError(f"chains: unknown chain {c!r} (expected one of {', '.join(p.chain_names)})")
     rng = np.random.default_rng(seed)
-    f = p.finger
     reason = f"drawn: nominal times a factor uniform in [{1 - spread:g}, {1 + spread:g}] per link, seed {seed}"
     upd: dict[str, Param] = {}
+    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "base_mass": "kg",
+             "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
 
-    def put(name: str, value: np.ndarray) -> None:
-        old = p.raw[name] if name in p.raw else Param(value, "N m" if name.endswith("F_s") else "N m s/rad",
-                                                         "assumed", reason, "per-joint friction")
-        upd[name] = dataclasses.replace(old, value=value, source="assumed", reason=reason, std=None)
+    def put(name: str, value: np.ndarray | float) -> None:
+        field_ = name.rsplit(".", 1)[1]
+        old = p.raw.get(name) or p.raw.get(f"finger.{field_}")
+        old = old if old is not None else Param(value, units[field_], "assumed", reason, f"per-joint {field_}")
+        upd[name] = dataclasses.replace(old, value=value, unit=units[field_], source="assumed", reason=reason, std=None)
 
-    if "K" in kinds:
-        put("finger.K", f.K * rng.uniform(1 - spread, 1 + spread, 3))
-    if "m" in kinds:
-        s = rng.uniform(1 - spread, 1 + spread, 3)
-        put("finger.m", f.m * s)
-        put("finger.I", f.I * s)
-    if "friction" in kinds:
-        Fs = f.F_s if f.F_s is not None else np.full(3, p.F_s)
-        Fv = f.F_v if f.F_v is not None else np.full(3, p.F_v)
-        put("finger.F_s", Fs * rng.uniform(1 - spread, 1 + spread, 3))
-        put("finger.F_v", Fv * rng.uniform(1 - spread, 1 + spread, 3))
+    def draw(size: int) -> np.ndarray | float:
+        f = rng.uniform(1 - spread, 1 + spread, size)
+        return f
+
+    for c in chains:
+        ch = p.chain(c)
+        n = ch.n
+        sec = "thumb" if c == "thumb" else ("finger" if c == "finger" else f"finger.{c}")
+        if "K" in kinds:
+            put(f"{sec}.K", ch.K * draw(n))
+        if "m" in kinds:
+            s = draw(n)
+            put(f"{sec}.m", ch.m * s)
+            put(f"{sec}.I", ch.I * s)
+            if c == "thumb":
+                put("thumb.base_mass", p.thumb_base_mass * float(draw(1)[0]))
+        if "friction" in kinds:
+            Fs = ch.F_s if ch.F_s is not None else np.full(n, p.F_s)
+            Fv = ch.F_v if ch.F_v is not None else np.full(n, p.F_v)
+            put(f"{sec}.F_s", Fs * draw(n))
+            put(f"{sec}.F_v", Fv * draw(n))
+            if c == "thumb":
+                Fs_a = p.F_s if p.abduction_F_s is None else p.abduction_F_s
+                Fv_a = p.F_v if p.abduction_F_v is None else p.abduction_F_v
+                put("thumb.abduction_F_s", Fs_a * float(draw(1)[0]))
+                put("thumb.abduction_F_v", Fv_a * float(draw(1)[0]))
     return with_values(p, upd)

@@ -45,6 +45,7 @@ import numpy as np
 
 from .errors import InputError, ModelError, RecordingError
 from .model import Model
+from .parametric import parameter_catalogue
 from .params import HandParams, Param, with_values, write_params
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
@@ -92,57 +93,86 @@ class IdentificationResult:
             "model": self.model.name,
         }
 
-    def params(self, base: HandParams | None = None) -> HandParams:
+    def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
         """The parameter set with the fitted values (see :func:`identified_params`)."""
-        return identified_params(self, base)
+        return identified_params(self, base, chain)
 
-    def write(self, path: str | Path, base: HandParams | None = None) -> Path:
+    def write(self, path: str | Path, base: HandParams | None = None, chain: str | None = None) -> Path:
         """Write the identified parameter file (the base file with each fitted value ``identified``)."""
-        return write_params(self.params(base), path,
+        return write_params(self.params(base, chain), path,
                             header=f"Identified by alpes_dyn from {self.recording_path or 'a recording'} "
                                    f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
 
 
-def identified_params(result: IdentificationResult, base: HandParams | None = None) -> HandParams:
-    """``base`` (default: the model's parameter file) with the fitted values of a finger model.
+def identified_params(result: IdentificationResult, base: HandParams | None = None,
+                      chain: str | None = None) -> HandParams:
+    """``base`` (default: the model's parameter file) with the fitted values of a chain, each marked
+    ``source = "identified"`` with its standard error.
 
-    K_i -> ``finger.K``, m_i -> ``finger.m`` and ``finger.I`` (scaled with the mass), F_s_i, F_v_i ->
-    ``finger.F_s``, ``finger.F_v``; each marked ``source = "identified"`` with its standard error.
+    Where they go (``chain``, default the model's :attr:`~alpes_dyn.Model.chain`):
+
+    * a finger model without a chain: the shared ``[finger]`` values -- K_i -> ``finger.K``, m_i ->
+      ``finger.m`` and ``finger.I`` (scaled with the mass), F_s_i, F_v_i -> ``finger.F_s``, ``finger.F_v``;
+    * a finger model with ``chain`` a finger's name: that finger's own values ``[finger.<name>]`` (the
+      fields fitted, the others untouched);
+    * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
+      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``.
     """
     p = base if base is not None else result.model.params
     if p is None:
         raise ModelError("identified parameters: the model has no parameter file; pass base=")
-    if result.model.name not in ("finger2", "finger3"):
-        raise ModelError(f"identified parameters: writing a parameter file is supported for finger2 and finger3, "
-                         f"not {result.model.name!r}")
-    n = result.model.n
+    model = result.model
+    if model.name not in ("finger2", "finger3", "thumb"):
+        raise ModelError(f"identified parameters: writing a parameter file is supported for finger2, finger3 and "
+                         f"thumb, not {model.name!r}")
+    if chain is None:
+        chain = model.chain
+    thumb = model.name == "thumb"
+    if thumb and chain != "thumb":
+        raise ModelError(f"chain: the thumb model's values go to the thumb, not {chain!r}")
+    if not thumb and chain is not None and chain not in p.finger_names:
+        raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
     reason = (f"identified from {result.recording_path or 'a recording'} by multiple shooting "
               f"({result.residual_rms:.3g} counts RMS residual)")
-    f = p.finger
-    arrays = {"K": f.K.copy(), "m": f.m.copy(), "I": f.I.copy(),
-              "F_s": (f.F_s if f.F_s is not None else np.full(3, p.F_s)).copy(),
-              "F_v": (f.F_v if f.F_v is not None else np.full(3, p.F_v)).copy()}
-    stds = {k: np.zeros(3) for k in arrays}
+    own = p.chain("finger" if chain is None else chain)
+    k = own.n
+    arrays = {"K": own.K.copy(), "m": own.m.copy(), "I": own.I.copy(),
+              "F_s": (own.F_s if own.F_s is not None else np.full(k, p.F_s)).copy(),
+              "F_v": (own.F_v if own.F_v is not None else np.full(k, p.F_v)).copy()}
+    stds = {kind: np.zeros(k) for kind in arrays}
+    scalars: dict[str, tuple[float, float]] = {}  # thumb scalars: field -> (value, std)
     touched = set()
+    cat = {pp.name: pp for pp in parameter_catalogue(model)}
+    flexion = [j for j in model.joint_names if j != "thumb_abd"]
     for name, value, sd in zip(result.names, result.values, result.std):
-        kind, _, idx = name.rpartition("_")
-        if kind not in ("K", "m", "F_s", "F_v") or not idx.isdigit() or not 1 <= int(idx) <= n:
+        pp = cat.get(name)
+        if pp is None or pp.kind not in ("K", "m", "F_s", "F_v"):
             raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
-        i = int(idx) - 1
-        if kind == "m":
+        if thumb and pp.joint == "thumb_abd":
+            field_ = {"K": "abduction_K", "m": "base_mass", "F_s": "abduction_F_s", "F_v": "abduction_F_v"}[pp.kind]
+            scalars[field_] = (float(value), float(sd))
+            continue
+        i = flexion.index(pp.joint)
+        if pp.kind == "m":
             scale = value / arrays["m"][i]
             arrays["I"][i] *= scale
             stds["I"][i] = arrays["I"][i] * sd / value
             touched.add("I")
-        arrays[kind][i] = value
-        stds[kind][i] = sd
-        touched.add(kind)
-    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad"}
+        arrays[pp.kind][i] = value
+        stds[pp.kind][i] = sd
+        touched.add(pp.kind)
+    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "abduction_K": "N m/rad",
+             "base_mass": "kg", "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
+    sec = "thumb" if thumb else ("finger" if chain is None else f"finger.{chain}")
     upd = {}
-    for k in touched:
-        old = p.raw.get(f"finger.{k}")
-        desc = old.description if old is not None else f"per-joint {k}"
-        upd[f"finger.{k}"] = Param(arrays[k], units[k], "identified", reason, desc, stds[k])
+    for kind in touched:
+        old = p.raw.get(f"{sec}.{kind}") or p.raw.get(f"finger.{kind}")
+        desc = old.description if old is not None else f"per-joint {kind}"
+        upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, stds[kind])
+    for field_, (value, sd) in scalars.items():
+        old = p.raw.get(f"thumb.{field_}")
+        desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
+        upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
     return with_values(p, upd)
 
 
@@ -293,7 +323,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                          "parameter needs a positive starting value (use a model with that term switched on)")
 
     # initial guess: the model's own response from its static equilibrium, cut at the nodes
-    q0 = static_equilibrium(model, tr.joint_torque(U[0])) if rec.gravity is None else np.zeros(n)
+    q0 = _rest_guess(model, tr.joint_torque(U[0]), y[0]) if rec.gravity is None else np.zeros(n)
     x_nom, _ = sens.run(np.concatenate([q0, np.zeros(n)])[None], U[None], G[None], theta0,
                         np.zeros((1, nu, sens.nb)) if sens.nb else None, basis=Psi[None] if lines else None)
     nodes = x_nom[0, np.arange(n_int) * L].copy()
@@ -552,3 +582,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
         states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)
+
+
+def _rest_guess(model: Model, tau: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """The static equilibrium under the joint torques ``tau``, the joints without spring (the thumb's
+    ab/adduction, which its own motor holds) held where the first encoder reading ``y0`` puts them."""
+    held = tuple(j for j, k in zip(model.joint_names, model.extras.stiffness) if k == 0)
+    if not held:
+        return static_equilibrium(model, tau)
+    q = np.zeros(model.n)
+    idx = [model.joint_index(j) for j in held]
+    q[idx] = (np.linalg.pinv(model.transmission.S) @ y0)[idx]
+    return model.static_equilibrium(tau, q, fixed=held)

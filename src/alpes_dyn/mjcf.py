@@ -261,7 +261,7 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         body.append(w.joint("thumb_abd", p.abduction_axis, spring_stiffness(np.array([p.abduction_K]), spring, p.b,
                                                                             p.r)[0],
                             p.abduction_ratio**2 * p.J_m, p.abduction_lower, p.abduction_upper, "        ",
-                            p.F_s, p.F_v))
+                            p.abduction_F_s, p.abduction_F_v))
         body.append(f'        <inertial pos="0 0 0" mass="{_f(p.thumb_base_mass)}" diaginertia="{_v((ib, ib, ib))}"/>\n')
         body.append(f'        <geom name="thumb_base" type="sphere" size="{_f(rb)}" contype="0" conaffinity="0" '
                     f'rgba="{finger_rgba}"/>\n')

@@ -532,16 +532,35 @@ class Model:
             tau -= self.contact_torque(q, F, tip, contacts)
         return tau
 
-    def static_equilibrium(self, tau: np.ndarray, q0: np.ndarray | None = None, tol: float = 1e-12) -> np.ndarray:
+    def static_equilibrium(self, tau: np.ndarray, q0: np.ndarray | None = None, tol: float = 1e-12,
+                           fixed: Sequence[str] = ()) -> np.ndarray:
         """Joint angles q (n,), rad, where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
 
         Newton's method from ``q0`` (default 0) with the analytic Jacobian of G (:meth:`gravity_jacobian`),
         at most 0.5 rad per step, until max |G(q) - tau| < ``tol`` (N m); raises
         :class:`~alpes_dyn.InputError` if the stiffness is singular or it does not converge in 50 iterations.
+        ``fixed``: joint names held at their ``q0`` values (e.g. a joint without spring that its own motor
+        holds, the thumb's ab/adduction): the balance is solved on the other joints only.
         """
         tau = self.vector(tau, "tau")
         q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
-        return newton_equilibrium(lambda q: self.gravity_torque(q) - tau, self.gravity_jacobian, q0, tol)
+        if isinstance(fixed, str):
+            fixed = (fixed,)
+        held = [self.joint_index(j) for j in fixed]
+        if not held:
+            return newton_equilibrium(lambda q: self.gravity_torque(q) - tau, self.gravity_jacobian, q0, tol)
+        free = np.setdiff1d(np.arange(self.n), held)
+        if free.size == 0:
+            return q0.copy()
+
+        def full(qf: np.ndarray) -> np.ndarray:
+            q = q0.copy()
+            q[free] = qf
+            return q
+
+        qf = newton_equilibrium(lambda qf: (self.gravity_torque(full(qf)) - tau)[free],
+                                lambda qf: self.gravity_jacobian(full(qf))[np.ix_(free, free)], q0[free], tol)
+        return full(qf)
 
     # ------------------------------------------------------------------ helpers
     @property

@@ -39,6 +39,7 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
         "L": (2, "pos"), "s": (2, "pos"), "m": (2, "pos"), "I": (2, "pos"), "K": (2, "nonneg"),
         "radius": (None, "pos"), "base_mass": (None, "pos"), "abduction_K": (None, "nonneg"), "abduction_axis": (3, "unit"),
         "abduction_lower": (None, "any"), "abduction_upper": (None, "any"), "F_s": (2, "nonneg"), "F_v": (2, "nonneg"),
+        "abduction_F_s": (None, "nonneg"), "abduction_F_v": (None, "nonneg"),
     },
     "palm": {
         "finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"),
@@ -52,7 +53,7 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "environment": {"gravity": (3, "any")},
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
-_OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v"}
+_OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v"}
 _ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
 # per-finger overrides: a table [finger.<name>] (name from palm.finger_names) with any of these fields, which
 # replace the shared [finger] values on that finger only (a real hand's fingers differ link by link)
@@ -146,6 +147,8 @@ class HandParams:
     path: str = ""
     raw: dict[str, Param] = field(default_factory=dict, repr=False)
     fingers: dict[str, ChainParams] = field(default_factory=dict, repr=False)
+    abduction_F_s: float | None = None  # the ab/adduction joint's own friction (N m, N m s/rad), else friction.F_s/F_v
+    abduction_F_v: float | None = None
 
     def chain(self, name: str) -> ChainParams:
         """The parameters of one chain: a finger by its name (``palm.finger_names``, the shared ``[finger]``
@@ -352,6 +355,7 @@ def _from_text(text: str, path: str) -> HandParams:
         finger_names=v["palm.finger_names"],
         finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
         thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
+        abduction_F_s=v.get("thumb.abduction_F_s"), abduction_F_v=v.get("thumb.abduction_F_v"),
     )
 
 

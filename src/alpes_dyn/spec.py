@@ -332,8 +332,8 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
 
     One motor per chain (ratio r/r_m on each of its flexion joints), one for the thumb's
     ab/adduction (``transmission.abduction_ratio``); springs K_i under the ``spring`` law (eq. 2.14);
-    with ``friction`` F_s and F_v on every joint (eq. 2.6-2.7; a chain's per-joint ``F_s``/``F_v``
-    where the file gives them); with ``rotor_inertia`` N^2 J_m on
+    with ``friction`` F_s and F_v on every joint (eq. 2.6-2.7; a chain's per-joint ``F_s``/``F_v`` -- a
+    finger's own first -- and the thumb's ``abduction_F_s``/``abduction_F_v`` where the file gives them); with ``rotor_inertia`` N^2 J_m on
     every flexion joint and abduction_ratio^2 J_m on the ab/adduction joint (eq. 2.8).
     """
     ratio, abd = params.transmission_ratio, params.abduction_ratio
@@ -352,7 +352,8 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
         if ch.abduction:
             K[ch.abduction] = lay.abduction_stiffness
             arm[ch.abduction] = abd**2 * params.J_m
-            Fs[ch.abduction], Fv[ch.abduction] = params.F_s, params.F_v
+            Fs[ch.abduction] = params.F_s if params.abduction_F_s is None else params.abduction_F_s
+            Fv[ch.abduction] = params.F_v if params.abduction_F_v is None else params.abduction_F_v
     joints = list(K)
     k = spring_stiffness(np.array([K[j] for j in joints]), spring, params.b, params.r)
     zeros: dict[str, float] = {}
