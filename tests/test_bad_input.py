@@ -595,6 +595,8 @@ API: list[Api] = [
     A("run_estimation", lambda c: _est(params=""), ModelError, "parameter file: empty file name"),
     A("run_estimation", lambda c: _est(params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
     A("run_estimation", lambda c: _est(model="hand"), InputError, "model: the estimation scenario"),
+    A("run_estimation", lambda c: _est(model="thumb"), InputError, "friction: the thumb's scenario needs friction=True"),
+    A("run_estimation", lambda c: _est(chain="pinky"), ModelError, "chain: unknown finger 'pinky'"),
     A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
     A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
 ]

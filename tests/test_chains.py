@@ -300,7 +300,6 @@ def test_identify_the_thumb_from_noise_free_data():
     ab/adduction axis, is not fitted: the truth keeps the nominal one)."""
     import math
 
-    from alpes_dyn.cli import THUMB_PARAMETERS
     from alpes_dyn.experiment import ExperimentDesign, experiment, perturbed_params
     from alpes_dyn.identification import identify
 
@@ -313,7 +312,7 @@ def test_identify_the_thumb_from_noise_free_data():
     model = ad.Model.alpes("thumb", friction=True)
     tr = model.transmission
     rec.encoder = rec.true_q @ tr.S.T / (2 * math.pi / tr.counts_per_rev)  # unquantised
-    res = identify(model, rec, THUMB_PARAMETERS, progress=False)
+    res = identify(model, rec, "K,m_thumb_j1,m_thumb_j2,friction", progress=False)
     t = true.thumb
     truth = np.r_[t.K, t.m, true.abduction_F_s, t.F_s, true.abduction_F_v, t.F_v]
     assert res.names == ("K_thumb_j1", "K_thumb_j2", "m_thumb_j1", "m_thumb_j2", "F_s_thumb_abd", "F_s_thumb_j1",
@@ -348,6 +347,47 @@ def test_experiment_and_identify_cli_on_the_thumb(tmp_path, capsys):
     q = load_params(ident)
     assert q.raw["thumb.K"].source == "identified" and q.raw["finger.K"].source == "report"
     assert q.thumb.K.tolist() == [res["parameters"][k]["value"] for k in ("K_thumb_j1", "K_thumb_j2")]
-    assert q.abduction_F_s == res["parameters"]["F_s_thumb_abd"]["value"]
+    assert "F_s_thumb_abd" not in res["parameters"] and q.abduction_F_s is None
+    assert q.thumb.F_s.tolist() == [res["parameters"][k]["value"] for k in ("F_s_thumb_j1", "F_s_thumb_j2")]
     assert np.max(np.abs(q.thumb.K / t.thumb.K - 1)) < 0.01
     assert np.max(np.abs(q.thumb.m / t.thumb.m - 1)) < 0.03
+
+
+def test_estimation_scenario_on_a_chain(hand_params):
+    """run_estimation(chain=) is the scenario on that finger of the hand (the same run as on the file projected
+    on it); on the thumb (friction on) the EKF with the exact model tracks all three joints, the ab/adduction
+    creeping by degrees under its scaled sines."""
+    from alpes_dyn.scenario import run_estimation
+
+    p = hand_params
+    a = run_estimation("ekf", model="finger3", chain="index", friction=True, params=p, duration=1.0)
+    b = run_estimation("ekf", model="finger3", friction=True, params=chain_params(p, "index"), duration=1.0)
+    c = run_estimation("ekf", model="finger3", friction=True, params=p, duration=1.0)
+    assert np.array_equal(a.rmse, b.rmse) and not np.allclose(a.x_true, c.x_true, rtol=1e-3)
+    assert a.to_dict()["chain"] == "index"
+    th = run_estimation("ekf", model="thumb", friction=True, params=p, duration=1.5)
+    assert th.joint_names == ("thumb_abd", "thumb_j1", "thumb_j2")
+    assert np.degrees(th.rmse).max() < 0.2
+    assert 1.0 < np.degrees(np.ptp(th.q_true[:, 0])) < 20.0
+    assert abs(th.q_true[0, 0] - np.pi / 4) <= 0.1  # starts mid-range (+- the scenario's offset)
+    with pytest.raises(ad.InputError, match=r"friction: the thumb's scenario needs friction=True"):
+        run_estimation("ekf", model="thumb", duration=1.0)
+
+
+def test_experiment_stops_below_a_fold():
+    """A little finger with K_1 18 % soft snaps through (a fold of its static equilibria) at 0.0215 N m, below
+    the nominal's mid-range bias: the trimmed bias stays below the fold by 1.25 times the multisine's peak,
+    and the recorded finger stays on its branch (q_1 under 80 degrees)."""
+    from alpes_dyn.experiment import ExperimentDesign, _fold_torque, experiment, perturbed_params
+
+    nominal = load_params()
+    true = perturbed_params(nominal, spread=0.2, seed=1, chains=nominal.chain_names)
+    assert true.chain("little").K[0] / nominal.finger.K[0] == pytest.approx(0.82, abs=0.01)
+    little = ad.Model.alpes("finger3", friction=True, params=true, chain="little")
+    fold = _fold_torque(little, lambda c: np.array([c]), np.array([0.0, 0.0, -9.81]), 0.2)
+    assert 0.0212 < fold < 0.0218
+    with pytest.raises(ad.InputError, match="did not converge"):  # beyond it, no rest near q = 0
+        little.static_equilibrium(little.transmission.joint_torque(np.array([fold + 3e-4])))
+    rec = experiment("finger3", true, ExperimentDesign(duration=0.5), seed=1, chain="little")
+    assert rec.torque[:, 0].max() < fold
+    assert np.degrees(rec.true_q[:, 0]).max() < 80

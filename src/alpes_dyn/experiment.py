@@ -12,7 +12,8 @@ The documented experiment on one finger (``finger2``, ``finger3``):
 * the bias trimmed on the hand (``trim_bias``, default on): before recording, a slow loop on the
   measured encoder moves the bias until the finger rests where the nominal one would (the real finger,
   not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
-  q_1 past its 90 degree stop);
+  q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a
+  fold of its static equilibria), as high as the excitation keeps clear of the fold;
 * optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
   ``camera_noise`` (rad);
 * the sensors of the estimation scenario (:mod:`alpes_dyn.scenario`): encoder quantised to
@@ -253,19 +254,57 @@ def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: f
     return 0.5 * (a + b)
 
 
-def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray) -> np.ndarray:
+def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray,
+                  peak: np.ndarray | None = None) -> np.ndarray:
     """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
     (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
     with a slow loop on its measured encoder before recording (the encoders are all it uses). The
-    motors of springless joints keep their bias (their joints are placed mid-range by hand)."""
+    motors of springless joints keep their bias (their joints are placed mid-range by hand).
+
+    A finger with soft springs may have no rest there: past a fold of its static equilibria (stiffness
+    dG/dq singular: gravity's torque outgrows the springs') it snaps to full flexion. The loop then
+    stops below the fold, by 1.25 times the multisine's ``peak`` torque (m,) so that the excitation does
+    not push it over (measured on a little finger with K_1 18 % soft: fold at 0.0217 N m, below the
+    nominal's mid-range bias of 0.0229 N m)."""
     S = nominal.transmission.S
     joints, sprung, free = _motor_groups(nominal)
     target = S @ _mean_equilibrium(nominal, bias, gravity)
     out = np.asarray(bias, dtype=float).copy()
     for k in sprung:
-        out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity,
-                              max(4.0 * out[k], 0.2), lambda c, k=k: _with(out, k, c))
+        upper = max(4.0 * out[k], 0.2)
+        out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity, upper,
+                              lambda c, k=k: _with(out, k, c))
+        if peak is not None:
+            fold = _fold_torque(truth, lambda c, k=k: _with(out, k, c), gravity, upper)
+            if fold is not None:
+                out[k] = min(out[k], fold - 1.25 * float(peak[k]))
     return out
+
+
+def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: np.ndarray,
+                 upper: float) -> float | None:
+    """The torque (N m) up to which the branch of stable static equilibria starting at zero torque goes on
+    (a fold, where dG/dq turns singular), or None if it reaches ``upper``: a scan in steps of upper/400,
+    then bisection."""
+    m = _oriented(model, gravity)
+
+    def stable(c: float) -> bool:
+        try:
+            q = _mean_equilibrium(model, torques(c), gravity)
+        except InputError:
+            return False
+        free = [i for i, j in enumerate(m.joint_names) if j not in _held(m)]
+        dG = m.gravity_jacobian(q)[np.ix_(free, free)]
+        return bool(np.linalg.eigvalsh(0.5 * (dG + dG.T)).min() > 0)
+
+    steps = np.linspace(0.0, upper, 401)
+    for a, b in zip(steps[:-1], steps[1:]):
+        if not stable(b):
+            for _ in range(40):
+                c = 0.5 * (a + b)
+                a, b = (c, b) if stable(c) else (a, c)
+            return a
+    return None
 
 
 def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -350,10 +389,11 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
     bias, amp = _excitation(nominal, design)
     truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
-    if design.trim_bias and design.torque_bias is None:
-        bias = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float))
-    rng = np.random.default_rng(seed)
     t, seg, G = _schedule(design)
+    if design.trim_bias and design.torque_bias is None:
+        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp)), axis=0)
+        bias = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float), peak)
+    rng = np.random.default_rng(seed)
     N = t.shape[0] - 1
     n_or = len(design.orientations)
     u = _profiles(design, t, bias, amp)

@@ -30,7 +30,7 @@ from __future__ import annotations
 import dataclasses
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -44,9 +44,15 @@ from .simulation import simulate
 from .statespace import StateSpace
 
 SCENARIO_MODELS: tuple[str, ...] = ("finger2", "finger3")
+ESTIMATION_MODELS: tuple[str, ...] = SCENARIO_MODELS + ("thumb",)
+"""The models the estimation scenario runs on: a finger (the shared one, or a finger of the hand with
+``chain``) or the thumb (``friction=True``: its ab/adduction has no spring)."""
+ABDUCTION_SCALE = 0.2
+"""The thumb's ab/adduction motor gets the scenario's sines times this, and no bias (palm up, gravity does not
+load it): 0.3 mN m at most, below the joint's 0.5 mN m Coulomb friction, so that it creeps by degrees."""
 
 __all__ = [
-    "SCENARIO_MODELS", "EstimationScenario", "EstimationResult", "run_estimation", "mismatched_params",
+    "SCENARIO_MODELS", "ESTIMATION_MODELS", "EstimationScenario", "EstimationResult", "run_estimation", "mismatched_params",
     "plot_estimation", "check_plot_path", "static_equilibrium", "default_noise",
 ]
 
@@ -108,6 +114,7 @@ class EstimationScenario:
     parameters: tuple[str, ...] = PARAMETERS
     params: Any = field(default=None, compare=False)
     observer_params: Any = field(default=None, compare=False)
+    chain: str | None = None
 
     @property
     def transient_s(self) -> float:
@@ -115,9 +122,12 @@ class EstimationScenario:
         return float(self.transient) if self.transient is not None else min(1.0, 0.2 * float(self.duration))
 
     def check(self) -> None:
-        if self.model not in SCENARIO_MODELS:
-            raise InputError(f"model: the estimation scenario is defined for one finger "
-                             f"({', '.join(SCENARIO_MODELS)}), got {self.model!r}")
+        if self.model not in ESTIMATION_MODELS:
+            raise InputError(f"model: the estimation scenario is defined for one finger or the thumb "
+                             f"({', '.join(ESTIMATION_MODELS)}), got {self.model!r}")
+        if self.model == "thumb" and not self.friction:
+            raise InputError("friction: the thumb's scenario needs friction=True (its ab/adduction has no spring: "
+                             "without friction nothing holds it)")
         if self.spring != "torsional":
             raise InputError(f"spring: the scenario's torque profile is balanced by the torsional springs; "
                              f"got spring model {self.spring!r}")
@@ -173,7 +183,7 @@ class EstimationResult:
         params = {k: {kk: (vv if np.isfinite(vv) else None) for kk, vv in v.items()}
                   for k, v in self.parameters.items()}
         return {
-            "model": sc.model, "observer": self.observer, "rmse": self.rmse.tolist(),
+            "model": sc.model, "chain": sc.chain, "observer": self.observer, "rmse": self.rmse.tolist(),
             "rmse_deg": np.degrees(self.rmse).tolist(), "transient_s": sc.transient_s,
             "final_error": self.final_error.tolist(), "joints": list(self.joint_names),
             "duration_s": sc.duration, "dt_s": sc.dt, "seed": sc.seed, "mismatch": sc.mismatch,
@@ -192,13 +202,26 @@ def static_equilibrium(model: Model, tau: np.ndarray, q: np.ndarray | None = Non
     return model.static_equilibrium(tau, q, tol)
 
 
-def _torque(sc: EstimationScenario, t: np.ndarray, m: int) -> np.ndarray:
-    """(len(t), m) motor torque profile, N m; motor j's sines are phase-shifted by j radians."""
+def _torque(sc: EstimationScenario, t: np.ndarray, m: int, held: Sequence[int] = ()) -> np.ndarray:
+    """(len(t), m) motor torque profile, N m; motor j's sines are phase-shifted by j radians. The motors
+    ``held`` (of joints without spring: the thumb's ab/adduction) get no bias and the sines times
+    :data:`ABDUCTION_SCALE`."""
     out = np.full((t.shape[0], m), sc.torque_bias)
     for j in range(m):
+        scale = ABDUCTION_SCALE if j in held else 1.0
+        if j in held:
+            out[:, j] = 0.0
         for a, f in zip(sc.torque_amplitudes, sc.torque_frequencies):
-            out[:, j] += a * np.sin(2 * np.pi * f * t + j)
+            out[:, j] += scale * a * np.sin(2 * np.pi * f * t + j)
     return out
+
+
+def _held_joints(model: Model) -> tuple[tuple[str, ...], list[int]]:
+    """Joints without spring (the thumb's ab/adduction) and the motors that drive them."""
+    joints = tuple(j for j, k in zip(model.joint_names, model.extras.stiffness) if k == 0)
+    idx = [model.joint_index(j) for j in joints]
+    S = model.transmission.S
+    return joints, [k for k in range(S.shape[0]) if np.any(S[k, idx] != 0)]
 
 
 def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_var: float) -> dict[str, Any]:
@@ -210,7 +233,7 @@ def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_va
     each gain (a random walk: the gains may drift by 1e-3 in a second).
     """
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * n_params
-    return {"process_noise": Q, "measurement_noise": [meas_var], "input_noise": [sc.torque_noise**2] * m}
+    return {"process_noise": Q, "measurement_noise": [meas_var] * m, "input_noise": [sc.torque_noise**2] * m}
 
 
 def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = None, *,
@@ -233,9 +256,10 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     if observer not in OBSERVERS:
         raise InputError(f"unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
     p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
-    truth = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p)
+    truth = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p, chain=sc.chain)
     rng = np.random.default_rng(sc.seed)
     n, m = truth.n, truth.transmission.n_motors
+    held, held_motors = _held_joints(truth)
     N = int(round(sc.duration / sc.dt))
     if N < 2:
         raise InputError(f"duration: {sc.duration:g} s is shorter than two samples of dt = {sc.dt:g} s")
@@ -249,8 +273,12 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
 
     # truth: RK4 at dt / substeps, the motor torque held over each sample period
     t = sc.dt * np.arange(N + 1)
-    u_true = _torque(sc, t[:-1], m)
-    q0 = static_equilibrium(truth, truth.transmission.joint_torque(u_true[0])) + rng.uniform(
+    u_true = _torque(sc, t[:-1], m, held_motors)
+    q_rest = np.zeros(n)  # the joints without spring start mid-range (held there by hand)
+    for j in held:
+        i = truth.joint_index(j)
+        q_rest[i] = 0.5 * (truth.lower[i] + truth.upper[i])
+    q0 = truth.static_equilibrium(truth.transmission.joint_torque(u_true[0]), q_rest, fixed=held) + rng.uniform(
         -sc.q0_offset, sc.q0_offset, size=n)
     x0 = np.concatenate([q0, np.zeros(n)])
     sim = simulate(truth, x0, np.repeat(u_true, sc.substeps, axis=0), sc.duration, sc.dt / sc.substeps,
@@ -271,7 +299,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
         mass_scale = spring_scale = float("nan")
     else:
         p_obs = mismatched_params(p, mass_scale, spring_scale) if d != 0 else p
-    obs_model = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p_obs)
+    obs_model = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p_obs, chain=sc.chain)
     ss = StateSpace(obs_model, input="motor", output="encoder")
     pars = tuple(sc.parameters) if observer.endswith("-params") else ()
     n_params = len(pars)
