@@ -41,6 +41,10 @@ from alpes_dyn.parametric import parameter_catalogue
 from alpes_dyn.params import load_params, write_params
 from alpes_dyn.scenario import run_estimation
 
+# Seed 5: every chain of this draw has a rest for the scenario's torques. Not every draw does: with seed 1
+# the little finger's K_1 is 18 % soft, and its static equilibria fold (it snaps to full flexion) at
+# 0.0215 N m, below the scenario's 0.0222 N m bias. The experiment's trimmed bias stays below such a fold
+# (identification works on that finger); the estimation scenario's fixed torque does not.
 SEED = 5
 nominal = load_params()
 true = perturbed_params(nominal, spread=0.2, seed=SEED, chains=nominal.chain_names)
@@ -71,7 +75,10 @@ print(f"five chains identified in {time.perf_counter() - t_start:.1f} s")
 
 folder = Path(tempfile.mkdtemp())
 ident_path = write_params(ident, folder / "hand_identified.toml", header="identified chain by chain")
-print(ident_path.read_text().split("[thumb]")[0].split("[finger.index]")[1][:400], "...")
+text = ident_path.read_text()
+print("sections:", " ".join(line for line in text.splitlines() if line.startswith("[")))
+for line in text.split("[finger.index]")[1].split("[finger.middle]")[0].strip().splitlines():
+    print(line[:105] + " ...")
 
 # %%
 # The parameter errors
@@ -123,13 +130,14 @@ for row, (chain, (before, after)) in enumerate(runs.items()):
         ax.plot(t, np.degrees(before.q_true[:, i]), color="k", lw=1.4, label="true")
         ax.plot(t, np.degrees(before.q_hat[:, i]), color="C3", lw=0.9, label="EKF, nominal file")
         ax.plot(t, np.degrees(after.q_hat[:, i]), "--", color="C0", lw=0.9, label="EKF, identified file")
-        lo, hi = np.degrees(before.q_true[:, i]).min(), np.degrees(before.q_true[:, i]).max()
-        ax.set_ylim(lo - 12, hi + 12)
+        k = t > 0.1  # past the first moments, where the filters start from q = 0
+        curves = np.degrees(np.r_[before.q_true[k, i], before.q_hat[k, i], after.q_hat[k, i]])
+        ax.set_ylim(curves.min() - 3, curves.max() + 3)
         ax.set_title(f"{chain} {before.joint_names[i]}: RMSE {np.degrees(before.rmse[i]):.2f} -> "
                      f"{np.degrees(after.rmse[i]):.2f} deg", fontsize=8)
         if i == 0:
             ax.set_ylabel("[deg]")
-axes[0, 0].legend(fontsize=7, loc="lower right")
+fig.legend(*axes[0, 0].get_legend_handles_labels(), loc="outside lower center", ncols=3, fontsize=8)
 for ax in axes[-1]:
     ax.set_xlabel("time [s]")
 fig.suptitle("The hand chain by chain: estimated vs true joints, nominal file (before) and identified file (after)")

@@ -409,10 +409,10 @@ def cmd_observability(args: argparse.Namespace) -> int:
 def cmd_estimate(args: argparse.Namespace) -> int:
     """Simulate the default scenario (alpes_dyn.scenario) and estimate the joints from the motor encoder."""
     from .observers import OBSERVERS
-    from .scenario import SCENARIO_MODELS, check_plot_path, plot_estimation, run_estimation
+    from .scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
 
     _check_model_options(args)
-    _one_finger(args.model, SCENARIO_MODELS, "the estimation scenario")
+    _one_chain(args.model, ESTIMATION_MODELS, "the estimation scenario")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
     if args.plot is not None:
         check_plot_path(args.plot)  # before the run: matplotlib, a writable file name, a known format
@@ -424,7 +424,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional",
                          params=args.true_params if args.true_params is not None else args.params,
                          observer_params=args.observer_params, friction=args.friction,
-                         mismatch=args.mismatch, duration=args.duration, seed=args.seed)
+                         mismatch=args.mismatch, duration=args.duration, seed=args.seed, chain=args.chain)
     if args.plot is not None:
         plot_estimation(res, args.plot)
     obj = res.to_dict()
@@ -433,7 +433,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         obj["plot"] = args.plot
     deg = np.degrees
     lines = [
-        f"{res.scenario.model}: joints estimated from the motor encoder by {args.observer} "
+        f"{res.scenario.model}{f' ({args.chain})' if args.chain else ''}: joints estimated from the motor encoder "
+        f"by {args.observer} "
         f"(mismatch {args.mismatch:g}, {args.duration:g} s, seed {args.seed})",
         f"  encoder {res.counts_per_rev:g} counts/rev + {res.scenario.encoder_noise_counts:g} count noise; "
         f"motor torque noise {res.scenario.torque_noise:g} N m",
@@ -719,7 +720,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(model="finger3")
     for a in s._actions:
         if a.dest == "model":
-            a.help = "finger2 or finger3 (default %(default)s)"
+            a.help = "finger2, finger3 or thumb (with --friction) (default %(default)s)"
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand (its own [finger.<name>] values in the files)")
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, or ekf-params, ukf-params (which also estimate the input and spring gains: use "
                         "them with --mismatch) (default %(default)s)")

@@ -4,6 +4,11 @@ The shipped file ``alpes_dyn/data/alpes_hand.toml`` holds the report's Table 1.2
 "report"``) and, marked ``source = "assumed"`` with a one-line reason each, every value the report
 does not give. :func:`load_params` validates it; any defect is a :class:`~alpes_dyn.ModelError`
 that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)``.
+
+The four fingers share ``[finger]``; a finger may have values of its own in a table ``[finger.<name>]``
+(``<name>`` from ``palm.finger_names``) holding any of :data:`OVERRIDE_FIELDS` (``K``, ``m``, ``I``,
+``F_s``, ``F_v``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
+:func:`chain_params`): an identified hand differs link by link.
 """
 
 from __future__ import annotations

@@ -23,6 +23,13 @@ What is simulated (``alpes-dyn estimate``, :func:`run_estimation`), all seeded b
   parameter set (the gains' true values are then unknown: NaN);
 * error metrics after ``transient`` seconds (default min(1 s, duration / 5)): the RMSE of each q_i (rad), and the
   final error |q_hat - q| at the last sample.
+
+One chain of the hand: ``chain`` (a finger's name) makes the finger model that finger of the files
+(its ``[finger.<name>]`` values, in the truth's and the observer's file); ``model="thumb"`` is the thumb
+(``friction=True``: its ab/adduction has no spring), whose flexion motor gets the torque above and whose
+ab/adduction motor the sines times :data:`ABDUCTION_SCALE` without bias, its joint starting mid-range.
+Note that a finger with soft springs may have no rest at the 0.0222 N m bias (a fold of its static
+equilibria, see :mod:`alpes_dyn.experiment`): the scenario then fails with a one-line error.
 """
 
 from __future__ import annotations
