@@ -22,7 +22,8 @@ and gravity) drifts by degrees and rad/s, and imposing continuity at once let Ga
 fit for the defects and stop in another basin (m_1 -> 0). So the fit goes in three stages: (1) each
 interval's start state alone on its encoder samples; (2) a homotopy, continuity as a quadratic penalty
 tightened tenfold per phase (four phases of Levenberg-Marquardt), friction held; (3) the constrained
-problem. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
+problem. In the homotopy a step whose parameter part the trust region shortens has its nodes solved
+again for the shortened step. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
 4-8 counts against the noise's 0.58), or stage 3 asks three times in a row for a change of log theta
 above 30 (the linearisation has lost the basin), stages 2-3 run again with friction free in the homotopy.
 
@@ -435,10 +436,11 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
 
     def limited(d: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
         """A trust region (no jump into a far basin): log theta by at most max_log_step, the line
-        corrections by at most max_coef_step prior standard deviations, the whole step scaled down
-        (the local variables with the global ones: re-solving the nodes for a shortened parameter
-        step, or damping the step, sent three of six +-20 % fingers to residuals of 50-1700 counts).
-        Returns the local and global steps and whether the step is whole."""
+        corrections by at most max_coef_step prior standard deviations, the whole step scaled down.
+        In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
+        for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
+        three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
+        and whether the step is whole."""
         dv, dg = d[:nv].reshape(n_int, nb), d[nv:nz]
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / max_log_step,
                   float(np.max(np.abs(dg[p:]), initial=0.0)) / max_coef_step)
@@ -473,7 +475,16 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                     d = -np.linalg.solve(H, g)
                 except np.linalg.LinAlgError:
                     d = -np.linalg.lstsq(H, g, rcond=None)[0]
-                dv, dg, _ = limited(d)
+                dv, dg, whole = limited(d)
+                if not whole:
+                    # the global step shortened, the local variables solved again for it: with continuity a
+                    # penalty the data hold the nodes, and they follow the parameters (scaled with them, the
+                    # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
+                    # iterations at 1/10-1/60 of the Gauss-Newton step)
+                    try:
+                        dv = np.linalg.solve(H[:nv, :nv], -g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, nb)
+                    except np.linalg.LinAlgError:
+                        pass
                 trial = evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
                 new_cost = 0.5 * float(np.sum(trial[0] ** 2) + np.sum(trial[5] ** 2)
                                        + np.sum((trial[2].reshape(-1) * wdef) ** 2))
