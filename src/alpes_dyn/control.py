@@ -41,6 +41,12 @@ file), with a conditional integration anti-windup.
 :func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.mjcf`,
 contact on, the block scene, joint friction on: ``pip install 'alpes_dyn[mujoco]'``); see
 :class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics.
+
+:func:`run_hand_control` runs the same loops on the whole hand grasping the cylinder of the MJCF's
+``"cylinder"`` scene: one controller, one EKF and one set of sensors per flexion motor (the four fingers
+and the thumb, :func:`chain_model`), the contact normal the cylinder's at the estimated fingertip
+(:func:`cylinder_normal`), the thumb's ab/adduction held by a PD on its encoder
+(:class:`HandControlScenario`, :class:`HandControlResult`).
 """
 
 from __future__ import annotations
@@ -732,10 +738,12 @@ class HandControlResult:
 
     Attributes
     ----------
-    t: (N,) times, s. chains: chain name -> :class:`ControlResult` of its loop (traces and metrics; its
-    ``scenario`` is a :class:`ControlScenario` with the chain's levels (a, b, b), step times (step_time,
-    duration), ``model`` ``"finger3"`` for a finger, ``"finger2"`` for the thumb's chain model).
-    q_abduction: (N,) the thumb's ab/adduction angle, rad. wall_s: wall time of the loop, s.
+    t: (N,) times, s.
+    chains: chain name -> the :class:`ControlResult` of its loop, traces and metrics. Its ``scenario`` is a
+        :class:`ControlScenario` with the chain's levels (a, b, b), step times (step_time, duration) and
+        ``model`` ``"finger3"`` for a finger, ``"finger2"`` for the thumb's chain model.
+    q_abduction: (N,) the thumb's ab/adduction angle, rad.
+    wall_s: wall time of the loop, s.
     """
 
     scenario: HandControlScenario
