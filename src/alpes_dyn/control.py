@@ -589,9 +589,9 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
 
 # ----------------------------------------------------------------------------- the whole hand
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
-#: Within what each fingertip holds on the :data:`~alpes_dyn.mjcf.CYLINDER` with the motor's 0.05 N m
-#: (quasi-static torque ramp, palm down: a finger's pad slides off the cylinder beyond about 0.6 N, the thumb's
-#: beyond about 1.4 N).
+#: Within what each fingertip holds on the :data:`~alpes_dyn.mjcf.CYLINDER` (the five motor torques ramped from 0
+#: to 0.05 N m over 4 s, palm down: the fingers' pads slide around the cylinder beyond 0.47-0.65 N, the thumb's
+#: beyond 1.48 N).
 HAND_LEVELS: dict[str, tuple[float, float]] = {
     "index": (0.25, 0.4), "middle": (0.2, 0.35), "ring": (0.3, 0.4), "little": (0.25, 0.35), "thumb": (0.4, 0.7),
 }
