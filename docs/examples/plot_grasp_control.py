@@ -18,11 +18,12 @@ encoder swings the thumb from beside the palm to 35 degrees, where its pad meets
 loops and once with the baseline PI on F_z alone (``"pi"``), on the same noise draws.
 """
 
+import ctypes.util
 import os
 import sys
 
-if sys.platform.startswith("linux") and not os.environ.get("DISPLAY"):
-    os.environ.setdefault("MUJOCO_GL", "egl")  # MuJoCo's offscreen renderer without a display
+if sys.platform.startswith("linux") and not os.environ.get("DISPLAY") and ctypes.util.find_library("EGL"):
+    os.environ.setdefault("MUJOCO_GL", "egl")  # MuJoCo's offscreen renderer without a display (set before import)
 
 import matplotlib.pyplot as plt
 import numpy as np
