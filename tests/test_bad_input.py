@@ -589,6 +589,7 @@ API: list[Api] = [
     A("run_hand_control", lambda c: _hand(step_time=5.0), InputError, "step_time: expected settle + 0.25 s <= step_time"),
     A("run_hand_control", lambda c: _hand(duration=float("nan")), InputError, "duration: expected a finite number"),
     A("run_hand_control", lambda c: _hand(abduction_kp="1"), InputError, "abduction_kp: expected a finite number"),
+    A("run_hand_control", lambda c: _hand(abduction_kd=-0.01), InputError, "abduction_kd: expected a number >= 0"),
     A("run_hand_control", lambda c: _hand(substeps=0), InputError, "substeps: expected a positive integer, got 0"),
     A("run_hand_control", lambda c: _hand(params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
     A("chain_frame", lambda c: _chain_frame("pinky"), InputError, "chain: unknown chain 'pinky'"),

@@ -709,6 +709,9 @@ class HandControlScenario:
             v = getattr(self, name)
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not math.isfinite(v):
                 raise InputError(f"{name}: expected a finite number, got {v!r}")
+        for name in ("abduction_kp", "abduction_kd", "abduction_filter_s"):
+            if getattr(self, name) < 0:
+                raise InputError(f"{name}: expected a number >= 0, got {getattr(self, name)!r}")
         if self.dt <= 0 or self.duration <= 0:
             raise InputError(f"{'dt' if self.dt <= 0 else 'duration'}: expected a positive number of seconds")
         if not (0.0 <= self.settle and self.settle + 0.25 <= self.step_time and self.step_time + 0.25 <= self.duration):
