@@ -137,6 +137,9 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--reference", "square", needle="unknown reference 'square'"),
         C("control", "--log", "/nonexistent/x.csv", needle="--log: directory '/nonexistent'"),
         C("control", "--plot", "{tmp}/x.xyz", needle="--plot:"),
+        C("control", "--model", "hand", "--reference", "ramp", needle="--reference: the hand's loops follow step"),
+        C("control", "--model", "hand", "--duration", "1", needle="--duration: the hand's run needs at least"),
+        C("control", "--model", "hand", "--plot", "{tmp}/x.xyz", needle="--plot:"),
     ],
     "linearize": [
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),

@@ -7,7 +7,9 @@ the thumb's table); MuJoCo's contact frames; MuJoCo's touch sensors in the close
 
 from __future__ import annotations
 
+import csv
 import dataclasses
+import json
 import math
 
 import numpy as np
@@ -16,6 +18,7 @@ import pytest
 import alpes_dyn as ad
 from alpes_dyn.control import (ForceController, HAND_LEVELS, chain_frame, chain_model, cylinder_normal, hand_chains,
                                run_hand_control)
+from alpes_dyn.cli import main
 from alpes_dyn.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 
 mujoco = pytest.importorskip("mujoco")
@@ -134,3 +137,22 @@ def test_missing_mujoco_one_line(monkeypatch):
     monkeypatch.setitem(sys.modules, "mujoco", None)
     with pytest.raises(ad.ModelError, match=r"needs mujoco \(pip install 'alpes_dyn\[mujoco\]'\)"):
         run_hand_control("pi")
+
+
+def test_cli_control_hand_json_log_plot(capsys, tmp_path):
+    """``alpes-dyn control --model hand``: per-chain JSON, a CSV with every chain's columns, a figure."""
+    pytest.importorskip("matplotlib")
+    log, fig = tmp_path / "h.csv", tmp_path / "h.png"
+    code = main(["control", "--model", "hand", "--controller", "pi", "--duration", "2.75", "--log", str(log),
+                 "--plot", str(fig), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    d = json.loads(out)
+    assert d["model"] == "hand" and d["plant"] == "mujoco" and d["duration_s"] == 2.75
+    assert [c["chain"] for c in d["chains"]] == list(HAND_LEVELS)
+    for c in d["chains"]:  # the PI holds each force within 3 % after 0.25 s on the new level
+        assert abs(c["F_held"] - c["F_ref"]) < 0.03 * c["F_ref"] and c["q_rmse_deg"] is None, c
+    rows = list(csv.reader(log.open()))
+    assert len(rows) == 2751 and rows[0][0] == "t_s" and rows[0][-1] == "q_thumb_abd_rad"
+    assert "thumb_F_mujoco_N" in rows[0] and "q_hat_index_j3_rad" in rows[0] and len(rows[0]) == 1 + 6 * 5 + 2 * 14 + 1
+    assert fig.stat().st_size > 10_000

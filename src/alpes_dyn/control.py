@@ -73,7 +73,7 @@ __all__ = [
     "CONTROLLERS", "REFERENCES", "CONTROL_MODELS", "DEFAULT_GAINS", "static_motor_torque", "static_contact_force", "ForceController",
     "ControlScenario", "ControlResult", "run_control", "plot_control", "reference_profile",
     "HAND_LEVELS", "HAND_GAINS", "hand_chains", "chain_frame", "chain_model", "cylinder_normal", "HandControlScenario",
-    "HandControlResult", "run_hand_control",
+    "HandControlResult", "run_hand_control", "plot_hand_control",
 ]
 
 CONTROLLERS: tuple[str, ...] = ("sensor", "sensorless", "pi")
@@ -773,6 +773,24 @@ class HandControlResult:
                          "q_rmse_deg": None if r.q_rmse_deg is None else max(r.q_rmse_deg), "saturated": r.saturated})
         return rows
 
+    def to_csv(self, path: str) -> None:
+        """Write one row per sample: t, then per chain F_ref, F_z measured by MuJoCo's sensor, the FlexiForce
+        reading, the force fed back, true and estimated q, motor torque command and measurement (columns
+        prefixed by the chain's name), then the thumb's ab/adduction angle."""
+        head, cols = ["t_s"], [self.t]
+        for c, r in self.chains.items():
+            head += [f"{c}_F_ref_N", f"{c}_F_mujoco_N", f"{c}_F_flexiforce_N", f"{c}_F_feedback_N"]
+            head += [f"q_true_{j}_rad" for j in r.joint_names] + [f"q_hat_{j}_rad" for j in r.joint_names]
+            head += [f"{c}_tau_cmd_Nm", f"{c}_tau_meas_Nm"]
+            cols += [r.F_ref, r.F_true, r.F_meas, r.F_hat, r.q_true, r.q_hat, r.tau_cmd, r.tau_meas]
+        head.append("q_thumb_abd_rad")
+        cols.append(self.q_abduction)
+        rows = np.column_stack(cols)
+        with atomic_path(path, "--log") as tmp, open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(head)
+            w.writerows([[f"{x:.9g}" for x in r] for r in rows])
+
     def to_dict(self) -> dict[str, Any]:
         """A JSON summary: the controller, the plant, per-chain metrics (:meth:`table`), the wall time."""
         sc = self.scenario
@@ -954,6 +972,36 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
         _metrics(r)
         results[ch["name"]] = r
     return HandControlResult(scenario=sc, t=t, chains=results, q_abduction=q_abd, wall_s=wall)
+
+
+def plot_hand_control(result: HandControlResult, path: str) -> None:
+    """Write a figure (PNG): per chain, the F_z reference and MuJoCo's force; the motor torques. Needs matplotlib."""
+    try:
+        import matplotlib
+
+        matplotlib.use("Agg")
+        import matplotlib.pyplot as plt
+    except ImportError:
+        raise InputError("--plot: matplotlib is not installed (pip install matplotlib)") from None
+    n = len(result.chains)
+    fig, axes = plt.subplots(n + 1, 1, figsize=(9, 1.6 * (n + 1) + 0.8), sharex=True)
+    for i, (ax, (c, r)) in enumerate(zip(axes, result.chains.items())):
+        ax.plot(r.t, r.F_ref, "k--", lw=1.0)
+        ax.plot(r.t, r.F_true, color=f"C{i}", lw=1.0)
+        ax.set_ylim(0.0, 1.5 * float(np.max(r.F_ref)))
+        ax.set_ylabel(f"{c}\nF_z [N]")
+        axes[-1].plot(r.t, r.tau_cmd, color=f"C{i}", lw=0.8, label=c)
+    axes[0].set_title(f"the hand on the cylinder, {result.scenario.controller} loops (dashed: references)", fontsize=9)
+    axes[-1].axhline(next(iter(result.chains.values())).tau_max, color="gray", ls=":", lw=0.8)
+    axes[-1].set_ylabel("tau_m [N m]")
+    axes[-1].set_xlabel("time [s]")
+    axes[-1].legend(loc="upper left", fontsize=7, ncol=n)
+    fig.tight_layout()
+    try:
+        with atomic_path(path, "--plot") as tmp:
+            fig.savefig(tmp, dpi=110)
+    finally:
+        plt.close(fig)
 
 
 def plot_control(result: ControlResult, path: str) -> None:
