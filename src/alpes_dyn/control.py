@@ -99,9 +99,15 @@ DEFAULT_GAINS: dict[str, dict[str, float]] = {
 
 def _normal(normal: Sequence[float]) -> np.ndarray:
     n = np.asarray(normal, dtype=float)
-    if n.shape != (3,) or not np.isfinite(n).all() or np.linalg.norm(n) == 0:
+    if n.shape == (3,):
+        x, y, z = n.tolist()
+        s = x * x + y * y + z * z  # Python floats: inf on overflow, NaN stays NaN, no warning
+        if 0.0 < s < math.inf:  # the common case, called at every control step
+            return n / math.sqrt(s)
+    if n.shape != (3,) or not np.isfinite(n).all() or not n.any():
         raise InputError(f"normal: expected a non-zero 3-vector, got {np.asarray(normal).tolist()!r}")
-    return n / np.linalg.norm(n)
+    n = n / np.max(np.abs(n))  # huge entries: scale first so that the norm does not overflow
+    return n / math.sqrt(float(n @ n))
 
 
 def static_motor_torque(model: Model, q: np.ndarray, F_z: float, normal: Sequence[float], motor: int = 0,
