@@ -71,6 +71,8 @@ def test_controller_takes_a_moving_normal():
     c.update(0.3, 0.0, q, normal=2 * n2)
     assert np.allclose(c.normal, n2)
     assert c.feedforward(q, 0.3) == pytest.approx(ad.control.static_motor_torque(m, q, 0.3, n2))
+    c.update(0.3, 0.0, q, normal=[1e200, 0.0, 1e200])  # huge entries: normalised without overflow
+    assert np.allclose(c.normal, [math.sqrt(0.5), 0.0, math.sqrt(0.5)])
 
 
 @pytest.fixture(scope="module")
