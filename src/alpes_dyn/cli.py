@@ -451,12 +451,18 @@ _positive_seconds.__name__ = "seconds"
 
 
 def cmd_control(args: argparse.Namespace) -> int:
-    """Closed loop on MuJoCo: a finger presses a block with the force asked for."""
+    """Closed loop on MuJoCo: a finger presses a block with the force asked for, or the hand grasps a cylinder."""
     from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
 
-    _one_finger(args.model, CONTROL_MODELS, "the control scenario")
+    if args.model != "hand" and args.model not in CONTROL_MODELS:
+        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
+                         f"or the hand on the cylinder (hand), got {args.model!r}")
     _one_of(args.controller, CONTROLLERS, "--controller", "controller")
     _one_of(args.reference, REFERENCES, "--reference", "reference")
+    if args.model == "hand":
+        return _control_hand(args)
+    if args.duration is None:
+        args.duration = 3.0
     if args.plot:
         try:
             import matplotlib  # noqa: F401
@@ -491,6 +497,59 @@ def cmd_control(args: argparse.Namespace) -> int:
         f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
         f"loop {res.realtime_ratio:.1f}x faster than real time",
     ]
+    if args.log:
+        lines.append(f"  log: {args.log}")
+    if args.plot:
+        lines.append(f"  figure: {args.plot}")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+def _control_hand(args: argparse.Namespace) -> int:
+    """``alpes-dyn control --model hand``: run_hand_control, one loop per motor, per-chain metrics."""
+    from .control import HandControlScenario, plot_hand_control, run_hand_control
+
+    if args.reference != "step":
+        raise InputError(f"--reference: the hand's loops follow step references (control.HAND_LEVELS), "
+                         f"got {args.reference!r}")
+    sc = HandControlScenario()
+    duration = sc.duration if args.duration is None else args.duration
+    if duration < sc.step_time + 0.25:
+        raise InputError(f"--duration: the hand's run needs at least {sc.step_time + 0.25:g} s (its references "
+                         f"step up at {sc.step_time:g} s), got {duration:g}")
+    if args.plot:
+        try:
+            import matplotlib  # noqa: F401
+        except ImportError:
+            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
+    for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
+        if path is not None:
+            check_output_path(path, opt, ext)
+    res = run_hand_control(args.controller, duration=duration, seed=args.seed, params=args.params,
+                           plant_params=args.plant_params)
+    if args.log:
+        res.to_csv(args.log)
+    if args.plot:
+        plot_hand_control(res, args.plot)
+    obj = res.to_dict()
+    for k, v in (("log", args.log), ("plot", args.plot)):
+        if v:
+            obj[k] = v
+
+    def f(x: Any, fmt: str) -> str:
+        return "n/a" if x is None else format(x, fmt)
+
+    lines = [f"the hand grasping the cylinder, {args.controller} loops, MuJoCo plant ({duration:g} s, seed {args.seed}, "
+             f"references step up at {sc.step_time:g} s)",
+             f"  {'chain':7s} {'asked':>6s} {'held':>7s} {'SSE':>7s} {'overshoot':>9s} {'rise':>7s} {'RMSE':>8s} "
+             f"{'q RMSE':>7s}"]
+    for row in res.table():
+        rise = "n/a" if row["rise_time_s"] is None else f"{1e3 * row['rise_time_s']:.0f} ms"
+        lines.append(f"  {row['chain']:7s} {row['F_ref']:4.2f} N {row['F_held']:5.3f} N "
+                     f"{f(row['steady_state_error'], '7.2%')} {f(row['overshoot'], '9.1%')} {rise:>7s} "
+                     f"{row['force_rmse']:6.4f} N {f(row['q_rmse_deg'], '5.2f')}{'' if row['q_rmse_deg'] is None else ' deg'}")
+    lines.append(f"  thumb ab/adduction held at {np.degrees(res.q_abduction[-1]):.1f} deg; "
+                 f"loop {res.realtime_ratio:.1f}x faster than real time")
     if args.log:
         lines.append(f"  log: {args.log}")
     if args.plot:
@@ -773,7 +832,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
                        epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
                               "--plot control.png")
-    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--model", default="finger3",
+                   help="finger2 or finger3 on the block, or hand grasping the cylinder (a loop per motor, the "
+                        "references of control.HAND_LEVELS) (default %(default)s)")
     s.add_argument("--controller", default="sensor",
                    help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
                         "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
@@ -783,7 +844,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--params", default=None, metavar="FILE", help="the controller's parameter file (default: shipped)")
     s.add_argument("--plant-params", default=None, metavar="FILE",
                    help="the plant's parameter file (default: the controller's)")
-    s.add_argument("--duration", type=_positive_seconds, default=3.0, help="simulated time, s (default %(default)s)")
+    s.add_argument("--duration", type=_positive_seconds, default=None,
+                   help="simulated time, s (default 3 for a finger, 3.5 for the hand)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
