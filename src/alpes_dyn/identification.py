@@ -588,6 +588,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     start = (nodes.copy(), offs.copy(), glob.copy())
     total_its = 0
     for freeze in (True, False):
+        if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
+            bar.close()
+            bar = _Progress(max_iterations, "identify (second start)", show)
         nodes, offs, glob, state, it, converged = solve(*[a.copy() for a in start], freeze)
         total_its += it
         r, J, c, Cv, Cr, rg, xs = state
