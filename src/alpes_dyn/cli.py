@@ -7,6 +7,7 @@ Vectors are comma-separated numbers; negative values work as ``--q=-0.1,0.2`` an
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import sys
@@ -450,6 +451,39 @@ def _positive_seconds(text: str) -> float:
 _positive_seconds.__name__ = "seconds"
 
 
+def _check_control_outputs(args: argparse.Namespace) -> None:
+    """Before a closed-loop run: matplotlib for ``--plot`` and writable ``--log``/``--plot`` paths."""
+    if args.plot:
+        try:
+            importlib.import_module("matplotlib")
+        except ImportError:
+            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
+    for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
+        if path is not None:
+            check_output_path(path, opt, ext)
+
+
+def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dict[str, Any]:
+    """The run's ``--log`` CSV and ``--plot`` figure; its JSON object with their paths."""
+    if args.log:
+        res.to_csv(args.log)
+    if args.plot:
+        plot(res, args.plot)
+    obj = res.to_dict()
+    for k, v in (("log", args.log), ("plot", args.plot)):
+        if v:
+            obj[k] = v
+    return obj
+
+
+def _output_lines(args: argparse.Namespace) -> list[str]:
+    return ([f"  log: {args.log}"] if args.log else []) + ([f"  figure: {args.plot}"] if args.plot else [])
+
+
+def _na(x: Any, fmt: str) -> str:
+    return "n/a" if x is None else format(x, fmt)
+
+
 def cmd_control(args: argparse.Namespace) -> int:
     """Closed loop on MuJoCo: a finger presses a block with the force asked for, or the hand grasps a cylinder."""
     from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
@@ -463,27 +497,11 @@ def cmd_control(args: argparse.Namespace) -> int:
         return _control_hand(args)
     if args.duration is None:
         args.duration = 3.0
-    if args.plot:
-        try:
-            import matplotlib  # noqa: F401
-        except ImportError:
-            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
-    for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
-        if path is not None:
-            check_output_path(path, opt, ext)
+    _check_control_outputs(args)
     res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
                       seed=args.seed, params=args.params, plant_params=args.plant_params)
-    if args.log:
-        res.to_csv(args.log)
-    if args.plot:
-        plot_control(res, args.plot)
-    obj = res.to_dict()
-    for k, v in (("log", args.log), ("plot", args.plot)):
-        if v:
-            obj[k] = v
-
-    def f(x: Any, fmt: str) -> str:
-        return "n/a" if x is None else format(x, fmt)
+    obj = _write_control_outputs(res, args, plot_control)
+    f = _na
 
     lines = [
         f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
@@ -497,11 +515,7 @@ def cmd_control(args: argparse.Namespace) -> int:
         f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
         f"loop {res.realtime_ratio:.1f}x faster than real time",
     ]
-    if args.log:
-        lines.append(f"  log: {args.log}")
-    if args.plot:
-        lines.append(f"  figure: {args.plot}")
-    _emit(obj, "\n".join(lines), args.json)
+    _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0
 
 
@@ -517,27 +531,11 @@ def _control_hand(args: argparse.Namespace) -> int:
     if duration < sc.step_time + 0.25:
         raise InputError(f"--duration: the hand's run needs at least {sc.step_time + 0.25:g} s (its references "
                          f"step up at {sc.step_time:g} s), got {duration:g}")
-    if args.plot:
-        try:
-            import matplotlib  # noqa: F401
-        except ImportError:
-            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
-    for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
-        if path is not None:
-            check_output_path(path, opt, ext)
+    _check_control_outputs(args)
     res = run_hand_control(args.controller, duration=duration, seed=args.seed, params=args.params,
                            plant_params=args.plant_params)
-    if args.log:
-        res.to_csv(args.log)
-    if args.plot:
-        plot_hand_control(res, args.plot)
-    obj = res.to_dict()
-    for k, v in (("log", args.log), ("plot", args.plot)):
-        if v:
-            obj[k] = v
-
-    def f(x: Any, fmt: str) -> str:
-        return "n/a" if x is None else format(x, fmt)
+    obj = _write_control_outputs(res, args, plot_hand_control)
+    f = _na
 
     lines = [f"the hand grasping the cylinder, {args.controller} loops, MuJoCo plant ({duration:g} s, seed {args.seed}, "
              f"references step up at {sc.step_time:g} s)",
@@ -550,11 +548,7 @@ def _control_hand(args: argparse.Namespace) -> int:
                      f"{row['force_rmse']:6.4f} N {f(row['q_rmse_deg'], '5.2f')}{'' if row['q_rmse_deg'] is None else ' deg'}")
     lines.append(f"  thumb ab/adduction held at {np.degrees(res.q_abduction[-1]):.1f} deg; "
                  f"loop {res.realtime_ratio:.1f}x faster than real time")
-    if args.log:
-        lines.append(f"  log: {args.log}")
-    if args.plot:
-        lines.append(f"  figure: {args.plot}")
-    _emit(obj, "\n".join(lines), args.json)
+    _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0
 
 

@@ -474,6 +474,19 @@ def _step_caller(step, label: str, compiled: bool):
     return call
 
 
+def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
+    """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
+    (the plant's default: the controller's), both turned palm down."""
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError("the control loop's plant needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
+    p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
+    pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
+        load_params(sc.plant_params) if sc.plant_params is not None else p)
+    return mujoco, palm_down_params(p), palm_down_params(pp)
+
+
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:
     """Run the closed loop: MuJoCo plant, the hand's sensors, the EKF and a force controller.
 
@@ -494,14 +507,7 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     """
     sc = dataclasses.replace(scenario or ControlScenario(), controller=controller, **overrides)
     sc.check()
-    try:
-        import mujoco
-    except ImportError:
-        raise ModelError("the control loop's plant needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
-    p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
-    pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
-        load_params(sc.plant_params) if sc.plant_params is not None else p)
-    p, pp = palm_down_params(p), palm_down_params(pp)
+    mujoco, p, pp = _plant_and_params(sc)
     n = 2 if sc.model == "finger2" else 3
     cq = tuple(sc.contact_q[:n])
     model = Model.alpes(sc.model, params=p)
@@ -826,16 +832,9 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     """
     sc = dataclasses.replace(scenario or HandControlScenario(), controller=controller, **overrides)
     sc.check()
-    try:
-        import mujoco
-    except ImportError:
-        raise ModelError("the control loop's plant needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
+    mujoco, p, pp = _plant_and_params(sc)
     from .mjcf import CYLINDER
 
-    p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
-    pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
-        load_params(sc.plant_params) if sc.plant_params is not None else p)
-    p, pp = palm_down_params(p), palm_down_params(pp)
     chains = hand_chains(p)
     sc.check(chains)
     if not p.abduction_lower <= sc.thumb_abduction <= p.abduction_upper:
