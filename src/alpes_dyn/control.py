@@ -979,6 +979,16 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     return HandControlResult(scenario=sc, t=t, chains=results, q_abduction=q_abd, wall_s=wall)
 
 
+def _save_figure(fig: Any, plt: Any, path: str) -> None:
+    """Lay ``fig`` out and write it to ``path`` (PNG, whole or not at all); close it."""
+    fig.tight_layout()
+    try:
+        with atomic_path(path, "--plot") as tmp:
+            fig.savefig(tmp, dpi=110)
+    finally:
+        plt.close(fig)
+
+
 def plot_hand_control(result: HandControlResult, path: str) -> None:
     """Write a figure (PNG): per chain, the F_z reference and MuJoCo's force; the motor torques. Needs matplotlib."""
     try:
@@ -1001,12 +1011,7 @@ def plot_hand_control(result: HandControlResult, path: str) -> None:
     axes[-1].set_ylabel("tau_m [N m]")
     axes[-1].set_xlabel("time [s]")
     axes[-1].legend(loc="upper left", fontsize=7, ncol=n)
-    fig.tight_layout()
-    try:
-        with atomic_path(path, "--plot") as tmp:
-            fig.savefig(tmp, dpi=110)
-    finally:
-        plt.close(fig)
+    _save_figure(fig, plt, path)
 
 
 def plot_control(result: ControlResult, path: str) -> None:
@@ -1041,9 +1046,4 @@ def plot_control(result: ControlResult, path: str) -> None:
     ax.set_ylabel("q [deg]")
     ax.set_xlabel("time [s]")
     ax.legend(loc="upper right", fontsize=8, ncol=2)
-    fig.tight_layout()
-    try:
-        with atomic_path(path, "--plot") as tmp:
-            fig.savefig(tmp, dpi=110)
-    finally:
-        plt.close(fig)
+    _save_figure(fig, plt, path)
