@@ -146,6 +146,9 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--reference", "square", needle="unknown reference 'square'"),
         C("control", "--log", "/nonexistent/x.csv", needle="--log: directory '/nonexistent'"),
         C("control", "--plot", "{tmp}/x.xyz", needle="--plot:"),
+        C("control", "--model", "hand", "--reference", "ramp", needle="--reference: the hand's loops follow step"),
+        C("control", "--model", "hand", "--duration", "1", needle="--duration: the hand's run needs at least"),
+        C("control", "--model", "hand", "--plot", "{tmp}/x.xyz", needle="--plot:"),
     ],
     "linearize": [
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
@@ -600,9 +603,60 @@ API: list[Api] = [
     A("run_estimation", lambda c: _est(model="hand"), InputError, "model: the estimation scenario"),
     A("run_estimation", lambda c: _est(model="thumb"), InputError, "friction: the thumb's scenario needs friction=True"),
     A("run_estimation", lambda c: _est(chain="pinky"), ModelError, "chain: unknown finger 'pinky'"),
+    # The whole hand's force loops (run_hand_control checks its settings before building anything)
+    A("run_hand_control", lambda c: _hand("pid"), InputError, "controller: unknown controller 'pid'"),
+    A("run_hand_control", lambda c: _hand(levels={"index": (0.2, 0.3)}), InputError,
+      "levels: no reference for chain 'middle'"),
+    A("run_hand_control", lambda c: _hand(levels={**_hand_levels(), "pinky": (0.2, 0.3)}), InputError,
+      "levels: unknown chain 'pinky'"),
+    A("run_hand_control", lambda c: _hand(levels={**_hand_levels(), "thumb": (0.2, float("nan"))}), InputError,
+      "levels: 'thumb' expects two positive forces (before, after) in N"),
+    A("run_hand_control", lambda c: _hand(levels=[0.2, 0.3]), InputError, "levels: expected a dict chain"),
+    A("run_hand_control", lambda c: _hand(thumb_abduction=2.0), InputError,
+      "thumb_abduction: 2 rad is outside the ab/adduction range"),
+    A("run_hand_control", lambda c: _hand(step_time=5.0), InputError, "step_time: expected settle + 0.25 s <= step_time"),
+    A("run_hand_control", lambda c: _hand(duration=float("nan")), InputError, "duration: expected a finite number"),
+    A("run_hand_control", lambda c: _hand(abduction_kp="1"), InputError, "abduction_kp: expected a finite number"),
+    A("run_hand_control", lambda c: _hand(abduction_kd=-0.01), InputError, "abduction_kd: expected a number >= 0"),
+    A("run_hand_control", lambda c: _hand(substeps=0), InputError, "substeps: expected a positive integer, got 0"),
+    A("run_hand_control", lambda c: _hand(params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
+    A("chain_frame", lambda c: _chain_frame("pinky"), InputError, "chain: unknown chain 'pinky'"),
+    A("chain_model", lambda c: _chain_model("thumb2"), InputError, "chain: unknown chain 'thumb2'"),
+    A("cylinder_normal", lambda c: _cyl_normal(c, (0, 0, 0)), InputError, "normal: expected a non-zero 3-vector"),
+    A("cylinder_normal", lambda c: _cyl_normal(c, (0, np.nan, 1)), InputError, "normal: expected a non-zero 3-vector"),
     A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
     A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
 ]
+
+
+def _hand(controller="sensor", **kw):
+    from alpes_dyn.control import run_hand_control
+
+    return run_hand_control(controller, **kw)
+
+
+def _hand_levels():
+    from alpes_dyn.control import HAND_LEVELS
+
+    return dict(HAND_LEVELS)
+
+
+def _chain_frame(chain):
+    from alpes_dyn.control import chain_frame
+
+    return chain_frame(ad.load_params(), chain)
+
+
+def _chain_model(chain):
+    from alpes_dyn.control import chain_model
+
+    return chain_model(ad.load_params(), chain)
+
+
+def _cyl_normal(c, axis):
+    from alpes_dyn.control import cylinder_normal
+
+    return cylinder_normal(c.m, np.zeros(3), (0.0, 0.0, 0.05), axis)
 
 
 def _plot_path(p):

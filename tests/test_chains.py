@@ -391,3 +391,17 @@ def test_experiment_stops_below_a_fold():
     rec = experiment("finger3", true, ExperimentDesign(duration=0.5), seed=1, chain="little")
     assert rec.torque[:, 0].max() < fold
     assert np.degrees(rec.true_q[:, 0]).max() < 80
+
+
+def test_control_chain_model_uses_the_fingers_values(hand_params):
+    """The hand controller's per-chain model (control.chain_model) is that finger of the file: its own springs
+    and masses, with the hand's gravity; its gravity torque is the hand's block."""
+    from alpes_dyn.control import chain_model
+
+    p = hand_params
+    m = chain_model(p, "index")
+    assert m.extras.stiffness.tolist() == p.chain("index").K.tolist()
+    h = ad.Model.alpes("hand", params=p)
+    idx = _block(h, ("index_j1", "index_j2", "index_j3"))
+    qh = h.random_state(np.random.default_rng(0))[0]
+    assert np.allclose(h.gravity_torque(qh)[idx], m.gravity_torque(qh[idx]), rtol=1e-12, atol=1e-15)

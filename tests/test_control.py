@@ -125,7 +125,9 @@ def test_cli_control_json_log(capsys, tmp_path):
 @pytest.mark.parametrize("argv,needle", [
     (["control", "--controller", "pid"], "--controller: unknown controller 'pid'"),
     (["control", "--reference", "square"], "--reference: unknown reference 'square'"),
-    (["control", "--model", "hand"], "--model: the control scenario is defined for one finger"),
+    (["control", "--model", "finger9"], "--model: the control scenario is defined for one finger"),
+    (["control", "--model", "hand", "--reference", "sine"], "--reference: the hand's loops follow step references"),
+    (["control", "--model", "hand", "--duration", "2"], "--duration: the hand's run needs at least 2.75 s"),
     (["control", "--duration", "0"], "--duration: expected a positive number of seconds"),
     (["control", "--log", "/nonexistent/x.csv"], "--log: directory '/nonexistent'"),
     (["control", "--params", "/nonexistent.toml"], "cannot be read"),

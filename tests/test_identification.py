@@ -15,6 +15,7 @@ from alpes_dyn.identification import identify, project_torque
 from alpes_dyn.parametric import ParametricDynamics, select_parameters
 from alpes_dyn.params import load_params, write_params
 from alpes_dyn.recording import read_recording, write_recording
+from alpes_dyn.sensitivity import SensitivityModel
 
 
 @pytest.fixture(scope="module")
@@ -103,6 +104,48 @@ def test_recording_unit_errors(tmp_path):
     with pytest.raises(RecordingError, match="must be in rad, not degrees"):
         write_recording(rec, tmp_path / "x.csv")
     assert not (tmp_path / "x.csv").exists()
+
+
+def test_sensitivities_equal_finite_differences_and_the_states_alone(finger2, rng):
+    """The compiled forward sensitivities (CasADi AD of the RK4 step) against central differences of
+    the states-only run, for the initial state, the parameters and the input-correction coefficients;
+    the states-only run gives the sensitivity run's states bit for bit."""
+    sm = SensitivityModel(finger2, None, dt=1e-3, substeps=2, input_basis=2)
+    B, N = 2, 60
+    x0 = np.c_[rng.uniform(0.1, 0.6, (B, 2)), rng.normal(0, 0.5, (B, 2))]
+    U = 0.02 + 0.005 * rng.normal(size=(B, N, 1))
+    G = np.broadcast_to(finger2.gravity, (B, N, 3))
+    phi = np.stack([np.ones((B, N)), np.sin(np.linspace(0, 3, N))[None].repeat(B, 0)], axis=-1)
+    C = np.array([[1e-3, -2e-3]])
+    th = sm.nominal * (1 + 0.1 * rng.uniform(-1, 1, sm.p))
+    x, X = sm.run(x0, U, G, th, C, basis=phi)
+    xs, none = sm.run(x0, U, G, th, C, basis=phi, sensitivities=False)
+    assert none is None and np.array_equal(x, xs)
+
+    def states(x0_, th_, C_):
+        return sm.run(x0_, U, G, th_, C_, basis=phi, sensitivities=False)[0]
+
+    cols = []
+    for j in range(sm.nx):
+        h = 1e-6
+        e = np.zeros(sm.nx)
+        e[j] = h
+        cols.append((states(x0 + e, th, C) - states(x0 - e, th, C)) / (2 * h))
+    for j in range(sm.p):
+        h = 1e-6 * th[j]
+        e = np.zeros(sm.p)
+        e[j] = h
+        cols.append((states(x0, th + e, C) - states(x0, th - e, C)) / (2 * h))
+    for j in range(sm.no):  # vec(C), column-major: (motor, basis function)
+        h = 1e-7
+        dC = np.zeros(sm.no)
+        dC[j] = h
+        dC = dC.reshape(sm.nb, sm.nu).T
+        cols.append((states(x0, th, C + dC) - states(x0, th, C - dC)) / (2 * h))
+    fd = np.stack(cols, axis=-1)
+    scale = np.maximum(np.abs(X).max(axis=(0, 1, 2)), 1e-12)
+    assert X.shape == fd.shape == (B, N + 1, sm.nx, sm.nd)
+    assert np.max(np.abs(X - fd) / scale) < 1e-5
 
 
 def test_identify_recovers_exact_parameters_from_noise_free_data(finger2):

@@ -7,6 +7,7 @@ Vectors are comma-separated numbers; negative values work as ``--q=-0.1,0.2`` an
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import re
 import sys
@@ -466,34 +467,57 @@ def _positive_seconds(text: str) -> float:
 _positive_seconds.__name__ = "seconds"
 
 
-def cmd_control(args: argparse.Namespace) -> int:
-    """Closed loop on MuJoCo: a finger presses a block with the force asked for."""
-    from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
-
-    _one_finger(args.model, CONTROL_MODELS, "the control scenario")
-    _one_of(args.controller, CONTROLLERS, "--controller", "controller")
-    _one_of(args.reference, REFERENCES, "--reference", "reference")
+def _check_control_outputs(args: argparse.Namespace) -> None:
+    """Before a closed-loop run: matplotlib for ``--plot`` and writable ``--log``/``--plot`` paths."""
     if args.plot:
         try:
-            import matplotlib  # noqa: F401
+            importlib.import_module("matplotlib")
         except ImportError:
             raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
     for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
         if path is not None:
             check_output_path(path, opt, ext)
-    res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
-                      seed=args.seed, params=args.params, plant_params=args.plant_params)
+
+
+def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dict[str, Any]:
+    """The run's ``--log`` CSV and ``--plot`` figure; its JSON object with their paths."""
     if args.log:
         res.to_csv(args.log)
     if args.plot:
-        plot_control(res, args.plot)
+        plot(res, args.plot)
     obj = res.to_dict()
     for k, v in (("log", args.log), ("plot", args.plot)):
         if v:
             obj[k] = v
+    return obj
 
-    def f(x: Any, fmt: str) -> str:
-        return "n/a" if x is None else format(x, fmt)
+
+def _output_lines(args: argparse.Namespace) -> list[str]:
+    return ([f"  log: {args.log}"] if args.log else []) + ([f"  figure: {args.plot}"] if args.plot else [])
+
+
+def _na(x: Any, fmt: str) -> str:
+    return "n/a" if x is None else format(x, fmt)
+
+
+def cmd_control(args: argparse.Namespace) -> int:
+    """Closed loop on MuJoCo: a finger presses a block with the force asked for, or the hand grasps a cylinder."""
+    from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
+
+    if args.model != "hand" and args.model not in CONTROL_MODELS:
+        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
+                         f"or the hand on the cylinder (hand), got {args.model!r}")
+    _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+    _one_of(args.reference, REFERENCES, "--reference", "reference")
+    if args.model == "hand":
+        return _control_hand(args)
+    if args.duration is None:
+        args.duration = 3.0
+    _check_control_outputs(args)
+    res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
+                      seed=args.seed, params=args.params, plant_params=args.plant_params)
+    obj = _write_control_outputs(res, args, plot_control)
+    f = _na
 
     lines = [
         f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
@@ -507,11 +531,40 @@ def cmd_control(args: argparse.Namespace) -> int:
         f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
         f"loop {res.realtime_ratio:.1f}x faster than real time",
     ]
-    if args.log:
-        lines.append(f"  log: {args.log}")
-    if args.plot:
-        lines.append(f"  figure: {args.plot}")
-    _emit(obj, "\n".join(lines), args.json)
+    _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
+    return 0
+
+
+def _control_hand(args: argparse.Namespace) -> int:
+    """``alpes-dyn control --model hand``: run_hand_control, one loop per motor, per-chain metrics."""
+    from .control import HandControlScenario, plot_hand_control, run_hand_control
+
+    if args.reference != "step":
+        raise InputError(f"--reference: the hand's loops follow step references (control.HAND_LEVELS), "
+                         f"got {args.reference!r}")
+    sc = HandControlScenario()
+    duration = sc.duration if args.duration is None else args.duration
+    if duration < sc.step_time + 0.25:
+        raise InputError(f"--duration: the hand's run needs at least {sc.step_time + 0.25:g} s (its references "
+                         f"step up at {sc.step_time:g} s), got {duration:g}")
+    _check_control_outputs(args)
+    res = run_hand_control(args.controller, duration=duration, seed=args.seed, params=args.params,
+                           plant_params=args.plant_params)
+    obj = _write_control_outputs(res, args, plot_hand_control)
+    f = _na
+
+    lines = [f"the hand grasping the cylinder, {args.controller} loops, MuJoCo plant ({duration:g} s, seed {args.seed}, "
+             f"references step up at {sc.step_time:g} s)",
+             f"  {'chain':7s} {'asked':>6s} {'held':>7s} {'SSE':>7s} {'overshoot':>9s} {'rise':>7s} {'RMSE':>8s} "
+             f"{'q RMSE':>7s}"]
+    for row in res.table():
+        rise = "n/a" if row["rise_time_s"] is None else f"{1e3 * row['rise_time_s']:.0f} ms"
+        lines.append(f"  {row['chain']:7s} {row['F_ref']:4.2f} N {row['F_held']:5.3f} N "
+                     f"{f(row['steady_state_error'], '7.2%')} {f(row['overshoot'], '9.1%')} {rise:>7s} "
+                     f"{row['force_rmse']:6.4f} N {f(row['q_rmse_deg'], '5.2f')}{'' if row['q_rmse_deg'] is None else ' deg'}")
+    lines.append(f"  thumb ab/adduction held at {np.degrees(res.q_abduction[-1]):.1f} deg; "
+                 f"loop {res.realtime_ratio:.1f}x faster than real time")
+    _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0
 
 
@@ -810,7 +863,9 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
                        epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
                               "--plot control.png")
-    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--model", default="finger3",
+                   help="finger2 or finger3 on the block, or hand grasping the cylinder (a loop per motor, the "
+                        "references of control.HAND_LEVELS) (default %(default)s)")
     s.add_argument("--controller", default="sensor",
                    help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
                         "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
@@ -820,7 +875,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--params", default=None, metavar="FILE", help="the controller's parameter file (default: shipped)")
     s.add_argument("--plant-params", default=None, metavar="FILE",
                    help="the plant's parameter file (default: the controller's)")
-    s.add_argument("--duration", type=_positive_seconds, default=3.0, help="simulated time, s (default %(default)s)")
+    s.add_argument("--duration", type=_positive_seconds, default=None,
+                   help="simulated time, s (default 3 for a finger, 3.5 for the hand)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")

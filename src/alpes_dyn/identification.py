@@ -22,8 +22,17 @@ and gravity) drifts by degrees and rad/s, and imposing continuity at once let Ga
 fit for the defects and stop in another basin (m_1 -> 0). So the fit goes in three stages: (1) each
 interval's start state alone on its encoder samples; (2) a homotopy, continuity as a quadratic penalty
 tightened tenfold per phase (four phases of Levenberg-Marquardt), friction held; (3) the constrained
-problem. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
-4-8 counts against the noise's 0.58), stages 2-3 run again with friction free in the homotopy.
+problem. In the homotopy a step whose parameter part the trust region shortens has its nodes solved
+again for the shortened step. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
+4-8 counts against the noise's 0.58), or stage 3 asks three times in a row for a change of log theta
+above 30 (the linearisation has lost the basin), stages 2-3 run again with friction free in the homotopy.
+
+Speed. A line search's trial needs the states, not their sensitivities: it runs the step without its
+derivatives (a tenth of the time), and the sensitivities are computed once a step is accepted. Near the
+solution a full Gauss-Newton step can raise the defects while the cost falls (the curvature of the
+shooting map at the smooth Coulomb friction's knee); a second-order correction (Nocedal & Wright,
+Section 18.3) removes them with the same matrix before the step is shortened. The fit stops at the
+data's resolution: once continuous, when no parameter would move by a tenth of its standard error.
 
 Torque noise. The recorded torque is not the true one. With a multisine excitation the true torque
 lies on its lines; the fit adds to the projected torque a correction on the lines with the
@@ -237,9 +246,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         balance a finger turns 3e-5 N m of in-band torque error into 13 counts of encoder misfit.
     camera_noise: standard deviation of the recording's joint-angle measurements, rad (weights them
         against the encoder, whose noise is its quantisation step / sqrt(12) plus the fit's residual).
-    max_iterations, tol: Gauss-Newton stopping rule: continuous to 1e-6 and a predicted or realised
-        change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1: the parameters would move by a
-        fraction of their standard errors), or chi^2 down by less than 1 over five iterations.
+    max_iterations, tol: Gauss-Newton stopping rule: continuous to 1e-6 and either the next step moving
+        no parameter by more than a tenth of its standard error, or a predicted or realised (whole step)
+        change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1), or chi^2 down by less than 1 over
+        five iterations.
     progress: a progress line on stderr (default: when stderr is a terminal).
 
     Returns
@@ -339,19 +349,29 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             return glob[p:].reshape(nphi, nu).T  # C (nu, nphi) from its column-major vec
         return offs if eiv else None
 
-    def evaluate(nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray):
+    def evaluate(nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool = True):
         """Residuals r (S, R), their Jacobians J (S, R, nb + ng) with respect to the interval's local
         variables and the global ones (log theta, line corrections), continuity c (S-1, nx) and its
         Jacobians Cv (S-1, nx, nb), Cr (S-1, nx, ng); the global residuals rg (ng,) (the line
-        corrections' prior; zeros for theta) and the states."""
+        corrections' prior; zeros for theta) and the states. ``jac=False``: r, c, rg and the states
+        alone (J, Cv, Cr None), from the step without its sensitivities (a tenth of the time)."""
         theta = theta0 * np.exp(glob[:p])
-        xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib)
+        xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
+        q = xs[:, :, :n]
+        r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
+        c = xs[:-1, L] - nodes[1:]
+        rg = np.concatenate([np.zeros(p), glob[p:]])
+        if not jac:
+            res = [r_enc.reshape(n_int, -1)]
+            if Qm is not None:
+                res.append((np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise).reshape(n_int, -1))
+            if no:
+                res.append(offs / sig_off)
+            return np.concatenate(res, axis=1), None, c, None, None, rg, xs
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if no else X[..., iv]  # (S, L+1, nx, nb)
         Xr = X[..., ip] * theta  # d/d log theta
         if lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
-        q = xs[:, :, :n]
-        r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
         w = valid[:, :, None, None] / sig_y
         res = [r_enc.reshape(n_int, -1)]
         J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
@@ -369,8 +389,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             jac.append(Jo)
         r = np.concatenate(res, axis=1)
         J = np.concatenate(jac, axis=1)
-        c = xs[:-1, L] - nodes[1:]
-        rg = np.concatenate([np.zeros(p), glob[p:]])
         return r, J, c, Xv[:-1, L], Xr[:-1, L], rg, xs
 
     nv = n_int * nb
@@ -429,7 +447,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         gn = np.einsum("sk,ski->si", r, A)
         Dn = np.einsum("sii->si", Hn)
         dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)), gn[:, :, None])
-        r2, *_ = evaluate(nodes + dn[:, :, 0], offs, glob)
+        r2, *_ = evaluate(nodes + dn[:, :, 0], offs, glob, jac=False)
         better = np.sum(r2**2, axis=1) < np.sum(r**2, axis=1)
         nodes[better] += dn[better, :, 0]
         mu_n = np.where(better, mu_n / 10, mu_n * 10)
@@ -446,12 +464,22 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         enc = r[:, : (L + 1) * ny] * sig_y / step
         return float(np.sqrt(np.sum(enc**2) / max(int(valid.sum()) * ny, 1)))
 
-    def limited(dv: np.ndarray, dg: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def limited(d: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
         """A trust region (no jump into a far basin): log theta by at most max_log_step, the line
-        corrections by at most max_coef_step prior standard deviations, the whole step scaled down."""
+        corrections by at most max_coef_step prior standard deviations, the whole step scaled down.
+        In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
+        for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
+        three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
+        and whether the step is whole."""
+        dv, dg = d[:nv].reshape(n_int, nb), d[nv:nz]
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / max_log_step,
                   float(np.max(np.abs(dg[p:]), initial=0.0)) / max_coef_step)
-        return (dv / big, dg / big) if big > 1.0 else (dv, dg)
+        return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
+
+    n_res = int(valid.sum()) * ny + (int(q_mask.sum()) if q_mask is not None else 0) + n_int * no + ncg
+    dof = max(n_res - (nz - nc), 1)
+    unit_p = np.zeros((nz + nc, p))
+    unit_p[nv + np.arange(p), np.arange(p)] = 1.0
 
     def solve(nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, freeze: bool):
         """Stages 2 and 3 from the stage-1 nodes; ``freeze``: friction held during the homotopy."""
@@ -477,13 +505,22 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                     d = -np.linalg.solve(H, g)
                 except np.linalg.LinAlgError:
                     d = -np.linalg.lstsq(H, g, rcond=None)[0]
-                dv, dg = limited(d[:nv].reshape(n_int, nb), d[nv:])
-                trial = evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg)
+                dv, dg, whole = limited(d)
+                if not whole:
+                    # the global step shortened, the local variables solved again for it: with continuity a
+                    # penalty the data hold the nodes, and they follow the parameters (scaled with them, the
+                    # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
+                    # iterations at 1/10-1/60 of the Gauss-Newton step)
+                    try:
+                        dv = np.linalg.solve(H[:nv, :nv], -g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, nb)
+                    except np.linalg.LinAlgError:
+                        pass
+                trial = evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
                 new_cost = 0.5 * float(np.sum(trial[0] ** 2) + np.sum(trial[5] ** 2)
                                        + np.sum((trial[2].reshape(-1) * wdef) ** 2))
                 if np.isfinite(new_cost) and new_cost < soft_cost:
                     nodes, offs, glob = nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg
-                    r, J, c, Cv, Cr, rg, xs = trial
+                    r, J, c, Cv, Cr, rg, xs = evaluate(nodes, offs, glob)
                     mu_s = max(mu_s / 10.0, 1e-9)
                     if soft_cost - new_cost < 1e-3 * soft_cost:
                         break
@@ -497,28 +534,37 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         mu = 1e-3
         converged = False
         history: list[float] = []
+        lost: list[bool] = []
         it = 0
         for it in range(1, max_iterations + 1):
             cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2))
-            K = kkt(J, Cv, Cr, mu)
             rhs = np.concatenate([-grad(r, J, rg), -c.reshape(-1)])
+            # the step, and the parameters' block of the inverse (their covariance up to the scale)
+            K = kkt(J, Cv, Cr, mu)
             try:
-                sol = np.linalg.solve(K, rhs)
+                sol = np.linalg.solve(K, np.column_stack([rhs, unit_p]))
             except np.linalg.LinAlgError:
-                sol = np.linalg.lstsq(K, rhs, rcond=None)[0]
+                sol = np.linalg.lstsq(K, np.column_stack([rhs, unit_p]), rcond=None)[0]
+            sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]
             viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
-            if viol < 1e-6 and abs(float(rhs[:nz] @ d)) <= max(tol * cost, 0.05):
-                # continuous, and Gauss-Newton predicts a decrease of chi^2 below 0.1 (the parameters would move
-                # by a fraction of their standard errors): the statistical resolution of the data
+            sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 1e-300) * max(2.0 * cost / dof, 1e-300))
+            step_sigma = float(np.max(np.abs(d[nv:nv + p]) / sd_rho, initial=0.0))
+            if viol < 1e-6 and (abs(float(rhs[:nz] @ d)) <= max(tol * cost, 0.05) or step_sigma < 0.1):
+                # continuous, and Gauss-Newton predicts a decrease of chi^2 below 0.1 or no parameter moving by
+                # a tenth of its standard error: the statistical resolution of the data
                 converged = True
                 break
             nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
             merit = cost + nu_merit * float(np.sum(np.abs(c)))
-            dv, dg = limited(d[:nv].reshape(n_int, nb), d[nv:])
-            accepted = False
-            for alpha in (1.0, 0.5, 0.25, 0.1, 0.03):
-                trial = evaluate(nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], glob + alpha * dg)
+            dv, dg, full = limited(d)
+            accepted, soc_done = False, False
+            candidates = [(1.0, dv, dg), (0.5, dv, dg), (0.25, dv, dg), (0.1, dv, dg), (0.03, dv, dg)]
+            k_try = 0
+            while k_try < len(candidates):
+                alpha, sv, sg = candidates[k_try]
+                k_try += 1
+                trial = evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
                 if not (np.isfinite(trial[0]).all() and np.isfinite(trial[2]).all()):
                     continue
                 cost_new = 0.5 * float(np.sum(trial[0] ** 2) + np.sum(trial[5] ** 2))
@@ -529,19 +575,36 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                                      and cost_new <= cost * (1.0 + 1e-6)):
                     accepted = True
                     break
+                if alpha == 1.0 and full and not soc_done:
+                    # second-order correction (Nocedal & Wright, 18.3): the full step's own defects removed by a
+                    # minimum-norm correction from the same system; near the solution the curvature of the
+                    # shooting map makes a full Gauss-Newton step raise the defects though the cost falls (the
+                    # Maratos effect), and without the correction the line search crawls
+                    soc_done = True
+                    try:
+                        d2 = np.linalg.solve(K, np.concatenate([np.zeros(nz), -trial[2].reshape(-1)]))[:nz]
+                    except np.linalg.LinAlgError:
+                        continue
+                    candidates.insert(k_try, (1.0, sv + d2[:nv].reshape(n_int, nb), sg + d2[nv:]))
             bar.update(1)
             if not accepted:
                 mu *= 10.0
                 if mu > 1e8:
                     break
                 continue
+            dv, dg = sv, sg
             step_g = float(np.max(np.abs(alpha * dg), initial=0.0))
             nodes, offs, glob = nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], glob + alpha * dg
-            r, J, c, Cv, Cr, rg, xs = trial
+            r, J, c, Cv, Cr, rg, xs = evaluate(nodes, offs, glob)
             mu = max(mu / 10.0, 1e-9) if alpha == 1.0 else min(mu * 3.0, 1e6)
             viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
-            small_change = abs(cost - cost_new) <= max(tol * cost, 0.05)  # chi^2 by less than 0.1
+            small_change = alpha == 1.0 and abs(cost - cost_new) <= max(tol * cost, 0.05)  # chi^2 by less than 0.1
             history.append(cost_new)
+            lost.append(not full and float(np.max(np.abs(d[nv:nv + p]), initial=0.0)) > 100.0 * max_log_step)
+            if len(lost) >= 3 and all(lost[-3:]) and viol > 1e-3:
+                # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
+                # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
+                break
             stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
             if viol < 1e-6 and (small_change or stalled or step_g < tol):
                 converged = True
@@ -555,6 +618,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     start = (nodes.copy(), offs.copy(), glob.copy())
     total_its = 0
     for freeze in (True, False):
+        if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
+            bar.close()
+            bar = _Progress(max_iterations, "identify (second start)", show)
         nodes, offs, glob, state, it, converged = solve(*[a.copy() for a in start], freeze)
         total_its += it
         r, J, c, Cv, Cr, rg, xs = state
@@ -569,8 +635,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         Kinv = np.linalg.inv(K0)
     except np.linalg.LinAlgError:
         Kinv = np.linalg.pinv(K0)
-    n_res = int(valid.sum()) * ny + (int(q_mask.sum()) if q_mask is not None else 0) + n_int * no + ncg
-    dof = max(n_res - (nz - nc), 1)
     s2 = float(np.sum(r**2) + np.sum(rg**2)) / dof
     P_rho = Kinv[nv:nv + p, nv:nv + p] * s2
     theta = theta0 * np.exp(glob[:p])

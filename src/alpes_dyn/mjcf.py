@@ -28,7 +28,7 @@ Scenes (``scene=``): ``"block"`` (finger2/finger3) adds a fixed, frictionless bo
 the fingertip at the configuration ``contact_q``, at an angle ``block_tilt`` to the distal phalanx
 (the block pushes the fingertip along the face's normal n, :func:`block_normal`: F = -F_z n with
 F_z >= 0 the FlexiForce reading); ``"cylinder"`` (hand) adds a
-fixed cylinder across the fingers, in front of the palm, that the hand can grasp. With the
+fixed, frictionless cylinder across the fingers, in front of the palm, that the hand can grasp (:data:`CYLINDER`). With the
 parameter file's gravity (palm up) the fingers lift their own weight; ``palm_down=True`` reverses
 it, the fingers then press down on the object, as in :mod:`alpes_dyn.control`.
 
@@ -59,8 +59,11 @@ SCENES: tuple[str, ...] = ("none", "block", "cylinder")
 BLOCK_CONTACT_Q: tuple[float, ...] = (0.9, 0.5, 0.5)
 #: Angle (rad) between the distal phalanx at :data:`BLOCK_CONTACT_Q` and the block's face.
 BLOCK_TILT: float = 0.15
-#: The cylinder of the hand scene: centre (m, palm frame), radius (m), half-length (m); its axis is y.
-CYLINDER = {"center": (0.07, 0.0, 0.07), "radius": 0.02, "half_length": 0.05}
+#: The cylinder of the hand scene: centre (m, palm frame), radius (m), half-length (m); its axis is y. Frictionless
+#: (``condim="1"``) like the block: the contact force is the normal force the FlexiForce reads. Placed where the four
+#: fingertips and the thumb's (ab/adduction at 35 degrees) meet it with their pads before any other phalanx touches,
+#: the hand palm down (see :func:`alpes_dyn.control.run_hand_control`).
+CYLINDER = {"center": (0.01, 0.0, 0.08), "radius": 0.025, "half_length": 0.08}
 
 
 def _f(x: float) -> str:
@@ -271,7 +274,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         if scene == "cylinder":
             c = CYLINDER
             body.append(f'    <geom name="cylinder" type="cylinder" pos="{_v(c["center"])}" quat="0.7071067811865476 '
-                        f'0.7071067811865476 0 0" size="{_f(c["radius"])} {_f(c["half_length"])}" rgba="0.4 0.6 0.8 1"/>\n')
+                        f'0.7071067811865476 0 0" size="{_f(c["radius"])} {_f(c["half_length"])}" condim="1" '
+                        'friction="0 0.005 0.0001" priority="1" rgba="0.4 0.6 0.8 1"/>\n')
     body.append("  </worldbody>\n")
     parts = [head, *body]
     if excludes:

@@ -96,11 +96,14 @@ class SensitivityModel:
         self.plain_step = cs.Function("step", [x, w], [xn])
         label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._loop = CompiledStepLoop(self.step, label, threads)
+        self._label, self._threads = label, threads
+        self._plain_loop: CompiledStepLoop | None = None  # the states alone, compiled on first use
         self.compile_seconds = self._loop.compile_seconds
         self.nw = self.nu + 3 + self.p + self.nb + self.no
 
     def run(self, x0: np.ndarray, U: np.ndarray, G: np.ndarray, theta: np.ndarray, offset: np.ndarray | None = None,
-            progress: bool = False, basis: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+            progress: bool = False, basis: np.ndarray | None = None,
+            sensitivities: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
         """States and sensitivities at the samples of B segments of N samples.
 
         Parameters
@@ -109,12 +112,13 @@ class SensitivityModel:
         G: (B, N, 3) gravity (m/s^2, base frame) per sample period. theta: (p,) parameter values.
         offset: the correction coefficients C, (B, nu, nb) per segment or (nu, nb) for all (with
         ``input_offset=True`` also (B, nu)); default 0. basis: phi, (B, N, nb) per sample (default: ones,
-        which only makes sense for a constant offset).
+        which only makes sense for a constant offset). sensitivities: False for the states alone (the
+        same step without its derivatives, compiled on first use: what a line search's trial needs).
 
         Returns
         -------
         x: (B, N+1, 2n) states at the samples; X: (B, N+1, 2n, nd) their derivatives with respect
-        to (x0, theta[, vec C]).
+        to (x0, theta[, vec C]), None without ``sensitivities``.
         """
         x0 = np.asarray(x0, dtype=float)
         U = np.asarray(U, dtype=float)
@@ -145,6 +149,13 @@ class SensitivityModel:
                     C = C[:, :, None]
                 C = np.broadcast_to(C, (B, self.nu, self.nb))
                 W[:, :, j + self.nb:] = C.transpose(0, 2, 1).reshape(B, 1, self.no)  # vec, column-major
+        if not sensitivities:
+            if self._plain_loop is None:
+                self._plain_loop = CompiledStepLoop(self.plain_step, self._label.replace("sens_", "states_", 1),
+                                                    self._threads)
+                self.compile_seconds += self._plain_loop.compile_seconds
+            x0 = np.ascontiguousarray(np.broadcast_to(x0, (B, self.nx)))
+            return self._plain_loop.run(x0, W, progress, "states")[:, ::s], None
         s0 = np.zeros((B, self.nx + self.nx * self.nd))
         s0[:, : self.nx] = x0
         s0[:, self.nx: self.nx + self.nx * self.nx] = np.eye(self.nx).ravel(order="F")
