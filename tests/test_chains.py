@@ -248,9 +248,12 @@ def test_identified_thumb_values_go_to_the_thumb(hand_params):
 
     p = hand_params
     th = ad.Model.alpes("thumb", friction=True, params=p)
-    res = _result(th, ("K_thumb_j2", "m_thumb_j1", "m_thumb_abd", "F_s_thumb_abd", "F_v_thumb_abd", "F_v_thumb_j2"),
-                  [0.055, 0.03, 0.006, 6e-4, 2e-4, 1.5e-4], [1e-4, 1e-4, 5e-3, 1e-5, 4e-5, 1e-6])
+    res = _result(th, ("K_thumb_j2", "m_thumb_j1", "m_thumb_abd", "F_s_thumb_abd", "F_v_thumb_abd", "F_v_thumb_j2",
+                       "K_thumb_abd"),
+                  [0.055, 0.03, 0.006, 6e-4, 2e-4, 1.5e-4, 0.01], [1e-4, 1e-4, 5e-3, 1e-5, 4e-5, 1e-6, 1e-4])
     out = identified_params(res)
+    assert out.abduction_K == 0.01 and out.raw["thumb.abduction_K"].source == "identified"
+    assert ad.Model.alpes("thumb", params=out).extras.stiffness.tolist() == [0.01, p.thumb.K[0], 0.055]
     assert out.thumb.K.tolist() == [p.thumb.K[0], 0.055]
     assert out.thumb.m[0] == 0.03 and out.thumb.I[0] == pytest.approx(p.thumb.I[0] * 0.03 / 0.025, rel=1e-12)
     assert out.thumb_base_mass == 0.006 and out.raw["thumb.base_mass"].std == 5e-3

@@ -20,6 +20,12 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   ``counts_per_rev`` with 0.5 count of Gaussian noise, motor torque with white noise of 5e-4 N m,
   sampled at 1 kHz.
 
+The hand is identified one chain at a time (:data:`EXPERIMENT_MODELS`): a finger model built from one
+finger of the hand (``chain=``), or the ``thumb`` model, whose two motors are excited at once, each with
+the multisine (phases shifted between them): the flexion tendon as a finger's, the ab/adduction (no
+spring; its joint placed mid-range) about the torque that balances gravity there, its amplitude searched
+down from four times its joint's breakaway (Coulomb) torque until a nominal run stays in range.
+
 Why this design (measured with :func:`~alpes_dyn.identifiability.fisher_information`, the Cramér-Rao
 bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
 the estimation scenario's small torque wiggle leaves F_v_3 at 10 % and the masses at up to 0.64 %; the
