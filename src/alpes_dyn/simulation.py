@@ -544,8 +544,7 @@ def _vector_step(source: str, lanes: int) -> str | None:
     b = re.sub(r"arg\[1\]\? arg\[1\]\[(\d+)\] : 0", r"W[\1]", b)
     b = re.sub(r"if \(res\[0\]!=0\) res\[0\]\[(\d+)\]=", r"Y[\1]=", b)
     b = re.sub(r"^(\s*a\d+)=([-+]?[0-9.]+(?:[eE][-+]?\d+)?);$", r"\1=VB(\2);", b, flags=re.M)
-    for name in _VEC_UNARY + _VEC_BINARY:
-        b = re.sub(rf"\b{name}\(", f"v_{name}(", b)
+    b = re.sub(r"\b(" + "|".join(_VEC_UNARY + _VEC_BINARY) + r")\(", r"v_\1(", b)  # one pass over the body
     calls = set(re.findall(r"\b([A-Za-z_]\w*)\(", b))
     if calls - {f"v_{n}" for n in _VEC_UNARY + _VEC_BINARY} - {"v_sincos", "VB"}:
         return None
