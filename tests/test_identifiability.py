@@ -151,3 +151,24 @@ def test_fim_nuisance_and_camera(finger2):
     d = cam.to_dict()
     assert set(d["parameters"]) == {"K_1", "m_2"} and d["camera_samples"] == 2
     assert "K_1" in cam.to_text()
+
+
+def test_thumb_springless_abduction_rests_mid_range():
+    """The thumb: structurally, its springs are identifiable (rank 2n + p); the Fisher information's
+    default initial state holds the springless ab/adduction mid-range (the static balance cannot place
+    it) and the flexion springs come out to a fraction of a percent from 0.5 s of its experiment."""
+    from alpes_dyn.experiment import ExperimentDesign, experiment
+
+    thumb = ad.Model.alpes("thumb", friction=True)
+    rep = identifiability(thumb, parameters="K")
+    assert (rep.rank, rep.dimension) == (8, 8)
+    design = ExperimentDesign(duration=0.5)
+    rec = experiment("thumb", load_params(), design, seed=1)
+    fr = fisher_information(thumb, "K", rec.torque[:-1], design=design)
+    assert fr.parameters == ("K_thumb_j1", "K_thumb_j2") and fr.rank == 2
+    assert np.all(fr.relative_std < 0.01)
+    mid = 0.5 * (thumb.lower[0] + thumb.upper[0])
+    tau0 = thumb.transmission.joint_torque(rec.torque[0])
+    q_rest = thumb.static_equilibrium(tau0, np.r_[mid, 0.0, 0.0], fixed=("thumb_abd",))
+    explicit = fisher_information(thumb, "K", rec.torque[:-1], design=design, x0=np.r_[q_rest, np.zeros(3)])
+    assert np.allclose(explicit.fim, fr.fim, rtol=1e-10)
