@@ -117,16 +117,11 @@ def _oriented(model: Model, gravity: np.ndarray) -> Model:
     return model if np.array_equal(model.gravity, gravity) else model.copy(gravity=gravity)
 
 
-def _held(model: Model) -> tuple[str, ...]:
-    """Joints without a spring (the thumb's ab/adduction): their own motor holds them, at mid-range."""
-    return tuple(j for j, k in zip(model.joint_names, model.extras.stiffness) if k == 0)
-
-
 def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarray) -> np.ndarray:
     """The static equilibrium under the motor torques ``tau_m`` (m,) (a number for one motor), the joints
     without spring held mid-range."""
     m = _oriented(model, gravity)
-    held = _held(m)
+    held = m.springless_joints
     q0 = np.zeros(m.n)
     for j in held:
         i = m.joint_index(j)
@@ -139,7 +134,7 @@ def _motor_groups(model: Model) -> tuple[list[np.ndarray], list[int], list[int]]
     """Each motor's joints, the motors whose joints all have springs (a tendon against its return springs) and
     the others (a motor driving springless joints both ways, held at mid-range by its bias)."""
     S = model.transmission.S
-    held = {model.joint_index(j) for j in _held(model)}
+    held = {model.joint_index(j) for j in model.springless_joints}
     joints = [np.flatnonzero(S[k]) for k in range(S.shape[0])]
     sprung = [k for k, js in enumerate(joints) if not held.intersection(js.tolist())]
     return joints, sprung, [k for k in range(S.shape[0]) if k not in sprung]
@@ -299,7 +294,7 @@ def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: 
             q = _mean_equilibrium(model, torques(c), gravity)
         except InputError:
             return False
-        free = [i for i, j in enumerate(m.joint_names) if j not in _held(m)]
+        free = [i for i, j in enumerate(m.joint_names) if j not in m.springless_joints]
         dG = m.gravity_jacobian(q)[np.ix_(free, free)]
         return bool(np.linalg.eigvalsh(0.5 * (dG + dG.T)).min() > 0)
 

@@ -523,8 +523,8 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     design: optional object with any of the fields ``dt``, ``substeps``, ``encoder_noise_counts``,
         ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.experiment.ExperimentDesign`): the
         defaults of the arguments of the same names.
-    x0: initial state (2n,); default the static equilibrium under U[0] and G[0] (a joint without spring,
-        the thumb's ab/adduction, held mid-range).
+    x0: initial state (2n,); default the static equilibrium under U[0] and G[0] (where the balance alone
+        does not place a joint without spring, the thumb's ab/adduction, that joint held mid-range).
     theta: parameter values (p,), default the model's (nominal).
     encoder_noise_counts: Gaussian encoder noise, counts (default 0.5); with ``quantisation`` the
         quantisation's step / sqrt(12) is added in quadrature.
@@ -608,11 +608,15 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     if x0 is None:
         m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
         tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
-        # joints without spring (the thumb's ab/adduction, held by its own motor) rest mid-range
-        k = m0.extras.stiffness if m0.extras is not None else np.ones(n)
-        held = tuple(j for j, kj in zip(model.joint_names, k) if kj == 0)
-        qh = np.where(np.isfinite(model.lower) & np.isfinite(model.upper), 0.5 * (model.lower + model.upper), 0.0)
-        x0a = np.concatenate([m0.static_equilibrium(tau0, np.where(k == 0, qh, 0.0), fixed=held), np.zeros(n)])
+        try:
+            q_rest = m0.static_equilibrium(tau0)
+        except InputError:
+            if tr is None or not model.springless_joints:
+                raise
+            from .experiment import _mean_equilibrium  # the experiment's rest: joints without spring mid-range
+
+            q_rest = _mean_equilibrium(model, Ua[0], Ga[0])
+        x0a = np.concatenate([q_rest, np.zeros(n)])
     else:
         x0a = _array(x0, "x0", 1)
         if x0a.shape != (nx,):

@@ -476,6 +476,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                   float(np.max(np.abs(dg[p:]), initial=0.0)) / max_coef_step)
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
+    def lin_solve(M: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """M x = rhs, or its least-squares (minimum-norm) solution where M is singular."""
+        try:
+            return np.linalg.solve(M, rhs)
+        except np.linalg.LinAlgError:
+            return np.linalg.lstsq(M, rhs, rcond=None)[0]
+
     n_res = int(valid.sum()) * ny + (int(q_mask.sum()) if q_mask is not None else 0) + n_int * no + ncg
     dof = max(n_res - (nz - nc), 1)
     unit_p = np.zeros((nz + nc, p))
@@ -501,10 +508,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 H = normal(J, mu_s) + C.T @ C
                 H[frozen, frozen] += 1e12 * np.maximum(H[frozen, frozen], 1.0)  # friction waits for the hard phase
                 g = grad(r, J, rg) + C.T @ (c.reshape(-1) * wdef)
-                try:
-                    d = -np.linalg.solve(H, g)
-                except np.linalg.LinAlgError:
-                    d = -np.linalg.lstsq(H, g, rcond=None)[0]
+                d = -lin_solve(H, g)
                 dv, dg, whole = limited(d)
                 if not whole:
                     # the global step shortened, the local variables solved again for it: with continuity a
@@ -534,17 +538,14 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         mu = 1e-3
         converged = False
         history: list[float] = []
-        lost: list[bool] = []
+        lost = 0  # consecutive steps that asked log theta for more than 30
         it = 0
         for it in range(1, max_iterations + 1):
             cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2))
             rhs = np.concatenate([-grad(r, J, rg), -c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)
             K = kkt(J, Cv, Cr, mu)
-            try:
-                sol = np.linalg.solve(K, np.column_stack([rhs, unit_p]))
-            except np.linalg.LinAlgError:
-                sol = np.linalg.lstsq(K, np.column_stack([rhs, unit_p]), rcond=None)[0]
+            sol = lin_solve(K, np.column_stack([rhs, unit_p]))
             sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]
             viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
@@ -600,8 +601,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
             small_change = alpha == 1.0 and abs(cost - cost_new) <= max(tol * cost, 0.05)  # chi^2 by less than 0.1
             history.append(cost_new)
-            lost.append(not full and float(np.max(np.abs(d[nv:nv + p]), initial=0.0)) > 100.0 * max_log_step)
-            if len(lost) >= 3 and all(lost[-3:]) and viol > 1e-3:
+            far = not full and float(np.max(np.abs(d[nv:nv + p]), initial=0.0)) > 100.0 * max_log_step
+            lost = lost + 1 if far else 0
+            if lost >= 3 and viol > 1e-3:
                 # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
                 # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
                 break
@@ -629,14 +631,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     it = total_its
     bar.close()
 
-    # covariance: the Gauss-Newton KKT inverse at the solution, scaled by the residual variance
-    K0 = kkt(J, Cv, Cr, 0.0)
-    try:
-        Kinv = np.linalg.inv(K0)
-    except np.linalg.LinAlgError:
-        Kinv = np.linalg.pinv(K0)
+    # covariance: the parameters' block of the undamped Gauss-Newton KKT inverse at the solution, scaled by
+    # the residual variance
     s2 = float(np.sum(r**2) + np.sum(rg**2)) / dof
-    P_rho = Kinv[nv:nv + p, nv:nv + p] * s2
+    P_rho = lin_solve(kkt(J, Cv, Cr, 0.0), unit_p)[nv:nv + p] * s2
     theta = theta0 * np.exp(glob[:p])
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
@@ -651,7 +649,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
 def _rest_guess(model: Model, tau: np.ndarray, y0: np.ndarray) -> np.ndarray:
     """The static equilibrium under the joint torques ``tau``, the joints without spring (the thumb's
     ab/adduction, which its own motor holds) held where the first encoder reading ``y0`` puts them."""
-    held = tuple(j for j, k in zip(model.joint_names, model.extras.stiffness) if k == 0)
+    held = model.springless_joints
     if not held:
         return static_equilibrium(model, tau)
     q = np.zeros(model.n)

@@ -564,6 +564,11 @@ class Model:
 
     # ------------------------------------------------------------------ helpers
     @property
+    def springless_joints(self) -> tuple[str, ...]:
+        """Joints without a spring (stiffness 0, e.g. the thumb's ab/adduction, which its own motor holds)."""
+        return tuple(j for j, k in zip(self.joint_names, self.extras.stiffness) if k == 0)
+
+    @property
     def lower(self) -> np.ndarray:
         """Joint lower limits from the URDF (rad)."""
         return self.pin_model.lowerPositionLimit.copy()

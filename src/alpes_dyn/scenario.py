@@ -225,7 +225,7 @@ def _torque(sc: EstimationScenario, t: np.ndarray, m: int, held: Sequence[int] =
 
 def _held_joints(model: Model) -> tuple[tuple[str, ...], list[int]]:
     """Joints without spring (the thumb's ab/adduction) and the motors that drive them."""
-    joints = tuple(j for j, k in zip(model.joint_names, model.extras.stiffness) if k == 0)
+    joints = model.springless_joints
     idx = [model.joint_index(j) for j in joints]
     S = model.transmission.S
     return joints, [k for k in range(S.shape[0]) if np.any(S[k, idx] != 0)]
