@@ -41,7 +41,7 @@ def main() -> None:
     a = ap.parse_args()
 
     import alpes_dyn as ad
-    from alpes_dyn.spec import example_spec_path
+    from alpes_dyn.model.spec import example_spec_path
 
     urdf, spec = ad.example_robot_urdf("allegro_hand", "allegro_right_hand"), example_spec_path("allegro_hand")
     cli = [sys.executable, "-m", "alpes_dyn.cli", "observability", "--model", str(urdf), "--spec", str(spec),

@@ -41,7 +41,7 @@ def sympy_check(n: int) -> dict[str, Any]:
     """The report's symbolic observability check of the n-phalanx finger (n = 2 or 3); returns rank, seconds."""
     import sympy as sp
 
-    from alpes_dyn.params import load_params
+    from alpes_dyn.model.params import load_params
 
     t0 = time.perf_counter()
     p = load_params()
@@ -110,7 +110,7 @@ def run_sympy(name: str, timeout: float) -> dict[str, Any]:
 
 # ----------------------------------------------------------------------------- ours
 def run_ours(name: str, repeat: int) -> dict[str, Any]:
-    from alpes_dyn.observability import check_observability as observability
+    from alpes_dyn.analysis.observability import check_observability as observability
 
     times = []
     rep = None
@@ -145,7 +145,7 @@ def main() -> None:
     if a.sympy_worker:
         print(json.dumps(sympy_check(a.sympy_worker)))
         return
-    import alpes_dyn.observability  # noqa: F401  (imports out of the timings)
+    import alpes_dyn.analysis.observability  # noqa: F401  (imports out of the timings)
     import adam.casadi  # noqa: F401
 
     res: dict[str, Any] = {}

@@ -30,7 +30,7 @@ import pytest
 import alpes_dyn as ad
 from alpes_dyn import cli
 from alpes_dyn.errors import AlpesDynError, InputError, ModelError, RecordingError
-from alpes_dyn.params import default_params_path
+from alpes_dyn.model.params import default_params_path
 
 BASE_TOML = default_params_path().read_text(encoding="utf-8")
 FINGER3 = ad.urdf_string("finger3")
@@ -338,7 +338,7 @@ class Ctx:
     """What the API rows work on: finger3, its state space, the broken files."""
 
     def __init__(self, d: Path) -> None:
-        from alpes_dyn.statespace import StateSpace
+        from alpes_dyn.symbolic.statespace import StateSpace
 
         self.d = d
         self.f = bad_files(d)
@@ -348,13 +348,13 @@ class Ctx:
 
 
 def _ekf(c, **kw):
-    from alpes_dyn.observers import ExtendedKalmanFilter
+    from alpes_dyn.estimation.observers import ExtendedKalmanFilter
 
     return ExtendedKalmanFilter(c.ss, 1e-3, **{"process_noise": 1e-9, "measurement_noise": 1e-7, **kw})
 
 
 def _ukf(c, **kw):
-    from alpes_dyn.observers import UnscentedKalmanFilter
+    from alpes_dyn.estimation.observers import UnscentedKalmanFilter
 
     return UnscentedKalmanFilter(c.ss, 1e-3, process_noise=1e-9, measurement_noise=1e-7, **kw)
 
@@ -366,7 +366,7 @@ def _sim(c, **kw):
 
 
 def _est(**kw):
-    from alpes_dyn.scenario import run_estimation
+    from alpes_dyn.estimation.scenario import run_estimation
 
     return run_estimation("ekf", **kw)
 
@@ -378,25 +378,25 @@ def _rollout(c, **kw):
 
 
 def _design(**kw):
-    from alpes_dyn.experiment import ExperimentDesign
+    from alpes_dyn.estimation.experiment import ExperimentDesign
 
     return ExperimentDesign(**{"duration": 0.2, **kw})
 
 
 def _exp(**kw):
-    from alpes_dyn.experiment import experiment
+    from alpes_dyn.estimation.experiment import experiment
 
     return experiment(**{"model": "finger2", "design": _design(), **kw})
 
 
 def _pp(**kw):
-    from alpes_dyn.experiment import perturbed_params
+    from alpes_dyn.estimation.experiment import perturbed_params
 
     return perturbed_params(**kw)
 
 
 def _ident(c, recording=None, **kw):
-    from alpes_dyn.identification import identify
+    from alpes_dyn.estimation.identification import identify
 
     if recording is None:
         recording = _exp()
@@ -404,26 +404,26 @@ def _ident(c, recording=None, **kw):
 
 
 def _pdyn(c, parameters):
-    from alpes_dyn.parametric import ParametricDynamics
+    from alpes_dyn.symbolic.parametric import ParametricDynamics
 
     return ParametricDynamics(c.m, parameters)
 
 
 def _idf(**kw):
-    from alpes_dyn.identifiability import identifiability
+    from alpes_dyn.analysis.identifiability import identifiability
 
     return identifiability(**{"system": "finger2", "parameters": "K", **kw})
 
 
 def _fim(c, **kw):
-    from alpes_dyn.identifiability import fisher_information
+    from alpes_dyn.analysis.identifiability import fisher_information
 
     kw = {"model": c.m, "parameters": "K", "U": np.full(10, 0.02), **kw}
     return fisher_information(**kw)
 
 
 def _nd(v, names):
-    from alpes_dyn.identifiability import name_direction
+    from alpes_dyn.analysis.identifiability import name_direction
 
     return name_direction(v, names)
 
@@ -660,7 +660,7 @@ def _cyl_normal(c, axis):
 
 
 def _plot_path(p):
-    from alpes_dyn.scenario import check_plot_path
+    from alpes_dyn.estimation.scenario import check_plot_path
 
     return check_plot_path(p)
 

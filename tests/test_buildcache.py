@@ -1,5 +1,5 @@
 """The compiled-library cache heals itself: broken libraries are never loaded but rebuilt, killed builds
-are cleaned up, concurrent processes compile once (alpes_dyn.buildcache)."""
+are cleaned up, concurrent processes compile once (alpes_dyn.simulation.buildcache)."""
 
 from __future__ import annotations
 
@@ -16,8 +16,8 @@ import casadi as cs
 import numpy as np
 import pytest
 
-from alpes_dyn.buildcache import CompilerError, build_library, verify_library
-from alpes_dyn.simulation import CompiledStepLoop, _CFLAGS, _compiler
+from alpes_dyn.simulation.buildcache import CompilerError, build_library, verify_library
+from alpes_dyn.simulation.codegen import CompiledStepLoop, _CFLAGS, _compiler
 
 SOURCE = "int alpes_answer(void) { return 42; }\n"
 
@@ -129,8 +129,8 @@ def test_concurrent_processes_compile_once(tmp_path):
     cc.write_text(f"#!/bin/sh\nsleep 1\nexec {shutil.which(_compiler())} \"$@\"\n")
     cc.chmod(0o755)
     cache = tmp_path / "cache"
-    code = ("import sys; from pathlib import Path; from alpes_dyn.buildcache import build_library; "
-            "from alpes_dyn.simulation import _CFLAGS; "
+    code = ("import sys; from pathlib import Path; from alpes_dyn.simulation.buildcache import build_library; "
+            "from alpes_dyn.simulation.codegen import _CFLAGS; "
             f"p, c, s, lib = build_library({SOURCE!r}, 'answer', {str(cc)!r}, _CFLAGS, Path({str(cache)!r})); "
             "print(int(c), lib.alpes_answer())")
     env = dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path))

@@ -95,7 +95,7 @@ def test_console_script_help_shows_negative_vectors():
 
 
 def test_estimate_help_lists_every_observer(capsys):
-    from alpes_dyn.observers import OBSERVERS
+    from alpes_dyn.estimation.observers import OBSERVERS
 
     with pytest.raises(SystemExit) as e:
         main(["estimate", "--help"])

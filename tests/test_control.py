@@ -17,7 +17,7 @@ import alpes_dyn as ad
 from alpes_dyn.cli import main
 from alpes_dyn.control import (ForceController, reference_profile, run_control, static_contact_force,
                                static_motor_torque)
-from alpes_dyn.mjcf import BLOCK_CONTACT_Q, block_normal, load_mujoco, mjcf_string, palm_down_params
+from alpes_dyn.model.mjcf import BLOCK_CONTACT_Q, block_normal, load_mujoco, mjcf_string, palm_down_params
 
 mujoco = pytest.importorskip("mujoco")
 

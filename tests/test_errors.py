@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.params import default_params_path
+from alpes_dyn.model.params import default_params_path
 
 BASE = default_params_path().read_text()
 

@@ -15,10 +15,10 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.model import Contact
-from alpes_dyn.observability import ObservabilityMatrix
+from alpes_dyn.analysis.observability import ObservabilityMatrix
 from alpes_dyn.simulation import simulate
-from alpes_dyn.spec import example_spec_path
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.model.spec import example_spec_path
+from alpes_dyn.symbolic.statespace import StateSpace
 from alpes_dyn.symbolic import SymbolicDynamics
 
 URDF = ad.example_robot_urdf("allegro_hand", "allegro_right_hand")

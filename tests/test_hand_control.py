@@ -19,7 +19,7 @@ import alpes_dyn as ad
 from alpes_dyn.control import (ForceController, HAND_LEVELS, chain_frame, chain_model, cylinder_normal, hand_chains,
                                run_hand_control)
 from alpes_dyn.cli import main
-from alpes_dyn.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string, palm_down_params
+from alpes_dyn.model.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 
 mujoco = pytest.importorskip("mujoco")
 

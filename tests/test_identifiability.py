@@ -1,4 +1,4 @@
-"""Identifiability (alpes_dyn.identifiability): known answers of the structural test and of the Fisher information."""
+"""Identifiability (alpes_dyn.analysis.identifiability): known answers of the structural test and of the Fisher information."""
 
 from __future__ import annotations
 
@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.identifiability import fisher_information, identifiability, name_direction
-from alpes_dyn.params import Param, load_params, with_values
+from alpes_dyn.analysis.identifiability import fisher_information, identifiability, name_direction
+from alpes_dyn.model.params import Param, load_params, with_values
 from alpes_dyn.simulation import simulate
 
 # two independent pendulums hanging from the base (rods of 0.1 m, axes y): nothing couples them
@@ -157,7 +157,7 @@ def test_thumb_springless_abduction_rests_mid_range():
     """The thumb: structurally, its springs are identifiable (rank 2n + p); the Fisher information's
     default initial state holds the springless ab/adduction mid-range (the static balance cannot place
     it) and the flexion springs come out to a fraction of a percent from 0.5 s of its experiment."""
-    from alpes_dyn.experiment import ExperimentDesign, experiment
+    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment
 
     thumb = ad.Model.alpes("thumb", friction=True)
     rep = identifiability(thumb, parameters="K")

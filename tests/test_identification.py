@@ -10,12 +10,12 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.errors import ModelError, RecordingError
-from alpes_dyn.experiment import ExperimentDesign, experiment, perturbed_params
-from alpes_dyn.identification import identify, project_torque
-from alpes_dyn.parametric import ParametricDynamics, select_parameters
-from alpes_dyn.params import load_params, write_params
-from alpes_dyn.recording import read_recording, write_recording
-from alpes_dyn.sensitivity import SensitivityModel
+from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
+from alpes_dyn.estimation.identification import identify, project_torque
+from alpes_dyn.symbolic.parametric import ParametricDynamics, select_parameters
+from alpes_dyn.model.params import load_params, write_params
+from alpes_dyn.estimation.recording import read_recording, write_recording
+from alpes_dyn.simulation.sensitivity import SensitivityModel
 
 
 @pytest.fixture(scope="module")
@@ -173,7 +173,7 @@ def test_estimate_cli_with_parameter_files(tmp_path, capsys):
     import json
 
     from alpes_dyn.cli import main
-    from alpes_dyn.scenario import run_estimation
+    from alpes_dyn.estimation.scenario import run_estimation
 
     true = write_params(perturbed_params(spread=0.2, seed=5), tmp_path / "true.toml")
     code = main(["estimate", "--friction", "--true-params", str(true), "--observer-params", str(true),
@@ -214,7 +214,7 @@ def test_identify_with_torque_noise_and_the_ekf_on_its_file(tmp_path):
     encoder noise. The errors-in-variables fit lands within a few standard errors of the truth, the
     residual is the encoder noise (0.58 counts), and the EKF on the identified file is as good as on the
     true one, where the shipped file leaves it degrees off."""
-    from alpes_dyn.scenario import run_estimation
+    from alpes_dyn.estimation.scenario import run_estimation
 
     true = perturbed_params(spread=0.2, seed=2)
     design = ExperimentDesign(duration=2.0)

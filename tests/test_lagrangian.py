@@ -15,7 +15,7 @@ import pytest
 import sympy as sp
 
 import alpes_dyn as ad
-from alpes_dyn.params import default_params_path
+from alpes_dyn.model.params import default_params_path
 
 RAW = tomllib.loads(default_params_path().read_text())
 FINGER = {k: v["value"] for k, v in RAW["finger"].items()}

@@ -14,9 +14,9 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.model import Contact
-from alpes_dyn.scenario import static_equilibrium
-from alpes_dyn.spec import example_spec_path
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.estimation.scenario import static_equilibrium
+from alpes_dyn.model.spec import example_spec_path
+from alpes_dyn.symbolic.statespace import StateSpace
 
 URDF = ad.example_robot_urdf("allegro_hand", "allegro_right_hand")
 OSC = """<robot name="osc"><link name="base"/>

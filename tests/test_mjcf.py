@@ -1,7 +1,7 @@
 """MJCF export against the library: MuJoCo's dynamics, tendons, motors and sensors on the exported model.
 
 References: MuJoCo (an independent physics engine) computing qacc, tendon lengths, actuator forces and
-a contact force on the text written by alpes_dyn.mjcf; alpes_dyn's Pinocchio model on the other side.
+a contact force on the text written by alpes_dyn.model.mjcf; alpes_dyn's Pinocchio model on the other side.
 """
 
 from __future__ import annotations
@@ -13,7 +13,7 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.cli import main
-from alpes_dyn.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
+from alpes_dyn.model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 
 mujoco = pytest.importorskip("mujoco")
 

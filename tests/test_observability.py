@@ -26,10 +26,10 @@ import sympy as sp
 
 import alpes_dyn as ad
 from alpes_dyn import cli
-from alpes_dyn.observability import (ObservabilityMatrix, normalised_singular_values, numerical_rank,
+from alpes_dyn.analysis.observability import (ObservabilityMatrix, normalised_singular_values, numerical_rank,
                                      observability)
-from alpes_dyn.params import default_params_path
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.model.params import default_params_path
+from alpes_dyn.symbolic.statespace import StateSpace
 
 RAW = tomllib.loads(default_params_path().read_text())
 FINGER = {k: v["value"] for k, v in RAW["finger"].items()}
@@ -287,8 +287,8 @@ def test_cli_urdf_without_transmission(capsys):
 def test_module_is_reachable_and_function_renamed():
     import importlib
 
-    mod = importlib.import_module("alpes_dyn.observability")
-    assert ad.observability is mod and mod.__name__ == "alpes_dyn.observability"
+    mod = importlib.import_module("alpes_dyn.analysis.observability")
+    assert ad.observability is mod and mod.__name__ == "alpes_dyn.analysis.observability"
     assert ad.check_observability is mod.check_observability is mod.observability is observability
     r = ad.observability("finger2", points=2)  # the former spelling still works (the module is callable)
     assert (r.rank, r.n_states) == (4, 4)

@@ -17,10 +17,10 @@ import pytest
 import alpes_dyn as ad
 from alpes_dyn.cli import main
 from alpes_dyn.errors import InputError, ModelError
-from alpes_dyn.extras import JointExtras
-from alpes_dyn.observers import ExtendedKalmanFilter, UnscentedKalmanFilter, make_observer
-from alpes_dyn.scenario import run_estimation
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.model.extras import JointExtras
+from alpes_dyn.estimation.observers import ExtendedKalmanFilter, UnscentedKalmanFilter, make_observer
+from alpes_dyn.estimation.scenario import run_estimation
+from alpes_dyn.symbolic.statespace import StateSpace
 
 from test_simulation import C_OSC, I_OSC, K_OSC, OSC_URDF
 

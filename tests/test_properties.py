@@ -28,7 +28,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import alpes_dyn as ad
-from alpes_dyn.params import default_params_path
+from alpes_dyn.model.params import default_params_path
 from alpes_dyn.simulation import CompiledRollout, simulate
 
 # derandomize: CI sees the same examples every run (a failure is reproducible); database=None: no .hypothesis/

@@ -14,9 +14,9 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.errors import InputError
-from alpes_dyn.extras import JointExtras
+from alpes_dyn.model.extras import JointExtras
 from alpes_dyn.simulation import compile_rollout, rk4_step_function, simulate
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.symbolic.statespace import StateSpace
 
 # a 1-DoF bar about z: inertia about the joint axis I = izz + m d^2 = 2e-3 + 0.5 * 0.1^2 = 7e-3 kg m^2
 OSC_URDF = """<?xml version="1.0"?>
@@ -243,7 +243,7 @@ def test_step_loop_simd_lanes_equal_scalar_code(cache):
 def test_joint_range_warns_errs_and_stops_hold():
     """0.02 N m on every hand motor for 1 s: without stops thumb_abd turns by > 100 rad and simulate warns
     (or errs); with JointStops no joint goes more than 10 degrees past a stop, even on impact (stiffness 2 N m/rad)."""
-    from alpes_dyn.stops import JointRangeWarning, JointStops
+    from alpes_dyn.model.stops import JointRangeWarning, JointStops
 
     m = ad.Model.alpes("hand")
     x0 = np.zeros(2 * m.n)
@@ -263,7 +263,7 @@ def test_joint_range_warns_errs_and_stops_hold():
 def test_stop_torque_numpy_equals_casadi():
     import casadi as cs
 
-    from alpes_dyn.stops import JointStops
+    from alpes_dyn.model.stops import JointStops
 
     st = JointStops(np.zeros(3), np.full(3, 1.5), 2.0, 4e-3)
     q, v = np.array([-0.1, 0.7, 1.6]), np.array([-0.5, 1.0, 2.0])

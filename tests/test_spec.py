@@ -1,4 +1,4 @@
-"""Transmission spec for any URDF (alpes_dyn.spec): the Allegro hand of example-robot-data with a tendon spec.
+"""Transmission spec for any URDF (alpes_dyn.model.spec): the Allegro hand of example-robot-data with a tendon spec.
 
 Reference: raw Pinocchio on the URDF *file* (its own parser entry point), with the spec's numbers read by
 tomllib straight from the shipped TOML and placed by Pinocchio's joint ids, the motor torques applied as
@@ -16,8 +16,8 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.cli import main
-from alpes_dyn.spec import Motor, TransmissionSpec, example_spec_path, load_spec
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.model.spec import Motor, TransmissionSpec, example_spec_path, load_spec
+from alpes_dyn.symbolic.statespace import StateSpace
 
 URDF = ad.example_robot_urdf("allegro_hand", "allegro_right_hand")
 SPEC = example_spec_path("allegro_hand")
@@ -123,7 +123,7 @@ def test_alpes_models_go_through_a_spec():
     assert np.array_equal(again.transmission.S, hand.transmission.S)
     for f in ("stiffness", "armature", "coulomb", "viscous"):
         assert np.array_equal(getattr(again.extras, f), getattr(hand.extras, f))
-    p = tomllib.loads(ad.params.default_params_path().read_text())
+    p = tomllib.loads(ad.model.params.default_params_path().read_text())
     ratio = p["finger"]["r"]["value"] / p["transmission"]["r_m"]["value"]
     assert hand.transmission.S[hand.motor_index("ring"), hand.joint_index("ring_j2")] == ratio
     assert hand.extras.armature[hand.joint_index("thumb_abd")] == (

@@ -15,8 +15,8 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.params import default_params_path
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.model.params import default_params_path
+from alpes_dyn.symbolic.statespace import StateSpace
 
 RAW = tomllib.loads(default_params_path().read_text())
 RATIO = RAW["finger"]["r"]["value"] / RAW["transmission"]["r_m"]["value"]  # r / r_m (Section 3)

@@ -57,7 +57,7 @@ class ParametersDirective(SphinxDirective):
     option_spec = {"source": directives.unchanged, "sections": directives.unchanged}
 
     def run(self) -> list[nodes.Node]:
-        from alpes_dyn.params import default_params_path, load_params
+        from alpes_dyn.model.params import default_params_path, load_params
 
         p = load_params()
         self.env.note_dependency(str(default_params_path()))

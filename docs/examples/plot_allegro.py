@@ -3,7 +3,7 @@ Your own robot: the Allegro hand with tendons
 =============================================
 
 Everything the library does for the Alpes hand works on any fixed-base URDF given a transmission
-spec (:mod:`alpes_dyn.spec`). Here the Allegro hand of ``example-robot-data`` -- 16 joints, four
+spec (:mod:`alpes_dyn.model.spec`). Here the Allegro hand of ``example-robot-data`` -- 16 joints, four
 fingers -- is made tendon-driven by the spec shipped with the package
 (``alpes_dyn/data/allegro_hand_spec.toml``): one tendon per finger over its three flexion joints
 (ratios 2.0, 1.6, 1.2 from the palm out), one motor per ab/adduction joint, return springs on every
@@ -17,10 +17,10 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.observers import make_observer
+from alpes_dyn.estimation.observers import make_observer
 from alpes_dyn.simulation import simulate
-from alpes_dyn.spec import example_spec_path
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.model.spec import example_spec_path
+from alpes_dyn.symbolic.statespace import StateSpace
 
 urdf = ad.example_robot_urdf("allegro_hand", "allegro_right_hand")
 hand = ad.Model.from_urdf_file(urdf, example_spec_path("allegro_hand"))

@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.reference import report_jacobian
+from alpes_dyn.model.reference import report_jacobian
 
 finger = ad.Model.alpes("finger3")
 s = np.linspace(0.0, 1.0, 91)[:, None] * finger.upper  # (91, 3): q(s) from 0 to the upper limits
@@ -74,7 +74,7 @@ for sp, m in models.items():
 # Fingertip Jacobian J(q) (Section 2.2, eq. 2.12)
 # -----------------------------------------------
 # Lines: Pinocchio (``finger.fingertip_jacobian``); dots: the report's closed form written
-# independently in :func:`alpes_dyn.reference.report_jacobian`. The y row is zero: the finger
+# independently in :func:`alpes_dyn.model.reference.report_jacobian`. The y row is zero: the finger
 # moves in the x-z plane.
 
 J = np.array([finger.fingertip_jacobian(q) for q in s])  # (91, 3, 3) m

@@ -15,8 +15,8 @@ import numpy as np
 from matplotlib.colors import LogNorm
 
 import alpes_dyn as ad
-from alpes_dyn.observability import ObservabilityMatrix, check_observability, normalised_singular_values
-from alpes_dyn.statespace import StateSpace
+from alpes_dyn.analysis.observability import ObservabilityMatrix, check_observability, normalised_singular_values
+from alpes_dyn.symbolic.statespace import StateSpace
 
 # %%
 # The rank test
@@ -29,7 +29,7 @@ for name in ("finger2", "finger3"):
 # %%
 # A map over the joint space
 # --------------------------
-# :class:`~alpes_dyn.observability.ObservabilityMatrix` evaluates O at many states at once. Each
+# :class:`~alpes_dyn.analysis.observability.ObservabilityMatrix` evaluates O at many states at once. Each
 # state here is a finger at rest at q (zero velocity) on a grid of (q_1, q_2) (q_3 = 0 for
 # ``finger3``), in two situations:
 #

@@ -7,15 +7,15 @@ Start with :meth:`alpes_dyn.Model.alpes`::
     A = finger.inertia_matrix([0.1, 0.2, 0.3])   # (3, 3) kg m^2
 """
 
-from .description import MODELS, example_robot_urdf, layout, urdf_string, write_urdfs
+from .model.description import MODELS, example_robot_urdf, layout, urdf_string, write_urdfs
 from .errors import AlpesDynError, InputError, ModelError, RecordingError
-from .extras import SPRING_MODELS, JointExtras
-from .model import Model
-from . import observability
-from .observability import ObservabilityReport, check_observability
-from .params import HandParams, load_params
-from .statespace import StateSpace
-from .transmission import Transmission
+from .model.extras import SPRING_MODELS, JointExtras
+from .model.robot import Model
+from .analysis import observability
+from .analysis.observability import ObservabilityReport, check_observability
+from .model.params import HandParams, load_params
+from .symbolic.statespace import StateSpace
+from .model.transmission import Transmission
 
 __version__ = "0.1.0"
 
@@ -24,3 +24,13 @@ __all__ = [
     "StateSpace", "check_observability", "observability", "ObservabilityReport", "load_params", "urdf_string", "layout",
     "write_urdfs", "example_robot_urdf", "MODELS", "SPRING_MODELS",
 ]
+
+
+def __getattr__(name: str) -> object:
+    """``alpes_dyn.<old module>`` of version 0.1 (``ad.params``, ``ad.spec``, ...): the moved module, with a
+    DeprecationWarning (:mod:`alpes_dyn._moved`)."""
+    from ._moved import MOVED, alias
+
+    if name in MOVED:
+        return alias(name)
+    raise AttributeError(f"module 'alpes_dyn' has no attribute {name!r}")

@@ -19,7 +19,7 @@ import numpy as np
 
 from . import __version__
 from .errors import AlpesDynError, InputError
-from .observability import MAX_INSTRUCTIONS
+from .analysis.observability import MAX_INSTRUCTIONS
 from .fileio import atomic_write, check_output_path, native_stderr_to
 from .limits import MAX_POINTS
 
@@ -132,7 +132,7 @@ def _check_model_options(args: argparse.Namespace) -> None:
 
 
 def _model_from_args(args: argparse.Namespace):
-    from .model import Model
+    from .model.robot import Model
 
     _check_model_options(args)
     if _is_urdf_path(args.model):
@@ -159,7 +159,7 @@ def _one_or_list(outputs: list[str]) -> str | list[str]:
 
 def cmd_linearize(args: argparse.Namespace) -> int:
     """(A, B, C, D) at a state and input (default: the rest state under the input), every row and column named."""
-    from .statespace import StateSpace
+    from .symbolic.statespace import StateSpace
 
     m = _model_from_args(args)
     ss = StateSpace(m, input=args.input, output=_one_or_list(args.output))
@@ -218,8 +218,8 @@ def _fmt_table(M: np.ndarray, rows: Sequence[str], cols: Sequence[str]) -> str:
 
 # ----------------------------------------------------------------------------- urdf
 def cmd_urdf(args: argparse.Namespace) -> int:
-    from .description import urdf_string
-    from .params import load_params
+    from .model.description import urdf_string
+    from .model.params import load_params
 
     text = urdf_string(args.model, load_params(args.params))
     if args.output is not None:
@@ -231,8 +231,8 @@ def cmd_urdf(args: argparse.Namespace) -> int:
 
 # ----------------------------------------------------------------------------- mjcf (issue 9)
 def cmd_mjcf(args: argparse.Namespace) -> int:
-    from .mjcf import mjcf_string
-    from .params import load_params
+    from .model.mjcf import mjcf_string
+    from .model.params import load_params
 
     text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
                        rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
@@ -311,9 +311,9 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------- report (main job)
 def dynamics_crosscheck(seed: int = 0, points: int = 20) -> dict[str, Any]:
     """Pinocchio vs the symbolic backend (A, G, qdd) and vs the report's Jacobian formula (Section 2.2)."""
-    from .model import Model
-    from .reference import report_jacobian
-    from .symbolic import SymbolicDynamics
+    from .model.robot import Model
+    from .model.reference import report_jacobian
+    from .symbolic.dynamics import SymbolicDynamics
     import casadi as cs
 
     rng = np.random.default_rng(seed)
@@ -364,7 +364,7 @@ def cmd_report(args: argparse.Namespace) -> int:
 def _observability_summary(args: argparse.Namespace) -> dict[str, Any]:
     """Observability of finger2, finger3 and the hand in the report's setting (u = joint torques,
     y = sum of joint angles), with the report's spring law (eq. 2.14) and the torsional one."""
-    from .observability import observability
+    from .analysis.observability import observability
 
     lines = ["  model    spring     states outputs  rank  observable  index  min sv    condition  at rest  parts"]
     results: dict[str, Any] = {}
@@ -388,7 +388,7 @@ def _observability_summary(args: argparse.Namespace) -> dict[str, Any]:
 
 # ---- owned by the observability work (issue 3)
 def cmd_observability(args: argparse.Namespace) -> int:
-    from .observability import observability
+    from .analysis.observability import observability
 
     order: str | int = getattr(args, "order", "auto")
     if order not in ("auto", "report"):
@@ -408,9 +408,9 @@ def cmd_observability(args: argparse.Namespace) -> int:
 
 # ---- owned by the observers work (issue 4)
 def cmd_estimate(args: argparse.Namespace) -> int:
-    """Simulate the default scenario (alpes_dyn.scenario) and estimate the joints from the motor encoder."""
-    from .observers import OBSERVERS
-    from .scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
+    """Simulate the default scenario (alpes_dyn.estimation.scenario) and estimate the joints from the motor encoder."""
+    from .estimation.observers import OBSERVERS
+    from .estimation.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
 
     _check_model_options(args)
     _one_chain(args.model, ESTIMATION_MODELS, "the estimation scenario")
@@ -502,7 +502,7 @@ def _na(x: Any, fmt: str) -> str:
 
 def cmd_control(args: argparse.Namespace) -> int:
     """Closed loop on MuJoCo: a finger presses a block with the force asked for, or the hand grasps a cylinder."""
-    from .control import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
+    from .control.force import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
 
     if args.model != "hand" and args.model not in CONTROL_MODELS:
         raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
@@ -537,7 +537,7 @@ def cmd_control(args: argparse.Namespace) -> int:
 
 def _control_hand(args: argparse.Namespace) -> int:
     """``alpes-dyn control --model hand``: run_hand_control, one loop per motor, per-chain metrics."""
-    from .control import HandControlScenario, plot_hand_control, run_hand_control
+    from .control.force import HandControlScenario, plot_hand_control, run_hand_control
 
     if args.reference != "step":
         raise InputError(f"--reference: the hand's loops follow step references (control.HAND_LEVELS), "
@@ -571,9 +571,9 @@ def _control_hand(args: argparse.Namespace) -> int:
 # ----------------------------------------------------------------------------- identification (issue 8)
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Simulate the documented identification experiment and write its recording."""
-    from .description import model_params
-    from .experiment import EXPERIMENT_MODELS, ExperimentDesign, experiment, perturbed_params
-    from .params import load_params, write_params
+    from .model.description import model_params
+    from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign, experiment, perturbed_params
+    from .model.params import load_params, write_params
 
     _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
     check_output_path(args.output, "-o")
@@ -602,9 +602,9 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
-    from .experiment import EXPERIMENT_MODELS, ExperimentDesign
-    from .identification import identify
-    from .model import Model
+    from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
+    from .estimation.identification import identify
+    from .model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
     if args.output is not None:
@@ -645,11 +645,11 @@ DESIGNS = ("documented", "scenario", "none")
 
 def cmd_identifiability(args: argparse.Namespace) -> int:
     """Structural identifiability of physical parameters, and the Cramér-Rao bounds of an experiment."""
-    from .experiment import ExperimentDesign, _profile, _schedule, excitation
-    from .identifiability import fisher_information, identifiability
-    from .model import Model
-    from .scenario import SCENARIO_MODELS, EstimationScenario, _torque
-    from .stops import JointRangeWarning
+    from .estimation.experiment import ExperimentDesign, _profile, _schedule, excitation
+    from .analysis.identifiability import fisher_information, identifiability
+    from .model.robot import Model
+    from .estimation.scenario import SCENARIO_MODELS, EstimationScenario, _torque
+    from .model.stops import JointRangeWarning
 
     _one_finger(args.model, SCENARIO_MODELS, "identifiability")
     _one_of(args.design, DESIGNS, "--design", "design")

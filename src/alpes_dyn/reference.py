@@ -1,22 +1,5 @@
-"""The report's closed-form expressions, used by the cross-checks of ``alpes-dyn report``.
+"""Moved to :mod:`alpes_dyn.model.reference` (this path is an alias of it, with a DeprecationWarning, for one release)."""
 
-These are written from the report's text, independently of Pinocchio and ADAM.
-"""
+from ._moved import alias
 
-from __future__ import annotations
-
-import numpy as np
-
-__all__ = ["report_jacobian"]
-
-
-def report_jacobian(L: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Fingertip Jacobian of a planar finger, report Section 2.2, (3, n), m.
-
-    Row x: -sum_{j>=i} L_j sin(q_1 + ... + q_j); row y: 0; row z: sum_{j>=i} L_j cos(q_1 + ... + q_j).
-    """
-    L = np.asarray(L, dtype=float)
-    th = np.cumsum(np.asarray(q, dtype=float))
-    sx = np.cumsum((-L * np.sin(th))[::-1])[::-1]
-    cz = np.cumsum((L * np.cos(th))[::-1])[::-1]
-    return np.vstack([sx, np.zeros_like(sx), cz])
+alias(__name__.rpartition(".")[2])

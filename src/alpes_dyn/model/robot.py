@@ -26,13 +26,13 @@ import numpy as np
 import pinocchio as pin
 
 from .description import Layout, check_model_name, layout, model_params, urdf_string
-from .checks import as_float_array
-from .errors import InputError, ModelError
+from ..checks import as_float_array
+from ..errors import InputError, ModelError
 from .extras import JointExtras
-from .fileio import native_stderr_to, read_text
+from ..fileio import native_stderr_to, read_text
 from .inertial import check_inertials
 from .params import HandParams, load_params
-from .spec import TransmissionSpec, alpes_spec, load_spec
+from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
 
 __all__ = ["Model", "DEFAULT_GRAVITY", "Contact", "REFERENCE_FRAMES", "as_contacts"]
@@ -164,7 +164,7 @@ class Model:
         URDF text (not a path; see :meth:`from_urdf_file`).
     spec:
         What the URDF cannot hold: motors and their joints with ratios, encoder, per-joint springs,
-        friction, rotor inertia (:class:`~alpes_dyn.spec.TransmissionSpec`, or the path of its TOML
+        friction, rotor inertia (:class:`~alpes_dyn.model.spec.TransmissionSpec`, or the path of its TOML
         file; default: none of them). The Alpes models are built through it (:meth:`alpes`).
     gravity:
         Gravity vector in the base frame, m/s^2, shape (3,) (default: the spec's, else (0, 0, -9.81)).
@@ -172,7 +172,7 @@ class Model:
         A label (default: the spec's name, else the robot name of the URDF).
     check_inertia:
         ``"relaxed"`` (default) or ``"strict"``: how the URDF's inertials are validated
-        (:func:`alpes_dyn.inertial.check_inertials`: masses and inertias positive (semi)definite;
+        (:func:`alpes_dyn.model.inertial.check_inertials`: masses and inertias positive (semi)definite;
         strict adds the triangle inequality, which real URDFs such as the Allegro hand's break).
     layout, params:
         Set by :meth:`alpes`: the chains of an Alpes model and its parameters.
@@ -262,7 +262,7 @@ class Model:
                               if i not in parents and f.type == pin.FrameType.BODY)
         self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
-            self.transmission = Transmission.from_layout(layout, self.joint_names, params.transmission_ratio,
+            self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
                                                          params.abduction_ratio, params.encoder_counts)
 
     # ------------------------------------------------------------------ construction
@@ -298,7 +298,7 @@ class Model:
     @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
         """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
-        (:class:`~alpes_dyn.spec.TransmissionSpec` or the path of its TOML file); without one the
+        (:class:`~alpes_dyn.model.spec.TransmissionSpec` or the path of its TOML file); without one the
         model has no motors, springs, friction or rotor inertia."""
         return cls(read_text(path, "URDF file", ModelError), spec, **kwargs)
 

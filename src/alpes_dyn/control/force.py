@@ -4,7 +4,7 @@ The report is titled *Control in effort of a robotic hand*: its model carries th
 J^T F (eq. 2.9-2.13), F measured by the fingertip's FlexiForce sensor. This module closes the loop.
 The controller sees only the hand's sensors -- the motor encoder q_m (quantised, noisy), the motor
 torque tau_m (from the current, noisy) and, if it uses it, the FlexiForce reading F_z (noisy,
-quantised) -- and the joints q_hat estimated by the library's EKF (:mod:`alpes_dyn.observers`).
+quantised) -- and the joints q_hat estimated by the library's EKF (:mod:`alpes_dyn.estimation.observers`).
 
 Static balance (eq. 2.11 at rest): G(q) = S^T tau_m + J(q)^T F with the contact force on the finger
 F = -F_z n, n the unit normal of the object's surface (base frame, pointing from the fingertip into
@@ -38,7 +38,7 @@ at contact the PI's integrator is set so that the torque is continuous (bumpless
 command is saturated to [0, tau_max] (a cable only pulls; ``transmission.tau_max`` of the parameter
 file), with a conditional integration anti-windup.
 
-:func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.mjcf`,
+:func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.model.mjcf`,
 contact on, the block scene, joint friction on: ``pip install 'alpes_dyn[mujoco]'``); see
 :class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics.
 
@@ -60,14 +60,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .errors import InputError, ModelError
-from .fileio import atomic_path
-from .mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
-from .model import Model
-from .observers import make_observer
-from .params import HandParams, load_params
-from .scenario import default_noise, static_equilibrium, EstimationScenario
-from .statespace import StateSpace
+from ..errors import InputError, ModelError
+from ..fileio import atomic_path
+from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
+from ..model.robot import Model
+from ..estimation.observers import make_observer
+from ..model.params import HandParams, load_params
+from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
+from ..symbolic.statespace import StateSpace
 
 __all__ = [
     "CONTROLLERS", "REFERENCES", "CONTROL_MODELS", "DEFAULT_GAINS", "static_motor_torque", "static_contact_force", "ForceController",
@@ -266,7 +266,7 @@ class ControlScenario:
     """Settings of the closed loop of :func:`run_control` (all SI units).
 
     The plant: MuJoCo stepping the MJCF of ``model`` with the ``"block"`` scene (a fixed, frictionless
-    block met by the fingertip at ``contact_q``, :func:`~alpes_dyn.mjcf.block_normal`), contact and joint
+    block met by the fingertip at ``contact_q``, :func:`~alpes_dyn.model.mjcf.block_normal`), contact and joint
     stops on, joint friction on
     (damping F_v, frictionloss F_s of the parameter file), the hand palm down (gravity reversed: the
     finger flexes with gravity toward the block under it), at ``dt / substeps``; its parameters are
@@ -441,10 +441,10 @@ def _metrics(res: ControlResult) -> None:
 
 def _batch_step_caller(step, label: str, compiled: bool):
     """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
-    of compiled C (cached, :class:`~alpes_dyn.simulation.CompiledStepLoop`) when possible, else CasADi's
+    of compiled C (cached, :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`) when possible, else CasADi's
     virtual machine (one call per filter)."""
     if compiled:
-        from .simulation import CompiledStepLoop, CompilerError
+        from ..simulation.integrate import CompiledStepLoop, CompilerError
 
         try:
             loop = CompiledStepLoop(step, label, threads=1, vectorize=False)
@@ -601,7 +601,7 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
 
 # ----------------------------------------------------------------------------- the whole hand
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
-#: Within what each fingertip holds on the :data:`~alpes_dyn.mjcf.CYLINDER` (the five motor torques ramped from 0
+#: Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` (the five motor torques ramped from 0
 #: to 0.05 N m over 4 s, palm down: the fingers' pads slide around the cylinder beyond 0.47-0.65 N, the thumb's
 #: beyond 1.48 N).
 HAND_LEVELS: dict[str, tuple[float, float]] = {
@@ -672,7 +672,7 @@ def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: 
 class HandControlScenario:
     """Settings of :func:`run_hand_control` (SI units): the hand grasping the cylinder, one force loop per motor.
 
-    The plant: MuJoCo stepping the hand's MJCF with the ``"cylinder"`` scene (:data:`~alpes_dyn.mjcf.CYLINDER`,
+    The plant: MuJoCo stepping the hand's MJCF with the ``"cylinder"`` scene (:data:`~alpes_dyn.model.mjcf.CYLINDER`,
     fixed and frictionless), contact and joint stops on, joint friction on, palm down (the fingers flex with
     gravity toward the cylinder under the palm), at ``dt / substeps``; its parameters ``plant_params``
     (default: the controller's). Each chain (:func:`hand_chains`) has its own loop of :class:`ForceController`
@@ -833,7 +833,7 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     sc = dataclasses.replace(scenario or HandControlScenario(), controller=controller, **overrides)
     sc.check()
     mujoco, p, pp = _plant_and_params(sc)
-    from .mjcf import CYLINDER
+    from ..model.mjcf import CYLINDER
 
     chains = hand_chains(p)
     sc.check(chains)

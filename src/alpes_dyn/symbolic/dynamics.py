@@ -10,7 +10,7 @@ One small interface, two backends:
 
 Both give A(q) (without rotor inertia), the bias b(q, qd) = C(q, qd) qd + gravity torque, and
 tip positions/Jacobians. The extras (springs, friction, rotor inertia) are applied here once,
-through :class:`~alpes_dyn.extras.JointExtras` with ``xp=casadi``, exactly as the numeric model
+through :class:`~alpes_dyn.model.extras.JointExtras` with ``xp=casadi``, exactly as the numeric model
 applies them with ``xp=numpy``. Forward dynamics solves eq. 3.3 block by block: the mass matrix
 of a fixed-base tree is block diagonal over the branches from the root (one per finger), and each
 block is solved on its own by an unrolled LDL^T (:func:`block_solve`), which keeps the expressions
@@ -24,8 +24,8 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-from .errors import ModelError
-from .model import REFERENCE_FRAMES, Model, as_contacts
+from ..errors import ModelError
+from ..model.robot import REFERENCE_FRAMES, Model, as_contacts
 
 __all__ = ["SymbolicDynamics", "available_backends", "block_solve"]
 
@@ -211,7 +211,7 @@ class SymbolicDynamics:
     def frame_jacobian(self, q: cs.SX, frame: str | None = None, reference: str = "local_world_aligned",
                        dim: int = 6) -> cs.SX:
         """Frame Jacobian (6, n) [linear; angular] or (3, n) linear rows, in Pinocchio's ``reference``
-        (:data:`~alpes_dyn.model.REFERENCE_FRAMES`), by AD of the frame pose (R, p):
+        (:data:`~alpes_dyn.model.robot.REFERENCE_FRAMES`), by AD of the frame pose (R, p):
         J_v = dp/dq, column j of the angular part in base axes vee((dR/dq_j) R^T); ``local`` rotates
         both by R^T, ``world`` moves the linear part to the base origin, J_v + [p]x J_w."""
         if reference not in REFERENCE_FRAMES:
@@ -238,7 +238,7 @@ class SymbolicDynamics:
         return cs.vertcat(Jv, Jw)[:dim, :]
 
     def contact_torque(self, q: cs.SX, F: Any, contacts: Any) -> cs.SX:
-        """Sum of J_c^T F_c (eq. 2.9), (n,), for ``contacts`` (:class:`~alpes_dyn.model.Contact` or frame
+        """Sum of J_c^T F_c (eq. 2.9), (n,), for ``contacts`` (:class:`~alpes_dyn.model.robot.Contact` or frame
         names) and their stacked forces/wrenches F (sum of dims,)."""
         cts = as_contacts(contacts)
         out = cs.SX.zeros(self.n)

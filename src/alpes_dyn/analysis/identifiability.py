@@ -1,0 +1,676 @@
+"""Identifiability of physical parameters, before any fit: structural (rank) and practical (Cramér-Rao).
+
+Structural. The chosen physical parameters theta (p,) of :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`
+(spring stiffness ``K_i``, mass ``m_i`` with its inertia, friction ``F_s_i``, ``F_v_i``, ``input_gain``)
+are appended to the finger's state as constants, theta' = 0 (the approach of STRIKE-GOLDD):
+
+    z = [q; qd; theta] (2n + p),     z' = [qd; qdd(q, qd, B u; theta); 0],     y = h(q) (default S q).
+
+The observability matrix of that augmented system (:class:`~alpes_dyn.analysis.observability.ObservabilityMatrix`:
+Lie derivatives with the input derivatives u', u'', ... as free symbols, i.e. a time-varying motor
+torque; report eq. 3.6, 3.14) is evaluated at ``points`` seeded random points: q within the joint
+limits, qd in [-2, 2] rad/s, u and its derivatives within the model's torque scale (as
+:func:`~alpes_dyn.analysis.observability.check_observability` samples them), theta at its nominal value. The
+parameter columns are taken in log coordinates, d/d(log theta_j) = theta_j d/d theta_j, so that they are
+unit-free and a null vector reads as relative changes. Rank and conditioning follow the conventions of
+:mod:`alpes_dyn.analysis.observability`: rows scaled to unit norm, rank = generic (largest over the points)
+numerical rank, the *normalised smallest singular value* s_(2n+p) / s_1 is the median over the points.
+
+Parameters whose column of O vanishes at every point "do not appear in y". The other unidentifiable
+directions are the right null vectors of O (at the point of largest rank) over the parameters, in log
+coordinates, made sparse by a reduced row-echelon basis and named:
+
+* two terms of equal size and sign, d log K_2 = d log m_2: only the ratio is identifiable, ``"K_2/m_2 only"``;
+* two terms of equal size and opposite sign: only the product, ``"K_2·m_2 only"``;
+* several terms all equal: a common scale, ``"common scale of input_gain, K_1, ...: only their ratios"``;
+* otherwise the unit vector, ``"0.71·K_2 + 0.71·m_2 (log)"``.
+
+Practical. For an experiment (motor torques U (N, m) held per sample period dt, gravity per period,
+encoder noise, optional joint angles measured a few times by a camera or a jig),
+:func:`fisher_information` computes the output-error Fisher information matrix from the exact forward
+sensitivities of the RK4-discretised model (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`):
+
+    FIM = sum_k (dy_k/dphi)^T R^-1 (dy_k/dphi),     phi = (theta, x0),
+
+with y_k the encoder angles S q_k (rad) at the N + 1 samples, R = sigma_e^2 I, sigma_e^2 =
+(noise_counts * step)^2 + step^2 / 12 (Gaussian noise plus the quantisation of a step of 2 pi /
+counts_per_rev), and the camera's joint angles q_k at ``camera_times`` with noise ``camera_noise`` (rad).
+The unknown initial state is a nuisance: its block is marginalised (the Schur complement
+F_tt - F_tx F_xx^-1 F_xt). The Cramér-Rao bound of an unbiased estimate is cov >= FIM^-1: each
+parameter's standard deviation (absolute, and relative to its value) and the correlation matrix.
+The measured torque is taken as exact (its noise is not in this FIM; see the identification guide).
+
+One call each::
+
+    from alpes_dyn.analysis.identifiability import identifiability, fisher_information
+    rep = identifiability("finger3", parameters="K")   # rank 9/9, smallest normalised sv ~3e-4
+    print(rep.to_text())
+    fim = fisher_information(model, "K,m", U=tau_m, dt=1e-3)
+    fim.std, fim.relative_std, fim.correlation
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import casadi as cs
+import numpy as np
+
+from ..errors import InputError, ModelError
+from ..limits import MAX_POINTS
+from ..model.robot import Model
+from .observability import (MAX_INSTRUCTIONS, ObservabilityMatrix, _input_scale, normalised_singular_values,
+                            numerical_rank)
+from ..symbolic.parametric import ParametricDynamics
+from ..symbolic.statespace import StateSpace
+
+__all__ = ["IdentifiabilityReport", "FisherReport", "identifiability", "fisher_information", "name_direction"]
+
+_EPS = float(np.finfo(float).eps)
+_SPEED = 2.0  # rad/s, bound of the sampled joint velocities (as observability)
+INITIAL_STATES = ("unknown", "known")
+
+
+# ----------------------------------------------------------------------------- the augmented system
+class _AugmentedStateSpace(StateSpace):
+    """z = [x; theta], z' = [f(x, u; theta); 0], y = h(x): what :class:`ObservabilityMatrix` reads of a
+    :class:`StateSpace` (x, u, f_expr, h_expr, names, sizes), built from a base state space and the
+    parametric dynamics (not the base's own f: the parameters must be symbols)."""
+
+    def __init__(self, base: StateSpace, pd: ParametricDynamics, gravity: np.ndarray) -> None:  # noqa: D401
+        n = base.n
+        self.model = base.model
+        self.n = n
+        self.B = base.B
+        self.input = base.input
+        self.input_names = base.input_names
+        self.force = False
+        self.F = None
+        self.force_names = ()
+        self.contacts = ()
+        self.u = base.u
+        self.x = cs.vertcat(base.x, pd.theta)
+        q, v = base.x[:n], base.x[n:]
+        qdd = pd.forward_dynamics(q, v, cs.mtimes(cs.DM(base.B), base.u), pd.theta, cs.DM(gravity))
+        self.f_expr = cs.vertcat(v, qdd, cs.SX.zeros(pd.p))
+        self.h_expr = base.h_expr
+        self.output_names = base.output_names
+        self.output_name = base.output_name
+        self.state_names = base.state_names + pd.names
+        self._nz = 2 * n + pd.p
+
+    @property
+    def n_states(self) -> int:
+        return self._nz
+
+    @property
+    def n_outputs(self) -> int:
+        return int(self.h_expr.shape[0])
+
+
+# ----------------------------------------------------------------------------- naming null directions
+def _fmt(c: float) -> str:
+    return f"{c:.2f}"
+
+
+def name_direction(v: Sequence[float], names: Sequence[str], tol: float = 1e-6) -> str:
+    """Text for an unidentifiable direction ``v`` over parameter ``names`` in log coordinates (see the
+    module doc): ``"K_2/m_2 only"``, ``"K_2·m_2 only"``, ``"common scale of ...: only their ratios"``
+    or ``"0.71·K_2 + 0.71·m_2 (log)"``. Components below ``tol`` times the largest are left out."""
+    v = np.asarray(v, dtype=float).reshape(-1)
+    if v.size != len(names):
+        raise InputError(f"v: expected {len(names)} components (one per name), got {v.size}")
+    if not np.isfinite(v).all() or not np.any(v):
+        raise InputError("v: expected a finite, non-zero direction")
+    big = np.abs(v).max()
+    idx = [i for i in range(v.size) if abs(v[i]) > tol * big]
+    u = v / np.linalg.norm(v[idx])
+    if u[idx[0]] < 0:
+        u = -u
+    same = all(abs(abs(u[i]) - abs(u[idx[0]])) < 1e-3 * abs(u[idx[0]]) for i in idx)
+    if len(idx) == 1:
+        return f"{names[idx[0]]} (log)"
+    if len(idx) == 2 and same:
+        a, b = names[idx[0]], names[idx[1]]
+        return f"{a}/{b} only" if u[idx[1]] > 0 else f"{a}·{b} only"
+    if same and all(u[i] > 0 for i in idx):
+        return f"common scale of {', '.join(names[i] for i in idx)}: only their ratios"
+    terms = []
+    for k, i in enumerate(idx):
+        c = u[i]
+        sign = "-" if c < 0 else ("+" if k else "")
+        terms.append(f"{sign}{' ' if k else ''}{_fmt(abs(c))}·{names[i]}")
+    return " ".join(terms).replace("+ ", "+ ").strip() + " (log)"
+
+
+def _rref(A: np.ndarray, tol: float = 1e-9) -> np.ndarray:
+    """Reduced row-echelon form of A (k, p) with partial pivoting: a sparse basis of its row space."""
+    A = np.array(A, dtype=float)
+    r = 0
+    rows, cols = A.shape
+    for c in range(cols):
+        if r >= rows:
+            break
+        piv = r + int(np.argmax(np.abs(A[r:, c])))
+        if abs(A[piv, c]) <= tol * max(1.0, np.abs(A).max()):
+            continue
+        A[[r, piv]] = A[[piv, r]]
+        A[r] /= A[r, c]
+        for i in range(rows):
+            if i != r:
+                A[i] -= A[i, c] * A[r]
+        r += 1
+    A[np.abs(A) < tol] = 0.0
+    return A[:r]
+
+
+# ----------------------------------------------------------------------------- structural report
+@dataclass
+class IdentifiabilityReport:
+    """Result of :func:`identifiability`.
+
+    Attributes
+    ----------
+    model: model name. parameters: parameter names (p); nominal (p,): the values used (their units).
+    n_states: 2n (the finger's states); dimension: 2n + p (the augmented state).
+    rank: generic rank of the augmented observability matrix; ranks_by_order: rank of O_0, O_1, ...
+    order: highest output derivative built.
+    min_singular_value: normalised smallest singular value (median over the points; 0 if rank-deficient).
+    singular_values: (points, dimension) normalised singular values at each point.
+    absent: parameters whose column of O is zero: they do not appear in y.
+    null_directions: (p, k) unidentifiable directions over the parameters (log coordinates, sparse basis),
+        the absent parameters excluded (they are listed in ``absent``).
+    combinations: one text per column of ``null_directions`` (see :func:`name_direction`).
+    state_in_null: whether some unidentifiable direction also moves the initial state.
+    truncated: the next derivative order would exceed ``max_operations``: ``rank`` is a lower bound
+        (the null directions are those of the orders built).
+    settings: input, output, points, seed, gravity.
+    """
+
+    model: str
+    parameters: tuple[str, ...]
+    nominal: np.ndarray
+    n_states: int
+    dimension: int
+    rank: int
+    ranks_by_order: tuple[int, ...]
+    order: int
+    min_singular_value: float
+    singular_values: np.ndarray
+    absent: tuple[str, ...] = ()
+    null_directions: np.ndarray = field(default_factory=lambda: np.zeros((0, 0)))
+    combinations: tuple[str, ...] = ()
+    state_in_null: bool = False
+    truncated: bool = False
+    seconds: float = 0.0
+    settings: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def identifiable(self) -> bool:
+        """Every parameter (and the initial state) structurally identifiable: rank = 2n + p."""
+        return self.rank == self.dimension
+
+    @property
+    def condition(self) -> float:
+        return 1.0 / self.min_singular_value if self.min_singular_value > 0 else float("inf")
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict (lists for arrays, None for an infinite condition)."""
+        return {
+            "model": self.model, "parameters": list(self.parameters), "nominal": self.nominal.tolist(),
+            "n_states": self.n_states, "dimension": self.dimension, "rank": self.rank,
+            "identifiable": self.identifiable, "min_singular_value": self.min_singular_value,
+            "condition": self.condition if math.isfinite(self.condition) else None,
+            "ranks_by_order": list(self.ranks_by_order), "order": self.order, "absent": list(self.absent),
+            "null_directions": self.null_directions.T.tolist(), "combinations": list(self.combinations),
+            "state_in_null": self.state_in_null, "truncated": self.truncated, "seconds": self.seconds, **self.settings,
+        }
+
+    def to_text(self) -> str:
+        st = self.settings
+        lines = [f"Structural identifiability of {', '.join(self.parameters)} on {self.model}: parameters as "
+                 f"constant states, input {st.get('input')} (time-varying), output {st.get('output')}",
+                 f"  rank {self.rank}/{self.dimension} (2n + p = {self.n_states} + {len(self.parameters)}), "
+                 f"{'identifiable' if self.identifiable else ('undecided' if self.truncated else 'NOT identifiable')}; smallest normalised singular "
+                 f"value {self.min_singular_value:.2e} (median over {st.get('points')} points, seed {st.get('seed')})",
+                 "  rank by derivative order: " + " ".join(str(r) for r in self.ranks_by_order)]
+        for a in self.absent:
+            lines.append(f"  {a}: does not appear in y")
+        for c in self.combinations:
+            lines.append(f"  unidentifiable: {c}")
+        if self.state_in_null:
+            lines.append("  (some unidentifiable direction also moves the initial state)")
+        if self.truncated:
+            lines.append(f"  rank is a lower bound: y^({self.order + 1}) would exceed max_operations "
+                         f"({self.settings.get('max_operations')} CasADi operations)")
+        lines.append(f"  {self.seconds:.2f} s")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.to_text()
+
+
+def _check_int(value: Any, name: str, low: int, high: int | None = None) -> int:
+    if isinstance(value, (bool, np.bool_)) or not isinstance(value, (int, np.integer)) or value < low \
+            or (high is not None and value > high):
+        want = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
+        raise InputError(f"{name}: expected {want}, got {value!r}")
+    return int(value)
+
+
+def _theta(theta: Any, pd_nominal: np.ndarray, names: Sequence[str]) -> np.ndarray:
+    if theta is None:
+        th = pd_nominal.copy()
+    else:
+        try:
+            th = np.asarray(theta, dtype=float).reshape(-1)
+        except (TypeError, ValueError):
+            raise InputError(f"theta: expected {len(names)} numbers, got {theta!r}") from None
+        if th.shape != pd_nominal.shape:
+            raise InputError(f"theta: expected {len(names)} values ({', '.join(names)}), got {th.size}")
+    if not np.isfinite(th).all() or np.any(th <= 0):
+        bad = next(n for n, v in zip(names, th) if not (np.isfinite(v) and v > 0))
+        raise InputError(f"theta: {bad} must be a finite positive value (log coordinates), got "
+                         f"{th[list(names).index(bad)]!r}")
+    return th
+
+
+def identifiability(system: Model | str, parameters: str | Sequence[str] | None = None, output: Any = "encoder", *,
+                    input: str | None = None, points: int = 8, seed: int = 0, theta: Any = None,
+                    order: int | None = None, friction: bool | None = None,
+                    max_operations: int = MAX_INSTRUCTIONS, coordinates: str = "log") -> IdentifiabilityReport:
+    """Structural identifiability of physical parameters (see the module doc).
+
+    Parameters
+    ----------
+    system: a :class:`~alpes_dyn.Model` or an Alpes model name (built with ``friction``).
+    parameters: selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters` (``"K"``, ``"K,m"``,
+        ``["K_1", "m_2"]``...; default K, m and friction where the model has it).
+    output: the measured output, as for :class:`~alpes_dyn.StateSpace` (default ``"encoder"``: S q,
+        the motor encoder; ``"sum"``, ``"joints"``, a matrix...).
+    input: ``"motor"`` (default when the model has a transmission) or ``"joint"``.
+    points, seed: random points of the generic rank (1 to 10000) and their seed.
+    theta: parameter values (p,) where O is evaluated (default the nominal ones; positive).
+    order: highest output derivative (default: up to 2n + p - 1, stopping at full rank or when the
+        rank stops growing, as ``order="auto"`` of :func:`~alpes_dyn.analysis.observability.check_observability`).
+    friction: for a model name, build it with friction (default: when ``parameters`` names F_s, F_v or
+        friction). The smooth Coulomb sign tanh(qd / v_s) makes the high output derivatives large and the
+        normalised singular values small (finger3, K: ~5e-7 with friction, ~1e-3 without).
+    max_operations: size cap of one derivative order's function (CasADi operations).
+    coordinates: ``"log"`` (default: parameter columns d/d log theta, unit-free) or ``"absolute"``
+        (d/d theta in the parameters' units; changes the singular values, not the rank).
+    """
+    t0 = time.perf_counter()
+    points = _check_int(points, "points", 1, MAX_POINTS)
+    seed = _check_int(seed, "seed", 0)
+    if coordinates not in ("log", "absolute"):
+        raise InputError(f"coordinates: expected 'log' or 'absolute', got {coordinates!r}")
+    if isinstance(system, str):
+        if friction is None:
+            spec = parameters if isinstance(parameters, str) else ",".join(map(str, parameters or ()))
+            friction = any(k in spec for k in ("F_s", "F_v", "friction"))
+        system = Model.alpes(system, friction=bool(friction))
+    elif friction is not None:
+        raise ModelError("friction: only with a model name; a Model has its friction already")
+    if not isinstance(system, Model):
+        raise ModelError(f"system: expected a Model or an Alpes model name, got {type(system).__name__}")
+    model = system
+    if input is None:
+        input = "motor" if model.transmission is not None else "joint"
+    base = StateSpace(model, input=input, output=output)
+    pd = ParametricDynamics(model, parameters)
+    th = _theta(theta, pd.nominal, pd.names)
+    aug = _AugmentedStateSpace(base, pd, np.asarray(model.gravity, dtype=float))
+    nz = aug.n_states
+    n2 = base.n_states
+    kmax = nz - 1 if order is None else _check_int(order, "order", 0)
+    om = ObservabilityMatrix(aug, False, max_operations)
+    rng = np.random.default_rng(seed)
+    q, v = model.random_state(rng, _SPEED, size=points)
+    scale = _input_scale(base, q)
+    W = rng.uniform(-1.0, 1.0, size=(points, max(kmax, 1) * scale.size)) * np.tile(scale, max(kmax, 1))
+    Z = np.hstack([q, v, np.tile(th, (points, 1))])
+    colscale = np.concatenate([np.ones(n2), th if coordinates == "log" else np.ones(pd.p)])  # d/d log theta = theta d/d theta
+    blocks: list[np.ndarray] = []
+    ranks: list[int] = []
+    truncated = False
+    for k in range(kmax + 1):
+        try:
+            om.block(k)
+        except InputError:
+            if order is not None or k == 0:
+                raise
+            truncated = True  # the next order is over max_operations: the rank found is a lower bound
+            break
+        b = om._eval_block(k, Z, W) * colscale
+        if not np.isfinite(b).all():
+            raise InputError(f"identifiability: O is not finite at derivative order {k} (model too stiff?)")
+        blocks.append(b)
+        O = np.concatenate(blocks, axis=1)
+        ranks.append(int(np.max(numerical_rank(O, _row_scale(O)))))
+        if ranks[-1] == nz:
+            break
+        if order is None and k > 0 and ranks[-1] == ranks[-2]:
+            break
+    O = np.concatenate(blocks, axis=1)  # (points, rows, nz)
+    rs = _row_scale(O)
+    s = normalised_singular_values(O, rs)
+    rank = ranks[-1]
+    smin = float(np.median(s[:, nz - 1]))
+    # parameters absent from y: zero column of the row-normalised O at every point
+    nrm = np.linalg.norm(O, axis=2, keepdims=True)
+    floor = max(O.shape[1:]) * _EPS * rs[None, :, None]
+    On = np.divide(O, nrm, out=np.zeros_like(O), where=nrm > floor)
+    colmax = np.linalg.norm(On, axis=1).max(axis=0)  # (nz,)
+    tol = max(O.shape[1:]) * _EPS * 1e3
+    absent_idx = [] if truncated else [j for j in range(pd.p) if colmax[n2 + j] <= tol * max(colmax.max(), 1e-300)]
+    keep = np.array([j for j in range(nz) if j < n2 or (j - n2) not in absent_idx], dtype=int)
+    null = np.zeros((pd.p, 0))
+    combos: list[str] = []
+    state_in_null = False
+    best = int(np.argmax(numerical_rank(O, rs)))
+    A = On[best][:, keep]
+    r_keep = int(numerical_rank(A))
+    if r_keep < keep.size and not truncated:  # (a truncated O's null space holds undecided directions too)
+        _, _, Vt = np.linalg.svd(A)
+        N = Vt[r_keep:].T  # (len(keep), k)
+        state_in_null = bool(np.any(np.abs(N[: n2]) > 1e-6))
+        Np = np.zeros((pd.p, N.shape[1]))
+        Np[[j - n2 for j in keep if j >= n2]] = N[n2:]
+        if coordinates == "absolute":
+            Np = Np / th[:, None]  # d log theta = d theta / theta
+        R = _rref(Np.T, 1e-6)
+        null = (R / np.linalg.norm(R, axis=1, keepdims=True)).T if R.size else np.zeros((pd.p, 0))
+        combos = [name_direction(null[:, i], pd.names) for i in range(null.shape[1])]
+    return IdentifiabilityReport(
+        model=model.name, parameters=pd.names, nominal=th, n_states=n2, dimension=nz, rank=rank,
+        ranks_by_order=tuple(ranks), order=len(blocks) - 1, min_singular_value=smin if rank == nz else 0.0,
+        singular_values=s, absent=tuple(pd.names[j] for j in absent_idx), null_directions=null,
+        combinations=tuple(combos), state_in_null=state_in_null, truncated=truncated, seconds=time.perf_counter() - t0,
+        settings={"input": input, "output": base.output_name, "points": points, "seed": seed,
+                  "max_operations": om.max_operations, "coordinates": coordinates, "friction": bool(model.extras.has_friction),
+                  "gravity": np.asarray(model.gravity, dtype=float).tolist()})
+
+
+def _row_scale(O: np.ndarray) -> np.ndarray:
+    """Largest norm of each row over the points."""
+    return np.linalg.norm(O, axis=-1).max(axis=0)
+
+
+# ----------------------------------------------------------------------------- practical: Fisher information
+@dataclass
+class FisherReport:
+    """Result of :func:`fisher_information`: the Fisher information of an experiment and its Cramér-Rao bounds.
+
+    Attributes
+    ----------
+    model: model name. parameters: names (p); theta (p,): the values (their units); units (p,).
+    fim: (p, p) Fisher information of theta (the initial state marginalised when unknown), 1/unit^2.
+    fim_full: (p + 2n, p + 2n) information of (theta, x0) before marginalisation.
+    covariance: (p, p) Cramér-Rao bound fim^-1; where the information is singular (``rank`` < p) the
+        parameters along a zero-information direction get an infinite variance (NaN covariances).
+    std: (p,) Cramér-Rao standard deviations (units, inf when not identifiable from this experiment);
+        relative_std: std / |theta|.
+    correlation: (p, p) correlation matrix of the bound.
+    rank: numerical rank of ``fim`` (log scale); eigenvalues of the relative information, ascending.
+    encoder_std: the encoder's noise standard deviation used (rad, noise and quantisation);
+    samples: output samples; camera_samples: joint-angle samples; duration: s.
+    initial_state: ``"unknown"`` (marginalised) or ``"known"``.
+    """
+
+    model: str
+    parameters: tuple[str, ...]
+    theta: np.ndarray
+    units: tuple[str, ...]
+    fim: np.ndarray
+    fim_full: np.ndarray
+    covariance: np.ndarray
+    std: np.ndarray
+    relative_std: np.ndarray
+    correlation: np.ndarray
+    rank: int
+    encoder_std: float
+    samples: int
+    camera_samples: int
+    duration: float
+    initial_state: str
+    seconds: float = 0.0
+
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-able dict: parameters {name: {value, unit, std, relative_std}}, correlation, fim, settings."""
+        return {
+            "model": self.model,
+            "parameters": {n: {"value": float(v), "unit": u, "std": _num(s), "relative_std": _num(r)}
+                           for n, v, u, s, r in zip(self.parameters, self.theta, self.units, self.std,
+                                                    self.relative_std)},
+            "correlation": [[_num(c) for c in row] for row in self.correlation], "fim": self.fim.tolist(), "rank": self.rank,
+            "encoder_std_rad": self.encoder_std, "samples": self.samples, "camera_samples": self.camera_samples,
+            "duration_s": self.duration, "initial_state": self.initial_state, "seconds": self.seconds,
+        }
+
+    def to_text(self) -> str:
+        lines = [f"Cramér-Rao bounds on {self.model}: {self.samples} encoder samples over {self.duration:g} s "
+                 f"(noise {self.encoder_std:.3g} rad incl. quantisation)"
+                 + (f", {self.camera_samples} camera samples" if self.camera_samples else "")
+                 + f", initial state {self.initial_state}"
+                 + ("" if self.rank == len(self.parameters) else
+                    f"; information rank {self.rank}/{len(self.parameters)}"),
+                 f"  {'parameter':12s} {'value':>11s} {'std':>10s} {'rel. std':>9s}  unit"]
+        for n, v, u, s, r in zip(self.parameters, self.theta, self.units, self.std, self.relative_std):
+            rs = f"{r:9.2%}" if np.isfinite(r) else "unbounded"
+            lines.append(f"  {n:12s} {v:11.5g} {s:10.3g} {rs:>9s}  {u}")
+        p = len(self.parameters)
+        C = self.correlation
+        iu = np.triu_indices(p, 1)
+        if p > 1 and np.isfinite(C[iu]).any():
+            a = np.where(np.isfinite(C[iu]), np.abs(C[iu]), -1.0)
+            k = int(np.argmax(a))
+            i, j = iu[0][k], iu[1][k]
+            lines.append(f"  largest correlation: {self.parameters[i]}, {self.parameters[j]} {C[i, j]:+.4f}")
+        if self.rank < p:
+            lines.append("  unbounded: along a direction this experiment gives no information on "
+                         "(see identifiability() for its name)")
+        return "\n".join(lines)
+
+    def __str__(self) -> str:
+        return self.to_text()
+
+
+def _num(x: float) -> float | None:
+    """JSON number, None for inf/NaN (not identifiable from the experiment)."""
+    return float(x) if np.isfinite(x) else None
+
+
+def _array(a: Any, name: str, ndim: int) -> np.ndarray:
+    try:
+        out = np.asarray(a, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected an array of numbers, got {type(a).__name__}") from None
+    if out.ndim != ndim:
+        raise InputError(f"{name}: expected a {ndim}-D array, got shape {out.shape}")
+    if not np.isfinite(out).all():
+        raise InputError(f"{name}: contains NaN or inf")
+    return out
+
+
+def _nonneg(v: Any, name: str) -> float:
+    if isinstance(v, (bool, np.bool_)) or not isinstance(v, (int, float, np.integer, np.floating)) \
+            or not (math.isfinite(v) and v >= 0):
+        raise InputError(f"{name}: expected a non-negative number, got {v!r}")
+    return float(v)
+
+
+def fisher_information(model: Model, parameters: str | Sequence[str] | None = None, U: Any = None, G: Any = None,
+                       dt: float | None = None, *, design: Any = None, x0: Any = None, theta: Any = None,
+                       encoder_noise_counts: float | None = None, quantisation: bool = True,
+                       camera_times: Sequence[float] | None = None, camera_noise: float | None = None,
+                       initial_state: str = "unknown", substeps: int | None = None,
+                       sensitivity: Any = None, counts_per_rev: float | None = None) -> FisherReport:
+    """Fisher information and Cramér-Rao bounds of ``parameters`` for one experiment (see the module doc).
+
+    Parameters
+    ----------
+    model: the finger (:class:`~alpes_dyn.Model` with a transmission: the motor input, the encoder output
+        y = S q; a model without one: joint torques in, joint encoders y = q out, ``counts_per_rev`` given).
+    parameters: selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters`.
+    U: (N,) or (N, motors) motor torques, N m, held over each of the N sample periods.
+    G: gravity, m/s^2 (base frame): (3,) for the whole experiment or (N, 3) per period (several hand
+        orientations); default the model's.
+    dt: sample period, s (default 1e-3).
+    design: optional object with any of the fields ``dt``, ``substeps``, ``encoder_noise_counts``,
+        ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiment.ExperimentDesign`): the
+        defaults of the arguments of the same names.
+    x0: initial state (2n,); default the static equilibrium under U[0] and G[0] (where the balance alone
+        does not place a joint without spring, the thumb's ab/adduction, that joint held mid-range).
+    theta: parameter values (p,), default the model's (nominal).
+    encoder_noise_counts: Gaussian encoder noise, counts (default 0.5); with ``quantisation`` the
+        quantisation's step / sqrt(12) is added in quadrature.
+    camera_times: times (s, within the experiment, on the sample grid) where every joint angle is
+        measured once, with noise ``camera_noise`` (rad, default 0.1 degree).
+    initial_state: ``"unknown"`` (nuisance parameters, marginalised; default) or ``"known"``.
+    substeps: RK4 steps per sample period (default 4).
+    sensitivity: a :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` of the same model, parameters, dt
+        and substeps to reuse (its compiled code), else one is built.
+    counts_per_rev: encoder resolution (default the transmission's; required without a transmission).
+    """
+    from ..simulation.sensitivity import SensitivityModel
+    from ..simulation.integrate import _check_dt
+
+    t0 = time.perf_counter()
+    if not isinstance(model, Model):
+        raise ModelError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+
+    def pick(value: Any, name: str, default: Any) -> Any:
+        if value is not None:
+            return value
+        return getattr(design, name, default) if design is not None else default
+
+    dt = _check_dt(pick(dt, "dt", 1e-3))
+    substeps = pick(substeps, "substeps", 4)
+    noise = _nonneg(pick(encoder_noise_counts, "encoder_noise_counts", 0.5), "encoder_noise_counts")
+    cam_times = tuple(pick(camera_times, "camera_times", ()))
+    cam_noise = _nonneg(pick(camera_noise, "camera_noise", math.radians(0.1)), "camera_noise")
+    if initial_state not in INITIAL_STATES:
+        raise InputError(f"initial_state: expected one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
+    tr = model.transmission
+    if tr is None and counts_per_rev is None:
+        raise ModelError(f"model: {model.name!r} has no transmission: give counts_per_rev (its joint encoders)")
+    if counts_per_rev is not None and (isinstance(counts_per_rev, (bool, np.bool_)) or not isinstance(
+            counts_per_rev, (int, float, np.integer, np.floating)) or not (math.isfinite(counts_per_rev)
+                                                                          and counts_per_rev > 0)):
+        raise InputError(f"counts_per_rev: expected a positive number, got {counts_per_rev!r}")
+    n_in = tr.n_motors if tr is not None else model.n
+    if U is None:
+        raise InputError("U: the motor torques of the experiment are required, (N,) or (N, motors) N m")
+    Ua = _array(U, "U", 1 if np.ndim(U) == 1 else 2)
+    if Ua.ndim == 1:
+        Ua = Ua[:, None]
+    N, nu = Ua.shape
+    if nu != n_in:
+        raise InputError(f"U: expected {n_in} {'motor' if tr is not None else 'joint'} torque column(s), got {nu}")
+    if N < 2:
+        raise InputError(f"U: expected at least 2 sample periods, got {N}")
+    n, nx = model.n, 2 * model.n
+    if G is None:
+        Ga = np.tile(np.asarray(model.gravity, dtype=float), (N, 1))
+    else:
+        Ga = _array(G, "G", np.ndim(G) if np.ndim(G) in (1, 2) else 2)
+        Ga = np.tile(Ga, (N, 1)) if Ga.ndim == 1 else Ga
+        if Ga.shape != (N, 3):
+            raise InputError(f"G: expected (3,) or ({N}, 3) gravity vectors, got {np.shape(G)}")
+    cam_idx = []
+    for tc in cam_times:
+        try:
+            k = round(float(tc) / dt) if math.isfinite(float(tc)) else -1
+        except (TypeError, ValueError):
+            raise InputError(f"camera_times: expected times in s, got {tc!r}") from None
+        if not 0 <= k <= N or abs(k * dt - float(tc)) > 1e-6 * dt + 1e-12:
+            raise InputError(f"camera_times: {tc!r} is not a sample time in [0, {N * dt:g}] s")
+        cam_idx.append(int(k))
+    if sensitivity is None:
+        sm = SensitivityModel(model, parameters, dt, substeps)
+    else:
+        sm = sensitivity
+        if not isinstance(sm, SensitivityModel) or sm.model is not model or sm.dt != float(dt) \
+                or sm.substeps != int(substeps):
+            raise InputError("sensitivity: expected a SensitivityModel of this model with the same dt and substeps")
+        if parameters is not None:
+            from ..symbolic.parametric import select_parameters
+
+            names = tuple(p.name for p in select_parameters(model, parameters))
+            if names != sm.names:
+                raise InputError(f"sensitivity: its parameters {', '.join(sm.names)} are not {', '.join(names)}")
+    p = sm.p
+    th = _theta(theta, sm.nominal, sm.names)
+    if x0 is None:
+        m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
+        tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
+        try:
+            q_rest = m0.static_equilibrium(tau0)
+        except InputError:
+            if tr is None or not model.springless_joints:
+                raise
+            from ..estimation.experiment import _mean_equilibrium  # the experiment's rest: joints without spring mid-range
+
+            q_rest = _mean_equilibrium(model, Ua[0], Ga[0])
+        x0a = np.concatenate([q_rest, np.zeros(n)])
+    else:
+        x0a = _array(x0, "x0", 1)
+        if x0a.shape != (nx,):
+            raise InputError(f"x0: expected {nx} values (q, qd), got {x0a.shape[0]}")
+    step = 2.0 * np.pi / float(counts_per_rev if counts_per_rev is not None else tr.counts_per_rev)
+    sigma = math.sqrt((noise * step) ** 2 + (step ** 2 / 12.0 if quantisation else 0.0))
+    if sigma <= 0 and not cam_idx:
+        raise InputError("encoder_noise_counts: zero noise without quantisation gives infinite information")
+    _, X = sm.run(x0a[None], Ua[None], Ga[None], th)
+    X = X[0]  # (N+1, nx, nx + p): d x_k / d(x0, theta)
+    cols = np.concatenate([np.arange(nx, nx + p), np.arange(nx)])  # (theta, x0)
+    S = np.asarray(tr.S, dtype=float) if tr is not None else np.eye(n)
+    Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols]).reshape(-1, p + nx)
+    Jy[:, :p] *= th  # log coordinates inside (well scaled), converted back below
+    F = Jy.T @ Jy / sigma ** 2 if sigma > 0 else np.zeros((p + nx, p + nx))
+    if cam_idx:
+        Jc = X[cam_idx][:, :n, :][:, :, cols].reshape(-1, p + nx).copy()
+        Jc[:, :p] *= th
+        F = F + (Jc.T @ Jc / cam_noise ** 2 if cam_noise > 0 else 0.0)
+    if not np.isfinite(F).all():
+        raise InputError("fisher_information: the sensitivities are not finite (experiment unstable?)")
+    Ftt = F[:p, :p]
+    if initial_state == "unknown":
+        Fxx, Fxt = F[p:, p:], F[p:, :p]
+        Flog = Ftt - Fxt.T @ np.linalg.pinv(Fxx, rcond=1e-13, hermitian=True) @ Fxt
+    else:
+        Flog = Ftt
+    Flog = 0.5 * (Flog + Flog.T)
+    # rank and inverse on the relative (log) information, scaled to unit diagonal
+    d = np.sqrt(np.clip(np.diag(Flog), 0, None))
+    dn = np.where(d > 0, d, 1.0)
+    Fs = Flog / np.outer(dn, dn)
+    w, V = np.linalg.eigh(Fs)
+    tol = max(p, 1) * 1e3 * _EPS * max(w.max(), 0)
+    rank = int(np.sum(w > tol))
+    cov_log = np.linalg.pinv(Fs, rcond=1e-12, hermitian=True) / np.outer(dn, dn)
+    rel = np.sqrt(np.clip(np.diag(cov_log), 0, None))
+    if rank < p:  # a parameter with a component along a zero-information direction: unbounded
+        V0 = V[:, w <= tol]
+        free = (np.linalg.norm(V0, axis=1) > 1e-6) | (d == 0)
+        rel = np.where(free, np.inf, rel)
+        cov_log[free, :] = np.nan
+        cov_log[:, free] = np.nan
+        np.fill_diagonal(cov_log, np.where(free, np.inf, np.diag(cov_log)))
+    sd = rel * np.abs(th)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        corr = cov_log / np.outer(rel, rel)
+    fim = Flog / np.outer(th, th)
+    fim_full = F.copy()
+    fim_full[:p] /= th[:, None]
+    fim_full[:, :p] /= th[None, :]
+    units = tuple(prm.unit for prm in sm.dynamics.parameters)
+    return FisherReport(
+        model=model.name, parameters=tuple(sm.names), theta=th, units=units, fim=fim, fim_full=fim_full,
+        covariance=cov_log * np.outer(th, th), std=sd, relative_std=rel, correlation=corr, rank=rank,
+        encoder_std=sigma, samples=N + 1, camera_samples=len(cam_idx), duration=N * float(dt),
+        initial_state=initial_state, seconds=time.perf_counter() - t0)

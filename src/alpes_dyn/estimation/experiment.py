@@ -1,0 +1,485 @@
+"""The identification experiment: what to do with the hand so that its parameters can be fitted.
+
+The documented experiment on one finger (``finger2``, ``finger3``):
+
+* the palm held still in one or more orientations (``orientations``, gravity vectors in the base frame;
+  default palm up, gravity along -z as in the report);
+* the motor driven by a multisine torque, tau_m(t) = tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f /
+  2) over ``frequencies`` (default 0.3 to 11.3 Hz, Schroeder phases), so that the springs, gravity,
+  inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
+  mean joint angle mid-range, the amplitude a is the largest that keeps the nominal finger's static
+  equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
+* the bias trimmed on the hand (``trim_bias``, default on): before recording, a slow loop on the
+  measured encoder moves the bias until the finger rests where the nominal one would (the real finger,
+  not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
+  q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a
+  fold of its static equilibria), as high as the excitation keeps clear of the fold;
+* optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
+  ``camera_noise`` (rad);
+* the sensors of the estimation scenario (:mod:`alpes_dyn.estimation.scenario`): encoder quantised to
+  ``counts_per_rev`` with 0.5 count of Gaussian noise, motor torque with white noise of 5e-4 N m,
+  sampled at 1 kHz.
+
+The hand is identified one chain at a time (:data:`EXPERIMENT_MODELS`): a finger model built from one
+finger of the hand (``chain=``), or the ``thumb`` model, whose two motors are excited at once, each with
+the multisine (phases shifted between them): the flexion tendon as a finger's, the ab/adduction (no
+spring; its joint placed mid-range) about the torque that balances gravity there, its amplitude searched
+down from four times its joint's breakaway (Coulomb) torque until a nominal run stays in range.
+
+Why this design (measured with :func:`~alpes_dyn.analysis.identifiability.fisher_information`, the Cramér-Rao
+bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
+the estimation scenario's small torque wiggle leaves F_v_3 at 10 % and the masses at up to 0.64 %; the
+multisine across the joint range brings every parameter below 0.8 % (masses 0.08-0.26 %). See the
+identification user guide for the full comparison.
+
+:func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
+(and writes) a :class:`~alpes_dyn.estimation.recording.Recording` with the true joint angles in ``true_q_*``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..model.robot import Model
+from ..model.params import HandParams, Param, load_params, with_values
+from .recording import Recording, write_recording
+from ..simulation.integrate import simulate
+from ..model.stops import JointRangeWarning
+
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "excitation", "perturbed_params"]
+
+EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
+"""The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
+
+
+@dataclass(frozen=True)
+class ExperimentDesign:
+    """Settings of the identification experiment (see the module docstring); SI units."""
+
+    duration: float = 4.0
+    dt: float = 1e-3
+    substeps: int = 4
+    frequencies: tuple[float, ...] = (0.3, 0.7, 1.3, 2.1, 3.7, 5.3, 7.9, 11.3)
+    torque_bias: float | None = None
+    torque_amplitude: float | None = None
+    margin: float = 0.05
+    orientations: tuple[tuple[float, float, float], ...] = ((0.0, 0.0, -9.81),)
+    camera_times: tuple[float, ...] = ()
+    camera_noise: float = math.radians(0.1)
+    encoder_noise_counts: float = 0.5
+    torque_noise: float = 5e-4
+    trim_bias: bool = True
+    amplitude_fraction: float = 0.6
+
+    @property
+    def n_samples(self) -> int:
+        return int(round(self.duration / self.dt)) + 1
+
+    def check(self) -> "ExperimentDesign":
+        if not (math.isfinite(self.dt) and 0 < self.dt <= 0.1):
+            raise InputError(f"dt: expected a sample period in (0, 0.1] s, got {self.dt!r}")
+        N = round(self.duration / self.dt) if math.isfinite(self.duration) else -1
+        if N < 100 or abs(N * self.dt - self.duration) > 1e-9 * self.duration:
+            raise InputError(f"duration: expected a whole number of at least 100 samples of {self.dt:g} s, "
+                             f"got {self.duration!r}")
+        if N > 2_000_000:
+            raise InputError(f"duration: {self.duration:g} s is more than 2e6 samples")
+        if not isinstance(self.substeps, int) or not 1 <= self.substeps <= 64:
+            raise InputError(f"substeps: expected an integer in [1, 64], got {self.substeps!r}")
+        f = np.asarray(self.frequencies, dtype=float)
+        if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(f >= 0.5 / self.dt):
+            raise InputError(f"frequencies: expected positive frequencies below Nyquist, got {self.frequencies!r}")
+        g = np.asarray(self.orientations, dtype=float)
+        if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] < 1 or not np.isfinite(g).all():
+            raise InputError(f"orientations: expected gravity vectors (3 numbers each), got {self.orientations!r}")
+        if not (math.isfinite(self.amplitude_fraction) and 0 < self.amplitude_fraction <= 1):
+            raise InputError(f"amplitude_fraction: expected a number in (0, 1], got {self.amplitude_fraction!r}")
+        for name in ("encoder_noise_counts", "torque_noise", "camera_noise", "margin"):
+            v = getattr(self, name)
+            if not (math.isfinite(v) and v >= 0):
+                raise InputError(f"{name}: expected a non-negative number, got {v!r}")
+        for t in self.camera_times:
+            if not (math.isfinite(t) and 0 <= t <= self.duration):
+                raise InputError(f"camera_times: {t!r} is outside [0, {self.duration:g}] s")
+        return self
+
+
+def _oriented(model: Model, gravity: np.ndarray) -> Model:
+    """``model`` itself, or a copy of it with another gravity vector (the hand turned)."""
+    return model if np.array_equal(model.gravity, gravity) else model.copy(gravity=gravity)
+
+
+def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarray) -> np.ndarray:
+    """The static equilibrium under the motor torques ``tau_m`` (m,) (a number for one motor), the joints
+    without spring held mid-range."""
+    m = _oriented(model, gravity)
+    held = m.springless_joints
+    q0 = np.zeros(m.n)
+    for j in held:
+        i = m.joint_index(j)
+        q0[i] = 0.5 * (m.lower[i] + m.upper[i])
+    return m.static_equilibrium(m.transmission.joint_torque(np.atleast_1d(np.asarray(tau_m, dtype=float))), q0,
+                                fixed=held)
+
+
+def _motor_groups(model: Model) -> tuple[list[np.ndarray], list[int], list[int]]:
+    """Each motor's joints, the motors whose joints all have springs (a tendon against its return springs) and
+    the others (a motor driving springless joints both ways, held at mid-range by its bias)."""
+    S = model.transmission.S
+    held = {model.joint_index(j) for j in model.springless_joints}
+    joints = [np.flatnonzero(S[k]) for k in range(S.shape[0])]
+    sprung = [k for k, js in enumerate(joints) if not held.intersection(js.tolist())]
+    return joints, sprung, [k for k in range(S.shape[0]) if k not in sprung]
+
+
+def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[np.ndarray],
+                  gravity: np.ndarray) -> np.ndarray:
+    """``bias`` with each motor of ``free`` set to the torque that balances gravity on its (held) joints."""
+    out = bias.copy()
+    if not free:
+        return out
+    q = _mean_equilibrium(model, out, gravity)
+    m = _oriented(model, gravity)
+    G = m.gravity_torque(q) - m.transmission.joint_torque(out)  # what the held joints still need
+    S = m.transmission.S
+    for k in free:
+        js = joints[k]
+        out[k] += float(S[k, js] @ G[js] / (S[k, js] @ S[k, js]))
+    return out
+
+
+def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | tuple[np.ndarray, np.ndarray]:
+    """(tau_b, a): the multisine's bias and amplitude for ``model`` (see the module docstring), N m; numbers
+    for a one-motor model, arrays (m,) per motor otherwise (the thumb: flexion and ab/adduction)."""
+    bias, amp = _excitation(model, design)
+    if model.transmission.n_motors == 1:
+        return float(bias[0]), float(amp[0])
+    return bias, amp
+
+
+def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray]:
+    """Bias and amplitude per motor (m,), N m. A motor against springs: bias putting the mean of its joints
+    mid-range, amplitude the largest keeping the static equilibria in range; a motor on springless joints
+    (the thumb's ab/adduction): bias balancing gravity there, amplitude from the motor's limit down.
+    Then every amplitude whose joints a nominal run takes out of range shrinks by 15 % until none does."""
+    lo, hi = model.lower + design.margin, model.upper - design.margin
+    g0 = np.asarray(design.orientations[0], dtype=float)
+    n_m = model.transmission.n_motors
+    joints, sprung, free = _motor_groups(model)
+
+    def within(tau: np.ndarray) -> bool:
+        try:
+            return all(np.all((q >= lo) & (q <= hi)) for q in
+                       (_mean_equilibrium(model, tau, np.asarray(g, dtype=float)) for g in design.orientations))
+        except InputError:
+            return False
+
+    bias = np.zeros(n_m)
+    for k in sprung:
+        if design.torque_bias is not None:
+            bias[k] = design.torque_bias
+        else:  # mean joint angle of the motor's joints mid-range
+            js = joints[k]
+            bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])),
+                                   float(np.mean(0.5 * (model.lower + model.upper)[js])), g0, 0.2,
+                                   lambda c, k=k: _with(bias, k, c))
+    bias = _holding_bias(model, bias, free, joints, g0)
+    if design.torque_amplitude is not None:
+        return bias, np.full(n_m, float(design.torque_amplitude))
+    if not within(bias):
+        raise InputError(f"torque_bias: the nominal finger's equilibrium at {_fmt(bias)} N m leaves its joint range")
+    amp = np.zeros(n_m)
+    for k in sprung:
+        a, b = 0.0, bias[k]
+        for _ in range(40):
+            c = 0.5 * (a + b)
+            a, b = (c, b) if within(_with(bias, k, bias[k] + c)) and within(_with(bias, k, bias[k] - c)) else (a, c)
+        amp[k] = a
+    cap = float(model.params.tau_max) if model.params is not None else 0.05
+    S = model.transmission.S
+    for k in free:  # from 4 x the breakaway torque (Coulomb friction) of its joints: a larger one runs away
+        js = joints[k]
+        breakaway = float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
+        amp[k] = min(cap, 4.0 * breakaway) if breakaway > 0 else cap
+    # resonances swing the finger further than its static equilibria: shrink until a nominal run stays in range.
+    # First the springless joints' motors alone (a wild swing there also throws the other joints out of range),
+    # then every motor whose joints leave the range.
+    t, seg, G = _schedule(design)
+    for shrinking in ((free,) if free else ()) + (tuple(range(n_m)),):
+        for _ in range(60):
+            with warnings.catch_warnings():  # a trial amplitude may leave the range: that is what is tested
+                warnings.simplefilter("ignore", JointRangeWarning)
+                q = _simulate(model, design, _profiles(design, t, bias, amp), G, seg)[:, : model.n]
+            out = np.any((q < lo) | (q > hi), axis=0)
+            hit = [k for k in shrinking if out[joints[k]].any()]
+            if not hit:
+                break
+            for k in hit:
+                amp[k] *= 0.85
+    return bias, amp * design.amplitude_fraction
+
+
+def _with(x: np.ndarray, k: int, value: float) -> np.ndarray:
+    out = x.copy()
+    out[k] = value
+    return out
+
+
+def _fmt(x: np.ndarray) -> str:
+    return f"{x[0]:g}" if x.size == 1 else "[" + ", ".join(f"{v:g}" for v in x) + "]"
+
+
+def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: float, gravity: np.ndarray,
+                 upper: float, torques: Callable[[float], np.ndarray] | None = None) -> float:
+    """The motor torque c in [0, upper] N m at which ``reading`` of the finger's static equilibrium (a
+    quantity that grows with the torque) equals ``target``: bisection, a torque that leaves the
+    equilibrium undefined counting as too much. ``torques(c)``: the motor torques with c on the motor
+    searched (default: the one motor)."""
+    torques = torques or (lambda c: np.array([c]))
+    a, b = 0.0, upper
+    for _ in range(60):
+        c = 0.5 * (a + b)
+        try:
+            above = reading(_mean_equilibrium(model, torques(c), gravity)) > target
+        except InputError:
+            above = True
+        a, b = (a, c) if above else (c, b)
+    return 0.5 * (a + b)
+
+
+def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray,
+                  peak: np.ndarray | None = None) -> np.ndarray:
+    """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
+    (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
+    with a slow loop on its measured encoder before recording (the encoders are all it uses). The
+    motors of springless joints keep their bias (their joints are placed mid-range by hand).
+
+    A finger with soft springs may have no rest there: past a fold of its static equilibria (stiffness
+    dG/dq singular: gravity's torque outgrows the springs') it snaps to full flexion. The loop then
+    stops below the fold, by 1.25 times the multisine's ``peak`` torque (m,) so that the excitation does
+    not push it over (measured on a little finger with K_1 18 % soft: fold at 0.0217 N m, below the
+    nominal's mid-range bias of 0.0229 N m)."""
+    S = nominal.transmission.S
+    joints, sprung, free = _motor_groups(nominal)
+    target = S @ _mean_equilibrium(nominal, bias, gravity)
+    out = np.asarray(bias, dtype=float).copy()
+    for k in sprung:
+        upper = max(4.0 * out[k], 0.2)
+        out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity, upper,
+                              lambda c, k=k: _with(out, k, c))
+        if peak is not None:
+            fold = _fold_torque(truth, lambda c, k=k: _with(out, k, c), gravity, upper)
+            if fold is not None:
+                out[k] = min(out[k], fold - 1.25 * float(peak[k]))
+    return out
+
+
+def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: np.ndarray,
+                 upper: float) -> float | None:
+    """The torque (N m) up to which the branch of stable static equilibria starting at zero torque goes on
+    (a fold, where dG/dq turns singular), or None if it reaches ``upper``: a scan in steps of upper/400,
+    then bisection."""
+    m = _oriented(model, gravity)
+
+    def stable(c: float) -> bool:
+        try:
+            q = _mean_equilibrium(model, torques(c), gravity)
+        except InputError:
+            return False
+        free = [i for i, j in enumerate(m.joint_names) if j not in m.springless_joints]
+        dG = m.gravity_jacobian(q)[np.ix_(free, free)]
+        return bool(np.linalg.eigvalsh(0.5 * (dG + dG.T)).min() > 0)
+
+    steps = np.linspace(0.0, upper, 401)
+    for a, b in zip(steps[:-1], steps[1:]):
+        if not stable(b):
+            for _ in range(40):
+                c = 0.5 * (a + b)
+                a, b = (c, b) if stable(c) else (a, c)
+            return a
+    return None
+
+
+def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sample times (N+1,), orientation segment of each sample and gravity (N+1, 3)."""
+    N = design.n_samples - 1
+    t = design.dt * np.arange(N + 1)
+    n_or = len(design.orientations)
+    seg = np.minimum((np.arange(N + 1) * n_or) // (N + 1), n_or - 1)
+    return t, seg, np.asarray(design.orientations, dtype=float)[seg]
+
+
+def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """States (N+1, 2n) from the static equilibrium at u[0], RK4 with substeps, the torques u (N+1, m) held per
+    sample, segment by segment of constant gravity."""
+    N = u.shape[0] - 1
+    x = np.zeros((N + 1, 2 * truth.n))
+    x[0, : truth.n] = _mean_equilibrium(truth, u[0], G[0])
+    start = 0
+    while start < N:
+        stop = start + 1
+        while stop < N and seg[stop] == seg[start]:
+            stop += 1
+        m = _oriented(truth, G[start])
+        k = stop - start
+        sim = simulate(m, x[start], np.repeat(u[start:stop], design.substeps, axis=0), k * design.dt,
+                       design.dt / design.substeps, "rk4", input="motor", output="encoder")
+        x[start + 1: stop + 1] = sim.x[design.substeps:: design.substeps]
+        start = stop
+    return x
+
+
+def _profile(design: ExperimentDesign, t: np.ndarray, bias: float, amp: float, motor: int = 0,
+             n_motors: int = 1) -> np.ndarray:
+    """One motor's multisine (len(t),), N m: Schroeder phases (a low crest factor), shifted by pi k i / m on
+    line i for motor k of m (the motors of one chain excited at once, out of phase)."""
+    f = np.asarray(design.frequencies, dtype=float)
+    k = np.arange(1, f.size + 1)
+    phases = -np.pi * k * (k - 1) / f.size - np.pi * motor * k / n_motors
+    s = np.sin(2 * np.pi * f[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
+    return bias + amp * s / math.sqrt(f.size / 2)
+
+
+def _profiles(design: ExperimentDesign, t: np.ndarray, bias: np.ndarray, amp: np.ndarray) -> np.ndarray:
+    """(len(t), m): every motor's multisine."""
+    m = len(bias)
+    return np.column_stack([_profile(design, t, float(bias[k]), float(amp[k]), k, m) for k in range(m)])
+
+
+def experiment(model: str, true_params: HandParams | str | Path | None = None,
+               design: ExperimentDesign | None = None, seed: int = 0, path: str | Path | None = None,
+               nominal_params: HandParams | str | Path | None = None, chain: str | None = None) -> Recording:
+    """Simulate the identification experiment on a finger (or the thumb) with ``true_params`` (friction included).
+
+    Parameters
+    ----------
+    model: ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors
+        are excited at once, each with the multisine (phases shifted between them): the flexion tendon
+        about a bias that holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about
+        the torque that balances gravity there, its joint starting mid-range, its amplitude the largest
+        that keeps the nominal thumb in range (x ``amplitude_fraction``).
+    true_params: the true parameters (a :class:`~alpes_dyn.model.params.HandParams` or a file).
+    design: the :class:`ExperimentDesign` (default: the documented one).
+    seed: seed of the sensor noise. path: write the recording there as CSV too.
+    nominal_params: the parameters the experimenter knows, from which the excitation is designed
+        (default: the shipped file).
+    chain: for a finger model, the hand's finger it is (its own ``[finger.<name>]`` values, in the true
+        and the nominal file; see :meth:`Model.alpes <alpes_dyn.Model.alpes>`).
+
+    Returns
+    -------
+    :class:`~alpes_dyn.estimation.recording.Recording` with encoder counts, measured torque, the camera's joint
+    angles (if any), gravity (when not the model's constant) and the true joint angles.
+    """
+    if model not in EXPERIMENT_MODELS:
+        raise InputError(f"model: the identification experiment is defined for one chain "
+                         f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    design = (design or ExperimentDesign()).check()
+    p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
+    p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
+    nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
+    bias, amp = _excitation(nominal, design)
+    truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
+    t, seg, G = _schedule(design)
+    if design.trim_bias and design.torque_bias is None:
+        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp)), axis=0)
+        bias = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float), peak)
+    rng = np.random.default_rng(seed)
+    N = t.shape[0] - 1
+    n_or = len(design.orientations)
+    u = _profiles(design, t, bias, amp)
+    x = _simulate(truth, design, u, G, seg)
+    tr = truth.transmission
+    step = 2 * np.pi / tr.counts_per_rev
+    qm = x[:, : truth.n] @ tr.S.T
+    counts = np.round((qm + design.encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step)
+    torque = u + design.torque_noise * rng.standard_normal(u.shape)
+    q_meas = None
+    if design.camera_times:
+        q_meas = np.full((N + 1, truth.n), np.nan)
+        for tc in design.camera_times:
+            k = int(round(tc / design.dt))
+            q_meas[k] = x[k, : truth.n] + design.camera_noise * rng.standard_normal(truth.n)
+    same_g = n_or == 1 and np.array_equal(G[0], truth.gravity)
+    rec = Recording(t=t, encoder=counts, torque=torque, motor_names=tr.motor_names, joint_names=truth.joint_names,
+                    q=q_meas, gravity=None if same_g else G, true_q=x[:, : truth.n].copy())
+    if path is not None:
+        write_recording(rec, path)
+    return rec
+
+
+def perturbed_params(params: HandParams | None = None, spread: float = 0.2, seed: int = 0,
+                     kinds: Sequence[str] = ("K", "m", "friction"), chains: Sequence[str] | None = None) -> HandParams:
+    """``params`` with the finger's springs K_i, masses m_i (inertias I_i with them) and per-joint
+    friction F_s, F_v each multiplied by an independent factor uniform in [1 - spread, 1 + spread].
+
+    ``chains``: which chains are drawn, each independently (one seeded generator, in the order given):
+    None (default) the shared ``[finger]`` values; finger names (``palm.finger_names``) give each of those
+    fingers values of its own (``[finger.<name>]``, drawn around its current ones); ``"thumb"`` draws the
+    thumb's flexion springs, masses (its base's too) and friction, and its ab/adduction friction.
+
+    The result is a valid parameter set (the changed entries marked ``assumed`` with the draw as reason),
+    e.g. the "true" finger (or hand) of a simulated identification experiment.
+    """
+    if not (math.isfinite(spread) and 0 <= spread < 1):
+        raise InputError(f"spread: expected a fraction in [0, 1), got {spread!r}")
+    for k in kinds:
+        if k not in ("K", "m", "friction"):
+            raise InputError(f"kinds: unknown kind {k!r} (expected K, m, friction)")
+    p = params if params is not None else load_params()
+    if chains is None:
+        chains = ("finger",)
+    elif isinstance(chains, str):
+        chains = (chains,)
+    for c in chains:
+        if c != "finger" and c not in p.chain_names:
+            raise InputError(f"chains: unknown chain {c!r} (expected one of {', '.join(p.chain_names)})")
+    rng = np.random.default_rng(seed)
+    reason = f"drawn: nominal times a factor uniform in [{1 - spread:g}, {1 + spread:g}] per link, seed {seed}"
+    upd: dict[str, Param] = {}
+    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "base_mass": "kg",
+             "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
+
+    def put(name: str, value: np.ndarray | float) -> None:
+        field_ = name.rsplit(".", 1)[1]
+        old = p.raw.get(name) or p.raw.get(f"finger.{field_}")
+        old = old if old is not None else Param(value, units[field_], "assumed", reason, f"per-joint {field_}")
+        upd[name] = dataclasses.replace(old, value=value, unit=units[field_], source="assumed", reason=reason, std=None)
+
+    def draw(size: int) -> np.ndarray | float:
+        f = rng.uniform(1 - spread, 1 + spread, size)
+        return f
+
+    for c in chains:
+        ch = p.chain(c)
+        n = ch.n
+        sec = "thumb" if c == "thumb" else ("finger" if c == "finger" else f"finger.{c}")
+        if "K" in kinds:
+            put(f"{sec}.K", ch.K * draw(n))
+        if "m" in kinds:
+            s = draw(n)
+            put(f"{sec}.m", ch.m * s)
+            put(f"{sec}.I", ch.I * s)
+            if c == "thumb":
+                put("thumb.base_mass", p.thumb_base_mass * float(draw(1)[0]))
+        if "friction" in kinds:
+            Fs = ch.F_s if ch.F_s is not None else np.full(n, p.F_s)
+            Fv = ch.F_v if ch.F_v is not None else np.full(n, p.F_v)
+            put(f"{sec}.F_s", Fs * draw(n))
+            put(f"{sec}.F_v", Fv * draw(n))
+            if c == "thumb":
+                Fs_a = p.F_s if p.abduction_F_s is None else p.abduction_F_s
+                Fv_a = p.F_v if p.abduction_F_v is None else p.abduction_F_v
+                put("thumb.abduction_F_s", Fs_a * float(draw(1)[0]))
+                put("thumb.abduction_F_v", Fv_a * float(draw(1)[0]))
+    return with_values(p, upd)

@@ -1,0 +1,658 @@
+"""Identification of a finger's physical parameters from a recording (output-error, multiple shooting).
+
+Problem. With the recording's measured motor torques as the known input, find the parameters theta
+(:mod:`alpes_dyn.symbolic.parametric`: K_i, m_i with I_i, F_s_i, F_v_i, ...) and the initial states that make the
+model's encoder reading q_m = S q (Section 3, eq. 3.13) -- and, where the recording has them, the
+camera's joint angles -- match the recording in the least-squares sense:
+
+    min  sum_k |S q_k - y_k|^2 / sigma_y^2 + sum_(k, i measured) (q_k,i - q^meas_k,i)^2 / sigma_q^2.
+
+Method: direct multiple shooting (Bock): the record is cut into intervals of ``interval`` seconds,
+each starting from its own state s_j; continuity s_j+1 = x(end of interval j) is an equality
+constraint. A lightly damped, stiff-ish system makes single shooting's cost landscape rugged; multiple
+shooting keeps every interval short, so the problem stays close to linear and converges from the
+nominal parameters. Each iteration is a constrained Gauss-Newton step (Levenberg-Marquardt damped,
+l1-merit line search) on the exact Jacobians of the RK4-discretised model, all intervals simulated
+with their sensitivities at once in compiled C (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`).
+Parameters are fitted as log theta: every iterate is physical (masses, springs and friction
+positive, inertias scaled with their masses).
+
+Globalisation. From parameters 20 % off, 100 ms of the finger (tiny inertias, a soft balance of springs
+and gravity) drifts by degrees and rad/s, and imposing continuity at once let Gauss-Newton trade the
+fit for the defects and stop in another basin (m_1 -> 0). So the fit goes in three stages: (1) each
+interval's start state alone on its encoder samples; (2) a homotopy, continuity as a quadratic penalty
+tightened tenfold per phase (four phases of Levenberg-Marquardt), friction held; (3) the constrained
+problem. In the homotopy a step whose parameter part the trust region shortens has its nodes solved
+again for the shortened step. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
+4-8 counts against the noise's 0.58), or stage 3 asks three times in a row for a change of log theta
+above 30 (the linearisation has lost the basin), stages 2-3 run again with friction free in the homotopy.
+
+Speed. A line search's trial needs the states, not their sensitivities: it runs the step without its
+derivatives (a tenth of the time), and the sensitivities are computed once a step is accepted. Near the
+solution a full Gauss-Newton step can raise the defects while the cost falls (the curvature of the
+shooting map at the smooth Coulomb friction's knee); a second-order correction (Nocedal & Wright,
+Section 18.3) removes them with the same matrix before the step is shortened. The fit stops at the
+data's resolution: once continuous, when no parameter would move by a tenth of its standard error.
+
+Torque noise. The recorded torque is not the true one. With a multisine excitation the true torque
+lies on its lines; the fit adds to the projected torque a correction on the lines with the
+projection error's own prior (errors in variables), see ``excitation``. The standard errors are those of the Gauss-Newton
+covariance at the solution scaled by the residual variance (a posteriori), by the delta method on
+theta = theta_0 exp(rho).
+"""
+
+from __future__ import annotations
+
+import math
+import sys
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InputError, ModelError, RecordingError
+from ..model.robot import Model
+from ..symbolic.parametric import parameter_catalogue
+from ..model.params import HandParams, Param, with_values, write_params
+from .recording import Recording, check_recording
+from .scenario import static_equilibrium
+from ..simulation.sensitivity import SensitivityModel
+from ..progress import _Progress
+
+__all__ = ["IdentificationResult", "identify", "identified_params", "project_torque"]
+
+
+@dataclass
+class IdentificationResult:
+    """Estimates and diagnostics of :func:`identify`.
+
+    Attributes
+    ----------
+    names: parameter names (p,). values, std, initial: (p,) in their units. units: (p,).
+    correlation: (p, p). residual_rms: RMS encoder residual, counts. iterations, converged.
+    seconds: wall time of the fit; compile_seconds: of it, compiling the sensitivity code (0 when
+    cached). states: (S, 2n) fitted states at the shooting nodes; node_times (S,) s.
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    std: np.ndarray
+    initial: np.ndarray
+    units: tuple[str, ...]
+    correlation: np.ndarray
+    residual_rms: float
+    iterations: int
+    converged: bool
+    seconds: float
+    compile_seconds: float
+    states: np.ndarray
+    node_times: np.ndarray
+    model: Model = field(repr=False)
+    recording_path: str = ""
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``alpes-dyn identify --json``."""
+        return {
+            "parameters": {n: {"value": float(v), "std": float(s), "initial": float(i), "unit": u}
+                           for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
+            "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
+            "converged": self.converged, "seconds": self.seconds, "compile_seconds": self.compile_seconds,
+            "model": self.model.name,
+        }
+
+    def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
+        """The parameter set with the fitted values (see :func:`identified_params`)."""
+        return identified_params(self, base, chain)
+
+    def write(self, path: str | Path, base: HandParams | None = None, chain: str | None = None) -> Path:
+        """Write the identified parameter file (the base file with each fitted value ``identified``)."""
+        return write_params(self.params(base, chain), path,
+                            header=f"Identified by alpes_dyn from {self.recording_path or 'a recording'} "
+                                   f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+
+
+def identified_params(result: IdentificationResult, base: HandParams | None = None,
+                      chain: str | None = None) -> HandParams:
+    """``base`` (default: the model's parameter file) with the fitted values of a chain, each marked
+    ``source = "identified"`` with its standard error.
+
+    Where they go (``chain``, default the model's :attr:`~alpes_dyn.Model.chain`):
+
+    * a finger model without a chain: the shared ``[finger]`` values -- K_i -> ``finger.K``, m_i ->
+      ``finger.m`` and ``finger.I`` (scaled with the mass), F_s_i, F_v_i -> ``finger.F_s``, ``finger.F_v``;
+    * a finger model with ``chain`` a finger's name: that finger's own values ``[finger.<name>]`` (the
+      fields fitted, the others untouched);
+    * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
+      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``.
+    """
+    p = base if base is not None else result.model.params
+    if p is None:
+        raise ModelError("identified parameters: the model has no parameter file; pass base=")
+    model = result.model
+    if model.name not in ("finger2", "finger3", "thumb"):
+        raise ModelError(f"identified parameters: writing a parameter file is supported for finger2, finger3 and "
+                         f"thumb, not {model.name!r}")
+    if chain is None:
+        chain = model.chain
+    thumb = model.name == "thumb"
+    if thumb and chain != "thumb":
+        raise ModelError(f"chain: the thumb model's values go to the thumb, not {chain!r}")
+    if not thumb and chain is not None and chain not in p.finger_names:
+        raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
+    reason = (f"identified from {result.recording_path or 'a recording'} by multiple shooting "
+              f"({result.residual_rms:.3g} counts RMS residual)")
+    own = p.chain("finger" if chain is None else chain)
+    k = own.n
+    arrays = {"K": own.K.copy(), "m": own.m.copy(), "I": own.I.copy(),
+              "F_s": (own.F_s if own.F_s is not None else np.full(k, p.F_s)).copy(),
+              "F_v": (own.F_v if own.F_v is not None else np.full(k, p.F_v)).copy()}
+    stds = {kind: np.zeros(k) for kind in arrays}
+    scalars: dict[str, tuple[float, float]] = {}  # thumb scalars: field -> (value, std)
+    touched = set()
+    cat = {pp.name: pp for pp in parameter_catalogue(model)}
+    flexion = [j for j in model.joint_names if j != "thumb_abd"]
+    for name, value, sd in zip(result.names, result.values, result.std):
+        pp = cat.get(name)
+        if pp is None or pp.kind not in ("K", "m", "F_s", "F_v"):
+            raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
+        if thumb and pp.joint == "thumb_abd":
+            field_ = {"K": "abduction_K", "m": "base_mass", "F_s": "abduction_F_s", "F_v": "abduction_F_v"}[pp.kind]
+            scalars[field_] = (float(value), float(sd))
+            continue
+        i = flexion.index(pp.joint)
+        if pp.kind == "m":
+            scale = value / arrays["m"][i]
+            arrays["I"][i] *= scale
+            stds["I"][i] = arrays["I"][i] * sd / value
+            touched.add("I")
+        arrays[pp.kind][i] = value
+        stds[pp.kind][i] = sd
+        touched.add(pp.kind)
+    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "abduction_K": "N m/rad",
+             "base_mass": "kg", "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
+    sec = "thumb" if thumb else ("finger" if chain is None else f"finger.{chain}")
+    upd = {}
+    for kind in touched:
+        old = p.raw.get(f"{sec}.{kind}") or p.raw.get(f"finger.{kind}")
+        desc = old.description if old is not None else f"per-joint {kind}"
+        upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, stds[kind])
+    for field_, (value, sd) in scalars.items():
+        old = p.raw.get(f"thumb.{field_}")
+        desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
+        upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
+    return with_values(p, upd)
+
+
+def _line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
+    """(N, 2 n_f + 1): 1, sin(2 pi f t), cos(2 pi f t) for f in ``frequencies`` (Hz), t from t[0]."""
+    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
+    t = np.asarray(t, dtype=float)
+    fs = 1.0 / ((t[-1] - t[0]) / (t.shape[0] - 1))
+    if np.any(f >= 0.5 * fs):
+        raise InputError(f"excitation: frequencies must be below the Nyquist frequency {0.5 * fs:g} Hz")
+    if 2 * f.size + 1 >= t.shape[0] // 4:
+        raise InputError(f"excitation: {f.size} frequencies are too many for {t.shape[0]} samples")
+    w = 2 * np.pi * f[None, :] * (t - t[0])[:, None]
+    return np.hstack([np.ones((t.shape[0], 1)), np.sin(w), np.cos(w)])
+
+
+def _project(Q: np.ndarray, torque: np.ndarray) -> np.ndarray:
+    """The least-squares fit of each column of ``torque`` on the orthonormal basis Q."""
+    return Q @ (Q.T @ torque)
+
+
+def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
+    """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
+    ``frequencies`` (Hz): the excitation without the measurement noise off its lines."""
+    return _project(np.linalg.qr(_line_basis(t, frequencies))[0], np.asarray(torque, dtype=float))
+
+
+def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Recording, str]:
+    if isinstance(recording, Recording):
+        return check_recording(recording), ""
+    from .recording import read_recording
+
+    return read_recording(recording, model), str(recording)
+
+
+def identify(model: Model, recording: Recording | str | Path, parameters: str | Sequence[str] | None = None, *,
+             excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int = 4,
+             torque_noise: float | None = None, camera_noise: float = math.radians(0.1),
+             max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
+             progress: bool | None = None) -> IdentificationResult:
+    """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
+
+    Parameters
+    ----------
+    model: the finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``);
+        parameters not fitted keep its values.
+    recording: a :class:`~alpes_dyn.estimation.recording.Recording` or a CSV path (:func:`~alpes_dyn.estimation.recording.read_recording`).
+    parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction.
+    excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().frequencies``):
+        the true torque is taken to lie on a constant and these sines and cosines (periodic-excitation
+        identification). The measured torque is projected on them, and the projection's error (what
+        the noise leaves on the lines) is fitted with the parameters: u = P u_meas + sigma_u Q c with Q
+        the lines' orthonormal basis and c ~ N(0, I) a priori (errors in variables, maximum likelihood).
+        None: the measured torque as it is.
+    interval: multiple-shooting interval, s. substeps: RK4 steps per sample.
+    torque_noise: standard deviation sigma_u of the recorded torque's white noise, N m. Default: with
+        ``excitation``, estimated from what the measured torque has off the lines; without, 0 (the torque
+        taken as exact). Without ``excitation`` a positive value gives each interval a constant torque
+        correction with prior sigma_u / sqrt(samples per interval). Why it matters: near its gravity
+        balance a finger turns 3e-5 N m of in-band torque error into 13 counts of encoder misfit.
+    camera_noise: standard deviation of the recording's joint-angle measurements, rad (weights them
+        against the encoder, whose noise is its quantisation step / sqrt(12) plus the fit's residual).
+    max_iterations, tol: Gauss-Newton stopping rule: continuous to 1e-6 and either the next step moving
+        no parameter by more than a tenth of its standard error, or a predicted or realised (whole step)
+        change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1), or chi^2 down by less than 1 over
+        five iterations.
+    progress: a progress line on stderr (default: when stderr is a terminal).
+
+    Returns
+    -------
+    :class:`IdentificationResult`. Raises :class:`~alpes_dyn.errors.RecordingError` for a recording
+    that does not fit the model, :class:`~alpes_dyn.InputError` for bad settings.
+    """
+    t_start = time.perf_counter()
+    if not isinstance(model, Model):
+        raise InputError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+    if model.transmission is None:
+        raise ModelError(f"model {model.name!r} has no tendon transmission: nothing to read the encoder with")
+    rec, rec_path = _as_recording(recording, model)
+    if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or tuple(rec.joint_names) != model.joint_names:
+        raise RecordingError(f"recording: motors {rec.motor_names} / joints {rec.joint_names} do not match model "
+                             f"{model.name!r}")
+    for name, v in (("interval", interval), ("camera_noise", camera_noise), ("tol", tol)):
+        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+            raise InputError(f"{name}: expected a positive number, got {v!r}")
+    if not isinstance(max_iterations, int) or max_iterations < 1:
+        raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
+    dt = rec.dt
+    L = int(round(interval / dt))
+    N = rec.n_samples - 1
+    if L < 2 or L > N:
+        raise InputError(f"interval: {interval:g} s must hold 2 to {N} samples of {dt:g} s")
+    if torque_noise is not None and not (isinstance(torque_noise, (int, float)) and not isinstance(torque_noise, bool)
+                                         and math.isfinite(torque_noise) and torque_noise >= 0):
+        raise InputError(f"torque_noise: expected a non-negative number of N m, got {torque_noise!r}")
+    if excitation is not None:
+        Phi = _line_basis(rec.t, excitation)[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
+        Q, _ = np.linalg.qr(Phi)
+        U = _project(Q, rec.torque[:-1])  # the measured torque projected on the lines
+        if torque_noise is None:  # what is off the lines is the noise: its standard deviation
+            off_lines = rec.torque[:-1] - U
+            torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
+    else:
+        U = rec.torque[:-1]
+        torque_noise = 0.0 if torque_noise is None else torque_noise
+    # errors in variables. With the lines: the true torque is U + sigma_u Q c, c ~ N(0, I) a priori (exactly the
+    # projection's error, whitened), c fitted with the parameters. Without them: a constant per interval.
+    eiv = torque_noise > 0
+    lines = eiv and excitation is not None
+    nphi = Q.shape[1] if lines else 0
+    sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
+                            input_offset=eiv and not lines, input_basis=nphi)
+    nx, p, nu, n = sens.nx, sens.p, sens.nu, sens.n
+    no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
+    ncg = sens.no if lines else 0  # global line-coefficient corrections
+    ng = p + ncg
+    nb = nx + no  # local variables of an interval: its start state and its torque correction
+    tr = model.transmission
+    S_enc = np.asarray(tr.S, dtype=float)
+    ny = S_enc.shape[0]
+    step = 2 * np.pi / tr.counts_per_rev
+    y = rec.encoder * step  # motor angle, rad
+    sig_y = step / math.sqrt(12.0)
+    sig_off = torque_noise / math.sqrt(L) if eiv else 1.0  # the mean of L white samples
+    G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (N, 3))
+    n_int = -(-N // L)
+    pad = n_int * L - N
+    Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
+    Gb = np.concatenate([G, np.repeat(G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+    Psib = None
+    if lines:
+        Psi = torque_noise * Q
+        Psib = np.concatenate([Psi, np.repeat(Psi[-1:], pad, axis=0)]).reshape(n_int, L, nphi)
+    # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
+    k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
+    valid = k_idx <= N
+    valid[:-1, L] = False  # an interval's end is the next one's start
+    kk = np.minimum(k_idx, N)
+    Yb = y[kk]  # (S, L+1, m)
+    Qm = rec.q[kk] if rec.q is not None else None  # (S, L+1, n) with NaN
+    q_mask = np.isfinite(Qm) & valid[:, :, None] if Qm is not None else None
+
+    theta0 = sens.nominal.copy()
+    if np.any(theta0 <= 0):
+        bad = sens.names[int(np.argmax(theta0 <= 0))]
+        raise ModelError(f"parameters: {bad} has the starting value {theta0[np.argmax(theta0 <= 0)]:g}; a fitted "
+                         "parameter needs a positive starting value (use a model with that term switched on)")
+
+    # initial guess: the model's own response from its static equilibrium, cut at the nodes
+    q0 = _rest_guess(model, tr.joint_torque(U[0]), y[0]) if rec.gravity is None else np.zeros(n)
+    x_nom, _ = sens.run(np.concatenate([q0, np.zeros(n)])[None], U[None], G[None], theta0,
+                        np.zeros((1, nu, sens.nb)) if sens.nb else None, basis=Psi[None] if lines else None)
+    nodes = x_nom[0, np.arange(n_int) * L].copy()
+    if not np.isfinite(nodes).all():
+        nodes[:] = np.concatenate([q0, np.zeros(n)])
+    offs = np.zeros((n_int, no))
+    glob = np.zeros(ng)  # log theta / theta_0, then the whitened line-coefficient corrections
+    iv, ip = slice(0, nx), slice(nx, nx + p)
+    io = slice(nx + p, nx + p + sens.no)
+
+    def correction(glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
+        if lines:
+            return glob[p:].reshape(nphi, nu).T  # C (nu, nphi) from its column-major vec
+        return offs if eiv else None
+
+    def evaluate(nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool = True):
+        """Residuals r (S, R), their Jacobians J (S, R, nb + ng) with respect to the interval's local
+        variables and the global ones (log theta, line corrections), continuity c (S-1, nx) and its
+        Jacobians Cv (S-1, nx, nb), Cr (S-1, nx, ng); the global residuals rg (ng,) (the line
+        corrections' prior; zeros for theta) and the states. ``jac=False``: r, c, rg and the states
+        alone (J, Cv, Cr None), from the step without its sensitivities (a tenth of the time)."""
+        theta = theta0 * np.exp(glob[:p])
+        xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
+        q = xs[:, :, :n]
+        r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
+        c = xs[:-1, L] - nodes[1:]
+        rg = np.concatenate([np.zeros(p), glob[p:]])
+        if not jac:
+            res = [r_enc.reshape(n_int, -1)]
+            if Qm is not None:
+                res.append((np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise).reshape(n_int, -1))
+            if no:
+                res.append(offs / sig_off)
+            return np.concatenate(res, axis=1), None, c, None, None, rg, xs
+        Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if no else X[..., iv]  # (S, L+1, nx, nb)
+        Xr = X[..., ip] * theta  # d/d log theta
+        if lines:
+            Xr = np.concatenate([Xr, X[..., io]], axis=-1)
+        w = valid[:, :, None, None] / sig_y
+        res = [r_enc.reshape(n_int, -1)]
+        J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
+                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1) * w
+        jac = [J_enc.reshape(n_int, -1, nb + ng)]
+        if Qm is not None:
+            rq = np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise
+            Jq = np.concatenate([Xv[:, :, :n], Xr[:, :, :n]], axis=-1) / camera_noise * q_mask[:, :, :, None]
+            res.append(rq.reshape(n_int, -1))
+            jac.append(Jq.reshape(n_int, -1, nb + ng))
+        if no:  # the per-interval torque corrections' prior: zero mean, sigma_u / sqrt(L)
+            res.append(offs / sig_off)
+            Jo = np.zeros((n_int, no, nb + ng))
+            Jo[:, :, nx:nb] = np.eye(no) / sig_off
+            jac.append(Jo)
+        r = np.concatenate(res, axis=1)
+        J = np.concatenate(jac, axis=1)
+        return r, J, c, Xv[:-1, L], Xr[:-1, L], rg, xs
+
+    nv = n_int * nb
+    nz = nv + ng
+    nc = (n_int - 1) * nx
+    prior_H = np.diag(np.r_[np.zeros(p), np.ones(ncg)])  # d rg / d glob, squared
+
+    def normal(J: np.ndarray, mu: float) -> np.ndarray:
+        """Gauss-Newton normal matrix of the interval-structured residuals, LM-damped by mu."""
+        A, P = J[:, :, :nb], J[:, :, nb:]
+        H = np.zeros((nz, nz))
+        AA = np.einsum("ski,skj->sij", A, A)
+        AP = np.einsum("ski,skj->sij", A, P)
+        for j in range(n_int):  # one block per interval: a loop over intervals, not time steps
+            sl = slice(j * nb, (j + 1) * nb)
+            H[sl, sl] = AA[j]
+            H[sl, nv:] = AP[j]
+        H[nv:, nv:] = np.einsum("ski,skj->ij", P, P) + prior_H
+        H = np.triu(H) + np.triu(H, 1).T
+        D = np.diag(H).copy()
+        H[np.diag_indices(nz)] += mu * np.maximum(D, 1e-12 * max(D.max(), 1.0))
+        return H
+
+    def continuity(Cv: np.ndarray, Cr: np.ndarray) -> np.ndarray:
+        """(nc, nz) Jacobian of the continuity defects."""
+        C = np.zeros((nc, nz))
+        for j in range(n_int - 1):
+            rows = slice(j * nx, (j + 1) * nx)
+            C[rows, j * nb:(j + 1) * nb] = Cv[j]
+            C[rows, (j + 1) * nb:(j + 1) * nb + nx] = -np.eye(nx)
+            C[rows, nv:] = Cr[j]
+        return C
+
+    def kkt(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float) -> np.ndarray:
+        """Normal equations of the interval-structured least squares, with the continuity constraints."""
+        H, C = normal(J, mu), continuity(Cv, Cr)
+        K = np.zeros((nz + nc, nz + nc))
+        K[:nz, :nz], K[:nz, nz:], K[nz:, :nz] = H, C.T, C
+        return K
+
+    def grad(r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
+        gs = np.einsum("sk,skd->sd", r, J)
+        return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0) + rg])
+
+    # stage 1: the nodes alone (theta fixed, intervals decoupled), from the nominal states shifted onto the
+    # measured encoder: a start close to the data, where Gauss-Newton on the whole problem converges
+    k_nodes = np.arange(n_int) * L
+    Sp = np.linalg.pinv(S_enc)
+    nodes[:, :n] += (y[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
+    nodes[:, n:] += (np.gradient(y, dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+    mu_n = 1e-2 * np.ones(n_int)
+    for _ in range(8):
+        r, J, *_ = evaluate(nodes, offs, glob)
+        A = J[:, :, :nx]
+        Hn = np.einsum("ski,skj->sij", A, A)
+        gn = np.einsum("sk,ski->si", r, A)
+        Dn = np.einsum("sii->si", Hn)
+        dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)), gn[:, :, None])
+        r2, *_ = evaluate(nodes + dn[:, :, 0], offs, glob, jac=False)
+        better = np.sum(r2**2, axis=1) < np.sum(r**2, axis=1)
+        nodes[better] += dn[better, :, 0]
+        mu_n = np.where(better, mu_n / 10, mu_n * 10)
+
+    max_log_step = 0.3  # at most a 35 % change of any parameter per iteration
+    soft_phases = 4
+    max_coef_step = 1.0  # and of a line-coefficient correction, in standard deviations of its prior
+    c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)  # per state component
+    show = sys.stderr.isatty() if progress is None else bool(progress)
+    bar = _Progress(max_iterations, "identify", show)
+
+    def encoder_rms(r: np.ndarray) -> float:
+        """RMS of the encoder residuals in r, counts."""
+        enc = r[:, : (L + 1) * ny] * sig_y / step
+        return float(np.sqrt(np.sum(enc**2) / max(int(valid.sum()) * ny, 1)))
+
+    def limited(d: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
+        """A trust region (no jump into a far basin): log theta by at most max_log_step, the line
+        corrections by at most max_coef_step prior standard deviations, the whole step scaled down.
+        In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
+        for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
+        three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
+        and whether the step is whole."""
+        dv, dg = d[:nv].reshape(n_int, nb), d[nv:nz]
+        big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / max_log_step,
+                  float(np.max(np.abs(dg[p:]), initial=0.0)) / max_coef_step)
+        return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
+
+    def lin_solve(M: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        """M x = rhs, or its least-squares (minimum-norm) solution where M is singular."""
+        try:
+            return np.linalg.solve(M, rhs)
+        except np.linalg.LinAlgError:
+            return np.linalg.lstsq(M, rhs, rcond=None)[0]
+
+    n_res = int(valid.sum()) * ny + (int(q_mask.sum()) if q_mask is not None else 0) + n_int * no + ncg
+    dof = max(n_res - (nz - nc), 1)
+    unit_p = np.zeros((nz + nc, p))
+    unit_p[nv + np.arange(p), np.arange(p)] = 1.0
+
+    def solve(nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, freeze: bool):
+        """Stages 2 and 3 from the stage-1 nodes; ``freeze``: friction held during the homotopy."""
+        # stage 2: continuity as a soft penalty, tightened tenfold per phase (a homotopy from the decoupled
+        # intervals to the shooting problem). With the starting parameters wrong, a 100 ms interval of the
+        # finger (tiny inertias, a soft balance of springs and gravity) drifts by degrees and rad/s; imposing
+        # continuity at once lets Gauss-Newton trade the fit for the defects and stall far from the truth.
+        r, J, c, Cv, Cr, rg, xs = evaluate(nodes, offs, glob)
+        defect0 = np.maximum(np.abs(c).max(axis=0), 1e-9)  # per state component
+        # the softly-coupled problem lets friction absorb the defects (F_v_1 went to 8x, F_s_1 to 0.4x and the
+        # fit to another basin): during the homotopy only the springs, masses, gains and torque lines move
+        frozen = nv + np.array([i for i, nm in enumerate(sens.names) if freeze and nm.startswith("F_")], dtype=int)
+        for level in range(soft_phases):
+            wdef = np.tile(10.0**level / defect0, n_int - 1)  # 1 / sigma of each defect
+            mu_s = 1e-3
+            for _ in range(6):
+                soft_cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2) + np.sum((c.reshape(-1) * wdef) ** 2))
+                C = continuity(Cv, Cr) * wdef[:, None]
+                H = normal(J, mu_s) + C.T @ C
+                H[frozen, frozen] += 1e12 * np.maximum(H[frozen, frozen], 1.0)  # friction waits for the hard phase
+                g = grad(r, J, rg) + C.T @ (c.reshape(-1) * wdef)
+                d = -lin_solve(H, g)
+                dv, dg, whole = limited(d)
+                if not whole:
+                    # the global step shortened, the local variables solved again for it: with continuity a
+                    # penalty the data hold the nodes, and they follow the parameters (scaled with them, the
+                    # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
+                    # iterations at 1/10-1/60 of the Gauss-Newton step)
+                    try:
+                        dv = np.linalg.solve(H[:nv, :nv], -g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, nb)
+                    except np.linalg.LinAlgError:
+                        pass
+                trial = evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
+                new_cost = 0.5 * float(np.sum(trial[0] ** 2) + np.sum(trial[5] ** 2)
+                                       + np.sum((trial[2].reshape(-1) * wdef) ** 2))
+                if np.isfinite(new_cost) and new_cost < soft_cost:
+                    nodes, offs, glob = nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg
+                    r, J, c, Cv, Cr, rg, xs = evaluate(nodes, offs, glob)
+                    mu_s = max(mu_s / 10.0, 1e-9)
+                    if soft_cost - new_cost < 1e-3 * soft_cost:
+                        break
+                else:
+                    mu_s *= 10.0
+                    if mu_s > 1e6:
+                        break
+
+        # stage 3: the shooting problem, continuity as constraints (constrained Gauss-Newton, l1 merit)
+        nu_merit = 1.0
+        mu = 1e-3
+        converged = False
+        history: list[float] = []
+        lost = 0  # consecutive steps that asked log theta for more than 30
+        it = 0
+        for it in range(1, max_iterations + 1):
+            cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2))
+            rhs = np.concatenate([-grad(r, J, rg), -c.reshape(-1)])
+            # the step, and the parameters' block of the inverse (their covariance up to the scale)
+            K = kkt(J, Cv, Cr, mu)
+            sol = lin_solve(K, np.column_stack([rhs, unit_p]))
+            sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
+            d, lam = sol[:nz], sol[nz:]
+            viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
+            sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 1e-300) * max(2.0 * cost / dof, 1e-300))
+            step_sigma = float(np.max(np.abs(d[nv:nv + p]) / sd_rho, initial=0.0))
+            if viol < 1e-6 and (abs(float(rhs[:nz] @ d)) <= max(tol * cost, 0.05) or step_sigma < 0.1):
+                # continuous, and Gauss-Newton predicts a decrease of chi^2 below 0.1 or no parameter moving by
+                # a tenth of its standard error: the statistical resolution of the data
+                converged = True
+                break
+            nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
+            merit = cost + nu_merit * float(np.sum(np.abs(c)))
+            dv, dg, full = limited(d)
+            accepted, soc_done = False, False
+            candidates = [(1.0, dv, dg), (0.5, dv, dg), (0.25, dv, dg), (0.1, dv, dg), (0.03, dv, dg)]
+            k_try = 0
+            while k_try < len(candidates):
+                alpha, sv, sg = candidates[k_try]
+                k_try += 1
+                trial = evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
+                if not (np.isfinite(trial[0]).all() and np.isfinite(trial[2]).all()):
+                    continue
+                cost_new = 0.5 * float(np.sum(trial[0] ** 2) + np.sum(trial[5] ** 2))
+                m_new = cost_new + nu_merit * float(np.sum(np.abs(trial[2])))
+                # the l1 merit, or (a filter's second chance, against the Maratos effect near the solution) a
+                # step that halves the defects while the cost stays put
+                if m_new < merit or (np.sum(np.abs(trial[2])) < 0.5 * np.sum(np.abs(c))
+                                     and cost_new <= cost * (1.0 + 1e-6)):
+                    accepted = True
+                    break
+                if alpha == 1.0 and full and not soc_done:
+                    # second-order correction (Nocedal & Wright, 18.3): the full step's own defects removed by a
+                    # minimum-norm correction from the same system; near the solution the curvature of the
+                    # shooting map makes a full Gauss-Newton step raise the defects though the cost falls (the
+                    # Maratos effect), and without the correction the line search crawls
+                    soc_done = True
+                    try:
+                        d2 = np.linalg.solve(K, np.concatenate([np.zeros(nz), -trial[2].reshape(-1)]))[:nz]
+                    except np.linalg.LinAlgError:
+                        continue
+                    candidates.insert(k_try, (1.0, sv + d2[:nv].reshape(n_int, nb), sg + d2[nv:]))
+            bar.update(1)
+            if not accepted:
+                mu *= 10.0
+                if mu > 1e8:
+                    break
+                continue
+            dv, dg = sv, sg
+            step_g = float(np.max(np.abs(alpha * dg), initial=0.0))
+            nodes, offs, glob = nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], glob + alpha * dg
+            r, J, c, Cv, Cr, rg, xs = evaluate(nodes, offs, glob)
+            mu = max(mu / 10.0, 1e-9) if alpha == 1.0 else min(mu * 3.0, 1e6)
+            viol = float(np.max(np.abs(c) / c_scale, initial=0.0))
+            small_change = alpha == 1.0 and abs(cost - cost_new) <= max(tol * cost, 0.05)  # chi^2 by less than 0.1
+            history.append(cost_new)
+            far = not full and float(np.max(np.abs(d[nv:nv + p]), initial=0.0)) > 100.0 * max_log_step
+            lost = lost + 1 if far else 0
+            if lost >= 3 and viol > 1e-3:
+                # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
+                # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
+                break
+            stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
+            if viol < 1e-6 and (small_change or stalled or step_g < tol):
+                converged = True
+                break
+        return nodes, offs, glob, (r, J, c, Cv, Cr, rg, xs), it, converged
+
+    # Two starts of stages 2-3, friction held during the homotopy or not: each alone missed the
+    # right basin on one of five +-20 % fingers; the wrong basins leave a residual of 4-8 counts,
+    # the right one the encoder noise (0.58 counts), so a residual above three times the quantisation
+    # floor (1/sqrt(12) count) asks for the second start.
+    start = (nodes.copy(), offs.copy(), glob.copy())
+    total_its = 0
+    for freeze in (True, False):
+        if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
+            bar.close()
+            bar = _Progress(max_iterations, "identify (second start)", show)
+        nodes, offs, glob, state, it, converged = solve(*[a.copy() for a in start], freeze)
+        total_its += it
+        r, J, c, Cv, Cr, rg, xs = state
+        if encoder_rms(r) <= 3.0 / math.sqrt(12.0):
+            break
+    it = total_its
+    bar.close()
+
+    # covariance: the parameters' block of the undamped Gauss-Newton KKT inverse at the solution, scaled by
+    # the residual variance
+    s2 = float(np.sum(r**2) + np.sum(rg**2)) / dof
+    P_rho = lin_solve(kkt(J, Cv, Cr, 0.0), unit_p)[nv:nv + p] * s2
+    theta = theta0 * np.exp(glob[:p])
+    sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
+    corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
+    rms = encoder_rms(r)
+    return IdentificationResult(
+        names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
+        units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
+        converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
+        states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)
+
+
+def _rest_guess(model: Model, tau: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """The static equilibrium under the joint torques ``tau``, the joints without spring (the thumb's
+    ab/adduction, which its own motor holds) held where the first encoder reading ``y0`` puts them."""
+    held = model.springless_joints
+    if not held:
+        return static_equilibrium(model, tau)
+    q = np.zeros(model.n)
+    idx = [model.joint_index(j) for j in held]
+    q[idx] = (np.linalg.pinv(model.transmission.S) @ y0)[idx]
+    return model.static_equilibrium(tau, q, fixed=held)

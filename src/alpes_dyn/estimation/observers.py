@@ -1,0 +1,443 @@
+"""State observers: the passive joints q_1..q_n of a finger estimated from its motor encoder.
+
+The report ends where this module begins (Conclusion: the finger is observable, "it is possible to
+investigate the synthesis of an observer"). Two discrete-time observers of the report's system
+(eq. 3.1, 3.3, 3.16), discretised by one classical RK4 step per sample period ``dt`` with the known
+input held over the period:
+
+* :class:`ExtendedKalmanFilter` -- the EKF: state and covariance predicted through the RK4 step,
+  its Jacobians with respect to the state and to the known input obtained by CasADi's automatic
+  differentiation of the discretised model;
+* :class:`UnscentedKalmanFilter` -- the UKF (Julier-Uhlmann, scaled sigma points, Wan-van der
+  Merwe weights): 2 nz + 1 sigma points propagated through the same RK4 step.
+
+Both can estimate, with the state, two uncertain gains as random-walk states (``parameters=``):
+
+* ``"input_gain"`` a -- multiplies the known torques (S^T tau_m, and J^T F);
+* ``"spring_gain"`` b -- multiplies the spring torques k q.
+
+If the observer's masses and inertias are (1 + d_m) times the true ones and its springs (1 + d_K)
+times, dividing its dynamics by (1 + d_m) shows that the truth is exactly its model with
+a = 1 + d_m and b = (1 + d_m) / (1 + d_K): these two gains remove the bias of a uniformly
+mis-scaled model (:func:`true_gains`).
+
+Measurements y_k = h(x(t_k)) (the motor encoder q_m = (r/r_m) sum q, Section 3), known inputs
+w_k = [u_k; F_k] held on [t_k, t_k+1) (the measured motor torque, optionally the measured contact
+force). Noise model: the known input carries white noise of covariance ``input_noise`` (it enters
+the prediction through G = dF/dw), plus additive ``process_noise`` on the state, and
+``measurement_noise`` on y.
+
+Each filter step (predict with w_k, update with y_k+1) is one CasADi function of
+s = [z; vec P]; :meth:`KalmanFilter.run` applies it N times in one call of CasADi's virtual
+machine (``mapaccum``, the default) or of compiled C (``compiled=True``:
+:class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`, cached on disk), never in a Python loop.
+
+Example (the default scenario of ``alpes-dyn estimate``, see :mod:`alpes_dyn.estimation.scenario`)::
+
+    from alpes_dyn.estimation.scenario import run_estimation, plot_estimation
+    res = run_estimation("ekf-params", mismatch=0.1, duration=5.0, seed=0)
+    print(res.rmse)            # (3,) rad, RMSE of q_1..q_3 after the transient
+    print(res.parameters)      # estimated and true gains
+    plot_estimation(res, "estimate.png")
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import casadi as cs
+import numpy as np
+
+from ..errors import InputError, ModelError
+from ..limits import check_bytes
+from ..simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
+from ..symbolic.statespace import StateSpace
+
+__all__ = [
+    "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
+    "Estimate", "true_gains", "make_observer",
+]
+
+OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
+PARAMETERS: tuple[str, ...] = ("input_gain", "spring_gain")
+
+
+def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
+    """Gains a, b that make an observer's mis-scaled model exact.
+
+    ``mass_scale`` = observer's masses (and inertias) / true ones, ``spring_scale`` = observer's
+    springs / true ones. Returns ``{"input_gain": mass_scale, "spring_gain": mass_scale / spring_scale}``.
+    """
+    return {"input_gain": float(mass_scale), "spring_gain": float(mass_scale) / float(spring_scale)}
+
+
+class DiscreteModel:
+    """z_{k+1} = F(z_k, w_k), y_k = h(z_k): the RK4-discretised state space, optionally with gains.
+
+    Parameters
+    ----------
+    system: the continuous state space (eq. 3.3); its output is the measurement.
+    dt: sample period, s. substeps: RK4 steps per sample period (default 1).
+    parameters: names from :data:`PARAMETERS` appended to the state as constants (z = [x; theta]).
+
+    Attributes
+    ----------
+    nz, nx, nw, ny: sizes of z, x = [q; qd], w = [u; F] and y.
+    names: names of z's entries.
+    step: ``casadi.Function`` (z, w) -> z_next (SX).
+    output: ``casadi.Function`` z -> y (SX).
+    """
+
+    def __init__(self, system: StateSpace, dt: float, parameters: Sequence[str] = (), substeps: int = 1) -> None:
+        if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or not 1 <= substeps <= 64:
+            raise InputError(f"substeps: expected an integer in [1, 64], got {substeps!r}")
+        self.substeps = int(substeps)
+        if not isinstance(system, StateSpace):
+            raise InputError(f"system: expected a StateSpace, got {type(system).__name__}")
+        self.system = system
+        self.dt = _check_dt(dt)
+        params = tuple(parameters)
+        for p in params:
+            if p not in PARAMETERS:
+                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)})")
+        if len(set(params)) != len(params):
+            raise ModelError(f"parameters: repeated name in {params}")
+        if "spring_gain" in params and not system.model.extras.has_spring:
+            raise ModelError("parameter 'spring_gain': the model has no spring")
+        self.parameters = params
+        n = system.n
+        self.nx = 2 * n
+        self.nz = self.nx + len(params)
+        self.nw = _n_known_inputs(system)
+        self.ny = system.n_outputs
+        self.names = system.state_names + params
+        z = cs.SX.sym("z", self.nz)
+        w = cs.SX.sym("w", self.nw)
+        zdot = cs.Function("zdot", [z, w], [self._rhs(z, w)])
+        zn = z
+        for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
+            zn = rk4_expression(zdot, zn, w, self.dt / self.substeps)
+        self.step = cs.Function("step", [z, w], [cs.cse(zn)], ["z", "w"], ["z_next"])
+        self.output = cs.Function("h", [z], [system.h_function(z[: self.nx])], ["z"], ["y"])
+
+    def _rhs(self, z: cs.SX, w: cs.SX) -> cs.SX:
+        ss = self.system
+        n = ss.n
+        q, v = z[:n], z[n: 2 * n]
+        th = {p: z[self.nx + i] for i, p in enumerate(self.parameters)}
+        a = th.get("input_gain", 1.0)
+        u = w[: ss.n_inputs]
+        tau = a * cs.mtimes(cs.DM(ss.B), u)
+        if "spring_gain" in th:  # the model applies k q; the gain b makes it b k q
+            tau = tau + (1.0 - th["spring_gain"]) * cs.DM(ss.model.extras.stiffness) * q
+        F = a * w[ss.n_inputs:] if ss.force else None
+        qdd = joint_accelerations(ss, q, v, tau, F)
+        return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))
+
+
+def _finite_number(x: Any, name: str) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not np.isfinite(v):
+        raise InputError(f"{name}: expected a finite number, got {x!r}")
+    return v
+
+
+def _cov(value: Any, n: int, name: str) -> np.ndarray:
+    """A covariance from variances (n,) or a matrix (n, n), checked symmetric positive semidefinite."""
+    try:
+        a = np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise InputError(f"{name}: expected {n} variances or an ({n}, {n}) covariance, got {value!r}") from None
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape == (n,):
+        a = np.diag(a)
+    if a.shape != (n, n):
+        raise InputError(f"{name}: expected {n} variances or an ({n}, {n}) covariance, got shape {a.shape}")
+    if not np.isfinite(a).all():
+        raise InputError(f"{name}: contains NaN or inf")
+    if not np.allclose(a, a.T, rtol=1e-10, atol=1e-300):
+        raise InputError(f"{name}: covariance must be symmetric")
+    if np.linalg.eigvalsh(a).min() < -1e-12 * max(1.0, float(np.abs(a).max())):
+        raise InputError(f"{name}: covariance must be positive semidefinite")
+    return a
+
+
+@dataclass
+class Estimate:
+    """The output of an observer run.
+
+    Attributes
+    ----------
+    t: (N+1,) sample times, s.
+    z: (N+1, nz) estimates [q; qd; theta] after each measurement update (rad, rad/s, -).
+    P: (N+1, nz, nz) their covariances.
+    names: names of z's entries.
+    """
+
+    t: np.ndarray
+    z: np.ndarray
+    P: np.ndarray
+    names: tuple[str, ...]
+
+    @property
+    def std(self) -> np.ndarray:
+        """(N+1, nz) standard deviations sqrt(diag P)."""
+        return np.sqrt(np.maximum(np.diagonal(self.P, axis1=1, axis2=2), 0.0))
+
+
+class KalmanFilter:
+    """Common machinery of the discrete Kalman filters (see :class:`ExtendedKalmanFilter`).
+
+    Parameters
+    ----------
+    system:
+        The continuous state space; its input u (and F if ``force=True``) is the known input and
+        its output the measurement, e.g. ``StateSpace(finger, input="motor", output="encoder")``.
+    dt:
+        Sample period, s.
+    process_noise:
+        Covariance per step of an additive noise on z (variances (nz,) or (nz, nz)); for the
+        parameter states it is their random-walk variance per step.
+    measurement_noise:
+        Covariance of the measurement noise, (p,) or (p, p), output units squared (rad^2).
+    input_noise:
+        Covariance of the known input's noise, (m[+3],) or square, N^2 m^2 (and N^2), default 0.
+    parameters:
+        Gains estimated with the state, from :data:`PARAMETERS`.
+    substeps:
+        RK4 steps per sample period in the discretised model (default 1; use the simulation's with the
+        smooth friction, whose time constant is a fraction of a millisecond).
+    compiled:
+        Run :meth:`run` in C generated by CasADi and compiled once per model and noise setting
+        (cached on disk, a few seconds of gcc; raises :class:`~alpes_dyn.simulation.integrate.CompilerError`
+        without a C compiler): worth it for long or repeated runs. Default False: CasADi's
+        virtual machine (about 0.1-0.3 ms per step on finger3). Both give the same numbers.
+
+    Attributes
+    ----------
+    model: the :class:`DiscreteModel`. names: names of z's entries. backend: ``"compiled"`` or ``"casadi"``.
+    filter_step: ``casadi.Function`` s = [z; vec P], [w; y] -> s_next, one predict-update step.
+    """
+
+    kind = "kalman"
+
+    def __init__(self, system: StateSpace, dt: float, *, process_noise: Any, measurement_noise: Any,
+                 input_noise: Any = None, parameters: Sequence[str] = (), compiled: bool = False,
+                 substeps: int = 1) -> None:
+        self.model = DiscreteModel(system, dt, parameters, substeps)
+        mdl = self.model
+        self.dt = mdl.dt
+        self.names = mdl.names
+        self.nz, self.nw, self.ny = mdl.nz, mdl.nw, mdl.ny
+        self.Q = _cov(process_noise, mdl.nz, "process_noise")
+        self.R = _cov(measurement_noise, mdl.ny, "measurement_noise")
+        self.Sw = _cov(0.0 if input_noise is None else input_noise, mdl.nw, "input_noise")
+        z = cs.SX.sym("z", mdl.nz)
+        P = cs.SX.sym("P", mdl.nz, mdl.nz)
+        w = cs.SX.sym("w", mdl.nw)
+        y = cs.SX.sym("y", mdl.ny)
+        nz = mdl.nz
+        self._predict = cs.Function("predict", [z, P, w], list(self._predict_sym(z, P, w)), ["z", "P", "w"],
+                                    ["z_pred", "P_pred"])
+        self._update = cs.Function("update", [z, P, y], list(self._update_sym(z, P, y)), ["z", "P", "y"],
+                                   ["z_upd", "P_upd"])
+        # one step on s = [z; vec P] and [w; y]: the two SX functions called on symbols are inlined
+        s = cs.SX.sym("s", nz + nz * nz)
+        r = cs.SX.sym("wy", mdl.nw + mdl.ny)
+        zp, Pp = self._predict(s[:nz], cs.reshape(s[nz:], nz, nz), r[: mdl.nw])
+        zu, Pu = self._update(zp, Pp, r[mdl.nw:])
+        out = cs.vertcat(zu, cs.vec(Pu))
+        self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [cs.cse(out)], ["s", "wy"], ["s_next"])
+        self._loop: CompiledStepLoop | None = None
+        self.backend = "casadi"
+        if compiled:
+            self._loop = CompiledStepLoop(self.filter_step, f"{self.kind}_{system.model.name}", threads=1,
+                                          vectorize=False)
+            self.backend = "compiled"
+
+    # ------------------------------------------------------------------ symbolic pieces
+    def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _update_sym(self, z: cs.SX, P: cs.SX, y: cs.SX) -> tuple[cs.SX, cs.SX]:
+        """Measurement update with a Joseph-form covariance (eq. of the linear Kalman filter)."""
+        zs = cs.SX.sym("zs", self.nz)
+        H = cs.Function("H", [zs], [cs.jacobian(self.model.output(zs), zs)])(z)
+        h = self.model.output(z)
+        R = cs.DM(self.R)
+        S = cs.mtimes([H, P, H.T]) + R
+        PHt = cs.mtimes(P, H.T)
+        K = PHt / S if self.ny == 1 else cs.mtimes(PHt, cs.inv(S))
+        zn = z + cs.mtimes(K, y - h)
+        IKH = cs.SX.eye(self.nz) - cs.mtimes(K, H)
+        Pn = cs.mtimes([IKH, P, IKH.T]) + cs.mtimes([K, R, K.T])
+        return zn, 0.5 * (Pn + Pn.T)
+
+    # ------------------------------------------------------------------ numeric API
+    def _z(self, z: Any, name: str = "z") -> np.ndarray:
+        return self.model.system.model.vector(z, name, self.nz)
+
+    def _P(self, P: Any, name: str = "P") -> np.ndarray:
+        return _cov(P, self.nz, name)
+
+    def predict(self, z: Any, P: Any, w: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Time update over one period with the known input w (m[+3],): (z (nz,), P (nz, nz))."""
+        w = self.model.system.model.vector(w, "w", self.nw)
+        zp, Pp = self._predict(self._z(z), self._P(P), w)
+        return np.array(zp).reshape(-1), np.array(Pp)
+
+    def update(self, z: Any, P: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Measurement update with y (p,): (z (nz,), P (nz, nz))."""
+        y = self.model.system.model.vector(y, "y", self.ny)
+        zu, Pu = self._update(self._z(z), self._P(P), y)
+        return np.array(zu).reshape(-1), np.array(Pu)
+
+    def step(self, z: Any, P: Any, w: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+        """One filter step: predict with w_k, then update with y_k+1."""
+        zp, Pp = self.predict(z, P, w)
+        return self.update(zp, Pp, y)
+
+    def run(self, z0: Any, P0: Any, W: Any, Y: Any) -> Estimate:
+        """Filter a whole record.
+
+        Parameters
+        ----------
+        z0, P0: prior mean (nz,) and covariance (nz,) variances or (nz, nz) at t_0.
+        W: (N, m[+3]) known inputs, W[k] held on [t_k, t_k+1) (N m, N).
+        Y: (N+1, p) measurements at t_0 .. t_N (rad).
+
+        Returns
+        -------
+        :class:`Estimate` with z (N+1, nz), P (N+1, nz, nz): z[k] uses Y[0..k].
+        """
+        z0, P0 = self._z(z0, "z0"), self._P(P0, "P0")
+        W = np.asarray(W, dtype=float)
+        Y = np.asarray(Y, dtype=float)
+        if W.ndim == 1 and self.nw == 1:
+            W = W[:, None]
+        if Y.ndim == 1 and self.ny == 1:
+            Y = Y[:, None]
+        if W.ndim != 2 or W.shape[1] != self.nw or W.shape[0] < 1:
+            raise InputError(f"W: expected shape (N, {self.nw}), got {W.shape}")
+        N = W.shape[0]
+        check_bytes(16.0 * (N + 1) * (self.nz + self.nz * self.nz), "W",
+                    f"{N} samples of {self.nz} states and their covariance")
+        if Y.shape != (N + 1, self.ny):
+            raise InputError(f"Y: expected shape ({N + 1}, {self.ny}) (one more sample than W), got {Y.shape}")
+        for a, name in ((W, "W"), (Y, "Y")):
+            if not np.isfinite(a).all():
+                raise InputError(f"{name}: contains NaN or inf")
+        z, P = self._update(z0, P0, Y[0])
+        s0 = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
+        WY = np.hstack([W, Y[1:]])
+        if self._loop is not None:
+            S = self._loop.run(s0[None], WY[None])[0]
+        else:
+            S = np.vstack([s0, np.array(self.filter_step.mapaccum(N)(s0, WY.T)).T])
+        nz = self.nz
+        Z = S[:, :nz]
+        Ps = S[:, nz:].reshape(N + 1, nz, nz).transpose(0, 2, 1)  # column-major vec(P)
+        if not np.isfinite(S[-1]).all():
+            raise InputError(f"{self.kind}: the filter diverged (non-finite estimate); check the noise settings")
+        return Estimate(t=self.dt * np.arange(N + 1), z=Z, P=Ps, names=self.names)
+
+
+class ExtendedKalmanFilter(KalmanFilter):
+    """Extended Kalman filter of the RK4-discretised model (see :class:`KalmanFilter` for parameters).
+
+    Prediction: z_k+1 = F(z_k, w_k), P_k+1 = A P A^T + G Sigma_w G^T + Q with A = dF/dz and
+    G = dF/dw by CasADi automatic differentiation of the RK4 step. Update: the Kalman gain with
+    H = dh/dz and a Joseph-form covariance.
+
+    Example
+    -------
+    >>> import alpes_dyn as ad
+    >>> from alpes_dyn.symbolic.statespace import StateSpace
+    >>> from alpes_dyn.estimation.observers import ExtendedKalmanFilter
+    >>> ss = StateSpace(ad.Model.alpes("finger3"), input="motor", output="encoder")
+    >>> ekf = ExtendedKalmanFilter(ss, 1e-3, process_noise=[1e-10] * 3 + [1e-6] * 3,
+    ...                            measurement_noise=[1e-7], input_noise=[1e-8])
+    """
+
+    kind = "ekf"
+
+    def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
+        zn = self.model.step(z, w)
+        A = cs.jacobian(zn, z)
+        G = cs.jacobian(zn, w)
+        Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, cs.DM(self.Sw), G.T]) + cs.DM(self.Q)
+        return zn, 0.5 * (Pn + Pn.T)
+
+
+def _chol_sym(P: cs.SX) -> cs.SX:
+    """Lower Cholesky factor of a symbolic symmetric positive definite matrix (unrolled)."""
+    n = P.shape[0]
+    L = [[cs.SX(0) for _ in range(n)] for _ in range(n)]
+    for j in range(n):
+        d = P[j, j] - sum((L[j][k] * L[j][k] for k in range(j)), cs.SX(0))
+        L[j][j] = cs.sqrt(cs.fmax(d, 1e-300))
+        for i in range(j + 1, n):
+            L[i][j] = (P[i, j] - sum((L[i][k] * L[j][k] for k in range(j)), cs.SX(0))) / L[j][j]
+    return cs.vertcat(*[cs.horzcat(*row) for row in L])
+
+
+class UnscentedKalmanFilter(KalmanFilter):
+    """Unscented Kalman filter of the RK4-discretised model (see :class:`KalmanFilter` for parameters).
+
+    Sigma points z +- sqrt(nz + lambda) L e_i (P = L L^T, lambda = alpha^2 (nz + kappa) - nz) go
+    through the RK4 step; mean and covariance are their weighted sums (Wan & van der Merwe, 2000),
+    plus G Sigma_w G^T + Q (G = dF/dw at the mean, by AD). The measurement is linear in the state
+    for the encoder, so the update is the Kalman update of :class:`KalmanFilter`.
+
+    Extra parameters: ``alpha`` (default 1, > 0), ``beta`` (2, optimal for Gaussians), ``kappa`` (0; with
+    alpha^2 (nz + kappa) > 0), all finite.
+    """
+
+    kind = "ukf"
+
+    def __init__(self, system: StateSpace, dt: float, *, alpha: float = 1.0, beta: float = 2.0,
+                 kappa: float = 0.0, **kwargs: Any) -> None:
+        self.alpha, self.beta, self.kappa = (_finite_number(x, name) for x, name in
+                                             ((alpha, "alpha"), (beta, "beta"), (kappa, "kappa")))
+        if not self.alpha > 0:
+            raise InputError(f"alpha: expected a positive number, got {alpha!r}")
+        super().__init__(system, dt, **kwargs)
+
+    def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
+        n = self.model.nz
+        lam = self.alpha**2 * (n + self.kappa) - n
+        if not n + lam > 0:  # the sigma points' spread sqrt(n + lambda) and the weights 1 / (n + lambda)
+            raise InputError(f"kappa: alpha^2 (nz + kappa) must be > 0 (nz = {n}, alpha = {self.alpha:g}, "
+                             f"kappa = {self.kappa:g})")
+        c = np.sqrt(n + lam)
+        Wm = np.full(2 * n + 1, 0.5 / (n + lam))
+        Wc = Wm.copy()
+        Wm[0] = lam / (n + lam)
+        Wc[0] = Wm[0] + 1.0 - self.alpha**2 + self.beta
+        L = _chol_sym(P)
+        pts = [z] + [z + c * L[:, i] for i in range(n)] + [z - c * L[:, i] for i in range(n)]
+        X = [self.model.step(p, w) for p in pts]
+        zm = sum((Wm[i] * X[i] for i in range(2 * n + 1)), cs.SX.zeros(n))
+        Pn = sum((Wc[i] * cs.mtimes(X[i] - zm, (X[i] - zm).T) for i in range(2 * n + 1)), cs.SX.zeros(n, n))
+        G = cs.jacobian(self.model.step(z, w), w)
+        Pn = Pn + cs.mtimes([G, cs.DM(self.Sw), G.T]) + cs.DM(self.Q)
+        return zm, 0.5 * (Pn + Pn.T)
+
+
+def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> KalmanFilter:
+    """An observer by name: ``ekf``, ``ukf``, ``ekf-params``, ``ukf-params`` (the last two estimate
+    both :data:`PARAMETERS`); keyword arguments go to the filter."""
+    if name not in OBSERVERS:
+        raise InputError(f"unknown observer {name!r} (expected one of {', '.join(OBSERVERS)})")
+    base, _, extra = name.partition("-")
+    if extra:
+        kwargs.setdefault("parameters", PARAMETERS)
+    elif kwargs.get("parameters"):
+        raise InputError(f"observer {name!r} estimates no parameter; use {name}-params")
+    cls = ExtendedKalmanFilter if base == "ekf" else UnscentedKalmanFilter
+    return cls(system, dt, **kwargs)

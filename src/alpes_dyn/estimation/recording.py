@@ -1,0 +1,255 @@
+"""Recordings of an experiment on the hand: the CSV format that :func:`~alpes_dyn.estimation.identification.identify` reads.
+
+One row per sample, uniformly spaced, a header line naming the columns (any order):
+
+=========================== ======== ==========================================================================
+column                      unit     meaning
+=========================== ======== ==========================================================================
+``t``                       s        sample time, strictly increasing, uniform spacing (the sample period)
+``encoder_<motor>``         counts   motor encoder, q_m = (2 pi / counts_per_rev) counts (Section 3, eq. 3.13)
+``torque_<motor>``          N m      measured motor torque, held until the next sample; or instead
+``current_<motor>``         A        motor current, converted with a torque constant (``torque_constant``, N m/A)
+``force_z``                 N        optional: fingertip normal force (FlexiForce, eq. 2.13)
+``q_<joint>``               rad      optional: a joint angle measured now and then (camera, jig); empty elsewhere
+``gravity_x,_y,_z``         m/s^2    optional, all three: gravity in the hand's base frame (its orientation)
+``true_q_<joint>``          rad      optional: the true joint angles of a simulated experiment; never read by a fit
+=========================== ======== ==========================================================================
+
+``<motor>`` and ``<joint>`` are the model's names (:attr:`Transmission.motor_names
+<alpes_dyn.Transmission.motor_names>`, :attr:`Model.joint_names <alpes_dyn.Model.joint_names>`): on
+``finger3`` the columns are ``t, encoder_finger, torque_finger`` and ``q_j1, q_j2, q_j3``. Only
+``q_*``, ``true_q_*`` and ``force_z`` may have empty cells. Every defect is one
+:class:`~alpes_dyn.errors.RecordingError` naming the column (and the row): an unknown or missing
+column, a non-number, NaN where not allowed, time not increasing or not uniform, a joint angle or
+gravity in the wrong unit (degrees, g), a recording too short or without excitation.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import math
+import os
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import RecordingError
+from ..model.robot import Model
+
+__all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
+
+MIN_SAMPLES = 100  # a shorter recording cannot tell a finger's dynamics
+
+
+@dataclass
+class Recording:
+    """A recorded (or simulated) experiment; every array has one row per sample.
+
+    Attributes
+    ----------
+    t: (N,) s. encoder: (N, m) counts. torque: (N, m) N m (torque[k] held on [t_k, t_k+1)).
+    motor_names (m,), joint_names (n,): the model's names.
+    q: (N, n) rad, NaN where not measured, or None. force_z: (N,) N or None.
+    gravity: (N, 3) m/s^2 or None. true_q: (N, n) rad or None (simulated experiments only).
+    """
+
+    t: np.ndarray
+    encoder: np.ndarray
+    torque: np.ndarray
+    motor_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    q: np.ndarray | None = None
+    force_z: np.ndarray | None = None
+    gravity: np.ndarray | None = None
+    true_q: np.ndarray | None = None
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """Sample period, s."""
+        return float((self.t[-1] - self.t[0]) / (self.n_samples - 1))
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns, in the documented order."""
+        out = {"t": self.t}
+        for j, mname in enumerate(self.motor_names):
+            out[f"encoder_{mname}"] = self.encoder[:, j]
+            out[f"torque_{mname}"] = self.torque[:, j]
+        if self.force_z is not None:
+            out["force_z"] = self.force_z
+        if self.q is not None:
+            out.update({f"q_{jn}": self.q[:, i] for i, jn in enumerate(self.joint_names)})
+        if self.gravity is not None:
+            out.update({f"gravity_{a}": self.gravity[:, i] for i, a in enumerate("xyz")})
+        if self.true_q is not None:
+            out.update({f"true_q_{jn}": self.true_q[:, i] for i, jn in enumerate(self.joint_names)})
+        return out
+
+
+def _fmt(x: float) -> str:
+    return "" if math.isnan(x) else repr(float(x))
+
+
+def write_recording(rec: Recording, path: str | Path) -> Path:
+    """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
+    check_recording(rec)
+    cols = rec.columns()
+    names = list(cols)
+    data = np.column_stack([cols[c] for c in names])
+    buf = io.StringIO()
+    buf.write(",".join(names) + "\n")
+    for row in data:
+        buf.write(",".join(_fmt(x) for x in row) + "\n")
+    p = Path(path)
+    tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
+    try:
+        tmp.write_text(buf.getvalue(), encoding="utf-8")
+        os.replace(tmp, p)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise RecordingError(f"recording {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
+    return p
+
+
+def read_recording(path: str | Path, model: Model, torque_constant: float | None = None) -> Recording:
+    """Read and validate a recording CSV for ``model`` (which names the motors and joints).
+
+    ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
+    them and refused without them. Raises :class:`~alpes_dyn.errors.RecordingError`.
+    """
+    p = Path(path)
+    try:
+        text = p.read_bytes().decode("utf-8")
+    except OSError as exc:
+        raise RecordingError(f"recording {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise RecordingError(f"recording {str(p)!r}: not a UTF-8 text file") from None
+    rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
+    if not rows:
+        raise RecordingError(f"recording {str(p)!r}: empty file")
+    header = [h.strip() for h in rows[0]]
+    if len(set(header)) != len(header):
+        dup = next(h for h in header if header.count(h) > 1)
+        raise RecordingError(f"recording: column {dup!r} appears twice")
+    tr = model.transmission
+    if tr is None:
+        raise RecordingError(f"recording: model {model.name!r} has no tendon transmission (no motors to read)")
+    motors, joints = tr.motor_names, model.joint_names
+    known = {"t", "force_z", "gravity_x", "gravity_y", "gravity_z"}
+    known |= {f"{k}_{mn}" for k in ("encoder", "torque", "current") for mn in motors}
+    known |= {f"{k}_{jn}" for k in ("q", "true_q") for jn in joints}
+    for h in header:
+        if h not in known:
+            raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
+                                 f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
+    optional_nan = {h for h in header if h.startswith(("q_", "true_q_")) or h == "force_z"}
+    data = np.empty((len(rows) - 1, len(header)))
+    for i, row in enumerate(rows[1:], start=2):
+        if len(row) != len(header):
+            raise RecordingError(f"recording: line {i} has {len(row)} fields, the header {len(header)}")
+        for j, cell in enumerate(row):
+            c = cell.strip()
+            if c == "":
+                if header[j] not in optional_nan:
+                    raise RecordingError(f"recording: column {header[j]!r} is empty at line {i} "
+                                         "(only q_*, true_q_* and force_z may have empty cells)")
+                data[i - 2, j] = np.nan
+                continue
+            try:
+                data[i - 2, j] = float(c)
+            except ValueError:
+                raise RecordingError(f"recording: column {header[j]!r} line {i}: not a number ({c!r})") from None
+            if not math.isfinite(data[i - 2, j]) and header[j] not in optional_nan:
+                raise RecordingError(f"recording: column {header[j]!r} line {i}: NaN or inf")
+    col = {h: data[:, j] for j, h in enumerate(header)}
+    if "t" not in col:
+        raise RecordingError("recording: missing column 't' (time, s)")
+    enc, torque = [], []
+    for mn in motors:
+        if f"encoder_{mn}" not in col:
+            raise RecordingError(f"recording: missing column 'encoder_{mn}' (counts)")
+        enc.append(col[f"encoder_{mn}"])
+        has_t, has_c = f"torque_{mn}" in col, f"current_{mn}" in col
+        if has_t == has_c:
+            raise RecordingError(f"recording: motor {mn!r} needs exactly one of 'torque_{mn}' (N m) and "
+                                 f"'current_{mn}' (A)")
+        if has_c:
+            if torque_constant is None:
+                raise RecordingError(f"recording: column 'current_{mn}' needs a torque constant (N m/A)")
+            torque.append(float(torque_constant) * col[f"current_{mn}"])
+        else:
+            torque.append(col[f"torque_{mn}"])
+    if torque_constant is not None and not any(f"current_{mn}" in col for mn in motors):
+        raise RecordingError("recording: a torque constant is given but there is no current_<motor> column")
+    if torque_constant is not None and not (math.isfinite(torque_constant) and torque_constant > 0):
+        raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r}")
+
+    def block(prefix: str) -> np.ndarray | None:
+        names = [f"{prefix}_{jn}" for jn in joints]
+        present = [n for n in names if n in col]
+        if not present:
+            return None
+        return np.column_stack([col[n] if n in col else np.full(len(col["t"]), np.nan) for n in names])
+
+    grav_cols = [f"gravity_{a}" for a in "xyz"]
+    present = [g for g in grav_cols if g in col]
+    if present and len(present) != 3:
+        raise RecordingError(f"recording: gravity needs all three columns gravity_x, gravity_y, gravity_z "
+                             f"(got {', '.join(present)})")
+    rec = Recording(t=col["t"], encoder=np.column_stack(enc), torque=np.column_stack(torque),
+                    motor_names=tuple(motors), joint_names=tuple(joints), q=block("q"),
+                    force_z=col.get("force_z"), gravity=np.column_stack([col[g] for g in grav_cols]) if present
+                    else None, true_q=block("true_q"))
+    check_recording(rec)
+    return rec
+
+
+def check_recording(rec: Recording) -> Recording:
+    """Validate a :class:`Recording` (shapes, time, units, length, excitation); returns it."""
+    t = np.asarray(rec.t, dtype=float)
+    N = t.shape[0]
+    if t.ndim != 1 or N < MIN_SAMPLES:
+        raise RecordingError(f"recording: too short ({N} samples; at least {MIN_SAMPLES} are needed)")
+    m, n = len(rec.motor_names), len(rec.joint_names)
+    for name, a, shape in (("encoder", rec.encoder, (N, m)), ("torque", rec.torque, (N, m)),
+                           ("q", rec.q, (N, n)), ("true_q", rec.true_q, (N, n)), ("force_z", rec.force_z, (N,)),
+                           ("gravity", rec.gravity, (N, 3))):
+        if a is not None and np.shape(a) != shape:
+            raise RecordingError(f"recording: {name} has shape {np.shape(a)}, expected {shape}")
+    for name, a in (("t", t), ("encoder", rec.encoder), ("torque", rec.torque), ("gravity", rec.gravity)):
+        if a is not None and not np.isfinite(a).all():
+            raise RecordingError(f"recording: {name} contains NaN or inf")
+    dts = np.diff(t)
+    if np.any(dts <= 0):
+        k = int(np.argmax(dts <= 0))
+        raise RecordingError(f"recording: t is not strictly increasing (row {k + 2}: {t[k + 1]!r} after {t[k]!r})")
+    dt = (t[-1] - t[0]) / (N - 1)
+    if np.max(np.abs(dts - dt)) > 1e-6 * dt + 1e-12:
+        k = int(np.argmax(np.abs(dts - dt)))
+        raise RecordingError(f"recording: t is not uniformly sampled (step {dts[k]:g} s at row {k + 2}, "
+                             f"mean {dt:g} s)")
+    if not 1e-6 <= dt <= 0.1:
+        raise RecordingError(f"recording: sample period {dt:g} s is outside [1e-6, 0.1] s (is t in seconds?)")
+    for name, a in (("q", rec.q), ("true_q", rec.true_q)):
+        if a is not None and np.nanmax(np.abs(a), initial=0.0) > 2 * np.pi:
+            raise RecordingError(f"recording: {name}_* exceeds 2 pi in magnitude: joint angles must be in rad, "
+                                 "not degrees")
+    if rec.gravity is not None:
+        g = np.linalg.norm(rec.gravity, axis=1)
+        if np.any((g < 5.0) | (g > 15.0)):
+            k = int(np.argmax((g < 5.0) | (g > 15.0)))
+            raise RecordingError(f"recording: gravity has norm {g[k]:g} at row {k + 2}; expected about 9.81 "
+                                 "(m/s^2, not units of g)")
+    enc = np.asarray(rec.encoder, dtype=float)
+    if np.all(np.ptp(enc, axis=0) < 2) and np.all(np.ptp(np.asarray(rec.torque), axis=0) == 0):
+        raise RecordingError("recording: no excitation (the torque is constant and no encoder moves)")
+    return rec

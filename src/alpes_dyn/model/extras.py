@@ -1,0 +1,129 @@
+"""Joint-space terms the URDF cannot hold: springs, friction and rotor inertia.
+
+They are written once here and applied identically by the numeric (Pinocchio) and symbolic
+(CasADi) backends: every method takes the math namespace ``xp`` (``numpy`` or ``casadi``).
+
+* springs (eq. 2.14): tau_s = k * q with a per-joint stiffness k (N m/rad) that depends on the
+  spring model:
+
+  - ``"torsional"`` (default): U = 1/2 K_i q_i^2, so k_i = K_i. Table 1.2 gives K_i in N m/rad,
+    a torsional stiffness.
+  - ``"report"``: eq. 2.14 read literally, U = 1/2 K_i (q_i (b/2 + r))^2, so k_i = K_i (b/2 + r)^2.
+    With K_i in N m/rad this makes the springs about 10^4 times weaker than gravity
+    ((b/2 + r)^2 = 3.0e-5 m^2): the report's units are inconsistent, kept for comparison.
+  - ``"none"``: no spring.
+
+* friction (eq. 2.6-2.7): tau_f = F_s sign(v) + F_v v, with ``sign`` optionally replaced by
+  ``tanh(v / v_s)`` (``smooth=True``) for integration and automatic differentiation.
+* rotor inertia (eq. 2.8): I_a = N^2 J_m added to the diagonal of A (Pinocchio's ``armature``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ModelError
+
+__all__ = ["SPRING_MODELS", "JointExtras", "spring_stiffness"]
+
+SPRING_MODELS: tuple[str, ...] = ("torsional", "report", "none")
+
+
+def spring_stiffness(K: np.ndarray, spring: str, b: float, r: float) -> np.ndarray:
+    """Joint stiffness k (N m/rad) of springs with constants K under a spring model (eq. 2.14)."""
+    if spring == "torsional":
+        return np.asarray(K, dtype=float).copy()
+    if spring == "report":
+        return np.asarray(K, dtype=float) * (b / 2 + r) ** 2
+    if spring == "none":
+        return np.zeros_like(np.asarray(K, dtype=float))
+    raise ModelError(f"unknown spring model {spring!r} (expected one of {', '.join(SPRING_MODELS)})")
+
+
+def _as(xp: Any, a: np.ndarray) -> Any:
+    return a if xp is np else xp.DM(a)
+
+
+@dataclass(frozen=True)
+class JointExtras:
+    """Per-joint extras, in the model's joint (velocity) order; all arrays have shape (n,).
+
+    stiffness: k (N m/rad); armature: N^2 J_m (kg m^2); coulomb: F_s (N m); viscous: F_v (N m s/rad);
+    smooth_velocity: v_s (rad/s) of the smooth sign tanh(v/v_s).
+
+    Validated on construction (:class:`~alpes_dyn.ModelError` naming the field): the four arrays
+    are 1-D of one length, finite and >= 0, and are stored as read-only float arrays; v_s > 0.
+    """
+
+    stiffness: np.ndarray
+    armature: np.ndarray
+    coulomb: np.ndarray
+    viscous: np.ndarray
+    smooth_velocity: float = 0.01
+
+    def __post_init__(self) -> None:
+        """Every array 1-D, of one length, finite and >= 0 (a negative stiffness, friction or rotor
+        inertia would inject energy); ``smooth_velocity`` finite and > 0. Arrays are stored as float."""
+        n = None
+        for fname in ("stiffness", "armature", "coulomb", "viscous"):
+            x = getattr(self, fname)
+            try:
+                a = np.array(x, dtype=float) if np.asarray(x).dtype.kind != "c" else None
+            except (TypeError, ValueError):
+                a = None
+            if a is None or a.ndim != 1:
+                got = f"shape {a.shape}" if a is not None else f"{type(x).__name__} {np.asarray(x).dtype}"
+                raise ModelError(f"extras.{fname}: expected a 1-D array of numbers, got {got}")
+            if n is not None and a.shape != (n,):
+                raise ModelError(f"extras.{fname}: expected shape ({n},) like extras.stiffness, got {a.shape}")
+            n = a.shape[0]
+            if not np.isfinite(a).all():
+                raise ModelError(f"extras.{fname}: contains NaN or inf")
+            if np.any(a < 0):
+                i = int(np.argmax(a < 0))
+                raise ModelError(f"extras.{fname}: must be >= 0 (got {a[i]:g} at index {i})")
+            a.flags.writeable = False
+            object.__setattr__(self, fname, a)
+        try:
+            vs = float(self.smooth_velocity)
+        except (TypeError, ValueError):
+            vs = float("nan")
+        if not (np.isfinite(vs) and vs > 0):
+            raise ModelError(f"extras.smooth_velocity: expected a finite number > 0 rad/s, got {self.smooth_velocity!r}")
+        object.__setattr__(self, "smooth_velocity", vs)
+
+    @classmethod
+    def zeros(cls, n: int) -> "JointExtras":
+        z = np.zeros(n)
+        return cls(z, z.copy(), z.copy(), z.copy())
+
+    @property
+    def has_spring(self) -> bool:
+        return bool(np.any(self.stiffness != 0))
+
+    @property
+    def has_friction(self) -> bool:
+        return bool(np.any(self.coulomb != 0) or np.any(self.viscous != 0))
+
+    def spring_torque(self, q: Any, xp: Any = np) -> Any:
+        """Spring torque k q (N m), the spring part of G(q) in eq. 2.11; q: (n,) array or casadi column."""
+        return _as(xp, self.stiffness) * q
+
+    def spring_energy(self, q: Any, xp: Any = np) -> Any:
+        """Spring potential energy sum 1/2 k_i q_i^2 (J)."""
+        return 0.5 * xp.dot(_as(xp, self.stiffness) * q, q)
+
+    def friction_torque(self, v: Any, smooth: bool = False, xp: Any = np) -> Any:
+        """Friction torque F_s sign(v) + F_v v (eq. 2.6-2.7), sign -> tanh(v/v_s) when ``smooth``."""
+        sgn = xp.tanh(v / self.smooth_velocity) if smooth else xp.sign(v)
+        return _as(xp, self.coulomb) * sgn + _as(xp, self.viscous) * v
+
+    def passive_torque(self, q: Any, v: Any, smooth: bool = False, xp: Any = np) -> Any:
+        """Springs plus friction, the extras' share of the left side of eq. 2.10."""
+        out = self.spring_torque(q, xp)
+        if self.has_friction:
+            out = out + self.friction_torque(v, smooth, xp)
+        return out

@@ -1,0 +1,331 @@
+"""MJCF export: the Alpes models for MuJoCo, from the same parameter file as the URDF.
+
+:func:`mjcf_string` writes the kinematics and inertias of :func:`~alpes_dyn.urdf_string` (same
+bodies, joints, frames, COMs and inertias about the COM) plus what URDF cannot hold and MuJoCo can:
+
+* joint springs: ``stiffness`` k_i with ``springref = 0`` (rest at q = 0), under the library's spring
+  law (:func:`~alpes_dyn.model.extras.spring_stiffness`; torsional by default);
+* joint stops: ``range`` = the parameter file's limits, ``limited`` (``limits=False`` drops them);
+* rotor inertia (``rotor_inertia=True``): ``armature`` N^2 J_m on each tendon-driven joint,
+  ``abduction_ratio^2 J_m`` on the thumb's ab/adduction (eq. 2.8, as :meth:`Model.alpes
+  <alpes_dyn.Model.alpes>`);
+* friction (``friction=True``): ``damping`` F_v and ``frictionloss`` F_s (eq. 2.6; MuJoCo's dry
+  friction is a constraint, the library's a smooth sign);
+* one fixed tendon per flexion motor, length l = sum_i r q_i over the motor's joints, and a
+  ``motor`` on it with gear 1/r_m: a motor torque tau_m pulls the cable with tau_m / r_m and gives
+  r tau_m / r_m on each joint, the library's Gamma = S^T tau_m (:class:`~alpes_dyn.Transmission`);
+  its ``ctrlrange`` is [0, tau_max]: a cable only pulls. The thumb's ab/adduction motor acts on its
+  joint with gear ``abduction_ratio`` and ``ctrlrange`` [-tau_max, tau_max];
+* sensors, per motor: ``encoder_<motor>`` (``actuatorpos`` = gear x tendon length = q_m, the
+  encoder angle of eq. 3.13, rad), ``tendon_<motor>`` (``tendonpos``, m), ``torque_<motor>``
+  (``actuatorfrc`` = tau_m, N m); per chain: ``flexiforce_<chain>`` (``touch`` at the fingertip
+  pad site ``<tip>_pad``: the normal contact force, N, the FlexiForce sensor of Section 2.2);
+* collision geoms: a capsule per phalanx (the URDF's cylinder radius), a box for the palm
+  (hand only), contacts between the palm and the proximal phalanges excluded;
+* a ``site`` at every tip frame (named as the URDF frame), for checks and rendering.
+
+Scenes (``scene=``): ``"block"`` (finger2/finger3) adds a fixed, frictionless box whose face meets
+the fingertip at the configuration ``contact_q``, at an angle ``block_tilt`` to the distal phalanx
+(the block pushes the fingertip along the face's normal n, :func:`block_normal`: F = -F_z n with
+F_z >= 0 the FlexiForce reading); ``"cylinder"`` (hand) adds a
+fixed, frictionless cylinder across the fingers, in front of the palm, that the hand can grasp (:data:`CYLINDER`). With the
+parameter file's gravity (palm up) the fingers lift their own weight; ``palm_down=True`` reverses
+it, the fingers then press down on the object, as in :mod:`alpes_dyn.control`.
+
+Joint order: MuJoCo's qpos/qvel follow the bodies' depth-first order, the URDF's (and
+:attr:`Model.joint_names <alpes_dyn.Model.joint_names>`) order too; :func:`joint_permutation`
+checks it by name.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+from typing import Sequence
+
+import numpy as np
+
+from .description import check_model_name, layout, model_params
+from ..errors import InputError, ModelError
+from .extras import spring_stiffness
+from .params import ChainParams, HandParams, load_params
+
+__all__ = ["SCENES", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
+           "block_normal", "BLOCK_TILT",
+           "BLOCK_CONTACT_Q", "CYLINDER"]
+
+SCENES: tuple[str, ...] = ("none", "block", "cylinder")
+#: Default configuration (rad) at which the block's lower face touches the fingertip pad.
+BLOCK_CONTACT_Q: tuple[float, ...] = (0.9, 0.5, 0.5)
+#: Angle (rad) between the distal phalanx at :data:`BLOCK_CONTACT_Q` and the block's face.
+BLOCK_TILT: float = 0.15
+#: The cylinder of the hand scene: centre (m, palm frame), radius (m), half-length (m); its axis is y. Frictionless
+#: (``condim="1"``) like the block: the contact force is the normal force the FlexiForce reads. Placed where the four
+#: fingertips and the thumb's (ab/adduction at 35 degrees) meet it with their pads before any other phalanx touches,
+#: the hand palm down (see :func:`alpes_dyn.control.force.run_hand_control`).
+CYLINDER = {"center": (0.01, 0.0, 0.08), "radius": 0.025, "half_length": 0.08}
+
+
+def _f(x: float) -> str:
+    return repr(float(x))
+
+
+def _v(xs: Sequence[float]) -> str:
+    return " ".join(_f(x) for x in xs)
+
+
+def _params(params: HandParams | str | Path | None) -> HandParams:
+    return params if isinstance(params, HandParams) else load_params(params)
+
+
+def palm_down_params(params: HandParams) -> HandParams:
+    """``params`` with gravity reversed: the hand turned palm down (the base frame's +z, toward which the
+    fingers flex, points down), so that a finger presses on an object under it."""
+    import dataclasses
+
+    return dataclasses.replace(params, gravity=-np.asarray(params.gravity, dtype=float))
+
+
+def block_normal(contact_q: Sequence[float], tilt: float = BLOCK_TILT) -> np.ndarray:
+    """Unit normal n (3,) of the block scene's face, base frame, pointing from the fingertip into the block:
+    the pad's normal at ``contact_q`` turned back by ``tilt`` (rad) so that the fingertip's end, not
+    the side of the distal phalanx, meets the face. The block pushes the finger with F = -F_z n."""
+    b = float(np.sum(np.asarray(contact_q, dtype=float))) - float(tilt)
+    return np.array([-math.sin(b), 0.0, math.cos(b)])
+
+
+def contact_tip_position(chain: ChainParams, q: Sequence[float]) -> np.ndarray:
+    """Tip-frame position (x, z) of a planar chain at joint angles q (m), in the chain's base frame.
+
+    Positive q turns +x toward +z (joint axes along -y), as in the URDF.
+    """
+    q = np.asarray(q, dtype=float)
+    a = np.cumsum(q)
+    L = chain.L[: q.shape[0]]
+    return np.array([float(np.sum(L * np.cos(a))), float(np.sum(L * np.sin(a)))])
+
+
+class _Writer:
+    def __init__(self, p: HandParams, spring: str, friction: bool, rotor_inertia: bool, limits: bool) -> None:
+        self.p = p
+        self.spring = spring
+        self.friction = friction
+        self.rotor_inertia = rotor_inertia
+        self.limits = limits
+        self.lines: list[str] = []
+
+    def joint(self, name: str, axis: Sequence[float], k: float, armature: float, lo: float, hi: float, ind: str,
+              F_s: float | None = None, F_v: float | None = None) -> str:
+        """A hinge; friction F_s, F_v (default: the file's ``[friction]`` values)."""
+        attrs = [f'name="{name}"', 'type="hinge"', f'axis="{_v(axis)}"', 'pos="0 0 0"',
+                 f'stiffness="{_f(k)}"', 'springref="0"']
+        if self.limits:
+            attrs += ['limited="true"', f'range="{_f(lo)} {_f(hi)}"']
+        else:
+            attrs += ['limited="false"']
+        if self.rotor_inertia and armature > 0:
+            attrs.append(f'armature="{_f(armature)}"')
+        if self.friction:
+            Fv = self.p.F_v if F_v is None else F_v
+            Fs = self.p.F_s if F_s is None else F_s
+            attrs += [f'damping="{_f(Fv)}"', f'frictionloss="{_f(Fs)}"']
+        return f"{ind}<joint {' '.join(attrs)}/>\n"
+
+    def chain(self, prefix: str, ch: ChainParams, n: int, K: np.ndarray, pos: Sequence[float], quat: Sequence[float],
+              ind: str, rgba: str) -> str:
+        """Nested bodies p1..pn of a planar chain, joints j1..jn, a tip site and a pad site."""
+        p = self.p
+        k = spring_stiffness(np.asarray(K[:n], dtype=float), self.spring, p.b, p.r)
+        d, I_com = ch.com_from_joint, ch.I_com
+        out = []
+        cur = ind
+        for i in range(n):
+            bpos = pos if i == 0 else (ch.L[i - 1], 0.0, 0.0)
+            bquat = f' quat="{_v(quat)}"' if i == 0 else ""
+            out.append(f'{cur}<body name="{prefix}p{i + 1}" pos="{_v(bpos)}"{bquat}>\n')
+            inner = cur + "  "
+            out.append(self.joint(f"{prefix}j{i + 1}", (0, -1, 0), k[i], p.N**2 * p.J_m, p.finger_lower, p.finger_upper,
+                                  inner, None if ch.F_s is None else float(ch.F_s[i]),
+                                  None if ch.F_v is None else float(ch.F_v[i])))
+            ixx = 0.5 * ch.m[i] * ch.radius**2
+            out.append(f'{inner}<inertial pos="{_v((d[i], 0, 0))}" mass="{_f(ch.m[i])}" '
+                       f'diaginertia="{_v((ixx, I_com[i], I_com[i]))}"/>\n')
+            out.append(f'{inner}<geom name="{prefix}p{i + 1}" type="capsule" fromto="0 0 0 {_f(ch.L[i])} 0 0" '
+                       f'size="{_f(ch.radius)}" rgba="{rgba}"/>\n')
+            cur = inner
+        out.append(f'{cur}<site name="{prefix}tip" pos="{_v((ch.L[n - 1], 0, 0))}" size="0.002" rgba="1 0 0 1"/>\n')
+        out.append(f'{cur}<site name="{prefix}tip_pad" type="sphere" pos="{_v((ch.L[n - 1], 0, 0))}" '
+                   f'size="{_f(1.25 * ch.radius)}" rgba="0.9 0.3 0.2 0.25"/>\n')
+        for i in reversed(range(n)):
+            out.append(f"{ind}{'  ' * i}</body>\n")
+        return "".join(out)
+
+
+def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, chain: str | None = None,
+                spring: str = "torsional",
+                friction: bool = False, rotor_inertia: bool = False, limits: bool = True, contact: bool = True,
+                scene: str = "none", contact_q: Sequence[float] | None = None,
+                block_friction: float = 0.0, block_tilt: float = BLOCK_TILT, palm_down: bool = False, timestep: float = 2.5e-4) -> str:
+    """MJCF text of ``model`` (``finger2``, ``finger3`` or ``hand``) built from ``params``.
+
+    Parameters
+    ----------
+    model: ``finger2``, ``finger3``, ``hand`` or ``thumb``.
+    params: a :class:`~alpes_dyn.HandParams`, a parameter file, or ``None`` for the shipped one.
+    chain: a finger model built from that finger of the hand (as :meth:`Model.alpes <alpes_dyn.Model.alpes>`);
+        the hand uses each finger's own values (``[finger.<name>]``), everywhere: inertias, springs, friction.
+    spring, friction, rotor_inertia: as :meth:`Model.alpes <alpes_dyn.Model.alpes>`, so that the MuJoCo
+        model and ``Model.alpes(model, spring, friction, rotor_inertia, params)`` are the same system.
+    limits: joint stops (``range``, ``limited``) from the parameter file's limits (default on).
+    contact: collisions (default on); ``False`` writes ``<flag contact="disable"/>``.
+    scene: ``"none"``, ``"block"`` (finger2/finger3: a fixed block on the fingertip pad at
+        ``contact_q``) or ``"cylinder"`` (hand: a fixed cylinder across the fingers, :data:`CYLINDER`).
+    contact_q: joint angles (rad) at which the block touches the fingertip (default :data:`BLOCK_CONTACT_Q`).
+    block_tilt: angle (rad) between the distal phalanx there and the block's face (:func:`block_normal`).
+    block_friction: friction coefficient of the block (default 0: frictionless, ``condim="1"``, so the
+        contact force is normal to the block, the report's no-sliding F = [0, 0, F_z] of eq. 2.13 in the
+        block's frame).
+    palm_down: the hand turned over, gravity reversed (see :func:`palm_down_params`): the fingers flex
+        with gravity, toward an object under them, as in the block scene of :mod:`alpes_dyn.control`.
+    timestep: MuJoCo's time step, s (default 0.25 ms, the estimation scenario's integration step).
+
+    Returns
+    -------
+    str: MJCF text, deterministic for given arguments.
+    """
+    from .extras import SPRING_MODELS
+
+    check_model_name(model)
+    if spring not in SPRING_MODELS:
+        raise ModelError(f"unknown spring model {spring!r} (expected one of {', '.join(SPRING_MODELS)})")
+    if scene not in SCENES:
+        raise ModelError(f"unknown scene {scene!r} (expected one of {', '.join(SCENES)})")
+    if scene == "block" and model in ("hand", "thumb"):
+        raise ModelError(f"scene 'block' is for one finger (finger2, finger3), not {model!r}")
+    if scene == "cylinder" and model != "hand":
+        raise ModelError(f"scene 'cylinder' is for the hand, not {model!r}; a finger's scene is 'block'")
+    if not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
+        raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
+    if not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction) and block_friction >= 0):
+        raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
+    p = model_params(model, _params(params), chain)
+    if palm_down:
+        p = palm_down_params(p)
+    lay = layout(model, p)
+    block_condim = 1 if block_friction == 0 else 3
+    w = _Writer(p, spring, friction, rotor_inertia, limits)
+    g = p.gravity
+    opt = f'timestep="{_f(timestep)}" gravity="{_v(g)}" integrator="implicitfast"'
+    option = f"  <option {opt}>\n    <flag contact=\"disable\"/>\n  </option>\n" if not contact else f"  <option {opt}/>\n"
+    head = (
+        f'<mujoco model="alpes_{model}">\n'
+        f"  <!-- Generated by alpes_dyn from {Path(p.path).name or 'parameters'}; do not edit. -->\n"
+        '  <compiler angle="radian" autolimits="true" inertiafromgeom="auto" balanceinertia="false"/>\n'
+        + option +
+        '  <visual><global offwidth="800" offheight="600"/></visual>\n'
+        "  <default>\n"
+        '    <geom condim="3" friction="0.3 0.005 0.0001" solref="0.002 1" solimp="0.95 0.99 0.001"/>\n'
+        "  </default>\n"
+    )
+    body: list[str] = ['  <worldbody>\n', '    <light name="top" pos="0.05 -0.3 0.4" dir="0 0.6 -0.8" diffuse="0.8 0.8 0.8"/>\n']
+    excludes: list[tuple[str, str]] = []
+    finger_rgba = "0.75 0.75 0.8 1"
+    if model in ("finger2", "finger3"):
+        n = 2 if model == "finger2" else 3
+        f = p.finger
+        body.append(w.chain("", f, n, f.K, (0, 0, 0), (1, 0, 0, 0), "    ", finger_rgba))
+        if scene == "block":
+            cq = np.asarray(BLOCK_CONTACT_Q[:n] if contact_q is None else contact_q, dtype=float)
+            if cq.shape != (n,) or not np.isfinite(cq).all():
+                raise InputError(f"contact_q: expected {n} finite joint angles, got {np.asarray(contact_q).tolist()!r}")
+            (x, z), nrm = contact_tip_position(f, cq), block_normal(cq, block_tilt)
+            fz = np.array([nrm[0], nrm[2]])  # the face's normal, from the finger into the block
+            fx = np.array([fz[1], -fz[0]])   # along the face, toward the fingertip's free end
+            half = (0.035, 0.02, 0.01)
+            c = np.array([x, z]) + (f.radius + half[2]) * fz + 0.015 * fx
+            b = float(np.sum(cq)) - block_tilt
+            quat = (math.cos(b / 2), 0.0, -math.sin(b / 2), 0.0)
+            body.append(f'    <geom name="block" type="box" pos="{_v((c[0], 0.0, c[1]))}" quat="{_v(quat)}" '
+                        f'size="{_v(half)}" condim="{block_condim}" friction="{_f(block_friction)} 0.005 0.0001" '
+                        'priority="1" rgba="0.4 0.6 0.8 1"/>\n')
+    else:
+        body.append('    <body name="palm">\n'
+                    '      <geom name="palm" type="box" pos="0 0 -0.012" size="0.045 0.036 0.012" rgba="0.6 0.6 0.65 1"/>\n')
+        for name, (x, y) in zip(p.finger_names if model == "hand" else (), p.finger_xy):
+            f3 = p.chain(name)  # the finger's own values where the file gives them
+            body.append(w.chain(f"{name}_", f3, 3, f3.K, (x, y, 0.0), (1, 0, 0, 0), "      ", finger_rgba))
+            excludes.append(("palm", f"{name}_p1"))
+        t = p.thumb
+        yaw = p.thumb_yaw
+        quat = (math.cos(yaw / 2), 0.0, 0.0, math.sin(yaw / 2))
+        rb = t.radius
+        ib = 0.4 * p.thumb_base_mass * rb**2
+        body.append(f'      <body name="thumb_base" pos="{_v(p.thumb_xyz)}" quat="{_v(quat)}">\n')
+        body.append(w.joint("thumb_abd", p.abduction_axis, spring_stiffness(np.array([p.abduction_K]), spring, p.b,
+                                                                            p.r)[0],
+                            p.abduction_ratio**2 * p.J_m, p.abduction_lower, p.abduction_upper, "        ",
+                            p.abduction_F_s, p.abduction_F_v))
+        body.append(f'        <inertial pos="0 0 0" mass="{_f(p.thumb_base_mass)}" diaginertia="{_v((ib, ib, ib))}"/>\n')
+        body.append(f'        <geom name="thumb_base" type="sphere" size="{_f(rb)}" contype="0" conaffinity="0" '
+                    f'rgba="{finger_rgba}"/>\n')
+        body.append(w.chain("thumb_", t, 2, t.K, (0, 0, 0), (1, 0, 0, 0), "        ", finger_rgba))
+        body.append("      </body>\n    </body>\n")
+        excludes += [("palm", "thumb_base"), ("palm", "thumb_p1")]
+        if scene == "cylinder":
+            c = CYLINDER
+            body.append(f'    <geom name="cylinder" type="cylinder" pos="{_v(c["center"])}" quat="0.7071067811865476 '
+                        f'0.7071067811865476 0 0" size="{_f(c["radius"])} {_f(c["half_length"])}" condim="1" '
+                        'friction="0 0.005 0.0001" priority="1" rgba="0.4 0.6 0.8 1"/>\n')
+    body.append("  </worldbody>\n")
+    parts = [head, *body]
+    if excludes:
+        parts.append("  <contact>\n" + "".join(f'    <exclude body1="{a}" body2="{b}"/>\n' for a, b in excludes)
+                     + "  </contact>\n")
+    # tendons and motors (the Transmission's order: flexion motors, then ab/adduction motors)
+    tendons, actuators, sensors = [], [], []
+    for ch in lay.chains:
+        coefs = "".join(f'      <joint joint="{j}" coef="{_f(p.r)}"/>\n' for j in ch.joints)
+        tendons.append(f'    <fixed name="{ch.name}">\n{coefs}    </fixed>\n')
+        actuators.append(f'    <motor name="{ch.name}" tendon="{ch.name}" gear="{_f(1.0 / p.r_m)}" '
+                         f'ctrlrange="0 {_f(p.tau_max)}"/>\n')
+        sensors += [f'    <actuatorpos name="encoder_{ch.name}" actuator="{ch.name}"/>\n',
+                    f'    <tendonpos name="tendon_{ch.name}" tendon="{ch.name}"/>\n',
+                    f'    <actuatorfrc name="torque_{ch.name}" actuator="{ch.name}"/>\n']
+    for ch in lay.chains:
+        if ch.abduction:
+            mname = f"{ch.name}_abduction"
+            actuators.append(f'    <motor name="{mname}" joint="{ch.abduction}" gear="{_f(p.abduction_ratio)}" '
+                             f'ctrlrange="{_f(-p.tau_max)} {_f(p.tau_max)}"/>\n')
+            sensors += [f'    <actuatorpos name="encoder_{mname}" actuator="{mname}"/>\n',
+                        f'    <actuatorfrc name="torque_{mname}" actuator="{mname}"/>\n']
+    for ch in lay.chains:
+        sensors.append(f'    <touch name="flexiforce_{ch.name}" site="{ch.tip}_pad"/>\n')
+    parts.append("  <tendon>\n" + "".join(tendons) + "  </tendon>\n")
+    parts.append("  <actuator>\n" + "".join(actuators) + "  </actuator>\n")
+    parts.append("  <sensor>\n" + "".join(sensors) + "  </sensor>\n")
+    parts.append("</mujoco>\n")
+    return "".join(parts)
+
+
+def load_mujoco(xml: str):
+    """A ``mujoco.MjModel`` from MJCF text; a one-line :class:`~alpes_dyn.ModelError` if MuJoCo is
+    missing (``pip install 'alpes_dyn[mujoco]'``) or rejects the text."""
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError("mujoco is not installed (pip install 'alpes_dyn[mujoco]')") from None
+    try:
+        return mujoco.MjModel.from_xml_string(xml)
+    except Exception as exc:  # mujoco raises ValueError with a multi-line message
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ModelError(f"MJCF rejected by MuJoCo: {first}") from None
+
+
+def joint_permutation(mj_model, joint_names: Sequence[str]) -> np.ndarray:
+    """MuJoCo qpos index of each joint in ``joint_names`` (the library's order), (n,) int."""
+    names = [mj_model.joint(k).name for k in range(mj_model.njnt)]
+    try:
+        return np.array([mj_model.jnt_qposadr[names.index(nm)] for nm in joint_names], dtype=int)
+    except ValueError:
+        missing = [nm for nm in joint_names if nm not in names]
+        raise ModelError(f"MuJoCo model has no joint {missing[0]!r}") from None

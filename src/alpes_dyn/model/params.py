@@ -1,0 +1,452 @@
+"""Physical parameters of the Alpes hand: loading and validation of the TOML parameter file.
+
+The shipped file ``alpes_dyn/data/alpes_hand.toml`` holds the report's Table 1.2 (``source =
+"report"``) and, marked ``source = "assumed"`` with a one-line reason each, every value the report
+does not give. :func:`load_params` validates it; any defect is a :class:`~alpes_dyn.ModelError`
+that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)``.
+
+The four fingers share ``[finger]``; a finger may have values of its own in a table ``[finger.<name>]``
+(``<name>`` from ``palm.finger_names``) holding any of :data:`OVERRIDE_FIELDS` (``K``, ``m``, ``I``,
+``F_s``, ``F_v``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
+:func:`chain_params`): an identified hand differs link by link.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import os
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import ModelError
+from ..fileio import read_text
+
+__all__ = [
+    "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
+    "params_toml", "with_values", "write_params", "chain_params",
+]
+
+# field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
+_SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
+    "finger": {
+        "L": (3, "pos"), "s": (3, "pos"), "m": (3, "pos"), "I": (3, "pos"), "r": (None, "pos"),
+        "K": (3, "nonneg"), "b": (None, "nonneg"), "radius": (None, "pos"),
+        "lower": (None, "any"), "upper": (None, "any"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
+    },
+    "thumb": {
+        "L": (2, "pos"), "s": (2, "pos"), "m": (2, "pos"), "I": (2, "pos"), "K": (2, "nonneg"),
+        "radius": (None, "pos"), "base_mass": (None, "pos"), "abduction_K": (None, "nonneg"), "abduction_axis": (3, "unit"),
+        "abduction_lower": (None, "any"), "abduction_upper": (None, "any"), "F_s": (2, "nonneg"), "F_v": (2, "nonneg"),
+        "abduction_F_s": (None, "nonneg"), "abduction_F_v": (None, "nonneg"),
+    },
+    "palm": {
+        "finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"),
+        "thumb_xyz": (3, "any"), "thumb_yaw": (None, "any"),
+    },
+    "transmission": {
+        "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
+        "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
+    },
+    "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
+    "environment": {"gravity": (3, "any")},
+}
+# per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
+_OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v"}
+_ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
+# per-finger overrides: a table [finger.<name>] (name from palm.finger_names) with any of these fields, which
+# replace the shared [finger] values on that finger only (a real hand's fingers differ link by link)
+OVERRIDE_FIELDS: dict[str, tuple[int, str]] = {
+    "K": (3, "nonneg"), "m": (3, "pos"), "I": (3, "pos"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
+}
+"""Fields a per-finger section ``[finger.<name>]`` may hold: 3-arrays, one entry per phalanx."""
+SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
+
+
+@dataclass(frozen=True)
+class Param:
+    """One parameter: its value, unit, provenance (``report``, ``assumed`` or ``identified``), why if
+    assumed (or how if identified), and for an identified value its standard error ``std`` (same shape)."""
+
+    value: Any
+    unit: str
+    source: str
+    reason: str = ""
+    description: str = ""
+    std: Any = None
+
+
+@dataclass(frozen=True)
+class ChainParams:
+    """A serial planar chain of phalanges (a finger or the thumb's flexion chain).
+
+    Arrays have one entry per phalanx, proximal first. Units: m, kg, kg m^2, N m/rad.
+    ``I`` is the inertia about the phalanx's own (proximal) joint axis, as in the report's table;
+    ``I_com = I - m d^2`` with ``d = L - s`` the COM distance to that joint. ``F_s``, ``F_v``: per-joint
+    friction (N m, N m s/rad) when the file gives it per phalanx, else None (``friction.F_s``/``F_v`` apply).
+    """
+
+    L: np.ndarray
+    s: np.ndarray
+    m: np.ndarray
+    I: np.ndarray
+    K: np.ndarray
+    radius: float
+    F_s: np.ndarray | None = None
+    F_v: np.ndarray | None = None
+
+    @property
+    def n(self) -> int:
+        """Number of phalanges."""
+        return int(self.L.shape[0])
+
+    @property
+    def com_from_joint(self) -> np.ndarray:
+        """Distance d_i = L_i - s_i from joint i to the COM of phalanx i (m)."""
+        return self.L - self.s
+
+    @property
+    def I_com(self) -> np.ndarray:
+        """Inertia about the COM, perpendicular to the phalanx: I_i - m_i d_i^2 (kg m^2)."""
+        return self.I - self.m * self.com_from_joint**2
+
+
+@dataclass(frozen=True)
+class HandParams:
+    """All parameters of the hand, as loaded from a parameter file.
+
+    ``raw`` keeps every :class:`Param` (with its unit, source and reason) by ``"section.field"``.
+    """
+
+    finger: ChainParams
+    thumb: ChainParams
+    r: float
+    b: float
+    r_m: float
+    J_m: float
+    N: float
+    abduction_ratio: float
+    encoder_counts: float
+    tau_max: float
+    F_s: float
+    F_v: float
+    smooth_velocity: float
+    gravity: np.ndarray
+    finger_lower: float
+    finger_upper: float
+    abduction_K: float
+    thumb_base_mass: float
+    abduction_axis: np.ndarray
+    abduction_lower: float
+    abduction_upper: float
+    finger_names: tuple[str, ...]
+    finger_xy: np.ndarray  # (4, 2)
+    thumb_xyz: np.ndarray
+    thumb_yaw: float
+    path: str = ""
+    raw: dict[str, Param] = field(default_factory=dict, repr=False)
+    fingers: dict[str, ChainParams] = field(default_factory=dict, repr=False)
+    abduction_F_s: float | None = None  # the ab/adduction joint's own friction (N m, N m s/rad), else friction.F_s/F_v
+    abduction_F_v: float | None = None
+
+    def chain(self, name: str) -> ChainParams:
+        """The parameters of one chain: a finger by its name (``palm.finger_names``, the shared ``[finger]``
+        values with that finger's ``[finger.<name>]`` overrides), ``"thumb"``, or ``"finger"`` (the shared
+        values). :class:`~alpes_dyn.ModelError` for another name."""
+        if name == "thumb":
+            return self.thumb
+        if name == "finger":
+            return self.finger
+        if isinstance(name, str) and name in self.finger_names:
+            return self.fingers.get(name, self.finger)
+        raise ModelError(f"chain: unknown chain {name!r} (expected one of {', '.join(self.chain_names)})")
+
+    @property
+    def chain_names(self) -> tuple[str, ...]:
+        """The hand's chains, one per motor's tendon: the fingers (``palm.finger_names``), then ``thumb``."""
+        return tuple(self.finger_names) + ("thumb",)
+
+    def overrides(self, finger: str) -> dict[str, Param]:
+        """The ``[finger.<finger>]`` entries of the file, by field (empty if the finger has none)."""
+        pre = f"finger.{finger}."
+        return {k[len(pre):]: prm for k, prm in self.raw.items() if k.startswith(pre)}
+
+    @property
+    def transmission_ratio(self) -> float:
+        """Pulley to motor-shaft ratio r / r_m of the tendon transmission (Section 3)."""
+        return self.r / self.r_m
+
+    def assumptions(self) -> list[tuple[str, Param]]:
+        """The parameters the report does not give, with their reasons, in file order."""
+        return [(k, p) for k, p in self.raw.items() if p.source == "assumed"]
+
+
+def default_params_path() -> Path:
+    """Path of the parameter file shipped with the package."""
+    return Path(str(resources.files("alpes_dyn") / "data" / "alpes_hand.toml"))
+
+
+def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
+    if kind == "str":
+        if not (isinstance(value, list) and len(value) == length and all(isinstance(v, str) and v for v in value)):
+            raise ModelError(f"{name}: value must be a list of {length} non-empty strings (got {value!r})")
+        if len(set(value)) != len(value):
+            raise ModelError(f"{name}: names must be unique (got {value!r})")
+        return tuple(value)
+    if length is None:
+        if isinstance(value, bool) or not isinstance(value, (int, float)):
+            raise ModelError(f"{name}: value must be a number (got {value!r})")
+        arr = np.array([float(value)])
+    else:
+        if not isinstance(value, list) or len(value) != length:
+            raise ModelError(f"{name}: value must be a list of {length} numbers (got {value!r})")
+        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
+            raise ModelError(f"{name}: value must be a list of {length} numbers (got {value!r})")
+        arr = np.array(value, dtype=float)
+    if not np.all(np.isfinite(arr)):
+        raise ModelError(f"{name}: value must be finite (got {value!r})")
+    if kind == "pos" and np.any(arr <= 0):
+        i = int(np.argmax(arr <= 0))
+        raise ModelError(f"{name}: value must be > 0 (got {arr[i]:g} at index {i})")
+    if kind == "nonneg" and np.any(arr < 0):
+        i = int(np.argmax(arr < 0))
+        raise ModelError(f"{name}: value must be >= 0 (got {arr[i]:g} at index {i})")
+    if kind == "unit" and not math.isclose(float(np.linalg.norm(arr)), 1.0, rel_tol=1e-9):
+        raise ModelError(f"{name}: value must be a unit vector (norm {np.linalg.norm(arr):g})")
+    return float(arr[0]) if length is None else arr
+
+
+def _parse(data: dict[str, Any]) -> dict[str, Param]:
+    out: dict[str, Param] = {}
+    for section in data:
+        if section not in _SCHEMA:
+            raise ModelError(f"{section}: unknown section (expected one of {', '.join(_SCHEMA)})")
+    for section, fields in _SCHEMA.items():
+        if section not in data:
+            raise ModelError(f"{section}: missing section")
+        table = data[section]
+        if not isinstance(table, dict):
+            raise ModelError(f"{section}: must be a table")
+        for key in table:
+            sub = table[key]
+            if key in fields or (section == "finger" and isinstance(sub, dict) and "value" not in sub):
+                continue  # a field, or a per-finger table [finger.<name>], checked once the names are known
+            raise ModelError(f"{section}.{key}: unknown key (expected one of {', '.join(fields)})")
+        for key, (length, kind) in fields.items():
+            name = f"{section}.{key}"
+            if key not in table:
+                if name in _OPTIONAL:
+                    continue
+                raise ModelError(f"{name}: missing field")
+            out[name] = _entry(name, table[key], length, kind)
+    names = out["palm.finger_names"].value
+    for nm in names:
+        if nm in _SCHEMA["finger"] or nm in _SCHEMA or nm == "thumb":
+            raise ModelError(f"palm.finger_names: {nm!r} is a field or section name; a finger needs another name")
+    for key, sub in data["finger"].items():
+        if key in _SCHEMA["finger"]:
+            continue
+        if key not in names:  # not a field of [finger] nor a finger: the unknown-key error of the section
+            raise ModelError(f"finger.{key}: unknown key (expected one of {', '.join(_SCHEMA['finger'])}, "
+                             f"or a finger name for its own values: {', '.join(names)})")
+        for k, entry in sub.items():
+            if k not in OVERRIDE_FIELDS:
+                raise ModelError(f"finger.{key}.{k}: unknown key (a finger's own values are "
+                                 f"{', '.join(OVERRIDE_FIELDS)})")
+            out[f"finger.{key}.{k}"] = _entry(f"finger.{key}.{k}", entry, *OVERRIDE_FIELDS[k])
+    return out
+
+
+def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
+    """One ``{ value, unit, source, ... }`` entry, validated."""
+    if not isinstance(entry, dict):
+        raise ModelError(f"{name}: must be a table with value, unit, source")
+    for k in entry:
+        if k not in _ENTRY_KEYS:
+            raise ModelError(f"{name}.{k}: unknown key (expected one of {', '.join(sorted(_ENTRY_KEYS))})")
+    for k in ("value", "unit", "source"):
+        if k not in entry:
+            raise ModelError(f"{name}.{k}: missing field")
+    source = entry["source"]
+    if source not in SOURCES:
+        raise ModelError(f"{name}.source: must be one of {', '.join(repr(x) for x in SOURCES)} (got {source!r})")
+    reason = entry.get("reason", "")
+    if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
+        raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
+    value = _check_value(name, entry["value"], length, kind)
+    std = None
+    if "std" in entry:
+        if source != "identified":
+            raise ModelError(f"{name}.std: only an identified value has a standard error")
+        std = _check_value(f"{name}.std", entry["std"], length, "nonneg" if kind != "str" else kind)
+    return Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")), std)
+
+
+def _chain(raw: dict[str, Param], sec: str, K: np.ndarray, over: str = "") -> ChainParams:
+    """The chain of section ``sec``; with ``over`` (``finger.<name>``) that finger's own values replace them."""
+    def get(k: str) -> Any:
+        for name in ((f"{over}.{k}",) if over else ()) + (f"{sec}.{k}",):
+            if name in raw:
+                return raw[name].value
+        return None
+
+    L, s, m, I = (get(k) for k in ("L", "s", "m", "I"))
+    K = get("K") if over else K
+    Fs, Fv, radius = get("F_s"), get("F_v"), get("radius")
+    sec = over or sec
+    if np.any(s > L):
+        i = int(np.argmax(s > L))
+        raise ModelError(f"{sec}.s: COM distance s must not exceed L (s={s[i]:g} > L={L[i]:g} at index {i})")
+    d = L - s
+    I_com = I - m * d**2
+    if np.any(I_com <= 0):
+        i = int(np.argmax(I_com <= 0))
+        raise ModelError(
+            f"{sec}.I: not physically consistent: I about the joint must exceed m d^2 = {m[i] * d[i] ** 2:.4g} "
+            f"(parallel-axis theorem, d = L - s) but is {I[i]:.4g} at index {i}"
+        )
+    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=radius, F_s=Fs, F_v=Fv)
+
+
+def load_params(path: str | Path | None = None) -> HandParams:
+    """Load and validate a parameter file.
+
+    Parameters
+    ----------
+    path:
+        TOML file; ``None`` loads the shipped ``alpes_hand.toml``.
+
+    Raises
+    ------
+    ModelError
+        Empty file name, unreadable or non-UTF-8 file, TOML syntax error, missing or unknown section/field, wrong length, a
+        non-positive length or mass, or an inertia that violates the parallel-axis theorem.
+    """
+    src = path if path is not None else default_params_path()
+    text = read_text(src, "parameter file", ModelError)
+    return _from_text(text, str(src))
+
+
+def _from_text(text: str, path: str) -> HandParams:
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        raise ModelError(f"parameter file {path!r}: invalid TOML ({exc})") from None
+    raw = _parse(data)
+    v = {k: prm.value for k, prm in raw.items()}
+    if v["finger.lower"] >= v["finger.upper"]:
+        raise ModelError("finger.lower: must be below finger.upper")
+    if v["thumb.abduction_lower"] >= v["thumb.abduction_upper"]:
+        raise ModelError("thumb.abduction_lower: must be below thumb.abduction_upper")
+    finger = _chain(raw, "finger", v["finger.K"])
+    fingers = {nm: (_chain(raw, "finger", v["finger.K"], f"finger.{nm}")
+                    if any(k.startswith(f"finger.{nm}.") for k in raw) else finger) for nm in v["palm.finger_names"]}
+    return HandParams(
+        finger=finger,
+        thumb=_chain(raw, "thumb", v["thumb.K"]),
+        r=v["finger.r"], b=v["finger.b"], r_m=v["transmission.r_m"], J_m=v["transmission.J_m"],
+        N=v["transmission.N"], abduction_ratio=v["transmission.abduction_ratio"],
+        encoder_counts=v["transmission.encoder_counts"], tau_max=v["transmission.tau_max"],
+        F_s=v["friction.F_s"], F_v=v["friction.F_v"], smooth_velocity=v["friction.smooth_velocity"],
+        gravity=v["environment.gravity"], finger_lower=v["finger.lower"], finger_upper=v["finger.upper"],
+        abduction_K=v["thumb.abduction_K"], thumb_base_mass=v["thumb.base_mass"], abduction_axis=v["thumb.abduction_axis"],
+        abduction_lower=v["thumb.abduction_lower"], abduction_upper=v["thumb.abduction_upper"],
+        finger_names=v["palm.finger_names"],
+        finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
+        thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
+        abduction_F_s=v.get("thumb.abduction_F_s"), abduction_F_v=v.get("thumb.abduction_F_v"),
+    )
+
+
+# ----------------------------------------------------------------------------- writing
+def _toml_value(x: Any) -> str:
+    if isinstance(x, (tuple, list, np.ndarray)):
+        return "[" + ", ".join(_toml_value(v) for v in x) + "]"
+    if isinstance(x, str):
+        return json.dumps(x)  # a TOML basic string: JSON's escapes are TOML's
+    if isinstance(x, (bool, np.bool_)):
+        raise ModelError(f"parameter value {x!r}: booleans are not parameters")
+    return repr(float(x))
+
+
+def params_toml(raw: dict[str, Param], header: str = "") -> str:
+    """TOML text of a parameter set (``HandParams.raw``), in the schema's order; loads back to the same."""
+    lines = [f"# {h}" for h in header.splitlines()] + ([""] if header else [])
+
+    def section_lines(section: str, fields) -> None:
+        lines.append(f"[{section}]")
+        for key in fields:
+            prm = raw.get(f"{section}.{key}")
+            if prm is None:
+                continue
+            items = [f"value = {_toml_value(prm.value)}", f"unit = {_toml_value(prm.unit)}",
+                     f"source = {_toml_value(prm.source)}"]
+            if prm.reason:
+                items.append(f"reason = {_toml_value(prm.reason)}")
+            if prm.std is not None:
+                items.append(f"std = {_toml_value(prm.std)}")
+            if prm.description:
+                items.append(f"description = {_toml_value(prm.description)}")
+            lines.append(f"{key} = {{ " + ", ".join(items) + " }")
+        lines.append("")
+
+    names = raw["palm.finger_names"].value if "palm.finger_names" in raw else ()
+    for section, fields in _SCHEMA.items():
+        section_lines(section, fields)
+        if section == "finger":  # the per-finger tables, in palm.finger_names order
+            for nm in names:
+                if any(k.startswith(f"finger.{nm}.") for k in raw):
+                    section_lines(f"finger.{nm}", OVERRIDE_FIELDS)
+    return "\n".join(lines)
+
+
+def with_values(params: HandParams, updates: dict[str, Param], header: str = "") -> HandParams:
+    """``params`` with the entries ``updates`` ("section.field" -> :class:`Param`) replaced, validated
+    exactly as a file is (the result is what :func:`load_params` reads from :func:`params_toml`)."""
+    raw = dict(params.raw)
+    for name, prm in updates.items():
+        section, _, key = name.partition(".")
+        finger, _, field_ = key.partition(".")
+        if not (section in _SCHEMA and key in _SCHEMA[section]) and not (
+                section == "finger" and finger in params.finger_names and field_ in OVERRIDE_FIELDS):
+            raise ModelError(f"{name}: unknown parameter field")
+        raw[name] = prm
+    text = params_toml(raw, header)
+    return _from_text(text, params.path or "<updated>")
+
+
+def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:
+    """Write ``params`` as a parameter file (atomically: a temporary file renamed into place)."""
+    p = Path(path)
+    text = params_toml(params.raw, header)
+    tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
+    try:
+        tmp.write_text(text, encoding="utf-8")
+        os.replace(tmp, p)
+    except OSError as exc:
+        tmp.unlink(missing_ok=True)
+        raise ModelError(f"parameter file {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
+    return p
+
+
+def chain_params(params: HandParams, chain: str) -> HandParams:
+    """``params`` as seen by one chain: for a finger, the hand whose shared ``[finger]`` values are that
+    finger's (its ``[finger.<name>]`` values merged in, every finger's own table dropped), so that
+    ``finger2``/``finger3`` built from it is that finger; for ``"thumb"`` or ``"finger"``, ``params``
+    without per-finger values. Both the arrays and ``raw`` (what :func:`write_params` writes) change."""
+    own = params.chain(chain)  # an unknown chain: ModelError
+    raw = {k: prm for k, prm in params.raw.items() if not (k.startswith("finger.") and k.count(".") == 2)}
+    finger = params.finger
+    if chain in params.finger_names:
+        finger = own
+        for field_, prm in params.overrides(chain).items():
+            base = params.raw.get(f"finger.{field_}")
+            desc = prm.description or (base.description if base is not None else "")
+            raw[f"finger.{field_}"] = Param(prm.value, prm.unit, prm.source, prm.reason, desc, prm.std)
+    return dataclasses.replace(params, finger=finger, fingers={nm: finger for nm in params.finger_names}, raw=raw)

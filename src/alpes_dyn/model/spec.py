@@ -1,0 +1,378 @@
+"""Transmission spec: what a URDF cannot hold about a tendon-driven robot, for any URDF.
+
+A :class:`TransmissionSpec` names the motors, the joints each drives with their ratios, the encoder
+resolution, and per-joint springs, friction and rotor inertia. With a URDF it makes a
+:class:`~alpes_dyn.Model` (``Model(urdf, spec)``, ``Model.from_urdf_file(path, spec)``) that has
+everything an Alpes model has: motor input, encoder outputs, springs, friction, rotor inertia. The
+Alpes models themselves are built the same way, from the spec :func:`alpes_spec` makes out of the
+parameter file.
+
+Conventions (report Section 3, eq. 3.13): motor k reads q_m,k = sum_i ratio_ki q_i over the joints it
+drives, i.e. q_m = S q with S (m, n); by power balance the motor torques act on the joints as
+Gamma = S^T tau_m. Joint i carries a spring torque k_i q_i (N m/rad; zero at q_i = 0), friction
+F_s,i sign(qd_i) + F_v,i qd_i (N m, N m s/rad; eq. 2.6-2.7) and a rotor inertia I_a,i (kg m^2; added
+to A's diagonal, Pinocchio's ``armature``, eq. 2.8: for a motor of inertia J_m behind ratio N,
+I_a = N^2 J_m). Joints a table does not list get zero.
+
+The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``joints``)::
+
+    name = "allegro_tendon"        # model label (default: the URDF's robot name)
+    encoder_counts = 4096          # encoder counts per motor revolution (quantisation)
+    smooth_velocity = 0.01         # rad/s, tanh(v / v_s) replaces sign(v) where smoothness is needed
+    gravity = [0.0, 0.0, -9.81]    # m/s^2 in the base frame (default: this one)
+    tips = ["link_3.0_tip"]        # tip frames, the first is the default tip (default: the URDF's leaves)
+
+    [[motor]]                      # one table per motor, in motor order
+    name = "index"
+    joints = { "joint_1.0" = 2.0, "joint_2.0" = 1.6, "joint_3.0" = 1.2 }   # joint -> ratio
+
+    [stiffness]                    # N m/rad
+    "joint_1.0" = 0.2
+    [coulomb]                      # N m
+    [viscous]                      # N m s/rad
+    [armature]                     # kg m^2
+
+The shipped example for the Allegro hand of example-robot-data is ``example_spec_path("allegro_hand")``.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from dataclasses import dataclass, field
+from importlib import resources
+from pathlib import Path
+from types import MappingProxyType
+from typing import Any, Mapping, Sequence
+
+import numpy as np
+
+from .description import Layout
+from ..errors import ModelError
+from .extras import JointExtras, spring_stiffness
+from .params import HandParams
+from .transmission import Transmission
+
+__all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES"]
+
+JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
+"""Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), rotor inertia (kg m^2)."""
+_TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES
+_MOTOR_KEYS = ("name", "joints")
+
+
+def _number(value: Any, name: str, low: float | None = None, strict: bool = False) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ModelError(f"{name}: expected a number, got {value!r}")
+    x = float(value)
+    if not math.isfinite(x):
+        raise ModelError(f"{name}: expected a finite number, got {value!r}")
+    if low is not None and (x <= low if strict else x < low):
+        raise ModelError(f"{name}: expected a number {'>' if strict else '>='} {low:g}, got {x:g}")
+    return x
+
+
+def _name(value: Any, name: str) -> str:
+    if not isinstance(value, str) or not value:
+        raise ModelError(f"{name}: expected a non-empty string, got {value!r}")
+    return value
+
+
+@dataclass(frozen=True)
+class Motor:
+    """One motor and its tendon: q_m = sum_i ratio_i q_i over ``joints`` {joint name: ratio}.
+
+    ``ratio`` is rad of motor shaft per rad of joint (r_i / r_m for a pulley of radius r_i on the
+    joint and r_m on the motor); non-zero and finite.
+    """
+
+    name: str
+    joints: Mapping[str, float]
+
+    def __post_init__(self) -> None:
+        _name(self.name, "motor.name")
+        where = f"motor {self.name!r}"
+        if not isinstance(self.joints, Mapping) or not self.joints:
+            raise ModelError(f"{where}.joints: expected a non-empty table joint name -> ratio, got {self.joints!r}")
+        clean: dict[str, float] = {}
+        for j, r in self.joints.items():
+            _name(j, f"{where}.joints")
+            x = _number(r, f"{where}.joints.{j}")
+            if x == 0.0:
+                raise ModelError(f"{where}.joints.{j}: a ratio must be non-zero (leave the joint out instead)")
+            clean[j] = x
+        object.__setattr__(self, "joints", MappingProxyType(clean))
+
+
+def _table(value: Any, name: str, low: float | None) -> Mapping[str, float]:
+    if value is None:
+        return MappingProxyType({})
+    if not isinstance(value, Mapping):
+        raise ModelError(f"{name}: expected a table joint name -> number, got {value!r}")
+    return MappingProxyType({_name(j, name): _number(x, f"{name}.{j}", low) for j, x in value.items()})
+
+
+@dataclass(frozen=True)
+class TransmissionSpec:
+    """Motors, encoder and per-joint extras of a robot, by joint name (see the module doc).
+
+    Parameters
+    ----------
+    motors: the motors in order (their order is the order of tau_m and of the encoder vector).
+    stiffness, coulomb, viscous, armature: {joint name: value} (N m/rad, N m, N m s/rad, kg m^2),
+        all >= 0; joints not listed get 0.
+    encoder_counts: encoder counts per motor revolution (> 0).
+    smooth_velocity: v_s (rad/s, > 0) of the smooth sign tanh(v / v_s).
+    gravity: (3,) m/s^2 in the base frame, or None (the model's default).
+    tips: tip frame names, or None (the URDF's leaf frames).
+    name: model label, or None (the URDF's robot name).
+    spring: a label of the spring law shown in reports (default ``"torsional"`` if any stiffness
+        is non-zero, else ``"none"``); the torque is always k q.
+    """
+
+    motors: tuple[Motor, ...] = ()
+    stiffness: Mapping[str, float] = field(default_factory=dict)
+    coulomb: Mapping[str, float] = field(default_factory=dict)
+    viscous: Mapping[str, float] = field(default_factory=dict)
+    armature: Mapping[str, float] = field(default_factory=dict)
+    encoder_counts: float = 4096.0
+    smooth_velocity: float = 0.01
+    gravity: tuple[float, float, float] | None = None
+    tips: tuple[str, ...] | None = None
+    name: str | None = None
+    spring: str | None = None
+
+    def __post_init__(self) -> None:
+        motors = tuple(self.motors) if isinstance(self.motors, (list, tuple)) else None
+        if motors is None or not all(isinstance(m, Motor) for m in motors):
+            raise ModelError(f"motors: expected a sequence of Motor, got {self.motors!r}")
+        names = [m.name for m in motors]
+        dup = next((n for n in names if names.count(n) > 1), None)
+        if dup is not None:
+            raise ModelError(f"motors: motor name {dup!r} appears twice")
+        object.__setattr__(self, "motors", motors)
+        for t in JOINT_TABLES:
+            object.__setattr__(self, t, _table(getattr(self, t), t, 0.0))
+        object.__setattr__(self, "encoder_counts", _number(self.encoder_counts, "encoder_counts", 0.0, strict=True))
+        object.__setattr__(self, "smooth_velocity", _number(self.smooth_velocity, "smooth_velocity", 0.0, strict=True))
+        if self.gravity is not None:
+            g = self.gravity
+            if not isinstance(g, (list, tuple, np.ndarray)) or len(g) != 3:
+                raise ModelError(f"gravity: expected 3 numbers, got {g!r}")
+            object.__setattr__(self, "gravity", tuple(_number(x, "gravity") for x in g))
+        if self.tips is not None:
+            if isinstance(self.tips, str) or not isinstance(self.tips, (list, tuple)) or not self.tips:
+                raise ModelError(f"tips: expected a non-empty list of frame names, got {self.tips!r}")
+            object.__setattr__(self, "tips", tuple(_name(t, "tips") for t in self.tips))
+        if self.name is not None:
+            _name(self.name, "name")
+        if self.spring is None:
+            object.__setattr__(self, "spring", "torsional" if any(self.stiffness.values()) else "none")
+        _name(self.spring, "spring")
+
+    # ------------------------------------------------------------------ file form
+    @classmethod
+    def from_dict(cls, data: Mapping[str, Any]) -> "TransmissionSpec":
+        """A spec from the parsed TOML (see the module doc); unknown keys are refused."""
+        if not isinstance(data, Mapping):
+            raise ModelError(f"spec: expected a table, got {type(data).__name__}")
+        for k in data:
+            if k not in _TOP_KEYS:
+                raise ModelError(f"{k}: unknown key (expected one of {', '.join(_TOP_KEYS)})")
+        raw_motors = data.get("motor", [])
+        if not isinstance(raw_motors, list):
+            raise ModelError("motor: expected an array of tables ([[motor]] entries)")
+        motors = []
+        for i, m in enumerate(raw_motors):
+            if not isinstance(m, Mapping):
+                raise ModelError(f"motor[{i}]: expected a table with name and joints")
+            for k in m:
+                if k not in _MOTOR_KEYS:
+                    raise ModelError(f"motor[{i}].{k}: unknown key (expected one of {', '.join(_MOTOR_KEYS)})")
+            for k in _MOTOR_KEYS:
+                if k not in m:
+                    raise ModelError(f"motor[{i}].{k}: missing field")
+            motors.append(Motor(m["name"], m["joints"]))
+        kw = {k: data[k] for k in _TOP_KEYS if k in data and k != "motor"}
+        if "tips" in kw and isinstance(kw["tips"], list):
+            kw["tips"] = tuple(kw["tips"])
+        if "gravity" in kw and isinstance(kw["gravity"], list):
+            kw["gravity"] = tuple(kw["gravity"])
+        return cls(motors=tuple(motors), **kw)
+
+    @classmethod
+    def from_toml(cls, text: str, source: str = "spec") -> "TransmissionSpec":
+        """Parse the TOML text of a spec; errors name ``source`` and the field."""
+        try:
+            data = tomllib.loads(text)
+        except tomllib.TOMLDecodeError as exc:
+            raise ModelError(f"spec file {source!r}: invalid TOML ({exc})") from None
+        try:
+            return cls.from_dict(data)
+        except ModelError as exc:
+            raise ModelError(f"spec file {source!r}: {exc}") from None
+
+    def to_toml(self) -> str:
+        """The TOML text of this spec (``TransmissionSpec.from_toml(spec.to_toml()) == spec``)."""
+        q = _toml_key
+        out = []
+        if self.name is not None:
+            out.append(f"name = {_toml_str(self.name)}")
+        out.append(f"spring = {_toml_str(self.spring or 'none')}")
+        out.append(f"encoder_counts = {self.encoder_counts!r}")
+        out.append(f"smooth_velocity = {self.smooth_velocity!r}")
+        if self.gravity is not None:
+            out.append(f"gravity = [{', '.join(repr(float(x)) for x in self.gravity)}]")
+        if self.tips is not None:
+            out.append(f"tips = [{', '.join(_toml_str(t) for t in self.tips)}]")
+        for m in self.motors:
+            out += ["", "[[motor]]", f"name = {_toml_str(m.name)}",
+                    "joints = { " + ", ".join(f"{q(j)} = {r!r}" for j, r in m.joints.items()) + " }"]
+        for t in JOINT_TABLES:
+            table = getattr(self, t)
+            if table:
+                out += ["", f"[{t}]"] + [f"{q(j)} = {x!r}" for j, x in table.items()]
+        return "\n".join(out) + "\n"
+
+    def __eq__(self, other: object) -> bool:
+        if not isinstance(other, TransmissionSpec):
+            return NotImplemented
+        return (self.motors == other.motors and all(dict(getattr(self, t)) == dict(getattr(other, t))
+                                                    for t in JOINT_TABLES)
+                and (self.encoder_counts, self.smooth_velocity, self.gravity, self.tips, self.name, self.spring)
+                == (other.encoder_counts, other.smooth_velocity, other.gravity, other.tips, other.name, other.spring))
+
+    __hash__ = None  # type: ignore[assignment]
+
+    # ------------------------------------------------------------------ applied to a URDF's joints
+    def check(self, joint_names: Sequence[str], frame_names: Sequence[str] = ()) -> None:
+        """Every joint and tip the spec names exists (else :class:`~alpes_dyn.ModelError` naming it)."""
+        known = set(joint_names)
+        listing = ", ".join(joint_names)
+        for m in self.motors:
+            for j in m.joints:
+                if j not in known:
+                    raise ModelError(f"motor {m.name!r}.joints: unknown joint {j!r} (URDF joints: {listing})")
+        for t in JOINT_TABLES:
+            for j in getattr(self, t):
+                if j not in known:
+                    raise ModelError(f"{t}.{j}: unknown joint {j!r} (URDF joints: {listing})")
+        if self.tips is not None and frame_names:
+            frames = set(frame_names)
+            for tip in self.tips:
+                if tip not in frames:
+                    raise ModelError(f"tips: unknown frame {tip!r} in the URDF")
+
+    def extras(self, joint_names: Sequence[str]) -> JointExtras:
+        """The per-joint tables as :class:`~alpes_dyn.JointExtras` in ``joint_names`` order."""
+        self.check(joint_names)
+        idx = {j: i for i, j in enumerate(joint_names)}
+        arrays = {}
+        for t in JOINT_TABLES:
+            a = np.zeros(len(joint_names))
+            for j, x in getattr(self, t).items():
+                a[idx[j]] = x
+            arrays[t] = a
+        return JointExtras(stiffness=arrays["stiffness"], armature=arrays["armature"], coulomb=arrays["coulomb"],
+                           viscous=arrays["viscous"], smooth_velocity=self.smooth_velocity)
+
+    def transmission(self, joint_names: Sequence[str]) -> Transmission | None:
+        """The :class:`~alpes_dyn.Transmission` (S, its sum pattern, encoder) in ``joint_names`` order,
+        None without motors."""
+        if not self.motors:
+            return None
+        self.check(joint_names)
+        idx = {j: i for i, j in enumerate(joint_names)}
+        S = np.zeros((len(self.motors), len(joint_names)))
+        for k, m in enumerate(self.motors):
+            for j, r in m.joints.items():
+                S[k, idx[j]] = r
+        return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts)
+
+
+def _toml_str(s: str) -> str:
+    return '"' + s.replace("\\", "\\\\").replace('"', '\\"') + '"'
+
+
+def _toml_key(s: str) -> str:
+    return s if s.replace("_", "").replace("-", "").isalnum() and s.isascii() else _toml_str(s)
+
+
+def load_spec(path: str | Path) -> TransmissionSpec:
+    """Read a spec file (TOML, see the module doc); :class:`~alpes_dyn.ModelError` naming the file and field."""
+    p = Path(path)
+    try:
+        text = p.read_text()
+    except OSError as exc:
+        raise ModelError(f"spec file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
+    except UnicodeDecodeError:
+        raise ModelError(f"spec file {str(p)!r}: not UTF-8 text") from None
+    return TransmissionSpec.from_toml(text, str(p))
+
+
+def example_spec_path(name: str = "allegro_hand") -> Path:
+    """Path of a spec file shipped with the package (``"allegro_hand"``: the Allegro hand's tendon spec)."""
+    p = Path(str(resources.files("alpes_dyn") / "data" / f"{name}_spec.toml"))
+    if not p.is_file():
+        raise ModelError(f"unknown example spec {name!r} (shipped: allegro_hand)")
+    return p
+
+
+def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float) -> tuple[Motor, ...]:
+    """The Alpes motors: one per chain (``ratio`` on each of its joints, chain order), then one per
+    ab/adduction joint (``abduction_ratio``), named ``<chain>_abduction``."""
+    motors = [Motor(ch.name, {j: ratio for j in ch.joints}) for ch in lay.chains]
+    motors += [Motor(f"{ch.name}_abduction", {ch.abduction: abduction_ratio}) for ch in lay.chains if ch.abduction]
+    return tuple(motors)
+
+
+def alpes_transmission(lay: Layout, joint_names: tuple[str, ...], ratio: float, abduction_ratio: float = 1.0,
+                       counts_per_rev: float = 4096.0) -> Transmission:
+    """The transmission of an Alpes layout: one motor per chain (``ratio`` on each of its joints), one per
+    ab/adduction joint (``abduction_ratio``); the same motors as :func:`alpes_spec` (Sec. 3, eq. 3.13)."""
+    tr = TransmissionSpec(motors=alpes_motors(lay, ratio, abduction_ratio),
+                          encoder_counts=counts_per_rev).transmission(joint_names)
+    assert tr is not None
+    return tr
+
+
+def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", friction: bool = False,
+               rotor_inertia: bool = False) -> TransmissionSpec:
+    """The spec of an Alpes model from its layout and the parameter file (what :meth:`Model.alpes` uses).
+
+    One motor per chain (ratio r/r_m on each of its flexion joints), one for the thumb's
+    ab/adduction (``transmission.abduction_ratio``); springs K_i under the ``spring`` law (eq. 2.14);
+    with ``friction`` F_s and F_v on every joint (eq. 2.6-2.7; a chain's per-joint ``F_s``/``F_v`` -- a
+    finger's own first -- and the thumb's ``abduction_F_s``/``abduction_F_v`` where the file gives them); with ``rotor_inertia`` N^2 J_m on
+    every flexion joint and abduction_ratio^2 J_m on the ab/adduction joint (eq. 2.8).
+    """
+    ratio, abd = params.transmission_ratio, params.abduction_ratio
+    motors = alpes_motors(lay, ratio, abd)
+    K: dict[str, float] = {}
+    arm: dict[str, float] = {}
+    Fs: dict[str, float] = {}
+    Fv: dict[str, float] = {}
+    for ch in lay.chains:
+        chain = params.chain(ch.name)  # per-joint chain friction where the file gives it (a finger's own first)
+        for i, (j, k) in enumerate(zip(ch.joints, ch.stiffness)):
+            K[j] = k
+            arm[j] = params.N**2 * params.J_m
+            Fs[j] = float(chain.F_s[i]) if getattr(chain, "F_s", None) is not None else params.F_s
+            Fv[j] = float(chain.F_v[i]) if getattr(chain, "F_v", None) is not None else params.F_v
+        if ch.abduction:
+            K[ch.abduction] = lay.abduction_stiffness
+            arm[ch.abduction] = abd**2 * params.J_m
+            Fs[ch.abduction] = params.F_s if params.abduction_F_s is None else params.abduction_F_s
+            Fv[ch.abduction] = params.F_v if params.abduction_F_v is None else params.abduction_F_v
+    joints = list(K)
+    k = spring_stiffness(np.array([K[j] for j in joints]), spring, params.b, params.r)
+    zeros: dict[str, float] = {}
+    return TransmissionSpec(
+        motors=tuple(motors),
+        stiffness={j: float(x) for j, x in zip(joints, k)},
+        coulomb=Fs if friction else zeros,
+        viscous=Fv if friction else zeros,
+        armature=arm if rotor_inertia else zeros,
+        encoder_counts=params.encoder_counts, smooth_velocity=params.smooth_velocity,
+        gravity=tuple(float(x) for x in params.gravity), tips=lay.tips, name=lay.model, spring=spring,
+    )

@@ -1,0 +1,65 @@
+"""Tendon transmission and actuation of the Alpes hand (report Section 3, eq. 3.13).
+
+Each finger has one motor whose encoder reads q_m = (r/r_m)(q_1 + q_2 + q_3). The map is linear,
+q_m = S q with S of shape (n_motors, n_joints); by power consistency (tau_m . qdot_m = tau . qdot)
+the motor torques act on the joints as tau = S^T tau_m, so S^T is the actuation matrix.
+For the hand: 6 motors -- index, middle, ring, little, thumb flexion (on the thumb's two flexion
+joints) and thumb ab/adduction (on its own joint, ratio ``transmission.abduction_ratio``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..checks import as_float_array
+from ..errors import InputError
+
+__all__ = ["Transmission"]
+
+
+@dataclass(frozen=True)
+class Transmission:
+    """Linear joint-to-motor map of a model.
+
+    Attributes
+    ----------
+    motor_names: names of the motors, length m.
+    S: (m, n) map q_m = S q (rad of motor shaft per rad of joint).
+    sum_matrix: (m, n) map y = (sum of each motor's joints), the report's output y = q_1 + ... + q_k.
+    counts_per_rev: encoder resolution (counts per motor revolution), for quantisation.
+    """
+
+    motor_names: tuple[str, ...]
+    S: np.ndarray
+    sum_matrix: np.ndarray
+    counts_per_rev: float
+
+    @property
+    def n_motors(self) -> int:
+        return int(self.S.shape[0])
+
+    @property
+    def actuation_matrix(self) -> np.ndarray:
+        """B = S^T, shape (n, m): joint torques tau = B tau_m."""
+        return self.S.T
+
+    def motor_positions(self, q: np.ndarray) -> np.ndarray:
+        """Encoder angles q_m = S q (rad), q: (n,) or (..., n) -> (m,) or (..., m)."""
+        q = as_float_array(q, "q", "joint angles")
+        if q.shape[-1:] != (self.S.shape[1],):
+            raise InputError(f"q: expected last dimension {self.S.shape[1]}, got shape {q.shape}")
+        return q @ self.S.T
+
+    def joint_torque(self, tau_m: np.ndarray) -> np.ndarray:
+        """Joint torques S^T tau_m (N m) from motor torques tau_m (N m), (m,) or (..., m)."""
+        tau_m = as_float_array(tau_m, "tau_m", "motor torques")
+        if tau_m.shape[-1:] != (self.n_motors,):
+            raise InputError(f"tau_m: expected last dimension {self.n_motors}, got shape {tau_m.shape}")
+        return tau_m @ self.S
+
+    def quantize(self, q_m: np.ndarray) -> np.ndarray:
+        """Encoder reading: q_m rounded to the encoder's resolution 2 pi / counts_per_rev (rad)."""
+        step = 2.0 * np.pi / self.counts_per_rev
+        return np.round(as_float_array(q_m, "q_m", "motor angles") / step) * step

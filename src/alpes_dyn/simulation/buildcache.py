@@ -1,0 +1,210 @@
+"""The on-disk cache of compiled shared libraries: checked, locked and self-healing.
+
+:func:`build_library` compiles C source once into ``<stem>_<key>.so`` in a cache directory (``key``:
+a hash of the source, the compiler and its flags) and returns it loaded with :mod:`ctypes`:
+
+* **checked before it is loaded** -- beside each library a small file ``<stem>_<key>.so.sha256``
+  records its size and SHA-256; a library is loaded only if both match. A library truncated by a
+  full disk or a killed copy, with a flipped byte, or without its record is never handed to the
+  dynamic loader (which would crash the process with a bus error or a segmentation fault): it is
+  removed and compiled again;
+* **locked** -- a build holds an exclusive ``fcntl`` lock on ``<stem>_<key>.lock``, so that
+  concurrent processes (or threads) needing the same library compile it once; the others wait and
+  load the result;
+* **atomic** -- the compiler writes into a private build folder ``.build@<stem>_<key>@...``; the
+  finished library is flushed to disk and renamed into place, then its record is written (also by
+  rename), so a reader never sees a half-written file;
+* **cleaned** -- build folders left by killed builds (their lock is free) are removed by the next
+  build, as are ``tmp*`` folders older than an hour left by versions before this cache.
+
+Errors are :class:`CompilerError` with one line.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import ctypes
+import hashlib
+import os
+import shutil
+import subprocess
+import tempfile
+import time
+from pathlib import Path
+from typing import Iterator, Sequence
+
+from ..errors import AlpesDynError
+from ..fileio import atomic_write
+
+try:  # POSIX; elsewhere builds are not locked
+    import fcntl
+except ImportError:  # pragma: no cover - not POSIX
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["CompilerError", "build_library", "verify_library", "LEGACY_TMP_AGE_S"]
+
+LEGACY_TMP_AGE_S = 3600.0
+"""Age (s) after which a ``tmp*`` folder of an older alpes_dyn in the cache is removed."""
+
+_BUILD = ".build@"
+
+
+class CompilerError(AlpesDynError, RuntimeError):
+    """The C compiler is missing or failed on generated code, or the cache cannot be used."""
+
+
+def _digest(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()
+
+
+def _record_path(lib: Path) -> Path:
+    return lib.with_name(lib.name + ".sha256")
+
+
+def verify_library(lib: Path) -> bool:
+    """True if ``lib`` exists and its size and SHA-256 equal its record (no loading)."""
+    try:
+        fields = _record_path(lib).read_text(encoding="ascii").split()
+        rec = dict(zip(fields[::2], fields[1::2]))
+        if lib.stat().st_size != int(rec["size"]):
+            return False
+        return _digest(lib) == rec["sha256"]
+    except (OSError, ValueError, KeyError, UnicodeDecodeError):
+        return False
+
+
+def _load(lib: Path) -> ctypes.CDLL | None:
+    """The library loaded if it passes :func:`verify_library`, else None."""
+    if not verify_library(lib):
+        return None
+    try:
+        return ctypes.CDLL(str(lib))
+    except OSError:
+        return None
+
+
+@contextlib.contextmanager
+def _locked(path: Path, blocking: bool = True) -> Iterator[bool]:
+    """Hold an exclusive lock on ``path`` (created if needed); yields False if not blocking and busy."""
+    if fcntl is None:  # pragma: no cover - not POSIX
+        yield True
+        return
+    try:
+        fd = os.open(path, os.O_RDWR | os.O_CREAT, 0o666)
+    except OSError as exc:
+        raise CompilerError(f"cache lock {str(path)!r}: cannot be created ({exc.strerror or exc})") from None
+    try:
+        try:
+            fcntl.flock(fd, fcntl.LOCK_EX | (0 if blocking else fcntl.LOCK_NB))
+        except BlockingIOError:
+            yield False
+            return
+        try:
+            yield True
+        finally:
+            fcntl.flock(fd, fcntl.LOCK_UN)
+    finally:
+        os.close(fd)
+
+
+def _clean_stale(d: Path, own: str) -> None:
+    """Remove build folders of killed builds: those of ``own`` (whose lock the caller holds) and those
+    whose lock is free; and ``tmp*`` folders of older versions after :data:`LEGACY_TMP_AGE_S`."""
+    now = time.time()
+    try:
+        entries = list(d.iterdir())
+    except OSError:
+        return
+    for e in entries:
+        try:
+            if not e.is_dir():
+                continue
+            if e.name.startswith(_BUILD):
+                name = e.name[len(_BUILD):].split("@", 1)[0]
+                if name == own:
+                    shutil.rmtree(e, ignore_errors=True)
+                    continue
+                with _locked(d / f"{name}.lock", blocking=False) as free:
+                    if free:
+                        shutil.rmtree(e, ignore_errors=True)
+            elif e.name.startswith("tmp") and now - e.stat().st_mtime > LEGACY_TMP_AGE_S:
+                shutil.rmtree(e, ignore_errors=True)
+        except (OSError, CompilerError):
+            continue
+
+
+def _remove(*paths: Path) -> None:
+    for p in paths:
+        try:
+            p.unlink()
+        except FileNotFoundError:
+            pass
+        except OSError as exc:
+            raise CompilerError(f"cache: cannot remove the broken {str(p)!r} ({exc.strerror or exc})") from None
+
+
+def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], directory: Path,
+                  libs: Sequence[str] = ("-lm",)) -> tuple[Path, bool, float, ctypes.CDLL]:
+    """Compile ``source`` into a shared library in ``directory`` once, and load it.
+
+    Parameters
+    ----------
+    source: C source. stem: file name stem (letters, digits, ``_``). cc: compiler path.
+    cflags: compiler flags (must produce a shared library). directory: the cache.
+
+    Returns
+    -------
+    (path, compiled_now, seconds, library): ``compiled_now`` is False when a verified library was
+    loaded from the cache (``seconds`` 0), True when this call compiled it.
+    """
+    key = hashlib.sha256((source + "\0" + " ".join(cflags) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
+    name = f"{stem}_{key}"
+    d = Path(directory)
+    try:
+        d.mkdir(parents=True, exist_ok=True)
+    except OSError as exc:
+        raise CompilerError(f"cache directory {str(d)!r}: cannot be created ({exc.strerror or exc})") from None
+    lib = d / f"{name}.so"
+    handle = _load(lib)
+    if handle is not None:
+        return lib, False, 0.0, handle
+    with _locked(d / f"{name}.lock"):
+        _clean_stale(d, name)
+        handle = _load(lib)  # built by another process while this one waited
+        if handle is not None:
+            return lib, False, 0.0, handle
+        _remove(lib, _record_path(lib))  # missing, broken or unloadable: build it again
+        t0 = time.perf_counter()
+        try:
+            build = Path(tempfile.mkdtemp(prefix=f"{_BUILD}{name}@", dir=d))
+        except OSError as exc:
+            raise CompilerError(f"cache directory {str(d)!r}: not writable ({exc.strerror or exc})") from None
+        try:
+            c = build / f"{stem}.c"
+            c.write_text(source, encoding="utf-8")
+            out = build / f"{stem}.so"
+            proc = subprocess.run([cc, *cflags, str(c), "-o", str(out), *libs], capture_output=True, text=True)
+            if proc.returncode != 0:
+                first = (proc.stderr.strip().splitlines() or ["unknown error"])[0]
+                raise CompilerError(f"compiling {stem}.c failed: {first}")
+            with open(out, "rb+") as f:
+                os.fsync(f.fileno())
+            size, digest = out.stat().st_size, _digest(out)
+            os.replace(out, lib)  # atomic: a reader sees the old state or the whole library
+            atomic_write(_record_path(lib), f"sha256 {digest}\nsize {size}\n", "cache record")
+        except OSError as exc:
+            raise CompilerError(f"cache: cannot write {name}.so ({exc.strerror or exc})") from None
+        except AlpesDynError as exc:
+            if isinstance(exc, CompilerError):
+                raise
+            raise CompilerError(f"cache: {exc}") from None
+        finally:
+            shutil.rmtree(build, ignore_errors=True)
+        handle = _load(lib)
+        if handle is None:
+            raise CompilerError(f"cache: the freshly built {str(lib)!r} cannot be loaded")
+        return lib, True, time.perf_counter() - t0, handle

@@ -1,0 +1,320 @@
+"""C code generation for batched step loops: CasADi's generated step wrapped in a C driver that
+loops over steps, advances two sequences per SIMD lane pair (a regex rewrite of CasADi's scalar C
+into GCC vector extensions) and splits the batch over POSIX threads; compiled once with the system
+C compiler (``$CC``, default gcc) and cached on disk (:mod:`alpes_dyn.simulation.buildcache`).
+
+:class:`CompiledStepLoop` is the engine behind :class:`alpes_dyn.simulation.integrate.CompiledRollout`, the
+observers' compiled runs and the identification's sensitivities. CasADi's stock path
+(``Function.map(N, "thread")`` with ``jit=True``) is the documented fallback where no C compiler
+is wanted.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import os
+import re
+import shutil
+from pathlib import Path
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from .buildcache import CompilerError, build_library
+from ..errors import InputError, ModelError
+from ..progress import _Progress
+
+__all__ = ["CompiledStepLoop", "cache_dir", "CompilerError"]
+
+# ----------------------------------------------------------------------------- C compilation and cache
+def cache_dir() -> Path:
+    """Directory of compiled libraries: ``$ALPES_DYN_CACHE`` or ``~/.cache/alpes_dyn``."""
+    env = os.environ.get("ALPES_DYN_CACHE")
+    return Path(env) if env else Path.home() / ".cache" / "alpes_dyn"
+
+
+_CFLAGS = ("-O3", "-fno-math-errno", "-shared", "-fPIC", "-pthread")
+_LANES = 2
+
+
+def _compiler() -> str:
+    cc = os.environ.get("CC", "gcc")
+    path = shutil.which(cc) or shutil.which("cc")
+    if path is None:
+        raise CompilerError(f"C compiler {cc!r} not found (install gcc or set CC); it builds the compiled rollout")
+    return path
+
+
+def _build_library(source: str, stem: str) -> tuple[Path, bool, float, ctypes.CDLL]:
+    """Compile ``source`` to a shared library in the cache (once) and load it; return (path,
+    compiled_now, seconds, library). The cache is checked, locked and self-healing:
+    :mod:`alpes_dyn.simulation.buildcache`."""
+    return build_library(source, stem, _compiler(), _CFLAGS, cache_dir())
+
+
+_DRIVER = r"""
+/* ---- alpes_dyn batched rollout driver (appended to the CasADi-generated step) ---- */
+#include <pthread.h>
+#include <string.h>
+
+#define NX {nx}
+#define NW {nw}
+#define SZ_ARG {sz_arg}
+#define SZ_RES {sz_res}
+#define SZ_IW {sz_iw}
+#define SZ_W {sz_w}
+#define LANES {lanes}
+
+typedef struct {{ const double* W; double* X; long b0, b1, ntot, k0, k1; int status; }} alpes_job;
+
+{vector_code}
+
+static void alpes_run(alpes_job* j) {{
+  long b, k;
+#if LANES > 1
+  /* LANES trajectories at once, one per SIMD lane; a short last group repeats its last trajectory */
+  vd xs[NX], xn[NX], w[NW];
+  double* Xp[LANES];
+  const double* Wp[LANES];
+  int i, l;
+  for (b = j->b0; b < j->b1; b += LANES) {{
+    for (l = 0; l < LANES; ++l) {{
+      long bl = b + l < j->b1 ? b + l : j->b1 - 1;
+      Xp[l] = j->X + bl * (j->ntot + 1) * NX;
+      Wp[l] = j->W + bl * j->ntot * NW;
+    }}
+    for (i = 0; i < NX; ++i) for (l = 0; l < LANES; ++l) xs[i][l] = Xp[l][j->k0 * NX + i];
+    for (k = j->k0; k < j->k1; ++k) {{
+      for (i = 0; i < NW; ++i) for (l = 0; l < LANES; ++l) w[i][l] = Wp[l][k * NW + i];
+      alpes_vstep(xs, w, xn);
+      for (i = 0; i < NX; ++i) {{
+        xs[i] = xn[i];
+        for (l = LANES - 1; l >= 0; --l) Xp[l][(k + 1) * NX + i] = xn[i][l];
+      }}
+    }}
+  }}
+#else
+  const casadi_real* arg[SZ_ARG];
+  casadi_real* res[SZ_RES];
+  casadi_int iw[SZ_IW + 1];
+  casadi_real w[SZ_W + 1];
+  for (b = j->b0; b < j->b1; ++b) {{
+    double* X = j->X + b * (j->ntot + 1) * NX;
+    const double* W = j->W + b * j->ntot * NW;
+    for (k = j->k0; k < j->k1; ++k) {{
+      arg[0] = X + k * NX;
+      arg[1] = W + k * NW;
+      res[0] = X + (k + 1) * NX;
+      if ({step}(arg, res, iw, w, 0)) {{ j->status = 1; return; }}
+    }}
+  }}
+#endif
+  j->status = 0;
+}}
+
+static void* alpes_worker(void* p) {{ alpes_run((alpes_job*) p); return 0; }}
+
+/* X: (B, ntot+1, NX) with X[b, k0] set; W: (B, ntot, NW); advances steps k0..k1-1 of every trajectory. */
+CASADI_SYMBOL_EXPORT int alpes_rollout(const double* W, double* X, long B, long ntot, long k0, long k1,
+                                       int nthreads) {{
+  alpes_job jobs[64];
+  pthread_t th[64];
+  int t, started[64], status = 0;
+  long groups = (B + LANES - 1) / LANES;
+  if (nthreads < 1) nthreads = 1;
+  if (nthreads > 64) nthreads = 64;
+  if (nthreads > groups) nthreads = (int) groups;
+  for (t = 0; t < nthreads; ++t) {{
+    jobs[t].W = W; jobs[t].X = X; jobs[t].ntot = ntot; jobs[t].k0 = k0; jobs[t].k1 = k1; jobs[t].status = 0;
+    jobs[t].b0 = LANES * (groups * t / nthreads);
+    jobs[t].b1 = LANES * (groups * (t + 1) / nthreads);
+    if (jobs[t].b1 > B) jobs[t].b1 = B;
+  }}
+  if (nthreads == 1) {{ alpes_run(&jobs[0]); return jobs[0].status; }}
+  for (t = 1; t < nthreads; ++t) started[t] = pthread_create(&th[t], 0, alpes_worker, &jobs[t]) == 0;
+  alpes_run(&jobs[0]);
+  for (t = 1; t < nthreads; ++t) {{
+    if (started[t]) pthread_join(th[t], 0); else alpes_run(&jobs[t]);
+    status |= jobs[t].status;
+  }}
+  return status | jobs[0].status;
+}}
+"""
+
+_VEC_UNARY = ("sin", "cos", "tan", "asin", "acos", "atan", "sinh", "cosh", "tanh", "exp", "log", "log10", "sqrt",
+              "fabs", "floor", "ceil", "erf", "casadi_sq", "casadi_fabs", "casadi_sign")
+_VEC_BINARY = ("atan2", "pow", "fmod", "casadi_fmin", "casadi_fmax", "copysign")
+_ASSIGN = re.compile(r"^\s*(a\d+)=(.*);$")
+_TRIG = re.compile(r"^\s*(a\d+)=(sin|cos)\((a\d+)\);$")
+
+
+def _fuse_sincos(lines: list[str]) -> tuple[list[str], int]:
+    """Pair sin(a) and cos(a) of the same value into one sincos call (as gcc does for scalar code)."""
+    lines = list(lines)
+    done: set[int] = set()
+    nt = 0
+    for i, line in enumerate(lines):
+        mt = _TRIG.match(line)
+        if not mt or i in done:
+            continue
+        k, fn, a = mt.groups()
+        if k == a:
+            continue
+        other = "cos" if fn == "sin" else "sin"
+        for j in range(i + 1, len(lines)):
+            m2 = _TRIG.match(lines[j])
+            if m2 and m2.group(2) == other and m2.group(3) == a and j not in done:
+                t = f"alpes_t{nt}"
+                nt += 1
+                s_, c_ = (k, t) if fn == "sin" else (t, k)
+                lines[i] = f"  v_sincos({a}, &{s_}, &{c_});"
+                lines[j] = f"  {m2.group(1)}={t};"
+                done.add(j)
+                break
+            ma = _ASSIGN.match(lines[j])
+            if ma and ma.group(1) == a:  # the argument changes: no partner
+                break
+    return lines, nt
+
+
+def _vector_step(source: str, lanes: int) -> str | None:
+    """SIMD version (GCC vector extension, one trajectory per lane) of the generated step ``casadi_f0``.
+
+    The body of CasADi's scalar SX code is rewritten statement by statement with the same
+    operations in the same order, so each lane computes bit for bit what the scalar code computes
+    (IEEE + - * / and sqrt are exact per lane; libm functions are called per lane). Returns None
+    when the body uses something not handled (work arrays, conditionals, other calls): the
+    scalar driver is used then.
+    """
+    try:
+        i = source.index("static int casadi_f0(")
+        j = source.index("\n}\n", i)
+    except ValueError:
+        return None
+    body = source[source.index("{", i) + 1: j]
+    if "casadi_f1" in source or re.search(r"\b(i?w)\[", body):
+        return None
+    lines, nt = _fuse_sincos(body.split("\n"))
+    b = "\n".join(lines)
+    b = re.sub(r"\bcasadi_real\b", "vd", b)
+    b = re.sub(r"arg\[0\]\? arg\[0\]\[(\d+)\] : 0", r"X[\1]", b)
+    b = re.sub(r"arg\[1\]\? arg\[1\]\[(\d+)\] : 0", r"W[\1]", b)
+    b = re.sub(r"if \(res\[0\]!=0\) res\[0\]\[(\d+)\]=", r"Y[\1]=", b)
+    b = re.sub(r"^(\s*a\d+)=([-+]?[0-9.]+(?:[eE][-+]?\d+)?);$", r"\1=VB(\2);", b, flags=re.M)
+    b = re.sub(r"\b(" + "|".join(_VEC_UNARY + _VEC_BINARY) + r")\(", r"v_\1(", b)  # one pass over the body
+    calls = set(re.findall(r"\b([A-Za-z_]\w*)\(", b))
+    if calls - {f"v_{n}" for n in _VEC_UNARY + _VEC_BINARY} - {"v_sincos", "VB"}:
+        return None
+    if re.search(r"[?<>!]|==|&&|\|\||\barg\b|\bres\b", b):
+        return None
+    decl = ("  vd " + ", ".join(f"alpes_t{k}" for k in range(nt)) + ";\n") if nt else ""
+    lane = ", ".join("(c)" for _ in range(lanes))
+    helpers = [
+        f"typedef double vd __attribute__((vector_size({8 * lanes})));",
+        f"#define VB(c) ((vd){{{lane}}})",
+        "#define VL for (l = 0; l < LANES; ++l)",
+        "static inline void v_sincos(vd x, vd* s, vd* c) { int l; double a, b; "
+        "VL { sincos(x[l], &a, &b); (*s)[l] = a; (*c)[l] = b; } }",
+    ]
+    helpers += [f"static inline vd v_{n}(vd x) {{ vd r; int l; VL r[l] = {n}(x[l]); return r; }}" for n in _VEC_UNARY]
+    helpers += [f"static inline vd v_{n}(vd x, vd y) {{ vd r; int l; VL r[l] = {n}(x[l], y[l]); return r; }}"
+                for n in _VEC_BINARY]
+    return ("\n".join(helpers) + "\nstatic int alpes_vstep(const vd* X, const vd* W, vd* Y) {\n" + decl + b
+            + "\n}\n")
+
+
+def _check_threads(threads: Any) -> int:
+    """``threads`` as an integer in 1..64 (the driver's maximum), default: the CPUs this process may use."""
+    if threads is None:
+        return _default_threads()
+    if isinstance(threads, (bool, np.bool_)) or not isinstance(threads, (int, np.integer)) or not 1 <= threads <= 64:
+        raise InputError(f"threads: expected an integer from 1 to 64, got {threads!r}")
+    return int(threads)
+
+
+def _default_threads() -> int:
+    try:
+        return max(1, len(os.sched_getaffinity(0)))
+    except AttributeError:  # pragma: no cover - not Linux
+        return max(1, os.cpu_count() or 1)
+
+
+class CompiledStepLoop:
+    """x_{k+1} = step(x_k, w_k) for B sequences of N steps, in compiled C, threaded over the sequences.
+
+    Parameters
+    ----------
+    step:
+        A ``casadi.Function`` ``(x (nx,), w (nw,)) -> x_next (nx,)`` (dense columns).
+    label:
+        Stem of the cached library's file name.
+    threads:
+        Worker threads, 1 to 64 (default: the CPUs this process may use).
+    vectorize:
+        Advance two sequences at once in SIMD lanes (GCC vector extensions; the same operations
+        in the same order as the scalar code, so the same bits); falls back to scalar code when
+        the step uses a construct the rewrite does not handle (``lanes`` tells which was built).
+
+    The C source is CasADi's code of ``step`` plus a driver looping over steps and splitting the
+    sequences over POSIX threads; it is compiled once with ``$CC`` (default gcc) ``-O3`` and cached
+    in :func:`cache_dir` under a hash of the source, so a later construction (in any process) only
+    loads it. ``compile_seconds`` is this instance's compilation time (0 when loaded from the cache),
+    ``library`` the path of the shared library.
+    """
+
+    def __init__(self, step: cs.Function, label: str = "steploop", threads: int | None = None,
+                 vectorize: bool = True) -> None:
+        if step.n_in() != 2 or step.n_out() != 1:
+            raise ModelError(f"step: expected a function (x, w) -> x_next, got {step}")
+        self.nx = int(step.size1_in(0))
+        self.nw = int(step.size1_in(1))
+        if step.size_out(0) != (self.nx, 1) or step.size2_in(0) != 1 or step.size2_in(1) != 1:
+            raise ModelError(f"step: x, w and x_next must be columns with x_next like x, got {step}")
+        self.threads = _check_threads(threads)
+        ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
+        step = cs.Function("alpes_step", ins, step.call(ins))  # fixed C symbol name for the driver
+        cg = cs.CodeGenerator("alpes_steploop.c", {"with_header": False})
+        cg.add(step)
+        generated = "#define _GNU_SOURCE\n" + cg.dump()
+        fmt = dict(nx=self.nx, nw=self.nw, sz_arg=step.sz_arg(), sz_res=step.sz_res(), sz_iw=step.sz_iw(),
+                   sz_w=step.sz_w(), step="alpes_step")
+        vector = _vector_step(generated, _LANES) if vectorize else None
+        self.lanes = 1
+        if vector is not None:
+            try:
+                self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
+                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label)
+                self.lanes = _LANES
+            except CompilerError:  # a compiler without GCC vector extensions: the scalar driver
+                vector = None
+        if vector is None:
+            self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
+                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label)
+        fn = self._lib.alpes_rollout
+        dp = ctypes.POINTER(ctypes.c_double)
+        fn.argtypes = [dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
+        fn.restype = ctypes.c_int
+        self._fn = fn
+        self._dp = dp
+
+    def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
+        """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), both float64 (checked by the caller)."""
+        x0 = np.asarray(x0, dtype=float)
+        W = np.ascontiguousarray(W, dtype=float)
+        B, N = W.shape[0], W.shape[1]
+        if x0.shape != (B, self.nx) or W.shape != (B, N, self.nw):
+            raise InputError(f"x0/W: expected ({B}, {self.nx}) and ({B}, N, {self.nw}), got {x0.shape} and {W.shape}")
+        X = np.empty((B, N + 1, self.nx))
+        X[:, 0] = x0
+        chunks = 50 if progress else 1
+        bar = _Progress(N, label, progress)
+        edges = np.linspace(0, N, chunks + 1).astype(int)
+        wp, xp = W.ctypes.data_as(self._dp), X.ctypes.data_as(self._dp)
+        for k0, k1 in zip(edges[:-1], edges[1:]):
+            if k1 > k0:
+                if self._fn(wp, xp, B, N, int(k0), int(k1), self.threads) != 0:
+                    raise InputError(f"{label}: the compiled step failed")
+                bar.update(int(k1 - k0))
+        bar.close()
+        return X

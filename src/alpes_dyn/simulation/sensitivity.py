@@ -1,0 +1,165 @@
+"""Trajectories and their sensitivities to the initial state and the physical parameters, in compiled C.
+
+For x' = f(x, Gamma; theta, g) (:class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`, eq. 2.10, 3.3)
+discretised by ``substeps`` classical RK4 steps per sample period (the input held over the period,
+as the estimation scenario and the observers do), the augmented step
+
+    x_{k+1} = F(x_k, w_k; theta),     X_{k+1} = F_x X_k + [0 | F_theta],     X_0 = [I | 0],
+
+propagates X = dx/d(x_0, theta) (2n x (2n + p)) with the state: forward sensitivities by CasADi's
+automatic differentiation of the step, so the Jacobians are exact for the discretised model. The
+step is compiled once by :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop` (cached on disk, keyed by
+the model's structure and the parameter selection: the parameter *values* are inputs) and runs many
+segments at once on threads: the multiple-shooting intervals of a fit, or the designs of a Fisher
+information study.
+
+Input corrections. With ``input_basis=b`` the input is u_k + C phi_k, where phi_k (b,) are known basis
+values per sample (e.g. 1, sin 2 pi f t, cos 2 pi f t of a multisine's lines) and C (nu x b) constant
+coefficients per segment, and X also holds dx/d vec(C) (column-major): the errors-in-variables fits of
+:func:`~alpes_dyn.estimation.identification.identify` fit the true torque as the measured one plus such a
+correction. ``input_offset=True`` is ``input_basis=1`` with phi = 1: a constant correction per segment.
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import casadi as cs
+import numpy as np
+
+from ..errors import InputError
+from ..model.robot import Model
+from ..symbolic.parametric import ParametricDynamics
+from .integrate import CompiledStepLoop, _check_dt, rk4_expression
+
+__all__ = ["SensitivityModel"]
+
+
+class SensitivityModel:
+    """Batched simulation with sensitivities of a model with symbolic parameters.
+
+    Parameters
+    ----------
+    model: the model (motor input through its transmission if it has one, else joint torques).
+    parameters: selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters`.
+    dt: sample period, s. substeps: RK4 steps per sample (default 4: the smooth friction is fast).
+    threads: worker threads of the compiled loop.
+    input_basis: number b of basis functions of an input correction (see the module docstring);
+    input_offset: True is ``input_basis=1`` (a constant correction per segment).
+
+    Attributes
+    ----------
+    dynamics: the :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; names, nominal (p,): parameters.
+    nx = 2n, p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
+    coefficients), nd = nx + p + no (sensitivity directions).
+    compile_seconds: time spent compiling now (0 when the library came from the cache).
+    """
+
+    def __init__(self, model: Model, parameters: str | Sequence[str] | None = None, dt: float = 1e-3,
+                 substeps: int = 4, threads: int | None = None, input_offset: bool = False,
+                 input_basis: int = 0) -> None:
+        self.model = model
+        self.dt = _check_dt(dt)
+        if not isinstance(substeps, (int, np.integer)) or substeps < 1:
+            raise InputError(f"substeps: expected a positive integer, got {substeps!r}")
+        self.substeps = int(substeps)
+        pd = ParametricDynamics(model, parameters, gravity_input=True)
+        self.dynamics = pd
+        self.names, self.nominal, self.p = pd.names, pd.nominal, pd.p
+        n = model.n
+        self.n, self.nx = n, 2 * n
+        tr = model.transmission
+        Bm = tr.actuation_matrix if tr is not None else np.eye(n)
+        self.B = np.asarray(Bm, dtype=float)
+        self.nu = self.B.shape[1]
+        if not isinstance(input_basis, (int, np.integer)) or isinstance(input_basis, bool) or not 0 <= input_basis <= 64:
+            raise InputError(f"input_basis: expected an integer in [0, 64], got {input_basis!r}")
+        if input_offset and input_basis not in (0, 1):
+            raise InputError("input_offset: a constant offset is input_basis=1; pass one of them")
+        self.nb = 1 if input_offset else int(input_basis)
+        self.input_offset = self.nb > 0
+        self.no = self.nu * self.nb
+        self.nd = self.nx + self.p + self.no
+        x = cs.SX.sym("x", self.nx)
+        u = cs.SX.sym("u", self.nu)
+        phi = cs.SX.sym("phi", self.nb)
+        off = cs.SX.sym("coef", self.no)
+        w = cs.vertcat(u, pd.g, pd.theta, phi, off)
+        u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
+        qdd = pd.forward_dynamics(x[:n], x[n:], cs.mtimes(cs.DM(self.B), u_eff), pd.theta, pd.g)
+        f = cs.Function("f", [x, w], [cs.vertcat(x[n:], qdd)])
+        xn = rk4_expression(f, x, w, self.dt / self.substeps)
+        X = cs.SX.sym("X", self.nx, self.nd)
+        Xn = cs.mtimes(cs.jacobian(xn, x), X) + cs.horzcat(cs.SX.zeros(self.nx, self.nx), cs.jacobian(xn, pd.theta),
+                                                           cs.jacobian(xn, off))
+        self.step = cs.Function("sens_step", [cs.vertcat(x, cs.vec(X)), w], [cs.cse(cs.vertcat(xn, cs.vec(Xn)))])
+        self.plain_step = cs.Function("step", [x, w], [xn])
+        label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
+        self._loop = CompiledStepLoop(self.step, label, threads)
+        self._label, self._threads = label, threads
+        self._plain_loop: CompiledStepLoop | None = None  # the states alone, compiled on first use
+        self.compile_seconds = self._loop.compile_seconds
+        self.nw = self.nu + 3 + self.p + self.nb + self.no
+
+    def run(self, x0: np.ndarray, U: np.ndarray, G: np.ndarray, theta: np.ndarray, offset: np.ndarray | None = None,
+            progress: bool = False, basis: np.ndarray | None = None,
+            sensitivities: bool = True) -> tuple[np.ndarray, np.ndarray | None]:
+        """States and sensitivities at the samples of B segments of N samples.
+
+        Parameters
+        ----------
+        x0: (B, 2n) initial states. U: (B, N, nu) inputs (N m), U[:, k] held on sample period k.
+        G: (B, N, 3) gravity (m/s^2, base frame) per sample period. theta: (p,) parameter values.
+        offset: the correction coefficients C, (B, nu, nb) per segment or (nu, nb) for all (with
+        ``input_offset=True`` also (B, nu)); default 0. basis: phi, (B, N, nb) per sample (default: ones,
+        which only makes sense for a constant offset). sensitivities: False for the states alone (the
+        same step without its derivatives, compiled on first use: what a line search's trial needs).
+
+        Returns
+        -------
+        x: (B, N+1, 2n) states at the samples; X: (B, N+1, 2n, nd) their derivatives with respect
+        to (x0, theta[, vec C]), None without ``sensitivities``.
+        """
+        x0 = np.asarray(x0, dtype=float)
+        U = np.asarray(U, dtype=float)
+        G = np.asarray(G, dtype=float)
+        B, N = U.shape[0], U.shape[1]
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        if theta.shape != (self.p,) or not np.isfinite(theta).all():
+            raise InputError(f"theta: expected {self.p} finite values, got {theta!r}")
+        s = self.substeps
+        W = np.empty((B, N * s, self.nw))
+        W[:, :, : self.nu] = np.repeat(U, s, axis=1)
+        W[:, :, self.nu: self.nu + 3] = np.repeat(G, s, axis=1)
+        W[:, :, self.nu + 3: self.nu + 3 + self.p] = theta
+        if self.nb:
+            j = self.nu + 3 + self.p
+            if basis is None:
+                W[:, :, j: j + self.nb] = 1.0
+            else:
+                basis = np.asarray(basis, dtype=float)
+                if basis.shape != (B, N, self.nb):
+                    raise InputError(f"basis: expected shape {(B, N, self.nb)}, got {basis.shape}")
+                W[:, :, j: j + self.nb] = np.repeat(basis, s, axis=1)
+            if offset is None:
+                W[:, :, j + self.nb:] = 0.0
+            else:
+                C = np.asarray(offset, dtype=float)
+                if C.shape == (B, self.nu) and self.nb == 1:
+                    C = C[:, :, None]
+                C = np.broadcast_to(C, (B, self.nu, self.nb))
+                W[:, :, j + self.nb:] = C.transpose(0, 2, 1).reshape(B, 1, self.no)  # vec, column-major
+        if not sensitivities:
+            if self._plain_loop is None:
+                self._plain_loop = CompiledStepLoop(self.plain_step, self._label.replace("sens_", "states_", 1),
+                                                    self._threads)
+                self.compile_seconds += self._plain_loop.compile_seconds
+            x0 = np.ascontiguousarray(np.broadcast_to(x0, (B, self.nx)))
+            return self._plain_loop.run(x0, W, progress, "states")[:, ::s], None
+        s0 = np.zeros((B, self.nx + self.nx * self.nd))
+        s0[:, : self.nx] = x0
+        s0[:, self.nx: self.nx + self.nx * self.nx] = np.eye(self.nx).ravel(order="F")
+        S = self._loop.run(s0, W, progress, "sensitivities")[:, ::s]
+        x = S[:, :, : self.nx]
+        X = S[:, :, self.nx:].reshape(B, N + 1, self.nd, self.nx).transpose(0, 1, 3, 2)
+        return x, X

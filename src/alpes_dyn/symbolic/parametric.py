@@ -1,0 +1,273 @@
+"""Dynamics with physical parameters as symbols: the base of identifiability and identification.
+
+The rigid-body dynamics are linear in each body's inertial parameters (mass, first moment, inertia:
+the regressor form of eq. 2.4). When body b's mass m_b is scaled by alpha_b = m_b / m_b^0 with its
+inertia (the report's I_i = m_i L_i^2 / 3 scales with m_i; the centre of mass stays put), all ten of
+its inertial parameters scale by alpha_b, hence
+
+    A(q) = sum_b alpha_b A_b(q) + A_rest(q) + I_a,
+    C(q, qd) qd = sum_b alpha_b c_b(q, qd) + c_rest(q, qd),
+    G_gravity(q) = -sum_b alpha_b m_b^0 (d p_b / dq)^T g - m_rest (d p_rest / dq)^T g,
+
+where A_b, c_b and p_b (centre of mass) are those of the URDF with only body b massive ("rest": the
+bodies not parameterised), computed once by the symbolic backend (ADAM). Springs (eq. 2.14,
+torsional), friction (eq. 2.6-2.7, smooth sign) and the input gain are linear in their parameters too.
+The gravity vector g (base frame) may be an input (the hand's orientation changes during an
+experiment) instead of the model's constant.
+
+Parameters are named after the joint they belong to (``K_1`` for joint ``j1`` of a finger,
+``K_index_j1`` on the hand):
+
+================ =========================================================== ==========
+kind             meaning                                                     unit
+================ =========================================================== ==========
+``K``            spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
+``m``            mass of the body a joint moves, inertia scaled with it      kg
+``F_s``          Coulomb friction of a joint (eq. 2.6)                       N m
+``F_v``          viscous friction of a joint (eq. 2.6)                       N m s/rad
+``input_gain``   scale of the known torques (r/r_m, the torque constant)     --
+================ =========================================================== ==========
+"""
+
+from __future__ import annotations
+
+import xml.etree.ElementTree as ET
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import casadi as cs
+import numpy as np
+
+from ..errors import ModelError
+from ..model.robot import Model
+from .dynamics import block_solve
+
+__all__ = ["KINDS", "PhysicalParameter", "parameter_catalogue", "select_parameters", "ParametricDynamics"]
+
+KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain")
+_UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-"}
+_GROUPS = {"friction": ("F_s", "F_v")}
+
+
+@dataclass(frozen=True)
+class PhysicalParameter:
+    """One physical parameter of a model: its name, kind, joint, nominal value and unit."""
+
+    name: str
+    kind: str
+    joint: str | None
+    nominal: float
+    unit: str
+
+
+def _suffix(joint: str) -> str:
+    """``j1`` -> ``1`` (the report's K_1), other names unchanged."""
+    return joint[1:] if joint[:1] == "j" and joint[1:].isdigit() else joint
+
+
+def _child_links(model: Model) -> dict[str, str]:
+    """Joint name -> the URDF link it moves."""
+    root = ET.fromstring(model.urdf)
+    out = {}
+    for j in root.iter("joint"):
+        child = j.find("child")
+        if child is not None and j.get("name") in model.joint_names:
+            out[j.get("name")] = child.get("link")
+    return out
+
+
+def _link_masses(urdf: str) -> dict[str, float]:
+    out = {}
+    for link in ET.fromstring(urdf).iter("link"):
+        mass = link.find("inertial/mass")
+        out[link.get("name")] = float(mass.get("value")) if mass is not None else 0.0
+    return out
+
+
+def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
+    """Every parameter of ``model`` that :class:`ParametricDynamics` can make symbolic, nominal values
+    from the model (stiffness, masses, friction of its extras; input gain 1)."""
+    ex = model.extras
+    links = _child_links(model)
+    masses = _link_masses(model.urdf)
+    out = []
+    for kind in ("K", "m", "F_s", "F_v"):
+        for i, j in enumerate(model.joint_names):
+            nominal = {"K": ex.stiffness[i], "m": masses.get(links.get(j, ""), 0.0), "F_s": ex.coulomb[i],
+                       "F_v": ex.viscous[i]}[kind]
+            out.append(PhysicalParameter(f"{kind}_{_suffix(j)}", kind, j, float(nominal), _UNITS[kind]))
+    out.append(PhysicalParameter("input_gain", "input_gain", None, 1.0, "-"))
+    return out
+
+
+def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> tuple[PhysicalParameter, ...]:
+    """Parameters chosen by ``spec``: a comma-separated string or a list of kinds (``K``, ``m``,
+    ``F_s``, ``F_v``, ``friction`` = F_s and F_v, ``input_gain``) and/or names (``K_2``, ``m_1``).
+
+    ``None`` gives K and m of every joint, plus F_s and F_v where the model has friction. A kind
+    selects only the joints where its nominal value is non-zero (a joint without a spring has no K).
+    Raises :class:`~alpes_dyn.ModelError` for an unknown name, a repeat, or an empty selection.
+    """
+    cat = parameter_catalogue(model)
+    by_name = {p.name: p for p in cat}
+    if spec is None:
+        items: list[str] = ["K", "m"] + (["F_s", "F_v"] if model.extras.has_friction else [])
+    elif isinstance(spec, str):
+        items = [s.strip() for s in spec.split(",")]
+    else:
+        items = list(spec)
+    chosen: list[PhysicalParameter] = []
+    for it in items:
+        if not isinstance(it, str) or not it:
+            raise ModelError(f"parameters: empty or non-string entry in {spec!r}")
+        kinds = _GROUPS.get(it, (it,) if it in KINDS else ())
+        if kinds:
+            new = [p for p in cat if p.kind in kinds and (p.kind == "input_gain" or p.nominal != 0.0)]
+        elif it in by_name:
+            new = [by_name[it]]
+        else:
+            raise ModelError(f"parameters: unknown parameter {it!r} (kinds: {', '.join(KINDS + tuple(_GROUPS))}; "
+                             f"names like {cat[0].name}, {cat[len(cat) // 4].name})")
+        for p in new:
+            if p in chosen:
+                raise ModelError(f"parameters: {p.name} is selected twice in {spec!r}")
+            chosen.append(p)
+    if not chosen:
+        raise ModelError(f"parameters: {spec!r} selects nothing on model {model.name!r} (no spring/friction?)")
+    return tuple(chosen)
+
+
+class _Shim:
+    """What symbolic._Adam reads of a model: a URDF, joint names and gravity."""
+
+    def __init__(self, urdf: str, joint_names: tuple[str, ...]) -> None:
+        self.urdf, self.joint_names, self.gravity = urdf, joint_names, np.zeros(3)
+
+
+def _only_massive(urdf: str, keep: set[str]) -> tuple[str, float]:
+    """The URDF with every link outside ``keep`` massless, and the total mass left."""
+    root = ET.fromstring(urdf)
+    total = 0.0
+    for link in root.iter("link"):
+        inertial = link.find("inertial")
+        if inertial is None:
+            continue
+        if link.get("name") in keep:
+            total += float(inertial.find("mass").get("value"))
+            continue
+        inertial.find("mass").set("value", "0.0")
+        inertia = inertial.find("inertia")
+        if inertia is not None:
+            for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
+                inertia.set(k, "0.0")
+    return ET.tostring(root, encoding="unicode"), total
+
+
+class ParametricDynamics:
+    """qdd(q, qd, Gamma; theta, g) of eq. 2.10 with the parameters ``theta`` as CasADi symbols.
+
+    Parameters
+    ----------
+    model: the numeric model; parameters not selected keep its values.
+    parameters: a selection for :func:`select_parameters` (default K, m, and friction if any).
+    gravity_input: take the gravity vector g (3,), m/s^2, base frame, as an input (default: the
+        model's constant gravity).
+
+    Attributes
+    ----------
+    parameters: the selected :class:`PhysicalParameter` (length p); names; nominal (p,).
+    theta: SX (p,) symbol of the parameter values in their units; g: SX (3,) symbol or None.
+    """
+
+    def __init__(self, model: Model, parameters: str | Sequence[str] | None = None,
+                 gravity_input: bool = False) -> None:
+        from .dynamics import _Adam
+
+        self.model = model
+        self.n = model.n
+        self.parameters = select_parameters(model, parameters)
+        self.names = tuple(p.name for p in self.parameters)
+        self.nominal = np.array([p.nominal for p in self.parameters])
+        self.p = len(self.parameters)
+        self.theta = cs.SX.sym("theta", self.p)
+        self.g = cs.SX.sym("g", 3) if gravity_input else None
+        self.gravity_input = bool(gravity_input)
+        links = _child_links(model)
+        masses = _link_masses(model.urdf)
+        self._mass_params = []  # (index in theta, nominal mass, backend)
+        self._K = cs.DM(model.extras.stiffness)
+        self._Fs = cs.DM(model.extras.coulomb)
+        self._Fv = cs.DM(model.extras.viscous)
+        idx = {j: i for i, j in enumerate(model.joint_names)}
+        parameterised = set()
+        self._sel: dict[str, list[tuple[int, int]]] = {k: [] for k in KINDS}
+        for k, prm in enumerate(self.parameters):
+            if prm.kind == "m":
+                link = links[prm.joint]
+                if masses.get(link, 0.0) <= 0:
+                    raise ModelError(f"parameters: {prm.name}: body {link!r} has no mass to scale")
+                parameterised.add(link)
+                urdf_b, _ = _only_massive(model.urdf, {link})
+                self._mass_params.append((k, masses[link], _Adam(_Shim(urdf_b, model.joint_names))))
+            else:
+                self._sel[prm.kind].append((k, idx[prm.joint] if prm.joint is not None else -1))
+        rest = {name for name, mass in masses.items() if mass > 0} - parameterised
+        self._rest = None
+        if rest:
+            urdf_r, m_rest = _only_massive(model.urdf, rest)
+            self._rest = (m_rest, _Adam(_Shim(urdf_r, model.joint_names)))
+        self._armature = np.asarray(model.extras.armature, dtype=float)
+        self.smooth_velocity = float(model.extras.smooth_velocity)
+
+    # ------------------------------------------------------------------ pieces
+    def _vector(self, kind: str, base: cs.DM, theta: cs.SX) -> cs.SX:
+        """A per-joint vector: the model's values with the selected entries replaced by theta's."""
+        out = cs.SX(base)
+        for k, i in self._sel[kind]:
+            out[i] = theta[k]
+        return out
+
+    def inertia_matrix(self, q: cs.SX, theta: cs.SX) -> cs.SX:
+        """A(q; theta) + I_a, (n, n), kg m^2."""
+        M = cs.SX.zeros(self.n, self.n)
+        for k, m0, be in self._mass_params:
+            M = M + (theta[k] / m0) * be.mass_matrix(q)
+        if self._rest is not None:
+            M = M + self._rest[1].mass_matrix(q)
+        if np.any(self._armature != 0):
+            M = M + cs.diag(cs.DM(self._armature))
+        return M
+
+    def bias_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, g: Any) -> cs.SX:
+        """C(q, qd) qd + gravity torque (no springs) for gravity g (3,), N m."""
+        g = cs.DM(self.model.gravity) if g is None else g
+        out = cs.SX.zeros(self.n)
+        H = cs.SX.eye(4)
+        terms = [(theta[k] / m0, m0, be) for k, m0, be in self._mass_params]
+        if self._rest is not None:
+            terms.append((1.0, self._rest[0], self._rest[1]))
+        for scale, mass, be in terms:
+            com = be.kd.CoM_position(H, q)
+            grav = -mass * cs.mtimes(cs.jacobian(com, q).T, g)
+            out = out + scale * (be.bias(q, v) + grav)
+        return out
+
+    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
+        """Springs K q (torsional) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m."""
+        K = self._vector("K", self._K, theta)
+        Fs = self._vector("F_s", self._Fs, theta)
+        Fv = self._vector("F_v", self._Fv, theta)
+        return K * q + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
+
+    def input_gain(self, theta: cs.SX) -> Any:
+        sel = self._sel["input_gain"]
+        return theta[sel[0][0]] if sel else 1.0
+
+    def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
+                         F_torque: cs.SX | None = None) -> cs.SX:
+        """qdd (n,) of eq. 2.10 with joint torques ``input_gain * tau`` (+ ``F_torque``, e.g. J^T F)."""
+        theta = self.theta if theta is None else theta
+        rhs = self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g) - self.passive_torque(q, v, theta)
+        if F_torque is not None:
+            rhs = rhs + F_torque
+        return block_solve(self.inertia_matrix(q, theta), rhs)
