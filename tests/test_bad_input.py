@@ -73,6 +73,10 @@ def bad_files(d: Path) -> dict[str, str]:
                                               'unit = "N m/rad", source = "report" }\n\n[thumb]', 1).encode(),
     }
     files.update({k: v.encode() for k, v in URDFS.items()})
+    k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
+    rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
+    rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
+    files["rec3_csv"] = ("\n".join(rows) + "\n").encode()
     out = {}
     for name, data in files.items():
         ext = name.rsplit("_", 1)[1]
@@ -215,6 +219,20 @@ CLI: dict[str, list[Cli]] = {
         C("observability", "--input", "torque", needle="invalid choice: 'torque'"),
     ],
     "estimate": [
+        C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
+        C("estimate", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("estimate", "--data", "{rec3_csv}", "--model", "finger2", needle="unknown column 'true_q_j3'"),
+        C("estimate", "--data", "{rec3_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
+        C("estimate", "--data", "{rec3_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
+        C("estimate", "--data", "{rec3_csv}", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
+        C("estimate", "--data", "{rec3_csv}", "--log", "{rec3_csv}", needle="--log: is the recording itself"),
+        C("estimate", "--data", "{rec3_csv}", "--log", "{dir}", needle="is a directory"),
+        C("estimate", "--data", "x.csv", "--mismatch", "0.1", needle="--mismatch: applies to the simulated scenario"),
+        C("estimate", "--data", "x.csv", "--seed", "3", needle="--seed: applies to the simulated scenario"),
+        C("estimate", "--data", "x.csv", "--observer-params", "o.toml", needle="the observer's model is --params"),
+        C("estimate", "--disturbance", needle="--disturbance: applies to an observer on a recording (--data"),
+        C("estimate", "--log", "e.csv", needle="--log: applies to an observer on a recording (--data"),
+        C("estimate", "--torque-noise", "1e-3", needle="--torque-noise: applies to an observer on a recording"),
         C("estimate", "--plot", "{dir}", needle="--plot: '{dir}' is a directory"),
         C("estimate", "--plot", "", needle="--plot: empty file name"),
         C("estimate", "--plot", "out.xyz", needle="--plot: 'out.xyz' has extension 'xyz'; expected one of"),
@@ -389,6 +407,14 @@ def _exp(**kw):
     return experiment(**{"model": "finger2", "design": _design(), **kw})
 
 
+def _replay(c, **kw):
+    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.replay import estimate_recording
+
+    kw = {"recording": read_recording(c.f["rec3_csv"], c.m), "model": c.m, **kw}
+    return estimate_recording(**kw)
+
+
 def _pp(**kw):
     from alpes_dyn.estimation.experiment import perturbed_params
 
@@ -533,6 +559,17 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("estimate_recording", lambda c: _replay(c, model="finger3"), InputError, "model: expected an alpes_dyn.Model"),
+    A("estimate_recording", lambda c: _replay(c, observer="pf"), InputError, "observer: expected one of ekf"),
+    A("estimate_recording", lambda c: _replay(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text"),
+    A("estimate_recording", lambda c: _replay(c, recording=42), InputError, "recording: expected a Recording"),
+    A("estimate_recording", lambda c: _replay(c, disturbance="yes"), InputError, "disturbance: expected True or False"),
+    A("estimate_recording", lambda c: _replay(c, disturbance_walk=-1.0), InputError, "disturbance_walk: expected a"),
+    A("estimate_recording", lambda c: _replay(c, transient=0.5), InputError, "must be shorter than the recording's"),
+    A("estimate_recording", lambda c: _replay(c, encoder_noise_counts=float("inf")), InputError,
+      "encoder_noise_counts: expected a non-negative"),
+    A("estimate_recording", lambda c: _replay(c, model=ad.Model.alpes("finger2")), RecordingError,
+      "recording: made for motors ['finger'] and joints ['j1', 'j2', 'j3'], not the model's"),
     A("identifiability", lambda c: _idf(points=0), InputError, "points: expected an integer from 1 to 10000"),
     A("identifiability", lambda c: _idf(seed=-1), InputError, "seed: expected an integer >= 0"),
     A("identifiability", lambda c: _idf(parameters="K_9"), ModelError, "unknown parameter 'K_9'"),

@@ -412,6 +412,11 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     from .estimation.observers import OBSERVERS
     from .estimation.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
 
+    if args.data is not None:
+        return _estimate_data(args)
+    for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log")):
+        if getattr(args, dest) not in (None, False):
+            raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     _check_model_options(args)
     _one_chain(args.model, ESTIMATION_MODELS, "the estimation scenario")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
@@ -448,6 +453,70 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         lines.append(f"  {name}: estimated {p['estimate']:.4f}, true {p['true']:.4f}")
     if args.plot is not None:
         lines.append(f"  figure: {args.plot}")
+    lines.append(f"  {obj['seconds']:.1f} s")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+_SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.0), ("--seed", "seed", 0),
+                  ("--true-params", "true_params", None), ("--observer-params", "observer_params", None),
+                  ("--plot", "plot", None))
+
+
+def _estimate_data(args: argparse.Namespace) -> int:
+    """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.replay)."""
+    from .estimation.observers import OBSERVERS
+    from pathlib import Path
+
+    from .estimation.recording import read_recording
+    from .estimation.replay import estimate_recording
+    from .model.robot import Model
+
+    for flag, dest, default in _SCENARIO_ONLY:
+        if getattr(args, dest) != default:
+            hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
+            raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
+    _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    if args.log is not None:
+        check_output_path(args.log, "--log")
+        if Path(args.log).resolve() == Path(args.data).resolve():
+            raise InputError("--log: is the recording itself (--data); choose another file")
+    t0 = time.perf_counter()
+    if _is_urdf_path(args.model):
+        model = _model_from_args(args)
+    else:
+        _check_model_options(args)
+        model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
+                            params=args.params, chain=args.chain)
+    rec = read_recording(args.data, model)
+    res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
+                             disturbance=args.disturbance)
+    if args.log is not None:
+        res.to_csv(args.log)
+    obj = res.to_dict()
+    obj.update({"data": args.data, "model": args.model, "chain": args.chain, "params": args.params,
+                "seconds": time.perf_counter() - t0})
+    if args.log is not None:
+        obj["log"] = args.log
+    deg = np.degrees
+    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: joints estimated by {args.observer} from "
+             f"{args.data} ({rec.n_samples} samples, {rec.duration:g} s)",
+             f"  torque noise {res.settings['torque_noise_Nm']:.3g} N m"
+             + (" (estimated from the recording)" if args.torque_noise is None else "")
+             + ("; a disturbance torque per motor" if args.disturbance else "")]
+    if res.rmse is not None:
+        head = f"RMSE after {res.settings['transient_s']:g} s [deg]:"
+        lines.append(f"  {head:30s}"
+                     + "  ".join(f"{j} {deg(e):.3f}" for j, e in zip(res.joint_names, res.rmse)))
+    else:
+        lines.append("  no true_q_* columns: no error to report")
+    lines.append(f"  {'final estimate [deg]:':30s}"
+                 + "  ".join(f"{j} {deg(q):.2f}" for j, q in zip(res.joint_names, res.q_hat[-1])))
+    if res.disturbance is not None:
+        lines.append(f"  {'final disturbance [N m]:':30s}"
+                     + "  ".join(f"{mn} {d:.3g}" for mn, d in zip(res.motor_names, res.disturbance[-1])))
+    if args.log is not None:
+        lines.append(f"  log: {args.log}")
     lines.append(f"  {obj['seconds']:.1f} s")
     _emit(obj, "\n".join(lines), args.json)
     return 0
@@ -791,6 +860,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify'")
     s.add_argument("--friction", action="store_true",
                    help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
+    s.add_argument("--data", default=None, metavar="REC.csv",
+                   help="run the observer on this recording (encoder and torque; RMSE where it has true_q_* columns) "
+                        "instead of the simulated scenario; the observer's model is --params (e.g. the file "
+                        "'alpes-dyn identify -o' wrote), with --friction if it has friction")
+    s.add_argument("--torque-noise", type=float, default=None, metavar="NM",
+                   help="with --data: white noise of the recorded torque, N m (default: estimated from the recording)")
+    s.add_argument("--disturbance", action="store_true",
+                   help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
+    s.add_argument("--log", default=None, metavar="FILE.csv",
+                   help="with --data: write the estimated joints, velocities and standard deviations as CSV")
     s.set_defaults(func=cmd_estimate)
 
     s = sub.add_parser("experiment", help="simulate the identification experiment on a finger or the thumb, write a "

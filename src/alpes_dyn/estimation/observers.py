@@ -14,7 +14,10 @@ input held over the period:
 Both can estimate, with the state, two uncertain gains as random-walk states (``parameters=``):
 
 * ``"input_gain"`` a -- multiplies the known torques (S^T tau_m, and J^T F);
-* ``"spring_gain"`` b -- multiplies the spring torques k q.
+* ``"spring_gain"`` b -- multiplies the spring torques k q;
+
+and, on a state space with motor inputs, a disturbance torque per motor, ``"disturbance_<motor>"`` d (N m,
+added to the measured motor torque: tau = a S^T (u + d)).
 
 If the observer's masses and inertias are (1 + d_m) times the true ones and its springs (1 + d_K)
 times, dividing its dynamics by (1 + d_m) shows that the truth is exactly its model with
@@ -61,6 +64,9 @@ __all__ = [
 
 OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
 PARAMETERS: tuple[str, ...] = ("input_gain", "spring_gain")
+DISTURBANCE_PREFIX = "disturbance_"
+"""``disturbance_<motor>``: an additive torque on that motor, N m, estimated as a random-walk state (motor inputs
+only): what the model leaves unexplained (:mod:`alpes_dyn.estimation.replay`)."""
 
 
 def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
@@ -98,9 +104,12 @@ class DiscreteModel:
         self.system = system
         self.dt = _check_dt(dt)
         params = tuple(parameters)
+        motors = system.model.transmission.motor_names if system.model.transmission is not None else ()
+        disturbances = tuple(f"{DISTURBANCE_PREFIX}{mn}" for mn in motors) if system.input == "motor" else ()
         for p in params:
-            if p not in PARAMETERS:
-                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)})")
+            if p not in PARAMETERS and p not in disturbances:
+                extra = f", or {', '.join(disturbances)}" if disturbances else ""
+                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)}{extra})")
         if len(set(params)) != len(params):
             raise ModelError(f"parameters: repeated name in {params}")
         if "spring_gain" in params and not system.model.extras.has_spring:
@@ -128,6 +137,10 @@ class DiscreteModel:
         th = {p: z[self.nx + i] for i, p in enumerate(self.parameters)}
         a = th.get("input_gain", 1.0)
         u = w[: ss.n_inputs]
+        motors = ss.model.transmission.motor_names if any(p.startswith(DISTURBANCE_PREFIX) for p in th) else ()
+        d = [th.get(f"{DISTURBANCE_PREFIX}{mn}", 0.0) for mn in motors]
+        if motors:  # an additive torque per motor (N m), a random-walk state
+            u = u + cs.vertcat(*d)
         tau = a * cs.mtimes(cs.DM(ss.B), u)
         if "spring_gain" in th:  # the model applies k q; the gain b makes it b k q
             tau = tau + (1.0 - th["spring_gain"]) * cs.DM(ss.model.extras.stiffness) * q
@@ -431,13 +444,14 @@ class UnscentedKalmanFilter(KalmanFilter):
 
 def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> KalmanFilter:
     """An observer by name: ``ekf``, ``ukf``, ``ekf-params``, ``ukf-params`` (the last two estimate
-    both :data:`PARAMETERS`); keyword arguments go to the filter."""
+    both :data:`PARAMETERS`; any of them may add the ``disturbance_<motor>`` states in ``parameters``); keyword
+    arguments go to the filter."""
     if name not in OBSERVERS:
         raise InputError(f"unknown observer {name!r} (expected one of {', '.join(OBSERVERS)})")
     base, _, extra = name.partition("-")
     if extra:
         kwargs.setdefault("parameters", PARAMETERS)
-    elif kwargs.get("parameters"):
-        raise InputError(f"observer {name!r} estimates no parameter; use {name}-params")
+    elif any(p in PARAMETERS for p in kwargs.get("parameters") or ()):
+        raise InputError(f"observer {name!r} estimates no gain; use {name}-params")
     cls = ExtendedKalmanFilter if base == "ekf" else UnscentedKalmanFilter
     return cls(system, dt, **kwargs)
