@@ -54,6 +54,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 from ..limits import check_bytes
+from ..rebuild import Rebuilt
 from ..simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from ..symbolic.statespace import StateSpace
 
@@ -203,7 +204,7 @@ class Estimate:
         return np.sqrt(np.maximum(np.diagonal(self.P, axis1=1, axis2=2), 0.0))
 
 
-class KalmanFilter:
+class KalmanFilter(Rebuilt):
     """Common machinery of the discrete Kalman filters (see :class:`ExtendedKalmanFilter`).
 
     Parameters
@@ -242,6 +243,8 @@ class KalmanFilter:
     def __init__(self, system: StateSpace, dt: float, *, process_noise: Any, measurement_noise: Any,
                  input_noise: Any = None, parameters: Sequence[str] = (), compiled: bool = False,
                  substeps: int = 1) -> None:
+        self._remember(system, dt, process_noise=process_noise, measurement_noise=measurement_noise,
+                       input_noise=input_noise, parameters=parameters, compiled=compiled, substeps=substeps)
         self.model = DiscreteModel(system, dt, parameters, substeps)
         mdl = self.model
         self.dt = mdl.dt
@@ -420,6 +423,7 @@ class UnscentedKalmanFilter(KalmanFilter):
         if not self.alpha > 0:
             raise InputError(f"alpha: expected a positive number, got {alpha!r}")
         super().__init__(system, dt, **kwargs)
+        self._remember(system, dt, alpha=alpha, beta=beta, kappa=kappa, **kwargs)
 
     def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
         n = self.model.nz

@@ -206,6 +206,7 @@ class Model:
             raise ModelError("extras: given together with a spec, which holds them already")
         if not isinstance(urdf, str) or "<robot" not in urdf:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
+        self._given_extras = extras
         self.urdf: str = urdf
         self.pin_model: pin.Model = _build_pinocchio(urdf)
         check_inertials(urdf, check_inertia)
@@ -264,6 +265,13 @@ class Model:
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
             self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
                                                          params.abduction_ratio, params.encoder_counts)
+
+    def __reduce__(self) -> tuple:
+        """Pickled (and deep-copied) as its description: the URDF, the spec as TOML, the gravity, the layout and the
+        parameter file's values; rebuilt on load (a new Pinocchio model and data)."""
+        spec = self.spec.to_toml() if self.spec is not None else None
+        return (_restore_model, (self.urdf, spec, self.gravity.tolist(), self.name, self.layout, self.params,
+                                 self.spring, self._given_extras if spec is None else None, self.check_inertia))
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -610,3 +618,11 @@ def _check_random_args(rng: object, speed: object, size: object) -> tuple[np.ran
                              or size < 0):
         raise InputError(f"size: expected an integer >= 0 or None, got {size!r}")
     return rng, s, None if size is None else int(size)
+
+
+def _restore_model(urdf: str, spec: str | None, gravity: list[float], name: str, layout: Layout | None,
+                   params: HandParams | None, spring: str, extras: JointExtras | None, check_inertia: str) -> Model:
+    """The :class:`Model` that :meth:`Model.__reduce__` described."""
+    ts = TransmissionSpec.from_toml(spec) if spec is not None else None
+    return Model(urdf, ts, gravity=gravity, name=name, layout=layout, params=params, spring=spring, extras=extras,
+                 check_inertia=check_inertia)

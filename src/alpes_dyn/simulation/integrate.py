@@ -40,6 +40,7 @@ from .buildcache import CompilerError
 from .codegen import CompiledStepLoop, cache_dir
 from ..errors import InputError
 from ..limits import check_bytes
+from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
 from ..model.stops import JointStops, check_range
@@ -364,7 +365,7 @@ def _integrate_sundials(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.nda
     return np.array(res["xf"])
 
 
-class CompiledRollout:
+class CompiledRollout(Rebuilt):
     """Batched fixed-step RK4 rollouts of a state space in compiled C, threaded over the batch.
 
     Parameters
@@ -383,6 +384,7 @@ class CompiledRollout:
 
     def __init__(self, system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
                  threads: int | None = None) -> None:
+        self._remember(system, dt, input=input, force=force, threads=threads)
         out: Any = "sum"
         if isinstance(system, Model) and system.transmission is None:
             out = np.eye(system.n)[:1]  # any output: a rollout returns states
