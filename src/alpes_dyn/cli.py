@@ -522,6 +522,43 @@ def _estimate_data(args: argparse.Namespace) -> int:
     return 0
 
 
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """A study over seeded draws, on Dask workers or serially (studies.sweep)."""
+    from .estimation.experiment import EXPERIMENT_MODELS
+    from .studies.sweep import STUDIES, sweep
+
+    _one_of(args.study, tuple(STUDIES), "--study", "study")
+    if args.model not in EXPERIMENT_MODELS or args.model == "thumb":
+        raise InputError(f"--model: the robustness study is defined for one finger (finger2, finger3), got "
+                         f"{args.model!r}")
+    if not (np.isfinite(args.spread) and 0 <= args.spread < 1):
+        raise InputError(f"--spread: expected a fraction in [0, 1), got {args.spread!r}")
+    if args.serial and (args.scheduler is not None or args.workers != 2):
+        raise InputError("--serial: runs in this process; give no --workers or --scheduler with it")
+    if args.scheduler is not None and args.workers != 2:
+        raise InputError("--workers: sizes a local cluster; a --scheduler has its own workers")
+    if args.output is not None:
+        check_output_path(args.output, "--output")
+    opts = {"model": args.model, "spread": args.spread, "duration": args.duration, "fit": not args.no_fit}
+    from .estimation.experiment import ExperimentDesign
+
+    ExperimentDesign(duration=args.duration).check()  # before any worker starts
+    res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts, workers=args.workers,
+                scheduler=args.scheduler, serial=args.serial)
+    res.meta.update({"study": args.study, **opts})
+    if args.output is not None:
+        res.to_csv(args.output)
+    obj = res.to_dict()
+    if args.output is not None:
+        obj["output"] = args.output
+    head = (f"{args.study} study on {args.model}: {args.draws} draws (seeds {args.seed}..{args.seed + args.draws - 1}), "
+            f"+-{100 * args.spread:g} % per link, {args.duration:g} s experiments; {res.backend} on {res.workers} "
+            f"worker{'s' if res.workers != 1 else ''}, {res.seconds:.1f} s")
+    lines = [head, res.table()] + ([f"  table: {args.output}"] if args.output else [])
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
 # ----------------------------------------------------------------------------- control (issue 9)
 def _positive_seconds(text: str) -> float:
     try:
@@ -938,6 +975,28 @@ def build_parser() -> argparse.ArgumentParser:
                         "above it the rank is a lower bound")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identifiability)
+
+    s = sub.add_parser("sweep", help="a study over seeded draws of a finger within its tolerances, on Dask workers "
+                       "(experiment, identification, EKF per draw)",
+                       epilog="Example: alpes-dyn sweep --model finger3 --draws 8 --seed 1 --workers 2 -o sweep.csv")
+    s.add_argument("--study", default="robustness",
+                   help="robustness: per draw a finger drawn +-spread per link, its experiment, the fit and the EKF "
+                        "before/after (default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--draws", type=_int_at_least(1), default=4, help="number of draws (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="seed of the first draw; draw k has seed + k "
+                   "(default %(default)s)")
+    s.add_argument("--spread", type=float, default=0.2, help="relative spread per link (default %(default)s)")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--no-fit", action="store_true", help="no identification: the EKF on the nominal file only")
+    s.add_argument("--workers", type=_int_at_least(1), default=2,
+                   help="processes of the local Dask cluster (default %(default)s)")
+    s.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a running Dask scheduler, e.g. tcp://host:8786, instead of a local cluster")
+    s.add_argument("--serial", action="store_true", help="one draw after another in this process (no Dask)")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.csv", help="write the table as CSV")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_sweep)
 
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
                        epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
