@@ -304,6 +304,15 @@ class Model:
         return "thumb" if self.layout.model == "thumb" else self.layout.chain
 
     @classmethod
+    def from_mjcf(cls, mjcf: str | Path, **kwargs) -> "Model":
+        """A MuJoCo model with fixed tendons (MJCF text or path; needs ``mujoco``): its tree as a URDF, its tendons,
+        springs, armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`)."""
+        from .mjcf_import import mjcf_to_urdf
+
+        urdf, spec = mjcf_to_urdf(mjcf)
+        return cls(urdf, spec, **kwargs)
+
+    @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
         """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
         (:class:`~alpes_dyn.model.spec.TransmissionSpec` or the path of its TOML file); without one the
