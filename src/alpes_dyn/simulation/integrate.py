@@ -37,7 +37,7 @@ import casadi as cs
 import numpy as np
 
 from .buildcache import CompilerError
-from .codegen import CompiledStepLoop, cache_dir
+from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
 from ..errors import InputError
 from ..limits import check_bytes
 from ..rebuild import Rebuilt
@@ -51,6 +51,8 @@ __all__ = [
 ]
 
 METHODS: tuple[str, ...] = ("rk4", "cvodes", "idas")
+BACKENDS: tuple[str, ...] = ("c", "casadi", "casadi-jit")
+"""Backends of :class:`CompiledRollout`: the generated C driver, CasADi's virtual machine, CasADi's JIT."""
 
 InputLike = Union[None, float, Sequence[float], np.ndarray, Callable[[float], Any]]
 
@@ -380,11 +382,16 @@ class CompiledRollout(Rebuilt):
     The step is :func:`rk4_step_function` (the one :func:`simulate` evaluates with
     ``method="rk4"``), compiled by :class:`CompiledStepLoop`: results equal :func:`simulate`'s to
     rounding. ``compile_seconds`` (0 when loaded from the cache) and ``library`` describe the build.
+    ``backend``: ``"c"`` (default, the generated driver), ``"casadi"`` (CasADi's stock ``mapaccum`` + threaded
+    ``map`` in its virtual machine: no compiler) or ``"casadi-jit"`` (the same JIT-compiled by CasADi, per
+    process): :class:`~alpes_dyn.simulation.codegen.CasadiStepLoop`, the documented fallback.
     """
 
     def __init__(self, system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
-                 threads: int | None = None) -> None:
-        self._remember(system, dt, input=input, force=force, threads=threads)
+                 threads: int | None = None, backend: str = "c") -> None:
+        self._remember(system, dt, input=input, force=force, threads=threads, backend=backend)
+        if backend not in BACKENDS:
+            raise InputError(f"backend: expected one of {', '.join(BACKENDS)}, got {backend!r}")
         out: Any = "sum"
         if isinstance(system, Model) and system.transmission is None:
             out = np.eye(system.n)[:1]  # any output: a rollout returns states
@@ -393,7 +400,11 @@ class CompiledRollout(Rebuilt):
         self.dt = _check_dt(dt)
         self.nx = ss.n_states
         self.nw = _n_known_inputs(ss)
-        self._loop = CompiledStepLoop(rk4_step_function(ss, self.dt), f"rollout_{ss.model.name}", threads)
+        step = rk4_step_function(ss, self.dt)
+        self.backend = backend
+        self._loop: CompiledStepLoop | CasadiStepLoop = (
+            CompiledStepLoop(step, f"rollout_{ss.model.name}", threads) if backend == "c"
+            else CasadiStepLoop(step, threads, jit=backend == "casadi-jit"))
         self.threads = self._loop.threads
         self.library, self.compiled, self.compile_seconds = (self._loop.library, self._loop.compiled,
                                                              self._loop.compile_seconds)
@@ -465,6 +476,6 @@ class CompiledRollout(Rebuilt):
 
 
 def compile_rollout(system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
-                    threads: int | None = None) -> CompiledRollout:
+                    threads: int | None = None, backend: str = "c") -> CompiledRollout:
     """Build (or load from the cache) a :class:`CompiledRollout`; see there."""
-    return CompiledRollout(system, dt, input=input, force=force, threads=threads)
+    return CompiledRollout(system, dt, input=input, force=force, threads=threads, backend=backend)
