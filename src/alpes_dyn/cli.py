@@ -716,7 +716,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
                    help="spring model (default %(default)s)")
     s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
-    s.add_argument("--rotor-inertia", action="store_true", help="joint armature N^2 J_m (eq. 2.8)")
+    s.add_argument("--rotor-inertia", action="store_true", help="the rotor J_m on each tendon: tendon armature J_m/r_m^2 "
+                   "(eq. 2.8)")
     s.add_argument("--no-limits", action="store_true", help="no joint stops")
     s.add_argument("--no-contact", action="store_true", help="collisions disabled")
     s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
@@ -732,8 +733,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--force", help="contact force Fx,Fy,Fz at the tip, N, base frame (eq. 2.9, 2.13)")
     s.add_argument("--tip", help="tip frame name (default: the first tip)")
     s.add_argument("--friction", action="store_true", help="Alpes models: switch on friction (eq. 2.6-2.7)")
-    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on rotor inertia N^2 J_m "
-                                                                "(eq. 2.8)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on the rotor inertia J_m "
+                                                                "on each tendon, S^T J_m S (eq. 2.8)")
     s.set_defaults(func=cmd_dynamics)
 
     s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")
