@@ -605,6 +605,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
     from .estimation.identification import identify
     from .model.robot import Model
+    from .symbolic.parametric import select_parameters
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
     if args.output is not None:
@@ -616,10 +617,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    model = Model.alpes(args.model, friction=True, params=args.params, chain=args.chain)
+    model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=args.params,
+                        chain=args.chain)
     parameters = args.parameters
     if parameters is None and args.model == "thumb":
         parameters = THUMB_PARAMETERS
+    select_parameters(model, parameters)  # a bad selection named before the recording is read
     res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise)
     if args.output is not None:
         res.write(args.output)
@@ -825,9 +828,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
-                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... "
-                        f"(default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own mass "
-                        "and friction are barely seen by the encoders; name them to fit them)")
+                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain, J_m (with --rotor-inertia), "
+                        "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "
+                        "rad; a planar finger sees tilt_y only) and/or names K_1, m_2, encoder_offset_finger, "
+                        f"tilt_y... (default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own "
+                        "mass and friction are barely seen by the encoders; name them to fit them)")
+    s.add_argument("--rotor-inertia", action="store_true",
+                   help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")

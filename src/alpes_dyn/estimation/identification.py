@@ -54,7 +54,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
-from ..symbolic.parametric import parameter_catalogue
+from ..symbolic.parametric import OUTPUT_KINDS, parameter_catalogue
 from ..model.params import HandParams, Param, with_values, write_params
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
@@ -155,6 +155,14 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     flexion = [j for j in model.joint_names if j != "thumb_abd"]
     for name, value, sd in zip(result.names, result.values, result.std):
         pp = cat.get(name)
+        if pp is not None and pp.kind in ("encoder_offset", "tilt"):
+            continue  # of the recording (the encoder's zero, the palm's orientation), not of the hand
+        if pp is not None and pp.kind == "J_m":
+            if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
+                raise ModelError("identified parameters: the file has one rotor inertia transmission.J_m for "
+                                 "every motor; fit one motor's J_m")
+            scalars["J_m"] = (float(value), float(sd))
+            continue
         if pp is None or pp.kind not in ("K", "m", "F_s", "F_v"):
             raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
         if thumb and pp.joint == "thumb_abd":
@@ -179,6 +187,11 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         desc = old.description if old is not None else f"per-joint {kind}"
         upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, stds[kind])
     for field_, (value, sd) in scalars.items():
+        if field_ == "J_m":
+            old = p.raw.get("transmission.J_m")
+            upd["transmission.J_m"] = Param(value, "kg m^2", "identified", reason,
+                                            old.description if old is not None else "rotor inertia J_m (eq. 2.8)", sd)
+            continue
         old = p.raw.get(f"thumb.{field_}")
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
         upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
@@ -327,9 +340,14 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     q_mask = np.isfinite(Qm) & valid[:, :, None] if Qm is not None else None
 
     theta0 = sens.nominal.copy()
-    if np.any(theta0 <= 0):
-        bad = sens.names[int(np.argmax(theta0 <= 0))]
-        raise ModelError(f"parameters: {bad} has the starting value {theta0[np.argmax(theta0 <= 0)]:g}; a fitted "
+    # additive parameters (encoder offsets, tilt angles: nominal 0, either sign) are fitted as they are, the
+    # others as log theta / theta_0; the encoder offsets enter the output only (their state sensitivities are 0)
+    additive = np.array([pp.additive for pp in sens.dynamics.parameters], dtype=bool)
+    off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
+                if pp.kind in OUTPUT_KINDS]
+    if np.any((theta0 <= 0) & ~additive):
+        bad = sens.names[int(np.argmax((theta0 <= 0) & ~additive))]
+        raise ModelError(f"parameters: {bad} has the starting value {theta0[sens.names.index(bad)]:g}; a fitted "
                          "parameter needs a positive starting value (use a model with that term switched on)")
 
     # initial guess: the model's own response from its static equilibrium, cut at the nodes
@@ -344,6 +362,17 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     iv, ip = slice(0, nx), slice(nx, nx + p)
     io = slice(nx + p, nx + p + sens.no)
 
+    def values(glob: np.ndarray) -> np.ndarray:
+        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + rho for the additive ones."""
+        return np.where(additive, theta0 + glob[:p], theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
+
+    def offset(theta: np.ndarray) -> np.ndarray:
+        """(m,) the encoder offsets, rad."""
+        out = np.zeros(ny)
+        for k, mo in off_cols:
+            out[mo] += theta[k]
+        return out
+
     def correction(glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
         if lines:
             return glob[p:].reshape(nphi, nu).T  # C (nu, nphi) from its column-major vec
@@ -355,10 +384,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         Jacobians Cv (S-1, nx, nb), Cr (S-1, nx, ng); the global residuals rg (ng,) (the line
         corrections' prior; zeros for theta) and the states. ``jac=False``: r, c, rg and the states
         alone (J, Cv, Cr None), from the step without its sensitivities (a tenth of the time)."""
-        theta = theta0 * np.exp(glob[:p])
+        theta = values(glob)
         xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
         q = xs[:, :, :n]
-        r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
+        r_enc = (np.einsum("ij,skj->ski", S_enc, q) + offset(theta) - Yb) / sig_y * valid[:, :, None]
         c = xs[:-1, L] - nodes[1:]
         rg = np.concatenate([np.zeros(p), glob[p:]])
         if not jac:
@@ -369,13 +398,16 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 res.append(offs / sig_off)
             return np.concatenate(res, axis=1), None, c, None, None, rg, xs
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if no else X[..., iv]  # (S, L+1, nx, nb)
-        Xr = X[..., ip] * theta  # d/d log theta
+        Xr = X[..., ip] * np.where(additive, 1.0, theta)  # d/d log theta (d/d theta for the additive ones)
         if lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
         w = valid[:, :, None, None] / sig_y
         res = [r_enc.reshape(n_int, -1)]
         J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
-                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1) * w
+                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
+        for k, mo in off_cols:  # y = S q + offset: d r / d offset_m = e_m
+            J_enc[:, :, mo, nb + k] += 1.0
+        J_enc = J_enc * w
         jac = [J_enc.reshape(n_int, -1, nb + ng)]
         if Qm is not None:
             rq = np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise
@@ -635,12 +667,12 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # the residual variance
     s2 = float(np.sum(r**2) + np.sum(rg**2)) / dof
     P_rho = lin_solve(kkt(J, Cv, Cr, 0.0), unit_p)[nv:nv + p] * s2
-    theta = theta0 * np.exp(glob[:p])
+    theta = values(glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
     rms = encoder_rms(r)
     return IdentificationResult(
-        names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
+        names=sens.names, values=theta, std=np.where(additive, 1.0, theta) * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
         states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)
