@@ -193,6 +193,51 @@ def test_identify_recovers_an_encoder_offset_and_the_palm_tilt_from_noise_free_d
     assert np.allclose(ident.finger.K[:2], truth[:2], rtol=1e-6)
 
 
+def test_identify_recovers_the_rotor_inertia_on_the_tendon_from_noise_free_data(tmp_path):
+    """The rotor's J_m (30 % above the file's), on the tendon, fitted with K, m and friction: all to 1e-6; the
+    identified file carries it as transmission.J_m."""
+    from alpes_dyn.model.params import Param, with_values
+
+    base = perturbed_params(spread=0.2, seed=3)
+    J_true = 1.3 * base.J_m
+    true = with_values(base, {"transmission.J_m": Param(J_true, "kg m^2", "assumed", "test", "rotor inertia J_m")})
+    design = ExperimentDesign(duration=1.0, encoder_noise_counts=0.0, torque_noise=0.0)
+    rec = experiment("finger2", true, design, seed=3, rotor_inertia=True)
+    model = ad.Model.alpes("finger2", friction=True, rotor_inertia=True)
+    tr = model.transmission
+    rec.encoder = rec.true_q @ tr.S.T / (2 * math.pi / tr.counts_per_rev)
+    res = identify(model, rec, "K,m,friction,J_m", progress=False)
+    truth = np.r_[true.finger.K[:2], true.finger.m[:2], true.finger.F_s[:2], true.finger.F_v[:2], J_true]
+    assert res.names[-1] == "J_m_finger" and res.initial[-1] == base.J_m and res.converged
+    assert np.max(np.abs(res.values / truth - 1)) < 1e-6
+    ident = load_params(res.write(tmp_path / "ident.toml"))
+    assert ident.raw["transmission.J_m"].source == "identified" and ident.J_m == pytest.approx(J_true, rel=1e-6)
+
+
+def test_identify_finds_the_torque_constant_with_the_masses_held(finger2):
+    """The torque constant 5 % off (the true motor torque is 1.05 times the recorded one): with the masses known
+    (the maker's) and held, input_gain, K and friction are recovered to 1e-6; with every mass free too the scale
+    is not seen, and identify refuses the selection."""
+    from alpes_dyn.estimation.identification import check_selection
+    from alpes_dyn.model.params import with_values
+
+    true = perturbed_params(spread=0.2, seed=3)
+    design = ExperimentDesign(duration=1.0, encoder_noise_counts=0.0, torque_noise=0.0)
+    rec = experiment("finger2", true, design, seed=3)
+    tr = finger2.transmission
+    rec.encoder = rec.true_q @ tr.S.T / (2 * math.pi / tr.counts_per_rev)
+    rec.torque = rec.torque / 1.05
+    known = with_values(load_params(), {k: true.raw[k] for k in ("finger.m", "finger.I")})
+    model = ad.Model.alpes("finger2", friction=True, params=known)
+    res = identify(model, rec, "K,friction,input_gain", progress=False)
+    truth = np.r_[true.finger.K[:2], true.finger.F_s[:2], true.finger.F_v[:2], 1.05]
+    assert res.names[-1] == "input_gain" and res.converged
+    assert np.max(np.abs(res.values / truth - 1)) < 1e-6
+    with pytest.raises(ModelError, match="input_gain with every mass, spring and friction"):
+        check_selection(finger2, "K,m,friction,input_gain")
+    check_selection(finger2, "K,m_1,friction,input_gain")  # one mass held fixes the scale
+
+
 def test_fisher_information_of_the_offset_and_the_tilt(finger2):
     """What the encoder sees (the fit's selection, so its compiled code is shared): the offset's information is
     exactly (N + 1) / sigma^2 with the initial state known (dy/d offset = 1 at every sample); at a level palm

@@ -603,9 +603,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
-    from .estimation.identification import identify
+    from .estimation.identification import check_selection, identify
     from .model.robot import Model
-    from .symbolic.parametric import select_parameters
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
     if args.output is not None:
@@ -622,7 +621,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     parameters = args.parameters
     if parameters is None and args.model == "thumb":
         parameters = THUMB_PARAMETERS
-    select_parameters(model, parameters)  # a bad selection named before the recording is read
+    check_selection(model, parameters)  # a bad selection named before the recording is read
     res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise)
     if args.output is not None:
         res.write(args.output)

@@ -54,14 +54,14 @@ import numpy as np
 
 from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
-from ..symbolic.parametric import OUTPUT_KINDS, parameter_catalogue
+from ..symbolic.parametric import OUTPUT_KINDS, common_scale, parameter_catalogue, select_parameters
 from ..model.params import HandParams, Param, with_values, write_params
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
 from ..simulation.sensitivity import SensitivityModel
 from ..progress import _Progress
 
-__all__ = ["IdentificationResult", "identify", "identified_params", "project_torque"]
+__all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection"]
 
 
 @dataclass
@@ -125,7 +125,12 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     * a finger model with ``chain`` a finger's name: that finger's own values ``[finger.<name>]`` (the
       fields fitted, the others untouched);
     * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
-      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``.
+      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
+    * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``.
+
+    Encoder offsets, the tilt angles and ``input_gain`` are of the recording and its sensors (the encoder's
+    zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
+    the hand: they stay in the result (and ``identify --json``), not in the file.
     """
     p = base if base is not None else result.model.params
     if p is None:
@@ -155,8 +160,8 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     flexion = [j for j in model.joint_names if j != "thumb_abd"]
     for name, value, sd in zip(result.names, result.values, result.std):
         pp = cat.get(name)
-        if pp is not None and pp.kind in ("encoder_offset", "tilt"):
-            continue  # of the recording (the encoder's zero, the palm's orientation), not of the hand
+        if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
+            continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
         if pp is not None and pp.kind == "J_m":
             if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
                 raise ModelError("identified parameters: the file has one rotor inertia transmission.J_m for "
@@ -196,6 +201,16 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
         upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
     return with_values(p, upd)
+
+
+def check_selection(model: Model, parameters: str | Sequence[str] | None) -> None:
+    """:class:`~alpes_dyn.ModelError` for a selection :func:`identify` cannot fit: an unknown or repeated
+    name (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), or the torque constant's common scale
+    (``input_gain`` with every mass, spring and friction, :func:`~alpes_dyn.symbolic.parametric.common_scale`)."""
+    if common_scale(model, select_parameters(model, parameters)):
+        raise ModelError("parameters: input_gain with every mass, spring and friction: the encoder sees only their "
+                         "ratios (theta -> c theta leaves the motion unchanged); hold the masses (known from the "
+                         "maker) and fit input_gain with the springs and friction, or leave input_gain out")
 
 
 def _line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
@@ -307,6 +322,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     eiv = torque_noise > 0
     lines = eiv and excitation is not None
     nphi = Q.shape[1] if lines else 0
+    check_selection(model, parameters)  # before anything is compiled
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=eiv and not lines, input_basis=nphi)
     nx, p, nu, n = sens.nx, sens.p, sens.nu, sens.n

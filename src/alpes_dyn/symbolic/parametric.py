@@ -61,7 +61,7 @@ from ..errors import ModelError
 from ..model.robot import Model
 from .dynamics import block_solve, sparse_dm
 
-__all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilt_rotation", "parameter_catalogue", "select_parameters", "ParametricDynamics"]
+__all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "ParametricDynamics"]
 
 KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt")
 ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt")
@@ -188,6 +188,19 @@ def tilted_gravity(g: Any, tilt_x: Any, tilt_y: Any, xp: Any = np) -> Any:
     b = -gy * sx + gz * cx  # (R_x^T g)_z
     out = (cy * gx - sy * b, a, sy * gx + cy * b)
     return xp.vertcat(*out) if xp is not np else np.array(out, dtype=float)
+
+
+def common_scale(model: Model, parameters: Sequence[PhysicalParameter]) -> bool:
+    """True when ``parameters`` hold ``input_gain`` and every term of eq. 2.10 that scales with it: the mass of
+    every body a joint moves, every non-zero spring, friction and rotor inertia (none held), no joint-side
+    armature. Then theta -> c theta leaves qdd, hence the encoder, unchanged: only the ratios are seen. The
+    torque constant's scale must come from something known -- the masses (the maker gives them) or a force
+    sensor: fit ``input_gain`` with the masses held."""
+    names = {p.name for p in parameters}
+    if "input_gain" not in names or np.any(model.extras.armature != 0):
+        return False
+    return all(p.name in names for p in parameter_catalogue(model)
+               if p.kind in ("K", "m", "F_s", "F_v", "J_m") and p.nominal != 0.0)
 
 
 class _Shim:
