@@ -1,7 +1,7 @@
 """Transmission spec: what a URDF cannot hold about a tendon-driven robot, for any URDF.
 
-A :class:`TransmissionSpec` names the motors, the joints each drives with their ratios, the encoder
-resolution, and per-joint springs, friction and rotor inertia. With a URDF it makes a
+A :class:`TransmissionSpec` names the motors, the joints each drives with their ratios and the rotor
+inertia of each, the encoder resolution, and per-joint springs, friction and joint-side inertia. With a URDF it makes a
 :class:`~alpes_dyn.Model` (``Model(urdf, spec)``, ``Model.from_urdf_file(path, spec)``) that has
 everything an Alpes model has: motor input, encoder outputs, springs, friction, rotor inertia. The
 Alpes models themselves are built the same way, from the spec :func:`alpes_spec` makes out of the
@@ -63,7 +63,8 @@ from .transmission import Transmission
 __all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES"]
 
 JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
-"""Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), rotor inertia (kg m^2)."""
+"""Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), joint-side
+inertia (kg m^2, the diagonal; a motor's rotor on its tendon is the motor's ``rotor_inertia``)."""
 _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES
 _MOTOR_KEYS = ("name", "joints", "rotor_inertia")
 _MOTOR_REQUIRED = ("name", "joints")
