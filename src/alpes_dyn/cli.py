@@ -850,8 +850,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
-                   help="kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... (default K,m,friction; "
-                        "the finger has friction when friction parameters are chosen)")
+                   help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
+                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
+                        "chosen)")
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "

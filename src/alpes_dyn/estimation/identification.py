@@ -15,7 +15,9 @@ nominal parameters. Each iteration is a constrained Gauss-Newton step (Levenberg
 l1-merit line search) on the exact Jacobians of the RK4-discretised model, all intervals simulated
 with their sensitivities at once in compiled C (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`).
 Parameters are fitted as log theta: every iterate is physical (masses, springs and friction
-positive, inertias scaled with their masses).
+positive, inertias scaled with their masses); the encoder offsets and the tilt angles (nominal 0, either
+sign) as they are. An encoder offset enters the output only, y = S q + offset; the tilt turns gravity
+(:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`).
 
 Globalisation. From parameters 20 % off, 100 ms of the finger (tiny inertias, a soft balance of springs
 and gravity) drifts by degrees and rad/s, and imposing continuity at once let Gauss-Newton trade the
@@ -259,7 +261,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     model: the finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``);
         parameters not fitted keep its values.
     recording: a :class:`~alpes_dyn.estimation.recording.Recording` or a CSV path (:func:`~alpes_dyn.estimation.recording.read_recording`).
-    parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction.
+    parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction;
+        by name also ``J_m`` (a model with rotors), ``encoder_offset``, ``tilt`` (``tilt_y`` on a planar finger:
+        ``tilt_x`` is seen only through its cosine) and ``input_gain`` (with the masses held:
+        :func:`check_selection`).
     excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().frequencies``):
         the true torque is taken to lie on a constant and these sines and cosines (periodic-excitation
         identification). The measured torque is projected on them, and the projection's error (what
