@@ -191,6 +191,9 @@ def test_identify_recovers_an_encoder_offset_and_the_palm_tilt_from_noise_free_d
     assert res.initial[-1] == 0.0 and res.residual_rms < 1e-3
     ident = res.params()  # the offset and the tilt belong to the recording, not to the parameter file
     assert np.allclose(ident.finger.K[:2], truth[:2], rtol=1e-6)
+    with pytest.warns(UserWarning, match="tilt_x: no information in this recording"):
+        both = identify(finger2, rec, "K,m,friction,encoder_offset,tilt", progress=False)  # tilt_x unseen
+    assert both.values[-2] == 0.0 and both.std[-2] == math.inf and abs(both.values[-1] - tilt_y) < 1e-7
 
 
 def test_identify_recovers_the_rotor_inertia_on_the_tendon_from_noise_free_data(tmp_path):

@@ -48,6 +48,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
@@ -95,9 +96,10 @@ class IdentificationResult:
     recording_path: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``alpes-dyn identify --json``."""
+        """The JSON of ``alpes-dyn identify --json`` (an unbounded std, a parameter the data do not see, is null)."""
         return {
-            "parameters": {n: {"value": float(v), "std": float(s), "initial": float(i), "unit": u}
+            "parameters": {n: {"value": float(v), "std": float(s) if math.isfinite(s) else None, "initial": float(i),
+                               "unit": u}
                            for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
             "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
             "converged": self.converged, "seconds": self.seconds, "compile_seconds": self.compile_seconds,
@@ -690,7 +692,18 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     P_rho = lin_solve(kkt(J, Cv, Cr, 0.0), unit_p)[nv:nv + p] * s2
     theta = values(glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
-    corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
+    # a parameter the data do not see at the solution (its columns zero: tilt_x on a planar finger at a level
+    # palm, seen only through cos tilt_x): the least-squares step left it at its start, its std is unbounded
+    info = np.einsum("skd,skd->d", J[:, :, nb:nb + p], J[:, :, nb:nb + p]) + np.einsum("sid,sid->d", Cr[:, :, :p],
+                                                                                       Cr[:, :, :p])
+    blind = info <= 1e-20 * max(float(info.max(initial=0.0)), 1e-300)
+    if blind.any():
+        sd_rho = np.where(blind, np.inf, sd_rho)
+        warnings.warn(f"identify: {', '.join(n_ for n_, b in zip(sens.names, blind) if b)}: no information in "
+                      "this recording (the encoder does not see it here); left at its start, std inf", stacklevel=2)
+    with np.errstate(invalid="ignore", over="ignore"):
+        sd_c = np.where(np.isfinite(sd_rho), np.maximum(sd_rho, 1e-300), np.nan)
+        corr = P_rho / np.outer(sd_c, sd_c)
     rms = encoder_rms(r)
     return IdentificationResult(
         names=sens.names, values=theta, std=np.where(additive, 1.0, theta) * sd_rho, initial=theta0,
