@@ -468,6 +468,10 @@ API: list[Api] = [
     # Model evaluation
     A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F="abc"), InputError, "F: expected F_z or 3 numbers"),
     A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F=[0, 0, np.nan]), InputError, "F: contains NaN"),
+    A("Model", lambda c: ad.Model.alpes("finger3", rotor_inertia=True).forward_dynamics(c.z, c.z, np.array([0, np.inf, 0])),
+      InputError, "tau: contains NaN or inf"),
+    A("Model", lambda c: ad.Model.alpes("finger3", rotor_inertia=True).forward_dynamics(np.array([np.nan, 0, 0]), c.z, c.z),
+      InputError, "q: contains NaN or inf"),
     A("Model", lambda c: c.m.forward_dynamics(np.array([0.1 + 1j, 0, 0]), c.z, c.z), InputError,
       "q: complex values are not supported"),
     A("Model", lambda c: c.m.inertia_matrix([0.1j, 0, 0]), InputError, "q: complex values are not supported"),

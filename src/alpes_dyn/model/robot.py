@@ -568,6 +568,8 @@ class Model:
         pm, pd = self.pin_model, self.pin_data
         _crba(pm, pd, q)
         b = tau - _nle(pm, pd, q, v)
+        if not _isfinite(b.dot(self._tiny)):  # a non-finite input: NaN out, no solve of inf (no numpy warning)
+            return np.full(self.n, np.nan)
         if self._rotor_tree:
             M = pd.M
             M += self._rotor_upper  # in place: Pinocchio's factorisation reads data.M's upper triangle
