@@ -709,7 +709,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
-    from .estimation.identification import identify
+    from .estimation.identification import check_selection, identify
     from .model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
@@ -722,10 +722,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    model = Model.alpes(args.model, friction=True, params=args.params, chain=args.chain)
+    model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=args.params,
+                        chain=args.chain)
     parameters = args.parameters
     if parameters is None and args.model == "thumb":
         parameters = THUMB_PARAMETERS
+    check_selection(model, parameters)  # a bad selection named before the recording is read
     res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise)
     if args.output is not None:
         res.write(args.output)
@@ -822,7 +824,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
                    help="spring model (default %(default)s)")
     s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
-    s.add_argument("--rotor-inertia", action="store_true", help="joint armature N^2 J_m (eq. 2.8)")
+    s.add_argument("--rotor-inertia", action="store_true", help="the rotor J_m on each tendon: tendon armature J_m/r_m^2 "
+                   "(eq. 2.8)")
     s.add_argument("--no-limits", action="store_true", help="no joint stops")
     s.add_argument("--no-contact", action="store_true", help="collisions disabled")
     s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
@@ -838,8 +841,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--force", help="contact force Fx,Fy,Fz at the tip, N, base frame (eq. 2.9, 2.13)")
     s.add_argument("--tip", help="tip frame name (default: the first tip)")
     s.add_argument("--friction", action="store_true", help="Alpes models: switch on friction (eq. 2.6-2.7)")
-    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on rotor inertia N^2 J_m "
-                                                                "(eq. 2.8)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on the rotor inertia J_m "
+                                                                "on each tendon, S^T J_m S (eq. 2.8)")
     s.set_defaults(func=cmd_dynamics)
 
     s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")
@@ -940,9 +943,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
-                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... "
-                        f"(default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own mass "
-                        "and friction are barely seen by the encoders; name them to fit them)")
+                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain, J_m (with --rotor-inertia), "
+                        "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "
+                        "rad; a planar finger sees tilt_y only) and/or names K_1, m_2, encoder_offset_finger, "
+                        f"tilt_y... (default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own "
+                        "mass and friction are barely seen by the encoders; name them to fit them)")
+    s.add_argument("--rotor-inertia", action="store_true",
+                   help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
@@ -959,8 +966,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
-                   help="kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... (default K,m,friction; "
-                        "the finger has friction when friction parameters are chosen)")
+                   help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
+                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
+                        "chosen)")
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
