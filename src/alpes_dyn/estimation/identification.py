@@ -56,6 +56,7 @@ from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 from ..model.params import HandParams, Param, with_values, write_params
+from .adequacy import Adequacy, Validation, assess, compare, sensor_floor
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
 from ..simulation.sensitivity import SensitivityModel
@@ -91,6 +92,21 @@ class IdentificationResult:
     node_times: np.ndarray
     model: Model = field(repr=False)
     recording_path: str = ""
+    reason: str = ""
+    residual: np.ndarray | None = field(default=None, repr=False)
+    adequacy: Adequacy | None = None
+
+    @property
+    def trustworthy(self) -> bool:
+        """Converged, and the model adequate to the recording (:attr:`adequacy`)."""
+        return bool(self.converged and (self.adequacy is None or self.adequacy.adequate))
+
+    def status(self) -> str:
+        """One line: why the fit is (not) to be trusted."""
+        parts = [] if self.converged else [f"the fit did not converge ({self.reason})"]
+        if self.adequacy is not None and not self.adequacy.adequate:
+            parts.append(self.adequacy.summary())
+        return "; ".join(parts) if parts else "converged; " + (self.adequacy.summary() if self.adequacy else "")
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``alpes-dyn identify --json``."""
@@ -98,8 +114,9 @@ class IdentificationResult:
             "parameters": {n: {"value": float(v), "std": float(s), "initial": float(i), "unit": u}
                            for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
             "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
-            "converged": self.converged, "seconds": self.seconds, "compile_seconds": self.compile_seconds,
-            "model": self.model.name,
+            "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
+            "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
+            "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
         }
 
     def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
@@ -108,9 +125,11 @@ class IdentificationResult:
 
     def write(self, path: str | Path, base: HandParams | None = None, chain: str | None = None) -> Path:
         """Write the identified parameter file (the base file with each fitted value ``identified``)."""
-        return write_params(self.params(base, chain), path,
-                            header=f"Identified by alpes_dyn from {self.recording_path or 'a recording'} "
-                                   f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+        header = (f"Identified by alpes_dyn from {_printable(self.recording_path) or 'a recording'} "
+                  f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+        if not self.trustworthy:
+            header += f"\nNOT TRUSTWORTHY (written with --force): {_printable(self.status())}"
+        return write_params(self.params(base, chain), path, header=header)
 
 
 def identified_params(result: IdentificationResult, base: HandParams | None = None,
@@ -141,8 +160,10 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         raise ModelError(f"chain: the thumb model's values go to the thumb, not {chain!r}")
     if not thumb and chain is not None and chain not in p.finger_names:
         raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
-    reason = (f"identified from {result.recording_path or 'a recording'} by multiple shooting "
+    reason = (f"identified from {_printable(result.recording_path) or 'a recording'} by multiple shooting "
               f"({result.residual_rms:.3g} counts RMS residual)")
+    if not result.trustworthy:
+        reason += f"; NOT TRUSTWORTHY: {result.status()}"
     own = p.chain("finger" if chain is None else chain)
     k = own.n
     arrays = {"K": own.K.copy(), "m": own.m.copy(), "I": own.I.copy(),
@@ -182,7 +203,28 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         old = p.raw.get(f"thumb.{field_}")
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
         upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
-    return with_values(p, upd)
+    key = "thumb" if thumb else ("finger" if chain is None else chain)
+    return with_values(p, upd, identification={key: _record(result)})
+
+
+def _printable(text: str) -> str:
+    """``text`` with control characters replaced by '?' (it goes into a file's header and fields)."""
+    return "".join(c if c.isprintable() else "?" for c in str(text))
+
+
+def _record(result: IdentificationResult) -> dict[str, Any]:
+    """The ``[identification.<chain>]`` record of a fit (:data:`~alpes_dyn.model.params.IDENTIFICATION_FIELDS`)."""
+    rec: dict[str, Any] = {"model": result.model.name, "recording": _printable(result.recording_path),
+                           "converged": bool(result.converged), "stop": _printable(result.reason),
+                           "trustworthy": result.trustworthy}
+    if math.isfinite(result.residual_rms):
+        rec["residual_rms"] = float(result.residual_rms)
+    a = result.adequacy
+    if a is not None:
+        rec.update(adequate=bool(a.adequate), verdict=_printable(a.summary()), likely_missing=list(a.likely_missing))
+        if math.isfinite(a.floor.total):
+            rec["sensor_floor"] = float(a.floor.total)
+    return rec
 
 
 def _line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
@@ -223,7 +265,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int = 4,
              torque_noise: float | None = None, camera_noise: float = math.radians(0.1),
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
-             progress: bool | None = None) -> IdentificationResult:
+             progress: bool | None = None, validation: Recording | str | Path | None = None,
+             encoder_noise: float | None = None) -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
     Parameters
@@ -251,6 +294,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1), or chi^2 down by less than 1 over
         five iterations.
     progress: a progress line on stderr (default: when stderr is a terminal).
+    validation: a held-out recording of the same finger (another run of the experiment): the fitted
+        model is simulated open-loop on its torque (:func:`~alpes_dyn.estimation.adequacy.compare`, fit %).
+    encoder_noise: the encoder's white noise beyond its quantisation, counts, for the adequacy's sensor
+        floor (default: estimated from the recording, :func:`~alpes_dyn.estimation.adequacy.white_noise_level`).
+
+    The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
+    failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
+    (:func:`~alpes_dyn.estimation.adequacy.assess`: whiteness, independence of the torque, RMS against the
+    sensor floor, the validation).
 
     Returns
     -------
@@ -266,6 +318,16 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or tuple(rec.joint_names) != model.joint_names:
         raise RecordingError(f"recording: motors {rec.motor_names} / joints {rec.joint_names} do not match model "
                              f"{model.name!r}")
+    val_rec = None
+    if validation is not None:  # read and checked before the fit: a bad file fails at once
+        val_rec = _as_recording(validation, model)
+        if (tuple(val_rec[0].motor_names) != tuple(model.transmission.motor_names)
+                or tuple(val_rec[0].joint_names) != model.joint_names):
+            raise RecordingError(f"validation: motors {val_rec[0].motor_names} / joints {val_rec[0].joint_names} do "
+                                 f"not match model {model.name!r}")
+    if encoder_noise is not None and not (isinstance(encoder_noise, (int, float)) and not isinstance(encoder_noise, bool)
+                                          and math.isfinite(encoder_noise) and encoder_noise >= 0):
+        raise InputError(f"encoder_noise: expected a non-negative number of counts, got {encoder_noise!r}")
     for name, v in (("interval", interval), ("camera_noise", camera_noise), ("tol", tol)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise InputError(f"{name}: expected a positive number, got {v!r}")
@@ -540,6 +602,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         history: list[float] = []
         lost = 0  # consecutive steps that asked log theta for more than 30
         it = 0
+        reason = f"iteration cap: {max_iterations} Gauss-Newton iterations without meeting the stopping rule"
         for it in range(1, max_iterations + 1):
             cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2))
             rhs = np.concatenate([-grad(r, J, rg), -c.reshape(-1)])
@@ -555,6 +618,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 # continuous, and Gauss-Newton predicts a decrease of chi^2 below 0.1 or no parameter moving by
                 # a tenth of its standard error: the statistical resolution of the data
                 converged = True
+                reason = "converged: continuous, and the next step within the data's resolution"
                 break
             nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
             merit = cost + nu_merit * float(np.sum(np.abs(c)))
@@ -591,6 +655,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             if not accepted:
                 mu *= 10.0
                 if mu > 1e8:
+                    reason = (f"step failure: no step lowered the merit function (Levenberg-Marquardt damping "
+                              f"above 1e8, iteration {it})")
                     break
                 continue
             dv, dg = sv, sg
@@ -606,12 +672,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             if lost >= 3 and viol > 1e-3:
                 # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
                 # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
+                reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
+                          f"{100.0 * max_log_step:g} (iteration {it})")
                 break
             stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
             if viol < 1e-6 and (small_change or stalled or step_g < tol):
                 converged = True
+                reason = "converged: continuous, and the cost no longer falls"
                 break
-        return nodes, offs, glob, (r, J, c, Cv, Cr, rg, xs), it, converged
+        return nodes, offs, glob, (r, J, c, Cv, Cr, rg, xs), it, converged, reason
 
     # Two starts of stages 2-3, friction held during the homotopy or not: each alone missed the
     # right basin on one of five +-20 % fingers; the wrong basins leave a residual of 4-8 counts,
@@ -623,7 +692,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
             bar.close()
             bar = _Progress(max_iterations, "identify (second start)", show)
-        nodes, offs, glob, state, it, converged = solve(*[a.copy() for a in start], freeze)
+        nodes, offs, glob, state, it, converged, reason = solve(*[a.copy() for a in start], freeze)
         total_its += it
         r, J, c, Cv, Cr, rg, xs = state
         if encoder_rms(r) <= 3.0 / math.sqrt(12.0):
@@ -639,11 +708,107 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
     rms = encoder_rms(r)
+    # the adequacy of the fitted model (module adequacy): its trajectory at the samples, the intervals cut
+    # at their valid samples (sample order), the residual y - yhat in counts
+    x_fit = xs[valid]
+    yhat = x_fit[:, :n] @ S_enc.T / step
+    e = rec.encoder - yhat
+    explained = 0.0
+    if eiv and not lines:  # what the torque noise explains through the model (with the lines: fitted away)
+        explained = _torque_explained(sens, nodes, Ub, Gb, theta, offs, valid, S_enc, step, torque_noise, L)
+    floor = sensor_floor(rec.encoder, explained, encoder_noise)
+    resp = _responses(sens, nodes, Ub, Gb, theta, correction(glob, offs), Psib, valid, x_fit, S_enc, step, dt)
+    resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[kk] * valid[:, :, None]  # tendon stretch ~ tension
+    # each response less what the fit itself would absorb of it (its projection on the fit's tangent space:
+    # the nodes and parameters, continuity kept): the residual of a missing effect is that remainder
+    Kz = kkt(J, Cv, Cr, 0.0)
+    regressors = {}
+    for name, R in resp.items():  # a loop over the four effects
+        Rr = np.zeros_like(r)
+        Rr[:, : (L + 1) * ny] = (R * step / sig_y).reshape(n_int, -1)
+        z = lin_solve(Kz, np.concatenate([grad(Rr, J, np.zeros(ng)), np.zeros(nc)]))[:nz]
+        Jz = np.einsum("skd,sd->sk", J[:, :, :nb], z[:nv].reshape(n_int, nb)) + J[:, :, nb:] @ z[nv:nz]
+        regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * sig_y / step)[valid]
+    val = None
+    if val_rec is not None:
+        val = _validate(model, sens, theta, val_rec, excitation, interval)
+    verdict = assess(e, rec.torque, floor, regressors, val)
     return IdentificationResult(
         names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
-        states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)
+        states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path,
+        reason=reason, residual=e, adequacy=verdict)
+
+
+def _responses(sens: SensitivityModel, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
+               corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
+               step: float, dt: float) -> dict[str, np.ndarray]:
+    """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
+    fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
+    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon: the signatures of
+    :func:`~alpes_dyn.estimation.adequacy.signatures`); finite differences of one batched run, states only."""
+    n = sens.n
+    B, L = Ub.shape[0], Ub.shape[1]
+    N1 = x_fit.shape[0]
+    vm = x_fit[:, n:] @ S.T  # (N+1, m) motor velocity, rad/s
+    sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
+            "acceleration": np.gradient(vm, dt, axis=0)}
+    eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
+    pert = []
+    for g in sigs.values():  # a loop over the three effects
+        g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
+        gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
+        pert.append(gp.reshape(B, L, -1))
+    K = len(pert) + 1
+    U = np.concatenate([Ub[None]] + [(Ub + d)[None] for d in pert]).reshape(K * B, L, -1)
+    C = np.tile(corr, (K, 1)) if (corr is not None and Psib is None) else corr  # per interval, or global
+    xs, _ = sens.run(np.tile(nodes, (K, 1)), U, np.tile(Gb, (K, 1, 1)), theta, C,
+                     basis=None if Psib is None else np.tile(Psib, (K, 1, 1)), sensitivities=False)
+    y = np.einsum("ij,bkj->bki", S, xs[:, :, :n]).reshape(K, B, L + 1, -1) / step
+    return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
+
+
+def _torque_explained(sens: SensitivityModel, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
+                      offs: np.ndarray, valid: np.ndarray, S: np.ndarray, step: float, sigma: float, L: int) -> float:
+    """RMS encoder difference (counts) the recorded torque's white noise ``sigma`` (N m) makes through the
+    fitted model, each interval from its fitted node, the noise's per-interval mean removed (the fit's
+    per-interval corrections take it): a Monte Carlo of two draws (seed 0), states only."""
+    rng = np.random.default_rng(0)
+    R = 2
+    w = sigma * rng.standard_normal((R,) + Ub.shape)
+    w -= w.mean(axis=2, keepdims=True)
+    B = Ub.shape[0]
+    U = np.concatenate([Ub[None], Ub[None] + w]).reshape((R + 1) * B, L, -1)
+    x0 = np.tile(nodes, (R + 1, 1))
+    G = np.tile(Gb, (R + 1, 1, 1))
+    off = np.tile(offs, (R + 1, 1))
+    xs, _ = sens.run(x0, U, G, theta, off, sensitivities=False)
+    y = np.einsum("ij,bkj->bki", S, xs[:, :, : S.shape[1]]).reshape(R + 1, B, L + 1, -1) / step
+    d = (y[1:] - y[:1]) * valid[None, :, :, None]
+    return float(np.sqrt(np.sum(d**2) / (R * max(int(valid.sum()), 1) * S.shape[0])))
+
+
+def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
+              excitation: Sequence[float] | None, prefix_s: float) -> Validation:
+    """:func:`~alpes_dyn.estimation.adequacy.compare` of the fitted model on a held-out recording, its
+    torque projected on the excitation's lines as in the fit, the initial state estimated on the first
+    ``prefix_s`` seconds (one shooting interval)."""
+    rec, path = recording
+    if abs(rec.dt - sens.dt) > 1e-9 * sens.dt:
+        raise RecordingError(f"validation: sample period {rec.dt:g} s differs from the fit's {sens.dt:g} s")
+    U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation)
+    G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
+    tr = model.transmission
+    step = 2 * np.pi / tr.counts_per_rev
+    prefix = max(2, int(round(prefix_s / rec.dt)))
+    if prefix >= rec.n_samples // 2:
+        raise RecordingError(f"validation: {rec.n_samples} samples are too few (the first {prefix} fix the start)")
+    q0 = _rest_guess(model, tr.joint_torque(U[0]), rec.encoder[0] * step) if rec.gravity is None else np.zeros(model.n)
+    val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, rec.encoder,
+                  np.asarray(tr.S, dtype=float), step, prefix, path)
+    val.prefix_s = prefix * rec.dt
+    return val
 
 
 def _rest_guess(model: Model, tau: np.ndarray, y0: np.ndarray) -> np.ndarray:
