@@ -101,15 +101,15 @@ def test_sensor_floor_from_the_recordings_own_values():
 
 @pytest.fixture(scope="module")
 def fits():
-    """finger3 drawn +-20 % (seed 2), 2 s: a recording of the model's own structure and one whose plant has a
+    """finger3 drawn +-20 % (seed 2), 1 s: a recording of the model's own structure and one whose plant has a
     rotor inertia (1e-6 kg m^2 on the tendon) the model lacks, each fitted; a held-out run of each."""
     true = perturbed_params(spread=0.2, seed=2)
     model = ad.Model.alpes("finger3", friction=True)
     freqs = ExperimentDesign().frequencies
     out = {}
     for kind in ("match", "rotor"):
-        rec = mismatched(kind, true, duration=2.0, seed=2)
-        val = mismatched(kind, true, duration=2.0, seed=102)
+        rec = mismatched(kind, true, duration=1.0, seed=2)
+        val = mismatched(kind, true, duration=1.0, seed=102)
         # the rotor's fit does not converge (two starts of 50 iterations): 20 are enough to judge it
         out[kind] = (rec, val, identify(model, rec, excitation=freqs, progress=False, validation=val,
                                         max_iterations=50 if kind == "match" else 20))
@@ -123,7 +123,7 @@ def test_adequate_on_the_models_own_structure(fits):
     assert a.adequate and a.reasons == [] and a.likely_missing == [] and res.trustworthy
     assert 0.9 < a.floor_ratio < 1.1  # the residual is the sensor noise
     assert a.whiteness.max_acf[0] < 2 * a.whiteness.band
-    assert a.validation.fit_percent[0] > 90
+    assert a.validation.fit_percent[0] > 80
     d = json.loads(json.dumps(res.to_dict(), allow_nan=False))
     assert d["adequacy"]["adequate"] is True and d["trustworthy"] is True
 
@@ -133,7 +133,7 @@ def test_not_adequate_with_a_rotor_inertia_the_model_lacks(fits):
     a = res.adequacy
     assert not a.adequate and not res.trustworthy
     assert any("coloured" in r for r in a.reasons) and a.floor_ratio > 2
-    assert a.validation.fit_percent[0] < 60
+    assert a.validation.fit_percent[0] < 30
     assert a.likely_missing and a.likely_missing[0].startswith("rotor inertia")
     json.dumps(res.to_dict(), allow_nan=False)  # finite numbers only
 
@@ -175,7 +175,7 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
                  ["dynamics", "--model", "finger3", "--params", str(out), "--json"],
                  ["observability", "--model", "finger2", "--params", str(out), "--json"],
                  ["estimate", "--friction", "--true-params", str(out), "--duration", "0.3", "--json"],
-                 ["mjcf", "finger3", "--params", str(out), "-o", str(tmp_path / "f.xml")],
+                 ["mjcf", "--params", str(out), "-o", str(tmp_path / "f.xml"), "finger3"],
                  ["identify", "--params", str(out), "--data", str(rec), "-o", str(tmp_path / "again.toml"),
                   "--force"]):
         code = main(argv)

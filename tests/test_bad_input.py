@@ -15,6 +15,7 @@ To add a command or an API: add rows to ``CLI`` / ``API``; ``test_every_command_
 from __future__ import annotations
 
 import argparse
+import math
 import os
 import re
 import resource
@@ -58,6 +59,24 @@ URDFS = {
 }
 
 
+_RECORDINGS: dict[str, str] = {}
+
+
+def _recordings() -> dict[str, str]:
+    """CSV text of a valid 0.2 s identification recording of finger2 and of finger3 (made once)."""
+    if not _RECORDINGS:
+        import tempfile
+
+        from alpes_dyn.estimation.experiment import ExperimentDesign, experiment
+        from alpes_dyn.estimation.recording import write_recording
+
+        with tempfile.TemporaryDirectory() as d:
+            for m in ("finger2", "finger3"):
+                path = write_recording(experiment(m, design=ExperimentDesign(duration=0.2)), Path(d) / f"{m}.csv")
+                _RECORDINGS[m] = path.read_text()
+    return _RECORDINGS
+
+
 def bad_files(d: Path) -> dict[str, str]:
     """Write the broken inputs into ``d``; return {placeholder: path}."""
     files: dict[str, bytes] = {
@@ -72,7 +91,9 @@ def bad_files(d: Path) -> dict[str, str]:
         "short_index_toml": BASE_TOML.replace("[thumb]", '[finger.index]\nK = { value = [0.04, 0.05], '
                                               'unit = "N m/rad", source = "report" }\n\n[thumb]', 1).encode(),
     }
+    files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files.update({k: v.encode() for k, v in URDFS.items()})
+    files.update({f"rec{m[-1]}_csv": text.encode() for m, text in _recordings().items()})
     out = {}
     for name, data in files.items():
         ext = name.rsplit("_", 1)[1]
@@ -134,6 +155,15 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{latin1_toml}", "--parameters", "K_9", needle="recording"),
         C("identify", "--data", "x.csv", "-o", "{tmp}", needle="is a directory"),
         C("identify", "--data", "x.csv", "--excitation", "a,b", needle="--excitation: expected comma-separated"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/none.csv", needle="cannot be read"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{rec3_csv}", needle="validation: 201 samples are too few"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{dir}", needle="cannot be read (Is a directory)"),
+        C("identify", "--data", "{rec3_csv}", "--encoder-noise", "-1", needle="encoder_noise: expected a non-negative"),
+        C("identify", "--data", "{rec3_csv}", "--encoder-noise", "nan", needle="encoder_noise: expected a non-negative"),
+        C("identify", "--data", "x.csv", "--encoder-noise", "abc", needle="--encoder-noise: invalid float value"),
+        C("identify", "--data", "{rec3_csv}", "--params", "{badident_toml}",
+          needle="identification.finger.converged: expected true or false"),
     ],
     "mjcf": [
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
@@ -403,6 +433,12 @@ def _ident(c, recording=None, **kw):
     return identify(ad.Model.alpes("finger2", friction=True), recording, **kw)
 
 
+def _adq(name, *args):
+    from alpes_dyn.estimation import adequacy
+
+    return getattr(adequacy, name)(*args)
+
+
 def _pdyn(c, parameters):
     from alpes_dyn.symbolic.parametric import ParametricDynamics
 
@@ -533,6 +569,22 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("identify", lambda c: _ident(c, validation=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("identify", lambda c: _ident(c, validation=c.f["rec2_csv"]), RecordingError, "validation: 201 samples are too few"),
+    A("identify", lambda c: _ident(c, encoder_noise=-1.0), InputError, "encoder_noise: expected a non-negative"),
+    A("identify", lambda c: _ident(c, encoder_noise=True), InputError, "encoder_noise: expected a non-negative"),
+    A("whiteness", lambda c: _adq("whiteness", np.zeros(5)), InputError, "residual: expected (N,) or (N, m) samples"),
+    A("whiteness", lambda c: _adq("whiteness", np.r_[np.zeros(99), np.nan]), InputError, "residual: expected finite"),
+    A("whiteness", lambda c: _adq("whiteness", np.zeros(100), 60), InputError, "lags: expected an integer from 1 to 49"),
+    A("cross_correlation", lambda c: _adq("cross_correlation", np.zeros(100), np.zeros(99)), InputError,
+      "input: expected 100 samples, got 99"),
+    A("fit_percent", lambda c: _adq("fit_percent", np.arange(5.0), np.arange(4.0)), InputError, "yhat: expected shape"),
+    A("sensor_floor", lambda c: _adq("sensor_floor", np.arange(20.0), 0.0, -1.0), InputError,
+      "encoder_noise: expected a non-negative number of counts"),
+    A("sensor_floor", lambda c: _adq("sensor_floor", np.arange(20.0), math.inf), InputError,
+      "torque_explained: expected a non-negative number"),
+    A("load_params", lambda c: ad.load_params(c.f["badident_toml"]), ModelError,
+      "identification.finger.converged: expected true or false, got 1"),
     A("identifiability", lambda c: _idf(points=0), InputError, "points: expected an integer from 1 to 10000"),
     A("identifiability", lambda c: _idf(seed=-1), InputError, "seed: expected an integer >= 0"),
     A("identifiability", lambda c: _idf(parameters="K_9"), ModelError, "unknown parameter 'K_9'"),

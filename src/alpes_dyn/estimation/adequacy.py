@@ -57,19 +57,21 @@ BAND_99 = 2.5758293035489004  # the standard normal's 99.5 % quantile: the two-s
 THRESHOLDS: dict[str, float] = {
     "lags": 25,
     "exact_counts": 0.05,
-    "ljung_box_p": 1e-3,
-    "max_acf_bands": 2.0,
+    "ljung_box_p": 1e-6,
+    "max_acf_bands": 3.0,
     "max_xcorr_bands": 2.0,
     "floor_ratio": 1.15,
-    "validation_fit_percent": 90.0,
+    "validation_fit_percent": 70.0,
     "signature_share": 0.02,
 }
 """The verdict's thresholds.
 
 ``lags`` M; ``exact_counts``: a residual below this RMS (counts) is numerical, the fit exact (noise-free
-data), and the other tests are skipped; coloured: the Ljung-Box p-value below ``ljung_box_p`` *and* some
-|r_ee(k)| above ``max_acf_bands`` times the 99 % band (one lag in 25 outside the band alone happens to
-white noise 22 % of the time); correlated with the input: some |r_eu(k)| above ``max_xcorr_bands``
+data), and the other tests are skipped; coloured: the Ljung-Box p-value below ``ljung_box_p`` *or* some
+|r_ee(k)| above ``max_acf_bands`` times the 99 % band (MATLAB's rule, every lag inside the band, rejects
+white noise 22 % of the time over 25 lags; the multiple-shooting residual is not exactly white either:
+its fitted start states take a little of it, and fits of our own simulator gave p down to 1.1e-3 and
+lags up to 1.4 bands); correlated with the input: some |r_eu(k)| above ``max_xcorr_bands``
 bands; too large: residual RMS above ``floor_ratio`` times the sensor floor; a validation below
 ``validation_fit_percent`` %; a signature named, when the verdict is not adequate, where its effect
 explains at least ``signature_share`` of the residual and at least half what the strongest one does
@@ -78,7 +80,7 @@ explains at least ``signature_share`` of the residual and at least half what the
 SIGNATURES: dict[str, str] = {
     "sign_velocity": "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)",
     "velocity": "viscous friction (a torque following the motor velocity)",
-    "acceleration": "rotor inertia (a torque following the motor acceleration)",
+    "acceleration": "rotor inertia (a torque following the motor acceleration; or a wrong inertia)",
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
     "bias": "an encoder offset or a tilted palm (a constant bias of the residual)",
 }
@@ -384,7 +386,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     lags = int(th["lags"])
     w = whiteness(e, lags)
     x = cross_correlation(e, u, lags)
-    coloured = bool(np.any((w.p_value < th["ljung_box_p"]) & (w.max_acf > th["max_acf_bands"] * w.band)))
+    coloured = bool(np.any((w.p_value < th["ljung_box_p"]) | (w.max_acf > th["max_acf_bands"] * w.band)))
     if coloured:
         j = int(np.argmax(w.max_acf))
         reasons.append(f"residual coloured (autocorrelation up to {w.max_acf[j]:.2f} against a 99 % band of "

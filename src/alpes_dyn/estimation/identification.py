@@ -331,6 +331,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     for name, v in (("interval", interval), ("camera_noise", camera_noise), ("tol", tol)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise InputError(f"{name}: expected a positive number, got {v!r}")
+    if val_rec is not None:
+        if abs(val_rec[0].dt - rec.dt) > 1e-9 * rec.dt:
+            raise RecordingError(f"validation: sample period {val_rec[0].dt:g} s differs from the recording's {rec.dt:g} s")
+        pre = max(2, int(round(interval / rec.dt)))  # the prefix that fixes the start, one interval
+        if val_rec[0].n_samples <= 4 * pre:
+            raise RecordingError(f"validation: {val_rec[0].n_samples} samples are too few (the first {pre} fix the "
+                                 f"start; give more than {4 * pre})")
     if not isinstance(max_iterations, int) or max_iterations < 1:
         raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
     dt = rec.dt
@@ -795,15 +802,11 @@ def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording
     torque projected on the excitation's lines as in the fit, the initial state estimated on the first
     ``prefix_s`` seconds (one shooting interval)."""
     rec, path = recording
-    if abs(rec.dt - sens.dt) > 1e-9 * sens.dt:
-        raise RecordingError(f"validation: sample period {rec.dt:g} s differs from the fit's {sens.dt:g} s")
     U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation)
     G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
     tr = model.transmission
     step = 2 * np.pi / tr.counts_per_rev
-    prefix = max(2, int(round(prefix_s / rec.dt)))
-    if prefix >= rec.n_samples // 2:
-        raise RecordingError(f"validation: {rec.n_samples} samples are too few (the first {prefix} fix the start)")
+    prefix = max(2, int(round(prefix_s / rec.dt)))  # checked against the length in identify
     q0 = _rest_guess(model, tr.joint_torque(U[0]), rec.encoder[0] * step) if rec.gravity is None else np.zeros(model.n)
     val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, rec.encoder,
                   np.asarray(tr.S, dtype=float), step, prefix, path)
