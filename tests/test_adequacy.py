@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import json
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -13,7 +14,7 @@ from scipy import stats
 
 import alpes_dyn as ad
 from alpes_dyn.errors import InputError, ModelError
-from alpes_dyn.estimation.adequacy import (BAND_99, cross_correlation, encoder_resolution, fit_percent, nrmse,
+from alpes_dyn.estimation.adequacy import (BAND_99, AdequacyWarning, cross_correlation, encoder_resolution, fit_percent, nrmse,
                                            sensor_floor, whiteness, white_noise_level)
 from alpes_dyn.estimation.experiment import ExperimentDesign, perturbed_params
 from alpes_dyn.estimation.identification import identify
@@ -111,14 +112,18 @@ def fits():
         rec = mismatched(kind, true, duration=1.0, seed=2)
         val = mismatched(kind, true, duration=1.0, seed=102)
         # the rotor's fit does not converge (two starts of 50 iterations): 20 are enough to judge it
-        out[kind] = (rec, val, identify(model, rec, excitation=freqs, progress=False, validation=val,
-                                        max_iterations=50 if kind == "match" else 20))
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            res = identify(model, rec, excitation=freqs, progress=False, validation=val,
+                           max_iterations=50 if kind == "match" else 20)
+        out[kind] = (rec, val, res, [w for w in caught if issubclass(w.category, AdequacyWarning)])
     return out
 
 
 def test_adequate_on_the_models_own_structure(fits):
-    rec, val, res = fits["match"]
+    rec, val, res, warned = fits["match"]
     a = res.adequacy
+    assert warned == []
     assert res.converged and res.reason.startswith("converged")
     assert a.adequate and a.reasons == [] and a.likely_missing == [] and res.trustworthy
     assert 0.9 < a.floor_ratio < 1.1  # the residual is the sensor noise
@@ -129,9 +134,11 @@ def test_adequate_on_the_models_own_structure(fits):
 
 
 def test_not_adequate_with_a_rotor_inertia_the_model_lacks(fits):
-    rec, val, res = fits["rotor"]
+    rec, val, res, warned = fits["rotor"]
     a = res.adequacy
     assert not a.adequate and not res.trustworthy
+    assert len(warned) == 1 and "model NOT adequate" in str(warned[0].message)
+    assert "\n" not in str(warned[0].message)
     assert any("coloured" in r for r in a.reasons) and a.floor_ratio > 2
     assert a.validation.fit_percent[0] < 30
     assert a.likely_missing and a.likely_missing[0].startswith("rotor inertia")
@@ -188,7 +195,7 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
 
 
 def test_identified_file_of_a_trusted_fit_records_it(tmp_path, fits):
-    _, _, res = fits["match"]
+    _, _, res, _ = fits["match"]
     p = load_params(res.write(tmp_path / "ok.toml"))
     rec = p.identification["finger"]
     assert rec["converged"] is True and rec["adequate"] is True and rec["trustworthy"] is True

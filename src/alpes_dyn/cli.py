@@ -617,12 +617,18 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
+    from .estimation.adequacy import AdequacyWarning
     from .estimation.identification import identify
     from .model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
     if args.output is not None:
         check_output_path(args.output, "-o")
+        from pathlib import Path
+
+        for opt, inp in (("--data", args.data), ("--validate", args.validate)):
+            if inp is not None and Path(inp).resolve() == Path(args.output).resolve():
+                raise InputError(f"-o: {args.output!r} is the {opt} recording; the fit would overwrite its input")
     exc = args.excitation
     if exc == "documented":
         freqs = ExperimentDesign().frequencies
@@ -634,8 +640,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
     parameters = args.parameters
     if parameters is None and args.model == "thumb":
         parameters = THUMB_PARAMETERS
-    res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise,
-                   validation=args.validate, encoder_noise=args.encoder_noise)
+    with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
+        warnings.simplefilter("ignore", AdequacyWarning)
+        res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise,
+                       validation=args.validate, encoder_noise=args.encoder_noise)
     written = args.output is not None and (res.trustworthy or args.force)
     if written:
         res.write(args.output)

@@ -48,9 +48,13 @@ from scipy import stats
 
 from ..errors import InputError
 
-__all__ = ["THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
+__all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
            "signatures", "assess", "SIGNATURES"]
+
+class AdequacyWarning(UserWarning):
+    """An identification that did not converge or whose model is not adequate to the recording (one line)."""
+
 
 BAND_99 = 2.5758293035489004  # the standard normal's 99.5 % quantile: the two-sided 99 % band
 
@@ -452,3 +456,51 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
     return Validation(fit_percent=fit_percent(ys, yh), nrmse=nrmse(ys, yh),
                       residual_rms=float(np.sqrt(np.mean((ys - yh) ** 2))), prefix_s=0.0, samples=int(ys.shape[0]),
                       recording_path=recording_path)
+
+
+def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
+               corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
+               step: float, dt: float) -> dict[str, np.ndarray]:
+    """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
+    fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
+    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon: the signatures of
+    :func:`~alpes_dyn.estimation.adequacy.signatures`); finite differences of one batched run, states only."""
+    n = sens.n
+    B, L = Ub.shape[0], Ub.shape[1]
+    N1 = x_fit.shape[0]
+    vm = x_fit[:, n:] @ S.T  # (N+1, m) motor velocity, rad/s
+    sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
+            "acceleration": np.gradient(vm, dt, axis=0)}
+    eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
+    pert = []
+    for g in sigs.values():  # a loop over the three effects
+        g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
+        gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
+        pert.append(gp.reshape(B, L, -1))
+    K = len(pert) + 1
+    U = np.concatenate([Ub[None]] + [(Ub + d)[None] for d in pert]).reshape(K * B, L, -1)
+    C = np.tile(corr, (K, 1)) if (corr is not None and Psib is None) else corr  # per interval, or global
+    xs, _ = sens.run(np.tile(nodes, (K, 1)), U, np.tile(Gb, (K, 1, 1)), theta, C,
+                     basis=None if Psib is None else np.tile(Psib, (K, 1, 1)), sensitivities=False)
+    y = np.einsum("ij,bkj->bki", S, xs[:, :, :n]).reshape(K, B, L + 1, -1) / step
+    return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
+
+
+def torque_explained(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
+                      offs: np.ndarray, valid: np.ndarray, S: np.ndarray, step: float, sigma: float, L: int) -> float:
+    """RMS encoder difference (counts) the recorded torque's white noise ``sigma`` (N m) makes through the
+    fitted model, each interval from its fitted node, the noise's per-interval mean removed (the fit's
+    per-interval corrections take it): a Monte Carlo of two draws (seed 0), states only."""
+    rng = np.random.default_rng(0)
+    R = 2
+    w = sigma * rng.standard_normal((R,) + Ub.shape)
+    w -= w.mean(axis=2, keepdims=True)
+    B = Ub.shape[0]
+    U = np.concatenate([Ub[None], Ub[None] + w]).reshape((R + 1) * B, L, -1)
+    x0 = np.tile(nodes, (R + 1, 1))
+    G = np.tile(Gb, (R + 1, 1, 1))
+    off = np.tile(offs, (R + 1, 1))
+    xs, _ = sens.run(x0, U, G, theta, off, sensitivities=False)
+    y = np.einsum("ij,bkj->bki", S, xs[:, :, : S.shape[1]]).reshape(R + 1, B, L + 1, -1) / step
+    d = (y[1:] - y[:1]) * valid[None, :, :, None]
+    return float(np.sqrt(np.sum(d**2) / (R * max(int(valid.sum()), 1) * S.shape[0])))

@@ -46,6 +46,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
@@ -56,7 +57,8 @@ from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 from ..model.params import HandParams, Param, with_values, write_params
-from .adequacy import Adequacy, Validation, assess, compare, sensor_floor
+from .adequacy import (_finite, Adequacy, AdequacyWarning, Validation, assess, compare, effect_responses, sensor_floor,
+                       torque_explained)
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
 from ..simulation.sensitivity import SensitivityModel
@@ -111,9 +113,9 @@ class IdentificationResult:
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``alpes-dyn identify --json``."""
         return {
-            "parameters": {n: {"value": float(v), "std": float(s), "initial": float(i), "unit": u}
+            "parameters": {n: {"value": _finite(v), "std": _finite(s), "initial": _finite(i), "unit": u}
                            for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
-            "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
+            "residual_rms": _finite(self.residual_rms), "residual_unit": "counts", "iterations": self.iterations,
             "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
@@ -722,9 +724,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     e = rec.encoder - yhat
     explained = 0.0
     if eiv and not lines:  # what the torque noise explains through the model (with the lines: fitted away)
-        explained = _torque_explained(sens, nodes, Ub, Gb, theta, offs, valid, S_enc, step, torque_noise, L)
+        explained = torque_explained(sens, nodes, Ub, Gb, theta, offs, valid, S_enc, step, torque_noise, L)
     floor = sensor_floor(rec.encoder, explained, encoder_noise)
-    resp = _responses(sens, nodes, Ub, Gb, theta, correction(glob, offs), Psib, valid, x_fit, S_enc, step, dt)
+    resp = effect_responses(sens, nodes, Ub, Gb, theta, correction(glob, offs), Psib, valid, x_fit, S_enc, step, dt)
     resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[kk] * valid[:, :, None]  # tendon stretch ~ tension
     # each response less what the fit itself would absorb of it (its projection on the fit's tangent space:
     # the nodes and parameters, continuity kept): the residual of a missing effect is that remainder
@@ -740,60 +742,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if val_rec is not None:
         val = _validate(model, sens, theta, val_rec, excitation, interval)
     verdict = assess(e, rec.torque, floor, regressors, val)
-    return IdentificationResult(
+    result = IdentificationResult(
         names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
         states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path,
         reason=reason, residual=e, adequacy=verdict)
-
-
-def _responses(sens: SensitivityModel, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
-               corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
-               step: float, dt: float) -> dict[str, np.ndarray]:
-    """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
-    fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
-    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon: the signatures of
-    :func:`~alpes_dyn.estimation.adequacy.signatures`); finite differences of one batched run, states only."""
-    n = sens.n
-    B, L = Ub.shape[0], Ub.shape[1]
-    N1 = x_fit.shape[0]
-    vm = x_fit[:, n:] @ S.T  # (N+1, m) motor velocity, rad/s
-    sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
-            "acceleration": np.gradient(vm, dt, axis=0)}
-    eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
-    pert = []
-    for g in sigs.values():  # a loop over the three effects
-        g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
-        gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
-        pert.append(gp.reshape(B, L, -1))
-    K = len(pert) + 1
-    U = np.concatenate([Ub[None]] + [(Ub + d)[None] for d in pert]).reshape(K * B, L, -1)
-    C = np.tile(corr, (K, 1)) if (corr is not None and Psib is None) else corr  # per interval, or global
-    xs, _ = sens.run(np.tile(nodes, (K, 1)), U, np.tile(Gb, (K, 1, 1)), theta, C,
-                     basis=None if Psib is None else np.tile(Psib, (K, 1, 1)), sensitivities=False)
-    y = np.einsum("ij,bkj->bki", S, xs[:, :, :n]).reshape(K, B, L + 1, -1) / step
-    return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
-
-
-def _torque_explained(sens: SensitivityModel, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
-                      offs: np.ndarray, valid: np.ndarray, S: np.ndarray, step: float, sigma: float, L: int) -> float:
-    """RMS encoder difference (counts) the recorded torque's white noise ``sigma`` (N m) makes through the
-    fitted model, each interval from its fitted node, the noise's per-interval mean removed (the fit's
-    per-interval corrections take it): a Monte Carlo of two draws (seed 0), states only."""
-    rng = np.random.default_rng(0)
-    R = 2
-    w = sigma * rng.standard_normal((R,) + Ub.shape)
-    w -= w.mean(axis=2, keepdims=True)
-    B = Ub.shape[0]
-    U = np.concatenate([Ub[None], Ub[None] + w]).reshape((R + 1) * B, L, -1)
-    x0 = np.tile(nodes, (R + 1, 1))
-    G = np.tile(Gb, (R + 1, 1, 1))
-    off = np.tile(offs, (R + 1, 1))
-    xs, _ = sens.run(x0, U, G, theta, off, sensitivities=False)
-    y = np.einsum("ij,bkj->bki", S, xs[:, :, : S.shape[1]]).reshape(R + 1, B, L + 1, -1) / step
-    d = (y[1:] - y[:1]) * valid[None, :, :, None]
-    return float(np.sqrt(np.sum(d**2) / (R * max(int(valid.sum()), 1) * S.shape[0])))
+    if not result.trustworthy:  # one line (the CLI reports it itself)
+        warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
+    return result
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
