@@ -215,3 +215,18 @@ def test_identification_record_errors(tmp_path, table, pattern):
     path.write_text(load_params().path and open(load_params().path).read() + "\n" + table)
     with pytest.raises(ModelError, match=pattern):
         load_params(path)
+
+
+def test_a_fit_that_stops_gives_its_reason():
+    """One Gauss-Newton iteration allowed: the fit stops at the cap, says so, is not trustworthy, and the
+    parameter file it would write records it (converged false, the stop reason)."""
+    from alpes_dyn.estimation.experiment import experiment
+
+    rec = experiment("finger2", perturbed_params(spread=0.2, seed=3), ExperimentDesign(duration=0.5), seed=3)
+    with pytest.warns(AdequacyWarning, match="did not converge"):
+        res = identify(ad.Model.alpes("finger2", friction=True), rec, max_iterations=1, progress=False)
+    assert not res.converged and not res.trustworthy
+    assert res.reason == "iteration cap: 1 Gauss-Newton iterations without meeting the stopping rule"
+    assert res.to_dict()["reason"] == res.reason
+    rec_ = res.params().identification["finger"]
+    assert rec_["converged"] is False and rec_["stop"] == res.reason and rec_["trustworthy"] is False
