@@ -230,3 +230,28 @@ def test_a_fit_that_stops_gives_its_reason():
     assert res.to_dict()["reason"] == res.reason
     rec_ = res.params().identification["finger"]
     assert rec_["converged"] is False and rec_["stop"] == res.reason and rec_["trustworthy"] is False
+
+
+def test_assess_rules_on_synthetic_residuals():
+    """White noise at the floor: adequate. The same plus a constant: too large, the bias named. An AR(1)
+    residual: coloured, unless the floor says the torque noise's (coloured) response dominates it."""
+    from alpes_dyn.estimation.adequacy import SensorFloor, assess
+
+    rng = np.random.default_rng(4)
+    N = 3000
+    u = rng.standard_normal((N, 1))
+    floor = SensorFloor(step=1.0, quantisation=1 / math.sqrt(12), noise=0.5, torque=0.0, noise_source="given")
+    white = math.sqrt(0.25 + 1 / 12) * rng.standard_normal((N, 1))
+    ok = assess(white, u, floor)
+    assert ok.adequate and ok.notes == [] and abs(ok.floor_ratio - 1) < 0.05
+    biased = assess(white + 1.0, u, floor)
+    assert not biased.adequate and biased.likely_missing[0].startswith("an encoder offset")
+    ar = np.zeros(N)
+    w = rng.standard_normal(N) * 0.3
+    for t in range(1, N):  # AR(1), rho 0.9 (test data)
+        ar[t] = 0.9 * ar[t - 1] + w[t]
+    coloured = assess(ar[:, None], u, floor)
+    assert not coloured.adequate and "coloured" in coloured.reasons[0]
+    torque_floor = SensorFloor(1.0, 1 / math.sqrt(12), 0.5, float(np.std(ar)), "given")
+    judged = assess(ar[:, None], u, torque_floor)
+    assert judged.adequate and "not judged" in judged.notes[0]

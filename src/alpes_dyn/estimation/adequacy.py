@@ -323,7 +323,8 @@ class Validation:
 @dataclass
 class Adequacy:
     """The verdict. adequate; reasons: why not (empty when adequate); likely_missing: the effects
-    whose signature the residual shows (named where known, :data:`SIGNATURES`); the statistics."""
+    whose signature the residual shows (named where known, :data:`SIGNATURES`); the statistics; notes:
+    tests not judged and why."""
 
     adequate: bool
     reasons: list[str]
@@ -334,6 +335,7 @@ class Adequacy:
     cross: CrossCorrelation | None
     signatures: dict[str, dict[str, float]] = field(default_factory=dict)
     validation: Validation | None = None
+    notes: list[str] = field(default_factory=list)
 
     @property
     def floor_ratio(self) -> float:
@@ -358,7 +360,7 @@ class Adequacy:
                 "signatures": {k: {"share": _finite(v["share"]), "coefficient": _finite(v["coefficient"])}
                                for k, v in self.signatures.items()},
                 "validation": self.validation.to_dict() if self.validation is not None else None,
-                "thresholds": dict(THRESHOLDS)}
+                "notes": list(self.notes), "thresholds": dict(THRESHOLDS)}
 
 
 def _finite(x: Any) -> Any:
@@ -390,12 +392,20 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     lags = int(th["lags"])
     w = whiteness(e, lags)
     x = cross_correlation(e, u, lags)
-    coloured = bool(np.any((w.p_value < th["ljung_box_p"]) | (w.max_acf > th["max_acf_bands"] * w.band)))
+    # where the torque noise's response dominates the floor (a fit without the excitation's lines, the
+    # torque noise given), even a right model leaves a coloured residual correlated with the measured
+    # torque: then the floor alone decides
+    white_floor = math.hypot(floor.quantisation, floor.noise)
+    notes = []
+    if floor.torque > white_floor:
+        notes.append(f"whiteness and cross-correlation not judged: the torque noise explains {floor.torque:.3g} "
+                     f"counts of the floor, more than the encoder's white {white_floor:.3g}")
+    coloured = not notes and bool(np.any((w.p_value < th["ljung_box_p"]) | (w.max_acf > th["max_acf_bands"] * w.band)))
     if coloured:
         j = int(np.argmax(w.max_acf))
         reasons.append(f"residual coloured (autocorrelation up to {w.max_acf[j]:.2f} against a 99 % band of "
                        f"{w.band:.3f}; Ljung-Box p = {w.p_value[j]:.2g})")
-    if x.max_xcorr > th["max_xcorr_bands"] * x.band:
+    if not notes and x.max_xcorr > th["max_xcorr_bands"] * x.band:
         reasons.append(f"residual correlated with the motor torque ({x.max_xcorr:.2f} against a 99 % band of "
                        f"{x.band:.3f})")
     ratio = rms / floor.total if floor.total > 0 else math.inf
@@ -409,7 +419,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
         top = ranked[0][0] if ranked else 0.0
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)]
-    return Adequacy(not reasons, reasons, missing, rms, floor, w, x, sig, validation)
+    return Adequacy(not reasons, reasons, missing, rms, floor, w, x, sig, validation, notes)
 
 
 def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.ndarray, y: np.ndarray,
