@@ -255,3 +255,21 @@ def test_assess_rules_on_synthetic_residuals():
     torque_floor = SensorFloor(1.0, 1 / math.sqrt(12), 0.5, float(np.std(ar)), "given")
     judged = assess(ar[:, None], u, torque_floor)
     assert judged.adequate and "not judged" in judged.notes[0]
+
+
+def test_reversal_ratio_sees_a_residual_at_velocity_reversals():
+    """A residual of white noise: ratio ~1 (within 15 %); with bursts of 3x within 10 ms of each zero of
+    the velocity (what sticking does): above 2, and assess names stick-slip first."""
+    from alpes_dyn.estimation.adequacy import SensorFloor, assess, reversal_ratio
+
+    rng = np.random.default_rng(5)
+    t = np.arange(4000) * 1e-3
+    v = np.sin(2 * np.pi * 2.0 * t + 0.3)[:, None]
+    e = rng.standard_normal((4000, 1))
+    assert abs(reversal_ratio(e, v) - 1) < 0.15
+    near = np.abs(np.sin(2 * np.pi * 2.0 * t + 0.3)) < np.sin(2 * np.pi * 2.0 * 0.01)
+    stuck = e * np.where(near, 3.0, 1.0)[:, None]
+    assert reversal_ratio(stuck, v) > 2
+    floor = SensorFloor(1.0, 1 / math.sqrt(12), 0.5, 0.0, "given")
+    a = assess(stuck, rng.standard_normal((4000, 1)), floor, velocity=v)
+    assert not a.adequate and a.likely_missing[0].startswith("stick-slip")

@@ -50,7 +50,7 @@ from ..errors import InputError
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
-           "signatures", "assess", "SIGNATURES"]
+           "signatures", "assess", "SIGNATURES", "reversal_ratio"]
 
 class AdequacyWarning(UserWarning):
     """An identification that did not converge or whose model is not adequate to the recording (one line)."""
@@ -67,6 +67,7 @@ THRESHOLDS: dict[str, float] = {
     "floor_ratio": 1.15,
     "validation_fit_percent": 70.0,
     "signature_share": 0.02,
+    "reversal_ratio": 2.0,
 }
 """The verdict's thresholds.
 
@@ -79,7 +80,8 @@ lags up to 1.4 bands); correlated with the input: some |r_eu(k)| above ``max_xco
 bands; too large: residual RMS above ``floor_ratio`` times the sensor floor; a validation below
 ``validation_fit_percent`` %; a signature named, when the verdict is not adequate, where its effect
 explains at least ``signature_share`` of the residual and at least half what the strongest one does
-(the list is ordered, the most likely first)."""
+(the list is ordered, the most likely first); stick-slip named first where the residual's mean square
+within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere."""
 
 SIGNATURES: dict[str, str] = {
     "sign_velocity": "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)",
@@ -372,14 +374,38 @@ def _finite(x: Any) -> Any:
     return [v if math.isfinite(v) else None for v in a.reshape(-1).tolist()]
 
 
+def reversal_ratio(e: np.ndarray, velocity: np.ndarray, window: int = 20) -> float:
+    """Mean square of the residual within ``window`` samples of a motor velocity reversal (a sign change),
+    over its mean square elsewhere (1 for a residual that does not care; stick-slip friction makes it
+    large where the plant sticks and the model slides). e, velocity: (N, m); per encoder, the largest."""
+    e, v = _columns(e, "residual"), _columns(velocity, "velocity")
+    best = 1.0
+    for j in range(e.shape[1]):  # a loop over encoders
+        flips = np.flatnonzero(np.sign(v[1:, j]) != np.sign(v[:-1, j]))
+        near = np.zeros(e.shape[0], dtype=bool)
+        if flips.size:
+            d = np.zeros(e.shape[0] + 1)
+            np.add.at(d, np.maximum(flips - window, 0), 1)
+            np.add.at(d, np.minimum(flips + window + 1, e.shape[0]), -1)
+            near = np.cumsum(d)[:-1] > 0
+        if near.sum() >= 10 and (~near).sum() >= 10:
+            inside, outside = float(np.mean(e[near, j] ** 2)), float(np.mean(e[~near, j] ** 2))
+            if outside > 0:
+                best = max(best, inside / outside)
+    return best
+
+
 def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping[str, np.ndarray] | None = None,
-           validation: Validation | None = None, thresholds: Mapping[str, float] | None = None) -> Adequacy:
+           validation: Validation | None = None, thresholds: Mapping[str, float] | None = None,
+           velocity: np.ndarray | None = None) -> Adequacy:
     """The verdict on a fit's encoder residual.
 
     e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
     regressors: name -> (N, m) the encoder's responses to candidate missing effects (keys of
     :data:`SIGNATURES`, see :func:`signatures`). validation: a held-out recording's :class:`Validation`.
-    thresholds: overrides of :data:`THRESHOLDS`.
+    thresholds: overrides of :data:`THRESHOLDS`. velocity: (N, m) the fitted motor velocity, rad/s:
+    the residual at its reversals (:func:`reversal_ratio`) names stick-slip friction first when above
+    ``reversal_ratio``.
     """
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
@@ -414,11 +440,16 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
     sig = signatures(e, regressors or {})
+    if velocity is not None:
+        sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
     missing: list[str] = []
     if reasons:
         ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
         top = ranked[0][0] if ranked else 0.0
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)]
+        if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
+            stick = SIGNATURES["sign_velocity"]
+            missing = [stick] + [m for m in missing if m != stick]
     return Adequacy(not reasons, reasons, missing, rms, floor, w, x, sig, validation, notes)
 
 

@@ -741,7 +741,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     val = None
     if val_rec is not None:
         val = _validate(model, sens, theta, val_rec, excitation, interval)
-    verdict = assess(e, rec.torque, floor, regressors, val)
+    verdict = assess(e, rec.torque, floor, regressors, val, velocity=x_fit[:, n:] @ S_enc.T)
     result = IdentificationResult(
         names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
