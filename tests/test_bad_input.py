@@ -140,6 +140,17 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
         C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: cannot write"),
         C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
+        C("mjcf", "finger3", "--stiction", "-1", needle="stiction: expected a positive time constant in s"),
+        C("mjcf", "finger3", "--stiction", "abc", needle="argument --stiction: invalid float value"),
+        C("mjcf", "finger3", "--tendon-stiffness", "0", needle="tendon_stiffness: expected a positive stiffness"),
+        C("mjcf", "finger3", "--tendon-stiffness", "inf", needle="tendon_stiffness: expected a positive stiffness"),
+        C("mjcf", "finger3", "--tendon-damping", "2", needle="tendon_damping: needs tendon_stiffness"),
+        C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-damping", "-1",
+          needle="tendon_damping: expected a damping >= 0"),
+        C("mjcf", "hand", "--tendon-rotor", "--rotor-inertia", needle="rotor_inertia: the rotor would be counted twice"),
+        C("mjcf", "finger3", "--tendon-rotor", "--tendon-stiffness", "4e4",
+          needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
+        C("mjcf", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
     ],
     "control": [
         C("control", "--controller", "pid", needle="unknown controller 'pid'"),
@@ -624,6 +635,18 @@ API: list[Api] = [
     A("chain_model", lambda c: _chain_model("thumb2"), InputError, "chain: unknown chain 'thumb2'"),
     A("cylinder_normal", lambda c: _cyl_normal(c, (0, 0, 0)), InputError, "normal: expected a non-zero 3-vector"),
     A("cylinder_normal", lambda c: _cyl_normal(c, (0, np.nan, 1)), InputError, "normal: expected a non-zero 3-vector"),
+    # the MJCF export's realism options
+    A("mjcf_string", lambda c: _mjcf(stiction=0.0), InputError, "stiction: expected a positive time constant"),
+    A("mjcf_string", lambda c: _mjcf(stiction="0.5 ms"), InputError, "stiction: expected a positive time constant"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=-4e4), InputError, "tendon_stiffness: expected a positive"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=True), InputError, "tendon_stiffness: expected a positive"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, tendon_damping=np.nan), InputError,
+      "tendon_damping: expected a damping >= 0"),
+    A("mjcf_string", lambda c: _mjcf(tendon_damping=1.0), InputError, "tendon_damping: needs tendon_stiffness"),
+    A("mjcf_string", lambda c: _mjcf(tendon_rotor="yes"), InputError, "tendon_rotor: expected True or False"),
+    A("mjcf_string", lambda c: _mjcf(tendon_rotor=True, rotor_inertia=True), InputError, "counted twice"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, rotor_inertia=True), InputError, "counted twice"),
+    A("mjcf_string", lambda c: _mjcf(tilt=float("inf")), InputError, "tilt: expected a finite angle in rad"),
     A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
     A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
 ]
@@ -657,6 +680,12 @@ def _cyl_normal(c, axis):
     from alpes_dyn.control import cylinder_normal
 
     return cylinder_normal(c.m, np.zeros(3), (0.0, 0.0, 0.05), axis)
+
+
+def _mjcf(**kw):
+    from alpes_dyn.model.mjcf import mjcf_string
+
+    return mjcf_string("finger3", **kw)
 
 
 def _plot_path(p):
