@@ -12,7 +12,8 @@ case       the plant
 none       the model's own structure (its smooth friction law applied in MuJoCo by a passive callback)
 stiction   stick-slip dry friction: MuJoCo's frictionloss F_s, a stiff constraint (0.5 ms, impedance 0.999)
 tendon     a series-elastic, pull-only cable with the motor's rotor J_m on its own joint: k_t such that the
-           cable stretches by 3 % of the tendon's travel under the experiment's torque swing (printed),
+           cable stretches, under the experiment's mean tension, by 3 % of the tendon's travel from the
+           springs' rest (printed: 3.97e4 N/m, the EA/L of a 0.3 mm Dyneema cable 0.15-0.2 m long),
            damping ratio 0.2 on the rotor-on-cable mode
 rotor      the rotor inertia J_m on the rigid tendon: J_m S^T S added to the mass matrix (all entries)
 tilt       the palm tilted by 3 degrees in the finger's plane (gravity rotated; the recording does not say)
@@ -30,7 +31,7 @@ plant's rest, the filter started at q = 0 -- from that run's recorded encoder an
 deg per joint. (The estimation scenario's torque is not used: it takes the nominal finger outside its
 joint range, into MuJoCo's stops.) If :mod:`alpes_dyn.estimation.adequacy` exists its verdict is shown, else "-".
 
-    python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--quick] [--json]
+    python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--quick] [--json] [--log FILE]
 
 ``--quick``: one seed (the first) and a 2 s experiment.
 """
@@ -71,20 +72,20 @@ CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "al
 
 
 def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
-    """k_t (N/m) and c_t (N s/m) for the tendon case, from the nominal finger's experiment on the library's
-    simulator: the cable tension swings by ptp(tau_m) / r_m; k_t makes that stretch STRETCH times the tendon's
-    joint-side travel r ptp(sum q). c_t gives the rotor-on-cable mode (J_m on r_m^2 k_t) the damping ratio ZETA."""
+    """k_t (N/m) and c_t (N s/m) for the tendon case, from the nominal finger's experiment on a rigid MuJoCo plant:
+    under the experiment's mean tension mean(tau_m) / r_m the cable stretches by STRETCH times the tendon's travel
+    from the springs' rest (q = 0) to the mean configuration, r mean(sum q). c_t gives the rotor-on-cable mode
+    (J_m on r_m^2 k_t) the damping ratio ZETA."""
     p = load_params()
     t, u, x0 = experiment_torque(MODEL, p, design)
-    from alpes_dyn.control.plants import mujoco_recording as rec_of
-
-    rec = rec_of(MODEL, p, u, design.dt, encoder_noise_counts=0.0, torque_noise=0.0)
-    travel = p.r * float(np.ptp(rec.true_q.sum(axis=1)))
-    tension = float(np.ptp(u)) / p.r_m
+    rec = mujoco_recording(MODEL, p, u, design.dt, encoder_noise_counts=0.0, torque_noise=0.0)
+    travel = p.r * float(np.mean(rec.true_q.sum(axis=1)))
+    tension = float(np.mean(u)) / p.r_m
     k_t = tension / (STRETCH * travel)
     c_t = 2 * ZETA * math.sqrt(k_t * p.J_m) / p.r_m
-    info = {"tension_swing_N": tension, "tendon_travel_m": travel, "k_t_N_per_m": k_t, "c_t_N_s_per_m": c_t,
-            "rotor_mode_Hz": math.sqrt(k_t * p.r_m**2 / p.J_m) / (2 * math.pi)}
+    info = {"mean_tension_N": tension, "tension_swing_N": float(np.ptp(u)) / p.r_m, "tendon_travel_m": travel,
+            "swing_travel_m": p.r * float(np.ptp(rec.true_q.sum(axis=1))), "k_t_N_per_m": k_t,
+            "c_t_N_s_per_m": c_t, "rotor_mode_Hz": math.sqrt(k_t * p.r_m**2 / p.J_m) / (2 * math.pi)}
     return k_t, c_t, info
 
 
@@ -138,11 +139,22 @@ def ekf_rmse(rec, params_path: str, transient: float = 1.0) -> np.ndarray:
     return np.sqrt(np.mean((est.z[k0:, :n] - rec.true_q[k0:]) ** 2, axis=0))
 
 
+_TORQUES: dict = {}
+
+
+def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray):
+    """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim)."""
+    key = (seed, design, tuple(np.round(gravity, 12)))
+    if key not in _TORQUES:
+        _TORQUES[key] = experiment_torque(MODEL, p, design, true_gravity=gravity)
+    return _TORQUES[key]
+
+
 def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign):
     """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
     the fit never saw, in the joint range by the same design rule), from the plant's rest."""
     fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES)
-    _, u, x0 = experiment_torque(MODEL, p, fresh, true_gravity=plant_model(MODEL, p, effects).gravity)
+    _, u, x0 = torque_of(seed, p, fresh, plant_model(MODEL, p, effects).gravity)
     return mujoco_recording(MODEL, p, u, fresh.dt, effects=effects, q0=x0[:3], seed=seed + 1000)
 
 
@@ -150,7 +162,7 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
     true = perturbed_params(spread=0.2, seed=seed)
     t0 = time.perf_counter()
     g_true = plant_model(MODEL, true, effects).gravity
-    _, u, x0 = experiment_torque(MODEL, true, design, true_gravity=g_true)
+    _, u, x0 = torque_of(seed, true, design, g_true)
     rec = mujoco_recording(MODEL, true, u, design.dt, effects=effects, q0=x0[:3], seed=seed)
     plant_s = time.perf_counter() - t0
     res = identify(ad.Model.alpes(MODEL, friction=True), rec, excitation=design.frequencies, progress=False)
@@ -178,6 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--cases", default=",".join(CASE_NAMES))
     ap.add_argument("--quick", action="store_true", help="the first seed only and a 2 s experiment")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
     args = ap.parse_args(argv)
     try:
         seeds = [int(s) for s in args.seeds.split(",")]
@@ -197,7 +210,11 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as d:
         for c in names:
             t0 = time.perf_counter()
-            rows += [one(c, table[c], s, design, Path(d)) for s in seeds]
+            for s in seeds:
+                rows.append(one(c, table[c], s, design, Path(d)))
+                if args.log:
+                    with open(args.log, "a", encoding="utf-8") as f:
+                        f.write(json.dumps(rows[-1]) + "\n")
             case_seconds[c] = time.perf_counter() - t0
     out = {"model": MODEL, "seeds": seeds, "duration_s": design.duration, "tendon": info,
            "case_seconds": case_seconds, "rows": rows}
@@ -209,9 +226,10 @@ def table_text(out: dict) -> str:
     """The table of a run (the --json object)."""
     info = out["tendon"]
     lines = [f"{out['model']}, seeds {out['seeds']}, {out['duration_s']:g} s experiment; tendon k_t = "
-             f"{info['k_t_N_per_m']:.3g} N/m (tension swing {info['tension_swing_N']:.2f} N, travel "
-             f"{1e3 * info['tendon_travel_m']:.2f} mm, {100 * STRETCH:g} % stretch), c_t = "
-             f"{info['c_t_N_s_per_m']:.3g} N s/m, rotor mode {info['rotor_mode_Hz']:.0f} Hz",
+             f"{info['k_t_N_per_m']:.3g} N/m ({100 * STRETCH:g} % stretch: mean tension "
+             f"{info['mean_tension_N']:.1f} N over a travel of {1e3 * info['tendon_travel_m']:.2f} mm from q = 0; "
+             f"swing {info['tension_swing_N']:.2f} N over {1e3 * info['swing_travel_m']:.2f} mm), "
+             f"c_t = {info['c_t_N_s_per_m']:.3g} N s/m, rotor mode {info['rotor_mode_Hz']:.0f} Hz",
              f"{'case':9} {'seed':>4} {'K%':>6} {'m%':>6} {'F_s%':>7} {'F_v%':>7} {'resid':>6} {'conv':>5} "
              f"{'fit s':>6} {'EKF deg (identified file)':>26} {'EKF deg (true file)':>22}  verdict"]
     for r in out["rows"]:
