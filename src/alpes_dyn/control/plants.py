@@ -160,7 +160,8 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     (the rotor with the elastic tendon) quantised, plus ``encoder_offset``; ``torque`` (1 +
     ``torque_constant_error``) x torque + noise; ``true_q`` MuJoCo's joint angles; no gravity columns.
     Cost: a Python loop over the N samples, MuJoCo stepping each sample's substeps (``mj_step`` with
-    ``nstep``); about 1.3 s for the 4 s experiment with the smooth-friction callback, 0.6 s without.
+    ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
+    callback, 0.9 s with ``stiction`` (no callback).
     """
     import mujoco  # load_mujoco below gives the one-line error when it is missing
 
