@@ -199,6 +199,17 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
         C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: cannot write"),
         C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
+        C("mjcf", "finger3", "--stiction", "-1", needle="stiction: expected a positive time constant in s"),
+        C("mjcf", "finger3", "--stiction", "abc", needle="argument --stiction: invalid float value"),
+        C("mjcf", "finger3", "--tendon-stiffness", "0", needle="tendon_stiffness: expected a positive stiffness"),
+        C("mjcf", "finger3", "--tendon-stiffness", "inf", needle="tendon_stiffness: expected a positive stiffness"),
+        C("mjcf", "finger3", "--tendon-damping", "2", needle="tendon_damping: needs tendon_stiffness"),
+        C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-damping", "-1",
+          needle="tendon_damping: expected a damping >= 0"),
+        C("mjcf", "hand", "--tendon-rotor", "--rotor-inertia", needle="rotor_inertia: the rotor would be counted twice"),
+        C("mjcf", "finger3", "--tendon-rotor", "--tendon-stiffness", "4e4",
+          needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
+        C("mjcf", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
     ],
     "control": [
         C("control", "--controller", "pid", needle="unknown controller 'pid'"),
@@ -750,6 +761,43 @@ API: list[Api] = [
     A("chain_model", lambda c: _chain_model("thumb2"), InputError, "chain: unknown chain 'thumb2'"),
     A("cylinder_normal", lambda c: _cyl_normal(c, (0, 0, 0)), InputError, "normal: expected a non-zero 3-vector"),
     A("cylinder_normal", lambda c: _cyl_normal(c, (0, np.nan, 1)), InputError, "normal: expected a non-zero 3-vector"),
+    # the MJCF export's realism options
+    A("mjcf_string", lambda c: _mjcf(stiction=0.0), InputError, "stiction: expected a positive time constant"),
+    A("mjcf_string", lambda c: _mjcf(stiction="0.5 ms"), InputError, "stiction: expected a positive time constant"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=-4e4), InputError, "tendon_stiffness: expected a positive"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=True), InputError, "tendon_stiffness: expected a positive"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, tendon_damping=np.nan), InputError,
+      "tendon_damping: expected a damping >= 0"),
+    A("mjcf_string", lambda c: _mjcf(tendon_damping=1.0), InputError, "tendon_damping: needs tendon_stiffness"),
+    A("mjcf_string", lambda c: _mjcf(tendon_rotor="yes"), InputError, "tendon_rotor: expected True or False"),
+    A("mjcf_string", lambda c: _mjcf(tendon_rotor=True, rotor_inertia=True), InputError, "counted twice"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, rotor_inertia=True), InputError, "counted twice"),
+    A("mjcf_string", lambda c: _mjcf(tilt=float("inf")), InputError, "tilt: expected a finite angle in rad"),
+    # MuJoCo recording plants and the experiment's torque
+    A("mujoco_recording", lambda c: _mjrec(model="hand"), InputError, "model: a recording plant is one chain"),
+    A("mujoco_recording", lambda c: _mjrec(torque=np.zeros((10, 2))), InputError,
+      "torque: expected finite motor torques of shape (N+1, 1), got shape (10, 2)"),
+    A("mujoco_recording", lambda c: _mjrec(torque=np.full((10, 1), np.nan)), InputError, "torque: expected finite"),
+    A("mujoco_recording", lambda c: _mjrec(dt=0.0), InputError, "dt: expected a sample period in (0, 0.1] s"),
+    A("mujoco_recording", lambda c: _mjrec(timestep=3e-4), InputError, "does not divide the sample period"),
+    A("mujoco_recording", lambda c: _mjrec(timestep=2e-3), InputError, "timestep: expected a MuJoCo step in (0, dt]"),
+    A("mujoco_recording", lambda c: _mjrec(integrator="euler"), InputError, "integrator: unknown integrator 'euler'"),
+    A("mujoco_recording", lambda c: _mjrec(seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("mujoco_recording", lambda c: _mjrec(torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
+    A("mujoco_recording", lambda c: _mjrec(q0=[0.1, 0.2]), InputError, "q0: expected 3 finite joint angles (rad)"),
+    A("mujoco_recording", lambda c: _mjrec(true_params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
+    A("PlantEffects", lambda c: _mjrec(effects=_eff(torque_constant_error=0.7)), InputError,
+      "torque_constant_error: expected a fraction in (-0.5, 0.5)"),
+    A("PlantEffects", lambda c: _mjrec(effects=_eff(encoder_offset=np.nan)), InputError,
+      "encoder_offset: expected a finite number of counts"),
+    A("PlantEffects", lambda c: _mjrec(effects=_eff(stiction=-1.0)), InputError, "stiction: expected a positive"),
+    A("PlantEffects", lambda c: _mjrec(effects=_eff(tendon_rotor=True, tendon_stiffness=1e4)), InputError,
+      "tendon_rotor: the series-elastic tendon"),
+    A("experiment_torque", lambda c: _exptorque(model="hand"), InputError, "defined for one chain"),
+    A("experiment_torque", lambda c: _exptorque(true_gravity=[0.0, -9.81]), InputError,
+      "true_gravity: expected 3 finite numbers"),
+    A("experiment_torque", lambda c: _exptorque(design=_design(orientations=((0, 0, -9.81), (0, 0, 9.81)))),
+      InputError, "orientations: experiment_torque replays one orientation, got 2"),
     A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
     A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
 ]
@@ -783,6 +831,31 @@ def _cyl_normal(c, axis):
     from alpes_dyn.control import cylinder_normal
 
     return cylinder_normal(c.m, np.zeros(3), (0.0, 0.0, 0.05), axis)
+
+
+def _mjrec(**kw):
+    from alpes_dyn.control.plants import mujoco_recording
+
+    kw = {"model": "finger3", "true_params": None, "torque": np.full((200, 1), 0.02), **kw}
+    return mujoco_recording(kw.pop("model"), kw.pop("true_params"), kw.pop("torque"), **kw)
+
+
+def _eff(**kw):
+    from alpes_dyn.control.plants import PlantEffects
+
+    return PlantEffects(**kw)
+
+
+def _exptorque(**kw):
+    from alpes_dyn.estimation.experiment import experiment_torque
+
+    return experiment_torque(kw.pop("model", "finger3"), **kw)
+
+
+def _mjcf(**kw):
+    from alpes_dyn.model.mjcf import mjcf_string
+
+    return mjcf_string("finger3", **kw)
 
 
 def _plot_path(p):

@@ -11,6 +11,7 @@ from __future__ import annotations
 import argparse
 import importlib
 import json
+import math
 import re
 import sys
 import time
@@ -248,9 +249,13 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
     from .model.mjcf import mjcf_string
     from .model.params import load_params
 
+    if not math.isfinite(args.tilt):
+        raise InputError(f"--tilt: expected a finite angle in degrees, got {args.tilt!r}")
     text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
                        rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
-                       scene=args.scene, palm_down=args.palm_down)
+                       scene=args.scene, palm_down=args.palm_down, stiction=args.stiction,
+                       tendon_stiffness=args.tendon_stiffness, tendon_damping=args.tendon_damping,
+                       tendon_rotor=args.tendon_rotor, tilt=math.radians(args.tilt))
     if args.output is not None:
         atomic_write(args.output, text, "-o")
     else:
@@ -867,6 +872,16 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--no-limits", action="store_true", help="no joint stops")
     s.add_argument("--no-contact", action="store_true", help="collisions disabled")
     s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
+    s.add_argument("--stiction", type=float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
+                   help="stick-slip dry friction: frictionloss F_s with solreffriction of this time constant "
+                        "(default %(const)g s when given without a value)")
+    s.add_argument("--tendon-stiffness", type=float, default=None, metavar="N_PER_M",
+                   help="series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
+    s.add_argument("--tendon-damping", type=float, default=0.0, metavar="N_S_PER_M",
+                   help="damping c_t of the series-elastic tendon (default 0)")
+    s.add_argument("--tendon-rotor", action="store_true", help="rotor inertia J_m / r_m^2 on each rigid tendon")
+    s.add_argument("--tilt", type=float, default=0.0, metavar="DEG",
+                   help="palm tilted in the finger's plane by DEG degrees (gravity rotated about y)")
     s.set_defaults(func=cmd_mjcf)
 
     s = sub.add_parser("dynamics", help="A, C, G, J and forward dynamics at one state",

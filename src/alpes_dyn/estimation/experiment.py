@@ -54,7 +54,7 @@ from .recording import Recording, write_recording
 from ..simulation.integrate import simulate
 from ..model.stops import JointRangeWarning
 
-__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "excitation", "perturbed_params"]
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "perturbed_params"]
 
 EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 """The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
@@ -256,7 +256,7 @@ def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: f
 
 
 def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray,
-                  peak: np.ndarray | None = None) -> np.ndarray:
+                  peak: np.ndarray | None = None, target: np.ndarray | None = None) -> np.ndarray:
     """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
     (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
     with a slow loop on its measured encoder before recording (the encoders are all it uses). The
@@ -266,10 +266,11 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     dG/dq singular: gravity's torque outgrows the springs') it snaps to full flexion. The loop then
     stops below the fold, by 1.25 times the multisine's ``peak`` torque (m,) so that the excitation does
     not push it over (measured on a little finger with K_1 18 % soft: fold at 0.0217 N m, below the
-    nominal's mid-range bias of 0.0229 N m)."""
+    nominal's mid-range bias of 0.0229 N m). ``target`` (m,): the encoder readings to trim to, if not the
+    nominal's at ``gravity``."""
     S = nominal.transmission.S
     joints, sprung, free = _motor_groups(nominal)
-    target = S @ _mean_equilibrium(nominal, bias, gravity)
+    target = S @ _mean_equilibrium(nominal, bias, gravity) if target is None else target
     out = np.asarray(bias, dtype=float).copy()
     for k in sprung:
         upper = max(4.0 * out[k], 0.2)
@@ -419,6 +420,50 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     if path is not None:
         write_recording(rec, path)
     return rec
+
+
+def experiment_torque(model: str, true_params: HandParams | str | Path | None = None,
+                      design: ExperimentDesign | None = None, nominal_params: HandParams | str | Path | None = None,
+                      chain: str | None = None,
+                      true_gravity: Sequence[float] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The motor torque of the experiment that :func:`experiment` runs on ``true_params``, without sensors: the
+    input to replay on another plant (a MuJoCo finger, :func:`alpes_dyn.control.plants.mujoco_recording`).
+
+    The arguments are :func:`experiment`'s (the bias trimmed on the true finger as there: what the
+    experimenter's slow loop on the encoder finds with the library's model of that finger).
+    ``true_gravity`` (3,), m/s^2: the gravity the true finger feels, if not the design's first orientation (a
+    palm tilted unknown to the experimenter: the excitation is designed for the orientation the design
+    names, the bias trimmed and the rest found on the finger as it is). One orientation only.
+
+    Returns
+    -------
+    t: (N+1,) s. u: (N+1, m) true motor torque, N m, u[k] held on [t_k, t_k+1). x0: (2n,) the initial state
+    (the true finger at rest under u[0], first orientation), rad and rad/s.
+    """
+    if model not in EXPERIMENT_MODELS:
+        raise InputError(f"model: the identification experiment is defined for one chain "
+                         f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
+    design = (design or ExperimentDesign()).check()
+    if len(design.orientations) != 1:
+        raise InputError(f"orientations: experiment_torque replays one orientation, got {len(design.orientations)}")
+    g_true = np.asarray(design.orientations[0] if true_gravity is None else true_gravity, dtype=float)
+    if g_true.shape != (3,) or not np.isfinite(g_true).all():
+        raise InputError(f"true_gravity: expected 3 finite numbers (m/s^2), got {np.asarray(true_gravity).tolist()!r}")
+    p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
+    p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
+    nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
+    bias, amp = _excitation(nominal, design)
+    truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
+    t, _, _ = _schedule(design)
+    if design.trim_bias and design.torque_bias is None:
+        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp)), axis=0)
+        # the trim loop's target: the nominal finger's encoder reading as designed; found on the finger as it is
+        want = nominal.transmission.S @ _mean_equilibrium(nominal, bias, np.asarray(design.orientations[0], dtype=float))
+        bias = _trimmed_bias(truth, nominal, bias, g_true, peak, want)
+    u = _profiles(design, t, bias, amp)
+    x0 = np.zeros(2 * truth.n)
+    x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true)
+    return t, u, x0
 
 
 def perturbed_params(params: HandParams | None = None, spread: float = 0.2, seed: int = 0,

@@ -26,6 +26,31 @@ bodies, joints, frames, COMs and inertias about the COM) plus what URDF cannot h
   (hand only), contacts between the palm and the proximal phalanges excluded;
 * a ``site`` at every tip frame (named as the URDF frame), for checks and rendering.
 
+Effects of a real hand that the library's rigid model leaves out (each off by default: the text is then the
+same, byte for byte), for plants "we did not write" (:mod:`alpes_dyn.control.plants`, ``benchmarks/realism.py``):
+
+* ``stiction=tau``: stick-slip dry friction. MuJoCo's ``frictionloss`` = F_s is a constraint whose softness is
+  ``solreffriction``; with MuJoCo's default (0.02 s) it is soft on this light finger (joint 3 reaches only
+  0.70 F_s while sliding, and creeps at 0.4 rad/s under 0.8 F_s). A time constant tau of a fraction of a
+  millisecond (:data:`STICTION_TIMECONST`, 0.5 ms) gives the full F_s while sliding, and an impedance
+  close to 1 (``solimpfriction``, :data:`STICTION_IMPEDANCE`) real stick phases (the joint stays at rest,
+  creeping by 1e-4 rad/s, while the torque is below F_s). MuJoCo has no Stribeck curve (no breakaway torque above F_s): stiction here is the
+  frictionloss constraint alone. Written with ``damping`` F_v, as ``friction=True``;
+* ``tendon_stiffness=k_t`` (N/m, with ``tendon_damping=c_t``, N s/m): a series-elastic tendon. Each flexion
+  motor drives a rotor hinge ``<motor>_rotor`` of its own (``armature`` J_m, the rotor's inertia on the
+  motor side, eq. 2.8's I_a), the motor actuator on that joint (gear 1, ``ctrlrange`` [0, tau_max]); the
+  fixed tendon ``<motor>`` is the cable's stretch e = r_m theta_m - sum_i r q_i (m), with stiffness k_t,
+  damping c_t and ``springlength="-1 0"``: MuJoCo's dead band makes the spring pull only (tension
+  T = k_t max(e, 0): a slack cable pushes nothing; the damping c_t acts on de/dt slack or not). The joints
+  get r T each, the rotor -r_m T. ``encoder_<motor>`` measures the rotor, ``tendon_<motor>`` the stretch e;
+* ``tendon_rotor=True``: the rotor inertia on a rigid tendon, ``armature`` J_m / r_m^2 (kg) on each flexion
+  tendon: MuJoCo adds it as J_m S^T S to the joints' mass matrix (every entry of the chain's block, not
+  only the diagonal as ``rotor_inertia``'s N^2 J_m);
+  with either rotor option the thumb's ab/adduction joint (a gear on the joint, no tendon) gets its
+  rotor as ``armature`` abduction_ratio^2 J_m;
+* ``tilt=angle`` (rad): the palm tilted in the finger's plane, gravity rotated about the base frame's y
+  axis (the joint axes' line): :func:`tilted_gravity`.
+
 Scenes (``scene=``): ``"block"`` (finger2/finger3) adds a fixed, frictionless box whose face meets
 the fingertip at the configuration ``contact_q``, at an angle ``block_tilt`` to the distal phalanx
 (the block pushes the fingertip along the face's normal n, :func:`block_normal`: F = -F_z n with
@@ -52,7 +77,7 @@ from ..errors import InputError, ModelError
 from .extras import spring_stiffness
 from .params import ChainParams, HandParams, load_params
 
-__all__ = ["SCENES", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
+__all__ = ["SCENES", "STICTION_TIMECONST", "STICTION_IMPEDANCE", "tilted_gravity", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
            "block_normal", "BLOCK_TILT",
            "BLOCK_CONTACT_Q", "CYLINDER"]
 
@@ -65,6 +90,14 @@ BLOCK_TILT: float = 0.15
 #: (``condim="1"``) like the block: the contact force is the normal force the FlexiForce reads. Placed where the four
 #: fingertips and the thumb's (ab/adduction at 35 degrees) meet it with their pads before any other phalanx touches,
 #: the hand palm down (see :func:`alpes_dyn.control.force.run_hand_control`).
+#: Time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) that gives stick-slip on the finger.
+STICTION_TIMECONST: float = 5e-4
+#: Impedance d of that constraint (``solimpfriction``): a stuck joint creeps at a velocity proportional to
+#: (1 - d) / d; MuJoCo's default 0.9 lets joint 3 creep at 0.012 rad/s under 0.8 F_s after 0.1 s, 0.999 at 1.2e-4.
+STICTION_IMPEDANCE: float = 0.999
+#: The rotor bodies of the series-elastic tendon: a point mass (kg) and inertia (kg m^2) that MuJoCo needs for a
+#: body, 1e-5 of the rotor's J_m = 1e-7 kg m^2 (the rotor's inertia is the joint's ``armature``).
+_ROTOR_MASS, _ROTOR_INERTIA = 1e-6, 1e-12
 CYLINDER = {"center": (0.01, 0.0, 0.08), "radius": 0.025, "half_length": 0.08}
 
 
@@ -88,6 +121,16 @@ def palm_down_params(params: HandParams) -> HandParams:
     return dataclasses.replace(params, gravity=-np.asarray(params.gravity, dtype=float))
 
 
+def tilted_gravity(gravity: Sequence[float], tilt: float) -> np.ndarray:
+    """Gravity (3,), m/s^2, in the base frame of a hand tilted by ``tilt`` (rad) in the finger's plane (x-z):
+    R_y(tilt) g, the rotation about the base frame's y axis (the joints' axes are along -y). With the
+    shipped palm-up gravity (0, 0, -g): (-g sin(tilt), 0, -g cos(tilt)). The same vector goes to
+    :class:`~alpes_dyn.Model` (``Model.copy(gravity=...)``) for the same tilted hand."""
+    g = np.asarray(gravity, dtype=float)
+    c, s_ = math.cos(tilt), math.sin(tilt)
+    return np.array([c * g[0] + s_ * g[2], g[1], -s_ * g[0] + c * g[2]])
+
+
 def block_normal(contact_q: Sequence[float], tilt: float = BLOCK_TILT) -> np.ndarray:
     """Unit normal n (3,) of the block scene's face, base frame, pointing from the fingertip into the block:
     the pad's normal at ``contact_q`` turned back by ``tilt`` (rad) so that the fingertip's end, not
@@ -108,8 +151,10 @@ def contact_tip_position(chain: ChainParams, q: Sequence[float]) -> np.ndarray:
 
 
 class _Writer:
-    def __init__(self, p: HandParams, spring: str, friction: bool, rotor_inertia: bool, limits: bool) -> None:
+    def __init__(self, p: HandParams, spring: str, friction: bool, rotor_inertia: bool, limits: bool,
+                 stiction: float | None = None) -> None:
         self.p = p
+        self.stiction = stiction
         self.spring = spring
         self.friction = friction
         self.rotor_inertia = rotor_inertia
@@ -117,20 +162,24 @@ class _Writer:
         self.lines: list[str] = []
 
     def joint(self, name: str, axis: Sequence[float], k: float, armature: float, lo: float, hi: float, ind: str,
-              F_s: float | None = None, F_v: float | None = None) -> str:
-        """A hinge; friction F_s, F_v (default: the file's ``[friction]`` values)."""
+              F_s: float | None = None, F_v: float | None = None, rotor: bool = False) -> str:
+        """A hinge; friction F_s, F_v (default: the file's ``[friction]`` values); ``armature`` with
+        ``rotor_inertia`` or ``rotor`` (the ab/adduction's rotor under a tendon-rotor option)."""
         attrs = [f'name="{name}"', 'type="hinge"', f'axis="{_v(axis)}"', 'pos="0 0 0"',
                  f'stiffness="{_f(k)}"', 'springref="0"']
         if self.limits:
             attrs += ['limited="true"', f'range="{_f(lo)} {_f(hi)}"']
         else:
             attrs += ['limited="false"']
-        if self.rotor_inertia and armature > 0:
+        if (self.rotor_inertia or rotor) and armature > 0:
             attrs.append(f'armature="{_f(armature)}"')
         if self.friction:
             Fv = self.p.F_v if F_v is None else F_v
             Fs = self.p.F_s if F_s is None else F_s
             attrs += [f'damping="{_f(Fv)}"', f'frictionloss="{_f(Fs)}"']
+            if self.stiction is not None:
+                attrs.append(f'solreffriction="{_f(self.stiction)} 1" '
+                             f'solimpfriction="{_f(STICTION_IMPEDANCE)} {_f(STICTION_IMPEDANCE)} 0.001"')
         return f"{ind}<joint {' '.join(attrs)}/>\n"
 
     def chain(self, prefix: str, ch: ChainParams, n: int, K: np.ndarray, pos: Sequence[float], quat: Sequence[float],
@@ -167,7 +216,9 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
                 spring: str = "torsional",
                 friction: bool = False, rotor_inertia: bool = False, limits: bool = True, contact: bool = True,
                 scene: str = "none", contact_q: Sequence[float] | None = None,
-                block_friction: float = 0.0, block_tilt: float = BLOCK_TILT, palm_down: bool = False, timestep: float = 2.5e-4) -> str:
+                block_friction: float = 0.0, block_tilt: float = BLOCK_TILT, palm_down: bool = False, timestep: float = 2.5e-4,
+                stiction: float | None = None, tendon_stiffness: float | None = None, tendon_damping: float = 0.0,
+                tendon_rotor: bool = False, tilt: float = 0.0) -> str:
     """MJCF text of ``model`` (``finger2``, ``finger3`` or ``hand``) built from ``params``.
 
     Parameters
@@ -190,6 +241,12 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     palm_down: the hand turned over, gravity reversed (see :func:`palm_down_params`): the fingers flex
         with gravity, toward an object under them, as in the block scene of :mod:`alpes_dyn.control`.
     timestep: MuJoCo's time step, s (default 0.25 ms, the estimation scenario's integration step).
+    stiction: time constant (s) of the dry-friction constraint (``solreffriction``), e.g.
+        :data:`STICTION_TIMECONST`: stick-slip friction, F_s and F_v written as with ``friction=True``.
+    tendon_stiffness, tendon_damping: k_t (N/m) and c_t (N s/m) of a series-elastic, pull-only tendon with its
+        own rotor joint (module docstring); None (default): the rigid tendon.
+    tendon_rotor: the rotor inertia J_m / r_m^2 as the rigid tendon's ``armature`` (J_m S^T S on the joints).
+    tilt: the palm tilted in the finger's plane, rad (:func:`tilted_gravity`); applied after ``palm_down``.
 
     Returns
     -------
@@ -210,13 +267,15 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
     if not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction) and block_friction >= 0):
         raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
+    _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia)
     p = model_params(model, _params(params), chain)
     if palm_down:
         p = palm_down_params(p)
     lay = layout(model, p)
     block_condim = 1 if block_friction == 0 else 3
-    w = _Writer(p, spring, friction, rotor_inertia, limits)
-    g = p.gravity
+    w = _Writer(p, spring, friction or stiction is not None, rotor_inertia, limits, stiction)
+    rotor = tendon_rotor or tendon_stiffness is not None
+    g = p.gravity if tilt == 0 else tilted_gravity(p.gravity, tilt)
     opt = f'timestep="{_f(timestep)}" gravity="{_v(g)}" integrator="implicitfast"'
     option = f"  <option {opt}>\n    <flag contact=\"disable\"/>\n  </option>\n" if not contact else f"  <option {opt}/>\n"
     head = (
@@ -266,7 +325,7 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         body.append(w.joint("thumb_abd", p.abduction_axis, spring_stiffness(np.array([p.abduction_K]), spring, p.b,
                                                                             p.r)[0],
                             p.abduction_ratio**2 * p.J_m, p.abduction_lower, p.abduction_upper, "        ",
-                            p.abduction_F_s, p.abduction_F_v))
+                            p.abduction_F_s, p.abduction_F_v, rotor))
         body.append(f'        <inertial pos="0 0 0" mass="{_f(p.thumb_base_mass)}" diaginertia="{_v((ib, ib, ib))}"/>\n')
         body.append(f'        <geom name="thumb_base" type="sphere" size="{_f(rb)}" contype="0" conaffinity="0" '
                     f'rgba="{finger_rgba}"/>\n')
@@ -278,6 +337,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
             body.append(f'    <geom name="cylinder" type="cylinder" pos="{_v(c["center"])}" quat="0.7071067811865476 '
                         f'0.7071067811865476 0 0" size="{_f(c["radius"])} {_f(c["half_length"])}" condim="1" '
                         'friction="0 0.005 0.0001" priority="1" rgba="0.4 0.6 0.8 1"/>\n')
+    if tendon_stiffness is not None:
+        body += [_rotor_body(ch.name, p.J_m) for ch in lay.chains]
     body.append("  </worldbody>\n")
     parts = [head, *body]
     if excludes:
@@ -286,11 +347,16 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     # tendons and motors (the Transmission's order: flexion motors, then ab/adduction motors)
     tendons, actuators, sensors = [], [], []
     for ch in lay.chains:
-        coefs = "".join(f'      <joint joint="{j}" coef="{_f(p.r)}"/>\n' for j in ch.joints)
-        arm = f' armature="{_f(p.J_m / p.r_m**2)}"' if rotor_inertia and p.J_m > 0 else ""
-        tendons.append(f'    <fixed name="{ch.name}"{arm}>\n{coefs}    </fixed>\n')
-        actuators.append(f'    <motor name="{ch.name}" tendon="{ch.name}" gear="{_f(1.0 / p.r_m)}" '
-                         f'ctrlrange="0 {_f(p.tau_max)}"/>\n')
+        if tendon_stiffness is not None:
+            tendons.append(_elastic_tendon(ch.name, ch.joints, p, tendon_stiffness, tendon_damping))
+            actuators.append(f'    <motor name="{ch.name}" joint="{ch.name}_rotor" gear="1" '
+                             f'ctrlrange="0 {_f(p.tau_max)}"/>\n')
+        else:
+            coefs = "".join(f'      <joint joint="{j}" coef="{_f(p.r)}"/>\n' for j in ch.joints)
+            arm = f' armature="{_f(p.J_m / p.r_m**2)}"' if (tendon_rotor or rotor_inertia) and p.J_m > 0 else ""
+            tendons.append(f'    <fixed name="{ch.name}"{arm}>\n{coefs}    </fixed>\n')
+            actuators.append(f'    <motor name="{ch.name}" tendon="{ch.name}" gear="{_f(1.0 / p.r_m)}" '
+                             f'ctrlrange="0 {_f(p.tau_max)}"/>\n')
         sensors += [f'    <actuatorpos name="encoder_{ch.name}" actuator="{ch.name}"/>\n',
                     f'    <tendonpos name="tendon_{ch.name}" tendon="{ch.name}"/>\n',
                     f'    <actuatorfrc name="torque_{ch.name}" actuator="{ch.name}"/>\n']
@@ -308,6 +374,50 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     parts.append("  <sensor>\n" + "".join(sensors) + "  </sensor>\n")
     parts.append("</mujoco>\n")
     return "".join(parts)
+
+
+def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendon_damping: float,
+                   tendon_rotor: bool, tilt: float, rotor_inertia: bool) -> None:
+    """The realism options of :func:`mjcf_string`: numbers in range, no rotor counted twice."""
+    def number(x: object) -> bool:
+        return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
+
+    if stiction is not None and not (number(stiction) and stiction > 0):
+        raise InputError(f"stiction: expected a positive time constant in s (e.g. {STICTION_TIMECONST:g}), "
+                         f"got {stiction!r}")
+    if tendon_stiffness is not None and not (number(tendon_stiffness) and tendon_stiffness > 0):
+        raise InputError(f"tendon_stiffness: expected a positive stiffness in N/m, got {tendon_stiffness!r}")
+    if not (number(tendon_damping) and tendon_damping >= 0):
+        raise InputError(f"tendon_damping: expected a damping >= 0 in N s/m, got {tendon_damping!r}")
+    if tendon_damping > 0 and tendon_stiffness is None:
+        raise InputError("tendon_damping: needs tendon_stiffness (the rigid tendon has no stretch to damp)")
+    if not isinstance(tendon_rotor, (bool, np.bool_)):
+        raise InputError(f"tendon_rotor: expected True or False, got {tendon_rotor!r}")
+    if not number(tilt):
+        raise InputError(f"tilt: expected a finite angle in rad, got {tilt!r}")
+    if tendon_stiffness is not None and tendon_rotor:
+        raise InputError("tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already")
+    if rotor_inertia and (tendon_rotor or tendon_stiffness is not None):
+        raise InputError(f"rotor_inertia: the rotor would be counted twice (with "
+                         f"{'tendon_rotor' if tendon_rotor else 'tendon_stiffness'})")
+
+
+def _rotor_body(motor: str, J_m: float) -> str:
+    """A flexion motor's rotor: a hinge ``<motor>_rotor`` with ``armature`` J_m on a point body (no geom)."""
+    return (f'    <body name="{motor}_rotor" pos="0 0 0">\n'
+            f'      <joint name="{motor}_rotor" type="hinge" axis="0 -1 0" pos="0 0 0" limited="false" '
+            f'armature="{_f(J_m)}"/>\n'
+            f'      <inertial pos="0 0 0" mass="{_f(_ROTOR_MASS)}" diaginertia="{_v((_ROTOR_INERTIA,) * 3)}"/>\n'
+            "    </body>\n")
+
+
+def _elastic_tendon(motor: str, joints: Sequence[str], p: HandParams, k_t: float, c_t: float) -> str:
+    """The cable's stretch e = r_m theta_m - sum r q_i as a fixed tendon, a spring k_t pulling only (dead band
+    below e = 0) and a damper c_t."""
+    coefs = f'      <joint joint="{motor}_rotor" coef="{_f(p.r_m)}"/>\n'
+    coefs += "".join(f'      <joint joint="{j}" coef="{_f(-p.r)}"/>\n' for j in joints)
+    return (f'    <fixed name="{motor}" stiffness="{_f(k_t)}" damping="{_f(c_t)}" springlength="-1 0">\n'
+            f"{coefs}    </fixed>\n")
 
 
 def load_mujoco(xml: str):

@@ -1,0 +1,228 @@
+"""Plants we did not write: a finger exported to MuJoCo with the effects of a real hand, and its recording.
+
+The library's identification and observers are exact on data from its own simulator, whose model structure
+is the fitted one. :func:`mujoco_recording` makes the data a user gets from a real hand instead: the
+finger exported by :func:`~alpes_dyn.model.mjcf.mjcf_string` and stepped by MuJoCo (an independent engine;
+joint stops on, RK4 at 0.1 ms by default), a motor torque replayed on it (e.g. the identification
+experiment's, :func:`~alpes_dyn.estimation.experiment.experiment_torque`), read through the sensors of
+:mod:`alpes_dyn.estimation.experiment` (the encoder quantised to ``counts_per_rev`` with 0.5 count of
+Gaussian noise, the torque with 5e-4 N m of white noise, 1 kHz), into a
+:class:`~alpes_dyn.estimation.recording.Recording` that :func:`~alpes_dyn.estimation.identification.identify`
+reads, with the true joint angles in ``true_q_*``.
+
+The effects (:class:`PlantEffects`, each off by default):
+
+* ``stiction``: stick-slip dry friction, MuJoCo's ``frictionloss`` F_s with a stiff constraint
+  (:data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST`); off, the joints get the library's own smooth law
+  F_s tanh(v / v_s) + F_v v (:class:`~alpes_dyn.model.extras.JointExtras`), added to MuJoCo's passive forces
+  by a callback at every RK4 stage: the plant then has the fitted model's friction structure;
+* ``tendon_stiffness`` / ``tendon_damping``: the series-elastic, pull-only tendon with a rotor per motor
+  (its inertia J_m on the motor side); the encoder measures the rotor;
+* ``tendon_rotor``: the rotor inertia on the rigid tendon (J_m S^T S on the joints' mass matrix);
+* ``tilt``: the palm tilted in the finger's plane (rad); the recording has no ``gravity_*`` columns (the
+  user does not know the tilt);
+* ``torque_constant_error`` e: the recorded torque is (1 + e) times the true one (a torque constant e off);
+* ``encoder_offset``: the encoder's zero off by this many counts.
+
+The passive callback is MuJoCo's process-wide ``mjcb_passive``: :func:`mujoco_recording` sets it for its run and
+restores the previous one (not thread-safe: one smooth-friction run at a time per process).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError, ModelError
+from ..estimation.recording import Recording
+from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, tilted_gravity
+from ..model.params import HandParams, load_params
+from ..model.robot import Model
+
+__all__ = ["PLANT_MODELS", "INTEGRATORS", "PlantEffects", "plant_mjcf", "plant_model", "mujoco_recording"]
+
+PLANT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
+"""The models a recording plant is built for: one chain, as the identification experiment."""
+INTEGRATORS: tuple[str, ...] = ("rk4", "implicit", "implicitfast")
+
+
+def _number(x: object) -> bool:
+    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
+
+
+@dataclass(frozen=True)
+class PlantEffects:
+    """The unmodelled effects of a real hand on a MuJoCo plant (see the module docstring); SI units.
+
+    stiction: time constant (s) of MuJoCo's dry-friction constraint, or None (the library's smooth law).
+    tendon_stiffness: k_t (N/m) of a series-elastic tendon, or None (rigid). tendon_damping: c_t (N s/m).
+    tendon_rotor: the rotor's inertia on the rigid tendon. tilt: rad, in the finger's plane.
+    torque_constant_error: e, the recorded torque (1 + e) times the true one. encoder_offset: counts.
+    """
+
+    stiction: float | None = None
+    tendon_stiffness: float | None = None
+    tendon_damping: float = 0.0
+    tendon_rotor: bool = False
+    tilt: float = 0.0
+    torque_constant_error: float = 0.0
+    encoder_offset: float = 0.0
+
+    def check(self) -> "PlantEffects":
+        """Numbers in range (:class:`~alpes_dyn.InputError` naming the field); the MJCF options are checked by
+        :func:`~alpes_dyn.model.mjcf.mjcf_string`."""
+        if not (_number(self.torque_constant_error) and -0.5 < self.torque_constant_error < 0.5):
+            raise InputError(f"torque_constant_error: expected a fraction in (-0.5, 0.5), got "
+                             f"{self.torque_constant_error!r}")
+        if not (_number(self.encoder_offset) and abs(self.encoder_offset) <= 1e6):
+            raise InputError(f"encoder_offset: expected a finite number of counts, got {self.encoder_offset!r}")
+        return self
+
+
+def _params(params: HandParams | str | None) -> HandParams:
+    return params if isinstance(params, HandParams) else load_params(params)
+
+
+def plant_mjcf(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
+               chain: str | None = None, timestep: float = 1e-4) -> str:
+    """MJCF text of the plant: ``model`` from ``params`` with the MJCF side of ``effects`` (joint stops on,
+    contact off: a finger moving freely; friction as the module docstring says)."""
+    e = (effects or PlantEffects()).check()
+    return mjcf_string(model, _params(params), chain=chain, friction=False, contact=False, timestep=timestep,
+                       stiction=e.stiction, tendon_stiffness=e.tendon_stiffness, tendon_damping=e.tendon_damping,
+                       tendon_rotor=e.tendon_rotor, tilt=e.tilt)
+
+
+def plant_model(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
+                chain: str | None = None) -> Model:
+    """The library's rigid model of the same finger (friction on), with the plant's tilted gravity: what the
+    plant is without its other effects (its rest states, its smooth friction law)."""
+    e = (effects or PlantEffects()).check()
+    m = Model.alpes(model, friction=True, params=_params(params), chain=chain)
+    return m if e.tilt == 0 else m.copy(gravity=tilted_gravity(m.gravity, e.tilt))
+
+
+def _check_run(model: str, u: np.ndarray, dt: float, timestep: float, integrator: str, m: int) -> int:
+    """Substeps per sample; one-line errors for the run's settings."""
+    if integrator not in INTEGRATORS:
+        raise InputError(f"integrator: unknown integrator {integrator!r} (expected one of {', '.join(INTEGRATORS)})")
+    if u.ndim != 2 or u.shape[1] != m or u.shape[0] < 2 or not np.isfinite(u).all():
+        raise InputError(f"torque: expected finite motor torques of shape (N+1, {m}), got shape {u.shape}")
+    if not (_number(dt) and 0 < dt <= 0.1):
+        raise InputError(f"dt: expected a sample period in (0, 0.1] s, got {dt!r}")
+    if not (_number(timestep) and 0 < timestep <= dt):
+        raise InputError(f"timestep: expected a MuJoCo step in (0, dt] s, got {timestep!r}")
+    sub = int(round(dt / timestep))
+    if abs(sub * timestep - dt) > 1e-9 * dt:
+        raise InputError(f"timestep: {timestep:g} s does not divide the sample period {dt:g} s")
+    return sub
+
+
+def _initial_state(mj, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np.ndarray, p: HandParams,
+                   effects: PlantEffects) -> np.ndarray:
+    """qpos of the plant at joint angles q0 (rad), at rest: each rotor (series-elastic tendon) turned so that the
+    cable holds the motor torque u0 (the static tension T = tau_m / r_m, stretch T / k_t)."""
+    qpos = mj.qpos0.copy()
+    qpos[perm] = q0
+    if effects.tendon_stiffness is not None:
+        S = truth.transmission.S
+        for k, mn in enumerate(truth.transmission.motor_names):
+            if mn.endswith("abduction"):
+                continue
+            stretch = float(u0[k]) / (p.r_m * effects.tendon_stiffness)
+            qpos[mj.joint(f"{mn}_rotor").qposadr[0]] = float(S[k] @ q0) + stretch / p.r_m  # e = r_m theta - r sum q
+    return qpos
+
+
+def mujoco_recording(model: str, true_params: HandParams | str | None, torque: np.ndarray, dt: float = 1e-3, *,
+                     effects: PlantEffects | None = None, q0: Sequence[float] | None = None, seed: int = 0,
+                     chain: str | None = None, timestep: float = 1e-4, integrator: str = "rk4",
+                     encoder_noise_counts: float = 0.5, torque_noise: float = 5e-4) -> Recording:
+    """Replay a motor torque on a MuJoCo plant of ``model`` with ``effects`` and record it as the hand's sensors do.
+
+    Parameters
+    ----------
+    model: ``finger2``, ``finger3`` or ``thumb`` (:data:`PLANT_MODELS`). true_params: the plant's parameters.
+    torque: (N+1, m) true motor torque, N m, torque[k] held on [t_k, t_k+1) (the last row is recorded only).
+    dt: sample period, s. timestep: MuJoCo's step, s (a divisor of dt; default 0.1 ms).
+    effects: :class:`PlantEffects` (default none: the library's own model structure, its smooth friction).
+    q0: initial joint angles (rad; default the plant's rest under torque[0], as :func:`plant_model` finds it),
+        at rest (qd = 0), each series-elastic rotor holding the cable's static tension.
+    seed: seed of the sensor noise. integrator: ``rk4`` (default), ``implicit`` or ``implicitfast``.
+    encoder_noise_counts: Gaussian noise (counts) added before the encoder's quantisation. torque_noise: N m.
+
+    Returns
+    -------
+    :class:`~alpes_dyn.estimation.recording.Recording`: ``encoder`` the plant's ``encoder_<motor>`` sensor
+    (the rotor with the elastic tendon) quantised, plus ``encoder_offset``; ``torque`` (1 +
+    ``torque_constant_error``) x torque + noise; ``true_q`` MuJoCo's joint angles; no gravity columns.
+    Cost: a Python loop over the N samples, MuJoCo stepping each sample's substeps (``mj_step`` with
+    ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
+    callback, 0.9 s with ``stiction`` (no callback).
+    """
+    import mujoco  # load_mujoco below gives the one-line error when it is missing
+
+    e = (effects or PlantEffects()).check()
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    for name, v in (("encoder_noise_counts", encoder_noise_counts), ("torque_noise", torque_noise)):
+        if not (_number(v) and v >= 0):
+            raise InputError(f"{name}: expected a non-negative number, got {v!r}")
+    if model not in PLANT_MODELS:
+        raise InputError(f"model: a recording plant is one chain ({', '.join(PLANT_MODELS)}), got {model!r}")
+    p = _params(true_params)
+    truth = plant_model(model, p, e, chain)
+    m = truth.transmission.n_motors
+    u = np.asarray(torque, dtype=float)
+    u = u[:, None] if u.ndim == 1 else u
+    sub = _check_run(model, u, dt, timestep, integrator, m)
+    mj = load_mujoco(plant_mjcf(model, p, e, chain, timestep))
+    mj.opt.integrator = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
+                         "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}[integrator]
+    d = mujoco.MjData(mj)
+    perm = joint_permutation(mj, truth.joint_names)
+    if q0 is None:
+        q_init = truth.static_equilibrium(truth.transmission.joint_torque(u[0]), np.zeros(truth.n),
+                                          fixed=truth.springless_joints)
+    else:
+        q_init = np.asarray(q0, dtype=float)
+        if q_init.shape != (truth.n,) or not np.isfinite(q_init).all():
+            raise InputError(f"q0: expected {truth.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
+    d.qpos[:] = _initial_state(mj, truth, perm, q_init, u[0], p, e)
+    mujoco.mj_forward(mj, d)
+    tr = truth.transmission
+    enc_adr = [mj.sensor_adr[mj.sensor(f"encoder_{mn}").id] for mn in tr.motor_names]
+    dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
+    ex = truth.extras
+
+    def smooth_friction(_m, dd) -> None:  # the library's law, at every RK4 stage
+        v = dd.qvel[dofs]
+        dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
+
+    N = u.shape[0] - 1
+    qm, q = np.empty((N + 1, m)), np.empty((N + 1, truth.n))
+    qm[0], q[0] = d.sensordata[enc_adr], d.qpos[perm]
+    previous = mujoco.get_mjcb_passive()
+    if e.stiction is None:
+        mujoco.set_mjcb_passive(smooth_friction)
+    try:
+        for k in range(N):
+            d.ctrl[:] = u[k]
+            mujoco.mj_step(mj, d, nstep=sub)
+            # mj_step's sensors are the state's before its last integration: recompute at the sample's state
+            mujoco.mj_fwdPosition(mj, d)
+            mujoco.mj_sensorPos(mj, d)
+            qm[k + 1], q[k + 1] = d.sensordata[enc_adr], d.qpos[perm]
+    finally:
+        mujoco.set_mjcb_passive(previous)
+    if not np.isfinite(q).all():
+        raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
+    rng = np.random.default_rng(seed)
+    step = 2 * np.pi / tr.counts_per_rev
+    counts = np.round((qm + encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step + e.encoder_offset)
+    measured = (1.0 + e.torque_constant_error) * u + torque_noise * rng.standard_normal(u.shape)
+    return Recording(t=dt * np.arange(N + 1), encoder=counts, torque=measured, motor_names=tr.motor_names,
+                     joint_names=truth.joint_names, true_q=q)

@@ -1,0 +1,110 @@
+"""MuJoCo recording plants (alpes_dyn.control.plants) against independent references: the library's own
+simulator for the plant with the model's structure, the sensors' documented laws, the rest of the elastic
+tendon, the experiment's torque as experiment() applies it. Short runs (0.3 s)."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.control.plants import PlantEffects, mujoco_recording, plant_mjcf, plant_model
+from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, experiment_torque
+from alpes_dyn.estimation.recording import read_recording, write_recording
+from alpes_dyn.model.mjcf import tilted_gravity
+from alpes_dyn.simulation.integrate import simulate
+
+mujoco = pytest.importorskip("mujoco")
+
+DT = 1e-3
+
+
+def _torque(duration: float = 0.3) -> np.ndarray:
+    t = DT * np.arange(int(round(duration / DT)) + 1)
+    return (0.022 + 0.006 * np.sin(2 * np.pi * 3.0 * t) + 0.003 * np.sin(2 * np.pi * 11.0 * t))[:, None]
+
+
+def test_plant_with_the_model_structure_is_the_library_simulator():
+    """No effect: MuJoCo (RK4 0.1 ms, the smooth friction law by the passive callback) and the library's RK4 at
+    0.1 ms on Model.alpes(friction=True) give the same joint angles (1e-6 rad over 0.3 s); the callback is gone
+    after the run."""
+    m = ad.Model.alpes("finger3", friction=True)
+    u = _torque()
+    rec = mujoco_recording("finger3", None, u, DT, encoder_noise_counts=0.0, torque_noise=0.0)
+    q0 = m.static_equilibrium(m.transmission.joint_torque(u[0]))
+    sim = simulate(m, np.r_[q0, np.zeros(3)], np.repeat(u[:-1], 10, axis=0), 0.3, 1e-4, "rk4", input="motor",
+                   output="encoder")
+    q_lib = sim.x[::10, :3]
+    assert np.ptp(rec.true_q[:, 0]) > 0.05  # it moves
+    assert np.abs(rec.true_q - q_lib).max() < 1e-6
+    assert mujoco.get_mjcb_passive() is None
+
+
+def test_sensors_torque_constant_and_encoder_offset():
+    """Noise off: encoder counts = round(S q / step + offset) (the rigid tendon's rotor is S q), the recorded torque
+    = (1 + e) x the true one exactly; the recording round-trips through the CSV format identify reads."""
+    eff = PlantEffects(torque_constant_error=0.05, encoder_offset=3.3)
+    u = _torque()
+    rec = mujoco_recording("finger3", None, u, DT, effects=eff, encoder_noise_counts=0.0, torque_noise=0.0)
+    m = ad.Model.alpes("finger3")
+    step = 2 * np.pi / m.transmission.counts_per_rev
+    qm = rec.true_q @ m.transmission.S.T
+    exact = qm / step + 3.3
+    assert np.abs(rec.encoder - exact).max() <= 0.5 + 1e-9  # rounding (a tie may flip: sensor vs S q by 1e-16)
+    assert np.mean(rec.encoder == np.round(exact)) > 0.99
+    assert np.array_equal(rec.torque, 1.05 * u)
+    assert rec.gravity is None
+
+
+def test_recording_round_trip(tmp_path):
+    rec = mujoco_recording("finger3", None, _torque(0.2), DT, seed=3)
+    back = read_recording(write_recording(rec, tmp_path / "r.csv"), ad.Model.alpes("finger3"))
+    assert np.array_equal(back.encoder, rec.encoder) and np.allclose(back.true_q, rec.true_q, rtol=1e-15)
+    noise = rec.torque - _torque(0.2)
+    assert 3e-4 < noise.std() < 7e-4  # the 5e-4 N m sensor noise
+
+
+def test_elastic_tendon_starts_at_rest_with_the_cable_stretched():
+    """Series-elastic tendon under a constant torque from its rest: the joints stay at the rigid model's rest
+    (2e-6 rad over 0.3 s), the encoder reads the rotor, S q + tau_m / (r_m^2 k_t) (the static stretch)."""
+    p = ad.load_params()
+    k_t = 1.2e4
+    u = np.full((301, 1), 0.022)
+    eff = PlantEffects(tendon_stiffness=k_t, tendon_damping=5.0)
+    rec = mujoco_recording("finger3", p, u, DT, effects=eff, encoder_noise_counts=0.0, torque_noise=0.0)
+    m = plant_model("finger3", p, eff)
+    q_rest = m.static_equilibrium(m.transmission.joint_torque(u[0]))
+    assert np.abs(rec.true_q - q_rest).max() < 2e-6
+    step = 2 * np.pi / m.transmission.counts_per_rev
+    rotor = float(m.transmission.S[0] @ q_rest) + 0.022 / (p.r_m**2 * k_t)
+    assert np.all(rec.encoder == np.round(rotor / step))
+    assert rotor - float(m.transmission.S[0] @ q_rest) > 20 * step  # the stretch is seen by the encoder
+
+
+def test_tilted_plant_rests_where_the_tilted_model_does():
+    eff = PlantEffects(tilt=np.radians(3.0))
+    m = plant_model("finger3", None, eff)
+    assert np.allclose(m.gravity, tilted_gravity(ad.load_params().gravity, np.radians(3.0)))
+    u = np.full((201, 1), 0.022)
+    rec = mujoco_recording("finger3", None, u, DT, effects=eff, encoder_noise_counts=0.0, torque_noise=0.0)
+    q_rest = m.static_equilibrium(m.transmission.joint_torque(u[0]))
+    assert np.abs(rec.true_q - q_rest).max() < 2e-6
+    level = ad.Model.alpes("finger3").static_equilibrium(m.transmission.joint_torque(u[0]))
+    assert np.abs(q_rest - level).max() > 0.01
+    assert 'gravity="' in plant_mjcf("finger3", None, eff)
+
+
+def test_experiment_torque_is_the_experiments():
+    """experiment_torque gives the torque experiment() records (minus its 5e-4 N m noise) and its initial state;
+    with a tilted true gravity the bias is trimmed on the tilted finger: the same encoder reading at rest."""
+    design = ExperimentDesign(duration=0.5, torque_amplitude=0.004)  # no amplitude search: a fast test
+    p = ad.load_params()
+    t, u, x0 = experiment_torque("finger3", p, design)
+    rec = experiment("finger3", p, design, seed=2)
+    assert np.array_equal(rec.t, t) and np.array_equal(rec.true_q[0], x0[:3])
+    assert 4e-4 < np.std(rec.torque - u) < 6e-4 and abs(np.mean(rec.torque - u)) < 1e-4
+    g = tilted_gravity(p.gravity, np.radians(3.0))
+    _, u_t, x0_t = experiment_torque("finger3", p, design, true_gravity=g)
+    S = ad.Model.alpes("finger3").transmission.S
+    assert float(S[0] @ x0_t[:3]) == pytest.approx(float(S[0] @ x0[:3]), abs=1e-6)
+    assert abs(u_t[0, 0] - u[0, 0]) > 1e-4  # a different bias holds it there
