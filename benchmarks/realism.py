@@ -29,7 +29,9 @@ the fit time; then the EKF on the identified file (and, for comparison, on the t
 the plant -- the experiment's design on other lines (0.4-12.7 Hz: a torque the fit never saw), from the
 plant's rest, the filter started at q = 0 -- from that run's recorded encoder and torque: RMSE after 1 s,
 deg per joint. (The estimation scenario's torque is not used: it takes the nominal finger outside its
-joint range, into MuJoCo's stops.) If :mod:`alpes_dyn.estimation.adequacy` exists its verdict is shown, else "-".
+joint range, into MuJoCo's stops.) The verdict is the fit's adequacy check (:mod:`alpes_dyn.estimation.adequacy`,
+in-sample: whiteness, cross-correlation with the torque, residual against the sensor floor): "adequate", or
+"FLAGGED" with the reason.
 
     python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--quick] [--json] [--log FILE]
 
@@ -106,21 +108,17 @@ def cases(k_t: float, c_t: float) -> dict[str, PlantEffects]:
     return one
 
 
-def verdict(res, rec) -> str:
-    """The adequacy check's verdict, if the module exists (another branch), else "-"."""
-    try:
-        from alpes_dyn.estimation import adequacy  # type: ignore[attr-defined]
-    except ImportError:
-        return "-"
-    for name in ("verdict", "adequacy", "check_adequacy", "check"):
-        f = getattr(adequacy, name, None)
-        if callable(f):
-            try:
-                v = f(res, rec)
-            except Exception as exc:  # noqa: BLE001 - a foreign module's API: show what happened
-                return f"error: {type(exc).__name__}"
-            return str(getattr(v, "verdict", v))
-    return "-"
+def verdict(res) -> str:
+    """The fit's own word on itself (:mod:`alpes_dyn.estimation.adequacy`): adequate, or why not (the stop reason,
+    the failed checks, the likely missing effect)."""
+    if res.trustworthy:
+        return "adequate"
+    why = [] if res.converged else [f"not converged ({res.reason})"]
+    if res.adequacy is not None and not res.adequacy.adequate:
+        why.append("inadequate")
+        if res.adequacy.likely_missing:
+            why.append("likely " + ", ".join(res.adequacy.likely_missing[:2]))
+    return "FLAGGED: " + "; ".join(why)
 
 
 def ekf_rmse(rec, params_path: str, transient: float = 1.0) -> np.ndarray:
@@ -181,7 +179,8 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
             "converged": bool(res.converged), "iterations": res.iterations, "fit_seconds": res.seconds,
             "compile_seconds": res.compile_seconds, "plant_seconds": plant_s, "ekf_seconds": ekf_s,
             "ekf_rmse_deg": np.degrees(rmse).tolist(), "ekf_true_file_rmse_deg": np.degrees(rmse_true).tolist(),
-            "verdict": verdict(res, rec)}
+            "verdict": verdict(res), "flagged": not res.trustworthy, "stop_reason": res.reason,
+            "adequacy": res.adequacy.to_dict() if res.adequacy is not None else None}
 
 
 def main(argv: list[str] | None = None) -> int:
