@@ -138,7 +138,7 @@ CLI: dict[str, list[Cli]] = {
     "mjcf": [
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
-        C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: cannot write"),
+        C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
         C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
     ],
     "control": [
@@ -164,8 +164,8 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "finger7", needle="unknown model 'finger7'"),
         C("urdf", "hand", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
         C("urdf", "hand", "-o", "", needle="-o: empty file name"),
-        C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: cannot write"),
-        C("urdf", "hand", "-o", "{file}/hand.urdf", needle="-o: cannot write"),
+        C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: directory '{tmp}/missing' of"),
+        C("urdf", "hand", "-o", "{file}/hand.urdf", needle="-o: '{file}' in '{file}/hand.urdf' is not a directory"),
         C("urdf", "hand", "-o", "{tmp}/hand.urdf", needle="-o: cannot write", fsize=4096),  # full disk
         C("urdf", "finger3", "--params", "{binary_toml}", needle="not UTF-8 text (byte 0x80 at offset 128)"),
         C("urdf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text (byte 0xe9"),

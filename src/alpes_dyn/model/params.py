@@ -16,8 +16,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
-import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -26,7 +24,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ModelError
-from ..fileio import read_text
+from ..fileio import atomic_write, load_toml, read_text
 
 __all__ = [
     "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
@@ -59,6 +57,22 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
 _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v"}
+# the unit each field's value is read in: a file giving another one is refused (no conversion is made)
+_UNITS: dict[str, str] = {
+    **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
+    "finger.K": "N m/rad", "finger.lower": "rad", "finger.upper": "rad", "finger.F_s": "N m",
+    "finger.F_v": "N m s/rad",
+    **{f"thumb.{k}": "m" for k in ("L", "s", "radius")}, "thumb.m": "kg", "thumb.I": "kg m^2", "thumb.K": "N m/rad",
+    "thumb.base_mass": "kg", "thumb.abduction_K": "N m/rad", "thumb.abduction_axis": "-", "thumb.abduction_lower": "rad",
+    "thumb.abduction_upper": "rad", "thumb.F_s": "N m", "thumb.F_v": "N m s/rad", "thumb.abduction_F_s": "N m",
+    "thumb.abduction_F_v": "N m s/rad",
+    "palm.finger_names": "-", "palm.finger_x": "m", "palm.finger_y": "m", "palm.thumb_xyz": "m", "palm.thumb_yaw": "rad",
+    "transmission.r_m": "m", "transmission.abduction_ratio": "-", "transmission.J_m": "kg m^2", "transmission.N": "-",
+    "transmission.encoder_counts": "counts/rev", "transmission.tau_max": "N m",
+    "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
+    "environment.gravity": "m/s^2",
+}
+_INTEGER = {"transmission.encoder_counts"}  # fields whose value must be a whole number
 _ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
 # per-finger overrides: a table [finger.<name>] (name from palm.finger_names) with any of these fields, which
 # replace the shared [finger] values on that finger only (a real hand's fingers differ link by link)
@@ -280,6 +294,14 @@ def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
     if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
         raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
     value = _check_value(name, entry["value"], length, kind)
+    field_name = ".".join(name.split(".")[::2]) if name.count(".") == 2 else name  # finger.<nm>.K -> finger.K
+    unit, expected = entry["unit"], _UNITS.get(field_name)
+    if expected is not None and (not isinstance(unit, str) or " ".join(unit.split()) not in
+                                 ((expected, "", "1") if expected == "-" else (expected,))):
+        raise ModelError(f"{name}.unit: the value is read in {expected!r}, got {unit!r} (convert it; no other unit "
+                         "is accepted)")
+    if field_name in _INTEGER and not float(value).is_integer():
+        raise ModelError(f"{name}: value must be a whole number, got {value:g}")
     std = None
     if "std" in entry:
         if source != "identified":
@@ -334,10 +356,7 @@ def load_params(path: str | Path | None = None) -> HandParams:
 
 
 def _from_text(text: str, path: str) -> HandParams:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelError(f"parameter file {path!r}: invalid TOML ({exc})") from None
+    data = load_toml(text, f"parameter file {path!r}", ModelError)
     raw = _parse(data)
     v = {k: prm.value for k, prm in raw.items()}
     if v["finger.lower"] >= v["finger.upper"]:
@@ -423,16 +442,8 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "")
 
 def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:
     """Write ``params`` as a parameter file (atomically: a temporary file renamed into place)."""
-    p = Path(path)
     text = params_toml(params.raw, header)
-    tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, p)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ModelError(f"parameter file {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
-    return p
+    return atomic_write(path, text, "parameter file", ModelError)
 
 
 def chain_params(params: HandParams, chain: str) -> HandParams:
