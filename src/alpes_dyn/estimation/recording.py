@@ -130,7 +130,9 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
     try:
         rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
-    except csv.Error as exc:  # a cell over the csv module's own limit, a NUL byte
+    except csv.Error as exc:  # a cell over the csv module's own limit (131072 characters)
+        if "field larger" in str(exc):
+            raise RecordingError(f"recording {str(p)!r}: a cell over the limit of {MAX_CSV_CELL} characters") from None
         raise RecordingError(f"recording {str(p)!r}: not a CSV file ({exc})") from None
     del text
     if not rows:
