@@ -94,6 +94,7 @@ def bad_files(d: Path) -> dict[str, str]:
     }
     files.update({
         "params_toml": BASE_TOML.encode(),
+        "xmlname_toml": BASE_TOML.replace('["index"', '["in<d&\\"ex"', 1).encode(),
         "bom_toml": b"\xef\xbb\xbf" + BASE_TOML.encode(),
         "bigint_toml": _toml_field("transmission.N", '{ value = ' + "9" * 401 + ', unit = "-", source = "report" }'),
         "deep_toml": BASE_TOML.encode() + b"\n[extra]\nx = " + b"[" * 100_000 + b"]" * 100_000 + b"\n",
@@ -228,6 +229,7 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "finger3", "--params", "{params_toml}", "-o", "{params_toml}", needle="is the input of --params"),
         C("mjcf", "finger3", "-o", "{device}", needle="is a character device"),
         C("mjcf", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
+        C("mjcf", "hand", "--params", "{xmlname_toml}", needle="palm.finger_names: 'in<d&\"ex' is not a name"),
     ],
     "control": [
         C("control", "--controller", "pid", needle="unknown controller 'pid'"),
@@ -650,6 +652,8 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model(URDFS["inverted_limit_urdf"]), ModelError, "limit lower 1.6 is above upper 0"),
     A("Model", lambda c: ad.Model(FINGER3, spec=c.f["fifo"]), ModelError, "spec file '{fifo}': is a FIFO"),
     A("write_urdfs", lambda c: ad.write_urdfs(_linked_dir(c)), InputError, "finger2.urdf' is a symbolic link"),
+    A("load_params", lambda c: ad.load_params(c.f["xmlname_toml"]), ModelError,
+      "palm.finger_names: 'in<d&\"ex' is not a name: letters, digits and '_'"),
     A("write_params", lambda c: _write_params(c.f["link"]), ModelError, "is a symbolic link; refusing to replace it"),
     A("write_params", lambda c: _write_params(c.f["fifo"]), ModelError, "is a FIFO (named pipe); only a regular file"),
     A("write_recording", lambda c: _write_rec(c.f["device"]), RecordingError, "is a character device"),
@@ -1095,6 +1099,18 @@ def test_byte_order_mark_accepted(tmp_path):
     m = ad.Model.alpes("finger2")
     a, b = read_recording(path, m), read_recording(bom, m)
     assert np.array_equal(a.t, b.t) and np.array_equal(a.encoder, b.encoder)
+
+
+def test_header_with_control_characters_reads_back(tmp_path):
+    """A recording name with control characters (ESC, NUL, a line separator) in a written file's header:
+    escaped, so the file stays TOML that loads back to the same values."""
+    from alpes_dyn.model.params import params_toml, write_params
+
+    p = ad.load_params()
+    path = write_params(p, tmp_path / "p.toml", header="from rec\x00\x1b[31m\u2028.csv\rnext")
+    head = path.read_text().splitlines()[0]
+    assert head == "# from rec\\x00\\x1b[31m\\u2028.csv\\x0dnext"
+    assert params_toml(ad.load_params(path).raw) == params_toml(p.raw)
 
 
 def test_json_is_strict(capfd):

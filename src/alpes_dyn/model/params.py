@@ -16,6 +16,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
+import re
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -206,12 +207,24 @@ def default_params_path() -> Path:
     return Path(str(resources.files("alpes_dyn") / "data" / "alpes_hand.toml"))
 
 
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+
+
+def _header_line(text: str) -> str:
+    """One comment line of a file header: control characters written as escapes (TOML refuses them raw)."""
+    return "".join(c if c.isprintable() else f"\\x{ord(c):02x}" if ord(c) < 256 else f"\\u{ord(c):04x}"
+                   for c in text)
+
+
 def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
     if kind == "str":
         if not (isinstance(value, list) and len(value) == length and all(isinstance(v, str) and v for v in value)):
             raise ModelError(f"{name}: value must be a list of {length} non-empty strings (got {value!r})")
         if len(set(value)) != len(value):
             raise ModelError(f"{name}: names must be unique (got {value!r})")
+        bad = next((v for v in value if not _NAME.fullmatch(v)), None)
+        if bad is not None:  # a name goes into URDF/MJCF attributes, joint names and CSV column names
+            raise ModelError(f"{name}: {bad[:40]!r} is not a name: letters, digits and '_', starting with a letter")
         return tuple(value)
     if length is None:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -396,7 +409,7 @@ def _toml_value(x: Any) -> str:
 
 def params_toml(raw: dict[str, Param], header: str = "") -> str:
     """TOML text of a parameter set (``HandParams.raw``), in the schema's order; loads back to the same."""
-    lines = [f"# {h}" for h in header.splitlines()] + ([""] if header else [])
+    lines = [f"# {_header_line(h)}" for h in header.split("\n")] + ([""] if header else [])
 
     def section_lines(section: str, fields) -> None:
         lines.append(f"[{section}]")
