@@ -57,6 +57,8 @@ URDFS = {
                       "<parent link='a'/><child link='b'/></joint></robot>",
     "truncated_urdf": FINGER3[: len(FINGER3) // 2],
     "inverted_limit_urdf": FINGER3.replace('lower="0.0" upper="1.5707963267948966"', 'lower="1.6" upper="0.0"', 1),
+    "mimic_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="revolute"><mimic joint="j1"/>',
+                                  1),
     "many_links_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(1001)) + "</robot>",
     "deep_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'><inertial><mass value='1'/><inertia ixx='1' "
                                               "ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial></link>"
@@ -318,6 +320,7 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{truncated_urdf}", needle="URDF could not be parsed"),
         C("dynamics", "--model", "{fifo}", needle="URDF file '{fifo}': is a FIFO (named pipe)"),
         C("dynamics", "--model", "{big_urdf}", needle="16777217 bytes, over the limit of 16777216 bytes"),
+        C("dynamics", "--model", "{mimic_urdf}", needle="joint 'j2': <mimic joint='j1'> is not modelled"),
         C("dynamics", "--model", "{many_links_urdf}", needle="URDF: 1001 links, over the limit of 1000"),
         C("dynamics", "--model", "{deep_urdf}", needle="joints deep, over the limit of 100"),
         C("dynamics", "--model", "{inverted_limit_urdf}", needle="joint 'j1': limit lower 1.6 is above upper 0"),
@@ -499,6 +502,12 @@ def _ukf(c, **kw):
     return UnscentedKalmanFilter(c.ss, 1e-3, process_noise=1e-9, measurement_noise=1e-7, **kw)
 
 
+def _sim_x0(c, x0):
+    from alpes_dyn.simulation import simulate
+
+    return simulate(c.m, x0, duration=0.01, dt=1e-3)
+
+
 def _sim(c, **kw):
     from alpes_dyn.simulation import simulate
 
@@ -647,6 +656,26 @@ API: list[Api] = [
       "finger.r.unit: the value is read in 'm', got 'mm'"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["big_urdf"]), ModelError, "over the limit of 16777216 bytes"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["fifo"]), ModelError, "is a FIFO"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"]), ModelError, "<mimic joint='j1'> is not modelled"),
+    A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
+    A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
+    A("simulate", lambda c: _sim(c, inputs=["0", "0", "0"]), InputError, "inputs: expected an array of numbers"),
+    A("simulate", lambda c: _sim(c, inputs=np.zeros(3, bool)), InputError, "inputs: expected an array of numbers or a "
+      "callable of time, got booleans"),
+    A("simulate", lambda c: _sim(c, dt=True), InputError, "dt: expected a positive number of seconds, got True"),
+    A("simulate", lambda c: _sim(c, dt=10**400), InputError, "dt: expected a positive number of seconds"),
+    A("simulate", lambda c: _sim(c, dt="1e-3"), InputError, "dt: expected a positive number of seconds, got '1e-3'"),
+    A("simulate", lambda c: _sim_x0(c, np.zeros(6) + 1j), InputError, "x0: complex values are not supported"),
+    A("compile_rollout", lambda c: _rollout(c).rollout(np.zeros(6) + 1j, np.zeros((5, 3))), InputError,
+      "x0_batch: complex values are not supported"),
+    A("compile_rollout", lambda c: _rollout(c).rollout(np.zeros(6), np.zeros((5, 3), bool)), InputError,
+      "U_batch: expected an array of inputs, got booleans"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), np.ones(6), np.zeros((5, 1)) + 1j, np.zeros((6, 1))),
+      InputError, "W: complex values are not supported"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), np.ones(6), np.zeros((5, 1)), [["a"]] * 6),
+      InputError, "Y: expected an array of measurements"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), [True] * 6, np.zeros((5, 1)), np.zeros((6, 1))),
+      InputError, "P0: expected 6 variances or an (6, 6) covariance, got booleans"),
     A("Model", lambda c: ad.Model(URDFS["many_links_urdf"]), ModelError, "URDF: 1001 links, over the limit of 1000"),
     A("Model", lambda c: ad.Model(URDFS["deep_urdf"]), ModelError, "is 101 joints deep, over the limit of 100"),
     A("Model", lambda c: ad.Model(URDFS["inverted_limit_urdf"]), ModelError, "limit lower 1.6 is above upper 0"),

@@ -100,7 +100,8 @@ _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
 def check_urdf_structure(urdf: str) -> None:
     """Before Pinocchio's parser: at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS` links, a kinematic
     tree at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` joints deep (the parser recurses per level:
-    a 10,000-link chain crashes it), and every joint limit with lower <= upper. :class:`ModelError`."""
+    a 10,000-link chain crashes it), every joint limit with lower <= upper, and no ``<mimic>`` joint
+    (a coupling alpes_dyn does not model: refused rather than silently ignored). :class:`ModelError`."""
     import xml.etree.ElementTree as ET
 
     n_links = len(re.findall(r"<\s*link[\s/>]", urdf))
@@ -114,6 +115,11 @@ def check_urdf_structure(urdf: str) -> None:
         raise ModelError(f"URDF could not be parsed: {type(exc).__name__}") from None
     parent_of: dict[str, str] = {}
     for j in root.iter("joint"):
+        mimic = j.find("mimic")
+        if mimic is not None and j.get("type") not in ("fixed", None):
+            raise ModelError(f"joint {j.get('name')!r}: <mimic joint={mimic.get('joint')!r}> is not modelled (the joint "
+                             "would move on its own); remove the <mimic> element for an independent joint, or make "
+                             "the joint fixed")
         p, c = j.find("parent"), j.find("child")
         if p is not None and c is not None:
             parent_of[str(c.get("link"))] = str(p.get("link"))

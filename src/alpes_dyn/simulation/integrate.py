@@ -38,6 +38,7 @@ import numpy as np
 
 from .buildcache import CompilerError
 from .codegen import CompiledStepLoop, cache_dir
+from ..checks import as_float_array
 from ..errors import InputError
 from ..limits import check_bytes
 from ..model.robot import Model
@@ -146,10 +147,14 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
 
 # ----------------------------------------------------------------------------- input checks
 def _check_dt(dt: Any) -> float:
+    if isinstance(dt, (bool, np.bool_)):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
     try:
         d = float(dt)
-    except (TypeError, ValueError):
-        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}") from None
+    if isinstance(dt, (str, bytes, complex)):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}")
     if not math.isfinite(d) or d <= 0:
         raise InputError(f"dt: expected a positive finite number of seconds, got {dt!r}")
     return d
@@ -183,18 +188,14 @@ def _sample(inputs: InputLike, t: np.ndarray, m: int, name: str) -> np.ndarray:
         rows = []
         for tk in t:  # a user's Python callable: sampled once per step
             try:
-                v = np.asarray(inputs(float(tk)), dtype=float).reshape(-1)
+                v = as_float_array(inputs(float(tk)), name, f"{m} numbers").reshape(-1)
             except (TypeError, ValueError) as exc:
                 raise InputError(f"{name}: the callable must return {m} numbers ({exc})") from None
             if v.shape != (m,):
                 raise InputError(f"{name}: the callable returned {v.size} values at t = {tk:g} s, expected {m}")
             rows.append(v)
         return _finite(np.array(rows), f"{name}(t)")
-    try:
-        a = np.asarray(inputs, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of numbers or a callable of time, "
-                         f"got {type(inputs).__name__}") from None
+    a = as_float_array(inputs, name, "an array of numbers or a callable of time")
     if a.ndim == 0 or a.shape == (m,):
         a = np.broadcast_to(a, (N, m)).copy()
     elif m == 1 and a.shape == (N,):
@@ -214,7 +215,7 @@ def _sample_force(force: InputLike, t: np.ndarray, k: int = 3) -> np.ndarray:
         out = np.zeros((N, 3))
         for k, tk in enumerate(t):
             try:
-                v = np.asarray(force(float(tk)), dtype=float).reshape(-1)
+                v = as_float_array(force(float(tk)), "force", "F_z or (Fx, Fy, Fz)").reshape(-1)
             except (TypeError, ValueError) as exc:
                 raise InputError(f"force: the callable must return F_z or (Fx, Fy, Fz) ({exc})") from None
             if v.size == 1:
@@ -224,7 +225,7 @@ def _sample_force(force: InputLike, t: np.ndarray, k: int = 3) -> np.ndarray:
             else:
                 raise InputError(f"force: the callable returned {v.size} values at t = {tk:g} s, expected 1 or 3")
         return _finite(out, "force(t)")
-    a = np.asarray(force, dtype=float)
+    a = as_float_array(force, "force", "F_z or (Fx, Fy, Fz) numbers")
     if a.ndim == 0 or a.shape == (N,):
         out = np.zeros((N, 3))
         out[:, 2] = a
@@ -415,8 +416,8 @@ class CompiledRollout:
         -------
         (B, N+1, 2n) states, X[:, 0] = x0_batch.
         """
-        x0 = np.asarray(x0_batch, dtype=float)
-        U = np.asarray(U_batch, dtype=float)
+        x0 = as_float_array(x0_batch, "x0_batch", "an array of states")
+        U = as_float_array(U_batch, "U_batch", "an array of inputs")
         m = self.system.n_inputs
         if x0.ndim == 1:
             x0 = x0[None, :]
@@ -434,7 +435,7 @@ class CompiledRollout:
         if self.system.force:
             if F_batch is None:
                 raise InputError(f"F_batch: this rollout has the contact force as an input; pass (B, N, {nf})")
-            F = np.asarray(F_batch, dtype=float)
+            F = as_float_array(F_batch, "F_batch", "an array of forces")
             if F.ndim == 2:
                 F = F[None]
             if F.ndim != 3 or F.shape[1:] != (N, nf):
