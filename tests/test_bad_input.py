@@ -265,6 +265,7 @@ CLI: dict[str, list[Cli]] = {
         C(needle="the following arguments are required: command"),
         C("frobnicate", needle="invalid choice: 'frobnicate'"),
         C("--bogus", needle="the following arguments are required"),
+        C("dynamics", *["--json"] * 1000, needle="1001 command-line arguments, over the limit of 1000"),
     ],
     "urdf": [
         C("urdf", "finger7", needle="unknown model 'finger7'"),
@@ -407,7 +408,7 @@ def _one_stderr_line(code: int, out: str, err: str, needle: str) -> None:
     assert "Traceback" not in err and "Warning" not in err
 
 
-@pytest.mark.parametrize("cmd,row", CLI_ROWS, ids=[f"{c}:{' '.join(r.argv) or '-'}" for c, r in CLI_ROWS])
+@pytest.mark.parametrize("cmd,row", CLI_ROWS, ids=[f"{c}:{' '.join(r.argv)[:120] or '-'}" for c, r in CLI_ROWS])
 def test_cli_bad_input(cmd, row, tmp_path, monkeypatch, capfd):
     work = tmp_path / "work"
     work.mkdir()
@@ -1140,6 +1141,33 @@ def test_header_with_control_characters_reads_back(tmp_path):
     head = path.read_text().splitlines()[0]
     assert head == "# from rec\\x00\\x1b[31m\\u2028.csv\\x0dnext"
     assert params_toml(ad.load_params(path).raw) == params_toml(p.raw)
+
+
+def test_long_file_name_written(tmp_path):
+    """A legal 250-character file name: the temporary name next to it must fit as well."""
+    from alpes_dyn.fileio import atomic_write
+
+    dest = tmp_path / ("r" * 246 + ".csv")
+    assert atomic_write(dest, "x\n").read_text() == "x\n"
+    assert [p.name for p in tmp_path.iterdir()] == [dest.name]
+
+
+def test_unix_epoch_time_stamps_accepted(tmp_path):
+    """t in Unix-epoch seconds (~1.7e9 s, resolution ~0.24 us): uniform to its float resolution, accepted;
+    a real jitter of 1 % of a period still refused."""
+    import dataclasses
+
+    from alpes_dyn.estimation.recording import read_recording, write_recording
+
+    rec = _exp()
+    m = ad.Model.alpes("finger2")
+    epoch = write_recording(dataclasses.replace(rec, t=rec.t + 1.7e9), tmp_path / "epoch.csv")
+    back = read_recording(epoch, m)
+    assert np.allclose(back.t - 1.7e9, rec.t, atol=1e-6) and np.array_equal(back.encoder, rec.encoder)
+    t = rec.t + 1.7e9
+    t[5] += 1e-5
+    with pytest.raises(RecordingError, match="t is not uniformly sampled"):
+        write_recording(dataclasses.replace(rec, t=t), tmp_path / "jitter.csv")
 
 
 def test_json_is_strict(capfd):

@@ -22,7 +22,7 @@ from . import __version__
 from .errors import AlpesDynError, InputError
 from .analysis.observability import MAX_INSTRUCTIONS
 from .fileio import atomic_write, check_outputs, native_stderr_to
-from .limits import MAX_DURATION_S, MAX_ORDER, MAX_POINTS
+from .limits import MAX_ARGS, MAX_ORDER, MAX_POINTS
 
 VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
@@ -958,6 +958,8 @@ def _one_line(text: str) -> str:
 def _run(argv: list[str]) -> tuple[int, str | None]:
     """(exit code, error line or None) of one command."""
     try:
+        if len(argv) > MAX_ARGS:
+            raise InputError(f"{len(argv)} command-line arguments, over the limit of {MAX_ARGS}")
         args = build_parser().parse_args(_join_negative_vectors(argv))
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args), None

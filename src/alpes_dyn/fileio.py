@@ -347,7 +347,8 @@ def atomic_path(path: str | os.PathLike[str], what: str = "output",
     parent = dest.parent
     with signals_as_exceptions():
         try:
-            fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=f".tmp{dest.suffix}", dir=parent)
+            # the name shortened so that the temporary name fits where the destination's does (255 bytes)
+            fd, tmp = tempfile.mkstemp(prefix=f".{dest.stem[:80]}.", suffix=f".tmp{dest.suffix[:16]}", dir=parent)
         except OSError as exc:
             raise error(f"{what}: cannot write {str(dest)!r} ({exc.strerror or exc})") from None
         os.close(fd)

@@ -14,7 +14,7 @@
   :data:`MAX_URDF_DEPTH` (counted before Pinocchio's parser sees it); TOML nested at most
   :data:`MAX_TOML_DEPTH` deep, its integers at most :data:`MAX_TOML_INT` in magnitude.
 * Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, derivative orders at
-  most :data:`MAX_ORDER`.
+  most :data:`MAX_ORDER`; at most :data:`MAX_ARGS` command-line arguments.
 """
 
 from __future__ import annotations
@@ -27,7 +27,7 @@ from .errors import InputError
 
 __all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
            "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_TOML_DEPTH", "MAX_TOML_INT",
-           "MAX_DURATION_S", "MAX_ORDER"]
+           "MAX_DURATION_S", "MAX_ORDER", "MAX_ARGS"]
 
 MAX_POINTS = 10_000
 """Most random points for the observability rank and the report's dynamics cross-check."""
@@ -58,6 +58,9 @@ MAX_TOML_INT = 2**53
 
 MAX_DURATION_S = 1e6
 """Longest simulated or recorded duration a user can ask for, s (the array limit usually comes first)."""
+
+MAX_ARGS = 1000
+"""Most command-line arguments of one ``alpes-dyn`` command (argparse's parsing grows faster than linearly)."""
 
 MAX_ORDER = 1000
 """Highest derivative order of an observability or identifiability test."""
