@@ -258,8 +258,8 @@ CLI: dict[str, list[Cli]] = {
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
         C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),
         C("linearize", "--q=nan,0,0", needle="--q: contains NaN or inf"),
-        C("linearize", "--dt", "1e308", "--json", needle="--dt: the linearisation's A matrix is not finite"),
-        C("linearize", "--dt", "1e308", needle="--dt: the linearisation's A matrix is not finite"),
+        C("linearize", "--dt", "1e308", "--json", needle="dt: the discrete A, B are not finite at dt = 1e+308 s"),
+        C("linearize", "--dt", "1e308", needle="dt: the discrete A, B are not finite"),
     ],
     "(global)": [
         C(needle="the following arguments are required: command"),
@@ -663,6 +663,17 @@ API: list[Api] = [
     A("simulate", lambda c: _sim(c, inputs=["0", "0", "0"]), InputError, "inputs: expected an array of numbers"),
     A("simulate", lambda c: _sim(c, inputs=np.zeros(3, bool)), InputError, "inputs: expected an array of numbers or a "
       "callable of time, got booleans"),
+    A("simulate", lambda c: _sim(c, duration=1e308), InputError, "duration: 1e+308 s at dt = 0.001 s is more than 2^53"),
+    A("simulate", lambda c: _sim(c, duration=10**400), InputError, "duration: expected a positive finite number"),
+    A("simulate", lambda c: _sim(c, duration=True), InputError, "duration: expected a positive number of seconds"),
+    A("StateSpace", lambda c: c.ss.linearize(np.zeros(6), np.zeros(1), dt=1e308), InputError,
+      "dt: the discrete A, B are not finite at dt = 1e+308 s"),
+    A("fisher_information", lambda c: _fim(c, U=[10**400] * 10), InputError, "U: expected an array of numbers, got a "
+      "number too large"),
+    A("fisher_information", lambda c: _fim(c, U=[True] * 10), InputError, "U: expected an array of numbers, got "
+      "booleans"),
+    A("run_estimation", lambda c: _est(duration=10**400), InputError, "duration: 1000000000000000000"),
+    A("write_urdfs", lambda c: ad.write_urdfs("a\0b"), InputError, "directory: the folder name 'a\\x00b' contains a NUL"),
     A("simulate", lambda c: _sim(c, dt=True), InputError, "dt: expected a positive number of seconds, got True"),
     A("simulate", lambda c: _sim(c, dt=10**400), InputError, "dt: expected a positive number of seconds"),
     A("simulate", lambda c: _sim(c, dt="1e-3"), InputError, "dt: expected a positive number of seconds, got '1e-3'"),

@@ -73,6 +73,8 @@ def _check_settings(sc: "EstimationScenario") -> None:
             continue
         if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
             raise InputError(f"{name}: expected a number, got {x!r}")
+        if isinstance(x, int) and abs(x) > 2**53:
+            raise InputError(f"{name}: {str(x)[:20]}... is too large")
         if not np.isfinite(x):
             raise InputError(f"{name}: expected a finite number, got {x!r}")
     if not sc.dt > 0:

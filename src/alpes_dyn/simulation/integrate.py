@@ -161,12 +161,16 @@ def _check_dt(dt: Any) -> float:
 
 
 def _n_steps(duration: Any, dt: float) -> int:
+    if isinstance(duration, (bool, np.bool_, str, bytes, complex)):
+        raise InputError(f"duration: expected a positive number of seconds, got {duration!r:.60}")
     try:
         T = float(duration)
-    except (TypeError, ValueError):
-        raise InputError(f"duration: expected a positive number of seconds, got {duration!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"duration: expected a positive finite number of seconds, got {str(duration)[:60]}") from None
     if not math.isfinite(T) or T <= 0:
         raise InputError(f"duration: expected a positive finite number of seconds, got {duration!r}")
+    if not T / dt < 2.0**53:
+        raise InputError(f"duration: {T:g} s at dt = {dt:g} s is more than 2^53 steps")
     N = int(round(T / dt))
     if N < 1 or abs(N * dt - T) > 1e-9 * max(T, dt):
         raise InputError(f"duration: {T:g} s is not a whole number of steps dt = {dt:g} s")
