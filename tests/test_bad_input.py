@@ -1154,6 +1154,18 @@ def test_header_with_control_characters_reads_back(tmp_path):
     assert params_toml(ad.load_params(path).raw) == params_toml(p.raw)
 
 
+def test_recording_row_limit(tmp_path, monkeypatch):
+    """Rows are counted before the CSV is parsed (the limit lowered here to 50: a real one is 20 million)."""
+    from alpes_dyn.estimation import recording
+
+    path = recording.write_recording(_exp(), tmp_path / "rec.csv")  # 201 rows
+    monkeypatch.setattr(recording, "MAX_CSV_ROWS", 50)
+    with pytest.raises(RecordingError, match=r"rec.csv': more than 50 rows \(the limit of a recording\)$"):
+        recording.read_recording(path, ad.Model.alpes("finger2"))
+    monkeypatch.setattr(recording, "MAX_CSV_ROWS", 201)
+    assert recording.read_recording(path, ad.Model.alpes("finger2")).t.shape == (201,)
+
+
 def test_long_file_name_written(tmp_path):
     """A legal 250-character file name: the temporary name next to it must fit as well."""
     from alpes_dyn.fileio import atomic_write

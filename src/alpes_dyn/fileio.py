@@ -303,15 +303,19 @@ def check_outputs(outputs: Sequence[tuple[str, str | os.PathLike[str] | None]],
 
     Parameters
     ----------
-    outputs: (option, path) of every file the run may write (None: not asked for).
-    inputs: (option, path) of every file the run reads (None: the shipped default).
-    extensions: option -> accepted extensions, for the outputs whose format is chosen by it.
+    outputs:
+        (option, path) of every file the run may write (None: not asked for).
+    inputs:
+        (option, path) of every file the run reads (None: the shipped default).
+    extensions:
+        option -> accepted extensions, for the outputs whose format is chosen by it.
 
     Raises
     ------
-    ``error`` with one line naming the option: an output that is one of the inputs (the same file,
-    compared by device and inode, so a hard link or another spelling counts) or the same path as
-    another output, and every refusal of :func:`check_output_path`.
+    InputError
+        (or ``error``) with one line naming the option: an output that is one of the inputs (the same
+        file, compared by device and inode, so a hard link or another spelling counts) or the same path
+        as another output, and every refusal of :func:`check_output_path`.
     """
     done: list[tuple[str, Path]] = []
     for opt, path in outputs:
