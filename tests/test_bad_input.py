@@ -250,7 +250,7 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--log", "{fifo}", needle="--log: '{fifo}' is a FIFO"),
         C("control", "--duration", "1e308", needle="duration: 1e+308 s is over the limit of 1e+06 s"),
         C("control", "--duration", "1e9", needle="duration: 1e+09 s is over the limit of 1e+06 s"),
-        C("control", "--duration", "0.5001", needle="duration: 0.5001 s leaves less than 0.25 s after the settling"),
+        C("control", "--duration", "0.5001", needle="duration: 0.5001 s leaves less than 0.05 s after the settling"),
         C("control", "--model", "hand", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
         C("control", "--params", "{fifo}", needle="is a FIFO (named pipe)"),
     ],
@@ -710,7 +710,7 @@ API: list[Api] = [
     A("read_text", lambda c: _read_text(c.f["latin1_urdf"]), InputError, "not UTF-8 text (byte 0xe9"),
     A("load_toml", lambda c: _toml("a = " + "9" * 401), InputError, "x: a: integer of 401 digits"),
     A("load_toml", lambda c: _toml("a = " + "[" * 100_000), InputError, "x: arrays or tables nested more than 32"),
-    A("ControlScenario", lambda c: _control_sc(duration=0.6), InputError, "leaves less than 0.25 s after the settling"),
+    A("ControlScenario", lambda c: _control_sc(duration=0.52), InputError, "leaves less than 0.05 s after the settling"),
     A("ControlScenario", lambda c: _control_sc(duration=1e9), InputError, "duration: 1e+09 s is over the limit"),
     A("ExperimentDesign", lambda c: _design(duration=1e308).check(), InputError, "duration: 1e+308 s is over the limit"),
     A("observability", lambda c: ad.observability("finger2", order=10**20), InputError, "order: 100000000000000000000 "
