@@ -3,6 +3,8 @@
 For finger3 and hand (torsional springs, the default), times per call of
 
     Model.forward_dynamics   vs  pinocchio.aba
+    the same with the rotors on the tendons (rotor_inertia=True: CRBA + S^T diag(J_m) S + Cholesky)
+                             vs  pinocchio.aba (which takes only a diagonal armature)
     Model.inertia_matrix     vs  pinocchio.crba
     Model.gravity_torque     vs  pinocchio.computeGeneralizedGravity
 
@@ -26,12 +28,14 @@ import alpes_dyn as ad
 
 def bench(name: str, number: int, repeat: int) -> dict[str, float]:
     m = ad.Model.alpes(name)
+    mr = ad.Model.alpes(name, rotor_inertia=True)
     rng = np.random.default_rng(0)
     q, v = m.random_state(rng)
     tau = rng.normal(scale=0.05, size=m.n)
     pm, pd = m.pin_model, m.pin_data
     pairs = {
         "forward_dynamics": (lambda: m.forward_dynamics(q, v, tau), lambda: pin.aba(pm, pd, q, v, tau)),
+        "forward_dynamics_rotor": (lambda: mr.forward_dynamics(q, v, tau), lambda: pin.aba(pm, pd, q, v, tau)),
         "inertia_matrix": (lambda: m.inertia_matrix(q), lambda: pin.crba(pm, pd, q)),
         "gravity_torque": (lambda: m.gravity_torque(q), lambda: pin.computeGeneralizedGravity(pm, pd, q)),
     }
@@ -60,11 +64,11 @@ def main() -> None:
     if a.json:
         print(json.dumps(res))
         return
-    print(f"{'model':8s} {'call':18s} {'alpes_dyn us':>13s} {'pinocchio us':>13s} {'ratio':>7s}")
+    print(f"{'model':8s} {'call':22s} {'alpes_dyn us':>13s} {'pinocchio us':>13s} {'ratio':>7s}")
     for name in ("finger3", "hand"):
         r = res[name]
-        for key in ("forward_dynamics", "inertia_matrix", "gravity_torque"):
-            print(f"{name:8s} {key:18s} {r[key + '_us']:13.2f} {r[key + '_raw_us']:13.2f} {r[key + '_ratio']:7.2f}")
+        for key in ("forward_dynamics", "forward_dynamics_rotor", "inertia_matrix", "gravity_torque"):
+            print(f"{name:8s} {key:22s} {r[key + '_us']:13.2f} {r[key + '_raw_us']:13.2f} {r[key + '_ratio']:7.2f}")
     print(f"goal: hand forward_dynamics <= 1.5x pinocchio.aba: {'met' if res['goal']['met'] else 'NOT met'}")
 
 

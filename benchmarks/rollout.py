@@ -6,6 +6,10 @@ time per RK4 step per trajectory (microseconds, wall clock) of
 * ``alpes_dyn``: :class:`alpes_dyn.simulation.CompiledRollout` -- the CasADi RK4 step generated as
   C, compiled once (cached; the compilation is reported, not timed), B trajectories of N steps
   split over ``--threads`` POSIX threads;
+* ``casadi`` / ``casadi-jit``: CasADi's stock path, the documented fallback
+  (:class:`alpes_dyn.simulation.codegen.CasadiStepLoop`): ``mapaccum`` over the steps and a threaded ``map`` over
+  the batch in CasADi's virtual machine, or with the step JIT-compiled by CasADi; the margin of the generated
+  driver over it is ``x casadi``;
 * ``pinocchio_python``: RK4 in a Python for-loop over steps, four ``pinocchio.aba`` calls per
   step (springs as -k q in the torque), one trajectory of ``--python-steps`` steps (its cost per
   step does not depend on B);
@@ -157,15 +161,25 @@ def bench_model(name: str, B: int, N: int, threads: int, repeat: int, python_ste
     except ImportError:
         have_mujoco = False
         out["mujoco_us_per_step"] = None
-    for key in ("python_max_abs_diff_rad", "mujoco_max_abs_diff_rad"):
+    for key in ("python_max_abs_diff_rad", "mujoco_max_abs_diff_rad", "casadi_max_abs_diff_rad",
+                "casadi-jit_max_abs_diff_rad"):
         if key in out and not out[key] < 1e-8:
             raise SystemExit(f"{name}: {key} = {out[key]:.3g}: the trajectories disagree, timing would be meaningless")
 
-    stages = ["alpes_dyn", "python"] + (["mujoco"] if have_mujoco else [])
+    # CasADi's stock path (the documented fallback): mapaccum over steps, threaded map over the batch
+    fallbacks = {be: compile_rollout(m, DT, input="joint", threads=threads, backend=be)
+                 for be in ("casadi", "casadi-jit")}
+    for be, fb in fallbacks.items():
+        out[f"{be}_max_abs_diff_rad"] = float(np.max(np.abs(fb.rollout(X0[:4], U[:4, :CHECK_STEPS]) - X)))
+    stages = ["alpes_dyn", "casadi", "casadi-jit", "python"] + (["mujoco"] if have_mujoco else [])
     for stage in _progress(stages, f"{name}", quiet):
         if stage == "alpes_dyn":
             t = _best(lambda: ro.rollout(X0, U, progress=False), repeat)
             out["alpes_dyn_us_per_step"] = t / (B * N) * 1e6
+        elif stage in fallbacks:
+            fb = fallbacks[stage]
+            t = _best(lambda: fb.rollout(X0, U, progress=False), max(1, repeat // 2))
+            out[f"{stage}_us_per_step"] = t / (B * N) * 1e6
         elif stage == "python":
             Np = min(python_steps, N)
             t = _best(lambda: python_rk4(m, X0[0], U[0, :Np], DT), max(1, repeat // 2))
@@ -183,6 +197,8 @@ def bench_model(name: str, B: int, N: int, threads: int, repeat: int, python_ste
             out["mujoco_us_per_step"] = t / (B * N) * 1e6
     a = out["alpes_dyn_us_per_step"]
     out["speedup_vs_python"] = out["pinocchio_python_us_per_step"] / a
+    out["speedup_vs_casadi"] = out["casadi_us_per_step"] / a
+    out["speedup_vs_casadi_jit"] = out["casadi-jit_us_per_step"] / a
     out["speedup_vs_mujoco"] = out["mujoco_us_per_step"] / a if out.get("mujoco_us_per_step") else None
     out["goal_40x_python"] = out["speedup_vs_python"] >= 40
     out["goal_faster_than_mujoco"] = bool(out["speedup_vs_mujoco"] and out["speedup_vs_mujoco"] > 1)
@@ -209,12 +225,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     print(f"RK4 rollouts, dt = {DT:g} s, B = {args.batch} trajectories x N = {args.steps} steps, "
           f"{args.threads} threads (us per step per trajectory, best of {args.repeat})")
-    print(f"{'model':8s} {'alpes_dyn':>10s} {'python+aba':>11s} {'mujoco':>9s} {'x python':>9s} {'x mujoco':>9s}"
-          f" {'compile s':>9s} {'|dq| mujoco':>11s}")
+    print(f"{'model':8s} {'alpes_dyn':>10s} {'casadi':>9s} {'casadi-jit':>10s} {'python+aba':>11s} {'mujoco':>9s} "
+          f"{'x casadi':>9s} {'x python':>9s} {'x mujoco':>9s} {'compile s':>9s} {'|dq| mujoco':>11s}")
     for name, r in res.items():
         mj = r.get("mujoco_us_per_step")
-        print(f"{name:8s} {r['alpes_dyn_us_per_step']:10.3f} {r['pinocchio_python_us_per_step']:11.2f} "
-              f"{mj if mj is None else f'{mj:9.3f}':>9} {r['speedup_vs_python']:9.1f} "
+        print(f"{name:8s} {r['alpes_dyn_us_per_step']:10.3f} {r['casadi_us_per_step']:9.3f} "
+              f"{r['casadi-jit_us_per_step']:10.3f} {r['pinocchio_python_us_per_step']:11.2f} "
+              f"{mj if mj is None else f'{mj:9.3f}':>9} {r['speedup_vs_casadi']:9.1f} {r['speedup_vs_python']:9.1f} "
               f"{(r['speedup_vs_mujoco'] or float('nan')):9.1f} {r['alpes_dyn_compile_s']:9.2f} "
               f"{r.get('mujoco_max_abs_diff_rad', float('nan')):11.1e}")
     ok = all(r["goal_40x_python"] and r["goal_faster_than_mujoco"] for r in res.values())

@@ -18,8 +18,8 @@ from alpes_dyn._moved import MOVED, PUBLIC
 PACKAGE = Path(alpes_dyn.__file__).parent
 
 # Floors from the ground up; a module may import its own floor and the floors below it.
-FLOORS = ("base", "model", "symbolic", "simulation", "estimation", "analysis", "control", "cli")
-BASE = {"errors", "checks", "limits", "fileio", "progress", "_moved"}
+FLOORS = ("base", "model", "symbolic", "simulation", "estimation", "analysis", "control", "studies", "cli")
+BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "_moved"}
 
 
 def floor_of(dotted: str) -> str:

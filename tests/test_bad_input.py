@@ -108,6 +108,10 @@ def bad_files(d: Path) -> dict[str, str]:
         "nul_csv": (RECORDING_HEAD + "0,\0,0\n").encode(),
     })
     files.update({k: v.encode() for k, v in URDFS.items()})
+    k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
+    rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
+    rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
+    files["rec3_csv"] = ("\n".join(rows) + "\n").encode()
     out = {}
     for name, data in files.items():
         ext = name.rsplit("_", 1)[1]
@@ -204,7 +208,16 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--model", "hand", "--data", "x.csv", needle="identification is defined for one chain"),
         C("identify", "--chain", "pinky", "--data", "x.csv", needle="chain: unknown finger 'pinky'"),
         C("identify", "--model", "thumb", "--chain", "ring", "--data", "x.csv", needle="chain: only a finger model"),
-        C("identify", "--data", "{latin1_toml}", "--parameters", "K_9", needle="recording"),
+        C("identify", "--data", "{latin1_toml}", "--parameters", "K_9", needle="unknown parameter 'K_9'"),
+        C("identify", "--data", "x.csv", "--parameters", "K,tilt_z", needle="unknown parameter 'tilt_z'"),
+        C("identify", "--data", "x.csv", "--parameters", "encoder_offset_index",
+          needle="unknown parameter 'encoder_offset_index'"),
+        C("identify", "--data", "x.csv", "--parameters", "J_m", needle="'J_m' selects nothing"),
+        C("identify", "--data", "x.csv", "--rotor-inertia", "--parameters", "J_m_thumb",
+          needle="unknown parameter 'J_m_thumb'"),
+        C("identify", "--data", "x.csv", "--parameters", "tilt,tilt_y", needle="tilt_y is selected twice"),
+        C("identify", "--data", "x.csv", "--parameters", "K,m,friction,input_gain",
+          needle="input_gain with every mass, spring and friction"),
         C("identify", "--data", "x.csv", "-o", "{tmp}", needle="is a directory"),
         C("identify", "--data", "x.csv", "--excitation", "a,b", needle="--excitation: expected comma-separated"),
         C("identify", "--data", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input of "
@@ -221,6 +234,23 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{longcell_csv}", needle="a cell of 300 characters, over the limit of 256"),
         C("identify", "--data", "{hugecell_csv}", needle="hugecell.csv': a cell over the limit of 256 characters"),  # over csv's own limit
         C("identify", "--data", "{nul_csv}", needle="column 'encoder_finger' line 2: not a number"),
+    ],
+    "sweep": [
+        C("sweep", "--study", "monte", needle="--study: unknown study 'monte'"),
+        C("sweep", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
+        C("sweep", "-o", "{device}", needle="is a character device"),
+        C("sweep", "-o", "{tmp}/table/", needle="ends with '/'"),
+        C("sweep", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
+        C("sweep", "--model", "hand", needle="--model: the robustness study is defined for one finger"),
+        C("sweep", "--model", "thumb", needle="--model: the robustness study is defined for one finger"),
+        C("sweep", "--spread", "1.5", needle="--spread: expected a fraction in [0, 1)"),
+        C("sweep", "--spread", "nan", needle="--spread: expected a fraction in [0, 1)"),
+        C("sweep", "--draws", "0", needle="--draws: expected an integer >= 1"),
+        C("sweep", "--serial", "--workers", "3", needle="--serial: runs in this process"),
+        C("sweep", "--scheduler", "tcp://x:1", "--workers", "3", needle="--workers: sizes a local cluster"),
+        C("sweep", "--scheduler", "localhost", needle="scheduler: expected an address such as tcp://host:8786"),
+        C("sweep", "--duration", "0.01", needle="duration: expected a whole number of at least 100"),
+        C("sweep", "-o", "{dir}", needle="is a directory"),
     ],
     "mjcf": [
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
@@ -348,6 +378,24 @@ CLI: dict[str, list[Cli]] = {
         C("observability", "--order", "1001", needle="--order: 1001 is over the limit of 1000"),
     ],
     "estimate": [
+        C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
+        C("estimate", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("estimate", "--data", "{rec3_csv}", "--model", "finger2", needle="unknown column 'true_q_j3'"),
+        C("estimate", "--data", "{rec3_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
+        C("estimate", "--data", "{rec3_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
+        C("estimate", "--data", "{rec3_csv}", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
+        C("estimate", "--data", "{rec3_csv}", "--log", "{rec3_csv}", needle="--log: '{rec3_csv}' is the input of --data"),
+        C("estimate", "--data", "{rec3_csv}", "--params", "{params_toml}", "--log", "{hardlink}",
+          needle="--log: '{hardlink}' is the input of --params"),
+        C("estimate", "--data", "{rec3_csv}", "--log", "{link}", needle="--log: '{link}' is a symbolic link"),
+        C("estimate", "--data", "{fifo}", needle="recording '{fifo}': is a FIFO (named pipe)"),
+        C("estimate", "--data", "{rec3_csv}", "--log", "{dir}", needle="is a directory"),
+        C("estimate", "--data", "x.csv", "--mismatch", "0.1", needle="--mismatch: applies to the simulated scenario"),
+        C("estimate", "--data", "x.csv", "--seed", "3", needle="--seed: applies to the simulated scenario"),
+        C("estimate", "--data", "x.csv", "--observer-params", "o.toml", needle="the observer's model is --params"),
+        C("estimate", "--disturbance", needle="--disturbance: applies to an observer on a recording (--data"),
+        C("estimate", "--log", "e.csv", needle="--log: applies to an observer on a recording (--data"),
+        C("estimate", "--torque-noise", "1e-3", needle="--torque-noise: applies to an observer on a recording"),
         C("estimate", "--plot", "{dir}", needle="--plot: '{dir}' is a directory"),
         C("estimate", "--plot", "", needle="--plot: empty file name"),
         C("estimate", "--plot", "out.xyz", needle="--plot: 'out.xyz' has extension 'xyz'; expected one of"),
@@ -539,6 +587,14 @@ def _exp(**kw):
     return experiment(**{"model": "finger2", "design": _design(), **kw})
 
 
+def _replay(c, **kw):
+    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.replay import estimate_recording
+
+    kw = {"recording": read_recording(c.f["rec3_csv"], c.m), "model": c.m, **kw}
+    return estimate_recording(**kw)
+
+
 def _pp(**kw):
     from alpes_dyn.estimation.experiment import perturbed_params
 
@@ -609,6 +665,10 @@ API: list[Api] = [
     # Model evaluation
     A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F="abc"), InputError, "F: expected F_z or 3 numbers"),
     A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, c.z, F=[0, 0, np.nan]), InputError, "F: contains NaN"),
+    A("Model", lambda c: ad.Model.alpes("finger3", rotor_inertia=True).forward_dynamics(c.z, c.z, np.array([0, np.inf, 0])),
+      InputError, "tau: contains NaN or inf"),
+    A("Model", lambda c: ad.Model.alpes("finger3", rotor_inertia=True).forward_dynamics(np.array([np.nan, 0, 0]), c.z, c.z),
+      InputError, "q: contains NaN or inf"),
     A("Model", lambda c: c.m.forward_dynamics(np.array([0.1 + 1j, 0, 0]), c.z, c.z), InputError,
       "q: complex values are not supported"),
     A("Model", lambda c: c.m.inertia_matrix([0.1j, 0, 0]), InputError, "q: complex values are not supported"),
@@ -657,6 +717,7 @@ API: list[Api] = [
       "finger.r.unit: the value is read in 'm', got 'mm'"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["big_urdf"]), ModelError, "over the limit of 16777216 bytes"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["fifo"]), ModelError, "is a FIFO"),
+    A("Model", lambda c: ad.Model.from_mjcf(c.f["big_urdf"]), ModelError, "mjcf '{big_urdf}': 16777217 bytes, over the"),
     A("Model", lambda c: ad.Model(URDFS["mimic_urdf"]), ModelError, "<mimic joint='j1'> is not modelled"),
     A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
     A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
@@ -729,6 +790,8 @@ API: list[Api] = [
     A("Transmission", lambda c: c.m.transmission.motor_positions("abc"), InputError, "q: expected joint angles"),
     A("Transmission", lambda c: c.m.transmission.joint_torque([1j]), InputError, "tau_m: complex values"),
     A("Transmission", lambda c: c.m.transmission.quantize("x"), InputError, "q_m: expected motor angles"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, [-1e-7]), InputError,
+      "rotor_inertia: expected 1 finite numbers >= 0"),
     # state space, observability
     A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
       "output function: returned str 'abc'"),
@@ -753,9 +816,23 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, interval=0.0), InputError, "interval: expected a positive number"),
     A("identify", lambda c: _ident(c, interval=10.0), InputError, "interval: 10 s must hold 2 to"),
     A("identify", lambda c: _ident(c, parameters="K_7"), ModelError, "unknown parameter 'K_7'"),
+    A("identify", lambda c: _ident(c, parameters="K,tilt_w"), ModelError, "unknown parameter 'tilt_w'"),
+    A("identify", lambda c: _ident(c, parameters="input_gain,m,K,friction"), ModelError,
+      "the encoder sees only their ratios"),
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("estimate_recording", lambda c: _replay(c, model="finger3"), InputError, "model: expected an alpes_dyn.Model"),
+    A("estimate_recording", lambda c: _replay(c, observer="pf"), InputError, "observer: expected one of ekf"),
+    A("estimate_recording", lambda c: _replay(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text"),
+    A("estimate_recording", lambda c: _replay(c, recording=42), InputError, "recording: expected a Recording"),
+    A("estimate_recording", lambda c: _replay(c, disturbance="yes"), InputError, "disturbance: expected True or False"),
+    A("estimate_recording", lambda c: _replay(c, disturbance_walk=-1.0), InputError, "disturbance_walk: expected a"),
+    A("estimate_recording", lambda c: _replay(c, transient=0.5), InputError, "must be shorter than the recording's"),
+    A("estimate_recording", lambda c: _replay(c, encoder_noise_counts=float("inf")), InputError,
+      "encoder_noise_counts: expected a non-negative"),
+    A("estimate_recording", lambda c: _replay(c, model=ad.Model.alpes("finger2")), RecordingError,
+      "recording: made for motors ['finger'] and joints ['j1', 'j2', 'j3'], not the model's"),
     A("identifiability", lambda c: _idf(points=0), InputError, "points: expected an integer from 1 to 10000"),
     A("identifiability", lambda c: _idf(seed=-1), InputError, "seed: expected an integer >= 0"),
     A("identifiability", lambda c: _idf(parameters="K_9"), ModelError, "unknown parameter 'K_9'"),
@@ -786,6 +863,9 @@ API: list[Api] = [
     A("name_direction", lambda c: _nd([1, 0, 0], ("K_1", "m_1")), InputError, "v: expected 2 components"),
     A("ParametricDynamics", lambda c: _pdyn(c, "m_9"), ModelError, "unknown parameter 'm_9'"),
     A("ParametricDynamics", lambda c: _pdyn(c, "friction"), ModelError, "selects nothing"),
+    A("ParametricDynamics", lambda c: _pdyn(c, "J_m"), ModelError, "'J_m' selects nothing"),
+    A("ParametricDynamics", lambda c: _pdyn(c, "encoder_offset_thumb"), ModelError,
+      "unknown parameter 'encoder_offset_thumb'"),
     A("check_observability", lambda c: ad.check_observability("finger3", seed=-1), InputError,
       "seed: expected an integer >= 0"),
     A("check_observability", lambda c: ad.check_observability("finger3", max_operations=0), InputError,

@@ -172,3 +172,18 @@ def test_thumb_springless_abduction_rests_mid_range():
     q_rest = thumb.static_equilibrium(tau0, np.r_[mid, 0.0, 0.0], fixed=("thumb_abd",))
     explicit = fisher_information(thumb, "K", rec.torque[:-1], design=design, x0=np.r_[q_rest, np.zeros(3)])
     assert np.allclose(explicit.fim, fr.fim, rtol=1e-10)
+
+
+def test_encoder_offset_and_tilt_structurally():
+    """finger2 with its encoder's zero and the palm's tilt: the offset is identifiable (y = S q + offset: the
+    springs and gravity fix where q = 0 is); tilt_y too; tilt_x does not appear in y at a level palm (its first
+    derivative vanishes there: gravity along the joint axes, the in-plane part scaled by cos tilt_x) and is
+    identifiable at 0.05 rad."""
+    for sel in ("K,encoder_offset", "K,encoder_offset,tilt_y"):
+        rep = identifiability("finger2", sel)
+        assert rep.rank == rep.dimension and rep.absent == ()
+    level = identifiability("finger2", "K,tilt_x")
+    assert level.rank == level.dimension - 1 and level.absent == ("tilt_x",)
+    K = ad.Model.alpes("finger2").extras.stiffness
+    tilted = identifiability("finger2", "K,tilt_x", theta=[*K, 0.05])
+    assert tilted.rank == tilted.dimension and tilted.absent == ()

@@ -73,7 +73,8 @@ def test_against_closed_form_lagrangian(name, spring, extra, rng):
     m = ad.Model.alpes(name, spring=spring, friction=extra, rotor_inertia=extra)
     ref = closed_form(n)
     k = spring_k(n, spring)
-    Ia = (TRANS["N"] ** 2 * TRANS["J_m"]) * np.ones(n) if extra else np.zeros(n)
+    # the rotor J_m on the tendon q_m = (r/r_m)(q_1 + ... + q_n): (r/r_m)^2 J_m on every entry (eq. 2.8)
+    Ia = (FINGER["r"] / TRANS["r_m"]) ** 2 * TRANS["J_m"] * np.ones((n, n)) if extra else np.zeros((n, n))
     Fs, Fv = (FRICTION["F_s"], FRICTION["F_v"]) if extra else (0.0, 0.0)
     for _ in range(10):
         q = rng.uniform(-1.5, 1.5, n)
@@ -81,7 +82,7 @@ def test_against_closed_form_lagrangian(name, spring, extra, rng):
         tau = rng.normal(scale=0.05, size=n)
         Fz = rng.normal()
         A, Cqd, Gg, J = ref(q, v)
-        Afull = A + np.diag(Ia)
+        Afull = A + Ia
         G = Gg.ravel() + k * q
         fric = Fs * np.sign(v) + Fv * v
         assert rel(m.inertia_matrix(q), Afull) < 1e-10

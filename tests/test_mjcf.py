@@ -45,6 +45,27 @@ def test_qacc_equals_library_forward_dynamics(name, rotor_inertia, rng):
     assert worst <= 1e-9
 
 
+@pytest.mark.parametrize("name", ["finger3", "hand"])
+def test_rotor_inertia_on_the_tendon_equals_mujoco_mass_matrix(name, rng):
+    """The rotor on the tendon: the fixed tendon's armature J_m / r_m^2 gives MuJoCo's M (mj_fullM) =
+    A(q) + S^T diag(J_m) S of Model.inertia_matrix to 1e-10 relative, and the rotor fills whole chain blocks."""
+    m = ad.Model.alpes(name, rotor_inertia=True)
+    mj = load_mujoco(mjcf_string(name, rotor_inertia=True, limits=False, contact=False))
+    p = ad.load_params()
+    assert np.allclose(mj.tendon_armature, p.J_m / p.r_m**2, rtol=1e-15)
+    d = mujoco.MjData(mj)
+    perm = joint_permutation(mj, m.joint_names)
+    M = np.zeros((mj.nv, mj.nv))
+    for _ in range(5):
+        q, v = m.random_state(rng)
+        _state(mj, d, perm, q, v, np.zeros(mj.nu))
+        mujoco.mj_fullM(mj, d, M)  # MuJoCo 4: (model, data, dst)
+        ours = m.inertia_matrix(q)
+        assert np.max(np.abs(M[np.ix_(perm, perm)] - ours)) <= 1e-10 * np.max(np.abs(ours))
+    j1, j3 = (m.joint_index(j) for j in (("j1", "j3") if name == "finger3" else ("index_j1", "index_j3")))
+    assert m.rotor_matrix[j1, j3] == pytest.approx((p.r / p.r_m) ** 2 * p.J_m, rel=1e-15)
+
+
 @pytest.mark.parametrize("name", ad.MODELS)
 def test_tendon_motor_and_sensor_mapping(name, rng):
     """Tendon length / r_m = encoder q_m = MuJoCo's actuatorpos; actuatorfrc = tau_m; tip site = tip frame."""

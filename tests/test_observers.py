@@ -169,3 +169,28 @@ def test_cli_estimate(tmp_path, capsys):
         assert main(["estimate", *bad]) == 2
         err = capsys.readouterr().err
         assert word in err and err.count("\n") == 1
+
+
+def test_online_filter_equals_run_bit_for_bit():
+    """KalmanFilter.online: one compiled call per sample gives run()'s estimates to the last bit."""
+    from alpes_dyn.estimation.observers import OnlineFilter
+
+    m = ad.Model.alpes("finger2")
+    ss = StateSpace(m, input="motor", output="encoder")
+    f = make_observer("ekf-params", ss, 1e-3, process_noise=[1e-18] * 2 + [4e-8] * 2 + [1e-10] * 2,
+                      measurement_noise=[1e-6], input_noise=[2.5e-7])
+    rng = np.random.default_rng(4)
+    N = 300
+    W = 0.02 + 1e-3 * rng.standard_normal((N, 1))
+    Y = 0.9 + 1e-3 * rng.standard_normal((N + 1, 1))
+    z0, P0 = np.r_[0.3, 0.5, 0.0, 0.0, 1.0, 1.0], [0.25, 0.25, 1.0, 1.0, 0.04, 0.04]
+    on = f.online(z0, P0, Y[0])
+    assert isinstance(on, OnlineFilter) and f.backend == "casadi"  # run() keeps its own backend
+    Z = np.vstack([on.z.copy()] + [on.step(W[k], Y[k + 1]).copy() for k in range(N)])
+    est = f.run(z0, P0, W, Y)
+    np.testing.assert_array_equal(Z, est.z)
+    np.testing.assert_array_equal(on.P, est.P[-1])
+    with pytest.raises(ValueError):
+        on.z[0] = 1.0  # a read-only view
+    with pytest.raises(InputError, match=r"w, y: expected 1 and 1 numbers, got \(2,\) and \(1,\)"):
+        on.step(np.zeros(2), Y[0])  # w has one entry on finger2

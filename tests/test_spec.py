@@ -102,7 +102,7 @@ def test_allegro_symbolic_f_matches_pinocchio(allegro, rng):
 
 def test_python_object_equals_file_and_round_trips():
     py = TransmissionSpec(
-        motors=tuple(Motor(m["name"], m["joints"]) for m in RAW["motor"]),
+        motors=tuple(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0)) for m in RAW["motor"]),
         stiffness=RAW["stiffness"], viscous=RAW["viscous"], armature=RAW["armature"],
         encoder_counts=4096, smooth_velocity=0.01, gravity=(0.0, 0.0, -9.81), tips=tuple(RAW["tips"]),
         name="allegro_tendon")
@@ -126,8 +126,13 @@ def test_alpes_models_go_through_a_spec():
     p = tomllib.loads(ad.model.params.default_params_path().read_text())
     ratio = p["finger"]["r"]["value"] / p["transmission"]["r_m"]["value"]
     assert hand.transmission.S[hand.motor_index("ring"), hand.joint_index("ring_j2")] == ratio
-    assert hand.extras.armature[hand.joint_index("thumb_abd")] == (
-        p["transmission"]["abduction_ratio"]["value"] ** 2 * p["transmission"]["J_m"]["value"])
+    # rotor inertia on the tendons: every motor has the file's J_m, no joint-side armature
+    J_m = p["transmission"]["J_m"]["value"]
+    assert np.array_equal(hand.transmission.rotor_inertia, np.full(6, J_m)) and not hand.extras.armature.any()
+    a = hand.joint_index("thumb_abd")
+    assert hand.rotor_matrix[a, a] == p["transmission"]["abduction_ratio"]["value"] ** 2 * J_m
+    i, j = hand.joint_index("ring_j1"), hand.joint_index("ring_j3")
+    assert hand.rotor_matrix[i, j] == ratio**2 * J_m and hand.rotor_matrix[i, hand.joint_index("index_j1")] == 0
 
 
 @pytest.mark.parametrize("text,needle", [
@@ -136,6 +141,10 @@ def test_alpes_models_go_through_a_spec():
     ("[[motor]]\nname = 'a'\njoints = {j = 1}\ngear = 2", "motor[0].gear: unknown key"),
     ("[[motor]]\nname = 'a'\njoints = {j = 0}", "motor 'a'.joints.j: a ratio must be non-zero"),
     ("[[motor]]\nname = 'a'\njoints = {j = 'x'}", "motor 'a'.joints.j: expected a number"),
+    ("[[motor]]\nname = 'a'\njoints = {j = 1}\nrotor_inertia = -1e-7",
+     "motor 'a'.rotor_inertia: expected a number >= 0, got -1e-07"),
+    ("[[motor]]\nname = 'a'\njoints = {j = 1}\nrotor_inertia = 'big'", "motor 'a'.rotor_inertia: expected a number"),
+    ("[[motor]]\nname = 'a'\njoints = {j = 1}\nrotor_inertia = inf", "motor 'a'.rotor_inertia: expected a finite"),
     ("[[motor]]\nname = 'a'\njoints = {j = 1}\n[[motor]]\nname = 'a'\njoints = {k = 1}", "motor name 'a' appears twice"),
     ("[stiffness]\nj = -1", "stiffness.j: expected a number >= 0, got -1"),
     ("[viscous]\nj = nan", "viscous.j: expected a finite number"),

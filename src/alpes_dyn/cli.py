@@ -482,6 +482,11 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     from .estimation.observers import OBSERVERS
     from .estimation.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
 
+    if args.data is not None:
+        return _estimate_data(args)
+    for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log")):
+        if getattr(args, dest) not in (None, False):
+            raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     _check_model_options(args)
     _one_chain(args.model, ESTIMATION_MODELS, "the estimation scenario")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
@@ -520,6 +525,101 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.plot is not None:
         lines.append(f"  figure: {args.plot}")
     lines.append(f"  {obj['seconds']:.1f} s")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+_SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.0), ("--seed", "seed", 0),
+                  ("--true-params", "true_params", None), ("--observer-params", "observer_params", None),
+                  ("--plot", "plot", None))
+
+
+def _estimate_data(args: argparse.Namespace) -> int:
+    """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.replay)."""
+    from .estimation.observers import OBSERVERS
+    from .estimation.recording import read_recording
+    from .estimation.replay import estimate_recording
+    from .model.robot import Model
+
+    for flag, dest, default in _SCENARIO_ONLY:
+        if getattr(args, dest) != default:
+            hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
+            raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
+    _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
+    t0 = time.perf_counter()
+    if _is_urdf_path(args.model):
+        model = _model_from_args(args)
+    else:
+        _check_model_options(args)
+        model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
+                            params=args.params, chain=args.chain)
+    rec = read_recording(args.data, model)
+    res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
+                             disturbance=args.disturbance)
+    if args.log is not None:
+        res.to_csv(args.log)
+    obj = res.to_dict()
+    obj.update({"data": args.data, "model": args.model, "chain": args.chain, "params": args.params,
+                "seconds": time.perf_counter() - t0})
+    if args.log is not None:
+        obj["log"] = args.log
+    deg = np.degrees
+    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: joints estimated by {args.observer} from "
+             f"{args.data} ({rec.n_samples} samples, {rec.duration:g} s)",
+             f"  torque noise {res.settings['torque_noise_Nm']:.3g} N m"
+             + (" (estimated from the recording)" if args.torque_noise is None else "")
+             + ("; a disturbance torque per motor" if args.disturbance else "")]
+    if res.rmse is not None:
+        head = f"RMSE after {res.settings['transient_s']:g} s [deg]:"
+        lines.append(f"  {head:30s}"
+                     + "  ".join(f"{j} {deg(e):.3f}" for j, e in zip(res.joint_names, res.rmse)))
+    else:
+        lines.append("  no true_q_* columns: no error to report")
+    lines.append(f"  {'final estimate [deg]:':30s}"
+                 + "  ".join(f"{j} {deg(q):.2f}" for j, q in zip(res.joint_names, res.q_hat[-1])))
+    if res.disturbance is not None:
+        lines.append(f"  {'final disturbance [N m]:':30s}"
+                     + "  ".join(f"{mn} {d:.3g}" for mn, d in zip(res.motor_names, res.disturbance[-1])))
+    if args.log is not None:
+        lines.append(f"  log: {args.log}")
+    lines.append(f"  {obj['seconds']:.1f} s")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+def cmd_sweep(args: argparse.Namespace) -> int:
+    """A study over seeded draws, on Dask workers or serially (studies.sweep)."""
+    from .estimation.experiment import EXPERIMENT_MODELS
+    from .studies.sweep import STUDIES, sweep
+
+    _one_of(args.study, tuple(STUDIES), "--study", "study")
+    if args.model not in EXPERIMENT_MODELS or args.model == "thumb":
+        raise InputError(f"--model: the robustness study is defined for one finger (finger2, finger3), got "
+                         f"{args.model!r}")
+    if not (np.isfinite(args.spread) and 0 <= args.spread < 1):
+        raise InputError(f"--spread: expected a fraction in [0, 1), got {args.spread!r}")
+    if args.serial and (args.scheduler is not None or args.workers != 2):
+        raise InputError("--serial: runs in this process; give no --workers or --scheduler with it")
+    if args.scheduler is not None and args.workers != 2:
+        raise InputError("--workers: sizes a local cluster; a --scheduler has its own workers")
+    _check_run_files(args)
+    opts = {"model": args.model, "spread": args.spread, "duration": args.duration, "fit": not args.no_fit}
+    from .estimation.experiment import ExperimentDesign
+
+    ExperimentDesign(duration=args.duration).check()  # before any worker starts
+    res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts, workers=args.workers,
+                scheduler=args.scheduler, serial=args.serial)
+    res.meta.update({"study": args.study, **opts})
+    if args.output is not None:
+        res.to_csv(args.output)
+    obj = res.to_dict()
+    if args.output is not None:
+        obj["output"] = args.output
+    head = (f"{args.study} study on {args.model}: {args.draws} draws (seeds {args.seed}..{args.seed + args.draws - 1}), "
+            f"+-{100 * args.spread:g} % per link, {args.duration:g} s experiments; {res.backend} on {res.workers} "
+            f"worker{'s' if res.workers != 1 else ''}, {res.seconds:.1f} s")
+    lines = [head, res.table()] + ([f"  table: {args.output}"] if args.output else [])
     _emit(obj, "\n".join(lines), args.json)
     return 0
 
@@ -670,7 +770,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
-    from .estimation.identification import identify
+    from .estimation.identification import check_selection, identify
     from .model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
@@ -682,10 +782,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    model = Model.alpes(args.model, friction=True, params=args.params, chain=args.chain)
+    model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=args.params,
+                        chain=args.chain)
     parameters = args.parameters
     if parameters is None and args.model == "thumb":
         parameters = THUMB_PARAMETERS
+    check_selection(model, parameters)  # a bad selection named before the recording is read
     res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise)
     if args.output is not None:
         res.write(args.output)
@@ -782,7 +884,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
                    help="spring model (default %(default)s)")
     s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
-    s.add_argument("--rotor-inertia", action="store_true", help="joint armature N^2 J_m (eq. 2.8)")
+    s.add_argument("--rotor-inertia", action="store_true", help="the rotor J_m on each tendon: tendon armature J_m/r_m^2 "
+                   "(eq. 2.8)")
     s.add_argument("--no-limits", action="store_true", help="no joint stops")
     s.add_argument("--no-contact", action="store_true", help="collisions disabled")
     s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
@@ -798,8 +901,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--force", help="contact force Fx,Fy,Fz at the tip, N, base frame (eq. 2.9, 2.13)")
     s.add_argument("--tip", help="tip frame name (default: the first tip)")
     s.add_argument("--friction", action="store_true", help="Alpes models: switch on friction (eq. 2.6-2.7)")
-    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on rotor inertia N^2 J_m "
-                                                                "(eq. 2.8)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on the rotor inertia J_m "
+                                                                "on each tendon, S^T J_m S (eq. 2.8)")
     s.set_defaults(func=cmd_dynamics)
 
     s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")
@@ -857,6 +960,16 @@ def build_parser() -> argparse.ArgumentParser:
                    help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify'")
     s.add_argument("--friction", action="store_true",
                    help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
+    s.add_argument("--data", default=None, metavar="REC.csv",
+                   help="run the observer on this recording (encoder and torque; RMSE where it has true_q_* columns) "
+                        "instead of the simulated scenario; the observer's model is --params (e.g. the file "
+                        "'alpes-dyn identify -o' wrote), with --friction if it has friction")
+    s.add_argument("--torque-noise", type=float, default=None, metavar="NM",
+                   help="with --data: white noise of the recorded torque, N m (default: estimated from the recording)")
+    s.add_argument("--disturbance", action="store_true",
+                   help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
+    s.add_argument("--log", default=None, metavar="FILE.csv",
+                   help="with --data: write the estimated joints, velocities and standard deviations as CSV")
     s.set_defaults(func=cmd_estimate)
 
     s = sub.add_parser("experiment", help="simulate the identification experiment on a finger or the thumb, write a "
@@ -890,9 +1003,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
-                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... "
-                        f"(default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own mass "
-                        "and friction are barely seen by the encoders; name them to fit them)")
+                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain, J_m (with --rotor-inertia), "
+                        "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "
+                        "rad; a planar finger sees tilt_y only) and/or names K_1, m_2, encoder_offset_finger, "
+                        f"tilt_y... (default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own "
+                        "mass and friction are barely seen by the encoders; name them to fit them)")
+    s.add_argument("--rotor-inertia", action="store_true",
+                   help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
@@ -909,8 +1026,9 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
-                   help="kinds K, m, F_s, F_v, friction, input_gain and/or names K_1, m_2... (default K,m,friction; "
-                        "the finger has friction when friction parameters are chosen)")
+                   help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
+                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
+                        "chosen)")
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
@@ -925,6 +1043,28 @@ def build_parser() -> argparse.ArgumentParser:
                         "above it the rank is a lower bound")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identifiability)
+
+    s = sub.add_parser("sweep", help="a study over seeded draws of a finger within its tolerances, on Dask workers "
+                       "(experiment, identification, EKF per draw)",
+                       epilog="Example: alpes-dyn sweep --model finger3 --draws 8 --seed 1 --workers 2 -o sweep.csv")
+    s.add_argument("--study", default="robustness",
+                   help="robustness: per draw a finger drawn +-spread per link, its experiment, the fit and the EKF "
+                        "before/after (default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--draws", type=_int_at_least(1), default=4, help="number of draws (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="seed of the first draw; draw k has seed + k "
+                   "(default %(default)s)")
+    s.add_argument("--spread", type=float, default=0.2, help="relative spread per link (default %(default)s)")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--no-fit", action="store_true", help="no identification: the EKF on the nominal file only")
+    s.add_argument("--workers", type=_int_at_least(1), default=2,
+                   help="processes of the local Dask cluster (default %(default)s)")
+    s.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a running Dask scheduler, e.g. tcp://host:8786, instead of a local cluster")
+    s.add_argument("--serial", action="store_true", help="one draw after another in this process (no Dask)")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.csv", help="write the table as CSV")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_sweep)
 
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
                        epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "

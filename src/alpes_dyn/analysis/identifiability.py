@@ -262,7 +262,9 @@ def _check_int(value: Any, name: str, low: int, high: int | None = None) -> int:
     return int(value)
 
 
-def _theta(theta: Any, pd_nominal: np.ndarray, names: Sequence[str]) -> np.ndarray:
+def _theta(theta: Any, pd_nominal: np.ndarray, names: Sequence[str], additive: np.ndarray | None = None) -> np.ndarray:
+    """The parameter values: positive (log coordinates), any finite value for the additive ones."""
+    additive = np.zeros(len(names), dtype=bool) if additive is None else additive
     if theta is None:
         th = pd_nominal.copy()
     else:
@@ -272,8 +274,8 @@ def _theta(theta: Any, pd_nominal: np.ndarray, names: Sequence[str]) -> np.ndarr
             raise InputError(f"theta: expected {len(names)} numbers, got {theta!r}") from None
         if th.shape != pd_nominal.shape:
             raise InputError(f"theta: expected {len(names)} values ({', '.join(names)}), got {th.size}")
-    if not np.isfinite(th).all() or np.any(th <= 0):
-        bad = next(n for n, v in zip(names, th) if not (np.isfinite(v) and v > 0))
+    if not np.isfinite(th).all() or np.any((th <= 0) & ~additive):
+        bad = next(n for n, v, a in zip(names, th, additive) if not (np.isfinite(v) and (v > 0 or a)))
         raise InputError(f"theta: {bad} must be a finite positive value (log coordinates), got "
                          f"{th[list(names).index(bad)]!r}")
     return th
@@ -323,8 +325,14 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
         input = "motor" if model.transmission is not None else "joint"
     base = StateSpace(model, input=input, output=output)
     pd = ParametricDynamics(model, parameters)
-    th = _theta(theta, pd.nominal, pd.names)
+    additive = np.array([prm.additive for prm in pd.parameters], dtype=bool)
+    th = _theta(theta, pd.nominal, pd.names, additive)
     aug = _AugmentedStateSpace(base, pd, np.asarray(model.gravity, dtype=float))
+    if pd._sel["encoder_offset"]:  # y = S q + offset
+        if base.output_name != "encoder":
+            raise ModelError(f"parameters: encoder_offset applies to the encoder output, not {base.output_name!r}")
+        aug.h_expr = aug.h_expr + pd.encoder_offset(pd.theta)
+    unit = np.where(additive, 1.0, th)  # d/d log theta = theta d/d theta; the additive ones as they are
     nz = aug.n_states
     n2 = base.n_states
     kmax = nz - 1 if order is None else _check_int(order, "order", 0)
@@ -334,7 +342,7 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
     scale = _input_scale(base, q)
     W = rng.uniform(-1.0, 1.0, size=(points, max(kmax, 1) * scale.size)) * np.tile(scale, max(kmax, 1))
     Z = np.hstack([q, v, np.tile(th, (points, 1))])
-    colscale = np.concatenate([np.ones(n2), th if coordinates == "log" else np.ones(pd.p)])  # d/d log theta = theta d/d theta
+    colscale = np.concatenate([np.ones(n2), unit if coordinates == "log" else np.ones(pd.p)])
     blocks: list[np.ndarray] = []
     ranks: list[int] = []
     truncated = False
@@ -382,7 +390,7 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
         Np = np.zeros((pd.p, N.shape[1]))
         Np[[j - n2 for j in keep if j >= n2]] = N[n2:]
         if coordinates == "absolute":
-            Np = Np / th[:, None]  # d log theta = d theta / theta
+            Np = Np / unit[:, None]  # d log theta = d theta / theta
         R = _rref(Np.T, 1e-6)
         null = (R / np.linalg.norm(R, axis=1, keepdims=True)).T if R.size else np.zeros((pd.p, 0))
         combos = [name_direction(null[:, i], pd.names) for i in range(null.shape[1])]
@@ -602,7 +610,9 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
             if names != sm.names:
                 raise InputError(f"sensitivity: its parameters {', '.join(sm.names)} are not {', '.join(names)}")
     p = sm.p
-    th = _theta(theta, sm.nominal, sm.names)
+    additive = np.array([prm.additive for prm in sm.dynamics.parameters], dtype=bool)
+    th = _theta(theta, sm.nominal, sm.names, additive)
+    unit = np.where(additive, 1.0, th)  # log coordinates, the additive parameters (offsets, tilt) as they are
     if x0 is None:
         m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
         tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
@@ -627,12 +637,15 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     X = X[0]  # (N+1, nx, nx + p): d x_k / d(x0, theta)
     cols = np.concatenate([np.arange(nx, nx + p), np.arange(nx)])  # (theta, x0)
     S = np.asarray(tr.S, dtype=float) if tr is not None else np.eye(n)
-    Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols]).reshape(-1, p + nx)
-    Jy[:, :p] *= th  # log coordinates inside (well scaled), converted back below
+    Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
+    for k, i in sm.dynamics._sel["encoder_offset"]:  # y = S q + offset
+        Jy[:, i, k] += 1.0
+    Jy = Jy.reshape(-1, p + nx)
+    Jy[:, :p] *= unit  # log coordinates inside (well scaled), converted back below
     F = Jy.T @ Jy / sigma ** 2 if sigma > 0 else np.zeros((p + nx, p + nx))
     if cam_idx:
         Jc = X[cam_idx][:, :n, :][:, :, cols].reshape(-1, p + nx).copy()
-        Jc[:, :p] *= th
+        Jc[:, :p] *= unit
         F = F + (Jc.T @ Jc / cam_noise ** 2 if cam_noise > 0 else 0.0)
     if not np.isfinite(F).all():
         raise InputError("fisher_information: the sensitivities are not finite (experiment unstable?)")
@@ -659,16 +672,17 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         cov_log[free, :] = np.nan
         cov_log[:, free] = np.nan
         np.fill_diagonal(cov_log, np.where(free, np.inf, np.diag(cov_log)))
-    sd = rel * np.abs(th)
+    sd = rel * np.abs(unit)
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov_log / np.outer(rel, rel)
-    fim = Flog / np.outer(th, th)
+        rel = np.where(additive, sd / np.abs(th), rel)  # an additive parameter at 0: inf
+    fim = Flog / np.outer(unit, unit)
     fim_full = F.copy()
-    fim_full[:p] /= th[:, None]
-    fim_full[:, :p] /= th[None, :]
+    fim_full[:p] /= unit[:, None]
+    fim_full[:, :p] /= unit[None, :]
     units = tuple(prm.unit for prm in sm.dynamics.parameters)
     return FisherReport(
         model=model.name, parameters=tuple(sm.names), theta=th, units=units, fim=fim, fim_full=fim_full,
-        covariance=cov_log * np.outer(th, th), std=sd, relative_std=rel, correlation=corr, rank=rank,
+        covariance=cov_log * np.outer(unit, unit), std=sd, relative_std=rel, correlation=corr, rank=rank,
         encoder_std=sigma, samples=N + 1, camera_samples=len(cam_idx), duration=N * float(dt),
         initial_state=initial_state, seconds=time.perf_counter() - t0)

@@ -359,7 +359,8 @@ def _profiles(design: ExperimentDesign, t: np.ndarray, bias: np.ndarray, amp: np
 
 def experiment(model: str, true_params: HandParams | str | Path | None = None,
                design: ExperimentDesign | None = None, seed: int = 0, path: str | Path | None = None,
-               nominal_params: HandParams | str | Path | None = None, chain: str | None = None) -> Recording:
+               nominal_params: HandParams | str | Path | None = None, chain: str | None = None,
+               rotor_inertia: bool = False) -> Recording:
     """Simulate the identification experiment on a finger (or the thumb) with ``true_params`` (friction included).
 
     Parameters
@@ -376,6 +377,8 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
         (default: the shipped file).
     chain: for a finger model, the hand's finger it is (its own ``[finger.<name>]`` values, in the true
         and the nominal file; see :meth:`Model.alpes <alpes_dyn.Model.alpes>`).
+    rotor_inertia: the true finger (and the nominal one the excitation is designed on) with each file's
+        rotor inertia J_m on its tendon (eq. 2.8; default off, the rigid finger of the documented experiment).
 
     Returns
     -------
@@ -390,9 +393,9 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     design = (design or ExperimentDesign()).check()
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
-    nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
+    nominal = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_nom, chain=chain)
     bias, amp = _excitation(nominal, design)
-    truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
+    truth = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_true, chain=chain)
     t, seg, G = _schedule(design)
     if design.trim_bias and design.torque_bias is None:
         peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp)), axis=0)

@@ -15,7 +15,9 @@ nominal parameters. Each iteration is a constrained Gauss-Newton step (Levenberg
 l1-merit line search) on the exact Jacobians of the RK4-discretised model, all intervals simulated
 with their sensitivities at once in compiled C (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`).
 Parameters are fitted as log theta: every iterate is physical (masses, springs and friction
-positive, inertias scaled with their masses).
+positive, inertias scaled with their masses); the encoder offsets and the tilt angles (nominal 0, either
+sign) as they are. An encoder offset enters the output only, y = S q + offset; the tilt turns gravity
+(:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`).
 
 Globalisation. From parameters 20 % off, 100 ms of the finger (tiny inertias, a soft balance of springs
 and gravity) drifts by degrees and rad/s, and imposing continuity at once let Gauss-Newton trade the
@@ -46,6 +48,7 @@ from __future__ import annotations
 import math
 import sys
 import time
+import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Sequence
@@ -54,14 +57,14 @@ import numpy as np
 
 from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
-from ..symbolic.parametric import parameter_catalogue
+from ..symbolic.parametric import OUTPUT_KINDS, common_scale, parameter_catalogue, select_parameters
 from ..model.params import HandParams, Param, with_values, write_params
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
 from ..simulation.sensitivity import SensitivityModel
 from ..progress import _Progress
 
-__all__ = ["IdentificationResult", "identify", "identified_params", "project_torque"]
+__all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection"]
 
 
 @dataclass
@@ -93,9 +96,10 @@ class IdentificationResult:
     recording_path: str = ""
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``alpes-dyn identify --json``."""
+        """The JSON of ``alpes-dyn identify --json`` (an unbounded std, a parameter the data do not see, is null)."""
         return {
-            "parameters": {n: {"value": float(v), "std": float(s), "initial": float(i), "unit": u}
+            "parameters": {n: {"value": float(v), "std": float(s) if math.isfinite(s) else None, "initial": float(i),
+                               "unit": u}
                            for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
             "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
             "converged": self.converged, "seconds": self.seconds, "compile_seconds": self.compile_seconds,
@@ -125,7 +129,12 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     * a finger model with ``chain`` a finger's name: that finger's own values ``[finger.<name>]`` (the
       fields fitted, the others untouched);
     * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
-      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``.
+      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
+    * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``.
+
+    Encoder offsets, the tilt angles and ``input_gain`` are of the recording and its sensors (the encoder's
+    zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
+    the hand: they stay in the result (and ``identify --json``), not in the file.
     """
     p = base if base is not None else result.model.params
     if p is None:
@@ -155,6 +164,14 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     flexion = [j for j in model.joint_names if j != "thumb_abd"]
     for name, value, sd in zip(result.names, result.values, result.std):
         pp = cat.get(name)
+        if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
+            continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
+        if pp is not None and pp.kind == "J_m":
+            if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
+                raise ModelError("identified parameters: the file has one rotor inertia transmission.J_m for "
+                                 "every motor; fit one motor's J_m")
+            scalars["J_m"] = (float(value), float(sd))
+            continue
         if pp is None or pp.kind not in ("K", "m", "F_s", "F_v"):
             raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
         if thumb and pp.joint == "thumb_abd":
@@ -179,10 +196,25 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         desc = old.description if old is not None else f"per-joint {kind}"
         upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, stds[kind])
     for field_, (value, sd) in scalars.items():
+        if field_ == "J_m":
+            old = p.raw.get("transmission.J_m")
+            upd["transmission.J_m"] = Param(value, "kg m^2", "identified", reason,
+                                            old.description if old is not None else "rotor inertia J_m (eq. 2.8)", sd)
+            continue
         old = p.raw.get(f"thumb.{field_}")
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
         upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
     return with_values(p, upd)
+
+
+def check_selection(model: Model, parameters: str | Sequence[str] | None) -> None:
+    """:class:`~alpes_dyn.ModelError` for a selection :func:`identify` cannot fit: an unknown or repeated
+    name (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), or the torque constant's common scale
+    (``input_gain`` with every mass, spring and friction, :func:`~alpes_dyn.symbolic.parametric.common_scale`)."""
+    if common_scale(model, select_parameters(model, parameters)):
+        raise ModelError("parameters: input_gain with every mass, spring and friction: the encoder sees only their "
+                         "ratios (theta -> c theta leaves the motion unchanged); hold the masses (known from the "
+                         "maker) and fit input_gain with the springs and friction, or leave input_gain out")
 
 
 def _line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
@@ -231,7 +263,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     model: the finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``);
         parameters not fitted keep its values.
     recording: a :class:`~alpes_dyn.estimation.recording.Recording` or a CSV path (:func:`~alpes_dyn.estimation.recording.read_recording`).
-    parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction.
+    parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction;
+        by name also ``J_m`` (a model with rotors), ``encoder_offset``, ``tilt`` (``tilt_y`` on a planar finger:
+        ``tilt_x`` is seen only through its cosine) and ``input_gain`` (with the masses held:
+        :func:`check_selection`).
     excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().frequencies``):
         the true torque is taken to lie on a constant and these sines and cosines (periodic-excitation
         identification). The measured torque is projected on them, and the projection's error (what
@@ -294,6 +329,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     eiv = torque_noise > 0
     lines = eiv and excitation is not None
     nphi = Q.shape[1] if lines else 0
+    check_selection(model, parameters)  # before anything is compiled
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=eiv and not lines, input_basis=nphi)
     nx, p, nu, n = sens.nx, sens.p, sens.nu, sens.n
@@ -327,9 +363,14 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     q_mask = np.isfinite(Qm) & valid[:, :, None] if Qm is not None else None
 
     theta0 = sens.nominal.copy()
-    if np.any(theta0 <= 0):
-        bad = sens.names[int(np.argmax(theta0 <= 0))]
-        raise ModelError(f"parameters: {bad} has the starting value {theta0[np.argmax(theta0 <= 0)]:g}; a fitted "
+    # additive parameters (encoder offsets, tilt angles: nominal 0, either sign) are fitted as they are, the
+    # others as log theta / theta_0; the encoder offsets enter the output only (their state sensitivities are 0)
+    additive = np.array([pp.additive for pp in sens.dynamics.parameters], dtype=bool)
+    off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
+                if pp.kind in OUTPUT_KINDS]
+    if np.any((theta0 <= 0) & ~additive):
+        bad = sens.names[int(np.argmax((theta0 <= 0) & ~additive))]
+        raise ModelError(f"parameters: {bad} has the starting value {theta0[sens.names.index(bad)]:g}; a fitted "
                          "parameter needs a positive starting value (use a model with that term switched on)")
 
     # initial guess: the model's own response from its static equilibrium, cut at the nodes
@@ -344,6 +385,17 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     iv, ip = slice(0, nx), slice(nx, nx + p)
     io = slice(nx + p, nx + p + sens.no)
 
+    def values(glob: np.ndarray) -> np.ndarray:
+        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + rho for the additive ones."""
+        return np.where(additive, theta0 + glob[:p], theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
+
+    def offset(theta: np.ndarray) -> np.ndarray:
+        """(m,) the encoder offsets, rad."""
+        out = np.zeros(ny)
+        for k, mo in off_cols:
+            out[mo] += theta[k]
+        return out
+
     def correction(glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
         if lines:
             return glob[p:].reshape(nphi, nu).T  # C (nu, nphi) from its column-major vec
@@ -355,10 +407,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         Jacobians Cv (S-1, nx, nb), Cr (S-1, nx, ng); the global residuals rg (ng,) (the line
         corrections' prior; zeros for theta) and the states. ``jac=False``: r, c, rg and the states
         alone (J, Cv, Cr None), from the step without its sensitivities (a tenth of the time)."""
-        theta = theta0 * np.exp(glob[:p])
+        theta = values(glob)
         xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
         q = xs[:, :, :n]
-        r_enc = (np.einsum("ij,skj->ski", S_enc, q) - Yb) / sig_y * valid[:, :, None]
+        r_enc = (np.einsum("ij,skj->ski", S_enc, q) + offset(theta) - Yb) / sig_y * valid[:, :, None]
         c = xs[:-1, L] - nodes[1:]
         rg = np.concatenate([np.zeros(p), glob[p:]])
         if not jac:
@@ -369,13 +421,16 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 res.append(offs / sig_off)
             return np.concatenate(res, axis=1), None, c, None, None, rg, xs
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if no else X[..., iv]  # (S, L+1, nx, nb)
-        Xr = X[..., ip] * theta  # d/d log theta
+        Xr = X[..., ip] * np.where(additive, 1.0, theta)  # d/d log theta (d/d theta for the additive ones)
         if lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
         w = valid[:, :, None, None] / sig_y
         res = [r_enc.reshape(n_int, -1)]
         J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
-                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1) * w
+                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
+        for k, mo in off_cols:  # y = S q + offset: d r / d offset_m = e_m
+            J_enc[:, :, mo, nb + k] += 1.0
+        J_enc = J_enc * w
         jac = [J_enc.reshape(n_int, -1, nb + ng)]
         if Qm is not None:
             rq = np.where(q_mask, q - np.nan_to_num(Qm), 0.0) / camera_noise
@@ -635,12 +690,23 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # the residual variance
     s2 = float(np.sum(r**2) + np.sum(rg**2)) / dof
     P_rho = lin_solve(kkt(J, Cv, Cr, 0.0), unit_p)[nv:nv + p] * s2
-    theta = theta0 * np.exp(glob[:p])
+    theta = values(glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
-    corr = P_rho / np.outer(np.maximum(sd_rho, 1e-300), np.maximum(sd_rho, 1e-300))
+    # a parameter the data do not see at the solution (its columns zero: tilt_x on a planar finger at a level
+    # palm, seen only through cos tilt_x): the least-squares step left it at its start, its std is unbounded
+    info = np.einsum("skd,skd->d", J[:, :, nb:nb + p], J[:, :, nb:nb + p]) + np.einsum("sid,sid->d", Cr[:, :, :p],
+                                                                                       Cr[:, :, :p])
+    blind = info <= 1e-20 * max(float(info.max(initial=0.0)), 1e-300)
+    if blind.any():
+        sd_rho = np.where(blind, np.inf, sd_rho)
+        warnings.warn(f"identify: {', '.join(n_ for n_, b in zip(sens.names, blind) if b)}: no information in "
+                      "this recording (the encoder does not see it here); left at its start, std inf", stacklevel=2)
+    with np.errstate(invalid="ignore", over="ignore"):
+        sd_c = np.where(np.isfinite(sd_rho), np.maximum(sd_rho, 1e-300), np.nan)
+        corr = P_rho / np.outer(sd_c, sd_c)
     rms = encoder_rms(r)
     return IdentificationResult(
-        names=sens.names, values=theta, std=theta * sd_rho, initial=theta0,
+        names=sens.names, values=theta, std=np.where(additive, 1.0, theta) * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
         states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)

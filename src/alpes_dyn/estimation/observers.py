@@ -14,7 +14,10 @@ input held over the period:
 Both can estimate, with the state, two uncertain gains as random-walk states (``parameters=``):
 
 * ``"input_gain"`` a -- multiplies the known torques (S^T tau_m, and J^T F);
-* ``"spring_gain"`` b -- multiplies the spring torques k q.
+* ``"spring_gain"`` b -- multiplies the spring torques k q;
+
+and, on a state space with motor inputs, a disturbance torque per motor, ``"disturbance_<motor>"`` d (N m,
+added to the measured motor torque: tau = a S^T (u + d)).
 
 If the observer's masses and inertias are (1 + d_m) times the true ones and its springs (1 + d_K)
 times, dividing its dynamics by (1 + d_m) shows that the truth is exactly its model with
@@ -52,16 +55,20 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from ..limits import check_bytes
+from ..rebuild import Rebuilt
 from ..simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from ..symbolic.statespace import StateSpace
 
 __all__ = [
     "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
-    "Estimate", "true_gains", "make_observer",
+    "Estimate", "true_gains", "make_observer", "OnlineFilter",
 ]
 
 OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
 PARAMETERS: tuple[str, ...] = ("input_gain", "spring_gain")
+DISTURBANCE_PREFIX = "disturbance_"
+"""``disturbance_<motor>``: an additive torque on that motor, N m, estimated as a random-walk state (motor inputs
+only): what the model leaves unexplained (:mod:`alpes_dyn.estimation.replay`)."""
 
 
 def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
@@ -99,9 +106,12 @@ class DiscreteModel:
         self.system = system
         self.dt = _check_dt(dt)
         params = tuple(parameters)
+        motors = system.model.transmission.motor_names if system.model.transmission is not None else ()
+        disturbances = tuple(f"{DISTURBANCE_PREFIX}{mn}" for mn in motors) if system.input == "motor" else ()
         for p in params:
-            if p not in PARAMETERS:
-                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)})")
+            if p not in PARAMETERS and p not in disturbances:
+                extra = f", or {', '.join(disturbances)}" if disturbances else ""
+                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)}{extra})")
         if len(set(params)) != len(params):
             raise ModelError(f"parameters: repeated name in {params}")
         if "spring_gain" in params and not system.model.extras.has_spring:
@@ -129,6 +139,10 @@ class DiscreteModel:
         th = {p: z[self.nx + i] for i, p in enumerate(self.parameters)}
         a = th.get("input_gain", 1.0)
         u = w[: ss.n_inputs]
+        motors = ss.model.transmission.motor_names if any(p.startswith(DISTURBANCE_PREFIX) for p in th) else ()
+        d = [th.get(f"{DISTURBANCE_PREFIX}{mn}", 0.0) for mn in motors]
+        if motors:  # an additive torque per motor (N m), a random-walk state
+            u = u + cs.vertcat(*d)
         tau = a * cs.mtimes(cs.DM(ss.B), u)
         if "spring_gain" in th:  # the model applies k q; the gain b makes it b k q
             tau = tau + (1.0 - th["spring_gain"]) * cs.DM(ss.model.extras.stiffness) * q
@@ -188,7 +202,7 @@ class Estimate:
         return np.sqrt(np.maximum(np.diagonal(self.P, axis1=1, axis2=2), 0.0))
 
 
-class KalmanFilter:
+class KalmanFilter(Rebuilt):
     """Common machinery of the discrete Kalman filters (see :class:`ExtendedKalmanFilter`).
 
     Parameters
@@ -227,6 +241,8 @@ class KalmanFilter:
     def __init__(self, system: StateSpace, dt: float, *, process_noise: Any, measurement_noise: Any,
                  input_noise: Any = None, parameters: Sequence[str] = (), compiled: bool = False,
                  substeps: int = 1) -> None:
+        self._remember(system, dt, process_noise=process_noise, measurement_noise=measurement_noise,
+                       input_noise=input_noise, parameters=parameters, compiled=compiled, substeps=substeps)
         self.model = DiscreteModel(system, dt, parameters, substeps)
         mdl = self.model
         self.dt = mdl.dt
@@ -300,6 +316,22 @@ class KalmanFilter:
         zp, Pp = self.predict(z, P, w)
         return self.update(zp, Pp, y)
 
+    def online(self, z0: Any, P0: Any, y0: Any = None) -> "OnlineFilter":
+        """A filter for a real-time loop: :meth:`OnlineFilter.step` is one call into compiled C per sample.
+
+        ``z0``, ``P0``: the prior at t_0; ``y0``: the first measurement (updated into the prior when given).
+        Compiles the filter step on first use when the filter was not built with ``compiled=True`` (cached on
+        disk). The same numbers as :meth:`run` on the same samples (tested to the last bit).
+        """
+        if self._loop is None:
+            self._loop = CompiledStepLoop(self.filter_step, f"{self.kind}_{self.model.system.model.name}", threads=1,
+                                          vectorize=False)
+        z, P = self._z(z0, "z0"), self._P(P0, "P0")
+        if y0 is not None:
+            y0 = self.model.system.model.vector(y0, "y0", self.ny)
+            z, P = self._update(z, P, y0)
+        return OnlineFilter(self, np.array(z).reshape(-1), np.array(P))
+
     def run(self, z0: Any, P0: Any, W: Any, Y: Any) -> Estimate:
         """Filter a whole record.
 
@@ -343,6 +375,60 @@ class KalmanFilter:
         if not np.isfinite(S[-1]).all():
             raise InputError(f"{self.kind}: the filter diverged (non-finite estimate); check the noise settings")
         return Estimate(t=self.dt * np.arange(N + 1), z=Z, P=Ps, names=self.names)
+
+
+class OnlineFilter:
+    """One filter step per call, in compiled C, for a loop at the sample rate (:meth:`KalmanFilter.online`).
+
+    :meth:`step` copies w and y into a preallocated buffer, calls the compiled predict-update step once
+    and returns the new estimate z as a view of the filter's buffer (valid until the next step: copy it to
+    keep it); :attr:`P` is the covariance. No allocation and no check per step beyond the shapes of w and
+    y (numpy's assignment): what a 1 kHz loop from Python can afford. Measured in
+    ``benchmarks/observer_step.py``.
+    """
+
+    def __init__(self, filt: KalmanFilter, z: np.ndarray, P: np.ndarray) -> None:
+        self.filter = filt
+        nz, nw, ny = filt.nz, filt.nw, filt.ny
+        self.nz, self.nw, self.ny = nz, nw, ny
+        ns = nz + nz * nz
+        self._X = np.zeros((1, 2, ns))
+        self._X[0, 0, :nz] = z
+        self._X[0, 0, nz:] = np.asarray(P, dtype=float).reshape(-1, order="F")
+        self._W = np.zeros((1, 1, nw + ny))
+        loop = filt._loop
+        assert loop is not None
+        self._fn = loop._fn
+        self._wp = self._W.ctypes.data_as(loop._dp)
+        self._xp = self._X.ctypes.data_as(loop._dp)
+        self._s, self._next = self._X[0, 0], self._X[0, 1]
+        self._w, self._y = self._W[0, 0, :nw], self._W[0, 0, nw:]
+        self._zview = self._s[:nz]
+        self._zview.flags.writeable = False
+
+    @property
+    def z(self) -> np.ndarray:
+        """(nz,) the current estimate [q; qd; theta] (a read-only view)."""
+        return self._zview
+
+    @property
+    def P(self) -> np.ndarray:
+        """(nz, nz) its covariance (a copy)."""
+        return self._s[self.nz:].reshape(self.nz, self.nz, order="F").copy()
+
+    def step(self, w: Any, y: Any) -> np.ndarray:
+        """Predict with the input w (nw,) held over the period, update with the measurement y (ny,) at its end;
+        return the estimate z (nz,) (a read-only view, valid until the next step)."""
+        try:
+            self._w[:] = w
+            self._y[:] = y
+        except (ValueError, TypeError):
+            raise InputError(f"w, y: expected {self.nw} and {self.ny} numbers, got {np.shape(w)} and {np.shape(y)}") \
+                from None
+        if self._fn(self._wp, self._xp, 1, 1, 0, 1, 1) != 0:
+            raise InputError(f"{self.filter.kind}: the compiled step failed")
+        self._s[:] = self._next
+        return self._zview
 
 
 class ExtendedKalmanFilter(KalmanFilter):
@@ -405,6 +491,7 @@ class UnscentedKalmanFilter(KalmanFilter):
         if not self.alpha > 0:
             raise InputError(f"alpha: expected a positive number, got {alpha!r}")
         super().__init__(system, dt, **kwargs)
+        self._remember(system, dt, alpha=alpha, beta=beta, kappa=kappa, **kwargs)
 
     def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
         n = self.model.nz
@@ -429,13 +516,14 @@ class UnscentedKalmanFilter(KalmanFilter):
 
 def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> KalmanFilter:
     """An observer by name: ``ekf``, ``ukf``, ``ekf-params``, ``ukf-params`` (the last two estimate
-    both :data:`PARAMETERS`); keyword arguments go to the filter."""
+    both :data:`PARAMETERS`; any of them may add the ``disturbance_<motor>`` states in ``parameters``); keyword
+    arguments go to the filter."""
     if name not in OBSERVERS:
         raise InputError(f"unknown observer {name!r} (expected one of {', '.join(OBSERVERS)})")
     base, _, extra = name.partition("-")
     if extra:
         kwargs.setdefault("parameters", PARAMETERS)
-    elif kwargs.get("parameters"):
-        raise InputError(f"observer {name!r} estimates no parameter; use {name}-params")
+    elif any(p in PARAMETERS for p in kwargs.get("parameters") or ()):
+        raise InputError(f"observer {name!r} estimates no gain; use {name}-params")
     cls = ExtendedKalmanFilter if base == "ekf" else UnscentedKalmanFilter
     return cls(system, dt, **kwargs)

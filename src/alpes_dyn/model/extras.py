@@ -15,7 +15,10 @@ They are written once here and applied identically by the numeric (Pinocchio) an
 
 * friction (eq. 2.6-2.7): tau_f = F_s sign(v) + F_v v, with ``sign`` optionally replaced by
   ``tanh(v / v_s)`` (``smooth=True``) for integration and automatic differentiation.
-* rotor inertia (eq. 2.8): I_a = N^2 J_m added to the diagonal of A (Pinocchio's ``armature``).
+* joint-side inertia (``armature``, kg m^2): added to the diagonal of A (Pinocchio's ``armature``; eq. 2.8's
+  N^2 J_m for a motor that drives that joint alone). A motor's rotor on a tendon shared by several joints
+  is not diagonal: it is the transmission's S^T diag(J_m) S (:attr:`Model.rotor_matrix
+  <alpes_dyn.Model.rotor_matrix>`, :class:`~alpes_dyn.model.spec.Motor`'s ``rotor_inertia``).
 """
 
 from __future__ import annotations
@@ -51,7 +54,7 @@ def _as(xp: Any, a: np.ndarray) -> Any:
 class JointExtras:
     """Per-joint extras, in the model's joint (velocity) order; all arrays have shape (n,).
 
-    stiffness: k (N m/rad); armature: N^2 J_m (kg m^2); coulomb: F_s (N m); viscous: F_v (N m s/rad);
+    stiffness: k (N m/rad); armature: joint-side inertia on A's diagonal (kg m^2); coulomb: F_s (N m); viscous: F_v (N m s/rad);
     smooth_velocity: v_s (rad/s) of the smooth sign tanh(v/v_s).
 
     Validated on construction (:class:`~alpes_dyn.ModelError` naming the field): the four arrays

@@ -6,9 +6,11 @@ bodies, joints, frames, COMs and inertias about the COM) plus what URDF cannot h
 * joint springs: ``stiffness`` k_i with ``springref = 0`` (rest at q = 0), under the library's spring
   law (:func:`~alpes_dyn.model.extras.spring_stiffness`; torsional by default);
 * joint stops: ``range`` = the parameter file's limits, ``limited`` (``limits=False`` drops them);
-* rotor inertia (``rotor_inertia=True``): ``armature`` N^2 J_m on each tendon-driven joint,
-  ``abduction_ratio^2 J_m`` on the thumb's ab/adduction (eq. 2.8, as :meth:`Model.alpes
-  <alpes_dyn.Model.alpes>`);
+* rotor inertia (``rotor_inertia=True``): the motor's rotor J_m on its tendon, the fixed tendon's
+  ``armature`` J_m / r_m^2 (kg on the tendon length l = r sum q_i, with q_m = l / r_m: MuJoCo adds
+  armature J_l^T J_l, i.e. (r/r_m)^2 J_m on every entry of the chain's block, the library's
+  S^T diag(J_m) S of eq. 2.8), and ``armature`` abduction_ratio^2 J_m on the thumb's ab/adduction
+  joint, which its motor drives alone (as :meth:`Model.alpes <alpes_dyn.Model.alpes>`);
 * friction (``friction=True``): ``damping`` F_v and ``frictionloss`` F_s (eq. 2.6; MuJoCo's dry
   friction is a constraint, the library's a smooth sign);
 * one fixed tendon per flexion motor, length l = sum_i r q_i over the motor's joints, and a
@@ -144,7 +146,7 @@ class _Writer:
             bquat = f' quat="{_v(quat)}"' if i == 0 else ""
             out.append(f'{cur}<body name="{prefix}p{i + 1}" pos="{_v(bpos)}"{bquat}>\n')
             inner = cur + "  "
-            out.append(self.joint(f"{prefix}j{i + 1}", (0, -1, 0), k[i], p.N**2 * p.J_m, p.finger_lower, p.finger_upper,
+            out.append(self.joint(f"{prefix}j{i + 1}", (0, -1, 0), k[i], 0.0, p.finger_lower, p.finger_upper,
                                   inner, None if ch.F_s is None else float(ch.F_s[i]),
                                   None if ch.F_v is None else float(ch.F_v[i])))
             ixx = 0.5 * ch.m[i] * ch.radius**2
@@ -285,7 +287,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     tendons, actuators, sensors = [], [], []
     for ch in lay.chains:
         coefs = "".join(f'      <joint joint="{j}" coef="{_f(p.r)}"/>\n' for j in ch.joints)
-        tendons.append(f'    <fixed name="{ch.name}">\n{coefs}    </fixed>\n')
+        arm = f' armature="{_f(p.J_m / p.r_m**2)}"' if rotor_inertia and p.J_m > 0 else ""
+        tendons.append(f'    <fixed name="{ch.name}"{arm}>\n{coefs}    </fixed>\n')
         actuators.append(f'    <motor name="{ch.name}" tendon="{ch.name}" gear="{_f(1.0 / p.r_m)}" '
                          f'ctrlrange="0 {_f(p.tau_max)}"/>\n')
         sensors += [f'    <actuatorpos name="encoder_{ch.name}" actuator="{ch.name}"/>\n',

@@ -5,7 +5,9 @@ The model solves eq. 2.10 of the report,
     (A(q) + I_a) qdd + C(q, qd) qd + F_v qd + f_s + G(q) = Gamma + J^T F,
 
 with A from CRBA, C the Christoffel-consistent Coriolis matrix (A_dot - 2C skew-symmetric),
-G = gravity + springs (eq. 2.11, 2.14), I_a = N^2 J_m (eq. 2.8, Pinocchio's ``armature``),
+G = gravity + springs (eq. 2.11, 2.14), I_a = diag(armature) + S^T diag(J_m) S (eq. 2.8: a joint-side
+inertia on the diagonal, Pinocchio's ``armature``, plus each motor's rotor inertia J_m on its tendon
+coordinate q_m = S q, which couples every pair of joints the tendon drives; constant, so C is unchanged),
 friction eq. 2.6-2.7 and the contact torque J^T F of eq. 2.9 with F a linear force at a tip frame,
 expressed in the base frame (default F = [0, 0, F_z], eq. 2.13).
 
@@ -24,6 +26,7 @@ from typing import Any, Sequence
 
 import numpy as np
 import pinocchio as pin
+from scipy.linalg import lapack as _lapack
 
 from .description import Layout, check_model_name, layout, model_params, urdf_string
 from ..checks import as_float_array
@@ -42,6 +45,10 @@ DEFAULT_GRAVITY = np.array([0.0, 0.0, -9.81])
 _F64 = np.dtype(np.float64)
 _ND = np.ndarray
 _aba = pin.aba
+_crba = pin.crba
+_nle = pin.nonLinearEffects
+_potrf, _potrs = _lapack.dpotrf, _lapack.dpotrs
+_chol_decompose, _chol_solve = pin.cholesky.decompose, pin.cholesky.solve
 _isfinite = math.isfinite
 _WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
@@ -207,6 +214,16 @@ def _check_mass_matrix(model: pin.Model, data: pin.Data, names: Sequence[str]) -
         raise ModelError("A(q) is singular at a generic configuration (massless links?)") from None
 
 
+def _check_positive(model: pin.Model, data: pin.Data, R: np.ndarray) -> None:
+    """A(q) + R stays positive definite at a generic q (R >= 0 by construction; a guard on the sum)."""
+    A = pin.crba(model, data, _generic_configuration(model))
+    A = np.triu(A) + np.triu(A, 1).T + R
+    try:
+        np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:  # pragma: no cover - R = S^T J S >= 0 cannot make it indefinite
+        raise ModelError("A(q) + S^T diag(J_m) S is not positive definite at a generic configuration") from None
+
+
 class Model:
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
@@ -258,6 +275,7 @@ class Model:
             raise ModelError("extras: given together with a spec, which holds them already")
         if not isinstance(urdf, str) or "<robot" not in urdf:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
+        self._given_extras = extras
         self.urdf: str = urdf
         self.pin_model: pin.Model = _build_pinocchio(urdf)
         check_inertials(urdf, check_inertia)
@@ -316,6 +334,24 @@ class Model:
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
             self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
                                                          params.abduction_ratio, params.encoder_counts)
+        tr = self.transmission
+        self._rotor = tr is not None and bool(np.any(tr.rotor_inertia != 0))
+        R = tr.rotor_matrix if self._rotor else np.zeros((n, n))
+        R.flags.writeable = False
+        self.rotor_matrix: np.ndarray = R
+        """S^T diag(J_m) S (n, n), kg m^2: the motors' rotor inertia on the joints (eq. 2.8; zeros without)."""
+        self._rotor_upper = np.triu(R)
+        sup = [set(self.pin_model.supports[j + 1]) for j in range(n)]  # joint j's ancestors and itself (ids 1..n)
+        self._rotor_tree = all(i + 1 in sup[j] for i, j in zip(*np.nonzero(self._rotor_upper)))
+        if self._rotor:
+            _check_positive(self.pin_model, self.pin_data, R)
+
+    def __reduce__(self) -> tuple:
+        """Pickled (and deep-copied) as its description: the URDF, the spec as TOML, the gravity, the layout and the
+        parameter file's values; rebuilt on load (a new Pinocchio model and data)."""
+        spec = self.spec.to_toml() if self.spec is not None else None
+        return (_restore_model, (self.urdf, spec, self.gravity.tolist(), self.name, self.layout, self.params,
+                                 self.spring, self._given_extras if spec is None else None, self.check_inertia))
 
     # ------------------------------------------------------------------ construction
     @classmethod
@@ -346,6 +382,15 @@ class Model:
         if self.layout is None:
             return None
         return "thumb" if self.layout.model == "thumb" else self.layout.chain
+
+    @classmethod
+    def from_mjcf(cls, mjcf: str | Path, **kwargs) -> "Model":
+        """A MuJoCo model with fixed tendons (MJCF text or path; needs ``mujoco``): its tree as a URDF, its tendons,
+        springs, armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`)."""
+        from .mjcf_import import mjcf_to_urdf
+
+        urdf, spec = mjcf_to_urdf(mjcf)
+        return cls(urdf, spec, **kwargs)
 
     @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
@@ -432,10 +477,13 @@ class Model:
 
     # ------------------------------------------------------------------ terms of eq. 2.10
     def inertia_matrix(self, q: np.ndarray) -> np.ndarray:
-        """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8)."""
+        """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8): the joint-side
+        ``armature`` on the diagonal and the rotors' S^T diag(J_m) S (:attr:`rotor_matrix`)."""
         q = self.vector(q, "q")
         M = pin.crba(self.pin_model, self.pin_data, q).copy()
         M[self._lower] = M.T[self._lower]  # CRBA fills the upper triangle
+        if self._rotor:
+            M += self.rotor_matrix
         return M
 
     def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -547,6 +595,9 @@ class Model:
                          tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint accelerations qdd (n,), rad/s^2, solving eq. 2.10 (ABA + extras).
 
+        With rotor inertia on the tendons (:attr:`rotor_matrix` non-zero; ABA takes only a diagonal
+        armature): CRBA + S^T diag(J_m) S, the bias by RNEA at zero acceleration, a Cholesky solve.
+
         ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
         or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
         :meth:`contact_torque`).
@@ -563,7 +614,10 @@ class Model:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
             tau = tau + self.contact_torque(q, F, tip, contacts)
-        qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
+        if self._rotor:
+            qdd = self._rotor_solve(q, v, tau)
+        else:
+            qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
         if not _isfinite(qdd.dot(self._tiny)):
             for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
                 self.vector(x, name)
@@ -571,11 +625,37 @@ class Model:
                 raise InputError("forward dynamics gave non-finite accelerations (inputs too large?)")
         return qdd
 
+    def _rotor_solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
+        """(A(q) + armature + S^T J_m S)^-1 (tau - C qd - gravity), CRBA and a Cholesky solve.
+
+        Where every tendon runs along one branch of the tree (each pair of joints it couples is an
+        ancestor and a descendant: the Alpes chains), the rotors' matrix has the tree's sparsity and
+        Pinocchio's sparse Cholesky of ``data.M`` solves it (1.6x ABA on the hand); otherwise LAPACK's
+        dense ``dpotrf``/``dpotrs`` on the upper triangle. NaN where the factorisation fails (a
+        non-finite input: the caller's finiteness check names it).
+        """
+        pm, pd = self.pin_model, self.pin_data
+        _crba(pm, pd, q)
+        b = tau - _nle(pm, pd, q, v)
+        if not _isfinite(b.dot(self._tiny)):  # a non-finite input: NaN out, no solve of inf (no numpy warning)
+            return np.full(self.n, np.nan)
+        if self._rotor_tree:
+            M = pd.M
+            M += self._rotor_upper  # in place: Pinocchio's factorisation reads data.M's upper triangle
+            _chol_decompose(pm, pd)
+            return _chol_solve(pm, pd, b)
+        c, info = _potrf(pd.M + self.rotor_matrix, lower=0, clean=0, overwrite_a=1)
+        if info != 0:
+            return np.full(self.n, np.nan)
+        return _potrs(c, b)[0]
+
     def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, F: object = None,
                          tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint torques Gamma (n,), N m, that produce accelerations ``a`` (eq. 2.10; RNEA + extras)."""
         q, v, a = self.vector(q, "q"), self.vector(v, "v"), self.vector(a, "a")
         tau = pin.rnea(self.pin_model, self.pin_data, q, v, a).copy()
+        if self._rotor:
+            tau += self.rotor_matrix @ a
         if self._spring:
             tau += self._k * q
         if self._friction:
@@ -662,3 +742,11 @@ def _check_random_args(rng: object, speed: object, size: object) -> tuple[np.ran
                              or size < 0):
         raise InputError(f"size: expected an integer >= 0 or None, got {size!r}")
     return rng, s, None if size is None else int(size)
+
+
+def _restore_model(urdf: str, spec: str | None, gravity: list[float], name: str, layout: Layout | None,
+                   params: HandParams | None, spring: str, extras: JointExtras | None, check_inertia: str) -> Model:
+    """The :class:`Model` that :meth:`Model.__reduce__` described."""
+    ts = TransmissionSpec.from_toml(spec) if spec is not None else None
+    return Model(urdf, ts, gravity=gravity, name=name, layout=layout, params=params, spring=spring, extras=extras,
+                 check_inertia=check_inertia)

@@ -1,7 +1,7 @@
 """Transmission spec: what a URDF cannot hold about a tendon-driven robot, for any URDF.
 
-A :class:`TransmissionSpec` names the motors, the joints each drives with their ratios, the encoder
-resolution, and per-joint springs, friction and rotor inertia. With a URDF it makes a
+A :class:`TransmissionSpec` names the motors, the joints each drives with their ratios and the rotor
+inertia of each, the encoder resolution, and per-joint springs, friction and joint-side inertia. With a URDF it makes a
 :class:`~alpes_dyn.Model` (``Model(urdf, spec)``, ``Model.from_urdf_file(path, spec)``) that has
 everything an Alpes model has: motor input, encoder outputs, springs, friction, rotor inertia. The
 Alpes models themselves are built the same way, from the spec :func:`alpes_spec` makes out of the
@@ -10,9 +10,15 @@ parameter file.
 Conventions (report Section 3, eq. 3.13): motor k reads q_m,k = sum_i ratio_ki q_i over the joints it
 drives, i.e. q_m = S q with S (m, n); by power balance the motor torques act on the joints as
 Gamma = S^T tau_m. Joint i carries a spring torque k_i q_i (N m/rad; zero at q_i = 0), friction
-F_s,i sign(qd_i) + F_v,i qd_i (N m, N m s/rad; eq. 2.6-2.7) and a rotor inertia I_a,i (kg m^2; added
-to A's diagonal, Pinocchio's ``armature``, eq. 2.8: for a motor of inertia J_m behind ratio N,
-I_a = N^2 J_m). Joints a table does not list get zero.
+F_s,i sign(qd_i) + F_v,i qd_i (N m, N m s/rad; eq. 2.6-2.7) and a joint-side inertia I_a,i (kg m^2,
+the ``[armature]`` table: added to A's diagonal, Pinocchio's ``armature``; e.g. a motor or a gearbox
+that drives that joint alone). Joints a table does not list get zero.
+
+Rotor inertia on the tendon (eq. 2.8's I_a, the motor's side): motor k's ``rotor_inertia`` J_m,k
+(kg m^2 about the motor shaft) turns with qd_m,k = S_k qd, so its kinetic energy 1/2 J_m,k (S_k qd)^2
+adds S^T diag(J_m) S to the mass matrix: J_m,k ratio_ki ratio_kj on *every* entry (i, j) of the joints the
+motor drives, not only on the diagonal. A motor that drives one joint with ratio N adds N^2 J_m to
+that joint's diagonal: the same as an ``[armature]`` entry N^2 J_m.
 
 The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``joints``)::
 
@@ -25,12 +31,13 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     [[motor]]                      # one table per motor, in motor order
     name = "index"
     joints = { "joint_1.0" = 2.0, "joint_2.0" = 1.6, "joint_3.0" = 1.2 }   # joint -> ratio
+    rotor_inertia = 1.0e-7         # kg m^2 on the motor shaft (optional, default 0)
 
     [stiffness]                    # N m/rad
     "joint_1.0" = 0.2
     [coulomb]                      # N m
     [viscous]                      # N m s/rad
-    [armature]                     # kg m^2
+    [armature]                     # kg m^2, joint-side (diagonal) inertia
 
 The shipped example for the Allegro hand of example-robot-data is ``example_spec_path("allegro_hand")``.
 """
@@ -57,9 +64,11 @@ from .transmission import Transmission
 __all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES"]
 
 JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
-"""Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), rotor inertia (kg m^2)."""
+"""Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), joint-side
+inertia (kg m^2, the diagonal; a motor's rotor on its tendon is the motor's ``rotor_inertia``)."""
 _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES
-_MOTOR_KEYS = ("name", "joints")
+_MOTOR_KEYS = ("name", "joints", "rotor_inertia")
+_MOTOR_REQUIRED = ("name", "joints")
 
 
 def _number(value: Any, name: str, low: float | None = None, strict: bool = False) -> float:
@@ -84,11 +93,14 @@ class Motor:
     """One motor and its tendon: q_m = sum_i ratio_i q_i over ``joints`` {joint name: ratio}.
 
     ``ratio`` is rad of motor shaft per rad of joint (r_i / r_m for a pulley of radius r_i on the
-    joint and r_m on the motor); non-zero and finite.
+    joint and r_m on the motor); non-zero and finite. ``rotor_inertia``: J_m (kg m^2, >= 0) of the
+    rotor (and gearbox) about the motor shaft, which adds J_m ratio_i ratio_j to the mass matrix's
+    entry (i, j) (eq. 2.8's I_a on the tendon coordinate; see the module doc).
     """
 
     name: str
     joints: Mapping[str, float]
+    rotor_inertia: float = 0.0
 
     def __post_init__(self) -> None:
         _name(self.name, "motor.name")
@@ -103,6 +115,7 @@ class Motor:
                 raise ModelError(f"{where}.joints.{j}: a ratio must be non-zero (leave the joint out instead)")
             clean[j] = x
         object.__setattr__(self, "joints", MappingProxyType(clean))
+        object.__setattr__(self, "rotor_inertia", _number(self.rotor_inertia, f"{where}.rotor_inertia", 0.0))
 
 
 def _table(value: Any, name: str, low: float | None) -> Mapping[str, float]:
@@ -190,10 +203,10 @@ class TransmissionSpec:
             for k in m:
                 if k not in _MOTOR_KEYS:
                     raise ModelError(f"motor[{i}].{k}: unknown key (expected one of {', '.join(_MOTOR_KEYS)})")
-            for k in _MOTOR_KEYS:
+            for k in _MOTOR_REQUIRED:
                 if k not in m:
                     raise ModelError(f"motor[{i}].{k}: missing field")
-            motors.append(Motor(m["name"], m["joints"]))
+            motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0)))
         kw = {k: data[k] for k in _TOP_KEYS if k in data and k != "motor"}
         if "tips" in kw and isinstance(kw["tips"], list):
             kw["tips"] = tuple(kw["tips"])
@@ -226,6 +239,8 @@ class TransmissionSpec:
         for m in self.motors:
             out += ["", "[[motor]]", f"name = {_toml_str(m.name)}",
                     "joints = { " + ", ".join(f"{q(j)} = {r!r}" for j, r in m.joints.items()) + " }"]
+            if m.rotor_inertia:
+                out.append(f"rotor_inertia = {m.rotor_inertia!r}")
         for t in JOINT_TABLES:
             table = getattr(self, t)
             if table:
@@ -285,7 +300,8 @@ class TransmissionSpec:
         for k, m in enumerate(self.motors):
             for j, r in m.joints.items():
                 S[k, idx[j]] = r
-        return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts)
+        return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts,
+                            np.array([m.rotor_inertia for m in self.motors]))
 
 
 def _toml_str(s: str) -> str:
@@ -310,11 +326,13 @@ def example_spec_path(name: str = "allegro_hand") -> Path:
     return p
 
 
-def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float) -> tuple[Motor, ...]:
+def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float, rotor_inertia: float = 0.0) -> tuple[Motor, ...]:
     """The Alpes motors: one per chain (``ratio`` on each of its joints, chain order), then one per
-    ab/adduction joint (``abduction_ratio``), named ``<chain>_abduction``."""
-    motors = [Motor(ch.name, {j: ratio for j in ch.joints}) for ch in lay.chains]
-    motors += [Motor(f"{ch.name}_abduction", {ch.abduction: abduction_ratio}) for ch in lay.chains if ch.abduction]
+    ab/adduction joint (``abduction_ratio``), named ``<chain>_abduction``; each with ``rotor_inertia``
+    J_m (kg m^2 on the motor shaft)."""
+    motors = [Motor(ch.name, {j: ratio for j in ch.joints}, rotor_inertia) for ch in lay.chains]
+    motors += [Motor(f"{ch.name}_abduction", {ch.abduction: abduction_ratio}, rotor_inertia)
+               for ch in lay.chains if ch.abduction]
     return tuple(motors)
 
 
@@ -335,25 +353,25 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
     One motor per chain (ratio r/r_m on each of its flexion joints), one for the thumb's
     ab/adduction (``transmission.abduction_ratio``); springs K_i under the ``spring`` law (eq. 2.14);
     with ``friction`` F_s and F_v on every joint (eq. 2.6-2.7; a chain's per-joint ``F_s``/``F_v`` -- a
-    finger's own first -- and the thumb's ``abduction_F_s``/``abduction_F_v`` where the file gives them); with ``rotor_inertia`` N^2 J_m on
-    every flexion joint and abduction_ratio^2 J_m on the ab/adduction joint (eq. 2.8).
+    finger's own first -- and the thumb's ``abduction_F_s``/``abduction_F_v`` where the file gives them); with
+    ``rotor_inertia`` the file's ``transmission.J_m`` on every motor, acting on its tendon (eq. 2.8): a
+    chain's motor adds (r/r_m)^2 J_m to every entry of its chain's block of the mass matrix, the
+    ab/adduction motor abduction_ratio^2 J_m on its joint. (``transmission.N`` is not used: the
+    tendon's ratio is r/r_m, which the file's N equals.)
     """
     ratio, abd = params.transmission_ratio, params.abduction_ratio
-    motors = alpes_motors(lay, ratio, abd)
+    motors = alpes_motors(lay, ratio, abd, params.J_m if rotor_inertia else 0.0)
     K: dict[str, float] = {}
-    arm: dict[str, float] = {}
     Fs: dict[str, float] = {}
     Fv: dict[str, float] = {}
     for ch in lay.chains:
         chain = params.chain(ch.name)  # per-joint chain friction where the file gives it (a finger's own first)
         for i, (j, k) in enumerate(zip(ch.joints, ch.stiffness)):
             K[j] = k
-            arm[j] = params.N**2 * params.J_m
             Fs[j] = float(chain.F_s[i]) if getattr(chain, "F_s", None) is not None else params.F_s
             Fv[j] = float(chain.F_v[i]) if getattr(chain, "F_v", None) is not None else params.F_v
         if ch.abduction:
             K[ch.abduction] = lay.abduction_stiffness
-            arm[ch.abduction] = abd**2 * params.J_m
             Fs[ch.abduction] = params.F_s if params.abduction_F_s is None else params.abduction_F_s
             Fv[ch.abduction] = params.F_v if params.abduction_F_v is None else params.abduction_F_v
     joints = list(K)
@@ -364,7 +382,6 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
         stiffness={j: float(x) for j, x in zip(joints, k)},
         coulomb=Fs if friction else zeros,
         viscous=Fv if friction else zeros,
-        armature=arm if rotor_inertia else zeros,
         encoder_counts=params.encoder_counts, smooth_velocity=params.smooth_velocity,
         gravity=tuple(float(x) for x in params.gravity), tips=lay.tips, name=lay.model, spring=spring,
     )

@@ -29,12 +29,28 @@ class Transmission:
     S: (m, n) map q_m = S q (rad of motor shaft per rad of joint).
     sum_matrix: (m, n) map y = (sum of each motor's joints), the report's output y = q_1 + ... + q_k.
     counts_per_rev: encoder resolution (counts per motor revolution), for quantisation.
+    rotor_inertia: (m,) J_m of each motor's rotor about its shaft, kg m^2 (default zeros).
     """
 
     motor_names: tuple[str, ...]
     S: np.ndarray
     sum_matrix: np.ndarray
     counts_per_rev: float
+    rotor_inertia: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        J = np.zeros(self.S.shape[0]) if self.rotor_inertia is None else np.asarray(self.rotor_inertia, dtype=float)
+        if J.shape != (self.S.shape[0],) or not np.all(np.isfinite(J)) or np.any(J < 0):
+            raise InputError(f"rotor_inertia: expected {self.S.shape[0]} finite numbers >= 0 (kg m^2), got {J.tolist()!r}")
+        J = J.copy()
+        J.flags.writeable = False
+        object.__setattr__(self, "rotor_inertia", J)
+
+    @property
+    def rotor_matrix(self) -> np.ndarray:
+        """S^T diag(J_m) S, (n, n), kg m^2: the rotors' inertia on the joints (eq. 2.8's I_a on the
+        tendon coordinate; kinetic energy 1/2 sum_k J_m,k qd_m,k^2 with qd_m = S qd)."""
+        return self.S.T @ (self.rotor_inertia[:, None] * self.S)
 
     @property
     def n_motors(self) -> int:

@@ -25,7 +25,7 @@ from .buildcache import CompilerError, build_library
 from ..errors import InputError, ModelError
 from ..progress import _Progress
 
-__all__ = ["CompiledStepLoop", "cache_dir", "CompilerError"]
+__all__ = ["CompiledStepLoop", "CasadiStepLoop", "cache_dir", "CompilerError"]
 
 # ----------------------------------------------------------------------------- C compilation and cache
 def cache_dir() -> Path:
@@ -331,4 +331,56 @@ class CompiledStepLoop:
                     raise InputError(f"{label}: the compiled step failed")
                 bar.update(int(k1 - k0))
         bar.close()
+        return X
+
+
+class CasadiStepLoop:
+    """The same batched loop as :class:`CompiledStepLoop` on CasADi's stock path: ``step.mapaccum(N)`` over
+    the steps and ``.map(B, "thread", threads)`` over the batch, evaluated by CasADi's virtual machine
+    (``jit=False``, no compiler needed: the fallback where no C compiler may run) or JIT-compiled by CasADi
+    (``jit=True``, the system compiler through CasADi's ``shell`` JIT, rebuilt in every process: no disk cache).
+
+    The same operations as the generated C in the same order: the states agree with
+    :class:`CompiledStepLoop`'s to rounding (tested). The margin of the generated driver (SIMD lanes, threads,
+    a cached library) over this path is measured in ``benchmarks/rollout.py``.
+    """
+
+    def __init__(self, step: cs.Function, threads: int | None = None, jit: bool = False) -> None:
+        if step.n_in() != 2 or step.n_out() != 1:
+            raise ModelError(f"step: expected a function (x, w) -> x_next, got {step}")
+        self.nx = int(step.size1_in(0))
+        self.nw = int(step.size1_in(1))
+        self.threads = _check_threads(threads)
+        self.jit = bool(jit)
+        self._step = step
+        self._maps: dict[tuple[int, int], cs.Function] = {}
+        self.library, self.compiled, self.compile_seconds = None, False, 0.0
+        self.lanes = 1
+
+    def _map(self, B: int, N: int) -> cs.Function:
+        key = (B, N)
+        if key not in self._maps:
+            step = self._step
+            if self.jit:  # the step JIT-compiled once (C through CasADi's shell compiler), the loops CasADi's
+                if not hasattr(self, "_jitted"):
+                    ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
+                    self._jitted = cs.Function("alpes_jit_step", ins, step.call(ins),
+                                               {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}})
+                step = self._jitted
+            self._maps[key] = step.mapaccum(N).map(B, "thread", self.threads)
+        return self._maps[key]
+
+    def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
+        """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), as :meth:`CompiledStepLoop.run`."""
+        x0 = np.asarray(x0, dtype=float)
+        W = np.asarray(W, dtype=float)
+        B, N = W.shape[0], W.shape[1]
+        if x0.shape != (B, self.nx) or W.shape != (B, N, self.nw):
+            raise InputError(f"x0/W: expected ({B}, {self.nx}) and ({B}, N, {self.nw}), got {x0.shape} and {W.shape}")
+        # mapaccum: x0 (nx, 1), W (nw, N) -> X (nx, N); map over the batch stacks columns: (nx, B), (nw, B N)
+        Xs = np.array(self._map(B, N)(x0.T, W.transpose(2, 1, 0).reshape(self.nw, N, B).transpose(0, 2, 1)
+                                      .reshape(self.nw, B * N)))
+        X = np.empty((B, N + 1, self.nx))
+        X[:, 0] = x0
+        X[:, 1:] = Xs.reshape(self.nx, B, N).transpose(1, 2, 0)
         return X

@@ -37,10 +37,11 @@ import casadi as cs
 import numpy as np
 
 from .buildcache import CompilerError
-from .codegen import CompiledStepLoop, cache_dir
+from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
 from ..checks import as_float_array
 from ..errors import InputError
 from ..limits import check_bytes
+from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
 from ..model.stops import JointStops, check_range
@@ -51,6 +52,8 @@ __all__ = [
 ]
 
 METHODS: tuple[str, ...] = ("rk4", "cvodes", "idas")
+BACKENDS: tuple[str, ...] = ("c", "casadi", "casadi-jit")
+"""Backends of :class:`CompiledRollout`: the generated C driver, CasADi's virtual machine, CasADi's JIT."""
 
 InputLike = Union[None, float, Sequence[float], np.ndarray, Callable[[float], Any]]
 
@@ -369,7 +372,7 @@ def _integrate_sundials(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.nda
     return np.array(res["xf"])
 
 
-class CompiledRollout:
+class CompiledRollout(Rebuilt):
     """Batched fixed-step RK4 rollouts of a state space in compiled C, threaded over the batch.
 
     Parameters
@@ -384,10 +387,16 @@ class CompiledRollout:
     The step is :func:`rk4_step_function` (the one :func:`simulate` evaluates with
     ``method="rk4"``), compiled by :class:`CompiledStepLoop`: results equal :func:`simulate`'s to
     rounding. ``compile_seconds`` (0 when loaded from the cache) and ``library`` describe the build.
+    ``backend``: ``"c"`` (default, the generated driver), ``"casadi"`` (CasADi's stock ``mapaccum`` + threaded
+    ``map`` in its virtual machine: no compiler) or ``"casadi-jit"`` (the same JIT-compiled by CasADi, per
+    process): :class:`~alpes_dyn.simulation.codegen.CasadiStepLoop`, the documented fallback.
     """
 
     def __init__(self, system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
-                 threads: int | None = None) -> None:
+                 threads: int | None = None, backend: str = "c") -> None:
+        self._remember(system, dt, input=input, force=force, threads=threads, backend=backend)
+        if backend not in BACKENDS:
+            raise InputError(f"backend: expected one of {', '.join(BACKENDS)}, got {backend!r}")
         out: Any = "sum"
         if isinstance(system, Model) and system.transmission is None:
             out = np.eye(system.n)[:1]  # any output: a rollout returns states
@@ -396,7 +405,11 @@ class CompiledRollout:
         self.dt = _check_dt(dt)
         self.nx = ss.n_states
         self.nw = _n_known_inputs(ss)
-        self._loop = CompiledStepLoop(rk4_step_function(ss, self.dt), f"rollout_{ss.model.name}", threads)
+        step = rk4_step_function(ss, self.dt)
+        self.backend = backend
+        self._loop: CompiledStepLoop | CasadiStepLoop = (
+            CompiledStepLoop(step, f"rollout_{ss.model.name}", threads) if backend == "c"
+            else CasadiStepLoop(step, threads, jit=backend == "casadi-jit"))
         self.threads = self._loop.threads
         self.library, self.compiled, self.compile_seconds = (self._loop.library, self._loop.compiled,
                                                              self._loop.compile_seconds)
@@ -468,6 +481,6 @@ class CompiledRollout:
 
 
 def compile_rollout(system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
-                    threads: int | None = None) -> CompiledRollout:
+                    threads: int | None = None, backend: str = "c") -> CompiledRollout:
     """Build (or load from the cache) a :class:`CompiledRollout`; see there."""
-    return CompiledRollout(system, dt, input=input, force=force, threads=threads)
+    return CompiledRollout(system, dt, input=input, force=force, threads=threads, backend=backend)

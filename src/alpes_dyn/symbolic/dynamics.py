@@ -8,7 +8,7 @@ One small interface, two backends:
   block of its floating-base mass matrix and bias force at identity base pose and zero base
   velocity, with the model's gravity (ADAM's default is 9.80665 m/s^2; Pinocchio's 9.81).
 
-Both give A(q) (without rotor inertia), the bias b(q, qd) = C(q, qd) qd + gravity torque, and
+Both give A(q) (without rotor or joint-side inertia), the bias b(q, qd) = C(q, qd) qd + gravity torque, and
 tip positions/Jacobians. The extras (springs, friction, rotor inertia) are applied here once,
 through :class:`~alpes_dyn.model.extras.JointExtras` with ``xp=casadi``, exactly as the numeric model
 applies them with ``xp=numpy``. Forward dynamics solves eq. 3.3 block by block: the mass matrix
@@ -27,7 +27,7 @@ import numpy as np
 from ..errors import ModelError
 from ..model.robot import REFERENCE_FRAMES, Model, as_contacts
 
-__all__ = ["SymbolicDynamics", "available_backends", "block_solve"]
+__all__ = ["SymbolicDynamics", "available_backends", "block_solve", "sparse_dm"]
 
 
 def available_backends() -> tuple[str, ...]:
@@ -46,6 +46,14 @@ def available_backends() -> tuple[str, ...]:
     except ImportError:
         pass
     return tuple(out)
+
+
+def sparse_dm(A: np.ndarray) -> cs.DM:
+    """A numeric matrix as a CasADi DM with only its non-zero entries structural (a dense DM would make
+    every entry structurally non-zero and merge the blocks of :func:`block_solve`)."""
+    A = np.asarray(A, dtype=float)
+    rows, cols = np.nonzero(A)
+    return cs.DM.triplet(rows.tolist(), cols.tolist(), cs.DM(A[rows, cols]), A.shape[0], A.shape[1])
 
 
 def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
@@ -178,10 +186,15 @@ class SymbolicDynamics:
         return tip if tip is not None else self.model.tips[0]
 
     def inertia_matrix(self, q: cs.SX) -> cs.SX:
-        """A(q) + I_a (n, n): the rigid-body mass matrix plus rotor inertia N^2 J_m (eq. 2.8)."""
+        """A(q) + I_a (n, n): the rigid-body mass matrix plus the joint-side ``armature`` on the
+        diagonal and the rotors' S^T diag(J_m) S (eq. 2.8, :attr:`Model.rotor_matrix
+        <alpes_dyn.Model.rotor_matrix>`; its structural zeros kept, so :func:`block_solve` still
+        splits the hand by finger)."""
         M = self._be.mass_matrix(q)
         if np.any(self.extras.armature != 0):
             M = M + cs.diag(cs.DM(self.extras.armature))
+        if self.model._rotor:
+            M = M + sparse_dm(self.model.rotor_matrix)
         return M
 
     def bias_torque(self, q: cs.SX, v: cs.SX) -> cs.SX:

@@ -18,15 +18,34 @@ experiment) instead of the model's constant.
 Parameters are named after the joint they belong to (``K_1`` for joint ``j1`` of a finger,
 ``K_index_j1`` on the hand):
 
-================ =========================================================== ==========
-kind             meaning                                                     unit
-================ =========================================================== ==========
-``K``            spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
-``m``            mass of the body a joint moves, inertia scaled with it      kg
-``F_s``          Coulomb friction of a joint (eq. 2.6)                       N m
-``F_v``          viscous friction of a joint (eq. 2.6)                       N m s/rad
-``input_gain``   scale of the known torques (r/r_m, the torque constant)     --
-================ =========================================================== ==========
+================== =========================================================== ==========
+kind               meaning                                                     unit
+================== =========================================================== ==========
+``K``              spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
+``m``              mass of the body a joint moves, inertia scaled with it      kg
+``F_s``            Coulomb friction of a joint (eq. 2.6)                       N m
+``F_v``            viscous friction of a joint (eq. 2.6)                       N m s/rad
+``input_gain``     scale of the known torques (r/r_m, the torque constant)     --
+``J_m``            rotor inertia of a motor on its tendon, S^T diag(J_m) S     kg m^2
+                   (eq. 2.8; ``J_m_<motor>``)
+``encoder_offset`` the zero of a motor's encoder: y = S q + offset             rad
+                   (``encoder_offset_<motor>``; output only, no dynamics)
+``tilt``           the base (palm) turned by two small angles, ``tilt_x``      rad
+                   about its x axis then ``tilt_y`` about its y axis
+================== =========================================================== ==========
+
+Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
+(:func:`~alpes_dyn.estimation.identification.identify`); ``encoder_offset`` and ``tilt`` have the
+nominal value 0, can be negative and are fitted as they are (:data:`ADDITIVE_KINDS`).
+
+Tilt. With the base rotated by R = R_x(tilt_x) R_y(tilt_y) against the frame the gravity vector g is
+given in (the recording's ``gravity_*`` columns, else the model's constant), the gravity in the base
+frame is R^T g (:func:`tilted_gravity`). For a finger moving in its x-z plane (joint axes along -y),
+g = (0, 0, -g0) gives R^T g = g0 (cos tilt_x sin tilt_y, -sin tilt_x, -cos tilt_x cos tilt_y): tilt_y
+turns gravity within the finger's plane (a tilt about the joint axes), which changes the gravity
+torques at first order; tilt_x moves part of gravity along the joint axes, where it exerts no torque,
+and scales the in-plane part by cos tilt_x (second order): from a palm near level the encoder sees
+tilt_y, and tilt_x only through 1 - cos tilt_x.
 """
 
 from __future__ import annotations
@@ -40,24 +59,36 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.robot import Model
-from .dynamics import block_solve
+from .dynamics import block_solve, sparse_dm
 
-__all__ = ["KINDS", "PhysicalParameter", "parameter_catalogue", "select_parameters", "ParametricDynamics"]
+__all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "ParametricDynamics"]
 
-KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain")
-_UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-"}
+KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt")
+ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt")
+"""Kinds fitted as they are (nominal 0, either sign), not in log."""
+OUTPUT_KINDS: tuple[str, ...] = ("encoder_offset",)
+"""Kinds that change the measured output only, not the dynamics."""
+_UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-", "J_m": "kg m^2",
+          "encoder_offset": "rad", "tilt": "rad"}
 _GROUPS = {"friction": ("F_s", "F_v")}
+_ALWAYS = ("input_gain", "encoder_offset", "tilt")  # a kind selects these even at nominal 0
 
 
 @dataclass(frozen=True)
 class PhysicalParameter:
-    """One physical parameter of a model: its name, kind, joint, nominal value and unit."""
+    """One physical parameter of a model: its name, kind, joint (or motor), nominal value and unit."""
 
     name: str
     kind: str
     joint: str | None
     nominal: float
     unit: str
+    motor: str | None = None
+
+    @property
+    def additive(self) -> bool:
+        """Fitted as it is (nominal 0, either sign), not in log: :data:`ADDITIVE_KINDS`."""
+        return self.kind in ADDITIVE_KINDS
 
 
 def _suffix(joint: str) -> str:
@@ -86,7 +117,8 @@ def _link_masses(urdf: str) -> dict[str, float]:
 
 def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     """Every parameter of ``model`` that :class:`ParametricDynamics` can make symbolic, nominal values
-    from the model (stiffness, masses, friction of its extras; input gain 1)."""
+    from the model (stiffness, masses, friction of its extras; input gain 1; each motor's rotor inertia
+    J_m and encoder offset 0; the tilt angles 0)."""
     ex = model.extras
     links = _child_links(model)
     masses = _link_masses(model.urdf)
@@ -97,15 +129,25 @@ def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
                        "F_v": ex.viscous[i]}[kind]
             out.append(PhysicalParameter(f"{kind}_{_suffix(j)}", kind, j, float(nominal), _UNITS[kind]))
     out.append(PhysicalParameter("input_gain", "input_gain", None, 1.0, "-"))
+    tr = model.transmission
+    if tr is not None:
+        for kind in ("J_m", "encoder_offset"):
+            for k, mo in enumerate(tr.motor_names):
+                nominal = float(tr.rotor_inertia[k]) if kind == "J_m" else 0.0
+                out.append(PhysicalParameter(f"{kind}_{mo}", kind, None, nominal, _UNITS[kind], mo))
+    out += [PhysicalParameter(f"tilt_{a}", "tilt", None, 0.0, "rad") for a in ("x", "y")]
     return out
 
 
 def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> tuple[PhysicalParameter, ...]:
     """Parameters chosen by ``spec``: a comma-separated string or a list of kinds (``K``, ``m``,
-    ``F_s``, ``F_v``, ``friction`` = F_s and F_v, ``input_gain``) and/or names (``K_2``, ``m_1``).
+    ``F_s``, ``F_v``, ``friction`` = F_s and F_v, ``input_gain``, ``J_m``, ``encoder_offset``, ``tilt``)
+    and/or names (``K_2``, ``m_1``, ``J_m_finger``, ``encoder_offset_finger``, ``tilt_y``).
 
-    ``None`` gives K and m of every joint, plus F_s and F_v where the model has friction. A kind
-    selects only the joints where its nominal value is non-zero (a joint without a spring has no K).
+    ``None`` gives K and m of every joint, plus F_s and F_v where the model has friction (never the
+    rotor inertia, encoder offsets or tilt: those are asked for by name). A kind selects only the
+    joints (motors) where its nominal value is non-zero (a joint without a spring has no K, a motor
+    without rotor inertia no J_m); ``input_gain``, ``encoder_offset`` and ``tilt`` are always selected.
     Raises :class:`~alpes_dyn.ModelError` for an unknown name, a repeat, or an empty selection.
     """
     cat = parameter_catalogue(model)
@@ -122,7 +164,7 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
             raise ModelError(f"parameters: empty or non-string entry in {spec!r}")
         kinds = _GROUPS.get(it, (it,) if it in KINDS else ())
         if kinds:
-            new = [p for p in cat if p.kind in kinds and (p.kind == "input_gain" or p.nominal != 0.0)]
+            new = [p for p in cat if p.kind in kinds and (p.kind in _ALWAYS or p.nominal != 0.0)]
         elif it in by_name:
             new = [by_name[it]]
         else:
@@ -135,6 +177,30 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
     if not chosen:
         raise ModelError(f"parameters: {spec!r} selects nothing on model {model.name!r} (no spring/friction?)")
     return tuple(chosen)
+
+
+def tilted_gravity(g: Any, tilt_x: Any, tilt_y: Any, xp: Any = np) -> Any:
+    """R^T g (3,), m/s^2: gravity g in the frame of a base turned by R = R_x(tilt_x) R_y(tilt_y) (rad)
+    against the frame g is given in; ``xp`` numpy or casadi."""
+    cx, sx, cy, sy = xp.cos(tilt_x), xp.sin(tilt_x), xp.cos(tilt_y), xp.sin(tilt_y)
+    gx, gy, gz = g[0], g[1], g[2]
+    a = gy * cx + gz * sx  # (R_x^T g)_y
+    b = -gy * sx + gz * cx  # (R_x^T g)_z
+    out = (cy * gx - sy * b, a, sy * gx + cy * b)
+    return xp.vertcat(*out) if xp is not np else np.array(out, dtype=float)
+
+
+def common_scale(model: Model, parameters: Sequence[PhysicalParameter]) -> bool:
+    """True when ``parameters`` hold ``input_gain`` and every term of eq. 2.10 that scales with it: the mass of
+    every body a joint moves, every non-zero spring, friction and rotor inertia (none held), no joint-side
+    armature. Then theta -> c theta leaves qdd, hence the encoder, unchanged: only the ratios are seen. The
+    torque constant's scale must come from something known -- the masses (the maker gives them) or a force
+    sensor: fit ``input_gain`` with the masses held."""
+    names = {p.name for p in parameters}
+    if "input_gain" not in names or np.any(model.extras.armature != 0):
+        return False
+    return all(p.name in names for p in parameter_catalogue(model)
+               if p.kind in ("K", "m", "F_s", "F_v", "J_m") and p.nominal != 0.0)
 
 
 class _Shim:
@@ -209,6 +275,10 @@ class ParametricDynamics:
                 parameterised.add(link)
                 urdf_b, _ = _only_massive(model.urdf, {link})
                 self._mass_params.append((k, masses[link], _Adam(_Shim(urdf_b, model.joint_names))))
+            elif prm.kind in ("J_m", "encoder_offset"):
+                self._sel[prm.kind].append((k, model.motor_index(prm.motor)))
+            elif prm.kind == "tilt":
+                self._sel[prm.kind].append((k, "xy".index(prm.name[-1])))
             else:
                 self._sel[prm.kind].append((k, idx[prm.joint] if prm.joint is not None else -1))
         rest = {name for name, mass in masses.items() if mass > 0} - parameterised
@@ -217,6 +287,10 @@ class ParametricDynamics:
             urdf_r, m_rest = _only_massive(model.urdf, rest)
             self._rest = (m_rest, _Adam(_Shim(urdf_r, model.joint_names)))
         self._armature = np.asarray(model.extras.armature, dtype=float)
+        tr = model.transmission
+        self._S = sparse_dm(tr.S) if tr is not None else None
+        self._Jm = cs.DM(tr.rotor_inertia) if tr is not None else None
+        self._rotor = model.rotor_matrix if model._rotor else None
         self.smooth_velocity = float(model.extras.smooth_velocity)
 
     # ------------------------------------------------------------------ pieces
@@ -236,11 +310,22 @@ class ParametricDynamics:
             M = M + self._rest[1].mass_matrix(q)
         if np.any(self._armature != 0):
             M = M + cs.diag(cs.DM(self._armature))
+        if self._sel["J_m"]:  # S^T diag(J_m) S with J_m fitted (S sparse: the blocks stay apart)
+            J = self._vector("J_m", self._Jm, theta)
+            M = M + cs.mtimes(self._S.T, cs.mtimes(cs.diag(J), self._S))
+        elif self._rotor is not None:
+            M = M + sparse_dm(self._rotor)
         return M
 
     def bias_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, g: Any) -> cs.SX:
-        """C(q, qd) qd + gravity torque (no springs) for gravity g (3,), N m."""
+        """C(q, qd) qd + gravity torque (no springs) for gravity g (3,), N m; g turned by the tilt
+        angles where they are selected (:func:`tilted_gravity`)."""
         g = cs.DM(self.model.gravity) if g is None else g
+        if self._sel["tilt"]:
+            angles: list[Any] = [0.0, 0.0]
+            for k, i in self._sel["tilt"]:
+                angles[i] = theta[k]
+            g = tilted_gravity(g, angles[0], angles[1], cs)
         out = cs.SX.zeros(self.n)
         H = cs.SX.eye(4)
         terms = [(theta[k] / m0, m0, be) for k, m0, be in self._mass_params]
@@ -258,6 +343,11 @@ class ParametricDynamics:
         Fs = self._vector("F_s", self._Fs, theta)
         Fv = self._vector("F_v", self._Fv, theta)
         return K * q + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
+
+    def encoder_offset(self, theta: cs.SX) -> cs.SX:
+        """(m,) the encoder offsets, rad: y = S q + offset (zeros where not selected)."""
+        m = self.model.transmission.n_motors if self.model.transmission is not None else 0
+        return self._vector("encoder_offset", cs.DM.zeros(m), theta)
 
     def input_gain(self, theta: cs.SX) -> Any:
         sel = self._sel["input_gain"]

@@ -37,6 +37,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
+from ..rebuild import Rebuilt
 from ..model.robot import Contact, Model, as_contacts
 from .dynamics import SymbolicDynamics
 
@@ -80,7 +81,7 @@ def _output_expression(y: Any) -> cs.SX:
                          "or numbers") from None
 
 
-class StateSpace:
+class StateSpace(Rebuilt):
     """x' = f(x, u[, F]), y = h(x) for a :class:`~alpes_dyn.Model`.
 
     Parameters
@@ -113,6 +114,8 @@ class StateSpace:
                  contacts: Any = None) -> None:
         if not isinstance(model, Model):
             raise ModelError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+        self._remember(model, input=input, output=output, force=force, tip=tip, smooth=smooth, backend=backend,
+                       contacts=contacts)
         self.model = model
         n = model.n
         self.n = n

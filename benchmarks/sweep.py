@@ -1,0 +1,51 @@
+"""Sweep benchmark (issue 20): the robustness study over draws, serial vs a local Dask cluster.
+
+The same draws (finger3 drawn +-20 % per link, its identification experiment, the fit, the EKF before and
+after) run one after another in this process (the baseline) and on a 2-process local Dask cluster; the
+per-draw rows must be equal, and the speed-up is the ratio of the wall times (the cluster's start-up
+included). Goal: >= 1.8x on 2 cores.
+
+    python benchmarks/sweep.py [--draws 4] [--seed 1] [--duration 4] [--no-fit] [--workers 2] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import sys
+
+from alpes_dyn.studies.sweep import robustness_draw, sweep
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--draws", type=int, default=4)
+    ap.add_argument("--seed", type=int, default=1)
+    ap.add_argument("--duration", type=float, default=4.0)
+    ap.add_argument("--no-fit", action="store_true")
+    ap.add_argument("--workers", type=int, default=2)
+    ap.add_argument("--json", action="store_true")
+    args = ap.parse_args(argv)
+    opts = {"duration": args.duration, "fit": not args.no_fit}
+    robustness_draw(args.seed, **{**opts, "duration": 0.5})  # warm the compile cache outside the timings
+    serial = sweep(robustness_draw, args.draws, seed=args.seed, options=opts, serial=True)
+    dask = sweep(robustness_draw, args.draws, seed=args.seed, options=opts, workers=args.workers)
+    same = serial.rows == dask.rows
+    out = {"draws": args.draws, "seed": args.seed, "duration_s": args.duration, "fit": opts["fit"],
+           "serial_s": serial.seconds, "dask_s": dask.seconds, "workers": dask.workers,
+           "speedup": serial.seconds / dask.seconds, "same_rows": same, "load_avg": os.getloadavg()[0],
+           "rows": serial.to_dict()["rows"]}
+    if args.json:
+        print(json.dumps(out))
+        return 0
+    print(f"{args.draws} draws (seeds {args.seed}..), {args.duration:g} s experiments, fit {opts['fit']}; "
+          f"load average {out['load_avg']:.1f}")
+    print(f"  serial {serial.seconds:.1f} s   dask ({dask.workers} workers) {dask.seconds:.1f} s   "
+          f"speed-up {out['speedup']:.2f}x   same rows: {same}")
+    print(serial.table())
+    return 0 if same else 1
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,225 @@
+"""The observer on a recording: the joints estimated from a recorded encoder and motor torque.
+
+What a user does with the real hand (``alpes-dyn estimate --data REC.csv --params FILE``,
+:func:`estimate_recording`): the recording (the CSV format of :mod:`alpes_dyn.estimation.recording`,
+written by the hand's logger or by ``alpes-dyn experiment``) is played back into an observer of the
+model -- typically the one identified from another recording (``alpes-dyn identify -o FILE``).
+
+* Measurement y_k: the encoder, q_m = (2 pi / counts_per_rev) counts (Section 3, eq. 3.13), of
+  variance q_step^2 / 12 (the quantisation) plus ``encoder_noise_counts`` squared.
+* Known input w_k: the recorded motor torque, held on [t_k, t_k+1), with white noise of standard
+  deviation ``torque_noise`` (default: estimated from the recording, sqrt(mean(diff(tau)^2) / 2),
+  which a white noise on a smooth excitation gives).
+* Optionally (``disturbance=True``) one slowly varying torque per motor, d_j, added to the recorded
+  torque (tau = S^T (u + d)) as a random-walk state of the observer: what identification leaves --
+  a friction the smooth law does not hold, a torque constant a few percent off, a gravity load of a
+  palm not level -- is absorbed there instead of in the joint estimates. Its random walk
+  (``disturbance_walk``, N m per sqrt(s)) sets how fast it may move.
+* Initial state: the static equilibrium under the first recorded torque (the hand at rest when the
+  recording starts), joints without spring mid-range; covariance 0.5 rad, 1 rad/s (as the scenario).
+* A recording with ``gravity_*`` columns sets the model's gravity when they are constant (a fixed
+  orientation); a varying orientation is refused (the observer has no gravity input).
+* Where the recording has ``true_q_*`` columns (a simulated experiment, or a jig), the RMSE of each
+  joint after ``transient`` seconds (default min(1 s, duration / 5)), as ``alpes-dyn estimate`` prints.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, RecordingError
+from ..fileio import atomic_path
+from ..limits import check_bytes
+from ..model.robot import Model
+from ..symbolic.statespace import StateSpace
+from .observers import OBSERVERS, Estimate, make_observer
+from .recording import Recording, read_recording
+
+__all__ = ["RecordingEstimate", "estimate_recording", "DISTURBANCE_WALK"]
+
+DISTURBANCE_WALK = 2e-4
+"""Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
+0.2 mN m, a tenth of the torque that holds a finger half-flexed, and follow stick-slip friction's breakaway
+within tens of milliseconds."""
+
+
+@dataclass
+class RecordingEstimate:
+    """An observer run on a recording.
+
+    Attributes
+    ----------
+    t: (N,) s. estimate: the observer's :class:`Estimate` (z = [q; qd; d]).
+    joint_names (n,), motor_names (m,). rmse: (n,) rad after the transient, or None (no ``true_q_*``).
+    final_error: (n,) rad at the last sample, or None. disturbance: (N, m) N m, or None.
+    settings: the noise levels and options used.
+    """
+
+    t: np.ndarray
+    estimate: Estimate
+    joint_names: tuple[str, ...]
+    motor_names: tuple[str, ...]
+    rmse: np.ndarray | None
+    final_error: np.ndarray | None
+    disturbance: np.ndarray | None
+    settings: dict[str, Any]
+
+    @property
+    def q_hat(self) -> np.ndarray:
+        """(N, n) estimated joint angles, rad."""
+        return self.estimate.z[:, : len(self.joint_names)]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON summary of ``alpes-dyn estimate --data --json`` (rmse in rad per joint, as ``estimate``)."""
+        n = len(self.joint_names)
+        out: dict[str, Any] = {
+            "joints": list(self.joint_names), "motors": list(self.motor_names), "samples": int(self.t.shape[0]),
+            "duration_s": float(self.t[-1] - self.t[0]),
+            "rmse": None if self.rmse is None else self.rmse.tolist(),
+            "rmse_deg": None if self.rmse is None else np.degrees(self.rmse).tolist(),
+            "final_error": None if self.final_error is None else self.final_error.tolist(),
+            "final_q": self.q_hat[-1].tolist(), "final_q_std": self.estimate.std[-1, :n].tolist(),
+        }
+        if self.disturbance is not None:
+            out["final_disturbance_Nm"] = self.disturbance[-1].tolist()
+        out.update(self.settings)
+        return out
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write t, q_hat_*, qd_hat_*, q_std_* (and d_hat_*) as CSV, atomically."""
+        n = len(self.joint_names)
+        cols = {"t": self.t}
+        cols.update({f"q_hat_{j}": self.estimate.z[:, i] for i, j in enumerate(self.joint_names)})
+        cols.update({f"qd_hat_{j}": self.estimate.z[:, n + i] for i, j in enumerate(self.joint_names)})
+        cols.update({f"q_std_{j}": self.estimate.std[:, i] for i, j in enumerate(self.joint_names)})
+        if self.disturbance is not None:
+            cols.update({f"d_hat_{mn}": self.disturbance[:, k] for k, mn in enumerate(self.motor_names)})
+        data = np.column_stack(list(cols.values()))
+        with atomic_path(path) as tmp:
+            np.savetxt(tmp, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+        return Path(path)
+
+
+def _nonnegative(x: Any, name: str, unit: str) -> float:
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)) \
+            or not math.isfinite(x) or x < 0:
+        raise InputError(f"{name}: expected a non-negative number of {unit}, got {x!r}")
+    return float(x)
+
+
+def _model_for(model: Model, rec: Recording) -> Model:
+    """The model in the recording's orientation (constant ``gravity_*`` columns), else the model itself."""
+    if rec.gravity is None:
+        return model
+    g = rec.gravity
+    if np.max(np.abs(g - g[0])) > 1e-9 * max(1.0, float(np.abs(g).max())):
+        raise RecordingError("recording: gravity_x,_y,_z vary over the recording; the observer takes one orientation "
+                             "(split the recording where the hand turns)")
+    return model.copy(gravity=g[0])
+
+
+def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
+    """[q; 0]: the static equilibrium under the first torque, joints without spring mid-range (fixed there)."""
+    n = model.n
+    held = model.springless_joints
+    q_rest = np.zeros(n)
+    for j in held:
+        i = model.joint_index(j)
+        q_rest[i] = 0.5 * (model.lower[i] + model.upper[i])
+    try:
+        q0 = model.static_equilibrium(model.transmission.joint_torque(u0), q_rest, fixed=held)
+    except Exception:  # no rest under this torque (a fold, a springless chain): start stretched, as the scenario
+        q0 = q_rest
+    return np.concatenate([q0, np.zeros(n)])
+
+
+def estimate_recording(recording: Recording | str | Path, model: Model, observer: str = "ekf", *,
+                       torque_noise: float | None = None, encoder_noise_counts: float = 0.0,
+                       disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
+                       transient: float | None = None, substeps: int | None = None,
+                       compiled: bool = False) -> RecordingEstimate:
+    """Run an observer on a recording (see the module docstring).
+
+    Parameters
+    ----------
+    recording: a :class:`Recording` or the path of its CSV (read for ``model``).
+    model: the observer's model, e.g. ``Model.alpes("finger3", friction=True, params="ident.toml")``.
+    observer: ``"ekf"`` or ``"ukf"`` (the ``-params`` variants estimate two gains as well).
+    torque_noise: the recorded torque's white noise, N m (default: estimated from the recording).
+    encoder_noise_counts: encoder noise beyond the quantisation, counts.
+    disturbance: estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``
+        N m per sqrt(s).
+    transient: start of the error metrics, s (default min(1 s, duration / 5)).
+    substeps: RK4 steps per sample (default 4 with friction: the smooth sign is fast; else 1).
+    compiled: the filter in compiled C (same numbers).
+
+    Returns
+    -------
+    :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
+    """
+    if not isinstance(model, Model):
+        raise InputError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
+    if model.transmission is None:
+        raise InputError(f"model: {model.name!r} has no tendon transmission (no encoder to observe)")
+    if observer not in OBSERVERS:
+        raise InputError(f"observer: expected one of {', '.join(OBSERVERS)}, got {observer!r}")
+    if not isinstance(recording, (Recording, str, Path)):
+        raise InputError(f"recording: expected a Recording or a CSV path, got {type(recording).__name__}")
+    rec = recording if isinstance(recording, Recording) else read_recording(recording, model)
+    if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or \
+            tuple(rec.joint_names) != tuple(model.joint_names):
+        raise RecordingError(f"recording: made for motors {list(rec.motor_names)} and joints {list(rec.joint_names)}, "
+                             f"not the model's {list(model.transmission.motor_names)} and {list(model.joint_names)}")
+    encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
+    disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
+    if not isinstance(disturbance, (bool, np.bool_)):
+        raise InputError(f"disturbance: expected True or False, got {disturbance!r}")
+    N, dt = rec.n_samples, rec.dt
+    duration = rec.duration
+    t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")
+    if not t_start < duration:
+        raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
+    if torque_noise is None:
+        d_tau = np.diff(rec.torque, axis=0)
+        torque_noise = float(np.sqrt(np.mean(d_tau**2) / 2.0))
+    torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
+    m_obs = _model_for(model, rec)
+    has_friction = bool(np.any(m_obs.extras.coulomb) or np.any(m_obs.extras.viscous))
+    if substeps is None:
+        substeps = 4 if has_friction else 1
+    n, m = m_obs.n, m_obs.transmission.n_motors
+    pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
+    gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
+    nz = 2 * n + len(pars) + len(gains)
+    check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
+    step = 2 * np.pi / m_obs.transmission.counts_per_rev
+    y = rec.encoder * step
+    u = rec.torque[:-1]
+    meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2
+    Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
+    ss = StateSpace(m_obs, input="motor", output="encoder")
+    filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
+                         process_noise=Q, measurement_noise=[meas_var] * m, input_noise=[torque_noise**2] * m)
+    z0 = np.concatenate([_initial_state(m_obs, rec.torque[0]), np.ones(len(gains)), np.zeros(len(pars))])
+    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
+    est = filt.run(z0, P0, u, y)
+    est = dataclasses.replace(est, t=rec.t.copy())
+    rmse = final = None
+    if rec.true_q is not None and np.isfinite(rec.true_q).all():
+        k0 = int(round(t_start / dt))
+        err = est.z[:, :n] - rec.true_q
+        rmse = np.sqrt(np.mean(err[k0:] ** 2, axis=0))
+        final = np.abs(err[-1])
+    dist = est.z[:, 2 * n + len(gains):] if pars else None
+    settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
+                "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
+                "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend}
+    return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
+                             motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
+                             disturbance=dist, settings=settings)

@@ -1,0 +1,222 @@
+"""MJCF import: a MuJoCo model with fixed tendons as a URDF and a transmission spec (any tendon hand).
+
+(:meth:`Model.from_mjcf <alpes_dyn.model.robot.Model.from_mjcf>`) compiles the MJCF with
+MuJoCo itself (so defaults, classes, ``<include>`` and angle units are MuJoCo's), then writes what the library's
+backends read:
+
+* the **URDF** of the kinematic tree: one link per body with its inertial (mass, centre of mass, principal
+  inertia and axes), one revolute joint per hinge (its axis and its range), a fixed joint for a body without joint, one fixed child link per site (a frame a
+  fingertip or a sensor can name). A hinge placed off its body's origin (``pos``) moves the URDF link frame onto
+  the joint axis: the same kinematics, the body's inertial and children expressed from there;
+* the **spec**: one motor per actuator on a fixed tendon, q_m = gear * sum_i coef_i q_i, so the ratio of joint i
+  is gear * coef_i, or on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
+  (with ``springref`` 0: a spring that rests elsewhere is refused, the spec has no rest angle), ``armature``,
+  ``frictionloss`` (Coulomb) and ``damping`` (viscous); gravity from ``<option gravity>``; the tips: the first
+  site of each leaf body.
+
+What the library does not model is refused with one line naming it, never dropped: free, ball and slide
+joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring or armature,
+equality constraints. Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
+and forward dynamics as the model exported, to 1e-12.
+"""
+
+from __future__ import annotations
+
+import xml.sax.saxutils as su
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import ModelError
+from ..fileio import read_bytes
+from .spec import Motor, TransmissionSpec
+
+__all__ = ["mjcf_to_urdf"]
+
+
+def _mj():
+    try:
+        import mujoco
+    except ImportError:  # pragma: no cover - mujoco is an extra
+        raise ModelError("MJCF import needs MuJoCo: pip install 'alpes_dyn[mujoco]'") from None
+    return mujoco
+
+
+def _compile(mjcf: str | Path):
+    """MuJoCo's compiled model of MJCF text (a string with a ``<``) or of a file (its folder resolves includes)."""
+    mujoco = _mj()
+    is_text = isinstance(mjcf, str) and "<" in mjcf
+    if not is_text and not isinstance(mjcf, (str, Path)):
+        raise ModelError(f"mjcf: expected MJCF text or the path of an MJCF file, got {type(mjcf).__name__}")
+    if is_text and "<mujoco" not in mjcf:
+        raise ModelError("mjcf: expected MJCF text containing a <mujoco> element, or the path of such a file")
+    if not is_text and not Path(mjcf).is_file():
+        raise ModelError(f"mjcf: {str(mjcf)!r} is not a file")
+    if not is_text:  # a regular file within the size limit, before MuJoCo's parser reads it
+        read_bytes(mjcf, "mjcf", ModelError)
+    try:
+        if is_text:
+            return mujoco.MjModel.from_xml_string(mjcf)
+        return mujoco.MjModel.from_xml_path(str(mjcf))
+    except ValueError as exc:
+        raise ModelError(f"mjcf: MuJoCo cannot compile it ({str(exc).splitlines()[0]})") from None
+
+
+def _name(mujoco, m, kind, i: int, prefix: str) -> str:
+    n = mujoco.mj_id2name(m, kind, i)
+    return n if n else f"{prefix}{i}"
+
+
+def _f(x) -> str:
+    """A number as URDF text (Python's shortest round-trip repr of the float)."""
+    return repr(float(x))
+
+
+def _rpy(R: np.ndarray) -> tuple[float, float, float]:
+    """URDF roll-pitch-yaw (R = Rz(y) Ry(p) Rx(r)) of a rotation matrix."""
+    p = float(np.arcsin(np.clip(-R[2, 0], -1.0, 1.0)))
+    if abs(np.cos(p)) > 1e-9:
+        r, y = float(np.arctan2(R[2, 1], R[2, 2])), float(np.arctan2(R[1, 0], R[0, 0]))
+    else:  # gimbal lock: yaw 0
+        r, y = float(np.arctan2(-R[1, 2], R[1, 1])), 0.0
+    return r, p, y
+
+
+def _quat_mat(q: np.ndarray) -> np.ndarray:
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - z * w), 2 * (x * z + y * w)],
+                     [2 * (x * y + z * w), 1 - 2 * (x * x + z * z), 2 * (y * z - x * w)],
+                     [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
+
+
+def _origin(p: np.ndarray, R: np.ndarray) -> str:
+    r, pi, y = _rpy(R)
+    return f'<origin xyz="{_f(p[0])} {_f(p[1])} {_f(p[2])}" rpy="{_f(r)} {_f(pi)} {_f(y)}"/>'
+
+
+def _check_supported(mujoco, m) -> None:
+    hinge = mujoco.mjtJoint.mjJNT_HINGE
+    for j in range(m.njnt):
+        if m.jnt_type[j] != hinge:
+            kind = {0: "free", 1: "ball", 2: "slide"}.get(int(m.jnt_type[j]), str(m.jnt_type[j]))
+            raise ModelError(f"mjcf: joint {_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, 'joint')!r} is a {kind} "
+                             "joint; the library models fixed-base trees of hinges")
+    counts = np.bincount(m.jnt_bodyid, minlength=m.nbody) if m.njnt else np.zeros(m.nbody, int)
+    for b in range(m.nbody):
+        if counts[b] > 1:
+            raise ModelError(f"mjcf: body {_name(mujoco, m, mujoco.mjtObj.mjOBJ_BODY, b, 'body')!r} has "
+                             f"{counts[b]} joints; one hinge per body is supported")
+    if m.neq:
+        raise ModelError("mjcf: equality constraints are not modelled (a coupled joint: give it as a tendon ratio)")
+    for t in range(m.ntendon):
+        tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
+        if np.any(m.tendon_stiffness[t] != 0) or np.any(getattr(m, "tendon_armature", np.zeros(m.ntendon))[t] != 0):
+            raise ModelError(f"mjcf: tendon {tname!r} has a stiffness or armature; the spec holds rigid tendons only")
+        if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
+            raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
+    for j in range(m.njnt):
+        if m.jnt_stiffness[j] != 0 and m.qpos_spring[m.jnt_qposadr[j]] != 0:
+            raise ModelError(f"mjcf: joint {_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, 'joint')!r} has "
+                             f"springref {m.qpos_spring[m.jnt_qposadr[j]]:g}; the spec's springs rest at q = 0")
+
+
+def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
+    """The URDF text and the spec of an MJCF (text or path); see the module docstring."""
+    mujoco = _mj()
+    m = _compile(mjcf)
+    _check_supported(mujoco, m)
+    O = mujoco.mjtObj
+    body = [_name(mujoco, m, O.mjOBJ_BODY, b, "body") for b in range(m.nbody)]
+    body[0] = "world"
+    jnt_of = {int(m.jnt_bodyid[j]): j for j in range(m.njnt)}
+    # each body's URDF link frame: its MuJoCo frame shifted onto its joint's position (p_shift in the body frame)
+    shift = np.zeros((m.nbody, 3))
+    for b, j in jnt_of.items():
+        shift[b] = m.jnt_pos[j]
+    links, joints = ['<link name="world"/>'], []
+    for b in range(1, m.nbody):
+        R_i = _quat_mat(m.body_iquat[b])
+        c = m.body_ipos[b] - shift[b]
+        mass = float(m.body_mass[b])
+        if mass > 0:
+            I = R_i @ np.diag(m.body_inertia[b]) @ R_i.T
+            inert = (f'<inertial><origin xyz="{_f(c[0])} {_f(c[1])} {_f(c[2])}"/><mass value="{_f(mass)}"/>'
+                     f'<inertia ixx="{_f(I[0, 0])}" ixy="{_f(I[0, 1])}" ixz="{_f(I[0, 2])}" iyy="{_f(I[1, 1])}" '
+                     f'iyz="{_f(I[1, 2])}" izz="{_f(I[2, 2])}"/></inertial>')
+        else:
+            inert = ""
+        links.append(f'<link name="{su.escape(body[b])}">{inert}</link>')
+        parent = int(m.body_parentid[b])
+        R = _quat_mat(m.body_quat[b])
+        p = m.body_pos[b] - shift[parent] + R @ shift[b]
+        org = _origin(p, R)
+        if b in jnt_of:
+            j = jnt_of[b]
+            jname = _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")
+            ax = m.jnt_axis[j]
+            if not m.jnt_limited[j]:
+                raise ModelError(f"mjcf: joint {jname!r} has no range; the library's joints are revolute joints with "
+                                 "limits (give it a range)")
+            lo, hi = m.jnt_range[j]
+            lim = f'<limit lower="{_f(lo)}" upper="{_f(hi)}" effort="1000" velocity="1000"/>'
+            kind = "revolute"
+            joints.append(f'<joint name="{su.escape(jname)}" type="{kind}"><parent link="{su.escape(body[parent])}"/>'
+                          f'<child link="{su.escape(body[b])}"/>{org}<axis xyz="{_f(ax[0])} {_f(ax[1])} {_f(ax[2])}"/>'
+                          f'{lim}</joint>')
+        else:
+            joints.append(f'<joint name="{su.escape(body[b])}_fixed" type="fixed"><parent '
+                          f'link="{su.escape(body[parent])}"/><child link="{su.escape(body[b])}"/>{org}</joint>')
+    sites = []
+    for s in range(m.nsite):
+        sname = _name(mujoco, m, O.mjOBJ_SITE, s, "site")
+        b = int(m.site_bodyid[s])
+        p = m.site_pos[s] - shift[b]
+        links.append(f'<link name="{su.escape(sname)}"/>')
+        joints.append(f'<joint name="{su.escape(sname)}_site" type="fixed"><parent link="{su.escape(body[b])}"/>'
+                      f'<child link="{su.escape(sname)}"/>{_origin(p, _quat_mat(m.site_quat[s]))}</joint>')
+        sites.append((sname, b))
+    raw = bytes(m.names)
+    model_name = raw[: raw.index(b"\0")].decode() or "mjcf"  # MuJoCo's name buffer starts with the model's name
+    urdf = (f'<?xml version="1.0"?>\n<robot name="{su.escape(model_name)}">\n  '
+            + "\n  ".join(links + joints) + "\n</robot>\n")
+    spec = _spec(mujoco, m, sites, model_name)
+    return urdf, spec
+
+
+def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> TransmissionSpec:
+    O = mujoco.mjtObj
+    motors = []
+    for a in range(m.nu):
+        aname = _name(mujoco, m, O.mjOBJ_ACTUATOR, a, "motor")
+        gear = float(m.actuator_gear[a, 0])
+        if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:  # a motor on one joint: q_m = gear q
+            motors.append(Motor(aname, {_name(mujoco, m, O.mjOBJ_JOINT, int(m.actuator_trnid[a, 0]), "joint"): gear}))
+            continue
+        if m.actuator_trntype[a] != mujoco.mjtTrn.mjTRN_TENDON:
+            raise ModelError(f"mjcf: actuator {aname!r} acts neither on a joint nor on a tendon; the spec's motors "
+                             "pull fixed tendons")
+        t = int(m.actuator_trnid[a, 0])
+        adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
+        ratios = {}
+        for w in range(adr, adr + num):
+            if m.wrap_type[w] != mujoco.mjtWrap.mjWRAP_JOINT:
+                raise ModelError(f"mjcf: actuator {aname!r} pulls a spatial tendon; fixed tendons only")
+            jname = _name(mujoco, m, O.mjOBJ_JOINT, int(m.wrap_objid[w]), "joint")
+            ratios[jname] = gear * float(m.wrap_prm[w])
+        motors.append(Motor(aname, ratios))
+    tables: dict[str, dict[str, float]] = {"stiffness": {}, "armature": {}, "coulomb": {}, "viscous": {}}
+    for j in range(m.njnt):
+        jname = _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")
+        d = int(m.jnt_dofadr[j])
+        for key, v in (("stiffness", m.jnt_stiffness[j]), ("armature", m.dof_armature[d]),
+                       ("coulomb", m.dof_frictionloss[d]), ("viscous", m.dof_damping[d])):
+            if v != 0:
+                tables[key][jname] = float(v)
+    children = set(int(p) for p in m.body_parentid[1:])
+    tips, seen = [], set()
+    for sname, b in sites:
+        if b not in children and b not in seen:
+            tips.append(sname)
+            seen.add(b)
+    return TransmissionSpec(motors=tuple(motors), gravity=tuple(float(g) for g in m.opt.gravity),
+                            tips=tuple(tips) or None, name=model_name, **tables)

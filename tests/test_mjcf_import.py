@@ -1,0 +1,98 @@
+"""MJCF import (Model.from_mjcf): the export's round trip, and a hand-written MJCF against MuJoCo itself."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import ModelError
+
+mujoco = pytest.importorskip("mujoco")
+from alpes_dyn.model.mjcf import mjcf_string  # noqa: E402
+
+
+@pytest.mark.parametrize("name, kw", [("finger3", {}), ("finger3", {"friction": True, "rotor_inertia": True}),
+                                      ("hand", {"friction": True}), ("thumb", {"friction": True})])
+def test_export_import_round_trip(name, kw):
+    m = ad.Model.alpes(name, **kw)
+    b = ad.Model.from_mjcf(mjcf_string(name, **kw))
+    assert b.joint_names == m.joint_names and b.tips == m.tips
+    assert b.transmission.motor_names == m.transmission.motor_names
+    np.testing.assert_allclose(b.transmission.S, m.transmission.S, rtol=1e-15, atol=0)
+    for f in ("stiffness", "armature", "coulomb", "viscous"):
+        np.testing.assert_allclose(getattr(b.extras, f), getattr(m.extras, f), rtol=1e-15, atol=0)
+    rng = np.random.default_rng(7)
+    for _ in range(3):
+        q, v = m.random_state(rng)
+        tau = rng.normal(scale=0.05, size=m.n)
+        np.testing.assert_allclose(b.inertia_matrix(q), m.inertia_matrix(q), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.coriolis_matrix(q, v), m.coriolis_matrix(q, v), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.gravity_torque(q), m.gravity_torque(q), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.forward_dynamics(q, v, tau), m.forward_dynamics(q, v, tau), rtol=0, atol=1e-9)
+
+
+# two hinges off their bodies' origins, rotated bodies and a rotated inertial frame: MuJoCo's own M(q) and bias
+ARM = """<mujoco model="arm">
+  <compiler angle="radian"/>
+  <option gravity="0 0 -9.81"/>
+  <worldbody>
+    <body name="a" pos="0.01 0.02 0.1" quat="0.9238795 0 0.3826834 0">
+      <joint name="ja" type="hinge" axis="0 1 0" pos="0.02 0 0" range="-1 1" stiffness="0.3" damping="0.01"
+             armature="1e-4" frictionloss="0.002"/>
+      <inertial pos="0.05 0.01 0" quat="0.7071068 0.7071068 0 0" mass="0.2" diaginertia="1e-4 2e-4 3e-4"/>
+      <body name="b" pos="0.1 0 0" euler="0.3 0 0.2">
+        <joint name="jb" type="hinge" axis="0 0.6 0.8" pos="0 0.01 0" range="-2 2"/>
+        <inertial pos="0.04 0 0.01" mass="0.1" diaginertia="5e-5 6e-5 7e-5"/>
+        <site name="tip" pos="0.08 0 0"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon><fixed name="t"><joint joint="ja" coef="0.01"/><joint joint="jb" coef="0.008"/></fixed></tendon>
+  <actuator><motor name="m" tendon="t" gear="100"/></actuator>
+</mujoco>"""
+
+
+def test_hand_written_mjcf_against_mujoco():
+    b = ad.Model.from_mjcf(ARM)
+    mj = mujoco.MjModel.from_xml_string(ARM)
+    d = mujoco.MjData(mj)
+    assert b.joint_names == ("ja", "jb") and b.tips == ("tip",) and b.name == "arm"
+    np.testing.assert_allclose(b.transmission.S, [[1.0, 0.8]], rtol=1e-15)
+    np.testing.assert_allclose(b.extras.stiffness, [0.3, 0.0])
+    np.testing.assert_allclose(b.extras.coulomb, [0.002, 0.0])
+    np.testing.assert_array_equal(b.lower, [-1.0, -2.0])
+    rng = np.random.default_rng(0)
+    for _ in range(4):
+        q, v = rng.uniform(-1, 1, 2), rng.uniform(-2, 2, 2)
+        d.qpos[:], d.qvel[:] = q, v
+        mujoco.mj_forward(mj, d)
+        M = np.zeros((2, 2))
+        mujoco.mj_fullM(mj, d, M)
+        np.testing.assert_allclose(b.inertia_matrix(q), M, rtol=1e-6, atol=1e-12)  # armature in both
+        # MuJoCo's bias: C qd + gravity (its springs and damping are passive forces, apart)
+        cg = b.coriolis_matrix(q, v) @ v + b.gravity_torque(q) - b.extras.stiffness * q
+        np.testing.assert_allclose(cg, d.qfrc_bias, rtol=1e-6, atol=1e-12)
+        # the site: the same frame
+        np.testing.assert_allclose(b.frame_position(q, "tip") if hasattr(b, "frame_position") else
+                                   b.fingertip_position(q, "tip"), d.site_xpos[0], rtol=0, atol=1e-7)
+
+
+@pytest.mark.parametrize("xml, needle", [
+    ("<mujoco><worldbody><body><freejoint/><inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body>"
+     "</worldbody></mujoco>", "is a free joint"),
+    ("<mujoco><worldbody><body><joint type='slide' name='s'/><inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/>"
+     "</body></worldbody></mujoco>", "joint 's' is a slide joint"),
+    ("<mujoco><worldbody><body name='x'><joint name='a'/><joint name='b' axis='1 0 0'/>"
+     "<inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body></worldbody></mujoco>", "body 'x' has 2 joints"),
+    ("<mujoco><worldbody><body><joint name='a' stiffness='1' springref='0.3'/>"
+     "<inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body></worldbody></mujoco>", "springref 0.00523599"),  # MJCF angles: degrees by default
+    ("<mujoco><worldbody><body><joint name='u'/><inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body>"
+     "</worldbody></mujoco>", "joint 'u' has no range"),
+    ("<mujoco><worldbody><body></mujoco>", "mjcf: MuJoCo cannot compile it"),
+    ("<robot name='x'/>", "expected MJCF text containing a <mujoco> element"),
+    ("no/such/file.xml", "'no/such/file.xml' is not a file"),
+])
+def test_bad_mjcf(xml, needle):
+    with pytest.raises(ModelError, match=needle.replace("(", r"\(")):
+        ad.Model.from_mjcf(xml)
