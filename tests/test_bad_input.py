@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import os
 import re
 import resource
@@ -80,6 +81,24 @@ def _toml_field(field: str, entry: str) -> bytes:
     return "".join(lines).encode()
 
 
+_RECORDINGS: dict[str, str] = {}
+
+
+def _recordings() -> dict[str, str]:
+    """CSV text of a valid 0.2 s identification recording of finger2 and of finger3 (made once)."""
+    if not _RECORDINGS:
+        import tempfile
+
+        from alpes_dyn.estimation.experiment import ExperimentDesign, experiment
+        from alpes_dyn.estimation.recording import write_recording
+
+        with tempfile.TemporaryDirectory() as d:
+            for m in ("finger2", "finger3"):
+                path = write_recording(experiment(m, design=ExperimentDesign(duration=0.2)), Path(d) / f"{m}.csv")
+                _RECORDINGS[m] = path.read_text()
+    return _RECORDINGS
+
+
 def bad_files(d: Path) -> dict[str, str]:
     """Write the broken inputs into ``d``; return {placeholder: path}."""
     files: dict[str, bytes] = {
@@ -107,11 +126,13 @@ def bad_files(d: Path) -> dict[str, str]:
         "hugecell_csv": (RECORDING_HEAD + "0," + "1" * 200_000 + ",0\n").encode(),
         "nul_csv": (RECORDING_HEAD + "0,\0,0\n").encode(),
     })
+    files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files.update({k: v.encode() for k, v in URDFS.items()})
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
-    files["rec3_csv"] = ("\n".join(rows) + "\n").encode()
+    files["replay_csv"] = ("\n".join(rows) + "\n").encode()
+    files.update({f"rec{m[-1]}_csv": text.encode() for m, text in _recordings().items()})
     out = {}
     for name, data in files.items():
         ext = name.rsplit("_", 1)[1]
@@ -234,6 +255,18 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{longcell_csv}", needle="a cell of 300 characters, over the limit of 256"),
         C("identify", "--data", "{hugecell_csv}", needle="hugecell.csv': a cell over the limit of 256 characters"),  # over csv's own limit
         C("identify", "--data", "{nul_csv}", needle="column 'encoder_finger' line 2: not a number"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/none.csv", needle="cannot be read"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{rec3_csv}", needle="validation: 201 samples are too few"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{dir}", needle="is a directory, expected a file"),
+        C("identify", "--data", "{rec3_csv}", "--encoder-noise", "-1", needle="encoder_noise: expected a non-negative"),
+        C("identify", "--data", "{rec3_csv}", "--encoder-noise", "nan", needle="encoder_noise: expected a non-negative"),
+        C("identify", "--data", "x.csv", "--encoder-noise", "abc", needle="--encoder-noise: invalid float value"),
+        C("identify", "--data", "{rec3_csv}", "-o", "{rec3_csv}", needle="-o: '{rec3_csv}' is the input of --data"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{params_toml}", "-o", "{hardlink}",
+          needle="-o: '{hardlink}' is the input of --validate"),
+        C("identify", "--data", "{rec3_csv}", "--params", "{badident_toml}",
+          needle="identification.finger.converged: expected true or false"),
     ],
     "sweep": [
         C("sweep", "--study", "monte", needle="--study: unknown study 'monte'"),
@@ -380,16 +413,16 @@ CLI: dict[str, list[Cli]] = {
     "estimate": [
         C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
         C("estimate", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
-        C("estimate", "--data", "{rec3_csv}", "--model", "finger2", needle="unknown column 'true_q_j3'"),
-        C("estimate", "--data", "{rec3_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
-        C("estimate", "--data", "{rec3_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
-        C("estimate", "--data", "{rec3_csv}", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
-        C("estimate", "--data", "{rec3_csv}", "--log", "{rec3_csv}", needle="--log: '{rec3_csv}' is the input of --data"),
-        C("estimate", "--data", "{rec3_csv}", "--params", "{params_toml}", "--log", "{hardlink}",
+        C("estimate", "--data", "{replay_csv}", "--model", "finger2", needle="unknown column 'true_q_j3'"),
+        C("estimate", "--data", "{replay_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
+        C("estimate", "--data", "{replay_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
+        C("estimate", "--data", "{replay_csv}", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
+        C("estimate", "--data", "{replay_csv}", "--log", "{replay_csv}", needle="--log: '{replay_csv}' is the input of --data"),
+        C("estimate", "--data", "{replay_csv}", "--params", "{params_toml}", "--log", "{hardlink}",
           needle="--log: '{hardlink}' is the input of --params"),
-        C("estimate", "--data", "{rec3_csv}", "--log", "{link}", needle="--log: '{link}' is a symbolic link"),
+        C("estimate", "--data", "{replay_csv}", "--log", "{link}", needle="--log: '{link}' is a symbolic link"),
         C("estimate", "--data", "{fifo}", needle="recording '{fifo}': is a FIFO (named pipe)"),
-        C("estimate", "--data", "{rec3_csv}", "--log", "{dir}", needle="is a directory"),
+        C("estimate", "--data", "{replay_csv}", "--log", "{dir}", needle="is a directory"),
         C("estimate", "--data", "x.csv", "--mismatch", "0.1", needle="--mismatch: applies to the simulated scenario"),
         C("estimate", "--data", "x.csv", "--seed", "3", needle="--seed: applies to the simulated scenario"),
         C("estimate", "--data", "x.csv", "--observer-params", "o.toml", needle="the observer's model is --params"),
@@ -591,7 +624,7 @@ def _replay(c, **kw):
     from alpes_dyn.estimation.recording import read_recording
     from alpes_dyn.estimation.replay import estimate_recording
 
-    kw = {"recording": read_recording(c.f["rec3_csv"], c.m), "model": c.m, **kw}
+    kw = {"recording": read_recording(c.f["replay_csv"], c.m), "model": c.m, **kw}
     return estimate_recording(**kw)
 
 
@@ -607,6 +640,12 @@ def _ident(c, recording=None, **kw):
     if recording is None:
         recording = _exp()
     return identify(ad.Model.alpes("finger2", friction=True), recording, **kw)
+
+
+def _adq(name, *args):
+    from alpes_dyn.estimation import adequacy
+
+    return getattr(adequacy, name)(*args)
 
 
 def _pdyn(c, parameters):
@@ -833,6 +872,22 @@ API: list[Api] = [
       "encoder_noise_counts: expected a non-negative"),
     A("estimate_recording", lambda c: _replay(c, model=ad.Model.alpes("finger2")), RecordingError,
       "recording: made for motors ['finger'] and joints ['j1', 'j2', 'j3'], not the model's"),
+    A("identify", lambda c: _ident(c, validation=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("identify", lambda c: _ident(c, validation=c.f["rec2_csv"]), RecordingError, "validation: 201 samples are too few"),
+    A("identify", lambda c: _ident(c, encoder_noise=-1.0), InputError, "encoder_noise: expected a non-negative"),
+    A("identify", lambda c: _ident(c, encoder_noise=True), InputError, "encoder_noise: expected a non-negative"),
+    A("whiteness", lambda c: _adq("whiteness", np.zeros(5)), InputError, "residual: expected (N,) or (N, m) samples"),
+    A("whiteness", lambda c: _adq("whiteness", np.r_[np.zeros(99), np.nan]), InputError, "residual: expected finite"),
+    A("whiteness", lambda c: _adq("whiteness", np.zeros(100), 60), InputError, "lags: expected an integer from 1 to 49"),
+    A("cross_correlation", lambda c: _adq("cross_correlation", np.zeros(100), np.zeros(99)), InputError,
+      "input: expected 100 samples, got 99"),
+    A("fit_percent", lambda c: _adq("fit_percent", np.arange(5.0), np.arange(4.0)), InputError, "yhat: expected shape"),
+    A("sensor_floor", lambda c: _adq("sensor_floor", np.arange(20.0), 0.0, -1.0), InputError,
+      "encoder_noise: expected a non-negative number of counts"),
+    A("sensor_floor", lambda c: _adq("sensor_floor", np.arange(20.0), math.inf), InputError,
+      "torque_explained: expected a non-negative number"),
+    A("load_params", lambda c: ad.load_params(c.f["badident_toml"]), ModelError,
+      "identification.finger.converged: expected true or false, got 1"),
     A("identifiability", lambda c: _idf(points=0), InputError, "points: expected an integer from 1 to 10000"),
     A("identifiability", lambda c: _idf(seed=-1), InputError, "seed: expected an integer >= 0"),
     A("identifiability", lambda c: _idf(parameters="K_9"), ModelError, "unknown parameter 'K_9'"),

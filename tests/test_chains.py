@@ -285,11 +285,14 @@ def test_experiment_and_identify_cli_on_one_finger(tmp_path, capsys):
     assert not np.array_equal(t.chain("index").K, p.finger.K * 1.2) and np.array_equal(t.finger.K, p.finger.K)
     assert np.all(np.abs(t.chain("index").K / (p.finger.K * 1.2) - 1) <= 0.1)
     assert t.chain("ring").F_s.tolist() == [4e-4] * 3
+    # K alone fitted while the finger's m and friction are 10 % off: not adequate (exit 3, nothing written)
+    # unless --force, which writes it with the verdict recorded in [identification.index]
     assert main(["identify", "--model", "finger2", "--chain", "index", "--params", str(base), "--data", str(rec),
-                 "--parameters", "K", "-o", str(ident), "--json"]) == 0
+                 "--parameters", "K", "-o", str(ident), "--json", "--force"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["chain"] == "index" and set(res["parameters"]) == {"K_1", "K_2"}
     q = load_params(ident)
+    assert q.untrusted == ["index"] and q.identification["index"]["adequate"] is False
     assert q.raw["finger.index.K"].source == "identified" and q.raw["finger.K"].source == "report"
     fitted = [res["parameters"][k]["value"] for k in ("K_1", "K_2")]
     assert q.chain("index").K.tolist() == fitted + [p.finger.K[2] * 1.2]

@@ -20,6 +20,7 @@ def test_export_import_round_trip(name, kw):
     assert b.joint_names == m.joint_names and b.tips == m.tips
     assert b.transmission.motor_names == m.transmission.motor_names
     np.testing.assert_allclose(b.transmission.S, m.transmission.S, rtol=1e-15, atol=0)
+    np.testing.assert_allclose(b.transmission.rotor_inertia, m.transmission.rotor_inertia, rtol=1e-14, atol=0)
     for f in ("stiffness", "armature", "coulomb", "viscous"):
         np.testing.assert_allclose(getattr(b.extras, f), getattr(m.extras, f), rtol=1e-15, atol=0)
     rng = np.random.default_rng(7)

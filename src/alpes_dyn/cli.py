@@ -1,6 +1,8 @@
 """Command line ``alpes-dyn``: URDF generation, dynamics, the report reproduced, observability, estimation.
 
 Every bad input ends with one line on stderr naming the problem and exit code 2, never a traceback.
+Exit code 3 (:data:`EXIT_UNTRUSTED`): ``identify`` ran, but its fit did not converge or its model is not
+adequate to the recording; nothing was written (``--force`` writes the file, marked not trustworthy).
 Vectors are comma-separated numbers; negative values work as ``--q=-0.1,0.2`` and ``--q -0.1,0.2``.
 """
 
@@ -35,6 +37,18 @@ class _Parser(argparse.ArgumentParser):
 
 class _UsageError(Exception):
     pass
+
+
+EXIT_UNTRUSTED = 3
+"""Exit code of ``identify`` when the fit did not converge or the model is not adequate (and no --force)."""
+
+
+class _Untrusted(Exception):
+    """The fit ran but is not to be trusted: exit :data:`EXIT_UNTRUSTED` with one line."""
+
+
+class UntrustedFitWarning(UserWarning):
+    """``identify --force`` wrote a file from a fit that did not converge or whose model is not adequate."""
 
 
 def _int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
@@ -112,8 +126,9 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
-_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("data", "--data"), ("true_params", "--true-params"),
-                  ("observer_params", "--observer-params"), ("plant_params", "--plant-params"))
+_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("data", "--data"), ("validate", "--validate"),
+                  ("true_params", "--true-params"), ("observer_params", "--observer-params"),
+                  ("plant_params", "--plant-params"))
 _OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), ("log", "--log"), ("plot", "--plot"))
 
 
@@ -770,11 +785,12 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
+    from .estimation.adequacy import AdequacyWarning
     from .estimation.identification import check_selection, identify
     from .model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
-    _check_run_files(args)
+    _check_run_files(args)  # the output policy: -o is none of --data, --validate, --params, nor a link...
     exc = args.excitation
     if exc == "documented":
         freqs = ExperimentDesign().frequencies
@@ -788,11 +804,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if parameters is None and args.model == "thumb":
         parameters = THUMB_PARAMETERS
     check_selection(model, parameters)  # a bad selection named before the recording is read
-    res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise)
-    if args.output is not None:
+    with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
+        warnings.simplefilter("ignore", AdequacyWarning)
+        res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise,
+                       validation=args.validate, encoder_noise=args.encoder_noise)
+    written = args.output is not None and (res.trustworthy or args.force)
+    if written:
         res.write(args.output)
     obj = res.to_dict()
-    obj["output"] = args.output
+    obj["output"] = args.output if written else None
     obj["chain"] = model.chain
     lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
              f"({res.iterations} Gauss-Newton iterations, "
@@ -802,9 +822,23 @@ def cmd_identify(args: argparse.Namespace) -> int:
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
-    if args.output is not None:
-        lines.append(f"  written to {args.output}")
+    a = res.adequacy
+    if a is not None:
+        lines.append(f"  sensor floor {a.floor.total:.3g} counts (quantisation {a.floor.quantisation:.3g}, noise "
+                     f"{a.floor.noise:.3g}, torque {a.floor.torque:.3g}); {a.summary()}")
+        if a.validation is not None:
+            v = a.validation
+            lines.append(f"  validation on {args.validate}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
+                         f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
+    if written:
+        lines.append(f"  written to {args.output}" + ("" if res.trustworthy else " (marked NOT trustworthy)"))
     _emit(obj, "\n".join(lines), args.json)
+    if not res.trustworthy:
+        why = res.status()
+        if not args.force:
+            raise _Untrusted(f"alpes-dyn: identify: not trustworthy, {'nothing written' if args.output else 'no file'}"
+                             f" (--force writes it anyway): {why}")
+        warnings.warn(UntrustedFitWarning(f"identify --force: {args.output or 'the fit'} is NOT trustworthy: {why}"))
     return 0
 
 
@@ -994,7 +1028,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.set_defaults(func=cmd_experiment)
 
     s = sub.add_parser("identify", help="fit a finger's or the thumb's springs, masses and friction to a recording",
-                       epilog="Example: alpes-dyn identify --model finger3 --chain index --data rec.csv -o ident.toml")
+                       epilog="Example: alpes-dyn identify --model finger3 --chain index --data rec.csv -o ident.toml. "
+                              "Exit codes: 0 written (or --force), 2 bad input, 3 the fit did not converge or the "
+                              "model is not adequate to the recording (residual coloured, correlated with the "
+                              "torque, above the sensor floor, or a poor --validate fit): nothing written")
     s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
     s.add_argument("--chain", default=None, metavar="FINGER",
                    help="a finger model as that finger of the hand: starts from its own values and writes the fit "
@@ -1016,6 +1053,15 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--torque-noise", type=float, default=None,
                    help="white noise of the recorded torque, N m (errors in variables). Default: estimated from "
                         "the torque off the excitation's lines; with --excitation none, 0 (the torque taken as exact)")
+    s.add_argument("--validate", default=None, metavar="REC2.csv",
+                   help="a held-out recording of the same finger: the fitted model simulated on its torque, fit %% "
+                        "and NRMSE per encoder (MATLAB's compare), part of the adequacy verdict")
+    s.add_argument("--encoder-noise", type=float, default=None, metavar="COUNTS",
+                   help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
+                        "adequacy check (default: estimated from the recording)")
+    s.add_argument("--force", action="store_true",
+                   help="write -o even when the fit did not converge or the model is not adequate (the file is "
+                        "marked not trustworthy); without it such a fit writes nothing and exits with code 3")
     s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identify)
@@ -1105,6 +1151,8 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
         return func(args), None
     except _UsageError as exc:
         return 2, _one_line(str(exc))
+    except _Untrusted as exc:
+        return EXIT_UNTRUSTED, _one_line(str(exc))
     except AlpesDynError as exc:
         return 2, f"alpes-dyn: error: {_one_line(str(exc))}"
     except KeyboardInterrupt:
@@ -1139,7 +1187,8 @@ def _say(line: str) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    """Run one command; exit code 0, 2 for bad input (one line on stderr), 1 for an internal error.
+    """Run one command; exit code 0, 2 for bad input (one line on stderr), 3 for an identification not to be
+    trusted (:data:`EXIT_UNTRUSTED`), 1 for an internal error.
 
     Whatever Python warnings (e.g. numpy's RuntimeWarning) and native libraries (urdfdom, CasADi) would
     print on stderr is captured: it is appended to the error line, or, after a successful command,

@@ -59,6 +59,8 @@ from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
 from ..symbolic.parametric import OUTPUT_KINDS, common_scale, parameter_catalogue, select_parameters
 from ..model.params import HandParams, Param, with_values, write_params
+from .adequacy import (_finite, Adequacy, AdequacyWarning, Validation, assess, compare, effect_responses, sensor_floor,
+                       torque_explained)
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
 from ..simulation.sensitivity import SensitivityModel
@@ -94,16 +96,31 @@ class IdentificationResult:
     node_times: np.ndarray
     model: Model = field(repr=False)
     recording_path: str = ""
+    reason: str = ""
+    residual: np.ndarray | None = field(default=None, repr=False)
+    adequacy: Adequacy | None = None
+
+    @property
+    def trustworthy(self) -> bool:
+        """Converged, and the model adequate to the recording (:attr:`adequacy`)."""
+        return bool(self.converged and (self.adequacy is None or self.adequacy.adequate))
+
+    def status(self) -> str:
+        """One line: why the fit is (not) to be trusted."""
+        parts = [] if self.converged else [f"the fit did not converge ({self.reason})"]
+        if self.adequacy is not None and not self.adequacy.adequate:
+            parts.append(self.adequacy.summary())
+        return "; ".join(parts) if parts else "converged; " + (self.adequacy.summary() if self.adequacy else "")
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``alpes-dyn identify --json`` (an unbounded std, a parameter the data do not see, is null)."""
         return {
-            "parameters": {n: {"value": float(v), "std": float(s) if math.isfinite(s) else None, "initial": float(i),
-                               "unit": u}
+            "parameters": {n: {"value": _finite(v), "std": _finite(s), "initial": _finite(i), "unit": u}
                            for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
-            "residual_rms": self.residual_rms, "residual_unit": "counts", "iterations": self.iterations,
-            "converged": self.converged, "seconds": self.seconds, "compile_seconds": self.compile_seconds,
-            "model": self.model.name,
+            "residual_rms": _finite(self.residual_rms), "residual_unit": "counts", "iterations": self.iterations,
+            "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
+            "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
+            "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
         }
 
     def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
@@ -112,9 +129,11 @@ class IdentificationResult:
 
     def write(self, path: str | Path, base: HandParams | None = None, chain: str | None = None) -> Path:
         """Write the identified parameter file (the base file with each fitted value ``identified``)."""
-        return write_params(self.params(base, chain), path,
-                            header=f"Identified by alpes_dyn from {self.recording_path or 'a recording'} "
-                                   f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+        header = (f"Identified by alpes_dyn from {_printable(self.recording_path) or 'a recording'} "
+                  f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+        if not self.trustworthy:
+            header += f"\nNOT TRUSTWORTHY (written with --force): {_printable(self.status())}"
+        return write_params(self.params(base, chain), path, header=header)
 
 
 def identified_params(result: IdentificationResult, base: HandParams | None = None,
@@ -150,8 +169,10 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         raise ModelError(f"chain: the thumb model's values go to the thumb, not {chain!r}")
     if not thumb and chain is not None and chain not in p.finger_names:
         raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
-    reason = (f"identified from {result.recording_path or 'a recording'} by multiple shooting "
+    reason = (f"identified from {_printable(result.recording_path) or 'a recording'} by multiple shooting "
               f"({result.residual_rms:.3g} counts RMS residual)")
+    if not result.trustworthy:
+        reason += f"; NOT TRUSTWORTHY: {result.status()}"
     own = p.chain("finger" if chain is None else chain)
     k = own.n
     arrays = {"K": own.K.copy(), "m": own.m.copy(), "I": own.I.copy(),
@@ -204,7 +225,28 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         old = p.raw.get(f"thumb.{field_}")
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
         upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
-    return with_values(p, upd)
+    key = "thumb" if thumb else ("finger" if chain is None else chain)
+    return with_values(p, upd, identification={key: _record(result)})
+
+
+def _printable(text: str) -> str:
+    """``text`` with control characters replaced by '?' (it goes into a file's header and fields)."""
+    return "".join(c if c.isprintable() else "?" for c in str(text))
+
+
+def _record(result: IdentificationResult) -> dict[str, Any]:
+    """The ``[identification.<chain>]`` record of a fit (:data:`~alpes_dyn.model.params.IDENTIFICATION_FIELDS`)."""
+    rec: dict[str, Any] = {"model": result.model.name, "recording": _printable(result.recording_path),
+                           "converged": bool(result.converged), "stop": _printable(result.reason),
+                           "trustworthy": result.trustworthy}
+    if math.isfinite(result.residual_rms):
+        rec["residual_rms"] = float(result.residual_rms)
+    a = result.adequacy
+    if a is not None:
+        rec.update(adequate=bool(a.adequate), verdict=_printable(a.summary()), likely_missing=list(a.likely_missing))
+        if math.isfinite(a.floor.total):
+            rec["sensor_floor"] = float(a.floor.total)
+    return rec
 
 
 def check_selection(model: Model, parameters: str | Sequence[str] | None) -> None:
@@ -255,7 +297,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int = 4,
              torque_noise: float | None = None, camera_noise: float = math.radians(0.1),
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
-             progress: bool | None = None) -> IdentificationResult:
+             progress: bool | None = None, validation: Recording | str | Path | None = None,
+             encoder_noise: float | None = None) -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
     Parameters
@@ -286,6 +329,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1), or chi^2 down by less than 1 over
         five iterations.
     progress: a progress line on stderr (default: when stderr is a terminal).
+    validation: a held-out recording of the same finger (another run of the experiment): the fitted
+        model is simulated open-loop on its torque (:func:`~alpes_dyn.estimation.adequacy.compare`, fit %).
+    encoder_noise: the encoder's white noise beyond its quantisation, counts, for the adequacy's sensor
+        floor (default: estimated from the recording, :func:`~alpes_dyn.estimation.adequacy.white_noise_level`).
+
+    The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
+    failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
+    (:func:`~alpes_dyn.estimation.adequacy.assess`: whiteness, independence of the torque, RMS against the
+    sensor floor, the validation).
 
     Returns
     -------
@@ -301,9 +353,26 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or tuple(rec.joint_names) != model.joint_names:
         raise RecordingError(f"recording: motors {rec.motor_names} / joints {rec.joint_names} do not match model "
                              f"{model.name!r}")
+    val_rec = None
+    if validation is not None:  # read and checked before the fit: a bad file fails at once
+        val_rec = _as_recording(validation, model)
+        if (tuple(val_rec[0].motor_names) != tuple(model.transmission.motor_names)
+                or tuple(val_rec[0].joint_names) != model.joint_names):
+            raise RecordingError(f"validation: motors {val_rec[0].motor_names} / joints {val_rec[0].joint_names} do "
+                                 f"not match model {model.name!r}")
+    if encoder_noise is not None and not (isinstance(encoder_noise, (int, float)) and not isinstance(encoder_noise, bool)
+                                          and math.isfinite(encoder_noise) and encoder_noise >= 0):
+        raise InputError(f"encoder_noise: expected a non-negative number of counts, got {encoder_noise!r}")
     for name, v in (("interval", interval), ("camera_noise", camera_noise), ("tol", tol)):
         if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise InputError(f"{name}: expected a positive number, got {v!r}")
+    if val_rec is not None:
+        if abs(val_rec[0].dt - rec.dt) > 1e-9 * rec.dt:
+            raise RecordingError(f"validation: sample period {val_rec[0].dt:g} s differs from the recording's {rec.dt:g} s")
+        pre = max(2, int(round(interval / rec.dt)))  # the prefix that fixes the start, one interval
+        if val_rec[0].n_samples <= 4 * pre:
+            raise RecordingError(f"validation: {val_rec[0].n_samples} samples are too few (the first {pre} fix the "
+                                 f"start; give more than {4 * pre})")
     if not isinstance(max_iterations, int) or max_iterations < 1:
         raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
     dt = rec.dt
@@ -595,6 +664,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         history: list[float] = []
         lost = 0  # consecutive steps that asked log theta for more than 30
         it = 0
+        reason = f"iteration cap: {max_iterations} Gauss-Newton iterations without meeting the stopping rule"
         for it in range(1, max_iterations + 1):
             cost = 0.5 * float(np.sum(r**2) + np.sum(rg**2))
             rhs = np.concatenate([-grad(r, J, rg), -c.reshape(-1)])
@@ -610,6 +680,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 # continuous, and Gauss-Newton predicts a decrease of chi^2 below 0.1 or no parameter moving by
                 # a tenth of its standard error: the statistical resolution of the data
                 converged = True
+                reason = "converged: continuous, and the next step within the data's resolution"
                 break
             nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
             merit = cost + nu_merit * float(np.sum(np.abs(c)))
@@ -646,6 +717,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             if not accepted:
                 mu *= 10.0
                 if mu > 1e8:
+                    reason = (f"step failure: no step lowered the merit function (Levenberg-Marquardt damping "
+                              f"above 1e8, iteration {it})")
                     break
                 continue
             dv, dg = sv, sg
@@ -661,12 +734,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             if lost >= 3 and viol > 1e-3:
                 # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
                 # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
+                reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
+                          f"{100.0 * max_log_step:g} (iteration {it})")
                 break
             stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
             if viol < 1e-6 and (small_change or stalled or step_g < tol):
                 converged = True
+                reason = "converged: continuous, and the cost no longer falls"
                 break
-        return nodes, offs, glob, (r, J, c, Cv, Cr, rg, xs), it, converged
+        return nodes, offs, glob, (r, J, c, Cv, Cr, rg, xs), it, converged, reason
 
     # Two starts of stages 2-3, friction held during the homotopy or not: each alone missed the
     # right basin on one of five +-20 % fingers; the wrong basins leave a residual of 4-8 counts,
@@ -678,7 +754,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
             bar.close()
             bar = _Progress(max_iterations, "identify (second start)", show)
-        nodes, offs, glob, state, it, converged = solve(*[a.copy() for a in start], freeze)
+        nodes, offs, glob, state, it, converged, reason = solve(*[a.copy() for a in start], freeze)
         total_its += it
         r, J, c, Cv, Cr, rg, xs = state
         if encoder_rms(r) <= 3.0 / math.sqrt(12.0):
@@ -705,11 +781,60 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         sd_c = np.where(np.isfinite(sd_rho), np.maximum(sd_rho, 1e-300), np.nan)
         corr = P_rho / np.outer(sd_c, sd_c)
     rms = encoder_rms(r)
-    return IdentificationResult(
+    # the adequacy of the fitted model (module adequacy): its trajectory at the samples, the intervals cut
+    # at their valid samples (sample order), the residual y - yhat in counts
+    x_fit = xs[valid]
+    yhat = (x_fit[:, :n] @ S_enc.T + offset(theta)) / step  # y = S q + offset (the fitted offsets, else 0)
+    e = rec.encoder - yhat
+    explained = 0.0
+    if eiv and not lines:  # what the torque noise explains through the model (with the lines: fitted away)
+        explained = torque_explained(sens, nodes, Ub, Gb, theta, offs, valid, S_enc, step, torque_noise, L)
+    floor = sensor_floor(rec.encoder, explained, encoder_noise)
+    resp = effect_responses(sens, nodes, Ub, Gb, theta, correction(glob, offs), Psib, valid, x_fit, S_enc, step, dt)
+    resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[kk] * valid[:, :, None]  # tendon stretch ~ tension
+    # each response less what the fit itself would absorb of it (its projection on the fit's tangent space:
+    # the nodes and parameters, continuity kept): the residual of a missing effect is that remainder
+    Kz = kkt(J, Cv, Cr, 0.0)
+    regressors = {}
+    for name, R in resp.items():  # a loop over the four effects
+        Rr = np.zeros_like(r)
+        Rr[:, : (L + 1) * ny] = (R * step / sig_y).reshape(n_int, -1)
+        z = lin_solve(Kz, np.concatenate([grad(Rr, J, np.zeros(ng)), np.zeros(nc)]))[:nz]
+        Jz = np.einsum("skd,sd->sk", J[:, :, :nb], z[:nv].reshape(n_int, nb)) + J[:, :, nb:] @ z[nv:nz]
+        regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * sig_y / step)[valid]
+    val = None
+    if val_rec is not None:
+        val = _validate(model, sens, theta, val_rec, excitation, interval, offset(theta))
+    verdict = assess(e, rec.torque, floor, regressors, val, velocity=x_fit[:, n:] @ S_enc.T)
+    result = IdentificationResult(
         names=sens.names, values=theta, std=np.where(additive, 1.0, theta) * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
-        states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path)
+        states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path,
+        reason=reason, residual=e, adequacy=verdict)
+    if not result.trustworthy:  # one line (the CLI reports it itself)
+        warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
+    return result
+
+
+def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
+              excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None) -> Validation:
+    """:func:`~alpes_dyn.estimation.adequacy.compare` of the fitted model on a held-out recording, its
+    torque projected on the excitation's lines as in the fit, the initial state estimated on the first
+    ``prefix_s`` seconds (one shooting interval); ``offset`` (m,) rad: the fitted encoder offsets, the same
+    sensors' (taken off the held-out encoder)."""
+    rec, path = recording
+    U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation)
+    G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
+    tr = model.transmission
+    step = 2 * np.pi / tr.counts_per_rev
+    prefix = max(2, int(round(prefix_s / rec.dt)))  # checked against the length in identify
+    enc = rec.encoder if offset is None else rec.encoder - np.asarray(offset) / step
+    q0 = _rest_guess(model, tr.joint_torque(U[0]), enc[0] * step) if rec.gravity is None else np.zeros(model.n)
+    val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, enc,
+                  np.asarray(tr.S, dtype=float), step, prefix, path)
+    val.prefix_s = prefix * rec.dt
+    return val
 
 
 def _rest_guess(model: Model, tau: np.ndarray, y0: np.ndarray) -> np.ndarray:

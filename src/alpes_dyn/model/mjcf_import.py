@@ -15,7 +15,8 @@ backends read:
   site of each leaf body.
 
 What the library does not model is refused with one line naming it, never dropped: free, ball and slide
-joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring or armature,
+joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
+  an armature on a tendon no actuator pulls,
 equality constraints. Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
 and forward dynamics as the model exported, to 1e-12.
 """
@@ -94,6 +95,10 @@ def _origin(p: np.ndarray, R: np.ndarray) -> str:
     return f'<origin xyz="{_f(p[0])} {_f(p[1])} {_f(p[2])}" rpy="{_f(r)} {_f(pi)} {_f(y)}"/>'
 
 
+def _tendon_armature(m, t: int) -> float:
+    return float(m.tendon_armature[t]) if hasattr(m, "tendon_armature") else 0.0
+
+
 def _check_supported(mujoco, m) -> None:
     hinge = mujoco.mjtJoint.mjJNT_HINGE
     for j in range(m.njnt):
@@ -110,8 +115,12 @@ def _check_supported(mujoco, m) -> None:
         raise ModelError("mjcf: equality constraints are not modelled (a coupled joint: give it as a tendon ratio)")
     for t in range(m.ntendon):
         tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
-        if np.any(m.tendon_stiffness[t] != 0) or np.any(getattr(m, "tendon_armature", np.zeros(m.ntendon))[t] != 0):
-            raise ModelError(f"mjcf: tendon {tname!r} has a stiffness or armature; the spec holds rigid tendons only")
+        if np.any(m.tendon_stiffness[t] != 0):
+            raise ModelError(f"mjcf: tendon {tname!r} has a stiffness; the spec holds rigid tendons only")
+        driven = any(m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON and m.actuator_trnid[a, 0] == t
+                     for a in range(m.nu))
+        if _tendon_armature(m, t) != 0 and not driven:
+            raise ModelError(f"mjcf: tendon {tname!r} has an armature but no actuator; a rotor belongs to a motor")
         if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
     for j in range(m.njnt):
@@ -203,7 +212,8 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
                 raise ModelError(f"mjcf: actuator {aname!r} pulls a spatial tendon; fixed tendons only")
             jname = _name(mujoco, m, O.mjOBJ_JOINT, int(m.wrap_objid[w]), "joint")
             ratios[jname] = gear * float(m.wrap_prm[w])
-        motors.append(Motor(aname, ratios))
+        # the tendon's armature J_t acts on its length sum coef_i q_i: J_t coef coef^T = (J_t / gear^2) S^T S
+        motors.append(Motor(aname, ratios, rotor_inertia=_tendon_armature(m, t) / gear**2))
     tables: dict[str, dict[str, float]] = {"stiffness": {}, "armature": {}, "coulomb": {}, "viscous": {}}
     for j in range(m.njnt):
         jname = _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")

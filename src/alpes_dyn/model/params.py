@@ -9,6 +9,12 @@ The four fingers share ``[finger]``; a finger may have values of its own in a ta
 (``<name>`` from ``palm.finger_names``) holding any of :data:`OVERRIDE_FIELDS` (``K``, ``m``, ``I``,
 ``F_s``, ``F_v``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
 :func:`chain_params`): an identified hand differs link by link.
+
+An identified file also records, per chain fitted, how far the fit is to be trusted: an optional table
+``[identification.<chain>]`` (``<chain>``: ``finger`` for the shared values, a finger's name, or
+``thumb``) with the fields of :data:`IDENTIFICATION_FIELDS` (``converged``, ``adequate``,
+``trustworthy``, the stop reason, the verdict...; :attr:`HandParams.identification`). Every command
+reads such a file; the record is informative, the values are used as they are.
 """
 
 from __future__ import annotations
@@ -29,7 +35,7 @@ from ..fileio import atomic_write, load_toml, read_text
 
 __all__ = [
     "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
-    "params_toml", "with_values", "write_params", "chain_params",
+    "params_toml", "with_values", "write_params", "chain_params", "IDENTIFICATION_FIELDS",
 ]
 
 # field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
@@ -82,6 +88,14 @@ OVERRIDE_FIELDS: dict[str, tuple[int, str]] = {
 }
 """Fields a per-finger section ``[finger.<name>]`` may hold: 3-arrays, one entry per phalanx."""
 SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
+IDENTIFICATION_FIELDS: dict[str, type] = {
+    "model": str, "recording": str, "converged": bool, "stop": str, "adequate": bool, "trustworthy": bool,
+    "verdict": str, "likely_missing": list, "residual_rms": float, "sensor_floor": float,
+}
+"""Fields of a table ``[identification.<chain>]`` (each optional): the model fitted, the recording, whether
+the fit converged and why it stopped, the adequacy verdict (``adequate``, its one-line ``verdict``, the
+``likely_missing`` effects), ``trustworthy`` (converged and adequate: false only in a file written with
+``alpes-dyn identify --force``), the residual and the sensor floor (counts RMS)."""
 
 
 @dataclass(frozen=True)
@@ -169,6 +183,13 @@ class HandParams:
     fingers: dict[str, ChainParams] = field(default_factory=dict, repr=False)
     abduction_F_s: float | None = None  # the ab/adduction joint's own friction (N m, N m s/rad), else friction.F_s/F_v
     abduction_F_v: float | None = None
+    identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
+    """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
+
+    @property
+    def untrusted(self) -> list[str]:
+        """The chains whose identified values are marked not trustworthy (written with ``--force``)."""
+        return [c for c, rec in self.identification.items() if rec.get("trustworthy") is False]
 
     def chain(self, name: str) -> ChainParams:
         """The parameters of one chain: a finger by its name (``palm.finger_names``, the shared ``[finger]``
@@ -249,9 +270,40 @@ def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
     return float(arr[0]) if length is None else arr
 
 
+def _identification(data: Any, names: tuple[str, ...]) -> dict[str, dict[str, Any]]:
+    """The optional ``[identification.<chain>]`` tables, validated."""
+    if not isinstance(data, dict):
+        raise ModelError("identification: must be a table of [identification.<chain>] tables")
+    out: dict[str, dict[str, Any]] = {}
+    chains = ("finger", "thumb") + tuple(names)
+    for chain, rec in data.items():
+        if chain not in chains:
+            raise ModelError(f"identification.{chain}: unknown chain (expected one of {', '.join(chains)})")
+        if not isinstance(rec, dict):
+            raise ModelError(f"identification.{chain}: must be a table")
+        for key, value in rec.items():
+            kind = IDENTIFICATION_FIELDS.get(key)
+            if kind is None:
+                raise ModelError(f"identification.{chain}.{key}: unknown key (expected one of "
+                                 f"{', '.join(IDENTIFICATION_FIELDS)})")
+            ok = (isinstance(value, bool) if kind is bool else
+                  (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+                   and value >= 0) if kind is float else
+                  (isinstance(value, list) and all(isinstance(v, str) for v in value)) if kind is list else
+                  isinstance(value, str))
+            if not ok:
+                want = {bool: "true or false", float: "a non-negative number", list: "a list of strings",
+                        str: "a string"}[kind]
+                raise ModelError(f"identification.{chain}.{key}: expected {want}, got {value!r}")
+        out[chain] = {k: (float(v) if IDENTIFICATION_FIELDS[k] is float else v) for k, v in rec.items()}
+    return out
+
+
 def _parse(data: dict[str, Any]) -> dict[str, Param]:
     out: dict[str, Param] = {}
     for section in data:
+        if section == "identification":
+            continue  # the fit's record, read by _identification
         if section not in _SCHEMA:
             raise ModelError(f"{section}: unknown section (expected one of {', '.join(_SCHEMA)})")
     for section, fields in _SCHEMA.items():
@@ -372,6 +424,7 @@ def _from_text(text: str, path: str) -> HandParams:
     data = load_toml(text, f"parameter file {path!r}", ModelError)
     raw = _parse(data)
     v = {k: prm.value for k, prm in raw.items()}
+    ident = _identification(data.get("identification", {}), tuple(v["palm.finger_names"]))
     if v["finger.lower"] >= v["finger.upper"]:
         raise ModelError("finger.lower: must be below finger.upper")
     if v["thumb.abduction_lower"] >= v["thumb.abduction_upper"]:
@@ -393,6 +446,7 @@ def _from_text(text: str, path: str) -> HandParams:
         finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
         thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
         abduction_F_s=v.get("thumb.abduction_F_s"), abduction_F_v=v.get("thumb.abduction_F_v"),
+        identification=ident,
     )
 
 
@@ -407,8 +461,10 @@ def _toml_value(x: Any) -> str:
     return repr(float(x))
 
 
-def params_toml(raw: dict[str, Param], header: str = "") -> str:
-    """TOML text of a parameter set (``HandParams.raw``), in the schema's order; loads back to the same."""
+def params_toml(raw: dict[str, Param], header: str = "",
+                identification: dict[str, dict[str, Any]] | None = None) -> str:
+    """TOML text of a parameter set (``HandParams.raw``, and its ``identification`` records), in the
+    schema's order; loads back to the same. The header's control characters are escaped."""
     lines = [f"# {_header_line(h)}" for h in header.split("\n")] + ([""] if header else [])
 
     def section_lines(section: str, fields) -> None:
@@ -435,12 +491,24 @@ def params_toml(raw: dict[str, Param], header: str = "") -> str:
             for nm in names:
                 if any(k.startswith(f"finger.{nm}.") for k in raw):
                     section_lines(f"finger.{nm}", OVERRIDE_FIELDS)
+    for chain, rec in (identification or {}).items():
+        lines.append(f"[identification.{chain}]")
+        for key in IDENTIFICATION_FIELDS:
+            if key in rec:
+                value = rec[key]
+                text = ("true" if value else "false") if isinstance(value, bool) else (
+                    "[" + ", ".join(json.dumps(str(x)) for x in value) + "]" if isinstance(value, list) else
+                    json.dumps(value) if isinstance(value, str) else repr(float(value)))
+                lines.append(f"{key} = {text}")
+        lines.append("")
     return "\n".join(lines)
 
 
-def with_values(params: HandParams, updates: dict[str, Param], header: str = "") -> HandParams:
+def with_values(params: HandParams, updates: dict[str, Param], header: str = "",
+                identification: dict[str, dict[str, Any]] | None = None) -> HandParams:
     """``params`` with the entries ``updates`` ("section.field" -> :class:`Param`) replaced, validated
-    exactly as a file is (the result is what :func:`load_params` reads from :func:`params_toml`)."""
+    exactly as a file is (the result is what :func:`load_params` reads from :func:`params_toml`);
+    ``identification``: records of ``[identification.<chain>]`` set (per chain, replacing)."""
     raw = dict(params.raw)
     for name, prm in updates.items():
         section, _, key = name.partition(".")
@@ -449,13 +517,14 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "")
                 section == "finger" and finger in params.finger_names and field_ in OVERRIDE_FIELDS):
             raise ModelError(f"{name}: unknown parameter field")
         raw[name] = prm
-    text = params_toml(raw, header)
+    ident = {**params.identification, **(identification or {})}
+    text = params_toml(raw, header, ident)
     return _from_text(text, params.path or "<updated>")
 
 
 def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:
     """Write ``params`` as a parameter file (atomically: a temporary file renamed into place)."""
-    text = params_toml(params.raw, header)
+    text = params_toml(params.raw, header, params.identification)
     return atomic_write(path, text, "parameter file", ModelError)
 
 
