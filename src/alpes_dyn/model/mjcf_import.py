@@ -16,8 +16,8 @@ backends read:
 
 What the library does not model is refused with one line naming it, never dropped: free, ball and slide
 joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
-  an armature on a tendon no actuator pulls,
-equality constraints. Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
+an armature on a tendon no actuator pulls, equality constraints. An MJCF file must be a regular file within
+:data:`alpes_dyn.limits.MAX_TEXT_BYTES` (checked before MuJoCo's parser reads it). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
 and forward dynamics as the model exported, to 1e-12.
 """
 
