@@ -15,6 +15,7 @@ To add a command or an API: add rows to ``CLI`` / ``API``; ``test_every_command_
 from __future__ import annotations
 
 import argparse
+import json
 import math
 import os
 import re
@@ -56,7 +57,28 @@ URDFS = {
     "no_limits_urdf": "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
                       "<parent link='a'/><child link='b'/></joint></robot>",
     "truncated_urdf": FINGER3[: len(FINGER3) // 2],
+    "inverted_limit_urdf": FINGER3.replace('lower="0.0" upper="1.5707963267948966"', 'lower="1.6" upper="0.0"', 1),
+    "mimic_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="revolute"><mimic joint="j1"/>',
+                                  1),
+    "many_links_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(1001)) + "</robot>",
+    "deep_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'><inertial><mass value='1'/><inertia ixx='1' "
+                                              "ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial></link>"
+                                              for i in range(102))
+                 + "".join(f"<joint name='j{i}' type='revolute'><parent link='l{i}'/><child link='l{i + 1}'/>"
+                           "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for i in range(101))
+                 + "</robot>",
 }
+RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
+
+
+def _toml_field(field: str, entry: str) -> bytes:
+    """The shipped parameter file with the entry of ``field`` (``section.key``) replaced by ``entry``."""
+    section, key = field.split(".")
+    lines = BASE_TOML.splitlines(keepends=True)
+    start = lines.index(f"[{section}]\n")
+    i = next(k for k in range(start + 1, len(lines)) if lines[k].startswith(f"{key} = "))
+    lines[i] = f"{key} = {entry}\n"
+    return "".join(lines).encode()
 
 
 _RECORDINGS: dict[str, str] = {}
@@ -91,6 +113,19 @@ def bad_files(d: Path) -> dict[str, str]:
         "short_index_toml": BASE_TOML.replace("[thumb]", '[finger.index]\nK = { value = [0.04, 0.05], '
                                               'unit = "N m/rad", source = "report" }\n\n[thumb]', 1).encode(),
     }
+    files.update({
+        "params_toml": BASE_TOML.encode(),
+        "xmlname_toml": BASE_TOML.replace('["index"', '["in<d&\\"ex"', 1).encode(),
+        "bom_toml": b"\xef\xbb\xbf" + BASE_TOML.encode(),
+        "bigint_toml": _toml_field("transmission.N", '{ value = ' + "9" * 401 + ', unit = "-", source = "report" }'),
+        "deep_toml": BASE_TOML.encode() + b"\n[extra]\nx = " + b"[" * 100_000 + b"]" * 100_000 + b"\n",
+        "half_count_toml": _toml_field("transmission.encoder_counts",
+                                       '{ value = 4096.5, unit = "counts/rev", source = "report" }'),
+        "mm_toml": _toml_field("finger.r", '{ value = 5.0, unit = "mm", source = "report" }'),
+        "longcell_csv": (RECORDING_HEAD + "0," + "1" * 300 + ",0\n").encode(),
+        "hugecell_csv": (RECORDING_HEAD + "0," + "1" * 200_000 + ",0\n").encode(),
+        "nul_csv": (RECORDING_HEAD + "0,\0,0\n").encode(),
+    })
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files.update({k: v.encode() for k, v in URDFS.items()})
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
@@ -107,7 +142,25 @@ def bad_files(d: Path) -> dict[str, str]:
     (d / "dir").mkdir()
     (d / "file").write_text("not a directory\n")
     out.update(dir=str(d / "dir"), file=str(d / "file"), tmp=str(d))
+    os.link(out["params_toml"], d / "hardlink.toml")  # the same file as params.toml under another name
+    (d / "link.png").symlink_to(out["params_toml"])
+    (d / "linked").mkdir()
+    (d / "linked" / "finger2.urdf").symlink_to(out["params_toml"])  # write_urdfs would replace the link
+    os.mkfifo(d / "fifo.toml")  # a FIFO with no writer: opening it to read would block forever
+    (d / "big.urdf").touch()
+    os.truncate(d / "big.urdf", 16 * 1024**2 + 1)  # sparse: over the size limit without writing 16 MiB
+    out.update(hardlink=str(d / "hardlink.toml"), link=str(d / "link.png"), fifo=str(d / "fifo.toml"),
+               big_urdf=str(d / "big.urdf"), device=_device(d))
     return out
+
+
+def _device(d: Path) -> str:
+    """A character device to write to: a private copy of /dev/null's node as root, else /dev/full itself."""
+    try:
+        os.mknod(d / "null", 0o600 | __import__("stat").S_IFCHR, os.makedev(1, 3))
+        return str(d / "null")
+    except (OSError, AttributeError):
+        return "/dev/full"
 
 
 @dataclass(frozen=True)
@@ -135,6 +188,23 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv", needle="goes with --perturb"),
         C("experiment", "-o", "{tmp}", needle="is a directory"),
         C("experiment", "--params", "{latin1_toml}", "-o", "{tmp}/r.csv", needle="not UTF-8 text"),
+        # the output policy: no output over an input or another output, nor a link, device, FIFO, directory
+        C("experiment", "--perturb", "0.1", "-o", "{tmp}/r.csv", "--true-params-out", "{tmp}/r.csv",
+          needle="--true-params-out: '{tmp}/r.csv' is also the output of -o"),
+        C("experiment", "--perturb", "0.1", "-o", "{tmp}/r.csv", "--true-params-out", "{tmp}/./r.csv",
+          needle="is also the output of -o"),
+        C("experiment", "--params", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input of "
+          "--params; refusing to write over it"),
+        C("experiment", "--params", "{params_toml}", "-o", "{hardlink}", needle="-o: '{hardlink}' is the input of "
+          "--params"),  # the same inode under another name
+        C("experiment", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
+        C("experiment", "-o", "{fifo}", needle="-o: '{fifo}' is a FIFO (named pipe); only a regular file"),
+        C("experiment", "-o", "{tmp}/newdir/", needle="-o: '{tmp}/newdir/' ends with '/'"),
+        C("experiment", "-o", "{tmp}/r\0.csv", needle="-o: the file name"),
+        # numbers checked before any allocation
+        C("experiment", "--duration", "1e308", "-o", "{tmp}/r.csv", needle="duration: 1e+308 s is over the limit of"),
+        C("experiment", "--duration", "1e9", "-o", "{tmp}/r.csv", needle="duration: 1e+09 s is over the limit of"),
+        C("experiment", "--params", "{fifo}", "-o", "{tmp}/r.csv", needle="is a FIFO (named pipe), expected a regular"),
     ],
     "identifiability": [
         C("identifiability", "--model", "hand", needle="--model: identifiability is defined for one finger"),
@@ -147,6 +217,9 @@ CLI: dict[str, list[Cli]] = {
           needle="duration: expected a whole number of at least 100"),
         C("identifiability", "--parameters", "K", "--camera-times", "9", needle="camera_times: 9.0 is outside"),
         C("identifiability", "--output", "elbow", "--parameters", "K", needle="unknown output 'elbow'"),
+        C("identifiability", "--parameters", "K", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
+        C("identifiability", "--parameters", "K", "--duration", "1e9", needle="duration: 1e+09 s is over the limit"),
+        C("identifiability", "--params", "{deep_toml}", needle="nested more than 32 deep"),
     ],
     "identify": [
         C("identify", needle="the following arguments are required: --data"),
@@ -168,21 +241,39 @@ CLI: dict[str, list[Cli]] = {
           needle="input_gain with every mass, spring and friction"),
         C("identify", "--data", "x.csv", "-o", "{tmp}", needle="is a directory"),
         C("identify", "--data", "x.csv", "--excitation", "a,b", needle="--excitation: expected comma-separated"),
+        C("identify", "--data", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input of "
+          "--data"),
+        C("identify", "--data", "{hardlink}", "-o", "{params_toml}", needle="is the input of --data"),
+        C("identify", "--data", "x.csv", "--params", "{params_toml}", "-o", "{hardlink}",
+          needle="-o: '{hardlink}' is the input of --params"),
+        C("identify", "--data", "x.csv", "-o", "{link}", needle="is a symbolic link"),
+        C("identify", "--data", "x.csv", "-o", "{device}", needle="is a character device; only a regular file"),
+        C("identify", "--data", "x.csv", "-o", "{tmp}/out/", needle="ends with '/'"),
+        C("identify", "--data", "{fifo}", needle="recording '{fifo}': is a FIFO (named pipe)"),  # never blocks
+        C("identify", "--data", "/dev/zero", needle="recording '/dev/zero': is a character device"),
+        C("identify", "--data", "{dir}", needle="is a directory"),
+        C("identify", "--data", "{longcell_csv}", needle="a cell of 300 characters, over the limit of 256"),
+        C("identify", "--data", "{hugecell_csv}", needle="hugecell.csv': a cell over the limit of 256 characters"),  # over csv's own limit
+        C("identify", "--data", "{nul_csv}", needle="column 'encoder_finger' line 2: not a number"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/none.csv", needle="cannot be read"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{latin1_toml}", needle="not a UTF-8 text file"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{rec3_csv}", needle="validation: 201 samples are too few"),
-        C("identify", "--data", "{rec3_csv}", "--validate", "{dir}", needle="cannot be read (Is a directory)"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{dir}", needle="is a directory, expected a file"),
         C("identify", "--data", "{rec3_csv}", "--encoder-noise", "-1", needle="encoder_noise: expected a non-negative"),
         C("identify", "--data", "{rec3_csv}", "--encoder-noise", "nan", needle="encoder_noise: expected a non-negative"),
         C("identify", "--data", "x.csv", "--encoder-noise", "abc", needle="--encoder-noise: invalid float value"),
-        C("identify", "--data", "{rec3_csv}", "-o", "{rec3_csv}", needle="is the --data recording"),
-        C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/v.csv", "-o", "{tmp}/v.csv",
-          needle="is the --validate recording"),
+        C("identify", "--data", "{rec3_csv}", "-o", "{rec3_csv}", needle="-o: '{rec3_csv}' is the input of --data"),
+        C("identify", "--data", "{rec3_csv}", "--validate", "{params_toml}", "-o", "{hardlink}",
+          needle="-o: '{hardlink}' is the input of --validate"),
         C("identify", "--data", "{rec3_csv}", "--params", "{badident_toml}",
           needle="identification.finger.converged: expected true or false"),
     ],
     "sweep": [
         C("sweep", "--study", "monte", needle="--study: unknown study 'monte'"),
+        C("sweep", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
+        C("sweep", "-o", "{device}", needle="is a character device"),
+        C("sweep", "-o", "{tmp}/table/", needle="ends with '/'"),
+        C("sweep", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
         C("sweep", "--model", "hand", needle="--model: the robustness study is defined for one finger"),
         C("sweep", "--model", "thumb", needle="--model: the robustness study is defined for one finger"),
         C("sweep", "--spread", "1.5", needle="--spread: expected a fraction in [0, 1)"),
@@ -197,7 +288,7 @@ CLI: dict[str, list[Cli]] = {
     "mjcf": [
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
-        C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: cannot write"),
+        C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
         C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
         C("mjcf", "finger3", "--stiction", "-1", needle="stiction: expected a positive time constant in s"),
         C("mjcf", "finger3", "--stiction", "abc", needle="argument --stiction: invalid float value"),
@@ -210,6 +301,11 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "finger3", "--tendon-rotor", "--tendon-stiffness", "4e4",
           needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
         C("mjcf", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
+        C("mjcf", "finger3", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
+        C("mjcf", "finger3", "--params", "{params_toml}", "-o", "{params_toml}", needle="is the input of --params"),
+        C("mjcf", "finger3", "-o", "{device}", needle="is a character device"),
+        C("mjcf", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
+        C("mjcf", "hand", "--params", "{xmlname_toml}", needle="palm.finger_names: 'in<d&\"ex' is not a name"),
     ],
     "control": [
         C("control", "--controller", "pid", needle="unknown controller 'pid'"),
@@ -219,29 +315,59 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--model", "hand", "--reference", "ramp", needle="--reference: the hand's loops follow step"),
         C("control", "--model", "hand", "--duration", "1", needle="--duration: the hand's run needs at least"),
         C("control", "--model", "hand", "--plot", "{tmp}/x.xyz", needle="--plot:"),
+        C("control", "--log", "{tmp}/x.png", "--plot", "{tmp}/x.png", needle="--plot: '{tmp}/x.png' is also the "
+          "output of --log"),
+        C("control", "--params", "{params_toml}", "--log", "{hardlink}", needle="--log: '{hardlink}' is the input of "
+          "--params"),
+        C("control", "--plant-params", "{params_toml}", "--log", "{params_toml}", needle="is the input of --plant-params"),
+        C("control", "--log", "{link}", needle="--log: '{link}' is a symbolic link"),
+        C("control", "--log", "{fifo}", needle="--log: '{fifo}' is a FIFO"),
+        C("control", "--duration", "1e308", needle="duration: 1e+308 s is over the limit of 1e+06 s"),
+        C("control", "--duration", "1e9", needle="duration: 1e+09 s is over the limit of 1e+06 s"),
+        C("control", "--duration", "0.5001", needle="duration: 0.5001 s leaves less than 0.05 s after the settling"),
+        C("control", "--model", "hand", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
+        C("control", "--params", "{fifo}", needle="is a FIFO (named pipe)"),
     ],
     "linearize": [
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
         C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),
         C("linearize", "--q=nan,0,0", needle="--q: contains NaN or inf"),
+        C("linearize", "--dt", "1e308", "--json", needle="dt: the discrete A, B are not finite at dt = 1e+308 s"),
+        C("linearize", "--dt", "1e308", needle="dt: the discrete A, B are not finite"),
     ],
     "(global)": [
         C(needle="the following arguments are required: command"),
         C("frobnicate", needle="invalid choice: 'frobnicate'"),
         C("--bogus", needle="the following arguments are required"),
+        C("dynamics", *["--json"] * 1000, needle="1001 command-line arguments, over the limit of 1000"),
     ],
     "urdf": [
         C("urdf", "finger7", needle="unknown model 'finger7'"),
         C("urdf", "hand", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
         C("urdf", "hand", "-o", "", needle="-o: empty file name"),
-        C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: cannot write"),
-        C("urdf", "hand", "-o", "{file}/hand.urdf", needle="-o: cannot write"),
+        C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: directory '{tmp}/missing' of"),
+        C("urdf", "hand", "-o", "{file}/hand.urdf", needle="-o: '{file}' in '{file}/hand.urdf' is not a directory"),
         C("urdf", "hand", "-o", "{tmp}/hand.urdf", needle="-o: cannot write", fsize=4096),  # full disk
         C("urdf", "finger3", "--params", "{binary_toml}", needle="not UTF-8 text (byte 0x80 at offset 128)"),
         C("urdf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text (byte 0xe9"),
         C("urdf", "finger3", "--params", "", needle="parameter file: empty file name"),
         C("urdf", "finger3", "--params", "{dir}", needle="is a directory"),
         C("urdf", "finger3", "--params", "{negative_k_toml}", needle="finger.K: value must be >= 0"),
+        C("urdf", "hand", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
+        C("urdf", "hand", "-o", "{fifo}", needle="-o: '{fifo}' is a FIFO (named pipe)"),
+        C("urdf", "hand", "-o", "{device}", needle="is a character device; only a regular file is written"),
+        C("urdf", "hand", "-o", "{tmp}/newdir/", needle="-o: '{tmp}/newdir/' ends with '/': it names a directory"),
+        C("urdf", "hand", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
+        C("urdf", "hand", "--params", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input "
+          "of --params"),
+        C("urdf", "hand", "--params", "{params_toml}", "-o", "{hardlink}", needle="is the input of --params"),
+        C("urdf", "finger3", "--params", "{fifo}", needle="parameter file '{fifo}': is a FIFO (named pipe)"),
+        C("urdf", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
+        C("urdf", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
+        C("urdf", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
+        C("urdf", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
+          "whole number, got 4096.5"),
+        C("urdf", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
     ],
     "dynamics": [
         C("dynamics", "--model", "finger9", needle="unknown model 'finger9'"),
@@ -267,6 +393,14 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{nan_urdf}", needle="link 'p3': mass: must be finite, got 'nan'"),
         C("dynamics", "--model", "{no_limits_urdf}", needle="does not specify limits"),  # urdfdom's stderr
         C("dynamics", "--model", "{truncated_urdf}", needle="URDF could not be parsed"),
+        C("dynamics", "--model", "{fifo}", needle="URDF file '{fifo}': is a FIFO (named pipe)"),
+        C("dynamics", "--model", "{big_urdf}", needle="16777217 bytes, over the limit of 16777216 bytes"),
+        C("dynamics", "--model", "{mimic_urdf}", needle="joint 'j2': <mimic joint='j1'> is not modelled"),
+        C("dynamics", "--model", "{many_links_urdf}", needle="URDF: 1001 links, over the limit of 1000"),
+        C("dynamics", "--model", "{deep_urdf}", needle="joints deep, over the limit of 100"),
+        C("dynamics", "--model", "{inverted_limit_urdf}", needle="joint 'j1': limit lower 1.6 is above upper 0"),
+        C("dynamics", "--model", "{negmass_urdf}", "--spec", "{fifo}", needle="spec file '{fifo}': is a FIFO"),
+        C("dynamics", "--model", "{negmass_urdf}", "--spec", "{deep_toml}", needle="nested more than 32 deep"),
     ],
     "report": [
         C("report", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
@@ -283,6 +417,9 @@ CLI: dict[str, list[Cli]] = {
         C("observability", "--model", "{negmass_urdf}", needle="mass must be >= 0"),
         C("observability", "--model", "{binary_urdf}", needle="not UTF-8 text"),
         C("observability", "--input", "torque", needle="invalid choice: 'torque'"),
+        C("observability", "--order", "99999999999999999999", needle="--order: 99999999999999999999 is over the limit "
+          "of 1000"),
+        C("observability", "--order", "1001", needle="--order: 1001 is over the limit of 1000"),
     ],
     "estimate": [
         C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
@@ -291,7 +428,11 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--data", "{replay_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
         C("estimate", "--data", "{replay_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
         C("estimate", "--data", "{replay_csv}", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
-        C("estimate", "--data", "{replay_csv}", "--log", "{replay_csv}", needle="--log: is the recording itself"),
+        C("estimate", "--data", "{replay_csv}", "--log", "{replay_csv}", needle="--log: '{replay_csv}' is the input of --data"),
+        C("estimate", "--data", "{replay_csv}", "--params", "{params_toml}", "--log", "{hardlink}",
+          needle="--log: '{hardlink}' is the input of --params"),
+        C("estimate", "--data", "{replay_csv}", "--log", "{link}", needle="--log: '{link}' is a symbolic link"),
+        C("estimate", "--data", "{fifo}", needle="recording '{fifo}': is a FIFO (named pipe)"),
         C("estimate", "--data", "{replay_csv}", "--log", "{dir}", needle="is a directory"),
         C("estimate", "--data", "x.csv", "--mismatch", "0.1", needle="--mismatch: applies to the simulated scenario"),
         C("estimate", "--data", "x.csv", "--seed", "3", needle="--seed: applies to the simulated scenario"),
@@ -325,6 +466,11 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--true-params", "{latin1_toml}", needle="not UTF-8 text"),
         C("estimate", "--observer-params", "", needle="parameter file: empty file name"),
         C("estimate", "--observer-params", "x.toml", "--mismatch", "0.1", needle="either --mismatch or --observer-params"),
+        C("estimate", "--duration", "1e308", needle="duration: 1e+308 s at dt = 0.001 s is more than 2^53 samples"),
+        C("estimate", "--duration", "1e9", needle="duration: 1e+09 s at dt = 0.001 s"),
+        C("estimate", "--plot", "{link}", needle="--plot: '{link}' is a symbolic link"),
+        C("estimate", "--true-params", "{fifo}", needle="is a FIFO (named pipe)"),
+        C("estimate", "--observer-params", "{bigint_toml}", needle="integer of 401 digits"),
     ],
 }
 
@@ -336,8 +482,14 @@ def test_every_command_has_rows():
     assert set(sub.choices) <= set(CLI), f"commands without bad-input rows: {set(sub.choices) - set(CLI)}"
 
 
-def _files_under(*dirs: Path) -> set[str]:
-    return {str(p) for d in dirs for p in d.rglob("*")}
+def _files_under(*dirs: Path) -> dict[str, tuple[int, int, int]]:
+    """Every path under ``dirs`` with its (mode, size, mtime): a file written over, or replaced, counts."""
+    out = {}
+    for d in dirs:
+        for p in d.rglob("*"):
+            st = p.lstat()
+            out[str(p)] = (st.st_mode, st.st_size, st.st_mtime_ns)
+    return out
 
 
 def _one_stderr_line(code: int, out: str, err: str, needle: str) -> None:
@@ -348,7 +500,7 @@ def _one_stderr_line(code: int, out: str, err: str, needle: str) -> None:
     assert "Traceback" not in err and "Warning" not in err
 
 
-@pytest.mark.parametrize("cmd,row", CLI_ROWS, ids=[f"{c}:{' '.join(r.argv) or '-'}" for c, r in CLI_ROWS])
+@pytest.mark.parametrize("cmd,row", CLI_ROWS, ids=[f"{c}:{' '.join(r.argv)[:120] or '-'}" for c, r in CLI_ROWS])
 def test_cli_bad_input(cmd, row, tmp_path, monkeypatch, capfd):
     work = tmp_path / "work"
     work.mkdir()
@@ -441,6 +593,12 @@ def _ukf(c, **kw):
     from alpes_dyn.estimation.observers import UnscentedKalmanFilter
 
     return UnscentedKalmanFilter(c.ss, 1e-3, process_noise=1e-9, measurement_noise=1e-7, **kw)
+
+
+def _sim_x0(c, x0):
+    from alpes_dyn.simulation import simulate
+
+    return simulate(c.m, x0, duration=0.01, dt=1e-3)
 
 
 def _sim(c, **kw):
@@ -597,6 +755,80 @@ API: list[Api] = [
     A("load_params", lambda c: ad.load_params(c.f["pinky_toml"]), ModelError, "finger.pinky: unknown key"),
     A("load_params", lambda c: ad.load_params(c.f["short_index_toml"]), ModelError,
       "finger.index.K: value must be a list of 3 numbers"),
+    A("load_params", lambda c: ad.load_params(c.f["fifo"]), ModelError, "is a FIFO (named pipe), expected a regular"),
+    A("load_params", lambda c: ad.load_params("/dev/zero"), ModelError, "'/dev/zero': is a character device"),
+    A("load_params", lambda c: ad.load_params("x\0.toml"), ModelError, "parameter file: the file name 'x\\x00.toml' "
+      "contains a NUL byte"),
+    A("load_params", lambda c: ad.load_params(c.f["bigint_toml"]), ModelError, "integer of 401 digits"),
+    A("load_params", lambda c: ad.load_params(c.f["deep_toml"]), ModelError, "nested more than 32 deep"),
+    A("load_params", lambda c: ad.load_params(c.f["half_count_toml"]), ModelError,
+      "transmission.encoder_counts: value must be a whole number, got 4096.5"),
+    A("load_params", lambda c: ad.load_params(c.f["mm_toml"]), ModelError,
+      "finger.r.unit: the value is read in 'm', got 'mm'"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["big_urdf"]), ModelError, "over the limit of 16777216 bytes"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["fifo"]), ModelError, "is a FIFO"),
+    A("Model", lambda c: ad.Model.from_mjcf(c.f["big_urdf"]), ModelError, "mjcf '{big_urdf}': 16777217 bytes, over the"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"]), ModelError, "<mimic joint='j1'> is not modelled"),
+    A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
+    A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
+    A("simulate", lambda c: _sim(c, inputs=["0", "0", "0"]), InputError, "inputs: expected an array of numbers"),
+    A("simulate", lambda c: _sim(c, inputs=np.zeros(3, bool)), InputError, "inputs: expected an array of numbers or a "
+      "callable of time, got booleans"),
+    A("simulate", lambda c: _sim(c, duration=1e308), InputError, "duration: 1e+308 s at dt = 0.001 s is more than 2^53"),
+    A("simulate", lambda c: _sim(c, duration=10**400), InputError, "duration: expected a positive finite number"),
+    A("simulate", lambda c: _sim(c, duration=True), InputError, "duration: expected a positive number of seconds"),
+    A("StateSpace", lambda c: c.ss.linearize(np.zeros(6), np.zeros(1), dt=1e308), InputError,
+      "dt: the discrete A, B are not finite at dt = 1e+308 s"),
+    A("fisher_information", lambda c: _fim(c, U=[10**400] * 10), InputError, "U: expected an array of numbers, got a "
+      "number too large"),
+    A("fisher_information", lambda c: _fim(c, U=[True] * 10), InputError, "U: expected an array of numbers, got "
+      "booleans"),
+    A("run_estimation", lambda c: _est(duration=10**400), InputError, "duration: 1000000000000000000"),
+    A("write_urdfs", lambda c: ad.write_urdfs("a\0b"), InputError, "directory: the folder name 'a\\x00b' contains a NUL"),
+    A("simulate", lambda c: _sim(c, dt=True), InputError, "dt: expected a positive number of seconds, got True"),
+    A("simulate", lambda c: _sim(c, dt=10**400), InputError, "dt: expected a positive number of seconds"),
+    A("simulate", lambda c: _sim(c, dt="1e-3"), InputError, "dt: expected a positive number of seconds, got '1e-3'"),
+    A("simulate", lambda c: _sim_x0(c, np.zeros(6) + 1j), InputError, "x0: complex values are not supported"),
+    A("compile_rollout", lambda c: _rollout(c).rollout(np.zeros(6) + 1j, np.zeros((5, 3))), InputError,
+      "x0_batch: complex values are not supported"),
+    A("compile_rollout", lambda c: _rollout(c).rollout(np.zeros(6), np.zeros((5, 3), bool)), InputError,
+      "U_batch: expected an array of inputs, got booleans"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), np.ones(6), np.zeros((5, 1)) + 1j, np.zeros((6, 1))),
+      InputError, "W: complex values are not supported"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), np.ones(6), np.zeros((5, 1)), [["a"]] * 6),
+      InputError, "Y: expected an array of measurements"),
+    A("ExtendedKalmanFilter", lambda c: _ekf(c).run(np.zeros(6), [True] * 6, np.zeros((5, 1)), np.zeros((6, 1))),
+      InputError, "P0: expected 6 variances or an (6, 6) covariance, got booleans"),
+    A("Model", lambda c: ad.Model(URDFS["many_links_urdf"]), ModelError, "URDF: 1001 links, over the limit of 1000"),
+    A("Model", lambda c: ad.Model(URDFS["deep_urdf"]), ModelError, "is 101 joints deep, over the limit of 100"),
+    A("Model", lambda c: ad.Model(URDFS["inverted_limit_urdf"]), ModelError, "limit lower 1.6 is above upper 0"),
+    A("Model", lambda c: ad.Model(FINGER3, spec=c.f["fifo"]), ModelError, "spec file '{fifo}': is a FIFO"),
+    A("write_urdfs", lambda c: ad.write_urdfs(_linked_dir(c)), InputError, "finger2.urdf' is a symbolic link"),
+    A("load_params", lambda c: ad.load_params(c.f["xmlname_toml"]), ModelError,
+      "palm.finger_names: 'in<d&\"ex' is not a name: letters, digits and '_'"),
+    A("write_params", lambda c: _write_params(c.f["link"]), ModelError, "is a symbolic link; refusing to replace it"),
+    A("write_params", lambda c: _write_params(c.f["fifo"]), ModelError, "is a FIFO (named pipe); only a regular file"),
+    A("write_recording", lambda c: _write_rec(c.f["device"]), RecordingError, "is a character device"),
+    A("read_recording", lambda c: _read_rec(c.f["fifo"]), RecordingError, "recording '{fifo}': is a FIFO"),
+    A("read_recording", lambda c: _read_rec(c.f["longcell_csv"]), RecordingError, "a cell of 300 characters"),
+    A("check_outputs", lambda c: _outputs([("-o", c.f["hardlink"])], [("--params", c.f["params_toml"])]), InputError,
+      "-o: '{hardlink}' is the input of --params"),
+    A("check_outputs", lambda c: _outputs([("-o", c.d / "a.csv"), ("--log", str(c.d) + "//a.csv")]), InputError,
+      "--log: '{tmp}/a.csv' is also the output of -o"),
+    A("check_outputs", lambda c: _outputs([("-o", c.f["tmp"] + "/nodir/")]), InputError, "ends with '/'"),
+    A("atomic_write", lambda c: _atomic(c.f["device"]), InputError, "is a character device"),
+    A("read_text", lambda c: _read_text(c.f["big_urdf"]), InputError, "over the limit of 16777216 bytes"),
+    A("read_text", lambda c: _read_text(c.f["latin1_urdf"]), InputError, "not UTF-8 text (byte 0xe9"),
+    A("load_toml", lambda c: _toml("a = " + "9" * 401), InputError, "x: a: integer of 401 digits"),
+    A("load_toml", lambda c: _toml("a = " + "[" * 100_000), InputError, "x: arrays or tables nested more than 32"),
+    A("ControlScenario", lambda c: _control_sc(duration=0.52), InputError, "leaves less than 0.05 s after the settling"),
+    A("ControlScenario", lambda c: _control_sc(duration=1e9), InputError, "duration: 1e+09 s is over the limit"),
+    A("ExperimentDesign", lambda c: _design(duration=1e308).check(), InputError, "duration: 1e+308 s is over the limit"),
+    A("observability", lambda c: ad.observability("finger2", order=10**20), InputError, "order: 100000000000000000000 "
+      "is over the limit of 1000"),
+    A("check_duration", lambda c: _check_duration(10**400), InputError, "d: expected a finite number of seconds"),
+    A("check_duration", lambda c: _check_duration("5"), InputError, "d: expected a number of seconds, got str"),
+    A("InputError", lambda c: _raise_np(), InputError, "x: got 0.1 and 3, True"),
     A("urdf_string", lambda c: ad.urdf_string("palm"), ModelError, "unknown model 'palm'"),
     A("layout", lambda c: ad.layout("palm"), ModelError, "unknown model 'palm'"),
     A("write_urdfs", lambda c: ad.write_urdfs(c.f["file"]), InputError, "exists and is not a folder"),
@@ -803,6 +1035,68 @@ API: list[Api] = [
 ]
 
 
+def _linked_dir(c):
+    return c.d / "linked"
+
+
+def _write_params(path):
+    from alpes_dyn.model.params import write_params
+
+    return write_params(ad.load_params(), path)
+
+
+def _write_rec(path):
+    from alpes_dyn.estimation.recording import write_recording
+
+    return write_recording(_exp(), path)
+
+
+def _read_rec(path):
+    from alpes_dyn.estimation.recording import read_recording
+
+    return read_recording(path, ad.Model.alpes("finger3"))
+
+
+def _outputs(outputs, inputs=()):
+    from alpes_dyn.fileio import check_outputs
+
+    return check_outputs(outputs, inputs)
+
+
+def _atomic(path):
+    from alpes_dyn.fileio import atomic_write
+
+    return atomic_write(path, "x", "out")
+
+
+def _read_text(path):
+    from alpes_dyn.fileio import read_text
+
+    return read_text(path, "text")
+
+
+def _toml(text):
+    from alpes_dyn.fileio import load_toml
+
+    return load_toml(text, "x")
+
+
+def _control_sc(**kw):
+    from alpes_dyn.control import ControlScenario
+
+    return ControlScenario(**kw).check()
+
+
+def _check_duration(x):
+    from alpes_dyn.limits import check_duration
+
+    return check_duration(x, "d")
+
+
+def _raise_np():
+    raise InputError(f"x: got {np.float64(0.1)!r} and {np.int64(3)!r}, {np.bool_(True)!r}")
+
+
 def _hand(controller="sensor", **kw):
     from alpes_dyn.control import run_hand_control
 
@@ -890,3 +1184,228 @@ def test_api_bad_input(ctx, row):
     assert "\n" not in msg and msg.strip() == msg and msg
     assert row.needle.format(**ctx.f) in msg, msg
     assert _files_under(ctx.d) == before, "a file was left behind"
+
+
+# ----------------------------------------------------------------------------- the process: signals, streams, compiler
+def _env(**kw: str) -> dict[str, str]:
+    return dict(os.environ, PYTHONPATH=os.pathsep.join(sys.path), PYTHONDONTWRITEBYTECODE="1", **kw)
+
+
+_WRITER = """
+import sys, time
+from alpes_dyn.fileio import atomic_path
+with atomic_path(sys.argv[1], "-o") as tmp:
+    tmp.write_text("half of the new content")
+    print("writing", flush=True)
+    time.sleep(60)
+"""
+
+
+@pytest.mark.parametrize("sig", ["SIGTERM", "SIGINT", "SIGHUP"])
+def test_signal_mid_write_leaves_old_file_and_no_temp(tmp_path, sig):
+    """A process stopped by a signal while it writes: the old file intact, no ``.NAME.*.tmp`` left behind."""
+    import signal
+
+    dest = tmp_path / "out.toml"
+    dest.write_text("old content\n")
+    p = subprocess.Popen([sys.executable, "-c", _WRITER, str(dest)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                         text=True, env=_env())
+    assert p.stdout.readline() == "writing\n"
+    assert len(list(tmp_path.iterdir())) == 2  # the temporary file exists while writing
+    p.send_signal(getattr(signal, sig))
+    p.wait(timeout=30)
+    assert p.returncode != 0
+    if sig != "SIGINT":  # died by the signal, as without alpes_dyn's handler
+        assert p.returncode == -getattr(signal, sig)
+    assert [x.name for x in tmp_path.iterdir()] == ["out.toml"]
+    assert dest.read_text() == "old content\n"
+
+
+def _slow_cc(tmp_path: Path, seconds: float) -> Path:
+    """A C compiler that first records its TMPDIR, then waits, then runs gcc."""
+    cc = tmp_path / "slowcc"
+    cc.write_text(f"#!/bin/sh\necho \"$TMPDIR\" > {tmp_path}/tmpdir.txt\nsleep {seconds}\nexec gcc \"$@\"\n")
+    cc.chmod(0o755)
+    return cc
+
+
+def test_compiler_temp_files_in_the_build_folder(tmp_path):
+    """gcc's own temporary files go into the cache's build folder (TMPDIR), removed with it."""
+    from alpes_dyn.simulation.buildcache import build_library
+
+    cache = tmp_path / "cache"
+    lib, compiled, _, handle = build_library("int alpes_one(void) { return 1; }\n", "one", str(_slow_cc(tmp_path, 0)),
+                                             ("-O0", "-shared", "-fPIC"), cache)
+    assert compiled and handle.alpes_one() == 1
+    tmpdir = Path((tmp_path / "tmpdir.txt").read_text().strip())
+    assert tmpdir.parent == cache and tmpdir.name.startswith(".build@one_")
+    assert not tmpdir.exists()  # the build folder is gone after the build
+    assert sorted(p.name for p in cache.iterdir() if p.name.startswith(".build@")) == []
+
+
+_BUILDER = """
+import sys
+from pathlib import Path
+from alpes_dyn.simulation.buildcache import build_library
+build_library("int alpes_one(void) { return 1; }\\n", "one", sys.argv[1], ("-O0", "-shared", "-fPIC"), Path(sys.argv[2]))
+"""
+
+
+def test_sigterm_during_compile_removes_the_build_folder(tmp_path):
+    import signal
+    import time
+
+    cache = tmp_path / "cache"
+    p = subprocess.Popen([sys.executable, "-c", _BUILDER, str(_slow_cc(tmp_path, 60)), str(cache)], env=_env(),
+                         stderr=subprocess.PIPE)
+    deadline = time.monotonic() + 60
+    while not (tmp_path / "tmpdir.txt").exists() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert any(x.name.startswith(".build@") for x in cache.iterdir())
+    p.send_signal(signal.SIGTERM)
+    p.wait(timeout=30)
+    assert p.returncode == -signal.SIGTERM
+    assert [x.name for x in cache.iterdir() if not x.name.endswith(".lock")] == []
+
+
+def test_cache_needs_a_home_or_alpes_dyn_cache(monkeypatch):
+    from alpes_dyn.simulation import CompilerError, cache_dir
+
+    monkeypatch.delenv("ALPES_DYN_CACHE", raising=False)
+    for home in ("", "relative/home"):
+        monkeypatch.setenv("HOME", home)
+        with pytest.raises(CompilerError, match="set ALPES_DYN_CACHE") as e:
+            cache_dir()
+        assert "\n" not in str(e.value)
+    monkeypatch.setenv("ALPES_DYN_CACHE", "/some/cache")
+    assert cache_dir() == Path("/some/cache")
+
+
+def test_cc_that_does_not_exist_is_an_error_naming_cc(monkeypatch):
+    from alpes_dyn.simulation import CompilerError
+    from alpes_dyn.simulation.codegen import _compiler
+
+    monkeypatch.setenv("CC", "/nonexistent/cc")
+    with pytest.raises(CompilerError, match=r"^CC: the C compiler '/nonexistent/cc' is not found"):
+        _compiler()
+    monkeypatch.delenv("CC")
+    assert Path(_compiler()).name in ("gcc", "cc")  # unset: the system's gcc
+
+
+def _cli(*argv: str, **kw: Any) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "alpes_dyn.cli", *argv], text=True, timeout=120,
+                          **{"env": _env(), **kw})
+
+
+def test_stdout_broken_pipe_is_one_line_exit_2():
+    p = subprocess.Popen([sys.executable, "-m", "alpes_dyn.cli", "urdf", "hand"], stdout=subprocess.PIPE,
+                         stderr=subprocess.PIPE, text=True, env=_env())
+    p.stdout.close()  # the reader is gone before the first byte (``| head -c0``)
+    err = p.stderr.read()
+    assert p.wait(timeout=60) == 2
+    assert err == "alpes-dyn: error: stdout: broken pipe (the reader closed it before the end of the output)\n"
+
+
+def test_stdout_on_a_full_device_is_one_line_exit_2():
+    with open("/dev/full", "w") as full:
+        for argv in (("dynamics", "--json"), ("--help",)):
+            r = _cli(*argv, stdout=full, stderr=subprocess.PIPE)
+            assert r.returncode == 2, r.stderr
+            assert r.stderr == "alpes-dyn: error: stdout: cannot write the output (No space left on device)\n"
+
+
+def test_closed_stderr_keeps_the_exit_code():
+    """``2>&-``: nothing to write the error line to; the exit code still tells (2 bad input, 0 success)."""
+    close2 = lambda: os.close(2)  # noqa: E731
+    bad = _cli("dynamics", "--q", "1", capture_output=True, preexec_fn=close2)
+    assert bad.returncode == 2 and bad.stdout == ""
+    good = _cli("dynamics", "--json", stdout=subprocess.PIPE, preexec_fn=close2)
+    assert good.returncode == 0 and json.loads(good.stdout)["model"] == "finger3"
+
+
+def test_help_on_an_ascii_terminal():
+    r = _cli("identifiability", "--help", capture_output=True, env=_env(PYTHONIOENCODING="ascii"))
+    assert r.returncode == 0 and r.stderr == ""
+    assert "Cram\\xe9r-Rao" in r.stdout
+
+
+def test_byte_order_mark_accepted(tmp_path):
+    """A UTF-8 BOM (as Windows editors write) is read as nothing: TOML, spec, CSV."""
+    from alpes_dyn.estimation.recording import read_recording, write_recording
+    from alpes_dyn.model.spec import load_spec
+
+    files = bad_files(tmp_path)
+    from alpes_dyn.model.params import params_toml
+
+    assert params_toml(ad.load_params(files["bom_toml"]).raw) == params_toml(ad.load_params().raw)
+    shipped = Path(ad.__file__).parent / "data" / "allegro_hand_spec.toml"
+    (tmp_path / "bom_spec.toml").write_bytes(b"\xef\xbb\xbf" + shipped.read_bytes())
+    assert load_spec(tmp_path / "bom_spec.toml") == load_spec(shipped)
+    rec = _exp()
+    path = write_recording(rec, tmp_path / "rec.csv")
+    bom = tmp_path / "bom.csv"
+    bom.write_bytes(b"\xef\xbb\xbf" + path.read_bytes())
+    m = ad.Model.alpes("finger2")
+    a, b = read_recording(path, m), read_recording(bom, m)
+    assert np.array_equal(a.t, b.t) and np.array_equal(a.encoder, b.encoder)
+
+
+def test_header_with_control_characters_reads_back(tmp_path):
+    """A recording name with control characters (ESC, NUL, a line separator) in a written file's header:
+    escaped, so the file stays TOML that loads back to the same values."""
+    from alpes_dyn.model.params import params_toml, write_params
+
+    p = ad.load_params()
+    path = write_params(p, tmp_path / "p.toml", header="from rec\x00\x1b[31m\u2028.csv\rnext")
+    head = path.read_text().splitlines()[0]
+    assert head == "# from rec\\x00\\x1b[31m\\u2028.csv\\x0dnext"
+    assert params_toml(ad.load_params(path).raw) == params_toml(p.raw)
+
+
+def test_recording_row_limit(tmp_path, monkeypatch):
+    """Rows are counted before the CSV is parsed (the limit lowered here to 50: a real one is 20 million)."""
+    from alpes_dyn.estimation import recording
+
+    path = recording.write_recording(_exp(), tmp_path / "rec.csv")  # 201 rows
+    monkeypatch.setattr(recording, "MAX_CSV_ROWS", 50)
+    with pytest.raises(RecordingError, match=r"rec.csv': more than 50 rows \(the limit of a recording\)$"):
+        recording.read_recording(path, ad.Model.alpes("finger2"))
+    monkeypatch.setattr(recording, "MAX_CSV_ROWS", 201)
+    assert recording.read_recording(path, ad.Model.alpes("finger2")).t.shape == (201,)
+
+
+def test_long_file_name_written(tmp_path):
+    """A legal 250-character file name: the temporary name next to it must fit as well."""
+    from alpes_dyn.fileio import atomic_write
+
+    dest = tmp_path / ("r" * 246 + ".csv")
+    assert atomic_write(dest, "x\n").read_text() == "x\n"
+    assert [p.name for p in tmp_path.iterdir()] == [dest.name]
+
+
+def test_unix_epoch_time_stamps_accepted(tmp_path):
+    """t in Unix-epoch seconds (~1.7e9 s, resolution ~0.24 us): uniform to its float resolution, accepted;
+    a real jitter of 1 % of a period still refused."""
+    import dataclasses
+
+    from alpes_dyn.estimation.recording import read_recording, write_recording
+
+    rec = _exp()
+    m = ad.Model.alpes("finger2")
+    epoch = write_recording(dataclasses.replace(rec, t=rec.t + 1.7e9), tmp_path / "epoch.csv")
+    back = read_recording(epoch, m)
+    assert np.allclose(back.t - 1.7e9, rec.t, atol=1e-6) and np.array_equal(back.encoder, rec.encoder)
+    t = rec.t + 1.7e9
+    t[5] += 1e-5
+    with pytest.raises(RecordingError, match="t is not uniformly sampled"):
+        write_recording(dataclasses.replace(rec, t=t), tmp_path / "jitter.csv")
+
+
+def test_json_is_strict(capfd):
+    """Non-finite numbers never reach JSON: written as null (here: no NaN/Infinity token parses)."""
+    def refuse(token):
+        raise AssertionError(f"non-JSON token {token}")
+
+    assert cli._json_safe({"a": [1.0, float("nan")], "b": {"c": float("inf")}}) == {"a": [1.0, None], "b": {"c": None}}
+    assert cli.main(["observability", "--model", "finger2", "--json"]) == 0
+    json.loads(capfd.readouterr().out, parse_constant=refuse)

@@ -141,7 +141,7 @@ def test_cli_mjcf(capsys, tmp_path):
     (["mjcf", "finger7"], "unknown model 'finger7'"),
     (["mjcf", "hand", "--scene", "block"], "scene 'block' is for one finger"),
     (["mjcf", "finger3", "--scene", "table"], "invalid choice: 'table'"),
-    (["mjcf", "finger3", "-o", "/nonexistent/dir/x.xml"], "-o: cannot write"),
+    (["mjcf", "finger3", "-o", "/nonexistent/dir/x.xml"], "-o: directory '/nonexistent/dir' of"),
 ])
 def test_cli_mjcf_bad_input(capsys, argv, needle):
     code = main(argv)

@@ -2,23 +2,57 @@
 
 from __future__ import annotations
 
+import math
+import numbers
+
 import numpy as np
 
 from .errors import InputError
 
-__all__ = ["as_float_array"]
+__all__ = ["as_float_array", "as_positive_float"]
+
+
+def _describe(x: object) -> str:
+    return f"{x!r:.80}" if not isinstance(x, np.ndarray) else f"an array of {x.dtype} {x.shape}"
 
 
 def as_float_array(x: object, name: str, expected: str) -> np.ndarray:
     """``x`` as a float array (no copy when it already is one).
 
-    Complex values (whose imaginary part a float conversion would drop), strings and other
-    non-numbers raise :class:`~alpes_dyn.InputError` ``"<name>: expected <expected>, got ..."``.
+    Only real numbers are accepted: complex values (whose imaginary part a float conversion would
+    drop), booleans (``True`` is not 1.0 here), strings (``"1"`` is not a number either, nor a list of
+    them), None and other objects raise :class:`~alpes_dyn.InputError`
+    ``"<name>: expected <expected>, got ..."``; an integer too large for a float too.
     """
+    if isinstance(x, (str, bytes)):
+        raise InputError(f"{name}: expected {expected}, got a string {x!r:.60}")
     try:
         a = np.asarray(x)
-        if a.dtype.kind != "c":
-            return a.astype(float, copy=False) if a.dtype.kind in "fiub" else np.asarray(x, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected {expected}, got {x!r:.80}") from None
-    raise InputError(f"{name}: complex values are not supported, got {x!r:.80}")
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"{name}: expected {expected}, got {_describe(x)}") from None
+    kind = a.dtype.kind
+    if kind in "fiu":
+        return a.astype(float, copy=False)
+    if kind == "c" or (kind == "O" and any(isinstance(v, complex) for v in a.reshape(-1))):
+        raise InputError(f"{name}: complex values are not supported, got {_describe(x)}")
+    if kind == "b" or (kind == "O" and any(isinstance(v, (bool, np.bool_)) for v in a.reshape(-1))):
+        raise InputError(f"{name}: expected {expected}, got booleans {_describe(x)}")
+    if kind == "O" and all(isinstance(v, numbers.Real) for v in a.reshape(-1)):
+        try:
+            return a.astype(float)
+        except (OverflowError, TypeError, ValueError):
+            raise InputError(f"{name}: expected {expected}, got a number too large for a float") from None
+    raise InputError(f"{name}: expected {expected}, got {_describe(x)}")
+
+
+def as_positive_float(x: object, name: str, unit: str = "s") -> float:
+    """``x`` as a finite positive float (a time step, a duration): not a bool, a string or complex."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
+        raise InputError(f"{name}: expected a positive number of {unit}, got {_describe(x)}")
+    try:
+        v = float(x)
+    except (OverflowError, ValueError):
+        raise InputError(f"{name}: expected a positive number of {unit}, got a number too large") from None
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(f"{name}: expected a positive finite number of {unit}, got {v!r}")
+    return v

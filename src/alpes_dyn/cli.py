@@ -12,6 +12,7 @@ import argparse
 import importlib
 import json
 import math
+import os
 import re
 import sys
 import time
@@ -23,8 +24,8 @@ import numpy as np
 from . import __version__
 from .errors import AlpesDynError, InputError
 from .analysis.observability import MAX_INSTRUCTIONS
-from .fileio import atomic_write, check_output_path, native_stderr_to
-from .limits import MAX_POINTS
+from .fileio import atomic_write, check_outputs, native_stderr_to
+from .limits import MAX_ARGS, MAX_ORDER, MAX_POINTS
 
 VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
 _NUMLIST = re.compile(r"^-[0-9.]")
@@ -126,6 +127,25 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
+_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("data", "--data"), ("validate", "--validate"),
+                  ("true_params", "--true-params"), ("observer_params", "--observer-params"),
+                  ("plant_params", "--plant-params"))
+_OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), ("log", "--log"), ("plot", "--plot"))
+
+
+def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[str]] | None = None) -> None:
+    """The output policy (:func:`alpes_dyn.fileio.check_outputs`) of the command in ``args``, before any work:
+    every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
+    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF --model) and the others."""
+    inputs = [(flag, getattr(args, dest)) for dest, flag in _INPUT_OPTIONS if isinstance(getattr(args, dest, None), str)]
+    model = getattr(args, "model", None)
+    if isinstance(model, str) and _is_urdf_path(model):
+        inputs.append(("--model", model))
+    outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
+    outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
+    check_outputs(outputs, inputs, extensions)
+
+
 def _is_urdf_path(model: str) -> bool:
     return model.endswith(".urdf") or "/" in model
 
@@ -197,7 +217,14 @@ def cmd_linearize(args: argparse.Namespace) -> int:
         where = "the given state"
     if args.dt is not None and not (np.isfinite(args.dt) and args.dt > 0):
         raise InputError(f"--dt: expected a positive number of seconds, got {args.dt!r}")
-    A, B, C, D = ss.linearize(x0, u, dt=args.dt)
+    with warnings.catch_warnings():  # an overflow is reported below as the non-finite result it gives
+        warnings.simplefilter("ignore", RuntimeWarning)
+        A, B, C, D = ss.linearize(x0, u, dt=args.dt)
+    bad = next((k for k, M in zip("ABCD", (A, B, C, D)) if not np.isfinite(M).all()), None)
+    if bad is not None:
+        raise InputError(f"{'--dt' if args.dt is not None else '--q'}: the linearisation's {bad} matrix is not finite "
+                         f"at {'dt = %g s' % args.dt if args.dt is not None else 'this point'} (a smaller --dt, or "
+                         "another point)")
     kind = "continuous" if args.dt is None else f"discrete, zero-order hold, dt = {args.dt:g} s"
     obj = {"model": m.name, "input": args.input, "output": args.output, "dt": args.dt, "x0": x0.tolist(),
            "u0": u.tolist(), "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist(),
@@ -213,8 +240,47 @@ def cmd_linearize(args: argparse.Namespace) -> int:
     return 0
 
 
+def _json_safe(x: Any) -> Any:
+    """``x`` with every non-finite float (NaN, inf: not JSON) written as null."""
+    if isinstance(x, float):
+        return x if np.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_safe(v) for v in x]
+    return x
+
+
 def _emit(obj: dict[str, Any], text: str, as_json: bool) -> None:
-    print(json.dumps(obj) if as_json else text)
+    """Print the result: one JSON object (strict JSON: a non-finite number is null) or the text."""
+    _write_stdout((json.dumps(_json_safe(obj), allow_nan=False) if as_json else text) + "\n")
+
+
+class _StdoutError(AlpesDynError):
+    """Standard output cannot take the result (a closed pipe, a full device)."""
+
+
+def _write_stdout(text: str) -> None:
+    """Write ``text`` to stdout and flush it; a closed pipe or a full device is :class:`_StdoutError` (one line,
+    exit 2), and stdout is then pointed at /dev/null so that the interpreter's last flush cannot fail again."""
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _drop_stdout()
+        raise _StdoutError("stdout: broken pipe (the reader closed it before the end of the output)") from None
+    except OSError as exc:
+        _drop_stdout()
+        raise _StdoutError(f"stdout: cannot write the output ({exc.strerror or exc})") from None
+
+
+def _drop_stdout() -> None:
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError, AttributeError):
+        pass
 
 
 def _fmt_matrix(M: np.ndarray) -> str:
@@ -236,11 +302,12 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     from .model.description import urdf_string
     from .model.params import load_params
 
+    _check_run_files(args)
     text = urdf_string(args.model, load_params(args.params))
     if args.output is not None:
         atomic_write(args.output, text, "-o")  # never a partial file (full disk, killed process)
     else:
-        sys.stdout.write(text)
+        _write_stdout(text)
     return 0
 
 
@@ -251,6 +318,7 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
 
     if not math.isfinite(args.tilt):
         raise InputError(f"--tilt: expected a finite angle in degrees, got {args.tilt!r}")
+    _check_run_files(args)
     text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
                        rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
                        scene=args.scene, palm_down=args.palm_down, stiction=args.stiction,
@@ -259,7 +327,7 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
     if args.output is not None:
         atomic_write(args.output, text, "-o")
     else:
-        sys.stdout.write(text)
+        _write_stdout(text)
     return 0
 
 
@@ -417,6 +485,9 @@ def cmd_observability(args: argparse.Namespace) -> int:
             raise InputError(f"--order: expected auto, report or a non-negative integer, got {order!r}") from None
         if order < 0:
             raise InputError(f"--order: expected auto, report or a non-negative integer, got {order}")
+        if order > MAX_ORDER:
+            raise InputError(f"--order: {order if order < 10**30 else 'an integer of %d digits' % len(str(order))} "
+                             f"is over the limit of {MAX_ORDER}")
     model = _model_from_args(args)
     rep = observability(model, input=args.input, output=_one_or_list(args.output), points=args.points, seed=args.seed,
                         constant_input=getattr(args, "constant_input", False), order=order,
@@ -441,6 +512,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
     if args.plot is not None:
         check_plot_path(args.plot)  # before the run: matplotlib, a writable file name, a known format
+    _check_run_files(args)
     t0 = time.perf_counter()
     if args.true_params is not None and args.params is not None:
         raise InputError("--true-params: give either --params or --true-params (the simulated finger's file)")
@@ -485,8 +557,6 @@ _SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.
 def _estimate_data(args: argparse.Namespace) -> int:
     """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.replay)."""
     from .estimation.observers import OBSERVERS
-    from pathlib import Path
-
     from .estimation.recording import read_recording
     from .estimation.replay import estimate_recording
     from .model.robot import Model
@@ -496,10 +566,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
             hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
             raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
-    if args.log is not None:
-        check_output_path(args.log, "--log")
-        if Path(args.log).resolve() == Path(args.data).resolve():
-            raise InputError("--log: is the recording itself (--data); choose another file")
+    _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     t0 = time.perf_counter()
     if _is_urdf_path(args.model):
         model = _model_from_args(args)
@@ -556,8 +623,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise InputError("--serial: runs in this process; give no --workers or --scheduler with it")
     if args.scheduler is not None and args.workers != 2:
         raise InputError("--workers: sizes a local cluster; a --scheduler has its own workers")
-    if args.output is not None:
-        check_output_path(args.output, "--output")
+    _check_run_files(args)
     opts = {"model": args.model, "spread": args.spread, "duration": args.duration, "fit": not args.no_fit}
     from .estimation.experiment import ExperimentDesign
 
@@ -599,9 +665,7 @@ def _check_control_outputs(args: argparse.Namespace) -> None:
             importlib.import_module("matplotlib")
         except ImportError:
             raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
-    for opt, path, ext in (("--log", args.log, None), ("--plot", args.plot, ("png",))):
-        if path is not None:
-            check_output_path(path, opt, ext)
+    _check_run_files(args, {"--plot": ("png",)})
 
 
 def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dict[str, Any]:
@@ -701,9 +765,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     from .model.params import load_params, write_params
 
     _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
-    check_output_path(args.output, "-o")
-    if args.true_params_out is not None:
-        check_output_path(args.true_params_out, "--true-params-out")
+    _check_run_files(args)
     if args.perturb is None and args.true_params_out is not None:
         raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
     truth = load_params(args.params)
@@ -733,13 +795,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from .model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
-    if args.output is not None:
-        check_output_path(args.output, "-o")
-        from pathlib import Path
-
-        for opt, inp in (("--data", args.data), ("--validate", args.validate)):
-            if inp is not None and Path(inp).resolve() == Path(args.output).resolve():
-                raise InputError(f"-o: {args.output!r} is the {opt} recording; the fit would overwrite its input")
+    _check_run_files(args)  # the output policy: -o is none of --data, --validate, --params, nor a link...
     exc = args.excitation
     if exc == "documented":
         freqs = ExperimentDesign().frequencies
@@ -1103,6 +1159,8 @@ def _one_line(text: str) -> str:
 def _run(argv: list[str]) -> tuple[int, str | None]:
     """(exit code, error line or None) of one command."""
     try:
+        if len(argv) > MAX_ARGS:
+            raise InputError(f"{len(argv)} command-line arguments, over the limit of {MAX_ARGS}")
         args = build_parser().parse_args(_join_negative_vectors(argv))
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args), None
@@ -1114,9 +1172,33 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
         return 2, f"alpes-dyn: error: {_one_line(str(exc))}"
     except KeyboardInterrupt:
         return 130, "alpes-dyn: interrupted"
+    except MemoryError:  # a size no check foresaw: still the input's
+        return 2, "alpes-dyn: error: out of memory: the input asks for arrays larger than this machine holds"
+    except (OverflowError, RecursionError) as exc:
+        return 2, f"alpes-dyn: error: an input too large ({type(exc).__name__}: {_one_line(str(exc))[:200]})"
     except Exception as exc:  # never a traceback for a user
         msg = str(exc).strip().splitlines()[0] if str(exc).strip() else ""
         return 1, f"alpes-dyn: internal error: {type(exc).__name__}: {_one_line(msg)}"
+
+
+def _tolerant_streams() -> None:
+    """Text that the terminal's encoding cannot show (the é of Cramér under ``PYTHONIOENCODING=ascii``) is
+    written as a backslash escape rather than raising UnicodeEncodeError."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.reconfigure(errors="backslashreplace")  # type: ignore[union-attr]
+        except (AttributeError, ValueError, OSError):
+            pass
+
+
+def _say(line: str) -> None:
+    """One line on stderr; nothing if stderr is closed (``2>&-``) or cannot be written."""
+    if sys.stderr is None:
+        return
+    try:
+        print(line, file=sys.stderr, flush=True)
+    except (OSError, ValueError):
+        pass
 
 
 def main(argv: Sequence[str] | None = None) -> int:
@@ -1125,20 +1207,31 @@ def main(argv: Sequence[str] | None = None) -> int:
 
     Whatever Python warnings (e.g. numpy's RuntimeWarning) and native libraries (urdfdom, CasADi) would
     print on stderr is captured: it is appended to the error line, or, after a successful command,
-    summarised in one ``alpes-dyn: warning:`` line. stderr never gets more than one line.
+    summarised in one ``alpes-dyn: warning:`` line. stderr never gets more than one line. A closed or full
+    stdout (``| head``, ``> /dev/full``) is exit 2 with one line; a closed stderr (``2>&-``) is written to
+    nowhere, the exit code unchanged.
     """
+    _tolerant_streams()
     argv = list(sys.argv[1:] if argv is None else argv)
     printed: list[str] = []
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         with native_stderr_to(printed):
-            code, error = _run(argv)
+            try:
+                code, error = _run(argv)
+            except SystemExit as done:  # --help, --version: argparse printed them
+                try:
+                    _write_stdout("")
+                except _StdoutError as exc:
+                    code, error = 2, f"alpes-dyn: error: {exc}"
+                else:
+                    raise done
     notes = [_one_line(f"{w.category.__name__}: {w.message}") for w in caught] + [_one_line(p) for p in printed]
     more = f" (+{len(notes) - 1} more)" if len(notes) > 1 else ""
     if error is not None:
-        print(error + (f" [{notes[0]}{more}]" if notes else ""), file=sys.stderr)
+        _say(error + (f" [{notes[0]}{more}]" if notes else ""))
     elif notes:
-        print(f"alpes-dyn: warning: {notes[0]}{more}", file=sys.stderr)
+        _say(f"alpes-dyn: warning: {notes[0]}{more}")
     return code
 
 

@@ -2,9 +2,24 @@
 
 from __future__ import annotations
 
+import re
+
+_NUMPY_REPR = re.compile(r"\bnp\.(?:float|int|uint|complex|bool|str)_?(?:\d+)?\(([^()]*)\)")
+
+
+def plain(text: str) -> str:
+    """``text`` with numpy scalar reprs written as numbers: ``np.float64(0.1)`` -> ``0.1``."""
+    return re.sub(r"\bnp\.(True|False)_", r"\1", _NUMPY_REPR.sub(r"\1", text))
+
 
 class AlpesDynError(Exception):
-    """Base class of every error raised on purpose by alpes_dyn."""
+    """Base class of every error raised on purpose by alpes_dyn. A message holding numpy scalar reprs
+    (``np.float64(0.1)``, from ``{x!r}`` of a numpy value) is stored with plain numbers (``0.1``)."""
+
+    def __init__(self, *args: object) -> None:
+        if args and isinstance(args[0], str):
+            args = (plain(args[0]), *args[1:])
+        super().__init__(*args)
 
 
 class ModelError(AlpesDynError, ValueError):

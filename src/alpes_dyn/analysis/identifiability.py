@@ -59,6 +59,7 @@ from typing import Any, Sequence
 import casadi as cs
 import numpy as np
 
+from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from ..limits import MAX_POINTS
 from ..model.robot import Model
@@ -493,10 +494,7 @@ def _num(x: float) -> float | None:
 
 
 def _array(a: Any, name: str, ndim: int) -> np.ndarray:
-    try:
-        out = np.asarray(a, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of numbers, got {type(a).__name__}") from None
+    out = as_float_array(a, name, "an array of numbers")
     if out.ndim != ndim:
         raise InputError(f"{name}: expected a {ndim}-D array, got shape {out.shape}")
     if not np.isfinite(out).all():

@@ -76,7 +76,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
-from ..limits import MAX_POINTS
+from ..limits import MAX_ORDER, MAX_POINTS
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
 
@@ -268,6 +268,8 @@ def _max_operations(cap: Any) -> int:
 def _order(k: Any) -> int:
     if isinstance(k, (bool, np.bool_)) or not isinstance(k, (int, np.integer)) or k < 0:
         raise InputError(f"order: expected a non-negative integer, got {k!r}")
+    if k > MAX_ORDER:
+        raise InputError(f"order: {int(k)} is over the limit of {MAX_ORDER}")
     return int(k)
 
 

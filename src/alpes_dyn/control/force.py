@@ -62,6 +62,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 from ..fileio import atomic_path
+from ..limits import check_bytes, check_duration
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 from ..model.robot import Model
 from ..estimation.observers import make_observer
@@ -322,10 +323,22 @@ class ControlScenario:
             raise InputError(f"reference: unknown reference {self.reference!r} (expected one of {', '.join(REFERENCES)})")
         if not (isinstance(self.duration, (int, float)) and math.isfinite(self.duration) and self.duration > 0):
             raise InputError(f"duration: expected a positive number of seconds, got {self.duration!r}")
-        if not self.settle < self.duration:
-            raise InputError(f"duration: {self.duration:g} s must be longer than the settling time {self.settle:g} s")
+        check_duration(self.duration, "duration")
+        if not self.settle + _METRIC_WINDOW_S <= self.duration:
+            raise InputError(f"duration: {self.duration:g} s leaves less than {_METRIC_WINDOW_S:g} s after the settling "
+                             f"time {self.settle:g} s (the metrics' window)")
+        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0):
+            raise InputError(f"dt: expected a positive number of seconds, got {self.dt!r}")
+        check_bytes(8.0 * self.duration / self.dt * _SAMPLE_ARRAYS, "duration",
+                    f"{self.duration:g} s at dt = {self.dt:g} s")
         if self.substeps < 1:
             raise InputError(f"substeps: expected a positive integer, got {self.substeps!r}")
+
+
+_METRIC_WINDOW_S = 0.05
+"""Shortest run after the settling time, s: the force RMSE needs samples (50 at 1 kHz)."""
+_SAMPLE_ARRAYS = 64
+"""Float64 values a closed-loop run keeps per sample (an upper bound: traces of forces, torques, q, q-hat)."""
 
 
 @dataclass
@@ -726,6 +739,9 @@ class HandControlScenario:
                 raise InputError(f"{name}: expected a number >= 0, got {getattr(self, name)!r}")
         if self.dt <= 0 or self.duration <= 0:
             raise InputError(f"{'dt' if self.dt <= 0 else 'duration'}: expected a positive number of seconds")
+        check_duration(self.duration, "duration")
+        check_bytes(8.0 * self.duration / self.dt * _SAMPLE_ARRAYS * 5, "duration",
+                    f"{self.duration:g} s at dt = {self.dt:g} s")
         if not (0.0 <= self.settle and self.settle + 0.25 <= self.step_time and self.step_time + 0.25 <= self.duration):
             raise InputError(f"step_time: expected settle + 0.25 s <= step_time <= duration - 0.25 s (the metrics' "
                              f"windows), got settle {self.settle:g}, step_time {self.step_time:g}, duration "

@@ -48,6 +48,7 @@ from typing import Callable, Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..limits import MAX_DURATION_S
 from ..model.robot import Model
 from ..model.params import HandParams, Param, load_params, with_values
 from .recording import Recording, write_recording
@@ -86,6 +87,8 @@ class ExperimentDesign:
     def check(self) -> "ExperimentDesign":
         if not (math.isfinite(self.dt) and 0 < self.dt <= 0.1):
             raise InputError(f"dt: expected a sample period in (0, 0.1] s, got {self.dt!r}")
+        if isinstance(self.duration, (int, float)) and math.isfinite(self.duration) and self.duration > MAX_DURATION_S:
+            raise InputError(f"duration: {self.duration:g} s is over the limit of {MAX_DURATION_S:g} s")
         N = round(self.duration / self.dt) if math.isfinite(self.duration) else -1
         if N < 100 or abs(N * self.dt - self.duration) > 1e-9 * self.duration:
             raise InputError(f"duration: expected a whole number of at least 100 samples of {self.dt:g} s, "

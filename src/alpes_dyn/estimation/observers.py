@@ -52,6 +52,7 @@ from typing import Any, Sequence
 import casadi as cs
 import numpy as np
 
+from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from ..limits import check_bytes
 from ..rebuild import Rebuilt
@@ -162,10 +163,7 @@ def _finite_number(x: Any, name: str) -> float:
 
 def _cov(value: Any, n: int, name: str) -> np.ndarray:
     """A covariance from variances (n,) or a matrix (n, n), checked symmetric positive semidefinite."""
-    try:
-        a = np.asarray(value, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected {n} variances or an ({n}, {n}) covariance, got {value!r}") from None
+    a = as_float_array(value, name, f"{n} variances or an ({n}, {n}) covariance")
     if a.ndim == 0:
         a = np.full(n, float(a))
     if a.shape == (n,):
@@ -348,8 +346,8 @@ class KalmanFilter(Rebuilt):
         :class:`Estimate` with z (N+1, nz), P (N+1, nz, nz): z[k] uses Y[0..k].
         """
         z0, P0 = self._z(z0, "z0"), self._P(P0, "P0")
-        W = np.asarray(W, dtype=float)
-        Y = np.asarray(Y, dtype=float)
+        W = as_float_array(W, "W", "an array of known inputs")
+        Y = as_float_array(Y, "Y", "an array of measurements")
         if W.ndim == 1 and self.nw == 1:
             W = W[:, None]
         if Y.ndim == 1 and self.ny == 1:

@@ -29,13 +29,14 @@ from __future__ import annotations
 import csv
 import io
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import RecordingError
+from ..fileio import atomic_write, read_bytes
+from ..limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES
 from ..model.robot import Model
 
 __all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
@@ -109,15 +110,7 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
     buf.write(",".join(names) + "\n")
     for row in data:
         buf.write(",".join(_fmt(x) for x in row) + "\n")
-    p = Path(path)
-    tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(buf.getvalue(), encoding="utf-8")
-        os.replace(tmp, p)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise RecordingError(f"recording {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
-    return p
+    return atomic_write(path, buf.getvalue(), "recording", RecordingError)
 
 
 def read_recording(path: str | Path, model: Model, torque_constant: float | None = None) -> Recording:
@@ -126,17 +119,28 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
     them and refused without them. Raises :class:`~alpes_dyn.errors.RecordingError`.
     """
+    data_bytes = read_bytes(path, "recording", RecordingError, MAX_RECORDING_BYTES)
     p = Path(path)
     try:
-        text = p.read_bytes().decode("utf-8")
-    except OSError as exc:
-        raise RecordingError(f"recording {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
+        text = data_bytes.decode("utf-8-sig")  # a byte-order mark is accepted
     except UnicodeDecodeError:
         raise RecordingError(f"recording {str(p)!r}: not a UTF-8 text file") from None
-    rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
+    del data_bytes
+    if text.count("\n") > MAX_CSV_ROWS + 1:
+        raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
+    try:
+        rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
+    except csv.Error as exc:  # a cell over the csv module's own limit (131072 characters)
+        if "field larger" in str(exc):
+            raise RecordingError(f"recording {str(p)!r}: a cell over the limit of {MAX_CSV_CELL} characters") from None
+        raise RecordingError(f"recording {str(p)!r}: not a CSV file ({exc})") from None
+    del text
     if not rows:
         raise RecordingError(f"recording {str(p)!r}: empty file")
     header = [h.strip() for h in rows[0]]
+    long = next((h for h in header if len(h) > MAX_CSV_CELL), None)
+    if long is not None:
+        raise RecordingError(f"recording: a column name of {len(long)} characters, over the limit of {MAX_CSV_CELL}")
     if len(set(header)) != len(header):
         dup = next(h for h in header if header.count(h) > 1)
         raise RecordingError(f"recording: column {dup!r} appears twice")
@@ -158,6 +162,9 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
             raise RecordingError(f"recording: line {i} has {len(row)} fields, the header {len(header)}")
         for j, cell in enumerate(row):
             c = cell.strip()
+            if len(c) > MAX_CSV_CELL:
+                raise RecordingError(f"recording: column {header[j]!r} line {i}: a cell of {len(c)} characters, "
+                                     f"over the limit of {MAX_CSV_CELL}")
             if c == "":
                 if header[j] not in optional_nan:
                     raise RecordingError(f"recording: column {header[j]!r} is empty at line {i} "
@@ -233,7 +240,9 @@ def check_recording(rec: Recording) -> Recording:
         k = int(np.argmax(dts <= 0))
         raise RecordingError(f"recording: t is not strictly increasing (row {k + 2}: {t[k + 1]!r} after {t[k]!r})")
     dt = (t[-1] - t[0]) / (N - 1)
-    if np.max(np.abs(dts - dt)) > 1e-6 * dt + 1e-12:
+    # tolerance: 1e-6 of the period, or the float resolution of the time stamps (Unix-epoch times, ~1.7e9 s,
+    # hold only ~0.24 us: their steps jitter by that much)
+    if np.max(np.abs(dts - dt)) > 1e-6 * dt + 1e-12 + 4 * float(np.spacing(max(abs(t[0]), abs(t[-1])))):
         k = int(np.argmax(np.abs(dts - dt)))
         raise RecordingError(f"recording: t is not uniformly sampled (step {dts[k]:g} s at row {k + 2}, "
                              f"mean {dt:g} s)")

@@ -73,6 +73,8 @@ def _check_settings(sc: "EstimationScenario") -> None:
             continue
         if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
             raise InputError(f"{name}: expected a number, got {x!r}")
+        if isinstance(x, int) and abs(x) > 2**53:
+            raise InputError(f"{name}: {str(x)[:20]}... is too large")
         if not np.isfinite(x):
             raise InputError(f"{name}: expected a finite number, got {x!r}")
     if not sc.dt > 0:
@@ -267,6 +269,8 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     rng = np.random.default_rng(sc.seed)
     n, m = truth.n, truth.transmission.n_motors
     held, held_motors = _held_joints(truth)
+    if not sc.duration / sc.dt < 2.0**53:
+        raise InputError(f"duration: {sc.duration:g} s at dt = {sc.dt:g} s is more than 2^53 samples")
     N = int(round(sc.duration / sc.dt))
     if N < 2:
         raise InputError(f"duration: {sc.duration:g} s is shorter than two samples of dt = {sc.dt:g} s")

@@ -218,6 +218,8 @@ def write_urdfs(directory: str | Path, params: HandParams | str | Path | None = 
     ``directory`` is a file or cannot be created or written."""
     if not isinstance(directory, (str, os.PathLike)) or not str(directory).strip():
         raise InputError(f"directory: expected a folder path, got {directory!r}")
+    if "\0" in str(directory):
+        raise InputError(f"directory: the folder name {str(directory)[:80]!r} contains a NUL byte")
     d = Path(directory)
     if d.exists() and not d.is_dir():
         raise InputError(f"directory: {str(d)!r} exists and is not a folder")

@@ -16,8 +16,8 @@ backends read:
 
 What the library does not model is refused with one line naming it, never dropped: free, ball and slide
 joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
-  an armature on a tendon no actuator pulls,
-equality constraints. Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
+an armature on a tendon no actuator pulls, equality constraints. An MJCF file must be a regular file within
+:data:`alpes_dyn.limits.MAX_TEXT_BYTES` (checked before MuJoCo's parser reads it). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
 and forward dynamics as the model exported, to 1e-12.
 """
 
@@ -29,6 +29,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import ModelError
+from ..fileio import read_bytes
 from .spec import Motor, TransmissionSpec
 
 __all__ = ["mjcf_to_urdf"]
@@ -52,6 +53,8 @@ def _compile(mjcf: str | Path):
         raise ModelError("mjcf: expected MJCF text containing a <mujoco> element, or the path of such a file")
     if not is_text and not Path(mjcf).is_file():
         raise ModelError(f"mjcf: {str(mjcf)!r} is not a file")
+    if not is_text:  # a regular file within the size limit, before MuJoCo's parser reads it
+        read_bytes(mjcf, "mjcf", ModelError)
     try:
         if is_text:
             return mujoco.MjModel.from_xml_string(mjcf)

@@ -22,8 +22,7 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import os
-import tomllib
+import re
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -32,7 +31,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import ModelError
-from ..fileio import read_text
+from ..fileio import atomic_write, load_toml, read_text
 
 __all__ = [
     "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
@@ -65,6 +64,22 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
 _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v"}
+# the unit each field's value is read in: a file giving another one is refused (no conversion is made)
+_UNITS: dict[str, str] = {
+    **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
+    "finger.K": "N m/rad", "finger.lower": "rad", "finger.upper": "rad", "finger.F_s": "N m",
+    "finger.F_v": "N m s/rad",
+    **{f"thumb.{k}": "m" for k in ("L", "s", "radius")}, "thumb.m": "kg", "thumb.I": "kg m^2", "thumb.K": "N m/rad",
+    "thumb.base_mass": "kg", "thumb.abduction_K": "N m/rad", "thumb.abduction_axis": "-", "thumb.abduction_lower": "rad",
+    "thumb.abduction_upper": "rad", "thumb.F_s": "N m", "thumb.F_v": "N m s/rad", "thumb.abduction_F_s": "N m",
+    "thumb.abduction_F_v": "N m s/rad",
+    "palm.finger_names": "-", "palm.finger_x": "m", "palm.finger_y": "m", "palm.thumb_xyz": "m", "palm.thumb_yaw": "rad",
+    "transmission.r_m": "m", "transmission.abduction_ratio": "-", "transmission.J_m": "kg m^2", "transmission.N": "-",
+    "transmission.encoder_counts": "counts/rev", "transmission.tau_max": "N m",
+    "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
+    "environment.gravity": "m/s^2",
+}
+_INTEGER = {"transmission.encoder_counts"}  # fields whose value must be a whole number
 _ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
 # per-finger overrides: a table [finger.<name>] (name from palm.finger_names) with any of these fields, which
 # replace the shared [finger] values on that finger only (a real hand's fingers differ link by link)
@@ -213,12 +228,24 @@ def default_params_path() -> Path:
     return Path(str(resources.files("alpes_dyn") / "data" / "alpes_hand.toml"))
 
 
+_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
+
+
+def _header_line(text: str) -> str:
+    """One comment line of a file header: control characters written as escapes (TOML refuses them raw)."""
+    return "".join(c if c.isprintable() else f"\\x{ord(c):02x}" if ord(c) < 256 else f"\\u{ord(c):04x}"
+                   for c in text)
+
+
 def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
     if kind == "str":
         if not (isinstance(value, list) and len(value) == length and all(isinstance(v, str) and v for v in value)):
             raise ModelError(f"{name}: value must be a list of {length} non-empty strings (got {value!r})")
         if len(set(value)) != len(value):
             raise ModelError(f"{name}: names must be unique (got {value!r})")
+        bad = next((v for v in value if not _NAME.fullmatch(v)), None)
+        if bad is not None:  # a name goes into URDF/MJCF attributes, joint names and CSV column names
+            raise ModelError(f"{name}: {bad[:40]!r} is not a name: letters, digits and '_', starting with a letter")
         return tuple(value)
     if length is None:
         if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -332,6 +359,14 @@ def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
     if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
         raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
     value = _check_value(name, entry["value"], length, kind)
+    field_name = ".".join(name.split(".")[::2]) if name.count(".") == 2 else name  # finger.<nm>.K -> finger.K
+    unit, expected = entry["unit"], _UNITS.get(field_name)
+    if expected is not None and (not isinstance(unit, str) or " ".join(unit.split()) not in
+                                 ((expected, "", "1") if expected == "-" else (expected,))):
+        raise ModelError(f"{name}.unit: the value is read in {expected!r}, got {unit!r} (convert it; no other unit "
+                         "is accepted)")
+    if field_name in _INTEGER and not float(value).is_integer():
+        raise ModelError(f"{name}: value must be a whole number, got {value:g}")
     std = None
     if "std" in entry:
         if source != "identified":
@@ -386,10 +421,7 @@ def load_params(path: str | Path | None = None) -> HandParams:
 
 
 def _from_text(text: str, path: str) -> HandParams:
-    try:
-        data = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as exc:
-        raise ModelError(f"parameter file {path!r}: invalid TOML ({exc})") from None
+    data = load_toml(text, f"parameter file {path!r}", ModelError)
     raw = _parse(data)
     v = {k: prm.value for k, prm in raw.items()}
     ident = _identification(data.get("identification", {}), tuple(v["palm.finger_names"]))
@@ -432,8 +464,8 @@ def _toml_value(x: Any) -> str:
 def params_toml(raw: dict[str, Param], header: str = "",
                 identification: dict[str, dict[str, Any]] | None = None) -> str:
     """TOML text of a parameter set (``HandParams.raw``, and its ``identification`` records), in the
-    schema's order; loads back to the same."""
-    lines = [f"# {h}" for h in header.splitlines()] + ([""] if header else [])
+    schema's order; loads back to the same. The header's control characters are escaped."""
+    lines = [f"# {_header_line(h)}" for h in header.split("\n")] + ([""] if header else [])
 
     def section_lines(section: str, fields) -> None:
         lines.append(f"[{section}]")
@@ -492,16 +524,8 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "",
 
 def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:
     """Write ``params`` as a parameter file (atomically: a temporary file renamed into place)."""
-    p = Path(path)
     text = params_toml(params.raw, header, params.identification)
-    tmp = p.with_name(f".{p.name}.tmp{os.getpid()}")
-    try:
-        tmp.write_text(text, encoding="utf-8")
-        os.replace(tmp, p)
-    except OSError as exc:
-        tmp.unlink(missing_ok=True)
-        raise ModelError(f"parameter file {str(p)!r}: cannot be written ({exc.strerror or exc})") from None
-    return p
+    return atomic_write(path, text, "parameter file", ModelError)
 
 
 def chain_params(params: HandParams, chain: str) -> HandParams:

@@ -45,7 +45,7 @@ The shipped example for the Allegro hand of example-robot-data is ``example_spec
 from __future__ import annotations
 
 import math
-import tomllib
+import os
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -56,6 +56,7 @@ import numpy as np
 
 from .description import Layout
 from ..errors import ModelError
+from ..fileio import load_toml, read_text
 from .extras import JointExtras, spring_stiffness
 from .params import HandParams
 from .transmission import Transmission
@@ -216,10 +217,7 @@ class TransmissionSpec:
     @classmethod
     def from_toml(cls, text: str, source: str = "spec") -> "TransmissionSpec":
         """Parse the TOML text of a spec; errors name ``source`` and the field."""
-        try:
-            data = tomllib.loads(text)
-        except tomllib.TOMLDecodeError as exc:
-            raise ModelError(f"spec file {source!r}: invalid TOML ({exc})") from None
+        data = load_toml(text, f"spec file {source!r}", ModelError)
         try:
             return cls.from_dict(data)
         except ModelError as exc:
@@ -316,14 +314,8 @@ def _toml_key(s: str) -> str:
 
 def load_spec(path: str | Path) -> TransmissionSpec:
     """Read a spec file (TOML, see the module doc); :class:`~alpes_dyn.ModelError` naming the file and field."""
-    p = Path(path)
-    try:
-        text = p.read_text()
-    except OSError as exc:
-        raise ModelError(f"spec file {str(p)!r}: cannot be read ({exc.strerror or exc})") from None
-    except UnicodeDecodeError:
-        raise ModelError(f"spec file {str(p)!r}: not UTF-8 text") from None
-    return TransmissionSpec.from_toml(text, str(p))
+    text = read_text(path, "spec file", ModelError)
+    return TransmissionSpec.from_toml(text, os.fspath(path))
 
 
 def example_spec_path(name: str = "allegro_hand") -> Path:

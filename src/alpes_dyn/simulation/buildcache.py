@@ -11,10 +11,12 @@ a hash of the source, the compiler and its flags) and returns it loaded with :mo
 * **locked** -- a build holds an exclusive ``fcntl`` lock on ``<stem>_<key>.lock``, so that
   concurrent processes (or threads) needing the same library compile it once; the others wait and
   load the result;
-* **atomic** -- the compiler writes into a private build folder ``.build@<stem>_<key>@...``; the
+* **atomic** -- the compiler writes into a private build folder ``.build@<stem>_<key>@...`` (its own
+  temporary files too: ``TMPDIR`` points there for the compiler's process); the
   finished library is flushed to disk and renamed into place, then its record is written (also by
   rename), so a reader never sees a half-written file;
-* **cleaned** -- build folders left by killed builds (their lock is free) are removed by the next
+* **cleaned** -- a build stopped by SIGINT, SIGTERM or SIGHUP removes its folder (and stops the
+  compiler); build folders left by killed builds (SIGKILL: their lock is free) are removed by the next
   build, as are ``tmp*`` folders older than an hour left by versions before this cache.
 
 Errors are :class:`CompilerError` with one line.
@@ -34,7 +36,7 @@ from pathlib import Path
 from typing import Iterator, Sequence
 
 from ..errors import AlpesDynError
-from ..fileio import atomic_write
+from ..fileio import atomic_write, signals_as_exceptions
 
 try:  # POSIX; elsewhere builds are not locked
     import fcntl
@@ -179,32 +181,44 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
             return lib, False, 0.0, handle
         _remove(lib, _record_path(lib))  # missing, broken or unloadable: build it again
         t0 = time.perf_counter()
+        with signals_as_exceptions():  # SIGTERM/SIGHUP: the build folder removed, the compiler stopped
+            return _build_locked(source, stem, cc, cflags, d, libs, name, lib, t0)
+
+
+def _build_locked(source: str, stem: str, cc: str, cflags: Sequence[str], d: Path, libs: Sequence[str], name: str,
+                  lib: Path, t0: float) -> tuple[Path, bool, float, ctypes.CDLL]:
+    """The compilation of :func:`build_library`, its lock held: in a private build folder, renamed into place."""
+    try:
+        build = Path(tempfile.mkdtemp(prefix=f"{_BUILD}{name}@", dir=d))
+    except OSError as exc:
+        raise CompilerError(f"cache directory {str(d)!r}: not writable ({exc.strerror or exc})") from None
+    try:
+        c = build / f"{stem}.c"
+        c.write_text(source, encoding="utf-8")
+        out = build / f"{stem}.so"
+        env = dict(os.environ, TMPDIR=str(build))  # gcc's own temporary files (cc*.s, cc*.o) in the build folder
         try:
-            build = Path(tempfile.mkdtemp(prefix=f"{_BUILD}{name}@", dir=d))
+            proc = subprocess.run([cc, *cflags, str(c), "-o", str(out), *libs], capture_output=True, text=True,
+                                  env=env)
         except OSError as exc:
-            raise CompilerError(f"cache directory {str(d)!r}: not writable ({exc.strerror or exc})") from None
-        try:
-            c = build / f"{stem}.c"
-            c.write_text(source, encoding="utf-8")
-            out = build / f"{stem}.so"
-            proc = subprocess.run([cc, *cflags, str(c), "-o", str(out), *libs], capture_output=True, text=True)
-            if proc.returncode != 0:
-                first = (proc.stderr.strip().splitlines() or ["unknown error"])[0]
-                raise CompilerError(f"compiling {stem}.c failed: {first}")
-            with open(out, "rb+") as f:
-                os.fsync(f.fileno())
-            size, digest = out.stat().st_size, _digest(out)
-            os.replace(out, lib)  # atomic: a reader sees the old state or the whole library
-            atomic_write(_record_path(lib), f"sha256 {digest}\nsize {size}\n", "cache record")
-        except OSError as exc:
-            raise CompilerError(f"cache: cannot write {name}.so ({exc.strerror or exc})") from None
-        except AlpesDynError as exc:
-            if isinstance(exc, CompilerError):
-                raise
-            raise CompilerError(f"cache: {exc}") from None
-        finally:
-            shutil.rmtree(build, ignore_errors=True)
-        handle = _load(lib)
-        if handle is None:
-            raise CompilerError(f"cache: the freshly built {str(lib)!r} cannot be loaded")
-        return lib, True, time.perf_counter() - t0, handle
+            raise CompilerError(f"C compiler {cc!r} cannot be run ({exc.strerror or exc}; set CC)") from None
+        if proc.returncode != 0:
+            first = (proc.stderr.strip().splitlines() or ["unknown error"])[0]
+            raise CompilerError(f"compiling {stem}.c failed: {first}")
+        with open(out, "rb+") as f:
+            os.fsync(f.fileno())
+        size, digest = out.stat().st_size, _digest(out)
+        os.replace(out, lib)  # atomic: a reader sees the old state or the whole library
+        atomic_write(_record_path(lib), f"sha256 {digest}\nsize {size}\n", "cache record")
+    except OSError as exc:
+        raise CompilerError(f"cache: cannot write {name}.so ({exc.strerror or exc})") from None
+    except AlpesDynError as exc:
+        if isinstance(exc, CompilerError):
+            raise
+        raise CompilerError(f"cache: {exc}") from None
+    finally:
+        shutil.rmtree(build, ignore_errors=True)
+    handle = _load(lib)
+    if handle is None:
+        raise CompilerError(f"cache: the freshly built {str(lib)!r} cannot be loaded")
+    return lib, True, time.perf_counter() - t0, handle

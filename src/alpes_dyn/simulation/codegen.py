@@ -29,9 +29,18 @@ __all__ = ["CompiledStepLoop", "CasadiStepLoop", "cache_dir", "CompilerError"]
 
 # ----------------------------------------------------------------------------- C compilation and cache
 def cache_dir() -> Path:
-    """Directory of compiled libraries: ``$ALPES_DYN_CACHE`` or ``~/.cache/alpes_dyn``."""
-    env = os.environ.get("ALPES_DYN_CACHE")
-    return Path(env) if env else Path.home() / ".cache" / "alpes_dyn"
+    """Directory of compiled libraries: ``$ALPES_DYN_CACHE`` if set and not empty, else
+    ``$HOME/.cache/alpes_dyn``. With neither (``HOME`` unset, empty or not an absolute path) a
+    :class:`CompilerError` asks for ``ALPES_DYN_CACHE``: never a cache at ``/.cache`` or relative to the
+    working directory."""
+    env = os.environ.get("ALPES_DYN_CACHE", "").strip()
+    if env:
+        return Path(env)
+    home = os.environ.get("HOME", "")
+    if not (home.strip() and os.path.isabs(home)):
+        raise CompilerError(f"HOME is {'empty' if not home.strip() else 'not an absolute path (%r)' % home}: set "
+                            "ALPES_DYN_CACHE to a folder for the compiled-code cache")
+    return Path(home) / ".cache" / "alpes_dyn"
 
 
 _CFLAGS = ("-O3", "-fno-math-errno", "-shared", "-fPIC", "-pthread")
@@ -39,10 +48,15 @@ _LANES = 2
 
 
 def _compiler() -> str:
-    cc = os.environ.get("CC", "gcc")
-    path = shutil.which(cc) or shutil.which("cc")
+    cc = os.environ.get("CC", "").strip()
+    if cc:  # asked for by name: that compiler or an error, never another one silently
+        path = shutil.which(cc)
+        if path is None:
+            raise CompilerError(f"CC: the C compiler {cc!r} is not found or not executable (unset CC to use gcc)")
+        return path
+    path = shutil.which("gcc") or shutil.which("cc")
     if path is None:
-        raise CompilerError(f"C compiler {cc!r} not found (install gcc or set CC); it builds the compiled rollout")
+        raise CompilerError("C compiler gcc not found (install gcc or set CC); it builds the compiled rollout")
     return path
 
 

@@ -38,6 +38,7 @@ import numpy as np
 
 from .buildcache import CompilerError
 from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
+from ..checks import as_float_array
 from ..errors import InputError
 from ..limits import check_bytes
 from ..rebuild import Rebuilt
@@ -149,22 +150,30 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
 
 # ----------------------------------------------------------------------------- input checks
 def _check_dt(dt: Any) -> float:
+    if isinstance(dt, (bool, np.bool_)):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
     try:
         d = float(dt)
-    except (TypeError, ValueError):
-        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}") from None
+    if isinstance(dt, (str, bytes, complex)):
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}")
     if not math.isfinite(d) or d <= 0:
         raise InputError(f"dt: expected a positive finite number of seconds, got {dt!r}")
     return d
 
 
 def _n_steps(duration: Any, dt: float) -> int:
+    if isinstance(duration, (bool, np.bool_, str, bytes, complex)):
+        raise InputError(f"duration: expected a positive number of seconds, got {duration!r:.60}")
     try:
         T = float(duration)
-    except (TypeError, ValueError):
-        raise InputError(f"duration: expected a positive number of seconds, got {duration!r}") from None
+    except (TypeError, ValueError, OverflowError):
+        raise InputError(f"duration: expected a positive finite number of seconds, got {str(duration)[:60]}") from None
     if not math.isfinite(T) or T <= 0:
         raise InputError(f"duration: expected a positive finite number of seconds, got {duration!r}")
+    if not T / dt < 2.0**53:
+        raise InputError(f"duration: {T:g} s at dt = {dt:g} s is more than 2^53 steps")
     N = int(round(T / dt))
     if N < 1 or abs(N * dt - T) > 1e-9 * max(T, dt):
         raise InputError(f"duration: {T:g} s is not a whole number of steps dt = {dt:g} s")
@@ -186,18 +195,14 @@ def _sample(inputs: InputLike, t: np.ndarray, m: int, name: str) -> np.ndarray:
         rows = []
         for tk in t:  # a user's Python callable: sampled once per step
             try:
-                v = np.asarray(inputs(float(tk)), dtype=float).reshape(-1)
+                v = as_float_array(inputs(float(tk)), name, f"{m} numbers").reshape(-1)
             except (TypeError, ValueError) as exc:
                 raise InputError(f"{name}: the callable must return {m} numbers ({exc})") from None
             if v.shape != (m,):
                 raise InputError(f"{name}: the callable returned {v.size} values at t = {tk:g} s, expected {m}")
             rows.append(v)
         return _finite(np.array(rows), f"{name}(t)")
-    try:
-        a = np.asarray(inputs, dtype=float)
-    except (TypeError, ValueError):
-        raise InputError(f"{name}: expected an array of numbers or a callable of time, "
-                         f"got {type(inputs).__name__}") from None
+    a = as_float_array(inputs, name, "an array of numbers or a callable of time")
     if a.ndim == 0 or a.shape == (m,):
         a = np.broadcast_to(a, (N, m)).copy()
     elif m == 1 and a.shape == (N,):
@@ -217,7 +222,7 @@ def _sample_force(force: InputLike, t: np.ndarray, k: int = 3) -> np.ndarray:
         out = np.zeros((N, 3))
         for k, tk in enumerate(t):
             try:
-                v = np.asarray(force(float(tk)), dtype=float).reshape(-1)
+                v = as_float_array(force(float(tk)), "force", "F_z or (Fx, Fy, Fz)").reshape(-1)
             except (TypeError, ValueError) as exc:
                 raise InputError(f"force: the callable must return F_z or (Fx, Fy, Fz) ({exc})") from None
             if v.size == 1:
@@ -227,7 +232,7 @@ def _sample_force(force: InputLike, t: np.ndarray, k: int = 3) -> np.ndarray:
             else:
                 raise InputError(f"force: the callable returned {v.size} values at t = {tk:g} s, expected 1 or 3")
         return _finite(out, "force(t)")
-    a = np.asarray(force, dtype=float)
+    a = as_float_array(force, "force", "F_z or (Fx, Fy, Fz) numbers")
     if a.ndim == 0 or a.shape == (N,):
         out = np.zeros((N, 3))
         out[:, 2] = a
@@ -428,8 +433,8 @@ class CompiledRollout(Rebuilt):
         -------
         (B, N+1, 2n) states, X[:, 0] = x0_batch.
         """
-        x0 = np.asarray(x0_batch, dtype=float)
-        U = np.asarray(U_batch, dtype=float)
+        x0 = as_float_array(x0_batch, "x0_batch", "an array of states")
+        U = as_float_array(U_batch, "U_batch", "an array of inputs")
         m = self.system.n_inputs
         if x0.ndim == 1:
             x0 = x0[None, :]
@@ -447,7 +452,7 @@ class CompiledRollout(Rebuilt):
         if self.system.force:
             if F_batch is None:
                 raise InputError(f"F_batch: this rollout has the contact force as an input; pass (B, N, {nf})")
-            F = np.asarray(F_batch, dtype=float)
+            F = as_float_array(F_batch, "F_batch", "an array of forces")
             if F.ndim == 2:
                 F = F[None]
             if F.ndim != 3 or F.shape[1:] != (N, nf):

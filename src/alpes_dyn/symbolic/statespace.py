@@ -356,15 +356,24 @@ class StateSpace(Rebuilt):
             raise InputError("linearize: the Jacobians are not finite at this point (state or inputs too large?)")
         if dt is None:
             return A, B, C, D
-        if method == "euler":
-            return np.eye(A.shape[0]) + A * dt, B * dt, C, D
-        from scipy.linalg import expm
+        import warnings
 
-        N, m = A.shape[0], B.shape[1]
-        E = np.zeros((N + m, N + m))
-        E[:N, :N], E[:N, N:] = A, B
-        Phi = expm(E * float(dt))
-        return Phi[:N, :N], Phi[:N, N:], C, D
+        with warnings.catch_warnings():  # an overflow is refused below, as the non-finite result it gives
+            warnings.simplefilter("ignore", RuntimeWarning)
+            if method == "euler":
+                Ad, Bd = np.eye(A.shape[0]) + A * dt, B * dt
+            else:
+                from scipy.linalg import expm
+
+                N, m = A.shape[0], B.shape[1]
+                E = np.zeros((N + m, N + m))
+                E[:N, :N], E[:N, N:] = A, B
+                Phi = expm(E * float(dt))
+                Ad, Bd = Phi[:N, :N], Phi[:N, N:]
+        if not (np.isfinite(Ad).all() and np.isfinite(Bd).all()):
+            raise InputError(f"dt: the discrete A, B are not finite at dt = {float(dt):g} s (too long a step for "
+                             "these dynamics)")
+        return Ad, Bd, C, D
 
     def to_control(self, x0: Any, u0: Any, F0: Any = None, dt: float | None = None, method: str = "zoh") -> Any:
         """The linearisation (:meth:`linearize`) as a ``control.StateSpace`` (python-control, optional extra
