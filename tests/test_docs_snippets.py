@@ -8,7 +8,6 @@ step of its own (``python -m pytest -m commands``)."""
 
 from __future__ import annotations
 
-import os
 import re
 from pathlib import Path
 
@@ -19,21 +18,25 @@ NEEDS = {"mujoco": "mujoco", "to_control": "control",
          "run_hand_control": "mujoco"}
 
 
-def python_blocks(path: Path) -> list[tuple[int, str]]:
-    """(line, code) of each ``.. code-block:: python`` of an rst page."""
+def blocks(path: Path, language: str) -> list[tuple[int, list[str]]]:
+    """(line, lines) of each ``.. code-block:: <language>`` of an rst page, the indentation cut."""
     lines = path.read_text(encoding="utf-8").split("\n")
     out, i = [], 0
     while i < len(lines):
-        if lines[i].strip() == ".. code-block:: python":
+        if lines[i].strip() == f".. code-block:: {language}":
             j = i + 1
             while j < len(lines) and (not lines[j].strip() or lines[j].startswith("   ")):
                 j += 1
-            body = [ln[3:] for ln in lines[i + 1: j]]
-            out.append((i + 1, "\n".join(body).strip("\n")))
+            out.append((i + 1, [ln[3:] for ln in lines[i + 1: j]]))
             i = j
         else:
             i += 1
     return out
+
+
+def python_blocks(path: Path) -> list[tuple[int, str]]:
+    """(line, code) of each ``.. code-block:: python`` of an rst page."""
+    return [(line, "\n".join(body).strip("\n")) for line, body in blocks(path, "python")]
 
 
 PAGES = sorted(p for p in DOCS.rglob("*.rst") if python_blocks(p) and "_build" not in p.parts)
@@ -60,20 +63,11 @@ def test_page_snippets_run(page, tmp_path, monkeypatch):
 
 def command_blocks(path: Path) -> list[tuple[int, list[str]]]:
     """(line, commands) of each ``.. code-block:: bash`` of an rst page: the ``alpes-dyn`` lines, comments cut."""
-    lines = path.read_text(encoding="utf-8").split("\n")
-    out, i = [], 0
-    while i < len(lines):
-        if lines[i].strip() == ".. code-block:: bash":
-            j = i + 1
-            while j < len(lines) and (not lines[j].strip() or lines[j].startswith("   ")):
-                j += 1
-            cmds = [ln.split(" #")[0].strip() for ln in lines[i + 1: j]]
-            cmds = [c for c in cmds if c.startswith("alpes-dyn ")]
-            if cmds:
-                out.append((i + 1, cmds))
-            i = j
-        else:
-            i += 1
+    out = []
+    for line, body in blocks(path, "bash"):
+        cmds = [c for c in (ln.split(" #")[0].strip() for ln in body) if c.startswith("alpes-dyn ")]
+        if cmds:
+            out.append((line, cmds))
     return out
 
 

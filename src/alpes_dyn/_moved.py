@@ -48,3 +48,19 @@ def forward(package: str, module: str, name: str) -> object:
     warnings.warn(f"alpes_dyn.{package}.{name} moved to alpes_dyn.{package}.{module}.{name}; the old path goes in "
                   "the next release", DeprecationWarning, stacklevel=3)
     return value
+
+
+def package_getattr(package: str, modules: tuple[str, ...]):
+    """The module ``__getattr__`` of a package that was a module (``alpes_dyn.model``, ...): a name of the old
+    module that the package does not re-export is taken from the first of ``modules`` that has it, with a
+    DeprecationWarning (:func:`forward`)."""
+    def __getattr__(name: str) -> object:
+        if name.startswith("__"):
+            raise AttributeError(name)
+        for module in modules:
+            try:
+                return forward(package, module, name)
+            except AttributeError:
+                continue
+        raise AttributeError(f"module 'alpes_dyn.{package}' has no attribute {name!r}")
+    return __getattr__

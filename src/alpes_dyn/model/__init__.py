@@ -9,16 +9,6 @@ from .robot import __all__ as _public
 __all__ = list(_public)
 
 
-def __getattr__(name: str) -> object:
-    """Names of the old ``alpes_dyn.model`` module not re-exported here: forwarded with a DeprecationWarning."""
-    from .._moved import forward
+from .._moved import package_getattr  # noqa: E402
 
-    if name.startswith("__"):
-        raise AttributeError(name)
-    last = None
-    for module in ('robot',):
-        try:
-            return forward("model", module, name)
-        except AttributeError as exc:
-            last = exc
-    raise last  # type: ignore[misc]
+__getattr__ = package_getattr("model", ('robot',))

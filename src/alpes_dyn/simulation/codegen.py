@@ -254,6 +254,18 @@ def _default_threads() -> int:
         return max(1, os.cpu_count() or 1)
 
 
+def _batch(x0: np.ndarray, W: np.ndarray, nx: int, nw: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """x0 (B, nx) and W (B, N, nw) as contiguous float64, checked; X (B, N+1, nx) with X[:, 0] = x0."""
+    x0 = np.asarray(x0, dtype=float)
+    W = np.ascontiguousarray(W, dtype=float)
+    B, N = W.shape[0], W.shape[1]
+    if x0.shape != (B, nx) or W.shape != (B, N, nw):
+        raise InputError(f"x0/W: expected ({B}, {nx}) and ({B}, N, {nw}), got {x0.shape} and {W.shape}")
+    X = np.empty((B, N + 1, nx))
+    X[:, 0] = x0
+    return x0, W, X
+
+
 class CompiledStepLoop:
     """x_{k+1} = step(x_k, w_k) for B sequences of N steps, in compiled C, threaded over the sequences.
 
@@ -314,13 +326,8 @@ class CompiledStepLoop:
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
         """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), both float64 (checked by the caller)."""
-        x0 = np.asarray(x0, dtype=float)
-        W = np.ascontiguousarray(W, dtype=float)
+        x0, W, X = _batch(x0, W, self.nx, self.nw)
         B, N = W.shape[0], W.shape[1]
-        if x0.shape != (B, self.nx) or W.shape != (B, N, self.nw):
-            raise InputError(f"x0/W: expected ({B}, {self.nx}) and ({B}, N, {self.nw}), got {x0.shape} and {W.shape}")
-        X = np.empty((B, N + 1, self.nx))
-        X[:, 0] = x0
         chunks = 50 if progress else 1
         bar = _Progress(N, label, progress)
         edges = np.linspace(0, N, chunks + 1).astype(int)
@@ -372,15 +379,10 @@ class CasadiStepLoop:
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
         """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), as :meth:`CompiledStepLoop.run`."""
-        x0 = np.asarray(x0, dtype=float)
-        W = np.asarray(W, dtype=float)
+        x0, W, X = _batch(x0, W, self.nx, self.nw)
         B, N = W.shape[0], W.shape[1]
-        if x0.shape != (B, self.nx) or W.shape != (B, N, self.nw):
-            raise InputError(f"x0/W: expected ({B}, {self.nx}) and ({B}, N, {self.nw}), got {x0.shape} and {W.shape}")
         # mapaccum: x0 (nx, 1), W (nw, N) -> X (nx, N); map over the batch stacks columns: (nx, B), (nw, B N)
         Xs = np.array(self._map(B, N)(x0.T, W.transpose(2, 1, 0).reshape(self.nw, N, B).transpose(0, 2, 1)
                                       .reshape(self.nw, B * N)))
-        X = np.empty((B, N + 1, self.nx))
-        X[:, 0] = x0
         X[:, 1:] = Xs.reshape(self.nx, B, N).transpose(1, 2, 0)
         return X

@@ -7,16 +7,6 @@ from .dynamics import __all__ as _public
 __all__ = list(_public)
 
 
-def __getattr__(name: str) -> object:
-    """Names of the old ``alpes_dyn.symbolic`` module not re-exported here: forwarded with a DeprecationWarning."""
-    from .._moved import forward
+from .._moved import package_getattr  # noqa: E402
 
-    if name.startswith("__"):
-        raise AttributeError(name)
-    last = None
-    for module in ('dynamics',):
-        try:
-            return forward("symbolic", module, name)
-        except AttributeError as exc:
-            last = exc
-    raise last  # type: ignore[misc]
+__getattr__ = package_getattr("symbolic", ('dynamics',))
