@@ -984,9 +984,10 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--dt", type=float, default=None, help="time step, s: discretise with a zero-order hold")
     s.set_defaults(func=cmd_linearize)
 
-    s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder",
-                       epilog="Example: alpes-dyn estimate --model finger3 --observer ekf-params --mismatch 0.1 "
-                              "--plot estimate.png")
+    s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder, or run "
+                       "the observer on a recording (--data)",
+                       epilog="Examples: alpes-dyn estimate --model finger3 --observer ekf-params --mismatch 0.1 "
+                              "--plot estimate.png; alpes-dyn estimate --data rec.csv --params ident.toml --friction")
     common(s)
     s.set_defaults(model="finger3")
     for a in s._actions:
@@ -1006,7 +1007,8 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--true-params", default=None, metavar="FILE",
                    help="parameter file of the simulated (true) finger, e.g. from a perturbed draw")
     s.add_argument("--observer-params", default=None, metavar="FILE",
-                   help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify'")
+                   help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify' (default: the "
+                        "simulated finger's, --true-params, or the shipped one, mis-scaled by --mismatch)")
     s.add_argument("--friction", action="store_true",
                    help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
     s.add_argument("--data", default=None, metavar="REC.csv",
