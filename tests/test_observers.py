@@ -185,7 +185,7 @@ def test_online_filter_equals_run_bit_for_bit():
     Y = 0.9 + 1e-3 * rng.standard_normal((N + 1, 1))
     z0, P0 = np.r_[0.3, 0.5, 0.0, 0.0, 1.0, 1.0], [0.25, 0.25, 1.0, 1.0, 0.04, 0.04]
     on = f.online(z0, P0, Y[0])
-    assert isinstance(on, OnlineFilter) and f.backend == "casadi"  # run() keeps its own backend
+    assert isinstance(on, OnlineFilter) and f.backend == "casadi" and f._loop is None  # run() keeps its backend
     Z = np.vstack([on.z.copy()] + [on.step(W[k], Y[k + 1]).copy() for k in range(N)])
     est = f.run(z0, P0, W, Y)
     np.testing.assert_array_equal(Z, est.z)

@@ -610,7 +610,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """A study over seeded draws, on Dask workers or serially (studies.sweep)."""
-    from .estimation.experiment import EXPERIMENT_MODELS
+    from .estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
     from .studies.sweep import STUDIES, sweep
 
     _one_of(args.study, tuple(STUDIES), "--study", "study")
@@ -625,8 +625,6 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise InputError("--workers: sizes a local cluster; a --scheduler has its own workers")
     _check_run_files(args)
     opts = {"model": args.model, "spread": args.spread, "duration": args.duration, "fit": not args.no_fit}
-    from .estimation.experiment import ExperimentDesign
-
     ExperimentDesign(duration=args.duration).check()  # before any worker starts
     res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts, workers=args.workers,
                 scheduler=args.scheduler, serial=args.serial)

@@ -268,6 +268,7 @@ class KalmanFilter(Rebuilt):
         out = cs.vertcat(zu, cs.vec(Pu))
         self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [cs.cse(out)], ["s", "wy"], ["s_next"])
         self._loop: CompiledStepLoop | None = None
+        self._online_loop: CompiledStepLoop | None = None  # built by online() for a filter that runs in the VM
         self.backend = "casadi"
         if compiled:
             self._loop = CompiledStepLoop(self.filter_step, f"{self.kind}_{system.model.name}", threads=1,
@@ -323,9 +324,9 @@ class KalmanFilter(Rebuilt):
         Compiles the filter step on first use when the filter was not built with ``compiled=True`` (cached on
         disk). The same numbers as :meth:`run` on the same samples (tested to the last bit).
         """
-        if self._loop is None:
-            self._loop = CompiledStepLoop(self.filter_step, f"{self.kind}_{self.model.system.model.name}", threads=1,
-                                          vectorize=False)
+        if self._loop is None and self._online_loop is None:  # run() keeps its own backend
+            self._online_loop = CompiledStepLoop(self.filter_step, f"{self.kind}_{self.model.system.model.name}",
+                                                 threads=1, vectorize=False)
         z, P = self._z(z0, "z0"), self._P(P0, "P0")
         if y0 is not None:
             y0 = self.model.system.model.vector(y0, "y0", self.ny)
@@ -396,7 +397,7 @@ class OnlineFilter:
         self._X[0, 0, :nz] = z
         self._X[0, 0, nz:] = np.asarray(P, dtype=float).reshape(-1, order="F")
         self._W = np.zeros((1, 1, nw + ny))
-        loop = filt._loop
+        loop = filt._loop or filt._online_loop
         assert loop is not None
         self._fn = loop._fn
         self._wp = self._W.ctypes.data_as(loop._dp)

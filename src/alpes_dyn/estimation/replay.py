@@ -40,6 +40,7 @@ from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
 from .observers import OBSERVERS, Estimate, make_observer
 from .recording import Recording, read_recording
+from .scenario import held_mid_range, rest_with_held_joints
 
 __all__ = ["RecordingEstimate", "estimate_recording", "DISTURBANCE_WALK"]
 
@@ -126,17 +127,11 @@ def _model_for(model: Model, rec: Recording) -> Model:
 
 def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
     """[q; 0]: the static equilibrium under the first torque, joints without spring mid-range (fixed there)."""
-    n = model.n
-    held = model.springless_joints
-    q_rest = np.zeros(n)
-    for j in held:
-        i = model.joint_index(j)
-        q_rest[i] = 0.5 * (model.lower[i] + model.upper[i])
     try:
-        q0 = model.static_equilibrium(model.transmission.joint_torque(u0), q_rest, fixed=held)
-    except Exception:  # no rest under this torque (a fold, a springless chain): start stretched, as the scenario
-        q0 = q_rest
-    return np.concatenate([q0, np.zeros(n)])
+        q0 = rest_with_held_joints(model, u0)
+    except InputError:  # no rest under this torque (a fold, a springless chain): start stretched, as the scenario
+        q0 = held_mid_range(model)
+    return np.concatenate([q0, np.zeros(model.n)])
 
 
 def estimate_recording(recording: Recording | str | Path, model: Model, observer: str = "ekf", *,

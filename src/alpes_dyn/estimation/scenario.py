@@ -233,6 +233,23 @@ def _held_joints(model: Model) -> tuple[tuple[str, ...], list[int]]:
     return joints, [k for k in range(S.shape[0]) if np.any(S[k, idx] != 0)]
 
 
+def held_mid_range(model: Model) -> np.ndarray:
+    """q (n,), rad: 0, but the joints without spring (the thumb's ab/adduction) mid-range."""
+    q = np.zeros(model.n)
+    for j in model.springless_joints:
+        i = model.joint_index(j)
+        q[i] = 0.5 * (model.lower[i] + model.upper[i])
+    return q
+
+
+def rest_with_held_joints(model: Model, tau_m: np.ndarray) -> np.ndarray:
+    """Joint angles q (n,), rad: the static equilibrium under the motor torques ``tau_m`` (m,), N m, the
+    joints without spring held mid-range (:func:`held_mid_range`; eq. 2.11; raises
+    :class:`~alpes_dyn.InputError` where there is no rest)."""
+    return model.static_equilibrium(model.transmission.joint_torque(tau_m), held_mid_range(model),
+                                    fixed=model.springless_joints)
+
+
 def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_var: float) -> dict[str, Any]:
     """Observer noise settings for the scenario (the keyword arguments of a Kalman filter).
 
@@ -285,12 +302,8 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     # truth: RK4 at dt / substeps, the motor torque held over each sample period
     t = sc.dt * np.arange(N + 1)
     u_true = _torque(sc, t[:-1], m, held_motors)
-    q_rest = np.zeros(n)  # the joints without spring start mid-range (held there by hand)
-    for j in held:
-        i = truth.joint_index(j)
-        q_rest[i] = 0.5 * (truth.lower[i] + truth.upper[i])
-    q0 = truth.static_equilibrium(truth.transmission.joint_torque(u_true[0]), q_rest, fixed=held) + rng.uniform(
-        -sc.q0_offset, sc.q0_offset, size=n)
+    # the joints without spring start mid-range (held there by hand)
+    q0 = rest_with_held_joints(truth, u_true[0]) + rng.uniform(-sc.q0_offset, sc.q0_offset, size=n)
     x0 = np.concatenate([q0, np.zeros(n)])
     sim = simulate(truth, x0, np.repeat(u_true, sc.substeps, axis=0), sc.duration, sc.dt / sc.substeps,
                    "rk4", input="motor", output="encoder", joint_range="ignore")  # no stop, as documented above

@@ -369,6 +369,10 @@ class CasadiStepLoop:
         self.nw = int(step.size1_in(1))
         self.threads = _check_threads(threads)
         self.jit = bool(jit)
+        if self.jit:  # the step JIT-compiled once (C through CasADi's shell compiler), the loops CasADi's
+            ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
+            step = cs.Function("alpes_jit_step", ins, step.call(ins),
+                               {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}})
         self._step = step
         self._maps: dict[tuple[int, int], cs.Function] = {}
         self.library, self.compiled, self.compile_seconds = None, False, 0.0
@@ -377,14 +381,7 @@ class CasadiStepLoop:
     def _map(self, B: int, N: int) -> cs.Function:
         key = (B, N)
         if key not in self._maps:
-            step = self._step
-            if self.jit:  # the step JIT-compiled once (C through CasADi's shell compiler), the loops CasADi's
-                if not hasattr(self, "_jitted"):
-                    ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
-                    self._jitted = cs.Function("alpes_jit_step", ins, step.call(ins),
-                                               {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}})
-                step = self._jitted
-            self._maps[key] = step.mapaccum(N).map(B, "thread", self.threads)
+            self._maps[key] = self._step.mapaccum(N).map(B, "thread", self.threads)
         return self._maps[key]
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
