@@ -33,6 +33,7 @@ import alpes_dyn as ad
 from alpes_dyn import cli
 from alpes_dyn.errors import AlpesDynError, InputError, ModelError, RecordingError
 from alpes_dyn.model.params import default_params_path
+from alpes_dyn.model.spec import TransmissionSpec
 
 BASE_TOML = default_params_path().read_text(encoding="utf-8")
 FINGER3 = ad.urdf_string("finger3")
@@ -126,6 +127,8 @@ def bad_files(d: Path) -> dict[str, str]:
         "hugecell_csv": (RECORDING_HEAD + "0," + "1" * 200_000 + ",0\n").encode(),
         "nul_csv": (RECORDING_HEAD + "0,\0,0\n").encode(),
     })
+    files["compliance_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = nan, '
+                                                 'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files.update({k: v.encode() for k, v in URDFS.items()})
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
@@ -363,6 +366,7 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "hand", "--params", "{params_toml}", "-o", "{hardlink}", needle="is the input of --params"),
         C("urdf", "finger3", "--params", "{fifo}", needle="parameter file '{fifo}': is a FIFO (named pipe)"),
         C("urdf", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
+        C("urdf", "finger3", "--params", "{compliance_toml}", needle="transmission.tendon_compliance: value must be finite"),
         C("urdf", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
         C("urdf", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
         C("urdf", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
@@ -842,6 +846,13 @@ API: list[Api] = [
     A("Transmission", lambda c: c.m.transmission.quantize("x"), InputError, "q_m: expected motor angles"),
     A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, [-1e-7]), InputError,
       "rotor_inertia: expected 1 finite numbers >= 0"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, None, [np.nan]),
+      InputError, "tendon_compliance: expected 1 finite numbers (rad/(N m))"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, None, [1.0])
+      .encoder_angles(np.zeros(3), [1.0, 2.0]), InputError, "tau_m: expected last dimension 1"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'tendon_compliance = "x"\n'),
+      ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),
     # state space, observability
     A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
       "output function: returned str 'abc'"),
@@ -879,6 +890,10 @@ API: list[Api] = [
     A("estimate_recording", lambda c: _replay(c, disturbance="yes"), InputError, "disturbance: expected True or False"),
     A("estimate_recording", lambda c: _replay(c, disturbance_walk=-1.0), InputError, "disturbance_walk: expected a"),
     A("estimate_recording", lambda c: _replay(c, transient=0.5), InputError, "must be shorter than the recording's"),
+    A("estimate_recording", lambda c: _replay(c, encoder_offset=[0.1, 0.2]), InputError,
+      "encoder_offset: expected 1 finite numbers (rad)"),
+    A("estimate_recording", lambda c: _replay(c, tilt="flat"), InputError, "tilt: expected 2 finite numbers (rad)"),
+    A("estimate_recording", lambda c: _replay(c, tilt=[0.0, np.nan]), InputError, "tilt: expected 2 finite numbers"),
     A("estimate_recording", lambda c: _replay(c, encoder_noise_counts=float("inf")), InputError,
       "encoder_noise_counts: expected a non-negative"),
     A("estimate_recording", lambda c: _replay(c, model=ad.Model.alpes("finger2")), RecordingError,

@@ -334,3 +334,30 @@ def test_identify_with_torque_noise_and_the_ekf_on_its_file(tmp_path):
                             duration=2.0)
     assert np.degrees(after.rmse).max() < 0.5 < np.degrees(before.rmse).max()
     assert np.all(after.rmse < exact.rmse + math.radians(0.1))
+
+
+def test_identify_recovers_the_tendon_compliance_from_noise_free_data(finger2, tmp_path):
+    """A series-elastic tendon in its quasi-static limit: the encoder reads S q + C tau_m (C = 6.3 rad/(N m), a
+    3.97e4 N/m cable on the 2 mm motor pulley). Fitted from C = 0 with K, m and friction, all to 1e-6 (measured
+    7e-8); the file written holds C as ``transmission.tendon_compliance``, which a model built from it reads back."""
+    from alpes_dyn.model.params import Param, with_values
+
+    C = 6.3
+    true = with_values(perturbed_params(spread=0.2, seed=3),
+                       {"transmission.tendon_compliance": Param(C, "rad/(N m)", "assumed", "test", "stretch")})
+    design = ExperimentDesign(duration=1.0, encoder_noise_counts=0.0, torque_noise=0.0)
+    rec = experiment("finger2", true, design, seed=3)
+    tr = ad.Model.alpes("finger2", params=true).transmission
+    assert tr.tendon_compliance.tolist() == [C]
+    step = 2 * math.pi / tr.counts_per_rev
+    assert np.abs(rec.encoder * step - tr.encoder_angles(rec.true_q, rec.torque)).max() <= step / 2  # the stretch
+    rec.encoder = tr.encoder_angles(rec.true_q, rec.torque) / step  # unquantised
+    res = identify(finger2, rec, "K,m,friction,tendon_compliance", progress=False)
+    truth = np.r_[true.finger.K[:2], true.finger.m[:2], true.finger.F_s[:2], true.finger.F_v[:2], C]
+    assert res.names[-1] == "tendon_compliance_finger" and res.units[-1] == "rad/(N m)" and res.initial[-1] == 0.0
+    assert res.converged and np.max(np.abs(res.values / truth - 1)) < 1e-6
+    back = ad.Model.alpes("finger2", friction=True, params=res.write(tmp_path / "ident.toml"))
+    assert back.transmission.tendon_compliance[0] == pytest.approx(C, rel=1e-6)
+    assert back.params.raw["transmission.tendon_compliance"].source == "identified"
+    rigid = identify(finger2, rec, progress=False)  # without it: the stretch is missed
+    assert rigid.residual_rms > 100 * res.residual_rms

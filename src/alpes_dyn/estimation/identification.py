@@ -149,7 +149,9 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
       fields fitted, the others untouched);
     * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
       ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
-    * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``.
+    * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``;
+    * the chain's tendon compliance ``tendon_compliance_<motor>``: ``transmission.tendon_compliance`` (the
+      ab/adduction gear's stays in the result).
 
     Encoder offsets, the tilt angles and ``input_gain`` are of the recording and its sensors (the encoder's
     zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
@@ -183,21 +185,29 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     touched = set()
     cat = {pp.name: pp for pp in parameter_catalogue(model)}
     flexion = [j for j in model.joint_names if j != "thumb_abd"]
+    unbounded = [n_ for n_, sd in zip(result.names, result.std) if not math.isfinite(sd)]
+    if unbounded:  # not seen by this recording: the value is its start, no standard error to write
+        reason += f"; no standard error for {', '.join(unbounded)} (not seen by the recording)"
     for name, value, sd in zip(result.names, result.values, result.std):
         pp = cat.get(name)
         if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
             continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
+        if pp is not None and pp.kind == "tendon_compliance":
+            if pp.motor.endswith("_abduction"):
+                continue  # the ab/adduction gear's stretch: of this rig's gear, kept in the result, not the file
+            scalars["tendon_compliance"] = (float(value), _sd(sd))
+            continue
         if pp is not None and pp.kind == "J_m":
             if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
                 raise ModelError("identified parameters: the file has one rotor inertia transmission.J_m for "
                                  "every motor; fit one motor's J_m")
-            scalars["J_m"] = (float(value), float(sd))
+            scalars["J_m"] = (float(value), _sd(sd))
             continue
         if pp is None or pp.kind not in ("K", "m", "F_s", "F_v"):
             raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
         if thumb and pp.joint == "thumb_abd":
             field_ = {"K": "abduction_K", "m": "base_mass", "F_s": "abduction_F_s", "F_v": "abduction_F_v"}[pp.kind]
-            scalars[field_] = (float(value), float(sd))
+            scalars[field_] = (float(value), _sd(sd))
             continue
         i = flexion.index(pp.joint)
         if pp.kind == "m":
@@ -215,8 +225,15 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     for kind in touched:
         old = p.raw.get(f"{sec}.{kind}") or p.raw.get(f"finger.{kind}")
         desc = old.description if old is not None else f"per-joint {kind}"
-        upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, stds[kind])
+        std = stds[kind] if np.isfinite(stds[kind]).all() else None  # one unseen entry: no std for the field
+        upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, std)
     for field_, (value, sd) in scalars.items():
+        if field_ == "tendon_compliance":
+            old = p.raw.get("transmission.tendon_compliance")
+            upd["transmission.tendon_compliance"] = Param(
+                value, "rad/(N m)", "identified", reason, old.description if old is not None else
+                "the flexion tendons' stretch seen by the encoder per N m of motor torque (y = S q + C tau_m)", sd)
+            continue
         if field_ == "J_m":
             old = p.raw.get("transmission.J_m")
             upd["transmission.J_m"] = Param(value, "kg m^2", "identified", reason,
@@ -227,6 +244,11 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
     key = "thumb" if thumb else ("finger" if chain is None else chain)
     return with_values(p, upd, identification={key: _record(result)})
+
+
+def _sd(sd: float) -> float | None:
+    """A standard error to write: None where the recording does not see the parameter (inf)."""
+    return float(sd) if math.isfinite(sd) else None
 
 
 def _printable(text: str) -> str:
@@ -384,14 +406,18 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                                          and math.isfinite(torque_noise) and torque_noise >= 0):
         raise InputError(f"torque_noise: expected a non-negative number of N m, got {torque_noise!r}")
     if excitation is not None:
-        Phi = _line_basis(rec.t, excitation)[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
-        Q, _ = np.linalg.qr(Phi)
+        Phi_all = _line_basis(rec.t, excitation)
+        Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
+        Q, R_q = np.linalg.qr(Phi)
         U = _project(Q, rec.torque[:-1])  # the measured torque projected on the lines
+        Q_last = np.linalg.solve(R_q.T, Phi_all[-1])  # the basis at the last sample (Q = Phi R^-1)
+        U_last = (Q_last @ (Q.T @ rec.torque[:-1]))[None]
         if torque_noise is None:  # what is off the lines is the noise: its standard deviation
             off_lines = rec.torque[:-1] - U
             torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
     else:
         U = rec.torque[:-1]
+        U_last = rec.torque[-1:]
         torque_noise = 0.0 if torque_noise is None else torque_noise
     # errors in variables. With the lines: the true torque is U + sigma_u Q c, c ~ N(0, I) a priori (exactly the
     # projection's error, whitened), c fitted with the parameters. Without them: a constant per interval.
@@ -436,7 +462,18 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # others as log theta / theta_0; the encoder offsets enter the output only (their state sensitivities are 0)
     additive = np.array([pp.additive for pp in sens.dynamics.parameters], dtype=bool)
     off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
-                if pp.kind in OUTPUT_KINDS]
+                if pp.kind == "encoder_offset"]
+    # tendon compliances (y = S q + offset + C u, u the modelled torque at the sample): fitted in units of
+    # the recording's own encoder-to-torque scale std(y) / std(u), so that a unit step is of the data's order
+    comp_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
+                 if pp.kind == "tendon_compliance"]
+    scale = np.ones(p)
+    for k, mo in comp_cols:
+        su = float(np.std(rec.torque[:, mo]))
+        scale[k] = float(np.std(y[:, mo])) / su if su > 0 and np.std(y[:, mo]) > 0 else 1.0
+    Ufull = np.concatenate([U, U_last])  # the modelled torque at every sample, the last one's too
+    Uk = Ufull[kk]  # (S, L+1, nu)
+    Psik = (np.concatenate([Psi, torque_noise * Q_last[None]])[kk] if lines else None)  # (S, L+1, nphi)
     if np.any((theta0 <= 0) & ~additive):
         bad = sens.names[int(np.argmax((theta0 <= 0) & ~additive))]
         raise ModelError(f"parameters: {bad} has the starting value {theta0[sens.names.index(bad)]:g}; a fitted "
@@ -455,8 +492,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     io = slice(nx + p, nx + p + sens.no)
 
     def values(glob: np.ndarray) -> np.ndarray:
-        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + rho for the additive ones."""
-        return np.where(additive, theta0 + glob[:p], theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
+        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + scale rho for the additive ones."""
+        return np.where(additive, theta0 + scale * glob[:p], theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
 
     def offset(theta: np.ndarray) -> np.ndarray:
         """(m,) the encoder offsets, rad."""
@@ -464,6 +501,24 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         for k, mo in off_cols:
             out[mo] += theta[k]
         return out
+
+    def torque_at(glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
+        """(S, L+1, nu) the modelled torque at each residual's sample (N m): the measured or projected one plus
+        the fitted correction."""
+        if lines:
+            return Uk + np.einsum("skl,il->ski", Psik, glob[p:].reshape(nphi, nu).T)
+        if eiv:
+            return Uk + offs[:, None, :]
+        return Uk
+
+    def stretch(theta: np.ndarray, glob: np.ndarray, offs: np.ndarray) -> np.ndarray | float:
+        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad (0 without compliance)."""
+        if not comp_cols:
+            return 0.0
+        C = np.zeros(ny)
+        for k, mo in comp_cols:
+            C[mo] += theta[k]
+        return torque_at(glob, offs) * C
 
     def correction(glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
         if lines:
@@ -479,7 +534,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         theta = values(glob)
         xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
         q = xs[:, :, :n]
-        r_enc = (np.einsum("ij,skj->ski", S_enc, q) + offset(theta) - Yb) / sig_y * valid[:, :, None]
+        r_enc = ((np.einsum("ij,skj->ski", S_enc, q) + offset(theta) + stretch(theta, glob, offs) - Yb) / sig_y
+                 * valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
         rg = np.concatenate([np.zeros(p), glob[p:]])
         if not jac:
@@ -490,7 +546,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 res.append(offs / sig_off)
             return np.concatenate(res, axis=1), None, c, None, None, rg, xs
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if no else X[..., iv]  # (S, L+1, nx, nb)
-        Xr = X[..., ip] * np.where(additive, 1.0, theta)  # d/d log theta (d/d theta for the additive ones)
+        Xr = X[..., ip] * np.where(additive, scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
         if lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
         w = valid[:, :, None, None] / sig_y
@@ -499,6 +555,14 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                                 np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
         for k, mo in off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
+        if comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
+            u_k = torque_at(glob, offs)
+            for k, mo in comp_cols:
+                J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * scale[k]
+                if lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
+                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * Psik
+                elif eiv:
+                    J_enc[:, :, mo, nx + mo] += theta[k]
         J_enc = J_enc * w
         jac = [J_enc.reshape(n_int, -1, nb + ng)]
         if Qm is not None:
@@ -561,7 +625,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # measured encoder: a start close to the data, where Gauss-Newton on the whole problem converges
     k_nodes = np.arange(n_int) * L
     Sp = np.linalg.pinv(S_enc)
-    nodes[:, :n] += (y[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
+    y_rigid = y - Ufull * np.asarray(tr.tendon_compliance) if comp_cols else y  # the start's stretch off
+    nodes[:, :n] += (y_rigid[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
     nodes[:, n:] += (np.gradient(y, dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
     mu_n = 1e-2 * np.ones(n_int)
     for _ in range(8):
@@ -784,7 +849,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # the adequacy of the fitted model (module adequacy): its trajectory at the samples, the intervals cut
     # at their valid samples (sample order), the residual y - yhat in counts
     x_fit = xs[valid]
-    yhat = (x_fit[:, :n] @ S_enc.T + offset(theta)) / step  # y = S q + offset (the fitted offsets, else 0)
+    stretched = stretch(theta, glob, offs)
+    u_fit = stretched[valid] if comp_cols else 0.0
+    yhat = (x_fit[:, :n] @ S_enc.T + offset(theta) + u_fit) / step  # y = S q + offset + C u (the fitted ones)
     e = rec.encoder - yhat
     explained = 0.0
     if eiv and not lines:  # what the torque noise explains through the model (with the lines: fitted away)
@@ -804,10 +871,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * sig_y / step)[valid]
     val = None
     if val_rec is not None:
-        val = _validate(model, sens, theta, val_rec, excitation, interval, offset(theta))
+        comp = np.zeros(ny)
+        for k, mo in comp_cols:
+            comp[mo] += theta[k]
+        val = _validate(model, sens, theta, val_rec, excitation, interval, offset(theta), comp)
     verdict = assess(e, rec.torque, floor, regressors, val, velocity=x_fit[:, n:] @ S_enc.T)
     result = IdentificationResult(
-        names=sens.names, values=theta, std=np.where(additive, 1.0, theta) * sd_rho, initial=theta0,
+        names=sens.names, values=theta, std=np.where(additive, scale, theta) * sd_rho, initial=theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=rms, iterations=it,
         converged=converged, seconds=time.perf_counter() - t_start, compile_seconds=sens.compile_seconds,
         states=nodes, node_times=rec.t[np.arange(n_int) * L], model=model, recording_path=rec_path,
@@ -818,11 +888,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
-              excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None) -> Validation:
+              excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
+              compliance: np.ndarray | None = None) -> Validation:
     """:func:`~alpes_dyn.estimation.adequacy.compare` of the fitted model on a held-out recording, its
     torque projected on the excitation's lines as in the fit, the initial state estimated on the first
     ``prefix_s`` seconds (one shooting interval); ``offset`` (m,) rad: the fitted encoder offsets, the same
-    sensors' (taken off the held-out encoder)."""
+    sensors' (taken off the held-out encoder), and ``compliance`` (m,) rad/(N m): the fitted tendon stretch
+    C u, u the held-out torque as the fit takes it (taken off too)."""
     rec, path = recording
     U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation)
     G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
@@ -830,6 +902,8 @@ def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording
     step = 2 * np.pi / tr.counts_per_rev
     prefix = max(2, int(round(prefix_s / rec.dt)))  # checked against the length in identify
     enc = rec.encoder if offset is None else rec.encoder - np.asarray(offset) / step
+    if compliance is not None and np.any(compliance != 0):
+        enc = enc - np.concatenate([U, U[-1:]]) * np.asarray(compliance) / step
     q0 = _rest_guess(model, tr.joint_torque(U[0]), enc[0] * step) if rec.gravity is None else np.zeros(model.n)
     val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, enc,
                   np.asarray(tr.S, dtype=float), step, prefix, path)

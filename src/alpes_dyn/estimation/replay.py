@@ -37,6 +37,7 @@ from ..errors import InputError, RecordingError
 from ..fileio import atomic_path
 from ..limits import check_bytes
 from ..model.robot import Model
+from ..symbolic.parametric import tilted_gravity
 from ..symbolic.statespace import StateSpace
 from .observers import OBSERVERS, Estimate, make_observer
 from .recording import Recording, read_recording
@@ -114,6 +115,16 @@ def _nonnegative(x: Any, name: str, unit: str) -> float:
     return float(x)
 
 
+def _finite_vector(x: Any, n: int, name: str, unit: str) -> np.ndarray:
+    try:
+        a = np.array(x, dtype=float).reshape(-1)
+    except (TypeError, ValueError):
+        a = None
+    if isinstance(x, (str, bytes)) or a is None or a.shape != (n,) or not np.isfinite(a).all():
+        raise InputError(f"{name}: expected {n} finite numbers ({unit}), got {x!r}")
+    return a
+
+
 def _model_for(model: Model, rec: Recording) -> Model:
     """The model in the recording's orientation (constant ``gravity_*`` columns), else the model itself."""
     if rec.gravity is None:
@@ -138,7 +149,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        torque_noise: float | None = None, encoder_noise_counts: float = 0.0,
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
-                       compiled: bool = False) -> RecordingEstimate:
+                       compiled: bool = False, encoder_offset: Any = None,
+                       tilt: Any = None) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -153,6 +165,11 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     transient: start of the error metrics, s (default min(1 s, duration / 5)).
     substeps: RK4 steps per sample (default 4 with friction: the smooth sign is fast; else 1).
     compiled: the filter in compiled C (same numbers).
+    encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
+        :func:`~alpes_dyn.estimation.identification.identify`): taken off the reading. Default 0.
+    tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
+        gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
+        tendons' stretch C tau_m (the model's ``tendon_compliance``) is always taken off the reading.
 
     Returns
     -------
@@ -185,6 +202,11 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         torque_noise = float(np.sqrt(np.mean(d_tau**2) / 2.0))
     torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
     m_obs = _model_for(model, rec)
+    if tilt is not None:
+        angles = _finite_vector(tilt, 2, "tilt", "rad")
+        m_obs = m_obs.copy(gravity=tilted_gravity(m_obs.gravity, angles[0], angles[1]))
+    offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
+        _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
     has_friction = bool(np.any(m_obs.extras.coulomb) or np.any(m_obs.extras.viscous))
     if substeps is None:
         substeps = 4 if has_friction else 1
@@ -194,13 +216,15 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     nz = 2 * n + len(pars) + len(gains)
     check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
     step = 2 * np.pi / m_obs.transmission.counts_per_rev
-    y = rec.encoder * step
+    tr = m_obs.transmission
+    y = tr.unstretched(rec.encoder * step - offsets, rec.torque)  # S q: the zero and the stretch C tau_m off
     u = rec.torque[:-1]
-    meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2
+    # the measurement's noise: the encoder's, and the torque noise through the tendon's stretch
+    meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
     ss = StateSpace(m_obs, input="motor", output="encoder")
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         process_noise=Q, measurement_noise=[meas_var] * m, input_noise=[torque_noise**2] * m)
+                         process_noise=Q, measurement_noise=list(meas_var * np.ones(m)), input_noise=[torque_noise**2] * m)
     z0 = np.concatenate([_initial_state(m_obs, rec.torque[0]), np.ones(len(gains)), np.zeros(len(pars))])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
     est = filt.run(z0, P0, u, y)

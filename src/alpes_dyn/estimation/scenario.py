@@ -310,7 +310,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     x_true = sim.x[:: sc.substeps]
     # sensors
     step = 2 * np.pi / truth.transmission.counts_per_rev
-    y_cont = x_true[:, :n] @ truth.transmission.S.T
+    y_cont = truth.transmission.encoder_angles(x_true[:, :n], np.concatenate([u_true, u_true[-1:]]))  # + C u
     y = truth.transmission.quantize(y_cont + sc.encoder_noise_counts * step * rng.standard_normal(y_cont.shape))
     u_meas = u_true + sc.torque_noise * rng.standard_normal(u_true.shape)
     meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2

@@ -58,12 +58,14 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "transmission": {
         "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
         "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
+        "tendon_compliance": (None, "any"),
     },
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
     "environment": {"gravity": (3, "any")},
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
-_OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v"}
+_OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v",
+             "transmission.tendon_compliance"}
 # the unit each field's value is read in: a file giving another one is refused (no conversion is made)
 _UNITS: dict[str, str] = {
     **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
@@ -76,6 +78,7 @@ _UNITS: dict[str, str] = {
     "palm.finger_names": "-", "palm.finger_x": "m", "palm.finger_y": "m", "palm.thumb_xyz": "m", "palm.thumb_yaw": "rad",
     "transmission.r_m": "m", "transmission.abduction_ratio": "-", "transmission.J_m": "kg m^2", "transmission.N": "-",
     "transmission.encoder_counts": "counts/rev", "transmission.tau_max": "N m",
+    "transmission.tendon_compliance": "rad/(N m)",
     "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
     "environment.gravity": "m/s^2",
 }
@@ -183,6 +186,9 @@ class HandParams:
     fingers: dict[str, ChainParams] = field(default_factory=dict, repr=False)
     abduction_F_s: float | None = None  # the ab/adduction joint's own friction (N m, N m s/rad), else friction.F_s/F_v
     abduction_F_v: float | None = None
+    tendon_compliance: float = 0.0
+    """C_t, rad/(N m): the flexion tendons' stretch seen by the encoder per N m of recorded motor torque,
+    y = S q + C_t tau_m (optional ``transmission.tendon_compliance``; 0, the default, is a rigid tendon)."""
     identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
 
@@ -446,7 +452,7 @@ def _from_text(text: str, path: str) -> HandParams:
         finger_xy=np.column_stack([v["palm.finger_x"], v["palm.finger_y"]]),
         thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
         abduction_F_s=v.get("thumb.abduction_F_s"), abduction_F_v=v.get("thumb.abduction_F_v"),
-        identification=ident,
+        identification=ident, tendon_compliance=float(v.get("transmission.tendon_compliance", 0.0)),
     )
 
 

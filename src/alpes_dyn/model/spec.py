@@ -20,6 +20,12 @@ adds S^T diag(J_m) S to the mass matrix: J_m,k ratio_ki ratio_kj on *every* entr
 motor drives, not only on the diagonal. A motor that drives one joint with ratio N adds N^2 J_m to
 that joint's diagonal: the same as an ``[armature]`` entry N^2 J_m.
 
+Tendon compliance (a series-elastic tendon in its quasi-static limit): motor k's ``tendon_compliance`` C_k
+(rad of motor shaft per N m of motor torque) is the cable's stretch the encoder sees, y_k = S_k q + C_k
+tau_m,k. A cable of stiffness k_t (N/m) on a motor pulley of radius r_m has C = 1 / (k_t r_m^2). This holds
+while the rotor on the cable (J_m on k_t r_m^2) resonates well above the motion's band and the cable stays
+taut; the joints' dynamics are the rigid tendon's (with the rotor's J_m S^T S). 0 (default): a rigid tendon.
+
 The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``joints``)::
 
     name = "allegro_tendon"        # model label (default: the URDF's robot name)
@@ -32,6 +38,7 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     name = "index"
     joints = { "joint_1.0" = 2.0, "joint_2.0" = 1.6, "joint_3.0" = 1.2 }   # joint -> ratio
     rotor_inertia = 1.0e-7         # kg m^2 on the motor shaft (optional, default 0)
+    tendon_compliance = 0.1        # rad/(N m): the tendon's stretch seen by the encoder (optional, default 0)
 
     [stiffness]                    # N m/rad
     "joint_1.0" = 0.2
@@ -67,7 +74,7 @@ JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
 """Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), joint-side
 inertia (kg m^2, the diagonal; a motor's rotor on its tendon is the motor's ``rotor_inertia``)."""
 _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES
-_MOTOR_KEYS = ("name", "joints", "rotor_inertia")
+_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance")
 _MOTOR_REQUIRED = ("name", "joints")
 
 
@@ -95,12 +102,14 @@ class Motor:
     ``ratio`` is rad of motor shaft per rad of joint (r_i / r_m for a pulley of radius r_i on the
     joint and r_m on the motor); non-zero and finite. ``rotor_inertia``: J_m (kg m^2, >= 0) of the
     rotor (and gearbox) about the motor shaft, which adds J_m ratio_i ratio_j to the mass matrix's
-    entry (i, j) (eq. 2.8's I_a on the tendon coordinate; see the module doc).
+    entry (i, j) (eq. 2.8's I_a on the tendon coordinate; see the module doc). ``tendon_compliance``: C
+    (rad/(N m), finite) of the tendon: the encoder reads S q + C tau_m (the module doc; 0 is rigid).
     """
 
     name: str
     joints: Mapping[str, float]
     rotor_inertia: float = 0.0
+    tendon_compliance: float = 0.0
 
     def __post_init__(self) -> None:
         _name(self.name, "motor.name")
@@ -116,6 +125,7 @@ class Motor:
             clean[j] = x
         object.__setattr__(self, "joints", MappingProxyType(clean))
         object.__setattr__(self, "rotor_inertia", _number(self.rotor_inertia, f"{where}.rotor_inertia", 0.0))
+        object.__setattr__(self, "tendon_compliance", _number(self.tendon_compliance, f"{where}.tendon_compliance"))
 
 
 def _table(value: Any, name: str, low: float | None) -> Mapping[str, float]:
@@ -206,7 +216,7 @@ class TransmissionSpec:
             for k in _MOTOR_REQUIRED:
                 if k not in m:
                     raise ModelError(f"motor[{i}].{k}: missing field")
-            motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0)))
+            motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0), m.get("tendon_compliance", 0.0)))
         kw = {k: data[k] for k in _TOP_KEYS if k in data and k != "motor"}
         if "tips" in kw and isinstance(kw["tips"], list):
             kw["tips"] = tuple(kw["tips"])
@@ -241,6 +251,8 @@ class TransmissionSpec:
                     "joints = { " + ", ".join(f"{q(j)} = {r!r}" for j, r in m.joints.items()) + " }"]
             if m.rotor_inertia:
                 out.append(f"rotor_inertia = {m.rotor_inertia!r}")
+            if m.tendon_compliance:
+                out.append(f"tendon_compliance = {m.tendon_compliance!r}")
         for t in JOINT_TABLES:
             table = getattr(self, t)
             if table:
@@ -301,7 +313,8 @@ class TransmissionSpec:
             for j, r in m.joints.items():
                 S[k, idx[j]] = r
         return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts,
-                            np.array([m.rotor_inertia for m in self.motors]))
+                            np.array([m.rotor_inertia for m in self.motors]),
+                            np.array([m.tendon_compliance for m in self.motors]))
 
 
 def _toml_str(s: str) -> str:
@@ -326,11 +339,13 @@ def example_spec_path(name: str = "allegro_hand") -> Path:
     return p
 
 
-def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float, rotor_inertia: float = 0.0) -> tuple[Motor, ...]:
+def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float, rotor_inertia: float = 0.0,
+                 tendon_compliance: float = 0.0) -> tuple[Motor, ...]:
     """The Alpes motors: one per chain (``ratio`` on each of its joints, chain order), then one per
     ab/adduction joint (``abduction_ratio``), named ``<chain>_abduction``; each with ``rotor_inertia``
-    J_m (kg m^2 on the motor shaft)."""
-    motors = [Motor(ch.name, {j: ratio for j in ch.joints}, rotor_inertia) for ch in lay.chains]
+    J_m (kg m^2 on the motor shaft); the chains' tendons with ``tendon_compliance`` (rad/(N m); the
+    ab/adduction is a gear, rigid)."""
+    motors = [Motor(ch.name, {j: ratio for j in ch.joints}, rotor_inertia, tendon_compliance) for ch in lay.chains]
     motors += [Motor(f"{ch.name}_abduction", {ch.abduction: abduction_ratio}, rotor_inertia)
                for ch in lay.chains if ch.abduction]
     return tuple(motors)
@@ -357,10 +372,11 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
     ``rotor_inertia`` the file's ``transmission.J_m`` on every motor, acting on its tendon (eq. 2.8): a
     chain's motor adds (r/r_m)^2 J_m to every entry of its chain's block of the mass matrix, the
     ab/adduction motor abduction_ratio^2 J_m on its joint. (``transmission.N`` is not used: the
-    tendon's ratio is r/r_m, which the file's N equals.)
+    tendon's ratio is r/r_m, which the file's N equals.) The file's ``transmission.tendon_compliance``
+    (default 0) goes on every chain's motor: it changes the encoder reading only.
     """
     ratio, abd = params.transmission_ratio, params.abduction_ratio
-    motors = alpes_motors(lay, ratio, abd, params.J_m if rotor_inertia else 0.0)
+    motors = alpes_motors(lay, ratio, abd, params.J_m if rotor_inertia else 0.0, params.tendon_compliance)
     K: dict[str, float] = {}
     Fs: dict[str, float] = {}
     Fv: dict[str, float] = {}

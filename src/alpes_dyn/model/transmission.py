@@ -30,6 +30,9 @@ class Transmission:
     sum_matrix: (m, n) map y = (sum of each motor's joints), the report's output y = q_1 + ... + q_k.
     counts_per_rev: encoder resolution (counts per motor revolution), for quantisation.
     rotor_inertia: (m,) J_m of each motor's rotor about its shaft, kg m^2 (default zeros).
+    tendon_compliance: (m,) C of each motor's tendon, rad/(N m) (default zeros: rigid): the encoder reads
+    y = S q + C tau_m (:meth:`encoder_angles`; the series-elastic tendon's quasi-static limit,
+    :mod:`alpes_dyn.model.spec`).
     """
 
     motor_names: tuple[str, ...]
@@ -37,6 +40,7 @@ class Transmission:
     sum_matrix: np.ndarray
     counts_per_rev: float
     rotor_inertia: np.ndarray | None = None
+    tendon_compliance: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         J = np.zeros(self.S.shape[0]) if self.rotor_inertia is None else np.asarray(self.rotor_inertia, dtype=float)
@@ -45,6 +49,28 @@ class Transmission:
         J = J.copy()
         J.flags.writeable = False
         object.__setattr__(self, "rotor_inertia", J)
+        m = self.S.shape[0]
+        C = np.zeros(m) if self.tendon_compliance is None else np.array(self.tendon_compliance, dtype=float)
+        if C.shape != (m,) or not np.all(np.isfinite(C)):
+            raise InputError(f"tendon_compliance: expected {m} finite numbers (rad/(N m)), got {C.tolist()!r}")
+        C.flags.writeable = False
+        object.__setattr__(self, "tendon_compliance", C)
+
+    @property
+    def elastic(self) -> bool:
+        """True when a tendon has a non-zero compliance (the encoder then reads S q + C tau_m)."""
+        return bool(np.any(self.tendon_compliance != 0))
+
+    def encoder_angles(self, q: np.ndarray, tau_m: np.ndarray | None = None) -> np.ndarray:
+        """What the encoders read, rad: S q + C tau_m (the tendons' stretch under the motor torque tau_m,
+        N m; without it, or with rigid tendons, S q). q: (..., n), tau_m: (..., m) -> (..., m)."""
+        y = self.motor_positions(q)
+        if tau_m is None or not self.elastic:
+            return y
+        tau_m = as_float_array(tau_m, "tau_m", "motor torques")
+        if tau_m.shape[-1:] != (self.n_motors,):
+            raise InputError(f"tau_m: expected last dimension {self.n_motors}, got shape {tau_m.shape}")
+        return y + tau_m * self.tendon_compliance
 
     @property
     def rotor_matrix(self) -> np.ndarray:
@@ -67,6 +93,14 @@ class Transmission:
         if q.shape[-1:] != (self.S.shape[1],):
             raise InputError(f"q: expected last dimension {self.S.shape[1]}, got shape {q.shape}")
         return q @ self.S.T
+
+    def unstretched(self, y: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
+        """S q from an encoder reading y (rad): y - C tau_m, the tendons' stretch under the motor torque tau_m
+        (N m) taken off (y itself for rigid tendons). y, tau_m: (..., m)."""
+        y = as_float_array(y, "y", "encoder angles")
+        if not self.elastic:
+            return y
+        return y - as_float_array(tau_m, "tau_m", "motor torques") * self.tendon_compliance
 
     def joint_torque(self, tau_m: np.ndarray) -> np.ndarray:
         """Joint torques S^T tau_m (N m) from motor torques tau_m (N m), (m,) or (..., m)."""

@@ -32,11 +32,15 @@ kind               meaning                                                     u
                    (``encoder_offset_<motor>``; output only, no dynamics)
 ``tilt``           the base (palm) turned by two small angles, ``tilt_x``      rad
                    about its x axis then ``tilt_y`` about its y axis
+``tendon_          a motor's tendon stretch per N m of its recorded torque:    rad/(N m)
+compliance``       y = S q + offset + C tau_m (``tendon_compliance_<motor>``;
+                   output only; the series-elastic tendon's quasi-static limit)
 ================== =========================================================== ==========
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
 (:func:`~alpes_dyn.estimation.identification.identify`); ``encoder_offset`` and ``tilt`` have the
-nominal value 0, can be negative and are fitted as they are (:data:`ADDITIVE_KINDS`).
+nominal value 0, can be negative and are fitted as they are (:data:`ADDITIVE_KINDS`); so is
+``tendon_compliance`` (nominal: the model's, 0 for a rigid tendon).
 
 Tilt. With the base rotated by R = R_x(tilt_x) R_y(tilt_y) against the frame the gravity vector g is
 given in (the recording's ``gravity_*`` columns, else the model's constant), the gravity in the base
@@ -63,15 +67,15 @@ from .dynamics import block_solve, sparse_dm
 
 __all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "ParametricDynamics"]
 
-KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt")
-ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt")
+KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt", "tendon_compliance")
+ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt", "tendon_compliance")
 """Kinds fitted as they are (nominal 0, either sign), not in log."""
-OUTPUT_KINDS: tuple[str, ...] = ("encoder_offset",)
+OUTPUT_KINDS: tuple[str, ...] = ("encoder_offset", "tendon_compliance")
 """Kinds that change the measured output only, not the dynamics."""
 _UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-", "J_m": "kg m^2",
-          "encoder_offset": "rad", "tilt": "rad"}
+          "encoder_offset": "rad", "tilt": "rad", "tendon_compliance": "rad/(N m)"}
 _GROUPS = {"friction": ("F_s", "F_v")}
-_ALWAYS = ("input_gain", "encoder_offset", "tilt")  # a kind selects these even at nominal 0
+_ALWAYS = ("input_gain", "encoder_offset", "tilt", "tendon_compliance")  # a kind selects these even at nominal 0
 
 
 @dataclass(frozen=True)
@@ -131,9 +135,10 @@ def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     out.append(PhysicalParameter("input_gain", "input_gain", None, 1.0, "-"))
     tr = model.transmission
     if tr is not None:
-        for kind in ("J_m", "encoder_offset"):
+        for kind in ("J_m", "encoder_offset", "tendon_compliance"):
             for k, mo in enumerate(tr.motor_names):
-                nominal = float(tr.rotor_inertia[k]) if kind == "J_m" else 0.0
+                nominal = {"J_m": float(tr.rotor_inertia[k]), "encoder_offset": 0.0,
+                           "tendon_compliance": float(tr.tendon_compliance[k])}[kind]
                 out.append(PhysicalParameter(f"{kind}_{mo}", kind, None, nominal, _UNITS[kind], mo))
     out += [PhysicalParameter(f"tilt_{a}", "tilt", None, 0.0, "rad") for a in ("x", "y")]
     return out
@@ -275,7 +280,7 @@ class ParametricDynamics:
                 parameterised.add(link)
                 urdf_b, _ = _only_massive(model.urdf, {link})
                 self._mass_params.append((k, masses[link], _Adam(_Shim(urdf_b, model.joint_names))))
-            elif prm.kind in ("J_m", "encoder_offset"):
+            elif prm.kind in ("J_m", "encoder_offset", "tendon_compliance"):
                 self._sel[prm.kind].append((k, model.motor_index(prm.motor)))
             elif prm.kind == "tilt":
                 self._sel[prm.kind].append((k, "xy".index(prm.name[-1])))
