@@ -392,6 +392,14 @@ class Model:
         urdf, spec = mjcf_to_urdf(mjcf)
         return cls(urdf, spec, **kwargs)
 
+    def to_mjcf(self, **kwargs) -> str:
+        """MJCF text of this model for MuJoCo: its tree, inertias, limits, springs, armature, friction, motors as
+        fixed tendons with motor actuators, rotor inertia, tip sites and gravity
+        (:func:`alpes_dyn.model.mjcf_export.model_mjcf`, whose keywords it takes); :meth:`from_mjcf` reads it back."""
+        from .mjcf_export import model_mjcf
+
+        return model_mjcf(self, **kwargs)
+
     @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
         """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec

@@ -1,0 +1,262 @@
+"""MJCF export of any :class:`~alpes_dyn.Model`: a URDF + spec robot for MuJoCo (the inverse of :mod:`.mjcf_import`).
+
+:func:`model_mjcf` (and :meth:`Model.to_mjcf <alpes_dyn.model.robot.Model.to_mjcf>`) writes what the model holds,
+read from Pinocchio's model (so the URDF's fixed links are already merged into their moving parent) and from the
+model's extras and transmission (the spec's, or the ``extras=`` given):
+
+* the **kinematic tree**: the URDF's root link as a static body, then one body per joint, named as the joint's
+  child link, placed at Pinocchio's joint placement (``pos``, ``quat``) so that the body frame is the joint
+  frame; its ``inertial``: mass, centre of mass and the full inertia about it (``fullinertia``, the merged
+  inertia of the link and of the fixed links under it);
+* one ``hinge`` per revolute joint (``slide`` per prismatic one) at the body origin with the joint's axis;
+  ``range`` = the URDF limits (``limited="true"`` with ``limits``, else ``limited="false"`` and no range);
+  ``stiffness`` k_i with ``springref="0"`` (the spec's springs rest at q = 0), ``armature`` (the joint-side
+  inertia), ``frictionloss`` F_s (Coulomb: MuJoCo's dry friction is a constraint, the library's a sign or a
+  smooth sign) and ``damping`` F_v (viscous);
+* one **fixed tendon** per motor, named as the motor, with coefficient S_ki on each joint it drives: its length
+  is the motor angle q_m = S q; its ``armature`` is the rotor inertia J_m, which MuJoCo adds as J_m S_k^T S_k,
+  the library's :attr:`Model.rotor_matrix <alpes_dyn.Model.rotor_matrix>`;
+* a ``motor`` actuator on each tendon, gear 1: ctrl = tau_m gives the joints S^T tau_m (the spec holds no
+  torque limit, so ``ctrlrange`` is unlimited: a pull-only cable needs ``ctrlrange="0 tau_max"`` by hand);
+* sensors: ``encoder_<motor>`` (``tendonpos`` = q_m, rad), ``torque_<motor>`` (``actuatorfrc`` = tau_m, N m),
+  and at each tip frame (:attr:`Model.tips <alpes_dyn.Model.tips>`) a site named as the frame, a sphere geom of
+  radius ``tip_radius`` (mass-less: ``inertiafromgeom="false"``) and a ``touch`` sensor ``touch_<tip>`` (N);
+* ``<option>``: the model's gravity, ``timestep`` (default 1e-4 s) and ``integrator`` (default ``RK4``);
+  ``compiler angle="radian"``.
+
+Not written, as MuJoCo has no such thing: the encoder resolution (``encoder_counts``: MuJoCo's sensors are not
+quantised, :meth:`Transmission.quantize <alpes_dyn.Transmission.quantize>` is) and the smooth sign's v_s
+(``smooth_velocity``). What MuJoCo cannot express is refused with a :class:`~alpes_dyn.ModelError` naming it: a
+moving body without mass or with a singular inertia (MuJoCo needs both positive), an inertia that breaks the
+triangle inequality (MuJoCo would have to change it, ``balanceinertia``), a joint neither revolute nor prismatic.
+
+Round trip (tested): ``Model.from_mjcf(model_mjcf(m))`` has m's joints, S, rotor inertia, springs, armature,
+friction and the same A, C, G and forward dynamics (to ~1e-15 relative) -- with ``limits`` (the import needs
+ranges) and for revolute joints (the import refuses slides). A tip frame that is a moving link itself gets the
+site ``<tip>_site`` (the import makes a link of each site).
+"""
+
+from __future__ import annotations
+
+import math
+import xml.sax.saxutils as su
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InputError, ModelError
+
+__all__ = ["model_mjcf", "INTEGRATORS"]
+
+INTEGRATORS: tuple[str, ...] = ("Euler", "implicit", "implicitfast", "RK4")
+"""MuJoCo's integrators (``<option integrator>``)."""
+_AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
+_MINVAL = 1e-15  # MuJoCo's mjMINVAL: the least mass and principal inertia of a moving body
+
+
+def _f(x: float) -> str:
+    """A number as MJCF text (Python's shortest round-trip repr of the float)."""
+    return repr(float(x))
+
+
+def _v(xs: Sequence[float]) -> str:
+    return " ".join(_f(x) for x in xs)
+
+
+def _q(s: str) -> str:
+    """An XML attribute value, quoted and escaped."""
+    return su.quoteattr(s)
+
+
+def _joint_kind(jm: Any, name: str) -> tuple[str, tuple[float, float, float]]:
+    """(``"hinge"`` or ``"slide"``, its axis in the joint frame) of a Pinocchio joint model."""
+    short = jm.shortname()
+    for prefix, kind in (("JointModelR", "hinge"), ("JointModelP", "slide")):
+        tail = short[len(prefix):]
+        if short.startswith(prefix) and tail in _AXES:
+            return kind, _AXES[tail]
+    for prefix, kind in (("JointModelRevoluteUnaligned", "hinge"), ("JointModelPrismaticUnaligned", "slide")):
+        if short == prefix:
+            return kind, tuple(float(x) for x in jm.extract().axis)
+    raise ModelError(f"MJCF export: joint {name!r} is a {short.removeprefix('JointModel')} joint; "
+                     "only revolute (hinge) and prismatic (slide) joints are exported")
+
+
+def _check_inertia(link: str, mass: float, I: np.ndarray) -> None:
+    """What MuJoCo needs of a moving body's inertial (else it refuses to compile the model)."""
+    e = np.linalg.eigvalsh(0.5 * (I + I.T))
+    if not mass > _MINVAL:
+        raise ModelError(f"MJCF export: link {link!r} moves but has mass {mass:g}; MuJoCo needs a positive mass "
+                         "on every moving body (give the link a mass, or make its joint fixed)")
+    if not e[0] > _MINVAL:
+        raise ModelError(f"MJCF export: link {link!r} has a singular inertia (principal moments "
+                         f"{', '.join(f'{x:g}' for x in e)}); MuJoCo needs positive principal moments on every "
+                         "moving body")
+    if e[0] + e[1] < e[2]:
+        raise ModelError(f"MJCF export: link {link!r} has an inertia that breaks the triangle inequality (principal "
+                         f"moments {', '.join(f'{x:g}' for x in e)}: {e[0] + e[1]:g} < {e[2]:g}); MuJoCo refuses it "
+                         "(its balanceinertia would change the dynamics)")
+
+
+def _quat(R: np.ndarray) -> tuple[float, float, float, float]:
+    """MuJoCo's quaternion (w, x, y, z) of a rotation matrix."""
+    import pinocchio as pin
+
+    x, y, z, w = pin.Quaternion(np.asarray(R, dtype=float)).coeffs()
+    return (float(w), float(x), float(y), float(z))
+
+
+def _pose(M: Any) -> str:
+    """``pos``/``quat`` attributes of a Pinocchio SE3 (quat left out for the identity)."""
+    out = f'pos="{_v(M.translation)}"'
+    if not np.array_equal(M.rotation, np.eye(3)):
+        out += f' quat="{_v(_quat(M.rotation))}"'
+    return out
+
+
+def _body_names(model: Any) -> tuple[str, list[str]]:
+    """(the root link's name, each joint's child link name) from Pinocchio's frames."""
+    import pinocchio as pin
+
+    pm = model.pin_model
+    frames = pm.frames
+    root = next((f.name for f in frames if f.type == pin.FrameType.BODY and f.parentJoint == 0), "base")
+    names = []
+    for i in range(1, pm.njoints):
+        jf = pm.getFrameId(pm.names[i], pin.FrameType.JOINT)
+        child = next((f.name for f in frames if f.type == pin.FrameType.BODY and f.parentFrame == jf), None)
+        names.append(child if child is not None else f"{pm.names[i]}_link")
+    return root, names
+
+
+def _joint_xml(model: Any, i: int, limits: bool) -> str:
+    """The ``<joint>`` of Pinocchio joint i (1-based): axis, range, spring, armature, friction."""
+    pm, ex = model.pin_model, model.extras
+    name = pm.names[i]
+    kind, axis = _joint_kind(pm.joints[i], name)
+    k = i - 1
+    attrs = [f"name={_q(name)}", f'type="{kind}"', 'pos="0 0 0"', f'axis="{_v(axis)}"']
+    lo, hi = float(pm.lowerPositionLimit[k]), float(pm.upperPositionLimit[k])
+    if limits and math.isfinite(lo) and math.isfinite(hi) and lo < hi:
+        attrs += ['limited="true"', f'range="{_f(lo)} {_f(hi)}"']
+    else:
+        attrs.append('limited="false"')
+    attrs += [f'stiffness="{_f(ex.stiffness[k])}"', 'springref="0"']
+    for attr, values in (("armature", ex.armature), ("frictionloss", ex.coulomb), ("damping", ex.viscous)):
+        if values[k] != 0:
+            attrs.append(f'{attr}="{_f(values[k])}"')
+    return f"<joint {' '.join(attrs)}/>"
+
+
+def _tips(model: Any, bodies: set[str], tip_radius: float) -> dict[int, list[str]]:
+    """Per Pinocchio joint (0: the world), the site, geom and sensor name lines of the tips it carries."""
+    pm = model.pin_model
+    out: dict[int, list[str]] = {}
+    for tip in model.tips:
+        fr = pm.frames[model.frame_id(tip)]
+        site = f"{tip}_site" if tip in bodies else tip
+        size = f' size="{_f(1.25 * tip_radius)}"' if tip_radius > 0 else ""  # else MuJoCo's default, 5 mm
+        lines = [f"<site name={_q(site)} {_pose(fr.placement)}{size}/>"]
+        if tip_radius > 0:
+            lines.append(f'<geom name={_q(site)} type="sphere" size="{_f(tip_radius)}" '
+                         f'pos="{_v(fr.placement.translation)}" rgba="0.8 0.3 0.3 1"/>')
+        out.setdefault(int(fr.parentJoint), []).extend(lines)
+    return out
+
+
+def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[str, str]]:
+    """The ``<worldbody>`` lines (depth first, Pinocchio's joint order) and the site name of each tip."""
+    pm = model.pin_model
+    root, names = _body_names(model)
+    children: dict[int, list[int]] = {}
+    for i in range(1, pm.njoints):
+        children.setdefault(int(pm.parents[i]), []).append(i)
+    tips = _tips(model, set(names), tip_radius)
+    lines = ["  <worldbody>", f"    <body name={_q(root)}>"]
+
+    def body(i: int, depth: int) -> None:
+        ind = "  " * depth
+        Y = pm.inertias[i]
+        mass, c, I = float(Y.mass), np.asarray(Y.lever), np.asarray(Y.inertia)
+        _check_inertia(names[i - 1], mass, I)
+        lines.append(f"{ind}<body name={_q(names[i - 1])} {_pose(pm.jointPlacements[i])}>")
+        lines.append(f"{ind}  {_joint_xml(model, i, limits)}")
+        lines.append(f'{ind}  <inertial pos="{_v(c)}" mass="{_f(mass)}" fullinertia="'
+                     f'{_v((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]))}"/>')
+        lines.extend(f"{ind}  {s}" for s in tips.get(i, ()))
+        for ch in children.get(i, ()):
+            body(ch, depth + 1)
+        lines.append(f"{ind}</body>")
+
+    lines.extend(f"      {s}" for s in tips.get(0, ()))
+    for i in children.get(0, ()):
+        body(i, 3)
+    lines += ["    </body>", "  </worldbody>"]
+    sites = {t: (f"{t}_site" if t in names else t) for t in model.tips}
+    return lines, sites
+
+
+def _transmission(model: Any, sites: dict[str, str]) -> list[str]:
+    """The ``<tendon>``, ``<actuator>`` and ``<sensor>`` sections (none without motors or tips)."""
+    tr = model.transmission
+    tendons, actuators, sensors = [], [], []
+    if tr is not None:
+        for k, motor in enumerate(tr.motor_names):
+            J = float(tr.rotor_inertia[k])
+            arm = f' armature="{_f(J)}"' if J != 0 else ""
+            coefs = "".join(f'\n      <joint joint={_q(model.joint_names[i])} coef="{_f(tr.S[k, i])}"/>'
+                            for i in np.flatnonzero(tr.S[k]))
+            tendons.append(f"    <fixed name={_q(motor)}{arm}>{coefs}\n    </fixed>")
+            actuators.append(f'    <motor name={_q(motor)} tendon={_q(motor)} gear="1" ctrllimited="false"/>')
+            sensors += [f"    <tendonpos name={_q('encoder_' + motor)} tendon={_q(motor)}/>",
+                        f"    <actuatorfrc name={_q('torque_' + motor)} actuator={_q(motor)}/>"]
+    sensors += [f"    <touch name={_q('touch_' + t)} site={_q(s)}/>" for t, s in sites.items()]
+    out = []
+    for tag, items in (("tendon", tendons), ("actuator", actuators), ("sensor", sensors)):
+        if items:
+            out += [f"  <{tag}>", *items, f"  </{tag}>"]
+    return out
+
+
+def _check_args(timestep: Any, integrator: Any, tip_radius: Any) -> None:
+    def number(x: Any) -> bool:
+        return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
+
+    if not (number(timestep) and timestep > 0):
+        raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
+    if integrator not in INTEGRATORS:
+        raise InputError(f"integrator: expected one of {', '.join(INTEGRATORS)}, got {integrator!r}")
+    if not (number(tip_radius) and tip_radius >= 0):
+        raise InputError(f"tip_radius: expected a radius >= 0 in m, got {tip_radius!r}")
+
+
+def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integrator: str = "RK4",
+               tip_radius: float = 0.005) -> str:
+    """MJCF text of ``model`` (any :class:`~alpes_dyn.Model`: a URDF with or without a spec, an Alpes model).
+
+    Parameters
+    ----------
+    model: the model; its tree, inertias, joint limits, springs, armature, friction, motors (fixed tendons and
+        motor actuators), rotor inertia (tendon armature), tips and gravity are written (module doc).
+    limits: joint ranges from the URDF limits, ``limited="true"`` (default); ``False``: unlimited joints
+        (then :meth:`Model.from_mjcf <alpes_dyn.Model.from_mjcf>` refuses the text: it needs ranges).
+    timestep: MuJoCo's time step, s (default 1e-4).
+    integrator: one of :data:`INTEGRATORS` (default ``RK4``).
+    tip_radius: radius (m) of the sphere geom at each tip, in the touch sensor's site (1.25 x as large);
+        0: the site alone (MuJoCo's default size, 5 mm), no geom.
+
+    Returns
+    -------
+    str: MJCF text, deterministic; :class:`~alpes_dyn.ModelError` if MuJoCo cannot express the model (module doc).
+    """
+    if not all(hasattr(model, a) for a in ("pin_model", "extras", "transmission", "tips", "gravity")):
+        raise ModelError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
+    if not isinstance(limits, (bool, np.bool_)):
+        raise InputError(f"limits: expected True or False, got {limits!r}")
+    _check_args(timestep, integrator, tip_radius)
+    tree, sites = _tree(model, bool(limits), float(tip_radius))
+    head = [f"<mujoco model={_q(model.name)}>",
+            "  <!-- Generated by alpes_dyn.model.mjcf_export from a URDF + spec model; do not edit. -->",
+            '  <compiler angle="radian" autolimits="true" inertiafromgeom="false" balanceinertia="false"/>',
+            f'  <option timestep="{_f(timestep)}" gravity="{_v(model.gravity)}" integrator="{integrator}"/>']
+    return "\n".join(head + tree + _transmission(model, sites) + ["</mujoco>"]) + "\n"
