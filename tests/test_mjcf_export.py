@@ -188,3 +188,17 @@ def test_spec_without_mujoco_counterpart_is_not_written():
     a = ad.Model(ARM_URDF, ARM_SPEC)
     b = ad.Model(ARM_URDF, dataclasses.replace(ARM_SPEC, encoder_counts=100.0, smooth_velocity=0.5))
     assert a.to_mjcf() == b.to_mjcf()
+
+
+def test_elastic_tendon_is_refused_by_name():
+    """The tendon compliance (an encoder law, y = S q + C tau_m) has no MJCF form: refused, never dropped."""
+    from dataclasses import replace
+
+    from alpes_dyn.errors import ModelError
+    from alpes_dyn.model.mjcf_export import model_mjcf
+    from alpes_dyn.model.spec import Motor
+
+    m = ad.Model.alpes("finger3")
+    spec = replace(m.spec, motors=tuple(Motor(mo.name, mo.joints, 0.0, 6.3) for mo in m.spec.motors))
+    with pytest.raises(ModelError, match="tendon_compliance: an elastic tendon"):
+        model_mjcf(ad.Model(m.urdf, spec))

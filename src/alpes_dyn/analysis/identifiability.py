@@ -328,6 +328,9 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
     additive = np.array([prm.additive for prm in pd.parameters], dtype=bool)
     th = _theta(theta, pd.nominal, pd.names, additive)
     aug = _AugmentedStateSpace(base, pd, np.asarray(model.gravity, dtype=float))
+    if pd._sel["tendon_compliance"]:
+        raise ModelError("parameters: tendon_compliance is a feedthrough of the torque to the encoder (y = S q + C "
+                         "tau_m), outside this test's y = h(x); ask fisher_information on an experiment instead")
     if pd._sel["encoder_offset"]:  # y = S q + offset
         if base.output_name != "encoder":
             raise ModelError(f"parameters: encoder_offset applies to the encoder output, not {base.output_name!r}")
@@ -640,6 +643,9 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
     for k, i in sm.dynamics._sel["encoder_offset"]:  # y = S q + offset
         Jy[:, i, k] += 1.0
+    U_samples = np.concatenate([Ua, Ua[-1:]])  # the torque at each sample (the last held)
+    for k, i in sm.dynamics._sel["tendon_compliance"]:  # y = S q + C u: the torque itself
+        Jy[:, i, k] += U_samples[:, i]
     Jy = Jy.reshape(-1, p + nx)
     Jy[:, :p] *= unit  # log coordinates inside (well scaled), converted back below
     F = Jy.T @ Jy / sigma ** 2 if sigma > 0 else np.zeros((p + nx, p + nx))
