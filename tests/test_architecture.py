@@ -17,7 +17,8 @@ from alpes_dyn._moved import MOVED, PUBLIC
 
 PACKAGE = Path(alpes_dyn.__file__).parent
 
-# Floors from the ground up; a module may import its own floor and the floors below it.
+# Floors from the ground up; a module may import its own floor and the floors below it. The top floor is the
+# package alpes_dyn.cli: its front door (main, exit codes), parser, common helpers and command-family modules.
 FLOORS = ("base", "model", "symbolic", "simulation", "estimation", "analysis", "control", "studies", "cli")
 BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "_moved"}
 
@@ -103,6 +104,18 @@ def test_no_import_circle_between_modules():
         if node not in seen and node != "__init__":
             visit(node)
     assert circles == []
+
+
+def test_cli_is_a_package_on_the_top_floor():
+    """The command line is the top floor, a package of modules; none of them but ``__main__`` imports its front
+    door ``cli/__init__`` (which imports them all: the circle test lets a package's own ``__init__`` pass)."""
+    assert FLOORS[-1] == "cli" and (PACKAGE / "cli" / "__init__.py").exists() and not (PACKAGE / "cli.py").exists()
+    modules = sorted((PACKAGE / "cli").glob("*.py"))
+    assert {floor_of(".".join(p.relative_to(PACKAGE).with_suffix("").parts)) for p in modules} == {"cli"}
+    front = [p.name for p in modules if p.name not in ("__init__.py", "__main__.py") and "cli" in module_imports(p)]
+    assert front == []
+    below = [p for p in library_modules() if p.relative_to(PACKAGE).parts[0] != "cli"]
+    assert [str(p) for p in below if any(floor_of(t) == "cli" for t in module_imports(p))] == []
 
 
 @pytest.mark.parametrize("old", sorted(MOVED))

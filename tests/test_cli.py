@@ -94,6 +94,17 @@ def test_console_script_help_shows_negative_vectors():
     assert r.returncode == 2 and "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1
 
 
+def test_help_description_is_the_package_docstring(capsys):
+    """``alpes-dyn --help`` opens with the first line of the ``alpes_dyn.cli`` package's docstring."""
+    import alpes_dyn.cli as cli
+    from alpes_dyn.cli import parser
+
+    assert parser.DESCRIPTION == cli.__doc__.splitlines()[0]
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    assert " ".join(capsys.readouterr().out.split()).count(" ".join(parser.DESCRIPTION.split())) == 1
+
+
 def test_estimate_help_lists_every_observer(capsys):
     from alpes_dyn.estimation.observers import OBSERVERS
 

@@ -8,13 +8,13 @@ driven by the ``"sensor"`` force loop of ``alpes-dyn control``: its own EKF esti
 q̂ from the motor encoder and the motor torque, a feedforward holds the reference through the static balance at
 q̂ (eq. 2.11, J(q̂)ᵀ n with n the cylinder's normal at the estimated fingertip) and a PI acts on the measured
 FlexiForce F_z. Everything is sampled at 1 kHz with the estimation scenario's quantisation and noise
-(:class:`alpes_dyn.control.force.HandControlScenario`).
+(:class:`alpes_dyn.control.hand_loop.HandControlScenario`).
 
 A finger's loop uses the ``finger3`` model: each finger of the hand is a ``finger3`` translated on the
 palm (the tests check the hand's G(q), tip positions and Jacobians against the chain models). The thumb's
 flexion loop uses a two-phalanx model with the parameter file's thumb values; a PD on the ab/adduction
 encoder swings the thumb from beside the palm to 35 degrees, where its pad meets the cylinder.
-:func:`alpes_dyn.control.force.run_hand_control` does all of this; here it runs once with the ``"sensor"``
+:func:`alpes_dyn.control.hand_loop.run_hand_control` does all of this; here it runs once with the ``"sensor"``
 loops and once with the baseline PI on F_z alone (``"pi"``), on the same noise draws.
 """
 

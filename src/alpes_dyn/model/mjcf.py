@@ -89,7 +89,7 @@ BLOCK_TILT: float = 0.15
 #: The cylinder of the hand scene: centre (m, palm frame), radius (m), half-length (m); its axis is y. Frictionless
 #: (``condim="1"``) like the block: the contact force is the normal force the FlexiForce reads. Placed where the four
 #: fingertips and the thumb's (ab/adduction at 35 degrees) meet it with their pads before any other phalanx touches,
-#: the hand palm down (see :func:`alpes_dyn.control.force.run_hand_control`).
+#: the hand palm down (see :func:`alpes_dyn.control.hand_loop.run_hand_control`).
 #: Time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) that gives stick-slip on the finger.
 STICTION_TIMECONST: float = 5e-4
 #: Impedance d of that constraint (``solimpfriction``): a stuck joint creeps at a velocity proportional to

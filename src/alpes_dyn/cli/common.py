@@ -1,0 +1,203 @@
+"""What every command shares: the exit codes and their exceptions, vectors and choices read from the
+command line, the model of ``--model``, the output policy of the files a command reads and writes, and the
+printing of its result (text, or one strict JSON object) on a stdout that may be closed or full."""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import re
+import sys
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import AlpesDynError, InputError
+from ..fileio import check_outputs
+
+
+VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
+
+
+_NUMLIST = re.compile(r"^-[0-9.]")
+
+
+class _UsageError(Exception):
+    pass
+
+
+EXIT_UNTRUSTED = 3
+"""Exit code of ``identify`` when the fit did not converge or the model is not adequate (and no --force)."""
+
+
+class _Untrusted(Exception):
+    """The fit ran but is not to be trusted: exit :data:`EXIT_UNTRUSTED` with one line."""
+
+
+class UntrustedFitWarning(UserWarning):
+    """``identify --force`` wrote a file from a fit that did not converge or whose model is not adequate."""
+
+
+def _one_of(value: str, choices: Sequence[str], option: str, kind: str) -> None:
+    """InputError ``<option>: unknown <kind> 'x' (expected one of ...)`` unless ``value`` is a choice."""
+    if value not in choices:
+        raise InputError(f"{option}: unknown {kind} {value!r} (expected one of {', '.join(choices)})")
+
+
+def _one_chain(model: str, models: Sequence[str], what: str) -> None:
+    """InputError unless ``model`` is one of the one-chain ``models`` ``what`` is defined for."""
+    if model not in models:
+        raise InputError(f"--model: {what} is defined for one chain ({', '.join(models)}; a finger of the hand "
+                         f"with --chain), got {model!r}")
+
+
+def _one_finger(model: str, models: Sequence[str], what: str) -> None:
+    """InputError unless ``model`` is one of the one-finger ``models`` ``what`` is defined for."""
+    if model not in models:
+        raise InputError(f"--model: {what} is defined for one finger ({', '.join(models)}), got {model!r}")
+
+
+def parse_vector(text: str, name: str) -> np.ndarray:
+    """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise."""
+    parts = [p.strip() for p in text.split(",")]
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError:
+        raise InputError(f"--{name}: expected comma-separated numbers, got {text!r}") from None
+    a = np.array(vals)
+    if not np.isfinite(a).all():
+        raise InputError(f"--{name}: contains NaN or inf ({text!r})")
+    return a
+
+
+def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
+    """Turn ``--q -0.1,0.2`` into ``--q=-0.1,0.2`` (argparse would read -0.1,0.2 as an option)."""
+    out: list[str] = []
+    i = 0
+    while i < len(argv):
+        a = argv[i]
+        if a in VECTOR_OPTIONS and i + 1 < len(argv) and _NUMLIST.match(argv[i + 1]):
+            out.append(f"{a}={argv[i + 1]}")
+            i += 2
+            continue
+        out.append(a)
+        i += 1
+    return out
+
+
+_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("data", "--data"), ("validate", "--validate"),
+                  ("true_params", "--true-params"), ("observer_params", "--observer-params"),
+                  ("plant_params", "--plant-params"))
+
+
+_OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), ("log", "--log"), ("plot", "--plot"))
+
+
+def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[str]] | None = None) -> None:
+    """The output policy (:func:`alpes_dyn.fileio.check_outputs`) of the command in ``args``, before any work:
+    every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
+    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF --model) and the others."""
+    inputs = [(flag, getattr(args, dest)) for dest, flag in _INPUT_OPTIONS if isinstance(getattr(args, dest, None), str)]
+    model = getattr(args, "model", None)
+    if isinstance(model, str) and _is_urdf_path(model):
+        inputs.append(("--model", model))
+    outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
+    outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
+    check_outputs(outputs, inputs, extensions)
+
+
+def _is_urdf_path(model: str) -> bool:
+    return model.endswith(".urdf") or "/" in model
+
+
+_ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--friction"),
+               ("rotor_inertia", "--rotor-inertia"))
+
+
+def _check_model_options(args: argparse.Namespace) -> None:
+    """Refuse, with one line, the options that do not apply to the kind of --model given (never ignore them)."""
+    if _is_urdf_path(args.model):
+        for dest, flag in _ALPES_ONLY:
+            if getattr(args, dest, None) not in (None, False):
+                raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand); for a URDF --model "
+                                 "put springs, friction and rotor inertia in a --spec file")
+    elif getattr(args, "spec", None) is not None:
+        raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its transmission "
+                         "from --params")
+
+
+def _model_from_args(args: argparse.Namespace):
+    from ..model.robot import Model
+
+    _check_model_options(args)
+    if _is_urdf_path(args.model):
+        return Model.from_urdf_file(args.model, getattr(args, "spec", None))
+    return Model.alpes(args.model, spring=getattr(args, "spring", None) or "torsional",
+                       friction=getattr(args, "friction", False), rotor_inertia=getattr(args, "rotor_inertia", False),
+                       params=getattr(args, "params", None))
+
+
+def _one_or_list(outputs: list[str]) -> str | list[str]:
+    return outputs[0] if len(outputs) == 1 else outputs
+
+
+def _json_safe(x: Any) -> Any:
+    """``x`` with every non-finite float (NaN, inf: not JSON) written as null."""
+    if isinstance(x, float):
+        return x if np.isfinite(x) else None
+    if isinstance(x, dict):
+        return {k: _json_safe(v) for k, v in x.items()}
+    if isinstance(x, (list, tuple)):
+        return [_json_safe(v) for v in x]
+    return x
+
+
+def _emit(obj: dict[str, Any], text: str, as_json: bool) -> None:
+    """Print the result: one JSON object (strict JSON: a non-finite number is null) or the text."""
+    _write_stdout((json.dumps(_json_safe(obj), allow_nan=False) if as_json else text) + "\n")
+
+
+class _StdoutError(AlpesDynError):
+    """Standard output cannot take the result (a closed pipe, a full device)."""
+
+
+def _write_stdout(text: str) -> None:
+    """Write ``text`` to stdout and flush it; a closed pipe or a full device is :class:`_StdoutError` (one line,
+    exit 2), and stdout is then pointed at /dev/null so that the interpreter's last flush cannot fail again."""
+    try:
+        sys.stdout.write(text)
+        sys.stdout.flush()
+    except BrokenPipeError:
+        _drop_stdout()
+        raise _StdoutError("stdout: broken pipe (the reader closed it before the end of the output)") from None
+    except OSError as exc:
+        _drop_stdout()
+        raise _StdoutError(f"stdout: cannot write the output ({exc.strerror or exc})") from None
+
+
+def _drop_stdout() -> None:
+    try:
+        fd = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(fd, sys.stdout.fileno())
+        os.close(fd)
+    except (OSError, ValueError, AttributeError):
+        pass
+
+
+def _fmt_matrix(M: np.ndarray) -> str:
+    return "\n".join("  " + " ".join(f"{x: .6e}" for x in row) for row in np.atleast_2d(M))
+
+
+def _fmt_table(M: np.ndarray, rows: Sequence[str], cols: Sequence[str]) -> str:
+    """A matrix with a header of column names and each row led by its name."""
+    M = np.atleast_2d(M)
+    w = max([len(r) for r in rows] + [1])
+    cw = max([len(c) for c in cols] + [13])
+    head = "  " + " " * w + " " + " ".join(f"{c:>{cw}s}" for c in cols)
+    return "\n".join([head] + ["  " + f"{r:<{w}s} " + " ".join(f"{x:>{cw}.6e}" for x in row)
+                               for r, row in zip(rows, M)])
+
+
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split())

@@ -1,0 +1,112 @@
+"""The ``control`` command: closed-loop fingertip force control on a MuJoCo plant, a finger pressing a block
+or the hand grasping a cylinder, with its ``--log`` CSV and ``--plot`` figure."""
+
+from __future__ import annotations
+
+import argparse
+import importlib
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from .common import _check_run_files, _emit, _one_of
+
+
+def _check_control_outputs(args: argparse.Namespace) -> None:
+    """Before a closed-loop run: matplotlib for ``--plot`` and writable ``--log``/``--plot`` paths."""
+    if args.plot:
+        try:
+            importlib.import_module("matplotlib")
+        except ImportError:
+            raise InputError("--plot: matplotlib is not installed (pip install 'alpes_dyn[plot]')") from None
+    _check_run_files(args, {"--plot": ("png",)})
+
+
+def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dict[str, Any]:
+    """The run's ``--log`` CSV and ``--plot`` figure; its JSON object with their paths."""
+    if args.log:
+        res.to_csv(args.log)
+    if args.plot:
+        plot(res, args.plot)
+    obj = res.to_dict()
+    for k, v in (("log", args.log), ("plot", args.plot)):
+        if v:
+            obj[k] = v
+    return obj
+
+
+def _output_lines(args: argparse.Namespace) -> list[str]:
+    return ([f"  log: {args.log}"] if args.log else []) + ([f"  figure: {args.plot}"] if args.plot else [])
+
+
+def _na(x: Any, fmt: str) -> str:
+    return "n/a" if x is None else format(x, fmt)
+
+
+def cmd_control(args: argparse.Namespace) -> int:
+    """Closed loop on MuJoCo: a finger presses a block with the force asked for, or the hand grasps a cylinder."""
+    from ..control.force import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
+
+    if args.model != "hand" and args.model not in CONTROL_MODELS:
+        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
+                         f"or the hand on the cylinder (hand), got {args.model!r}")
+    _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+    _one_of(args.reference, REFERENCES, "--reference", "reference")
+    if args.model == "hand":
+        return _control_hand(args)
+    if args.duration is None:
+        args.duration = 3.0
+    _check_control_outputs(args)
+    res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
+                      seed=args.seed, params=args.params, plant_params=args.plant_params)
+    obj = _write_control_outputs(res, args, plot_control)
+    f = _na
+
+    lines = [
+        f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
+        f"({args.duration:g} s, seed {args.seed})",
+        f"  force RMSE {res.force_rmse:.4f} N; steady-state error {f(res.steady_state_error, '.2%')}; "
+        f"overshoot {f(res.overshoot, '.1%')}; 10-90 % rise "
+        f"{'n/a' if res.rise_time_s is None else f'{res.rise_time_s:.3f} s'}",
+        "  joints observed during contact, RMSE [deg]: "
+        + ("n/a (no observer)" if res.q_rmse_deg is None else
+           "  ".join(f"{j} {e:.2f}" for j, e in zip(res.joint_names, res.q_rmse_deg))),
+        f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
+        f"loop {res.realtime_ratio:.1f}x faster than real time",
+    ]
+    _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
+    return 0
+
+
+def _control_hand(args: argparse.Namespace) -> int:
+    """``alpes-dyn control --model hand``: run_hand_control, one loop per motor, per-chain metrics."""
+    from ..control.force import HandControlScenario, plot_hand_control, run_hand_control
+
+    if args.reference != "step":
+        raise InputError(f"--reference: the hand's loops follow step references (control.HAND_LEVELS), "
+                         f"got {args.reference!r}")
+    sc = HandControlScenario()
+    duration = sc.duration if args.duration is None else args.duration
+    if duration < sc.step_time + 0.25:
+        raise InputError(f"--duration: the hand's run needs at least {sc.step_time + 0.25:g} s (its references "
+                         f"step up at {sc.step_time:g} s), got {duration:g}")
+    _check_control_outputs(args)
+    res = run_hand_control(args.controller, duration=duration, seed=args.seed, params=args.params,
+                           plant_params=args.plant_params)
+    obj = _write_control_outputs(res, args, plot_hand_control)
+    f = _na
+
+    lines = [f"the hand grasping the cylinder, {args.controller} loops, MuJoCo plant ({duration:g} s, seed {args.seed}, "
+             f"references step up at {sc.step_time:g} s)",
+             f"  {'chain':7s} {'asked':>6s} {'held':>7s} {'SSE':>7s} {'overshoot':>9s} {'rise':>7s} {'RMSE':>8s} "
+             f"{'q RMSE':>7s}"]
+    for row in res.table():
+        rise = "n/a" if row["rise_time_s"] is None else f"{1e3 * row['rise_time_s']:.0f} ms"
+        lines.append(f"  {row['chain']:7s} {row['F_ref']:4.2f} N {row['F_held']:5.3f} N "
+                     f"{f(row['steady_state_error'], '7.2%')} {f(row['overshoot'], '9.1%')} {rise:>7s} "
+                     f"{row['force_rmse']:6.4f} N {f(row['q_rmse_deg'], '5.2f')}{'' if row['q_rmse_deg'] is None else ' deg'}")
+    lines.append(f"  thumb ab/adduction held at {np.degrees(res.q_abduction[-1]):.1f} deg; "
+                 f"loop {res.realtime_ratio:.1f}x faster than real time")
+    _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
+    return 0

@@ -1,0 +1,212 @@
+"""The commands on one model: ``urdf`` and ``mjcf`` (its descriptions), ``dynamics`` (A, C, G, J and the
+forward dynamics at one state), ``linearize`` (its state space at a point) and ``report`` (the report
+reproduced: the dynamics cross-checked, the observability of its models)."""
+
+from __future__ import annotations
+
+import argparse
+import math
+import time
+import warnings
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..fileio import atomic_write
+from .analysis_cmds import _observability_summary
+from .common import _check_run_files, _emit, _fmt_table, _model_from_args, _one_or_list, _write_stdout, parse_vector
+
+
+def cmd_urdf(args: argparse.Namespace) -> int:
+    from ..model.description import urdf_string
+    from ..model.params import load_params
+
+    _check_run_files(args)
+    text = urdf_string(args.model, load_params(args.params))
+    if args.output is not None:
+        atomic_write(args.output, text, "-o")  # never a partial file (full disk, killed process)
+    else:
+        _write_stdout(text)
+    return 0
+
+
+def cmd_mjcf(args: argparse.Namespace) -> int:
+    from ..model.mjcf import mjcf_string
+    from ..model.params import load_params
+
+    if not math.isfinite(args.tilt):
+        raise InputError(f"--tilt: expected a finite angle in degrees, got {args.tilt!r}")
+    _check_run_files(args)
+    text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
+                       rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
+                       scene=args.scene, palm_down=args.palm_down, stiction=args.stiction,
+                       tendon_stiffness=args.tendon_stiffness, tendon_damping=args.tendon_damping,
+                       tendon_rotor=args.tendon_rotor, tilt=math.radians(args.tilt))
+    if args.output is not None:
+        atomic_write(args.output, text, "-o")
+    else:
+        _write_stdout(text)
+    return 0
+
+
+def cmd_dynamics(args: argparse.Namespace) -> int:
+    m = _model_from_args(args)
+    n = m.n
+    q = parse_vector(args.q, "q") if args.q is not None else np.zeros(n)
+    v = parse_vector(args.v, "v") if args.v is not None else np.zeros(n)
+    tau = parse_vector(args.tau, "tau") if args.tau is not None else np.zeros(n)
+    for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
+        if x.shape != (n,):
+            raise InputError(f"--{name}: model {m.name!r} has {n} joints, got {x.size} values")
+    tau_m = None
+    if args.tau_m is not None:
+        if m.transmission is None:
+            raise InputError(f"--tau-m: model {m.name!r} has no motors (give a URDF --model a --spec with [[motor]])")
+        if args.tau is not None:
+            raise InputError("--tau-m: give joint torques --tau or motor torques --tau-m, not both")
+        tau_m = parse_vector(args.tau_m, "tau-m")
+        if tau_m.shape != (m.transmission.n_motors,):
+            raise InputError(f"--tau-m: model {m.name!r} has {m.transmission.n_motors} motors "
+                             f"({', '.join(m.motor_names)}), got {tau_m.size} values")
+        tau = m.transmission.joint_torque(tau_m)  # Gamma = S^T tau_m (eq. 3.13)
+    F = None
+    if args.force is not None:
+        F = parse_vector(args.force, "force")
+        if F.shape != (3,):
+            raise InputError(f"--force: expected 3 values Fx,Fy,Fz, got {F.size}")
+    tip = args.tip if args.tip is not None else (m.tips[0] if m.tips else None)
+    A = m.inertia_matrix(q)
+    C = m.coriolis_matrix(q, v)
+    G = m.gravity_torque(q)
+    J = m.fingertip_jacobian(q, tip)
+    qdd = m.forward_dynamics(q, v, tau, F, tip)
+    obj = {"model": m.name, "q": q.tolist(), "v": v.tolist(), "tau": tau.tolist(), "A": A.tolist(),
+           "C": C.tolist(), "G": G.tolist(), "J": J.tolist(), "qdd": qdd.tolist(), "tip": tip,
+           "joints": list(m.joint_names), "spring": m.spring, "F": None if F is None else F.tolist(),
+           "motors": list(m.motor_names), "tips": list(m.tip_names)}
+    outside = [j for j, x, lo, hi in zip(m.joint_names, q, m.lower, m.upper) if x < lo or x > hi]
+    obj["outside_limits"] = outside  # joints whose q is outside the URDF limits (no stop in eq. 2.10)
+    joints = m.joint_names
+    motor_lines: list[str] = []
+    if m.transmission is not None:
+        q_m = m.transmission.motor_positions(q)
+        obj["q_m"] = q_m.tolist()
+        obj["tau_m"] = None if tau_m is None else tau_m.tolist()
+        cols = ("q_m", "tau_m") if tau_m is not None else ("q_m",)
+        vals = np.column_stack([q_m, tau_m]) if tau_m is not None else q_m[:, None]
+        motor_lines = ["per motor: encoder angle q_m = S q [rad]" + (", motor torque tau_m [N m] (tau = S^T tau_m)"
+                                                                     if tau_m is not None else "") + ":",
+                       _fmt_table(vals, m.motor_names, cols)]
+    text = "\n".join([
+        f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}",
+        f"F [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
+        "per joint: q [rad], v [rad/s], tau [N m], G(q) = gravity + springs [N m], qdd [rad/s^2]:",
+        _fmt_table(np.column_stack([q, v, tau, G, qdd]), joints, ("q", "v", "tau", "G", "qdd")),
+        "A(q) [kg m^2]:", _fmt_table(A, joints, joints),
+        "C(q, v) [N m s]:", _fmt_table(C, joints, joints),
+        f"J(q) fingertip {tip}, linear, base axes [m]:", _fmt_table(J, ("x", "y", "z"), joints),
+        *motor_lines,
+    ] + ([f"WARNING: q outside the joint limits at {', '.join(outside)} (the model has no joint stop: "
+          "these terms hold as if the joints could go there)"] if outside else []))
+    _emit(obj, text, args.json)
+    return 0
+
+
+def cmd_linearize(args: argparse.Namespace) -> int:
+    """(A, B, C, D) at a state and input (default: the rest state under the input), every row and column named."""
+    from ..symbolic.statespace import StateSpace
+
+    m = _model_from_args(args)
+    ss = StateSpace(m, input=args.input, output=_one_or_list(args.output))
+    u = parse_vector(args.u, "u") if args.u is not None else np.zeros(ss.n_inputs)
+    if u.shape != (ss.n_inputs,):
+        raise InputError(f"--u: input {args.input!r} of model {m.name!r} has {ss.n_inputs} entries "
+                         f"({', '.join(ss.input_names)}), got {u.size} values")
+    if args.q is None and args.v is not None:
+        raise InputError("--v: give --q with it (without --q the point is the rest state under --u)")
+    if args.q is None:
+        x0 = ss.equilibrium(u)
+        where = "the rest state under u (f(x0, u) = 0)"
+    else:
+        q = parse_vector(args.q, "q")
+        v = parse_vector(args.v, "v") if args.v is not None else np.zeros(m.n)
+        for x, name in ((q, "q"), (v, "v")):
+            if x.shape != (m.n,):
+                raise InputError(f"--{name}: model {m.name!r} has {m.n} joints, got {x.size} values")
+        x0 = np.concatenate([q, v])
+        where = "the given state"
+    if args.dt is not None and not (np.isfinite(args.dt) and args.dt > 0):
+        raise InputError(f"--dt: expected a positive number of seconds, got {args.dt!r}")
+    with warnings.catch_warnings():  # an overflow is reported below as the non-finite result it gives
+        warnings.simplefilter("ignore", RuntimeWarning)
+        A, B, C, D = ss.linearize(x0, u, dt=args.dt)
+    bad = next((k for k, M in zip("ABCD", (A, B, C, D)) if not np.isfinite(M).all()), None)
+    if bad is not None:
+        raise InputError(f"{'--dt' if args.dt is not None else '--q'}: the linearisation's {bad} matrix is not finite "
+                         f"at {'dt = %g s' % args.dt if args.dt is not None else 'this point'} (a smaller --dt, or "
+                         "another point)")
+    kind = "continuous" if args.dt is None else f"discrete, zero-order hold, dt = {args.dt:g} s"
+    obj = {"model": m.name, "input": args.input, "output": args.output, "dt": args.dt, "x0": x0.tolist(),
+           "u0": u.tolist(), "A": A.tolist(), "B": B.tolist(), "C": C.tolist(), "D": D.tolist(),
+           "states": list(ss.state_names), "inputs": list(ss.input_names), "outputs": list(ss.output_names)}
+    xs, us, ys = ss.state_names, ss.input_names, ss.output_names
+    text = "\n".join([
+        f"Linearisation of {m.name} ({kind}) at {where}: input {args.input} ({ss.n_inputs}), "
+        f"output {'+'.join(args.output)} ({ss.n_outputs})",
+        "x0:", _fmt_table(x0[None], ("x0",), xs), "A:", _fmt_table(A, xs, xs), "B:", _fmt_table(B, xs, us),
+        "C:", _fmt_table(C, ys, xs), "D:", _fmt_table(D, ys, us),
+    ])
+    _emit(obj, text, args.json)
+    return 0
+
+
+def dynamics_crosscheck(seed: int = 0, points: int = 20) -> dict[str, Any]:
+    """Pinocchio vs the symbolic backend (A, G, qdd) and vs the report's Jacobian formula (Section 2.2)."""
+    from ..model.robot import Model
+    from ..model.reference import report_jacobian
+    from ..symbolic.dynamics import SymbolicDynamics
+    import casadi as cs
+
+    rng = np.random.default_rng(seed)
+    out: dict[str, Any] = {}
+    for name in ("finger2", "finger3", "hand"):
+        m = Model.alpes(name)
+        S = SymbolicDynamics(m)
+        qs, vs, ts = (cs.SX.sym(s, m.n) for s in ("q", "v", "t"))
+        f = cs.Function("f", [qs, vs, ts], [S.inertia_matrix(qs), S.gravity_torque(qs),
+                                            S.forward_dynamics(qs, vs, ts, smooth=False)])
+        errs = {"A": 0.0, "G": 0.0, "qdd": 0.0, "J_report": 0.0}
+        for _ in range(points):
+            q, v = m.random_state(rng)
+            tau = rng.normal(scale=0.05, size=m.n)
+            A, G, a = (np.array(x).reshape(-1) for x in f(q, v, tau))
+            rel = lambda x, y: float(np.max(np.abs(x - y)) / max(np.max(np.abs(y)), 1e-300))  # noqa: E731
+            errs["A"] = max(errs["A"], rel(A.reshape(m.n, m.n), m.inertia_matrix(q)))
+            errs["G"] = max(errs["G"], rel(G, m.gravity_torque(q)))
+            errs["qdd"] = max(errs["qdd"], rel(a, m.forward_dynamics(q, v, tau)))
+            if name != "hand":
+                L = m.params.finger.L[: m.n]
+                errs["J_report"] = max(errs["J_report"], rel(m.fingertip_jacobian(q), report_jacobian(L, q)))
+        if name == "hand":
+            del errs["J_report"]
+        out[name] = {"backend": S.backend, "points": points, "max_rel_error": errs}
+    return out
+
+
+def cmd_report(args: argparse.Namespace) -> int:
+    t0 = time.perf_counter()
+    dyn = dynamics_crosscheck(args.seed, args.points)
+    obs = _observability_summary(args)
+    obj = {"dynamics": dyn, "observability": {k: v for k, v in obs.items() if k != "lines"},
+           "seconds": time.perf_counter() - t0}
+    lines = ["Alpes hand: the report reproduced", "", "Dynamics cross-check (max relative error over random states)"]
+    for name, d in dyn.items():
+        e = d["max_rel_error"]
+        lines.append(f"  {name:8s} Pinocchio vs {d['backend']}: A {e['A']:.1e}  G {e['G']:.1e}  qdd {e['qdd']:.1e}"
+                     + (f"  J vs report Sec. 2.2 {e['J_report']:.1e}" if "J_report" in e else ""))
+    lines += ["", "Observability (rank of d(y, y', ..., y^(n-1))/dx, eq. 3.8)"]
+    lines += obs["lines"]
+    lines.append(f"\n{obj['seconds']:.2f} s")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0

@@ -1,0 +1,367 @@
+"""The command line's grammar: the ``argparse`` parser of every command, its options, help texts and
+examples (one function per command, in the order ``alpes-dyn --help`` lists them)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Callable
+
+import numpy as np
+
+from .. import __version__
+from ..analysis.observability import MAX_INSTRUCTIONS
+from ..limits import MAX_POINTS
+from .analysis_cmds import cmd_identifiability, cmd_observability
+from .common import _UsageError
+from .control_cmds import cmd_control
+from .estimation_cmds import THUMB_PARAMETERS, cmd_estimate, cmd_experiment, cmd_identify
+from .model_cmds import cmd_dynamics, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
+from .study_cmds import cmd_sweep
+
+DESCRIPTION = "Command line ``alpes-dyn``: URDF generation, dynamics, the report reproduced, observability, estimation."
+"""``alpes-dyn --help``'s first line: the first line of the package's docstring (:mod:`alpes_dyn.cli`)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message: str) -> None:  # one line, exit 2
+        raise _UsageError(f"{self.prog}: {message}")
+
+
+def _int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
+    want = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
+
+    def parse(text: str) -> int:
+        try:
+            value = int(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"expected {want}, got {text!r}") from None
+        if value < low or (high is not None and value > high):
+            raise argparse.ArgumentTypeError(f"expected {want}, got {value}")
+        return value
+
+    parse.__name__ = want
+    return parse
+
+
+_SEED = _int_at_least(0)
+_POINTS = _int_at_least(1, MAX_POINTS)
+
+
+def _positive_seconds(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}") from None
+    if not (np.isfinite(value) and value > 0):
+        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
+    return value
+
+
+_positive_seconds.__name__ = "seconds"
+
+
+OUTPUT_HELP = ("y: sum (of each motor's joint angles, default), encoder (q_m = S q), joints, joints:<a>,<b>, "
+               "tip_position:<frame>; several joined by '+', e.g. encoder+tip_position:tip")
+
+
+def _outputs(text: str) -> list[str]:
+    parts = [p.strip() for p in text.split("+")]
+    if not all(parts):
+        raise argparse.ArgumentTypeError(f"expected output names joined by '+', got {text!r}")
+    return parts
+
+
+def _common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") -> None:
+    """The options of the commands on one model: --model, --spec, --spring, --params, --json."""
+    sp.add_argument("--model", default=model_default, required=model_default is None,
+                    help="finger2, finger3, hand, or a path to a fixed-base URDF file (default %(default)s)")
+    sp.add_argument("--spec", default=None, metavar="FILE.toml",
+                    help="transmission spec of a URDF --model: motors, ratios, encoder, springs, friction, "
+                         "rotor inertia (see the user guide, 'Your own robot')")
+    sp.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
+                    help="Alpes models: spring model torsional 1/2 K q^2 (default), report (eq. 2.14 literally), "
+                         "none")
+    sp.add_argument("--params", default=None, metavar="FILE",
+                    help="Alpes models: parameter file (default: the shipped one)")
+    sp.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _add_urdf(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("urdf", help="print or write the URDF of a model")
+    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.set_defaults(func=cmd_urdf)
+
+
+def _add_mjcf(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("mjcf", help="print or write the MuJoCo model (MJCF) of a model: springs, stops, tendons, "
+                       "motors, sensors", epilog="Example: alpes-dyn mjcf finger3 --scene block -o finger3.xml")
+    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--scene", default="none", choices=("none", "block", "cylinder"),
+                   help="add a fixed block on a finger's pad (finger2, finger3) or a cylinder in the hand")
+    s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
+                   help="spring model (default %(default)s)")
+    s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
+    s.add_argument("--rotor-inertia", action="store_true", help="the rotor J_m on each tendon: tendon armature J_m/r_m^2 "
+                   "(eq. 2.8)")
+    s.add_argument("--no-limits", action="store_true", help="no joint stops")
+    s.add_argument("--no-contact", action="store_true", help="collisions disabled")
+    s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
+    s.add_argument("--stiction", type=float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
+                   help="stick-slip dry friction: frictionloss F_s with solreffriction of this time constant "
+                        "(default %(const)g s when given without a value)")
+    s.add_argument("--tendon-stiffness", type=float, default=None, metavar="N_PER_M",
+                   help="series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
+    s.add_argument("--tendon-damping", type=float, default=0.0, metavar="N_S_PER_M",
+                   help="damping c_t of the series-elastic tendon (default 0)")
+    s.add_argument("--tendon-rotor", action="store_true", help="rotor inertia J_m / r_m^2 on each rigid tendon")
+    s.add_argument("--tilt", type=float, default=0.0, metavar="DEG",
+                   help="palm tilted in the finger's plane by DEG degrees (gravity rotated about y)")
+    s.set_defaults(func=cmd_mjcf)
+
+
+def _add_dynamics(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("dynamics", help="A, C, G, J and forward dynamics at one state",
+                       epilog="Example: alpes-dyn dynamics --model finger3 --q=-0.1,0.2,0.3 --v=0,0,0 --tau=0.01,0,0")
+    _common(s)
+    s.add_argument("--q", help="joint angles, rad, e.g. --q=-0.1,0.2,0.3 (default zeros)")
+    s.add_argument("--v", help="joint velocities, rad/s (default zeros)")
+    s.add_argument("--tau", help="joint torques Gamma, N m (default zeros)")
+    s.add_argument("--tau-m", help="motor torques tau_m, N m, in motor order: Gamma = S^T tau_m (instead of --tau)")
+    s.add_argument("--force", help="contact force Fx,Fy,Fz at the tip, N, base frame (eq. 2.9, 2.13)")
+    s.add_argument("--tip", help="tip frame name (default: the first tip)")
+    s.add_argument("--friction", action="store_true", help="Alpes models: switch on friction (eq. 2.6-2.7)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: switch on the rotor inertia J_m "
+                                                                "on each tendon, S^T J_m S (eq. 2.8)")
+    s.set_defaults(func=cmd_dynamics)
+
+
+def _add_report(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("report", help="the report reproduced: dynamics cross-check and observability")
+    s.add_argument("--points", type=_POINTS, default=20, help="random states per check (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_report)
+
+
+def _add_observability(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("observability", help="nonlinear observability rank test (eq. 3.4-3.8)")
+    _common(s)
+    s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
+    s.add_argument("--output", default="sum", type=_outputs, help=OUTPUT_HELP)
+    s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--order", default="auto", help="highest derivative order: auto (until the rank stops growing, "
+                   "default), report (y..y^(n-1), eq. 3.8) or an integer")
+    s.add_argument("--constant-input", action="store_true", help="inputs constant (u' = u'' = ... = 0)")
+    s.add_argument("--max-operations", type=_int_at_least(1), default=MAX_INSTRUCTIONS,
+                   help="size cap of one derivative order's function, CasADi operations (default %(default)s)")
+    s.set_defaults(func=cmd_observability)
+
+
+def _add_linearize(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("linearize", help="A, B, C, D of the state space at a point (continuous, or discrete with --dt)",
+                       epilog="Example: alpes-dyn linearize --model finger3 --input motor --output encoder --u 0.02")
+    _common(s)
+    s.add_argument("--input", default="joint", choices=("joint", "motor"), help="u = joint torques or motor torques")
+    s.add_argument("--output", default="sum", type=_outputs, help=OUTPUT_HELP)
+    s.add_argument("--u", help="input u0 (joint or motor torques, N m; default zeros)")
+    s.add_argument("--q", help="joint angles of x0, rad (default: the rest state under --u)")
+    s.add_argument("--v", help="joint velocities of x0, rad/s (default zeros; needs --q)")
+    s.add_argument("--dt", type=float, default=None, help="time step, s: discretise with a zero-order hold")
+    s.set_defaults(func=cmd_linearize)
+
+
+def _add_estimate(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("estimate", help="simulate a finger and estimate its joints from the motor encoder, or run "
+                       "the observer on a recording (--data)",
+                       epilog="Examples: alpes-dyn estimate --model finger3 --observer ekf-params --mismatch 0.1 "
+                              "--plot estimate.png; alpes-dyn estimate --data rec.csv --params ident.toml --friction")
+    _common(s)
+    s.set_defaults(model="finger3")
+    for a in s._actions:
+        if a.dest == "model":
+            a.help = "finger2, finger3 or thumb (with --friction) (default %(default)s)"
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand (its own [finger.<name>] values in the files)")
+    s.add_argument("--observer", default="ekf",
+                   help="ekf, ukf, or ekf-params, ukf-params (which also estimate the input and spring gains: use "
+                        "them with --mismatch) (default %(default)s)")
+    s.add_argument("--mismatch", type=float, default=0.0,
+                   help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
+    s.add_argument("--duration", type=float, default=5.0, help="simulated time, s (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints (format by "
+                   "extension: .png, .pdf, .svg...)")
+    s.add_argument("--true-params", default=None, metavar="FILE",
+                   help="parameter file of the simulated (true) finger, e.g. from a perturbed draw")
+    s.add_argument("--observer-params", default=None, metavar="FILE",
+                   help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify' (default: the "
+                        "simulated finger's, --true-params, or the shipped one, mis-scaled by --mismatch)")
+    s.add_argument("--friction", action="store_true",
+                   help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
+    s.add_argument("--data", default=None, metavar="REC.csv",
+                   help="run the observer on this recording (encoder and torque; RMSE where it has true_q_* columns) "
+                        "instead of the simulated scenario; the observer's model is --params (e.g. the file "
+                        "'alpes-dyn identify -o' wrote), with --friction if it has friction")
+    s.add_argument("--torque-noise", type=float, default=None, metavar="NM",
+                   help="with --data: white noise of the recorded torque, N m (default: estimated from the recording)")
+    s.add_argument("--disturbance", action="store_true",
+                   help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
+    s.add_argument("--log", default=None, metavar="FILE.csv",
+                   help="with --data: write the estimated joints, velocities and standard deviations as CSV")
+    s.set_defaults(func=cmd_estimate)
+
+
+def _add_experiment(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("experiment", help="simulate the identification experiment on a finger or the thumb, write a "
+                       "recording CSV",
+                       epilog="Example: alpes-dyn experiment --model finger3 --chain index --params true.toml --seed 1 "
+                              "-o rec.csv")
+    s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
+                        "values in --params)")
+    s.add_argument("--params", default=None, metavar="FILE",
+                   help="the true parameter file (default: the shipped one)")
+    s.add_argument("--perturb", type=float, default=None, metavar="SPREAD",
+                   help="draw the true chain from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
+                        "per link (seeded by --seed): the --chain finger's own values, the thumb's, or the shared "
+                        "finger's; write it with --true-params-out")
+    s.add_argument("--true-params-out", default=None, metavar="FILE", help="write the (drawn) true parameters there")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
+    s.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="the recording to write")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_experiment)
+
+
+def _add_identify(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("identify", help="fit a finger's or the thumb's springs, masses and friction to a recording",
+                       epilog="Example: alpes-dyn identify --model finger3 --chain index --data rec.csv -o ident.toml. "
+                              "Exit codes: 0 written (or --force), 2 bad input, 3 the fit did not converge or the "
+                              "model is not adequate to the recording (residual coloured, correlated with the "
+                              "torque, above the sensor floor, or a poor --validate fit): nothing written")
+    s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand: starts from its own values and writes the fit "
+                        "into its [finger.<name>] table (the thumb's go to [thumb])")
+    s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
+    s.add_argument("--params", default=None, metavar="FILE",
+                   help="parameter file to start from, and the base of the written file (default: the shipped one)")
+    s.add_argument("--parameters", default=None,
+                   help="what to fit: kinds K, m, F_s, F_v, friction, input_gain, J_m (with --rotor-inertia), "
+                        "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "
+                        "rad; a planar finger sees tilt_y only) and/or names K_1, m_2, encoder_offset_finger, "
+                        f"tilt_y... (default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own "
+                        "mass and friction are barely seen by the encoders; name them to fit them)")
+    s.add_argument("--rotor-inertia", action="store_true",
+                   help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
+    s.add_argument("--excitation", default="documented",
+                   help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
+                        "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
+    s.add_argument("--torque-noise", type=float, default=None,
+                   help="white noise of the recorded torque, N m (errors in variables). Default: estimated from "
+                        "the torque off the excitation's lines; with --excitation none, 0 (the torque taken as exact)")
+    s.add_argument("--validate", default=None, metavar="REC2.csv",
+                   help="a held-out recording of the same finger: the fitted model simulated on its torque, fit %% "
+                        "and NRMSE per encoder (MATLAB's compare), part of the adequacy verdict")
+    s.add_argument("--encoder-noise", type=float, default=None, metavar="COUNTS",
+                   help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
+                        "adequacy check (default: estimated from the recording)")
+    s.add_argument("--force", action="store_true",
+                   help="write -o even when the fit did not converge or the model is not adequate (the file is "
+                        "marked not trustworthy); without it such a fit writes nothing and exits with code 3")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_identify)
+
+
+def _add_identifiability(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("identifiability", help="which physical parameters a finger's encoder can identify: "
+                       "structural rank and Cramér-Rao bounds of an experiment",
+                       epilog="Example: alpes-dyn identifiability --model finger3 --parameters K,m --design documented")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--parameters", default=None,
+                   help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
+                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
+                        "chosen)")
+    s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
+    s.add_argument("--design", default="documented",
+                   help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
+                        "scenario (the estimation scenario's small torque wiggle) or none (structural only)")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--camera-times", default=None, metavar="T1,T2,...",
+                   help="times (s) where a camera or a jig measures every joint angle once (noise 0.1 degree)")
+    s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--max-operations", type=_int_at_least(1), default=MAX_INSTRUCTIONS,
+                   help="size cap of one derivative order's function, CasADi operations (default %(default)s); "
+                        "above it the rank is a lower bound")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_identifiability)
+
+
+def _add_sweep(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("sweep", help="a study over seeded draws of a finger within its tolerances, on Dask workers "
+                       "(experiment, identification, EKF per draw)",
+                       epilog="Example: alpes-dyn sweep --model finger3 --draws 8 --seed 1 --workers 2 -o sweep.csv")
+    s.add_argument("--study", default="robustness",
+                   help="robustness: per draw a finger drawn +-spread per link, its experiment, the fit and the EKF "
+                        "before/after (default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--draws", type=_int_at_least(1), default=4, help="number of draws (default %(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="seed of the first draw; draw k has seed + k "
+                   "(default %(default)s)")
+    s.add_argument("--spread", type=float, default=0.2, help="relative spread per link (default %(default)s)")
+    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--no-fit", action="store_true", help="no identification: the EKF on the nominal file only")
+    s.add_argument("--workers", type=_int_at_least(1), default=2,
+                   help="processes of the local Dask cluster (default %(default)s)")
+    s.add_argument("--scheduler", default=None, metavar="ADDRESS",
+                   help="a running Dask scheduler, e.g. tcp://host:8786, instead of a local cluster")
+    s.add_argument("--serial", action="store_true", help="one draw after another in this process (no Dask)")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.csv", help="write the table as CSV")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_sweep)
+
+
+def _add_control(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
+                       epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
+                              "--plot control.png")
+    s.add_argument("--model", default="finger3",
+                   help="finger2 or finger3 on the block, or hand grasping the cylinder (a loop per motor, the "
+                        "references of control.HAND_LEVELS) (default %(default)s)")
+    s.add_argument("--controller", default="sensor",
+                   help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
+                        "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
+    s.add_argument("--reference", default="step",
+                   help="step (0.2, 1.0, 0.5 N), ramp (0.2 to 1.0 N in 1 s), sine (0.3-0.8 N at 1 Hz) "
+                        "(default %(default)s)")
+    s.add_argument("--params", default=None, metavar="FILE", help="the controller's parameter file (default: shipped)")
+    s.add_argument("--plant-params", default=None, metavar="FILE",
+                   help="the plant's parameter file (default: the controller's)")
+    s.add_argument("--duration", type=_positive_seconds, default=None,
+                   help="simulated time, s (default 3 for a finger, 3.5 for the hand)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
+    s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
+    s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_control)
+
+
+def build_parser() -> argparse.ArgumentParser:
+    """The parser of ``alpes-dyn`` and of each of its commands (which set ``func``, the command to run)."""
+    p = _Parser(prog="alpes-dyn", description=DESCRIPTION,
+                epilog="Vectors: comma-separated numbers; negative values as --q=-0.1,0.2 (or --q -0.1,0.2).")
+    p.add_argument("--version", action="version", version=f"alpes-dyn {__version__}")
+    sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
+    for add in (_add_urdf, _add_mjcf, _add_dynamics, _add_report, _add_observability, _add_linearize,
+                _add_estimate, _add_experiment, _add_identify, _add_identifiability, _add_sweep, _add_control):
+        add(sub)
+    return p

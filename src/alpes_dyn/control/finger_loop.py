@@ -1,0 +1,382 @@
+"""The closed loop of one finger pressing a block, MuJoCo as the plant, a controller of
+:mod:`alpes_dyn.control.controller` on the hand's sensors.
+
+:func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.model.mjcf`,
+contact on, the block scene, joint friction on: ``pip install 'alpes_dyn[mujoco]'``); see
+:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics.
+"""
+
+from __future__ import annotations
+
+import csv
+import dataclasses
+import math
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError, ModelError
+from ..fileio import atomic_path
+from ..limits import check_bytes, check_duration
+from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
+from ..model.robot import Model
+from ..estimation.observers import make_observer
+from ..model.params import HandParams, load_params
+from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
+from ..symbolic.statespace import StateSpace
+from .controller import CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile, static_contact_force
+
+
+CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
+
+
+@dataclass(frozen=True)
+class ControlScenario:
+    """Settings of the closed loop of :func:`run_control` (all SI units).
+
+    The plant: MuJoCo stepping the MJCF of ``model`` with the ``"block"`` scene (a fixed, frictionless
+    block met by the fingertip at ``contact_q``, :func:`~alpes_dyn.model.mjcf.block_normal`), contact and joint
+    stops on, joint friction on
+    (damping F_v, frictionloss F_s of the parameter file), the hand palm down (gravity reversed: the
+    finger flexes with gravity toward the block under it), at ``dt / substeps``; its parameters are
+    ``plant_params`` (default: the controller's). The controller's model is
+    ``Model.alpes(model, params)`` palm down, no friction (the report's eq. 2.11).
+
+    Sensors, sampled every ``dt`` (1 kHz): the encoder as in the estimation scenario
+    (``transmission.encoder_counts`` counts per motor revolution, plus ``encoder_noise_counts`` counts
+    of Gaussian noise, then quantised); the motor torque plus ``torque_noise`` N m of white noise; the
+    FlexiForce: MuJoCo's touch sensor plus ``force_noise`` N of noise, quantised to ``force_resolution``
+    (a 10-bit reading of a 4.4 N -- 1 lb -- FlexiForce A201: 4.3 mN).
+
+    The reference (:func:`.reference_profile`): ``levels`` (N) and a 1 Hz sine between ``sine[0]`` and
+    ``sine[1]``; metrics over the levels after ``settle`` s (see :class:`ControlResult`). The sensorless
+    loop low-passes its force estimate with ``force_filter_s``. ``gains`` override
+    :data:`.DEFAULT_GAINS` (any :class:`.ForceController` field). ``compiled``: the EKF step in compiled C
+    (cached; CasADi's virtual machine if no C compiler), the same numbers.
+
+    Initial state: the finger at rest on its springs (static equilibrium, motor off); the EKF starts
+    there too, with standard deviations 0.05 rad and 0.1 rad/s.
+    """
+
+    model: str = "finger3"
+    controller: str = "sensor"
+    reference: str = "step"
+    duration: float = 3.0
+    dt: float = 1e-3
+    substeps: int = 4
+    seed: int = 0
+    levels: tuple[float, float, float] = (0.2, 1.0, 0.5)
+    sine: tuple[float, float, float] = (0.3, 0.8, 1.0)
+    step_times: tuple[float, float] = (1.0, 2.0)
+    settle: float = 0.5
+    encoder_noise_counts: float = 0.5
+    torque_noise: float = 5e-4
+    force_noise: float = 0.005
+    force_resolution: float = 4.4 / 1024
+    contact_q: tuple[float, ...] = BLOCK_CONTACT_Q
+    force_filter_s: float = 0.01
+    compiled: bool = True
+    gains: dict = field(default_factory=dict, compare=False)  # overrides of DEFAULT_GAINS[controller]
+    params: Any = field(default=None, compare=False)
+    plant_params: Any = field(default=None, compare=False)
+
+    def check(self) -> None:
+        if self.model not in CONTROL_MODELS:
+            raise InputError(f"model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}), "
+                             f"got {self.model!r}")
+        if self.controller not in CONTROLLERS:
+            raise InputError(f"controller: unknown controller {self.controller!r} "
+                             f"(expected one of {', '.join(CONTROLLERS)})")
+        if self.reference not in REFERENCES:
+            raise InputError(f"reference: unknown reference {self.reference!r} (expected one of {', '.join(REFERENCES)})")
+        if not (isinstance(self.duration, (int, float)) and math.isfinite(self.duration) and self.duration > 0):
+            raise InputError(f"duration: expected a positive number of seconds, got {self.duration!r}")
+        check_duration(self.duration, "duration")
+        if not self.settle + _METRIC_WINDOW_S <= self.duration:
+            raise InputError(f"duration: {self.duration:g} s leaves less than {_METRIC_WINDOW_S:g} s after the settling "
+                             f"time {self.settle:g} s (the metrics' window)")
+        if not (isinstance(self.dt, (int, float)) and math.isfinite(self.dt) and self.dt > 0):
+            raise InputError(f"dt: expected a positive number of seconds, got {self.dt!r}")
+        check_bytes(8.0 * self.duration / self.dt * _SAMPLE_ARRAYS, "duration",
+                    f"{self.duration:g} s at dt = {self.dt:g} s")
+        if self.substeps < 1:
+            raise InputError(f"substeps: expected a positive integer, got {self.substeps!r}")
+
+
+_METRIC_WINDOW_S = 0.05
+"""Shortest run after the settling time, s: the force RMSE needs samples (50 at 1 kHz)."""
+_SAMPLE_ARRAYS = 64
+"""Float64 values a closed-loop run keeps per sample (an upper bound: traces of forces, torques, q, q-hat)."""
+
+
+@dataclass
+class ControlResult:
+    """One closed-loop run.
+
+    Attributes
+    ----------
+    t: (N,) times, s. F_ref: (N,) reference, N. F_true: (N,) MuJoCo's touch sensor (noise-free), N.
+    F_meas: (N,) the FlexiForce reading (noisy, quantised), N. F_hat: (N,) the force the controller fed
+    back (F_meas, or the sensorless estimate), N. q_true, q_hat: (N, n) joints, rad (q_hat NaN for ``pi``).
+    tau_cmd, tau_meas: (N,) motor torque command and its noisy measurement, N m.
+    force_rmse: RMSE of F_true - F_ref after ``settle``, N. steady_state_error: worst over the constant
+    levels (after ``settle``; for the ramp, the levels before and after it) of |mean(F_true) - F_ref| / F_ref
+    over each level's last 200 ms (None for the sine). overshoot: worst over the steps of the excursion
+    beyond the new level / step size (None unless step). rise_time_s: 10-90 % rise time of the up-step, s
+    (None unless step). q_rmse_deg: (n,) RMSE of
+    q_hat - q during contact (F_true > 0.05 N), deg (None for ``pi``). wall_s: wall time of the loop, s.
+    saturated: fraction of samples with the command at 0 or tau_max.
+    """
+
+    scenario: ControlScenario
+    t: np.ndarray
+    F_ref: np.ndarray
+    F_true: np.ndarray
+    F_meas: np.ndarray
+    F_hat: np.ndarray
+    q_true: np.ndarray
+    q_hat: np.ndarray
+    tau_cmd: np.ndarray
+    tau_meas: np.ndarray
+    joint_names: tuple[str, ...]
+    tau_max: float
+    wall_s: float
+    force_rmse: float = float("nan")
+    steady_state_error: float | None = None
+    overshoot: float | None = None
+    rise_time_s: float | None = None
+    q_rmse_deg: list[float] | None = None
+    saturated: float = 0.0
+
+    @property
+    def realtime_ratio(self) -> float:
+        """Simulated time / wall time of the loop (> 1: faster than real time)."""
+        return float(self.scenario.duration / self.wall_s)
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON summary of ``alpes-dyn control --json``."""
+        sc = self.scenario
+        return {
+            "controller": sc.controller, "plant": "mujoco", "model": sc.model, "reference": sc.reference,
+            "force_rmse": self.force_rmse, "steady_state_error": self.steady_state_error, "overshoot": self.overshoot,
+            "rise_time_s": self.rise_time_s, "q_rmse_deg": self.q_rmse_deg, "joints": list(self.joint_names),
+            "duration_s": sc.duration, "dt_s": sc.dt, "seed": sc.seed, "tau_max_Nm": self.tau_max,
+            "saturated_fraction": self.saturated, "realtime_ratio": self.realtime_ratio,
+        }
+
+    def to_csv(self, path: str) -> None:
+        """Write t, F_ref, F_z measured by MuJoCo's sensor, the FlexiForce reading, the force fed back, true
+        and estimated q, motor torque command and measurement, one row per sample."""
+        n = len(self.joint_names)
+        head = (["t_s", "F_ref_N", "F_mujoco_N", "F_flexiforce_N", "F_feedback_N"]
+                + [f"q_true_{j}_rad" for j in self.joint_names] + [f"q_hat_{j}_rad" for j in self.joint_names]
+                + ["tau_cmd_Nm", "tau_meas_Nm"])
+        rows = np.column_stack([self.t, self.F_ref, self.F_true, self.F_meas, self.F_hat, self.q_true[:, :n],
+                                self.q_hat[:, :n], self.tau_cmd, self.tau_meas])
+        with atomic_path(path, "--log") as tmp, open(tmp, "w", newline="") as fh:
+            w = csv.writer(fh)
+            w.writerow(head)
+            w.writerows([[f"{x:.9g}" for x in r] for r in rows])
+
+
+def _metrics(res: ControlResult) -> None:
+    sc = res.scenario
+    t, F, R = res.t, res.F_true, res.F_ref
+    k0 = t >= sc.settle
+    res.force_rmse = float(np.sqrt(np.mean((F[k0] - R[k0]) ** 2)))
+    res.saturated = float(np.mean((res.tau_cmd <= 0.0) | (res.tau_cmd >= res.tau_max)))
+    contact = F > 0.05
+    if sc.controller != "pi" and contact.any():
+        err = np.degrees(res.q_hat[contact] - res.q_true[contact])
+        res.q_rmse_deg = np.sqrt(np.mean(err**2, axis=0)).tolist()
+    if sc.reference == "sine":
+        return
+    a, b, c = sc.levels
+    t1, t2 = sc.step_times
+    T = sc.duration
+    segs = [(sc.settle, t1, a), (t1, t2, b), (t2, T, c)] if sc.reference == "step" else [(sc.settle, t1, a),
+                                                                                           (t1 + 1.0, T, b)]
+    segs = [(lo, min(hi, T), v) for lo, hi, v in segs if min(hi, T) - lo > 0.25]
+    sse = []
+    for lo, hi, v in segs:
+        win = (t >= hi - 0.2) & (t < hi)
+        sse.append(abs(float(np.mean(F[win])) - v) / v)
+    res.steady_state_error = max(sse) if sse else None
+    if sc.reference != "step" or T - t1 < 0.25:
+        return
+    over = []
+    for lo, hi, prev, new in ((t1, min(t2, T), a, b), (t2, T, b, c)):
+        k = (t >= lo) & (t < hi)
+        if hi - lo < 0.25:
+            continue
+        seg = F[k]
+        ex = float(seg.max()) - new if new > prev else new - float(seg.min())
+        over.append(max(0.0, ex) / abs(new - prev))
+    res.overshoot = max(over)
+    k = (t >= t1) & (t < min(t2, T))
+    F_up, t_up = F[k], t[k]
+    lo, hi = a + 0.1 * (b - a), a + 0.9 * (b - a)
+    if (F_up >= hi).any():
+        res.rise_time_s = float(t_up[np.argmax(F_up >= hi)] - t_up[np.argmax(F_up >= lo)])
+
+
+def _batch_step_caller(step, label: str, compiled: bool):
+    """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
+    of compiled C (cached, :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`) when possible, else CasADi's
+    virtual machine (one call per filter)."""
+    if compiled:
+        from ..simulation.integrate import CompiledStepLoop, CompilerError
+
+        try:
+            loop = CompiledStepLoop(step, label, threads=1, vectorize=False)
+        except CompilerError:
+            loop = None
+        if loop is not None:
+            run = loop.run
+
+            def call(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
+                return run(S, WY[:, None, :])[:, 1]
+
+            return call
+
+    def call_vm(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
+        return np.stack([np.asarray(step(s, wy)).reshape(-1) for s, wy in zip(S, WY)])
+
+    return call_vm
+
+
+def _step_caller(step, label: str, compiled: bool):
+    """s, wy -> s_next for one filter step (:func:`_batch_step_caller` with B = 1)."""
+    batch = _batch_step_caller(step, label, compiled)
+
+    def call(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
+        return batch(s[None], wy[None])[0]
+
+    return call
+
+
+def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
+    """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
+    (the plant's default: the controller's), both turned palm down."""
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError("the control loop's plant needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
+    p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
+    pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
+        load_params(sc.plant_params) if sc.plant_params is not None else p)
+    return mujoco, palm_down_params(p), palm_down_params(pp)
+
+
+def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:
+    """Run the closed loop: MuJoCo plant, the hand's sensors, the EKF and a force controller.
+
+    Parameters
+    ----------
+    controller: one of :data:`.CONTROLLERS`.
+    scenario: the settings (default :class:`ControlScenario`); ``overrides`` replace fields, e.g.
+        ``run_control("sensor", reference="sine", duration=4.0, plant_params="plant.toml")``.
+
+    Returns
+    -------
+    :class:`ControlResult` with the traces and the metrics.
+
+    Raises
+    ------
+    InputError: bad settings. ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra) or
+    an unreadable parameter file.
+    """
+    sc = dataclasses.replace(scenario or ControlScenario(), controller=controller, **overrides)
+    sc.check()
+    mujoco, p, pp = _plant_and_params(sc)
+    n = 2 if sc.model == "finger2" else 3
+    cq = tuple(sc.contact_q[:n])
+    model = Model.alpes(sc.model, params=p)
+    plant_model = Model.alpes(sc.model, params=pp)
+    mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=cq,
+                                 timestep=sc.dt / sc.substeps))
+    d = mujoco.MjData(mj)
+    perm = joint_permutation(mj, model.joint_names)
+    normal = block_normal(cq)  # the block's face normal: the fingertip presses along it
+    tr = model.transmission
+    rng = np.random.default_rng(sc.seed)
+    N = int(round(sc.duration / sc.dt))
+    t = sc.dt * np.arange(N)
+    F_ref = reference_profile(sc.reference, t, sc.levels, sc.sine, sc.step_times)
+
+    # the plant starts at rest: the finger hanging on its springs, motor off
+    q0 = static_equilibrium(plant_model, np.zeros(plant_model.n))
+    d.qpos[perm] = q0
+    mujoco.mj_forward(mj, d)
+    s_enc = mj.sensor("encoder_finger").adr[0]
+    s_frc = mj.sensor("torque_finger").adr[0]
+    s_touch = mj.sensor("flexiforce_finger").adr[0]
+
+    # observer: the library's EKF, motor torque and contact force as known inputs, encoder measured
+    use_obs = sc.controller != "pi"
+    step = 2 * np.pi / tr.counts_per_rev
+    if use_obs:
+        ss = StateSpace(model, input="motor", output="encoder", force=True)
+        est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
+        meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
+        noise = default_noise(est_sc, n, 1, 0, meas_var)
+        f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
+        noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
+        ekf = make_observer("ekf", ss, sc.dt, **noise)
+        z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
+        P0 = np.array([0.05**2] * n + [0.1**2] * n)
+        s = np.concatenate([z0, np.diag(P0).reshape(-1, order="F")])
+        fstep = _step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled)
+    ctl = ForceController(sc.controller, model, normal, sc.dt, p.tau_max, **{**DEFAULT_GAINS[sc.controller], **sc.gains})
+
+    out_F_true = np.empty(N)
+    out_F_meas = np.empty(N)
+    out_F_hat = np.empty(N)
+    out_q = np.empty((N, n))
+    out_qh = np.full((N, n), np.nan)
+    out_tau = np.empty(N)
+    out_tau_meas = np.empty(N)
+    enc_noise = sc.encoder_noise_counts * step * rng.standard_normal(N + 1)
+    trq_noise = sc.torque_noise * rng.standard_normal(N)
+    frc_noise = sc.force_noise * rng.standard_normal(N)
+    alpha = sc.dt / (sc.force_filter_s + sc.dt)
+    F_filt = 0.0
+    tau_meas_prev = 0.0
+    sd = d.sensordata
+    t_wall = time.perf_counter()
+    for k in range(N):
+        # sensors at t_k
+        out_q[k] = d.qpos[perm]
+        F_true = float(sd[s_touch])
+        F_meas = max(0.0, round((F_true + frc_noise[k]) / sc.force_resolution) * sc.force_resolution)  # reads >= 0
+        y = round((float(sd[s_enc]) + enc_noise[k]) / step) * step
+        # observer update with the previous period's inputs and this encoder reading
+        if use_obs:
+            F_in = F_meas if sc.controller == "sensor" else F_filt
+            if k > 0:
+                s = fstep(s, np.concatenate([[tau_meas_prev], -F_in * normal, [y]]))
+            q_hat = s[:n]
+            if sc.controller == "sensorless":
+                F_est = static_contact_force(model, q_hat, np.array([tau_meas_prev]), normal)
+                F_filt += alpha * (max(F_est, 0.0) - F_filt)
+                F_fb = F_filt
+            else:
+                F_fb = F_meas
+            out_qh[k] = q_hat
+        else:
+            q_hat, F_fb = None, F_meas
+        tau = ctl.update(float(F_ref[k]), F_fb, q_hat)
+        d.ctrl[0] = tau
+        for _ in range(sc.substeps):
+            mujoco.mj_step(mj, d)
+        tau_meas_prev = float(sd[s_frc]) + trq_noise[k]  # the current sensor over the period
+        out_F_true[k], out_F_meas[k], out_F_hat[k] = F_true, F_meas, F_fb
+        out_tau[k], out_tau_meas[k] = tau, tau_meas_prev
+    wall = time.perf_counter() - t_wall
+    res = ControlResult(scenario=sc, t=t, F_ref=F_ref, F_true=out_F_true, F_meas=out_F_meas, F_hat=out_F_hat,
+                        q_true=out_q, q_hat=out_qh, tau_cmd=out_tau, tau_meas=out_tau_meas,
+                        joint_names=model.joint_names, tau_max=p.tau_max, wall_s=wall)
+    _metrics(res)
+    return res
