@@ -7,6 +7,7 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.analysis.identifiability import fisher_information, identifiability, name_direction
+from alpes_dyn.errors import ModelError
 from alpes_dyn.model.params import Param, load_params, with_values
 from alpes_dyn.simulation import simulate
 
@@ -187,3 +188,26 @@ def test_encoder_offset_and_tilt_structurally():
     K = ad.Model.alpes("finger2").extras.stiffness
     tilted = identifiability("finger2", "K,tilt_x", theta=[*K, 0.05])
     assert tilted.rank == tilted.dimension and tilted.absent == ()
+
+
+def test_fisher_information_sees_the_tendon_compliance(finger2):
+    """y = S q + C u: dy/dC is the torque itself (the states do not depend on C), so the compliance's own
+    information is sum_k u_k^2 / sigma^2 exactly (closed form, 1e-12), and a 0.3 s two-line experiment bounds C
+    (nominal 6.3 rad/(N m)) with K_1 beside it; the structural test refuses it (a feedthrough, not y = h(x))."""
+    from dataclasses import replace
+
+    from alpes_dyn.model.spec import Motor
+
+    spec = replace(finger2.spec, motors=tuple(Motor(mo.name, mo.joints, 0.0, 6.3) for mo in finger2.spec.motors))
+    m = ad.Model(finger2.urdf, spec)
+    t = 1e-3 * np.arange(300)
+    U = (0.022 + 0.004 * np.sin(2 * np.pi * 3 * t) + 0.002 * np.sin(2 * np.pi * 11 * t))[:, None]
+    rep = fisher_information(m, "K_1,tendon_compliance", U=U, initial_state="known", quantisation=False,
+                             encoder_noise_counts=1.0)
+    assert rep.parameters == ("K_1", "tendon_compliance_finger") and rep.theta[1] == 6.3
+    sigma = 2 * np.pi / m.transmission.counts_per_rev
+    u = np.r_[U[:, 0], U[-1, 0]]
+    assert rep.fim[1, 1] == pytest.approx(np.sum(u**2) / sigma**2, rel=1e-12)
+    assert rep.rank == 2 and 0 < rep.relative_std[1] < 1e-2
+    with pytest.raises(ModelError, match="tendon_compliance is a feedthrough"):
+        identifiability(m, "K_1,tendon_compliance")

@@ -202,3 +202,19 @@ def test_elastic_tendon_is_refused_by_name():
     spec = replace(m.spec, motors=tuple(Motor(mo.name, mo.joints, 0.0, 6.3) for mo in m.spec.motors))
     with pytest.raises(ModelError, match="tendon_compliance: an elastic tendon"):
         model_mjcf(ad.Model(m.urdf, spec))
+
+
+def test_cli_mjcf_of_a_urdf_with_its_spec(tmp_path, capsys):
+    """``alpes-dyn mjcf PATH.urdf --spec FILE`` writes model_mjcf of that model (the Allegro and its shipped spec),
+    ``--no-limits`` included; MuJoCo loads it."""
+    from alpes_dyn.cli import main
+
+    urdf = example_robot_urdf("allegro_hand", "allegro_right_hand")
+    model = ad.Model.from_urdf_file(urdf, example_spec_path())
+    assert main(["mjcf", str(urdf), "--spec", str(example_spec_path())]) == 0
+    assert capsys.readouterr().out == model_mjcf(model)
+    out = tmp_path / "allegro.xml"
+    assert main(["mjcf", str(urdf), "--spec", str(example_spec_path()), "--no-limits", "-o", str(out)]) == 0
+    assert out.read_text() == model_mjcf(model, limits=False)
+    mj = mujoco.MjModel.from_xml_string(out.read_text())
+    assert mj.nv == model.n and mj.ntendon == model.transmission.n_motors

@@ -15,7 +15,8 @@ import numpy as np
 from ..errors import InputError
 from ..fileio import atomic_write
 from .analysis_cmds import _observability_summary
-from .common import _check_run_files, _emit, _fmt_table, _model_from_args, _one_or_list, _write_stdout, parse_vector
+from .common import (_check_run_files, _emit, _fmt_table, _is_urdf_path, _model_from_args, _one_or_list, _write_stdout,
+                     parse_vector)
 
 
 def cmd_urdf(args: argparse.Namespace) -> int:
@@ -38,16 +39,46 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
     if not math.isfinite(args.tilt):
         raise InputError(f"--tilt: expected a finite angle in degrees, got {args.tilt!r}")
     _check_run_files(args)
-    text = mjcf_string(args.model, load_params(args.params), spring=args.spring, friction=args.friction,
-                       rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
-                       scene=args.scene, palm_down=args.palm_down, stiction=args.stiction,
-                       tendon_stiffness=args.tendon_stiffness, tendon_damping=args.tendon_damping,
-                       tendon_rotor=args.tendon_rotor, tilt=math.radians(args.tilt))
+    if _is_urdf_path(args.model):
+        text = _urdf_mjcf(args)
+    else:
+        if args.spec is not None:
+            raise InputError(f"--spec: applies to a URDF model; the Alpes model {args.model!r} takes its transmission "
+                             "from --params")
+        text = _alpes_mjcf(args, mjcf_string, load_params)
     if args.output is not None:
         atomic_write(args.output, text, "-o")
     else:
         _write_stdout(text)
     return 0
+
+
+_MJCF_ALPES_ONLY = (("params", "--params", None), ("spring", "--spring", None), ("friction", "--friction", False),
+                    ("rotor_inertia", "--rotor-inertia", False), ("no_contact", "--no-contact", False),
+                    ("scene", "--scene", "none"), ("palm_down", "--palm-down", False), ("stiction", "--stiction", None),
+                    ("tendon_stiffness", "--tendon-stiffness", None), ("tendon_damping", "--tendon-damping", 0.0),
+                    ("tendon_rotor", "--tendon-rotor", False), ("tilt", "--tilt", 0.0))
+
+
+def _urdf_mjcf(args: argparse.Namespace) -> str:
+    """The MJCF of a URDF + spec model (:func:`alpes_dyn.model.mjcf_export.model_mjcf`); the Alpes plant's options
+    refused by name (the spec holds springs, friction and rotor inertia)."""
+    from ..model.mjcf_export import model_mjcf
+    from ..model.robot import Model
+
+    for dest, flag, default in _MJCF_ALPES_ONLY:
+        if getattr(args, dest) != default:
+            raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand, thumb); a URDF model's "
+                             "springs, friction and rotor inertia come from its --spec")
+    return model_mjcf(Model.from_urdf_file(args.model, args.spec), limits=not args.no_limits)
+
+
+def _alpes_mjcf(args: argparse.Namespace, mjcf_string, load_params) -> str:
+    return mjcf_string(args.model, load_params(args.params), spring=args.spring or "torsional", friction=args.friction,
+                       rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
+                       scene=args.scene, palm_down=args.palm_down, stiction=args.stiction,
+                       tendon_stiffness=args.tendon_stiffness, tendon_damping=args.tendon_damping,
+                       tendon_rotor=args.tendon_rotor, tilt=math.radians(args.tilt))
 
 
 def cmd_dynamics(args: argparse.Namespace) -> int:

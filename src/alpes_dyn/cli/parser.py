@@ -97,13 +97,15 @@ def _add_urdf(sub: argparse._SubParsersAction) -> None:
 def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("mjcf", help="print or write the MuJoCo model (MJCF) of a model: springs, stops, tendons, "
                        "motors, sensors", epilog="Example: alpes-dyn mjcf finger3 --scene block -o finger3.xml")
-    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("model", help="finger2, finger3, hand, thumb, or a URDF path (with --spec)")
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF model's transmission spec: motors, tendons, springs, friction, rotor inertia")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.add_argument("--scene", default="none", choices=("none", "block", "cylinder"),
                    help="add a fixed block on a finger's pad (finger2, finger3) or a cylinder in the hand")
-    s.add_argument("--spring", default="torsional", choices=("report", "torsional", "none"),
-                   help="spring model (default %(default)s)")
+    s.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
+                   help="spring model (default torsional)")
     s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
     s.add_argument("--rotor-inertia", action="store_true", help="the rotor J_m on each tendon: tendon armature J_m/r_m^2 "
                    "(eq. 2.8)")
