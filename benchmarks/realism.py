@@ -23,15 +23,24 @@ all        all of the above at once
 ========== ================================================================================================
 
 Per case and seed: the identification experiment's torque (designed on the nominal file, the bias trimmed on
-the true finger as it stands) replayed on the plant, today's ``identify`` (rigid model, smooth friction: K, m,
-F_s, F_v), the worst error (%) of each kind, the residual (counts; the sensor floor is 0.58), ``converged``,
-the fit time; then the EKF on the identified file (and, for comparison, on the true file) on a fresh run of
-the plant -- the experiment's design on other lines (0.4-12.7 Hz: a torque the fit never saw), from the
-plant's rest, the filter started at q = 0 -- from that run's recorded encoder and torque: RMSE after 1 s,
-deg per joint. (The estimation scenario's torque is not used: it takes the nominal finger outside its
-joint range, into MuJoCo's stops.) The verdict is the fit's adequacy check (:mod:`alpes_dyn.estimation.adequacy`,
-in-sample: whiteness, cross-correlation with the torque, residual against the sensor floor): "adequate", or
-"FLAGGED" with the reason.
+the true finger as it stands) replayed on the plant, and two fits of it:
+
+* **rigid**: the rigid, smooth-friction model (K, m, F_s, F_v; ``alpes-dyn identify --effects none``), whose
+  adequacy verdict must flag every plant with an effect and none with the model's own structure;
+* **extended**: what a real hand needs (``--effects stiction,compliance,tilt``: the stick-slip friction law,
+  the tendon's compliance, the palm's tilt, :mod:`alpes_dyn.estimation.effects`), from the nominal file.
+
+For each, the worst error (%) of each kind, also up to the one common scale (exp of the mean log ratio over
+K and m: the torque constant scales every parameter together, and the encoder cannot see it), the residual
+(counts; the sensor floor is 0.58), ``converged``, the fit time, the verdict. Then the EKF
+(:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``) on the extended
+fit's file, with its fitted tilt and offset, and for comparison on the true file (rigid, level: it knows
+neither), on a fresh run of the plant -- the experiment's design on other lines (0.4-12.7 Hz: a torque the fit
+never saw), from the plant's rest -- from that run's recorded encoder and torque: RMSE after 1 s, deg per joint.
+(The estimation scenario's torque is not used: it takes the nominal finger outside its joint range, into
+MuJoCo's stops.) The verdict is the fit's adequacy check (:mod:`alpes_dyn.estimation.adequacy`, in-sample:
+whiteness, cross-correlation with the torque, residual against the sensor floor): "adequate", or "FLAGGED"
+with the reason.
 
     python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--quick] [--json] [--log FILE]
 
@@ -55,10 +64,11 @@ import numpy as np
 import alpes_dyn as ad
 from alpes_dyn.control.plants import PlantEffects, mujoco_recording, plant_model
 from alpes_dyn.estimation.experiment import ExperimentDesign, experiment_torque, perturbed_params
+from alpes_dyn.estimation.effects import effect_parameters, stiction_params
 from alpes_dyn.estimation.identification import identify
 from alpes_dyn.estimation.replay import estimate_recording
 from alpes_dyn.model.mjcf import STICTION_TIMECONST
-from alpes_dyn.model.params import load_params, with_values, write_params
+from alpes_dyn.model.params import load_params, write_params
 from alpes_dyn.model.stops import JointRangeWarning
 
 MODEL = "finger3"
@@ -68,17 +78,13 @@ TILT_DEG = 3.0
 KT_ERROR = 0.05
 OFFSET_COUNTS = 4.0
 FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)  # Hz: the EKF's validation run
-EXTENDED = "K,m,friction,tendon_compliance,encoder_offset,tilt_y"  # the fit of a real hand's effects
-FIT = {"smooth_velocity": None, "substeps": 4}  # the extended fit's friction law (None: the file's v_s) and RK4 steps
+FIT_EFFECTS = ("stiction", "compliance", "tilt")  # the extended fit: --effects stiction,compliance,tilt
 
 
-def fit_start():
-    """The nominal file the extended fit starts from, its smooth sign's v_s set by FIT (else as shipped)."""
+def fit_start(effects=FIT_EFFECTS):
+    """The nominal file the extended fit starts from: the stick-slip friction law where ``effects`` asks for it."""
     p = load_params()
-    if FIT["smooth_velocity"] is None:
-        return p
-    return with_values(p, {"friction.smooth_velocity": dataclasses.replace(
-        p.raw["friction.smooth_velocity"], value=FIT["smooth_velocity"])})
+    return stiction_params(p) if "stiction" in effects else p
 
 
 CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "all")
@@ -139,8 +145,7 @@ def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0) -> np.
     obs = ad.Model.alpes(MODEL, friction=True, params=params_path)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
-    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
-                             substeps=FIT["substeps"])
+    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
     return est.rmse
 
 
@@ -171,9 +176,9 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
     rec = mujoco_recording(MODEL, true, u, design.dt, effects=effects, q0=x0[:3], seed=seed)
     plant_s = time.perf_counter() - t0
     rigid = identify(ad.Model.alpes(MODEL, friction=True), rec, excitation=design.frequencies, progress=False)
-    start = fit_start()
-    res = identify(ad.Model.alpes(MODEL, friction=True, params=start), rec, EXTENDED, excitation=design.frequencies,
-                   progress=False, substeps=FIT["substeps"])
+    start = ad.Model.alpes(MODEL, friction=True, params=fit_start())
+    res = identify(start, rec, effect_parameters(start, FIT_EFFECTS, rec.gravity is not None),
+                   excitation=design.frequencies, progress=False)
     ident = res.write(tmp / f"ident_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
     truth = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]
     t1 = time.perf_counter()
@@ -244,22 +249,29 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def table_text(out: dict) -> str:
-    """The table of a run (the --json object)."""
+    """The table of a run (the --json object): per case and seed the rigid fit (its worst K and m errors, residual,
+    verdict) and the extended one (worst errors up to the common scale, residual, converged, fit time, verdict),
+    then the EKF on the extended fit's file and on the true file."""
     info = out["tendon"]
     lines = [f"{out['model']}, seeds {out['seeds']}, {out['duration_s']:g} s experiment; tendon k_t = "
              f"{info['k_t_N_per_m']:.3g} N/m ({100 * STRETCH:g} % stretch: mean tension "
              f"{info['mean_tension_N']:.1f} N over a travel of {1e3 * info['tendon_travel_m']:.2f} mm from q = 0; "
              f"swing {info['tension_swing_N']:.2f} N over {1e3 * info['swing_travel_m']:.2f} mm), "
-             f"c_t = {info['c_t_N_s_per_m']:.3g} N s/m, rotor mode {info['rotor_mode_Hz']:.0f} Hz",
-             f"{'case':9} {'seed':>4} {'K%':>6} {'m%':>6} {'F_s%':>7} {'F_v%':>7} {'resid':>6} {'conv':>5} "
-             f"{'fit s':>6} {'EKF deg (identified file)':>26} {'EKF deg (true file)':>22}  verdict"]
+             f"c_t = {info['c_t_N_s_per_m']:.3g} N s/m, rotor mode {info['rotor_mode_Hz']:.0f} Hz; extended fit: "
+             f"--effects {','.join(FIT_EFFECTS)}",
+             f"{'case':9} {'seed':>4} | {'rigid K%':>8} {'m%':>6} {'resid':>5} {'flag':>5} | {'ext K%':>6} {'m%':>5} "
+             f"{'F_s%':>5} {'F_v%':>5} {'resid':>5} {'conv':>5} {'fit s':>5} {'flag':>5} | "
+             f"{'EKF deg (extended file)':>23} | {'EKF deg (true file)':>19}"]
     for r in out["rows"]:
-        w = r["worst_error_pct"]
-        lines.append(f"{r['case']:9} {r['seed']:>4} {w['K']:6.2f} {w['m']:6.2f} {w['F_s']:7.1f} {w['F_v']:7.1f} "
-                     f"{r['residual_counts']:6.2f} {str(r['converged']):>5} {r['fit_seconds']:6.1f} "
-                     f"{' / '.join(f'{x:.2f}' for x in r['ekf_rmse_deg']):>26} "
-                     f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>22}  {r['verdict']}")
-    lines.append("time per case (all seeds; plant + fit + EKF runs): "
+        a, b = r["rigid"], r["extended"]
+        wa, wb = a["worst_error_pct"], b["worst_error_common_scale_pct"]
+        lines.append(f"{r['case']:9} {r['seed']:>4} | {wa['K']:8.2f} {wa['m']:6.1f} {a['residual_counts']:5.2f} "
+                     f"{'yes' if a['flagged'] else 'no':>5} | {wb['K']:6.2f} {wb['m']:5.1f} {wb['F_s']:5.1f} "
+                     f"{wb['F_v']:5.1f} {b['residual_counts']:5.2f} {str(b['converged']):>5} {b['fit_seconds']:5.1f} "
+                     f"{'yes' if b['flagged'] else 'no':>5} | "
+                     f"{' / '.join(f'{x:.2f}' for x in r['ekf_rmse_deg']):>23} | "
+                     f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19}")
+    lines.append("time per case (all seeds; plant + two fits + EKF runs): "
                  + ", ".join(f"{c} {s:.0f} s" for c, s in out["case_seconds"].items()))
     return "\n".join(lines)
 

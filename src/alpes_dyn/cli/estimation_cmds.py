@@ -31,7 +31,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
 
     if args.data is not None:
         return _estimate_data(args)
-    for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log")):
+    for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
+                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt")):
         if getattr(args, dest) not in (None, False):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     _check_model_options(args)
@@ -102,8 +103,10 @@ def _estimate_data(args: argparse.Namespace) -> int:
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
                             params=args.params, chain=args.chain)
     rec = read_recording(args.data, model)
+    offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
+    tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
-                             disturbance=args.disturbance)
+                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -164,6 +167,30 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     return 0
 
 
+def _fit_selection(args: argparse.Namespace):
+    """The model to fit from (the stick-slip law where --effects asks for it) and the parameters (the default
+    selection, or --parameters, with the effects' parameters added: :mod:`alpes_dyn.estimation.effects`)."""
+    from ..estimation.effects import effect_parameters, parse_effects, stiction_params
+    from ..estimation.recording import read_recording
+    from ..model.params import load_params
+    from ..model.robot import Model
+
+    effects = parse_effects(args.effects) if args.effects is not None else (
+        () if args.parameters is not None else parse_effects(None))
+    if args.parameters is not None and set(effects) - {"stiction"}:
+        raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
+                         "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
+    p = load_params(args.params)
+    if "stiction" in effects:
+        p = stiction_params(p)
+    model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=p, chain=args.chain)
+    base = args.parameters if args.parameters is not None else (THUMB_PARAMETERS if args.model == "thumb" else None)
+    if args.parameters is None and set(effects) - {"stiction"}:
+        has_gravity = read_recording(args.data, model).gravity is not None  # tilt only where the file does not say
+        return model, effect_parameters(model, effects, has_gravity, base), effects
+    return model, base, effects
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
@@ -180,12 +207,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=args.params,
-                        chain=args.chain)
-    parameters = args.parameters
-    if parameters is None and args.model == "thumb":
-        parameters = THUMB_PARAMETERS
-    check_selection(model, parameters)  # a bad selection named before the recording is read
+    model, parameters, effects = _fit_selection(args)
+    check_selection(model, parameters)  # a bad selection named before the fit
     with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
         warnings.simplefilter("ignore", AdequacyWarning)
         res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise,
@@ -196,6 +219,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = model.chain
+    obj["effects"] = list(effects)
     lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
              f"({res.iterations} Gauss-Newton iterations, "
              f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s)",

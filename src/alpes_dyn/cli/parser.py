@@ -215,6 +215,12 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                    help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
     s.add_argument("--log", default=None, metavar="FILE.csv",
                    help="with --data: write the estimated joints, velocities and standard deviations as CSV")
+    s.add_argument("--encoder-offset", default=None, metavar="RAD[,RAD...]",
+                   help="with --data: each encoder's zero on this rig, rad (identify's encoder_offset_<motor>), "
+                        "taken off the reading")
+    s.add_argument("--tilt", default=None, metavar="TILT_X,TILT_Y",
+                   help="with --data: the palm's orientation, rad (identify's tilt_x, tilt_y): the observer's "
+                        "gravity turned by it")
     s.set_defaults(func=cmd_estimate)
 
 
@@ -259,7 +265,15 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "
                         "rad; a planar finger sees tilt_y only) and/or names K_1, m_2, encoder_offset_finger, "
                         f"tilt_y... (default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own "
-                        "mass and friction are barely seen by the encoders; name them to fit them)")
+                        "mass and friction are barely seen by the encoders; name them to fit them), each with the "
+                        "parameters of --effects added; given, the selection as named (no effect added unless "
+                        "--effects stiction)")
+    s.add_argument("--effects", default=None, metavar="LIST",
+                   help="the real hand's effects to fit, comma-separated: stiction (the stick-slip friction law, "
+                        "v_s = 0.02 rad/s, kept in the file), compliance (the tendon's stretch, tendon_compliance), "
+                        "tilt (the palm's orientation where the recording has no gravity columns), offset (the "
+                        "encoders' zero); 'none' for the rigid, smooth-friction fit. Default compliance,tilt "
+                        "(with --parameters: none)")
     s.add_argument("--rotor-inertia", action="store_true",
                    help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
     s.add_argument("--excitation", default="documented",

@@ -52,7 +52,7 @@ from ..limits import MAX_DURATION_S
 from ..model.robot import Model
 from ..model.params import HandParams, Param, load_params, with_values
 from .recording import Recording, write_recording
-from ..simulation.integrate import simulate
+from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning
 
 __all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "perturbed_params"]
@@ -322,9 +322,11 @@ def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
-    """States (N+1, 2n) from the static equilibrium at u[0], RK4 with substeps, the torques u (N+1, m) held per
-    sample, segment by segment of constant gravity."""
+    """States (N+1, 2n) from the static equilibrium at u[0], RK4 with the design's substeps (more where the truth's
+    friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`), the torques u (N+1, m) held
+    per sample, segment by segment of constant gravity."""
     N = u.shape[0] - 1
+    sub = max(design.substeps, stable_substeps(truth, design.dt))  # a sharper friction sign asks for more
     x = np.zeros((N + 1, 2 * truth.n))
     x[0, : truth.n] = _mean_equilibrium(truth, u[0], G[0])
     start = 0
@@ -334,9 +336,9 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
             stop += 1
         m = _oriented(truth, G[start])
         k = stop - start
-        sim = simulate(m, x[start], np.repeat(u[start:stop], design.substeps, axis=0), k * design.dt,
-                       design.dt / design.substeps, "rk4", input="motor", output="encoder")
-        x[start + 1: stop + 1] = sim.x[design.substeps:: design.substeps]
+        sim = simulate(m, x[start], np.repeat(u[start:stop], sub, axis=0), k * design.dt,
+                       design.dt / sub, "rk4", input="motor", output="encoder")
+        x[start + 1: stop + 1] = sim.x[sub::sub]
         start = stop
     return x
 

@@ -63,6 +63,7 @@ from .adequacy import (_finite, Adequacy, AdequacyWarning, Validation, assess, c
                        torque_explained)
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
+from ..simulation.integrate import stable_substeps
 from ..simulation.sensitivity import SensitivityModel
 from ..progress import _Progress
 
@@ -316,7 +317,7 @@ def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Reco
 
 
 def identify(model: Model, recording: Recording | str | Path, parameters: str | Sequence[str] | None = None, *,
-             excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int = 4,
+             excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int | None = None,
              torque_noise: float | None = None, camera_noise: float = math.radians(0.1),
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
              progress: bool | None = None, validation: Recording | str | Path | None = None,
@@ -338,7 +339,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         the noise leaves on the lines) is fitted with the parameters: u = P u_meas + sigma_u Q c with Q
         the lines' orthonormal basis and c ~ N(0, I) a priori (errors in variables, maximum likelihood).
         None: the measured torque as it is.
-    interval: multiple-shooting interval, s. substeps: RK4 steps per sample.
+    interval: multiple-shooting interval, s. substeps: RK4 steps per sample (default
+        :func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth friction law at 1 kHz, 15 for the
+        stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY` on finger3).
     torque_noise: standard deviation sigma_u of the recorded torque's white noise, N m. Default: with
         ``excitation``, estimated from what the measured torque has off the lines; without, 0 (the torque
         taken as exact). Without ``excitation`` a positive value gives each interval a constant torque
@@ -425,6 +428,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     lines = eiv and excitation is not None
     nphi = Q.shape[1] if lines else 0
     check_selection(model, parameters)  # before anything is compiled
+    if substeps is None:
+        substeps = stable_substeps(model, dt)
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=eiv and not lines, input_basis=nphi)
     nx, p, nu, n = sens.nx, sens.p, sens.nu, sens.n

@@ -37,6 +37,7 @@ from ..errors import InputError, RecordingError
 from ..fileio import atomic_path
 from ..limits import check_bytes
 from ..model.robot import Model
+from ..simulation.integrate import stable_substeps
 from ..symbolic.parametric import tilted_gravity
 from ..symbolic.statespace import StateSpace
 from .observers import OBSERVERS, Estimate, make_observer
@@ -163,7 +164,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     disturbance: estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``
         N m per sqrt(s).
     transient: start of the error metrics, s (default min(1 s, duration / 5)).
-    substeps: RK4 steps per sample (default 4 with friction: the smooth sign is fast; else 1).
+    substeps: RK4 steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
+        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; else 1).
     compiled: the filter in compiled C (same numbers).
     encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
         :func:`~alpes_dyn.estimation.identification.identify`): taken off the reading. Default 0.
@@ -203,13 +205,13 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
     m_obs = _model_for(model, rec)
     if tilt is not None:
-        angles = _finite_vector(tilt, 2, "tilt", "rad")
+        angles = _finite_vector(tilt, 2, "tilt", "rad").tolist()
         m_obs = m_obs.copy(gravity=tilted_gravity(m_obs.gravity, angles[0], angles[1]))
     offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
         _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
     has_friction = bool(np.any(m_obs.extras.coulomb) or np.any(m_obs.extras.viscous))
-    if substeps is None:
-        substeps = 4 if has_friction else 1
+    if substeps is None:  # as many as the friction's stiffness asks (4 for the smooth law at 1 kHz)
+        substeps = stable_substeps(m_obs, dt) if has_friction else 1
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
@@ -238,7 +240,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     dist = est.z[:, 2 * n + len(gains):] if pars else None
     settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
                 "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
-                "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend}
+                "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
+                "encoder_offset_rad": offsets.tolist(), "tilt_rad": list(angles) if tilt is not None else None,
+                "tendon_compliance": tr.tendon_compliance.tolist()}
     return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
                              motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
                              disturbance=dist, settings=settings)

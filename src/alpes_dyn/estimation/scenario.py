@@ -47,7 +47,7 @@ from ..limits import check_bytes
 from ..model.robot import Model
 from .observers import OBSERVERS, PARAMETERS, Estimate, make_observer, true_gains
 from ..model.params import HandParams, load_params
-from ..simulation.integrate import simulate
+from ..simulation.integrate import simulate, stable_substeps
 from ..symbolic.statespace import StateSpace
 
 SCENARIO_MODELS: tuple[str, ...] = ("finger2", "finger3")
@@ -305,9 +305,10 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     # the joints without spring start mid-range (held there by hand)
     q0 = rest_with_held_joints(truth, u_true[0]) + rng.uniform(-sc.q0_offset, sc.q0_offset, size=n)
     x0 = np.concatenate([q0, np.zeros(n)])
-    sim = simulate(truth, x0, np.repeat(u_true, sc.substeps, axis=0), sc.duration, sc.dt / sc.substeps,
+    sub = max(sc.substeps, stable_substeps(truth, sc.dt))  # a sharper friction sign asks for more
+    sim = simulate(truth, x0, np.repeat(u_true, sub, axis=0), sc.duration, sc.dt / sub,
                    "rk4", input="motor", output="encoder", joint_range="ignore")  # no stop, as documented above
-    x_true = sim.x[:: sc.substeps]
+    x_true = sim.x[::sub]
     # sensors
     step = 2 * np.pi / truth.transmission.counts_per_rev
     y_cont = truth.transmission.encoder_angles(x_true[:, :n], np.concatenate([u_true, u_true[-1:]]))  # + C u
@@ -330,7 +331,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     noise = default_noise(sc, n, m, n_params, meas_var)
     # with friction the observer's model needs the truth's RK4 substeps (h lambda of the smooth sign)
     filt = make_observer(observer, ss, sc.dt, compiled=compiled, parameters=pars,
-                         substeps=sc.substeps if sc.friction else 1, **noise)
+                         substeps=max(sc.substeps, stable_substeps(obs_model, sc.dt)) if sc.friction else 1, **noise)
     z0 = np.concatenate([np.zeros(2 * n), np.ones(n_params)])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * n_params)
     est = filt.run(z0, P0, u_meas, y)

@@ -48,7 +48,8 @@ from ..model.stops import JointStops, check_range
 
 __all__ = [
     "METHODS", "SimulationResult", "simulate", "rk4_expression", "rk4_step_function", "as_statespace", "CompiledRollout",
-    "compile_rollout", "CompiledStepLoop", "cache_dir", "CompilerError", "joint_accelerations",
+    "compile_rollout", "CompiledStepLoop", "cache_dir", "CompilerError", "joint_accelerations", "stable_substeps",
+    "friction_rate",
 ]
 
 METHODS: tuple[str, ...] = ("rk4", "cvodes", "idas")
@@ -56,6 +57,38 @@ BACKENDS: tuple[str, ...] = ("c", "casadi", "casadi-jit")
 """Backends of :class:`CompiledRollout`: the generated C driver, CasADi's virtual machine, CasADi's JIT."""
 
 InputLike = Union[None, float, Sequence[float], np.ndarray, Callable[[float], Any]]
+
+
+# ----------------------------------------------------------------------------- the friction's stiffness
+RK4_REACH = 2.5
+"""h lambda kept below this on the friction's fastest decay rate lambda (RK4's real-axis stability ends at 2.78)."""
+
+
+def friction_rate(model: Model) -> float:
+    """lambda, 1/s: the fastest velocity decay the friction imposes near rest, the largest eigenvalue of
+    A(q)^-1 D with D = diag(F_s / v_s + F_v) (the smooth sign's slope at qd = 0, eq. 2.6-2.7) and A the mass matrix
+    with the rotor inertia, over q at the joint ranges' lower ends, middles and upper ends (0 without friction)."""
+    ex = model.extras
+    D = ex.coulomb / ex.smooth_velocity + ex.viscous
+    if not np.any(D > 0):
+        return 0.0
+    lo = np.where(np.isfinite(model.lower) & (np.abs(model.lower) < 1e3), model.lower, 0.0)
+    hi = np.where(np.isfinite(model.upper) & (np.abs(model.upper) < 1e3), model.upper, 0.0)
+    rate = 0.0
+    for q in (lo, 0.5 * (lo + hi), hi, np.zeros(model.n)):  # a loop over four configurations
+        A = model.inertia_matrix(q)
+        L = np.linalg.cholesky(A)
+        Li = np.linalg.inv(L)
+        rate = max(rate, float(np.linalg.eigvalsh(Li @ np.diag(D) @ Li.T).max()))  # A^-1 D, symmetrised
+    return rate
+
+
+def stable_substeps(model: Model, dt: float, minimum: int = 4) -> int:
+    """RK4 steps per sample period ``dt`` (s) for the model's friction: at least ``minimum`` (4, what the smooth
+    law at v_s = 0.1 rad/s needs at 1 kHz) and enough that h lambda <= :data:`RK4_REACH` (:func:`friction_rate`).
+    A sharper sign (v_s = 0.02 rad/s, the stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`) on finger3 at 1 kHz: 15."""
+    dt = _check_dt(dt)
+    return max(int(minimum), int(math.ceil(dt * friction_rate(model) / RK4_REACH - 1e-9)))
 
 
 # ----------------------------------------------------------------------------- state space helpers

@@ -1,0 +1,105 @@
+"""The effects of a real hand that a fit takes beyond the rigid, smooth-friction model (issue 16).
+
+A real tendon-driven finger has what the model of the report leaves out; each is one switch of
+``alpes-dyn identify --effects`` (default :data:`DEFAULT_EFFECTS`: compliance and tilt):
+
+============== ======================================================================================
+effect         what the fit does
+============== ======================================================================================
+``stiction``   (asked for: the adequacy check names stick-slip when it is missing) the friction's smooth sign tanh(qd / v_s) sharpened to v_s = :data:`STICTION_VELOCITY`
+               (0.02 rad/s): a joint under a torque below F_s creeps at v_s atanh(tau / F_s) instead of
+               sliding, the stick phases of dry friction; RK4 steps shortened to match
+               (:func:`~alpes_dyn.simulation.integrate.stable_substeps`). The file written keeps this v_s.
+``compliance`` the tendon's stretch seen by the encoder, y = S q + C tau_m (``tendon_compliance``, the
+               series-elastic tendon's quasi-static limit): fitted, written to the file.
+``tilt``       the palm's orientation when the recording has no ``gravity_*`` columns: ``tilt_y`` on a
+               planar finger (``tilt_x`` is seen only through its cosine), both on the thumb. Of the rig,
+               kept in the result, not in the file.
+``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
+               (absorbed by the initial states), and beside the tilt it trades with the masses.
+============== ======================================================================================
+
+Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
+asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
+(``alpes-dyn experiment``), whose recordings it would call inadequate, and costs 15 RK4 steps per sample instead
+of 4. Measured (``benchmarks/realism.py``, MuJoCo plants of finger3 drawn +-20 %): the rigid fit of a
+stick-slip plant lands masses 22-62 % off, the sharper sign within 2.4 %; a 3 % tendon stretch leaves the
+rigid fit's EKF 3.9-5.2 degrees off, the compliance 0.6; a 3 degree tilt leaves masses 12-66 % off.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..model.extras import STICTION_VELOCITY
+from ..model.params import HandParams, with_values
+from ..model.robot import Model
+
+__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
+           "stiction_params"]
+
+EFFECTS: tuple[str, ...] = ("stiction", "compliance", "tilt", "offset")
+DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
+
+
+def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
+    """The effects of a comma-separated list (``"none"``: the rigid, smooth-friction fit; None: the defaults).
+    :class:`~alpes_dyn.InputError` naming an unknown or repeated one."""
+    if text is None:
+        return DEFAULT_EFFECTS
+    items = [s.strip() for s in text.split(",")] if isinstance(text, str) else list(text)
+    if items == ["none"]:
+        return ()
+    for it in items:
+        if it not in EFFECTS:
+            raise InputError(f"effects: unknown effect {it!r} (expected some of {', '.join(EFFECTS)}, or none)")
+    if len(set(items)) != len(items):
+        raise InputError(f"effects: an effect is named twice in {text!r}")
+    return tuple(items)
+
+
+def _planar(model: Model) -> bool:
+    """Every joint axis parallel at q = 0 (a finger moving in one plane): then only tilt_y is seen."""
+    import pinocchio as pin
+
+    data = model.pin_model.createData()
+    J = pin.computeJointJacobians(model.pin_model, data, np.zeros(model.pin_model.nq))
+    axes = J[3:].T  # (n, 3): each revolute joint's axis in the base frame
+    norms = np.linalg.norm(axes, axis=1)
+    if np.any(norms < 1e-12):
+        return False
+    a = axes / norms[:, None]
+    return bool(np.all(np.linalg.norm(np.cross(a[0], a), axis=1) < 1e-9))
+
+
+def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
+                      base: str | None = None) -> str | None:
+    """The fit's selection for ``effects``: ``base`` (default K, m and friction: None) with ``tendon_compliance``
+    (compliance), ``tilt_y`` or ``tilt`` (tilt, only where the recording has no gravity columns: else its
+    orientation is known) and ``encoder_offset`` (offset) added. None when nothing is added to the default."""
+    extra = []
+    if "compliance" in effects:
+        extra.append("tendon_compliance")
+    if "tilt" in effects and not has_gravity:
+        extra.append("tilt_y" if _planar(model) else "tilt")
+    if "offset" in effects:
+        extra.append("encoder_offset")
+    if not extra:
+        return base
+    if base is None:
+        base = "K,m" + (",friction" if model.extras.has_friction else "")
+    return ",".join([base] + extra)
+
+
+def stiction_params(params: HandParams) -> HandParams:
+    """``params`` with the friction's smooth sign at v_s = :data:`STICTION_VELOCITY` (the stick-slip law)."""
+    old = params.raw["friction.smooth_velocity"]
+    new = dataclasses.replace(old, value=STICTION_VELOCITY, source="assumed",
+                              reason="the stick-slip law of alpes_dyn.estimation.effects: a joint creeps at "
+                                     "v_s atanh(tau / F_s) under a torque below F_s", std=None)
+    return with_values(params, {"friction.smooth_velocity": new})
+
