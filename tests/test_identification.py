@@ -361,3 +361,74 @@ def test_identify_recovers_the_tendon_compliance_from_noise_free_data(finger2, t
     assert back.params.raw["transmission.tendon_compliance"].source == "identified"
     rigid = identify(finger2, rec, progress=False)  # without it: the stretch is missed
     assert rigid.residual_rms > 100 * res.residual_rms
+
+
+def test_identify_cli_fits_the_real_hands_effects_by_default(tmp_path, capsys):
+    """``alpes-dyn identify`` without --parameters fits K, m, friction and the effects of --effects auto: the
+    tendon compliance and the palm's tilt_y (the recording has no gravity columns); on our simulator's recording
+    (rigid tendon, level palm, the smooth law) both come out within their standard errors of 0 (measured 1 sigma
+    or less), the fit is adequate (no second fit with the stick-slip law), and the file holds the compliance.
+    ``--effects none`` is the rigid fit."""
+    import json
+
+    from alpes_dyn.cli import main
+
+    rec, true, ident = tmp_path / "rec.csv", tmp_path / "true.toml", tmp_path / "ident.toml"
+    assert main(["experiment", "--model", "finger2", "--perturb", "0.1", "--seed", "2", "--duration", "2",
+                 "--true-params-out", str(true), "-o", str(rec)]) == 0
+    capsys.readouterr()
+    assert main(["identify", "--model", "finger2", "--data", str(rec), "-o", str(ident), "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["effects"] == ["compliance", "tilt"] and res["tried"] is None
+    names = list(res["parameters"])
+    assert names[-2:] == ["tendon_compliance_finger", "tilt_y"] and len(names) == 10  # K, m, F_s, F_v of 2 joints
+    for n in names[-2:]:
+        assert abs(res["parameters"][n]["value"]) < 3 * res["parameters"][n]["std"]
+    p = load_params(ident)
+    assert p.raw["transmission.tendon_compliance"].source == "identified"
+    assert p.tendon_compliance == pytest.approx(res["parameters"]["tendon_compliance_finger"]["value"], rel=1e-12)
+    assert main(["identify", "--model", "finger2", "--data", str(rec), "--effects", "none", "--json"]) == 0
+    rigid = json.loads(capsys.readouterr().out)
+    assert rigid["effects"] == [] and list(rigid["parameters"]) == names[:-2]
+
+
+def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeypatch):
+    """The decision rule of --effects auto on stand-in fits: a second fit with the stick-slip law only where the
+    first is flagged with stick-slip among the likely missing effects, and the lower residual kept."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation import effects as eff
+    from alpes_dyn.estimation import identification as ident_mod
+
+    def verdict(ok, missing=()):
+        return SimpleNamespace(adequate=ok, likely_missing=list(missing))
+
+    calls = []
+    outcomes = {}
+
+    def fake_identify(model, rec, parameters, **kw):
+        stick = model.extras.smooth_velocity == eff.STICTION_VELOCITY
+        calls.append((stick, parameters))
+        return outcomes[stick]
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    p = load_params()
+    model_of = lambda st: ad.Model.alpes("finger2", friction=True, params=eff.stiction_params(p) if st else p)  # noqa: E731
+    stick_slip = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
+    outcomes = {False: SimpleNamespace(residual_rms=0.9, adequacy=verdict(False, ["viscous friction", stick_slip])),
+                True: SimpleNamespace(residual_rms=0.6, adequacy=verdict(True))}
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
+    assert fit.effects == ("compliance", "tilt", "stiction") and fit.result is outcomes[True]
+    assert fit.tried is outcomes[False] and fit.tried_effects == ("compliance", "tilt")
+    assert calls == [(False, "K,m,friction,tendon_compliance,tilt_y"), (True, "K,m,friction,tendon_compliance,tilt_y")]
+    calls.clear()
+    outcomes[True] = SimpleNamespace(residual_rms=1.5, adequacy=verdict(False))  # worse: the first is kept
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
+    assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 2
+    calls.clear()
+    outcomes[False] = SimpleNamespace(residual_rms=0.6, adequacy=verdict(False, ["rotor inertia"]))
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]
+    calls.clear()
+    fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
+    assert calls == [(True, None)] and fit.effects == ("stiction",)

@@ -167,10 +167,13 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fit_selection(args: argparse.Namespace):
-    """The model to fit from (the stick-slip law where --effects asks for it) and the parameters (the default
-    selection, or --parameters, with the effects' parameters added: :mod:`alpes_dyn.estimation.effects`)."""
-    from ..estimation.effects import effect_parameters, parse_effects, stiction_params
+def _fit(args: argparse.Namespace, freqs):
+    """The fit: --parameters as named (the stick-slip law where --effects asks for it), else the default selection
+    with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
+    check names it (:mod:`alpes_dyn.estimation.effects`). Returns the EffectsFit."""
+    from ..estimation.adequacy import AdequacyWarning
+    from ..estimation.effects import EffectsFit, fit_effects, parse_effects, stiction_params
+    from ..estimation.identification import check_selection, identify
     from ..estimation.recording import read_recording
     from ..model.params import load_params
     from ..model.robot import Model
@@ -181,22 +184,28 @@ def _fit_selection(args: argparse.Namespace):
         raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
                          "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
     p = load_params(args.params)
-    if "stiction" in effects:
-        p = stiction_params(p)
-    model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=p, chain=args.chain)
-    base = args.parameters if args.parameters is not None else (THUMB_PARAMETERS if args.model == "thumb" else None)
-    if args.parameters is None and set(effects) - {"stiction"}:
-        has_gravity = read_recording(args.data, model).gravity is not None  # tilt only where the file does not say
-        return model, effect_parameters(model, effects, has_gravity, base), effects
-    return model, base, effects
+    p_stick = stiction_params(p) if "stiction" in effects or "auto" in effects else None
+
+    def model_of(stiction: bool) -> Model:
+        return Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia,
+                           params=p_stick if stiction else p, chain=args.chain)
+
+    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=args.validate,
+              encoder_noise=args.encoder_noise)
+    if args.parameters is not None:
+        model = model_of("stiction" in effects)
+        check_selection(model, args.parameters)  # a bad selection named before the fit
+        with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
+            warnings.simplefilter("ignore", AdequacyWarning)
+            return EffectsFit(identify(model, args.data, args.parameters, **kw), effects)
+    base = THUMB_PARAMETERS if args.model == "thumb" else None
+    has_gravity = read_recording(args.data, model_of(False)).gravity is not None  # tilt only where not given
+    return fit_effects(model_of, args.data, effects, base, has_gravity, **kw)
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger to a recording; write the identified parameter file."""
     from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
-    from ..estimation.adequacy import AdequacyWarning
-    from ..estimation.identification import check_selection, identify
-    from ..model.robot import Model
 
     _one_chain(args.model, EXPERIMENT_MODELS, "identification")
     _check_run_files(args)  # the output policy: -o is none of --data, --validate, --params, nor a link...
@@ -207,19 +216,18 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    model, parameters, effects = _fit_selection(args)
-    check_selection(model, parameters)  # a bad selection named before the fit
-    with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
-        warnings.simplefilter("ignore", AdequacyWarning)
-        res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise,
-                       validation=args.validate, encoder_noise=args.encoder_noise)
+    fit = _fit(args, freqs)
+    res, model = fit.result, fit.result.model
     written = args.output is not None and (res.trustworthy or args.force)
     if written:
         res.write(args.output)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = model.chain
-    obj["effects"] = list(effects)
+    obj["effects"] = list(fit.effects)
+    obj["tried"] = None if fit.tried is None else {
+        "effects": list(fit.tried_effects), "residual_rms": fit.tried.residual_rms, "converged": fit.tried.converged,
+        "verdict": fit.tried.status()}
     lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
              f"({res.iterations} Gauss-Newton iterations, "
              f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s)",

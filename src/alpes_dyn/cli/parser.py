@@ -272,8 +272,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                    help="the real hand's effects to fit, comma-separated: stiction (the stick-slip friction law, "
                         "v_s = 0.02 rad/s, kept in the file), compliance (the tendon's stretch, tendon_compliance), "
                         "tilt (the palm's orientation where the recording has no gravity columns), offset (the "
-                        "encoders' zero); 'none' for the rigid, smooth-friction fit. Default compliance,tilt "
-                        "(with --parameters: none)")
+                        "encoders' zero); 'auto' (the default): compliance,tilt, then the fit again with stiction "
+                        "where the first one's adequacy check names stick-slip friction, the lower residual kept; "
+                        "'none' for the rigid, smooth-friction fit (with --parameters the default is none)")
     s.add_argument("--rotor-inertia", action="store_true",
                    help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
     s.add_argument("--excitation", default="documented",

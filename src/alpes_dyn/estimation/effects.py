@@ -30,7 +30,9 @@ rigid fit's EKF 3.9-5.2 degrees off, the compliance 0.6; a 3 degree tilt leaves 
 from __future__ import annotations
 
 import dataclasses
-from typing import Sequence
+import warnings
+from dataclasses import dataclass
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -40,23 +42,24 @@ from ..model.params import HandParams, with_values
 from ..model.robot import Model
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
-           "stiction_params"]
+           "stiction_params", "names_stiction", "fit_effects", "EffectsFit"]
 
 EFFECTS: tuple[str, ...] = ("stiction", "compliance", "tilt", "offset")
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 
 
 def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
-    """The effects of a comma-separated list (``"none"``: the rigid, smooth-friction fit; None: the defaults).
+    """The effects of a comma-separated list (``"none"``: the rigid, smooth-friction fit; None or ``"auto"``: the
+    defaults plus ``"auto"``, stiction where the first fit's adequacy check names it, :func:`fit_effects`).
     :class:`~alpes_dyn.InputError` naming an unknown or repeated one."""
-    if text is None:
-        return DEFAULT_EFFECTS
+    if text is None or text == "auto":
+        return DEFAULT_EFFECTS + ("auto",)
     items = [s.strip() for s in text.split(",")] if isinstance(text, str) else list(text)
     if items == ["none"]:
         return ()
     for it in items:
-        if it not in EFFECTS:
-            raise InputError(f"effects: unknown effect {it!r} (expected some of {', '.join(EFFECTS)}, or none)")
+        if it not in EFFECTS + ("auto",):
+            raise InputError(f"effects: unknown effect {it!r} (expected some of {', '.join(EFFECTS)}, auto, or none)")
     if len(set(items)) != len(items):
         raise InputError(f"effects: an effect is named twice in {text!r}")
     return tuple(items)
@@ -103,3 +106,48 @@ def stiction_params(params: HandParams) -> HandParams:
                                      "v_s atanh(tau / F_s) under a torque below F_s", std=None)
     return with_values(params, {"friction.smooth_velocity": new})
 
+
+
+def names_stiction(result: Any) -> bool:
+    """True when a fit's adequacy check flags it and names stick-slip friction among the likely missing effects."""
+    a = getattr(result, "adequacy", None)
+    return a is not None and not a.adequate and any("stick-slip" in m for m in a.likely_missing)
+
+
+@dataclass
+class EffectsFit:
+    """What :func:`fit_effects` did: the result kept and the effects it was fitted with; ``tried``: the other fit
+    where ``"auto"`` made two (with and without the stick-slip law; None otherwise) and its effects."""
+
+    result: Any
+    effects: tuple[str, ...]
+    tried: Any = None
+    tried_effects: tuple[str, ...] | None = None
+
+
+def fit_effects(model_of: Callable[[bool], Model], recording: Any, effects: Sequence[str],
+                base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
+    """Identify with ``effects`` (:func:`parse_effects`). ``model_of(stiction)`` builds the model to fit from, with
+    the stick-slip law or not. With ``"auto"`` among the effects: the fit without the stick-slip law first, and
+    where its adequacy check names stick-slip (:func:`names_stiction`), a second fit with it, kept if its
+    residual is lower (else the first). ``kwargs`` go to :func:`~alpes_dyn.estimation.identification.identify`."""
+    from .adequacy import AdequacyWarning
+    from .identification import identify
+
+    auto = "auto" in effects
+    chosen = tuple(e for e in effects if e != "auto")
+
+    def run(effs: tuple[str, ...]):
+        model = model_of("stiction" in effs)
+        with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
+            warnings.simplefilter("ignore", AdequacyWarning)
+            return identify(model, recording, effect_parameters(model, effs, has_gravity, base), **kwargs)
+
+    res = run(chosen)
+    if not auto or "stiction" in chosen or not names_stiction(res):
+        return EffectsFit(res, chosen)
+    second = chosen + ("stiction",)
+    res2 = run(second)
+    if res2.residual_rms < res.residual_rms:
+        return EffectsFit(res2, second, res, chosen)
+    return EffectsFit(res, chosen, res2, second)
