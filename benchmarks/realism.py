@@ -82,10 +82,12 @@ FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)  # Hz: the EKF's v
 FIT_EFFECTS = "auto"  # the extended fit: alpes-dyn identify's default --effects
 
 
-def fit_start(stiction: bool) -> "ad.Model":
-    """The nominal finger the extended fit starts from, with the stick-slip friction law or the file's smooth one."""
+def fit_start(effects: tuple) -> "ad.Model":
+    """The nominal finger the extended fit starts from: the stick-slip friction law and the rotor on the tendon
+    (the file's J_m) where ``effects`` hold them."""
     p = load_params()
-    return ad.Model.alpes(MODEL, friction=True, params=stiction_params(p) if stiction else p)
+    return ad.Model.alpes(MODEL, friction=True, rotor_inertia="rotor" in effects,
+                          params=stiction_params(p) if "stiction" in effects else p)
 
 
 CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "all")
@@ -139,11 +141,11 @@ def verdict(res) -> str:
     return "FLAGGED: " + "; ".join(why)
 
 
-def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0) -> np.ndarray:
+def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False) -> np.ndarray:
     """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
     torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``)."""
-    obs = ad.Model.alpes(MODEL, friction=True, params=params_path)
+    obs = ad.Model.alpes(MODEL, friction=True, rotor_inertia=rotor, params=params_path)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
     est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
@@ -185,27 +187,28 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
     t1 = time.perf_counter()
     fresh = fresh_run(true, effects, seed, design)
     fitted = dict(zip(res.names, res.values))
-    rmse = ekf_rmse(fresh, str(ident), fitted)
+    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects)
     true_path = write_params(true, tmp / f"true_{seed}.toml")
     rmse_true = ekf_rmse(fresh, str(true_path), {})
     ekf_s = time.perf_counter() - t1
     row = {"case": case, "seed": seed}
-    for label, fit, effects in (("rigid", rigid, []), ("extended", res, list(fit.effects))):
-        err = 100 * (fit.values[:12] / truth - 1)
+    for label, one_fit, effects in (("rigid", rigid, []), ("extended", res, list(fit.effects))):
+        err = 100 * (one_fit.values[:12] / truth - 1)
         # the torque constant scales every parameter together (the encoder cannot see it): the errors up to
         # the one common scale, exp(mean log(value / truth)) over K and m, taken off
-        c = float(np.exp(np.mean(np.log(fit.values[:6] / truth[:6]))))
-        err_c = 100 * (fit.values[:12] / (c * truth) - 1)
+        c = float(np.exp(np.mean(np.log(one_fit.values[:6] / truth[:6]))))
+        err_c = 100 * (one_fit.values[:12] / (c * truth) - 1)
         row[label] = {
             "worst_error_pct": {kind: float(np.max(np.abs(err[i * 3:(i + 1) * 3])))
                                 for i, kind in enumerate(("K", "m", "F_s", "F_v"))},
             "worst_error_common_scale_pct": {kind: float(np.max(np.abs(err_c[i * 3:(i + 1) * 3])))
                                              for i, kind in enumerate(("K", "m", "F_s", "F_v"))},
-            "common_scale": c, "values": dict(zip(fit.names, fit.values.tolist())),
-            "residual_counts": fit.residual_rms, "converged": bool(fit.converged), "iterations": fit.iterations,
-            "fit_seconds": fit.seconds, "compile_seconds": fit.compile_seconds, "verdict": verdict(fit),
-            "flagged": not fit.trustworthy, "stop_reason": fit.reason, "effects": effects,
-            "adequacy": fit.adequacy.to_dict() if fit.adequacy is not None else None}
+            "common_scale": c, "values": dict(zip(one_fit.names, one_fit.values.tolist())),
+            "residual_counts": one_fit.residual_rms, "converged": bool(one_fit.converged),
+            "iterations": one_fit.iterations,
+            "fit_seconds": one_fit.seconds, "compile_seconds": one_fit.compile_seconds, "verdict": verdict(one_fit),
+            "flagged": not one_fit.trustworthy, "stop_reason": one_fit.reason, "effects": effects,
+            "adequacy": one_fit.adequacy.to_dict() if one_fit.adequacy is not None else None}
     row["extended"]["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy}
     row.update({"plant_seconds": plant_s, "ekf_seconds": ekf_s, "ekf_rmse_deg": np.degrees(rmse).tolist(),
@@ -261,7 +264,7 @@ def table_text(out: dict) -> str:
              f"{info['mean_tension_N']:.1f} N over a travel of {1e3 * info['tendon_travel_m']:.2f} mm from q = 0; "
              f"swing {info['tension_swing_N']:.2f} N over {1e3 * info['swing_travel_m']:.2f} mm), "
              f"c_t = {info['c_t_N_s_per_m']:.3g} N s/m, rotor mode {info['rotor_mode_Hz']:.0f} Hz; extended fit: "
-             f"--effects {FIT_EFFECTS} (effects kept: c compliance, t tilt, s stiction)",
+             f"--effects {FIT_EFFECTS} (effects kept: c compliance, t tilt, s stiction, r rotor)",
              f"{'case':9} {'seed':>4} | {'rigid K%':>8} {'m%':>6} {'resid':>5} {'flag':>5} | {'ext K%':>6} {'m%':>5} "
              f"{'F_s%':>5} {'F_v%':>5} {'resid':>5} {'conv':>5} {'fit s':>5} {'flag':>5} {'eff':>5} | "
              f"{'EKF deg (extended file)':>23} | {'EKF deg (true file)':>19}"]

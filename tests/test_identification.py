@@ -403,17 +403,21 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     def verdict(ok, missing=()):
         return SimpleNamespace(adequate=ok, likely_missing=list(missing))
 
-    calls = []
+    calls, rotors = [], []
     outcomes = {}
 
     def fake_identify(model, rec, parameters, **kw):
         stick = model.extras.smooth_velocity == eff.STICTION_VELOCITY
         calls.append((stick, parameters))
+        rotors.append(model._rotor)
         return outcomes[stick]
 
     monkeypatch.setattr(ident_mod, "identify", fake_identify)
     p = load_params()
-    model_of = lambda st: ad.Model.alpes("finger2", friction=True, params=eff.stiction_params(p) if st else p)  # noqa: E731
+    def model_of(effs):
+        return ad.Model.alpes("finger2", friction=True, rotor_inertia="rotor" in effs,
+                              params=eff.stiction_params(p) if "stiction" in effs else p)
+
     stick_slip = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
     outcomes = {False: SimpleNamespace(residual_rms=0.9, adequacy=verdict(False, ["viscous friction", stick_slip])),
                 True: SimpleNamespace(residual_rms=0.6, adequacy=verdict(True))}
@@ -426,9 +430,17 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
     assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 2
     calls.clear()
-    outcomes[False] = SimpleNamespace(residual_rms=0.6, adequacy=verdict(False, ["rotor inertia"]))
+    outcomes[False] = SimpleNamespace(residual_rms=0.6, adequacy=verdict(False, ["viscous friction"]))
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
-    assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]
+    assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]  # nothing named: one fit
+    calls.clear()
+    rotor = "rotor inertia (a torque following the motor acceleration; or a wrong inertia)"
+    outcomes[False] = SimpleNamespace(residual_rms=0.9, adequacy=verdict(False, [rotor, stick_slip]))
+    outcomes[True] = SimpleNamespace(residual_rms=0.6, adequacy=verdict(True))
+    rotors.clear()
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert fit.effects == ("compliance", "tilt", "stiction", "rotor") and rotors == [False, True]
+    assert fit.result is outcomes[True] and len(calls) == 2
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)

@@ -32,7 +32,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.data is not None:
         return _estimate_data(args)
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
-                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt")):
+                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia")):
         if getattr(args, dest) not in (None, False):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     _check_model_options(args)
@@ -101,7 +101,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     else:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
-                            params=args.params, chain=args.chain)
+                            rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain)
     rec = read_recording(args.data, model)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
@@ -180,26 +180,26 @@ def _fit(args: argparse.Namespace, freqs):
 
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
-    if args.parameters is not None and set(effects) - {"stiction"}:
-        raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
-                         "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
+    if args.parameters is not None and set(effects) - {"stiction", "rotor"}:
+        raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor'))} with "
+                         "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
     p = load_params(args.params)
     p_stick = stiction_params(p) if "stiction" in effects or "auto" in effects else None
 
-    def model_of(stiction: bool) -> Model:
-        return Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia,
-                           params=p_stick if stiction else p, chain=args.chain)
+    def model_of(effs: tuple[str, ...]) -> Model:
+        return Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia or "rotor" in effs,
+                           params=p_stick if "stiction" in effs else p, chain=args.chain)
 
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=args.validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
-        model = model_of("stiction" in effects)
+        model = model_of(effects)
         check_selection(model, args.parameters)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
             return EffectsFit(identify(model, args.data, args.parameters, **kw), effects)
     base = THUMB_PARAMETERS if args.model == "thumb" else None
-    has_gravity = read_recording(args.data, model_of(False)).gravity is not None  # tilt only where not given
+    has_gravity = read_recording(args.data, model_of(())).gravity is not None  # tilt only where not given
     return fit_effects(model_of, args.data, effects, base, has_gravity, **kw)
 
 

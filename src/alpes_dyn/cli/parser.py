@@ -215,6 +215,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                    help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
     s.add_argument("--log", default=None, metavar="FILE.csv",
                    help="with --data: write the estimated joints, velocities and standard deviations as CSV")
+    s.add_argument("--rotor-inertia", action="store_true",
+                   help="with --data: the observer's model with the file's rotor inertia J_m on each tendon (what "
+                        "'identify' fitted with when its JSON's effects hold rotor)")
     s.add_argument("--encoder-offset", default=None, metavar="RAD[,RAD...]",
                    help="with --data: each encoder's zero on this rig, rad (identify's encoder_offset_<motor>), "
                         "taken off the reading")
@@ -270,10 +273,11 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "--effects stiction)")
     s.add_argument("--effects", default=None, metavar="LIST",
                    help="the real hand's effects to fit, comma-separated: stiction (the stick-slip friction law, "
-                        "v_s = 0.02 rad/s, kept in the file), compliance (the tendon's stretch, tendon_compliance), "
+                        "v_s = 0.02 rad/s, kept in the file), rotor (the file's rotor inertia J_m on each tendon, "
+                        "held), compliance (the tendon's stretch, tendon_compliance), "
                         "tilt (the palm's orientation where the recording has no gravity columns), offset (the "
-                        "encoders' zero); 'auto' (the default): compliance,tilt, then the fit again with stiction "
-                        "where the first one's adequacy check names stick-slip friction, the lower residual kept; "
+                        "encoders' zero); 'auto' (the default): compliance,tilt, then the fit again with stiction and/or "
+                        "rotor where the first one's adequacy check names them, the lower residual kept; "
                         "'none' for the rigid, smooth-friction fit (with --parameters the default is none)")
     s.add_argument("--rotor-inertia", action="store_true",
                    help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")

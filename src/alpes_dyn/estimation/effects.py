@@ -15,6 +15,8 @@ effect         what the fit does
 ``tilt``       the palm's orientation when the recording has no ``gravity_*`` columns: ``tilt_y`` on a
                planar finger (``tilt_x`` is seen only through its cosine), both on the thumb. Of the rig,
                kept in the result, not in the file.
+``rotor``      (asked for, or named) the motor's rotor on its tendon, J_m S^T S with the file's
+               ``transmission.J_m`` (the motor's datasheet; held, not fitted: ``--parameters J_m`` fits it)
 ``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
                (absorbed by the initial states), and beside the tilt it trades with the masses.
 ============== ======================================================================================
@@ -42,9 +44,11 @@ from ..model.params import HandParams, with_values
 from ..model.robot import Model
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
-           "stiction_params", "names_stiction", "fit_effects", "EffectsFit"]
+           "stiction_params", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
-EFFECTS: tuple[str, ...] = ("stiction", "compliance", "tilt", "offset")
+EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset")
+NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia"}
+"""The effects ``auto`` adds where the first fit's adequacy check names them (a word of the likely missing effect)."""
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 
 
@@ -108,10 +112,12 @@ def stiction_params(params: HandParams) -> HandParams:
 
 
 
-def names_stiction(result: Any) -> bool:
-    """True when a fit's adequacy check flags it and names stick-slip friction among the likely missing effects."""
+def named_effects(result: Any) -> tuple[str, ...]:
+    """The effects of :data:`NAMED_BY` that a flagged fit's adequacy check names among the likely missing ones."""
     a = getattr(result, "adequacy", None)
-    return a is not None and not a.adequate and any("stick-slip" in m for m in a.likely_missing)
+    if a is None or a.adequate:
+        return ()
+    return tuple(e for e, word in NAMED_BY.items() if any(word in m for m in a.likely_missing))
 
 
 @dataclass
@@ -125,12 +131,13 @@ class EffectsFit:
     tried_effects: tuple[str, ...] | None = None
 
 
-def fit_effects(model_of: Callable[[bool], Model], recording: Any, effects: Sequence[str],
+def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
                 base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
-    """Identify with ``effects`` (:func:`parse_effects`). ``model_of(stiction)`` builds the model to fit from, with
-    the stick-slip law or not. With ``"auto"`` among the effects: the fit without the stick-slip law first, and
-    where its adequacy check names stick-slip (:func:`names_stiction`), a second fit with it, kept if its
-    residual is lower (else the first). ``kwargs`` go to :func:`~alpes_dyn.estimation.identification.identify`."""
+    """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
+    stick-slip law where ``"stiction"`` is in them, the rotor where ``"rotor"`` is). With ``"auto"`` among the
+    effects: the fit without those first, and where its adequacy check names stick-slip or the rotor
+    (:func:`named_effects`), a second fit with them added, kept if its residual is lower (else the first).
+    ``kwargs`` go to :func:`~alpes_dyn.estimation.identification.identify`."""
     from .adequacy import AdequacyWarning
     from .identification import identify
 
@@ -138,15 +145,16 @@ def fit_effects(model_of: Callable[[bool], Model], recording: Any, effects: Sequ
     chosen = tuple(e for e in effects if e != "auto")
 
     def run(effs: tuple[str, ...]):
-        model = model_of("stiction" in effs)
+        model = model_of(effs)
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
             return identify(model, recording, effect_parameters(model, effs, has_gravity, base), **kwargs)
 
     res = run(chosen)
-    if not auto or "stiction" in chosen or not names_stiction(res):
+    more = tuple(e for e in named_effects(res) if e not in chosen) if auto else ()
+    if not more:
         return EffectsFit(res, chosen)
-    second = chosen + ("stiction",)
+    second = chosen + more
     res2 = run(second)
     if res2.residual_rms < res.residual_rms:
         return EffectsFit(res2, second, res, chosen)
