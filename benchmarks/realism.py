@@ -210,7 +210,8 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
             "flagged": not one_fit.trustworthy, "stop_reason": one_fit.reason, "effects": effects,
             "adequacy": one_fit.adequacy.to_dict() if one_fit.adequacy is not None else None}
     row["extended"]["tried"] = None if fit.tried is None else {
-        "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy}
+        "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy,
+        "fit_seconds": fit.tried.seconds}
     row.update({"plant_seconds": plant_s, "ekf_seconds": ekf_s, "ekf_rmse_deg": np.degrees(rmse).tolist(),
                 "ekf_true_file_rmse_deg": np.degrees(rmse_true).tolist()})
     return row
