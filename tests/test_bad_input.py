@@ -58,6 +58,10 @@ URDFS = {
     "no_limits_urdf": "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
                       "<parent link='a'/><child link='b'/></joint></robot>",
     "truncated_urdf": FINGER3[: len(FINGER3) // 2],
+    "continuous_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="continuous">', 1),
+    "planar_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="planar">', 1),
+    "zeroaxis_urdf": re.sub(r'(<joint name="j2".*?<axis xyz=")[^"]*"', r'\g<1>0 0 0"', FINGER3, count=1, flags=re.S),
+    "nanaxis_urdf": re.sub(r'(<joint name="j2".*?<axis xyz=")[^"]*"', r'\g<1>0 nan 1"', FINGER3, count=1, flags=re.S),
     "inverted_limit_urdf": FINGER3.replace('lower="0.0" upper="1.5707963267948966"', 'lower="1.6" upper="0.0"', 1),
     "mimic_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="revolute"><mimic joint="j1"/>',
                                   1),
@@ -400,6 +404,12 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{latin1_urdf}", needle="not UTF-8 text (byte 0xe9"),
         C("dynamics", "--model", "{negmass_urdf}", needle="link 'p3': mass must be >= 0 kg, got -0.023"),
         C("dynamics", "--model", "{massless_urdf}", needle="joint 'j3' moves no mass"),
+        C("dynamics", "--model", "{continuous_urdf}", needle="joint 'j2' is continuous (unbounded); give it limits as a "
+          "revolute joint"),
+        C("dynamics", "--model", "{zeroaxis_urdf}", needle="joint 'j2' has the zero axis xyz='0 0 0'; give the "
+          "direction it turns about"),
+        C("dynamics", "--model", "{planar_urdf}", needle="joint 'j2' is planar (3 degrees of freedom); only revolute, "
+          "prismatic and fixed joints"),
         C("dynamics", "--model", "{zero_mass_inertia_urdf}", needle="link 'p3': zero mass with a non-zero inertia"),
         C("dynamics", "--model", "{indefinite_urdf}", needle="not positive semidefinite"),
         C("dynamics", "--model", "{indefinite_urdf}", needle="link 'p3': inertia is not positive semidefinite"),
@@ -710,6 +720,11 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model(123), ModelError, "urdf: expected URDF text"),
     A("Model", lambda c: ad.Model(URDFS["negmass_urdf"]), ModelError, "link 'p3': mass must be >= 0 kg"),
     A("Model", lambda c: ad.Model(URDFS["massless_urdf"]), ModelError, "joint 'j3' moves no mass"),
+    A("Model", lambda c: ad.Model(URDFS["continuous_urdf"]), ModelError,
+      "joint 'j2' is continuous (unbounded); give it limits as a revolute joint"),
+    A("Model", lambda c: ad.Model(URDFS["zeroaxis_urdf"]), ModelError, "joint 'j2' has the zero axis xyz='0 0 0'"),
+    A("Model", lambda c: ad.Model(URDFS["nanaxis_urdf"]), ModelError, "joint 'j2': axis xyz='0 nan 1' is not finite"),
+    A("Model", lambda c: ad.Model(URDFS["planar_urdf"]), ModelError, "joint 'j2' is planar"),
     A("Model", lambda c: ad.Model(URDFS["zero_mass_inertia_urdf"]), ModelError, "zero mass with a non-zero inertia"),
     A("Model", lambda c: ad.Model(URDFS["triangle_urdf"], check_inertia="strict"), ModelError, "triangle inequality"),
     A("Model", lambda c: ad.Model(URDFS["triangle_urdf"], check_inertia="loose"), ModelError,
