@@ -104,6 +104,17 @@ def _recordings() -> dict[str, str]:
     return _RECORDINGS
 
 
+def _huge_encoder(text: str) -> str:
+    """A recording whose encoder reads 1e15 counts from line 103 on (a fit on it diverged: 'theta: expected finite')."""
+    lines = text.splitlines(keepends=True)
+    j = lines[0].strip().split(",").index("encoder_finger")
+    for i in range(102, len(lines)):
+        cells = lines[i].rstrip("\n").split(",")
+        cells[j] = "1e15"
+        lines[i] = ",".join(cells) + "\n"
+    return "".join(lines)
+
+
 def bad_files(d: Path) -> dict[str, str]:
     """Write the broken inputs into ``d``; return {placeholder: path}."""
     files: dict[str, bytes] = {
@@ -140,6 +151,8 @@ def bad_files(d: Path) -> dict[str, str]:
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
     files["replay_csv"] = ("\n".join(rows) + "\n").encode()
     files.update({f"rec{m[-1]}_csv": text.encode() for m, text in _recordings().items()})
+    files["enchuge_csv"] = _huge_encoder(_recordings()["finger3"]).encode()
+    files["current_csv"] = _recordings()["finger3"].replace("torque_finger", "current_finger", 1).encode()
     out = {}
     for name, data in files.items():
         ext = name.rsplit("_", 1)[1]
@@ -266,6 +279,19 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{longcell_csv}", needle="a cell of 300 characters, over the limit of 256"),
         C("identify", "--data", "{hugecell_csv}", needle="hugecell.csv': a cell over the limit of 256 characters"),  # over csv's own limit
         C("identify", "--data", "{nul_csv}", needle="column 'encoder_finger' line 2: not a number"),
+        C("identify", "--data", "{current_csv}", needle="column 'current_finger' needs a torque constant (N m/A: "
+          "torque_constant, or --torque-constant"),
+        C("identify", "--data", "{rec3_csv}", "--torque-constant", "0.05", needle="recording '{rec3_csv}': a torque "
+          "constant is given but it has no current_<motor> column"),
+        C("identify", "--data", "{current_csv}", "--torque-constant", "-1", needle="torque_constant: expected a "
+          "positive number of N m/A, got -1.0"),
+        C("identify", "--data", "{current_csv}", "--torque-constant", "inf", needle="torque_constant: expected a "
+          "positive number of N m/A, got inf"),
+        C("identify", "--data", "x.csv", "--torque-constant", "0.05 N m/A", needle="--torque-constant: invalid float"),
+        C("identify", "--data", "{current_csv}", "--torque-constant", "0.05", "--validate", "{rec3_csv}",
+          needle="recording '{rec3_csv}': a torque constant is given but it has no current_<motor> column"),
+        C("identify", "--data", "{enchuge_csv}", needle="recording: column 'encoder_finger' line 103: 1e+15 counts is "
+          "beyond what the joint ranges allow (0 to 6144 counts"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/none.csv", needle="cannot be read"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{latin1_toml}", needle="not a UTF-8 text file"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{rec3_csv}", needle="validation: 201 samples are too few"),
@@ -447,6 +473,11 @@ CLI: dict[str, list[Cli]] = {
     "estimate": [
         C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
         C("estimate", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("estimate", "--torque-constant", "0.05", needle="--torque-constant: applies to an observer on a recording"),
+        C("estimate", "--data", "{current_csv}", needle="column 'current_finger' needs a torque constant"),
+        C("estimate", "--data", "{current_csv}", "--torque-constant", "nan",
+          needle="torque_constant: expected a positive number of N m/A, got nan"),
+        C("estimate", "--data", "{enchuge_csv}", "--friction", needle="column 'encoder_finger' line 103: 1e+15 counts"),
         C("estimate", "--data", "{replay_csv}", "--model", "finger2", needle="unknown column 'true_q_j3'"),
         C("estimate", "--data", "{replay_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
         C("estimate", "--data", "{replay_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
@@ -681,6 +712,16 @@ def _ident(c, recording=None, **kw):
     return identify(ad.Model.alpes("finger2", friction=True), recording, **kw)
 
 
+def _diverging():
+    """A Recording object (no reader's range check) whose encoder jumps to 1e15 counts: the fit overflows."""
+    import dataclasses
+
+    rec = _exp()
+    enc = rec.encoder.copy()
+    enc[100:] = 1e15
+    return dataclasses.replace(rec, encoder=enc)
+
+
 def _adq(name, *args):
     from alpes_dyn.estimation import adequacy
 
@@ -844,6 +885,14 @@ API: list[Api] = [
     A("write_recording", lambda c: _write_rec(c.f["device"]), RecordingError, "is a character device"),
     A("read_recording", lambda c: _read_rec(c.f["fifo"]), RecordingError, "recording '{fifo}': is a FIFO"),
     A("read_recording", lambda c: _read_rec(c.f["longcell_csv"]), RecordingError, "a cell of 300 characters"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], True), RecordingError,
+      "torque_constant: expected a positive number of N m/A, got True"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], "0.05"), RecordingError,
+      "torque_constant: expected a positive number of N m/A, got '0.05'"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], np.float64(0.0)), RecordingError,
+      "torque_constant: expected a positive number of N m/A, got 0.0"),
+    A("read_recording", lambda c: _read_rec(c.f["enchuge_csv"]), RecordingError,
+      "column 'encoder_finger' line 103: 1e+15 counts is beyond what the joint ranges allow"),
     A("check_outputs", lambda c: _outputs([("-o", c.f["hardlink"])], [("--params", c.f["params_toml"])]), InputError,
       "-o: '{hardlink}' is the input of --params"),
     A("check_outputs", lambda c: _outputs([("-o", c.d / "a.csv"), ("--log", str(c.d) + "//a.csv")]), InputError,
@@ -912,6 +961,8 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("identify", lambda c: _ident(c, recording=_diverging()), InputError, "identify: the fit diverged (its parameters "
+      "or states overflowed to NaN or inf): are the recording's encoders this model's, in counts"),
     A("estimate_recording", lambda c: _replay(c, model="finger3"), InputError, "model: expected an alpes_dyn.Model"),
     A("estimate_recording", lambda c: _replay(c, observer="pf"), InputError, "observer: expected one of ekf"),
     A("estimate_recording", lambda c: _replay(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text"),
@@ -1095,10 +1146,10 @@ def _write_rec(path):
     return write_recording(_exp(), path)
 
 
-def _read_rec(path):
+def _read_rec(path, torque_constant=None):
     from alpes_dyn.estimation.recording import read_recording
 
-    return read_recording(path, ad.Model.alpes("finger3"))
+    return read_recording(path, ad.Model.alpes("finger3"), torque_constant)
 
 
 def _outputs(outputs, inputs=()):

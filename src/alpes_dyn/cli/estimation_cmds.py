@@ -32,7 +32,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.data is not None:
         return _estimate_data(args)
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
-                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt")):
+                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"),
+                       ("--torque-constant", "torque_constant")):
         if getattr(args, dest) not in (None, False):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     _check_model_options(args)
@@ -102,7 +103,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
                             params=args.params, chain=args.chain)
-    rec = read_recording(args.data, model)
+    rec = read_recording(args.data, model, args.torque_constant)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
@@ -186,7 +187,7 @@ def _fit_selection(args: argparse.Namespace):
     model = Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia, params=p, chain=args.chain)
     base = args.parameters if args.parameters is not None else (THUMB_PARAMETERS if args.model == "thumb" else None)
     if args.parameters is None and set(effects) - {"stiction"}:
-        has_gravity = read_recording(args.data, model).gravity is not None  # tilt only where the file does not say
+        has_gravity = read_recording(args.data, model, args.torque_constant).gravity is not None  # tilt only where the file does not say
         return model, effect_parameters(model, effects, has_gravity, base), effects
     return model, base, effects
 
@@ -209,10 +210,18 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = tuple(parse_vector(exc, "excitation"))
     model, parameters, effects = _fit_selection(args)
     check_selection(model, parameters)  # a bad selection named before the fit
+    data, validate = args.data, args.validate
+    if args.torque_constant is not None:  # current_<motor> columns: the recordings read here, as torques
+        from ..estimation.recording import read_recording
+
+        data = read_recording(args.data, model, args.torque_constant)
+        if validate is not None:
+            validate = read_recording(args.validate, model, args.torque_constant)
     with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
         warnings.simplefilter("ignore", AdequacyWarning)
-        res = identify(model, args.data, parameters, excitation=freqs, torque_noise=args.torque_noise,
-                       validation=args.validate, encoder_noise=args.encoder_noise)
+        res = identify(model, data, parameters, excitation=freqs, torque_noise=args.torque_noise,
+                       validation=validate, encoder_noise=args.encoder_noise)
+    res.recording_path = args.data  # the identified file's header names the recording read
     written = args.output is not None and (res.trustworthy or args.force)
     if written:
         res.write(args.output)
