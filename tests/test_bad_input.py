@@ -1504,3 +1504,20 @@ def test_json_is_strict(capfd):
     assert cli._json_safe({"a": [1.0, float("nan")], "b": {"c": float("inf")}}) == {"a": [1.0, None], "b": {"c": None}}
     assert cli.main(["observability", "--model", "finger2", "--json"]) == 0
     json.loads(capfd.readouterr().out, parse_constant=refuse)
+
+
+def test_numpy_reprs_are_plain_in_warnings_and_cli_lines():
+    """``np.float64(0.1)`` (a ``{x!r}`` of a numpy value) reads ``0.1`` in alpes_dyn's warnings too, and in any
+    line the command line prints (a warning of another library, an internal error)."""
+    import warnings
+
+    from alpes_dyn.cli.common import UntrustedFitWarning, _one_line
+    from alpes_dyn.estimation.adequacy import AdequacyWarning
+    from alpes_dyn.model.stops import JointRangeWarning
+
+    for cls in (JointRangeWarning, AdequacyWarning, UntrustedFitWarning):
+        with pytest.warns(cls) as caught:
+            warnings.warn(cls(f"q = {np.float64(0.1)!r} at {np.int64(3)!r}, {np.bool_(True)!r}"))
+        assert str(caught[0].message) == "q = 0.1 at 3, True"
+        assert issubclass(cls, UserWarning)
+    assert _one_line(f"x {np.float64(2.5)!r}\n{np.float32(1.5)!r}") == "x 2.5 1.5"
