@@ -88,7 +88,7 @@ def _common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") 
 
 def _add_urdf(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("urdf", help="print or write the URDF of a model")
-    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("model", help="finger2, finger3, thumb or hand")
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.set_defaults(func=cmd_urdf)
