@@ -34,7 +34,8 @@ kind               meaning                                                     u
                    about its x axis then ``tilt_y`` about its y axis
 ``tendon_          a motor's tendon stretch per N m of its recorded torque:    rad/(N m)
 compliance``       y = S q + offset + C tau_m (``tendon_compliance_<motor>``;
-                   output only; the series-elastic tendon's quasi-static limit)
+                   output only; the series-elastic tendon's quasi-static
+                   limit)
 ================== =========================================================== ==========
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
