@@ -58,6 +58,10 @@ URDFS = {
     "no_limits_urdf": "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
                       "<parent link='a'/><child link='b'/></joint></robot>",
     "truncated_urdf": FINGER3[: len(FINGER3) // 2],
+    "continuous_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="continuous">', 1),
+    "planar_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="planar">', 1),
+    "zeroaxis_urdf": re.sub(r'(<joint name="j2".*?<axis xyz=")[^"]*"', r'\g<1>0 0 0"', FINGER3, count=1, flags=re.S),
+    "nanaxis_urdf": re.sub(r'(<joint name="j2".*?<axis xyz=")[^"]*"', r'\g<1>0 nan 1"', FINGER3, count=1, flags=re.S),
     "inverted_limit_urdf": FINGER3.replace('lower="0.0" upper="1.5707963267948966"', 'lower="1.6" upper="0.0"', 1),
     "mimic_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="revolute"><mimic joint="j1"/>',
                                   1),
@@ -100,6 +104,17 @@ def _recordings() -> dict[str, str]:
     return _RECORDINGS
 
 
+def _huge_encoder(text: str) -> str:
+    """A recording whose encoder reads 1e15 counts from line 103 on (a fit on it diverged: 'theta: expected finite')."""
+    lines = text.splitlines(keepends=True)
+    j = lines[0].strip().split(",").index("encoder_finger")
+    for i in range(102, len(lines)):
+        cells = lines[i].rstrip("\n").split(",")
+        cells[j] = "1e15"
+        lines[i] = ",".join(cells) + "\n"
+    return "".join(lines)
+
+
 def bad_files(d: Path) -> dict[str, str]:
     """Write the broken inputs into ``d``; return {placeholder: path}."""
     files: dict[str, bytes] = {
@@ -136,6 +151,8 @@ def bad_files(d: Path) -> dict[str, str]:
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
     files["replay_csv"] = ("\n".join(rows) + "\n").encode()
     files.update({f"rec{m[-1]}_csv": text.encode() for m, text in _recordings().items()})
+    files["enchuge_csv"] = _huge_encoder(_recordings()["finger3"]).encode()
+    files["current_csv"] = _recordings()["finger3"].replace("torque_finger", "current_finger", 1).encode()
     out = {}
     for name, data in files.items():
         ext = name.rsplit("_", 1)[1]
@@ -262,6 +279,19 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{longcell_csv}", needle="a cell of 300 characters, over the limit of 256"),
         C("identify", "--data", "{hugecell_csv}", needle="hugecell.csv': a cell over the limit of 256 characters"),  # over csv's own limit
         C("identify", "--data", "{nul_csv}", needle="column 'encoder_finger' line 2: not a number"),
+        C("identify", "--data", "{current_csv}", needle="column 'current_finger' needs a torque constant (N m/A: "
+          "torque_constant, or --torque-constant"),
+        C("identify", "--data", "{rec3_csv}", "--torque-constant", "0.05", needle="recording '{rec3_csv}': a torque "
+          "constant is given but it has no current_<motor> column"),
+        C("identify", "--data", "{current_csv}", "--torque-constant", "-1", needle="torque_constant: expected a "
+          "positive number of N m/A, got -1.0"),
+        C("identify", "--data", "{current_csv}", "--torque-constant", "inf", needle="torque_constant: expected a "
+          "positive number of N m/A, got inf"),
+        C("identify", "--data", "x.csv", "--torque-constant", "0.05 N m/A", needle="--torque-constant: invalid float"),
+        C("identify", "--data", "{current_csv}", "--torque-constant", "0.05", "--validate", "{rec3_csv}",
+          needle="recording '{rec3_csv}': a torque constant is given but it has no current_<motor> column"),
+        C("identify", "--data", "{enchuge_csv}", needle="recording: column 'encoder_finger' line 103: 1e+15 counts is "
+          "beyond what the joint ranges allow (0 to 6144 counts"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/none.csv", needle="cannot be read"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{latin1_toml}", needle="not a UTF-8 text file"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{rec3_csv}", needle="validation: 201 samples are too few"),
@@ -400,6 +430,12 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{latin1_urdf}", needle="not UTF-8 text (byte 0xe9"),
         C("dynamics", "--model", "{negmass_urdf}", needle="link 'p3': mass must be >= 0 kg, got -0.023"),
         C("dynamics", "--model", "{massless_urdf}", needle="joint 'j3' moves no mass"),
+        C("dynamics", "--model", "{continuous_urdf}", needle="joint 'j2' is continuous (unbounded); give it limits as a "
+          "revolute joint"),
+        C("dynamics", "--model", "{zeroaxis_urdf}", needle="joint 'j2' has the zero axis xyz='0 0 0'; give the "
+          "direction it turns about"),
+        C("dynamics", "--model", "{planar_urdf}", needle="joint 'j2' is planar (3 degrees of freedom); only revolute, "
+          "prismatic and fixed joints"),
         C("dynamics", "--model", "{zero_mass_inertia_urdf}", needle="link 'p3': zero mass with a non-zero inertia"),
         C("dynamics", "--model", "{indefinite_urdf}", needle="not positive semidefinite"),
         C("dynamics", "--model", "{indefinite_urdf}", needle="link 'p3': inertia is not positive semidefinite"),
@@ -437,6 +473,11 @@ CLI: dict[str, list[Cli]] = {
     "estimate": [
         C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
         C("estimate", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
+        C("estimate", "--torque-constant", "0.05", needle="--torque-constant: applies to an observer on a recording"),
+        C("estimate", "--data", "{current_csv}", needle="column 'current_finger' needs a torque constant"),
+        C("estimate", "--data", "{current_csv}", "--torque-constant", "nan",
+          needle="torque_constant: expected a positive number of N m/A, got nan"),
+        C("estimate", "--data", "{enchuge_csv}", "--friction", needle="column 'encoder_finger' line 103: 1e+15 counts"),
         C("estimate", "--data", "{replay_csv}", "--model", "finger2", needle="unknown column 'true_q_j3'"),
         C("estimate", "--data", "{replay_csv}", "--torque-noise", "-1", needle="torque_noise: expected a non-negative"),
         C("estimate", "--data", "{replay_csv}", "--torque-noise", "nan", needle="torque_noise: expected a non-negative"),
@@ -674,6 +715,16 @@ def _ident(c, recording=None, **kw):
     return identify(ad.Model.alpes("finger2", friction=True), recording, **kw)
 
 
+def _diverging():
+    """A Recording object (no reader's range check) whose encoder jumps to 1e15 counts: the fit overflows."""
+    import dataclasses
+
+    rec = _exp()
+    enc = rec.encoder.copy()
+    enc[100:] = 1e15
+    return dataclasses.replace(rec, encoder=enc)
+
+
 def _adq(name, *args):
     from alpes_dyn.estimation import adequacy
 
@@ -713,6 +764,11 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model(123), ModelError, "urdf: expected URDF text"),
     A("Model", lambda c: ad.Model(URDFS["negmass_urdf"]), ModelError, "link 'p3': mass must be >= 0 kg"),
     A("Model", lambda c: ad.Model(URDFS["massless_urdf"]), ModelError, "joint 'j3' moves no mass"),
+    A("Model", lambda c: ad.Model(URDFS["continuous_urdf"]), ModelError,
+      "joint 'j2' is continuous (unbounded); give it limits as a revolute joint"),
+    A("Model", lambda c: ad.Model(URDFS["zeroaxis_urdf"]), ModelError, "joint 'j2' has the zero axis xyz='0 0 0'"),
+    A("Model", lambda c: ad.Model(URDFS["nanaxis_urdf"]), ModelError, "joint 'j2': axis xyz='0 nan 1' is not finite"),
+    A("Model", lambda c: ad.Model(URDFS["planar_urdf"]), ModelError, "joint 'j2' is planar"),
     A("Model", lambda c: ad.Model(URDFS["zero_mass_inertia_urdf"]), ModelError, "zero mass with a non-zero inertia"),
     A("Model", lambda c: ad.Model(URDFS["triangle_urdf"], check_inertia="strict"), ModelError, "triangle inequality"),
     A("Model", lambda c: ad.Model(URDFS["triangle_urdf"], check_inertia="loose"), ModelError,
@@ -832,6 +888,14 @@ API: list[Api] = [
     A("write_recording", lambda c: _write_rec(c.f["device"]), RecordingError, "is a character device"),
     A("read_recording", lambda c: _read_rec(c.f["fifo"]), RecordingError, "recording '{fifo}': is a FIFO"),
     A("read_recording", lambda c: _read_rec(c.f["longcell_csv"]), RecordingError, "a cell of 300 characters"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], True), RecordingError,
+      "torque_constant: expected a positive number of N m/A, got True"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], "0.05"), RecordingError,
+      "torque_constant: expected a positive number of N m/A, got '0.05'"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], np.float64(0.0)), RecordingError,
+      "torque_constant: expected a positive number of N m/A, got 0.0"),
+    A("read_recording", lambda c: _read_rec(c.f["enchuge_csv"]), RecordingError,
+      "column 'encoder_finger' line 103: 1e+15 counts is beyond what the joint ranges allow"),
     A("check_outputs", lambda c: _outputs([("-o", c.f["hardlink"])], [("--params", c.f["params_toml"])]), InputError,
       "-o: '{hardlink}' is the input of --params"),
     A("check_outputs", lambda c: _outputs([("-o", c.d / "a.csv"), ("--log", str(c.d) + "//a.csv")]), InputError,
@@ -900,6 +964,8 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
+    A("identify", lambda c: _ident(c, recording=_diverging()), InputError, "identify: the fit diverged (its parameters "
+      "or states overflowed to NaN or inf): are the recording's encoders this model's, in counts"),
     A("estimate_recording", lambda c: _replay(c, model="finger3"), InputError, "model: expected an alpes_dyn.Model"),
     A("estimate_recording", lambda c: _replay(c, observer="pf"), InputError, "observer: expected one of ekf"),
     A("estimate_recording", lambda c: _replay(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text"),
@@ -1083,10 +1149,10 @@ def _write_rec(path):
     return write_recording(_exp(), path)
 
 
-def _read_rec(path):
+def _read_rec(path, torque_constant=None):
     from alpes_dyn.estimation.recording import read_recording
 
-    return read_recording(path, ad.Model.alpes("finger3"))
+    return read_recording(path, ad.Model.alpes("finger3"), torque_constant)
 
 
 def _outputs(outputs, inputs=()):
@@ -1441,3 +1507,20 @@ def test_json_is_strict(capfd):
     assert cli._json_safe({"a": [1.0, float("nan")], "b": {"c": float("inf")}}) == {"a": [1.0, None], "b": {"c": None}}
     assert cli.main(["observability", "--model", "finger2", "--json"]) == 0
     json.loads(capfd.readouterr().out, parse_constant=refuse)
+
+
+def test_numpy_reprs_are_plain_in_warnings_and_cli_lines():
+    """``np.float64(0.1)`` (a ``{x!r}`` of a numpy value) reads ``0.1`` in alpes_dyn's warnings too, and in any
+    line the command line prints (a warning of another library, an internal error)."""
+    import warnings
+
+    from alpes_dyn.cli.common import UntrustedFitWarning, _one_line
+    from alpes_dyn.estimation.adequacy import AdequacyWarning
+    from alpes_dyn.model.stops import JointRangeWarning
+
+    for cls in (JointRangeWarning, AdequacyWarning, UntrustedFitWarning):
+        with pytest.warns(cls) as caught:
+            warnings.warn(cls(f"q = {np.float64(0.1)!r} at {np.int64(3)!r}, {np.bool_(True)!r}"))
+        assert str(caught[0].message) == "q = 0.1 at 3, True"
+        assert issubclass(cls, UserWarning)
+    assert _one_line(f"x {np.float64(2.5)!r}\n{np.float32(1.5)!r}") == "x 2.5 1.5"

@@ -70,6 +70,33 @@ def test_broken_library_is_rebuilt_not_loaded(tmp_path, damage):
     assert path2 == path and compiled and verify_library(path) and answer(lib) == 42
 
 
+def test_foreign_library_under_this_name_is_rebuilt(tmp_path):
+    """Another model's library copied with its record under this one's name (the issue's ``malloc(): invalid
+    size``): sound files, but built for another source. The record's model key tells; rebuilt, not loaded."""
+    other = SOURCE.replace("42", "7")
+    d, path = built_elsewhere(tmp_path)
+    theirs = build(tmp_path / "c", other)[0]
+    shutil.copyfile(theirs, path)
+    shutil.copyfile(theirs.with_name(theirs.name + ".sha256"), path.with_name(path.name + ".sha256"))
+    assert not verify_library(path)  # size and SHA-256 match their record, the model key does not
+    path2, compiled, _, lib = build(d)
+    assert path2 == path and compiled and verify_library(path) and answer(lib) == 42
+    assert f"model {path.stem.rsplit('_', 1)[1]}" in path.with_name(path.name + ".sha256").read_text()
+
+
+def test_stale_record_without_model_key_is_rebuilt(tmp_path):
+    """A record of an older alpes_dyn (size and SHA-256 only, no model key): the library's identity is not
+    known, so it is compiled again rather than loaded."""
+    d, path = built_elsewhere(tmp_path, SOURCE + "/* stale */\n")
+    record = path.with_name(path.name + ".sha256")
+    record.write_text("".join(line for line in record.read_text().splitlines(keepends=True)
+                              if not line.startswith("model ")))
+    assert not verify_library(path)
+    assert verify_library(path, key=None) is False
+    path2, compiled, _, lib = build(d, SOURCE + "/* stale */\n")
+    assert compiled and verify_library(path2) and answer(lib) == 42
+
+
 def test_truncated_rollout_library_is_rebuilt(tmp_path, monkeypatch):
     """The issue's case: a cached step library truncated on disk, then a construction needing it."""
     x, w = cs.SX.sym("x", 2), cs.SX.sym("w", 1)

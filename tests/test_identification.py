@@ -444,3 +444,36 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)
+
+
+def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_path, capsys):
+    """The documented current_<motor> columns (A) on the command line: --torque-constant N m/A makes them the
+    motor torques; the fit and the observer are those of the same recording with torque_<motor> (N m)."""
+    import json
+
+    from alpes_dyn.cli import main
+    from alpes_dyn.estimation.recording import write_recording
+
+    kt = 0.05
+    torque = write_recording(experiment("finger2", design=ExperimentDesign(duration=1.0), seed=1), tmp_path / "t.csv")
+    lines = torque.read_text().splitlines()
+    j = lines[0].split(",").index("torque_finger")
+    rows = [lines[0].replace("torque_finger", "current_finger")]
+    for line in lines[1:]:
+        cells = line.split(",")
+        cells[j] = repr(float(cells[j]) / kt)
+        rows.append(",".join(cells))
+    current = tmp_path / "c.csv"
+    current.write_text("\n".join(rows) + "\n")
+    fits = []
+    for argv in (["--data", str(torque)], ["--data", str(current), "--torque-constant", str(kt)]):
+        main(["identify", "--model", "finger2", *argv, "--json", "--force", "-o", str(tmp_path / "i.toml")])
+        fits.append(json.loads(capsys.readouterr().out))
+    a, b = ({k: v["value"] for k, v in f["parameters"].items()} for f in fits)
+    assert a.keys() == b.keys() and all(np.isclose(a[k], b[k], rtol=1e-8, atol=1e-12) for k in a)
+    assert f"from {current}" in (tmp_path / "i.toml").read_text().splitlines()[0]  # the header names the file
+    est = []
+    for argv in (["--data", str(torque)], ["--data", str(current), "--torque-constant", str(kt)]):
+        assert main(["estimate", "--model", "finger2", "--friction", *argv, "--json"]) == 0
+        est.append(json.loads(capsys.readouterr().out))
+    assert np.allclose(est[0]["rmse_deg"], est[1]["rmse_deg"], rtol=1e-6)

@@ -22,6 +22,15 @@ class AlpesDynError(Exception):
         super().__init__(*args)
 
 
+class AlpesDynWarning(UserWarning):
+    """Base class of alpes_dyn's warnings; like :class:`AlpesDynError`, its message has plain numbers."""
+
+    def __init__(self, *args: object) -> None:
+        if args and isinstance(args[0], str):
+            args = (plain(args[0]), *args[1:])
+        super().__init__(*args)
+
+
 class ModelError(AlpesDynError, ValueError):
     """A parameter file, URDF, model name, tip/frame name or model option is invalid."""
 

@@ -13,7 +13,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import AlpesDynError, InputError
+from ..errors import AlpesDynError, AlpesDynWarning, InputError, plain
 from ..fileio import check_outputs
 
 
@@ -35,7 +35,7 @@ class _Untrusted(Exception):
     """The fit ran but is not to be trusted: exit :data:`EXIT_UNTRUSTED` with one line."""
 
 
-class UntrustedFitWarning(UserWarning):
+class UntrustedFitWarning(AlpesDynWarning):
     """``identify --force`` wrote a file from a fit that did not converge or whose model is not adequate."""
 
 
@@ -200,4 +200,5 @@ def _fmt_table(M: np.ndarray, rows: Sequence[str], cols: Sequence[str]) -> str:
 
 
 def _one_line(text: str) -> str:
-    return " ".join(str(text).split())
+    """``text`` on one line, numpy scalar reprs as plain numbers (a warning's or a library's text too)."""
+    return " ".join(plain(str(text)).split())

@@ -32,7 +32,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.data is not None:
         return _estimate_data(args)
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
-                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia")):
+                       ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
+                       ("--torque-constant", "torque_constant")):
         if getattr(args, dest) not in (None, False):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     _check_model_options(args)
@@ -102,7 +103,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
                             rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain)
-    rec = read_recording(args.data, model)
+    rec = read_recording(args.data, model, args.torque_constant)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
@@ -190,17 +191,22 @@ def _fit(args: argparse.Namespace, freqs):
         return Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia or "rotor" in effs,
                            params=p_stick if "stiction" in effs else p, chain=args.chain)
 
-    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=args.validate,
+    data, validate = args.data, args.validate
+    if args.torque_constant is not None:  # current_<motor> columns: the recordings read here, as torques
+        data = read_recording(args.data, model_of(()), args.torque_constant)
+        if validate is not None:
+            validate = read_recording(args.validate, model_of(()), args.torque_constant)
+    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
         model = model_of(effects)
         check_selection(model, args.parameters)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit(identify(model, args.data, args.parameters, **kw), effects)
+            return EffectsFit(identify(model, data, args.parameters, **kw), effects)
     base = THUMB_PARAMETERS if args.model == "thumb" else None
-    has_gravity = read_recording(args.data, model_of(())).gravity is not None  # tilt only where not given
-    return fit_effects(model_of, args.data, effects, base, has_gravity, **kw)
+    rec = data if args.torque_constant is not None else read_recording(args.data, model_of(()))
+    return fit_effects(model_of, data, effects, base, rec.gravity is not None, **kw)  # tilt only where not given
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
@@ -218,6 +224,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = tuple(parse_vector(exc, "excitation"))
     fit = _fit(args, freqs)
     res, model = fit.result, fit.result.model
+    res.recording_path = args.data  # the identified file's header names the recording read
     written = args.output is not None and (res.trustworthy or args.force)
     if written:
         res.write(args.output)

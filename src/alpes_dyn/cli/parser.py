@@ -88,7 +88,7 @@ def _common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") 
 
 def _add_urdf(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("urdf", help="print or write the URDF of a model")
-    s.add_argument("model", help="finger2, finger3 or hand")
+    s.add_argument("model", help="finger2, finger3, thumb or hand")
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.set_defaults(func=cmd_urdf)
@@ -211,6 +211,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                         "'alpes-dyn identify -o' wrote), with --friction if it has friction")
     s.add_argument("--torque-noise", type=float, default=None, metavar="NM",
                    help="with --data: white noise of the recorded torque, N m (default: estimated from the recording)")
+    s.add_argument("--torque-constant", type=float, default=None, metavar="NM_PER_A",
+                   help="with --data: the motors' torque constant, N m/A, to read a recording's current_<motor> "
+                        "columns (A) as motor torques (a recording with current columns needs it)")
     s.add_argument("--disturbance", action="store_true",
                    help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
     s.add_argument("--log", default=None, metavar="FILE.csv",
@@ -263,6 +266,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
+    s.add_argument("--torque-constant", type=float, default=None, metavar="NM_PER_A",
+                   help="the motors' torque constant, N m/A, to read the recordings' current_<motor> columns (A) as "
+                        "motor torques (a recording with current columns needs it)")
     s.add_argument("--parameters", default=None,
                    help="what to fit: kinds K, m, F_s, F_v, friction, input_gain, J_m (with --rotor-inertia), "
                         "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "

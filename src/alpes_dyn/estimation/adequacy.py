@@ -46,13 +46,13 @@ from typing import Any, Mapping
 import numpy as np
 from scipy import stats
 
-from ..errors import InputError
+from ..errors import AlpesDynWarning, InputError
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
            "signatures", "assess", "SIGNATURES", "reversal_ratio"]
 
-class AdequacyWarning(UserWarning):
+class AdequacyWarning(AlpesDynWarning):
     """An identification that did not converge or whose model is not adequate to the recording (one line)."""
 
 

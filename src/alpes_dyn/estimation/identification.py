@@ -537,6 +537,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         corrections' prior; zeros for theta) and the states. ``jac=False``: r, c, rg and the states
         alone (J, Cv, Cr None), from the step without its sensitivities (a tenth of the time)."""
         theta = values(glob)
+        if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
+            raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
+                             "the recording's encoders this model's, in counts, and its torques in N m?")
         xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
         q = xs[:, :, :n]
         r_enc = ((np.einsum("ij,skj->ski", S_enc, q) + offset(theta) + stretch(theta, glob, offs) - Yb) / sig_y

@@ -18,7 +18,10 @@ column                      unit     meaning
 ``<motor>`` and ``<joint>`` are the model's names (:attr:`Transmission.motor_names
 <alpes_dyn.Transmission.motor_names>`, :attr:`Model.joint_names <alpes_dyn.Model.joint_names>`): on
 ``finger3`` the columns are ``t, encoder_finger, torque_finger`` and ``q_j1, q_j2, q_j3``. Only
-``q_*``, ``true_q_*`` and ``force_z`` may have empty cells. Every defect is one
+``q_*``, ``true_q_*`` and ``force_z`` may have empty cells. On the command line, ``identify`` and
+``estimate --data`` read ``current_<motor>`` columns with ``--torque-constant NM_PER_A``. An encoder
+reading far outside what the joints' ranges allow (more than the range and a motor turn beyond it) is
+refused by name: it is not this model's encoder in counts. Every defect is one
 :class:`~alpes_dyn.errors.RecordingError` naming the column (and the row): an unknown or missing
 column, a non-number, NaN where not allowed, time not increasing or not uniform, a joint angle or
 gravity in the wrong unit (degrees, g), a recording too short or without excitation.
@@ -119,6 +122,10 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
     them and refused without them. Raises :class:`~alpes_dyn.errors.RecordingError`.
     """
+    if torque_constant is not None and not (isinstance(torque_constant, (int, float, np.integer, np.floating))
+                                            and not isinstance(torque_constant, (bool, np.bool_))
+                                            and math.isfinite(torque_constant) and torque_constant > 0):
+        raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r}")
     data_bytes = read_bytes(path, "recording", RecordingError, MAX_RECORDING_BYTES)
     p = Path(path)
     try:
@@ -191,14 +198,14 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                                  f"'current_{mn}' (A)")
         if has_c:
             if torque_constant is None:
-                raise RecordingError(f"recording: column 'current_{mn}' needs a torque constant (N m/A)")
+                raise RecordingError(f"recording: column 'current_{mn}' needs a torque constant (N m/A: "
+                                     "torque_constant, or --torque-constant on the command line)")
             torque.append(float(torque_constant) * col[f"current_{mn}"])
         else:
             torque.append(col[f"torque_{mn}"])
     if torque_constant is not None and not any(f"current_{mn}" in col for mn in motors):
-        raise RecordingError("recording: a torque constant is given but there is no current_<motor> column")
-    if torque_constant is not None and not (math.isfinite(torque_constant) and torque_constant > 0):
-        raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r}")
+        raise RecordingError(f"recording {str(p)!r}: a torque constant is given but it has no current_<motor> column "
+                             f"(its torques are torque_<motor>, N m)")
 
     def block(prefix: str) -> np.ndarray | None:
         names = [f"{prefix}_{jn}" for jn in joints]
@@ -217,7 +224,33 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                     force_z=col.get("force_z"), gravity=np.column_stack([col[g] for g in grav_cols]) if present
                     else None, true_q=block("true_q"))
     check_recording(rec)
+    _check_encoder_range(rec, model)
     return rec
+
+
+def _check_encoder_range(rec: Recording, model: Model) -> None:
+    """Each encoder column within what its joints' ranges allow (S q over the range box, in counts), with a
+    margin of the whole range and one motor turn on each side (an encoder's zero, stops overrun): a reading
+    far outside is not this model's encoder in counts, and would send a fit or an observer to overflow."""
+    tr = model.transmission
+    S = np.asarray(tr.S, dtype=float)
+    lo_q, hi_q = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
+    cpr = float(tr.counts_per_rev)
+    for i, mn in enumerate(rec.motor_names):
+        used = S[i] != 0
+        if not (np.isfinite(lo_q[used]).all() and np.isfinite(hi_q[used]).all()):
+            continue  # an unbounded joint: no range to check against
+        a, b = S[i] * lo_q, S[i] * hi_q
+        lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
+        hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
+        margin = (hi - lo) + cpr
+        e = rec.encoder[:, i]
+        bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"recording: column 'encoder_{mn}' line {k + 2}: {float(e[k]):g} counts is beyond "
+                                 f"what the joint ranges allow ({lo:.6g} to {hi:.6g} counts, give or take the range "
+                                 "and a turn); is it this model's encoder, in counts?")
 
 
 def check_recording(rec: Recording) -> Recording:

@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import re
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
@@ -33,11 +32,11 @@ from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from .extras import JointExtras
 from ..fileio import native_stderr_to, read_text
-from ..limits import MAX_URDF_DEPTH, MAX_URDF_LINKS
 from .inertial import check_inertials
 from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
+from .urdf_checks import check_urdf_structure
 
 __all__ = ["Model", "DEFAULT_GRAVITY", "Contact", "REFERENCE_FRAMES", "as_contacts"]
 
@@ -102,56 +101,6 @@ def as_contacts(contacts: Any) -> tuple[Contact, ...]:
 
 
 _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
-
-
-def check_urdf_structure(urdf: str) -> None:
-    """Before Pinocchio's parser: at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS` links, a kinematic
-    tree at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` joints deep (the parser recurses per level:
-    a 10,000-link chain crashes it), every joint limit with lower <= upper, and no ``<mimic>`` joint
-    (a coupling alpes_dyn does not model: refused rather than silently ignored). :class:`ModelError`."""
-    import xml.etree.ElementTree as ET
-
-    n_links = len(re.findall(r"<\s*link[\s/>]", urdf))
-    if n_links > MAX_URDF_LINKS:
-        raise ModelError(f"URDF: {n_links} links, over the limit of {MAX_URDF_LINKS}")
-    try:
-        root = ET.fromstring(urdf)
-    except ET.ParseError as exc:
-        raise ModelError(f"URDF could not be parsed: {exc}") from None
-    except (ValueError, RecursionError, MemoryError) as exc:
-        raise ModelError(f"URDF could not be parsed: {type(exc).__name__}") from None
-    parent_of: dict[str, str] = {}
-    for j in root.iter("joint"):
-        mimic = j.find("mimic")
-        if mimic is not None and j.get("type") not in ("fixed", None):
-            raise ModelError(f"joint {j.get('name')!r}: <mimic joint={mimic.get('joint')!r}> is not modelled (the joint "
-                             "would move on its own); remove the <mimic> element for an independent joint, or make "
-                             "the joint fixed")
-        p, c = j.find("parent"), j.find("child")
-        if p is not None and c is not None:
-            parent_of[str(c.get("link"))] = str(p.get("link"))
-        lim = j.find("limit")
-        if lim is not None and lim.get("lower") is not None and lim.get("upper") is not None:
-            try:
-                lo, hi = float(lim.get("lower", "")), float(lim.get("upper", ""))
-            except ValueError:
-                continue  # Pinocchio's parser names it
-            if lo > hi:
-                raise ModelError(f"joint {j.get('name')!r}: limit lower {lo:g} is above upper {hi:g}")
-    depth: dict[str, int] = {}
-    for leaf in parent_of:
-        chain, link = [], leaf
-        while link in parent_of and link not in depth:
-            chain.append(link)
-            link = parent_of[link]
-            if len(chain) > MAX_URDF_DEPTH + 1:
-                raise ModelError(f"URDF: a chain more than {MAX_URDF_DEPTH} joints deep (the limit), or a "
-                                 "loop, below link " + repr(link))
-        base = depth.get(link, 0)
-        for k, name in enumerate(reversed(chain), start=1):
-            depth[name] = base + k
-        if depth.get(leaf, 0) > MAX_URDF_DEPTH:
-            raise ModelError(f"URDF: link {leaf!r} is {depth[leaf]} joints deep, over the limit of {MAX_URDF_DEPTH}")
 
 
 def _build_pinocchio(urdf: str) -> pin.Model:

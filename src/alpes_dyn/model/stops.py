@@ -28,14 +28,14 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import AlpesDynWarning, InputError
 
 __all__ = ["JointStops", "JointRangeWarning", "check_range", "JOINT_RANGE_MODES"]
 
 JOINT_RANGE_MODES: tuple[str, ...] = ("warn", "error", "ignore")
 
 
-class JointRangeWarning(UserWarning):
+class JointRangeWarning(AlpesDynWarning):
     """A simulated joint left its range [lower, upper] while no joint stop was modelled."""
 
 

@@ -31,8 +31,8 @@ class Transmission:
     counts_per_rev: encoder resolution (counts per motor revolution), for quantisation.
     rotor_inertia: (m,) J_m of each motor's rotor about its shaft, kg m^2 (default zeros).
     tendon_compliance: (m,) C of each motor's tendon, rad/(N m) (default zeros: rigid): the encoder reads
-    y = S q + C tau_m (:meth:`encoder_angles`; the series-elastic tendon's quasi-static limit,
-    :mod:`alpes_dyn.model.spec`).
+        y = S q + C tau_m (:meth:`encoder_angles`; the series-elastic tendon's quasi-static limit,
+        :mod:`alpes_dyn.model.spec`).
     """
 
     motor_names: tuple[str, ...]

@@ -4,10 +4,13 @@
 a hash of the source, the compiler and its flags) and returns it loaded with :mod:`ctypes`:
 
 * **checked before it is loaded** -- beside each library a small file ``<stem>_<key>.so.sha256``
-  records its size and SHA-256; a library is loaded only if both match. A library truncated by a
-  full disk or a killed copy, with a flipped byte, or without its record is never handed to the
-  dynamic loader (which would crash the process with a bus error or a segmentation fault): it is
-  removed and compiled again;
+  records its size, its SHA-256 and the ``key`` it was built for (the hash of the generated source,
+  which is the model's structure, with the compiler and flags); a library is loaded only if all three
+  match. A library truncated by a full disk or a killed copy, with a flipped byte, without its record,
+  with a record of an older alpes_dyn (no key), or copied with its record under another model's name
+  (``malloc(): invalid size`` once called with the wrong sizes) is never handed to the dynamic loader
+  (which would crash the process with a bus error or a segmentation fault): it is removed and
+  compiled again;
 * **locked** -- a build holds an exclusive ``fcntl`` lock on ``<stem>_<key>.lock``, so that
   concurrent processes (or threads) needing the same library compile it once; the others wait and
   load the result;
@@ -67,11 +70,20 @@ def _record_path(lib: Path) -> Path:
     return lib.with_name(lib.name + ".sha256")
 
 
-def verify_library(lib: Path) -> bool:
-    """True if ``lib`` exists and its size and SHA-256 equal its record (no loading)."""
+def _name_key(lib: Path) -> str:
+    """The key in a library's file name ``<stem>_<key>.so``."""
+    return lib.name.removesuffix(".so").rsplit("_", 1)[-1]
+
+
+def verify_library(lib: Path, key: str | None = None) -> bool:
+    """True if ``lib`` exists, its size and SHA-256 equal its record, and the record's ``model`` key is
+    ``key`` (default: the key in the file's own name, ``<stem>_<key>.so``): the library is the one
+    built for this source, not another model's copied under its name (no loading)."""
     try:
         fields = _record_path(lib).read_text(encoding="ascii").split()
         rec = dict(zip(fields[::2], fields[1::2]))
+        if rec.get("model") != (_name_key(lib) if key is None else key):
+            return False
         if lib.stat().st_size != int(rec["size"]):
             return False
         return _digest(lib) == rec["sha256"]
@@ -79,9 +91,9 @@ def verify_library(lib: Path) -> bool:
         return False
 
 
-def _load(lib: Path) -> ctypes.CDLL | None:
-    """The library loaded if it passes :func:`verify_library`, else None."""
-    if not verify_library(lib):
+def _load(lib: Path, key: str) -> ctypes.CDLL | None:
+    """The library loaded if it passes :func:`verify_library` for ``key``, else None."""
+    if not verify_library(lib, key):
         return None
     try:
         return ctypes.CDLL(str(lib))
@@ -171,23 +183,24 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
     except OSError as exc:
         raise CompilerError(f"cache directory {str(d)!r}: cannot be created ({exc.strerror or exc})") from None
     lib = d / f"{name}.so"
-    handle = _load(lib)
+    handle = _load(lib, key)
     if handle is not None:
         return lib, False, 0.0, handle
     with _locked(d / f"{name}.lock"):
         _clean_stale(d, name)
-        handle = _load(lib)  # built by another process while this one waited
+        handle = _load(lib, key)  # built by another process while this one waited
         if handle is not None:
             return lib, False, 0.0, handle
         _remove(lib, _record_path(lib))  # missing, broken or unloadable: build it again
         t0 = time.perf_counter()
         with signals_as_exceptions():  # SIGTERM/SIGHUP: the build folder removed, the compiler stopped
-            return _build_locked(source, stem, cc, cflags, d, libs, name, lib, t0)
+            return _build_locked(source, stem, cc, cflags, d, libs, key, lib, t0)
 
 
-def _build_locked(source: str, stem: str, cc: str, cflags: Sequence[str], d: Path, libs: Sequence[str], name: str,
+def _build_locked(source: str, stem: str, cc: str, cflags: Sequence[str], d: Path, libs: Sequence[str], key: str,
                   lib: Path, t0: float) -> tuple[Path, bool, float, ctypes.CDLL]:
     """The compilation of :func:`build_library`, its lock held: in a private build folder, renamed into place."""
+    name = f"{stem}_{key}"
     try:
         build = Path(tempfile.mkdtemp(prefix=f"{_BUILD}{name}@", dir=d))
     except OSError as exc:
@@ -209,7 +222,7 @@ def _build_locked(source: str, stem: str, cc: str, cflags: Sequence[str], d: Pat
             os.fsync(f.fileno())
         size, digest = out.stat().st_size, _digest(out)
         os.replace(out, lib)  # atomic: a reader sees the old state or the whole library
-        atomic_write(_record_path(lib), f"sha256 {digest}\nsize {size}\n", "cache record")
+        atomic_write(_record_path(lib), f"sha256 {digest}\nsize {size}\nmodel {key}\n", "cache record")
     except OSError as exc:
         raise CompilerError(f"cache: cannot write {name}.so ({exc.strerror or exc})") from None
     except AlpesDynError as exc:
@@ -218,7 +231,7 @@ def _build_locked(source: str, stem: str, cc: str, cflags: Sequence[str], d: Pat
         raise CompilerError(f"cache: {exc}") from None
     finally:
         shutil.rmtree(build, ignore_errors=True)
-    handle = _load(lib)
+    handle = _load(lib, key)
     if handle is None:
         raise CompilerError(f"cache: the freshly built {str(lib)!r} cannot be loaded")
     return lib, True, time.perf_counter() - t0, handle

@@ -28,6 +28,7 @@ same order: they agree to the last bit in practice (to rounding in any case).
 from __future__ import annotations
 
 import math
+import re
 import sys
 import weakref
 from dataclasses import dataclass
@@ -331,7 +332,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
         Simulated time and step (the output grid), s; duration must be a whole number of steps.
     method:
         ``"rk4"`` (fixed step, classical Runge-Kutta), ``"cvodes"`` (adaptive BDF, SUNDIALS) or
-        ``"idas"`` (adaptive implicit DAE solver, SUNDIALS); the last two honour ``rtol``/``atol``.
+        ``"idas"`` (adaptive implicit DAE solver, SUNDIALS); the last two honour ``rtol``/``atol`` and
+        restart wherever the held input changes (time-varying inputs: one run per constant stretch).
     force:
         Measured contact force at the state space's tip, N, base frame (eq. 2.9, 2.13): a scalar,
         an (N,) series or a callable returning F_z, or (3,), (N, 3), or a callable returning 3 values.
@@ -392,17 +394,42 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
 
 def _integrate_sundials(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.ndarray, method: str,
                         rtol: float, atol: float, stops: JointStops | None = None) -> np.ndarray:
+    """(nx, N) states at t[1:]: the input piecewise constant, the solver restarted wherever it changes.
+
+    One SUNDIALS run over a grid with the input switching at the grid points fails its error test at the
+    first jump ("CV_ERR_FAILURE" at t = dt, h ~ 1e-10: BDF's history spans the discontinuity); each run of
+    equal input rows is integrated on its own, from the state where the previous one ended (the state space
+    is autonomous: time enters through the input only)."""
+    from ..fileio import native_stderr_to
+
     f = _rhs_function(ss, stops)
     w = cs.SX.sym("w", W.shape[1])
-    dae = {"x": ss.x, "u": w, "ode": f(ss.x, w)}
+    dae = {"x": ss.x, "p": w, "ode": f(ss.x, w)}
     opts: dict[str, Any] = {"abstol": float(atol), "reltol": float(rtol), "max_num_steps": 1_000_000}
-    try:
-        integ = cs.integrator("sim", method, dae, 0.0, list(t[1:]), opts)
-        res = integ(x0=x0, u=W.T)
-    except RuntimeError as exc:
-        msg = str(exc).strip().splitlines()[-1] if str(exc).strip() else "failed"
-        raise InputError(f"integrator {method}: {msg}") from None
-    return np.array(res["xf"])
+    N, dt = W.shape[0], float(t[1] - t[0])
+    starts = np.r_[0, np.flatnonzero(np.any(W[1:] != W[:-1], axis=1)) + 1]
+    ends = np.r_[starts[1:], N]
+    runs: dict[int, cs.Function] = {}  # one integrator per run length (a sine input: length 1 only)
+    X = np.empty((ss.n_states, N))
+    x = np.asarray(x0, dtype=float)
+    printed: list[str] = []  # SUNDIALS prints its reason ("the error test failed...") on fd 2: into the message
+    for k0, k1 in zip(starts, ends):
+        L = int(k1 - k0)
+        try:
+            with native_stderr_to(printed):
+                if L not in runs:
+                    runs[L] = cs.integrator(f"sim{L}", method, dae, 0.0, list(dt * np.arange(1, L + 1)), opts)
+                xs = np.array(runs[L](x0=x, p=W[k0])["xf"]).reshape(ss.n_states, L)
+        except RuntimeError as exc:
+            why = next((ln.strip() for ln in printed if ln.strip()), "")  # its t is the run's own: dropped
+            why = re.sub(r"^At t = [^,]*?(?: and h = [^,]*)?, ", "", why)
+            code = str(exc).strip().splitlines()[-1] if str(exc).strip() else "failed"
+            code = code.split('returned "', 1)[-1].split('"', 1)[0] if 'returned "' in code else code
+            raise InputError(f"integrator {method} failed on [{t[k0]:g}, {t[k1]:g}] s ({code}"
+                             f"{': ' + why.rstrip('.') if why else ''}); loosen rtol/atol, or use method='rk4'") from None
+        X[:, k0:k1] = xs
+        x = xs[:, -1]
+    return X
 
 
 class CompiledRollout(Rebuilt):

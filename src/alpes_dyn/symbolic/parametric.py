@@ -18,24 +18,25 @@ experiment) instead of the model's constant.
 Parameters are named after the joint they belong to (``K_1`` for joint ``j1`` of a finger,
 ``K_index_j1`` on the hand):
 
-================== =========================================================== ==========
-kind               meaning                                                     unit
-================== =========================================================== ==========
-``K``              spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
-``m``              mass of the body a joint moves, inertia scaled with it      kg
-``F_s``            Coulomb friction of a joint (eq. 2.6)                       N m
-``F_v``            viscous friction of a joint (eq. 2.6)                       N m s/rad
-``input_gain``     scale of the known torques (r/r_m, the torque constant)     --
-``J_m``            rotor inertia of a motor on its tendon, S^T diag(J_m) S     kg m^2
-                   (eq. 2.8; ``J_m_<motor>``)
-``encoder_offset`` the zero of a motor's encoder: y = S q + offset             rad
-                   (``encoder_offset_<motor>``; output only, no dynamics)
-``tilt``           the base (palm) turned by two small angles, ``tilt_x``      rad
-                   about its x axis then ``tilt_y`` about its y axis
-``tendon_          a motor's tendon stretch per N m of its recorded torque:    rad/(N m)
-compliance``       y = S q + offset + C tau_m (``tendon_compliance_<motor>``;
-                   output only; the series-elastic tendon's quasi-static limit)
-================== =========================================================== ==========
+===================== =========================================================== ==========
+kind                  meaning                                                     unit
+===================== =========================================================== ==========
+``K``                 spring stiffness of a joint (torsional, eq. 2.14)           N m/rad
+``m``                 mass of the body a joint moves, inertia scaled with it      kg
+``F_s``               Coulomb friction of a joint (eq. 2.6)                       N m
+``F_v``               viscous friction of a joint (eq. 2.6)                       N m s/rad
+``input_gain``        scale of the known torques (r/r_m, the torque constant)     --
+``J_m``               rotor inertia of a motor on its tendon, S^T diag(J_m) S     kg m^2
+                      (eq. 2.8; ``J_m_<motor>``)
+``encoder_offset``    the zero of a motor's encoder: y = S q + offset             rad
+                      (``encoder_offset_<motor>``; output only, no dynamics)
+``tilt``              the base (palm) turned by two small angles, ``tilt_x``      rad
+                      about its x axis then ``tilt_y`` about its y axis
+``tendon_compliance`` a motor's tendon stretch per N m of its recorded torque:    rad/(N m)
+                      y = S q + offset + C tau_m (``tendon_compliance_<motor>``;
+                      output only; the series-elastic tendon's quasi-static
+                      limit)
+===================== =========================================================== ==========
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
 (:func:`~alpes_dyn.estimation.identification.identify`); ``encoder_offset`` and ``tilt`` have the

@@ -1,0 +1,99 @@
+"""Checks of a URDF's text before Pinocchio's parser sees it: its size and depth (the parser recurses per
+level), its joints' types, axes, limits and ``<mimic>`` elements, each refused by name with one line."""
+
+from __future__ import annotations
+
+import math
+import re
+import xml.etree.ElementTree as ET
+
+from ..errors import ModelError
+from ..limits import MAX_URDF_DEPTH, MAX_URDF_LINKS
+
+__all__ = ["check_urdf_structure", "check_joint"]
+
+_OTHER_TYPES = {
+    "continuous": "is continuous (unbounded); give it limits as a revolute joint (type=\"revolute\" with <limit "
+                  "lower=... upper=... effort=... velocity=...>)",
+    "floating": "is floating (6 degrees of freedom); only revolute, prismatic and fixed joints are supported "
+                "(a fixed-base tree of 1-DoF joints)",
+    "planar": "is planar (3 degrees of freedom); only revolute, prismatic and fixed joints are supported "
+              "(a fixed-base tree of 1-DoF joints)",
+}
+
+
+def check_joint(j: ET.Element) -> None:
+    """A ``<joint>`` element of a supported type (revolute, prismatic or fixed), and a moving joint's
+    ``<axis xyz>`` finite and non-zero (URDF's default, absent: 1 0 0). :class:`ModelError` naming it."""
+    name, kind = j.get("name"), j.get("type")
+    if kind is None:
+        return  # a <transmission>'s or <gazebo>'s <joint> reference, not a joint (one without a type: urdfdom's)
+    if kind in _OTHER_TYPES:
+        raise ModelError(f"joint {name!r} {_OTHER_TYPES[kind]}")
+    if kind not in ("revolute", "prismatic", "fixed"):
+        raise ModelError(f"joint {name!r} has type {kind!r}; expected revolute, prismatic or fixed")
+    axis = j.find("axis")
+    if kind == "fixed" or axis is None or axis.get("xyz") is None:
+        return
+    text = str(axis.get("xyz"))
+    try:
+        v = [float(x) for x in text.split()]
+    except ValueError:
+        return  # Pinocchio's parser names it
+    how = "turns about" if kind == "revolute" else "slides along"
+    if len(v) == 3 and not all(math.isfinite(x) for x in v):
+        raise ModelError(f"joint {name!r}: axis xyz={text!r} is not finite; give the direction it {how}, e.g. "
+                         "xyz='0 0 1'")
+    if len(v) == 3 and not any(v):
+        raise ModelError(f"joint {name!r} has the zero axis xyz={text!r}; give the direction it {how}, e.g. "
+                         "xyz='0 0 1'")
+
+
+def check_urdf_structure(urdf: str) -> None:
+    """Before Pinocchio's parser: at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS` links, a kinematic
+    tree at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` joints deep (the parser recurses per level:
+    a 10,000-link chain crashes it), every joint limit with lower <= upper, no ``<mimic>`` joint
+    (a coupling alpes_dyn does not model: refused rather than silently ignored), every joint of a
+    supported type (:func:`check_joint`) and every moving joint's axis non-zero. :class:`ModelError`."""
+    n_links = len(re.findall(r"<\s*link[\s/>]", urdf))
+    if n_links > MAX_URDF_LINKS:
+        raise ModelError(f"URDF: {n_links} links, over the limit of {MAX_URDF_LINKS}")
+    try:
+        root = ET.fromstring(urdf)
+    except ET.ParseError as exc:
+        raise ModelError(f"URDF could not be parsed: {exc}") from None
+    except (ValueError, RecursionError, MemoryError) as exc:
+        raise ModelError(f"URDF could not be parsed: {type(exc).__name__}") from None
+    parent_of: dict[str, str] = {}
+    for j in root.iter("joint"):
+        mimic = j.find("mimic")
+        if mimic is not None and j.get("type") not in ("fixed", None):
+            raise ModelError(f"joint {j.get('name')!r}: <mimic joint={mimic.get('joint')!r}> is not modelled (the joint "
+                             "would move on its own); remove the <mimic> element for an independent joint, or make "
+                             "the joint fixed")
+        check_joint(j)
+        p, c = j.find("parent"), j.find("child")
+        if p is not None and c is not None:
+            parent_of[str(c.get("link"))] = str(p.get("link"))
+        lim = j.find("limit")
+        if lim is not None and lim.get("lower") is not None and lim.get("upper") is not None:
+            try:
+                lo, hi = float(lim.get("lower", "")), float(lim.get("upper", ""))
+            except ValueError:
+                continue  # Pinocchio's parser names it
+            if lo > hi:
+                raise ModelError(f"joint {j.get('name')!r}: limit lower {lo:g} is above upper {hi:g}")
+    depth: dict[str, int] = {}
+    for leaf in parent_of:
+        chain, link = [], leaf
+        while link in parent_of and link not in depth:
+            chain.append(link)
+            link = parent_of[link]
+            if len(chain) > MAX_URDF_DEPTH + 1:
+                raise ModelError(f"URDF: a chain more than {MAX_URDF_DEPTH} joints deep (the limit), or a "
+                                 "loop, below link " + repr(link))
+        base = depth.get(link, 0)
+        for k, name in enumerate(reversed(chain), start=1):
+            depth[name] = base + k
+        if depth.get(leaf, 0) > MAX_URDF_DEPTH:
+            raise ModelError(f"URDF: link {leaf!r} is {depth[leaf]} joints deep, over the limit of {MAX_URDF_DEPTH}")
