@@ -34,6 +34,8 @@ identification user guide for the full comparison.
 
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
 (and writes) a :class:`~alpes_dyn.estimation.recording.Recording` with the true joint angles in ``true_q_*``.
+:func:`model_experiment` does the same on any tendon-driven robot (a URDF + spec :class:`~alpes_dyn.Model`),
+its searches scaled by the robot's own static torques.
 """
 
 from __future__ import annotations
