@@ -344,13 +344,17 @@ def _fit_robot(args: argparse.Namespace, freqs):
     model = _urdf_robot(args, "identification")
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
+    if "rotor" in effects:
+        raise InputError("--effects: rotor applies to the Alpes models (their file's J_m put on the tendons); a URDF "
+                         "--model's rotors are always on, its spec's motors' rotor_inertia (fit them with "
+                         "--parameters J_m)")
     if args.parameters is not None and set(effects) - {"stiction"}:
         raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
                          "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
     sticky = Model(model.urdf, dataclasses.replace(model.spec, smooth_velocity=STICTION_VELOCITY))
 
-    def model_of(stiction: bool) -> Model:
-        return sticky if stiction else model
+    def model_of(effs: tuple[str, ...]) -> Model:  # "rotor", named by auto's verdict, is the spec's rotors: on
+        return sticky if "stiction" in effs else model
 
     masses = spec_misfits(model, _chain_names(model, args.parameters, args.chain))  # the effects add none
     if masses and args.output is not None:
@@ -359,7 +363,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=args.validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
-        fitted = model_of("stiction" in effects)
+        fitted = model_of(effects)
         names = _chain_names(fitted, args.parameters, args.chain)
         check_selection(fitted, names)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
