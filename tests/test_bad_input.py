@@ -74,6 +74,10 @@ URDFS = {
                  + "</robot>",
 }
 RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
+ROBOT_URDF = FINGER3.replace('name="alpes_finger3"', 'name="tendon_robot"', 1)
+"""A URDF robot for the rows of the commands on any robot: finger3's URDF with a spec of its own (ROBOT_SPEC)."""
+ROBOT_SPEC = ('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n\n'
+              "[stiffness]\nj1 = 0.04\nj2 = 0.05\nj3 = 0.06\n\n[viscous]\nj1 = 1e-4\nj2 = 1e-4\nj3 = 1e-4\n")
 
 
 def _toml_field(field: str, entry: str) -> bytes:
@@ -146,6 +150,11 @@ def bad_files(d: Path) -> dict[str, str]:
                                                  'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files.update({k: v.encode() for k, v in URDFS.items()})
+    files.update(robot_urdf=ROBOT_URDF.encode(), robot_toml=ROBOT_SPEC.encode(),
+                 robotident_toml=(ROBOT_SPEC + "\n[identified.stiffness]\nj1 = 1e-5\nj9 = 1e-5\n").encode(),
+                 robotstd_toml=(ROBOT_SPEC + "\n[identified.viscous]\nj1 = -1e-5\n").encode(),
+                 robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
+                 robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -198,6 +207,29 @@ def C(*argv: str, needle: str, fsize: int | None = None) -> Cli:
 
 CLI: dict[str, list[Cli]] = {
     "experiment": [
+        # a URDF --model (issue 17): the Alpes-only options refused by name
+        C("experiment", "--model", "{robot_urdf}", "-o", "{tmp}/r.csv",
+          needle="--spec: the identification experiment on a URDF --model needs its transmission spec"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--chain", "index", "-o", "{tmp}/r.csv",
+          needle="--chain: names a finger of the Alpes hand; a URDF --model's experiment excites every motor"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--perturb", "0.1", "-o", "{tmp}/r.csv",
+          needle="--perturb: draws an Alpes parameter file; for a URDF --model give the perturbed robot's spec"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-params-out", "{tmp}/t.toml",
+          "-o", "{tmp}/r.csv", needle="--true-params-out: goes with --perturb on an Alpes model"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--params", "x.toml", "-o", "{tmp}/r.csv",
+          needle="--params: applies to the Alpes models"),
+        C("experiment", "--true-spec", "x.toml", "-o", "{tmp}/r.csv", needle="--true-spec: applies to a URDF --model"),
+        C("experiment", "--spec", "x.toml", "-o", "{tmp}/r.csv", needle="--spec: applies to a URDF --model"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robottwo_toml}", "-o",
+          "{tmp}/r.csv", needle="truth: expected the nominal's joints j1, j2, j3 and motors flexor"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotident_toml}", "-o",
+          "{tmp}/r.csv", needle="identified.stiffness.j9: the spec has no stiffness value for joint 'j9'"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotstd_toml}", "-o",
+          "{tmp}/r.csv", needle="identified.viscous.j1: expected a standard error >= 0"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{robot_toml}",
+          needle="-o: '{robot_toml}' is the input of --spec"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotstd_toml}", "-o",
+          "{robotstd_toml}", needle="-o: '{robotstd_toml}' is the input of --true-spec"),
         C("experiment", needle="the following arguments are required: -o/--output"),
         C("experiment", "--model", "hand", "-o", "{tmp}/r.csv", needle="defined for one chain (finger2, finger3, thumb"),
         C("experiment", "--chain", "pinky", "-o", "{tmp}/r.csv",
@@ -227,6 +259,14 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--params", "{fifo}", "-o", "{tmp}/r.csv", needle="is a FIFO (named pipe), expected a regular"),
     ],
     "identifiability": [
+        C("identifiability", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--design", "scenario",
+          needle="--design: scenario is the Alpes fingers' estimation scenario"),
+        C("identifiability", "--model", "{robot_urdf}", needle="--spec: identifiability on a URDF --model needs"),
+        C("identifiability", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--params", "x.toml",
+          needle="--params: applies to the Alpes models"),
+        C("identifiability", "--spec", "{robot_toml}", needle="--spec: applies to a URDF --model"),
+        C("identifiability", "--model", "{robot_urdf}", "--spec", "{robotrecord_toml}",
+          needle='identified.source: expected "identified", got \'cad\''),
         C("identifiability", "--model", "hand", needle="--model: identifiability is defined for one finger"),
         C("identifiability", "--design", "wiggle", needle="--design: unknown design 'wiggle'"),
         C("identifiability", "--parameters", "K_9", needle="unknown parameter 'K_9'"),
@@ -242,6 +282,26 @@ CLI: dict[str, list[Cli]] = {
         C("identifiability", "--params", "{deep_toml}", needle="nested more than 32 deep"),
     ],
     "identify": [
+        C("identify", "--model", "{robot_urdf}", "--data", "x.csv", needle="--spec: identification on a URDF --model"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--rotor-inertia",
+          needle="--rotor-inertia: applies to the Alpes models; a URDF --model's rotor inertia is its spec's"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--params", "x.toml",
+          needle="--params: applies to the Alpes models"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--parameters", "K",
+          "--chain", "index", needle="--chain: unknown motor 'index' of the URDF --model (motors: flexor)"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robottwo_toml}", "--data", "x.csv", "--parameters",
+          "K_1", "--chain", "distal", needle="--chain: the selection has no parameter of motor 'distal'"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/i.toml",
+          needle="-o: m_1, m_2, m_3: a spec file holds no masses (they are the URDF's)"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--parameters", "K_9",
+          needle="unknown parameter 'K_9'"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robotident_toml}", "--data", "x.csv",
+          needle="identified.stiffness.j9: the spec has no stiffness value"),
+        C("identify", "--spec", "{robot_toml}", "--data", "x.csv", needle="--spec: applies to a URDF --model"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--effects", "rotor",
+          needle="--effects: rotor applies to the Alpes models"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "{robot_toml}", "-o",
+          "{robot_toml}", needle="-o: '{robot_toml}' is the input of"),
         C("identify", needle="the following arguments are required: --data"),
         C("identify", "--data", "{tmp}/none.csv", needle="cannot be read"),
         C("identify", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
@@ -471,6 +531,20 @@ CLI: dict[str, list[Cli]] = {
         C("observability", "--order", "1001", needle="--order: 1001 is over the limit of 1000"),
     ],
     "estimate": [
+        C("estimate", "--model", "{robot_urdf}", "--spec", "{robot_toml}",
+          needle="--model: the simulated estimation scenario is the Alpes fingers'; on a URDF --model run the observer"),
+        C("estimate", "--friction-free", needle="--friction-free: applies to a URDF --model on a recording"),
+        C("estimate", "--data", "{replay_csv}", "--friction-free", needle="--friction-free: applies to a URDF --model"),
+        C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}",
+          needle="--spec: the observer on a URDF --model needs its transmission spec"),
+        C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--chain", "index",
+          needle="--chain: names a finger of the Alpes hand"),
+        C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--friction",
+          needle="--friction: applies to the Alpes models"),
+        C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--rotor-inertia",
+          needle="--rotor-inertia: applies to the Alpes models"),
+        C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robottwo_toml}",
+          needle="motors"),
         C("estimate", "--data", "{tmp}/none.csv", needle="cannot be read"),
         C("estimate", "--data", "{latin1_toml}", needle="not a UTF-8 text file"),
         C("estimate", "--torque-constant", "0.05", needle="--torque-constant: applies to an observer on a recording"),
@@ -691,6 +765,27 @@ def _exp(**kw):
     from alpes_dyn.estimation.experiment import experiment
 
     return experiment(**{"model": "finger2", "design": _design(), **kw})
+
+
+def _model_exp(nominal, **kw):
+    from alpes_dyn.estimation.experiment import model_experiment
+
+    return model_experiment(nominal, **{"design": _design(), **kw})
+
+
+def _ident_spec(names, base=None):
+    """identified_spec of a made-up fit of ``names`` on the URDF robot (no fit run: the refusals come first)."""
+    from alpes_dyn.estimation.identification import IdentificationResult
+    from alpes_dyn.estimation.identified_spec import identified_spec
+
+    spec = TransmissionSpec.from_toml(ROBOT_SPEC)
+    p = len(names)
+    z = np.zeros(p)
+    res = IdentificationResult(names=tuple(names), values=z + 0.05, std=z + 1e-5, initial=z + 0.05, units=("",) * p,
+                               correlation=np.eye(p), residual_rms=0.5, iterations=1, converged=True, seconds=0.0,
+                               compile_seconds=0.0, states=np.zeros((1, 6)), node_times=np.zeros(1),
+                               model=ad.Model(ROBOT_URDF, spec))
+    return identified_spec(res, spec if base is None else base)
 
 
 def _replay(c, **kw):
@@ -934,6 +1029,27 @@ API: list[Api] = [
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'tendon_compliance = "x"\n'),
       ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified.coulomb]\nj1 = 1e-5\n"),
+      ModelError, "identified.coulomb.j1: the spec has no coulomb value for joint 'j1'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified]\nresidual_rms = -1\n"),
+      ModelError, "identified.residual_rms: expected a non-negative number"),
+    A("TransmissionSpec", lambda c: TransmissionSpec(identified=[1]), ModelError, "identified: expected a table"),
+    A("TransmissionSpec", lambda c: TransmissionSpec(identified={"record": 3}), ModelError,
+      "identified.record: expected a table"),
+    # any robot's experiment and identified spec (issue 17)
+    A("model_experiment", lambda c: _model_exp("finger3"), InputError, "nominal: expected an alpes_dyn Model, got str"),
+    A("model_experiment", lambda c: _model_exp(c.m, truth=ad.Model.alpes("finger2")), InputError,
+      "truth: expected the nominal's joints j1, j2, j3"),
+    A("model_experiment", lambda c: _model_exp(c.m, truth=3), InputError, "truth: expected an alpes_dyn Model"),
+    A("model_experiment", lambda c: _model_exp(c.m, seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("model_experiment", lambda c: _model_exp(ad.Model(ROBOT_URDF)), InputError, "nominal: model 'tendon_robot' has "
+      "no motors"),
+    A("model_experiment", lambda c: _model_exp(c.m, design=_design(dt=0.0)), InputError, "dt: expected a sample period"),
+    A("identified_spec", lambda c: _ident_spec(("K_1",), base="x"), ModelError, "base: expected a TransmissionSpec"),
+    A("identified_spec", lambda c: _ident_spec(("K_1", "m_2")), ModelError,
+      "identified spec: m_2: a spec file holds no masses"),
+    A("identified_spec", lambda c: _ident_spec(("K_1",), base=TransmissionSpec.from_toml(
+        ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon are not the fitted"),
     # state space, observability
     A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
       "output function: returned str 'abc'"),

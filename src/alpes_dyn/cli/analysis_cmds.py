@@ -12,7 +12,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..limits import MAX_ORDER
-from .common import _emit, _model_from_args, _one_finger, _one_of, _one_or_list, parse_vector
+from .common import (_emit, _is_urdf_path, _model_from_args, _one_finger, _one_of, _one_or_list, _urdf_robot,
+                     parse_vector)
 
 
 # ---- owned by the observability work (issue 3): replace the body, keep the signature
@@ -75,6 +76,11 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
     from ..estimation.scenario import SCENARIO_MODELS, EstimationScenario, _torque
     from ..model.stops import JointRangeWarning
 
+    if _is_urdf_path(args.model):
+        return _identifiability_robot(args)
+    if args.spec is not None:
+        raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its transmission "
+                         "from --params")
     _one_finger(args.model, SCENARIO_MODELS, "identifiability")
     _one_of(args.design, DESIGNS, "--design", "design")
     spec = args.parameters if args.parameters is not None else "K,m,friction"
@@ -96,6 +102,40 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
             U = _profile(design, t, bias, amp)[:-1, None]
         else:
             U = _torque(EstimationScenario(model=args.model), t[:-1], model.transmission.n_motors)
+        fim = fisher_information(model, spec, U=U, G=G[:-1], design=design)
+        obj["practical"] = fim.to_dict()
+        lines += [f"Practical identifiability, design {args.design!r} ({args.duration:g} s)"
+                  + (" with the camera" if cams else "") + ":", fim.to_text()]
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+def _identifiability_robot(args: argparse.Namespace) -> int:
+    """``identifiability --model PATH.urdf --spec FILE.toml``: the structural test on the spec's robot and the
+    Cramér-Rao bounds of its documented experiment (the multisine designed for its own joint ranges and masses,
+    :func:`~alpes_dyn.estimation.experiment.model_experiment`'s), or structural only (``--design none``)."""
+    from ..analysis.identifiability import fisher_information, identifiability
+    from ..estimation.experiment import ExperimentDesign, _excitation, _profiles, _schedule
+    from ..model.stops import JointRangeWarning
+
+    _one_of(args.design, DESIGNS, "--design", "design")
+    if args.design == "scenario":
+        raise InputError("--design: scenario is the Alpes fingers' estimation scenario; a URDF --model takes "
+                         "documented (its identification multisine) or none (structural only)")
+    spec = args.parameters if args.parameters is not None else "K,m,friction"
+    cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
+    design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
+    model = _urdf_robot(args, "identifiability")
+    rep = identifiability(model, spec, output=args.output, points=args.points, seed=args.seed,
+                          max_operations=args.max_operations)
+    obj: dict[str, Any] = {"structural": rep.to_dict(), "design": args.design, "practical": None}
+    lines = [rep.to_text()]
+    if design is not None:
+        t, _, G = _schedule(design)
+        with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
+            warnings.simplefilter("ignore", JointRangeWarning)
+            bias, amp = _excitation(model, design)
+        U = _profiles(design, t, bias, amp)[:-1]
         fim = fisher_information(model, spec, U=U, G=G[:-1], design=design)
         obj["practical"] = fim.to_dict()
         lines += [f"Practical identifiability, design {args.design!r} ({args.duration:g} s)"

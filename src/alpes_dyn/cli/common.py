@@ -86,7 +86,8 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
-_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("data", "--data"), ("validate", "--validate"),
+_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("true_spec", "--true-spec"), ("data", "--data"),
+                  ("validate", "--validate"),
                   ("true_params", "--true-params"), ("observer_params", "--observer-params"),
                   ("plant_params", "--plant-params"))
 
@@ -136,6 +137,25 @@ def _model_from_args(args: argparse.Namespace):
     return Model.alpes(args.model, spring=getattr(args, "spring", None) or "torsional",
                        friction=getattr(args, "friction", False), rotor_inertia=getattr(args, "rotor_inertia", False),
                        params=getattr(args, "params", None))
+
+
+def _refuse_for_urdf(args: argparse.Namespace, options: Sequence[tuple[str, str, Any, str]]) -> None:
+    """InputError ``<flag>: <why>`` for the first of ``options`` (flag, dest, default, why) given on a URDF --model."""
+    for flag, dest, default, why in options:
+        if getattr(args, dest, default) != default:
+            raise InputError(f"{flag}: {why}")
+
+
+def _urdf_robot(args: argparse.Namespace, what: str, spec: str | None = None):
+    """The Model of a URDF --model with its --spec (required: ``what`` needs the robot's motors and encoders)."""
+    from ..model.robot import Model
+
+    _check_model_options(args)
+    spec = args.spec if spec is None else spec
+    if spec is None:
+        raise InputError(f"--spec: {what} on a URDF --model needs its transmission spec (motors, encoder, springs, "
+                         "friction: see the user guide, 'Your own robot')")
+    return Model.from_urdf_file(args.model, spec)
 
 
 def _one_or_list(outputs: list[str]) -> str | list[str]:

@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _is_urdf_path,
-                     _model_from_args, _one_chain, _one_of, _Untrusted, parse_vector)
+                     _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot, parse_vector)
 
 
 THUMB_PARAMETERS = "K,m_thumb_j1,m_thumb_j2,F_s_thumb_j1,F_s_thumb_j2,F_v_thumb_j1,F_v_thumb_j2"
@@ -36,6 +36,12 @@ def cmd_estimate(args: argparse.Namespace) -> int:
                        ("--torque-constant", "torque_constant")):
         if getattr(args, dest) not in (None, False):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
+    if _is_urdf_path(args.model):
+        raise InputError("--model: the simulated estimation scenario is the Alpes fingers'; on a URDF --model run "
+                         "the observer on a recording (--data REC.csv, e.g. written by alpes-dyn experiment)")
+    if args.friction_free:
+        raise InputError("--friction-free: applies to a URDF --model on a recording (--data); the Alpes models "
+                         "take --friction")
     _check_model_options(args)
     _one_chain(args.model, ESTIMATION_MODELS, "the estimation scenario")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
@@ -98,7 +104,13 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     t0 = time.perf_counter()
     if _is_urdf_path(args.model):
-        model = _model_from_args(args)
+        _refuse_for_urdf(args, _URDF_ESTIMATE)
+        model = _urdf_robot(args, "the observer")
+        if args.friction_free:
+            model = _without_friction(model)
+    elif args.friction_free:
+        raise InputError("--friction-free: applies to a URDF --model (its spec's friction taken off); the Alpes "
+                         "models take --friction")
     else:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
@@ -139,12 +151,31 @@ def _estimate_data(args: argparse.Namespace) -> int:
     return 0
 
 
+_URDF_ESTIMATE = (("--chain", "chain", None, "names a finger of the Alpes hand; a URDF --model's observer "
+                   "estimates every joint of its spec's motors"),)
+
+
+def _without_friction(model):
+    """``model`` rebuilt from its URDF and spec with the spec's Coulomb and viscous tables taken off."""
+    import dataclasses
+
+    from ..model.robot import Model
+
+    return Model(model.urdf, dataclasses.replace(model.spec, coulomb={}, viscous={}, identified=None))
+
+
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Simulate the documented identification experiment and write its recording."""
     from ..model.description import model_params
     from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign, experiment, perturbed_params
     from ..model.params import load_params, write_params
 
+    if _is_urdf_path(args.model):
+        return _experiment_robot(args)
+    if args.true_spec is not None:
+        raise InputError(f"--true-spec: applies to a URDF --model; the Alpes model {args.model!r} takes the true "
+                         "finger from --params (or --perturb)")
+    _check_model_options(args)
     _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
     _check_run_files(args)
     if args.perturb is None and args.true_params_out is not None:
@@ -164,6 +195,34 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     text = (f"{args.model}: identification experiment, {rec.n_samples} samples over {rec.duration:g} s "
             f"written to {args.output}" + (f"; true parameters in {args.true_params_out}"
                                             if args.true_params_out else ""))
+    _emit(obj, text, args.json)
+    return 0
+
+
+_URDF_EXPERIMENT = (
+    ("--chain", "chain", None, "names a finger of the Alpes hand; a URDF --model's experiment excites every motor of "
+     "its spec"),
+    ("--perturb", "perturb", None, "draws an Alpes parameter file; for a URDF --model give the perturbed robot's "
+     "spec as --true-spec"),
+    ("--true-params-out", "true_params_out", None, "goes with --perturb on an Alpes model; a URDF --model's true "
+     "robot is --true-spec"),
+)
+
+
+def _experiment_robot(args: argparse.Namespace) -> int:
+    """``experiment --model PATH.urdf --spec FILE.toml [--true-spec TRUE.toml]``: the documented multisine designed
+    on the spec's robot, simulated on the true one (:func:`~alpes_dyn.estimation.experiment.model_experiment`)."""
+    from ..estimation.experiment import ExperimentDesign, model_experiment
+
+    _refuse_for_urdf(args, _URDF_EXPERIMENT)
+    _check_run_files(args)
+    nominal = _urdf_robot(args, "the identification experiment")
+    truth = _urdf_robot(args, "the identification experiment", args.true_spec) if args.true_spec else None
+    rec = model_experiment(nominal, truth, ExperimentDesign(duration=args.duration), seed=args.seed, path=args.output)
+    obj = {"model": args.model, "spec": args.spec, "true_spec": args.true_spec, "output": args.output,
+           "samples": rec.n_samples, "duration_s": rec.duration, "dt_s": rec.dt, "columns": list(rec.columns())}
+    text = (f"{nominal.name}: identification experiment on {', '.join(nominal.motor_names)}, {rec.n_samples} samples "
+            f"over {rec.duration:g} s (true robot: {args.true_spec or args.spec}) written to {args.output}")
     _emit(obj, text, args.json)
     return 0
 
@@ -210,10 +269,17 @@ def _fit(args: argparse.Namespace, freqs):
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
-    """Fit the parameters of a finger to a recording; write the identified parameter file."""
+    """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
+    (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identified_spec`)."""
     from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
+    from ..estimation.identified_spec import write_identified_spec
 
-    _one_chain(args.model, EXPERIMENT_MODELS, "identification")
+    urdf = _is_urdf_path(args.model)
+    if not urdf:
+        _one_chain(args.model, EXPERIMENT_MODELS, "identification")
+        if args.spec is not None:
+            raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its "
+                             "transmission from --params")
     _check_run_files(args)  # the output policy: -o is none of --data, --validate, --params, nor a link...
     exc = args.excitation
     if exc == "documented":
@@ -222,15 +288,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    fit = _fit(args, freqs)
+    fit = _fit_robot(args, freqs) if urdf else _fit(args, freqs)
     res, model = fit.result, fit.result.model
     res.recording_path = args.data  # the identified file's header names the recording read
     written = args.output is not None and (res.trustworthy or args.force)
-    if written:
-        res.write(args.output)
+    if written:  # a URDF robot's into a copy of its spec (the stick-slip law's smooth_velocity kept, as in a file)
+        res.write(args.output) if not urdf else write_identified_spec(res, model.spec, args.output)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
-    obj["chain"] = model.chain
+    obj["chain"] = args.chain if urdf else model.chain
     obj["effects"] = list(fit.effects)
     obj["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_rms": fit.tried.residual_rms, "converged": fit.tried.converged,
@@ -261,3 +327,88 @@ def cmd_identify(args: argparse.Namespace) -> int:
                              f" (--force writes it anyway): {why}")
         warnings.warn(UntrustedFitWarning(f"identify --force: {args.output or 'the fit'} is NOT trustworthy: {why}"))
     return 0
+
+
+_URDF_IDENTIFY = (("--rotor-inertia", "rotor_inertia", False, "applies to the Alpes models; a URDF --model's rotor "
+                   "inertia is its spec's motors' rotor_inertia (fit it with --parameters J_m)"),)
+
+
+def _fit_robot(args: argparse.Namespace, freqs):
+    """``identify --model PATH.urdf --spec FILE.toml``: :func:`_fit` on the spec's robot (the stick-slip law: the
+    spec's smooth_velocity at :data:`~alpes_dyn.estimation.effects.STICTION_VELOCITY`); ``--chain MOTOR`` keeps the
+    parameters of the joints that motor drives and its own (compliance, offset); a selection with masses is
+    refused with -o (a spec holds no masses) before the fit."""
+    import dataclasses
+
+    from ..estimation.adequacy import AdequacyWarning
+    from ..estimation.effects import STICTION_VELOCITY, EffectsFit, fit_effects, parse_effects
+    from ..estimation.identification import check_selection, identify
+    from ..estimation.identified_spec import spec_misfits
+    from ..estimation.recording import read_recording
+    from ..model.robot import Model
+
+    _refuse_for_urdf(args, _URDF_IDENTIFY)
+    model = _urdf_robot(args, "identification")
+    effects = parse_effects(args.effects) if args.effects is not None else (
+        () if args.parameters is not None else parse_effects(None))
+    if "rotor" in effects:
+        raise InputError("--effects: rotor applies to the Alpes models (their file's J_m put on the tendons); a URDF "
+                         "--model's rotors are always on, its spec's motors' rotor_inertia (fit them with "
+                         "--parameters J_m)")
+    if args.parameters is not None and set(effects) - {"stiction"}:
+        raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
+                         "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
+    sticky = Model(model.urdf, dataclasses.replace(model.spec, smooth_velocity=STICTION_VELOCITY))
+
+    def model_of(effs: tuple[str, ...]) -> Model:  # "rotor", named by auto's verdict, is the spec's rotors: on
+        return sticky if "stiction" in effs else model
+
+    masses = spec_misfits(model, _chain_names(model, args.parameters, args.chain))  # the effects add none
+    if masses and args.output is not None:
+        raise InputError(f"-o: {', '.join(masses)}: a spec file holds no masses (they are the URDF's); fit "
+                         "--parameters K,friction to write the identified spec, or leave out -o to see the masses")
+    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=args.validate,
+              encoder_noise=args.encoder_noise)
+    if args.parameters is not None:
+        fitted = model_of(effects)
+        names = _chain_names(fitted, args.parameters, args.chain)
+        check_selection(fitted, names)  # a bad selection named before the fit
+        with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
+            warnings.simplefilter("ignore", AdequacyWarning)
+            return EffectsFit(identify(fitted, args.data, names, **kw), effects)
+    has_gravity = read_recording(args.data, model).gravity is not None  # tilt only where not given
+    if args.chain is None:
+        return fit_effects(model_of, args.data, effects, None, has_gravity, **kw)
+    own = tuple(e for e in effects if e in ("compliance", "offset"))  # the motor's own, named here
+    base = ",".join(_chain_names(model, None, args.chain, own))
+    fit = fit_effects(model_of, args.data, tuple(e for e in effects if e not in own), base, has_gravity, **kw)
+    fit.effects = own + fit.effects
+    return fit
+
+
+def _chain_names(model, parameters: str | None, motor: str | None, own: tuple[str, ...] = ()) -> list[str]:
+    """The names of the selection ``parameters`` (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), with
+    ``motor`` those of the joints it drives, its own and the robot's (tilt, input gain), and with ``own`` effects
+    (compliance, offset) that motor's tendon compliance and encoder offset."""
+    from ..symbolic.parametric import select_parameters
+
+    chosen = select_parameters(model, parameters)
+    if motor is None:
+        return [p.name for p in chosen]
+    names = [p.name for p in _motor_chain(model, chosen, motor)]
+    extra = {"compliance": f"tendon_compliance_{motor}", "offset": f"encoder_offset_{motor}"}
+    return names + [extra[e] for e in own if extra[e] not in names]
+
+
+def _motor_chain(model, chosen, motor: str):
+    """The parameters of ``chosen`` that belong to ``motor``'s chain: of the joints it drives, or its own (J_m,
+    tendon compliance, encoder offset), and the robot's (tilt, input gain)."""
+    if motor not in model.motor_names:
+        raise InputError(f"--chain: unknown motor {motor!r} of the URDF --model (motors: "
+                         f"{', '.join(model.motor_names)})")
+    joints = {model.joint_names[i] for i in np.flatnonzero(model.transmission.S[model.motor_index(motor)])}
+    out = tuple(p for p in chosen if p.joint in joints or p.motor == motor or (p.joint is None and p.motor is None))
+    if not out:
+        raise InputError(f"--chain: the selection has no parameter of motor {motor!r}'s joints "
+                         f"({', '.join(sorted(joints))})")
+    return out

@@ -186,7 +186,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.set_defaults(model="finger3")
     for a in s._actions:
         if a.dest == "model":
-            a.help = "finger2, finger3 or thumb (with --friction) (default %(default)s)"
+            a.help = ("finger2, finger3 or thumb (with --friction), or with --data a URDF path (with --spec) "
+                      "(default %(default)s)")
     s.add_argument("--chain", default=None, metavar="FINGER",
                    help="a finger model as that finger of the hand (its own [finger.<name>] values in the files)")
     s.add_argument("--observer", default="ekf",
@@ -209,6 +210,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                    help="run the observer on this recording (encoder and torque; RMSE where it has true_q_* columns) "
                         "instead of the simulated scenario; the observer's model is --params (e.g. the file "
                         "'alpes-dyn identify -o' wrote), with --friction if it has friction")
+    s.add_argument("--friction-free", action="store_true",
+                   help="with --data on a URDF --model: the observer's model without its spec's friction")
     s.add_argument("--torque-noise", type=float, default=None, metavar="NM",
                    help="with --data: white noise of the recorded torque, N m (default: estimated from the recording)")
     s.add_argument("--torque-constant", type=float, default=None, metavar="NM_PER_A",
@@ -235,7 +238,13 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                        "recording CSV",
                        epilog="Example: alpes-dyn experiment --model finger3 --chain index --params true.toml --seed 1 "
                               "-o rec.csv")
-    s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, or a URDF path (with --spec) "
+                   "(default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF --model's transmission spec: the robot the excitation is designed on (and the true "
+                        "one, unless --true-spec)")
+    s.add_argument("--true-spec", default=None, metavar="TRUE.toml",
+                   help="a URDF --model: the spec of the simulated (true) robot, e.g. with other springs")
     s.add_argument("--chain", default=None, metavar="FINGER",
                    help="a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
                         "values in --params)")
@@ -259,10 +268,15 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                               "Exit codes: 0 written (or --force), 2 bad input, 3 the fit did not converge or the "
                               "model is not adequate to the recording (residual coloured, correlated with the "
                               "torque, above the sensor floor, or a poor --validate fit): nothing written")
-    s.add_argument("--model", default="finger3", help="finger2, finger3 or thumb (default %(default)s)")
-    s.add_argument("--chain", default=None, metavar="FINGER",
+    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, or a URDF path (with --spec) "
+                   "(default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF --model's transmission spec: the values to start from, and the base of the written "
+                        "spec (-o: the identified values, their standard errors in [identified])")
+    s.add_argument("--chain", default=None, metavar="FINGER|MOTOR",
                    help="a finger model as that finger of the hand: starts from its own values and writes the fit "
-                        "into its [finger.<name>] table (the thumb's go to [thumb])")
+                        "into its [finger.<name>] table (the thumb's go to [thumb]); on a URDF --model a motor's "
+                        "name: fit only the parameters of the joints it drives (and its own)")
     s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
@@ -302,7 +316,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--force", action="store_true",
                    help="write -o even when the fit did not converge or the model is not adequate (the file is "
                         "marked not trustworthy); without it such a fit writes nothing and exits with code 3")
-    s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.toml",
+                   help="write the identified parameter file (a URDF --model: its identified spec; a spec holds no "
+                        "masses: fit without m to write one)")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identify)
 
@@ -311,7 +327,9 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("identifiability", help="which physical parameters a finger's encoder can identify: "
                        "structural rank and Cramér-Rao bounds of an experiment",
                        epilog="Example: alpes-dyn identifiability --model finger3 --parameters K,m --design documented")
-    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, or a URDF path (with --spec) "
+                   "(default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml", help="a URDF --model's transmission spec")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
                    help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "

@@ -34,6 +34,8 @@ identification user guide for the full comparison.
 
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
 (and writes) a :class:`~alpes_dyn.estimation.recording.Recording` with the true joint angles in ``true_q_*``.
+:func:`model_experiment` does the same on any tendon-driven robot (a URDF + spec :class:`~alpes_dyn.Model`),
+its searches scaled by the robot's own static torques.
 """
 
 from __future__ import annotations
@@ -55,7 +57,8 @@ from .recording import Recording, write_recording
 from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning
 
-__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "perturbed_params"]
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "model_experiment",
+           "perturbed_params"]
 
 EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 """The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
@@ -192,7 +195,8 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
         else:  # mean joint angle of the motor's joints mid-range
             js = joints[k]
             bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])),
-                                   float(np.mean(0.5 * (model.lower + model.upper)[js])), g0, 0.2,
+                                   float(np.mean(0.5 * (model.lower + model.upper)[js])), g0,
+                                   _torque_ceiling(model, k),
                                    lambda c, k=k: _with(bias, k, c))
     bias = _holding_bias(model, bias, free, joints, g0)
     if design.torque_amplitude is not None:
@@ -201,17 +205,18 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
         raise InputError(f"torque_bias: the nominal finger's equilibrium at {_fmt(bias)} N m leaves its joint range")
     amp = np.zeros(n_m)
     for k in sprung:
-        a, b = 0.0, bias[k]
+        a, b = 0.0, _amplitude_ceiling(model, k, bias[k])
         for _ in range(40):
             c = 0.5 * (a + b)
             a, b = (c, b) if within(_with(bias, k, bias[k] + c)) and within(_with(bias, k, bias[k] - c)) else (a, c)
         amp[k] = a
-    cap = float(model.params.tau_max) if model.params is not None else 0.05
+    cap = float(model.params.tau_max) if model.params is not None else None
     S = model.transmission.S
     for k in free:  # from 4 x the breakaway torque (Coulomb friction) of its joints: a larger one runs away
         js = joints[k]
         breakaway = float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
-        amp[k] = min(cap, 4.0 * breakaway) if breakaway > 0 else cap
+        cap_k = cap if cap is not None else _torque_ceiling(model, k)
+        amp[k] = min(cap_k, 4.0 * breakaway) if breakaway > 0 else cap_k
     # resonances swing the finger further than its static equilibria: shrink until a nominal run stays in range.
     # First the springless joints' motors alone (a wild swing there also throws the other joints out of range),
     # then every motor whose joints leave the range.
@@ -228,6 +233,34 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
             for k in hit:
                 amp[k] *= 0.85
     return bias, amp * design.amplitude_fraction
+
+
+def _torque_ceiling(model: Model, k: int) -> float:
+    """The largest motor torque the design's searches try on motor ``k``, N m: 0.2 on an Alpes model (what the
+    documented experiment was measured with); on any other robot its own static scale, twice the largest torque
+    that one of the motor's joints needs to hold its far limit against its spring and the largest gravity torque
+    met over its range (through the motor's ratio): max_i 2 (k_i max(|lo_i|, |hi_i|) + G_i) / |S_ki| (0.05 N m
+    for joints with neither)."""
+    if model.params is not None:
+        return 0.2
+    S = model.transmission.S
+    k_j = model.extras.stiffness
+    grav = np.zeros(model.n)
+    for q in (model.lower, 0.5 * (model.lower + model.upper), model.upper):  # gravity alone (springs taken off)
+        grav = np.maximum(grav, np.abs(model.gravity_torque(q) - model.spring_torque(q)))
+    js = np.flatnonzero(S[k])
+    need = (k_j[js] * np.maximum(np.abs(model.lower[js]), np.abs(model.upper[js])) + grav[js]) / np.abs(S[k, js])
+    top = float(2.0 * need.max())
+    return top if top > 0 else 0.05
+
+
+def _amplitude_ceiling(model: Model, k: int, bias: float) -> float:
+    """The largest multisine amplitude searched on motor ``k``: its bias (a tendon pulls only: the torque stays
+    >= 0), but on a robot other than an Alpes model a motor that drives one joint alone (a direct drive or a
+    gear, both ways) may swing through zero, up to :func:`_torque_ceiling`."""
+    if model.params is not None or np.count_nonzero(model.transmission.S[k]) != 1:
+        return bias
+    return max(bias, _torque_ceiling(model, k))
 
 
 def _with(x: np.ndarray, k: int, value: float) -> np.ndarray:
@@ -276,7 +309,7 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     target = S @ _mean_equilibrium(nominal, bias, gravity) if target is None else target
     out = np.asarray(bias, dtype=float).copy()
     for k in sprung:
-        upper = max(4.0 * out[k], 0.2)
+        upper = max(4.0 * out[k], _torque_ceiling(nominal, k))
         out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity, upper,
                               lambda c, k=k: _with(out, k, c))
         if peak is not None:
@@ -397,8 +430,41 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
     nominal = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_nom, chain=chain)
-    bias, amp = _excitation(nominal, design)
     truth = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_true, chain=chain)
+    return _run(truth, nominal, design, seed, path)
+
+
+def model_experiment(nominal: Model, truth: Model | None = None, design: ExperimentDesign | None = None,
+                     seed: int = 0, path: str | Path | None = None) -> Recording:
+    """The identification experiment of :func:`experiment` on any tendon-driven robot (a URDF + spec
+    :class:`~alpes_dyn.Model`): the multisine designed on ``nominal`` (the bias that puts each motor's joints
+    mid-range, the amplitude the largest that keeps the static equilibria and a nominal run in the joint range,
+    both searched up to the robot's own static torque scale), the bias trimmed on ``truth`` (default: the
+    nominal itself), simulated on ``truth`` with the sensors of the design.
+
+    ``truth`` must have the nominal's joints and motors (e.g. the same URDF with a perturbed spec). Returns
+    (and writes to ``path``) the :class:`~alpes_dyn.estimation.recording.Recording`, readable by
+    :func:`~alpes_dyn.estimation.recording.read_recording` with either model.
+    """
+    if not isinstance(nominal, Model):
+        raise InputError(f"nominal: expected an alpes_dyn Model, got {type(nominal).__name__}")
+    truth = nominal if truth is None else truth
+    if not isinstance(truth, Model):
+        raise InputError(f"truth: expected an alpes_dyn Model, got {type(truth).__name__}")
+    if nominal.transmission is None:
+        raise InputError(f"nominal: model {nominal.name!r} has no motors (give its spec's [[motor]] tables)")
+    if truth.joint_names != nominal.joint_names or truth.motor_names != nominal.motor_names:
+        raise InputError(f"truth: expected the nominal's joints {', '.join(nominal.joint_names)} and motors "
+                         f"{', '.join(nominal.motor_names)}, got {', '.join(truth.joint_names)} and "
+                         f"{', '.join(truth.motor_names)}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    return _run(truth, nominal, (design or ExperimentDesign()).check(), seed, path)
+
+
+def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path: str | Path | None) -> Recording:
+    """The experiment designed on ``nominal``, trimmed on and simulated with ``truth``, with the sensors."""
+    bias, amp = _excitation(nominal, design)
     t, seg, G = _schedule(design)
     if design.trim_bias and design.torque_bias is None:
         peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp)), axis=0)

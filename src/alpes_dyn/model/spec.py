@@ -46,11 +46,27 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     [viscous]                      # N m s/rad
     [armature]                     # kg m^2, joint-side (diagonal) inertia
 
+    [identified]                   # optional, written by `alpes-dyn identify -o`: the values it fitted
+    source = "identified"          # (source = "identified"), the fit's record (IDENTIFICATION_FIELDS) ...
+    recording = "rec.csv"
+    converged = true
+    trustworthy = true
+    residual_rms = 0.58            # counts RMS
+    [identified.stiffness]         # ... and the standard error of each value it wrote, in the value's unit
+    "joint_1.0" = 4.0e-5           # (inf: a value the recording does not see; the start kept)
+    [identified.tendon_compliance] # per motor: rotor_inertia, tendon_compliance
+    index = 1.0e-3
+
+Every table of ``[identified]`` names values the spec holds (a joint of its ``[stiffness]``, ``[coulomb]``,
+``[viscous]`` table, a motor of its ``[[motor]]`` entries); the record is informative, the values are used as
+they are (:data:`IDENTIFIED_TABLES`).
+
 The shipped example for the Allegro hand of example-robot-data is ``example_spec_path("allegro_hand")``.
 """
 
 from __future__ import annotations
 
+import json
 import math
 import os
 from dataclasses import dataclass, field
@@ -65,15 +81,20 @@ from .description import Layout
 from ..errors import ModelError
 from ..fileio import load_toml, read_text
 from .extras import JointExtras, spring_stiffness
-from .params import HandParams
+from .params import IDENTIFICATION_FIELDS, HandParams
 from .transmission import Transmission
 
-__all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES"]
+__all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES",
+           "IDENTIFIED_TABLES"]
 
 JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
 """Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), joint-side
 inertia (kg m^2, the diagonal; a motor's rotor on its tendon is the motor's ``rotor_inertia``)."""
-_TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES
+_TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES + (
+    "identified",)
+IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_inertia", "tendon_compliance")
+"""The tables of a spec's ``[identified]`` section: the standard error of each identified value, by joint (the
+per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``)."""
 _MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance")
 _MOTOR_REQUIRED = ("name", "joints")
 
@@ -152,6 +173,8 @@ class TransmissionSpec:
     name: model label, or None (the URDF's robot name).
     spring: a label of the spring law shown in reports (default ``"torsional"`` if any stiffness
         is non-zero, else ``"none"``); the torque is always k q.
+    identified: the ``[identified]`` section (module doc), or None: {"record": {field: value}, table: {joint or
+        motor: standard error}} for the tables of :data:`IDENTIFIED_TABLES`.
     """
 
     motors: tuple[Motor, ...] = ()
@@ -165,6 +188,7 @@ class TransmissionSpec:
     tips: tuple[str, ...] | None = None
     name: str | None = None
     spring: str | None = None
+    identified: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         motors = tuple(self.motors) if isinstance(self.motors, (list, tuple)) else None
@@ -193,6 +217,8 @@ class TransmissionSpec:
         if self.spring is None:
             object.__setattr__(self, "spring", "torsional" if any(self.stiffness.values()) else "none")
         _name(self.spring, "spring")
+        if self.identified is not None:
+            object.__setattr__(self, "identified", _identified(self.identified, self))
 
     # ------------------------------------------------------------------ file form
     @classmethod
@@ -257,6 +283,14 @@ class TransmissionSpec:
             table = getattr(self, t)
             if table:
                 out += ["", f"[{t}]"] + [f"{q(j)} = {x!r}" for j, x in table.items()]
+        if self.identified is not None:
+            out += ["", "[identified]", 'source = "identified"']
+            for key, value in self.identified["record"].items():
+                out.append(f"{key} = {_toml_value(value)}")
+            for t in IDENTIFIED_TABLES:
+                if self.identified.get(t):
+                    out += ["", f"[identified.{t}]"] + [f"{q(j)} = {_toml_value(x)}"
+                                                         for j, x in self.identified[t].items()]
         return "\n".join(out) + "\n"
 
     def __eq__(self, other: object) -> bool:
@@ -265,7 +299,8 @@ class TransmissionSpec:
         return (self.motors == other.motors and all(dict(getattr(self, t)) == dict(getattr(other, t))
                                                     for t in JOINT_TABLES)
                 and (self.encoder_counts, self.smooth_velocity, self.gravity, self.tips, self.name, self.spring)
-                == (other.encoder_counts, other.smooth_velocity, other.gravity, other.tips, other.name, other.spring))
+                == (other.encoder_counts, other.smooth_velocity, other.gravity, other.tips, other.name, other.spring)
+                and _plain(self.identified) == _plain(other.identified))
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -315,6 +350,75 @@ class TransmissionSpec:
         return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts,
                             np.array([m.rotor_inertia for m in self.motors]),
                             np.array([m.tendon_compliance for m in self.motors]))
+
+
+def _identified(data: Any, spec: "TransmissionSpec") -> Mapping[str, Any]:
+    """The ``[identified]`` section validated against ``spec`` (module doc): {"record": {...}, table: {...}}."""
+    if not isinstance(data, Mapping):
+        raise ModelError(f"identified: expected a table, got {data!r}")
+    record: dict[str, Any] = {}
+    out: dict[str, Any] = {"record": record}
+    motors = {m.name: m for m in spec.motors}
+    for key, value in data.items():
+        if key == "record":  # the Python form (TransmissionSpec(identified=...)): the record as one table
+            if not isinstance(value, Mapping):
+                raise ModelError(f"identified.record: expected a table, got {value!r}")
+            for k, v in value.items():
+                record[k] = _record_field(k, v)
+        elif key == "source":
+            if value != "identified":
+                raise ModelError(f"identified.source: expected \"identified\", got {value!r}")
+        elif key in IDENTIFIED_TABLES:
+            if not isinstance(value, Mapping):
+                raise ModelError(f"identified.{key}: expected a table {'joint' if key in JOINT_TABLES else 'motor'} "
+                                 f"name -> standard error, got {value!r}")
+            table = {}
+            for j, sd in value.items():
+                if key in JOINT_TABLES and j not in getattr(spec, key):
+                    raise ModelError(f"identified.{key}.{j}: the spec has no {key} value for joint {j!r}")
+                if key not in JOINT_TABLES and j not in motors:
+                    raise ModelError(f"identified.{key}.{j}: unknown motor {j!r} (motors: {', '.join(motors)})")
+                if isinstance(sd, bool) or not isinstance(sd, (int, float)) or math.isnan(sd) or sd < 0:
+                    raise ModelError(f"identified.{key}.{j}: expected a standard error >= 0 (inf: not seen), "
+                                     f"got {sd!r}")
+                table[j] = float(sd)
+            out[key] = MappingProxyType(table)
+        else:
+            record[key] = _record_field(key, value)
+    out["record"] = MappingProxyType(record)
+    return MappingProxyType(out)
+
+
+def _record_field(key: str, value: Any) -> Any:
+    """One field of the fit's record (:data:`~alpes_dyn.model.params.IDENTIFICATION_FIELDS`), validated."""
+    kind = IDENTIFICATION_FIELDS.get(key)
+    if kind is None:
+        raise ModelError(f"identified.{key}: unknown key (expected source, one of {', '.join(IDENTIFICATION_FIELDS)}"
+                         f", or a table {', '.join(IDENTIFIED_TABLES)})")
+    ok = (isinstance(value, bool) if kind is bool else
+          (isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value) and value >= 0)
+          if kind is float else (isinstance(value, list) and all(isinstance(v, str) for v in value))
+          if kind is list else isinstance(value, str))
+    if not ok:
+        want = {bool: "true or false", float: "a non-negative number", list: "a list of strings", str: "a string"}
+        raise ModelError(f"identified.{key}: expected {want[kind]}, got {value!r}")
+    return float(value) if kind is float else (list(value) if kind is list else value)
+
+
+def _plain(x: Any) -> Any:
+    """Mappings as dicts (the comparison of two ``identified`` sections)."""
+    return {k: _plain(v) for k, v in x.items()} if isinstance(x, Mapping) else x
+
+
+def _toml_value(x: Any) -> str:
+    if isinstance(x, bool):
+        return "true" if x else "false"
+    if isinstance(x, str):  # JSON's escapes are TOML's (a control character as \\uXXXX)
+        return json.dumps(x, ensure_ascii=False).replace("\x7f", "\\u007f")
+    if isinstance(x, list):
+        return "[" + ", ".join(_toml_value(v) for v in x) + "]"
+    x = float(x)
+    return "inf" if x == math.inf else repr(x)
 
 
 def _toml_str(s: str) -> str:

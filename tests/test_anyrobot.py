@@ -1,0 +1,193 @@
+"""Any tendon-driven robot, end to end (issue 17): a two-joint planar tendon finger of the test's own (URDF + spec),
+its identification experiment simulated on a perturbed robot (``experiment --true-spec``), the springs and
+friction identified into a copy of its spec (``identify -o``), every command taking that spec back, and the
+observer on the recording (``estimate --data``); the Allegro hand's experiment and observer on a short run."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import tomllib
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.cli import main
+from alpes_dyn.errors import ModelError
+from alpes_dyn.model.spec import TransmissionSpec, example_spec_path, load_spec
+
+FINGER_URDF = """<?xml version="1.0"?>
+<robot name="tendon_finger">
+  <link name="palm"/>
+  <link name="proximal">
+    <inertial><origin xyz="0.022 0 0"/><mass value="0.028"/>
+      <inertia ixx="9e-07" ixy="0" ixz="0" iyy="5e-06" iyz="0" izz="5e-06"/></inertial>
+  </link>
+  <joint name="mcp" type="revolute">
+    <parent link="palm"/><child link="proximal"/><origin xyz="0 0 0"/><axis xyz="0 -1 0"/>
+    <limit lower="0.0" upper="1.5" effort="1" velocity="20"/>
+  </joint>
+  <link name="distal">
+    <inertial><origin xyz="0.014 0 0"/><mass value="0.018"/>
+      <inertia ixx="6e-07" ixy="0" ixz="0" iyy="1.4e-06" iyz="0" izz="1.4e-06"/></inertial>
+  </link>
+  <joint name="pip" type="revolute">
+    <parent link="proximal"/><child link="distal"/><origin xyz="0.045 0 0"/><axis xyz="0 -1 0"/>
+    <limit lower="0.0" upper="1.5" effort="1" velocity="20"/>
+  </joint>
+  <link name="fingertip"/>
+  <joint name="tip_joint" type="fixed"><parent link="distal"/><child link="fingertip"/><origin xyz="0.028 0 0"/></joint>
+</robot>
+"""
+
+
+def finger_spec(K=(0.045, 0.035), Fs=(5e-4, 4e-4), Fv=(1e-4, 1e-4), motors=None) -> str:
+    """The finger's spec: one tendon over both joints (ratios 2.0, 1.5), springs, Coulomb and viscous friction."""
+    motors = motors or '[[motor]]\nname = "flexor"\njoints = { mcp = 2.0, pip = 1.5 }\n'
+    return (f'name = "tendon_finger"\nencoder_counts = 4096\ntips = ["fingertip"]\n\n{motors}\n'
+            f"[stiffness]\nmcp = {K[0]!r}\npip = {K[1]!r}\n\n[coulomb]\nmcp = {Fs[0]!r}\npip = {Fs[1]!r}\n\n"
+            f"[viscous]\nmcp = {Fv[0]!r}\npip = {Fv[1]!r}\n")
+
+
+TRUE_K = (0.05, 0.031)  # the true robot's springs: +11 % and -11 % off the spec's
+
+
+@pytest.fixture(scope="module")
+def robot(tmp_path_factory):
+    d = tmp_path_factory.mktemp("anyrobot")
+    (d / "finger.urdf").write_text(FINGER_URDF)
+    (d / "finger.toml").write_text(finger_spec())
+    (d / "true.toml").write_text(finger_spec(TRUE_K, (5.5e-4, 3.6e-4), (1.1e-4, 0.9e-4)))
+    return d
+
+
+def run(capsys, *argv: str) -> tuple[int, dict]:
+    rc = main([*argv, "--json"])
+    out = capsys.readouterr().out
+    return rc, (json.loads(out) if out.strip() else {})
+
+
+@pytest.fixture(scope="module")
+def recording(robot):
+    """``experiment --true-spec``: the recording of the perturbed finger (made once; --json read by the test)."""
+    rc = main(["experiment", "--model", str(robot / "finger.urdf"), "--spec", str(robot / "finger.toml"),
+               "--true-spec", str(robot / "true.toml"), "-o", str(robot / "rec.csv")])
+    assert rc == 0
+    return robot / "rec.csv"
+
+
+def test_experiment_writes_a_recording_the_model_reads(robot, recording):
+    from alpes_dyn.estimation.recording import read_recording
+
+    model = ad.Model.from_urdf_file(robot / "finger.urdf", robot / "finger.toml")
+    rec = read_recording(recording, model)
+    assert rec.n_samples == 4001 and rec.motor_names == ("flexor",) and rec.joint_names == ("mcp", "pip")
+    q = rec.true_q
+    assert np.all(q >= model.lower) and np.all(q <= model.upper)
+    assert np.ptp(q[:, 0]) > math.radians(20)  # the multisine swings the finger across its range
+    assert rec.torque.min() > 0  # a tendon pulls only: the multisine stays above zero
+
+
+def test_experiment_identify_estimate_end_to_end(robot, recording, capsys):
+    """The goal figure: the springs within 1 % of the true robot's, the observer on the identified spec < 0.5 deg."""
+    urdf, ident = str(robot / "finger.urdf"), robot / "ident.toml"
+    rc, obj = run(capsys, "identify", "--model", urdf, "--spec", str(robot / "finger.toml"), "--data", str(recording),
+                  "--parameters", "K,friction", "-o", str(ident))
+    assert rc == 0 and obj["trustworthy"] and obj["output"] == str(ident)
+    K = [obj["parameters"][f"K_{j}"]["value"] for j in ("mcp", "pip")]
+    assert np.max(np.abs(np.array(K) / TRUE_K - 1)) < 0.01, K
+    spec = load_spec(ident)  # the identified spec: the values, each with its std, and the fit's record
+    assert spec.stiffness["mcp"] == pytest.approx(K[0], rel=1e-12)
+    assert spec.identified["record"]["trustworthy"] is True
+    assert set(spec.identified["stiffness"]) == {"mcp", "pip"} and set(spec.identified["viscous"]) == {"mcp", "pip"}
+    raw = tomllib.loads(ident.read_text())
+    assert raw["identified"]["source"] == "identified"
+    assert TransmissionSpec.from_toml(spec.to_toml()) == spec
+    rc, est = run(capsys, "estimate", "--data", str(recording), "--model", urdf, "--spec", str(ident))
+    assert rc == 0 and max(est["rmse_deg"]) < 0.5, est
+    # every command takes the identified spec back
+    for argv in (["dynamics", "--model", urdf], ["linearize", "--model", urdf, "--input", "motor", "--output", "encoder"],
+                 ["observability", "--model", urdf, "--input", "motor", "--output", "encoder", "--points", "2"],
+                 ["identifiability", "--model", urdf, "--parameters", "K", "--design", "none", "--points", "2"]):
+        assert main([*argv, "--spec", str(ident)]) == 0, argv
+        capsys.readouterr()
+    assert main(["mjcf", urdf, "--spec", str(ident), "-o", str(robot / "ident.xml")]) == 0
+
+
+def test_estimate_friction_free_and_the_nominal_spec(robot, recording, capsys):
+    urdf = str(robot / "finger.urdf")
+    rc, nominal = run(capsys, "estimate", "--data", str(recording), "--model", urdf, "--spec", str(robot / "true.toml"))
+    assert rc == 0
+    rc, free = run(capsys, "estimate", "--data", str(recording), "--model", urdf, "--spec", str(robot / "true.toml"),
+                   "--friction-free")
+    assert rc == 0 and free["rmse"] != nominal["rmse"]
+
+
+def test_identify_with_masses_and_output_is_refused_before_the_fit(robot, capsys):
+    rc = main(["identify", "--model", str(robot / "finger.urdf"), "--spec", str(robot / "finger.toml"), "--data",
+               "x.csv", "-o", str(robot / "m.toml")])
+    assert rc == 2 and not (robot / "m.toml").exists()
+    assert "m_mcp, m_pip: a spec file holds no masses" in capsys.readouterr().err
+
+
+def test_chain_motor_keeps_that_motors_joints(robot):
+    from alpes_dyn.cli.estimation_cmds import _motor_chain
+    from alpes_dyn.symbolic.parametric import select_parameters
+
+    two = '[[motor]]\nname = "flexor"\njoints = { mcp = 2.0, pip = 1.5 }\n\n[[motor]]\nname = "distal"\njoints = { pip = 1.0 }\n'
+    (robot / "two.toml").write_text(finger_spec(motors=two))
+    m = ad.Model.from_urdf_file(robot / "finger.urdf", robot / "two.toml")
+    chosen = select_parameters(m, "K,friction,tendon_compliance,tilt_y")
+    names = [p.name for p in _motor_chain(m, chosen, "distal")]
+    assert names == ["K_pip", "F_s_pip", "F_v_pip", "tendon_compliance_distal", "tilt_y"]
+    assert len(_motor_chain(m, chosen, "flexor")) == len(chosen) - 1  # all but the distal motor's compliance
+
+
+def test_identifiability_of_the_robot(robot, capsys):
+    rc, obj = run(capsys, "identifiability", "--model", str(robot / "finger.urdf"), "--spec", str(robot / "finger.toml"),
+                  "--parameters", "K,friction", "--points", "2", "--duration", "1")
+    assert rc == 0 and obj["design"] == "documented"
+    rel = {n: p["std"] / p["value"] for n, p in obj["practical"]["parameters"].items()}
+    assert set(rel) == {"K_mcp", "K_pip", "F_s_mcp", "F_s_pip", "F_v_mcp", "F_v_pip"}
+    assert max(rel[k] for k in ("K_mcp", "K_pip")) < 0.01
+
+
+def test_identified_section_validated_and_round_trips(robot):
+    base = load_spec(robot / "finger.toml")
+    spec = dataclasses.replace(base, identified={"record": {"recording": 'a"b\n', "converged": True},
+                                                 "stiffness": {"mcp": 1e-5, "pip": math.inf}})
+    assert TransmissionSpec.from_toml(spec.to_toml()) == spec
+    assert spec != base
+    text = base.to_toml()
+    for extra, needle in (("[identified]\nfoo = 1\n", "identified.foo: unknown key"),
+                          ("[identified.stiffness]\nxx = 1e-5\n", "identified.stiffness.xx: the spec has no stiffness"),
+                          ("[identified.viscous]\nmcp = -1.0\n", "identified.viscous.mcp: expected a standard error"),
+                          ("[identified.viscous]\nmcp = nan\n", "identified.viscous.mcp: expected a standard error"),
+                          ("[identified]\nsource = \"cad\"\n", 'identified.source: expected "identified"'),
+                          ("[identified]\nconverged = 1\n", "identified.converged: expected true or false"),
+                          ("[identified.rotor_inertia]\nwrist = 1e-9\n", "identified.rotor_inertia.wrist: unknown motor"),
+                          ("[identified]\nstiffness = 3\n", "identified.stiffness: expected a table joint name")):
+        with pytest.raises(ModelError, match=None) as e:
+            TransmissionSpec.from_toml(text + extra, "s.toml")
+        assert needle in str(e.value), str(e.value)
+
+
+def test_allegro_experiment_and_observer(tmp_path, capsys):
+    """The shipped Allegro example: its 8 motors excited at once for 0.5 s (the ab/adduction's direct motors
+    through zero), every joint inside its range, and the EKF on the recording."""
+    # (not its fit: the 16-joint sensitivity code takes minutes to compile)
+    from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
+
+    urdf, spec = ad.example_robot_urdf("allegro_hand", "allegro_right_hand"), example_spec_path()
+    m = ad.Model.from_urdf_file(urdf, spec)
+    rec = model_experiment(m, design=ExperimentDesign(duration=0.5), path=tmp_path / "a.csv")
+    assert np.all(rec.true_q >= m.lower) and np.all(rec.true_q <= m.upper)
+    S = m.transmission.S
+    mid = 0.5 * (m.lower + m.upper)
+    centred = [k for k in range(S.shape[0]) if np.count_nonzero(S[k]) == 1 and abs(mid[np.flatnonzero(S[k])[0]]) < 1e-9]
+    assert len(centred) == 3  # the ab/adduction joints, centred on zero: their direct motors swing both ways
+    assert all(rec.torque[:, k].min() < 0 < rec.torque[:, k].max() for k in centred)
+    rc, obj = run(capsys, "estimate", "--data", str(tmp_path / "a.csv"), "--model", str(urdf), "--spec", str(spec))
+    assert rc == 0 and max(obj["rmse"]) < math.radians(0.5)
