@@ -403,6 +403,9 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     def verdict(ok, missing=()):
         return SimpleNamespace(adequate=ok, likely_missing=list(missing))
 
+    def fitted(residual, ok, missing=()):
+        return SimpleNamespace(residual_rms=residual, adequacy=verdict(ok, missing), names=(), values=[], std=[])
+
     calls, rotors = [], []
     outcomes = {}
 
@@ -410,7 +413,7 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
         stick = model.extras.smooth_velocity == eff.STICTION_VELOCITY
         calls.append((stick, parameters))
         rotors.append(model._rotor)
-        return outcomes[stick]
+        return outcomes[stick or model._rotor]  # the second fit's outcome: with the stick-slip law or the rotor
 
     monkeypatch.setattr(ident_mod, "identify", fake_identify)
     p = load_params()
@@ -419,28 +422,34 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
                               params=eff.stiction_params(p) if "stiction" in effs else p)
 
     stick_slip = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
-    outcomes = {False: SimpleNamespace(residual_rms=0.9, adequacy=verdict(False, ["viscous friction", stick_slip])),
-                True: SimpleNamespace(residual_rms=0.6, adequacy=verdict(True))}
+    outcomes = {False: fitted(0.9, False, ["viscous friction", stick_slip]),
+                True: fitted(0.6, True)}
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
     assert fit.effects == ("compliance", "tilt", "stiction") and fit.result is outcomes[True]
     assert fit.tried is outcomes[False] and fit.tried_effects == ("compliance", "tilt")
     assert calls == [(False, "K,m,friction,tendon_compliance,tilt_y"), (True, "K,m,friction,tendon_compliance,tilt_y")]
     calls.clear()
-    outcomes[True] = SimpleNamespace(residual_rms=1.5, adequacy=verdict(False))  # worse: the first is kept
+    outcomes[True] = fitted(1.5, False)  # worse: the first is kept
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
     assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 2
     calls.clear()
-    outcomes[False] = SimpleNamespace(residual_rms=0.6, adequacy=verdict(False, ["viscous friction"]))
+    outcomes[False] = fitted(0.6, False, ["viscous friction"])
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
     assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]  # nothing named: one fit
     calls.clear()
     rotor = "rotor inertia (a torque following the motor acceleration; or a wrong inertia)"
-    outcomes[False] = SimpleNamespace(residual_rms=0.9, adequacy=verdict(False, [rotor, stick_slip]))
-    outcomes[True] = SimpleNamespace(residual_rms=0.6, adequacy=verdict(True))
+    outcomes[False] = fitted(0.9, False, [rotor, stick_slip])
+    outcomes[True] = fitted(0.6, True)
     rotors.clear()
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
     assert fit.effects == ("compliance", "tilt", "stiction", "rotor") and rotors == [False, True]
     assert fit.result is outcomes[True] and len(calls) == 2
+    calls.clear()
+    rotors.clear()  # a compliance seen (above 3 standard errors): the rotor joins the second fit, unnamed
+    outcomes[False] = SimpleNamespace(residual_rms=0.7, adequacy=verdict(False, ["viscous friction"]),
+                                      names=("K_1", "tendon_compliance_finger"), values=[0.04, 6.0], std=[1e-4, 0.2])
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert fit.effects == ("compliance", "tilt", "rotor") and rotors == [False, True] and len(calls) == 2
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)

@@ -15,7 +15,7 @@ effect         what the fit does
 ``tilt``       the palm's orientation when the recording has no ``gravity_*`` columns: ``tilt_y`` on a
                planar finger (``tilt_x`` is seen only through its cosine), both on the thumb. Of the rig,
                kept in the result, not in the file.
-``rotor``      (asked for, or named) the motor's rotor on its tendon, J_m S^T S with the file's
+``rotor``      (asked for, named, or where the cable is seen stretching) the motor's rotor on its tendon, J_m S^T S with the file's
                ``transmission.J_m`` (the motor's datasheet; held, not fitted: ``--parameters J_m`` fits it)
 ``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
                (absorbed by the initial states), and beside the tilt it trades with the masses.
@@ -131,12 +131,22 @@ class EffectsFit:
     tried_effects: tuple[str, ...] | None = None
 
 
+def _elastic(result: Any) -> bool:
+    """True when a fit found a tendon compliance above three of its standard errors (the cable is seen stretching)."""
+    for name, value, sd in zip(result.names, result.values, result.std):
+        if name.startswith("tendon_compliance") and np.isfinite(sd) and value > 3.0 * sd:
+            return True
+    return False
+
+
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
                 base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
     """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
     stick-slip law where ``"stiction"`` is in them, the rotor where ``"rotor"`` is). With ``"auto"`` among the
     effects: the fit without those first, and where its adequacy check names stick-slip or the rotor
-    (:func:`named_effects`), a second fit with them added, kept if its residual is lower (else the first).
+    (:func:`named_effects`), or it sees the tendon stretching (a compliance above three standard errors: the
+    quasi-static cable carries the rotor's J_m S^T S to the joints, which the verdict does not tell from a
+    wrong inertia), a second fit with them added, kept if its residual is lower (else the first).
     ``kwargs`` go to :func:`~alpes_dyn.estimation.identification.identify`."""
     from .adequacy import AdequacyWarning
     from .identification import identify
@@ -152,6 +162,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
 
     res = run(chosen)
     more = tuple(e for e in named_effects(res) if e not in chosen) if auto else ()
+    if auto and "rotor" not in chosen + more and _elastic(res):
+        more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
     if not more:
         return EffectsFit(res, chosen)
     second = chosen + more
