@@ -450,6 +450,13 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
                                       names=("K_1", "tendon_compliance_finger"), values=[0.04, 6.0], std=[1e-4, 0.2])
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
     assert fit.effects == ("compliance", "tilt", "rotor") and rotors == [False, True] and len(calls) == 2
+    calls.clear()  # rounds: the stick-slip law named, then its fit sees the cable stretch: a third with the rotor
+    outcomes[False] = fitted(0.9, False, [stick_slip])
+    outcomes[True] = SimpleNamespace(residual_rms=0.7, adequacy=verdict(False, ["viscous friction"]),
+                                     names=("tendon_compliance_finger",), values=[6.0], std=[0.2])
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert len(calls) == 3 and fit.effects == ("compliance", "tilt", "stiction")  # the third no lower: kept 2nd
+    assert fit.tried_effects == ("compliance", "tilt", "stiction", "rotor")
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)

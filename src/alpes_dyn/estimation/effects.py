@@ -146,7 +146,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     effects: the fit without those first, and where its adequacy check names stick-slip or the rotor
     (:func:`named_effects`), or it sees the tendon stretching (a compliance above three standard errors: the
     quasi-static cable carries the rotor's J_m S^T S to the joints, which the verdict does not tell from a
-    wrong inertia), a second fit with them added, kept if its residual is lower (else the first).
+    wrong inertia), a fit with them added, kept if its residual is lower, and so on while the kept fit asks for
+    more (at most one round per effect; ``tried`` is the last fit not kept, or the one before the kept one).
     ``kwargs`` go to :func:`~alpes_dyn.estimation.identification.identify`."""
     from .adequacy import AdequacyWarning
     from .identification import identify
@@ -160,14 +161,18 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
             warnings.simplefilter("ignore", AdequacyWarning)
             return identify(model, recording, effect_parameters(model, effs, has_gravity, base), **kwargs)
 
-    res = run(chosen)
-    more = tuple(e for e in named_effects(res) if e not in chosen) if auto else ()
-    if auto and "rotor" not in chosen + more and _elastic(res):
-        more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
-    if not more:
-        return EffectsFit(res, chosen)
-    second = chosen + more
-    res2 = run(second)
-    if res2.residual_rms < res.residual_rms:
-        return EffectsFit(res2, second, res, chosen)
-    return EffectsFit(res, chosen, res2, second)
+    best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
+    while auto:  # at most once per effect auto can add: each round adds one at least
+        more = tuple(e for e in named_effects(best) if e not in best_effects)
+        if "rotor" not in best_effects + more and _elastic(best):
+            more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
+        if not more:
+            break
+        effs = best_effects + more
+        res = run(effs)
+        if res.residual_rms >= best.residual_rms:
+            tried, tried_effects = res, effs
+            break
+        tried, tried_effects = best, best_effects
+        best, best_effects = res, effs
+    return EffectsFit(best, best_effects, tried, tried_effects)
