@@ -68,10 +68,32 @@ def cmd_observability(args: argparse.Namespace) -> int:
 DESIGNS = ("documented", "scenario", "none")
 
 
+def _identifiability_report(args: argparse.Namespace, model, spec: str, torque) -> int:
+    """The structural test of ``spec`` on ``model`` and, unless ``--design none``, the Cramér-Rao bounds of the
+    experiment whose motor torque ``torque(design, t)`` gives (N, m) on the design's grid; one JSON object or
+    the text."""
+    from ..analysis.identifiability import fisher_information, identifiability
+    from ..estimation.experiment import ExperimentDesign, _schedule
+
+    cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
+    design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
+    rep = identifiability(model, spec, output=args.output, points=args.points, seed=args.seed,
+                          max_operations=args.max_operations)
+    obj: dict[str, Any] = {"structural": rep.to_dict(), "design": args.design, "practical": None}
+    lines = [rep.to_text()]
+    if design is not None:
+        t, _, G = _schedule(design)
+        fim = fisher_information(model, spec, U=torque(design, t), G=G[:-1], design=design)
+        obj["practical"] = fim.to_dict()
+        lines += [f"Practical identifiability, design {args.design!r} ({args.duration:g} s)"
+                  + (" with the camera" if cams else "") + ":", fim.to_text()]
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
 def cmd_identifiability(args: argparse.Namespace) -> int:
     """Structural identifiability of physical parameters, and the Cramér-Rao bounds of an experiment."""
-    from ..estimation.experiment import ExperimentDesign, _profile, _schedule, excitation
-    from ..analysis.identifiability import fisher_information, identifiability
+    from ..estimation.experiment import _profile, excitation
     from ..model.robot import Model
     from ..estimation.scenario import SCENARIO_MODELS, EstimationScenario, _torque
     from ..model.stops import JointRangeWarning
@@ -84,38 +106,26 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
     _one_finger(args.model, SCENARIO_MODELS, "identifiability")
     _one_of(args.design, DESIGNS, "--design", "design")
     spec = args.parameters if args.parameters is not None else "K,m,friction"
-    cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
-    design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
     friction = any(k in spec for k in ("F_s", "F_v", "friction"))
     model = Model.alpes(args.model, friction=friction, params=args.params)
-    rep = identifiability(model, spec, output=args.output, points=args.points, seed=args.seed,
-                          max_operations=args.max_operations)
-    obj: dict[str, Any] = {"structural": rep.to_dict(), "design": args.design, "practical": None}
-    lines = [rep.to_text()]
-    if design is not None:
-        t, _, G = _schedule(design)
-        if args.design == "documented":
-            nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params)
-            with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
-                warnings.simplefilter("ignore", JointRangeWarning)
-                bias, amp = excitation(nominal, design)
-            U = _profile(design, t, bias, amp)[:-1, None]
-        else:
-            U = _torque(EstimationScenario(model=args.model), t[:-1], model.transmission.n_motors)
-        fim = fisher_information(model, spec, U=U, G=G[:-1], design=design)
-        obj["practical"] = fim.to_dict()
-        lines += [f"Practical identifiability, design {args.design!r} ({args.duration:g} s)"
-                  + (" with the camera" if cams else "") + ":", fim.to_text()]
-    _emit(obj, "\n".join(lines), args.json)
-    return 0
+
+    def torque(design, t):
+        if args.design != "documented":
+            return _torque(EstimationScenario(model=args.model), t[:-1], model.transmission.n_motors)
+        nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params)
+        with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
+            warnings.simplefilter("ignore", JointRangeWarning)
+            bias, amp = excitation(nominal, design)
+        return _profile(design, t, bias, amp)[:-1, None]
+
+    return _identifiability_report(args, model, spec, torque)
 
 
 def _identifiability_robot(args: argparse.Namespace) -> int:
     """``identifiability --model PATH.urdf --spec FILE.toml``: the structural test on the spec's robot and the
     Cramér-Rao bounds of its documented experiment (the multisine designed for its own joint ranges and masses,
     :func:`~alpes_dyn.estimation.experiment.model_experiment`'s), or structural only (``--design none``)."""
-    from ..analysis.identifiability import fisher_information, identifiability
-    from ..estimation.experiment import ExperimentDesign, _excitation, _profiles, _schedule
+    from ..estimation.experiment import _excitation, _profiles
     from ..model.stops import JointRangeWarning
 
     _one_of(args.design, DESIGNS, "--design", "design")
@@ -123,22 +133,12 @@ def _identifiability_robot(args: argparse.Namespace) -> int:
         raise InputError("--design: scenario is the Alpes fingers' estimation scenario; a URDF --model takes "
                          "documented (its identification multisine) or none (structural only)")
     spec = args.parameters if args.parameters is not None else "K,m,friction"
-    cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
-    design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
     model = _urdf_robot(args, "identifiability")
-    rep = identifiability(model, spec, output=args.output, points=args.points, seed=args.seed,
-                          max_operations=args.max_operations)
-    obj: dict[str, Any] = {"structural": rep.to_dict(), "design": args.design, "practical": None}
-    lines = [rep.to_text()]
-    if design is not None:
-        t, _, G = _schedule(design)
+
+    def torque(design, t):
         with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
             warnings.simplefilter("ignore", JointRangeWarning)
             bias, amp = _excitation(model, design)
-        U = _profiles(design, t, bias, amp)[:-1]
-        fim = fisher_information(model, spec, U=U, G=G[:-1], design=design)
-        obj["practical"] = fim.to_dict()
-        lines += [f"Practical identifiability, design {args.design!r} ({args.duration:g} s)"
-                  + (" with the camera" if cams else "") + ":", fim.to_text()]
-    _emit(obj, "\n".join(lines), args.json)
-    return 0
+        return _profiles(design, t, bias, amp)[:-1]
+
+    return _identifiability_report(args, model, spec, torque)
