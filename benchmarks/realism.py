@@ -65,7 +65,7 @@ import numpy as np
 import alpes_dyn as ad
 from alpes_dyn.control.plants import PlantEffects, mujoco_recording, plant_model
 from alpes_dyn.estimation.experiment import ExperimentDesign, experiment_torque, perturbed_params
-from alpes_dyn.estimation.effects import fit_effects, parse_effects, stiction_params
+from alpes_dyn.estimation.effects import alpes_models, fit_effects, parse_effects
 from alpes_dyn.estimation.identification import identify
 from alpes_dyn.estimation.replay import estimate_recording
 from alpes_dyn.model.mjcf import STICTION_TIMECONST
@@ -80,14 +80,6 @@ KT_ERROR = 0.05
 OFFSET_COUNTS = 4.0
 FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)  # Hz: the EKF's validation run
 FIT_EFFECTS = "auto"  # the extended fit: alpes-dyn identify's default --effects
-
-
-def fit_start(effects: tuple) -> "ad.Model":
-    """The nominal finger the extended fit starts from: the stick-slip friction law and the rotor on the tendon
-    (the file's J_m) where ``effects`` hold them."""
-    p = load_params()
-    return ad.Model.alpes(MODEL, friction=True, rotor_inertia="rotor" in effects,
-                          params=stiction_params(p) if "stiction" in effects else p)
 
 
 CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "all")
@@ -179,7 +171,7 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
     rec = mujoco_recording(MODEL, true, u, design.dt, effects=effects, q0=x0[:3], seed=seed)
     plant_s = time.perf_counter() - t0
     rigid = identify(ad.Model.alpes(MODEL, friction=True), rec, excitation=design.frequencies, progress=False)
-    fit = fit_effects(fit_start, rec, parse_effects(FIT_EFFECTS), None, rec.gravity is not None,
+    fit = fit_effects(alpes_models(MODEL, load_params()), rec, parse_effects(FIT_EFFECTS), None, rec.gravity is not None,
                       excitation=design.frequencies, progress=False)
     res = fit.result
     ident = res.write(tmp / f"ident_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so

@@ -417,9 +417,7 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
 
     monkeypatch.setattr(ident_mod, "identify", fake_identify)
     p = load_params()
-    def model_of(effs):
-        return ad.Model.alpes("finger2", friction=True, rotor_inertia="rotor" in effs,
-                              params=eff.stiction_params(p) if "stiction" in effs else p)
+    model_of = eff.alpes_models("finger2", p)  # the stick-slip law where the effects say, the rotor likewise
 
     stick_slip = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
     outcomes = {False: fitted(0.9, False, ["viscous friction", stick_slip]),

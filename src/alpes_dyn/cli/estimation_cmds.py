@@ -232,23 +232,17 @@ def _fit(args: argparse.Namespace, freqs):
     with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
     check names it (:mod:`alpes_dyn.estimation.effects`). Returns the EffectsFit."""
     from ..estimation.adequacy import AdequacyWarning
-    from ..estimation.effects import EffectsFit, fit_effects, parse_effects, stiction_params
+    from ..estimation.effects import EffectsFit, alpes_models, fit_effects, parse_effects
     from ..estimation.identification import check_selection, identify
     from ..estimation.recording import read_recording
     from ..model.params import load_params
-    from ..model.robot import Model
 
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
     if args.parameters is not None and set(effects) - {"stiction", "rotor"}:
         raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor'))} with "
                          "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
-    p = load_params(args.params)
-    p_stick = stiction_params(p) if "stiction" in effects or "auto" in effects else None
-
-    def model_of(effs: tuple[str, ...]) -> Model:
-        return Model.alpes(args.model, friction=True, rotor_inertia=args.rotor_inertia or "rotor" in effs,
-                           params=p_stick if "stiction" in effs else p, chain=args.chain)
+    model_of = alpes_models(args.model, load_params(args.params), rotor_inertia=args.rotor_inertia, chain=args.chain)
 
     data, validate = args.data, args.validate
     if args.torque_constant is not None:  # current_<motor> columns: the recordings read here, as torques

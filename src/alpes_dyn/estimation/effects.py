@@ -45,7 +45,7 @@ from ..model.params import HandParams, with_values
 from ..model.robot import Model
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
-           "stiction_params", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
+           "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset")
 NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia"}
@@ -111,6 +111,22 @@ def stiction_params(params: HandParams) -> HandParams:
                                      "v_s atanh(tau / F_s) under a torque below F_s", std=None)
     return with_values(params, {"friction.smooth_velocity": new})
 
+
+
+def alpes_models(model: str, params: HandParams, *, rotor_inertia: bool = False,
+                 chain: str | None = None) -> Callable[[Sequence[str]], Model]:
+    """``model_of`` for :func:`fit_effects` on an Alpes model: ``Model.alpes(model, friction=True, ...)`` from
+    ``params``, with the stick-slip law's parameters where the effects hold ``stiction`` (made once, on first
+    use) and the rotor on the tendon where they hold ``rotor`` (or ``rotor_inertia``)."""
+    stick: list[HandParams] = []
+
+    def model_of(effects: Sequence[str]) -> Model:
+        if "stiction" in effects and not stick:
+            stick.append(stiction_params(params))
+        return Model.alpes(model, friction=True, rotor_inertia=rotor_inertia or "rotor" in effects,
+                           params=stick[0] if "stiction" in effects else params, chain=chain)
+
+    return model_of
 
 
 def named_effects(result: Any) -> tuple[str, ...]:

@@ -57,7 +57,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
-from ..symbolic.parametric import OUTPUT_KINDS, common_scale, parameter_catalogue, select_parameters
+from ..symbolic.parametric import common_scale, parameter_catalogue, select_parameters
 from ..model.params import HandParams, Param, with_values, write_params
 from .adequacy import (_finite, Adequacy, AdequacyWarning, Validation, assess, compare, effect_responses, sensor_floor,
                        torque_explained)
@@ -474,8 +474,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                  if pp.kind == "tendon_compliance"]
     scale = np.ones(p)
     for k, mo in comp_cols:
-        su = float(np.std(rec.torque[:, mo]))
-        scale[k] = float(np.std(y[:, mo])) / su if su > 0 and np.std(y[:, mo]) > 0 else 1.0
+        su, sy = float(np.std(rec.torque[:, mo])), float(np.std(y[:, mo]))
+        scale[k] = sy / su if su > 0 and sy > 0 else 1.0
     Ufull = np.concatenate([U, U_last])  # the modelled torque at every sample, the last one's too
     Uk = Ufull[kk]  # (S, L+1, nu)
     Psik = (np.concatenate([Psi, torque_noise * Q_last[None]])[kk] if lines else None)  # (S, L+1, nphi)
@@ -500,12 +500,16 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         """theta from the fitted variables: theta_0 exp(rho), or theta_0 + scale rho for the additive ones."""
         return np.where(additive, theta0 + scale * glob[:p], theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
 
-    def offset(theta: np.ndarray) -> np.ndarray:
-        """(m,) the encoder offsets, rad."""
+    def per_motor(theta: np.ndarray, cols: list[tuple[int, int]]) -> np.ndarray:
+        """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere."""
         out = np.zeros(ny)
-        for k, mo in off_cols:
+        for k, mo in cols:
             out[mo] += theta[k]
         return out
+
+    def offset(theta: np.ndarray) -> np.ndarray:
+        """(m,) the encoder offsets, rad."""
+        return per_motor(theta, off_cols)
 
     def torque_at(glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
         """(S, L+1, nu) the modelled torque at each residual's sample (N m): the measured or projected one plus
@@ -516,14 +520,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             return Uk + offs[:, None, :]
         return Uk
 
-    def stretch(theta: np.ndarray, glob: np.ndarray, offs: np.ndarray) -> np.ndarray | float:
-        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad (0 without compliance)."""
-        if not comp_cols:
-            return 0.0
-        C = np.zeros(ny)
-        for k, mo in comp_cols:
-            C[mo] += theta[k]
-        return torque_at(glob, offs) * C
+    def stretch(theta: np.ndarray, u_k: np.ndarray | None) -> np.ndarray | float:
+        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad, for the modelled torque u_k
+        (:func:`torque_at`; None without compliance: 0)."""
+        return 0.0 if u_k is None else u_k * per_motor(theta, comp_cols)
 
     def correction(glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
         if lines:
@@ -542,7 +542,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                              "the recording's encoders this model's, in counts, and its torques in N m?")
         xs, X = sens.run(nodes, Ub, Gb, theta, correction(glob, offs), basis=Psib, sensitivities=jac)
         q = xs[:, :, :n]
-        r_enc = ((np.einsum("ij,skj->ski", S_enc, q) + offset(theta) + stretch(theta, glob, offs) - Yb) / sig_y
+        u_k = torque_at(glob, offs) if comp_cols else None
+        r_enc = ((np.einsum("ij,skj->ski", S_enc, q) + offset(theta) + stretch(theta, u_k) - Yb) / sig_y
                  * valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
         rg = np.concatenate([np.zeros(p), glob[p:]])
@@ -564,7 +565,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         for k, mo in off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
         if comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
-            u_k = torque_at(glob, offs)
             for k, mo in comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * scale[k]
                 if lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
@@ -857,8 +857,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # the adequacy of the fitted model (module adequacy): its trajectory at the samples, the intervals cut
     # at their valid samples (sample order), the residual y - yhat in counts
     x_fit = xs[valid]
-    stretched = stretch(theta, glob, offs)
-    u_fit = stretched[valid] if comp_cols else 0.0
+    u_fit = stretch(theta, torque_at(glob, offs))[valid] if comp_cols else 0.0
     yhat = (x_fit[:, :n] @ S_enc.T + offset(theta) + u_fit) / step  # y = S q + offset + C u (the fitted ones)
     e = rec.encoder - yhat
     explained = 0.0
@@ -879,10 +878,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * sig_y / step)[valid]
     val = None
     if val_rec is not None:
-        comp = np.zeros(ny)
-        for k, mo in comp_cols:
-            comp[mo] += theta[k]
-        val = _validate(model, sens, theta, val_rec, excitation, interval, offset(theta), comp)
+        val = _validate(model, sens, theta, val_rec, excitation, interval, offset(theta), per_motor(theta, comp_cols))
     verdict = assess(e, rec.torque, floor, regressors, val, velocity=x_fit[:, n:] @ S_enc.T)
     result = IdentificationResult(
         names=sens.names, values=theta, std=np.where(additive, scale, theta) * sd_rho, initial=theta0,

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..checks import as_float_array
 from ..errors import InputError, RecordingError
 from ..fileio import atomic_path
 from ..limits import check_bytes
@@ -117,13 +118,12 @@ def _nonnegative(x: Any, name: str, unit: str) -> float:
 
 
 def _finite_vector(x: Any, n: int, name: str, unit: str) -> np.ndarray:
-    try:
-        a = np.array(x, dtype=float).reshape(-1)
-    except (TypeError, ValueError):
-        a = None
-    if isinstance(x, (str, bytes)) or a is None or a.shape != (n,) or not np.isfinite(a).all():
-        raise InputError(f"{name}: expected {n} finite numbers ({unit}), got {x!r}")
-    return a
+    """``x`` as (n,) finite floats (:func:`~alpes_dyn.checks.as_float_array`: no string, bool or complex)."""
+    expected = f"{n} finite numbers ({unit})"
+    a = as_float_array(x, name, expected).reshape(-1)
+    if a.shape != (n,) or not np.isfinite(a).all():
+        raise InputError(f"{name}: expected {expected}, got {np.asarray(x).tolist()!r}")
+    return a.copy()
 
 
 def _model_for(model: Model, rec: Recording) -> Model:
