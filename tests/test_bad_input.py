@@ -1078,6 +1078,11 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, parameters="input_gain,m,K,friction"), ModelError,
       "the encoder sees only their ratios"),
     A("identify", lambda c: _ident(c, torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
+    A("identify", lambda c: _ident(c, start={"K_9": 0.05}), InputError, "start: 'K_9' is not a parameter of this fit"),
+    A("identify", lambda c: _ident(c, start={"m_1": -0.01}), InputError, "start: m_1 = -0.01: expected a finite number > 0"),
+    A("identify", lambda c: _ident(c, start={"m_1": True}), InputError, "start: m_1 = True: expected a finite number"),
+    A("identify", lambda c: _ident(c, start={"K_1": float("nan")}), InputError, "start: K_1 = nan: expected a finite"),
+    A("identify", lambda c: _ident(c, start=[0.05]), InputError, "start: expected a mapping of parameter names"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
     A("identify", lambda c: _ident(c, recording=_diverging()), InputError, "identify: the fit diverged (its parameters "

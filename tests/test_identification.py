@@ -165,6 +165,11 @@ def test_identify_recovers_exact_parameters_from_noise_free_data(finger2):
     ident = res.params()
     assert ident.raw["finger.K"].source == "identified" and ident.raw["finger.K"].std is not None
     assert np.allclose(ident.finger.I[:2] / ident.finger.m[:2], true.finger.I[:2] / true.finger.m[:2], rtol=1e-12)
+    # start= (what fit_effects passes from one round to the next): the masses' start 10 % high, the rest the model's
+    half = {"m_1": 1.1 * true.finger.m[0], "m_2": 1.1 * true.finger.m[1]}
+    warm = identify(finger2, rec, progress=False, start=half)
+    assert warm.initial[2:4].tolist() == [half["m_1"], half["m_2"]] and warm.initial[0] == res.initial[0]
+    assert warm.converged and np.max(np.abs(warm.values / truth - 1)) < 1e-6
 
 
 def test_identify_recovers_an_encoder_offset_and_the_palm_tilt_from_noise_free_data(finger2):
@@ -380,6 +385,8 @@ def test_identify_cli_fits_the_real_hands_effects_by_default(tmp_path, capsys):
     assert main(["identify", "--model", "finger2", "--data", str(rec), "-o", str(ident), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
     assert res["effects"] == ["compliance", "tilt"] and res["tried"] is None
+    assert [r["effects"] for r in res["rounds"]] == [["compliance", "tilt"]]  # one fit: adequate
+    assert res["fit_seconds_total"] == res["rounds"][0]["seconds"] == res["seconds"] > 0
     names = list(res["parameters"])
     assert names[-2:] == ["tendon_compliance_finger", "tilt_y"] and len(names) == 10  # K, m, F_s, F_v of 2 joints
     for n in names[-2:]:
@@ -393,8 +400,9 @@ def test_identify_cli_fits_the_real_hands_effects_by_default(tmp_path, capsys):
 
 
 def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeypatch):
-    """The decision rule of --effects auto on stand-in fits: a second fit with the stick-slip law only where the
-    first is flagged with stick-slip among the likely missing effects, and the lower residual kept."""
+    """The decision rule of --effects auto on stand-in fits: a second fit with the stick-slip law where the first
+    is flagged (stick-slip named among the likely missing effects, or nothing named), none where it is adequate,
+    the lower residual kept, each round started from the last one's values."""
     from types import SimpleNamespace
 
     from alpes_dyn.estimation import effects as eff
@@ -403,16 +411,18 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     def verdict(ok, missing=()):
         return SimpleNamespace(adequate=ok, likely_missing=list(missing))
 
-    def fitted(residual, ok, missing=()):
-        return SimpleNamespace(residual_rms=residual, adequacy=verdict(ok, missing), names=(), values=[], std=[])
+    def fitted(residual, ok, missing=(), names=(), values=(), std=()):
+        return SimpleNamespace(residual_rms=residual, adequacy=verdict(ok, missing), names=names, values=list(values),
+                               std=list(std), trustworthy=ok, converged=True)
 
-    calls, rotors = [], []
+    calls, rotors, starts = [], [], []
     outcomes = {}
 
     def fake_identify(model, rec, parameters, **kw):
         stick = model.extras.smooth_velocity == eff.STICTION_VELOCITY
         calls.append((stick, parameters))
         rotors.append(model._rotor)
+        starts.append(kw.get("start"))
         return outcomes[stick or model._rotor]  # the second fit's outcome: with the stick-slip law or the rotor
 
     monkeypatch.setattr(ident_mod, "identify", fake_identify)
@@ -431,9 +441,14 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
     assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 2
     calls.clear()
-    outcomes[False] = fitted(0.6, False, ["viscous friction"])
+    outcomes[False] = fitted(0.6, False, ["viscous friction"])  # flagged, stick-slip not named: tried all the same
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
-    assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]  # nothing named: one fit
+    assert calls == [(False, "K,m,friction,tendon_compliance"), (True, "K,m,friction,tendon_compliance")]
+    assert fit.result is outcomes[False] and fit.tried_effects == ("compliance", "tilt", "stiction")
+    calls.clear()
+    outcomes[False] = fitted(0.58, True)  # adequate: one fit
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]
     calls.clear()
     rotor = "rotor inertia (a torque following the motor acceleration; or a wrong inertia)"
     outcomes[False] = fitted(0.9, False, [rotor, stick_slip])
@@ -444,17 +459,19 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     assert fit.result is outcomes[True] and len(calls) == 2
     calls.clear()
     rotors.clear()  # a compliance seen (above 3 standard errors): the rotor joins the second fit, unnamed
-    outcomes[False] = SimpleNamespace(residual_rms=0.7, adequacy=verdict(False, ["viscous friction"]),
-                                      names=("K_1", "tendon_compliance_finger"), values=[0.04, 6.0], std=[1e-4, 0.2])
+    outcomes[False] = fitted(0.7, True, names=("K_1", "tendon_compliance_finger"), values=[0.04, 6.0], std=[1e-4, 0.2])
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
     assert fit.effects == ("compliance", "tilt", "rotor") and rotors == [False, True] and len(calls) == 2
+    assert starts[-1] == {"K_1": 0.04, "tendon_compliance_finger": 6.0}  # the second round from the first's values
     calls.clear()  # rounds: the stick-slip law named, then its fit sees the cable stretch: a third with the rotor
     outcomes[False] = fitted(0.9, False, [stick_slip])
-    outcomes[True] = SimpleNamespace(residual_rms=0.7, adequacy=verdict(False, ["viscous friction"]),
-                                     names=("tendon_compliance_finger",), values=[6.0], std=[0.2])
+    outcomes[True] = fitted(0.7, False, ["viscous friction"], names=("tendon_compliance_finger",), values=[6.0],
+                            std=[0.2])
+    starts.clear()
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
     assert len(calls) == 3 and fit.effects == ("compliance", "tilt", "stiction")  # the third no lower: kept 2nd
     assert fit.tried_effects == ("compliance", "tilt", "stiction", "rotor")
+    assert starts == [None, {}, {"tendon_compliance_finger": 6.0}]
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)

@@ -256,7 +256,7 @@ def _fit(args: argparse.Namespace, freqs):
         check_selection(model, args.parameters)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit(identify(model, data, args.parameters, **kw), effects)
+            return EffectsFit.single(identify(model, data, args.parameters, **kw), effects)
     base = THUMB_PARAMETERS if args.model == "thumb" else None
     rec = data if args.torque_constant is not None else read_recording(args.data, model_of(()))
     return fit_effects(model_of, data, effects, base, rec.gravity is not None, **kw)  # tilt only where not given
@@ -295,9 +295,15 @@ def cmd_identify(args: argparse.Namespace) -> int:
     obj["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_rms": fit.tried.residual_rms, "converged": fit.tried.converged,
         "verdict": fit.tried.status()}
+    obj["rounds"] = [{"effects": list(e), "residual_rms": r.residual_rms, "converged": bool(r.converged),
+                      "seconds": r.seconds} for e, r in fit.rounds]
+    obj["fit_seconds_total"] = fit.seconds
+    more = (f"; {len(fit.rounds)} fits in {fit.seconds:.1f} s: "
+            + ", ".join(f"{'+'.join(e) or 'rigid'} {r.residual_rms:.3g} counts" for e, r in fit.rounds)
+            if len(fit.rounds) > 1 else "")
     lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
              f"({res.iterations} Gauss-Newton iterations, "
-             f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s)",
+             f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s{more})",
              f"  {'parameter':{max(10, *(len(n) for n in res.names))}s} {'value':>12s} {'std':>10s} {'start':>12s}  unit"]
     w = max(10, *(len(n) for n in res.names))
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
@@ -369,7 +375,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
         check_selection(fitted, names)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit(identify(fitted, args.data, names, **kw), effects)
+            return EffectsFit.single(identify(fitted, args.data, names, **kw), effects)
     has_gravity = read_recording(args.data, model).gravity is not None  # tilt only where not given
     if args.chain is None:
         return fit_effects(model_of, args.data, effects, None, has_gravity, **kw)

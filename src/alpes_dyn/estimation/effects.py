@@ -6,7 +6,7 @@ A real tendon-driven finger has what the model of the report leaves out; each is
 ============== ======================================================================================
 effect         what the fit does
 ============== ======================================================================================
-``stiction``   (asked for: the adequacy check names stick-slip when it is missing) the friction's smooth sign tanh(qd / v_s) sharpened to v_s = :data:`STICTION_VELOCITY`
+``stiction``   (asked for; ``auto`` adds it where the first fit is flagged) the friction's smooth sign tanh(qd / v_s) sharpened to v_s = :data:`STICTION_VELOCITY`
                (0.02 rad/s): a joint under a torque below F_s creeps at v_s atanh(tau / F_s) instead of
                sliding, the stick phases of dry friction; RK4 steps shortened to match
                (:func:`~alpes_dyn.simulation.integrate.stable_substeps`). The file written keeps this v_s.
@@ -55,7 +55,7 @@ DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 
 def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
     """The effects of a comma-separated list (``"none"``: the rigid, smooth-friction fit; None or ``"auto"``: the
-    defaults plus ``"auto"``, stiction where the first fit's adequacy check names it, :func:`fit_effects`).
+    defaults plus ``"auto"``, stiction where the first fit's adequacy check flags it, :func:`fit_effects`).
     :class:`~alpes_dyn.InputError` naming an unknown or repeated one."""
     if text is None or text == "auto":
         return DEFAULT_EFFECTS + ("auto",)
@@ -140,12 +140,26 @@ def named_effects(result: Any) -> tuple[str, ...]:
 @dataclass
 class EffectsFit:
     """What :func:`fit_effects` did: the result kept and the effects it was fitted with; ``tried``: the other fit
-    where ``"auto"`` made two (with and without the stick-slip law; None otherwise) and its effects."""
+    where ``"auto"`` made two (with and without the stick-slip law; None otherwise) and its effects; ``rounds``:
+    every fit made, in order, as (effects, result); ``seconds``: their time together, s."""
 
     result: Any
     effects: tuple[str, ...]
     tried: Any = None
     tried_effects: tuple[str, ...] | None = None
+    rounds: tuple[tuple[tuple[str, ...], Any], ...] = ()
+
+    @classmethod
+    def single(cls, result: Any, effects: tuple[str, ...]) -> "EffectsFit":
+        """The record of one fit made with ``effects``."""
+        return cls(result, effects, rounds=((effects, result),))
+
+    @property
+    def seconds(self) -> float:
+        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded)."""
+        if not self.rounds:
+            return float(self.result.seconds)
+        return float(sum(r.seconds for _, r in self.rounds))
 
 
 def _elastic(result: Any) -> bool:
@@ -156,40 +170,62 @@ def _elastic(result: Any) -> bool:
     return False
 
 
+def _selection_names(model: Model, selection: str | None) -> tuple[str, ...]:
+    """The parameter names of ``selection`` on ``model`` (:func:`~alpes_dyn.symbolic.parametric.select_parameters`)."""
+    from ..symbolic.parametric import select_parameters
+
+    return tuple(pp.name for pp in select_parameters(model, selection))
+
+
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
                 base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
     """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
     stick-slip law where ``"stiction"`` is in them, the rotor where ``"rotor"`` is). With ``"auto"`` among the
-    effects: the fit without those first, and where its adequacy check names stick-slip or the rotor
-    (:func:`named_effects`), or it sees the tendon stretching (a compliance above three standard errors: the
-    quasi-static cable carries the rotor's J_m S^T S to the joints, which the verdict does not tell from a
-    wrong inertia), a fit with them added, kept if its residual is lower, and so on while the kept fit asks for
-    more (at most one round per effect; ``tried`` is the last fit not kept, or the one before the kept one).
-    ``kwargs`` go to :func:`~alpes_dyn.estimation.identification.identify`."""
+    effects: the fit without those first; then, where its adequacy check flags it (stick-slip named among the
+    likely missing effects, or nothing named: a lost basin, or several effects mixed), a fit with the stick-slip
+    law added, and the rotor where the verdict names it (:func:`named_effects`) or the fit sees the tendon
+    stretching (a compliance above three standard errors: the quasi-static cable carries the rotor's J_m S^T S
+    to the joints, which the verdict does not tell from a wrong inertia); kept if its residual is lower, and so
+    on while the kept fit asks for more (at most one round per effect; ``tried`` is the last fit not kept, or
+    the one before the kept one). Each round starts from the last converged one's values
+    (:func:`~alpes_dyn.estimation.identification.identify`'s ``start``). ``kwargs`` go to ``identify``."""
     from .adequacy import AdequacyWarning
     from .identification import identify
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")
 
-    def run(effs: tuple[str, ...]):
+    def run(effs: tuple[str, ...], warm: Any = None):
         model = model_of(effs)
+        selection = effect_parameters(model, effs, has_gravity, base)
+        kw = dict(kwargs)
+        if warm is not None and warm.converged and "start" not in kw:
+            # the next round from the last one's values: the same basin, a third of the iterations
+            names = set(_selection_names(model, selection))
+            kw["start"] = {nm: float(v) for nm, v in zip(warm.names, warm.values) if nm in names}
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
-            return identify(model, recording, effect_parameters(model, effs, has_gravity, base), **kwargs)
+            return identify(model, recording, selection, **kw)
 
     best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
+    rounds = [(chosen, best)]
     while auto:  # at most once per effect auto can add: each round adds one at least
         more = tuple(e for e in named_effects(best) if e not in best_effects)
+        if "stiction" not in best_effects + more and not best.trustworthy:
+            # a flagged fit whose signature names nothing (a lost basin, or two effects mixed): stick-slip first,
+            # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
+            # one of three)
+            more += ("stiction",)
         if "rotor" not in best_effects + more and _elastic(best):
             more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
         if not more:
             break
         effs = best_effects + more
-        res = run(effs)
+        res = run(effs, best)
+        rounds.append((effs, res))
         if res.residual_rms >= best.residual_rms:
             tried, tried_effects = res, effs
             break
         tried, tried_effects = best, best_effects
         best, best_effects = res, effs
-    return EffectsFit(best, best_effects, tried, tried_effects)
+    return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds))

@@ -28,6 +28,8 @@ problem. In the homotopy a step whose parameter part the trust region shortens h
 again for the shortened step. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
 4-8 counts against the noise's 0.58), or stage 3 asks three times in a row for a change of log theta
 above 30 (the linearisation has lost the basin), stages 2-3 run again with friction free in the homotopy.
+The intervals are 50 ms: at 100 ms one of three MuJoCo fingers with the effects of a real hand lost its basin
+from both starts, and the longer drift took more iterations where it held.
 
 Speed. A line search's trial needs the states, not their sensitivities: it runs the step without its
 derivatives (a tenth of the time), and the sensitivities are computed once a step is accepted. Near the
@@ -51,7 +53,7 @@ import time
 import warnings
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -68,6 +70,9 @@ from ..simulation.sensitivity import SensitivityModel
 from ..progress import _Progress
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection"]
+
+VALIDATION_PREFIX = 0.1
+"""s: the held-out recording's prefix that fixes its initial state (at least one shooting interval)."""
 
 
 @dataclass
@@ -317,11 +322,11 @@ def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Reco
 
 
 def identify(model: Model, recording: Recording | str | Path, parameters: str | Sequence[str] | None = None, *,
-             excitation: Sequence[float] | None = None, interval: float = 0.1, substeps: int | None = None,
+             excitation: Sequence[float] | None = None, interval: float = 0.05, substeps: int | None = None,
              torque_noise: float | None = None, camera_noise: float = math.radians(0.1),
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
              progress: bool | None = None, validation: Recording | str | Path | None = None,
-             encoder_noise: float | None = None) -> IdentificationResult:
+             encoder_noise: float | None = None, start: Mapping[str, float] | None = None) -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
     Parameters
@@ -339,7 +344,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         the noise leaves on the lines) is fitted with the parameters: u = P u_meas + sigma_u Q c with Q
         the lines' orthonormal basis and c ~ N(0, I) a priori (errors in variables, maximum likelihood).
         None: the measured torque as it is.
-    interval: multiple-shooting interval, s. substeps: RK4 steps per sample (default
+    interval: multiple-shooting interval, s (default 50 ms: on MuJoCo's +-20 % fingers with the effects of a real
+        hand, 100 ms lost the basin on one seed of three, and took longer where it held: 20.8 s against 9.9 s on
+        one). substeps: RK4 steps per sample (default
         :func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth friction law at 1 kHz, 15 for the
         stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY` on finger3).
     torque_noise: standard deviation sigma_u of the recorded torque's white noise, N m. Default: with
@@ -358,6 +365,11 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         model is simulated open-loop on its torque (:func:`~alpes_dyn.estimation.adequacy.compare`, fit %).
     encoder_noise: the encoder's white noise beyond its quantisation, counts, for the adequacy's sensor
         floor (default: estimated from the recording, :func:`~alpes_dyn.estimation.adequacy.white_noise_level`).
+    start: values to start the fit from, by the fit's parameter names (e.g. an earlier fit's
+        ``dict(zip(result.names, result.values))``, as :func:`~alpes_dyn.estimation.effects.fit_effects` does from
+        one round to the next); the parameters not named start from the model's values. A name that is not
+        fitted here, or a value that is not finite (positive where the parameter is fitted as log theta), is an
+        :class:`~alpes_dyn.InputError`.
 
     The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
     failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
@@ -394,7 +406,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if val_rec is not None:
         if abs(val_rec[0].dt - rec.dt) > 1e-9 * rec.dt:
             raise RecordingError(f"validation: sample period {val_rec[0].dt:g} s differs from the recording's {rec.dt:g} s")
-        pre = max(2, int(round(interval / rec.dt)))  # the prefix that fixes the start, one interval
+        pre = max(2, int(round(max(interval, VALIDATION_PREFIX) / rec.dt)))  # the prefix that fixes the start
         if val_rec[0].n_samples <= 4 * pre:
             raise RecordingError(f"validation: {val_rec[0].n_samples} samples are too few (the first {pre} fix the "
                                  f"start; give more than {4 * pre})")
@@ -466,6 +478,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # additive parameters (encoder offsets, tilt angles: nominal 0, either sign) are fitted as they are, the
     # others as log theta / theta_0; the encoder offsets enter the output only (their state sensitivities are 0)
     additive = np.array([pp.additive for pp in sens.dynamics.parameters], dtype=bool)
+    if start is not None:
+        theta0 = _start_values(theta0, sens.names, additive, start)
     off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
                 if pp.kind == "encoder_offset"]
     # tendon compliances (y = S q + offset + C u, u the modelled torque at the sample): fitted in units of
@@ -878,7 +892,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * sig_y / step)[valid]
     val = None
     if val_rec is not None:
-        val = _validate(model, sens, theta, val_rec, excitation, interval, offset(theta), per_motor(theta, comp_cols))
+        val = _validate(model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX), offset(theta),
+                        per_motor(theta, comp_cols))
     verdict = assess(e, rec.torque, floor, regressors, val, velocity=x_fit[:, n:] @ S_enc.T)
     result = IdentificationResult(
         names=sens.names, values=theta, std=np.where(additive, scale, theta) * sd_rho, initial=theta0,
@@ -889,6 +904,25 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
+
+
+def _start_values(theta0: np.ndarray, names: Sequence[str], additive: np.ndarray,
+                  start: Mapping[str, float]) -> np.ndarray:
+    """``theta0`` with the values of ``start`` (by parameter name) put in; :class:`~alpes_dyn.InputError` naming
+    a parameter that is not fitted, or a value that is not a finite number (positive unless additive)."""
+    if not isinstance(start, Mapping):
+        raise InputError(f"start: expected a mapping of parameter names to values, got {type(start).__name__}")
+    theta = theta0.copy()
+    for name, v in start.items():
+        if name not in names:
+            raise InputError(f"start: {name!r} is not a parameter of this fit (fitted: {', '.join(names)})")
+        k = list(names).index(name)
+        ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, (bool, np.bool_))
+        if not ok or not math.isfinite(float(v)) or (not additive[k] and float(v) <= 0):
+            need = "a finite number" if additive[k] else "a finite number > 0"
+            raise InputError(f"start: {name} = {v!r}: expected {need}")
+        theta[k] = float(v)
+    return theta
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
