@@ -201,6 +201,9 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
             "fit_seconds": one_fit.seconds, "compile_seconds": one_fit.compile_seconds, "verdict": verdict(one_fit),
             "flagged": not one_fit.trustworthy, "stop_reason": one_fit.reason, "effects": effects,
             "adequacy": one_fit.adequacy.to_dict() if one_fit.adequacy is not None else None}
+    row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
+                                  "fit_seconds": r.seconds} for e, r in fit.rounds]
+    row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
     row["extended"]["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy,
         "fit_seconds": fit.tried.seconds}
@@ -266,7 +269,8 @@ def table_text(out: dict) -> str:
         wa, wb = a["worst_error_pct"], b["worst_error_common_scale_pct"]
         lines.append(f"{r['case']:9} {r['seed']:>4} | {wa['K']:8.2f} {wa['m']:6.1f} {a['residual_counts']:5.2f} "
                      f"{'yes' if a['flagged'] else 'no':>5} | {wb['K']:6.2f} {wb['m']:5.1f} {wb['F_s']:5.1f} "
-                     f"{wb['F_v']:5.1f} {b['residual_counts']:5.2f} {str(b['converged']):>5} {b['fit_seconds']:5.1f} "
+                     f"{wb['F_v']:5.1f} {b['residual_counts']:5.2f} {str(b['converged']):>5} "
+                     f"{b.get('fit_seconds_total', b['fit_seconds']):5.1f} "
                      f"{'yes' if b['flagged'] else 'no':>5} {''.join(e[0] for e in b['effects']):>5} | "
                      f"{' / '.join(f'{x:.2f}' for x in r['ekf_rmse_deg']):>23} | "
                      f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19}")
