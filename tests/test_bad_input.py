@@ -554,6 +554,16 @@ CLI: dict[str, list[Cli]] = {
         C("codegen", "--params", "{tmp}/missing.toml", "-o", "{tmp}/c",
           needle="parameter file '{tmp}/missing.toml': cannot be read"),
         C("codegen", "--json", "--spring", "none", "-o", "{tmp}/c", needle="unrecognized arguments: --spring"),
+        C("codegen", "--controller", "pid", "-o", "{tmp}/c", needle="--controller: unknown controller 'pid'"),
+        C("codegen", "--controller", "sensor", "--model", "thumb", "--friction", "-o", "{tmp}/c",
+          needle="--controller: the force controller is exported for finger2 and finger3"),
+        C("codegen", "--controller", "pi", "--chain", "index", "-o", "{tmp}/c",
+          needle="--controller: the force controller is exported for finger2 and finger3"),
+        C("codegen", "--controller", "sensor", "--friction", "-o", "{tmp}/c",
+          needle="without --chain and --friction"),
+        C("codegen", "--controller", "sensor", "-o", "{tmp}", needle="-o: directory '{tmp}' is not empty"),
+        C("codegen", "--controller", "sensor", "--params", "{negative_k_toml}", "-o", "{tmp}/c",
+          needle="finger.K: value must be >= 0"),
     ],
     "estimate": [
         C("estimate", "--model", "{robot_urdf}", "--spec", "{robot_toml}",
@@ -1408,6 +1418,12 @@ def _cexport(c, what, *a, **kw):
     return getattr(cexport, what)(*a, **kw)
 
 
+def _fcexport(what, *a, **kw):
+    from alpes_dyn.control import cexport
+
+    return getattr(cexport, what)(*a, **kw)
+
+
 API.extend([
     A("c_sources", lambda c: _cexport(c, "c_sources", c.ss), InputError, "filt: expected a KalmanFilter, got StateSpace"),
     A("c_sources", lambda c: _cexport(c, "c_sources", _ekf(c), prefix="2x"), InputError, "prefix: expected a C identifier"),
@@ -1420,6 +1436,17 @@ API.extend([
       "model: the estimation scenario is defined for one finger or the thumb"),
     A("read_main_output", lambda c: _cexport(c, "read_main_output", "1 2 3\n", 6), InputError,
       "main.c output: expected lines of 42 numbers"),
+    A("write_sources", lambda c: _cexport(c, "write_sources", {"../x.c": ""}, c.d / "new"), InputError,
+      "files: '../x.c' is not a plain file name"),
+    A("check_output_directory", lambda c: _cexport(c, "check_output_directory", ""), InputError,
+      "-o: expected a directory name"),
+    A("controller_c_sources", lambda c: _fcexport("controller_c_sources", c.m), InputError,
+      "ctl: expected a ForceController, got Model"),
+    A("block_controller", lambda c: _fcexport("block_controller", "pid"), InputError, "unknown controller 'pid'"),
+    A("block_controller", lambda c: _fcexport("block_controller", "sensor", "hand"), InputError,
+      "defined for finger2 and finger3 on the block"),
+    A("read_force_output", lambda c: _fcexport("read_force_output", "1\n"), InputError,
+      "force_main.c output: expected two numbers per line"),
 ])
 
 

@@ -249,6 +249,9 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, ekf-params or ukf-params (the estimation scenario's filters and noise settings) "
                         "(default %(default)s)")
+    s.add_argument("--controller", default=None,
+                   help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block): "
+                        "sensor, sensorless or pi, as alpes_force.h, alpes_force.c and force_main.c")
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")

@@ -44,7 +44,8 @@ from ..errors import InputError
 from ..fileio import _fsync_dir, signals_as_exceptions
 from .observers import KalmanFilter
 
-__all__ = ["c_sources", "write_c_observer", "scenario_filter", "read_main_output", "main_input"]
+__all__ = ["c_sources", "write_c_observer", "write_sources", "check_output_directory", "scenario_filter",
+           "read_main_output", "main_input"]
 
 _WRAPPERS = r"""
 /* ---- alpes_dyn wrappers: the fixed-size API of {prefix}.h ---- */
@@ -313,11 +314,20 @@ def _header_fields(filt: KalmanFilter, about: str, nwork: int, z0: Any, P0: Any)
 
 def write_c_observer(filt: KalmanFilter, directory: str | os.PathLike[str], *, what: str = "-o",
                      **kwargs: Any) -> dict[str, Path]:
-    """Write :func:`c_sources` into ``directory``, a new (or empty) directory: the files are written into a
-    temporary directory beside it, which is then renamed to ``directory`` (never a partial directory; an
+    """Write :func:`c_sources` into ``directory``, a new (or empty) directory (:func:`write_sources`).
+    Returns {file name: path}."""
+    check_output_directory(directory, what)
+    return write_sources(c_sources(filt, **kwargs), directory, what)
+
+
+def write_sources(files: dict[str, str], directory: str | os.PathLike[str], what: str = "-o") -> dict[str, Path]:
+    """Write ``files`` ({name: text}) into ``directory``, a new (or empty) directory: into a temporary directory
+    beside it first, which is then renamed to ``directory`` (never a partial directory; an error or an
     interruption leaves nothing). Returns {file name: path}."""
     dest = check_output_directory(directory, what)
-    files = c_sources(filt, **kwargs)
+    for name in files:
+        if not name or "/" in name or name.startswith("."):
+            raise InputError(f"files: {name!r} is not a plain file name")
     with signals_as_exceptions():
         tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name[:80]}.", suffix=".tmp", dir=dest.parent))
         try:
