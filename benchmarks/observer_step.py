@@ -1,6 +1,8 @@
 """The observer's step for a real-time loop (issue 20): microseconds per sample, in the same process, of
 
     OnlineFilter.step   (KalmanFilter.online: one call into the compiled predict-update step)
+    C export            (alpes-dyn codegen: alpes_ekf_step in the exported C, compiled with cc -O2 (-O1 for the
+                         hand's large source) and timed by its main.c -t, no Python in the loop)
     KalmanFilter.step   (the Python API: CasADi's virtual machine, checks and copies)
     filterpy + Pinocchio  (the baseline: filterpy's ExtendedKalmanFilter with the RK4 step on pinocchio.aba and
                            its exact Jacobian from pinocchio.computeABADerivatives through the four RK4 stages)
@@ -18,14 +20,20 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
+import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
 import pinocchio as pin
 
 import alpes_dyn as ad
+from alpes_dyn.estimation.cexport import main_input, read_main_output, write_c_observer
 from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.simulation.codegen import _LARGE_SOURCE
 from alpes_dyn.symbolic.statespace import StateSpace
 
 
@@ -57,6 +65,32 @@ def _rk4_and_jacobian(m: ad.Model, dt: float):
                 dt / 6 * (U1 + 2 * E2 + 2 * E3 + E4))
 
     return step
+
+
+def c_export(filt, z0, P0, W, Y) -> dict:
+    """The exported C step (alpes-dyn codegen's files for ``filt``): built with the system compiler, run on the
+    record (its estimates) and timed by main.c's -t (us per step); None where no C compiler is found."""
+    cc = shutil.which(os.environ.get("CC", "").strip() or "gcc") or shutil.which("cc")
+    if cc is None:
+        return {"c_us": None, "c_build_s": None, "Z": None}
+    with tempfile.TemporaryDirectory() as d:
+        files = write_c_observer(filt, Path(d) / "c")
+        src = files["alpes_ekf.c"]
+        opt = "-O1" if src.stat().st_size > _LARGE_SOURCE else "-O2"
+        exe = src.parent / "alpes_ekf_main"
+        t0 = time.perf_counter()
+        subprocess.run([cc, opt, "-o", str(exe), str(files["main.c"]), str(src), "-lm"], check=True,
+                       capture_output=True)
+        build_s = time.perf_counter() - t0
+        inp = src.parent / "in.txt"
+        inp.write_text(main_input(z0, P0, Y[0], W, Y[1:]))
+        out = subprocess.run([str(exe), str(inp)], check=True, capture_output=True, text=True).stdout
+        Z, _ = read_main_output(out, filt.nz)
+        repeat = max(1, 20000 // len(W))
+        timed = subprocess.run([str(exe), "-t", str(repeat), str(inp)], check=True, capture_output=True,
+                               text=True).stdout
+        us = float(timed.split(":")[1].split("us")[0])
+    return {"c_us": us, "c_build_s": build_s, "c_opt": opt, "Z": Z}
 
 
 def bench(name: str, steps: int) -> dict:
@@ -116,11 +150,15 @@ def bench(name: str, steps: int) -> dict:
         Z_fp[k + 1] = fp.x
     filterpy_us = (time.perf_counter() - t0) / steps * 1e6
     est = filt.run(z0, P0, W, Y)
+    c = c_export(filt, z0, P0, W, Y)
+    Zc = c.pop("Z")
     return {"model": name, "states": 2 * n, "online_us": online_us, "step_us": step_us, "filterpy_us": filterpy_us,
             "online_vs_filterpy": online_us / filterpy_us, "step_vs_filterpy": step_us / filterpy_us,
             "online_equals_run": bool(np.array_equal(Z_on, est.z)),
             "filterpy_max_diff_rad": float(np.abs(Z_fp[:, :n] - Z_on[:, :n]).max()),
-            "online_build_s": build_s}
+            "online_build_s": build_s, **c,
+            "c_vs_filterpy": c["c_us"] / filterpy_us if c["c_us"] is not None else None,
+            "c_max_diff_vs_run": float(np.abs(Zc - est.z).max()) if Zc is not None else None}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -138,10 +176,13 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     print(f"load average {out['load_avg']:.1f}; us per sample (build of the compiled step excluded)")
     print(f"{'model':8s} {'states':>6s} {'online':>9s} {'step()':>9s} {'filterpy':>9s} {'online/fp':>9s} "
-          f"{'=run':>5s} {'|fp-online| rad':>15s}")
+          f"{'=run':>5s} {'|fp-online| rad':>15s} {'C export':>9s} {'C/fp':>7s} {'|C-run|':>9s}")
     for r in rows:
+        c = (f"{r['c_us']:9.2f} {r['c_vs_filterpy']:7.4f} {r['c_max_diff_vs_run']:9.1e}" if r["c_us"] is not None
+             else f"{'no cc':>9s} {'-':>7s} {'-':>9s}")
         print(f"{r['model']:8s} {r['states']:6d} {r['online_us']:9.2f} {r['step_us']:9.1f} {r['filterpy_us']:9.1f} "
-              f"{r['online_vs_filterpy']:9.3f} {str(r['online_equals_run']):>5s} {r['filterpy_max_diff_rad']:15.2e}")
+              f"{r['online_vs_filterpy']:9.3f} {str(r['online_equals_run']):>5s} {r['filterpy_max_diff_rad']:15.2e} "
+              f"{c}")
     return 0
 
 

@@ -530,6 +530,41 @@ CLI: dict[str, list[Cli]] = {
           "of 1000"),
         C("observability", "--order", "1001", needle="--order: 1001 is over the limit of 1000"),
     ],
+    "codegen": [
+        C("codegen", needle="the following arguments are required: -o/--output"),
+        C("codegen", "-o", "", needle="-o: expected a directory name, got ''"),
+        C("codegen", "-o", "{tmp}", needle="-o: directory '{tmp}' is not empty; refusing to write over it"),
+        C("codegen", "-o", "{params_toml}", needle="-o: '{params_toml}' exists and is not a directory"),
+        C("codegen", "--params", "{params_toml}", "-o", "{hardlink}", needle="exists and is not a directory"),
+        C("codegen", "-o", "{device}", needle="exists and is not a directory"),
+        C("codegen", "-o", "{link}", needle="-o: '{link}' is a symbolic link"),
+        C("codegen", "-o", "/nonexistent/c", needle="-o: directory '/nonexistent' of '/nonexistent/c' does not exist"),
+        C("codegen", "-o", "{file}/c", needle="-o: directory '{file}' of '{file}/c' does not exist"),
+        C("codegen", "--model", "hand", "-o", "{tmp}/c", needle="--model: the C export is defined for one chain"),
+        C("codegen", "--model", "{robot_urdf}", "-o", "{tmp}/c", needle="a URDF --model is not exported yet"),
+        C("codegen", "--model", "thumb", "-o", "{tmp}/c", needle="friction: the thumb's scenario needs"),
+        C("codegen", "--chain", "pinky", "-o", "{tmp}/c", needle="chain: unknown finger 'pinky'"),
+        C("codegen", "--model", "thumb", "--friction", "--chain", "index", "-o", "{tmp}/c",
+          needle="chain: only a finger model"),
+        C("codegen", "--observer", "pf", "-o", "{tmp}/c", needle="--observer: unknown observer 'pf'"),
+        C("codegen", "--params", "", "-o", "{tmp}/c", needle="parameter file: empty file name"),
+        C("codegen", "--params", "{latin1_toml}", "-o", "{tmp}/c", needle="not UTF-8 text"),
+        C("codegen", "--params", "{fifo}", "-o", "{tmp}/c", needle="is a FIFO (named pipe)"),
+        C("codegen", "--params", "{negative_k_toml}", "-o", "{tmp}/c", needle="finger.K: value must be >= 0"),
+        C("codegen", "--params", "{tmp}/missing.toml", "-o", "{tmp}/c",
+          needle="parameter file '{tmp}/missing.toml': cannot be read"),
+        C("codegen", "--json", "--spring", "none", "-o", "{tmp}/c", needle="unrecognized arguments: --spring"),
+        C("codegen", "--controller", "pid", "-o", "{tmp}/c", needle="--controller: unknown controller 'pid'"),
+        C("codegen", "--controller", "sensor", "--model", "thumb", "--friction", "-o", "{tmp}/c",
+          needle="--controller: the force controller is exported for finger2 and finger3"),
+        C("codegen", "--controller", "pi", "--chain", "index", "-o", "{tmp}/c",
+          needle="--controller: the force controller is exported for finger2 and finger3"),
+        C("codegen", "--controller", "sensor", "--friction", "-o", "{tmp}/c",
+          needle="without --chain and --friction"),
+        C("codegen", "--controller", "sensor", "-o", "{tmp}", needle="-o: directory '{tmp}' is not empty"),
+        C("codegen", "--controller", "sensor", "--params", "{negative_k_toml}", "-o", "{tmp}/c",
+          needle="finger.K: value must be >= 0"),
+    ],
     "estimate": [
         C("estimate", "--model", "{robot_urdf}", "--spec", "{robot_toml}",
           needle="--model: the simulated estimation scenario is the Alpes fingers'; on a URDF --model run the observer"),
@@ -1376,6 +1411,44 @@ def _plot_path(p):
     from alpes_dyn.estimation.scenario import check_plot_path
 
     return check_plot_path(p)
+
+
+def _cexport(c, what, *a, **kw):
+    from alpes_dyn.estimation import cexport
+
+    return getattr(cexport, what)(*a, **kw)
+
+
+def _fcexport(what, *a, **kw):
+    from alpes_dyn.control import cexport
+
+    return getattr(cexport, what)(*a, **kw)
+
+
+API.extend([
+    A("c_sources", lambda c: _cexport(c, "c_sources", c.ss), InputError, "filt: expected a KalmanFilter, got StateSpace"),
+    A("c_sources", lambda c: _cexport(c, "c_sources", _ekf(c), prefix="2x"), InputError, "prefix: expected a C identifier"),
+    A("write_c_observer", lambda c: _cexport(c, "write_c_observer", _ekf(c), c.d), InputError,
+      "is not empty; refusing to write over it"),
+    A("write_c_observer", lambda c: _cexport(c, "write_c_observer", _ekf(c), c.f["params_toml"]), InputError,
+      "exists and is not a directory"),
+    A("scenario_filter", lambda c: _cexport(c, "scenario_filter", "pf"), InputError, "unknown observer 'pf'"),
+    A("scenario_filter", lambda c: _cexport(c, "scenario_filter", "ekf", "hand"), InputError,
+      "model: the estimation scenario is defined for one finger or the thumb"),
+    A("read_main_output", lambda c: _cexport(c, "read_main_output", "1 2 3\n", 6), InputError,
+      "main.c output: expected lines of 42 numbers"),
+    A("write_sources", lambda c: _cexport(c, "write_sources", {"../x.c": ""}, c.d / "new"), InputError,
+      "files: '../x.c' is not a plain file name"),
+    A("check_output_directory", lambda c: _cexport(c, "check_output_directory", ""), InputError,
+      "-o: expected a directory name"),
+    A("controller_c_sources", lambda c: _fcexport("controller_c_sources", c.m), InputError,
+      "ctl: expected a ForceController, got Model"),
+    A("block_controller", lambda c: _fcexport("block_controller", "pid"), InputError, "unknown controller 'pid'"),
+    A("block_controller", lambda c: _fcexport("block_controller", "sensor", "hand"), InputError,
+      "defined for finger2 and finger3 on the block"),
+    A("read_force_output", lambda c: _fcexport("read_force_output", "1\n"), InputError,
+      "force_main.c output: expected two numbers per line"),
+])
 
 
 # Public names that take no user input of their own (records returned by the library, constants, errors)

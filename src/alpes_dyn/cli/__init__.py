@@ -7,7 +7,7 @@ Vectors are comma-separated numbers; negative values work as ``--q=-0.1,0.2`` an
 
 The package holds one module per command family, each a thin layer over the floors below:
 ``model_cmds`` (urdf, mjcf, dynamics, linearize, report), ``analysis_cmds`` (observability,
-identifiability), ``estimation_cmds`` (estimate, experiment, identify), ``control_cmds`` (control) and
+identifiability), ``estimation_cmds`` (estimate, codegen, experiment, identify), ``control_cmds`` (control) and
 ``study_cmds`` (sweep); ``parser`` builds the parser (:func:`build_parser`) and ``common`` holds what they
 share. This module runs one command (:func:`main`), turns every exception into its exit code and one stderr
 line, and re-exports the names of the former module ``cli.py``: ``alpes_dyn.cli.X`` is what it was.

@@ -1,6 +1,7 @@
 """The commands on recordings and observers: ``estimate`` (an observer on the simulated scenario or on a
-recording), ``experiment`` (the identification experiment simulated, its recording written) and
-``identify`` (a chain's parameters fitted to a recording; exit code 3 when the fit is not to be trusted)."""
+recording), ``experiment`` (the identification experiment simulated, its recording written),
+``identify`` (a chain's parameters fitted to a recording; exit code 3 when the fit is not to be trusted) and
+``codegen`` (the observer's step written as standalone C)."""
 
 from __future__ import annotations
 
@@ -412,3 +413,54 @@ def _motor_chain(model, chosen, motor: str):
         raise InputError(f"--chain: the selection has no parameter of motor {motor!r}'s joints "
                          f"({', '.join(sorted(joints))})")
     return out
+
+
+# ---- the observer's step as standalone C (issue 20)
+def cmd_codegen(args: argparse.Namespace) -> int:
+    """``codegen``: write the observer's step (the estimation scenario's filter) as C source, header and test
+    program into a new directory (alpes_dyn.estimation.cexport), with --controller the force controller's too
+    (alpes_dyn.control.cexport)."""
+    from ..estimation.cexport import c_sources, check_output_directory, scenario_filter, write_sources
+    from ..estimation.observers import OBSERVERS
+    from ..estimation.scenario import ESTIMATION_MODELS
+
+    if _is_urdf_path(args.model):
+        raise InputError("--model: the C export builds the estimation scenario's observer of an Alpes finger "
+                         f"({', '.join(ESTIMATION_MODELS)}); a URDF --model is not exported yet")
+    _one_chain(args.model, ESTIMATION_MODELS, "the C export")
+    _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    if args.controller is not None:
+        from ..control.controller import CONTROLLERS
+
+        _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+        if args.model not in ("finger2", "finger3") or args.chain is not None or args.friction:
+            raise InputError("--controller: the force controller is exported for finger2 and finger3 on the block "
+                             "(alpes-dyn control's scene), without --chain and --friction")
+    check_output_directory(args.output, "-o")  # before the build: a new or empty directory, never a file
+    t0 = time.perf_counter()
+    filt, z0, P0 = scenario_filter(args.observer, args.model, params=args.params, chain=args.chain,
+                                   friction=args.friction)
+    about = (f"Model {args.model}{f' (chain {args.chain})' if args.chain else ''}, parameter file "
+             f"{args.params or 'shipped with alpes_dyn'}{', with friction' if args.friction else ''}; observer "
+             f"{args.observer} with the noise settings of 'alpes-dyn estimate'.")
+    files = c_sources(filt, about=about, z0=z0, P0=P0)
+    if args.controller is not None:
+        from ..control.cexport import block_controller, controller_c_sources
+
+        files.update(controller_c_sources(block_controller(args.controller, args.model, args.params)))
+    written = write_sources(files, args.output, "-o")
+    prefix = f"alpes_{filt.kind}"
+    obj = {"model": args.model, "chain": args.chain, "params": args.params, "observer": args.observer,
+           "controller": args.controller, "directory": args.output, "files": sorted(written), "prefix": prefix,
+           "nz": filt.nz, "nw": filt.nw, "ny": filt.ny, "dt": filt.dt, "states": list(filt.names),
+           "seconds": time.perf_counter() - t0}
+    lines = [f"{args.model}: {args.observer} step{f' and {args.controller} controller' if args.controller else ''} "
+             f"written to {args.output}/ ({', '.join(sorted(written))})",
+             f"  {prefix}_step(z[{filt.nz}], P[{filt.nz}*{filt.nz}], w[{filt.nw}], y[{filt.ny}], z_out, P_out, "
+             f"work), dt = {filt.dt:g} s; the API in {prefix}.h",
+             f"  build: cc -O2 -o {prefix}_main main.c {prefix}.c -lm"]
+    if args.controller is not None:
+        lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
+                     "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0

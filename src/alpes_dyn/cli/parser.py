@@ -14,7 +14,7 @@ from ..limits import MAX_POINTS
 from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import _UsageError
 from .control_cmds import cmd_control
-from .estimation_cmds import THUMB_PARAMETERS, cmd_estimate, cmd_experiment, cmd_identify
+from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_experiment, cmd_identify
 from .model_cmds import cmd_dynamics, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
 from .study_cmds import cmd_sweep
 
@@ -233,6 +233,31 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.set_defaults(func=cmd_estimate)
 
 
+def _add_codegen(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("codegen", help="write the observer's step as standalone C (source, header, test program): "
+                       "no Python, no heap",
+                       epilog="Example: alpes-dyn codegen --model finger3 --observer ekf -o ekf_c; then "
+                              "cc -O2 -o ekf_c/alpes_ekf_main ekf_c/main.c ekf_c/alpes_ekf.c -lm")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, or thumb (with --friction) "
+                   "(default %(default)s)")
+    s.add_argument("--chain", default=None, metavar="FINGER",
+                   help="a finger model as that finger of the hand (its own [finger.<name>] values in --params)")
+    s.add_argument("--params", default=None, metavar="FILE",
+                   help="the observer's parameter file, e.g. written by 'alpes-dyn identify' (default: the shipped "
+                        "one)")
+    s.add_argument("--friction", action="store_true", help="the observer's model has friction (eq. 2.6-2.7)")
+    s.add_argument("--observer", default="ekf",
+                   help="ekf, ukf, ekf-params or ukf-params (the estimation scenario's filters and noise settings) "
+                        "(default %(default)s)")
+    s.add_argument("--controller", default=None,
+                   help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block): "
+                        "sensor, sensorless or pi, as alpes_force.h, alpes_force.c and force_main.c")
+    s.add_argument("-o", "--output", required=True, metavar="DIR",
+                   help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.set_defaults(func=cmd_codegen)
+
+
 def _add_experiment(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("experiment", help="simulate the identification experiment on a finger or the thumb, write a "
                        "recording CSV",
@@ -407,6 +432,7 @@ def build_parser() -> argparse.ArgumentParser:
     p.add_argument("--version", action="version", version=f"alpes-dyn {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
     for add in (_add_urdf, _add_mjcf, _add_dynamics, _add_report, _add_observability, _add_linearize,
-                _add_estimate, _add_experiment, _add_identify, _add_identifiability, _add_sweep, _add_control):
+                _add_estimate, _add_codegen, _add_experiment, _add_identify, _add_identifiability, _add_sweep,
+                _add_control):
         add(sub)
     return p

@@ -1,0 +1,332 @@
+"""A standalone C export of the fingertip force controller (issue 20): :class:`~.controller.ForceController`'s
+``update`` as C, beside the observer's (:mod:`alpes_dyn.estimation.cexport`).
+
+:func:`controller_c_sources` writes ``alpes_force.h`` (the API, the settings in its comment), ``alpes_force.c``
+(the controller's logic -- prefilter, contact onset and loss, bumpless transfer, saturation, anti-windup -- line
+for line as :meth:`ForceController.update <alpes_dyn.control.controller.ForceController.update>`, and CasADi's
+generated code of its feedforward, the static balance :func:`~.controller.static_motor_torque` at the fixed
+surface normal, and of :func:`~.controller.static_contact_force`, the sensorless loop's force estimate) and
+``force_main.c`` (reads F_ref F_fb q_hat per line, prints the torque command and that force)::
+
+    typedef struct { ... } alpes_force_state;          /* the controller's memory: zero it to start */
+    void alpes_force_init(alpes_force_state* s);
+    int alpes_force_update(alpes_force_state* s, double F_ref, double F_fb, const double q_hat[ALPES_FORCE_NQ],
+                           double* tau, double work[ALPES_FORCE_NWORK]);
+    int alpes_force_contact_force(const double q_hat[ALPES_FORCE_NQ], double tau_m, double* F_z,
+                                  double work[ALPES_FORCE_NWORK]);   /* the sensorless loop's estimate */
+
+No heap, no global state; ``-lm``. The surface normal is the controller's at export (a block's face: the
+per-step normal of a curved object, ``update(normal=)``, is not exported).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from ..errors import InputError
+from ..symbolic.dynamics import SymbolicDynamics
+from .controller import ForceController
+
+__all__ = ["controller_c_sources", "block_controller", "force_main_input", "read_force_output"]
+
+_LOGIC = r"""
+/* ---- alpes_dyn: ForceController.update, line for line ---- */
+#include <string.h>
+#include "{prefix}.h"
+
+#define KIND_PI {is_pi}
+#define DT {dt!r}
+#define TAU_MAX {tau_max!r}
+#define KP {kp!r}
+#define KI {ki!r}
+#define THRESHOLD {contact_threshold!r}
+#define APPROACH_RATE {approach_rate!r}
+#define PREFILTER_S {prefilter_s!r}
+#define LOSS_S {loss_s!r}
+#define ONSET_S {onset_s!r}
+#define ORDER {prefilter_order}
+#define SETPOINT_WEIGHT {setpoint_weight!r}
+
+static double mn(double a, double b) {{ return b < a ? b : a; }}  /* Python's min(a, b) */
+static double mx(double a, double b) {{ return b > a ? b : a; }}  /* Python's max(a, b) */
+
+void {prefix}_init({prefix}_state* s) {{ memset(s, 0, sizeof(*s)); }}
+
+int {prefix}_contact_force(const double q_hat[{P}_NQ], double tau_m, double* F_z, double work[{P}_NWORK]) {{
+  const casadi_real* arg[{fc_arg}];
+  casadi_real* res[{fc_res}];
+  casadi_int iw[{fc_iw} + 1];
+  double* qi = work;
+  memcpy(qi, q_hat, sizeof(double) * {P}_NQ);
+  qi[{P}_NQ] = tau_m;
+  arg[0] = qi;
+  arg[1] = qi + {P}_NQ;
+  res[0] = F_z;
+  return {prefix}_cs_fz(arg, res, iw, qi + {P}_NQ + 1, 0);
+}}
+
+#if !KIND_PI
+static int feedforward(const double* q, double F, double* ff, double* work) {{
+  const casadi_real* arg[{ff_arg}];
+  casadi_real* res[{ff_res}];
+  casadi_int iw[{ff_iw} + 1];
+  double* qi = work;
+  memcpy(qi, q, sizeof(double) * {P}_NQ);
+  qi[{P}_NQ] = F;
+  arg[0] = qi;
+  arg[1] = qi + {P}_NQ;
+  res[0] = ff;
+  return {prefix}_cs_ff(arg, res, iw, qi + {P}_NQ + 1, 0);
+}}
+#endif
+
+int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], double* tau_out,
+                    double work[{P}_NWORK]) {{
+  double F_raw = F_ref, ff = 0.0, e, e_p, tau, tau_u;
+#if !KIND_PI
+  double a = DT / (PREFILTER_S + DT);
+  if (!s->started) {{ s->F_ref_f = s->F_ref_f2 = F_ref; s->started = 1; }}
+  s->F_ref_f += a * (F_ref - s->F_ref_f);
+  s->F_ref_f2 += a * (s->F_ref_f - s->F_ref_f2);
+  F_ref = ORDER == 2 ? s->F_ref_f2 : s->F_ref_f;
+  if (feedforward(q_hat, F_ref, &ff, work)) return 1;
+#else
+  (void) q_hat; (void) work;
+#endif
+  e = F_ref - F_fb;
+  e_p = e + SETPOINT_WEIGHT * (F_raw - F_ref);
+  if (s->in_contact) {{
+    s->below = F_fb < THRESHOLD ? s->below + 1 : 0;
+    if ((double) s->below * DT >= LOSS_S) {{
+      s->in_contact = 0;
+      s->below = 0;
+      s->tau_prev = KIND_PI ? 0.5 * s->tau_prev : mn(s->tau_prev, mx(ff, 0.0));
+    }}
+  }}
+  if (!s->in_contact) {{
+    s->above = F_fb >= THRESHOLD ? s->above + 1 : 0;
+    if (s->above == 0 || (double) s->above * DT < ONSET_S) {{ /* approach: bounded torque rate */
+      tau = mn(s->tau_prev + APPROACH_RATE * DT, TAU_MAX);
+      if (!KIND_PI) tau = mn(tau, mx(ff, s->tau_prev));
+      s->tau_prev = tau;
+      *tau_out = tau;
+      return 0;
+    }}
+    s->in_contact = 1;
+    s->integral = s->tau_prev - ff - KP * e_p; /* bumpless transfer */
+  }}
+  tau_u = ff + KP * e_p + s->integral;
+  tau = mn(mx(tau_u, 0.0), TAU_MAX);
+  if (tau == tau_u || (tau_u > TAU_MAX && e < 0) || (tau_u < 0 && e > 0)) s->integral += KI * e * DT; /* anti-windup */
+  s->tau_prev = tau;
+  *tau_out = tau;
+  return 0;
+}}
+"""
+
+_HEADER = r"""/* {prefix}.h -- the {kind} fingertip force controller of {model} (ForceController.update in C), exported by
+   alpes_dyn {version} (alpes-dyn codegen).
+
+   One motor's loop at dt = {dt!r} s: the motor torque command tau (N m, in [0, {tau_max!r}]) for the force
+   reference F_ref (N) and the force fed back F_fb (N: the FlexiForce reading, or the sensorless estimate),
+   with the feedforward S (G(q_hat) + F_ref J(q_hat)^T n) / (S S^T) at the observer's joint angles q_hat
+   ({nq}, rad){pi_note}. Surface normal n = {normal} (base frame, fixed). Settings: kp {kp!r} N m/N, ki {ki!r}
+   N m/(N s), contact threshold {contact_threshold!r} N (onset {onset_s!r} s, loss {loss_s!r} s), approach rate
+   {approach_rate!r} N m/s, prefilter {prefilter_s!r} s ({prefilter_order} stage(s)), set-point weight
+   {setpoint_weight!r}.
+
+   Start: {prefix}_state s; {prefix}_init(&s); then each period: {prefix}_update(&s, F_ref, F_fb, q_hat, &tau, work).
+   No heap, no global state; returns 0 (1 if the generated feedforward failed). Build: cc -O2 -c {prefix}.c
+   (link with -lm); the test program: cc -O2 -o {prefix}_main force_main.c {prefix}.c -lm
+*/
+#ifndef {P}_H
+#define {P}_H
+
+#ifdef __cplusplus
+extern "C" {{
+#endif
+
+#define {P}_NQ {nq}        /* joint angles of q_hat */
+#define {P}_NWORK {nwork}  /* doubles of the work array */
+#define {P}_DT {dt!r}  /* control period, s */
+
+typedef struct {{
+  double integral;   /* the PI's integral, N m */
+  double tau_prev;   /* the last command, N m */
+  double F_ref_f, F_ref_f2;  /* the prefilter's stages, N */
+  long above, below; /* periods above / below the contact threshold */
+  int in_contact, started;
+}} {prefix}_state;
+
+void {prefix}_init({prefix}_state* s);
+
+/* The command tau (N m) for this period. */
+int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], double* tau,
+                    double work[{P}_NWORK]);
+
+/* The static contact force F_z (N) that balances the motor torque tau_m (N m) at q_hat (rad): the sensorless
+   loop's estimate (static_contact_force; the loop low-passes it, max(F_z, 0), before feeding it back). */
+int {prefix}_contact_force(const double q_hat[{P}_NQ], double tau_m, double* F_z, double work[{P}_NWORK]);
+
+#ifdef __cplusplus
+}}
+#endif
+#endif
+"""
+
+_MAIN = r"""/* force_main.c -- test program of {prefix}.c: reads lines F_ref F_fb q_hat ({nq}), prints per line the command tau
+   and the contact force that balances it at q_hat, {prefix}_contact_force (%.17g);
+   with -t REPEAT times the updates instead. Build: cc -O2 -o {prefix}_main force_main.c {prefix}.c -lm */
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "{prefix}.h"
+
+#define NR (2 + {P}_NQ)
+
+int main(int argc, char** argv) {{
+  double work[{P}_NWORK], tau = 0.0, Fz = 0.0, *rows = 0;
+  long n = 0, cap = 0, k, r, repeat = 0;
+  int a = 1, i;
+  {prefix}_state s;
+  FILE* f;
+  if (argc > 2 && strcmp(argv[1], "-t") == 0) {{ repeat = atol(argv[2]); a = 3; }}
+  if (argc != a + 1 || (a == 3 && repeat < 1)) {{ fprintf(stderr, "usage: %s [-t REPEAT] FILE|-\n", argv[0]); return 2; }}
+  f = strcmp(argv[a], "-") == 0 ? stdin : fopen(argv[a], "r");
+  if (!f) {{ fprintf(stderr, "%s: cannot open %s\n", argv[0], argv[a]); return 2; }}
+  for (;;) {{
+    if (n == cap) {{
+      double* more = realloc(rows, sizeof(double) * NR * (cap = cap ? 2 * cap : 1024));
+      if (!more) {{ fprintf(stderr, "%s: out of memory\n", argv[0]); return 2; }}
+      rows = more;
+    }}
+    for (i = 0; i < NR; ++i) if (fscanf(f, "%lf", &rows[n * NR + i]) != 1) break;
+    if (i == 0) break;
+    if (i != NR) {{ fprintf(stderr, "%s: line %ld: expected %d numbers\n", argv[0], n + 1, NR); return 2; }}
+    ++n;
+  }}
+  if (repeat == 0) {{
+    {prefix}_init(&s);
+    for (k = 0; k < n; ++k) {{
+      if ({prefix}_update(&s, rows[k * NR], rows[k * NR + 1], rows + k * NR + 2, &tau, work)) return 1;
+      if ({prefix}_contact_force(rows + k * NR + 2, tau, &Fz, work)) return 1;
+      printf("%.17g %.17g\n", tau, Fz);
+    }}
+  }} else {{
+    struct timespec t0, t1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (r = 0; r < repeat; ++r) {{
+      {prefix}_init(&s);
+      for (k = 0; k < n; ++k) {prefix}_update(&s, rows[k * NR], rows[k * NR + 1], rows + k * NR + 2, &tau, work);
+    }}
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    printf("%ld updates x %ld: %.4f us per update (tau = %.17g)\n", n, repeat,
+           1e6 * ((t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec)) / (n * repeat > 0 ? n * repeat : 1), tau);
+  }}
+  free(rows);
+  return 0;
+}}
+"""
+
+
+def _feedforward_function(ctl: ForceController, name: str) -> cs.Function:
+    """tau_ff(q, F) = S (G(q) + F J(q)^T n) / (S S^T): :func:`~.controller.static_motor_torque` in CasADi."""
+    m = ctl.model
+    sym = SymbolicDynamics(m)
+    q = cs.SX.sym("q", m.n)
+    F = cs.SX.sym("F")
+    S = np.asarray(m.transmission.S[0], dtype=float)
+    b = sym.gravity_torque(q) + F * cs.mtimes(sym.fingertip_jacobian(q).T, cs.DM(ctl.normal))
+    return cs.Function(name, [q, F], [cs.dot(cs.DM(S), b) / float(S @ S)], ["q", "F"], ["tau_ff"])
+
+
+def _contact_force_function(ctl: ForceController, name: str) -> cs.Function:
+    """F_z(q, tau_m) = -(J^T n) . (G(q) - S^T tau_m) / |J^T n|^2: :func:`~.controller.static_contact_force`."""
+    m = ctl.model
+    sym = SymbolicDynamics(m)
+    q = cs.SX.sym("q", m.n)
+    tau = cs.SX.sym("tau_m")
+    jn = cs.mtimes(sym.fingertip_jacobian(q).T, cs.DM(ctl.normal))
+    r = sym.gravity_torque(q) - cs.DM(np.asarray(m.transmission.S[0], dtype=float)) * tau
+    return cs.Function(name, [q, tau], [-cs.dot(jn, r) / cs.dot(jn, jn)], ["q", "tau_m"], ["F_z"])
+
+
+def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -> dict[str, str]:
+    """The C export of ``ctl.update``: ``{"<prefix>.h": ..., "<prefix>.c": ..., "force_main.c": ...}`` (see the
+    module docstring). ``ctl`` is a fresh controller (its settings are exported, not its state)."""
+    from .. import __version__
+
+    if not isinstance(ctl, ForceController):
+        raise InputError(f"ctl: expected a ForceController, got {type(ctl).__name__}")
+    if not (prefix.isidentifier() and prefix.isascii() and len(prefix) <= 40):
+        raise InputError(f"prefix: expected a C identifier of at most 40 characters, got {prefix!r}")
+    P = prefix.upper()
+    ff = _feedforward_function(ctl, f"{prefix}_cs_ff")
+    fc = _contact_force_function(ctl, f"{prefix}_cs_fz")
+    cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
+    cg.add(ff)
+    cg.add(fc)
+    nq = ctl.model.n
+    nwork = nq + 1 + max(ff.sz_w(), fc.sz_w())
+    settings: dict[str, Any] = {k: float(getattr(ctl, k)) for k in (
+        "dt", "tau_max", "kp", "ki", "contact_threshold", "approach_rate", "prefilter_s", "loss_s", "onset_s",
+        "setpoint_weight")}
+    for k, v in settings.items():
+        if not np.isfinite(v):
+            raise InputError(f"{k}: expected a finite number, got {v!r}")
+    settings["prefilter_order"] = int(ctl.prefilter_order)
+    is_pi = int(ctl.kind == "pi")
+    source = (f"/* {prefix}.c -- generated by alpes_dyn (alpes-dyn codegen); the API is in {prefix}.h */\n"
+              + cg.dump() + _LOGIC.format(prefix=prefix, P=P, is_pi=is_pi, ff_arg=ff.sz_arg(), ff_res=ff.sz_res(),
+                                          ff_iw=ff.sz_iw(), fc_arg=fc.sz_arg(), fc_res=fc.sz_res(), fc_iw=fc.sz_iw(),
+                                          **settings))
+    header = _HEADER.format(prefix=prefix, P=P, kind=ctl.kind, model=ctl.model.name, version=__version__, nq=nq,
+                            nwork=nwork, normal="[" + ", ".join(f"{x:.17g}" for x in ctl.normal) + "]",
+                            pi_note=" (the pi baseline: no feedforward, q_hat unused)" if is_pi else "", **settings)
+    return {f"{prefix}.h": header, f"{prefix}.c": source,
+            "force_main.c": _MAIN.format(prefix=prefix, P=P, nq=nq)}
+
+
+def block_controller(kind: str = "sensor", model: str = "finger3", params: Any = None) -> ForceController:
+    """The controller of ``alpes-dyn control`` (:func:`~.finger_loop.run_control`'s block scene): ``kind`` from
+    :data:`~.controller.CONTROLLERS` with its :data:`~.controller.DEFAULT_GAINS`, on ``model`` (finger2,
+    finger3) with the parameter file ``params``, the block's face normal, the scenario's period and
+    ``tau_max``; a fresh one (its state at zero)."""
+    from ..model.mjcf import block_normal
+    from ..model.params import load_params
+    from ..model.robot import Model
+    from .controller import CONTROLLERS, DEFAULT_GAINS
+    from .finger_loop import ControlScenario
+
+    if kind not in CONTROLLERS:
+        raise InputError(f"controller: unknown controller {kind!r} (expected one of {', '.join(CONTROLLERS)})")
+    if model not in ("finger2", "finger3"):
+        raise InputError(f"model: the force controller's C export is defined for finger2 and finger3 on the block, "
+                         f"got {model!r}")
+    sc = ControlScenario(model=model, controller=kind)
+    p = load_params(params)
+    m = Model.alpes(model, params=p)
+    return ForceController(kind, m, block_normal(tuple(sc.contact_q[: m.n])), sc.dt, p.tau_max, **DEFAULT_GAINS[kind])
+
+
+def force_main_input(F_ref: Any, F_fb: Any, q_hat: Any) -> str:
+    """The text ``force_main.c`` reads: F_ref F_fb q_hat per line (``repr``: read back exactly)."""
+    F_ref, F_fb = np.asarray(F_ref, float).reshape(-1), np.asarray(F_fb, float).reshape(-1)
+    Q = np.asarray(q_hat, float).reshape(len(F_ref), -1)
+    return "".join(" ".join(repr(float(x)) for x in np.r_[a, b, q]) + "\n" for a, b, q in zip(F_ref, F_fb, Q))
+
+
+def read_force_output(text: str) -> tuple[np.ndarray, np.ndarray]:
+    """``force_main.c``'s printout: (tau (N,) torque commands, N m; F_z (N,) the contact forces balancing them, N)."""
+    try:
+        rows = np.array([[float(x) for x in line.split()] for line in text.splitlines() if line.strip()])
+    except ValueError:
+        rows = np.zeros((0, 0))
+    if rows.ndim != 2 or rows.shape[1] != 2:
+        raise InputError("force_main.c output: expected two numbers per line")
+    return rows[:, 0], rows[:, 1]
