@@ -208,6 +208,11 @@ class Model:
     middle, ring, thumb). Motors (:attr:`motor_names`) keep the order of the transmission, tips
     (:attr:`tip_names`) the order given by the layout or spec (else the URDF's, leaf frames in
     Pinocchio's frame order). Use :meth:`joint_index` rather than positions.
+
+    Default tip (:attr:`default_tip`): the first of :attr:`tips` where the spec (``tips = [...]``) or the layout
+    names them, or where the URDF has a single leaf frame; a URDF with several leaves and no tip named has none
+    (UR5's leaves are ``base``, ``ee_link``, ``tool0``: its first leaf, the base, is no tip), and what needs
+    the default tip raises :class:`~alpes_dyn.ModelError` naming the leaves and how to name one.
     """
 
     def __init__(self, urdf: str, spec: TransmissionSpec | str | Path | None = None,
@@ -279,6 +284,8 @@ class Model:
             parents = {self.pin_model.frames[i].parentFrame for i in range(len(self.pin_model.frames))}
             self.tips = tuple(f.name for i, f in enumerate(self.pin_model.frames)
                               if i not in parents and f.type == pin.FrameType.BODY)
+        self.tips_named: bool = (spec is not None and spec.tips is not None) or layout is not None or len(self.tips) <= 1
+        """Whether :attr:`default_tip` is defined: tips named by the spec or layout, or a URDF with one leaf."""
         self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
             self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
@@ -413,12 +420,22 @@ class Model:
             raise InputError(f"{name}: contains NaN or inf ({a.tolist()})")
         return a
 
+    @property
+    def default_tip(self) -> str:
+        """The tip used where none is given: the first of :attr:`tips`; :class:`~alpes_dyn.ModelError` where there
+        is none, or where the URDF has several leaf frames and neither the spec nor the layout names the tips."""
+        if not self.tips:
+            raise ModelError("model has no tip frame; pass a frame name")
+        if not self.tips_named:
+            raise ModelError(f"tip: model {self.name!r} names no tip and its URDF has {len(self.tips)} leaf frames "
+                             f"({', '.join(self.tips)}); name it: tips = [\"<frame>\"] in the spec, or tip=<frame> "
+                             "(the command line's --tip)")
+        return self.tips[0]
+
     def frame_id(self, tip: str | None) -> int:
-        """Pinocchio frame index of ``tip`` (default: the first tip)."""
+        """Pinocchio frame index of ``tip`` (default: :attr:`default_tip`)."""
         if tip is None:
-            if not self.tips:
-                raise ModelError("model has no tip frame; pass a frame name")
-            tip = self.tips[0]
+            tip = self.default_tip
         try:
             return self._frames[tip]
         except (KeyError, TypeError):
@@ -449,14 +466,15 @@ class Model:
         return pin.computeCoriolisMatrix(self.pin_model, self.pin_data, q, v).copy()
 
     def spring_torque(self, q: np.ndarray) -> np.ndarray:
-        """Spring torques k q, (n,), N m (eq. 2.14 under the model's spring law)."""
+        """Spring torques k (q - q_rest), (n,), N m (eq. 2.14 under the model's spring law; q_rest the rest angles,
+        0 unless the spec's ``[rest_angle]`` gives them)."""
         return self.extras.spring_torque(self.vector(q, "q"))
 
     def gravity_torque(self, q: np.ndarray) -> np.ndarray:
         """G(q) of eq. 2.11: gravity plus springs, (n,), N m."""
         q = self.vector(q, "q")
         g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, q)
-        return g + self._k * q if self._spring else g.copy()
+        return g + self.extras.spring_torque(q) if self._spring else g.copy()
 
     def gravity_jacobian(self, q: np.ndarray) -> np.ndarray:
         """dG/dq (n, n), N m/rad: Pinocchio's analytic gravity derivatives plus the spring stiffness diag(k)."""
@@ -544,7 +562,7 @@ class Model:
         return 0.5 * float(v @ self.inertia_matrix(q) @ v)
 
     def potential_energy(self, q: np.ndarray) -> float:
-        """U = gravity + spring potential energy (J), zero at the base height and q = 0 springs."""
+        """U = gravity + spring potential energy (J), zero at the base height and with every spring at its rest angle."""
         q = self.vector(q, "q")
         return float(pin.computePotentialEnergy(self.pin_model, self.pin_data, q)) + float(self.extras.spring_energy(q))
 
@@ -566,7 +584,7 @@ class Model:
                 and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == self._shape):
             q, v, tau = self.vector(q, "q"), self.vector(v, "v"), self.vector(tau, "tau")
         if self._spring:
-            tau = tau - self._k * q
+            tau = tau - self.extras.spring_torque(q)
         if self._friction:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
@@ -614,7 +632,7 @@ class Model:
         if self._rotor:
             tau += self.rotor_matrix @ a
         if self._spring:
-            tau += self._k * q
+            tau += self.extras.spring_torque(q)
         if self._friction:
             tau += self.extras.friction_torque(v, smooth)
         if F is not None:
