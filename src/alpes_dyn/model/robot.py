@@ -207,14 +207,7 @@ class Model:
         self._shape = (n,)
         self._tiny = np.full(n, _TINY)  # x . tiny is finite iff x is, and never overflows (no numpy warning)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
-        if spec is not None and spec.tips is not None:
-            self.tips: tuple[str, ...] = spec.tips
-        elif layout is not None:
-            self.tips = layout.tips
-        else:
-            parents = {self.pin_model.frames[i].parentFrame for i in range(len(self.pin_model.frames))}
-            self.tips = tuple(f.name for i, f in enumerate(self.pin_model.frames)
-                              if i not in parents and f.type == pin.FrameType.BODY)
+        self.tips: tuple[str, ...] = _tips(self.pin_model, spec, layout)
         self.tips_named: bool = (spec is not None and spec.tips is not None) or layout is not None or len(self.tips) <= 1
         """Whether :attr:`default_tip` is defined: tips named by the spec or layout, or a URDF with one leaf."""
         self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
@@ -630,6 +623,16 @@ class Model:
         hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
         shape = self.n if size is None else (size, self.n)
         return rng.uniform(lo, hi, size=None if size is None else shape), rng.uniform(-speed, speed, shape)
+
+
+def _tips(pm: pin.Model, spec: TransmissionSpec | None, layout: Layout | None) -> tuple[str, ...]:
+    """The tip frames: the spec's, else the layout's, else the URDF's leaf frames (Pinocchio's frame order)."""
+    if spec is not None and spec.tips is not None:
+        return spec.tips
+    if layout is not None:
+        return layout.tips
+    parents = {pm.frames[i].parentFrame for i in range(len(pm.frames))}
+    return tuple(f.name for i, f in enumerate(pm.frames) if i not in parents and f.type == pin.FrameType.BODY)
 
 
 def _restore_model(urdf: str, spec: str | None, gravity: list[float], name: str, layout: Layout | None,
