@@ -58,6 +58,8 @@ URDFS = {
     "no_limits_urdf": "<robot name='x'><link name='a'/><link name='b'/><joint name='j' type='revolute'>"
                       "<parent link='a'/><child link='b'/></joint></robot>",
     "truncated_urdf": FINGER3[: len(FINGER3) // 2],
+    "twoleaf_urdf": FINGER3.replace("</robot>", '<link name="nail"/><joint name="nail_joint" type="fixed"><parent '
+                                    'link="p3"/><child link="nail"/></joint></robot>'),  # two leaves: no default tip
     "continuous_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="continuous">', 1),
     "planar_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="planar">', 1),
     "zeroaxis_urdf": re.sub(r'(<joint name="j2".*?<axis xyz=")[^"]*"', r'\g<1>0 0 0"', FINGER3, count=1, flags=re.S),
@@ -154,7 +156,8 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotident_toml=(ROBOT_SPEC + "\n[identified.stiffness]\nj1 = 1e-5\nj9 = 1e-5\n").encode(),
                  robotstd_toml=(ROBOT_SPEC + "\n[identified.viscous]\nj1 = -1e-5\n").encode(),
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
-                 robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode())
+                 robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
+                 robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -510,6 +513,10 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{inverted_limit_urdf}", needle="joint 'j1': limit lower 1.6 is above upper 0"),
         C("dynamics", "--model", "{negmass_urdf}", "--spec", "{fifo}", needle="spec file '{fifo}': is a FIFO"),
         C("dynamics", "--model", "{negmass_urdf}", "--spec", "{deep_toml}", needle="nested more than 32 deep"),
+        C("dynamics", "--model", "{twoleaf_urdf}", needle="names no tip and its URDF has 2 leaf frames (nail, tip); "
+          'name it: tips = ["<frame>"] in the spec, or tip=<frame> (the command line\'s --tip)'),
+        C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotrest_toml}",
+          needle="rest_angle.j9: joint 'j9' has no spring (no [stiffness] value)"),
     ],
     "report": [
         C("report", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
@@ -880,6 +887,12 @@ def _fim(c, **kw):
     return fisher_information(**kw)
 
 
+def _stops(model, **kw):
+    from alpes_dyn.model.stops import JointStops
+
+    return JointStops.of(model, **kw)
+
+
 def _nd(v, names):
     from alpes_dyn.analysis.identifiability import name_direction
 
@@ -932,6 +945,9 @@ API: list[Api] = [
     A("Model", lambda c: c.m.inverse_dynamics(c.z, c.z, "abc"), InputError, "a: expected 3 numbers"),
     A("Model", lambda c: c.m.gravity_torque(np.zeros(4)), InputError, r"q: expected shape (3,), got (4,)"),
     A("Model", lambda c: c.m.fingertip_jacobian(c.z, "nail"), ModelError, "unknown tip/frame 'nail'"),
+    A("Model", lambda c: ad.Model(URDFS["twoleaf_urdf"]).fingertip_jacobian(c.z), ModelError,
+      "tip: model 'alpes_finger3' names no tip and its URDF has 2 leaf frames (nail, tip); name it"),
+    A("Model", lambda c: ad.Model(URDFS["twoleaf_urdf"]).default_tip, ModelError, 'tips = ["<frame>"] in the spec'),
     A("Model", lambda c: c.m.random_state("abc"), InputError, "rng: expected a numpy Generator"),
     A("Model", lambda c: c.m.random_state(-1), InputError, "rng: expected a numpy Generator"),
     A("Model", lambda c: c.m.random_state(0, speed=-1.0), InputError, "speed: expected a finite number >= 0"),
@@ -953,6 +969,11 @@ API: list[Api] = [
       "extras.smooth_velocity: expected a finite number > 0"),
     A("JointExtras", lambda c: ad.Model(FINGER3, extras=ad.JointExtras.zeros(2)), ModelError,
       "extras.stiffness: expected shape (3,)"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, c.z, c.z, c.z, rest=np.zeros(2)), ModelError,
+      "extras.rest: expected shape (3,) like extras.stiffness (rest angles, rad), got shape (2,)"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, c.z, c.z, c.z, rest=np.array([0, np.inf, 0])), ModelError,
+      "extras.rest: contains NaN or inf"),
+    A("JointExtras", lambda c: ad.JointExtras(c.z, c.z, c.z, c.z, rest="abc"), ModelError, "extras.rest: expected shape"),
     # parameter files and URDF generation
     A("load_params", lambda c: ad.load_params(c.f["binary_toml"]), ModelError, "not UTF-8 text (byte 0x80"),
     A("load_params", lambda c: ad.load_params(c.f["latin1_toml"]), ModelError, "not UTF-8 text (byte 0xe9"),
@@ -1069,6 +1090,27 @@ API: list[Api] = [
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified]\nresidual_rms = -1\n"),
       ModelError, "identified.residual_rms: expected a non-negative number"),
     A("TransmissionSpec", lambda c: TransmissionSpec(identified=[1]), ModelError, "identified: expected a table"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + '[rest_angle]\nj1 = "x"\n'), ModelError,
+      "rest_angle.j1: expected a number, got 'x'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[rest_angle]\nj1 = nan\n"), ModelError,
+      "rest_angle.j1: expected a finite number, got nan"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[rest_angle]\nj9 = 0.1\n"), ModelError,
+      "rest_angle.j9: joint 'j9' has no spring (no [stiffness] value); a rest angle is where a spring exerts no torque"),
+    A("TransmissionSpec", lambda c: TransmissionSpec(rest_angle=[0.1]), ModelError,
+      "rest_angle: expected a table joint name -> number"),
+    A("TransmissionSpec", lambda c: ad.Model(FINGER3, TransmissionSpec(stiffness={"j1": 0.1, "j9": 0.1},
+                                                                          rest_angle={"j9": 0.1})), ModelError,
+      "stiffness.j9: unknown joint 'j9'"),
+    A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0])), InputError,
+      "stops: nothing pushes model 'alpes_finger3' into its joint stops (no gravity torque, no spring resting beyond a "
+      "limit) to size them by; pass stiffness= (N m/rad) and damping= (N m s/rad)"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=-1.0), InputError,
+      "stiffness: expected a positive number of N m/rad (or None: sized to the robot), got -1.0"),
+    A("JointStops", lambda c: _stops(c.m, damping=float("nan")), InputError,
+      "damping: expected a number >= 0 of N m s/rad"),
+    A("JointStops", lambda c: _stops(c.m, stiffness="2"), InputError, "stiffness: expected a positive number"),
+    A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0]), damping=1.0), InputError,
+      "stops: nothing pushes model 'alpes_finger3'"),  # d given, k still to size
     A("TransmissionSpec", lambda c: TransmissionSpec(identified={"record": 3}), ModelError,
       "identified.record: expected a table"),
     # any robot's experiment and identified spec (issue 17)

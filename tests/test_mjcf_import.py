@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 import pytest
 
@@ -86,8 +88,6 @@ def test_hand_written_mjcf_against_mujoco():
      "</body></worldbody></mujoco>", "joint 's' is a slide joint"),
     ("<mujoco><worldbody><body name='x'><joint name='a'/><joint name='b' axis='1 0 0'/>"
      "<inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body></worldbody></mujoco>", "body 'x' has 2 joints"),
-    ("<mujoco><worldbody><body><joint name='a' stiffness='1' springref='0.3'/>"
-     "<inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body></worldbody></mujoco>", "springref 0.00523599"),  # MJCF angles: degrees by default
     ("<mujoco><worldbody><body><joint name='u'/><inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body>"
      "</worldbody></mujoco>", "joint 'u' has no range"),
     ("<mujoco><worldbody><body></mujoco>", "mjcf: MuJoCo cannot compile it"),
@@ -97,3 +97,14 @@ def test_hand_written_mjcf_against_mujoco():
 def test_bad_mjcf(xml, needle):
     with pytest.raises(ModelError, match=needle.replace("(", r"\(")):
         ad.Model.from_mjcf(xml)
+
+
+def test_springref_is_the_rest_angle():
+    """A joint spring's springref becomes the spec's [rest_angle] (MJCF angles are degrees by default: 0.3 deg is
+    0.00523599 rad); a springref without stiffness is no spring and is dropped."""
+    m = ad.Model.from_mjcf("<mujoco><worldbody><body><joint name='a' stiffness='1' springref='0.3' range='-90 90'/>"
+                           "<inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/><body pos='1 0 0'>"
+                           "<joint name='b' springref='10' range='-90 90'/><inertial pos='0 0 0' mass='1' "
+                           "diaginertia='1 1 1'/></body></body></worldbody></mujoco>")
+    assert m.spec.rest_angle == {"a": pytest.approx(math.radians(0.3), rel=1e-12)}
+    assert m.spring_torque(np.array([0.0, 0.0]))[0] == pytest.approx(-math.radians(0.3), rel=1e-12)

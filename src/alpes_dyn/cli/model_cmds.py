@@ -106,7 +106,7 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         F = parse_vector(args.force, "force")
         if F.shape != (3,):
             raise InputError(f"--force: expected 3 values Fx,Fy,Fz, got {F.size}")
-    tip = args.tip if args.tip is not None else (m.tips[0] if m.tips else None)
+    tip = args.tip if args.tip is not None else (m.default_tip if m.tips else None)
     A = m.inertia_matrix(q)
     C = m.coriolis_matrix(q, v)
     G = m.gravity_torque(q)

@@ -239,17 +239,18 @@ def _torque_ceiling(model: Model, k: int) -> float:
     """The largest motor torque the design's searches try on motor ``k``, N m: 0.2 on an Alpes model (what the
     documented experiment was measured with); on any other robot its own static scale, twice the largest torque
     that one of the motor's joints needs to hold its far limit against its spring and the largest gravity torque
-    met over its range (through the motor's ratio): max_i 2 (k_i max(|lo_i|, |hi_i|) + G_i) / |S_ki| (0.05 N m
-    for joints with neither)."""
+    met over its range (through the motor's ratio): max_i 2 (k_i max(|lo_i - r_i|, |hi_i - r_i|) + G_i) / |S_ki|, r_i
+    the spring's rest angle (0.05 N m for joints with neither)."""
     if model.params is not None:
         return 0.2
     S = model.transmission.S
-    k_j = model.extras.stiffness
+    k_j, rest = model.extras.stiffness, model.extras.rest
     grav = np.zeros(model.n)
     for q in (model.lower, 0.5 * (model.lower + model.upper), model.upper):  # gravity alone (springs taken off)
         grav = np.maximum(grav, np.abs(model.gravity_torque(q) - model.spring_torque(q)))
     js = np.flatnonzero(S[k])
-    need = (k_j[js] * np.maximum(np.abs(model.lower[js]), np.abs(model.upper[js])) + grav[js]) / np.abs(S[k, js])
+    reach = np.maximum(np.abs(model.lower[js] - rest[js]), np.abs(model.upper[js] - rest[js]))  # from the rest angle
+    need = (k_j[js] * reach + grav[js]) / np.abs(S[k, js])
     top = float(2.0 * need.max())
     return top if top > 0 else 0.05
 

@@ -144,8 +144,8 @@ class DiscreteModel:
         if motors:  # an additive torque per motor (N m), a random-walk state
             u = u + cs.vertcat(*d)
         tau = a * cs.mtimes(cs.DM(ss.B), u)
-        if "spring_gain" in th:  # the model applies k q; the gain b makes it b k q
-            tau = tau + (1.0 - th["spring_gain"]) * cs.DM(ss.model.extras.stiffness) * q
+        if "spring_gain" in th:  # the model applies k (q - q_rest); the gain b makes it b k (q - q_rest)
+            tau = tau + (1.0 - th["spring_gain"]) * ss.model.extras.spring_torque(q, cs)
         F = a * w[ss.n_inputs:] if ss.force else None
         qdd = joint_accelerations(ss, q, v, tau, F)
         return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))

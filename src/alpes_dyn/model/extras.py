@@ -3,8 +3,10 @@
 They are written once here and applied identically by the numeric (Pinocchio) and symbolic
 (CasADi) backends: every method takes the math namespace ``xp`` (``numpy`` or ``casadi``).
 
-* springs (eq. 2.14): tau_s = k * q with a per-joint stiffness k (N m/rad) that depends on the
-  spring model:
+* springs (eq. 2.14): tau_s = k (q - q_rest) with a per-joint stiffness k (N m/rad) and rest angle q_rest
+  (rad, default 0: the report's springs rest at q = 0; a spec's ``[rest_angle]`` table), written once in
+  :func:`spring_law` and used by the numeric, symbolic and parametric models, the spring energy and the MJCF
+  export (MuJoCo's ``springref``). k depends on the spring model:
 
   - ``"torsional"`` (default): U = 1/2 K_i q_i^2, so k_i = K_i. Table 1.2 gives K_i in N m/rad,
     a torsional stiffness.
@@ -30,7 +32,7 @@ import numpy as np
 
 from ..errors import ModelError
 
-__all__ = ["SPRING_MODELS", "JointExtras", "spring_stiffness", "STICTION_VELOCITY"]
+__all__ = ["SPRING_MODELS", "JointExtras", "spring_stiffness", "spring_law", "STICTION_VELOCITY"]
 
 SPRING_MODELS: tuple[str, ...] = ("torsional", "report", "none")
 STICTION_VELOCITY = 0.02
@@ -57,15 +59,27 @@ def _as(xp: Any, a: np.ndarray) -> Any:
     return a if xp is np else xp.DM(a)
 
 
+def spring_law(k: Any, rest: np.ndarray | None, q: Any, xp: Any = np) -> Any:
+    """The spring torque k (q - q_rest) (N m): the one place it is written. ``k``: (n,) stiffness (N m/rad; a numpy
+    array, or a CasADi column such as the parametric model's fitted K); ``rest``: (n,) rest angles (rad) or None
+    (all zero: then k q, bit for bit what the springs gave before rest angles existed); ``q``: (n,) array or column."""
+    k = _as(xp, k) if isinstance(k, np.ndarray) else k
+    if rest is None or not np.any(np.asarray(rest) != 0):
+        return k * q
+    return k * (q - _as(xp, np.asarray(rest, dtype=float)))
+
+
 @dataclass(frozen=True)
 class JointExtras:
     """Per-joint extras, in the model's joint (velocity) order; all arrays have shape (n,).
 
     stiffness: k (N m/rad); armature: joint-side inertia on A's diagonal (kg m^2); coulomb: F_s (N m); viscous: F_v (N m s/rad);
-    smooth_velocity: v_s (rad/s) of the smooth sign tanh(v/v_s).
+    smooth_velocity: v_s (rad/s) of the smooth sign tanh(v/v_s); rest: q_rest (rad), the angle at which each
+    spring exerts no torque (default None: zeros).
 
     Validated on construction (:class:`~alpes_dyn.ModelError` naming the field): the four arrays
-    are 1-D of one length, finite and >= 0, and are stored as read-only float arrays; v_s > 0.
+    are 1-D of one length, finite and >= 0, and are stored as read-only float arrays; v_s > 0; ``rest``
+    of the same length, finite, of either sign.
     """
 
     stiffness: np.ndarray
@@ -73,6 +87,7 @@ class JointExtras:
     coulomb: np.ndarray
     viscous: np.ndarray
     smooth_velocity: float = 0.01
+    rest: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         """Every array 1-D, of one length, finite and >= 0 (a negative stiffness, friction or rotor
@@ -104,6 +119,23 @@ class JointExtras:
         if not (np.isfinite(vs) and vs > 0):
             raise ModelError(f"extras.smooth_velocity: expected a finite number > 0 rad/s, got {self.smooth_velocity!r}")
         object.__setattr__(self, "smooth_velocity", vs)
+        object.__setattr__(self, "rest", self._rest_array(n))
+        object.__setattr__(self, "_rest_used", self.rest if np.any(self.rest != 0) else None)  # None: k q, fast
+
+    def _rest_array(self, n: int | None) -> np.ndarray:
+        """``rest`` as a read-only (n,) float array (zeros for None), finite, any sign."""
+        x = np.zeros(n or 0) if self.rest is None else self.rest
+        try:
+            a = np.array(x, dtype=float) if np.asarray(x).dtype.kind != "c" else None
+        except (TypeError, ValueError):
+            a = None
+        if a is None or a.shape != (n,):
+            got = f"shape {a.shape}" if a is not None else f"{type(x).__name__}"
+            raise ModelError(f"extras.rest: expected shape ({n},) like extras.stiffness (rest angles, rad), got {got}")
+        if not np.isfinite(a).all():
+            raise ModelError("extras.rest: contains NaN or inf")
+        a.flags.writeable = False
+        return a
 
     @classmethod
     def zeros(cls, n: int) -> "JointExtras":
@@ -118,13 +150,22 @@ class JointExtras:
     def has_friction(self) -> bool:
         return bool(np.any(self.coulomb != 0) or np.any(self.viscous != 0))
 
+    @property
+    def has_rest(self) -> bool:
+        """Whether any spring rests elsewhere than at q = 0."""
+        return self._rest_used is not None
+
     def spring_torque(self, q: Any, xp: Any = np) -> Any:
-        """Spring torque k q (N m), the spring part of G(q) in eq. 2.11; q: (n,) array or casadi column."""
-        return _as(xp, self.stiffness) * q
+        """Spring torque k (q - q_rest) (N m, :func:`spring_law`), the spring part of G(q) in eq. 2.11; q: (n,)
+        array or casadi column."""
+        if xp is np and self._rest_used is None:  # the hot path (forward dynamics): k q
+            return self.stiffness * q
+        return spring_law(self.stiffness, self._rest_used, q, xp)
 
     def spring_energy(self, q: Any, xp: Any = np) -> Any:
-        """Spring potential energy sum 1/2 k_i q_i^2 (J)."""
-        return 0.5 * xp.dot(_as(xp, self.stiffness) * q, q)
+        """Spring potential energy sum 1/2 k_i (q_i - q_rest,i)^2 (J): 1/2 tau_s . (q - q_rest)."""
+        dq = q - _as(xp, self.rest) if self.has_rest else q
+        return 0.5 * xp.dot(self.spring_torque(q, xp), dq)
 
     def friction_torque(self, v: Any, smooth: bool = False, xp: Any = np) -> Any:
         """Friction torque F_s sign(v) + F_v v (eq. 2.6-2.7), sign -> tanh(v/v_s) when ``smooth``."""

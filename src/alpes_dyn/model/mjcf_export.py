@@ -10,7 +10,8 @@ model's extras and transmission (the spec's, or the ``extras=`` given):
   inertia of the link and of the fixed links under it);
 * one ``hinge`` per revolute joint (``slide`` per prismatic one) at the body origin with the joint's axis;
   ``range`` = the URDF limits (``limited="true"`` with ``limits``, else ``limited="false"`` and no range);
-  ``stiffness`` k_i with ``springref="0"`` (the spec's springs rest at q = 0), ``armature`` (the joint-side
+  ``stiffness`` k_i with ``springref`` q_rest,i (the spring's rest angle, rad: the spec's ``[rest_angle]``, 0 by
+  default; MuJoCo's passive force -k (q - springref) is the library's spring law), ``armature`` (the joint-side
   inertia), ``frictionloss`` F_s (Coulomb: MuJoCo's dry friction is a constraint, the library's a sign or a
   smooth sign) and ``damping`` F_v (viscous);
 * one **fixed tendon** per motor, named as the motor, with coefficient S_ki on each joint it drives: its length
@@ -141,7 +142,7 @@ def _joint_xml(model: Any, i: int, limits: bool) -> str:
         attrs += ['limited="true"', f'range="{_f(lo)} {_f(hi)}"']
     else:
         attrs.append('limited="false"')
-    attrs += [f'stiffness="{_f(ex.stiffness[k])}"', 'springref="0"']
+    attrs += [f'stiffness="{_f(ex.stiffness[k])}"', f'springref="{_f(ex.rest[k]) if ex.rest[k] != 0 else "0"}"']
     for attr, values in (("armature", ex.armature), ("frictionloss", ex.coulomb), ("damping", ex.viscous)):
         if values[k] != 0:
             attrs.append(f'{attr}="{_f(values[k])}"')

@@ -10,7 +10,7 @@ backends read:
   the joint axis: the same kinematics, the body's inertial and children expressed from there;
 * the **spec**: one motor per actuator on a fixed tendon, q_m = gear * sum_i coef_i q_i, so the ratio of joint i
   is gear * coef_i, or on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
-  (with ``springref`` 0: a spring that rests elsewhere is refused, the spec has no rest angle), ``armature``,
+  (with ``springref``, the spring's rest angle: the spec's ``[rest_angle]`` where it is not 0), ``armature``,
   ``frictionloss`` (Coulomb) and ``damping`` (viscous); gravity from ``<option gravity>``; the tips: the first
   site of each leaf body.
 
@@ -123,10 +123,6 @@ def _check_supported(mujoco, m) -> None:
             raise ModelError(f"mjcf: tendon {tname!r} has an armature but no actuator; a rotor belongs to a motor")
         if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
-    for j in range(m.njnt):
-        if m.jnt_stiffness[j] != 0 and m.qpos_spring[m.jnt_qposadr[j]] != 0:
-            raise ModelError(f"mjcf: joint {_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, 'joint')!r} has "
-                             f"springref {m.qpos_spring[m.jnt_qposadr[j]]:g}; the spec's springs rest at q = 0")
 
 
 def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
@@ -222,6 +218,9 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
                        ("coulomb", m.dof_frictionloss[d]), ("viscous", m.dof_damping[d])):
             if v != 0:
                 tables[key][jname] = float(v)
+        rest = float(m.qpos_spring[m.jnt_qposadr[j]])
+        if m.jnt_stiffness[j] != 0 and rest != 0:
+            tables.setdefault("rest_angle", {})[jname] = rest
     children = set(int(p) for p in m.body_parentid[1:])
     tips, seen = [], set()
     for sname, b in sites:

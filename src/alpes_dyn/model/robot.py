@@ -31,12 +31,13 @@ from .description import Layout, check_model_name, layout, model_params, urdf_st
 from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from .extras import JointExtras
-from ..fileio import native_stderr_to, read_text
+from ..fileio import read_text
 from .inertial import check_inertials
+from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args,
+                           newton_equilibrium)
 from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
-from .urdf_checks import check_urdf_structure
 
 __all__ = ["Model", "DEFAULT_GRAVITY", "Contact", "REFERENCE_FRAMES", "as_contacts"]
 
@@ -103,76 +104,6 @@ def as_contacts(contacts: Any) -> tuple[Contact, ...]:
 _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
 
 
-def _build_pinocchio(urdf: str) -> pin.Model:
-    check_urdf_structure(urdf)
-    printed: list[str] = []  # urdfdom prints its parse errors on the process's stderr: into the message
-    try:
-        with native_stderr_to(printed):
-            model = pin.buildModelFromXML(urdf)
-    except Exception as exc:  # pinocchio raises ValueError/RuntimeError with multi-line text
-        errors = [line.removeprefix("Error:").strip() for line in printed if line.startswith("Error:")]
-        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ModelError(f"URDF could not be parsed by Pinocchio: {errors[0] if errors else first}") from None
-    if model.nv == 0:
-        raise ModelError("URDF has no movable joint")
-    if model.nq != model.nv:
-        raise ModelError(
-            f"URDF has joints with nq != nv (nq={model.nq}, nv={model.nv}); only fixed-base trees of "
-            "revolute/prismatic joints are supported"
-        )
-    return model
-
-
-def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:
-    """Newton's method for residual(q) = 0 (N m) from q0, steps capped at 0.5 rad; :class:`InputError` on failure."""
-    q = np.array(q0, dtype=float)
-    for _ in range(iterations):
-        r = residual(q)
-        if np.max(np.abs(r)) < tol:
-            return q
-        try:
-            dq = np.linalg.solve(jacobian(q), -r)
-        except np.linalg.LinAlgError:
-            raise InputError("static equilibrium: singular stiffness (a joint without spring?)") from None
-        q = q + dq * min(1.0, 0.5 / max(float(np.max(np.abs(dq))), 1e-300))  # at most 0.5 rad per step
-    raise InputError("static equilibrium: Newton's method did not converge (torque beyond the springs' range?)")
-
-
-def _generic_configuration(model: pin.Model) -> np.ndarray:
-    """A fixed, generic q inside the joint limits (golden-ratio fractions of each range)."""
-    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
-    lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.pi)
-    hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
-    frac = np.mod(0.5 + 0.6180339887498949 * np.arange(1, model.nv + 1), 1.0)
-    return lo + frac * (hi - lo)
-
-
-def _check_mass_matrix(model: pin.Model, data: pin.Data, names: Sequence[str]) -> None:
-    """ModelError if A(q) + I_a is singular at a generic q: a joint that moves only massless links."""
-    A = pin.crba(model, data, _generic_configuration(model))
-    A = np.triu(A) + np.triu(A, 1).T
-    d = np.diag(A)
-    scale = float(np.max(np.abs(d))) if d.size else 0.0
-    for i, name in enumerate(names):
-        if not d[i] > 1e-14 * scale:
-            raise ModelError(f"joint {name!r} moves no mass: the links it carries are massless, so A(q) is singular "
-                             "(give them a mass and inertia, or make the joint fixed)")
-    try:
-        np.linalg.cholesky(A)
-    except np.linalg.LinAlgError:
-        raise ModelError("A(q) is singular at a generic configuration (massless links?)") from None
-
-
-def _check_positive(model: pin.Model, data: pin.Data, R: np.ndarray) -> None:
-    """A(q) + R stays positive definite at a generic q (R >= 0 by construction; a guard on the sum)."""
-    A = pin.crba(model, data, _generic_configuration(model))
-    A = np.triu(A) + np.triu(A, 1).T + R
-    try:
-        np.linalg.cholesky(A)
-    except np.linalg.LinAlgError:  # pragma: no cover - R = S^T J S >= 0 cannot make it indefinite
-        raise ModelError("A(q) + S^T diag(J_m) S is not positive definite at a generic configuration") from None
-
-
 class Model:
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
@@ -208,6 +139,11 @@ class Model:
     middle, ring, thumb). Motors (:attr:`motor_names`) keep the order of the transmission, tips
     (:attr:`tip_names`) the order given by the layout or spec (else the URDF's, leaf frames in
     Pinocchio's frame order). Use :meth:`joint_index` rather than positions.
+
+    Default tip (:attr:`default_tip`): the first of :attr:`tips` where the spec (``tips = [...]``) or the layout
+    names them, or where the URDF has a single leaf frame; a URDF with several leaves and no tip named has none
+    (UR5's leaves are ``base``, ``ee_link``, ``tool0``: its first leaf, the base, is no tip), and what needs
+    the default tip raises :class:`~alpes_dyn.ModelError` naming the leaves and how to name one.
     """
 
     def __init__(self, urdf: str, spec: TransmissionSpec | str | Path | None = None,
@@ -271,14 +207,9 @@ class Model:
         self._shape = (n,)
         self._tiny = np.full(n, _TINY)  # x . tiny is finite iff x is, and never overflows (no numpy warning)
         self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
-        if spec is not None and spec.tips is not None:
-            self.tips: tuple[str, ...] = spec.tips
-        elif layout is not None:
-            self.tips = layout.tips
-        else:
-            parents = {self.pin_model.frames[i].parentFrame for i in range(len(self.pin_model.frames))}
-            self.tips = tuple(f.name for i, f in enumerate(self.pin_model.frames)
-                              if i not in parents and f.type == pin.FrameType.BODY)
+        self.tips: tuple[str, ...] = _tips(self.pin_model, spec, layout)
+        self.tips_named: bool = (spec is not None and spec.tips is not None) or layout is not None or len(self.tips) <= 1
+        """Whether :attr:`default_tip` is defined: tips named by the spec or layout, or a URDF with one leaf."""
         self.transmission: Transmission | None = spec.transmission(self.joint_names) if spec is not None else None
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
             self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
@@ -413,12 +344,22 @@ class Model:
             raise InputError(f"{name}: contains NaN or inf ({a.tolist()})")
         return a
 
+    @property
+    def default_tip(self) -> str:
+        """The tip used where none is given: the first of :attr:`tips`; :class:`~alpes_dyn.ModelError` where there
+        is none, or where the URDF has several leaf frames and neither the spec nor the layout names the tips."""
+        if not self.tips:
+            raise ModelError("model has no tip frame; pass a frame name")
+        if not self.tips_named:
+            raise ModelError(f"tip: model {self.name!r} names no tip and its URDF has {len(self.tips)} leaf frames "
+                             f"({', '.join(self.tips)}); name it: tips = [\"<frame>\"] in the spec, or tip=<frame> "
+                             "(the command line's --tip)")
+        return self.tips[0]
+
     def frame_id(self, tip: str | None) -> int:
-        """Pinocchio frame index of ``tip`` (default: the first tip)."""
+        """Pinocchio frame index of ``tip`` (default: :attr:`default_tip`)."""
         if tip is None:
-            if not self.tips:
-                raise ModelError("model has no tip frame; pass a frame name")
-            tip = self.tips[0]
+            tip = self.default_tip
         try:
             return self._frames[tip]
         except (KeyError, TypeError):
@@ -449,14 +390,15 @@ class Model:
         return pin.computeCoriolisMatrix(self.pin_model, self.pin_data, q, v).copy()
 
     def spring_torque(self, q: np.ndarray) -> np.ndarray:
-        """Spring torques k q, (n,), N m (eq. 2.14 under the model's spring law)."""
+        """Spring torques k (q - q_rest), (n,), N m (eq. 2.14 under the model's spring law; q_rest the rest angles,
+        0 unless the spec's ``[rest_angle]`` gives them)."""
         return self.extras.spring_torque(self.vector(q, "q"))
 
     def gravity_torque(self, q: np.ndarray) -> np.ndarray:
         """G(q) of eq. 2.11: gravity plus springs, (n,), N m."""
         q = self.vector(q, "q")
         g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, q)
-        return g + self._k * q if self._spring else g.copy()
+        return g + self.extras.spring_torque(q) if self._spring else g.copy()
 
     def gravity_jacobian(self, q: np.ndarray) -> np.ndarray:
         """dG/dq (n, n), N m/rad: Pinocchio's analytic gravity derivatives plus the spring stiffness diag(k)."""
@@ -544,7 +486,7 @@ class Model:
         return 0.5 * float(v @ self.inertia_matrix(q) @ v)
 
     def potential_energy(self, q: np.ndarray) -> float:
-        """U = gravity + spring potential energy (J), zero at the base height and q = 0 springs."""
+        """U = gravity + spring potential energy (J), zero at the base height and with every spring at its rest angle."""
         q = self.vector(q, "q")
         return float(pin.computePotentialEnergy(self.pin_model, self.pin_data, q)) + float(self.extras.spring_energy(q))
 
@@ -566,7 +508,7 @@ class Model:
                 and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == self._shape):
             q, v, tau = self.vector(q, "q"), self.vector(v, "v"), self.vector(tau, "tau")
         if self._spring:
-            tau = tau - self._k * q
+            tau = tau - self.extras.spring_torque(q)
         if self._friction:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
@@ -614,7 +556,7 @@ class Model:
         if self._rotor:
             tau += self.rotor_matrix @ a
         if self._spring:
-            tau += self._k * q
+            tau += self.extras.spring_torque(q)
         if self._friction:
             tau += self.extras.friction_torque(v, smooth)
         if F is not None:
@@ -683,22 +625,14 @@ class Model:
         return rng.uniform(lo, hi, size=None if size is None else shape), rng.uniform(-speed, speed, shape)
 
 
-def _check_random_args(rng: object, speed: object, size: object) -> tuple[np.random.Generator, float, int | None]:
-    if not isinstance(rng, np.random.Generator):
-        if rng is not None and (isinstance(rng, (bool, np.bool_)) or not isinstance(rng, (int, np.integer))
-                                or rng < 0):
-            raise InputError(f"rng: expected a numpy Generator, an integer seed >= 0 or None, got {rng!r}")
-        rng = np.random.default_rng(rng)
-    try:
-        s = float(speed)  # type: ignore[arg-type]
-    except (TypeError, ValueError):
-        s = float("nan")
-    if not (math.isfinite(s) and s >= 0):
-        raise InputError(f"speed: expected a finite number >= 0 rad/s, got {speed!r}")
-    if size is not None and (isinstance(size, (bool, np.bool_)) or not isinstance(size, (int, np.integer))
-                             or size < 0):
-        raise InputError(f"size: expected an integer >= 0 or None, got {size!r}")
-    return rng, s, None if size is None else int(size)
+def _tips(pm: pin.Model, spec: TransmissionSpec | None, layout: Layout | None) -> tuple[str, ...]:
+    """The tip frames: the spec's, else the layout's, else the URDF's leaf frames (Pinocchio's frame order)."""
+    if spec is not None and spec.tips is not None:
+        return spec.tips
+    if layout is not None:
+        return layout.tips
+    parents = {pm.frames[i].parentFrame for i in range(len(pm.frames))}
+    return tuple(f.name for i, f in enumerate(pm.frames) if i not in parents and f.type == pin.FrameType.BODY)
 
 
 def _restore_model(urdf: str, spec: str | None, gravity: list[float], name: str, layout: Layout | None,

@@ -9,7 +9,8 @@ parameter file.
 
 Conventions (report Section 3, eq. 3.13): motor k reads q_m,k = sum_i ratio_ki q_i over the joints it
 drives, i.e. q_m = S q with S (m, n); by power balance the motor torques act on the joints as
-Gamma = S^T tau_m. Joint i carries a spring torque k_i q_i (N m/rad; zero at q_i = 0), friction
+Gamma = S^T tau_m. Joint i carries a spring torque k_i (q_i - q_rest,i) (k in N m/rad; zero at the rest angle
+q_rest,i, rad, the ``[rest_angle]`` table, default 0), friction
 F_s,i sign(qd_i) + F_v,i qd_i (N m, N m s/rad; eq. 2.6-2.7) and a joint-side inertia I_a,i (kg m^2,
 the ``[armature]`` table: added to A's diagonal, Pinocchio's ``armature``; e.g. a motor or a gearbox
 that drives that joint alone). Joints a table does not list get zero.
@@ -32,7 +33,8 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     encoder_counts = 4096          # encoder counts per motor revolution (quantisation)
     smooth_velocity = 0.01         # rad/s, tanh(v / v_s) replaces sign(v) where smoothness is needed
     gravity = [0.0, 0.0, -9.81]    # m/s^2 in the base frame (default: this one)
-    tips = ["link_3.0_tip"]        # tip frames, the first is the default tip (default: the URDF's leaves)
+    tips = ["link_3.0_tip"]        # tip frames, the first is the default tip (default: the URDF's leaves,
+                                   # and no default tip where there are several: Model.default_tip)
 
     [[motor]]                      # one table per motor, in motor order
     name = "index"
@@ -42,6 +44,8 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
 
     [stiffness]                    # N m/rad
     "joint_1.0" = 0.2
+    [rest_angle]                   # rad, where the joint's spring exerts no torque (default 0; any sign)
+    "joint_1.0" = 0.1              # (only on a joint of [stiffness]: a rest angle belongs to a spring)
     [coulomb]                      # N m
     [viscous]                      # N m s/rad
     [armature]                     # kg m^2, joint-side (diagonal) inertia
@@ -85,13 +89,16 @@ from .params import IDENTIFICATION_FIELDS, HandParams
 from .transmission import Transmission
 
 __all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES",
-           "IDENTIFIED_TABLES"]
+           "IDENTIFIED_TABLES", "REST_TABLE"]
 
 JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
 """Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), joint-side
 inertia (kg m^2, the diagonal; a motor's rotor on its tendon is the motor's ``rotor_inertia``)."""
+REST_TABLE = "rest_angle"
+"""The per-joint table of the springs' rest angles q_rest (rad, either sign; default 0): the spring torque is
+k (q - q_rest) (:func:`~alpes_dyn.model.extras.spring_law`). Only on a joint the ``[stiffness]`` table lists."""
 _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES + (
-    "identified",)
+    REST_TABLE, "identified")
 IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_inertia", "tendon_compliance")
 """The tables of a spec's ``[identified]`` section: the standard error of each identified value, by joint (the
 per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``)."""
@@ -166,13 +173,15 @@ class TransmissionSpec:
     motors: the motors in order (their order is the order of tau_m and of the encoder vector).
     stiffness, coulomb, viscous, armature: {joint name: value} (N m/rad, N m, N m s/rad, kg m^2),
         all >= 0; joints not listed get 0.
+    rest_angle: {joint name: q_rest} (rad, finite, either sign) where each spring exerts no torque; only joints
+        of ``stiffness``; joints not listed rest at 0.
     encoder_counts: encoder counts per motor revolution (> 0).
     smooth_velocity: v_s (rad/s, > 0) of the smooth sign tanh(v / v_s).
     gravity: (3,) m/s^2 in the base frame, or None (the model's default).
-    tips: tip frame names, or None (the URDF's leaf frames).
+    tips: tip frame names, or None (the URDF's leaf frames; a default tip only where there is one leaf).
     name: model label, or None (the URDF's robot name).
     spring: a label of the spring law shown in reports (default ``"torsional"`` if any stiffness
-        is non-zero, else ``"none"``); the torque is always k q.
+        is non-zero, else ``"none"``); the torque is always k (q - q_rest).
     identified: the ``[identified]`` section (module doc), or None: {"record": {field: value}, table: {joint or
         motor: standard error}} for the tables of :data:`IDENTIFIED_TABLES`.
     """
@@ -189,6 +198,7 @@ class TransmissionSpec:
     name: str | None = None
     spring: str | None = None
     identified: Mapping[str, Any] | None = None
+    rest_angle: Mapping[str, float] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         motors = tuple(self.motors) if isinstance(self.motors, (list, tuple)) else None
@@ -201,6 +211,11 @@ class TransmissionSpec:
         object.__setattr__(self, "motors", motors)
         for t in JOINT_TABLES:
             object.__setattr__(self, t, _table(getattr(self, t), t, 0.0))
+        object.__setattr__(self, REST_TABLE, _table(self.rest_angle, REST_TABLE, None))
+        for j in self.rest_angle:
+            if j not in self.stiffness:
+                raise ModelError(f"{REST_TABLE}.{j}: joint {j!r} has no spring (no [stiffness] value); a rest angle "
+                                 "is where a spring exerts no torque")
         object.__setattr__(self, "encoder_counts", _number(self.encoder_counts, "encoder_counts", 0.0, strict=True))
         object.__setattr__(self, "smooth_velocity", _number(self.smooth_velocity, "smooth_velocity", 0.0, strict=True))
         if self.gravity is not None:
@@ -279,7 +294,7 @@ class TransmissionSpec:
                 out.append(f"rotor_inertia = {m.rotor_inertia!r}")
             if m.tendon_compliance:
                 out.append(f"tendon_compliance = {m.tendon_compliance!r}")
-        for t in JOINT_TABLES:
+        for t in JOINT_TABLES + (REST_TABLE,):
             table = getattr(self, t)
             if table:
                 out += ["", f"[{t}]"] + [f"{q(j)} = {x!r}" for j, x in table.items()]
@@ -297,7 +312,7 @@ class TransmissionSpec:
         if not isinstance(other, TransmissionSpec):
             return NotImplemented
         return (self.motors == other.motors and all(dict(getattr(self, t)) == dict(getattr(other, t))
-                                                    for t in JOINT_TABLES)
+                                                    for t in JOINT_TABLES + (REST_TABLE,))
                 and (self.encoder_counts, self.smooth_velocity, self.gravity, self.tips, self.name, self.spring)
                 == (other.encoder_counts, other.smooth_velocity, other.gravity, other.tips, other.name, other.spring)
                 and _plain(self.identified) == _plain(other.identified))
@@ -313,7 +328,7 @@ class TransmissionSpec:
             for j in m.joints:
                 if j not in known:
                     raise ModelError(f"motor {m.name!r}.joints: unknown joint {j!r} (URDF joints: {listing})")
-        for t in JOINT_TABLES:
+        for t in JOINT_TABLES + (REST_TABLE,):
             for j in getattr(self, t):
                 if j not in known:
                     raise ModelError(f"{t}.{j}: unknown joint {j!r} (URDF joints: {listing})")
@@ -328,13 +343,13 @@ class TransmissionSpec:
         self.check(joint_names)
         idx = {j: i for i, j in enumerate(joint_names)}
         arrays = {}
-        for t in JOINT_TABLES:
+        for t in JOINT_TABLES + (REST_TABLE,):
             a = np.zeros(len(joint_names))
             for j, x in getattr(self, t).items():
                 a[idx[j]] = x
             arrays[t] = a
         return JointExtras(stiffness=arrays["stiffness"], armature=arrays["armature"], coulomb=arrays["coulomb"],
-                           viscous=arrays["viscous"], smooth_velocity=self.smooth_velocity)
+                           viscous=arrays["viscous"], smooth_velocity=self.smooth_velocity, rest=arrays[REST_TABLE])
 
     def transmission(self, joint_names: Sequence[str]) -> Transmission | None:
         """The :class:`~alpes_dyn.Transmission` (S, its sum pattern, encoder) in ``joint_names`` order,

@@ -8,9 +8,11 @@ Two tools:
 * :class:`JointStops` -- a stop modelled as a stiff unilateral spring-damper (a rubber end stop):
   outside [lower, upper] by a penetration p > 0 the joint feels ``max(0, k p - d v_in)`` back
   toward the range (v_in the velocity further into the stop), nothing inside. Smooth enough for
-  RK4 and automatic differentiation; the default k = 2 N m/rad (50 times the stiffest finger
+  RK4 and automatic differentiation. On the Alpes models k = 2 N m/rad (50 times the stiffest finger
   spring: 1.4 degrees of penetration under 0.05 N m) and d = 4e-3 N m s/rad keep the stop's own
-  mode (sqrt(k / I) ~ 1300 rad/s on a distal phalanx) stable for RK4 steps up to about 1 ms.
+  mode (sqrt(k / I) ~ 1300 rad/s on a distal phalanx) stable for RK4 steps up to about 1 ms. On any
+  other robot :meth:`JointStops.of` sizes them to the robot (:func:`sized_stops`: the same 1.4 degrees under
+  the robot's own static torque into its stops), or refuses where nothing sizes them.
   Pass it to :func:`~alpes_dyn.simulation.integrate.simulate` as ``stops=``. Rigid stops with an impact law
   (MuJoCo's constraint solver) are what the MJCF export (:mod:`alpes_dyn.model.mjcf`) gives.
 * :func:`check_range` -- whether a trajectory leaves the joint range; :func:`simulate` calls it
@@ -22,6 +24,7 @@ eq. 2.10 as it is, and a stiff stop makes the dynamics stiff (smaller RK4 steps)
 
 from __future__ import annotations
 
+import math
 import warnings
 from dataclasses import dataclass
 from typing import Any, Sequence
@@ -30,9 +33,19 @@ import numpy as np
 
 from ..errors import AlpesDynWarning, InputError
 
-__all__ = ["JointStops", "JointRangeWarning", "check_range", "JOINT_RANGE_MODES"]
+__all__ = ["JointStops", "JointRangeWarning", "check_range", "JOINT_RANGE_MODES", "sized_stops", "STOP_PENETRATION",
+           "STOP_DAMPING_RATIO", "ALPES_STOP"]
 
 JOINT_RANGE_MODES: tuple[str, ...] = ("warn", "error", "ignore")
+ALPES_STOP: tuple[float, float] = (2.0, 4e-3)
+"""(k N m/rad, d N m s/rad) of the Alpes models' stops (the module doc): :meth:`JointStops.of`'s on a model with an
+Alpes parameter file."""
+STOP_PENETRATION = math.radians(1.4)
+"""p* (rad, 1.4 degrees): how far a sized stop gives under the robot's largest static torque into a stop (the
+Alpes stop's 1.4 degrees under 0.05 N m)."""
+STOP_DAMPING_RATIO = 1.0
+"""zeta of a sized stop's mode on the robot's lightest limited joint: d = 2 zeta sqrt(k I_min) (critical
+damping; the Alpes stop's d = 4e-3 N m s/rad is zeta = 1.25 on finger3's distal joint, I = 1.27e-6 kg m^2)."""
 
 
 class JointRangeWarning(AlpesDynWarning):
@@ -49,15 +62,26 @@ class JointStops:
     damping: float = 4e-3
 
     @classmethod
-    def of(cls, model: Any, stiffness: float = 2.0, damping: float = 4e-3) -> "JointStops":
-        """Stops at a :class:`~alpes_dyn.Model`'s URDF limits (joints without finite limits get none)."""
-        if not (np.isfinite(stiffness) and stiffness > 0):
-            raise InputError(f"stiffness: expected a positive number of N m/rad, got {stiffness!r}")
-        if not (np.isfinite(damping) and damping >= 0):
-            raise InputError(f"damping: expected a number >= 0 of N m s/rad, got {damping!r}")
-        lo, hi = model.lower, model.upper
-        lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.inf)
-        hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.inf)
+    def of(cls, model: Any, stiffness: float | None = None, damping: float | None = None) -> "JointStops":
+        """Stops at a :class:`~alpes_dyn.Model`'s URDF limits (joints without finite limits get none).
+
+        ``stiffness`` k (N m/rad) and ``damping`` d (N m s/rad), or None (default): on an Alpes model (one with
+        an Alpes parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad, 4e-3 N m s/rad); on any other
+        robot sized to it by :func:`sized_stops` (the damping sized to the k given, if only k is);
+        :class:`~alpes_dyn.InputError` where they cannot be sized (no torque toward any stop)."""
+        for x, name, unit, low in ((stiffness, "stiffness", "N m/rad", True), (damping, "damping", "N m s/rad", False)):
+            if x is not None and not (isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
+                                      and np.isfinite(x) and (x > 0 if low else x >= 0)):
+                raise InputError(f"{name}: expected a {'positive number' if low else 'number >= 0'} of {unit} "
+                                 f"(or None: sized to the robot), got {x!r}")
+        lo, hi = _limits(model)
+        if stiffness is None or damping is None:
+            if getattr(model, "params", None) is not None:
+                k, d = ALPES_STOP
+            else:
+                k, d = sized_stops(model, stiffness)
+            stiffness = k if stiffness is None else stiffness
+            damping = d if damping is None else damping
         return cls(lo, hi, float(stiffness), float(damping))
 
     def torque(self, q: Any, v: Any, xp: Any = np) -> Any:
@@ -74,12 +98,77 @@ class JointStops:
         return push_up - push_down
 
 
+def _limits(model: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The URDF limits with missing or huge (|x| >= 1e3) ones as -inf / inf: no stop there."""
+    lo, hi = model.lower, model.upper
+    return (np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.inf),
+            np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.inf))
+
+
+def _torque_into_stops(model: Any, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
+    """(n,) N m: the largest static torque G_i(q) (gravity and springs, eq. 2.11) that pushes joint i into one of
+    its stops, the joint at that stop and the others at their lower ends, middles, upper ends or a generic angle
+    inside their ranges (0 where nothing pushes; a spring pushes into a stop only where it rests beyond it)."""
+    flo, fhi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
+    frac = np.mod(0.5 + 0.6180339887498949 * np.arange(1, model.n + 1), 1.0)
+    others = (flo, 0.5 * (flo + fhi), fhi, flo + frac * (fhi - flo))
+    out = np.zeros(model.n)
+    for i in range(model.n):
+        for limit, sign, finite in ((lo[i], 1.0, np.isfinite(lo[i])), (hi[i], -1.0, np.isfinite(hi[i]))):
+            if not finite:
+                continue
+            for base in others:
+                q = base.copy()
+                q[i] = limit
+                out[i] = max(out[i], sign * float(model.gravity_torque(q)[i]))  # G > 0 drives q down: the lower stop
+    return out
+
+
+def sized_stops(model: Any, stiffness: float | None = None) -> tuple[float, float]:
+    """(k N m/rad, d N m s/rad) of stops sized to ``model``'s own gravity torque and inertia.
+
+    Rule: k = tau* / p*, with tau* the largest static torque (gravity and springs, eq. 2.11) that pushes a joint
+    into one of its stops (the joint at the stop, the others at their lower ends, middles, upper ends or a
+    generic angle) and p* = :data:`STOP_PENETRATION` (1.4 degrees): a joint resting on its stop under its own
+    weight gives at most 1.4 degrees, whatever the robot weighs. d = 2 zeta sqrt(k I_min) with zeta =
+    :data:`STOP_DAMPING_RATIO` (1) and I_min the least effective inertia 1 / (A^-1)_ii (kg m^2, rotors included,
+    the joint's inertia with the others free) over the limited joints at mid-range: the stop's mode critically
+    damped on the lightest joint. The mode's rate sqrt(k / I_min) bounds the RK4 step (about 2.8 / rate).
+
+    Numbers. finger3 (Alpes): tau* = 0.0409 N m (j1 at its lower stop under the finger's weight), k = 1.67
+    N m/rad and d = 2.9e-3 N m s/rad (I_min = 1.27e-6 kg m^2) -- the Alpes stop's 2 and 4e-3, which its models
+    keep (:data:`ALPES_STOP`), are 1.2 and 1.4 times these. The Allegro hand with its shipped spec: tau* = 0.0825
+    N m (joint_12.0's spring rests at 0, below its stop at 0.263 rad), k = 3.38 N m/rad, d = 0.0119 N m s/rad;
+    UR5: k = 2.42e3 N m/rad, d = 12.4 N m s/rad. A finger 20 times as heavy (masses and inertias) gets k and d
+    20 times as large. ``stiffness`` given: only d is sized.
+
+    :class:`~alpes_dyn.InputError` where nothing sizes k: no torque pushes any joint into a stop (no gravity
+    across the joints and no spring resting beyond a limit) or no joint has a finite limit.
+    """
+    lo, hi = _limits(model)
+    limited = np.isfinite(lo) | np.isfinite(hi)
+    if not limited.any():
+        raise InputError(f"stops: model {model.name!r} has no joint with a finite limit; no stop to size")
+    if stiffness is None:
+        tau = float(np.max(_torque_into_stops(model, lo, hi)[limited]))
+        if not tau > 0:
+            raise InputError(f"stops: nothing pushes model {model.name!r} into its joint stops (no gravity torque, no "
+                             "spring resting beyond a limit) to size them by; pass stiffness= (N m/rad) and damping= "
+                             "(N m s/rad)")
+        stiffness = tau / STOP_PENETRATION
+    flo, fhi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
+    Ainv = np.linalg.inv(model.inertia_matrix(0.5 * (flo + fhi)))
+    I_min = float(np.min(1.0 / np.diag(Ainv)[limited]))
+    return float(stiffness), float(2.0 * STOP_DAMPING_RATIO * math.sqrt(stiffness * I_min))
+
+
 def check_range(t: np.ndarray, q: np.ndarray, lower: np.ndarray, upper: np.ndarray, names: Sequence[str],
-                mode: str = "warn", tol: float = 1e-9) -> str:
+                mode: str = "warn", tol: float = 1e-9, rest: np.ndarray | None = None) -> str:
     """Whether the trajectory q (N+1, n) at times t leaves [lower - tol, upper + tol].
 
     Returns "" if it stays within, else a one-line message naming the first joint to leave, when and
-    how far; ``mode`` ``"warn"`` also issues a :class:`JointRangeWarning`, ``"error"`` raises
+    how far, and (``rest``: the springs' rest angles, rad, NaN on a joint without spring) every spring that
+    rests outside its joint's range, with the spec field that moves it (``[rest_angle]``); ``mode`` ``"warn"`` also issues a :class:`JointRangeWarning`, ``"error"`` raises
     :class:`~alpes_dyn.InputError`, ``"ignore"`` only returns the message.
     """
     if mode not in JOINT_RANGE_MODES:
@@ -93,6 +182,13 @@ def check_range(t: np.ndarray, q: np.ndarray, lower: np.ndarray, upper: np.ndarr
     msg = (f"joint {names[j]!r} left its range [{lower[j]:g}, {upper[j]:g}] rad at t = {t[k]:g} s (q = {q[k, j]:.4g} "
            f"rad) and no joint stop is modelled (worst: {names[jw]!r} {worst[jw]:.3g} rad outside; pass "
            "stops=JointStops.of(model) to simulate them)")
+    if rest is not None:
+        r = np.asarray(rest, dtype=float)
+        bad = [i for i in range(len(names)) if np.isfinite(r[i]) and not lower[i] <= r[i] <= upper[i]]
+        if bad:
+            msg += ("; " + ", ".join(f"the spring of {names[i]!r} rests at {r[i]:g} rad, outside [{lower[i]:g}, "
+                                     f"{upper[i]:g}]" for i in bad)
+                    + ": set its rest angle inside the range in the spec's [rest_angle] table")
     if mode == "error":
         raise InputError(msg)
     if mode == "warn":

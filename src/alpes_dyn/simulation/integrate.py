@@ -387,7 +387,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
         raise InputError(f"simulation diverged (non-finite state at t = {t[k]:g} s); reduce dt or the inputs")
     if stops is None and joint_range != "ignore":
         m = ss.model
-        check_range(t, x[:, : ss.n], m.lower, m.upper, m.joint_names, joint_range)
+        check_range(t, x[:, : ss.n], m.lower, m.upper, m.joint_names, joint_range,
+                    rest=np.where(m.extras.stiffness != 0, m.extras.rest, np.nan))
     y = np.array(ss.h_function.map(N + 1)(x[:, : 2 * ss.n].T)).T
     return SimulationResult(t=t, x=x, y=y, u=U, F=Fs, system=ss, method=method)
 

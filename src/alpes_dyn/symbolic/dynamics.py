@@ -183,7 +183,7 @@ class SymbolicDynamics:
 
     def _tip(self, tip: str | None) -> str:
         self.model.frame_id(tip)  # validates
-        return tip if tip is not None else self.model.tips[0]
+        return tip if tip is not None else self.model.default_tip
 
     def inertia_matrix(self, q: cs.SX) -> cs.SX:
         """A(q) + I_a (n, n): the rigid-body mass matrix plus the joint-side ``armature`` on the

@@ -63,6 +63,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import ModelError
+from ..model.extras import spring_law
 from ..model.robot import Model
 from .dynamics import block_solve, sparse_dm
 
@@ -268,6 +269,7 @@ class ParametricDynamics:
         masses = _link_masses(model.urdf)
         self._mass_params = []  # (index in theta, nominal mass, backend)
         self._K = cs.DM(model.extras.stiffness)
+        self._q_rest = np.asarray(model.extras.rest) if model.extras.has_rest else None  # rad, not fitted
         self._Fs = cs.DM(model.extras.coulomb)
         self._Fv = cs.DM(model.extras.viscous)
         idx = {j: i for i, j in enumerate(model.joint_names)}
@@ -344,11 +346,12 @@ class ParametricDynamics:
         return out
 
     def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
-        """Springs K q (torsional) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m."""
+        """Springs K (q - q_rest) (torsional; K fitted, the rest angles q_rest the model's, :func:`~alpes_dyn.model.extras.
+        spring_law`) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m."""
         K = self._vector("K", self._K, theta)
         Fs = self._vector("F_s", self._Fs, theta)
         Fv = self._vector("F_v", self._Fv, theta)
-        return K * q + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
+        return spring_law(K, self._q_rest, q, cs) + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
 
     def encoder_offset(self, theta: cs.SX) -> cs.SX:
         """(m,) the encoder offsets, rad: y = S q + offset (zeros where not selected)."""

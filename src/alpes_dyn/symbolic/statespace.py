@@ -143,7 +143,7 @@ class StateSpace(Rebuilt):
                 model.frame_id(c.frame)
             self._legacy_force = False
         elif force:
-            t = tip if tip is not None else (model.tips[0] if model.tips else None)
+            t = tip if tip is not None else model.default_tip
             model.frame_id(t)
             self.contacts = (Contact(t),)
             self._legacy_force = True
@@ -151,8 +151,8 @@ class StateSpace(Rebuilt):
             self.contacts = ()
             self._legacy_force = False
         self.force = bool(self.contacts)
-        self.tip = self.contacts[0].frame if self.contacts else (tip if tip is not None else
-                                                                (model.tips[0] if model.tips else None))
+        self.tip = self.contacts[0].frame if self.contacts else (tip if tip is not None else (
+            model.tips[0] if model.tips and model.tips_named else None))
         self.force_names: tuple[str, ...] = (("F_x", "F_y", "F_z") if self._legacy_force
                                              else tuple(nm for c in self.contacts for nm in c.names))
 

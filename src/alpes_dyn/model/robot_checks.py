@@ -1,0 +1,105 @@
+"""Checks and solvers of :class:`~alpes_dyn.Model` (:mod:`alpes_dyn.model.robot`): the URDF parsed by Pinocchio
+(what it refuses, in one line), the mass matrix's definiteness at a generic configuration, Newton's method of the
+static equilibrium, the arguments of ``random_state``."""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+import numpy as np
+import pinocchio as pin
+
+from ..errors import InputError, ModelError
+from ..fileio import native_stderr_to
+from .urdf_checks import check_urdf_structure
+
+__all__ = ["newton_equilibrium"]
+
+
+def _build_pinocchio(urdf: str) -> pin.Model:
+    check_urdf_structure(urdf)
+    printed: list[str] = []  # urdfdom prints its parse errors on the process's stderr: into the message
+    try:
+        with native_stderr_to(printed):
+            model = pin.buildModelFromXML(urdf)
+    except Exception as exc:  # pinocchio raises ValueError/RuntimeError with multi-line text
+        errors = [line.removeprefix("Error:").strip() for line in printed if line.startswith("Error:")]
+        first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
+        raise ModelError(f"URDF could not be parsed by Pinocchio: {errors[0] if errors else first}") from None
+    if model.nv == 0:
+        raise ModelError("URDF has no movable joint")
+    if model.nq != model.nv:
+        raise ModelError(
+            f"URDF has joints with nq != nv (nq={model.nq}, nv={model.nv}); only fixed-base trees of "
+            "revolute/prismatic joints are supported"
+        )
+    return model
+
+
+def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:
+    """Newton's method for residual(q) = 0 (N m) from q0, steps capped at 0.5 rad; :class:`InputError` on failure."""
+    q = np.array(q0, dtype=float)
+    for _ in range(iterations):
+        r = residual(q)
+        if np.max(np.abs(r)) < tol:
+            return q
+        try:
+            dq = np.linalg.solve(jacobian(q), -r)
+        except np.linalg.LinAlgError:
+            raise InputError("static equilibrium: singular stiffness (a joint without spring?)") from None
+        q = q + dq * min(1.0, 0.5 / max(float(np.max(np.abs(dq))), 1e-300))  # at most 0.5 rad per step
+    raise InputError("static equilibrium: Newton's method did not converge (torque beyond the springs' range?)")
+
+
+def _generic_configuration(model: pin.Model) -> np.ndarray:
+    """A fixed, generic q inside the joint limits (golden-ratio fractions of each range)."""
+    lo, hi = model.lowerPositionLimit, model.upperPositionLimit
+    lo = np.where(np.isfinite(lo) & (np.abs(lo) < 1e3), lo, -np.pi)
+    hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
+    frac = np.mod(0.5 + 0.6180339887498949 * np.arange(1, model.nv + 1), 1.0)
+    return lo + frac * (hi - lo)
+
+
+def _check_mass_matrix(model: pin.Model, data: pin.Data, names: Sequence[str]) -> None:
+    """ModelError if A(q) + I_a is singular at a generic q: a joint that moves only massless links."""
+    A = pin.crba(model, data, _generic_configuration(model))
+    A = np.triu(A) + np.triu(A, 1).T
+    d = np.diag(A)
+    scale = float(np.max(np.abs(d))) if d.size else 0.0
+    for i, name in enumerate(names):
+        if not d[i] > 1e-14 * scale:
+            raise ModelError(f"joint {name!r} moves no mass: the links it carries are massless, so A(q) is singular "
+                             "(give them a mass and inertia, or make the joint fixed)")
+    try:
+        np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:
+        raise ModelError("A(q) is singular at a generic configuration (massless links?)") from None
+
+
+def _check_positive(model: pin.Model, data: pin.Data, R: np.ndarray) -> None:
+    """A(q) + R stays positive definite at a generic q (R >= 0 by construction; a guard on the sum)."""
+    A = pin.crba(model, data, _generic_configuration(model))
+    A = np.triu(A) + np.triu(A, 1).T + R
+    try:
+        np.linalg.cholesky(A)
+    except np.linalg.LinAlgError:  # pragma: no cover - R = S^T J S >= 0 cannot make it indefinite
+        raise ModelError("A(q) + S^T diag(J_m) S is not positive definite at a generic configuration") from None
+
+
+def _check_random_args(rng: object, speed: object, size: object) -> tuple[np.random.Generator, float, int | None]:
+    if not isinstance(rng, np.random.Generator):
+        if rng is not None and (isinstance(rng, (bool, np.bool_)) or not isinstance(rng, (int, np.integer))
+                                or rng < 0):
+            raise InputError(f"rng: expected a numpy Generator, an integer seed >= 0 or None, got {rng!r}")
+        rng = np.random.default_rng(rng)
+    try:
+        s = float(speed)  # type: ignore[arg-type]
+    except (TypeError, ValueError):
+        s = float("nan")
+    if not (math.isfinite(s) and s >= 0):
+        raise InputError(f"speed: expected a finite number >= 0 rad/s, got {speed!r}")
+    if size is not None and (isinstance(size, (bool, np.bool_)) or not isinstance(size, (int, np.integer))
+                             or size < 0):
+        raise InputError(f"size: expected an integer >= 0 or None, got {size!r}")
+    return rng, s, None if size is None else int(size)
