@@ -26,7 +26,7 @@ from ..fileio import atomic_write
 from ..model.robot import Model
 from ..model.spec import Motor, TransmissionSpec
 from ..symbolic.parametric import parameter_catalogue
-from .identification import _printable, _record  # the same record as a parameter file's [identification.<chain>]
+from .fit_result import _printable, _record  # the same record as a parameter file's [identification.<chain>]
 
 __all__ = ["identified_spec", "write_identified_spec", "spec_misfits"]
 
