@@ -1543,11 +1543,14 @@ def test_signal_mid_write_leaves_old_file_and_no_temp(tmp_path, sig):
 
     dest = tmp_path / "out.toml"
     dest.write_text("old content\n")
+    signum = getattr(signal, sig)
+    # the signal's default disposition in the child, whatever the runner's (under nohup SIGHUP is ignored, and
+    # the ignored disposition is inherited: the writer then rightly sleeps through it)
     p = subprocess.Popen([sys.executable, "-c", _WRITER, str(dest)], stdout=subprocess.PIPE, stderr=subprocess.PIPE,
-                         text=True, env=_env())
+                         text=True, env=_env(), preexec_fn=lambda: signal.signal(signum, signal.SIG_DFL))
     assert p.stdout.readline() == "writing\n"
     assert len(list(tmp_path.iterdir())) == 2  # the temporary file exists while writing
-    p.send_signal(getattr(signal, sig))
+    p.send_signal(signum)
     p.wait(timeout=30)
     assert p.returncode != 0
     if sig != "SIGINT":  # died by the signal, as without alpes_dyn's handler
