@@ -11,7 +11,7 @@ import subprocess
 import numpy as np
 import pytest
 
-from alpes_dyn import cli
+from alpes_dyn import cli, fileio
 from alpes_dyn.errors import InputError
 from alpes_dyn.estimation import cexport
 from alpes_dyn.estimation.cexport import c_sources, main_input, read_main_output, scenario_filter, write_c_observer
@@ -72,7 +72,7 @@ def test_codegen_writes_a_whole_directory_or_nothing(tmp_path, capsys, monkeypat
     def broken(*a, **k):
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(cexport, "_write_file", broken)
+    monkeypatch.setattr(fileio, "_write_file", broken)  # the directory writer (fileio.write_directory) fails
     capsys.readouterr()
     assert cli.main(["codegen", "--model", "finger2", "-o", str(tmp_path / "d")]) == 2
     assert "-o: cannot write" in capsys.readouterr().err

@@ -27,6 +27,7 @@ from __future__ import annotations
 import contextlib
 import errno
 import os
+import shutil
 import signal
 import stat
 import sys
@@ -39,7 +40,7 @@ from .errors import AlpesDynError, InputError
 from .limits import MAX_TEXT_BYTES
 
 __all__ = ["read_bytes", "read_text", "decode_utf8", "load_toml", "atomic_write", "atomic_path", "check_output_path", "check_outputs",
-           "signals_as_exceptions", "native_stderr_to"]
+           "signals_as_exceptions", "native_stderr_to", "check_output_directory", "write_directory"]
 
 def _path(path: str | os.PathLike[str], what: str, error: type[AlpesDynError]) -> Path:
     if not isinstance(path, (str, os.PathLike)):
@@ -383,6 +384,64 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes, what: str = "o
             f.flush()
             os.fsync(f.fileno())
     return Path(path)
+
+
+def check_output_directory(directory: str | os.PathLike[str] | None, what: str = "-o") -> Path:
+    """A directory to create: not empty, not an existing file, link or non-empty directory, its parent an
+    existing writable directory (:class:`~alpes_dyn.InputError` naming ``what``)."""
+    text = os.fspath(directory) if isinstance(directory, (str, os.PathLike)) else ""
+    if not text or "\0" in text:
+        raise InputError(f"{what}: expected a directory name, got {text!r}")
+    p = Path(text.rstrip("/") or "/")
+    if os.path.islink(p):
+        raise InputError(f"{what}: {text!r} is a symbolic link; give a new directory name")
+    if p.exists():
+        if not p.is_dir():
+            raise InputError(f"{what}: {text!r} exists and is not a directory; give a new directory name")
+        if any(p.iterdir()):
+            raise InputError(f"{what}: directory {text!r} is not empty; refusing to write over it (give a new "
+                             "directory name)")
+        if p.resolve() == p.resolve().parent:
+            raise InputError(f"{what}: {text!r} is the root directory")
+    parent = p.parent if str(p.parent) else Path(".")
+    if not parent.is_dir():
+        raise InputError(f"{what}: directory {str(parent)!r} of {text!r} does not exist")
+    if not os.access(parent, os.W_OK | os.X_OK):
+        raise InputError(f"{what}: directory {str(parent)!r} is not writable")
+    return p
+
+
+def write_directory(files: dict[str, str], directory: str | os.PathLike[str], what: str = "-o") -> dict[str, Path]:
+    """Write ``files`` ({name: text}) into ``directory``, a new (or empty) directory: into a temporary directory
+    beside it first, which is then renamed to ``directory`` (never a partial directory; an error or an
+    interruption leaves nothing): the directory's twin of :func:`atomic_path`. Returns {file name: path}."""
+    dest = check_output_directory(directory, what)
+    for name in files:
+        if not name or "/" in name or name.startswith("."):
+            raise InputError(f"files: {name!r} is not a plain file name")
+    with signals_as_exceptions():
+        tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name[:80]}.", suffix=".tmp", dir=dest.parent))
+        try:
+            for name, text in files.items():
+                _write_file(tmp / name, text)
+            os.chmod(tmp, 0o777 & ~_UMASK)
+            check_output_directory(dest, what)  # nothing came there meanwhile
+            os.rename(tmp, dest)  # replaces an empty directory, atomically
+        except OSError as exc:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise InputError(f"{what}: cannot write {str(dest)!r} ({exc.strerror or exc})") from None
+        except BaseException:
+            shutil.rmtree(tmp, ignore_errors=True)
+            raise
+    _fsync_dir(dest.parent)
+    return {name: dest / name for name in files}
+
+
+def _write_file(path: Path, text: str) -> None:
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+        f.flush()
+        os.fsync(f.fileno())
 
 
 @contextlib.contextmanager

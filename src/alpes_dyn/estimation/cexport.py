@@ -32,8 +32,6 @@ prior) for ``alpes-dyn codegen``. Build::
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 from pathlib import Path
 from typing import Any
 
@@ -41,7 +39,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError
-from ..fileio import _fsync_dir, signals_as_exceptions
+from ..fileio import check_output_directory, write_directory as write_sources  # their home: fileio
 from .observers import KalmanFilter
 
 __all__ = ["c_sources", "write_c_observer", "write_sources", "check_output_directory", "scenario_filter",
@@ -318,70 +316,6 @@ def write_c_observer(filt: KalmanFilter, directory: str | os.PathLike[str], *, w
     Returns {file name: path}."""
     check_output_directory(directory, what)
     return write_sources(c_sources(filt, **kwargs), directory, what)
-
-
-def write_sources(files: dict[str, str], directory: str | os.PathLike[str], what: str = "-o") -> dict[str, Path]:
-    """Write ``files`` ({name: text}) into ``directory``, a new (or empty) directory: into a temporary directory
-    beside it first, which is then renamed to ``directory`` (never a partial directory; an error or an
-    interruption leaves nothing). Returns {file name: path}."""
-    dest = check_output_directory(directory, what)
-    for name in files:
-        if not name or "/" in name or name.startswith("."):
-            raise InputError(f"files: {name!r} is not a plain file name")
-    with signals_as_exceptions():
-        tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name[:80]}.", suffix=".tmp", dir=dest.parent))
-        try:
-            for name, text in files.items():
-                _write_file(tmp / name, text)
-            os.chmod(tmp, 0o777 & ~_umask())
-            check_output_directory(dest, what)  # nothing came there meanwhile
-            os.rename(tmp, dest)  # replaces an empty directory, atomically
-        except OSError as exc:
-            shutil.rmtree(tmp, ignore_errors=True)
-            raise InputError(f"{what}: cannot write {str(dest)!r} ({exc.strerror or exc})") from None
-        except BaseException:
-            shutil.rmtree(tmp, ignore_errors=True)
-            raise
-    _fsync_dir(dest.parent)
-    return {name: dest / name for name in files}
-
-
-def _write_file(path: Path, text: str) -> None:
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(text)
-        f.flush()
-        os.fsync(f.fileno())
-
-
-def _umask() -> int:
-    from ..fileio import _UMASK
-
-    return _UMASK
-
-
-def check_output_directory(directory: str | os.PathLike[str] | None, what: str = "-o") -> Path:
-    """A directory to create: not empty, not an existing file, link or non-empty directory, its parent an
-    existing writable directory (:class:`~alpes_dyn.InputError` naming ``what``)."""
-    text = os.fspath(directory) if isinstance(directory, (str, os.PathLike)) else ""
-    if not text or "\0" in text:
-        raise InputError(f"{what}: expected a directory name, got {text!r}")
-    p = Path(text.rstrip("/") or "/")
-    if os.path.islink(p):
-        raise InputError(f"{what}: {text!r} is a symbolic link; give a new directory name")
-    if p.exists():
-        if not p.is_dir():
-            raise InputError(f"{what}: {text!r} exists and is not a directory; give a new directory name")
-        if any(p.iterdir()):
-            raise InputError(f"{what}: directory {text!r} is not empty; refusing to write over it (give a new "
-                             "directory name)")
-        if p.resolve() == p.resolve().parent:
-            raise InputError(f"{what}: {text!r} is the root directory")
-    parent = p.parent if str(p.parent) else Path(".")
-    if not parent.is_dir():
-        raise InputError(f"{what}: directory {str(parent)!r} of {text!r} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
-        raise InputError(f"{what}: directory {str(parent)!r} is not writable")
-    return p
 
 
 def main_input(z0: Any, P0: Any, y0: Any, W: Any, Y: Any) -> str:
