@@ -6,7 +6,7 @@ A real tendon-driven finger has what the model of the report leaves out; each is
 ============== ======================================================================================
 effect         what the fit does
 ============== ======================================================================================
-``stiction``   (asked for; ``auto`` adds it where the first fit is flagged) the friction's smooth sign tanh(qd / v_s) sharpened to v_s = :data:`STICTION_VELOCITY`
+``stiction``   (asked for; ``auto`` adds it where a fit's verdict names it, or flags it naming nothing) the friction's smooth sign tanh(qd / v_s) sharpened to v_s = :data:`STICTION_VELOCITY`
                (0.02 rad/s): a joint under a torque below F_s creeps at v_s atanh(tau / F_s) instead of
                sliding, the stick phases of dry friction; RK4 steps shortened to match
                (:func:`~alpes_dyn.simulation.integrate.stable_substeps`). The file written keeps this v_s.
@@ -46,6 +46,7 @@ from ..errors import InputError
 from ..model.extras import STICTION_VELOCITY
 from ..model.params import HandParams, with_values
 from ..model.robot import Model
+from ..symbolic.parametric import select_parameters
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
@@ -63,7 +64,7 @@ at 50 ms every round held (0.69-0.99 counts, K within 2.4 %, masses within 4.6 %
 
 def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
     """The effects of a comma-separated list (``"none"``: the rigid, smooth-friction fit; None or ``"auto"``: the
-    defaults plus ``"auto"``, stiction where the first fit's adequacy check flags it, :func:`fit_effects`).
+    defaults plus ``"auto"``: the rounds of :func:`fit_effects`).
     :class:`~alpes_dyn.InputError` naming an unknown or repeated one."""
     if text is None or text == "auto":
         return DEFAULT_EFFECTS + ("auto",)
@@ -118,7 +119,6 @@ def stiction_params(params: HandParams) -> HandParams:
                               reason="the stick-slip law of alpes_dyn.estimation.effects: a joint creeps at "
                                      "v_s atanh(tau / F_s) under a torque below F_s", std=None)
     return with_values(params, {"friction.smooth_velocity": new})
-
 
 
 def alpes_models(model: str, params: HandParams, *, rotor_inertia: bool = False,
@@ -180,8 +180,6 @@ def _elastic(result: Any) -> bool:
 
 def _selection_names(model: Model, selection: str | None) -> tuple[str, ...]:
     """The parameter names of ``selection`` on ``model`` (:func:`~alpes_dyn.symbolic.parametric.select_parameters`)."""
-    from ..symbolic.parametric import select_parameters
-
     return tuple(pp.name for pp in select_parameters(model, selection))
 
 
@@ -210,7 +208,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         kw = dict(kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
         if warm is not None and warm.converged and "start" not in kw:
-            # the next round from the last one's values: the same basin, a third of the iterations
+            # the next round from the last one's values, in its basin (all-effects seed 12: the rotor's round
+            # took 6 iterations from the stick-slip round's values)
             names = set(_selection_names(model, selection))
             kw["start"] = {nm: float(v) for nm, v in zip(warm.names, warm.values) if nm in names}
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps

@@ -292,7 +292,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # additive parameters (encoder offsets, tilt angles: nominal 0, either sign) are fitted as they are, the
     # others as log theta / theta_0; the encoder offsets enter the output only (their state sensitivities are 0)
     additive = np.array([pp.additive for pp in sens.dynamics.parameters], dtype=bool)
-    start_values = start
     if start is not None:
         theta0 = _start_values(theta0, sens.names, additive, start)
     off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
@@ -484,10 +483,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                   float(np.max(np.abs(dg[p:]), initial=0.0)) / max_coef_step)
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
-    def lin_solve(M, rhs: np.ndarray) -> np.ndarray:
-        """M x = rhs, or its least-squares (minimum-norm) solution where M is singular (:func:`.kkt.factorize`)."""
-        return factorize(M)(rhs)
-
     n_res = int(valid.sum()) * ny + (int(q_mask.sum()) if q_mask is not None else 0) + n_int * no + ncg
     dof = max(n_res - (nz - nc), 1)
     unit_p = np.zeros((nz + nc, p))
@@ -516,7 +511,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 hold[frozen] = 1e12 * np.maximum(H.diagonal()[frozen], 1.0)
                 H = H + (np.diag(hold) if dense else sp.diags(hold, format="csc"))
                 g = grad(r, J, rg) + C.T @ (c.reshape(-1) * wdef)
-                d = -lin_solve(H, g)
+                d = -factorize(H)(g)  # the least-squares solution where H is singular
                 dv, dg, whole = limited(d)
                 if not whole:
                     # the global step shortened, the local variables solved again for it: with continuity a
@@ -633,13 +628,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # the right one the encoder noise (0.58 counts), so a residual above three times the quantisation
     # floor (1/sqrt(12) count) asks for the second start.
     basin_limit = 3.0 / math.sqrt(12.0)
-    start = (nodes.copy(), offs.copy(), glob.copy())
+    first = (nodes.copy(), offs.copy(), glob.copy())  # both starts from the stage-1 nodes
     total_its = 0
     for freeze in (True, False):
         if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
             bar.close()
             bar = _Progress(max_iterations, "identify (second start)", show)
-        nodes, offs, glob, state, it, converged, reason = solve(*[a.copy() for a in start], freeze)
+        nodes, offs, glob, state, it, converged, reason = solve(*[a.copy() for a in first], freeze)
         total_its += it
         r, J, c, Cv, Cr, rg, xs = state
         if encoder_rms(r) <= basin_limit:
@@ -659,7 +654,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             again = identify(model, recording, parameters, excitation=excitation, interval=0.5 * interval,
                              substeps=substeps, torque_noise=torque_noise, camera_noise=camera_noise,
                              max_iterations=max_iterations, tol=tol, threads=threads, progress=progress,
-                             validation=validation, encoder_noise=encoder_noise, start=start_values, kkt=kkt)
+                             validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt)
         if again.converged and again.residual_rms < encoder_rms(r):  # a lost basin again: the first kept
             again.iterations += it
             again.seconds = time.perf_counter() - t_start

@@ -158,9 +158,7 @@ class JointExtras:
     def spring_torque(self, q: Any, xp: Any = np) -> Any:
         """Spring torque k (q - q_rest) (N m, :func:`spring_law`), the spring part of G(q) in eq. 2.11; q: (n,)
         array or casadi column."""
-        if xp is np and self._rest_used is None:  # the hot path (forward dynamics): k q
-            return self.stiffness * q
-        return spring_law(self.stiffness, self._rest_used, q, xp)
+        return spring_law(self.stiffness, self._rest_used, q, xp)  # no rest angle: k q, the hot path
 
     def spring_energy(self, q: Any, xp: Any = np) -> Any:
         """Spring potential energy sum 1/2 k_i (q_i - q_rest,i)^2 (J): 1/2 tau_s . (q - q_rest)."""
