@@ -44,7 +44,7 @@ def child(duration: float, seed: int, dense: bool) -> dict:
     out: dict = {"duration_s": duration, "seed": seed}
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     t0 = time.perf_counter()
-    res = identify(model, rec, excitation=design.frequencies, progress=False)
+    res = identify(model, rec, excitation=design.lines, progress=False)
     out["sparse"] = {"seconds": time.perf_counter() - t0, "compile_seconds": res.compile_seconds,
                      "iterations": res.iterations, "converged": bool(res.converged),
                      "residual_counts": res.residual_rms,
@@ -54,7 +54,7 @@ def child(duration: float, seed: int, dense: bool) -> dict:
     out["rss_before_fit_mib"] = rss0
     if dense:
         t0 = time.perf_counter()
-        ref = identify(model, rec, excitation=design.frequencies, progress=False, kkt="dense")
+        ref = identify(model, rec, excitation=design.lines, progress=False, kkt="dense")
         out["dense"] = {"seconds": time.perf_counter() - t0, "iterations": ref.iterations,
                         "residual_counts": ref.residual_rms}
         out["dense_over_sparse_time"] = out["dense"]["seconds"] / out["sparse"]["seconds"]

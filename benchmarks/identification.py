@@ -35,7 +35,7 @@ def one(seed: int, tmp: Path) -> dict:
     rec = experiment("finger3", true, seed=seed)
     model = ad.Model.alpes("finger3", friction=True)
     t0 = time.perf_counter()
-    res = identify(model, rec, excitation=ExperimentDesign().frequencies, progress=False)  # torque noise: estimated
+    res = identify(model, rec, excitation=ExperimentDesign().lines, progress=False)  # torque noise: estimated
     fit_s = time.perf_counter() - t0
     ident_path = res.write(tmp / f"ident{seed}.toml")
     truth = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]

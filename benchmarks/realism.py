@@ -159,7 +159,7 @@ def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray):
 def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign):
     """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
     the fit never saw, in the joint range by the same design rule), from the plant's rest."""
-    fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES)
+    fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0)  # in use: no dither, stick phases
     _, u, x0 = torque_of(seed, p, fresh, plant_model(MODEL, p, effects).gravity)
     return mujoco_recording(MODEL, p, u, fresh.dt, effects=effects, q0=x0[:3], seed=seed + 1000)
 
@@ -171,9 +171,9 @@ def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, t
     _, u, x0 = torque_of(seed, true, design, g_true)
     rec = mujoco_recording(MODEL, true, u, design.dt, effects=effects, q0=x0[:3], seed=seed)
     plant_s = time.perf_counter() - t0
-    rigid = identify(ad.Model.alpes(MODEL, friction=True), rec, excitation=design.frequencies, progress=False)
+    rigid = identify(ad.Model.alpes(MODEL, friction=True), rec, excitation=design.lines, progress=False)
     fit = fit_effects(alpes_models(MODEL, load_params()), rec, parse_effects(FIT_EFFECTS), None, rec.gravity is not None,
-                      excitation=design.frequencies, progress=False)
+                      excitation=design.lines, progress=False)
     res = fit.result
     ident = res.write(tmp / f"ident_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
     truth = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]

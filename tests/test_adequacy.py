@@ -106,7 +106,7 @@ def fits():
     rotor inertia (1e-6 kg m^2 on the tendon) the model lacks, each fitted; a held-out run of each."""
     true = perturbed_params(spread=0.2, seed=2)
     model = ad.Model.alpes("finger3", friction=True)
-    freqs = ExperimentDesign().frequencies
+    freqs = ExperimentDesign().lines
     out = {}
     for kind in ("match", "rotor"):
         rec = mismatched(kind, true, duration=1.0, seed=2)

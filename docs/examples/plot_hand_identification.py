@@ -69,7 +69,7 @@ for chain in nominal.chain_names:
     name, ch = ("thumb", None) if chain == "thumb" else ("finger3", chain)
     rec = experiment(name, true, design, seed=SEED, chain=ch)
     model = ad.Model.alpes(name, friction=True, params=nominal, chain=ch)
-    res = identify(model, rec, THUMB_PARAMETERS if chain == "thumb" else None, excitation=design.frequencies,
+    res = identify(model, rec, THUMB_PARAMETERS if chain == "thumb" else None, excitation=design.lines,
                    progress=False)
     ident = res.params(ident)  # into [finger.<chain>] or [thumb]
     truth = {p.name: p.nominal for p in parameter_catalogue(ad.Model.alpes(name, friction=True, params=true,

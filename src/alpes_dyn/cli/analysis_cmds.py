@@ -93,7 +93,7 @@ def _identifiability_report(args: argparse.Namespace, model, spec: str, torque) 
 
 def cmd_identifiability(args: argparse.Namespace) -> int:
     """Structural identifiability of physical parameters, and the Cramér-Rao bounds of an experiment."""
-    from ..estimation.experiment import _profile, excitation
+    from ..estimation.experiment import _profile, dither_amplitude, excitation
     from ..model.robot import Model
     from ..estimation.scenario import SCENARIO_MODELS, EstimationScenario, _torque
     from ..model.stops import JointRangeWarning
@@ -116,7 +116,7 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
         with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
             warnings.simplefilter("ignore", JointRangeWarning)
             bias, amp = excitation(nominal, design)
-        return _profile(design, t, bias, amp)[:-1, None]
+        return _profile(design, t, bias, amp, dither=float(dither_amplitude(nominal, design)[0]))[:-1, None]
 
     return _identifiability_report(args, model, spec, torque)
 
@@ -125,7 +125,7 @@ def _identifiability_robot(args: argparse.Namespace) -> int:
     """``identifiability --model PATH.urdf --spec FILE.toml``: the structural test on the spec's robot and the
     Cramér-Rao bounds of its documented experiment (the multisine designed for its own joint ranges and masses,
     :func:`~alpes_dyn.estimation.experiment.model_experiment`'s), or structural only (``--design none``)."""
-    from ..estimation.experiment import _excitation, _profiles
+    from ..estimation.experiment import _excitation, _profiles, dither_amplitude
     from ..model.stops import JointRangeWarning
 
     _one_of(args.design, DESIGNS, "--design", "design")
@@ -139,6 +139,6 @@ def _identifiability_robot(args: argparse.Namespace) -> int:
         with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
             warnings.simplefilter("ignore", JointRangeWarning)
             bias, amp = _excitation(model, design)
-        return _profiles(design, t, bias, amp)[:-1]
+        return _profiles(design, t, bias, amp, dither_amplitude(model, design))[:-1]
 
     return _identifiability_report(args, model, spec, torque)

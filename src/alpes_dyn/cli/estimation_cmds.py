@@ -278,7 +278,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     _check_run_files(args)  # the output policy: -o is none of --data, --validate, --params, nor a link...
     exc = args.excitation
     if exc == "documented":
-        freqs = ExperimentDesign().frequencies
+        freqs = ExperimentDesign().lines  # the multisine's and the dither's
     elif exc == "none":
         freqs = None
     else:

@@ -145,7 +145,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         by name also ``J_m`` (a model with rotors), ``encoder_offset``, ``tilt`` (``tilt_y`` on a planar finger:
         ``tilt_x`` is seen only through its cosine) and ``input_gain`` (with the masses held:
         :func:`check_selection`).
-    excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().frequencies``):
+    excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().lines``):
         the true torque is taken to lie on a constant and these sines and cosines (periodic-excitation
         identification). The measured torque is projected on them, and the projection's error (what
         the noise leaves on the lines) is fitted with the parameters: u = P u_meas + sigma_u Q c with Q

@@ -33,7 +33,21 @@ from ..model.robot import Model
 from ..symbolic.parametric import ParametricDynamics
 from .integrate import CompiledStepLoop, _check_dt, rk4_expression
 
-__all__ = ["SensitivityModel", "variational_rk4_step"]
+__all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
+
+
+def repeated_step(step: cs.Function, count: int) -> cs.Function:
+    """``step`` (x, w) -> x_next applied ``count`` times with the same w (an MX function calling it ``count``
+    times): the substeps of one sample period in one compiled call, so the caller's inputs and states are per
+    sample (not repeated per substep: for a stick-slip fit's 15 substeps, 15x less memory in and out)."""
+    if count == 1:
+        return step
+    z = cs.MX.sym("z", step.size1_in(0))
+    wm = cs.MX.sym("w", step.size1_in(1))
+    zk = z
+    for _ in range(count):
+        zk = step(zk, wm)
+    return cs.Function(step.name() + f"_x{count}", [z, wm], [zk])
 
 
 def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> cs.Function:
@@ -116,8 +130,10 @@ class SensitivityModel:
         f = cs.Function("rhs", [x, w], [cs.cse(rhs)])
         h = self.dt / self.substeps
         xm, wm = cs.MX.sym("x", self.nx), cs.MX.sym("w", w.numel())
-        self.plain_step = cs.Function("step", [xm, wm], [rk4_expression(f, xm, wm, h)])  # rhs once in the C
-        self.step = variational_rk4_step(rhs, x, w, cs.vertcat(pd.theta, off), h)
+        # one call per sample period: the substeps in the compiled step, the input held, the states at the samples
+        self.plain_step = repeated_step(cs.Function("step", [xm, wm], [rk4_expression(f, xm, wm, h)]),
+                                        self.substeps)  # the right-hand side once in the C
+        self.step = repeated_step(variational_rk4_step(rhs, x, w, cs.vertcat(pd.theta, off), h), self.substeps)
         label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._loop = CompiledStepLoop(self.step, label, threads)
         self._label, self._threads = label, threads
@@ -151,10 +167,9 @@ class SensitivityModel:
         theta = np.asarray(theta, dtype=float).reshape(-1)
         if theta.shape != (self.p,) or not np.isfinite(theta).all():
             raise InputError(f"theta: expected {self.p} finite values, got {theta!r}")
-        s = self.substeps
-        W = np.empty((B, N * s, self.nw))
-        W[:, :, : self.nu] = np.repeat(U, s, axis=1)
-        W[:, :, self.nu: self.nu + 3] = np.repeat(G, s, axis=1)
+        W = np.empty((B, N, self.nw))  # per sample period: the compiled step makes the substeps
+        W[:, :, : self.nu] = U
+        W[:, :, self.nu: self.nu + 3] = G
         W[:, :, self.nu + 3: self.nu + 3 + self.p] = theta
         if self.nb:
             j = self.nu + 3 + self.p
@@ -164,7 +179,7 @@ class SensitivityModel:
                 basis = np.asarray(basis, dtype=float)
                 if basis.shape != (B, N, self.nb):
                     raise InputError(f"basis: expected shape {(B, N, self.nb)}, got {basis.shape}")
-                W[:, :, j: j + self.nb] = np.repeat(basis, s, axis=1)
+                W[:, :, j: j + self.nb] = basis
             if offset is None:
                 W[:, :, j + self.nb:] = 0.0
             else:
@@ -179,11 +194,11 @@ class SensitivityModel:
                                                     self._threads)
                 self.compile_seconds += self._plain_loop.compile_seconds
             x0 = np.ascontiguousarray(np.broadcast_to(x0, (B, self.nx)))
-            return self._plain_loop.run(x0, W, progress, "states")[:, ::s], None
+            return self._plain_loop.run(x0, W, progress, "states"), None
         s0 = np.zeros((B, self.nx + self.nx * self.nd))
         s0[:, : self.nx] = x0
         s0[:, self.nx: self.nx + self.nx * self.nx] = np.eye(self.nx).ravel(order="F")
-        S = self._loop.run(s0, W, progress, "sensitivities")[:, ::s]
+        S = self._loop.run(s0, W, progress, "sensitivities")
         x = S[:, :, : self.nx]
         X = S[:, :, self.nx:].reshape(B, N + 1, self.nd, self.nx).transpose(0, 1, 3, 2)
         return x, X

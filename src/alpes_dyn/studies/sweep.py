@@ -175,7 +175,7 @@ def robustness_draw(seed: int, model: str = "finger3", spread: float = 0.2, dura
     out: dict[str, Any] = {"rmse_deg_before": np.degrees(estimate_recording(rec, nominal).rmse)}
     if fit:
         t0 = time.perf_counter()
-        res = identify(nominal, rec, excitation=design.frequencies, progress=False)
+        res = identify(nominal, rec, excitation=design.lines, progress=False)
         out["fit_seconds"] = time.perf_counter() - t0
         out["converged"] = bool(res.converged)
         out["residual_counts"] = float(res.residual_rms)
