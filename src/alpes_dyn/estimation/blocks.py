@@ -92,7 +92,7 @@ class Observer(Block):
         self.has_response = self.first_update and step is None
 
     def start(self, n_periods: int, dt: float, final: bool) -> None:
-        self.n_periods = n_periods
+        self.n_periods, self._slots = n_periods, None
         if self._step is None:
             fs = self.filt.filter_step
             self._call = lambda s, wy: np.asarray(fs(s, wy)).reshape(-1)
@@ -113,7 +113,13 @@ class Observer(Block):
                 z, P = self.filt._update(z, P, np.ravel(u[self.measurement]))
             self._s = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
         else:
-            wy = np.concatenate([np.ravel(u[s]) for s in self.inputs])
+            if self._slots is None:  # where each signal goes in [w; y]
+                sizes = np.cumsum([0] + [np.size(u[s]) for s in self.inputs])
+                self._slots = [(s, slice(int(a), int(b))) for s, a, b in zip(self.inputs, sizes[:-1], sizes[1:])]
+                self._wy = np.empty(int(sizes[-1]))
+            wy = self._wy
+            for s, sl in self._slots:
+                wy[sl] = u[s]
             self._s = self._call(self._s, wy)
         return self._out()
 

@@ -304,37 +304,38 @@ def _run_batch(blocks: Sequence[Block], order: list[int]) -> dict[str, np.ndarra
     return signals
 
 
+def _updates(b: Block) -> bool:
+    """Whether the block takes part in the update pass: it reads or writes there, or has an update of its own."""
+    return bool(b.update_inputs or b.period_outputs) or "update" in vars(b) or type(b).update is not Block.update
+
+
 def _run_step(blocks: Sequence[Block], out_order: list[int], upd_order: list[int], N: int, final: bool,
               period: set[str]) -> dict[str, np.ndarray]:
-    """The sample-by-sample loop: outputs in ``out_order``, updates in ``upd_order``; each value logged."""
+    """The sample-by-sample loop: outputs in ``out_order``, updates in ``upd_order``; every value logged (a numpy
+    array copied: a block may reuse its buffers), the logs stacked at the end."""
     now: dict[str, Any] = {}
     for b in blocks:
         for s in b.period_outputs:
             now[s] = b.initial.get(s, 0.0)
-    log: dict[str, np.ndarray] = {}
+    lists: dict[str, list[Any]] = {s: [] for b in blocks for s in (*b.outputs, *b.period_outputs)}
     S = N + 1 if final else N
-
-    def put(k: int, values: dict[str, Any], rows: int) -> None:
-        for s, v in values.items():
-            now[s] = v
-            arr = log.get(s)
-            if arr is None:
-                a = np.asarray(v)
-                arr = log[s] = np.full((rows, *a.shape), np.nan, dtype=np.result_type(a.dtype, np.float64))
-            arr[k] = v
-
-    outs = [(blocks[i], blocks[i].inputs) for i in out_order]
-    upds = [(blocks[i], blocks[i].update_inputs) for i in upd_order if blocks[i].update_inputs
-            or blocks[i].period_outputs or type(blocks[i]).update is not Block.update]
+    ndarray = np.ndarray
+    outs = [(blocks[i].output, blocks[i].inputs) for i in out_order if blocks[i].outputs]
+    upds = [(blocks[i].update, blocks[i].update_inputs) for i in upd_order if _updates(blocks[i])]
     for k in range(S):
-        for b, names in outs:
-            values = b.output(k, {s: now[s] for s in names})
-            if values:
-                put(k, values, S)
-        if k == N:
-            break
-        for b, names in upds:
-            values = b.update(k, {s: now[s] for s in names})
-            if values:
-                put(k, values, N)
+        for passes in ((outs,) if k == N else (outs, upds)):
+            for call, names in passes:
+                values = call(k, {s: now[s] for s in names})
+                if values:
+                    now.update(values)
+                    for s, v in values.items():
+                        lists[s].append(v.copy() if type(v) is ndarray else v)
+    log: dict[str, np.ndarray] = {}
+    for s, values in lists.items():
+        rows = N if s in period else S
+        if len(values) != rows:
+            raise InputError(f"signal {s!r}: written {len(values)} times in {rows} "
+                             f"{'periods' if s in period else 'samples'} (a block must write its signals every time)")
+        a = np.array(values)
+        log[s] = a.astype(np.float64) if a.dtype.kind in "iub" else a
     return log

@@ -77,8 +77,10 @@ class Sensor(Block):
         self.signal, self.reading = signal, reading
         if timing == "sample":
             self.inputs, self.outputs = (signal,), (reading,)
+            self.output = self._read  # type: ignore[method-assign]
         else:
             self.update_inputs, self.period_outputs = (signal,), (reading,)
+            self.update = self._read  # type: ignore[method-assign]
 
     def start(self, n_periods: int, dt: float, final: bool) -> None:
         rows = n_periods + int(final) if self.timing == "sample" else n_periods
@@ -95,14 +97,8 @@ class Sensor(Block):
         """The reading of the true value ``x`` with the noise ``noise`` (same shape; whole records too)."""
         raise NotImplementedError
 
-    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
-        if self.timing == "period":
-            return {}
-        return {self.reading: self.measure(u[self.signal], self.noise[k])}
-
-    def update(self, k: int, u: dict[str, Any]) -> dict[str, Any] | None:
-        if self.timing == "sample":
-            return None
+    def _read(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
+        """The reading at sample k (``output``) or over period k (``update``), per the sensor's timing."""
         return {self.reading: self.measure(u[self.signal], self.noise[k])}
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -130,6 +126,9 @@ class Encoder(Sensor):
         v = (x + noise) / self.step
         if self.offset != 0.0:
             v = v + self.offset
+        if isinstance(v, float):  # one motor (np.float64 too): Python's round, the same half-to-even as numpy's
+            r = round(v)
+            return float(r) if self.counts else r * self.step
         return np.round(v) if self.counts else np.round(v) * self.step
 
 
@@ -158,6 +157,6 @@ class ForceSensor(Sensor):
 
     def measure(self, x: Any, noise: Any) -> Any:
         r = self.resolution
-        if np.ndim(x) == 0:
+        if isinstance(x, (float, np.floating)) or np.ndim(x) == 0:
             return max(0.0, round((float(x) + noise) / r) * r)
         return np.maximum(0.0, np.round((x + noise) / r) * r)
