@@ -4,6 +4,7 @@
   (updated with the first measurement, or not), then each sample one predict-update step
   (``filter_step``) with the known inputs of the previous period and the measurement at t_k. Its whole-record
   response is the filter's :meth:`~alpes_dyn.estimation.observers.KalmanFilter.run` (one compiled loop).
+* :class:`ObserverBank`: observers of the same model advanced together, one compiled call per sample;
 * :func:`step_caller` / :func:`batch_step_caller`: the filter step of one filter, or of B filters of the same model
   in one call of compiled C (CasADi's virtual machine without a compiler).
 * :class:`RecordingPlayback`: a :class:`~alpes_dyn.estimation.recording.Recording` as the plant: its encoder counts,
@@ -21,7 +22,7 @@ from ..simulation.loop import Block
 from .observers import KalmanFilter
 from .recording import Recording
 
-__all__ = ["Observer", "RecordingPlayback", "step_caller", "batch_step_caller"]
+__all__ = ["Observer", "ObserverBank", "RecordingPlayback", "step_caller", "batch_step_caller"]
 
 
 def batch_step_caller(step: Any, label: str, compiled: bool) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
@@ -73,12 +74,13 @@ class Observer(Block):
     first_update: update the prior with the measurement at t_0 (as :meth:`KalmanFilter.run`); else the estimate
         at t_0 is the prior.
     step: the step s, wy -> s_next (:func:`step_caller`; default the filter's ``filter_step`` in CasADi's VM).
+    label: the name of its compiled step in an :class:`ObserverBank` (default ``<kind>_<model name>``).
     """
 
     def __init__(self, filt: KalmanFilter, z0: Any, P0: Any, *, known: Sequence[str] = ("u",),
                  measurement: str = "y", estimate: str = "z", covariance: str | None = "P",
                  first_update: bool = True, step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
-                 name: str = "observer") -> None:
+                 label: str | None = None, name: str = "observer") -> None:
         if not isinstance(filt, KalmanFilter):
             raise InputError(f"filt: expected a KalmanFilter of alpes_dyn.estimation.observers, got {type(filt).__name__}")
         self.filt, self.name = filt, name
@@ -87,6 +89,7 @@ class Observer(Block):
         self.measurement, self.estimate, self.covariance = measurement, estimate, covariance
         self.first_update = bool(first_update)
         self._step = step
+        self.label = label or f"{filt.kind}_{filt.model.system.model.name}"
         self.inputs = (*self.known, measurement)
         self.outputs = (estimate,) if covariance is None else (estimate, covariance)
         self.has_response = self.first_update and step is None
@@ -106,21 +109,30 @@ class Observer(Block):
             out[self.covariance] = self._s[nz:].reshape(nz, nz, order="F")
         return out
 
+    def first(self, u: dict[str, Any]) -> np.ndarray:
+        """The state s = [z; vec P] at t_0: the prior, updated with the first measurement or not."""
+        z, P = self.z0, self.P0
+        if self.first_update:
+            z, P = self.filt._update(z, P, np.ravel(u[self.measurement]))
+        self._s = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
+        return self._s
+
+    def wy(self, u: dict[str, Any]) -> np.ndarray:
+        """[w; y] (nw + ny,) from the input signals (a buffer reused at each sample)."""
+        if self._slots is None:  # where each signal goes
+            sizes = np.cumsum([0] + [np.size(u[s]) for s in self.inputs])
+            self._slots = [(s, slice(int(a), int(b))) for s, a, b in zip(self.inputs, sizes[:-1], sizes[1:])]
+            self._wy = np.empty(int(sizes[-1]))
+        wy = self._wy
+        for s, sl in self._slots:
+            wy[sl] = u[s]
+        return wy
+
     def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         if k == 0:
-            z, P = self.z0, self.P0
-            if self.first_update:
-                z, P = self.filt._update(z, P, np.ravel(u[self.measurement]))
-            self._s = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
+            self.first(u)
         else:
-            if self._slots is None:  # where each signal goes in [w; y]
-                sizes = np.cumsum([0] + [np.size(u[s]) for s in self.inputs])
-                self._slots = [(s, slice(int(a), int(b))) for s, a, b in zip(self.inputs, sizes[:-1], sizes[1:])]
-                self._wy = np.empty(int(sizes[-1]))
-            wy = self._wy
-            for s, sl in self._slots:
-                wy[sl] = u[s]
-            self._s = self._call(self._s, wy)
+            self._s = self._call(self._s, self.wy(u))
         return self._out()
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -132,6 +144,47 @@ class Observer(Block):
         out = {self.estimate: est.z}
         if self.covariance is not None:
             out[self.covariance] = est.P
+        return out
+
+
+class ObserverBank(Block):
+    """Several :class:`Observer` blocks as one: those whose filters share a step function (the same model and
+    noise settings: the hand's four fingers) advance together, in one call of compiled C per sample
+    (:func:`batch_step_caller`; ``compiled=False``: CasADi's virtual machine). Each observer keeps its own signals."""
+
+    def __init__(self, observers: Sequence[Observer], *, compiled: bool = True, name: str = "observers") -> None:
+        observers = list(observers)
+        if not observers or not all(isinstance(o, Observer) for o in observers):
+            raise InputError("observers: expected a non-empty list of Observer blocks")
+        self.observers, self.name = observers, name
+        groups: dict[str, list[int]] = {}
+        self._callers: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {}
+        for i, o in enumerate(observers):
+            key = o.filt.filter_step.serialize()
+            if key not in self._callers:
+                self._callers[key] = batch_step_caller(o.filt.filter_step, o.label, compiled)
+            groups.setdefault(key, []).append(i)
+        self._groups = list(groups.items())
+        self.inputs = tuple(dict.fromkeys(s for o in observers for s in o.inputs))
+        self.outputs = tuple(s for o in observers for s in o.outputs)
+
+    def start(self, n_periods: int, dt: float, final: bool) -> None:
+        for o in self.observers:
+            o.start(n_periods, dt, final)
+
+    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
+        obs = self.observers
+        if k == 0:
+            for o in obs:
+                o.first(u)
+        else:
+            for key, idx in self._groups:
+                S = self._callers[key](np.stack([obs[i]._s for i in idx]), np.stack([obs[i].wy(u) for i in idx]))
+                for j, i in enumerate(idx):
+                    obs[i]._s = S[j]
+        out: dict[str, Any] = {}
+        for o in obs:
+            out.update(o._out())
         return out
 
 
