@@ -25,7 +25,6 @@ model -- typically the one identified from another recording (``alpes-dyn identi
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
