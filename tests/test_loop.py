@@ -184,6 +184,33 @@ def test_simulator_plant_steps_its_model(finger):
     assert same(step_log["q_m"], finger.transmission.encoder_angles(sim.x[::2, :n], u))
 
 
+def test_mujoco_plant_steps_mujoco(finger):
+    """One period of the block: the controls set, ``substeps`` mj_step calls; its signals MuJoCo's qpos and
+    sensordata (the period sensor read after the steps), as on a twin MjData stepped by hand."""
+    mujoco = pytest.importorskip("mujoco")
+    from alpes_dyn.model.mjcf import joint_permutation, load_mujoco, mjcf_string
+    from alpes_dyn.simulation.plants import MujocoPlant
+
+    mj = load_mujoco(mjcf_string("finger3", ad.load_params(), friction=True, scene="block"))
+    d, twin = mujoco.MjData(mj), mujoco.MjData(mj)
+    perm = joint_permutation(mj, finger.joint_names)
+    for dd in (d, twin):
+        dd.qpos[perm] = [0.3, 0.8, 0.7]
+        mujoco.mj_forward(mj, dd)
+    u = np.array([0.0, 0.01, 0.02, 0.03])
+    plant = MujocoPlant(mj, d, substeps=3, joints={"q": finger.joint_names}, actuators={"tau": "finger"},
+                        sensors={"q_m": "encoder_finger"}, period_sensors={"tau_applied": "torque_finger"})
+    log = run_loop([Source(tau=u), plant], 4, 3 * mj.opt.timestep)
+    enc, frc = mj.sensor("encoder_finger").adr[0], mj.sensor("torque_finger").adr[0]
+    for k in range(4):
+        assert same(log["q"][k], twin.qpos[perm]) and log["q_m"][k] == twin.sensordata[enc]
+        twin.ctrl[0] = u[k]
+        for _ in range(3):
+            mujoco.mj_step(mj, twin)
+        assert log["tau_applied"][k] == twin.sensordata[frc]
+    assert log["tau_applied"][-1] == pytest.approx(0.03)  # the actuator's force over the last period
+
+
 def test_observer_block_is_its_filter_and_a_bank_is_its_observers(finger):
     ss = StateSpace(finger, input="motor", output="encoder")
     rng = np.random.default_rng(0)
