@@ -34,7 +34,8 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, field
-from typing import Any, Callable, Sequence
+from types import MappingProxyType
+from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
@@ -69,12 +70,14 @@ class Block:
     def start(self, n_periods: int, dt: float, final: bool) -> None:
         """Before the run: N periods of ``dt`` s; ``final``: the outputs at t_N are evaluated too."""
 
-    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
-        """The sample signals at t_k from the inputs ``u`` (signal name -> value)."""
+    def output(self, k: int, u: Mapping[str, Any]) -> dict[str, Any]:
+        """The sample signals at t_k from the inputs: ``u[name]`` for each name of ``inputs`` (``u`` is a read-only
+        mapping of the loop's current values; read the declared inputs only)."""
         return {}
 
-    def update(self, k: int, u: dict[str, Any]) -> dict[str, Any] | None:
-        """Advance over [t_k, t_k+1); return the period signals of that period (or None)."""
+    def update(self, k: int, u: Mapping[str, Any]) -> dict[str, Any] | None:
+        """Advance over [t_k, t_k+1) with ``u[name]`` for each name of ``update_inputs``; return the period signals
+        of that period (or None)."""
         return None
 
     has_response = False  # True where response() is implemented
@@ -141,8 +144,8 @@ class Function(Block):
         self.outputs = _names(outputs, "outputs")
         self.has_response = bool(vectorized)
 
-    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
-        out = self.fn(**u)
+    def output(self, k: int, u: Mapping[str, Any]) -> dict[str, Any]:
+        out = self.fn(**{s: u[s] for s in self.inputs})
         return {self.outputs[0]: out} if len(self.outputs) == 1 else dict(zip(self.outputs, out))
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
@@ -320,12 +323,13 @@ def _run_step(blocks: Sequence[Block], out_order: list[int], upd_order: list[int
     lists: dict[str, list[Any]] = {s: [] for b in blocks for s in (*b.outputs, *b.period_outputs)}
     S = N + 1 if final else N
     ndarray = np.ndarray
-    outs = [(blocks[i].output, blocks[i].inputs) for i in out_order if blocks[i].outputs]
-    upds = [(blocks[i].update, blocks[i].update_inputs) for i in upd_order if _updates(blocks[i])]
+    outs = [blocks[i].output for i in out_order if blocks[i].outputs]
+    upds = [blocks[i].update for i in upd_order if _updates(blocks[i])]
+    view = MappingProxyType(now)  # every block reads the current values through one read-only view
     for k in range(S):
         for passes in ((outs,) if k == N else (outs, upds)):
-            for call, names in passes:
-                values = call(k, {s: now[s] for s in names})
+            for call in passes:
+                values = call(k, view)
                 if values:
                     now.update(values)
                     for s, v in values.items():

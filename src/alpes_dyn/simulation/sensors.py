@@ -92,6 +92,8 @@ class Sensor(Block):
             self.noise = self.std * self.rng.standard_normal((draws, *self.shape))
         if self.noise.shape[0] < rows:
             raise InputError(f"draws: {self.name!r} reads {rows} times but draws {self.noise.shape[0]} noise rows")
+        # a scalar sensor reads Python floats at each sample (the same numbers, faster than numpy scalars)
+        self._row = self.noise.tolist() if self.shape == () else self.noise
 
     def measure(self, x: Any, noise: Any) -> Any:
         """The reading of the true value ``x`` with the noise ``noise`` (same shape; whole records too)."""
@@ -99,7 +101,7 @@ class Sensor(Block):
 
     def _read(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         """The reading at sample k (``output``) or over period k (``update``), per the sensor's timing."""
-        return {self.reading: self.measure(u[self.signal], self.noise[k])}
+        return {self.reading: self.measure(u[self.signal], self._row[k])}
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         x = np.asarray(u[self.signal])[: self._rows]
@@ -127,7 +129,7 @@ class Encoder(Sensor):
         if self.offset != 0.0:
             v = v + self.offset
         if isinstance(v, float):  # one motor (np.float64 too): Python's round, the same half-to-even as numpy's
-            r = round(v)
+            r = round(float(v))
             return float(r) if self.counts else r * self.step
         return np.round(v) if self.counts else np.round(v) * self.step
 
@@ -158,5 +160,5 @@ class ForceSensor(Sensor):
     def measure(self, x: Any, noise: Any) -> Any:
         r = self.resolution
         if isinstance(x, (float, np.floating)) or np.ndim(x) == 0:
-            return max(0.0, round((float(x) + noise) / r) * r)
+            return max(0.0, round(float((float(x) + noise) / r)) * r)
         return np.maximum(0.0, np.round((x + noise) / r) * r)
