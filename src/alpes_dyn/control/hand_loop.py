@@ -305,6 +305,31 @@ def _chain_ekf(ch: dict[str, Any], sc: HandControlScenario) -> Observer:
                     label=f"ekf_force_hand_{m.name}", name=f"ekf_{c}")
 
 
+def _chain_results(sc: HandControlScenario, C: list[dict[str, Any]], log: Any, t: np.ndarray,
+                   tau_max: float) -> dict[str, ControlResult]:
+    """Each chain's :class:`.ControlResult` (traces from the loop's log, metrics), by chain name."""
+    N, kind, wall = t.shape[0], sc.controller, log.wall_s
+    results = {}
+    for ch in C:
+        a, b = ch["levels"]
+        csc = ControlScenario(model="finger2" if ch["n"] == 2 else "finger3", controller=sc.controller,
+                              reference="step", duration=sc.duration, dt=sc.dt, substeps=sc.substeps, seed=sc.seed,
+                              levels=(a, b, b), step_times=(sc.step_time, sc.duration), settle=sc.settle,
+                              encoder_noise_counts=sc.encoder_noise_counts, torque_noise=sc.torque_noise,
+                              force_noise=sc.force_noise, force_resolution=sc.force_resolution,
+                              force_filter_s=sc.force_filter_s, compiled=sc.compiled, gains=sc.gains,
+                              params=sc.params, plant_params=sc.plant_params)
+        c = ch["name"]
+        q_hat = log[f"z_{c}"][:, : ch["n"]] if kind != "pi" else np.full((N, ch["n"]), np.nan)
+        r = ControlResult(scenario=csc, t=t, F_ref=ch["F_ref"], F_true=log[f"F_touch_{c}"], F_meas=log[f"F_meas_{c}"],
+                          F_hat=log[f"F_fb_{c}" if kind == "sensorless" else f"F_meas_{c}"], q_true=log[f"q_{c}"],
+                          q_hat=q_hat, tau_cmd=log[f"tau_{c}"], tau_meas=log[f"tau_meas_{c}"],
+                          joint_names=ch["names"], tau_max=tau_max, wall_s=wall)
+        _metrics(r)
+        results[ch["name"]] = r
+    return results
+
+
 def run_hand_control(controller: str = "sensor", scenario: HandControlScenario | None = None,
                      **overrides: Any) -> HandControlResult:
     """The whole hand grasping the cylinder in MuJoCo: one force loop, one EKF per motor (issue 9, item 5).
@@ -366,24 +391,5 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     if kind != "pi":  # one EKF per chain, those of the same model advanced in one call
         blocks.append(ObserverBank([_chain_ekf(ch, sc) for ch in C], compiled=sc.compiled))
     log = run_loop(blocks, N, sc.dt)
-    wall = log.wall_s
-
-    results = {}
-    for ch in C:
-        a, b = ch["levels"]
-        csc = ControlScenario(model="finger2" if ch["n"] == 2 else "finger3", controller=sc.controller,
-                              reference="step", duration=sc.duration, dt=sc.dt, substeps=sc.substeps, seed=sc.seed,
-                              levels=(a, b, b), step_times=(sc.step_time, sc.duration), settle=sc.settle,
-                              encoder_noise_counts=sc.encoder_noise_counts, torque_noise=sc.torque_noise,
-                              force_noise=sc.force_noise, force_resolution=sc.force_resolution,
-                              force_filter_s=sc.force_filter_s, compiled=sc.compiled, gains=sc.gains,
-                              params=sc.params, plant_params=sc.plant_params)
-        c = ch["name"]
-        q_hat = log[f"z_{c}"][:, : ch["n"]] if kind != "pi" else np.full((N, ch["n"]), np.nan)
-        r = ControlResult(scenario=csc, t=t, F_ref=ch["F_ref"], F_true=log[f"F_touch_{c}"], F_meas=log[f"F_meas_{c}"],
-                          F_hat=log[f"F_fb_{c}" if kind == "sensorless" else f"F_meas_{c}"], q_true=log[f"q_{c}"],
-                          q_hat=q_hat, tau_cmd=log[f"tau_{c}"], tau_meas=log[f"tau_meas_{c}"],
-                          joint_names=ch["names"], tau_max=p.tau_max, wall_s=wall)
-        _metrics(r)
-        results[ch["name"]] = r
-    return HandControlResult(scenario=sc, t=t, chains=results, q_abduction=log["q_abd"][:, 0], wall_s=wall)
+    return HandControlResult(scenario=sc, t=t, chains=_chain_results(sc, C, log, t, p.tau_max),
+                             q_abduction=log["q_abd"][:, 0], wall_s=log.wall_s)
