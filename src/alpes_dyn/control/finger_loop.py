@@ -3,7 +3,10 @@
 
 :func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.model.mjcf`,
 contact on, the block scene, joint friction on: ``pip install 'alpes_dyn[mujoco]'``); see
-:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics.
+:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics. The loop is a composition
+of blocks run by :func:`~alpes_dyn.simulation.loop.run_loop`: the reference, the MuJoCo plant, the encoder, current
+and FlexiForce sensors, the force controller and, for the model-based controllers, the EKF (and the sensorless
+force estimate).
 """
 
 from __future__ import annotations

@@ -4,7 +4,9 @@
 ``"cylinder"`` scene: one controller, one EKF and one set of sensors per flexion motor (the four fingers
 and the thumb, :func:`chain_model`), the contact normal the cylinder's at the estimated fingertip
 (:func:`cylinder_normal`), the thumb's ab/adduction held by a PD on its encoder
-(:class:`HandControlScenario`, :class:`HandControlResult`).
+(:class:`HandControlScenario`, :class:`HandControlResult`). Like the finger's, a composition of blocks run by
+:func:`~alpes_dyn.simulation.loop.run_loop`, the EKFs of the four fingers in one
+:class:`~alpes_dyn.estimation.blocks.ObserverBank` (one compiled call per sample).
 
 """
 

@@ -21,6 +21,9 @@ What is simulated (``alpes-dyn estimate``, :func:`run_estimation`), all seeded b
   inertias (1 - d) times (``mismatch_signs = (-1, 1)``, the worse case for a fixed |d|: the two
   errors add up in the spring-to-inertia ratio); ``observer_params`` gives the observer any other
   parameter set (the gains' true values are then unknown: NaN);
+* the run: a composition of blocks (:func:`~alpes_dyn.simulation.loop.run_loop`): the torque profile, the true
+  finger (:class:`~alpes_dyn.simulation.plants.SimulatorPlant`), the encoder and the current sensor (their noise
+  drawn in that order from the seed's generator, after the initial offsets), the observer;
 * error metrics after ``transient`` seconds (default min(1 s, duration / 5)): the RMSE of each q_i (rad), and the
   final error |q_hat - q| at the last sample.
 

@@ -58,6 +58,7 @@ class Block:
     * ``initial``: {period signal: value} read at k = 0, before the first period (default 0.0).
 
     ``output`` may advance the block's own state (it is called once per sample, in the loop's order).
+    ``has_response``: the block implements :meth:`response` (its signals over the whole record at once).
     """
 
     name: str = "block"
@@ -65,7 +66,7 @@ class Block:
     update_inputs: tuple[str, ...] = ()
     outputs: tuple[str, ...] = ()
     period_outputs: tuple[str, ...] = ()
-    initial: dict[str, Any] = {}
+    initial: Mapping[str, Any] = MappingProxyType({})
 
     def start(self, n_periods: int, dt: float, final: bool) -> None:
         """Before the run: N periods of ``dt`` s; ``final``: the outputs at t_N are evaluated too."""
@@ -216,7 +217,8 @@ def _producers(blocks: Sequence[Block]) -> tuple[dict[str, int], dict[str, int]]
 
 def _order(n: int, edges: dict[int, set[int]], what: str, blocks: Sequence[Block]) -> list[int]:
     """A topological order of blocks 0..n-1 (``edges[i]``: the blocks that must come before i), stable in the
-    list's order; a cycle is an algebraic loop (:class:`~alpes_dyn.InputError`)."""
+    list's order; a cycle is an algebraic loop (:class:`~alpes_dyn.InputError` naming its blocks). Depth-first:
+    a chain of more blocks than Python's recursion limit (1000) is refused by Python."""
     order: list[int] = []
     state = [0] * n
 
@@ -237,9 +239,10 @@ def _order(n: int, edges: dict[int, set[int]], what: str, blocks: Sequence[Block
     return order
 
 
-def _has_cycle(n: int, edges: dict[int, set[int]]) -> bool:
+def _has_cycle(n: int, edges: dict[int, set[int]], blocks: Sequence[Block]) -> bool:
+    """Whether the signal graph has a cycle (a feedback loop: the runner then steps the blocks)."""
     try:
-        _order(n, edges, "", [Block() for _ in range(n)])
+        _order(n, edges, "signals", blocks)
     except InputError:
         return True
     return False
@@ -263,7 +266,9 @@ def run_loop(blocks: Sequence[Block], n_periods: int, dt: float, *, final: bool 
 
     Raises
     ------
-    InputError: a signal read but not written or written twice, an algebraic loop, ``batch`` on a closed loop.
+    InputError: a signal read but not written or written twice, an algebraic loop (a cycle of direct
+    feedthroughs: put a :class:`Delay` in it), ``batch`` on a closed loop, a block writing a signal at some
+    samples only; and what the blocks raise (a source too short, an observer diverging...).
     """
     if mode not in MODES:
         raise InputError(f"mode: expected one of {', '.join(MODES)}, got {mode!r}")
@@ -279,7 +284,7 @@ def run_loop(blocks: Sequence[Block], n_periods: int, dt: float, *, final: bool 
     out_order = _order(nb, feed, "outputs", blocks)
     upd_order = _order(nb, upd, "updates", blocks)
     flow = {i: {sample.get(s, period.get(s)) for s in (*b.inputs, *b.update_inputs)} for i, b in enumerate(blocks)}
-    open_loop = not _has_cycle(nb, flow)
+    open_loop = not _has_cycle(nb, flow, blocks)
     batch = all(b.has_response for b in blocks) and open_loop
     if mode == "batch" and not batch:
         raise InputError("mode: 'batch' needs an open loop of blocks that all have response(); use 'step'")
