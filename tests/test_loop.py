@@ -292,3 +292,25 @@ def test_recording_plant_and_replay_reproduce_the_hand_written_ones(finger):
         new = estimate_recording(rec, model, disturbance=disturbance)
         ref = legacy.legacy_estimate_recording(rec, model, disturbance=disturbance)
         assert same(new.estimate.z, ref["z"]) and same(new.estimate.P, ref["P"])
+
+
+def test_the_estimation_scenario_stepped_gives_its_whole_record_run(monkeypatch):
+    """The open loop of run_estimation evaluated block by block (auto) and sample by sample (step): the same bits."""
+    from alpes_dyn.estimation import scenario
+    from alpes_dyn.simulation import loop
+
+    modes = []
+
+    def run(*a, mode="auto", **kw):
+        log = loop.run_loop(*a, mode=mode, **kw)
+        modes.append(log.mode)
+        return log
+
+    monkeypatch.setattr(scenario, "run_loop", run)
+    batch = scenario.run_estimation("ekf", duration=0.2, seed=6)
+    monkeypatch.setattr(scenario, "run_loop", lambda *a, **kw: run(*a, **{**kw, "mode": "step"}))
+    step = scenario.run_estimation("ekf", duration=0.2, seed=6)
+    assert modes == ["batch", "step"]
+    for a, b in ((batch.x_true, step.x_true), (batch.y, step.y), (batch.u_meas, step.u_meas),
+                 (batch.estimate.z, step.estimate.z), (batch.estimate.P, step.estimate.P)):
+        assert same(a, b)
