@@ -72,6 +72,12 @@ class Sensor(Block):
         if draws is not None and (isinstance(draws, bool) or not isinstance(draws, (int, np.integer)) or draws < 0):
             raise InputError(f"draws: expected an integer >= 0 or None, got {draws!r}")
         self.std = _nonnegative(std, "std", "the signal's units")
+        try:
+            shape = tuple(int(d) for d in shape)
+        except (TypeError, ValueError):
+            raise InputError(f"shape: expected a tuple of sizes, got {shape!r}") from None
+        if any(d < 0 for d in shape):
+            raise InputError(f"shape: expected sizes >= 0, got {shape!r}")
         self.rng, self.shape, self.draws, self.timing = rng, tuple(shape), draws, timing
         self.name = name or reading
         self.signal, self.reading = signal, reading
@@ -99,13 +105,22 @@ class Sensor(Block):
         """The reading of the true value ``x`` with the noise ``noise`` (same shape; whole records too)."""
         raise NotImplementedError
 
+    def _shape_error(self, got: tuple[int, ...]) -> InputError:
+        return InputError(f"shape: sensor {self.name!r} reads {self.signal!r} of shape {got}, not its shape "
+                          f"{self.shape}")
+
     def _read(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         """The reading at sample k (``output``) or over period k (``update``), per the sensor's timing."""
-        return {self.reading: self.measure(u[self.signal], self._row[k])}
+        x = u[self.signal]
+        if k == 0 and np.shape(x) != self.shape:
+            raise self._shape_error(np.shape(x))
+        return {self.reading: self.measure(x, self._row[k])}
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         x = np.asarray(u[self.signal])[: self._rows]
-        return {self.reading: self.measure(x, self.noise[: self._rows].reshape(x.shape))}
+        if x.shape[1:] != self.shape:
+            raise self._shape_error(x.shape[1:])
+        return {self.reading: self.measure(x, self.noise[: self._rows])}
 
 
 class Encoder(Sensor):
