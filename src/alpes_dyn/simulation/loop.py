@@ -328,17 +328,30 @@ def _run_step(blocks: Sequence[Block], out_order: list[int], upd_order: list[int
     lists: dict[str, list[Any]] = {s: [] for b in blocks for s in (*b.outputs, *b.period_outputs)}
     S = N + 1 if final else N
     ndarray = np.ndarray
-    outs = [blocks[i].output for i in out_order if blocks[i].outputs]
-    upds = [blocks[i].update for i in upd_order if _updates(blocks[i])]
+    outs = [(blocks[i].output, blocks[i].outputs) for i in out_order if blocks[i].outputs]
+    upds = [(blocks[i].update, blocks[i].period_outputs) for i in upd_order if _updates(blocks[i])]
     view = MappingProxyType(now)  # every block reads the current values through one read-only view
-    for k in range(S):
-        for passes in ((outs,) if k == N else (outs, upds)):
-            for call in passes:
-                values = call(k, view)
-                if values:
-                    now.update(values)
-                    for s, v in values.items():
-                        lists[s].append(v.copy() if type(v) is ndarray else v)
+    logs = [(call, [(s, lists[s].append) for s in names]) for call, names in outs]
+    ulogs = [(call, [(s, lists[s].append) for s in names]) for call, names in upds]
+
+    def run(stage: list, k: int) -> None:
+        for call, appends in stage:
+            values = call(k, view)
+            if values:
+                now.update(values)
+                for s, append in appends:
+                    try:
+                        v = values[s]
+                    except KeyError:
+                        raise InputError(f"signal {s!r}: not written by its block at step {k} (a block writes all its "
+                                         f"signals every time)") from None
+                    append(v.copy() if type(v) is ndarray else v)
+
+    for k in range(N):
+        run(logs, k)
+        run(ulogs, k)
+    if final:
+        run(logs, N)
     log: dict[str, np.ndarray] = {}
     for s, values in lists.items():
         rows = N if s in period else S
