@@ -91,7 +91,8 @@ def _addresses(mj: Any, names: str | Sequence[str]) -> int | np.ndarray:
 
 class MujocoPlant(Block):
     """MuJoCo as the plant: ``model`` (an ``mujoco.MjModel``) and ``data`` (its ``MjData``, in its initial state:
-    set qpos and call ``mj_forward`` before the run) stepped ``substeps`` times per period.
+    set qpos and call ``mj_forward`` before the run; the block never resets it, so that a second run goes on from
+    where the first stopped) stepped ``substeps`` times per period (``model.opt.timestep`` each: dt / substeps).
 
     Parameters
     ----------
