@@ -246,7 +246,7 @@ def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     return mujoco, palm_down_params(p), palm_down_params(pp)
 
 
-def _force_ekf(sc: ControlScenario, model: Model, normal: np.ndarray) -> Observer:
+def _force_ekf(sc: ControlScenario, model: Model) -> Observer:
     """The EKF of the finger's loop as a block: known inputs the measured motor torque ``tau_meas`` (N m, the
     previous period's) and the contact force ``w_F`` (3,) (N), the encoder ``y`` measured (rad); the estimate
     ``z`` = [q; qd] starts at the finger's rest, standard deviations 0.05 rad and 0.1 rad/s, not updated at t_0."""
@@ -317,7 +317,7 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
                         force="F_fb" if kind == "sensorless" else "F_meas", estimate=None if kind == "pi" else "z")]
     if kind != "pi":  # the EKF: motor torque and contact force as known inputs, the encoder measured
         F_in = "F_fb_prev" if kind == "sensorless" else "F_meas"  # the sensorless force of the previous sample
-        blocks += [force_input(F_in, "w_F", normal), _force_ekf(sc, model, normal)]
+        blocks += [force_input(F_in, "w_F", normal), _force_ekf(sc, model)]
     if kind == "sensorless":
         blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal),
                    Delay("F_fb", "F_fb_prev", 0.0)]
