@@ -1499,6 +1499,99 @@ API.extend([
 ])
 
 
+
+def _loop(what: str, *a, **kw):
+    from alpes_dyn.simulation import loop, plants, sensors
+
+    mod = next(m for m in (loop, sensors, plants) if hasattr(m, what))
+    return getattr(mod, what)(*a, **kw)
+
+
+def _eblock(what: str, *a, **kw):
+    from alpes_dyn.estimation import blocks
+
+    return getattr(blocks, what)(*a, **kw)
+
+
+def _cblock(what: str, *a, **kw):
+    from alpes_dyn.control import blocks
+
+    return getattr(blocks, what)(*a, **kw)
+
+
+def _src(n=3):
+    return _loop("Source", u=np.ones(n))
+
+
+# the closed-loop engine: the runner, its blocks
+API.extend([
+    A("run_loop", lambda c: _loop("run_loop", [_src()], 0, 1e-3), InputError, "n_periods: expected an integer >= 1"),
+    A("run_loop", lambda c: _loop("run_loop", [_src()], 2, float("nan")), InputError, "dt: expected a positive number"),
+    A("run_loop", lambda c: _loop("run_loop", [_src()], 2, 1e-3, mode="fast"), InputError,
+      "mode: expected one of auto, step, batch"),
+    A("run_loop", lambda c: _loop("run_loop", [_src(), "encoder"], 2, 1e-3), InputError,
+      "blocks: expected Block objects, got str at position 1"),
+    A("run_loop", lambda c: _loop("run_loop", [_src(), _src()], 2, 1e-3), InputError, "'u': written by two blocks"),
+    A("run_loop", lambda c: _loop("run_loop", [_loop("Function", lambda v: v, ("v",), "w")], 2, 1e-3), InputError,
+      "'v': read by block 'function' but written by no block"),
+    A("run_loop", lambda c: _loop("run_loop", [_src(2)], 2, 1e-3, final=True), InputError, "u: expected at least 3 rows"),
+    A("Source", lambda c: _loop("Source"), InputError, "Source: expected at least one signal"),
+    A("Function", lambda c: _loop("Function", 3, ("a",), "b"), InputError, "fn: expected a callable, got int"),
+    A("Function", lambda c: _loop("Function", abs, ("",), "b"), InputError, "inputs: expected signal names"),
+    A("Encoder", lambda c: _loop("Encoder", "q", "y", 0), InputError, "counts_per_rev: expected a positive number"),
+    A("Encoder", lambda c: _loop("Encoder", "q", "y", 4096, noise_counts=-1), InputError,
+      "noise_counts: expected a non-negative number of counts"),
+    A("Encoder", lambda c: _loop("Encoder", "q", "y", 4096, offset=float("inf")), InputError,
+      "offset: expected a finite number of counts"),
+    A("Encoder", lambda c: _loop("Encoder", "q", "y", 4096, rng=0), InputError,
+      "rng: expected a numpy.random.Generator or None, got int"),
+    A("Encoder", lambda c: _loop("Encoder", "q", "y", 4096, timing="later"), InputError,
+      "timing: expected one of sample, period"),
+    A("TorqueSensor", lambda c: _loop("TorqueSensor", "t", "m", gain=0.0), InputError, "gain: expected a positive"),
+    A("TorqueSensor", lambda c: _loop("TorqueSensor", "t", "m", shape=3), InputError, "shape: expected a tuple of sizes"),
+    A("TorqueSensor", lambda c: _loop("run_loop", [_loop("Source", t=np.ones((3, 2))), _loop("TorqueSensor", "t", "m")],
+                                      2, 1e-3), InputError, "shape: sensor 'm' reads 't' of shape (2,), not its shape ()"),
+    A("TorqueSensor", lambda c: _loop("run_loop", [_loop("Source", t=np.ones((3, 2))), _loop("TorqueSensor", "t", "m")],
+                                      2, 1e-3, mode="step"), InputError, "shape: sensor 'm' reads 't' of shape (2,)"),
+    A("TorqueSensor", lambda c: _loop("TorqueSensor", "t", "m", noise="big"), InputError,
+      "std: expected a non-negative number"),
+    A("TorqueSensor", lambda c: _loop("TorqueSensor", "t", "m", draws=-2), InputError,
+      "draws: expected an integer >= 0 or None"),
+    A("ForceSensor", lambda c: _loop("ForceSensor", "F", "Fm", resolution=0), InputError,
+      "resolution: expected a positive number of N"),
+    A("ForceSensor", lambda c: _loop("ForceSensor", "", "Fm"), InputError, "signal, reading: expected signal names"),
+    A("SimulatorPlant", lambda c: _loop("SimulatorPlant", c.ss, np.zeros(6)), InputError,
+      "model: expected an alpes_dyn.Model with a tendon transmission"),
+    A("SimulatorPlant", lambda c: _loop("SimulatorPlant", c.m, np.zeros(6), substeps=0), InputError,
+      "substeps: expected an integer >= 1"),
+    A("SimulatorPlant", lambda c: _loop("SimulatorPlant", c.m, np.zeros(5)), InputError, "x0"),
+    A("MujocoPlant", lambda c: _mj_plant(sensors={"F": "no_such_sensor"}), InputError,
+      "sensors: the MuJoCo model has no sensor"),
+    A("MujocoPlant", lambda c: _mj_plant(actuators={"tau": "no_such_motor"}), InputError,
+      "actuators: the MuJoCo model has no actuator"),
+    A("Observer", lambda c: _eblock("Observer", c.ss, np.zeros(6), np.ones(6)), InputError,
+      "filt: expected a KalmanFilter"),
+    A("Observer", lambda c: _eblock("Observer", _ekf(c), np.zeros(5), np.ones(6)), InputError, "z0"),
+    A("ObserverBank", lambda c: _eblock("ObserverBank", []), InputError, "observers: expected a non-empty list"),
+    A("RecordingPlayback", lambda c: _eblock("RecordingPlayback", "rec.csv"), InputError,
+      "recording: expected a Recording, got str"),
+    A("ForceLoop", lambda c: _cblock("ForceLoop", c.m), InputError, "controller: expected a ForceController, got Model"),
+    A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.m, 1.5), InputError, "alpha: expected a number in (0, 1]"),
+    A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.ss, 0.5), InputError, "model: expected an alpes_dyn.Model"),
+    A("force_input", lambda c: _cblock("force_input", "F", "w", (0.0, 1.0)), InputError, "normal: expected 3 numbers"),
+    A("EncoderPD", lambda c: _cblock("EncoderPD", 0.5, 1.0, 0.1, 0.0), InputError, "alpha: expected a number in (0, 1]"),
+])
+
+
+def _mj_plant(**kw):
+    pytest.importorskip("mujoco")
+    import mujoco
+
+    from alpes_dyn.model.mjcf import load_mujoco, mjcf_string
+
+    mj = load_mujoco(mjcf_string("finger3", ad.load_params(), friction=True, scene="block"))
+    return _loop("MujocoPlant", mj, mujoco.MjData(mj), **kw)
+
 # Public names that take no user input of their own (records returned by the library, constants, errors)
 NOT_CALLED = {"AlpesDynError", "InputError", "ModelError", "RecordingError", "HandParams", "ObservabilityReport", "MODELS",
               "SPRING_MODELS"}

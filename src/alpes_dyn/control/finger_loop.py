@@ -3,7 +3,10 @@
 
 :func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.model.mjcf`,
 contact on, the block scene, joint friction on: ``pip install 'alpes_dyn[mujoco]'``); see
-:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics.
+:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics. The loop is a composition
+of blocks run by :func:`~alpes_dyn.simulation.loop.run_loop`: the reference, the MuJoCo plant, the encoder, current
+and FlexiForce sensors, the force controller and, for the model-based controllers, the EKF (and the sensorless
+force estimate).
 """
 
 from __future__ import annotations
@@ -11,7 +14,6 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,11 +24,16 @@ from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 from ..model.robot import Model
+from ..estimation.blocks import Observer, batch_step_caller, step_caller
 from ..estimation.observers import make_observer
 from ..model.params import HandParams, load_params
 from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
-from .controller import CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile, static_contact_force
+from ..simulation.loop import Delay, Source, run_loop
+from ..simulation.plants import MujocoPlant
+from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
+from .blocks import ForceLoop, SensorlessForce, force_input
+from .controller import CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile
 
 
 CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
@@ -222,39 +229,8 @@ def _metrics(res: ControlResult) -> None:
         res.rise_time_s = float(t_up[np.argmax(F_up >= hi)] - t_up[np.argmax(F_up >= lo)])
 
 
-def _batch_step_caller(step, label: str, compiled: bool):
-    """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
-    of compiled C (cached, :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`) when possible, else CasADi's
-    virtual machine (one call per filter)."""
-    if compiled:
-        from ..simulation.integrate import CompiledStepLoop, CompilerError
-
-        try:
-            loop = CompiledStepLoop(step, label, threads=1, vectorize=False)
-        except CompilerError:
-            loop = None
-        if loop is not None:
-            run = loop.run
-
-            def call(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
-                return run(S, WY[:, None, :])[:, 1]
-
-            return call
-
-    def call_vm(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
-        return np.stack([np.asarray(step(s, wy)).reshape(-1) for s, wy in zip(S, WY)])
-
-    return call_vm
-
-
-def _step_caller(step, label: str, compiled: bool):
-    """s, wy -> s_next for one filter step (:func:`_batch_step_caller` with B = 1)."""
-    batch = _batch_step_caller(step, label, compiled)
-
-    def call(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
-        return batch(s[None], wy[None])[0]
-
-    return call
+_batch_step_caller = batch_step_caller  # the old names of estimation.blocks' step callers
+_step_caller = step_caller
 
 
 def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
@@ -268,6 +244,25 @@ def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
         load_params(sc.plant_params) if sc.plant_params is not None else p)
     return mujoco, palm_down_params(p), palm_down_params(pp)
+
+
+def _force_ekf(sc: ControlScenario, model: Model) -> Observer:
+    """The EKF of the finger's loop as a block: known inputs the measured motor torque ``tau_meas`` (N m, the
+    previous period's) and the contact force ``w_F`` (3,) (N), the encoder ``y`` measured (rad); the estimate
+    ``z`` = [q; qd] starts at the finger's rest, standard deviations 0.05 rad and 0.1 rad/s, not updated at t_0."""
+    n = model.n
+    step = 2 * np.pi / model.transmission.counts_per_rev
+    ss = StateSpace(model, input="motor", output="encoder", force=True)
+    est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
+    meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
+    noise = default_noise(est_sc, n, 1, 0, meas_var)
+    f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
+    noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
+    ekf = make_observer("ekf", ss, sc.dt, **noise)
+    z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
+    P0 = np.array([0.05**2] * n + [0.1**2] * n)
+    return Observer(ekf, z0, P0, known=("tau_meas", "w_F"), measurement="y", covariance=None, first_update=False,
+                    step=_step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled))
 
 
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:
@@ -307,76 +302,30 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     F_ref = reference_profile(sc.reference, t, sc.levels, sc.sine, sc.step_times)
 
     # the plant starts at rest: the finger hanging on its springs, motor off
-    q0 = static_equilibrium(plant_model, np.zeros(plant_model.n))
-    d.qpos[perm] = q0
+    d.qpos[perm] = static_equilibrium(plant_model, np.zeros(plant_model.n))
     mujoco.mj_forward(mj, d)
-    s_enc = mj.sensor("encoder_finger").adr[0]
-    s_frc = mj.sensor("torque_finger").adr[0]
-    s_touch = mj.sensor("flexiforce_finger").adr[0]
-
-    # observer: the library's EKF, motor torque and contact force as known inputs, encoder measured
-    use_obs = sc.controller != "pi"
-    step = 2 * np.pi / tr.counts_per_rev
-    if use_obs:
-        ss = StateSpace(model, input="motor", output="encoder", force=True)
-        est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
-        meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-        noise = default_noise(est_sc, n, 1, 0, meas_var)
-        f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
-        noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
-        ekf = make_observer("ekf", ss, sc.dt, **noise)
-        z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
-        P0 = np.array([0.05**2] * n + [0.1**2] * n)
-        s = np.concatenate([z0, np.diag(P0).reshape(-1, order="F")])
-        fstep = _step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled)
-    ctl = ForceController(sc.controller, model, normal, sc.dt, p.tau_max, **{**DEFAULT_GAINS[sc.controller], **sc.gains})
-
-    out_F_true = np.empty(N)
-    out_F_meas = np.empty(N)
-    out_F_hat = np.empty(N)
-    out_q = np.empty((N, n))
-    out_qh = np.full((N, n), np.nan)
-    out_tau = np.empty(N)
-    out_tau_meas = np.empty(N)
-    enc_noise = sc.encoder_noise_counts * step * rng.standard_normal(N + 1)
-    trq_noise = sc.torque_noise * rng.standard_normal(N)
-    frc_noise = sc.force_noise * rng.standard_normal(N)
-    alpha = sc.dt / (sc.force_filter_s + sc.dt)
-    F_filt = 0.0
-    tau_meas_prev = 0.0
-    sd = d.sensordata
-    t_wall = time.perf_counter()
-    for k in range(N):
-        # sensors at t_k
-        out_q[k] = d.qpos[perm]
-        F_true = float(sd[s_touch])
-        F_meas = max(0.0, round((F_true + frc_noise[k]) / sc.force_resolution) * sc.force_resolution)  # reads >= 0
-        y = round((float(sd[s_enc]) + enc_noise[k]) / step) * step
-        # observer update with the previous period's inputs and this encoder reading
-        if use_obs:
-            F_in = F_meas if sc.controller == "sensor" else F_filt
-            if k > 0:
-                s = fstep(s, np.concatenate([[tau_meas_prev], -F_in * normal, [y]]))
-            q_hat = s[:n]
-            if sc.controller == "sensorless":
-                F_est = static_contact_force(model, q_hat, np.array([tau_meas_prev]), normal)
-                F_filt += alpha * (max(F_est, 0.0) - F_filt)
-                F_fb = F_filt
-            else:
-                F_fb = F_meas
-            out_qh[k] = q_hat
-        else:
-            q_hat, F_fb = None, F_meas
-        tau = ctl.update(float(F_ref[k]), F_fb, q_hat)
-        d.ctrl[0] = tau
-        for _ in range(sc.substeps):
-            mujoco.mj_step(mj, d)
-        tau_meas_prev = float(sd[s_frc]) + trq_noise[k]  # the current sensor over the period
-        out_F_true[k], out_F_meas[k], out_F_hat[k] = F_true, F_meas, F_fb
-        out_tau[k], out_tau_meas[k] = tau, tau_meas_prev
-    wall = time.perf_counter() - t_wall
-    res = ControlResult(scenario=sc, t=t, F_ref=F_ref, F_true=out_F_true, F_meas=out_F_meas, F_hat=out_F_hat,
-                        q_true=out_q, q_hat=out_qh, tau_cmd=out_tau, tau_meas=out_tau_meas,
-                        joint_names=model.joint_names, tau_max=p.tau_max, wall_s=wall)
+    kind = sc.controller
+    blocks = [Source("reference", F_ref=F_ref),
+              MujocoPlant(mj, d, substeps=sc.substeps, joints={"q": model.joint_names}, actuators={"tau": "finger"},
+                          sensors={"q_m": "encoder_finger", "F_touch": "flexiforce_finger"},
+                          period_sensors={"tau_applied": "torque_finger"}),
+              # the sensors' noise, drawn in this order (the encoder's one row more than read: the old draw)
+              Encoder("q_m", "y", tr.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng, draws=N + 1),
+              TorqueSensor("tau_applied", "tau_meas", noise=sc.torque_noise, rng=rng, timing="period"),
+              ForceSensor("F_touch", "F_meas", noise=sc.force_noise, resolution=sc.force_resolution, rng=rng),
+              ForceLoop(ForceController(kind, model, normal, sc.dt, p.tau_max, **{**DEFAULT_GAINS[kind], **sc.gains}),
+                        force="F_fb" if kind == "sensorless" else "F_meas", estimate=None if kind == "pi" else "z")]
+    if kind != "pi":  # the EKF: motor torque and contact force as known inputs, the encoder measured
+        F_in = "F_fb_prev" if kind == "sensorless" else "F_meas"  # the sensorless force of the previous sample
+        blocks += [force_input(F_in, "w_F", normal), _force_ekf(sc, model)]
+    if kind == "sensorless":
+        blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal),
+                   Delay("F_fb", "F_fb_prev", 0.0)]
+    log = run_loop(blocks, N, sc.dt)
+    q_hat = log["z"][:, :n] if kind != "pi" else np.full((N, n), np.nan)
+    res = ControlResult(scenario=sc, t=t, F_ref=F_ref, F_true=log["F_touch"], F_meas=log["F_meas"],
+                        F_hat=log["F_fb" if kind == "sensorless" else "F_meas"], q_true=log["q"], q_hat=q_hat,
+                        tau_cmd=log["tau"], tau_meas=log["tau_meas"], joint_names=model.joint_names,
+                        tau_max=p.tau_max, wall_s=log.wall_s)
     _metrics(res)
     return res

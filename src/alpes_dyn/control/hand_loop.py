@@ -4,7 +4,9 @@
 ``"cylinder"`` scene: one controller, one EKF and one set of sensors per flexion motor (the four fingers
 and the thumb, :func:`chain_model`), the contact normal the cylinder's at the estimated fingertip
 (:func:`cylinder_normal`), the thumb's ab/adduction held by a PD on its encoder
-(:class:`HandControlScenario`, :class:`HandControlResult`).
+(:class:`HandControlScenario`, :class:`HandControlResult`). Like the finger's, a composition of blocks run by
+:func:`~alpes_dyn.simulation.loop.run_loop`, the EKFs of the four fingers in one
+:class:`~alpes_dyn.estimation.blocks.ObserverBank` (one compiled call per sample).
 
 """
 
@@ -13,7 +15,6 @@ from __future__ import annotations
 import csv
 import dataclasses
 import math
-import time
 from dataclasses import dataclass, field
 from typing import Any, Sequence
 
@@ -24,12 +25,17 @@ from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string
 from ..model.robot import Model
+from ..estimation.blocks import Observer, ObserverBank
 from ..estimation.observers import make_observer
 from ..model.params import HandParams
 from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
-from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal, static_contact_force
-from .finger_loop import _SAMPLE_ARRAYS, ControlResult, ControlScenario, _batch_step_caller, _metrics, _plant_and_params
+from ..simulation.loop import Delay, Function, Source, run_loop
+from ..simulation.plants import MujocoPlant
+from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
+from .blocks import EncoderPD, ForceLoop, SensorlessForce, force_input
+from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal
+from .finger_loop import _SAMPLE_ARRAYS, ControlResult, ControlScenario, _metrics, _plant_and_params
 
 
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
@@ -246,6 +252,86 @@ class HandControlResult:
                 "thumb_abduction_rad": sc.thumb_abduction, "realtime_ratio": self.realtime_ratio}
 
 
+def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandControlScenario,
+           levels: Sequence[float], t: np.ndarray) -> dict[str, Any]:
+    """One chain of the hand: the controller's model, its joints' MuJoCo names, the cylinder in its frame (m), its
+    reference (N, one per sample) and its rest q0 (rad: the plant's, set in ``d.qpos``)."""
+    from ..model.mjcf import CYLINDER
+
+    m = chain_model(p, c, sc.thumb_abduction)
+    R, pos = chain_frame(p, c, sc.thumb_abduction)
+    names = [f"{c}_{j}" for j in m.joint_names]
+    q0 = static_equilibrium(chain_model(pp, c, sc.thumb_abduction), np.zeros(m.n))
+    d.qpos[joint_permutation(mj, names)] = q0
+    a, b = (float(x) for x in levels)
+    center = np.asarray(CYLINDER["center"], dtype=float)
+    return dict(name=c, model=m, n=m.n, names=tuple(names), center=R.T @ (center - pos),
+                axis=R.T @ np.array([0.0, 1.0, 0.0]), F_ref=np.where(t < sc.step_time, a, b), levels=(a, b), z0=q0)
+
+
+def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gains: dict) -> list:
+    """The blocks of one chain's loop: the cylinder's normal at the estimated fingertip, the sensorless force,
+    the force controller and the EKF's force input (the previous sample's -F n)."""
+    c, m, kind = ch["name"], ch["model"], sc.controller
+    ctl = ForceController(kind, m, cylinder_normal(m, ch["z0"], ch["center"], ch["axis"]), sc.dt, tau_max, **gains)
+    if kind == "pi":
+        return [ForceLoop(ctl, reference=f"F_ref_{c}", force=f"F_meas_{c}", command=f"tau_{c}", name=f"ctl_{c}")]
+    F = f"F_fb_{c}" if kind == "sensorless" else f"F_meas_{c}"
+    center, axis = ch["center"], ch["axis"]
+    out = [Function(lambda **u: cylinder_normal(m, u[f"z_{c}"][: m.n], center, axis), (f"z_{c}",), f"normal_{c}",
+                    name=f"normal_{c}"),
+           ForceLoop(ctl, reference=f"F_ref_{c}", force=F, estimate=f"z_{c}", normal=f"normal_{c}",
+                     command=f"tau_{c}", name=f"ctl_{c}"),
+           force_input(F, f"w_F_{c}", f"normal_{c}", name=f"w_F_{c}"),
+           Delay(f"w_F_{c}", f"w_F_prev_{c}", np.zeros(3), name=f"delay_{c}")]
+    if kind == "sensorless":
+        out.append(SensorlessForce(m, sc.dt / (sc.force_filter_s + sc.dt), estimate=f"z_{c}",
+                                   torque=f"tau_meas_{c}", normal=f"normal_{c}", force=F, name=f"sensorless_{c}"))
+    return out
+
+
+def _chain_ekf(ch: dict[str, Any], sc: HandControlScenario) -> Observer:
+    """The EKF of one chain (known inputs its torque reading and the previous sample's force input, its encoder
+    measured), started at the chain's rest with standard deviations 0.05 rad and 0.1 rad/s, not updated at t_0."""
+    c, m, n = ch["name"], ch["model"], ch["n"]
+    step = 2 * np.pi / m.transmission.counts_per_rev
+    est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
+    meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
+    f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
+    noise = default_noise(est_sc, n, 1, 0, meas_var)
+    noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
+    ekf = make_observer("ekf", StateSpace(m, input="motor", output="encoder", force=True), sc.dt, **noise)
+    z0 = np.concatenate([static_equilibrium(m, np.zeros(n)), np.zeros(n)])
+    return Observer(ekf, z0, np.diag([0.05**2] * n + [0.1**2] * n), known=(f"tau_meas_{c}", f"w_F_prev_{c}"),
+                    measurement=f"y_{c}", estimate=f"z_{c}", covariance=None, first_update=False,
+                    label=f"ekf_force_hand_{m.name}", name=f"ekf_{c}")
+
+
+def _chain_results(sc: HandControlScenario, C: list[dict[str, Any]], log: Any, t: np.ndarray,
+                   tau_max: float) -> dict[str, ControlResult]:
+    """Each chain's :class:`.ControlResult` (traces from the loop's log, metrics), by chain name."""
+    N, kind, wall = t.shape[0], sc.controller, log.wall_s
+    results = {}
+    for ch in C:
+        a, b = ch["levels"]
+        csc = ControlScenario(model="finger2" if ch["n"] == 2 else "finger3", controller=sc.controller,
+                              reference="step", duration=sc.duration, dt=sc.dt, substeps=sc.substeps, seed=sc.seed,
+                              levels=(a, b, b), step_times=(sc.step_time, sc.duration), settle=sc.settle,
+                              encoder_noise_counts=sc.encoder_noise_counts, torque_noise=sc.torque_noise,
+                              force_noise=sc.force_noise, force_resolution=sc.force_resolution,
+                              force_filter_s=sc.force_filter_s, compiled=sc.compiled, gains=sc.gains,
+                              params=sc.params, plant_params=sc.plant_params)
+        c = ch["name"]
+        q_hat = log[f"z_{c}"][:, : ch["n"]] if kind != "pi" else np.full((N, ch["n"]), np.nan)
+        r = ControlResult(scenario=csc, t=t, F_ref=ch["F_ref"], F_true=log[f"F_touch_{c}"], F_meas=log[f"F_meas_{c}"],
+                          F_hat=log[f"F_fb_{c}" if kind == "sensorless" else f"F_meas_{c}"], q_true=log[f"q_{c}"],
+                          q_hat=q_hat, tau_cmd=log[f"tau_{c}"], tau_meas=log[f"tau_meas_{c}"],
+                          joint_names=ch["names"], tau_max=tau_max, wall_s=wall)
+        _metrics(r)
+        results[ch["name"]] = r
+    return results
+
+
 def run_hand_control(controller: str = "sensor", scenario: HandControlScenario | None = None,
                      **overrides: Any) -> HandControlResult:
     """The whole hand grasping the cylinder in MuJoCo: one force loop, one EKF per motor (issue 9, item 5).
@@ -268,8 +354,6 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     sc = dataclasses.replace(scenario or HandControlScenario(), controller=controller, **overrides)
     sc.check()
     mujoco, p, pp = _plant_and_params(sc)
-    from ..model.mjcf import CYLINDER
-
     chains = hand_chains(p)
     sc.check(chains)
     if not p.abduction_lower <= sc.thumb_abduction <= p.abduction_upper:
@@ -278,137 +362,36 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     levels = HAND_LEVELS if sc.levels is None else sc.levels
     mj = load_mujoco(mjcf_string("hand", pp, friction=True, scene="cylinder", timestep=sc.dt / sc.substeps))
     d = mujoco.MjData(mj)
-    sd = d.sensordata
     N = int(round(sc.duration / sc.dt))
     t = sc.dt * np.arange(N)
     rng = np.random.default_rng(sc.seed)
-    use_obs = sc.controller != "pi"
-    gains = {**DEFAULT_GAINS[sc.controller], **HAND_GAINS, **sc.gains}
-    center = np.asarray(CYLINDER["center"], dtype=float)
-
-    # per chain: the controller's model, the plant's initial state, sensors, the cylinder in the chain's frame
-    C = []
-    for c in chains:
-        m = chain_model(p, c, sc.thumb_abduction)
-        R, pos = chain_frame(p, c, sc.thumb_abduction)
-        names = [f"{c}_{j}" for j in m.joint_names]
-        perm = joint_permutation(mj, names)
-        q0 = static_equilibrium(chain_model(pp, c, sc.thumb_abduction), np.zeros(m.n))
-        d.qpos[perm] = q0
-        a, b = (float(x) for x in levels[c])
-        C.append(dict(name=c, model=m, n=m.n, perm=perm, names=tuple(names), center=R.T @ (center - pos),
-                      axis=R.T @ np.array([0.0, 1.0, 0.0]), F_ref=np.where(t < sc.step_time, a, b), levels=(a, b),
-                      enc=mj.sensor(f"encoder_{c}").adr[0], frc=mj.sensor(f"torque_{c}").adr[0],
-                      touch=mj.sensor(f"flexiforce_{c}").adr[0], act=mj.actuator(c).id, z0=q0))
-    abd_q = mj.joint("thumb_abd").qposadr[0]
-    abd_act = mj.actuator("thumb_abduction").id
-    abd_enc = mj.sensor("encoder_thumb_abduction").adr[0]
-    d.qpos[abd_q] = 0.0
+    kind = sc.controller
+    gains = {**DEFAULT_GAINS[kind], **HAND_GAINS, **sc.gains}
+    C = [_chain(p, pp, mj, d, c, sc, levels[c], t) for c in chains]  # the plant starts at rest, each chain
+    d.qpos[mj.joint("thumb_abd").qposadr[0]] = 0.0
     mujoco.mj_forward(mj, d)
-    step = 2 * np.pi / C[0]["model"].transmission.counts_per_rev
-
-    # observers: one EKF per chain, those of the same model advanced together
-    groups: dict[str, list[int]] = {}
-    callers = {}
-    S: list[np.ndarray] = []
-    if use_obs:
-        est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
-        meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-        f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
-        for i, ch in enumerate(C):
-            n = ch["n"]
-            ss = StateSpace(ch["model"], input="motor", output="encoder", force=True)
-            noise = default_noise(est_sc, n, 1, 0, meas_var)
-            noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
-            fstep = make_observer("ekf", ss, sc.dt, **noise).filter_step
-            key = fstep.serialize()
-            if key not in callers:
-                callers[key] = _batch_step_caller(fstep, f"ekf_force_hand_{ch['model'].name}", sc.compiled)
-            groups.setdefault(key, []).append(i)
-            z0 = np.concatenate([static_equilibrium(ch["model"], np.zeros(n)), np.zeros(n)])
-            P0 = np.diag([0.05**2] * n + [0.1**2] * n)
-            S.append(np.concatenate([z0, P0.reshape(-1, order="F")]))
-    ctls = [ForceController(sc.controller, ch["model"], cylinder_normal(ch["model"], ch["z0"], ch["center"], ch["axis"]),
-                            sc.dt, p.tau_max, **gains) for ch in C]
-
-    nc = len(C)
-    out = {k: np.empty((nc, N)) for k in ("F_true", "F_meas", "F_hat", "tau", "tau_meas")}
-    out_q = [np.empty((N, ch["n"])) for ch in C]
-    out_qh = [np.full((N, ch["n"]), np.nan) for ch in C]
-    q_abd = np.empty(N)
-    enc_noise = sc.encoder_noise_counts * step * rng.standard_normal((nc + 1, N))
-    trq_noise = sc.torque_noise * rng.standard_normal((nc, N))
-    frc_noise = sc.force_noise * rng.standard_normal((nc, N))
-    alpha = sc.dt / (sc.force_filter_s + sc.dt)
-    a_v = sc.dt / (sc.abduction_filter_s + sc.dt)
-    F_filt = np.zeros(nc)
-    tau_meas_prev = np.zeros(nc)
-    F_in_prev = np.zeros(nc)
-    normals = [ctl.normal.copy() for ctl in ctls]
-    y_abd_prev, v_abd = None, 0.0
-    res = sc.force_resolution
-    t_wall = time.perf_counter()
-    for k in range(N):
-        y = np.empty(nc)
-        F_meas = np.empty(nc)
-        for i, ch in enumerate(C):
-            out_q[i][k] = d.qpos[ch["perm"]]
-            F_true = float(sd[ch["touch"]])
-            out["F_true"][i, k] = F_true
-            F_meas[i] = max(0.0, round((F_true + frc_noise[i, k]) / res) * res)
-            y[i] = round((float(sd[ch["enc"]]) + enc_noise[i, k]) / step) * step
-        if use_obs and k > 0:
-            for key, idx in groups.items():
-                WY = np.stack([np.concatenate([[tau_meas_prev[i]], -F_in_prev[i] * normals[i], [y[i]]]) for i in idx])
-                S_next = callers[key](np.stack([S[i] for i in idx]), WY)
-                for j, i in enumerate(idx):
-                    S[i] = S_next[j]
-        for i, ch in enumerate(C):
-            if use_obs:
-                q_hat = S[i][: ch["n"]]
-                out_qh[i][k] = q_hat
-                normals[i] = cylinder_normal(ch["model"], q_hat, ch["center"], ch["axis"])
-                if sc.controller == "sensorless":
-                    F_est = static_contact_force(ch["model"], q_hat, np.array([tau_meas_prev[i]]), normals[i])
-                    F_filt[i] += alpha * (max(F_est, 0.0) - F_filt[i])
-                    F_fb = F_filt[i]
-                else:
-                    F_fb = F_meas[i]
-                F_in_prev[i] = F_fb
-                tau = ctls[i].update(float(ch["F_ref"][k]), F_fb, q_hat, normal=normals[i])
-            else:
-                F_fb = F_meas[i]
-                tau = ctls[i].update(float(ch["F_ref"][k]), F_fb, None)
-            d.ctrl[ch["act"]] = tau
-            out["F_meas"][i, k], out["F_hat"][i, k], out["tau"][i, k] = F_meas[i], F_fb, tau
-        # the thumb's ab/adduction: PD on its encoder
-        y_abd = round((float(sd[abd_enc]) + enc_noise[nc, k]) / step) * step / p.abduction_ratio
-        if y_abd_prev is not None:
-            v_abd += a_v * ((y_abd - y_abd_prev) / sc.dt - v_abd)
-        y_abd_prev = y_abd
-        q_abd[k] = d.qpos[abd_q]
-        u = sc.abduction_kp * (sc.thumb_abduction - y_abd) - sc.abduction_kd * v_abd
-        d.ctrl[abd_act] = min(max(u, -p.tau_max), p.tau_max)
-        for _ in range(sc.substeps):
-            mujoco.mj_step(mj, d)
-        for i, ch in enumerate(C):
-            tau_meas_prev[i] = float(sd[ch["frc"]]) + trq_noise[i, k]
-        out["tau_meas"][:, k] = tau_meas_prev
-    wall = time.perf_counter() - t_wall
-
-    results = {}
-    for i, ch in enumerate(C):
-        a, b = ch["levels"]
-        csc = ControlScenario(model="finger2" if ch["n"] == 2 else "finger3", controller=sc.controller,
-                              reference="step", duration=sc.duration, dt=sc.dt, substeps=sc.substeps, seed=sc.seed,
-                              levels=(a, b, b), step_times=(sc.step_time, sc.duration), settle=sc.settle,
-                              encoder_noise_counts=sc.encoder_noise_counts, torque_noise=sc.torque_noise,
-                              force_noise=sc.force_noise, force_resolution=sc.force_resolution,
-                              force_filter_s=sc.force_filter_s, compiled=sc.compiled, gains=sc.gains,
-                              params=sc.params, plant_params=sc.plant_params)
-        r = ControlResult(scenario=csc, t=t, F_ref=ch["F_ref"], F_true=out["F_true"][i], F_meas=out["F_meas"][i],
-                          F_hat=out["F_hat"][i], q_true=out_q[i], q_hat=out_qh[i], tau_cmd=out["tau"][i],
-                          tau_meas=out["tau_meas"][i], joint_names=ch["names"], tau_max=p.tau_max, wall_s=wall)
-        _metrics(r)
-        results[ch["name"]] = r
-    return HandControlResult(scenario=sc, t=t, chains=results, q_abduction=q_abd, wall_s=wall)
+    names = [c["name"] for c in C]
+    plant = MujocoPlant(mj, d, substeps=sc.substeps, actuators={**{f"tau_{c}": c for c in names},
+                                                                "u_abd": "thumb_abduction"},
+                        joints={**{f"q_{c}": C[i]["names"] for i, c in enumerate(names)}, "q_abd": ["thumb_abd"]},
+                        sensors={**{f"q_m_{c}": f"encoder_{c}" for c in names}, "q_m_abd": "encoder_thumb_abduction",
+                                 **{f"F_touch_{c}": f"flexiforce_{c}" for c in names}},
+                        period_sensors={f"tau_applied_{c}": f"torque_{c}" for c in names})
+    cpr = C[0]["model"].transmission.counts_per_rev
+    # the sensors' noise, drawn in this order: the encoders (the chains', the ab/adduction's), torques, forces
+    blocks = [Source("references", **{f"F_ref_{c['name']}": c["F_ref"] for c in C}), plant]
+    blocks += [Encoder(f"q_m_{c}", f"y_{c}", cpr, noise_counts=sc.encoder_noise_counts, rng=rng) for c in
+               (*names, "abd")]
+    blocks += [TorqueSensor(f"tau_applied_{c}", f"tau_meas_{c}", noise=sc.torque_noise, rng=rng, timing="period")
+               for c in names]
+    blocks += [ForceSensor(f"F_touch_{c}", f"F_meas_{c}", noise=sc.force_noise, resolution=sc.force_resolution,
+                           rng=rng) for c in names]
+    blocks.append(EncoderPD(sc.thumb_abduction, sc.abduction_kp, sc.abduction_kd, sc.dt / (sc.abduction_filter_s + sc.dt),
+                            ratio=p.abduction_ratio, u_max=p.tau_max, reading="y_abd", command="u_abd"))
+    for ch in C:
+        blocks += _chain_loop(ch, sc, p.tau_max, gains)
+    if kind != "pi":  # one EKF per chain, those of the same model advanced in one call
+        blocks.append(ObserverBank([_chain_ekf(ch, sc) for ch in C], compiled=sc.compiled))
+    log = run_loop(blocks, N, sc.dt)
+    return HandControlResult(scenario=sc, t=t, chains=_chain_results(sc, C, log, t, p.tau_max),
+                             q_abduction=log["q_abd"][:, 0], wall_s=log.wall_s)

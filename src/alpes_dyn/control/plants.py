@@ -41,6 +41,9 @@ from ..estimation.recording import Recording
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, tilted_gravity
 from ..model.params import HandParams, load_params
 from ..model.robot import Model
+from ..simulation.loop import Source, run_loop
+from ..simulation.plants import MujocoPlant
+from ..simulation.sensors import Encoder, TorqueSensor
 
 __all__ = ["PLANT_MODELS", "INTEGRATORS", "PlantEffects", "plant_mjcf", "plant_model", "mujoco_recording"]
 
@@ -159,8 +162,8 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     :class:`~alpes_dyn.estimation.recording.Recording`: ``encoder`` the plant's ``encoder_<motor>`` sensor
     (the rotor with the elastic tendon) quantised, plus ``encoder_offset``; ``torque`` (1 +
     ``torque_constant_error``) x torque + noise; ``true_q`` MuJoCo's joint angles; no gravity columns.
-    Cost: a Python loop over the N samples, MuJoCo stepping each sample's substeps (``mj_step`` with
-    ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
+    Cost: the loop of :func:`~alpes_dyn.simulation.loop.run_loop` over the N samples, MuJoCo stepping each sample's
+    substeps (``mj_step`` with ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
     callback, 0.9 s with ``stiction`` (no callback).
     """
     import mujoco  # load_mujoco below gives the one-line error when it is missing
@@ -193,36 +196,32 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
             raise InputError(f"q0: expected {truth.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
     d.qpos[:] = _initial_state(mj, truth, perm, q_init, u[0], p, e)
     mujoco.mj_forward(mj, d)
-    tr = truth.transmission
-    enc_adr = [mj.sensor_adr[mj.sensor(f"encoder_{mn}").id] for mn in tr.motor_names]
+    tr, ex = truth.transmission, truth.extras
     dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
-    ex = truth.extras
 
     def smooth_friction(_m, dd) -> None:  # the library's law, at every RK4 stage
         v = dd.qvel[dofs]
         dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
 
+    rng = np.random.default_rng(seed)  # the encoder's noise, then the torque's
     N = u.shape[0] - 1
-    qm, q = np.empty((N + 1, m)), np.empty((N + 1, truth.n))
-    qm[0], q[0] = d.sensordata[enc_adr], d.qpos[perm]
+    blocks = [Source("torque", tau=u),
+              # mj_step's sensors are the state's before its last integration: recomputed at the sample's state
+              MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True, joints={"q": truth.joint_names},
+                          sensors={"q_m": [f"encoder_{mn}" for mn in tr.motor_names]}, actuators={"tau": None}),
+              Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True,
+                      offset=e.encoder_offset, rng=rng, shape=(m,)),
+              TorqueSensor("tau", "tau_meas", noise=torque_noise, gain=1.0 + e.torque_constant_error, rng=rng,
+                           shape=(m,))]
     previous = mujoco.get_mjcb_passive()
     if e.stiction is None:
         mujoco.set_mjcb_passive(smooth_friction)
     try:
-        for k in range(N):
-            d.ctrl[:] = u[k]
-            mujoco.mj_step(mj, d, nstep=sub)
-            # mj_step's sensors are the state's before its last integration: recompute at the sample's state
-            mujoco.mj_fwdPosition(mj, d)
-            mujoco.mj_sensorPos(mj, d)
-            qm[k + 1], q[k + 1] = d.sensordata[enc_adr], d.qpos[perm]
+        log = run_loop(blocks, N, dt, final=True)
     finally:
         mujoco.set_mjcb_passive(previous)
+    q, counts, measured = log["q"], log["counts"], log["tau_meas"]
     if not np.isfinite(q).all():
         raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
-    rng = np.random.default_rng(seed)
-    step = 2 * np.pi / tr.counts_per_rev
-    counts = np.round((qm + encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step + e.encoder_offset)
-    measured = (1.0 + e.torque_constant_error) * u + torque_noise * rng.standard_normal(u.shape)
     return Recording(t=dt * np.arange(N + 1), encoder=counts, torque=measured, motor_names=tr.motor_names,
                      joint_names=truth.joint_names, true_q=q)

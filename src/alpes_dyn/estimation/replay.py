@@ -25,7 +25,6 @@ model -- typically the one identified from another recording (``alpes-dyn identi
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -41,6 +40,8 @@ from ..model.robot import Model
 from ..simulation.integrate import stable_substeps
 from ..symbolic.parametric import tilted_gravity
 from ..symbolic.statespace import StateSpace
+from ..simulation.loop import Function, run_loop
+from .blocks import Observer, RecordingPlayback
 from .observers import OBSERVERS, Estimate, make_observer
 from .recording import Recording, read_recording
 from .scenario import held_mid_range, rest_with_held_joints
@@ -146,6 +147,25 @@ def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
     return np.concatenate([q0, np.zeros(model.n)])
 
 
+def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque_noise: float,
+                   encoder_noise_counts: float, disturbance_walk: float, gains: tuple[str, ...], pars: tuple[str, ...],
+                   u0: np.ndarray, compiled: bool) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The observer of :func:`estimate_recording` and its prior: (filter, z0 (nz,), P0 (nz,) variances); ``u0`` (m,)
+    the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C."""
+    n, m = m_obs.n, m_obs.transmission.n_motors
+    tr = m_obs.transmission
+    step = 2 * np.pi / tr.counts_per_rev
+    # the measurement's noise: the encoder's, and the torque noise through the tendon's stretch
+    meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
+    Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
+    ss = StateSpace(m_obs, input="motor", output="encoder")
+    filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
+                         process_noise=Q, measurement_noise=list(meas_var * np.ones(m)), input_noise=[torque_noise**2] * m)
+    z0 = np.concatenate([_initial_state(m_obs, u0), np.ones(len(gains)), np.zeros(len(pars))])
+    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
+    return filt, z0, P0
+
+
 def estimate_recording(recording: Recording | str | Path, model: Model, observer: str = "ekf", *,
                        torque_noise: float | None = None, encoder_noise_counts: float = 0.0,
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
@@ -219,18 +239,15 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
     step = 2 * np.pi / m_obs.transmission.counts_per_rev
     tr = m_obs.transmission
-    y = tr.unstretched(rec.encoder * step - offsets, rec.torque)  # S q: the zero and the stretch C tau_m off
-    u = rec.torque[:-1]
-    # the measurement's noise: the encoder's, and the torque noise through the tendon's stretch
-    meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
-    Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
-    ss = StateSpace(m_obs, input="motor", output="encoder")
-    filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         process_noise=Q, measurement_noise=list(meas_var * np.ones(m)), input_noise=[torque_noise**2] * m)
-    z0 = np.concatenate([_initial_state(m_obs, rec.torque[0]), np.ones(len(gains)), np.zeros(len(pars))])
-    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
-    est = filt.run(z0, P0, u, y)
-    est = dataclasses.replace(est, t=rec.t.copy())
+    filt, z0, P0 = _replay_filter(m_obs, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
+                                  gains, pars, rec.torque[0], compiled)
+    # the composition: the recording played back -> the encoder's zero and the tendons' stretch C tau_m off -> observer
+    blocks = [RecordingPlayback(rec, encoder="counts", torque="tau", held="tau_held"),
+              Function(lambda counts, tau: tr.unstretched(counts * step - offsets, tau), ("counts", "tau"), "y",
+                       name="unstretched", vectorized=True),
+              Observer(filt, z0, P0, known=("tau_held",), measurement="y")]
+    log = run_loop(blocks, N - 1, dt, final=True)
+    est = Estimate(t=rec.t.copy(), z=log["z"], P=log["P"], names=filt.names)
     rmse = final = None
     if rec.true_q is not None and np.isfinite(rec.true_q).all():
         k0 = int(round(t_start / dt))

@@ -21,6 +21,9 @@ What is simulated (``alpes-dyn estimate``, :func:`run_estimation`), all seeded b
   inertias (1 - d) times (``mismatch_signs = (-1, 1)``, the worse case for a fixed |d|: the two
   errors add up in the spring-to-inertia ratio); ``observer_params`` gives the observer any other
   parameter set (the gains' true values are then unknown: NaN);
+* the run: a composition of blocks (:func:`~alpes_dyn.simulation.loop.run_loop`): the torque profile, the true
+  finger (:class:`~alpes_dyn.simulation.plants.SimulatorPlant`), the encoder and the current sensor (their noise
+  drawn in that order from the seed's generator, after the initial offsets), the observer;
 * error metrics after ``transient`` seconds (default min(1 s, duration / 5)): the RMSE of each q_i (rad), and the
   final error |q_hat - q| at the last sample.
 
@@ -47,7 +50,11 @@ from ..limits import check_bytes
 from ..model.robot import Model
 from .observers import OBSERVERS, PARAMETERS, Estimate, make_observer, true_gains
 from ..model.params import HandParams, load_params
-from ..simulation.integrate import simulate, stable_substeps
+from ..simulation.integrate import stable_substeps
+from ..simulation.loop import Source, run_loop
+from ..simulation.plants import SimulatorPlant
+from ..simulation.sensors import Encoder, TorqueSensor
+from .blocks import Observer
 from ..symbolic.statespace import StateSpace
 
 SCENARIO_MODELS: tuple[str, ...] = ("finger2", "finger3")
@@ -262,6 +269,33 @@ def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_va
     return {"process_noise": Q, "measurement_noise": [meas_var] * m, "input_noise": [sc.torque_noise**2] * m}
 
 
+def _scenario_observer(sc: EstimationScenario, observer: str, p: HandParams, compiled: bool, n: int, m: int,
+                       counts_per_rev: float) -> tuple[Any, np.ndarray, np.ndarray, float, float]:
+    """The scenario's observer on its model, possibly mis-scaled, for the truth's encoder of ``counts_per_rev``:
+    (filter, z0 (nz,), P0 (nz,) variances, mass_scale, spring_scale -- NaN for ``observer_params``)."""
+    d = sc.mismatch
+    mass_scale, spring_scale = 1.0 + sc.mismatch_signs[0] * d, 1.0 + sc.mismatch_signs[1] * d
+    if sc.observer_params is not None:
+        p_obs = sc.observer_params if isinstance(sc.observer_params, HandParams) else load_params(sc.observer_params)
+        mass_scale = spring_scale = float("nan")
+    else:
+        p_obs = mismatched_params(p, mass_scale, spring_scale) if d != 0 else p
+    obs_model = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p_obs, chain=sc.chain)
+    ss = StateSpace(obs_model, input="motor", output="encoder")
+    pars = tuple(sc.parameters) if observer.endswith("-params") else ()
+    n_params = len(pars)
+    step = 2 * np.pi / counts_per_rev
+    meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
+    noise = default_noise(sc, n, m, n_params, meas_var)
+    # with friction the observer's model needs the truth's RK4 substeps (h lambda of the smooth sign)
+    filt = make_observer(observer, ss, sc.dt, compiled=compiled, parameters=pars,
+                         substeps=max(sc.substeps, stable_substeps(obs_model, sc.dt)) if sc.friction else 1, **noise)
+    z0 = np.concatenate([np.zeros(2 * n), np.ones(n_params)])
+    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * n_params)
+    return filt, z0, P0, mass_scale, spring_scale
+
+
+
 def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = None, *,
                    compiled: bool = False, **overrides: Any) -> EstimationResult:
     """Simulate the default scenario and run an observer on it.
@@ -285,7 +319,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     truth = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p, chain=sc.chain)
     rng = np.random.default_rng(sc.seed)
     n, m = truth.n, truth.transmission.n_motors
-    held, held_motors = _held_joints(truth)
+    _, held_motors = _held_joints(truth)
     if not sc.duration / sc.dt < 2.0**53:
         raise InputError(f"duration: {sc.duration:g} s at dt = {sc.dt:g} s is more than 2^53 samples")
     N = int(round(sc.duration / sc.dt))
@@ -299,42 +333,23 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     check_bytes(48.0 * (N + 1) * (sc.substeps * (4 * n + 2 * m + 1) + 2 * (nz + nz * nz) + 4 * n + 3 * m), "duration",
                 f"{sc.duration:g} s at dt = {sc.dt:g} s ({N} samples)")
 
-    # truth: RK4 at dt / substeps, the motor torque held over each sample period
+    # the composition (alpes_dyn.simulation.loop): torque -> the true finger -> encoder, torque sensor -> observer
     t = sc.dt * np.arange(N + 1)
     u_true = _torque(sc, t[:-1], m, held_motors)
     # the joints without spring start mid-range (held there by hand)
     q0 = rest_with_held_joints(truth, u_true[0]) + rng.uniform(-sc.q0_offset, sc.q0_offset, size=n)
-    x0 = np.concatenate([q0, np.zeros(n)])
     sub = max(sc.substeps, stable_substeps(truth, sc.dt))  # a sharper friction sign asks for more
-    sim = simulate(truth, x0, np.repeat(u_true, sub, axis=0), sc.duration, sc.dt / sub,
-                   "rk4", input="motor", output="encoder", joint_range="ignore")  # no stop, as documented above
-    x_true = sim.x[::sub]
-    # sensors
-    step = 2 * np.pi / truth.transmission.counts_per_rev
-    y_cont = truth.transmission.encoder_angles(x_true[:, :n], np.concatenate([u_true, u_true[-1:]]))  # + C u
-    y = truth.transmission.quantize(y_cont + sc.encoder_noise_counts * step * rng.standard_normal(y_cont.shape))
-    u_meas = u_true + sc.torque_noise * rng.standard_normal(u_true.shape)
-    meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-
-    # the observer's model, possibly mis-scaled
-    d = sc.mismatch
-    mass_scale, spring_scale = 1.0 + sc.mismatch_signs[0] * d, 1.0 + sc.mismatch_signs[1] * d
-    if sc.observer_params is not None:
-        p_obs = sc.observer_params if isinstance(sc.observer_params, HandParams) else load_params(sc.observer_params)
-        mass_scale = spring_scale = float("nan")
-    else:
-        p_obs = mismatched_params(p, mass_scale, spring_scale) if d != 0 else p
-    obs_model = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p_obs, chain=sc.chain)
-    ss = StateSpace(obs_model, input="motor", output="encoder")
-    pars = tuple(sc.parameters) if observer.endswith("-params") else ()
-    n_params = len(pars)
-    noise = default_noise(sc, n, m, n_params, meas_var)
-    # with friction the observer's model needs the truth's RK4 substeps (h lambda of the smooth sign)
-    filt = make_observer(observer, ss, sc.dt, compiled=compiled, parameters=pars,
-                         substeps=max(sc.substeps, stable_substeps(obs_model, sc.dt)) if sc.friction else 1, **noise)
-    z0 = np.concatenate([np.zeros(2 * n), np.ones(n_params)])
-    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * n_params)
-    est = filt.run(z0, P0, u_meas, y)
+    filt, z0, P0, mass_scale, spring_scale = _scenario_observer(sc, observer, p, compiled, n, m,
+                                                                        truth.transmission.counts_per_rev)
+    blocks = [Source("torque", tau=np.concatenate([u_true, u_true[-1:]])),  # held: the last row for C u at t_N
+              SimulatorPlant(truth, np.concatenate([q0, np.zeros(n)]), substeps=sub),  # no stop, as documented
+              Encoder("q_m", "y", truth.transmission.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng,
+                      shape=(m,)),
+              TorqueSensor("tau", "u_meas", noise=sc.torque_noise, rng=rng, shape=(m,), timing="period"),
+              Observer(filt, z0, P0, known=("u_meas",), measurement="y")]
+    log = run_loop(blocks, N, sc.dt, final=True)
+    x_true, y, u_meas = log["x"], log["y"], log["u_meas"]
+    est = Estimate(t=filt.dt * np.arange(N + 1), z=log["z"], P=log["P"], names=filt.names)
 
     k0 = int(round(sc.transient_s / sc.dt))
     err = est.z[:, :n] - x_true[:, :n]
