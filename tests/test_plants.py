@@ -139,7 +139,7 @@ def test_elastic_tendon_encoder_is_the_compliance_model_while_moving():
 
 
 def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
-    """The experiment's dither (7 breakaway torques at 20 Hz, :func:`dither_amplitude`): 7 max_j F_s_j / |S_j| on
+    """The experiment's dither (12 breakaway torques at 20 Hz, :func:`dither_amplitude`): 12 max_j F_s_j / |S_j| on
     finger3 (a closed form), a line of the design; on MuJoCo's stick-slip finger (``frictionloss``, a stiff
     constraint) the multisine alone leaves q_3 stuck (|qd_3| < 0.01 rad/s) on a large share of the samples, with
     the dither on under 2 % of them on every joint."""
@@ -150,12 +150,12 @@ def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
     m = ad.Model.alpes("finger3", friction=True)
     design = ExperimentDesign(duration=2.0)
     S = m.transmission.S
-    assert dither_amplitude(m, design) == pytest.approx([7.0 * np.max(m.extras.coulomb / np.abs(S[0]))], rel=1e-12)
+    assert dither_amplitude(m, design) == pytest.approx([12.0 * np.max(m.extras.coulomb / np.abs(S[0]))], rel=1e-12)
     assert design.lines == design.frequencies + (20.0,)
     assert ExperimentDesign(dither=0.0).lines == design.frequencies
     eff = PlantEffects(stiction=STICTION_TIMECONST)
     stuck = {}
-    for d in (0.0, 7.0):
+    for d in (0.0, 12.0):
         des = ExperimentDesign(duration=2.0, dither=d)
         _, u, x0 = experiment_torque("finger3", p, des)
         assert np.ptp(u) > 0
@@ -164,4 +164,4 @@ def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
         v = np.diff(rec.true_q, axis=0) / des.dt
         stuck[d] = (np.abs(v[200:]) < 0.01).mean(axis=0)  # after the first 0.2 s
     assert stuck[0.0][2] > 0.2
-    assert np.all(stuck[7.0] < 0.02)
+    assert np.all(stuck[12.0] < 0.02)

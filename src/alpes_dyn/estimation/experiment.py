@@ -9,7 +9,7 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
   mean joint angle mid-range, the amplitude a is the largest that keeps the nominal finger's static
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
-* a dither on top (``dither``, default 7 times the breakaway torque of the motor's joints, at
+* a dither on top (``dither``, default 12 times the breakaway torque of the motor's joints, at
   ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
   stick phases no memoryless friction law fits (:func:`dither_amplitude`). The experiment's lines, the
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
@@ -86,7 +86,7 @@ class ExperimentDesign:
     torque_noise: float = 5e-4
     trim_bias: bool = True
     amplitude_fraction: float = 0.6
-    dither: float = 7.0
+    dither: float = 12.0
     dither_frequency: float = 20.0
 
     @property
@@ -429,9 +429,11 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     Why a dither: on a plant with stick-slip friction (MuJoCo's finger3, ``benchmarks/realism.py``) the multisine
     alone leaves q_3 stuck half the time (|qd_3| < 0.01 rad/s on 53 % of the samples, seed 12), where no
     memoryless friction law matches it: the fit's springs came out 1-2 % off and the EKF on its file 1.2 degrees
-    off on q_3. A 20 Hz dither of 7 breakaway torques (1.7e-3 N m on finger3's motor, a few % of its mean torque)
-    brings the stuck time under 1 % on every joint, and the fit on the same plant within 0.4 % (springs) with the
-    EKF at 0.14 degrees (stick-slip alone) or 0.44 (every effect at once)."""
+    off on q_3. A 20 Hz dither of 12 breakaway torques (3e-3 N m on finger3's motor, about 5 % of its mean torque)
+    brings the stuck time to about 1 % on every joint. Measured on the all-effects plants of seeds 13 and 14 (4 s,
+    ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
+    the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
+    10 Hz dither left q_3 stuck on 23-39 % of the samples."""
     joints, _, _ = _motor_groups(model)
     S = model.transmission.S
     out = np.zeros(S.shape[0])
