@@ -143,3 +143,10 @@ def test_missing_mujoco_one_line(capsys, monkeypatch):
     code = main(["control"])
     out, err = capsys.readouterr()
     assert code == 2 and err.count("\n") == 1 and "pip install 'alpes_dyn[mujoco]'" in err
+
+
+def test_short_step_segments_give_no_overshoot_and_no_crash():
+    """Both step segments under 0.25 s (duration 0.7 s, steps at 0.4 and 0.6 s): no overshoot to measure (None,
+    not a crash on an empty list); the force RMSE is still measured."""
+    r = run_control("pi", duration=0.7, step_times=(0.4, 0.6))
+    assert r.overshoot is None and np.isfinite(r.force_rmse)

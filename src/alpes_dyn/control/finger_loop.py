@@ -221,7 +221,7 @@ def _metrics(res: ControlResult) -> None:
         seg = F[k]
         ex = float(seg.max()) - new if new > prev else new - float(seg.min())
         over.append(max(0.0, ex) / abs(new - prev))
-    res.overshoot = max(over)
+    res.overshoot = max(over) if over else None  # both steps' segments under 0.25 s: nothing to measure
     k = (t >= t1) & (t < min(t2, T))
     F_up, t_up = F[k], t[k]
     lo, hi = a + 0.1 * (b - a), a + 0.9 * (b - a)
