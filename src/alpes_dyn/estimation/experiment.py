@@ -57,12 +57,13 @@ from ..errors import InputError
 from ..limits import MAX_DURATION_S
 from ..model.robot import Model
 from ..model.params import HandParams, Param, load_params, with_values
+from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .recording import Recording, write_recording
 from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning
 
 __all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "model_experiment",
-           "perturbed_params", "dither_amplitude"]
+           "perturbed_params", "dither_amplitude"]  # dither_amplitude: from .multisine
 
 EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 """The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
@@ -154,16 +155,6 @@ def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarr
         q0[i] = 0.5 * (m.lower[i] + m.upper[i])
     return m.static_equilibrium(m.transmission.joint_torque(np.atleast_1d(np.asarray(tau_m, dtype=float))), q0,
                                 fixed=held)
-
-
-def _motor_groups(model: Model) -> tuple[list[np.ndarray], list[int], list[int]]:
-    """Each motor's joints, the motors whose joints all have springs (a tendon against its return springs) and
-    the others (a motor driving springless joints both ways, held at mid-range by its bias)."""
-    S = model.transmission.S
-    held = {model.joint_index(j) for j in model.springless_joints}
-    joints = [np.flatnonzero(S[k]) for k in range(S.shape[0])]
-    sprung = [k for k, js in enumerate(joints) if not held.intersection(js.tolist())]
-    return joints, sprung, [k for k in range(S.shape[0]) if k not in sprung]
 
 
 def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[np.ndarray],
@@ -396,53 +387,6 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
         x[start + 1: stop + 1] = sim.x[sub::sub]
         start = stop
     return x
-
-
-def _profile(design: ExperimentDesign, t: np.ndarray, bias: float, amp: float, motor: int = 0,
-             n_motors: int = 1, dither: float = 0.0) -> np.ndarray:
-    """One motor's multisine (len(t),), N m: Schroeder phases (a low crest factor), shifted by pi k i / m on
-    line i for motor k of m (the motors of one chain excited at once, out of phase); plus the dither, ``dither``
-    N m at ``design.dither_frequency`` (shifted by pi k / m)."""
-    f = np.asarray(design.frequencies, dtype=float)
-    k = np.arange(1, f.size + 1)
-    phases = -np.pi * k * (k - 1) / f.size - np.pi * motor * k / n_motors
-    s = np.sin(2 * np.pi * f[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
-    out = bias + amp * s / math.sqrt(f.size / 2)
-    if dither:
-        out = out + dither * np.sin(2 * np.pi * design.dither_frequency * t + np.pi * motor / n_motors)
-    return out
-
-
-def _profiles(design: ExperimentDesign, t: np.ndarray, bias: np.ndarray, amp: np.ndarray,
-              dither: np.ndarray | None = None) -> np.ndarray:
-    """(len(t), m): every motor's multisine, with its dither amplitude ``dither`` (m,), N m (default none)."""
-    m = len(bias)
-    d = np.zeros(m) if dither is None else np.asarray(dither, dtype=float)
-    return np.column_stack([_profile(design, t, float(bias[k]), float(amp[k]), k, m, float(d[k])) for k in range(m)])
-
-
-def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
-    """The dither's amplitude per motor (m,), N m: ``design.dither`` times the largest breakaway torque of the
-    motor's joints, max_j F_s_j / |S_kj| (their dry friction seen at the motor; the model's F_s, the nominal one
-    for a designed experiment), so that every joint keeps sliding through its friction; 0 without friction.
-
-    Why a dither: on a plant with stick-slip friction (MuJoCo's finger3, ``benchmarks/realism.py``) the multisine
-    alone leaves q_3 stuck half the time (|qd_3| < 0.01 rad/s on 53 % of the samples, seed 12), where no
-    memoryless friction law matches it: the fit's springs came out 1-2 % off and the EKF on its file 1.2 degrees
-    off on q_3. A 20 Hz dither of 12 breakaway torques (3e-3 N m on finger3's motor, about 5 % of its mean torque)
-    brings the stuck time to about 1 % on every joint. Measured on the all-effects plants of seeds 13 and 14 (4 s,
-    ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
-    the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
-    10 Hz dither left q_3 stuck on 23-39 % of the samples."""
-    joints, _, _ = _motor_groups(model)
-    S = model.transmission.S
-    out = np.zeros(S.shape[0])
-    if design.dither <= 0:
-        return out
-    for k, js in enumerate(joints):
-        if js.size:
-            out[k] = design.dither * float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
-    return out
 
 
 def experiment(model: str, true_params: HandParams | str | Path | None = None,
