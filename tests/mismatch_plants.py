@@ -25,7 +25,7 @@ def _sensors(rec: Recording, qm: np.ndarray, design: ExperimentDesign, seed: int
 
 
 def mismatched(kind: str, true: HandParams, model: str = "finger3", duration: float = 2.0,
-               seed: int = 0) -> Recording:
+               seed: int = 0, dither: float | None = None) -> Recording:
     """A recording of the documented experiment on ``true`` with one effect the model lacks:
 
     * ``match``: none (the model's own structure);
@@ -35,8 +35,12 @@ def mismatched(kind: str, true: HandParams, model: str = "finger3", duration: fl
     * ``tendon``: an elastic tendon, the encoder ahead of the joints by tau_m / k_t, k_t such that the
       stretch is 3 % of the motor's motion;
     * ``coulomb``: dry friction three times stronger with a sharp sign (v_s 0.02 rad/s, the model 0.1).
+
+    ``dither``: the design's (default: the documented one's).
     """
     design = ExperimentDesign(duration=duration)
+    if dither is not None:
+        design = dataclasses.replace(design, dither=dither)
     if kind == "match":
         return experiment(model, true, design, seed=seed)
     if kind == "tilt":
