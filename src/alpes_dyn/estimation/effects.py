@@ -24,13 +24,14 @@ effect         what the fit does
 Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
 asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
 (``alpes-dyn experiment``), whose recordings it would call inadequate, and costs 15 RK4 steps per sample instead
-of 4. Measured (``benchmarks/realism.py``, MuJoCo plants of finger3 drawn +-20 %, seeds 12-14, 2026-12-02): the
-rigid fit of a stick-slip plant lands masses 22-62 % off, the sharper sign within 2.9-3.7 % on two seeds (15 % on
-the third, where a rotor the plant lacks lowered the residual and was kept); a 3 % tendon stretch leaves the rigid
-fit's EKF 3.9-5.2 degrees off, the compliance with the rotor it brings 0.15-0.33 (masses within 3.5 %); a 3 degree
-tilt leaves masses 12-66 % off, the fitted tilt within 2.7 % (EKF 0.18 degree). All of them at once: springs
-within 2.4 %, masses within 4.6 %, the EKF 0.74-1.30 degrees on its worst joint (its goal, 0.5, not met: under
-stick-slip the law's creep biases the springs by 1-2 %, and q_3's balance turns 1 % into half a degree).
+of 4. Measured (``benchmarks/realism.py``, MuJoCo plants of finger3 drawn +-20 %, seeds 12-14, 2026-12-02, the
+documented experiment with its dither): the rigid fit of a stick-slip plant is flagged 3/3, the sharper sign lands the
+springs within 0.47 %, the masses within 5.8 % and the EKF within 0.26 degree (fits 18-20 s); a 3 % tendon stretch leaves
+the rigid fit's masses 32-95 % off, the compliance with the rotor it brings within 1.1 % (springs), 12.8 % (masses), 0.46
+degree (EKF); a 3 degree tilt is fitted (springs within 1.1 %, EKF 0.24 degree). All of them at once: springs within
+1 %, the EKF within 0.45 degree on every joint, but the masses 4.5-11.3 % off (m_2 high, m_1 low; likely what the
+quasi-static cable leaves out of the rotor's motion at the dither's frequency: a 15 Hz dither left 6.7-9.7 %) and all rounds 21-43 s. Without the dither the stick phases biased the springs
+by 1-2 % and the EKF was 0.74-1.30 degrees off.
 """
 
 from __future__ import annotations
