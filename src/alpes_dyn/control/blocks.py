@@ -63,7 +63,7 @@ class ForceLoop(Block):
 class SensorlessForce(Block):
     """The contact force without a force sensor: F_est = the static balance of the measured motor torque at the
     estimated joints (:func:`~alpes_dyn.control.controller.static_contact_force`), low-passed:
-    F_k = F_k-1 + ``alpha`` (max(F_est, 0) - F_k-1), N (F_-1 = 0).
+    ``F[k] = F[k-1] + alpha (max(F_est, 0) - F[k-1])``, N (``F[-1] = 0``).
 
     Parameters
     ----------
