@@ -329,7 +329,7 @@ def legacy_estimate_recording(rec, model, observer="ekf", *, torque_noise=None, 
 
     dt = rec.dt
     if torque_noise is None:
-        torque_noise = float(np.sqrt(np.mean(np.diff(rec.torque, axis=0) ** 2) / 2.0))
+        torque_noise = float(np.sqrt(np.mean(np.diff(rec.torque, n=2, axis=0) ** 2) / 6.0))  # as replay (second difference)
     substeps = stable_substeps(model, dt)
     n, m = model.n, model.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in model.transmission.motor_names) if disturbance else ()

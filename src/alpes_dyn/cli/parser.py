@@ -327,7 +327,7 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--rotor-inertia", action="store_true",
                    help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
     s.add_argument("--excitation", default="documented",
-                   help="'documented' (the torque is the documented multisine: fit it on its lines, default), "
+                   help="'documented' (the torque is the documented multisine and its dither: fit it on their lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
     s.add_argument("--torque-noise", type=float, default=None,
                    help="white noise of the recorded torque, N m (errors in variables). Default: estimated from "
