@@ -36,6 +36,14 @@ from .integrate import CompiledStepLoop, _check_dt, rk4_expression
 __all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
 
 
+def _rk4_calling(fn: cs.Function, h: float, name: str) -> cs.Function:
+    """One classical RK4 step of z' = fn(z, w), w held, as an MX function calling the SX ``fn`` four times (its
+    body once in the generated C, not four times inlined)."""
+    z = cs.MX.sym("z", fn.size1_in(0))
+    wm = cs.MX.sym("w", fn.size1_in(1))
+    return cs.Function(name, [z, wm], [rk4_expression(fn, z, wm, h)])
+
+
 def repeated_step(step: cs.Function, count: int) -> cs.Function:
     """``step`` (x, w) -> x_next applied ``count`` times with the same w (an MX function calling it ``count``
     times): the substeps of one sample period in one compiled call, so the caller's inputs and states are per
@@ -69,9 +77,7 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
     X = cs.SX.sym("X", nx, nx + p.numel())
     dX = cs.mtimes(cs.jacobian(rhs, x), X) + cs.horzcat(cs.SX.zeros(nx, nx), cs.jacobian(rhs, p))
     fa = cs.Function("sens_rhs", [cs.vertcat(x, cs.vec(X)), w], [cs.cse(cs.vertcat(rhs, cs.vec(dX)))])
-    z = cs.MX.sym("z", nx * (1 + X.shape[1]))
-    wm = cs.MX.sym("w", w.numel())
-    return cs.Function("sens_step", [z, wm], [rk4_expression(fa, z, wm, h)])
+    return _rk4_calling(fa, h, "sens_step")
 
 
 class SensitivityModel:
@@ -127,12 +133,10 @@ class SensitivityModel:
         u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
         qdd = pd.forward_dynamics(x[:n], x[n:], cs.mtimes(cs.DM(self.B), u_eff), pd.theta, pd.g)
         rhs = cs.vertcat(x[n:], qdd)
-        f = cs.Function("rhs", [x, w], [cs.cse(rhs)])
         h = self.dt / self.substeps
-        xm, wm = cs.MX.sym("x", self.nx), cs.MX.sym("w", w.numel())
         # one call per sample period: the substeps in the compiled step, the input held, the states at the samples
-        self.plain_step = repeated_step(cs.Function("step", [xm, wm], [rk4_expression(f, xm, wm, h)]),
-                                        self.substeps)  # the right-hand side once in the C
+        self.plain_step = repeated_step(_rk4_calling(cs.Function("rhs", [x, w], [cs.cse(rhs)]), h, "step"),
+                                        self.substeps)
         self.step = repeated_step(variational_rk4_step(rhs, x, w, cs.vertcat(pd.theta, off), h), self.substeps)
         label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._loop = CompiledStepLoop(self.step, label, threads)
