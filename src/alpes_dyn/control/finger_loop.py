@@ -24,7 +24,7 @@ from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 from ..model.robot import Model
-from ..estimation.blocks import Observer, batch_step_caller, step_caller
+from ..estimation.blocks import Observer, step_caller
 from ..estimation.observers import make_observer
 from ..model.params import HandParams, load_params
 from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
@@ -229,10 +229,6 @@ def _metrics(res: ControlResult) -> None:
         res.rise_time_s = float(t_up[np.argmax(F_up >= hi)] - t_up[np.argmax(F_up >= lo)])
 
 
-_batch_step_caller = batch_step_caller  # the old names of estimation.blocks' step callers
-_step_caller = step_caller
-
-
 def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
     (the plant's default: the controller's), both turned palm down."""
@@ -262,7 +258,7 @@ def _force_ekf(sc: ControlScenario, model: Model) -> Observer:
     z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
     P0 = np.array([0.05**2] * n + [0.1**2] * n)
     return Observer(ekf, z0, P0, known=("tau_meas", "w_F"), measurement="y", covariance=None, first_update=False,
-                    step=_step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled))
+                    step=step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled))
 
 
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:

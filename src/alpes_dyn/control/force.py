@@ -22,11 +22,12 @@ Its pieces, one module each, every name re-exported here (``alpes_dyn.control.fo
 
 from __future__ import annotations
 
+from ..estimation.blocks import batch_step_caller as _batch_step_caller, step_caller as _step_caller  # noqa: F401
 from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, _normal,  # noqa: F401
                          reference_profile, static_contact_force, static_motor_torque)
 from .figures import _save_figure, plot_control, plot_hand_control  # noqa: F401
 from .finger_loop import (_METRIC_WINDOW_S, _SAMPLE_ARRAYS, CONTROL_MODELS, ControlResult,  # noqa: F401
-                          ControlScenario, _batch_step_caller, _metrics, _plant_and_params, _step_caller, run_control)
+                          ControlScenario, _metrics, _plant_and_params, run_control)
 from .hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlResult, HandControlScenario, _rotation,  # noqa: F401
                         chain_frame, chain_model, cylinder_normal, hand_chains, run_hand_control)
 
