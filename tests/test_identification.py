@@ -558,3 +558,57 @@ def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_p
         assert main(["estimate", "--model", "finger2", "--friction", *argv, "--json"]) == 0
         est.append(json.loads(capsys.readouterr().out))
     assert np.allclose(est[0]["rmse_deg"], est[1]["rmse_deg"], rtol=1e-6)
+
+
+def test_shooting_problem_jacobians_equal_finite_differences(finger2):
+    """The fit's problem alone (:class:`~alpes_dyn.estimation.shooting.ShootingProblem`): the Jacobians of its
+    residuals and continuity defects, with respect to every node, torque line coefficient and parameter (log K, m,
+    friction; the additive encoder offset; the compliance in its scale), equal central differences of the residuals
+    themselves (relative 1e-5 of the largest entry), on 0.3 s of finger2 with camera columns and the lines' errors in
+    variables: every term of the residual."""
+    from alpes_dyn.estimation.shooting import ShootingProblem, torque_model
+
+    true = perturbed_params(spread=0.2, seed=4)
+    design = ExperimentDesign(duration=0.3)
+    rec = experiment("finger2", true, design, seed=4)
+    qm = rec.true_q.copy()
+    qm[np.arange(len(qm)) % 9 != 0] = np.nan  # the camera: every 9th sample
+    rec.q = qm
+    sel = "K,m,friction,encoder_offset,tendon_compliance"
+    torque = torque_model(rec, design.lines[:4], None)
+    assert torque.lines and torque.noise > 0
+    sens = SensitivityModel(finger2, sel, dt=rec.dt, substeps=4, input_basis=torque.nphi)
+    pb = ShootingProblem(finger2, rec, sens, 100, torque, math.radians(0.1),
+                         start={"tendon_compliance_finger": 2.0, "encoder_offset_finger": 0.01})
+    rng = np.random.default_rng(0)
+    nodes = pb.initial_nodes(np.zeros(pb.n)) + 1e-3 * rng.standard_normal((pb.n_int, pb.nx))
+    offs = np.zeros((pb.n_int, pb.no))
+    glob = 0.05 * rng.standard_normal(pb.ng)
+    e = pb.evaluate(nodes, offs, glob)
+    assert pb.q_mask.sum() > 0 and e.r.shape[1] > (pb.L + 1) * pb.ny  # camera residuals are in
+    h = 1e-6
+
+    def fd(s, k, glob_index=None):
+        """Central differences of (r, c) in interval s's node entry k, or in global variable glob_index."""
+        out = []
+        for sign in (1, -1):
+            nd, gl = nodes.copy(), glob.copy()
+            if glob_index is None:
+                nd[s, k] += sign * h
+            else:
+                gl[glob_index] += sign * h
+            t = pb.evaluate(nd, offs, gl, jac=False)
+            out.append((t.r, t.c))
+        return (out[0][0] - out[1][0]) / (2 * h), (out[0][1] - out[1][1]) / (2 * h)
+
+    for s, k in ((0, 0), (1, 3), (2, 1)):
+        dr, dc = fd(s, k)
+        assert np.allclose(dr[s], e.J[s, :, k], rtol=0, atol=1e-5 * np.abs(e.J[s, :, k]).max())
+        assert np.abs(np.delete(dr, s, axis=0)).max() == 0.0  # a node moves its own interval only
+        if s < pb.n_int - 1:
+            assert np.allclose(dc[s], e.Cv[s, :, k], rtol=0, atol=1e-5 * max(np.abs(e.Cv[s, :, k]).max(), 1e-9))
+    for g in list(range(pb.p)) + [pb.p, pb.ng - 1]:  # every parameter and two line coefficients
+        dr, dc = fd(None, None, g)
+        col, ccol = e.J[:, :, pb.nb + g], e.Cr[:, :, g]
+        assert np.allclose(dr, col, rtol=0, atol=1e-5 * np.abs(col).max()), sens.names[g] if g < pb.p else g
+        assert np.allclose(dc, ccol, rtol=0, atol=1e-5 * max(np.abs(ccol).max(), 1e-12))
