@@ -5,8 +5,10 @@
 
 from .robot import *  # noqa: F401,F403  (the old module's public names)
 from .robot import __all__ as _public
+from .contact import *  # noqa: F401,F403
+from .contact import __all__ as _contact
 
-__all__ = list(_public)
+__all__ = list(_public) + list(_contact)
 
 
 from .._moved import package_getattr  # noqa: E402

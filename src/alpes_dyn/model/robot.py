@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -38,8 +37,9 @@ from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive
 from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
+from .contact import REFERENCE_FRAMES, Contact, as_contacts  # noqa: F401  (importable from here, as before)
 
-__all__ = ["Model", "DEFAULT_GRAVITY", "Contact", "REFERENCE_FRAMES", "as_contacts"]
+__all__ = ["Model", "DEFAULT_GRAVITY"]
 
 DEFAULT_GRAVITY = np.array([0.0, 0.0, -9.81])
 _F64 = np.dtype(np.float64)
@@ -51,56 +51,6 @@ _potrf, _potrs = _lapack.dpotrf, _lapack.dpotrs
 _chol_decompose, _chol_solve = pin.cholesky.decompose, pin.cholesky.solve
 _isfinite = math.isfinite
 _WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
-REFERENCE_FRAMES: dict[str, pin.ReferenceFrame] = {
-    "world": pin.ReferenceFrame.WORLD, "local": pin.ReferenceFrame.LOCAL,
-    "local_world_aligned": pin.ReferenceFrame.LOCAL_WORLD_ALIGNED,
-}
-"""Pinocchio's reference frames by name: a frame's velocity (v, w) or a wrench (f, tau) expressed
-``"local"`` in the frame's own axes at its origin, ``"local_world_aligned"`` at its origin in the base
-(world) axes, ``"world"`` at the base origin in the base axes (spatial velocity)."""
-
-
-@dataclass(frozen=True)
-class Contact:
-    """A contact at a frame: a force (``dim=3``, N, applied at the frame origin) or a wrench
-    (``dim=6``: [force (N); torque (N m)], Pinocchio's order) expressed in ``reference``
-    (:data:`REFERENCE_FRAMES`; default ``"local_world_aligned"``: base axes, as eq. 2.13).
-    Its joint torque is J^T F with J the frame Jacobian in the same reference (eq. 2.9)."""
-
-    frame: str
-    dim: int = 3
-    reference: str = "local_world_aligned"
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.frame, str) or not self.frame:
-            raise ModelError(f"contact frame: expected a frame name, got {self.frame!r}")
-        if self.dim not in (3, 6) or isinstance(self.dim, bool):
-            raise ModelError(f"contact {self.frame!r}: dim must be 3 (force) or 6 (wrench), got {self.dim!r}")
-        if self.reference not in REFERENCE_FRAMES:
-            raise ModelError(f"contact {self.frame!r}: unknown reference {self.reference!r} "
-                             f"(expected one of {', '.join(REFERENCE_FRAMES)})")
-
-    @property
-    def names(self) -> tuple[str, ...]:
-        """Labels of its components: F_x_<frame>, ... and, for a wrench, M_x_<frame>, ..."""
-        comps = ("F_x", "F_y", "F_z", "M_x", "M_y", "M_z")[: self.dim]
-        return tuple(f"{c}_{self.frame}" for c in comps)
-
-
-def as_contacts(contacts: Any) -> tuple[Contact, ...]:
-    """A tuple of :class:`Contact` from Contacts and frame names (a name is a 3-D force in base axes)."""
-    if isinstance(contacts, (str, Contact)):
-        contacts = (contacts,)
-    if not isinstance(contacts, (list, tuple)):
-        raise ModelError(f"contacts: expected a list of Contact or frame names, got {contacts!r}")
-    out = tuple(c if isinstance(c, Contact) else Contact(c) for c in contacts)
-    frames = [c.frame for c in out]
-    dup = next((f for f in frames if frames.count(f) > 1), None)
-    if dup is not None:
-        raise ModelError(f"contacts: frame {dup!r} appears twice")
-    return out
-
-
 _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
 
 
@@ -437,7 +387,7 @@ class Model:
         """Jacobian of ``frame`` (default: the first tip) as Pinocchio's ``getFrameJacobian``: (6, n)
         [linear (m/rad); angular (1)] rows, or (3, n) linear rows with ``dim=3``, in ``reference``:
         ``"local_world_aligned"`` (default; the frame origin's velocity in base axes), ``"local"``
-        (frame axes) or ``"world"`` (spatial velocity at the base origin), see :data:`REFERENCE_FRAMES`."""
+        (frame axes) or ``"world"`` (spatial velocity at the base origin), see :data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`."""
         q = self.vector(q, "q")
         fid = self.frame_id(frame)
         if reference not in REFERENCE_FRAMES:
@@ -452,7 +402,7 @@ class Model:
         """Sum of J_c^T F_c over the contacts (eq. 2.9), (n,), N m.
 
         * one force at ``tip``: F (3,) in N, base axes (a scalar means [0, 0, F_z], eq. 2.13);
-        * several: ``contacts`` (a list of :class:`Contact` or frame names) and F their stacked
+        * several: ``contacts`` (a list of :class:`~alpes_dyn.model.contact.Contact` or frame names) and F their stacked
           forces/wrenches, (sum of dims,); or F a dict {frame: force (3,) or wrench (6,)} in base axes.
         """
         if isinstance(F, dict):

@@ -25,7 +25,8 @@ import casadi as cs
 import numpy as np
 
 from ..errors import ModelError
-from ..model.robot import REFERENCE_FRAMES, Model, as_contacts
+from ..model.contact import REFERENCE_FRAMES, as_contacts
+from ..model.robot import Model
 
 __all__ = ["SymbolicDynamics", "available_backends", "block_solve", "sparse_dm"]
 
@@ -224,7 +225,7 @@ class SymbolicDynamics:
     def frame_jacobian(self, q: cs.SX, frame: str | None = None, reference: str = "local_world_aligned",
                        dim: int = 6) -> cs.SX:
         """Frame Jacobian (6, n) [linear; angular] or (3, n) linear rows, in Pinocchio's ``reference``
-        (:data:`~alpes_dyn.model.robot.REFERENCE_FRAMES`), by AD of the frame pose (R, p):
+        (:data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`), by AD of the frame pose (R, p):
         J_v = dp/dq, column j of the angular part in base axes vee((dR/dq_j) R^T); ``local`` rotates
         both by R^T, ``world`` moves the linear part to the base origin, J_v + [p]x J_w."""
         if reference not in REFERENCE_FRAMES:
@@ -251,7 +252,7 @@ class SymbolicDynamics:
         return cs.vertcat(Jv, Jw)[:dim, :]
 
     def contact_torque(self, q: cs.SX, F: Any, contacts: Any) -> cs.SX:
-        """Sum of J_c^T F_c (eq. 2.9), (n,), for ``contacts`` (:class:`~alpes_dyn.model.robot.Contact` or frame
+        """Sum of J_c^T F_c (eq. 2.9), (n,), for ``contacts`` (:class:`~alpes_dyn.model.contact.Contact` or frame
         names) and their stacked forces/wrenches F (sum of dims,)."""
         cts = as_contacts(contacts)
         out = cs.SX.zeros(self.n)

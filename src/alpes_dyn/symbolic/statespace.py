@@ -11,7 +11,7 @@ Inputs (``input=``):
 Measured contact forces are optional known inputs F: ``force=True`` is the report's one force
 (eq. 2.9, 2.13: a 3-vector at the model's first tip, or ``tip``, base axes); ``contacts=`` any number
 of forces or wrenches at any frames in any of Pinocchio's reference frames
-(:class:`~alpes_dyn.model.robot.Contact`, or frame names for 3-D forces in base axes), stacked in F in the
+(:class:`~alpes_dyn.model.contact.Contact`, or frame names for 3-D forces in base axes), stacked in F in the
 order given.
 
 Outputs (``output=``; one of them, or a list of them stacked in order):
@@ -38,7 +38,8 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 from ..rebuild import Rebuilt
-from ..model.robot import Contact, Model, as_contacts
+from ..model.contact import Contact, as_contacts
+from ..model.robot import Model
 from .dynamics import SymbolicDynamics
 
 __all__ = ["StateSpace", "INPUTS", "OUTPUTS"]
@@ -96,7 +97,7 @@ class StateSpace(Rebuilt):
     smooth: use tanh for the Coulomb sign (default True: f is differentiable).
     backend: symbolic backend, see :class:`~alpes_dyn.symbolic.dynamics.SymbolicDynamics`.
     contacts: several contact forces/wrenches as known inputs, a list of
-        :class:`~alpes_dyn.model.robot.Contact` or frame names (instead of ``force``/``tip``).
+        :class:`~alpes_dyn.model.contact.Contact` or frame names (instead of ``force``/``tip``).
 
     Attributes
     ----------
