@@ -12,6 +12,7 @@ import dataclasses
 
 import numpy as np
 
+from alpes_dyn.model.transmission import torque_before
 from alpes_dyn.estimation.blocks import batch_step_caller, step_caller
 from alpes_dyn.estimation.observers import make_observer, true_gains
 from alpes_dyn.estimation.scenario import (EstimationScenario, _held_joints, _torque, default_noise,
@@ -40,7 +41,8 @@ def legacy_estimation(observer: str = "ekf", **kw) -> dict[str, np.ndarray]:
                    "rk4", input="motor", output="encoder", joint_range="ignore")
     x_true = sim.x[::sub]
     step = 2 * np.pi / truth.transmission.counts_per_rev
-    y_cont = truth.transmission.encoder_angles(x_true[:, :n], np.concatenate([u_true, u_true[-1:]]))
+    # the stretch under the torque held before each sample (torque_before: the convention since 2026-12-02)
+    y_cont = truth.transmission.encoder_angles(x_true[:, :n], torque_before(np.concatenate([u_true, u_true[-1:]])))
     y = truth.transmission.quantize(y_cont + sc.encoder_noise_counts * step * rng.standard_normal(y_cont.shape))
     u_meas = u_true + sc.torque_noise * rng.standard_normal(u_true.shape)
     meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
@@ -336,7 +338,7 @@ def legacy_estimate_recording(rec, model, observer="ekf", *, torque_noise=None, 
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
     tr = model.transmission
     step = 2 * np.pi / tr.counts_per_rev
-    y = tr.unstretched(rec.encoder * step - np.zeros(m), rec.torque)
+    y = tr.unstretched(rec.encoder * step - np.zeros(m), torque_before(rec.torque))
     meas_var = step**2 / 12 + (0.0 * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
     filt = make_observer(observer, StateSpace(model, input="motor", output="encoder"), dt, parameters=gains + pars,

@@ -191,8 +191,9 @@ def test_encoder_offset_and_tilt_structurally():
 
 
 def test_fisher_information_sees_the_tendon_compliance(finger2):
-    """y = S q + C u: dy/dC is the torque itself (the states do not depend on C), so the compliance's own
-    information is sum_k u_k^2 / sigma^2 exactly (closed form, 1e-12), and a 0.3 s two-line experiment bounds C
+    """y_k = S q_k + C u_k-1: dy/dC is the torque held before each sample (the states do not depend on C), so the
+    compliance's own information is sum_k u_k-1^2 / sigma^2 exactly (closed form, 1e-12; the first sample under its
+    own torque), and a 0.3 s two-line experiment bounds C
     (nominal 6.3 rad/(N m)) with K_1 beside it; the structural test refuses it (a feedthrough, not y = h(x))."""
     from dataclasses import replace
 
@@ -206,7 +207,7 @@ def test_fisher_information_sees_the_tendon_compliance(finger2):
                              encoder_noise_counts=1.0)
     assert rep.parameters == ("K_1", "tendon_compliance_finger") and rep.theta[1] == 6.3
     sigma = 2 * np.pi / m.transmission.counts_per_rev
-    u = np.r_[U[:, 0], U[-1, 0]]
+    u = np.r_[U[0, 0], U[:, 0]]  # u_-1 := u_0, then u_0 .. u_N-1
     assert rep.fim[1, 1] == pytest.approx(np.sum(u**2) / sigma**2, rel=1e-12)
     assert rep.rank == 2 and 0 < rep.relative_std[1] < 1e-2
     with pytest.raises(ModelError, match="tendon_compliance is a feedthrough"):

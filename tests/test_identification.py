@@ -15,6 +15,7 @@ from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, pertur
 from alpes_dyn.estimation.identification import identify, project_torque
 from alpes_dyn.symbolic.parametric import ParametricDynamics, select_parameters, tilted_gravity
 from alpes_dyn.model.params import load_params, write_params
+from alpes_dyn.model.transmission import torque_before
 from alpes_dyn.estimation.recording import read_recording, write_recording
 from alpes_dyn.simulation.sensitivity import SensitivityModel
 
@@ -388,7 +389,7 @@ def test_identify_with_torque_noise_and_the_ekf_on_its_file(tmp_path):
 
 
 def test_identify_recovers_the_tendon_compliance_from_noise_free_data(finger2, tmp_path):
-    """A series-elastic tendon in its quasi-static limit: the encoder reads S q + C tau_m (C = 6.3 rad/(N m), a
+    """A series-elastic tendon in its quasi-static limit: the encoder reads S q_k + C tau_m,k-1 (C = 6.3 rad/(N m), a
     3.97e4 N/m cable on the 2 mm motor pulley). Fitted from C = 0 with K, m and friction, all to 1e-6 (measured
     7e-8); the file written holds C as ``transmission.tendon_compliance``, which a model built from it reads back."""
     from alpes_dyn.model.params import Param, with_values
@@ -401,8 +402,11 @@ def test_identify_recovers_the_tendon_compliance_from_noise_free_data(finger2, t
     tr = ad.Model.alpes("finger2", params=true).transmission
     assert tr.tendon_compliance.tolist() == [C]
     step = 2 * math.pi / tr.counts_per_rev
-    assert np.abs(rec.encoder * step - tr.encoder_angles(rec.true_q, rec.torque)).max() <= step / 2  # the stretch
-    rec.encoder = tr.encoder_angles(rec.true_q, rec.torque) / step  # unquantised
+    # the stretch under the torque held before each reading (the cable's tension at t_k has seen u_k-1)
+    before = torque_before(rec.torque)
+    assert np.array_equal(before[1:], rec.torque[:-1]) and np.array_equal(before[0], rec.torque[0])
+    assert np.abs(rec.encoder * step - tr.encoder_angles(rec.true_q, before)).max() <= step / 2
+    rec.encoder = tr.encoder_angles(rec.true_q, before) / step  # unquantised
     res = identify(finger2, rec, "K,m,friction,tendon_compliance", progress=False)
     truth = np.r_[true.finger.K[:2], true.finger.m[:2], true.finger.F_s[:2], true.finger.F_v[:2], C]
     assert res.names[-1] == "tendon_compliance_finger" and res.units[-1] == "rad/(N m)" and res.initial[-1] == 0.0

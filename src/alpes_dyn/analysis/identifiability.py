@@ -63,6 +63,7 @@ from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from ..limits import MAX_POINTS
 from ..model.robot import Model
+from ..model.transmission import torque_before
 from .observability import (MAX_INSTRUCTIONS, ObservabilityMatrix, _input_scale, normalised_singular_values,
                             numerical_rank)
 from ..symbolic.parametric import ParametricDynamics
@@ -643,8 +644,8 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
     for k, i in sm.dynamics._sel["encoder_offset"]:  # y = S q + offset
         Jy[:, i, k] += 1.0
-    U_samples = np.concatenate([Ua, Ua[-1:]])  # the torque at each sample (the last held)
-    for k, i in sm.dynamics._sel["tendon_compliance"]:  # y = S q + C u: the torque itself
+    U_samples = torque_before(np.concatenate([Ua, Ua[-1:]]))  # the torque held before each sample
+    for k, i in sm.dynamics._sel["tendon_compliance"]:  # y_k = S q_k + C u_k-1: the torque itself
         Jy[:, i, k] += U_samples[:, i]
     Jy = Jy.reshape(-1, p + nx)
     Jy[:, :p] *= unit  # log coordinates inside (well scaled), converted back below

@@ -18,6 +18,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..errors import InputError
+from ..model.transmission import torque_before
 from ..simulation.loop import Block
 from .observers import KalmanFilter
 from .recording import Recording
@@ -192,18 +193,23 @@ class RecordingPlayback(Block):
     """A :class:`~alpes_dyn.estimation.recording.Recording` as the plant (run the loop with ``final=True`` over
     its N = n_samples - 1 periods).
 
-    Writes ``encoder`` (m,) counts and ``torque`` (m,) N m at t_k (sample signals), ``held`` the torque over
-    [t_k, t_k+1) (a period signal: what a known input reads), and ``true_q`` (n,) rad where the recording has it.
+    Writes ``encoder`` (m,) counts and ``torque`` (m,) N m at t_k (sample signals), ``before`` the torque held over
+    the period before t_k (the first sample's own at t_0: what the tendons' tension balances at the reading,
+    :func:`~alpes_dyn.model.transmission.torque_before`), ``held`` the torque over [t_k, t_k+1) (a period signal:
+    what a known input reads), and ``true_q`` (n,) rad where the recording has it.
     """
 
     has_response = True
 
     def __init__(self, recording: Recording, *, encoder: str = "counts", torque: str = "tau",
-                 held: str = "tau_held", true_q: str | None = "true_q", name: str = "recording") -> None:
+                 held: str = "tau_held", true_q: str | None = "true_q", before: str | None = None,
+                 name: str = "recording") -> None:
         if not isinstance(recording, Recording):
             raise InputError(f"recording: expected a Recording, got {type(recording).__name__}")
         self.rec, self.name = recording, name
         self._sample = {encoder: recording.encoder, torque: recording.torque}
+        if before is not None:
+            self._sample[before] = torque_before(recording.torque)
         if true_q is not None and recording.true_q is not None:
             self._sample[true_q] = recording.true_q
         self.outputs = tuple(self._sample)

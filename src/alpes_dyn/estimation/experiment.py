@@ -57,6 +57,7 @@ from ..errors import InputError
 from ..limits import MAX_DURATION_S
 from ..model.robot import Model
 from ..model.params import HandParams, Param, load_params, with_values
+from ..model.transmission import torque_before
 from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .recording import Recording, write_recording
 from ..simulation.integrate import simulate, stable_substeps
@@ -473,7 +474,7 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
     x = _simulate(truth, design, u, G, seg)
     tr = truth.transmission
     step = 2 * np.pi / tr.counts_per_rev
-    qm = tr.encoder_angles(x[:, : truth.n], u)  # S q, plus the tendons' stretch C u where they are elastic
+    qm = tr.encoder_angles(x[:, : truth.n], torque_before(u))  # S q, plus the stretch C u_k-1 where elastic
     counts = np.round((qm + design.encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step)
     torque = u + design.torque_noise * rng.standard_normal(u.shape)
     q_meas = None

@@ -63,6 +63,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
+from ..model.transmission import torque_before
 from ..symbolic.parametric import common_scale, select_parameters
 from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, sensor_floor,
                        torque_explained)
@@ -332,7 +333,8 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     floor = sensor_floor(rec.encoder, explained, encoder_noise)
     resp = effect_responses(sens, out.nodes, pb.Ub, pb.Gb, theta, pb.correction(out.glob, out.offs), pb.Psib,
                             pb.valid, x_fit, pb.S_enc, pb.step, rec.dt)
-    resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[pb.kk] * pb.valid[:, :, None]  # tendon stretch ~ tension
+    # the tendon's stretch follows the tension: the torque held before each sample (torque_before)
+    resp["torque"] = torque_before(rec.torque - rec.torque.mean(axis=0))[pb.kk] * pb.valid[:, :, None]
     regressors = {}
     for name, R in resp.items():  # a loop over the four effects
         Rr = np.zeros_like(e.r)
@@ -363,7 +365,7 @@ def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording
     prefix = max(2, int(round(prefix_s / rec.dt)))  # checked against the length in identify
     enc = rec.encoder if offset is None else rec.encoder - np.asarray(offset) / step
     if compliance is not None and np.any(compliance != 0):
-        enc = enc - np.concatenate([U, U[-1:]]) * np.asarray(compliance) / step
+        enc = enc - torque_before(np.concatenate([U, U[-1:]])) * np.asarray(compliance) / step
     q0 = _rest_guess(model, tr.joint_torque(U[0]), enc[0] * step) if rec.gravity is None else np.zeros(model.n)
     val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, enc,
                   np.asarray(tr.S, dtype=float), step, prefix, path)

@@ -191,7 +191,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         :func:`~alpes_dyn.estimation.identification.identify`): taken off the reading. Default 0.
     tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
         gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
-        tendons' stretch C tau_m (the model's ``tendon_compliance``) is always taken off the reading.
+        tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
+        taken off it.
 
     Returns
     -------
@@ -243,9 +244,10 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     tr = m_obs.transmission
     filt, z0, P0 = _replay_filter(m_obs, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
                                   gains, pars, rec.torque[0], compiled)
-    # the composition: the recording played back -> the encoder's zero and the tendons' stretch C tau_m off -> observer
-    blocks = [RecordingPlayback(rec, encoder="counts", torque="tau", held="tau_held"),
-              Function(lambda counts, tau: tr.unstretched(counts * step - offsets, tau), ("counts", "tau"), "y",
+    # the composition: the recording played back -> the encoder's zero and the stretch C tau_m,k-1 off -> observer
+    blocks = [RecordingPlayback(rec, encoder="counts", torque="tau", held="tau_held", before="tau_before"),
+              Function(lambda counts, tau_before: tr.unstretched(counts * step - offsets, tau_before),
+                       ("counts", "tau_before"), "y",
                        name="unstretched", vectorized=True),
               Observer(filt, z0, P0, known=("tau_held",), measurement="y")]
     log = run_loop(blocks, N - 1, dt, final=True)

@@ -8,7 +8,8 @@ torque. The problem is
 
     min  1/2 |r(s, rho, c)|^2 + 1/2 |c|^2    subject to  s_j+1 = x(end of interval j; s_j, rho, c),
 
-with r the encoder residuals (S q + offset + C u - y) / sigma_y (Section 3, eq. 3.13; C the tendon's compliance),
+with r the encoder residuals (S q_k + offset + C u_k-1 - y_k) / sigma_y (Section 3, eq. 3.13; C the tendon's
+compliance, u_k-1 the torque held before the sample: :func:`~alpes_dyn.model.transmission.torque_before`),
 the camera's (q - q_meas) / sigma_q where the recording has joint angles, and the per-interval corrections' prior.
 :class:`ShootingProblem` holds the data cut at the intervals and evaluates r, the continuity defects and their
 Jacobians from the compiled sensitivities
@@ -27,6 +28,7 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 from ..model.robot import Model
+from ..model.transmission import torque_before
 from ..simulation.sensitivity import SensitivityModel
 from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
 from .recording import Recording
@@ -169,8 +171,11 @@ class ShootingProblem:
         self.q_mask = np.isfinite(self.Qm) & valid[:, :, None] if self.Qm is not None else None
         self._parameters(start)
         self.Ufull = np.concatenate([U, torque.U_last])  # the modelled torque at every sample, the last one's too
-        self.Uk = self.Ufull[self.kk]  # (S, L+1, nu)
-        self.Psik = (np.concatenate([self.Psi, torque.noise * torque.Q_last[None]])[self.kk] if lines else None)
+        # the torque each residual's stretch C u is under: the one held over the period before its sample (the
+        # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
+        self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
+        self.Psik = (torque_before(np.concatenate([self.Psi, torque.noise * torque.Q_last[None]]))[self.kk]
+                     if lines else None)
         self.shape = Shape(n_int, self.nb, self.nx, self.ng)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
@@ -230,8 +235,9 @@ class ShootingProblem:
         return self.per_motor(theta, self.comp_cols)
 
     def torque_at(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
-        """(S, L+1, nu) the modelled torque at each residual's sample (N m): the measured or projected one plus
-        the fitted correction."""
+        """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
+        tendons' tension balances at each residual's sample: the one held over the period before it
+        (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
         if self.torque.lines:
             return self.Uk + np.einsum("skl,il->ski", self.Psik, glob[self.p:].reshape(self.torque.nphi, self.nu).T)
         if self.torque.eiv:
@@ -354,7 +360,8 @@ class ShootingProblem:
         k_nodes = np.arange(n_int) * L
         S_enc, y = self.S_enc, self.y
         Sp = np.linalg.pinv(S_enc)
-        y_rigid = y - self.Ufull * np.asarray(self.model.transmission.tendon_compliance) if self.comp_cols else y
+        C0 = np.asarray(self.model.transmission.tendon_compliance)
+        y_rigid = y - torque_before(self.Ufull) * C0 if self.comp_cols else y
         nodes[:, :n] += (y_rigid[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
         nodes[:, n:] += (np.gradient(y, self.rec.dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
         return nodes

@@ -16,7 +16,21 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError
 
-__all__ = ["Transmission"]
+__all__ = ["Transmission", "torque_before"]
+
+
+def torque_before(tau_m: np.ndarray) -> np.ndarray:
+    """(N, m) the motor torque that each sample's tendon tension balances: the one held over the period before
+    it, tau_m,k-1 (N m), the first sample its own. A recording's torque tau_m,k acts over [t_k, t_k+1) (zero-order
+    hold), and the cable's tension at t_k has seen only the torques before t_k, so the elastic tendon's stretch the
+    encoder reads at t_k is C tau_m,k-1 (:meth:`Transmission.encoder_angles`). Measured on MuJoCo's elastic tendon
+    (finger3, seed 13, 4 s, ``benchmarks/realism.py``'s cable): the stretch from the same sample's torque left the
+    masses 9-12 % off (the dither's 20 Hz turns the half-period shift into a stretch in quadrature), from the
+    previous sample's 1.1 %. tau_m: (N, m) or (N,)."""
+    tau_m = as_float_array(tau_m, "tau_m", "motor torques")
+    if tau_m.ndim == 0 or tau_m.shape[0] == 0:
+        raise InputError(f"tau_m: expected one row per sample, got shape {tau_m.shape}")
+    return np.concatenate([tau_m[:1], tau_m[:-1]])
 
 
 @dataclass(frozen=True)
@@ -31,8 +45,8 @@ class Transmission:
     counts_per_rev: encoder resolution (counts per motor revolution), for quantisation.
     rotor_inertia: (m,) J_m of each motor's rotor about its shaft, kg m^2 (default zeros).
     tendon_compliance: (m,) C of each motor's tendon, rad/(N m) (default zeros: rigid): the encoder reads
-        y = S q + C tau_m (:meth:`encoder_angles`; the series-elastic tendon's quasi-static limit,
-        :mod:`alpes_dyn.model.spec`).
+        y_k = S q_k + C tau_m,k-1 (:meth:`encoder_angles` with :func:`torque_before`; the series-elastic tendon's
+        quasi-static limit, :mod:`alpes_dyn.model.spec`).
     """
 
     motor_names: tuple[str, ...]
@@ -63,7 +77,9 @@ class Transmission:
 
     def encoder_angles(self, q: np.ndarray, tau_m: np.ndarray | None = None) -> np.ndarray:
         """What the encoders read, rad: S q + C tau_m (the tendons' stretch under the motor torque tau_m,
-        N m; without it, or with rigid tendons, S q). q: (..., n), tau_m: (..., m) -> (..., m)."""
+        N m, that the tension balances at the reading's instant: in a sampled record, the torque held over the
+        period before it, :func:`torque_before`; without it, or with rigid tendons, S q). q: (..., n),
+        tau_m: (..., m) -> (..., m)."""
         y = self.motor_positions(q)
         if tau_m is None or not self.elastic:
             return y
@@ -96,7 +112,8 @@ class Transmission:
 
     def unstretched(self, y: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
         """S q from an encoder reading y (rad): y - C tau_m, the tendons' stretch under the motor torque tau_m
-        (N m) taken off (y itself for rigid tendons). y, tau_m: (..., m)."""
+        (N m; the one held before the reading, :func:`torque_before`) taken off (y itself for rigid tendons).
+        y, tau_m: (..., m)."""
         y = as_float_array(y, "y", "encoder angles")
         if not self.elastic:
             return y

@@ -17,6 +17,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..model.robot import Model
+from ..model.transmission import torque_before
 from .integrate import as_statespace, rk4_step_function, simulate
 from .loop import Block
 
@@ -36,7 +37,8 @@ class SimulatorPlant(Block):
     ----------
     model: the true :class:`~alpes_dyn.Model` (with a tendon transmission). x0: (2n,) initial [q; qd], rad, rad/s.
     substeps: RK4 steps per period. u, x, y: signal names of the motor torques (m,) N m (read), the state (2n,)
-        and the motor angles (m,) rad (written; y = S q + C tau_m, the tendons' stretch under tau_m).
+        and the motor angles (m,) rad (written; y_k = S q_k + C tau_m,k-1, the tendons' stretch under the torque
+        held before t_k: :func:`~alpes_dyn.model.transmission.torque_before`; at t_0 the first torque's).
     joint_range: :func:`~alpes_dyn.simulation.integrate.simulate`'s check of the joint range (default ``"ignore"``).
     """
 
@@ -57,17 +59,20 @@ class SimulatorPlant(Block):
     def start(self, n_periods: int, dt: float, final: bool) -> None:
         self.dt, self.n_periods = dt, n_periods
         self._x = self.x0.copy()
+        self._before = None  # the torque held over the last period (None at t_0: the first one's)
         self._step = rk4_step_function(as_statespace(self.model, "motor", "encoder"), dt / self.substeps)
 
     def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         tr = self.model.transmission
-        return {self.x: self._x, self.y: tr.encoder_angles(self._x[: self.model.n], u[self.u])}
+        before = u[self.u] if self._before is None else self._before
+        return {self.x: self._x, self.y: tr.encoder_angles(self._x[: self.model.n], before)}
 
     def update(self, k: int, u: dict[str, Any]) -> None:
         x = self._x
         for _ in range(self.substeps):
             x = self._step(x, u[self.u])
         self._x = np.array(x).reshape(-1)
+        self._before = np.asarray(u[self.u], dtype=float).copy()
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """One :func:`simulate` call over the record (``u``: one row per sample, the last used by y only)."""
@@ -76,7 +81,7 @@ class SimulatorPlant(Block):
         sim = simulate(self.model, self.x0, np.repeat(U[:N], sub, axis=0), N * self.dt, self.dt / sub, "rk4",
                        input="motor", output="encoder", joint_range=self.joint_range)
         X = sim.x[::sub][: U.shape[0]]
-        return {self.x: X, self.y: self.model.transmission.encoder_angles(X[:, : self.model.n], U)}
+        return {self.x: X, self.y: self.model.transmission.encoder_angles(X[:, : self.model.n], torque_before(U))}
 
 
 def _addresses(mj: Any, names: str | Sequence[str]) -> int | np.ndarray:
