@@ -454,7 +454,8 @@ def test_identify_cli_fits_the_real_hands_effects_by_default(tmp_path, capsys):
 def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeypatch):
     """The decision rule of --effects auto on stand-in fits: a second fit with the stick-slip law where the first
     is flagged (stick-slip named among the likely missing effects, or nothing named), none where it is adequate,
-    the lower residual kept, each round started from the last one's values."""
+    the lower residual kept, each round started from the last one's values; while the kept fit is flagged, the
+    next effect not yet tried (the rotor after the stick-slip law), each effect once."""
     from types import SimpleNamespace
 
     from alpes_dyn.estimation import effects as eff
@@ -489,14 +490,17 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     assert fit.tried is outcomes[False] and fit.tried_effects == ("compliance", "tilt")
     assert calls == [(False, "K,m,friction,tendon_compliance,tilt_y"), (True, "K,m,friction,tendon_compliance,tilt_y")]
     calls.clear()
-    outcomes[True] = fitted(1.5, False)  # worse: the first is kept
+    outcomes[True] = fitted(1.5, False)  # worse: the first is kept, and (still flagged) the rotor tried on it
+    rotors.clear()
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
-    assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 2
+    assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 3
+    assert rotors == [False, False, True] and [c[0] for c in calls] == [False, True, False]
+    assert fit.tried_effects == ("compliance", "tilt", "rotor")  # every effect tried once: the rounds end
     calls.clear()
     outcomes[False] = fitted(0.6, False, ["viscous friction"])  # flagged, stick-slip not named: tried all the same
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
-    assert calls == [(False, "K,m,friction,tendon_compliance"), (True, "K,m,friction,tendon_compliance")]
-    assert fit.result is outcomes[False] and fit.tried_effects == ("compliance", "tilt", "stiction")
+    assert calls[:2] == [(False, "K,m,friction,tendon_compliance"), (True, "K,m,friction,tendon_compliance")]
+    assert fit.result is outcomes[False] and fit.tried_effects == ("compliance", "tilt", "rotor") and len(calls) == 3
     calls.clear()
     outcomes[False] = fitted(0.58, True)  # adequate: one fit
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)

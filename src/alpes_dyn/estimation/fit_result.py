@@ -182,7 +182,7 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
             old = p.raw.get("transmission.tendon_compliance")
             upd["transmission.tendon_compliance"] = Param(
                 value, "rad/(N m)", "identified", reason, old.description if old is not None else
-                "the flexion tendons' stretch seen by the encoder per N m of motor torque (y = S q + C tau_m)", sd)
+                "the flexion tendons' stretch seen by the encoder per N m of motor torque (y_k = S q_k + C tau_m,k-1)", sd)
             continue
         if field_ == "J_m":
             old = p.raw.get("transmission.J_m")

@@ -33,7 +33,12 @@ from ..simulation.sensitivity import SensitivityModel
 from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
 from .recording import Recording
 
-__all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation"]
+__all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "JACOBIAN_CHUNK"]
+
+JACOBIAN_CHUNK = 2**22
+"""Doubles of sensitivities (32 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
+chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
+one chunk)."""
 
 
 def line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
@@ -197,7 +202,7 @@ class ShootingProblem:
             theta0 = start_values(theta0, sens.names, additive, start)
         self.off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
                          if pp.kind == "encoder_offset"]
-        # tendon compliances (y = S q + offset + C u, u the modelled torque at the sample): fitted in units of
+        # tendon compliances (y_k = S q_k + offset + C u_k-1, u the modelled torque): fitted in units of
         # the recording's own encoder-to-torque scale std(y) / std(u), so that a unit step is of the data's order
         self.comp_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
                           if pp.kind == "tendon_compliance"]
@@ -245,7 +250,7 @@ class ShootingProblem:
         return self.Uk
 
     def stretch(self, theta: np.ndarray, u_k: np.ndarray | None) -> np.ndarray | float:
-        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad, for the modelled torque u_k
+        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad, for the modelled torque u_k-1
         (:meth:`torque_at`; None without compliance: 0)."""
         return 0.0 if u_k is None else u_k * self.compliance(theta)
 
@@ -265,16 +270,21 @@ class ShootingProblem:
 
     def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool = True) -> Evaluation:
         """The :class:`Evaluation` at (nodes, offs, glob). ``jac=False``: r, c, rg and the states alone (J, Cv, Cr
-        None), from the step without its sensitivities (a tenth of the time)."""
+        None), from the step without its sensitivities (a tenth of the time). With them, the intervals go through
+        the compiled sensitivities :data:`JACOBIAN_CHUNK` doubles of sensitivities at a time, each chunk reduced to
+        its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it)."""
         theta = self.values(glob)
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
             raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
                              "the recording's encoders this model's, in counts, and its torques in N m?")
-        xs, X = self.sens.run(nodes, self.Ub, self.Gb, theta, self.correction(glob, offs), basis=self.Psib,
-                              sensitivities=jac)
         n, L = self.n, self.L
-        q = xs[:, :, :n]
         u_k = self.torque_at(glob, offs) if self.comp_cols else None
+        corr = self.correction(glob, offs)
+        if jac:
+            xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k)
+        else:
+            xs, _ = self.sens.run(nodes, self.Ub, self.Gb, theta, corr, basis=self.Psib, sensitivities=False)
+        q = xs[:, :, :n]
         r_enc = ((np.einsum("ij,skj->ski", self.S_enc, q) + self.offset(theta) + self.stretch(theta, u_k) - self.Yb)
                  / self.sig_y * self.valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
@@ -289,19 +299,44 @@ class ShootingProblem:
         r = np.concatenate(res, axis=1)
         if not jac:
             return Evaluation(r, None, c, None, None, rg, xs)
-        J, Xv, Xr = self._jacobian(X, theta, u_k)
-        return Evaluation(r, J, c, Xv[:-1, L], Xr[:-1, L], rg, xs)
+        return Evaluation(r, J, c, Cv, Cr, rg, xs)
 
-    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None):
-        """J (S, R, nb + ng) of the residuals from the sensitivities X (S, L+1, nx, nx + p + no), and the
-        sensitivities with respect to the local (Xv) and global (Xr) variables."""
+    def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
+                       u_k: np.ndarray | None):
+        """The states xs (S, L+1, nx), J (S, R, nb + ng) and the end-of-interval sensitivities Cv (S-1, nx, nb),
+        Cr (S-1, nx, ng), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of sensitivities."""
+        n_int, L, nx = self.n_int, self.L, self.nx
+        per_interval = (L + 1) * nx * (nx + self.p + self.sens.no)
+        chunk = max(1, JACOBIAN_CHUNK // per_interval)
+        xs = np.empty((n_int, L + 1, nx))
+        J = Cv = Cr = None
+        for a in range(0, n_int, chunk):
+            sl = slice(a, min(a + chunk, n_int))
+            corr_sl = corr[sl] if (corr is not None and self.no) else corr  # per interval, or the lines' (global)
+            x_c, X_c = self.sens.run(nodes[sl], self.Ub[sl], self.Gb[sl], theta, corr_sl,
+                                     basis=self.Psib[sl] if self.Psib is not None else None)
+            J_c, Xv_end, Xr_end = self._jacobian(X_c, theta, None if u_k is None else u_k[sl], sl)
+            if J is None:
+                J = np.empty((n_int,) + J_c.shape[1:])
+                Cv = np.empty((n_int - 1,) + Xv_end.shape[1:])
+                Cr = np.empty((n_int - 1,) + Xr_end.shape[1:])
+            xs[sl], J[sl] = x_c, J_c
+            last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
+            Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
+        return xs, J, Cv, Cr
+
+    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice):
+        """J (s, R, nb + ng) of the residuals of the intervals ``sl`` from their sensitivities X (s, L+1, nx,
+        nx + p + no), and the sensitivities at their ends with respect to the local (nx, nb) and global (nx, ng)
+        variables."""
         nx, p, n, nb, ng, nu = self.nx, self.p, self.n, self.nb, self.ng, self.nu
+        s_int = X.shape[0]
         iv, ip, io = slice(0, nx), slice(nx, nx + p), slice(nx + p, nx + p + self.sens.no)
-        Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if self.no else X[..., iv]  # (S, L+1, nx, nb)
+        Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if self.no else X[..., iv]  # (s, L+1, nx, nb)
         Xr = X[..., ip] * np.where(self.additive, self.scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
         if self.torque.lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
-        w = self.valid[:, :, None, None] / self.sig_y
+        w = self.valid[sl, :, None, None] / self.sig_y
         S_enc = self.S_enc
         J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
                                 np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
@@ -311,19 +346,20 @@ class ShootingProblem:
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
                 if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
-                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.Psik
+                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.Psik[sl]
                 elif self.torque.eiv:
                     J_enc[:, :, mo, nx + mo] += theta[k]
         J_enc = J_enc * w
-        jac = [J_enc.reshape(self.n_int, -1, nb + ng)]
+        jac = [J_enc.reshape(s_int, -1, nb + ng)]
         if self.Qm is not None:
-            Jq = np.concatenate([Xv[:, :, :n], Xr[:, :, :n]], axis=-1) / self.camera_noise * self.q_mask[:, :, :, None]
-            jac.append(Jq.reshape(self.n_int, -1, nb + ng))
+            Jq = (np.concatenate([Xv[:, :, :n], Xr[:, :, :n]], axis=-1) / self.camera_noise
+                  * self.q_mask[sl, :, :, None])
+            jac.append(Jq.reshape(s_int, -1, nb + ng))
         if self.no:
-            Jo = np.zeros((self.n_int, self.no, nb + ng))
+            Jo = np.zeros((s_int, self.no, nb + ng))
             Jo[:, :, nx:nb] = np.eye(self.no) / self.sig_off
             jac.append(Jo)
-        return np.concatenate(jac, axis=1), Xv, Xr
+        return np.concatenate(jac, axis=1), Xv[:, self.L], Xr[:, self.L]
 
     # --- the linear algebra (module kkt) ------------------------------------------------------------------------
 

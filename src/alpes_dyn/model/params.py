@@ -188,7 +188,7 @@ class HandParams:
     abduction_F_v: float | None = None
     tendon_compliance: float = 0.0
     """C_t, rad/(N m): the flexion tendons' stretch seen by the encoder per N m of recorded motor torque,
-    y = S q + C_t tau_m (optional ``transmission.tendon_compliance``; 0, the default, is a rigid tendon)."""
+    y_k = S q_k + C_t tau_m,k-1, the torque held before the reading (optional ``transmission.tendon_compliance``; 0, the default, is a rigid tendon)."""
     identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
 

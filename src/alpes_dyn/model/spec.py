@@ -23,7 +23,8 @@ that joint's diagonal: the same as an ``[armature]`` entry N^2 J_m.
 
 Tendon compliance (a series-elastic tendon in its quasi-static limit): motor k's ``tendon_compliance`` C_k
 (rad of motor shaft per N m of motor torque) is the cable's stretch the encoder sees, y_k = S_k q + C_k
-tau_m,k. A cable of stiffness k_t (N/m) on a motor pulley of radius r_m has C = 1 / (k_t r_m^2). This holds
+tau_m,k, with tau_m,k the torque held over the period before the reading (in a sampled record the tension at
+t_j has seen the torque of [t_j-1, t_j): :func:`~alpes_dyn.model.transmission.torque_before`). A cable of stiffness k_t (N/m) on a motor pulley of radius r_m has C = 1 / (k_t r_m^2). This holds
 while the rotor on the cable (J_m on k_t r_m^2) resonates well above the motion's band and the cable stays
 taut; the joints' dynamics are the rigid tendon's (with the rotor's J_m S^T S). 0 (default): a rigid tendon.
 
@@ -131,7 +132,7 @@ class Motor:
     joint and r_m on the motor); non-zero and finite. ``rotor_inertia``: J_m (kg m^2, >= 0) of the
     rotor (and gearbox) about the motor shaft, which adds J_m ratio_i ratio_j to the mass matrix's
     entry (i, j) (eq. 2.8's I_a on the tendon coordinate; see the module doc). ``tendon_compliance``: C
-    (rad/(N m), finite) of the tendon: the encoder reads S q + C tau_m (the module doc; 0 is rigid).
+    (rad/(N m), finite) of the tendon: the encoder reads S q + C tau_m, tau_m held before the reading (the module doc; 0 is rigid).
     """
 
     name: str

@@ -2,7 +2,7 @@
 
 * :class:`SimulatorPlant`: a :class:`~alpes_dyn.Model` driven by its motor torques, integrated by the library's
   RK4 (:func:`~alpes_dyn.simulation.integrate.rk4_step_function`) at dt / ``substeps``, the torque held over each
-  period; writes its state and its motor angles (what the encoders see, S q + C tau_m). Open loop it has a
+  period; writes its state and its motor angles (what the encoders see, S q_k + C tau_m,k-1). Open loop it has a
   whole-record response: one :func:`~alpes_dyn.simulation.integrate.simulate` call.
 * :class:`MujocoPlant`: MuJoCo stepping a model (e.g. the MJCF of :func:`~alpes_dyn.model.mjcf.mjcf_string`)
   ``substeps`` times per period; signals are its joints' qpos, its sensors' data and its actuators' controls,

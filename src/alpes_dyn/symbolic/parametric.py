@@ -33,7 +33,7 @@ kind                  meaning                                                   
 ``tilt``              the base (palm) turned by two small angles, ``tilt_x``      rad
                       about its x axis then ``tilt_y`` about its y axis
 ``tendon_compliance`` a motor's tendon stretch per N m of its recorded torque:    rad/(N m)
-                      y = S q + offset + C tau_m (``tendon_compliance_<motor>``;
+                      y_k = S q_k + offset + C tau_m,k-1 (``tendon_compliance_<motor>``;
                       output only; the series-elastic tendon's quasi-static
                       limit)
 ===================== =========================================================== ==========
