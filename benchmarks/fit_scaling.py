@@ -1,9 +1,10 @@
 """Fit cost against the record's length (issue 20, item 2): time and peak memory of ``identify`` on 2-60 s records.
 
 finger3 drawn +-20 % per link (seed 21 by default: not one the other benchmarks tune on), the documented
-identification experiment simulated for each duration (our simulator; sensor noise on), the default fit
-(K, m, friction; ``excitation`` the documented lines), each duration in a fresh process so that its peak
-resident memory is its own. The sparse KKT (the default, :mod:`alpes_dyn.estimation.kkt`) against the dense
+identification experiment simulated for each duration (our simulator; sensor noise on) and written to a CSV by
+one process, the default fit (K, m, friction; ``excitation`` the documented lines) of that file in a fresh one, as
+``alpes-dyn identify --data`` does, so that its peak resident memory is the fit's own (the 60 s experiment's
+simulation alone peaks at about 500 MiB). The sparse KKT (the default, :mod:`alpes_dyn.estimation.kkt`) against the dense
 one (``kkt="dense"``, the baseline, run in the same process where it fits in memory: up to 16 s), with the
 ratio of their times and their parameters' largest relative difference.
 
@@ -19,27 +20,42 @@ import json
 import resource
 import subprocess
 import sys
+import tempfile
 import time
+from pathlib import Path
 
 
-def child(duration: float, seed: int, dense: bool) -> dict:
-    """One duration, in this process: the record, the sparse fit, optionally the dense one; peak RSS at the end."""
+def make(duration: float, seed: int, path: str) -> None:
+    """The record of one duration, written to ``path`` (the recording CSV)."""
+    import warnings
+
+    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.recording import write_recording
+    from alpes_dyn.model.stops import JointRangeWarning
+
+    warnings.simplefilter("ignore", JointRangeWarning)
+    write_recording(experiment("finger3", perturbed_params(spread=0.2, seed=seed), ExperimentDesign(duration=duration),
+                               seed=seed), path)
+
+
+def child(duration: float, seed: int, dense: bool, path: str) -> dict:
+    """One duration, in this process: the record read from ``path``, the sparse fit, optionally the dense one; peak
+    RSS at the end."""
     import warnings
 
     import numpy as np
 
     import alpes_dyn as ad
     from alpes_dyn.estimation.adequacy import AdequacyWarning
-    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.experiment import ExperimentDesign, perturbed_params
     from alpes_dyn.estimation.identification import identify
-    from alpes_dyn.model.stops import JointRangeWarning
+    from alpes_dyn.estimation.recording import read_recording
 
-    warnings.simplefilter("ignore", JointRangeWarning)
     warnings.simplefilter("ignore", AdequacyWarning)
     true = perturbed_params(spread=0.2, seed=seed)
     design = ExperimentDesign(duration=duration)
-    rec = experiment("finger3", true, design, seed=seed)
     model = ad.Model.alpes("finger3", friction=True)
+    rec = read_recording(path, model)
     truth = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]
     out: dict = {"duration_s": duration, "seed": seed}
     rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
@@ -71,24 +87,31 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--child", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--dense", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--make", type=float, help=argparse.SUPPRESS)
+    ap.add_argument("--data", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.make is not None:
+        make(args.make, args.seed, args.data)
+        return 0
     if args.child is not None:
-        print(json.dumps(child(args.child, args.seed, args.dense)))
+        print(json.dumps(child(args.child, args.seed, args.dense, args.data)))
         return 0
     try:
         durations = [float(d) for d in args.durations.split(",")]
     except ValueError:
         ap.error(f"--durations: expected comma-separated seconds, got {args.durations!r}")
     rows = []
-    for d in durations:
-        cmd = [sys.executable, __file__, "--child", str(d), "--seed", str(args.seed)]
-        if d <= args.dense_up_to:
-            cmd.append("--dense")
-        done = subprocess.run(cmd, capture_output=True, text=True, check=False)
-        if done.returncode != 0:
-            print(f"{d:g} s: the child failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
-            return 1
-        rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
+    with tempfile.TemporaryDirectory() as tmp:
+        for d in durations:
+            path = str(Path(tmp) / f"rec_{d:g}.csv")
+            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", path]
+            cmd = base + ["--child", str(d)] + (["--dense"] if d <= args.dense_up_to else [])
+            for step in (base + ["--make", str(d)], cmd):
+                done = subprocess.run(step, capture_output=True, text=True, check=False)
+                if done.returncode != 0:
+                    print(f"{d:g} s: the child failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
+                    return 1
+            rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
     if args.json:
         print(json.dumps({"model": "finger3", "rows": rows}))
         return 0

@@ -41,7 +41,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Mapping
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 from scipy import stats
@@ -50,7 +50,7 @@ from ..errors import AlpesDynWarning, InputError
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
-           "signatures", "assess", "SIGNATURES", "reversal_ratio"]
+           "signatures", "assess", "SIGNATURES", "reversal_ratio", "range_exit", "JOINT_STOP", "RANGE_TOLERANCE"]
 
 class AdequacyWarning(AlpesDynWarning):
     """An identification that did not converge or whose model is not adequate to the recording (one line)."""
@@ -82,6 +82,28 @@ bands; too large: residual RMS above ``floor_ratio`` times the sensor floor; a v
 explains at least ``signature_share`` of the residual and at least half what the strongest one does
 (the list is ordered, the most likely first); stick-slip named first where the residual's mean square
 within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere."""
+
+JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
+              "model does not have; lower the excitation or trim its bias)")
+"""The likely missing effect named first where the fitted trajectory leaves the joint range (:func:`range_exit`)."""
+RANGE_TOLERANCE = math.radians(1.0)
+"""rad: how far past a joint limit the fitted trajectory may go before :func:`range_exit` reports it."""
+
+
+def range_exit(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, names: Sequence[str]) -> str | None:
+    """Where the fitted joint angles q (N, n) rad leave [lower - tol, upper + tol] (:data:`RANGE_TOLERANCE`): one
+    phrase per joint ("q_1 down to -15.0 deg (limit 0)"), or None. Joints without finite limits are not judged."""
+    q = np.asarray(q, dtype=float)
+    out = []
+    for j, name in enumerate(names):
+        lo, hi = float(lower[j]), float(upper[j])
+        qmin, qmax = float(np.min(q[:, j])), float(np.max(q[:, j]))
+        if math.isfinite(lo) and qmin < lo - RANGE_TOLERANCE:
+            out.append(f"{name} down to {math.degrees(qmin):.1f} deg (limit {math.degrees(lo):.3g})")
+        if math.isfinite(hi) and qmax > hi + RANGE_TOLERANCE:
+            out.append(f"{name} up to {math.degrees(qmax):.1f} deg (limit {math.degrees(hi):.3g})")
+    return "; ".join(out) or None
+
 
 SIGNATURES: dict[str, str] = {
     "sign_velocity": "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)",
@@ -397,7 +419,7 @@ def reversal_ratio(e: np.ndarray, velocity: np.ndarray, window: int = 20) -> flo
 
 def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping[str, np.ndarray] | None = None,
            validation: Validation | None = None, thresholds: Mapping[str, float] | None = None,
-           velocity: np.ndarray | None = None) -> Adequacy:
+           velocity: np.ndarray | None = None, range_exit: str | None = None) -> Adequacy:
     """The verdict on a fit's encoder residual.
 
     e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
@@ -405,7 +427,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     :data:`SIGNATURES`, see :func:`signatures`). validation: a held-out recording's :class:`Validation`.
     thresholds: overrides of :data:`THRESHOLDS`. velocity: (N, m) the fitted motor velocity, rad/s:
     the residual at its reversals (:func:`reversal_ratio`) names stick-slip friction first when above
-    ``reversal_ratio``.
+    ``reversal_ratio``. range_exit: where the fitted joints leave their range, which and how far (the caller's
+    :func:`range_exit`): a reason of its own, and a joint stop named first among the likely missing effects.
     """
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
@@ -442,6 +465,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     sig = signatures(e, regressors or {})
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
+    if range_exit:
+        reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []
     if reasons:
         ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
@@ -450,6 +475,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
+        if range_exit:
+            missing = [JOINT_STOP] + missing
     return Adequacy(not reasons, reasons, missing, rms, floor, w, x, sig, validation, notes)
 
 
@@ -505,7 +532,7 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
     fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
     acceleration (dry friction, viscous friction, a rotor's inertia on the tendon: the signatures of
-    :func:`~alpes_dyn.estimation.adequacy.signatures`); finite differences of one batched run, states only."""
+    :func:`~alpes_dyn.estimation.adequacy.signatures`); finite differences of batched runs, states only."""
     n = sens.n
     B, L = Ub.shape[0], Ub.shape[1]
     N1 = x_fit.shape[0]
@@ -518,12 +545,10 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))
-    K = len(pert) + 1
-    U = np.concatenate([Ub[None]] + [(Ub + d)[None] for d in pert]).reshape(K * B, L, -1)
-    C = np.tile(corr, (K, 1)) if (corr is not None and Psib is None) else corr  # per interval, or global
-    xs, _ = sens.run(np.tile(nodes, (K, 1)), U, np.tile(Gb, (K, 1, 1)), theta, C,
-                     basis=None if Psib is None else np.tile(Psib, (K, 1, 1)), sensitivities=False)
-    y = np.einsum("ij,bkj->bki", S, xs[:, :, :n]).reshape(K, B, L + 1, -1) / step
+    y = []
+    for d in [0.0] + pert:  # the fitted run, then one per effect (one at a time: a 60 s record's are 30 MB each)
+        xs, _ = sens.run(nodes, Ub + d, Gb, theta, corr, basis=Psib, sensitivities=False)
+        y.append(np.einsum("ij,bkj->bki", S, xs[:, :, :n]) / step)
     return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
 
 

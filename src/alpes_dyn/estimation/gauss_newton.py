@@ -35,8 +35,13 @@ __all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "SOFT
 
 MAX_LOG_STEP = 0.3
 """The trust region on log theta per iteration (at most a 35 % change of any parameter)."""
-MAX_COEF_STEP = 1.0
-"""The trust region on a line-coefficient correction per iteration, in standard deviations of its prior."""
+MAX_COEF_STEP = 0.1
+"""The trust region on the torque's line corrections per iteration: each line's amplitude by at most this many
+times the torque noise sigma_u, a whitened coefficient by MAX_COEF_STEP sqrt(N / 2) prior standard deviations
+(a coefficient c moves a line's amplitude by sigma_u c sqrt(2 / N) over N samples). It was one standard deviation
+whatever the record: the fit then crawled on long records, where the coefficients must move by tens of them
+(finger3 seed 21: 16 s, 37 iterations and 11.4 s, now 8 and 6.1 s; 60 s, 78 iterations, now 8). Larger values
+(0.2, 0.5) left a 1 s recording of finger3 (seed 2) at the 50-iteration cap where 0.05-0.1 converged in 9-10."""
 SOFT_PHASES = 4
 """Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
 BASIN_LIMIT = 3.0 / math.sqrt(12.0)
@@ -93,8 +98,8 @@ class GaussNewton:
 
     @staticmethod
     def limited(pb: ShootingProblem, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
-        """A trust region (no jump into a far basin): log theta by at most :data:`MAX_LOG_STEP`, the line
-        corrections by at most :data:`MAX_COEF_STEP` prior standard deviations, the whole step scaled down.
+        """A trust region (no jump into a far basin): log theta by at most :data:`MAX_LOG_STEP`, each line of the
+        torque's correction by at most :data:`MAX_COEF_STEP` times its noise, the whole step scaled down.
         In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
         for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
         three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
@@ -102,7 +107,7 @@ class GaussNewton:
         p = pb.p
         dv, dg = d[:pb.nv].reshape(pb.n_int, pb.nb), d[pb.nv:pb.nz]
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP,
-                  float(np.max(np.abs(dg[p:]), initial=0.0)) / MAX_COEF_STEP)
+                  float(np.max(np.abs(dg[p:]), initial=0.0)) / (MAX_COEF_STEP * math.sqrt(pb.N / 2.0)))
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
     # --- stage 2 ----------------------------------------------------------------------------------------------
@@ -205,7 +210,9 @@ class GaussNewton:
         nu_merit, mu, converged, lost, it = 1.0, 1e-3, False, 0, 0
         history: list[float] = []
         reason = f"iteration cap: {self.max_iterations} Gauss-Newton iterations without meeting the stopping rule"
+        solve_K = None
         for it in range(1, self.max_iterations + 1):
+            solve_K = None  # the last iteration's factorisation freed before the next (a 60 s record's: 110 MB)
             cost = e.cost
             rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)

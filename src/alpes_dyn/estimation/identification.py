@@ -65,7 +65,7 @@ from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
 from ..model.transmission import torque_before
 from ..symbolic.parametric import common_scale, select_parameters
-from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, sensor_floor,
+from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, range_exit, sensor_floor,
                        torque_explained)
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
@@ -346,7 +346,8 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     if val_rec is not None:
         val = _validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
                         pb.offset(theta), pb.compliance(theta))
-    return assess(res, rec.torque, floor, regressors, val, velocity=x_fit[:, pb.n:] @ pb.S_enc.T)
+    exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
+    return assess(res, rec.torque, floor, regressors, val, velocity=x_fit[:, pb.n:] @ pb.S_enc.T, range_exit=exit_)
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],

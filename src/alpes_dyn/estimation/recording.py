@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -116,6 +117,18 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
     return atomic_write(path, buf.getvalue(), "recording", RecordingError)
 
 
+def _next_row(rows, p: Path) -> list[str] | None:
+    """The next row of the CSV reader ``rows`` (None at the end); a one-line RecordingError for what csv refuses."""
+    try:
+        return next(rows)
+    except StopIteration:
+        return None
+    except csv.Error as exc:  # a cell over the csv module's own limit (131072 characters)
+        if "field larger" in str(exc):
+            raise RecordingError(f"recording {str(p)!r}: a cell over the limit of {MAX_CSV_CELL} characters") from None
+        raise RecordingError(f"recording {str(p)!r}: not a CSV file ({exc})") from None
+
+
 def read_recording(path: str | Path, model: Model, torque_constant: float | None = None) -> Recording:
     """Read and validate a recording CSV for ``model`` (which names the motors and joints).
 
@@ -135,16 +148,12 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     del data_bytes
     if text.count("\n") > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
-    try:
-        rows = [r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r)]
-    except csv.Error as exc:  # a cell over the csv module's own limit (131072 characters)
-        if "field larger" in str(exc):
-            raise RecordingError(f"recording {str(p)!r}: a cell over the limit of {MAX_CSV_CELL} characters") from None
-        raise RecordingError(f"recording {str(p)!r}: not a CSV file ({exc})") from None
-    del text
-    if not rows:
+    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
+    rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
+    first = _next_row(rows, p)
+    if first is None:
         raise RecordingError(f"recording {str(p)!r}: empty file")
-    header = [h.strip() for h in rows[0]]
+    header = [h.strip() for h in first]
     long = next((h for h in header if len(h) > MAX_CSV_CELL), None)
     if long is not None:
         raise RecordingError(f"recording: a column name of {len(long)} characters, over the limit of {MAX_CSV_CELL}")
@@ -163,8 +172,13 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
             raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
                                  f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
     optional_nan = {h for h in header if h.startswith(("q_", "true_q_")) or h == "force_z"}
-    data = np.empty((len(rows) - 1, len(header)))
-    for i, row in enumerate(rows[1:], start=2):
+    data = np.empty((text.count("\n") + 1, len(header)))  # at least one row per line: trimmed below
+    n_rows = 0
+    for i in itertools.count(2):
+        row = _next_row(rows, p)
+        if row is None:
+            break
+        n_rows += 1
         if len(row) != len(header):
             raise RecordingError(f"recording: line {i} has {len(row)} fields, the header {len(header)}")
         for j, cell in enumerate(row):
@@ -184,6 +198,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: not a number ({c!r})") from None
             if not math.isfinite(data[i - 2, j]) and header[j] not in optional_nan:
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: NaN or inf")
+    del text
+    data = data[:n_rows]
     col = {h: data[:, j] for j, h in enumerate(header)}
     if "t" not in col:
         raise RecordingError("recording: missing column 't' (time, s)")

@@ -35,10 +35,10 @@ from .recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "JACOBIAN_CHUNK"]
 
-JACOBIAN_CHUNK = 2**22
-"""Doubles of sensitivities (32 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
+JACOBIAN_CHUNK = 2**20
+"""Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
-one chunk)."""
+two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
 
 
 def line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
@@ -280,10 +280,7 @@ class ShootingProblem:
         n, L = self.n, self.L
         u_k = self.torque_at(glob, offs) if self.comp_cols else None
         corr = self.correction(glob, offs)
-        if jac:
-            xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k)
-        else:
-            xs, _ = self.sens.run(nodes, self.Ub, self.Gb, theta, corr, basis=self.Psib, sensitivities=False)
+        xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac)
         q = xs[:, :, :n]
         r_enc = ((np.einsum("ij,skj->ski", self.S_enc, q) + self.offset(theta) + self.stretch(theta, u_k) - self.Yb)
                  / self.sig_y * self.valid[:, :, None])
@@ -302,11 +299,12 @@ class ShootingProblem:
         return Evaluation(r, J, c, Cv, Cr, rg, xs)
 
     def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
-                       u_k: np.ndarray | None):
-        """The states xs (S, L+1, nx), J (S, R, nb + ng) and the end-of-interval sensitivities Cv (S-1, nx, nb),
-        Cr (S-1, nx, ng), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of sensitivities."""
+                       u_k: np.ndarray | None, jac: bool = True):
+        """The states xs (S, L+1, nx) and, with ``jac``, J (S, R, nb + ng) and the end-of-interval sensitivities Cv
+        (S-1, nx, nb), Cr (S-1, nx, ng) (else None), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of
+        sensitivities (or of the compiled step's per-sample inputs, without them)."""
         n_int, L, nx = self.n_int, self.L, self.nx
-        per_interval = (L + 1) * nx * (nx + self.p + self.sens.no)
+        per_interval = (L + 1) * nx * (nx + self.p + self.sens.no) if jac else L * self.sens.nw
         chunk = max(1, JACOBIAN_CHUNK // per_interval)
         xs = np.empty((n_int, L + 1, nx))
         J = Cv = Cr = None
@@ -314,13 +312,17 @@ class ShootingProblem:
             sl = slice(a, min(a + chunk, n_int))
             corr_sl = corr[sl] if (corr is not None and self.no) else corr  # per interval, or the lines' (global)
             x_c, X_c = self.sens.run(nodes[sl], self.Ub[sl], self.Gb[sl], theta, corr_sl,
-                                     basis=self.Psib[sl] if self.Psib is not None else None)
+                                     basis=self.Psib[sl] if self.Psib is not None else None, sensitivities=jac)
+            xs[sl] = x_c
+            if not jac:
+                continue
             J_c, Xv_end, Xr_end = self._jacobian(X_c, theta, None if u_k is None else u_k[sl], sl)
+            del X_c
             if J is None:
                 J = np.empty((n_int,) + J_c.shape[1:])
                 Cv = np.empty((n_int - 1,) + Xv_end.shape[1:])
                 Cr = np.empty((n_int - 1,) + Xr_end.shape[1:])
-            xs[sl], J[sl] = x_c, J_c
+            J[sl] = J_c
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
         return xs, J, Cv, Cr
@@ -389,7 +391,7 @@ class ShootingProblem:
         n, L, n_int, nu = self.n, self.L, self.n_int, self.nu
         x_nom, _ = self.sens.run(np.concatenate([q0, np.zeros(n)])[None], self.torque.U[None], self.G[None],
                                  self.theta0, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
-                                 basis=self.Psi[None] if self.torque.lines else None)
+                                 basis=self.Psi[None] if self.torque.lines else None, sensitivities=False)
         nodes = x_nom[0, np.arange(n_int) * L].copy()
         if not np.isfinite(nodes).all():
             nodes[:] = np.concatenate([q0, np.zeros(n)])
