@@ -31,17 +31,19 @@ from ..progress import _Progress
 from .kkt import factorize
 from .shooting import Evaluation, ShootingProblem
 
-__all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "SOFT_PHASES", "BASIN_LIMIT"]
+__all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "SOFT_PHASES", "BASIN_LIMIT"]
 
 MAX_LOG_STEP = 0.3
 """The trust region on log theta per iteration (at most a 35 % change of any parameter)."""
-MAX_COEF_STEP = 0.1
-"""The trust region on the torque's line corrections per iteration: each line's amplitude by at most this many
-times the torque noise sigma_u, a whitened coefficient by MAX_COEF_STEP sqrt(N / 2) prior standard deviations
-(a coefficient c moves a line's amplitude by sigma_u c sqrt(2 / N) over N samples). It was one standard deviation
-whatever the record: the fit then crawled on long records, where the coefficients must move by tens of them
-(finger3 seed 21: 16 s, 37 iterations and 11.4 s, now 8 and 6.1 s; 60 s, 78 iterations, now 8). Larger values
-(0.2, 0.5) left a 1 s recording of finger3 (seed 2) at the 50-iteration cap where 0.05-0.1 converged in 9-10."""
+MAX_COEF_STEP = 1.0
+COEF_STEP_RECORD = 4000
+"""The trust region on the torque's line corrections per iteration: a whitened coefficient by at most
+MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1)) prior standard deviations over N samples: one standard deviation up
+to a 4 s record at 1 kHz, growing as sqrt(N) beyond (a torque error of a given size is sqrt(N) times more standard
+deviations of a coefficient in a longer record). One standard deviation whatever the record left long fits
+crawling (finger3 seed 21: 16 s, 37 iterations; 60 s, 78), the coefficients asking for tens of them per step. A cap
+of 0.1 sigma_u per line (4.5 standard deviations at 4 s) sent the MuJoCo plants of seed 14 in
+``benchmarks/realism.py`` to other basins (masses 8-22 % off, four fits of eight not converged)."""
 SOFT_PHASES = 4
 """Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
 BASIN_LIMIT = 3.0 / math.sqrt(12.0)
@@ -99,7 +101,7 @@ class GaussNewton:
     @staticmethod
     def limited(pb: ShootingProblem, d: np.ndarray) -> tuple[np.ndarray, np.ndarray, bool]:
         """A trust region (no jump into a far basin): log theta by at most :data:`MAX_LOG_STEP`, each line of the
-        torque's correction by at most :data:`MAX_COEF_STEP` times its noise, the whole step scaled down.
+        torque's line corrections within :data:`COEF_STEP_RECORD`'s rule, the whole step scaled down.
         In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
         for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
         three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
@@ -107,7 +109,7 @@ class GaussNewton:
         p = pb.p
         dv, dg = d[:pb.nv].reshape(pb.n_int, pb.nb), d[pb.nv:pb.nz]
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP,
-                  float(np.max(np.abs(dg[p:]), initial=0.0)) / (MAX_COEF_STEP * math.sqrt(pb.N / 2.0)))
+                  float(np.max(np.abs(dg[p:]), initial=0.0)) / (MAX_COEF_STEP * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0))))
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
     # --- stage 2 ----------------------------------------------------------------------------------------------
