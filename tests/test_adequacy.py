@@ -291,3 +291,29 @@ def test_reversal_ratio_sees_a_residual_at_velocity_reversals():
     floor = SensorFloor(1.0, 1 / math.sqrt(12), 0.5, 0.0, "given")
     a = assess(stuck, rng.standard_normal((4000, 1)), floor, velocity=v)
     assert not a.adequate and a.likely_missing[0].startswith("stick-slip")
+
+
+def test_a_fitted_trajectory_leaving_the_joint_range_names_a_joint_stop():
+    """range_exit: the joints whose fitted angles pass a limit by more than RANGE_TOLERANCE (1 deg), each with how
+    far; assess then fails the fit on it and names a joint stop first (MuJoCo's seed 32 drives q_1 to -15 deg into
+    its stop; the fit of it left j1 at -23 to -28 deg and named the stop)."""
+    from alpes_dyn.estimation.adequacy import JOINT_STOP, RANGE_TOLERANCE, assess, range_exit, sensor_floor
+
+    q = np.zeros((100, 3))
+    q[:, 1] = np.linspace(0.0, 1.0, 100)
+    lo, hi, names = np.zeros(3), np.full(3, math.radians(90)), ("j1", "j2", "j3")
+    assert range_exit(q, lo, hi, names) is None  # inside
+    q[10, 0] = -0.5 * RANGE_TOLERANCE  # within the tolerance: not reported
+    assert range_exit(q, lo, hi, names) is None
+    q[20, 0], q[30, 2] = math.radians(-15.0), math.radians(95.0)
+    text = range_exit(q, lo, hi, names)
+    assert text == "j1 down to -15.0 deg (limit 0); j3 up to 95.0 deg (limit 90)"
+    assert range_exit(q, np.full(3, -np.inf), np.full(3, np.inf), names) is None  # no finite limits: not judged
+    rng = np.random.default_rng(0)
+    e = rng.standard_normal((2000, 1)) * 0.6
+    u = rng.standard_normal((2000, 1))
+    floor = sensor_floor(np.round(e * 10) / 10, 0.0, 0.5)
+    ok = assess(e, u, floor)
+    flagged = assess(e, u, floor, range_exit=text)
+    assert flagged.reasons[-1] == f"the fitted joints leave their range ({text})" and not flagged.adequate
+    assert flagged.likely_missing[0] == JOINT_STOP and flagged.reasons[:-1] == ok.reasons

@@ -1082,6 +1082,8 @@ API: list[Api] = [
       InputError, "tendon_compliance: expected 1 finite numbers (rad/(N m))"),
     A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, None, [1.0])
       .encoder_angles(np.zeros(3), [1.0, 2.0]), InputError, "tau_m: expected last dimension 1"),
+    A("torque_before", lambda c: __import__("alpes_dyn.model.transmission", fromlist=["x"]).torque_before(1.0),
+      InputError, "tau_m: expected one row per sample, got shape ()"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'tendon_compliance = "x"\n'),
       ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),

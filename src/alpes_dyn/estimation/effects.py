@@ -15,7 +15,8 @@ effect         what the fit does
 ``tilt``       the palm's orientation when the recording has no ``gravity_*`` columns: ``tilt_y`` on a
                planar finger (``tilt_x`` is seen only through its cosine), both on the thumb. Of the rig,
                kept in the result, not in the file.
-``rotor``      (asked for, named, or where the cable is seen stretching) the motor's rotor on its tendon, J_m S^T S with the file's
+``rotor``      (asked for, named, where the cable is seen stretching, or where a fit with the stick-slip law is still
+               flagged) the motor's rotor on its tendon, J_m S^T S with the file's
                ``transmission.J_m`` (the motor's datasheet; held, not fitted: ``--parameters J_m`` fits it)
 ``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
                (absorbed by the initial states), and beside the tilt it trades with the masses.
@@ -25,13 +26,18 @@ Why these defaults: compliance and tilt cost nothing where they are absent (the 
 asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
 (``alpes-dyn experiment``), whose recordings it would call inadequate, and costs 15 RK4 steps per sample instead
 of 4. Measured (``benchmarks/realism.py``, MuJoCo plants of finger3 drawn +-20 %, seeds 12-14, 2026-12-02, the
-documented experiment with its dither): the rigid fit of a stick-slip plant is flagged 3/3, the sharper sign lands the
-springs within 0.47 %, the masses within 5.8 % and the EKF within 0.26 degree (fits 18-20 s); a 3 % tendon stretch leaves
-the rigid fit's masses 32-95 % off, the compliance with the rotor it brings within 1.1 % (springs), 12.8 % (masses), 0.46
-degree (EKF); a 3 degree tilt is fitted (springs within 1.1 %, EKF 0.24 degree). All of them at once: springs within
-1 %, the EKF within 0.45 degree on every joint, but the masses 4.5-11.3 % off (m_2 high, m_1 low; likely what the
-quasi-static cable leaves out of the rotor's motion at the dither's frequency: a 15 Hz dither left 6.7-9.7 %) and all rounds 21-43 s. Without the dither the stick phases biased the springs
-by 1-2 % and the EKF was 0.74-1.30 degrees off.
+documented experiment with its dither, load about 1.5, cache warm): the rigid fit of every plant with an effect is
+flagged but the torque constant's (only seed 13's, whose rigid fit loses its basin: the encoder cannot see the
+scale) and the encoder offset's (never: the excitation's constant line absorbs it, harmlessly), and none of the
+model's own structure is; with
+``--effects auto`` every effect alone lands the springs within 0.47 %, the masses within 3.6 % and the EKF within
+0.28 degree. All of them at once: springs within 0.64 %, masses within 4.0 % (1.50 / 2.33 / 4.02), the EKF within
+0.27 degree on every joint, all rounds 7.4-9.7 s. Two things made the masses: the tendon's stretch under the torque
+held *before* each reading (:func:`~alpes_dyn.model.transmission.torque_before`; under the same sample's torque the
+masses were 4.5-11.3 % off, the elastic tendon alone's 12.8 %), and, while a fit is flagged, the rotor tried after
+the stick-slip law (the rotor on a rigid tendon of seed 13, which the verdict does not name: K 4.2 -> 0.17 %, EKF 1.8
+-> 0.09 degree). Without the dither the stick phases biased the springs by 1-2 % and the EKF was 0.74-1.30 degrees
+off.
 """
 
 from __future__ import annotations
@@ -192,9 +198,9 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     (:func:`named_effects`: stick-slip, the rotor), the rotor where it sees the tendon stretching (a compliance
     above three standard errors: the quasi-static cable carries the rotor's J_m S^T S to the joints, which the
     verdict does not tell from a wrong inertia), or, where it is flagged and asks for none of these (a lost
-    basin, or several effects mixed), the stick-slip law; kept if its residual is lower, and so on while the
-    kept fit asks for more (at most one round per effect; ``tried`` is the last fit not kept, or the one before
-    the kept one). Each round starts from the last converged one's values
+    basin, or several effects mixed), the stick-slip law, then the rotor; kept if its residual is lower, and so on
+    while the kept fit asks for more or is flagged (each effect in one round at most; ``tried`` is the last fit not
+    kept, or the one before the kept one). Each round starts from the last converged one's values
     (:func:`~alpes_dyn.estimation.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
     ``kwargs`` (which go to ``identify``) name an ``interval``."""
     from .adequacy import AdequacyWarning
