@@ -33,9 +33,9 @@ kind                  meaning                                                   
 ``tilt``              the base (palm) turned by two small angles, ``tilt_x``      rad
                       about its x axis then ``tilt_y`` about its y axis
 ``tendon_compliance`` a motor's tendon stretch per N m of its recorded torque:    rad/(N m)
-                      y_k = S q_k + offset + C tau_m,k-1 (``tendon_compliance_<motor>``;
-                      output only; the series-elastic tendon's quasi-static
-                      limit)
+                      y_k = S q_k + offset + C tau_m,k-1, the torque held
+                      before the reading (``tendon_compliance_<motor>``;
+                      output only; the tendon's quasi-static limit)
 ===================== =========================================================== ==========
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
