@@ -225,10 +225,10 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
 
     best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
     rounds = [(chosen, best)]
-    attempted = set(chosen)  # every effect a round was made with: none is tried twice, so the rounds end
+    attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
     while auto:
-        more = tuple(e for e in named_effects(best) if e not in best_effects and e not in attempted)
-        if "rotor" not in best_effects + more and "rotor" not in attempted and _elastic(best):
+        more = tuple(e for e in named_effects(best) if e not in attempted)
+        if "rotor" not in attempted and "rotor" not in more and _elastic(best):
             more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
         if not more and not best.trustworthy:
             # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
@@ -237,7 +237,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
             # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
             # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
             # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither)
-            more = next(((e,) for e in ("stiction", "rotor") if e not in best_effects and e not in attempted), ())
+            more = next(((e,) for e in ("stiction", "rotor") if e not in attempted), ())
         if not more:
             break
         attempted.update(more)

@@ -212,7 +212,6 @@ class GaussNewton:
         nu_merit, mu, converged, lost, it = 1.0, 1e-3, False, 0, 0
         history: list[float] = []
         reason = f"iteration cap: {self.max_iterations} Gauss-Newton iterations without meeting the stopping rule"
-        solve_K = None
         for it in range(1, self.max_iterations + 1):
             solve_K = None  # the last iteration's factorisation freed before the next (a 60 s record's: 110 MB)
             cost = e.cost

@@ -146,7 +146,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     except UnicodeDecodeError:
         raise RecordingError(f"recording {str(p)!r}: not a UTF-8 text file") from None
     del data_bytes
-    if text.count("\n") > MAX_CSV_ROWS + 1:
+    n_lines = text.count("\n")
+    if n_lines > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
     # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
     rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
@@ -172,7 +173,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
             raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
                                  f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
     optional_nan = {h for h in header if h.startswith(("q_", "true_q_")) or h == "force_z"}
-    data = np.empty((text.count("\n") + 1, len(header)))  # at least one row per line: trimmed below
+    data = np.empty((n_lines + 1, len(header)))  # at least one row per line: trimmed below
     n_rows = 0
     for i in itertools.count(2):
         row = _next_row(rows, p)
