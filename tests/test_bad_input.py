@@ -406,6 +406,10 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "finger3", "--tendon-rotor", "--tendon-stiffness", "4e4",
           needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
         C("mjcf", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
+        C("mjcf", "finger3", "--tendon-dead-band", "1e-4", needle="tendon_dead_band: needs tendon_stiffness"),
+        C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-dead-band=-1e-4",
+          needle="tendon_dead_band: expected a cable's play >= 0 in m"),
+        C("mjcf", "{triangle_urdf}", "--tendon-dead-band", "1e-4", needle="--tendon-dead-band: applies to the Alpes"),
         C("mjcf", "finger3", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
         C("mjcf", "finger3", "--params", "{params_toml}", "-o", "{params_toml}", needle="is the input of --params"),
         C("mjcf", "finger3", "-o", "{device}", needle="is a character device"),
@@ -893,6 +897,21 @@ def _stops(model, **kw):
     return JointStops.of(model, **kw)
 
 
+def _cable(*args, **kw):
+    from alpes_dyn.symbolic.elastic_tendon import ElasticTendon
+    return ElasticTendon.from_cable(*args, **kw)
+
+
+def _tendon(*args):
+    from alpes_dyn.symbolic.elastic_tendon import ElasticTendon
+    return ElasticTendon(*args)
+
+
+def _ses(model, tendon, **kw):
+    from alpes_dyn.symbolic.elastic_tendon import SeriesElasticSystem
+    return SeriesElasticSystem(model, tendon, **kw)
+
+
 def _nd(v, names):
     from alpes_dyn.analysis.identifiability import name_direction
 
@@ -1310,6 +1329,23 @@ API: list[Api] = [
     A("mjcf_string", lambda c: _mjcf(tendon_rotor=True, rotor_inertia=True), InputError, "counted twice"),
     A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, rotor_inertia=True), InputError, "counted twice"),
     A("mjcf_string", lambda c: _mjcf(tilt=float("inf")), InputError, "tilt: expected a finite angle in rad"),
+    A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, tendon_dead_band=np.inf), InputError,
+      "tendon_dead_band: expected a cable's play >= 0"),
+    A("mjcf_string", lambda c: _mjcf(tendon_dead_band=1e-4), InputError, "tendon_dead_band: needs tendon_stiffness"),
+    # the series-elastic tendon with its rotor as a state (symbolic.elastic_tendon)
+    A("ElasticTendon.from_cable", lambda c: _cable(1, "4e4", 0.002), InputError, "cable_stiffness: expected numbers of N/m, got a string"),
+    A("ElasticTendon.from_cable", lambda c: _cable(1, 4e4, 0.002, dead_band=[1e-4, 2e-4]), InputError,
+      "dead_band: expected 1 finite non-negative numbers"),
+    A("ElasticTendon", lambda c: _tendon(1.0, -1.0, 0.0), InputError, "damping: expected 1 finite non-negative"),
+    A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), rotor_inertia=np.nan), InputError,
+      "rotor_inertia: expected 1 finite positive"),
+    A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), smooth="yes"), InputError,
+      "smooth: expected True or False"),
+    A("SeriesElasticSystem.simulate", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0)).simulate(np.zeros(8), [[0.0, 1.0]],
+                                                                                              1e-3, 50),
+      InputError, "u: expected (N, 1) finite motor torques"),
+    A("SeriesElasticSystem.equilibrium", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0)).equilibrium([0.01j]), InputError,
+      "u: complex values are not supported"),
     # MuJoCo recording plants and the experiment's torque
     A("mujoco_recording", lambda c: _mjrec(model="hand"), InputError, "model: a recording plant is one chain"),
     A("mujoco_recording", lambda c: _mjrec(torque=np.zeros((10, 2))), InputError,

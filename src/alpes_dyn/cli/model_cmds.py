@@ -57,7 +57,7 @@ _MJCF_ALPES_ONLY = (("params", "--params", None), ("spring", "--spring", None), 
                     ("rotor_inertia", "--rotor-inertia", False), ("no_contact", "--no-contact", False),
                     ("scene", "--scene", "none"), ("palm_down", "--palm-down", False), ("stiction", "--stiction", None),
                     ("tendon_stiffness", "--tendon-stiffness", None), ("tendon_damping", "--tendon-damping", 0.0),
-                    ("tendon_rotor", "--tendon-rotor", False), ("tilt", "--tilt", 0.0))
+                    ("tendon_dead_band", "--tendon-dead-band", 0.0), ("tendon_rotor", "--tendon-rotor", False), ("tilt", "--tilt", 0.0))
 
 
 def _urdf_mjcf(args: argparse.Namespace) -> str:
@@ -78,7 +78,8 @@ def _alpes_mjcf(args: argparse.Namespace, mjcf_string, load_params) -> str:
                        rotor_inertia=args.rotor_inertia, limits=not args.no_limits, contact=not args.no_contact,
                        scene=args.scene, palm_down=args.palm_down, stiction=args.stiction,
                        tendon_stiffness=args.tendon_stiffness, tendon_damping=args.tendon_damping,
-                       tendon_rotor=args.tendon_rotor, tilt=math.radians(args.tilt))
+                       tendon_rotor=args.tendon_rotor, tilt=math.radians(args.tilt),
+                       tendon_dead_band=args.tendon_dead_band)
 
 
 def cmd_dynamics(args: argparse.Namespace) -> int:

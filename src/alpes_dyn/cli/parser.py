@@ -119,6 +119,8 @@ def _add_mjcf(sub: argparse._SubParsersAction) -> None:
                    help="series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
     s.add_argument("--tendon-damping", type=float, default=0.0, metavar="N_S_PER_M",
                    help="damping c_t of the series-elastic tendon (default 0)")
+    s.add_argument("--tendon-dead-band", type=float, default=0.0, metavar="M",
+                   help="the series-elastic cable's play: slack up to this stretch, m (default 0)")
     s.add_argument("--tendon-rotor", action="store_true", help="rotor inertia J_m / r_m^2 on each rigid tendon")
     s.add_argument("--tilt", type=float, default=0.0, metavar="DEG",
                    help="palm tilted in the finger's plane by DEG degrees (gravity rotated about y)")

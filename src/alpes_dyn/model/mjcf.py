@@ -41,7 +41,9 @@ same, byte for byte), for plants "we did not write" (:mod:`alpes_dyn.control.pla
   motor side, eq. 2.8's I_a), the motor actuator on that joint (gear 1, ``ctrlrange`` [0, tau_max]); the
   fixed tendon ``<motor>`` is the cable's stretch e = r_m theta_m - sum_i r q_i (m), with stiffness k_t,
   damping c_t and ``springlength="-1 0"``: MuJoCo's dead band makes the spring pull only (tension
-  T = k_t max(e, 0): a slack cable pushes nothing; the damping c_t acts on de/dt slack or not). The joints
+  T = k_t max(e, 0): a slack cable pushes nothing; the damping c_t acts on de/dt slack or not; with
+  ``tendon_dead_band=delta`` (m) the cable has play, ``springlength="-1 delta"``, T = k_t max(e - delta, 0)). Our own
+  model of the same system: :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem`. The joints
   get r T each, the rotor -r_m T. ``encoder_<motor>`` measures the rotor, ``tendon_<motor>`` the stretch e;
 * ``tendon_rotor=True``: the rotor inertia on a rigid tendon, ``armature`` J_m / r_m^2 (kg) on each flexion
   tendon: MuJoCo adds it as J_m S^T S to the joints' mass matrix (every entry of the chain's block, not
@@ -218,7 +220,7 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
                 scene: str = "none", contact_q: Sequence[float] | None = None,
                 block_friction: float = 0.0, block_tilt: float = BLOCK_TILT, palm_down: bool = False, timestep: float = 2.5e-4,
                 stiction: float | None = None, tendon_stiffness: float | None = None, tendon_damping: float = 0.0,
-                tendon_rotor: bool = False, tilt: float = 0.0) -> str:
+                tendon_rotor: bool = False, tilt: float = 0.0, tendon_dead_band: float = 0.0) -> str:
     """MJCF text of ``model`` (``finger2``, ``finger3`` or ``hand``) built from ``params``.
 
     Parameters
@@ -245,6 +247,9 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         :data:`STICTION_TIMECONST`: stick-slip friction, F_s and F_v written as with ``friction=True``.
     tendon_stiffness, tendon_damping: k_t (N/m) and c_t (N s/m) of a series-elastic, pull-only tendon with its
         own rotor joint (module docstring); None (default): the rigid tendon.
+    tendon_dead_band: the cable's play, m (>= 0, with ``tendon_stiffness``): slack up to this stretch, the spring
+        pulling k_t (e - dead band) beyond it (``springlength="-1 <dead band>"``; default 0). The same system as
+        :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` with ``ElasticTendon.from_cable``.
     tendon_rotor: the rotor inertia J_m / r_m^2 as the rigid tendon's ``armature`` (J_m S^T S on the joints).
     tilt: the palm tilted in the finger's plane, rad (:func:`tilted_gravity`); applied after ``palm_down``.
 
@@ -267,7 +272,7 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
     if not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction) and block_friction >= 0):
         raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
-    _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia)
+    _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia, tendon_dead_band)
     p = model_params(model, _params(params), chain)
     if palm_down:
         p = palm_down_params(p)
@@ -348,7 +353,7 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     tendons, actuators, sensors = [], [], []
     for ch in lay.chains:
         if tendon_stiffness is not None:
-            tendons.append(_elastic_tendon(ch.name, ch.joints, p, tendon_stiffness, tendon_damping))
+            tendons.append(_elastic_tendon(ch.name, ch.joints, p, tendon_stiffness, tendon_damping, tendon_dead_band))
             actuators.append(f'    <motor name="{ch.name}" joint="{ch.name}_rotor" gear="1" '
                              f'ctrlrange="0 {_f(p.tau_max)}"/>\n')
         else:
@@ -377,7 +382,7 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
 
 
 def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendon_damping: float,
-                   tendon_rotor: bool, tilt: float, rotor_inertia: bool) -> None:
+                   tendon_rotor: bool, tilt: float, rotor_inertia: bool, tendon_dead_band: float = 0.0) -> None:
     """The realism options of :func:`mjcf_string`: numbers in range, no rotor counted twice."""
     def number(x: object) -> bool:
         return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
@@ -391,6 +396,10 @@ def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendo
         raise InputError(f"tendon_damping: expected a damping >= 0 in N s/m, got {tendon_damping!r}")
     if tendon_damping > 0 and tendon_stiffness is None:
         raise InputError("tendon_damping: needs tendon_stiffness (the rigid tendon has no stretch to damp)")
+    if not (number(tendon_dead_band) and tendon_dead_band >= 0):
+        raise InputError(f"tendon_dead_band: expected a cable's play >= 0 in m, got {tendon_dead_band!r}")
+    if tendon_dead_band > 0 and tendon_stiffness is None:
+        raise InputError("tendon_dead_band: needs tendon_stiffness (the rigid tendon has no play)")
     if not isinstance(tendon_rotor, (bool, np.bool_)):
         raise InputError(f"tendon_rotor: expected True or False, got {tendon_rotor!r}")
     if not number(tilt):
@@ -411,12 +420,13 @@ def _rotor_body(motor: str, J_m: float) -> str:
             "    </body>\n")
 
 
-def _elastic_tendon(motor: str, joints: Sequence[str], p: HandParams, k_t: float, c_t: float) -> str:
+def _elastic_tendon(motor: str, joints: Sequence[str], p: HandParams, k_t: float, c_t: float,
+                    dead_band: float = 0.0) -> str:
     """The cable's stretch e = r_m theta_m - sum r q_i as a fixed tendon, a spring k_t pulling only (dead band
-    below e = 0) and a damper c_t."""
+    below e = ``dead_band``, m) and a damper c_t."""
     coefs = f'      <joint joint="{motor}_rotor" coef="{_f(p.r_m)}"/>\n'
     coefs += "".join(f'      <joint joint="{j}" coef="{_f(-p.r)}"/>\n' for j in joints)
-    return (f'    <fixed name="{motor}" stiffness="{_f(k_t)}" damping="{_f(c_t)}" springlength="-1 0">\n'
+    return (f'    <fixed name="{motor}" stiffness="{_f(k_t)}" damping="{_f(c_t)}" springlength="-1 {_f(dead_band)}">\n'
             f"{coefs}    </fixed>\n")
 
 

@@ -1,0 +1,192 @@
+"""The series-elastic tendon with the rotor as a state (symbolic.elastic_tendon) against independent references:
+MuJoCo on the exported MJCF (its tendon spring with a dead band, the rotor hinge: accelerations, the cable's pull and
+trajectories under MuJoCo's own RK4), the rigid tendon with the rotor on the joints (J_m S^T S) as the cable
+stiffens, the quasi-static compliance C = 1 / k_m at rest, and the numeric against the CasADi right-hand side."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import InputError
+from alpes_dyn.model.mjcf import _ROTOR_INERTIA, joint_permutation, load_mujoco, mjcf_string
+from alpes_dyn.simulation import simulate
+from alpes_dyn.symbolic.elastic_tendon import ElasticTendon, SeriesElasticSystem
+
+K_T, C_T = 4e4, 2.0  # N/m, N s/m: the realism benchmark's cable (3.97e4 N/m), lightly damped
+
+
+@pytest.fixture(scope="module")
+def p():
+    return ad.load_params()
+
+
+@pytest.fixture(scope="module")
+def finger(p):
+    return ad.Model.alpes("finger3")
+
+
+def _mujoco(dead_band: float = 0.0):
+    mujoco = pytest.importorskip("mujoco")
+    mj = load_mujoco(mjcf_string("finger3", tendon_stiffness=K_T, tendon_damping=C_T, tendon_dead_band=dead_band,
+                                 limits=False, contact=False, timestep=1e-4))
+    mj.opt.integrator = mujoco.mjtIntegrator.mjINT_RK4
+    return mujoco, mj, mujoco.MjData(mj)
+
+
+def _system(finger, p, dead_band: float = 0.0) -> SeriesElasticSystem:
+    # MuJoCo's rotor hinge carries a point body of inertia 1e-12 kg m^2 beside its armature J_m (the export's)
+    return SeriesElasticSystem(finger, ElasticTendon.from_cable(1, K_T, p.r_m, C_T, dead_band),
+                               rotor_inertia=p.J_m + _ROTOR_INERTIA)
+
+
+@pytest.mark.parametrize("dead_band", [0.0, 1e-4])
+def test_accelerations_and_pull_equal_mujoco(finger, p, rng, dead_band):
+    """f(x, u) equals MuJoCo's qacc (joints and rotor) on the exported MJCF at random states, taut, slack and in
+    the dead band, and the cable's pull T_m equals minus MuJoCo's passive force on the rotor."""
+    mujoco, mj, d = _mujoco(dead_band)
+    sy = _system(finger, p, dead_band)
+    perm = joint_permutation(mj, finger.joint_names)
+    rot, rdof = mj.joint("finger_rotor").qposadr[0], mj.joint("finger_rotor").dofadr[0]
+    kinds = set()
+    for _ in range(16):
+        q, v = finger.random_state(rng, speed=1.0)
+        e = rng.uniform(-2e-4, 3e-4)  # the cable's stretch, m
+        th, w, u = (p.r * q.sum() + e) / p.r_m, rng.uniform(-5, 5), rng.uniform(0, 0.05)
+        d.qpos[perm], d.qvel[perm], d.qpos[rot], d.qvel[rot], d.ctrl[0] = q, v, th, w, u
+        mujoco.mj_forward(mj, d)
+        x = np.r_[q, th, v, w]
+        xd = sy.f(x, [u])
+        assert np.allclose(xd[4:7], d.qacc[perm], rtol=1e-9, atol=1e-9)
+        assert xd[7] == pytest.approx(d.qacc[rdof], rel=1e-9)
+        assert sy.tension(x)[0] == pytest.approx(-d.qfrc_passive[rdof], rel=1e-9, abs=1e-15)
+        assert sy.encoder(x)[0] == pytest.approx(d.sensor("encoder_finger").data[0], rel=1e-14)
+        kinds.add("slack" if e < 0 else "band" if e < dead_band else "taut")
+    assert kinds == ({"slack", "band", "taut"} if dead_band else {"slack", "taut"})
+
+
+def test_trajectory_equals_mujoco_with_slack_phases(finger, p):
+    """0.3 s of a multisine torque with a 10 ms release (the cable goes slack): SeriesElasticSystem.simulate (RK4,
+    0.1 ms) and MuJoCo's RK4 at 0.1 ms give the same joints and rotor to 1e-10 rad."""
+    mujoco, mj, d = _mujoco()
+    sy = _system(finger, p)
+    perm, rot = joint_permutation(mj, finger.joint_names), mj.joint("finger_rotor").qposadr[0]
+    t = 1e-3 * np.arange(300)
+    u = 0.02 + 0.004 * np.sin(2 * np.pi * 7 * t) + 0.002 * np.sin(2 * np.pi * 23 * t)
+    u[(t > 0.15) & (t < 0.16)] = 0.0
+    x0 = sy.equilibrium([u[0]])
+    X = sy.simulate(x0, u, 1e-3, 10)
+    d.qpos[perm], d.qpos[rot] = x0[:3], x0[3]
+    Q = [np.r_[d.qpos[perm], d.qpos[rot]]]
+    for uk in u:
+        d.ctrl[0] = uk
+        mujoco.mj_step(mj, d, nstep=10)
+        Q.append(np.r_[d.qpos[perm], d.qpos[rot]])
+    assert np.abs(np.array(Q) - X[:, :4]).max() < 1e-10
+    stretch = X[:, 3] - sy.S[0] @ X[:, :3].T
+    assert np.mean(stretch < 0) > 0.01  # slack phases were crossed
+    assert np.ptp(X[:, :3], axis=0).min() > 0.3  # and the finger moved
+
+
+def test_rigid_limit_is_the_rotor_on_the_joints(finger, p):
+    """As the cable stiffens the joints converge, at first order in 1/k_t, to the rigid tendon with the rotor's
+    inertia on the joints (Model.alpes(rotor_inertia=True): A + J_m S^T S), simulated by the library's RK4."""
+    rigid = ad.Model.alpes("finger3", rotor_inertia=True)
+    t = 1e-3 * np.arange(300)
+    u = 0.02 + 0.004 * np.sin(2 * np.pi * 7 * t) + 0.002 * np.sin(2 * np.pi * 23 * t)
+    x0 = np.r_[finger.static_equilibrium(finger.transmission.S.T @ u[:1]), np.zeros(3)]
+    q_rigid = simulate(rigid, x0, np.repeat(u, 10)[:, None], 0.3, 1e-4, "rk4", input="motor").x[::10, :3]
+    err = []
+    for k_t in (4e5, 4e6):
+        c_t = 2 * 0.7 * np.sqrt(k_t * p.J_m) / p.r_m  # the rotor-on-cable mode damped at 0.7
+        sy = SeriesElasticSystem(finger, ElasticTendon.from_cable(1, k_t, p.r_m, c_t))
+        X = sy.simulate(sy.equilibrium(u[:1]), u, 1e-3, 10)
+        err.append(np.abs(X[:, :3] - q_rigid).max())
+    assert err[1] < 2e-4
+    assert 8 < err[0] / err[1] < 12  # first order in the compliance
+
+
+def test_rest_is_the_quasi_static_compliance(finger, p):
+    """At rest under u the cable pulls T_m = u, the state is stationary (f = 0) and the encoder reads the
+    quasi-static S q + delta + C u with C = 1 / (k_t r_m^2): the Transmission's tendon_compliance reading."""
+    band = 5e-5
+    sy = SeriesElasticSystem(finger, ElasticTendon.from_cable(1, K_T, p.r_m, C_T, band))
+    u = np.array([0.021])
+    x = sy.equilibrium(u)
+    assert np.abs(sy.f(x, u)).max() < 1e-8
+    assert sy.tension(x) == pytest.approx(u, rel=1e-12)
+    C = 1.0 / (K_T * p.r_m**2)
+    assert sy.tendon.compliance == pytest.approx([C], rel=1e-15)
+    elastic = dataclasses.replace(finger.transmission, tendon_compliance=sy.tendon.compliance)
+    q = x[:3]
+    assert sy.encoder(x) == pytest.approx(elastic.encoder_angles(q[None], u[None])[0] + band / p.r_m, rel=1e-13)
+    assert np.abs(finger.gravity_torque(q) - finger.transmission.S.T @ u).max() < 1e-12
+
+
+def test_numeric_equals_symbolic_with_friction(p, rng):
+    """Model.forward_dynamics (Pinocchio ABA) and SymbolicDynamics (CasADi) give the same right-hand side, the
+    smooth friction law included, at random states."""
+    m = ad.Model.alpes("finger3", friction=True)
+    sy = SeriesElasticSystem(m, ElasticTendon.from_cable(1, K_T, p.r_m, C_T, 2e-5))
+    f = sy.f_function()
+    for _ in range(8):
+        q, v = m.random_state(rng, speed=2.0)
+        x = np.r_[q, sy.S[0] @ q + rng.uniform(-1e-1, 1e-1), v, rng.uniform(-5, 5)]
+        u = rng.uniform(0, 0.05, 1)
+        a, b = sy.f(x, u), np.asarray(f(x, u)).ravel()
+        assert np.abs(a - b).max() <= 1e-9 * np.abs(a).max()
+
+
+def test_hand_is_its_chains(p, rng):
+    """On the hand (6 motors, 15 joints) the index's joints and rotor move as on the index's own chain model
+    (Model.alpes("finger3", chain="index"), another Pinocchio model): each cable pulls its own chain only."""
+    hand = ad.Model.alpes("hand")
+    index = ad.Model.alpes("finger3", chain="index")
+    m = hand.transmission.n_motors
+    cable = dict(cable_stiffness=K_T, shaft_radius=p.r_m, cable_damping=C_T)
+    sh = SeriesElasticSystem(hand, ElasticTendon.from_cable(m, **cable))
+    si = SeriesElasticSystem(index, ElasticTendon.from_cable(1, **cable))
+    js = [hand.joint_names.index(j) for j in hand.joint_names if j.startswith("index_")]
+    k = hand.transmission.motor_names.index("index")
+    assert len(js) == 3
+    for _ in range(4):
+        q, v = hand.random_state(rng, speed=1.0)
+        th, w = sh.S @ q + rng.uniform(-0.05, 0.1, m), rng.uniform(-5, 5, m)
+        u = rng.uniform(0, 0.05, m)
+        xd = sh.f(np.r_[q, th, v, w], u)
+        xi = si.f(np.r_[q[js], th[k], v[js], w[k]], u[k:k + 1])
+        n = hand.n
+        assert np.allclose(xd[n + m:][js], xi[4:7], rtol=1e-10, atol=1e-9)
+        assert xd[2 * n + m + k] == pytest.approx(xi[7], rel=1e-12)
+
+
+@pytest.mark.parametrize("call, needle", [
+    (lambda f, p: ElasticTendon.from_cable(1, -1.0, p.r_m), "cable_stiffness: expected 1 finite positive"),
+    (lambda f, p: ElasticTendon.from_cable(1, 4e4, 0.0), "shaft_radius: expected 1 finite positive"),
+    (lambda f, p: ElasticTendon.from_cable(1, 4e4, p.r_m, dead_band=-1e-4), "dead_band: expected 1 finite"),
+    (lambda f, p: ElasticTendon.from_cable(0, 4e4, p.r_m), "n_motors: expected a positive integer"),
+    (lambda f, p: ElasticTendon([1.0, 2.0], [0.0], [0.0]), "damping: expected 2 finite non-negative"),
+    (lambda f, p: ElasticTendon(np.nan, 0.0, 0.0), "stiffness: expected 1 finite positive"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon([1.0, 1.0], [0.0, 0.0], [0.0, 0.0])),
+     "tendon: expected 1 motors' values"),
+    (lambda f, p: SeriesElasticSystem(ad.Model.alpes("finger3", rotor_inertia=True), ElasticTendon(1.0, 0.0, 0.0)),
+     "model: built with the rotor on its joints"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0), rotor_inertia=0.0),
+     "rotor_inertia: expected 1 finite positive"),
+    (lambda f, p: SeriesElasticSystem(f, "cable"), "tendon: expected an ElasticTendon"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0)).equilibrium([-0.01]),
+     "u: a pull-only cable holds no negative motor torque"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0)).f(np.zeros(7), [0.0]), "x: expected 8 finite"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0)).f(np.zeros(8), [np.nan]),
+     "u: expected 1 finite motor torques"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0)).simulate(np.zeros(8), [0.0], 1e-3, 1),
+     "substeps: RK4 steps of 0.001 s are unstable on the rotor's mode"),
+    (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0)).simulate(np.zeros(8), [0.0], True),
+     "dt: expected a positive number of seconds"),
+])
+def test_bad_input(finger, p, call, needle):
+    with pytest.raises(InputError, match=needle.replace("(", r"\(").replace(")", r"\)").replace("^", r"\^")):
+        call(finger, p)
