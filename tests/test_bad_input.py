@@ -902,6 +902,16 @@ def _cable(*args, **kw):
     return ElasticTendon.from_cable(*args, **kw)
 
 
+def _tendon_of(model, **kw):
+    from alpes_dyn.model.tendon import ElasticTendon
+    return ElasticTendon.of(model, **kw)
+
+
+def _model_mjcf(model, **kw):
+    from alpes_dyn.model.mjcf_export import model_mjcf
+    return model_mjcf(model, **kw)
+
+
 def _tendon(*args):
     from alpes_dyn.symbolic.elastic_tendon import ElasticTendon
     return ElasticTendon(*args)
@@ -1332,7 +1342,9 @@ API: list[Api] = [
     A("mjcf_string", lambda c: _mjcf(tendon_stiffness=4e4, tendon_dead_band=np.inf), InputError,
       "tendon_dead_band: expected a cable's play >= 0"),
     A("mjcf_string", lambda c: _mjcf(tendon_dead_band=1e-4), InputError, "tendon_dead_band: needs tendon_stiffness"),
-    # the series-elastic tendon with its rotor as a state (symbolic.elastic_tendon)
+    # the series-elastic tendon with its rotor as a state (symbolic.elastic_tendon), its cable in the MJCF export
+    A("model_mjcf", lambda c: _model_mjcf(c.m, tendon=[1.0]), InputError, "tendon: expected an ElasticTendon"),
+    A("ElasticTendon.of", lambda c: _tendon_of(c.m), InputError, "tendon_compliance: motor 'finger' has a rigid"),
     A("ElasticTendon.from_cable", lambda c: _cable(1, "4e4", 0.002), InputError, "cable_stiffness: expected numbers of N/m, got a string"),
     A("ElasticTendon.from_cable", lambda c: _cable(1, 4e4, 0.002, dead_band=[1e-4, 2e-4]), InputError,
       "dead_band: expected 1 finite non-negative numbers"),

@@ -6,6 +6,7 @@ stiffens, the quasi-static compliance C = 1 / k_m at rest, and the numeric again
 from __future__ import annotations
 
 import dataclasses
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -126,6 +127,24 @@ def test_rest_is_the_quasi_static_compliance(finger, p):
     assert np.abs(finger.gravity_torque(q) - finger.transmission.S.T @ u).max() < 1e-12
 
 
+def test_of_reads_the_compliance_written_once(p, tmp_path):
+    """ElasticTendon.of takes k_m = 1 / C from the model's tendon compliance, as a parameter file (or an identified
+    one) holds it: the same cable as from_cable(k_t, r_m) where C = 1 / (k_t r_m^2); a rigid tendon is refused."""
+    C = 1.0 / (K_T * p.r_m**2)
+    text = Path(p.path).read_text(encoding="utf-8").replace(
+        "[transmission]\n", f'[transmission]\ntendon_compliance = {{ value = {C!r}, unit = "rad/(N m)", '
+        'source = "identified", reason = "a test cable", description = "the cable" }\n', 1)
+    path = tmp_path / "elastic.toml"
+    path.write_text(text, encoding="utf-8")
+    m = ad.Model.alpes("finger3", params=str(path))
+    t = ElasticTendon.of(m, damping=C_T * p.r_m**2, dead_band=1e-2)
+    ref = ElasticTendon.from_cable(1, K_T, p.r_m, C_T, 1e-2 * p.r_m)
+    for a, b in ((t.stiffness, ref.stiffness), (t.damping, ref.damping), (t.dead_band, ref.dead_band)):
+        assert a == pytest.approx(b, rel=1e-12)
+    with pytest.raises(InputError, match="tendon_compliance: motor 'finger' has a rigid tendon"):
+        ElasticTendon.of(ad.Model.alpes("finger3"))
+
+
 def test_numeric_equals_symbolic_with_friction(p, rng):
     """Model.forward_dynamics (Pinocchio ABA) and SymbolicDynamics (CasADi) give the same right-hand side, the
     smooth friction law included, at random states."""
@@ -172,8 +191,6 @@ def test_hand_is_its_chains(p, rng):
     (lambda f, p: ElasticTendon(np.nan, 0.0, 0.0), "stiffness: expected 1 finite positive"),
     (lambda f, p: SeriesElasticSystem(f, ElasticTendon([1.0, 1.0], [0.0, 0.0], [0.0, 0.0])),
      "tendon: expected 1 motors' values"),
-    (lambda f, p: SeriesElasticSystem(ad.Model.alpes("finger3", rotor_inertia=True), ElasticTendon(1.0, 0.0, 0.0)),
-     "model: built with the rotor on its joints"),
     (lambda f, p: SeriesElasticSystem(f, ElasticTendon(1.0, 0.0, 0.0), rotor_inertia=0.0),
      "rotor_inertia: expected 1 finite positive"),
     (lambda f, p: SeriesElasticSystem(f, "cable"), "tendon: expected an ElasticTendon"),
@@ -190,3 +207,74 @@ def test_hand_is_its_chains(p, rng):
 def test_bad_input(finger, p, call, needle):
     with pytest.raises(InputError, match=needle.replace("(", r"\(").replace(")", r"\)").replace("^", r"\^")):
         call(finger, p)
+
+
+def test_any_robot_export_equals_the_model(rng):
+    """A URDF + spec robot (test_mjcf_export's arm: a tendon with a negative ratio over two joints, a geared slider,
+    rotors, springs, friction, tilted gravity): model_mjcf(tendon=) writes a rotor hinge per motor and the cable as a
+    one-sided spring; MuJoCo's accelerations and pull equal SeriesElasticSystem's, whose model leaves the spec's
+    rotor inertia off the joints (it is each rotor's own); the cable's play included."""
+    mujoco = pytest.importorskip("mujoco")
+    from alpes_dyn.model.mjcf_export import _ROTOR_MASS, model_mjcf
+    from test_mjcf_export import ARM_SPEC, ARM_URDF
+
+    arm = ad.Model(ARM_URDF, ARM_SPEC)
+    assert arm._rotor  # the spec's rotors sit on the joints (J_m S^T S) ...
+    tendon = ElasticTendon([0.5, 30.0], [1e-3, 0.0], [0.01, 0.0])
+    mj = mujoco.MjModel.from_xml_string(model_mjcf(arm, tendon=tendon, limits=False))
+    d = mujoco.MjData(mj)
+    sy = SeriesElasticSystem(arm, tendon, rotor_inertia=arm.transmission.rotor_inertia + _ROTOR_MASS)
+    assert not sy.model._rotor  # ... and leave them for the system
+    jq = [mj.joint(j).qposadr[0] for j in arm.joint_names]
+    rq = [mj.joint(f"{mo}_rotor").qposadr[0] for mo in arm.transmission.motor_names]
+    rv = [mj.joint(f"{mo}_rotor").dofadr[0] for mo in arm.transmission.motor_names]
+    jv = [mj.joint(j).dofadr[0] for j in arm.joint_names]
+    mj.dof_frictionloss[:] = 0.0  # MuJoCo's dry friction is a constraint: compare the smooth parts
+    sy_nf = SeriesElasticSystem(ad.Model(ARM_URDF, dataclasses.replace(ARM_SPEC, coulomb={})), tendon,
+                                rotor_inertia=arm.transmission.rotor_inertia + _ROTOR_MASS)
+    for _ in range(10):
+        q, v = arm.random_state(rng, speed=1.0)
+        th = sy.S @ q + rng.uniform(-0.02, 0.05, 2)
+        w, u = rng.uniform(-3, 3, 2), rng.uniform(-0.1, 0.1, 2)
+        d.qpos[jq], d.qvel[jv], d.qpos[rq], d.qvel[rv], d.ctrl[:] = q, v, th, w, u
+        mujoco.mj_forward(mj, d)
+        x = np.r_[q, th, v, w]
+        xd = sy_nf.f(x, u)
+        assert np.allclose(xd[5:8], d.qacc[jv], rtol=1e-8, atol=1e-8)
+        assert np.allclose(xd[8:], d.qacc[rv], rtol=1e-8, atol=1e-8)
+        assert np.allclose(sy.tension(x), -d.qfrc_passive[rv], rtol=1e-10, atol=1e-14)
+        assert np.allclose([d.sensor(f"encoder_{mo}").data[0] for mo in arm.transmission.motor_names], th)
+    with pytest.raises(InputError, match="tendon: expected an ElasticTendon"):
+        model_mjcf(arm, tendon="cable")
+    with pytest.raises(InputError, match="tendon: expected the values of the model's 2 motors"):
+        model_mjcf(arm, tendon=ElasticTendon(1.0, 0.0, 0.0))
+
+
+def test_rotor_on_the_joints_moves_to_its_state(p, rng):
+    """An Alpes model built with its rotor on the joints gives the same system as one without (the rotor J_m
+    becomes the state's), and its export's round trip refuses nothing silently: an elastic model needs tendon=."""
+    a = SeriesElasticSystem(ad.Model.alpes("finger3", rotor_inertia=True), ElasticTendon.from_cable(1, K_T, p.r_m))
+    b = SeriesElasticSystem(ad.Model.alpes("finger3"), ElasticTendon.from_cable(1, K_T, p.r_m))
+    assert a.rotor_inertia == pytest.approx(b.rotor_inertia, rel=0) and not a.model._rotor
+    q, v = a.model.random_state(rng, speed=1.0)
+    x = np.r_[q, a.S[0] @ q + 0.01, v, 1.0]
+    assert np.array_equal(a.f(x, [0.02]), b.f(x, [0.02]))
+
+
+def test_elastic_model_exports_its_cable_written_once():
+    """A spec with a tendon compliance (as identify writes it) exports its cable (tendon=ElasticTendon.of(model),
+    k_m = 1 / C) and nothing else: no tendon= is refused (the quasi-static stretch is no MJCF), nor a cable of
+    another stiffness."""
+    from alpes_dyn.errors import ModelError
+    from alpes_dyn.model.mjcf_export import model_mjcf
+    from test_mjcf_export import ARM_SPEC, ARM_URDF
+
+    spec = dataclasses.replace(ARM_SPEC, motors=tuple(dataclasses.replace(m, tendon_compliance=c)
+                                                      for m, c in zip(ARM_SPEC.motors, (2.0, 0.05))))
+    arm = ad.Model(ARM_URDF, spec)
+    with pytest.raises(ModelError, match=r"tendon_compliance: .* export its cable's dynamics"):
+        model_mjcf(arm)
+    text = model_mjcf(arm, tendon=ElasticTendon.of(arm, damping=1e-3))
+    assert 'stiffness="0.5"' in text and 'stiffness="20.0"' in text and text.count("_rotor") >= 4
+    with pytest.raises(InputError, match="tendon: its compliance 1/k_m"):
+        model_mjcf(arm, tendon=ElasticTendon([0.5, 21.0], [0.0, 0.0], [0.0, 0.0]))

@@ -17,6 +17,10 @@ model's extras and transmission (the spec's, or the ``extras=`` given):
 * one **fixed tendon** per motor, named as the motor, with coefficient S_ki on each joint it drives: its length
   is the motor angle q_m = S q; its ``armature`` is the rotor inertia J_m, which MuJoCo adds as J_m S_k^T S_k,
   the library's :attr:`Model.rotor_matrix <alpes_dyn.Model.rotor_matrix>`;
+* with ``tendon=`` (an :class:`~alpes_dyn.model.tendon.ElasticTendon`): series-elastic, pull-only cables instead,
+  a rotor hinge ``<motor>_rotor`` per motor (``armature`` J_m) and the fixed tendon ``<motor>`` = theta_m - S_k q
+  with the cable's stiffness, damping and play (:class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem`'s
+  system: tested equal in MuJoCo), the motor on the rotor's hinge, ``encoder_<motor>`` on the rotor;
 * a ``motor`` actuator on each tendon, gear 1: ctrl = tau_m gives the joints S^T tau_m (the spec holds no
   torque limit, so ``ctrlrange`` is unlimited: a pull-only cable needs ``ctrlrange="0 tau_max"`` by hand);
 * sensors: ``encoder_<motor>`` (``tendonpos`` = q_m, rad), ``torque_<motor>`` (``actuatorfrc`` = tau_m, N m),
@@ -53,6 +57,7 @@ INTEGRATORS: tuple[str, ...] = ("Euler", "implicit", "implicitfast", "RK4")
 """MuJoCo's integrators (``<option integrator>``)."""
 _AXES = {"X": (1.0, 0.0, 0.0), "Y": (0.0, 1.0, 0.0), "Z": (0.0, 0.0, 1.0)}
 _MINVAL = 1e-15  # MuJoCo's mjMINVAL: the least mass and principal inertia of a moving body
+_ROTOR_MASS = 1e-12  # kg and kg m^2 of a rotor hinge's body (MuJoCo needs a positive mass): its inertia is the armature
 
 
 def _f(x: float) -> str:
@@ -197,11 +202,44 @@ def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[
     return lines, sites
 
 
-def _transmission(model: Any, sites: dict[str, str]) -> list[str]:
+def _rotor_bodies(model: Any) -> list[str]:
+    """One body per motor for the series-elastic tendon: a hinge ``<motor>_rotor`` (``armature`` J_m) on a body of
+    the least mass and inertia MuJoCo takes (its rotor is the armature)."""
+    tr = model.transmission
+    return [f"    <body name={_q(motor + '_rotor')}>\n"
+            f'      <joint name={_q(motor + "_rotor")} type="hinge" axis="0 0 1" limited="false" '
+            f'armature="{_f(float(tr.rotor_inertia[k]))}"/>\n'
+            f'      <inertial pos="0 0 0" mass="{_f(_ROTOR_MASS)}" diaginertia="{_v((_ROTOR_MASS,) * 3)}"/>\n'
+            "    </body>" for k, motor in enumerate(tr.motor_names)]
+
+
+def _elastic_tendons(model: Any, tendon: Any) -> tuple[list[str], list[str], list[str]]:
+    """Tendons, actuators, sensors of the series-elastic tendon: the stretch phi = theta_m - S_k q (rad of motor
+    shaft) as a fixed tendon with stiffness k_m, damping c_m and the dead band ``springlength="-1e6 delta"`` (pull
+    only beyond the play), the motor on the rotor's hinge, its encoder on the rotor."""
+    tr = model.transmission
+    tendons, actuators, sensors = [], [], []
+    for k, motor in enumerate(tr.motor_names):
+        rotor = motor + "_rotor"
+        coefs = f'\n      <joint joint={_q(rotor)} coef="1"/>' + "".join(
+            f'\n      <joint joint={_q(model.joint_names[i])} coef="{_f(-tr.S[k, i])}"/>' for i in np.flatnonzero(tr.S[k]))
+        tendons.append(f'    <fixed name={_q(motor)} stiffness="{_f(float(tendon.stiffness[k]))}" '
+                       f'damping="{_f(float(tendon.damping[k]))}" springlength="-1e6 {_f(float(tendon.dead_band[k]))}">'
+                       f"{coefs}\n    </fixed>")
+        actuators.append(f'    <motor name={_q(motor)} joint={_q(rotor)} gear="1" ctrllimited="false"/>')
+        sensors += [f"    <jointpos name={_q('encoder_' + motor)} joint={_q(rotor)}/>",
+                    f"    <tendonpos name={_q('tendon_' + motor)} tendon={_q(motor)}/>",
+                    f"    <actuatorfrc name={_q('torque_' + motor)} actuator={_q(motor)}/>"]
+    return tendons, actuators, sensors
+
+
+def _transmission(model: Any, sites: dict[str, str], tendon: Any = None) -> list[str]:
     """The ``<tendon>``, ``<actuator>`` and ``<sensor>`` sections (none without motors or tips)."""
     tr = model.transmission
     tendons, actuators, sensors = [], [], []
-    if tr is not None:
+    if tendon is not None:
+        tendons, actuators, sensors = _elastic_tendons(model, tendon)
+    elif tr is not None:
         for k, motor in enumerate(tr.motor_names):
             J = float(tr.rotor_inertia[k])
             arm = f' armature="{_f(J)}"' if J != 0 else ""
@@ -231,8 +269,29 @@ def _check_args(timestep: Any, integrator: Any, tip_radius: Any) -> None:
         raise InputError(f"tip_radius: expected a radius >= 0 in m, got {tip_radius!r}")
 
 
+def _check_tendon(model: Any, tendon: Any) -> None:
+    """``tendon`` fits ``model``: an ElasticTendon of its motors, each rotor with J_m > 0, its stiffness the model's
+    quasi-static compliance where the model has one (one cable, written once)."""
+    from .tendon import ElasticTendon
+
+    if not isinstance(tendon, ElasticTendon):
+        raise InputError(f"tendon: expected an ElasticTendon (or None: rigid tendons), got {type(tendon).__name__}")
+    tr = model.transmission
+    if tr is None or tendon.n_motors != tr.n_motors:
+        raise InputError(f"tendon: expected the values of the model's {0 if tr is None else tr.n_motors} motors, "
+                         f"got {tendon.n_motors}")
+    if not np.all(tr.rotor_inertia > 0):
+        k = int(np.flatnonzero(~(tr.rotor_inertia > 0))[0])
+        raise InputError(f"tendon: the series-elastic tendon's rotor is a joint of its own and needs J_m > 0; motor "
+                         f"{tr.motor_names[k]!r} has rotor_inertia {float(tr.rotor_inertia[k]):g}")
+    if tr.elastic and not np.allclose(tendon.compliance, tr.tendon_compliance, rtol=1e-12, atol=0.0):
+        raise InputError(f"tendon: its compliance 1/k_m {tendon.compliance.tolist()} differs from the model's "
+                         f"tendon_compliance {tr.tendon_compliance.tolist()} (rad/(N m)); build it with "
+                         "ElasticTendon.of(model)")
+
+
 def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integrator: str = "RK4",
-               tip_radius: float = 0.005) -> str:
+               tip_radius: float = 0.005, tendon: Any = None) -> str:
     """MJCF text of ``model`` (any :class:`~alpes_dyn.Model`: a URDF with or without a spec, an Alpes model).
 
     Parameters
@@ -245,6 +304,14 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
     integrator: one of :data:`INTEGRATORS` (default ``RK4``).
     tip_radius: radius (m) of the sphere geom at each tip, in the touch sensor's site (1.25 x as large);
         0: the site alone (MuJoCo's default size, 5 mm), no geom.
+    tendon: an :class:`~alpes_dyn.model.tendon.ElasticTendon` of the model's motors: series-elastic, pull-only
+        cables, each motor driving a rotor hinge ``<motor>_rotor`` of its own (``armature`` J_m, the spec's
+        ``rotor_inertia``, > 0) coupled to its joints through the fixed tendon ``<motor>`` = theta_m - S_k q with
+        stiffness k_m, damping c_m and the play as a dead band; ``encoder_<motor>`` reads the rotor,
+        ``tendon_<motor>`` the stretch. The same system as
+        :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` (tested against MuJoCo). A model with a
+        tendon compliance needs it (``ElasticTendon.of(model)``: the quasi-static stretch is a sensor law MuJoCo
+        cannot hold, the cable's dynamics are); default None: rigid tendons.
 
     Returns
     -------
@@ -256,12 +323,16 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
         raise InputError(f"limits: expected True or False, got {limits!r}")
     _check_args(timestep, integrator, tip_radius)
     tr = model.transmission
-    if tr is not None and tr.elastic:  # nothing silently dropped: the quasi-static stretch has no MJCF form
+    if tendon is not None:
+        _check_tendon(model, tendon)
+    elif tr is not None and tr.elastic:  # nothing silently dropped: the quasi-static stretch has no MJCF form
         raise ModelError("tendon_compliance: an elastic tendon (y = S q + C tau_m) is a sensor law MuJoCo cannot "
-                         "hold; export the model with rigid tendons, or the Alpes plant with mjcf_string(tendon_stiffness=)")
+                         "hold; export its cable's dynamics (tendon=ElasticTendon.of(model)) or rigid tendons")
     tree, sites = _tree(model, bool(limits), float(tip_radius))
+    if tendon is not None:
+        tree[-1:-1] = _rotor_bodies(model)  # before </worldbody>
     head = [f"<mujoco model={_q(model.name)}>",
             "  <!-- Generated by alpes_dyn.model.mjcf_export from a URDF + spec model; do not edit. -->",
             '  <compiler angle="radian" autolimits="true" inertiafromgeom="false" balanceinertia="false"/>',
             f'  <option timestep="{_f(timestep)}" gravity="{_v(model.gravity)}" integrator="{integrator}"/>']
-    return "\n".join(head + tree + _transmission(model, sites) + ["</mujoco>"]) + "\n"
+    return "\n".join(head + tree + _transmission(model, sites, tendon) + ["</mujoco>"]) + "\n"

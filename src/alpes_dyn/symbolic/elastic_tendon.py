@@ -33,7 +33,7 @@ Its two limits are the library's other tendons (both tested):
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import dataclasses
 from typing import Any
 
 import casadi as cs
@@ -42,79 +42,21 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError
 from ..model.robot import Model
+from ..model.tendon import ElasticTendon, _per_motor
 from .dynamics import SymbolicDynamics
 
 __all__ = ["ElasticTendon", "SeriesElasticSystem"]
 
 
-def _per_motor(x: Any, m: int, name: str, unit: str, positive: bool) -> np.ndarray:
-    """``x`` as (m,) finite floats, each > 0 (``positive``) or >= 0; one number is every motor's."""
-    if isinstance(x, (bool, np.bool_)):
-        raise InputError(f"{name}: expected a number of {unit}, got {x!r}")
-    a = as_float_array(x, name, f"numbers of {unit}")
-    a = np.full(m, float(a)) if a.ndim == 0 else a
-    if a.shape != (m,) or not np.isfinite(a).all() or not (np.all(a > 0) if positive else np.all(a >= 0)):
-        raise InputError(f"{name}: expected {m} finite {'positive' if positive else 'non-negative'} numbers of "
-                         f"{unit} (one per motor), got {np.atleast_1d(a).tolist()!r}")
-    return a
-
-
-@dataclass(frozen=True)
-class ElasticTendon:
-    """Each motor's cable, seen on the motor shaft (arrays (m,), one per motor of the model).
-
-    Attributes
-    ----------
-    stiffness: k_m, N m/rad of motor shaft (> 0): ``k_t r_m^2`` for a cable of stiffness k_t (N/m) on a shaft of
-        radius r_m (:meth:`from_cable`).
-    damping: c_m, N m s/rad (>= 0).
-    dead_band: delta, rad of motor shaft (>= 0): the stretch below which the cable is slack (0: taut at zero
-        stretch, MuJoCo's ``springlength="-1 0"``).
-    """
-
-    stiffness: np.ndarray
-    damping: np.ndarray
-    dead_band: np.ndarray
-
-    @classmethod
-    def from_cable(cls, n_motors: int, cable_stiffness: Any, shaft_radius: float, cable_damping: Any = 0.0,
-                   dead_band: Any = 0.0) -> "ElasticTendon":
-        """The tendon of a cable of stiffness k_t (N/m, EA/L) and damping c_t (N s/m) wound on a motor shaft of
-        radius r_m (m), with a dead band of ``dead_band`` m of cable: k_m = k_t r_m^2, c_m = c_t r_m^2,
-        delta = dead_band / r_m. The same numbers as :func:`~alpes_dyn.model.mjcf.mjcf_string`'s
-        ``tendon_stiffness`` and ``tendon_damping``."""
-        if not isinstance(n_motors, (int, np.integer)) or isinstance(n_motors, bool) or n_motors < 1:
-            raise InputError(f"n_motors: expected a positive integer, got {n_motors!r}")
-        r = _per_motor(shaft_radius, 1, "shaft_radius", "m", True)[0]
-        k_t = _per_motor(cable_stiffness, n_motors, "cable_stiffness", "N/m", True)
-        c_t = _per_motor(cable_damping, n_motors, "cable_damping", "N s/m", False)
-        band = _per_motor(dead_band, n_motors, "dead_band", "m", False)
-        return cls(k_t * r**2, c_t * r**2, band / r)
-
-    def __post_init__(self) -> None:
-        k = as_float_array(self.stiffness, "stiffness", "numbers of N m/rad")
-        m = 1 if k.ndim == 0 else k.shape[0]
-        object.__setattr__(self, "stiffness", _per_motor(k, m, "stiffness", "N m/rad", True))
-        object.__setattr__(self, "damping", _per_motor(self.damping, m, "damping", "N m s/rad", False))
-        object.__setattr__(self, "dead_band", _per_motor(self.dead_band, m, "dead_band", "rad", False))
-
-    @property
-    def n_motors(self) -> int:
-        return int(self.stiffness.shape[0])
-
-    @property
-    def compliance(self) -> np.ndarray:
-        """(m,) C = 1 / k_m, rad/(N m): the quasi-static stretch per motor torque
-        (:attr:`~alpes_dyn.Transmission.tendon_compliance`)."""
-        return 1.0 / self.stiffness
-
-    def tension(self, stretch: Any, rate: Any, xp: Any = np) -> Any:
-        """T_m = k_m max(phi - delta, 0) + c_m dphi/dt (m,), N m on the motor shaft, for the stretch phi and its
-        rate (numpy arrays or CasADi columns; ``xp`` numpy or casadi)."""
-        k, c, band = self.stiffness, self.damping, self.dead_band
-        if xp is not np:
-            k, c, band = cs.DM(k), cs.DM(c), cs.DM(band)
-        return k * xp.fmax(stretch - band, 0) + c * rate
+def _joints_only(model: Model) -> Model:
+    """``model`` without its rotors on the joints (J_m S^T S): the same URDF and spec, each motor's rotor_inertia 0
+    (the series-elastic system carries the rotors as states)."""
+    if not model._rotor:
+        return model
+    spec = model.spec
+    bare = dataclasses.replace(spec, motors=tuple(dataclasses.replace(m, rotor_inertia=0.0) for m in spec.motors))
+    return Model(model.urdf, bare, gravity=model.gravity, name=model.name, layout=model.layout, params=model.params,
+                 spring=model.spring, check_inertia=model.check_inertia)
 
 
 class SeriesElasticSystem:
@@ -123,8 +65,9 @@ class SeriesElasticSystem:
 
     Parameters
     ----------
-    model: a model with motors (``model.transmission``), built *without* the rotor on its joints
-        (``rotor_inertia=False``: here the rotor is a state, not an inertia of the joints).
+    model: a model with motors (``model.transmission``). Its rotors leave the joints: a model built with them
+        there (a spec's ``rotor_inertia``, ``Model.alpes(..., rotor_inertia=True)``: J_m S^T S) is rebuilt without
+        (:attr:`model`), each J_m becoming its rotor's own inertia.
     tendon: the :class:`ElasticTendon` of its motors.
     rotor_inertia: J_m > 0 of each motor (m,), kg m^2 (eq. 2.8's I_a); default the model's
         ``transmission.rotor_inertia`` (a spec's ``rotor_inertia``), or on an Alpes model the parameter file's J_m.
@@ -144,9 +87,6 @@ class SeriesElasticSystem:
         if tendon.n_motors != tr.n_motors:
             raise InputError(f"tendon: expected {tr.n_motors} motors' values ({', '.join(tr.motor_names)}), "
                              f"got {tendon.n_motors}")
-        if model._rotor:
-            raise InputError("model: built with the rotor on its joints (rotor_inertia=True, J_m S^T S); the "
-                             "series-elastic tendon makes the rotor a state of its own: build it without")
         if rotor_inertia is not None:
             J = _per_motor(rotor_inertia, tr.n_motors, "rotor_inertia", "kg m^2", True)
         elif np.any(tr.rotor_inertia != 0) or model.params is None:
@@ -159,7 +99,7 @@ class SeriesElasticSystem:
                              f"(kg m^2); motor {bad[0]!r} has {J[tr.motor_names.index(bad[0])]:g}")
         if not isinstance(smooth, (bool, np.bool_)):
             raise InputError(f"smooth: expected True or False, got {smooth!r}")
-        self.model, self.tendon, self.smooth = model, tendon, bool(smooth)
+        self.model, self.tendon, self.smooth = _joints_only(model), tendon, bool(smooth)
         self.n, self.m = model.n, tr.n_motors
         self.S = np.asarray(tr.S, dtype=float)
         self.rotor_inertia = J
