@@ -150,6 +150,8 @@ def bad_files(d: Path) -> dict[str, str]:
     })
     files["compliance_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = nan, '
                                                  'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
+    files["cable_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = 3.0, '
+                                            'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files.update({k: v.encode() for k, v in URDFS.items()})
     files.update(robot_urdf=ROBOT_URDF.encode(), robot_toml=ROBOT_SPEC.encode(),
@@ -407,6 +409,10 @@ CLI: dict[str, list[Cli]] = {
           needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
         C("mjcf", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
         C("mjcf", "finger3", "--tendon-dead-band", "1e-4", needle="tendon_dead_band: needs tendon_stiffness"),
+        C("mjcf", "finger3", "--params", "{cable_toml}", "--tendon-stiffness", "4e4",
+          needle="tendon_stiffness: 40000.0 N/m differs from the parameter file's cable"),
+        C("mjcf", "finger3", "--params", "{cable_toml}", "--tendon-rotor",
+          needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
         C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-dead-band=-1e-4",
           needle="tendon_dead_band: expected a cable's play >= 0 in m"),
         C("mjcf", "{triangle_urdf}", "--tendon-dead-band", "1e-4", needle="--tendon-dead-band: applies to the Alpes"),

@@ -145,6 +145,21 @@ def test_of_reads_the_compliance_written_once(p, tmp_path):
         ElasticTendon.of(ad.Model.alpes("finger3"))
 
 
+def test_alpes_export_takes_the_file_cable(p, tmp_path):
+    """mjcf_string of a parameter file with a tendon compliance C writes that cable (k_t = 1 / (C r_m^2)): the same
+    MJCF as tendon_stiffness=k_t given by hand (whose rest is the quasi-static S q + C u: test_mjcf_effects)."""
+    C = 1.0 / (K_T * p.r_m**2)
+    text = Path(p.path).read_text(encoding="utf-8").replace(
+        "[transmission]\n", f'[transmission]\ntendon_compliance = {{ value = {C!r}, unit = "rad/(N m)", '
+        'source = "identified", reason = "a test cable", description = "the cable" }\n', 1)
+    path = tmp_path / "cable.toml"
+    path.write_text(text, encoding="utf-8")
+    body = [ln for ln in mjcf_string("finger3", str(path), tendon_damping=C_T).splitlines() if "<!--" not in ln]
+    by_hand = [ln for ln in mjcf_string("finger3", tendon_stiffness=K_T, tendon_damping=C_T).splitlines()
+               if "<!--" not in ln]
+    assert body == by_hand
+
+
 def test_numeric_equals_symbolic_with_friction(p, rng):
     """Model.forward_dynamics (Pinocchio ABA) and SymbolicDynamics (CasADi) give the same right-hand side, the
     smooth friction law included, at random states."""

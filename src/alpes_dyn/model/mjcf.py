@@ -246,7 +246,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     stiction: time constant (s) of the dry-friction constraint (``solreffriction``), e.g.
         :data:`STICTION_TIMECONST`: stick-slip friction, F_s and F_v written as with ``friction=True``.
     tendon_stiffness, tendon_damping: k_t (N/m) and c_t (N s/m) of a series-elastic, pull-only tendon with its
-        own rotor joint (module docstring); None (default): the rigid tendon.
+        own rotor joint (module docstring); None (default): the parameter file's cable where it holds a tendon
+        compliance C (k_t = 1 / (C r_m^2): an identified file's), else the rigid tendon.
     tendon_dead_band: the cable's play, m (>= 0, with ``tendon_stiffness``): slack up to this stretch, the spring
         pulling k_t (e - dead band) beyond it (``springlength="-1 <dead band>"``; default 0). The same system as
         :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` with ``ElasticTendon.from_cable``.
@@ -272,8 +273,9 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
     if not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction) and block_friction >= 0):
         raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
-    _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia, tendon_dead_band)
     p = model_params(model, _params(params), chain)
+    tendon_stiffness = _file_cable(p, tendon_stiffness)
+    _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia, tendon_dead_band)
     if palm_down:
         p = palm_down_params(p)
     lay = layout(model, p)
@@ -379,6 +381,24 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     parts.append("  <sensor>\n" + "".join(sensors) + "  </sensor>\n")
     parts.append("</mujoco>\n")
     return "".join(parts)
+
+
+def _file_cable(p: HandParams, tendon_stiffness: float | None) -> float | None:
+    """The cable's k_t (N/m): the parameter file's, where it holds a tendon compliance C (``transmission.tendon_compliance``,
+    as ``alpes-dyn identify`` writes it: k_t = 1 / (C r_m^2), the same cable as
+    :meth:`ElasticTendon.of <alpes_dyn.model.tendon.ElasticTendon.of>`), else ``tendon_stiffness`` as given; both,
+    differing, are refused (one cable, written once)."""
+    C = float(p.tendon_compliance)
+    if C <= 0:
+        return tendon_stiffness
+    k_file = 1.0 / (C * p.r_m**2)
+    if tendon_stiffness is None:
+        return k_file
+    if not (isinstance(tendon_stiffness, (int, float, np.integer, np.floating)) and not isinstance(tendon_stiffness, bool)
+            and math.isclose(tendon_stiffness, k_file, rel_tol=1e-12)):
+        raise InputError(f"tendon_stiffness: {tendon_stiffness!r} N/m differs from the parameter file's cable "
+                         f"(transmission.tendon_compliance {C:g} rad/(N m): k_t = 1/(C r_m^2) = {k_file:.6g} N/m)")
+    return tendon_stiffness
 
 
 def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendon_damping: float,
