@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
+from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.errors import ModelError
 from alpes_dyn.model.params import Param, chain_params, load_params, params_toml, with_values, write_params
 
@@ -394,9 +395,34 @@ def test_experiment_stops_below_a_fold():
     assert 0.0212 < fold < 0.0218
     with pytest.raises(ad.InputError, match="did not converge"):  # beyond it, no rest near q = 0
         little.static_equilibrium(little.transmission.joint_torque(np.array([fold + 3e-4])))
-    rec = experiment("finger3", true, ExperimentDesign(duration=0.5), seed=1, chain="little")
+    with pytest.warns(JointRangeWarning, match=r"fold at 0\.021\d+ N m .* joint 'j1' rests at -\d+\.\d deg, outside its "
+                      r"range \[0, 90\] deg: the experiment would excite it on its stop\. Hang the hand fingers down"):
+        rec = experiment("finger3", true, ExperimentDesign(duration=0.5), seed=1, chain="little")
     assert rec.torque[:, 0].max() < fold
     assert np.degrees(rec.true_q[:, 0]).max() < 80
+    assert np.degrees(rec.true_q[0, 0]) < 0  # the finger starts on its stop (the library's model has none)
+
+
+def test_hanging_hand_has_no_fold():
+    """Hung fingers down (hanging_gravity), gravity pulls along the finger: the same soft little finger's
+    equilibria fold only past 0.15 N m (palm up: 0.0215 N m, below its mid-range bias), and its experiment, designed and trimmed in that orientation, rests it
+    mid-range with no warning; the orientation is the palm turned -90 degrees about the joints' axes."""
+    import warnings
+
+    from alpes_dyn.estimation.experiment import ExperimentDesign, _fold_torque, experiment_torque, perturbed_params
+    from alpes_dyn.model.mjcf import hanging_gravity
+
+    nominal = load_params()
+    true = perturbed_params(nominal, spread=0.2, seed=1, chains=nominal.chain_names)
+    g = hanging_gravity(nominal.gravity)
+    assert g == pytest.approx([9.81, 0.0, 0.0], abs=1e-12)
+    little = ad.Model.alpes("finger3", friction=True, params=true, chain="little")
+    assert _fold_torque(little, lambda c: np.array([c]), g, 0.2) > 0.15
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", JointRangeWarning)
+        _, u, x0 = experiment_torque("finger3", true, ExperimentDesign(duration=0.5, orientations=(tuple(g),)),
+                                     chain="little")
+    assert np.all((np.degrees(x0[:3]) > 20) & (np.degrees(x0[:3]) < 70))
 
 
 def test_control_chain_model_uses_the_fingers_values(hand_params):

@@ -133,6 +133,18 @@ def tilted_gravity(gravity: Sequence[float], tilt: float) -> np.ndarray:
     return np.array([c * g[0] + s_ * g[2], g[1], -s_ * g[0] + c * g[2]])
 
 
+HANGING_TILT = -math.pi / 2
+"""The tilt (rad, :func:`tilted_gravity`) of a hand hung fingers down: the palm turned by -90 degrees about the
+joints' axes from level, gravity along the fingers' length at q = 0 (+x of the base frame)."""
+
+
+def hanging_gravity(gravity: Sequence[float]) -> np.ndarray:
+    """Gravity (3,), m/s^2, in the base frame of the hand hung fingers down (:data:`HANGING_TILT`): the
+    identification experiment's orientation for fingers whose springs cannot hold them mid-range palm up (gravity
+    then pulls along the finger, its static equilibria do not fold; :mod:`alpes_dyn.estimation.experiment`)."""
+    return tilted_gravity(gravity, HANGING_TILT)
+
+
 def block_normal(contact_q: Sequence[float], tilt: float = BLOCK_TILT) -> np.ndarray:
     """Unit normal n (3,) of the block scene's face, base frame, pointing from the fingertip into the block:
     the pad's normal at ``contact_q`` turned back by ``tilt`` (rad) so that the fingertip's end, not
