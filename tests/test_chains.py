@@ -437,3 +437,23 @@ def test_control_chain_model_uses_the_fingers_values(hand_params):
     idx = _block(h, ("index_j1", "index_j2", "index_j3"))
     qh = h.random_state(np.random.default_rng(0))[0]
     assert np.allclose(h.gravity_torque(qh)[idx], m.gravity_torque(qh[idx]), rtol=1e-12, atol=1e-15)
+
+
+def test_cli_experiment_on_the_hanging_rig(tmp_path, capsys):
+    """``alpes-dyn experiment --rig hanging`` on the soft draw of seed 32 (palm up it folds and rests q_1 at -15
+    degrees, on its stop): the recording holds the hanging rig's gravity columns (9.81, 0, 0) m/s^2, the finger
+    rests and moves inside its range, and no range warning is given."""
+    import warnings
+
+    from alpes_dyn.cli import main
+    from alpes_dyn.estimation.recording import read_recording
+
+    out = tmp_path / "r.csv"
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", JointRangeWarning)
+        assert main(["experiment", "--perturb", "0.2", "--seed", "32", "--rig", "hanging", "--duration", "0.5",
+                     "-o", str(out)]) == 0
+    rec = read_recording(out, ad.Model.alpes("finger3"))
+    assert rec.gravity == pytest.approx(np.tile([9.81, 0.0, 0.0], (rec.n_samples, 1)), abs=1e-12)
+    q = np.degrees(rec.true_q)
+    assert q.min() > 5 and q.max() < 85

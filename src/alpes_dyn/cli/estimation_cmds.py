@@ -186,8 +186,14 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     if args.perturb is not None:  # the chain's own values drawn (the thumb's, a finger's, or the shared finger's)
         chains = ("thumb",) if args.model == "thumb" else ((args.chain,) if args.chain else None)
         truth = perturbed_params(truth, args.perturb, args.seed, chains=chains)
-    rec = experiment(args.model, truth, ExperimentDesign(duration=args.duration), seed=args.seed,
-                     nominal_params=args.params, path=args.output, chain=args.chain)
+    design = ExperimentDesign(duration=args.duration)
+    if args.rig == "hanging":  # fingers down: gravity in the base frame turned by the rig (gravity columns written)
+        from ..model.mjcf import hanging_gravity
+
+        design = ExperimentDesign(duration=args.duration,
+                                  orientations=(tuple(hanging_gravity(load_params(args.params).gravity)),))
+    rec = experiment(args.model, truth, design, seed=args.seed, nominal_params=args.params, path=args.output,
+                     chain=args.chain)
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment "
                                                         f"(spread {args.perturb:g}, seed {args.seed})")
@@ -207,6 +213,8 @@ _URDF_EXPERIMENT = (
      "spec as --true-spec"),
     ("--true-params-out", "true_params_out", None, "goes with --perturb on an Alpes model; a URDF --model's true "
      "robot is --true-spec"),
+    ("--rig", "rig", "level", "hangs an Alpes hand fingers down; a URDF --model's experiment runs in its spec's "
+     "gravity"),
 )
 
 
