@@ -104,3 +104,17 @@ def place_block_tau0(finger) -> float:
     m = ad.Model.from_urdf_file(finger / "finger.urdf", finger / "finger.toml")
     G, _ = _pin_gravity_and_jacobian(place_block(m).contact_q)
     return float(S @ G / (S @ S))
+
+
+def test_one_motor_of_two_pulls_the_others_held_at_zero(finger):
+    """A second motor on the distal joint: the default motor is refused as ambiguous (both move the tip); the loop
+    drives the one named (MuJoCo's other actuator at 0 N m) and holds the force."""
+    two = SPEC.replace('[[motor]]\nname = "flexor"\njoints = { mcp = 2.0, pip = 1.5 }\n',
+                       '[[motor]]\nname = "flexor"\njoints = { mcp = 2.0, pip = 1.5 }\n\n'
+                       '[[motor]]\nname = "distal"\njoints = { pip = 1.0 }\n')
+    (finger / "two.toml").write_text(two)
+    m = ad.Model.from_urdf_file(finger / "finger.urdf", finger / "two.toml")
+    with pytest.raises(ad.InputError, match="motor: 'tendon_finger' has 2 motors moving 'fingertip'"):
+        run_control("pi", model=m, frame="fingertip")
+    r = run_control("pi", model=m, motor="flexor", duration=1.8, step_times=(0.8, 1.3))
+    assert r.steady_state_error < 0.02 and r.block.motor == "flexor" and r.tau_meas.shape == r.t.shape

@@ -81,6 +81,7 @@ class SensorlessForce(Block):
             raise InputError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
         self.model, self.alpha, self.name = model, _fraction(alpha, "alpha"), name
         self.estimate, self.torque, self.tip = estimate, torque, tip
+        self._motors = len(model.transmission.motor_names) if model.transmission is not None else 1
         self._normal_signal = normal if isinstance(normal, str) else None
         self._normal = None if isinstance(normal, str) else np.asarray(normal, dtype=float)
         self.inputs = (estimate, torque) + ((normal,) if isinstance(normal, str) else ())
@@ -92,7 +93,10 @@ class SensorlessForce(Block):
     def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         normal = self._normal if self._normal_signal is None else u[self._normal_signal]
         q_hat = u[self.estimate][: self.model.n]
-        F_est = static_contact_force(self.model, q_hat, np.array([u[self.torque]]).reshape(-1), normal, self.tip)
+        tau = np.array([u[self.torque]]).reshape(-1)
+        if tau.shape[0] != self._motors:  # a scalar before the first period's reading: every motor at it
+            tau = np.broadcast_to(tau, (self._motors,))
+        F_est = static_contact_force(self.model, q_hat, tau, normal, self.tip)
         self.F += self.alpha * (max(F_est, 0.0) - self.F)
         return {self.outputs[0]: self.F}
 
