@@ -369,7 +369,9 @@ def _robot_setup(sc: ControlScenario) -> _Setup:
     robot: Model = sc.model
     block = place_block(robot, sc.frame, sc.motor, sc.contact_q)
     if robot.spec is not None and (robot.spec.coulomb or robot.spec.viscous):  # the controller's model: no friction
-        model = Model(robot.urdf, dataclasses.replace(robot.spec, coulomb={}, viscous={}, identified=None))
+        spec = dataclasses.replace(robot.spec, coulomb={}, viscous={}, identified=None)
+        model = Model(robot.urdf, spec, gravity=None if spec.gravity is not None else robot.gravity, name=robot.name,
+                      check_inertia=robot.check_inertia)
     else:
         model = robot
     mj = load_mujoco(block_scene_mjcf(robot, block, timestep=sc.dt / sc.substeps, integrator="implicitfast"))
