@@ -121,6 +121,7 @@ class ControlScenario:
 
     @property
     def model_name(self) -> str:
+        """The Alpes finger's name, or the Model's (its spec's or URDF's name)."""
         return self.model.name if self.robot else str(self.model)
 
     def check(self) -> None:
