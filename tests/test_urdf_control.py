@@ -106,7 +106,7 @@ def place_block_tau0(finger) -> float:
     return float(S @ G / (S @ S))
 
 
-def test_one_motor_of_two_pulls_the_others_held_at_zero(finger):
+def test_one_motor_of_two_named_and_its_force_held(finger):
     """A second motor on the distal joint: the default motor is refused as ambiguous (both move the tip); the loop
     drives the one named (MuJoCo's other actuator at 0 N m) and holds the force."""
     two = SPEC.replace('[[motor]]\nname = "flexor"\njoints = { mcp = 2.0, pip = 1.5 }\n',
@@ -118,3 +118,15 @@ def test_one_motor_of_two_pulls_the_others_held_at_zero(finger):
         run_control("pi", model=m, frame="fingertip")
     r = run_control("pi", model=m, motor="flexor", duration=1.8, step_times=(0.8, 1.3))
     assert r.steady_state_error < 0.02 and r.block.motor == "flexor" and r.tau_meas.shape == r.t.shape
+
+
+def test_contact_q_given_places_the_same_block(model, finger, capsys):
+    """--contact-q at the default q_c (the CLI's text of its floats) runs the same loop as the default."""
+    q_c = place_block(model).contact_q
+    argv = ["control", "--model", str(finger / "finger.urdf"), "--spec", str(finger / "finger.toml"), "--controller",
+            "pi", "--duration", "0.6", "--json"]
+    outs = []
+    for extra in ([], ["--contact-q", ",".join(repr(float(x)) for x in q_c)]):
+        assert main(argv + extra) == 0
+        outs.append(json.loads(capsys.readouterr().out))
+    assert outs[1]["contact_q"] == outs[0]["contact_q"] and outs[1]["force_rmse"] == outs[0]["force_rmse"]
