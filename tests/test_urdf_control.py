@@ -68,6 +68,26 @@ def test_block_placed_where_the_motor_brings_the_tip(model):
     assert xml.replace([ln for ln in xml.splitlines() if 'name="block"' in ln][0] + "\n", "") == model_mjcf(model)
 
 
+def test_mujoco_sees_the_tip_touch_the_block_at_the_contact(model):
+    """MuJoCo's own distance between the block and the tip's sphere: 0 at q_c, positive at rest, negative (pressed)
+    a little further along the motor's pull."""
+    mujoco = pytest.importorskip("mujoco")
+    from alpes_dyn.model.mjcf import joint_permutation
+
+    b = place_block(model)
+    mj = mujoco.MjModel.from_xml_string(block_scene_mjcf(model, b))
+    d = mujoco.MjData(mj)
+    G, _ = _pin_gravity_and_jacobian(b.contact_q)
+    further = model.static_equilibrium(S * (S @ G / (S @ S)) * 1.05, b.contact_q)
+
+    def distance(q: np.ndarray) -> float:
+        d.qpos[joint_permutation(mj, model.joint_names)] = q
+        mujoco.mj_forward(mj, d)
+        return mujoco.mj_geomDistance(mj, d, mj.geom("block").id, mj.geom("fingertip").id, 1.0, np.zeros(6))
+
+    assert abs(distance(b.contact_q)) < 1e-12 and distance(b.rest_q) > 0.01 and distance(further) < 0
+
+
 def test_force_held_on_the_urdf_and_equal_to_the_static_balance(model):
     r = run_control("sensor", model=model, duration=1.8, step_times=(0.8, 1.3))
     assert r.steady_state_error < 0.02 and max(r.q_rmse_deg) < 2.0
