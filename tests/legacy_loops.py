@@ -72,12 +72,12 @@ def legacy_control(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
 
     from alpes_dyn.control.controller import DEFAULT_GAINS, ForceController, reference_profile, static_contact_force
     from alpes_dyn.control.finger_loop import ControlScenario, _plant_and_params
-    from alpes_dyn.model.mjcf import block_normal, joint_permutation, load_mujoco, mjcf_string
+    from alpes_dyn.model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string
 
     sc = dataclasses.replace(ControlScenario(), controller=controller, **kw)
     _, p, pp = _plant_and_params(sc)
     n = 2 if sc.model == "finger2" else 3
-    cq = tuple(sc.contact_q[:n])
+    cq = tuple((sc.contact_q or BLOCK_CONTACT_Q)[:n])
     model = Model.alpes(sc.model, params=p)
     plant_model = Model.alpes(sc.model, params=pp)
     mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=cq,

@@ -82,6 +82,11 @@ ROBOT_SPEC = ('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0, j3 = 2
               "[stiffness]\nj1 = 0.04\nj2 = 0.05\nj3 = 0.06\n\n[viscous]\nj1 = 1e-4\nj2 = 1e-4\nj3 = 1e-4\n")
 
 
+ROBOT_CONTROL_SPEC = ('gravity = [0.0, 0.0, 9.81]\ntips = ["tip", "p1"]\n\n' + ROBOT_SPEC
+                      + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n')
+"""The robot palm down (its rest inside the joint ranges), two motors, two tips: for ``control`` on a URDF."""
+
+
 def _toml_field(field: str, entry: str) -> bytes:
     """The shipped parameter file with the entry of ``field`` (``section.key``) replaced by ``entry``."""
     section, key = field.split(".")
@@ -159,7 +164,8 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotstd_toml=(ROBOT_SPEC + "\n[identified.viscous]\nj1 = -1e-5\n").encode(),
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
-                 robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode())
+                 robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
+                 robotctl_toml=ROBOT_CONTROL_SPEC.encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -445,6 +451,46 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--duration", "0.5001", needle="duration: 0.5001 s leaves less than 0.05 s after the settling"),
         C("control", "--model", "hand", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
         C("control", "--params", "{fifo}", needle="is a FIFO (named pipe)"),
+        # a URDF --model (issue 17): its spec, the frame, the motor, the block's placement
+        C("control", "--model", "{robot_urdf}", needle="--spec: control on a URDF --model needs its transmission spec"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robot_toml}", needle="--spec: the rest configuration "
+          "(motors off) has joint 'j1' at -0.727 rad, outside its range [0, 1.571]"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}",
+          needle="--motor: 'tendon_robot' has 2 motors (flexor, distal); name one"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--motor", "flexor",
+          needle="--frame: motor 'flexor' moves 2 tip frames (tip, p1); name one"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--motor", "distal", "--frame", "p1",
+          needle="--frame: motor 'distal' does not move 'p1' (the tips it moves: tip)"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--motor", "wrist",
+          needle="--motor: unknown motor 'wrist' (motors: flexor, distal)"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--frame", "p3",
+          needle="--frame: 'p3' is not a tip frame of 'tendon_robot' (tips: tip, p1"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--frame", "tip", "--motor", "flexor",
+          "--contact-q", "2,0,0", needle="--contact-q: the block cannot be placed: joint 'j1' at 2 rad is outside"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--frame", "tip", "--motor", "flexor",
+          "--contact-q", "0.1,0.2", needle="--contact-q: expected 3 finite joint angles (rad, j1, j2, j3)"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--frame", "tip", "--motor", "flexor",
+          "--contact-q", "0,0,0", needle="--contact-q: the block cannot be placed: the frame at rest (motors off) is "
+          "already at or past the block's face"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--contact-q", "a,b",
+          needle="--contact-q: expected comma-separated numbers"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--tau-max", "0",
+          needle="--tau-max: expected a positive number of N m"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--tau-max", "nan",
+          needle="--tau-max: expected a positive number of N m"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--params", "x.toml",
+          needle="--params: applies to the Alpes models"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--plant-params", "x.toml",
+          needle="--plant-params: applies to the Alpes models"),
+        C("control", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--frame", "tip", "--motor", "flexor",
+          "--log", "{robotctl_toml}", needle="--log: '{robotctl_toml}' is the input of --spec"),
+        C("control", "--model", "{tmp}/none.urdf", "--spec", "{robotctl_toml}", needle="none.urdf"),
+        C("control", "--spec", "{robotctl_toml}", needle="--spec: applies to a URDF --model"),
+        C("control", "--frame", "tip", needle="--frame: applies to a URDF --model; the Alpes 'finger3'"),
+        C("control", "--model", "hand", "--motor", "index", needle="--motor: applies to a URDF --model"),
+        C("control", "--contact-q", "0.1,0.2,0.3", needle="--contact-q: applies to a URDF --model"),
+        C("control", "--tau-max", "0.1", needle="--tau-max: applies to a URDF --model"),
+        C("control", "--model", "nofinger", needle="--model: the control scenario is defined for one finger"),
     ],
     "linearize": [
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
@@ -1097,6 +1143,27 @@ API: list[Api] = [
     A("load_toml", lambda c: _toml("a = " + "[" * 100_000), InputError, "x: arrays or tables nested more than 32"),
     A("ControlScenario", lambda c: _control_sc(duration=0.52), InputError, "leaves less than 0.05 s after the settling"),
     A("ControlScenario", lambda c: _control_sc(duration=1e9), InputError, "duration: 1e+09 s is over the limit"),
+    A("ControlScenario", lambda c: _control_sc(frame="tip"), InputError, "frame: applies to a URDF + spec model"),
+    A("ControlScenario", lambda c: _control_sc(motor="finger"), InputError, "motor: applies to a URDF + spec model"),
+    A("ControlScenario", lambda c: _control_sc(tau_max=0.1), InputError, "tau_max: applies to a URDF + spec model"),
+    A("ControlScenario", lambda c: _control_sc(model=_control_robot(c), tau_max=-1.0), InputError,
+      "tau_max: expected a positive motor torque limit in N m, got -1.0"),
+    A("ControlScenario", lambda c: _control_sc(model=_control_robot(c), params="x.toml"), InputError,
+      "params: applies to the Alpes fingers"),
+    A("ControlScenario", lambda c: _control_sc(model=42), InputError, "model: the control scenario is defined for one"),
+    A("run_control", lambda c: _run_control(c, frame="p3"), InputError, "frame: 'p3' is not a tip frame"),
+    A("run_control", lambda c: _run_control(c, motor="flexor", frame="tip", contact_q=(0.1, np.nan, 0.2)), InputError,
+      "contact_q: expected 3 finite joint angles"),
+    A("place_block", lambda c: _place(c, approach=1.0), InputError, "approach: expected a number in (0, 1)"),
+    A("place_block", lambda c: _place(c, tip_radius=0.0), InputError, "tip_radius: expected a number in (0, inf) m"),
+    A("place_block", lambda c: _place(c, contact_q="abc"), InputError, "contact_q: expected 3 joint angles"),
+    A("place_block", lambda c: _place(c, contact_q=(0.0, 0.0, 2.0)), InputError,
+      "contact_q: the block cannot be placed: joint 'j3' at 2 rad is outside its range"),
+    A("place_block", lambda c: _place_on(ad.Model(ROBOT_URDF)), InputError,
+      "spec: model 'tendon_robot' has no transmission"),
+    A("place_block", lambda c: _place(c, spec=ROBOT_CONTROL_SPEC.replace("gravity = [0.0, 0.0, 9.81]\n", "")
+                                      .replace("j1 = 0.04", "j1 = 0.0").replace("j1 = 2.0, ", "")), InputError,
+      "spec: the rest configuration (motors off) cannot be found: static equilibrium: singular stiffness"),
     A("ExperimentDesign", lambda c: _design(duration=1e308).check(), InputError, "duration: 1e+308 s is over the limit"),
     A("observability", lambda c: ad.observability("finger2", order=10**20), InputError, "order: 100000000000000000000 "
       "is over the limit of 1000"),
@@ -1447,6 +1514,26 @@ def _control_sc(**kw):
     from alpes_dyn.control import ControlScenario
 
     return ControlScenario(**kw).check()
+
+
+def _control_robot(c, spec: str = ROBOT_CONTROL_SPEC):
+    return ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(spec))
+
+
+def _run_control(c, **kw):
+    from alpes_dyn.control import run_control
+
+    return run_control("pi", model=_control_robot(c), duration=1.0, **kw)
+
+
+def _place(c, spec: str = ROBOT_CONTROL_SPEC, **kw):
+    return _place_on(_control_robot(c, spec), **({"motor": "flexor", "frame": "tip"} | kw))
+
+
+def _place_on(model, **kw):
+    from alpes_dyn.model.block_scene import place_block
+
+    return place_block(model, **kw)
 
 
 def _check_duration(x):

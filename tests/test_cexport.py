@@ -82,7 +82,7 @@ def test_codegen_writes_a_whole_directory_or_nothing(tmp_path, capsys, monkeypat
 def _force_inputs(n, N=1000, seed=0):
     """A force loop's inputs: the step reference, a fed-back force that rises after an approach, with noise, drops
     to zero for 40 ms (the contact lost) and comes back, and q_hat about the block's contact angles."""
-    from alpes_dyn.control.finger_loop import ControlScenario
+    from alpes_dyn.model.mjcf import BLOCK_CONTACT_Q
 
     rng = np.random.default_rng(seed)
     t = 1e-3 * np.arange(N)
@@ -93,7 +93,7 @@ def _force_inputs(n, N=1000, seed=0):
             f += 0.05 * (F_ref[k] - f)
         F_fb[k] = max(0.0, f + 0.01 * rng.standard_normal())
     F_fb[500:540] = 0.0
-    q = np.array(ControlScenario().contact_q[:n]) + 0.01 * rng.standard_normal((N, n))
+    q = np.array(BLOCK_CONTACT_Q[:n]) + 0.01 * rng.standard_normal((N, n))
     return F_ref, F_fb, q
 
 

@@ -17,7 +17,7 @@ from ..errors import AlpesDynError, AlpesDynWarning, InputError, plain
 from ..fileio import check_outputs
 
 
-VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force")
+VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force", "--contact-q")
 
 
 _NUMLIST = re.compile(r"^-[0-9.]")

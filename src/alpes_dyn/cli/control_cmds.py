@@ -1,5 +1,6 @@
 """The ``control`` command: closed-loop fingertip force control on a MuJoCo plant, a finger pressing a block
-or the hand grasping a cylinder, with its ``--log`` CSV and ``--plot`` figure."""
+(an Alpes finger, or a URDF + spec robot's tip frame on a block placed from its kinematics) or the hand grasping a
+cylinder, with its ``--log`` CSV and ``--plot`` figure."""
 
 from __future__ import annotations
 
@@ -10,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .common import _check_run_files, _emit, _one_of
+from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _urdf_robot, parse_vector
 
 
 def _check_control_outputs(args: argparse.Namespace) -> None:
@@ -48,23 +49,48 @@ def cmd_control(args: argparse.Namespace) -> int:
     """Closed loop on MuJoCo: a finger presses a block with the force asked for, or the hand grasps a cylinder."""
     from ..control.force import CONTROL_MODELS, CONTROLLERS, REFERENCES, plot_control, run_control
 
-    if args.model != "hand" and args.model not in CONTROL_MODELS:
-        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
-                         f"or the hand on the cylinder (hand), got {args.model!r}")
+    urdf = _is_urdf_path(args.model)
+    if args.model != "hand" and args.model not in CONTROL_MODELS and not urdf:
+        raise InputError(f"--model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}), "
+                         f"the hand on the cylinder (hand) or a URDF path with --spec, got {args.model!r}")
     _one_of(args.controller, CONTROLLERS, "--controller", "controller")
     _one_of(args.reference, REFERENCES, "--reference", "reference")
+    if not urdf:
+        for flag, dest in _URDF_ONLY:
+            if getattr(args, dest) is not None:
+                raise InputError(f"{flag}: applies to a URDF --model; the Alpes {args.model!r} presses with its "
+                                 "fingertip, its transmission and motor limit from its parameter file (--params)")
     if args.model == "hand":
         return _control_hand(args)
     if args.duration is None:
         args.duration = 3.0
-    _check_control_outputs(args)
-    res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
-                      seed=args.seed, params=args.params, plant_params=args.plant_params)
+    kw: dict[str, Any] = {}
+    if urdf:
+        for flag, dest in (("--params", "params"), ("--plant-params", "plant_params")):
+            if getattr(args, dest) is not None:
+                raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand); a URDF --model's "
+                                 "controller and plant are its --spec")
+        robot = _urdf_robot(args, "control")
+        kw = {"frame": args.frame, "motor": args.motor, "tau_max": args.tau_max,
+              "contact_q": None if args.contact_q is None else tuple(parse_vector(args.contact_q, "contact-q"))}
+        _check_control_outputs(args)
+        try:
+            res = run_control(args.controller, model=robot, reference=args.reference, duration=args.duration,
+                              seed=args.seed, **kw)
+        except InputError as exc:  # the scenario's field names as the command's options
+            raise InputError(_as_option(str(exc))) from None
+        where = (f"{robot.name}: {res.block.frame} pressing a block (motor {res.block.motor}, normal "
+                 f"{', '.join(f'{x:.3f}' for x in res.block.normal)})")
+    else:
+        _check_control_outputs(args)
+        res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
+                          seed=args.seed, params=args.params, plant_params=args.plant_params)
+        where = f"{args.model} pressing a block"
     obj = _write_control_outputs(res, args, plot_control)
     f = _na
 
     lines = [
-        f"{args.model} pressing a block, {args.controller} controller, {args.reference} reference, MuJoCo plant "
+        f"{where}, {args.controller} controller, {args.reference} reference, MuJoCo plant "
         f"({args.duration:g} s, seed {args.seed})",
         f"  force RMSE {res.force_rmse:.4f} N; steady-state error {f(res.steady_state_error, '.2%')}; "
         f"overshoot {f(res.overshoot, '.1%')}; 10-90 % rise "
@@ -77,6 +103,18 @@ def cmd_control(args: argparse.Namespace) -> int:
     ]
     _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0
+
+
+_URDF_ONLY = (("--spec", "spec"), ("--frame", "frame"), ("--motor", "motor"), ("--contact-q", "contact_q"),
+              ("--tau-max", "tau_max"))
+_FIELD_OPTIONS = {"frame": "--frame", "motor": "--motor", "contact_q": "--contact-q", "tau_max": "--tau-max",
+                  "spec": "--spec"}
+
+
+def _as_option(message: str) -> str:
+    """A scenario's error ``field: ...`` as ``--option: ...`` (the same words, the option the user typed)."""
+    head, sep, tail = message.partition(": ")
+    return f"{_FIELD_OPTIONS[head]}: {tail}" if sep and head in _FIELD_OPTIONS else message
 
 
 def _control_hand(args: argparse.Namespace) -> int:

@@ -60,6 +60,20 @@ def _positive_seconds(text: str) -> float:
 _positive_seconds.__name__ = "seconds"
 
 
+def _positive_number(unit: str) -> Callable[[str], float]:
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            value = float("nan")
+        if not (np.isfinite(value) and value > 0):
+            raise argparse.ArgumentTypeError(f"expected a positive number of {unit}, got {text!r}")
+        return value
+
+    parse.__name__ = unit
+    return parse
+
+
 OUTPUT_HELP = ("y: sum (of each motor's joint angles, default), encoder (q_m = S q), joints, joints:<a>,<b>, "
                "tip_position:<frame>; several joined by '+', e.g. encoder+tip_position:tip")
 
@@ -408,22 +422,39 @@ def _add_sweep(sub: argparse._SubParsersAction) -> None:
 
 def _add_control(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("control", help="closed-loop fingertip force control on a MuJoCo plant (needs mujoco)",
-                       epilog="Example: alpes-dyn control --model finger3 --controller sensor --reference step "
-                              "--plot control.png")
+                       epilog="Examples: alpes-dyn control --model finger3 --controller sensor --reference step "
+                              "--plot control.png; alpes-dyn control --model robot.urdf --spec robot.toml "
+                              "--frame fingertip --motor flexor")
     s.add_argument("--model", default="finger3",
-                   help="finger2 or finger3 on the block, or hand grasping the cylinder (a loop per motor, the "
-                        "references of control.HAND_LEVELS) (default %(default)s)")
+                   help="finger2 or finger3 on the block, hand grasping the cylinder (a loop per motor, the "
+                        "references of control.HAND_LEVELS), or a URDF path (with --spec): one motor's tip frame "
+                        "on a block placed from the robot's kinematics (default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF --model's transmission spec (motors, encoder, springs, friction); required with one")
+    s.add_argument("--frame", default=None, metavar="NAME",
+                   help="a URDF --model only: the tip frame that presses the block (default: the only tip the "
+                        "motor moves)")
+    s.add_argument("--motor", default=None, metavar="NAME",
+                   help="a URDF --model only: the spec's motor that pulls (default: the only motor, or the only "
+                        "one moving --frame)")
+    s.add_argument("--contact-q", default=None, metavar="Q1,Q2,...",
+                   help="a URDF --model only: the joint angles (rad, every joint) at which the frame meets the "
+                        "block (default: where the motor's free pull covers 25 %% of its joints' ranges)")
+    s.add_argument("--tau-max", type=_positive_number("N m"), default=None, metavar="NM",
+                   help="a URDF --model only: the motor torque limit, N m (default: twice the static torque of "
+                        "the largest reference force at the contact)")
     s.add_argument("--controller", default="sensor",
                    help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
                         "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
     s.add_argument("--reference", default="step",
                    help="step (0.2, 1.0, 0.5 N), ramp (0.2 to 1.0 N in 1 s), sine (0.3-0.8 N at 1 Hz) "
                         "(default %(default)s)")
-    s.add_argument("--params", default=None, metavar="FILE", help="the controller's parameter file (default: shipped)")
+    s.add_argument("--params", default=None, metavar="FILE",
+                   help="the Alpes models only: the controller's parameter file (default: shipped)")
     s.add_argument("--plant-params", default=None, metavar="FILE",
-                   help="the plant's parameter file (default: the controller's)")
+                   help="the Alpes models only: the plant's parameter file (default: the controller's)")
     s.add_argument("--duration", type=_positive_seconds, default=None,
-                   help="simulated time, s (default 3 for a finger, 3.5 for the hand)")
+                   help="simulated time, s (default 3 for a finger or a URDF, 3.5 for the hand)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")

@@ -70,14 +70,18 @@ class SensorlessForce(Block):
     model: the controller's model. alpha: the low-pass's weight, dt / (tau_f + dt). estimate: the observer's
     estimate (q_hat its first n entries). torque: the motor torque's reading (the previous period's, N m).
     normal: the contact normal (3,) -- a signal name, or a constant vector. force: the signal written, N.
+    tip: the contact frame (None: the model's default tip). The torque's reading: one motor's (a float), or every
+    motor's (m,).
     """
 
     def __init__(self, model: Model, alpha: float, *, estimate: str = "z", torque: str = "tau_meas",
-                 normal: str | Sequence[float] = (0.0, 0.0, 1.0), force: str = "F_fb", name: str = "sensorless") -> None:
+                 normal: str | Sequence[float] = (0.0, 0.0, 1.0), force: str = "F_fb", name: str = "sensorless",
+                 tip: str | None = None) -> None:
         if not isinstance(model, Model):
             raise InputError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
         self.model, self.alpha, self.name = model, _fraction(alpha, "alpha"), name
-        self.estimate, self.torque = estimate, torque
+        self.estimate, self.torque, self.tip = estimate, torque, tip
+        self._motors = len(model.transmission.motor_names) if model.transmission is not None else 1
         self._normal_signal = normal if isinstance(normal, str) else None
         self._normal = None if isinstance(normal, str) else np.asarray(normal, dtype=float)
         self.inputs = (estimate, torque) + ((normal,) if isinstance(normal, str) else ())
@@ -89,7 +93,10 @@ class SensorlessForce(Block):
     def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         normal = self._normal if self._normal_signal is None else u[self._normal_signal]
         q_hat = u[self.estimate][: self.model.n]
-        F_est = static_contact_force(self.model, q_hat, np.array([u[self.torque]]).reshape(-1), normal)
+        tau = np.array([u[self.torque]]).reshape(-1)
+        if tau.shape[0] != self._motors:  # a scalar before the first period's reading: every motor at it
+            tau = np.broadcast_to(tau, (self._motors,))
+        F_est = static_contact_force(self.model, q_hat, tau, normal, self.tip)
         self.F += self.alpha * (max(F_est, 0.0) - self.F)
         return {self.outputs[0]: self.F}
 

@@ -294,7 +294,7 @@ def block_controller(kind: str = "sensor", model: str = "finger3", params: Any =
     :data:`~.controller.CONTROLLERS` with its :data:`~.controller.DEFAULT_GAINS`, on ``model`` (finger2,
     finger3) with the parameter file ``params``, the block's face normal, the scenario's period and
     ``tau_max``; a fresh one (its state at zero)."""
-    from ..model.mjcf import block_normal
+    from ..model.mjcf import BLOCK_CONTACT_Q, block_normal
     from ..model.params import load_params
     from ..model.robot import Model
     from .controller import CONTROLLERS, DEFAULT_GAINS
@@ -308,7 +308,7 @@ def block_controller(kind: str = "sensor", model: str = "finger3", params: Any =
     sc = ControlScenario(model=model, controller=kind)
     p = load_params(params)
     m = Model.alpes(model, params=p)
-    return ForceController(kind, m, block_normal(tuple(sc.contact_q[: m.n])), sc.dt, p.tau_max, **DEFAULT_GAINS[kind])
+    return ForceController(kind, m, block_normal(tuple((sc.contact_q or BLOCK_CONTACT_Q)[: m.n])), sc.dt, p.tau_max, **DEFAULT_GAINS[kind])
 
 
 def force_main_input(F_ref: Any, F_fb: Any, q_hat: Any) -> str:

@@ -123,6 +123,8 @@ class ForceController:
     setpoint_weight: weight b in [0, 1] of the raw reference in the proportional term's error
         (b F_ref + (1 - b) F_ref_filtered - F_fb; the model-based controllers only).
     loss_s: contact is lost when the force stays below the threshold this long, s.
+    motor: the motor's row of S (the feedforward's torque is this motor's). tip: the contact frame (None: the
+        model's default tip).
     """
 
     kind: str
@@ -139,6 +141,8 @@ class ForceController:
     onset_s: float = 0.0
     prefilter_order: int = 2
     setpoint_weight: float = 0.0
+    motor: int = 0
+    tip: str | None = None
     _above: int = 0
     integral: float = 0.0
     in_contact: bool = False
@@ -160,7 +164,7 @@ class ForceController:
         """Static-balance torque at q_hat for F_ref (0 for the ``"pi"`` baseline), N m."""
         if self.kind == "pi":
             return 0.0
-        return static_motor_torque(self.model, q_hat, F_ref, self.normal)
+        return static_motor_torque(self.model, q_hat, F_ref, self.normal, self.motor, self.tip)
 
     def update(self, F_ref: float, F_fb: float, q_hat: np.ndarray | None,
                normal: Sequence[float] | None = None) -> float:  # noqa: C901

@@ -67,7 +67,8 @@ def plot_control(result: ControlResult, path: str) -> None:
     ax.plot(r.t, r.F_true, color="C0", lw=1.2, label="MuJoCo touch sensor")
     ax.set_ylabel("F_z [N]")
     ax.legend(loc="upper right", fontsize=8, ncol=3)
-    ax.set_title(f"{r.scenario.model}, {r.scenario.controller} controller: force RMSE {r.force_rmse:.3f} N", fontsize=9)
+    where = r.scenario.model_name + ("" if r.block is None else f", {r.block.frame}")
+    ax.set_title(f"{where}, {r.scenario.controller} controller: force RMSE {r.force_rmse:.3f} N", fontsize=9)
     ax = axes[1]
     ax.plot(r.t, r.tau_cmd, color="C2", lw=1.0, label="command")
     ax.axhline(r.tau_max, color="gray", ls=":", lw=0.8, label="tau_max")

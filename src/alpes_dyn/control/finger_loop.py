@@ -3,7 +3,10 @@
 
 :func:`run_control` runs the closed loop with MuJoCo as the plant (the MJCF of :mod:`alpes_dyn.model.mjcf`,
 contact on, the block scene, joint friction on: ``pip install 'alpes_dyn[mujoco]'``); see
-:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics. The loop is a composition
+:class:`ControlScenario` for every setting and :class:`ControlResult` for the metrics. The same loop runs on any
+tendon-driven robot given as a URDF + spec (a :class:`~alpes_dyn.Model` as ``model``): one motor pulls, a named tip
+frame presses a block placed from the robot's own kinematics (:func:`~alpes_dyn.model.block_scene.place_block`),
+MuJoCo steps the model's MJCF export (:func:`~alpes_dyn.model.block_scene.block_scene_mjcf`). The loop is a composition
 of blocks run by :func:`~alpes_dyn.simulation.loop.run_loop`: the reference, the MuJoCo plant, the encoder, current
 and FlexiForce sensors, the force controller and, for the model-based controllers, the EKF (and the sensorless
 force estimate).
@@ -13,6 +16,7 @@ from __future__ import annotations
 
 import csv
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -22,6 +26,7 @@ import numpy as np
 from ..errors import InputError, ModelError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
+from ..model.block_scene import BlockScene, block_scene_mjcf, place_block
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 from ..model.robot import Model
 from ..estimation.blocks import Observer, step_caller
@@ -33,7 +38,8 @@ from ..simulation.loop import Delay, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .blocks import ForceLoop, SensorlessForce, force_input
-from .controller import CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile
+from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile,
+                         static_motor_torque)
 
 
 CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
@@ -65,9 +71,25 @@ class ControlScenario:
 
     Initial state: the finger at rest on its springs (static equilibrium, motor off); the EKF starts
     there too, with standard deviations 0.05 rad and 0.1 rad/s.
+
+    **Any robot** (``model`` an :class:`~alpes_dyn.Model` built from a URDF and its spec): motor ``motor`` (its
+    name; default the only motor, or the only one moving ``frame``) pulls and the tip frame ``frame`` (default the
+    only tip that motor moves; the candidates are listed otherwise) presses the block of
+    :func:`~alpes_dyn.model.block_scene.place_block`: at the frame's position at ``contact_q`` ((n,) rad, inside
+    the joint ranges; default None: where the motor's free pull has covered 25 % of its joints' ranges), its
+    face square to the direction the frame moves there as the motor pulls harder. The plant: MuJoCo stepping
+    :func:`~alpes_dyn.model.block_scene.block_scene_mjcf` (the model's MJCF export, its spec's friction on, the
+    spec's gravity; MuJoCo's ``implicitfast`` integrator as the Alpes scene's), the other motors' commands at 0;
+    the sensors: ``encoder_<motor>``, ``torque_<motor>`` and the touch sensor ``touch_<frame>`` with the noises
+    above. The controller's and the EKF's model: ``model`` without its spec's friction, as the Alpes loop's; the
+    EKF's contact force acts at ``frame``. ``tau_max`` (N m): the motor's limit (a spec holds none; default twice
+    the static-balance torque of the largest reference force at ``contact_q``). The gains of :data:`.DEFAULT_GAINS`
+    (tuned on finger3) are scaled to the robot (:func:`scaled_gains`: kp and ki by its lever dtau_m/dF_z at the
+    contact over finger3's, the approach rate by its motor torque at the contact over finger3's); ``gains`` then
+    override them. ``params``, ``plant_params`` are the Alpes models' (refused here); the plant is the model.
     """
 
-    model: str = "finger3"
+    model: Any = "finger3"
     controller: str = "sensor"
     reference: str = "step"
     duration: float = 3.0
@@ -82,17 +104,43 @@ class ControlScenario:
     torque_noise: float = 5e-4
     force_noise: float = 0.005
     force_resolution: float = 4.4 / 1024
-    contact_q: tuple[float, ...] = BLOCK_CONTACT_Q
+    contact_q: tuple[float, ...] | None = None  # None: BLOCK_CONTACT_Q on an Alpes finger, place_block's on a URDF
     force_filter_s: float = 0.01
     compiled: bool = True
     gains: dict = field(default_factory=dict, compare=False)  # overrides of DEFAULT_GAINS[controller]
     params: Any = field(default=None, compare=False)
     plant_params: Any = field(default=None, compare=False)
+    frame: str | None = None
+    motor: str | None = None
+    tau_max: float | None = None
+
+    @property
+    def robot(self) -> bool:
+        """Whether ``model`` is any robot's :class:`~alpes_dyn.Model` (a URDF + spec) rather than an Alpes finger."""
+        return isinstance(self.model, Model)
+
+    @property
+    def model_name(self) -> str:
+        """The Alpes finger's name, or the Model's (its spec's or URDF's name)."""
+        return self.model.name if self.robot else str(self.model)
 
     def check(self) -> None:
-        if self.model not in CONTROL_MODELS:
-            raise InputError(f"model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}), "
-                             f"got {self.model!r}")
+        if not self.robot and (not isinstance(self.model, str) or self.model not in CONTROL_MODELS):
+            raise InputError(f"model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
+                             f"or a URDF + spec Model, got {self.model!r}")
+        if self.robot:
+            for name in ("params", "plant_params"):
+                if getattr(self, name) is not None:
+                    raise InputError(f"{name}: applies to the Alpes fingers; a URDF model's plant and controller are "
+                                     "the model itself (its spec)")
+            if self.tau_max is not None and not (isinstance(self.tau_max, (int, float)) and not isinstance(
+                    self.tau_max, bool) and math.isfinite(self.tau_max) and self.tau_max > 0):
+                raise InputError(f"tau_max: expected a positive motor torque limit in N m, got {self.tau_max!r}")
+        else:
+            for name in ("frame", "motor", "tau_max"):
+                if getattr(self, name) is not None:
+                    raise InputError(f"{name}: applies to a URDF + spec model; the Alpes finger presses with its "
+                                     "fingertip, its motor and its tau_max are the parameter file's")
         if self.controller not in CONTROLLERS:
             raise InputError(f"controller: unknown controller {self.controller!r} "
                              f"(expected one of {', '.join(CONTROLLERS)})")
@@ -134,7 +182,9 @@ class ControlResult:
     beyond the new level / step size (None unless step). rise_time_s: 10-90 % rise time of the up-step, s
     (None unless step). q_rmse_deg: (n,) RMSE of
     q_hat - q during contact (F_true > 0.05 N), deg (None for ``pi``). wall_s: wall time of the loop, s.
-    saturated: fraction of samples with the command at 0 or tau_max.
+    saturated: fraction of samples with the command at 0 or tau_max. block: on a URDF model, where the block was
+    placed (:class:`~alpes_dyn.model.block_scene.BlockScene`: frame, motor, contact_q, normal, lever); None on an
+    Alpes finger.
     """
 
     scenario: ControlScenario
@@ -156,6 +206,7 @@ class ControlResult:
     rise_time_s: float | None = None
     q_rmse_deg: list[float] | None = None
     saturated: float = 0.0
+    block: BlockScene | None = None  # a URDF model's block (None on an Alpes finger)
 
     @property
     def realtime_ratio(self) -> float:
@@ -166,12 +217,14 @@ class ControlResult:
         """The JSON summary of ``alpes-dyn control --json``."""
         sc = self.scenario
         return {
-            "controller": sc.controller, "plant": "mujoco", "model": sc.model, "reference": sc.reference,
+            "controller": sc.controller, "plant": "mujoco", "model": sc.model_name, "reference": sc.reference,
             "force_rmse": self.force_rmse, "steady_state_error": self.steady_state_error, "overshoot": self.overshoot,
             "rise_time_s": self.rise_time_s, "q_rmse_deg": self.q_rmse_deg, "joints": list(self.joint_names),
             "duration_s": sc.duration, "dt_s": sc.dt, "seed": sc.seed, "tau_max_Nm": self.tau_max,
             "saturated_fraction": self.saturated, "realtime_ratio": self.realtime_ratio,
-        }
+        } | ({} if self.block is None else {
+            "frame": self.block.frame, "motor": self.block.motor, "contact_q": self.block.contact_q.tolist(),
+            "normal": self.block.normal.tolist(), "lever_m": self.block.lever})
 
     def to_csv(self, path: str) -> None:
         """Write t, F_ref, F_z measured by MuJoCo's sensor, the FlexiForce reading, the force fed back, true
@@ -232,33 +285,135 @@ def _metrics(res: ControlResult) -> None:
 def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
     (the plant's default: the controller's), both turned palm down."""
-    try:
-        import mujoco
-    except ImportError:
-        raise ModelError("the control loop's plant needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
+    mujoco = _mujoco()
     p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
     pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
         load_params(sc.plant_params) if sc.plant_params is not None else p)
     return mujoco, palm_down_params(p), palm_down_params(pp)
 
 
-def _force_ekf(sc: ControlScenario, model: Model) -> Observer:
-    """The EKF of the finger's loop as a block: known inputs the measured motor torque ``tau_meas`` (N m, the
-    previous period's) and the contact force ``w_F`` (3,) (N), the encoder ``y`` measured (rad); the estimate
-    ``z`` = [q; qd] starts at the finger's rest, standard deviations 0.05 rad and 0.1 rad/s, not updated at t_0."""
-    n = model.n
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError("the control loop's plant needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
+    return mujoco
+
+
+@dataclass
+class _Setup:
+    """What the loop needs of its robot: the controller's (and the EKF's) model, MuJoCo's model and data (at the
+    plant's initial state), the contact normal (3,), the motor limit (N m), the motor's row of S, the contact
+    frame (None: the model's default tip), the MuJoCo names (actuator, encoders, torque sensors, touch sensor),
+    the controller's gains and the block's placement (None on an Alpes finger)."""
+
+    model: Model
+    mj: Any
+    data: Any
+    normal: np.ndarray
+    tau_max: float
+    motor: int
+    frame: str | None
+    actuator: str
+    encoders: str | list[str]
+    torques: str | list[str]
+    touch: str
+    gains: dict[str, float]
+    block: BlockScene | None = None
+
+
+def _alpes_setup(sc: ControlScenario) -> _Setup:
+    """finger2/finger3 on the Alpes block scene, palm down (the loop of version 0.2, unchanged)."""
+    mujoco, p, pp = _plant_and_params(sc)
+    n = 2 if sc.model == "finger2" else 3
+    cq = tuple((BLOCK_CONTACT_Q if sc.contact_q is None else sc.contact_q)[:n])
+    model = Model.alpes(sc.model, params=p)
+    plant_model = Model.alpes(sc.model, params=pp)
+    mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=cq,
+                                 timestep=sc.dt / sc.substeps))
+    d = mujoco.MjData(mj)
+    perm = joint_permutation(mj, model.joint_names)
+    # the plant starts at rest: the finger hanging on its springs, motor off
+    d.qpos[perm] = static_equilibrium(plant_model, np.zeros(plant_model.n))
+    mujoco.mj_forward(mj, d)
+    return _Setup(model, mj, d, block_normal(cq), p.tau_max, 0, None, "finger", "encoder_finger", "torque_finger",
+                  "flexiforce_finger", {**DEFAULT_GAINS[sc.controller], **sc.gains})
+
+
+@functools.lru_cache(maxsize=1)
+def finger3_contact() -> tuple[float, float]:
+    """(dtau_m/dF_z (m), the static motor torque at F_z = 0 (N m)) of finger3 (shipped parameters, palm down) at
+    its block's contact (:data:`BLOCK_CONTACT_Q`): where the default gains were tuned (:data:`.DEFAULT_GAINS`)."""
+    m = Model.alpes("finger3", params=palm_down_params(load_params(None)))
+    q, S = np.asarray(BLOCK_CONTACT_Q, dtype=float), m.transmission.S[0]
+    n = block_normal(q)
+    return float(S @ (m.fingertip_jacobian(q).T @ n) / (S @ S)), static_motor_torque(m, q, 0.0, n)
+
+
+def scaled_gains(controller: str, lever: float, tau_contact: float) -> dict[str, float]:
+    """:data:`.DEFAULT_GAINS` of ``controller`` for a robot whose motor needs ``lever`` (m) N m per newton pressed
+    and ``tau_contact`` (N m) to bring the tip to the block: kp and ki times lever / finger3's lever (the same
+    force-to-force loop gain), the approach rate times tau_contact / finger3's (the same approach time, about
+    0.4 s); the other settings (in newtons or seconds) as they are."""
+    lever3, tau3 = finger3_contact()
+    defaults = {f.name: f.default for f in dataclasses.fields(ForceController)}
+    gains = dict(DEFAULT_GAINS[controller])
+    for g in ("kp", "ki"):
+        gains[g] = lever / lever3 * gains.get(g, defaults[g])
+    gains["approach_rate"] = max(tau_contact, 0.0) / tau3 * gains.get("approach_rate", defaults["approach_rate"])
+    return gains
+
+
+def _robot_setup(sc: ControlScenario) -> _Setup:
+    """Any URDF + spec model: the block placed from its kinematics, the MJCF export plus the block (class doc)."""
+    mujoco = _mujoco()
+    robot: Model = sc.model
+    block = place_block(robot, sc.frame, sc.motor, sc.contact_q)
+    if robot.spec is not None and (robot.spec.coulomb or robot.spec.viscous):  # the controller's model: no friction
+        spec = dataclasses.replace(robot.spec, coulomb={}, viscous={}, identified=None)
+        model = Model(robot.urdf, spec, gravity=None if spec.gravity is not None else robot.gravity, name=robot.name,
+                      check_inertia=robot.check_inertia)
+    else:
+        model = robot
+    mj = load_mujoco(block_scene_mjcf(robot, block, timestep=sc.dt / sc.substeps, integrator="implicitfast"))
+    d = mujoco.MjData(mj)
+    d.qpos[joint_permutation(mj, robot.joint_names)] = block.rest_q  # at rest: the springs and gravity, motors off
+    mujoco.mj_forward(mj, d)
+    k, frame = block.motor_index, block.frame
+    F_max = max(max(sc.levels), max(sc.sine[:2]))
+    tau_max = sc.tau_max if sc.tau_max is not None else 2.0 * static_motor_torque(
+        model, block.contact_q, F_max, block.normal, motor=k, tip=frame)
+    if not tau_max > 0:
+        raise InputError(f"tau_max: the static balance at contact_q needs no pulling torque ({tau_max:.3g} N m): "
+                         "the block cannot be pressed by the motor (give tau_max, or another contact_q)")
+    tau_contact = static_motor_torque(model, block.contact_q, 0.0, block.normal, motor=k, tip=frame)
+    gains = scaled_gains(sc.controller, block.lever, tau_contact)
+    tr = model.transmission
+    motors = tr.motor_names
+    encoders = [f"encoder_{m}" for m in motors] if len(motors) > 1 else f"encoder_{motors[0]}"
+    torques = [f"torque_{m}" for m in motors] if len(motors) > 1 else f"torque_{motors[0]}"
+    return _Setup(model, mj, d, block.normal, float(tau_max), k, frame, motors[k], encoders, torques,
+                  f"touch_{frame}", {**gains, **sc.gains}, block)
+
+
+def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None) -> Observer:
+    """The EKF of the finger's loop as a block: known inputs the measured motor torques ``tau_meas`` (N m, the
+    previous period's) and the contact force ``w_F`` (3,) (N) at ``frame`` (None: the default tip), the encoders
+    ``y`` measured (rad); the estimate ``z`` = [q; qd] starts at the finger's rest, standard deviations 0.05 rad and
+    0.1 rad/s, not updated at t_0."""
+    n, m = model.n, len(model.transmission.motor_names)
     step = 2 * np.pi / model.transmission.counts_per_rev
-    ss = StateSpace(model, input="motor", output="encoder", force=True)
+    ss = StateSpace(model, input="motor", output="encoder", force=True, tip=frame)
     est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
     meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-    noise = default_noise(est_sc, n, 1, 0, meas_var)
+    noise = default_noise(est_sc, n, m, 0, meas_var)
     f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
-    noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
+    noise["input_noise"] = [sc.torque_noise**2] * m + [f_var] * 3
     ekf = make_observer("ekf", ss, sc.dt, **noise)
     z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
     P0 = np.array([0.05**2] * n + [0.1**2] * n)
     return Observer(ekf, z0, P0, known=("tau_meas", "w_F"), measurement="y", covariance=None, first_update=False,
-                    step=step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled))
+                    step=step_caller(ekf.filter_step, f"ekf_force_{sc.model_name}", sc.compiled))
 
 
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:
@@ -268,7 +423,8 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     ----------
     controller: one of :data:`.CONTROLLERS`.
     scenario: the settings (default :class:`ControlScenario`); ``overrides`` replace fields, e.g.
-        ``run_control("sensor", reference="sine", duration=4.0, plant_params="plant.toml")``.
+        ``run_control("sensor", reference="sine", duration=4.0, plant_params="plant.toml")``, or on any robot
+        ``run_control("sensor", model=Model.from_urdf_file(urdf, spec), frame="fingertip")``.
 
     Returns
     -------
@@ -276,52 +432,46 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
 
     Raises
     ------
-    InputError: bad settings. ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra) or
-    an unreadable parameter file.
+    InputError: bad settings (a frame, a motor or a block that cannot be placed: one line naming it).
+    ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra) or an unreadable parameter file.
     """
     sc = dataclasses.replace(scenario or ControlScenario(), controller=controller, **overrides)
     sc.check()
-    mujoco, p, pp = _plant_and_params(sc)
-    n = 2 if sc.model == "finger2" else 3
-    cq = tuple(sc.contact_q[:n])
-    model = Model.alpes(sc.model, params=p)
-    plant_model = Model.alpes(sc.model, params=pp)
-    mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=cq,
-                                 timestep=sc.dt / sc.substeps))
-    d = mujoco.MjData(mj)
-    perm = joint_permutation(mj, model.joint_names)
-    normal = block_normal(cq)  # the block's face normal: the fingertip presses along it
+    s = _robot_setup(sc) if sc.robot else _alpes_setup(sc)
+    model, normal = s.model, s.normal
+    m = len(model.transmission.motor_names)
+    n = model.n
     tr = model.transmission
     rng = np.random.default_rng(sc.seed)
     N = int(round(sc.duration / sc.dt))
     t = sc.dt * np.arange(N)
     F_ref = reference_profile(sc.reference, t, sc.levels, sc.sine, sc.step_times)
-
-    # the plant starts at rest: the finger hanging on its springs, motor off
-    d.qpos[perm] = static_equilibrium(plant_model, np.zeros(plant_model.n))
-    mujoco.mj_forward(mj, d)
+    shape = () if m == 1 else (m,)
     kind = sc.controller
+    tip = {} if s.frame is None else {"motor": s.motor, "tip": s.frame}
     blocks = [Source("reference", F_ref=F_ref),
-              MujocoPlant(mj, d, substeps=sc.substeps, joints={"q": model.joint_names}, actuators={"tau": "finger"},
-                          sensors={"q_m": "encoder_finger", "F_touch": "flexiforce_finger"},
-                          period_sensors={"tau_applied": "torque_finger"}),
+              MujocoPlant(s.mj, s.data, substeps=sc.substeps, joints={"q": model.joint_names},
+                          actuators={"tau": s.actuator}, sensors={"q_m": s.encoders, "F_touch": s.touch},
+                          period_sensors={"tau_applied": s.torques}),
               # the sensors' noise, drawn in this order (the encoder's one row more than read: the old draw)
-              Encoder("q_m", "y", tr.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng, draws=N + 1),
-              TorqueSensor("tau_applied", "tau_meas", noise=sc.torque_noise, rng=rng, timing="period"),
+              Encoder("q_m", "y", tr.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng, draws=N + 1,
+                      shape=shape),
+              TorqueSensor("tau_applied", "tau_meas", noise=sc.torque_noise, rng=rng, timing="period", shape=shape),
               ForceSensor("F_touch", "F_meas", noise=sc.force_noise, resolution=sc.force_resolution, rng=rng),
-              ForceLoop(ForceController(kind, model, normal, sc.dt, p.tau_max, **{**DEFAULT_GAINS[kind], **sc.gains}),
+              ForceLoop(ForceController(kind, model, normal, sc.dt, s.tau_max, **tip, **s.gains),
                         force="F_fb" if kind == "sensorless" else "F_meas", estimate=None if kind == "pi" else "z")]
     if kind != "pi":  # the EKF: motor torque and contact force as known inputs, the encoder measured
         F_in = "F_fb_prev" if kind == "sensorless" else "F_meas"  # the sensorless force of the previous sample
-        blocks += [force_input(F_in, "w_F", normal), _force_ekf(sc, model)]
+        blocks += [force_input(F_in, "w_F", normal), _force_ekf(sc, model, s.frame)]
     if kind == "sensorless":
-        blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal),
+        blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal, tip=s.frame),
                    Delay("F_fb", "F_fb_prev", 0.0)]
     log = run_loop(blocks, N, sc.dt)
     q_hat = log["z"][:, :n] if kind != "pi" else np.full((N, n), np.nan)
+    tau_meas = log["tau_meas"] if m == 1 else log["tau_meas"][:, s.motor]
     res = ControlResult(scenario=sc, t=t, F_ref=F_ref, F_true=log["F_touch"], F_meas=log["F_meas"],
                         F_hat=log["F_fb" if kind == "sensorless" else "F_meas"], q_true=log["q"], q_hat=q_hat,
-                        tau_cmd=log["tau"], tau_meas=log["tau_meas"], joint_names=model.joint_names,
-                        tau_max=p.tau_max, wall_s=log.wall_s)
+                        tau_cmd=log["tau"], tau_meas=tau_meas, joint_names=model.joint_names,
+                        tau_max=s.tau_max, wall_s=log.wall_s, block=s.block)
     _metrics(res)
     return res

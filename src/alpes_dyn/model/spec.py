@@ -452,10 +452,13 @@ def load_spec(path: str | Path) -> TransmissionSpec:
 
 
 def example_spec_path(name: str = "allegro_hand") -> Path:
-    """Path of a spec file shipped with the package (``"allegro_hand"``: the Allegro hand's tendon spec)."""
-    p = Path(str(resources.files("alpes_dyn") / "data" / f"{name}_spec.toml"))
-    if not p.is_file():
-        raise ModelError(f"unknown example spec {name!r} (shipped: allegro_hand)")
+    """Path of a spec file shipped with the package (``"allegro_hand"``: the Allegro hand's tendon spec;
+    ``"finger_edu"``: the TriFinger finger_edu as a one-tendon finger, the force control's example)."""
+    data = Path(str(resources.files("alpes_dyn") / "data"))
+    p = data / f"{name}_spec.toml"
+    if not isinstance(name, str) or "/" in name or not p.is_file():
+        shipped = sorted(f.name.removesuffix("_spec.toml") for f in data.glob("*_spec.toml"))
+        raise ModelError(f"unknown example spec {name!r} (shipped: {', '.join(shipped)})")
     return p
 
 
