@@ -127,15 +127,21 @@ def test_rest_is_the_quasi_static_compliance(finger, p):
     assert np.abs(finger.gravity_torque(q) - finger.transmission.S.T @ u).max() < 1e-12
 
 
-def test_of_reads_the_compliance_written_once(p, tmp_path):
-    """ElasticTendon.of takes k_m = 1 / C from the model's tendon compliance, as a parameter file (or an identified
-    one) holds it: the same cable as from_cable(k_t, r_m) where C = 1 / (k_t r_m^2); a rigid tendon is refused."""
+def _cable_file(p, tmp_path: Path) -> Path:
+    """The shipped parameter file with the K_T cable's compliance C = 1 / (K_T r_m^2), as identify writes it."""
     C = 1.0 / (K_T * p.r_m**2)
     text = Path(p.path).read_text(encoding="utf-8").replace(
         "[transmission]\n", f'[transmission]\ntendon_compliance = {{ value = {C!r}, unit = "rad/(N m)", '
         'source = "identified", reason = "a test cable", description = "the cable" }\n', 1)
-    path = tmp_path / "elastic.toml"
+    path = tmp_path / "cable.toml"
     path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_of_reads_the_compliance_written_once(p, tmp_path):
+    """ElasticTendon.of takes k_m = 1 / C from the model's tendon compliance, as a parameter file (or an identified
+    one) holds it: the same cable as from_cable(k_t, r_m) where C = 1 / (k_t r_m^2); a rigid tendon is refused."""
+    path = _cable_file(p, tmp_path)
     m = ad.Model.alpes("finger3", params=str(path))
     t = ElasticTendon.of(m, damping=C_T * p.r_m**2, dead_band=1e-2)
     ref = ElasticTendon.from_cable(1, K_T, p.r_m, C_T, 1e-2 * p.r_m)
@@ -148,12 +154,7 @@ def test_of_reads_the_compliance_written_once(p, tmp_path):
 def test_alpes_export_takes_the_file_cable(p, tmp_path):
     """mjcf_string of a parameter file with a tendon compliance C writes that cable (k_t = 1 / (C r_m^2)): the same
     MJCF as tendon_stiffness=k_t given by hand (whose rest is the quasi-static S q + C u: test_mjcf_effects)."""
-    C = 1.0 / (K_T * p.r_m**2)
-    text = Path(p.path).read_text(encoding="utf-8").replace(
-        "[transmission]\n", f'[transmission]\ntendon_compliance = {{ value = {C!r}, unit = "rad/(N m)", '
-        'source = "identified", reason = "a test cable", description = "the cable" }\n', 1)
-    path = tmp_path / "cable.toml"
-    path.write_text(text, encoding="utf-8")
+    path = _cable_file(p, tmp_path)
     body = [ln for ln in mjcf_string("finger3", str(path), tendon_damping=C_T).splitlines() if "<!--" not in ln]
     by_hand = [ln for ln in mjcf_string("finger3", tendon_stiffness=K_T, tendon_damping=C_T).splitlines()
                if "<!--" not in ln]
