@@ -139,7 +139,11 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int, *, seed: int = 0, optio
     cluster = None
     if own:
         if scheduler is not None:
-            client = Client(scheduler, timeout="10s")
+            try:
+                client = Client(scheduler, timeout="10s")
+            except (OSError, ValueError, TypeError) as exc:  # no scheduler there, or not an address Dask reads
+                raise InputError(f"scheduler: cannot connect to {scheduler!r} ({type(exc).__name__}: "
+                                 f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
         else:
             workers = _check_int(workers, "workers", 1, 256)
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,

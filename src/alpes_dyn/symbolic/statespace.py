@@ -176,6 +176,9 @@ class StateSpace(Rebuilt):
         self.output_names = tuple(nm for pc in pieces for nm in pc.names)
         if len(self.output_names) != self.h_expr.shape[0]:  # callables: row names once the size is known
             self.output_names = tuple(f"y{i}" for i in range(self.h_expr.shape[0]))
+        twice = next((nm for nm in self.output_names if self.output_names.count(nm) > 1), None)
+        if twice is not None:  # y would hold the same row twice under one name (its Jacobian, rank-deficient)
+            raise InputError(f"output: {twice!r} is asked for twice in {self.output_name!r}; name each output once")
         mats = [pc.matrix for pc in pieces]
         self.output_matrix: np.ndarray | None = np.vstack(mats) if mats and all(M is not None for M in mats) else None
         self.H: np.ndarray | None = (self.output_matrix[:, :n].copy() if self.output_matrix is not None
