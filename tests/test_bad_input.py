@@ -161,7 +161,8 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotstd_toml=(ROBOT_SPEC + "\n[identified.viscous]\nj1 = -1e-5\n").encode(),
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
-                 robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode())
+                 robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
+                 robotctl_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -403,6 +404,8 @@ CLI: dict[str, list[Cli]] = {
         C("sweep", "-o", "{dir}", needle="is a directory"),
     ],
     "mjcf": [
+        C("mjcf", "{robot_urdf}", "--spec", "{robotctl_toml}",
+          needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
         C("mjcf", "finger3", "--tilt", "1e308", needle="--tilt: expected a finite angle in degrees within [-180, 180]"),
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
@@ -457,8 +460,8 @@ CLI: dict[str, list[Cli]] = {
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
         C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),
         C("linearize", "--q=nan,0,0", needle="--q: contains NaN or inf"),
-        C("linearize", "--dt", "1e308", "--json", needle="dt: the discrete A, B are not finite at dt = 1e+308 s"),
-        C("linearize", "--dt", "1e308", needle="dt: the discrete A, B are not finite"),
+        C("linearize", "--dt", "1e308", "--json", needle="dt: 1e+308 s is outside [1e-09, 1e+06] s"),
+        C("linearize", "--dt", "1e-320", needle="dt: 9.99989e-321 s is outside [1e-09, 1e+06] s"),
     ],
     "(global)": [
         C(needle="the following arguments are required: command"),
@@ -1040,7 +1043,10 @@ API: list[Api] = [
     A("StateSpace", lambda c: __import__("alpes_dyn.symbolic.statespace", fromlist=["x"]).StateSpace(
         c.m, output=["encoder", "encoder"]), InputError, "output: 'q_m_finger' is asked for twice"),
     A("StateSpace", lambda c: c.ss.linearize(np.zeros(6), np.zeros(1), dt=1e308), InputError,
-      "dt: the discrete A, B are not finite at dt = 1e+308 s"),
+      "dt: 1e+308 s is outside [1e-09, 1e+06] s"),
+    A("compile_rollout", lambda c: _rollout(c, dt=1e-320), InputError, "dt: 9.99989e-321 s is outside [1e-09, 1e+06] s"),
+    A("ExtendedKalmanFilter", lambda c: __import__("alpes_dyn.estimation.observers", fromlist=["x"]).ExtendedKalmanFilter(
+        c.ss, 1e300, process_noise=1e-9, measurement_noise=1e-7), InputError, "dt: 1e+300 s is outside"),
     A("fisher_information", lambda c: _fim(c, U=[10**400] * 10), InputError, "U: expected an array of numbers, got a "
       "number too large"),
     A("fisher_information", lambda c: _fim(c, U=[True] * 10), InputError, "U: expected an array of numbers, got "
@@ -1213,6 +1219,11 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, interval=0.0), InputError, "interval: expected a positive number"),
     A("identify", lambda c: _ident(c, interval=1e308), InputError, "interval: 1e+308 s must hold 2 to"),
     A("identify", lambda c: _ident(c, interval=True), InputError, "interval: expected a positive number, got True"),
+    A("identify", lambda c: _ident(c, substeps=10**9), InputError, "substeps: expected an integer from 1 to 1000"),
+    A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
+        lambda seed: {"x": 1.0}, 1, options=5, serial=True), InputError, "options: expected a dict of keyword arguments"),
+    A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
+        lambda seed: {"x": 1.0}, 1, options={"seed": 3}, serial=True), InputError, "options: 'seed' is each draw's own"),
     A("identify", lambda c: _ident(c, max_iterations=True), InputError, "max_iterations: expected a positive integer"),
     A("identify", lambda c: _ident(c, excitation="abc"), InputError, "excitation: expected frequencies in Hz, got a string"),
     A("identify", lambda c: _ident(c, excitation=[1j]), InputError, "excitation: complex values are not supported"),

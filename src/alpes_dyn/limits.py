@@ -13,7 +13,8 @@
   rows; a URDF of at most :data:`MAX_URDF_LINKS` links, :data:`MAX_URDF_JOINTS` moving joints and a kinematic
   tree of depth at most :data:`MAX_URDF_DEPTH` (counted before Pinocchio's parser sees it); TOML nested at most
   :data:`MAX_TOML_DEPTH` deep, its integers at most :data:`MAX_TOML_INT` in magnitude.
-* Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, derivative orders at
+* Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, time steps in
+  [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`], derivative orders at
   most :data:`MAX_ORDER`, operation caps at most :data:`MAX_OPERATIONS`; at most :data:`MAX_ARGS` command-line arguments.
 """
 
@@ -25,9 +26,9 @@ import os
 
 from .errors import InputError
 
-__all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
+__all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "check_time_step", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
            "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_URDF_JOINTS", "MAX_TOML_DEPTH", "MAX_TOML_INT",
-           "MAX_DURATION_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS"]
+           "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS"]
 
 MAX_POINTS = 10_000
 """Most random points for the observability rank and the report's dynamics cross-check."""
@@ -62,6 +63,10 @@ MAX_TOML_INT = 2**53
 
 MAX_DURATION_S = 1e6
 """Longest simulated or recorded duration a user can ask for, s (the array limit usually comes first)."""
+
+MIN_TIME_STEP_S = 1e-9
+"""Shortest time step (integration, sampling, discretisation), s: below, t = k dt loses its digits (a subnormal
+1e-320 s is printed back as 9.99989e-321 s); the longest is :data:`MAX_DURATION_S`."""
 
 MAX_ARGS = 1000
 """Most command-line arguments of one ``alpes-dyn`` command (argparse's parsing grows faster than linearly)."""
@@ -113,6 +118,15 @@ def check_duration(value: object, field: str) -> float:
     if x > MAX_DURATION_S:
         raise InputError(f"{field}: {x:g} s is over the limit of {MAX_DURATION_S:g} s")
     return x
+
+
+def check_time_step(dt: float, field: str = "dt") -> float:
+    """``dt`` (already a finite positive float) within [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`] s, else
+    InputError naming ``field``."""
+    if not MIN_TIME_STEP_S <= dt <= MAX_DURATION_S:
+        raise InputError(f"{field}: {dt:g} s is outside [{MIN_TIME_STEP_S:g}, {MAX_DURATION_S:g}] s, the time steps "
+                         "accepted")
+    return dt
 
 
 def check_bytes(nbytes: float, field: str, detail: str) -> None:

@@ -41,7 +41,7 @@ from .buildcache import CompilerError
 from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
 from ..checks import as_float_array
 from ..errors import InputError
-from ..limits import check_bytes
+from ..limits import check_bytes, check_time_step
 from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
@@ -204,7 +204,7 @@ def _check_dt(dt: Any) -> float:
         raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}")
     if not math.isfinite(d) or d <= 0:
         raise InputError(f"dt: expected a positive finite number of seconds, got {dt!r}")
-    return d
+    return check_time_step(d)
 
 
 def _n_steps(duration: Any, dt: float) -> int:

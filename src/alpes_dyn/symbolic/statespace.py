@@ -37,6 +37,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
+from ..limits import check_time_step
 from ..rebuild import Rebuilt
 from ..model.contact import Contact, as_contacts
 from ..model.robot import Model
@@ -354,6 +355,8 @@ class StateSpace(Rebuilt):
         if dt is not None and (isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating))
                                or not np.isfinite(dt) or dt <= 0):
             raise InputError(f"dt: expected a positive number of seconds or None, got {dt!r}")
+        if dt is not None:
+            check_time_step(float(dt))
         args = [x0, u0] + ([F0] if F0 is not None else [])
         A, B, C, D = (np.asarray(M, dtype=float) for M in self._jacobian_function()(*args))
         if not all(np.isfinite(M).all() for M in (A, B, C, D)):
