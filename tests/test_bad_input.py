@@ -68,6 +68,10 @@ URDFS = {
     "mimic_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="revolute"><mimic joint="j1"/>',
                                   1),
     "many_links_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(1001)) + "</robot>",
+    "star_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(202))
+                 + "".join(f"<joint name='j{i}' type='revolute'><parent link='l0'/><child link='l{i + 1}'/>"
+                           "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for i in range(201))
+                 + "</robot>",  # 201 joints on the base: Pinocchio's data would grow with their square
     "deep_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'><inertial><mass value='1'/><inertia ixx='1' "
                                               "ixy='0' ixz='0' iyy='1' iyz='0' izz='1'/></inertial></link>"
                                               for i in range(102))
@@ -165,13 +169,18 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
-                 robotctl_toml=ROBOT_CONTROL_SPEC.encode())
+                 robotctl_toml=ROBOT_CONTROL_SPEC.encode(),
+                 robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
     files["replay_csv"] = ("\n".join(rows) + "\n").encode()
     files.update({f"rec{m[-1]}_csv": text.encode() for m, text in _recordings().items()})
     files["enchuge_csv"] = _huge_encoder(_recordings()["finger3"]).encode()
+    lines = _recordings()["finger3"].splitlines()
+    files["grav149_csv"] = "\n".join([lines[0] + ",gravity_x,gravity_y,gravity_z"]
+                                     + [row + ",0,0,-14.9" for row in lines[1:]]).encode()  # 1.5 g: not the Earth's
+    files["unders_csv"] = "\n".join(lines[:5] + [lines[5].replace(",", ",1_0", 1)] + lines[6:]).encode()
     files["current_csv"] = _recordings()["finger3"].replace("torque_finger", "current_finger", 1).encode()
     out = {}
     for name, data in files.items():
@@ -273,6 +282,8 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--params", "{fifo}", "-o", "{tmp}/r.csv", needle="is a FIFO (named pipe), expected a regular"),
     ],
     "identifiability": [
+        C("identifiability", "--max-operations", "99999999999999999999",
+          needle="max_operations: 99999999999999999999 is over the limit of 50000000"),
         C("identifiability", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--design", "scenario",
           needle="--design: scenario is the Alpes fingers' estimation scenario"),
         C("identifiability", "--model", "{robot_urdf}", needle="--spec: identifiability on a URDF --model needs"),
@@ -296,6 +307,13 @@ CLI: dict[str, list[Cli]] = {
         C("identifiability", "--params", "{deep_toml}", needle="nested more than 32 deep"),
     ],
     "identify": [
+        C("identify", "--data", "{grav149_csv}", "-o", "{tmp}/i.toml",
+          needle="gravity has norm 14.9 m/s^2 at row 2; expected 9.81 m/s^2 within 10 %"),
+        C("identify", "--data", "{unders_csv}", "-o", "{tmp}/i.toml", needle="line 6: not a number ('1_0"),
+        C("identify", "--data", "{rec3_csv}", "--torque-noise", "1e308", "-o", "{tmp}/i.toml",
+          needle="torque_noise: expected a non-negative number of N m, at most 1, got 1e+308"),
+        C("identify", "--data", "{rec3_csv}", "--encoder-noise", "1_0", "-o", "{tmp}/i.toml",
+          needle="--encoder-noise: invalid float value: '1_0'"),
         C("identify", "--model", "{robot_urdf}", "--data", "x.csv", needle="--spec: identification on a URDF --model"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--rotor-inertia",
           needle="--rotor-inertia: applies to the Alpes models; a URDF --model's rotor inertia is its spec's"),
@@ -397,6 +415,9 @@ CLI: dict[str, list[Cli]] = {
         C("sweep", "-o", "{dir}", needle="is a directory"),
     ],
     "mjcf": [
+        C("mjcf", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
+          needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
+        C("mjcf", "finger3", "--tilt", "1e308", needle="--tilt: expected a finite angle in degrees within [-180, 180]"),
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
         C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
@@ -493,11 +514,13 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--model", "nofinger", needle="--model: the control scenario is defined for one finger"),
     ],
     "linearize": [
+        C("linearize", "--output", "sum+sum", needle="output: 'sum_finger' is asked for twice in 'sum+sum'"),
+        C("observability", "--output", "joints:j1,j1", needle="output: 'q_j1' is asked for twice"),
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
         C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),
         C("linearize", "--q=nan,0,0", needle="--q: contains NaN or inf"),
-        C("linearize", "--dt", "1e308", "--json", needle="dt: the discrete A, B are not finite at dt = 1e+308 s"),
-        C("linearize", "--dt", "1e308", needle="dt: the discrete A, B are not finite"),
+        C("linearize", "--dt", "1e308", "--json", needle="dt: 1e+308 s is outside [1e-09, 1e+06] s"),
+        C("linearize", "--dt", "1e-320", needle="dt: 9.99989e-321 s is outside [1e-09, 1e+06] s"),
     ],
     "(global)": [
         C(needle="the following arguments are required: command"),
@@ -535,6 +558,8 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
     ],
     "dynamics": [
+        C("dynamics", "--model", "{star_urdf}", needle="URDF: 201 moving joints, over the limit of 200"),
+        C("dynamics", "--q=1_0,0,0", needle="--q: expected comma-separated numbers, got '1_0,0,0'"),
         C("dynamics", "--model", "finger9", needle="unknown model 'finger9'"),
         C("dynamics", "--q=0.1,0.2", needle="--q: model 'finger3' has 3 joints, got 2 values"),
         C("dynamics", "--q=0.1,x,0.2", needle="--q: expected comma-separated numbers"),
@@ -632,6 +657,9 @@ CLI: dict[str, list[Cli]] = {
           needle="finger.K: value must be >= 0"),
     ],
     "estimate": [
+        C("estimate", "--data", "{grav149_csv}", needle="gravity has norm 14.9 m/s^2"),
+        C("estimate", "--duration", "1_0", needle="--duration: invalid float value: '1_0'"),
+        C("control", "--duration", "1_0", needle="--duration: expected a positive number of seconds, got '1_0'"),
         C("estimate", "--model", "{robot_urdf}", "--spec", "{robot_toml}",
           needle="--model: the simulated estimation scenario is the Alpes fingers'; on a URDF --model run the observer"),
         C("estimate", "--friction-free", needle="--friction-free: applies to a URDF --model on a recording"),
@@ -1083,14 +1111,26 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model(URDFS["mimic_urdf"]), ModelError, "<mimic joint='j1'> is not modelled"),
     A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
     A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
+    A("simulate", lambda c: _sim(c, method="cvodes", rtol="x"), InputError, "rtol: expected a positive number, got 'x'"),
+    A("simulate", lambda c: _sim(c, method="cvodes", atol=-1.0), InputError, "atol: expected a positive finite number"),
+    A("simulate", lambda c: _sim(c, inputs=np.ma.masked_array(np.zeros((10, 3)), mask=np.eye(10, 3))), InputError,
+      "inputs: masked values are not supported"),
+    A("Model", lambda c: c.m.inertia_matrix(np.ma.masked_array([0.1, 0.2, 0.3], mask=[1, 0, 0])), InputError,
+      "q: masked values are not supported"),
+    A("Model", lambda c: ad.Model(URDFS["star_urdf"]), ModelError, "URDF: 201 moving joints, over the limit of 200"),
     A("simulate", lambda c: _sim(c, inputs=["0", "0", "0"]), InputError, "inputs: expected an array of numbers"),
     A("simulate", lambda c: _sim(c, inputs=np.zeros(3, bool)), InputError, "inputs: expected an array of numbers or a "
       "callable of time, got booleans"),
     A("simulate", lambda c: _sim(c, duration=1e308), InputError, "duration: 1e+308 s at dt = 0.001 s is more than 2^53"),
     A("simulate", lambda c: _sim(c, duration=10**400), InputError, "duration: expected a positive finite number"),
     A("simulate", lambda c: _sim(c, duration=True), InputError, "duration: expected a positive number of seconds"),
+    A("StateSpace", lambda c: __import__("alpes_dyn.symbolic.statespace", fromlist=["x"]).StateSpace(
+        c.m, output=["encoder", "encoder"]), InputError, "output: 'q_m_finger' is asked for twice"),
     A("StateSpace", lambda c: c.ss.linearize(np.zeros(6), np.zeros(1), dt=1e308), InputError,
-      "dt: the discrete A, B are not finite at dt = 1e+308 s"),
+      "dt: 1e+308 s is outside [1e-09, 1e+06] s"),
+    A("compile_rollout", lambda c: _rollout(c, dt=1e-320), InputError, "dt: 9.99989e-321 s is outside [1e-09, 1e+06] s"),
+    A("ExtendedKalmanFilter", lambda c: __import__("alpes_dyn.estimation.observers", fromlist=["x"]).ExtendedKalmanFilter(
+        c.ss, 1e300, process_noise=1e-9, measurement_noise=1e-7), InputError, "dt: 1e+300 s is outside"),
     A("fisher_information", lambda c: _fim(c, U=[10**400] * 10), InputError, "U: expected an array of numbers, got a "
       "number too large"),
     A("fisher_information", lambda c: _fim(c, U=[True] * 10), InputError, "U: expected an array of numbers, got "
@@ -1122,6 +1162,11 @@ API: list[Api] = [
     A("write_params", lambda c: _write_params(c.f["fifo"]), ModelError, "is a FIFO (named pipe); only a regular file"),
     A("write_recording", lambda c: _write_rec(c.f["device"]), RecordingError, "is a character device"),
     A("read_recording", lambda c: _read_rec(c.f["fifo"]), RecordingError, "recording '{fifo}': is a FIFO"),
+    A("read_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).read_recording(
+        c.f["rec3_csv"], "finger3"), RecordingError,
+      "model: expected an alpes_dyn Model (it names the columns), got str"),
+    A("read_recording", lambda c: _read_rec(c.f["unders_csv"]), RecordingError, "not a number ('1_0"),
+    A("read_recording", lambda c: _read_rec(c.f["grav149_csv"]), RecordingError, "gravity has norm 14.9 m/s^2"),
     A("read_recording", lambda c: _read_rec(c.f["longcell_csv"]), RecordingError, "a cell of 300 characters"),
     A("read_recording", lambda c: _read_rec(c.f["current_csv"], True), RecordingError,
       "torque_constant: expected a positive number of N m/A, got True"),
@@ -1165,6 +1210,8 @@ API: list[Api] = [
                                       .replace("j1 = 0.04", "j1 = 0.0").replace("j1 = 2.0, ", "")), InputError,
       "spec: the rest configuration (motors off) cannot be found: static equilibrium: singular stiffness"),
     A("ExperimentDesign", lambda c: _design(duration=1e308).check(), InputError, "duration: 1e+308 s is over the limit"),
+    A("observability", lambda c: ad.observability("finger2", max_operations=10**20), InputError,
+      "max_operations: 100000000000000000000 is over the limit of 50000000"),
     A("observability", lambda c: ad.observability("finger2", order=10**20), InputError, "order: 100000000000000000000 "
       "is over the limit of 1000"),
     A("check_duration", lambda c: _check_duration(10**400), InputError, "d: expected a finite number of seconds"),
@@ -1246,6 +1293,19 @@ API: list[Api] = [
     A("StateSpace", lambda c: ad.StateSpace(c.m, input="tendon"), ModelError, "unknown input 'tendon'"),
     A("observability", lambda c: ad.observability("finger3", seed=-1), InputError, "seed: expected an integer >= 0"),
     A("experiment", lambda c: _exp(seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("experiment", lambda c: _exp(design=_design(duration=True)), InputError, "duration: expected a real number, got bool"),
+    A("experiment", lambda c: _exp(design=_design(dt="0.001")), InputError, "dt: expected a real number, got str"),
+    A("experiment", lambda c: _exp(design=_design(substeps=True)), InputError, "substeps: expected an integer in [1, 64]"),
+    A("experiment", lambda c: _exp(design=_design(frequencies=(1j,))), InputError, "frequencies: complex values"),
+    A("experiment", lambda c: _exp(design=_design(orientations=((0.0, 0.0, -14.9),))), InputError,
+      "orientations: gravity vector [0.0, 0.0, -14.9] has norm 14.9 m/s^2; expected 9.81 m/s^2 within 10 %"),
+    A("experiment", lambda c: _exp(design={"duration": 0.2}), InputError, "design: expected an ExperimentDesign, got dict"),
+    A("experiment", lambda c: _exp(true_params=c.f["params_toml"], path=c.f["params_toml"]), InputError,
+      "path: '{params_toml}' is the input of true_params; refusing to write over it"),
+    A("experiment", lambda c: _exp(path=c.f["tmp"] + "/newdir/"), InputError, "path: '{tmp}/newdir/' ends with '/'"),
+    A("experiment", lambda c: _exp(path=c.f["link"]), InputError, "path: '{link}' is a symbolic link"),
+    A("write_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).write_recording(
+        _exp(), c.f["tmp"] + "/newdir/"), InputError, "ends with '/'"),
     A("experiment", lambda c: _exp(model="hand"), InputError, "defined for one chain"),
     A("experiment", lambda c: _exp(model="finger3", chain="pinky"), ModelError, "chain: unknown finger 'pinky'"),
     A("experiment", lambda c: _exp(model="thumb", chain="index"), ModelError, "chain: only a finger model"),
@@ -1262,6 +1322,19 @@ API: list[Api] = [
     A("perturbed_params", lambda c: _pp(chains=("pinky",)), InputError,
       "chains: unknown chain 'pinky' (expected one of index, middle, ring, little, thumb)"),
     A("identify", lambda c: _ident(c, interval=0.0), InputError, "interval: expected a positive number"),
+    A("identify", lambda c: _ident(c, interval=1e308), InputError, "interval: 1e+308 s must hold 2 to"),
+    A("identify", lambda c: _ident(c, interval=True), InputError, "interval: expected a positive number, got True"),
+    A("identify", lambda c: _ident(c, substeps=10**9), InputError, "substeps: expected an integer from 1 to 1000"),
+    A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
+        lambda seed: {"x": 1.0}, 1, options=5, serial=True), InputError, "options: expected a dict of keyword arguments"),
+    A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
+        lambda seed: {"x": 1.0}, 1, options={"seed": 3}, serial=True), InputError, "options: 'seed' is each draw's own"),
+    A("identify", lambda c: _ident(c, max_iterations=True), InputError, "max_iterations: expected a positive integer"),
+    A("identify", lambda c: _ident(c, excitation="abc"), InputError, "excitation: expected frequencies in Hz, got a string"),
+    A("identify", lambda c: _ident(c, excitation=[1j]), InputError, "excitation: complex values are not supported"),
+    A("identify", lambda c: _ident(c, recording=_exp(design=_design(duration=0.5)),
+                                   validation=_exp(design=_design(duration=0.5))), RecordingError,
+      "validation: the same samples as the recording fitted"),
     A("identify", lambda c: _ident(c, interval=10.0), InputError, "interval: 10 s must hold 2 to"),
     A("identify", lambda c: _ident(c, parameters="K_7"), ModelError, "unknown parameter 'K_7'"),
     A("identify", lambda c: _ident(c, parameters="K,tilt_w"), ModelError, "unknown parameter 'tilt_w'"),
@@ -1405,6 +1478,12 @@ API: list[Api] = [
     A("cylinder_normal", lambda c: _cyl_normal(c, (0, np.nan, 1)), InputError, "normal: expected a non-zero 3-vector"),
     # the MJCF export's realism options
     A("mjcf_string", lambda c: _mjcf(stiction=0.0), InputError, "stiction: expected a positive time constant"),
+    A("mjcf_string", lambda c: _mjcf(timestep=True), InputError, "timestep: expected a positive number of seconds"),
+    A("mjcf_string", lambda c: _mjcf(contact_q=[0.1, 0.2]), InputError, "contact_q: places the block of scene='block'"),
+    A("mjcf_string", lambda c: _mjcf(contact_q=[0.1, 0.2, 1j], scene="block"), InputError, "contact_q: complex values"),
+    A("mjcf_string", lambda c: _mjcf(block_tilt=float("nan"), scene="block"), InputError,
+      "block_tilt: expected a finite angle in rad"),
+    A("mjcf_string", lambda c: _mjcf(tilt=4.0), InputError, "tilt: expected a finite angle in rad within [-pi, pi]"),
     A("mjcf_string", lambda c: _mjcf(stiction="0.5 ms"), InputError, "stiction: expected a positive time constant"),
     A("mjcf_string", lambda c: _mjcf(tendon_stiffness=-4e4), InputError, "tendon_stiffness: expected a positive"),
     A("mjcf_string", lambda c: _mjcf(tendon_stiffness=True), InputError, "tendon_stiffness: expected a positive"),
@@ -2009,3 +2088,39 @@ def test_numpy_reprs_are_plain_in_warnings_and_cli_lines():
         assert str(caught[0].message) == "q = 0.1 at 3, True"
         assert issubclass(cls, UserWarning)
     assert _one_line(f"x {np.float64(2.5)!r}\n{np.float32(1.5)!r}") == "x 2.5 1.5"
+
+
+def test_closed_stdout_is_one_line_exit_2():
+    """``>&-``: no stdout at all (sys.stdout is None): one line on stderr and exit 2, not an AttributeError."""
+    r = _cli("dynamics", "--json", capture_output=True, preexec_fn=lambda: os.close(1))
+    assert r.returncode == 2, r.stderr
+    assert r.stderr == "alpes-dyn: error: stdout: closed (nowhere to write the output)\n"
+
+
+def test_unreachable_scheduler_is_one_input_error(monkeypatch):
+    """A --scheduler that does not answer (Dask's OSError after its timeout) is an InputError naming it."""
+    import distributed
+
+    from alpes_dyn.studies.sweep import sweep
+
+    def refuse(address, timeout=None):
+        raise OSError(f"Timed out trying to connect to {address} after 10 s")
+
+    monkeypatch.setattr(distributed, "Client", refuse)
+    with pytest.raises(InputError, match=r"^scheduler: cannot connect to 'tcp://127.0.0.1:1' \(OSError: Timed out"):
+        sweep(lambda seed: {"x": 1.0}, 1, scheduler="tcp://127.0.0.1:1")
+
+
+def test_experiment_on_the_file_true_params_out_wrote():
+    """``experiment --params TRUE.toml`` on the finger ``--perturb 0.2 --seed 11`` drew: its springs spread the joints
+    so that the bias putting their mean mid-range leaves j1 out of range; the bias then moves to where every joint's
+    static equilibrium (solved here again, on the finger itself) is in range, instead of refusing the file."""
+    from alpes_dyn.estimation.experiment import ExperimentDesign, excitation, perturbed_params
+
+    true = perturbed_params(spread=0.2, seed=11)
+    finger = ad.Model.alpes("finger3", friction=True, params=true)
+    design = ExperimentDesign(duration=0.2)
+    bias, amp = excitation(finger, design)
+    q = finger.static_equilibrium(finger.transmission.joint_torque(np.array([bias])), np.zeros(3))
+    assert np.all(q >= finger.lower + design.margin) and np.all(q <= finger.upper - design.margin), q
+    assert amp > 0

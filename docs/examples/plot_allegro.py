@@ -18,12 +18,17 @@ import numpy as np
 
 import alpes_dyn as ad
 from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.model.stops import JointStops
 from alpes_dyn.simulation import simulate
-from alpes_dyn.model.spec import example_spec_path
+from alpes_dyn.model.spec import TransmissionSpec, example_spec_path
 from alpes_dyn.symbolic.statespace import StateSpace
 
 urdf = ad.example_robot_urdf("allegro_hand", "allegro_right_hand")
-hand = ad.Model.from_urdf_file(urdf, example_spec_path("allegro_hand"))
+# The shipped spec leaves every spring resting at 0 rad, below the range [15, 80] deg of the thumb's first
+# joint (nothing measured says where the real thumb's spring rests); here it rests inside, at 0.5 rad.
+spec = TransmissionSpec.from_toml(example_spec_path("allegro_hand").read_text(encoding="utf-8")
+                                  + '\n[rest_angle]\n"joint_12.0" = 0.5\n')
+hand = ad.Model.from_urdf_file(urdf, spec)
 print(hand)
 print("joints (Pinocchio's order):", ", ".join(hand.joint_names))
 print("motors:", ", ".join(hand.motor_names))
@@ -62,21 +67,24 @@ except ad.ModelError as exc:  # python-control is an optional extra
 # %%
 # Simulation and an observer
 # --------------------------
-# The hand starts at rest with its fingers stretched; the tendons pull with a grasp torque plus a
+# The hand starts still with its fingers stretched, each joint at 0 or, where 0 is out of its range (the
+# thumb's first joint turns from 15 deg), just inside it; the tendons pull with a grasp torque plus a
 # slow sine. An extended Kalman filter that sees only the 8 (quantised) encoders and the motor
 # torques estimates all 16 joint angles. It starts away from the truth: every joint guessed 0.3 rad
 # (17 deg) more flexed than it is. The first encoder sample corrects each tendon's sum of joints; how that sum splits
-# over the joints comes from the dynamics, within about 0.1 s.
+# over the joints comes from the dynamics, within about 0.1 s. The simulated hand has its joint stops (the index's
+# first joint swings onto its stop near 0.34 s); the EKF's model has none, and its error grows a little there.
 
 dt, T = 2e-3, 0.6
 t = dt * np.arange(int(round(T / dt)))
 U = u_grasp * (1 + 0.3 * np.sin(2 * np.pi * 2.0 * t))[:, None]
-sim = simulate(ss, np.zeros(32), U, duration=T, dt=dt)
+q_start = np.clip(np.zeros(16), hand.lower + 0.05, hand.upper - 0.05)  # rad, inside every joint's range
+sim = simulate(ss, np.r_[q_start, np.zeros(16)], U, duration=T, dt=dt, stops=JointStops.of(hand))  # the joint stops
 step = 2 * np.pi / hand.transmission.counts_per_rev
 Y = hand.transmission.quantize(sim.y)
 ekf = make_observer("ekf", ss, dt, process_noise=[1e-10] * 16 + [1e-4] * 16,
                     measurement_noise=[step**2 / 12] * 8)
-z0 = np.r_[np.full(16, 0.3), np.zeros(16)]  # the guess: every joint 0.3 rad more flexed, at rest
+z0 = np.r_[q_start + 0.3, np.zeros(16)]  # the guess: every joint 0.3 rad more flexed, still
 est = ekf.run(z0, [0.3**2] * 16 + [1.0] * 16, U, Y)
 err = np.degrees(np.abs(est.z[:, :16] - sim.x[:, :16])).max(axis=1)  # the worst joint at each sample
 for k in (0, int(round(0.1 / dt)), len(sim.t) - 1):

@@ -20,12 +20,14 @@ def as_float_array(x: object, name: str, expected: str) -> np.ndarray:
     """``x`` as a float array (no copy when it already is one).
 
     Only real numbers are accepted: complex values (whose imaginary part a float conversion would
-    drop), booleans (``True`` is not 1.0 here), strings (``"1"`` is not a number either, nor a list of
-    them), None and other objects raise :class:`~alpes_dyn.InputError`
+    drop), masked arrays with masked entries (whose mask it would drop), booleans (``True`` is not 1.0
+    here), strings (``"1"`` is not a number either, nor a list of them), None and other objects raise :class:`~alpes_dyn.InputError`
     ``"<name>: expected <expected>, got ..."``; an integer too large for a float too.
     """
     if isinstance(x, (str, bytes)):
         raise InputError(f"{name}: expected {expected}, got a string {x!r:.60}")
+    if isinstance(x, np.ma.MaskedArray) and np.ma.is_masked(x):  # np.asarray would drop the mask, not the values
+        raise InputError(f"{name}: masked values are not supported (give the values, or NaN where they are missing)")
     try:
         a = np.asarray(x)
     except (TypeError, ValueError, OverflowError):

@@ -348,6 +348,8 @@ def atomic_path(path: str | os.PathLike[str], what: str = "output",
     (``error``) and never replaced. ``OSError`` becomes ``error`` naming ``what`` and the path.
     """
     dest = _path(path, what, error)
+    if os.fspath(path).endswith(("/", os.sep)):  # type: ignore[arg-type]
+        raise error(f"{what}: {os.fspath(path)!r} ends with '/': it names a directory, expected a file name")
     _check_destination(dest, what, error)
     parent = dest.parent
     with signals_as_exceptions():

@@ -10,11 +10,12 @@
 * Input files, checked before they are parsed (:mod:`alpes_dyn.fileio`): a parameter file, spec or
   URDF of at most :data:`MAX_TEXT_BYTES`, a recording of at most :data:`MAX_RECORDING_BYTES`; a
   recording's cells of at most :data:`MAX_CSV_CELL` characters and at most :data:`MAX_CSV_ROWS`
-  rows; a URDF of at most :data:`MAX_URDF_LINKS` links and a kinematic tree of depth at most
-  :data:`MAX_URDF_DEPTH` (counted before Pinocchio's parser sees it); TOML nested at most
+  rows; a URDF of at most :data:`MAX_URDF_LINKS` links, :data:`MAX_URDF_JOINTS` moving joints and a kinematic
+  tree of depth at most :data:`MAX_URDF_DEPTH` (counted before Pinocchio's parser sees it); TOML nested at most
   :data:`MAX_TOML_DEPTH` deep, its integers at most :data:`MAX_TOML_INT` in magnitude.
-* Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, derivative orders at
-  most :data:`MAX_ORDER`; at most :data:`MAX_ARGS` command-line arguments.
+* Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, time steps in
+  [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`], derivative orders at
+  most :data:`MAX_ORDER`, operation caps at most :data:`MAX_OPERATIONS`; at most :data:`MAX_ARGS` command-line arguments.
 """
 
 from __future__ import annotations
@@ -25,9 +26,9 @@ import os
 
 from .errors import InputError
 
-__all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
-           "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_TOML_DEPTH", "MAX_TOML_INT",
-           "MAX_DURATION_S", "MAX_ORDER", "MAX_ARGS"]
+__all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "check_time_step", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
+           "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_URDF_JOINTS", "MAX_TOML_DEPTH", "MAX_TOML_INT",
+           "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS"]
 
 MAX_POINTS = 10_000
 """Most random points for the observability rank and the report's dynamics cross-check."""
@@ -50,6 +51,10 @@ MAX_URDF_LINKS = 1000
 MAX_URDF_DEPTH = 100
 """Deepest kinematic chain of a URDF, joints from the root (a finger has 3, an arm about 7)."""
 
+MAX_URDF_JOINTS = 200
+"""Most moving joints (degrees of freedom) of a URDF (the Alpes hand has 14, a humanoid about 50): Pinocchio's
+data takes memory and time growing with the square of the joints (a 1000-joint URDF asks for 16 GB)."""
+
 MAX_TOML_DEPTH = 32
 """Deepest nesting of arrays and tables in a parameter file or spec."""
 
@@ -59,11 +64,19 @@ MAX_TOML_INT = 2**53
 MAX_DURATION_S = 1e6
 """Longest simulated or recorded duration a user can ask for, s (the array limit usually comes first)."""
 
+MIN_TIME_STEP_S = 1e-9
+"""Shortest time step (integration, sampling, discretisation), s: below, t = k dt loses its digits (a subnormal
+1e-320 s is printed back as 9.99989e-321 s); the longest is :data:`MAX_DURATION_S`."""
+
 MAX_ARGS = 1000
 """Most command-line arguments of one ``alpes-dyn`` command (argparse's parsing grows faster than linearly)."""
 
 MAX_ORDER = 1000
 """Highest derivative order of an observability or identifiability test."""
+
+MAX_OPERATIONS = 50_000_000
+"""Largest size cap (``max_operations``, CasADi operations) of one derivative order's function in the observability
+and identifiability tests (25 times the default; a larger cap lets one order take hours and tens of GB)."""
 
 DEFAULT_MAX_BYTES = 2 * 1024**3
 """Default limit of the estimated size of a run's arrays, bytes (2 GiB)."""
@@ -105,6 +118,15 @@ def check_duration(value: object, field: str) -> float:
     if x > MAX_DURATION_S:
         raise InputError(f"{field}: {x:g} s is over the limit of {MAX_DURATION_S:g} s")
     return x
+
+
+def check_time_step(dt: float, field: str = "dt") -> float:
+    """``dt`` (already a finite positive float) within [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`] s, else
+    InputError naming ``field``."""
+    if not MIN_TIME_STEP_S <= dt <= MAX_DURATION_S:
+        raise InputError(f"{field}: {dt:g} s is outside [{MIN_TIME_STEP_S:g}, {MAX_DURATION_S:g}] s, the time steps "
+                         "accepted")
+    return dt
 
 
 def check_bytes(nbytes: float, field: str, detail: str) -> None:

@@ -76,7 +76,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
-from ..limits import MAX_ORDER, MAX_POINTS
+from ..limits import MAX_OPERATIONS, MAX_ORDER, MAX_POINTS
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
 
@@ -262,6 +262,8 @@ class ObservabilityMatrix:
 def _max_operations(cap: Any) -> int:
     if isinstance(cap, (bool, np.bool_)) or not isinstance(cap, (int, np.integer)) or cap < 1:
         raise InputError(f"max_operations: expected a positive integer, got {cap!r}")
+    if cap > MAX_OPERATIONS:
+        raise InputError(f"max_operations: {cap} is over the limit of {MAX_OPERATIONS} CasADi operations")
     return int(cap)
 
 

@@ -62,6 +62,8 @@ def parse_vector(text: str, name: str) -> np.ndarray:
     """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise."""
     parts = [p.strip() for p in text.split(",")]
     try:
+        if any("_" in p for p in parts):  # float() reads 1_0 as 10: not a number written on a command line
+            raise ValueError(text)
         vals = [float(p) for p in parts]
     except ValueError:
         raise InputError(f"--{name}: expected comma-separated numbers, got {text!r}") from None
@@ -185,6 +187,8 @@ class _StdoutError(AlpesDynError):
 def _write_stdout(text: str) -> None:
     """Write ``text`` to stdout and flush it; a closed pipe or a full device is :class:`_StdoutError` (one line,
     exit 2), and stdout is then pointed at /dev/null so that the interpreter's last flush cannot fail again."""
+    if sys.stdout is None:  # started with stdout closed (``>&-``)
+        raise _StdoutError("stdout: closed (nowhere to write the output)")
     try:
         sys.stdout.write(text)
         sys.stdout.flush()

@@ -36,8 +36,8 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
     from ..model.mjcf import mjcf_string
     from ..model.params import load_params
 
-    if not math.isfinite(args.tilt):
-        raise InputError(f"--tilt: expected a finite angle in degrees, got {args.tilt!r}")
+    if not (math.isfinite(args.tilt) and abs(args.tilt) <= 180):
+        raise InputError(f"--tilt: expected a finite angle in degrees within [-180, 180], got {args.tilt!r}")
     _check_run_files(args)
     if _is_urdf_path(args.model):
         text = _urdf_mjcf(args)

@@ -47,9 +47,19 @@ _SEED = _int_at_least(0)
 _POINTS = _int_at_least(1, MAX_POINTS)
 
 
+def _strict_float(text: str) -> float:
+    """A number as argparse's ``type=float`` reads it, less Python's digit separators (``1_0`` is not 10)."""
+    if "_" in text:
+        raise ValueError(text)
+    return float(text)
+
+
+_strict_float.__name__ = "float"  # argparse's message: "invalid float value: 'x'"
+
+
 def _positive_seconds(text: str) -> float:
     try:
-        value = float(text)
+        value = _strict_float(text)
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}") from None
     if not (np.isfinite(value) and value > 0):
@@ -126,17 +136,17 @@ def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--no-limits", action="store_true", help="no joint stops")
     s.add_argument("--no-contact", action="store_true", help="collisions disabled")
     s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
-    s.add_argument("--stiction", type=float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
+    s.add_argument("--stiction", type=_strict_float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
                    help="stick-slip dry friction: frictionloss F_s with solreffriction of this time constant "
                         "(default %(const)g s when given without a value)")
-    s.add_argument("--tendon-stiffness", type=float, default=None, metavar="N_PER_M",
+    s.add_argument("--tendon-stiffness", type=_strict_float, default=None, metavar="N_PER_M",
                    help="series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
-    s.add_argument("--tendon-damping", type=float, default=0.0, metavar="N_S_PER_M",
+    s.add_argument("--tendon-damping", type=_strict_float, default=0.0, metavar="N_S_PER_M",
                    help="damping c_t of the series-elastic tendon (default 0)")
-    s.add_argument("--tendon-dead-band", type=float, default=0.0, metavar="M",
+    s.add_argument("--tendon-dead-band", type=_strict_float, default=0.0, metavar="M",
                    help="the series-elastic cable's play: slack up to this stretch, m (default 0)")
     s.add_argument("--tendon-rotor", action="store_true", help="rotor inertia J_m / r_m^2 on each rigid tendon")
-    s.add_argument("--tilt", type=float, default=0.0, metavar="DEG",
+    s.add_argument("--tilt", type=_strict_float, default=0.0, metavar="DEG",
                    help="palm tilted in the finger's plane by DEG degrees (gravity rotated about y)")
     s.set_defaults(func=cmd_mjcf)
 
@@ -189,7 +199,7 @@ def _add_linearize(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--u", help="input u0 (joint or motor torques, N m; default zeros)")
     s.add_argument("--q", help="joint angles of x0, rad (default: the rest state under --u)")
     s.add_argument("--v", help="joint velocities of x0, rad/s (default zeros; needs --q)")
-    s.add_argument("--dt", type=float, default=None, help="time step, s: discretise with a zero-order hold")
+    s.add_argument("--dt", type=_strict_float, default=None, help="time step, s: discretise with a zero-order hold")
     s.set_defaults(func=cmd_linearize)
 
 
@@ -209,9 +219,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, or ekf-params, ukf-params (which also estimate the input and spring gains: use "
                         "them with --mismatch) (default %(default)s)")
-    s.add_argument("--mismatch", type=float, default=0.0,
+    s.add_argument("--mismatch", type=_strict_float, default=0.0,
                    help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
-    s.add_argument("--duration", type=float, default=5.0, help="simulated time, s (default %(default)s)")
+    s.add_argument("--duration", type=_strict_float, default=5.0, help="simulated time, s (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints (format by "
                    "extension: .png, .pdf, .svg...)")
@@ -228,9 +238,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                         "'alpes-dyn identify -o' wrote), with --friction if it has friction")
     s.add_argument("--friction-free", action="store_true",
                    help="with --data on a URDF --model: the observer's model without its spec's friction")
-    s.add_argument("--torque-noise", type=float, default=None, metavar="NM",
+    s.add_argument("--torque-noise", type=_strict_float, default=None, metavar="NM",
                    help="with --data: white noise of the recorded torque, N m (default: estimated from the recording)")
-    s.add_argument("--torque-constant", type=float, default=None, metavar="NM_PER_A",
+    s.add_argument("--torque-constant", type=_strict_float, default=None, metavar="NM_PER_A",
                    help="with --data: the motors' torque constant, N m/A, to read a recording's current_<motor> "
                         "columns (A) as motor torques (a recording with current columns needs it)")
     s.add_argument("--disturbance", action="store_true",
@@ -291,12 +301,12 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                         "values in --params)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="the true parameter file (default: the shipped one)")
-    s.add_argument("--perturb", type=float, default=None, metavar="SPREAD",
+    s.add_argument("--perturb", type=_strict_float, default=None, metavar="SPREAD",
                    help="draw the true chain from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
                         "per link (seeded by --seed): the --chain finger's own values, the thumb's, or the shared "
                         "finger's; write it with --true-params-out")
     s.add_argument("--true-params-out", default=None, metavar="FILE", help="write the (drawn) true parameters there")
-    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--rig", choices=("level", "hanging"), default="level",
                    help="the hand's orientation during the experiment (an Alpes model): level, palm up as the "
                         "file's gravity (default), or hanging, fingers down (a finger whose springs fold palm up "
@@ -325,7 +335,7 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="parameter file to start from, and the base of the written file (default: the shipped one)")
-    s.add_argument("--torque-constant", type=float, default=None, metavar="NM_PER_A",
+    s.add_argument("--torque-constant", type=_strict_float, default=None, metavar="NM_PER_A",
                    help="the motors' torque constant, N m/A, to read the recordings' current_<motor> columns (A) as "
                         "motor torques (a recording with current columns needs it)")
     s.add_argument("--parameters", default=None,
@@ -349,13 +359,13 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine and its dither: fit it on their lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
-    s.add_argument("--torque-noise", type=float, default=None,
+    s.add_argument("--torque-noise", type=_strict_float, default=None,
                    help="white noise of the recorded torque, N m (errors in variables). Default: estimated from "
                         "the torque off the excitation's lines; with --excitation none, 0 (the torque taken as exact)")
     s.add_argument("--validate", default=None, metavar="REC2.csv",
                    help="a held-out recording of the same finger: the fitted model simulated on its torque, fit %% "
                         "and NRMSE per encoder (MATLAB's compare), part of the adequacy verdict")
-    s.add_argument("--encoder-noise", type=float, default=None, metavar="COUNTS",
+    s.add_argument("--encoder-noise", type=_strict_float, default=None, metavar="COUNTS",
                    help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
                         "adequacy check (default: estimated from the recording)")
     s.add_argument("--force", action="store_true",
@@ -384,7 +394,7 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
                         "scenario (the estimation scenario's small torque wiggle) or none (structural only)")
-    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--camera-times", default=None, metavar="T1,T2,...",
                    help="times (s) where a camera or a jig measures every joint angle once (noise 0.1 degree)")
     s.add_argument("--points", type=_POINTS, default=8, help="random points for the generic rank (default %(default)s)")
@@ -407,8 +417,8 @@ def _add_sweep(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--draws", type=_int_at_least(1), default=4, help="number of draws (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the first draw; draw k has seed + k "
                    "(default %(default)s)")
-    s.add_argument("--spread", type=float, default=0.2, help="relative spread per link (default %(default)s)")
-    s.add_argument("--duration", type=float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--spread", type=_strict_float, default=0.2, help="relative spread per link (default %(default)s)")
+    s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--no-fit", action="store_true", help="no identification: the EKF on the nominal file only")
     s.add_argument("--workers", type=_int_at_least(1), default=2,
                    help="processes of the local Dask cluster (default %(default)s)")

@@ -45,6 +45,7 @@ its searches scaled by the robot's own static torques.
 from __future__ import annotations
 
 import math
+import numbers
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
@@ -52,14 +53,16 @@ from typing import Callable, Sequence
 
 import numpy as np
 
+from ..checks import as_float_array
 from ..errors import InputError
-from ..limits import MAX_DURATION_S
+from ..fileio import check_outputs
+from ..limits import check_duration
 from ..model.robot import Model
 from ..model.params import HandParams, load_params
 from ..model.transmission import torque_before
 from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .draws import perturbed_params  # noqa: F401 (re-exported)
-from .recording import Recording, write_recording
+from .recording import GRAVITY, GRAVITY_TOLERANCE, Recording, gravity_norm_off, write_recording
 from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning
 
@@ -102,17 +105,29 @@ class ExperimentDesign:
         return int(round(self.duration / self.dt)) + 1
 
     def check(self) -> "ExperimentDesign":
+        """This design, every field checked (InputError naming the first bad one): real numbers only (a bool,
+        a string or a complex number is refused, not read as 1 s or its real part), in their ranges."""
+        for name in ("duration", "dt", "margin", "camera_noise", "encoder_noise_counts", "torque_noise",
+                     "amplitude_fraction", "dither", "dither_frequency", "torque_bias", "torque_amplitude"):
+            v = getattr(self, name)
+            if v is None and name in ("torque_bias", "torque_amplitude"):
+                continue
+            if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
+                raise InputError(f"{name}: expected a real number, got {type(v).__name__} {v!r:.40}")
+        for name in ("frequencies", "orientations", "camera_times"):
+            as_float_array(getattr(self, name), name, "real numbers")
+        if not isinstance(self.trim_bias, (bool, np.bool_)):
+            raise InputError(f"trim_bias: expected True or False, got {self.trim_bias!r:.40}")
+        check_duration(self.duration, "duration")
         if not (math.isfinite(self.dt) and 0 < self.dt <= 0.1):
             raise InputError(f"dt: expected a sample period in (0, 0.1] s, got {self.dt!r}")
-        if isinstance(self.duration, (int, float)) and math.isfinite(self.duration) and self.duration > MAX_DURATION_S:
-            raise InputError(f"duration: {self.duration:g} s is over the limit of {MAX_DURATION_S:g} s")
         N = round(self.duration / self.dt) if math.isfinite(self.duration) else -1
         if N < 100 or abs(N * self.dt - self.duration) > 1e-9 * self.duration:
             raise InputError(f"duration: expected a whole number of at least 100 samples of {self.dt:g} s, "
                              f"got {self.duration!r}")
         if N > 2_000_000:
             raise InputError(f"duration: {self.duration:g} s is more than 2e6 samples")
-        if not isinstance(self.substeps, int) or not 1 <= self.substeps <= 64:
+        if isinstance(self.substeps, bool) or not isinstance(self.substeps, int) or not 1 <= self.substeps <= 64:
             raise InputError(f"substeps: expected an integer in [1, 64], got {self.substeps!r}")
         f = np.asarray(self.frequencies, dtype=float)
         if f.ndim != 1 or f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0) or np.any(f >= 0.5 / self.dt):
@@ -120,6 +135,11 @@ class ExperimentDesign:
         g = np.asarray(self.orientations, dtype=float)
         if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] < 1 or not np.isfinite(g).all():
             raise InputError(f"orientations: expected gravity vectors (3 numbers each), got {self.orientations!r}")
+        off = gravity_norm_off(g)
+        if off.size:
+            raise InputError(f"orientations: gravity vector {g[off[0]].tolist()} has norm {np.linalg.norm(g[off[0]]):g} "
+                             f"m/s^2; expected {GRAVITY:g} m/s^2 within {100 * GRAVITY_TOLERANCE:g} % (a recording's gravity "
+                             "columns are checked so)")
         if not (isinstance(self.dither, (int, float)) and math.isfinite(self.dither) and 0 <= self.dither <= 100):
             raise InputError(f"dither: expected a number in [0, 100] (times each joint's breakaway torque), got "
                              f"{self.dither!r}")
@@ -138,6 +158,15 @@ class ExperimentDesign:
             if not (math.isfinite(t) and 0 <= t <= self.duration):
                 raise InputError(f"camera_times: {t!r} is outside [0, {self.duration:g}] s")
         return self
+
+
+def _checked_design(design: object) -> ExperimentDesign:
+    """``design`` (None: the documented one) checked: an :class:`ExperimentDesign`, every field in range."""
+    if design is None:
+        return ExperimentDesign().check()
+    if not isinstance(design, ExperimentDesign):
+        raise InputError(f"design: expected an ExperimentDesign, got {type(design).__name__}")
+    return design.check()
 
 
 def _oriented(model: Model, gravity: np.ndarray) -> Model:
@@ -213,6 +242,8 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
     bias = _holding_bias(model, bias, free, joints, g0)
     if design.torque_amplitude is not None:
         return bias, np.full(n_m, float(design.torque_amplitude))
+    if not within(bias) and design.torque_bias is None:
+        bias = _bias_in_range(model, bias, sprung, within)
     if not within(bias):
         raise InputError(f"torque_bias: the nominal finger's equilibrium at {_fmt(bias)} N m leaves its joint range")
     amp = np.zeros(n_m)
@@ -246,6 +277,27 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
             for k in hit:
                 amp[k] *= 0.85
     return bias, amp * design.amplitude_fraction
+
+
+def _bias_in_range(model: Model, bias: np.ndarray, sprung: list[int], within: Callable[[np.ndarray], bool],
+                   points: int = 81) -> np.ndarray:
+    """``bias`` with each sprung motor's entry moved to the nearest torque (on a grid of ``points`` over
+    [-ceiling, ceiling]) whose equilibrium keeps every joint in range: springs of unequal stiffness spread the
+    joints so that the bias putting their mean mid-range can leave one of them out (a finger drawn by
+    ``perturbed_params``); the middle of the feasible torques nearest the first choice then. Unchanged where no
+    grid torque is feasible (the caller refuses it)."""
+    out = bias.copy()
+    for k in sprung:
+        c = _torque_ceiling(model, k)
+        grid = np.linspace(-c, c, points)
+        ok = np.array([within(_with(out, k, float(tau))) for tau in grid])
+        if not ok.any():
+            continue
+        runs = np.split(np.arange(points), np.flatnonzero(np.diff(ok.astype(int))) + 1)  # feasible and not runs
+        feasible = [r for r in runs if ok[r[0]]]
+        best = min(feasible, key=lambda r: float(np.min(np.abs(grid[r] - out[k]))))
+        out[k] = float(0.5 * (grid[best[0]] + grid[best[-1]]))
+    return out
 
 
 def _torque_ceiling(model: Model, k: int) -> float:
@@ -440,7 +492,11 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
                          f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
-    design = (design or ExperimentDesign()).check()
+    design = _checked_design(design)
+    if path is not None:  # the output policy before any work: not over the parameter files read, nor a link...
+        check_outputs([("path", path)], [(name, f) for name, f in (("true_params", true_params),
+                                                                   ("nominal_params", nominal_params))
+                                         if isinstance(f, (str, Path))])
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
     nominal = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_nom, chain=chain)
@@ -473,7 +529,10 @@ def model_experiment(nominal: Model, truth: Model | None = None, design: Experim
                          f"{', '.join(truth.motor_names)}")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
-    return _run(truth, nominal, (design or ExperimentDesign()).check(), seed, path)
+    design = _checked_design(design)
+    if path is not None:
+        check_outputs([("path", path)])
+    return _run(truth, nominal, design, seed, path)
 
 
 def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path: str | Path | None) -> Recording:
@@ -529,7 +588,7 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
     if model not in EXPERIMENT_MODELS:
         raise InputError(f"model: the identification experiment is defined for one chain "
                          f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
-    design = (design or ExperimentDesign()).check()
+    design = _checked_design(design)
     if len(design.orientations) != 1:
         raise InputError(f"orientations: experiment_torque replays one orientation, got {len(design.orientations)}")
     g_true = np.asarray(design.orientations[0] if true_gravity is None else true_gravity, dtype=float)

@@ -232,6 +232,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     return result
 
 
+MAX_TORQUE_NOISE = 1.0
+"""Largest ``torque_noise`` accepted, N m (20 times a finger's torques, ~0.05 N m; far beyond, the torque's weight underflows)."""
+
+
 def _check_inputs(model: Model, recording, validation, encoder_noise, interval, camera_noise, tol, kkt,
                   max_iterations, torque_noise) -> tuple[Recording, str, tuple[Recording, str] | None]:
     """:func:`identify`'s arguments checked, the recording (and the held-out one) read: (recording, its path,
@@ -255,7 +259,7 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
                                           and math.isfinite(encoder_noise) and encoder_noise >= 0):
         raise InputError(f"encoder_noise: expected a non-negative number of counts, got {encoder_noise!r}")
     for name, v in (("interval", interval), ("camera_noise", camera_noise), ("tol", tol)):
-        if not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
+        if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v > 0):
             raise InputError(f"{name}: expected a positive number, got {v!r}")
     if val_rec is not None:
         if abs(val_rec[0].dt - rec.dt) > 1e-9 * rec.dt:
@@ -264,16 +268,22 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
         if val_rec[0].n_samples <= 4 * pre:
             raise RecordingError(f"validation: {val_rec[0].n_samples} samples are too few (the first {pre} fix the "
                                  f"start; give more than {4 * pre})")
+        v = val_rec[0]
+        if v.n_samples == rec.n_samples and np.array_equal(v.encoder, rec.encoder) and np.array_equal(v.torque, rec.torque):
+            raise RecordingError("validation: the same samples as the recording fitted (its encoder and torque "
+                                 "columns are identical); a held-out recording is another run of the experiment")
     if not isinstance(kkt, str) or kkt not in ("sparse", "dense"):
         raise InputError(f"kkt: expected 'sparse' or 'dense', got {kkt!r}")
-    if not isinstance(max_iterations, int) or max_iterations < 1:
+    if isinstance(max_iterations, bool) or not isinstance(max_iterations, int) or max_iterations < 1:
         raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
-    L, N = int(round(interval / rec.dt)), rec.n_samples - 1
+    N = rec.n_samples - 1
+    L = int(round(interval / rec.dt)) if interval <= N * rec.dt else N + 1
     if L < 2 or L > N:
         raise InputError(f"interval: {interval:g} s must hold 2 to {N} samples of {rec.dt:g} s")
     if torque_noise is not None and not (isinstance(torque_noise, (int, float)) and not isinstance(torque_noise, bool)
-                                         and math.isfinite(torque_noise) and torque_noise >= 0):
-        raise InputError(f"torque_noise: expected a non-negative number of N m, got {torque_noise!r}")
+                                         and math.isfinite(torque_noise) and 0 <= torque_noise <= MAX_TORQUE_NOISE):
+        raise InputError(f"torque_noise: expected a non-negative number of N m, at most {MAX_TORQUE_NOISE:g}, got "
+                         f"{torque_noise!r}")
     return rec, rec_path, val_rec
 
 

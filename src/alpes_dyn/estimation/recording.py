@@ -23,8 +23,9 @@ column                      unit     meaning
 reading far outside what the joints' ranges allow (more than the range and a motor turn beyond it) is
 refused by name: it is not this model's encoder in counts. Every defect is one
 :class:`~alpes_dyn.errors.RecordingError` naming the column (and the row): an unknown or missing
-column, a non-number, NaN where not allowed, time not increasing or not uniform, a joint angle or
-gravity in the wrong unit (degrees, g), a recording too short or without excitation.
+column, a non-number (``1_0`` too: no digit separators), NaN where not allowed, time not increasing or not
+uniform, a joint angle or gravity in the wrong unit (degrees, g: the gravity's norm must be 9.81 m/s^2 within
+10 %), a recording too short or without excitation.
 """
 
 from __future__ import annotations
@@ -46,6 +47,20 @@ from ..model.robot import Model
 __all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
 
 MIN_SAMPLES = 100  # a shorter recording cannot tell a finger's dynamics
+
+GRAVITY = 9.81
+"""The gravity a recording's ``gravity_*`` columns (and an experiment's orientations) hold, m/s^2."""
+
+GRAVITY_TOLERANCE = 0.1
+"""Relative tolerance on the norm of a recorded gravity vector: 9.81 m/s^2 +- 10 % (an accelerometer's scale
+error; a norm of 14.9 or of 1 m/s^2 is not the Earth's gravity in m/s^2, and a fit would read it as such)."""
+
+
+def gravity_norm_off(gravity: np.ndarray) -> np.ndarray:
+    """Indices of the rows of ``gravity`` (N, 3), m/s^2, whose norm is not :data:`GRAVITY` within
+    :data:`GRAVITY_TOLERANCE`."""
+    g = np.linalg.norm(np.atleast_2d(np.asarray(gravity, dtype=float)), axis=1)
+    return np.flatnonzero(~(np.abs(g - GRAVITY) <= GRAVITY_TOLERANCE * GRAVITY))
 
 
 @dataclass
@@ -139,6 +154,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                                             and not isinstance(torque_constant, (bool, np.bool_))
                                             and math.isfinite(torque_constant) and torque_constant > 0):
         raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r}")
+    if not isinstance(model, Model):
+        raise RecordingError(f"model: expected an alpes_dyn Model (it names the columns), got {type(model).__name__}")
     data_bytes = read_bytes(path, "recording", RecordingError, MAX_RECORDING_BYTES)
     p = Path(path)
     try:
@@ -194,6 +211,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                 data[i - 2, j] = np.nan
                 continue
             try:
+                if "_" in c:  # Python reads 1_000 as 1000; a CSV number has no digit separators
+                    raise ValueError(c)
                 data[i - 2, j] = float(c)
             except ValueError:
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: not a number ({c!r})") from None
@@ -303,11 +322,11 @@ def check_recording(rec: Recording) -> Recording:
             raise RecordingError(f"recording: {name}_* exceeds 2 pi in magnitude: joint angles must be in rad, "
                                  "not degrees")
     if rec.gravity is not None:
-        g = np.linalg.norm(rec.gravity, axis=1)
-        if np.any((g < 5.0) | (g > 15.0)):
-            k = int(np.argmax((g < 5.0) | (g > 15.0)))
-            raise RecordingError(f"recording: gravity has norm {g[k]:g} at row {k + 2}; expected about 9.81 "
-                                 "(m/s^2, not units of g)")
+        bad = gravity_norm_off(rec.gravity)
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"recording: gravity has norm {np.linalg.norm(rec.gravity[k]):g} m/s^2 at row {k + 2}; "
+                                 f"expected {GRAVITY:g} m/s^2 within {100 * GRAVITY_TOLERANCE:g} % (m/s^2, not units of g)")
     enc = np.asarray(rec.encoder, dtype=float)
     if np.all(np.ptp(enc, axis=0) < 2) and np.all(np.ptp(np.asarray(rec.torque), axis=0) == 0):
         raise RecordingError("recording: no excitation (the torque is constant and no encoder moves)")

@@ -26,6 +26,7 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
+from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from ..model.robot import Model
 from ..model.transmission import torque_before
@@ -43,7 +44,7 @@ two chunks); the states alone likewise, by the compiled step's per-sample inputs
 
 def line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
     """(N, 2 n_f + 1): 1, sin(2 pi f t), cos(2 pi f t) for f in ``frequencies`` (Hz), t from t[0]."""
-    f = np.asarray(frequencies, dtype=float).reshape(-1)
+    f = as_float_array(frequencies, "excitation", "frequencies in Hz").reshape(-1)
     if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
     t = np.asarray(t, dtype=float)

@@ -75,6 +75,7 @@ from typing import Sequence
 import numpy as np
 
 from .description import check_model_name, layout, model_params
+from ..checks import as_float_array
 from ..errors import InputError, ModelError
 from .extras import spring_stiffness
 from .params import ChainParams, HandParams, load_params
@@ -281,10 +282,17 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
         raise ModelError(f"scene 'block' is for one finger (finger2, finger3), not {model!r}")
     if scene == "cylinder" and model != "hand":
         raise ModelError(f"scene 'cylinder' is for the hand, not {model!r}; a finger's scene is 'block'")
-    if not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
+    if isinstance(timestep, bool) or not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
         raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
-    if not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction) and block_friction >= 0):
+    if isinstance(block_friction, bool) or not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction)
+                                                and block_friction >= 0):
         raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
+    if isinstance(block_tilt, bool) or not (isinstance(block_tilt, (int, float)) and math.isfinite(block_tilt)):
+        raise InputError(f"block_tilt: expected a finite angle in rad, got {block_tilt!r}")
+    if contact_q is not None:
+        as_float_array(contact_q, "contact_q", "joint angles in rad")  # not complex, bool or text
+        if scene != "block":
+            raise InputError(f"contact_q: places the block of scene='block'; the scene is {scene!r}")
     p = model_params(model, _params(params), chain)
     tendon_stiffness = _file_cable(p, tendon_stiffness)
     _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia, tendon_dead_band)
@@ -434,8 +442,8 @@ def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendo
         raise InputError("tendon_dead_band: needs tendon_stiffness (the rigid tendon has no play)")
     if not isinstance(tendon_rotor, (bool, np.bool_)):
         raise InputError(f"tendon_rotor: expected True or False, got {tendon_rotor!r}")
-    if not number(tilt):
-        raise InputError(f"tilt: expected a finite angle in rad, got {tilt!r}")
+    if not number(tilt) or abs(tilt) > math.pi:
+        raise InputError(f"tilt: expected a finite angle in rad within [-pi, pi], got {tilt!r}")
     if tendon_stiffness is not None and tendon_rotor:
         raise InputError("tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already")
     if rotor_inertia and (tendon_rotor or tendon_stiffness is not None):

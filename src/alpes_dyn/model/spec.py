@@ -119,8 +119,12 @@ def _number(value: Any, name: str, low: float | None = None, strict: bool = Fals
 
 
 def _name(value: Any, name: str) -> str:
+    """A name of the spec (motor, joint, frame, robot): a non-empty string without control characters (they
+    become XML names in the MJCF export and CSV columns, where XML 1.0 cannot hold them at all)."""
     if not isinstance(value, str) or not value:
         raise ModelError(f"{name}: expected a non-empty string, got {value!r}")
+    if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in value):
+        raise ModelError(f"{name}: {value!r} holds a control character; a name is printable text")
     return value
 
 

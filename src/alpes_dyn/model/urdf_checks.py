@@ -8,7 +8,7 @@ import re
 import xml.etree.ElementTree as ET
 
 from ..errors import ModelError
-from ..limits import MAX_URDF_DEPTH, MAX_URDF_LINKS
+from ..limits import MAX_URDF_DEPTH, MAX_URDF_JOINTS, MAX_URDF_LINKS
 
 __all__ = ["check_urdf_structure", "check_joint"]
 
@@ -50,7 +50,8 @@ def check_joint(j: ET.Element) -> None:
 
 
 def check_urdf_structure(urdf: str) -> None:
-    """Before Pinocchio's parser: at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS` links, a kinematic
+    """Before Pinocchio's parser: at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS` links and
+    :data:`~alpes_dyn.limits.MAX_URDF_JOINTS` moving joints (Pinocchio's data grows with their square), a kinematic
     tree at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` joints deep (the parser recurses per level:
     a 10,000-link chain crashes it), every joint limit with lower <= upper, no ``<mimic>`` joint
     (a coupling alpes_dyn does not model: refused rather than silently ignored), every joint of a
@@ -64,6 +65,9 @@ def check_urdf_structure(urdf: str) -> None:
         raise ModelError(f"URDF could not be parsed: {exc}") from None
     except (ValueError, RecursionError, MemoryError) as exc:
         raise ModelError(f"URDF could not be parsed: {type(exc).__name__}") from None
+    moving = [j for j in root.iter("joint") if j.get("type") not in ("fixed", None)]
+    if len(moving) > MAX_URDF_JOINTS:
+        raise ModelError(f"URDF: {len(moving)} moving joints, over the limit of {MAX_URDF_JOINTS}")
     parent_of: dict[str, str] = {}
     for j in root.iter("joint"):
         mimic = j.find("mimic")

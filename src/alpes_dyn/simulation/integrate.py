@@ -41,7 +41,7 @@ from .buildcache import CompilerError
 from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
 from ..checks import as_float_array
 from ..errors import InputError
-from ..limits import check_bytes
+from ..limits import check_bytes, check_time_step
 from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
@@ -183,6 +183,16 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
 
 
 # ----------------------------------------------------------------------------- input checks
+def _tolerance(x: Any, name: str) -> float:
+    """A SUNDIALS tolerance: a finite positive real number (not a bool, string or complex), else InputError."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise InputError(f"{name}: expected a positive number, got {x!r:.60}")
+    v = float(x)
+    if not (math.isfinite(v) and v > 0):
+        raise InputError(f"{name}: expected a positive finite number, got {v!r}")
+    return v
+
+
 def _check_dt(dt: Any) -> float:
     if isinstance(dt, (bool, np.bool_)):
         raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
@@ -194,7 +204,7 @@ def _check_dt(dt: Any) -> float:
         raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}")
     if not math.isfinite(d) or d <= 0:
         raise InputError(f"dt: expected a positive finite number of seconds, got {dt!r}")
-    return d
+    return check_time_step(d)
 
 
 def _n_steps(duration: Any, dt: float) -> int:
@@ -368,6 +378,8 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     if force is None and ss.force:
         raise InputError("force: this state space has the contact force as an input; pass force=")
     dt = _check_dt(dt)
+    if method != "rk4":
+        rtol, atol = _tolerance(rtol, "rtol"), _tolerance(atol, "atol")
     N = _n_steps(duration, dt)
     check_bytes(8.0 * (N + 1) * (2 * ss.n_states + ss.n_outputs + _n_known_inputs(ss)), "duration",
                 f"{N} steps of {ss.n_states} states")

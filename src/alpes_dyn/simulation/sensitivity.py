@@ -105,8 +105,8 @@ class SensitivityModel:
                  input_basis: int = 0) -> None:
         self.model = model
         self.dt = _check_dt(dt)
-        if not isinstance(substeps, (int, np.integer)) or substeps < 1:
-            raise InputError(f"substeps: expected a positive integer, got {substeps!r}")
+        if isinstance(substeps, (bool, np.bool_)) or not isinstance(substeps, (int, np.integer)) or not 1 <= substeps <= 1000:
+            raise InputError(f"substeps: expected an integer from 1 to 1000 (RK4 steps per sample), got {substeps!r}")
         self.substeps = int(substeps)
         pd = ParametricDynamics(model, parameters, gravity_input=True)
         self.dynamics = pd

@@ -123,7 +123,11 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int, *, seed: int = 0, optio
         raise InputError(f"fn: expected a function of the seed, got {type(fn).__name__}")
     draws = _check_int(draws, "draws", 1, 100_000)
     seed = _check_int(seed, "seed", 0, 2**63 - 1 - draws)
+    if options is not None and not (isinstance(options, dict) and all(isinstance(k, str) for k in options)):
+        raise InputError(f"options: expected a dict of keyword arguments of fn, got {type(options).__name__}")
     options = dict(options or {})
+    if "seed" in options:
+        raise InputError("options: 'seed' is each draw's own (seed, seed + 1, ...); give it as sweep's seed")
     seeds = list(range(seed, seed + draws))
     t0 = time.perf_counter()
     if serial:
@@ -139,7 +143,11 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int, *, seed: int = 0, optio
     cluster = None
     if own:
         if scheduler is not None:
-            client = Client(scheduler, timeout="10s")
+            try:
+                client = Client(scheduler, timeout="10s")
+            except (OSError, ValueError, TypeError) as exc:  # no scheduler there, or not an address Dask reads
+                raise InputError(f"scheduler: cannot connect to {scheduler!r} ({type(exc).__name__}: "
+                                 f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
         else:
             workers = _check_int(workers, "workers", 1, 256)
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,

@@ -37,6 +37,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
+from ..limits import check_time_step
 from ..rebuild import Rebuilt
 from ..model.contact import Contact, as_contacts
 from ..model.robot import Model
@@ -176,6 +177,9 @@ class StateSpace(Rebuilt):
         self.output_names = tuple(nm for pc in pieces for nm in pc.names)
         if len(self.output_names) != self.h_expr.shape[0]:  # callables: row names once the size is known
             self.output_names = tuple(f"y{i}" for i in range(self.h_expr.shape[0]))
+        twice = next((nm for nm in self.output_names if self.output_names.count(nm) > 1), None)
+        if twice is not None:  # y would hold the same row twice under one name (its Jacobian, rank-deficient)
+            raise InputError(f"output: {twice!r} is asked for twice in {self.output_name!r}; name each output once")
         mats = [pc.matrix for pc in pieces]
         self.output_matrix: np.ndarray | None = np.vstack(mats) if mats and all(M is not None for M in mats) else None
         self.H: np.ndarray | None = (self.output_matrix[:, :n].copy() if self.output_matrix is not None
@@ -351,6 +355,8 @@ class StateSpace(Rebuilt):
         if dt is not None and (isinstance(dt, bool) or not isinstance(dt, (int, float, np.floating))
                                or not np.isfinite(dt) or dt <= 0):
             raise InputError(f"dt: expected a positive number of seconds or None, got {dt!r}")
+        if dt is not None:
+            check_time_step(float(dt))
         args = [x0, u0] + ([F0] if F0 is not None else [])
         A, B, C, D = (np.asarray(M, dtype=float) for M in self._jacobian_function()(*args))
         if not all(np.isfinite(M).all() for M in (A, B, C, D)):
