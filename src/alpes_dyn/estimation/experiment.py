@@ -11,7 +11,8 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
 * a dither on top (``dither``, default 12 times the breakaway torque of the motor's joints, at
   ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
-  stick phases no memoryless friction law fits (:func:`dither_amplitude`). The experiment's lines, the
+  stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
+  joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
 * the bias trimmed on the hand (``trim_bias``, default on): before recording, a slow loop on the
   measured encoder moves the bias until the finger rests where the nominal one would (the real finger,
@@ -310,7 +311,12 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
     (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
     with a slow loop on its measured encoder before recording (the encoders are all it uses). The
-    motors of springless joints keep their bias (their joints are placed mid-range by hand).
+    motors of springless joints (the thumb's ab/adduction) get the torque that holds their joints where the
+    nominal design places them (mid-range) on ``truth`` under ``gravity``: what the same loop settles to on
+    that motor's encoder. Their bias from the nominal model, which balances the gravity the design names,
+    leaves an unknown tilt's torque unbalanced: with the palm 3 degrees off, the thumb's ab/adduction
+    (no spring) drifted from mid-range onto its 0 degree stop within the 4 s experiment (MuJoCo plant, hand
+    seeds 5 and 6), which no fit without the stop explains (12 counts of residual, springs 12 % off).
 
     A finger with soft springs may have no rest there: past a fold of its static equilibria (stiffness
     dG/dq singular: gravity's torque outgrows the springs') it snaps to full flexion. The loop then
@@ -321,6 +327,7 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     S = nominal.transmission.S
     joints, sprung, free = _motor_groups(nominal)
     target = S @ _mean_equilibrium(nominal, bias, gravity) if target is None else target
+    truth = _oriented(truth, gravity)  # once: each search below solves hundreds of equilibria under this gravity
     out = np.asarray(bias, dtype=float).copy()
     for k in sprung:
         upper = max(4.0 * out[k], _torque_ceiling(nominal, k))
@@ -330,7 +337,7 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
             fold = _fold_torque(truth, lambda c, k=k: _with(out, k, c), gravity, upper)
             if fold is not None:
                 out[k] = min(out[k], fold - 1.25 * float(peak[k]))
-    return out
+    return _holding_bias(truth, out, free, joints, gravity)
 
 
 def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: np.ndarray,
