@@ -28,8 +28,9 @@ The documented experiment on one finger (``finger2``, ``finger3``):
 The hand is identified one chain at a time (:data:`EXPERIMENT_MODELS`): a finger model built from one
 finger of the hand (``chain=``), or the ``thumb`` model, whose two motors are excited at once, each with
 the multisine (phases shifted between them): the flexion tendon as a finger's, the ab/adduction (no
-spring; its joint placed mid-range) about the torque that balances gravity there, its amplitude searched
-down from four times its joint's breakaway (Coulomb) torque until a nominal run stays in range.
+spring; its joint placed mid-range) about the torque that balances gravity there (trimmed on the hand:
+the gravity it feels, not the design's), its amplitude searched down from four times its joint's breakaway
+(Coulomb) torque until a nominal run stays in range, and no dither on it (nothing but its friction holds it).
 
 Why this design (measured with :func:`~alpes_dyn.analysis.identifiability.fisher_information`, the Cramér-Rao
 bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
@@ -408,8 +409,8 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     model: ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors
         are excited at once, each with the multisine (phases shifted between them): the flexion tendon
         about a bias that holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about
-        the torque that balances gravity there, its joint starting mid-range, its amplitude the largest
-        that keeps the nominal thumb in range (x ``amplitude_fraction``).
+        the torque that balances gravity there (trimmed on the hand too), its joint starting mid-range, its
+        amplitude the largest that keeps the nominal thumb in range (x ``amplitude_fraction``), without dither.
     true_params: the true parameters (a :class:`~alpes_dyn.model.params.HandParams` or a file).
     design: the :class:`ExperimentDesign` (default: the documented one).
     seed: seed of the sensor noise. path: write the recording there as CSV too.
