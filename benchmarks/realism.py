@@ -46,6 +46,7 @@ with the reason.
 
     python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--rig level|hanging] [--quick]
                                  [--json] [--log FILE]
+    python benchmarks/realism.py --chains index,middle,ring,little,thumb [--hand-seed 5] [--cases ...]
 
 ``--rig hanging``: the hand hung fingers down during the experiments (:func:`~alpes_dyn.model.mjcf.hanging_gravity`),
 the experiment designed and trimmed in that orientation, the fits and the EKF on the models turned to it (the
@@ -54,6 +55,16 @@ before it reaches mid-range): held below the fold it rests on its stop, and no f
 seeds 30-49). Hanging, none folds.
 
 ``--quick``: one seed (the first) and a 2 s experiment.
+
+``--chains``: the hand's chains instead of finger3, one at a time, each as ``alpes-dyn identify`` fits it (a finger
+as ``--model finger3 --chain <name>``; the thumb as ``--model thumb``, its flexion springs, masses and friction,
+:data:`~alpes_dyn.cli.THUMB_PARAMETERS`, its ab/adduction on its own geared motor), from the nominal file; the
+true hand is the nominal one with every chain drawn +-20 % (``perturbed_params(..., chains=<all the hand's
+chains>)``, seed ``--hand-seed``, which also seeds the sensors' noise). The errors are over the parameters of the
+chain's catalogue (:func:`~alpes_dyn.symbolic.parametric.parameter_catalogue`) that the fit holds and whose truth
+is not 0 (not the tendon's compliance, the tilt or the encoder's offset, of the rig), up to the common scale over
+its K and m. The cable of the tendon case is finger3's (the flexion tendon's; the thumb's geared ab/adduction
+motor stays rigid).
 """
 
 from __future__ import annotations
@@ -79,6 +90,9 @@ from alpes_dyn.estimation.replay import estimate_recording
 from alpes_dyn.model.mjcf import HANGING_TILT, STICTION_TIMECONST, tilted_gravity
 from alpes_dyn.model.params import load_params, write_params
 from alpes_dyn.model.stops import JointRangeWarning
+from alpes_dyn.symbolic.parametric import parameter_catalogue
+
+KINDS = ("K", "m", "F_s", "F_v")  # the kinds of parameter whose errors the table gives
 
 MODEL = "finger3"
 STRETCH = 0.03  # cable stretch / tendon travel under the experiment's torque swing
@@ -148,13 +162,47 @@ def verdict(res) -> str:
     return "FLAGGED: " + "; ".join(why)
 
 
+@dataclasses.dataclass(frozen=True)
+class Plant:
+    """What is identified: ``label`` (the table's), the Alpes ``model`` (finger3 or thumb) and the hand's ``chain``
+    (None: the shared ``[finger]`` values of the default finger3 run), and the parameters the fits start from and
+    select (``base``: None for a finger's default K, m and friction; :data:`~alpes_dyn.cli.THUMB_PARAMETERS` for the
+    thumb)."""
+
+    label: str
+    model: str = MODEL
+    chain: str | None = None
+    base: str | None = None
+
+    def true_params(self, seed: int):
+        """The plant's parameters: finger3 drawn +-20 % (default), or the whole hand, every chain drawn."""
+        if self.chain is None and self.model == MODEL:
+            return perturbed_params(spread=0.2, seed=seed)
+        nominal = load_params()
+        return perturbed_params(nominal, spread=0.2, seed=seed, chains=nominal.chain_names)
+
+    def alpes(self, **kwargs) -> ad.Model:
+        return ad.Model.alpes(self.model, friction=True, chain=self.chain, **kwargs)
+
+
+FINGER3 = Plant("finger3")
+
+
+def hand_plant(chain: str) -> Plant:
+    """The :class:`Plant` of one of the hand's chains (``thumb`` or a finger's name), as ``identify`` fits it."""
+    if chain == "thumb":
+        from alpes_dyn.cli import THUMB_PARAMETERS
+        return Plant("thumb", "thumb", None, THUMB_PARAMETERS)
+    return Plant(chain, MODEL, chain)
+
+
 def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
-             rig: np.ndarray | None = None) -> np.ndarray:
+             plant: Plant = FINGER3, rig: np.ndarray | None = None) -> np.ndarray:
     """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
     torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
     the gravity of the rig's orientation, if not the file's, the tilt on top of it)."""
-    obs = _on_rig(ad.Model.alpes(MODEL, friction=True, rotor_inertia=rotor, params=params_path), rig)
+    obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path), rig)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
     est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
@@ -164,20 +212,21 @@ def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor:
 _TORQUES: dict = {}
 
 
-def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray):
+def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray, plant: Plant = FINGER3):
     """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim)."""
-    key = (seed, design, tuple(np.round(gravity, 12)))
+    key = (plant, seed, design, tuple(np.round(gravity, 12)))
     if key not in _TORQUES:
-        _TORQUES[key] = experiment_torque(MODEL, p, design, true_gravity=gravity)
+        _TORQUES[key] = experiment_torque(plant.model, p, design, chain=plant.chain, true_gravity=gravity)
     return _TORQUES[key]
 
 
-def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign):
+def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, plant: Plant = FINGER3):
     """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
     the fit never saw, in the joint range by the same design rule), from the plant's rest."""
     fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0)  # in use: no dither, stick phases
-    _, u, x0 = torque_of(seed, p, fresh, plant_model(MODEL, p, effects).gravity)
-    return mujoco_recording(MODEL, p, u, fresh.dt, effects=effects, q0=x0[:3], seed=seed + 1000)
+    _, u, x0 = torque_of(seed, p, fresh, plant_model(plant.model, p, effects, plant.chain).gravity, plant)
+    return mujoco_recording(plant.model, p, u, fresh.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed + 1000,
+                            chain=plant.chain)
 
 
 def _on_rig(model, rig: np.ndarray | None):
@@ -191,46 +240,61 @@ def rig_of(design: ExperimentDesign) -> np.ndarray | None:
     return None if np.array_equal(g, load_params().gravity) else g
 
 
-def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, tmp: Path) -> dict:
-    true = perturbed_params(spread=0.2, seed=seed)
+def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dict, float]:
+    """The worst error (%) of each of :data:`KINDS` over the fitted ``values`` whose ``truth`` is known and not 0,
+    plain and up to the common scale c = exp(mean log(value / truth)) over K and m (the torque constant scales
+    every parameter together: the encoder cannot see it); and c."""
+    kinds = {nm: kind for kind in KINDS for nm in values if nm.startswith(kind + "_") and truth.get(nm, 0.0) != 0.0}
+    km = [values[nm] / truth[nm] for nm, kind in kinds.items() if kind in ("K", "m")]
+    c = float(np.exp(np.mean(np.log(km))))
+    worst = {kind: 0.0 for kind in KINDS}
+    worst_c = dict(worst)
+    for nm, kind in kinds.items():
+        worst[kind] = max(worst[kind], abs(100 * (values[nm] / truth[nm] - 1)))
+        worst_c[kind] = max(worst_c[kind], abs(100 * (values[nm] / (c * truth[nm]) - 1)))
+    return worst, worst_c, c
+
+
+def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, tmp: Path,
+        plant: Plant = FINGER3) -> dict:
+    """One row: the plant's recording with ``effects`` (seed ``seed``: the draw and the noise), the two fits, the
+    EKF runs (see the module docstring)."""
+    true = plant.true_params(seed)
     rig = rig_of(design)
+    nominal = load_params()
     t0 = time.perf_counter()
-    g_true = plant_model(MODEL, true, effects).gravity
-    _, u, x0 = torque_of(seed, true, design, g_true)
-    rec = mujoco_recording(MODEL, true, u, design.dt, effects=effects, q0=x0[:3], seed=seed)
+    g_true = plant_model(plant.model, true, effects, plant.chain).gravity
+    _, u, x0 = torque_of(seed, true, design, g_true, plant)
+    rec = mujoco_recording(plant.model, true, u, design.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed,
+                           chain=plant.chain)
     plant_s = time.perf_counter() - t0
-    rigid = identify(_on_rig(ad.Model.alpes(MODEL, friction=True), rig), rec, excitation=design.lines, progress=False)
-    model_of = alpes_models(MODEL, load_params())
-    fit = fit_effects(lambda e: _on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), None,
+    rigid = identify(_on_rig(plant.alpes(params=nominal), rig), rec, plant.base, excitation=design.lines,
+                     progress=False)
+    model_of = alpes_models(plant.model, nominal, chain=plant.chain)
+    fit = fit_effects(lambda e: _on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), plant.base,
                       rec.gravity is not None, excitation=design.lines, progress=False)
     res = fit.result
-    ident = res.write(tmp / f"ident_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
-    truth = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]
+    ident = res.write(tmp / f"ident_{plant.label}_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
+    truth = {pp.name: pp.nominal for pp in parameter_catalogue(plant.alpes(params=true))}
     t1 = time.perf_counter()
-    fresh = fresh_run(true, effects, seed, design)
+    fresh = fresh_run(true, effects, seed, design, plant)
     fitted = dict(zip(res.names, res.values))
-    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, rig=rig)
-    true_path = write_params(true, tmp / f"true_{seed}.toml")
-    rmse_true = ekf_rmse(fresh, str(true_path), {}, rig=rig)
+    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig)
+    true_path = write_params(true, tmp / f"true_{plant.label}_{seed}.toml")
+    rmse_true = ekf_rmse(fresh, str(true_path), {}, plant=plant, rig=rig)
     ekf_s = time.perf_counter() - t1
-    row = {"case": case, "seed": seed}
+    row = {"case": case, "seed": seed, "chain": plant.label}
     for label, one_fit, effects in (("rigid", rigid, []), ("extended", res, list(fit.effects))):
-        err = 100 * (one_fit.values[:12] / truth - 1)
-        # the torque constant scales every parameter together (the encoder cannot see it): the errors up to
-        # the one common scale, exp(mean log(value / truth)) over K and m, taken off
-        c = float(np.exp(np.mean(np.log(one_fit.values[:6] / truth[:6]))))
-        err_c = 100 * (one_fit.values[:12] / (c * truth) - 1)
+        worst, worst_c, c = errors(dict(zip(one_fit.names, one_fit.values.tolist())), truth)
         row[label] = {
-            "worst_error_pct": {kind: float(np.max(np.abs(err[i * 3:(i + 1) * 3])))
-                                for i, kind in enumerate(("K", "m", "F_s", "F_v"))},
-            "worst_error_common_scale_pct": {kind: float(np.max(np.abs(err_c[i * 3:(i + 1) * 3])))
-                                             for i, kind in enumerate(("K", "m", "F_s", "F_v"))},
+            "worst_error_pct": worst, "worst_error_common_scale_pct": worst_c,
             "common_scale": c, "values": dict(zip(one_fit.names, one_fit.values.tolist())),
             "residual_counts": one_fit.residual_rms, "converged": bool(one_fit.converged),
             "iterations": one_fit.iterations,
             "fit_seconds": one_fit.seconds, "compile_seconds": one_fit.compile_seconds, "verdict": verdict(one_fit),
             "flagged": not one_fit.trustworthy, "stop_reason": one_fit.reason, "effects": effects,
             "adequacy": one_fit.adequacy.to_dict() if one_fit.adequacy is not None else None}
+    row["joint_range_deg"] = [np.degrees(rec.true_q.min(axis=0)).tolist(), np.degrees(rec.true_q.max(axis=0)).tolist()]
     row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
                                   "fit_seconds": r.seconds} for e, r in fit.rounds]
     row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
@@ -252,11 +316,29 @@ def main(argv: list[str] | None = None) -> int:
                          "default) or hanging (fingers down: no fold of a soft finger's equilibria)")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
+    ap.add_argument("--chains", help="the hand's chains instead of finger3, comma-separated (index, middle, ring, "
+                                     "little, thumb)")
+    ap.add_argument("--hand-seed", type=int, default=None,
+                    help="with --chains: the seed of the hand's draw and of the sensors' noise (default 5)")
     args = ap.parse_args(argv)
     try:
         seeds = [int(s) for s in args.seeds.split(",")]
     except ValueError:
         ap.error(f"--seeds: expected comma-separated integers, got {args.seeds!r}")
+    plants = [FINGER3]
+    if args.chains is not None:
+        known = load_params().chain_names
+        chains = [c.strip() for c in args.chains.split(",") if c.strip()]
+        bad = [c for c in chains if c not in known]
+        if bad or not chains or len(set(chains)) != len(chains):
+            why = f"unknown chain {bad[0]!r}" if bad else ("no chain" if not chains else "a chain named twice")
+            ap.error(f"--chains: {why} (expected some of {', '.join(known)})")
+        plants = [hand_plant(c) for c in chains]
+        seeds = [5 if args.hand_seed is None else args.hand_seed]
+        if seeds[0] < 0:
+            ap.error(f"--hand-seed: expected a non-negative integer, got {seeds[0]}")
+    elif args.hand_seed is not None:
+        ap.error("--hand-seed: only with --chains (finger3's seeds are --seeds)")
     names = [c.strip() for c in args.cases.split(",") if c.strip()]
     bad = [c for c in names if c not in CASE_NAMES]
     if bad or not names:
@@ -274,14 +356,18 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as d:
         for c in names:
             t0 = time.perf_counter()
-            for s in seeds:
-                rows.append(one(c, table[c], s, design, Path(d)))
-                if args.log:
-                    with open(args.log, "a", encoding="utf-8") as f:
-                        f.write(json.dumps(rows[-1]) + "\n")
+            for plant in plants:
+                for s in seeds:
+                    rows.append(one(c, table[c], s, design, Path(d), plant))
+                    if args.log:
+                        with open(args.log, "a", encoding="utf-8") as f:
+                            f.write(json.dumps(rows[-1]) + "\n")
             case_seconds[c] = time.perf_counter() - t0
-    out = {"model": MODEL, "seeds": seeds, "duration_s": design.duration, "rig": args.rig, "tendon": info,
-           "case_seconds": case_seconds, "rows": rows}
+    out = {"model": MODEL if args.chains is None else "hand", "seeds": seeds, "duration_s": design.duration,
+           "rig": args.rig,
+           "tendon": info, "case_seconds": case_seconds, "rows": rows}
+    if args.chains is not None:
+        out["chains"] = [p.label for p in plants]
     print(json.dumps(out) if args.json else table_text(out))
     return 0
 
@@ -291,27 +377,28 @@ def table_text(out: dict) -> str:
     verdict) and the extended one (worst errors up to the common scale, residual, converged, fit time, verdict),
     then the EKF on the extended fit's file and on the true file."""
     info = out["tendon"]
-    lines = [f"{out['model']}, seeds {out['seeds']}, {out['duration_s']:g} s experiment on the "
+    what = f"hand chains {', '.join(out['chains'])}, hand seed" if "chains" in out else f"{out['model']}, seeds"
+    lines = [f"{what} {out['seeds']}, {out['duration_s']:g} s experiment on the "
              f"{out.get('rig', 'level')} rig; tendon k_t = "
              f"{info['k_t_N_per_m']:.3g} N/m ({100 * STRETCH:g} % stretch: mean tension "
              f"{info['mean_tension_N']:.1f} N over a travel of {1e3 * info['tendon_travel_m']:.2f} mm from q = 0; "
              f"swing {info['tension_swing_N']:.2f} N over {1e3 * info['swing_travel_m']:.2f} mm), "
              f"c_t = {info['c_t_N_s_per_m']:.3g} N s/m, rotor mode {info['rotor_mode_Hz']:.0f} Hz; extended fit: "
              f"--effects {FIT_EFFECTS} (effects kept: c compliance, t tilt, s stiction, r rotor)",
-             f"{'case':9} {'seed':>4} | {'rigid K%':>8} {'m%':>6} {'resid':>5} {'flag':>5} | {'ext K%':>6} {'m%':>5} "
+             f"{'case':9} {'chain':>6} {'seed':>4} | {'rigid K%':>8} {'m%':>6} {'resid':>5} {'flag':>5} | {'ext K%':>6} {'m%':>5} "
              f"{'F_s%':>5} {'F_v%':>5} {'resid':>5} {'conv':>5} {'fit s':>5} {'flag':>5} {'eff':>5} | "
              f"{'EKF deg (extended file)':>23} | {'EKF deg (true file)':>19}"]
     for r in out["rows"]:
         a, b = r["rigid"], r["extended"]
         wa, wb = a["worst_error_pct"], b["worst_error_common_scale_pct"]
-        lines.append(f"{r['case']:9} {r['seed']:>4} | {wa['K']:8.2f} {wa['m']:6.1f} {a['residual_counts']:5.2f} "
+        lines.append(f"{r['case']:9} {r.get('chain', out['model']):>6} {r['seed']:>4} | {wa['K']:8.2f} {wa['m']:6.1f} {a['residual_counts']:5.2f} "
                      f"{'yes' if a['flagged'] else 'no':>5} | {wb['K']:6.2f} {wb['m']:5.1f} {wb['F_s']:5.1f} "
                      f"{wb['F_v']:5.1f} {b['residual_counts']:5.2f} {str(b['converged']):>5} "
                      f"{b['fit_seconds_total']:5.1f} "
                      f"{'yes' if b['flagged'] else 'no':>5} {''.join(e[0] for e in b['effects']):>5} | "
                      f"{' / '.join(f'{x:.2f}' for x in r['ekf_rmse_deg']):>23} | "
                      f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19}")
-    lines.append("time per case (all seeds; plant + two fits + EKF runs): "
+    lines.append("time per case (all seeds and chains; plant + two fits + EKF runs): "
                  + ", ".join(f"{c} {s:.0f} s" for c, s in out["case_seconds"].items()))
     return "\n".join(lines)
 

@@ -11,7 +11,8 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
 * a dither on top (``dither``, default 12 times the breakaway torque of the motor's joints, at
   ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
-  stick phases no memoryless friction law fits (:func:`dither_amplitude`). The experiment's lines, the
+  stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
+  joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
 * the bias trimmed on the hand (``trim_bias``, default on): before recording, a slow loop on the
   measured encoder moves the bias until the finger rests where the nominal one would (the real finger,
@@ -27,8 +28,9 @@ The documented experiment on one finger (``finger2``, ``finger3``):
 The hand is identified one chain at a time (:data:`EXPERIMENT_MODELS`): a finger model built from one
 finger of the hand (``chain=``), or the ``thumb`` model, whose two motors are excited at once, each with
 the multisine (phases shifted between them): the flexion tendon as a finger's, the ab/adduction (no
-spring; its joint placed mid-range) about the torque that balances gravity there, its amplitude searched
-down from four times its joint's breakaway (Coulomb) torque until a nominal run stays in range.
+spring; its joint placed mid-range) about the torque that balances gravity there (trimmed on the hand:
+the gravity it feels, not the design's), its amplitude searched down from four times its joint's breakaway
+(Coulomb) torque until a nominal run stays in range, and no dither on it (nothing but its friction holds it).
 
 Why this design (measured with :func:`~alpes_dyn.analysis.identifiability.fisher_information`, the Cramér-Rao
 bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
@@ -362,7 +364,12 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
     (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
     with a slow loop on its measured encoder before recording (the encoders are all it uses). The
-    motors of springless joints keep their bias (their joints are placed mid-range by hand).
+    motors of springless joints (the thumb's ab/adduction) get the torque that holds their joints where the
+    nominal design places them (mid-range) on ``truth`` under ``gravity``: what the same loop settles to on
+    that motor's encoder. Their bias from the nominal model, which balances the gravity the design names,
+    leaves an unknown tilt's torque unbalanced: with the palm 3 degrees off, the thumb's ab/adduction
+    (no spring) drifted from mid-range onto its 0 degree stop within the 4 s experiment (MuJoCo plant, hand
+    seeds 5 and 6), which no fit without the stop explains (12 counts of residual, springs 12 % off).
 
     A finger with soft springs may have no rest there: past a fold of its static equilibria (stiffness
     dG/dq singular: gravity's torque outgrows the springs') it snaps to full flexion. The loop then
@@ -373,6 +380,7 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     S = nominal.transmission.S
     joints, sprung, free = _motor_groups(nominal)
     target = S @ _mean_equilibrium(nominal, bias, gravity) if target is None else target
+    truth = _oriented(truth, gravity)  # once: each search below solves hundreds of equilibria under this gravity
     out = np.asarray(bias, dtype=float).copy()
     for k in sprung:
         upper = max(4.0 * out[k], _torque_ceiling(nominal, k))
@@ -383,7 +391,7 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
             if fold is not None and fold - 1.25 * float(peak[k]) < out[k]:
                 out[k] = fold - 1.25 * float(peak[k])
                 _warn_folded(truth, out, gravity, fold)
-    return out
+    return _holding_bias(truth, out, free, joints, gravity)
 
 
 def _warn_folded(truth: Model, bias: np.ndarray, gravity: np.ndarray, fold: float) -> None:
@@ -470,8 +478,8 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     model: ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors
         are excited at once, each with the multisine (phases shifted between them): the flexion tendon
         about a bias that holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about
-        the torque that balances gravity there, its joint starting mid-range, its amplitude the largest
-        that keeps the nominal thumb in range (x ``amplitude_fraction``).
+        the torque that balances gravity there (trimmed on the hand too), its joint starting mid-range, its
+        amplitude the largest that keeps the nominal thumb in range (x ``amplitude_fraction``), without dither.
     true_params: the true parameters (a :class:`~alpes_dyn.model.params.HandParams` or a file).
     design: the :class:`ExperimentDesign` (default: the documented one).
     seed: seed of the sensor noise. path: write the recording there as CSV too.

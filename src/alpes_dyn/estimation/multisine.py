@@ -3,7 +3,8 @@ designs their bias and amplitudes).
 
 The multisine: tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f / 2) over the design's ``frequencies`` (Schroeder
 phases, shifted between the motors of one chain); the dither: a sine at ``dither_frequency`` of
-:func:`dither_amplitude` (``dither`` times the breakaway torque of the motor's joints).
+:func:`dither_amplitude` (``dither`` times the breakaway torque of the motor's joints; none on the motors of
+springless joints).
 """
 
 from __future__ import annotations
@@ -65,13 +66,23 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     brings the stuck time to about 1 % on every joint. Measured on the all-effects plants of seeds 13 and 14 (4 s,
     ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
     the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
-    10 Hz dither left q_3 stuck on 23-39 % of the samples."""
-    joints, _, _ = _motor_groups(model)
+    10 Hz dither left q_3 stuck on 23-39 % of the samples.
+
+    Not on a motor of springless joints (the thumb's ab/adduction; 0 there): nothing but their dry friction holds
+    them where the design places them, and a dither that keeps them sliding lets any torque the design did not
+    balance carry them away. Measured on MuJoCo's thumb of hand seed 5 (``benchmarks/realism.py --chains thumb``,
+    4 s): with the dither, a palm 3 degrees off (a gravity torque of 1e-4 N m at mid-range, 3.5e-4 at 0, below the
+    joint's breakaway torque of 4.5e-4) carried the ab/adduction from 45 degrees onto its 0 degree stop, and the
+    fit with every effect of a real hand ended at 12.3 counts, not converged, springs 12 % off; even on the plant
+    with the model's own structure the ab/adduction swept 24-57 degrees through its friction, which the fit
+    holds at the nominal value (:data:`~alpes_dyn.cli.THUMB_PARAMETERS`): 0.70 counts, not converged. Without it:
+    41-52 degrees, 0.58 counts with the model's structure, 0.66 with every effect (springs within 0.35 %)."""
+    joints, _, free = _motor_groups(model)
     S = model.transmission.S
     out = np.zeros(S.shape[0])
     if design.dither <= 0:
         return out
     for k, js in enumerate(joints):
-        if js.size:
+        if js.size and k not in free:
             out[k] = design.dither * float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
     return out
