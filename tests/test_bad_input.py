@@ -1701,6 +1701,10 @@ def _fcexport(what, *a, **kw):
 API.extend([
     A("c_sources", lambda c: _cexport(c, "c_sources", c.ss), InputError, "filt: expected a KalmanFilter, got StateSpace"),
     A("c_sources", lambda c: _cexport(c, "c_sources", _ekf(c), prefix="2x"), InputError, "prefix: expected a C identifier"),
+    A("c_sources", lambda c: _cexport(c, "c_sources", _ekf(c), code="fast"), InputError,
+      "code: expected 'sparse' or 'casadi', got 'fast'"),
+    A("c_sources", lambda c: _cexport(c, "c_sources", _ukf(c), code="sparse"), InputError,
+      "code: 'sparse' is the EKF's; the ukf is exported as 'casadi'"),
     A("write_c_observer", lambda c: _cexport(c, "write_c_observer", _ekf(c), c.d), InputError,
       "is not empty; refusing to write over it"),
     A("write_c_observer", lambda c: _cexport(c, "write_c_observer", _ekf(c), c.f["params_toml"]), InputError,

@@ -133,3 +133,87 @@ def test_codegen_with_the_controller(tmp_path, capsys):
     assert obj["files"] == ["alpes_ekf.c", "alpes_ekf.h", "alpes_force.c", "alpes_force.h", "force_main.c", "main.c"]
     h = (tmp_path / "c" / "alpes_force.h").read_text()
     assert "int alpes_force_update(alpes_force_state* s, double F_ref, double F_fb" in h and "kp 0.008" in h
+
+
+def _run_main(exe, text, tmp_path, nz):
+    (tmp_path / "in.txt").write_text(text)
+    out = subprocess.run([str(exe), str(tmp_path / "in.txt")], check=True, capture_output=True, text=True).stdout
+    return read_main_output(out, nz)
+
+
+@needs_cc
+def test_c_export_of_the_hand_equals_the_filter_bit_for_bit(tmp_path):
+    """The hand (30 states, 6 encoders): the exported C -- CasADi's code of the model, the covariance arithmetic as
+    loops over the Jacobians' nonzeros, skipping P's zeros -- gives run()'s estimates and covariances to the last
+    bit, from a diagonal prior (P stays block-diagonal by chain: the zeros are skipped) and from a full one (none
+    are). Built at -O0 (seconds for its 1 MB source; x86-64's SSE arithmetic is the same at any level, and
+    -std=c99 contracts no multiply-add)."""
+    import alpes_dyn as ad
+    from alpes_dyn.estimation.observers import make_observer
+    from alpes_dyn.symbolic.statespace import StateSpace
+
+    m = ad.Model.alpes("hand")
+    n, p = m.n, m.transmission.n_motors
+    filt = make_observer("ekf", StateSpace(m, input="motor", output="encoder"), 1e-3,
+                         process_noise=[1e-18] * n + [4e-8] * n, measurement_noise=[1.96e-7] * p,
+                         input_noise=[2.5e-7] * p)
+    assert filt.exact_loops and (filt.nz, filt.ny) == (30, 6)
+    files = write_c_observer(filt, tmp_path / "c")
+    src = files["alpes_ekf.c"].read_text()
+    assert "alpes_ekf_cs_model" in src and "alpes_ekf_cs_step" not in src  # the loops, not the whole step
+    exe = tmp_path / "c" / "main"
+    subprocess.run([CC, "-O0", "-std=c99", "-Wall", "-o", str(exe), str(files["main.c"]), str(files["alpes_ekf.c"]),
+                    "-lm"], check=True, capture_output=True, text=True, timeout=300)
+    rng = np.random.default_rng(3)
+    N = 300
+    W = 0.02 + 1e-3 * rng.standard_normal((N, p))
+    Y = np.full(n, 0.3) @ m.transmission.S.T + 1e-3 * rng.standard_normal((N + 1, p))
+    z0 = np.r_[np.full(n, 0.3), np.zeros(n)]
+    B = rng.standard_normal((2 * n, 2 * n))
+    P_full = np.diag([0.05**2] * n + [0.1**2] * n) + 1e-4 * (B @ B.T)
+    for P0 in (np.diag([0.05**2] * n + [0.1**2] * n), 0.5 * (P_full + P_full.T)):
+        est = filt.run(z0, P0, W, Y)
+        Z, P = _run_main(exe, main_input(z0, P0, Y[0], W, Y[1:]), tmp_path, filt.nz)
+        assert np.abs(est.z[1:, :n] @ m.transmission.S.T - Y[1:]).max() < 0.05  # it follows the encoders (rad)
+        assert np.array_equal(Z, est.z) and np.array_equal(P, est.P)
+
+
+@needs_cc
+@pytest.mark.parametrize("observer, code", [("ekf-params", "sparse"), ("ekf", "sparse"), ("ukf", None)])
+def test_c_export_of_each_code_equals_the_filter(observer, code, tmp_path):
+    """finger3: the EKF's loops (its default is CasADi's code of the whole step, tested above), with its gains as
+    states too (constant rows in its Jacobian), and the UKF (only CasADi's code): each equal to the filter's run()
+    on the scenario's record, bit for bit."""
+    from alpes_dyn.estimation.scenario import run_estimation
+
+    res = run_estimation("ekf", duration=0.3)
+    filt, z0, P0 = scenario_filter(observer, "finger3")
+    d = write_c_observer(filt, tmp_path / "c", code=code, prefix="obs")["main.c"].parent
+    assert ("obs_cs_model" in (d / "obs.c").read_text()) == (code == "sparse")
+    Z, P = _run_main(_build(d, "obs"), main_input(z0, P0, res.y[0], res.u_meas, res.y[1:]), tmp_path, filt.nz)
+    est = filt.run(z0, P0, res.u_meas, res.y)
+    assert Z.shape == (301, filt.nz) and np.array_equal(Z, est.z) and np.array_equal(P, est.P)
+
+
+def test_folded_products_are_counted_and_refused_for_the_loops(monkeypatch):
+    """CasADi folds a constant times (a constant times x) into one product, which rounds differently from the C's
+    two: the filter counts such products in its arithmetic, and c_sources refuses the loops where there are some
+    (by default it exports CasADi's code of the whole step there)."""
+    import casadi as cs
+
+    from alpes_dyn.estimation.covariance import _mul
+
+    x = cs.SX.sym("x")
+    folds: list[int] = []
+    assert str(_mul(cs.SX(0.1), 3.0 * x, folds)) == str(cs.SX(0.1 * 3.0) * x) and folds == [1]
+    _mul(x, 3.0 * x, folds)
+    _mul(cs.SX(2.0), x * x, folds)
+    assert folds == [1]  # a product of two expressions is kept
+    filt, _, _ = scenario_filter("ekf", "finger2")
+    assert "alpes_ekf_cs_step" in c_sources(filt)["alpes_ekf.c"]  # a small covariance: the whole step
+    monkeypatch.setattr(cexport, "_LOOPS_FROM", 0)
+    assert filt.exact_loops and "alpes_ekf_cs_model" in c_sources(filt)["alpes_ekf.c"]
+    filt.exact_loops = False  # as on a model where CasADi folded some
+    assert "alpes_ekf_cs_step" in c_sources(filt)["alpes_ekf.c"]
+    with pytest.raises(InputError, match="code: 'sparse' would round differently"):
+        c_sources(filt, code="sparse")

@@ -5,10 +5,13 @@ without their parameter states) into three texts:
 
 * ``alpes_<kind>.h`` -- the documented, fixed-size API (sizes as macros, the model, dt and noise settings in
   its comment);
-* ``alpes_<kind>.c`` -- CasADi's generated code of the filter's own step function
+* ``alpes_<kind>.c`` -- the filter's own step
   (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step`, the expression that ``run``, ``online``
-  and the compiled loop evaluate: the same numbers) and of its measurement update, with the two wrappers
-  below; it needs only ``<math.h>`` (link with ``-lm``): no CasADi runtime, no heap, no global state;
+  and the compiled loop evaluate: the same numbers, to the last bit) and its measurement update, with the two
+  functions below: for the EKF, CasADi's generated code of the model and its Jacobian and the covariance
+  arithmetic as loops over their nonzeros (:mod:`~alpes_dyn.estimation.cexport_ekf`, ``code="sparse"``); for
+  the UKF (or ``code="casadi"``), CasADi's generated code of the whole step. It needs only ``<math.h>`` (link
+  with ``-lm``): no CasADi runtime, no heap, no global state;
 * ``main.c`` -- a test program: reads a prior, a first measurement and lines of inputs and measurements,
   prints the estimate and its covariance after each sample (``%.17g``: they read back exactly), or times the
   step (``-t REPEAT``).
@@ -40,7 +43,8 @@ import numpy as np
 
 from ..errors import InputError
 from ..fileio import check_output_directory, write_directory as write_sources  # their home: fileio
-from .observers import KalmanFilter
+from .cexport_ekf import ekf_c_source
+from .observers import ExtendedKalmanFilter, KalmanFilter
 
 __all__ = ["c_sources", "write_c_observer", "write_sources", "check_output_directory", "scenario_filter",
            "read_main_output", "main_input"]
@@ -116,7 +120,8 @@ _HEADER = r"""/* {prefix}.h -- {title}, exported by alpes_dyn {version} (alpes-d
    Arrays are double; P is NZ x NZ, column-major (P[i + NZ*j] = P_ij; it is symmetric, so row-major reads
    the same). The outputs may be the inputs (in place). No heap, no global state, no CasADi runtime: the
    caller owns every buffer, work included; the functions are reentrant. Return 0 on success, 1 if the
-   generated code failed (it does not: a non-finite estimate shows in z_out, check it).
+   generated code failed (it does not: a non-finite estimate shows in z_out, check it) or, in the EKF's
+   loops, if H P H^T + R is not positive definite (the filter diverged).
 
    A filter loop at the sample rate:
      double z[NZ] = z0, P[NZ*NZ] = P0, work[{P}_NWORK];
@@ -155,7 +160,8 @@ int {prefix}_update(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], con
 _MAIN = r"""/* main.c -- test program of {prefix}.c (alpes-dyn codegen).
 
    {prefix}_main FILE|-              print z and P after each sample, one line each (z then P column-major)
-   {prefix}_main -t REPEAT FILE|-    time the steps: run the record REPEAT times, print us per step
+   {prefix}_main -t REPEAT FILE|-    time the steps: run the record REPEAT times, print us per step (wall clock,
+                                    and the process's processor time: what a loaded machine leaves to it)
 
    FILE: whitespace-separated numbers: z0 ({nz}), P0 ({nz}x{nz}, column-major), y0 ({ny}), then one sample per
    group: w ({nw}) y ({ny}) -- w held on [t_k, t_k+1), y measured at t_k+1. The first line printed is the prior
@@ -227,15 +233,18 @@ int main(int argc, char** argv) {{
   }} else {{
     struct timespec t0, t1;
     double s;
+    clock_t c0 = clock(), c1;
     clock_gettime(CLOCK_MONOTONIC, &t0);
     for (r = 0; r < repeat; ++r) {{
       {prefix}_update(z0, P0, y0, z, P, work);
       for (k = 0; k < n; ++k) {prefix}_step(z, P, wy + k * (NW + NY), wy + k * (NW + NY) + NW, z, P, work);
     }}
     clock_gettime(CLOCK_MONOTONIC, &t1);
+    c1 = clock();
     s = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
-    printf("%ld steps x %ld: %.4f us per step (z[0] = %.17g)\n", n, repeat, 1e6 * s / (n * repeat > 0 ? n * repeat : 1),
-           z[0]);
+    printf("%ld steps x %ld: %.4f us per step, %.4f us of processor time (z[0] = %.17g)\n", n, repeat,
+           1e6 * s / (n * repeat > 0 ? n * repeat : 1),
+           1e6 * (double)(c1 - c0) / CLOCKS_PER_SEC / (n * repeat > 0 ? n * repeat : 1), z[0]);
   }}
   free(wy);
   return 0;
@@ -254,19 +263,55 @@ def _diag_or_full(M: np.ndarray) -> str:
 
 
 def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
-              z0: Any = None, P0: Any = None) -> dict[str, str]:
+              z0: Any = None, P0: Any = None, code: str | None = None) -> dict[str, str]:
     """The C export of ``filt``'s step: ``{"<prefix>.h": ..., "<prefix>.c": ..., "main.c": ...}``.
 
     ``prefix`` (default ``alpes_<kind>``: ``alpes_ekf``, ``alpes_ukf``) starts every external symbol; ``about``
     is a line for the header's comment (the model, its parameter file); ``z0``, ``P0`` the prior it suggests
-    (documentation only). See the module docstring for the API.
+    (documentation only). ``code``: ``"sparse"`` -- CasADi's code of the model and its Jacobian, the covariance
+    arithmetic as C loops over the nonzeros in the filter's own order of operations
+    (:mod:`~alpes_dyn.estimation.cexport_ekf`; the EKF only, where CasADi folded no constant in that arithmetic,
+    ``filt.exact_loops``); ``"casadi"`` -- CasADi's code of the filter's whole step. Both give the filter's
+    numbers to the last bit. Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large (over
+    :data:`_LOOPS_FROM` operations: the hand), else ``"casadi"`` (a finger, the UKF). See the module docstring
+    for the API.
     """
     if not isinstance(filt, KalmanFilter):
         raise InputError(f"filt: expected a KalmanFilter, got {type(filt).__name__}")
     prefix = prefix or f"alpes_{filt.kind}"
     if not (prefix.isidentifier() and prefix.isascii() and len(prefix) <= 40):
         raise InputError(f"prefix: expected a C identifier of at most 40 characters, got {prefix!r}")
+    ekf = isinstance(filt, ExtendedKalmanFilter)
+    code = ("sparse" if ekf and filt.exact_loops and _covariance_operations(filt) > _LOOPS_FROM else "casadi") \
+        if code is None else code
+    if code not in ("sparse", "casadi"):
+        raise InputError(f"code: expected 'sparse' or 'casadi', got {code!r}")
+    if code == "sparse" and not ekf:
+        raise InputError(f"code: 'sparse' is the EKF's; the {filt.kind} is exported as 'casadi'")
+    if code == "sparse" and not filt.exact_loops:
+        raise InputError("code: 'sparse' would round differently from the filter's step on this model (CasADi "
+                         "folds constant products in it); use 'casadi'")
+    body, nwork = ekf_c_source(filt, prefix) if code == "sparse" else _whole_step_source(filt, prefix)
     P = prefix.upper()
+    source = f"/* {prefix}.c -- generated by alpes_dyn (alpes-dyn codegen); the API is in {prefix}.h */\n" + body
+    header = _HEADER.format(prefix=prefix, P=P, **_header_fields(filt, about, nwork, z0, P0))
+    main = _MAIN.format(prefix=prefix, P=P, nz=filt.nz, nw=filt.nw, ny=filt.ny)
+    return {f"{prefix}.h": header, f"{prefix}.c": source, "main.c": main}
+
+
+_LOOPS_FROM = 5000
+"""The EKF's default code is ``"sparse"`` when its covariance arithmetic takes more operations than this in the
+filter's step (the hand: 30,000; finger3: 700, where CasADi's straight-line code of the whole step took 3.7 us of
+processor time per step against the loops' 4.3, timed in turn on 2026-12-02)."""
+
+
+def _covariance_operations(filt: ExtendedKalmanFilter) -> int:
+    """The operations of the filter's step beyond its model's (the RK4 step, its Jacobian, the measurement)."""
+    return filt.filter_step.n_instructions() - filt.linearized.n_instructions() - filt.measurement.n_instructions()
+
+
+def _whole_step_source(filt: KalmanFilter, prefix: str) -> tuple[str, int]:
+    """CasADi's code of the filter's own step and update with the API's wrappers: (source, nwork)."""
     step = filt.filter_step
     upd = filt._update
     fstep = cs.Function(f"{prefix}_cs_step", [step.sx_in(0), step.sx_in(1)], step.call([step.sx_in(0), step.sx_in(1)]))
@@ -274,17 +319,11 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
     cg.add(fstep)
     cg.add(fupd)
-    nz, nw, ny = filt.nz, filt.nw, filt.ny
-    ns = nz + nz * nz
-    nwork = max(2 * ns + nw + ny + fstep.sz_w(), 2 * ns + ny + fupd.sz_w())
-    generated = cg.dump()
-    fmt = dict(prefix=prefix, P=P, step_arg=fstep.sz_arg(), step_res=fstep.sz_res(), step_iw=fstep.sz_iw(),
-               upd_arg=fupd.sz_arg(), upd_res=fupd.sz_res(), upd_iw=fupd.sz_iw())
-    source = f"/* {prefix}.c -- generated by alpes_dyn (alpes-dyn codegen); the API is in {prefix}.h */\n" \
-        + generated + _WRAPPERS.format(**fmt)
-    header = _HEADER.format(**fmt, **_header_fields(filt, about, nwork, z0, P0))
-    main = _MAIN.format(prefix=prefix, P=P, nz=nz, nw=nw, ny=ny)
-    return {f"{prefix}.h": header, f"{prefix}.c": source, "main.c": main}
+    ns = filt.nz + filt.nz * filt.nz
+    nwork = max(2 * ns + filt.nw + filt.ny + fstep.sz_w(), 2 * ns + filt.ny + fupd.sz_w())
+    fmt = dict(prefix=prefix, P=prefix.upper(), step_arg=fstep.sz_arg(), step_res=fstep.sz_res(),
+               step_iw=fstep.sz_iw(), upd_arg=fupd.sz_arg(), upd_res=fupd.sz_res(), upd_iw=fupd.sz_iw())
+    return cg.dump() + _WRAPPERS.format(**fmt), nwork
 
 
 def _header_fields(filt: KalmanFilter, about: str, nwork: int, z0: Any, P0: Any) -> dict[str, Any]:

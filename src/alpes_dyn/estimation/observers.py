@@ -58,6 +58,7 @@ from ..limits import check_bytes
 from ..rebuild import Rebuilt
 from ..simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from ..symbolic.statespace import StateSpace
+from .covariance import predicted_covariance, updated_state
 
 __all__ = [
     "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
@@ -233,7 +234,11 @@ class KalmanFilter(Rebuilt):
     Attributes
     ----------
     model: the :class:`DiscreteModel`. names: names of z's entries. backend: ``"compiled"`` or ``"casadi"``.
-    filter_step: ``casadi.Function`` s = [z; vec P], [w; y] -> s_next, one predict-update step.
+    filter_step: ``casadi.Function`` s = [z; vec P], [w; y] -> s_next, one predict-update step; its covariance
+    arithmetic in the order of :mod:`~alpes_dyn.estimation.covariance` (the exported C's).
+    measurement: ``casadi.Function`` z -> (h (ny,), H = dh/dz (ny, nz), sparse), what the update evaluates.
+    exact_loops: True when CasADi folded no constant product in that arithmetic: the exported C's loops
+    (:mod:`~alpes_dyn.estimation.cexport_ekf`) give the step's numbers to the last bit.
     """
 
     kind = "kalman"
@@ -253,18 +258,20 @@ class KalmanFilter(Rebuilt):
         self.Sw = _cov(0.0 if input_noise is None else input_noise, mdl.nw, "input_noise")
         z = cs.SX.sym("z", mdl.nz)
         P = cs.SX.sym("P", mdl.nz, mdl.nz)
-        w = cs.SX.sym("w", mdl.nw)
         y = cs.SX.sym("y", mdl.ny)
         nz = mdl.nz
-        self._predict = cs.Function("predict", [z, P, w], list(self._predict_sym(z, P, w)), ["z", "P", "w"],
-                                    ["z_pred", "P_pred"])
+        self._folds: list[int] = []  # the products CasADi folded (covariance._mul)
+        self._predict_fn: cs.Function | None = None  # built on first use (predict())
         self._update = cs.Function("update", [z, P, y], list(self._update_sym(z, P, y)), ["z", "P", "y"],
                                    ["z_upd", "P_upd"])
-        # one step on s = [z; vec P] and [w; y]: the two SX functions called on symbols are inlined
+        # one step on s = [z; vec P] and [w; y], built from the expressions (not by calling the two functions, so
+        # that the products CasADi folds are seen: self.exact_loops, for the exported C)
         s = cs.SX.sym("s", nz + nz * nz)
         r = cs.SX.sym("wy", mdl.nw + mdl.ny)
-        zp, Pp = self._predict(s[:nz], cs.reshape(s[nz:], nz, nz), r[: mdl.nw])
-        zu, Pu = self._update(zp, Pp, r[mdl.nw:])
+        self._folds.clear()
+        zp, Pp = self._predict_sym(s[:nz], cs.reshape(s[nz:], nz, nz), r[: mdl.nw])
+        zu, Pu = self._update_sym(zp, Pp, r[mdl.nw:])
+        self.exact_loops = not self._folds
         out = cs.vertcat(zu, cs.vec(Pu))
         self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [cs.cse(out)], ["s", "wy"], ["s_next"])
         self._loop: CompiledStepLoop | None = None
@@ -276,22 +283,27 @@ class KalmanFilter(Rebuilt):
             self.backend = "compiled"
 
     # ------------------------------------------------------------------ symbolic pieces
+    @property
+    def _predict(self) -> cs.Function:
+        """The time update, (z, P, w) -> (z_pred, P_pred), built on first use (:meth:`predict`; the step is
+        built from the expressions)."""
+        if self._predict_fn is None:
+            z, P, w = cs.SX.sym("z", self.nz), cs.SX.sym("P", self.nz, self.nz), cs.SX.sym("w", self.nw)
+            self._predict_fn = cs.Function("predict", [z, P, w], list(self._predict_sym(z, P, w)), ["z", "P", "w"],
+                                           ["z_pred", "P_pred"])
+        return self._predict_fn
+
     def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:  # pragma: no cover - abstract
         raise NotImplementedError
 
     def _update_sym(self, z: cs.SX, P: cs.SX, y: cs.SX) -> tuple[cs.SX, cs.SX]:
-        """Measurement update with a Joseph-form covariance (eq. of the linear Kalman filter)."""
+        """Measurement update with a Joseph-form covariance (eq. of the linear Kalman filter), in the order of
+        :func:`~alpes_dyn.estimation.covariance.updated_state` (the exported C's)."""
         zs = cs.SX.sym("zs", self.nz)
-        H = cs.Function("H", [zs], [cs.jacobian(self.model.output(zs), zs)])(z)
-        h = self.model.output(z)
-        R = cs.DM(self.R)
-        S = cs.mtimes([H, P, H.T]) + R
-        PHt = cs.mtimes(P, H.T)
-        K = PHt / S if self.ny == 1 else cs.mtimes(PHt, cs.inv(S))
-        zn = z + cs.mtimes(K, y - h)
-        IKH = cs.SX.eye(self.nz) - cs.mtimes(K, H)
-        Pn = cs.mtimes([IKH, P, IKH.T]) + cs.mtimes([K, R, K.T])
-        return zn, 0.5 * (Pn + Pn.T)
+        hs = self.model.output(zs)
+        self.measurement = cs.Function("measurement", [zs], [hs, cs.jacobian(hs, zs)], ["z"], ["h", "H"])
+        h, H = self.measurement(z)
+        return updated_state(z, P, y, h, H, self.R, self._folds)
 
     # ------------------------------------------------------------------ numeric API
     def _z(self, z: Any, name: str = "z") -> np.ndarray:
@@ -437,7 +449,8 @@ class ExtendedKalmanFilter(KalmanFilter):
 
     Prediction: z_k+1 = F(z_k, w_k), P_k+1 = A P A^T + G Sigma_w G^T + Q with A = dF/dz and
     G = dF/dw by CasADi automatic differentiation of the RK4 step. Update: the Kalman gain with
-    H = dh/dz and a Joseph-form covariance.
+    H = dh/dz and a Joseph-form covariance. Attribute ``linearized``: ``casadi.Function`` (z, w) -> (z_next,
+    A (sparse), N = the lower triangle of G Sigma_w G^T + Q).
 
     Example
     -------
@@ -452,11 +465,14 @@ class ExtendedKalmanFilter(KalmanFilter):
     kind = "ekf"
 
     def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
-        zn = self.model.step(z, w)
-        A = cs.jacobian(zn, z)
-        G = cs.jacobian(zn, w)
-        Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, cs.DM(self.Sw), G.T]) + cs.DM(self.Q)
-        return zn, 0.5 * (Pn + Pn.T)
+        zs, ws = cs.SX.sym("zs", self.nz), cs.SX.sym("ws", self.nw)
+        zn = self.model.step(zs, ws)
+        G = cs.jacobian(zn, ws)
+        noise = cs.mtimes([G, cs.sparsify(cs.DM(self.Sw)), G.T]) + cs.sparsify(cs.DM(self.Q))
+        self.linearized = cs.Function("linearized", [zs, ws], [zn, cs.jacobian(zn, zs), cs.tril(noise)],
+                                      ["z", "w"], ["z_next", "A", "N"])
+        zn, A, N = self.linearized(z, w)
+        return zn, predicted_covariance(A, N, P, self._folds)
 
 
 def _chol_sym(P: cs.SX) -> cs.SX:
