@@ -182,9 +182,9 @@ class ControlResult:
     beyond the new level / step size (None unless step). rise_time_s: 10-90 % rise time of the up-step, s
     (None unless step). q_rmse_deg: (n,) RMSE of
     q_hat - q during contact (F_true > 0.05 N), deg (None for ``pi``). wall_s: wall time of the loop, s.
-    saturated: fraction of samples with the command at 0 or tau_max. block: on a URDF model, where the block was
-    placed (:class:`~alpes_dyn.model.block_scene.BlockScene`: frame, motor, contact_q, normal, lever); None on an
-    Alpes finger.
+    saturated: fraction of samples with the command at 0 or tau_max.
+    block: on a URDF model, the block's placement, a :class:`~alpes_dyn.model.block_scene.BlockScene` (frame,
+        motor, contact_q, normal, lever); None on an Alpes finger.
     """
 
     scenario: ControlScenario

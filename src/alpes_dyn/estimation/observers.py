@@ -235,10 +235,10 @@ class KalmanFilter(Rebuilt):
     ----------
     model: the :class:`DiscreteModel`. names: names of z's entries. backend: ``"compiled"`` or ``"casadi"``.
     filter_step: ``casadi.Function`` s = [z; vec P], [w; y] -> s_next, one predict-update step; its covariance
-    arithmetic in the order of :mod:`~alpes_dyn.estimation.covariance` (the exported C's).
+        arithmetic in the order of :mod:`~alpes_dyn.estimation.covariance` (the exported C's).
     measurement: ``casadi.Function`` z -> (h (ny,), H = dh/dz (ny, nz), sparse), what the update evaluates.
     exact_loops: True when CasADi folded no constant product in that arithmetic: the exported C's loops
-    (:mod:`~alpes_dyn.estimation.cexport_ekf`) give the step's numbers to the last bit.
+        (:mod:`~alpes_dyn.estimation.cexport_ekf`) give the step's numbers to the last bit.
     """
 
     kind = "kalman"
