@@ -38,6 +38,7 @@ import numpy as np
 import alpes_dyn as ad
 from alpes_dyn.control import CONTROLLERS, run_control
 from alpes_dyn.estimation.experiment import perturbed_params
+from _table import cell  # noqa: E402 (this folder is on the path)
 
 METRICS = ("steady_state_error", "force_rmse", "overshoot")
 
@@ -92,18 +93,14 @@ def main() -> None:
         print(json.dumps(out))
         return
 
-    def f(x, fmt):
-        width = int(fmt.split(".")[0])
-        return "n/a".rjust(width) if x is None else format(x, fmt)
-
     print(f"finger3 pressing a block on MuJoCo; motor limit {p.tau_max:g} N m; seed {args.seed}; "
           f"controller parameters: {out['params']}")
     print(f"{'case / controller':38s} {'RMSE [N]':>9s} {'SSE':>7s} {'overshoot':>9s} {'rise [s]':>8s} "
           f"{'q RMSE [deg]':>18s} {'x real time':>11s}")
     for name, d in runs.items():
         q = "n/a" if d["q_rmse_deg"] is None else " ".join(f"{e:.2f}" for e in d["q_rmse_deg"])
-        print(f"{name:38s} {d['force_rmse']:9.4f} {f(d['steady_state_error'], '7.2%')} {f(d['overshoot'], '9.1%')} "
-              f"{f(d['rise_time_s'], '8.3f')} {q:>18s} {d['realtime_ratio']:11.1f}")
+        print(f"{name:38s} {d['force_rmse']:9.4f} {cell(d['steady_state_error'], '7.2%')} {cell(d['overshoot'], '9.1%')} "
+              f"{cell(d['rise_time_s'], '8.3f')} {q:>18s} {d['realtime_ratio']:11.1f}")
     if plants:
         print(f"plant mismatch ({len(plants)} plant(s)), change against the matched plant, mean / worst:")
         for c, d in out["plant_mismatch_loss"].items():

@@ -17,6 +17,7 @@ import argparse
 import json
 
 from alpes_dyn.control import CONTROLLERS, run_hand_control
+from _table import cell  # noqa: E402 (this folder is on the path)
 
 
 def main() -> None:
@@ -38,18 +39,14 @@ def main() -> None:
         print(json.dumps(out))
         return
 
-    def f(x, fmt):
-        width = int(fmt.split(".")[0])
-        return "n/a".rjust(width) if x is None else format(x, fmt)
-
     print(f"the hand grasping the cylinder on MuJoCo; seed {args.seed}")
     print(f"{'controller / chain':22s} {'asked':>6s} {'held':>7s} {'SSE':>7s} {'overshoot':>9s} {'rise [s]':>8s} "
           f"{'RMSE [N]':>9s} {'q RMSE [deg]':>12s}")
     for c, d in out["runs"].items():
         for row in d["chains"]:
             print(f"{c + ' / ' + row['chain']:22s} {row['F_ref']:6.2f} {row['F_held']:7.3f} "
-                  f"{f(row['steady_state_error'], '7.2%')} {f(row['overshoot'], '9.1%')} {f(row['rise_time_s'], '8.3f')} "
-                  f"{row['force_rmse']:9.4f} {f(row['q_rmse_deg'], '12.2f')}")
+                  f"{cell(row['steady_state_error'], '7.2%')} {cell(row['overshoot'], '9.1%')} {cell(row['rise_time_s'], '8.3f')} "
+                  f"{row['force_rmse']:9.4f} {cell(row['q_rmse_deg'], '12.2f')}")
     for c, d in out["runs"].items():
         print(f"{c:11s} {d['realtime_ratio']:.2f} x real time, wall {d['wall_s']:.2f} s = {d['wall_vs_pi']:.1f} x the PI's")
 

@@ -30,6 +30,7 @@ import json
 import alpes_dyn as ad
 from alpes_dyn.control import CONTROLLERS, run_control
 from alpes_dyn.model.spec import example_spec_path
+from _table import cell  # noqa: E402 (this folder is on the path)
 
 ALLEGRO_REST = '\n[rest_angle]\n"joint_12.0" = 0.3\n"joint_14.0" = 0.1\n'
 
@@ -69,18 +70,14 @@ def main() -> None:
         print(json.dumps(out))
         return
 
-    def f(x, fmt):
-        width = int(fmt.split(".")[0])
-        return "n/a".rjust(width) if x is None else format(x, fmt)
-
     print(f"a tip frame pressing a block placed from the robot's kinematics, on MuJoCo; step 0.2 -> 1.0 -> 0.5 N; "
           f"seed {args.seed}")
     print(f"{'robot / controller':26s} {'frame':16s} {'RMSE [N]':>9s} {'SSE':>7s} {'overshoot':>9s} {'rise [s]':>8s} "
           f"{'q RMSE max [deg]':>16s} {'tau_max [N m]':>13s} {'x real time':>11s}")
     for name, d in out["runs"].items():
         q = "n/a" if d["q_rmse_deg"] is None else f"{max(d['q_rmse_deg']):.2f}"
-        print(f"{name:26s} {d['frame']:16s} {d['force_rmse']:9.4f} {f(d['steady_state_error'], '7.2%')} "
-              f"{f(d['overshoot'], '9.1%')} {f(d['rise_time_s'], '8.3f')} {q:>16s} {d['tau_max_Nm']:13.4f} "
+        print(f"{name:26s} {d['frame']:16s} {d['force_rmse']:9.4f} {cell(d['steady_state_error'], '7.2%')} "
+              f"{cell(d['overshoot'], '9.1%')} {cell(d['rise_time_s'], '8.3f')} {q:>16s} {d['tau_max_Nm']:13.4f} "
               f"{d['realtime_ratio']:11.1f}")
     print("goals: " + ", ".join(f"{k} {'yes' if v else 'NO'}" for k, v in out["goals"].items()))
 
