@@ -441,8 +441,6 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "finger3", "--tendon-dead-band", "1e-4", needle="tendon_dead_band: needs tendon_stiffness"),
         C("mjcf", "finger3", "--params", "{cable_toml}", "--tendon-stiffness", "4e4",
           needle="tendon_stiffness: 40000.0 N/m differs from the parameter file's cable"),
-        C("mjcf", "finger3", "--params", "{cable_toml}", "--tendon-rotor",
-          needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
         C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-dead-band=-1e-4",
           needle="tendon_dead_band: expected a cable's play >= 0 in m"),
         C("mjcf", "{triangle_urdf}", "--tendon-dead-band", "1e-4", needle="--tendon-dead-band: applies to the Alpes"),

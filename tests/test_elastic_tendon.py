@@ -151,14 +151,25 @@ def test_of_reads_the_compliance_written_once(p, tmp_path):
         ElasticTendon.of(ad.Model.alpes("finger3"))
 
 
-def test_alpes_export_takes_the_file_cable(p, tmp_path):
-    """mjcf_string of a parameter file with a tendon compliance C writes that cable (k_t = 1 / (C r_m^2)): the same
-    MJCF as tendon_stiffness=k_t given by hand (whose rest is the quasi-static S q + C u: test_mjcf_effects)."""
+def test_alpes_export_and_the_file_cable(p, tmp_path):
+    """mjcf_string of a parameter file with a tendon compliance C: with tendon_stiffness = 1 / (C r_m^2) the same MJCF
+    as from the shipped file (the cable written once); without it the rigid tendon with a warning naming that
+    stiffness (not silently dropped); another stiffness refused."""
+    from alpes_dyn.errors import AlpesDynWarning
+
     path = _cable_file(p, tmp_path)
-    body = [ln for ln in mjcf_string("finger3", str(path), tendon_damping=C_T).splitlines() if "<!--" not in ln]
-    by_hand = [ln for ln in mjcf_string("finger3", tendon_stiffness=K_T, tendon_damping=C_T).splitlines()
+    k_file = 1.0 / ((1.0 / (K_T * p.r_m**2)) * p.r_m**2)
+    body = [ln for ln in mjcf_string("finger3", str(path), tendon_stiffness=k_file, tendon_damping=C_T).splitlines()
+            if "<!--" not in ln]
+    by_hand = [ln for ln in mjcf_string("finger3", tendon_stiffness=k_file, tendon_damping=C_T).splitlines()
                if "<!--" not in ln]
     assert body == by_hand
+    with pytest.warns(AlpesDynWarning, match=r"tendon_compliance: the file's cable .* written as a rigid tendon; "
+                                             r"its series-elastic plant is tendon_stiffness=40000 N/m"):
+        rigid = mjcf_string("finger3", str(path))
+    assert "finger_rotor" not in rigid
+    with pytest.raises(InputError, match="tendon_stiffness: 30000.0 N/m differs from the parameter file's cable"):
+        mjcf_string("finger3", str(path), tendon_stiffness=3e4)
 
 
 def test_numeric_equals_symbolic_with_friction(p, rng):

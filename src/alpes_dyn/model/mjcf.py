@@ -69,6 +69,7 @@ checks it by name.
 from __future__ import annotations
 
 import math
+import warnings
 from pathlib import Path
 from typing import Sequence
 
@@ -76,7 +77,7 @@ import numpy as np
 
 from .description import check_model_name, layout, model_params
 from ..checks import as_float_array
-from ..errors import InputError, ModelError
+from ..errors import AlpesDynWarning, InputError, ModelError
 from .extras import spring_stiffness
 from .params import ChainParams, HandParams, load_params
 
@@ -259,8 +260,8 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     stiction: time constant (s) of the dry-friction constraint (``solreffriction``), e.g.
         :data:`STICTION_TIMECONST`: stick-slip friction, F_s and F_v written as with ``friction=True``.
     tendon_stiffness, tendon_damping: k_t (N/m) and c_t (N s/m) of a series-elastic, pull-only tendon with its
-        own rotor joint (module docstring); None (default): the parameter file's cable where it holds a tendon
-        compliance C (k_t = 1 / (C r_m^2): an identified file's), else the rigid tendon.
+        own rotor joint (module docstring); None (default): the rigid tendon (with a warning where the parameter
+        file holds a tendon compliance C: its cable is k_t = 1 / (C r_m^2), refused if given otherwise).
     tendon_dead_band: the cable's play, m (>= 0, with ``tendon_stiffness``): slack up to this stretch, the spring
         pulling k_t (e - dead band) beyond it (``springlength="-1 <dead band>"``; default 0). The same system as
         :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` with ``ElasticTendon.from_cable``.
@@ -404,16 +405,20 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
 
 
 def _file_cable(p: HandParams, tendon_stiffness: float | None) -> float | None:
-    """The cable's k_t (N/m): the parameter file's, where it holds a tendon compliance C (``transmission.tendon_compliance``,
-    as ``alpes-dyn identify`` writes it: k_t = 1 / (C r_m^2), the same cable as
-    :meth:`ElasticTendon.of <alpes_dyn.model.tendon.ElasticTendon.of>`), else ``tendon_stiffness`` as given; both,
-    differing, are refused (one cable, written once)."""
+    """``tendon_stiffness`` checked against the parameter file's cable where it holds a tendon compliance C
+    (``transmission.tendon_compliance``, as ``alpes-dyn identify`` writes it: k_t = 1 / (C r_m^2)); both, differing,
+    are refused (one cable, written once). Without ``tendon_stiffness`` the tendon stays rigid, with a warning: the
+    compliance is the quasi-static stretch the encoder sees, and its cable's dynamics (the rotor's mode, undamped
+    without a ``tendon_damping``) are a plant of their own, asked for with ``tendon_stiffness=k_t``."""
     C = float(p.tendon_compliance)
     if C <= 0:
         return tendon_stiffness
     k_file = 1.0 / (C * p.r_m**2)
     if tendon_stiffness is None:
-        return k_file
+        warnings.warn(AlpesDynWarning(
+            f"transmission.tendon_compliance: the file's cable ({C:g} rad/(N m)) is written as a rigid tendon; its "
+            f"series-elastic plant is tendon_stiffness={k_file:.6g} N/m (with a tendon_damping)"), stacklevel=3)
+        return None
     if not (isinstance(tendon_stiffness, (int, float, np.integer, np.floating)) and not isinstance(tendon_stiffness, bool)
             and math.isclose(tendon_stiffness, k_file, rel_tol=1e-12)):
         raise InputError(f"tendon_stiffness: {tendon_stiffness!r} N/m differs from the parameter file's cable "
