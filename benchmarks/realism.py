@@ -58,7 +58,7 @@ seeds 30-49). Hanging, none folds.
 
 ``--chains``: the hand's chains instead of finger3, one at a time, each as ``alpes-dyn identify`` fits it (a finger
 as ``--model finger3 --chain <name>``; the thumb as ``--model thumb``, its flexion springs, masses and friction,
-:data:`~alpes_dyn.cli.THUMB_PARAMETERS`, its ab/adduction on its own geared motor), from the nominal file; the
+:data:`~alpes_dyn.estimation.identification.THUMB_PARAMETERS`, its ab/adduction on its own geared motor), from the nominal file; the
 true hand is the nominal one with every chain drawn +-20 % (``perturbed_params(..., chains=<all the hand's
 chains>)``, seed ``--hand-seed``, which also seeds the sensors' noise). The errors are over the parameters of the
 chain's catalogue (:func:`~alpes_dyn.symbolic.parametric.parameter_catalogue`) that the fit holds and whose truth
@@ -70,240 +70,17 @@ motor stays rigid).
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
-import math
 import sys
 import tempfile
 import time
 import warnings
 from pathlib import Path
 
-import numpy as np
-
-import alpes_dyn as ad
-from alpes_dyn.control.plants import PlantEffects, mujoco_recording, plant_model
-from alpes_dyn.estimation.experiment import ExperimentDesign, experiment_torque, perturbed_params
-from alpes_dyn.estimation.effects import alpes_models, fit_effects, parse_effects
-from alpes_dyn.estimation.identification import identify
-from alpes_dyn.estimation.replay import estimate_recording
-from alpes_dyn.model.mjcf import HANGING_TILT, STICTION_TIMECONST, tilted_gravity
-from alpes_dyn.model.params import load_params, write_params
+from alpes_dyn.model.params import load_params
 from alpes_dyn.model.stops import JointRangeWarning
-from alpes_dyn.symbolic.parametric import parameter_catalogue
-
-KINDS = ("K", "m", "F_s", "F_v")  # the kinds of parameter whose errors the table gives
-
-MODEL = "finger3"
-STRETCH = 0.03  # cable stretch / tendon travel under the experiment's torque swing
-ZETA = 0.2  # damping ratio of the rotor-on-cable mode
-TILT_DEG = 3.0
-KT_ERROR = 0.05
-OFFSET_COUNTS = 4.0
-FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)  # Hz: the EKF's validation run
-FIT_EFFECTS = "auto"  # the extended fit: alpes-dyn identify's default --effects
-
-
-RIGS = {"level": 0.0, "hanging": HANGING_TILT}
-"""The rig's orientation (rad about the joints' axes from the file's palm-up gravity, :func:`tilted_gravity`)."""
-
-CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "all")
-
-
-def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
-    """k_t (N/m) and c_t (N s/m) for the tendon case, from the nominal finger's experiment on a rigid MuJoCo plant:
-    under the experiment's mean tension mean(tau_m) / r_m the cable stretches by STRETCH times the tendon's travel
-    from the springs' rest (q = 0) to the mean configuration, r mean(sum q). c_t gives the rotor-on-cable mode
-    (J_m on r_m^2 k_t) the damping ratio ZETA."""
-    p = load_params()
-    t, u, x0 = experiment_torque(MODEL, p, design)
-    rec = mujoco_recording(MODEL, p, u, design.dt, encoder_noise_counts=0.0, torque_noise=0.0)
-    travel = p.r * float(np.mean(rec.true_q.sum(axis=1)))
-    tension = float(np.mean(u)) / p.r_m
-    k_t = tension / (STRETCH * travel)
-    c_t = 2 * ZETA * math.sqrt(k_t * p.J_m) / p.r_m
-    info = {"mean_tension_N": tension, "tension_swing_N": float(np.ptp(u)) / p.r_m, "tendon_travel_m": travel,
-            "swing_travel_m": p.r * float(np.ptp(rec.true_q.sum(axis=1))), "k_t_N_per_m": k_t,
-            "c_t_N_s_per_m": c_t, "rotor_mode_Hz": math.sqrt(k_t * p.r_m**2 / p.J_m) / (2 * math.pi)}
-    return k_t, c_t, info
-
-
-def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffects]:
-    """Each case's plant effects; ``rig_tilt`` (rad): the rig's orientation (:func:`tilted_gravity`), under every
-    plant (the tilt cases' error on top of it)."""
-    one = {
-        "none": PlantEffects(),
-        "stiction": PlantEffects(stiction=STICTION_TIMECONST),
-        "tendon": PlantEffects(tendon_stiffness=k_t, tendon_damping=c_t),
-        "rotor": PlantEffects(tendon_rotor=True),
-        "tilt": PlantEffects(tilt=math.radians(TILT_DEG)),
-        "kt": PlantEffects(torque_constant_error=KT_ERROR),
-        "offset": PlantEffects(encoder_offset=OFFSET_COUNTS),
-    }
-    # all: every effect; the elastic tendon carries the rotor (tendon_rotor is its rigid limit)
-    one["all"] = PlantEffects(stiction=STICTION_TIMECONST, tendon_stiffness=k_t, tendon_damping=c_t,
-                              tilt=math.radians(TILT_DEG), torque_constant_error=KT_ERROR,
-                              encoder_offset=OFFSET_COUNTS)
-    if rig_tilt:
-        one = {c: dataclasses.replace(e, tilt=rig_tilt + e.tilt) for c, e in one.items()}
-    return one
-
-
-def verdict(res) -> str:
-    """The fit's own word on itself (:mod:`alpes_dyn.estimation.adequacy`): adequate, or why not (the stop reason,
-    the failed checks, the likely missing effect)."""
-    if res.trustworthy:
-        return "adequate"
-    why = [] if res.converged else [f"not converged ({res.reason})"]
-    if res.adequacy is not None and not res.adequacy.adequate:
-        why.append("inadequate")
-        if res.adequacy.likely_missing:
-            why.append("likely " + ", ".join(res.adequacy.likely_missing[:2]))
-    return "FLAGGED: " + "; ".join(why)
-
-
-@dataclasses.dataclass(frozen=True)
-class Plant:
-    """What is identified: ``label`` (the table's), the Alpes ``model`` (finger3 or thumb) and the hand's ``chain``
-    (None: the shared ``[finger]`` values of the default finger3 run), and the parameters the fits start from and
-    select (``base``: None for a finger's default K, m and friction; :data:`~alpes_dyn.cli.THUMB_PARAMETERS` for the
-    thumb)."""
-
-    label: str
-    model: str = MODEL
-    chain: str | None = None
-    base: str | None = None
-
-    def true_params(self, seed: int):
-        """The plant's parameters: finger3 drawn +-20 % (default), or the whole hand, every chain drawn."""
-        if self.chain is None and self.model == MODEL:
-            return perturbed_params(spread=0.2, seed=seed)
-        nominal = load_params()
-        return perturbed_params(nominal, spread=0.2, seed=seed, chains=nominal.chain_names)
-
-    def alpes(self, **kwargs) -> ad.Model:
-        return ad.Model.alpes(self.model, friction=True, chain=self.chain, **kwargs)
-
-
-FINGER3 = Plant("finger3")
-
-
-def hand_plant(chain: str) -> Plant:
-    """The :class:`Plant` of one of the hand's chains (``thumb`` or a finger's name), as ``identify`` fits it."""
-    if chain == "thumb":
-        from alpes_dyn.cli import THUMB_PARAMETERS
-        return Plant("thumb", "thumb", None, THUMB_PARAMETERS)
-    return Plant(chain, MODEL, chain)
-
-
-def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
-             plant: Plant = FINGER3, rig: np.ndarray | None = None) -> np.ndarray:
-    """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
-    torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
-    the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
-    the gravity of the rig's orientation, if not the file's, the tilt on top of it)."""
-    obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path), rig)
-    off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
-    tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
-    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
-    return est.rmse
-
-
-_TORQUES: dict = {}
-
-
-def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray, plant: Plant = FINGER3):
-    """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim)."""
-    key = (plant, seed, design, tuple(np.round(gravity, 12)))
-    if key not in _TORQUES:
-        _TORQUES[key] = experiment_torque(plant.model, p, design, chain=plant.chain, true_gravity=gravity)
-    return _TORQUES[key]
-
-
-def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, plant: Plant = FINGER3):
-    """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
-    the fit never saw, in the joint range by the same design rule), from the plant's rest."""
-    fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0)  # in use: no dither, stick phases
-    _, u, x0 = torque_of(seed, p, fresh, plant_model(plant.model, p, effects, plant.chain).gravity, plant)
-    return mujoco_recording(plant.model, p, u, fresh.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed + 1000,
-                            chain=plant.chain)
-
-
-def _on_rig(model, rig: np.ndarray | None):
-    """``model`` in the rig's orientation (gravity ``rig``, m/s^2), or as it is (None: the file's)."""
-    return model if rig is None else model.copy(gravity=rig)
-
-
-def rig_of(design: ExperimentDesign) -> np.ndarray | None:
-    """The rig's gravity (the design's orientation) where it is not the parameter file's, else None."""
-    g = np.asarray(design.orientations[0], dtype=float)
-    return None if np.array_equal(g, load_params().gravity) else g
-
-
-def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dict, float]:
-    """The worst error (%) of each of :data:`KINDS` over the fitted ``values`` whose ``truth`` is known and not 0,
-    plain and up to the common scale c = exp(mean log(value / truth)) over K and m (the torque constant scales
-    every parameter together: the encoder cannot see it); and c."""
-    kinds = {nm: kind for kind in KINDS for nm in values if nm.startswith(kind + "_") and truth.get(nm, 0.0) != 0.0}
-    km = [values[nm] / truth[nm] for nm, kind in kinds.items() if kind in ("K", "m")]
-    c = float(np.exp(np.mean(np.log(km))))
-    worst = {kind: 0.0 for kind in KINDS}
-    worst_c = dict(worst)
-    for nm, kind in kinds.items():
-        worst[kind] = max(worst[kind], abs(100 * (values[nm] / truth[nm] - 1)))
-        worst_c[kind] = max(worst_c[kind], abs(100 * (values[nm] / (c * truth[nm]) - 1)))
-    return worst, worst_c, c
-
-
-def one(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, tmp: Path,
-        plant: Plant = FINGER3) -> dict:
-    """One row: the plant's recording with ``effects`` (seed ``seed``: the draw and the noise), the two fits, the
-    EKF runs (see the module docstring)."""
-    true = plant.true_params(seed)
-    rig = rig_of(design)
-    nominal = load_params()
-    t0 = time.perf_counter()
-    g_true = plant_model(plant.model, true, effects, plant.chain).gravity
-    _, u, x0 = torque_of(seed, true, design, g_true, plant)
-    rec = mujoco_recording(plant.model, true, u, design.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed,
-                           chain=plant.chain)
-    plant_s = time.perf_counter() - t0
-    rigid = identify(_on_rig(plant.alpes(params=nominal), rig), rec, plant.base, excitation=design.lines,
-                     progress=False)
-    model_of = alpes_models(plant.model, nominal, chain=plant.chain)
-    fit = fit_effects(lambda e: _on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), plant.base,
-                      rec.gravity is not None, excitation=design.lines, progress=False)
-    res = fit.result
-    ident = res.write(tmp / f"ident_{plant.label}_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
-    truth = {pp.name: pp.nominal for pp in parameter_catalogue(plant.alpes(params=true))}
-    t1 = time.perf_counter()
-    fresh = fresh_run(true, effects, seed, design, plant)
-    fitted = dict(zip(res.names, res.values))
-    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig)
-    true_path = write_params(true, tmp / f"true_{plant.label}_{seed}.toml")
-    rmse_true = ekf_rmse(fresh, str(true_path), {}, plant=plant, rig=rig)
-    ekf_s = time.perf_counter() - t1
-    row = {"case": case, "seed": seed, "chain": plant.label}
-    for label, one_fit, effects in (("rigid", rigid, []), ("extended", res, list(fit.effects))):
-        worst, worst_c, c = errors(dict(zip(one_fit.names, one_fit.values.tolist())), truth)
-        row[label] = {
-            "worst_error_pct": worst, "worst_error_common_scale_pct": worst_c,
-            "common_scale": c, "values": dict(zip(one_fit.names, one_fit.values.tolist())),
-            "residual_counts": one_fit.residual_rms, "converged": bool(one_fit.converged),
-            "iterations": one_fit.iterations,
-            "fit_seconds": one_fit.seconds, "compile_seconds": one_fit.compile_seconds, "verdict": verdict(one_fit),
-            "flagged": not one_fit.trustworthy, "stop_reason": one_fit.reason, "effects": effects,
-            "adequacy": one_fit.adequacy.to_dict() if one_fit.adequacy is not None else None}
-    row["joint_range_deg"] = [np.degrees(rec.true_q.min(axis=0)).tolist(), np.degrees(rec.true_q.max(axis=0)).tolist()]
-    row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
-                                  "fit_seconds": r.seconds} for e, r in fit.rounds]
-    row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
-    row["extended"]["tried"] = None if fit.tried is None else {
-        "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy,
-        "fit_seconds": fit.tried.seconds}
-    row.update({"plant_seconds": plant_s, "ekf_seconds": ekf_s, "ekf_rmse_deg": np.degrees(rmse).tolist(),
-                "ekf_true_file_rmse_deg": np.degrees(rmse_true).tolist()})
-    return row
+from alpes_dyn.studies.realism import (CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
+                                       realism_case, rig_design, tendon_stiffness)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -343,22 +120,21 @@ def main(argv: list[str] | None = None) -> int:
     bad = [c for c in names if c not in CASE_NAMES]
     if bad or not names:
         ap.error(f"--cases: unknown case {bad[0] if bad else ''!r} (expected some of {', '.join(CASE_NAMES)})")
-    design = ExperimentDesign()
+    duration = 2.0 if args.quick else None
     if args.quick:
-        seeds, design = seeds[:1], dataclasses.replace(design, duration=2.0)
+        seeds = seeds[:1]
     warnings.simplefilter("ignore", JointRangeWarning)  # the library's simulator in the design; MuJoCo has stops
-    k_t, c_t, info = tendon_stiffness(design)  # the cable: sized on the level rig, the same cable on every rig
-    rig_tilt = RIGS[args.rig]
-    table = cases(k_t, c_t, rig_tilt)
-    if rig_tilt:  # the experiment designed, trimmed and fitted in the rig's orientation
-        design = dataclasses.replace(design, orientations=(tuple(tilted_gravity(load_params().gravity, rig_tilt)),))
+    # the cable: sized on the level rig, the same cable on every rig
+    k_t, c_t, info = tendon_stiffness(rig_design("level", duration))
+    table = cases(k_t, c_t, RIGS[args.rig])
+    design = rig_design(args.rig, duration)  # designed, trimmed and fitted in the rig's orientation
     rows, case_seconds = [], {}
     with tempfile.TemporaryDirectory() as d:
         for c in names:
             t0 = time.perf_counter()
             for plant in plants:
                 for s in seeds:
-                    rows.append(one(c, table[c], s, design, Path(d), plant))
+                    rows.append(realism_case(c, table[c], s, design, Path(d), plant))
                     if args.log:
                         with open(args.log, "a", encoding="utf-8") as f:
                             f.write(json.dumps(rows[-1]) + "\n")

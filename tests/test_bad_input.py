@@ -1009,6 +1009,10 @@ def _nd(v, names):
     return name_direction(v, names)
 
 
+
+def _realism():
+    return __import__("alpes_dyn.studies.realism", fromlist=["x"])
+
 API: list[Api] = [
     # Model construction and files
     A("Model", lambda c: ad.Model(FINGER3, gravity="abc"), ModelError, "gravity: expected 3 finite numbers"),
@@ -1327,6 +1331,14 @@ API: list[Api] = [
         lambda seed: {"x": 1.0}, 1, options=5, serial=True), InputError, "options: expected a dict of keyword arguments"),
     A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
         lambda seed: {"x": 1.0}, 1, options={"seed": 3}, serial=True), InputError, "options: 'seed' is each draw's own"),
+    A("realism_draw", lambda c: _realism().realism_draw(1, case="bogus"), InputError,
+      "case: expected one of none, stiction, tendon, rotor, tilt, kt, offset, all, got 'bogus'"),
+    A("realism_draw", lambda c: _realism().realism_draw(1, rig="upside"), InputError,
+      "rig: expected one of level, hanging, got 'upside'"),
+    A("realism_draw", lambda c: _realism().realism_draw(1, chain="pinky"), InputError,
+      "chain: unknown chain 'pinky' (expected one of index, middle, ring, little, thumb)"),
+    A("realism_draw", lambda c: _realism().realism_draw(1, duration=-4.0), InputError, "duration"),
+    A("rig_design", lambda c: _realism().rig_design("level", duration=float("nan")), InputError, "duration"),
     A("identify", lambda c: _ident(c, max_iterations=True), InputError, "max_iterations: expected a positive integer"),
     A("identify", lambda c: _ident(c, excitation="abc"), InputError, "excitation: expected frequencies in Hz, got a string"),
     A("identify", lambda c: _ident(c, excitation=[1j]), InputError, "excitation: complex values are not supported"),

@@ -38,7 +38,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.cli import THUMB_PARAMETERS
+from alpes_dyn.estimation.identification import THUMB_PARAMETERS
 from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
 from alpes_dyn.estimation.identification import identify
 from alpes_dyn.symbolic.parametric import parameter_catalogue

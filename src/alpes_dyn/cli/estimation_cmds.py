@@ -12,16 +12,9 @@ import warnings
 import numpy as np
 
 from ..errors import InputError
+from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _is_urdf_path,
                      _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot, parse_vector)
-
-
-THUMB_PARAMETERS = "K,m_thumb_j1,m_thumb_j2,F_s_thumb_j1,F_s_thumb_j2,F_v_thumb_j1,F_v_thumb_j2"
-"""What ``alpes-dyn identify --model thumb`` fits by default: the flexion joints' springs, masses and friction.
-Not the ab/adduction joint's own parameters: its base's mass sits on the axis (nothing the encoders see depends on
-it: standard error 100 %), and its friction is weak (F_v 21 % standard error: the joint only creeps) and, fitted
-from 20 % off, spoils the rest on some thumbs (seed 2: 0.66 counts after 50 iterations, a mass 2.8 % off; without
-it 0.58 counts, 0.32 %). Ask for them by name (``F_s_thumb_abd``...)."""
 
 
 # ---- owned by the observers work (issue 4)

@@ -1,0 +1,304 @@
+"""The realism study (issue 16): identification and the EKF on MuJoCo plants with the effects of a real hand.
+
+A plant we did not write -- the finger (or a chain of the hand) exported to MuJoCo
+(:mod:`alpes_dyn.control.plants`), drawn +-20 % per link, with one effect of a real hand or all of them
+(:func:`cases`: stick-slip, a series-elastic cable with its rotor, the rotor on the rigid tendon, the palm
+tilted, the torque constant and the encoder's zero off) -- records the identification experiment; two fits of
+it (the rigid smooth-friction model and ``alpes-dyn identify``'s default ``--effects auto``), and the EKF on the
+extended fit's file and on the true file, on a fresh run of the plant: :func:`realism_case` gives one such row.
+``benchmarks/realism.py`` prints them as a table; the gallery's "The hand on MuJoCo" runs the hand's five
+chains. :func:`realism_draw` is the same row flattened for :func:`~alpes_dyn.studies.sweep.sweep`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import tempfile
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..control.plants import PlantEffects, mujoco_recording, plant_model
+from ..errors import InputError
+from ..estimation.design import ExperimentDesign
+from ..estimation.draws import perturbed_params
+from ..estimation.effects import alpes_models, fit_effects, parse_effects
+from ..estimation.experiment import experiment_torque
+from ..estimation.identification import THUMB_PARAMETERS, identify
+from ..estimation.replay import estimate_recording
+from ..model.mjcf import HANGING_TILT, STICTION_TIMECONST, tilted_gravity
+from ..model.params import load_params, write_params
+from ..model.robot import Model
+from ..symbolic.parametric import parameter_catalogue
+
+__all__ = ["CASE_NAMES", "RIGS", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
+           "realism_case", "realism_draw", "rig_design", "errors"]
+
+KINDS = ("K", "m", "F_s", "F_v")
+"""The kinds of parameter whose worst errors a row gives."""
+
+MODEL = "finger3"
+STRETCH = 0.03
+"""The cable's stretch under the experiment's mean tension, as a fraction of the tendon's travel (:func:`tendon_stiffness`)."""
+ZETA = 0.2
+"""The damping ratio of the rotor-on-cable mode."""
+TILT_DEG = 3.0
+"""deg: the palm's tilt in the finger's plane, unknown to the fits (a rig's level a few degrees off)."""
+KT_ERROR = 0.05
+"""The torque constant's relative error: the recorded torque is 1.05 times the true one."""
+OFFSET_COUNTS = 4.0
+"""counts: the encoder's zero error."""
+FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)
+"""Hz: the lines of the EKF's validation run (:func:`fresh_run`), none of the experiment's."""
+FIT_EFFECTS = "auto"
+"""The extended fit's effects: ``alpes-dyn identify``'s default ``--effects``."""
+
+
+RIGS = {"level": 0.0, "hanging": HANGING_TILT}
+"""The rig's orientation (rad about the joints' axes from the file's palm-up gravity, :func:`tilted_gravity`)."""
+
+CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "all")
+
+
+def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
+    """k_t (N/m) and c_t (N s/m) for the tendon case, from the nominal finger's experiment on a rigid MuJoCo plant:
+    under the experiment's mean tension mean(tau_m) / r_m the cable stretches by STRETCH times the tendon's travel
+    from the springs' rest (q = 0) to the mean configuration, r mean(sum q). c_t gives the rotor-on-cable mode
+    (J_m on r_m^2 k_t) the damping ratio ZETA."""
+    p = load_params()
+    t, u, x0 = experiment_torque(MODEL, p, design)
+    rec = mujoco_recording(MODEL, p, u, design.dt, encoder_noise_counts=0.0, torque_noise=0.0)
+    travel = p.r * float(np.mean(rec.true_q.sum(axis=1)))
+    tension = float(np.mean(u)) / p.r_m
+    k_t = tension / (STRETCH * travel)
+    c_t = 2 * ZETA * math.sqrt(k_t * p.J_m) / p.r_m
+    info = {"mean_tension_N": tension, "tension_swing_N": float(np.ptp(u)) / p.r_m, "tendon_travel_m": travel,
+            "swing_travel_m": p.r * float(np.ptp(rec.true_q.sum(axis=1))), "k_t_N_per_m": k_t,
+            "c_t_N_s_per_m": c_t, "rotor_mode_Hz": math.sqrt(k_t * p.r_m**2 / p.J_m) / (2 * math.pi)}
+    return k_t, c_t, info
+
+
+def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffects]:
+    """Each case's plant effects; ``rig_tilt`` (rad): the rig's orientation (:func:`tilted_gravity`), under every
+    plant (the tilt cases' error on top of it)."""
+    one = {
+        "none": PlantEffects(),
+        "stiction": PlantEffects(stiction=STICTION_TIMECONST),
+        "tendon": PlantEffects(tendon_stiffness=k_t, tendon_damping=c_t),
+        "rotor": PlantEffects(tendon_rotor=True),
+        "tilt": PlantEffects(tilt=math.radians(TILT_DEG)),
+        "kt": PlantEffects(torque_constant_error=KT_ERROR),
+        "offset": PlantEffects(encoder_offset=OFFSET_COUNTS),
+    }
+    # all: every effect; the elastic tendon carries the rotor (tendon_rotor is its rigid limit)
+    one["all"] = PlantEffects(stiction=STICTION_TIMECONST, tendon_stiffness=k_t, tendon_damping=c_t,
+                              tilt=math.radians(TILT_DEG), torque_constant_error=KT_ERROR,
+                              encoder_offset=OFFSET_COUNTS)
+    if rig_tilt:
+        one = {c: dataclasses.replace(e, tilt=rig_tilt + e.tilt) for c, e in one.items()}
+    return one
+
+
+def verdict(res) -> str:
+    """The fit's own word on itself (:mod:`alpes_dyn.estimation.adequacy`): adequate, or why not (the stop reason,
+    the failed checks, the likely missing effect)."""
+    if res.trustworthy:
+        return "adequate"
+    why = [] if res.converged else [f"not converged ({res.reason})"]
+    if res.adequacy is not None and not res.adequacy.adequate:
+        why.append("inadequate")
+        if res.adequacy.likely_missing:
+            why.append("likely " + ", ".join(res.adequacy.likely_missing[:2]))
+    return "FLAGGED: " + "; ".join(why)
+
+
+@dataclasses.dataclass(frozen=True)
+class Plant:
+    """What is identified: ``label`` (the table's), the Alpes ``model`` (finger3 or thumb) and the hand's ``chain``
+    (None: the shared ``[finger]`` values of the default finger3 run), and the parameters the fits start from and
+    select (``base``: None for a finger's default K, m and friction; :data:`~alpes_dyn.estimation.identification.THUMB_PARAMETERS` for the
+    thumb)."""
+
+    label: str
+    model: str = MODEL
+    chain: str | None = None
+    base: str | None = None
+
+    def true_params(self, seed: int):
+        """The plant's parameters: finger3 drawn +-20 % (default), or the whole hand, every chain drawn."""
+        if self.chain is None and self.model == MODEL:
+            return perturbed_params(spread=0.2, seed=seed)
+        nominal = load_params()
+        return perturbed_params(nominal, spread=0.2, seed=seed, chains=nominal.chain_names)
+
+    def alpes(self, **kwargs) -> Model:
+        return Model.alpes(self.model, friction=True, chain=self.chain, **kwargs)
+
+
+FINGER3 = Plant("finger3")
+
+
+def hand_plant(chain: str) -> Plant:
+    """The :class:`Plant` of one of the hand's chains (``thumb`` or a finger's name), as ``identify`` fits it."""
+    known = load_params().chain_names
+    if chain not in known:
+        raise InputError(f"chain: unknown chain {chain!r} (expected one of {', '.join(known)})")
+    if chain == "thumb":
+        return Plant("thumb", "thumb", None, THUMB_PARAMETERS)
+    return Plant(chain, MODEL, chain)
+
+
+def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
+             plant: Plant = FINGER3, rig: np.ndarray | None = None) -> np.ndarray:
+    """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
+    torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
+    the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
+    the gravity of the rig's orientation, if not the file's, the tilt on top of it)."""
+    obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path), rig)
+    off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
+    tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
+    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
+    return est.rmse
+
+
+_TORQUES: dict = {}
+
+
+def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray, plant: Plant = FINGER3):
+    """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim)."""
+    key = (plant, seed, design, tuple(np.round(gravity, 12)))
+    if key not in _TORQUES:
+        _TORQUES[key] = experiment_torque(plant.model, p, design, chain=plant.chain, true_gravity=gravity)
+    return _TORQUES[key]
+
+
+def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, plant: Plant = FINGER3):
+    """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
+    the fit never saw, in the joint range by the same design rule), from the plant's rest."""
+    fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0)  # in use: no dither, stick phases
+    _, u, x0 = torque_of(seed, p, fresh, plant_model(plant.model, p, effects, plant.chain).gravity, plant)
+    return mujoco_recording(plant.model, p, u, fresh.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed + 1000,
+                            chain=plant.chain)
+
+
+def _on_rig(model, rig: np.ndarray | None):
+    """``model`` in the rig's orientation (gravity ``rig``, m/s^2), or as it is (None: the file's)."""
+    return model if rig is None else model.copy(gravity=rig)
+
+
+def rig_of(design: ExperimentDesign) -> np.ndarray | None:
+    """The rig's gravity (the design's orientation) where it is not the parameter file's, else None."""
+    g = np.asarray(design.orientations[0], dtype=float)
+    return None if np.array_equal(g, load_params().gravity) else g
+
+
+def rig_design(rig: str = "level", duration: float | None = None) -> ExperimentDesign:
+    """The documented experiment (:class:`~alpes_dyn.estimation.design.ExperimentDesign`; ``duration`` s if given) in
+    the rig's orientation (:data:`RIGS`: designed, trimmed and fitted there)."""
+    if rig not in RIGS:
+        raise InputError(f"rig: expected one of {', '.join(RIGS)}, got {rig!r}")
+    design = ExperimentDesign() if duration is None else ExperimentDesign(duration=duration)
+    design.check()
+    if RIGS[rig]:
+        design = dataclasses.replace(design, orientations=(tuple(tilted_gravity(load_params().gravity, RIGS[rig])),))
+    return design
+
+
+def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dict, float]:
+    """The worst error (%) of each of :data:`KINDS` over the fitted ``values`` whose ``truth`` is known and not 0,
+    plain and up to the common scale c = exp(mean log(value / truth)) over K and m (the torque constant scales
+    every parameter together: the encoder cannot see it); and c."""
+    kinds = {nm: kind for kind in KINDS for nm in values if nm.startswith(kind + "_") and truth.get(nm, 0.0) != 0.0}
+    km = [values[nm] / truth[nm] for nm, kind in kinds.items() if kind in ("K", "m")]
+    c = float(np.exp(np.mean(np.log(km))))
+    worst = {kind: 0.0 for kind in KINDS}
+    worst_c = dict(worst)
+    for nm, kind in kinds.items():
+        worst[kind] = max(worst[kind], abs(100 * (values[nm] / truth[nm] - 1)))
+        worst_c[kind] = max(worst_c[kind], abs(100 * (values[nm] / (c * truth[nm]) - 1)))
+    return worst, worst_c, c
+
+
+def _fit_row(fit: Any, truth: dict[str, float], effects: list[str]) -> dict[str, Any]:
+    """A fit's part of a row: its worst errors (plain and up to the common scale), values, residual, verdict."""
+    values = dict(zip(fit.names, fit.values.tolist()))
+    worst, worst_c, c = errors(values, truth)
+    return {"worst_error_pct": worst, "worst_error_common_scale_pct": worst_c, "common_scale": c, "values": values,
+            "residual_counts": fit.residual_rms, "converged": bool(fit.converged), "iterations": fit.iterations,
+            "fit_seconds": fit.seconds, "compile_seconds": fit.compile_seconds, "verdict": verdict(fit),
+            "flagged": not fit.trustworthy, "stop_reason": fit.reason, "effects": effects,
+            "adequacy": fit.adequacy.to_dict() if fit.adequacy is not None else None}
+
+
+def realism_case(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, tmp: Path,
+                 plant: Plant = FINGER3, rigid: bool = True) -> dict[str, Any]:
+    """One row: the plant's recording with ``effects`` (seed ``seed``: the draw and the noise), the two fits (the
+    rigid one only where ``rigid``), the EKF runs (see the module docstring); the identified file written in
+    ``tmp``. Keys: case, seed, chain, rigid (absent without ``rigid``) and extended (each: worst errors in %,
+    plain and up to the common scale, values, residual in counts, converged, verdict, adequacy), joint_range_deg,
+    plant_seconds, ekf_seconds, ekf_rmse_deg and ekf_true_file_rmse_deg (per joint, deg)."""
+    true = plant.true_params(seed)
+    rig = rig_of(design)
+    nominal = load_params()
+    t0 = time.perf_counter()
+    g_true = plant_model(plant.model, true, effects, plant.chain).gravity
+    _, u, x0 = torque_of(seed, true, design, g_true, plant)
+    rec = mujoco_recording(plant.model, true, u, design.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed,
+                           chain=plant.chain)
+    plant_s = time.perf_counter() - t0
+    row: dict[str, Any] = {"case": case, "seed": seed, "chain": plant.label}
+    truth = {pp.name: pp.nominal for pp in parameter_catalogue(plant.alpes(params=true))}
+    if rigid:
+        row["rigid"] = _fit_row(identify(_on_rig(plant.alpes(params=nominal), rig), rec, plant.base,
+                                         excitation=design.lines, progress=False), truth, [])
+    model_of = alpes_models(plant.model, nominal, chain=plant.chain)
+    fit = fit_effects(lambda e: _on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), plant.base,
+                      rec.gravity is not None, excitation=design.lines, progress=False)
+    res = fit.result
+    ident = res.write(tmp / f"ident_{plant.label}_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
+    t1 = time.perf_counter()
+    fresh = fresh_run(true, effects, seed, design, plant)
+    fitted = dict(zip(res.names, res.values))
+    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig)
+    true_path = write_params(true, tmp / f"true_{plant.label}_{seed}.toml")
+    rmse_true = ekf_rmse(fresh, str(true_path), {}, plant=plant, rig=rig)
+    ekf_s = time.perf_counter() - t1
+    row["extended"] = _fit_row(res, truth, list(fit.effects))
+    row["joint_range_deg"] = [np.degrees(rec.true_q.min(axis=0)).tolist(), np.degrees(rec.true_q.max(axis=0)).tolist()]
+    row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
+                                  "fit_seconds": r.seconds} for e, r in fit.rounds]
+    row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
+    row["extended"]["tried"] = None if fit.tried is None else {
+        "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy,
+        "fit_seconds": fit.tried.seconds}
+    row.update({"plant_seconds": plant_s, "ekf_seconds": ekf_s, "ekf_rmse_deg": np.degrees(rmse).tolist(),
+                "ekf_true_file_rmse_deg": np.degrees(rmse_true).tolist()})
+    return row
+
+
+def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
+                 duration: float = 4.0) -> dict[str, Any]:
+    """One row of :func:`realism_case` for :func:`~alpes_dyn.studies.sweep.sweep` (a function of the seed): the plant
+    ``case`` (:data:`CASE_NAMES`), on finger3 drawn with ``seed`` or on the hand's ``chain`` (the hand drawn with
+    ``seed``), on the ``rig``; flattened to numbers: the worst errors up to the common scale (%), the residuals
+    (counts), the verdicts (1: flagged), the extended fit's time (s, every round) and the EKF's RMSE per joint (deg)."""
+    if case not in CASE_NAMES:
+        raise InputError(f"case: expected one of {', '.join(CASE_NAMES)}, got {case!r}")
+    plant = FINGER3 if chain is None else hand_plant(chain)
+    design = rig_design(rig, duration)
+    k_t, c_t, _ = tendon_stiffness(rig_design("level", duration))  # the cable sized on the level rig, on every rig
+    effects = cases(k_t, c_t, RIGS[rig])[case]
+    with tempfile.TemporaryDirectory() as d:
+        row = realism_case(case, effects, seed, design, Path(d), plant)
+    a, b = row["rigid"], row["extended"]
+    out: dict[str, Any] = {"rigid_flagged": int(a["flagged"]), "rigid_residual_counts": a["residual_counts"]}
+    for kind in KINDS:
+        out[f"{kind}_pct"] = b["worst_error_common_scale_pct"][kind]
+    out.update({"residual_counts": b["residual_counts"], "converged": int(b["converged"]),
+                "flagged": int(b["flagged"]), "fit_seconds": b["fit_seconds_total"],
+                "effects": "+".join(b["effects"]) or "none", "ekf_deg": row["ekf_rmse_deg"],
+                "ekf_true_file_deg": row["ekf_true_file_rmse_deg"]})
+    return out
