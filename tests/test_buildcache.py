@@ -177,3 +177,22 @@ def test_large_generated_sources_compile_at_O1():
     assert _cflags("x" * 1000) == _CFLAGS and _cflags("x" * _LARGE_SOURCE) == _CFLAGS
     big = _cflags("x" * (_LARGE_SOURCE + 1))
     assert big[0] == "-O1" and big[1:] == _CFLAGS[1:]
+
+
+def test_default_threads_follow_omp_num_threads(monkeypatch):
+    """The compiled loops' default thread count: the CPUs this process may use, capped by OMP_NUM_THREADS where it
+    is a positive integer (Dask's workers set it to their thread count), ignored where it is not."""
+    import os
+
+    from alpes_dyn.simulation.codegen import _default_threads
+
+    cpus = max(1, len(os.sched_getaffinity(0)))
+    monkeypatch.delenv("OMP_NUM_THREADS", raising=False)
+    assert _default_threads() == cpus
+    monkeypatch.setenv("OMP_NUM_THREADS", "1")
+    assert _default_threads() == 1
+    monkeypatch.setenv("OMP_NUM_THREADS", str(cpus + 7))
+    assert _default_threads() == cpus
+    for bad in ("0", "two", "", "-3"):
+        monkeypatch.setenv("OMP_NUM_THREADS", bad)
+        assert _default_threads() == cpus

@@ -259,10 +259,15 @@ def _check_threads(threads: Any) -> int:
 
 
 def _default_threads() -> int:
+    """The CPUs this process may use, at most ``OMP_NUM_THREADS`` where that is set to a positive integer (the
+    convention of numpy's BLAS, which Dask's workers set to their own thread count: two workers on two cores
+    then run one thread each instead of two)."""
     try:
-        return max(1, len(os.sched_getaffinity(0)))
+        n = max(1, len(os.sched_getaffinity(0)))
     except AttributeError:  # pragma: no cover - not Linux
-        return max(1, os.cpu_count() or 1)
+        n = max(1, os.cpu_count() or 1)
+    omp = os.environ.get("OMP_NUM_THREADS", "").strip()
+    return min(n, int(omp)) if omp.isdigit() and int(omp) > 0 else n
 
 
 def _batch(x0: np.ndarray, W: np.ndarray, nx: int, nw: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
