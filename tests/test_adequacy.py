@@ -293,6 +293,52 @@ def test_reversal_ratio_sees_a_residual_at_velocity_reversals():
     assert not a.adequate and a.likely_missing[0].startswith("stick-slip")
 
 
+def test_intermodulation_products_by_hand():
+    """Lines 1 and 5 Hz: order 2 gives 2, 10, 6, 4; order 3 gives 3, 15, 7, |2 - 5| = 3, 11, |1 - 10| = 9."""
+    from alpes_dyn.estimation.harmonics import intermodulation
+
+    assert intermodulation([1.0, 5.0], 100.0).tolist() == [2.0, 3.0, 4.0, 6.0, 7.0, 9.0, 10.0, 11.0, 15.0]
+    assert intermodulation([1.0, 5.0], 100.0, orders=(2,)).tolist() == [2.0, 4.0, 6.0, 10.0]
+    assert intermodulation([1.0, 5.0], 8.0).tolist() == [2.0, 3.0, 4.0, 6.0, 7.0]
+
+
+def test_harmonic_ratio_sees_the_excitations_products():
+    """White noise: the ratio is 1 within 0.3 (136 bins: its spread about 0.09) on five draws. The same plus the
+    tones a friction reversing with the 20 Hz dither makes (3 x 20 Hz and 20 + 11.3 Hz, each of amplitude a):
+    the products' bins gain a^2 N^2 / 4 per tone over 2 x 3 + ... bins of mean N sigma^2, so the ratio is 1 +
+    that share; assess then names a nonlinearity, after the others."""
+    from alpes_dyn.estimation.adequacy import SensorFloor, assess
+    from alpes_dyn.estimation.harmonics import NONLINEARITY, harmonic_ratio, intermodulation
+
+    lines = ExperimentDesign().lines
+    dt, N = 1e-3, 4000  # 0.25 Hz bins: 60 and 31.25 Hz on bins
+    t = np.arange(N) * dt
+    rng = np.random.default_rng(11)
+    for _ in range(5):
+        assert abs(harmonic_ratio(rng.standard_normal(N) * 0.6, lines, dt) - 1) < 0.3
+    sigma, a = 0.6, 0.2
+    tones = a * (np.sin(2 * np.pi * 60.0 * t) + np.sin(2 * np.pi * 31.25 * t))
+    e = rng.standard_normal(N) * sigma
+    # the closed form: the products' bins (within 1 of each product, off the lines) hold on average
+    # N sigma^2 of noise, plus (a N / 2)^2 on each of the two tones' bins
+    f = np.fft.rfftfreq(N, dt)
+    near = np.zeros(f.size, bool)
+    for k in np.rint(intermodulation(lines, f[-1]) / f[1]).astype(int):
+        near[max(k - 1, 0): k + 2] = True
+    for k in np.rint(np.asarray(lines) / f[1]).astype(int):
+        near[max(k - 2, 0): k + 3] = False
+    near[:3] = False
+    expected = 1 + 2 * (a * N / 2) ** 2 / (near.sum() * N * sigma**2)
+    got = harmonic_ratio(e + tones, lines, dt)
+    assert expected > 1.5 and abs(got - expected) < 0.3 * (expected - 1) + 0.3
+    floor = SensorFloor(1.0, 1 / math.sqrt(12), 0.5, 0.0, "given")
+    flagged = assess((e + tones + 0.8)[:, None], rng.standard_normal((N, 1)), floor, lines=lines, dt=dt)
+    assert not flagged.adequate and flagged.likely_missing[-1] == NONLINEARITY
+    assert flagged.signatures["harmonics"]["share"] == pytest.approx(got, rel=1e-12)
+    plain = assess((e + 0.8)[:, None], rng.standard_normal((N, 1)), floor, lines=lines, dt=dt)
+    assert not plain.adequate and NONLINEARITY not in plain.likely_missing
+
+
 def test_a_fitted_trajectory_leaving_the_joint_range_names_a_joint_stop():
     """range_exit: the joints whose fitted angles pass a limit by more than RANGE_TOLERANCE (1 deg), each with how
     far; assess then fails the fit on it and names a joint stop first (MuJoCo's seed 32 drives q_1 to -15 deg into

@@ -1010,6 +1010,10 @@ def _nd(v, names):
 
 
 
+def _harm():
+    return __import__("alpes_dyn.estimation.harmonics", fromlist=["x"])
+
+
 def _realism():
     return __import__("alpes_dyn.studies.realism", fromlist=["x"])
 
@@ -1331,6 +1335,11 @@ API: list[Api] = [
         lambda seed: {"x": 1.0}, 1, options=5, serial=True), InputError, "options: expected a dict of keyword arguments"),
     A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
         lambda seed: {"x": 1.0}, 1, options={"seed": 3}, serial=True), InputError, "options: 'seed' is each draw's own"),
+    A("harmonic_ratio", lambda c: _harm().harmonic_ratio(np.zeros(100), [20.0], 0.0), InputError,
+      "dt: expected a positive time step in s, got 0.0"),
+    A("intermodulation", lambda c: _harm().intermodulation([20.0, -1.0], 500.0), InputError,
+      "lines: expected positive frequencies in Hz, got [20.0, -1.0]"),
+    A("intermodulation", lambda c: _harm().intermodulation([], 500.0), InputError, "lines: expected positive"),
     A("realism_draw", lambda c: _realism().realism_draw(1, case="bogus"), InputError,
       "case: expected one of none, stiction, tendon, rotor, tilt, kt, offset, all, got 'bogus'"),
     A("realism_draw", lambda c: _realism().realism_draw(1, rig="upside"), InputError,

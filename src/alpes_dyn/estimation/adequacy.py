@@ -47,6 +47,7 @@ import numpy as np
 from scipy import stats
 
 from ..errors import AlpesDynWarning, InputError
+from .harmonics import NONLINEARITY, harmonic_ratio
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
@@ -68,6 +69,7 @@ THRESHOLDS: dict[str, float] = {
     "validation_fit_percent": 70.0,
     "signature_share": 0.02,
     "reversal_ratio": 2.0,
+    "harmonic_ratio": 1.5,
 }
 """The verdict's thresholds.
 
@@ -81,7 +83,10 @@ bands; too large: residual RMS above ``floor_ratio`` times the sensor floor; a v
 ``validation_fit_percent`` %; a signature named, when the verdict is not adequate, where its effect
 explains at least ``signature_share`` of the residual and at least half what the strongest one does
 (the list is ordered, the most likely first); stick-slip named first where the residual's mean square
-within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere."""
+within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere; a
+nonlinearity shaped otherwise than in the model named (last) where the residual's power at the excitation's
+harmonics and intermodulation products is over ``harmonic_ratio`` times its power elsewhere
+(:func:`~alpes_dyn.estimation.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")
@@ -419,7 +424,8 @@ def reversal_ratio(e: np.ndarray, velocity: np.ndarray, window: int = 20) -> flo
 
 def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping[str, np.ndarray] | None = None,
            validation: Validation | None = None, thresholds: Mapping[str, float] | None = None,
-           velocity: np.ndarray | None = None, range_exit: str | None = None) -> Adequacy:
+           velocity: np.ndarray | None = None, range_exit: str | None = None,
+           lines: Sequence[float] | None = None, dt: float | None = None) -> Adequacy:
     """The verdict on a fit's encoder residual.
 
     e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
@@ -429,6 +435,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     the residual at its reversals (:func:`reversal_ratio`) names stick-slip friction first when above
     ``reversal_ratio``. range_exit: where the fitted joints leave their range, which and how far (the caller's
     :func:`range_exit`): a reason of its own, and a joint stop named first among the likely missing effects.
+    lines: the excitation's frequencies (Hz) and dt the sample time (s): the residual's power at their harmonics
+    and intermodulation (:func:`~alpes_dyn.estimation.harmonics.harmonic_ratio`, signature ``harmonics``) names a
+    nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``.
     """
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
@@ -465,6 +474,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     sig = signatures(e, regressors or {})
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
+    if lines is not None and len(lines) and dt is not None:
+        sig["harmonics"] = {"share": harmonic_ratio(e, lines, dt), "coefficient": 0.0}
     if range_exit:
         reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []
@@ -475,6 +486,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
+        if "harmonics" in sig and sig["harmonics"]["share"] > th["harmonic_ratio"]:
+            missing.append(NONLINEARITY)
         if range_exit:
             missing = [JOINT_STOP] + missing
     return Adequacy(not reasons, reasons, missing, rms, floor, w, x, sig, validation, notes)

@@ -365,7 +365,8 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
         val = _validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
-    return assess(res, rec.torque, floor, regressors, val, velocity=x_fit[:, pb.n:] @ pb.S_enc.T, range_exit=exit_)
+    return assess(res, rec.torque, floor, regressors, val, velocity=x_fit[:, pb.n:] @ pb.S_enc.T, range_exit=exit_,
+                  lines=excitation, dt=rec.dt)
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
