@@ -6,7 +6,7 @@ are appended to the finger's state as constants, theta' = 0 (the approach of STR
 
     z = [q; qd; theta] (2n + p),     z' = [qd; qdd(q, qd, B u; theta); 0],     y = h(q) (default S q).
 
-The observability matrix of that augmented system (:class:`~alpes_dyn.analysis.observability.ObservabilityMatrix`:
+The observability matrix of that augmented system (:class:`~alpes_dyn.analysis.observability_matrix.ObservabilityMatrix`:
 Lie derivatives with the input derivatives u', u'', ... as free symbols, i.e. a time-varying motor
 torque; report eq. 3.6, 3.14) is evaluated at ``points`` seeded random points: q within the joint
 limits, qd in [-2, 2] rad/s, u and its derivatives within the model's torque scale (as
@@ -64,8 +64,8 @@ from ..errors import InputError, ModelError
 from ..limits import MAX_POINTS
 from ..model.robot import Model
 from .fisher import INITIAL_STATES, FisherReport, _theta, fisher_information  # noqa: F401 (re-exported)
-from .observability import (MAX_INSTRUCTIONS, ObservabilityMatrix, _input_scale, normalised_singular_values,
-                            numerical_rank)
+from .observability import _input_scale
+from .observability_matrix import MAX_INSTRUCTIONS, ObservabilityMatrix, normalised_singular_values, numerical_rank
 from ..symbolic.parametric import ParametricDynamics
 from ..symbolic.statespace import StateSpace
 
