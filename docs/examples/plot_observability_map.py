@@ -29,7 +29,7 @@ for name in ("finger2", "finger3"):
 # %%
 # A map over the joint space
 # --------------------------
-# :class:`~alpes_dyn.analysis.observability.ObservabilityMatrix` evaluates O at many states at once. Each
+# :class:`~alpes_dyn.analysis.observability_matrix.ObservabilityMatrix` evaluates O at many states at once. Each
 # state here is a finger at rest at q (zero velocity) on a grid of (q_1, q_2) (q_3 = 0 for
 # ``finger3``), in two situations:
 #

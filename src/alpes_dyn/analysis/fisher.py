@@ -189,12 +189,51 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         and substeps to reuse (its compiled code), else one is built.
     counts_per_rev: encoder resolution (default the transmission's; required without a transmission).
     """
-    from ..simulation.sensitivity import SensitivityModel
-    from ..simulation.integrate import _check_dt
-
     t0 = time.perf_counter()
     if not isinstance(model, Model):
         raise ModelError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+    dt, substeps, noise, cam_times, cam_noise = _settings(design, dt, substeps, encoder_noise_counts, camera_times,
+                                                          camera_noise)
+    if initial_state not in INITIAL_STATES:
+        raise InputError(f"initial_state: expected one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
+    tr = model.transmission
+    _check_counts_per_rev(model, counts_per_rev)
+    Ua = _torques(U, tr.n_motors if tr is not None else model.n, tr is not None)
+    N = Ua.shape[0]
+    Ga = _gravity(G, model, N)
+    cam_idx = _camera_samples(cam_times, dt, N)
+    sm = _sensitivity_model(model, parameters, dt, substeps, sensitivity)
+    p = sm.p
+    additive = np.array([prm.additive for prm in sm.dynamics.parameters], dtype=bool)
+    th = _theta(theta, sm.nominal, sm.names, additive)
+    unit = np.where(additive, 1.0, th)  # log coordinates, the additive parameters (offsets, tilt) as they are
+    x0a = _initial_state(model, x0, Ua, Ga)
+    step = 2.0 * np.pi / float(counts_per_rev if counts_per_rev is not None else tr.counts_per_rev)
+    sigma = math.sqrt((noise * step) ** 2 + (step ** 2 / 12.0 if quantisation else 0.0))
+    if sigma <= 0 and not cam_idx:
+        raise InputError("encoder_noise_counts: zero noise without quantisation gives infinite information")
+    F = _information(model, sm, x0a, Ua, Ga, th, unit, sigma, cam_idx, cam_noise)
+    Flog = _marginal_information(F, p, initial_state)
+    rank, cov_log, sd, rel, corr = _cramer_rao(Flog, unit, additive, th)
+    fim = Flog / np.outer(unit, unit)
+    fim_full = F.copy()
+    fim_full[:p] /= unit[:, None]
+    fim_full[:, :p] /= unit[None, :]
+    units = tuple(prm.unit for prm in sm.dynamics.parameters)
+    return FisherReport(
+        model=model.name, parameters=tuple(sm.names), theta=th, units=units, fim=fim, fim_full=fim_full,
+        covariance=cov_log * np.outer(unit, unit), std=sd, relative_std=rel, correlation=corr, rank=rank,
+        encoder_std=sigma, samples=N + 1, camera_samples=len(cam_idx), duration=N * float(dt),
+        initial_state=initial_state, seconds=time.perf_counter() - t0)
+
+
+# ----------------------------------------------------------------------------- reading the experiment
+def _settings(design: Any, dt: float | None, substeps: int | None, encoder_noise_counts: float | None,
+              camera_times: Sequence[float] | None, camera_noise: float | None
+              ) -> tuple[float, Any, float, tuple, float]:
+    """(dt s, substeps, encoder noise counts, camera times s, camera noise rad): each argument, else the field of
+    the same name of ``design``, else its default; the noises checked non-negative."""
+    from ..simulation.integrate import _check_dt
 
     def pick(value: Any, name: str, default: Any) -> Any:
         if value is not None:
@@ -206,16 +245,21 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     noise = _nonneg(pick(encoder_noise_counts, "encoder_noise_counts", 0.5), "encoder_noise_counts")
     cam_times = tuple(pick(camera_times, "camera_times", ()))
     cam_noise = _nonneg(pick(camera_noise, "camera_noise", math.radians(0.1)), "camera_noise")
-    if initial_state not in INITIAL_STATES:
-        raise InputError(f"initial_state: expected one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
-    tr = model.transmission
-    if tr is None and counts_per_rev is None:
+    return dt, substeps, noise, cam_times, cam_noise
+
+
+def _check_counts_per_rev(model: Model, counts_per_rev: Any) -> None:
+    """The encoder's resolution: the transmission's, or ``counts_per_rev`` (required without one), positive."""
+    if model.transmission is None and counts_per_rev is None:
         raise ModelError(f"model: {model.name!r} has no transmission: give counts_per_rev (its joint encoders)")
     if counts_per_rev is not None and (isinstance(counts_per_rev, (bool, np.bool_)) or not isinstance(
             counts_per_rev, (int, float, np.integer, np.floating)) or not (math.isfinite(counts_per_rev)
                                                                           and counts_per_rev > 0)):
         raise InputError(f"counts_per_rev: expected a positive number, got {counts_per_rev!r}")
-    n_in = tr.n_motors if tr is not None else model.n
+
+
+def _torques(U: Any, n_in: int, motors: bool) -> np.ndarray:
+    """The experiment's torques as (N, n_in), N m, N >= 2: motor torques (``motors``) or joint torques."""
     if U is None:
         raise InputError("U: the motor torques of the experiment are required, (N,) or (N, motors) N m")
     Ua = _array(U, "U", 1 if np.ndim(U) == 1 else 2)
@@ -223,17 +267,25 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         Ua = Ua[:, None]
     N, nu = Ua.shape
     if nu != n_in:
-        raise InputError(f"U: expected {n_in} {'motor' if tr is not None else 'joint'} torque column(s), got {nu}")
+        raise InputError(f"U: expected {n_in} {'motor' if motors else 'joint'} torque column(s), got {nu}")
     if N < 2:
         raise InputError(f"U: expected at least 2 sample periods, got {N}")
-    n, nx = model.n, 2 * model.n
+    return Ua
+
+
+def _gravity(G: Any, model: Model, N: int) -> np.ndarray:
+    """Gravity per sample period, (N, 3) m/s^2: the model's, one vector (3,) repeated, or (N, 3) as given."""
     if G is None:
-        Ga = np.tile(np.asarray(model.gravity, dtype=float), (N, 1))
-    else:
-        Ga = _array(G, "G", np.ndim(G) if np.ndim(G) in (1, 2) else 2)
-        Ga = np.tile(Ga, (N, 1)) if Ga.ndim == 1 else Ga
-        if Ga.shape != (N, 3):
-            raise InputError(f"G: expected (3,) or ({N}, 3) gravity vectors, got {np.shape(G)}")
+        return np.tile(np.asarray(model.gravity, dtype=float), (N, 1))
+    Ga = _array(G, "G", np.ndim(G) if np.ndim(G) in (1, 2) else 2)
+    Ga = np.tile(Ga, (N, 1)) if Ga.ndim == 1 else Ga
+    if Ga.shape != (N, 3):
+        raise InputError(f"G: expected (3,) or ({N}, 3) gravity vectors, got {np.shape(G)}")
+    return Ga
+
+
+def _camera_samples(cam_times: Sequence[Any], dt: float, N: int) -> list[int]:
+    """The sample indices (0..N) of the camera's times (s), each on the sample grid."""
     cam_idx = []
     for tc in cam_times:
         try:
@@ -243,43 +295,60 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         if not 0 <= k <= N or abs(k * dt - float(tc)) > 1e-6 * dt + 1e-12:
             raise InputError(f"camera_times: {tc!r} is not a sample time in [0, {N * dt:g}] s")
         cam_idx.append(int(k))
+    return cam_idx
+
+
+def _sensitivity_model(model: Model, parameters: Any, dt: float, substeps: Any, sensitivity: Any) -> Any:
+    """``sensitivity`` checked to be of this model, dt, substeps and parameters; else a new
+    :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`."""
+    from ..simulation.sensitivity import SensitivityModel
+
     if sensitivity is None:
-        sm = SensitivityModel(model, parameters, dt, substeps)
-    else:
-        sm = sensitivity
-        if not isinstance(sm, SensitivityModel) or sm.model is not model or sm.dt != float(dt) \
-                or sm.substeps != int(substeps):
-            raise InputError("sensitivity: expected a SensitivityModel of this model with the same dt and substeps")
-        if parameters is not None:
-            from ..symbolic.parametric import select_parameters
+        return SensitivityModel(model, parameters, dt, substeps)
+    sm = sensitivity
+    if not isinstance(sm, SensitivityModel) or sm.model is not model or sm.dt != float(dt) \
+            or sm.substeps != int(substeps):
+        raise InputError("sensitivity: expected a SensitivityModel of this model with the same dt and substeps")
+    if parameters is not None:
+        from ..symbolic.parametric import select_parameters
 
-            names = tuple(p.name for p in select_parameters(model, parameters))
-            if names != sm.names:
-                raise InputError(f"sensitivity: its parameters {', '.join(sm.names)} are not {', '.join(names)}")
-    p = sm.p
-    additive = np.array([prm.additive for prm in sm.dynamics.parameters], dtype=bool)
-    th = _theta(theta, sm.nominal, sm.names, additive)
-    unit = np.where(additive, 1.0, th)  # log coordinates, the additive parameters (offsets, tilt) as they are
-    if x0 is None:
-        m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
-        tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
-        try:
-            q_rest = m0.static_equilibrium(tau0)
-        except InputError:
-            if tr is None or not model.springless_joints:
-                raise
-            from ..estimation.experiment import _mean_equilibrium  # the experiment's rest: joints without spring mid-range
+        names = tuple(p.name for p in select_parameters(model, parameters))
+        if names != sm.names:
+            raise InputError(f"sensitivity: its parameters {', '.join(sm.names)} are not {', '.join(names)}")
+    return sm
 
-            q_rest = _mean_equilibrium(model, Ua[0], Ga[0])
-        x0a = np.concatenate([q_rest, np.zeros(n)])
-    else:
+
+def _initial_state(model: Model, x0: Any, Ua: np.ndarray, Ga: np.ndarray) -> np.ndarray:
+    """x0 (2n,) as given (checked), else the rest under the first torque Ua[0] and gravity Ga[0] (the joints without
+    spring held mid-range where the balance alone cannot place them)."""
+    n, nx = model.n, 2 * model.n
+    tr = model.transmission
+    if x0 is not None:
         x0a = _array(x0, "x0", 1)
         if x0a.shape != (nx,):
             raise InputError(f"x0: expected {nx} values (q, qd), got {x0a.shape[0]}")
-    step = 2.0 * np.pi / float(counts_per_rev if counts_per_rev is not None else tr.counts_per_rev)
-    sigma = math.sqrt((noise * step) ** 2 + (step ** 2 / 12.0 if quantisation else 0.0))
-    if sigma <= 0 and not cam_idx:
-        raise InputError("encoder_noise_counts: zero noise without quantisation gives infinite information")
+        return x0a
+    m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
+    tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
+    try:
+        q_rest = m0.static_equilibrium(tau0)
+    except InputError:
+        if tr is None or not model.springless_joints:
+            raise
+        from ..estimation.experiment import _mean_equilibrium  # the experiment's rest: joints without spring mid-range
+
+        q_rest = _mean_equilibrium(model, Ua[0], Ga[0])
+    return np.concatenate([q_rest, np.zeros(n)])
+
+
+# ----------------------------------------------------------------------------- the information
+def _information(model: Model, sm: Any, x0a: np.ndarray, Ua: np.ndarray, Ga: np.ndarray, th: np.ndarray,
+                 unit: np.ndarray, sigma: float, cam_idx: list[int], cam_noise: float) -> np.ndarray:
+    """F (p + 2n, p + 2n): the Fisher information of (log theta, x0) (the additive parameters as they are), from the
+    exact sensitivities of the encoder outputs y_k = S q_k (+ offset, + C u_k-1) at the N + 1 samples (noise
+    ``sigma`` rad) and of the camera's joint angles at ``cam_idx`` (noise ``cam_noise`` rad)."""
+    n, nx, p = model.n, 2 * model.n, sm.p
+    tr = model.transmission
     _, X = sm.run(x0a[None], Ua[None], Ga[None], th)
     X = X[0]  # (N+1, nx, nx + p): d x_k / d(x0, theta)
     cols = np.concatenate([np.arange(nx, nx + p), np.arange(nx)])  # (theta, x0)
@@ -299,13 +368,26 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         F = F + (Jc.T @ Jc / cam_noise ** 2 if cam_noise > 0 else 0.0)
     if not np.isfinite(F).all():
         raise InputError("fisher_information: the sensitivities are not finite (experiment unstable?)")
+    return F
+
+
+def _marginal_information(F: np.ndarray, p: int, initial_state: str) -> np.ndarray:
+    """The (p, p) information of the parameters: F's parameter block, the unknown initial state marginalised (the
+    Schur complement F_tt - F_tx F_xx^-1 F_xt); symmetrised."""
     Ftt = F[:p, :p]
     if initial_state == "unknown":
         Fxx, Fxt = F[p:, p:], F[p:, :p]
         Flog = Ftt - Fxt.T @ np.linalg.pinv(Fxx, rcond=1e-13, hermitian=True) @ Fxt
     else:
         Flog = Ftt
-    Flog = 0.5 * (Flog + Flog.T)
+    return 0.5 * (Flog + Flog.T)
+
+
+def _cramer_rao(Flog: np.ndarray, unit: np.ndarray, additive: np.ndarray, th: np.ndarray
+                ) -> tuple[int, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The bound cov >= Flog^-1 of the (p, p) log information: (rank, covariance in log coordinates, std in the
+    parameters' units, relative std, correlation); a parameter along a zero-information direction unbounded."""
+    p = Flog.shape[0]
     # rank and inverse on the relative (log) information, scaled to unit diagonal
     d = np.sqrt(np.clip(np.diag(Flog), 0, None))
     dn = np.where(d > 0, d, 1.0)
@@ -326,13 +408,4 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     with np.errstate(invalid="ignore", divide="ignore"):
         corr = cov_log / np.outer(rel, rel)
         rel = np.where(additive, sd / np.abs(th), rel)  # an additive parameter at 0: inf
-    fim = Flog / np.outer(unit, unit)
-    fim_full = F.copy()
-    fim_full[:p] /= unit[:, None]
-    fim_full[:, :p] /= unit[None, :]
-    units = tuple(prm.unit for prm in sm.dynamics.parameters)
-    return FisherReport(
-        model=model.name, parameters=tuple(sm.names), theta=th, units=units, fim=fim, fim_full=fim_full,
-        covariance=cov_log * np.outer(unit, unit), std=sd, relative_std=rel, correlation=corr, rank=rank,
-        encoder_std=sigma, samples=N + 1, camera_samples=len(cam_idx), duration=N * float(dt),
-        initial_state=initial_state, seconds=time.perf_counter() - t0)
+    return rank, cov_log, sd, rel, corr

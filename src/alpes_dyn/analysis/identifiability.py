@@ -6,7 +6,7 @@ are appended to the finger's state as constants, theta' = 0 (the approach of STR
 
     z = [q; qd; theta] (2n + p),     z' = [qd; qdd(q, qd, B u; theta); 0],     y = h(q) (default S q).
 
-The observability matrix of that augmented system (:class:`~alpes_dyn.analysis.observability.ObservabilityMatrix`:
+The observability matrix of that augmented system (:class:`~alpes_dyn.analysis.observability_matrix.ObservabilityMatrix`:
 Lie derivatives with the input derivatives u', u'', ... as free symbols, i.e. a time-varying motor
 torque; report eq. 3.6, 3.14) is evaluated at ``points`` seeded random points: q within the joint
 limits, qd in [-2, 2] rad/s, u and its derivatives within the model's torque scale (as
@@ -64,8 +64,8 @@ from ..errors import InputError, ModelError
 from ..limits import MAX_POINTS
 from ..model.robot import Model
 from .fisher import INITIAL_STATES, FisherReport, _theta, fisher_information  # noqa: F401 (re-exported)
-from .observability import (MAX_INSTRUCTIONS, ObservabilityMatrix, _input_scale, normalised_singular_values,
-                            numerical_rank)
+from .observability import _input_scale
+from .observability_matrix import MAX_INSTRUCTIONS, ObservabilityMatrix, normalised_singular_values, numerical_rank
 from ..symbolic.parametric import ParametricDynamics
 from ..symbolic.statespace import StateSpace
 
@@ -292,6 +292,37 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
     seed = _check_int(seed, "seed", 0)
     if coordinates not in ("log", "absolute"):
         raise InputError(f"coordinates: expected 'log' or 'absolute', got {coordinates!r}")
+    model = _model_of(system, parameters, friction)
+    if input is None:
+        input = "motor" if model.transmission is not None else "joint"
+    base, pd, aug, th, additive = _augmented_system(model, parameters, input, output, theta)
+    unit = np.where(additive, 1.0, th)  # d/d log theta = theta d/d theta; the additive ones as they are
+    nz = aug.n_states
+    n2 = base.n_states
+    kmax = nz - 1 if order is None else _check_int(order, "order", 0)
+    om = ObservabilityMatrix(aug, False, max_operations)
+    colscale = np.concatenate([np.ones(n2), unit if coordinates == "log" else np.ones(pd.p)])
+    blocks, ranks, truncated = _observability_blocks(om, model, base, th, colscale, points, seed, kmax, order)
+    O = np.concatenate(blocks, axis=1)  # (points, rows, nz)
+    rs = _row_scale(O)
+    s = normalised_singular_values(O, rs)
+    rank = ranks[-1]
+    smin = float(np.median(s[:, nz - 1]))
+    On, absent_idx = _absent_parameters(O, rs, n2, pd.p, truncated)
+    null, combos, state_in_null = _null_directions(O, On, rs, absent_idx, n2, pd.names, unit, coordinates, truncated)
+    return IdentifiabilityReport(
+        model=model.name, parameters=pd.names, nominal=th, n_states=n2, dimension=nz, rank=rank,
+        ranks_by_order=tuple(ranks), order=len(blocks) - 1, min_singular_value=smin if rank == nz else 0.0,
+        singular_values=s, absent=tuple(pd.names[j] for j in absent_idx), null_directions=null,
+        combinations=tuple(combos), state_in_null=state_in_null, truncated=truncated, seconds=time.perf_counter() - t0,
+        settings={"input": input, "output": base.output_name, "points": points, "seed": seed,
+                  "max_operations": om.max_operations, "coordinates": coordinates, "friction": bool(model.extras.has_friction),
+                  "gravity": np.asarray(model.gravity, dtype=float).tolist()})
+
+
+def _model_of(system: Model | str, parameters: Any, friction: bool | None) -> Model:
+    """The model of :func:`identifiability`: ``system``, or the Alpes model of that name (with friction where asked,
+    by default where ``parameters`` names it)."""
     if isinstance(system, str):
         if friction is None:
             spec = parameters if isinstance(parameters, str) else ",".join(map(str, parameters or ()))
@@ -301,9 +332,13 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
         raise ModelError("friction: only with a model name; a Model has its friction already")
     if not isinstance(system, Model):
         raise ModelError(f"system: expected a Model or an Alpes model name, got {type(system).__name__}")
-    model = system
-    if input is None:
-        input = "motor" if model.transmission is not None else "joint"
+    return system
+
+
+def _augmented_system(model: Model, parameters: Any, input: str, output: Any, theta: Any
+                      ) -> tuple[StateSpace, ParametricDynamics, _AugmentedStateSpace, np.ndarray, np.ndarray]:
+    """(base state space, parametric dynamics, the augmented system z = [x; theta], theta (p,), additive (p,) bool):
+    the encoder offsets added to y = h(x); the tendon compliance (a feedthrough of the torque) refused."""
     base = StateSpace(model, input=input, output=output)
     pd = ParametricDynamics(model, parameters)
     additive = np.array([prm.additive for prm in pd.parameters], dtype=bool)
@@ -316,17 +351,21 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
         if base.output_name != "encoder":
             raise ModelError(f"parameters: encoder_offset applies to the encoder output, not {base.output_name!r}")
         aug.h_expr = aug.h_expr + pd.encoder_offset(pd.theta)
-    unit = np.where(additive, 1.0, th)  # d/d log theta = theta d/d theta; the additive ones as they are
-    nz = aug.n_states
-    n2 = base.n_states
-    kmax = nz - 1 if order is None else _check_int(order, "order", 0)
-    om = ObservabilityMatrix(aug, False, max_operations)
+    return base, pd, aug, th, additive
+
+
+def _observability_blocks(om: ObservabilityMatrix, model: Model, base: StateSpace, th: np.ndarray,
+                          colscale: np.ndarray, points: int, seed: int, kmax: int, order: int | None
+                          ) -> tuple[list[np.ndarray], list[int], bool]:
+    """The blocks O_0, O_1, ... (each (points, rows, 2n + p), columns scaled by ``colscale``) at ``points`` seeded
+    random states and inputs, up to order ``kmax`` or (``order`` None) full rank or a rank that stops growing; the
+    rank after each; whether the next order was over ``max_operations`` (the rank a lower bound)."""
+    nz = om.n_states
     rng = np.random.default_rng(seed)
     q, v = model.random_state(rng, _SPEED, size=points)
     scale = _input_scale(base, q)
     W = rng.uniform(-1.0, 1.0, size=(points, max(kmax, 1) * scale.size)) * np.tile(scale, max(kmax, 1))
     Z = np.hstack([q, v, np.tile(th, (points, 1))])
-    colscale = np.concatenate([np.ones(n2), unit if coordinates == "log" else np.ones(pd.p)])
     blocks: list[np.ndarray] = []
     ranks: list[int] = []
     truncated = False
@@ -348,20 +387,32 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
             break
         if order is None and k > 0 and ranks[-1] == ranks[-2]:
             break
-    O = np.concatenate(blocks, axis=1)  # (points, rows, nz)
-    rs = _row_scale(O)
-    s = normalised_singular_values(O, rs)
-    rank = ranks[-1]
-    smin = float(np.median(s[:, nz - 1]))
-    # parameters absent from y: zero column of the row-normalised O at every point
+    return blocks, ranks, truncated
+
+
+def _absent_parameters(O: np.ndarray, rs: np.ndarray, n2: int, p: int, truncated: bool
+                       ) -> tuple[np.ndarray, list[int]]:
+    """(O with its rows normalised (points, rows, nz), the indices of the parameters absent from y: a zero column
+    of that O at every point; none when ``truncated``)."""
     nrm = np.linalg.norm(O, axis=2, keepdims=True)
     floor = max(O.shape[1:]) * _EPS * rs[None, :, None]
     On = np.divide(O, nrm, out=np.zeros_like(O), where=nrm > floor)
     colmax = np.linalg.norm(On, axis=1).max(axis=0)  # (nz,)
     tol = max(O.shape[1:]) * _EPS * 1e3
-    absent_idx = [] if truncated else [j for j in range(pd.p) if colmax[n2 + j] <= tol * max(colmax.max(), 1e-300)]
+    absent_idx = [] if truncated else [j for j in range(p) if colmax[n2 + j] <= tol * max(colmax.max(), 1e-300)]
+    return On, absent_idx
+
+
+def _null_directions(O: np.ndarray, On: np.ndarray, rs: np.ndarray, absent_idx: list[int], n2: int,
+                     names: Sequence[str], unit: np.ndarray, coordinates: str, truncated: bool
+                     ) -> tuple[np.ndarray, list[str], bool]:
+    """The unidentifiable directions over the parameters (p, k) (log coordinates, a sparse reduced row-echelon
+    basis, unit columns; the absent parameters left out), their names, and whether one moves the initial state:
+    the right null space of the row-normalised O at the point of largest rank."""
+    p = len(names)
+    nz = O.shape[2]
     keep = np.array([j for j in range(nz) if j < n2 or (j - n2) not in absent_idx], dtype=int)
-    null = np.zeros((pd.p, 0))
+    null = np.zeros((p, 0))
     combos: list[str] = []
     state_in_null = False
     best = int(np.argmax(numerical_rank(O, rs)))
@@ -371,21 +422,14 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
         _, _, Vt = np.linalg.svd(A)
         N = Vt[r_keep:].T  # (len(keep), k)
         state_in_null = bool(np.any(np.abs(N[: n2]) > 1e-6))
-        Np = np.zeros((pd.p, N.shape[1]))
+        Np = np.zeros((p, N.shape[1]))
         Np[[j - n2 for j in keep if j >= n2]] = N[n2:]
         if coordinates == "absolute":
             Np = Np / unit[:, None]  # d log theta = d theta / theta
         R = _rref(Np.T, 1e-6)
-        null = (R / np.linalg.norm(R, axis=1, keepdims=True)).T if R.size else np.zeros((pd.p, 0))
-        combos = [name_direction(null[:, i], pd.names) for i in range(null.shape[1])]
-    return IdentifiabilityReport(
-        model=model.name, parameters=pd.names, nominal=th, n_states=n2, dimension=nz, rank=rank,
-        ranks_by_order=tuple(ranks), order=len(blocks) - 1, min_singular_value=smin if rank == nz else 0.0,
-        singular_values=s, absent=tuple(pd.names[j] for j in absent_idx), null_directions=null,
-        combinations=tuple(combos), state_in_null=state_in_null, truncated=truncated, seconds=time.perf_counter() - t0,
-        settings={"input": input, "output": base.output_name, "points": points, "seed": seed,
-                  "max_operations": om.max_operations, "coordinates": coordinates, "friction": bool(model.extras.has_friction),
-                  "gravity": np.asarray(model.gravity, dtype=float).tolist()})
+        null = (R / np.linalg.norm(R, axis=1, keepdims=True)).T if R.size else np.zeros((p, 0))
+        combos = [name_direction(null[:, i], names) for i in range(null.shape[1])]
+    return null, combos, state_in_null
 
 
 def _row_scale(O: np.ndarray) -> np.ndarray:

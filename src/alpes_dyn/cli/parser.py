@@ -9,7 +9,7 @@ from typing import Callable
 import numpy as np
 
 from .. import __version__
-from ..analysis.observability import MAX_INSTRUCTIONS
+from ..analysis.observability_matrix import MAX_INSTRUCTIONS
 from ..limits import MAX_POINTS
 from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import _UsageError

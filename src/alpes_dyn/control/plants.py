@@ -32,7 +32,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -169,13 +169,7 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     import mujoco  # load_mujoco below gives the one-line error when it is missing
 
     e = (effects or PlantEffects()).check()
-    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
-        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
-    for name, v in (("encoder_noise_counts", encoder_noise_counts), ("torque_noise", torque_noise)):
-        if not (_number(v) and v >= 0):
-            raise InputError(f"{name}: expected a non-negative number, got {v!r}")
-    if model not in PLANT_MODELS:
-        raise InputError(f"model: a recording plant is one chain ({', '.join(PLANT_MODELS)}), got {model!r}")
+    _check_recording_settings(model, seed, encoder_noise_counts, torque_noise)
     p = _params(true_params)
     truth = plant_model(model, p, e, chain)
     m = truth.transmission.n_motors
@@ -185,24 +179,8 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     mj = load_mujoco(plant_mjcf(model, p, e, chain, timestep))
     mj.opt.integrator = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
                          "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}[integrator]
-    d = mujoco.MjData(mj)
-    perm = joint_permutation(mj, truth.joint_names)
-    if q0 is None:
-        q_init = truth.static_equilibrium(truth.transmission.joint_torque(u[0]), np.zeros(truth.n),
-                                          fixed=truth.springless_joints)
-    else:
-        q_init = np.asarray(q0, dtype=float)
-        if q_init.shape != (truth.n,) or not np.isfinite(q_init).all():
-            raise InputError(f"q0: expected {truth.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
-    d.qpos[:] = _initial_state(mj, truth, perm, q_init, u[0], p, e)
-    mujoco.mj_forward(mj, d)
-    tr, ex = truth.transmission, truth.extras
-    dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
-
-    def smooth_friction(_m, dd) -> None:  # the library's law, at every RK4 stage
-        v = dd.qvel[dofs]
-        dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
-
+    d = _plant_at_rest(mj, truth, q0, u[0], p, e)
+    tr = truth.transmission
     rng = np.random.default_rng(seed)  # the encoder's noise, then the torque's
     N = u.shape[0] - 1
     blocks = [Source("torque", tau=u),
@@ -215,7 +193,7 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
                            shape=(m,))]
     previous = mujoco.get_mjcb_passive()
     if e.stiction is None:
-        mujoco.set_mjcb_passive(smooth_friction)
+        mujoco.set_mjcb_passive(_smooth_friction(mj, truth))
     try:
         log = run_loop(blocks, N, dt, final=True)
     finally:
@@ -225,3 +203,47 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
         raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
     return Recording(t=dt * np.arange(N + 1), encoder=counts, torque=measured, motor_names=tr.motor_names,
                      joint_names=truth.joint_names, true_q=q)
+
+
+def _check_recording_settings(model: str, seed: Any, encoder_noise_counts: Any, torque_noise: Any) -> None:
+    """One-line errors for :func:`mujoco_recording`'s seed, sensor noises and model."""
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    for name, v in (("encoder_noise_counts", encoder_noise_counts), ("torque_noise", torque_noise)):
+        if not (_number(v) and v >= 0):
+            raise InputError(f"{name}: expected a non-negative number, got {v!r}")
+    if model not in PLANT_MODELS:
+        raise InputError(f"model: a recording plant is one chain ({', '.join(PLANT_MODELS)}), got {model!r}")
+
+
+def _plant_at_rest(mj, truth: Model, q0: Sequence[float] | None, u0: np.ndarray, p: HandParams,
+                   effects: PlantEffects):
+    """The plant's MjData at joint angles ``q0`` (rad; default the rest of ``truth`` under the torque ``u0``, N m)
+    at rest, its derived quantities computed (``mj_forward``)."""
+    import mujoco
+
+    d = mujoco.MjData(mj)
+    perm = joint_permutation(mj, truth.joint_names)
+    if q0 is None:
+        q_init = truth.static_equilibrium(truth.transmission.joint_torque(u0), np.zeros(truth.n),
+                                          fixed=truth.springless_joints)
+    else:
+        q_init = np.asarray(q0, dtype=float)
+        if q_init.shape != (truth.n,) or not np.isfinite(q_init).all():
+            raise InputError(f"q0: expected {truth.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
+    d.qpos[:] = _initial_state(mj, truth, perm, q_init, u0, p, effects)
+    mujoco.mj_forward(mj, d)
+    return d
+
+
+def _smooth_friction(mj, truth: Model) -> Callable[[Any, Any], None]:
+    """MuJoCo's passive-force callback of the library's smooth friction law on ``truth``'s joints (N m), applied
+    at every RK4 stage."""
+    ex = truth.extras
+    dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
+
+    def smooth_friction(_m, dd) -> None:  # the library's law, at every RK4 stage
+        v = dd.qvel[dofs]
+        dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
+
+    return smooth_friction

@@ -107,6 +107,26 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
     the hand: they stay in the result (and ``identify --json``), not in the file.
     """
+    p, chain, thumb = _destination(result, base, chain)
+    reason = _provenance(result)
+    own = p.chain("finger" if chain is None else chain)
+    arrays, stds, touched, scalars = _fitted_values(result, own, p, thumb)
+    sec = "thumb" if thumb else ("finger" if chain is None else f"finger.{chain}")
+    upd = _array_params(p, sec, arrays, stds, touched, reason)
+    upd.update(_scalar_params(p, scalars, reason))
+    key = "thumb" if thumb else ("finger" if chain is None else chain)
+    return with_values(p, upd, identification={key: _record(result)})
+
+
+_UNITS = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "abduction_K": "N m/rad",
+          "base_mass": "kg", "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
+"""The units of the parameter file's fields that a fit writes."""
+
+
+def _destination(result: IdentificationResult, base: HandParams | None, chain: str | None
+                 ) -> tuple[HandParams, str | None, bool]:
+    """(the parameter set written into, the chain, whether it is the thumb's), checked: a model with a file, of a
+    finger or the thumb, a chain of its kind."""
     p = base if base is not None else result.model.params
     if p is None:
         raise ModelError("identified parameters: the model has no parameter file; pass base=")
@@ -121,23 +141,38 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         raise ModelError(f"chain: the thumb model's values go to the thumb, not {chain!r}")
     if not thumb and chain is not None and chain not in p.finger_names:
         raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
+    return p, chain, thumb
+
+
+def _provenance(result: IdentificationResult) -> str:
+    """The ``reason`` written with every identified value: the recording, the residual, the verdict, the parameters
+    without a standard error."""
     reason = (f"identified from {_printable(result.recording_path) or 'a recording'} by multiple shooting "
               f"({result.residual_rms:.3g} counts RMS residual)")
     if not result.trustworthy:
         reason += f"; NOT TRUSTWORTHY: {result.status()}"
-    own = p.chain("finger" if chain is None else chain)
+    unbounded = [n_ for n_, sd in zip(result.names, result.std) if not math.isfinite(sd)]
+    if unbounded:  # not seen by this recording: the value is its start, no standard error to write
+        reason += f"; no standard error for {', '.join(unbounded)} (not seen by the recording)"
+    return reason
+
+
+def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb: bool
+                   ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], set[str], dict[str, tuple[float, Any]]]:
+    """The chain's per-joint fields with the fitted values (K, m with I scaled with it, F_s, F_v: values and
+    standard errors, (k,) each, and the fields touched) and the scalar fields fitted (field -> (value, std)):
+    the thumb's ab/adduction joint, J_m, the tendon compliance. The recording's own parameters (encoder offsets,
+    tilt, input gain) and the ab/adduction gear's compliance are left out."""
+    model = result.model
     k = own.n
     arrays = {"K": own.K.copy(), "m": own.m.copy(), "I": own.I.copy(),
               "F_s": (own.F_s if own.F_s is not None else np.full(k, p.F_s)).copy(),
               "F_v": (own.F_v if own.F_v is not None else np.full(k, p.F_v)).copy()}
     stds = {kind: np.zeros(k) for kind in arrays}
-    scalars: dict[str, tuple[float, float]] = {}  # thumb scalars: field -> (value, std)
+    scalars: dict[str, tuple[float, Any]] = {}  # thumb scalars: field -> (value, std)
     touched = set()
     cat = {pp.name: pp for pp in parameter_catalogue(model)}
     flexion = [j for j in model.joint_names if j != "thumb_abd"]
-    unbounded = [n_ for n_, sd in zip(result.names, result.std) if not math.isfinite(sd)]
-    if unbounded:  # not seen by this recording: the value is its start, no standard error to write
-        reason += f"; no standard error for {', '.join(unbounded)} (not seen by the recording)"
     for name, value, sd in zip(result.names, result.values, result.std):
         pp = cat.get(name)
         if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
@@ -168,15 +203,26 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
         arrays[pp.kind][i] = value
         stds[pp.kind][i] = sd
         touched.add(pp.kind)
-    units = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "abduction_K": "N m/rad",
-             "base_mass": "kg", "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
-    sec = "thumb" if thumb else ("finger" if chain is None else f"finger.{chain}")
+    return arrays, stds, touched, scalars
+
+
+def _array_params(p: HandParams, sec: str, arrays: dict[str, np.ndarray], stds: dict[str, np.ndarray],
+                  touched: set[str], reason: str) -> dict[str, Param]:
+    """The per-joint fields touched as ``identified`` :class:`Param` of section ``sec`` (their description the
+    file's; no std for a field with one unseen entry)."""
     upd = {}
     for kind in touched:
         old = p.raw.get(f"{sec}.{kind}") or p.raw.get(f"finger.{kind}")
         desc = old.description if old is not None else f"per-joint {kind}"
         std = stds[kind] if np.isfinite(stds[kind]).all() else None  # one unseen entry: no std for the field
-        upd[f"{sec}.{kind}"] = Param(arrays[kind], units[kind], "identified", reason, desc, std)
+        upd[f"{sec}.{kind}"] = Param(arrays[kind], _UNITS[kind], "identified", reason, desc, std)
+    return upd
+
+
+def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason: str) -> dict[str, Param]:
+    """The scalar fields fitted as ``identified`` :class:`Param`: ``transmission.tendon_compliance``,
+    ``transmission.J_m`` and the thumb's ab/adduction fields."""
+    upd = {}
     for field_, (value, sd) in scalars.items():
         if field_ == "tendon_compliance":
             old = p.raw.get("transmission.tendon_compliance")
@@ -191,9 +237,8 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
             continue
         old = p.raw.get(f"thumb.{field_}")
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
-        upd[f"thumb.{field_}"] = Param(value, units[field_], "identified", reason, desc, sd)
-    key = "thumb" if thumb else ("finger" if chain is None else chain)
-    return with_values(p, upd, identification={key: _record(result)})
+        upd[f"thumb.{field_}"] = Param(value, _UNITS[field_], "identified", reason, desc, sd)
+    return upd
 
 
 def _sd(sd: float) -> float | None:

@@ -57,7 +57,7 @@ import sys
 import time
 import warnings
 from pathlib import Path
-from typing import Mapping, Sequence
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
@@ -214,30 +214,42 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, encoder_noise).total \
         and not reason.startswith("iteration")
     if missed and interval >= RETRY_INTERVAL * (1 - 1e-9) and int(round(0.5 * interval / dt)) >= 2:
-        # both starts ended above the basin limit (not merely at the iteration cap): shorter intervals drift less
-        # from a wrong start (on MuJoCo's +-20 % fingers with a real hand's effects, one of three lost its basin from both
-        # starts at 100 ms, and fitted to the sensor floor at 50 ms); kept if it converged to a lower residual (on
-        # a plant with a rotor the model lacks, the retry's lost basin fitted lower and named the wrong effect)
-        with warnings.catch_warnings():  # the verdict is reported on the fit kept
-            warnings.simplefilter("ignore", AdequacyWarning)
-            again = identify(model, recording, parameters, excitation=excitation, interval=0.5 * interval,
-                             substeps=substeps, torque_noise=torque_noise, camera_noise=camera_noise,
-                             max_iterations=max_iterations, tol=tol, threads=threads, progress=progress,
-                             validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt)
-        if again.converged and again.residual_rms < rms:  # a lost basin again: the first kept
-            again.iterations += it
-            again.seconds = time.perf_counter() - t_start
-            again.reason += (f" (at {500 * interval:g} ms intervals; at {1000 * interval:g} ms both starts missed:"
-                             f" {rms:.3g} counts, {reason})")
+        settings = dict(excitation=excitation, substeps=substeps, torque_noise=torque_noise, camera_noise=camera_noise,
+                        max_iterations=max_iterations, tol=tol, threads=threads, progress=progress,
+                        validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt)
+        again, it, reason = _retry_at_half_interval(model, recording, parameters, settings, interval, rms, it, reason,
+                                                    t_start)
+        if again is not None:
             if not again.trustworthy:
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
-        it += again.iterations
-        reason += f" (a fit at {500 * interval:g} ms intervals did no better: {again.residual_rms:.3g} counts)"
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
+
+
+def _retry_at_half_interval(model: Model, recording: Recording | str | Path, parameters: Any,
+                            settings: dict[str, Any], interval: float, rms: float, it: int, reason: str,
+                            t_start: float) -> tuple[IdentificationResult | None, int, str]:
+    """The fit again at half the shooting ``interval`` (s) where both starts ended above the basin limit (not merely
+    at the iteration cap): shorter intervals drift less from a wrong start (on MuJoCo's +-20 % fingers with a real
+    hand's effects, one of three lost its basin from both starts at 100 ms, and fitted to the sensor floor at 50 ms).
+    Returns (the retry, kept if it converged to a lower residual than ``rms`` counts, else None; the iterations and
+    the reason, with the retry's told) (on a plant with a rotor the model lacks, the retry's lost basin fitted lower
+    and named the wrong effect: a lost basin again keeps the first)."""
+    with warnings.catch_warnings():  # the verdict is reported on the fit kept
+        warnings.simplefilter("ignore", AdequacyWarning)
+        again = identify(model, recording, parameters, interval=0.5 * interval, **settings)
+    if again.converged and again.residual_rms < rms:  # a lost basin again: the first kept
+        again.iterations += it
+        again.seconds = time.perf_counter() - t_start
+        again.reason += (f" (at {500 * interval:g} ms intervals; at {1000 * interval:g} ms both starts missed:"
+                         f" {rms:.3g} counts, {reason})")
+        return again, it, reason
+    it += again.iterations
+    reason += f" (a fit at {500 * interval:g} ms intervals did no better: {again.residual_rms:.3g} counts)"
+    return None, it, reason
 
 
 MAX_TORQUE_NOISE = 1.0

@@ -150,24 +150,52 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
     them and refused without them. Raises :class:`~alpes_dyn.errors.RecordingError`.
     """
+    _check_reader(torque_constant, model)
+    p = Path(path)
+    text = _read_text(path)
+    n_lines = text.count("\n")
+    if n_lines > MAX_CSV_ROWS + 1:
+        raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
+    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
+    rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
+    header = _header(rows, p, model)
+    data = _parse_rows(rows, p, header, n_lines)
+    del text
+    col = {h: data[:, j] for j, h in enumerate(header)}
+    if "t" not in col:
+        raise RecordingError("recording: missing column 't' (time, s)")
+    motors, joints = model.transmission.motor_names, model.joint_names
+    enc, torque = _motor_columns(col, motors, torque_constant, p)
+    rec = Recording(t=col["t"], encoder=np.column_stack(enc), torque=np.column_stack(torque),
+                    motor_names=tuple(motors), joint_names=tuple(joints), q=_joint_columns(col, joints, "q"),
+                    force_z=col.get("force_z"), gravity=_gravity_columns(col), true_q=_joint_columns(col, joints, "true_q"))
+    check_recording(rec)
+    _check_encoder_range(rec, model)
+    return rec
+
+
+def _check_reader(torque_constant: float | None, model: Model) -> None:
+    """The arguments of :func:`read_recording`: a positive torque constant (N m/A) or None, an alpes_dyn Model."""
     if torque_constant is not None and not (isinstance(torque_constant, (int, float, np.integer, np.floating))
                                             and not isinstance(torque_constant, (bool, np.bool_))
                                             and math.isfinite(torque_constant) and torque_constant > 0):
         raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r}")
     if not isinstance(model, Model):
         raise RecordingError(f"model: expected an alpes_dyn Model (it names the columns), got {type(model).__name__}")
+
+
+def _read_text(path: str | Path) -> str:
+    """The recording's text (UTF-8, a byte-order mark accepted; at most :data:`MAX_RECORDING_BYTES`)."""
     data_bytes = read_bytes(path, "recording", RecordingError, MAX_RECORDING_BYTES)
-    p = Path(path)
     try:
-        text = data_bytes.decode("utf-8-sig")  # a byte-order mark is accepted
+        return data_bytes.decode("utf-8-sig")  # a byte-order mark is accepted
     except UnicodeDecodeError:
-        raise RecordingError(f"recording {str(p)!r}: not a UTF-8 text file") from None
-    del data_bytes
-    n_lines = text.count("\n")
-    if n_lines > MAX_CSV_ROWS + 1:
-        raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
-    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
-    rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
+        raise RecordingError(f"recording {str(Path(path))!r}: not a UTF-8 text file") from None
+
+
+def _header(rows, p: Path, model: Model) -> list[str]:
+    """The column names of the first row of ``rows``: each at most :data:`MAX_CSV_CELL` characters, once, and a
+    column of ``model`` (its motors' and joints' names)."""
     first = _next_row(rows, p)
     if first is None:
         raise RecordingError(f"recording {str(p)!r}: empty file")
@@ -189,6 +217,12 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
         if h not in known:
             raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
                                  f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
+    return header
+
+
+def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:
+    """The data rows as an array (rows, columns): numbers (no digit separators), empty or NaN cells only in the
+    optional columns (``q_*``, ``true_q_*``, ``force_z``: NaN there)."""
     optional_nan = {h for h in header if h.startswith(("q_", "true_q_")) or h == "force_z"}
     data = np.empty((n_lines + 1, len(header)))  # at least one row per line: trimmed below
     n_rows = 0
@@ -218,11 +252,13 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: not a number ({c!r})") from None
             if not math.isfinite(data[i - 2, j]) and header[j] not in optional_nan:
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: NaN or inf")
-    del text
-    data = data[:n_rows]
-    col = {h: data[:, j] for j, h in enumerate(header)}
-    if "t" not in col:
-        raise RecordingError("recording: missing column 't' (time, s)")
+    return data[:n_rows]
+
+
+def _motor_columns(col: dict[str, np.ndarray], motors: tuple[str, ...], torque_constant: float | None, p: Path
+                   ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Each motor's encoder (counts) and torque (N m: ``torque_<motor>``, or ``current_<motor>`` A times the
+    torque constant), (N,) each; the torque constant refused where no column is a current."""
     enc, torque = [], []
     for mn in motors:
         if f"encoder_{mn}" not in col:
@@ -242,26 +278,26 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     if torque_constant is not None and not any(f"current_{mn}" in col for mn in motors):
         raise RecordingError(f"recording {str(p)!r}: a torque constant is given but it has no current_<motor> column "
                              f"(its torques are torque_<motor>, N m)")
+    return enc, torque
 
-    def block(prefix: str) -> np.ndarray | None:
-        names = [f"{prefix}_{jn}" for jn in joints]
-        present = [n for n in names if n in col]
-        if not present:
-            return None
-        return np.column_stack([col[n] if n in col else np.full(len(col["t"]), np.nan) for n in names])
 
+def _joint_columns(col: dict[str, np.ndarray], joints: tuple[str, ...], prefix: str) -> np.ndarray | None:
+    """The columns ``<prefix>_<joint>`` as (N, n) rad (NaN for a joint without a column), or None without any."""
+    names = [f"{prefix}_{jn}" for jn in joints]
+    present = [n for n in names if n in col]
+    if not present:
+        return None
+    return np.column_stack([col[n] if n in col else np.full(len(col["t"]), np.nan) for n in names])
+
+
+def _gravity_columns(col: dict[str, np.ndarray]) -> np.ndarray | None:
+    """The gravity columns as (N, 3) m/s^2, None without them; all three or none."""
     grav_cols = [f"gravity_{a}" for a in "xyz"]
     present = [g for g in grav_cols if g in col]
     if present and len(present) != 3:
         raise RecordingError(f"recording: gravity needs all three columns gravity_x, gravity_y, gravity_z "
                              f"(got {', '.join(present)})")
-    rec = Recording(t=col["t"], encoder=np.column_stack(enc), torque=np.column_stack(torque),
-                    motor_names=tuple(motors), joint_names=tuple(joints), q=block("q"),
-                    force_z=col.get("force_z"), gravity=np.column_stack([col[g] for g in grav_cols]) if present
-                    else None, true_q=block("true_q"))
-    check_recording(rec)
-    _check_encoder_range(rec, model)
-    return rec
+    return np.column_stack([col[g] for g in grav_cols]) if present else None
 
 
 def _check_encoder_range(rec: Recording, model: Model) -> None:

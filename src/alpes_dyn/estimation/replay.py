@@ -198,6 +198,45 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
+    rec = _replay_recording(recording, model, observer)
+    encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
+    disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
+    if not isinstance(disturbance, (bool, np.bool_)):
+        raise InputError(f"disturbance: expected True or False, got {disturbance!r}")
+    N, dt = rec.n_samples, rec.dt
+    duration = rec.duration
+    t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")
+    if not t_start < duration:
+        raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
+    torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
+    m_obs, angles, offsets = _observer_model(model, rec, tilt, encoder_offset)
+    has_friction = bool(np.any(m_obs.extras.coulomb) or np.any(m_obs.extras.viscous))
+    if substeps is None:  # as many as the friction's stiffness asks (4 for the smooth law at 1 kHz)
+        substeps = stable_substeps(m_obs, dt) if has_friction else 1
+    n, m = m_obs.n, m_obs.transmission.n_motors
+    pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
+    gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
+    nz = 2 * n + len(pars) + len(gains)
+    check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
+    tr = m_obs.transmission
+    filt, z0, P0 = _replay_filter(m_obs, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
+                                  gains, pars, rec.torque[0], compiled)
+    est = _played_back(rec, filt, z0, P0, tr, offsets)
+    rmse, final = _errors(est, rec, t_start, n)
+    dist = est.z[:, 2 * n + len(gains):] if pars else None
+    settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
+                "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
+                "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
+                "encoder_offset_rad": offsets.tolist(), "tilt_rad": angles,
+                "tendon_compliance": tr.tendon_compliance.tolist()}
+    return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
+                             motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
+                             disturbance=dist, settings=settings)
+
+
+def _replay_recording(recording: Recording | str | Path, model: Model, observer: str) -> Recording:
+    """The recording (read for ``model`` from a path), checked to be of the model's motors and joints; the model
+    (with a transmission) and the observer's name checked first."""
     if not isinstance(model, Model):
         raise InputError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
     if model.transmission is None:
@@ -211,59 +250,50 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
             tuple(rec.joint_names) != tuple(model.joint_names):
         raise RecordingError(f"recording: made for motors {list(rec.motor_names)} and joints {list(rec.joint_names)}, "
                              f"not the model's {list(model.transmission.motor_names)} and {list(model.joint_names)}")
-    encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
-    disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
-    if not isinstance(disturbance, (bool, np.bool_)):
-        raise InputError(f"disturbance: expected True or False, got {disturbance!r}")
-    N, dt = rec.n_samples, rec.dt
-    duration = rec.duration
-    t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")
-    if not t_start < duration:
-        raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
-    if torque_noise is None:
-        # the second difference of a white noise has variance 6 sigma^2; the torque's own motion leaves (2 pi f dt)^2
-        # of its amplitude there: 1.6 % at the dither's 20 Hz (the first difference left 13 %, 7 % too high a sigma)
-        d2_tau = np.diff(rec.torque, n=2, axis=0)
-        torque_noise = float(np.sqrt(np.mean(d2_tau**2) / 6.0))
-    torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
+    return rec
+
+
+def _torque_noise(rec: Recording) -> float:
+    """The recorded torque's white noise, N m, from its second difference."""
+    # the second difference of a white noise has variance 6 sigma^2; the torque's own motion leaves (2 pi f dt)^2
+    # of its amplitude there: 1.6 % at the dither's 20 Hz (the first difference left 13 %, 7 % too high a sigma)
+    d2_tau = np.diff(rec.torque, n=2, axis=0)
+    return float(np.sqrt(np.mean(d2_tau**2) / 6.0))
+
+
+def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
+                    ) -> tuple[Model, list[float] | None, np.ndarray]:
+    """(the observer's model in the recording's orientation, turned by ``tilt``; the tilt angles as given, rad, or
+    None; the encoders' zero (m,) rad)."""
     m_obs = _model_for(model, rec)
+    angles = None
     if tilt is not None:
         angles = _finite_vector(tilt, 2, "tilt", "rad").tolist()
         m_obs = m_obs.copy(gravity=tilted_gravity(m_obs.gravity, angles[0], angles[1]))
     offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
         _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
-    has_friction = bool(np.any(m_obs.extras.coulomb) or np.any(m_obs.extras.viscous))
-    if substeps is None:  # as many as the friction's stiffness asks (4 for the smooth law at 1 kHz)
-        substeps = stable_substeps(m_obs, dt) if has_friction else 1
-    n, m = m_obs.n, m_obs.transmission.n_motors
-    pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
-    gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
-    nz = 2 * n + len(pars) + len(gains)
-    check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
-    step = 2 * np.pi / m_obs.transmission.counts_per_rev
-    tr = m_obs.transmission
-    filt, z0, P0 = _replay_filter(m_obs, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
-                                  gains, pars, rec.torque[0], compiled)
-    # the composition: the recording played back -> the encoder's zero and the stretch C tau_m,k-1 off -> observer
+    return m_obs, angles, offsets
+
+
+def _played_back(rec: Recording, filt: Any, z0: np.ndarray, P0: np.ndarray, tr: Any, offsets: np.ndarray
+                 ) -> Estimate:
+    """The observer's estimate over the recording: the composition recording played back -> the encoder's zero
+    and the tendons' stretch C tau_m,k-1 taken off -> observer, run by :func:`run_loop`."""
+    step = 2 * np.pi / tr.counts_per_rev
     blocks = [RecordingPlayback(rec, encoder="counts", torque="tau", held="tau_held", before="tau_before"),
               Function(lambda counts, tau_before: tr.unstretched(counts * step - offsets, tau_before),
                        ("counts", "tau_before"), "y",
                        name="unstretched", vectorized=True),
               Observer(filt, z0, P0, known=("tau_held",), measurement="y")]
-    log = run_loop(blocks, N - 1, dt, final=True)
-    est = Estimate(t=rec.t.copy(), z=log["z"], P=log["P"], names=filt.names)
-    rmse = final = None
-    if rec.true_q is not None and np.isfinite(rec.true_q).all():
-        k0 = int(round(t_start / dt))
-        err = est.z[:, :n] - rec.true_q
-        rmse = np.sqrt(np.mean(err[k0:] ** 2, axis=0))
-        final = np.abs(err[-1])
-    dist = est.z[:, 2 * n + len(gains):] if pars else None
-    settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
-                "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
-                "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
-                "encoder_offset_rad": offsets.tolist(), "tilt_rad": list(angles) if tilt is not None else None,
-                "tendon_compliance": tr.tendon_compliance.tolist()}
-    return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
-                             motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
-                             disturbance=dist, settings=settings)
+    log = run_loop(blocks, rec.n_samples - 1, rec.dt, final=True)
+    return Estimate(t=rec.t.copy(), z=log["z"], P=log["P"], names=filt.names)
+
+
+def _errors(est: Estimate, rec: Recording, t_start: float, n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(RMSE (n,) rad after ``t_start`` s, the last sample's error (n,) rad) against the recording's true joints;
+    (None, None) without them."""
+    if rec.true_q is None or not np.isfinite(rec.true_q).all():
+        return None, None
+    k0 = int(round(t_start / rec.dt))
+    err = est.z[:, :n] - rec.true_q
+    return np.sqrt(np.mean(err[k0:] ** 2, axis=0)), np.abs(err[-1])

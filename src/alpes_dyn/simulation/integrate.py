@@ -367,6 +367,30 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
         force input given a force, an integrator failure, or arrays over the size limit
         (:mod:`alpes_dyn.limits`, 2 GiB by default).
     """
+    ss, dt, rtol, atol = _simulation_setup(system, dt, method, force, input, output, smooth, rtol, atol, stops,
+                                           joint_range)
+    N = _n_steps(duration, dt)
+    check_bytes(8.0 * (N + 1) * (2 * ss.n_states + ss.n_outputs + _n_known_inputs(ss)), "duration",
+                f"{N} steps of {ss.n_states} states")
+    x0 = ss.model.vector(x0, "x0", ss.n_states)
+    t = dt * np.arange(N + 1)
+    U = _sample(inputs, t[:-1], ss.n_inputs, "inputs")
+    Fs = _sample_force(force, t[:-1], ss.n_force) if ss.force else None
+    W = U if Fs is None else np.hstack([U, Fs])
+    x = _trajectory(ss, x0, W, t, dt, method, rtol, atol, stops)
+    if stops is None and joint_range != "ignore":  # here: the warning names simulate's caller
+        m = ss.model
+        check_range(t, x[:, : ss.n], m.lower, m.upper, m.joint_names, joint_range,
+                    rest=np.where(m.extras.stiffness != 0, m.extras.rest, np.nan))
+    y = np.array(ss.h_function.map(N + 1)(x[:, : 2 * ss.n].T)).T
+    return SimulationResult(t=t, x=x, y=y, u=U, F=Fs, system=ss, method=method)
+
+
+def _simulation_setup(system: Model | StateSpace, dt: float, method: str, force: InputLike, input: str, output: Any,
+                      smooth: bool, rtol: float, atol: float, stops: JointStops | None, joint_range: str
+                      ) -> tuple[StateSpace, float, float, float]:
+    """(the state space simulated, dt s, rtol, atol): :func:`simulate`'s method, stops, range mode, force and
+    step checked (the tolerances for the SUNDIALS methods only)."""
     if method not in METHODS:
         raise InputError(f"method: unknown integration method {method!r} (expected one of {', '.join(METHODS)})")
     if stops is not None and not isinstance(stops, JointStops):
@@ -380,14 +404,14 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     dt = _check_dt(dt)
     if method != "rk4":
         rtol, atol = _tolerance(rtol, "rtol"), _tolerance(atol, "atol")
-    N = _n_steps(duration, dt)
-    check_bytes(8.0 * (N + 1) * (2 * ss.n_states + ss.n_outputs + _n_known_inputs(ss)), "duration",
-                f"{N} steps of {ss.n_states} states")
-    x0 = ss.model.vector(x0, "x0", ss.n_states)
-    t = dt * np.arange(N + 1)
-    U = _sample(inputs, t[:-1], ss.n_inputs, "inputs")
-    Fs = _sample_force(force, t[:-1], ss.n_force) if ss.force else None
-    W = U if Fs is None else np.hstack([U, Fs])
+    return ss, dt, rtol, atol
+
+
+def _trajectory(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.ndarray, dt: float, method: str, rtol: float,
+                atol: float, stops: JointStops | None) -> np.ndarray:
+    """(N+1, nx) states at the times ``t`` (s, steps of ``dt``) from ``x0`` under the held inputs W (N, inputs):
+    RK4 (one compiled ``mapaccum``) or SUNDIALS; a non-finite state is an error naming its time."""
+    N = t.size - 1
     if method == "rk4":
         step = rk4_step_function(ss, dt, stops=stops)
         X = np.array(step.mapaccum("rk4_traj", N)(x0, W.T))
@@ -397,12 +421,7 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
     if not np.isfinite(x).all():
         k = int(np.argmax(~np.isfinite(x).all(axis=1)))
         raise InputError(f"simulation diverged (non-finite state at t = {t[k]:g} s); reduce dt or the inputs")
-    if stops is None and joint_range != "ignore":
-        m = ss.model
-        check_range(t, x[:, : ss.n], m.lower, m.upper, m.joint_names, joint_range,
-                    rest=np.where(m.extras.stiffness != 0, m.extras.rest, np.nan))
-    y = np.array(ss.h_function.map(N + 1)(x[:, : 2 * ss.n].T)).T
-    return SimulationResult(t=t, x=x, y=y, u=U, F=Fs, system=ss, method=method)
+    return x
 
 
 def _integrate_sundials(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.ndarray, method: str,
