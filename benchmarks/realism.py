@@ -47,6 +47,7 @@ with the reason.
     python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--rig level|hanging] [--quick]
                                  [--json] [--log FILE]
     python benchmarks/realism.py --chains index,middle,ring,little,thumb [--hand-seed 5] [--cases ...]
+    python benchmarks/realism.py ... --workers 2      # each case's seeds on a local Dask cluster (the same rows)
 
 ``--rig hanging``: the hand hung fingers down during the experiments (:func:`~alpes_dyn.model.mjcf.hanging_gravity`),
 the experiment designed and trimmed in that orientation, the fits and the EKF on the models turned to it (the
@@ -80,7 +81,18 @@ from pathlib import Path
 from alpes_dyn.model.params import load_params
 from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.studies.realism import (CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
-                                       realism_case, rig_design, tendon_stiffness)
+                                       realism_case, realism_row, rig_design, tendon_stiffness)
+from alpes_dyn.studies.sweep import sweep
+
+
+def _client(workers: int):
+    """A Dask client on a local cluster of ``workers`` processes, one thread each (as :func:`sweep` makes)."""
+    import logging
+
+    from distributed import Client, LocalCluster
+
+    return Client(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR))
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -95,6 +107,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
     ap.add_argument("--chains", help="the hand's chains instead of finger3, comma-separated (index, middle, ring, "
                                      "little, thumb)")
+    ap.add_argument("--workers", type=int, default=0,
+                    help="run each case's seeds on a local Dask cluster of this many processes "
+                         "(alpes_dyn.studies.sweep; 0: in this process, one after another, the default)")
     ap.add_argument("--hand-seed", type=int, default=None,
                     help="with --chains: the seed of the hand's draw and of the sensors' noise (default 5)")
     args = ap.parse_args(argv)
@@ -116,6 +131,8 @@ def main(argv: list[str] | None = None) -> int:
             ap.error(f"--hand-seed: expected a non-negative integer, got {seeds[0]}")
     elif args.hand_seed is not None:
         ap.error("--hand-seed: only with --chains (finger3's seeds are --seeds)")
+    if not 0 <= args.workers <= 64:
+        ap.error(f"--workers: expected 0 (in this process) to 64, got {args.workers}")
     names = [c.strip() for c in args.cases.split(",") if c.strip()]
     bad = [c for c in names if c not in CASE_NAMES]
     if bad or not names:
@@ -129,16 +146,32 @@ def main(argv: list[str] | None = None) -> int:
     table = cases(k_t, c_t, RIGS[args.rig])
     design = rig_design(args.rig, duration)  # designed, trimmed and fitted in the rig's orientation
     rows, case_seconds = [], {}
-    with tempfile.TemporaryDirectory() as d:
-        for c in names:
-            t0 = time.perf_counter()
-            for plant in plants:
-                for s in seeds:
-                    rows.append(realism_case(c, table[c], s, design, Path(d), plant))
-                    if args.log:
-                        with open(args.log, "a", encoding="utf-8") as f:
-                            f.write(json.dumps(rows[-1]) + "\n")
-            case_seconds[c] = time.perf_counter() - t0
+
+    def log(new_rows: list) -> None:
+        rows.extend(new_rows)
+        if args.log:
+            with open(args.log, "a", encoding="utf-8") as f:
+                f.writelines(json.dumps(r) + "\n" for r in new_rows)
+
+    client = _client(args.workers) if args.workers else None
+    try:
+        with tempfile.TemporaryDirectory() as d:
+            for c in names:
+                t0 = time.perf_counter()
+                for plant in plants:
+                    if client is None:
+                        for s in seeds:
+                            log([realism_case(c, table[c], s, design, Path(d), plant)])
+                    else:  # the seeds of a case and plant as one sweep on the cluster (alpes_dyn.studies.sweep)
+                        opts = {"case": c, "rig": args.rig, "chain": None if plant is FINGER3 else plant.label,
+                                "duration": design.duration, "cable": (k_t, c_t)}
+                        log(sweep(realism_row, seeds=seeds, options=opts, client=client, flat=False).rows)
+                case_seconds[c] = time.perf_counter() - t0
+    finally:
+        if client is not None:
+            cluster = client.cluster
+            client.close()
+            cluster.close()
     out = {"model": MODEL if args.chains is None else "hand", "seeds": seeds, "duration_s": design.duration,
            "rig": args.rig,
            "tendon": info, "case_seconds": case_seconds, "rows": rows}

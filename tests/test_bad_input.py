@@ -1340,6 +1340,12 @@ API: list[Api] = [
     A("intermodulation", lambda c: _harm().intermodulation([20.0, -1.0], 500.0), InputError,
       "lines: expected positive frequencies in Hz, got [20.0, -1.0]"),
     A("intermodulation", lambda c: _harm().intermodulation([], 500.0), InputError, "lines: expected positive"),
+    A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
+        lambda seed: {"x": 1.0}, seeds=[3, 3], serial=True), InputError, "seeds: a seed is given twice"),
+    A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
+        lambda seed: {"x": 1.0}, 2, flat=None, serial=True), InputError, "flat: expected True or False, got None"),
+    A("realism_row", lambda c: _realism().realism_row(1, cable=(-1.0, 0.0)), InputError,
+      "cable: expected (k_t > 0 N/m, c_t >= 0 N s/m), got (-1.0, 0.0)"),
     A("realism_draw", lambda c: _realism().realism_draw(1, case="bogus"), InputError,
       "case: expected one of none, stiction, tendon, rotor, tilt, kt, offset, all, got 'bogus'"),
     A("realism_draw", lambda c: _realism().realism_draw(1, rig="upside"), InputError,

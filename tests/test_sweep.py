@@ -33,7 +33,25 @@ def test_rows_table_and_csv(tmp_path):
     assert res.table().splitlines()[0].split() == ["seed", "x_0", "x_1", "name", "v"]
 
 
+def test_given_seeds_and_nested_rows():
+    """seeds= runs exactly those seeds, in their order; flat=False keeps a draw's nested values, with its seed."""
+    def draw(seed):
+        return {"x": [seed, 2 * seed], "inner": {"y": seed + 0.5}}
+
+    res = sweep(draw, seeds=[7, 2, 40], serial=True, flat=False)
+    assert res.rows == [{"seed": 7, "x": [7, 14], "inner": {"y": 7.5}}, {"seed": 2, "x": [2, 4], "inner": {"y": 2.5}},
+                        {"seed": 40, "x": [40, 80], "inner": {"y": 40.5}}]
+    assert sweep(draw, seeds=(5,), serial=True).rows == [{"seed": 5, "x_0": 5.0, "x_1": 10.0, "inner": {"y": 5.5}}]
+
+
 @pytest.mark.parametrize("kw, needle", [
+    ({"draws": None, "seeds": [1, 1]}, "seeds: a seed is given twice"),
+    ({"seeds": [1, 2]}, "seeds: give the seeds, or draws and seed, not both"),
+    ({"draws": None, "seeds": []}, "seeds: expected 1 to 100000 integers"),
+    ({"draws": None, "seeds": [1, -2]}, "seeds: expected an integer from 0"),
+    ({"draws": None, "seeds": "12"}, "seeds: expected 1 to 100000 integers, got str"),
+    ({"draws": None}, "draws: expected the number of draws"),
+    ({"flat": "yes"}, "flat: expected True or False"),
     ({"draws": 0}, "draws: expected an integer from 1 to 100000"),
     ({"draws": True}, "draws: expected an integer"),
     ({"seed": -1}, "seed: expected an integer from 0"),

@@ -7,7 +7,8 @@ tilted, the torque constant and the encoder's zero off) -- records the identific
 it (the rigid smooth-friction model and ``alpes-dyn identify``'s default ``--effects auto``), and the EKF on the
 extended fit's file and on the true file, on a fresh run of the plant: :func:`realism_case` gives one such row.
 ``benchmarks/realism.py`` prints them as a table; the gallery's "The hand on MuJoCo" runs the hand's five
-chains. :func:`realism_draw` is the same row flattened for :func:`~alpes_dyn.studies.sweep.sweep`.
+chains. :func:`realism_row` is the same row as a function of the seed, for :func:`~alpes_dyn.studies.sweep.sweep`
+(``benchmarks/realism.py --workers 2`` runs each case's seeds so), and :func:`realism_draw` flattens it to numbers.
 """
 
 from __future__ import annotations
@@ -35,7 +36,7 @@ from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 
 __all__ = ["CASE_NAMES", "RIGS", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
-           "realism_case", "realism_draw", "rig_design", "errors"]
+           "realism_case", "realism_row", "realism_draw", "rig_design", "errors"]
 
 KINDS = ("K", "m", "F_s", "F_v")
 """The kinds of parameter whose worst errors a row gives."""
@@ -279,20 +280,32 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     return row
 
 
-def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
-                 duration: float = 4.0) -> dict[str, Any]:
-    """One row of :func:`realism_case` for :func:`~alpes_dyn.studies.sweep.sweep` (a function of the seed): the plant
+def realism_row(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
+                duration: float = 4.0, cable: tuple[float, float] | None = None) -> dict[str, Any]:
+    """:func:`realism_case` as a function of the seed (for :func:`~alpes_dyn.studies.sweep.sweep`): the plant
     ``case`` (:data:`CASE_NAMES`), on finger3 drawn with ``seed`` or on the hand's ``chain`` (the hand drawn with
-    ``seed``), on the ``rig``; flattened to numbers: the worst errors up to the common scale (%), the residuals
-    (counts), the verdicts (1: flagged), the extended fit's time (s, every round) and the EKF's RMSE per joint (deg)."""
+    ``seed``), the experiment of ``duration`` s on the ``rig`` (:func:`rig_design`); ``cable``: the tendon case's
+    (k_t N/m, c_t N s/m), None: sized by :func:`tendon_stiffness` on the level rig (a MuJoCo run of its own)."""
     if case not in CASE_NAMES:
         raise InputError(f"case: expected one of {', '.join(CASE_NAMES)}, got {case!r}")
     plant = FINGER3 if chain is None else hand_plant(chain)
     design = rig_design(rig, duration)
-    k_t, c_t, _ = tendon_stiffness(rig_design("level", duration))  # the cable sized on the level rig, on every rig
+    if cable is None:
+        cable = tendon_stiffness(rig_design("level", duration))[:2]  # sized on the level rig, used on every rig
+    k_t, c_t = (float(x) for x in cable)
+    if not (math.isfinite(k_t) and k_t > 0 and math.isfinite(c_t) and c_t >= 0):
+        raise InputError(f"cable: expected (k_t > 0 N/m, c_t >= 0 N s/m), got {tuple(cable)!r}")
     effects = cases(k_t, c_t, RIGS[rig])[case]
     with tempfile.TemporaryDirectory() as d:
-        row = realism_case(case, effects, seed, design, Path(d), plant)
+        return realism_case(case, effects, seed, design, Path(d), plant)
+
+
+def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
+                 duration: float = 4.0, cable: tuple[float, float] | None = None) -> dict[str, Any]:
+    """:func:`realism_row` flattened to numbers: the worst errors up to the common scale (%), the residuals
+    (counts), the verdicts (1: flagged), the extended fit's time (s, every round) and the EKF's RMSE per joint
+    (deg)."""
+    row = realism_row(seed, case, rig, chain, duration, cable)
     a, b = row["rigid"], row["extended"]
     out: dict[str, Any] = {"rigid_flagged": int(a["flagged"]), "rigid_residual_counts": a["residual_counts"]}
     for kind in KINDS:

@@ -21,6 +21,7 @@ import io
 import logging
 import math
 import time
+import uuid
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Sequence
@@ -95,8 +96,13 @@ def _flat(seed: int, out: Any) -> dict[str, Any]:
     return row
 
 
-def _draw(fn: Callable[..., dict[str, Any]], seed: int, options: dict[str, Any]) -> dict[str, Any]:
-    return _flat(seed, fn(seed, **options))
+def _draw(fn: Callable[..., dict[str, Any]], seed: int, options: dict[str, Any], flat: bool = True) -> dict[str, Any]:
+    out = fn(seed, **options)
+    if flat:
+        return _flat(seed, out)
+    if not isinstance(out, dict):
+        raise InputError(f"fn: a draw must return a dict of results, got {type(out).__name__} (seed {seed})")
+    return {"seed": seed, **out}
 
 
 def _check_int(x: Any, name: str, low: int, high: int) -> int:
@@ -105,15 +111,20 @@ def _check_int(x: Any, name: str, low: int, high: int) -> int:
     return int(x)
 
 
-def sweep(fn: Callable[..., dict[str, Any]], draws: int, *, seed: int = 0, options: dict[str, Any] | None = None,
-          workers: int | None = 2, scheduler: str | None = None, client: Any = None,
-          serial: bool = False) -> SweepResult:
-    """Run ``fn(s, **options)`` for the seeds s = seed .. seed + draws - 1; gather the rows in seed order.
+def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: int = 0,
+          options: dict[str, Any] | None = None, workers: int | None = 2, scheduler: str | None = None,
+          client: Any = None, serial: bool = False, seeds: Sequence[int] | None = None,
+          flat: bool = True) -> SweepResult:
+    """Run ``fn(s, **options)`` for the seeds s = seed .. seed + draws - 1 (or for each of ``seeds``); gather the
+    rows in that order.
 
     Parameters
     ----------
     fn: a module-level function (it travels to the workers by name) returning a dict of numbers, lists or strings.
     draws: number of draws, 1..100000. seed: the first seed (>= 0).
+    seeds: the seeds themselves instead of ``draws`` and ``seed`` (distinct integers >= 0, at most 100000).
+    flat: each row flattened (lists and arrays as name_0, name_1, ...; default), or the draw's dict as it is
+        (nested values kept) with its ``seed``.
     workers: processes of the local Dask cluster (one thread each), 1..256 (default 2).
     scheduler: address of a running Dask scheduler instead of a local cluster.
     client: a ``distributed.Client`` to use as it is.
@@ -121,17 +132,30 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int, *, seed: int = 0, optio
     """
     if not callable(fn):
         raise InputError(f"fn: expected a function of the seed, got {type(fn).__name__}")
-    draws = _check_int(draws, "draws", 1, 100_000)
-    seed = _check_int(seed, "seed", 0, 2**63 - 1 - draws)
+    if seeds is not None:
+        if draws is not None or seed != 0:
+            raise InputError("seeds: give the seeds, or draws and seed, not both")
+        if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__") or not 1 <= len(seeds) <= 100_000:
+            raise InputError(f"seeds: expected 1 to 100000 integers, got {type(seeds).__name__}")
+        seeds = [_check_int(s_, "seeds", 0, 2**63 - 1) for s_ in seeds]
+        if len(set(seeds)) != len(seeds):
+            raise InputError("seeds: a seed is given twice (each draw is its seed's)")
+    else:
+        if draws is None:
+            raise InputError("draws: expected the number of draws (or seeds=)")
+        draws = _check_int(draws, "draws", 1, 100_000)
+        seed = _check_int(seed, "seed", 0, 2**63 - 1 - draws)
+        seeds = list(range(seed, seed + draws))
+    if not isinstance(flat, (bool, np.bool_)):
+        raise InputError(f"flat: expected True or False, got {flat!r}")
     if options is not None and not (isinstance(options, dict) and all(isinstance(k, str) for k in options)):
         raise InputError(f"options: expected a dict of keyword arguments of fn, got {type(options).__name__}")
     options = dict(options or {})
     if "seed" in options:
         raise InputError("options: 'seed' is each draw's own (seed, seed + 1, ...); give it as sweep's seed")
-    seeds = list(range(seed, seed + draws))
     t0 = time.perf_counter()
     if serial:
-        rows = [_draw(fn, s, options) for s in seeds]
+        rows = [_draw(fn, s, options, bool(flat)) for s in seeds]
         return SweepResult(rows, time.perf_counter() - t0, "serial", 1)
     if scheduler is not None and not (isinstance(scheduler, str) and "://" in scheduler):
         raise InputError(f"scheduler: expected an address such as tcp://host:8786, got {scheduler!r}")
@@ -155,7 +179,8 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int, *, seed: int = 0, optio
             client = Client(cluster)
     try:
         n_workers = len(client.scheduler_info().get("workers", {}))
-        futures = [client.submit(_draw, fn, s, options, pure=False, key=f"draw-{s}") for s in seeds]
+        run = uuid.uuid4().hex[:8]  # a sweep's own keys: two sweeps of the same seeds on one client stay apart
+        futures = [client.submit(_draw, fn, s, options, bool(flat), pure=False, key=f"draw-{s}-{run}") for s in seeds]
         rows = client.gather(futures)
     finally:
         if own:
