@@ -1,28 +1,33 @@
 """Checks and solvers of :class:`~alpes_dyn.Model` (:mod:`alpes_dyn.model.robot`): the URDF parsed by Pinocchio
 (what it refuses, in one line), the mass matrix's definiteness at a generic configuration, Newton's method of the
-static equilibrium, the arguments of ``random_state``."""
+static equilibrium, the arguments of ``random_state``, the tip frames of a URDF."""
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError, ModelError
 from ..fileio import native_stderr_to
+from .mimic import MimicCoupling, urdf_mimics
 from .urdf_checks import check_urdf_structure
 
 __all__ = ["newton_equilibrium"]
 
 
-def _build_pinocchio(urdf: str) -> pin.Model:
+def _build_pinocchio(urdf: str) -> tuple[pin.Model, MimicCoupling | None]:
+    """The URDF's Pinocchio model, and with ``<mimic>`` joints their :class:`MimicCoupling` (Pinocchio's mimic
+    model, whose coordinates are the independent joints', and the whole tree's model beside it)."""
     check_urdf_structure(urdf)
+    mimics = urdf_mimics(urdf)
     printed: list[str] = []  # urdfdom prints its parse errors on the process's stderr: into the message
     try:
         with native_stderr_to(printed):
-            model = pin.buildModelFromXML(urdf)
+            model = pin.buildModelFromXML(urdf, mimic=True) if mimics else pin.buildModelFromXML(urdf)
+            full = pin.buildModelFromXML(urdf) if mimics else None
     except Exception as exc:  # pinocchio raises ValueError/RuntimeError with multi-line text
         errors = [line.removeprefix("Error:").strip() for line in printed if line.startswith("Error:")]
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
@@ -34,7 +39,20 @@ def _build_pinocchio(urdf: str) -> pin.Model:
             f"URDF has joints with nq != nv (nq={model.nq}, nv={model.nv}); only fixed-base trees of "
             "revolute/prismatic joints are supported"
         )
-    return model
+    if full is None:
+        return model, None
+    names = [model.names[i] for i in range(1, model.njoints) if model.joints[i].nv > 0]
+    return model, MimicCoupling(mimics, names, list(full.names[1:]), full)
+
+
+def _tips(pm: pin.Model, spec: Any, layout: Any) -> tuple[str, ...]:
+    """The tip frames: the spec's, else the layout's, else the URDF's leaf frames (Pinocchio's frame order)."""
+    if spec is not None and spec.tips is not None:
+        return spec.tips
+    if layout is not None:
+        return layout.tips
+    parents = {pm.frames[i].parentFrame for i in range(len(pm.frames))}
+    return tuple(f.name for i, f in enumerate(pm.frames) if i not in parents and f.type == pin.FrameType.BODY)
 
 
 def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:
