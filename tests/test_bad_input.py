@@ -1285,10 +1285,22 @@ API: list[Api] = [
       "stops: nothing pushes model 'alpes_finger3' into its joint stops (no gravity torque, no spring resting beyond a "
       "limit) to size them by; pass stiffness= (N m/rad) and damping= (N m s/rad)"),
     A("JointStops", lambda c: _stops(c.m, stiffness=-1.0), InputError,
-      "stiffness: expected a positive number of N m/rad (or None: sized to the robot), got -1.0"),
+      "stiffness: expected a positive number of N m/rad or 3 of them (one per joint) (or None: sized to the robot), "
+      "got -1.0"),
     A("JointStops", lambda c: _stops(c.m, damping=float("nan")), InputError,
       "damping: expected a number >= 0 of N m s/rad"),
     A("JointStops", lambda c: _stops(c.m, stiffness="2"), InputError, "stiffness: expected a positive number"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=[1.0, 2.0]), InputError,
+      "stiffness: expected a positive number of N m/rad or 3 of them (one per joint), got shape (2,)"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=[1.0, 0.0, 2.0]), InputError,
+      "stiffness: expected a positive number of N m/rad or 3 of them (one per joint) (or None: sized to the robot), "
+      "got [1.0, 0.0, 2.0]"),
+    A("JointStops", lambda c: _stops(c.m, damping=np.array([1e-3, np.nan, 1e-3])), InputError,
+      "damping: expected a number >= 0 of N m s/rad or 3 of them"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=["a", 1, 2]), InputError, "stiffness: expected a positive number"),
+    A("JointStops", lambda c: _stops(c.m, per_joint="yes"), InputError, "per_joint: expected True or False, got 'yes'"),
+    A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0]), per_joint=True), InputError,
+      "stops: nothing pushes model 'alpes_finger3' into its joint stops"),
     A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0]), damping=1.0), InputError,
       "stops: nothing pushes model 'alpes_finger3'"),  # d given, k still to size
     A("TransmissionSpec", lambda c: TransmissionSpec(identified={"record": 3}), ModelError,
