@@ -1127,6 +1127,10 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model(URDFS["mimic_urdf"].replace('<mimic joint="j1"/>',
                                                               '<mimic joint="j1" offset="1e999"/>')),
       ModelError, "joint 'j2': <mimic offset='1e999'> is not a finite number"),
+    A("Model", lambda c: ad.Model(FINGER3.replace('<joint name="j1" type="revolute">',
+                                                  '<joint name="j1" type="revolute"><mimic joint="j2"/>', 1)),
+      ModelError, "URDF could not be parsed by Pinocchio: The parent joint of the mimic joint is not in the kinematic "
+      "tree ('j1' follows 'j2'; Pinocchio needs the joint followed before its mimic"),
     A("Model", lambda c: ad.Model(URDFS["mimic_urdf"], TransmissionSpec.from_toml('[stiffness]\nj2 = 0.1\n')),
       ModelError, "stiffness.j2: joint 'j2' is a mimic joint"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<connect body1="a" body2="world" anchor="0 0 0"/>')),

@@ -116,9 +116,7 @@ class Model:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
         self._given_extras = extras
         self.urdf: str = urdf
-        self.pin_model: pin.Model
-        self.mimic: MimicCoupling | None
-        """The URDF's ``<mimic>`` joints as constraints q_full = G q + o (:mod:`alpes_dyn.model.mimic`), else None."""
+        self.mimic: MimicCoupling | None  # the URDF's <mimic> joints, q_full = G q + o (model.mimic), else None
         self.pin_model, self.mimic = _build_pinocchio(urdf)
         check_inertials(urdf, check_inertia)
         self.check_inertia = check_inertia
@@ -456,9 +454,8 @@ class Model:
     def potential_energy(self, q: np.ndarray) -> float:
         """U = gravity + spring potential energy (J), zero at the base height and with every spring at its rest angle."""
         q = self.vector(q, "q")
-        u = self.mimic.potential_energy(q) if self.mimic else float(pin.computePotentialEnergy(self.pin_model,
-                                                                                              self.pin_data, q))
-        return u + float(self.extras.spring_energy(q))
+        u = self.mimic.potential_energy(q) if self.mimic else pin.computePotentialEnergy(self.pin_model, self.pin_data, q)
+        return float(u) + float(self.extras.spring_energy(q))
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, F: object = None,
                          tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
