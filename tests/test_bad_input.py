@@ -66,7 +66,11 @@ URDFS = {
     "nanaxis_urdf": re.sub(r'(<joint name="j2".*?<axis xyz=")[^"]*"', r'\g<1>0 nan 1"', FINGER3, count=1, flags=re.S),
     "inverted_limit_urdf": FINGER3.replace('lower="0.0" upper="1.5707963267948966"', 'lower="1.6" upper="0.0"', 1),
     "mimic_urdf": FINGER3.replace('<joint name="j2" type="revolute">', '<joint name="j2" type="revolute"><mimic joint="j1"/>',
-                                  1),
+                                  1),  # well formed: j2 follows j1 (a spec naming j2 is refused)
+    "mimicself_urdf": FINGER3.replace('<joint name="j2" type="revolute">',
+                                      '<joint name="j2" type="revolute"><mimic joint="j2"/>', 1),
+    "mimicnan_urdf": FINGER3.replace('<joint name="j2" type="revolute">',
+                                     '<joint name="j2" type="revolute"><mimic joint="j1" multiplier="nan"/>', 1),
     "many_links_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(1001)) + "</robot>",
     "star_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(202))
                  + "".join(f"<joint name='j{i}' type='revolute'><parent link='l0'/><child link='l{i + 1}'/>"
@@ -79,6 +83,10 @@ URDFS = {
                            "<limit lower='-1' upper='1' effort='1' velocity='1'/></joint>" for i in range(101))
                  + "</robot>",
 }
+_MJCF_EQ = ('<mujoco><worldbody><body name="a"><joint name="j" range="-1 1"/><inertial pos="0 0 0" mass="1" '
+            'diaginertia="1 1 1"/><body name="b"><joint name="k" range="-1 1"/><inertial pos="0 0 0" mass="1" '
+            'diaginertia="1 1 1"/></body></body></worldbody><equality>{}</equality></mujoco>')
+"""A two-hinge MJCF with the equality given (``.format``): the import reads joint couplings only."""
 RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
 ROBOT_URDF = FINGER3.replace('name="alpes_finger3"', 'name="tendon_robot"', 1)
 """A URDF robot for the rows of the commands on any robot: finger3's URDF with a spec of its own (ROBOT_SPEC)."""
@@ -589,7 +597,10 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{truncated_urdf}", needle="URDF could not be parsed"),
         C("dynamics", "--model", "{fifo}", needle="URDF file '{fifo}': is a FIFO (named pipe)"),
         C("dynamics", "--model", "{big_urdf}", needle="16777217 bytes, over the limit of 16777216 bytes"),
-        C("dynamics", "--model", "{mimic_urdf}", needle="joint 'j2': <mimic joint='j1'> is not modelled"),
+        C("dynamics", "--model", "{mimicself_urdf}", needle="joint 'j2': <mimic joint='j2'> names the joint itself"),
+        C("dynamics", "--model", "{mimicnan_urdf}", needle="joint 'j2': <mimic multiplier='nan'> is not a finite number"),
+        C("dynamics", "--model", "{mimic_urdf}", "--spec", "{robot_toml}", needle="motor 'flexor'.joints: joint 'j2' "
+          "is a mimic joint (URDF <mimic>: q_j2 = 1 q_j1 + 0) with no coordinate of its own; name 'j1'"),
         C("dynamics", "--model", "{many_links_urdf}", needle="URDF: 1001 links, over the limit of 1000"),
         C("dynamics", "--model", "{deep_urdf}", needle="joints deep, over the limit of 100"),
         C("dynamics", "--model", "{inverted_limit_urdf}", needle="joint 'j1': limit lower 1.6 is above upper 0"),
@@ -1114,7 +1125,28 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["big_urdf"]), ModelError, "over the limit of 16777216 bytes"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["fifo"]), ModelError, "is a FIFO"),
     A("Model", lambda c: ad.Model.from_mjcf(c.f["big_urdf"]), ModelError, "mjcf '{big_urdf}': 16777217 bytes, over the"),
-    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"]), ModelError, "<mimic joint='j1'> is not modelled"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"].replace('<mimic joint="j1"/>', '<mimic joint="j9"/>')),
+      ModelError, "joint 'j2': <mimic joint='j9'> names no joint of the URDF"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"].replace('<joint name="j3" type="revolute">',
+                                                              '<joint name="j3" type="revolute"><mimic joint="j2"/>')),
+      ModelError, "joint 'j3': <mimic joint='j2'> follows a joint that is itself a mimic"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"].replace('<mimic joint="j1"/>', '<mimic/>')), ModelError,
+      "joint 'j2': <mimic> has no joint= attribute"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"].replace('<mimic joint="j1"/>',
+                                                              '<mimic joint="j1" offset="1e999"/>')),
+      ModelError, "joint 'j2': <mimic offset='1e999'> is not a finite number"),
+    A("Model", lambda c: ad.Model(FINGER3.replace('<joint name="j1" type="revolute">',
+                                                  '<joint name="j1" type="revolute"><mimic joint="j2"/>', 1)),
+      ModelError, "URDF could not be parsed by Pinocchio: The parent joint of the mimic joint is not in the kinematic "
+      "tree ('j1' follows 'j2'; Pinocchio needs the joint followed before its mimic"),
+    A("Model", lambda c: ad.Model(URDFS["mimic_urdf"], TransmissionSpec.from_toml('[stiffness]\nj2 = 0.1\n')),
+      ModelError, "stiffness.j2: joint 'j2' is a mimic joint"),
+    A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<connect body1="a" body2="world" anchor="0 0 0"/>')),
+      ModelError, "mjcf: equality 'equality0' is not a joint equality"),
+    A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint name="e" joint1="k" joint2="j" polycoef="0 1 2 0 0"/>')),
+      ModelError, "mjcf: equality 'e' on joint 'k' is not a linear coupling of two joints"),
+    A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint joint1="k"/>')),
+      ModelError, "mjcf: equality 'equality0' on joint 'k' is not a linear coupling of two joints"),
     A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
     A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
     A("simulate", lambda c: _sim(c, method="cvodes", rtol="x"), InputError, "rtol: expected a positive number, got 'x'"),
@@ -1265,10 +1297,22 @@ API: list[Api] = [
       "stops: nothing pushes model 'alpes_finger3' into its joint stops (no gravity torque, no spring resting beyond a "
       "limit) to size them by; pass stiffness= (N m/rad) and damping= (N m s/rad)"),
     A("JointStops", lambda c: _stops(c.m, stiffness=-1.0), InputError,
-      "stiffness: expected a positive number of N m/rad (or None: sized to the robot), got -1.0"),
+      "stiffness: expected a positive number of N m/rad or 3 of them (one per joint) (or None: sized to the robot), "
+      "got -1.0"),
     A("JointStops", lambda c: _stops(c.m, damping=float("nan")), InputError,
       "damping: expected a number >= 0 of N m s/rad"),
     A("JointStops", lambda c: _stops(c.m, stiffness="2"), InputError, "stiffness: expected a positive number"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=[1.0, 2.0]), InputError,
+      "stiffness: expected a positive number of N m/rad or 3 of them (one per joint), got shape (2,)"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=[1.0, 0.0, 2.0]), InputError,
+      "stiffness: expected a positive number of N m/rad or 3 of them (one per joint) (or None: sized to the robot), "
+      "got [1.0, 0.0, 2.0]"),
+    A("JointStops", lambda c: _stops(c.m, damping=np.array([1e-3, np.nan, 1e-3])), InputError,
+      "damping: expected a number >= 0 of N m s/rad or 3 of them"),
+    A("JointStops", lambda c: _stops(c.m, stiffness=["a", 1, 2]), InputError, "stiffness: expected a positive number"),
+    A("JointStops", lambda c: _stops(c.m, per_joint="yes"), InputError, "per_joint: expected True or False, got 'yes'"),
+    A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0]), per_joint=True), InputError,
+      "stops: nothing pushes model 'alpes_finger3' into its joint stops"),
     A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0]), damping=1.0), InputError,
       "stops: nothing pushes model 'alpes_finger3'"),  # d given, k still to size
     A("TransmissionSpec", lambda c: TransmissionSpec(identified={"record": 3}), ModelError,

@@ -83,7 +83,7 @@ def test_several_contacts_in_both_backends(rng):
         F = rng.normal(size=9)
         J1 = pin.computeFrameJacobian(pm, pd, q, pm.getFrameId("link_3.0_tip"), pin.LOCAL_WORLD_ALIGNED)[:3]
         J2 = pin.computeFrameJacobian(pm, pd, q, pm.getFrameId("link_15.0_tip"), pin.LOCAL)
-        tau = m.transmission.S.T @ tau_m + J1.T @ F[:3] + J2.T @ F[3:] - m.extras.stiffness * q \
+        tau = m.transmission.S.T @ tau_m + J1.T @ F[:3] + J2.T @ F[3:] - m.extras.stiffness * (q - m.extras.rest) \
             - m.extras.viscous * v
         qdd = pin.aba(pm, pd, q, v, tau)
         x = np.concatenate([q, v])

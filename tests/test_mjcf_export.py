@@ -101,7 +101,7 @@ def test_mujoco_dynamics_on_the_export(name):
     np.testing.assert_array_equal(mj.opt.gravity, m.gravity)
     perm = joint_permutation(mj, m.joint_names)
     np.testing.assert_array_equal(perm, np.arange(m.n))  # MuJoCo's qpos order is the library's joint order
-    S, k = m.transmission.S, m.extras.stiffness
+    S, k, rest = m.transmission.S, m.extras.stiffness, m.extras.rest
     rng = np.random.default_rng(11)
     for _ in range(5):
         q, v = m.random_state(rng)  # inside the ranges: no limit force
@@ -111,8 +111,8 @@ def test_mujoco_dynamics_on_the_export(name):
         M = np.zeros((m.n, m.n))
         mujoco.mj_fullM(mj, M, d.qM) if hasattr(d, "qM") else mujoco.mj_fullM(mj, d, M)
         assert _max(M, m.inertia_matrix(q)) <= 1e-12  # A + armature + S^T diag(J_m) S
-        assert _max(d.qfrc_bias, m.coriolis_matrix(q, v) @ v + m.gravity_torque(q) - k * q) <= 1e-12
-        assert _max(d.qfrc_passive, -k * q - m.extras.viscous * v) <= 1e-12
+        assert _max(d.qfrc_bias, m.coriolis_matrix(q, v) @ v + m.gravity_torque(q) - k * (q - rest)) <= 1e-12
+        assert _max(d.qfrc_passive, -k * (q - rest) - m.extras.viscous * v) <= 1e-12
         assert _max(d.qfrc_actuator, S.T @ tau_m) <= 1e-12
         for i, motor in enumerate(m.motor_names):
             assert abs(d.sensor(f"encoder_{motor}").data[0] - S[i] @ q) <= 1e-12

@@ -201,14 +201,46 @@ def test_rest_angle_round_trips_the_spec_and_pickle():
     assert m.extras.rest.tolist() == [-0.25]
 
 
+SHIPPED_SPEC_URDFS = {"allegro_hand_spec.toml": ("allegro_hand", "allegro_right_hand"),
+                      "finger_edu_spec.toml": ("finger_edu", "finger_edu")}
+"""Each shipped transmission spec (``alpes_dyn/data/*_spec.toml``) and its example-robot-data URDF."""
+
+
+def test_every_shipped_spec_rests_inside_its_joint_ranges():
+    """With the motors off (zero motor torque) and the spec's gravity, every shipped spec's static equilibrium
+    G(q) = 0 is inside every joint's range: no spring holds a joint on its stop for ever."""
+    from pathlib import Path
+
+    from alpes_dyn.model.spec import load_spec
+
+    data = Path(ad.__file__).parent / "data"
+    assert {p.name for p in data.glob("*_spec.toml")} == set(SHIPPED_SPEC_URDFS)  # a new spec needs its URDF here
+    for name, (robot, urdf) in SHIPPED_SPEC_URDFS.items():
+        m = ad.Model.from_urdf_file(ad.example_robot_urdf(robot, urdf), load_spec(data / name))
+        q = m.static_equilibrium(np.zeros(m.n))
+        np.testing.assert_allclose(m.gravity_torque(q), 0.0, atol=1e-12)  # the balance itself, zero motor torque
+        outside = [(j, float(x)) for j, x, lo, hi in zip(m.joint_names, q, m.lower, m.upper) if not lo <= x <= hi]
+        assert not outside, (name, outside)
+    # the Allegro spec's two rest angles: the rule of its header, q_rest = q* + g(q*) / k with q* 5 % inside the range
+    m = ad.Model.from_urdf_file(ad.example_robot_urdf("allegro_hand", "allegro_right_hand"),
+                                load_spec(data / "allegro_hand_spec.toml"))
+    q = m.static_equilibrium(np.zeros(m.n))
+    for j in ("joint_12.0", "joint_14.0"):
+        i = m.joint_index(j)
+        assert m.lower[i] + 0.04 * (m.upper[i] - m.lower[i]) <= q[i] <= m.lower[i] + 0.06 * (m.upper[i] - m.lower[i])
+
+
 def test_range_warning_names_the_rest_angle_field():
-    """The Allegro spec's joint_12.0 spring rests at 0, below its range [0.263, 1.396]: simulate's range warning
-    says so and names [rest_angle]."""
+    """The Allegro spec with joint_12.0's spring resting at 0 (as shipped before its [rest_angle] table), below its
+    range [0.263, 1.396]: simulate's range warning says so and names [rest_angle]."""
     from alpes_dyn.model.spec import example_spec_path
     from alpes_dyn.model.stops import JointRangeWarning
     from alpes_dyn.simulation import simulate
 
-    m = ad.Model.from_urdf_file(ad.example_robot_urdf("allegro_hand", "allegro_right_hand"), example_spec_path())
+    text = example_spec_path().read_text(encoding="utf-8")
+    assert '"joint_12.0" = 0.33\n' in text
+    spec = TransmissionSpec.from_toml(text.replace('"joint_12.0" = 0.33\n', ""), "allegro, joint_12.0 resting at 0")
+    m = ad.Model(ad.example_robot_urdf("allegro_hand", "allegro_right_hand").read_text(), spec)
     x0 = np.concatenate([m.static_equilibrium(np.zeros(m.n)), np.zeros(m.n)])
     with pytest.warns(JointRangeWarning, match=r"the spring of 'joint_12.0' rests at 0 rad, outside \[0.263, 1.396\]: "
                                                r"set its rest angle inside the range in the spec's \[rest_angle\]"):
@@ -302,3 +334,64 @@ def test_stops_refused_where_nothing_sizes_them():
     beyond = ad.Model(PENDULUM_URDF, TransmissionSpec(gravity=(0.0, 0.0, 0.0), stiffness={"hinge": 0.2},
                                                       rest_angle={"hinge": 2.0}))
     assert JointStops.of(beyond).stiffness == pytest.approx(0.2 * 0.5 / STOP_PENETRATION, rel=1e-12)
+
+
+def test_per_joint_stops_hold_each_joint_at_the_documented_depth():
+    """Per joint, k_i = tau*_i / 1.4 deg: the finger flat on its lower stops (its springs resting there, at 0) settles
+    where the hand-written balance says, 9.81 [m1 c1 cos q1 + m2 (l1 cos q1 + c2 cos(q1 + q2))] = (k_1 + ks_1) p_1 and
+    9.81 m2 c2 cos(q1 + q2) = (k_2 + ks_2) p_2 (q = -p): each joint gives p* k_i / (k_i + ks_i) to within the cosines,
+    the light distal joint as much as the heavy proximal one; with one k for the robot (the proximal joint's) the
+    distal joint gives 6.6 times less."""
+    from alpes_dyn.simulation import simulate
+
+    scale = 50.0
+    m = two_joint_finger(scale, rest=None, viscous=0.02)
+    m1, m2, c1, c2, l1, ks = 0.028 * scale, 0.018 * scale, 0.022, 0.014, 0.045, np.array([0.045, 0.035])
+    tau = G0 * np.array([m1 * c1 + m2 * (l1 + c2), m2 * c2])  # the weights on mcp and pip, the finger flat
+    st = JointStops.of(m, per_joint=True)
+    np.testing.assert_allclose(st.stiffness, tau / STOP_PENETRATION, rtol=1e-9)
+    Ainv = np.linalg.inv(m.inertia_matrix(np.full(2, 0.75)))
+    np.testing.assert_allclose(st.damping, 2.0 * np.sqrt(st.stiffness / np.diag(Ainv)), rtol=1e-12)
+
+    def balance(p: np.ndarray) -> np.ndarray:
+        q1, q2 = -p
+        g = G0 * np.array([m1 * c1 * math.cos(q1) + m2 * (l1 * math.cos(q1) + c2 * math.cos(q1 + q2)),
+                           m2 * c2 * math.cos(q1 + q2)])
+        return g - (st.stiffness + ks) * p
+
+    p = tau / (st.stiffness + ks)
+    for _ in range(50):  # fixed point: the cosines change p by parts in 1e4
+        p = p + balance(p) / (st.stiffness + ks)
+    assert np.max(np.abs(balance(p))) < 1e-14
+    np.testing.assert_allclose(p, STOP_PENETRATION * st.stiffness / (st.stiffness + ks), rtol=2e-3)  # cos(p1 + p2)
+    x0 = np.array([0.3, 0.3, 0.0, 0.0])
+    settled = simulate(m, x0, 0.0, duration=1.0, dt=5e-4, input="motor", stops=st).q[-1]
+    np.testing.assert_allclose(-settled, p, rtol=1e-4)
+    np.testing.assert_allclose(m.gravity_torque(settled), st.torque(settled, np.zeros(2)), rtol=1e-6)
+    scalar = JointStops.of(m)
+    assert scalar.stiffness == pytest.approx(st.stiffness[0], rel=1e-12)
+    p_scalar = -simulate(m, x0, 0.0, duration=1.0, dt=5e-4, input="motor", stops=scalar).q[-1]
+    assert p_scalar[0] == pytest.approx(p[0], rel=1e-3)
+    assert p_scalar[1] == pytest.approx(tau[1] / (scalar.stiffness + ks[1]), rel=2e-3)  # 0.21 deg, not 1.4
+    assert p_scalar[1] < p[1] / 6
+
+
+def test_per_joint_stops_given_and_sized():
+    """Given k per joint, d is sized per joint from it; the Alpes models keep their stop unless per_joint; the
+    Allegro hand, whose springs now hold every joint off its stops, is sized by its weight on them."""
+    from alpes_dyn.model.spec import example_spec_path
+
+    m = two_joint_finger(1.0, rest=None)
+    st = JointStops.of(m, stiffness=[3.0, 1.0])
+    Ainv = np.linalg.inv(m.inertia_matrix(np.full(2, 0.75)))
+    np.testing.assert_allclose(st.damping, 2.0 * np.sqrt(np.array([3.0, 1.0]) / np.diag(Ainv)), rtol=1e-12)
+    assert not st.stiffness.flags.writeable
+    st = JointStops.of(m, stiffness=[3.0, 1.0], damping=0.01)
+    assert st.damping == 0.01 and st.torque(np.array([-0.1, -0.2]), np.zeros(2)).tolist() == pytest.approx([0.3, 0.2])
+    f3 = ad.Model.alpes("finger3")
+    assert (JointStops.of(f3).stiffness, JointStops.of(f3).damping) == ALPES_STOP
+    k = JointStops.of(f3, per_joint=True).stiffness
+    assert k[0] == pytest.approx(sized_stops(f3)[0], rel=1e-12) and k[0] > k[1] > k[2]
+    hand = ad.Model.from_urdf_file(ad.example_robot_urdf("allegro_hand", "allegro_right_hand"), example_spec_path())
+    k, d = sized_stops(hand)
+    assert k == pytest.approx(1.913, rel=1e-3) and d == pytest.approx(8.94e-3, rel=1e-2)

@@ -34,13 +34,13 @@ def raw_pinocchio():
         for j, r in m["joints"].items():
             S[k, col(j)] = r
     per = {}
-    for t in ("stiffness", "viscous", "armature"):
+    for t in ("stiffness", "viscous", "armature", "rest_angle"):
         a = np.zeros(n)
-        for j, x in RAW[t].items():
+        for j, x in RAW.get(t, {}).items():
             a[col(j)] = x
         per[t] = a
     pm.armature = per["armature"]
-    return pm, pm.createData(), S, per["stiffness"], per["viscous"]
+    return pm, pm.createData(), S, per["stiffness"], per["viscous"], per["rest_angle"]
 
 
 @pytest.fixture(scope="module")
@@ -49,7 +49,7 @@ def allegro():
 
 
 def test_allegro_every_quantity_equals_raw_pinocchio(allegro, rng):
-    pm, pd, S, k, fv = raw_pinocchio()
+    pm, pd, S, k, fv, rest = raw_pinocchio()
     m = allegro
     assert m.n == 16 and m.joint_names == tuple(pm.names[1:])
     assert m.motor_names == tuple(mm["name"] for mm in RAW["motor"])
@@ -66,36 +66,36 @@ def test_allegro_every_quantity_equals_raw_pinocchio(allegro, rng):
         M = np.triu(M) + np.triu(M, 1).T
         assert np.max(np.abs(m.inertia_matrix(q) - M)) <= tol
         assert np.max(np.abs(m.coriolis_matrix(q, v) - pin.computeCoriolisMatrix(pm, pd, q, v))) <= tol
-        G = pin.computeGeneralizedGravity(pm, pd, q) + k * q
+        G = pin.computeGeneralizedGravity(pm, pd, q) + k * (q - rest)
         assert np.max(np.abs(m.gravity_torque(q) - G)) <= tol
         dG = pin.computeGeneralizedGravityDerivatives(pm, pd, q) + np.diag(k)
         assert np.max(np.abs(m.gravity_jacobian(q) - dG)) <= tol
-        qdd = pin.aba(pm, pd, q, v, tau - k * q - fv * v)
+        qdd = pin.aba(pm, pd, q, v, tau - k * (q - rest) - fv * v)
         assert np.max(np.abs(m.forward_dynamics(q, v, m.transmission.joint_torque(tau_m)) - qdd)) <= tol * max(
             1.0, np.abs(qdd).max())
         xdot = ss.f(np.concatenate([q, v]), tau_m)
         assert np.array_equal(xdot[:16], v) and np.max(np.abs(xdot[16:] - qdd)) <= tol * max(1.0, np.abs(qdd).max())
         assert np.max(np.abs(ss.h(np.concatenate([q, v])) - S @ q)) <= tol
-        tau_id = pin.rnea(pm, pd, q, v, a) + k * q + fv * v
+        tau_id = pin.rnea(pm, pd, q, v, a) + k * (q - rest) + fv * v
         assert np.max(np.abs(m.inverse_dynamics(q, v, a) - tau_id)) <= tol
         for tip in m.tip_names:
             J = pin.computeFrameJacobian(pm, pd, q, pm.getFrameId(tip), pin.LOCAL_WORLD_ALIGNED)[:3]
             assert np.max(np.abs(m.fingertip_jacobian(q, tip) - J)) <= tol
             pin.framesForwardKinematics(pm, pd, q)
             assert np.max(np.abs(m.fingertip_position(q, tip) - pd.oMf[pm.getFrameId(tip)].translation)) <= tol
-        U = pin.computePotentialEnergy(pm, pd, q) + 0.5 * k @ (q * q)
+        U = pin.computePotentialEnergy(pm, pd, q) + 0.5 * k @ ((q - rest) * (q - rest))
         assert abs(m.potential_energy(q) - U) <= tol
         assert abs(m.kinetic_energy(q, v) - 0.5 * v @ M @ v) <= tol
 
 
 def test_allegro_symbolic_f_matches_pinocchio(allegro, rng):
     """The CasADi f (ADAM, an independent rigid-body code) with motor input agrees with raw Pinocchio."""
-    pm, pd, S, k, fv = raw_pinocchio()
+    pm, pd, S, k, fv, rest = raw_pinocchio()
     ss = StateSpace(allegro, input="motor", output="encoder", smooth=False)
     for _ in range(5):
         q, v = allegro.random_state(rng)
         tau_m = rng.normal(scale=0.05, size=8)
-        qdd = pin.aba(pm, pd, q, v, S.T @ tau_m - k * q - fv * v)
+        qdd = pin.aba(pm, pd, q, v, S.T @ tau_m - k * (q - rest) - fv * v)
         f = np.asarray(ss.f_function(np.concatenate([q, v]), tau_m)).ravel()
         assert np.max(np.abs(f[16:] - qdd)) <= 1e-9 * max(1.0, np.abs(qdd).max())
 
@@ -103,7 +103,7 @@ def test_allegro_symbolic_f_matches_pinocchio(allegro, rng):
 def test_python_object_equals_file_and_round_trips():
     py = TransmissionSpec(
         motors=tuple(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0)) for m in RAW["motor"]),
-        stiffness=RAW["stiffness"], viscous=RAW["viscous"], armature=RAW["armature"],
+        stiffness=RAW["stiffness"], viscous=RAW["viscous"], armature=RAW["armature"], rest_angle=RAW["rest_angle"],
         encoder_counts=4096, smooth_velocity=0.01, gravity=(0.0, 0.0, -9.81), tips=tuple(RAW["tips"]),
         name="allegro_tendon")
     assert load_spec(SPEC) == py

@@ -24,10 +24,9 @@ from alpes_dyn.model.spec import TransmissionSpec, example_spec_path
 from alpes_dyn.symbolic.statespace import StateSpace
 
 urdf = ad.example_robot_urdf("allegro_hand", "allegro_right_hand")
-# The shipped spec leaves every spring resting at 0 rad, below the range [15, 80] deg of the thumb's first
-# joint (nothing measured says where the real thumb's spring rests); here it rests inside, at 0.5 rad.
-spec = TransmissionSpec.from_toml(example_spec_path("allegro_hand").read_text(encoding="utf-8")
-                                  + '\n[rest_angle]\n"joint_12.0" = 0.5\n')
+# The shipped spec's springs rest at 0 rad but two: the thumb's first joint (range [15, 80] deg) and joint_14.0,
+# whose rest angles put the hand's rest with the motors off inside its ranges (the rule in the file's header).
+spec = TransmissionSpec.from_toml(example_spec_path("allegro_hand").read_text(encoding="utf-8"))
 hand = ad.Model.from_urdf_file(urdf, spec)
 print(hand)
 print("joints (Pinocchio's order):", ", ".join(hand.joint_names))

@@ -286,6 +286,8 @@ def tree_parts(model: Model) -> dict[str, tuple[str, ...]]:
     pm = model.pin_model
     root_of = {}
     for j in range(1, pm.njoints):
+        if pm.names[j] not in model.joint_names:
+            continue  # a mimic joint (model.mimic): no coordinate of its own
         k = j
         while pm.parents[k] != 0:
             k = pm.parents[k]

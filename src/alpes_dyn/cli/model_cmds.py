@@ -131,7 +131,9 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
                                                                      if tau_m is not None else "") + ":",
                        _fmt_table(vals, m.motor_names, cols)]
     text = "\n".join([
-        f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}",
+        f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}" + "".join(
+            f"; {mj.name} mimics {mj.primary} (q = {mj.multiplier:g} q_{mj.primary} + {mj.offset:g})"
+            for mj in (m.mimic.mimics if m.mimic is not None else ())),
         f"F [N] at {tip}: {'none' if F is None else np.array2string(F, precision=6)}",
         "per joint: q [rad], v [rad/s], tau [N m], G(q) = gravity + springs [N m], qdd [rad/s^2]:",
         _fmt_table(np.column_stack([q, v, tau, G, qdd]), joints, ("q", "v", "tau", "G", "qdd")),

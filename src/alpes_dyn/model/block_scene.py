@@ -71,7 +71,7 @@ def motor_tips(model: Any, motor: int) -> tuple[str, ...]:
     """The tips of ``model`` (:attr:`Model.tips <alpes_dyn.Model.tips>`) that motor ``motor`` (row of S) moves:
     a joint the motor drives is among the tip's supporting joints."""
     pm = model.pin_model
-    driven = {int(i) + 1 for i in np.flatnonzero(model.transmission.S[motor])}  # Pinocchio's joint ids
+    driven = {pm.getJointId(model.joint_names[i]) for i in np.flatnonzero(model.transmission.S[motor])}  # their ids
     return tuple(t for t in model.tips if driven & set(pm.supports[pm.frames[model.frame_id(t)].parentJoint]))
 
 
@@ -234,7 +234,7 @@ def place_block(model: Any, frame: str | None = None, motor: str | None = None,
 
         data = model.pin_model.createData()
         pin.forwardKinematics(model.pin_model, data, q_c)
-        half_width = max(_MIN_HALF_WIDTH, 0.5 * float(np.linalg.norm(p_c - data.oMi[jc + 1].translation)))
+        half_width = max(_MIN_HALF_WIDTH, 0.5 * float(np.linalg.norm(p_c - data.oMi[model.pin_model.getJointId(model.joint_names[jc])].translation)))
     lever = float(tr.S[k] @ (J.T @ n) / (tr.S[k] @ tr.S[k]))
     center = p_c + (float(tip_radius) + _THICKNESS) * n
     return BlockScene(frame=frame, motor=tr.motor_names[k], motor_index=k, contact_q=q_c, tip_position=p_c,

@@ -23,6 +23,10 @@ model's extras and transmission (the spec's, or the ``extras=`` given):
   system: tested equal in MuJoCo), the motor on the rotor's hinge, ``encoder_<motor>`` on the rotor;
 * a ``motor`` actuator on each tendon, gear 1: ctrl = tau_m gives the joints S^T tau_m (the spec holds no
   torque limit, so ``ctrlrange`` is unlimited: a pull-only cable needs ``ctrlrange="0 tau_max"`` by hand);
+* one joint **equality** per mimic joint (:attr:`Model.mimic <alpes_dyn.Model.mimic>`): the URDF's
+  q_k = a q_J + b as ``<joint joint1="k" joint2="J" polycoef="b a 0 0 0"/>``, as stiff as MuJoCo's soft
+  constraints go (``solimp`` 0.9999, ``solref`` two time steps); the mimic joint a hinge of its own, with its
+  URDF range and no spring, armature or friction (the spec names the joint it follows);
 * sensors: ``encoder_<motor>`` (``tendonpos`` = q_m, rad), ``torque_<motor>`` (``actuatorfrc`` = tau_m, N m),
   and at each tip frame (:attr:`Model.tips <alpes_dyn.Model.tips>`) a site named as the frame, a sphere geom of
   radius ``tip_radius`` (mass-less: ``inertiafromgeom="false"``) and a ``touch`` sensor ``touch_<tip>`` (N);
@@ -120,11 +124,18 @@ def _pose(M: Any) -> str:
     return out
 
 
+def _tree_model(model: Any) -> Any:
+    """The Pinocchio model of the whole tree: with mimic joints the one beside Pinocchio's mimic model (a mimic
+    joint is a body and a joint of the MJCF, coupled by an equality), else the model's own (the same joint ids)."""
+    mimic = getattr(model, "mimic", None)
+    return mimic.full_model if mimic is not None else model.pin_model
+
+
 def _body_names(model: Any) -> tuple[str, list[str]]:
     """(the root link's name, each joint's child link name) from Pinocchio's frames."""
     import pinocchio as pin
 
-    pm = model.pin_model
+    pm = _tree_model(model)
     frames = pm.frames
     root = next((f.name for f in frames if f.type == pin.FrameType.BODY and f.parentJoint == 0), "base")
     names = []
@@ -136,8 +147,9 @@ def _body_names(model: Any) -> tuple[str, list[str]]:
 
 
 def _joint_xml(model: Any, i: int, limits: bool) -> str:
-    """The ``<joint>`` of Pinocchio joint i (1-based): axis, range, spring, armature, friction."""
-    pm, ex = model.pin_model, model.extras
+    """The ``<joint>`` of Pinocchio joint i (1-based): axis, range, spring, armature, friction (a mimic joint has
+    none of the last four: the spec names the joint it follows)."""
+    pm = _tree_model(model)
     name = pm.names[i]
     kind, axis = _joint_kind(pm.joints[i], name)
     k = i - 1
@@ -147,16 +159,30 @@ def _joint_xml(model: Any, i: int, limits: bool) -> str:
         attrs += ['limited="true"', f'range="{_f(lo)} {_f(hi)}"']
     else:
         attrs.append('limited="false"')
-    attrs += [f'stiffness="{_f(ex.stiffness[k])}"', f'springref="{_f(ex.rest[k]) if ex.rest[k] != 0 else "0"}"']
+    if name not in model.joint_names:  # a mimic joint
+        return f"<joint {' '.join(attrs)}/>"
+    ex, e = model.extras, model.joint_names.index(name)
+    attrs += [f'stiffness="{_f(ex.stiffness[e])}"', f'springref="{_f(ex.rest[e]) if ex.rest[e] != 0 else "0"}"']
     for attr, values in (("armature", ex.armature), ("frictionloss", ex.coulomb), ("damping", ex.viscous)):
-        if values[k] != 0:
-            attrs.append(f'{attr}="{_f(values[k])}"')
+        if values[e] != 0:
+            attrs.append(f'{attr}="{_f(values[e])}"')
     return f"<joint {' '.join(attrs)}/>"
+
+
+def _equality(model: Any, timestep: float) -> list[str]:
+    """One joint equality per mimic joint, q_mimic = b + a q_primary (``polycoef="b a 0 0 0"``, about qpos0 = 0),
+    as stiff as MuJoCo's soft constraints go: impedance 0.9999 and the time constant 2 steps (MuJoCo's least)."""
+    mimic = getattr(model, "mimic", None)
+    if mimic is None:
+        return []
+    lines = [f'    <joint joint1={_q(m.name)} joint2={_q(m.primary)} polycoef="{_f(m.offset)} {_f(m.multiplier)} 0 0 0" '
+             f'solref="{_f(2 * timestep)} 1" solimp="0.9999 0.9999 0.001 0.5 2"/>' for m in mimic.mimics]
+    return ["  <equality>", *lines, "  </equality>"]
 
 
 def _tips(model: Any, bodies: set[str], tip_radius: float) -> dict[int, list[str]]:
     """Per Pinocchio joint (0: the world), the site, geom and sensor name lines of the tips it carries."""
-    pm = model.pin_model
+    pm = _tree_model(model)
     out: dict[int, list[str]] = {}
     for tip in model.tips:
         fr = pm.frames[model.frame_id(tip)]
@@ -172,7 +198,7 @@ def _tips(model: Any, bodies: set[str], tip_radius: float) -> dict[int, list[str
 
 def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[str, str]]:
     """The ``<worldbody>`` lines (depth first, Pinocchio's joint order) and the site name of each tip."""
-    pm = model.pin_model
+    pm = _tree_model(model)
     root, names = _body_names(model)
     children: dict[int, list[int]] = {}
     for i in range(1, pm.njoints):
@@ -335,4 +361,5 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
             "  <!-- Generated by alpes_dyn.model.mjcf_export from a URDF + spec model; do not edit. -->",
             '  <compiler angle="radian" autolimits="true" inertiafromgeom="false" balanceinertia="false"/>',
             f'  <option timestep="{_f(timestep)}" gravity="{_v(model.gravity)}" integrator="{integrator}"/>']
-    return "\n".join(head + tree + _transmission(model, sites, tendon) + ["</mujoco>"]) + "\n"
+    return "\n".join(head + tree + _equality(model, float(timestep)) + _transmission(model, sites, tendon)
+                     + ["</mujoco>"]) + "\n"

@@ -16,7 +16,9 @@ backends read:
 
 What the library does not model is refused with one line naming it, never dropped: free, ball and slide
 joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
-an armature on a tendon no actuator pulls, equality constraints. An MJCF file must be a regular file within
+an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
+(``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
+:mod:`alpes_dyn.model.mimic`). An MJCF file must be a regular file within
 :data:`alpes_dyn.limits.MAX_TEXT_BYTES` (checked before MuJoCo's parser reads it). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
 and forward dynamics as the model exported, to 1e-12.
 """
@@ -111,8 +113,7 @@ def _check_supported(mujoco, m) -> None:
         if counts[b] > 1:
             raise ModelError(f"mjcf: body {_name(mujoco, m, mujoco.mjtObj.mjOBJ_BODY, b, 'body')!r} has "
                              f"{counts[b]} joints; one hinge per body is supported")
-    if m.neq:
-        raise ModelError("mjcf: equality constraints are not modelled (a coupled joint: give it as a tendon ratio)")
+    _mimics(mujoco, m)
     for t in range(m.ntendon):
         tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
         if np.any(m.tendon_stiffness[t] != 0):
@@ -123,6 +124,30 @@ def _check_supported(mujoco, m) -> None:
             raise ModelError(f"mjcf: tendon {tname!r} has an armature but no actuator; a rotor belongs to a motor")
         if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
+
+
+def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
+    """{joint1: (joint2, a, b)} of the MJCF's joint equalities, joint1 = b + a joint2 (the URDF's ``<mimic>``):
+    ``polycoef="b' a 0 0 0"`` about the joints' reference positions (qpos0), composed into b. Any other equality
+    (connect, weld, tendon, a joint held alone, a polynomial of degree > 1, one inactive at start) is refused."""
+    out: dict[int, tuple[int, float, float]] = {}
+    O = mujoco.mjtObj
+    for e in range(m.neq):
+        ename = _name(mujoco, m, O.mjOBJ_EQUALITY, e, "equality")
+        if m.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT:
+            raise ModelError(f"mjcf: equality {ename!r} is not a joint equality; only joint equalities (a URDF "
+                             "<mimic>, joint1 = b + a joint2) are modelled")
+        j1, j2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
+        c = np.asarray(m.eq_data[e, :5], dtype=float)
+        j1name = _name(mujoco, m, O.mjOBJ_JOINT, j1, "joint")
+        if j2 < 0 or np.any(c[2:] != 0) or not bool(m.eq_active0[e]):
+            raise ModelError(f"mjcf: equality {ename!r} on joint {j1name!r} is not a linear coupling of two joints "
+                             "active from the start (joint1 = b + a joint2: give joint2 and polycoef=\"b a 0 0 0\")")
+        y0, x0 = float(m.qpos0[m.jnt_qposadr[j1]]), float(m.qpos0[m.jnt_qposadr[j2]])
+        if j1 in out:
+            raise ModelError(f"mjcf: joint {j1name!r} is coupled by two joint equalities; one is modelled")
+        out[j1] = (j2, float(c[1]), float(c[0] + y0 - c[1] * x0))
+    return out
 
 
 def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
@@ -138,6 +163,7 @@ def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
     shift = np.zeros((m.nbody, 3))
     for b, j in jnt_of.items():
         shift[b] = m.jnt_pos[j]
+    mimics = _mimics(mujoco, m)
     links, joints = ['<link name="world"/>'], []
     for b in range(1, m.nbody):
         R_i = _quat_mat(m.body_iquat[b])
@@ -165,6 +191,10 @@ def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
             lo, hi = m.jnt_range[j]
             lim = f'<limit lower="{_f(lo)}" upper="{_f(hi)}" effort="1000" velocity="1000"/>'
             kind = "revolute"
+            if j in mimics:
+                j2, a, off = mimics[j]
+                lim += (f'<mimic joint="{su.escape(_name(mujoco, m, O.mjOBJ_JOINT, j2, "joint"))}" '
+                        f'multiplier="{_f(a)}" offset="{_f(off)}"/>')
             joints.append(f'<joint name="{su.escape(jname)}" type="{kind}"><parent link="{su.escape(body[parent])}"/>'
                           f'<child link="{su.escape(body[b])}"/>{org}<axis xyz="{_f(ax[0])} {_f(ax[1])} {_f(ax[2])}"/>'
                           f'{lim}</joint>')

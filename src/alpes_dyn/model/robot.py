@@ -32,7 +32,8 @@ from ..errors import InputError, ModelError
 from .extras import JointExtras
 from ..fileio import read_text
 from .inertial import check_inertials
-from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args,
+from .mimic import MimicCoupling, refuse_mimic_names
+from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args, _tips,
                            newton_equilibrium)
 from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
@@ -90,6 +91,9 @@ class Model:
     (:attr:`tip_names`) the order given by the layout or spec (else the URDF's, leaf frames in
     Pinocchio's frame order). Use :meth:`joint_index` rather than positions.
 
+    Mimic joints (a URDF ``<mimic>``): constraints, not joints; :attr:`joint_names` and q are the independent
+    joints' (:attr:`mimic`, :mod:`alpes_dyn.model.mimic`), A, C, G and the Jacobians restricted to them.
+
     Default tip (:attr:`default_tip`): the first of :attr:`tips` where the spec (``tips = [...]``) or the layout
     names them, or where the URDF has a single leaf frame; a URDF with several leaves and no tip named has none
     (UR5's leaves are ``base``, ``ee_link``, ``tool0``: its first leaf, the base, is no tip), and what needs
@@ -112,14 +116,17 @@ class Model:
             raise ModelError("urdf: expected URDF text containing a <robot> element")
         self._given_extras = extras
         self.urdf: str = urdf
-        self.pin_model: pin.Model = _build_pinocchio(urdf)
+        self.mimic: MimicCoupling | None  # the URDF's <mimic> joints, q_full = G q + o (model.mimic), else None
+        self.pin_model, self.mimic = _build_pinocchio(urdf)
         check_inertials(urdf, check_inertia)
         self.check_inertia = check_inertia
         n = self.pin_model.nv
         self.n: int = n
-        self.joint_names: tuple[str, ...] = tuple(self.pin_model.names[1:])
+        self.joint_names: tuple[str, ...] = self.mimic.names if self.mimic else tuple(self.pin_model.names[1:])
         self.spec: TransmissionSpec | None = spec
         if spec is not None:
+            if self.mimic is not None:
+                refuse_mimic_names(spec, self.mimic)
             spec.check(self.joint_names, [f.name for f in self.pin_model.frames])
             extras = spec.extras(self.joint_names)
             if gravity is not None and spec.gravity is not None and not np.array_equal(
@@ -138,6 +145,8 @@ class Model:
             raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
         self.gravity: np.ndarray = g.copy()
         self.pin_model.gravity.linear = g
+        if self.mimic is not None:
+            self.mimic.full_model.gravity.linear = g
         if extras is not None and not isinstance(extras, JointExtras):
             raise ModelError(f"extras: expected JointExtras, got {type(extras).__name__}")
         self.extras: JointExtras = extras if extras is not None else JointExtras.zeros(n)
@@ -171,8 +180,10 @@ class Model:
         self.rotor_matrix: np.ndarray = R
         """S^T diag(J_m) S (n, n), kg m^2: the motors' rotor inertia on the joints (eq. 2.8; zeros without)."""
         self._rotor_upper = np.triu(R)
-        sup = [set(self.pin_model.supports[j + 1]) for j in range(n)]  # joint j's ancestors and itself (ids 1..n)
-        self._rotor_tree = all(i + 1 in sup[j] for i, j in zip(*np.nonzero(self._rotor_upper)))
+        ids = [self.pin_model.getJointId(j) for j in self.joint_names]  # Pinocchio's ids (a mimic joint has one)
+        sup = [set(self.pin_model.supports[ids[j]]) for j in range(n)]  # joint j's ancestors and itself
+        self._rotor_tree = self.mimic is None and all(ids[i] in sup[j] for i, j in zip(*np.nonzero(self._rotor_upper)))
+        self._dense = self._rotor or self.mimic is not None  # CRBA and a dense solve (no ABA on a mimic model)
         if self._rotor:
             _check_positive(self.pin_model, self.pin_data, R)
 
@@ -337,6 +348,8 @@ class Model:
     def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
         """C(q, qd), (n, n), N m s: C qd are the Coriolis/centrifugal torques (eq. 2.4-2.5), A_dot - 2C skew."""
         q, v = self.vector(q, "q"), self.vector(v, "v")
+        if self.mimic is not None:
+            return self.mimic.coriolis_matrix(q, v)
         return pin.computeCoriolisMatrix(self.pin_model, self.pin_data, q, v).copy()
 
     def spring_torque(self, q: np.ndarray) -> np.ndarray:
@@ -353,7 +366,10 @@ class Model:
     def gravity_jacobian(self, q: np.ndarray) -> np.ndarray:
         """dG/dq (n, n), N m/rad: Pinocchio's analytic gravity derivatives plus the spring stiffness diag(k)."""
         q = self.vector(q, "q")
-        dG = pin.computeGeneralizedGravityDerivatives(self.pin_model, self.pin_data, q).copy()
+        if self.mimic is not None:
+            dG = self.mimic.gravity_jacobian(q)
+        else:
+            dG = pin.computeGeneralizedGravityDerivatives(self.pin_model, self.pin_data, q).copy()
         dG[np.diag_indices(self.n)] += self._k
         return dG
 
@@ -438,14 +454,16 @@ class Model:
     def potential_energy(self, q: np.ndarray) -> float:
         """U = gravity + spring potential energy (J), zero at the base height and with every spring at its rest angle."""
         q = self.vector(q, "q")
-        return float(pin.computePotentialEnergy(self.pin_model, self.pin_data, q)) + float(self.extras.spring_energy(q))
+        u = self.mimic.potential_energy(q) if self.mimic else pin.computePotentialEnergy(self.pin_model, self.pin_data, q)
+        return float(u) + float(self.extras.spring_energy(q))
 
     def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, F: object = None,
                          tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
         """Joint accelerations qdd (n,), rad/s^2, solving eq. 2.10 (ABA + extras).
 
         With rotor inertia on the tendons (:attr:`rotor_matrix` non-zero; ABA takes only a diagonal
-        armature): CRBA + S^T diag(J_m) S, the bias by RNEA at zero acceleration, a Cholesky solve.
+        armature), or mimic joints (:attr:`mimic`; Pinocchio's ABA refuses them): CRBA + S^T diag(J_m) S, the
+        bias by RNEA at zero acceleration, a Cholesky solve.
 
         ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
         or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
@@ -463,7 +481,7 @@ class Model:
             tau = tau - self.extras.friction_torque(v, smooth)
         if F is not None:
             tau = tau + self.contact_torque(q, F, tip, contacts)
-        if self._rotor:
+        if self._dense:
             qdd = self._rotor_solve(q, v, tau)
         else:
             qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
@@ -573,16 +591,6 @@ class Model:
         hi = np.where(np.isfinite(hi) & (np.abs(hi) < 1e3), hi, np.pi)
         shape = self.n if size is None else (size, self.n)
         return rng.uniform(lo, hi, size=None if size is None else shape), rng.uniform(-speed, speed, shape)
-
-
-def _tips(pm: pin.Model, spec: TransmissionSpec | None, layout: Layout | None) -> tuple[str, ...]:
-    """The tip frames: the spec's, else the layout's, else the URDF's leaf frames (Pinocchio's frame order)."""
-    if spec is not None and spec.tips is not None:
-        return spec.tips
-    if layout is not None:
-        return layout.tips
-    parents = {pm.frames[i].parentFrame for i in range(len(pm.frames))}
-    return tuple(f.name for i, f in enumerate(pm.frames) if i not in parents and f.type == pin.FrameType.BODY)
 
 
 def _restore_model(urdf: str, spec: str | None, gravity: list[float], name: str, layout: Layout | None,

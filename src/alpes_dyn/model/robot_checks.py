@@ -1,32 +1,41 @@
 """Checks and solvers of :class:`~alpes_dyn.Model` (:mod:`alpes_dyn.model.robot`): the URDF parsed by Pinocchio
 (what it refuses, in one line), the mass matrix's definiteness at a generic configuration, Newton's method of the
-static equilibrium, the arguments of ``random_state``."""
+static equilibrium, the arguments of ``random_state``, the tip frames of a URDF."""
 
 from __future__ import annotations
 
 import math
-from typing import Sequence
+from typing import Any, Sequence
 
 import numpy as np
 import pinocchio as pin
 
 from ..errors import InputError, ModelError
 from ..fileio import native_stderr_to
+from .mimic import MimicCoupling, urdf_mimics
 from .urdf_checks import check_urdf_structure
 
 __all__ = ["newton_equilibrium"]
 
 
-def _build_pinocchio(urdf: str) -> pin.Model:
+def _build_pinocchio(urdf: str) -> tuple[pin.Model, MimicCoupling | None]:
+    """The URDF's Pinocchio model, and with ``<mimic>`` joints their :class:`MimicCoupling` (Pinocchio's mimic
+    model, whose coordinates are the independent joints', and the whole tree's model beside it)."""
     check_urdf_structure(urdf)
+    mimics = urdf_mimics(urdf)
     printed: list[str] = []  # urdfdom prints its parse errors on the process's stderr: into the message
     try:
         with native_stderr_to(printed):
-            model = pin.buildModelFromXML(urdf)
+            model = pin.buildModelFromXML(urdf, mimic=True) if mimics else pin.buildModelFromXML(urdf)
+            full = pin.buildModelFromXML(urdf) if mimics else None
     except Exception as exc:  # pinocchio raises ValueError/RuntimeError with multi-line text
         errors = [line.removeprefix("Error:").strip() for line in printed if line.startswith("Error:")]
         first = str(exc).strip().splitlines()[0] if str(exc).strip() else type(exc).__name__
-        raise ModelError(f"URDF could not be parsed by Pinocchio: {errors[0] if errors else first}") from None
+        why = errors[0] if errors else first
+        if mimics and "mimic" in why:  # name them: Pinocchio's text does not
+            why += (" (" + ", ".join(f"{m.name!r} follows {m.primary!r}" for m in mimics) + "; Pinocchio needs the "
+                    "joint followed before its mimic in its depth-first order, siblings by child link name)")
+        raise ModelError(f"URDF could not be parsed by Pinocchio: {why}") from None
     if model.nv == 0:
         raise ModelError("URDF has no movable joint")
     if model.nq != model.nv:
@@ -34,7 +43,41 @@ def _build_pinocchio(urdf: str) -> pin.Model:
             f"URDF has joints with nq != nv (nq={model.nq}, nv={model.nv}); only fixed-base trees of "
             "revolute/prismatic joints are supported"
         )
-    return model
+    if full is None:
+        return model, None
+    names = [model.names[i] for i in range(1, model.njoints) if model.joints[i].nv > 0]
+    coupling = MimicCoupling(mimics, names, list(full.names[1:]), full)
+    _check_mimic_model(model, coupling)
+    return model, coupling
+
+
+def _check_mimic_model(model: pin.Model, coupling: MimicCoupling) -> None:
+    """Pinocchio's mimic model against the whole tree at a generic q: every frame's placement and G^T A G
+    (Pinocchio's mimic support is recent; its issues #2710 and #2761 were wrong CRBA and axes). ModelError if not."""
+    q = _generic_configuration(model)
+    data, fdata = model.createData(), coupling.full_data
+    pin.framesForwardKinematics(model, data, q)
+    pin.framesForwardKinematics(coupling.full_model, fdata, coupling.full_q(q))
+    worst = max(float(np.max(np.abs(a.homogeneous - b.homogeneous))) for a, b in zip(data.oMf, fdata.oMf))
+    A = pin.crba(model, data, q)
+    A_full = pin.crba(coupling.full_model, fdata, coupling.full_q(q))
+    A_red = coupling.project(np.triu(A_full) + np.triu(A_full, 1).T)
+    scale = max(1.0, float(np.max(np.abs(A_red))))
+    err = float(np.max(np.abs(np.triu(A) + np.triu(A, 1).T - A_red))) / scale
+    if not (worst < 1e-9 and err < 1e-9):
+        raise ModelError(f"URDF mimic joints ({', '.join(coupling.mimic_names)}): Pinocchio's mimic model disagrees "
+                         f"with the whole tree at a generic configuration (frames by {worst:.3g} m, A by {err:.3g} "
+                         "relative); remove the <mimic> elements for independent joints")
+
+
+def _tips(pm: pin.Model, spec: Any, layout: Any) -> tuple[str, ...]:
+    """The tip frames: the spec's, else the layout's, else the URDF's leaf frames (Pinocchio's frame order)."""
+    if spec is not None and spec.tips is not None:
+        return spec.tips
+    if layout is not None:
+        return layout.tips
+    parents = {pm.frames[i].parentFrame for i in range(len(pm.frames))}
+    return tuple(f.name for i, f in enumerate(pm.frames) if i not in parents and f.type == pin.FrameType.BODY)
 
 
 def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:

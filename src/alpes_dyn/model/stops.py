@@ -12,7 +12,8 @@ Two tools:
   spring: 1.4 degrees of penetration under 0.05 N m) and d = 4e-3 N m s/rad keep the stop's own
   mode (sqrt(k / I) ~ 1300 rad/s on a distal phalanx) stable for RK4 steps up to about 1 ms. On any
   other robot :meth:`JointStops.of` sizes them to the robot (:func:`sized_stops`: the same 1.4 degrees under
-  the robot's own static torque into its stops), or refuses where nothing sizes them.
+  the robot's own static torque into its stops; one k for the robot, or one per joint with ``per_joint=True``),
+  or refuses where nothing sizes them.
   Pass it to :func:`~alpes_dyn.simulation.integrate.simulate` as ``stops=``. Rigid stops with an impact law
   (MuJoCo's constraint solver) are what the MJCF export (:mod:`alpes_dyn.model.mjcf`) gives.
 * :func:`check_range` -- whether a trajectory leaves the joint range; :func:`simulate` calls it
@@ -54,35 +55,39 @@ class JointRangeWarning(AlpesDynWarning):
 
 @dataclass(frozen=True)
 class JointStops:
-    """Unilateral spring-damper end stops, per joint (arrays (n,), rad; k N m/rad; d N m s/rad)."""
+    """Unilateral spring-damper end stops (``lower``, ``upper``: arrays (n,), rad): one stiffness k (N m/rad) and
+    damping d (N m s/rad) for every joint (numbers), or one per joint (arrays (n,), :meth:`of` with
+    ``per_joint=True``)."""
 
     lower: np.ndarray
     upper: np.ndarray
-    stiffness: float = 2.0
-    damping: float = 4e-3
+    stiffness: float | np.ndarray = 2.0
+    damping: float | np.ndarray = 4e-3
 
     @classmethod
-    def of(cls, model: Any, stiffness: float | None = None, damping: float | None = None) -> "JointStops":
+    def of(cls, model: Any, stiffness: Any = None, damping: Any = None, per_joint: bool = False) -> "JointStops":
         """Stops at a :class:`~alpes_dyn.Model`'s URDF limits (joints without finite limits get none).
 
-        ``stiffness`` k (N m/rad) and ``damping`` d (N m s/rad), or None (default): on an Alpes model (one with
-        an Alpes parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad, 4e-3 N m s/rad); on any other
-        robot sized to it by :func:`sized_stops` (the damping sized to the k given, if only k is);
+        ``stiffness`` k (N m/rad) and ``damping`` d (N m s/rad): a number (every joint), n numbers (one per joint,
+        in :attr:`~alpes_dyn.Model.joint_names` order), or None (default): on an Alpes model (one with an Alpes
+        parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad, 4e-3 N m s/rad) unless ``per_joint``; on
+        any other robot sized to it by :func:`sized_stops` (the damping sized to the k given, if only k is).
+        ``per_joint``: what is sized, sized per joint (arrays (n,): the same rule on each joint, so a light distal
+        joint gets a softer stop than the heavy proximal one); default False, one k and one d for the robot.
         :class:`~alpes_dyn.InputError` where they cannot be sized (no torque toward any stop)."""
-        for x, name, unit, low in ((stiffness, "stiffness", "N m/rad", True), (damping, "damping", "N m s/rad", False)):
-            if x is not None and not (isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool)
-                                      and np.isfinite(x) and (x > 0 if low else x >= 0)):
-                raise InputError(f"{name}: expected a {'positive number' if low else 'number >= 0'} of {unit} "
-                                 f"(or None: sized to the robot), got {x!r}")
+        if not isinstance(per_joint, (bool, np.bool_)):
+            raise InputError(f"per_joint: expected True or False, got {per_joint!r}")
+        stiffness = _stop_value(stiffness, "stiffness", "N m/rad", True, model.n)
+        damping = _stop_value(damping, "damping", "N m s/rad", False, model.n)
         lo, hi = _limits(model)
         if stiffness is None or damping is None:
-            if getattr(model, "params", None) is not None:
+            if getattr(model, "params", None) is not None and not per_joint:
                 k, d = ALPES_STOP
             else:
-                k, d = sized_stops(model, stiffness)
+                k, d = sized_stops(model, stiffness, per_joint=bool(per_joint))
             stiffness = k if stiffness is None else stiffness
             damping = d if damping is None else damping
-        return cls(lo, hi, float(stiffness), float(damping))
+        return cls(lo, hi, _frozen(stiffness), _frozen(damping))
 
     def torque(self, q: Any, v: Any, xp: Any = np) -> Any:
         """Stop torques (n,), N m, for joint angles q and velocities v (numpy arrays or CasADi columns)."""
@@ -91,11 +96,45 @@ class JointStops:
         if xp is not np:
             lo, hi = xp.DM(lo), xp.DM(hi)
         k, d = self.stiffness, self.damping
+        if np.ndim(k) and xp is not np:
+            k = xp.DM(np.asarray(k, dtype=float))
+        if np.ndim(d) and xp is not np:
+            d = xp.DM(np.asarray(d, dtype=float))
         p_lo = xp.fmax(lo - q, 0)
         p_hi = xp.fmax(q - hi, 0)
         push_up = xp.fmax(k * p_lo - d * v * (p_lo > 0), 0)    # below the lower stop: pushes toward +q
         push_down = xp.fmax(k * p_hi + d * v * (p_hi > 0), 0)  # above the upper stop: pushes toward -q
         return push_up - push_down
+
+
+def _stop_value(x: Any, name: str, unit: str, positive: bool, n: int) -> float | np.ndarray | None:
+    """A stop's k or d as given: None, a number, or n numbers (one per joint); :class:`InputError` naming it."""
+    if x is None:
+        return None
+    want = f"a {'positive number' if positive else 'number >= 0'} of {unit} or {n} of them (one per joint)"
+    if isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, (bool, np.bool_)):
+        a = np.asarray(float(x))
+    elif isinstance(x, (list, tuple, np.ndarray)) and not isinstance(x, str):
+        try:
+            a = np.asarray(x, dtype=float)
+        except (TypeError, ValueError):
+            raise InputError(f"{name}: expected {want} (or None: sized to the robot), got {x!r}") from None
+        if a.shape != (n,) or (isinstance(x, np.ndarray) and x.dtype.kind not in "iuf"):
+            raise InputError(f"{name}: expected {want}, got shape {np.shape(x)}")
+    else:
+        raise InputError(f"{name}: expected {want} (or None: sized to the robot), got {x!r}")
+    if not (np.all(np.isfinite(a)) and np.all(a > 0 if positive else a >= 0)):
+        got = repr(x) if a.ndim == 0 else repr(a.tolist())
+        raise InputError(f"{name}: expected {want} (or None: sized to the robot), got {got}")
+    return float(a) if a.ndim == 0 else a
+
+
+def _frozen(x: float | np.ndarray) -> float | np.ndarray:
+    if np.ndim(x) == 0:
+        return float(x)
+    a = np.array(x, dtype=float)
+    a.flags.writeable = False
+    return a
 
 
 def _limits(model: Any) -> tuple[np.ndarray, np.ndarray]:
@@ -106,9 +145,11 @@ def _limits(model: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _torque_into_stops(model: Any, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
-    """(n,) N m: the largest static torque G_i(q) (gravity and springs, eq. 2.11) that pushes joint i into one of
-    its stops, the joint at that stop and the others at their lower ends, middles, upper ends or a generic angle
-    inside their ranges (0 where nothing pushes; a spring pushes into a stop only where it rests beyond it)."""
+    """(n,) N m: the largest static torque that pushes joint i into one of its stops, gravity and springs G_i(q)
+    (eq. 2.11) or gravity alone (the joint's weight on the stop where its spring would help it off: a motor may
+    hold the spring's side), the joint at that stop and the others at their lower ends, middles, upper ends or a
+    generic angle inside their ranges (0 where nothing pushes; a spring pushes into a stop only where it rests
+    beyond it)."""
     flo, fhi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
     frac = np.mod(0.5 + 0.6180339887498949 * np.arange(1, model.n + 1), 1.0)
     others = (flo, 0.5 * (flo + fhi), fhi, flo + frac * (fhi - flo))
@@ -120,27 +161,39 @@ def _torque_into_stops(model: Any, lo: np.ndarray, hi: np.ndarray) -> np.ndarray
             for base in others:
                 q = base.copy()
                 q[i] = limit
-                out[i] = max(out[i], sign * float(model.gravity_torque(q)[i]))  # G > 0 drives q down: the lower stop
+                G = model.gravity_torque(q)
+                g_only = G[i] - model.spring_torque(q)[i]
+                out[i] = max(out[i], sign * float(G[i]), sign * float(g_only))  # G > 0 drives q down: the lower stop
     return out
 
 
-def sized_stops(model: Any, stiffness: float | None = None) -> tuple[float, float]:
-    """(k N m/rad, d N m s/rad) of stops sized to ``model``'s own gravity torque and inertia.
+def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> tuple[Any, Any]:
+    """(k N m/rad, d N m s/rad) of stops sized to ``model``'s own gravity torque and inertia: two numbers, or with
+    ``per_joint`` two arrays (n,), the same rule on each joint.
 
-    Rule: k = tau* / p*, with tau* the largest static torque (gravity and springs, eq. 2.11) that pushes a joint
-    into one of its stops (the joint at the stop, the others at their lower ends, middles, upper ends or a
-    generic angle) and p* = :data:`STOP_PENETRATION` (1.4 degrees): a joint resting on its stop under its own
-    weight gives at most 1.4 degrees, whatever the robot weighs. d = 2 zeta sqrt(k I_min) with zeta =
-    :data:`STOP_DAMPING_RATIO` (1) and I_min the least effective inertia 1 / (A^-1)_ii (kg m^2, rotors included,
-    the joint's inertia with the others free) over the limited joints at mid-range: the stop's mode critically
-    damped on the lightest joint. The mode's rate sqrt(k / I_min) bounds the RK4 step (about 2.8 / rate).
+    Rule: k = tau* / p*, with tau* the largest static torque (gravity and springs, eq. 2.11, or gravity alone)
+    that pushes a joint into one of its stops (the joint at the stop, the others at their lower ends, middles,
+    upper ends or a generic angle) and p* = :data:`STOP_PENETRATION` (1.4 degrees): a joint resting on its stop
+    under its own weight gives at most 1.4 degrees, whatever the robot weighs. d = 2 zeta sqrt(k I) with zeta =
+    :data:`STOP_DAMPING_RATIO` (1) and I an effective inertia 1 / (A^-1)_ii (kg m^2, rotors included, the joint's
+    inertia with the others free) at mid-range: the stop's mode critically damped. The mode's rate sqrt(k / I)
+    bounds the RK4 step (about 2.8 / rate).
+
+    * One k and d (default): tau* the largest over the robot's limited joints, I = I_min the least over them
+      (critical damping on the lightest joint); the proximal joint's weight sizes every stop, so a light distal
+      joint resting on its stop gives much less than p* (and its mode is the fastest).
+    * ``per_joint``: k_i = tau*_i / p* and d_i = 2 zeta sqrt(k_i I_i) for each joint i: every joint resting on its
+      stop under its own weight gives p* (less its spring's share, k_i / (k_i + k_spring,i)). A limited joint that
+      nothing pushes into a stop (tau*_i = 0: its weight is across its axis) gets the least k_i of the others; a
+      joint without limits gets that k too (it has no stop: unused).
 
     Numbers. finger3 (Alpes): tau* = 0.0409 N m (j1 at its lower stop under the finger's weight), k = 1.67
     N m/rad and d = 2.9e-3 N m s/rad (I_min = 1.27e-6 kg m^2) -- the Alpes stop's 2 and 4e-3, which its models
-    keep (:data:`ALPES_STOP`), are 1.2 and 1.4 times these. The Allegro hand with its shipped spec: tau* = 0.0825
-    N m (joint_12.0's spring rests at 0, below its stop at 0.263 rad), k = 3.38 N m/rad, d = 0.0119 N m s/rad;
-    UR5: k = 2.42e3 N m/rad, d = 12.4 N m s/rad. A finger 20 times as heavy (masses and inertias) gets k and d
-    20 times as large. ``stiffness`` given: only d is sized.
+    keep (:data:`ALPES_STOP`), are 1.2 and 1.4 times these; per joint k = 1.67, 0.508, 0.111 N m/rad and d = 0.0213,
+    3.4e-3, 7.5e-4 N m s/rad on j1, j2, j3. The Allegro hand with its shipped spec: k = 1.91 N m/rad, d = 8.9e-3
+    N m s/rad (per joint 0.11-1.91 N m/rad). UR5: k = 2.42e3 N m/rad, d = 12.4 N m s/rad (per joint 6.34-2.42e3
+    N m/rad: the shoulder pan's and the last two wrist joints' weight is across their axes, they get wrist_1's). A finger 20 times as heavy (masses and inertias) gets k and d
+    20 times as large. ``stiffness`` given (a number, or n with ``per_joint``): only d is sized.
 
     :class:`~alpes_dyn.InputError` where nothing sizes k: no torque pushes any joint into a stop (no gravity
     across the joints and no spring resting beyond a limit) or no joint has a finite limit.
@@ -150,15 +203,20 @@ def sized_stops(model: Any, stiffness: float | None = None) -> tuple[float, floa
     if not limited.any():
         raise InputError(f"stops: model {model.name!r} has no joint with a finite limit; no stop to size")
     if stiffness is None:
-        tau = float(np.max(_torque_into_stops(model, lo, hi)[limited]))
-        if not tau > 0:
+        tau = _torque_into_stops(model, lo, hi)
+        if not np.max(tau[limited]) > 0:
             raise InputError(f"stops: nothing pushes model {model.name!r} into its joint stops (no gravity torque, no "
                              "spring resting beyond a limit) to size them by; pass stiffness= (N m/rad) and damping= "
                              "(N m s/rad)")
-        stiffness = tau / STOP_PENETRATION
+        pushed = limited & (tau > 1e-9 * np.max(tau[limited]))  # not a rounding error's torque across a vertical axis
+        stiffness = (np.where(pushed, tau, np.min(tau[pushed])) if per_joint else float(np.max(tau[limited])))
+        stiffness = stiffness / STOP_PENETRATION
     flo, fhi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
-    Ainv = np.linalg.inv(model.inertia_matrix(0.5 * (flo + fhi)))
-    I_min = float(np.min(1.0 / np.diag(Ainv)[limited]))
+    inertia = 1.0 / np.diag(np.linalg.inv(model.inertia_matrix(0.5 * (flo + fhi))))
+    if per_joint or np.ndim(stiffness):
+        k = np.broadcast_to(np.asarray(stiffness, dtype=float), (model.n,)).copy()
+        return k, 2.0 * STOP_DAMPING_RATIO * np.sqrt(k * inertia)
+    I_min = float(np.min(inertia[limited]))
     return float(stiffness), float(2.0 * STOP_DAMPING_RATIO * math.sqrt(stiffness * I_min))
 
 

@@ -1,5 +1,6 @@
 """Checks of a URDF's text before Pinocchio's parser sees it: its size and depth (the parser recurses per
-level), its joints' types, axes, limits and ``<mimic>`` elements, each refused by name with one line."""
+level), its joints' types, axes, limits and ``<mimic>`` elements (:func:`~alpes_dyn.model.mimic.read_mimics`), each
+refused by name with one line."""
 
 from __future__ import annotations
 
@@ -9,6 +10,7 @@ import xml.etree.ElementTree as ET
 
 from ..errors import ModelError
 from ..limits import MAX_URDF_DEPTH, MAX_URDF_JOINTS, MAX_URDF_LINKS
+from .mimic import read_mimics
 
 __all__ = ["check_urdf_structure", "check_joint"]
 
@@ -53,8 +55,8 @@ def check_urdf_structure(urdf: str) -> None:
     """Before Pinocchio's parser: at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS` links and
     :data:`~alpes_dyn.limits.MAX_URDF_JOINTS` moving joints (Pinocchio's data grows with their square), a kinematic
     tree at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` joints deep (the parser recurses per level:
-    a 10,000-link chain crashes it), every joint limit with lower <= upper, no ``<mimic>`` joint
-    (a coupling alpes_dyn does not model: refused rather than silently ignored), every joint of a
+    a 10,000-link chain crashes it), every joint limit with lower <= upper, every ``<mimic>`` element well formed
+    (:func:`~alpes_dyn.model.mimic.read_mimics`: it names an independent joint of its type), every joint of a
     supported type (:func:`check_joint`) and every moving joint's axis non-zero. :class:`ModelError`."""
     n_links = len(re.findall(r"<\s*link[\s/>]", urdf))
     if n_links > MAX_URDF_LINKS:
@@ -70,11 +72,6 @@ def check_urdf_structure(urdf: str) -> None:
         raise ModelError(f"URDF: {len(moving)} moving joints, over the limit of {MAX_URDF_JOINTS}")
     parent_of: dict[str, str] = {}
     for j in root.iter("joint"):
-        mimic = j.find("mimic")
-        if mimic is not None and j.get("type") not in ("fixed", None):
-            raise ModelError(f"joint {j.get('name')!r}: <mimic joint={mimic.get('joint')!r}> is not modelled (the joint "
-                             "would move on its own); remove the <mimic> element for an independent joint, or make "
-                             "the joint fixed")
         check_joint(j)
         p, c = j.find("parent"), j.find("child")
         if p is not None and c is not None:
@@ -87,6 +84,7 @@ def check_urdf_structure(urdf: str) -> None:
                 continue  # Pinocchio's parser names it
             if lo > hi:
                 raise ModelError(f"joint {j.get('name')!r}: limit lower {lo:g} is above upper {hi:g}")
+    read_mimics(root)
     depth: dict[str, int] = {}
     for leaf in parent_of:
         chain, link = [], leaf

@@ -169,7 +169,7 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
     dt = _check_dt(dt)
     cache = system.__dict__.setdefault("_rk4_cache", {})
     key = (float(dt), name) if stops is None else (float(dt), name, tuple(stops.lower), tuple(stops.upper),
-                                                   stops.stiffness, stops.damping)
+                                                   tuple(np.ravel(stops.stiffness)), tuple(np.ravel(stops.damping)))
     if key in cache:
         return cache[key]
     f = _rhs_function(system, stops)

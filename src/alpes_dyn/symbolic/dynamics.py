@@ -26,6 +26,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.contact import REFERENCE_FRAMES, as_contacts
+from ..model.mimic import MimicCoupling, urdf_mimics
 from ..model.robot import Model
 
 __all__ = ["SymbolicDynamics", "available_backends", "block_solve", "sparse_dm"]
@@ -88,33 +89,52 @@ def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
 
 
 class _Adam:
+    """ADAM's KinDynComputations on the URDF. With ``<mimic>`` joints (which ADAM reads as independent joints) it is
+    given the whole tree, the model's joints then the mimic ones, and every term is restricted to q_full = G q + o
+    (:mod:`alpes_dyn.model.mimic`): G^T A G, G^T b(q_full, G qd), G^T g, the frames at q_full."""
+
     name = "adam"
 
     def __init__(self, model: Model) -> None:
         from adam.casadi import KinDynComputations
 
         g6 = np.concatenate([model.gravity, np.zeros(3)])
+        names = list(model.joint_names)
+        mimics = urdf_mimics(model.urdf)
+        self.G: cs.DM | None = None
+        if mimics:
+            coupling = MimicCoupling(mimics, names, names + [m.name for m in mimics])
+            names = list(coupling.full_names)
+            self.G, self.o = sparse_dm(coupling.G), cs.DM(coupling.offset)
         try:
-            self.kd = KinDynComputations(model.urdf, list(model.joint_names), gravity=g6)
+            self.kd = KinDynComputations(model.urdf, names, gravity=g6)
         except Exception as exc:  # adam raises assorted errors on bad URDFs
             raise ModelError(f"URDF could not be loaded by ADAM: {str(exc).splitlines()[0] if str(exc) else exc}") from None
         self.H = cs.SX.eye(4)
         self.vb = cs.SX.zeros(6)
 
+    def _full(self, q: cs.SX) -> cs.SX:
+        return q if self.G is None else cs.mtimes(self.G, q) + self.o
+
+    def _down(self, x: cs.SX) -> cs.SX:
+        return x if self.G is None else cs.mtimes(self.G.T, x)
+
     def mass_matrix(self, q: cs.SX) -> cs.SX:
-        return self.kd.mass_matrix(self.H, q)[6:, 6:]
+        M = self.kd.mass_matrix(self.H, self._full(q))[6:, 6:]
+        return M if self.G is None else cs.mtimes(self.G.T, cs.mtimes(M, self.G))
 
     def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
-        return self.kd.bias_force(self.H, q, self.vb, v)[6:]
+        vf = v if self.G is None else cs.mtimes(self.G, v)
+        return self._down(self.kd.bias_force(self.H, self._full(q), self.vb, vf)[6:])
 
     def gravity(self, q: cs.SX) -> cs.SX:
-        return self.kd.gravity_term(self.H, q)[6:]
+        return self._down(self.kd.gravity_term(self.H, self._full(q))[6:])
 
     def tip_position(self, q: cs.SX, frame: str) -> cs.SX:
-        return self.kd.forward_kinematics(frame, self.H, q)[:3, 3]
+        return self.kd.forward_kinematics(frame, self.H, self._full(q))[:3, 3]
 
     def frame_pose(self, q: cs.SX, frame: str) -> tuple[cs.SX, cs.SX]:
-        T = self.kd.forward_kinematics(frame, self.H, q)
+        T = self.kd.forward_kinematics(frame, self.H, self._full(q))
         return T[:3, :3], T[:3, 3]
 
 
@@ -126,6 +146,9 @@ class _PinCasadi:  # pragma: no cover - pinocchio.casadi is not in the PyPI whee
         import pinocchio.casadi as cpin
 
         self.pin, self.cpin = pin, cpin
+        if model.mimic is not None:
+            raise ModelError(f"backend 'pinocchio.casadi': model {model.name!r} has mimic joints "
+                             f"({', '.join(model.mimic.mimic_names)}), which it is not tested on; use backend='adam'")
         m = model.pin_model.copy()
         m.armature[:] = 0.0
         self.cmodel = cpin.Model(m)
