@@ -104,6 +104,8 @@ class Model:
                  gravity: Sequence[float] | None = None, name: str | None = None, layout: Layout | None = None,
                  params: HandParams | None = None, spring: str | None = None, *,
                  extras: JointExtras | None = None, check_inertia: str = "relaxed") -> None:
+        """See the class. Long because it builds the model's parts in the one order the later ones read them
+        (the checked URDF, Pinocchio's model and its mimic coupling, the spec, the transmission, the extras)."""
         if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
             spec, extras = None, spec if extras is None else extras
         if isinstance(spec, (str, Path)):
