@@ -17,8 +17,7 @@ it is not thread-safe (use :meth:`Model.copy` per thread).
 
 from __future__ import annotations
 
-import dataclasses
-import math
+import dataclasses, math  # noqa: E401
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -29,8 +28,7 @@ from scipy.linalg import lapack as _lapack
 from .description import Layout, check_model_name, layout, model_params, urdf_string
 from ..checks import as_float_array
 from ..errors import InputError, ModelError
-from .extras import JointExtras
-from ..fileio import read_text
+from .extras import JointExtras; from ..fileio import read_text  # noqa: E702
 from .inertial import check_inertials
 from .mimic import MimicCoupling, refuse_mimic_names
 from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args, _tips,
@@ -104,8 +102,7 @@ class Model:
                  gravity: Sequence[float] | None = None, name: str | None = None, layout: Layout | None = None,
                  params: HandParams | None = None, spring: str | None = None, *,
                  extras: JointExtras | None = None, check_inertia: str = "relaxed") -> None:
-        """See the class. Long because it builds the model's parts in the one order the later ones read them
-        (the checked URDF, Pinocchio's model and its mimic coupling, the spec, the transmission, the extras)."""
+        """See the class. Long because it builds the parts in the order the later ones read them."""
         if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
             spec, extras = None, spec if extras is None else extras
         if isinstance(spec, (str, Path)):
