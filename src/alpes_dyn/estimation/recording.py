@@ -168,7 +168,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     enc, torque = _motor_columns(col, motors, torque_constant, p)
     rec = Recording(t=col["t"], encoder=np.column_stack(enc), torque=np.column_stack(torque),
                     motor_names=tuple(motors), joint_names=tuple(joints), q=_joint_columns(col, joints, "q"),
-                    force_z=col.get("force_z"), gravity=_gravity_columns(col), true_q=_joint_columns(col, joints, "true_q"))
+                    force_z=col.get("force_z"), gravity=_gravity_columns(col),
+                    true_q=_joint_columns(col, joints, "true_q"))
     check_recording(rec)
     _check_encoder_range(rec, model)
     return rec
