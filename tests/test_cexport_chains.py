@@ -1,9 +1,11 @@
 """The model's C code by blocks (estimation.cexport_chains): the blocks of one structure share a function, side by
 side in vector lanes (GCC, Clang) or one call each (-DALPES_NO_LANES); either gives CasADi's numbers to the last
-bit, on a small function with three blocks -- two of one structure with different constants, one of another."""
+bit, on a small function with three blocks -- two of one structure with different constants, one of another --,
+with 2 lanes (SSE2), 4 (AVX: a spare lane) or none."""
 
 from __future__ import annotations
 
+import platform
 import shutil
 import subprocess
 
@@ -51,8 +53,8 @@ def test_blocks_of_the_function():
 
 
 @pytest.mark.skipif(CC is None, reason="no C compiler (cc or gcc) on PATH")
-@pytest.mark.parametrize("lanes", [True, False])
-def test_model_by_blocks_equals_casadi_bit_for_bit(lanes, tmp_path):
+@pytest.mark.parametrize("flags", [[], ["-DALPES_NO_LANES"], ["-mavx"]], ids=["lanes", "no-lanes", "avx"])
+def test_model_by_blocks_equals_casadi_bit_for_bit(flags, tmp_path):
     f = _function()
     src = chain_model_source(f, model_blocks(f, 6), "model")
     assert src is not None
@@ -61,7 +63,8 @@ def test_model_by_blocks_equals_casadi_bit_for_bit(lanes, tmp_path):
     prelude = "#include <math.h>\n#define casadi_real double\n#define casadi_int long long int\n"
     (tmp_path / "m.c").write_text(prelude + code + _MAIN % {"annz": f.nnz_out(1), "nwork": nwork})
     exe = tmp_path / "m"
-    flags = [] if lanes else ["-DALPES_NO_LANES"]
+    if flags == ["-mavx"] and platform.machine() not in ("x86_64", "AMD64"):
+        pytest.skip("-mavx: x86-64 only")
     subprocess.run([CC, "-O2", "-std=c99", "-Wall", "-Werror", *flags, "-o", str(exe), str(tmp_path / "m.c"), "-lm"],
                    check=True, capture_output=True, text=True, timeout=120)
     rng = np.random.default_rng(5)

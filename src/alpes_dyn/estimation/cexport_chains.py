@@ -131,44 +131,67 @@ def _declare(prog: list[tuple[Any, ...]], ctype: str) -> str:
 
 _LANE_OPS: dict[int, str] = {
     cs.OP_ASSIGN: "{0}", cs.OP_ADD: "{0}+{1}", cs.OP_SUB: "{0}-{1}", cs.OP_MUL: "{0}*{1}", cs.OP_DIV: "{0}/{1}",
-    cs.OP_NEG: "-{0}", cs.OP_TWICE: "{two}*{0}", cs.OP_SQ: "{0}*{0}", cs.OP_INV: "{one}/{0}",
+    cs.OP_NEG: "-{0}", cs.OP_TWICE: "(alpes_lanes)ALPES_BC(2.)*{0}", cs.OP_SQ: "{0}*{0}",
+    cs.OP_INV: "(alpes_lanes)ALPES_BC(1.)/{0}",
 }
 """The operations a vector of lanes does at once (GCC's and Clang's vector extensions: the same IEEE operation in
-each lane); the others (sin, cos, ...) run lane by lane."""
+each lane); the others run lane by lane (:data:`_LANE_FUNCTIONS`)."""
+
+_LANE_FUNCTIONS: dict[int, str] = {
+    cs.OP_SQRT: "sqrt", cs.OP_SIN: "sin", cs.OP_COS: "cos", cs.OP_TAN: "tan", cs.OP_EXP: "exp", cs.OP_LOG: "log",
+    cs.OP_TANH: "tanh", cs.OP_ATAN: "atan", cs.OP_SINH: "sinh", cs.OP_COSH: "cosh", cs.OP_FABS: "fabs",
+    cs.OP_ATAN2: "atan2",
+}
+
+_LANES_HEAD = r"""#include <string.h>
+#if (defined(__GNUC__) || defined(__clang__)) && !defined(ALPES_NO_LANES) && !defined(ALPES_VL)
+/* the blocks of one structure side by side in vector variables: 4 lanes with AVX, else 2 (SSE2, NEON) */
+#if defined(__AVX__) && !defined(ALPES_LANES_2)
+#define ALPES_VL 4
+typedef double alpes_lanes __attribute__((vector_size(32)));
+#define ALPES_BC(c) {c, c, c, c}
+#define ALPES_MAP(f, x) {f(x[0]), f(x[1]), f(x[2]), f(x[3])}
+#define ALPES_MAP2(f, x, y) {f(x[0], y[0]), f(x[1], y[1]), f(x[2], y[2]), f(x[3], y[3])}
+#define ALPES_OWN(c, j) {c[0][j], c[1][j], c[2][j], c[3][j]}
+#else
+#define ALPES_VL 2
+typedef double alpes_lanes __attribute__((vector_size(16)));
+#define ALPES_BC(c) {c, c}
+#define ALPES_MAP(f, x) {f(x[0]), f(x[1])}
+#define ALPES_MAP2(f, x, y) {f(x[0], y[0]), f(x[1], y[1])}
+#define ALPES_OWN(c, j) {c[0][j], c[1][j]}
+#endif
+#endif
+#ifdef ALPES_VL
+#define ALPES_LANES 1
+#endif
+"""
 
 
-def _lane_template(name: str, prog: list[tuple[Any, ...]], consts: list[float], slots: list[int | None], vl: int,
-                   vtype: str) -> str:
-    """The C function ``name(x, y, c)`` running ``prog`` on vl lanes at once in variables of ``vtype`` (vl
-    doubles): x[i*vl + l] its inputs, y[m*vl + l] its outputs, c[j*vl + l] the lanes' own constants (``slots``:
-    :func:`_constants`); ``consts``: a block's constants (where they are shared)."""
+def _lane_template(name: str, prog: list[tuple[Any, ...]], consts: list[float], slots: list[int | None]) -> str:
+    """The C function ``name(x, y, c)`` running ``prog`` on ALPES_VL lanes at once in variables of type
+    ``alpes_lanes`` (:data:`_LANES_HEAD`): x[i*ALPES_VL + l] its inputs, y[m*ALPES_VL + l] its outputs, c[l] lane
+    l's own constants (``slots``: :func:`_constants`); ``consts``: a block's constants (where they are shared)."""
     lines, k = [], 0
-
-    def bc(v: float) -> str:
-        return f"({vtype}){{{', '.join([repr(v)] * vl)}}}"
-
-    shared = {"two": bc(2.0), "one": bc(1.0)}
     for op, out, inp in prog:
         if op == cs.OP_INPUT:
-            lines.append(f"  memcpy(&a{out[0]}, x + {vl * inp[0]}, sizeof(a{out[0]}));")
+            lines.append(f"  memcpy(&a{out[0]}, x + ALPES_VL * {inp[0]}, sizeof(a{out[0]}));")
             continue
         if op == cs.OP_OUTPUT:
-            lines.append(f"  memcpy(y + {vl * out[1]}, &a{inp[0]}, sizeof(a{inp[0]}));")
+            lines.append(f"  memcpy(y + ALPES_VL * {out[1]}, &a{inp[0]}, sizeof(a{inp[0]}));")
             continue
         if op == cs.OP_CONST:
             v, slot = consts[k], slots[k]
             k += 1
-            if slot is not None:
-                lines.append(f"  memcpy(&a{out[0]}, c + {vl * slot}, sizeof(a{out[0]}));")
-                continue
-            rhs = bc(v)
+            rhs = f"(alpes_lanes)ALPES_OWN(c, {slot})" if slot is not None else f"(alpes_lanes)ALPES_BC({v!r})"
         elif op in _LANE_OPS:
-            rhs = _LANE_OPS[op].format(*(f"a{i}" for i in inp), **shared)
+            rhs = _LANE_OPS[op].format(*(f"a{i}" for i in inp))
         else:
-            rhs = f"({vtype}){{" + ", ".join(_C_OPS[op].format(*(f"a{i}[{l}]" for i in inp)) for l in range(vl)) + "}"
+            fn = _LANE_FUNCTIONS[op]
+            rhs = f"(alpes_lanes)ALPES_MAP{'2' if len(inp) == 2 else ''}({fn}, {', '.join(f'a{i}' for i in inp)})"
         lines.append(f"  a{out[0]}={rhs};")
-    return f"static void {name}(const double* x, double* y, const double* c) {{\n{_declare(prog, vtype)}" \
-        "  (void)c;\n" + "\n".join(lines) + "\n}\n"
+    return (f"static void {name}(const double* x, double* y, const double* const* c) {{\n"
+            f"{_declare(prog, 'alpes_lanes')}  (void)c;\n" + "\n".join(lines) + "\n}\n")
 
 
 def chain_model_source(f: cs.Function, block: list[int], name: str) -> tuple[str, int] | None:
@@ -207,8 +230,7 @@ def chain_model_source(f: cs.Function, block: list[int], name: str) -> tuple[str
     lanes = ", ".join(str(len(mb)) for mb in groups.values())
     head = (f"\n/* ---- alpes_dyn: the model by blocks ({nb} blocks, {len(groups)} structure(s), lanes {lanes}): "
             "CasADi's instructions of each block, the same operations in the same order ---- */\n")
-    head += ("#include <string.h>\n#if (defined(__GNUC__) || defined(__clang__)) && !defined(ALPES_NO_LANES)\n"
-             "#define ALPES_LANES 1 /* the blocks of one structure side by side in vector variables */\n#endif\n")
+    head += _LANES_HEAD
     wrapper = (f"int {name}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{\n"
                "  int i, l;\n  (void)iw;\n  (void)mem;\n" + "\n".join(calls) + "\n  return 0;\n}\n")
     return head + "\n".join(parts) + "\n" + wrapper, nwork
@@ -228,10 +250,10 @@ def _group_source(name: str, prog: list[tuple[Any, ...]], ni: int, m: int,
            "in_nz": [members[l][0][i][1] for l in range(L) for i in range(ni)],
            "out_res": [members[l][2][k][0] for l in range(L) for k in range(m)],
            "out_nz": [members[l][2][k][1] for l in range(L) for k in range(m)]}
-    scalar_parts = [_template(name, prog, first, slots),
-                    f"static const double {name}_c[{L * no}] = "
-                    f"{{{', '.join(repr(v) for o in own for v in (o or [0.0]))}}};"]
-    parts = scalar_parts if L == 1 else ["#ifndef ALPES_LANES", *scalar_parts, "#endif"]
+    parts = [_template(name, prog, first, slots),
+             f"static const double {name}_c[{L * no}] = {{{', '.join(repr(v) for o in own for v in (o or [0.0]))}}};"]
+    if L > 1:
+        parts[0] = f"#ifndef ALPES_LANES\n{parts[0]}#endif"
     parts += [f"static const int {name}_{t}[{max(len(v), 1)}] = {{{', '.join(map(str, v)) or '0'}}};"
               for t, v in tab.items()]
     scalar = (f"  for (l = 0; l < {L}; ++l) {{\n"
@@ -241,16 +263,17 @@ def _group_source(name: str, prog: list[tuple[Any, ...]], ni: int, m: int,
               f"w[{ni} + i];\n  }}")
     if L == 1:
         return "\n".join(parts), scalar, ni + m
-    vl = 1 << (L - 1).bit_length()
-    vtype = f"{name}_lanes"
-    lane_c = [own[l if l < L else 0][j] for j in range(len(own[0])) for l in range(vl)] or [0.0]
-    parts += ["#ifdef ALPES_LANES", f"typedef double {vtype} __attribute__((vector_size({8 * vl})));",
-              _lane_template(f"{name}_v", prog, first, slots, vl, vtype),
-              f"static const double {name}_vc[{len(lane_c)}] = {{{', '.join(map(repr, lane_c))}}};", "#endif"]
-    vector = (f"  for (i = 0; i < {ni}; ++i)\n    for (l = 0; l < {vl}; ++l) {{\n"
-              f"      const int s = {ni} * (l < {L} ? l : 0) + i;\n"
-              f"      w[{vl} * i + l] = arg[{name}_in_arg[s]][{name}_in_nz[s]];\n    }}\n"
-              f"  {name}_v(w, w + {ni * vl}, {name}_vc);\n"
-              f"  for (i = 0; i < {m}; ++i)\n    for (l = 0; l < {L}; ++l)\n"
-              f"      res[{name}_out_res[{m} * l + i]][{name}_out_nz[{m} * l + i]] = w[{ni * vl} + {vl} * i + l];")
-    return "\n".join(parts), f"#ifdef ALPES_LANES\n{vector}\n#else\n{scalar}\n#endif", (ni + m) * vl
+    parts += ["#ifdef ALPES_LANES", _lane_template(f"{name}_v", prog, first, slots), "#endif"]
+    vector = (f"  for (l = 0; l < {L}; l += ALPES_VL) {{ /* ALPES_VL blocks at once, the spare lanes a copy of the "
+              "first */\n"
+              "    const double* cl[ALPES_VL];\n    int u;\n"
+              "    for (u = 0; u < ALPES_VL; ++u) {\n"
+              f"      const int b = l + u < {L} ? l + u : l;\n"
+              f"      cl[u] = {name}_c + {no} * b;\n"
+              f"      for (i = 0; i < {ni}; ++i) w[ALPES_VL * i + u] = arg[{name}_in_arg[{ni} * b + i]][{name}_in_nz[{ni} * b + i]];\n"
+              "    }\n"
+              f"    {name}_v(w, w + ALPES_VL * {ni}, cl);\n"
+              f"    for (i = 0; i < {m}; ++i)\n      for (u = 0; u < ALPES_VL && l + u < {L}; ++u)\n"
+              f"        res[{name}_out_res[{m} * (l + u) + i]][{name}_out_nz[{m} * (l + u) + i]] = "
+              f"w[ALPES_VL * ({ni} + i) + u];\n  }}")
+    return "\n".join(parts), f"#ifdef ALPES_LANES\n{vector}\n#else\n{scalar}\n#endif", (ni + m) * 4
