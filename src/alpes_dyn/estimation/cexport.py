@@ -8,10 +8,11 @@ without their parameter states) into three texts:
 * ``alpes_<kind>.c`` -- the filter's own step
   (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step`, the expression that ``run``, ``online``
   and the compiled loop evaluate: the same numbers, to the last bit) and its measurement update, with the two
-  functions below: for the EKF, CasADi's generated code of the model and its Jacobian and the covariance
-  arithmetic as loops over their nonzeros (:mod:`~alpes_dyn.estimation.cexport_ekf`, ``code="sparse"``); for
-  the UKF (or ``code="casadi"``), CasADi's generated code of the whole step. It needs only ``<math.h>`` (link
-  with ``-lm``): no CasADi runtime, no heap, no global state;
+  functions below: for the EKF, the code of the model and its Jacobian (on the hand by chain, the fingers side by
+  side in vector lanes: :mod:`~alpes_dyn.estimation.cexport_chains`; else CasADi's generated code) and the
+  covariance arithmetic as loops over their nonzeros (:mod:`~alpes_dyn.estimation.cexport_ekf`,
+  ``code="sparse"``); for the UKF (or ``code="casadi"``), CasADi's generated code of the whole step. It needs
+  only ``<math.h>`` and ``<string.h>`` (link with ``-lm``): no CasADi runtime, no heap, no global state;
 * ``main.c`` -- a test program: reads a prior, a first measurement and lines of inputs and measurements,
   prints the estimate and its covariance after each sample (``%.17g``: they read back exactly), or times the
   step (``-t REPEAT``).
@@ -29,7 +30,11 @@ P column-major (it is symmetric); outputs may be the inputs (in place); 0 on suc
 :func:`scenario_filter` builds the observer of ``alpes-dyn estimate``'s scenario (its noise settings and
 prior) for ``alpes-dyn codegen``. Build::
 
-    cc -O2 -o alpes_ekf_main main.c alpes_ekf.c -lm
+    cc -O2 -std=c99 -o alpes_ekf_main main.c alpes_ekf.c -lm
+
+The lanes use GCC's and Clang's vector extensions, 2 doubles wide by default (SSE2 on any x86-64, NEON), 4 with
+AVX (``-mavx``, ``-march=native`` on a machine that has it); ``-DALPES_NO_LANES`` (and any other compiler) runs
+the fingers one after the other. All give the same numbers.
 """
 
 from __future__ import annotations

@@ -23,7 +23,7 @@ from typing import Any
 
 import casadi as cs
 
-__all__ = ["model_blocks", "chain_model_source"]
+__all__ = ["components", "model_blocks", "chain_model_source"]
 
 _C_OPS: dict[int, str] = {
     cs.OP_ASSIGN: "{0}", cs.OP_ADD: "{0}+{1}", cs.OP_SUB: "{0}-{1}", cs.OP_MUL: "{0}*{1}",
@@ -36,11 +36,9 @@ _C_OPS: dict[int, str] = {
 for twice, 1./x for inv)."""
 
 
-def model_blocks(f: cs.Function, n_states: int, state_input: int = 0) -> list[int]:
-    """Each state's block: the connected components of the states that ``f``'s outputs couple -- an output
-    nonzero in row i that depends on state k joins i and k (outputs with ``n_states`` rows) -- numbered by their
-    first state. ``f``'s input ``state_input`` is the state."""
-    parent = list(range(n_states))
+def components(n: int, pairs: Any) -> list[int]:
+    """The connected components of n items joined by ``pairs`` (i, j): each item's, numbered by their first item."""
+    parent = list(range(n))
 
     def root(i: int) -> int:
         while parent[i] != i:
@@ -48,6 +46,18 @@ def model_blocks(f: cs.Function, n_states: int, state_input: int = 0) -> list[in
             i = parent[i]
         return i
 
+    for i, j in pairs:
+        parent[root(int(i))] = root(int(j))
+    first: dict[int, int] = {}
+    return [first.setdefault(root(i), len(first)) for i in range(n)]
+
+
+def model_blocks(f: cs.Function, n_states: int, state_input: int = 0) -> list[int]:
+    """Each state's block: the connected components of the states that ``f``'s outputs couple -- an output
+    nonzero in row i that depends on state k joins i and k, an entry (i, j) of a square output joins i and j
+    (outputs with ``n_states`` rows) -- numbered by their first state. ``f``'s input ``state_input`` is the
+    state."""
+    pairs = []
     for o in range(f.n_out()):
         if f.size1_out(o) != n_states:
             continue
@@ -55,15 +65,10 @@ def model_blocks(f: cs.Function, n_states: int, state_input: int = 0) -> list[in
         rows = sp.row()
         dep = f.jac_sparsity(o, state_input, True)  # (nonzeros of output o, states)
         colind, drow = dep.colind(), dep.row()
-        for k in range(n_states):
-            for a in range(colind[k], colind[k + 1]):
-                parent[root(rows[drow[a]])] = root(k)
-        for j, (c0, c1) in enumerate(zip(sp.colind()[:-1], sp.colind()[1:])):
-            if f.size2_out(o) == n_states:  # a square output (A, N): its entry (i, j) joins i and j
-                for a in range(c0, c1):
-                    parent[root(rows[a])] = root(j)
-    first: dict[int, int] = {}
-    return [first.setdefault(root(i), len(first)) for i in range(n_states)]
+        pairs += [(rows[drow[a]], k) for k in range(n_states) for a in range(colind[k], colind[k + 1])]
+        if f.size2_out(o) == n_states:  # a square output (A, N)
+            pairs += [(rows[a], j) for j in range(n_states) for a in range(sp.colind()[j], sp.colind()[j + 1])]
+    return components(n_states, pairs)
 
 
 def _program(f: cs.Function) -> tuple[list[tuple[Any, ...]], list[tuple[int, int]], list[float]]:
@@ -194,6 +199,10 @@ def _lane_template(name: str, prog: list[tuple[Any, ...]], consts: list[float], 
             f"{_declare(prog, 'alpes_lanes')}  (void)c;\n" + "\n".join(lines) + "\n}\n")
 
 
+_Member = tuple[list[tuple[int, int]], list[float], list[tuple[int, int]]]
+"""A block of a structure: its input places (arg, nz), its constants, its output places (res, nz)."""
+
+
 def chain_model_source(f: cs.Function, block: list[int], name: str) -> tuple[str, int] | None:
     """C source of ``name(arg, res, iw, w, mem)``, ``f``'s computation (CasADi's calling convention; all its
     outputs requested) by blocks, the blocks of one structure by one function; and the doubles of work it needs.
@@ -209,7 +218,7 @@ def chain_model_source(f: cs.Function, block: list[int], name: str) -> tuple[str
         rows = X.sparsity().row()
         for a in range(X.nnz()):
             per_block[block[rows[a]]].append((o, a, X.nz[a]))
-    groups: dict[tuple[Any, ...], list[tuple[list[tuple[int, int]], list[float], list[tuple[int, int]]]]] = {}
+    groups: dict[tuple[Any, ...], list[_Member]] = {}
     for b in range(nb):
         fb = cs.Function(f"{name}_b{b}", f.sx_in(), [cs.vertcat(*[e for _, _, e in per_block[b]])])
         prog, ins, consts = _program(fb)
@@ -237,11 +246,11 @@ def chain_model_source(f: cs.Function, block: list[int], name: str) -> tuple[str
 
 
 def _group_source(name: str, prog: list[tuple[Any, ...]], ni: int, m: int,
-                  members: list[tuple[list[tuple[int, int]], list[float], list[tuple[int, int]]]]) -> tuple[str, str, int]:
+                  members: list[_Member]) -> tuple[str, str, int]:
     """The C of one structure's blocks (members: each block's input places, constants and output places): its
     functions and tables, the wrapper's lines that gather the inputs, call it and scatter the outputs, and the
-    doubles of work they need. With several blocks, under ALPES_LANES a vector of lanes (a power of two, the
-    spare lanes a copy of the first), else one call per block."""
+    doubles of work they need. With several blocks, under ALPES_LANES ALPES_VL blocks at a time in vector
+    variables (the spare lanes a copy of the first block), else one call per block."""
     L = len(members)
     slots, own = _constants([c for _, c, _ in members])
     no = max(len(own[0]), 1)

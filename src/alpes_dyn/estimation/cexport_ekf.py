@@ -1,22 +1,31 @@
 """The EKF's step as C with its covariance arithmetic written out as loops (issue 20, item 3).
 
-:func:`~alpes_dyn.estimation.cexport.c_sources` exports the EKF this way (``code="sparse"``). CasADi generates
-the code of the model alone -- the RK4 step z_next = F(z, w), its Jacobian A = dF/dz (sparse, CSC) and the
-noise's share N = G Sigma_w G^T + Q (its lower triangle, G = dF/dw), the filter's
-:attr:`~alpes_dyn.estimation.observers.ExtendedKalmanFilter.linearized`; the measurement h(z) and H = dh/dz,
-its :attr:`~alpes_dyn.estimation.observers.KalmanFilter.measurement`. The covariance arithmetic is C loops over
-the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.covariance`, the order in
-which the filter's own step (``filter_step``, what ``run``, ``online`` and the compiled loop evaluate) is built:
-the same operations, the same numbers, to the last bit. The loops skip the products by an exact zero of P, of
-P H^T or of K (they add a zero: the sign of a zero aside, nothing changes): a hand whose prior is block-diagonal
-by chain keeps a block-diagonal P, and most of the products are such zeros.
+:func:`~alpes_dyn.estimation.cexport.c_sources` exports the EKF this way (``code="sparse"``). The model -- the
+RK4 step z_next = F(z, w), its Jacobian A = dF/dz (sparse, CSC) and the noise's share N = G Sigma_w G^T + Q (its
+lower triangle, G = dF/dw), the filter's :attr:`~alpes_dyn.estimation.observers.ExtendedKalmanFilter.linearized`
+-- is CasADi's instructions written out by block (:mod:`~alpes_dyn.estimation.cexport_chains`: the hand's four
+fingers side by side in vector lanes, its thumb alone) or, where the model has one block (a finger) or
+``chains=False``, CasADi's generated code of it; the measurement h(z) and H = dh/dz, its
+:attr:`~alpes_dyn.estimation.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic is C
+loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.covariance`, the
+order in which the filter's own step (``filter_step``, what ``run``, ``online`` and the compiled loop evaluate) is
+built: the same operations, the same numbers, to the last bit. Each sum accumulates in a register and is stored
+once. The blocks: the states that A, N, H and R couple (the hand: its five chains); when P's entries between two
+blocks are exact zeros (a prior diagonal or block-diagonal by chain; A P A^T + N and the update keep them so) the
+loops run over each column's block only and write the rest as zeros -- sums of products by an exact zero, so the
+sign of a zero aside nothing changes --, else over all rows. The products by an exact zero of P H^T or of K are
+skipped likewise.
 
 Why: CasADi's expression of the whole step is straight-line code of every scalar operation of the dense
-nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program, 44 us per step); the model's code
-is 41,000 operations and the loops a few kilobytes. ``benchmarks/observer_step.py`` measures both.
+nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program); the model's code is 41,500
+operations, 466 kB of machine code in one function, and the loops a few kilobytes. ``benchmarks/observer_step.py``
+measures the three codes: the default, the loops on CasADi's code of the whole model (``chains=False``) and
+CasADi's code of the whole step.
 
 Bit for bit needs the C compiler's IEEE arithmetic as written: no ``-ffast-math``, and no contraction of a
-multiply and an add into one (``-std=c99``, or ``-ffp-contract=off`` on targets with a fused multiply-add).
+multiply and an add into one (``-std=c99``, or ``-ffp-contract=off`` on targets with a fused multiply-add); with
+those, any optimisation level and ``-march`` give the same numbers (the hand's export at -O1, -O2, -O3 and
+``-O1 -march=native`` printed the same estimates, 2026-12-02).
 """
 
 from __future__ import annotations
@@ -26,7 +35,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-from .cexport_chains import chain_model_source, model_blocks
+from .cexport_chains import chain_model_source, components, model_blocks
 from .observers import ExtendedKalmanFilter
 
 __all__ = ["ekf_c_source"]
@@ -343,38 +352,21 @@ def _blocks(sA: cs.Sparsity, sN: cs.Sparsity, sH: cs.Sparsity, R: np.ndarray) ->
     """Each state's block: the connected components of the states that A, N, H (one measurement's states) and R
     (two measurements' states) couple, numbered by their first state."""
     nz = sA.size1()
-    parent = list(range(nz))
-
-    def root(i: int) -> int:
-        while parent[i] != i:
-            parent[i] = parent[parent[i]]
-            i = parent[i]
-        return i
-
-    def join(i: int, j: int) -> None:
-        parent[root(i)] = root(j)
-
+    pairs = []
     for sp in (sA, sN):
         colind, row = sp.colind(), sp.row()
-        for k in range(nz):
-            for a in range(colind[k], colind[k + 1]):
-                join(row[a], k)
-    _, H_col, _ = _rows(sH)
-    H_ptr = _rows(sH)[0]
+        pairs += [(row[a], k) for k in range(nz) for a in range(colind[k], colind[k + 1])]
+    H_ptr, H_col, _ = _rows(sH)
     states = [H_col[H_ptr[r]:H_ptr[r + 1]] for r in range(sH.size1())]
-    for cols in states:
-        for k in cols[1:]:
-            join(cols[0], k)
-    for r1, r2 in zip(*np.nonzero(R)):
-        if states[r1] and states[r2]:
-            join(states[r1][0], states[r2][0])
-    first: dict[int, int] = {}
-    return [first.setdefault(root(i), len(first)) for i in range(nz)]
+    pairs += [(cols[0], k) for cols in states for k in cols[1:]]
+    pairs += [(states[r1][0], states[r2][0]) for r1, r2 in zip(*np.nonzero(R)) if states[r1] and states[r2]]
+    return components(nz, pairs)
 
 
 def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True) -> tuple[str, int]:
     """The C source of ``filt``'s step and update (the API of :mod:`~alpes_dyn.estimation.cexport`) and the
-    doubles of its work array: (source, nwork)."""
+    doubles of its work array: (source, nwork). ``by_chain``: the model's code by block
+    (:mod:`~alpes_dyn.estimation.cexport_chains`) where it has several, else CasADi's."""
     nz, ny = filt.nz, filt.ny
     lin, meas = filt.linearized, filt.measurement  # the functions the filter's step calls
     fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
