@@ -1,19 +1,22 @@
 """The observer's step for a real-time loop (issue 20): microseconds per sample, in the same process, of
 
     OnlineFilter.step   (KalmanFilter.online: one call into the compiled predict-update step)
-    C export            (alpes-dyn codegen: alpes_ekf_step in the exported C, its default code -- the covariance
-                         arithmetic as loops on the hand, CasADi's code of the whole step on finger3 --, compiled with
-                         cc -O2 (-O1 for a source over 500 kB: the hand's) and timed by its main.c -t,
-                         no Python in the loop, wall clock and (cpu) the process's processor time, which a loaded
-                         machine inflates less; goals: under 5 us on finger3, 30 us on the hand)
-    C whole             (the baseline C: CasADi's code of the filter's whole step, code="casadi", the export's only
-                         code before the loops, built and timed the same way; the column C/whole is the ratio)
+    C export            (alpes-dyn codegen: alpes_ekf_step in the exported C, its default code -- on the hand the
+                         model by chains, the four fingers side by side in vector lanes, and the covariance loops by
+                         block; on finger3 CasADi's code of the whole step --, compiled with cc -O2 -std=c99 (-O1 for
+                         a source over 500 kB: the hand's) and timed by its main.c -t, no Python in the loop, wall
+                         clock and (cpu) the process's processor time, which a loaded machine inflates less; goals:
+                         under 5 us on finger3, 30 us on the hand; "build s": its compile)
+    C whole             (a baseline C: CasADi's code of the filter's whole step, code="casadi", built and timed the
+                         same way; the column C/whole is the ratio)
+    C 1model            (the covariance loops on CasADi's code of the whole model, chains=False: the hand's model
+                         code of the export before the chains; C/1model is the ratio)
     KalmanFilter.step   (the Python API: CasADi's virtual machine, checks and copies)
     filterpy + Pinocchio  (the baseline: filterpy's ExtendedKalmanFilter with the RK4 step on pinocchio.aba and
                            its exact Jacobian from pinocchio.computeABADerivatives through the four RK4 stages)
 
 on finger3 and the hand (motor inputs, encoder outputs, the scenario's noise settings), each filtering the
-same record; the estimates are compared (|C-run|, |Cw-run|: both C exports give run()'s, 0.0; filterpy's RK4
+same record; the estimates are compared (|C-run|, |Cw-run|, |C1-run|: the C exports give run()'s, 0.0; filterpy's RK4
 is the same discretisation: they agree to rounding). Goals: OnlineFilter.step under 20 us on finger3 and 100 us
 on the hand. The first run compiles the filter step (seconds on finger3, minutes on the hand: cached on disk); the
 timings exclude it.
@@ -73,24 +76,28 @@ def _rk4_and_jacobian(m: ad.Model, dt: float):
     return step
 
 
-def c_exports(filt, z0, P0, W, Y, rounds: int = 3) -> tuple[dict, dict]:
-    """The exported C step (alpes-dyn codegen's files for ``filt``) with its default code (the EKF's covariance
-    loops on the hand, CasADi's code of the whole step on a finger) and with CasADi's code of the whole step
-    (code="casadi", the baseline): each built with the system compiler, run on the record (its estimates) and
-    timed by main.c's -t (us per step, wall clock and processor time), the two in turn ``rounds`` times, the
-    fastest kept (a loaded machine's bursts fall on both); ({}, {}) with None where no C compiler is found."""
+def c_exports(filt, z0, P0, W, Y, rounds: int = 3) -> tuple[dict, dict, dict]:
+    """The exported C step (alpes-dyn codegen's files for ``filt``) with its default code (on the hand: the model
+    by chains, the fingers side by side, and the covariance loops by block; on a finger CasADi's code of the whole
+    step), with the covariance loops on CasADi's code of the whole model (``chains=False``: the model's code of the
+    export before; on a finger, where the default is CasADi's code, the loops with it), and with CasADi's code of
+    the whole step (code="casadi", the baseline): each built with the system compiler, run on the record (its
+    estimates) and timed by main.c's -t (us per step, wall clock and processor time), the three in turn
+    ``rounds`` times, the fastest kept (a loaded machine's bursts fall on all); dicts with None where no C
+    compiler is found."""
     cc = shutil.which(os.environ.get("CC", "").strip() or "gcc") or shutil.which("cc")
     if cc is None:
-        return {"c_us": None, "c_build_s": None, "Z": None}, {"c_us": None, "c_build_s": None, "Z": None}
+        return tuple({"c_us": None, "c_build_s": None, "Z": None} for _ in range(3))  # type: ignore[return-value]
     with tempfile.TemporaryDirectory() as d:
         built = []
-        for code in (None, "casadi"):
-            files = write_c_observer(filt, Path(d) / str(code), code=code)
+        for name, kw in (("default", {}), ("whole_model", {"code": "sparse", "chains": False}),
+                         ("casadi", {"code": "casadi"})):
+            files = write_c_observer(filt, Path(d) / name, **kw)
             src = files["alpes_ekf.c"]
             opt = "-O1" if src.stat().st_size > _LARGE_SOURCE else "-O2"
             exe = src.parent / "alpes_ekf_main"
             t0 = time.perf_counter()
-            subprocess.run([cc, opt, "-o", str(exe), str(files["main.c"]), str(src), "-lm"], check=True,
+            subprocess.run([cc, opt, "-std=c99", "-o", str(exe), str(files["main.c"]), str(src), "-lm"], check=True,
                            capture_output=True)
             build_s = time.perf_counter() - t0
             inp = src.parent / "in.txt"
@@ -106,7 +113,7 @@ def c_exports(filt, z0, P0, W, Y, rounds: int = 3) -> tuple[dict, dict]:
                                        text=True).stdout
                 r["c_us"] = min(r["c_us"], float(timed.split(":")[1].split("us")[0]))
                 r["c_cpu_us"] = min(r["c_cpu_us"], float(timed.split(",")[1].split("us")[0]))
-    return built[0][2], built[1][2]
+    return built[0][2], built[1][2], built[2][2]
 
 
 def bench(name: str, steps: int) -> dict:
@@ -166,8 +173,8 @@ def bench(name: str, steps: int) -> dict:
         Z_fp[k + 1] = fp.x
     filterpy_us = (time.perf_counter() - t0) / steps * 1e6
     est = filt.run(z0, P0, W, Y)
-    c, whole = c_exports(filt, z0, P0, W, Y)  # the baseline C: CasADi's code of the whole step
-    Zc, Zw = c.pop("Z"), whole.pop("Z")
+    c, loops, whole = c_exports(filt, z0, P0, W, Y)  # the baseline C: CasADi's code of the whole step
+    Zc, Zl, Zw = c.pop("Z"), loops.pop("Z"), whole.pop("Z")
     return {"model": name, "states": 2 * n, "online_us": online_us, "step_us": step_us, "filterpy_us": filterpy_us,
             "online_vs_filterpy": online_us / filterpy_us, "step_vs_filterpy": step_us / filterpy_us,
             "online_equals_run": bool(np.array_equal(Z_on, est.z)),
@@ -179,7 +186,13 @@ def bench(name: str, steps: int) -> dict:
             "c_casadi_build_s": whole["c_build_s"], "c_casadi_opt": whole.get("c_opt"),
             "c_vs_c_casadi": c["c_us"] / whole["c_us"] if c["c_us"] is not None else None,
             "c_cpu_vs_c_casadi": c["c_cpu_us"] / whole["c_cpu_us"] if c["c_us"] is not None else None,
-            "c_casadi_max_diff_vs_run": float(np.abs(Zw - est.z).max()) if Zw is not None else None}
+            "c_casadi_max_diff_vs_run": float(np.abs(Zw - est.z).max()) if Zw is not None else None,
+            "c_build_s": c["c_build_s"], "c_source_bytes": c.get("c_source_bytes"),
+            "c_whole_model_us": loops["c_us"], "c_whole_model_cpu_us": loops.get("c_cpu_us"),
+            "c_whole_model_build_s": loops["c_build_s"],
+            "c_vs_c_whole_model": c["c_us"] / loops["c_us"] if c["c_us"] is not None else None,
+            "c_cpu_vs_c_whole_model": c["c_cpu_us"] / loops["c_cpu_us"] if c["c_us"] is not None else None,
+            "c_whole_model_max_diff_vs_run": float(np.abs(Zl - est.z).max()) if Zl is not None else None}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -201,12 +214,15 @@ def main(argv: list[str] | None = None) -> int:
     print(f"load average {out['load_avg']:.1f}; us per sample (build of the compiled step excluded)")
     print(f"{'model':8s} {'states':>6s} {'online':>9s} {'step()':>9s} {'filterpy':>9s} {'online/fp':>9s} "
           f"{'=run':>5s} {'|fp-online| rad':>15s} {'C export':>9s} {'(cpu)':>7s} {'C/fp':>7s} {'|C-run|':>9s} "
-          f"{'C whole':>9s} {'(cpu)':>7s} {'C/whole':>7s} {'(cpu)':>7s} {'|Cw-run|':>9s}")
+          f"{'C whole':>9s} {'(cpu)':>7s} {'C/whole':>7s} {'(cpu)':>7s} {'|Cw-run|':>9s} "
+          f"{'C 1model':>9s} {'(cpu)':>7s} {'C/1model':>8s} {'(cpu)':>7s} {'|C1-run|':>9s} {'build s':>7s}")
     for r in rows:
         c = (f"{r['c_us']:9.2f} {r['c_cpu_us']:7.2f} {r['c_vs_filterpy']:7.4f} {r['c_max_diff_vs_run']:9.1e} "
              f"{r['c_casadi_us']:9.2f} {r['c_casadi_cpu_us']:7.2f} {r['c_vs_c_casadi']:7.3f} "
-             f"{r['c_cpu_vs_c_casadi']:7.3f} {r['c_casadi_max_diff_vs_run']:9.1e}" if r["c_us"] is not None
-             else f"{'no cc':>9s} {'-':>7s} {'-':>7s} {'-':>9s} {'-':>9s} {'-':>7s} {'-':>7s} {'-':>7s} {'-':>9s}")
+             f"{r['c_cpu_vs_c_casadi']:7.3f} {r['c_casadi_max_diff_vs_run']:9.1e} "
+             f"{r['c_whole_model_us']:9.2f} {r['c_whole_model_cpu_us']:7.2f} {r['c_vs_c_whole_model']:8.3f} "
+             f"{r['c_cpu_vs_c_whole_model']:7.3f} {r['c_whole_model_max_diff_vs_run']:9.1e} {r['c_build_s']:7.1f}"
+             if r["c_us"] is not None else "no C compiler")
         print(f"{r['model']:8s} {r['states']:6d} {r['online_us']:9.2f} {r['step_us']:9.1f} {r['filterpy_us']:9.1f} "
               f"{r['online_vs_filterpy']:9.3f} {str(r['online_equals_run']):>5s} {r['filterpy_max_diff_rad']:15.2e} "
               f"{c}")
