@@ -107,6 +107,7 @@ PHYSICAL_RANGES: dict[str, tuple[float, float]] = {
     "counts/rev": (1.0, 1e9),
     "counts": (1e-9, 1e9),
     "s": (1e-9, 1e6),
+    "Hz": (1e-6, 1e6),
 }
 """The accepted magnitudes of a physical quantity, by its unit: (smallest, largest) magnitude of a non-zero value.
 A value must be finite, not subnormal and at most the largest in magnitude; a quantity that must be positive (a
@@ -121,7 +122,7 @@ _SMALLEST_NORMAL = 2.2250738585072014e-308
 def check_not_subnormal(x: float, field: str, unit: str = "", error: type[Exception] = InputError) -> float:
     """``x`` unless it is a subnormal number (0 < abs(x) < 2.2e-308, e.g. 1e-320): ``error`` naming ``field``."""
     if x != 0.0 and abs(x) < _SMALLEST_NORMAL:
-        raise error(f"{field}: {x:g}{' ' + unit if unit and unit != '-' else ''} is a subnormal number (below "
+        raise error(f"{field}: {x!r}{' ' + unit if unit and unit != '-' else ''} is a subnormal number (below "
                     "2.2e-308, the smallest normal float): write 0 or a physical value")
     return x
 

@@ -26,7 +26,7 @@ from ..errors import AlpesDynError, InputError
 from ..fileio import native_stderr_to
 from ..limits import MAX_ARGS
 from .common import (EXIT_UNTRUSTED, _join_negative_vectors, _one_line, _StdoutError, _Untrusted, _UsageError,
-                     _write_stdout)
+                     _write_stdout, check_option_ranges, refuse_repeated_options)
 from .parser import build_parser
 
 # the names of the former module cli.py, where they are now (``from alpes_dyn.cli import X`` still works)
@@ -50,7 +50,10 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
     try:
         if len(argv) > MAX_ARGS:
             raise InputError(f"{len(argv)} command-line arguments, over the limit of {MAX_ARGS}")
-        args = build_parser().parse_args(_join_negative_vectors(argv))
+        parser = build_parser()
+        refuse_repeated_options(parser, argv)
+        args = parser.parse_args(_join_negative_vectors(argv))
+        check_option_ranges(args)
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args), None
     except _UsageError as exc:
