@@ -162,6 +162,14 @@ def bad_files(d: Path) -> dict[str, str]:
     files["cable_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = 3.0, '
                                             'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
+    # physical ranges (issue 19): an angle, a ratio, gravity of 1e300, a subnormal spring, an axis of 1e300
+    files["angle_toml"] = _toml_field("finger.upper", '{ value = 1e300, unit = "rad", source = "report" }')
+    files["ratio_toml"] = _toml_field("transmission.N", '{ value = 1e300, unit = "-", source = "report" }')
+    files["gravity_toml"] = _toml_field("environment.gravity", '{ value = [0.0, 0.0, -1e300], unit = "m/s^2", '
+                                        'source = "report" }')
+    files["subk_toml"] = _toml_field("finger.K", '{ value = [1e-320, 0.05, 0.06], unit = "N m/rad", source = "report" }')
+    files["axis_toml"] = _toml_field("thumb.abduction_axis", '{ value = [1e300, 0.0, 0.0], unit = "-", '
+                                     'source = "report", reason = "x" }')
     files.update({k: v.encode() for k, v in URDFS.items()})
     files.update(robot_urdf=ROBOT_URDF.encode(), robot_toml=ROBOT_SPEC.encode(),
                  robotident_toml=(ROBOT_SPEC + "\n[identified.stiffness]\nj1 = 1e-5\nj9 = 1e-5\n").encode(),
@@ -170,7 +178,11 @@ def bad_files(d: Path) -> dict[str, str]:
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
                  robotctl_toml=ROBOT_CONTROL_SPEC.encode(),
-                 robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode())
+                 robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode(),
+                 robotratio_toml=ROBOT_SPEC.replace("j1 = 2.0", "j1 = 1e300", 1).encode(),
+                 robotsub_toml=ROBOT_SPEC.replace("j1 = 0.04", "j1 = 1e-320", 1).encode(),
+                 robotcounts_toml=("encoder_counts = 4096.5\n" + ROBOT_SPEC).encode(),
+                 robotempty_toml=b"# a spec with nothing in it\n")
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -736,6 +748,52 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--observer-params", "{bigint_toml}", needle="integer of 401 digits"),
     ],
 }
+
+# issue 19's re-check: numbers outside their unit's accepted range, repeated options, the cache's folder, outputs
+RANGE = "is outside the accepted range"
+CLI["dynamics"] += [
+    C("dynamics", "--q", "1e300,0,0", needle=f"--q: 1e+300 rad (index 0) {RANGE} [-100, 100] rad"),
+    C("dynamics", "--v=0,-1e300,0", needle=f"--v: -1e+300 rad/s (index 1) {RANGE} [-10000, 10000] rad/s"),
+    C("dynamics", "--force", "0,0,1e-320", needle="--force (index 2): 1e-320 N is a subnormal number"),
+    C("dynamics", "--q", "0.1,0,0", "--q", "0.2,0,0", needle="--q: given 2 times; give it once"),
+    C("dynamics", "--json", "--json", needle="--json: given 2 times; give it once"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotratio_toml}",
+      needle=f"motor 'flexor'.joints.j1: 1e+300 {RANGE} [-1e+06, 1e+06]"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotsub_toml}", needle="stiffness.j1: 1e-320 N m/rad is a "
+      "subnormal number"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotcounts_toml}",
+      needle="encoder_counts: expected a whole number of counts per revolution, got 4096.5"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotempty_toml}", needle="holds nothing (no [[motor]]"),
+    C("dynamics", "--params", "{angle_toml}", needle=f"finger.upper: 1e+300 rad {RANGE} [-100, 100] rad"),
+]
+CLI["mjcf"] += [
+    C("mjcf", "finger3", "--tendon-stiffness", "1e300", "-o", "{tmp}/m.xml",
+      needle=f"--tendon-stiffness: 1e+300 N/m {RANGE} [1e-06, 1e+12] N/m"),
+    C("mjcf", "finger3", "--stiction", "1e-320", "-o", "{tmp}/m.xml", needle="--stiction: 1e-320 s is a subnormal"),
+    C("mjcf", "hand", "--params", "{ratio_toml}", "-o", "{tmp}/m.xml", needle=f"transmission.N: 1e+300 {RANGE}"),
+]
+CLI["linearize"] += [C("linearize", "--u", "1e300,0,0", needle=f"--u: 1e+300 N m (index 0) {RANGE}")]
+CLI["experiment"] += [
+    C("experiment", "--duration", "0.2", "-o", "{tmp}/a.csv", "-o", "{tmp}/b.csv", needle="-o: given 2 times"),
+    C("experiment", "--perturb", "1e300", "-o", "{tmp}/r.csv", needle=f"--perturb: 1e+300 {RANGE} [0, 1e+06]"),
+    C("experiment", "--seed", "9" * 400, "-o", "{tmp}/r.csv", needle="--seed: expected an integer from 0 to "
+      "9223372036854775807"),
+]
+CLI["control"] += [
+    C("control", "--log", "{tmp}/x.png", needle="--log: '{tmp}/x.png' has extension 'png'; expected one of .csv"),
+    C("control", "--contact-q", "1e300,0.5,0.5", needle=f"--contact-q: 1e+300 rad (index 0) {RANGE}"),
+    C("control", "--tau-max", "1e300", needle=f"--tau-max: 1e+300 N m {RANGE} [1e-12, 1e+06] N m"),
+]
+CLI["estimate"] += [
+    C("estimate", "--torque-constant", "1e300", "--data", "x.csv", needle=f"--torque-constant: 1e+300 N m/A {RANGE}"),
+    C("estimate", "--encoder-offset", "1e300", "--data", "x.csv", needle=f"--encoder-offset: 1e+300 rad {RANGE}"),
+    C("estimate", "--log", "{tmp}/e.txt", "--data", "x.csv", needle="--log: '{tmp}/e.txt' has "
+      "extension 'txt'"),
+]
+CLI["identifiability"] += [C("identifiability", "--camera-times", "0.5,1e300",
+                             needle=f"--camera-times: 1e+300 s (index 1) {RANGE} [0, 1e+06] s")]
+CLI["identify"] += [C("identify", "--data", "x.csv", "--encoder-noise", "1e300",
+                      needle=f"--encoder-noise: 1e+300 counts {RANGE} [0, 1e+09] counts")]
 
 CLI_ROWS = [(cmd, row) for cmd, rows in CLI.items() for row in rows]
 
@@ -1824,6 +1882,67 @@ NOT_CALLED = {"AlpesDynError", "InputError", "ModelError", "RecordingError", "Ha
               "SPRING_MODELS"}
 
 
+def _spec(**kw):
+    from alpes_dyn.model.spec import Motor, TransmissionSpec
+
+    motor = kw.pop("motor", None)
+    return TransmissionSpec(motors=(Motor("m", **motor),) if motor else (), **kw)
+
+
+def _mjcf(**kw):
+    from alpes_dyn.model.mjcf import mjcf_string
+
+    return mjcf_string("finger3", **kw)
+
+
+def _design(**kw):
+    from alpes_dyn.estimation.experiment import ExperimentDesign
+
+    return ExperimentDesign(**kw).check()
+
+
+API.extend([  # issue 19's re-check: every number of a file, a spec and the API within its unit's accepted range
+    A("load_params", lambda c: ad.load_params(c.f["angle_toml"]), ModelError,
+      "finger.upper: 1e+300 rad is outside the accepted range [-100, 100] rad"),
+    A("load_params", lambda c: ad.load_params(c.f["ratio_toml"]), ModelError,
+      "transmission.N: 1e+300 is outside the accepted range [1e-06, 1e+06]"),
+    A("load_params", lambda c: ad.load_params(c.f["gravity_toml"]), ModelError,
+      "environment.gravity: -1e+300 m/s^2 (index 2) is outside the accepted range [-100, 100] m/s^2"),
+    A("load_params", lambda c: ad.load_params(c.f["subk_toml"]), ModelError,
+      "finger.K (index 0): 1e-320 N m/rad is a subnormal number"),
+    A("load_params", lambda c: ad.load_params(c.f["axis_toml"]), ModelError,
+      "thumb.abduction_axis: value must be a unit vector (norm 1e+300)"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["robot_urdf"], c.f["robotratio_toml"]), ModelError,
+      "motor 'flexor'.joints.j1: 1e+300 is outside the accepted range"),
+    A("Model", lambda c: ad.Model(FINGER3, gravity=[0.0, 0.0, -1e300]), ModelError,
+      "gravity: -1e+300 m/s^2 (index 2) is outside the accepted range [-100, 100] m/s^2"),
+    A("Model", lambda c: _spec(motor=dict(joints={"j1": 10**400})), ModelError,
+      "motor 'm'.joints.j1: expected a finite number, got an integer of 401 digits"),
+    A("Model", lambda c: _spec(motor=dict(joints={"j1": 1.0}, rotor_inertia=1e300)), ModelError,
+      "motor 'm'.rotor_inertia: 1e+300 kg m^2 is outside the accepted range [0, 10000] kg m^2"),
+    A("Model", lambda c: _spec(stiffness={"j1": 1e-320}), ModelError, "stiffness.j1: 1e-320 N m/rad is a subnormal"),
+    A("Model", lambda c: _spec(gravity=(0.0, 0.0, 1e300)), ModelError,
+      "gravity: 1e+300 m/s^2 is outside the accepted range [-100, 100] m/s^2"),
+    A("Model", lambda c: _spec(encoder_counts=4096.5), ModelError, "encoder_counts: expected a whole number"),
+    A("Model", lambda c: _mjcf(tendon_stiffness=1e300), InputError,
+      "tendon_stiffness: 1e+300 N/m is outside the accepted range [1e-06, 1e+12] N/m"),
+    A("Model", lambda c: _mjcf(timestep=10**400), InputError, "timestep: expected a positive number of seconds"),
+    A("Model", lambda c: _mjcf(stiction=1e-320), InputError, "stiction: 1e-320 s is a subnormal number"),
+    A("Model", lambda c: _mjcf(scene="block", block_friction=1e300), InputError,
+      "block_friction: 1e+300 is outside the accepted range [0, 1e+06]"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], torque_constant=1e300), RecordingError,
+      "torque_constant: 1e+300 N m/A is outside the accepted range [1e-09, 1000] N m/A"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], torque_constant=10**400), RecordingError,
+      "torque_constant: expected a positive number of N m/A"),
+    A("Model", lambda c: _ekf(c, process_noise=1e300), InputError, "process_noise: an entry of 1e+300 is over the "
+      "limit of 1e+12"),
+    A("Model", lambda c: _ekf(c, measurement_noise=1e-320), InputError, "measurement_noise: 1e-320 is a subnormal"),
+    A("Model", lambda c: _design(amplitude_fraction=10**400), InputError,
+      "amplitude_fraction: expected a real number, got an integer too large for a float"),
+    A("Model", lambda c: _design(dither=1e-320), InputError, "dither: 1e-320 is a subnormal number"),
+])
+
+
 def test_every_public_api_has_rows():
     public = set(ad.__all__) - NOT_CALLED
     covered = {row.api for row in API}
@@ -2126,3 +2245,40 @@ def test_experiment_on_the_file_true_params_out_wrote():
     q = finger.static_equilibrium(finger.transmission.joint_torque(np.array([bias])), np.zeros(3))
     assert np.all(q >= finger.lower + design.margin) and np.all(q <= finger.upper - design.margin), q
     assert amp > 0
+
+
+def test_cache_folder_checked_before_a_compiling_command(tmp_path, monkeypatch, capfd):
+    """The compiled-code cache's folder is checked before a compiling command starts: a symbolic link, a file, a
+    folder without a write bit (root too), a relative path are one line and exit 2 -- not a silent fall-back to
+    uncompiled code; a command that never compiles does not look at it."""
+    from alpes_dyn.simulation.codegen import CacheFolderError, check_cache_folder
+
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "folder")
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "ro").mkdir(mode=0o555)
+    cases = {str(tmp_path / "link"): "is a symbolic link", str(tmp_path / "file"): "is not a folder",
+             str(tmp_path / "ro"): "is a folder that cannot be written",
+             str(tmp_path / "ro" / "new"): "cannot be created", "relative/cache": "is not an absolute path"}
+    for path, needle in cases.items():
+        monkeypatch.setenv("ALPES_DYN_CACHE", path)
+        code = cli.main(["estimate", "--duration", "0.2"])
+        out, err = capfd.readouterr()
+        _one_stderr_line(code, out, err, needle)
+        assert "ALPES_DYN_CACHE" in err
+    assert cli.main(["dynamics", "--json"]) == 0  # dynamics compiles nothing: the bad cache is not its business
+    capfd.readouterr()
+    with pytest.raises(CacheFolderError, match="is a symbolic link"):
+        check_cache_folder(tmp_path / "link", "cache")
+    assert check_cache_folder(tmp_path / "folder" / "new", "cache") == tmp_path / "folder" / "new"
+    assert not (tmp_path / "folder" / "new").exists()  # checked, not created
+
+
+def test_output_in_a_read_only_folder_refused_to_root_too(tmp_path):
+    from alpes_dyn.fileio import check_output_path
+
+    ro = tmp_path / "ro"
+    ro.mkdir(mode=0o555)
+    with pytest.raises(InputError, match=r"-o: directory '.*ro' is not writable"):
+        check_output_path(str(ro / "out.csv"), "-o")
+    assert check_output_path(str(tmp_path / "out.csv"), "-o") == tmp_path / "out.csv"

@@ -26,7 +26,8 @@ from ..errors import AlpesDynError, InputError
 from ..fileio import native_stderr_to
 from ..limits import MAX_ARGS
 from .common import (EXIT_UNTRUSTED, _join_negative_vectors, _one_line, _StdoutError, _Untrusted, _UsageError,
-                     _write_stdout, check_option_ranges, refuse_repeated_options)
+                     _write_stdout, check_cache_before_compiling, check_option_ranges,
+                     refuse_repeated_options)
 from .parser import build_parser
 
 # the names of the former module cli.py, where they are now (``from alpes_dyn.cli import X`` still works)
@@ -54,6 +55,7 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
         refuse_repeated_options(parser, argv)
         args = parser.parse_args(_join_negative_vectors(argv))
         check_option_ranges(args)
+        check_cache_before_compiling(args)
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args), None
     except _UsageError as exc:

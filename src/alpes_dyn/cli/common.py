@@ -109,6 +109,20 @@ def parse_vector(text: str, name: str) -> np.ndarray:
     return a
 
 
+COMPILING_COMMANDS = ("estimate", "codegen", "experiment", "identify", "identifiability", "control", "sweep")
+"""The commands that may compile C code into the cache: its folder is checked before they start."""
+
+
+def check_cache_before_compiling(args: argparse.Namespace) -> None:
+    """For a command of :data:`COMPILING_COMMANDS`: the compiled-code cache's folder checked before any work
+    (:func:`alpes_dyn.simulation.codegen.cache_dir`): a symbolic link, a file or a folder that cannot be written is
+    one line and exit 2, not a silent fall-back to uncompiled code minutes later."""
+    if getattr(args, "command", None) in COMPILING_COMMANDS:
+        from ..simulation.codegen import cache_dir
+
+        cache_dir()
+
+
 def refuse_repeated_options(parser: argparse.ArgumentParser, argv: Sequence[str]) -> None:
     """InputError ``--x: given 2 times; give it once`` for an option given more than once on the command line (the
     last would silently win over the others). Flags of the command's subparser, by their dest."""
@@ -166,7 +180,7 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
         inputs.append(("--model", model))
     outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
     outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
-    check_outputs(outputs, inputs, extensions)
+    check_outputs(outputs, inputs, {"--log": ("csv",), **(extensions or {})})  # --log FILE.csv: a CSV, by its name
 
 
 def _is_urdf_path(model: str) -> bool:

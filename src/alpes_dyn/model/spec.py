@@ -290,8 +290,12 @@ class TransmissionSpec:
 
     @classmethod
     def from_toml(cls, text: str, source: str = "spec") -> "TransmissionSpec":
-        """Parse the TOML text of a spec; errors name ``source`` and the field."""
+        """Parse the TOML text of a spec; errors name ``source`` and the field. A file with nothing in it (empty, or
+        only comments: a truncated or wrong file) is refused; a spec of no motors says so with its other keys."""
         data = load_toml(text, f"spec file {source!r}", ModelError)
+        if not data:
+            raise ModelError(f"spec file {source!r}: holds nothing (no [[motor]], no table, no key); a spec names at "
+                             "least the robot's motors")
         try:
             return cls.from_dict(data)
         except ModelError as exc:
