@@ -1940,6 +1940,11 @@ API.extend([  # issue 19's re-check: every number of a file, a spec and the API 
     A("Model", lambda c: _design(amplitude_fraction=10**400), InputError,
       "amplitude_fraction: expected a real number, got an integer too large for a float"),
     A("Model", lambda c: _design(dither=1e-320), InputError, "dither: 1e-320 is a subnormal number"),
+    # a name becomes a recording's column (at most 256 characters) and an MJCF name: at most 128 characters
+    A("Model", lambda c: ad.Model(FINGER3.replace('"j3"', '"' + "j" * 300 + '"')), ModelError,
+      "URDF: joint name 'jjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjj'... of 300 characters, over the limit of 128"),
+    A("Model", lambda c: _spec(motor=dict(joints={"j1": 1.0}), name="r" * 200), ModelError,
+      "name: 'rrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrr'... has 200 characters, over the limit of 128"),
 ])
 
 

@@ -16,7 +16,7 @@
 * Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, time steps in
   [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`], derivative orders at
   most :data:`MAX_ORDER`, operation caps at most :data:`MAX_OPERATIONS`; at most :data:`MAX_ARGS` command-line arguments;
-  seeds from 0 to :data:`MAX_SEED`.
+  seeds from 0 to :data:`MAX_SEED`; names (joints, links, frames, motors) of at most :data:`MAX_NAME` characters.
 * Physical quantities (:data:`PHYSICAL_RANGES`, :func:`check_physical`): every number of a parameter file, of a
   spec and of a command-line option that has a unit lies within a range of magnitudes, by its unit: an angle of
   1e300 rad or a gear ratio of 1e300 is refused with one line naming the field and the range, as is a subnormal
@@ -33,7 +33,7 @@ from .errors import InputError
 
 __all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "check_time_step", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
            "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_URDF_JOINTS", "MAX_TOML_DEPTH", "MAX_TOML_INT",
-           "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS", "MAX_SEED", "PHYSICAL_RANGES",
+           "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS", "MAX_SEED", "MAX_NAME", "PHYSICAL_RANGES",
            "check_physical", "check_not_subnormal"]
 
 MAX_POINTS = 10_000
@@ -83,6 +83,10 @@ MAX_ORDER = 1000
 MAX_OPERATIONS = 50_000_000
 """Largest size cap (``max_operations``, CasADi operations) of one derivative order's function in the observability
 and identifiability tests (25 times the default; a larger cap lets one order take hours and tens of GB)."""
+
+MAX_NAME = 128
+"""Longest name of a joint, link, frame or motor, characters: a name becomes an MJCF name and a recording's column
+(``encoder_<motor>``, ``true_q_<joint>``), whose cells are at most :data:`MAX_CSV_CELL` characters."""
 
 MAX_SEED = 2**63 - 1
 """Largest random seed (a seed is an integer from 0 to 2^63 - 1)."""

@@ -85,7 +85,7 @@ import numpy as np
 from .description import Layout
 from ..errors import ModelError
 from ..fileio import load_toml, read_text
-from ..limits import check_physical
+from ..limits import MAX_NAME, check_physical
 from .extras import JointExtras, spring_stiffness
 from .params import IDENTIFICATION_FIELDS, HandParams
 from .transmission import Transmission
@@ -131,6 +131,8 @@ def _name(value: Any, name: str) -> str:
     become XML names in the MJCF export and CSV columns, where XML 1.0 cannot hold them at all)."""
     if not isinstance(value, str) or not value:
         raise ModelError(f"{name}: expected a non-empty string, got {value!r}")
+    if len(value) > MAX_NAME:  # it becomes a recording's column (encoder_<motor>) and an MJCF name
+        raise ModelError(f"{name}: {value[:40]!r}... has {len(value)} characters, over the limit of {MAX_NAME}")
     if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in value):
         raise ModelError(f"{name}: {value!r} holds a control character; a name is printable text")
     return value
