@@ -793,7 +793,11 @@ CLI["estimate"] += [
 CLI["identifiability"] += [C("identifiability", "--camera-times", "0.5,1e300",
                              needle=f"--camera-times: 1e+300 s (index 1) {RANGE} [0, 1e+06] s")]
 CLI["identify"] += [C("identify", "--data", "x.csv", "--encoder-noise", "1e300",
-                      needle=f"--encoder-noise: 1e+300 counts {RANGE} [0, 1e+09] counts")]
+                      needle=f"--encoder-noise: 1e+300 counts {RANGE} [0, 1e+09] counts"),
+                    C("identify", "--data", "x.csv", "-o", "{tmp}/i.csv",
+                      needle="-o: '{tmp}/i.csv' has extension 'csv'; expected one of .toml")]
+CLI["experiment"] += [C("experiment", "--perturb", "0.1", "-o", "{tmp}/r.csv", "--true-params-out", "{tmp}/t.csv",
+                        needle="--true-params-out: '{tmp}/t.csv' has extension 'csv'; expected one of .toml")]
 
 CLI_ROWS = [(cmd, row) for cmd, rows in CLI.items() for row in rows]
 

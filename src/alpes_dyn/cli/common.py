@@ -180,7 +180,8 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
         inputs.append(("--model", model))
     outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
     outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
-    check_outputs(outputs, inputs, {"--log": ("csv",), **(extensions or {})})  # --log FILE.csv: a CSV, by its name
+    # --log FILE.csv is a CSV, --true-params-out a parameter file (TOML), by their names
+    check_outputs(outputs, inputs, {"--log": ("csv",), "--true-params-out": ("toml",), **(extensions or {})})
 
 
 def _is_urdf_path(model: str) -> bool:
