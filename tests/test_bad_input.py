@@ -1331,7 +1331,7 @@ API: list[Api] = [
     A("model_experiment", lambda c: _model_exp(c.m, truth=ad.Model.alpes("finger2")), InputError,
       "truth: expected the nominal's joints j1, j2, j3"),
     A("model_experiment", lambda c: _model_exp(c.m, truth=3), InputError, "truth: expected an alpes_dyn Model"),
-    A("model_experiment", lambda c: _model_exp(c.m, seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("model_experiment", lambda c: _model_exp(c.m, seed=-1), InputError, "seed: expected an integer from 0 to 9223372036854775807, got -1"),
     A("model_experiment", lambda c: _model_exp(ad.Model(ROBOT_URDF)), InputError, "nominal: model 'tendon_robot' has "
       "no motors"),
     A("model_experiment", lambda c: _model_exp(c.m, design=_design(dt=0.0)), InputError, "dt: expected a sample period"),
@@ -1351,7 +1351,7 @@ API: list[Api] = [
       "output: expected a preset name, a matrix or a callable"),
     A("StateSpace", lambda c: ad.StateSpace(c.m, input="tendon"), ModelError, "unknown input 'tendon'"),
     A("observability", lambda c: ad.observability("finger3", seed=-1), InputError, "seed: expected an integer >= 0"),
-    A("experiment", lambda c: _exp(seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("experiment", lambda c: _exp(seed=-1), InputError, "seed: expected an integer from 0 to 9223372036854775807, got -1"),
     A("experiment", lambda c: _exp(design=_design(duration=True)), InputError, "duration: expected a real number, got bool"),
     A("experiment", lambda c: _exp(design=_design(dt="0.001")), InputError, "dt: expected a real number, got str"),
     A("experiment", lambda c: _exp(design=_design(substeps=True)), InputError, "substeps: expected an integer in [1, 64]"),
@@ -1935,6 +1935,7 @@ API.extend([  # issue 19's re-check: every number of a file, a spec and the API 
     A("Model", lambda c: _checked_design(amplitude_fraction=10**400), InputError,
       "amplitude_fraction: expected a real number, got an integer too large for a float"),
     A("Model", lambda c: _checked_design(dither=1e-320), InputError, "dither: 1e-320 is a subnormal number"),
+    A("experiment", lambda c: _exp(seed=10**400), InputError, "seed: expected an integer from 0 to 9223372036854775807"),
     # a name becomes a recording's column (at most 256 characters) and an MJCF name: at most 128 characters
     A("Model", lambda c: ad.Model(FINGER3.replace('"j3"', '"' + "j" * 300 + '"')), ModelError,
       "URDF: joint name 'jjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjj'... of 300 characters, over the limit of 128"),
