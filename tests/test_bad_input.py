@@ -170,6 +170,14 @@ def bad_files(d: Path) -> dict[str, str]:
     files["cable_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = 3.0, '
                                             'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
+    # physical ranges (issue 19): an angle, a ratio, gravity of 1e300, a subnormal spring, an axis of 1e300
+    files["angle_toml"] = _toml_field("finger.upper", '{ value = 1e300, unit = "rad", source = "report" }')
+    files["ratio_toml"] = _toml_field("transmission.N", '{ value = 1e300, unit = "-", source = "report" }')
+    files["gravity_toml"] = _toml_field("environment.gravity", '{ value = [0.0, 0.0, -1e300], unit = "m/s^2", '
+                                        'source = "report" }')
+    files["subk_toml"] = _toml_field("finger.K", '{ value = [1e-320, 0.05, 0.06], unit = "N m/rad", source = "report" }')
+    files["axis_toml"] = _toml_field("thumb.abduction_axis", '{ value = [1e300, 0.0, 0.0], unit = "-", '
+                                     'source = "report", reason = "x" }')
     files.update({k: v.encode() for k, v in URDFS.items()})
     files.update(robot_urdf=ROBOT_URDF.encode(), robot_toml=ROBOT_SPEC.encode(),
                  robotident_toml=(ROBOT_SPEC + "\n[identified.stiffness]\nj1 = 1e-5\nj9 = 1e-5\n").encode(),
@@ -178,7 +186,11 @@ def bad_files(d: Path) -> dict[str, str]:
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
                  robotctl_toml=ROBOT_CONTROL_SPEC.encode(),
-                 robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode())
+                 robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode(),
+                 robotratio_toml=ROBOT_SPEC.replace("j1 = 2.0", "j1 = 1e300", 1).encode(),
+                 robotsub_toml=ROBOT_SPEC.replace("j1 = 0.04", "j1 = 1e-320", 1).encode(),
+                 robotcounts_toml=("encoder_counts = 4096.5\n" + ROBOT_SPEC).encode(),
+                 robotempty_toml=b"# a spec with nothing in it\n")
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -285,8 +297,8 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "-o", "{tmp}/newdir/", needle="-o: '{tmp}/newdir/' ends with '/'"),
         C("experiment", "-o", "{tmp}/r\0.csv", needle="-o: the file name"),
         # numbers checked before any allocation
-        C("experiment", "--duration", "1e308", "-o", "{tmp}/r.csv", needle="duration: 1e+308 s is over the limit of"),
-        C("experiment", "--duration", "1e9", "-o", "{tmp}/r.csv", needle="duration: 1e+09 s is over the limit of"),
+        C("experiment", "--duration", "1e308", "-o", "{tmp}/r.csv", needle="--duration: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
+        C("experiment", "--duration", "1e9", "-o", "{tmp}/r.csv", needle="--duration: 1e+09 s is outside the accepted range [1e-09, 1e+06] s"),
         C("experiment", "--params", "{fifo}", "-o", "{tmp}/r.csv", needle="is a FIFO (named pipe), expected a regular"),
     ],
     "identifiability": [
@@ -304,14 +316,14 @@ CLI: dict[str, list[Cli]] = {
         C("identifiability", "--design", "wiggle", needle="--design: unknown design 'wiggle'"),
         C("identifiability", "--parameters", "K_9", needle="unknown parameter 'K_9'"),
         C("identifiability", "--points", "0", needle="--points: expected an integer from 1 to 10000"),
-        C("identifiability", "--seed", "-1", needle="--seed: expected an integer >= 0"),
+        C("identifiability", "--seed", "-1", needle="--seed: expected an integer from 0 to 9223372036854775807"),
         C("identifiability", "--camera-times", "a", "--parameters", "K", needle="--camera-times: expected comma-separated"),
         C("identifiability", "--parameters", "K", "--duration", "0.01",
           needle="duration: expected a whole number of at least 100"),
         C("identifiability", "--parameters", "K", "--camera-times", "9", needle="camera_times: 9.0 is outside"),
         C("identifiability", "--output", "elbow", "--parameters", "K", needle="unknown output 'elbow'"),
-        C("identifiability", "--parameters", "K", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
-        C("identifiability", "--parameters", "K", "--duration", "1e9", needle="duration: 1e+09 s is over the limit"),
+        C("identifiability", "--parameters", "K", "--duration", "1e308", needle="--duration: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
+        C("identifiability", "--parameters", "K", "--duration", "1e9", needle="--duration: 1e+09 s is outside the accepted range [1e-09, 1e+06] s"),
         C("identifiability", "--params", "{deep_toml}", needle="nested more than 32 deep"),
     ],
     "identify": [
@@ -319,7 +331,7 @@ CLI: dict[str, list[Cli]] = {
           needle="gravity has norm 14.9 m/s^2 at row 2; expected 9.81 m/s^2 within 10 %"),
         C("identify", "--data", "{unders_csv}", "-o", "{tmp}/i.toml", needle="line 6: not a number ('1_0"),
         C("identify", "--data", "{rec3_csv}", "--torque-noise", "1e308", "-o", "{tmp}/i.toml",
-          needle="torque_noise: expected a non-negative number of N m, at most 1, got 1e+308"),
+          needle="--torque-noise: 1e+308 N m is outside the accepted range [0, 1e+06] N m"),
         C("identify", "--data", "{rec3_csv}", "--encoder-noise", "1_0", "-o", "{tmp}/i.toml",
           needle="--encoder-noise: invalid float value: '1_0'"),
         C("identify", "--model", "{robot_urdf}", "--data", "x.csv", needle="--spec: identification on a URDF --model"),
@@ -410,7 +422,7 @@ CLI: dict[str, list[Cli]] = {
         C("sweep", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
         C("sweep", "-o", "{device}", needle="is a character device"),
         C("sweep", "-o", "{tmp}/table/", needle="ends with '/'"),
-        C("sweep", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
+        C("sweep", "--duration", "1e308", needle="--duration: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
         C("sweep", "--model", "hand", needle="--model: the robustness study is defined for one finger"),
         C("sweep", "--model", "thumb", needle="--model: the robustness study is defined for one finger"),
         C("sweep", "--spread", "1.5", needle="--spread: expected a fraction in [0, 1)"),
@@ -425,7 +437,7 @@ CLI: dict[str, list[Cli]] = {
     "mjcf": [
         C("mjcf", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
           needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
-        C("mjcf", "finger3", "--tilt", "1e308", needle="--tilt: expected a finite angle in degrees within [-180, 180]"),
+        C("mjcf", "finger3", "--tilt", "1e308", needle="--tilt: 1e+308 deg is outside the accepted range [-180, 180] deg"),
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
         C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
@@ -473,10 +485,10 @@ CLI: dict[str, list[Cli]] = {
         C("control", "--plant-params", "{params_toml}", "--log", "{params_toml}", needle="is the input of --plant-params"),
         C("control", "--log", "{link}", needle="--log: '{link}' is a symbolic link"),
         C("control", "--log", "{fifo}", needle="--log: '{fifo}' is a FIFO"),
-        C("control", "--duration", "1e308", needle="duration: 1e+308 s is over the limit of 1e+06 s"),
-        C("control", "--duration", "1e9", needle="duration: 1e+09 s is over the limit of 1e+06 s"),
+        C("control", "--duration", "1e308", needle="--duration: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
+        C("control", "--duration", "1e9", needle="--duration: 1e+09 s is outside the accepted range [1e-09, 1e+06] s"),
         C("control", "--duration", "0.5001", needle="duration: 0.5001 s leaves less than 0.05 s after the settling"),
-        C("control", "--model", "hand", "--duration", "1e308", needle="duration: 1e+308 s is over the limit"),
+        C("control", "--model", "hand", "--duration", "1e308", needle="--duration: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
         C("control", "--params", "{fifo}", needle="is a FIFO (named pipe)"),
         # a URDF --model (issue 17): its spec, the frame, the motor, the block's placement
         C("control", "--model", "{robot_urdf}", needle="--spec: control on a URDF --model needs its transmission spec"),
@@ -525,8 +537,8 @@ CLI: dict[str, list[Cli]] = {
         C("linearize", "--u=1,2", needle="--u: input 'joint' of model 'finger3' has 3 entries"),
         C("linearize", "--model", "finger2", "--spec", "x.toml", needle="--spec: applies to a URDF --model"),
         C("linearize", "--q=nan,0,0", needle="--q: contains NaN or inf"),
-        C("linearize", "--dt", "1e308", "--json", needle="dt: 1e+308 s is outside [1e-09, 1e+06] s"),
-        C("linearize", "--dt", "1e-320", needle="dt: 9.99989e-321 s is outside [1e-09, 1e+06] s"),
+        C("linearize", "--dt", "1e308", "--json", needle="--dt: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
+        C("linearize", "--dt", "1e-320", needle="--dt: 1e-320 s is a subnormal number (below 2.2e-308"),
     ],
     "(global)": [
         C(needle="the following arguments are required: command"),
@@ -571,7 +583,7 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--q=0.1,x,0.2", needle="--q: expected comma-separated numbers"),
         C("dynamics", "--q=0.1,nan,0.2", needle="--q: contains NaN or inf"),
         C("dynamics", "--v=1e400,0,0", needle="--v: contains NaN or inf"),
-        C("dynamics", "--tau=1e308,1e308,1e308", needle="non-finite accelerations"),  # no numpy warning line
+        C("dynamics", "--tau=1e308,1e308,1e308", needle="--tau: 1e+308 N m (index 0) is outside the accepted range"),  # no numpy warning line
         C("dynamics", "--force=0,1", needle="--force: expected 3 values"),
         C("dynamics", "--tip", "nail", needle="unknown tip/frame 'nail'"),
         C("dynamics", "--spring", "cubic", needle="invalid choice: 'cubic'"),
@@ -615,12 +627,12 @@ CLI: dict[str, list[Cli]] = {
         C("report", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
         C("report", "--points", "100000000", needle="--points: expected an integer from 1 to 10000"),
         C("report", "--points", "x", needle="--points: expected an integer from 1 to 10000, got 'x'"),
-        C("report", "--seed", "-1", needle="--seed: expected an integer >= 0, got -1"),
+        C("report", "--seed", "-1", needle="--seed: expected an integer from 0 to 9223372036854775807, got -1"),
     ],
     "observability": [
         C("observability", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
         C("observability", "--points", "10000001", needle="--points: expected an integer from 1 to 10000"),
-        C("observability", "--seed", "-1", needle="--seed: expected an integer >= 0"),
+        C("observability", "--seed", "-1", needle="--seed: expected an integer from 0 to 9223372036854775807"),
         C("observability", "--order", "x", needle="--order: expected auto, report or a non-negative integer"),
         C("observability", "--order", "-1", needle="--order: expected auto, report or a non-negative integer"),
         C("observability", "--model", "{negmass_urdf}", needle="mass must be >= 0"),
@@ -720,7 +732,7 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--plot", "out", needle="--plot: 'out' has no extension"),
         C("estimate", "--plot", "{tmp}/missing/x.png", needle="--plot: directory"),
         C("estimate", "--plot", "{file}/x.png", needle="is not a directory"),
-        C("estimate", "--duration", "1e12", needle="duration: 1e+12 s at dt = 0.001 s"),
+        C("estimate", "--duration", "1e12", needle="--duration: 1e+12 s is outside the accepted range [1e-09, 1e+06] s"),
         C("estimate", "--duration", "0.001", needle="duration: 0.001 s is shorter than two samples"),
         C("estimate", "--duration", "0.0015", needle="not a whole number of samples"),
         C("estimate", "--duration", "nan", needle="duration: expected a finite number"),
@@ -735,18 +747,67 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--model", "thumb", needle="friction: the thumb's scenario needs friction=True"),
         C("estimate", "--chain", "pinky", needle="chain: unknown finger 'pinky'"),
         C("estimate", "--model", "thumb", "--friction", "--chain", "index", needle="chain: only a finger model"),
-        C("estimate", "--seed", "-1", needle="--seed: expected an integer >= 0, got -1"),
+        C("estimate", "--seed", "-1", needle="--seed: expected an integer from 0 to 9223372036854775807, got -1"),
         C("estimate", "--spring", "report", needle="spring: the scenario's torque profile"),
         C("estimate", "--true-params", "{latin1_toml}", needle="not UTF-8 text"),
         C("estimate", "--observer-params", "", needle="parameter file: empty file name"),
         C("estimate", "--observer-params", "x.toml", "--mismatch", "0.1", needle="either --mismatch or --observer-params"),
-        C("estimate", "--duration", "1e308", needle="duration: 1e+308 s at dt = 0.001 s is more than 2^53 samples"),
-        C("estimate", "--duration", "1e9", needle="duration: 1e+09 s at dt = 0.001 s"),
+        C("estimate", "--duration", "1e308", needle="--duration: 1e+308 s is outside the accepted range [1e-09, 1e+06] s"),
+        C("estimate", "--duration", "1e9", needle="--duration: 1e+09 s is outside the accepted range [1e-09, 1e+06] s"),
         C("estimate", "--plot", "{link}", needle="--plot: '{link}' is a symbolic link"),
         C("estimate", "--true-params", "{fifo}", needle="is a FIFO (named pipe)"),
         C("estimate", "--observer-params", "{bigint_toml}", needle="integer of 401 digits"),
     ],
 }
+
+# issue 19's re-check: numbers outside their unit's accepted range, repeated options, the cache's folder, outputs
+RANGE = "is outside the accepted range"
+CLI["dynamics"] += [
+    C("dynamics", "--q", "1e300,0,0", needle=f"--q: 1e+300 rad (index 0) {RANGE} [-100, 100] rad"),
+    C("dynamics", "--v=0,-1e300,0", needle=f"--v: -1e+300 rad/s (index 1) {RANGE} [-10000, 10000] rad/s"),
+    C("dynamics", "--force", "0,0,1e-320", needle="--force (index 2): 1e-320 N is a subnormal number"),
+    C("dynamics", "--q", "0.1,0,0", "--q", "0.2,0,0", needle="--q: given 2 times; give it once"),
+    C("dynamics", "--json", "--json", needle="--json: given 2 times; give it once"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotratio_toml}",
+      needle=f"motor 'flexor'.joints.j1: 1e+300 {RANGE} [-1e+06, 1e+06]"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotsub_toml}", needle="stiffness.j1: 1e-320 N m/rad is a "
+      "subnormal number"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotcounts_toml}",
+      needle="encoder_counts: expected a whole number of counts per revolution, got 4096.5"),
+    C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotempty_toml}", needle="holds nothing (no [[motor]]"),
+    C("dynamics", "--params", "{angle_toml}", needle=f"finger.upper: 1e+300 rad {RANGE} [-100, 100] rad"),
+]
+CLI["mjcf"] += [
+    C("mjcf", "finger3", "--tendon-stiffness", "1e300", "-o", "{tmp}/m.xml",
+      needle=f"--tendon-stiffness: 1e+300 N/m {RANGE} [1e-06, 1e+12] N/m"),
+    C("mjcf", "finger3", "--stiction", "1e-320", "-o", "{tmp}/m.xml", needle="--stiction: 1e-320 s is a subnormal"),
+    C("mjcf", "hand", "--params", "{ratio_toml}", "-o", "{tmp}/m.xml", needle=f"transmission.N: 1e+300 {RANGE}"),
+]
+CLI["linearize"] += [C("linearize", "--u", "1e300,0,0", needle=f"--u: 1e+300 N m (index 0) {RANGE}")]
+CLI["experiment"] += [
+    C("experiment", "--duration", "0.2", "-o", "{tmp}/a.csv", "-o", "{tmp}/b.csv", needle="-o: given 2 times"),
+    C("experiment", "--perturb", "1e300", "-o", "{tmp}/r.csv", needle=f"--perturb: 1e+300 {RANGE} [0, 1e+06]"),
+    C("experiment", "--seed", "9" * 400, "-o", "{tmp}/r.csv", needle="--seed: expected an integer from 0 to "
+      "9223372036854775807"),
+]
+CLI["control"] += [
+    C("control", "--log", "{tmp}/x.png", needle="--log: '{tmp}/x.png' has extension 'png'; expected one of .csv"),
+    C("control", "--tau-max", "1e300", needle=f"--tau-max: 1e+300 N m {RANGE} [1e-12, 1e+06] N m"),
+]
+CLI["estimate"] += [
+    C("estimate", "--torque-constant", "1e300", "--data", "x.csv", needle=f"--torque-constant: 1e+300 N m/A {RANGE}"),
+    C("estimate", "--encoder-offset", "1e300", "--data", "{replay_csv}", needle=f"--encoder-offset: 1e+300 rad {RANGE}"),
+    C("estimate", "--log", "{tmp}/e.txt", "--data", "x.csv", needle="--log: '{tmp}/e.txt' has "
+      "extension 'txt'"),
+]
+CLI["identifiability"] += [C("identifiability", "--camera-times", "0.5,1e300",
+                             needle=f"--camera-times: 1e+300 s (index 1) {RANGE} [0, 1e+06] s")]
+CLI["identify"] += [C("identify", "--data", "x.csv", "--encoder-noise", "1e300",
+                      needle=f"--encoder-noise: 1e+300 counts {RANGE} [0, 1e+09] counts"),
+                    C("identify", "--data", "x.csv", "-o", "{tmp}/i.csv",
+                      needle="-o: '{tmp}/i.csv' has extension 'csv'; expected one of .toml")]
+CLI["experiment"] += [C("experiment", "--perturb", "0.1", "-o", "{tmp}/r.csv", "--true-params-out", "{tmp}/t.csv",
+                        needle="--true-params-out: '{tmp}/t.csv' has extension 'csv'; expected one of .toml")]
 
 CLI_ROWS = [(cmd, row) for cmd, rows in CLI.items() for row in rows]
 
@@ -1322,7 +1383,7 @@ API: list[Api] = [
     A("model_experiment", lambda c: _model_exp(c.m, truth=ad.Model.alpes("finger2")), InputError,
       "truth: expected the nominal's joints j1, j2, j3"),
     A("model_experiment", lambda c: _model_exp(c.m, truth=3), InputError, "truth: expected an alpes_dyn Model"),
-    A("model_experiment", lambda c: _model_exp(c.m, seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("model_experiment", lambda c: _model_exp(c.m, seed=-1), InputError, "seed: expected an integer from 0 to 9223372036854775807, got -1"),
     A("model_experiment", lambda c: _model_exp(ad.Model(ROBOT_URDF)), InputError, "nominal: model 'tendon_robot' has "
       "no motors"),
     A("model_experiment", lambda c: _model_exp(c.m, design=_design(dt=0.0)), InputError, "dt: expected a sample period"),
@@ -1342,7 +1403,7 @@ API: list[Api] = [
       "output: expected a preset name, a matrix or a callable"),
     A("StateSpace", lambda c: ad.StateSpace(c.m, input="tendon"), ModelError, "unknown input 'tendon'"),
     A("observability", lambda c: ad.observability("finger3", seed=-1), InputError, "seed: expected an integer >= 0"),
-    A("experiment", lambda c: _exp(seed=-1), InputError, "seed: expected a non-negative integer"),
+    A("experiment", lambda c: _exp(seed=-1), InputError, "seed: expected an integer from 0 to 9223372036854775807, got -1"),
     A("experiment", lambda c: _exp(design=_design(duration=True)), InputError, "duration: expected a real number, got bool"),
     A("experiment", lambda c: _exp(design=_design(dt="0.001")), InputError, "dt: expected a real number, got str"),
     A("experiment", lambda c: _exp(design=_design(substeps=True)), InputError, "substeps: expected an integer in [1, 64]"),
@@ -1899,6 +1960,65 @@ NOT_CALLED = {"AlpesDynError", "InputError", "ModelError", "RecordingError", "Ha
               "SPRING_MODELS"}
 
 
+def _spec(**kw):
+    from alpes_dyn.model.spec import Motor, TransmissionSpec
+
+    motor = kw.pop("motor", None)
+    return TransmissionSpec(motors=(Motor("m", **motor),) if motor else (), **kw)
+
+
+def _checked_design(**kw):
+    return _design(**kw).check()
+
+
+API.extend([  # issue 19's re-check: every number of a file, a spec and the API within its unit's accepted range
+    A("load_params", lambda c: ad.load_params(c.f["angle_toml"]), ModelError,
+      "finger.upper: 1e+300 rad is outside the accepted range [-100, 100] rad"),
+    A("load_params", lambda c: ad.load_params(c.f["ratio_toml"]), ModelError,
+      "transmission.N: 1e+300 is outside the accepted range [1e-06, 1e+06]"),
+    A("load_params", lambda c: ad.load_params(c.f["gravity_toml"]), ModelError,
+      "environment.gravity: -1e+300 m/s^2 (index 2) is outside the accepted range [-100, 100] m/s^2"),
+    A("load_params", lambda c: ad.load_params(c.f["subk_toml"]), ModelError,
+      "finger.K (index 0): 1e-320 N m/rad is a subnormal number"),
+    A("load_params", lambda c: ad.load_params(c.f["axis_toml"]), ModelError,
+      "thumb.abduction_axis: value must be a unit vector (norm 1e+300)"),
+    A("Model", lambda c: ad.Model.from_urdf_file(c.f["robot_urdf"], c.f["robotratio_toml"]), ModelError,
+      "motor 'flexor'.joints.j1: 1e+300 is outside the accepted range"),
+    A("Model", lambda c: ad.Model(FINGER3, gravity=[0.0, 0.0, -1e300]), ModelError,
+      "gravity: -1e+300 m/s^2 (index 2) is outside the accepted range [-100, 100] m/s^2"),
+    A("Model", lambda c: _spec(motor=dict(joints={"j1": 10**400})), ModelError,
+      "motor 'm'.joints.j1: expected a finite number, got an integer of 401 digits"),
+    A("Model", lambda c: _spec(motor=dict(joints={"j1": 1.0}, rotor_inertia=1e300)), ModelError,
+      "motor 'm'.rotor_inertia: 1e+300 kg m^2 is outside the accepted range [0, 10000] kg m^2"),
+    A("Model", lambda c: _spec(stiffness={"j1": 1e-320}), ModelError, "stiffness.j1: 1e-320 N m/rad is a subnormal"),
+    A("Model", lambda c: _spec(gravity=(0.0, 0.0, 1e300)), ModelError,
+      "gravity: 1e+300 m/s^2 is outside the accepted range [-100, 100] m/s^2"),
+    A("Model", lambda c: _spec(encoder_counts=4096.5), ModelError, "encoder_counts: expected a whole number"),
+    A("Model", lambda c: _mjcf(tendon_stiffness=1e300), InputError,
+      "tendon_stiffness: 1e+300 N/m is outside the accepted range [1e-06, 1e+12] N/m"),
+    A("Model", lambda c: _mjcf(timestep=10**400), InputError, "timestep: expected a positive number of seconds"),
+    A("Model", lambda c: _mjcf(stiction=1e-320), InputError, "stiction: 1e-320 s is a subnormal number"),
+    A("Model", lambda c: _mjcf(scene="block", block_friction=1e300), InputError,
+      "block_friction: 1e+300 is outside the accepted range [0, 1e+06]"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], torque_constant=1e300), RecordingError,
+      "torque_constant: 1e+300 N m/A is outside the accepted range [1e-09, 1000] N m/A"),
+    A("read_recording", lambda c: _read_rec(c.f["current_csv"], torque_constant=10**400), RecordingError,
+      "torque_constant: expected a positive number of N m/A"),
+    A("Model", lambda c: _ekf(c, process_noise=1e300), InputError, "process_noise: an entry of 1e+300 is over the "
+      "limit of 1e+12"),
+    A("Model", lambda c: _ekf(c, measurement_noise=1e-320), InputError, "measurement_noise: 1e-320 is a subnormal"),
+    A("Model", lambda c: _checked_design(amplitude_fraction=10**400), InputError,
+      "amplitude_fraction: expected a real number, got an integer too large for a float"),
+    A("Model", lambda c: _checked_design(dither=1e-320), InputError, "dither: 1e-320 is a subnormal number"),
+    A("experiment", lambda c: _exp(seed=10**400), InputError, "seed: expected an integer from 0 to 9223372036854775807"),
+    # a name becomes a recording's column (at most 256 characters) and an MJCF name: at most 128 characters
+    A("Model", lambda c: ad.Model(FINGER3.replace('"j3"', '"' + "j" * 300 + '"')), ModelError,
+      "URDF: joint name 'jjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjjj'... of 300 characters, over the limit of 128"),
+    A("Model", lambda c: _spec(motor=dict(joints={"j1": 1.0}), name="r" * 200), ModelError,
+      "name: 'rrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrr'... has 200 characters, over the limit of 128"),
+])
+
+
 def test_every_public_api_has_rows():
     public = set(ad.__all__) - NOT_CALLED
     covered = {row.api for row in API}
@@ -2201,3 +2321,48 @@ def test_experiment_on_the_file_true_params_out_wrote():
     q = finger.static_equilibrium(finger.transmission.joint_torque(np.array([bias])), np.zeros(3))
     assert np.all(q >= finger.lower + design.margin) and np.all(q <= finger.upper - design.margin), q
     assert amp > 0
+
+
+def test_cache_folder_checked_before_a_compiling_command(tmp_path, monkeypatch, capfd):
+    """The compiled-code cache's folder is checked before a compiling command starts: a symbolic link, a file, a
+    folder without a write bit (root too), a relative path are one line and exit 2 -- not a silent fall-back to
+    uncompiled code; a command that never compiles does not look at it."""
+    from alpes_dyn.simulation.codegen import CacheFolderError, check_cache_folder
+
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "folder")
+    (tmp_path / "file").write_text("x")
+    (tmp_path / "ro").mkdir(mode=0o555)
+    cases = {str(tmp_path / "link"): "is a symbolic link", str(tmp_path / "file"): "is not a folder",
+             str(tmp_path / "ro"): "is a folder that cannot be written",
+             str(tmp_path / "ro" / "new"): "cannot be created", "relative/cache": "is not an absolute path"}
+    for path, needle in cases.items():
+        monkeypatch.setenv("ALPES_DYN_CACHE", path)
+        code = cli.main(["estimate", "--duration", "0.2"])
+        out, err = capfd.readouterr()
+        _one_stderr_line(code, out, err, needle)
+        assert "ALPES_DYN_CACHE" in err
+    assert cli.main(["dynamics", "--json"]) == 0  # dynamics compiles nothing: the bad cache is not its business
+    capfd.readouterr()
+    with pytest.raises(CacheFolderError, match="is a symbolic link"):
+        check_cache_folder(tmp_path / "link", "cache")
+    assert check_cache_folder(tmp_path / "folder" / "new", "cache") == tmp_path / "folder" / "new"
+    assert not (tmp_path / "folder" / "new").exists()  # checked, not created
+
+
+def test_output_in_a_read_only_folder_refused_to_root_too(tmp_path):
+    from alpes_dyn.fileio import check_output_path
+
+    ro = tmp_path / "ro"
+    ro.mkdir(mode=0o555)
+    with pytest.raises(InputError, match=r"-o: directory '.*ro' is not writable"):
+        check_output_path(str(ro / "out.csv"), "-o")
+    assert check_output_path(str(tmp_path / "out.csv"), "-o") == tmp_path / "out.csv"
+
+
+def test_bad_max_bytes_refused_by_every_command(monkeypatch, capfd):
+    """$ALPES_DYN_MAX_BYTES is read at the start of every command, also one that sizes no array (dynamics)."""
+    monkeypatch.setenv("ALPES_DYN_MAX_BYTES", "abc")
+    code = cli.main(["dynamics"])
+    out, err = capfd.readouterr()
+    _one_stderr_line(code, out, err, "ALPES_DYN_MAX_BYTES: expected a number of bytes >= 1, got 'abc'")

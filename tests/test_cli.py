@@ -66,7 +66,7 @@ def test_dynamics_readable_and_hand_tip(capsys):
     (["dynamics", "--model", "/nonexistent.urdf"], "cannot be read"),
     (["urdf", "finger7"], "unknown model 'finger7'"),
     (["frobnicate"], "invalid choice"),
-    (["estimate", "--seed", "-1"], "--seed: expected an integer >= 0, got -1"),
+    (["estimate", "--seed", "-1"], "--seed: expected an integer from 0 to 9223372036854775807, got -1"),
     (["observability", "--points", "0"], "--points: expected an integer from 1 to 10000, got 0"),
     (["report", "--points", "x"], "--points: expected an integer from 1 to 10000, got 'x'"),
     (["dynamics", "--spec", "/nonexistent.toml"], "--spec: applies to a URDF --model"),

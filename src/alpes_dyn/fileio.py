@@ -40,6 +40,7 @@ from .errors import AlpesDynError, InputError
 from .limits import MAX_TEXT_BYTES
 
 __all__ = ["read_bytes", "read_text", "decode_utf8", "load_toml", "atomic_write", "atomic_path", "check_output_path", "check_outputs",
+           "writable_directory",
            "signals_as_exceptions", "native_stderr_to", "check_output_directory", "write_directory"]
 
 def _path(path: str | os.PathLike[str], what: str, error: type[AlpesDynError]) -> Path:
@@ -271,6 +272,23 @@ def _check_destination(p: Path, what: str, error: type[AlpesDynError]) -> None:
         raise error(f"{what}: {str(p)!r} is {_kind(st.st_mode)}; only a regular file is written (or replaced)")
 
 
+def writable_directory(p: Path) -> bool:
+    """Whether the directory ``p`` can take new files: ``os.access`` (which root always passes) and a write bit in
+    its mode (a directory made read-only, 0555, is refused to root too: nothing is written where the mode says
+    no)."""
+    try:
+        return os.access(p, os.W_OK | os.X_OK) and bool(os.stat(p).st_mode & 0o222)
+    except OSError:
+        return False
+
+
+def _check_extension(p: Path, what: str, extensions: Sequence[str], error: type[AlpesDynError]) -> None:
+    ext = p.suffix.lower().lstrip(".")
+    if ext not in extensions:
+        raise error(f"{what}: {str(p)!r} has {'extension ' + repr(ext) if ext else 'no extension'}; "
+                    f"expected one of {', '.join('.' + e for e in extensions)}")
+
+
 def check_output_path(path: str | None, what: str, extensions: Sequence[str] | None = None,
                       error: type[AlpesDynError] = InputError) -> Path:
     """Validate one output file name before any work: not empty, not ending in ``/``, not an existing
@@ -282,16 +300,13 @@ def check_output_path(path: str | None, what: str, extensions: Sequence[str] | N
         raise error(f"{what}: {text!r} ends with '/': it names a directory, expected a file name")
     _check_destination(p, what, error)
     if extensions is not None:
-        ext = p.suffix.lower().lstrip(".")
-        if ext not in extensions:
-            raise error(f"{what}: {str(p)!r} has {'extension ' + repr(ext) if ext else 'no extension'}; "
-                        f"expected one of {', '.join('.' + e for e in extensions)}")
+        _check_extension(p, what, extensions, error)
     parent = p.parent if str(p.parent) else Path(".")
     if parent.exists() and not parent.is_dir():
         raise error(f"{what}: {str(parent)!r} in {str(p)!r} is not a directory")
     if not parent.is_dir():
         raise error(f"{what}: directory {str(parent)!r} of {str(p)!r} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
+    if not writable_directory(parent):
         raise error(f"{what}: directory {str(parent)!r} is not writable")
     return p
 
@@ -322,7 +337,7 @@ def check_outputs(outputs: Sequence[tuple[str, str | os.PathLike[str] | None]],
     for opt, path in outputs:
         if path is None:
             continue
-        p = check_output_path(path, opt, (extensions or {}).get(opt), error)
+        p = check_output_path(path, opt, None, error)  # (its format by extension after: an input's name first)
         for iopt, ipath in inputs:
             if ipath is None or not isinstance(ipath, (str, os.PathLike)) or not os.fspath(ipath):
                 continue
@@ -333,6 +348,9 @@ def check_outputs(outputs: Sequence[tuple[str, str | os.PathLike[str] | None]],
             if _same_file(p, q):
                 raise error(f"{opt}: {str(p)!r} is also the output of {oopt}; give each output its own file")
         done.append((opt, p))
+    for opt, p in done:  # the formats last: an output on an input or on another output is the first thing said
+        if (extensions or {}).get(opt) is not None:
+            _check_extension(p, opt, extensions[opt], error)  # type: ignore[index]
     return [p for _, p in done]
 
 
@@ -408,7 +426,7 @@ def check_output_directory(directory: str | os.PathLike[str] | None, what: str =
     parent = p.parent if str(p.parent) else Path(".")
     if not parent.is_dir():
         raise InputError(f"{what}: directory {str(parent)!r} of {text!r} does not exist")
-    if not os.access(parent, os.W_OK | os.X_OK):
+    if not writable_directory(parent):
         raise InputError(f"{what}: directory {str(parent)!r} is not writable")
     return p
 

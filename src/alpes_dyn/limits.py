@@ -15,7 +15,12 @@
   :data:`MAX_TOML_DEPTH` deep, its integers at most :data:`MAX_TOML_INT` in magnitude.
 * Times and orders a user asks for: durations at most :data:`MAX_DURATION_S`, time steps in
   [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`], derivative orders at
-  most :data:`MAX_ORDER`, operation caps at most :data:`MAX_OPERATIONS`; at most :data:`MAX_ARGS` command-line arguments.
+  most :data:`MAX_ORDER`, operation caps at most :data:`MAX_OPERATIONS`; at most :data:`MAX_ARGS` command-line arguments;
+  seeds from 0 to :data:`MAX_SEED`; names (joints, links, frames, motors) of at most :data:`MAX_NAME` characters.
+* Physical quantities (:data:`PHYSICAL_RANGES`, :func:`check_physical`): every number of a parameter file, of a
+  spec and of a command-line option that has a unit lies within a range of magnitudes, by its unit: an angle of
+  1e300 rad or a gear ratio of 1e300 is refused with one line naming the field and the range, as is a subnormal
+  number such as 1e-320 (below the smallest normal float, 2.2e-308: write 0, or a physical value).
 """
 
 from __future__ import annotations
@@ -28,7 +33,8 @@ from .errors import InputError
 
 __all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "check_time_step", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
            "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_URDF_JOINTS", "MAX_TOML_DEPTH", "MAX_TOML_INT",
-           "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS"]
+           "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS", "MAX_SEED", "MAX_NAME", "PHYSICAL_RANGES",
+           "check_physical", "check_not_subnormal"]
 
 MAX_POINTS = 10_000
 """Most random points for the observability rank and the report's dynamics cross-check."""
@@ -77,6 +83,84 @@ MAX_ORDER = 1000
 MAX_OPERATIONS = 50_000_000
 """Largest size cap (``max_operations``, CasADi operations) of one derivative order's function in the observability
 and identifiability tests (25 times the default; a larger cap lets one order take hours and tens of GB)."""
+
+MAX_NAME = 128
+"""Longest name of a joint, link, frame or motor, characters: a name becomes an MJCF name and a recording's column
+(``encoder_<motor>``, ``true_q_<joint>``), whose cells are at most :data:`MAX_CSV_CELL` characters."""
+
+MAX_SEED = 2**63 - 1
+"""Largest random seed (a seed is an integer from 0 to 2^63 - 1)."""
+
+PHYSICAL_RANGES: dict[str, tuple[float, float]] = {
+    "m": (1e-6, 100.0),  # lengths, radii, positions: 1 um to 100 m
+    "kg": (1e-9, 1e4),
+    "kg m^2": (1e-15, 1e4),
+    "rad": (1e-12, 100.0),  # angles: joint angles, limits, yaws, offsets (16 turns either way)
+    "deg": (1e-10, 180.0),
+    "rad/s": (1e-9, 1e4),
+    "m/s^2": (1e-9, 100.0),  # gravity: up to about 10 g
+    "N m": (1e-12, 1e6),  # torques, Coulomb friction, noise
+    "N": (1e-12, 1e6),
+    "N m/rad": (1e-12, 1e6),  # springs
+    "N m s/rad": (1e-15, 1e6),  # viscous friction
+    "N/m": (1e-6, 1e12),  # a tendon's stiffness
+    "N s/m": (1e-15, 1e9),
+    "N m/A": (1e-9, 1e3),  # a motor's torque constant
+    "rad/(N m)": (1e-12, 1e6),  # a tendon's compliance seen by the encoder
+    "-": (1e-6, 1e6),  # ratios: gear and transmission ratios, relative spreads
+    "counts/rev": (1.0, 1e9),
+    "counts": (1e-9, 1e9),
+    "s": (1e-9, 1e6),
+    "Hz": (1e-6, 1e6),
+}
+"""The accepted magnitudes of a physical quantity, by its unit: (smallest, largest) magnitude of a non-zero value.
+A value must be finite, not subnormal and at most the largest in magnitude; a quantity that must be positive (a
+length, a mass: a tiny one makes the mass matrix singular) is also refused at zero and below and under the smallest,
+one that may be zero (a spring, a friction) below zero; a signed one (a position, an angle) only over the largest.
+The ranges are wide on purpose (a 100 m link, a 10 t mass): they refuse what no robot has, not what this hand has
+not."""
+
+_SMALLEST_NORMAL = 2.2250738585072014e-308
+
+
+def check_not_subnormal(x: float, field: str, unit: str = "", error: type[Exception] = InputError) -> float:
+    """``x`` unless it is a subnormal number (0 < abs(x) < 2.2e-308, e.g. 1e-320): ``error`` naming ``field``."""
+    if x != 0.0 and abs(x) < _SMALLEST_NORMAL:
+        raise error(f"{field}: {x!r}{' ' + unit if unit and unit != '-' else ''} is a subnormal number (below "
+                    "2.2e-308, the smallest normal float): write 0 or a physical value")
+    return x
+
+
+def check_physical(value: object, field: str, unit: str, kind: str = "any", error: type[Exception] = InputError):
+    """``value`` (a float or an array of them, already finite) within the accepted range of its ``unit``
+    (:data:`PHYSICAL_RANGES`), else ``error`` with one line naming ``field``, the value and the range.
+
+    ``kind``: ``"pos"`` (> 0, in [smallest, largest]), ``"nonneg"`` (in [0, largest]) or ``"any"`` (either sign, at
+    most the largest in magnitude); a unit absent from the table checks only for subnormal numbers. Returns
+    ``value``.
+    """
+    import numpy as np
+
+    arr = np.atleast_1d(np.asarray(value, dtype=float)).reshape(-1)
+    low, high = PHYSICAL_RANGES.get(unit, (0.0, math.inf))
+    u = "" if unit in ("-", "") else f" {unit}"
+    for i, x in enumerate(arr):
+        x = float(x)
+        at = f" (index {i})" if arr.size > 1 else ""
+        check_not_subnormal(x, field + at, unit, error)
+        small = kind == "pos" and abs(x) < low  # (a signed or a may-be-zero quantity may pass through zero)
+        bad = (kind == "pos" and x <= 0) or (kind == "nonneg" and x < 0) or abs(x) > high or small
+        if bad:
+            if kind == "pos":
+                rng = f"[{low:g}, {high:g}]{u}"
+            elif kind == "nonneg":
+                rng = f"[0, {high:g}]{u}"
+            else:
+                rng = f"[{-high:g}, {high:g}]{u}"
+            raise error(f"{field}: {x:g}{u}{at} is outside the accepted range {rng} (docs: user guide, command line, "
+                        "'Accepted ranges')")
+    return value
+
 
 DEFAULT_MAX_BYTES = 2 * 1024**3
 """Default limit of the estimated size of a run's arrays, bytes (2 GiB)."""

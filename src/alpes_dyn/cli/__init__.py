@@ -24,9 +24,10 @@ from typing import Callable, Sequence
 
 from ..errors import AlpesDynError, InputError
 from ..fileio import native_stderr_to
-from ..limits import MAX_ARGS
+from ..limits import MAX_ARGS, max_bytes
 from .common import (EXIT_UNTRUSTED, _join_negative_vectors, _one_line, _StdoutError, _Untrusted, _UsageError,
-                     _write_stdout)
+                     _write_stdout, check_cache_before_compiling, check_option_ranges,
+                     refuse_repeated_options)
 from .parser import build_parser
 
 # the names of the former module cli.py, where they are now (``from alpes_dyn.cli import X`` still works)
@@ -50,7 +51,12 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
     try:
         if len(argv) > MAX_ARGS:
             raise InputError(f"{len(argv)} command-line arguments, over the limit of {MAX_ARGS}")
-        args = build_parser().parse_args(_join_negative_vectors(argv))
+        parser = build_parser()
+        refuse_repeated_options(parser, argv)
+        args = parser.parse_args(_join_negative_vectors(argv))
+        check_option_ranges(args)
+        max_bytes()  # $ALPES_DYN_MAX_BYTES read by every command: a bad one is refused even where no array is sized
+        check_cache_before_compiling(args)
         func: Callable[[argparse.Namespace], int] = args.func
         return func(args), None
     except _UsageError as exc:

@@ -15,6 +15,7 @@ import numpy as np
 
 from ..errors import AlpesDynError, AlpesDynWarning, InputError, plain
 from ..fileio import check_outputs
+from ..limits import PHYSICAL_RANGES, check_physical
 
 
 VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force", "--contact-q")
@@ -58,19 +59,91 @@ def _one_finger(model: str, models: Sequence[str], what: str) -> None:
         raise InputError(f"--model: {what} is defined for one finger ({', '.join(models)}), got {model!r}")
 
 
+VECTOR_UNITS: dict[str, tuple[str, str]] = {
+    "q": ("rad", "any"), "v": ("rad/s", "any"), "tau": ("N m", "any"), "tau-m": ("N m", "any"), "u": ("N m", "any"),
+    "force": ("N", "any"), "contact-q": ("rad", "any"), "encoder-offset": ("rad", "any"), "tilt": ("rad", "any"),
+    "camera-times": ("s", "nonneg"), "excitation": ("Hz", "pos"),
+}
+"""The unit and sign of each comma-separated option's numbers (their ranges: :data:`alpes_dyn.limits.PHYSICAL_RANGES`;
+a joint coordinate of a prismatic joint is read in m, within the same magnitude)."""
+
+OPTION_UNITS: dict[str, tuple[str, str]] = {
+    "stiction": ("s", "pos"), "tendon_stiffness": ("N/m", "pos"), "tendon_damping": ("N s/m", "nonneg"),
+    "tendon_dead_band": ("m", "nonneg"), "dt": ("s", "pos"), "mismatch": ("-", "any"), "duration": ("s", "pos"),
+    "torque_noise": ("N m", "nonneg"), "torque_constant": ("N m/A", "pos"), "perturb": ("-", "nonneg"),
+    "encoder_noise": ("counts", "nonneg"), "spread": ("-", "nonneg"), "tau_max": ("N m", "pos"), "tilt": ("deg", "any"),
+}
+"""The unit and sign of each number option (by its ``dest``), checked by :func:`check_option_ranges` right after
+parsing, before any work: not subnormal, within the magnitude :data:`alpes_dyn.limits.PHYSICAL_RANGES` gives its
+unit."""
+
+
+def check_option_ranges(args: argparse.Namespace) -> None:
+    """InputError ``--<option>: ...`` for the first number option of ``args`` (:data:`OPTION_UNITS`) that is
+    subnormal or larger in magnitude than its unit's accepted range allows (an angle of 1e300 deg, a duration of
+    1e300 s), right after parsing; its sign, zero, NaN and inf are left to the command's own check, which names the
+    quantity (``torque_noise: expected a non-negative number of N m, at most 1``)."""
+    for dest, (unit, kind) in OPTION_UNITS.items():
+        value = getattr(args, dest, None)
+        if isinstance(value, float) and np.isfinite(value) and (abs(value) > PHYSICAL_RANGES[unit][1]
+                                                                 or 0 < abs(value) < sys.float_info.min):
+            check_physical(value, "--" + dest.replace("_", "-"), unit, kind)
+
+
 def parse_vector(text: str, name: str) -> np.ndarray:
-    """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise."""
+    """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise (and for numbers outside the
+    accepted range of the option's unit, :data:`VECTOR_UNITS`)."""
+    name = name.lstrip("-")
     parts = [p.strip() for p in text.split(",")]
     try:
         if any("_" in p for p in parts):  # float() reads 1_0 as 10: not a number written on a command line
             raise ValueError(text)
         vals = [float(p) for p in parts]
     except ValueError:
-        raise InputError(f"--{name}: expected comma-separated numbers, got {text!r}") from None
+        raise InputError(f"--{name}: expected comma-separated numbers, got {text[:80]!r}") from None
     a = np.array(vals)
     if not np.isfinite(a).all():
-        raise InputError(f"--{name}: contains NaN or inf ({text!r})")
+        raise InputError(f"--{name}: contains NaN or inf ({text[:80]!r})")
+    unit, kind = VECTOR_UNITS.get(name, ("", "any"))
+    check_physical(a, f"--{name}", unit, kind)
     return a
+
+
+COMPILING_COMMANDS = ("estimate", "codegen", "experiment", "identify", "identifiability", "control", "sweep")
+"""The commands that may compile C code into the cache: its folder is checked before they start."""
+
+
+def check_cache_before_compiling(args: argparse.Namespace) -> None:
+    """For a command of :data:`COMPILING_COMMANDS`: the compiled-code cache's folder checked before any work
+    (:func:`alpes_dyn.simulation.codegen.cache_dir`): a symbolic link, a file or a folder that cannot be written is
+    one line and exit 2, not a silent fall-back to uncompiled code minutes later."""
+    if getattr(args, "command", None) in COMPILING_COMMANDS:
+        from ..simulation.codegen import cache_dir
+
+        cache_dir()
+
+
+def refuse_repeated_options(parser: argparse.ArgumentParser, argv: Sequence[str]) -> None:
+    """InputError ``--x: given 2 times; give it once`` for an option given more than once on the command line (the
+    last would silently win over the others). Flags of the command's subparser, by their dest."""
+    sub = next((a for a in parser._actions if isinstance(a, argparse._SubParsersAction)), None)
+    words = [a for a in argv if not a.startswith("-")]
+    command = sub.choices.get(words[0]) if sub is not None and words else None
+    if command is None:
+        return
+    seen: dict[str, int] = {}
+    flags: dict[str, str] = {}
+    for a in argv:
+        if a == "--":
+            break
+        action = command._option_string_actions.get(a.split("=", 1)[0]) if a.startswith("-") else None
+        if action is None or isinstance(action, argparse._HelpAction):
+            continue
+        seen[action.dest] = seen.get(action.dest, 0) + 1
+        flags.setdefault(action.dest, a.split("=", 1)[0])
+    for dest, n in seen.items():
+        if n > 1:
+            raise InputError(f"{flags[dest]}: given {n} times; give it once")
 
 
 def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
@@ -107,7 +180,8 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
         inputs.append(("--model", model))
     outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
     outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
-    check_outputs(outputs, inputs, extensions)
+    # --log FILE.csv is a CSV, --true-params-out a parameter file (TOML), by their names
+    check_outputs(outputs, inputs, {"--log": ("csv",), "--true-params-out": ("toml",), **(extensions or {})})
 
 
 def _is_urdf_path(model: str) -> bool:

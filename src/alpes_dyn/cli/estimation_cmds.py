@@ -276,7 +276,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         if args.spec is not None:
             raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its "
                              "transmission from --params")
-    _check_run_files(args)  # the output policy: -o is none of --data, --validate, --params, nor a link...
+    _check_run_files(args, {"-o": ("toml",)})  # the output policy: -o (a TOML file) is none of --data, --params...
     exc = args.excitation
     if exc == "documented":
         freqs = ExperimentDesign().lines  # the multisine's and the dither's

@@ -10,7 +10,7 @@ import numpy as np
 
 from .. import __version__
 from ..analysis.observability_matrix import MAX_INSTRUCTIONS
-from ..limits import MAX_POINTS
+from ..limits import MAX_POINTS, MAX_SEED
 from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import _UsageError
 from .control_cmds import cmd_control
@@ -43,7 +43,7 @@ def _int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
     return parse
 
 
-_SEED = _int_at_least(0)
+_SEED = _int_at_least(0, MAX_SEED)
 _POINTS = _int_at_least(1, MAX_POINTS)
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..checks import as_float_array
 from ..errors import InputError
-from ..limits import check_duration
+from ..limits import check_duration, check_not_subnormal
 from .recording import GRAVITY, GRAVITY_TOLERANCE, gravity_norm_off
 
 __all__ = ["ExperimentDesign"]
@@ -58,6 +58,10 @@ class ExperimentDesign:
                 continue
             if isinstance(v, (bool, np.bool_)) or not isinstance(v, numbers.Real):
                 raise InputError(f"{name}: expected a real number, got {type(v).__name__} {v!r:.40}")
+            try:
+                check_not_subnormal(float(v), name)  # 1e-320: below the smallest normal float
+            except OverflowError:
+                raise InputError(f"{name}: expected a real number, got an integer too large for a float") from None
         for name in ("frequencies", "orientations", "camera_times"):
             as_float_array(getattr(self, name), name, "real numbers")
         if not isinstance(self.trim_bias, (bool, np.bool_)):

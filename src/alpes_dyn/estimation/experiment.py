@@ -55,6 +55,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..fileio import check_outputs
+from ..limits import MAX_SEED
 from ..model.robot import Model
 from ..model.params import HandParams, load_params
 from ..model.transmission import torque_before
@@ -399,8 +400,8 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
     if model not in EXPERIMENT_MODELS:
         raise InputError(f"model: the identification experiment is defined for one chain "
                          f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
-    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
-        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:
+        raise InputError(f"seed: expected an integer from 0 to {MAX_SEED}, got {seed!r:.60}")
     design = _checked_design(design)
     if path is not None:  # the output policy before any work: not over the parameter files read, nor a link...
         check_outputs([("path", path)], [(name, f) for name, f in (("true_params", true_params),
@@ -436,8 +437,8 @@ def model_experiment(nominal: Model, truth: Model | None = None, design: Experim
         raise InputError(f"truth: expected the nominal's joints {', '.join(nominal.joint_names)} and motors "
                          f"{', '.join(nominal.motor_names)}, got {', '.join(truth.joint_names)} and "
                          f"{', '.join(truth.motor_names)}")
-    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
-        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:
+        raise InputError(f"seed: expected an integer from 0 to {MAX_SEED}, got {seed!r:.60}")
     design = _checked_design(design)
     if path is not None:
         check_outputs([("path", path)])

@@ -162,6 +162,11 @@ def _finite_number(x: Any, name: str) -> float:
     return v
 
 
+MAX_VARIANCE = 1e12
+"""Largest entry of a noise covariance or an initial covariance (squared units of a state or an output: rad^2,
+(rad/s)^2, ...): a standard deviation of 10^6 is no prior at all."""
+
+
 def _cov(value: Any, n: int, name: str) -> np.ndarray:
     """A covariance from variances (n,) or a matrix (n, n), checked symmetric positive semidefinite."""
     a = as_float_array(value, name, f"{n} variances or an ({n}, {n}) covariance")
@@ -173,6 +178,14 @@ def _cov(value: Any, n: int, name: str) -> np.ndarray:
         raise InputError(f"{name}: expected {n} variances or an ({n}, {n}) covariance, got shape {a.shape}")
     if not np.isfinite(a).all():
         raise InputError(f"{name}: contains NaN or inf")
+    big = float(np.abs(a).max()) if a.size else 0.0
+    if big > MAX_VARIANCE:  # a variance of 1e300: squared units of a state, never that large
+        raise InputError(f"{name}: an entry of {big:g} is over the limit of {MAX_VARIANCE:g} (a variance, in the "
+                         "squared units of its state or output)")
+    tiny = a[(a != 0) & (np.abs(a) < np.finfo(float).tiny)]
+    if tiny.size:
+        raise InputError(f"{name}: {float(tiny[0])!r} is a subnormal number (below 2.2e-308): write 0 or a "
+                         "physical variance")
     if not np.allclose(a, a.T, rtol=1e-10, atol=1e-300):
         raise InputError(f"{name}: covariance must be symmetric")
     if np.linalg.eigvalsh(a).min() < -1e-12 * max(1.0, float(np.abs(a).max())):

@@ -41,7 +41,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..fileio import atomic_write, read_bytes
-from ..limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES
+from ..limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_physical
 from ..model.robot import Model
 
 __all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
@@ -144,6 +144,14 @@ def _next_row(rows, p: Path) -> list[str] | None:
         raise RecordingError(f"recording {str(p)!r}: not a CSV file ({exc})") from None
 
 
+def _finite(x: object) -> bool:
+    """Whether the real number ``x`` is finite (an integer too large for a float is not)."""
+    try:
+        return math.isfinite(x)  # type: ignore[arg-type]
+    except OverflowError:
+        return False
+
+
 def read_recording(path: str | Path, model: Model, torque_constant: float | None = None) -> Recording:
     """Read and validate a recording CSV for ``model`` (which names the motors and joints).
 
@@ -179,8 +187,10 @@ def _check_reader(torque_constant: float | None, model: Model) -> None:
     """The arguments of :func:`read_recording`: a positive torque constant (N m/A) or None, an alpes_dyn Model."""
     if torque_constant is not None and not (isinstance(torque_constant, (int, float, np.integer, np.floating))
                                             and not isinstance(torque_constant, (bool, np.bool_))
-                                            and math.isfinite(torque_constant) and torque_constant > 0):
-        raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r}")
+                                            and _finite(torque_constant) and torque_constant > 0):
+        raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r:.60}")
+    if torque_constant is not None:  # an absurd one (1e300 N m/A) or a subnormal number
+        check_physical(float(torque_constant), "torque_constant", "N m/A", "pos", RecordingError)
     if not isinstance(model, Model):
         raise RecordingError(f"model: expected an alpes_dyn Model (it names the columns), got {type(model).__name__}")
 

@@ -78,6 +78,7 @@ import numpy as np
 from .description import check_model_name, layout, model_params
 from ..checks import as_float_array
 from ..errors import AlpesDynWarning, InputError, ModelError
+from ..limits import check_physical
 from .extras import spring_stiffness
 from .params import ChainParams, HandParams, load_params
 
@@ -321,13 +322,16 @@ def _check_mjcf_arguments(model: str, spring: str, scene: str, timestep: Any, bl
         raise ModelError(f"scene 'block' is for one finger (finger2, finger3), not {model!r}")
     if scene == "cylinder" and model != "hand":
         raise ModelError(f"scene 'cylinder' is for the hand, not {model!r}; a finger's scene is 'block'")
-    if isinstance(timestep, bool) or not (isinstance(timestep, (int, float)) and math.isfinite(timestep) and timestep > 0):
-        raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r}")
-    if isinstance(block_friction, bool) or not (isinstance(block_friction, (int, float)) and math.isfinite(block_friction)
+    if isinstance(timestep, bool) or not (isinstance(timestep, (int, float)) and _finite(timestep) and timestep > 0):
+        raise InputError(f"timestep: expected a positive number of seconds, got {timestep!r:.60}")
+    if isinstance(block_friction, bool) or not (isinstance(block_friction, (int, float)) and _finite(block_friction)
                                                 and block_friction >= 0):
-        raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r}")
-    if isinstance(block_tilt, bool) or not (isinstance(block_tilt, (int, float)) and math.isfinite(block_tilt)):
-        raise InputError(f"block_tilt: expected a finite angle in rad, got {block_tilt!r}")
+        raise InputError(f"block_friction: expected a friction coefficient >= 0, got {block_friction!r:.60}")
+    if isinstance(block_tilt, bool) or not (isinstance(block_tilt, (int, float)) and _finite(block_tilt)):
+        raise InputError(f"block_tilt: expected a finite angle in rad, got {block_tilt!r:.60}")
+    check_physical(float(timestep), "timestep", "s", "pos")
+    check_physical(float(block_friction), "block_friction", "-", "nonneg")
+    check_physical(float(block_tilt), "block_tilt", "rad", "any")
     if contact_q is not None:
         as_float_array(contact_q, "contact_q", "joint angles in rad")  # not complex, bool or text
         if scene != "block":
@@ -468,7 +472,7 @@ def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendo
                    tendon_rotor: bool, tilt: float, rotor_inertia: bool, tendon_dead_band: float = 0.0) -> None:
     """The realism options of :func:`mjcf_string`: numbers in range, no rotor counted twice."""
     def number(x: object) -> bool:
-        return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
+        return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and _finite(x)
 
     if stiction is not None and not (number(stiction) and stiction > 0):
         raise InputError(f"stiction: expected a positive time constant in s (e.g. {STICTION_TIMECONST:g}), "
@@ -492,6 +496,19 @@ def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendo
     if rotor_inertia and (tendon_rotor or tendon_stiffness is not None):
         raise InputError(f"rotor_inertia: the rotor would be counted twice (with "
                          f"{'tendon_rotor' if tendon_rotor else 'tendon_stiffness'})")
+    for name, x, unit, kind in (("stiction", stiction, "s", "pos"), ("tendon_stiffness", tendon_stiffness, "N/m", "pos"),
+                                ("tendon_damping", tendon_damping, "N s/m", "nonneg"),
+                                ("tendon_dead_band", tendon_dead_band, "m", "nonneg"), ("tilt", tilt, "rad", "any")):
+        if x is not None:  # an absurd magnitude (a stiffness of 1e300 N/m) or a subnormal number
+            check_physical(float(x), name, unit, kind)
+
+
+def _finite(x: object) -> bool:
+    """Whether the real number ``x`` is finite (an integer too large for a float is not)."""
+    try:
+        return math.isfinite(x)  # type: ignore[arg-type]
+    except OverflowError:
+        return False
 
 
 def _rotor_body(motor: str, J_m: float) -> str:

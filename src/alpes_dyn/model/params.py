@@ -3,7 +3,9 @@
 The shipped file ``alpes_dyn/data/alpes_hand.toml`` holds the report's Table 1.2 (``source =
 "report"``) and, marked ``source = "assumed"`` with a one-line reason each, every value the report
 does not give. :func:`load_params` validates it; any defect is a :class:`~alpes_dyn.ModelError`
-that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)``.
+that names the field, e.g. ``finger.m: value must be > 0 (got -0.03 at index 0)``; every number must lie within
+the accepted range of its unit (:data:`alpes_dyn.limits.PHYSICAL_RANGES`: a length of 1e300 m, a ratio of 1e300,
+a subnormal 1e-320 are refused with the field's name and the range).
 
 The four fingers share ``[finger]``; a finger may have values of its own in a table ``[finger.<name>]``
 (``<name>`` from ``palm.finger_names``) holding any of :data:`OVERRIDE_FIELDS` (``K``, ``m``, ``I``,
@@ -32,6 +34,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..fileio import atomic_write, load_toml, read_text
+from ..limits import check_not_subnormal, check_physical
 
 __all__ = [
     "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
@@ -271,8 +274,13 @@ def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
     if kind == "nonneg" and np.any(arr < 0):
         i = int(np.argmax(arr < 0))
         raise ModelError(f"{name}: value must be >= 0 (got {arr[i]:g} at index {i})")
-    if kind == "unit" and not math.isclose(float(np.linalg.norm(arr)), 1.0, rel_tol=1e-9):
-        raise ModelError(f"{name}: value must be a unit vector (norm {np.linalg.norm(arr):g})")
+    if kind == "unit":
+        scale = float(np.max(np.abs(arr)))  # (the norm of a component of 1e300 would overflow)
+        norm = scale * float(np.linalg.norm(arr / scale)) if scale > 0 else 0.0
+        if not math.isclose(norm, 1.0, rel_tol=1e-9):
+            raise ModelError(f"{name}: value must be a unit vector (norm {norm:g})")
+        for x in arr:
+            check_not_subnormal(float(x), name, "", ModelError)
     return float(arr[0]) if length is None else arr
 
 
@@ -371,6 +379,8 @@ def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
                                  ((expected, "", "1") if expected == "-" else (expected,))):
         raise ModelError(f"{name}.unit: the value is read in {expected!r}, got {unit!r} (convert it; no other unit "
                          "is accepted)")
+    if expected is not None and kind in ("pos", "nonneg", "any"):  # an angle of 1e300 rad, a ratio of 1e300: refused
+        check_physical(value, name, expected, kind, ModelError)
     if field_name in _INTEGER and not float(value).is_integer():
         raise ModelError(f"{name}: value must be a whole number, got {value:g}")
     std = None

@@ -27,6 +27,7 @@ from scipy.linalg import lapack as _lapack
 
 from .description import Layout, check_model_name, layout, model_params, urdf_string
 from ..checks import as_float_array
+from ..limits import check_physical
 from ..errors import InputError, ModelError
 from .extras import JointExtras; from ..fileio import read_text  # noqa: E702
 from .inertial import check_inertials
@@ -142,6 +143,7 @@ class Model:
             raise ModelError(str(exc)) from None
         if g.shape != (3,) or not np.all(np.isfinite(g)):
             raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
+        check_physical(g, "gravity", "m/s^2", "any", ModelError)  # a gravity of 1e300 m/s^2, a subnormal 1e-320
         self.gravity: np.ndarray = g.copy()
         self.pin_model.gravity.linear = g
         if self.mimic is not None:

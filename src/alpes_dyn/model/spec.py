@@ -85,6 +85,7 @@ import numpy as np
 from .description import Layout
 from ..errors import ModelError
 from ..fileio import load_toml, read_text
+from ..limits import MAX_NAME, check_physical
 from .extras import JointExtras, spring_stiffness
 from .params import IDENTIFICATION_FIELDS, HandParams
 from .transmission import Transmission
@@ -107,14 +108,21 @@ _MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance")
 _MOTOR_REQUIRED = ("name", "joints")
 
 
-def _number(value: Any, name: str, low: float | None = None, strict: bool = False) -> float:
+def _number(value: Any, name: str, low: float | None = None, strict: bool = False, unit: str = "") -> float:
+    """``value`` as a finite float of the accepted range of its ``unit`` (:data:`alpes_dyn.limits.PHYSICAL_RANGES`;
+    ``low``: 0.0 for a quantity that may be zero, with ``strict`` one that must be positive), else ModelError."""
     if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
         raise ModelError(f"{name}: expected a number, got {value!r}")
-    x = float(value)
+    try:
+        x = float(value)
+    except OverflowError:  # an integer of 400 digits
+        raise ModelError(f"{name}: expected a finite number, got an integer of {len(str(abs(int(value))))} digits") from None
     if not math.isfinite(x):
         raise ModelError(f"{name}: expected a finite number, got {value!r}")
     if low is not None and (x <= low if strict else x < low):
         raise ModelError(f"{name}: expected a number {'>' if strict else '>='} {low:g}, got {x:g}")
+    kind = "any" if low is None else "pos" if strict else "nonneg"
+    check_physical(x, name, unit, kind, ModelError)
     return x
 
 
@@ -123,6 +131,8 @@ def _name(value: Any, name: str) -> str:
     become XML names in the MJCF export and CSV columns, where XML 1.0 cannot hold them at all)."""
     if not isinstance(value, str) or not value:
         raise ModelError(f"{name}: expected a non-empty string, got {value!r}")
+    if len(value) > MAX_NAME:  # it becomes a recording's column (encoder_<motor>) and an MJCF name
+        raise ModelError(f"{name}: {value[:40]!r}... has {len(value)} characters, over the limit of {MAX_NAME}")
     if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in value):
         raise ModelError(f"{name}: {value!r} holds a control character; a name is printable text")
     return value
@@ -152,13 +162,18 @@ class Motor:
         clean: dict[str, float] = {}
         for j, r in self.joints.items():
             _name(j, f"{where}.joints")
-            x = _number(r, f"{where}.joints.{j}")
+            x = _number(r, f"{where}.joints.{j}", unit="-")
             if x == 0.0:
                 raise ModelError(f"{where}.joints.{j}: a ratio must be non-zero (leave the joint out instead)")
             clean[j] = x
         object.__setattr__(self, "joints", MappingProxyType(clean))
-        object.__setattr__(self, "rotor_inertia", _number(self.rotor_inertia, f"{where}.rotor_inertia", 0.0))
-        object.__setattr__(self, "tendon_compliance", _number(self.tendon_compliance, f"{where}.tendon_compliance"))
+        object.__setattr__(self, "rotor_inertia", _number(self.rotor_inertia, f"{where}.rotor_inertia", 0.0,
+                                                                   unit="kg m^2"))
+        object.__setattr__(self, "tendon_compliance", _number(self.tendon_compliance, f"{where}.tendon_compliance",
+                                                                       unit="rad/(N m)"))
+
+
+_TABLE_UNITS = {"stiffness": "N m/rad", "coulomb": "N m", "viscous": "N m s/rad", "armature": "kg m^2", "rest_angle": "rad"}
 
 
 def _table(value: Any, name: str, low: float | None) -> Mapping[str, float]:
@@ -166,7 +181,8 @@ def _table(value: Any, name: str, low: float | None) -> Mapping[str, float]:
         return MappingProxyType({})
     if not isinstance(value, Mapping):
         raise ModelError(f"{name}: expected a table joint name -> number, got {value!r}")
-    return MappingProxyType({_name(j, name): _number(x, f"{name}.{j}", low) for j, x in value.items()})
+    return MappingProxyType({_name(j, name): _number(x, f"{name}.{j}", low, unit=_TABLE_UNITS.get(name, ""))
+                             for j, x in value.items()})
 
 
 @dataclass(frozen=True)
@@ -221,13 +237,17 @@ class TransmissionSpec:
             if j not in self.stiffness:
                 raise ModelError(f"{REST_TABLE}.{j}: joint {j!r} has no spring (no [stiffness] value); a rest angle "
                                  "is where a spring exerts no torque")
-        object.__setattr__(self, "encoder_counts", _number(self.encoder_counts, "encoder_counts", 0.0, strict=True))
-        object.__setattr__(self, "smooth_velocity", _number(self.smooth_velocity, "smooth_velocity", 0.0, strict=True))
+        counts = _number(self.encoder_counts, "encoder_counts", 0.0, strict=True, unit="counts/rev")
+        if not counts.is_integer():
+            raise ModelError(f"encoder_counts: expected a whole number of counts per revolution, got {counts:g}")
+        object.__setattr__(self, "encoder_counts", counts)
+        object.__setattr__(self, "smooth_velocity", _number(self.smooth_velocity, "smooth_velocity", 0.0, strict=True,
+                                                            unit="rad/s"))
         if self.gravity is not None:
             g = self.gravity
             if not isinstance(g, (list, tuple, np.ndarray)) or len(g) != 3:
                 raise ModelError(f"gravity: expected 3 numbers, got {g!r}")
-            object.__setattr__(self, "gravity", tuple(_number(x, "gravity") for x in g))
+            object.__setattr__(self, "gravity", tuple(_number(x, "gravity", unit="m/s^2") for x in g))
         if self.tips is not None:
             if isinstance(self.tips, str) or not isinstance(self.tips, (list, tuple)) or not self.tips:
                 raise ModelError(f"tips: expected a non-empty list of frame names, got {self.tips!r}")
@@ -272,8 +292,12 @@ class TransmissionSpec:
 
     @classmethod
     def from_toml(cls, text: str, source: str = "spec") -> "TransmissionSpec":
-        """Parse the TOML text of a spec; errors name ``source`` and the field."""
+        """Parse the TOML text of a spec; errors name ``source`` and the field. A file with nothing in it (empty, or
+        only comments: a truncated or wrong file) is refused; a spec of no motors says so with its other keys."""
         data = load_toml(text, f"spec file {source!r}", ModelError)
+        if not data:
+            raise ModelError(f"spec file {source!r}: holds nothing (no [[motor]], no table, no key); a spec names at "
+                             "least the robot's motors")
         try:
             return cls.from_dict(data)
         except ModelError as exc:

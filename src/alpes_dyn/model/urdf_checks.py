@@ -9,7 +9,7 @@ import re
 import xml.etree.ElementTree as ET
 
 from ..errors import ModelError
-from ..limits import MAX_URDF_DEPTH, MAX_URDF_JOINTS, MAX_URDF_LINKS
+from ..limits import MAX_NAME, MAX_URDF_DEPTH, MAX_URDF_JOINTS, MAX_URDF_LINKS
 from .mimic import read_mimics
 
 __all__ = ["check_urdf_structure", "check_joint"]
@@ -70,6 +70,11 @@ def check_urdf_structure(urdf: str) -> None:
     moving = [j for j in root.iter("joint") if j.get("type") not in ("fixed", None)]
     if len(moving) > MAX_URDF_JOINTS:
         raise ModelError(f"URDF: {len(moving)} moving joints, over the limit of {MAX_URDF_JOINTS}")
+    for el in list(root.iter("joint")) + list(root.iter("link")):
+        name = el.get("name") or ""
+        if len(name) > MAX_NAME:  # a joint's name becomes a recording's column (true_q_<joint>), an MJCF name
+            raise ModelError(f"URDF: {el.tag} name {name[:40]!r}... of {len(name)} characters, over the limit of "
+                             f"{MAX_NAME}")
     parent_of: dict[str, str] = {}
     for j in root.iter("joint"):
         check_joint(j)

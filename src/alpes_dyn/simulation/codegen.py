@@ -22,25 +22,67 @@ import casadi as cs
 import numpy as np
 
 from .buildcache import CompilerError, build_library
+from ..fileio import writable_directory
 from ..errors import InputError, ModelError
 from ..progress import _Progress
 
-__all__ = ["CompiledStepLoop", "CasadiStepLoop", "cache_dir", "CompilerError"]
+__all__ = ["CompiledStepLoop", "CasadiStepLoop", "cache_dir", "CompilerError", "CacheFolderError", "check_cache_folder"]
 
 # ----------------------------------------------------------------------------- C compilation and cache
 def cache_dir() -> Path:
-    """Directory of compiled libraries: ``$ALPES_DYN_CACHE`` if set and not empty, else
+    """Directory of compiled libraries: ``$ALPES_DYN_CACHE`` if set and not blank, else
     ``$HOME/.cache/alpes_dyn``. With neither (``HOME`` unset, empty or not an absolute path) a
     :class:`CompilerError` asks for ``ALPES_DYN_CACHE``: never a cache at ``/.cache`` or relative to the
-    working directory."""
+    working directory.
+
+    The folder is checked before anything is compiled (:func:`check_cache_folder`): an ``ALPES_DYN_CACHE`` that is
+    relative, a symbolic link, a file or a device, or a folder (or, not there yet, a parent) that cannot be written
+    is a :class:`CacheFolderError` naming it (an :class:`~alpes_dyn.InputError`: the run stops there, it does not
+    fall back to uncompiled code)."""
     env = os.environ.get("ALPES_DYN_CACHE", "").strip()
     if env:
-        return Path(env)
+        if not os.path.isabs(env):
+            raise CacheFolderError(f"ALPES_DYN_CACHE: {env[:200]!r} is not an absolute path; give the cache's folder "
+                                   "as one")
+        return check_cache_folder(Path(env), "ALPES_DYN_CACHE")
     home = os.environ.get("HOME", "")
     if not (home.strip() and os.path.isabs(home)):
         raise CompilerError(f"HOME is {'empty' if not home.strip() else 'not an absolute path (%r)' % home}: set "
                             "ALPES_DYN_CACHE to a folder for the compiled-code cache")
-    return Path(home) / ".cache" / "alpes_dyn"
+    return check_cache_folder(Path(home) / ".cache" / "alpes_dyn", "the compiled-code cache")
+
+
+class CacheFolderError(InputError):
+    """The compiled-code cache's folder cannot be used: a symbolic link, a file, a device, not writable."""
+
+
+def check_cache_folder(d: Path, what: str) -> Path:
+    """``d`` if it can be the cache's folder: an existing folder (not a symbolic link to one) that can be written,
+    or a path whose nearest existing parent is such a folder; else :class:`CacheFolderError` naming ``what``."""
+    import stat
+
+    where = f"{what} {str(d)[:200]!r}"
+    try:
+        st = os.lstat(d)
+    except FileNotFoundError:
+        st = None
+    except OSError as exc:
+        raise CacheFolderError(f"{where}: cannot be examined ({exc.strerror or exc})") from None
+    if st is not None:
+        if stat.S_ISLNK(st.st_mode):
+            raise CacheFolderError(f"{where}: is a symbolic link; give the folder it points to (the cache's files are "
+                                   "replaced in place)")
+        if not stat.S_ISDIR(st.st_mode):
+            raise CacheFolderError(f"{where}: is not a folder (a file or a device); the cache needs a folder")
+        if not writable_directory(d):
+            raise CacheFolderError(f"{where}: is a folder that cannot be written")
+        return d
+    parent = d.parent
+    while not os.path.lexists(parent) and parent != parent.parent:
+        parent = parent.parent
+    if not os.path.isdir(parent) or not writable_directory(parent):
+        raise CacheFolderError(f"{where}: cannot be created ({str(parent)!r} is not a folder that can be written)")
+    return d
 
 
 _CFLAGS = ("-O3", "-fno-math-errno", "-shared", "-fPIC", "-pthread")
