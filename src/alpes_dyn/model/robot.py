@@ -17,7 +17,8 @@ it is not thread-safe (use :meth:`Model.copy` per thread).
 
 from __future__ import annotations
 
-import dataclasses, math  # noqa: E401
+import dataclasses
+import math
 from pathlib import Path
 from typing import Any, Sequence
 
@@ -29,7 +30,8 @@ from .description import Layout, check_model_name, layout, model_params, urdf_st
 from ..checks import as_float_array
 from ..limits import check_physical
 from ..errors import InputError, ModelError
-from .extras import JointExtras; from ..fileio import read_text  # noqa: E702
+from .extras import JointExtras
+from ..fileio import read_text
 from .inertial import check_inertials
 from .mimic import MimicCoupling, refuse_mimic_names
 from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args, _tips,
@@ -38,6 +40,7 @@ from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
 from .contact import REFERENCE_FRAMES, Contact, as_contacts  # noqa: F401  (importable from here, as before)
+from .frames import FrameKinematics
 
 __all__ = ["Model", "DEFAULT_GRAVITY"]
 
@@ -50,11 +53,10 @@ _nle = pin.nonLinearEffects
 _potrf, _potrs = _lapack.dpotrf, _lapack.dpotrs
 _chol_decompose, _chol_solve = pin.cholesky.decompose, pin.cholesky.solve
 _isfinite = math.isfinite
-_WORLD = pin.ReferenceFrame.LOCAL_WORLD_ALIGNED
 _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
 
 
-class Model:
+class Model(FrameKinematics):
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
     Parameters
@@ -306,35 +308,6 @@ class Model:
             raise InputError(f"{name}: contains NaN or inf ({a.tolist()})")
         return a
 
-    @property
-    def default_tip(self) -> str:
-        """The tip used where none is given: the first of :attr:`tips`; :class:`~alpes_dyn.ModelError` where there
-        is none, or where the URDF has several leaf frames and neither the spec nor the layout names the tips."""
-        if not self.tips:
-            raise ModelError("model has no tip frame; pass a frame name")
-        if not self.tips_named:
-            raise ModelError(f"tip: model {self.name!r} names no tip and its URDF has {len(self.tips)} leaf frames "
-                             f"({', '.join(self.tips)}); name it: tips = [\"<frame>\"] in the spec, or tip=<frame> "
-                             "(the command line's --tip)")
-        return self.tips[0]
-
-    def frame_id(self, tip: str | None) -> int:
-        """Pinocchio frame index of ``tip`` (default: :attr:`default_tip`)."""
-        if tip is None:
-            tip = self.default_tip
-        try:
-            return self._frames[tip]
-        except (KeyError, TypeError):
-            raise ModelError(f"unknown tip/frame {tip!r} (tips: {', '.join(self.tips)})") from None
-
-    def _force(self, F: object) -> np.ndarray:
-        if F is None:
-            return np.zeros(3)
-        a = as_float_array(F, "F", "F_z or 3 numbers Fx, Fy, Fz")
-        if a.shape == ():
-            return np.array([0.0, 0.0, float(self.vector(np.atleast_1d(a), "F", 1)[0])])  # F_z only (eq. 2.13)
-        return self.vector(a, "F", 3)
-
     # ------------------------------------------------------------------ terms of eq. 2.10
     def inertia_matrix(self, q: np.ndarray) -> np.ndarray:
         """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8): the joint-side
@@ -377,75 +350,6 @@ class Model:
     def friction_torque(self, v: np.ndarray, smooth: bool = False) -> np.ndarray:
         """Friction F_v qd + f_s (eq. 2.6-2.7), (n,), N m; ``smooth`` uses tanh(qd / v_s) for sign."""
         return self.extras.friction_torque(self.vector(v, "v"), smooth)
-
-    def fingertip_position(self, q: np.ndarray, tip: str | None = None) -> np.ndarray:
-        """Position of a tip frame in the base frame, (3,), m."""
-        q = self.vector(q, "q")
-        fid = self.frame_id(tip)
-        pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
-        return self.pin_data.oMf[fid].translation.copy()
-
-    def fingertip_jacobian(self, q: np.ndarray, tip: str | None = None) -> np.ndarray:
-        """Linear velocity Jacobian J of a tip frame in the base frame, (3, n), m (Section 2.2, eq. 2.12)."""
-        q = self.vector(q, "q")
-        fid = self.frame_id(tip)
-        return pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, _WORLD)[:3].copy()
-
-    def frame_placement(self, q: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
-        """(R (3, 3), p (3,)): orientation and position (m) of ``frame`` in the base frame."""
-        q = self.vector(q, "q")
-        fid = self.frame_id(frame)
-        pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
-        M = self.pin_data.oMf[fid]
-        return M.rotation.copy(), M.translation.copy()
-
-    def frame_jacobian(self, q: np.ndarray, frame: str | None = None, reference: str = "local_world_aligned",
-                       dim: int = 6) -> np.ndarray:
-        """Jacobian of ``frame`` (default: the first tip) as Pinocchio's ``getFrameJacobian``: (6, n)
-        [linear (m/rad); angular (1)] rows, or (3, n) linear rows with ``dim=3``, in ``reference``:
-        ``"local_world_aligned"`` (default; the frame origin's velocity in base axes), ``"local"``
-        (frame axes) or ``"world"`` (spatial velocity at the base origin), see :data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`."""
-        q = self.vector(q, "q")
-        fid = self.frame_id(frame)
-        if reference not in REFERENCE_FRAMES:
-            raise ModelError(f"reference: unknown {reference!r} (expected one of {', '.join(REFERENCE_FRAMES)})")
-        if dim not in (3, 6) or isinstance(dim, bool):
-            raise ModelError(f"dim: expected 3 (linear rows) or 6 (linear and angular), got {dim!r}")
-        J = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, REFERENCE_FRAMES[reference])
-        return J[:dim].copy()
-
-    def contact_torque(self, q: np.ndarray, F: object = None, tip: str | None = None,
-                       contacts: Any = None) -> np.ndarray:
-        """Sum of J_c^T F_c over the contacts (eq. 2.9), (n,), N m.
-
-        * one force at ``tip``: F (3,) in N, base axes (a scalar means [0, 0, F_z], eq. 2.13);
-        * several: ``contacts`` (a list of :class:`~alpes_dyn.model.contact.Contact` or frame names) and F their stacked
-          forces/wrenches, (sum of dims,); or F a dict {frame: force (3,) or wrench (6,)} in base axes.
-        """
-        if isinstance(F, dict):
-            if contacts is not None:
-                raise ModelError("contacts: give either contacts= with a stacked F or F as a dict, not both")
-            for f, x in F.items():
-                if np.size(x) not in (3, 6):
-                    raise InputError(f"F[{f!r}]: expected a force (3 values) or a wrench (6), got {np.size(x)} values")
-            contacts = tuple(Contact(f, int(np.size(x))) for f, x in F.items())
-            try:
-                F = np.concatenate([np.ravel(np.asarray(x, dtype=float)) for x in F.values()]) if F else np.zeros(0)
-            except (TypeError, ValueError):
-                raise InputError(f"F: expected numbers for every frame, got {F!r}") from None
-        if contacts is None:
-            return self.fingertip_jacobian(q, tip).T @ self._force(F)
-        cts = as_contacts(contacts)
-        F = self.vector(F, "F", sum(c.dim for c in cts))
-        q = self.vector(q, "q")
-        out = np.zeros(self.n)
-        k = 0
-        for c in cts:
-            J = pin.computeFrameJacobian(self.pin_model, self.pin_data, q, self.frame_id(c.frame),
-                                         REFERENCE_FRAMES[c.reference])
-            out += J[: c.dim].T @ F[k: k + c.dim]
-            k += c.dim
-        return out
 
     def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
         """E = 1/2 qd^T (A + I_a) qd (eq. 2.3), J."""
