@@ -82,17 +82,7 @@ from alpes_dyn.model.params import load_params
 from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.studies.realism import (CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
                                        realism_case, realism_row, rig_design, tendon_stiffness)
-from alpes_dyn.studies.sweep import sweep
-
-
-def _client(workers: int):
-    """A Dask client on a local cluster of ``workers`` processes, one thread each (as :func:`sweep` makes)."""
-    import logging
-
-    from distributed import Client, LocalCluster
-
-    return Client(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                               silence_logs=logging.ERROR))
+from alpes_dyn.studies.sweep import local_client, sweep
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -153,7 +143,7 @@ def main(argv: list[str] | None = None) -> int:
             with open(args.log, "a", encoding="utf-8") as f:
                 f.writelines(json.dumps(r) + "\n" for r in new_rows)
 
-    client = _client(args.workers) if args.workers else None
+    client = local_client(args.workers) if args.workers else None
     try:
         with tempfile.TemporaryDirectory() as d:
             for c in names:

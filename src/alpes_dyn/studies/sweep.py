@@ -31,7 +31,7 @@ import numpy as np
 from ..errors import InputError
 from ..fileio import atomic_path
 
-__all__ = ["SweepResult", "sweep", "robustness_draw", "STUDIES"]
+__all__ = ["SweepResult", "sweep", "local_client", "robustness_draw", "STUDIES"]
 
 
 @dataclass
@@ -111,6 +111,16 @@ def _check_int(x: Any, name: str, low: int, high: int) -> int:
     return int(x)
 
 
+def local_client(workers: int) -> Any:
+    """A ``distributed.Client`` on a new local cluster of ``workers`` processes, one thread each (each process's
+    compiled loops then run on one thread: :func:`~alpes_dyn.simulation.codegen._default_threads` reads the
+    OMP_NUM_THREADS Dask sets); close it with ``client.close(); client.cluster.close()``."""
+    from distributed import Client, LocalCluster
+
+    return Client(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
+                               silence_logs=logging.ERROR))
+
+
 def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: int = 0,
           options: dict[str, Any] | None = None, workers: int | None = 2, scheduler: str | None = None,
           client: Any = None, serial: bool = False, seeds: Sequence[int] | None = None,
@@ -160,7 +170,7 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     if scheduler is not None and not (isinstance(scheduler, str) and "://" in scheduler):
         raise InputError(f"scheduler: expected an address such as tcp://host:8786, got {scheduler!r}")
     try:
-        from distributed import Client, LocalCluster
+        from distributed import Client
     except ImportError:
         raise InputError("sweep: Dask is not installed (pip install 'alpes_dyn[sweep]'), or pass serial=True") from None
     own = client is None
@@ -173,10 +183,8 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
                 raise InputError(f"scheduler: cannot connect to {scheduler!r} ({type(exc).__name__}: "
                                  f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
         else:
-            workers = _check_int(workers, "workers", 1, 256)
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                                   silence_logs=logging.ERROR)
-            client = Client(cluster)
+            client = local_client(_check_int(workers, "workers", 1, 256))
+            cluster = client.cluster
     try:
         n_workers = len(client.scheduler_info().get("workers", {}))
         run = uuid.uuid4().hex[:8]  # a sweep's own keys: two sweeps of the same seeds on one client stay apart
