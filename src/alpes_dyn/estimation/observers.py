@@ -275,15 +275,17 @@ class KalmanFilter(Rebuilt):
         nz = mdl.nz
         self._folds: list[int] = []  # the products CasADi folded (covariance._mul)
         self._predict_fn: cs.Function | None = None  # built on first use (predict())
+        # the update built once, on symbols (where it folds a product, it folds it on any P: the folds come from
+        # the constant entries of H and R), and called on the prediction's expressions in the step (the same
+        # operations in the same order; building it twice took 3-6 s on the Allegro hand's 32 states)
         self._update = cs.Function("update", [z, P, y], list(self._update_sym(z, P, y)), ["z", "P", "y"],
                                    ["z_upd", "P_upd"])
-        # one step on s = [z; vec P] and [w; y], built from the expressions (not by calling the two functions, so
-        # that the products CasADi folds are seen: self.exact_loops, for the exported C)
+        # one step on s = [z; vec P] and [w; y], the prediction built from the expressions (so that the products
+        # CasADi folds are seen: self.exact_loops, for the exported C)
         s = cs.SX.sym("s", nz + nz * nz)
         r = cs.SX.sym("wy", mdl.nw + mdl.ny)
-        self._folds.clear()
         zp, Pp = self._predict_sym(s[:nz], cs.reshape(s[nz:], nz, nz), r[: mdl.nw])
-        zu, Pu = self._update_sym(zp, Pp, r[mdl.nw:])
+        zu, Pu = self._update(zp, Pp, r[mdl.nw:])
         self.exact_loops = not self._folds
         out = cs.vertcat(zu, cs.vec(Pu))
         self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [cs.cse(out)], ["s", "wy"], ["s_next"])
