@@ -370,6 +370,8 @@ def atomic_path(path: str | os.PathLike[str], what: str = "output",
         raise error(f"{what}: {os.fspath(path)!r} ends with '/': it names a directory, expected a file name")
     _check_destination(dest, what, error)
     parent = dest.parent
+    if parent.is_dir() and not writable_directory(parent):  # (a 0555 folder: refused to root too, as the CLI does)
+        raise error(f"{what}: directory {str(parent)!r} is not writable")
     with signals_as_exceptions():
         try:
             # the name shortened so that the temporary name fits where the destination's does (255 bytes)
@@ -436,9 +438,12 @@ def write_directory(files: dict[str, str], directory: str | os.PathLike[str], wh
     beside it first, which is then renamed to ``directory`` (never a partial directory; an error or an
     interruption leaves nothing): the directory's twin of :func:`atomic_path`. Returns {file name: path}."""
     dest = check_output_directory(directory, what)
-    for name in files:
-        if not name or "/" in name or name.startswith("."):
-            raise InputError(f"files: {name!r} is not a plain file name")
+    for name, text in files.items():
+        if not isinstance(name, str) or not name or "/" in name or "\0" in name or name.startswith(".") \
+                or len(name.encode("utf-8", "replace")) > 255:
+            raise InputError(f"files: {name!r:.80} is not a plain file name")
+        if not isinstance(text, str):
+            raise InputError(f"files: {name!r}'s content is {type(text).__name__}, expected str (text)")
     with signals_as_exceptions():
         tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name[:80]}.", suffix=".tmp", dir=dest.parent))
         try:

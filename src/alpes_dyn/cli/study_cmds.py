@@ -29,7 +29,8 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     _check_run_files(args)
     opts = {"model": args.model, "spread": args.spread, "duration": args.duration, "fit": not args.no_fit}
     ExperimentDesign(duration=args.duration).check()  # before any worker starts
-    res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts, workers=args.workers,
+    res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts,
+                workers=None if args.serial or args.scheduler is not None else args.workers,
                 scheduler=args.scheduler, serial=args.serial)
     res.meta.update({"study": args.study, **opts})
     if args.output is not None:
