@@ -2049,6 +2049,8 @@ API.extend([  # issue 19's third re-check: mimic attributes, the hot paths' boun
       "<mimic offset='1e-320'>: 1e-320 rad is a subnormal number"),
     A("Model", lambda c: ad.Model(_mimic('joint="j1" multiplier="1_0"')), ModelError,
       "joint 'j2': <mimic multiplier='1_0'> is not a finite number (write a decimal number"),
+    A("Model", lambda c: ad.Model(_mimic('joint="j1" multiplier="2 "')), ModelError,  # urdfdom refuses it too
+      "joint 'j2': <mimic multiplier='2 '> is not a finite number"),
     A("Model", lambda c: ad.Model(_mimic('joint="j1"/><mimic joint="j3" multiplier="2"')), ModelError,
       "joint 'j2': 2 <mimic> elements; a joint follows one joint"),
     A("Model", lambda c: c.m.forward_dynamics(np.array([1e300, 0.0, 0.0]), c.z, c.z), InputError,

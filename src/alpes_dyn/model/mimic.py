@@ -50,8 +50,9 @@ class MimicJoint:
     offset: float = 0.0
 
 
-_DECIMAL = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?\s*")
-"""A URDF number: decimal digits, an optional exponent (not Python's ``1_0``, ``nan``, ``infinity``)."""
+_DECIMAL = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+"""A URDF number as urdfdom reads it: decimal digits, an optional exponent, leading blanks (not trailing ones, nor
+Python's ``1_0``, ``nan``, ``infinity``)."""
 
 
 def _attr_number(j: ET.Element, m: ET.Element, attr: str, default: float) -> float:
