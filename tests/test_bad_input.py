@@ -421,6 +421,8 @@ CLI: dict[str, list[Cli]] = {
     ],
     "sweep": [
         C("sweep", "--study", "monte", needle="--study: unknown study 'monte'"),
+        C("sweep", "--draws", "1_0", needle="argument --draws: expected an integer >= 1, got '1_0'"),  # int() reads 10
+        C("sweep", "--serial", "--seed", "1_0", needle="argument --seed: expected an integer from 0 to"),
         C("sweep", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
         C("sweep", "-o", "{device}", needle="is a character device"),
         C("sweep", "-o", "{tmp}/table/", needle="ends with '/'"),
@@ -613,6 +615,8 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{big_urdf}", needle="16777217 bytes, over the limit of 16777216 bytes"),
         C("dynamics", "--model", "{mimicself_urdf}", needle="joint 'j2': <mimic joint='j2'> names the joint itself"),
         C("dynamics", "--model", "{mimicnan_urdf}", needle="joint 'j2': <mimic multiplier='nan'> is not a finite number"),
+        C("control", "--tau-max", "1_0", needle="argument --tau-max: expected a positive number of N m, got '1_0'"),
+        C("observability", "--order", "1_0", needle="--order: expected auto, report or a non-negative integer, got '1_0'"),
         C("dynamics", "--model", "{mimicbig_urdf}", needle="joint 'j2': <mimic multiplier='1e300'>: 1e+300 is outside "
           "the accepted range [-1e+06, 1e+06]"),
         C("dynamics", "--model", "{mimic_urdf}", "--spec", "{robot_toml}", needle="motor 'flexor'.joints: joint 'j2' "
