@@ -171,7 +171,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
                          "finger from --params (or --perturb)")
     _check_model_options(args)
     _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
-    _check_run_files(args)
+    _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
     if args.perturb is None and args.true_params_out is not None:
         raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
     truth = load_params(args.params)
