@@ -424,6 +424,9 @@ CLI: dict[str, list[Cli]] = {
         C("sweep", "--draws", "1_0", needle="argument --draws: expected an integer >= 1, got '1_0'"),  # int() reads 10
         C("sweep", "--serial", "-o", "{tmp}/s.toml", needle="-o: '{tmp}/s.toml' has extension 'toml'; expected one of .csv"),
         C("experiment", "-o", "{tmp}/r.toml", needle="-o: '{tmp}/r.toml' has extension 'toml'; expected one of .csv"),
+        C("codegen", "-o", "{tmp}/" + "z" * 300, needle="-o: the name 'zzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzz'... has "
+          "300 bytes, over the 255 a file name may have"),  # os.stat raised: an internal error, exit 1
+        C("experiment", "-o", "{tmp}/a\nb.csv", needle="-o: the name 'a\\nb.csv' holds a control character"),
         C("sweep", "--serial", "--seed", "1_0", needle="argument --seed: expected an integer from 0 to"),
         C("sweep", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
         C("sweep", "-o", "{device}", needle="is a character device"),
