@@ -71,6 +71,8 @@ URDFS = {
                                       '<joint name="j2" type="revolute"><mimic joint="j2"/>', 1),
     "mimicnan_urdf": FINGER3.replace('<joint name="j2" type="revolute">',
                                      '<joint name="j2" type="revolute"><mimic joint="j1" multiplier="nan"/>', 1),
+    "mimicbig_urdf": FINGER3.replace('<joint name="j2" type="revolute">',
+                                     '<joint name="j2" type="revolute"><mimic joint="j1" multiplier="1e300"/>', 1),
     "many_links_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(1001)) + "</robot>",
     "star_urdf": "<robot name='x'>" + "".join(f"<link name='l{i}'/>" for i in range(202))
                  + "".join(f"<joint name='j{i}' type='revolute'><parent link='l0'/><child link='l{i + 1}'/>"
@@ -419,6 +421,13 @@ CLI: dict[str, list[Cli]] = {
     ],
     "sweep": [
         C("sweep", "--study", "monte", needle="--study: unknown study 'monte'"),
+        C("sweep", "--draws", "1_0", needle="argument --draws: expected an integer >= 1, got '1_0'"),  # int() reads 10
+        C("sweep", "--serial", "-o", "{tmp}/s.toml", needle="-o: '{tmp}/s.toml' has extension 'toml'; expected one of .csv"),
+        C("experiment", "-o", "{tmp}/r.toml", needle="-o: '{tmp}/r.toml' has extension 'toml'; expected one of .csv"),
+        C("codegen", "-o", "{tmp}/" + "z" * 300, needle="-o: the name 'zzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzzz'... has "
+          "300 bytes, over the 255 a file name may have"),  # os.stat raised: an internal error, exit 1
+        C("experiment", "-o", "{tmp}/a\nb.csv", needle="-o: the name 'a\\nb.csv' holds a control character"),
+        C("sweep", "--serial", "--seed", "1_0", needle="argument --seed: expected an integer from 0 to"),
         C("sweep", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
         C("sweep", "-o", "{device}", needle="is a character device"),
         C("sweep", "-o", "{tmp}/table/", needle="ends with '/'"),
@@ -611,6 +620,10 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", "--model", "{big_urdf}", needle="16777217 bytes, over the limit of 16777216 bytes"),
         C("dynamics", "--model", "{mimicself_urdf}", needle="joint 'j2': <mimic joint='j2'> names the joint itself"),
         C("dynamics", "--model", "{mimicnan_urdf}", needle="joint 'j2': <mimic multiplier='nan'> is not a finite number"),
+        C("control", "--tau-max", "1_0", needle="argument --tau-max: expected a positive number of N m, got '1_0'"),
+        C("observability", "--order", "1_0", needle="--order: expected auto, report or a non-negative integer, got '1_0'"),
+        C("dynamics", "--model", "{mimicbig_urdf}", needle="joint 'j2': <mimic multiplier='1e300'>: 1e+300 is outside "
+          "the accepted range [-1e+06, 1e+06]"),
         C("dynamics", "--model", "{mimic_urdf}", "--spec", "{robot_toml}", needle="motor 'flexor'.joints: joint 'j2' "
           "is a mimic joint (URDF <mimic>: q_j2 = 1 q_j1 + 0) with no coordinate of its own; name 'j1'"),
         C("dynamics", "--model", "{many_links_urdf}", needle="URDF: 1001 links, over the limit of 1000"),
@@ -2017,6 +2030,110 @@ API.extend([  # issue 19's re-check: every number of a file, a spec and the API 
     A("Model", lambda c: _spec(motor=dict(joints={"j1": 1.0}), name="r" * 200), ModelError,
       "name: 'rrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrrr'... has 200 characters, over the limit of 128"),
 ])
+
+
+def _mimic(attrs: str) -> str:
+    """finger3 whose j2 follows j1 with the ``<mimic>`` attributes ``attrs`` (or elements, with a leading '>')."""
+    return FINGER3.replace('<joint name="j2" type="revolute">', f'<joint name="j2" type="revolute"><mimic {attrs}/>', 1)
+
+
+def _sweep_api():
+    return __import__("alpes_dyn.studies.sweep", fromlist=["x"])
+
+
+def _one(seed: int, x: float = 1.0) -> dict:
+    return {"x": x * seed}
+
+
+def _replay_rec3(c, **kw):
+    from alpes_dyn.estimation.replay import estimate_recording
+
+    return estimate_recording(c.f["rec3_csv"], c.m, **kw)
+
+
+API.extend([  # issue 19's third re-check: mimic attributes, the hot paths' bound, sweep, the replay's numbers
+    A("Model", lambda c: ad.Model(_mimic('joint="j1" offset="1e7"')), ModelError,
+      "joint 'j2': <mimic offset='1e7'>: 1e+07 rad is outside the accepted range [-100, 100] rad"),
+    A("Model", lambda c: ad.Model(_mimic('joint="j1" offset="1e-320"')), ModelError,
+      "<mimic offset='1e-320'>: 1e-320 rad is a subnormal number"),
+    A("Model", lambda c: ad.Model(_mimic('joint="j1" multiplier="1_0"')), ModelError,
+      "joint 'j2': <mimic multiplier='1_0'> is not a finite number (write a decimal number"),
+    A("Model", lambda c: ad.Model(_mimic('joint="j1" multiplier="2 "')), ModelError,  # urdfdom refuses it too
+      "joint 'j2': <mimic multiplier='2 '> is not a finite number"),
+    A("Model", lambda c: ad.Model(_mimic('joint="j1"/><mimic joint="j3" multiplier="2"')), ModelError,
+      "joint 'j2': 2 <mimic> elements; a joint follows one joint"),
+    A("Model", lambda c: c.m.forward_dynamics(np.array([1e300, 0.0, 0.0]), c.z, c.z), InputError,
+      "q: 1e+300 (index 0) is over the numeric hot paths' bound of 2^40 = 1.1e12 in magnitude"),
+    A("Model", lambda c: c.m.forward_dynamics(c.z, np.array([0.0, 0.0, -1e13]), c.z), InputError,
+      "v: -1e+13 (index 2) is over the numeric hot paths' bound"),
+    A("Model", lambda c: c.m.forward_dynamics(c.z, c.z, [0.0, 2e12, 0.0]), InputError,
+      "tau: 2e+12 (index 1) is over the numeric hot paths' bound"),
+    A("Model", lambda c: c.m.inertia_matrix(np.array([0.0, 1e15, 0.0])), InputError, "q: 1e+15 (index 1) is over"),
+    A("StateSpace", lambda c: c.ss.f(np.array([1e13, 0, 0, 0, 0, 0.0]), np.zeros(1)), InputError,
+      "x: 1e+13 (index 0) is over the numeric hot paths' bound"),
+    A("compile_rollout", lambda c: _rollout(c).rollout(np.array([0, 0, 1e13, 0, 0, 0.0]), np.zeros((2, 3))),
+      InputError, "x0_batch: 1e+13 (index 2) is over the numeric hot paths' bound"),
+    A("sweep", lambda c: _sweep_api().sweep(_one, 1, options={"y": 2.0}, serial=True), InputError,
+      "options: _one takes no argument 'y' (its arguments: seed, x)"),
+    A("sweep", lambda c: _sweep_api().sweep(_one, 1, serial=True, workers=3), InputError,
+      "workers: serial already says where the draws run"),
+    A("sweep", lambda c: _sweep_api().sweep(_one, 1, scheduler="tcp://127.0.0.1:1", workers=3), InputError,
+      "workers: scheduler already says where the draws run"),
+    A("sweep", lambda c: _sweep_api().sweep(lambda seed: {"names": ["a", "b"]}, 1, serial=True), InputError,
+      "fn: result 'names' (seed 0): expected numbers"),
+    A("sweep", lambda c: _sweep_api().sweep(lambda seed: {"c": [1 + 2j]}, 1, serial=True), InputError,
+      "fn: result 'c' (seed 0): complex values are not supported"),
+    A("sweep", lambda c: _sweep_api().sweep(lambda seed: {"r": [[1.0, 2.0], [3.0]]}, 1, serial=True), InputError,
+      "fn: result 'r' (seed 0): expected numbers"),
+    A("sweep", lambda c: _sweep_api().sweep(lambda seed: {1: 2.0}, 1, serial=True), InputError,
+      "fn: a draw's result has the key 1, expected a string (seed 0)"),
+    A("sweep", lambda c: _sweep_api().sweep(_one, 1, serial=True).table(["nope"]), InputError,
+      "columns: 'nope' is not a column (columns: seed, x)"),
+    A("estimate_recording", lambda c: _replay_rec3(c, torque_noise=1e300), InputError,
+      "torque_noise: 1e+300 N m is outside the accepted range [0, 1e+06] N m"),
+    A("estimate_recording", lambda c: _replay_rec3(c, tilt=[1e300, 0.0]), InputError,
+      "tilt: 1e+300 rad (index 0) is outside the accepted range [-100, 100] rad"),
+    A("estimate_recording", lambda c: _replay_rec3(c, encoder_offset=[1e-320]), InputError,
+      "encoder_offset: 1e-320 rad is a subnormal number"),
+    A("estimate_recording", lambda c: _replay_rec3(c, compiled="yes"), InputError, "compiled: expected True or False"),
+    A("read_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).read_recording(3, c.m),
+      RecordingError, "recording: expected a file path, got int"),
+    A("write_sources", lambda c: __import__("alpes_dyn.fileio", fromlist=["x"]).write_directory(
+        {"a\0.c": "int x;"}, c.f["tmp"] + "/cg"), InputError, "files: 'a\\x00.c' is not a plain file name"),
+    A("write_sources", lambda c: __import__("alpes_dyn.fileio", fromlist=["x"]).write_directory(
+        {"a.c": b"int x;"}, c.f["tmp"] + "/cg"), InputError, "files: 'a.c''s content is bytes, expected str"),
+])
+
+
+def test_hot_path_below_its_bound_is_newton():
+    """Below 2^40 the hot path gives what eq. 2.10 gives, however large: Gamma = 1e11 N m on finger3 against a
+    dense solve of A qdd = Gamma - nle - k q (Pinocchio's CRBA and RNEA, numpy's solve); and the bound is the
+    magnitude of one entry (three entries of 9e11, whose norm is 1.6e12 > 2^40, pass: the exact check decides)."""
+    import pinocchio as pin
+
+    m = ad.Model.alpes("finger3")
+    q, v, tau = np.array([0.3, 0.5, 0.2]), np.array([0.1, -0.2, 0.3]), np.array([1e11, 0.0, -1e11])
+    A = pin.crba(m.pin_model, m.pin_model.createData(), q)
+    A = np.triu(A) + np.triu(A, 1).T
+    nle = pin.rnea(m.pin_model, m.pin_model.createData(), q, v, np.zeros(3))
+    np.testing.assert_allclose(m.forward_dynamics(q, v, tau), np.linalg.solve(A, tau - nle - m.spring_torque(q)),
+                               rtol=1e-9)
+    big = np.full(3, 9e11)
+    assert np.linalg.norm(big) > 2.0**40
+    np.testing.assert_allclose(m.inverse_dynamics(q, v, big) - m.inverse_dynamics(q, v, np.zeros(3)), A @ big,
+                               rtol=1e-9)
+
+
+def test_sweep_api_output_in_a_read_only_folder(tmp_path):
+    ro = tmp_path / "ro"
+    ro.mkdir()
+    ro.chmod(0o555)
+    try:
+        with pytest.raises(InputError, match="is not writable"):
+            _sweep_api().sweep(_one, 1, serial=True).to_csv(ro / "s.csv")
+        assert list(ro.iterdir()) == []
+    finally:
+        ro.chmod(0o755)
 
 
 def test_every_public_api_has_rows():

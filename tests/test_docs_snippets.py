@@ -4,11 +4,16 @@ Python blocks: the blocks of one page in order, in one namespace, in a temporary
 them (a block that needs an optional package is skipped when it is missing: MuJoCo, python-control). Command
 blocks (``.. code-block:: bash``): every ``alpes-dyn`` line of a page, in order, in one folder, must exit 0;
 they fit and sweep for minutes, so they are marked ``commands``, left out of the default run and run by CI as a
-step of its own (``python -m pytest -m commands``)."""
+step of its own (``python -m pytest -m commands``). Docstring examples (``>>>``, rendered on the API pages) run as
+doctests; the gallery's scripts (``docs/examples/plot_*.py``, which sphinx-gallery runs to build its pages) run
+as scripts, marked ``gallery`` (minutes: ``python -m pytest -m gallery``)."""
 
 from __future__ import annotations
 
+import doctest
+import importlib
 import re
+import runpy
 from pathlib import Path
 
 import pytest
@@ -90,3 +95,31 @@ def test_page_commands_run(page, tmp_path):
             r = subprocess.run([sys.executable, "-m", "alpes_dyn.cli", *argv], cwd=tmp_path, capture_output=True,
                                text=True, timeout=600)
             assert r.returncode == 0, f"{page.relative_to(DOCS)} line {line}: {cmd}: {r.stderr.strip()}"
+
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "alpes_dyn"
+DOCTEST_MODULES = sorted("alpes_dyn." + ".".join(p.relative_to(SRC).with_suffix("").parts)
+                         for p in SRC.rglob("*.py") if ">>> " in p.read_text(encoding="utf-8"))
+
+
+def test_the_docstrings_have_examples():
+    assert DOCTEST_MODULES  # a runner that finds none would test nothing
+
+
+@pytest.mark.parametrize("module", DOCTEST_MODULES)
+def test_docstring_examples_run(module):
+    """The ``>>>`` examples of the docstrings (the API pages show them): each runs, its output as printed."""
+    result = doctest.testmod(importlib.import_module(module), optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0, result
+
+
+GALLERY = sorted((DOCS / "examples").glob("plot_*.py"))
+
+
+@pytest.mark.gallery
+@pytest.mark.parametrize("script", GALLERY, ids=[p.name for p in GALLERY])
+def test_gallery_script_runs(script, tmp_path, monkeypatch):
+    """A gallery script as sphinx-gallery runs it to build its page (the figures to a non-interactive backend)."""
+    monkeypatch.chdir(tmp_path)
+    monkeypatch.setenv("MPLBACKEND", "Agg")
+    runpy.run_path(str(script), run_name="__main__")

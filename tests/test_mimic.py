@@ -146,6 +146,48 @@ def test_zero_multiplier_is_the_welded_tree():
         assert m.potential_energy(q) == pytest.approx(w.potential_energy(q), rel=1e-13)
 
 
+def _middle_mimic_urdf(multiplier: float, offset: float, welded: bool = False) -> str:
+    """The shipped finger3 whose middle joint j2 follows j1 (q_j2 = a q_j1 + b) while j3 below it moves on its own;
+    ``welded``: j2 a fixed joint turned by ``offset`` about its axis (0 -1 0)."""
+    urdf = ad.urdf_string("finger3")
+    head = '<joint name="j2" type="revolute">'
+    assert head in urdf
+    if not welded:
+        return urdf.replace(head, head + f'<mimic joint="j1" multiplier="{multiplier!r}" offset="{offset!r}"/>')
+    start = urdf.index(head)
+    end = urdf.index("</joint>", start) + len("</joint>")
+    j2 = urdf[start:end]
+    parent = j2[j2.index("<parent"):j2.index("/>", j2.index("<parent")) + 2]
+    child = j2[j2.index("<child"):j2.index("/>", j2.index("<child")) + 2]
+    xyz = j2[j2.index('xyz="', j2.index("<origin")) + 5:j2.index('"', j2.index('xyz="', j2.index("<origin")) + 5)]
+    fixed = (f'<joint name="j2" type="fixed">{parent}{child}<origin xyz="{xyz}" rpy="0 {-offset!r} 0"/></joint>')
+    return urdf[:start] + fixed + urdf[end:]
+
+
+def test_a_mimic_joint_with_a_moving_child_on_repeated_calls():
+    """A mimic joint in the middle of the chain (j3 below it moves on its own): Pinocchio 4.1's CRBA on its mimic
+    model adds to the coupled entries on every call after the first, so A and the forward dynamics must not come
+    from it. (a) a = 0 against the tree with j2 welded at the offset, over repeated calls at the same state; (b) a =
+    0.8 against Pinocchio's mimic model on a fresh Data per call (right on a first call: it equals (a)'s welded
+    tree at a = 0)."""
+    m, w = ad.Model(_middle_mimic_urdf(0.0, 0.3)), ad.Model(_middle_mimic_urdf(0.0, 0.3, welded=True))
+    assert m.joint_names == w.joint_names == ("j1", "j3")
+    q, v, tau = np.array([0.4, 0.9]), np.array([0.5, -1.0]), np.array([0.01, -0.002])
+    for _ in range(3):  # the same state thrice: the same numbers thrice
+        np.testing.assert_allclose(m.inertia_matrix(q), w.inertia_matrix(q), rtol=1e-13, atol=0)
+        np.testing.assert_allclose(m.forward_dynamics(q, v, tau), w.forward_dynamics(q, v, tau), rtol=1e-11)
+    urdf = _middle_mimic_urdf(0.8, 0.1)
+    m = ad.Model(urdf)
+    pm = pin.buildModelFromXML(urdf, mimic=True)
+    for q, v, tau in list(_states(m)) * 2:
+        pd = pm.createData()
+        M = pin.crba(pm, pd, q)
+        M = np.triu(M) + np.triu(M, 1).T
+        np.testing.assert_allclose(m.inertia_matrix(q), M, rtol=1e-13, atol=0)
+        np.testing.assert_allclose(m.forward_dynamics(q, v, tau), np.linalg.solve(M, tau - pin.nonLinearEffects(
+            pm, pd, q, v)), rtol=1e-11)
+
+
 # ------------------------------------------------------------------ the spec on the independent joints
 def test_spec_rows_act_on_the_independent_joint():
     m, bare = ad.Model(finger_urdf(), SPEC), ad.Model(finger_urdf())

@@ -2,6 +2,10 @@
 
 from __future__ import annotations
 
+import csv
+import json
+import math
+
 import numpy as np
 import pytest
 
@@ -67,3 +71,19 @@ def test_bad_sweep_arguments(kw, needle):
 def test_a_draw_must_return_a_dict():
     with pytest.raises(InputError, match="fn: a draw must return a dict of results, got int"):
         sweep(lambda s: s, 1, serial=True)
+
+
+def _with_non_finite(seed: int) -> dict:
+    return {"x": float(seed), "bad": math.nan, "pair": [1.0, math.inf], "flags": [True, False]}
+
+
+def test_non_finite_results_never_reach_the_table_or_csv(tmp_path):
+    """NaN and inf from a draw: null in JSON, an empty cell in the CSV, '-' in the table; bool lists stay flags."""
+    res = sweep(_with_non_finite, 2, serial=True)
+    path = res.to_csv(tmp_path / "s.csv")
+    rows = list(csv.DictReader(open(path)))
+    assert rows[1] == {"seed": "1", "x": "1.0", "bad": "", "pair_0": "1.0", "pair_1": "", "flags_0": "True",
+                       "flags_1": "False"}
+    assert "nan" not in res.table() and "inf" not in res.table() and res.table().split("\n")[2].split()[2] == "-"
+    obj = json.loads(json.dumps(res.to_dict(), allow_nan=False))
+    assert obj["rows"][0]["bad"] is None and obj["rows"][0]["pair_1"] is None

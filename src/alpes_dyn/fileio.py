@@ -289,6 +289,19 @@ def _check_extension(p: Path, what: str, extensions: Sequence[str], error: type[
                     f"expected one of {', '.join('.' + e for e in extensions)}")
 
 
+def _check_output_name(p: Path, what: str, error: type[AlpesDynError]) -> None:
+    """An output's own name (the last component): at most 255 bytes (the file systems' NAME_MAX: a longer one
+    made ``os.stat`` raise, an internal error), and no control character (a line break or an escape in a name the
+    command would create: a file nobody can type back)."""
+    name = p.name
+    if len(os.fsencode(name)) > 255:
+        raise error(f"{what}: the name {name[:40]!r}... has {len(os.fsencode(name))} bytes, over the 255 a file "
+                    "name may have")
+    if any(ord(ch) < 32 or ord(ch) == 127 for ch in name):
+        raise error(f"{what}: the name {name[:80]!r} holds a control character (a line break, a tab, an escape); "
+                    "give a printable name")
+
+
 def check_output_path(path: str | None, what: str, extensions: Sequence[str] | None = None,
                       error: type[AlpesDynError] = InputError) -> Path:
     """Validate one output file name before any work: not empty, not ending in ``/``, not an existing
@@ -296,6 +309,7 @@ def check_output_path(path: str | None, what: str, extensions: Sequence[str] | N
     extension is one of ``extensions`` (lower-case, without dot)."""
     p = _path(path if path is not None else "", what, error)
     text = os.fspath(path)  # type: ignore[arg-type]
+    _check_output_name(p, what, error)
     if text.endswith(("/", os.sep)) and not p.is_dir():
         raise error(f"{what}: {text!r} ends with '/': it names a directory, expected a file name")
     _check_destination(p, what, error)
@@ -370,6 +384,8 @@ def atomic_path(path: str | os.PathLike[str], what: str = "output",
         raise error(f"{what}: {os.fspath(path)!r} ends with '/': it names a directory, expected a file name")
     _check_destination(dest, what, error)
     parent = dest.parent
+    if parent.is_dir() and not writable_directory(parent):  # (a 0555 folder: refused to root too, as the CLI does)
+        raise error(f"{what}: directory {str(parent)!r} is not writable")
     with signals_as_exceptions():
         try:
             # the name shortened so that the temporary name fits where the destination's does (255 bytes)
@@ -413,6 +429,7 @@ def check_output_directory(directory: str | os.PathLike[str] | None, what: str =
     if not text or "\0" in text:
         raise InputError(f"{what}: expected a directory name, got {text!r}")
     p = Path(text.rstrip("/") or "/")
+    _check_output_name(p, what, InputError)
     if os.path.islink(p):
         raise InputError(f"{what}: {text!r} is a symbolic link; give a new directory name")
     if p.exists():
@@ -436,9 +453,12 @@ def write_directory(files: dict[str, str], directory: str | os.PathLike[str], wh
     beside it first, which is then renamed to ``directory`` (never a partial directory; an error or an
     interruption leaves nothing): the directory's twin of :func:`atomic_path`. Returns {file name: path}."""
     dest = check_output_directory(directory, what)
-    for name in files:
-        if not name or "/" in name or name.startswith("."):
-            raise InputError(f"files: {name!r} is not a plain file name")
+    for name, text in files.items():
+        if not isinstance(name, str) or not name or "/" in name or "\0" in name or name.startswith(".") \
+                or len(name.encode("utf-8", "replace")) > 255:
+            raise InputError(f"files: {name!r:.80} is not a plain file name")
+        if not isinstance(text, str):
+            raise InputError(f"files: {name!r}'s content is {type(text).__name__}, expected str (text)")
     with signals_as_exceptions():
         tmp = Path(tempfile.mkdtemp(prefix=f".{dest.name[:80]}.", suffix=".tmp", dir=dest.parent))
         try:

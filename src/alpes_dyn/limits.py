@@ -17,6 +17,10 @@
   [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`], derivative orders at
   most :data:`MAX_ORDER`, operation caps at most :data:`MAX_OPERATIONS`; at most :data:`MAX_ARGS` command-line arguments;
   seeds from 0 to :data:`MAX_SEED`; names (joints, links, frames, motors) of at most :data:`MAX_NAME` characters.
+* The numeric hot paths (:class:`~alpes_dyn.Model`'s dynamics, a state space's and an observer's vectors): every entry
+  of a vector below :data:`MAX_HOT_MAGNITUDE` (2^40, about 1.1e12) in magnitude, checked with one BLAS norm per
+  vector (:func:`within_hot_magnitude`): an angle beyond it is known to worse than 2.4e-4 rad (float64's spacing
+  there), so its sine and cosine are noise, and no robot's velocity, torque or force comes near it.
 * Physical quantities (:data:`PHYSICAL_RANGES`, :func:`check_physical`): every number of a parameter file, of a
   spec and of a command-line option that has a unit lies within a range of magnitudes, by its unit: an angle of
   1e300 rad or a gear ratio of 1e300 is refused with one line naming the field and the range, as is a subnormal
@@ -29,12 +33,14 @@ import math
 import numbers
 import os
 
+from scipy.linalg.blas import dnrm2 as _NRM2  # BLAS's norm: the hot paths' one-call check
+
 from .errors import InputError
 
 __all__ = ["MAX_POINTS", "DEFAULT_MAX_BYTES", "max_bytes", "check_bytes", "check_duration", "check_time_step", "MAX_TEXT_BYTES", "MAX_RECORDING_BYTES",
            "MAX_CSV_CELL", "MAX_CSV_ROWS", "MAX_URDF_LINKS", "MAX_URDF_DEPTH", "MAX_URDF_JOINTS", "MAX_TOML_DEPTH", "MAX_TOML_INT",
            "MAX_DURATION_S", "MIN_TIME_STEP_S", "MAX_ORDER", "MAX_OPERATIONS", "MAX_ARGS", "MAX_SEED", "MAX_NAME", "PHYSICAL_RANGES",
-           "check_physical", "check_not_subnormal"]
+           "check_physical", "check_not_subnormal", "MAX_HOT_MAGNITUDE", "within_hot_magnitude"]
 
 MAX_POINTS = 10_000
 """Most random points for the observability rank and the report's dynamics cross-check."""
@@ -88,6 +94,12 @@ MAX_NAME = 128
 """Longest name of a joint, link, frame or motor, characters: a name becomes an MJCF name and a recording's column
 (``encoder_<motor>``, ``true_q_<joint>``), whose cells are at most :data:`MAX_CSV_CELL` characters."""
 
+MAX_HOT_MAGNITUDE = 2.0**40
+"""Largest magnitude (exclusive) of an entry of a vector given to the numeric hot paths (q in rad or m, qd, Gamma,
+a force, a state, a measurement): 2^40 = 1.0995e12. Float64's spacing at 2^40 is 2^-12 = 2.4e-4, so an angle there
+is known to a quarter of a milliradian at best (at 2^53, not to 1 rad: its sine is noise); no robot's velocity
+(rad/s), torque (N m) or force (N) comes near it."""
+
 MAX_SEED = 2**63 - 1
 """Largest random seed (a seed is an integer from 0 to 2^63 - 1)."""
 
@@ -121,6 +133,29 @@ The ranges are wide on purpose (a 100 m link, a 10 t mass): they refuse what no 
 not."""
 
 _SMALLEST_NORMAL = 2.2250738585072014e-308
+
+
+def within_hot_magnitude(a) -> bool:
+    """Whether float64 vector ``a`` is finite with its Euclidean norm below :data:`MAX_HOT_MAGNITUDE`: one BLAS
+    ``dnrm2`` call (about as cheap as a dot product; its scaling never overflows, so no numpy warning either).
+    True implies every entry is below the bound; False (a NaN, an inf, an entry at or over the bound, or rarely
+    many entries whose norm only reaches it) sends the caller to its exact, slower check."""
+    return _NRM2(a) < MAX_HOT_MAGNITUDE
+
+
+def hot_magnitude_error(a, name: str) -> InputError | None:
+    """The :class:`~alpes_dyn.InputError` naming ``name`` and the first entry of finite vector ``a`` at or over
+    :data:`MAX_HOT_MAGNITUDE`, or None when every entry is below it (the exact check behind
+    :func:`within_hot_magnitude`)."""
+    import numpy as np
+
+    big = np.flatnonzero(np.abs(a) >= MAX_HOT_MAGNITUDE)
+    if big.size == 0:
+        return None
+    i = int(big[0])
+    at = f" (index {i})" if np.ndim(a) and np.size(a) > 1 else ""
+    return InputError(f"{name}: {float(np.reshape(a, -1)[i]):g}{at} is over the numeric hot paths' bound of 2^40 = "
+                      "1.1e12 in magnitude (docs: user guide, dynamics, 'Input bounds')")
 
 
 def check_not_subnormal(x: float, field: str, unit: str = "", error: type[Exception] = InputError) -> float:

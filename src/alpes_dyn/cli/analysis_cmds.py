@@ -12,7 +12,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..limits import MAX_ORDER
-from .common import (_emit, _is_urdf_path, _model_from_args, _one_finger, _one_of, _one_or_list, _urdf_robot,
+from .common import (_emit, _is_urdf_path, _model_from_args, _one_finger, _one_of, _one_or_list, _strict_int, _urdf_robot,
                      parse_vector)
 
 
@@ -49,7 +49,7 @@ def cmd_observability(args: argparse.Namespace) -> int:
     order: str | int = getattr(args, "order", "auto")
     if order not in ("auto", "report"):
         try:
-            order = int(order)
+            order = _strict_int(order)
         except ValueError:
             raise InputError(f"--order: expected auto, report or a non-negative integer, got {order!r}") from None
         if order < 0:

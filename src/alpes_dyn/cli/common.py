@@ -90,6 +90,14 @@ def check_option_ranges(args: argparse.Namespace) -> None:
             check_physical(value, "--" + dest.replace("_", "-"), unit, kind)
 
 
+def _strict_int(text: str) -> int:
+    """An integer as ``int()`` reads it, less Python's digit separators (``1_0`` is not 10: ``--draws 1_0`` ran ten
+    draws)."""
+    if "_" in text:
+        raise ValueError(text)
+    return int(text)
+
+
 def parse_vector(text: str, name: str) -> np.ndarray:
     """``"-0.1,0.2"`` -> array([-0.1, 0.2]); a clear :class:`InputError` otherwise (and for numbers outside the
     accepted range of the option's unit, :data:`VECTOR_UNITS`)."""

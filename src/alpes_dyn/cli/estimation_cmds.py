@@ -171,7 +171,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
                          "finger from --params (or --perturb)")
     _check_model_options(args)
     _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
-    _check_run_files(args)
+    _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
     if args.perturb is None and args.true_params_out is not None:
         raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
     truth = load_params(args.params)
@@ -217,7 +217,7 @@ def _experiment_robot(args: argparse.Namespace) -> int:
     from ..estimation.experiment import ExperimentDesign, model_experiment
 
     _refuse_for_urdf(args, _URDF_EXPERIMENT)
-    _check_run_files(args)
+    _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
     nominal = _urdf_robot(args, "the identification experiment")
     truth = _urdf_robot(args, "the identification experiment", args.true_spec) if args.true_spec else None
     rec = model_experiment(nominal, truth, ExperimentDesign(duration=args.duration), seed=args.seed, path=args.output)

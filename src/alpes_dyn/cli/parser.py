@@ -12,7 +12,7 @@ from .. import __version__
 from ..analysis.observability_matrix import MAX_INSTRUCTIONS
 from ..limits import MAX_POINTS, MAX_SEED
 from .analysis_cmds import cmd_identifiability, cmd_observability
-from .common import _UsageError
+from .common import _UsageError, _strict_int
 from .control_cmds import cmd_control
 from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_experiment, cmd_identify
 from .model_cmds import cmd_dynamics, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
@@ -32,7 +32,7 @@ def _int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
 
     def parse(text: str) -> int:
         try:
-            value = int(text)
+            value = _strict_int(text)
         except ValueError:
             raise argparse.ArgumentTypeError(f"expected {want}, got {text!r}") from None
         if value < low or (high is not None and value > high):
@@ -73,7 +73,7 @@ _positive_seconds.__name__ = "seconds"
 def _positive_number(unit: str) -> Callable[[str], float]:
     def parse(text: str) -> float:
         try:
-            value = float(text)
+            value = _strict_float(text)
         except ValueError:
             value = float("nan")
         if not (np.isfinite(value) and value > 0):

@@ -26,10 +26,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         raise InputError("--serial: runs in this process; give no --workers or --scheduler with it")
     if args.scheduler is not None and args.workers != 2:
         raise InputError("--workers: sizes a local cluster; a --scheduler has its own workers")
-    _check_run_files(args)
+    _check_run_files(args, {"-o": ("csv",)})  # the table: a CSV by its name
     opts = {"model": args.model, "spread": args.spread, "duration": args.duration, "fit": not args.no_fit}
     ExperimentDesign(duration=args.duration).check()  # before any worker starts
-    res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts, workers=args.workers,
+    res = sweep(STUDIES[args.study], args.draws, seed=args.seed, options=opts,
+                workers=None if args.serial or args.scheduler is not None else args.workers,
                 scheduler=args.scheduler, serial=args.serial)
     res.meta.update({"study": args.study, **opts})
     if args.output is not None:

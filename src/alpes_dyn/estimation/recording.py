@@ -159,8 +159,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     them and refused without them. Raises :class:`~alpes_dyn.errors.RecordingError`.
     """
     _check_reader(torque_constant, model)
+    text = _read_text(path)  # (a path that is not a str or os.PathLike: RecordingError, before Path() sees it)
     p = Path(path)
-    text = _read_text(path)
     n_lines = text.count("\n")
     if n_lines > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")

@@ -35,7 +35,7 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError, RecordingError
 from ..fileio import atomic_path
-from ..limits import check_bytes
+from ..limits import check_bytes, check_physical
 from ..model.robot import Model
 from ..simulation.integrate import stable_substeps
 from ..symbolic.parametric import tilted_gravity
@@ -112,10 +112,16 @@ class RecordingEstimate:
 
 
 def _nonnegative(x: Any, name: str, unit: str) -> float:
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)) \
-            or not math.isfinite(x) or x < 0:
+    """``x`` as a finite float >= 0 within its unit's accepted range (:func:`~alpes_dyn.limits.check_physical`)."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
         raise InputError(f"{name}: expected a non-negative number of {unit}, got {x!r}")
-    return float(x)
+    try:
+        v = float(x)
+    except OverflowError:
+        v = math.inf
+    if not math.isfinite(v) or v < 0:
+        raise InputError(f"{name}: expected a non-negative number of {unit}, got {x!r:.40}")
+    return float(check_physical(v, name, unit, "nonneg"))
 
 
 def _finite_vector(x: Any, n: int, name: str, unit: str) -> np.ndarray:
@@ -124,7 +130,7 @@ def _finite_vector(x: Any, n: int, name: str, unit: str) -> np.ndarray:
     a = as_float_array(x, name, expected).reshape(-1)
     if a.shape != (n,) or not np.isfinite(a).all():
         raise InputError(f"{name}: expected {expected}, got {np.asarray(x).tolist()!r}")
-    return a.copy()
+    return check_physical(a.copy(), name, unit, "any")
 
 
 def _model_for(model: Model, rec: Recording) -> Model:
@@ -201,8 +207,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     rec = _replay_recording(recording, model, observer)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
-    if not isinstance(disturbance, (bool, np.bool_)):
-        raise InputError(f"disturbance: expected True or False, got {disturbance!r}")
+    for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise InputError(f"{name}: expected True or False, got {flag!r:.40}")
     N, dt = rec.n_samples, rec.dt
     duration = rec.duration
     t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")

@@ -28,7 +28,7 @@ from scipy.linalg import lapack as _lapack
 
 from .description import Layout, check_model_name, layout, model_params, urdf_string
 from ..checks import as_float_array
-from ..limits import check_physical
+from ..limits import _NRM2, MAX_HOT_MAGNITUDE, check_physical, hot_magnitude_error
 from ..errors import InputError, ModelError
 from .extras import JointExtras
 from ..fileio import read_text
@@ -54,6 +54,8 @@ _potrf, _potrs = _lapack.dpotrf, _lapack.dpotrs
 _chol_decompose, _chol_solve = pin.cholesky.decompose, pin.cholesky.solve
 _isfinite = math.isfinite
 _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
+_HOT = MAX_HOT_MAGNITUDE
+_INF = math.inf
 
 
 class Model(FrameKinematics):
@@ -294,11 +296,12 @@ class Model(FrameKinematics):
 
     # ------------------------------------------------------------------ input checks
     def vector(self, x: object, name: str, n: int | None = None) -> np.ndarray:
-        """``x`` as a finite float vector of length n (default the model's), else :class:`InputError`."""
+        """``x`` as a finite float vector of length n (default the model's), every entry below
+        :data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE` (2^40) in magnitude, else :class:`InputError` naming ``name``."""
         n = self.n if n is None else n
         if x.__class__ is _ND and x.dtype is _F64 and x.shape == (n,):  # fast path, no copy
             a = x
-            if math.isfinite(a.dot(self._tiny if n == self.n else np.full(n, _TINY))):  # one BLAS call
+            if _NRM2(a) < _HOT:  # one BLAS call: finite and bounded
                 return a
         else:
             a = as_float_array(x, name, f"{n} numbers")
@@ -306,6 +309,9 @@ class Model(FrameKinematics):
                 raise InputError(f"{name}: expected shape ({n},), got {a.shape}")
         if not np.isfinite(a).all():
             raise InputError(f"{name}: contains NaN or inf ({a.tolist()})")
+        err = hot_magnitude_error(a, name)
+        if err is not None:
+            raise err
         return a
 
     # ------------------------------------------------------------------ terms of eq. 2.10
@@ -313,6 +319,10 @@ class Model(FrameKinematics):
         """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8): the joint-side
         ``armature`` on the diagonal and the rotors' S^T diag(J_m) S (:attr:`rotor_matrix`)."""
         q = self.vector(q, "q")
+        if self.mimic is not None:  # (Pinocchio's CRBA on a mimic model is right on its first call only)
+            M = self.mimic.mass_matrix(q)
+            M[np.diag_indices(self.n)] += self.pin_model.armature
+            return M + self.rotor_matrix if self._rotor else M
         M = pin.crba(self.pin_model, self.pin_data, q).copy()
         M[self._lower] = M.T[self._lower]  # CRBA fills the upper triangle
         if self._rotor:
@@ -373,12 +383,15 @@ class Model(FrameKinematics):
         ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
         or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
         :meth:`contact_torque`).
-        This is the hot path: float64 arrays of the right shape skip conversion, and finiteness is
-        checked once on the result (NaN/inf in any input propagates to it); a non-finite result
-        raises :class:`InputError` naming the offending input.
+        This is the hot path: float64 arrays of the right shape skip conversion. Its input contract
+        (:data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE`): every entry of q, v and tau finite and below 2^40 in
+        magnitude (beyond it an angle's sine is noise, and no robot's velocity or torque comes near it), checked
+        on every call with one BLAS norm per vector; :class:`InputError` naming the input, or saying the
+        accelerations overflowed.
         """
         if not (q.__class__ is _ND and v.__class__ is _ND and tau.__class__ is _ND and q.dtype is _F64
-                and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == self._shape):
+                and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == self._shape
+                and _NRM2(q) < _HOT and _NRM2(v) < _HOT and _NRM2(tau) < _HOT):
             q, v, tau = self.vector(q, "q"), self.vector(v, "v"), self.vector(tau, "tau")
         if self._spring:
             tau = tau - self.extras.spring_torque(q)
@@ -390,11 +403,8 @@ class Model(FrameKinematics):
             qdd = self._rotor_solve(q, v, tau)
         else:
             qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
-        if not _isfinite(qdd.dot(self._tiny)):
-            for x, name in ((q, "q"), (v, "v"), (tau, "tau")):
-                self.vector(x, name)
-            if not np.isfinite(qdd).all():
-                raise InputError("forward dynamics gave non-finite accelerations (inputs too large?)")
+        if not _NRM2(qdd) < _INF and not np.isfinite(qdd).all():  # (inputs checked: an overflow inside)
+            raise InputError("forward dynamics gave non-finite accelerations (inputs too large?)")
         return qdd
 
     def _rotor_solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
@@ -407,6 +417,12 @@ class Model(FrameKinematics):
         non-finite input: the caller's finiteness check names it).
         """
         pm, pd = self.pin_model, self.pin_data
+        if self.mimic is not None:  # the whole tree's CRBA, projected (mimic.MimicCoupling.mass_matrix)
+            b = tau - _nle(pm, pd, q, v)
+            if not _isfinite(b.dot(self._tiny)):
+                return np.full(self.n, np.nan)
+            c, info = _potrf(self.inertia_matrix(q), lower=0, clean=0, overwrite_a=1)
+            return _potrs(c, b)[0] if info == 0 else np.full(self.n, np.nan)
         _crba(pm, pd, q)
         b = tau - _nle(pm, pd, q, v)
         if not _isfinite(b.dot(self._tiny)):  # a non-finite input: NaN out, no solve of inf (no numpy warning)

@@ -41,7 +41,7 @@ from .buildcache import CompilerError
 from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
 from ..checks import as_float_array
 from ..errors import InputError
-from ..limits import check_bytes, check_time_step
+from ..limits import check_bytes, check_time_step, hot_magnitude_error
 from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
@@ -225,8 +225,12 @@ def _n_steps(duration: Any, dt: float) -> int:
 
 
 def _finite(a: np.ndarray, name: str) -> np.ndarray:
+    """``a`` if finite with every entry below :data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE`, else InputError."""
     if not np.isfinite(a).all():
         raise InputError(f"{name}: contains NaN or inf")
+    err = hot_magnitude_error(a, name)
+    if err is not None:
+        raise err
     return a
 
 

@@ -28,6 +28,7 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
+from ..checks import as_float_array
 from ..errors import InputError
 from ..fileio import atomic_path
 
@@ -58,21 +59,26 @@ class SweepResult:
                 "backend": self.backend, "workers": self.workers, **self.meta}
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write the table as CSV (one row per draw), atomically."""
+        """Write the table as CSV (one row per draw), atomically; a non-finite number is an empty cell (as
+        :meth:`to_dict` writes it null: never ``nan`` or ``inf`` in a table)."""
         buf = io.StringIO()
         w = csv.DictWriter(buf, fieldnames=self.columns(), lineterminator="\n")
         w.writeheader()
-        w.writerows(self.rows)
+        w.writerows({k: "" if _non_finite(v) else v for k, v in r.items()} for r in self.rows)
         with atomic_path(path, "--output") as tmp:
             tmp.write_text(buf.getvalue(), encoding="utf-8")
         return Path(path)
 
     def table(self, columns: Sequence[str] | None = None) -> str:
-        """A plain-text table of ``columns`` (default: all)."""
+        """A plain-text table of ``columns`` (default: all; an unknown one is refused); a non-finite number is
+        shown as ``-``."""
         cols = list(columns) if columns is not None else self.columns()
+        unknown = [c for c in cols if c not in self.columns()]
+        if unknown:
+            raise InputError(f"columns: {unknown[0]!r} is not a column (columns: {', '.join(self.columns())})")
 
         def fmt(v: Any) -> str:
-            return f"{v:.4g}" if isinstance(v, float) else str(v)
+            return "-" if _non_finite(v) else f"{v:.4g}" if isinstance(v, float) else str(v)
         cells = [[fmt(r.get(c, "")) for c in cols] for r in self.rows]
         widths = [max(len(c), *(len(row[i]) for row in cells)) for i, c in enumerate(cols)]
         lines = ["  ".join(c.rjust(w) for c, w in zip(cols, widths))]
@@ -80,14 +86,30 @@ class SweepResult:
         return "\n".join(lines)
 
 
+def _non_finite(v: Any) -> bool:
+    return isinstance(v, float) and not math.isfinite(v)
+
+
+def _bool_array(v: Any) -> bool:
+    try:
+        return np.asarray(v).dtype.kind == "b"
+    except (ValueError, TypeError):  # ragged: as_float_array names it
+        return False
+
+
 def _flat(seed: int, out: Any) -> dict[str, Any]:
-    """A draw's result as one flat row: arrays and lists become name_0, name_1, ..."""
+    """A draw's result as one flat row: arrays and lists (of real numbers: anything else is refused naming the
+    key) become name_0, name_1, ...; the keys are strings."""
     if not isinstance(out, dict):
         raise InputError(f"fn: a draw must return a dict of results, got {type(out).__name__} (seed {seed})")
     row: dict[str, Any] = {"seed": seed}
     for k, v in out.items():
-        if isinstance(v, (list, tuple, np.ndarray)):
-            for i, x in enumerate(np.asarray(v, dtype=float).ravel()):
+        if not isinstance(k, str):
+            raise InputError(f"fn: a draw's result has the key {k!r:.40}, expected a string (seed {seed})")
+        if isinstance(v, (list, tuple, np.ndarray)) and _bool_array(v):
+            row.update({f"{k}_{i}": bool(x) for i, x in enumerate(np.asarray(v).ravel())})  # flags stay flags
+        elif isinstance(v, (list, tuple, np.ndarray)):
+            for i, x in enumerate(as_float_array(v, f"fn: result {k!r} (seed {seed})", "numbers").ravel()):
                 row[f"{k}_{i}"] = float(x)
         elif isinstance(v, (np.floating, np.integer, np.bool_)):
             row[k] = v.item()
@@ -103,6 +125,23 @@ def _draw(fn: Callable[..., dict[str, Any]], seed: int, options: dict[str, Any],
     if not isinstance(out, dict):
         raise InputError(f"fn: a draw must return a dict of results, got {type(out).__name__} (seed {seed})")
     return {"seed": seed, **out}
+
+
+def _check_options(fn: Callable[..., Any], options: dict[str, Any]) -> None:
+    """InputError naming an option that ``fn`` has no keyword argument of (before any draw runs)."""
+    import inspect
+
+    try:
+        params = inspect.signature(fn).parameters
+    except (TypeError, ValueError):  # a builtin or a callable without a readable signature: fn says it
+        return
+    if any(p.kind is inspect.Parameter.VAR_KEYWORD for p in params.values()):
+        return
+    names = {n for n, p in params.items() if p.kind in (p.POSITIONAL_OR_KEYWORD, p.KEYWORD_ONLY)}
+    for k in options:
+        if k not in names:
+            raise InputError(f"options: {getattr(fn, '__name__', 'fn')} takes no argument {k!r} "
+                             f"(its arguments: {', '.join(sorted(names)) or 'none'})")
 
 
 def _check_int(x: Any, name: str, low: int, high: int) -> int:
@@ -122,7 +161,7 @@ def local_client(workers: int) -> Any:
 
 
 def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: int = 0,
-          options: dict[str, Any] | None = None, workers: int | None = 2, scheduler: str | None = None,
+          options: dict[str, Any] | None = None, workers: int | None = None, scheduler: str | None = None,
           client: Any = None, serial: bool = False, seeds: Sequence[int] | None = None,
           flat: bool = True) -> SweepResult:
     """Run ``fn(s, **options)`` for the seeds s = seed .. seed + draws - 1 (or for each of ``seeds``); gather the
@@ -139,6 +178,8 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     scheduler: address of a running Dask scheduler instead of a local cluster.
     client: a ``distributed.Client`` to use as it is.
     serial: run in this process, one draw after another (the baseline; no Dask needed).
+    Each of ``serial``, ``scheduler``, ``client`` and ``workers`` says where the draws run: given together they
+    are refused (none is silently ignored); so is an option ``fn`` takes no argument of.
     """
     if not callable(fn):
         raise InputError(f"fn: expected a function of the seed, got {type(fn).__name__}")
@@ -163,6 +204,12 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     options = dict(options or {})
     if "seed" in options:
         raise InputError("options: 'seed' is each draw's own (seed, seed + 1, ...); give it as sweep's seed")
+    _check_options(fn, options)
+    where = [n for n, given in (("serial", bool(serial)), ("scheduler", scheduler is not None),
+                                ("client", client is not None), ("workers", workers is not None)) if given]
+    if len(where) > 1:
+        raise InputError(f"{where[1]}: {where[0]} already says where the draws run; give one of serial, scheduler, "
+                         "client or workers")
     t0 = time.perf_counter()
     if serial:
         rows = [_draw(fn, s, options, bool(flat)) for s in seeds]
@@ -183,7 +230,7 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
                 raise InputError(f"scheduler: cannot connect to {scheduler!r} ({type(exc).__name__}: "
                                  f"{str(exc).splitlines()[0] if str(exc) else ''})") from None
         else:
-            client = local_client(_check_int(workers, "workers", 1, 256))
+            client = local_client(_check_int(2 if workers is None else workers, "workers", 1, 256))
             cluster = client.cluster
     try:
         n_workers = len(client.scheduler_info().get("workers", {}))
