@@ -264,20 +264,31 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
                        "no Python, no heap",
                        epilog="Example: alpes-dyn codegen --model finger3 --observer ekf -o ekf_c; then "
                               "cc -O2 -o ekf_c/alpes_ekf_main ekf_c/main.c ekf_c/alpes_ekf.c -lm")
-    s.add_argument("--model", default="finger3", help="finger2, finger3, or thumb (with --friction) "
-                   "(default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, or thumb (with --friction), or a URDF path "
+                   "(with --spec: the observer of 'estimate --data' on it) (default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF --model's transmission spec (motors, encoder, springs, friction); required with one")
     s.add_argument("--chain", default=None, metavar="FINGER",
-                   help="a finger model as that finger of the hand (its own [finger.<name>] values in --params)")
+                   help="Alpes models: a finger model as that finger of the hand (its own [finger.<name>] values "
+                        "in --params)")
     s.add_argument("--params", default=None, metavar="FILE",
-                   help="the observer's parameter file, e.g. written by 'alpes-dyn identify' (default: the shipped "
-                        "one)")
-    s.add_argument("--friction", action="store_true", help="the observer's model has friction (eq. 2.6-2.7)")
+                   help="Alpes models: the observer's parameter file, e.g. written by 'alpes-dyn identify' "
+                        "(default: the shipped one)")
+    s.add_argument("--friction", action="store_true", help="Alpes models: the observer's model has friction "
+                   "(eq. 2.6-2.7; a URDF --model's has its spec's)")
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, ekf-params or ukf-params (the estimation scenario's filters and noise settings) "
                         "(default %(default)s)")
     s.add_argument("--controller", default=None,
-                   help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block): "
-                        "sensor, sensorless or pi, as alpes_force.h, alpes_force.c and force_main.c")
+                   help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block, "
+                        "or a URDF --model's tip frame on its block): sensor, sensorless or pi, as alpes_force.h, "
+                        "alpes_force.c and force_main.c")
+    s.add_argument("--frame", default=None, metavar="NAME",
+                   help="a URDF --model with --controller: the tip frame that presses the block (default: the only "
+                        "tip the motor moves)")
+    s.add_argument("--motor", default=None, metavar="NAME",
+                   help="a URDF --model with --controller: the spec's motor that pulls (default: the only motor, or "
+                        "the only one moving --frame)")
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")
