@@ -509,7 +509,7 @@ def _codegen_robot(args: argparse.Namespace) -> int:
             ctl = robot_controller(args.controller, model, frame=args.frame, motor=args.motor)
         except InputError as exc:  # the scenario's field names as the command's options
             head, sep, tail = str(exc).partition(": ")
-            raise InputError(f"--{head}: {tail}" if sep and head in ("frame", "motor") else str(exc)) from None
+            raise InputError(f"--{head}: {tail}" if sep and head in ("frame", "motor", "spec") else str(exc)) from None
     sc = EstimationScenario()
     filt, z0, P0 = recording_filter(model, args.observer, sc.dt, torque_noise=sc.torque_noise,
                                     encoder_noise_counts=sc.encoder_noise_counts)
