@@ -412,7 +412,7 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
-                        "scenario (the estimation scenario's small torque wiggle) or none (structural only)")
+                        "scenario (the Alpes fingers' estimation scenario's small torque wiggle) or none (structural only)")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--camera-times", default=None, metavar="T1,T2,...",
                    help="times (s) where a camera or a jig measures every joint angle once (noise 0.1 degree)")
