@@ -442,12 +442,23 @@ CLI: dict[str, list[Cli]] = {
         C("sweep", "--scheduler", "localhost", needle="scheduler: expected an address such as tcp://host:8786"),
         C("sweep", "--duration", "0.01", needle="duration: expected a whole number of at least 100"),
         C("sweep", "-o", "{dir}", needle="is a directory"),
+        C("sweep", "--spec", "{robot_toml}", needle="--spec: applies to a URDF --model; the Alpes model 'finger3'"),
+        C("sweep", "--model", "{robot_urdf}", needle="--spec: the robustness study on a URDF --model needs its"),
+        C("sweep", "--model", "{robot_urdf}", "--spec", "{latin1_toml}", needle="not UTF-8 text"),
+        C("sweep", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--spread", "2",
+          needle="--spread: expected a fraction in [0, 1)"),
+        C("sweep", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{robot_toml}",
+          needle="-o: '{robot_toml}' is the input of --spec; refusing to write over it"),
     ],
     "mjcf": [
         C("mjcf", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
           needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
         C("mjcf", "finger3", "--tilt", "1e308", needle="--tilt: 1e+308 deg is outside the accepted range [-180, 180] deg"),
         C("mjcf", "finger7", needle="unknown model 'finger7'"),
+        C("mjcf", "{robot_urdf}", "--spec", "{robot_toml}", "--scene", "block",
+          needle="--scene: applies to the Alpes models (finger2, finger3, hand, thumb); a URDF model's block scene"),
+        C("mjcf", "{robot_urdf}", "--spec", "{robot_toml}", "--tilt", "10",
+          needle="--tilt: applies to the Alpes models (finger2, finger3, hand, thumb); a URDF model's gravity is"),
         C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
         C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
         C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
@@ -557,6 +568,7 @@ CLI: dict[str, list[Cli]] = {
     ],
     "urdf": [
         C("urdf", "finger7", needle="unknown model 'finger7'"),
+        C("urdf", "{robot_urdf}", needle="is a URDF already; this command writes the Alpes models'"),
         C("urdf", "hand", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
         C("urdf", "hand", "-o", "", needle="-o: empty file name"),
         C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: directory '{tmp}/missing' of"),
@@ -666,7 +678,34 @@ CLI: dict[str, list[Cli]] = {
         C("codegen", "-o", "/nonexistent/c", needle="-o: directory '/nonexistent' of '/nonexistent/c' does not exist"),
         C("codegen", "-o", "{file}/c", needle="-o: directory '{file}' of '{file}/c' does not exist"),
         C("codegen", "--model", "hand", "-o", "{tmp}/c", needle="--model: the C export is defined for one chain"),
-        C("codegen", "--model", "{robot_urdf}", "-o", "{tmp}/c", needle="a URDF --model is not exported yet"),
+        C("codegen", "--model", "{robot_urdf}", "-o", "{tmp}/c",
+          needle="--spec: the C export on a URDF --model needs its transmission spec"),
+        C("codegen", "--spec", "{robot_toml}", "-o", "{tmp}/c", needle="--spec: applies to a URDF --model"),
+        C("codegen", "--controller", "sensor", "--frame", "tip", "-o", "{tmp}/c",
+          needle="--frame: applies to a URDF --model"),
+        C("codegen", "--motor", "flexor", "-o", "{tmp}/c", needle="--motor: applies to a URDF --model"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--chain", "index", "-o", "{tmp}/c",
+          needle="--chain: names a finger of the Alpes hand"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--params", "x.toml", "-o", "{tmp}/c",
+          needle="--params: applies to the Alpes models"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--friction", "-o", "{tmp}/c",
+          needle="--friction: applies to the Alpes models; a URDF --model's observer has its --spec's friction"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--motor", "flexor", "-o", "{tmp}/c",
+          needle="--motor: names the force controller's tip frame or motor; give it with --controller"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--observer", "pf", "-o", "{tmp}/c",
+          needle="--observer: unknown observer 'pf'"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--controller", "pid", "-o", "{tmp}/c",
+          needle="--controller: unknown controller 'pid'"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--controller", "sensor", "-o", "{tmp}/c",
+          needle="--spec: the rest configuration (motors off) has joint 'j1' at -0.727 rad, outside its range"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--controller", "sensor", "-o",
+          "{tmp}/c", needle="--motor: 'tendon_robot' has 2 motors (flexor, distal); name one"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--controller", "pi", "--motor", "nope",
+          "-o", "{tmp}/c", needle="--motor: unknown motor 'nope'"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--controller", "pi", "--motor",
+          "flexor", "-o", "{tmp}/c", needle="--frame: motor 'flexor' moves 2 tip frames (tip, p1); name one"),
+        C("codegen", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{robot_toml}",
+          needle="exists and is not a directory"),
         C("codegen", "--model", "thumb", "-o", "{tmp}/c", needle="friction: the thumb's scenario needs"),
         C("codegen", "--chain", "pinky", "-o", "{tmp}/c", needle="chain: unknown finger 'pinky'"),
         C("codegen", "--model", "thumb", "--friction", "--chain", "index", "-o", "{tmp}/c",
@@ -1683,7 +1722,50 @@ API: list[Api] = [
       InputError, "orientations: experiment_torque replays one orientation, got 2"),
     A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
     A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
+    A("recording_filter", lambda c: _recfilt("finger3"), InputError, "model: expected an alpes_dyn Model with motors"),
+    A("recording_filter", lambda c: _recfilt(c.m, observer="pf"), InputError, "observer: unknown observer 'pf'"),
+    A("recording_filter", lambda c: _recfilt(c.m, dt=0.0), InputError, "dt: expected a positive number of seconds"),
+    A("recording_filter", lambda c: _recfilt(c.m, dt=float("nan")), InputError, "dt: expected a non-negative number"),
+    A("recording_filter", lambda c: _recfilt(c.m, torque_noise=-1.0), InputError,
+      "torque_noise: expected a non-negative number of N m"),
+    A("recording_filter", lambda c: _recfilt(c.m, encoder_noise_counts="1"), InputError,
+      "encoder_noise_counts: expected a non-negative number of counts"),
+    A("recording_filter", lambda c: _recfilt(c.m, u0=[0.1, 0.2]), InputError, "u0: expected 1 finite numbers (N m)"),
+    A("robot_controller", lambda c: _robctl("sensor", "finger3"), InputError, "model: expected an alpes_dyn Model"),
+    A("robot_controller", lambda c: _robctl("sensor", ad.Model(ROBOT_URDF)), InputError,
+      "model: 'tendon_robot' has no transmission spec"),
+    A("robot_controller", lambda c: _robctl("pid", _ctl_robot(c)), InputError, "controller: unknown controller 'pid'"),
+    A("robot_controller", lambda c: _robctl("pi", _ctl_robot(c), motor="nope"), InputError, "motor: unknown motor"),
+    A("robot_controller", lambda c: _robctl("pi", _ctl_robot(c), motor="flexor", frame="nope"), InputError,
+      "frame: "),
+    A("robot_controller", lambda c: _robctl("pi", _ctl_robot(c), motor="flexor", frame="tip", tau_max=-1.0),
+      InputError, "tau_max: expected a positive motor torque limit in N m, got -1.0"),
+    A("drawn_spec", lambda c: _drawn(c, 1.5), InputError, "spread: expected a fraction in [0, 1), got 1.5"),
+    A("drawn_spec", lambda c: _drawn(c, True), InputError, "spread: expected a fraction in [0, 1), got True"),
 ]
+
+
+def _recfilt(model, **kw):
+    from alpes_dyn.estimation.replay import recording_filter
+
+    return recording_filter(model, **kw)
+
+
+def _robctl(kind, model, **kw):
+    from alpes_dyn.control.cexport import robot_controller
+
+    return robot_controller(kind, model, **kw)
+
+
+def _ctl_robot(c):
+    return ad.Model(ROBOT_URDF, c.f["robotctl_toml"])
+
+
+def _drawn(c, spread):
+    from alpes_dyn.model.spec import load_spec
+    from alpes_dyn.studies.sweep import drawn_spec
+
+    return drawn_spec(load_spec(c.f["robot_toml"]), spread, 0)
 
 
 def _linked_dir(c):

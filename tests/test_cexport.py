@@ -20,9 +20,9 @@ CC = shutil.which("cc") or shutil.which("gcc")
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc or gcc) on PATH: the exported C is not built")
 
 
-def _build(d, prefix="alpes_ekf"):
+def _build(d, prefix="alpes_ekf", opt="-O2"):
     exe = d / f"{prefix}_main"
-    subprocess.run([CC, "-O2", "-std=c99", "-Wall", "-o", str(exe), str(d / "main.c"), str(d / f"{prefix}.c"), "-lm"],
+    subprocess.run([CC, opt, "-std=c99", "-Wall", "-o", str(exe), str(d / "main.c"), str(d / f"{prefix}.c"), "-lm"],
                    check=True, capture_output=True, text=True, timeout=300)
     return exe
 
@@ -217,3 +217,76 @@ def test_folded_products_are_counted_and_refused_for_the_loops(monkeypatch):
     assert "alpes_ekf_cs_step" in c_sources(filt)["alpes_ekf.c"]
     with pytest.raises(InputError, match="code: 'sparse' would round differently"):
         c_sources(filt, code="sparse")
+
+
+# ---- a URDF + spec robot (issue 17): finger_edu of example-robot-data with its shipped spec
+def _finger_edu():
+    import alpes_dyn as ad
+    from alpes_dyn.model.spec import example_spec_path
+
+    return str(ad.example_robot_urdf("finger_edu")), str(example_spec_path("finger_edu"))
+
+
+@needs_cc
+def test_c_export_of_a_urdf_robot_equals_estimate_on_its_recording(tmp_path, capsys):
+    """``codegen --model finger_edu.urdf --spec ...``'s observer, compiled, gives what ``estimate --data`` gives on a
+    recording of the robot (the Python path: estimate_recording) with the same noise settings, step for step."""
+    from alpes_dyn import Model
+    from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
+    from alpes_dyn.estimation.replay import estimate_recording, recording_filter
+
+    import re
+
+    urdf, shipped = _finger_edu()
+    spec = tmp_path / "smooth.toml"  # its spec without friction: one RK4 step per sample, C that builds in seconds
+    spec.write_text(re.sub(r"\[(coulomb|viscous)\][^\[]*", "", open(shipped).read()))
+    assert cli.main(["codegen", "--model", urdf, "--spec", str(spec), "-o", str(tmp_path / "c"), "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert obj["nz"] == 6 and obj["nw"] == 1 and obj["ny"] == 1 and obj["controller"] is None
+    model = Model.from_urdf_file(urdf, str(spec))
+    assert not model.extras.coulomb.any() and not model.extras.viscous.any()
+    rec = model_experiment(model, design=ExperimentDesign(duration=0.5), seed=3)
+    est = estimate_recording(rec, model, torque_noise=5e-4, encoder_noise_counts=0.5)
+    _, z0, P0 = recording_filter(model, "ekf", rec.dt, torque_noise=5e-4, encoder_noise_counts=0.5, u0=rec.torque[0])
+    step = 2 * np.pi / model.transmission.counts_per_rev
+    Y = rec.encoder * step  # finger_edu's tendon is rigid: the reading is q_m itself
+    exe = _build(tmp_path / "c", opt="-O0")  # half a megabyte of C: -O2 takes 15 s of processor time
+    Z, P = _run_main(exe, main_input(z0, P0, Y[0], rec.torque[:-1], Y[1:]), tmp_path, 6)
+    assert Z.shape == est.estimate.z.shape == (rec.n_samples, 6)
+    assert np.abs(Z - est.estimate.z).max() <= 1e-12
+    assert np.abs(P - est.estimate.P).max() <= 1e-12
+    assert np.degrees(est.rmse[1:]).max() < 0.1  # the driven joints followed (a real estimate, not a constant)
+
+
+@needs_cc
+def test_force_controller_c_export_of_a_urdf_robot_equals_python(tmp_path, capsys):
+    """The controller of ``control --model finger_edu.urdf`` (its motor flexor, its frame finger_tip_link, the block
+    placed from its kinematics), exported and compiled, commands what ForceController.update commands."""
+    from alpes_dyn import Model
+    from alpes_dyn.control.cexport import force_main_input, read_force_output, robot_controller
+    from alpes_dyn.control.controller import static_contact_force
+
+    urdf, spec = _finger_edu()
+    assert cli.main(["codegen", "--model", urdf, "--spec", spec, "--controller", "sensorless", "-o",
+                     str(tmp_path / "c"), "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert (obj["motor"], obj["frame"]) == ("flexor", "finger_tip_link")
+    d = tmp_path / "c"
+    exe = d / "fm"
+    subprocess.run([CC, "-O2", "-std=c99", "-Wall", "-Werror", "-Wno-unused-parameter", "-o", str(exe),
+                    str(d / "force_main.c"), str(d / "alpes_force.c"), "-lm"],
+                   check=True, capture_output=True, text=True, timeout=120)
+    ctl = robot_controller("sensorless", Model.from_urdf_file(urdf, spec))
+    from alpes_dyn.model.block_scene import place_block
+
+    q_c = place_block(Model.from_urdf_file(urdf, spec)).contact_q
+    F_ref, F_fb, _ = _force_inputs(3)
+    q = q_c + 0.01 * np.random.default_rng(1).standard_normal((len(F_ref), 3))
+    (tmp_path / "in.txt").write_text(force_main_input(F_ref, F_fb, q))
+    out = subprocess.run([str(exe), str(tmp_path / "in.txt")], check=True, capture_output=True, text=True).stdout
+    tau_c, Fz_c = read_force_output(out)
+    tau = np.array([ctl.update(float(F_ref[k]), float(F_fb[k]), q[k]) for k in range(len(F_ref))])
+    assert tau.max() > 0.1 * ctl.tau_max  # it pressed: the feedforward and the PI at work
+    assert np.abs(tau_c - tau).max() <= 1e-12
+    Fz = [static_contact_force(ctl.model, q[k], np.array([tau[k]]), ctl.normal, ctl.tip) for k in range(0, 1000, 50)]
+    assert np.abs(Fz_c[::50] - np.array(Fz)).max() <= 1e-12  # N: Pinocchio's G and J against CasADi's

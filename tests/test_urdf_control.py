@@ -101,6 +101,13 @@ def test_force_held_on_the_urdf_and_equal_to_the_static_balance(model):
         residual = S * tau - G - F_touch * jn  # J^T F = S^T tau_m - G, F = -F_z n
         assert np.max(np.abs(residual)) < 0.01 * np.max(np.abs(S * tau))
         assert static_contact_force(model, q, np.array([tau]), n, "fingertip") == pytest.approx(F_touch, rel=0.01)
+    # the controller that 'codegen --controller' exports (control.cexport.robot_controller) is the loop's: on the
+    # loop's own inputs it commands the loop's torques, to the bit
+    from alpes_dyn.control.cexport import robot_controller
+
+    ctl = robot_controller("sensor", model)
+    tau = [ctl.update(float(r.F_ref[k]), float(r.F_meas[k]), r.q_hat[k]) for k in range(len(r.t))]
+    assert ctl.tau_max == r.tau_max and np.array_equal(np.array(tau), r.tau_cmd)
 
 
 def test_gains_scaled_by_the_lever_and_the_contact_torque():

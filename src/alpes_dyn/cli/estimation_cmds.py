@@ -426,8 +426,11 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     from ..estimation.scenario import ESTIMATION_MODELS
 
     if _is_urdf_path(args.model):
-        raise InputError("--model: the C export builds the estimation scenario's observer of an Alpes finger "
-                         f"({', '.join(ESTIMATION_MODELS)}); a URDF --model is not exported yet")
+        return _codegen_robot(args)
+    for flag, dest in (("--spec", "spec"), ("--frame", "frame"), ("--motor", "motor")):
+        if getattr(args, dest) is not None:
+            raise InputError(f"{flag}: applies to a URDF --model; the Alpes model {args.model!r} takes its "
+                             "transmission from --params and presses with its fingertip")
     _one_chain(args.model, ESTIMATION_MODELS, "the C export")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
     if args.controller is not None:
@@ -461,6 +464,76 @@ def cmd_codegen(args: argparse.Namespace) -> int:
              f"work), dt = {filt.dt:g} s; the API in {prefix}.h",
              f"  build: cc -O2 -o {prefix}_main main.c {prefix}.c -lm"]
     if args.controller is not None:
+        lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
+                     "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+_URDF_CODEGEN = (
+    ("--chain", "chain", None, "names a finger of the Alpes hand; a URDF --model's observer estimates every joint of "
+     "its spec's motors"),
+    ("--params", "params", None, "applies to the Alpes models; a URDF --model's observer is its --spec"),
+    ("--friction", "friction", False, "applies to the Alpes models; a URDF --model's observer has its --spec's "
+     "friction"),
+)
+
+
+def _codegen_robot(args: argparse.Namespace) -> int:
+    """``codegen --model PATH.urdf --spec FILE.toml``: the observer that ``estimate --data`` runs on a recording of
+    the robot (:func:`~alpes_dyn.estimation.replay.recording_filter`) at the estimation scenario's sampling and sensor
+    noises, and with ``--controller`` the force controller of ``control`` on the robot
+    (:func:`~alpes_dyn.control.cexport.robot_controller`: ``--frame``, ``--motor``), as standalone C."""
+    from ..estimation.cexport import c_sources, check_output_directory, write_sources
+    from ..estimation.observers import OBSERVERS
+    from ..estimation.replay import recording_filter
+    from ..estimation.scenario import EstimationScenario
+
+    _refuse_for_urdf(args, _URDF_CODEGEN)
+    _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    if args.controller is not None:
+        from ..control.controller import CONTROLLERS
+
+        _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+    elif args.frame is not None or args.motor is not None:
+        raise InputError(f"{'--frame' if args.frame is not None else '--motor'}: names the force controller's tip "
+                         "frame or motor; give it with --controller")
+    check_output_directory(args.output, "-o")  # before the build: a new or empty directory, never a file
+    t0 = time.perf_counter()
+    model = _urdf_robot(args, "the C export")
+    ctl = None
+    if args.controller is not None:  # the controller first: a frame or motor that cannot press is one line, no C
+        from ..control.cexport import robot_controller
+
+        try:
+            ctl = robot_controller(args.controller, model, frame=args.frame, motor=args.motor)
+        except InputError as exc:  # the scenario's field names as the command's options
+            head, sep, tail = str(exc).partition(": ")
+            raise InputError(f"--{head}: {tail}" if sep and head in ("frame", "motor", "spec") else str(exc)) from None
+    sc = EstimationScenario()
+    filt, z0, P0 = recording_filter(model, args.observer, sc.dt, torque_noise=sc.torque_noise,
+                                    encoder_noise_counts=sc.encoder_noise_counts)
+    about = (f"Model {model.name} ({args.model}, spec {args.spec}), with its spec's friction; observer "
+             f"{args.observer} of 'alpes-dyn estimate --data' at dt = {sc.dt:g} s, torque noise "
+             f"{sc.torque_noise:g} N m, encoder noise {sc.encoder_noise_counts:g} counts; prior: the rest, motors off.")
+    files = c_sources(filt, about=about, z0=z0, P0=P0)
+    if ctl is not None:
+        from ..control.cexport import controller_c_sources
+
+        files.update(controller_c_sources(ctl))
+    written = write_sources(files, args.output, "-o")
+    prefix = f"alpes_{filt.kind}"
+    obj = {"model": args.model, "spec": args.spec, "observer": args.observer, "controller": args.controller,
+           "frame": None if ctl is None else ctl.tip, "motor": None if ctl is None else model.motor_names[ctl.motor],
+           "directory": args.output, "files": sorted(written), "prefix": prefix, "nz": filt.nz, "nw": filt.nw,
+           "ny": filt.ny, "dt": filt.dt, "states": list(filt.names), "seconds": time.perf_counter() - t0}
+    lines = [f"{model.name}: {args.observer} step"
+             + (f" and {args.controller} controller (motor {obj['motor']}, frame {obj['frame']})" if ctl else "")
+             + f" written to {args.output}/ ({', '.join(sorted(written))})",
+             f"  {prefix}_step(z[{filt.nz}], P[{filt.nz}*{filt.nz}], w[{filt.nw}], y[{filt.ny}], z_out, P_out, "
+             f"work), dt = {filt.dt:g} s; the API in {prefix}.h",
+             f"  build: cc -O2 -o {prefix}_main main.c {prefix}.c -lm"]
+    if ctl is not None:
         lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
                      "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
     _emit(obj, "\n".join(lines), args.json)

@@ -23,6 +23,9 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     from ..model.description import urdf_string
     from ..model.params import load_params
 
+    if _is_urdf_path(args.model):
+        raise InputError(f"model: {args.model!r} is a URDF already; this command writes the Alpes models' (finger2, "
+                         "finger3, thumb, hand); 'alpes-dyn mjcf' exports a URDF with its --spec")
     _check_run_files(args)
     text = urdf_string(args.model, load_params(args.params))
     if args.output is not None:
@@ -60,6 +63,15 @@ _MJCF_ALPES_ONLY = (("params", "--params", None), ("spring", "--spring", None), 
                     ("tendon_dead_band", "--tendon-dead-band", 0.0), ("tendon_rotor", "--tendon-rotor", False), ("tilt", "--tilt", 0.0))
 
 
+_MJCF_URDF_WHY = {
+    "scene": "a URDF model's block scene (placed from its kinematics) is alpes-dyn control's (--frame, --motor)",
+    "no_contact": "a URDF model's collisions are its URDF's",
+    "palm_down": "a URDF model's gravity is its spec's (gravity = [...])",
+    "tilt": "a URDF model's gravity is its spec's (gravity = [...])",
+}
+"""Why an Alpes plant option does not apply to a URDF model, where the default reason (its spec) does not say it."""
+
+
 def _urdf_mjcf(args: argparse.Namespace) -> str:
     """The MJCF of a URDF + spec model (:func:`alpes_dyn.model.mjcf_export.model_mjcf`); the Alpes plant's options
     refused by name (the spec holds springs, friction and rotor inertia)."""
@@ -68,8 +80,9 @@ def _urdf_mjcf(args: argparse.Namespace) -> str:
 
     for dest, flag, default in _MJCF_ALPES_ONLY:
         if getattr(args, dest) != default:
-            raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand, thumb); a URDF model's "
-                             "springs, friction and rotor inertia come from its --spec")
+            raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand, thumb); "
+                             + _MJCF_URDF_WHY.get(dest, "a URDF model's springs, friction and rotor inertia come from "
+                                                        "its --spec"))
     return model_mjcf(Model.from_urdf_file(args.model, args.spec), limits=not args.no_limits)
 
 

@@ -125,29 +125,34 @@ def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--spec", default=None, metavar="FILE.toml",
                    help="a URDF model's transmission spec: motors, tendons, springs, friction, rotor inertia")
-    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--params", default=None, metavar="FILE", help="Alpes models: parameter file (default: the shipped one)")
     s.add_argument("--scene", default="none", choices=("none", "block", "cylinder"),
-                   help="add a fixed block on a finger's pad (finger2, finger3) or a cylinder in the hand")
+                   help="Alpes models: add a fixed block on a finger's pad (finger2, finger3) or a cylinder in the hand "
+                        "(a URDF --model's block scene: alpes-dyn control)")
     s.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
-                   help="spring model (default torsional)")
-    s.add_argument("--friction", action="store_true", help="joint damping F_v and frictionloss F_s (eq. 2.6)")
-    s.add_argument("--rotor-inertia", action="store_true", help="the rotor J_m on each tendon: tendon armature J_m/r_m^2 "
-                   "(eq. 2.8)")
+                   help="Alpes models: spring model (default torsional)")
+    s.add_argument("--friction", action="store_true", help="Alpes models: joint damping F_v and frictionloss F_s (eq. 2.6; a URDF --model has "
+                   "its spec's, always)")
+    s.add_argument("--rotor-inertia", action="store_true", help="Alpes models: the rotor J_m on each tendon: tendon "
+                   "armature J_m/r_m^2 (eq. 2.8; a URDF --model has its spec's rotor_inertia, always)")
     s.add_argument("--no-limits", action="store_true", help="no joint stops")
-    s.add_argument("--no-contact", action="store_true", help="collisions disabled")
-    s.add_argument("--palm-down", action="store_true", help="gravity reversed: the hand turned over (control scene)")
+    s.add_argument("--no-contact", action="store_true", help="Alpes models: collisions disabled")
+    s.add_argument("--palm-down", action="store_true", help="Alpes models: gravity reversed: the hand turned over "
+                   "(control scene)")
     s.add_argument("--stiction", type=_strict_float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
-                   help="stick-slip dry friction: frictionloss F_s with solreffriction of this time constant "
+                   help="Alpes models: stick-slip dry friction: frictionloss F_s with solreffriction of this time "
+                        "constant "
                         "(default %(const)g s when given without a value)")
     s.add_argument("--tendon-stiffness", type=_strict_float, default=None, metavar="N_PER_M",
-                   help="series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
+                   help="Alpes models: series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
     s.add_argument("--tendon-damping", type=_strict_float, default=0.0, metavar="N_S_PER_M",
-                   help="damping c_t of the series-elastic tendon (default 0)")
+                   help="Alpes models: damping c_t of the series-elastic tendon (default 0)")
     s.add_argument("--tendon-dead-band", type=_strict_float, default=0.0, metavar="M",
-                   help="the series-elastic cable's play: slack up to this stretch, m (default 0)")
-    s.add_argument("--tendon-rotor", action="store_true", help="rotor inertia J_m / r_m^2 on each rigid tendon")
+                   help="Alpes models: the series-elastic cable's play: slack up to this stretch, m (default 0)")
+    s.add_argument("--tendon-rotor", action="store_true", help="Alpes models: rotor inertia J_m / r_m^2 on each rigid tendon")
     s.add_argument("--tilt", type=_strict_float, default=0.0, metavar="DEG",
-                   help="palm tilted in the finger's plane by DEG degrees (gravity rotated about y)")
+                   help="Alpes models: palm tilted in the finger's plane by DEG degrees (gravity rotated about y; a "
+                        "URDF --model's gravity is its spec's)")
     s.set_defaults(func=cmd_mjcf)
 
 
@@ -264,20 +269,31 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
                        "no Python, no heap",
                        epilog="Example: alpes-dyn codegen --model finger3 --observer ekf -o ekf_c; then "
                               "cc -O2 -o ekf_c/alpes_ekf_main ekf_c/main.c ekf_c/alpes_ekf.c -lm")
-    s.add_argument("--model", default="finger3", help="finger2, finger3, or thumb (with --friction) "
-                   "(default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, or thumb (with --friction), or a URDF path "
+                   "(with --spec: the observer of 'estimate --data' on it) (default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF --model's transmission spec (motors, encoder, springs, friction); required with one")
     s.add_argument("--chain", default=None, metavar="FINGER",
-                   help="a finger model as that finger of the hand (its own [finger.<name>] values in --params)")
+                   help="Alpes models: a finger model as that finger of the hand (its own [finger.<name>] values "
+                        "in --params)")
     s.add_argument("--params", default=None, metavar="FILE",
-                   help="the observer's parameter file, e.g. written by 'alpes-dyn identify' (default: the shipped "
-                        "one)")
-    s.add_argument("--friction", action="store_true", help="the observer's model has friction (eq. 2.6-2.7)")
+                   help="Alpes models: the observer's parameter file, e.g. written by 'alpes-dyn identify' "
+                        "(default: the shipped one)")
+    s.add_argument("--friction", action="store_true", help="Alpes models: the observer's model has friction "
+                   "(eq. 2.6-2.7; a URDF --model's has its spec's)")
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, ekf-params or ukf-params (the estimation scenario's filters and noise settings) "
                         "(default %(default)s)")
     s.add_argument("--controller", default=None,
-                   help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block): "
-                        "sensor, sensorless or pi, as alpes_force.h, alpes_force.c and force_main.c")
+                   help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block, "
+                        "or a URDF --model's tip frame on its block): sensor, sensorless or pi, as alpes_force.h, "
+                        "alpes_force.c and force_main.c")
+    s.add_argument("--frame", default=None, metavar="NAME",
+                   help="a URDF --model with --controller: the tip frame that presses the block (default: the only "
+                        "tip the motor moves)")
+    s.add_argument("--motor", default=None, metavar="NAME",
+                   help="a URDF --model with --controller: the spec's motor that pulls (default: the only motor, or "
+                        "the only one moving --frame)")
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -297,15 +313,16 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--true-spec", default=None, metavar="TRUE.toml",
                    help="a URDF --model: the spec of the simulated (true) robot, e.g. with other springs")
     s.add_argument("--chain", default=None, metavar="FINGER",
-                   help="a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
+                   help="Alpes models: a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
                         "values in --params)")
     s.add_argument("--params", default=None, metavar="FILE",
-                   help="the true parameter file (default: the shipped one)")
+                   help="Alpes models: the true parameter file (default: the shipped one)")
     s.add_argument("--perturb", type=_strict_float, default=None, metavar="SPREAD",
-                   help="draw the true chain from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
+                   help="Alpes models: draw the true chain from --params with K, m, friction each times U(1-SPREAD, 1+SPREAD) "
                         "per link (seeded by --seed): the --chain finger's own values, the thumb's, or the shared "
                         "finger's; write it with --true-params-out")
-    s.add_argument("--true-params-out", default=None, metavar="FILE", help="write the (drawn) true parameters there")
+    s.add_argument("--true-params-out", default=None, metavar="FILE", help="Alpes models, with --perturb: write the drawn true parameters "
+                   "there")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--rig", choices=("level", "hanging"), default="level",
                    help="the hand's orientation during the experiment (an Alpes model): level, palm up as the "
@@ -334,7 +351,8 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "name: fit only the parameters of the joints it drives (and its own)")
     s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
     s.add_argument("--params", default=None, metavar="FILE",
-                   help="parameter file to start from, and the base of the written file (default: the shipped one)")
+                   help="Alpes models: parameter file to start from, and the base of the written file (default: the "
+                        "shipped one)")
     s.add_argument("--torque-constant", type=_strict_float, default=None, metavar="NM_PER_A",
                    help="the motors' torque constant, N m/A, to read the recordings' current_<motor> columns (A) as "
                         "motor torques (a recording with current columns needs it)")
@@ -355,7 +373,8 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "rotor where the first one's adequacy check names them, the lower residual kept; "
                         "'none' for the rigid, smooth-friction fit (with --parameters the default is none)")
     s.add_argument("--rotor-inertia", action="store_true",
-                   help="the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it with J_m")
+                   help="Alpes models: the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it "
+                        "with J_m (a URDF --model's rotors are its spec's, always on)")
     s.add_argument("--excitation", default="documented",
                    help="'documented' (the torque is the documented multisine and its dither: fit it on their lines, default), "
                         "'none' (use the measured torque as it is) or comma-separated frequencies in Hz")
@@ -385,7 +404,7 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--model", default="finger3", help="finger2, finger3, or a URDF path (with --spec) "
                    "(default %(default)s)")
     s.add_argument("--spec", default=None, metavar="FILE.toml", help="a URDF --model's transmission spec")
-    s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    s.add_argument("--params", default=None, metavar="FILE", help="Alpes models: parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
                    help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
                         "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
@@ -393,7 +412,7 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
-                        "scenario (the estimation scenario's small torque wiggle) or none (structural only)")
+                        "scenario (the Alpes fingers' estimation scenario's small torque wiggle) or none (structural only)")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--camera-times", default=None, metavar="T1,T2,...",
                    help="times (s) where a camera or a jig measures every joint angle once (noise 0.1 degree)")
@@ -413,11 +432,16 @@ def _add_sweep(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--study", default="robustness",
                    help="robustness: per draw a finger drawn +-spread per link, its experiment, the fit and the EKF "
                         "before/after (default %(default)s)")
-    s.add_argument("--model", default="finger3", help="finger2 or finger3 (default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2 or finger3 (K, m, friction drawn), or a URDF path "
+                   "(with --spec: its spec's stiffness and friction drawn, those of the joints a motor drives "
+                   "fitted) (default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml",
+                   help="a URDF --model's transmission spec: the nominal robot; required with one")
     s.add_argument("--draws", type=_int_at_least(1), default=4, help="number of draws (default %(default)s)")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the first draw; draw k has seed + k "
                    "(default %(default)s)")
-    s.add_argument("--spread", type=_strict_float, default=0.2, help="relative spread per link (default %(default)s)")
+    s.add_argument("--spread", type=_strict_float, default=0.2, help="relative spread per link (a URDF --model: per "
+                   "value of its spec) (default %(default)s)")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--no-fit", action="store_true", help="no identification: the EKF on the nominal file only")
     s.add_argument("--workers", type=_int_at_least(1), default=2,

@@ -30,7 +30,7 @@ from ..errors import InputError
 from ..symbolic.dynamics import SymbolicDynamics
 from .controller import ForceController
 
-__all__ = ["controller_c_sources", "block_controller", "force_main_input", "read_force_output"]
+__all__ = ["controller_c_sources", "block_controller", "robot_controller", "force_main_input", "read_force_output"]
 
 _LOGIC = r"""
 /* ---- alpes_dyn: ForceController.update, line for line ---- */
@@ -127,7 +127,7 @@ int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q
 _HEADER = r"""/* {prefix}.h -- the {kind} fingertip force controller of {model} (ForceController.update in C), exported by
    alpes_dyn {version} (alpes-dyn codegen).
 
-   One motor's loop at dt = {dt!r} s: the motor torque command tau (N m, in [0, {tau_max!r}]) for the force
+   One motor's loop ({which}) at dt = {dt!r} s: the motor torque command tau (N m, in [0, {tau_max!r}]) for the force
    reference F_ref (N) and the force fed back F_fb (N: the FlexiForce reading, or the sensorless estimate),
    with the feedforward S (G(q_hat) + F_ref J(q_hat)^T n) / (S S^T) at the observer's joint angles q_hat
    ({nq}, rad){pi_note}. Surface normal n = {normal} (base frame, fixed). Settings: kp {kp!r} N m/N, ki {ki!r}
@@ -232,24 +232,26 @@ int main(int argc, char** argv) {{
 
 
 def _feedforward_function(ctl: ForceController, name: str) -> cs.Function:
-    """tau_ff(q, F) = S (G(q) + F J(q)^T n) / (S S^T): :func:`~.controller.static_motor_torque` in CasADi."""
+    """tau_ff(q, F) = S_k (G(q) + F J(q)^T n) / (S_k S_k^T): :func:`~.controller.static_motor_torque` in CasADi, S_k
+    the controller's motor's row, J the Jacobian of its tip frame (``ctl.tip``; None: the model's default tip)."""
     m = ctl.model
     sym = SymbolicDynamics(m)
     q = cs.SX.sym("q", m.n)
     F = cs.SX.sym("F")
-    S = np.asarray(m.transmission.S[0], dtype=float)
-    b = sym.gravity_torque(q) + F * cs.mtimes(sym.fingertip_jacobian(q).T, cs.DM(ctl.normal))
+    S = np.asarray(m.transmission.S[ctl.motor], dtype=float)
+    b = sym.gravity_torque(q) + F * cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, cs.DM(ctl.normal))
     return cs.Function(name, [q, F], [cs.dot(cs.DM(S), b) / float(S @ S)], ["q", "F"], ["tau_ff"])
 
 
 def _contact_force_function(ctl: ForceController, name: str) -> cs.Function:
-    """F_z(q, tau_m) = -(J^T n) . (G(q) - S^T tau_m) / |J^T n|^2: :func:`~.controller.static_contact_force`."""
+    """F_z(q, tau_m) = -(J^T n) . (G(q) - S_k^T tau_m) / |J^T n|^2: :func:`~.controller.static_contact_force` with
+    the controller's motor k alone pulling (the others at 0), at its tip frame."""
     m = ctl.model
     sym = SymbolicDynamics(m)
     q = cs.SX.sym("q", m.n)
     tau = cs.SX.sym("tau_m")
-    jn = cs.mtimes(sym.fingertip_jacobian(q).T, cs.DM(ctl.normal))
-    r = sym.gravity_torque(q) - cs.DM(np.asarray(m.transmission.S[0], dtype=float)) * tau
+    jn = cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, cs.DM(ctl.normal))
+    r = sym.gravity_torque(q) - cs.DM(np.asarray(m.transmission.S[ctl.motor], dtype=float)) * tau
     return cs.Function(name, [q, tau], [-cs.dot(jn, r) / cs.dot(jn, jn)], ["q", "tau_m"], ["F_z"])
 
 
@@ -282,7 +284,9 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
               + cg.dump() + _LOGIC.format(prefix=prefix, P=P, is_pi=is_pi, n_arg=max(ff.sz_arg(), fc.sz_arg()),
                                           n_res=max(ff.sz_res(), fc.sz_res()), n_iw=max(ff.sz_iw(), fc.sz_iw()),
                                           **settings))
-    header = _HEADER.format(prefix=prefix, P=P, kind=ctl.kind, model=ctl.model.name, version=__version__, nq=nq,
+    tr = ctl.model.transmission
+    which = f"motor {tr.motor_names[ctl.motor]}, frame {ctl.tip or ctl.model.default_tip}"
+    header = _HEADER.format(prefix=prefix, P=P, kind=ctl.kind, model=ctl.model.name, version=__version__, nq=nq, which=which,
                             nwork=nwork, normal="[" + ", ".join(f"{x:.17g}" for x in ctl.normal) + "]",
                             pi_note=" (the pi baseline: no feedforward, q_hat unused)" if is_pi else "", **settings)
     return {f"{prefix}.h": header, f"{prefix}.c": source,
@@ -309,6 +313,28 @@ def block_controller(kind: str = "sensor", model: str = "finger3", params: Any =
     p = load_params(params)
     m = Model.alpes(model, params=p)
     return ForceController(kind, m, block_normal(tuple((sc.contact_q or BLOCK_CONTACT_Q)[: m.n])), sc.dt, p.tau_max, **DEFAULT_GAINS[kind])
+
+
+def robot_controller(kind: str, model: Any, *, frame: str | None = None, motor: str | None = None,
+                     contact_q: Any = None, tau_max: float | None = None) -> ForceController:
+    """The controller of ``alpes-dyn control --model ROBOT.urdf --spec FILE.toml`` (:func:`~.finger_loop.run_control`
+    on a URDF + spec :class:`~alpes_dyn.Model`): ``kind`` with the gains scaled to the robot, on the robot without
+    its spec's friction, its motor ``motor`` pulling and its frame ``frame`` pressing the block placed from the
+    robot's kinematics at ``contact_q`` (:func:`~alpes_dyn.model.block_scene.place_block`; the defaults those of
+    ``control``), the motor limit ``tau_max`` (N m; default twice the static torque of the largest reference force);
+    a fresh one (its state at zero). The same controller as the loop's (tested against its commands)."""
+    from ..model.robot import Model
+    from .finger_loop import ControlScenario, robot_control_settings
+
+    if not isinstance(model, Model):
+        raise InputError(f"model: expected an alpes_dyn Model of a URDF and its spec, got {type(model).__name__}")
+    if model.spec is None or model.transmission is None:
+        raise InputError(f"model: {model.name!r} has no transmission spec (its motors): the force controller needs one")
+    sc = ControlScenario(model=model, controller=kind, frame=frame, motor=motor, tau_max=tau_max,
+                         contact_q=None if contact_q is None else tuple(np.asarray(contact_q, dtype=float).ravel()))
+    sc.check()
+    m, block, limit, gains = robot_control_settings(sc)
+    return ForceController(kind, m, block.normal, sc.dt, limit, motor=block.motor_index, tip=block.frame, **gains)
 
 
 def force_main_input(F_ref: Any, F_fb: Any, q_hat: Any) -> str:

@@ -364,9 +364,11 @@ def scaled_gains(controller: str, lever: float, tau_contact: float) -> dict[str,
     return gains
 
 
-def _robot_setup(sc: ControlScenario) -> _Setup:
-    """Any URDF + spec model: the block placed from its kinematics, the MJCF export plus the block (class doc)."""
-    mujoco = _mujoco()
+def robot_control_settings(sc: ControlScenario) -> tuple[Model, BlockScene, float, dict[str, float]]:
+    """What a URDF + spec robot's loop sets before MuJoCo (class doc): (the controller's model -- the robot without
+    its spec's friction --, the block of :func:`~alpes_dyn.model.block_scene.place_block`, the motor limit tau_max
+    (N m), the controller's gains); the C export's controller is built from them too
+    (:func:`~alpes_dyn.control.cexport.robot_controller`)."""
     robot: Model = sc.model
     block = place_block(robot, sc.frame, sc.motor, sc.contact_q)
     if robot.spec is not None and (robot.spec.coulomb or robot.spec.viscous):  # the controller's model: no friction
@@ -375,10 +377,6 @@ def _robot_setup(sc: ControlScenario) -> _Setup:
                       check_inertia=robot.check_inertia)
     else:
         model = robot
-    mj = load_mujoco(block_scene_mjcf(robot, block, timestep=sc.dt / sc.substeps, integrator="implicitfast"))
-    d = mujoco.MjData(mj)
-    d.qpos[joint_permutation(mj, robot.joint_names)] = block.rest_q  # at rest: the springs and gravity, motors off
-    mujoco.mj_forward(mj, d)
     k, frame = block.motor_index, block.frame
     F_max = max(max(sc.levels), max(sc.sine[:2]))
     tau_max = sc.tau_max if sc.tau_max is not None else 2.0 * static_motor_torque(
@@ -388,12 +386,25 @@ def _robot_setup(sc: ControlScenario) -> _Setup:
                          "the block cannot be pressed by the motor (give tau_max, or another contact_q)")
     tau_contact = static_motor_torque(model, block.contact_q, 0.0, block.normal, motor=k, tip=frame)
     gains = scaled_gains(sc.controller, block.lever, tau_contact)
+    return model, block, float(tau_max), {**gains, **sc.gains}
+
+
+def _robot_setup(sc: ControlScenario) -> _Setup:
+    """Any URDF + spec model: the block placed from its kinematics, the MJCF export plus the block (class doc)."""
+    mujoco = _mujoco()
+    robot: Model = sc.model
+    model, block, tau_max, gains = robot_control_settings(sc)
+    mj = load_mujoco(block_scene_mjcf(robot, block, timestep=sc.dt / sc.substeps, integrator="implicitfast"))
+    d = mujoco.MjData(mj)
+    d.qpos[joint_permutation(mj, robot.joint_names)] = block.rest_q  # at rest: the springs and gravity, motors off
+    mujoco.mj_forward(mj, d)
+    k, frame = block.motor_index, block.frame
     tr = model.transmission
     motors = tr.motor_names
     encoders = [f"encoder_{m}" for m in motors] if len(motors) > 1 else f"encoder_{motors[0]}"
     torques = [f"torque_{m}" for m in motors] if len(motors) > 1 else f"torque_{motors[0]}"
-    return _Setup(model, mj, d, block.normal, float(tau_max), k, frame, motors[k], encoders, torques,
-                  f"touch_{frame}", {**gains, **sc.gains}, block)
+    return _Setup(model, mj, d, block.normal, tau_max, k, frame, motors[k], encoders, torques,
+                  f"touch_{frame}", gains, block)
 
 
 def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None) -> Observer:

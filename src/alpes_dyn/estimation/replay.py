@@ -46,7 +46,7 @@ from .observers import OBSERVERS, Estimate, make_observer
 from .recording import Recording, read_recording
 from .scenario import held_mid_range, rest_with_held_joints
 
-__all__ = ["RecordingEstimate", "estimate_recording", "DISTURBANCE_WALK"]
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "DISTURBANCE_WALK"]
 
 DISTURBANCE_WALK = 2e-4
 """Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
@@ -170,6 +170,34 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     z0 = np.concatenate([_initial_state(m_obs, u0), np.ones(len(gains)), np.zeros(len(pars))])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
     return filt, z0, P0
+
+
+def recording_filter(model: Model, observer: str = "ekf", dt: float = 1e-3, *, torque_noise: float = 5e-4,
+                     encoder_noise_counts: float = 0.0, substeps: int | None = None,
+                     u0: Any = None) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The observer :func:`estimate_recording` runs on a recording of ``model`` sampled every ``dt`` s with the
+    torque noise ``torque_noise`` (N m) and the encoder noise ``encoder_noise_counts`` (counts beyond the
+    quantisation), without disturbance states: (filter, z0 (nz,), P0 (nz,) variances), z0 the rest under the motor
+    torques ``u0`` ((m,) N m, default 0). ``substeps`` as :func:`estimate_recording`'s (default: as many as the
+    model's friction asks, else 1). The C export of a URDF robot's observer (``alpes-dyn codegen``) is this
+    filter."""
+    if not isinstance(model, Model) or model.transmission is None:
+        raise InputError("model: expected an alpes_dyn Model with motors (a URDF and its spec's [[motor]] tables)")
+    if observer not in OBSERVERS:
+        raise InputError(f"observer: unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
+    dt = _nonnegative(dt, "dt", "s")
+    if not dt > 0:
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
+    torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
+    encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
+    has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
+    if substeps is None:
+        substeps = stable_substeps(model, dt) if has_friction else 1
+    m = model.transmission.n_motors
+    u0 = np.zeros(m) if u0 is None else _finite_vector(u0, m, "u0", "N m")
+    gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
+    return _replay_filter(model, observer, dt, substeps, torque_noise, encoder_noise_counts, DISTURBANCE_WALK, gains,
+                          (), u0, False)
 
 
 def estimate_recording(recording: Recording | str | Path, model: Model, observer: str = "ekf", *,
