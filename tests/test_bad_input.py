@@ -1391,7 +1391,7 @@ API: list[Api] = [
     A("identified_spec", lambda c: _ident_spec(("K_1", "m_2")), ModelError,
       "identified spec: m_2: a spec file holds no masses"),
     A("identified_spec", lambda c: _ident_spec(("K_1",), base=TransmissionSpec.from_toml(
-        ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon are not the fitted"),
+        ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon do not hold the fitted"),
     # state space, observability
     A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
       "output function: returned str 'abc'"),
