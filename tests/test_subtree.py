@@ -17,7 +17,7 @@ import alpes_dyn as ad
 from alpes_dyn.cli import main
 from alpes_dyn.errors import ModelError, RecordingError
 from alpes_dyn.model.spec import TransmissionSpec, example_spec_path, load_spec
-from alpes_dyn.model.subtree import branch_joints, subtree_model
+from alpes_dyn.model.subtree import branch_joints, closed_motors, subtree_model
 
 
 def _finger(s: str, parent: str, y: float, m1: float, m2: float) -> str:
@@ -152,6 +152,10 @@ def test_what_would_couple_two_branches_is_refused():
                             "'mcp_b' of another branch; a sub-model would cut its tendon (name 'across' too to keep "
                             "both branches)")
     assert coupled.subtree(["flexor_a", "across"]).joint_names == coupled.joint_names
+    # what identify --chain and estimate --chain take instead: the branches closed under what couples them
+    assert closed_motors(coupled, "flexor_a") == coupled.motor_names
+    hand = ad.Model(HAND_URDF, TransmissionSpec.from_toml(hand_spec()))
+    assert closed_motors(hand, "flexor_a") == ("flexor_a", "distal_a")
     mimic = HAND_URDF.replace('<joint name="pip_b" type="revolute">',
                               '<joint name="pip_b" type="revolute"><mimic joint="pip_a" multiplier="0.5"/>')
     m = ad.Model(mimic, TransmissionSpec.from_toml(hand_spec().replace("\npip_b = 0.03", "")
@@ -162,6 +166,7 @@ def test_what_would_couple_two_branches_is_refused():
         m.subtree("flexor_a")
     with pytest.raises(ModelError, match="mimic joint 'pip_b' follows 'pip_a', and joint 'pip_b'"):
         m.subtree("flexor_b")
+    assert closed_motors(m, "flexor_b") == m.motor_names
 
 
 def test_read_recording_ignores_the_other_branches_columns(hand, tmp_path):

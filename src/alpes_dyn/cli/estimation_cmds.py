@@ -393,18 +393,18 @@ def _fit_robot(args: argparse.Namespace, freqs):
 
 def _chain_model(model, motor: str | None):
     """``model`` (a URDF + spec robot), or with ``motor`` (``--chain``) its sub-model on that motor's branches
-    (:meth:`~alpes_dyn.model.robot.Model.subtree`): an unknown motor named as --chain's."""
-    from ..errors import ModelError
+    (:meth:`~alpes_dyn.model.robot.Model.subtree`), with those of any tendon or mimic joint that couples them to
+    another branch (:func:`~alpes_dyn.model.subtree.closed_motors`: never refused, the whole robot at worst); an
+    unknown motor named as --chain's."""
+    from ..model.subtree import closed_motors
 
     if motor is None:
         return model
     if motor not in model.motor_names:
         raise InputError(f"--chain: unknown motor {motor!r} of the URDF --model (motors: "
                          f"{', '.join(model.motor_names)})")
-    try:
-        return model.subtree(motor)
-    except ModelError as exc:
-        raise InputError(f"--chain: {exc}") from None
+    motors = closed_motors(model, motor)
+    return model if len(motors) == len(model.motor_names) else model.subtree(motors)
 
 
 def _robot_recordings(args: argparse.Namespace, model):

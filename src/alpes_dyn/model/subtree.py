@@ -23,7 +23,9 @@ fixed-base trees of 1-DoF joints (a URDF's floating or planar joint is refused w
 could still couple two branches is therefore refused, as one line naming the motor and the shared joint: a
 motor that drives joints of the kept branches and of a removed one (its tendon's torque and rotor inertia act on
 both), and a URDF ``<mimic>`` joint and the joint it follows in different sets (the constraint carries one
-branch's inertia onto the other's coordinates).
+branch's inertia onto the other's coordinates). :func:`closed_motors` gives the motors of the fewest branches
+that nothing couples with the rest, whose sub-model is never refused (what ``identify --chain`` and ``estimate
+--chain`` fit and observe on a URDF robot).
 
 ``tests/test_subtree.py`` checks the sub-model's A, bias and gravity torques and forward dynamics against the
 full Pinocchio model's rows and columns of the kept joints at random states (1e-12).
@@ -40,7 +42,7 @@ import numpy as np
 from ..errors import ModelError
 from .spec import IDENTIFIED_TABLES, JOINT_TABLES, REST_TABLE, TransmissionSpec
 
-__all__ = ["subtree_model", "branch_joints", "subtree_spec", "subtree_urdf"]
+__all__ = ["subtree_model", "branch_joints", "closed_motors", "subtree_spec", "subtree_urdf"]
 
 
 def _motor_set(model: Any, motors: str | Sequence[str]) -> tuple[str, ...]:
@@ -97,6 +99,30 @@ def _branches(model: Any, motors: str | Sequence[str]) -> tuple[set[str], tuple[
     joints = tuple(j for j in model.joint_names if j in kept)
     kept_motors = tuple(m.name for m in model.spec.motors if any(j in kept for j in m.joints))
     return kept, joints, kept_motors
+
+
+def closed_motors(model: Any, motors: str | Sequence[str]) -> tuple[str, ...]:
+    """The motors (``model.motor_names`` order) of the fewest branches that hold the joints ``motors`` drive and
+    that nothing couples with the others: the branches of ``motors``, then those of every motor driving one of
+    their joints and of every mimic joint following one of them (or followed by one), until none is added; the whole
+    robot's motors at worst. :func:`subtree_model` of them is never refused (``identify --chain`` and ``estimate
+    --chain`` on a URDF: a chain whose tendon or mimic reaches into another branch takes that branch along)."""
+    given = _motor_set(model, motors)
+    full = model.mimic.full_model if model.mimic is not None else model.pin_model
+    top = _top_branch(full)
+    spec_motors = {m.name: m for m in model.spec.motors}
+    tops = {top[j] for m in given for j in spec_motors[m].joints}
+    links = [set(m.joints) for m in model.spec.motors]
+    links += [{mj.name, mj.primary} for mj in (model.mimic.mimics if model.mimic is not None else ())]
+    grown = True
+    while grown:
+        grown = False
+        for joints in links:
+            ts = {top[j] for j in joints}
+            if ts & tops and not ts <= tops:
+                tops |= ts
+                grown = True
+    return tuple(m.name for m in model.spec.motors if any(top[j] in tops for j in m.joints))
 
 
 def branch_joints(model: Any, motors: str | Sequence[str]) -> tuple[tuple[str, ...], tuple[str, ...]]:
