@@ -255,7 +255,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                         "'identify' fitted with when its JSON's effects hold rotor)")
     s.add_argument("--encoder-offset", default=None, metavar="RAD[,RAD...]",
                    help="with --data: each encoder's zero on this rig, rad (identify's encoder_offset_<motor>), "
-                        "taken off the reading")
+                        "taken off the reading (with --chain MOTOR on a URDF: one per motor of its branches)")
     s.add_argument("--tilt", default=None, metavar="TILT_X,TILT_Y",
                    help="with --data: the palm's orientation, rad (identify's tilt_x, tilt_y): the observer's "
                         "gravity turned by it")
