@@ -214,7 +214,7 @@ def test_identify_chain_fits_on_the_sub_model_and_writes_the_whole_spec(files, c
     rc = main(["identify", "--model", urdf, "--spec", str(files / "hand.toml"), "--data", str(files / "rec.csv"),
                "--chain", "flexor_a", "--parameters", "K,F_v", "-o", str(out), "--json"])
     obj = json.loads(capsys.readouterr().out)
-    assert rc == 0 and obj["trustworthy"] and obj["model"] == "two_fingers[flexor_a]"
+    assert rc == 0 and obj["trustworthy"] and obj["model"] == "two_fingers[flexor_a,distal_a]"
     names = list(obj["parameters"])
     assert names == ["K_mcp_a", "K_pip_a", "F_v_mcp_a", "F_v_pip_a"]
     got = np.array([obj["parameters"][n]["value"] for n in names])
