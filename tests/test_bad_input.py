@@ -96,6 +96,18 @@ ROBOT_SPEC = ('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0, j3 = 2
               "[stiffness]\nj1 = 0.04\nj2 = 0.05\nj3 = 0.06\n\n[viscous]\nj1 = 1e-4\nj2 = 1e-4\nj3 = 1e-4\n")
 
 
+_LINK = ("<link name='{0}'><inertial><origin xyz='0.02 0 0'/><mass value='0.02'/><inertia ixx='1e-6' ixy='0' "
+         "ixz='0' iyy='1e-6' iyz='0' izz='1e-6'/></inertial></link>")
+_HINGE = ("<joint name='{0}' type='revolute'><parent link='palm'/><child link='{1}'/><origin xyz='0 {2} 0'/>"
+          "<axis xyz='0 1 0'/><limit lower='-1' upper='1' effort='1' velocity='1'/></joint>")
+BRANCHES_URDF = ("<robot name='branches'><link name='palm'/>" + _LINK.format("a") + _LINK.format("b")
+                 + _HINGE.format("ja", "a", "-0.02") + _HINGE.format("jb", "b", "0.02") + "</robot>")
+"""Two one-joint branches on a palm, for the sub-model's rows (Model.subtree, --chain on a URDF)."""
+BRANCHES_SPEC = ('[[motor]]\nname = "fa"\njoints = { ja = 1.0 }\n\n[[motor]]\nname = "fb"\njoints = { jb = 1.0 }\n\n'
+                 '[[motor]]\nname = "across"\njoints = { ja = 1.0, jb = 0.5 }\n\n[stiffness]\nja = 0.1\njb = 0.1\n')
+"""Its spec: a motor per branch and one tendon ``across`` both (a sub-model of ``fa`` alone is refused)."""
+
+
 ROBOT_CONTROL_SPEC = ('gravity = [0.0, 0.0, 9.81]\ntips = ["tip", "p1"]\n\n' + ROBOT_SPEC
                       + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n')
 """The robot palm down (its rest inside the joint ranges), two motors, two tips: for ``control`` on a URDF."""
@@ -187,7 +199,8 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
-                 robotctl_toml=ROBOT_CONTROL_SPEC.encode(),
+                 robotctl_toml=ROBOT_CONTROL_SPEC.encode(), branches_urdf=BRANCHES_URDF.encode(),
+                 branches_toml=BRANCHES_SPEC.encode(),
                  robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode(),
                  robotratio_toml=ROBOT_SPEC.replace("j1 = 2.0", "j1 = 1e300", 1).encode(),
                  robotsub_toml=ROBOT_SPEC.replace("j1 = 0.04", "j1 = 1e-320", 1).encode(),
@@ -345,6 +358,10 @@ CLI: dict[str, list[Cli]] = {
           "--chain", "index", needle="--chain: unknown motor 'index' of the URDF --model (motors: flexor)"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robottwo_toml}", "--data", "x.csv", "--parameters",
           "K_1", "--chain", "distal", needle="--chain: the selection has no parameter of motor 'distal'"),
+        C("identify", "--model", "{branches_urdf}", "--spec", "{branches_toml}", "--data", "{replay_csv}", "--chain",
+          "across", "--parameters", "K", needle="recording: unknown column 'encoder_finger' for model 'branches'"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robottwo_toml}", "--data", "{replay_csv}", "--chain",
+          "distal", "--parameters", "K", needle="recording: unknown column 'encoder_finger' for model 'tendon_robot'"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/i.toml",
           needle="-o: m_1, m_2, m_3: a spec file holds no masses (they are the URDF's)"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--parameters", "K_9",
@@ -740,7 +757,9 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}",
           needle="--spec: the observer on a URDF --model needs its transmission spec"),
         C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--chain", "index",
-          needle="--chain: names a finger of the Alpes hand"),
+          needle="--chain: unknown motor 'index' of the URDF --model (motors: flexor)"),
+        C("estimate", "--data", "{replay_csv}", "--model", "{branches_urdf}", "--spec", "{branches_toml}", "--chain",
+          "fa", needle="recording: unknown column 'encoder_finger' for model 'branches' (motors fa, fb, across"),
         C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--friction",
           needle="--friction: applies to the Alpes models"),
         C("estimate", "--data", "{replay_csv}", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--rotor-inertia",
@@ -955,6 +974,11 @@ class Api:
 
 def A(api: str, call: Callable[[Any], Any], error: type[AlpesDynError], needle: str) -> Api:
     return Api(api, call, error, needle)
+
+
+def _branches():
+    """The two-branch robot of :data:`BRANCHES_URDF` with its spec."""
+    return ad.Model(BRANCHES_URDF, TransmissionSpec.from_toml(BRANCHES_SPEC))
 
 
 class Ctx:
@@ -1317,6 +1341,26 @@ API: list[Api] = [
         c.f["rec3_csv"], "finger3"), RecordingError,
       "model: expected an alpes_dyn Model (it names the columns), got str"),
     A("read_recording", lambda c: _read_rec(c.f["unders_csv"]), RecordingError, "not a number ('1_0"),
+    A("read_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).read_recording(
+        c.f["rec3_csv"], c.m, ignore_others_of="hand"), RecordingError,
+      "ignore_others_of: expected an alpes_dyn Model or None, got str"),
+    # a sub-model on some branches (Model.subtree)
+    A("Model.subtree", lambda c: _branches().subtree("fc"), ModelError, "motors: unknown motor 'fc' (motors: fa, fb, "
+      "across)"),
+    A("Model.subtree", lambda c: _branches().subtree([]), ModelError, "motors: expected a motor name or a non-empty "
+      "list of motor names, got []"),
+    A("Model.subtree", lambda c: _branches().subtree(3), ModelError, "motors: expected a motor name or a non-empty "
+      "list of motor names, got 3"),
+    A("Model.subtree", lambda c: _branches().subtree(["fa", 1]), ModelError, "motors: expected a motor name"),
+    A("Model.subtree", lambda c: _branches().subtree("fa"), ModelError, "motors fa: motor 'across' drives joint 'ja' "
+      "of their branches and joint 'jb' of another branch"),
+    A("Model.subtree", lambda c: ad.Model(FINGER3).subtree("finger"), ModelError, "motors: model 'alpes_finger3' has "
+      "no spec with motors"),
+    A("subtree_model", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).subtree_model(
+        ad.Model(BRANCHES_URDF.replace("<joint name='jb' type='revolute'>", "<joint name='jb' type='revolute'><mimic "
+                                       "joint='ja'/>"), TransmissionSpec.from_toml('[[motor]]\nname = "fa"\njoints = '
+                                                                                   '{ ja = 1.0 }\n')), "fa"),
+      ModelError, "motors fa: mimic joint 'jb' follows 'ja', and joint 'ja' is in their branches, 'jb' in another"),
     A("read_recording", lambda c: _read_rec(c.f["grav149_csv"]), RecordingError, "gravity has norm 14.9 m/s^2"),
     A("read_recording", lambda c: _read_rec(c.f["longcell_csv"]), RecordingError, "a cell of 300 characters"),
     A("read_recording", lambda c: _read_rec(c.f["current_csv"], True), RecordingError,
@@ -1443,7 +1487,7 @@ API: list[Api] = [
     A("identified_spec", lambda c: _ident_spec(("K_1", "m_2")), ModelError,
       "identified spec: m_2: a spec file holds no masses"),
     A("identified_spec", lambda c: _ident_spec(("K_1",), base=TransmissionSpec.from_toml(
-        ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon are not the fitted"),
+        ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon do not hold the fitted"),
     # state space, observability
     A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
       "output function: returned str 'abc'"),

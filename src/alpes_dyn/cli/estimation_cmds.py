@@ -97,11 +97,14 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     t0 = time.perf_counter()
+    whole = None
     if _is_urdf_path(args.model):
-        _refuse_for_urdf(args, _URDF_ESTIMATE)
-        model = _urdf_robot(args, "the observer")
+        whole = _urdf_robot(args, "the observer")
+        model = _chain_model(whole, args.chain)  # --chain MOTOR: the observer on that motor's branches alone
         if args.friction_free:
             model = _without_friction(model)
+        if args.chain is None:
+            whole = None
     elif args.friction_free:
         raise InputError("--friction-free: applies to a URDF --model (its spec's friction taken off); the Alpes "
                          "models take --friction")
@@ -109,7 +112,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
                             rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain)
-    rec = read_recording(args.data, model, args.torque_constant)
+    rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
@@ -145,17 +148,13 @@ def _estimate_data(args: argparse.Namespace) -> int:
     return 0
 
 
-_URDF_ESTIMATE = (("--chain", "chain", None, "names a finger of the Alpes hand; a URDF --model's observer "
-                   "estimates every joint of its spec's motors"),)
-
-
 def _without_friction(model):
     """``model`` rebuilt from its URDF and spec with the spec's Coulomb and viscous tables taken off."""
     import dataclasses
 
     from ..model.robot import Model
 
-    return Model(model.urdf, dataclasses.replace(model.spec, coulomb={}, viscous={}, identified=None))
+    return Model(model.urdf, dataclasses.replace(model.spec, coulomb={}, viscous={}, identified=None), name=model.name)
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
@@ -269,6 +268,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identified_spec`)."""
     from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
     from ..estimation.identified_spec import write_identified_spec
+    from ..model.spec import load_spec
 
     urdf = _is_urdf_path(args.model)
     if not urdf:
@@ -288,8 +288,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     res, model = fit.result, fit.result.model
     res.recording_path = args.data  # the identified file's header names the recording read
     written = args.output is not None and (res.trustworthy or args.force)
-    if written:  # a URDF robot's into a copy of its spec (the stick-slip law's smooth_velocity kept, as in a file)
-        res.write(args.output) if not urdf else write_identified_spec(res, model.spec, args.output)
+    if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
+        # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
+        res.write(args.output) if not urdf else write_identified_spec(res, load_spec(args.spec), args.output)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
@@ -337,20 +338,21 @@ _URDF_IDENTIFY = (("--rotor-inertia", "rotor_inertia", False, "applies to the Al
 
 def _fit_robot(args: argparse.Namespace, freqs):
     """``identify --model PATH.urdf --spec FILE.toml``: :func:`_fit` on the spec's robot (the stick-slip law: the
-    spec's smooth_velocity at :data:`~alpes_dyn.estimation.effects.STICTION_VELOCITY`); ``--chain MOTOR`` keeps the
-    parameters of the joints that motor drives and its own (compliance, offset); a selection with masses is
-    refused with -o (a spec holds no masses) before the fit."""
+    spec's smooth_velocity at :data:`~alpes_dyn.estimation.effects.STICTION_VELOCITY`); ``--chain MOTOR`` fits on
+    the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
+    other branches do not change its joints' dynamics; the recording's columns of their motors and joints are
+    ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); a selection
+    with masses is refused with -o (a spec holds no masses) before the fit."""
     import dataclasses
 
     from ..estimation.adequacy import AdequacyWarning
     from ..estimation.effects import STICTION_VELOCITY, EffectsFit, fit_effects, parse_effects
     from ..estimation.identification import check_selection, identify
     from ..estimation.identified_spec import spec_misfits
-    from ..estimation.recording import read_recording
     from ..model.robot import Model
 
     _refuse_for_urdf(args, _URDF_IDENTIFY)
-    model = _urdf_robot(args, "identification")
+    model = _chain_model(_urdf_robot(args, "identification"), args.chain)
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
     if "rotor" in effects:
@@ -360,7 +362,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
     if args.parameters is not None and set(effects) - {"stiction"}:
         raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
                          "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
-    sticky = Model(model.urdf, dataclasses.replace(model.spec, smooth_velocity=STICTION_VELOCITY))
+    sticky = Model(model.urdf, dataclasses.replace(model.spec, smooth_velocity=STICTION_VELOCITY), name=model.name)
 
     def model_of(effs: tuple[str, ...]) -> Model:  # "rotor", named by auto's verdict, is the spec's rotors: on
         return sticky if "stiction" in effs else model
@@ -369,7 +371,8 @@ def _fit_robot(args: argparse.Namespace, freqs):
     if masses and args.output is not None:
         raise InputError(f"-o: {', '.join(masses)}: a spec file holds no masses (they are the URDF's); fit "
                          "--parameters K,friction to write the identified spec, or leave out -o to see the masses")
-    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=args.validate,
+    data, validate = _robot_recordings(args, model)
+    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
         fitted = model_of(effects)
@@ -377,15 +380,47 @@ def _fit_robot(args: argparse.Namespace, freqs):
         check_selection(fitted, names)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit.single(identify(fitted, args.data, names, **kw), effects)
-    has_gravity = read_recording(args.data, model).gravity is not None  # tilt only where not given
+            return EffectsFit.single(identify(fitted, data, names, **kw), effects)
+    has_gravity = data.gravity is not None  # tilt only where not given
     if args.chain is None:
-        return fit_effects(model_of, args.data, effects, None, has_gravity, **kw)
+        return fit_effects(model_of, data, effects, None, has_gravity, **kw)
     own = tuple(e for e in effects if e in ("compliance", "offset"))  # the motor's own, named here
     base = ",".join(_chain_names(model, None, args.chain, own))
-    fit = fit_effects(model_of, args.data, tuple(e for e in effects if e not in own), base, has_gravity, **kw)
+    fit = fit_effects(model_of, data, tuple(e for e in effects if e not in own), base, has_gravity, **kw)
     fit.effects = own + fit.effects
     return fit
+
+
+def _chain_model(model, motor: str | None):
+    """``model`` (a URDF + spec robot), or with ``motor`` (``--chain``) its sub-model on that motor's branches
+    (:meth:`~alpes_dyn.model.robot.Model.subtree`), with those of any tendon or mimic joint that couples them to
+    another branch (:func:`~alpes_dyn.model.subtree.closed_motors`: never refused, the whole robot at worst); an
+    unknown motor named as --chain's."""
+    from ..model.subtree import closed_motors
+
+    if motor is None:
+        return model
+    if motor not in model.motor_names:
+        raise InputError(f"--chain: unknown motor {motor!r} of the URDF --model (motors: "
+                         f"{', '.join(model.motor_names)})")
+    motors = closed_motors(model, motor)
+    return model if len(motors) == len(model.motor_names) else model.subtree(motors)
+
+
+def _robot_recordings(args: argparse.Namespace, model):
+    """--data and --validate read for ``model`` (a sub-model with --chain: the whole robot's other columns
+    ignored), with --torque-constant where they hold currents."""
+    from ..estimation.recording import read_recording
+
+    whole = None
+    if args.chain is not None:
+        from ..model.robot import Model
+
+        whole = Model.from_urdf_file(args.model, args.spec)
+    data = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
+    validate = None if args.validate is None else read_recording(args.validate, model, args.torque_constant,
+                                                                 ignore_others_of=whole)
+    return data, validate
 
 
 def _chain_names(model, parameters: str | None, motor: str | None, own: tuple[str, ...] = ()) -> list[str]:

@@ -219,8 +219,11 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
         if a.dest == "model":
             a.help = ("finger2, finger3 or thumb (with --friction), or with --data a URDF path (with --spec) "
                       "(default %(default)s)")
-    s.add_argument("--chain", default=None, metavar="FINGER",
-                   help="a finger model as that finger of the hand (its own [finger.<name>] values in the files)")
+    s.add_argument("--chain", default=None, metavar="FINGER|MOTOR",
+                   help="a finger model as that finger of the hand (its own [finger.<name>] values in the files); "
+                        "on a URDF --model with --data a motor's name: the observer on the sub-model of its "
+                        "branches from the base, with every motor driving them (the recording's columns of the "
+                        "other motors and joints are ignored)")
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, or ekf-params, ukf-params (which also estimate the input and spring gains: use "
                         "them with --mismatch) (default %(default)s)")
@@ -257,7 +260,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                         "'identify' fitted with when its JSON's effects hold rotor)")
     s.add_argument("--encoder-offset", default=None, metavar="RAD[,RAD...]",
                    help="with --data: each encoder's zero on this rig, rad (identify's encoder_offset_<motor>), "
-                        "taken off the reading")
+                        "taken off the reading (with --chain MOTOR on a URDF: one per motor of its branches)")
     s.add_argument("--tilt", default=None, metavar="TILT_X,TILT_Y",
                    help="with --data: the palm's orientation, rad (identify's tilt_x, tilt_y): the observer's "
                         "gravity turned by it")
@@ -348,7 +351,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--chain", default=None, metavar="FINGER|MOTOR",
                    help="a finger model as that finger of the hand: starts from its own values and writes the fit "
                         "into its [finger.<name>] table (the thumb's go to [thumb]); on a URDF --model a motor's "
-                        "name: fit only the parameters of the joints it drives (and its own)")
+                        "name: fit only the parameters of the joints it drives (and its own), on the sub-model of "
+                        "its branches from the base (the recording's columns of the other motors and joints are "
+                        "ignored; -o writes the whole robot's spec with the chain's values replaced)")
     s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="Alpes models: parameter file to start from, and the base of the written file (default: the "

@@ -43,15 +43,19 @@ def spec_misfits(model: Model, names: Sequence[str]) -> list[str]:
 
 def identified_spec(result: Any, base: TransmissionSpec) -> TransmissionSpec:
     """``base`` with the fitted values of ``result`` (an
-    :class:`~alpes_dyn.estimation.identification.IdentificationResult` of a model built on ``base``) and the
-    ``[identified]`` section: their standard errors and the fit's record (the module doc).
+    :class:`~alpes_dyn.estimation.identification.IdentificationResult` of a model built on ``base``, or on its
+    restriction to some branches, :meth:`~alpes_dyn.model.robot.Model.subtree`: the whole robot's spec with
+    those values replaced) and the ``[identified]`` section: their standard errors and the fit's record (the
+    module doc).
     :class:`~alpes_dyn.ModelError` for a mass, or a result whose joints or motors are not the spec's."""
     if not isinstance(base, TransmissionSpec):
         raise ModelError(f"base: expected a TransmissionSpec, got {type(base).__name__}")
     model = result.model
-    if tuple(m.name for m in base.motors) != model.motor_names:
-        raise ModelError(f"base: the spec's motors {', '.join(m.name for m in base.motors)} are not the fitted "
-                         f"model's {', '.join(model.motor_names)}")
+    fitted = {m.name: dict(m.joints) for m in model.spec.motors} if model.spec is not None else {}
+    ours = {m.name: dict(m.joints) for m in base.motors}
+    if set(fitted) != set(model.motor_names) or any(ours.get(n) != j for n, j in fitted.items()):
+        raise ModelError(f"base: the spec's motors {', '.join(m.name for m in base.motors)} do not hold the fitted "
+                         f"model's {', '.join(model.motor_names)} (with their joints)")
     masses = spec_misfits(model, result.names)
     if masses:
         raise ModelError(f"identified spec: {', '.join(masses)}: a spec file holds no masses (they are the URDF's); "

@@ -152,13 +152,20 @@ def _finite(x: object) -> bool:
         return False
 
 
-def read_recording(path: str | Path, model: Model, torque_constant: float | None = None) -> Recording:
+def read_recording(path: str | Path, model: Model, torque_constant: float | None = None, *,
+                   ignore_others_of: Model | None = None) -> Recording:
     """Read and validate a recording CSV for ``model`` (which names the motors and joints).
 
     ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
-    them and refused without them. Raises :class:`~alpes_dyn.errors.RecordingError`.
+    them and refused without them. ``ignore_others_of``: a wider model (e.g. the whole robot of a
+    :meth:`~alpes_dyn.model.robot.Model.subtree` ``model``) whose columns of motors and joints that ``model``
+    does not have are accepted and ignored (a recording of the whole hand read for one finger); a column of
+    neither model is still refused. Raises :class:`~alpes_dyn.errors.RecordingError`.
     """
     _check_reader(torque_constant, model)
+    if ignore_others_of is not None and not isinstance(ignore_others_of, Model):
+        raise RecordingError(f"ignore_others_of: expected an alpes_dyn Model or None, got "
+                             f"{type(ignore_others_of).__name__}")
     text = _read_text(path)  # (a path that is not a str or os.PathLike: RecordingError, before Path() sees it)
     p = Path(path)
     n_lines = text.count("\n")
@@ -166,10 +173,11 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
     # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
     rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
-    header = _header(rows, p, model)
+    header = _header(rows, p, model, ignore_others_of)
     data = _parse_rows(rows, p, header, n_lines)
     del text
-    col = {h: data[:, j] for j, h in enumerate(header)}
+    own = _known_columns(model)
+    col = {h: data[:, j] for j, h in enumerate(header) if h in own}
     if "t" not in col:
         raise RecordingError("recording: missing column 't' (time, s)")
     motors, joints = model.transmission.motor_names, model.joint_names
@@ -204,9 +212,17 @@ def _read_text(path: str | Path) -> str:
         raise RecordingError(f"recording {str(Path(path))!r}: not a UTF-8 text file") from None
 
 
-def _header(rows, p: Path, model: Model) -> list[str]:
+def _known_columns(model: Model) -> set[str]:
+    """The columns a recording of ``model`` may hold (its motors' and joints' names in them)."""
+    motors, joints = model.transmission.motor_names, model.joint_names
+    known = {"t", "force_z", "gravity_x", "gravity_y", "gravity_z"}
+    known |= {f"{k}_{mn}" for k in ("encoder", "torque", "current") for mn in motors}
+    return known | {f"{k}_{jn}" for k in ("q", "true_q") for jn in joints}
+
+
+def _header(rows, p: Path, model: Model, wider: Model | None = None) -> list[str]:
     """The column names of the first row of ``rows``: each at most :data:`MAX_CSV_CELL` characters, once, and a
-    column of ``model`` (its motors' and joints' names)."""
+    column of ``model`` (its motors' and joints' names) or of the ``wider`` model."""
     first = _next_row(rows, p)
     if first is None:
         raise RecordingError(f"recording {str(p)!r}: empty file")
@@ -221,9 +237,9 @@ def _header(rows, p: Path, model: Model) -> list[str]:
     if tr is None:
         raise RecordingError(f"recording: model {model.name!r} has no tendon transmission (no motors to read)")
     motors, joints = tr.motor_names, model.joint_names
-    known = {"t", "force_z", "gravity_x", "gravity_y", "gravity_z"}
-    known |= {f"{k}_{mn}" for k in ("encoder", "torque", "current") for mn in motors}
-    known |= {f"{k}_{jn}" for k in ("q", "true_q") for jn in joints}
+    known = _known_columns(model)
+    if wider is not None and wider.transmission is not None:
+        known |= _known_columns(wider)
     for h in header:
         if h not in known:
             raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "

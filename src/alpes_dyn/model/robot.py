@@ -246,6 +246,15 @@ class Model(FrameKinematics):
 
         return model_mjcf(self, **kwargs)
 
+    def subtree(self, motors: str | Sequence[str]) -> "Model":
+        """The sub-model on the branches from the base that ``motors`` (a motor name or a list of them) drive,
+        with every motor that drives one of their joints; the other branches removed from the URDF and the spec
+        (:func:`alpes_dyn.model.subtree.subtree_model`: why they cannot change the kept joints' dynamics on a
+        fixed base, and what is refused)."""
+        from .subtree import subtree_model
+
+        return subtree_model(self, motors)
+
     @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
         """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
