@@ -230,9 +230,10 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--mismatch", type=_strict_float, default=0.0,
                    help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
     s.add_argument("--duration", type=_strict_float, default=5.0, help="simulated time, s (default %(default)s)")
-    s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
-    s.add_argument("--plot", metavar="FILE.png", help="write a figure of true and estimated joints (format by "
-                   "extension: .png, .pdf, .svg...)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed of the simulated scenario (default "
+                   "%(default)s)")
+    s.add_argument("--plot", metavar="FILE.png", help="the simulated scenario (not with --data): write a figure "
+                   "of true and estimated joints (format by extension: .png, .pdf, .svg...)")
     s.add_argument("--true-params", default=None, metavar="FILE",
                    help="parameter file of the simulated (true) finger, e.g. from a perturbed draw")
     s.add_argument("--observer-params", default=None, metavar="FILE",
