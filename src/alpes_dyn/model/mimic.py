@@ -37,7 +37,7 @@ import numpy as np
 from ..errors import ModelError
 from ..limits import check_physical
 
-__all__ = ["MimicJoint", "MimicCoupling", "read_mimics", "refuse_mimic_names"]
+__all__ = ["MimicJoint", "MimicCoupling", "read_mimics", "refuse_mimic_names", "tree_model"]
 
 
 @dataclass(frozen=True)
@@ -219,3 +219,10 @@ def refuse_mimic_names(spec: Any, coupling: MimicCoupling) -> None:
         if m is not None:
             raise ModelError(f"{where}: joint {j!r} is a mimic joint (URDF <mimic>: q_{j} = {m.multiplier:g} "
                              f"q_{m.primary} + {m.offset:g}) with no coordinate of its own; name {m.primary!r}")
+
+
+def tree_model(model: Any) -> Any:
+    """The Pinocchio model of ``model``'s whole tree: with mimic joints the one beside Pinocchio's mimic model (every
+    joint its own coordinate, mimic joints included), else the model's own (the same joint ids)."""
+    mimic = getattr(model, "mimic", None)
+    return mimic.full_model if mimic is not None else model.pin_model

@@ -54,6 +54,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError, ModelError
+from .mimic import tree_model
 
 __all__ = ["model_mjcf", "INTEGRATORS"]
 
@@ -124,18 +125,11 @@ def _pose(M: Any) -> str:
     return out
 
 
-def _tree_model(model: Any) -> Any:
-    """The Pinocchio model of the whole tree: with mimic joints the one beside Pinocchio's mimic model (a mimic
-    joint is a body and a joint of the MJCF, coupled by an equality), else the model's own (the same joint ids)."""
-    mimic = getattr(model, "mimic", None)
-    return mimic.full_model if mimic is not None else model.pin_model
-
-
 def _body_names(model: Any) -> tuple[str, list[str]]:
     """(the root link's name, each joint's child link name) from Pinocchio's frames."""
     import pinocchio as pin
 
-    pm = _tree_model(model)
+    pm = tree_model(model)
     frames = pm.frames
     root = next((f.name for f in frames if f.type == pin.FrameType.BODY and f.parentJoint == 0), "base")
     names = []
@@ -149,7 +143,7 @@ def _body_names(model: Any) -> tuple[str, list[str]]:
 def _joint_xml(model: Any, i: int, limits: bool) -> str:
     """The ``<joint>`` of Pinocchio joint i (1-based): axis, range, spring, armature, friction (a mimic joint has
     none of the last four: the spec names the joint it follows)."""
-    pm = _tree_model(model)
+    pm = tree_model(model)
     name = pm.names[i]
     kind, axis = _joint_kind(pm.joints[i], name)
     k = i - 1
@@ -182,7 +176,7 @@ def _equality(model: Any, timestep: float) -> list[str]:
 
 def _tips(model: Any, bodies: set[str], tip_radius: float) -> dict[int, list[str]]:
     """Per Pinocchio joint (0: the world), the site, geom and sensor name lines of the tips it carries."""
-    pm = _tree_model(model)
+    pm = tree_model(model)
     out: dict[int, list[str]] = {}
     for tip in model.tips:
         fr = pm.frames[model.frame_id(tip)]
@@ -198,7 +192,7 @@ def _tips(model: Any, bodies: set[str], tip_radius: float) -> dict[int, list[str
 
 def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[str, str]]:
     """The ``<worldbody>`` lines (depth first, Pinocchio's joint order) and the site name of each tip."""
-    pm = _tree_model(model)
+    pm = tree_model(model)
     root, names = _body_names(model)
     children: dict[int, list[int]] = {}
     for i in range(1, pm.njoints):

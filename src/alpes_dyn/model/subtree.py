@@ -40,6 +40,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import ModelError
+from .mimic import tree_model
 from .spec import IDENTIFIED_TABLES, JOINT_TABLES, REST_TABLE, TransmissionSpec
 
 __all__ = ["subtree_model", "branch_joints", "closed_motors", "subtree_spec", "subtree_urdf"]
@@ -72,14 +73,19 @@ def _top_branch(pm: Any) -> dict[str, int]:
     return out
 
 
+def _given_branches(model: Any, given: tuple[str, ...]) -> tuple[dict[str, int], set[int]]:
+    """(:func:`_top_branch` of the whole tree, mimic joints included; the branches holding a joint the motors
+    ``given`` drive)."""
+    top = _top_branch(tree_model(model))
+    spec_motors = {m.name: m for m in model.spec.motors}
+    return top, {top[j] for m in given for j in spec_motors[m].joints}
+
+
 def _branches(model: Any, motors: str | Sequence[str]) -> tuple[set[str], tuple[str, ...], tuple[str, ...]]:
     """(the kept joints of the whole tree, mimic joints included; the kept independent joints in
     ``model.joint_names`` order; the kept motors in ``model.motor_names`` order): :func:`branch_joints`."""
     given = _motor_set(model, motors)
-    full = model.mimic.full_model if model.mimic is not None else model.pin_model
-    top = _top_branch(full)
-    spec_motors = {m.name: m for m in model.spec.motors}
-    tops = {top[j] for m in given for j in spec_motors[m].joints}
+    top, tops = _given_branches(model, given)
     kept = {j for j, t in top.items() if t in tops}
     label = ", ".join(given)
     for m in model.spec.motors:
@@ -108,10 +114,7 @@ def closed_motors(model: Any, motors: str | Sequence[str]) -> tuple[str, ...]:
     robot's motors at worst. :func:`subtree_model` of them is never refused (``identify --chain`` and ``estimate
     --chain`` on a URDF: a chain whose tendon or mimic reaches into another branch takes that branch along)."""
     given = _motor_set(model, motors)
-    full = model.mimic.full_model if model.mimic is not None else model.pin_model
-    top = _top_branch(full)
-    spec_motors = {m.name: m for m in model.spec.motors}
-    tops = {top[j] for m in given for j in spec_motors[m].joints}
+    top, tops = _given_branches(model, given)
     links = [set(m.joints) for m in model.spec.motors]
     links += [{mj.name, mj.primary} for mj in (model.mimic.mimics if model.mimic is not None else ())]
     grown = True
@@ -199,7 +202,7 @@ def subtree_model(model: Any, motors: str | Sequence[str]) -> Any:
     robot again. :class:`~alpes_dyn.ModelError` naming the motor and the joint for what would couple the kept
     branches with a removed one."""
     kept_full, joints, kept = _branches(model, motors)
-    full = model.mimic.full_model if model.mimic is not None else model.pin_model
+    full = tree_model(model)
     urdf = subtree_urdf(model.urdf, tuple(kept_full), tuple(full.names[1:]))
     ids = {full.getJointId(j) for j in kept_full} | {0}  # the frames left: on a kept joint or on the base
     frames = [f.name for f in full.frames if f.parentJoint in ids]

@@ -98,11 +98,9 @@ def _bool_array(v: Any) -> bool:
         return False
 
 
-def _flat(seed: int, out: Any) -> dict[str, Any]:
+def _flat(seed: int, out: dict[str, Any]) -> dict[str, Any]:
     """A draw's result as one flat row: arrays and lists (of real numbers: anything else is refused naming the
     key) become name_0, name_1, ...; the keys are strings."""
-    if not isinstance(out, dict):
-        raise InputError(f"fn: a draw must return a dict of results, got {type(out).__name__} (seed {seed})")
     row: dict[str, Any] = {"seed": seed}
     for k, v in out.items():
         if not isinstance(k, str):
@@ -121,11 +119,9 @@ def _flat(seed: int, out: Any) -> dict[str, Any]:
 
 def _draw(fn: Callable[..., dict[str, Any]], seed: int, options: dict[str, Any], flat: bool = True) -> dict[str, Any]:
     out = fn(seed, **options)
-    if flat:
-        return _flat(seed, out)
     if not isinstance(out, dict):
         raise InputError(f"fn: a draw must return a dict of results, got {type(out).__name__} (seed {seed})")
-    return {"seed": seed, **out}
+    return _flat(seed, out) if flat else {"seed": seed, **out}
 
 
 def _check_options(fn: Callable[..., Any], options: dict[str, Any]) -> None:
