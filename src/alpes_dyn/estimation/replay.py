@@ -172,6 +172,15 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     return filt, z0, P0
 
 
+def _substeps(model: Model, dt: float, substeps: int | None) -> int:
+    """The observer's RK4 steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
+    (:func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth law at 1 kHz), 1 without friction."""
+    if substeps is not None:
+        return substeps
+    has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
+    return stable_substeps(model, dt) if has_friction else 1
+
+
 def recording_filter(model: Model, observer: str = "ekf", dt: float = 1e-3, *, torque_noise: float = 5e-4,
                      encoder_noise_counts: float = 0.0, substeps: int | None = None,
                      u0: Any = None) -> tuple[Any, np.ndarray, np.ndarray]:
@@ -190,9 +199,7 @@ def recording_filter(model: Model, observer: str = "ekf", dt: float = 1e-3, *, t
         raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
     torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
-    has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
-    if substeps is None:
-        substeps = stable_substeps(model, dt) if has_friction else 1
+    substeps = _substeps(model, dt, substeps)
     m = model.transmission.n_motors
     u0 = np.zeros(m) if u0 is None else _finite_vector(u0, m, "u0", "N m")
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
@@ -245,9 +252,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
     torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
     m_obs, angles, offsets = _observer_model(model, rec, tilt, encoder_offset)
-    has_friction = bool(np.any(m_obs.extras.coulomb) or np.any(m_obs.extras.viscous))
-    if substeps is None:  # as many as the friction's stiffness asks (4 for the smooth law at 1 kHz)
-        substeps = stable_substeps(m_obs, dt) if has_friction else 1
+    substeps = _substeps(m_obs, dt, substeps)
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
