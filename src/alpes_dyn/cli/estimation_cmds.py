@@ -352,7 +352,8 @@ def _fit_robot(args: argparse.Namespace, freqs):
     from ..model.robot import Model
 
     _refuse_for_urdf(args, _URDF_IDENTIFY)
-    model = _chain_model(_urdf_robot(args, "identification"), args.chain)
+    whole = _urdf_robot(args, "identification")
+    model = _chain_model(whole, args.chain)
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
     if "rotor" in effects:
@@ -371,7 +372,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
     if masses and args.output is not None:
         raise InputError(f"-o: {', '.join(masses)}: a spec file holds no masses (they are the URDF's); fit "
                          "--parameters K,friction to write the identified spec, or leave out -o to see the masses")
-    data, validate = _robot_recordings(args, model)
+    data, validate = _robot_recordings(args, model, whole if args.chain is not None else None)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
@@ -407,16 +408,11 @@ def _chain_model(model, motor: str | None):
     return model if len(motors) == len(model.motor_names) else model.subtree(motors)
 
 
-def _robot_recordings(args: argparse.Namespace, model):
-    """--data and --validate read for ``model`` (a sub-model with --chain: the whole robot's other columns
-    ignored), with --torque-constant where they hold currents."""
+def _robot_recordings(args: argparse.Namespace, model, whole=None):
+    """--data and --validate read for ``model`` (with --chain a sub-model of the robot ``whole``, whose other
+    columns are then ignored), with --torque-constant where they hold currents."""
     from ..estimation.recording import read_recording
 
-    whole = None
-    if args.chain is not None:
-        from ..model.robot import Model
-
-        whole = Model.from_urdf_file(args.model, args.spec)
     data = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     validate = None if args.validate is None else read_recording(args.validate, model, args.torque_constant,
                                                                  ignore_others_of=whole)
