@@ -178,8 +178,10 @@ def test_sensitivities_equal_finite_differences_and_the_states_alone(finger2, rn
     assert np.max(np.abs(X - fd) / scale) < 1e-5
 
 
-def test_identify_recovers_exact_parameters_from_noise_free_data(finger2):
-    """No sensor noise, unquantised encoder: the fit lands on the truth (K, m, friction within 1e-6)."""
+def test_identify_recovers_exact_parameters_from_noise_free_data(finger2, monkeypatch):
+    """No sensor noise, unquantised encoder: the fit lands on the truth (K, m, friction within 1e-6); from an
+    earlier result (a warm start) the last stage alone does, from its trajectory; at another interval the
+    trajectory does not fit the problem and the fit runs whole from the result's values."""
     true = perturbed_params(spread=0.2, seed=3)
     design = ExperimentDesign(duration=1.0, encoder_noise_counts=0.0, torque_noise=0.0)
     rec = experiment("finger2", true, design, seed=3)
@@ -216,6 +218,19 @@ def test_identify_recovers_exact_parameters_from_noise_free_data(finger2):
     ref = identify(finger2, rec, progress=False, kkt="dense")
     assert ref.iterations == res.iterations and np.max(np.abs(ref.values / res.values - 1)) < 1e-9
     assert np.max(np.abs(ref.std / res.std - 1)) < 1e-6
+    # a warm start from the result (fit_effects' rounds): stages 1-2 never run, the values and trajectory are kept
+    from alpes_dyn.estimation.gauss_newton import GaussNewton
+
+    assert res.solution.nodes.shape == res.states.shape and res.solution.samples == 100
+    seen = []
+    monkeypatch.setattr(GaussNewton, "fit_nodes", staticmethod(lambda pb, nodes, *a, **k: seen.append(1) or nodes))
+    again = identify(finger2, rec, progress=False, start=res)
+    assert not seen and again.converged and again.iterations <= 2 < res.iterations
+    assert np.array_equal(again.initial, res.values) and np.max(np.abs(again.values[:4] / truth[:4] - 1)) < 1e-6
+    assert np.max(np.abs(again.values / truth - 1)) < 3e-6  # as the first fit's
+    other = identify(finger2, rec, progress=False, start=res, interval=0.05)  # cut at 50 ms: the values only
+    assert seen and other.converged and np.array_equal(other.initial, res.values)
+    assert other.solution.samples == 50 and np.max(np.abs(other.values / truth - 1)) < 3e-6
 
 
 def test_identify_recovers_an_encoder_offset_and_the_palm_tilt_from_noise_free_data(finger2):
@@ -520,7 +535,7 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)  # the rotor, alone
     assert fit.effects == ("compliance", "tilt", "rotor") and rotors == [False, True] and len(calls) == 2
     assert [c[0] for c in calls] == [False, False]  # no stick-slip law: the rotor's fit (0.6) is adequate
-    assert starts[-1] == {"K_1": 0.04, "tendon_compliance_finger": 6.0}  # the second round from the first's values
+    assert starts[-1] is outcomes[False]  # the second round from the first (its values and trajectory)
     calls.clear()  # rounds: the stick-slip law named, then its fit sees the cable stretch: a third with the rotor
     outcomes[False] = fitted(0.9, False, [stick_slip])
     outcomes[True] = fitted(0.7, False, ["viscous friction"], names=("tendon_compliance_finger",), values=[6.0],
@@ -529,7 +544,7 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
     assert len(calls) == 3 and fit.effects == ("compliance", "tilt", "stiction")  # the third no lower: kept 2nd
     assert fit.tried_effects == ("compliance", "tilt", "stiction", "rotor")
-    assert starts == [None, {}, {"tendon_compliance_finger": 6.0}]
+    assert starts[0] is None and starts[1] is outcomes[False] and starts[2] is outcomes[True]
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)

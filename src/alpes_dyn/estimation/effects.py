@@ -53,7 +53,6 @@ from ..errors import InputError
 from ..model.extras import STICTION_VELOCITY
 from ..model.params import HandParams, with_values
 from ..model.robot import Model
-from ..symbolic.parametric import select_parameters
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
@@ -185,11 +184,6 @@ def _elastic(result: Any) -> bool:
     return False
 
 
-def _selection_names(model: Model, selection: str | None) -> tuple[str, ...]:
-    """The parameter names of ``selection`` on ``model`` (:func:`~alpes_dyn.symbolic.parametric.select_parameters`)."""
-    return tuple(pp.name for pp in select_parameters(model, selection))
-
-
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
                 base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
     """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
@@ -215,10 +209,10 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         kw = dict(kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
         if warm is not None and warm.converged and "start" not in kw:
-            # the next round from the last one's values, in its basin (all-effects seed 12: the rotor's round
-            # took 6 iterations from the stick-slip round's values)
-            names = set(_selection_names(model, selection))
-            kw["start"] = {nm: float(v) for nm, v in zip(warm.names, warm.values) if nm in names}
+            # the next round from the last one's values and trajectory, in its basin (all-effects seed 12: the
+            # rotor's round took 6 iterations from the stick-slip round's values; seeds 40-41: the rotor's and the
+            # stick-slip law's rounds 3.2-8.2 s from the trajectory instead of 5.0-16.5 s after a homotopy)
+            kw["start"] = warm
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
             return identify(model, recording, selection, **kw)

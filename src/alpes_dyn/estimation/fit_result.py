@@ -28,7 +28,8 @@ class IdentificationResult:
     names: parameter names (p,). values, std, initial: (p,) in their units. units: (p,).
     correlation: (p, p). residual_rms: RMS encoder residual, counts. iterations, converged.
     seconds: wall time of the fit; compile_seconds: of it, compiling the sensitivity code (0 when
-    cached). states: (S, 2n) fitted states at the shooting nodes; node_times (S,) s.
+    cached). states: (S, 2n) fitted states at the shooting nodes; node_times (S,) s. solution: the shooting
+    variables, to start another fit from.
     """
 
     names: tuple[str, ...]
@@ -49,6 +50,9 @@ class IdentificationResult:
     reason: str = ""
     residual: np.ndarray | None = field(default=None, repr=False)
     adequacy: Adequacy | None = None
+    solution: Any = field(default=None, repr=False, compare=False)
+    """The fit's shooting variables (:class:`~alpes_dyn.estimation.shooting.ShootingSolution`) for a warm start of
+    another fit of the same recording (``identify(..., start=result)``); not written to the file."""
 
     @property
     def trustworthy(self) -> bool:

@@ -127,7 +127,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              torque_noise: float | None = None, camera_noise: float = math.radians(0.1),
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
              progress: bool | None = None, validation: Recording | str | Path | None = None,
-             encoder_noise: float | None = None, start: Mapping[str, float] | None = None,
+             encoder_noise: float | None = None, start: Mapping[str, float] | IdentificationResult | None = None,
              kkt: str = "sparse") -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
@@ -173,7 +173,11 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         ``dict(zip(result.names, result.values))``, as :func:`~alpes_dyn.estimation.effects.fit_effects` does from
         one round to the next); the parameters not named start from the model's values. A name that is not
         fitted here, or a value that is not finite (positive where the parameter is fitted as log theta), is an
-        :class:`~alpes_dyn.InputError`.
+        :class:`~alpes_dyn.InputError`. Or an earlier :class:`IdentificationResult` of the same recording (a
+        warm start, as :func:`~alpes_dyn.estimation.effects.fit_effects` does from one round to the next): its
+        values of the parameters fitted here, and, where it was cut at the same interval with the same state,
+        its trajectory: the fit's last stage from there (:meth:`~alpes_dyn.estimation.gauss_newton.GaussNewton.solve`),
+        the whole fit where that does not converge.
     kkt: ``"sparse"`` (default): the shooting problem's normal and KKT matrices held sparse and factorised once per
         iteration (:mod:`alpes_dyn.estimation.kkt`), time and memory linear in the record; ``"dense"``: as arrays
         (the reference; quadratic memory, cubic time).
@@ -199,7 +203,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         substeps = stable_substeps(model, dt)
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
-    pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, start, dense=kkt == "dense")
+    values, solution = _start_of(start, sens.names)
+    pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense")
     # initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder
     q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))
@@ -207,7 +212,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     offs = np.zeros((pb.n_int, pb.no))
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)
-    out = GaussNewton(max_iterations, tol, show).solve(pb, nodes, offs, glob)
+    out = GaussNewton(max_iterations, tol, show).solve(pb, nodes, offs, glob, warm=pb.warm_variables(solution))
     it, reason = out.iterations, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
@@ -227,6 +232,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
+
+
+def _start_of(start: Mapping[str, float] | IdentificationResult | None,
+              names: Sequence[str]) -> tuple[Mapping[str, float] | None, Any]:
+    """``identify``'s ``start`` as (values by name, a warm start's shooting variables or None): an earlier result's
+    values of the parameters named in ``names`` and its :attr:`~IdentificationResult.solution`."""
+    if isinstance(start, IdentificationResult):
+        return {nm: float(v) for nm, v in zip(start.names, start.values) if nm in names}, start.solution
+    return start, None
 
 
 def _retry_at_half_interval(model: Model, recording: Recording | str | Path, parameters: Any,
@@ -338,7 +352,8 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=pb.encoder_rms(e.r),
         iterations=it, converged=out.converged, seconds=time.perf_counter() - t_start,
         compile_seconds=sens.compile_seconds, states=out.nodes, node_times=pb.rec.t[np.arange(pb.n_int) * pb.L],
-        model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=verdict)
+        model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=verdict,
+        solution=pb.solution(out.nodes, out.offs, out.glob))
 
 
 def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

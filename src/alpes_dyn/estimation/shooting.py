@@ -34,7 +34,8 @@ from ..simulation.sensitivity import SensitivityModel
 from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
 from .recording import Recording
 
-__all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "JACOBIAN_CHUNK"]
+__all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
+           "JACOBIAN_CHUNK"]
 
 JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
@@ -102,6 +103,18 @@ def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_nois
         off_lines = rec.torque[:-1] - U
         torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
     return TorqueModel(U, U_last, torque_noise, Q, Q_last)
+
+
+@dataclass(frozen=True)
+class ShootingSolution:
+    """A fit's shooting variables at its end, to start another fit of the same recording from (a warm start):
+    ``nodes`` (S, nx) the intervals' start states, ``offs`` (S, no) their torque corrections, ``lines`` (ncg,) the
+    whitened line-coefficient corrections, ``samples`` the samples per interval (L) they were cut at."""
+
+    nodes: np.ndarray
+    offs: np.ndarray
+    lines: np.ndarray
+    samples: int
 
 
 @dataclass
@@ -386,6 +399,21 @@ class ShootingProblem:
 
     # --- the start --------------------------------------------------------------------------------------------
 
+    def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> ShootingSolution:
+        """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
+        name, :func:`start_values`)."""
+        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:].copy(), self.L)
+
+    def warm_variables(self, sol: ShootingSolution | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
+        line corrections, theta at theta_0 (the start's values, given by name). None where the two problems are
+        not cut alike (another interval, state size or torque model: another model's states, a retry at half the
+        interval), or where ``sol`` is None."""
+        if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
+                or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
+            return None
+        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines])
+
     def initial_nodes(self, q0: np.ndarray) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
         onto the measured encoder (the stretch of the start's compliance off): a start close to the data."""
@@ -411,7 +439,8 @@ def start_values(theta0: np.ndarray, names: Sequence[str], additive: np.ndarray,
     """``theta0`` with the values of ``start`` (by parameter name) put in; :class:`~alpes_dyn.InputError` naming
     a parameter that is not fitted, or a value that is not a finite number (positive unless additive)."""
     if not isinstance(start, Mapping):
-        raise InputError(f"start: expected a mapping of parameter names to values, got {type(start).__name__}")
+        raise InputError(f"start: expected a mapping of parameter names to values (or an earlier "
+                         f"IdentificationResult), got {type(start).__name__}")
     theta = theta0.copy()
     for name, v in start.items():
         if name not in names:
