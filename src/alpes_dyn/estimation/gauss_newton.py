@@ -259,8 +259,7 @@ class GaussNewton:
                 # sensor's, and Newton's own convergence is what takes the parameters to 1e-6.
                 restored = self.restore(pb, nodes, offs, glob, e, solve_K, c_scale, max(tol * cost, 0.5))
                 if restored is not None:
-                    nodes, offs, glob, e = restored
-                    converged = True
+                    (nodes, offs, glob, e), converged = restored, True
                     reason = ("converged: the next step within the data's resolution" if step_sigma < 0.1 else
                               "converged: the cost no longer falls") + ", continuity restored"
                     break
@@ -281,8 +280,7 @@ class GaussNewton:
                 # on MuJoCo's plants 6-9 line searches in a row failed there while the damping climbed from 1e-9)
                 restored = self.restore(pb, nodes, offs, glob, e, solve_K, c_scale, max(tol * cost, 0.5))
                 if restored is not None:
-                    nodes, offs, glob, e = restored
-                    converged = True
+                    (nodes, offs, glob, e), converged = restored, True
                     reason = "converged: no step within half a standard error lowers the cost, continuity restored"
                     break
             if found is None:
