@@ -548,6 +548,18 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     calls.clear()
     fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)
+    # a compliance below minus three standard errors (a cable shortening under tension): a last round without it
+    calls.clear()
+    starts.clear()
+    outcomes[False] = fitted(0.6, True, names=("K_1", "tendon_compliance_finger"), values=[0.04, -0.42],
+                             std=[1e-4, 0.1])
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert calls == [(False, "K,m,friction,tendon_compliance"), (False, None)] and fit.effects == ("tilt",)
+    assert fit.tried_effects == ("compliance", "tilt") and starts[-1] is fit.tried
+    calls.clear()  # within three standard errors of 0: kept as it is
+    outcomes[False] = fitted(0.6, True, names=("tendon_compliance_finger",), values=[-0.25], std=[0.1])
+    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    assert len(calls) == 1 and fit.effects == ("compliance", "tilt")
 
 
 def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_path, capsys):
