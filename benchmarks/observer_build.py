@@ -18,8 +18,9 @@ that both filter steps give the same numbers, bit for bit, on the same input.
 Then ``alpes-dyn estimate --data REC.csv --model ALLEGRO.urdf --spec SPEC --chain index`` (a 2 s recording of the hand,
 ``benchmarks/allegro_identify.py``'s experiment) is timed, wall clock, a new process each, ``--rounds`` times by each
 tree in turn, the first from an empty compile cache (``ALPES_DYN_CACHE`` a new folder; ``estimate`` compiles nothing:
-the number of libraries it left there is printed, 0, so a warm cache gives the same time). Goal: about 10 s or less. And finger3's compiled step (``online()``, what a
-1 kHz loop calls): its first build from an empty cache (gcc) and from a warm one.
+the number of libraries it left there is printed, 0, so a warm cache gives the same time). Goal: about 10 s or
+less. And finger3's compiled step (``online()``, what a 1 kHz loop calls): its first build from an empty cache (gcc)
+and from a warm one.
 
     python benchmarks/observer_build.py [--models finger3,index,hand] [--no-baseline] [--json]
 
@@ -128,7 +129,7 @@ def estimate_wall(src: Path, rec: Path, cache: Path) -> float:
 
 def online_build(cache: Path) -> tuple[float, float]:
     """finger3's compiled step (``online()``) built from the empty ``cache`` and again from it warm, s."""
-    code = ("import time, numpy as np\nfrom alpes_dyn.estimation.replay import recording_filter\nimport alpes_dyn as ad\n"
+    code = ("import time\nfrom alpes_dyn.estimation.replay import recording_filter\nimport alpes_dyn as ad\n"
             "f, z0, P0 = recording_filter(ad.Model.alpes('finger3', friction=True), 'ekf', 1e-3)\n"
             "t = time.perf_counter(); f.online(z0, P0); print(time.perf_counter() - t)\n")
     src = ROOT / "src"
