@@ -8,8 +8,10 @@ recording_filter`: motor torques in, encoders out, the default substeps) is buil
                   the covariance arithmetic: everything that runs before the first sample);
     build again   a second build in the same process (what a sweep's next draw pays);
     instr         the filter step's instructions (CasADi's virtual machine runs each once per sample);
-    VM us         run() per sample over 300 samples, the least of three runs (the step's time where ``estimate``
-                  runs it: the VM);
+    VM us         the step per sample in CasADi's virtual machine (where ``estimate`` runs it), over 300 samples,
+                  the least of five runs; "cse": the same step merged again by ``cse`` (what the baseline built, at
+                  the cost of "cse s"), timed in turn in the same process -- the fair comparison of the step's time
+                  (the baseline's own "VM us", in another process, moves with the machine's load);
 
 each by the code of this tree and by the baseline commit :data:`BASELINE` (today's main before this work, extracted
 with ``git archive`` and run in its own process in the same run: the column "x" is baseline / now). ``=base`` checks
@@ -62,6 +64,7 @@ def _model(name: str):
 
 def measure(name: str) -> dict:
     """One model's observer built twice in this process: times, size, VM step, and its step on a fixed input."""
+    import casadi as cs
     import numpy as np
 
     from alpes_dyn.estimation.replay import recording_filter
@@ -77,17 +80,28 @@ def measure(name: str) -> dict:
     N = 300
     W, Y = 1e-3 * rng.standard_normal((N, filt.nw)), 1e-3 * rng.standard_normal((N + 1, filt.ny))
     filt.run(z0, P0, W[:5], Y[:6])
-    times = []
-    for _ in range(3):  # the least of three: a loaded machine's noise is one-sided
-        t0 = time.perf_counter()
-        est = filt.run(z0, P0, W, Y)
-        times.append(time.perf_counter() - t0)
-    vm_us = min(times) / N * 1e6
+    est = filt.run(z0, P0, W, Y)
+    # the step's time in the VM against the same step merged again by cse (the baseline's expression, give or take
+    # the 1-2 % of instructions cse removes), timed in turn in this process: the least of five runs of N samples
+    f = filt.filter_step
+    t0 = time.perf_counter()
+    merged = cs.Function("merged", f.sx_in(), [cs.cse(f.call(f.sx_in())[0])])
+    cse_s = time.perf_counter() - t0
+    s0 = np.concatenate([z0, np.diag(P0).reshape(-1, order="F")])
+    WY = np.hstack([W, Y[1:]]).T
+    times: dict[str, list[float]] = {"now": [], "cse": []}
+    for _ in range(5):  # a loaded machine's noise is one-sided: the least
+        for key, F in (("now", f.mapaccum(N)), ("cse", merged.mapaccum(N))):
+            t0 = time.perf_counter()
+            F(s0, WY)
+            times[key].append((time.perf_counter() - t0) / N * 1e6)
+    vm_us, vm_cse_us = min(times["now"]), min(times["cse"])
     B = rng.standard_normal((filt.nz, filt.nz))
     s = np.concatenate([z0, (0.01 * B @ B.T + np.diag(P0)).reshape(-1, order="F")])
     out = np.array(filt.filter_step(s, 1e-3 * rng.standard_normal(filt.nw + filt.ny))).ravel()
     return {"model": name, "nz": filt.nz, "build_first_s": first, "build_again_s": again,
-            "instructions": filt.filter_step.n_instructions(), "vm_us": vm_us, "step_out": out.tolist(),
+            "instructions": filt.filter_step.n_instructions(), "vm_us": vm_us, "vm_cse_us": vm_cse_us,
+            "cse_instructions": merged.n_instructions(), "cse_s": cse_s, "step_out": out.tolist(),
             "run_last": est.z[-1].tolist()}
 
 
@@ -165,7 +179,8 @@ def main(argv: list[str] | None = None) -> int:
             row = {k: v for k, v in now.items() if k not in ("step_out", "run_last")}
             if base is not None:
                 old = _measured(base, name)
-                row.update({"base_" + k: v for k, v in old.items() if k not in ("model", "nz", "step_out", "run_last")})
+                row.update({"base_" + k: v for k, v in old.items()
+                            if k in ("build_first_s", "build_again_s", "instructions", "vm_us")})
                 row["equal_to_base"] = bool(np.array_equal(now["step_out"], old["step_out"]) and
                                             np.array_equal(now["run_last"], old["run_last"]))
             out["rows"].append(row)
@@ -187,7 +202,7 @@ def main(argv: list[str] | None = None) -> int:
     print(f"observer build, {out['date']}, load average {out['load_before']:.1f} -> {out['load_after']:.1f}; "
           f"baseline {out['baseline'] or 'none'} (x = baseline / now)")
     print(f"{'model':8s} {'nz':>3s} {'build 1st':>9s} {'base':>7s} {'x':>5s} {'again':>7s} {'base':>7s} {'x':>5s} "
-          f"{'instr':>8s} {'base':>8s} {'VM us':>7s} {'base':>7s} {'=base':>5s}")
+          f"{'instr':>8s} {'base':>8s} {'VM us':>7s} {'cse':>7s} {'cse s':>6s} {'base':>7s} {'=base':>5s}")
     for r in out["rows"]:
         b = r.get("base_build_first_s")
         print(f"{r['model']:8s} {r['nz']:3d} {r['build_first_s']:9.2f} "
@@ -196,7 +211,8 @@ def main(argv: list[str] | None = None) -> int:
               + (f"{r['base_build_again_s']:7.2f} {r['base_build_again_s'] / r['build_again_s']:5.1f} "
                  if b is not None else f"{'n/a':>7s} {'':5s} ")
               + f"{r['instructions']:8d} " + (f"{r['base_instructions']:8d} " if b is not None else f"{'n/a':>8s} ")
-              + f"{r['vm_us']:7.0f} " + (f"{r['base_vm_us']:7.0f} {str(r['equal_to_base']):>5s}" if b is not None
+              + f"{r['vm_us']:7.0f} {r['vm_cse_us']:7.0f} {r['cse_s']:6.2f} "
+              + (f"{r['base_vm_us']:7.0f} {str(r['equal_to_base']):>5s}" if b is not None
                                          else f"{'n/a':>7s}"))
     e, w, be = out["estimate_s"], out["estimate_warm_s"], out["base_estimate_s"]
     best = min(out["estimate_runs_s"])
