@@ -2,8 +2,8 @@
 
 The EKF's prediction P_pred = A P A^T + G Sigma_w G^T + Q and the measurement update of both filters (S = H P
 H^T + R, K = P H^T S^-1, z + K (y - h), the Joseph form (I - K H) P (I - K H)^T + K R K^T) are written here
-scalar by scalar, over the nonzeros of the sparse Jacobians A, G, H and over one triangle of the symmetric
-results, every sum in a stated order. The exported C (:mod:`~alpes_dyn.estimation.cexport_ekf`) runs the same
+over the nonzeros of the sparse Jacobians A, G, H and over one triangle of the symmetric results, every sum in a
+stated order. The exported C (:mod:`~alpes_dyn.estimation.cexport_ekf`) runs the same
 loops in the same order, so the filter's step and its C give the same numbers to the last bit (up to the sign of
 an exact zero), with the arithmetic of sparse products and one triangle instead of dense ones (the hand: 134,000
 operations per step before, 60,000 after; tested in ``tests/test_cexport.py``).
@@ -20,7 +20,8 @@ They are built as CasADi matrix operations (``mtimes``, ``mac``, column and oute
 these orders: CasADi's sparse product accumulates z[i, j] += x[i, k] y[k, j] over the nonzeros k of y's column j,
 ascending, from z's entry (a structural zero, or R's in ``mac``) -- the same operations, the same numbers as the
 scalar loops written out entry by entry before (the hand's 30 states: 4.9 s of Python to build the step's
-covariance arithmetic, 0.1 s as matrices; ``benchmarks/observer_build.py``). The products by a constant that CasADi
+covariance arithmetic entry by entry, 0.4 s as matrices, both on the loaded 2-core machine, 2026-12-03; the whole
+build: ``benchmarks/observer_build.py``). The products by a constant that CasADi
 folds are found on the matrices' entries (:func:`_count_folds`), not by a Python call per product.
 """
 
