@@ -201,13 +201,16 @@ def test_folded_products_are_counted_and_refused_for_the_loops(monkeypatch):
     (by default it exports CasADi's code of the whole step there)."""
     import casadi as cs
 
-    from alpes_dyn.estimation.covariance import _mul
+    from alpes_dyn.estimation.covariance import _count_folds
 
     x = cs.SX.sym("x")
     folds: list[int] = []
-    assert str(_mul(cs.SX(0.1), 3.0 * x, folds)) == str(cs.SX(0.1 * 3.0) * x) and folds == [1]
-    _mul(x, 3.0 * x, folds)
-    _mul(cs.SX(2.0), x * x, folds)
+    X, Y = cs.SX(cs.DM([[0.1]])), cs.vertcat(3.0 * x).T
+    assert str(cs.mtimes(X, Y)) == str(cs.SX(0.1 * 3.0) * x)  # one product where the C makes two
+    _count_folds(X, Y, folds)
+    assert folds == [1]
+    _count_folds(cs.vertcat(x).T, cs.vertcat(3.0 * x).T, folds)
+    _count_folds(cs.SX(cs.DM([[2.0]])), cs.vertcat(x * x).T, folds)
     assert folds == [1]  # a product of two expressions is kept
     filt, _, _ = scenario_filter("ekf", "finger2")
     assert "alpes_ekf_cs_step" in c_sources(filt)["alpes_ekf.c"]  # a small covariance: the whole step

@@ -44,7 +44,6 @@ from dataclasses import dataclass, field
 from typing import Any, Mapping, Sequence
 
 import numpy as np
-from scipy import stats
 
 from ..errors import AlpesDynWarning, InputError
 from .harmonics import NONLINEARITY, harmonic_ratio
@@ -184,6 +183,8 @@ def whiteness(e: np.ndarray, lags: int = 25) -> Whiteness:
     k = np.arange(1, lags + 1)[:, None]
     q = n * (n + 2) * np.sum(acf**2 / (n - k), axis=0)
     band = BAND_99 / math.sqrt(n)
+    from scipy import stats  # here: importing scipy.stats takes a second, and every command imports this module
+
     return Whiteness(acf=acf, band=band, ljung_box=q, p_value=stats.chi2.sf(q, lags),
                      outside=np.sum(np.abs(acf) > band, axis=0))
 

@@ -126,11 +126,14 @@ class DiscreteModel:
         self.names = system.state_names + params
         z = cs.SX.sym("z", self.nz)
         w = cs.SX.sym("w", self.nw)
-        zdot = cs.Function("zdot", [z, w], [self._rhs(z, w)])
+        # the common subexpressions merged once, in the right-hand side (milliseconds), not in the RK4 step that
+        # calls it 4 x substeps times (the step's cse took 0.3 s on finger3, 2-4 s on an Allegro finger, for the
+        # same instructions: each call of zdot is already one node per instruction of its merged expression)
+        zdot = cs.Function("zdot", [z, w], [cs.cse(self._rhs(z, w))])
         zn = z
         for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
             zn = rk4_expression(zdot, zn, w, self.dt / self.substeps)
-        self.step = cs.Function("step", [z, w], [cs.cse(zn)], ["z", "w"], ["z_next"])
+        self.step = cs.Function("step", [z, w], [zn], ["z", "w"], ["z_next"])
         self.output = cs.Function("h", [z], [system.h_function(z[: self.nx])], ["z"], ["y"])
 
     def _rhs(self, z: cs.SX, w: cs.SX) -> cs.SX:
@@ -288,7 +291,9 @@ class KalmanFilter(Rebuilt):
         zu, Pu = self._update(zp, Pp, r[mdl.nw:])
         self.exact_loops = not self._folds
         out = cs.vertcat(zu, cs.vec(Pu))
-        self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [cs.cse(out)], ["s", "wy"], ["s_next"])
+        # no cse of the whole step: built from merged pieces, it has 1-2 % more instructions than merged again, and
+        # merging them took 0.3 s on finger3, 2-4 s on an Allegro finger (benchmarks/observer_build.py)
+        self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [out], ["s", "wy"], ["s_next"])
         self._loop: CompiledStepLoop | None = None
         self._online_loop: CompiledStepLoop | None = None  # built by online() for a filter that runs in the VM
         self.backend = "casadi"
