@@ -115,7 +115,7 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
     if not extra:
         return base
     if base is None:
-        base = "K,m" + (",friction" if model.extras.has_friction else "")
+        base = ",".join(pp.name for pp in select_parameters(model, None))  # the default's (unseen masses held)
     return ",".join([base] + extra)
 
 
