@@ -125,5 +125,6 @@ def test_mimic_finger_identified_through_the_cli(tmp_path, capsys):
     rc = main(["identify", "--model", urdf, "--spec", spec, "--data", str(rec), "--effects", "none", "--json"])
     obj = json.loads(capsys.readouterr().out)
     assert rc == 0 and obj["converged"], obj["reason"]
+    assert obj["held"] == []  # both joints on the tendon: every mass seen
     assert obj["parameters"]["K_mcp"]["value"] == pytest.approx(0.055, rel=0.01)
     assert obj["parameters"]["K_pip"]["value"] == pytest.approx(0.027, rel=0.01)
