@@ -53,7 +53,7 @@ from ..errors import InputError
 from ..model.extras import STICTION_VELOCITY
 from ..model.params import HandParams, with_values
 from ..model.robot import Model
-from ..symbolic.parametric import select_parameters
+from ..symbolic.parametric import select_parameters, unseen_masses
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
@@ -115,7 +115,8 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
     if not extra:
         return base
     if base is None:
-        base = ",".join(pp.name for pp in select_parameters(model, None))  # the default's (unseen masses held)
+        base = (",".join(pp.name for pp in select_parameters(model, None)) if unseen_masses(model)  # the default's
+                else "K,m" + (",friction" if model.extras.has_friction else ""))  # (unseen masses held)
     return ",".join([base] + extra)
 
 

@@ -7,7 +7,8 @@ The documented experiment on one finger (``finger2``, ``finger3``):
 * the motor driven by a multisine torque, tau_m(t) = tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f /
   2) over ``frequencies`` (default 0.3 to 11.3 Hz, Schroeder phases), so that the springs, gravity,
   inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
-  mean joint angle mid-range, the amplitude a is the largest that keeps the nominal finger's static
+  mean joint angle mid-range (on a robot whose springs already rest there, the middle of the range its tendon
+  reaches pulling: :func:`_pulled_target`), the amplitude a is the largest that keeps the nominal finger's static
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
 * a dither on top (``dither``, default 12 times the breakaway torque of the motor's joints, at
   ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
@@ -139,8 +140,9 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
             bias[k] = design.torque_bias
         else:  # mean joint angle of the motor's joints mid-range (or mid pulled range: _pulled_target)
             js = joints[k]
-            bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])), _pulled_target(model, bias, k, js, g0),
-                                   g0, _torque_ceiling(model, k), lambda c, k=k: _with(bias, k, c))
+            bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])),
+                                   _pulled_target(model, bias, k, js, g0), g0, _torque_ceiling(model, k),
+                                   lambda c, k=k: _with(bias, k, c))
     bias = _holding_bias(model, bias, free, joints, g0)
     if design.torque_amplitude is not None:
         return bias, np.full(n_m, float(design.torque_amplitude))

@@ -6,8 +6,8 @@ KKT matrices) and knows nothing of the model. Three stages:
 1. :meth:`GaussNewton.fit_nodes`: each interval's start state alone on its encoder samples (theta fixed, the
    intervals decoupled), Levenberg-Marquardt per interval;
 2. :meth:`GaussNewton.homotopy`: continuity as a quadratic penalty tightened tenfold per phase (four phases of
-   Levenberg-Marquardt), friction (and the torque lines) held on the first start; a step whose parameter part the trust region shortens
-   has its nodes solved again for the shortened step;
+   Levenberg-Marquardt), friction and the torque lines held on the first start; a step whose parameter part the
+   trust region shortens has its nodes solved again for the shortened step;
 3. :meth:`GaussNewton.constrained`: the constrained problem, Gauss-Newton on the KKT system (Levenberg-Marquardt
    damped), an l1-merit line search (:meth:`GaussNewton.line_search`) with a second-order correction (Nocedal &
    Wright, Section 18.3) and a filter's second chance against the Maratos effect.

@@ -176,8 +176,8 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
     and/or names (``K_2``, ``m_1``, ``J_m_finger``, ``encoder_offset_finger``, ``tilt_y``).
 
     ``None`` gives K and m of every joint (but the masses of :func:`unseen_masses`, held), plus F_s and F_v where the
-    model has friction (never the rotor inertia, encoder offsets or tilt: those are asked for by name). A kind selects only the
-    joints (motors) where its nominal value is non-zero (a joint without a spring has no K, a motor
+    model has friction (never the rotor inertia, encoder offsets or tilt: those are asked for by name). A kind
+    selects only the joints (motors) where its nominal value is non-zero (a joint without a spring has no K, a motor
     without rotor inertia no J_m); ``input_gain``, ``encoder_offset`` and ``tilt`` are always selected.
     Raises :class:`~alpes_dyn.ModelError` for an unknown name, a repeat, or an empty selection.
     """
