@@ -129,5 +129,10 @@ def test_sweep_command_on_a_urdf_robot_runs_its_draws(tmp_path, capsys):
     rec = model_experiment(nominal, truth, ExperimentDesign(duration=0.5), seed=4)
     rmse = np.degrees(estimate_recording(rec, nominal).rmse)
     got = [obj["rows"][0][f"rmse_deg_before_{i}"] for i in range(3)]
-    assert got == pytest.approx(rmse, rel=1e-9) and rmse[1:].max() < 1.0  # the driven joints: within a degree
+    assert got == pytest.approx(rmse, rel=1e-9)
+    # the experiment pulls the finger to mid-range (springs resting at 0: before, it hung still and the nominal
+    # spec's EKF read it within a degree whatever its springs); there the drawn springs (17-19 % off) leave the
+    # nominal spec's observer tens of degrees off in 0.5 s (40-72 deg), the true spec's within its start's
+    # transient (0.7-1.3 deg)
+    assert np.degrees(estimate_recording(rec, truth).rmse).max() < 2.0 and rmse[1:].min() > 10.0
     assert (tmp_path / "s.csv").read_text().startswith("seed,rmse_deg_before_0,")

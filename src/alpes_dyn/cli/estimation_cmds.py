@@ -311,6 +311,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
     w = max(10, *(len(n) for n in res.names))
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
+    held = _held_masses(model, args) if urdf else ()
+    obj["held"] = list(held)
+    if held:
+        lines.append(f"  held at the URDF's values: {', '.join(held)} (a link that only motorless joints move: the "
+                     "encoders see its mass only with those joints' springs; name it in --parameters to fit it)")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
     a = res.adequacy
     if a is not None:
@@ -330,6 +335,14 @@ def cmd_identify(args: argparse.Namespace) -> int:
                              f" (--force writes it anyway): {why}")
         warnings.warn(UntrustedFitWarning(f"identify --force: {args.output or 'the fit'} is NOT trustworthy: {why}"))
     return 0
+
+
+def _held_masses(model, args: argparse.Namespace) -> tuple[str, ...]:
+    """The masses the default selection held on a URDF --model (:func:`~alpes_dyn.symbolic.parametric.unseen_masses`);
+    none where --parameters names the selection."""
+    from ..symbolic.parametric import unseen_masses
+
+    return unseen_masses(model) if args.parameters is None else ()
 
 
 _URDF_IDENTIFY = (("--rotor-inertia", "rotor_inertia", False, "applies to the Alpes models; a URDF --model's rotor "

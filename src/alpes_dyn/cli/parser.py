@@ -367,7 +367,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "encoder_offset (each encoder's zero, rad), tilt (tilt_x, tilt_y: the palm's orientation, "
                         "rad; a planar finger sees tilt_y only) and/or names K_1, m_2, encoder_offset_finger, "
                         f"tilt_y... (default K,m,friction; on the thumb {THUMB_PARAMETERS}: the ab/adduction's own "
-                        "mass and friction are barely seen by the encoders; name them to fit them), each with the "
+                        "mass and friction are barely seen by the encoders; name them to fit them; on a URDF --model "
+                        "the masses of links that only motorless joints move are held, seen only with those joints' "
+                        "springs), each with the "
                         "parameters of --effects added; given, the selection as named (no effect added unless "
                         "--effects stiction)")
     s.add_argument("--effects", default=None, metavar="LIST",

@@ -53,6 +53,7 @@ from ..errors import InputError
 from ..model.extras import STICTION_VELOCITY
 from ..model.params import HandParams, with_values
 from ..model.robot import Model
+from ..symbolic.parametric import select_parameters, unseen_masses
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
@@ -114,7 +115,8 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
     if not extra:
         return base
     if base is None:
-        base = "K,m" + (",friction" if model.extras.has_friction else "")
+        base = (",".join(pp.name for pp in select_parameters(model, None)) if unseen_masses(model)  # the default's
+                else "K,m" + (",friction" if model.extras.has_friction else ""))  # (unseen masses held)
     return ",".join([base] + extra)
 
 
@@ -258,7 +260,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         best, best_effects = res, effs
     if auto and "compliance" in best_effects and _contracting(best):
         # a cable does not shorten under tension: the compliance absorbed another effect (MuJoCo's stick-slip
-        # plant of seed 31, a rigid tendon: -0.42 +- 0.10 with the masses 5.2 % off; held at 0, within 3.1 %)
+        # plant of seed 31, a rigid tendon: -0.42 +- 0.10 with the masses 5.2 % off; held at 0, within 2.6 %)
         effs = tuple(e for e in best_effects if e != "compliance")
         res = run(effs, best)
         rounds.append((effs, res))

@@ -7,7 +7,8 @@ The documented experiment on one finger (``finger2``, ``finger3``):
 * the motor driven by a multisine torque, tau_m(t) = tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f /
   2) over ``frequencies`` (default 0.3 to 11.3 Hz, Schroeder phases), so that the springs, gravity,
   inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
-  mean joint angle mid-range, the amplitude a is the largest that keeps the nominal finger's static
+  mean joint angle mid-range (on a robot whose springs already rest there, the middle of the range its tendon
+  reaches pulling: :func:`_pulled_target`), the amplitude a is the largest that keeps the nominal finger's static
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
 * a dither on top (``dither``, default 12 times the breakaway torque of the motor's joints, at
   ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
@@ -137,11 +138,10 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
     for k in sprung:
         if design.torque_bias is not None:
             bias[k] = design.torque_bias
-        else:  # mean joint angle of the motor's joints mid-range
+        else:  # mean joint angle of the motor's joints mid-range (or mid pulled range: _pulled_target)
             js = joints[k]
             bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])),
-                                   float(np.mean(0.5 * (model.lower + model.upper)[js])), g0,
-                                   _torque_ceiling(model, k),
+                                   _pulled_target(model, bias, k, js, g0), g0, _torque_ceiling(model, k),
                                    lambda c, k=k: _with(bias, k, c))
     bias = _holding_bias(model, bias, free, joints, g0)
     if design.torque_amplitude is not None:
@@ -181,6 +181,23 @@ def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.
             for k in hit:
                 amp[k] *= 0.85
     return bias, amp * design.amplitude_fraction
+
+
+def _pulled_target(model: Model, bias: np.ndarray, k: int, js: np.ndarray, gravity: np.ndarray) -> float:
+    """The mean joint angle (rad) that motor ``k``'s bias puts its joints ``js`` at: mid-range; but on a motor that
+    pulls only (:func:`_amplitude_ceiling` = its bias) whose joints' springs already hold them mid-range or beyond
+    with the motor off, the middle of the range the tendon reaches pulling, between that unloaded rest and the
+    joints' upper limits. Without it a spring resting mid-range asks for no bias, hence no multisine (amplitude <=
+    bias): on finger_edu (springs resting at 0 in ranges symmetric about 0) the excitation was the dither alone,
+    0.012 N m, the joints moved by 0.2 deg, and the fit lost its basin even from the true values."""
+    target = float(np.mean(0.5 * (model.lower + model.upper)[js]))
+    if _amplitude_ceiling(model, k, 0.0) > 0:  # a motor that pushes too: mid-range about no bias is fine
+        return target
+    try:
+        unloaded = float(np.mean(_mean_equilibrium(model, _with(bias, k, 0.0), gravity)[js]))
+    except InputError:
+        return target
+    return target if target > unloaded else 0.5 * (unloaded + float(np.mean(model.upper[js])))
 
 
 def _bias_in_range(model: Model, bias: np.ndarray, sprung: list[int], within: Callable[[np.ndarray], bool],

@@ -130,6 +130,10 @@ class _Adam:
     def gravity(self, q: cs.SX) -> cs.SX:
         return self._down(self.kd.gravity_term(self.H, self._full(q))[6:])
 
+    def com_position(self, q: cs.SX) -> cs.SX:
+        """The centre of mass (3,), m, at q (n,): at q_full on a model with mimic joints."""
+        return self.kd.CoM_position(self.H, self._full(q))
+
     def tip_position(self, q: cs.SX, frame: str) -> cs.SX:
         return self.kd.forward_kinematics(frame, self.H, self._full(q))[:3, 3]
 
