@@ -387,6 +387,7 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "x.csv", "--parameters", "J_m", needle="'J_m' selects nothing"),
         C("identify", "--data", "x.csv", "--effects", "friction", needle="effects: unknown effect 'friction'"),
         C("identify", "--data", "x.csv", "--effects", "tilt,tilt", needle="effects: an effect is named twice"),
+        C("identify", "--data", "x.csv", "--effects", "none,stiction", needle="effects: 'none' goes alone"),
         C("identify", "--data", "x.csv", "--effects", "compliance", "--parameters", "K",
           needle="--effects: compliance with --parameters: name their parameters there"),
         C("identify", "--data", "x.csv", "--rotor-inertia", "--parameters", "J_m_thumb",
@@ -2229,6 +2230,30 @@ API.extend([  # issue 19's third re-check: mimic attributes, the hot paths' boun
     A("write_sources", lambda c: __import__("alpes_dyn.fileio", fromlist=["x"]).write_directory(
         {"a.c": b"int x;"}, c.f["tmp"] + "/cg"), InputError, "files: 'a.c''s content is bytes, expected str"),
 ])
+
+
+API.extend([  # issue 19's fourth re-check: the sub-model's and the effects' arguments
+    A("subtree_model", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).subtree_model("hand.urdf", "fa"),
+      ModelError, "model: expected an alpes_dyn Model, got str"),
+    A("closed_motors", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).closed_motors(None, "fa"),
+      ModelError, "model: expected an alpes_dyn Model, got NoneType"),
+    A("branch_joints", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).branch_joints(object(), "fa"),
+      ModelError, "model: expected an alpes_dyn Model, got object"),
+    A("parse_effects", lambda c: _parse_effects(5), InputError,
+      "effects: expected a comma-separated string or a list of effect names, got int 5"),
+    A("parse_effects", lambda c: _parse_effects({"rotor"}), InputError,
+      "effects: expected a comma-separated string or a list of effect names, got set"),
+    A("parse_effects", lambda c: _parse_effects(["rotor", None]), InputError,
+      "effects: expected a comma-separated string or a list of effect names, got list"),
+    A("parse_effects", lambda c: _parse_effects([]), InputError, "effects: an empty list (give 'none' for the rigid"),
+    A("parse_effects", lambda c: _parse_effects("none,stiction"), InputError, "effects: 'none' goes alone"),
+])
+
+
+def _parse_effects(text):
+    from alpes_dyn.estimation.effects import parse_effects
+
+    return parse_effects(text)
 
 
 def test_hot_path_below_its_bound_is_newton():
