@@ -2247,6 +2247,10 @@ API.extend([  # issue 19's fourth re-check: the sub-model's and the effects' arg
       "effects: expected a comma-separated string or a list of effect names, got list"),
     A("parse_effects", lambda c: _parse_effects([]), InputError, "effects: an empty list (give 'none' for the rigid"),
     A("parse_effects", lambda c: _parse_effects("none,stiction"), InputError, "effects: 'none' goes alone"),
+    # a trailing '/' after a file's name (Path() dropped it: the file was read)
+    A("read_recording", lambda c: _read_rec(c.f["rec3_csv"] + "/"), RecordingError,
+      "recording '{rec3_csv}/': a path through a file that is not a directory"),
+    A("load_params", lambda c: ad.load_params(c.f["rec3_csv"] + "/"), ModelError, "a path through a file"),
 ])
 
 
