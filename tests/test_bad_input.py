@@ -2251,7 +2251,34 @@ API.extend([  # issue 19's fourth re-check: the sub-model's and the effects' arg
     A("read_recording", lambda c: _read_rec(c.f["rec3_csv"] + "/"), RecordingError,
       "recording '{rec3_csv}/': a path through a file that is not a directory"),
     A("load_params", lambda c: ad.load_params(c.f["rec3_csv"] + "/"), ModelError, "a path through a file"),
+    # a column of another branch, ignored for the sub-model, still an encoder in counts
+    A("read_recording", lambda c: _read_branch_fa({"encoder_fb": 1e12}), RecordingError,
+      "column 'encoder_fb' line 52: 1e+12 counts is beyond what the joint ranges allow"),
 ])
+
+
+def _read_branch_fa(override: dict[str, float]):
+    """A recording of both branches of :data:`BRANCHES_URDF` (without the tendon across them) read for the
+    sub-model of motor fa, row 50 (line 52) of the columns ``override`` set to their values."""
+    import tempfile
+
+    from alpes_dyn.estimation.recording import read_recording
+
+    whole = ad.Model(BRANCHES_URDF, TransmissionSpec.from_toml(BRANCHES_SPEC.split("[[motor]]\nname = \"across\"")[0]
+                                                               + "[stiffness]\nja = 0.1\njb = 0.1\n"))
+    rng = np.random.default_rng(0)
+    cols = {"t": np.arange(200) * 1e-3}
+    for m in ("fa", "fb"):
+        cols[f"encoder_{m}"] = np.round(rng.uniform(-50, 50, 200))
+        cols[f"torque_{m}"] = rng.normal(0, 1e-3, 200)
+    for k, v in override.items():
+        cols[k][50] = v
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "r.csv"
+        path.write_text(",".join(cols) + "\n" + "\n".join(",".join(repr(float(cols[k][i])) for k in cols)
+                                                             for i in range(200)) + "\n")
+        return read_recording(path, whole.subtree("fa"), ignore_others_of=whole)
+
 
 
 def _parse_effects(text):
