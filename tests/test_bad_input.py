@@ -387,6 +387,7 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "x.csv", "--parameters", "J_m", needle="'J_m' selects nothing"),
         C("identify", "--data", "x.csv", "--effects", "friction", needle="effects: unknown effect 'friction'"),
         C("identify", "--data", "x.csv", "--effects", "tilt,tilt", needle="effects: an effect is named twice"),
+        C("identify", "--data", "x.csv", "--effects", "none,stiction", needle="effects: 'none' goes alone"),
         C("identify", "--data", "x.csv", "--effects", "compliance", "--parameters", "K",
           needle="--effects: compliance with --parameters: name their parameters there"),
         C("identify", "--data", "x.csv", "--rotor-inertia", "--parameters", "J_m_thumb",
@@ -2229,6 +2230,61 @@ API.extend([  # issue 19's third re-check: mimic attributes, the hot paths' boun
     A("write_sources", lambda c: __import__("alpes_dyn.fileio", fromlist=["x"]).write_directory(
         {"a.c": b"int x;"}, c.f["tmp"] + "/cg"), InputError, "files: 'a.c''s content is bytes, expected str"),
 ])
+
+
+API.extend([  # issue 19's fourth re-check: the sub-model's and the effects' arguments
+    A("subtree_model", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).subtree_model("hand.urdf", "fa"),
+      ModelError, "model: expected an alpes_dyn Model, got str"),
+    A("closed_motors", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).closed_motors(None, "fa"),
+      ModelError, "model: expected an alpes_dyn Model, got NoneType"),
+    A("branch_joints", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).branch_joints(object(), "fa"),
+      ModelError, "model: expected an alpes_dyn Model, got object"),
+    A("parse_effects", lambda c: _parse_effects(5), InputError,
+      "effects: expected a comma-separated string or a list of effect names, got int 5"),
+    A("parse_effects", lambda c: _parse_effects({"rotor"}), InputError,
+      "effects: expected a comma-separated string or a list of effect names, got set"),
+    A("parse_effects", lambda c: _parse_effects(["rotor", None]), InputError,
+      "effects: expected a comma-separated string or a list of effect names, got list"),
+    A("parse_effects", lambda c: _parse_effects([]), InputError, "effects: an empty list (give 'none' for the rigid"),
+    A("parse_effects", lambda c: _parse_effects("none,stiction"), InputError, "effects: 'none' goes alone"),
+    # a trailing '/' after a file's name (Path() dropped it: the file was read)
+    A("read_recording", lambda c: _read_rec(c.f["rec3_csv"] + "/"), RecordingError,
+      "recording '{rec3_csv}/': a path through a file that is not a directory"),
+    A("load_params", lambda c: ad.load_params(c.f["rec3_csv"] + "/"), ModelError, "a path through a file"),
+    # a column of another branch, ignored for the sub-model, still an encoder in counts
+    A("read_recording", lambda c: _read_branch_fa({"encoder_fb": 1e12}), RecordingError,
+      "column 'encoder_fb' line 52: 1e+12 counts is beyond what the joint ranges allow"),
+])
+
+
+def _read_branch_fa(override: dict[str, float]):
+    """A recording of both branches of :data:`BRANCHES_URDF` (without the tendon across them) read for the
+    sub-model of motor fa, row 50 (line 52) of the columns ``override`` set to their values."""
+    import tempfile
+
+    from alpes_dyn.estimation.recording import read_recording
+
+    whole = ad.Model(BRANCHES_URDF, TransmissionSpec.from_toml(BRANCHES_SPEC.split("[[motor]]\nname = \"across\"")[0]
+                                                               + "[stiffness]\nja = 0.1\njb = 0.1\n"))
+    rng = np.random.default_rng(0)
+    cols = {"t": np.arange(200) * 1e-3}
+    for m in ("fa", "fb"):
+        cols[f"encoder_{m}"] = np.round(rng.uniform(-50, 50, 200))
+        cols[f"torque_{m}"] = rng.normal(0, 1e-3, 200)
+    for k, v in override.items():
+        cols[k][50] = v
+    with tempfile.TemporaryDirectory() as d:
+        path = Path(d) / "r.csv"
+        path.write_text(",".join(cols) + "\n" + "\n".join(",".join(repr(float(cols[k][i])) for k in cols)
+                                                             for i in range(200)) + "\n")
+        return read_recording(path, whole.subtree("fa"), ignore_others_of=whole)
+
+
+
+def _parse_effects(text):
+    from alpes_dyn.estimation.effects import parse_effects
+
+    return parse_effects(text)
 
 
 def test_hot_path_below_its_bound_is_newton():

@@ -75,9 +75,11 @@ def read_bytes(path: str | os.PathLike[str], what: str, error: type[AlpesDynErro
     p = _path(path, what, error)
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
     try:
-        fd = os.open(p, flags)
+        fd = os.open(os.fspath(path), flags)  # as given: Path() drops a trailing '/' ('rec.csv/' is no file)
     except IsADirectoryError:
         raise error(f"{what} {str(p)!r}: is a directory, expected a file") from None
+    except NotADirectoryError:
+        raise error(f"{what} {os.fspath(path)!r}: a path through a file that is not a directory") from None
     except (OSError, ValueError, OverflowError) as exc:
         raise error(f"{what} {str(p)!r}: cannot be read ({getattr(exc, 'strerror', None) or exc})") from None
     try:

@@ -75,9 +75,16 @@ def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
     :class:`~alpes_dyn.InputError` naming an unknown or repeated one."""
     if text is None or text == "auto":
         return DEFAULT_EFFECTS + ("auto",)
+    if not isinstance(text, (str, list, tuple)) or not all(isinstance(it, str) for it in text):
+        raise InputError(f"effects: expected a comma-separated string or a list of effect names, got "
+                         f"{type(text).__name__} {text!r:.60}")
     items = [s.strip() for s in text.split(",")] if isinstance(text, str) else list(text)
+    if not items:
+        raise InputError("effects: an empty list (give 'none' for the rigid, smooth-friction fit)")
     if items == ["none"]:
         return ()
+    if "none" in items:
+        raise InputError(f"effects: 'none' goes alone (the rigid, smooth-friction fit), got {text!r:.80}")
     for it in items:
         if it not in EFFECTS + ("auto",):
             raise InputError(f"effects: unknown effect {it!r} (expected some of {', '.join(EFFECTS)}, auto, or none)")

@@ -159,8 +159,9 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
     them and refused without them. ``ignore_others_of``: a wider model (e.g. the whole robot of a
     :meth:`~alpes_dyn.model.robot.Model.subtree` ``model``) whose columns of motors and joints that ``model``
-    does not have are accepted and ignored (a recording of the whole hand read for one finger); a column of
-    neither model is still refused. Raises :class:`~alpes_dyn.errors.RecordingError`.
+    does not have are accepted and ignored (a recording of the whole hand read for one finger; their
+    cells are still numbers, and their encoders within the wider model's joint ranges); a column of neither model
+    is still refused. Raises :class:`~alpes_dyn.errors.RecordingError`.
     """
     _check_reader(torque_constant, model)
     if ignore_others_of is not None and not isinstance(ignore_others_of, Model):
@@ -188,6 +189,10 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                     true_q=_joint_columns(col, joints, "true_q"))
     check_recording(rec)
     _check_encoder_range(rec, model)
+    if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
+        others = {h[len("encoder_"):]: data[:, j] for j, h in enumerate(header)
+                  if h not in own and h.startswith("encoder_")}
+        _check_encoder_columns(others, ignore_others_of)
     return rec
 
 
@@ -331,11 +336,17 @@ def _check_encoder_range(rec: Recording, model: Model) -> None:
     """Each encoder column within what its joints' ranges allow (S q over the range box, in counts), with a
     margin of the whole range and one motor turn on each side (an encoder's zero, stops overrun): a reading
     far outside is not this model's encoder in counts, and would send a fit or an observer to overflow."""
+    _check_encoder_columns(dict(zip(rec.motor_names, rec.encoder.T)), model)
+
+
+def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> None:
+    """:func:`_check_encoder_range` of the columns ``encoders`` (motor name of ``model`` -> counts (N,))."""
     tr = model.transmission
     S = np.asarray(tr.S, dtype=float)
     lo_q, hi_q = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
     cpr = float(tr.counts_per_rev)
-    for i, mn in enumerate(rec.motor_names):
+    for mn, e in encoders.items():
+        i = tr.motor_names.index(mn)
         used = S[i] != 0
         if not (np.isfinite(lo_q[used]).all() and np.isfinite(hi_q[used]).all()):
             continue  # an unbounded joint: no range to check against
@@ -343,7 +354,6 @@ def _check_encoder_range(rec: Recording, model: Model) -> None:
         lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
         hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
         margin = (hi - lo) + cpr
-        e = rec.encoder[:, i]
         bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
         if bad.size:
             k = int(bad[0])

@@ -49,6 +49,9 @@ __all__ = ["subtree_model", "branch_joints", "closed_motors", "subtree_spec", "s
 def _motor_set(model: Any, motors: str | Sequence[str]) -> tuple[str, ...]:
     """``motors`` (one name or a sequence of names) checked against ``model``'s motors; ModelError naming the
     field."""
+    if not all(hasattr(model, a) for a in ("spec", "motor_names", "joint_names", "mimic", "urdf")):
+        # (an alpes_dyn Model by what this module reads of it: robot.py imports this module, not the other way)
+        raise ModelError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
     if model.spec is None or not model.motor_names:
         raise ModelError(f"motors: model {model.name!r} has no spec with motors; a sub-model is chosen by the "
                          "motors that drive its branches")
