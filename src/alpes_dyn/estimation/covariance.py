@@ -121,7 +121,8 @@ def updated_state(z: cs.SX, P: cs.SX, y: cs.SX, h: cs.SX, H: cs.SX, R: np.ndarra
     Ht = H.T
     PHt = cs.mtimes(P, Ht)
     _count_folds(P, Ht, folds)
-    S = cs.mac(H, PHt, cs.densify(cs.SX(cs.DM(np.asarray(R, float).reshape(ny, ny)))))
+    R_dm = cs.DM(np.asarray(R, float).reshape(ny, ny))
+    S = cs.mac(H, PHt, cs.densify(cs.SX(R_dm)))
     _count_folds(H, PHt, folds)
     K = _gain(PHt, S)
     zu = z
@@ -132,7 +133,7 @@ def updated_state(z: cs.SX, P: cs.SX, y: cs.SX, h: cs.SX, H: cs.SX, R: np.ndarra
         M = M - cs.mtimes(K[:, r], PHt[:, r].T)
     MHt = cs.mtimes(M, Ht)
     _count_folds(M, Ht, folds)
-    Rs = cs.SX(cs.sparsify(cs.DM(np.asarray(R, float).reshape(ny, ny))))
+    Rs = cs.SX(cs.sparsify(R_dm))
     KR = cs.mtimes(K, Rs)
     _count_folds(K, Rs, folds)
     D = KR - MHt

@@ -185,21 +185,21 @@ class EffectsFit:
         return float(sum(r.seconds for _, r in self.rounds))
 
 
+def _compliances(result: Any) -> list[tuple[float, float]]:
+    """(value, standard error) of each tendon compliance a fit found with a finite standard error."""
+    return [(value, sd) for name, value, sd in zip(result.names, result.values, result.std)
+            if name.startswith("tendon_compliance") and np.isfinite(sd)]
+
+
 def _elastic(result: Any) -> bool:
     """True when a fit found a tendon compliance above three of its standard errors (the cable is seen stretching)."""
-    for name, value, sd in zip(result.names, result.values, result.std):
-        if name.startswith("tendon_compliance") and np.isfinite(sd) and value > 3.0 * sd:
-            return True
-    return False
+    return any(value > 3.0 * sd for value, sd in _compliances(result))
 
 
 def _contracting(result: Any) -> bool:
     """True when a fit found a tendon compliance below minus three of its standard errors (a cable read as
     shortening under tension: no cable does)."""
-    for name, value, sd in zip(result.names, result.values, result.std):
-        if name.startswith("tendon_compliance") and np.isfinite(sd) and value < -3.0 * sd:
-            return True
-    return False
+    return any(value < -3.0 * sd for value, sd in _compliances(result))
 
 
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],

@@ -205,6 +205,11 @@ class GaussNewton:
                 candidates.insert(k_try, (1.0, sv + d2[:nv].reshape(pb.n_int, pb.nb), sg + d2[nv:]))
         return None
 
+    def stalled(self, history: list[float], cost: float) -> bool:
+        """The accepted costs ``history`` down by at most max(tol ``cost``, 0.5) over the last five steps (chi^2 by 1
+        in 5: the data's resolution)."""
+        return len(history) > 5 and history[-6] - history[-1] <= max(self.tol * cost, 0.5)
+
     @staticmethod
     def restore(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, at: Evaluation,
                 solve_K, c_scale: np.ndarray, slack: float):
@@ -253,7 +258,7 @@ class GaussNewton:
             sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 1e-300) * max(2.0 * cost / pb.dof, 1e-300))
             step_sigma = float(np.max(np.abs(d[nv:nv + p]) / sd_rho, initial=0.0))
             within = abs(float(rhs[:nz] @ d)) <= max(tol * cost, 0.05) or step_sigma < 0.1
-            stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
+            stalled = self.stalled(history, cost)
             noisy = 2.0 * cost > 0.25 * pb.dof  # residual at least half the quantisation floor: sigma is statistical
             if viol >= 1e-6 and noisy and (step_sigma < 0.1 or (stalled and step_sigma < 1.0)):
                 # the fit is done but for continuity (steps shortened by the line search leave part of each
@@ -310,7 +315,7 @@ class GaussNewton:
                 reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
                           f"{100.0 * MAX_LOG_STEP:g} (iteration {it})")
                 break
-            stalled = len(history) > 5 and history[-6] - history[-1] <= max(tol * cost, 0.5)  # chi^2 by 1 in 5
+            stalled = self.stalled(history, cost)
             if viol < 1e-6 and (small_change or stalled or step_g < tol):
                 converged = True
                 reason = "converged: continuous, and the cost no longer falls"
