@@ -2239,6 +2239,10 @@ API.extend([  # issue 19's fourth re-check: the sub-model's and the effects' arg
       ModelError, "model: expected an alpes_dyn Model, got NoneType"),
     A("branch_joints", lambda c: __import__("alpes_dyn.model.subtree", fromlist=["x"]).branch_joints(object(), "fa"),
       ModelError, "model: expected an alpes_dyn Model, got object"),
+    A("unseen_masses", lambda c: __import__("alpes_dyn.symbolic.parametric", fromlist=["x"]).unseen_masses("finger3"),
+      ModelError, "model: expected an alpes_dyn Model, got str"),
+    A("select_parameters", lambda c: __import__("alpes_dyn.symbolic.parametric", fromlist=["x"]).select_parameters(
+        None, "K"), ModelError, "model: expected an alpes_dyn Model, got NoneType"),
     A("parse_effects", lambda c: _parse_effects(5), InputError,
       "effects: expected a comma-separated string or a list of effect names, got int 5"),
     A("parse_effects", lambda c: _parse_effects({"rotor"}), InputError,

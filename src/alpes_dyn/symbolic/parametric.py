@@ -121,10 +121,17 @@ def _link_masses(urdf: str) -> dict[str, float]:
     return out
 
 
+def _check_model(model: Any) -> None:
+    """:class:`~alpes_dyn.ModelError` naming the field where ``model`` is not a :class:`Model`."""
+    if not isinstance(model, Model):
+        raise ModelError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+
+
 def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     """Every parameter of ``model`` that :class:`ParametricDynamics` can make symbolic, nominal values
     from the model (stiffness, masses, friction of its extras; input gain 1; each motor's rotor inertia
     J_m and encoder offset 0; the tilt angles 0)."""
+    _check_model(model)
     ex = model.extras
     links = _child_links(model)
     masses = _link_masses(model.urdf)
@@ -153,6 +160,7 @@ def unseen_masses(model: Model) -> tuple[str, ...]:
     mass is seen together with the joint's spring (on finger_edu's 3 s experiment the Cramér-Rao bounds give it 2.9 %
     against 0.02 % for the other masses, correlated +0.99 with K of its joint) and the fit, freeing it, headed for
     m = 0 and lost its basin. A mimic joint counts as moved where its primary joint is. Empty without motors."""
+    _check_model(model)
     tr = model.transmission
     if tr is None:
         return ()
