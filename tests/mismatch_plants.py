@@ -25,7 +25,7 @@ def _sensors(rec: Recording, qm: np.ndarray, design: ExperimentDesign, seed: int
 
 
 def mismatched(kind: str, true: HandParams, model: str = "finger3", duration: float = 2.0,
-               seed: int = 0, dither: float | None = None) -> Recording:
+               seed: int = 0, dither: float | None = None, amplitude_fraction: float | None = None) -> Recording:
     """A recording of the documented experiment on ``true`` with one effect the model lacks:
 
     * ``match``: none (the model's own structure);
@@ -36,11 +36,13 @@ def mismatched(kind: str, true: HandParams, model: str = "finger3", duration: fl
       stretch is 3 % of the motor's motion;
     * ``coulomb``: dry friction three times stronger with a sharp sign (v_s 0.02 rad/s, the model 0.1).
 
-    ``dither``: the design's (default: the documented one's).
+    ``dither``, ``amplitude_fraction``: the design's (default: the documented one's).
     """
     design = ExperimentDesign(duration=duration)
     if dither is not None:
         design = dataclasses.replace(design, dither=dither)
+    if amplitude_fraction is not None:
+        design = dataclasses.replace(design, amplitude_fraction=amplitude_fraction)
     if kind == "match":
         return experiment(model, true, design, seed=seed)
     if kind == "tilt":

@@ -105,14 +105,17 @@ def fits():
     """finger3 drawn +-20 % (seed 2), 1 s: a recording of the model's own structure and one whose plant has a
     rotor inertia (1e-6 kg m^2 on the tendon) the model lacks, each fitted; a held-out run of each. The rotor's
     without the dither (with it, the 20 Hz accelerations through ten times the file's J_m throw the fit 20 counts
-    off, where no signature is read: flagged, naming nothing; ``test_a_dithered_rotor_mismatch_is_flagged``)."""
+    off, where no signature is read: flagged, naming nothing; ``test_a_dithered_rotor_mismatch_is_flagged``) and
+    at 0.6 of the multisine's amplitude ceiling (the documented experiment's until 2026-12-03): at today's 0.5 the
+    rigid fit of this draw loses its basin at iteration 11 (1.31 counts) and its residual's signature names an
+    offset or a tilt, not the rotor (flagged all the same): a signature is read where the fit is in its basin."""
     true = perturbed_params(spread=0.2, seed=2)
     model = ad.Model.alpes("finger3", friction=True)
     out = {}
     for kind in ("match", "rotor"):
-        dither = 0.0 if kind == "rotor" else None
-        rec = mismatched(kind, true, duration=1.0, seed=2, dither=dither)
-        val = mismatched(kind, true, duration=1.0, seed=102, dither=dither)
+        dither, fraction = (0.0, 0.6) if kind == "rotor" else (None, None)
+        rec = mismatched(kind, true, duration=1.0, seed=2, dither=dither, amplitude_fraction=fraction)
+        val = mismatched(kind, true, duration=1.0, seed=102, dither=dither, amplitude_fraction=fraction)
         freqs = ExperimentDesign(dither=0.0).lines if kind == "rotor" else ExperimentDesign().lines
         # the rotor's fit does not converge (two starts of 50 iterations): 20 are enough to judge it
         with warnings.catch_warnings(record=True) as caught:

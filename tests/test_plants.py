@@ -139,7 +139,7 @@ def test_elastic_tendon_encoder_is_the_compliance_model_while_moving():
 
 
 def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
-    """The experiment's dither (12 breakaway torques at 20 Hz, :func:`dither_amplitude`): 12 max_j F_s_j / |S_j| on
+    """The experiment's dither (20 breakaway torques at 20 Hz, :func:`dither_amplitude`): 20 max_j F_s_j / |S_j| on
     finger3 (a closed form), a line of the design; on MuJoCo's stick-slip finger (``frictionloss``, a stiff
     constraint) the multisine alone leaves q_3 stuck (|qd_3| < 0.01 rad/s) on a large share of the samples, with
     the dither on under 2 % of them on every joint."""
@@ -150,12 +150,12 @@ def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
     m = ad.Model.alpes("finger3", friction=True)
     design = ExperimentDesign(duration=2.0)
     S = m.transmission.S
-    assert dither_amplitude(m, design) == pytest.approx([12.0 * np.max(m.extras.coulomb / np.abs(S[0]))], rel=1e-12)
+    assert dither_amplitude(m, design) == pytest.approx([20.0 * np.max(m.extras.coulomb / np.abs(S[0]))], rel=1e-12)
     assert design.lines == design.frequencies + (20.0,)
     assert ExperimentDesign(dither=0.0).lines == design.frequencies
     eff = PlantEffects(stiction=STICTION_TIMECONST)
     stuck = {}
-    for d in (0.0, 12.0):
+    for d in (0.0, 20.0):
         des = ExperimentDesign(duration=2.0, dither=d)
         _, u, x0 = experiment_torque("finger3", p, des)
         assert np.ptp(u) > 0
@@ -164,7 +164,7 @@ def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
         v = np.diff(rec.true_q, axis=0) / des.dt
         stuck[d] = (np.abs(v[200:]) < 0.01).mean(axis=0)  # after the first 0.2 s
     assert stuck[0.0][2] > 0.2
-    assert np.all(stuck[12.0] < 0.02)
+    assert np.all(stuck[20.0] < 0.02)
 
 
 def _tilted_thumb():
@@ -180,7 +180,7 @@ def _tilted_thumb():
 
 
 def test_thumb_abduction_gets_no_dither_and_its_trimmed_torque_holds_it_on_a_tilted_palm():
-    """The thumb's ab/adduction (no spring) is held only by its dry friction: the dither is 12 breakaway torques on
+    """The thumb's ab/adduction (no spring) is held only by its dry friction: the dither is 20 breakaway torques on
     the flexion motor (a closed form) and none on the ab/adduction's; the bias trimmed on the tilted thumb (its
     other parts constant: no multisine, no dither) holds it on MuJoCo's plant, which computes gravity on its own:
     under 0.05 degree of drift in 1 s, where the untrimmed bias (the gravity torque of the level palm, 0 there)
@@ -191,7 +191,7 @@ def test_thumb_abduction_gets_no_dither_and_its_trimmed_torque_holds_it_on_a_til
     S = m.transmission.S
     flexion = [m.joint_index("thumb_j1"), m.joint_index("thumb_j2")]
     assert dither_amplitude(m, ExperimentDesign()) == pytest.approx(
-        [12.0 * np.max(m.extras.coulomb[flexion] / np.abs(S[0, flexion])), 0.0], rel=1e-12, abs=0.0)
+        [20.0 * np.max(m.extras.coulomb[flexion] / np.abs(S[0, flexion])), 0.0], rel=1e-12, abs=0.0)
     true, eff, g = _tilted_thumb()
     des = ExperimentDesign(duration=1.0, torque_amplitude=0.0, dither=0.0)
     _, u, x0 = experiment_torque("thumb", true, des, true_gravity=g)

@@ -34,8 +34,8 @@ class ExperimentDesign:
     encoder_noise_counts: float = 0.5
     torque_noise: float = 5e-4
     trim_bias: bool = True
-    amplitude_fraction: float = 0.6
-    dither: float = 12.0
+    amplitude_fraction: float = 0.5
+    dither: float = 20.0
     dither_frequency: float = 20.0
 
     @property
