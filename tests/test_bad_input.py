@@ -2291,6 +2291,48 @@ def _parse_effects(text):
     return parse_effects(text)
 
 
+def _excursion(fn, recording, *args):
+    from alpes_dyn.estimation import excursion
+
+    return getattr(excursion, fn)(recording, *args)
+
+
+def _rec_of(counts):
+    from alpes_dyn.estimation.recording import Recording
+
+    enc = np.asarray(counts, dtype=float).reshape(-1, 1)
+    return Recording(t=np.arange(enc.shape[0]) * 1e-3, encoder=enc, torque=np.zeros_like(enc), motor_names=("m",),
+                     joint_names=("j",))
+
+
+API.extend([  # the encoder excursion check of experiment and identify (issue 17)
+    A("encoder_excursions", lambda c: _excursion("encoder_excursions", "rec.csv"), InputError,
+      "recording: expected a Recording with encoder counts (N, motors), got str"),
+    A("small_excursions", lambda c: _excursion("small_excursions", _rec_of([0, 5]), -1.0), InputError,
+      "threshold: expected a number of counts >= 0, got -1.0"),
+    A("small_excursions", lambda c: _excursion("small_excursions", _rec_of([0, 5]), float("nan")), InputError,
+      "threshold: expected a number of counts >= 0, got nan"),
+    A("small_excursions", lambda c: _excursion("small_excursions", _rec_of([0, 5]), "30"), InputError,
+      "threshold: expected a number of counts >= 0, got '30'"),
+    A("small_excursions", lambda c: _excursion("small_excursions", _rec_of([0, 5]), True), InputError,
+      "threshold: expected a number of counts >= 0, got True"),
+    A("excursion_report", lambda c: _excursion("excursion_report", None), InputError,
+      "recording: expected a Recording with encoder counts (N, motors), got NoneType"),
+    A("warn_small_excursions", lambda c: _excursion("warn_small_excursions", _rec_of([0, 5]), -2), InputError,
+      "threshold: expected a number of counts >= 0, got -2"),
+    # the stops each joint gets (alpes-dyn dynamics' table)
+    A("stop_table", lambda c: _stop_table("finger3"), InputError, "model: expected an alpes_dyn Model, got str"),
+    A("stop_table", lambda c: _stop_table(ad.Model.alpes("finger3"), per_joint="yes"), InputError,
+      "per_joint: expected True or False, got 'yes'"),
+])
+
+
+def _stop_table(model, **kw):
+    from alpes_dyn.model.stops import stop_table
+
+    return stop_table(model, **kw)
+
+
 def test_hot_path_below_its_bound_is_newton():
     """Below 2^40 the hot path gives what eq. 2.10 gives, however large: Gamma = 1e11 N m on finger3 against a
     dense solve of A qdd = Gamma - nle - k q (Pinocchio's CRBA and RNEA, numpy's solve); and the bound is the

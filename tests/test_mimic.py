@@ -294,3 +294,41 @@ def test_cli_names_the_mimic(tmp_path, capsys):
     out = capsys.readouterr().out
     assert out.startswith("model finger3m (2 joints in Pinocchio's order), spring model none; dip mimics pip "
                           "(q = 0.7 q_pip + 0.1)")
+
+
+GRIPPER_SPEC = ('encoder_counts = 4096\ntips = ["panda_leftfinger"]\n\n[[motor]]\nname = "gripper"\n'
+                'joints = { panda_finger_joint1 = 1.0 }\n\n[stiffness]\npanda_finger_joint1 = 50.0\n')
+
+
+@pytest.mark.skipif(not PANDA.is_file(), reason="example-robot-data's Panda not installed")
+def test_panda_gripper_experiment_refused_in_one_line(tmp_path, capsys):
+    """A tendon on Panda's gripper (its two fingers one mimic pair): the arm's seven joints have neither a motor nor a
+    spring, nothing holds them still, and the experiment says so naming them (it used to say that "the nominal
+    finger's equilibrium at 1 N m leaves its joint range": the design's 0.05 margin inside each limit left the
+    fingers' 0.04 m travel an empty range; the margin is now at most a tenth of a joint's range). Welded, the
+    gripper alone is refused by the symbolic backend in one line (ADAM's recursive Newton-Euler fails on this tree)."""
+    from alpes_dyn.cli import main
+    from alpes_dyn.estimation.experiment import _joint_margins
+
+    spec = tmp_path / "gripper.toml"
+    spec.write_text(GRIPPER_SPEC)
+    m = ad.Model.from_urdf_file(PANDA, spec)
+    margins = _joint_margins(m, 0.05)
+    assert margins[-1] == pytest.approx(0.004, rel=1e-12) and np.all(margins[:-1] == 0.05)
+    assert main(["experiment", "--model", str(PANDA), "--spec", str(spec), "--duration", "0.5",
+                 "-o", str(tmp_path / "rec.csv")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith("alpes-dyn: error: model: panda_joint1, panda_joint2, panda_joint3, panda_joint4, "
+                          "panda_joint5, panda_joint6, panda_joint7 have neither a motor nor a spring, so nothing "
+                          "holds them still") and "\n" not in err
+    assert not (tmp_path / "rec.csv").exists()
+    welded = PANDA.read_text()
+    for i in range(1, 8):
+        welded = welded.replace(f'<joint name="panda_joint{i}" type="revolute">', f'<joint name="panda_joint{i}" '
+                                'type="fixed">')
+    g = ad.Model(welded, m.spec)
+    assert g.joint_names == ("panda_finger_joint1",)
+    with pytest.raises(ad.ModelError, match="backend 'adam': adam-robotics cannot compute the bias forces of model"):
+        from alpes_dyn.symbolic.statespace import StateSpace
+
+        StateSpace(g, input="motor", output="encoder")

@@ -136,3 +136,31 @@ def test_sweep_command_on_a_urdf_robot_runs_its_draws(tmp_path, capsys):
     # transient (0.7-1.3 deg)
     assert np.degrees(estimate_recording(rec, truth).rmse).max() < 2.0 and rmse[1:].min() > 10.0
     assert (tmp_path / "s.csv").read_text().startswith("seed,rmse_deg_before_0,")
+
+
+def test_sweep_on_finger_edu_fits_what_it_draws_and_converges(capsys):
+    """``sweep`` on finger_edu, 2 draws: its passive ab/adduction's spring and friction are drawn with the rest, and
+    fitted with the rest (on 4 s experiments: held at the spec's, seed 0 ran into the iteration cap at 7.5 counts;
+    freed from the nominal at once, seed 1 did at 3.3). Here 1 s experiments, to keep the test short. Both draws converge at the sensor floor (0.5 count of noise and the quantisation's
+    0.29: 0.58 counts), the springs within 1 % of the drawn ones, and the output says what was drawn and held."""
+    import json
+
+    import alpes_dyn as ad
+    from alpes_dyn import cli
+    from alpes_dyn.model.spec import example_spec_path
+    from alpes_dyn.studies.sweep import ROBOT_DRAWN, ROBOT_HELD
+
+    urdf, spec = str(ad.example_robot_urdf("finger_edu")), str(example_spec_path("finger_edu"))
+    assert cli.main(["sweep", "--model", urdf, "--spec", spec, "--draws", "2", "--serial", "--duration", "1",
+                     "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
+    assert obj["drawn"] == list(ROBOT_DRAWN) == ["K", "F_s", "F_v"] and obj["held"] == list(ROBOT_HELD)
+    for row in obj["rows"]:
+        assert row["converged"] is True, row
+        assert 0.5 < row["residual_counts"] < 0.65, row  # the floor: sqrt(0.5^2 + 1/12) = 0.577 counts
+        assert row["worst_K_pct"] < 1.0, row
+        assert max(row[f"rmse_deg_after_{i}"] for i in range(3)) < max(row[f"rmse_deg_before_{i}"] for i in range(3))
+    assert cli.main(["sweep", "--model", urdf, "--spec", spec, "--draws", "1", "--serial", "--duration", "0.5",
+                     "--no-fit"]) == 0
+    head = capsys.readouterr().out.splitlines()[1]
+    assert head.startswith("  drawn: K, F_s, F_v of every joint the spec gives them (motorless joints too); held")

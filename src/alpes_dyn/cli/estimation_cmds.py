@@ -12,9 +12,11 @@ import warnings
 import numpy as np
 
 from ..errors import InputError
+from ..estimation.excursion import SmallExcursionWarning
 from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _is_urdf_path,
-                     _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot, parse_vector)
+from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
+                     _fit_excursions, _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
+                     parse_vector)
 
 
 # ---- owned by the observers work (issue 4)
@@ -184,8 +186,10 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
         design = ExperimentDesign(duration=args.duration,
                                   orientations=(tuple(hanging_gravity(load_params(args.params).gravity)),))
-    rec = experiment(args.model, truth, design, seed=args.seed, nominal_params=args.params, path=args.output,
-                     chain=args.chain)
+    with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
+        warnings.simplefilter("ignore", SmallExcursionWarning)
+        rec = experiment(args.model, truth, design, seed=args.seed, nominal_params=args.params, path=args.output,
+                         chain=args.chain)
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment "
                                                         f"(spread {args.perturb:g}, seed {args.seed})")
@@ -194,7 +198,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     text = (f"{args.model}: identification experiment, {rec.n_samples} samples over {rec.duration:g} s "
             f"written to {args.output}" + (f"; true parameters in {args.true_params_out}"
                                             if args.true_params_out else ""))
-    _emit(obj, text, args.json)
+    _emit(obj, text + _excursion_lines(rec, obj), args.json)
     return 0
 
 
@@ -219,12 +223,15 @@ def _experiment_robot(args: argparse.Namespace) -> int:
     _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
     nominal = _urdf_robot(args, "the identification experiment")
     truth = _urdf_robot(args, "the identification experiment", args.true_spec) if args.true_spec else None
-    rec = model_experiment(nominal, truth, ExperimentDesign(duration=args.duration), seed=args.seed, path=args.output)
+    with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
+        warnings.simplefilter("ignore", SmallExcursionWarning)
+        rec = model_experiment(nominal, truth, ExperimentDesign(duration=args.duration), seed=args.seed,
+                               path=args.output)
     obj = {"model": args.model, "spec": args.spec, "true_spec": args.true_spec, "output": args.output,
            "samples": rec.n_samples, "duration_s": rec.duration, "dt_s": rec.dt, "columns": list(rec.columns())}
     text = (f"{nominal.name}: identification experiment on {', '.join(nominal.motor_names)}, {rec.n_samples} samples "
             f"over {rec.duration:g} s (true robot: {args.true_spec or args.spec}) written to {args.output}")
-    _emit(obj, text, args.json)
+    _emit(obj, text + _excursion_lines(rec, obj), args.json)
     return 0
 
 
@@ -317,6 +324,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  held at the URDF's values: {', '.join(held)} (a link that only motorless joints move: the "
                      "encoders see its mass only with those joints' springs; name it in --parameters to fit it)")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
+    lines += [f"  WARNING: {line}" for line in _fit_excursions(args, model, urdf, obj)]  # the fit's data
     a = res.adequacy
     if a is not None:
         lines.append(f"  sensor floor {a.floor.total:.3g} counts (quantisation {a.floor.quantisation:.3g}, noise "

@@ -153,11 +153,37 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         "A(q) [kg m^2]:", _fmt_table(A, joints, joints),
         "C(q, v) [N m s]:", _fmt_table(C, joints, joints),
         f"J(q) fingertip {tip}, linear, base axes [m]:", _fmt_table(J, ("x", "y", "z"), joints),
-        *motor_lines,
+        *motor_lines, *_stop_lines(m, obj),
     ] + ([f"WARNING: q outside the joint limits at {', '.join(outside)} (the model has no joint stop: "
           "these terms hold as if the joints could go there)"] if outside else []))
     _emit(obj, text, args.json)
     return 0
+
+
+def _stop_lines(m: Any, obj: dict[str, Any]) -> list[str]:
+    """The joint stops each joint gets in a simulation with stops (``JointStops.of(model)``, and with
+    ``per_joint=True``) and where they come from (:func:`~alpes_dyn.model.stops.stop_table`): ``obj["stops"]`` and
+    the text's lines."""
+    from ..model.stops import stop_table
+
+    robot, own = stop_table(m), stop_table(m, per_joint=True)
+    obj["stops"] = {"robot": robot, "per_joint": own}
+    lines = [f"joint stops (simulate(stops=JointStops.of(model)); per joint: JointStops.of(model, per_joint=True)), "
+             f"sized to give {math.degrees(robot['penetration_rad']):g} deg under the torque into the stop tau*: "
+             "k [N m/rad], d [N m s/rad], tau* [N m]:"]
+    w = max(len(j) for j in m.joint_names)
+    lines.append(f"  {'':{w}s} {'lower':>9s} {'upper':>9s} {'tau*':>10s} {'k':>10s} {'d':>10s}  {'source':22s}"
+                 f" {'k per joint':>11s} {'d per joint':>11s}  source")
+
+    def num(x: Any, width: int) -> str:
+        return f"{'-':>{width}s}" if x is None else f"{x:>{width}.4g}"
+    for i, j in enumerate(m.joint_names):
+        lines.append(f"  {j:{w}s} {m.lower[i]:>9.4g} {m.upper[i]:>9.4g} {num(robot['torque_into_stop'][i], 10)} "
+                     f"{num(robot['stiffness'][i], 10)} {num(robot['damping'][i], 10)}  {robot['source'][i]:22s} "
+                     f"{num(own['stiffness'][i], 11)} {num(own['damping'][i], 11)}  {own['source'][i]}")
+    if robot["error"] is not None:
+        lines.append(f"  not sized: {robot['error']}")
+    return lines
 
 
 def cmd_linearize(args: argparse.Namespace) -> int:

@@ -441,8 +441,8 @@ def _add_sweep(sub: argparse._SubParsersAction) -> None:
                    help="robustness: per draw a finger drawn +-spread per link, its experiment, the fit and the EKF "
                         "before/after (default %(default)s)")
     s.add_argument("--model", default="finger3", help="finger2 or finger3 (K, m, friction drawn), or a URDF path "
-                   "(with --spec: its spec's stiffness and friction drawn, those of the joints a motor drives "
-                   "fitted) (default %(default)s)")
+                   "(with --spec: its spec's stiffness and friction drawn and fitted on every joint, motorless ones "
+                   "too; the URDF's masses held) (default %(default)s)")
     s.add_argument("--spec", default=None, metavar="FILE.toml",
                    help="a URDF --model's transmission spec: the nominal robot; required with one")
     s.add_argument("--draws", type=_int_at_least(1), default=4, help="number of draws (default %(default)s)")

@@ -14,7 +14,7 @@ from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _urdf_robot
 def cmd_sweep(args: argparse.Namespace) -> int:
     """A study over seeded draws, on Dask workers or serially (studies.sweep)."""
     from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
-    from ..studies.sweep import STUDIES, robot_robustness_draw, sweep
+    from ..studies.sweep import ROBOT_DRAWN, ROBOT_HELD, STUDIES, robot_robustness_draw, sweep
 
     _one_of(args.study, tuple(STUDIES), "--study", "study")
     urdf = _is_urdf_path(args.model)
@@ -43,6 +43,11 @@ def cmd_sweep(args: argparse.Namespace) -> int:
                 workers=None if args.serial or args.scheduler is not None else args.workers,
                 scheduler=args.scheduler, serial=args.serial)
     res.meta.update({"study": args.study, "model": args.model, **opts})
+    drawn = ""
+    if urdf:  # what the draw perturbs is what the fit frees; the rest is held at the files' values in both
+        res.meta.update({"drawn": list(ROBOT_DRAWN), "held": list(ROBOT_HELD)})
+        drawn = (f"\n  drawn{'' if args.no_fit else ' and fitted'}: {', '.join(ROBOT_DRAWN)} of every joint the spec "
+                 f"gives them (motorless joints too); held at the files' values: {', '.join(ROBOT_HELD)}")
     if args.output is not None:
         res.to_csv(args.output)
     obj = res.to_dict()
@@ -50,7 +55,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
         obj["output"] = args.output
     head = (f"{args.study} study on {args.model}: {args.draws} draws (seeds {args.seed}..{args.seed + args.draws - 1}), "
             f"+-{100 * args.spread:g} % per {'value of the spec' if urdf else 'link'}, {args.duration:g} s experiments; "
-            f"{res.backend} on {res.workers} worker{'s' if res.workers != 1 else ''}, {res.seconds:.1f} s")
+            f"{res.backend} on {res.workers} worker{'s' if res.workers != 1 else ''}, {res.seconds:.1f} s{drawn}")
     lines = [head, res.table()] + ([f"  table: {args.output}"] if args.output else [])
     _emit(obj, "\n".join(lines), args.json)
     return 0

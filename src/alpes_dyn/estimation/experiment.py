@@ -42,7 +42,10 @@ identification user guide for the full comparison.
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
 (and writes) a :class:`~alpes_dyn.estimation.recording.Recording` with the true joint angles in ``true_q_*``.
 :func:`model_experiment` does the same on any tendon-driven robot (a URDF + spec :class:`~alpes_dyn.Model`),
-its searches scaled by the robot's own static torques.
+its searches scaled by the robot's own static torques. Both warn
+(:class:`~alpes_dyn.estimation.excursion.SmallExcursionWarning`, one per motor) where the recording moved a motor's
+encoder by fewer counts than a fit can use
+(:mod:`alpes_dyn.estimation.excursion`).
 """
 
 from __future__ import annotations
@@ -63,6 +66,7 @@ from ..model.transmission import torque_before
 from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported)
 from .draws import perturbed_params  # noqa: F401 (re-exported)
+from .excursion import warn_small_excursions
 from .recording import Recording, write_recording
 from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning
@@ -117,12 +121,40 @@ def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | 
     return bias, amp
 
 
+def _unheld_joints(model: Model) -> list[str]:
+    """The joints that no motor's tendon moves and no spring holds (a robot arm's joints under a tendon gripper):
+    no static equilibrium to design the experiment about, and a simulation of them falls through their range."""
+    S = np.asarray(model.transmission.S)
+    k = np.asarray(model.extras.stiffness, dtype=float)
+    return [j for i, j in enumerate(model.joint_names) if not np.any(S[:, i] != 0) and not k[i] > 0]
+
+
+MARGIN_FRACTION = 0.1
+"""The most of a joint's range the design's ``margin`` takes at each end: a short range keeps its middle."""
+
+
+def _joint_margins(model: Model, margin: float) -> np.ndarray:
+    """(n,) rad or m: the design's ``margin`` inside each joint limit, at most :data:`MARGIN_FRACTION` of the joint's
+    range (the 0.05 rad default is 0.05 m on a prismatic joint: more than the whole 0.04 m travel of Panda's
+    fingers, whose design range was then empty). Where a range is wider than 10 margins (the Alpes joints' 1.57 rad)
+    it is the margin itself."""
+    span = np.where(np.isfinite(model.upper - model.lower), model.upper - model.lower, np.inf)
+    return np.minimum(margin, MARGIN_FRACTION * span)
+
+
 def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray]:
     """Bias and amplitude per motor (m,), N m. A motor against springs: bias putting the mean of its joints
     mid-range, amplitude the largest keeping the static equilibria in range; a motor on springless joints
     (the thumb's ab/adduction): bias balancing gravity there, amplitude from the motor's limit down.
     Then every amplitude whose joints a nominal run takes out of range shrinks by 15 % until none does."""
-    lo, hi = model.lower + design.margin, model.upper - design.margin
+    unheld = _unheld_joints(model)
+    if unheld:
+        raise InputError(f"model: {', '.join(unheld)} {'has' if len(unheld) == 1 else 'have'} neither a motor nor a "
+                         "spring, so nothing holds {} still for the experiment to start from; weld {} in the URDF "
+                         "(type=\"fixed\") or give {} a spring ([stiffness]) or a motor".format(
+                             *(["it"] * 3 if len(unheld) == 1 else ["them"] * 3)))
+    margin = _joint_margins(model, design.margin)
+    lo, hi = model.lower + margin, model.upper - margin
     g0 = np.asarray(design.orientations[0], dtype=float)
     n_m = model.transmission.n_motors
     joints, sprung, free = _motor_groups(model)
@@ -491,6 +523,7 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
                     q=q_meas, gravity=None if same_g else G, true_q=x[:, : truth.n].copy())
     if path is not None:
         write_recording(rec, path)
+    warn_small_excursions(rec)  # one SmallExcursionWarning per motor whose encoder barely moved
     return rec
 
 

@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import AlpesDynWarning, InputError
 
 __all__ = ["JointStops", "JointRangeWarning", "check_range", "JOINT_RANGE_MODES", "sized_stops", "STOP_PENETRATION",
-           "STOP_DAMPING_RATIO", "ALPES_STOP"]
+           "STOP_DAMPING_RATIO", "ALPES_STOP", "stop_table"]
 
 JOINT_RANGE_MODES: tuple[str, ...] = ("warn", "error", "ignore")
 ALPES_STOP: tuple[float, float] = (2.0, 4e-3)
@@ -218,6 +218,45 @@ def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> t
         return k, 2.0 * STOP_DAMPING_RATIO * np.sqrt(k * inertia)
     I_min = float(np.min(inertia[limited]))
     return float(stiffness), float(2.0 * STOP_DAMPING_RATIO * math.sqrt(stiffness * I_min))
+
+
+def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:
+    """What :meth:`JointStops.of` (``model``, ``per_joint``) gives each joint, and where it comes from: what
+    ``alpes-dyn dynamics`` prints.
+
+    Returns a dict of lists in :attr:`~alpes_dyn.Model.joint_names` order: ``stiffness`` (N m/rad) and ``damping``
+    (N m s/rad), None on a joint without a finite limit (no stop); ``source`` per joint: ``"alpes"`` (the Alpes
+    models' :data:`ALPES_STOP`), ``"sized"`` (:func:`sized_stops`: the robot's largest static torque into a stop over
+    :data:`STOP_PENETRATION`, critical damping on its lightest limited joint; per joint: that joint's own), ``"least
+    of the others"`` (per joint, a limited joint that nothing pushes into a stop), ``"none"`` (no finite limit); and
+    ``torque_into_stop`` (N m, the sizing's tau*_i), ``penetration_rad`` (p*). Where nothing sizes the stops
+    (:func:`sized_stops` refuses) every stiffness and damping is None, the sources ``"not sized"`` and ``error`` the
+    reason; otherwise ``error`` is None."""
+    if not all(hasattr(model, a) for a in ("joint_names", "lower", "upper", "gravity_torque", "inertia_matrix")):
+        raise InputError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+    if not isinstance(per_joint, (bool, np.bool_)):
+        raise InputError(f"per_joint: expected True or False, got {per_joint!r}")
+    lo, hi = _limits(model)
+    limited = np.isfinite(lo) | np.isfinite(hi)
+    tau = _torque_into_stops(model, lo, hi)
+    out: dict[str, Any] = {"joints": list(model.joint_names), "per_joint": bool(per_joint),
+                           "torque_into_stop": [float(t) if lim else None for t, lim in zip(tau, limited)],
+                           "penetration_rad": STOP_PENETRATION, "error": None}
+    try:
+        stops = JointStops.of(model, per_joint=bool(per_joint))
+    except InputError as exc:
+        out.update(stiffness=[None] * model.n, damping=[None] * model.n, error=str(exc),
+                   source=["not sized" if lim else "none" for lim in limited])
+        return out
+    k = np.broadcast_to(np.asarray(stops.stiffness, dtype=float), (model.n,))
+    d = np.broadcast_to(np.asarray(stops.damping, dtype=float), (model.n,))
+    alpes = getattr(model, "params", None) is not None and not per_joint
+    pushed = tau > 1e-9 * np.max(np.where(limited, tau, 0.0), initial=0.0)
+    source = ["none" if not lim else "alpes" if alpes else "sized" if not per_joint or push else "least of the others"
+              for lim, push in zip(limited, pushed)]
+    out.update(stiffness=[float(x) if lim else None for x, lim in zip(k, limited)],
+               damping=[float(x) if lim else None for x, lim in zip(d, limited)], source=source)
+    return out
 
 
 def check_range(t: np.ndarray, q: np.ndarray, lower: np.ndarray, upper: np.ndarray, names: Sequence[str],

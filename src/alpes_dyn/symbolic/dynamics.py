@@ -112,6 +112,7 @@ class _Adam:
             raise ModelError(f"URDF could not be loaded by ADAM: {str(exc).splitlines()[0] if str(exc) else exc}") from None
         self.H = cs.SX.eye(4)
         self.vb = cs.SX.zeros(6)
+        self.model_name = getattr(model, "name", "")  # a shim of the parametric model has none
 
     def _full(self, q: cs.SX) -> cs.SX:
         return q if self.G is None else cs.mtimes(self.G, q) + self.o
@@ -119,16 +120,26 @@ class _Adam:
     def _down(self, x: cs.SX) -> cs.SX:
         return x if self.G is None else cs.mtimes(self.G.T, x)
 
+    def _adam(self, what: str, fn: Any, *args: Any) -> cs.SX:
+        """ADAM's ``fn(*args)``; its failure on a tree it cannot take (ADAM 0.x's recursive Newton-Euler on
+        Panda's URDF: a shape mismatch in its sum of velocities) a :class:`ModelError` naming the term, one line."""
+        try:
+            return fn(*args)
+        except (ValueError, IndexError, TypeError) as exc:
+            msg = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+            raise ModelError(f"backend 'adam': adam-robotics cannot compute the {what} of model {self.model_name!r} "
+                             f"({msg}); no symbolic model of it here") from None
+
     def mass_matrix(self, q: cs.SX) -> cs.SX:
-        M = self.kd.mass_matrix(self.H, self._full(q))[6:, 6:]
+        M = self._adam("mass matrix", self.kd.mass_matrix, self.H, self._full(q))[6:, 6:]
         return M if self.G is None else cs.mtimes(self.G.T, cs.mtimes(M, self.G))
 
     def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
         vf = v if self.G is None else cs.mtimes(self.G, v)
-        return self._down(self.kd.bias_force(self.H, self._full(q), self.vb, vf)[6:])
+        return self._down(self._adam("bias forces", self.kd.bias_force, self.H, self._full(q), self.vb, vf)[6:])
 
     def gravity(self, q: cs.SX) -> cs.SX:
-        return self._down(self.kd.gravity_term(self.H, self._full(q))[6:])
+        return self._down(self._adam("gravity torques", self.kd.gravity_term, self.H, self._full(q))[6:])
 
     def com_position(self, q: cs.SX) -> cs.SX:
         """The centre of mass (3,), m, at q (n,): at q_full on a model with mimic joints."""
