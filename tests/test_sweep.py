@@ -88,6 +88,18 @@ def test_bad_sweep_arguments(kw, needle):
         sweep(robustness_draw, args.pop("draws"), **args)
 
 
+def test_the_last_draw_may_have_the_largest_seed():
+    """seed .. seed + draws - 1 reach 2^63 - 1, the largest seed of every command, and not beyond (was one short)."""
+    from alpes_dyn.limits import MAX_SEED
+
+    assert MAX_SEED == 2**63 - 1
+    assert [r["seed"] for r in sweep(lambda s: {"x": 1.0}, 1, seed=MAX_SEED, serial=True).rows] == [MAX_SEED]
+    assert [r["seed"] for r in sweep(lambda s: {"x": 1.0}, 3, seed=MAX_SEED - 2, serial=True).rows] == [
+        MAX_SEED - 2, MAX_SEED - 1, MAX_SEED]
+    with pytest.raises(InputError, match=f"seed: expected an integer from 0 to {MAX_SEED - 1}, got {MAX_SEED}"):
+        sweep(lambda s: {"x": 1.0}, 2, seed=MAX_SEED, serial=True)
+
+
 def test_a_draw_must_return_a_dict():
     with pytest.raises(InputError, match="fn: a draw must return a dict of results, got int"):
         sweep(lambda s: s, 1, serial=True)

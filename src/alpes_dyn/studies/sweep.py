@@ -33,6 +33,7 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError
 from ..fileio import atomic_path
+from ..limits import MAX_SEED
 
 __all__ = ["SweepResult", "sweep", "local_client", "robustness_draw", "robot_robustness_draw", "drawn_spec", "STUDIES"]
 
@@ -205,14 +206,14 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
             raise InputError("seeds: give the seeds, or draws and seed, not both")
         if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__") or not 1 <= len(seeds) <= 100_000:
             raise InputError(f"seeds: expected 1 to 100000 integers, got {type(seeds).__name__}")
-        seeds = [_check_int(s_, "seeds", 0, 2**63 - 1) for s_ in seeds]
+        seeds = [_check_int(s_, "seeds", 0, MAX_SEED) for s_ in seeds]
         if len(set(seeds)) != len(seeds):
             raise InputError("seeds: a seed is given twice (each draw is its seed's)")
     else:
         if draws is None:
             raise InputError("draws: expected the number of draws (or seeds=)")
         draws = _check_int(draws, "draws", 1, 100_000)
-        seed = _check_int(seed, "seed", 0, 2**63 - 1 - draws)
+        seed = _check_int(seed, "seed", 0, MAX_SEED + 1 - draws)  # the last draw's seed MAX_SEED at most
         seeds = list(range(seed, seed + draws))
     if not isinstance(flat, (bool, np.bool_)):
         raise InputError(f"flat: expected True or False, got {flat!r}")
