@@ -798,6 +798,7 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--disturbance", needle="--disturbance: applies to an observer on a recording (--data"),
         C("estimate", "--log", "e.csv", needle="--log: applies to an observer on a recording (--data"),
         C("estimate", "--torque-noise", "1e-3", needle="--torque-noise: applies to an observer on a recording"),
+        C("estimate", "--torque-noise", "0", needle="--torque-noise: applies to an observer on a recording"),  # 0 == False
         C("estimate", "--plot", "{dir}", needle="--plot: '{dir}' is a directory"),
         C("estimate", "--plot", "", needle="--plot: empty file name"),
         C("estimate", "--plot", "out.xyz", needle="--plot: 'out.xyz' has extension 'xyz'; expected one of"),

@@ -200,11 +200,17 @@ _ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--f
                ("rotor_inertia", "--rotor-inertia"))
 
 
+def _given(value: object) -> bool:
+    """Whether an option's parsed value was given: not its default None or a flag's False (by identity: a number
+    option given 0, which equals False, is given; ``--torque-noise 0`` was taken as absent and silently ignored)."""
+    return value is not None and value is not False
+
+
 def _check_model_options(args: argparse.Namespace) -> None:
     """Refuse, with one line, the options that do not apply to the kind of --model given (never ignore them)."""
     if _is_urdf_path(args.model):
         for dest, flag in _ALPES_ONLY:
-            if getattr(args, dest, None) not in (None, False):
+            if _given(getattr(args, dest, None)):
                 raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand); for a URDF --model "
                                  "put springs, friction and rotor inertia in a --spec file")
     elif getattr(args, "spec", None) is not None:

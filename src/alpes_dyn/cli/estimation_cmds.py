@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _is_urdf_path,
+from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _given, _is_urdf_path,
                      _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot, parse_vector)
 
 
@@ -28,7 +28,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant")):
-        if getattr(args, dest) not in (None, False):
+        if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
         raise InputError("--model: the simulated estimation scenario is the Alpes fingers'; on a URDF --model run "
