@@ -13,7 +13,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _given, _is_urdf_path,
+from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _is_urdf_path,
                      _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot, parse_vector)
 
 
@@ -22,6 +22,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     """Simulate the default scenario (alpes_dyn.estimation.scenario) and estimate the joints from the motor encoder."""
     from ..estimation.observers import OBSERVERS
     from ..estimation.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
+    from .common import _given
 
     if args.data is not None:
         return _estimate_data(args)
