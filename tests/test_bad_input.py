@@ -294,7 +294,9 @@ CLI: dict[str, list[Cli]] = {
           needle="chain: unknown finger 'pinky' (expected one of index, middle, ring, little)"),
         C("experiment", "--model", "thumb", "--chain", "index", "-o", "{tmp}/r.csv", needle="chain: only a finger model"),
         C("experiment", "--duration", "0.01", "-o", "{tmp}/r.csv", needle="duration: expected a whole number of at least 100"),
-        C("experiment", "--perturb", "1.5", "-o", "{tmp}/r.csv", needle="spread: expected a fraction in [0, 1)"),
+        C("experiment", "--perturb", "1.5", "-o", "{tmp}/r.csv", needle="--perturb: expected a fraction in [0, 1)"),
+        C("experiment", "--perturb", "nan", "-o", "{tmp}/r.csv", needle="--perturb: expected a fraction in [0, 1), got nan"),
+        C("experiment", "--perturb", "1e-320", "-o", "{tmp}/r.csv", needle="--perturb: 1e-320 is a subnormal number"),
         C("experiment", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv", needle="goes with --perturb"),
         C("experiment", "-o", "{tmp}", needle="is a directory"),
         C("experiment", "--params", "{latin1_toml}", "-o", "{tmp}/r.csv", needle="not UTF-8 text"),
@@ -798,6 +800,7 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--disturbance", needle="--disturbance: applies to an observer on a recording (--data"),
         C("estimate", "--log", "e.csv", needle="--log: applies to an observer on a recording (--data"),
         C("estimate", "--torque-noise", "1e-3", needle="--torque-noise: applies to an observer on a recording"),
+        C("estimate", "--torque-noise", "0", needle="--torque-noise: applies to an observer on a recording"),  # 0 == False
         C("estimate", "--plot", "{dir}", needle="--plot: '{dir}' is a directory"),
         C("estimate", "--plot", "", needle="--plot: empty file name"),
         C("estimate", "--plot", "out.xyz", needle="--plot: 'out.xyz' has extension 'xyz'; expected one of"),
@@ -858,7 +861,7 @@ CLI["mjcf"] += [
 CLI["linearize"] += [C("linearize", "--u", "1e300,0,0", needle=f"--u: 1e+300 N m (index 0) {RANGE}")]
 CLI["experiment"] += [
     C("experiment", "--duration", "0.2", "-o", "{tmp}/a.csv", "-o", "{tmp}/b.csv", needle="-o: given 2 times"),
-    C("experiment", "--perturb", "1e300", "-o", "{tmp}/r.csv", needle=f"--perturb: 1e+300 {RANGE} [0, 1e+06]"),
+    C("experiment", "--perturb", "1e300", "-o", "{tmp}/r.csv", needle="--perturb: expected a fraction in [0, 1), got 1e+300"),
     C("experiment", "--seed", "9" * 400, "-o", "{tmp}/r.csv", needle="--seed: expected an integer from 0 to "
       "9223372036854775807"),
 ]
@@ -2711,3 +2714,45 @@ def test_bad_max_bytes_refused_by_every_command(monkeypatch, capfd):
     code = cli.main(["dynamics"])
     out, err = capfd.readouterr()
     _one_stderr_line(code, out, err, "ALPES_DYN_MAX_BYTES: expected a number of bytes >= 1, got 'abc'")
+
+
+def _recording_edited(column: str, cell: Callable[[int, str], str] | None) -> str:
+    """finger3's recording with ``column``'s cells replaced by ``cell(row index, old cell)``, or dropped (None)."""
+    lines = _recordings()["finger3"].splitlines()
+    j = lines[0].split(",").index(column)
+    out = []
+    for i, line in enumerate(lines):
+        cells = line.split(",")
+        if cell is None:
+            del cells[j]
+        elif i > 0:
+            cells[j] = cell(i - 1, cells[j])
+        out.append(",".join(cells))
+    return "\n".join(out) + "\n"
+
+
+@pytest.mark.parametrize("column, cell, needle", [  # issue 19's fifth re-check: estimate --data's recordings
+    ("torque_finger", lambda i, v: "1e-320", "column 'torque_finger' line 2: 1e-320 is a subnormal number"),
+    ("encoder_finger", lambda i, v: "-5e-324" if i == 7 else v, "column 'encoder_finger' line 9: -5e-324 is a subnormal"),
+    ("true_q_j2", lambda i, v: "nan", "column 'true_q_j2' line 2: NaN or inf"),  # the RMSE silently dropped
+    ("true_q_j2", lambda i, v: "" if i == 3 else v, "column 'true_q_j2' is empty at line 5 (only q_* and force_z"),
+    ("true_q_j2", None, "true_q_* has no column for joint 'j2': the true angles of every joint, or none"),
+    ("t", lambda i, v: repr(1e12 + 1e-3 * i), "t reaches 1e+12 s, where a float holds time only to 0.00012 s"),
+])
+def test_recording_cells_that_were_read_as_nonsense(tmp_path, column, cell, needle):
+    """A subnormal reading, true angles missing somewhere (estimate --data then said 'no true_q_* columns'), time
+    stamps that cannot hold the sample period: one RecordingError naming the column, as for the other defects."""
+    path = tmp_path / "r.csv"
+    path.write_text(_recording_edited(column, cell))
+    with pytest.raises(RecordingError, match=re.escape(needle)):
+        _read_rec(path)
+
+
+def test_recording_without_true_angles_and_epoch_seconds_still_read(tmp_path):
+    """The same reader accepts the recording with no true_q_* at all (a real rig's) and t in Unix-epoch seconds."""
+    no_true = "\n".join(",".join(line.split(",")[:3]) for line in _recordings()["finger3"].splitlines()) + "\n"
+    (tmp_path / "real.csv").write_text(no_true)
+    rec = _read_rec(tmp_path / "real.csv")
+    assert rec.true_q is None and rec.t.shape == (201,)
+    (tmp_path / "epoch.csv").write_text(_recording_edited("t", lambda i, v: repr(1.7e9 + float(v))))
+    assert np.allclose(_read_rec(tmp_path / "epoch.csv").t - 1.7e9, rec.t, atol=1e-6)

@@ -48,6 +48,26 @@ def test_given_seeds_and_nested_rows():
     assert sweep(draw, seeds=(5,), serial=True).rows == [{"seed": 5, "x_0": 5.0, "x_1": 10.0, "inner": {"y": 5.5}}]
 
 
+def _nested(seed: int) -> dict:
+    return {"inner": {"y": seed + 0.5, "z": [seed, math.nan], "w": {"k": np.float64(2.5)}}, "x": [seed, 2 * seed]}
+
+
+def test_nested_values_are_json_in_the_csv(tmp_path):
+    """A dict in a row (and a list, in rows not flattened) is a CSV cell of JSON text that json.loads reads back to
+    the same value (a non-finite number in it null, as in to_dict); never Python's repr."""
+    flat = sweep(_nested, seeds=[3], serial=True)
+    rows = list(csv.DictReader(open(flat.to_csv(tmp_path / "flat.csv"))))
+    assert rows == [{"seed": "3", "inner": rows[0]["inner"], "x_0": "3.0", "x_1": "6.0"}]
+    assert json.loads(rows[0]["inner"]) == {"y": 3.5, "z": [3, None], "w": {"k": 2.5}}
+    nested = sweep(_nested, seeds=[4, 1], serial=True, flat=False)
+    rows = list(csv.DictReader(open(nested.to_csv(tmp_path / "nested.csv"))))
+    assert [json.loads(r["x"]) for r in rows] == [[4, 8], [1, 2]]
+    assert json.loads(rows[1]["inner"]) == {"y": 1.5, "z": [1, None], "w": {"k": 2.5}}
+    assert "nan" not in (tmp_path / "nested.csv").read_text().lower()
+    obj = json.loads(json.dumps(nested.to_dict(), allow_nan=False))  # the JSON output: null at any depth too
+    assert obj["rows"][0]["inner"] == {"y": 4.5, "z": [4, None], "w": {"k": 2.5}}
+
+
 @pytest.mark.parametrize("kw, needle", [
     ({"draws": None, "seeds": [1, 1]}, "seeds: a seed is given twice"),
     ({"seeds": [1, 2]}, "seeds: give the seeds, or draws and seed, not both"),
@@ -66,6 +86,18 @@ def test_bad_sweep_arguments(kw, needle):
     args = {"draws": 2, **kw}
     with pytest.raises(InputError, match=needle.replace("(", r"\(")):
         sweep(robustness_draw, args.pop("draws"), **args)
+
+
+def test_the_last_draw_may_have_the_largest_seed():
+    """seed .. seed + draws - 1 reach 2^63 - 1, the largest seed of every command, and not beyond (was one short)."""
+    from alpes_dyn.limits import MAX_SEED
+
+    assert MAX_SEED == 2**63 - 1
+    assert [r["seed"] for r in sweep(lambda s: {"x": 1.0}, 1, seed=MAX_SEED, serial=True).rows] == [MAX_SEED]
+    assert [r["seed"] for r in sweep(lambda s: {"x": 1.0}, 3, seed=MAX_SEED - 2, serial=True).rows] == [
+        MAX_SEED - 2, MAX_SEED - 1, MAX_SEED]
+    with pytest.raises(InputError, match=f"seed: expected an integer from 0 to {MAX_SEED - 1}, got {MAX_SEED}"):
+        sweep(lambda s: {"x": 1.0}, 2, seed=MAX_SEED, serial=True)
 
 
 def test_a_draw_must_return_a_dict():

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..errors import AlpesDynError, AlpesDynWarning, InputError, plain
 from ..fileio import check_outputs
-from ..limits import PHYSICAL_RANGES, check_physical
+from ..limits import PHYSICAL_RANGES, check_not_subnormal, check_physical
 
 
 VECTOR_OPTIONS = ("--q", "--v", "--u", "--tau", "--tau-m", "--force", "--contact-q")
@@ -70,8 +70,8 @@ a joint coordinate of a prismatic joint is read in m, within the same magnitude)
 OPTION_UNITS: dict[str, tuple[str, str]] = {
     "stiction": ("s", "pos"), "tendon_stiffness": ("N/m", "pos"), "tendon_damping": ("N s/m", "nonneg"),
     "tendon_dead_band": ("m", "nonneg"), "dt": ("s", "pos"), "mismatch": ("-", "any"), "duration": ("s", "pos"),
-    "torque_noise": ("N m", "nonneg"), "torque_constant": ("N m/A", "pos"), "perturb": ("-", "nonneg"),
-    "encoder_noise": ("counts", "nonneg"), "spread": ("-", "nonneg"), "tau_max": ("N m", "pos"), "tilt": ("deg", "any"),
+    "torque_noise": ("N m", "nonneg"), "torque_constant": ("N m/A", "pos"),
+    "encoder_noise": ("counts", "nonneg"), "tau_max": ("N m", "pos"), "tilt": ("deg", "any"),
 }
 """The unit and sign of each number option (by its ``dest``), checked by :func:`check_option_ranges` right after
 parsing, before any work: not subnormal, within the magnitude :data:`alpes_dyn.limits.PHYSICAL_RANGES` gives its
@@ -88,6 +88,24 @@ def check_option_ranges(args: argparse.Namespace) -> None:
         if isinstance(value, float) and np.isfinite(value) and (abs(value) > PHYSICAL_RANGES[unit][1]
                                                                  or 0 < abs(value) < sys.float_info.min):
             check_physical(value, "--" + dest.replace("_", "-"), unit, kind)
+    for dest in FRACTION_OPTIONS:
+        value = getattr(args, dest, None)
+        if isinstance(value, float):
+            check_fraction(value, "--" + dest)
+
+
+FRACTION_OPTIONS = ("perturb", "spread")
+"""The options that are a relative spread, each a fraction in [0, 1) (``experiment --perturb``, ``sweep --spread``):
+named by the option the user typed (``--perturb nan`` said ``spread: ...``, ``--perturb 1e300`` gave the range
+[0, 1e+06] of a ratio, 2 being refused later)."""
+
+
+def check_fraction(value: float, flag: str) -> float:
+    """``value`` if it is a fraction in [0, 1), not subnormal, else InputError naming ``flag``."""
+    check_not_subnormal(value, flag)
+    if not (np.isfinite(value) and 0 <= value < 1):
+        raise InputError(f"{flag}: expected a fraction in [0, 1), got {value!r}")
+    return value
 
 
 def _strict_int(text: str) -> int:
@@ -200,11 +218,17 @@ _ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--f
                ("rotor_inertia", "--rotor-inertia"))
 
 
+def _given(value: object) -> bool:
+    """Whether an option's parsed value was given: not its default None or a flag's False (by identity: a number
+    option given 0, which equals False, is given; ``--torque-noise 0`` was taken as absent and silently ignored)."""
+    return value is not None and value is not False
+
+
 def _check_model_options(args: argparse.Namespace) -> None:
     """Refuse, with one line, the options that do not apply to the kind of --model given (never ignore them)."""
     if _is_urdf_path(args.model):
         for dest, flag in _ALPES_ONLY:
-            if getattr(args, dest, None) not in (None, False):
+            if _given(getattr(args, dest, None)):
                 raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand); for a URDF --model "
                                  "put springs, friction and rotor inertia in a --spec file")
     elif getattr(args, "spec", None) is not None:

@@ -24,13 +24,14 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     """Simulate the default scenario (alpes_dyn.estimation.scenario) and estimate the joints from the motor encoder."""
     from ..estimation.observers import OBSERVERS
     from ..estimation.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
+    from .common import _given
 
     if args.data is not None:
         return _estimate_data(args)
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant")):
-        if getattr(args, dest) not in (None, False):
+        if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
         raise InputError("--model: the simulated estimation scenario is the Alpes fingers'; on a URDF --model run "

@@ -5,10 +5,8 @@ from __future__ import annotations
 
 import argparse
 
-import numpy as np
-
 from ..errors import InputError
-from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _urdf_robot
+from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _urdf_robot, check_fraction
 
 
 def cmd_sweep(args: argparse.Namespace) -> int:
@@ -26,8 +24,7 @@ def cmd_sweep(args: argparse.Namespace) -> int:
     elif args.model not in EXPERIMENT_MODELS or args.model == "thumb":
         raise InputError(f"--model: the robustness study is defined for one finger (finger2, finger3) or a URDF "
                          f"path with --spec, got {args.model!r}")
-    if not (np.isfinite(args.spread) and 0 <= args.spread < 1):
-        raise InputError(f"--spread: expected a fraction in [0, 1), got {args.spread!r}")
+    check_fraction(args.spread, "--spread")  # (also right after parsing: before any file is read)
     if args.serial and (args.scheduler is not None or args.workers != 2):
         raise InputError("--serial: runs in this process; give no --workers or --scheduler with it")
     if args.scheduler is not None and args.workers != 2:

@@ -18,7 +18,8 @@ column                      unit     meaning
 ``<motor>`` and ``<joint>`` are the model's names (:attr:`Transmission.motor_names
 <alpes_dyn.Transmission.motor_names>`, :attr:`Model.joint_names <alpes_dyn.Model.joint_names>`): on
 ``finger3`` the columns are ``t, encoder_finger, torque_finger`` and ``q_j1, q_j2, q_j3``. Only
-``q_*``, ``true_q_*`` and ``force_z`` may have empty cells. On the command line, ``identify`` and
+``q_*`` and ``force_z`` may have empty cells; the true angles ``true_q_*`` are every joint's at every sample, or
+not in the file (the RMSE of ``estimate --data`` needs them all). On the command line, ``identify`` and
 ``estimate --data`` read ``current_<motor>`` columns with ``--torque-constant NM_PER_A``. An encoder
 reading far outside what the joints' ranges allow (more than the range and a motor turn beyond it) is
 refused by name: it is not this model's encoder in counts. Every defect is one
@@ -41,7 +42,7 @@ import numpy as np
 
 from ..errors import RecordingError
 from ..fileio import atomic_write, read_bytes
-from ..limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_physical
+from ..limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ..model.robot import Model
 
 __all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
@@ -182,6 +183,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     if "t" not in col:
         raise RecordingError("recording: missing column 't' (time, s)")
     motors, joints = model.transmission.motor_names, model.joint_names
+    _check_true_columns(col, joints)
     enc, torque = _motor_columns(col, motors, torque_constant, p)
     rec = Recording(t=col["t"], encoder=np.column_stack(enc), torque=np.column_stack(torque),
                     motor_names=tuple(motors), joint_names=tuple(joints), q=_joint_columns(col, joints, "q"),
@@ -254,8 +256,8 @@ def _header(rows, p: Path, model: Model, wider: Model | None = None) -> list[str
 
 def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:
     """The data rows as an array (rows, columns): numbers (no digit separators), empty or NaN cells only in the
-    optional columns (``q_*``, ``true_q_*``, ``force_z``: NaN there)."""
-    optional_nan = {h for h in header if h.startswith(("q_", "true_q_")) or h == "force_z"}
+    optional measurements (``q_*``, ``force_z``: NaN there; ``true_q_*`` is a simulation's, every sample)."""
+    optional_nan = {h for h in header if h.startswith("q_") or h == "force_z"}
     data = np.empty((n_lines + 1, len(header)))  # at least one row per line: trimmed below
     n_rows = 0
     for i in itertools.count(2):
@@ -273,7 +275,7 @@ def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:
             if c == "":
                 if header[j] not in optional_nan:
                     raise RecordingError(f"recording: column {header[j]!r} is empty at line {i} "
-                                         "(only q_*, true_q_* and force_z may have empty cells)")
+                                         "(only q_* and force_z may have empty cells)")
                 data[i - 2, j] = np.nan
                 continue
             try:
@@ -284,7 +286,12 @@ def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: not a number ({c!r})") from None
             if not math.isfinite(data[i - 2, j]) and header[j] not in optional_nan:
                 raise RecordingError(f"recording: column {header[j]!r} line {i}: NaN or inf")
-    return data[:n_rows]
+    data = data[:n_rows]
+    tiny = np.argwhere((data != 0) & (np.abs(data) < np.finfo(float).tiny))  # (NaN compares False: not tiny)
+    if tiny.size:  # no sensor reads 1e-320: a value written wrong (and its digits are not a float's)
+        k, j = (int(x) for x in tiny[0])
+        check_not_subnormal(float(data[k, j]), f"recording: column {header[j]!r} line {k + 2}", error=RecordingError)
+    return data
 
 
 def _motor_columns(col: dict[str, np.ndarray], motors: tuple[str, ...], torque_constant: float | None, p: Path
@@ -311,6 +318,15 @@ def _motor_columns(col: dict[str, np.ndarray], motors: tuple[str, ...], torque_c
         raise RecordingError(f"recording {str(p)!r}: a torque constant is given but it has no current_<motor> column "
                              f"(its torques are torque_<motor>, N m)")
     return enc, torque
+
+
+def _check_true_columns(col: dict[str, np.ndarray], joints: tuple[str, ...]) -> None:
+    """The true angles ``true_q_<joint>`` for every joint of the model or for none (with some missing, every joint's
+    RMSE was silently dropped: the estimate said the file had no true angles)."""
+    missing = [jn for jn in joints if f"true_q_{jn}" not in col]
+    if len(missing) not in (0, len(joints)):
+        raise RecordingError(f"recording: true_q_* has no column for joint{'s' if len(missing) > 1 else ''} "
+                             f"{', '.join(repr(j) for j in missing[:5])}: the true angles of every joint, or none")
 
 
 def _joint_columns(col: dict[str, np.ndarray], joints: tuple[str, ...], prefix: str) -> np.ndarray | None:
@@ -390,6 +406,10 @@ def check_recording(rec: Recording) -> Recording:
                              f"mean {dt:g} s)")
     if not 1e-6 <= dt <= 0.1:
         raise RecordingError(f"recording: sample period {dt:g} s is outside [1e-6, 0.1] s (is t in seconds?)")
+    resolution = float(np.spacing(max(abs(t[0]), abs(t[-1]))))
+    if resolution > 1e-3 * dt:  # Unix-epoch seconds (1.7e9: 2.4e-7 s) hold a 1 ms period; 1e12 s does not
+        raise RecordingError(f"recording: t reaches {max(abs(t[0]), abs(t[-1])):g} s, where a float holds time only to "
+                             f"{resolution:.2g} s, over 1e-3 of the sample period {dt:g} s: subtract the start time")
     for name, a in (("q", rec.q), ("true_q", rec.true_q)):
         if a is not None and np.nanmax(np.abs(a), initial=0.0) > 2 * np.pi:
             raise RecordingError(f"recording: {name}_* exceeds 2 pi in magnitude: joint angles must be in rad, "

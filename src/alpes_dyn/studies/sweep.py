@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import logging
 import math
 import time
@@ -32,6 +33,7 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError
 from ..fileio import atomic_path
+from ..limits import MAX_SEED
 
 __all__ = ["SweepResult", "sweep", "local_client", "robustness_draw", "robot_robustness_draw", "drawn_spec",
            "ROBOT_DRAWN", "ROBOT_HELD", "STUDIES"]
@@ -54,19 +56,19 @@ class SweepResult:
         return cols
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON: the rows (non-finite numbers as null), the backend, workers and wall time."""
-        def clean(v: Any) -> Any:
-            return None if isinstance(v, float) and not math.isfinite(v) else v
-        return {"rows": [{k: clean(v) for k, v in r.items()} for r in self.rows], "seconds": self.seconds,
+        """JSON: the rows (non-finite numbers as null, at any depth of a nested value), the backend, workers and
+        wall time."""
+        return {"rows": [{k: _json_value(v) for k, v in r.items()} for r in self.rows], "seconds": self.seconds,
                 "backend": self.backend, "workers": self.workers, **self.meta}
 
     def to_csv(self, path: str | Path) -> Path:
         """Write the table as CSV (one row per draw), atomically; a non-finite number is an empty cell (as
-        :meth:`to_dict` writes it null: never ``nan`` or ``inf`` in a table)."""
+        :meth:`to_dict` writes it null: never ``nan`` or ``inf`` in a table); a nested value (a dict, or a list of a
+        row that is not flat) is its JSON text, which ``json.loads`` reads back (non-finite numbers in it null)."""
         buf = io.StringIO()
         w = csv.DictWriter(buf, fieldnames=self.columns(), lineterminator="\n")
         w.writeheader()
-        w.writerows({k: "" if _non_finite(v) else v for k, v in r.items()} for r in self.rows)
+        w.writerows({k: _csv_cell(v) for k, v in r.items()} for r in self.rows)
         with atomic_path(path, "--output") as tmp:
             tmp.write_text(buf.getvalue(), encoding="utf-8")
         return Path(path)
@@ -90,6 +92,25 @@ class SweepResult:
 
 def _non_finite(v: Any) -> bool:
     return isinstance(v, float) and not math.isfinite(v)
+
+
+def _json_value(v: Any) -> Any:
+    """``v`` as JSON can hold it: non-finite numbers None, NumPy scalars and arrays plain numbers and lists, at any
+    depth of dicts, lists and tuples."""
+    if isinstance(v, dict):
+        return {str(k): _json_value(x) for k, x in v.items()}
+    if isinstance(v, (list, tuple)):
+        return [_json_value(x) for x in v]
+    if isinstance(v, (np.ndarray, np.generic)):
+        return _json_value(v.tolist())
+    return None if _non_finite(v) else v
+
+
+def _csv_cell(v: Any) -> Any:
+    """A CSV cell: a non-finite number empty, a nested value its JSON text (other tools read it back), else ``v``."""
+    if isinstance(v, (dict, list, tuple, np.ndarray)):
+        return json.dumps(_json_value(v), allow_nan=False, default=str)
+    return "" if _non_finite(v) else v
 
 
 def _bool_array(v: Any) -> bool:
@@ -186,14 +207,14 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
             raise InputError("seeds: give the seeds, or draws and seed, not both")
         if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__") or not 1 <= len(seeds) <= 100_000:
             raise InputError(f"seeds: expected 1 to 100000 integers, got {type(seeds).__name__}")
-        seeds = [_check_int(s_, "seeds", 0, 2**63 - 1) for s_ in seeds]
+        seeds = [_check_int(s_, "seeds", 0, MAX_SEED) for s_ in seeds]
         if len(set(seeds)) != len(seeds):
             raise InputError("seeds: a seed is given twice (each draw is its seed's)")
     else:
         if draws is None:
             raise InputError("draws: expected the number of draws (or seeds=)")
         draws = _check_int(draws, "draws", 1, 100_000)
-        seed = _check_int(seed, "seed", 0, 2**63 - 1 - draws)
+        seed = _check_int(seed, "seed", 0, MAX_SEED + 1 - draws)  # the last draw's seed MAX_SEED at most
         seeds = list(range(seed, seed + draws))
     if not isinstance(flat, (bool, np.bool_)):
         raise InputError(f"flat: expected True or False, got {flat!r}")
