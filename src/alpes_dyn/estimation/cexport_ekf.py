@@ -303,8 +303,8 @@ int {prefix}_update(const double z[NZ], const double P[NZ * NZ], const double y[
 }}
 
 /* predict with w over the period, then update with y */
-int {prefix}_step(const double z[NZ], const double P[NZ * NZ], const double w[NW], const double y[NY],
-                  double z_out[NZ], double P_out[NZ * NZ], double work[{P}_NWORK]) {{
+int {prefix}_step_p(const double z[NZ], const double P[NZ * NZ], const double w[NW], const double y[NY],
+                    const double p[{P}_NP], double z_out[NZ], double P_out[NZ * NZ], double work[{P}_NWORK]) {{
   const casadi_real* arg[{model_arg}];
   casadi_real* res[{model_res}];
   casadi_int iw[{model_iw} + 1];
@@ -316,6 +316,7 @@ int {prefix}_step(const double z[NZ], const double P[NZ * NZ], const double w[NW
   double* T = N + {N_nnz}; /* scratch: NZ x NZ, the generated code's work, the update's */
   arg[0] = z;
   arg[1] = w;
+  arg[2] = p;
   res[0] = zp;
   res[1] = A;
   res[2] = N;
@@ -368,7 +369,7 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
     doubles of its work array: (source, nwork). ``by_chain``: the model's code by block
     (:mod:`~alpes_dyn.estimation.cexport_chains`) where it has several, else CasADi's."""
     nz, ny = filt.nz, filt.ny
-    lin, meas = filt.linearized, filt.measurement  # the functions the filter's step calls
+    lin, meas = filt.linearized_p, filt.measurement  # the functions the filter's step calls (p: the model's numbers)
     fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
     fmeas = cs.Function(f"{prefix}_cs_meas", meas.sx_in(), cs.cse(meas.call(meas.sx_in())))
     sA, sN, sH = fmodel.sparsity_out(1), fmodel.sparsity_out(2), fmeas.sparsity_out(1)
