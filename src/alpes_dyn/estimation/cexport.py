@@ -6,7 +6,7 @@ without their parameter states) into three texts:
 * ``alpes_<kind>.h`` -- the documented, fixed-size API (sizes as macros, the model, dt and noise settings in
   its comment);
 * ``alpes_<kind>.c`` -- the filter's own step
-  (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step`, the expression that ``run``, ``online``
+  (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step_p`, the expression that ``run``, ``online``
   and the compiled loop evaluate: the same numbers, to the last bit) and its measurement update, with the two
   functions below: for the EKF, the code of the model and its Jacobian (on the hand by chain, the fingers side by
   side in vector lanes: :mod:`~alpes_dyn.estimation.cexport_chains`; else CasADi's generated code) and the

@@ -8,7 +8,7 @@ fingers side by side in vector lanes, its thumb alone) or, where the model has o
 ``chains=False``, CasADi's generated code of it; the measurement h(z) and H = dh/dz, its
 :attr:`~alpes_dyn.estimation.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic is C
 loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.covariance`, the
-order in which the filter's own step (``filter_step``, what ``run``, ``online`` and the compiled loop evaluate) is
+order in which the filter's own step (``filter_step_p``, what ``run``, ``online`` and the compiled loop evaluate) is
 built: the same operations, the same numbers, to the last bit. Each sum accumulates in a register and is stored
 once. The blocks: the states that A, N, H and R couple (the hand: its five chains); when P's entries between two
 blocks are exact zeros (a prior diagonal or block-diagonal by chain; A P A^T + N and the update keep them so) the
