@@ -34,7 +34,9 @@ def batch_step_caller(step: Any, label: str, compiled: bool,
     or its ``filter_step_p`` with ``parameters`` its model's numbers (``filt.model.values``: the compiled library
     then keyed on the model's structure, shared by models of other values)."""
     if parameters is not None:
-        p = np.asarray(parameters, dtype=float)
+        from ..simulation.codegen import _step_parameters
+
+        p = _step_parameters(step, parameters)  # checked against the step's input p (InputError naming it)
         step_p = step
         step = lambda s, wy: step_p(s, wy, p)  # noqa: E731 - the VM's call
     if compiled:
