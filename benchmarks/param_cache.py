@@ -23,6 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import shutil
 import sys
 import tempfile
 import time
@@ -50,6 +51,14 @@ def _step_us(loop, nz: int, nw: int, ny: int, steps: int) -> float:
 
 
 def main(argv: list[str] | None = None) -> int:
+    cache = Path(tempfile.mkdtemp(prefix="alpes_param_cache_"))
+    try:
+        return _main(argv, cache)
+    finally:
+        shutil.rmtree(cache, ignore_errors=True)  # the private cache and its libraries
+
+
+def _main(argv: list[str] | None, cache: Path) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--model", default="finger3")
     ap.add_argument("--seed", type=int, default=5)
@@ -57,7 +66,6 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rounds", type=int, default=7)
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
-    cache = Path(tempfile.mkdtemp(prefix="alpes_param_cache_"))
     os.environ["ALPES_DYN_CACHE"] = str(cache)  # read at each build (simulation.codegen.cache_dir)
     import alpes_dyn as ad
     from alpes_dyn.estimation.experiment import perturbed_params
@@ -105,7 +113,7 @@ def main(argv: list[str] | None = None) -> int:
     if a.json:
         print(json.dumps(out))
         return 0
-    print(f"{a.model}, nominal and drawn +-20 % (seed {a.seed}); private empty cache {cache}; load average "
+    print(f"{a.model}, nominal and drawn +-20 % (seed {a.seed}); a private empty cache (removed after); load average "
           f"{load0:.1f} -> {os.getloadavg()[0]:.1f}; {f.model.values.size} numbers in p")
     print(f"{'way':7s} {'model':8s} {'build s':>8s} {'compiled':>8s} {'gcc s':>6s}  library")
     for way, w in out["ways"].items():
