@@ -108,7 +108,7 @@ def legacy_control(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
         z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
         P0 = np.array([0.05**2] * n + [0.1**2] * n)
         s = np.concatenate([z0, np.diag(P0).reshape(-1, order="F")])
-        fstep = step_caller(ekf.filter_step, f"ekf_force_{sc.model}", sc.compiled)
+        fstep = step_caller(ekf.filter_step_p, f"ekf_force_{sc.model}", sc.compiled, ekf.model.values)
     ctl = ForceController(sc.controller, model, normal, sc.dt, p.tau_max, **{**DEFAULT_GAINS[sc.controller], **sc.gains})
     out = {k: np.empty(N) for k in ("F_true", "F_meas", "F_hat", "tau_cmd", "tau_meas")}
     out["q_true"], out["q_hat"] = np.empty((N, n)), np.full((N, n), np.nan)
@@ -199,10 +199,11 @@ def legacy_hand(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
             ss = StateSpace(ch["model"], input="motor", output="encoder", force=True)
             noise = default_noise(est_sc, n, 1, 0, meas_var)
             noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
-            fstep = make_observer("ekf", ss, sc.dt, **noise).filter_step
-            key = fstep.serialize()
+            filt = make_observer("ekf", ss, sc.dt, **noise)
+            fstep, values = filt.filter_step_p, filt.model.values  # the step of run(): the model's numbers an input
+            key = fstep.serialize() + values.tobytes().hex()
             if key not in callers:
-                callers[key] = batch_step_caller(fstep, f"ekf_force_hand_{ch['model'].name}", sc.compiled)
+                callers[key] = batch_step_caller(fstep, f"ekf_force_hand_{ch['model'].name}", sc.compiled, values)
             groups.setdefault(key, []).append(i)
             z0 = np.concatenate([static_equilibrium(ch["model"], np.zeros(n)), np.zeros(n)])
             S.append(np.concatenate([z0, np.diag([0.05**2] * n + [0.1**2] * n).reshape(-1, order="F")]))

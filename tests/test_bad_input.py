@@ -998,6 +998,18 @@ class Ctx:
         self.z = np.zeros(3)
 
 
+def _steploop(lifted=True, **kw):
+    """A compiled loop of x_k+1 = 0.9 x_k + 0.05 w_k, its two numbers an input p (lifted) or literals."""
+    import casadi as cs
+
+    from alpes_dyn.simulation.codegen import CompiledStepLoop
+    from alpes_dyn.symbolic.lifted import lift_constants
+
+    x, w = cs.SX.sym("x"), cs.SX.sym("w")
+    f = cs.Function("lin", [x, w], [0.9 * x + 0.05 * w])
+    return CompiledStepLoop(lift_constants(f)[0] if lifted else f, "bad_lifted", threads=1, **kw)
+
+
 def _ekf(c, **kw):
     from alpes_dyn.estimation.observers import ExtendedKalmanFilter
 
@@ -1661,6 +1673,19 @@ API: list[Api] = [
     A("compile_rollout", lambda c: _rollout(c, threads="a"), InputError, "threads: expected an integer from 1 to 64"),
     A("compile_rollout", lambda c: _rollout(c, threads=0), InputError, "threads: expected an integer from 1 to 64"),
     A("compile_rollout", lambda c: _rollout(c, dt=float("nan")), InputError, "dt: expected a positive finite"),
+    A("CompiledStepLoop", lambda c: _steploop(parameters=[1.0]), InputError,
+      "parameters: expected 2 numbers, the step's input p, got '[1.0]'"),
+    A("CompiledStepLoop", lambda c: _steploop(parameters=None), InputError, "parameters: expected 2 numbers"),
+    A("CompiledStepLoop", lambda c: _steploop(parameters=[[0.9, 0.05]]), InputError, "parameters: expected 2 numbers"),
+    A("CompiledStepLoop", lambda c: _steploop(parameters=["a", "b"]), InputError, "parameters: expected 2 numbers"),
+    A("CompiledStepLoop", lambda c: _steploop(parameters=[np.inf, 0.0]), InputError, "parameters: contains NaN or inf"),
+    A("CompiledStepLoop", lambda c: _steploop(lifted=False, parameters=[1.0]), InputError,
+      "parameters: the step (x, w) -> x_next takes none"),
+    A("batch_step_caller", lambda c: __import__("alpes_dyn.estimation.blocks", fromlist=["x"]).batch_step_caller(
+        _ekf(c).filter_step_p, "bad", False, [1.0, 2.0]), InputError,
+      "numbers, the step's input p, got '[1.0, 2.0]'"),
+    A("lift_constants", lambda c: __import__("alpes_dyn.symbolic.lifted", fromlist=["x"]).lift_constants("f"),
+      ModelError, "lift_constants: expected an SX casadi.Function, got str"),
     A("compile_rollout", lambda c: _rollout(c).rollout(np.zeros(6), np.broadcast_to(0.0, (1, 10**9, 3))), InputError,
       "U_batch: 1 trajectories of 1000000000 steps would take about"),
     # observers and the estimation scenario

@@ -293,3 +293,60 @@ def test_force_controller_c_export_of_a_urdf_robot_equals_python(tmp_path, capsy
     assert np.abs(tau_c - tau).max() <= 1e-12
     Fz = [static_contact_force(ctl.model, q[k], np.array([tau[k]]), ctl.normal, ctl.tip) for k in range(0, 1000, 50)]
     assert np.abs(Fz_c[::50] - np.array(Fz)).max() <= 1e-12  # N: Pinocchio's G and J against CasADi's
+
+
+_OTHER_MAIN = r"""#include <stdio.h>
+#include "alpes_ekf.h"
+%(numbers)s
+static const double W[%(n)d] = {%(W)s};
+static const double Y[%(n1)d] = {%(Y)s};
+int main(void) {
+  double z[ALPES_EKF_NZ] = {%(z0)s}, P[ALPES_EKF_NZ * ALPES_EKF_NZ] = {%(P0)s}, work[ALPES_EKF_NWORK];
+  int k, i;
+  if (alpes_ekf_update(z, P, Y, z, P, work)) return 1;
+  for (k = 0; k < %(n)d; ++k) {
+    if (alpes_ekf_step_p(z, P, W + k, Y + k + 1, xq_model_p, z, P, work)) return 1;
+    for (i = 0; i < ALPES_EKF_NZ; ++i) printf("%%.17g ", z[i]);
+    printf("\n");
+  }
+  return 0;
+}
+"""
+
+
+@needs_cc
+def test_c_export_takes_the_model_numbers_as_an_input(tmp_path):
+    """finger3 and a finger3 of other masses, springs and friction: their exported C differ only in the array of the
+    model's numbers, and the nominal's code given the other's array (its one line) (alpes_ekf_step_p) gives the other filter's
+    run() bit for bit (the numbers reach the code; the code is the structure's)."""
+    from alpes_dyn.estimation.experiment import perturbed_params
+    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.model.params import write_params
+
+    res = run_estimation("ekf", duration=0.2)
+    toml = write_params(perturbed_params(spread=0.2, seed=7), tmp_path / "other.toml")
+    nominal, z0, P0 = scenario_filter("ekf", "finger3")
+    other, _, _ = scenario_filter("ekf", "finger3", params=toml)
+    a = c_sources(nominal, code="sparse")["alpes_ekf.c"]
+    b = c_sources(other, code="sparse", prefix="xq")["xq.c"]
+
+    def without_numbers(src: str) -> str:
+        lines = [ln for ln in src.splitlines() if not ln.startswith("const double alpes_ekf_model_p[")]
+        assert len(lines) == src.count("\n") - 1  # one line of numbers
+        return "\n".join(lines)
+
+    assert without_numbers(a) == without_numbers(b.replace("xq", "alpes_ekf").replace("XQ", "ALPES_EKF"))
+    assert a != b.replace("xq", "alpes_ekf").replace("XQ", "ALPES_EKF")
+    assert np.any(nominal.model.values != other.model.values)
+    d = write_c_observer(nominal, tmp_path / "c", code="sparse")["main.c"].parent
+    numbers = next(ln for ln in b.splitlines() if ln.startswith("const double xq_model_p["))
+    (d / "run.c").write_text(_OTHER_MAIN % dict(numbers=numbers.replace("XQ_NP", "ALPES_EKF_NP"),
+        n=len(res.u_meas), n1=len(res.y), W=", ".join(repr(float(x)) for x in res.u_meas.ravel()),
+        Y=", ".join(repr(float(x)) for x in res.y.ravel()), z0=", ".join(repr(float(x)) for x in z0),
+        P0=", ".join(repr(float(x)) for x in np.diag(P0).ravel(order="F"))))
+    exe = d / "run"
+    subprocess.run([CC, "-O2", "-std=c99", "-Wall", "-o", str(exe), str(d / "run.c"), str(d / "alpes_ekf.c"), "-lm"], check=True, capture_output=True, text=True, timeout=300)
+    out = subprocess.run([str(exe)], check=True, capture_output=True, text=True).stdout
+    Z = np.array([[float(x) for x in ln.split()] for ln in out.splitlines()])
+    np.testing.assert_array_equal(Z, other.run(z0, P0, res.u_meas, res.y).z[1:])
+    assert np.abs(Z - nominal.run(z0, P0, res.u_meas, res.y).z[1:]).max() > 1e-9

@@ -25,6 +25,34 @@ def test_local_cluster_equals_serial_loop():
     assert before.shape == (3, 3) and np.all(before > 0.05)  # the nominal file on fingers drawn 20 % off
 
 
+def _has_module(name: str) -> bool:
+    import sys
+
+    return name in sys.modules
+
+
+@pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="workers are forked on Linux only")
+def test_local_cluster_workers_are_forked_with_this_process_modules():
+    """local_client forks its workers on Linux: a module imported here only (a throw-away one) is in theirs, which a
+    spawned worker would not have; and they run their compiled loops on one thread (OMP_NUM_THREADS=1)."""
+    pytest.importorskip("distributed")
+    import sys
+    import types
+
+    from alpes_dyn.studies.sweep import local_client
+
+    sys.modules["alpes_test_only_here"] = types.ModuleType("alpes_test_only_here")
+    client = local_client(2)
+    try:
+        assert client.gather([client.submit(_has_module, "alpes_test_only_here", pure=False) for _ in range(2)]) \
+            == [True, True]
+        assert set(client.run(lambda: __import__("os").environ.get("OMP_NUM_THREADS")).values()) == {"1"}
+    finally:
+        client.close()
+        client.cluster.close()
+        del sys.modules["alpes_test_only_here"]
+
+
 def test_rows_table_and_csv(tmp_path):
     def draw(seed):  # a closure does not travel to Dask, but runs serially
         return {"x": [seed, 2 * seed], "name": f"d{seed}", "v": np.float64(seed / 2)}

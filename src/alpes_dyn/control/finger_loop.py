@@ -424,7 +424,7 @@ def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None) -> O
     z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
     P0 = np.array([0.05**2] * n + [0.1**2] * n)
     return Observer(ekf, z0, P0, known=("tau_meas", "w_F"), measurement="y", covariance=None, first_update=False,
-                    step=step_caller(ekf.filter_step, f"ekf_force_{sc.model_name}", sc.compiled))
+                    step=step_caller(ekf.filter_step_p, f"ekf_force_{sc.model_name}", sc.compiled, ekf.model.values))
 
 
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:

@@ -2,7 +2,7 @@
 
 * :class:`Observer`: a Kalman filter of :mod:`alpes_dyn.estimation.observers` at the sample rate: at t_0 its prior
   (updated with the first measurement, or not), then each sample one predict-update step
-  (``filter_step``) with the known inputs of the previous period and the measurement at t_k. Its whole-record
+  (``filter_step_p``) with the known inputs of the previous period and the measurement at t_k. Its whole-record
   response is the filter's :meth:`~alpes_dyn.estimation.observers.KalmanFilter.run` (one compiled loop).
 * :class:`ObserverBank`: observers of the same model advanced together, one compiled call per sample;
 * :func:`step_caller` / :func:`batch_step_caller`: the filter step of one filter, or of B filters of the same model
@@ -26,15 +26,25 @@ from .recording import Recording
 __all__ = ["Observer", "ObserverBank", "RecordingPlayback", "step_caller", "batch_step_caller"]
 
 
-def batch_step_caller(step: Any, label: str, compiled: bool) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+def batch_step_caller(step: Any, label: str, compiled: bool,
+                      parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
     of compiled C (cached, :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`) when ``compiled`` and a C
-    compiler is there, else CasADi's virtual machine (one call per filter). ``step``: a filter's ``filter_step``."""
+    compiler is there, else CasADi's virtual machine (one call per filter). ``step``: a filter's ``filter_step``,
+    or its ``filter_step_p`` with ``parameters`` its model's numbers (``filt.model.values``: the compiled library
+    then keyed on the model's structure, shared by models of other values)."""
+    if parameters is not None:
+        from ..simulation.codegen import _step_parameters
+
+        p = _step_parameters(step, parameters)  # checked against the step's input p (InputError naming it)
+        step_p = step
+        step = lambda s, wy: step_p(s, wy, p)  # noqa: E731 - the VM's call
     if compiled:
         from ..simulation.integrate import CompiledStepLoop, CompilerError
 
         try:
-            loop = CompiledStepLoop(step, label, threads=1, vectorize=False)
+            loop = CompiledStepLoop(step_p if parameters is not None else step, label, threads=1, vectorize=False,
+                                    parameters=parameters)
         except CompilerError:
             loop = None
         if loop is not None:
@@ -51,9 +61,10 @@ def batch_step_caller(step: Any, label: str, compiled: bool) -> Callable[[np.nda
     return call_vm
 
 
-def step_caller(step: Any, label: str, compiled: bool) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+def step_caller(step: Any, label: str, compiled: bool,
+                parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """s (ns,), wy (nw,) -> s_next (ns,): one filter step (:func:`batch_step_caller` with B = 1)."""
-    batch = batch_step_caller(step, label, compiled)
+    batch = batch_step_caller(step, label, compiled, parameters)
 
     def call(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
         return batch(s[None], wy[None])[0]
@@ -74,7 +85,8 @@ class Observer(Block):
         (nz, nz) at t_k (``covariance=None``: not written).
     first_update: update the prior with the measurement at t_0 (as :meth:`KalmanFilter.run`); else the estimate
         at t_0 is the prior.
-    step: the step s, wy -> s_next (:func:`step_caller`; default the filter's ``filter_step`` in CasADi's VM).
+    step: the step s, wy -> s_next (:func:`step_caller`; default the filter's ``filter_step_p`` with its model's
+        numbers in CasADi's VM: :meth:`~alpes_dyn.estimation.observers.KalmanFilter.run`'s step).
     label: the name of its compiled step in an :class:`ObserverBank` (default ``<kind>_<model name>``).
     """
 
@@ -98,8 +110,8 @@ class Observer(Block):
     def start(self, n_periods: int, dt: float, final: bool) -> None:
         self.n_periods, self._slots = n_periods, None
         if self._step is None:
-            fs = self.filt.filter_step
-            self._call = lambda s, wy: np.asarray(fs(s, wy)).reshape(-1)
+            fs, p = self.filt.filter_step_p, self.filt.model.values
+            self._call = lambda s, wy: np.asarray(fs(s, wy, p)).reshape(-1)
         else:
             self._call = self._step
 
@@ -149,9 +161,10 @@ class Observer(Block):
 
 
 class ObserverBank(Block):
-    """Several :class:`Observer` blocks as one: those whose filters share a step function (the same model and
-    noise settings: the hand's four fingers) advance together, in one call of compiled C per sample
-    (:func:`batch_step_caller`; ``compiled=False``: CasADi's virtual machine). Each observer keeps its own signals."""
+    """Several :class:`Observer` blocks as one: those whose filters share a step function and its numbers (the
+    same model and noise settings: the hand's four fingers) advance together, in one call of compiled C per sample
+    (:func:`batch_step_caller`; ``compiled=False``: CasADi's virtual machine); those of one structure but other
+    numbers load the same library. Each observer keeps its own signals."""
 
     def __init__(self, observers: Sequence[Observer], *, compiled: bool = True, name: str = "observers") -> None:
         observers = list(observers)
@@ -161,9 +174,9 @@ class ObserverBank(Block):
         groups: dict[str, list[int]] = {}
         self._callers: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {}
         for i, o in enumerate(observers):
-            key = o.filt.filter_step.serialize()
+            key = o.filt.filter_step_p.serialize() + o.filt.model.values.tobytes().hex()
             if key not in self._callers:
-                self._callers[key] = batch_step_caller(o.filt.filter_step, o.label, compiled)
+                self._callers[key] = batch_step_caller(o.filt.filter_step_p, o.label, compiled, o.filt.model.values)
             groups.setdefault(key, []).append(i)
         self._groups = list(groups.items())
         self.inputs = tuple(dict.fromkeys(s for o in observers for s in o.inputs))

@@ -6,7 +6,7 @@ without their parameter states) into three texts:
 * ``alpes_<kind>.h`` -- the documented, fixed-size API (sizes as macros, the model, dt and noise settings in
   its comment);
 * ``alpes_<kind>.c`` -- the filter's own step
-  (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step`, the expression that ``run``, ``online``
+  (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step_p`, the expression that ``run``, ``online``
   and the compiled loop evaluate: the same numbers, to the last bit) and its measurement update, with the two
   functions below: for the EKF, the code of the model and its Jacobian (on the hand by chain, the fingers side by
   side in vector lanes: :mod:`~alpes_dyn.estimation.cexport_chains`; else CasADi's generated code) and the
@@ -23,6 +23,15 @@ The API (``alpes_ekf`` for the EKF)::
                          double z_out[NZ], double P_out[NZ*NZ], double work[ALPES_EKF_NWORK]);
     int alpes_ekf_step(const double z[NZ], const double P[NZ*NZ], const double w[NW], const double y[NY],
                        double z_out[NZ], double P_out[NZ*NZ], double work[ALPES_EKF_NWORK]);
+    int alpes_ekf_step_p(const double z[NZ], const double P[NZ*NZ], const double w[NW], const double y[NY],
+                         const double p[ALPES_EKF_NP], double z_out[NZ], double P_out[NZ*NZ],
+                         double work[ALPES_EKF_NWORK]);
+    extern const double alpes_ekf_model_p[ALPES_EKF_NP];
+
+``alpes_ekf_step`` is ``alpes_ekf_step_p`` with the exported model's numbers ``alpes_ekf_model_p`` (its masses,
+inertias, lengths, springs, friction, ratios: one entry per use in its code, :mod:`alpes_dyn.symbolic.lifted`): the
+code of a model of the same structure -- joints, transmission, effects, noise settings -- is the same but for
+that array, so one build runs any of them given its array (``alpes_ekf_model_p`` of the file exported for it).
 
 P column-major (it is symmetric); outputs may be the inputs (in place); 0 on success.
 
@@ -62,9 +71,9 @@ _WRAPPERS = r"""
 #define NS ({P}_NZ + {P}_NZ * {P}_NZ)
 
 /* the inputs are copied into work first: the outputs may be the inputs */
-int {prefix}_step(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const double w[{P}_NW],
-                  const double y[{P}_NY], double z_out[{P}_NZ], double P_out[{P}_NZ * {P}_NZ],
-                  double work[{P}_NWORK]) {{
+int {prefix}_step_p(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const double w[{P}_NW],
+                    const double y[{P}_NY], const double p[{P}_NP], double z_out[{P}_NZ],
+                    double P_out[{P}_NZ * {P}_NZ], double work[{P}_NWORK]) {{
   const casadi_real* arg[{step_arg}];
   casadi_real* res[{step_res}];
   casadi_int iw[{step_iw} + 1];
@@ -77,6 +86,7 @@ int {prefix}_step(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const
   memcpy(wy + {P}_NW, y, sizeof(double) * {P}_NY);
   arg[0] = s;
   arg[1] = wy;
+  arg[2] = p;
   res[0] = sn;
   if ({prefix}_cs_step(arg, res, iw, sn + NS, 0)) return 1;
   memcpy(z_out, sn, sizeof(double) * {P}_NZ);
@@ -116,7 +126,11 @@ _HEADER = r"""/* {prefix}.h -- {title}, exported by alpes_dyn {version} (alpes-d
    State z ({nz}): {names}
      (rad, rad/s{gain_units}). Known input w ({nw}): {inputs} (N m{force_units}), held over the sample
    period. Measurement y ({ny}): {outputs} (rad), at the end of the period.
-   Sample period dt = {dt!r} s, {substeps} RK4 step(s) per period. The noise settings are compiled in:
+   Sample period dt = {dt!r} s, {substeps} RK4 step(s) per period. The model's numbers (masses, inertias,
+   lengths, springs, friction, ratios: {np} values, one per use in the model's code) are the array
+   {prefix}_model_p, an input of {prefix}_step_p: the same code runs another model of the same structure (its
+   joints, transmission and effects) given that model's array, from the {prefix}.c exported for it. The noise
+   settings are compiled in:
      process noise Q (per step), diagonal: {Q}
      measurement noise R, diagonal: {R}
      input noise Sigma_w, diagonal: {Sw}
@@ -146,11 +160,20 @@ extern "C" {{
 #define {P}_NY {ny}      /* measurements: motor encoder angles */
 #define {P}_NWORK {nwork}  /* doubles of the work array */
 #define {P}_DT {dt!r}  /* sample period, s */
+#define {P}_NP {np}  /* the model's numbers, an input of the step */
+
+/* The numbers of the model this file was exported for. */
+extern const double {prefix}_model_p[{P}_NP];
 
 /* Predict with w held over the period, then update with y measured at its end: one filter sample. */
 int {prefix}_step(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const double w[{P}_NW],
                   const double y[{P}_NY], double z_out[{P}_NZ], double P_out[{P}_NZ * {P}_NZ],
                   double work[{P}_NWORK]);
+
+/* The same with the model's numbers p ({prefix}_step is {prefix}_step_p with p = {prefix}_model_p). */
+int {prefix}_step_p(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const double w[{P}_NW],
+                    const double y[{P}_NY], const double p[{P}_NP], double z_out[{P}_NZ],
+                    double P_out[{P}_NZ * {P}_NZ], double work[{P}_NWORK]);
 
 /* The measurement update alone (for the first measurement y0, before any step). */
 int {prefix}_update(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const double y[{P}_NY],
@@ -306,11 +329,24 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     body, nwork = (ekf_c_source(filt, prefix, by_chain=chains is not False) if code == "sparse"
                    else _whole_step_source(filt, prefix))
     P = prefix.upper()
-    source = f"/* {prefix}.c -- generated by alpes_dyn (alpes-dyn codegen); the API is in {prefix}.h */\n" + body
+    values = filt.model.values
+    source = (f"/* {prefix}.c -- generated by alpes_dyn (alpes-dyn codegen); the API is in {prefix}.h */\n" + body
+              + _MODEL_P.format(prefix=prefix, P=P, values=", ".join(repr(float(v)) for v in values) or "0.0"))
     header = _HEADER.format(prefix=prefix, P=P, **_header_fields(filt, about, nwork, z0, P0))
     main = _MAIN.format(prefix=prefix, P=P, nz=filt.nz, nw=filt.nw, ny=filt.ny)
     return {f"{prefix}.h": header, f"{prefix}.c": source, "main.c": main}
 
+
+_MODEL_P = r"""
+/* the numbers of the model exported (one per use in its code: what differs between models of one structure) */
+const double {prefix}_model_p[{P}_NP] = {{{values}}};
+
+int {prefix}_step(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const double w[{P}_NW],
+                  const double y[{P}_NY], double z_out[{P}_NZ], double P_out[{P}_NZ * {P}_NZ],
+                  double work[{P}_NWORK]) {{
+  return {prefix}_step_p(z, P, w, y, {prefix}_model_p, z_out, P_out, work);
+}}
+"""
 
 _LOOPS_FROM = 5000
 """The EKF's default code is ``"sparse"`` when its covariance arithmetic takes more operations than this in the
@@ -325,9 +361,9 @@ def _covariance_operations(filt: ExtendedKalmanFilter) -> int:
 
 def _whole_step_source(filt: KalmanFilter, prefix: str) -> tuple[str, int]:
     """CasADi's code of the filter's own step and update with the API's wrappers: (source, nwork)."""
-    step = filt.filter_step
+    step = filt.filter_step_p  # the model's numbers an input (run's and the compiled loop's step)
     upd = filt._update
-    fstep = cs.Function(f"{prefix}_cs_step", [step.sx_in(0), step.sx_in(1)], step.call([step.sx_in(0), step.sx_in(1)]))
+    fstep = cs.Function(f"{prefix}_cs_step", step.sx_in(), step.call(step.sx_in()))
     fupd = cs.Function(f"{prefix}_cs_update", upd.sx_in(), upd.call(upd.sx_in()))
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
     cg.add(fstep)
@@ -353,7 +389,7 @@ def _header_fields(filt: KalmanFilter, about: str, nwork: int, z0: Any, P0: Any)
     return dict(
         title=f"{kind} of {ss.model.name} ({filt.kind} step in C)", version=__version__,
         about=(about or f"Model {ss.model.name}.").replace("*/", "* /"),
-        nz=filt.nz, nw=filt.nw, ny=filt.ny, nwork=nwork, dt=float(filt.dt), substeps=filt.model.substeps,
+        nz=filt.nz, nw=filt.nw, ny=filt.ny, nwork=nwork, np=max(int(filt.model.values.size), 1), dt=float(filt.dt), substeps=filt.model.substeps,
         names=", ".join(filt.names), inputs=inputs + force, outputs=outputs,
         gain_units=", and the gains / disturbances " + ", ".join(params) if params else "",
         gain_word=f", then {len(params)} estimated parameter(s)" if params else "",

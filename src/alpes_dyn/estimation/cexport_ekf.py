@@ -8,7 +8,7 @@ fingers side by side in vector lanes, its thumb alone) or, where the model has o
 ``chains=False``, CasADi's generated code of it; the measurement h(z) and H = dh/dz, its
 :attr:`~alpes_dyn.estimation.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic is C
 loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.covariance`, the
-order in which the filter's own step (``filter_step``, what ``run``, ``online`` and the compiled loop evaluate) is
+order in which the filter's own step (``filter_step_p``, what ``run``, ``online`` and the compiled loop evaluate) is
 built: the same operations, the same numbers, to the last bit. Each sum accumulates in a register and is stored
 once. The blocks: the states that A, N, H and R couple (the hand: its five chains); when P's entries between two
 blocks are exact zeros (a prior diagonal or block-diagonal by chain; A P A^T + N and the update keep them so) the
@@ -303,8 +303,8 @@ int {prefix}_update(const double z[NZ], const double P[NZ * NZ], const double y[
 }}
 
 /* predict with w over the period, then update with y */
-int {prefix}_step(const double z[NZ], const double P[NZ * NZ], const double w[NW], const double y[NY],
-                  double z_out[NZ], double P_out[NZ * NZ], double work[{P}_NWORK]) {{
+int {prefix}_step_p(const double z[NZ], const double P[NZ * NZ], const double w[NW], const double y[NY],
+                    const double p[{P}_NP], double z_out[NZ], double P_out[NZ * NZ], double work[{P}_NWORK]) {{
   const casadi_real* arg[{model_arg}];
   casadi_real* res[{model_res}];
   casadi_int iw[{model_iw} + 1];
@@ -316,6 +316,7 @@ int {prefix}_step(const double z[NZ], const double P[NZ * NZ], const double w[NW
   double* T = N + {N_nnz}; /* scratch: NZ x NZ, the generated code's work, the update's */
   arg[0] = z;
   arg[1] = w;
+  arg[2] = p;
   res[0] = zp;
   res[1] = A;
   res[2] = N;
@@ -368,7 +369,7 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
     doubles of its work array: (source, nwork). ``by_chain``: the model's code by block
     (:mod:`~alpes_dyn.estimation.cexport_chains`) where it has several, else CasADi's."""
     nz, ny = filt.nz, filt.ny
-    lin, meas = filt.linearized, filt.measurement  # the functions the filter's step calls
+    lin, meas = filt.linearized_p, filt.measurement  # the functions the filter's step calls (p: the model's numbers)
     fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
     fmeas = cs.Function(f"{prefix}_cs_meas", meas.sx_in(), cs.cse(meas.call(meas.sx_in())))
     sA, sN, sH = fmodel.sparsity_out(1), fmodel.sparsity_out(2), fmeas.sparsity_out(1)

@@ -133,7 +133,7 @@ _DRIVER = r"""
 #define SZ_W {sz_w}
 #define LANES {lanes}
 
-typedef struct {{ const double* W; double* X; long b0, b1, ntot, k0, k1; int status; }} alpes_job;
+typedef struct {{ const double* W; double* X; const double* P; long b0, b1, ntot, k0, k1; int status; }} alpes_job;
 
 {vector_code}
 
@@ -154,7 +154,7 @@ static void alpes_run(alpes_job* j) {{
     for (i = 0; i < NX; ++i) for (l = 0; l < LANES; ++l) xs[i][l] = Xp[l][j->k0 * NX + i];
     for (k = j->k0; k < j->k1; ++k) {{
       for (i = 0; i < NW; ++i) for (l = 0; l < LANES; ++l) w[i][l] = Wp[l][k * NW + i];
-      alpes_vstep(xs, w, xn);
+      alpes_vstep(xs, w, j->P, xn);
       for (i = 0; i < NX; ++i) {{
         xs[i] = xn[i];
         for (l = LANES - 1; l >= 0; --l) Xp[l][(k + 1) * NX + i] = xn[i][l];
@@ -172,6 +172,7 @@ static void alpes_run(alpes_job* j) {{
     for (k = j->k0; k < j->k1; ++k) {{
       arg[0] = X + k * NX;
       arg[1] = W + k * NW;
+      {parg}
       res[0] = X + (k + 1) * NX;
       if ({step}(arg, res, iw, w, 0)) {{ j->status = 1; return; }}
     }}
@@ -182,9 +183,10 @@ static void alpes_run(alpes_job* j) {{
 
 static void* alpes_worker(void* p) {{ alpes_run((alpes_job*) p); return 0; }}
 
-/* X: (B, ntot+1, NX) with X[b, k0] set; W: (B, ntot, NW); advances steps k0..k1-1 of every trajectory. */
-CASADI_SYMBOL_EXPORT int alpes_rollout(const double* W, double* X, long B, long ntot, long k0, long k1,
-                                       int nthreads) {{
+/* X: (B, ntot+1, NX) with X[b, k0] set; W: (B, ntot, NW); P: the step's parameters (its third input; unread by a
+   step of two inputs); advances steps k0..k1-1 of every trajectory. */
+CASADI_SYMBOL_EXPORT int alpes_rollout(const double* W, double* X, const double* P, long B, long ntot, long k0,
+                                       long k1, int nthreads) {{
   alpes_job jobs[64];
   pthread_t th[64];
   int t, started[64], status = 0;
@@ -193,7 +195,7 @@ CASADI_SYMBOL_EXPORT int alpes_rollout(const double* W, double* X, long B, long 
   if (nthreads > 64) nthreads = 64;
   if (nthreads > groups) nthreads = (int) groups;
   for (t = 0; t < nthreads; ++t) {{
-    jobs[t].W = W; jobs[t].X = X; jobs[t].ntot = ntot; jobs[t].k0 = k0; jobs[t].k1 = k1; jobs[t].status = 0;
+    jobs[t].W = W; jobs[t].X = X; jobs[t].P = P; jobs[t].ntot = ntot; jobs[t].k0 = k0; jobs[t].k1 = k1; jobs[t].status = 0;
     jobs[t].b0 = LANES * (groups * t / nthreads);
     jobs[t].b1 = LANES * (groups * (t + 1) / nthreads);
     if (jobs[t].b1 > B) jobs[t].b1 = B;
@@ -267,6 +269,7 @@ def _vector_step(source: str, lanes: int) -> str | None:
     b = re.sub(r"\bcasadi_real\b", "vd", b)
     b = re.sub(r"arg\[0\]\? arg\[0\]\[(\d+)\] : 0", r"X[\1]", b)
     b = re.sub(r"arg\[1\]\? arg\[1\]\[(\d+)\] : 0", r"W[\1]", b)
+    b = re.sub(r"arg\[2\]\? arg\[2\]\[(\d+)\] : 0", r"VB(P[\1])", b)  # a parameter, the same in every lane
     b = re.sub(r"if \(res\[0\]!=0\) res\[0\]\[(\d+)\]=", r"Y[\1]=", b)
     b = re.sub(r"^(\s*a\d+)=([-+]?[0-9.]+(?:[eE][-+]?\d+)?);$", r"\1=VB(\2);", b, flags=re.M)
     b = re.sub(r"\b(" + "|".join(_VEC_UNARY + _VEC_BINARY) + r")\(", r"v_\1(", b)  # one pass over the body
@@ -287,7 +290,8 @@ def _vector_step(source: str, lanes: int) -> str | None:
     helpers += [f"static inline vd v_{n}(vd x) {{ vd r; int l; VL r[l] = {n}(x[l]); return r; }}" for n in _VEC_UNARY]
     helpers += [f"static inline vd v_{n}(vd x, vd y) {{ vd r; int l; VL r[l] = {n}(x[l], y[l]); return r; }}"
                 for n in _VEC_BINARY]
-    return ("\n".join(helpers) + "\nstatic int alpes_vstep(const vd* X, const vd* W, vd* Y) {\n" + decl + b
+    return ("\n".join(helpers) + "\nstatic int alpes_vstep(const vd* X, const vd* W, const double* P, vd* Y) {\n"
+            + decl + b
             + "\n}\n")
 
 
@@ -324,13 +328,37 @@ def _batch(x0: np.ndarray, W: np.ndarray, nx: int, nw: int) -> tuple[np.ndarray,
     return x0, W, X
 
 
+def _step_parameters(step: cs.Function, parameters: Any) -> np.ndarray:
+    """The parameters of a step (x, w, p) as a contiguous (np,) float64 copy; (0,) for a step (x, w). An
+    :class:`~alpes_dyn.InputError` naming ``parameters`` where they do not fit the step."""
+    if step.n_in() == 2:
+        if parameters is not None:
+            raise InputError("parameters: the step (x, w) -> x_next takes none; give a step (x, w, p) -> x_next")
+        return np.zeros(0)
+    n_p = int(step.nnz_in(2))
+    try:
+        p = np.array(parameters, dtype=float).reshape(-1) if parameters is not None else None
+    except (TypeError, ValueError):
+        p = None
+    if p is None or p.shape != (n_p,) or np.ndim(parameters) > 1:
+        raise InputError(f"parameters: expected {n_p} numbers, the step's input p, got {str(parameters)[:60]!r}")
+    if not np.isfinite(p).all():
+        raise InputError("parameters: contains NaN or inf")
+    return np.ascontiguousarray(p)
+
+
 class CompiledStepLoop:
     """x_{k+1} = step(x_k, w_k) for B sequences of N steps, in compiled C, threaded over the sequences.
 
     Parameters
     ----------
     step:
-        A ``casadi.Function`` ``(x (nx,), w (nw,)) -> x_next (nx,)`` (dense columns).
+        A ``casadi.Function`` ``(x (nx,), w (nw,)) -> x_next (nx,)`` (dense columns), or ``(x, w, p (np,)) ->
+        x_next`` with ``parameters``: the numbers of a model as an input (:func:`~alpes_dyn.symbolic.lifted.
+        lift_constants`), so that the library is keyed on the step's structure and shared by models of other
+        values.
+    parameters:
+        (np,) the values of p for this loop's runs (finite numbers; copied), with a step of three inputs.
     label:
         Stem of the cached library's file name.
     threads:
@@ -348,9 +376,10 @@ class CompiledStepLoop:
     """
 
     def __init__(self, step: cs.Function, label: str = "steploop", threads: int | None = None,
-                 vectorize: bool = True) -> None:
-        if step.n_in() != 2 or step.n_out() != 1:
-            raise ModelError(f"step: expected a function (x, w) -> x_next, got {step}")
+                 vectorize: bool = True, parameters: Any = None) -> None:
+        if step.n_in() not in (2, 3) or step.n_out() != 1:
+            raise ModelError(f"step: expected a function (x, w) -> x_next or (x, w, p) -> x_next, got {step}")
+        self.parameters = _step_parameters(step, parameters)
         self.nx = int(step.size1_in(0))
         self.nw = int(step.size1_in(1))
         if step.size_out(0) != (self.nx, 1) or step.size2_in(0) != 1 or step.size2_in(1) != 1:
@@ -362,7 +391,7 @@ class CompiledStepLoop:
         cg.add(step)
         generated = "#define _GNU_SOURCE\n" + cg.dump()
         fmt = dict(nx=self.nx, nw=self.nw, sz_arg=step.sz_arg(), sz_res=step.sz_res(), sz_iw=step.sz_iw(),
-                   sz_w=step.sz_w(), step="alpes_step")
+                   sz_w=step.sz_w(), step="alpes_step", parg="arg[2] = j->P;" if step.n_in() == 3 else "")
         vector = _vector_step(generated, _LANES) if vectorize else None
         self.lanes = 1
         if vector is not None:
@@ -377,10 +406,11 @@ class CompiledStepLoop:
                 generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label)
         fn = self._lib.alpes_rollout
         dp = ctypes.POINTER(ctypes.c_double)
-        fn.argtypes = [dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
+        fn.argtypes = [dp, dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
         fn.restype = ctypes.c_int
         self._fn = fn
         self._dp = dp
+        self._pp = self.parameters.ctypes.data_as(dp)  # the parameters' buffer, held by this loop
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
         """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), both float64 (checked by the caller)."""
@@ -392,7 +422,7 @@ class CompiledStepLoop:
         wp, xp = W.ctypes.data_as(self._dp), X.ctypes.data_as(self._dp)
         for k0, k1 in zip(edges[:-1], edges[1:]):
             if k1 > k0:
-                if self._fn(wp, xp, B, N, int(k0), int(k1), self.threads) != 0:
+                if self._fn(wp, xp, self._pp, B, N, int(k0), int(k1), self.threads) != 0:
                     raise InputError(f"{label}: the compiled step failed")
                 bar.update(int(k1 - k0))
         bar.close()
