@@ -10,7 +10,7 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   mean joint angle mid-range (on a robot whose springs already rest there, the middle of the range its tendon
   reaches pulling: :func:`_pulled_target`), the amplitude a is the largest that keeps the nominal finger's static
   equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
-* a dither on top (``dither``, default 12 times the breakaway torque of the motor's joints, at
+* a dither on top (``dither``, default 20 times the breakaway torque of the motor's joints, at
   ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
   stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
   joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the

@@ -66,7 +66,12 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     brings the stuck time to about 1 % on every joint. Measured on the all-effects plants of seeds 13 and 14 (4 s,
     ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
     the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
-    10 Hz dither left q_3 stuck on 23-39 % of the samples.
+    10 Hz dither left q_3 stuck on 23-39 % of the samples. 20, with the multisine at 0.5 of its amplitude ceiling
+    instead of 0.6 (``amplitude_fraction``, so that the finger's range holds the larger swing): on the all-effects
+    plants of seeds 31 and 42, where 12 had left the masses 7.1 and 5.8 % off (the stick-slip round trading the
+    masses against the tilt and the friction), 2.1 and 2.4 %, and 0.7 and 1.0 % on seeds 46 and 47, not tuned on
+    (2026-12-03, ``benchmarks/realism.py``); the joints swing 10-50 % further (q_3: 14 -> 21 degrees peak to peak
+    on seed 31).
 
     Not on a motor of springless joints (the thumb's ab/adduction; 0 there): nothing but their dry friction holds
     them where the design places them, and a dither that keeps them sliding lets any torque the design did not
