@@ -258,7 +258,9 @@ def test_c_export_of_a_urdf_robot_equals_estimate_on_its_recording(tmp_path, cap
     assert Z.shape == est.estimate.z.shape == (rec.n_samples, 6)
     assert np.abs(Z - est.estimate.z).max() <= 1e-12
     assert np.abs(P - est.estimate.P).max() <= 1e-12
-    assert np.degrees(est.rmse[1:]).max() < 0.1  # the driven joints followed (a real estimate, not a constant)
+    # the driven joints followed (a real estimate, not a constant): 0.27-0.36 degree over these 0.5 s, most of it the
+    # transient from the rest state, where they swing 21-26 degrees (0.005-0.01 degree over 2 s)
+    assert np.degrees(est.rmse[1:]).max() < 0.5
 
 
 @needs_cc

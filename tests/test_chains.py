@@ -315,7 +315,8 @@ def test_identify_the_thumb_from_noise_free_data():
     design = ExperimentDesign(duration=1.0, encoder_noise_counts=0.0, torque_noise=0.0)
     rec = experiment("thumb", true, design, seed=3)
     assert rec.motor_names == ("thumb", "thumb_abduction") and rec.encoder.shape == (1001, 2)
-    assert np.ptp(rec.true_q, axis=0).min() > math.radians(4)  # every joint moves, the ab/adduction too
+    # every joint moves, the ab/adduction too (3.5 degrees in this 1 s at 0.5 of its amplitude ceiling)
+    assert np.ptp(rec.true_q, axis=0).min() > math.radians(3)
     model = ad.Model.alpes("thumb", friction=True)
     tr = model.transmission
     rec.encoder = rec.true_q @ tr.S.T / (2 * math.pi / tr.counts_per_rev)  # unquantised

@@ -586,7 +586,11 @@ def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_p
         main(["identify", "--model", "finger2", *argv, "--json", "--force", "-o", str(tmp_path / "i.toml")])
         fits.append(json.loads(capsys.readouterr().out))
     a, b = ({k: v["value"] for k, v in f["parameters"].items()} for f in fits)
-    assert a.keys() == b.keys() and all(np.isclose(a[k], b[k], rtol=1e-8, atol=1e-12) for k in a)
+    sd = {k: v["std"] for k, v in fits[0]["parameters"].items()}
+    # the same fit up to the torque's rounding (current / kt * kt): K, m, friction to 1e-8; the tendon's compliance,
+    # about 0 on this rigid finger, 9e-8 relative apart (a millionth of its standard error): all within 1e-6 sigma
+    assert a.keys() == b.keys() and all(abs(a[k] - b[k]) <= 1e-6 * sd[k] for k in a)
+    assert all(np.isclose(a[k], b[k], rtol=1e-8, atol=1e-12) for k in a if k[0] in "KmF")
     assert f"from {current}" in (tmp_path / "i.toml").read_text().splitlines()[0]  # the header names the file
     est = []
     for argv in (["--data", str(torque)], ["--data", str(current), "--torque-constant", str(kt)]):

@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
@@ -120,13 +121,18 @@ class GaussNewton:
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
     @staticmethod
-    def coef_bound(pb: ShootingProblem, d: np.ndarray, coef_radius: float) -> bool:
-        """Whether the line corrections, not log theta, cut the step ``d`` (:meth:`limited`)."""
+    def next_radius(pb: ShootingProblem, d: np.ndarray, coef_radius: float, found: Any) -> float:
+        """The line corrections' trust region (a multiple of :data:`COEF_STEP_RECORD`'s rule) for the next step of
+        stage 3, after the step ``d`` cut by ``coef_radius`` and its line search ``found``: doubled (up to
+        :data:`MAX_COEF_GROWTH`) where the line corrections, not log theta, cut the step and the cut step was taken
+        whole (a crawl down a valley the linearisation sees right), else one (the textbook rule, Nocedal and
+        Wright ch. 4, on this one block)."""
         p = pb.p
         dg = d[pb.nv:pb.nz]
         coef = float(np.max(np.abs(dg[p:]), initial=0.0)) / (
             MAX_COEF_STEP * coef_radius * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0)))
-        return coef > 1.0 and coef >= float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP
+        bound = coef > 1.0 and coef >= float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP
+        return min(2.0 * coef_radius, MAX_COEF_GROWTH) if (found is not None and found[0] == 1.0 and bound) else 1.0
 
     # --- stage 2 ----------------------------------------------------------------------------------------------
 
@@ -295,14 +301,9 @@ class GaussNewton:
                 reason = "converged: continuous, and the next step within the data's resolution"
                 break
             nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
-            merit = cost + nu_merit * float(np.sum(np.abs(e.c)))
-            dv, dg, full = self.limited(pb, d, radius)
-            bound = self.coef_bound(pb, d, radius)
+            merit, (dv, dg, full) = cost + nu_merit * float(np.sum(np.abs(e.c))), self.limited(pb, d, radius)
             found = self.line_search(pb, e, nodes, offs, glob, dv, dg, full, merit, nu_merit, solve_K)
-            # the line corrections' trust region grows while they alone cut the step and the cut step is taken
-            # whole (a crawl down a valley the linearisation sees right), and falls back to one at any shortened
-            # or failed step (the textbook rule, Nocedal & Wright ch. 4, on this one block)
-            radius = min(2.0 * radius, MAX_COEF_GROWTH) if (found is not None and found[0] == 1.0 and bound) else 1.0
+            radius = self.next_radius(pb, d, radius, found)
             bar.update(1)
             if found is None and noisy and step_sigma < 0.5:
                 # no step along a direction that moves no parameter by half a standard error: the data cannot tell
