@@ -70,8 +70,8 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     instead of 0.6 (``amplitude_fraction``, so that the finger's range holds the larger swing): on the all-effects
     plants of seeds 31 and 42, where 12 had left the masses 7.1 and 5.8 % off (the stick-slip round trading the
     masses against the tilt and the friction), 2.1 and 2.4 %, and 0.7 and 1.0 % on seeds 46 and 47, not tuned on
-    (2026-12-03, ``benchmarks/realism.py``); the joints swing 10-50 % further (q_3: 14 -> 21 degrees peak to peak
-    on seed 31).
+    (2026-12-03, ``benchmarks/realism.py``); with the dither at 20 and the multisine still at 0.6, seed 31's q_3 swung
+    21 degrees peak to peak instead of 14.
 
     Not on a motor of springless joints (the thumb's ab/adduction; 0 there): nothing but their dry friction holds
     them where the design places them, and a dither that keeps them sliding lets any torque the design did not
