@@ -178,6 +178,36 @@ def test_sensitivities_equal_finite_differences_and_the_states_alone(finger2, rn
     assert np.max(np.abs(X - fd) / scale) < 1e-5
 
 
+def test_line_corrections_trust_region_grows_only_on_a_crawl():
+    """GaussNewton.next_radius: a step the line corrections alone cut (here a coefficient asking for 10 standard
+    deviations, log theta still) and taken whole grows the streak; from the third in a row the region doubles, up
+    to MAX_COEF_GROWTH; a shortened or failed step, a step log theta cuts, or one inside the region resets it."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation.gauss_newton import CRAWL_STEPS, MAX_COEF_GROWTH, GaussNewton
+
+    assert (CRAWL_STEPS, MAX_COEF_GROWTH) == (3, 16.0)
+    pb = SimpleNamespace(p=2, nv=3, nz=3 + 2 + 4, N=4000)  # 3 local variables, 2 parameters, 4 line coefficients
+    d = np.zeros(pb.nz)
+    d[pb.nv + pb.p + 1] = 10.0
+    whole, short = (1.0, None, None, 0.0), (0.5, None, None, 0.0)
+    radius, streak, seen = 1.0, 0, []
+    for _ in range(7):
+        radius, streak = GaussNewton.next_radius(pb, d, radius, streak, whole)
+        seen.append((radius, streak))
+    # at 16 the 10 sigma step is inside the region, not cut: the streak ends there and the region falls back to one
+    assert seen == [(1.0, 1), (1.0, 2), (2.0, 3), (4.0, 4), (8.0, 5), (16.0, 6), (1.0, 0)]
+    assert GaussNewton.next_radius(pb, d, 4.0, 5, short) == (1.0, 0)
+    assert GaussNewton.next_radius(pb, d, 4.0, 5, None) == (1.0, 0)
+    d_log = d.copy()
+    d_log[pb.nv] = 0.3 * 20.0  # log theta asks for 20 of its steps, the line corrections for 10: log theta cuts
+    assert GaussNewton.next_radius(pb, d_log, 1.0, 2, whole) == (1.0, 0)
+    d_big = d * 4.0  # 40 sigma: the region doubles to its cap
+    assert GaussNewton.next_radius(pb, d_big, 16.0, 9, whole) == (16.0, 10)
+    # beyond 4 s the rule's sqrt(N / 4000) widens every radius: 10 sigma at 16 s is inside one
+    assert GaussNewton.next_radius(SimpleNamespace(p=2, nv=3, nz=9, N=16000 * 100), d, 1.0, 2, whole) == (1.0, 0)
+
+
 def test_identify_recovers_exact_parameters_from_noise_free_data(finger2, monkeypatch):
     """No sensor noise, unquantised encoder: the fit lands on the truth (K, m, friction within 1e-6); from an
     earlier result (a warm start) the last stage alone does, from its trajectory; at another interval the

@@ -32,8 +32,8 @@ from ..progress import _Progress
 from .kkt import factorize
 from .shooting import Evaluation, ShootingProblem
 
-__all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH", "CRAWL_STEPS",
-           "SOFT_PHASES", "BASIN_LIMIT"]
+__all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
+           "CRAWL_STEPS", "SOFT_PHASES", "BASIN_LIMIT"]
 
 MAX_LOG_STEP = 0.3
 """The trust region on log theta per iteration (at most a 35 % change of any parameter)."""
@@ -48,7 +48,8 @@ of 0.1 sigma_u per line (4.5 standard deviations at 4 s) sent the MuJoCo plants 
 ``benchmarks/realism.py`` to other basins (masses 8-22 % off, four fits of eight not converged)."""
 MAX_COEF_GROWTH = 16.0
 """The most the constrained stage (stage 3) widens the line corrections' trust region (:data:`COEF_STEP_RECORD`'s
-rule), doubling it at each step they alone cut and that is taken whole. On MuJoCo's all-effects finger3 plants with
+rule), doubling it at each step they alone cut and that is taken whole, from the :data:`CRAWL_STEPS`-th such step
+in a row (:meth:`GaussNewton.next_radius`). On MuJoCo's all-effects finger3 plants with
 the documented experiment (dither of 20 breakaway torques) the coefficients asked for 20-57 standard deviations per
 step and the fit crawled one per step: 40-48 iterations of stage 3 in each of two rounds (seeds 31, 40)."""
 CRAWL_STEPS = 3
