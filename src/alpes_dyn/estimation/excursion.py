@@ -70,10 +70,14 @@ def encoder_excursions(recording: Any) -> np.ndarray:
 def small_excursions(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) -> list[str]:
     """One line per motor whose encoder moved by less than ``threshold`` counts peak to peak over ``recording``,
     naming the motor, its excursion and what to change; empty when every encoder moved enough."""
+    return _lines(recording, encoder_excursions(recording), threshold)
+
+
+def _lines(recording: Any, ex: np.ndarray, threshold: float) -> list[str]:
+    """:func:`small_excursions`' lines from the excursions ``ex`` (m,) of ``recording`` already computed."""
     if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) or not np.isfinite(threshold) \
             or threshold < 0:
         raise InputError(f"threshold: expected a number of counts >= 0, got {threshold!r}")
-    ex = encoder_excursions(recording)
     names = list(getattr(recording, "motor_names", ())) or [str(j) for j in range(ex.size)]
     return [f"motor {name}: its encoder moved {e:g} counts peak to peak over the recording (below {threshold:g}): a "
             f"fit sees mostly its quantisation (standard errors grow as 1 / excursion); a larger pulley ratio, a finer "
@@ -83,8 +87,8 @@ def small_excursions(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) ->
 def excursion_report(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) -> dict[str, Any]:
     """What ``alpes-dyn experiment`` and ``identify`` print of ``recording``: ``encoder_excursion_counts`` (each
     motor's, by name), ``small_excursions`` (:func:`small_excursions`' lines) and ``min_excursion_counts``."""
-    lines = small_excursions(recording, threshold)
     ex = encoder_excursions(recording)
+    lines = _lines(recording, ex, threshold)
     return {"encoder_excursion_counts": {str(n): None if not np.isfinite(e) else float(e)
                                          for n, e in zip(recording.motor_names, ex)},
             "small_excursions": lines, "min_excursion_counts": float(threshold)}
