@@ -208,6 +208,45 @@ def test_line_corrections_trust_region_grows_only_on_a_crawl():
     assert GaussNewton.next_radius(SimpleNamespace(p=2, nv=3, nz=9, N=16000 * 100), d, 1.0, 2, whole) == (1.0, 0)
 
 
+def test_line_search_corrects_a_curved_step_until_the_merit_takes_it(monkeypatch):
+    """GaussNewton.line_search on a one-node problem whose constraint curves: cost 100 (g - 1)^2, continuity
+    c = v + 0.05 v^2 - g^2 = 0, from v = g = 0 the Gauss-Newton step dg = 1 (dv = 0) lowers the cost to 0 but
+    leaves c = -1, which the merit's penalty (1e6) refuses at every length down to 1/30. Second-order corrections
+    from the same factorised system (here [I C^T; C 0] with C = [1, 0] at the start) remove the defect by
+    Newton's iteration on v (defects 1, 0.05, 4.9e-3, 4.6e-4, 4.4e-5): with SOC_STEPS = 4 of them the merit takes
+    the whole corrected step, landing on the manifold (v + 0.05 v^2 = 1: v = 10 (sqrt(1.2) - 1)); with one (the
+    rule before) it finds no step."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation import gauss_newton as gn
+
+    def evaluate(nodes, offs, glob, jac=False):
+        v, g = float(nodes[0, 0]), float(glob[0])
+        r = np.array([10.0 * (g - 1.0)])
+        return SimpleNamespace(r=r, c=np.array([[v + 0.05 * v * v - g * g]]), cost=float(r @ r))
+
+    pb = SimpleNamespace(nx=1, nz=2, nv=1, n_int=1, nb=1, evaluate=evaluate)
+    K = np.array([[1.0, 0.0, 1.0], [0.0, 1.0, 0.0], [1.0, 0.0, 0.0]])  # H = I, C = [1, 0] (dc/dg = -2g = 0)
+
+    def solve_K(rhs):
+        return np.linalg.solve(K, rhs)
+
+    nodes, offs, glob = np.zeros((1, 1)), np.zeros((1, 0)), np.zeros(1)
+    at = evaluate(nodes, offs, glob)
+    assert at.cost == 100.0 and at.c[0, 0] == 0.0
+    merit, nu = at.cost, 1e6
+    dv, dg = np.zeros((1, 1)), np.array([1.0])
+    assert gn.SOC_STEPS == 4
+    found = gn.GaussNewton.line_search(pb, at, nodes, offs, glob, dv, dg, merit, nu, solve_K)
+    assert found is not None
+    alpha, sv, sg, cost_new = found
+    v_star = 10.0 * (math.sqrt(1.2) - 1.0)
+    assert alpha == 1.0 and sg[0] == 1.0 and cost_new == 0.0
+    assert abs(sv[0, 0] - v_star) < 1e-4 and abs(sv[0, 0] + 0.05 * sv[0, 0] ** 2 - 1.0) * nu < merit
+    monkeypatch.setattr(gn, "SOC_STEPS", 1)
+    assert gn.GaussNewton.line_search(pb, at, nodes, offs, glob, dv, dg, merit, nu, solve_K) is None
+
+
 def test_identify_recovers_exact_parameters_from_noise_free_data(finger2, monkeypatch):
     """No sensor noise, unquantised encoder: the fit lands on the truth (K, m, friction within 1e-6); from an
     earlier result (a warm start) the last stage alone does, from its trajectory; at another interval the
