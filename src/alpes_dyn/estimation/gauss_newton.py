@@ -23,7 +23,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
 import scipy.sparse as sp
@@ -366,9 +366,10 @@ class GaussNewton:
 
     # --- the two starts ---------------------------------------------------------------------------------------
 
-    def solve(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
-              warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SolverResult:
-        """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.shooting.ShootingProblem.initial_nodes`): stage 1,
+    def solve(self, pb: ShootingProblem, nodes: np.ndarray | Callable[[], np.ndarray], offs: np.ndarray,
+              glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SolverResult:
+        """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.shooting.ShootingProblem.initial_nodes`; or a
+        function giving them, called only where no warm start converges: a run of the whole record): stage 1,
         then stages 2-3 with friction held during the homotopy, and again with it free where the first ends
         above :data:`BASIN_LIMIT` (each alone missed the right basin on one of five +-20 % fingers). ``warm``: the
         variables of another fit of the recording (:meth:`~alpes_dyn.estimation.shooting.ShootingProblem.warm_variables`):
@@ -386,7 +387,7 @@ class GaussNewton:
             if out.converged and pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
                 return out
             total_its = out.iterations
-        nodes = self.fit_nodes(pb, nodes, offs, glob)
+        nodes = self.fit_nodes(pb, nodes() if callable(nodes) else nodes, offs, glob)
         c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)  # per state component
         bar = _Progress(self.max_iterations, "identify", self.show)
         first = (nodes.copy(), offs.copy(), glob.copy())  # both starts from the stage-1 nodes

@@ -56,6 +56,7 @@ import math
 import sys
 import time
 import warnings
+from functools import partial
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -208,7 +209,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     # initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder
     q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))
-    nodes = pb.initial_nodes(q0)
+    nodes = partial(pb.initial_nodes, q0)  # run only where no warm start converges
     offs = np.zeros((pb.n_int, pb.no))
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)
