@@ -18,8 +18,9 @@ from alpes_dyn.estimation.adequacy import (BAND_99, AdequacyWarning, cross_corre
                                            sensor_floor, whiteness, white_noise_level)
 from alpes_dyn.estimation.experiment import ExperimentDesign, perturbed_params
 from alpes_dyn.estimation.identification import identify
-from alpes_dyn.estimation.recording import write_recording
+from alpes_dyn.estimation.recording import read_recording, write_recording
 from alpes_dyn.model.params import load_params, write_params
+from alpes_dyn.model.robot import Model
 from mismatch_plants import mismatched
 
 
@@ -175,8 +176,7 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
     seen = []
 
     def fake(model, data, *a, **kw):
-        seen.append((model.name, str(data), kw.get("validation")))
-        fitted.recording_path = str(data)
+        seen.append((model.name, data, kw.get("validation")))
         return fitted
 
     monkeypatch.setattr(ident, "identify", fake)
@@ -209,7 +209,10 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
     # --effects auto: the verdict names the rotor, so each of the three identify commands fits with it, then (the
     # stand-in's residual not lower, the fit kept still flagged) with the stick-slip law: three fits each, the first
     # kept and reported
-    assert seen[0] == ("finger3", str(rec), None) and len(seen) == 9
+    # each command read its --data once and gave every fit the same Recording (the file's encoder column)
+    assert len(seen) == 9 and all(m == "finger3" and v is None for m, _, v in seen)
+    assert seen[0][1] is seen[1][1] is seen[2][1] and seen[2][1] is not seen[3][1]
+    assert np.array_equal(seen[0][1].encoder, read_recording(rec, Model.alpes("finger3")).encoder)
     # a file rewritten from it keeps the record; a trustworthy fit's file says so
     back = write_params(p, tmp_path / "copy.toml")
     assert load_params(back).identification == p.identification

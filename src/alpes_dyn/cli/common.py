@@ -341,13 +341,3 @@ def _excursion_lines(rec: Any, obj: dict[str, Any]) -> str:
 
     obj.update(excursion_report(rec))
     return "".join(f"\n  WARNING: {line}" for line in obj["small_excursions"])
-
-
-def _fit_excursions(args: argparse.Namespace, model: Any, urdf: bool, obj: dict[str, Any]) -> list[str]:
-    """``identify``'s --data read for the fitted ``model`` (with --chain: its motors, the robot's other columns
-    ignored), checked by :func:`_excursion_lines`: the lines, also in ``obj``."""
-    from ..estimation.recording import read_recording
-
-    whole = _urdf_robot(args, "identification") if urdf and args.chain is not None else None
-    _excursion_lines(read_recording(args.data, model, args.torque_constant, ignore_others_of=whole), obj)
-    return obj["small_excursions"]

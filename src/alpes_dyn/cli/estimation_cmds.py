@@ -15,7 +15,7 @@ from ..errors import InputError
 from ..estimation.excursion import SmallExcursionWarning
 from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
-                     _fit_excursions, _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
+                     _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      parse_vector)
 
 
@@ -239,7 +239,7 @@ def _experiment_robot(args: argparse.Namespace) -> int:
 def _fit(args: argparse.Namespace, freqs):
     """The fit: --parameters as named (the stick-slip law where --effects asks for it), else the default selection
     with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
-    check names it (:mod:`alpes_dyn.estimation.effects`). Returns the EffectsFit."""
+    check names it (:mod:`alpes_dyn.estimation.effects`). Returns the EffectsFit and the recording it read."""
     from ..estimation.adequacy import AdequacyWarning
     from ..estimation.effects import EffectsFit, alpes_models, fit_effects, parse_effects
     from ..estimation.identification import check_selection, identify
@@ -253,22 +253,20 @@ def _fit(args: argparse.Namespace, freqs):
                          "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
     model_of = alpes_models(args.model, load_params(args.params), rotor_inertia=args.rotor_inertia, chain=args.chain)
 
-    data, validate = args.data, args.validate
-    if args.torque_constant is not None:  # current_<motor> columns: the recordings read here, as torques
-        data = read_recording(args.data, model_of(()), args.torque_constant)
-        if validate is not None:
-            validate = read_recording(args.validate, model_of(()), args.torque_constant)
+    if args.parameters is not None:
+        check_selection(model_of(effects), args.parameters)  # a bad selection named before the recording is read
+    # the recordings read once (with --torque-constant their current_<motor> columns as torques), for every round
+    data = read_recording(args.data, model_of(()), args.torque_constant)
+    validate = None if args.validate is None else read_recording(args.validate, model_of(()), args.torque_constant)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
         model = model_of(effects)
-        check_selection(model, args.parameters)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit.single(identify(model, data, args.parameters, **kw), effects)
+            return EffectsFit.single(identify(model, data, args.parameters, **kw), effects), data
     base = THUMB_PARAMETERS if args.model == "thumb" else None
-    rec = data if args.torque_constant is not None else read_recording(args.data, model_of(()))
-    return fit_effects(model_of, data, effects, base, rec.gravity is not None, **kw)  # tilt only where not given
+    return fit_effects(model_of, data, effects, base, data.gravity is not None, **kw), data  # tilt where not given
 
 
 def cmd_identify(args: argparse.Namespace) -> int:
@@ -292,7 +290,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         freqs = None
     else:
         freqs = tuple(parse_vector(exc, "excitation"))
-    fit = _fit_robot(args, freqs) if urdf else _fit(args, freqs)
+    fit, data = _fit_robot(args, freqs) if urdf else _fit(args, freqs)
     res, model = fit.result, fit.result.model
     res.recording_path = args.data  # the identified file's header names the recording read
     written = args.output is not None and (res.trustworthy or args.force)
@@ -325,7 +323,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  held at the URDF's values: {', '.join(held)} (a link that only motorless joints move: the "
                      "encoders see its mass only with those joints' springs; name it in --parameters to fit it)")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
-    lines += [f"  WARNING: {line}" for line in _fit_excursions(args, model, urdf, obj)]  # the fit's data
+    _excursion_lines(data, obj)  # the fit's data: its motors whose encoder barely moved
+    lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
     a = res.adequacy
     if a is not None:
         lines.append(f"  sensor floor {a.floor.total:.3g} counts (quantisation {a.floor.quantisation:.3g}, noise "
@@ -364,7 +363,8 @@ def _fit_robot(args: argparse.Namespace, freqs):
     the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
     other branches do not change its joints' dynamics; the recording's columns of their motors and joints are
     ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); a selection
-    with masses is refused with -o (a spec holds no masses) before the fit."""
+    with masses is refused with -o (a spec holds no masses) before the fit. Returns the EffectsFit and the recording
+    it read."""
     import dataclasses
 
     from ..estimation.adequacy import AdequacyWarning
@@ -403,15 +403,15 @@ def _fit_robot(args: argparse.Namespace, freqs):
         check_selection(fitted, names)  # a bad selection named before the fit
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
             warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit.single(identify(fitted, data, names, **kw), effects)
+            return EffectsFit.single(identify(fitted, data, names, **kw), effects), data
     has_gravity = data.gravity is not None  # tilt only where not given
     if args.chain is None:
-        return fit_effects(model_of, data, effects, None, has_gravity, **kw)
+        return fit_effects(model_of, data, effects, None, has_gravity, **kw), data
     own = tuple(e for e in effects if e in ("compliance", "offset"))  # the motor's own, named here
     base = ",".join(_chain_names(model, None, args.chain, own))
     fit = fit_effects(model_of, data, tuple(e for e in effects if e not in own), base, has_gravity, **kw)
     fit.effects = own + fit.effects
-    return fit
+    return fit, data
 
 
 def _chain_model(model, motor: str | None):
