@@ -112,7 +112,9 @@ def test_mjcf_export_writes_the_spec_stops_and_mujoco_holds_them():
     ours = r.x[1000::1000, 0]
     assert np.max(np.abs(ours - np.array(q_mj))) < 1e-3 * (q_hand - 1.5) + 1e-6
     plain = _pendulum("")
-    assert "solreflimit" not in plain.to_mjcf()
+    assert "solreflimit" not in plain.to_mjcf() and ad.Model.from_mjcf(plain.to_mjcf()).spec.stops is None
+    back = ad.Model.from_mjcf(m.to_mjcf()).spec.stops["joints"]["hinge"]  # the import reads the stop back
+    assert back["stiffness"] == pytest.approx(k, rel=1e-12) and back["damping"] == pytest.approx(d, rel=1e-12)
 
 
 def test_dynamics_command_says_spec(tmp_path, capsys):
