@@ -144,7 +144,7 @@ def run_robot(name: str, r: dict[str, Any], seed: int, duration: float, skip: se
     if "control" not in skip:
         w_c, ctl = cli("control", *base, "--spec", str(ident), "--controller", "sensor", *r["control"],
                        "--seed", str(seed))
-        out["control"] = {"wall_s": w_c, "steady_state_error": ctl["steady_state_error"], "rmse_N": ctl.get("rmse"),
+        out["control"] = {"wall_s": w_c, "steady_state_error": ctl["steady_state_error"], "force_rmse_N": ctl.get("force_rmse"), "q_hat_rmse_deg": ctl.get("q_rmse_deg"),
                           "frame": ctl.get("frame"), "motor": ctl.get("motor"),
                           "goal_met": ctl["steady_state_error"] < GOALS["steady_state_error"]}
     return out
@@ -240,8 +240,8 @@ def print_table(out: dict[str, Any]) -> None:
                   f"({e['baseline_over_identified']:.1f}x); MuJoCo recording {e['mujoco_recording_s']:.1f} s")
         if "control" in r:
             c = r["control"]
-            print(f"  control (sensor) at {c['frame']}: steady-state error {100 * c['steady_state_error']:.2f} % "
-                  f"({c['wall_s']:.1f} s)  goal 2 %: {met[c['goal_met']]}")
+            print(f"  control (sensor) at {c['frame']}: steady-state error {100 * c['steady_state_error']:.2f} %, "
+                  f"force RMSE {c['force_rmse_N']:.3f} N ({c['wall_s']:.1f} s)  goal 2 %: {met[c['goal_met']]}")
     if "round_trip" in out:
         print("MJCF round trip (alpes-dyn mjcf -> Model.from_mjcf), largest difference over 5 states:")
         print(f"  {'model':14s} {'n':>3s} {'A':>9s} {'C':>9s} {'G':>9s} {'FD (rel)':>9s}")
