@@ -199,6 +199,8 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
+                 robotstops_toml=(ROBOT_SPEC + "\n[stops]\nstiffness = -2.0\n").encode(),
+                 robotstopj_toml=(ROBOT_SPEC + "\n[stops.joints]\nj9 = { stiffness = 2.0 }\n").encode(),
                  robotctl_toml=ROBOT_CONTROL_SPEC.encode(), branches_urdf=BRANCHES_URDF.encode(),
                  branches_toml=BRANCHES_SPEC.encode(),
                  robotctrlchar_toml=ROBOT_SPEC.replace('name = "flexor"', 'name = "fl\\u0001exor"').encode(),
@@ -667,6 +669,10 @@ CLI: dict[str, list[Cli]] = {
           'name it: tips = ["<frame>"] in the spec, or tip=<frame> (the command line\'s --tip)'),
         C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotrest_toml}",
           needle="rest_angle.j9: joint 'j9' has no spring (no [stiffness] value)"),
+        C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotstops_toml}",
+          needle="stops.stiffness: expected a number > 0, got -2"),
+        C("mjcf", "{robot_urdf}", "--spec", "{robotstopj_toml}",
+          needle="stops.joints.j9: unknown joint 'j9' (URDF joints: j1, j2, j3)"),
     ],
     "report": [
         C("report", "--points", "0", needle="--points: expected an integer from 1 to 10000, got 0"),
@@ -1463,6 +1469,46 @@ API: list[Api] = [
       "rest_angle.j9: joint 'j9' has no spring (no [stiffness] value); a rest angle is where a spring exerts no torque"),
     A("TransmissionSpec", lambda c: TransmissionSpec(rest_angle=[0.1]), ModelError,
       "rest_angle: expected a table joint name -> number"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops]\nstiffness = 0.0\n"), ModelError,
+      "stops.stiffness: expected a number > 0, got 0"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops]\ndamping = -1e-3\n"), ModelError,
+      "stops.damping: expected a number >= 0, got -0.001"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + '[stops]\nstiffness = "x"\n'), ModelError,
+      "stops.stiffness: expected a number, got 'x'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops]\nstifness = 2.0\n"), ModelError,
+      "stops.stifness: unknown key (expected stiffness or damping)"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops]\n"), ModelError,
+      "stops: an empty table; give stiffness, damping or joints"),
+    A("TransmissionSpec", lambda c: TransmissionSpec(stops=[2.0]), ModelError,
+      "stops: expected a table (stiffness, damping, joints), got [2.0]"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops]\njoints = 2.0\n"), ModelError,
+      "stops.joints: expected a table joint name -> {{stiffness, damping}}, got 2.0"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops.joints]\nj1 = 2.0\n"), ModelError,
+      "stops.joints.j1: expected a table with stiffness and/or damping, got 2.0"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops.joints]\nj1 = { k = 2.0 }\n"),
+      ModelError, "stops.joints.j1.k: unknown key (expected stiffness or damping)"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[stops.joints]\nj1 = { damping = nan }\n"),
+      ModelError, "stops.joints.j1.damping: expected a finite number, got nan"),
+    A("TransmissionSpec", lambda c: ad.Model(FINGER3, TransmissionSpec(stops={"joints": {"j9": {"stiffness": 1.0}}})),
+      ModelError, "stops.joints.j9: unknown joint 'j9'"),
+    A("mjcf_recording", lambda c: _mjcf_recording(None, 3, np.zeros((5, 1))), InputError,
+      "model: expected an alpes_dyn Model with motors, got int"),
+    A("mjcf_recording", lambda c: _mjcf_recording(12, None, np.zeros((5, 1))), InputError,
+      "mjcf: expected MJCF text or the path of its file, got int"),
+    A("mjcf_recording", lambda c: _mjcf_recording({"timestep": 3e-4}, None, np.zeros((5, 1))), InputError,
+      "timestep: 0.0003 s does not divide the sample period 0.001 s"),
+    A("mjcf_recording", lambda c: _mjcf_recording({}, None, np.zeros((5, 2))), InputError,
+      "torque: expected finite motor torques of shape (N+1, 1), got shape (5, 2)"),
+    A("mjcf_recording", lambda c: _mjcf_recording({}, None, np.zeros((5, 1)), q0=[0.1]), InputError,
+      "q0: expected 3 finite joint angles (rad), got [0.1]"),
+    A("mjcf_recording", lambda c: _mjcf_recording({}, None, np.zeros((5, 1)), seed=-1), InputError,
+      "seed: expected a non-negative integer, got -1"),
+    A("mjcf_recording", lambda c: _mjcf_recording("{d}/missing.xml".format(d=c.d), None, np.zeros((5, 1))),
+      InputError, "missing.xml"),
+    A("JointStops", lambda c: _stops(ad.Model(FINGER3.replace('lower="0.0" upper="1.5707963267948966"',
+                                                              'lower="-1e4" upper="1e4"'),
+                                              TransmissionSpec(stops={"joints": {"j1": {"stiffness": 1.0}}}))),
+      InputError, "stops.joints.j1: joint 'j1' has no finite limit (URDF limits beyond 1e3 or none): no stop to hold it"),
     A("TransmissionSpec", lambda c: ad.Model(FINGER3, TransmissionSpec(stiffness={"j1": 0.1, "j9": 0.1},
                                                                           rest_angle={"j9": 0.1})), ModelError,
       "stiffness.j9: unknown joint 'j9'"),
@@ -2353,6 +2399,15 @@ API.extend([  # the encoder excursion check of experiment and identify (issue 17
     A("stop_table", lambda c: _stop_table(ad.Model.alpes("finger3"), per_joint="yes"), InputError,
       "per_joint: expected True or False, got 'yes'"),
 ])
+
+
+def _mjcf_recording(mjcf, model, torque, **kw):
+    """mjcf_recording on ROBOT_URDF + ROBOT_SPEC (model None) and its MJCF (mjcf a dict: model_mjcf's keywords)."""
+    from alpes_dyn.control.plants import mjcf_recording
+
+    robot = ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(ROBOT_SPEC))
+    text = robot.to_mjcf(**mjcf) if isinstance(mjcf, dict) else mjcf
+    return mjcf_recording(text, robot if model is None else model, torque, **kw)
 
 
 def _stop_table(model, **kw):

@@ -31,6 +31,7 @@ restores the previous one (not thread-safe: one smooth-friction run at a time pe
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -45,7 +46,8 @@ from ..simulation.loop import Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, TorqueSensor
 
-__all__ = ["PLANT_MODELS", "INTEGRATORS", "PlantEffects", "plant_mjcf", "plant_model", "mujoco_recording"]
+__all__ = ["PLANT_MODELS", "INTEGRATORS", "PlantEffects", "plant_mjcf", "plant_model", "mujoco_recording",
+           "mjcf_recording"]
 
 PLANT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 """The models a recording plant is built for: one chain, as the identification experiment."""
@@ -203,6 +205,65 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
         raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
     return Recording(t=dt * np.arange(N + 1), encoder=counts, torque=measured, motor_names=tr.motor_names,
                      joint_names=truth.joint_names, true_q=q)
+
+
+def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt: float = 1e-3, *,
+                   q0: Sequence[float] | None = None, seed: int = 0, encoder_noise_counts: float = 0.5,
+                   torque_noise: float = 5e-4) -> Recording:
+    """Replay a motor torque on MuJoCo stepping an MJCF of any robot, and record it as :func:`mujoco_recording` does.
+
+    ``mjcf``: the MJCF text, or the path of its file -- e.g. what ``alpes-dyn mjcf --model ROBOT.urdf --spec
+    ROBOT.toml -o plant.xml`` (:func:`~alpes_dyn.model.mjcf_export.model_mjcf`) writes: a motor actuator and an
+    ``encoder_<motor>`` sensor per motor, the joints named as ``model``'s. Stepped as written (its ``timestep``, which
+    must divide ``dt``, its integrator, its friction: MuJoCo's ``frictionloss`` is stick-slip, not the library's
+    smooth law). ``model``: the :class:`~alpes_dyn.Model` whose joints, motors and encoder resolution the recording
+    names (the robot the MJCF was exported from); its static equilibrium under ``torque[0]`` is the initial state
+    unless ``q0`` (rad) is given. ``torque`` (N+1, m), N m, held over each period; ``dt`` the sample period, s;
+    ``seed``, ``encoder_noise_counts``, ``torque_noise`` as :func:`mujoco_recording`'s.
+
+    Returns the :class:`~alpes_dyn.estimation.recording.Recording` (encoder counts, measured torque, MuJoCo's joint
+    angles as ``true_q``), which :func:`~alpes_dyn.estimation.recording.write_recording` writes for ``alpes-dyn
+    estimate --data``. A mimic joint starts at its rule's value of the initial q.
+    """
+    import mujoco  # load_mujoco below gives the one-line error when it is missing
+
+    if not isinstance(model, Model) or model.transmission is None:
+        raise InputError(f"model: expected an alpes_dyn Model with motors, got {type(model).__name__}")
+    if isinstance(mjcf, os.PathLike) or (isinstance(mjcf, str) and not mjcf.lstrip().startswith("<")):
+        from ..fileio import read_text
+
+        mjcf = read_text(mjcf, "mjcf", InputError)
+    if not isinstance(mjcf, str):
+        raise InputError(f"mjcf: expected MJCF text or the path of its file, got {type(mjcf).__name__}")
+    _check_recording_settings("finger3", seed, encoder_noise_counts, torque_noise)
+    mj = load_mujoco(mjcf)
+    tr = model.transmission
+    u = np.asarray(torque, dtype=float)
+    u = u[:, None] if u.ndim == 1 else u
+    sub = _check_run("finger3", u, dt, float(mj.opt.timestep), "rk4", tr.n_motors)
+    d = mujoco.MjData(mj)
+    q_init = (model.static_equilibrium(tr.joint_torque(u[0]), np.zeros(model.n), fixed=model.springless_joints)
+              if q0 is None else np.asarray(q0, dtype=float))
+    if q_init.shape != (model.n,) or not np.isfinite(q_init).all():
+        raise InputError(f"q0: expected {model.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
+    d.qpos[joint_permutation(mj, model.joint_names)] = q_init
+    for mimic in model.mimic.mimics if model.mimic is not None else ():
+        d.qpos[mj.joint(mimic.name).qposadr[0]] = mimic.multiplier * q_init[model.joint_index(mimic.primary)] \
+            + mimic.offset
+    mujoco.mj_forward(mj, d)
+    rng = np.random.default_rng(seed)  # the encoder's noise, then the torque's
+    blocks = [Source("torque", tau=u),
+              MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True, joints={"q": model.joint_names},
+                          sensors={"q_m": [f"encoder_{mn}" for mn in tr.motor_names]},
+                          actuators={"tau": list(tr.motor_names)}),
+              Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True, rng=rng,
+                      shape=(tr.n_motors,)),
+              TorqueSensor("tau", "tau_meas", noise=torque_noise, rng=rng, shape=(tr.n_motors,))]
+    log = run_loop(blocks, u.shape[0] - 1, dt, final=True)
+    if not np.isfinite(log["q"]).all():
+        raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
+    return Recording(t=dt * np.arange(u.shape[0]), encoder=log["counts"], torque=log["tau_meas"],
+                     motor_names=tr.motor_names, joint_names=model.joint_names, true_q=log["q"])
 
 
 def _check_recording_settings(model: str, seed: Any, encoder_noise_counts: Any, torque_noise: Any) -> None:

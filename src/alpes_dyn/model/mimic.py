@@ -208,12 +208,13 @@ class MimicCoupling:
 
 def refuse_mimic_names(spec: Any, coupling: MimicCoupling) -> None:
     """:class:`~alpes_dyn.ModelError` where a :class:`~alpes_dyn.model.spec.TransmissionSpec` names a mimic joint
-    (a motor's joint, a spring, friction, armature or rest-angle row): it has no coordinate of its own, so its row
+    (a motor's joint, a spring, friction, armature, rest-angle or stop row): it has no coordinate of its own, so its row
     is refused rather than moved onto the joint it follows (whose own values would then be ambiguous)."""
     from .spec import JOINT_TABLES, REST_TABLE
 
     uses = [(f"motor {m.name!r}.joints", j) for m in spec.motors for j in m.joints]
     uses += [(f"{t}.{j}", j) for t in JOINT_TABLES + (REST_TABLE,) for j in getattr(spec, t)]
+    uses += [(f"stops.joints.{j}", j) for j in (spec.stops or {}).get("joints", {})]
     for where, j in uses:
         m = coupling.of(j)
         if m is not None:

@@ -9,7 +9,14 @@ model's extras and transmission (the spec's, or the ``extras=`` given):
   frame; its ``inertial``: mass, centre of mass and the full inertia about it (``fullinertia``, the merged
   inertia of the link and of the fixed links under it);
 * one ``hinge`` per revolute joint (``slide`` per prismatic one) at the body origin with the joint's axis;
-  ``range`` = the URDF limits (``limited="true"`` with ``limits``, else ``limited="false"`` and no range);
+  ``range`` = the URDF limits (``limited="true"`` with ``limits``, else ``limited="false"`` and no range); where
+  the spec has a ``[stops]`` table, every limited joint's stop as :meth:`JointStops.of
+  <alpes_dyn.model.stops.JointStops.of>` gives it (the table's values, the sized ones on the joints it leaves out):
+  ``solreflimit="-k w -d w"`` (MuJoCo's direct form, stiffness and damping per unit of the joint's inverse weight
+  w = (A(q=0)^-1)_ii, MuJoCo's ``dof_invweight0``) and ``solimplimit`` :data:`STOP_IMPEDANCE` (MuJoCo's least
+  impedance d): the limit's force is then -(k p + d v) / (1 - d + d A_ii(q) w) -- k p + d v to 1e-4, the library's
+  unilateral spring-damper (MuJoCo's constraint takes the share d = 1e-4 of the other torques on the joint too;
+  without ``[stops]`` MuJoCo's default limit, as stiff as its solver makes it);
   ``stiffness`` k_i with ``springref`` q_rest,i (the spring's rest angle, rad: the spec's ``[rest_angle]``, 0 by
   default; MuJoCo's passive force -k (q - springref) is the library's spring law), ``armature`` (the joint-side
   inertia), ``frictionloss`` F_s (Coulomb: MuJoCo's dry friction is a constraint, the library's a sign or a
@@ -56,7 +63,11 @@ import numpy as np
 from ..errors import InputError, ModelError
 from .mimic import tree_model
 
-__all__ = ["model_mjcf", "INTEGRATORS"]
+__all__ = ["model_mjcf", "INTEGRATORS", "STOP_IMPEDANCE", "stop_solref"]
+
+STOP_IMPEDANCE = 1e-4
+"""MuJoCo's least constraint impedance (``mjMINIMP``): the ``solimplimit`` of a joint stop from the spec's ``[stops]``
+table, which makes MuJoCo's soft limit a spring-damper to 1e-4 (the module doc)."""
 
 INTEGRATORS: tuple[str, ...] = ("Euler", "implicit", "implicitfast", "RK4")
 """MuJoCo's integrators (``<option integrator>``)."""
@@ -140,7 +151,7 @@ def _body_names(model: Any) -> tuple[str, list[str]]:
     return root, names
 
 
-def _joint_xml(model: Any, i: int, limits: bool) -> str:
+def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, float]]) -> str:
     """The ``<joint>`` of Pinocchio joint i (1-based): axis, range, spring, armature, friction (a mimic joint has
     none of the last four: the spec names the joint it follows)."""
     pm = tree_model(model)
@@ -151,6 +162,9 @@ def _joint_xml(model: Any, i: int, limits: bool) -> str:
     lo, hi = float(pm.lowerPositionLimit[k]), float(pm.upperPositionLimit[k])
     if limits and math.isfinite(lo) and math.isfinite(hi) and lo < hi:
         attrs += ['limited="true"', f'range="{_f(lo)} {_f(hi)}"']
+        if name in solref:
+            attrs += [f'solreflimit="{_f(solref[name][0])} {_f(solref[name][1])}"',
+                      f'solimplimit="{_f(STOP_IMPEDANCE)} {_f(STOP_IMPEDANCE)} 0.001 0.5 2"']
     else:
         attrs.append('limited="false"')
     if name not in model.joint_names:  # a mimic joint
@@ -161,6 +175,36 @@ def _joint_xml(model: Any, i: int, limits: bool) -> str:
         if values[e] != 0:
             attrs.append(f'{attr}="{_f(values[e])}"')
     return f"<joint {' '.join(attrs)}/>"
+
+
+def stop_solref(model: Any) -> dict[str, tuple[float, float]]:
+    """{joint: (solreflimit's two numbers)} of the stops the export writes: empty without a spec ``[stops]`` table;
+    else every limited joint's -k w and -d w, k and d :meth:`JointStops.of <alpes_dyn.model.stops.JointStops.of>`'s
+    (N m/rad, N m s/rad), w = (A(0)^-1)_ii (1/(kg m^2): MuJoCo's ``dof_invweight0``, the whole tree's mass matrix
+    at qpos0 = 0 with armature and rotors, mimic joints as coordinates of their own)."""
+    import pinocchio as pin
+
+    from .stops import JointStops
+
+    spec = getattr(model, "spec", None)
+    if spec is None or spec.stops is None:
+        return {}
+    stops = JointStops.of(model)
+    pm = tree_model(model)
+    M = pin.crba(pm, pm.createData(), np.zeros(pm.nq))
+    M = np.triu(M) + np.triu(M, 1).T
+    names = list(pm.names[1:])
+    idx = [names.index(j) for j in model.joint_names]
+    M[np.diag_indices(len(names))] -= pm.armature  # what crba added, then the model's own armature and rotors
+    A = np.zeros((model.n, model.n))
+    A[np.diag_indices(model.n)] = model.extras.armature
+    A += model.rotor_matrix if model.transmission is not None else 0.0
+    M[np.ix_(idx, idx)] += A
+    w = np.diag(np.linalg.inv(M))[idx]
+    k = np.broadcast_to(stops.stiffness, (model.n,))
+    d = np.broadcast_to(stops.damping, (model.n,))
+    limited = np.isfinite(stops.lower) | np.isfinite(stops.upper)
+    return {j: (-float(k[i] * w[i]), -float(d[i] * w[i])) for i, j in enumerate(model.joint_names) if limited[i]}
 
 
 def _equality(model: Any, timestep: float) -> list[str]:
@@ -198,6 +242,7 @@ def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[
     for i in range(1, pm.njoints):
         children.setdefault(int(pm.parents[i]), []).append(i)
     tips = _tips(model, set(names), tip_radius)
+    solref = stop_solref(model) if limits else {}
     lines = ["  <worldbody>", f"    <body name={_q(root)}>"]
 
     def body(i: int, depth: int) -> None:
@@ -206,7 +251,7 @@ def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[
         mass, c, I = float(Y.mass), np.asarray(Y.lever), np.asarray(Y.inertia)
         _check_inertia(names[i - 1], mass, I)
         lines.append(f"{ind}<body name={_q(names[i - 1])} {_pose(pm.jointPlacements[i])}>")
-        lines.append(f"{ind}  {_joint_xml(model, i, limits)}")
+        lines.append(f"{ind}  {_joint_xml(model, i, limits, solref)}")
         lines.append(f'{ind}  <inertial pos="{_v(c)}" mass="{_f(mass)}" fullinertia="'
                      f'{_v((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]))}"/>')
         lines.extend(f"{ind}  {s}" for s in tips.get(i, ()))

@@ -11,8 +11,11 @@ backends read:
 * the **spec**: one motor per actuator on a fixed tendon, q_m = gear * sum_i coef_i q_i, so the ratio of joint i
   is gear * coef_i, or on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
   (with ``springref``, the spring's rest angle: the spec's ``[rest_angle]`` where it is not 0), ``armature``,
-  ``frictionloss`` (Coulomb) and ``damping`` (viscous); gravity from ``<option gravity>``; the tips: the first
-  site of each leaf body.
+  ``frictionloss`` (Coulomb) and ``damping`` (viscous); a joint limit's ``solreflimit`` in MuJoCo's direct form
+  (-stiffness -damping, what the export writes for a spec's ``[stops]``) as the ``[stops]`` row k = -solref[0] / w,
+  d = -solref[1] / w, w the joint's ``dof_invweight0`` (the library's spring-damper stop where the limit's impedance
+  is small, as the export's 1e-4; a limit in the time-constant form gets no row: sized by the library);
+  gravity from ``<option gravity>``; the tips: the first site of each leaf body.
 
 What the library does not model is refused with one line naming it, never dropped: free, ball and slide
 joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
@@ -241,6 +244,7 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         # the tendon's armature J_t acts on its length sum coef_i q_i: J_t coef coef^T = (J_t / gear^2) S^T S
         motors.append(Motor(aname, ratios, rotor_inertia=_tendon_armature(m, t) / gear**2))
     tables: dict[str, dict[str, float]] = {"stiffness": {}, "armature": {}, "coulomb": {}, "viscous": {}}
+    stops: dict[str, dict[str, float]] = {}
     for j in range(m.njnt):
         jname = _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")
         d = int(m.jnt_dofadr[j])
@@ -251,6 +255,9 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         rest = float(m.qpos_spring[m.jnt_qposadr[j]])
         if m.jnt_stiffness[j] != 0 and rest != 0:
             tables.setdefault("rest_angle", {})[jname] = rest
+        if m.jnt_limited[j] and m.jnt_solref[j, 0] < 0:  # a stop in MuJoCo's direct form: the export's [stops]
+            w = float(m.dof_invweight0[d])
+            stops[jname] = {"stiffness": -float(m.jnt_solref[j, 0]) / w, "damping": -float(m.jnt_solref[j, 1]) / w}
     children = set(int(p) for p in m.body_parentid[1:])
     tips, seen = [], set()
     for sname, b in sites:
@@ -258,4 +265,5 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
             tips.append(sname)
             seen.add(b)
     return TransmissionSpec(motors=tuple(motors), gravity=tuple(float(g) for g in m.opt.gravity),
-                            tips=tuple(tips) or None, name=model_name, **tables)
+                            tips=tuple(tips) or None, name=model_name, stops={"joints": stops} if stops else None,
+                            **tables)

@@ -51,6 +51,12 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     [viscous]                      # N m s/rad
     [armature]                     # kg m^2, joint-side (diagonal) inertia
 
+    [stops]                        # joint stops (optional; default: sized to the robot, alpes_dyn.model.stops)
+    stiffness = 40.0               # N m/rad (> 0), every joint with a finite limit
+    damping = 0.05                 # N m s/rad (>= 0)
+    [stops.joints]                 # per joint, over the robot-wide values (either key may be left out)
+    "joint_1.0" = { stiffness = 80.0, damping = 0.1 }
+
     [identified]                   # optional, written by `alpes-dyn identify -o`: the values it fitted
     source = "identified"          # (source = "identified"), the fit's record (IDENTIFICATION_FIELDS) ...
     recording = "rec.csv"
@@ -61,6 +67,12 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     "joint_1.0" = 4.0e-5           # (inf: a value the recording does not see; the start kept)
     [identified.tendon_compliance] # per motor: rotor_inertia, tendon_compliance
     index = 1.0e-3
+
+The ``[stops]`` table gives the unilateral spring-damper end stops of :class:`~alpes_dyn.model.stops.JointStops`
+(``JointStops.of(model)``, ``simulate(..., stops=)``), the MJCF export (each such joint's ``solreflimit`` and
+``solimplimit``, :mod:`alpes_dyn.model.mjcf_export`) and ``alpes-dyn dynamics``' stop table (source ``spec``): a joint
+the table leaves without a value gets the sized one (:func:`~alpes_dyn.model.stops.sized_stops`; a damping left out
+is sized to the stiffness given). A value on a joint without a finite limit is refused where stops are built.
 
 Every table of ``[identified]`` names values the spec holds (a joint of its ``[stiffness]``, ``[coulomb]``,
 ``[viscous]`` table, a motor of its ``[[motor]]`` entries); the record is informative, the values are used as
@@ -85,13 +97,13 @@ import numpy as np
 from .description import Layout
 from ..errors import ModelError
 from ..fileio import load_toml, read_text
-from ..limits import MAX_NAME, check_physical
 from .extras import JointExtras, spring_stiffness
 from .params import IDENTIFICATION_FIELDS, HandParams
+from .spec_values import STOP_KEYS, STOPS_TABLE, _name, _number, parse_stops, stop_values, stops_toml
 from .transmission import Transmission
 
 __all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES",
-           "IDENTIFIED_TABLES", "REST_TABLE"]
+           "IDENTIFIED_TABLES", "REST_TABLE", "STOPS_TABLE", "STOP_KEYS"]
 
 JOINT_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "armature")
 """Per-joint tables of a spec: spring k (N m/rad), Coulomb F_s (N m), viscous F_v (N m s/rad), joint-side
@@ -100,42 +112,12 @@ REST_TABLE = "rest_angle"
 """The per-joint table of the springs' rest angles q_rest (rad, either sign; default 0): the spring torque is
 k (q - q_rest) (:func:`~alpes_dyn.model.extras.spring_law`). Only on a joint the ``[stiffness]`` table lists."""
 _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES + (
-    REST_TABLE, "identified")
+    REST_TABLE, STOPS_TABLE, "identified")
 IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_inertia", "tendon_compliance")
 """The tables of a spec's ``[identified]`` section: the standard error of each identified value, by joint (the
 per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``)."""
 _MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance")
 _MOTOR_REQUIRED = ("name", "joints")
-
-
-def _number(value: Any, name: str, low: float | None = None, strict: bool = False, unit: str = "") -> float:
-    """``value`` as a finite float of the accepted range of its ``unit`` (:data:`alpes_dyn.limits.PHYSICAL_RANGES`;
-    ``low``: 0.0 for a quantity that may be zero, with ``strict`` one that must be positive), else ModelError."""
-    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
-        raise ModelError(f"{name}: expected a number, got {value!r}")
-    try:
-        x = float(value)
-    except OverflowError:  # an integer of 400 digits
-        raise ModelError(f"{name}: expected a finite number, got an integer of {len(str(abs(int(value))))} digits") from None
-    if not math.isfinite(x):
-        raise ModelError(f"{name}: expected a finite number, got {value!r}")
-    if low is not None and (x <= low if strict else x < low):
-        raise ModelError(f"{name}: expected a number {'>' if strict else '>='} {low:g}, got {x:g}")
-    kind = "any" if low is None else "pos" if strict else "nonneg"
-    check_physical(x, name, unit, kind, ModelError)
-    return x
-
-
-def _name(value: Any, name: str) -> str:
-    """A name of the spec (motor, joint, frame, robot): a non-empty string without control characters (they
-    become XML names in the MJCF export and CSV columns, where XML 1.0 cannot hold them at all)."""
-    if not isinstance(value, str) or not value:
-        raise ModelError(f"{name}: expected a non-empty string, got {value!r}")
-    if len(value) > MAX_NAME:  # it becomes a recording's column (encoder_<motor>) and an MJCF name
-        raise ModelError(f"{name}: {value[:40]!r}... has {len(value)} characters, over the limit of {MAX_NAME}")
-    if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in value):
-        raise ModelError(f"{name}: {value!r} holds a control character; a name is printable text")
-    return value
 
 
 @dataclass(frozen=True)
@@ -205,6 +187,8 @@ class TransmissionSpec:
         is non-zero, else ``"none"``); the torque is always k (q - q_rest).
     identified: the ``[identified]`` section (module doc), or None: {"record": {field: value}, table: {joint or
         motor: standard error}} for the tables of :data:`IDENTIFIED_TABLES`.
+    stops: the ``[stops]`` table (module doc), or None (stops sized to the robot): {"stiffness": N m/rad,
+        "damping": N m s/rad, "joints": {joint: {"stiffness": ..., "damping": ...}}}, every key optional.
     """
 
     motors: tuple[Motor, ...] = ()
@@ -220,6 +204,7 @@ class TransmissionSpec:
     spring: str | None = None
     identified: Mapping[str, Any] | None = None
     rest_angle: Mapping[str, float] = field(default_factory=dict)
+    stops: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         motors = tuple(self.motors) if isinstance(self.motors, (list, tuple)) else None
@@ -233,6 +218,7 @@ class TransmissionSpec:
         for t in JOINT_TABLES:
             object.__setattr__(self, t, _table(getattr(self, t), t, 0.0))
         object.__setattr__(self, REST_TABLE, _table(self.rest_angle, REST_TABLE, None))
+        object.__setattr__(self, STOPS_TABLE, parse_stops(self.stops))
         for j in self.rest_angle:
             if j not in self.stiffness:
                 raise ModelError(f"{REST_TABLE}.{j}: joint {j!r} has no spring (no [stiffness] value); a rest angle "
@@ -327,6 +313,7 @@ class TransmissionSpec:
             table = getattr(self, t)
             if table:
                 out += ["", f"[{t}]"] + [f"{q(j)} = {x!r}" for j, x in table.items()]
+        out += stops_toml(self.stops, q)
         if self.identified is not None:
             out += ["", "[identified]", 'source = "identified"']
             for key, value in self.identified["record"].items():
@@ -344,7 +331,7 @@ class TransmissionSpec:
                                                     for t in JOINT_TABLES + (REST_TABLE,))
                 and (self.encoder_counts, self.smooth_velocity, self.gravity, self.tips, self.name, self.spring)
                 == (other.encoder_counts, other.smooth_velocity, other.gravity, other.tips, other.name, other.spring)
-                and _plain(self.identified) == _plain(other.identified))
+                and _plain(self.identified) == _plain(other.identified) and _plain(self.stops) == _plain(other.stops))
 
     __hash__ = None  # type: ignore[assignment]
 
@@ -361,6 +348,9 @@ class TransmissionSpec:
             for j in getattr(self, t):
                 if j not in known:
                     raise ModelError(f"{t}.{j}: unknown joint {j!r} (URDF joints: {listing})")
+        for j in (self.stops or {}).get("joints", {}):
+            if j not in known:
+                raise ModelError(f"{STOPS_TABLE}.joints.{j}: unknown joint {j!r} (URDF joints: {listing})")
         if self.tips is not None and frame_names:
             frames = set(frame_names)
             for tip in self.tips:
@@ -379,6 +369,12 @@ class TransmissionSpec:
             arrays[t] = a
         return JointExtras(stiffness=arrays["stiffness"], armature=arrays["armature"], coulomb=arrays["coulomb"],
                            viscous=arrays["viscous"], smooth_velocity=self.smooth_velocity, rest=arrays[REST_TABLE])
+
+    def stop_values(self, joint_names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+        """The ``[stops]`` table in ``joint_names`` order (:func:`~alpes_dyn.model.spec_values.stop_values`):
+        stiffness (n,) N m/rad and damping (n,) N m s/rad, NaN where it gives none."""
+        self.check(joint_names)
+        return stop_values(self.stops, joint_names)
 
     def transmission(self, joint_names: Sequence[str]) -> Transmission | None:
         """The :class:`~alpes_dyn.Transmission` (S, its sum pattern, encoder) in ``joint_names`` order,

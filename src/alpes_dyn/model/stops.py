@@ -13,7 +13,8 @@ Two tools:
   mode (sqrt(k / I) ~ 1300 rad/s on a distal phalanx) stable for RK4 steps up to about 1 ms. On any
   other robot :meth:`JointStops.of` sizes them to the robot (:func:`sized_stops`: the same 1.4 degrees under
   the robot's own static torque into its stops; one k for the robot, or one per joint with ``per_joint=True``),
-  or refuses where nothing sizes them.
+  or refuses where nothing sizes them; a spec's ``[stops]`` table (:mod:`alpes_dyn.model.spec`) gives them per joint
+  or robot-wide instead (:func:`spec_stops`), the joints it leaves out sized.
   Pass it to :func:`~alpes_dyn.simulation.integrate.simulate` as ``stops=``. Rigid stops with an impact law
   (MuJoCo's constraint solver) are what the MJCF export (:mod:`alpes_dyn.model.mjcf`) gives.
 * :func:`check_range` -- whether a trajectory leaves the joint range; :func:`simulate` calls it
@@ -35,7 +36,7 @@ import numpy as np
 from ..errors import AlpesDynWarning, InputError
 
 __all__ = ["JointStops", "JointRangeWarning", "check_range", "JOINT_RANGE_MODES", "sized_stops", "STOP_PENETRATION",
-           "STOP_DAMPING_RATIO", "ALPES_STOP", "stop_table"]
+           "STOP_DAMPING_RATIO", "ALPES_STOP", "stop_table", "spec_stops"]
 
 JOINT_RANGE_MODES: tuple[str, ...] = ("warn", "error", "ignore")
 ALPES_STOP: tuple[float, float] = (2.0, 4e-3)
@@ -69,9 +70,11 @@ class JointStops:
         """Stops at a :class:`~alpes_dyn.Model`'s URDF limits (joints without finite limits get none).
 
         ``stiffness`` k (N m/rad) and ``damping`` d (N m s/rad): a number (every joint), n numbers (one per joint,
-        in :attr:`~alpes_dyn.Model.joint_names` order), or None (default): on an Alpes model (one with an Alpes
-        parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad, 4e-3 N m s/rad) unless ``per_joint``; on
-        any other robot sized to it by :func:`sized_stops` (the damping sized to the k given, if only k is).
+        in :attr:`~alpes_dyn.Model.joint_names` order), or None (default): the spec's ``[stops]`` table where it
+        gives them (:func:`spec_stops`; a joint it leaves out sized as below, a damping it leaves out sized to its
+        k); on an Alpes model (one with an Alpes parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad,
+        4e-3 N m s/rad) unless ``per_joint``; on any other robot sized to it by :func:`sized_stops` (the damping
+        sized to the k given, if only k is).
         ``per_joint``: what is sized, sized per joint (arrays (n,): the same rule on each joint, so a light distal
         joint gets a softer stop than the heavy proximal one); default False, one k and one d for the robot.
         :class:`~alpes_dyn.InputError` where they cannot be sized (no torque toward any stop)."""
@@ -80,6 +83,7 @@ class JointStops:
         stiffness = _stop_value(stiffness, "stiffness", "N m/rad", True, model.n)
         damping = _stop_value(damping, "damping", "N m s/rad", False, model.n)
         lo, hi = _limits(model)
+        stiffness, damping = _with_spec_stops(model, stiffness, damping, bool(per_joint))
         if stiffness is None or damping is None:
             if getattr(model, "params", None) is not None and not per_joint:
                 k, d = ALPES_STOP
@@ -105,6 +109,71 @@ class JointStops:
         push_up = xp.fmax(k * p_lo - d * v * (p_lo > 0), 0)    # below the lower stop: pushes toward +q
         push_down = xp.fmax(k * p_hi + d * v * (p_hi > 0), 0)  # above the upper stop: pushes toward -q
         return push_up - push_down
+
+
+def spec_stops(model: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The stop stiffness (n,) N m/rad and damping (n,) N m s/rad the model's spec gives (its ``[stops]`` table,
+    :meth:`~alpes_dyn.model.spec.TransmissionSpec.stop_values`), NaN where it gives none (all NaN without a spec or
+    table). :class:`~alpes_dyn.InputError` naming the field where it gives a value to a joint without a finite limit
+    (no stop to hold it)."""
+    spec = getattr(model, "spec", None)
+    if spec is None or getattr(spec, "stops", None) is None:
+        return np.full(model.n, np.nan), np.full(model.n, np.nan)
+    k, d = spec.stop_values(model.joint_names)
+    lo, hi = _limits(model)
+    free = ~(np.isfinite(lo) | np.isfinite(hi))
+    for j in spec.stops["joints"]:
+        if free[model.joint_names.index(j)]:
+            raise InputError(f"stops.joints.{j}: joint {j!r} has no finite limit (URDF limits beyond 1e3 or none): "
+                             "no stop to hold it")
+    k[free], d[free] = np.nan, np.nan  # a robot-wide value: only on the joints with a stop
+    return k, d
+
+
+def _with_spec_stops(model: Any, stiffness: Any, damping: Any, per_joint: bool) -> tuple[Any, Any]:
+    """``stiffness`` and ``damping`` as :meth:`JointStops.of` got them, completed by the spec's ``[stops]`` table
+    (unchanged without one): an argument given wins; else on each limited joint the table's value, or where the table
+    gives none the value the robot gets without it (:func:`sized_stops`, ``per_joint``), except a damping the table
+    leaves out on a joint whose stiffness it gives (or the argument does): d = 2 zeta sqrt(k I), I the robot's
+    least effective inertia (per joint: the joint's own), as :func:`sized_stops` sizes d from a given k. A number
+    where every limited joint gets the same value, else arrays (n,)."""
+    ks, ds = spec_stops(model)
+    if not (np.isfinite(ks).any() or np.isfinite(ds).any()) or (stiffness is not None and damping is not None):
+        return stiffness, damping
+    lo, hi = _limits(model)
+    limited = np.isfinite(lo) | np.isfinite(hi)
+    k_given = np.isfinite(ks) if stiffness is None else np.ones(model.n, dtype=bool)
+    if stiffness is not None:
+        ks = np.broadcast_to(np.asarray(stiffness, dtype=float), (model.n,)).copy()
+    if damping is not None:
+        ds = np.broadcast_to(np.asarray(damping, dtype=float), (model.n,)).copy()
+    k, d = ks.copy(), ds.copy()
+    unsized = limited & (~np.isfinite(ks) | (~np.isfinite(ds) & ~k_given))
+    if unsized.any():  # the joints the table leaves out: what they get without it
+        k0, d0 = (np.broadcast_to(x, (model.n,)) for x in sized_stops(model, per_joint=per_joint))
+        k = np.where(np.isfinite(k), k, k0)
+        d = np.where(np.isfinite(d) | k_given, d, d0)
+    if (limited & ~np.isfinite(d)).any():  # d sized to the k given
+        inertia = _effective_inertia(model)
+        inertia = inertia if per_joint else np.full(model.n, np.min(inertia[limited]))
+        d = np.where(np.isfinite(d), d, 2.0 * STOP_DAMPING_RATIO * np.sqrt(k * inertia))
+    return _collapsed(k, limited), _collapsed(d, limited)
+
+
+def _effective_inertia(model: Any) -> np.ndarray:
+    """(n,) kg m^2: each joint's effective inertia 1 / (A^-1)_ii at mid-range (rotors included; the others free)."""
+    lo, hi = _limits(model)
+    flo, fhi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
+    return 1.0 / np.diag(np.linalg.inv(model.inertia_matrix(0.5 * (flo + fhi))))
+
+
+def _collapsed(x: np.ndarray, limited: np.ndarray) -> float | np.ndarray:
+    """One number where every limited joint has the same value, else (n,) with the joints without a stop (unused)
+    given the least of the others (finite: a stop's torque is k times a zero penetration there)."""
+    vals = x[limited]
+    if np.all(vals == vals[0]):
+        return float(vals[0])
+    return np.where(limited, x, np.min(vals))
 
 
 def _stop_value(x: Any, name: str, unit: str, positive: bool, n: int) -> float | np.ndarray | None:
@@ -211,8 +280,7 @@ def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> t
         pushed = limited & (tau > 1e-9 * np.max(tau[limited]))  # not a rounding error's torque across a vertical axis
         stiffness = (np.where(pushed, tau, np.min(tau[pushed])) if per_joint else float(np.max(tau[limited])))
         stiffness = stiffness / STOP_PENETRATION
-    flo, fhi = np.where(np.isfinite(lo), lo, 0.0), np.where(np.isfinite(hi), hi, 0.0)
-    inertia = 1.0 / np.diag(np.linalg.inv(model.inertia_matrix(0.5 * (flo + fhi))))
+    inertia = _effective_inertia(model)
     if per_joint or np.ndim(stiffness):
         k = np.broadcast_to(np.asarray(stiffness, dtype=float), (model.n,)).copy()
         return k, 2.0 * STOP_DAMPING_RATIO * np.sqrt(k * inertia)
@@ -225,8 +293,9 @@ def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:
     ``alpes-dyn dynamics`` prints.
 
     Returns a dict of lists in :attr:`~alpes_dyn.Model.joint_names` order: ``stiffness`` (N m/rad) and ``damping``
-    (N m s/rad), None on a joint without a finite limit (no stop); ``source`` per joint: ``"alpes"`` (the Alpes
-    models' :data:`ALPES_STOP`), ``"sized"`` (:func:`sized_stops`: the robot's largest static torque into a stop over
+    (N m s/rad), None on a joint without a finite limit (no stop); ``source`` per joint: ``"spec"`` (the spec's
+    ``[stops]`` table gives both; ``"spec k, sized d"`` or ``"sized k, spec d"`` where it gives one), ``"alpes"``
+    (the Alpes models' :data:`ALPES_STOP`), ``"sized"`` (:func:`sized_stops`: the robot's largest static torque into a stop over
     :data:`STOP_PENETRATION`, critical damping on its lightest limited joint; per joint: that joint's own), ``"least
     of the others"`` (per joint, a limited joint that nothing pushes into a stop), ``"none"`` (no finite limit); and
     ``torque_into_stop`` (N m, the sizing's tau*_i), ``penetration_rad`` (p*). Where nothing sizes the stops
@@ -254,6 +323,10 @@ def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:
     pushed = tau > 1e-9 * np.max(np.where(limited, tau, 0.0), initial=0.0)
     source = ["none" if not lim else "alpes" if alpes else "sized" if not per_joint or push else "least of the others"
               for lim, push in zip(limited, pushed)]
+    ks, ds = spec_stops(model)
+    for i in np.flatnonzero(limited & (np.isfinite(ks) | np.isfinite(ds))):
+        source[i] = ("spec" if np.isfinite(ks[i]) and np.isfinite(ds[i]) else
+                     "spec k, sized d" if np.isfinite(ks[i]) else "sized k, spec d")
     out.update(stiffness=[float(x) if lim else None for x, lim in zip(k, limited)],
                damping=[float(x) if lim else None for x, lim in zip(d, limited)], source=source)
     return out

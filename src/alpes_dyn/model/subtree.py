@@ -178,7 +178,7 @@ def subtree_urdf(urdf: str, joints: Sequence[str], all_joints: Sequence[str]) ->
 def subtree_spec(spec: TransmissionSpec, joints: Sequence[str], motors: Sequence[str],
                  frames: Sequence[str]) -> TransmissionSpec:
     """``spec`` restricted to ``motors`` and ``joints``: their ``[[motor]]`` entries, the per-joint tables' and
-    the rest angles' rows of those joints, the tips among ``frames`` (None where none is left), the
+    the rest angles' and the ``[stops]`` rows of those joints (its robot-wide values kept), the tips among ``frames`` (None where none is left), the
     ``[identified]`` section's rows of those joints and motors (its record kept)."""
     keep_j, keep_m = set(joints), set(motors)
     tables = {t: {j: x for j, x in getattr(spec, t).items() if j in keep_j} for t in JOINT_TABLES + (REST_TABLE,)}
@@ -193,8 +193,13 @@ def subtree_spec(spec: TransmissionSpec, joints: Sequence[str], motors: Sequence
                     if k in (keep_j if t in JOINT_TABLES else keep_m)}
             if rows:
                 identified[t] = rows
+    stops = None
+    if spec.stops is not None:  # the robot-wide values, and the kept joints' own
+        stops = {k: x for k, x in spec.stops.items() if k != "joints"}
+        stops["joints"] = {j: dict(e) for j, e in spec.stops["joints"].items() if j in keep_j}
+        stops = stops if len(stops) > 1 or stops["joints"] else None
     return dataclasses.replace(spec, motors=tuple(m for m in spec.motors if m.name in keep_m), tips=tips,
-                               identified=identified, **tables)
+                               identified=identified, stops=stops, **tables)
 
 
 def subtree_model(model: Any, motors: str | Sequence[str]) -> Any:

@@ -18,6 +18,7 @@ URDF + spec robot (``alpes-dyn sweep --model ROBOT.urdf --spec FILE.toml``): wha
 from __future__ import annotations
 
 import csv
+import functools
 import io
 import json
 import logging
@@ -342,6 +343,23 @@ ROBOT_HELD: tuple[str, ...] = ("masses and inertias (the URDF's)", "rest angles"
 """What :func:`robot_robustness_draw` neither draws nor fits (held in the truth and in the fit alike)."""
 
 
+def staged_fit(fit: Callable[..., Any], names: list[str], first: list[str]) -> tuple[Any, bool]:
+    """(the fit kept, whether the one-stage restart was run) of :func:`robot_robustness_draw`: ``fit(names, **kw)``
+    (``identify`` on the recording) of ``first`` (the driven joints' values) for at most :data:`WARM_UP_ITERATIONS`,
+    then of every name from there; where that does not converge, one stage from the spec's values as well, the
+    converged one kept (both converged or neither: the lower residual). Where ``first`` is every name (or none), one
+    stage. Why the restart: neither order converges on every draw (robot_robustness_draw's docstring)."""
+    if not first or len(first) == len(names):
+        return fit(names), False
+    held = fit(first, max_iterations=WARM_UP_ITERATIONS)
+    res = fit(names, start=held)
+    if res.converged:
+        return res, False
+    alt = fit(names)
+    better = (alt.converged, -alt.residual_rms) > (res.converged, -res.residual_rms)
+    return (alt if better else res), True
+
+
 def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: float = 0.2, duration: float = 4.0,
                           fit: bool = True) -> dict[str, Any]:
     """One draw of the robustness study on a URDF + spec robot (the files ``urdf`` and ``spec``: their paths travel
@@ -367,7 +385,14 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
     :data:`WARM_UP_ITERATIONS` (a warm-up: with wrong held values it cannot converge, and run longer it drifts: seed 0
     was at 0.68 counts after 12 iterations, 7.5 after 50), then everything drawn from there. 4 s experiments, seeds
     0 and 1: both converged at 0.575 and 0.572 counts, every spring within 0.006 %, 28 s per fit (load 7 on 2 cores,
-    2026-12-03). A robot whose motors drive every joint is fitted in one stage."""
+    2026-12-03). A robot whose motors drive every joint is fitted in one stage.
+
+    Why the one-stage restart (:func:`staged_fit`): seed 4 (the passive spring drawn 17.7 % off) fails the two stages
+    -- the warm-up, the passive values held that far off, pulls the distal spring to 0.505 N m/rad (true 0.595, the
+    residual 5.06 counts), and the second stage ends at the iteration cap at 1.63 counts, the springs 1.4 % off --
+    while one stage from the spec's values converges at the sensor floor (0.580 counts) in 32 iterations (2026-12-03,
+    load 8-9: 18 s, against 147 s for the failed two stages); seed 1 is the other way round. So where the two stages
+    do not converge, the fit is run in one stage too and the converged one kept (``one_stage_restart`` in the row)."""
     import warnings
 
     from ..estimation.adequacy import AdequacyWarning
@@ -391,13 +416,10 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
         with warnings.catch_warnings():  # the verdict is the row's: converged, residual
             warnings.simplefilter("ignore", AdequacyWarning)
             first = [n for n, p in chosen.items() if p.joint in driven]
-            if first and len(first) < len(chosen):  # the driven joints' values first, then all, from there
-                held = identify(nominal, rec, first, excitation=design.lines, progress=False,
-                                max_iterations=WARM_UP_ITERATIONS)
-                res = identify(nominal, rec, list(chosen), excitation=design.lines, progress=False, start=held)
-            else:
-                res = identify(nominal, rec, list(chosen), excitation=design.lines, progress=False)
+            fit_of = functools.partial(identify, nominal, rec, excitation=design.lines, progress=False)
+            res, restarted = staged_fit(fit_of, list(chosen), first)
         out["fit_seconds"] = time.perf_counter() - t0
+        out["one_stage_restart"] = restarted
         out["converged"] = bool(res.converged)
         out["residual_counts"] = float(res.residual_rms)
         truth_of = {"K": true_spec.stiffness, "F_s": true_spec.coulomb, "F_v": true_spec.viscous}

@@ -1,0 +1,113 @@
+"""The values of a transmission spec (:mod:`alpes_dyn.model.spec`): a number in its physical range, a name, and the
+``[stops]`` table (joint stops a user gives, robot-wide and per joint: read, placed in joint order, written)."""
+
+from __future__ import annotations
+
+import math
+from types import MappingProxyType
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from ..errors import ModelError
+from ..limits import MAX_NAME, check_physical
+
+__all__ = ["STOPS_TABLE", "STOP_KEYS", "parse_stops", "stop_values", "stops_toml"]
+
+STOPS_TABLE = "stops"
+"""The joint stops' table of a spec: ``stiffness`` (N m/rad, > 0) and ``damping`` (N m s/rad, >= 0) for every
+limited joint, and ``joints`` {joint: {stiffness, damping}} per joint (:mod:`alpes_dyn.model.spec`'s module doc)."""
+STOP_KEYS: tuple[str, ...] = ("stiffness", "damping")
+
+
+def _number(value: Any, name: str, low: float | None = None, strict: bool = False, unit: str = "") -> float:
+    """``value`` as a finite float of the accepted range of its ``unit`` (:data:`alpes_dyn.limits.PHYSICAL_RANGES`;
+    ``low``: 0.0 for a quantity that may be zero, with ``strict`` one that must be positive), else ModelError."""
+    if isinstance(value, bool) or not isinstance(value, (int, float, np.integer, np.floating)):
+        raise ModelError(f"{name}: expected a number, got {value!r}")
+    try:
+        x = float(value)
+    except OverflowError:  # an integer of 400 digits
+        raise ModelError(f"{name}: expected a finite number, got an integer of {len(str(abs(int(value))))} digits") from None
+    if not math.isfinite(x):
+        raise ModelError(f"{name}: expected a finite number, got {value!r}")
+    if low is not None and (x <= low if strict else x < low):
+        raise ModelError(f"{name}: expected a number {'>' if strict else '>='} {low:g}, got {x:g}")
+    kind = "any" if low is None else "pos" if strict else "nonneg"
+    check_physical(x, name, unit, kind, ModelError)
+    return x
+
+
+def _name(value: Any, name: str) -> str:
+    """A name of the spec (motor, joint, frame, robot): a non-empty string without control characters (they
+    become XML names in the MJCF export and CSV columns, where XML 1.0 cannot hold them at all)."""
+    if not isinstance(value, str) or not value:
+        raise ModelError(f"{name}: expected a non-empty string, got {value!r}")
+    if len(value) > MAX_NAME:  # it becomes a recording's column (encoder_<motor>) and an MJCF name
+        raise ModelError(f"{name}: {value[:40]!r}... has {len(value)} characters, over the limit of {MAX_NAME}")
+    if any(ord(c) < 32 or 127 <= ord(c) < 160 for c in value):
+        raise ModelError(f"{name}: {value!r} holds a control character; a name is printable text")
+    return value
+
+
+def _stop_numbers(value: Any, where: str) -> dict[str, float]:
+    """``stiffness`` (N m/rad, > 0) and ``damping`` (N m s/rad, >= 0) of a ``[stops]`` table or entry."""
+    out = {}
+    for k, x in value.items():
+        if k not in STOP_KEYS:
+            raise ModelError(f"{where}.{k}: unknown key (expected {' or '.join(STOP_KEYS)})")
+        out[k] = _number(x, f"{where}.{k}", 0.0, strict=k == "stiffness",
+                         unit="N m/rad" if k == "stiffness" else "N m s/rad")
+    return out
+
+
+def parse_stops(value: Any) -> Mapping[str, Any] | None:
+    """The ``[stops]`` table validated (module doc): {"stiffness", "damping" (robot-wide, optional), "joints": {joint:
+    {"stiffness", "damping"}}}, or None."""
+    if value is None:
+        return None
+    if not isinstance(value, Mapping):
+        raise ModelError(f"stops: expected a table (stiffness, damping, joints), got {value!r}")
+    joints = value.get("joints", {})
+    out: dict[str, Any] = _stop_numbers({k: x for k, x in value.items() if k != "joints"}, "stops")
+    if not isinstance(joints, Mapping):
+        raise ModelError(f"stops.joints: expected a table joint name -> {{stiffness, damping}}, got {joints!r}")
+    per: dict[str, Mapping[str, float]] = {}
+    for j, entry in joints.items():
+        _name(j, "stops.joints")
+        if not isinstance(entry, Mapping) or not entry:
+            raise ModelError(f"stops.joints.{j}: expected a table with stiffness and/or damping, got {entry!r}")
+        per[j] = MappingProxyType(_stop_numbers(entry, f"stops.joints.{j}"))
+    if not out and not per:
+        raise ModelError("stops: an empty table; give stiffness, damping or joints (or leave [stops] out: sized to "
+                         "the robot)")
+    out["joints"] = MappingProxyType(per)
+    return MappingProxyType(out)
+
+
+def stop_values(stops: Mapping[str, Any] | None, joint_names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
+    """A ``[stops]`` table (:func:`parse_stops`'s) in ``joint_names`` order: stiffness (n,) N m/rad and damping (n,)
+    N m s/rad, a joint's own value over the robot-wide one, NaN where the table gives none (all NaN for None)."""
+    n = len(joint_names)
+    out = {k: np.full(n, np.nan) for k in STOP_KEYS}
+    if stops is not None:
+        for k in STOP_KEYS:
+            if k in stops:
+                out[k][:] = stops[k]
+        idx = {j: i for i, j in enumerate(joint_names)}
+        for j, entry in stops["joints"].items():
+            for k, x in entry.items():
+                out[k][idx[j]] = x
+    return out["stiffness"], out["damping"]
+
+
+def stops_toml(stops: Mapping[str, Any] | None, key: Callable[[str], str]) -> list[str]:
+    """The TOML lines of a ``[stops]`` table (none for None); ``key`` quotes a joint name as a TOML key."""
+    if stops is None:
+        return []
+    out = ["", f"[{STOPS_TABLE}]"] + [f"{k} = {stops[k]!r}" for k in STOP_KEYS if k in stops]
+    if stops["joints"]:
+        out += ["", f"[{STOPS_TABLE}.joints]"] + [
+            f"{key(j)} = {{ " + ", ".join(f"{k} = {x!r}" for k, x in e.items()) + " }"
+            for j, e in stops["joints"].items()]
+    return out

@@ -1,0 +1,49 @@
+"""``mjcf_recording``: MuJoCo stepped on the MJCF of any robot (what ``alpes-dyn mjcf`` writes), recorded through the
+library's encoder and torque sensors (issue 17: the EKF's goal on a MuJoCo plant of the exported MJCF).
+
+References: the library's own simulator on the same robot (a different integrator of the same equations: MuJoCo's
+RK4 at 0.1 ms on its own mass matrix, bias forces and passive springs), and the encoder's law by hand
+(counts = round(S q / (2 pi / counts_per_rev)) without noise)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.model.spec import TransmissionSpec
+from alpes_dyn.simulation.integrate import simulate
+
+mujoco = pytest.importorskip("mujoco")
+from alpes_dyn.control.plants import mjcf_recording  # noqa: E402
+
+SPEC = ('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n\n'
+        "[stiffness]\nj1 = 0.04\nj2 = 0.05\nj3 = 0.06\n\n[viscous]\nj1 = 1e-4\nj2 = 1e-4\nj3 = 1e-4\n")
+
+
+def _robot() -> ad.Model:
+    return ad.Model(ad.urdf_string("finger3").replace('name="alpes_finger3"', 'name="tendon_robot"', 1),
+                    TransmissionSpec.from_toml(SPEC))
+
+
+def test_mjcf_recording_follows_our_simulator_and_the_encoder_law(tmp_path):
+    """A tendon finger (finger3's URDF, one motor over its three joints, springs, viscous friction), its exported MJCF
+    written as a file, a torque ramp 0.02 -> 0.025 N m replayed for 0.5 s from the rest under 0.02 N m (inside the joint
+    ranges throughout: no stop acts): MuJoCo's joints follow our RK4 to 1e-6 rad; without noise the counts are round(S q / step) of MuJoCo's joints and the torque the one given."""
+    m = _robot()
+    path = tmp_path / "plant.xml"
+    path.write_text(m.to_mjcf())
+    t = np.arange(501) * 1e-3
+    u = (0.02 + 0.01 * t)[:, None]
+    rec = mjcf_recording(path, m, u, 1e-3, encoder_noise_counts=0.0, torque_noise=0.0)
+    x0 = np.concatenate([m.static_equilibrium(m.transmission.joint_torque(u[0]), np.zeros(m.n)), np.zeros(m.n)])
+    ours = simulate(m, x0, u[:-1], duration=0.5, dt=1e-3, input="motor", output="joints", joint_range="ignore")
+    assert np.max(np.abs(rec.true_q - ours.x[:, : m.n])) < 1e-6
+    assert np.ptp(rec.true_q[:, 0]) > 0.05  # it moved: the comparison is not of two rests
+    assert np.all(rec.true_q > m.lower) and np.all(rec.true_q < m.upper)
+    step = 2 * math.pi / 4096
+    np.testing.assert_array_equal(rec.encoder[:, 0], np.round(rec.true_q @ m.transmission.S[0] / step))
+    np.testing.assert_array_equal(rec.torque, u)
+    assert rec.motor_names == ("flexor",) and rec.joint_names == m.joint_names
