@@ -2260,7 +2260,7 @@ API.extend([  # issue 19's third re-check: mimic attributes, the hot paths' boun
     A("Model", lambda c: ad.Model(_mimic('joint="j1" multiplier="1_0"')), ModelError,
       "joint 'j2': <mimic multiplier='1_0'> is not a finite number (write a decimal number"),
     A("Model", lambda c: ad.Model(_mimic('joint="j1" multiplier="2 "')), ModelError,  # urdfdom refuses it too
-      "joint 'j2': <mimic multiplier='2 '> is not a finite number"),
+      "joint 'j2': <mimic multiplier='2 '> has a blank after the number (URDF readers refuse it"),
     A("Model", lambda c: ad.Model(_mimic('joint="j1"/><mimic joint="j3" multiplier="2"')), ModelError,
       "joint 'j2': 2 <mimic> elements; a joint follows one joint"),
     A("Model", lambda c: c.m.forward_dynamics(np.array([1e300, 0.0, 0.0]), c.z, c.z), InputError,
@@ -2377,6 +2377,36 @@ def _rec_of(counts):
     enc = np.asarray(counts, dtype=float).reshape(-1, 1)
     return Recording(t=np.arange(enc.shape[0]) * 1e-3, encoder=enc, torque=np.zeros_like(enc), motor_names=("m",),
                      joint_names=("j",))
+
+
+_P3_I = 'ixx="1e-6" ixy="0" ixz="0" iyy="1e-6" iyz="0" izz="1e-6"'
+
+
+def _p3_inertial_origin(xyz: str) -> str:
+    """finger3's URDF with the ``<origin xyz>`` of its last phalanx p3's inertial replaced."""
+    out, n = re.subn(r'(<link name="p3">\s*<inertial>\s*<origin xyz=")[^"]*"', rf'\g<1>{xyz}"', FINGER3)
+    assert n == 1
+    return out
+
+
+API.extend([  # issue 19's sixth re-check: an inertial urdfdom cannot read (Pinocchio then builds the link massless)
+    A("Model", lambda c: ad.Model(_with_p3_inertial("0.023 ", _P3_I)), ModelError,
+      "link 'p3': mass: '0.023 ' has a blank after the number (URDF readers refuse it"),
+    A("Model", lambda c: ad.Model(_with_p3_inertial("2_3e-2", _P3_I)), ModelError,
+      "link 'p3': mass: '2_3e-2' is not a finite number (write a decimal number"),
+    A("Model", lambda c: ad.Model(_with_p3_inertial("0.023", _P3_I.replace('ixx="1e-6"', 'ixx="1e-6 "'))), ModelError,
+      "link 'p3': inertia ixx: '1e-6 ' has a blank after the number"),
+    A("Model", lambda c: ad.Model(_with_p3_inertial("0.023", _P3_I.replace('ixy="0" ', ''))), ModelError,
+      "link 'p3': inertia ixy: missing (URDF readers then drop the link's whole inertial"),
+    A("Model", lambda c: ad.Model(FINGER3.replace('<mass value="0.023"/>', '<mass/>', 1)), ModelError,
+      "link 'p3': mass: missing"),
+    A("Model", lambda c: ad.Model(_p3_inertial_origin("0.01 0")), ModelError,
+      "link 'p3': inertial origin xyz='0.01 0': expected 3 numbers, got 2"),
+    A("Model", lambda c: ad.Model(_p3_inertial_origin("0.01 0 0x0")), ModelError,
+      "link 'p3': inertial origin xyz: expected a number, got '0x0'"),
+    A("check_inertials", lambda c: __import__("alpes_dyn.model.inertial", fromlist=["x"]).check_inertials(
+        _with_p3_inertial("inf", _P3_I)), ModelError, "link 'p3': mass: must be finite, got 'inf'"),
+])
 
 
 API.extend([  # the encoder excursion check of experiment and identify (issue 17)
@@ -2836,3 +2866,20 @@ def test_recording_without_true_angles_and_epoch_seconds_still_read(tmp_path):
     assert rec.true_q is None and rec.t.shape == (201,)
     (tmp_path / "epoch.csv").write_text(_recording_edited("t", lambda i, v: repr(1.7e9 + float(v))))
     assert np.allclose(_read_rec(tmp_path / "epoch.csv").t - 1.7e9, rec.t, atol=1e-6)
+
+
+def test_urdf_inertial_numbers_read_as_urdfdom_reads_them():
+    """Why the inertials' numbers are checked by urdfdom's grammar: Pinocchio's own build of a mass with a blank
+    after it gives the link no mass at all, without an error (the dynamics silently changed). What urdfdom accepts
+    is accepted and gives the same model: a blank before a number, blanks around an origin's three numbers."""
+    import pinocchio as pin
+    from alpes_dyn.fileio import native_stderr_to
+    with native_stderr_to([]):  # urdfdom prints its errors on the process's stderr
+        raw = pin.buildModelFromXML(_with_p3_inertial("0.023 ", _P3_I))
+    assert raw.inertias[raw.getJointId("j3")].mass == 0.0  # the link's 0.023 kg gone
+    q = np.array([0.3, 0.5, 0.7])
+    clean = ad.Model(FINGER3)
+    padded = ad.Model(_p3_inertial_origin(" 0.012  0.0 0.0 ").replace('<mass value="0.023"/>',
+                                                                       '<mass value=" 0.023"/>', 1))
+    assert np.array_equal(padded.inertia_matrix(q), clean.inertia_matrix(q))
+    assert np.array_equal(padded.gravity_torque(q), clean.gravity_torque(q))

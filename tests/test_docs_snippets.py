@@ -123,3 +123,35 @@ def test_gallery_script_runs(script, tmp_path, monkeypatch):
     monkeypatch.chdir(tmp_path)
     monkeypatch.setenv("MPLBACKEND", "Agg")
     runpy.run_path(str(script), run_name="__main__")
+
+
+def _extras_in_getting_started() -> dict[str, set[str]]:
+    """Each ``pip install ".[extra]"`` line of getting-started with the packages its comment lists (continuation
+    lines included; descriptions after a colon or in parentheses cut)."""
+    out: dict[str, set[str]] = {}
+    current = None
+    for line in (DOCS / "getting-started.rst").read_text(encoding="utf-8").splitlines():
+        m = re.match(r'\s*\$ pip install "\.\[(\w+)\]"\s*#\s*\+\s*(.*)', line)
+        cont = re.match(r"\s*#\s{3}(.*)", line)
+        if m:
+            current, text = m.group(1), m.group(2)
+        elif cont and current:
+            text = cont.group(1)
+        else:
+            current = None
+            continue
+        text = re.sub(r"\([^)]*\)", "", text.split(":")[0])
+        out.setdefault(current, set()).update(w.strip() for w in text.split(",") if w.strip())
+    return out
+
+
+def test_getting_started_lists_every_extras_package():
+    """The install lines of getting-started name exactly the packages of pyproject.toml's extras (issue 19: the
+    lists were incomplete), python-control written for its distribution name ``control``."""
+    import tomllib
+    project = tomllib.loads((DOCS.parent / "pyproject.toml").read_text(encoding="utf-8"))["project"]
+    documented = _extras_in_getting_started()
+    for extra, requirements in project["optional-dependencies"].items():
+        names = {re.split(r"[<>=!~ ;]", r, maxsplit=1)[0] for r in requirements}
+        names = {"python-control" if n == "control" else n for n in names}
+        assert documented.get(extra) == names, (extra, documented.get(extra), names)

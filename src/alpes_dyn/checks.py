@@ -4,12 +4,29 @@ from __future__ import annotations
 
 import math
 import numbers
+import re
 
 import numpy as np
 
 from .errors import InputError
 
-__all__ = ["as_float_array", "as_positive_float"]
+__all__ = ["as_float_array", "as_positive_float", "URDF_DECIMAL", "urdf_number_problem"]
+
+URDF_DECIMAL = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
+"""A URDF number as urdfdom (Pinocchio's URDF parser) reads it, a C++ stream's ``>>`` that must reach the end:
+decimal digits, an optional exponent, leading blanks (not trailing ones, nor Python's ``1_0``, ``nan``, ``inf``,
+hexadecimal)."""
+
+
+def urdf_number_problem(text: str) -> str | None:
+    """Why urdfdom would not read ``text`` as one finite number (``None`` if it would): the words of an error
+    message after the attribute's name, e.g. ``"has a blank after the number"``. Pinocchio builds a link whose
+    ``<inertial>`` urdfdom could not read as massless, without an error: its numbers are checked before."""
+    if URDF_DECIMAL.fullmatch(text):
+        return None if math.isfinite(float(text)) else "is not a finite number"
+    if URDF_DECIMAL.fullmatch(text.rstrip()):
+        return "has a blank after the number (URDF readers refuse it: remove it)"
+    return "is not a finite number (write a decimal number, e.g. 0.5 or -1.2e-2)"
 
 
 def _describe(x: object) -> str:

@@ -3,7 +3,9 @@
 :func:`check_inertials` is run by every :class:`~alpes_dyn.Model` on its URDF. For each ``<link>``
 with an ``<inertial>``:
 
-* the mass and the six inertia entries are finite numbers;
+* the mass and the six inertia entries (each given) and the ``<origin>``'s numbers are finite numbers as
+  urdfdom reads them (no blank after a number, no ``1_0``): where urdfdom cannot read an inertial, Pinocchio
+  builds the link massless without an error;
 * the mass is >= 0; a link of zero mass must have a zero inertia too (a *massless* link, like a
   link without ``<inertial>``): a zero mass with a non-zero inertia is not a body;
 * the rotational inertia (about the COM, kg m^2) is positive semidefinite: its principal moments
@@ -25,6 +27,7 @@ import xml.etree.ElementTree as ET
 
 import numpy as np
 
+from ..checks import urdf_number_problem
 from ..errors import ModelError
 
 __all__ = ["INERTIA_MODES", "check_inertials"]
@@ -34,13 +37,35 @@ _KEYS = ("ixx", "ixy", "ixz", "iyy", "iyz", "izz")
 
 
 def _number(text: str | None, what: str) -> float:
+    """An inertial's number as urdfdom reads it (:func:`~alpes_dyn.checks.urdf_number_problem`): where urdfdom
+    cannot read one, Pinocchio builds the link massless without an error, so it is refused here, named."""
+    if text is None:
+        raise ModelError(f"{what}: missing (URDF readers then drop the link's whole inertial: give it)")
     try:
-        x = float(text if text is not None else "0")
+        x = float(text)
     except ValueError:
         raise ModelError(f"{what}: expected a number, got {text!r}") from None
     if not math.isfinite(x):
         raise ModelError(f"{what}: must be finite, got {text!r}")
+    problem = urdf_number_problem(text)
+    if problem is not None:
+        raise ModelError(f"{what}: {text!r} {problem}")
     return x
+
+
+def _check_origin(inertial: ET.Element, name: str) -> None:
+    """The ``<origin xyz rpy>`` of an ``<inertial>``: three URDF numbers each (blank-separated), where given."""
+    origin = inertial.find("origin")
+    for attr in ("xyz", "rpy"):
+        text = origin.get(attr) if origin is not None else None
+        if text is None:
+            continue
+        parts = text.split()
+        if len(parts) != 3:
+            raise ModelError(f"{name}: inertial origin {attr}={text[:40]!r}: expected 3 numbers, got {len(parts)} "
+                             "(URDF readers then drop the link's whole inertial)")
+        for part in parts:
+            _number(part, f"{name}: inertial origin {attr}")
 
 
 def check_inertials(urdf: str, mode: str = "strict") -> None:
@@ -65,8 +90,9 @@ def check_inertials(urdf: str, mode: str = "strict") -> None:
         m = _number(mass_el.get("value") if mass_el is not None else None, f"{name}: mass")
         if m < 0:
             raise ModelError(f"{name}: mass must be >= 0 kg, got {m:g}")
-        el = inertial.find("inertia")
-        v = dict(zip(_KEYS, (_number(el.get(k) if el is not None else None, f"{name}: inertia {k}") for k in _KEYS)))
+        _check_origin(inertial, name)
+        el = inertial.find("inertia")  # absent: a point mass, as Pinocchio builds it (all six then 0)
+        v = dict(zip(_KEYS, (_number(el.get(k), f"{name}: inertia {k}") if el is not None else 0.0 for k in _KEYS)))
         I = np.array([[v["ixx"], v["ixy"], v["ixz"]], [v["ixy"], v["iyy"], v["iyz"]], [v["ixz"], v["iyz"], v["izz"]]])
         if m == 0:
             if np.any(I != 0):

@@ -26,14 +26,13 @@ is the model's A).
 
 from __future__ import annotations
 
-import math
-import re
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from typing import Any, Sequence
 
 import numpy as np
 
+from ..checks import urdf_number_problem
 from ..errors import ModelError
 from ..limits import check_physical
 
@@ -50,11 +49,6 @@ class MimicJoint:
     offset: float = 0.0
 
 
-_DECIMAL = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
-"""A URDF number as urdfdom reads it: decimal digits, an optional exponent, leading blanks (not trailing ones, nor
-Python's ``1_0``, ``nan``, ``infinity``)."""
-
-
 def _attr_number(j: ET.Element, m: ET.Element, attr: str, default: float) -> float:
     """``<mimic attr=...>`` of joint ``j`` as a float (``default`` when absent): a decimal number within the
     accepted range (:func:`~alpes_dyn.limits.check_physical`): a multiplier of magnitude at most 1e6 (either sign,
@@ -64,11 +58,10 @@ def _attr_number(j: ET.Element, m: ET.Element, attr: str, default: float) -> flo
     if text is None:
         return default
     where = f"joint {j.get('name')!r}: <mimic {attr}={text[:40]!r}>"
-    if not _DECIMAL.fullmatch(text):
-        raise ModelError(f"{where} is not a finite number (write a decimal number, e.g. 0.5 or -1.2e-2)")
+    problem = urdf_number_problem(text)
+    if problem is not None:
+        raise ModelError(f"{where} {problem}")
     x = float(text)
-    if not math.isfinite(x):
-        raise ModelError(f"{where} is not a finite number")
     unit = "-" if attr == "multiplier" else ("m" if j.get("type") == "prismatic" else "rad")
     return float(check_physical(x, where, unit, "any", ModelError))
 
