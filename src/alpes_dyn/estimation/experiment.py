@@ -15,11 +15,15 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
   joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
-* the bias trimmed on the hand (``trim_bias``, default on): before recording, a slow loop on the
-  measured encoder moves the bias until the finger rests where the nominal one would (the real finger,
-  not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
-  q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a
-  fold of its static equilibria), as high as the excitation keeps clear of the fold;
+* the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.trim`): before recording, a
+  slow loop on the measured encoder moves the bias until the finger rests where the nominal one would (the real
+  finger, not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
+  q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a fold of its
+  static equilibria), as high as the excitation keeps clear of the fold. Palm up a finger within +-20 % of the
+  nominal values is up to 6.4 times as compliant mid-range as the nominal, and the excitation then swings it past
+  its stops: :data:`alpes_dyn.estimation.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits' precision)
+  holds such a finger no higher than where it is as compliant as the nominal at its design point, its multisine
+  and dither shrunk with the room its joints have left below;
 * optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
   ``camera_noise`` (rad);
 * the sensors of the estimation scenario (:mod:`alpes_dyn.estimation.scenario`): encoder quantised to
@@ -67,6 +71,9 @@ from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # n
 from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported)
 from .draws import perturbed_params  # noqa: F401 (re-exported)
 from .excursion import warn_small_excursions
+from . import trim as _trim
+from .trim import (_fmt, _fold_torque, _holding_bias, _mean_equilibrium, _oriented, _rest_torque,  # noqa: F401
+                   _torque_ceiling, _trimmed_bias, _with)  # (_fold_torque, _oriented: re-exported)
 from .recording import Recording, write_recording
 from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning
@@ -76,40 +83,6 @@ __all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_to
 
 EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 """The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
-
-
-def _oriented(model: Model, gravity: np.ndarray) -> Model:
-    """``model`` itself, or a copy of it with another gravity vector (the hand turned)."""
-    return model if np.array_equal(model.gravity, gravity) else model.copy(gravity=gravity)
-
-
-def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarray) -> np.ndarray:
-    """The static equilibrium under the motor torques ``tau_m`` (m,) (a number for one motor), the joints
-    without spring held mid-range."""
-    m = _oriented(model, gravity)
-    held = m.springless_joints
-    q0 = np.zeros(m.n)
-    for j in held:
-        i = m.joint_index(j)
-        q0[i] = 0.5 * (m.lower[i] + m.upper[i])
-    return m.static_equilibrium(m.transmission.joint_torque(np.atleast_1d(np.asarray(tau_m, dtype=float))), q0,
-                                fixed=held)
-
-
-def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[np.ndarray],
-                  gravity: np.ndarray) -> np.ndarray:
-    """``bias`` with each motor of ``free`` set to the torque that balances gravity on its (held) joints."""
-    out = bias.copy()
-    if not free:
-        return out
-    q = _mean_equilibrium(model, out, gravity)
-    m = _oriented(model, gravity)
-    G = m.gravity_torque(q) - m.transmission.joint_torque(out)  # what the held joints still need
-    S = m.transmission.S
-    for k in free:
-        js = joints[k]
-        out[k] += float(S[k, js] @ G[js] / (S[k, js] @ S[k, js]))
-    return out
 
 
 def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | tuple[np.ndarray, np.ndarray]:
@@ -253,26 +226,6 @@ def _bias_in_range(model: Model, bias: np.ndarray, sprung: list[int], within: Ca
     return out
 
 
-def _torque_ceiling(model: Model, k: int) -> float:
-    """The largest motor torque the design's searches try on motor ``k``, N m: 0.2 on an Alpes model (what the
-    documented experiment was measured with); on any other robot its own static scale, twice the largest torque
-    that one of the motor's joints needs to hold its far limit against its spring and the largest gravity torque
-    met over its range (through the motor's ratio): max_i 2 (k_i max(|lo_i - r_i|, |hi_i - r_i|) + G_i) / |S_ki|, r_i
-    the spring's rest angle (0.05 N m for joints with neither)."""
-    if model.params is not None:
-        return 0.2
-    S = model.transmission.S
-    k_j, rest = model.extras.stiffness, model.extras.rest
-    grav = np.zeros(model.n)
-    for q in (model.lower, 0.5 * (model.lower + model.upper), model.upper):  # gravity alone (springs taken off)
-        grav = np.maximum(grav, np.abs(model.gravity_torque(q) - model.spring_torque(q)))
-    js = np.flatnonzero(S[k])
-    reach = np.maximum(np.abs(model.lower[js] - rest[js]), np.abs(model.upper[js] - rest[js]))  # from the rest angle
-    need = (k_j[js] * reach + grav[js]) / np.abs(S[k, js])
-    top = float(2.0 * need.max())
-    return top if top > 0 else 0.05
-
-
 def _amplitude_ceiling(model: Model, k: int, bias: float) -> float:
     """The largest multisine amplitude searched on motor ``k``: its bias (a tendon pulls only: the torque stays
     >= 0), but on a robot other than an Alpes model a motor that drives one joint alone (a direct drive or a
@@ -280,111 +233,6 @@ def _amplitude_ceiling(model: Model, k: int, bias: float) -> float:
     if model.params is not None or np.count_nonzero(model.transmission.S[k]) != 1:
         return bias
     return max(bias, _torque_ceiling(model, k))
-
-
-def _with(x: np.ndarray, k: int, value: float) -> np.ndarray:
-    out = x.copy()
-    out[k] = value
-    return out
-
-
-def _fmt(x: np.ndarray) -> str:
-    return f"{x[0]:g}" if x.size == 1 else "[" + ", ".join(f"{v:g}" for v in x) + "]"
-
-
-def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: float, gravity: np.ndarray,
-                 upper: float, torques: Callable[[float], np.ndarray] | None = None) -> float:
-    """The motor torque c in [0, upper] N m at which ``reading`` of the finger's static equilibrium (a
-    quantity that grows with the torque) equals ``target``: bisection, a torque that leaves the
-    equilibrium undefined counting as too much. ``torques(c)``: the motor torques with c on the motor
-    searched (default: the one motor)."""
-    torques = torques or (lambda c: np.array([c]))
-    a, b = 0.0, upper
-    for _ in range(60):
-        c = 0.5 * (a + b)
-        try:
-            above = reading(_mean_equilibrium(model, torques(c), gravity)) > target
-        except InputError:
-            above = True
-        a, b = (a, c) if above else (c, b)
-    return 0.5 * (a + b)
-
-
-def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray,
-                  peak: np.ndarray | None = None, target: np.ndarray | None = None) -> np.ndarray:
-    """The motor torques at which ``truth`` rests with the encoder readings that ``nominal`` has at ``bias``
-    (N m), motor by motor for the motors against springs: what an experimenter gets by trimming each bias
-    with a slow loop on its measured encoder before recording (the encoders are all it uses). The
-    motors of springless joints (the thumb's ab/adduction) get the torque that holds their joints where the
-    nominal design places them (mid-range) on ``truth`` under ``gravity``: what the same loop settles to on
-    that motor's encoder. Their bias from the nominal model, which balances the gravity the design names,
-    leaves an unknown tilt's torque unbalanced: with the palm 3 degrees off, the thumb's ab/adduction
-    (no spring) drifted from mid-range onto its 0 degree stop within the 4 s experiment (MuJoCo plant, hand
-    seeds 5 and 6), which no fit without the stop explains (12 counts of residual, springs 12 % off).
-
-    A finger with soft springs may have no rest there: past a fold of its static equilibria (stiffness
-    dG/dq singular: gravity's torque outgrows the springs') it snaps to full flexion. The loop then
-    stops below the fold, by 1.25 times the multisine's ``peak`` torque (m,) so that the excitation does
-    not push it over (measured on a little finger with K_1 18 % soft: fold at 0.0217 N m, below the
-    nominal's mid-range bias of 0.0229 N m). ``target`` (m,): the encoder readings to trim to, if not the
-    nominal's at ``gravity``."""
-    S = nominal.transmission.S
-    joints, sprung, free = _motor_groups(nominal)
-    target = S @ _mean_equilibrium(nominal, bias, gravity) if target is None else target
-    truth = _oriented(truth, gravity)  # once: each search below solves hundreds of equilibria under this gravity
-    out = np.asarray(bias, dtype=float).copy()
-    for k in sprung:
-        upper = max(4.0 * out[k], _torque_ceiling(nominal, k))
-        out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity, upper,
-                              lambda c, k=k: _with(out, k, c))
-        if peak is not None:
-            fold = _fold_torque(truth, lambda c, k=k: _with(out, k, c), gravity, upper)
-            if fold is not None and fold - 1.25 * float(peak[k]) < out[k]:
-                out[k] = fold - 1.25 * float(peak[k])
-                _warn_folded(truth, out, gravity, fold)
-    return _holding_bias(truth, out, free, joints, gravity)
-
-
-def _warn_folded(truth: Model, bias: np.ndarray, gravity: np.ndarray, fold: float) -> None:
-    """A :class:`JointRangeWarning` where the bias held below a fold rests a joint of ``truth`` outside its range:
-    in this orientation the finger cannot be excited mid-range (it would be excited on its stop)."""
-    q = _mean_equilibrium(truth, bias, gravity)
-    out = np.flatnonzero((q < truth.lower) | (q > truth.upper))
-    if out.size:
-        j = int(out[np.argmax(np.maximum(truth.lower[out] - q[out], q[out] - truth.upper[out]))])
-        warnings.warn(JointRangeWarning(
-            f"the finger's static equilibria fold at {fold:.4g} N m (gravity outgrows its springs in this orientation): "
-            f"held below it, at {_fmt(bias)} N m, joint {truth.joint_names[j]!r} rests at "
-            f"{math.degrees(q[j]):.1f} deg, outside its range [{math.degrees(truth.lower[j]):g}, "
-            f"{math.degrees(truth.upper[j]):g}] deg: the experiment would excite it on its stop. Hang the hand fingers "
-            "down (ExperimentDesign(orientations=(hanging_gravity(g),)), alpes_dyn.model.mjcf): gravity then pulls "
-            "along the finger and its equilibria do not fold"), stacklevel=3)
-
-
-def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: np.ndarray,
-                 upper: float) -> float | None:
-    """The torque (N m) up to which the branch of stable static equilibria starting at zero torque goes on
-    (a fold, where dG/dq turns singular), or None if it reaches ``upper``: a scan in steps of upper/400,
-    then bisection."""
-    m = _oriented(model, gravity)
-
-    def stable(c: float) -> bool:
-        try:
-            q = _mean_equilibrium(model, torques(c), gravity)
-        except InputError:
-            return False
-        free = [i for i, j in enumerate(m.joint_names) if j not in m.springless_joints]
-        dG = m.gravity_jacobian(q)[np.ix_(free, free)]
-        return bool(np.linalg.eigvalsh(0.5 * (dG + dG.T)).min() > 0)
-
-    steps = np.linspace(0.0, upper, 401)
-    for a, b in zip(steps[:-1], steps[1:]):
-        if not stable(b):
-            for _ in range(40):
-                c = 0.5 * (a + b)
-                a, b = (c, b) if stable(c) else (a, c)
-            return a
-    return None
 
 
 def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -500,8 +348,10 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
     dither = dither_amplitude(nominal, design)
     t, seg, G = _schedule(design)
     if design.trim_bias and design.torque_bias is None:
-        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, dither)), axis=0)
-        bias = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float), peak)
+        extra = None if _trim.MATCH_COMPLIANCE else dither  # the rule's fold check: the multisine's peak alone
+        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, extra)), axis=0)
+        bias, scale = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float), peak)
+        amp, dither = amp * scale, dither * scale  # 1 but on a finger held lower (alpes_dyn.estimation.trim)
     rng = np.random.default_rng(seed)
     N = t.shape[0] - 1
     n_or = len(design.orientations)
@@ -562,10 +412,13 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
     truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
     t, _, _ = _schedule(design)
     if design.trim_bias and design.torque_bias is None:
-        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, dither)), axis=0)
+        extra = None if _trim.MATCH_COMPLIANCE else dither  # the rule's fold check: the multisine's peak alone
+        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, extra)), axis=0)
         # the trim loop's target: the nominal finger's encoder reading as designed; found on the finger as it is
-        want = nominal.transmission.S @ _mean_equilibrium(nominal, bias, np.asarray(design.orientations[0], dtype=float))
-        bias = _trimmed_bias(truth, nominal, bias, g_true, peak, want)
+        g_design = np.asarray(design.orientations[0], dtype=float)
+        want = nominal.transmission.S @ _mean_equilibrium(nominal, bias, g_design)
+        bias, scale = _trimmed_bias(truth, nominal, bias, g_true, peak, want, g_design)
+        amp, dither = amp * scale, dither * scale
     u = _profiles(design, t, bias, amp, dither)
     x0 = np.zeros(2 * truth.n)
     x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true)
