@@ -235,6 +235,24 @@ def _amplitude_ceiling(model: Model, k: int, bias: float) -> float:
     return max(bias, _torque_ceiling(model, k))
 
 
+def _trim_on_hand(truth: Model, nominal: Model, design: ExperimentDesign, t: np.ndarray, bias: np.ndarray,
+                  amp: np.ndarray, dither: np.ndarray, gravity: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(bias, amp, dither), N m per motor, as the experimenter's slow loop on the encoder leaves them on ``truth``
+    under ``gravity`` (3,) (:func:`~alpes_dyn.estimation.trim._trimmed_bias`: the nominal finger's encoder readings
+    at the design's first orientation as the target, found on the finger as it is; the multisine's and the dither's
+    amplitudes scaled with it, 1 but on a finger held lower); unchanged where the design gives its own
+    ``torque_bias`` or no ``trim_bias``. The fold check's peak is the multisine's and the dither's, the multisine's
+    alone under :data:`~alpes_dyn.estimation.trim.MATCH_COMPLIANCE`."""
+    if not design.trim_bias or design.torque_bias is not None:
+        return bias, amp, dither
+    extra = None if _trim.MATCH_COMPLIANCE else dither
+    peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, extra)), axis=0)
+    g_design = np.asarray(design.orientations[0], dtype=float)
+    bias, scale = _trimmed_bias(truth, nominal, bias, gravity, peak, design_gravity=g_design)
+    return bias, amp * scale, dither * scale
+
+
 def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Sample times (N+1,), orientation segment of each sample and gravity (N+1, 3)."""
     N = design.n_samples - 1
@@ -347,11 +365,8 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
     bias, amp = _excitation(nominal, design)
     dither = dither_amplitude(nominal, design)
     t, seg, G = _schedule(design)
-    if design.trim_bias and design.torque_bias is None:
-        extra = None if _trim.MATCH_COMPLIANCE else dither  # the rule's fold check: the multisine's peak alone
-        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, extra)), axis=0)
-        bias, scale = _trimmed_bias(truth, nominal, bias, np.asarray(design.orientations[0], dtype=float), peak)
-        amp, dither = amp * scale, dither * scale  # 1 but on a finger held lower (alpes_dyn.estimation.trim)
+    bias, amp, dither = _trim_on_hand(truth, nominal, design, t, bias, amp, dither,
+                                      np.asarray(design.orientations[0], dtype=float))
     rng = np.random.default_rng(seed)
     N = t.shape[0] - 1
     n_or = len(design.orientations)
@@ -411,14 +426,7 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
     dither = dither_amplitude(nominal, design)
     truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
     t, _, _ = _schedule(design)
-    if design.trim_bias and design.torque_bias is None:
-        extra = None if _trim.MATCH_COMPLIANCE else dither  # the rule's fold check: the multisine's peak alone
-        peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, extra)), axis=0)
-        # the trim loop's target: the nominal finger's encoder reading as designed; found on the finger as it is
-        g_design = np.asarray(design.orientations[0], dtype=float)
-        want = nominal.transmission.S @ _mean_equilibrium(nominal, bias, g_design)
-        bias, scale = _trimmed_bias(truth, nominal, bias, g_true, peak, want, g_design)
-        amp, dither = amp * scale, dither * scale
+    bias, amp, dither = _trim_on_hand(truth, nominal, design, t, bias, amp, dither, g_true)
     u = _profiles(design, t, bias, amp, dither)
     x0 = np.zeros(2 * truth.n)
     x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true)

@@ -117,6 +117,12 @@ class GaussNewton:
     # --- the trust region ---------------------------------------------------------------------------------------
 
     @staticmethod
+    def coef_cap(pb: ShootingProblem, coef_radius: float) -> float:
+        """The line corrections' trust region per line, in whitened units: :data:`COEF_STEP_RECORD`'s rule
+        (MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1))) times ``coef_radius``."""
+        return MAX_COEF_STEP * coef_radius * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0))
+
+    @staticmethod
     def limited(pb: ShootingProblem, d: np.ndarray, coef_radius: float = 1.0) -> tuple[np.ndarray, np.ndarray, bool]:
         """A trust region (no jump into a far basin): log theta by at most :data:`MAX_LOG_STEP`, each line of the
         torque's line corrections within :data:`COEF_STEP_RECORD`'s rule times ``coef_radius``, the whole step
@@ -126,9 +132,8 @@ class GaussNewton:
         and whether the step is whole."""
         p = pb.p
         dv, dg = d[:pb.nv].reshape(pb.n_int, pb.nb), d[pb.nv:pb.nz]
-        coef_cap = MAX_COEF_STEP * coef_radius * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0))
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP,
-                  float(np.max(np.abs(dg[p:]), initial=0.0)) / coef_cap)
+                  float(np.max(np.abs(dg[p:]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius))
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
     @staticmethod
@@ -144,8 +149,7 @@ class GaussNewton:
         iterations, where it converged in 16 at one standard deviation)."""
         p = pb.p
         dg = d[pb.nv:pb.nz]
-        coef = float(np.max(np.abs(dg[p:]), initial=0.0)) / (
-            MAX_COEF_STEP * coef_radius * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0)))
+        coef = float(np.max(np.abs(dg[p:]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius)
         if not (found is not None and found[0] == 1.0 and coef > 1.0
                 and coef >= float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP):
             return 1.0, 0
@@ -225,19 +229,16 @@ class GaussNewton:
         nx, nz, nv = pb.nx, pb.nz, pb.nv
         cost = at.cost
         candidates = [(1.0, dv, dg), (0.5, dv, dg), (0.25, dv, dg), (0.1, dv, dg), (0.03, dv, dg)]
-        soc_done, k_try, c_last = 0, 0, math.inf
+        soc_done, k_try, c_last, c_at = 0, 0, math.inf, float(np.sum(np.abs(at.c)))
         while k_try < len(candidates):
             alpha, sv, sg = candidates[k_try]
             k_try += 1
             trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
             if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
                 continue
-            cost_new = trial.cost
-            m_new = cost_new + nu_merit * float(np.sum(np.abs(trial.c)))
-            if m_new < merit or (np.sum(np.abs(trial.c)) < 0.5 * np.sum(np.abs(at.c))
-                                 and cost_new <= cost * (1.0 + 1e-6)):
+            cost_new, c_now = trial.cost, float(np.sum(np.abs(trial.c)))
+            if cost_new + nu_merit * c_now < merit or (c_now < 0.5 * c_at and cost_new <= cost * (1.0 + 1e-6)):
                 return alpha, sv, sg, cost_new
-            c_now = float(np.sum(np.abs(trial.c)))
             if alpha == 1.0 and soc_done < SOC_STEPS and c_now <= 0.5 * c_last:
                 soc_done, c_last = soc_done + 1, c_now
                 try:

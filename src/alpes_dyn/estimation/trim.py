@@ -164,11 +164,12 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
         upper = max(4.0 * out[k], _torque_ceiling(nominal, k))
         out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity, upper,
                               lambda c, k=k: _with(out, k, c))
-        allowed = _compliance(nominal, k, bias, g_design)
-        if MATCH_COMPLIANCE and _compliance(truth, k, out, gravity) > allowed * (1 + 1e-6):
-            out[k] = _matched_compliance(truth, k, out, gravity, allowed)
-            reading = float(S[k] @ _mean_equilibrium(truth, out, gravity))
-            scale[k] = _room_below(nominal, k, bias, reading, g_design, q_design)
+        if MATCH_COMPLIANCE:  # the nominal's compliance at its design point: the most the finger may have
+            allowed = _compliance(nominal, k, bias, g_design)
+            if _compliance(truth, k, out, gravity) > allowed * (1 + 1e-6):
+                out[k] = _matched_compliance(truth, k, out, gravity, allowed)
+                reading = float(S[k] @ _mean_equilibrium(truth, out, gravity))
+                scale[k] = _room_below(nominal, k, bias, reading, g_design, q_design)
         if peak is not None:
             fold = _fold_torque(truth, lambda c, k=k: _with(out, k, c), gravity, upper)
             if fold is not None and fold - 1.25 * scale[k] * float(peak[k]) < out[k]:
