@@ -232,3 +232,17 @@ def test_cli_urdf_refuses_options_that_do_not_apply(capsys, extra, needle):
 def test_cli_spec_errors(capsys, argv, needle):
     code, out, err = run(capsys, *argv)
     assert code == 2 and out == "" and err.count("\n") == 1 and needle in err
+
+
+def test_driven_joints_are_the_specs_motor_joints(allegro):
+    """Transmission.driven: the joints some motor's table names with a non-zero ratio (read from the TOML by tomllib),
+    the others passive; on finger_edu the ab/adduction joint has no motor."""
+    named = {j for m in RAW["motor"] for j, r in m["joints"].items() if r != 0}
+    assert {j for j, d in zip(allegro.joint_names, allegro.transmission.driven) if d} == named
+    assert len(named) == 16
+    edu_spec = example_spec_path("finger_edu")
+    edu = tomllib.loads(edu_spec.read_text())
+    edu_model = ad.Model.from_urdf_file(ad.example_robot_urdf("finger_edu"), edu_spec)
+    passive = [j for j, d in zip(edu_model.joint_names, edu_model.transmission.driven) if not d]
+    assert passive == [j for j in edu_model.joint_names if all(j not in m["joints"] for m in edu["motor"])]
+    assert len(passive) == 1

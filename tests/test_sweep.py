@@ -34,7 +34,8 @@ def _has_module(name: str) -> bool:
 @pytest.mark.skipif(not __import__("sys").platform.startswith("linux"), reason="workers are forked on Linux only")
 def test_local_cluster_workers_are_forked_with_this_process_modules():
     """local_client forks its workers on Linux: a module imported here only (a throw-away one) is in theirs, which a
-    spawned worker would not have; and they run their compiled loops on one thread (OMP_NUM_THREADS=1)."""
+    spawned worker would not have; they run their compiled loops on one thread (OMP_NUM_THREADS=1), and no
+    statistical profiler samples them (its periodic callback absent, as the worker's config says)."""
     pytest.importorskip("distributed")
     import sys
     import types
@@ -47,6 +48,10 @@ def test_local_cluster_workers_are_forked_with_this_process_modules():
         assert client.gather([client.submit(_has_module, "alpes_test_only_here", pure=False) for _ in range(2)]) \
             == [True, True]
         assert set(client.run(lambda: __import__("os").environ.get("OMP_NUM_THREADS")).values()) == {"1"}
+        assert set(client.run(lambda: __import__("dask").config.get("distributed.worker.profile.enabled")).values()) \
+            == {False}
+        assert not any("profile" in name for cbs in client.run(lambda dask_worker: sorted(dask_worker.periodic_callbacks))
+                       .values() for name in cbs)
     finally:
         client.close()
         client.cluster.close()

@@ -12,7 +12,7 @@ import warnings
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.excursion import SmallExcursionWarning
+from ..estimation.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
@@ -323,7 +323,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  held at the URDF's values: {', '.join(held)} (a link that only motorless joints move: the "
                      "encoders see its mass only with those joints' springs; name it in --parameters to fit it)")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
-    _excursion_lines(data, obj)  # the fit's data: its motors whose encoder barely moved
+    obj.update(excursion_report(data))  # the fit's data: its motors whose encoder barely moved
     lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
     a = res.adequacy
     if a is not None:

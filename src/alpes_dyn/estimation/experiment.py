@@ -97,9 +97,8 @@ def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | 
 def _unheld_joints(model: Model) -> list[str]:
     """The joints that no motor's tendon moves and no spring holds (a robot arm's joints under a tendon gripper):
     no static equilibrium to design the experiment about, and a simulation of them falls through their range."""
-    S = np.asarray(model.transmission.S)
     k = np.asarray(model.extras.stiffness, dtype=float)
-    return [j for i, j in enumerate(model.joint_names) if not np.any(S[:, i] != 0) and not k[i] > 0]
+    return [j for j, d, k_j in zip(model.joint_names, model.transmission.driven, k) if not d and not k_j > 0]
 
 
 MARGIN_FRACTION = 0.1

@@ -156,8 +156,14 @@ def _with_spec_stops(model: Any, stiffness: Any, damping: Any, per_joint: bool) 
     if (limited & ~np.isfinite(d)).any():  # d sized to the k given
         inertia = _effective_inertia(model)
         inertia = inertia if per_joint else np.full(model.n, np.min(inertia[limited]))
-        d = np.where(np.isfinite(d), d, 2.0 * STOP_DAMPING_RATIO * np.sqrt(k * inertia))
+        d = np.where(np.isfinite(d), d, _stop_damping(k, inertia))
     return _collapsed(k, limited), _collapsed(d, limited)
+
+
+def _stop_damping(k: Any, inertia: Any) -> Any:
+    """d = 2 zeta sqrt(k I) (N m s/rad), zeta = :data:`STOP_DAMPING_RATIO`: the stop's mode of stiffness k (N m/rad)
+    on the inertia I (kg m^2) so damped; numbers or arrays alike."""
+    return 2.0 * STOP_DAMPING_RATIO * np.sqrt(np.multiply(k, inertia))
 
 
 def _effective_inertia(model: Any) -> np.ndarray:
@@ -283,9 +289,9 @@ def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> t
     inertia = _effective_inertia(model)
     if per_joint or np.ndim(stiffness):
         k = np.broadcast_to(np.asarray(stiffness, dtype=float), (model.n,)).copy()
-        return k, 2.0 * STOP_DAMPING_RATIO * np.sqrt(k * inertia)
+        return k, _stop_damping(k, inertia)
     I_min = float(np.min(inertia[limited]))
-    return float(stiffness), float(2.0 * STOP_DAMPING_RATIO * math.sqrt(stiffness * I_min))
+    return float(stiffness), float(_stop_damping(stiffness, I_min))
 
 
 def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:

@@ -89,6 +89,11 @@ class Transmission:
         return y + tau_m * self.tendon_compliance
 
     @property
+    def driven(self) -> np.ndarray:
+        """(n,) bool: the joints some motor's tendon moves (a non-zero column of S); the others are passive."""
+        return np.any(self.S != 0, axis=0)
+
+    @property
     def rotor_matrix(self) -> np.ndarray:
         """S^T diag(J_m) S, (n, n), kg m^2: the rotors' inertia on the joints (eq. 2.8's I_a on the
         tendon coordinate; kinetic energy 1/2 sum_k J_m,k qd_m,k^2 with qd_m = S qd)."""

@@ -183,12 +183,19 @@ def local_client(workers: int) -> Any:
     fit, fork and spawn in turn at load 4.3-4.8: 29.1 / 22.2 s against 32.1 / 31.0 s (up 0.2-0.4 s against 2.2 s,
     closed 0.1 s against 1.1-1.2 s, the draws no slower: the forked workers keep the parent's two BLAS threads, to
     no measured cost). A script may then also start a sweep without an ``if __name__ == "__main__":`` guard,
-    which spawned workers need. Elsewhere (macOS, Windows: fork is unsafe or absent) Dask's default."""
+    which spawned workers need. Elsewhere (macOS, Windows: fork is unsafe or absent) Dask's default.
+
+    The workers' statistical profiler (``distributed.worker.profile.enabled``, the dashboard's profile) is off: it
+    samples the worker thread's stack every 10 ms, taking the GIL from a draw that calls compiled code in short
+    steps. Measured in pairs, 8 draws with the fit (seeds 51-58, 2026-12-03, load about 2.3 with the sweep's own
+    processes): 41.7 / 30.8 / 33.4 s with it, 32.6 / 26.3 / 28.7 s without (the machine's own speed drifting between
+    pairs). A user who wants it passes a client of their own."""
     import dask
     from distributed import Client, LocalCluster
 
     method = "fork" if sys.platform.startswith("linux") else dask.config.get("distributed.worker.multiprocessing-method")
-    with dask.config.set({"distributed.worker.multiprocessing-method": method}):
+    with dask.config.set({"distributed.worker.multiprocessing-method": method,
+                          "distributed.worker.profile.enabled": False}):
         return Client(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
                                    silence_logs=logging.ERROR))
 
@@ -327,11 +334,6 @@ def drawn_spec(spec: Any, spread: float, seed: int) -> Any:
                                viscous=drawn(spec.viscous), identified=None)
 
 
-def _driven_joints(model: Any) -> list[str]:
-    """The joints a motor's tendon moves (a non-zero column of S), in the model's order."""
-    return [model.joint_names[i] for i in np.flatnonzero(np.any(model.transmission.S != 0, axis=0))]
-
-
 WARM_UP_ITERATIONS = 12
 """Gauss-Newton iterations of the first stage of :func:`robot_robustness_draw`'s fit (the driven joints' values, the
 passive ones held): a warm start, not a fit (its docstring: why two stages, and why short)."""
@@ -411,7 +413,7 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
     out: dict[str, Any] = {"rmse_deg_before": np.degrees(estimate_recording(rec, nominal).rmse)}
     if fit:
         chosen = {p.name: p for p in select_parameters(nominal, ",".join(ROBOT_DRAWN))}  # every value drawn
-        driven = set(_driven_joints(nominal))
+        driven = {j for j, d in zip(nominal.joint_names, nominal.transmission.driven) if d}
         t0 = time.perf_counter()
         with warnings.catch_warnings():  # the verdict is the row's: converged, residual
             warnings.simplefilter("ignore", AdequacyWarning)
