@@ -17,7 +17,8 @@ Two baselines, each run in every round:
   ratio is the sweep's own parallel speed-up, the figure the goal's 1.8x of 2 cores is a fraction of (90 %).
 
 Why rounds: the wall time of the same draws varies by up to 30 % between runs on this shared machine (a
-virtual one: 2026-12-03, the same 4-draw cluster sweep took 15.8-25.1 s in eight runs). Each round runs the
+virtual one: 2026-12-03, 16 draws, seeds 101-116: the serial loop 91.0 and 114.8 s in two rounds, the cluster 69.3
+and 52.4 s; two plain processes side by side take 4-10 % longer than one alone). Each round runs the
 three in turn (serial, serial on one thread, a new cluster), so a slow spell falls on all three of a round;
 the figures are each ratio's median over the rounds, every round printed (``--json``: all of them).
 
