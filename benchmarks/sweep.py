@@ -19,8 +19,9 @@ Two baselines, each run in every round:
 Why rounds: the wall time of the same draws varies by up to 30 % between runs on this shared machine (a
 virtual one: 2026-12-03, 16 draws, seeds 101-116: the serial loop 91.0 and 114.8 s in two rounds, the cluster 69.3
 and 52.4 s; two plain processes side by side take 4-10 % longer than one alone). Each round runs the
-three in turn (serial, serial on one thread, a new cluster), so a slow spell falls on all three of a round;
-the figures are each ratio's median over the rounds, every round printed (``--json``: all of them).
+three in turn (serial, serial on one thread, a new cluster); the figures are each ratio's median over the
+rounds, every round printed (``--json``: all of them). A slow spell is shorter than a round, so it spoils one
+ratio of a round, not the median of several.
 
     python benchmarks/sweep.py [--draws 8] [--seed 1] [--rounds 3] [--duration 4] [--no-fit] [--workers 2] [--json]
 """
