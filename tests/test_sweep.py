@@ -35,7 +35,8 @@ def _has_module(name: str) -> bool:
 def test_local_cluster_workers_are_forked_with_this_process_modules():
     """local_client forks its workers on Linux: a module imported here only (a throw-away one) is in theirs, which a
     spawned worker would not have; they run their compiled loops on one thread (OMP_NUM_THREADS=1), and no
-    statistical profiler samples them (its periodic callback absent, as the worker's config says)."""
+    statistical profiler samples them (its periodic callback absent, as the worker's config says), nor a worker
+    the cluster restarts."""
     pytest.importorskip("distributed")
     import sys
     import types
@@ -50,8 +51,10 @@ def test_local_cluster_workers_are_forked_with_this_process_modules():
         assert set(client.run(lambda: __import__("os").environ.get("OMP_NUM_THREADS")).values()) == {"1"}
         assert set(client.run(lambda: __import__("dask").config.get("distributed.worker.profile.enabled")).values()) \
             == {False}
-        assert not any("profile" in name for cbs in client.run(lambda dask_worker: sorted(dask_worker.periodic_callbacks))
-                       .values() for name in cbs)
+        profiled = lambda dask_worker: any("profile" in name for name in dask_worker.periodic_callbacks)  # noqa: E731
+        assert set(client.run(profiled).values()) == {False}
+        client.restart(timeout=120)  # a worker the cluster restarts (spawned) keeps the configuration
+        assert set(client.run(profiled).values()) == {False}
     finally:
         client.close()
         client.cluster.close()

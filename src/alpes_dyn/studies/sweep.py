@@ -189,15 +189,20 @@ def local_client(workers: int) -> Any:
     samples the worker thread's stack every 10 ms, taking the GIL from a draw that calls compiled code in short
     steps. Measured in pairs, 8 draws with the fit (seeds 51-58, 2026-12-03, load about 2.3 with the sweep's own
     processes): 41.7 / 30.8 / 33.4 s with it, 32.6 / 26.3 / 28.7 s without (the machine's own speed drifting between
-    pairs). A user who wants it passes a client of their own."""
+    pairs). A user who wants it passes a client of their own. The workers get it in their whole Dask configuration
+    (the Nanny's ``config``), so a worker the cluster restarts keeps it; a restarted worker is spawned, though (Dask
+    reads the start method from the calling process's configuration at each start)."""
+    import copy
+
     import dask
     from distributed import Client, LocalCluster
 
     method = "fork" if sys.platform.startswith("linux") else dask.config.get("distributed.worker.multiprocessing-method")
     with dask.config.set({"distributed.worker.multiprocessing-method": method,
                           "distributed.worker.profile.enabled": False}):
+        config = copy.deepcopy(dask.config.config)  # whole: the worker sets it subtree by subtree
         return Client(LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, dashboard_address=None,
-                                   silence_logs=logging.ERROR))
+                                   silence_logs=logging.ERROR, config=config))
 
 
 def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: int = 0,
