@@ -386,7 +386,8 @@ def test_experiment_stops_below_a_fold():
     """A little finger with K_1 18 % soft snaps through (a fold of its static equilibria) at 0.0215 N m, below
     the nominal's mid-range bias: the trimmed bias stays below the fold by 1.25 times the multisine's peak,
     and the recorded finger stays on its branch (q_1 under 80 degrees)."""
-    from alpes_dyn.estimation.experiment import ExperimentDesign, _fold_torque, experiment, perturbed_params
+    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.trim import _fold_torque
 
     nominal = load_params()
     true = perturbed_params(nominal, spread=0.2, seed=1, chains=nominal.chain_names)
@@ -410,7 +411,8 @@ def test_hanging_hand_has_no_fold():
     mid-range with no warning; the orientation is the palm turned -90 degrees about the joints' axes."""
     import warnings
 
-    from alpes_dyn.estimation.experiment import ExperimentDesign, _fold_torque, experiment_torque, perturbed_params
+    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment_torque, perturbed_params
+    from alpes_dyn.estimation.trim import _fold_torque
     from alpes_dyn.model.mjcf import hanging_gravity
 
     nominal = load_params()

@@ -182,29 +182,38 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     mj.opt.integrator = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
                          "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}[integrator]
     d = _plant_at_rest(mj, truth, q0, u[0], p, e)
-    tr = truth.transmission
-    rng = np.random.default_rng(seed)  # the encoder's noise, then the torque's
-    N = u.shape[0] - 1
-    blocks = [Source("torque", tau=u),
-              # mj_step's sensors are the state's before its last integration: recomputed at the sample's state
-              MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True, joints={"q": truth.joint_names},
-                          sensors={"q_m": [f"encoder_{mn}" for mn in tr.motor_names]}, actuators={"tau": None}),
-              Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True,
-                      offset=e.encoder_offset, rng=rng, shape=(m,)),
-              TorqueSensor("tau", "tau_meas", noise=torque_noise, gain=1.0 + e.torque_constant_error, rng=rng,
-                           shape=(m,))]
     previous = mujoco.get_mjcb_passive()
     if e.stiction is None:
         mujoco.set_mjcb_passive(_smooth_friction(mj, truth))
     try:
-        log = run_loop(blocks, N, dt, final=True)
+        return _sensed_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise,
+                           offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
     finally:
         mujoco.set_mjcb_passive(previous)
-    q, counts, measured = log["q"], log["counts"], log["tau_meas"]
-    if not np.isfinite(q).all():
+
+
+def _sensed_run(mj: Any, d: Any, sub: int, u: np.ndarray, dt: float, model: Model, actuators: list[str] | None,
+                seed: int, encoder_noise_counts: float, torque_noise: float, offset: float = 0.0,
+                gain: float = 1.0) -> Recording:
+    """The recording of MuJoCo (``mj``, ``d`` at the initial state) stepped ``sub`` substeps per sample under the
+    torque ``u`` (N+1, m) held over each period ``dt``: ``model``'s joint angles as ``true_q``, its motors'
+    ``encoder_<motor>`` sensors quantised with ``offset`` counts (the encoder's noise drawn first from ``seed``),
+    the torque measured as ``gain`` x ``u`` + noise. ``actuators``: the MJCF's actuators in the motors' order (None:
+    the MJCF's own order). ModelError where MuJoCo diverged."""
+    tr, m = model.transmission, model.transmission.n_motors
+    rng = np.random.default_rng(seed)  # the encoder's noise, then the torque's
+    blocks = [Source("torque", tau=u),
+              # mj_step's sensors are the state's before its last integration: recomputed at the sample's state
+              MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True, joints={"q": model.joint_names},
+                          sensors={"q_m": [f"encoder_{mn}" for mn in tr.motor_names]}, actuators={"tau": actuators}),
+              Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True,
+                      offset=offset, rng=rng, shape=(m,)),
+              TorqueSensor("tau", "tau_meas", noise=torque_noise, gain=gain, rng=rng, shape=(m,))]
+    log = run_loop(blocks, u.shape[0] - 1, dt, final=True)
+    if not np.isfinite(log["q"]).all():
         raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
-    return Recording(t=dt * np.arange(N + 1), encoder=counts, torque=measured, motor_names=tr.motor_names,
-                     joint_names=truth.joint_names, true_q=q)
+    return Recording(t=dt * np.arange(u.shape[0]), encoder=log["counts"], torque=log["tau_meas"],
+                     motor_names=tr.motor_names, joint_names=model.joint_names, true_q=log["q"])
 
 
 def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt: float = 1e-3, *,
@@ -251,19 +260,7 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
         d.qpos[mj.joint(mimic.name).qposadr[0]] = mimic.multiplier * q_init[model.joint_index(mimic.primary)] \
             + mimic.offset
     mujoco.mj_forward(mj, d)
-    rng = np.random.default_rng(seed)  # the encoder's noise, then the torque's
-    blocks = [Source("torque", tau=u),
-              MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True, joints={"q": model.joint_names},
-                          sensors={"q_m": [f"encoder_{mn}" for mn in tr.motor_names]},
-                          actuators={"tau": list(tr.motor_names)}),
-              Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True, rng=rng,
-                      shape=(tr.n_motors,)),
-              TorqueSensor("tau", "tau_meas", noise=torque_noise, rng=rng, shape=(tr.n_motors,))]
-    log = run_loop(blocks, u.shape[0] - 1, dt, final=True)
-    if not np.isfinite(log["q"]).all():
-        raise ModelError("the MuJoCo plant diverged (NaN in its state): a smaller timestep or another integrator")
-    return Recording(t=dt * np.arange(u.shape[0]), encoder=log["counts"], torque=log["tau_meas"],
-                     motor_names=tr.motor_names, joint_names=model.joint_names, true_q=log["q"])
+    return _sensed_run(mj, d, sub, u, dt, model, list(tr.motor_names), seed, encoder_noise_counts, torque_noise)
 
 
 def _check_recording_settings(model: str, seed: Any, encoder_noise_counts: Any, torque_noise: Any) -> None:

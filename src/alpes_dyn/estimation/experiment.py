@@ -72,8 +72,8 @@ from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported
 from .draws import perturbed_params  # noqa: F401 (re-exported)
 from .excursion import warn_small_excursions
 from . import trim as _trim
-from .trim import (_fmt, _fold_torque, _holding_bias, _mean_equilibrium, _oriented, _rest_torque,  # noqa: F401
-                   _torque_ceiling, _trimmed_bias, _with)  # (_fold_torque, _oriented: re-exported)
+from .trim import (_fmt, _holding_bias, _mean_equilibrium, _oriented, _rest_torque, _torque_ceiling, _trimmed_bias,
+                   _with)
 from .recording import Recording, write_recording
 from ..simulation.integrate import simulate, stable_substeps
 from ..model.stops import JointRangeWarning

@@ -56,7 +56,6 @@ import math
 import sys
 import time
 import warnings
-from functools import partial
 from pathlib import Path
 from typing import Any, Mapping, Sequence
 
@@ -206,10 +205,11 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense")
-    # initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder
-    q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
-          else np.zeros(pb.n))
-    nodes = partial(pb.initial_nodes, q0)  # run only where no warm start converges
+    def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
+        """The initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder."""
+        q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
+              else np.zeros(pb.n))
+        return pb.initial_nodes(q0)
     offs = np.zeros((pb.n_int, pb.no))
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)

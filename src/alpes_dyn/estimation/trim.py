@@ -130,8 +130,8 @@ MuJoCo's all-effects seed 40: masses 12.4 % instead of 2.1 %; six tests then fai
 
 
 def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.ndarray,
-                  peak: np.ndarray | None = None, target: np.ndarray | None = None,
-                  design_gravity: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+                  peak: np.ndarray | None = None, design_gravity: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray]:
     """(bias, scale): the motor torques (m,), N m, at which ``truth`` rests with the encoder readings that ``nominal``
     has at ``bias``, motor by motor for the motors against springs, and the factor (m,) by which each motor's
     multisine and dither shrink on ``truth`` (1 but where the rest was lowered, below). What an experimenter gets by
@@ -150,13 +150,13 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     torque outgrows the springs' and it snaps to full flexion) is infinitely compliant at the fold, so its matched
     rest lies below it; should the fold still lie within 1.25 times the shrunk multisine's ``peak`` torque (m, the
     multisine alone: the 20 Hz dither is too fast to carry the finger over) above the rest, the loop stops there
-    instead. ``target`` (m,): the encoder readings to trim to, if not the nominal's at ``gravity``;
-    ``design_gravity`` (3,): the orientation the nominal design is made for (default ``gravity``)."""
+    instead. ``design_gravity`` (3,): the orientation the nominal design is made for (default ``gravity``), where
+    the nominal's encoder readings at ``bias`` are the loop's target."""
     S = nominal.transmission.S
     joints, sprung, free = _motor_groups(nominal)
     g_design = gravity if design_gravity is None else design_gravity
     q_design = _mean_equilibrium(nominal, bias, g_design)
-    target = S @ q_design if target is None else target
+    target = S @ q_design
     truth = _oriented(truth, gravity)  # once: each search below solves hundreds of equilibria under this gravity
     out = np.asarray(bias, dtype=float).copy()
     scale = np.ones(out.size)
@@ -249,13 +249,13 @@ def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: 
     (a fold, where dG/dq turns singular), or None if it reaches ``upper``: a scan in steps of upper/400,
     then bisection."""
     m = _oriented(model, gravity)
+    free = [i for i, j in enumerate(m.joint_names) if j not in m.springless_joints]
 
     def stable(c: float) -> bool:
         try:
             q = _mean_equilibrium(model, torques(c), gravity)
         except InputError:
             return False
-        free = [i for i, j in enumerate(m.joint_names) if j not in m.springless_joints]
         dG = m.gravity_jacobian(q)[np.ix_(free, free)]
         return bool(np.linalg.eigvalsh(0.5 * (dG + dG.T)).min() > 0)
 
