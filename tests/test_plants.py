@@ -81,6 +81,34 @@ def test_elastic_tendon_starts_at_rest_with_the_cable_stretched():
     assert rotor - float(m.transmission.S[0] @ q_rest) > 20 * step  # the stretch is seen by the encoder
 
 
+def test_torque_delay_shifts_the_recorded_torque_by_whole_samples_and_nothing_else():
+    """A torque measured 2 samples late: the recorded torque is the true one of 2 samples before (the first rows
+    repeat the first), exactly with the noise off; the encoder, which sees the applied torque, is unchanged."""
+    u = _torque()
+    kw = dict(encoder_noise_counts=0.0, torque_noise=0.0)
+    rec = mujoco_recording("finger3", None, u, DT, **kw)
+    late = mujoco_recording("finger3", None, u, DT, effects=PlantEffects(torque_delay=2), **kw)
+    assert np.array_equal(late.torque[2:], u[:-2]) and np.array_equal(late.torque[:2], u[[0, 0]])
+    assert np.array_equal(late.encoder, rec.encoder) and np.array_equal(late.true_q, rec.true_q)
+
+
+def test_tendon_dead_band_turns_the_rotor_by_the_slack_at_rest():
+    """A cable with play delta (m) under a constant torque from its rest: the joints rest where the rigid model does
+    (the tension is the same), the rotor turned further by delta / r_m (the slack taken up first) than without it."""
+    p = ad.load_params()
+    delta = p.r_m * np.radians(0.5)  # 0.5 degree of backlash at the motor shaft
+    u = np.full((301, 1), 0.022)
+    kw = dict(encoder_noise_counts=0.0, torque_noise=0.0)
+    tight = PlantEffects(tendon_stiffness=1.2e4, tendon_damping=5.0)
+    rec = mujoco_recording("finger3", p, u, DT, effects=tight, **kw)
+    slack = mujoco_recording("finger3", p, u, DT, effects=PlantEffects(tendon_stiffness=1.2e4, tendon_damping=5.0,
+                                                                       tendon_dead_band=delta), **kw)
+    m = plant_model("finger3", p, tight)
+    step = 2 * np.pi / m.transmission.counts_per_rev
+    assert np.abs(slack.true_q - rec.true_q).max() < 2e-6
+    assert np.abs((slack.encoder - rec.encoder) * step - np.radians(0.5)).max() <= step + 1e-12
+
+
 def test_tilted_plant_rests_where_the_tilted_model_does():
     eff = PlantEffects(tilt=np.radians(3.0))
     m = plant_model("finger3", None, eff)

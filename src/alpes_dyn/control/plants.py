@@ -22,7 +22,12 @@ The effects (:class:`PlantEffects`, each off by default):
 * ``tilt``: the palm tilted in the finger's plane (rad); the recording has no ``gravity_*`` columns (the
   user does not know the tilt);
 * ``torque_constant_error`` e: the recorded torque is (1 + e) times the true one (a torque constant e off);
-* ``encoder_offset``: the encoder's zero off by this many counts.
+* ``encoder_offset``: the encoder's zero off by this many counts;
+* ``tendon_dead_band`` (m, with ``tendon_stiffness``): the cable's slack at the motor shaft, a dead band on the
+  tendon's stretch (the cable pulls k_t max(e - delta, 0)): 0.5 degree of backlash at the shaft is
+  ``r_m * radians(0.5)``;
+* ``torque_delay``: the torque measured this many whole samples late (the current's filter and the bus): the
+  recording's torque at t_k is what the motor gave at t_(k-d) (the first d rows repeat the first torque).
 
 The passive callback is MuJoCo's process-wide ``mjcb_passive``: :func:`mujoco_recording` sets it for its run and
 restores the previous one (not thread-safe: one smooth-friction run at a time per process).
@@ -46,8 +51,8 @@ from ..simulation.loop import Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, TorqueSensor
 
-__all__ = ["PLANT_MODELS", "INTEGRATORS", "PlantEffects", "plant_mjcf", "plant_model", "mujoco_recording",
-           "mjcf_recording"]
+__all__ = ["PLANT_MODELS", "INTEGRATORS", "MAX_TORQUE_DELAY", "PlantEffects", "delayed", "plant_mjcf", "plant_model",
+           "mujoco_recording", "mjcf_recording"]
 
 PLANT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 """The models a recording plant is built for: one chain, as the identification experiment."""
@@ -66,6 +71,8 @@ class PlantEffects:
     tendon_stiffness: k_t (N/m) of a series-elastic tendon, or None (rigid). tendon_damping: c_t (N s/m).
     tendon_rotor: the rotor's inertia on the rigid tendon. tilt: rad, in the finger's plane.
     torque_constant_error: e, the recorded torque (1 + e) times the true one. encoder_offset: counts.
+    tendon_dead_band: m, the cable's slack (with ``tendon_stiffness``). torque_delay: whole samples (>= 0) by which
+    the recorded torque lags the applied one.
     """
 
     stiction: float | None = None
@@ -75,6 +82,8 @@ class PlantEffects:
     tilt: float = 0.0
     torque_constant_error: float = 0.0
     encoder_offset: float = 0.0
+    tendon_dead_band: float = 0.0
+    torque_delay: int = 0
 
     def check(self) -> "PlantEffects":
         """Numbers in range (:class:`~alpes_dyn.InputError` naming the field); the MJCF options are checked by
@@ -84,7 +93,28 @@ class PlantEffects:
                              f"{self.torque_constant_error!r}")
         if not (_number(self.encoder_offset) and abs(self.encoder_offset) <= 1e6):
             raise InputError(f"encoder_offset: expected a finite number of counts, got {self.encoder_offset!r}")
+        if not (isinstance(self.torque_delay, (int, np.integer)) and not isinstance(self.torque_delay, bool)
+                and 0 <= self.torque_delay <= MAX_TORQUE_DELAY):
+            raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_TORQUE_DELAY}, got "
+                             f"{self.torque_delay!r}")
+        if self.tendon_dead_band and self.tendon_stiffness is None:
+            raise InputError("tendon_dead_band: the cable's slack needs the series-elastic tendon (tendon_stiffness)")
         return self
+
+
+MAX_TORQUE_DELAY = 100
+"""The longest torque delay a plant takes, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
+
+
+def delayed(signal: np.ndarray, samples: int) -> np.ndarray:
+    """``signal`` (N+1, ...) seen ``samples`` whole samples late: row k is row k - samples of ``signal``, the first
+    ``samples`` rows repeat row 0 (what a sensor that lags by a fixed number of samples reads from a held start)."""
+    if samples == 0:
+        return signal
+    out = np.empty_like(signal)
+    out[samples:] = signal[:-samples]
+    out[:samples] = signal[0]
+    return out
 
 
 def _params(params: HandParams | str | None) -> HandParams:
@@ -98,7 +128,7 @@ def plant_mjcf(model: str, params: HandParams | str | None = None, effects: Plan
     e = (effects or PlantEffects()).check()
     return mjcf_string(model, _params(params), chain=chain, friction=False, contact=False, timestep=timestep,
                        stiction=e.stiction, tendon_stiffness=e.tendon_stiffness, tendon_damping=e.tendon_damping,
-                       tendon_rotor=e.tendon_rotor, tilt=e.tilt)
+                       tendon_rotor=e.tendon_rotor, tilt=e.tilt, tendon_dead_band=e.tendon_dead_band)
 
 
 def plant_model(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
@@ -129,7 +159,7 @@ def _check_run(model: str, u: np.ndarray, dt: float, timestep: float, integrator
 def _initial_state(mj, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np.ndarray, p: HandParams,
                    effects: PlantEffects) -> np.ndarray:
     """qpos of the plant at joint angles q0 (rad), at rest: each rotor (series-elastic tendon) turned so that the
-    cable holds the motor torque u0 (the static tension T = tau_m / r_m, stretch T / k_t)."""
+    cable holds the motor torque u0 (the static tension T = tau_m / r_m, stretch T / k_t, plus the cable's slack)."""
     qpos = mj.qpos0.copy()
     qpos[perm] = q0
     if effects.tendon_stiffness is not None:
@@ -137,7 +167,7 @@ def _initial_state(mj, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np.nd
         for k, mn in enumerate(truth.transmission.motor_names):
             if mn.endswith("abduction"):
                 continue
-            stretch = float(u0[k]) / (p.r_m * effects.tendon_stiffness)
+            stretch = float(u0[k]) / (p.r_m * effects.tendon_stiffness) + effects.tendon_dead_band  # slack taken up
             qpos[mj.joint(f"{mn}_rotor").qposadr[0]] = float(S[k] @ q0) + stretch / p.r_m  # e = r_m theta - r sum q
     return qpos
 
@@ -186,10 +216,13 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     if e.stiction is None:
         mujoco.set_mjcb_passive(_smooth_friction(mj, truth))
     try:
-        return _sensed_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise,
-                           offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
+        rec = _sensed_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise,
+                          offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
     finally:
         mujoco.set_mjcb_passive(previous)
+    if e.torque_delay:  # the sensor's reading of sample k is the torque (and its noise) of sample k - d
+        rec.torque = delayed(rec.torque, e.torque_delay)
+    return rec
 
 
 def _sensed_run(mj: Any, d: Any, sub: int, u: np.ndarray, dt: float, model: Model, actuators: list[str] | None,
