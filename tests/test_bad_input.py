@@ -159,6 +159,9 @@ def bad_files(d: Path) -> dict[str, str]:
         "latin1_toml": ("# r\xe9glage\n" + BASE_TOML).encode("latin-1"),
         "binary_urdf": b"\x89PNG\r\n\x1a\n" + bytes(range(256)),
         "latin1_urdf": FINGER3.replace("Generated", "G\xe9n\xe9r\xe9").encode("latin-1"),
+        "negative_compliance_toml": BASE_TOML.replace(
+            "[transmission]\n", '[transmission]\ntendon_compliance = { value = -0.1, unit = "rad/(N m)", '
+            'source = "identified", reason = "a fit" }\n', 1).encode(),
         "negative_k_toml": BASE_TOML.replace("K = { value = [0.04, 0.05, 0.06]", "K = { value = [-0.04, 0.05, 0.06]",
                                              1).encode(),
         "pinky_toml": BASE_TOML.replace("[thumb]", '[finger.pinky]\nK = { value = [0.04, 0.05, 0.06], unit = "N m/rad", '
@@ -601,6 +604,8 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "finger3", "--params", "", needle="parameter file: empty file name"),
         C("urdf", "finger3", "--params", "{dir}", needle="is a directory"),
         C("urdf", "finger3", "--params", "{negative_k_toml}", needle="finger.K: value must be >= 0"),
+        C("identify", "--params", "{negative_compliance_toml}", "--data", "x.csv",
+          needle="transmission.tendon_compliance: value must be >= 0"),
         C("urdf", "hand", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
         C("urdf", "hand", "-o", "{fifo}", needle="-o: '{fifo}' is a FIFO (named pipe)"),
         C("urdf", "hand", "-o", "{device}", needle="is a character device; only a regular file is written"),
@@ -1268,6 +1273,8 @@ API: list[Api] = [
     A("load_params", lambda c: ad.load_params(""), ModelError, "parameter file: empty file name"),
     A("load_params", lambda c: ad.load_params(c.f["dir"]), ModelError, "is a directory"),
     A("load_params", lambda c: ad.load_params(c.f["negative_k_toml"]), ModelError, "finger.K: value must be >= 0"),
+    A("load_params", lambda c: ad.load_params(c.f["negative_compliance_toml"]), ModelError,
+      "transmission.tendon_compliance: value must be >= 0 (got -0.1"),
     A("load_params", lambda c: ad.load_params(c.f["pinky_toml"]), ModelError, "finger.pinky: unknown key"),
     A("load_params", lambda c: ad.load_params(c.f["short_index_toml"]), ModelError,
       "finger.index.K: value must be a list of 3 numbers"),
@@ -1613,6 +1620,9 @@ API: list[Api] = [
       "case: expected one of none, stiction, tendon, rotor, tilt, kt, offset, all, got 'bogus'"),
     A("realism_draw", lambda c: _realism().realism_draw(1, rig="upside"), InputError,
       "rig: expected one of level, hanging, got 'upside'"),
+    A("adapted_experiment", lambda c: _adapted(rig="upside"), InputError,
+      "rig: expected one of auto, level, hanging, got 'upside'"),
+
     A("realism_draw", lambda c: _realism().realism_draw(1, chain="pinky"), InputError,
       "chain: unknown chain 'pinky' (expected one of index, middle, ring, little, thumb)"),
     A("realism_draw", lambda c: _realism().realism_draw(1, duration=-4.0), InputError, "duration"),
@@ -2018,6 +2028,12 @@ def _eff(**kw):
     from alpes_dyn.control.plants import PlantEffects
 
     return PlantEffects(**kw)
+
+
+def _adapted(**kw):
+    from alpes_dyn.estimation.adapt import adapted_experiment
+
+    return adapted_experiment(kw.pop("model", "finger3"), design=_design(), **kw)
 
 
 def _exptorque(**kw):

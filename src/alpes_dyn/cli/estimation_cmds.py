@@ -163,7 +163,8 @@ def _without_friction(model):
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Simulate the documented identification experiment and write its recording."""
     from ..model.description import model_params
-    from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign, experiment, perturbed_params
+    from ..estimation.adapt import adapted_experiment
+    from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign, perturbed_params
     from ..model.params import load_params, write_params
 
     if _is_urdf_path(args.model):
@@ -182,23 +183,23 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         chains = ("thumb",) if args.model == "thumb" else ((args.chain,) if args.chain else None)
         truth = perturbed_params(truth, args.perturb, args.seed, chains=chains)
     design = ExperimentDesign(duration=args.duration)
-    if args.rig == "hanging":  # fingers down: gravity in the base frame turned by the rig (gravity columns written)
-        from ..model.mjcf import hanging_gravity
-
-        design = ExperimentDesign(duration=args.duration,
-                                  orientations=(tuple(hanging_gravity(load_params(args.params).gravity)),))
     with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
         warnings.simplefilter("ignore", SmallExcursionWarning)
-        rec = experiment(args.model, truth, design, seed=args.seed, nominal_params=args.params, path=args.output,
-                         chain=args.chain)
+        # the design checked over the whole record on the finger before it is written; --rig auto: palm up
+        # unless the finger leaves its range there, then hung fingers down (gravity columns written)
+        rec, adaptation = adapted_experiment(args.model, truth, design, seed=args.seed, nominal_params=args.params,
+                                             path=args.output, chain=args.chain, rig=args.rig)
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment "
                                                         f"(spread {args.perturb:g}, seed {args.seed})")
     obj = {"model": args.model, "output": args.output, "samples": rec.n_samples, "duration_s": rec.duration,
-           "dt_s": rec.dt, "columns": list(rec.columns()), "true_params": args.true_params_out}
+           "dt_s": rec.dt, "columns": list(rec.columns()), "true_params": args.true_params_out,
+           "design": adaptation.to_dict()}
     text = (f"{args.model}: identification experiment, {rec.n_samples} samples over {rec.duration:g} s "
             f"written to {args.output}" + (f"; true parameters in {args.true_params_out}"
                                             if args.true_params_out else ""))
+    if adaptation.note:
+        text += f"\n  design: {adaptation.note}"
     _emit(obj, text + _excursion_lines(rec, obj), args.json)
     return 0
 
@@ -210,7 +211,7 @@ _URDF_EXPERIMENT = (
      "spec as --true-spec"),
     ("--true-params-out", "true_params_out", None, "goes with --perturb on an Alpes model; a URDF --model's true "
      "robot is --true-spec"),
-    ("--rig", "rig", "level", "hangs an Alpes hand fingers down; a URDF --model's experiment runs in its spec's "
+    ("--rig", "rig", "auto", "hangs an Alpes hand fingers down; a URDF --model's experiment runs in its spec's "
      "gravity"),
 )
 

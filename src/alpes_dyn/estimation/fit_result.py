@@ -15,6 +15,7 @@ from ..model.params import HandParams, Param, with_values, write_params
 from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 from .adequacy import Adequacy, _finite
+from .bounds import describe
 
 __all__ = ["IdentificationResult", "identified_params"]
 
@@ -53,6 +54,10 @@ class IdentificationResult:
     solution: Any = field(default=None, repr=False, compare=False)
     """The fit's shooting variables (:class:`~alpes_dyn.estimation.shooting.ShootingSolution`) for a warm start of
     another fit of the same recording (``identify(..., start=result)``); not written to the file."""
+    not_identified: dict[str, str] = field(default_factory=dict)
+    """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
+    interval past 0: :mod:`~alpes_dyn.estimation.bounds`), name -> why (with the effect the data do not support):
+    held in the fit kept, never written to a file."""
 
     @property
     def trustworthy(self) -> bool:
@@ -64,7 +69,8 @@ class IdentificationResult:
         parts = [] if self.converged else [f"the fit did not converge ({self.reason})"]
         if self.adequacy is not None and not self.adequacy.adequate:
             parts.append(self.adequacy.summary())
-        return "; ".join(parts) if parts else "converged; " + (self.adequacy.summary() if self.adequacy else "")
+        text = "; ".join(parts) if parts else "converged; " + (self.adequacy.summary() if self.adequacy else "")
+        return text + (f"; {describe(self.not_identified)}" if self.not_identified else "")
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``alpes-dyn identify --json`` (an unbounded std, a parameter the data do not see, is null)."""
@@ -75,6 +81,7 @@ class IdentificationResult:
             "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
+            "not_identified": dict(self.not_identified),
         }
 
     def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
@@ -178,6 +185,8 @@ def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb:
     cat = {pp.name: pp for pp in parameter_catalogue(model)}
     flexion = [j for j in model.joint_names if j != "thumb_abd"]
     for name, value, sd in zip(result.names, result.values, result.std):
+        if name in result.not_identified:
+            continue  # not identified (outside its physical range, or not told from 0): never written
         pp = cat.get(name)
         if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
             continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
@@ -267,4 +276,6 @@ def _record(result: IdentificationResult) -> dict[str, Any]:
         rec.update(adequate=bool(a.adequate), verdict=_printable(a.summary()), likely_missing=list(a.likely_missing))
         if math.isfinite(a.floor.total):
             rec["sensor_floor"] = float(a.floor.total)
+    if result.not_identified:
+        rec["not_identified"] = [_printable(f"{n}: {why}") for n, why in result.not_identified.items()]
     return rec

@@ -64,13 +64,14 @@ import numpy as np
 from ..errors import InputError, ModelError, RecordingError
 from ..model.robot import Model
 from ..model.transmission import torque_before
-from ..symbolic.parametric import common_scale, select_parameters
+from ..symbolic.parametric import common_scale, parameter_catalogue, select_parameters
 from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, range_exit, sensor_floor,
                        torque_explained)
 from .recording import Recording, check_recording
 from .scenario import static_equilibrium
 from ..simulation.integrate import stable_substeps
 from ..simulation.sensitivity import SensitivityModel
+from .bounds import held_value, unsupported
 from .kkt import factorize
 from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
@@ -230,9 +231,59 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
+    settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
+                    camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
+                    progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
+    result = _within_bounds(model, recording, result, settings, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
+
+
+def _within_bounds(model: Model, recording: Recording | str | Path, result: IdentificationResult,
+                   settings: dict[str, Any], t_start: float) -> IdentificationResult:
+    """``result`` where every fitted parameter is identified (:func:`~alpes_dyn.estimation.bounds.unsupported`:
+    physical, off its bounds, its 95 % interval clear of 0); else the fit again with those held (at the bound 0
+    where the fit crossed it, else at the model's value), warm-started from ``result``, the ones held named in its
+    :attr:`~IdentificationResult.not_identified` with the effect the data do not support. ``settings``: the other
+    arguments of :func:`identify`. Where no parameter is left, ``result`` itself, its parameters all named."""
+    kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}
+    bad = unsupported(result.names, [kind.get(n, "") for n in result.names], result.values, result.std,
+                      result.initial, result.units)
+    if not bad:
+        return result
+    keep = [n for n in result.names if n not in bad]
+    if not keep:
+        result.not_identified = bad
+        return result
+    held = {n: v for n, v in zip(result.names, result.values) if n in bad and kind.get(n) == "tendon_compliance"}
+    with warnings.catch_warnings():  # the verdict is reported on the fit kept
+        warnings.simplefilter("ignore", AdequacyWarning)
+        again = identify(_compliance_held(model, held), recording, keep, start=result, **settings)
+    again.not_identified = {**bad, **again.not_identified}
+    first = dict(zip(result.names, result.initial))
+    again.initial = np.array([first.get(n, v) for n, v in zip(again.names, again.initial)])
+    again.iterations += result.iterations
+    again.seconds = time.perf_counter() - t_start
+    again.reason += f" (fitted again with {', '.join(bad)} held: not identified)"
+    return again
+
+
+def _compliance_held(model: Model, fitted: Mapping[str, float]) -> Model:
+    """``model`` with the tendon compliance of each motor whose fit (``fitted``: name -> value) crossed its bound
+    0 set to that bound (:func:`~alpes_dyn.estimation.bounds.held_value`; the others as the model has them)."""
+    import dataclasses
+
+    motors = {pp.name: pp.motor for pp in parameter_catalogue(model) if pp.name in fitted}
+    zero = {motors[n] for n, v in fitted.items()
+            if held_value("tendon_compliance", v, 0.0) == 0.0 and v < 0.0}
+    if not zero or model.spec is None or not any(m.tendon_compliance != 0 for m in model.spec.motors
+                                                 if m.name in zero):
+        return model
+    spec = dataclasses.replace(model.spec, motors=tuple(
+        dataclasses.replace(m, tendon_compliance=0.0) if m.name in zero else m for m in model.spec.motors))
+    return Model(model.urdf, spec, model.gravity, model.name, model.layout, model.params, model.spring,
+                 check_inertia=model.check_inertia)
 
 
 def _start_of(start: Mapping[str, float] | IdentificationResult | None,

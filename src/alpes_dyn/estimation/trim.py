@@ -239,8 +239,9 @@ def _warn_folded(truth: Model, bias: np.ndarray, gravity: np.ndarray, fold: floa
             f"held below it, at {_fmt(bias)} N m, joint {truth.joint_names[j]!r} rests at "
             f"{math.degrees(q[j]):.1f} deg, outside its range [{math.degrees(truth.lower[j]):g}, "
             f"{math.degrees(truth.upper[j]):g}] deg: the experiment would excite it on its stop. Hang the hand fingers "
-            "down (ExperimentDesign(orientations=(hanging_gravity(g),)), alpes_dyn.model.mjcf): gravity then pulls "
-            "along the finger and its equilibria do not fold"), stacklevel=3)
+            "down (alpes-dyn experiment --rig hanging, or --rig auto, the default, which does it by itself; from "
+            "Python ExperimentDesign(orientations=(hanging_gravity(g),)), alpes_dyn.model.mjcf): gravity then "
+            "pulls along the finger and its equilibria do not fold"), stacklevel=3)
 
 
 def _fold_torque(model: Model, torques: Callable[[float], np.ndarray], gravity: np.ndarray,

@@ -61,7 +61,7 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "transmission": {
         "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
         "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
-        "tendon_compliance": (None, "any"),
+        "tendon_compliance": (None, "nonneg"),
     },
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
     "environment": {"gravity": (3, "any")},
@@ -96,12 +96,14 @@ OVERRIDE_FIELDS: dict[str, tuple[int, str]] = {
 SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
 IDENTIFICATION_FIELDS: dict[str, type] = {
     "model": str, "recording": str, "converged": bool, "stop": str, "adequate": bool, "trustworthy": bool,
-    "verdict": str, "likely_missing": list, "residual_rms": float, "sensor_floor": float,
+    "verdict": str, "likely_missing": list, "residual_rms": float, "sensor_floor": float, "not_identified": list,
 }
 """Fields of a table ``[identification.<chain>]`` (each optional): the model fitted, the recording, whether
 the fit converged and why it stopped, the adequacy verdict (``adequate``, its one-line ``verdict``, the
 ``likely_missing`` effects), ``trustworthy`` (converged and adequate: false only in a file written with
-``alpes-dyn identify --force``), the residual and the sensor floor (counts RMS)."""
+``alpes-dyn identify --force``), the residual and the sensor floor (counts RMS), and ``not_identified``: each
+parameter the fit did not identify, with why and the effect the data do not support (its value never written:
+:mod:`~alpes_dyn.estimation.bounds`)."""
 
 
 @dataclass(frozen=True)

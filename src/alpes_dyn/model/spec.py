@@ -152,7 +152,7 @@ class Motor:
         object.__setattr__(self, "rotor_inertia", _number(self.rotor_inertia, f"{where}.rotor_inertia", 0.0,
                                                                    unit="kg m^2"))
         object.__setattr__(self, "tendon_compliance", _number(self.tendon_compliance, f"{where}.tendon_compliance",
-                                                                       unit="rad/(N m)"))
+                                                                       0.0, unit="rad/(N m)"))
 
 
 _TABLE_UNITS = {"stiffness": "N m/rad", "coulomb": "N m", "viscous": "N m s/rad", "armature": "kg m^2", "rest_angle": "rad"}

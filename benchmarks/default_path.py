@@ -1,0 +1,138 @@
+"""The default path on every draw (issue 35): ``alpes-dyn experiment`` then ``alpes-dyn identify``, no options.
+
+For each seed of the +-20 % tolerance family (``--perturb 0.2``; the true file written with ``--true-params-out``):
+
+    alpes-dyn experiment --model MODEL --perturb 0.2 --seed S -o rec.csv --true-params-out true.toml
+    alpes-dyn identify --model MODEL --data rec.csv -o ident.toml --json
+
+run in this process (the commands' own ``main``), as a user types them. Per draw: the design the experiment chose
+(``--rig auto``: palm up unless the finger leaves its range there), identify's exit code (0 written, 3 refused),
+the worst error of the springs K and of the masses m against the true file, the parameters the fit reported not
+identified, and the fit's time (every round; cache warm after the first draw). The goals: exit 0 on every draw,
+K within 3 %, m within 5 %, and no written file holding a value outside its physical range (a negative compliance,
+friction, mass or spring: checked on the file read back).
+
+    python benchmarks/default_path.py [--models finger3,finger2] [--seeds 1-60] [--json] [--log FILE]
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import io
+import json
+import sys
+import tempfile
+import time
+import tomllib
+from pathlib import Path
+
+import numpy as np
+
+from _table import cell
+
+
+def seeds_of(text: str) -> list[int]:
+    """``"1-60"``, ``"3,5,9"`` or a mix (``"1-4,9"``) as a list of seeds."""
+    out: list[int] = []
+    for part in text.split(","):
+        a, _, b = part.partition("-")
+        out.extend(range(int(a), int(b) + 1) if b else [int(a)])
+    return out
+
+
+def _run(argv: list[str]) -> tuple[int, str, str]:
+    from alpes_dyn.cli import main
+
+    out, err = io.StringIO(), io.StringIO()
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+        code = main(argv)
+    return code, out.getvalue(), err.getvalue()
+
+
+def _physical(path: Path) -> list[str]:
+    """The fields of an identified file outside their physical range (none expected: the loader refuses them)."""
+    data = tomllib.loads(path.read_text())
+    bad = []
+    for sec in ("finger", "transmission", "thumb"):
+        for key, entry in data.get(sec, {}).items():
+            if isinstance(entry, dict) and entry.get("source") == "identified":
+                v = np.atleast_1d(np.asarray(entry["value"], dtype=float))
+                if key in ("K", "m", "I", "F_s", "F_v", "tendon_compliance", "J_m") and np.any(v < 0):
+                    bad.append(f"{sec}.{key}")
+    return bad
+
+
+def draw(model: str, seed: int, tmp: Path) -> dict:
+    rec, true, ident = tmp / f"{model}-{seed}.csv", tmp / f"{model}-{seed}-true.toml", tmp / f"{model}-{seed}-id.toml"
+    code, out, _ = _run(["experiment", "--model", model, "--perturb", "0.2", "--seed", str(seed), "-o", str(rec),
+                         "--true-params-out", str(true), "--json"])
+    if code != 0:
+        return {"model": model, "seed": seed, "experiment_exit": code}
+    design = json.loads(out)["design"]
+    t0 = time.perf_counter()
+    code, out, err = _run(["identify", "--model", model, "--data", str(rec), "-o", str(ident), "--json"])
+    wall = time.perf_counter() - t0
+    row = {"model": model, "seed": seed, "experiment_exit": 0, "rig": design["rig"],
+           "amplitude_scale": design["amplitude_scale"], "design_note": design["note"], "identify_exit": code,
+           "identify_wall_s": wall}
+    if code not in (0, 3):
+        row["error"] = err.strip()[:300]
+        return row
+    res = json.loads(out)
+    t = tomllib.loads(true.read_text())["finger"]
+    K, m = np.asarray(t["K"]["value"]), np.asarray(t["m"]["value"])
+    P = res["parameters"]
+    row.update(trustworthy=res["trustworthy"], converged=res["converged"], residual_counts=res["residual_rms"],
+               not_identified=sorted(res.get("not_identified", {})),
+               K_err_pct=max(abs(P[f"K_{i + 1}"]["value"] / K[i] - 1) for i in range(K.size)) * 100,
+               m_err_pct=max(abs(P[f"m_{i + 1}"]["value"] / m[i] - 1) for i in range(m.size) if f"m_{i + 1}" in P) * 100,
+               verdict=(res.get("adequacy") or {}).get("summary", ""))
+    row["unphysical_fields"] = _physical(ident) if code == 0 else []
+    return row
+
+
+def table(rows: list[dict]) -> str:
+    lines = [f"{'model':8} {'seed':>4} {'rig':8} {'amp':>4} {'exit':>4} {'K %':>6} {'m %':>6} {'fit s':>6}  not identified"]
+    for r in rows:
+        lines.append(f"{r['model']:8} {r['seed']:4d} {r.get('rig', '-'):8} {cell(r.get('amplitude_scale'), '4.2f')} "
+                     f"{r.get('identify_exit', r['experiment_exit']):4d} {cell(r.get('K_err_pct'), '6.2f')} "
+                     f"{cell(r.get('m_err_pct'), '6.2f')} {cell(r.get('identify_wall_s'), '6.1f')}  "
+                     f"{', '.join(r.get('not_identified', []))}")
+    for model in sorted({r["model"] for r in rows}):
+        rs = [r for r in rows if r["model"] == model]
+        ok = [r for r in rs if r.get("identify_exit") == 0]
+        K = [r["K_err_pct"] for r in ok]
+        m = [r["m_err_pct"] for r in ok]
+        lines.append(f"{model}: {len(ok)}/{len(rs)} exit 0; hung {sum(r.get('rig') == 'hanging' for r in rs)}; "
+                     f"K worst {max(K, default=float('nan')):.2f} % (median {np.median(K) if K else float('nan'):.2f}), "
+                     f"m worst {max(m, default=float('nan')):.2f} % (median {np.median(m) if m else float('nan'):.2f}); "
+                     f"over K 3 %: {sum(k > 3 for k in K)}, over m 5 %: {sum(x > 5 for x in m)}; "
+                     f"unphysical files: {sum(bool(r.get('unphysical_fields')) for r in rs)}")
+    return "\n".join(lines)
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--models", default="finger3,finger2")
+    ap.add_argument("--seeds", default="1-60")
+    ap.add_argument("--json", action="store_true")
+    ap.add_argument("--log", default=None, help="append each row as a JSON line to this file as it comes")
+    args = ap.parse_args()
+    rows = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for model in args.models.split(","):
+            for seed in seeds_of(args.seeds):
+                row = draw(model, seed, Path(tmp))
+                rows.append(row)
+                if args.log:
+                    with open(args.log, "a") as f:
+                        f.write(json.dumps(row) + "\n")
+    print(json.dumps(rows, indent=1) if args.json else table(rows))
+    bad = [r for r in rows if r.get("identify_exit") != 0 or r.get("K_err_pct", 0) > 3 or r.get("m_err_pct", 0) > 5
+           or r.get("unphysical_fields")]
+    return 1 if bad else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
