@@ -318,6 +318,8 @@ def cmd_identify(args: argparse.Namespace) -> int:
     w = max(10, *(len(n) for n in res.names))
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
+    for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.bounds)
+        lines.append(f"  {n:{w}s} not identified: {why}")
     held = _held_masses(model, args) if urdf else ()
     obj["held"] = list(held)
     if held:

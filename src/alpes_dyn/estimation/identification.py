@@ -253,8 +253,10 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
     if not bad:
         return result
     keep = [n for n in result.names if n not in bad]
-    if not keep:
+    if not keep:  # nothing the data support: not a result to write (identify's caller refuses it)
         result.not_identified = bad
+        result.converged = False
+        result.reason += "; no fitted parameter is identified"
         return result
     held = {n: v for n, v in zip(result.names, result.values) if n in bad and kind.get(n) == "tendon_compliance"}
     with warnings.catch_warnings():  # the verdict is reported on the fit kept
