@@ -46,11 +46,12 @@ def _one_of(value: str, choices: Sequence[str], option: str, kind: str) -> None:
         raise InputError(f"{option}: unknown {kind} {value!r} (expected one of {', '.join(choices)})")
 
 
-def _one_chain(model: str, models: Sequence[str], what: str) -> None:
-    """InputError unless ``model`` is one of the one-chain ``models`` ``what`` is defined for."""
+def _one_chain(model: str, models: Sequence[str], what: str, hand: bool = False) -> None:
+    """InputError unless ``model`` is one of the one-chain ``models`` ``what`` is defined for (``hand``: the whole
+    hand is too, handled before this check)."""
     if model not in models:
         raise InputError(f"--model: {what} is defined for one chain ({', '.join(models)}; a finger of the hand "
-                         f"with --chain), got {model!r}")
+                         f"with --chain){' or the whole hand (hand)' if hand else ''}, got {model!r}")
 
 
 def _one_finger(model: str, models: Sequence[str], what: str) -> None:

@@ -173,7 +173,11 @@ def cmd_experiment(args: argparse.Namespace) -> int:
         raise InputError(f"--true-spec: applies to a URDF --model; the Alpes model {args.model!r} takes the true "
                          "finger from --params (or --perturb)")
     _check_model_options(args)
-    _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment")
+    if args.model == "hand":  # the six motors at once, one recording
+        from .hand_cmds import experiment_hand
+
+        return experiment_hand(args)
+    _one_chain(args.model, EXPERIMENT_MODELS, "the identification experiment", hand=True)
     _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
     if args.perturb is None and args.true_params_out is not None:
         raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
@@ -237,10 +241,12 @@ def _experiment_robot(args: argparse.Namespace) -> int:
     return 0
 
 
-def _fit(args: argparse.Namespace, freqs):
+def _fit(args: argparse.Namespace, freqs, recordings=None):
     """The fit: --parameters as named (the stick-slip law where --effects asks for it), else the default selection
     with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
-    check names it (:mod:`alpes_dyn.estimation.effects`). Returns the EffectsFit and the recording it read."""
+    check names it (:mod:`alpes_dyn.estimation.effects`). ``recordings``: (data, validation or None) already read
+    (a chain's of the whole hand's), else --data and --validate are read. Returns the EffectsFit and the recording
+    it fitted."""
     from ..estimation.adequacy import AdequacyWarning
     from ..estimation.effects import EffectsFit, alpes_models, fit_effects, parse_effects
     from ..estimation.identification import check_selection, identify
@@ -257,8 +263,11 @@ def _fit(args: argparse.Namespace, freqs):
     if args.parameters is not None:
         check_selection(model_of(effects), args.parameters)  # a bad selection named before the recording is read
     # the recordings read once (with --torque-constant their current_<motor> columns as torques), for every round
-    data = read_recording(args.data, model_of(()), args.torque_constant)
-    validate = None if args.validate is None else read_recording(args.validate, model_of(()), args.torque_constant)
+    if recordings is not None:
+        data, validate = recordings
+    else:
+        data = read_recording(args.data, model_of(()), args.torque_constant)
+        validate = None if args.validate is None else read_recording(args.validate, model_of(()), args.torque_constant)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)
     if args.parameters is not None:
@@ -270,27 +279,34 @@ def _fit(args: argparse.Namespace, freqs):
     return fit_effects(model_of, data, effects, base, data.gravity is not None, **kw), data  # tilt where not given
 
 
+def _identify_lines(args: argparse.Namespace):
+    """--excitation's lines, Hz (``documented``: the multisine's and the dither's; ``none``: None)."""
+    from ..estimation.experiment import ExperimentDesign
+
+    if args.excitation == "documented":
+        return ExperimentDesign().lines
+    return None if args.excitation == "none" else tuple(parse_vector(args.excitation, "excitation"))
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identified_spec`)."""
-    from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
+    from ..estimation.experiment import EXPERIMENT_MODELS
     from ..estimation.identified_spec import write_identified_spec
     from ..model.spec import load_spec
 
     urdf = _is_urdf_path(args.model)
+    if args.model == "hand":  # every chain from one recording of the six motors
+        from .hand_cmds import identify_hand
+
+        return identify_hand(args)
     if not urdf:
-        _one_chain(args.model, EXPERIMENT_MODELS, "identification")
+        _one_chain(args.model, EXPERIMENT_MODELS, "identification", hand=True)
         if args.spec is not None:
             raise InputError(f"--spec: applies to a URDF --model; the Alpes model {args.model!r} takes its "
                              "transmission from --params")
     _check_run_files(args, {"-o": ("toml",)})  # the output policy: -o (a TOML file) is none of --data, --params...
-    exc = args.excitation
-    if exc == "documented":
-        freqs = ExperimentDesign().lines  # the multisine's and the dither's
-    elif exc == "none":
-        freqs = None
-    else:
-        freqs = tuple(parse_vector(exc, "excitation"))
+    freqs = _identify_lines(args)
     fit, data = _fit_robot(args, freqs) if urdf else _fit(args, freqs)
     res, model = fit.result, fit.result.model
     res.recording_path = args.data  # the identified file's header names the recording read

@@ -309,8 +309,8 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                        "recording CSV",
                        epilog="Example: alpes-dyn experiment --model finger3 --chain index --params true.toml --seed 1 "
                               "-o rec.csv")
-    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, or a URDF path (with --spec) "
-                   "(default %(default)s)")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, hand (the six motors at once, one "
+                   "recording), or a URDF path (with --spec) (default %(default)s)")
     s.add_argument("--spec", default=None, metavar="FILE.toml",
                    help="a URDF --model's transmission spec: the robot the excitation is designed on (and the true "
                         "one, unless --true-spec)")
@@ -346,7 +346,8 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                               "Exit codes: 0 written (or --force), 2 bad input, 3 the fit did not converge or the "
                               "model is not adequate to the recording (residual coloured, correlated with the "
                               "torque, above the sensor floor, or a poor --validate fit): nothing written")
-    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, or a URDF path (with --spec) "
+    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, hand (every chain from one recording "
+                   "of the six motors, one file; --chain NAME: that chain only), or a URDF path (with --spec) "
                    "(default %(default)s)")
     s.add_argument("--spec", default=None, metavar="FILE.toml",
                    help="a URDF --model's transmission spec: the values to start from, and the base of the written "

@@ -26,7 +26,7 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
+from typing import Any, Sequence
 
 import numpy as np
 
@@ -95,7 +95,8 @@ def _scaled(design: ExperimentDesign, scale: float) -> ExperimentDesign:
                                dither=design.dither * scale, torque_amplitude=amp)
 
 
-def _candidates(design: ExperimentDesign, rig: str, gravity: np.ndarray) -> list[tuple[str, float, ExperimentDesign]]:
+def _candidates(design: ExperimentDesign, rig: str, gravity: np.ndarray,
+                scales: Sequence[float] = AMPLITUDE_SCALES) -> list[tuple[str, float, ExperimentDesign]]:
     """The designs to try, in order: (rig, amplitude scale, design)."""
     hanging = dataclasses.replace(design, orientations=(tuple(float(x) for x in hanging_gravity(gravity)),))
     if rig == "hanging":
@@ -106,18 +107,20 @@ def _candidates(design: ExperimentDesign, rig: str, gravity: np.ndarray) -> list
         base = [("level", design), ("hanging", hanging)]
     if rig == "auto" and len(base) == 2:
         order = [base[0], base[1]]
-        scaled = [(r, s, _scaled(d, s)) for s in AMPLITUDE_SCALES for r, d in (base[1], base[0])]
+        scaled = [(r, s, _scaled(d, s)) for s in scales for r, d in (base[1], base[0])]
         return [(r, 1.0, d) for r, d in order] + scaled
-    return [(r, 1.0, d) for r, d in base] + [(r, s, _scaled(d, s)) for s in AMPLITUDE_SCALES for r, d in base]
+    return [(r, 1.0, d) for r, d in base] + [(r, s, _scaled(d, s)) for s in scales for r, d in base]
 
 
 def adapted_experiment(model: str, true_params: HandParams | str | Path | None = None,
                        design: ExperimentDesign | None = None, seed: int = 0, path: str | Path | None = None,
                        nominal_params: HandParams | str | Path | None = None, chain: str | None = None,
-                       rotor_inertia: bool = False, rig: str = "auto") -> tuple[Recording, Adaptation]:
+                       rotor_inertia: bool = False, rig: str = "auto",
+                       scales: Sequence[float] = AMPLITUDE_SCALES) -> tuple[Recording, Adaptation]:
     """:func:`~alpes_dyn.estimation.experiment.experiment` (its arguments) with the design adapted until the finger
     stays inside its range over the whole record (the module docstring); ``rig``: one of :data:`RIGS` (``level``:
-    ``design``'s own orientation, default palm up). Returns the recording (written to ``path`` only once chosen) and
+    ``design``'s own orientation, default palm up); ``scales``: the amplitude factors to try after the full excitation
+    (default :data:`AMPLITUDE_SCALES`; none: the orientation alone adapts). Returns the recording (written to ``path`` only once chosen) and
     the :class:`Adaptation`. Each run tried costs one experiment's simulation (about 1 s for 4 s of finger3)."""
     from ..errors import InputError
     from .experiment import experiment
@@ -133,7 +136,7 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     limits = Model.alpes(model, params=p_true, chain=chain)
     tried, best = [], None
-    for r, scale, d in _candidates(design, rig, np.asarray(p_nom.gravity, dtype=float)):
+    for r, scale, d in _candidates(design, rig, np.asarray(p_nom.gravity, dtype=float), scales):
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             rec = experiment(model, p_true, d, seed=seed, nominal_params=p_nom, chain=chain,

@@ -1,0 +1,114 @@
+"""``alpes-dyn experiment --model hand`` and ``alpes-dyn identify --model hand``: the whole hand in one experiment
+(:mod:`alpes_dyn.estimation.hand_experiment`), one recording of its six motors, every chain fitted from it into one
+parameter file."""
+
+from __future__ import annotations
+
+import argparse
+import warnings
+
+from ..errors import InputError
+from ..estimation.excursion import SmallExcursionWarning
+from .common import _Untrusted, _check_run_files, _emit, _excursion_lines
+
+
+def experiment_hand(args: argparse.Namespace) -> int:
+    """The six motors excited at once (each chain's experiment, one orientation of the hand), one recording."""
+    from ..estimation.design import ExperimentDesign
+    from ..estimation.draws import perturbed_params
+    from ..estimation.hand_experiment import hand_chains, hand_experiment
+    from ..model.params import load_params, write_params
+
+    if args.chain is not None:
+        raise InputError("--chain: the hand's experiment drives every chain at once; for one finger give --model "
+                         "finger3 --chain NAME (or --model thumb)")
+    _check_run_files(args, {"-o": ("csv",)})
+    if args.perturb is None and args.true_params_out is not None:
+        raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
+    truth = load_params(args.params)
+    if args.perturb is not None:  # every chain its own values, drawn
+        truth = perturbed_params(truth, args.perturb, args.seed, chains=hand_chains(truth))
+    with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
+        warnings.simplefilter("ignore", SmallExcursionWarning)
+        rec, how = hand_experiment(truth, ExperimentDesign(duration=args.duration), seed=args.seed,
+                                   path=args.output, nominal_params=args.params, rig=args.rig)
+    if args.true_params_out is not None:
+        write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment --model "
+                                                        f"hand (spread {args.perturb:g}, seed {args.seed})")
+    obj = {"model": "hand", "output": args.output, "samples": rec.n_samples, "duration_s": rec.duration,
+           "dt_s": rec.dt, "columns": list(rec.columns()), "true_params": args.true_params_out,
+           "design": {c: a.to_dict() for c, a in how.items()}}
+    rig = next(iter(how.values())).rig
+    where = "palm up" if rig == "level" else "hung fingers down"
+    text = (f"hand: identification experiment of the six motors at once ({where}), {rec.n_samples} samples over "
+            f"{rec.duration:g} s written to {args.output}"
+            + (f"; true parameters in {args.true_params_out}" if args.true_params_out else ""))
+    text += "".join(f"\n  design, {c}: {a.note}" for c, a in how.items() if a.note)
+    _emit(obj, text + _excursion_lines(rec, obj), args.json)
+    return 0
+
+
+def _chain_lines(chain: str, fit) -> list[str]:
+    """A chain's lines of the text output: its verdict, then its parameters (value, std) and those not identified."""
+    res = fit.result
+    lines = [f"  {chain}: {'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s, effects "
+             f"{'+'.join(fit.effects) or 'none'}, residual {res.residual_rms:.3g} counts; "
+             + (res.adequacy.summary() if res.adequacy is not None else "")]
+    w = max(10, *(len(n) for n in res.names))
+    lines += [f"    {n:{w}s} {v:12.6g} {sd:10.3g}  {u}" for n, v, sd, u in zip(res.names, res.values, res.std,
+                                                                             res.units)]
+    lines += [f"    {n:{w}s} not identified: {why}" for n, why in res.not_identified.items()]
+    return lines
+
+
+def identify_hand(args: argparse.Namespace) -> int:
+    """Every chain of the hand (or ``--chain``'s) fitted from one recording of its six motors (--data), each as
+    ``identify --model finger3 --chain NAME`` / ``--model thumb`` fits it; one parameter file (-o) with every chain's
+    section, written only where every chain's fit is to be trusted (or with --force)."""
+    from ..estimation.hand_experiment import chain_model_name, chain_recording, hand_chains
+    from ..estimation.recording import read_recording
+    from ..model.params import load_params, write_params
+    from ..model.robot import Model
+    from .estimation_cmds import _fit, _identify_lines
+
+    if args.parameters is not None:
+        raise InputError("--parameters: with --model hand each chain fits its default selection; to name a chain's "
+                         "parameters fit its columns with --model finger3 --chain NAME (or --model thumb)")
+    if args.spec is not None:
+        raise InputError("--spec: applies to a URDF --model; the Alpes hand takes its transmission from --params")
+    _check_run_files(args, {"-o": ("toml",)})
+    p = load_params(args.params)
+    chains = hand_chains(p)
+    if args.chain is not None and args.chain not in chains:
+        raise InputError(f"--chain: unknown chain {args.chain!r} of the hand (expected one of {', '.join(chains)})")
+    freqs = _identify_lines(args)
+    hand = Model.alpes("hand", params=p)
+    data = read_recording(args.data, hand, args.torque_constant)
+    val = None if args.validate is None else read_recording(args.validate, hand, args.torque_constant)
+    out, fits, lines = p, {}, []
+    for chain in (args.chain,) if args.chain else chains:
+        a = argparse.Namespace(**{**vars(args), "model": chain_model_name(chain),
+                                  "chain": None if chain == "thumb" else chain})
+        fit, _ = _fit(a, freqs, (chain_recording(data, chain), None if val is None else chain_recording(val, chain)))
+        fit.result.recording_path = args.data
+        fits[chain] = fit
+        out = fit.result.params(out, chain)
+        lines += _chain_lines(chain, fit)
+    untrusted = {c: f.result.status() for c, f in fits.items() if not f.result.trustworthy}
+    written = args.output is not None and (not untrusted or args.force)
+    if written:
+        header = f"Identified by alpes_dyn from {args.data}, chain by chain ({', '.join(fits)})"
+        if untrusted:
+            header += f"\nNOT TRUSTWORTHY (written with --force): {', '.join(untrusted)}"
+        write_params(out, args.output, header=header)
+    obj = {"model": "hand", "output": args.output if written else None, "trustworthy": not untrusted,
+           "seconds": sum(f.seconds for f in fits.values()),
+           "chains": {c: {**f.result.to_dict(), "effects": list(f.effects)} for c, f in fits.items()}}
+    text = (f"hand: {len(fits)} chains identified from {args.data} in {obj['seconds']:.1f} s"
+            + (f", written to {args.output}" if written else "") + "\n" + "\n".join(lines))
+    _emit(obj, text, args.json)
+    if untrusted and not args.force:
+        raise _Untrusted(f"alpes-dyn: identify: {', '.join(untrusted)} not trustworthy, "
+                         f"{'nothing written' if args.output else 'no file'} (--force writes it anyway): "
+                         + "; ".join(f"{c}: {why}" for c, why in untrusted.items()))
+    return 0
