@@ -18,6 +18,7 @@ every chain from the one file and writes one parameter file).
 
 from __future__ import annotations
 
+import dataclasses
 import warnings
 from pathlib import Path
 from typing import Sequence
@@ -145,6 +146,10 @@ def hand_experiment(true_params: HandParams | str | Path | None = None, design: 
                     chain=None if chain == "thumb" else chain, rig=r, scales=scales)
         if k == len(plans) - 1 or all(a.excess_deg == 0.0 for a in how.values()):
             break
+        out = [c for c, a in how.items() if a.excess_deg > 0.0]  # the chains that make the whole hand hang
+    if k > 0:
+        why = f"the whole hand hung fingers down (as --rig hanging): palm up {', '.join(out)} left its range"
+        how = {c: dataclasses.replace(a, note=why + (f"; {a.note}" if a.note else "")) for c, a in how.items()}
     for w in caught:
         warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     rec = hand_recording(recs, Model.alpes("hand", params=p_nom))
