@@ -14,6 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
+from .fitting import _fit, _identify_lines
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      parse_vector)
@@ -239,53 +240,6 @@ def _experiment_robot(args: argparse.Namespace) -> int:
             f"over {rec.duration:g} s (true robot: {args.true_spec or args.spec}) written to {args.output}")
     _emit(obj, text + _excursion_lines(rec, obj), args.json)
     return 0
-
-
-def _fit(args: argparse.Namespace, freqs, recordings=None):
-    """The fit: --parameters as named (the stick-slip law where --effects asks for it), else the default selection
-    with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
-    check names it (:mod:`alpes_dyn.estimation.effects`). ``recordings``: (data, validation or None) already read
-    (a chain's of the whole hand's), else --data and --validate are read. Returns the EffectsFit and the recording
-    it fitted."""
-    from ..estimation.adequacy import AdequacyWarning
-    from ..estimation.effects import EffectsFit, alpes_models, fit_effects, parse_effects
-    from ..estimation.identification import check_selection, identify
-    from ..estimation.recording import read_recording
-    from ..model.params import load_params
-
-    effects = parse_effects(args.effects) if args.effects is not None else (
-        () if args.parameters is not None else parse_effects(None))
-    if args.parameters is not None and set(effects) - {"stiction", "rotor"}:
-        raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor'))} with "
-                         "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
-    model_of = alpes_models(args.model, load_params(args.params), rotor_inertia=args.rotor_inertia, chain=args.chain)
-
-    if args.parameters is not None:
-        check_selection(model_of(effects), args.parameters)  # a bad selection named before the recording is read
-    # the recordings read once (with --torque-constant their current_<motor> columns as torques), for every round
-    if recordings is not None:
-        data, validate = recordings
-    else:
-        data = read_recording(args.data, model_of(()), args.torque_constant)
-        validate = None if args.validate is None else read_recording(args.validate, model_of(()), args.torque_constant)
-    kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
-              encoder_noise=args.encoder_noise)
-    if args.parameters is not None:
-        model = model_of(effects)
-        with warnings.catch_warnings():  # the command reports the verdict itself, in its one line
-            warnings.simplefilter("ignore", AdequacyWarning)
-            return EffectsFit.single(identify(model, data, args.parameters, **kw), effects), data
-    base = THUMB_PARAMETERS if args.model == "thumb" else None
-    return fit_effects(model_of, data, effects, base, data.gravity is not None, **kw), data  # tilt where not given
-
-
-def _identify_lines(args: argparse.Namespace):
-    """--excitation's lines, Hz (``documented``: the multisine's and the dither's; ``none``: None)."""
-    from ..estimation.experiment import ExperimentDesign
-
-    if args.excitation == "documented":
-        return ExperimentDesign().lines
-    return None if args.excitation == "none" else tuple(parse_vector(args.excitation, "excitation"))
 
 
 def cmd_identify(args: argparse.Namespace) -> int:

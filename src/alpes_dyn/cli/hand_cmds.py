@@ -69,7 +69,7 @@ def identify_hand(args: argparse.Namespace) -> int:
     from ..estimation.recording import read_recording
     from ..model.params import load_params, write_params
     from ..model.robot import Model
-    from .estimation_cmds import _fit, _identify_lines
+    from .fitting import _fit, _identify_lines
 
     if args.parameters is not None:
         raise InputError("--parameters: with --model hand each chain fits its default selection; to name a chain's "

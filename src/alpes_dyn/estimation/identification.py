@@ -246,11 +246,16 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
     physical, off its bounds, its 95 % interval clear of 0); else the fit again with those held (at the bound 0
     where the fit crossed it, else at the model's value), warm-started from ``result``, the ones held named in its
     :attr:`~IdentificationResult.not_identified` with the effect the data do not support. ``settings``: the other
-    arguments of :func:`identify`. Where no parameter is left, ``result`` itself, its parameters all named."""
+    arguments of :func:`identify`. Where no parameter is left, ``result`` itself, its parameters all named (and not
+    converged); where ``result`` is not to be trusted (not converged, or not adequate), ``result`` with them named
+    and not fitted again (its file, written only with ``--force``, does not receive them either)."""
     kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}
     bad = unsupported(result.names, [kind.get(n, "") for n in result.names], result.values, result.std,
                       result.initial, result.units)
     if not bad:
+        return result
+    if not result.trustworthy:  # not a result to keep: its parameters not identified named (never written), no refit
+        result.not_identified = bad
         return result
     keep = [n for n in result.names if n not in bad]
     if not keep:  # nothing the data support: not a result to write (identify's caller refuses it)
