@@ -264,7 +264,8 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     try:
         from distributed import Client
     except ImportError:
-        raise InputError("sweep: Dask is not installed (pip install 'alpes_dyn[sweep]'), or pass serial=True") from None
+        raise InputError("sweep: Dask is not installed (pip install 'alpes_dyn[sweep]'), or pass serial=True "
+                         "(the command line's --serial)") from None
     own = client is None
     cluster = None
     if own:
