@@ -17,7 +17,7 @@ from .model.params import HandParams, load_params
 from .symbolic.statespace import StateSpace
 from .model.transmission import Transmission
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 __all__ = [
     "AlpesDynError", "InputError", "ModelError", "RecordingError", "Model", "JointExtras", "Transmission", "HandParams",
