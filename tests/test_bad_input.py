@@ -2667,7 +2667,7 @@ def _cli(*argv: str, **kw: Any) -> subprocess.CompletedProcess:
 
 
 def test_stdout_broken_pipe_is_one_line_exit_2():
-    p = subprocess.Popen([sys.executable, "-m", "alpes_dyn.cli", "urdf", "hand"], stdout=subprocess.PIPE,
+    p = subprocess.Popen([sys.executable, "-m", "alpes_dyn.cli", "urdf", "--model", "hand"], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, env=_env())
     p.stdout.close()  # the reader is gone before the first byte (``| head -c0``)
     err = p.stderr.read()
