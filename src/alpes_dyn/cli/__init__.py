@@ -6,7 +6,7 @@ adequate to the recording; nothing was written (``--force`` writes the file, mar
 Vectors are comma-separated numbers; negative values work as ``--q=-0.1,0.2`` and ``--q -0.1,0.2``.
 
 The package holds one module per command family, each a thin layer over the floors below:
-``model_cmds`` (urdf, mjcf, dynamics, linearize, report), ``analysis_cmds`` (observability,
+``model_cmds`` (urdf, mjcf, import, dynamics, linearize, report), ``analysis_cmds`` (observability,
 identifiability), ``estimation_cmds`` (estimate, codegen, experiment, identify), ``control_cmds`` (control) and
 ``study_cmds`` (sweep); ``parser`` builds the parser (:func:`build_parser`) and ``common`` holds what they
 share. This module runs one command (:func:`main`), turns every exception into its exit code and one stderr

@@ -201,7 +201,8 @@ _OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), (
 def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[str]] | None = None) -> None:
     """The output policy (:func:`alpes_dyn.fileio.check_outputs`) of the command in ``args``, before any work:
     every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
-    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF --model) and the others."""
+    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF or MJCF --model) and
+    the others."""
     inputs = [(flag, getattr(args, dest)) for dest, flag in _INPUT_OPTIONS if isinstance(getattr(args, dest, None), str)]
     model = getattr(args, "model", None)
     if isinstance(model, str) and (_is_urdf_path(model) or _is_mjcf_path(model)):
