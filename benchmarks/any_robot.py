@@ -127,7 +127,7 @@ def run_robot(name: str, r: dict[str, Any], seed: int, duration: float, skip: se
                        "goal_met": bool(errors) and max(abs(e) for e in errors.values()) < GOALS["spring_error"]}
     if "estimate" not in skip:
         plant = d / "plant.xml"
-        w_mj, _ = cli("mjcf", r["urdf"], "--spec", str(true_path), "-o", str(plant), as_json=False)
+        w_mj, _ = cli("mjcf", *base, "--spec", str(true_path), "-o", str(plant), as_json=False)
         truth = ad.Model.from_urdf_file(r["urdf"], true_path)
         t0 = time.perf_counter()
         data = read_recording(rec, truth)
@@ -155,11 +155,11 @@ def round_trip(d: Path) -> dict[str, Any]:
     import alpes_dyn as ad
 
     rs = robots()
-    cases = {"finger3": (["finger3"], ad.Model.alpes("finger3")),
-             "hand": (["hand"], ad.Model.alpes("hand")),
-             "finger_edu": ([rs["finger_edu"]["urdf"], "--spec", rs["finger_edu"]["spec"]],
+    cases = {"finger3": (["--model", "finger3"], ad.Model.alpes("finger3")),
+             "hand": (["--model", "hand"], ad.Model.alpes("hand")),
+             "finger_edu": (["--model", rs["finger_edu"]["urdf"], "--spec", rs["finger_edu"]["spec"]],
                             ad.Model.from_urdf_file(rs["finger_edu"]["urdf"], rs["finger_edu"]["spec"])),
-             "allegro_hand": ([rs["allegro_index"]["urdf"], "--spec", rs["allegro_index"]["spec"]],
+             "allegro_hand": (["--model", rs["allegro_index"]["urdf"], "--spec", rs["allegro_index"]["spec"]],
                               ad.Model.from_urdf_file(rs["allegro_index"]["urdf"], rs["allegro_index"]["spec"]))}
     out = {}
     for name, (args, m) in cases.items():

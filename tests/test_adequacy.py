@@ -196,11 +196,11 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
     assert p.untrusted == ["finger"] and p.identification["finger"]["adequate"] is False
     assert "NOT TRUSTWORTHY" in p.raw["finger.K"].reason
     assert p.identification["finger"]["likely_missing"][0].startswith("rotor inertia")
-    for argv in (["urdf", "finger3", "--params", str(out), "-o", str(tmp_path / "f.urdf")],
+    for argv in (["urdf", "--model", "finger3", "--params", str(out), "-o", str(tmp_path / "f.urdf")],
                  ["dynamics", "--model", "finger3", "--params", str(out), "--json"],
                  ["observability", "--model", "finger2", "--params", str(out), "--json"],
                  ["estimate", "--friction", "--true-params", str(out), "--duration", "0.3", "--json"],
-                 ["mjcf", "--params", str(out), "-o", str(tmp_path / "f.xml"), "finger3"],
+                 ["mjcf", "--params", str(out), "-o", str(tmp_path / "f.xml"), "--model", "finger3"],
                  ["identify", "--params", str(out), "--data", str(rec), "-o", str(tmp_path / "again.toml"),
                   "--force"]):
         code = main(argv)

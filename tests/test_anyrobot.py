@@ -113,7 +113,7 @@ def test_experiment_identify_estimate_end_to_end(robot, recording, capsys):
                  ["identifiability", "--model", urdf, "--parameters", "K", "--design", "none", "--points", "2"]):
         assert main([*argv, "--spec", str(ident)]) == 0, argv
         capsys.readouterr()
-    assert main(["mjcf", urdf, "--spec", str(ident), "-o", str(robot / "ident.xml")]) == 0
+    assert main(["mjcf", "--model", urdf, "--spec", str(ident), "-o", str(robot / "ident.xml")]) == 0
 
 
 def test_estimate_friction_free_and_the_nominal_spec(robot, recording, capsys):

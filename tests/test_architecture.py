@@ -1,5 +1,5 @@
-"""The house: every floor's imports point down (no import up, no circle between modules), and the
-module paths of version 0.1 still import, as aliases of the new modules, with a DeprecationWarning."""
+"""The house: every floor's imports point down (no import up, no circle between modules); of the module paths
+of version 0.1, the deprecated aliases are gone and the public one (``alpes_dyn.observability``) stays."""
 
 from __future__ import annotations
 
@@ -13,14 +13,14 @@ from pathlib import Path
 import pytest
 
 import alpes_dyn
-from alpes_dyn._moved import MOVED, PUBLIC
+from alpes_dyn._moved import MOVED, REMOVED
 
 PACKAGE = Path(alpes_dyn.__file__).parent
 
 # Floors from the ground up; a module may import its own floor and the floors below it. The top floor is the
 # package alpes_dyn.cli: its front door (main, exit codes), parser, common helpers and command-family modules.
 FLOORS = ("base", "model", "symbolic", "simulation", "estimation", "analysis", "control", "studies", "cli")
-BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "_moved"}
+BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "_moved", "_version"}
 
 
 def floor_of(dotted: str) -> str:
@@ -52,6 +52,13 @@ def module_imports(path: Path) -> set[str]:
                 found.add(target)
         elif isinstance(node, ast.ImportFrom) and (node.module or "").startswith("alpes_dyn."):
             found.add(node.module.removeprefix("alpes_dyn."))
+        elif isinstance(node, ast.ImportFrom) and node.module == "alpes_dyn":  # from alpes_dyn import x
+            for a in node.names:
+                sub = PACKAGE / a.name
+                found.add(a.name if sub.is_dir() or sub.with_suffix(".py").exists() else "__init__")
+        elif isinstance(node, ast.Import):  # import alpes_dyn, import alpes_dyn.model.robot
+            found |= {"__init__" if a.name == "alpes_dyn" else a.name.removeprefix("alpes_dyn.")
+                      for a in node.names if a.name == "alpes_dyn" or a.name.startswith("alpes_dyn.")}
     return found
 
 
@@ -68,11 +75,39 @@ def test_every_import_points_down_or_sideways():
             continue  # the package's front door re-exports from every floor
         mine = FLOORS.index(floor_of(me))
         for target in module_imports(path):
-            if target.split(".")[0] in MOVED:
+            if target.split(".")[0] in MOVED or target.split(".")[0] in REMOVED:
                 ups.append(f"{me} imports the old path {target}")
             elif FLOORS.index(floor_of(target)) > mine:
                 ups.append(f"{me} ({FLOORS[mine]}) imports {target} ({floor_of(target)})")
     assert ups == []
+
+
+FRONT_DOOR_PENDING: set[str] = set()
+"""Modules below the command line that still import the package's front door: none (the last,
+``control/cexport.py``'s ``from .. import __version__``, now imports :mod:`alpes_dyn._version`)."""
+
+
+def test_only_the_command_line_imports_the_package_front_door():
+    """``alpes_dyn/__init__`` imports the model, symbolic and analysis floors to re-export their names: a module of
+    any floor below the command line that imports it (``from .. import __version__``, ``import alpes_dyn``) points
+    up, whatever floor it is on. The version is :mod:`alpes_dyn._version`'s, on the base floor."""
+    found = []
+    for path in library_modules():
+        me = ".".join(path.relative_to(PACKAGE).with_suffix("").parts)
+        if me != "__init__" and floor_of(me) != "cli" and "__init__" in module_imports(path):
+            found.append(me)
+    assert sorted(found) == sorted(FRONT_DOOR_PENDING)
+
+
+def test_the_front_door_rule_sees_every_spelling(monkeypatch):
+    """The import counter on made-up text of a module: the relative, absolute and plain spellings of an import of
+    the package's front door each count; a module of the package imported by name does not."""
+    mod = PACKAGE / "estimation" / "cexport.py"
+    for text, door in (("from .. import __version__", True), ("from alpes_dyn import __version__", True),
+                       ("import alpes_dyn", True), ("from .. import errors", False),
+                       ("from alpes_dyn import errors", False), ("from .._version import __version__", False)):
+        monkeypatch.setattr(Path, "read_text", lambda self, *a, _t=text, **k: _t)
+        assert ("__init__" in module_imports(mod)) is door, text
 
 
 def test_no_import_circle_between_modules():
@@ -119,16 +154,33 @@ def test_cli_is_a_package_on_the_top_floor():
 
 
 @pytest.mark.parametrize("old", sorted(MOVED))
-def test_old_module_path_is_an_alias_with_a_warning(old):
+def test_public_old_module_path_is_an_alias_without_a_warning(old):
     code = (f"import warnings, importlib; warnings.simplefilter('always');\n"
             f"with warnings.catch_warnings(record=True) as w:\n"
             f"    m = importlib.import_module('alpes_dyn.{old}')\n"
             f"n = importlib.import_module('alpes_dyn.{MOVED[old]}')\n"
-            f"print(m is n, sum(issubclass(x.category, DeprecationWarning) and 'alpes_dyn.{MOVED[old]}' in str(x.message)"
-            f" for x in w))")
+            f"print(m is n, len(w))")
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
-    assert out[0] == "True"
-    assert int(out[1]) == (0 if old in PUBLIC else 1)
+    assert out == ["True", "0"]
+
+
+@pytest.mark.parametrize("old", sorted(REMOVED))
+def test_removed_old_module_path_is_gone(old):
+    """The deprecated aliases of version 0.1 are removed (CHANGELOG.md): no file at the package's root, no import,
+    no attribute of the package; the module is at its new place."""
+    assert not (PACKAGE / f"{old}.py").exists()
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module(f"alpes_dyn.{old}")
+    with pytest.raises(AttributeError, match=f"module 'alpes_dyn' has no attribute '{old}'"):
+        getattr(alpes_dyn, old)
+    assert importlib.import_module(f"alpes_dyn.{REMOVED[old]}").__name__ == f"alpes_dyn.{REMOVED[old]}"
+
+
+def test_the_package_root_holds_only_the_base_floor_and_the_public_alias():
+    """The root of the package: its front door, the base floor's modules and the public old path; every other
+    module is in a floor's sub-package."""
+    root = {p.stem for p in PACKAGE.glob("*.py")}
+    assert root == BASE | {"__init__"} | set(MOVED)
 
 
 def test_old_names_of_renamed_packages_are_forwarded_with_a_warning():
@@ -148,10 +200,8 @@ def test_old_names_of_renamed_packages_are_forwarded_with_a_warning():
         importlib.import_module("alpes_dyn.control").nonexistent
 
 
-def test_old_module_as_an_attribute_of_the_package():
-    with pytest.warns(DeprecationWarning, match="alpes_dyn.model.params"):
-        mod = alpes_dyn.params
-    assert mod.default_params_path is importlib.import_module("alpes_dyn.model.params").default_params_path
+def test_public_old_module_as_an_attribute_of_the_package():
+    assert alpes_dyn.observability is importlib.import_module("alpes_dyn.analysis.observability")
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         alpes_dyn.nonexistent
 

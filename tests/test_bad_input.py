@@ -90,6 +90,13 @@ _MJCF_EQ = ('<mujoco><worldbody><body name="a"><joint name="j" range="-1 1"/><in
             'diaginertia="1 1 1"/></body></body></worldbody><equality>{}</equality></mujoco>')
 """A two-hinge MJCF with the equality given (``.format``): the import reads joint couplings only."""
 RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
+ARM_MJCF = """<mujoco model="arm"><compiler angle="radian"/><worldbody>
+  <body name="a" pos="0 0 0.1"><joint name="ja" type="hinge" axis="0 1 0" range="-1 1" stiffness="0.3"/>
+    <inertial pos="0.05 0 0" mass="0.2" diaginertia="1e-4 2e-4 3e-4"/><site name="tip" pos="0.1 0 0"/></body>
+</worldbody><tendon><fixed name="t"><joint joint="ja" coef="0.01"/></fixed></tendon>
+<actuator><motor name="m" tendon="t" gear="100"/></actuator></mujoco>"""
+"""A one-hinge MJCF with a fixed tendon and its motor: what ``alpes-dyn import`` reads."""
+
 ROBOT_URDF = FINGER3.replace('name="alpes_finger3"', 'name="tendon_robot"', 1)
 """A URDF robot for the rows of the commands on any robot: finger3's URDF with a spec of its own (ROBOT_SPEC)."""
 ROBOT_SPEC = ('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n\n'
@@ -210,7 +217,9 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotratio_toml=ROBOT_SPEC.replace("j1 = 2.0", "j1 = 1e300", 1).encode(),
                  robotsub_toml=ROBOT_SPEC.replace("j1 = 0.04", "j1 = 1e-320", 1).encode(),
                  robotcounts_toml=("encoder_counts = 4096.5\n" + ROBOT_SPEC).encode(),
-                 robotempty_toml=b"# a spec with nothing in it\n")
+                 robotempty_toml=b"# a spec with nothing in it\n", arm_xml=ARM_MJCF.encode(),
+                 slide_xml=ARM_MJCF.replace('<joint name="ja" type="hinge"', '<joint name="ja" type="slide"').encode(),
+                 norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n")
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -476,44 +485,48 @@ CLI: dict[str, list[Cli]] = {
           needle="-o: '{robot_toml}' is the input of --spec; refusing to write over it"),
     ],
     "mjcf": [
-        C("mjcf", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
           needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
-        C("mjcf", "finger3", "--tilt", "1e308", needle="--tilt: 1e+308 deg is outside the accepted range [-180, 180] deg"),
-        C("mjcf", "finger7", needle="unknown model 'finger7'"),
-        C("mjcf", "{robot_urdf}", "--spec", "{robot_toml}", "--scene", "block",
+        C("mjcf", "--model", "finger3", "--tilt", "1e308", needle="--tilt: 1e+308 deg is outside the accepted range [-180, 180] deg"),
+        C("mjcf", "--model", "finger7", needle="unknown model 'finger7'"),
+        C("mjcf", "hand", "--model", "finger3", needle="--model: given with the positional model 'hand'; give "
+          "--model only"),
+        C("mjcf", "--model", "{arm_xml}", needle="--model: '{arm_xml}' is an MJCF file; 'alpes-dyn import --model"),
+        C("mjcf", "--model", "finger3", "--json", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--scene", "block",
           needle="--scene: applies to the Alpes models (finger2, finger3, hand, thumb); a URDF model's block scene"),
-        C("mjcf", "{robot_urdf}", "--spec", "{robot_toml}", "--tilt", "10",
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--tilt", "10",
           needle="--tilt: applies to the Alpes models (finger2, finger3, hand, thumb); a URDF model's gravity is"),
-        C("mjcf", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
-        C("mjcf", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
-        C("mjcf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
-        C("mjcf", "finger3", "--stiction", "-1", needle="stiction: expected a positive time constant in s"),
-        C("mjcf", "finger3", "--stiction", "abc", needle="argument --stiction: invalid float value"),
-        C("mjcf", "finger3", "--tendon-stiffness", "0", needle="tendon_stiffness: expected a positive stiffness"),
-        C("mjcf", "finger3", "--tendon-stiffness", "inf", needle="tendon_stiffness: expected a positive stiffness"),
-        C("mjcf", "finger3", "--tendon-damping", "2", needle="tendon_damping: needs tendon_stiffness"),
-        C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-damping", "-1",
+        C("mjcf", "--model", "hand", "--scene", "block", needle="scene 'block' is for one finger"),
+        C("mjcf", "--model", "finger3", "-o", "/nonexistent/dir/x.xml", needle="-o: directory '/nonexistent/dir' of"),
+        C("mjcf", "--model", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
+        C("mjcf", "--model", "finger3", "--stiction", "-1", needle="stiction: expected a positive time constant in s"),
+        C("mjcf", "--model", "finger3", "--stiction", "abc", needle="argument --stiction: invalid float value"),
+        C("mjcf", "--model", "finger3", "--tendon-stiffness", "0", needle="tendon_stiffness: expected a positive stiffness"),
+        C("mjcf", "--model", "finger3", "--tendon-stiffness", "inf", needle="tendon_stiffness: expected a positive stiffness"),
+        C("mjcf", "--model", "finger3", "--tendon-damping", "2", needle="tendon_damping: needs tendon_stiffness"),
+        C("mjcf", "--model", "finger3", "--tendon-stiffness", "4e4", "--tendon-damping", "-1",
           needle="tendon_damping: expected a damping >= 0"),
-        C("mjcf", "{triangle_urdf}", "--tilt", "3", needle="--tilt: applies to the Alpes models"),
-        C("mjcf", "{triangle_urdf}", "--params", "x.toml", needle="--params: applies to the Alpes models"),
-        C("mjcf", "{triangle_urdf}", "--spring", "none", needle="--spring: applies to the Alpes models"),
-        C("mjcf", "{triangle_urdf}", needle="link 'p3' has an inertia that breaks the triangle inequality"),
-        C("mjcf", "finger3", "--spec", "x.toml", needle="--spec: applies to a URDF model"),
-        C("mjcf", "hand", "--tendon-rotor", "--rotor-inertia", needle="rotor_inertia: the rotor would be counted twice"),
-        C("mjcf", "finger3", "--tendon-rotor", "--tendon-stiffness", "4e4",
+        C("mjcf", "--model", "{triangle_urdf}", "--tilt", "3", needle="--tilt: applies to the Alpes models"),
+        C("mjcf", "--model", "{triangle_urdf}", "--params", "x.toml", needle="--params: applies to the Alpes models"),
+        C("mjcf", "--model", "{triangle_urdf}", "--spring", "none", needle="--spring: applies to the Alpes models"),
+        C("mjcf", "--model", "{triangle_urdf}", needle="link 'p3' has an inertia that breaks the triangle inequality"),
+        C("mjcf", "--model", "finger3", "--spec", "x.toml", needle="--spec: applies to a URDF model"),
+        C("mjcf", "--model", "hand", "--tendon-rotor", "--rotor-inertia", needle="rotor_inertia: the rotor would be counted twice"),
+        C("mjcf", "--model", "finger3", "--tendon-rotor", "--tendon-stiffness", "4e4",
           needle="tendon_rotor: the series-elastic tendon (tendon_stiffness) has its rotor already"),
-        C("mjcf", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
-        C("mjcf", "finger3", "--tendon-dead-band", "1e-4", needle="tendon_dead_band: needs tendon_stiffness"),
-        C("mjcf", "finger3", "--params", "{cable_toml}", "--tendon-stiffness", "4e4",
+        C("mjcf", "--model", "finger3", "--tilt", "nan", needle="--tilt: expected a finite angle in degrees"),
+        C("mjcf", "--model", "finger3", "--tendon-dead-band", "1e-4", needle="tendon_dead_band: needs tendon_stiffness"),
+        C("mjcf", "--model", "finger3", "--params", "{cable_toml}", "--tendon-stiffness", "4e4",
           needle="tendon_stiffness: 40000.0 N/m differs from the parameter file's cable"),
-        C("mjcf", "finger3", "--tendon-stiffness", "4e4", "--tendon-dead-band=-1e-4",
+        C("mjcf", "--model", "finger3", "--tendon-stiffness", "4e4", "--tendon-dead-band=-1e-4",
           needle="tendon_dead_band: expected a cable's play >= 0 in m"),
-        C("mjcf", "{triangle_urdf}", "--tendon-dead-band", "1e-4", needle="--tendon-dead-band: applies to the Alpes"),
-        C("mjcf", "finger3", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
-        C("mjcf", "finger3", "--params", "{params_toml}", "-o", "{params_toml}", needle="is the input of --params"),
-        C("mjcf", "finger3", "-o", "{device}", needle="is a character device"),
-        C("mjcf", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
-        C("mjcf", "hand", "--params", "{xmlname_toml}", needle="palm.finger_names: 'in<d&\"ex' is not a name"),
+        C("mjcf", "--model", "{triangle_urdf}", "--tendon-dead-band", "1e-4", needle="--tendon-dead-band: applies to the Alpes"),
+        C("mjcf", "--model", "finger3", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
+        C("mjcf", "--model", "finger3", "--params", "{params_toml}", "-o", "{params_toml}", needle="is the input of --params"),
+        C("mjcf", "--model", "finger3", "-o", "{device}", needle="is a character device"),
+        C("mjcf", "--model", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
+        C("mjcf", "--model", "hand", "--params", "{xmlname_toml}", needle="palm.finger_names: 'in<d&\"ex' is not a name"),
     ],
     "control": [
         C("control", "--controller", "pid", needle="unknown controller 'pid'"),
@@ -592,38 +605,68 @@ CLI: dict[str, list[Cli]] = {
         C("dynamics", *["--json"] * 1000, needle="1001 command-line arguments, over the limit of 1000"),
     ],
     "urdf": [
-        C("urdf", "finger7", needle="unknown model 'finger7'"),
-        C("urdf", "{robot_urdf}", needle="is a URDF already; this command writes the Alpes models'"),
-        C("urdf", "hand", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
-        C("urdf", "hand", "-o", "", needle="-o: empty file name"),
-        C("urdf", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: directory '{tmp}/missing' of"),
-        C("urdf", "hand", "-o", "{file}/hand.urdf", needle="-o: '{file}' in '{file}/hand.urdf' is not a directory"),
-        C("urdf", "hand", "-o", "{tmp}/hand.urdf", needle="-o: cannot write", fsize=4096),  # full disk
-        C("urdf", "finger3", "--params", "{binary_toml}", needle="not UTF-8 text (byte 0x80 at offset 128)"),
-        C("urdf", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text (byte 0xe9"),
-        C("urdf", "finger3", "--params", "", needle="parameter file: empty file name"),
-        C("urdf", "finger3", "--params", "{dir}", needle="is a directory"),
-        C("urdf", "finger3", "--params", "{negative_k_toml}", needle="finger.K: value must be >= 0"),
+        C("urdf", "--model", "finger7", needle="unknown model 'finger7'"),
+        C("urdf", "finger3", "--model", "hand", needle="--model: given with the positional model 'finger3'; give "
+          "--model only"),
+        C("urdf", "--model", "{arm_xml}", "--params", "{params_toml}", needle="--params: applies to the Alpes models"),
+        C("urdf", "--model", "{slide_xml}", needle="--model: joint 'ja' is a slide joint"),
+        C("urdf", "--model", "{tmp}/missing.xml", needle="--model: '{tmp}/missing.xml' is not a file"),
+        C("urdf", "--model", "{arm_xml}", "-o", "{arm_xml}", needle="-o: '{arm_xml}' is the input of --model"),
+        C("urdf", "--model", "hand", "--json", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
+        C("urdf", "--model", "{robot_urdf}", needle="is a URDF already; this command writes the Alpes models'"),
+        C("urdf", "--model", "hand", "-o", "{dir}", needle="-o: '{dir}' is a directory"),
+        C("urdf", "--model", "hand", "-o", "", needle="-o: empty file name"),
+        C("urdf", "--model", "hand", "-o", "{tmp}/missing/hand.urdf", needle="-o: directory '{tmp}/missing' of"),
+        C("urdf", "--model", "hand", "-o", "{file}/hand.urdf", needle="-o: '{file}' in '{file}/hand.urdf' is not a directory"),
+        C("urdf", "--model", "hand", "-o", "{tmp}/hand.urdf", needle="-o: cannot write", fsize=4096),  # full disk
+        C("urdf", "--model", "finger3", "--params", "{binary_toml}", needle="not UTF-8 text (byte 0x80 at offset 128)"),
+        C("urdf", "--model", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text (byte 0xe9"),
+        C("urdf", "--model", "finger3", "--params", "", needle="parameter file: empty file name"),
+        C("urdf", "--model", "finger3", "--params", "{dir}", needle="is a directory"),
+        C("urdf", "--model", "finger3", "--params", "{negative_k_toml}", needle="finger.K: value must be >= 0"),
         C("identify", "--params", "{negative_compliance_toml}", "--data", "x.csv",
           needle="transmission.tendon_compliance: value must be >= 0"),
-        C("urdf", "hand", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
-        C("urdf", "hand", "-o", "{fifo}", needle="-o: '{fifo}' is a FIFO (named pipe)"),
-        C("urdf", "hand", "-o", "{device}", needle="is a character device; only a regular file is written"),
-        C("urdf", "hand", "-o", "{tmp}/newdir/", needle="-o: '{tmp}/newdir/' ends with '/': it names a directory"),
-        C("urdf", "hand", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
-        C("urdf", "hand", "--params", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input "
+        C("urdf", "--model", "hand", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
+        C("urdf", "--model", "hand", "-o", "{fifo}", needle="-o: '{fifo}' is a FIFO (named pipe)"),
+        C("urdf", "--model", "hand", "-o", "{device}", needle="is a character device; only a regular file is written"),
+        C("urdf", "--model", "hand", "-o", "{tmp}/newdir/", needle="-o: '{tmp}/newdir/' ends with '/': it names a directory"),
+        C("urdf", "--model", "hand", "-o", "{dir}/", needle="-o: '{dir}' is a directory"),
+        C("urdf", "--model", "hand", "--params", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input "
           "of --params"),
-        C("urdf", "hand", "--params", "{params_toml}", "-o", "{hardlink}", needle="is the input of --params"),
-        C("urdf", "finger3", "--params", "{fifo}", needle="parameter file '{fifo}': is a FIFO (named pipe)"),
-        C("urdf", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
-        C("urdf", "finger3", "--params", "{compliance_toml}", needle="transmission.tendon_compliance: value must be finite"),
-        C("urdf", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
-        C("urdf", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
-        C("urdf", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
+        C("urdf", "--model", "hand", "--params", "{params_toml}", "-o", "{hardlink}", needle="is the input of --params"),
+        C("urdf", "--model", "finger3", "--params", "{fifo}", needle="parameter file '{fifo}': is a FIFO (named pipe)"),
+        C("urdf", "--model", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
+        C("urdf", "--model", "finger3", "--params", "{compliance_toml}", needle="transmission.tendon_compliance: value must be finite"),
+        C("urdf", "--model", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
+        C("urdf", "--model", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
+        C("urdf", "--model", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
           "whole number, got 4096.5"),
-        C("urdf", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
+        C("urdf", "--model", "finger3", "--params", "{mm_toml}", needle="finger.r.unit: the value is read in 'm', got 'mm'"),
+    ],
+    "import": [
+        C("import", "-o", "{tmp}/out", needle="the following arguments are required: --model"),
+        C("import", "--model", "{arm_xml}", needle="the following arguments are required: -o/--output"),
+        C("import", "--model", "finger3", "-o", "{tmp}/out", needle="--model: import reads an MJCF file (FILE.xml), "
+          "got 'finger3'; an Alpes model's MJCF: 'alpes-dyn mjcf --model finger3 -o FILE.xml'"),
+        C("import", "--model", "{robot_urdf}", "-o", "{tmp}/out", needle="is a URDF already; give it with its spec"),
+        C("import", "--model", "{tmp}/missing.xml", "-o", "{tmp}/out", needle="--model: '{tmp}/missing.xml' is not a "
+          "file"),
+        C("import", "--model", "{dir}", "-o", "{tmp}/out", needle="--model: '{dir}' is not a file"),
+        C("import", "--model", "{slide_xml}", "-o", "{tmp}/out", needle="--model: joint 'ja' is a slide joint"),
+        C("import", "--model", "{norange_xml}", "-o", "{tmp}/out", needle="--model: joint 'ja' has no range"),
+        C("import", "--model", "{notxml_xml}", "-o", "{tmp}/out", needle="--model: MuJoCo cannot compile it"),
+        C("import", "--model", "{tmp}/.xml", "-o", "{tmp}/out", needle="--model: the files written are named after "
+          "the MJCF file; '.xml' gives no plain name"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}", needle="-o: directory '{tmp}' is not empty; refusing to "
+          "write over it"),
+        C("import", "--model", "{arm_xml}", "-o", "{file}", needle="-o: '{file}' exists and is not a directory"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/missing/out", needle="-o: directory '{tmp}/missing' of"),
+        C("import", "--model", "{arm_xml}", "-o", "", needle="-o: expected a directory name, got ''"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--json", "--json", needle="--json: given 2 times"),
     ],
     "dynamics": [
+        C("dynamics", "--model", "{arm_xml}", needle="--model: '{arm_xml}' is an MJCF file; 'alpes-dyn import --model "
+          "{arm_xml} -o DIR' writes its URDF and spec, then give --model DIR/arm.urdf --spec DIR/arm.toml"),
         C("dynamics", "--model", "{star_urdf}", needle="URDF: 201 moving joints, over the limit of 200"),
         C("dynamics", "--q=1_0,0,0", needle="--q: expected comma-separated numbers, got '1_0,0,0'"),
         C("dynamics", "--model", "finger9", needle="unknown model 'finger9'"),
@@ -676,7 +719,7 @@ CLI: dict[str, list[Cli]] = {
           needle="rest_angle.j9: joint 'j9' has no spring (no [stiffness] value)"),
         C("dynamics", "--model", "{robot_urdf}", "--spec", "{robotstops_toml}",
           needle="stops.stiffness: expected a number > 0, got -2"),
-        C("mjcf", "{robot_urdf}", "--spec", "{robotstopj_toml}",
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robotstopj_toml}",
           needle="stops.joints.j9: unknown joint 'j9' (URDF joints: j1, j2, j3)"),
     ],
     "report": [
@@ -830,7 +873,7 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--params", "{latin1_toml}", needle="not UTF-8 text"),
         C("estimate", "--observer", "pf", needle="--observer: unknown observer 'pf'"),
         C("estimate", "--model", "hand", needle="--model: the estimation scenario is defined for one chain"),
-        C("estimate", "--model", "thumb", needle="friction: the thumb's scenario needs friction=True"),
+        C("estimate", "--model", "thumb", needle="friction: the thumb's scenario needs friction=True (the command line's --friction;"),
         C("estimate", "--chain", "pinky", needle="chain: unknown finger 'pinky'"),
         C("estimate", "--model", "thumb", "--friction", "--chain", "index", needle="chain: only a finger model"),
         C("estimate", "--seed", "-1", needle="--seed: expected an integer from 0 to 9223372036854775807, got -1"),
@@ -864,10 +907,10 @@ CLI["dynamics"] += [
     C("dynamics", "--params", "{angle_toml}", needle=f"finger.upper: 1e+300 rad {RANGE} [-100, 100] rad"),
 ]
 CLI["mjcf"] += [
-    C("mjcf", "finger3", "--tendon-stiffness", "1e300", "-o", "{tmp}/m.xml",
+    C("mjcf", "--model", "finger3", "--tendon-stiffness", "1e300", "-o", "{tmp}/m.xml",
       needle=f"--tendon-stiffness: 1e+300 N/m {RANGE} [1e-06, 1e+12] N/m"),
-    C("mjcf", "finger3", "--stiction", "1e-320", "-o", "{tmp}/m.xml", needle="--stiction: 1e-320 s is a subnormal"),
-    C("mjcf", "hand", "--params", "{ratio_toml}", "-o", "{tmp}/m.xml", needle=f"transmission.N: 1e+300 {RANGE}"),
+    C("mjcf", "--model", "finger3", "--stiction", "1e-320", "-o", "{tmp}/m.xml", needle="--stiction: 1e-320 s is a subnormal"),
+    C("mjcf", "--model", "hand", "--params", "{ratio_toml}", "-o", "{tmp}/m.xml", needle=f"transmission.N: 1e+300 {RANGE}"),
 ]
 CLI["linearize"] += [C("linearize", "--u", "1e300,0,0", needle=f"--u: 1e+300 N m (index 0) {RANGE}")]
 CLI["experiment"] += [
@@ -1531,7 +1574,8 @@ API: list[Api] = [
       "stiffness.j9: unknown joint 'j9'"),
     A("JointStops", lambda c: _stops(ad.Model(FINGER3, gravity=[0.0, 0.0, 0.0])), InputError,
       "stops: nothing pushes model 'alpes_finger3' into its joint stops (no gravity torque, no spring resting beyond a "
-      "limit) to size them by; pass stiffness= (N m/rad) and damping= (N m s/rad)"),
+      "limit) to size them by; pass stiffness= (N m/rad) and damping= (N m s/rad), or give them in the --spec "
+      "file's [stops] table"),
     A("JointStops", lambda c: _stops(c.m, stiffness=-1.0), InputError,
       "stiffness: expected a positive number of N m/rad or 3 of them (one per joint) (or None: sized to the robot), "
       "got -1.0"),
@@ -2649,7 +2693,7 @@ def _cli(*argv: str, **kw: Any) -> subprocess.CompletedProcess:
 
 
 def test_stdout_broken_pipe_is_one_line_exit_2():
-    p = subprocess.Popen([sys.executable, "-m", "alpes_dyn.cli", "urdf", "hand"], stdout=subprocess.PIPE,
+    p = subprocess.Popen([sys.executable, "-m", "alpes_dyn.cli", "urdf", "--model", "hand"], stdout=subprocess.PIPE,
                          stderr=subprocess.PIPE, text=True, env=_env())
     p.stdout.close()  # the reader is gone before the first byte (``| head -c0``)
     err = p.stderr.read()

@@ -24,10 +24,10 @@ def run(capsys, *argv):
 
 @pytest.mark.parametrize("name", ad.MODELS)
 def test_urdf_command(capsys, tmp_path, name):
-    code, out, _ = run(capsys, "urdf", name)
+    code, out, _ = run(capsys, "urdf", "--model", name)
     assert code == 0 and out == (ROOT / "urdf" / f"{name}.urdf").read_text()
     dest = tmp_path / "x.urdf"
-    assert run(capsys, "urdf", name, "-o", str(dest))[0] == 0
+    assert run(capsys, "urdf", "--model", name, "-o", str(dest))[0] == 0
     assert dest.read_text() == out
 
 
@@ -64,7 +64,7 @@ def test_dynamics_readable_and_hand_tip(capsys):
     (["dynamics", "--spring", "cubic"], "invalid choice: 'cubic'"),
     (["dynamics", "--params", "/nonexistent.toml"], "cannot be read"),
     (["dynamics", "--model", "/nonexistent.urdf"], "cannot be read"),
-    (["urdf", "finger7"], "unknown model 'finger7'"),
+    (["urdf", "--model", "finger7"], "unknown model 'finger7'"),
     (["frobnicate"], "invalid choice"),
     (["estimate", "--seed", "-1"], "--seed: expected an integer from 0 to 9223372036854775807, got -1"),
     (["observability", "--points", "0"], "--points: expected an integer from 1 to 10000, got 0"),

@@ -165,7 +165,8 @@ def test_alpes_export_and_the_file_cable(p, tmp_path):
                if "<!--" not in ln]
     assert body == by_hand
     with pytest.warns(AlpesDynWarning, match=r"tendon_compliance: the file's cable .* written as a rigid tendon; "
-                                             r"its series-elastic plant is tendon_stiffness=40000 N/m"):
+                                             r"its series-elastic plant is tendon_stiffness=40000 N/m with a tendon_damping "
+                                             r"\(the command line's --tendon-stiffness 40000 --tendon-damping"):
         rigid = mjcf_string("finger3", str(path))
     assert "finger_rotor" not in rigid
     with pytest.raises(InputError, match="tendon_stiffness: 30000.0 N/m differs from the parameter file's cable"):

@@ -129,19 +129,19 @@ def test_block_contact_force_equals_static_balance():
 
 
 def test_cli_mjcf(capsys, tmp_path):
-    assert main(["mjcf", "finger3", "--scene", "block", "--palm-down"]) == 0
+    assert main(["mjcf", "--model", "finger3", "--scene", "block", "--palm-down"]) == 0
     out = capsys.readouterr().out
     assert out == mjcf_string("finger3", scene="block", palm_down=True)
     dest = tmp_path / "h.xml"
-    assert main(["mjcf", "hand", "--scene", "cylinder", "-o", str(dest)]) == 0
+    assert main(["mjcf", "--model", "hand", "--scene", "cylinder", "-o", str(dest)]) == 0
     assert load_mujoco(dest.read_text()).nu == 6
 
 
 @pytest.mark.parametrize("argv,needle", [
-    (["mjcf", "finger7"], "unknown model 'finger7'"),
-    (["mjcf", "hand", "--scene", "block"], "scene 'block' is for one finger"),
-    (["mjcf", "finger3", "--scene", "table"], "invalid choice: 'table'"),
-    (["mjcf", "finger3", "-o", "/nonexistent/dir/x.xml"], "-o: directory '/nonexistent/dir' of"),
+    (["mjcf", "--model", "finger7"], "unknown model 'finger7'"),
+    (["mjcf", "--model", "hand", "--scene", "block"], "scene 'block' is for one finger"),
+    (["mjcf", "--model", "finger3", "--scene", "table"], "invalid choice: 'table'"),
+    (["mjcf", "--model", "finger3", "-o", "/nonexistent/dir/x.xml"], "-o: directory '/nonexistent/dir' of"),
 ])
 def test_cli_mjcf_bad_input(capsys, argv, needle):
     code = main(argv)

@@ -193,10 +193,10 @@ def test_tendon_rotor_is_J_m_S_T_S(name, rng):
 
 
 def test_cli_mjcf_effects(capsys):
-    assert main(["mjcf", "finger3", "--stiction", "--tendon-stiffness", "4e4", "--tendon-damping", "2",
+    assert main(["mjcf", "--model", "finger3", "--stiction", "--tendon-stiffness", "4e4", "--tendon-damping", "2",
                  "--tilt", "3"]) == 0
     out = capsys.readouterr().out
     assert out == mjcf_string("finger3", stiction=STICTION_TIMECONST, tendon_stiffness=4e4, tendon_damping=2.0,
                               tilt=np.radians(3.0))
-    assert main(["mjcf", "hand", "--tendon-rotor"]) == 0
+    assert main(["mjcf", "--model", "hand", "--tendon-rotor"]) == 0
     assert capsys.readouterr().out == mjcf_string("hand", tendon_rotor=True)

@@ -211,10 +211,10 @@ def test_cli_mjcf_of_a_urdf_with_its_spec(tmp_path, capsys):
 
     urdf = example_robot_urdf("allegro_hand", "allegro_right_hand")
     model = ad.Model.from_urdf_file(urdf, example_spec_path())
-    assert main(["mjcf", str(urdf), "--spec", str(example_spec_path())]) == 0
+    assert main(["mjcf", "--model", str(urdf), "--spec", str(example_spec_path())]) == 0
     assert capsys.readouterr().out == model_mjcf(model)
     out = tmp_path / "allegro.xml"
-    assert main(["mjcf", str(urdf), "--spec", str(example_spec_path()), "--no-limits", "-o", str(out)]) == 0
+    assert main(["mjcf", "--model", str(urdf), "--spec", str(example_spec_path()), "--no-limits", "-o", str(out)]) == 0
     assert out.read_text() == model_mjcf(model, limits=False)
     mj = mujoco.MjModel.from_xml_string(out.read_text())
     assert mj.nv == model.n and mj.ntendon == model.transmission.n_motors

@@ -17,20 +17,10 @@ from .model.params import HandParams, load_params
 from .symbolic.statespace import StateSpace
 from .model.transmission import Transmission
 
-__version__ = "0.1.0"
+from ._version import __version__
 
 __all__ = [
     "AlpesDynError", "InputError", "ModelError", "RecordingError", "Model", "JointExtras", "Transmission", "HandParams",
     "StateSpace", "check_observability", "observability", "ObservabilityReport", "load_params", "urdf_string", "layout",
     "write_urdfs", "example_robot_urdf", "MODELS", "SPRING_MODELS",
 ]
-
-
-def __getattr__(name: str) -> object:
-    """``alpes_dyn.<old module>`` of version 0.1 (``ad.params``, ``ad.spec``, ...): the moved module, with a
-    DeprecationWarning (:mod:`alpes_dyn._moved`)."""
-    from ._moved import MOVED, alias
-
-    if name in MOVED:
-        return alias(name)
-    raise AttributeError(f"module 'alpes_dyn' has no attribute {name!r}")

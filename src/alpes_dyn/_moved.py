@@ -1,5 +1,8 @@
-"""Old import paths of the modules moved into sub-packages (version 0.2): each old module name is an
-alias of its new module, importable for one release with a :class:`DeprecationWarning`."""
+"""Old import paths of version 0.1 that still hold: ``alpes_dyn.observability``, documented public API, an alias of
+its module :mod:`alpes_dyn.analysis.observability` (no warning); and the names the old modules ``model``,
+``symbolic``, ``simulation`` and ``control`` held that their packages do not re-export, forwarded with a
+:class:`DeprecationWarning` (:func:`package_getattr`). The other old module paths (``alpes_dyn.params``,
+``alpes_dyn.observers``, ...: :data:`REMOVED`) were deprecated aliases for one release and are gone."""
 
 from __future__ import annotations
 
@@ -10,28 +13,25 @@ from types import ModuleType
 
 __all__: list[str] = []
 
-MOVED: dict[str, str] = {
+MOVED: dict[str, str] = {"observability": "analysis.observability"}
+"""Old module (under ``alpes_dyn``) -> its new place (under ``alpes_dyn``), for the old paths that stay public."""
+
+REMOVED: dict[str, str] = {
     "params": "model.params", "spec": "model.spec", "transmission": "model.transmission",
     "description": "model.description", "inertial": "model.inertial", "extras": "model.extras",
     "stops": "model.stops", "mjcf": "model.mjcf", "reference": "model.reference",
     "parametric": "symbolic.parametric", "statespace": "symbolic.statespace",
-    "identifiability": "analysis.identifiability", "observability": "analysis.observability",
+    "identifiability": "analysis.identifiability",
     "sensitivity": "simulation.sensitivity", "buildcache": "simulation.buildcache",
     "observers": "estimation.observers", "recording": "estimation.recording", "experiment": "estimation.experiment",
     "identification": "estimation.identification", "scenario": "estimation.scenario",
 }
-"""Old module (under ``alpes_dyn``) -> its new place (under ``alpes_dyn``)."""
-
-PUBLIC: frozenset[str] = frozenset({"observability"})
-"""Old paths that stay documented public API (no warning): ``alpes_dyn.observability``."""
+"""The old module paths of version 0.1 that were deprecated aliases and are removed -> where the module is."""
 
 
 def alias(old: str) -> ModuleType:
-    """Make ``alpes_dyn.<old>`` the module ``alpes_dyn.<MOVED[old]>`` (warning unless public)."""
+    """Make ``alpes_dyn.<old>`` the module ``alpes_dyn.<MOVED[old]>`` (a public old path: no warning)."""
     new = MOVED[old]
-    if old not in PUBLIC:
-        warnings.warn(f"alpes_dyn.{old} moved to alpes_dyn.{new}; the old path goes in the next release",
-                      DeprecationWarning, stacklevel=3)
     module = importlib.import_module(f"alpes_dyn.{new}")
     sys.modules[f"alpes_dyn.{old}"] = module
     return module

@@ -6,7 +6,7 @@ adequate to the recording; nothing was written (``--force`` writes the file, mar
 Vectors are comma-separated numbers; negative values work as ``--q=-0.1,0.2`` and ``--q -0.1,0.2``.
 
 The package holds one module per command family, each a thin layer over the floors below:
-``model_cmds`` (urdf, mjcf, dynamics, linearize, report), ``analysis_cmds`` (observability,
+``model_cmds`` (urdf, mjcf, import, dynamics, linearize, report), ``analysis_cmds`` (observability,
 identifiability), ``estimation_cmds`` (estimate, codegen, experiment, identify), ``control_cmds`` (control) and
 ``study_cmds`` (sweep); ``parser`` builds the parser (:func:`build_parser`) and ``common`` holds what they
 share. This module runs one command (:func:`main`), turns every exception into its exit code and one stderr
@@ -26,8 +26,8 @@ from ..errors import AlpesDynError, InputError
 from ..fileio import native_stderr_to
 from ..limits import MAX_ARGS, max_bytes
 from .common import (EXIT_UNTRUSTED, _join_negative_vectors, _one_line, _StdoutError, _Untrusted, _UsageError,
-                     _write_stdout, check_cache_before_compiling, check_option_ranges,
-                     refuse_repeated_options)
+                     _write_stdout, check_cache_before_compiling, check_option_ranges, positional_model,
+                     refuse_mjcf_model, refuse_repeated_options)
 from .parser import build_parser
 
 # the names of the former module cli.py, where they are now (``from alpes_dyn.cli import X`` still works)
@@ -54,6 +54,8 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
         parser = build_parser()
         refuse_repeated_options(parser, argv)
         args = parser.parse_args(_join_negative_vectors(argv))
+        positional_model(args)  # urdf, mjcf: the deprecated positional MODEL as --model (one warning line)
+        refuse_mjcf_model(args)
         check_option_ranges(args)
         max_bytes()  # $ALPES_DYN_MAX_BYTES read by every command: a bad one is refused even where no array is sized
         check_cache_before_compiling(args)

@@ -9,6 +9,8 @@ import json
 import os
 import re
 import sys
+import warnings
+from pathlib import Path
 from typing import Any, Sequence
 
 import numpy as np
@@ -200,10 +202,11 @@ _OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), (
 def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[str]] | None = None) -> None:
     """The output policy (:func:`alpes_dyn.fileio.check_outputs`) of the command in ``args``, before any work:
     every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
-    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF --model) and the others."""
+    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF or MJCF --model) and
+    the others."""
     inputs = [(flag, getattr(args, dest)) for dest, flag in _INPUT_OPTIONS if isinstance(getattr(args, dest, None), str)]
     model = getattr(args, "model", None)
-    if isinstance(model, str) and _is_urdf_path(model):
+    if isinstance(model, str) and (_is_urdf_path(model) or _is_mjcf_path(model)):
         inputs.append(("--model", model))
     outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
     outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
@@ -213,6 +216,42 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
 
 def _is_urdf_path(model: str) -> bool:
     return model.endswith(".urdf") or "/" in model
+
+
+def _is_mjcf_path(model: str) -> bool:
+    """Whether a --model names an MJCF file (by its extension, .xml or .mjcf)."""
+    return model.lower().endswith((".xml", ".mjcf"))
+
+
+MJCF_MODEL_COMMANDS = ("urdf", "import")
+"""The commands that read an MJCF --model (``urdf``: the URDF of its tree; ``import``: its URDF and spec)."""
+
+
+def positional_model(args: argparse.Namespace) -> None:
+    """``urdf`` and ``mjcf``'s positional MODEL of version 0.1 (``alpes-dyn urdf finger3``), a deprecated alias of
+    ``--model``: moved into ``args.model`` with one DeprecationWarning naming --model (the one warning line of
+    :func:`alpes_dyn.cli.main`); given with --model it is refused; neither given: finger3, as every command's."""
+    if not hasattr(args, "legacy_model"):
+        return
+    legacy = args.legacy_model
+    if legacy is not None:
+        if args.model is not None:
+            raise InputError(f"--model: given with the positional model {legacy!r}; give --model only")
+        warnings.warn(f"'alpes-dyn {args.command} {legacy}': the positional model is deprecated, give --model "
+                      f"{legacy}", DeprecationWarning, stacklevel=2)
+        args.model = legacy
+    elif args.model is None:
+        args.model = "finger3"
+
+
+def refuse_mjcf_model(args: argparse.Namespace) -> None:
+    """InputError naming ``alpes-dyn import`` for an MJCF --model given to a command that reads a name or a URDF
+    (all but :data:`MJCF_MODEL_COMMANDS`): its URDF and spec are written first, then given as --model, --spec."""
+    model = getattr(args, "model", None)
+    if isinstance(model, str) and _is_mjcf_path(model) and args.command not in MJCF_MODEL_COMMANDS:
+        stem = Path(model).stem
+        raise InputError(f"--model: {model!r} is an MJCF file; 'alpes-dyn import --model {model} -o DIR' writes its "
+                         f"URDF and spec, then give --model DIR/{stem}.urdf --spec DIR/{stem}.toml")
 
 
 _ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--friction"),

@@ -1,6 +1,6 @@
-"""The commands on one model: ``urdf`` and ``mjcf`` (its descriptions), ``dynamics`` (A, C, G, J and the
-forward dynamics at one state), ``linearize`` (its state space at a point) and ``report`` (the report
-reproduced: the dynamics cross-checked, the observability of its models)."""
+"""The commands on one model: ``urdf`` and ``mjcf`` (its descriptions), ``import`` (an MJCF's URDF and spec),
+``dynamics`` (A, C, G, J and the forward dynamics at one state), ``linearize`` (its state space at a point) and
+``report`` (the report reproduced: the dynamics cross-checked, the observability of its models)."""
 
 from __future__ import annotations
 
@@ -15,7 +15,7 @@ import numpy as np
 from ..errors import InputError
 from ..fileio import atomic_write
 from .analysis_cmds import _observability_summary
-from .common import (_check_run_files, _emit, _fmt_table, _is_urdf_path, _model_from_args, _one_or_list, _write_stdout,
+from .common import (_check_run_files, _emit, _fmt_table, _is_mjcf_path, _is_urdf_path, _model_from_args, _one_or_list, _write_stdout,
                      parse_vector)
 
 
@@ -23,15 +23,89 @@ def cmd_urdf(args: argparse.Namespace) -> int:
     from ..model.description import urdf_string
     from ..model.params import load_params
 
-    if _is_urdf_path(args.model):
-        raise InputError(f"model: {args.model!r} is a URDF already; this command writes the Alpes models' (finger2, "
-                         "finger3, thumb, hand); 'alpes-dyn mjcf' exports a URDF with its --spec")
-    _check_run_files(args)
-    text = urdf_string(args.model, load_params(args.params))
+    if _is_mjcf_path(args.model):
+        if args.params is not None:
+            raise InputError("--params: applies to the Alpes models (finger2, finger3, thumb, hand); an MJCF --model's "
+                             "values are its own")
+        _check_run_files(args)
+        text = _mjcf_urdf(args.model)
+    elif _is_urdf_path(args.model):
+        raise InputError(f"--model: {args.model!r} is a URDF already; this command writes the Alpes models' (finger2, "
+                         "finger3, thumb, hand) or an MJCF file's; 'alpes-dyn mjcf --model FILE.urdf --spec FILE.toml' "
+                         "exports a URDF with its spec")
+    else:
+        _check_run_files(args)
+        text = urdf_string(args.model, load_params(args.params))
+    _text_out(args, text, "urdf")
+    return 0
+
+
+def _text_out(args: argparse.Namespace, text: str, key: str) -> None:
+    """A description's text to ``-o`` (atomically: never a partial file) or to stdout; with --json one object
+    instead, ``{"model", "output", key: the text (null when written to -o)}``."""
     if args.output is not None:
         atomic_write(args.output, text, "-o")  # never a partial file (full disk, killed process)
-    else:
+    if args.json:
+        _emit({"model": args.model, "output": args.output, key: None if args.output is not None else text}, "", True)
+    elif args.output is None:
         _write_stdout(text)
+
+
+def _mjcf_urdf(path: str) -> str:
+    """The URDF of an MJCF file's tree (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`), checked to load as a
+    Model with its spec; the importer's ``mjcf: ...`` errors named by the option, ``--model: ...``."""
+    return _mjcf_import(path)[0]
+
+
+def _mjcf_import(path: str):
+    """(URDF text, spec, Model) of an MJCF file: what ``import`` writes and ``urdf --model FILE.xml`` prints, the
+    pair loaded once as a Model (a URDF the library cannot load is refused before anything is written)."""
+    from ..errors import ModelError
+    from ..model.mjcf_import import mjcf_to_urdf
+    from ..model.robot import Model
+
+    try:
+        urdf, spec = mjcf_to_urdf(path)
+    except ModelError as exc:
+        head, sep, tail = str(exc).partition(": ")
+        raise InputError(f"--model: {tail}" if sep and head == "mjcf" else str(exc)) from None
+    return urdf, spec, Model(urdf, spec)
+
+
+def cmd_import(args: argparse.Namespace) -> int:
+    """An MJCF's URDF and transmission spec written into a new (or empty) directory, whole or not at all: the pair
+    ``--model DIR/<name>.urdf --spec DIR/<name>.toml`` reads (:meth:`alpes_dyn.model.robot.Model.from_mjcf`'s)."""
+    from pathlib import Path
+
+    from ..fileio import check_output_directory, write_directory
+    from ..model.spec import TransmissionSpec
+
+    if not _is_urdf_path(args.model) and not _is_mjcf_path(args.model) and not Path(args.model).suffix:
+        raise InputError(f"--model: import reads an MJCF file (FILE.xml), got {args.model!r}; an Alpes model's MJCF: "
+                         f"'alpes-dyn mjcf --model {args.model} -o FILE.xml'")
+    if args.model.endswith(".urdf"):
+        raise InputError(f"--model: {args.model!r} is a URDF already; give it with its spec: --model "
+                         f"{args.model} --spec FILE.toml")
+    name = Path(args.model).stem
+    if not name or name.startswith("."):
+        raise InputError(f"--model: the files written are named after the MJCF file; {Path(args.model).name!r} gives "
+                         "no plain name (rename the file)")
+    check_output_directory(args.output, "-o")  # before MuJoCo compiles: a new or empty directory, never a file
+    urdf, spec, model = _mjcf_import(args.model)
+    toml = (f"# the transmission spec of {Path(args.model).name} (alpes-dyn import): give it as --spec with "
+            f"--model {name}.urdf\n" + spec.to_toml())
+    if TransmissionSpec.from_toml(toml) != spec:  # never written as if it were the model's (to_toml's promise)
+        raise RuntimeError(f"the spec of {args.model!r} does not read back equal to itself from its TOML")
+    written = write_directory({f"{name}.urdf": urdf, f"{name}.toml": toml}, args.output, "-o")
+    paths = {k: str(v) for k, v in written.items()}
+    obj = {"model": args.model, "name": model.name, "directory": args.output, "urdf": paths[f"{name}.urdf"],
+           "spec": paths[f"{name}.toml"], "joints": list(model.joint_names), "motors": list(model.motor_names),
+           "tips": list(model.tip_names)}
+    text = (f"{model.name}: {model.n} joints, {len(model.motor_names)} motor"
+            f"{'s' if len(model.motor_names) != 1 else ''} ({', '.join(model.motor_names) or 'none'}), tips "
+            f"{', '.join(model.tip_names) or 'none'}; written to {args.output}/ ({name}.urdf, {name}.toml)\n"
+            f"  use: --model {obj['urdf']} --spec {obj['spec']}")
+    _emit(obj, text, args.json)
     return 0
 
 
@@ -49,10 +123,7 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
             raise InputError(f"--spec: applies to a URDF model; the Alpes model {args.model!r} takes its transmission "
                              "from --params")
         text = _alpes_mjcf(args, mjcf_string, load_params)
-    if args.output is not None:
-        atomic_write(args.output, text, "-o")
-    else:
-        _write_stdout(text)
+    _text_out(args, text, "mjcf")
     return 0
 
 

@@ -15,7 +15,7 @@ from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import _UsageError, _strict_int
 from .control_cmds import cmd_control
 from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_experiment, cmd_identify
-from .model_cmds import cmd_dynamics, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
+from .model_cmds import cmd_dynamics, cmd_import, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
 from .study_cmds import cmd_sweep
 
 DESCRIPTION = "Command line ``alpes-dyn``: URDF generation, dynamics, the report reproduced, observability, estimation."
@@ -110,18 +110,48 @@ def _common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") 
     sp.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def _json_option(sp: argparse.ArgumentParser) -> None:
+    """``--json``: the command's result as one JSON object on stdout (every command has it)."""
+    sp.add_argument("--json", action="store_true", help="print one JSON object")
+
+
+def _model_option(sp: argparse.ArgumentParser, help: str) -> None:
+    """``--model`` (default finger3, as every command's) and the deprecated positional MODEL of version 0.1
+    (:func:`~alpes_dyn.cli.common.positional_model`: one warning line naming --model)."""
+    sp.add_argument("legacy_model", nargs="?", default=None, metavar="MODEL",
+                    help="deprecated: the model as a positional argument; give --model MODEL")
+    sp.add_argument("--model", default=None, help=help + " (default finger3)")
+
+
 def _add_urdf(sub: argparse._SubParsersAction) -> None:
-    s = sub.add_parser("urdf", help="print or write the URDF of a model")
-    s.add_argument("model", help="finger2, finger3, thumb or hand")
+    s = sub.add_parser("urdf", help="print or write the URDF of a model",
+                       epilog="Example: alpes-dyn urdf --model finger3 -o finger3.urdf")
+    _model_option(s, "finger2, finger3, thumb, hand, or an MJCF path (FILE.xml: the URDF of its tree; "
+                     "'alpes-dyn import' writes its spec too)")
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--params", default=None, metavar="FILE", help="parameter file (default: the shipped one)")
+    _json_option(s)
     s.set_defaults(func=cmd_urdf)
+
+
+def _add_import(sub: argparse._SubParsersAction) -> None:
+    s = sub.add_parser("import", help="write the URDF and the transmission spec of a MuJoCo model (MJCF) with fixed "
+                       "tendons, for --model FILE.urdf --spec FILE.toml",
+                       epilog="Example: alpes-dyn import --model hand.xml -o hand; then alpes-dyn dynamics --model "
+                              "hand/hand.urdf --spec hand/hand.toml")
+    s.add_argument("--model", required=True, metavar="FILE.xml",
+                   help="the MJCF file (MuJoCo compiles it: its includes, defaults and classes resolved)")
+    s.add_argument("-o", "--output", required=True, metavar="DIR",
+                   help="the directory to create (new, or empty): <name>.urdf and <name>.toml, <name> the MJCF "
+                        "file's name without its extension; written whole or not at all")
+    _json_option(s)
+    s.set_defaults(func=cmd_import)
 
 
 def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("mjcf", help="print or write the MuJoCo model (MJCF) of a model: springs, stops, tendons, "
-                       "motors, sensors", epilog="Example: alpes-dyn mjcf finger3 --scene block -o finger3.xml")
-    s.add_argument("model", help="finger2, finger3, hand, thumb, or a URDF path (with --spec)")
+                       "motors, sensors", epilog="Example: alpes-dyn mjcf --model finger3 --scene block -o finger3.xml")
+    _model_option(s, "finger2, finger3, hand, thumb, or a URDF path (with --spec)")
     s.add_argument("-o", "--output", metavar="FILE", help="write to FILE instead of stdout")
     s.add_argument("--spec", default=None, metavar="FILE.toml",
                    help="a URDF model's transmission spec: motors, tendons, springs, friction, rotor inertia")
@@ -153,6 +183,7 @@ def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--tilt", type=_strict_float, default=0.0, metavar="DEG",
                    help="Alpes models: palm tilted in the finger's plane by DEG degrees (gravity rotated about y; a "
                         "URDF --model's gravity is its spec's)")
+    _json_option(s)
     s.set_defaults(func=cmd_mjcf)
 
 
@@ -513,7 +544,7 @@ def build_parser() -> argparse.ArgumentParser:
                 epilog="Vectors: comma-separated numbers; negative values as --q=-0.1,0.2 (or --q -0.1,0.2).")
     p.add_argument("--version", action="version", version=f"alpes-dyn {__version__}")
     sub = p.add_subparsers(dest="command", required=True, parser_class=_Parser)
-    for add in (_add_urdf, _add_mjcf, _add_dynamics, _add_report, _add_observability, _add_linearize,
+    for add in (_add_urdf, _add_mjcf, _add_import, _add_dynamics, _add_report, _add_observability, _add_linearize,
                 _add_estimate, _add_codegen, _add_experiment, _add_identify, _add_identifiability, _add_sweep,
                 _add_control):
         add(sub)

@@ -258,7 +258,7 @@ def _contact_force_function(ctl: ForceController, name: str) -> cs.Function:
 def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -> dict[str, str]:
     """The C export of ``ctl.update``: ``{"<prefix>.h": ..., "<prefix>.c": ..., "force_main.c": ...}`` (see the
     module docstring). ``ctl`` is a fresh controller (its settings are exported, not its state)."""
-    from .. import __version__
+    from .._version import __version__
 
     if not isinstance(ctl, ForceController):
         raise InputError(f"ctl: expected a ForceController, got {type(ctl).__name__}")

@@ -376,7 +376,7 @@ def _whole_step_source(filt: KalmanFilter, prefix: str) -> tuple[str, int]:
 
 
 def _header_fields(filt: KalmanFilter, about: str, nwork: int, z0: Any, P0: Any) -> dict[str, Any]:
-    from .. import __version__
+    from .._version import __version__
 
     ss = filt.model.system
     tr = ss.model.transmission

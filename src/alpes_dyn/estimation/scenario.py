@@ -142,8 +142,8 @@ class EstimationScenario:
             raise InputError(f"model: the estimation scenario is defined for one finger or the thumb "
                              f"({', '.join(ESTIMATION_MODELS)}), got {self.model!r}")
         if self.model == "thumb" and not self.friction:
-            raise InputError("friction: the thumb's scenario needs friction=True (its ab/adduction has no spring: "
-                             "without friction nothing holds it)")
+            raise InputError("friction: the thumb's scenario needs friction=True (the command line's --friction; its "
+                             "ab/adduction has no spring: without friction nothing holds it)")
         if self.spring != "torsional":
             raise InputError(f"spring: the scenario's torque profile is balanced by the torsional springs; "
                              f"got spring model {self.spring!r}")

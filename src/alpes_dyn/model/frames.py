@@ -29,7 +29,7 @@ class FrameKinematics:
         """The tip used where none is given: the first of :attr:`tips`; :class:`~alpes_dyn.ModelError` where there
         is none, or where the URDF has several leaf frames and neither the spec nor the layout names the tips."""
         if not self.tips:
-            raise ModelError("model has no tip frame; pass a frame name")
+            raise ModelError("model has no tip frame; pass a frame name (the command line's --tip, or control's --frame)")
         if not self.tips_named:
             raise ModelError(f"tip: model {self.name!r} names no tip and its URDF has {len(self.tips)} leaf frames "
                              f"({', '.join(self.tips)}); name it: tips = [\"<frame>\"] in the spec, or tip=<frame> "

@@ -459,7 +459,8 @@ def _file_cable(p: HandParams, tendon_stiffness: float | None) -> float | None:
     if tendon_stiffness is None:
         warnings.warn(AlpesDynWarning(
             f"transmission.tendon_compliance: the file's cable ({C:g} rad/(N m)) is written as a rigid tendon; its "
-            f"series-elastic plant is tendon_stiffness={k_file:.6g} N/m (with a tendon_damping)"), stacklevel=3)
+            f"series-elastic plant is tendon_stiffness={k_file:.6g} N/m with a tendon_damping (the command line's "
+            f"--tendon-stiffness {k_file:.6g} --tendon-damping N_S_PER_M)"), stacklevel=3)
         return None
     if not (isinstance(tendon_stiffness, (int, float, np.integer, np.floating)) and not isinstance(tendon_stiffness, bool)
             and math.isclose(tendon_stiffness, k_file, rel_tol=1e-12)):

@@ -58,6 +58,23 @@ _HOT = MAX_HOT_MAGNITUDE
 _INF = math.inf
 
 
+def _spec_and_extras(urdf: str, spec: TransmissionSpec | str | Path | JointExtras | None,
+                     extras: JointExtras | None) -> tuple[TransmissionSpec | None, JointExtras | None]:
+    """:class:`Model`'s spec and extras arguments read: a spec's path loaded, the former positional order
+    ``Model(urdf, extras, ...)`` understood, a wrong type or a spec with extras refused, the URDF text checked."""
+    if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
+        spec, extras = None, spec if extras is None else extras
+    if isinstance(spec, (str, Path)):
+        spec = load_spec(spec)
+    if spec is not None and not isinstance(spec, TransmissionSpec):
+        raise ModelError(f"spec: expected a TransmissionSpec or the path of its TOML file, got {type(spec).__name__}")
+    if spec is not None and extras is not None:
+        raise ModelError("extras: given together with a spec, which holds them already")
+    if not isinstance(urdf, str) or "<robot" not in urdf:
+        raise ModelError("urdf: expected URDF text containing a <robot> element")
+    return spec, extras
+
+
 class Model(FrameKinematics):
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
@@ -107,17 +124,9 @@ class Model(FrameKinematics):
                  gravity: Sequence[float] | None = None, name: str | None = None, layout: Layout | None = None,
                  params: HandParams | None = None, spring: str | None = None, *,
                  extras: JointExtras | None = None, check_inertia: str = "relaxed") -> None:
-        """See the class. Long because it builds the parts in the order the later ones read them."""
-        if isinstance(spec, JointExtras):  # the former positional order Model(urdf, extras, ...)
-            spec, extras = None, spec if extras is None else extras
-        if isinstance(spec, (str, Path)):
-            spec = load_spec(spec)
-        if spec is not None and not isinstance(spec, TransmissionSpec):
-            raise ModelError(f"spec: expected a TransmissionSpec or the path of its TOML file, got {type(spec).__name__}")
-        if spec is not None and extras is not None:
-            raise ModelError("extras: given together with a spec, which holds them already")
-        if not isinstance(urdf, str) or "<robot" not in urdf:
-            raise ModelError("urdf: expected URDF text containing a <robot> element")
+        """See the class. The parts are built in the order the later ones read them: the Pinocchio model and the
+        joints, the spec's values on them, the gravity, the joint extras, the caches and tips, the transmission."""
+        spec, extras = _spec_and_extras(urdf, spec, extras)
         self._given_extras = extras
         self.urdf: str = urdf
         self.mimic: MimicCoupling | None  # the URDF's <mimic> joints, q_full = G q + o (model.mimic), else None
@@ -129,48 +138,16 @@ class Model(FrameKinematics):
         self.joint_names: tuple[str, ...] = self.mimic.names if self.mimic else tuple(self.pin_model.names[1:])
         self.spec: TransmissionSpec | None = spec
         if spec is not None:
-            if self.mimic is not None:
-                refuse_mimic_names(spec, self.mimic)
-            spec.check(self.joint_names, [f.name for f in self.pin_model.frames])
-            extras = spec.extras(self.joint_names)
-            if gravity is not None and spec.gravity is not None and not np.array_equal(
-                    np.asarray(gravity, dtype=float), np.asarray(spec.gravity)):
-                raise ModelError("gravity: given both as an argument and in the spec, with different values")
-            gravity = spec.gravity if gravity is None else gravity
+            extras, gravity = self._spec_on_joints(spec, gravity)
         self.name: str = name or (spec.name if spec is not None and spec.name else None) or self.pin_model.name
         self.layout = layout
         self.params = params
         self.spring = spring if spring is not None else (spec.spring if spec is not None else "none")
-        try:
-            g = DEFAULT_GRAVITY if gravity is None else as_float_array(gravity, "gravity", "3 finite numbers")
-        except InputError as exc:
-            raise ModelError(str(exc)) from None
-        if g.shape != (3,) or not np.all(np.isfinite(g)):
-            raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
-        check_physical(g, "gravity", "m/s^2", "any", ModelError)  # a gravity of 1e300 m/s^2, a subnormal 1e-320
-        self.gravity: np.ndarray = g.copy()
-        self.pin_model.gravity.linear = g
-        if self.mimic is not None:
-            self.mimic.full_model.gravity.linear = g
-        if extras is not None and not isinstance(extras, JointExtras):
-            raise ModelError(f"extras: expected JointExtras, got {type(extras).__name__}")
-        self.extras: JointExtras = extras if extras is not None else JointExtras.zeros(n)
-        for fname in ("stiffness", "armature", "coulomb", "viscous"):
-            a = getattr(self.extras, fname)
-            if np.shape(a) != (n,):
-                raise ModelError(f"extras.{fname}: expected shape ({n},), got {np.shape(a)}")
-        if np.any(self.extras.armature < 0):
-            raise ModelError("extras.armature: must be >= 0")
-        self.pin_model.armature = np.asarray(self.extras.armature, dtype=float).copy()
+        self.gravity: np.ndarray = self._set_gravity(gravity)
+        self.extras: JointExtras = self._set_extras(extras)
         self.pin_data: pin.Data = self.pin_model.createData()
         _check_mass_matrix(self.pin_model, self.pin_data, self.joint_names)
-        self._k = np.asarray(self.extras.stiffness, dtype=float)
-        self._spring = self.extras.has_spring
-        self._friction = self.extras.has_friction
-        self._lower = np.tril_indices(n, -1)
-        self._shape = (n,)
-        self._tiny = np.full(n, _TINY)  # x . tiny is finite iff x is, and never overflows (no numpy warning)
-        self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
+        self._set_caches()
         self.tips: tuple[str, ...] = _tips(self.pin_model, spec, layout)
         self.tips_named: bool = (spec is not None and spec.tips is not None) or layout is not None or len(self.tips) <= 1
         """Whether :attr:`default_tip` is defined: tips named by the spec or layout, or a URDF with one leaf."""
@@ -178,12 +155,74 @@ class Model(FrameKinematics):
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
             self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
                                                          params.abduction_ratio, params.encoder_counts)
-        tr = self.transmission
+        self.rotor_matrix: np.ndarray = self._set_rotor()
+        """S^T diag(J_m) S (n, n), kg m^2: the motors' rotor inertia on the joints (eq. 2.8; zeros without)."""
+
+    def _spec_on_joints(self, spec: TransmissionSpec, gravity: Sequence[float] | None
+                        ) -> tuple[JointExtras, Sequence[float] | None]:
+        """The spec checked against the URDF's joints and frames (a mimic joint it names refused): its joint extras
+        and the gravity to use (the argument, else the spec's; both given and different: ModelError)."""
+        if self.mimic is not None:
+            refuse_mimic_names(spec, self.mimic)
+        spec.check(self.joint_names, [f.name for f in self.pin_model.frames])
+        extras = spec.extras(self.joint_names)
+        if gravity is not None and spec.gravity is not None and not np.array_equal(
+                np.asarray(gravity, dtype=float), np.asarray(spec.gravity)):
+            raise ModelError("gravity: given both as an argument and in the spec, with different values")
+        return extras, spec.gravity if gravity is None else gravity
+
+    def _set_gravity(self, gravity: Sequence[float] | None) -> np.ndarray:
+        """The gravity (3,), m/s^2 (default :data:`DEFAULT_GRAVITY`), checked finite and physical, set on the
+        Pinocchio model (and on a mimic model's full one); returned as :attr:`gravity`'s copy."""
+        try:
+            g = DEFAULT_GRAVITY if gravity is None else as_float_array(gravity, "gravity", "3 finite numbers")
+        except InputError as exc:
+            raise ModelError(str(exc)) from None
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise ModelError(f"gravity: expected 3 finite numbers, got {np.asarray(gravity).tolist()!r}")
+        check_physical(g, "gravity", "m/s^2", "any", ModelError)  # a gravity of 1e300 m/s^2, a subnormal 1e-320
+        out = g.copy()
+        self.pin_model.gravity.linear = g
+        if self.mimic is not None:
+            self.mimic.full_model.gravity.linear = g
+        return out
+
+    def _set_extras(self, extras: JointExtras | None) -> JointExtras:
+        """The joint extras (springs, armature, friction; zeros without), each of shape (n,), the armature >= 0 and
+        set on the Pinocchio model."""
+        n = self.n
+        if extras is not None and not isinstance(extras, JointExtras):
+            raise ModelError(f"extras: expected JointExtras, got {type(extras).__name__}")
+        extras = extras if extras is not None else JointExtras.zeros(n)
+        for fname in ("stiffness", "armature", "coulomb", "viscous"):
+            a = getattr(extras, fname)
+            if np.shape(a) != (n,):
+                raise ModelError(f"extras.{fname}: expected shape ({n},), got {np.shape(a)}")
+        if np.any(extras.armature < 0):
+            raise ModelError("extras.armature: must be >= 0")
+        self.pin_model.armature = np.asarray(extras.armature, dtype=float).copy()
+        return extras
+
+    def _set_caches(self) -> None:
+        """What the hot paths read at each call: the springs, the index of the mass matrix's lower triangle, the
+        state's shape, the overflow guard, the frames by name."""
+        n = self.n
+        self._k = np.asarray(self.extras.stiffness, dtype=float)
+        self._spring = self.extras.has_spring
+        self._friction = self.extras.has_friction
+        self._lower = np.tril_indices(n, -1)
+        self._shape = (n,)
+        self._tiny = np.full(n, _TINY)  # x . tiny is finite iff x is, and never overflows (no numpy warning)
+        self._frames = {f.name: i for i, f in enumerate(self.pin_model.frames)}
+
+    def _set_rotor(self) -> np.ndarray:
+        """The transmission's rotor inertia on the joints, S^T diag(J_m) S (n, n) read-only (zeros without), and how
+        the dynamics add it: dense (CRBA and a solve) where there is one or a mimic joint, by the tree's
+        ancestry where it couples only a joint with its ancestors; the sum A + R checked positive definite."""
+        n, tr = self.n, self.transmission
         self._rotor = tr is not None and bool(np.any(tr.rotor_inertia != 0))
         R = tr.rotor_matrix if self._rotor else np.zeros((n, n))
         R.flags.writeable = False
-        self.rotor_matrix: np.ndarray = R
-        """S^T diag(J_m) S (n, n), kg m^2: the motors' rotor inertia on the joints (eq. 2.8; zeros without)."""
         self._rotor_upper = np.triu(R)
         ids = [self.pin_model.getJointId(j) for j in self.joint_names]  # Pinocchio's ids (a mimic joint has one)
         sup = [set(self.pin_model.supports[ids[j]]) for j in range(n)]  # joint j's ancestors and itself
@@ -191,6 +230,7 @@ class Model(FrameKinematics):
         self._dense = self._rotor or self.mimic is not None  # CRBA and a dense solve (no ABA on a mimic model)
         if self._rotor:
             _check_positive(self.pin_model, self.pin_data, R)
+        return R
 
     def __reduce__(self) -> tuple:
         """Pickled (and deep-copied) as its description: the URDF, the spec as TOML, the gravity, the layout and the

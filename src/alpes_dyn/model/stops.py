@@ -282,7 +282,7 @@ def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> t
         if not np.max(tau[limited]) > 0:
             raise InputError(f"stops: nothing pushes model {model.name!r} into its joint stops (no gravity torque, no "
                              "spring resting beyond a limit) to size them by; pass stiffness= (N m/rad) and damping= "
-                             "(N m s/rad)")
+                             "(N m s/rad), or give them in the --spec file's [stops] table")
         pushed = limited & (tau > 1e-9 * np.max(tau[limited]))  # not a rounding error's torque across a vertical axis
         stiffness = (np.where(pushed, tau, np.min(tau[pushed])) if per_joint else float(np.max(tau[limited])))
         stiffness = stiffness / STOP_PENETRATION

@@ -228,28 +228,8 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     """
     if not callable(fn):
         raise InputError(f"fn: expected a function of the seed, got {type(fn).__name__}")
-    if seeds is not None:
-        if draws is not None or seed != 0:
-            raise InputError("seeds: give the seeds, or draws and seed, not both")
-        if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__") or not 1 <= len(seeds) <= 100_000:
-            raise InputError(f"seeds: expected 1 to 100000 integers, got {type(seeds).__name__}")
-        seeds = [_check_int(s_, "seeds", 0, MAX_SEED) for s_ in seeds]
-        if len(set(seeds)) != len(seeds):
-            raise InputError("seeds: a seed is given twice (each draw is its seed's)")
-    else:
-        if draws is None:
-            raise InputError("draws: expected the number of draws (or seeds=)")
-        draws = _check_int(draws, "draws", 1, 100_000)
-        seed = _check_int(seed, "seed", 0, MAX_SEED + 1 - draws)  # the last draw's seed MAX_SEED at most
-        seeds = list(range(seed, seed + draws))
-    if not isinstance(flat, (bool, np.bool_)):
-        raise InputError(f"flat: expected True or False, got {flat!r}")
-    if options is not None and not (isinstance(options, dict) and all(isinstance(k, str) for k in options)):
-        raise InputError(f"options: expected a dict of keyword arguments of fn, got {type(options).__name__}")
-    options = dict(options or {})
-    if "seed" in options:
-        raise InputError("options: 'seed' is each draw's own (seed, seed + 1, ...); give it as sweep's seed")
-    _check_options(fn, options)
+    seeds = _sweep_seeds(draws, seed, seeds)
+    options = _sweep_options(fn, flat, options)
     where = [n for n, given in (("serial", bool(serial)), ("scheduler", scheduler is not None),
                                 ("client", client is not None), ("workers", workers is not None)) if given]
     if len(where) > 1:
@@ -259,12 +239,53 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     if serial:
         rows = [_draw(fn, s, options, bool(flat)) for s in seeds]
         return SweepResult(rows, time.perf_counter() - t0, "serial", 1)
+    return _dask_sweep(fn, seeds, options, bool(flat), workers, scheduler, client, t0)
+
+
+def _sweep_seeds(draws: int | None, seed: int, seeds: Sequence[int] | None) -> list[int]:
+    """The seeds of :func:`sweep`: ``seeds`` checked (1 to 100000 distinct integers in 0..MAX_SEED), or
+    seed .. seed + draws - 1 (draws in 1..100000, the last seed MAX_SEED at most)."""
+    if seeds is not None:
+        if draws is not None or seed != 0:
+            raise InputError("seeds: give the seeds, or draws and seed, not both")
+        if isinstance(seeds, (str, bytes)) or not hasattr(seeds, "__len__") or not 1 <= len(seeds) <= 100_000:
+            raise InputError(f"seeds: expected 1 to 100000 integers, got {type(seeds).__name__}")
+        seeds = [_check_int(s_, "seeds", 0, MAX_SEED) for s_ in seeds]
+        if len(set(seeds)) != len(seeds):
+            raise InputError("seeds: a seed is given twice (each draw is its seed's)")
+        return seeds
+    if draws is None:
+        raise InputError("draws: expected the number of draws (or seeds=)")
+    draws = _check_int(draws, "draws", 1, 100_000)
+    seed = _check_int(seed, "seed", 0, MAX_SEED + 1 - draws)  # the last draw's seed MAX_SEED at most
+    return list(range(seed, seed + draws))
+
+
+def _sweep_options(fn: Callable[..., Any], flat: Any, options: dict[str, Any] | None) -> dict[str, Any]:
+    """:func:`sweep`'s ``flat`` checked a bool and its ``options`` a dict of ``fn``'s keyword arguments (not the
+    seed, each draw's own); a copy of them."""
+    if not isinstance(flat, (bool, np.bool_)):
+        raise InputError(f"flat: expected True or False, got {flat!r}")
+    if options is not None and not (isinstance(options, dict) and all(isinstance(k, str) for k in options)):
+        raise InputError(f"options: expected a dict of keyword arguments of fn, got {type(options).__name__}")
+    options = dict(options or {})
+    if "seed" in options:
+        raise InputError("options: 'seed' is each draw's own (seed, seed + 1, ...); give it as sweep's seed")
+    _check_options(fn, options)
+    return options
+
+
+def _dask_sweep(fn: Callable[..., dict[str, Any]], seeds: list[int], options: dict[str, Any], flat: bool,
+                workers: int | None, scheduler: str | None, client: Any, t0: float) -> SweepResult:
+    """The draws of :func:`sweep` on Dask: on ``client``, or on a client of its own (of the ``scheduler``, or of a
+    local cluster of ``workers`` processes) closed at the end; the rows in the seeds' order."""
     if scheduler is not None and not (isinstance(scheduler, str) and "://" in scheduler):
         raise InputError(f"scheduler: expected an address such as tcp://host:8786, got {scheduler!r}")
     try:
         from distributed import Client
     except ImportError:
-        raise InputError("sweep: Dask is not installed (pip install 'alpes_dyn[sweep]'), or pass serial=True") from None
+        raise InputError("sweep: Dask is not installed (pip install 'alpes_dyn[sweep]'), or pass serial=True "
+                         "(the command line's --serial)") from None
     own = client is None
     cluster = None
     if own:
@@ -280,7 +301,7 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
     try:
         n_workers = len(client.scheduler_info().get("workers", {}))
         run = uuid.uuid4().hex[:8]  # a sweep's own keys: two sweeps of the same seeds on one client stay apart
-        futures = [client.submit(_draw, fn, s, options, bool(flat), pure=False, key=f"draw-{s}-{run}") for s in seeds]
+        futures = [client.submit(_draw, fn, s, options, flat, pure=False, key=f"draw-{s}-{run}") for s in seeds]
         rows = client.gather(futures)
     finally:
         if own:

@@ -1,5 +1,0 @@
-"""Moved to :mod:`alpes_dyn.estimation.identification` (this path is an alias of it, with a DeprecationWarning, for one release)."""
-
-from ._moved import alias
-
-alias(__name__.rpartition(".")[2])
