@@ -54,7 +54,9 @@ from alpes_dyn.control.realism_loop import NO_COMPENSATION, Compensation
 from alpes_dyn.errors import InputError
 from alpes_dyn.estimation.draws import perturbed_params
 from alpes_dyn.model.stops import JointRangeWarning
-from alpes_dyn.studies.realism import FINGER3, Plant, realism_case, rig_design
+from alpes_dyn.control import run_hand_control
+from alpes_dyn.model.params import load_params, with_values, write_params
+from alpes_dyn.studies.realism import FINGER3, Plant, hand_plant, realism_case, rig_design
 
 LEVELS = (0.2, 0.6, 0.2)
 STEP = 0.4
@@ -142,17 +144,74 @@ def identify_row(model: str, seed: int, effects: Any, tmp: Path) -> tuple[dict, 
             tmp / f"ident_{plant.label}_all_{seed}.toml")
 
 
+def hand_file(fits: dict[str, Path], out: Path) -> Path:
+    """One parameter file of the hand from its chains' identified files: each chain's identified entries
+    (``source = "identified"``) into the shipped file, the tendon compliance the median of the chains' (one cable
+    kind on every flexion tendon)."""
+    merged = load_params()
+    comp = []
+    for chain, path in fits.items():
+        q = load_params(path)
+        upd = {k: prm for k, prm in q.raw.items() if prm.source == "identified"}
+        if "transmission.tendon_compliance" in upd:
+            comp.append(upd.pop("transmission.tendon_compliance"))
+        merged = with_values(merged, upd, identification=dict(q.identification))
+    if comp:
+        c = comp[0]
+        merged = with_values(merged, {"transmission.tendon_compliance": type(c)(
+            float(np.median([float(x.value) for x in comp])), c.unit, c.source, "median of the chains' fits",
+            c.description, None)})
+    return write_params(merged, out)
+
+
+def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict]]:
+    """The hand: each chain identified as the realism study does it (the hand drawn with ``seed``), one file, then
+    every controller and variant grasping the cylinder; (identification rows, control rows)."""
+    idents, fits, tilts = [], {}, []
+    for chain in load_params().chain_names:
+        plant = hand_plant(chain)
+        row = realism_case("all", effects, seed, rig_design("level"), tmp, plant, rigid=False)
+        ext = row["extended"]
+        idents.append({"model": "hand", "chain": chain, "seed": seed, "converged": ext["converged"],
+                       "flagged": ext["flagged"], "verdict": ext["verdict"], "fit_seconds": ext["fit_seconds_total"],
+                       "worst_error_common_scale_pct": ext["worst_error_common_scale_pct"],
+                       "tilt_y": ext["values"].get("tilt_y", 0.0)})
+        fits[chain] = tmp / f"ident_{plant.label}_all_{seed}.toml"
+        if chain != "thumb":
+            tilts.append(idents[-1]["tilt_y"])
+    ident = hand_file(fits, tmp / f"ident_hand_{seed}.toml")
+    truth = hand_plant("index").true_params(seed)
+    converged = all(i["converged"] for i in idents)
+    rows = []
+    for variant in VARIANTS:
+        params = None if variant == "shipped" else str(ident)
+        comp = NO_COMPENSATION if variant == "rigid" else Compensation(
+            tilt=(0.0, float(np.median(tilts)) if variant == "identified" else 0.0))
+        for ctl in CONTROLLERS:
+            t0 = time.perf_counter()
+            res = run_hand_control(ctl, params=params, plant_params=truth, seed=seed, effects=effects,
+                                   compensation=comp)
+            worst = max(r["steady_state_error"] for r in res.table())
+            rows.append({"model": "hand", "seed": seed, "variant": variant, "controller": ctl, "reference": "step",
+                         "chains": res.table(), "worst_sse_pct": 100 * worst, "goal_met": bool(100 * worst < 5),
+                         "ident_converged": converged, "wall_s": time.perf_counter() - t0})
+    return idents, rows
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="201,202,203,204,205,206")
     ap.add_argument("--models", default="finger2,finger3")
+    ap.add_argument("--hand-seeds", default="", help="the whole hand on these seeds too (comma-separated; "
+                    "five identifications each, ~5 min)")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--log", metavar="FILE", help="append each row as a JSON line as it is measured")
     ap.add_argument("--out-json", metavar="PATH", help="also write the JSON object here")
     ap.add_argument("--out-table", metavar="PATH", help="also write the table here")
     args = ap.parse_args(argv)
     seeds = [int(s) for s in args.seeds.split(",")]
-    models = [m.strip() for m in args.models.split(",")]
+    models = [m.strip() for m in args.models.split(",") if m.strip()]
+    hand_seeds = [int(x) for x in args.hand_seeds.split(",") if x.strip()]
     bad = [m for m in models if m not in PLANTS]
     if bad:
         ap.error(f"--models: unknown model {bad[0]!r} (expected some of {', '.join(PLANTS)})")
@@ -177,7 +236,12 @@ def main(argv: list[str] | None = None) -> int:
                     r["ident_converged"] = ident["converged"]
                 rows += new
                 log(new)
-    out = {"seeds": seeds, "models": models, "levels_N": LEVELS, "effects": {k: v for k, v in vars(effects).items()},
+        for seed in hand_seeds:
+            hi, hr = hand_rows(seed, effects, Path(d))
+            idents += hi
+            rows += hr
+            log(hi + hr)
+    out = {"seeds": seeds, "models": models, "hand_seeds": hand_seeds, "levels_N": LEVELS, "effects": {k: v for k, v in vars(effects).items()},
            "identifications": idents, "rows": rows, "summary": summary(rows), "seconds": time.perf_counter() - t_all}
     text = table_text(out)
     if args.out_json:
@@ -192,7 +256,8 @@ def summary(rows: list[dict]) -> dict[str, Any]:
     """Per model, variant and controller (step runs): the goal met on how many seeds (the identified variants over
     the seeds whose fit converged), the worst and median metrics."""
     out: dict[str, Any] = {}
-    keys = sorted({(r["model"], r["variant"], r["controller"]) for r in rows if r["reference"] == "step"})
+    keys = sorted({(r["model"], r["variant"], r["controller"]) for r in rows if r["reference"] == "step"
+                   and r["model"] != "hand"})
     for model, variant, ctl in keys:
         rs = [r for r in rows if (r["model"], r["variant"], r["controller"], r["reference"]) == (model, variant, ctl, "step")
               and (variant == "shipped" or r["ident_converged"])]
@@ -205,6 +270,12 @@ def summary(rows: list[dict]) -> dict[str, Any]:
         if ctl != "pi":
             s["goal_met"] = sum(bool(r["goal_met"]) for r in ok)
         out[f"{model}/{variant}/{ctl}"] = s
+    for variant in VARIANTS:
+        for ctl in CONTROLLERS:
+            hr = [r for r in rows if (r["model"], r["variant"], r["controller"]) == ("hand", variant, ctl)]
+            if hr:
+                out[f"hand/{variant}/{ctl}"] = {"runs": len(hr), "goal_met": sum(r["goal_met"] for r in hr),
+                                                "worst_sse_pct": max(r["worst_sse_pct"] for r in hr)}
     return out
 
 
@@ -220,11 +291,17 @@ def table_text(out: dict) -> str:
              "identification (realism_case, level rig, --effects auto):"]
     for i in out["identifications"]:
         w = i["worst_error_common_scale_pct"]
-        lines.append(f"  {i['model']} seed {i['seed']}: converged {i['converged']}, {i['verdict'][:90]}; K {w['K']:.2f} %, "
+        lines.append(f"  {i['model']}{' ' + i['chain'] if 'chain' in i else ''} seed {i['seed']}: converged {i['converged']}, {i['verdict'][:90]}; K {w['K']:.2f} %, "
                      f"m {w['m']:.2f} %, fit {i['fit_seconds']:.1f} s, tilt_y {i['tilt_y']:.4f} rad")
     lines.append(f"{'model':7} {'seed':>4} {'variant':10} {'controller':10} | {'RMSE%':>6} {'over%':>6} {'rise ms':>7} "
                  f"{'SSE%':>6} {'osc%':>5} {'osc':>4} {'q deg':>5} {'goal':>5}")
     for r in out["rows"]:
+        if r["model"] == "hand":
+            lines.append(f"hand    {r['seed']:>4} {r['variant']:10} {r['controller']:10} | worst steady-state error "
+                         f"{r['worst_sse_pct']:.2f} % (" + ", ".join(
+                             f"{c['chain']} {100 * c['steady_state_error']:.2f}" for c in r["chains"]) + ") "
+                         f"{'met' if r['goal_met'] else 'MISS'}{'' if r['ident_converged'] else '  (a fit not converged)'}")
+            continue
         if r["reference"] != "step":
             continue
         if "error" in r:
@@ -243,6 +320,9 @@ def table_text(out: dict) -> str:
                  "overshoot %, rise ms, SSE %")
     for k, s in out["summary"].items():
         g = "" if "goal_met" not in s else f"goal {s['goal_met']}/{s['runs']}, "
+        if k.startswith("hand/"):
+            lines.append(f"  {k:30} {g}worst steady-state error {s['worst_sse_pct']:.2f} % (goal < 5 %)")
+            continue
         worst = lambda name, fmt: _f(None if s[name] is None else s[name]["max"], fmt)  # noqa: E731
         lines.append(f"  {k:30} {g}failed {s['failed']}, worst RMSE {worst('rmse_pct', '.2f')}, overshoot "
                      f"{worst('overshoot_pct', '.1f')}, rise {worst('rise_ms', '.0f')}, SSE {worst('sse_pct', '.2f')}, "

@@ -38,9 +38,10 @@ def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dic
     if getattr(sc, "effects", None) is not None:
         import dataclasses
 
-        comp = sc.compensation
+        from ..control.realism_loop import Compensation
+
         obj["plant_effects"] = dataclasses.asdict(sc.effects)
-        obj["compensation"] = None if comp is None else dataclasses.asdict(comp)
+        obj["compensation"] = dataclasses.asdict(Compensation() if sc.compensation is None else sc.compensation)
     return obj
 
 
@@ -123,9 +124,14 @@ def cmd_control(args: argparse.Namespace) -> int:
             if getattr(args, dest) is not None:
                 raise InputError(f"{flag}: applies to a URDF --model; the Alpes {args.model!r} presses with its "
                                  "fingertip, its transmission and motor limit from its parameter file (--params)")
+    if urdf:
+        given = [f for f, d in (("--plant-effects", "plant_effects"), *_EFFECT_FLAGS) if getattr(args, d) is not None]
+        given += [f for f, d in (("--tendon-rotor", "tendon_rotor"), ("--no-compensation", "no_compensation"))
+                  if getattr(args, d)]
+        if given:
+            raise InputError(f"{given[0]}: a real hand's effects apply to the Alpes models (finger2, finger3, hand); "
+                             "a URDF --model's plant is its spec's MJCF")
     effects = _plant_effects(args)
-    if effects is not None and urdf:
-        raise InputError("--plant-effects: a real hand's effects apply to the Alpes models (finger2, finger3, hand)")
     fx = {} if effects is None else {"effects": effects, **({"compensation": _rigid()} if args.no_compensation else {})}
     if args.model == "hand":
         return _control_hand(args, fx)

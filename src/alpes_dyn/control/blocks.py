@@ -53,11 +53,10 @@ class ForceLoop(Block):
 
     def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         q_hat = None if self.estimate is None else u[self.estimate][: self.n]
-        qd_hat = None if self.estimate is None or self.ctl.friction is None else u[self.estimate][self.n: 2 * self.n]
         if self.normal is None:
-            tau = self.ctl.update(float(u[self.reference]), u[self.force], q_hat, qd_hat=qd_hat)
+            tau = self.ctl.update(float(u[self.reference]), u[self.force], q_hat)
         else:
-            tau = self.ctl.update(float(u[self.reference]), u[self.force], q_hat, normal=u[self.normal], qd_hat=qd_hat)
+            tau = self.ctl.update(float(u[self.reference]), u[self.force], q_hat, normal=u[self.normal])
         return {self.outputs[0]: tau}
 
 

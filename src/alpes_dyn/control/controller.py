@@ -143,14 +143,8 @@ class ForceController:
     setpoint_weight: float = 0.0
     motor: int = 0
     tip: str | None = None
-    friction: tuple | None = None
-    friction_velocity: float = 0.05
-    kd: float = 0.0
-    derivative_s: float = 0.01
     notch_hz: float | None = None
     notch_zeta: float = 0.5
-    _dF: float = 0.0
-    _F_last: float | None = None
     _notch: tuple | None = None
     _above: int = 0
     integral: float = 0.0
@@ -175,32 +169,11 @@ class ForceController:
             return 0.0
         return static_motor_torque(self.model, q_hat, F_ref, self.normal, self.motor, self.tip)
 
-    def _force_rate(self, F_fb: float) -> float:
-        """dF/dt of the force fed back (N/s), its difference low-passed over ``derivative_s``; 0 with ``kd`` = 0."""
-        if self.kd == 0.0:
-            return 0.0
-        if self._F_last is not None:
-            a = self.dt / (self.derivative_s + self.dt)
-            self._dF += a * ((F_fb - self._F_last) / self.dt - self._dF)
-        self._F_last = F_fb
-        return self._dF
-
-    def friction_torque(self, qd_hat: np.ndarray | None) -> float:
-        """The motor torque (N m) that carries the joints' friction at the observer's velocities qd_hat (rad/s):
-        S (F_s tanh(qd / v_s) + F_v qd) / (S S^T), the smoothed Coulomb law of the identified F_s, F_v
-        (``friction`` = (F_s (n,), F_v (n,)), v_s = ``friction_velocity``); 0 without ``friction``."""
-        if self.friction is None or qd_hat is None:
-            return 0.0
-        F_s, F_v = self.friction
-        S = self.model.transmission.S[self.motor]
-        tau_j = F_s * np.tanh(np.asarray(qd_hat) / self.friction_velocity) + F_v * np.asarray(qd_hat)
-        return float(S @ tau_j / (S @ S))
-
     def update(self, F_ref: float, F_fb: float, q_hat: np.ndarray | None,
-               normal: Sequence[float] | None = None, qd_hat: np.ndarray | None = None) -> float:
+               normal: Sequence[float] | None = None) -> float:
         """The motor torque command (N m): :meth:`command`, through the notch at ``notch_hz`` (if any) and clipped
         to [0, tau_max] again."""
-        tau = self.command(F_ref, F_fb, q_hat, normal, qd_hat)
+        tau = self.command(F_ref, F_fb, q_hat, normal)
         if self.notch_hz is None:
             return tau
         if self._notch is None:
@@ -211,7 +184,7 @@ class ForceController:
         return min(max(out, 0.0), self.tau_max)
 
     def command(self, F_ref: float, F_fb: float, q_hat: np.ndarray | None,
-                normal: Sequence[float] | None = None, qd_hat: np.ndarray | None = None) -> float:  # noqa: C901
+                normal: Sequence[float] | None = None) -> float:  # noqa: C901
         """The motor torque command (N m) before the notch for the reference F_ref and the force fed back F_fb (N).
 
         ``normal`` (3,), if given, replaces :attr:`normal` from this step on (a curved object: the
@@ -233,7 +206,7 @@ class ForceController:
             self.F_ref_f += a * (F_ref - self.F_ref_f)
             self.F_ref_f2 += a * (self.F_ref_f - self.F_ref_f2)
             F_ref = self.F_ref_f2 if self.prefilter_order == 2 else self.F_ref_f
-        ff = self.feedforward(q_hat, F_ref) + self.friction_torque(qd_hat) if self.kind != "pi" else 0.0
+        ff = self.feedforward(q_hat, F_ref) if self.kind != "pi" else 0.0
         e = F_ref - F_fb
         e_p = e + self.setpoint_weight * (F_raw - F_ref)  # the proportional term's error (set-point weighting)
         if self.in_contact:
@@ -251,7 +224,7 @@ class ForceController:
                 return tau
             self.in_contact = True
             self.integral = self.tau_prev - ff - self.kp * e_p  # bumpless transfer
-        tau_u = ff + self.kp * e_p + self.integral - self.kd * self._force_rate(F_fb)
+        tau_u = ff + self.kp * e_p + self.integral
         tau = min(max(tau_u, 0.0), self.tau_max)
         if tau == tau_u or (tau_u > self.tau_max and e < 0) or (tau_u < 0 and e > 0):  # anti-windup
             self.integral += self.ki * e * self.dt

@@ -496,9 +496,6 @@ def _effect_signals(sc: ControlScenario, model: Model, params: HandParams | None
     f_c = comp.cable_mode_hz(model, params)
     if f_c is not None and f_c < 0.45 / sc.dt:  # a notch below the Nyquist frequency
         out["controller"].update(notch_hz=f_c, notch_zeta=comp.notch_zeta)
-    if comp.friction_ff:
-        ex = Model.alpes(sc.model, friction=True, params=params).extras
-        out["controller"]["friction"] = (np.asarray(ex.coulomb, dtype=float), np.asarray(ex.viscous, dtype=float))
     out["blocks"] = blocks
     return out
 
