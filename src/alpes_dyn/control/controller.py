@@ -125,6 +125,9 @@ class ForceController:
     loss_s: contact is lost when the force stays below the threshold this long, s.
     motor: the motor's row of S (the feedforward's torque is this motor's). tip: the contact frame (None: the
         model's default tip).
+    notch_hz: the command through a notch (s^2 + w^2) / (s^2 + 2 zeta w s + w^2) at this frequency, Hz (None: no
+        notch), damping ratio ``notch_zeta``: the series-elastic cable's mode on its rotor, which the proportional
+        path excites (:mod:`alpes_dyn.control.realism_loop`).
     """
 
     kind: str
