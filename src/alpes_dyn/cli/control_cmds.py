@@ -5,6 +5,7 @@ cylinder, with its ``--log`` CSV and ``--plot`` figure."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 from typing import Any
 
@@ -36,8 +37,6 @@ def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dic
             obj[k] = v
     sc = res.scenario
     if getattr(sc, "effects", None) is not None:
-        import dataclasses
-
         from ..control.realism_loop import Compensation
 
         obj["plant_effects"] = dataclasses.asdict(sc.effects)
@@ -60,7 +59,6 @@ def realism_effects() -> Any:
     (:func:`~alpes_dyn.studies.realism.cases`, its cable sized by :func:`~alpes_dyn.studies.realism.tendon_stiffness`
     on the documented experiment) plus 0.5 degree of the cable's slack at the motor shaft (r_m radians(0.5), m) and
     the torque read 1 sample late."""
-    import dataclasses
     import math
 
     from ..model.params import load_params
@@ -73,10 +71,11 @@ def realism_effects() -> Any:
 
 def _plant_effects(args: argparse.Namespace) -> Any:
     """The plant's effects of the command line (``--plant-effects`` then each effect's flag), or None; checked."""
-    import dataclasses
     import math
 
     from ..control.plants import PlantEffects
+    from ..control.realism_loop import effects_mjcf_kwargs
+    from ..model.mjcf import mjcf_string
 
     given = {dest: getattr(args, dest) for _, dest in _EFFECT_FLAGS if getattr(args, dest) is not None}
     if args.tendon_rotor:
@@ -93,10 +92,6 @@ def _plant_effects(args: argparse.Namespace) -> Any:
     base = realism_effects() if args.plant_effects == "all" else PlantEffects()
     try:
         e = dataclasses.replace(base, **given).check()
-        from ..model.mjcf import mjcf_string
-
-        from ..control.realism_loop import effects_mjcf_kwargs
-
         mjcf_string("finger3", **effects_mjcf_kwargs(e))  # the MJCF side's own checks, one line each
     except InputError as exc:
         head, sep, tail = str(exc).partition(": ")
@@ -201,7 +196,7 @@ def _effects_words(fx: dict) -> str:
     if not fx:
         return ""
     e = fx["effects"]
-    on = [f.name for f in __import__("dataclasses").fields(e) if getattr(e, f.name) not in (None, 0, 0.0, False)]
+    on = [f.name for f in dataclasses.fields(e) if getattr(e, f.name) not in (None, 0, 0.0, False)]
     return f" (plant effects: {', '.join(on) or 'none'}; {'rigid' if 'compensation' in fx else 'compensated'} design)"
 
 
