@@ -5,6 +5,7 @@ cylinder, with its ``--log`` CSV and ``--plot`` figure."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import importlib
 from typing import Any
 
@@ -34,11 +35,69 @@ def _write_control_outputs(res: Any, args: argparse.Namespace, plot: Any) -> dic
     for k, v in (("log", args.log), ("plot", args.plot)):
         if v:
             obj[k] = v
+    sc = res.scenario
+    if getattr(sc, "effects", None) is not None:
+        from ..control.realism_loop import Compensation
+
+        obj["plant_effects"] = dataclasses.asdict(sc.effects)
+        obj["compensation"] = dataclasses.asdict(Compensation() if sc.compensation is None else sc.compensation)
     return obj
 
 
 def _output_lines(args: argparse.Namespace) -> list[str]:
     return ([f"  log: {args.log}"] if args.log else []) + ([f"  figure: {args.plot}"] if args.plot else [])
+
+
+_EFFECT_FLAGS = (("--stiction", "stiction"), ("--tendon-stiffness", "tendon_stiffness"),
+                 ("--tendon-damping", "tendon_damping"), ("--tendon-dead-band", "tendon_dead_band"),
+                 ("--tilt", "tilt"), ("--torque-constant-error", "torque_constant_error"),
+                 ("--encoder-offset", "encoder_offset"), ("--torque-delay", "torque_delay"))
+
+
+def realism_effects() -> Any:
+    """The ``--plant-effects all`` plant (``benchmarks/force_realism.py``'s): the realism study's ``all`` case
+    (:func:`~alpes_dyn.studies.realism.cases`, its cable sized by :func:`~alpes_dyn.studies.realism.tendon_stiffness`
+    on the documented experiment) plus 0.5 degree of the cable's slack at the motor shaft (r_m radians(0.5), m) and
+    the torque read 1 sample late."""
+    import math
+
+    from ..model.params import load_params
+    from ..studies.realism import cases, rig_design, tendon_stiffness
+
+    k_t, c_t, _ = tendon_stiffness(rig_design("level"))
+    return dataclasses.replace(cases(k_t, c_t)["all"], tendon_dead_band=load_params().r_m * math.radians(0.5),
+                               torque_delay=1)
+
+
+def _plant_effects(args: argparse.Namespace) -> Any:
+    """The plant's effects of the command line (``--plant-effects`` then each effect's flag), or None; checked."""
+    import math
+
+    from ..control.plants import PlantEffects
+    from ..control.realism_loop import effects_mjcf_kwargs
+    from ..model.mjcf import mjcf_string
+
+    given = {dest: getattr(args, dest) for _, dest in _EFFECT_FLAGS if getattr(args, dest) is not None}
+    if args.tendon_rotor:
+        given["tendon_rotor"] = True
+    if args.plant_effects in (None, "none") and not given:
+        if args.no_compensation:
+            raise InputError("--no-compensation: applies to a plant with effects (--plant-effects or an effect's flag)")
+        return None
+    if args.plant_effects == "none":
+        raise InputError("--plant-effects: 'none' with an effect's flag (" + ", ".join(
+            f for f, d in _EFFECT_FLAGS if d in given) + "): give one or the other")
+    if "tilt" in given:
+        given["tilt"] = math.radians(given["tilt"])
+    base = realism_effects() if args.plant_effects == "all" else PlantEffects()
+    try:
+        e = dataclasses.replace(base, **given).check()
+        mjcf_string("finger3", **effects_mjcf_kwargs(e))  # the MJCF side's own checks, one line each
+    except InputError as exc:
+        head, sep, tail = str(exc).partition(": ")
+        flag = dict((d, f) for f, d in _EFFECT_FLAGS).get(head, "--tendon-rotor" if head == "tendon_rotor" else None)
+        raise InputError(f"{flag}: {tail}" if sep and flag else str(exc)) from None
+    return e
 
 
 def _na(x: Any, fmt: str) -> str:
@@ -60,8 +119,17 @@ def cmd_control(args: argparse.Namespace) -> int:
             if getattr(args, dest) is not None:
                 raise InputError(f"{flag}: applies to a URDF --model; the Alpes {args.model!r} presses with its "
                                  "fingertip, its transmission and motor limit from its parameter file (--params)")
+    if urdf:
+        given = [f for f, d in (("--plant-effects", "plant_effects"), *_EFFECT_FLAGS) if getattr(args, d) is not None]
+        given += [f for f, d in (("--tendon-rotor", "tendon_rotor"), ("--no-compensation", "no_compensation"))
+                  if getattr(args, d)]
+        if given:
+            raise InputError(f"{given[0]}: a real hand's effects apply to the Alpes models (finger2, finger3, hand); "
+                             "a URDF --model's plant is its spec's MJCF")
+    effects = _plant_effects(args)
+    fx = {} if effects is None else {"effects": effects, **({"compensation": _rigid()} if args.no_compensation else {})}
     if args.model == "hand":
-        return _control_hand(args)
+        return _control_hand(args, fx)
     if args.duration is None:
         args.duration = 3.0
     kw: dict[str, Any] = {}
@@ -84,8 +152,8 @@ def cmd_control(args: argparse.Namespace) -> int:
     else:
         _check_control_outputs(args)
         res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
-                          seed=args.seed, params=args.params, plant_params=args.plant_params)
-        where = f"{args.model} pressing a block"
+                          seed=args.seed, params=args.params, plant_params=args.plant_params, **fx)
+        where = f"{args.model} pressing a block" + _effects_words(fx)
     obj = _write_control_outputs(res, args, plot_control)
     f = _na
 
@@ -117,7 +185,22 @@ def _as_option(message: str) -> str:
     return f"{_FIELD_OPTIONS[head]}: {tail}" if sep and head in _FIELD_OPTIONS else message
 
 
-def _control_hand(args: argparse.Namespace) -> int:
+def _rigid() -> Any:
+    from ..control.realism_loop import NO_COMPENSATION
+
+    return NO_COMPENSATION
+
+
+def _effects_words(fx: dict) -> str:
+    """`` (plant effects: ...; compensated|rigid design)`` for the report line, or nothing."""
+    if not fx:
+        return ""
+    e = fx["effects"]
+    on = [f.name for f in dataclasses.fields(e) if getattr(e, f.name) not in (None, 0, 0.0, False)]
+    return f" (plant effects: {', '.join(on) or 'none'}; {'rigid' if 'compensation' in fx else 'compensated'} design)"
+
+
+def _control_hand(args: argparse.Namespace, fx: dict | None = None) -> int:
     """``alpes-dyn control --model hand``: run_hand_control, one loop per motor, per-chain metrics."""
     from ..control.force import HandControlScenario, plot_hand_control, run_hand_control
 
@@ -131,11 +214,11 @@ def _control_hand(args: argparse.Namespace) -> int:
                          f"step up at {sc.step_time:g} s), got {duration:g}")
     _check_control_outputs(args)
     res = run_hand_control(args.controller, duration=duration, seed=args.seed, params=args.params,
-                           plant_params=args.plant_params)
+                           plant_params=args.plant_params, **(fx or {}))
     obj = _write_control_outputs(res, args, plot_hand_control)
     f = _na
 
-    lines = [f"the hand grasping the cylinder, {args.controller} loops, MuJoCo plant ({duration:g} s, seed {args.seed}, "
+    lines = [f"the hand grasping the cylinder{_effects_words(fx or {})}, {args.controller} loops, MuJoCo plant ({duration:g} s, seed {args.seed}, "
              f"references step up at {sc.step_time:g} s)",
              f"  {'chain':7s} {'asked':>6s} {'held':>7s} {'SSE':>7s} {'overshoot':>9s} {'rise':>7s} {'RMSE':>8s} "
              f"{'q RMSE':>7s}"]

@@ -529,6 +529,33 @@ def _add_control(sub: argparse._SubParsersAction) -> None:
                    help="the Alpes models only: the controller's parameter file (default: shipped)")
     s.add_argument("--plant-params", default=None, metavar="FILE",
                    help="the Alpes models only: the plant's parameter file (default: the controller's)")
+    s.add_argument("--plant-effects", default=None, choices=("none", "all"),
+                   help="the Alpes models only: a real hand's effects on the MuJoCo plant; all: the realism "
+                        "benchmark's (stick-slip, a 3.95e4 N/m cable with its rotor and 0.5 deg of slack at the motor "
+                        "shaft, palm 3 deg off, torque constant 5 %% off, encoder 4 counts off, torque read 1 sample "
+                        "late); the flags below change one effect of it (or, without it, add that effect alone)")
+    s.add_argument("--stiction", type=_strict_float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
+                   help="plant: stick-slip dry friction, the constraint's time constant (default %(const)g s)")
+    s.add_argument("--tendon-stiffness", type=_strict_float, default=None, metavar="N_PER_M",
+                   help="plant: series-elastic, pull-only tendon of stiffness k_t with its rotor")
+    s.add_argument("--tendon-damping", type=_strict_float, default=None, metavar="N_S_PER_M",
+                   help="plant: damping c_t of the series-elastic tendon")
+    s.add_argument("--tendon-dead-band", type=_strict_float, default=None, metavar="M",
+                   help="plant: the series-elastic cable's slack, m")
+    s.add_argument("--tendon-rotor", action="store_true", help="plant: the rotor inertia on the rigid tendon")
+    s.add_argument("--tilt", type=_strict_float, default=None, metavar="DEG",
+                   help="plant: the palm tilted in the finger's plane, deg")
+    s.add_argument("--torque-constant-error", type=_strict_float, default=None, metavar="FRACTION",
+                   help="plant: the motor gives tau / (1 + e) for the command tau, the current sensor reads (1 + e) "
+                        "times it")
+    s.add_argument("--encoder-offset", type=_strict_float, default=None, metavar="COUNTS",
+                   help="plant: the encoder's zero off by this many counts")
+    s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
+                   help="plant: the torque read this many whole samples late")
+    s.add_argument("--no-compensation", action="store_true",
+                   help="with plant effects: the rigid design (the observer and the controllers blind to them); "
+                        "default: the tendon's stretch off the encoder, the command as the observer's torque, the "
+                        "identified friction's feedforward")
     s.add_argument("--duration", type=_positive_seconds, default=None,
                    help="simulated time, s (default 3 for a finger or a URDF, 3.5 for the hand)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")

@@ -125,6 +125,9 @@ class ForceController:
     loss_s: contact is lost when the force stays below the threshold this long, s.
     motor: the motor's row of S (the feedforward's torque is this motor's). tip: the contact frame (None: the
         model's default tip).
+    notch_hz: the command through a notch (s^2 + w^2) / (s^2 + 2 zeta w s + w^2) at this frequency, Hz (None: no
+        notch), damping ratio ``notch_zeta``: the series-elastic cable's mode on its rotor, which the proportional
+        path excites (:mod:`alpes_dyn.control.realism_loop`).
     """
 
     kind: str
@@ -143,6 +146,9 @@ class ForceController:
     setpoint_weight: float = 0.0
     motor: int = 0
     tip: str | None = None
+    notch_hz: float | None = None
+    notch_zeta: float = 0.5
+    _notch: tuple | None = None
     _above: int = 0
     integral: float = 0.0
     in_contact: bool = False
@@ -167,8 +173,22 @@ class ForceController:
         return static_motor_torque(self.model, q_hat, F_ref, self.normal, self.motor, self.tip)
 
     def update(self, F_ref: float, F_fb: float, q_hat: np.ndarray | None,
-               normal: Sequence[float] | None = None) -> float:  # noqa: C901
-        """The motor torque command (N m) for the reference F_ref and the force fed back F_fb (N).
+               normal: Sequence[float] | None = None) -> float:
+        """The motor torque command (N m): :meth:`command`, through the notch at ``notch_hz`` (if any) and clipped
+        to [0, tau_max] again."""
+        tau = self.command(F_ref, F_fb, q_hat, normal)
+        if self.notch_hz is None:
+            return tau
+        if self._notch is None:
+            self._notch = (_notch_coefficients(self.notch_hz, self.notch_zeta, self.dt), [tau, tau], [tau, tau])
+        (b0, b1, b2, a1, a2), x, y = self._notch
+        out = b0 * tau + b1 * x[0] + b2 * x[1] - a1 * y[0] - a2 * y[1]
+        x[1], x[0], y[1], y[0] = x[0], tau, y[0], out
+        return min(max(out, 0.0), self.tau_max)
+
+    def command(self, F_ref: float, F_fb: float, q_hat: np.ndarray | None,
+                normal: Sequence[float] | None = None) -> float:  # noqa: C901
+        """The motor torque command (N m) before the notch for the reference F_ref and the force fed back F_fb (N).
 
         ``normal`` (3,), if given, replaces :attr:`normal` from this step on (a curved object: the
         surface normal at the fingertip moves with q_hat, see :func:`.cylinder_normal`).
@@ -213,6 +233,18 @@ class ForceController:
             self.integral += self.ki * e * self.dt
         self.tau_prev = tau
         return tau
+
+
+def _notch_coefficients(f_hz: float, zeta: float, dt: float) -> tuple[float, float, float, float, float]:
+    """(b0, b1, b2, a1, a2) of the notch (s^2 + w^2) / (s^2 + 2 zeta w s + w^2) at f_hz (Hz), bilinear with the
+    frequency prewarped, sample period dt (s): y_k = b0 x_k + b1 x_k-1 + b2 x_k-2 - a1 y_k-1 - a2 y_k-2 (unit DC gain)."""
+    w = 2.0 * math.pi * f_hz
+    K = w / math.tan(w * dt / 2.0)  # prewarp: the notch exactly at f_hz
+    a0 = K * K + 2 * zeta * w * K + w * w
+    b0 = (K * K + w * w) / a0
+    b1 = 2 * (w * w - K * K) / a0
+    a2 = (K * K - 2 * zeta * w * K + w * w) / a0
+    return b0, b1, b0, b1, a2
 
 
 def reference_profile(kind: str, t: np.ndarray, levels: Sequence[float] = (0.2, 1.0, 0.5),

@@ -34,12 +34,15 @@ from ..estimation.observers import make_observer
 from ..model.params import HandParams, load_params
 from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
-from ..simulation.loop import Delay, Source, run_loop
+from ..simulation.loop import Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .blocks import ForceLoop, SensorlessForce, force_input
 from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile,
                          static_motor_torque)
+from .plants import PlantEffects
+from .realism_loop import (Compensation, SampleLag, effects_mjcf_kwargs, plant_gravity, rotor_rest,
+                           torque_constant_blocks)
 
 
 CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
@@ -87,6 +90,13 @@ class ControlScenario:
     (tuned on finger3) are scaled to the robot (:func:`scaled_gains`: kp and ki by its lever dtau_m/dF_z at the
     contact over finger3's, the approach rate by its motor torque at the contact over finger3's); ``gains`` then
     override them. ``params``, ``plant_params`` are the Alpes models' (refused here); the plant is the model.
+
+    **A real hand's effects** (the Alpes fingers): ``effects`` a :class:`~alpes_dyn.control.plants.PlantEffects` --
+    stick-slip friction, the series-elastic tendon with its rotor and slack, the palm's tilt, the torque constant's
+    error, the encoder's offset, the torque read late -- on the plant (:mod:`alpes_dyn.control.realism_loop`), and
+    ``compensation`` a :class:`~alpes_dyn.control.realism_loop.Compensation`, what the controllers do about them
+    (default with ``effects``: every compensation on; :data:`~alpes_dyn.control.realism_loop.NO_COMPENSATION` the rigid
+    design). ``params`` is then typically an identified file (``alpes-dyn identify``), ``plant_params`` the truth.
     """
 
     model: Any = "finger3"
@@ -113,6 +123,8 @@ class ControlScenario:
     frame: str | None = None
     motor: str | None = None
     tau_max: float | None = None
+    effects: Any = field(default=None, compare=False)  # a PlantEffects: the plant's unmodelled effects (realism_loop)
+    compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
 
     @property
     def robot(self) -> bool:
@@ -128,6 +140,7 @@ class ControlScenario:
         if not self.robot and (not isinstance(self.model, str) or self.model not in CONTROL_MODELS):
             raise InputError(f"model: the control scenario is defined for one finger ({', '.join(CONTROL_MODELS)}) "
                              f"or a URDF + spec Model, got {self.model!r}")
+        _check_effects(self.effects, self.compensation, self.robot)
         if self.robot:
             for name in ("params", "plant_params"):
                 if getattr(self, name) is not None:
@@ -158,6 +171,24 @@ class ControlScenario:
                     f"{self.duration:g} s at dt = {self.dt:g} s")
         if self.substeps < 1:
             raise InputError(f"substeps: expected a positive integer, got {self.substeps!r}")
+
+
+def _check_effects(effects: Any, compensation: Any, robot: bool) -> None:
+    """``effects`` a PlantEffects or None, ``compensation`` a Compensation or None (only with effects), on an Alpes
+    finger (one-line InputError naming the field)."""
+    if effects is None:
+        if compensation is not None:
+            raise InputError("compensation: applies to a plant with effects (give effects)")
+        return
+    if robot:
+        raise InputError("effects: the real hand's effects apply to the Alpes models (finger2, finger3, hand)")
+    if not isinstance(effects, PlantEffects):
+        raise InputError(f"effects: expected a PlantEffects, got {type(effects).__name__}")
+    effects.check()
+    if compensation is not None:
+        if not isinstance(compensation, Compensation):
+            raise InputError(f"compensation: expected a Compensation, got {type(compensation).__name__}")
+        compensation.check()
 
 
 _METRIC_WINDOW_S = 0.05
@@ -320,6 +351,7 @@ class _Setup:
     touch: str
     gains: dict[str, float]
     block: BlockScene | None = None
+    params: HandParams | None = None  # an Alpes finger's controller parameters (palm down)
 
 
 def _alpes_setup(sc: ControlScenario) -> _Setup:
@@ -328,16 +360,22 @@ def _alpes_setup(sc: ControlScenario) -> _Setup:
     n = 2 if sc.model == "finger2" else 3
     cq = tuple((BLOCK_CONTACT_Q if sc.contact_q is None else sc.contact_q)[:n])
     model = Model.alpes(sc.model, params=p)
+    if sc.effects is not None:  # the controller's model in the palm's orientation as identified
+        model = (Compensation() if sc.compensation is None else sc.compensation).turned(model)
     plant_model = Model.alpes(sc.model, params=pp)
+    fx = {} if sc.effects is None else effects_mjcf_kwargs(sc.effects)
     mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=cq,
-                                 timestep=sc.dt / sc.substeps))
+                                 timestep=sc.dt / sc.substeps, **fx))
     d = mujoco.MjData(mj)
     perm = joint_permutation(mj, model.joint_names)
-    # the plant starts at rest: the finger hanging on its springs, motor off
-    d.qpos[perm] = static_equilibrium(plant_model, np.zeros(plant_model.n))
+    # the plant starts at rest: the finger hanging on its springs (in the plant's gravity), motor off
+    plant_model = plant_model.copy(gravity=plant_gravity(plant_model.gravity, sc.effects))
+    q0 = static_equilibrium(plant_model, np.zeros(plant_model.n))
+    d.qpos[perm] = q0
+    rotor_rest(mj, d, list(model.transmission.motor_names), plant_model, q0, sc.effects)
     mujoco.mj_forward(mj, d)
     return _Setup(model, mj, d, block_normal(cq), p.tau_max, 0, None, "finger", "encoder_finger", "torque_finger",
-                  "flexiforce_finger", {**DEFAULT_GAINS[sc.controller], **sc.gains})
+                  "flexiforce_finger", {**DEFAULT_GAINS[sc.controller], **sc.gains}, params=p)
 
 
 @functools.lru_cache(maxsize=1)
@@ -407,7 +445,8 @@ def _robot_setup(sc: ControlScenario) -> _Setup:
                   f"touch_{frame}", gains, block)
 
 
-def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None) -> Observer:
+def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None, torque: str = "tau_meas",
+              measurement: str = "y") -> Observer:
     """The EKF of the finger's loop as a block: known inputs the measured motor torques ``tau_meas`` (N m, the
     previous period's) and the contact force ``w_F`` (3,) (N) at ``frame`` (None: the default tip), the encoders
     ``y`` measured (rad); the estimate ``z`` = [q; qd] starts at the finger's rest, standard deviations 0.05 rad and
@@ -423,8 +462,42 @@ def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None) -> O
     ekf = make_observer("ekf", ss, sc.dt, **noise)
     z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
     P0 = np.array([0.05**2] * n + [0.1**2] * n)
-    return Observer(ekf, z0, P0, known=("tau_meas", "w_F"), measurement="y", covariance=None, first_update=False,
+    return Observer(ekf, z0, P0, known=(torque, "w_F"), measurement=measurement, covariance=None, first_update=False,
                     step=step_caller(ekf.filter_step_p, f"ekf_force_{sc.model_name}", sc.compiled, ekf.model.values))
+
+
+def _effect_signals(sc: ControlScenario, model: Model, params: HandParams | None) -> dict[str, Any]:
+    """The signal names and blocks of the plant's effects and of their compensation (:mod:`.realism_loop`): the
+    applied torque's signal, the encoder's offset (counts), the torque reading's signal and gain, the observer's
+    torque input and measurement, extra blocks, extra :class:`.ForceController` settings."""
+    e = sc.effects
+    out: dict[str, Any] = {"applied": "tau", "offset": 0.0, "reading": "tau_meas", "gain": 1.0, "torque": "tau_meas",
+                           "measurement": "y", "blocks": [], "controller": {}}
+    if e is None:
+        return out
+    comp = Compensation() if sc.compensation is None else sc.compensation
+    out.update(applied="tau_motor", offset=float(e.encoder_offset), gain=1.0 + float(e.torque_constant_error))
+    blocks = torque_constant_blocks(e, "tau", "tau_motor")
+    if e.torque_delay:
+        out["reading"] = "tau_meas_raw"
+        blocks.append(SampleLag("tau_meas_raw", "tau_meas", e.torque_delay, name="torque_delay"))
+    if comp.command_input:  # the command held over the period before: what the reading shows, without its lag
+        out["torque"] = "tau_prev"
+        blocks.append(Delay("tau", "tau_prev", 0.0, name="command_held"))
+    C = float(model.transmission.tendon_compliance[0])
+    if C < 0 and (comp.observer_compliance or comp.notch):
+        raise InputError(f"params: the controller's file holds a negative tendon compliance ({C:.3g} rad/(N m)), not a "
+                         "cable (a fit that did not converge?); give another file, or the rigid design")
+    if comp.observer_compliance:
+        off = float(comp.encoder_offset)
+        torque = out["torque"]
+        out["measurement"] = "y_obs"
+        blocks.append(Function(lambda **u: u["y"] - off - C * u[torque], ("y", torque), "y_obs", name="unstretched"))
+    f_c = comp.cable_mode_hz(model, params)
+    if f_c is not None and f_c < 0.45 / sc.dt:  # a notch below the Nyquist frequency
+        out["controller"].update(notch_hz=f_c, notch_zeta=comp.notch_zeta)
+    out["blocks"] = blocks
+    return out
 
 
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:
@@ -460,22 +533,27 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     shape = () if m == 1 else (m,)
     kind = sc.controller
     tip = {} if s.frame is None else {"motor": s.motor, "tip": s.frame}
+    fx = _effect_signals(sc, model, s.params)
     blocks = [Source("reference", F_ref=F_ref),
               MujocoPlant(s.mj, s.data, substeps=sc.substeps, joints={"q": model.joint_names},
-                          actuators={"tau": s.actuator}, sensors={"q_m": s.encoders, "F_touch": s.touch},
+                          actuators={fx["applied"]: s.actuator}, sensors={"q_m": s.encoders, "F_touch": s.touch},
                           period_sensors={"tau_applied": s.torques}),
               # the sensors' noise, drawn in this order (the encoder's one row more than read: the old draw)
               Encoder("q_m", "y", tr.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng, draws=N + 1,
-                      shape=shape),
-              TorqueSensor("tau_applied", "tau_meas", noise=sc.torque_noise, rng=rng, timing="period", shape=shape),
+                      shape=shape, offset=fx["offset"]),
+              TorqueSensor("tau_applied", fx["reading"], noise=sc.torque_noise, rng=rng, timing="period", shape=shape,
+                           gain=fx["gain"]),
               ForceSensor("F_touch", "F_meas", noise=sc.force_noise, resolution=sc.force_resolution, rng=rng),
-              ForceLoop(ForceController(kind, model, normal, sc.dt, s.tau_max, **tip, **s.gains),
-                        force="F_fb" if kind == "sensorless" else "F_meas", estimate=None if kind == "pi" else "z")]
+              ForceLoop(ForceController(kind, model, normal, sc.dt, s.tau_max, **tip, **s.gains, **fx["controller"]),
+                        force="F_fb" if kind == "sensorless" else "F_meas", estimate=None if kind == "pi" else "z"),
+              *fx["blocks"]]
     if kind != "pi":  # the EKF: motor torque and contact force as known inputs, the encoder measured
         F_in = "F_fb_prev" if kind == "sensorless" else "F_meas"  # the sensorless force of the previous sample
-        blocks += [force_input(F_in, "w_F", normal), _force_ekf(sc, model, s.frame)]
+        blocks += [force_input(F_in, "w_F", normal),
+                   _force_ekf(sc, model, s.frame, torque=fx["torque"], measurement=fx["measurement"])]
     if kind == "sensorless":
-        blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal, tip=s.frame),
+        blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal, tip=s.frame,
+                                   torque=fx["torque"]),
                    Delay("F_fb", "F_fb_prev", 0.0)]
     log = run_loop(blocks, N, sc.dt)
     q_hat = log["z"][:, :n] if kind != "pi" else np.full((N, n), np.nan)

@@ -35,7 +35,9 @@ from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .blocks import EncoderPD, ForceLoop, SensorlessForce, force_input
 from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal
-from .finger_loop import _SAMPLE_ARRAYS, ControlResult, ControlScenario, _metrics, _plant_and_params
+from .finger_loop import _SAMPLE_ARRAYS, ControlResult, ControlScenario, _check_effects, _metrics, _plant_and_params
+from .realism_loop import (Compensation, SampleLag, effects_mjcf_kwargs, plant_gravity, rotor_rest,
+                           torque_constant_blocks)
 
 
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
@@ -126,6 +128,10 @@ class HandControlScenario:
 
     References: ``levels[chain]`` = (before, after) the step at ``step_time`` s (default :data:`HAND_LEVELS`);
     metrics (per chain, as :class:`.ControlResult`) after ``settle`` s.
+
+    ``effects``, ``compensation``: a real hand's effects on the plant and what the loops do about them, as
+    :class:`.ControlScenario`'s (:mod:`alpes_dyn.control.realism_loop`), on the five flexion chains (the thumb's
+    ab/adduction gear and its PD stay as they are; the slack and the cable are the flexion tendons').
     """
 
     controller: str = "sensor"
@@ -149,8 +155,11 @@ class HandControlScenario:
     gains: dict = field(default_factory=dict, compare=False)
     params: Any = field(default=None, compare=False)
     plant_params: Any = field(default=None, compare=False)
+    effects: Any = field(default=None, compare=False)  # a PlantEffects (realism_loop), on every flexion chain
+    compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
 
     def check(self, chains: Sequence[str] | None = None) -> None:
+        _check_effects(self.effects, self.compensation, False)
         if self.controller not in CONTROLLERS:
             raise InputError(f"controller: unknown controller {self.controller!r} "
                              f"(expected one of {', '.join(CONTROLLERS)})")
@@ -258,24 +267,60 @@ def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandContr
     reference (N, one per sample) and its rest q0 (rad: the plant's, set in ``d.qpos``)."""
     from ..model.mjcf import CYLINDER
 
-    m = chain_model(p, c, sc.thumb_abduction)
+    e = sc.effects
+    comp = Compensation() if sc.compensation is None else sc.compensation
+    p_ctl = p if e is None else dataclasses.replace(p, gravity=comp.turned_gravity(p.gravity))
+    m = chain_model(p_ctl, c, sc.thumb_abduction)
     R, pos = chain_frame(p, c, sc.thumb_abduction)
     names = [f"{c}_{j}" for j in m.joint_names]
-    q0 = static_equilibrium(chain_model(pp, c, sc.thumb_abduction), np.zeros(m.n))
+    plant = chain_model(dataclasses.replace(pp, gravity=plant_gravity(pp.gravity, e)), c, sc.thumb_abduction)
+    q0 = static_equilibrium(plant, np.zeros(m.n))
     d.qpos[joint_permutation(mj, names)] = q0
+    rotor_rest(mj, d, [c], plant, q0, e)
     a, b = (float(x) for x in levels)
     center = np.asarray(CYLINDER["center"], dtype=float)
     return dict(name=c, model=m, n=m.n, names=tuple(names), center=R.T @ (center - pos),
                 axis=R.T @ np.array([0.0, 1.0, 0.0]), F_ref=np.where(t < sc.step_time, a, b), levels=(a, b), z0=q0)
 
 
+def _chain_effects(ch: dict[str, Any], sc: HandControlScenario, p: HandParams) -> dict[str, Any]:
+    """One chain's signals and blocks of the plant's effects and their compensation (as the finger's
+    :func:`~alpes_dyn.control.finger_loop._effect_signals`, the names suffixed with the chain's)."""
+    from .finger_loop import _effect_signals
+
+    c = ch["name"]
+    fx = _effect_signals(sc, ch["model"], p)
+    ren = {"tau": f"tau_{c}", "tau_motor": f"tau_motor_{c}", "tau_meas": f"tau_meas_{c}", "y": f"y_{c}",
+           "tau_meas_raw": f"tau_meas_raw_{c}", "tau_prev": f"tau_prev_{c}", "y_obs": f"y_obs_{c}"}
+    out = {k: ren.get(v, v) if isinstance(v, str) else v for k, v in fx.items() if k != "blocks"}
+    e = sc.effects
+    blocks: list = []
+    if e is not None:
+        comp = Compensation() if sc.compensation is None else sc.compensation
+        blocks += torque_constant_blocks(e, ren["tau"], ren["tau_motor"], name=f"motor_{c}")
+        if e.torque_delay:
+            blocks.append(SampleLag(ren["tau_meas_raw"], ren["tau_meas"], e.torque_delay, name=f"torque_delay_{c}"))
+        if comp.command_input:
+            blocks.append(Delay(ren["tau"], ren["tau_prev"], 0.0, name=f"command_held_{c}"))
+        if comp.observer_compliance:
+            C, off, torque, y = float(ch["model"].transmission.tendon_compliance[0]), float(comp.encoder_offset), \
+                out["torque"], ren["y"]
+            blocks.append(Function(lambda **u: u[y] - off - C * u[torque], (y, torque), ren["y_obs"],
+                                   name=f"unstretched_{c}"))
+    out["blocks"] = blocks
+    return out
+
+
 def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gains: dict) -> list:
     """The blocks of one chain's loop: the cylinder's normal at the estimated fingertip, the sensorless force,
     the force controller and the EKF's force input (the previous sample's -F n)."""
     c, m, kind = ch["name"], ch["model"], sc.controller
-    ctl = ForceController(kind, m, cylinder_normal(m, ch["z0"], ch["center"], ch["axis"]), sc.dt, tau_max, **gains)
+    fx = ch["effects"]
+    ctl = ForceController(kind, m, cylinder_normal(m, ch["z0"], ch["center"], ch["axis"]), sc.dt, tau_max, **gains,
+                          **fx["controller"])
     if kind == "pi":
-        return [ForceLoop(ctl, reference=f"F_ref_{c}", force=f"F_meas_{c}", command=f"tau_{c}", name=f"ctl_{c}")]
+        return [ForceLoop(ctl, reference=f"F_ref_{c}", force=f"F_meas_{c}", command=f"tau_{c}", name=f"ctl_{c}"),
+                *fx["blocks"]]
     F = f"F_fb_{c}" if kind == "sensorless" else f"F_meas_{c}"
     center, axis = ch["center"], ch["axis"]
     out = [Function(lambda **u: cylinder_normal(m, u[f"z_{c}"][: m.n], center, axis), (f"z_{c}",), f"normal_{c}",
@@ -283,10 +328,10 @@ def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gai
            ForceLoop(ctl, reference=f"F_ref_{c}", force=F, estimate=f"z_{c}", normal=f"normal_{c}",
                      command=f"tau_{c}", name=f"ctl_{c}"),
            force_input(F, f"w_F_{c}", f"normal_{c}", name=f"w_F_{c}"),
-           Delay(f"w_F_{c}", f"w_F_prev_{c}", np.zeros(3), name=f"delay_{c}")]
+           Delay(f"w_F_{c}", f"w_F_prev_{c}", np.zeros(3), name=f"delay_{c}"), *fx["blocks"]]
     if kind == "sensorless":
         out.append(SensorlessForce(m, sc.dt / (sc.force_filter_s + sc.dt), estimate=f"z_{c}",
-                                   torque=f"tau_meas_{c}", normal=f"normal_{c}", force=F, name=f"sensorless_{c}"))
+                                   torque=fx["torque"], normal=f"normal_{c}", force=F, name=f"sensorless_{c}"))
     return out
 
 
@@ -302,8 +347,8 @@ def _chain_ekf(ch: dict[str, Any], sc: HandControlScenario) -> Observer:
     noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
     ekf = make_observer("ekf", StateSpace(m, input="motor", output="encoder", force=True), sc.dt, **noise)
     z0 = np.concatenate([static_equilibrium(m, np.zeros(n)), np.zeros(n)])
-    return Observer(ekf, z0, np.diag([0.05**2] * n + [0.1**2] * n), known=(f"tau_meas_{c}", f"w_F_prev_{c}"),
-                    measurement=f"y_{c}", estimate=f"z_{c}", covariance=None, first_update=False,
+    return Observer(ekf, z0, np.diag([0.05**2] * n + [0.1**2] * n), known=(ch["effects"]["torque"], f"w_F_prev_{c}"),
+                    measurement=ch["effects"]["measurement"], estimate=f"z_{c}", covariance=None, first_update=False,
                     label=f"ekf_force_hand_{m.name}", name=f"ekf_{c}")
 
 
@@ -360,7 +405,8 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
         raise InputError(f"thumb_abduction: {sc.thumb_abduction:g} rad is outside the ab/adduction range "
                          f"[{p.abduction_lower:g}, {p.abduction_upper:g}] rad")
     levels = HAND_LEVELS if sc.levels is None else sc.levels
-    mj = load_mujoco(mjcf_string("hand", pp, friction=True, scene="cylinder", timestep=sc.dt / sc.substeps))
+    fxm = {} if sc.effects is None else effects_mjcf_kwargs(sc.effects)
+    mj = load_mujoco(mjcf_string("hand", pp, friction=True, scene="cylinder", timestep=sc.dt / sc.substeps, **fxm))
     d = mujoco.MjData(mj)
     N = int(round(sc.duration / sc.dt))
     t = sc.dt * np.arange(N)
@@ -368,10 +414,12 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     kind = sc.controller
     gains = {**DEFAULT_GAINS[kind], **HAND_GAINS, **sc.gains}
     C = [_chain(p, pp, mj, d, c, sc, levels[c], t) for c in chains]  # the plant starts at rest, each chain
+    for ch in C:
+        ch["effects"] = _chain_effects(ch, sc, p)
     d.qpos[mj.joint("thumb_abd").qposadr[0]] = 0.0
     mujoco.mj_forward(mj, d)
     names = [c["name"] for c in C]
-    plant = MujocoPlant(mj, d, substeps=sc.substeps, actuators={**{f"tau_{c}": c for c in names},
+    plant = MujocoPlant(mj, d, substeps=sc.substeps, actuators={**{C[i]["effects"]["applied"]: c for i, c in enumerate(names)},
                                                                 "u_abd": "thumb_abduction"},
                         joints={**{f"q_{c}": C[i]["names"] for i, c in enumerate(names)}, "q_abd": ["thumb_abd"]},
                         sensors={**{f"q_m_{c}": f"encoder_{c}" for c in names}, "q_m_abd": "encoder_thumb_abduction",
@@ -380,10 +428,10 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     cpr = C[0]["model"].transmission.counts_per_rev
     # the sensors' noise, drawn in this order: the encoders (the chains', the ab/adduction's), torques, forces
     blocks = [Source("references", **{f"F_ref_{c['name']}": c["F_ref"] for c in C}), plant]
-    blocks += [Encoder(f"q_m_{c}", f"y_{c}", cpr, noise_counts=sc.encoder_noise_counts, rng=rng) for c in
-               (*names, "abd")]
-    blocks += [TorqueSensor(f"tau_applied_{c}", f"tau_meas_{c}", noise=sc.torque_noise, rng=rng, timing="period")
-               for c in names]
+    blocks += [Encoder(f"q_m_{c}", f"y_{c}", cpr, noise_counts=sc.encoder_noise_counts, rng=rng,
+                       offset=C[i]["effects"]["offset"] if i < len(C) else 0.0) for i, c in enumerate((*names, "abd"))]
+    blocks += [TorqueSensor(f"tau_applied_{c}", C[i]["effects"]["reading"], noise=sc.torque_noise, rng=rng,
+                            timing="period", gain=C[i]["effects"]["gain"]) for i, c in enumerate(names)]
     blocks += [ForceSensor(f"F_touch_{c}", f"F_meas_{c}", noise=sc.force_noise, resolution=sc.force_resolution,
                            rng=rng) for c in names]
     blocks.append(EncoderPD(sc.thumb_abduction, sc.abduction_kp, sc.abduction_kd, sc.dt / (sc.abduction_filter_s + sc.dt),
