@@ -74,10 +74,12 @@ def chain_errors(ident: Path, true: Path, model: str) -> dict[str, tuple[float, 
     got, want = load_params(ident), load_params(true)
     chains = (tuple(want.finger_names) + ("thumb",)) if model == "hand" else ("thumb",) if model == "thumb" \
         else ("finger",)
+    n = 2 if model == "finger2" else None  # finger2 is the first two links of the finger's values
     out = {}
     for c in chains:
         g, w = got.chain(c), want.chain(c)
-        out[c] = (float(np.max(np.abs(g.K / w.K - 1))) * 100, float(np.max(np.abs(g.m / w.m - 1))) * 100)
+        out[c] = (float(np.max(np.abs(g.K[:n] / w.K[:n] - 1))) * 100,
+                  float(np.max(np.abs(g.m[:n] / w.m[:n] - 1))) * 100)
     return out
 
 
