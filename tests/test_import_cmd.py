@@ -15,26 +15,7 @@ from alpes_dyn.cli import main
 mujoco = pytest.importorskip("mujoco")
 from alpes_dyn.model.mjcf import mjcf_string  # noqa: E402
 
-# two hinges off their bodies' origins, rotated bodies and a rotated inertial frame, a spring, damping, armature
-# and dry friction, a fixed tendon pulled by one motor, a site at the tip
-ARM = """<mujoco model="arm">
-  <compiler angle="radian"/>
-  <option gravity="0 0 -9.81"/>
-  <worldbody>
-    <body name="a" pos="0.01 0.02 0.1" quat="0.9238795 0 0.3826834 0">
-      <joint name="ja" type="hinge" axis="0 1 0" pos="0.02 0 0" range="-1 1" stiffness="0.3" damping="0.01"
-             armature="1e-4" frictionloss="0.002"/>
-      <inertial pos="0.05 0.01 0" quat="0.7071068 0.7071068 0 0" mass="0.2" diaginertia="1e-4 2e-4 3e-4"/>
-      <body name="b" pos="0.1 0 0" euler="0.3 0 0.2">
-        <joint name="jb" type="hinge" axis="0 0.6 0.8" pos="0 0.01 0" range="-2 2"/>
-        <inertial pos="0.04 0 0.01" mass="0.1" diaginertia="5e-5 6e-5 7e-5"/>
-        <site name="tip" pos="0.08 0 0"/>
-      </body>
-    </body>
-  </worldbody>
-  <tendon><fixed name="t"><joint joint="ja" coef="0.01"/><joint joint="jb" coef="0.008"/></fixed></tendon>
-  <actuator><motor name="m" tendon="t" gear="100"/></actuator>
-</mujoco>"""
+from test_mjcf_import import ARM  # noqa: E402  (the two-hinge arm with a spring, friction, a tendon and a motor)
 
 
 def run(capsys, *argv: str) -> tuple[int, str, str]:
