@@ -484,10 +484,7 @@ def _effect_signals(sc: ControlScenario, model: Model, params: HandParams | None
     if comp.command_input:  # the command held over the period before: what the reading shows, without its lag
         out["torque"] = "tau_prev"
         blocks.append(Delay("tau", "tau_prev", 0.0, name="command_held"))
-    C = float(model.transmission.tendon_compliance[0])
-    if C < 0 and (comp.observer_compliance or comp.notch):
-        raise InputError(f"params: the controller's file holds a negative tendon compliance ({C:.3g} rad/(N m)), not a "
-                         "cable (a fit that did not converge?); give another file, or the rigid design")
+    C = float(model.transmission.tendon_compliance[0])  # >= 0: a parameter file refuses a negative one
     if comp.observer_compliance:
         off = float(comp.encoder_offset)
         torque = out["torque"]
