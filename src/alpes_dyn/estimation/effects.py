@@ -59,13 +59,15 @@ from ..model.params import HandParams, with_values
 from ..model.robot import Model
 from ..symbolic.parametric import select_parameters, unseen_masses
 
-__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
+__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
-EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset")
-NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia"}
+EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay")
+NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay"}
 """The effects ``auto`` adds where the first fit's adequacy check names them (a word of the likely missing effect)."""
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
+MAX_FIT_DELAY = 3
+"""The longest torque delay (samples) the ``delay`` effect tries: 1, 2, ... while the residual falls."""
 EFFECTS_INTERVAL = 0.05
 """s: the shooting interval of :func:`fit_effects`' fits unless the caller names one (``identify``'s own default is
 100 ms). On MuJoCo's finger3 plants with all the effects at once (seeds 12-14), 100 ms lost the basin of seed 13
@@ -175,6 +177,14 @@ class EffectsFit:
     tried: Any = None
     tried_effects: tuple[str, ...] | None = None
     rounds: tuple[tuple[tuple[str, ...], Any], ...] = ()
+    delay: int = 0
+    """Whole samples by which the kept fit found the recorded torque lagging the motor's (``delay``; 0 without it):
+    of the rig's sensors, kept here, not in the file (the EKF on a recording takes it,
+    :func:`~alpes_dyn.estimation.replay.estimate_recording` ``torque_delay``)."""
+    observer: Any = None
+    """The observer's check of the kept fit (:func:`~alpes_dyn.estimation.observer_check.judge`), or None."""
+    notes: list[str] = dataclasses.field(default_factory=list)
+    """What a staged start did (which effect broke a fit that lost its basin)."""
 
     @classmethod
     def single(cls, result: Any, effects: tuple[str, ...]) -> "EffectsFit":
@@ -183,10 +193,10 @@ class EffectsFit:
 
     @property
     def seconds(self) -> float:
-        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded)."""
-        if not self.rounds:
-            return float(self.result.seconds)
-        return float(sum(r.seconds for _, r in self.rounds))
+        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded), the
+        observer's check included."""
+        own = float(self.result.seconds) if not self.rounds else float(sum(r.seconds for _, r in self.rounds))
+        return own + (self.observer.seconds if self.observer is not None else 0.0)
 
 
 def _compliances(result: Any) -> list[tuple[float, float]]:
@@ -207,7 +217,8 @@ def _contracting(result: Any) -> bool:
 
 
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
-                base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
+                base: str | None = None, has_gravity: bool = False, observe: bool = True,
+                **kwargs: Any) -> EffectsFit:
     """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
     stick-slip law where ``"stiction"`` is in them, the rotor where ``"rotor"`` is). With ``"auto"`` among the
     effects: the fit without those first; then a fit with what it asks for: the effects its adequacy check names
@@ -220,15 +231,23 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     (a cable shortening under tension: another effect absorbed), a last round without it, kept where it
     converges. Each round starts from the last converged one's values
     (:func:`~alpes_dyn.estimation.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
-    ``kwargs`` (which go to ``identify``) name an ``interval``."""
+    ``kwargs`` (which go to ``identify``) name an ``interval``. With ``delay``: the torque read 1, 2, ... samples
+    earlier while the residual falls (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
+    feeds (:func:`~alpes_dyn.estimation.observer_check.judge`, on the ``validation`` recording where one is given,
+    else the fitted one): where the EKF on its file fails, the fit is not adequate, the reason naming the
+    observer."""
     from .adequacy import AdequacyWarning
     from .identification import identify
+    from .observer_check import judge
+    from .replay import advanced
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")
+    rounds: list[tuple[tuple[str, ...], Any]] = []
+    delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
 
-    def run(effs: tuple[str, ...], warm: Any = None):
-        model = model_of(effs)
+    def one(effs: tuple[str, ...], warm: Any, delay: int):
+        model = model_of(tuple(e for e in effs if e != "delay"))
         selection = effect_parameters(model, effs, has_gravity, base)
         kw = dict(kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
@@ -239,42 +258,103 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
             kw["start"] = warm
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
-            return identify(model, recording, selection, **kw)
-
-    best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
-    rounds = [(chosen, best)]
-    attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
-    while auto:
-        more = tuple(e for e in named_effects(best) if e not in attempted)
-        if "rotor" not in attempted and "rotor" not in more and _elastic(best):
-            more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
-        if not more and not best.trustworthy:
-            # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
-            # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
-            # two seeds of three); only then, as added to a fit it does not explain it made the rotor's round
-            # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
-            # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
-            # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither)
-            more = next(((e,) for e in ("stiction", "rotor") if e not in attempted), ())
-        if not more:
-            break
-        attempted.update(more)
-        effs = best_effects + more
-        res = run(effs, best)
+            res = identify(model, advanced(recording, delay), selection, **kw)
         rounds.append((effs, res))
-        if res.residual_rms >= best.residual_rms:
-            tried, tried_effects = res, effs
-            if best.trustworthy:
+        delays[id(res)] = delay
+        return res
+
+    def run(effs: tuple[str, ...], warm: Any = None):
+        """One fit with ``effs``; with ``delay`` among them, the torque read 1, 2, ... samples earlier (each from
+        the last, warm) while the residual falls, up to :data:`MAX_FIT_DELAY`: the lowest kept."""
+        if "delay" not in effs:
+            return one(effs, warm, 0)
+        if warm is not None and "delay" in _effects_of(warm):
+            return one(effs, warm, delays[id(warm)])  # found by an earlier round
+        res = one(effs, warm, 1)
+        for d in range(2, MAX_FIT_DELAY + 1):
+            nxt = one(effs, res, d)
+            if not (nxt.converged and nxt.residual_rms < res.residual_rms):
                 break
-            continue  # still flagged: the next effect not yet tried, on the fit kept
-        tried, tried_effects = best, best_effects
-        best, best_effects = res, effs
+            res = nxt
+        return res
+
+    def _effects_of(res: Any) -> tuple[str, ...]:
+        return next((e for e, r in rounds if r is res), ())
+
+    def staged(target: tuple[str, ...], failed: Any) -> tuple[Any, tuple[str, ...]]:
+        """A first fit that lost its basin, made again in stages: the rigid fit from the start, then the effects of
+        ``target`` one by one, each round from the last (its values and trajectory); where a stage does not
+        converge, the last converged one is kept and the note names the effect that broke it."""
+        prev, stage = run(()), ()
+        if not prev.converged:
+            notes.append(f"staged start: the rigid fit itself did not converge ({prev.reason})")
+            return failed, target
+        for e in target:
+            nxt = run(stage + (e,), prev)
+            if not nxt.converged:
+                notes.append(f"staged start: adding {e} to the converged {'+'.join(stage) or 'rigid'} fit broke it "
+                             f"({nxt.reason}); kept without it")
+                attempted.add(e)
+                return prev, stage
+            prev, stage = nxt, stage + (e,)
+        return prev, stage
+
+    def extend(best: Any, best_effects: tuple[str, ...], tried: Any, tried_effects: Any, fallback: tuple[str, ...]):
+        """auto's rounds from the kept fit: what it asks for, or while flagged the effects of ``fallback``."""
+        while True:
+            more = tuple(e for e in named_effects(best) if e not in attempted)
+            if "rotor" not in attempted and "rotor" not in more and _elastic(best):
+                more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
+            if not more and not best.trustworthy:
+                # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
+                # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
+                # two seeds of three); only then, as added to a fit it does not explain it made the rotor's round
+                # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
+                # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
+                # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither), then the torque delay
+                more = next(((e,) for e in fallback if e not in attempted), ())
+            if not more:
+                break
+            attempted.update(more)
+            effs = best_effects + more
+            res = run(effs, best)
+            if res.residual_rms >= best.residual_rms:
+                tried, tried_effects = res, effs
+                if best.trustworthy:
+                    break
+                continue  # still flagged: the next effect not yet tried, on the fit kept
+            tried, tried_effects = best, best_effects
+            best, best_effects = res, effs
+        return best, best_effects, tried, tried_effects
+
+    notes: list[str] = []
+    attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
+    best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
+    if not best.converged and any(e != "stiction" and e != "rotor" for e in chosen):
+        # a lost basin from the start (MuJoCo's all-effects finger3 of seed 306: 45.8 counts, j1 at -52 deg)
+        first = best
+        best, best_effects = staged(chosen, first)
+        if best is not first:
+            tried, tried_effects = first, chosen
+    fallback = ("stiction", "rotor", "delay")
+    if auto:
+        best, best_effects, tried, tried_effects = extend(best, best_effects, tried, tried_effects, fallback)
     if auto and "compliance" in best_effects and _contracting(best):
         # a cable does not shorten under tension: the compliance absorbed another effect (MuJoCo's stick-slip
         # plant of seed 31, a rigid tendon: -0.42 +- 0.10 with the masses 5.2 % off; held at 0, within 2.6 %)
         effs = tuple(e for e in best_effects if e != "compliance")
         res = run(effs, best)
-        rounds.append((effs, res))
         if res.converged:
             tried, tried_effects, best, best_effects = best, best_effects, res, effs
-    return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds))
+    check = None
+    if observe:
+        val = kwargs.get("validation")
+        on = val if isinstance(val, type(recording)) else recording
+        check = judge(best, on, delays[id(best)])
+        if auto and check is not None and not check.passed and any(e not in attempted for e in fallback):
+            # the EKF on the kept file fails where the fit's own verdict passed: the effects not yet tried, from it
+            again = extend(best, best_effects, tried, tried_effects, fallback)
+            if again[0] is not best:
+                best, best_effects, tried, tried_effects = again
+                check = judge(best, on, delays[id(best)])
+    return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds), delays[id(best)], check, notes)

@@ -119,7 +119,9 @@ def verdict(res) -> str:
         return "adequate"
     why = [] if res.converged else [f"not converged ({res.reason})"]
     if res.adequacy is not None and not res.adequacy.adequate:
-        why.append("inadequate")
+        obs = [r for r in res.adequacy.reasons if r.startswith("the EKF")]
+        why.append("inadequate" + (" (the observer: " + obs[0][len("the EKF on the identified file "):] + ")"
+                                   if obs else ""))
         if res.adequacy.likely_missing:
             why.append("likely " + ", ".join(res.adequacy.likely_missing[:2]))
     return "FLAGGED: " + "; ".join(why)
@@ -162,15 +164,17 @@ def hand_plant(chain: str) -> Plant:
 
 
 def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
-             plant: Plant = FINGER3, rig: np.ndarray | None = None) -> np.ndarray:
+             plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0) -> np.ndarray:
     """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
     torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
-    the gravity of the rig's orientation, if not the file's, the tilt on top of it)."""
+    the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
+    fitted)."""
     obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path), rig)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
-    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
+    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
+                             torque_delay=torque_delay)
     return est.rmse
 
 
@@ -272,7 +276,8 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     t1 = time.perf_counter()
     fresh = fresh_run(true, effects, seed, design, plant)
     fitted = dict(zip(res.names, res.values))
-    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig)
+    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig,
+                    torque_delay=fit.delay)
     true_path = write_params(true, tmp / f"true_{plant.label}_{seed}.toml")
     rmse_true = ekf_rmse(fresh, str(true_path), {}, plant=plant, rig=rig)
     ekf_s = time.perf_counter() - t1
@@ -281,6 +286,9 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
                                   "fit_seconds": r.seconds} for e, r in fit.rounds]
     row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
+    row["extended"]["torque_delay"] = fit.delay
+    row["extended"]["notes"] = list(fit.notes)
+    row["extended"]["observer"] = None if fit.observer is None else fit.observer.to_dict()
     row["extended"]["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy,
         "fit_seconds": fit.tried.seconds}

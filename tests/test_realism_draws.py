@@ -1,0 +1,93 @@
+"""The realism study on draws nobody tuned on (issue 38): the benchmark's seeds and distribution, the torque delay
+undone against MuJoCo's delayed sensor, and the observer's check of an identified file against MuJoCo."""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+
+from alpes_dyn.control.plants import PlantEffects, mujoco_recording
+from alpes_dyn.errors import InputError
+from alpes_dyn.estimation.replay import advanced, estimate_recording
+from alpes_dyn.studies.realism import cases, parse_seeds, summarise
+
+
+def test_parse_seeds_takes_ranges():
+    assert parse_seeds("301-305,7") == [301, 302, 303, 304, 305, 7]
+    assert parse_seeds("12") == [12]
+    for bad in ("3-1", "a", "1,,2", "1-2-3", "-4", "2,2"):
+        with pytest.raises(InputError, match="seeds"):
+            parse_seeds(bad)
+
+
+def _row(case, seed, flagged, ekf, m, verdict="adequate"):
+    w = {"K": 0.5, "m": m, "F_s": 10.0, "F_v": 5.0}
+    return {"case": case, "seed": seed, "ekf_rmse_deg": ekf,
+            "extended": {"worst_error_common_scale_pct": w, "flagged": flagged, "fit_seconds_total": 10.0 + seed,
+                         "verdict": verdict}}
+
+
+def test_summarise_counts_silent_misses_and_refusals():
+    rows = [_row("all", 1, False, [0.1, 0.2, 0.3], 2.0),  # adequate and right
+            _row("all", 2, False, [0.1, 0.9, 0.3], 2.0),  # adequate, EKF off: a silent miss
+            _row("all", 3, False, [0.1, 0.2, 0.3], 6.0),  # adequate, masses off: a silent miss
+            _row("all", 4, True, [3.0, 0.2, 0.3], 9.0, "FLAGGED: inadequate"),  # refused
+            {"case": "all", "seed": 5, "error": "ModelError: boom"},
+            _row("stiction", 1, False, [0.4, 0.2, 0.3], 1.0)]
+    s = summarise(rows)
+    a = s["all"]
+    assert a["n"] == 5 and a["adequate"] == 3
+    assert [m["seed"] for m in a["silent_misses"]] == [2, 3]
+    assert a["refusals"] == [{"seed": 4, "verdict": "FLAGGED: inadequate"}]
+    assert a["errors"] == [(5, "ModelError: boom")]
+    assert a["ekf_deg"] == {"median": pytest.approx(0.6), "worst": pytest.approx(3.0)}  # worst joints .3 .9 .3 3
+    assert a["m_pct"] == {"median": pytest.approx(4.0), "worst": pytest.approx(9.0)}
+    assert s["stiction"]["silent_misses"] == [] and s["stiction"]["ekf_deg"]["worst"] == pytest.approx(0.4)
+
+
+def test_cases_hold_the_slack_and_the_delay():
+    c = cases(4e4, 10.0)
+    assert c["slack"].tendon_dead_band == pytest.approx(0.002 * np.radians(0.5), rel=1e-12)  # r_m radians(0.5)
+    assert c["slack"].tendon_stiffness == 4e4 and c["delay"].torque_delay == 1
+    assert c["all"].torque_delay == 1 and c["all"].tendon_dead_band == c["slack"].tendon_dead_band
+
+
+def test_advanced_undoes_mujocos_torque_delay():
+    """MuJoCo's sensor reading the torque 2 samples late, read 2 samples earlier: the undelayed recording's torque
+    (its noise included) but for the last 2 rows, and the encoder untouched."""
+    t = np.arange(400) * 1e-3
+    u = (0.03 + 0.01 * np.sin(2 * np.pi * 3 * t))[:, None]
+    plain = mujoco_recording("finger3", None, u, 1e-3, seed=3)
+    late = mujoco_recording("finger3", None, u, 1e-3, seed=3, effects=PlantEffects(torque_delay=2))
+    back = advanced(late, 2)
+    np.testing.assert_array_equal(back.torque[:-2], plain.torque[:-2])
+    np.testing.assert_array_equal(back.torque[-2:], np.repeat(late.torque[-1:], 2, axis=0))
+    np.testing.assert_array_equal(back.encoder, late.encoder)
+    assert advanced(late, 0) is late
+    with pytest.raises(InputError, match="torque_delay"):
+        advanced(late, -1)
+    with pytest.raises(InputError, match="torque_delay"):
+        advanced(late, 400)
+
+
+def test_the_observer_check_passes_the_true_file_and_fails_a_wrong_one():
+    """On a MuJoCo recording of a finger drawn 20 % off (the library's friction law in MuJoCo, 1.5 s of a
+    two-line torque about the experiment's mean), the EKF of the true file predicts the encoder near the sensor
+    floor; the nominal file's EKF (degrees off) is refused, the reason naming the observer."""
+    import alpes_dyn as ad
+    from alpes_dyn.estimation.observer_check import observer_statistics
+    from alpes_dyn.studies.realism import FINGER3
+
+    true = FINGER3.true_params(302)
+    t = np.arange(1500) * 1e-3
+    u = (0.023 + 0.006 * np.sin(2 * np.pi * 1.3 * t) + 0.004 * np.sin(2 * np.pi * 4.1 * t))[:, None]
+    rec = mujoco_recording("finger3", true, u, 1e-3, seed=302)
+    good = observer_statistics(rec, ad.Model.alpes("finger3", friction=True, params=true))
+    bad = observer_statistics(rec, ad.Model.alpes("finger3", friction=True))
+    assert good.passed, good.reasons
+    assert np.degrees(good.ekf_rmse).max() < 0.3 and np.degrees(bad.ekf_rmse).max() > 2.0
+    assert not bad.passed and all(r.startswith("the EKF on the identified file") for r in bad.reasons)
+    assert bad.prediction_rms > 5 * good.prediction_rms and bad.innovation_rms > 1.8 * good.innovation_rms
+    assert good.floor == pytest.approx(0.57, abs=0.05)  # quantisation 0.29 and 0.5 count of noise
