@@ -44,9 +44,9 @@ OBSERVER_THRESHOLDS: dict[str, float] = {
     "horizon_s": 0.02,
     "stride": 5,
     "transient_s": 0.5,
-    "window_s": 2.5,
-    "innovation_ratio": 2.5,
-    "prediction_ratio": 20.0,
+    "window_s": 2.0,
+    "innovation_ratio": 8.0,
+    "prediction_ratio": 15.0,
 }
 """The observer check's settings: the prediction's ``horizon_s`` (s) from every ``stride``-th sample, after
 ``transient_s`` s of the filter's start; not adequate where the innovation's RMS exceeds ``innovation_ratio`` times
