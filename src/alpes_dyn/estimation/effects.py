@@ -20,7 +20,19 @@ effect         what the fit does
                ``transmission.J_m`` (the motor's datasheet; held, not fitted: ``--parameters J_m`` fits it)
 ``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
                (absorbed by the initial states), and beside the tilt it trades with the masses.
+``delay``      (asked for; ``auto`` adds it where a fit's verdict names "torque delay", the residual following
+               the torque's own rate, or as the last of the flagged fit's fallbacks) the recorded torque lagging
+               the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
+               1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.replay.advanced`) while the residual
+               falls, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
+               sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
 ============== ======================================================================================
+
+A first fit that loses its basin (not converged) is made again in stages: the rigid fit, then the effects one by
+one, each from the last; where one breaks it, the last converged stage is kept and :attr:`EffectsFit.notes` names
+the effect. The fit kept is then judged by the observer it feeds
+(:func:`~alpes_dyn.estimation.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
+is not adequate, the reason naming the observer, and ``auto`` tries the effects not yet tried.
 
 Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
 asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
