@@ -94,3 +94,31 @@ def test_the_observer_check_passes_the_true_file_and_fails_a_wrong_one():
     assert good.prediction_rms < 0.9 * ratio * good.floor and bad.prediction_rms > 5 * ratio * bad.floor
     assert good.floor == pytest.approx(0.57, abs=0.05)  # quantisation 0.29 and 0.5 count of noise
     assert good.horizon_s == pytest.approx(0.02)
+
+
+def test_mildly_coloured_is_the_ljung_box_alone():
+    """A white residual with a slow AR(1) part (rho 0.9) of 8 % of its variance, 4000 samples: lags up to about
+    0.067 (1.6 times the 99 % band 0.041) over some twenty lags, Ljung-Box p far below 1e-6: mildly coloured; the
+    slow part as large as the white one (lags to 0.45) is not; nor a mild one far above the floor."""
+    from scipy.signal import lfilter
+
+    from alpes_dyn.estimation.adequacy import assess, sensor_floor
+    from alpes_dyn.estimation.observer_check import mildly_coloured
+
+    rng = np.random.default_rng(4)
+    w, v = rng.standard_normal(4000), rng.standard_normal(4000)
+    slow = lfilter([1.0], [1.0, -0.9], v)
+    slow /= slow.std()
+
+    def res(share):
+        e = w + np.sqrt(share) * slow
+        return (0.5 * e / e.std())[:, None]
+
+    u = rng.standard_normal((4000, 1))
+    floor = sensor_floor(np.zeros((4000, 1)), encoder_noise=0.5)
+    mild, strong = assess(res(0.08), u, floor), assess(res(1.0), u, floor)
+    assert mild.whiteness.p_value[0] < 1e-6 and mild.whiteness.max_acf[0] < 3 * mild.whiteness.band
+    assert len(mild.reasons) == 1 and mildly_coloured(mild)
+    assert not strong.adequate and not mildly_coloured(strong)
+    loud = assess(4 * res(0.08), u, floor)  # 2 counts RMS against a floor of 0.5
+    assert len(loud.reasons) == 2 and not mildly_coloured(loud)
