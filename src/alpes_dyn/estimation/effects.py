@@ -21,7 +21,7 @@ effect         what the fit does
 ``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
                (absorbed by the initial states), and beside the tilt it trades with the masses.
 ``delay``      (asked for; ``auto`` adds it where a fit's verdict names "torque delay", the residual following
-               the torque's own rate, or as the last of the flagged fit's fallbacks) the recorded torque lagging
+               the torque's own rate) the recorded torque lagging
                the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
                1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.replay.advanced`) while the residual
                falls, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
@@ -335,7 +335,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
                 # two seeds of three); only then, as added to a fit it does not explain it made the rotor's round
                 # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
                 # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
-                # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither), then the torque delay
+                # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither)
                 more = next(((e,) for e in fallback if e not in attempted), ())
             if not more:
                 break
@@ -360,7 +360,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         best, best_effects = staged(chosen, first)
         if best is not first:
             tried, tried_effects = first, chosen
-    fallback = ("stiction", "rotor", "delay")
+    fallback = ("stiction", "rotor")  # the delay where the verdict names it (the residual following the torque's rate)
     if auto:
         best, best_effects, tried, tried_effects = extend(best, best_effects, tried, tried_effects, fallback)
     if auto and "compliance" in best_effects and _contracting(best):

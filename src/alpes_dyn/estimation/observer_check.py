@@ -93,8 +93,8 @@ def identified_model(result: Any) -> Model | None:
     model's kind (an Alpes finger or thumb, friction on, its rotor where it had one, its gravity) from the file the
     fit writes (:meth:`~alpes_dyn.estimation.fit_result.IdentificationResult.params`). None for a model that has no
     parameter file (a URDF robot)."""
-    m = result.model
-    if m.params is None or m.layout is None or m.name not in ("finger2", "finger3", "thumb"):
+    m = getattr(result, "model", None)
+    if not isinstance(m, Model) or m.params is None or m.layout is None or m.name not in ("finger2", "finger3", "thumb"):
         return None
     chain = m.chain if m.name != "thumb" else None
     obs = Model.alpes(m.name, spring=m.spring, friction=True, rotor_inertia=bool(m._rotor), params=result.params(),
