@@ -489,7 +489,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     if reasons:
         ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
         top = ranked[0][0] if ranked else 0.0
-        missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)]
+        missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
+                   and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
+        # acceleration response is close to the torque's rate (a rotor mismatch named both)
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
