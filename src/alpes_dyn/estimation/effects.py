@@ -28,7 +28,7 @@ effect         what the fit does
                sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
 ============== ======================================================================================
 
-A first fit that loses its basin (not converged) is made again in stages: the rigid fit, then the effects one by
+A first fit that loses its basin (its stop reason "lost basin", not at a joint stop) is made again in stages: the rigid fit, then the effects one by
 one, each from the last; where one breaks it, the last converged stage is kept and :attr:`EffectsFit.notes` names
 the effect. The fit kept is then judged by the observer it feeds
 (:func:`~alpes_dyn.estimation.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
@@ -354,7 +354,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     notes: list[str] = []
     attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
     best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
-    if not best.converged and not _at_stop(best) and any(e != "stiction" and e != "rotor" for e in chosen):
+    if (not best.converged and "lost basin" in str(getattr(best, "reason", "")) and not _at_stop(best)
+            and any(e != "stiction" and e != "rotor" for e in chosen)):
         # a lost basin from the start (MuJoCo's all-effects finger3 of seed 306: 45.8 counts, j1 at -52 deg)
         first = best
         best, best_effects = staged(chosen, first)
