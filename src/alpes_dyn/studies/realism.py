@@ -3,12 +3,14 @@
 A plant we did not write -- the finger (or a chain of the hand) exported to MuJoCo
 (:mod:`alpes_dyn.control.plants`), drawn +-20 % per link, with one effect of a real hand or all of them
 (:func:`cases`: stick-slip, a series-elastic cable with its rotor, the rotor on the rigid tendon, the palm
-tilted, the torque constant and the encoder's zero off) -- records the identification experiment; two fits of
+tilted, the torque constant and the encoder's zero off, the cable's slack at the motor shaft, the torque read a
+sample late) -- records the identification experiment; two fits of
 it (the rigid smooth-friction model and ``alpes-dyn identify``'s default ``--effects auto``), and the EKF on the
 extended fit's file and on the true file, on a fresh run of the plant: :func:`realism_case` gives one such row.
 ``benchmarks/realism.py`` prints them as a table; the gallery's "The hand on MuJoCo" runs the hand's five
 chains. :func:`realism_row` is the same row as a function of the seed, for :func:`~alpes_dyn.studies.sweep.sweep`
-(``benchmarks/realism.py --workers 2`` runs each case's seeds so), and :func:`realism_draw` flattens it to numbers.
+(``benchmarks/realism.py --workers 2`` runs each case's seeds so), and :func:`realism_draw` flattens it to numbers;
+:func:`summarise` gives a case's distribution over seeds (median, worst, silent misses, refusals).
 """
 
 from __future__ import annotations
