@@ -122,3 +122,41 @@ def test_mildly_coloured_is_the_ljung_box_alone():
     assert not strong.adequate and not mildly_coloured(strong)
     loud = assess(4 * res(0.08), u, floor)  # 2 counts RMS against a floor of 0.5
     assert len(loud.reasons) == 2 and not mildly_coloured(loud)
+
+
+def test_fit_effects_finds_the_torque_delay(monkeypatch):
+    """auto's delay on stand-in fits: the first fit's verdict names a torque delay, so the fit is made again on the
+    torque read 1, then 2 samples earlier (each round from the last); the residual lowest at 1 sample: kept, with
+    EffectsFit.delay = 1 and the torque the fit saw the recorded one advanced by exactly one sample."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation import effects as eff
+    from alpes_dyn.estimation import identification as ident_mod
+    from alpes_dyn.estimation.adequacy import SIGNATURES
+    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.model.params import load_params
+
+    n = 50
+    tau = np.linspace(0.01, 0.02, n)[:, None]
+    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
+                    joint_names=("j1", "j2", "j3"))
+    seen = []
+
+    def fake_identify(model, data, parameters, **kw):
+        d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))  # the samples it was advanced by
+        seen.append((d, data.torque.copy(), kw.get("start")))
+        ok = d == 1
+        missing = [] if ok else [SIGNATURES["torque_rate"]]
+        res = SimpleNamespace(residual_rms=0.6 + 0.1 * abs(d - 1), converged=True, reason="", names=(), values=[],
+                              std=[], trustworthy=ok, adequacy=SimpleNamespace(adequate=ok, likely_missing=missing))
+        return res
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), rec, eff.parse_effects("auto"),
+                          has_gravity=True)
+    assert [d for d, _, _ in seen] == [0, 1, 2]
+    assert fit.delay == 1 and fit.effects == ("compliance", "tilt", "delay") and fit.result.residual_rms == 0.6
+    np.testing.assert_array_equal(seen[1][1][:-1], tau[1:])  # advanced by one sample, the last repeated
+    assert seen[1][1][-1, 0] == tau[-1, 0]
+    assert seen[1][2] is not None and seen[2][2] is fit.result  # each round from the last
+    assert fit.observer is None  # a stand-in has no file to run the EKF on
