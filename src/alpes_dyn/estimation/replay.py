@@ -81,9 +81,9 @@ class RecordingEstimate:
     t: (N,) s. estimate: the observer's :class:`Estimate` (z = [q; qd; d]).
     joint_names (n,), motor_names (m,). rmse: (n,) rad after the transient, or None (no ``true_q_*``).
     final_error: (n,) rad at the last sample, or None. disturbance: (N, m) N m, or None.
-    settings: the noise levels and options used. filter: the observer run (its ``model.step`` the prediction;
-    :mod:`~alpes_dyn.estimation.observer_check`). measurement: (N, m) rad, the encoder as the observer read it (the
-    zero and the tendons' stretch taken off).
+    settings: the noise levels and options used.
+    filter: the observer run (its ``model.step`` the prediction, :mod:`~alpes_dyn.estimation.observer_check`).
+    measurement: (N, m) rad, the encoder as the observer read it (the zero and the tendons' stretch taken off).
     """
 
     t: np.ndarray
