@@ -375,14 +375,16 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     if observe:
         val = kwargs.get("validation")
         on = val if isinstance(val, type(recording)) else recording
-        check = judge(best, on, delays[id(best)])
         watched = fallback + ("delay",)
-        if auto and check is not None and not check.passed and any(e not in attempted for e in watched):
+        check = judge(best, on, delays[id(best)])
+        while auto and check is not None and not check.passed and any(e not in attempted for e in watched):
             # the EKF on the kept file fails where the fit's own verdict passed: the effects not yet tried, from it,
             # the torque delay among them (MuJoCo's all-effects finger3, seeds 405-409: the fit adequate without
-            # it, its EKF predicting the encoder 20 ms ahead within 28-43 times the floor; 9-13 with it)
+            # it, its EKF predicting the encoder 20 ms ahead within 28-43 times the floor; 9-13 with it); each new
+            # fit kept judged again
             again = extend(best, best_effects, tried, tried_effects, watched)
-            if again[0] is not best:
-                best, best_effects, tried, tried_effects = again
-                check = judge(best, on, delays[id(best)])
+            if again[0] is best:
+                break
+            best, best_effects, tried, tried_effects = again
+            check = judge(best, on, delays[id(best)])
     return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds), delays[id(best)], check, notes)
