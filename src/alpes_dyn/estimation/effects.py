@@ -205,10 +205,11 @@ class EffectsFit:
 
     @property
     def seconds(self) -> float:
-        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded), the
-        observer's check included."""
-        own = float(self.result.seconds) if not self.rounds else float(sum(r.seconds for _, r in self.rounds))
-        return own + (self.observer.seconds if self.observer is not None else 0.0)
+        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded);
+        the observer's check apart (``observer.seconds``)."""
+        if not self.rounds:
+            return float(self.result.seconds)
+        return float(sum(r.seconds for _, r in self.rounds))
 
 
 def _compliances(result: Any) -> list[tuple[float, float]]:

@@ -287,7 +287,9 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     row["joint_range_deg"] = [np.degrees(rec.true_q.min(axis=0)).tolist(), np.degrees(rec.true_q.max(axis=0)).tolist()]
     row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
                                   "fit_seconds": r.seconds} for e, r in fit.rounds]
-    row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
+    observed = fit.observer.seconds if fit.observer is not None else 0.0
+    row["extended"]["fit_seconds_total"] = fit.seconds + observed  # every round of auto, and the observer's check
+    row["extended"]["observer_seconds"] = observed
     row["extended"]["torque_delay"] = fit.delay
     row["extended"]["notes"] = list(fit.notes)
     row["extended"]["observer"] = None if fit.observer is None else fit.observer.to_dict()
