@@ -4,7 +4,8 @@ The identification benchmark fits data from the library's own simulator, whose s
 model's. Here the plant is the finger exported to MuJoCo (:mod:`alpes_dyn.control.plants`: joint stops on,
 RK4 at 0.1 ms, our encoder and torque sensors at 1 kHz), finger3 drawn +-20 % per link
 (:func:`~alpes_dyn.estimation.experiment.perturbed_params`, seeds 11, 12, 13 by default: the identification
-benchmark uses 1-4), with one effect of a real hand at a time, or all of them:
+benchmark uses 1-4; issue 38's fresh draws: ``--seeds 401-420``), with one effect of a real hand at a time, or all
+of them:
 
 ========== ================================================================================================
 case       the plant
@@ -19,6 +20,9 @@ rotor      the rotor inertia J_m on the rigid tendon: J_m S^T S added to the mas
 tilt       the palm tilted by 3 degrees in the finger's plane (gravity rotated; the recording does not say)
 kt         the torque constant 5 % off: the recorded torque is 1.05 times the true one
 offset     the encoder's zero 4 counts off
+slack      the series-elastic cable of ``tendon`` with 0.5 degree of slack (backlash) at the motor shaft: a dead band
+           r_m radians(0.5) on the cable's stretch
+delay      the torque measured one sample (1 ms) late
 all        all of the above at once
 ========== ================================================================================================
 
@@ -44,7 +48,7 @@ MuJoCo's stops.) The verdict is the fit's adequacy check (:mod:`alpes_dyn.estima
 whiteness, cross-correlation with the torque, residual against the sensor floor): "adequate", or "FLAGGED"
 with the reason.
 
-    python benchmarks/realism.py [--seeds 11,12,13] [--cases none,stiction,...] [--rig level|hanging] [--quick]
+    python benchmarks/realism.py [--seeds 11,12,13 | 301-320] [--cases none,stiction,...] [--rig level|hanging] [--quick]
                                  [--json] [--log FILE]
     python benchmarks/realism.py --chains index,middle,ring,little,thumb [--hand-seed 5] [--cases ...]
     python benchmarks/realism.py ... --workers 2      # each case's seeds on a local Dask cluster (the same rows)
@@ -54,6 +58,12 @@ the experiment designed and trimmed in that orientation, the fits and the EKF on
 tilt cases' 3 degrees on top). Palm up, a finger with soft springs folds (its static equilibria snap through
 before it reaches mid-range): held below the fold it rests on its stop, and no fit holds (5 of the 20 draws of
 seeds 30-49). Hanging, none folds.
+
+``--seeds`` takes ranges (``301-320,5``). After the rows, the distribution per case
+(:func:`~alpes_dyn.studies.realism.summarise`): the median and worst of each kind's error up to the common scale,
+of the EKF's worst joint (deg) and of the fit's time (every round and the observer's check); the **silent misses**
+(the fit adequate, but the EKF above 0.5 degree on a joint or the masses more than 5 % off), the **refusals** (the
+fit flagged) each with its verdict, and the runs that raised. ``--no-rigid`` skips the rigid fit (its columns "--").
 
 ``--quick``: one seed (the first) and a 2 s experiment.
 
@@ -78,10 +88,12 @@ import time
 import warnings
 from pathlib import Path
 
+from alpes_dyn.errors import InputError
 from alpes_dyn.model.params import load_params
 from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.studies.realism import (CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
-                                       realism_case, realism_row, rig_design, tendon_stiffness)
+                                       EKF_GOAL_DEG, MASS_GOAL_PCT, parse_seeds, realism_case, realism_row, rig_design,
+                                       summarise, tendon_stiffness)
 from alpes_dyn.studies.sweep import local_client, sweep
 
 
@@ -94,6 +106,7 @@ def main(argv: list[str] | None = None) -> int:
                     help="the hand's orientation during the experiments: level (palm up, the file's gravity; "
                          "default) or hanging (fingers down: no fold of a soft finger's equilibria)")
     ap.add_argument("--json", action="store_true")
+    ap.add_argument("--no-rigid", action="store_true", help="skip the rigid fit (the extended fit and the EKF only)")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
     ap.add_argument("--chains", help="the hand's chains instead of finger3, comma-separated (index, middle, ring, "
                                      "little, thumb)")
@@ -104,9 +117,9 @@ def main(argv: list[str] | None = None) -> int:
                     help="with --chains: the seed of the hand's draw and of the sensors' noise (default 5)")
     args = ap.parse_args(argv)
     try:
-        seeds = [int(s) for s in args.seeds.split(",")]
-    except ValueError:
-        ap.error(f"--seeds: expected comma-separated integers, got {args.seeds!r}")
+        seeds = parse_seeds(args.seeds)
+    except InputError as e:
+        ap.error(f"--{e}")
     plants = [FINGER3]
     if args.chains is not None:
         known = load_params().chain_names
@@ -151,7 +164,12 @@ def main(argv: list[str] | None = None) -> int:
                 for plant in plants:
                     if client is None:
                         for s in seeds:
-                            log([realism_case(c, table[c], s, design, Path(d), plant)])
+                            try:
+                                row = realism_case(c, table[c], s, design, Path(d), plant, rigid=not args.no_rigid)
+                            except Exception as exc:  # a run that raised (the plant diverged, ...): counted apart
+                                row = {"case": c, "seed": s, "chain": plant.label,
+                                       "error": f"{type(exc).__name__}: {exc}"}
+                            log([row])
                     else:  # the seeds of a case and plant as one sweep on the cluster (alpes_dyn.studies.sweep)
                         opts = {"case": c, "rig": args.rig, "chain": None if plant is FINGER3 else plant.label,
                                 "duration": design.duration, "cable": (k_t, c_t)}
@@ -164,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
             cluster.close()
     out = {"model": MODEL if args.chains is None else "hand", "seeds": seeds, "duration_s": design.duration,
            "rig": args.rig,
-           "tendon": info, "case_seconds": case_seconds, "rows": rows}
+           "tendon": info, "case_seconds": case_seconds, "rows": rows, "summary": summarise(rows)}
     if args.chains is not None:
         out["chains"] = [p.label for p in plants]
     print(json.dumps(out) if args.json else table_text(out))
@@ -188,10 +206,15 @@ def table_text(out: dict) -> str:
              f"{'F_s%':>5} {'F_v%':>5} {'resid':>5} {'conv':>5} {'fit s':>5} {'flag':>5} {'eff':>5} | "
              f"{'EKF deg (extended file)':>23} | {'EKF deg (true file)':>19}"]
     for r in out["rows"]:
-        a, b = r["rigid"], r["extended"]
-        wa, wb = a["worst_error_pct"], b["worst_error_common_scale_pct"]
-        lines.append(f"{r['case']:9} {r.get('chain', out['model']):>6} {r['seed']:>4} | {wa['K']:8.2f} {wa['m']:6.1f} {a['residual_counts']:5.2f} "
-                     f"{'yes' if a['flagged'] else 'no':>5} | {wb['K']:6.2f} {wb['m']:5.1f} {wb['F_s']:5.1f} "
+        if "error" in r:
+            lines.append(f"{r['case']:9} {r.get('chain', out['model']):>6} {r['seed']:>4} | RAISED {r['error'][:140]}")
+            continue
+        a, b = r.get("rigid"), r["extended"]
+        wb = b["worst_error_common_scale_pct"]
+        rigid = (f"{'--':>8} {'--':>6} {'--':>5} {'--':>5}" if a is None else
+                 f"{a['worst_error_pct']['K']:8.2f} {a['worst_error_pct']['m']:6.1f} {a['residual_counts']:5.2f} "
+                 f"{'yes' if a['flagged'] else 'no':>5}")
+        lines.append(f"{r['case']:9} {r.get('chain', out['model']):>6} {r['seed']:>4} | {rigid} | {wb['K']:6.2f} {wb['m']:5.1f} {wb['F_s']:5.1f} "
                      f"{wb['F_v']:5.1f} {b['residual_counts']:5.2f} {str(b['converged']):>5} "
                      f"{b['fit_seconds_total']:5.1f} "
                      f"{'yes' if b['flagged'] else 'no':>5} {''.join(e[0] for e in b['effects']):>5} | "
@@ -199,7 +222,32 @@ def table_text(out: dict) -> str:
                      f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19}")
     lines.append("time per case (all seeds and chains; plant + two fits + EKF runs): "
                  + ", ".join(f"{c} {s:.0f} s" for c, s in out["case_seconds"].items()))
+    lines += summary_text(out["summary"])
     return "\n".join(lines)
+
+
+def summary_text(summary: dict) -> list[str]:
+    """The distribution per case (:func:`~alpes_dyn.studies.realism.summarise`): median / worst of the extended fit's
+    errors up to the common scale, of the EKF's worst joint and of the fit's time; the silent misses (adequate, but
+    the EKF above EKF_GOAL_DEG or the masses above MASS_GOAL_PCT) and the refusals with their verdicts."""
+    def mw(st: dict, fmt: str = "5.2f") -> str:
+        return "--" if st["median"] is None else f"{st['median']:{fmt}} / {st['worst']:{fmt}}"
+    lines = [f"distribution per case (median / worst; extended fit, errors up to the common scale; silent miss: "
+             f"adequate but EKF > {EKF_GOAL_DEG:g} deg on a joint or m > {MASS_GOAL_PCT:g} %)",
+             f"{'case':9} {'n':>3} | {'K %':>13} {'m %':>13} {'F_s %':>13} {'F_v %':>13} | {'EKF deg':>13} | "
+             f"{'fit s':>11} | {'adequate':>8} {'silent':>6} {'refused':>7} {'raised':>6}"]
+    for c, s in summary.items():
+        lines.append(f"{c:9} {s['n']:>3} | {mw(s['K_pct'], '5.2f'):>13} {mw(s['m_pct'], '5.2f'):>13} "
+                     f"{mw(s['F_s_pct'], '5.1f'):>13} {mw(s['F_v_pct'], '5.1f'):>13} | {mw(s['ekf_deg']):>13} | "
+                     f"{mw(s['fit_seconds'], '4.1f'):>11} | {s['adequate']:>8} {len(s['silent_misses']):>6} "
+                     f"{len(s['refusals']):>7} {len(s['errors']):>6}")
+        for m in s["silent_misses"]:
+            lines.append(f"    silent miss seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg, m {m['m_pct']:.1f} %")
+        for r in s["refusals"]:
+            lines.append(f"    refused seed {r['seed']}: {r['verdict'][:150]}")
+        for seed, err in s["errors"]:
+            lines.append(f"    raised seed {seed}: {err[:150]}")
+    return lines
 
 
 if __name__ == "__main__":

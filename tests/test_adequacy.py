@@ -206,12 +206,13 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
         code = main(argv)
         capsys.readouterr()
         assert code == 0, argv
-    # --effects auto: the verdict names the rotor, so each of the three identify commands fits with it, then (the
-    # stand-in's residual not lower, the fit kept still flagged) with the stick-slip law: three fits each, the first
-    # kept and reported
+    # --effects auto: the first fit lost its basin, so a staged start (the rigid fit; the stand-in's loses it
+    # too: the first kept); the verdict names the rotor, so each of the three identify commands fits with it,
+    # then (the stand-in's residual not lower, the fit kept still flagged) with the stick-slip law: four fits each,
+    # the first kept and reported
     # each command read its --data once and gave every fit the same Recording (the file's encoder column)
-    assert len(seen) == 9 and all(m == "finger3" and v is None for m, _, v in seen)
-    assert seen[0][1] is seen[1][1] is seen[2][1] and seen[2][1] is not seen[3][1]
+    assert len(seen) == 12 and all(m == "finger3" and v is None for m, _, v in seen)
+    assert seen[0][1] is seen[1][1] is seen[2][1] is seen[3][1] and seen[3][1] is not seen[4][1]
     assert np.array_equal(seen[0][1].encoder, read_recording(rec, Model.alpes("finger3")).encoder)
     # a file rewritten from it keeps the record; a trustworthy fit's file says so
     back = write_params(p, tmp_path / "copy.toml")

@@ -115,6 +115,8 @@ SIGNATURES: dict[str, str] = {
     "acceleration": "rotor inertia (a torque following the motor acceleration; or a wrong inertia)",
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
     "bias": "an encoder offset or a tilted palm (a constant bias of the residual)",
+    "torque_rate": "a torque delay (the recorded torque lagging the motor's: a torque following the torque's own "
+                   "rate; --effects delay)",
 }
 """Regressor name -> the likely missing effect it names."""
 
@@ -366,6 +368,9 @@ class Adequacy:
     signatures: dict[str, dict[str, float]] = field(default_factory=dict)
     validation: Validation | None = None
     notes: list[str] = field(default_factory=list)
+    observer: Any = None
+    """The observer's check of the identified file where it was judged
+    (:class:`~alpes_dyn.estimation.observer_check.ObserverCheck`), else None."""
 
     @property
     def floor_ratio(self) -> float:
@@ -390,7 +395,8 @@ class Adequacy:
                 "signatures": {k: {"share": _finite(v["share"]), "coefficient": _finite(v["coefficient"])}
                                for k, v in self.signatures.items()},
                 "validation": self.validation.to_dict() if self.validation is not None else None,
-                "notes": list(self.notes), "thresholds": dict(THRESHOLDS)}
+                "notes": list(self.notes), "thresholds": dict(THRESHOLDS),
+                "observer": None if self.observer is None else self.observer.to_dict()}
 
 
 def _finite(x: Any) -> Any:
@@ -483,7 +489,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     if reasons:
         ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
         top = ranked[0][0] if ranked else 0.0
-        missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)]
+        missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
+                   and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
+        # acceleration response is close to the torque's rate (a rotor mismatch named both)
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
@@ -545,17 +553,21 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
                step: float, dt: float) -> dict[str, np.ndarray]:
     """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
     fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
-    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon: the signatures of
-    :func:`~alpes_dyn.estimation.adequacy.signatures`); finite differences of batched runs, states only."""
+    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon) and the torque's own forward
+    difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
+    torque delay): the signatures of :func:`~alpes_dyn.estimation.adequacy.signatures`; finite differences of
+    batched runs, states only."""
     n = sens.n
     B, L = Ub.shape[0], Ub.shape[1]
     N1 = x_fit.shape[0]
     vm = x_fit[:, n:] @ S.T  # (N+1, m) motor velocity, rad/s
+    held = Ub.reshape(B * L, -1)[: N1 - 1]  # (N, nu) the torque held over each period, as the fit takes it
+    rate = np.diff(held, axis=0, append=held[-1:])
     sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
-            "acceleration": np.gradient(vm, dt, axis=0)}
+            "acceleration": np.gradient(vm, dt, axis=0), "torque_rate": np.concatenate([rate, rate[-1:]])}
     eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
     pert = []
-    for g in sigs.values():  # a loop over the three effects
+    for g in sigs.values():  # a loop over the four effects
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))

@@ -20,7 +20,19 @@ effect         what the fit does
                ``transmission.J_m`` (the motor's datasheet; held, not fitted: ``--parameters J_m`` fits it)
 ``offset``     the encoder's zero (``encoder_offset_<motor>``); off by default: a few counts are harmless
                (absorbed by the initial states), and beside the tilt it trades with the masses.
+``delay``      (asked for; ``auto`` adds it where a fit's verdict names "torque delay", the residual following
+               the torque's own rate) the recorded torque lagging
+               the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
+               1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.replay.advanced`) while the residual
+               falls, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
+               sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
 ============== ======================================================================================
+
+A first fit that loses its basin (its stop reason "lost basin", not at a joint stop) is made again in stages: the rigid fit, then the effects one by
+one, each from the last; where one breaks it, the last converged stage is kept and :attr:`EffectsFit.notes` names
+the effect. The fit kept is then judged by the observer it feeds
+(:func:`~alpes_dyn.estimation.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
+is not adequate, the reason naming the observer, and ``auto`` tries the effects not yet tried.
 
 Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
 asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
@@ -59,13 +71,15 @@ from ..model.params import HandParams, with_values
 from ..model.robot import Model
 from ..symbolic.parametric import select_parameters, unseen_masses
 
-__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
+__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
-EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset")
-NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia"}
+EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay")
+NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay"}
 """The effects ``auto`` adds where the first fit's adequacy check names them (a word of the likely missing effect)."""
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
+MAX_FIT_DELAY = 3
+"""The longest torque delay (samples) the ``delay`` effect tries: 1, 2, ... while the residual falls."""
 EFFECTS_INTERVAL = 0.05
 """s: the shooting interval of :func:`fit_effects`' fits unless the caller names one (``identify``'s own default is
 100 ms). On MuJoCo's finger3 plants with all the effects at once (seeds 12-14), 100 ms lost the basin of seed 13
@@ -175,6 +189,14 @@ class EffectsFit:
     tried: Any = None
     tried_effects: tuple[str, ...] | None = None
     rounds: tuple[tuple[tuple[str, ...], Any], ...] = ()
+    delay: int = 0
+    """Whole samples by which the kept fit found the recorded torque lagging the motor's (``delay``; 0 without it):
+    of the rig's sensors, kept here, not in the file (the EKF on a recording takes it,
+    :func:`~alpes_dyn.estimation.replay.estimate_recording` ``torque_delay``)."""
+    observer: Any = None
+    """The observer's check of the kept fit (:func:`~alpes_dyn.estimation.observer_check.judge`), or None."""
+    notes: list[str] = dataclasses.field(default_factory=list)
+    """What a staged start did (which effect broke a fit that lost its basin)."""
 
     @classmethod
     def single(cls, result: Any, effects: tuple[str, ...]) -> "EffectsFit":
@@ -183,7 +205,8 @@ class EffectsFit:
 
     @property
     def seconds(self) -> float:
-        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded)."""
+        """The fits' time together, s (each round's ``seconds``; the kept one's alone where no round is recorded);
+        the observer's check apart (``observer.seconds``)."""
         if not self.rounds:
             return float(self.result.seconds)
         return float(sum(r.seconds for _, r in self.rounds))
@@ -206,8 +229,19 @@ def _contracting(result: Any) -> bool:
     return any(value < -3.0 * sd for value, sd in _compliances(result))
 
 
+def _at_stop(result: Any) -> bool:
+    """True when a fit's verdict names a joint stop first (its fitted joints leave their range: MuJoCo's finger3 of
+    seeds 306 and 311, all effects at once, j1 down to -28 and -21 degrees in the plant itself; neither a staged
+    start nor another effect's round converged there, 150 s of rounds)."""
+    from .adequacy import JOINT_STOP
+
+    a = getattr(result, "adequacy", None)
+    return bool(a is not None and a.likely_missing and a.likely_missing[0] == JOINT_STOP)
+
+
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
-                base: str | None = None, has_gravity: bool = False, **kwargs: Any) -> EffectsFit:
+                base: str | None = None, has_gravity: bool = False, observe: bool = True,
+                **kwargs: Any) -> EffectsFit:
     """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
     stick-slip law where ``"stiction"`` is in them, the rotor where ``"rotor"`` is). With ``"auto"`` among the
     effects: the fit without those first; then a fit with what it asks for: the effects its adequacy check names
@@ -220,15 +254,23 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     (a cable shortening under tension: another effect absorbed), a last round without it, kept where it
     converges. Each round starts from the last converged one's values
     (:func:`~alpes_dyn.estimation.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
-    ``kwargs`` (which go to ``identify``) name an ``interval``."""
+    ``kwargs`` (which go to ``identify``) name an ``interval``. With ``delay``: the torque read 1, 2, ... samples
+    earlier while the residual falls (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
+    feeds (:func:`~alpes_dyn.estimation.observer_check.judge`, on the ``validation`` recording where one is given,
+    else the fitted one): where the EKF on its file fails, the fit is not adequate, the reason naming the
+    observer."""
     from .adequacy import AdequacyWarning
     from .identification import identify
+    from .observer_check import judge
+    from .replay import advanced
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")
+    rounds: list[tuple[tuple[str, ...], Any]] = []
+    delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
 
-    def run(effs: tuple[str, ...], warm: Any = None):
-        model = model_of(effs)
+    def one(effs: tuple[str, ...], warm: Any, delay: int):
+        model = model_of(tuple(e for e in effs if e != "delay"))
         selection = effect_parameters(model, effs, has_gravity, base)
         kw = dict(kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
@@ -239,42 +281,111 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
             kw["start"] = warm
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
-            return identify(model, recording, selection, **kw)
-
-    best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
-    rounds = [(chosen, best)]
-    attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
-    while auto:
-        more = tuple(e for e in named_effects(best) if e not in attempted)
-        if "rotor" not in attempted and "rotor" not in more and _elastic(best):
-            more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
-        if not more and not best.trustworthy:
-            # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
-            # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
-            # two seeds of three); only then, as added to a fit it does not explain it made the rotor's round
-            # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
-            # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
-            # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither)
-            more = next(((e,) for e in ("stiction", "rotor") if e not in attempted), ())
-        if not more:
-            break
-        attempted.update(more)
-        effs = best_effects + more
-        res = run(effs, best)
+            res = identify(model, advanced(recording, delay), selection, **kw)
         rounds.append((effs, res))
-        if res.residual_rms >= best.residual_rms:
-            tried, tried_effects = res, effs
-            if best.trustworthy:
+        delays[id(res)] = delay
+        return res
+
+    def run(effs: tuple[str, ...], warm: Any = None):
+        """One fit with ``effs``; with ``delay`` among them, the torque read 1, 2, ... samples earlier (each from
+        the last, warm) while the residual falls, up to :data:`MAX_FIT_DELAY`: the lowest kept."""
+        if "delay" not in effs:
+            return one(effs, warm, 0)
+        if warm is not None and "delay" in _effects_of(warm):
+            return one(effs, warm, delays[id(warm)])  # found by an earlier round
+        res = one(effs, warm, 1)
+        if warm is not None and res.residual_rms >= warm.residual_rms:
+            return res  # a sample's delay does not help: none longer is tried
+        for d in range(2, MAX_FIT_DELAY + 1):
+            nxt = one(effs, res, d)
+            if not (nxt.converged and nxt.residual_rms < res.residual_rms):
                 break
-            continue  # still flagged: the next effect not yet tried, on the fit kept
-        tried, tried_effects = best, best_effects
-        best, best_effects = res, effs
+            res = nxt
+        return res
+
+    def _effects_of(res: Any) -> tuple[str, ...]:
+        return next((e for e, r in rounds if r is res), ())
+
+    def staged(target: tuple[str, ...], failed: Any) -> tuple[Any, tuple[str, ...]]:
+        """A first fit that lost its basin, made again in stages: the rigid fit from the start, then the effects of
+        ``target`` one by one, each round from the last (its values and trajectory); where a stage does not
+        converge, the last converged one is kept and the note names the effect that broke it."""
+        prev, stage = run(()), ()
+        if not prev.converged:
+            notes.append(f"staged start: the rigid fit itself did not converge ({prev.reason})")
+            return failed, target
+        for e in target:
+            nxt = run(stage + (e,), prev)
+            if not nxt.converged:
+                notes.append(f"staged start: adding {e} to the converged {'+'.join(stage) or 'rigid'} fit broke it "
+                             f"({nxt.reason}); kept without it")
+                attempted.add(e)
+                return prev, stage
+            prev, stage = nxt, stage + (e,)
+        return prev, stage
+
+    def extend(best: Any, best_effects: tuple[str, ...], tried: Any, tried_effects: Any, fallback: tuple[str, ...]):
+        """auto's rounds from the kept fit: what it asks for, or while flagged the effects of ``fallback``."""
+        while not (not best.converged and _at_stop(best)):  # a joint stop: no effect of the model's brings it back
+            more = tuple(e for e in named_effects(best) if e not in attempted)
+            if "rotor" not in attempted and "rotor" not in more and _elastic(best):
+                more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
+            if not more and not best.trustworthy:
+                # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
+                # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
+                # two seeds of three); only then, as added to a fit it does not explain it made the rotor's round
+                # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
+                # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
+                # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither)
+                more = next(((e,) for e in fallback if e not in attempted), ())
+            if not more:
+                break
+            attempted.update(more)
+            effs = best_effects + more
+            res = run(effs, best)
+            if res.residual_rms >= best.residual_rms:
+                tried, tried_effects = res, effs
+                if best.trustworthy:
+                    break
+                continue  # still flagged: the next effect not yet tried, on the fit kept
+            tried, tried_effects = best, best_effects
+            best, best_effects = res, effs
+        return best, best_effects, tried, tried_effects
+
+    notes: list[str] = []
+    attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
+    best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
+    if (not best.converged and "lost basin" in str(getattr(best, "reason", "")) and not _at_stop(best)
+            and any(e != "stiction" and e != "rotor" for e in chosen)):
+        # a lost basin from the start (MuJoCo's all-effects finger3 of seed 306: 45.8 counts, j1 at -52 deg)
+        first = best
+        best, best_effects = staged(chosen, first)
+        if best is not first:
+            tried, tried_effects = first, chosen
+    fallback = ("stiction", "rotor")  # the delay where the verdict names it (the residual following the torque's rate)
+    if auto:
+        best, best_effects, tried, tried_effects = extend(best, best_effects, tried, tried_effects, fallback)
     if auto and "compliance" in best_effects and _contracting(best):
         # a cable does not shorten under tension: the compliance absorbed another effect (MuJoCo's stick-slip
         # plant of seed 31, a rigid tendon: -0.42 +- 0.10 with the masses 5.2 % off; held at 0, within 2.6 %)
         effs = tuple(e for e in best_effects if e != "compliance")
         res = run(effs, best)
-        rounds.append((effs, res))
         if res.converged:
             tried, tried_effects, best, best_effects = best, best_effects, res, effs
-    return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds))
+    check = None
+    if observe:
+        val = kwargs.get("validation")
+        on = val if isinstance(val, type(recording)) else recording
+        watched = fallback + ("delay",)
+        check = judge(best, on, delays[id(best)])
+        while auto and check is not None and not check.passed and any(e not in attempted for e in watched):
+            # the EKF on the kept file fails where the fit's own verdict passed: the effects not yet tried, from it,
+            # the torque delay among them (MuJoCo's all-effects finger3, seeds 405-409: the fit adequate without
+            # it, its EKF predicting the encoder 20 ms ahead within 28-43 times the floor; 9-13 with it); each new
+            # fit kept judged again
+            again = extend(best, best_effects, tried, tried_effects, watched)
+            if again[0] is best:
+                break
+            best, best_effects, tried, tried_effects = again
+            check = judge(best, on, delays[id(best)])
+    return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds), delays[id(best)], check, notes)

@@ -25,6 +25,7 @@ model -- typically the one identified from another recording (``alpes-dyn identi
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -46,7 +47,24 @@ from .observers import OBSERVERS, Estimate, make_observer
 from .recording import Recording, read_recording
 from .scenario import held_mid_range, rest_with_held_joints
 
-__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "DISTURBANCE_WALK"]
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
+
+MAX_DELAY = 100
+"""The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
+
+
+def advanced(recording: Recording, samples: int) -> Recording:
+    """``recording`` with its torque read ``samples`` whole samples earlier: row k of the torque is row k + samples
+    of the recorded one, the last ``samples`` rows repeat the last (the applied torque of a sensor that lags by
+    ``samples``: :class:`~alpes_dyn.control.plants.PlantEffects` ``torque_delay``). The recording itself for 0."""
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 0 <= samples <= MAX_DELAY:
+        raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_DELAY}, got {samples!r}")
+    if samples == 0:
+        return recording
+    if samples >= recording.n_samples:
+        raise InputError(f"torque_delay: {samples} samples, the recording has {recording.n_samples}")
+    tau = np.concatenate([recording.torque[samples:], np.repeat(recording.torque[-1:], samples, axis=0)])
+    return dataclasses.replace(recording, torque=tau)
 
 DISTURBANCE_WALK = 2e-4
 """Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
@@ -64,6 +82,8 @@ class RecordingEstimate:
     joint_names (n,), motor_names (m,). rmse: (n,) rad after the transient, or None (no ``true_q_*``).
     final_error: (n,) rad at the last sample, or None. disturbance: (N, m) N m, or None.
     settings: the noise levels and options used.
+    filter: the observer run (its ``model.step`` the prediction, :mod:`~alpes_dyn.estimation.observer_check`).
+    measurement: (N, m) rad, the encoder as the observer read it (the zero and the tendons' stretch taken off).
     """
 
     t: np.ndarray
@@ -74,6 +94,8 @@ class RecordingEstimate:
     final_error: np.ndarray | None
     disturbance: np.ndarray | None
     settings: dict[str, Any]
+    filter: Any = None
+    measurement: np.ndarray | None = None
 
     @property
     def q_hat(self) -> np.ndarray:
@@ -212,7 +234,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None) -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int = 0) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -234,12 +256,15 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
         tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
         taken off it.
+    torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
+        :func:`~alpes_dyn.estimation.effects.fit_effects` with ``delay``): the observer reads the torque of
+        :func:`advanced` (a replay: the later samples are recorded). Default 0.
 
     Returns
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
-    rec = _replay_recording(recording, model, observer)
+    rec = advanced(_replay_recording(recording, model, observer), torque_delay)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
     for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
@@ -268,10 +293,11 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                 "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
                 "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
                 "encoder_offset_rad": offsets.tolist(), "tilt_rad": angles,
-                "tendon_compliance": tr.tendon_compliance.tolist()}
+                "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay)}
     return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
                              motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
-                             disturbance=dist, settings=settings)
+                             disturbance=dist, settings=settings, filter=filt,
+                             measurement=_reading(rec, tr, offsets))
 
 
 def _replay_recording(recording: Recording | str | Path, model: Model, observer: str) -> Recording:
@@ -313,6 +339,15 @@ def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
     offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
         _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
     return m_obs, angles, offsets
+
+
+def _reading(rec: Recording, tr: Any, offsets: np.ndarray) -> np.ndarray:
+    """(N, m) rad: the recorded encoder as the observer reads it, the zero ``offsets`` and the tendons' stretch
+    C tau_m,k-1 taken off (what :func:`_played_back`'s ``unstretched`` block gives it)."""
+    from ..model.transmission import torque_before
+
+    step = 2 * np.pi / tr.counts_per_rev
+    return tr.unstretched(rec.encoder * step - offsets, torque_before(rec.torque))
 
 
 def _played_back(rec: Recording, filt: Any, z0: np.ndarray, P0: np.ndarray, tr: Any, offsets: np.ndarray

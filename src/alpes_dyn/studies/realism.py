@@ -3,12 +3,14 @@
 A plant we did not write -- the finger (or a chain of the hand) exported to MuJoCo
 (:mod:`alpes_dyn.control.plants`), drawn +-20 % per link, with one effect of a real hand or all of them
 (:func:`cases`: stick-slip, a series-elastic cable with its rotor, the rotor on the rigid tendon, the palm
-tilted, the torque constant and the encoder's zero off) -- records the identification experiment; two fits of
+tilted, the torque constant and the encoder's zero off, the cable's slack at the motor shaft, the torque read a
+sample late) -- records the identification experiment; two fits of
 it (the rigid smooth-friction model and ``alpes-dyn identify``'s default ``--effects auto``), and the EKF on the
 extended fit's file and on the true file, on a fresh run of the plant: :func:`realism_case` gives one such row.
 ``benchmarks/realism.py`` prints them as a table; the gallery's "The hand on MuJoCo" runs the hand's five
 chains. :func:`realism_row` is the same row as a function of the seed, for :func:`~alpes_dyn.studies.sweep.sweep`
-(``benchmarks/realism.py --workers 2`` runs each case's seeds so), and :func:`realism_draw` flattens it to numbers.
+(``benchmarks/realism.py --workers 2`` runs each case's seeds so), and :func:`realism_draw` flattens it to numbers;
+:func:`summarise` gives a case's distribution over seeds (median, worst, silent misses, refusals).
 """
 
 from __future__ import annotations
@@ -36,7 +38,8 @@ from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 
 __all__ = ["CASE_NAMES", "RIGS", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
-           "realism_case", "realism_row", "realism_draw", "rig_design", "errors"]
+           "realism_case", "realism_row", "realism_draw", "rig_design", "errors", "parse_seeds", "summarise",
+           "EKF_GOAL_DEG", "MASS_GOAL_PCT"]
 
 KINDS = ("K", "m", "F_s", "F_v")
 """The kinds of parameter whose worst errors a row gives."""
@@ -52,6 +55,10 @@ KT_ERROR = 0.05
 """The torque constant's relative error: the recorded torque is 1.05 times the true one."""
 OFFSET_COUNTS = 4.0
 """counts: the encoder's zero error."""
+SLACK_DEG = 0.5
+"""deg: the cable's slack (backlash) at the motor shaft, a dead band r_m radians(SLACK_DEG) on the tendon's stretch."""
+DELAY_SAMPLES = 1
+"""The torque measured this many samples (1 ms) late."""
 FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)
 """Hz: the lines of the EKF's validation run (:func:`fresh_run`), none of the experiment's."""
 FIT_EFFECTS = "auto"
@@ -61,7 +68,7 @@ FIT_EFFECTS = "auto"
 RIGS = {"level": 0.0, "hanging": HANGING_TILT}
 """The rig's orientation (rad about the joints' axes from the file's palm-up gravity, :func:`tilted_gravity`)."""
 
-CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "all")
+CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "slack", "delay", "all")
 
 
 def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
@@ -84,7 +91,9 @@ def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
 
 def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffects]:
     """Each case's plant effects; ``rig_tilt`` (rad): the rig's orientation (:func:`tilted_gravity`), under every
-    plant (the tilt cases' error on top of it)."""
+    plant (the tilt cases' error on top of it). ``slack``: the elastic tendon with :data:`SLACK_DEG` of backlash at
+    the motor shaft; ``delay``: the torque :data:`DELAY_SAMPLES` late; ``all``: every effect, these two included."""
+    slack = load_params().r_m * math.radians(SLACK_DEG)  # m of cable
     one = {
         "none": PlantEffects(),
         "stiction": PlantEffects(stiction=STICTION_TIMECONST),
@@ -93,11 +102,13 @@ def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffec
         "tilt": PlantEffects(tilt=math.radians(TILT_DEG)),
         "kt": PlantEffects(torque_constant_error=KT_ERROR),
         "offset": PlantEffects(encoder_offset=OFFSET_COUNTS),
+        "slack": PlantEffects(tendon_stiffness=k_t, tendon_damping=c_t, tendon_dead_band=slack),
+        "delay": PlantEffects(torque_delay=DELAY_SAMPLES),
     }
     # all: every effect; the elastic tendon carries the rotor (tendon_rotor is its rigid limit)
     one["all"] = PlantEffects(stiction=STICTION_TIMECONST, tendon_stiffness=k_t, tendon_damping=c_t,
                               tilt=math.radians(TILT_DEG), torque_constant_error=KT_ERROR,
-                              encoder_offset=OFFSET_COUNTS)
+                              encoder_offset=OFFSET_COUNTS, tendon_dead_band=slack, torque_delay=DELAY_SAMPLES)
     if rig_tilt:
         one = {c: dataclasses.replace(e, tilt=rig_tilt + e.tilt) for c, e in one.items()}
     return one
@@ -110,7 +121,9 @@ def verdict(res) -> str:
         return "adequate"
     why = [] if res.converged else [f"not converged ({res.reason})"]
     if res.adequacy is not None and not res.adequacy.adequate:
-        why.append("inadequate")
+        obs = [r for r in res.adequacy.reasons if r.startswith("the EKF")]
+        why.append("inadequate" + (" (the observer: " + obs[0][len("the EKF on the identified file "):] + ")"
+                                   if obs else ""))
         if res.adequacy.likely_missing:
             why.append("likely " + ", ".join(res.adequacy.likely_missing[:2]))
     return "FLAGGED: " + "; ".join(why)
@@ -153,15 +166,17 @@ def hand_plant(chain: str) -> Plant:
 
 
 def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
-             plant: Plant = FINGER3, rig: np.ndarray | None = None) -> np.ndarray:
+             plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0) -> np.ndarray:
     """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
     torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
-    the gravity of the rig's orientation, if not the file's, the tilt on top of it)."""
+    the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
+    fitted)."""
     obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path), rig)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
-    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient)
+    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
+                             torque_delay=torque_delay)
     return est.rmse
 
 
@@ -263,7 +278,8 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     t1 = time.perf_counter()
     fresh = fresh_run(true, effects, seed, design, plant)
     fitted = dict(zip(res.names, res.values))
-    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig)
+    rmse = ekf_rmse(fresh, str(ident), fitted, rotor="rotor" in fit.effects, plant=plant, rig=rig,
+                    torque_delay=fit.delay)
     true_path = write_params(true, tmp / f"true_{plant.label}_{seed}.toml")
     rmse_true = ekf_rmse(fresh, str(true_path), {}, plant=plant, rig=rig)
     ekf_s = time.perf_counter() - t1
@@ -271,7 +287,12 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     row["joint_range_deg"] = [np.degrees(rec.true_q.min(axis=0)).tolist(), np.degrees(rec.true_q.max(axis=0)).tolist()]
     row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
                                   "fit_seconds": r.seconds} for e, r in fit.rounds]
-    row["extended"]["fit_seconds_total"] = fit.seconds  # every round of auto
+    observed = fit.observer.seconds if fit.observer is not None else 0.0
+    row["extended"]["fit_seconds_total"] = fit.seconds + observed  # every round of auto, and the observer's check
+    row["extended"]["observer_seconds"] = observed
+    row["extended"]["torque_delay"] = fit.delay
+    row["extended"]["notes"] = list(fit.notes)
+    row["extended"]["observer"] = None if fit.observer is None else fit.observer.to_dict()
     row["extended"]["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_counts": fit.tried.residual_rms, "flagged": not fit.tried.trustworthy,
         "fit_seconds": fit.tried.seconds}
@@ -314,4 +335,61 @@ def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | 
                 "flagged": int(b["flagged"]), "fit_seconds": b["fit_seconds_total"],
                 "effects": "+".join(b["effects"]) or "none", "ekf_deg": row["ekf_rmse_deg"],
                 "ekf_true_file_deg": row["ekf_true_file_rmse_deg"]})
+    return out
+
+
+EKF_GOAL_DEG = 0.5
+"""deg: the EKF's RMSE on every joint that an adequate file must give (issue 38)."""
+MASS_GOAL_PCT = 5.0
+"""%: the masses' worst error, up to the common scale, that an adequate file must keep."""
+
+
+def parse_seeds(text: str) -> list[int]:
+    """The seeds of ``text``: comma-separated non-negative integers or ranges ``a-b`` (both ends in), e.g.
+    ``"301-320,5"``; :class:`~alpes_dyn.InputError` naming ``seeds`` on anything else or a seed named twice."""
+    seeds: list[int] = []
+    for item in str(text).split(","):
+        a, sep, b = item.strip().partition("-")
+        try:
+            lo, hi = int(a), int(b) if sep else int(a)
+        except ValueError:
+            raise InputError(f"seeds: expected non-negative integers or ranges a-b, comma-separated, got {text!r}") from None
+        if lo < 0 or hi < lo:
+            raise InputError(f"seeds: expected a range a-b with 0 <= a <= b, got {item.strip()!r}")
+        seeds.extend(range(lo, hi + 1))
+    if len(set(seeds)) != len(seeds):
+        raise InputError(f"seeds: a seed is named twice in {text!r}")
+    return seeds
+
+
+def _stats(values: list[float]) -> dict[str, float | None]:
+    return ({"median": float(np.median(values)), "worst": float(np.max(values))} if values
+            else {"median": None, "worst": None})
+
+
+def summarise(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG,
+              mass_goal: float = MASS_GOAL_PCT) -> dict[str, dict[str, Any]]:
+    """Per case, the distribution of :func:`realism_case`'s rows (rows with ``error``: a run that raised, counted
+    apart): ``n``, the median and worst of each kind's error up to the common scale (%), of the EKF's RMSE on the
+    extended file (deg, the worst joint of each row) and of the fit's time (s, every round); ``adequate``;
+    ``silent_misses``: the adequate rows whose EKF is above ``ekf_goal`` deg on a joint or whose masses are more
+    than ``mass_goal`` % off (each as seed, EKF, m); ``refusals``: the flagged rows (each as seed and verdict);
+    ``errors``: (seed, message)."""
+    out: dict[str, dict[str, Any]] = {}
+    for case in dict.fromkeys(r["case"] for r in rows):
+        mine = [r for r in rows if r["case"] == case]
+        ok = [r for r in mine if "error" not in r]
+        ext = [r["extended"] for r in ok]
+        ekf = [max(r["ekf_rmse_deg"]) for r in ok]
+        s: dict[str, Any] = {"n": len(mine), "errors": [(r["seed"], r["error"]) for r in mine if "error" in r]}
+        for kind in KINDS:
+            s[f"{kind}_pct"] = _stats([e["worst_error_common_scale_pct"][kind] for e in ext])
+        s["ekf_deg"] = _stats(ekf)
+        s["fit_seconds"] = _stats([e["fit_seconds_total"] for e in ext])
+        s["adequate"] = sum(not e["flagged"] for e in ext)
+        s["silent_misses"] = [{"seed": r["seed"], "ekf_deg": d, "m_pct": e["worst_error_common_scale_pct"]["m"]}
+                              for r, e, d in zip(ok, ext, ekf)
+                              if not e["flagged"] and (d > ekf_goal or e["worst_error_common_scale_pct"]["m"] > mass_goal)]
+        s["refusals"] = [{"seed": r["seed"], "verdict": e["verdict"]} for r, e in zip(ok, ext) if e["flagged"]]
+        out[case] = s
     return out
