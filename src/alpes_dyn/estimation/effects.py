@@ -258,7 +258,11 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     earlier while the residual falls (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
     feeds (:func:`~alpes_dyn.estimation.observer_check.judge`, on the ``validation`` recording where one is given,
     else the fitted one): where the EKF on its file fails, the fit is not adequate, the reason naming the
-    observer."""
+    observer.
+
+    Long because its stages (the delay search, the staged start, auto's rounds, the observer's judgement) share the
+    rounds made, each fit's delay, the effects attempted and the notes through closures; the next step is a class
+    holding that state, one method per stage (issue 36's split of estimation/)."""
     from .adequacy import AdequacyWarning
     from .identification import identify
     from .observer_check import judge
