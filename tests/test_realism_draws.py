@@ -160,3 +160,22 @@ def test_fit_effects_finds_the_torque_delay(monkeypatch):
     assert seen[1][1][-1, 0] == tau[-1, 0]
     assert seen[1][2] is not None and seen[2][2] is fit.result  # each round from the last
     assert fit.observer is None  # a stand-in has no file to run the EKF on
+
+
+def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
+    """The observer's check never refuses the truth: on our simulator's recording of finger2 seed 3 (the fitted
+    model's exact structure) the true file's EKF predicts the encoder 20 ms ahead within the threshold (measured
+    16.0 times the floor, which the first threshold, 15, refused), the nominal file's far beyond it (310 times)."""
+    import alpes_dyn as ad
+    from alpes_dyn.estimation.adapt import adapted_experiment
+    from alpes_dyn.estimation.draws import perturbed_params
+    from alpes_dyn.estimation.observer_check import OBSERVER_THRESHOLDS, observer_statistics
+
+    true = perturbed_params(spread=0.2, seed=3)
+    rec, _ = adapted_experiment("finger2", true, seed=3)
+    good = observer_statistics(rec, ad.Model.alpes("finger2", friction=True, params=true))
+    bad = observer_statistics(rec, ad.Model.alpes("finger2", friction=True))
+    ratio = OBSERVER_THRESHOLDS["prediction_ratio"]
+    assert good.passed and 12 * good.floor < good.prediction_rms < 0.8 * ratio * good.floor
+    assert not bad.passed and bad.prediction_rms > 10 * ratio * bad.floor
+
