@@ -466,30 +466,32 @@ def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None, torq
                     step=step_caller(ekf.filter_step_p, f"ekf_force_{sc.model_name}", sc.compiled, ekf.model.values))
 
 
-def _effect_signals(sc: ControlScenario, model: Model, params: HandParams | None) -> dict[str, Any]:
+def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: str = "") -> dict[str, Any]:
     """The signal names and blocks of the plant's effects and of their compensation (:mod:`.realism_loop`): the
     applied torque's signal, the encoder's offset (counts), the torque reading's signal and gain, the observer's
-    torque input and measurement, extra blocks, extra :class:`.ForceController` settings."""
+    torque input and measurement, extra blocks, extra :class:`.ForceController` settings. ``suffix``: appended to
+    every signal and block name (a chain's of the hand, ``"_index"``: :func:`~.hand_loop.run_hand_control`)."""
     e = sc.effects
-    out: dict[str, Any] = {"applied": "tau", "offset": 0.0, "reading": "tau_meas", "gain": 1.0, "torque": "tau_meas",
-                           "measurement": "y", "blocks": [], "controller": {}}
+    sig = {k: k + suffix for k in ("tau", "tau_motor", "tau_meas", "tau_meas_raw", "tau_prev", "y", "y_obs")}
+    out: dict[str, Any] = {"applied": sig["tau"], "offset": 0.0, "reading": sig["tau_meas"], "gain": 1.0,
+                           "torque": sig["tau_meas"], "measurement": sig["y"], "blocks": [], "controller": {}}
     if e is None:
         return out
     comp = Compensation() if sc.compensation is None else sc.compensation
-    out.update(applied="tau_motor", offset=float(e.encoder_offset), gain=1.0 + float(e.torque_constant_error))
-    blocks = torque_constant_blocks(e, "tau", "tau_motor")
+    out.update(applied=sig["tau_motor"], offset=float(e.encoder_offset), gain=1.0 + float(e.torque_constant_error))
+    blocks = torque_constant_blocks(e, sig["tau"], sig["tau_motor"], name="motor" + suffix)
     if e.torque_delay:
-        out["reading"] = "tau_meas_raw"
-        blocks.append(SampleLag("tau_meas_raw", "tau_meas", e.torque_delay, name="torque_delay"))
+        out["reading"] = sig["tau_meas_raw"]
+        blocks.append(SampleLag(sig["tau_meas_raw"], sig["tau_meas"], e.torque_delay, name="torque_delay" + suffix))
     if comp.command_input:  # the command held over the period before: what the reading shows, without its lag
-        out["torque"] = "tau_prev"
-        blocks.append(Delay("tau", "tau_prev", 0.0, name="command_held"))
+        out["torque"] = sig["tau_prev"]
+        blocks.append(Delay(sig["tau"], sig["tau_prev"], 0.0, name="command_held" + suffix))
     C = float(model.transmission.tendon_compliance[0])  # >= 0: a parameter file refuses a negative one
     if comp.observer_compliance:
-        off = float(comp.encoder_offset)
-        torque = out["torque"]
-        out["measurement"] = "y_obs"
-        blocks.append(Function(lambda **u: u["y"] - off - C * u[torque], ("y", torque), "y_obs", name="unstretched"))
+        off, torque, y = float(comp.encoder_offset), out["torque"], sig["y"]
+        out["measurement"] = sig["y_obs"]
+        blocks.append(Function(lambda **u: u[y] - off - C * u[torque], (y, torque), sig["y_obs"],
+                               name="unstretched" + suffix))
     f_c = comp.cable_mode_hz(model, params)
     if f_c is not None and f_c < 0.45 / sc.dt:  # a notch below the Nyquist frequency
         out["controller"].update(notch_hz=f_c, notch_zeta=comp.notch_zeta)

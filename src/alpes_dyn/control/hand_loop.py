@@ -35,9 +35,9 @@ from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .blocks import EncoderPD, ForceLoop, SensorlessForce, force_input
 from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal
-from .finger_loop import _SAMPLE_ARRAYS, ControlResult, ControlScenario, _check_effects, _metrics, _plant_and_params
-from .realism_loop import (Compensation, SampleLag, effects_mjcf_kwargs, plant_gravity, rotor_rest,
-                           torque_constant_blocks)
+from .finger_loop import (_SAMPLE_ARRAYS, ControlResult, ControlScenario, _check_effects, _effect_signals, _metrics,
+                          _plant_and_params)
+from .realism_loop import Compensation, effects_mjcf_kwargs, plant_gravity, rotor_rest
 
 
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
@@ -284,31 +284,9 @@ def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandContr
 
 
 def _chain_effects(ch: dict[str, Any], sc: HandControlScenario, p: HandParams) -> dict[str, Any]:
-    """One chain's signals and blocks of the plant's effects and their compensation (as the finger's
-    :func:`~alpes_dyn.control.finger_loop._effect_signals`, the names suffixed with the chain's)."""
-    from .finger_loop import _effect_signals
-
-    c = ch["name"]
-    fx = _effect_signals(sc, ch["model"], p)
-    ren = {"tau": f"tau_{c}", "tau_motor": f"tau_motor_{c}", "tau_meas": f"tau_meas_{c}", "y": f"y_{c}",
-           "tau_meas_raw": f"tau_meas_raw_{c}", "tau_prev": f"tau_prev_{c}", "y_obs": f"y_obs_{c}"}
-    out = {k: ren.get(v, v) if isinstance(v, str) else v for k, v in fx.items() if k != "blocks"}
-    e = sc.effects
-    blocks: list = []
-    if e is not None:
-        comp = Compensation() if sc.compensation is None else sc.compensation
-        blocks += torque_constant_blocks(e, ren["tau"], ren["tau_motor"], name=f"motor_{c}")
-        if e.torque_delay:
-            blocks.append(SampleLag(ren["tau_meas_raw"], ren["tau_meas"], e.torque_delay, name=f"torque_delay_{c}"))
-        if comp.command_input:
-            blocks.append(Delay(ren["tau"], ren["tau_prev"], 0.0, name=f"command_held_{c}"))
-        if comp.observer_compliance:
-            C, off, torque, y = float(ch["model"].transmission.tendon_compliance[0]), float(comp.encoder_offset), \
-                out["torque"], ren["y"]
-            blocks.append(Function(lambda **u: u[y] - off - C * u[torque], (y, torque), ren["y_obs"],
-                                   name=f"unstretched_{c}"))
-    out["blocks"] = blocks
-    return out
+    """One chain's signals and blocks of the plant's effects and their compensation: the finger's
+    (:func:`~alpes_dyn.control.finger_loop._effect_signals`), every name suffixed with the chain's."""
+    return _effect_signals(sc, ch["model"], p, suffix=f"_{ch['name']}")
 
 
 def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gains: dict) -> list:
