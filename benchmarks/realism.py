@@ -105,6 +105,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rig", choices=tuple(RIGS), default="level",
                     help="the hand's orientation during the experiments: level (palm up, the file's gravity; "
                          "default) or hanging (fingers down: no fold of a soft finger's equilibria)")
+    ap.add_argument("--adapt", choices=("auto", "none"), default="auto",
+                    help="auto (default): the experiment adapted on the plant as alpes-dyn experiment adapts it (hung "
+                         "fingers down where palm up the finger leaves its range, then smaller amplitudes); none: the "
+                         "design as given")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--no-rigid", action="store_true", help="skip the rigid fit (the extended fit and the EKF only)")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
@@ -165,14 +169,15 @@ def main(argv: list[str] | None = None) -> int:
                     if client is None:
                         for s in seeds:
                             try:
-                                row = realism_case(c, table[c], s, design, Path(d), plant, rigid=not args.no_rigid)
+                                row = realism_case(c, table[c], s, design, Path(d), plant, rigid=not args.no_rigid,
+                                                   adapt=args.adapt)
                             except Exception as exc:  # a run that raised (the plant diverged, ...): counted apart
                                 row = {"case": c, "seed": s, "chain": plant.label,
                                        "error": f"{type(exc).__name__}: {exc}"}
                             log([row])
                     else:  # the seeds of a case and plant as one sweep on the cluster (alpes_dyn.studies.sweep)
                         opts = {"case": c, "rig": args.rig, "chain": None if plant is FINGER3 else plant.label,
-                                "duration": design.duration, "cable": (k_t, c_t)}
+                                "duration": design.duration, "cable": (k_t, c_t), "adapt": args.adapt}
                         log(sweep(realism_row, seeds=seeds, options=opts, client=client, flat=False).rows)
                 case_seconds[c] = time.perf_counter() - t0
     finally:
@@ -181,7 +186,7 @@ def main(argv: list[str] | None = None) -> int:
             client.close()
             cluster.close()
     out = {"model": MODEL if args.chains is None else "hand", "seeds": seeds, "duration_s": design.duration,
-           "rig": args.rig,
+           "rig": args.rig, "adapt": args.adapt,
            "tendon": info, "case_seconds": case_seconds, "rows": rows, "summary": summarise(rows)}
     if args.chains is not None:
         out["chains"] = [p.label for p in plants]
@@ -204,7 +209,7 @@ def table_text(out: dict) -> str:
              f"--effects {FIT_EFFECTS} (effects kept: c compliance, t tilt, s stiction, r rotor)",
              f"{'case':9} {'chain':>6} {'seed':>4} | {'rigid K%':>8} {'m%':>6} {'resid':>5} {'flag':>5} | {'ext K%':>6} {'m%':>5} "
              f"{'F_s%':>5} {'F_v%':>5} {'resid':>5} {'conv':>5} {'fit s':>5} {'flag':>5} {'eff':>5} | "
-             f"{'EKF deg (extended file)':>23} | {'EKF deg (true file)':>19}"]
+             f"{'EKF deg (extended file)':>23} | {'EKF deg (true file)':>19} | rig"]
     for r in out["rows"]:
         if "error" in r:
             lines.append(f"{r['case']:9} {r.get('chain', out['model']):>6} {r['seed']:>4} | RAISED {r['error'][:140]}")
@@ -219,11 +224,19 @@ def table_text(out: dict) -> str:
                      f"{b['fit_seconds_total']:5.1f} "
                      f"{'yes' if b['flagged'] else 'no':>5} {''.join(e[0] for e in b['effects']):>5} | "
                      f"{' / '.join(f'{x:.2f}' for x in r['ekf_rmse_deg']):>23} | "
-                     f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19}")
+                     f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19} | {_rig(r)}")
     lines.append("time per case (all seeds and chains; plant + two fits + EKF runs): "
                  + ", ".join(f"{c} {s:.0f} s" for c, s in out["case_seconds"].items()))
     lines += summary_text(out["summary"])
     return "\n".join(lines)
+
+
+def _rig(row: dict) -> str:
+    """The rig the experiment ran on and its amplitude scale (``h 0.7``: hung, scaled), ``!`` where it adapted."""
+    a = row.get("adaptation")
+    if a is None:
+        return "--"
+    return f"{a['rig'][0]}{'' if a['amplitude_scale'] == 1.0 else ' %g' % a['amplitude_scale']}{'!' if a['note'] else ''}"
 
 
 def summary_text(summary: dict) -> list[str]:

@@ -26,7 +26,7 @@ import math
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Any, Callable, Sequence
 
 import numpy as np
 
@@ -38,7 +38,8 @@ from ..model.stops import JointRangeWarning
 from .design import ExperimentDesign
 from .recording import Recording, write_recording
 
-__all__ = ["RANGE_MARGIN", "AMPLITUDE_SCALES", "RIGS", "Adaptation", "range_excess", "adapted_experiment"]
+__all__ = ["RANGE_MARGIN", "AMPLITUDE_SCALES", "RIGS", "Adaptation", "range_excess", "candidate_designs",
+           "first_in_range", "adaptation_of", "adapted_experiment"]
 
 RANGE_MARGIN = math.radians(1.0)
 """rad: how far inside its range every joint must stay over the whole record (a fit's range check is exact)."""
@@ -95,9 +96,11 @@ def _scaled(design: ExperimentDesign, scale: float) -> ExperimentDesign:
                                dither=design.dither * scale, torque_amplitude=amp)
 
 
-def _candidates(design: ExperimentDesign, rig: str, gravity: np.ndarray,
-                scales: Sequence[float] = AMPLITUDE_SCALES) -> list[tuple[str, float, ExperimentDesign]]:
-    """The designs to try, in order: (rig, amplitude scale, design)."""
+def candidate_designs(design: ExperimentDesign, rig: str, gravity: np.ndarray,
+                      scales: Sequence[float] = AMPLITUDE_SCALES) -> list[tuple[str, float, ExperimentDesign]]:
+    """The designs to try, in order, as (rig, amplitude scale, design): ``design`` as given (``level``: its own
+    orientation) and hung fingers down (``hanging``: :func:`~alpes_dyn.model.mjcf.hanging_gravity` of ``gravity``,
+    the parameter file's, m/s^2) as ``rig`` (one of :data:`RIGS`) allows, then each scaled by ``scales``."""
     hanging = dataclasses.replace(design, orientations=(tuple(float(x) for x in hanging_gravity(gravity)),))
     if rig == "hanging":
         base = [("hanging", hanging)]
@@ -110,6 +113,33 @@ def _candidates(design: ExperimentDesign, rig: str, gravity: np.ndarray,
         scaled = [(r, s, _scaled(d, s)) for s in scales for r, d in (base[1], base[0])]
         return [(r, 1.0, d) for r, d in order] + scaled
     return [(r, 1.0, d) for r, d in base] + [(r, s, _scaled(d, s)) for s in scales for r, d in base]
+
+
+def first_in_range(run: Callable[[str, ExperimentDesign], tuple[Any, np.ndarray]],
+                   candidates: Sequence[tuple[str, float, ExperimentDesign]], lower: np.ndarray, upper: np.ndarray
+                   ) -> tuple[tuple[Any, float, list, int], list[tuple[str, float, float, int, float, bool]]]:
+    """Run ``candidates`` (:func:`candidate_designs`) in turn until one keeps the joints inside [lower, upper] (rad,
+    less :data:`RANGE_MARGIN`) over the whole run and its trim does not find the equilibria folding.
+
+    ``run(rig, design)`` returns (its result, the joints' angles (N, n), rad): the library's simulated hand
+    (:func:`adapted_experiment`) or any other plant (a MuJoCo finger: :func:`alpes_dyn.studies.realism.realism_case`).
+    Returns ((the chosen result, its excess in rad, its warnings, its index), every run tried as (rig, scale,
+    excess deg, joint, extreme angle rad, folded)): the first run in range, else the one that left it least."""
+    tried: list[tuple[str, float, float, int, float, bool]] = []
+    best = None
+    for r, scale, d in candidates:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            out, q = run(r, d)
+        excess, j, extreme = range_excess(q, lower, upper)
+        folded = any(issubclass(w.category, JointRangeWarning) and "equilibria fold" in str(w.message) for w in caught)
+        tried.append((r, scale, math.degrees(excess), j, extreme, folded))
+        if best is None or excess < best[1] or (excess == 0.0 and not folded):
+            best = (out, excess, list(caught), len(tried) - 1)
+        if excess == 0.0 and not folded:
+            break
+    assert best is not None, "no candidate design"
+    return best, tried
 
 
 def adapted_experiment(model: str, true_params: HandParams | str | Path | None = None,
@@ -135,25 +165,18 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     limits = Model.alpes(model, params=p_true, chain=chain)
-    tried, best = [], None
-    for r, scale, d in _candidates(design, rig, np.asarray(p_nom.gravity, dtype=float), scales):
-        with warnings.catch_warnings(record=True) as caught:
-            warnings.simplefilter("always")
-            rec = experiment(model, p_true, d, seed=seed, nominal_params=p_nom, chain=chain,
-                             rotor_inertia=rotor_inertia)
-        excess, j, extreme = range_excess(rec.true_q, limits.lower, limits.upper)
-        folded = any(issubclass(w.category, JointRangeWarning) and "equilibria fold" in str(w.message) for w in caught)
-        tried.append((r, scale, math.degrees(excess), j, extreme, folded))
-        if best is None or excess < best[1]:
-            best = (rec, excess, caught, len(tried) - 1)
-        if excess == 0.0 and not folded:
-            best = (rec, excess, caught, len(tried) - 1)
-            break
+
+    def run(r: str, d: ExperimentDesign):
+        rec = experiment(model, p_true, d, seed=seed, nominal_params=p_nom, chain=chain, rotor_inertia=rotor_inertia)
+        return rec, rec.true_q
+
+    best, tried = first_in_range(run, candidate_designs(design, rig, np.asarray(p_nom.gravity, dtype=float), scales),
+                                 limits.lower, limits.upper)
     rec, excess, caught, k = best
     for w in caught:  # the chosen run's own warnings (small excursions...), once
         if not (excess == 0.0 and issubclass(w.category, JointRangeWarning)):
             warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    adaptation = _adaptation(tried, k, limits, rig)
+    adaptation = adaptation_of(tried, k, limits)
     if excess > 0.0:
         warnings.warn(JointRangeWarning(
             f"experiment: every design tried leaves the finger's range ({adaptation.note}); the recording is "
@@ -164,8 +187,7 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
     return rec, adaptation
 
 
-def _adaptation(tried: list[tuple[str, float, float, int, float, bool]], k: int, model: Model,
-                rig: str) -> Adaptation:
+def adaptation_of(tried: list[tuple[str, float, float, int, float, bool]], k: int, model: Model) -> Adaptation:
     """The :class:`Adaptation` of the run ``k`` chosen among ``tried`` (rig, scale, excess deg, joint, extreme rad,
     folded), with its note."""
     r, scale, excess, _, _, _ = tried[k]

@@ -26,6 +26,7 @@ import numpy as np
 
 from ..control.plants import PlantEffects, mujoco_recording, plant_model
 from ..errors import InputError
+from ..estimation.adapt import Adaptation, adaptation_of, candidate_designs, first_in_range
 from ..estimation.design import ExperimentDesign
 from ..estimation.draws import perturbed_params
 from ..estimation.effects import alpes_models, fit_effects, parse_effects
@@ -67,6 +68,9 @@ FIT_EFFECTS = "auto"
 
 RIGS = {"level": 0.0, "hanging": HANGING_TILT}
 """The rig's orientation (rad about the joints' axes from the file's palm-up gravity, :func:`tilted_gravity`)."""
+
+ADAPT = ("auto", "level", "hanging", "none")
+"""How :func:`plant_experiment` adapts the experiment to the plant (``auto``: as ``alpes-dyn experiment --rig auto``)."""
 
 CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "slack", "delay", "all")
 
@@ -249,23 +253,58 @@ def _fit_row(fit: Any, truth: dict[str, float], effects: list[str]) -> dict[str,
             "adequacy": fit.adequacy.to_dict() if fit.adequacy is not None else None}
 
 
+def _rig_tilt(design: ExperimentDesign) -> float:
+    """rad: the design's orientation as a tilt (:func:`~alpes_dyn.model.mjcf.tilted_gravity`) of the file's gravity."""
+    g, g0 = np.asarray(design.orientations[0], dtype=float), np.asarray(load_params().gravity, dtype=float)
+    return math.atan2(g0[2] * g[0] - g0[0] * g[2], g0[0] * g[0] + g0[2] * g[2])
+
+
+def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign, true, plant: Plant = FINGER3,
+                     adapt: str = "auto") -> tuple[Any, ExperimentDesign, PlantEffects, Adaptation]:
+    """The identification experiment run on the MuJoCo plant (``effects``, the truth ``true``), adapted as
+    ``alpes-dyn experiment`` adapts it (:func:`~alpes_dyn.estimation.adapt.first_in_range`: the whole record checked
+    against the joints' range; ``adapt``: its ``--rig``, ``auto`` hanging the hand where palm up the finger leaves
+    its range, then smaller amplitudes), but on the plant's own joint angles -- what the experimenter sees of
+    the real finger on its stop. Returns (the recording, the design chosen, the plant's effects in its orientation
+    (the tilt error on top of the rig's), the :class:`~alpes_dyn.estimation.adapt.Adaptation`)."""
+    if adapt not in ADAPT:
+        raise InputError(f"adapt: expected one of {', '.join(ADAPT)}, got {adapt!r}")
+    own = _rig_tilt(design)
+    limits = plant.alpes(params=true)
+
+    def run(r: str, d: ExperimentDesign):
+        e = effects if r == "level" else dataclasses.replace(effects, tilt=effects.tilt - own + _rig_tilt(d))
+        g_true = plant_model(plant.model, true, e, plant.chain).gravity
+        _, u, x0 = torque_of(seed, true, d, g_true, plant)
+        rec = mujoco_recording(plant.model, true, u, d.dt, effects=e, q0=x0[: x0.size // 2], seed=seed,
+                               chain=plant.chain)
+        return (rec, d, e), rec.true_q
+
+    rig = adapt if adapt != "auto" or own == 0.0 else "hanging"
+    candidates = candidate_designs(design, rig, np.asarray(load_params().gravity, dtype=float))
+    if adapt == "none":
+        candidates = candidates[:1]
+    (out, _, _, k), tried = first_in_range(run, candidates, limits.lower, limits.upper)
+    return (*out, adaptation_of(tried, k, limits))
+
+
 def realism_case(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, tmp: Path,
-                 plant: Plant = FINGER3, rigid: bool = True) -> dict[str, Any]:
+                 plant: Plant = FINGER3, rigid: bool = True, adapt: str = "auto") -> dict[str, Any]:
     """One row: the plant's recording with ``effects`` (seed ``seed``: the draw and the noise), the two fits (the
     rigid one only where ``rigid``), the EKF runs (see the module docstring); the identified file written in
     ``tmp``. Keys: case, seed, chain, rigid (absent without ``rigid``) and extended (each: worst errors in %,
     plain and up to the common scale, values, residual in counts, converged, verdict, adequacy), joint_range_deg,
-    plant_seconds, ekf_seconds, ekf_rmse_deg and ekf_true_file_rmse_deg (per joint, deg)."""
+    plant_seconds, ekf_seconds, ekf_rmse_deg and ekf_true_file_rmse_deg (per joint, deg), adaptation (the
+    experiment's, :func:`plant_experiment`; ``adapt``: ``auto`` (as ``alpes-dyn experiment``), ``level`` or
+    ``hanging`` (that orientation only, the amplitudes adapting), ``none`` (``design`` as given)); the rig, the
+    fits and the EKF on the orientation it chose."""
     true = plant.true_params(seed)
-    rig = rig_of(design)
     nominal = load_params()
     t0 = time.perf_counter()
-    g_true = plant_model(plant.model, true, effects, plant.chain).gravity
-    _, u, x0 = torque_of(seed, true, design, g_true, plant)
-    rec = mujoco_recording(plant.model, true, u, design.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed,
-                           chain=plant.chain)
+    rec, design, effects, adaptation = plant_experiment(effects, seed, design, true, plant, adapt)
+    rig = rig_of(design)
     plant_s = time.perf_counter() - t0
-    row: dict[str, Any] = {"case": case, "seed": seed, "chain": plant.label}
+    row: dict[str, Any] = {"case": case, "seed": seed, "chain": plant.label, "adaptation": adaptation.to_dict()}
     truth = {pp.name: pp.nominal for pp in parameter_catalogue(plant.alpes(params=true))}
     if rigid:
         row["rigid"] = _fit_row(identify(_on_rig(plant.alpes(params=nominal), rig), rec, plant.base,
@@ -302,13 +341,16 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
 
 
 def realism_row(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
-                duration: float = 4.0, cable: tuple[float, float] | None = None) -> dict[str, Any]:
+                duration: float = 4.0, cable: tuple[float, float] | None = None, adapt: str = "auto") -> dict[str, Any]:
     """:func:`realism_case` as a function of the seed (for :func:`~alpes_dyn.studies.sweep.sweep`): the plant
     ``case`` (:data:`CASE_NAMES`), on finger3 drawn with ``seed`` or on the hand's ``chain`` (the hand drawn with
     ``seed``), the experiment of ``duration`` s on the ``rig`` (:func:`rig_design`); ``cable``: the tendon case's
-    (k_t N/m, c_t N s/m), None: sized by :func:`tendon_stiffness` on the level rig (a MuJoCo run of its own)."""
+    (k_t N/m, c_t N s/m), None: sized by :func:`tendon_stiffness` on the level rig (a MuJoCo run of its own);
+    ``adapt``: :func:`realism_case`'s."""
     if case not in CASE_NAMES:
         raise InputError(f"case: expected one of {', '.join(CASE_NAMES)}, got {case!r}")
+    if adapt not in ADAPT:
+        raise InputError(f"adapt: expected one of {', '.join(ADAPT)}, got {adapt!r}")
     plant = FINGER3 if chain is None else hand_plant(chain)
     design = rig_design(rig, duration)
     if cable is None:
@@ -318,7 +360,7 @@ def realism_row(seed: int, case: str = "all", rig: str = "level", chain: str | N
         raise InputError(f"cable: expected (k_t > 0 N/m, c_t >= 0 N s/m), got {tuple(cable)!r}")
     effects = cases(k_t, c_t, RIGS[rig])[case]
     with tempfile.TemporaryDirectory() as d:
-        return realism_case(case, effects, seed, design, Path(d), plant)
+        return realism_case(case, effects, seed, design, Path(d), plant, adapt=adapt)
 
 
 def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
