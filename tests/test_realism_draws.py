@@ -162,6 +162,39 @@ def test_fit_effects_finds_the_torque_delay(monkeypatch):
     assert fit.observer is None  # a stand-in has no file to run the EKF on
 
 
+
+def test_a_flagged_fit_naming_nothing_tries_the_delay_after_stiction_and_the_rotor(monkeypatch):
+    """auto on stand-in fits whose verdict names no effect (as MuJoCo's hung all-effects finger3 of seeds 413 and
+    416: a residual at 1.09 times the floor, mildly coloured): the stick-slip law and the rotor do not help, so the
+    torque delay is tried last, found at 1 sample and kept; every effect one round at most."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation import effects as eff
+    from alpes_dyn.estimation import identification as ident_mod
+    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.model.params import load_params
+
+    n = 50
+    tau = np.linspace(0.01, 0.02, n)[:, None]
+    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
+                    joint_names=("j1", "j2", "j3"))
+    seen = []
+
+    def fake_identify(model, data, parameters, **kw):
+        d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))
+        seen.append(d)
+        ok = d == 1
+        return SimpleNamespace(residual_rms=0.6 + 0.1 * abs(d - 1), converged=True, reason="", names=(), values=[],
+                               std=[], trustworthy=ok, adequacy=SimpleNamespace(adequate=ok, likely_missing=[]))
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), rec, eff.parse_effects("auto"),
+                          has_gravity=True, observe=False)
+    assert [e for e, _ in fit.rounds] == [("compliance", "tilt"), ("compliance", "tilt", "stiction"), ("compliance", "tilt", "rotor"),
+                       ("compliance", "tilt", "delay"), ("compliance", "tilt", "delay")]
+    assert seen == [0, 0, 0, 1, 2]  # each round on the torque as fitted: 1 then 2 samples earlier
+    assert fit.delay == 1 and fit.effects == ("compliance", "tilt", "delay") and fit.result.trustworthy
+
 def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
     """The observer's check never refuses the truth: on our simulator's recording of finger2 seed 3 (the fitted
     model's exact structure) the true file's EKF predicts the encoder 20 ms ahead within the threshold (measured
@@ -179,3 +212,38 @@ def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
     assert good.passed and 12 * good.floor < good.prediction_rms < 0.8 * ratio * good.floor
     assert not bad.passed and bad.prediction_rms > 10 * ratio * bad.floor
 
+
+
+def test_the_delay_search_probes_before_a_full_fit(monkeypatch):
+    """Past the first sample, each delay is probed (DELAY_PROBE_ITERATIONS steps from the last delay's fit) and fitted
+    in full only where the probe already does better: stand-in fits whose residual is lowest at 2 samples, the probes
+    stopped by their iteration cap (not converged)."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation import effects as eff
+    from alpes_dyn.estimation import identification as ident_mod
+    from alpes_dyn.estimation.adequacy import SIGNATURES
+    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.model.params import load_params
+
+    n = 50
+    tau = np.linspace(0.01, 0.02, n)[:, None]
+    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
+                    joint_names=("j1", "j2", "j3"))
+    seen = []
+
+    def fake_identify(model, data, parameters, **kw):
+        d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))
+        cap = kw.get("max_iterations")
+        seen.append((d, cap))
+        ok = d == 2
+        return SimpleNamespace(residual_rms=0.6 + 0.1 * abs(d - 2), converged=cap is None, reason="", names=(),
+                               values=[], std=[], trustworthy=ok and cap is None,
+                               adequacy=SimpleNamespace(adequate=ok, likely_missing=[] if ok else [SIGNATURES["torque_rate"]]))
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), rec, eff.parse_effects("auto"),
+                          has_gravity=True, observe=False)
+    k = eff.DELAY_PROBE_ITERATIONS
+    assert seen == [(0, None), (1, None), (2, k), (2, None), (3, k)]
+    assert fit.delay == 2 and fit.result.trustworthy and fit.result.residual_rms == 0.6
