@@ -27,7 +27,7 @@ effect         what the fit does
                the torque's own rate) the recorded torque lagging
                the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
                1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.replay.advanced`) while the residual
-               falls, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
+               falls and the verdict still names it, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
                sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
 ============== ======================================================================================
 
@@ -74,7 +74,7 @@ from ..model.params import HandParams, with_values
 from ..model.robot import Model
 from ..symbolic.parametric import select_parameters, unseen_masses
 
-__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "DELAY_PROBE_ITERATIONS", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
+__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay")
@@ -82,10 +82,8 @@ NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", 
 """The effects ``auto`` adds where the first fit's adequacy check names them (a word of the likely missing effect)."""
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 MAX_FIT_DELAY = 3
-"""The longest torque delay (samples) the ``delay`` effect tries: 1, 2, ... while the residual falls."""
-DELAY_PROBE_ITERATIONS = 4
-"""Gauss-Newton steps of the probe at each delay past the first (from the last delay's fit): the full fit is made
-only where the probe's residual is already below the last's."""
+"""The longest torque delay (samples) the ``delay`` effect tries: 1, 2, ... while the residual falls and the last
+fit's verdict still names the delay."""
 EFFECTS_INTERVAL = 0.05
 """s: the shooting interval of :func:`fit_effects`' fits unless the caller names one (``identify``'s own default is
 100 ms). On MuJoCo's finger3 plants with all the effects at once (seeds 12-14), 100 ms lost the basin of seed 13
@@ -262,7 +260,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     converges. Each round starts from the last converged one's values
     (:func:`~alpes_dyn.estimation.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
     ``kwargs`` (which go to ``identify``) name an ``interval``. With ``delay``: the torque read 1, 2, ... samples
-    earlier while the residual falls (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
+    earlier while the residual falls and the last fit's verdict names the delay (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
     feeds (:func:`~alpes_dyn.estimation.observer_check.judge`, on the ``validation`` recording where one is given,
     else the fitted one): where the EKF on its file fails, the fit is not adequate, the reason naming the
     observer.
@@ -273,17 +271,20 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     from .adequacy import AdequacyWarning
     from .identification import identify
     from .observer_check import judge
+    from .recording import Recording, read_recording
     from .replay import advanced
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")
+    if not isinstance(recording, Recording):  # read once: every round fits it, the delay's on its torque advanced
+        recording = read_recording(recording, model_of(chosen))
     rounds: list[tuple[tuple[str, ...], Any]] = []
     delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
 
-    def one(effs: tuple[str, ...], warm: Any, delay: int, **override: Any):
+    def one(effs: tuple[str, ...], warm: Any, delay: int):
         model = model_of(tuple(e for e in effs if e != "delay"))
         selection = effect_parameters(model, effs, has_gravity, base)
-        kw = dict(kwargs, **override)
+        kw = dict(kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
         if warm is not None and warm.converged and "start" not in kw:
             # the next round from the last one's values and trajectory, in its basin (all-effects seed 12: the
@@ -308,13 +309,12 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         if warm is not None and res.residual_rms >= warm.residual_rms:
             return res  # a sample's delay does not help: none longer is tried
         for d in range(2, MAX_FIT_DELAY + 1):
-            # a probe of DELAY_PROBE_ITERATIONS steps from the last delay's fit; the full fit only where it already
-            # does better (MuJoCo's all-effects finger3 of seed 417, one sample late: the full fit at 2 samples took
-            # 20 iterations, 10 s, to end above the fit at 1)
-            probe = one(effs, res, d, max_iterations=DELAY_PROBE_ITERATIONS)
-            if not probe.residual_rms < res.residual_rms:
+            # one sample more only while the last fit's verdict still names the delay (its residual following the
+            # torque's rate): MuJoCo's all-effects finger3 of seed 417, one sample late, adequate at 1 sample, took
+            # 20 iterations, 10 s, at 2 to end above it
+            if "delay" not in named_effects(res):
                 break
-            nxt = probe if probe.converged else one(effs, res, d)
+            nxt = one(effs, res, d)
             if not (nxt.converged and nxt.residual_rms < res.residual_rms):
                 break
             res = nxt
