@@ -31,7 +31,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         return _estimate_data(args)
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
-                       ("--torque-constant", "torque_constant")):
+                       ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -91,7 +91,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.replay)."""
     from ..estimation.observers import OBSERVERS
     from ..estimation.recording import read_recording
-    from ..estimation.replay import estimate_recording
+    from ..estimation.replay import MAX_DELAY, estimate_recording
     from ..model.robot import Model
 
     for flag, dest, default in _SCENARIO_ONLY:
@@ -116,11 +116,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
                             rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain)
+    delay = 0 if args.torque_delay is None else args.torque_delay
+    if not 0 <= delay <= MAX_DELAY:
+        raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
+                         f"torque_delay), got {delay}")
     rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
-                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt)
+                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -272,6 +276,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
     obj["effects"] = list(fit.effects)
+    obj["torque_delay"] = fit.delay  # samples, of the rig's sensors (not in the file): estimate --data --torque-delay
     obj["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_rms": fit.tried.residual_rms, "converged": fit.tried.converged,
         "verdict": fit.tried.status()}
@@ -296,6 +301,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  held at the URDF's values: {', '.join(held)} (a link that only motorless joints move: the "
                      "encoders see its mass only with those joints' springs; name it in --parameters to fit it)")
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
+    if fit.delay:
+        lines.append(f"  torque delay: the recorded torque {fit.delay} sample{'s' if fit.delay > 1 else ''} late (the "
+                     f"rig's sensors, not written to the file: give it to the observer, estimate --data ... "
+                     f"--torque-delay {fit.delay})")
     obj.update(excursion_report(data))  # the fit's data: its motors whose encoder barely moved
     lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
     a = res.adequacy

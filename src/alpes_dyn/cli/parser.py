@@ -296,6 +296,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--tilt", default=None, metavar="TILT_X,TILT_Y",
                    help="with --data: the palm's orientation, rad (identify's tilt_x, tilt_y): the observer's "
                         "gravity turned by it")
+    s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
+                   help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
+                        "torque_delay): the observer reads it that many samples earlier")
     s.set_defaults(func=cmd_estimate)
 
 
