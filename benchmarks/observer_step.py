@@ -1,4 +1,6 @@
-"""The observer's step for a real-time loop (issue 20): microseconds per sample, in the same process, of
+"""The observer's step for a real-time loop (issue 20): microseconds per sample, the compiled step against filterpy.
+
+Timed in the same process:
 
     OnlineFilter.step   (KalmanFilter.online: one call into the compiled predict-update step)
     C export            (alpes-dyn codegen: alpes_ekf_step in the exported C, its default code -- on the hand the
