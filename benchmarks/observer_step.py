@@ -42,8 +42,8 @@ import numpy as np
 import pinocchio as pin
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.cexport import main_input, read_main_output, write_c_observer
-from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.estimation.cexport.cexport import main_input, read_main_output, write_c_observer
+from alpes_dyn.estimation.observers.observers import make_observer
 from alpes_dyn.simulation.codegen import _LARGE_SOURCE
 from alpes_dyn.symbolic.statespace import StateSpace
 

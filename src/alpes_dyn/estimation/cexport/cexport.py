@@ -1,16 +1,16 @@
 """A standalone C export of an observer's step (issue 20): C source, header and a test program, no Python.
 
-:func:`c_sources` turns a :class:`~alpes_dyn.estimation.observers.KalmanFilter` (the EKF, the UKF, with or
+:func:`c_sources` turns a :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` (the EKF, the UKF, with or
 without their parameter states) into three texts:
 
 * ``alpes_<kind>.h`` -- the documented, fixed-size API (sizes as macros, the model, dt and noise settings in
   its comment);
 * ``alpes_<kind>.c`` -- the filter's own step
-  (:attr:`~alpes_dyn.estimation.observers.KalmanFilter.filter_step_p`, the expression that ``run``, ``online``
+  (:attr:`~alpes_dyn.estimation.observers.observers.KalmanFilter.filter_step_p`, the expression that ``run``, ``online``
   and the compiled loop evaluate: the same numbers, to the last bit) and its measurement update, with the two
   functions below: for the EKF, the code of the model and its Jacobian (on the hand by chain, the fingers side by
-  side in vector lanes: :mod:`~alpes_dyn.estimation.cexport_chains`; else CasADi's generated code) and the
-  covariance arithmetic as loops over their nonzeros (:mod:`~alpes_dyn.estimation.cexport_ekf`,
+  side in vector lanes: :mod:`~alpes_dyn.estimation.cexport.cexport_chains`; else CasADi's generated code) and the
+  covariance arithmetic as loops over their nonzeros (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`,
   ``code="sparse"``); for the UKF (or ``code="casadi"``), CasADi's generated code of the whole step. It needs
   only ``<math.h>`` and ``<string.h>`` (link with ``-lm``): no CasADi runtime, no heap, no global state;
 * ``main.c`` -- a test program: reads a prior, a first measurement and lines of inputs and measurements,
@@ -55,10 +55,10 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import check_output_directory, write_directory as write_sources  # their home: fileio
+from ...errors import InputError
+from ...fileio import check_output_directory, write_directory as write_sources  # their home: fileio
 from .cexport_ekf import ekf_c_source
-from .observers import ExtendedKalmanFilter, KalmanFilter
+from ..observers.observers import ExtendedKalmanFilter, KalmanFilter
 
 __all__ = ["c_sources", "write_c_observer", "write_sources", "check_output_directory", "scenario_filter",
            "read_main_output", "main_input"]
@@ -298,12 +298,12 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     is a line for the header's comment (the model, its parameter file); ``z0``, ``P0`` the prior it suggests
     (documentation only). ``code``: ``"sparse"`` -- CasADi's code of the model and its Jacobian, the covariance
     arithmetic as C loops over the nonzeros in the filter's own order of operations
-    (:mod:`~alpes_dyn.estimation.cexport_ekf`; the EKF only, where CasADi folded no constant in that arithmetic,
+    (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`; the EKF only, where CasADi folded no constant in that arithmetic,
     ``filt.exact_loops``); ``"casadi"`` -- CasADi's code of the filter's whole step. Both give the filter's
     numbers to the last bit. Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large (over
     :data:`_LOOPS_FROM` operations: the hand), else ``"casadi"`` (a finger, the UKF). ``chains`` (``"sparse"``
     only): the model's code by block, the blocks of one structure side by side
-    (:mod:`~alpes_dyn.estimation.cexport_chains`: the hand's four fingers; the default, None, is True there);
+    (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers; the default, None, is True there);
     False: CasADi's code of the whole model. See the module docstring for the API.
     """
     if not isinstance(filt, KalmanFilter):
@@ -376,7 +376,7 @@ def _whole_step_source(filt: KalmanFilter, prefix: str) -> tuple[str, int]:
 
 
 def _header_fields(filt: KalmanFilter, about: str, nwork: int, z0: Any, P0: Any) -> dict[str, Any]:
-    from .._version import __version__
+    from ..._version import __version__
 
     ss = filt.model.system
     tr = ss.model.transmission
@@ -431,15 +431,15 @@ def read_main_output(text: str, nz: int) -> tuple[np.ndarray, np.ndarray]:
 
 def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: Any = None, chain: str | None = None,
                     friction: bool = False) -> tuple[KalmanFilter, np.ndarray, np.ndarray]:
-    """The observer of the estimation scenario (:func:`~alpes_dyn.estimation.scenario.run_estimation`, no
+    """The observer of the estimation scenario (:func:`~alpes_dyn.estimation.observers.scenario.run_estimation`, no
     mismatch) on ``model`` with the parameter file ``params``: (filter, z0, P0), its noise settings, substeps and
     prior those of the scenario (the same filter: tested against its estimate)."""
-    from ..model.params import load_params
-    from ..model.robot import Model
-    from ..simulation.integrate import stable_substeps
-    from ..symbolic.statespace import StateSpace
-    from .observers import OBSERVERS, PARAMETERS, make_observer
-    from .scenario import EstimationScenario, default_noise
+    from ...model.params import load_params
+    from ...model.robot import Model
+    from ...simulation.integrate import stable_substeps
+    from ...symbolic.statespace import StateSpace
+    from ..observers.observers import OBSERVERS, PARAMETERS, make_observer
+    from ..observers.scenario import EstimationScenario, default_noise
 
     if observer not in OBSERVERS:
         raise InputError(f"unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")

@@ -1,6 +1,6 @@
 """The model's C code per chain, the chains of one structure run side by side (issue 20, item 1).
 
-The EKF's exported C (:mod:`~alpes_dyn.estimation.cexport_ekf`) calls the model -- the RK4 step, its Jacobian
+The EKF's exported C (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`) calls the model -- the RK4 step, its Jacobian
 A and the noise's share N -- once per sample. On the hand, CasADi's generated code of it is one straight-line
 function of 41,500 operations (466 kB of machine code at -O1, more than the processor's instruction cache): the
 larger half of the step's time. Its outputs fall into independent blocks (:func:`model_blocks`: the hand's five

@@ -1,13 +1,13 @@
 """The EKF's step as C with its covariance arithmetic written out as loops (issue 20, item 3).
 
-:func:`~alpes_dyn.estimation.cexport.c_sources` exports the EKF this way (``code="sparse"``). The model -- the
+:func:`~alpes_dyn.estimation.cexport.cexport.c_sources` exports the EKF this way (``code="sparse"``). The model -- the
 RK4 step z_next = F(z, w), its Jacobian A = dF/dz (sparse, CSC) and the noise's share N = G Sigma_w G^T + Q (its
-lower triangle, G = dF/dw), the filter's :attr:`~alpes_dyn.estimation.observers.ExtendedKalmanFilter.linearized`
--- is CasADi's instructions written out by block (:mod:`~alpes_dyn.estimation.cexport_chains`: the hand's four
+lower triangle, G = dF/dw), the filter's :attr:`~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter.linearized`
+-- is CasADi's instructions written out by block (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four
 fingers side by side in vector lanes, its thumb alone) or, where the model has one block (a finger) or
 ``chains=False``, CasADi's generated code of it; the measurement h(z) and H = dh/dz, its
-:attr:`~alpes_dyn.estimation.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic is C
-loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.covariance`, the
+:attr:`~alpes_dyn.estimation.observers.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic is C
+loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.observers.covariance`, the
 order in which the filter's own step (``filter_step_p``, what ``run``, ``online`` and the compiled loop evaluate) is
 built: the same operations, the same numbers, to the last bit. Each sum accumulates in a register and is stored
 once. The blocks: the states that A, N, H and R couple (the hand: its five chains); when P's entries between two
@@ -36,13 +36,13 @@ import casadi as cs
 import numpy as np
 
 from .cexport_chains import chain_model_source, components, model_blocks
-from .observers import ExtendedKalmanFilter
+from ..observers.observers import ExtendedKalmanFilter
 
 __all__ = ["ekf_c_source"]
 
 _ARITHMETIC = r"""
 /* ---- alpes_dyn: the EKF's covariance arithmetic (P column-major, P[i + NZ*j]), in the order of
-   alpes_dyn.estimation.covariance: the filter's own step, operation for operation ---- */
+   alpes_dyn.estimation.observers.covariance: the filter's own step, operation for operation ---- */
 #include <math.h>
 #include <string.h>
 #include "{prefix}.h"
@@ -103,7 +103,7 @@ static inline int rows_of(int j, int blk, const int** rows) {{
   return B_ptr[B_of[j] + 1] - B_ptr[B_of[j]];
 }}
 
-/* Every sum below runs in the order of alpes_dyn.estimation.covariance (k ascending), accumulated in a register
+/* Every sum below runs in the order of alpes_dyn.estimation.observers.covariance (k ascending), accumulated in a register
    and stored once; with blk, the entries between two blocks, sums of exact zeros, are written as zeros (the
    sign of a zero aside, the same numbers). */
 
@@ -365,9 +365,9 @@ def _blocks(sA: cs.Sparsity, sN: cs.Sparsity, sH: cs.Sparsity, R: np.ndarray) ->
 
 
 def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True) -> tuple[str, int]:
-    """The C source of ``filt``'s step and update (the API of :mod:`~alpes_dyn.estimation.cexport`) and the
+    """The C source of ``filt``'s step and update (the API of :mod:`~alpes_dyn.estimation.cexport.cexport`) and the
     doubles of its work array: (source, nwork). ``by_chain``: the model's code by block
-    (:mod:`~alpes_dyn.estimation.cexport_chains`) where it has several, else CasADi's."""
+    (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`) where it has several, else CasADi's."""
     nz, ny = filt.nz, filt.ny
     lin, meas = filt.linearized_p, filt.measurement  # the functions the filter's step calls (p: the model's numbers)
     fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))

@@ -1,7 +1,7 @@
 """The identification experiment adapted to the finger it runs on (issue 35): ``alpes-dyn experiment``'s default.
 
-The documented experiment (:class:`~alpes_dyn.estimation.design.ExperimentDesign`, palm up) is designed on the
-nominal file and trimmed on the finger (:mod:`alpes_dyn.estimation.trim`), but no one design keeps every finger of
+The documented experiment (:class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`, palm up) is designed on the
+nominal file and trimmed on the finger (:mod:`alpes_dyn.estimation.experiments.trim`), but no one design keeps every finger of
 the +-20 % family off its stops palm up: a soft finger's static equilibria fold (gravity outgrows its springs) and
 it rests on its 0 degree stop (finger3 seeds 8, 11, 30, 32, 48), or the excitation swings a soft joint past its 90
 degree stop (seeds 2, 3). A fit cannot explain a stop its model does not have, and ``identify`` honestly refuses
@@ -30,11 +30,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..fileio import check_outputs
-from ..model.mjcf import hanging_gravity
-from ..model.params import HandParams, load_params
-from ..model.robot import Model
-from ..model.stops import JointRangeWarning
+from ...fileio import check_outputs
+from ...model.mjcf import hanging_gravity
+from ...model.params import HandParams, load_params
+from ...model.robot import Model
+from ...model.stops import JointRangeWarning
 from .design import ExperimentDesign
 from .recording import Recording, write_recording
 
@@ -147,12 +147,12 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
                        nominal_params: HandParams | str | Path | None = None, chain: str | None = None,
                        rotor_inertia: bool = False, rig: str = "auto",
                        scales: Sequence[float] = AMPLITUDE_SCALES) -> tuple[Recording, Adaptation]:
-    """:func:`~alpes_dyn.estimation.experiment.experiment` (its arguments) with the design adapted until the finger
+    """:func:`~alpes_dyn.estimation.experiments.experiment.experiment` (its arguments) with the design adapted until the finger
     stays inside its range over the whole record (the module docstring); ``rig``: one of :data:`RIGS` (``level``:
     ``design``'s own orientation, default palm up); ``scales``: the amplitude factors to try after the full excitation
     (default :data:`AMPLITUDE_SCALES`; none: the orientation alone adapts). Returns the recording (written to ``path`` only once chosen) and
     the :class:`Adaptation`. Each run tried costs one experiment's simulation (about 1 s for 4 s of finger3)."""
-    from ..errors import InputError
+    from ...errors import InputError
     from .experiment import experiment
 
     if rig not in RIGS:

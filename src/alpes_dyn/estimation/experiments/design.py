@@ -1,4 +1,4 @@
-"""The identification experiment's settings (:class:`ExperimentDesign`): what :mod:`alpes_dyn.estimation.experiment`
+"""The identification experiment's settings (:class:`ExperimentDesign`): what :mod:`alpes_dyn.estimation.experiments.experiment`
 designs, trims and simulates, each field checked with one line naming it."""
 
 from __future__ import annotations
@@ -9,9 +9,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..checks import as_float_array
-from ..errors import InputError
-from ..limits import check_duration, check_not_subnormal
+from ...checks import as_float_array
+from ...errors import InputError
+from ...limits import check_duration, check_not_subnormal
 from .recording import GRAVITY, GRAVITY_TOLERANCE, gravity_norm_off
 
 __all__ = ["ExperimentDesign"]
@@ -41,7 +41,7 @@ class ExperimentDesign:
     @property
     def lines(self) -> tuple[float, ...]:
         """The excitation's lines, Hz: the multisine's ``frequencies`` and, with a dither, its frequency (what
-        :func:`~alpes_dyn.estimation.identification.identify`'s ``excitation`` takes for this experiment)."""
+        :func:`~alpes_dyn.estimation.identification.identification.identify`'s ``excitation`` takes for this experiment)."""
         return tuple(float(f) for f in self.frequencies) + ((float(self.dither_frequency),) if self.dither > 0 else ())
 
     @property

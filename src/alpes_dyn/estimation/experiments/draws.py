@@ -9,8 +9,8 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import InputError
-from ..model.params import HandParams, Param, load_params, with_values
+from ...errors import InputError
+from ...model.params import HandParams, Param, load_params, with_values
 
 __all__ = ["perturbed_params"]
 

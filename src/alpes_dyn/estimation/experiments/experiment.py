@@ -15,18 +15,18 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
   joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
-* the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.trim`): before recording, a
+* the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.experiments.trim`): before recording, a
   slow loop on the measured encoder moves the bias until the finger rests where the nominal one would (the real
   finger, not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
   q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a fold of its
   static equilibria), as high as the excitation keeps clear of the fold. Palm up a finger within +-20 % of the
   nominal values is up to 6.4 times as compliant mid-range as the nominal, and the excitation then swings it past
-  its stops: :data:`alpes_dyn.estimation.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits' precision)
+  its stops: :data:`alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits' precision)
   holds such a finger no higher than where it is as compliant as the nominal at its design point, its multisine
   and dither shrunk with the room its joints have left below;
 * optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
   ``camera_noise`` (rad);
-* the sensors of the estimation scenario (:mod:`alpes_dyn.estimation.scenario`): encoder quantised to
+* the sensors of the estimation scenario (:mod:`alpes_dyn.estimation.observers.scenario`): encoder quantised to
   ``counts_per_rev`` with 0.5 count of Gaussian noise, motor torque with white noise of 5e-4 N m,
   sampled at 1 kHz.
 
@@ -44,12 +44,12 @@ multisine across the joint range brings every parameter below 0.8 % (masses 0.08
 identification user guide for the full comparison.
 
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
-(and writes) a :class:`~alpes_dyn.estimation.recording.Recording` with the true joint angles in ``true_q_*``.
+(and writes) a :class:`~alpes_dyn.estimation.experiments.recording.Recording` with the true joint angles in ``true_q_*``.
 :func:`model_experiment` does the same on any tendon-driven robot (a URDF + spec :class:`~alpes_dyn.Model`),
 its searches scaled by the robot's own static torques. Both warn
-(:class:`~alpes_dyn.estimation.excursion.SmallExcursionWarning`, one per motor) where the recording moved a motor's
+(:class:`~alpes_dyn.estimation.experiments.excursion.SmallExcursionWarning`, one per motor) where the recording moved a motor's
 encoder by fewer counts than a fit can use
-(:mod:`alpes_dyn.estimation.excursion`).
+(:mod:`alpes_dyn.estimation.experiments.excursion`).
 """
 
 from __future__ import annotations
@@ -61,12 +61,12 @@ from typing import Callable, Sequence
 
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import check_outputs
-from ..limits import MAX_SEED
-from ..model.robot import Model
-from ..model.params import HandParams, load_params
-from ..model.transmission import torque_before
+from ...errors import InputError
+from ...fileio import check_outputs
+from ...limits import MAX_SEED
+from ...model.robot import Model
+from ...model.params import HandParams, load_params
+from ...model.transmission import torque_before
 from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported)
 from .draws import perturbed_params  # noqa: F401 (re-exported)
@@ -75,8 +75,8 @@ from . import trim as _trim
 from .trim import (_fmt, _holding_bias, _mean_equilibrium, _oriented, _rest_torque, _torque_ceiling, _trimmed_bias,
                    _with)
 from .recording import Recording, write_recording
-from ..simulation.integrate import simulate, stable_substeps
-from ..model.stops import JointRangeWarning
+from ...simulation.integrate import simulate, stable_substeps
+from ...model.stops import JointRangeWarning
 
 __all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "model_experiment",
            "perturbed_params", "dither_amplitude"]  # dither_amplitude: from .multisine
@@ -238,11 +238,11 @@ def _trim_on_hand(truth: Model, nominal: Model, design: ExperimentDesign, t: np.
                   amp: np.ndarray, dither: np.ndarray, gravity: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(bias, amp, dither), N m per motor, as the experimenter's slow loop on the encoder leaves them on ``truth``
-    under ``gravity`` (3,) (:func:`~alpes_dyn.estimation.trim._trimmed_bias`: the nominal finger's encoder readings
+    under ``gravity`` (3,) (:func:`~alpes_dyn.estimation.experiments.trim._trimmed_bias`: the nominal finger's encoder readings
     at the design's first orientation as the target, found on the finger as it is; the multisine's and the dither's
     amplitudes scaled with it, 1 but on a finger held lower); unchanged where the design gives its own
     ``torque_bias`` or no ``trim_bias``. The fold check's peak is the multisine's and the dither's, the multisine's
-    alone under :data:`~alpes_dyn.estimation.trim.MATCH_COMPLIANCE`."""
+    alone under :data:`~alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE`."""
     if not design.trim_bias or design.torque_bias is not None:
         return bias, amp, dither
     extra = None if _trim.MATCH_COMPLIANCE else dither
@@ -308,7 +308,7 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
 
     Returns
     -------
-    :class:`~alpes_dyn.estimation.recording.Recording` with encoder counts, measured torque, the camera's joint
+    :class:`~alpes_dyn.estimation.experiments.recording.Recording` with encoder counts, measured torque, the camera's joint
     angles (if any), gravity (when not the model's constant) and the true joint angles.
     """
     if model not in EXPERIMENT_MODELS:
@@ -337,8 +337,8 @@ def model_experiment(nominal: Model, truth: Model | None = None, design: Experim
     nominal itself), simulated on ``truth`` with the sensors of the design.
 
     ``truth`` must have the nominal's joints and motors (e.g. the same URDF with a perturbed spec). Returns
-    (and writes to ``path``) the :class:`~alpes_dyn.estimation.recording.Recording`, readable by
-    :func:`~alpes_dyn.estimation.recording.read_recording` with either model.
+    (and writes to ``path``) the :class:`~alpes_dyn.estimation.experiments.recording.Recording`, readable by
+    :func:`~alpes_dyn.estimation.experiments.recording.read_recording` with either model.
     """
     if not isinstance(nominal, Model):
         raise InputError(f"nominal: expected an alpes_dyn Model, got {type(nominal).__name__}")

@@ -1,4 +1,4 @@
-"""Recordings of an experiment on the hand: the CSV format that :func:`~alpes_dyn.estimation.identification.identify` reads.
+"""Recordings of an experiment on the hand: the CSV format that :func:`~alpes_dyn.estimation.identification.identification.identify` reads.
 
 One row per sample, uniformly spaced, a header line naming the columns (any order):
 
@@ -40,10 +40,10 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import RecordingError
-from ..fileio import atomic_write, read_bytes
-from ..limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
-from ..model.robot import Model
+from ...errors import RecordingError
+from ...fileio import atomic_write, read_bytes
+from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
+from ...model.robot import Model
 
 __all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
 

@@ -1,4 +1,4 @@
-"""The experiment's bias trimmed on the hand (:mod:`alpes_dyn.estimation.experiment` designs it on the nominal model):
+"""The experiment's bias trimmed on the hand (:mod:`alpes_dyn.estimation.experiments.experiment` designs it on the nominal model):
 the static equilibria it is designed and trimmed on, the torque searches, and what the experimenter's slow loop on the
 encoder settles to on the real finger (:func:`_trimmed_bias`).
 
@@ -32,9 +32,9 @@ from typing import Callable
 
 import numpy as np
 
-from ..errors import InputError
-from ..model.robot import Model
-from ..model.stops import JointRangeWarning
+from ...errors import InputError
+from ...model.robot import Model
+from ...model.stops import JointRangeWarning
 from .multisine import _motor_groups
 
 

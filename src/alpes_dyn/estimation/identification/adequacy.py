@@ -22,7 +22,7 @@ the model's reading S q on the fit's multiple-shooting trajectory, one column pe
   sqrt(q^2 / 12 + sigma_n^2 + sigma_tau^2): the encoder's quantisation step q (read from the
   recording's own values), its white noise sigma_n beyond quantisation (estimated from the recording,
   model-free, by the fourth difference of the encoder, or given), and sigma_tau, what the torque noise
-  the fit leaves explains (see :func:`alpes_dyn.estimation.identification.identify`).
+  the fit leaves explains (see :func:`alpes_dyn.estimation.identification.identification.identify`).
 * **Validation** (:func:`fit_percent`, ``compare``): fit % = 100 (1 - ||y - yhat|| / ||y - mean y||)
   per encoder and NRMSE = ||y - yhat|| / ||y - mean y|| on a recording the fit did not see.
 * **Signatures** (:func:`signatures`): the share of the residual explained by each known missing
@@ -45,7 +45,7 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..errors import AlpesDynWarning, InputError
+from ...errors import AlpesDynWarning, InputError
 from .harmonics import NONLINEARITY, harmonic_ratio
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
@@ -85,7 +85,7 @@ explains at least ``signature_share`` of the residual and at least half what the
 within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere; a
 nonlinearity shaped otherwise than in the model named (last) where the residual's power at the excitation's
 harmonics and intermodulation products is over ``harmonic_ratio`` times its power elsewhere
-(:func:`~alpes_dyn.estimation.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1)."""
+(:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")
@@ -307,7 +307,7 @@ def nrmse(y: np.ndarray, yhat: np.ndarray) -> np.ndarray:
 def signatures(e: np.ndarray, responses: Mapping[str, np.ndarray]) -> dict[str, dict[str, float]]:
     """What each candidate missing effect explains of the residual: e (N, m) regressed jointly on the
     effects' responses (name -> (N, m): the encoder's response, counts, to a unit of the effect through the
-    fitted model, see :func:`~alpes_dyn.estimation.identification.identify`) and a constant (``"bias"``);
+    fitted model, see :func:`~alpes_dyn.estimation.identification.identification.identify`) and a constant (``"bias"``);
     per effect its ``share``, the partial R^2 (the fraction of the residual's sum of squares that
     the joint regression loses without that effect), and ``coefficient`` (counts per unit)."""
     e = _columns(e, "residual").reshape(-1)
@@ -370,7 +370,7 @@ class Adequacy:
     notes: list[str] = field(default_factory=list)
     observer: Any = None
     """The observer's check of the identified file where it was judged
-    (:class:`~alpes_dyn.estimation.observer_check.ObserverCheck`), else None."""
+    (:class:`~alpes_dyn.estimation.identification.observer_check.ObserverCheck`), else None."""
 
     @property
     def floor_ratio(self) -> float:
@@ -443,7 +443,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     ``reversal_ratio``. range_exit: where the fitted joints leave their range, which and how far (the caller's
     :func:`range_exit`): a reason of its own, and a joint stop named first among the likely missing effects.
     lines: the excitation's frequencies (Hz) and dt the sample time (s): the residual's power at their harmonics
-    and intermodulation (:func:`~alpes_dyn.estimation.harmonics.harmonic_ratio`, signature ``harmonics``) names a
+    and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``) names a
     nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``.
     """
     th = {**THRESHOLDS, **(thresholds or {})}
@@ -555,7 +555,7 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
     acceleration (dry friction, viscous friction, a rotor's inertia on the tendon) and the torque's own forward
     difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
-    torque delay): the signatures of :func:`~alpes_dyn.estimation.adequacy.signatures`; finite differences of
+    torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite differences of
     batched runs, states only."""
     n = sens.n
     B, L = Ub.shape[0], Ub.shape[1]

@@ -5,7 +5,7 @@ A fit's value is only a result where it is physical and the data determine it. T
 ==================== ============== ===================================================================
 kind                 range          how the fit keeps it
 ==================== ============== ===================================================================
-K, m (with I), F_s,  (0, inf)       fitted as log theta (:mod:`~alpes_dyn.estimation.identification`):
+K, m (with I), F_s,  (0, inf)       fitted as log theta (:mod:`~alpes_dyn.estimation.identification.identification`):
 F_v, J_m, input_gain                every iterate is positive; a value that ran off by more than
                                     :data:`RUNAWAY` times its start is at the bound (0 or inf) in effect
 tendon_compliance    [0, inf)       fitted as it is (nominal 0): a cable does not shorten under tension,
@@ -16,10 +16,10 @@ encoder_offset, tilt (-inf, inf)    of the rig and its sensors, either sign: nev
 
 A parameter is **not identified** (:func:`unsupported`) where its value is outside that range or pinned at a bound,
 or where its 95 % interval (value +- :data:`Z_INTERVAL` standard errors) reaches past 0 (the data cannot tell it from
-no such effect). :func:`~alpes_dyn.estimation.identification.identify` then fits again with it held (at its bound 0
+no such effect). :func:`~alpes_dyn.estimation.identification.identification.identify` then fits again with it held (at its bound 0
 where it crossed it, else at the model's value: the file's prior), warm-started from the first fit, so that the
 values written are those of a fit whose every parameter is identified; the result names each one not identified
-and the effect the data do not support (:attr:`~alpes_dyn.estimation.fit_result.IdentificationResult.not_identified`),
+and the effect the data do not support (:attr:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.not_identified`),
 and the parameter file never receives its value. A parameter the recording does not see at all (its standard error
 infinite: ``tilt_x`` at a level palm) is left as :func:`identify` leaves it (at its start, never written).
 """

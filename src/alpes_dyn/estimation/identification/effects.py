@@ -23,7 +23,7 @@ effect         what the fit does
 ``delay``      (asked for; ``auto`` adds it where a fit's verdict names "torque delay", the residual following
                the torque's own rate) the recorded torque lagging
                the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
-               1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.replay.advanced`) while the residual
+               1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.observers.replay.advanced`) while the residual
                falls, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
                sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
 ============== ======================================================================================
@@ -31,7 +31,7 @@ effect         what the fit does
 A first fit that loses its basin (its stop reason "lost basin", not at a joint stop) is made again in stages: the rigid fit, then the effects one by
 one, each from the last; where one breaks it, the last converged stage is kept and :attr:`EffectsFit.notes` names
 the effect. The fit kept is then judged by the observer it feeds
-(:func:`~alpes_dyn.estimation.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
+(:func:`~alpes_dyn.estimation.identification.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
 is not adequate, the reason naming the observer, and ``auto`` tries the effects not yet tried.
 
 Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
@@ -65,11 +65,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..errors import InputError
-from ..model.extras import STICTION_VELOCITY
-from ..model.params import HandParams, with_values
-from ..model.robot import Model
-from ..symbolic.parametric import select_parameters, unseen_masses
+from ...errors import InputError
+from ...model.extras import STICTION_VELOCITY
+from ...model.params import HandParams, with_values
+from ...model.robot import Model
+from ...symbolic.parametric import select_parameters, unseen_masses
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
@@ -149,7 +149,7 @@ def stiction_params(params: HandParams) -> HandParams:
     """``params`` with the friction's smooth sign at v_s = :data:`STICTION_VELOCITY` (the stick-slip law)."""
     old = params.raw["friction.smooth_velocity"]
     new = dataclasses.replace(old, value=STICTION_VELOCITY, source="assumed",
-                              reason="the stick-slip law of alpes_dyn.estimation.effects: a joint creeps at "
+                              reason="the stick-slip law of alpes_dyn.estimation.identification.effects: a joint creeps at "
                                      "v_s atanh(tau / F_s) under a torque below F_s", std=None)
     return with_values(params, {"friction.smooth_velocity": new})
 
@@ -192,9 +192,9 @@ class EffectsFit:
     delay: int = 0
     """Whole samples by which the kept fit found the recorded torque lagging the motor's (``delay``; 0 without it):
     of the rig's sensors, kept here, not in the file (the EKF on a recording takes it,
-    :func:`~alpes_dyn.estimation.replay.estimate_recording` ``torque_delay``)."""
+    :func:`~alpes_dyn.estimation.observers.replay.estimate_recording` ``torque_delay``)."""
     observer: Any = None
-    """The observer's check of the kept fit (:func:`~alpes_dyn.estimation.observer_check.judge`), or None."""
+    """The observer's check of the kept fit (:func:`~alpes_dyn.estimation.identification.observer_check.judge`), or None."""
     notes: list[str] = dataclasses.field(default_factory=list)
     """What a staged start did (which effect broke a fit that lost its basin)."""
 
@@ -253,10 +253,10 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     kept, or the one before the kept one). Where the kept fit's compliance is below minus three standard errors
     (a cable shortening under tension: another effect absorbed), a last round without it, kept where it
     converges. Each round starts from the last converged one's values
-    (:func:`~alpes_dyn.estimation.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
+    (:func:`~alpes_dyn.estimation.identification.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
     ``kwargs`` (which go to ``identify``) name an ``interval``. With ``delay``: the torque read 1, 2, ... samples
     earlier while the residual falls (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
-    feeds (:func:`~alpes_dyn.estimation.observer_check.judge`, on the ``validation`` recording where one is given,
+    feeds (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, on the ``validation`` recording where one is given,
     else the fitted one): where the EKF on its file fails, the fit is not adequate, the reason naming the
     observer.
 
@@ -266,7 +266,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     from .adequacy import AdequacyWarning
     from .identification import identify
     from .observer_check import judge
-    from .replay import advanced
+    from ..observers.replay import advanced
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")

@@ -1,4 +1,4 @@
-"""The result of a fit (:func:`~alpes_dyn.estimation.identification.identify`): its estimates and diagnostics,
+"""The result of a fit (:func:`~alpes_dyn.estimation.identification.identification.identify`): its estimates and diagnostics,
 and the parameter file they make (:func:`identified_params`)."""
 
 from __future__ import annotations
@@ -10,10 +10,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import ModelError
-from ..model.params import HandParams, Param, with_values, write_params
-from ..model.robot import Model
-from ..symbolic.parametric import parameter_catalogue
+from ...errors import ModelError
+from ...model.params import HandParams, Param, with_values, write_params
+from ...model.robot import Model
+from ...symbolic.parametric import parameter_catalogue
 from .adequacy import Adequacy, _finite
 from .bounds import describe
 
@@ -52,11 +52,11 @@ class IdentificationResult:
     residual: np.ndarray | None = field(default=None, repr=False)
     adequacy: Adequacy | None = None
     solution: Any = field(default=None, repr=False, compare=False)
-    """The fit's shooting variables (:class:`~alpes_dyn.estimation.shooting.ShootingSolution`) for a warm start of
+    """The fit's shooting variables (:class:`~alpes_dyn.estimation.identification.shooting.ShootingSolution`) for a warm start of
     another fit of the same recording (``identify(..., start=result)``); not written to the file."""
     not_identified: dict[str, str] = field(default_factory=dict)
     """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
-    interval past 0: :mod:`~alpes_dyn.estimation.bounds`), name -> why (with the effect the data do not support):
+    interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not support):
     held in the fit kept, never written to a file."""
 
     @property

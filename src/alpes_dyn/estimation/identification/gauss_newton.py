@@ -1,6 +1,6 @@
 """The solver of the multiple-shooting fit: constrained Gauss-Newton with a homotopy and two starts.
 
-It drives a :class:`~alpes_dyn.estimation.shooting.ShootingProblem` (residuals, defects, their Jacobians and the
+It drives a :class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem` (residuals, defects, their Jacobians and the
 KKT matrices) and knows nothing of the model. Three stages:
 
 1. :meth:`GaussNewton.fit_nodes`: each interval's start state alone on its encoder samples (theta fixed, the
@@ -14,7 +14,7 @@ KKT matrices) and knows nothing of the model. Three stages:
 
 :meth:`GaussNewton.solve` runs stages 2-3 from two starts (friction held during the homotopy, then free) where the
 first ends above the basin limit (three times the quantisation floor: wrong basins leave 4-8 counts). Why each
-stage exists is told in :mod:`alpes_dyn.estimation.identification` and at each rule below. Compared on the same
+stage exists is told in :mod:`alpes_dyn.estimation.identification.identification` and at each rule below. Compared on the same
 problem with IPOPT (CasADi's ``nlpsol``): at parity on fit time (5.4 vs 5.5 s), and this one converges without
 tight bounds where IPOPT did not (the issue 18 measurement).
 """
@@ -28,7 +28,7 @@ from typing import Any, Callable
 import numpy as np
 import scipy.sparse as sp
 
-from ..progress import _Progress
+from ...progress import _Progress
 from .kkt import factorize
 from .shooting import Evaluation, ShootingProblem
 
@@ -71,7 +71,7 @@ start (the wrong basins leave 4-8 counts, the right one the encoder noise, 0.58)
 
 @dataclass
 class SolverResult:
-    """Where a start of stages 2-3 ended: the variables, the :class:`~alpes_dyn.estimation.shooting.Evaluation`
+    """Where a start of stages 2-3 ended: the variables, the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation`
     there (with its Jacobians), the Gauss-Newton iterations, whether the stopping rule was met and why it stopped."""
 
     nodes: np.ndarray
@@ -96,7 +96,7 @@ class GaussNewton:
     def fit_nodes(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                   sweeps: int = 8) -> np.ndarray:
         """Stage 1: the nodes alone (theta fixed, intervals decoupled), ``sweeps`` Levenberg-Marquardt steps per
-        interval, from :meth:`~alpes_dyn.estimation.shooting.ShootingProblem.initial_nodes`."""
+        interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`."""
         nx, n_int = pb.nx, pb.n_int
         nodes = nodes.copy()
         mu_n = 1e-2 * np.ones(n_int)
@@ -369,11 +369,11 @@ class GaussNewton:
 
     def solve(self, pb: ShootingProblem, nodes: np.ndarray | Callable[[], np.ndarray], offs: np.ndarray,
               glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SolverResult:
-        """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.shooting.ShootingProblem.initial_nodes`; or a
+        """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; or a
         function giving them, called only where no warm start converges: a run of the whole record): stage 1,
         then stages 2-3 with friction held during the homotopy, and again with it free where the first ends
         above :data:`BASIN_LIMIT` (each alone missed the right basin on one of five +-20 % fingers). ``warm``: the
-        variables of another fit of the recording (:meth:`~alpes_dyn.estimation.shooting.ShootingProblem.warm_variables`):
+        variables of another fit of the recording (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.warm_variables`):
         stage 3 from them first, kept where it converges within :data:`BASIN_LIMIT`, else stages 1-3 as above (the
         homotopy brings a start from the model's own response near the data; a converged fit of a neighbouring
         model already is: on MuJoCo's all-effects finger3 plants, seeds 40-41, the rounds with the rotor and the

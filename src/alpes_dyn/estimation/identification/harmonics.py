@@ -9,7 +9,7 @@ On MuJoCo's stick-slip finger fitted with the stick-slip law (``benchmarks/reali
 12), the residual's excess power sat at 3 x 20 Hz (the dither's third harmonic, 19 times the mean) and at 20 +
 11.3 Hz (22 times): over every product, 2.0 times the power elsewhere, where white noise gives 0.83-1.11 (five
 draws of the same length). :func:`harmonic_ratio` is that ratio; the adequacy check names the effect where it
-is above :data:`~alpes_dyn.estimation.adequacy.THRESHOLDS` ``harmonic_ratio``.
+is above :data:`~alpes_dyn.estimation.identification.adequacy.THRESHOLDS` ``harmonic_ratio``.
 """
 
 from __future__ import annotations
@@ -19,7 +19,7 @@ from typing import Sequence
 
 import numpy as np
 
-from ..errors import InputError
+from ...errors import InputError
 
 __all__ = ["NONLINEARITY", "intermodulation", "harmonic_ratio"]
 

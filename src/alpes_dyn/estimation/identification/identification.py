@@ -8,8 +8,8 @@ camera's joint angles -- match the recording in the least-squares sense:
     min  sum_k |S q_k - y_k|^2 / sigma_y^2 + sum_(k, i measured) (q_k,i - q^meas_k,i)^2 / sigma_q^2.
 
 The code: the problem (residuals, continuity, their Jacobians from the compiled sensitivities, the KKT matrices) is
-:class:`~alpes_dyn.estimation.shooting.ShootingProblem`; the solver that drives it (stages 1-3 below, the two
-starts) is :class:`~alpes_dyn.estimation.gauss_newton.GaussNewton`; :func:`identify` checks the inputs, builds the
+:class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`; the solver that drives it (stages 1-3 below, the two
+starts) is :class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`; :func:`identify` checks the inputs, builds the
 one, runs the other, retries at half the interval, and concludes (covariance, adequacy).
 
 Method: direct multiple shooting (Bock): the record is cut into intervals of ``interval`` seconds,
@@ -61,16 +61,16 @@ from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-from ..errors import InputError, ModelError, RecordingError
-from ..model.robot import Model
-from ..model.transmission import torque_before
-from ..symbolic.parametric import common_scale, parameter_catalogue, select_parameters
+from ...errors import InputError, ModelError, RecordingError
+from ...model.robot import Model
+from ...model.transmission import torque_before
+from ...symbolic.parametric import common_scale, parameter_catalogue, select_parameters
 from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, range_exit, sensor_floor,
                        torque_explained)
-from .recording import Recording, check_recording
-from .scenario import static_equilibrium
-from ..simulation.integrate import stable_substeps
-from ..simulation.sensitivity import SensitivityModel
+from ..experiments.recording import Recording, check_recording
+from ..observers.scenario import static_equilibrium
+from ...simulation.integrate import stable_substeps
+from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
 from .kkt import factorize
 from .shooting import ShootingProblem, line_basis, torque_model
@@ -95,7 +95,7 @@ times the recording's sensor floor runs again at half the interval (once: 100 ms
 kept where it converges to a lower residual."""
 RETRY_FLOOR_RATIO = 3.0
 """The retry's threshold, times the recording's own sensor floor (quantisation and white noise, estimated from
-its encoder: :func:`~alpes_dyn.estimation.adequacy.sensor_floor`); wrong basins leave 4-8 times it."""
+its encoder: :func:`~alpes_dyn.estimation.identification.adequacy.sensor_floor`); wrong basins leave 4-8 times it."""
 
 
 def check_selection(model: Model, parameters: str | Sequence[str] | None) -> None:
@@ -118,7 +118,7 @@ def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[floa
 def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Recording, str]:
     if isinstance(recording, Recording):
         return check_recording(recording), ""
-    from .recording import read_recording
+    from ..experiments.recording import read_recording
 
     return read_recording(recording, model), str(recording)
 
@@ -136,7 +136,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     ----------
     model: the finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``);
         parameters not fitted keep its values.
-    recording: a :class:`~alpes_dyn.estimation.recording.Recording` or a CSV path (:func:`~alpes_dyn.estimation.recording.read_recording`).
+    recording: a :class:`~alpes_dyn.estimation.experiments.recording.Recording` or a CSV path (:func:`~alpes_dyn.estimation.experiments.recording.read_recording`).
     parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction;
         by name also ``J_m`` (a model with rotors), ``encoder_offset``, ``tilt`` (``tilt_y`` on a planar finger:
         ``tilt_x`` is seen only through its cosine) and ``input_gain`` (with the masses held:
@@ -167,25 +167,25 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         five iterations.
     progress: a progress line on stderr (default: when stderr is a terminal).
     validation: a held-out recording of the same finger (another run of the experiment): the fitted
-        model is simulated open-loop on its torque (:func:`~alpes_dyn.estimation.adequacy.compare`, fit %).
+        model is simulated open-loop on its torque (:func:`~alpes_dyn.estimation.identification.adequacy.compare`, fit %).
     encoder_noise: the encoder's white noise beyond its quantisation, counts, for the adequacy's sensor
-        floor (default: estimated from the recording, :func:`~alpes_dyn.estimation.adequacy.white_noise_level`).
+        floor (default: estimated from the recording, :func:`~alpes_dyn.estimation.identification.adequacy.white_noise_level`).
     start: values to start the fit from, by the fit's parameter names (e.g. an earlier fit's
-        ``dict(zip(result.names, result.values))``, as :func:`~alpes_dyn.estimation.effects.fit_effects` does from
+        ``dict(zip(result.names, result.values))``, as :func:`~alpes_dyn.estimation.identification.effects.fit_effects` does from
         one round to the next); the parameters not named start from the model's values. A name that is not
         fitted here, or a value that is not finite (positive where the parameter is fitted as log theta), is an
         :class:`~alpes_dyn.InputError`. Or an earlier :class:`IdentificationResult` of the same recording (a
-        warm start, as :func:`~alpes_dyn.estimation.effects.fit_effects` does from one round to the next): its
+        warm start, as :func:`~alpes_dyn.estimation.identification.effects.fit_effects` does from one round to the next): its
         values of the parameters fitted here, and, where it was cut at the same interval with the same state,
-        its trajectory: the fit's last stage from there (:meth:`~alpes_dyn.estimation.gauss_newton.GaussNewton.solve`),
+        its trajectory: the fit's last stage from there (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve`),
         the whole fit where that does not converge.
     kkt: ``"sparse"`` (default): the shooting problem's normal and KKT matrices held sparse and factorised once per
-        iteration (:mod:`alpes_dyn.estimation.kkt`), time and memory linear in the record; ``"dense"``: as arrays
+        iteration (:mod:`alpes_dyn.estimation.identification.kkt`), time and memory linear in the record; ``"dense"``: as arrays
         (the reference; quadratic memory, cubic time).
 
     The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
     failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
-    (:func:`~alpes_dyn.estimation.adequacy.assess`: whiteness, independence of the torque, RMS against the
+    (:func:`~alpes_dyn.estimation.identification.adequacy.assess`: whiteness, independence of the torque, RMS against the
     sensor floor, the validation).
 
     Returns
@@ -242,7 +242,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
 
 def _within_bounds(model: Model, recording: Recording | str | Path, result: IdentificationResult,
                    settings: dict[str, Any], t_start: float) -> IdentificationResult:
-    """``result`` where every fitted parameter is identified (:func:`~alpes_dyn.estimation.bounds.unsupported`:
+    """``result`` where every fitted parameter is identified (:func:`~alpes_dyn.estimation.identification.bounds.unsupported`:
     physical, off its bounds, its 95 % interval clear of 0); else the fit again with those held (at the bound 0
     where the fit crossed it, else at the model's value), warm-started from ``result``, the ones held named in its
     :attr:`~IdentificationResult.not_identified` with the effect the data do not support. ``settings``: the other
@@ -278,7 +278,7 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
 
 def _compliance_held(model: Model, fitted: Mapping[str, float]) -> Model:
     """``model`` with the tendon compliance of each motor whose fit (``fitted``: name -> value) crossed its bound
-    0 set to that bound (:func:`~alpes_dyn.estimation.bounds.held_value`; the others as the model has them)."""
+    0 set to that bound (:func:`~alpes_dyn.estimation.identification.bounds.held_value`; the others as the model has them)."""
     import dataclasses
 
     motors = {pp.name: pp.motor for pp in parameter_catalogue(model) if pp.name in fitted}
@@ -425,7 +425,7 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
 
 def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_Kz, x_fit: np.ndarray,
               res: np.ndarray, val_rec, excitation, interval: float, encoder_noise: float | None):
-    """:func:`~alpes_dyn.estimation.adequacy.assess` of the fit: the residual, the sensor floor, each missing
+    """:func:`~alpes_dyn.estimation.identification.adequacy.assess` of the fit: the residual, the sensor floor, each missing
     effect's response less its projection on the fit's tangent space (the nodes and parameters, continuity kept:
     the residual of a missing effect is that remainder), the held-out recording's comparison. ``x_fit``: the fitted
     trajectory at the samples, ``res`` the encoder residual, counts (:func:`_fitted_output`)."""
@@ -458,7 +458,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
               excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
               compliance: np.ndarray | None = None) -> Validation:
-    """:func:`~alpes_dyn.estimation.adequacy.compare` of the fitted model on a held-out recording, its
+    """:func:`~alpes_dyn.estimation.identification.adequacy.compare` of the fitted model on a held-out recording, its
     torque projected on the excitation's lines as in the fit, the initial state estimated on the first
     ``prefix_s`` seconds (one shooting interval); ``offset`` (m,) rad: the fitted encoder offsets, the same
     sensors' (taken off the held-out encoder), and ``compliance`` (m,) rad/(N m): the fitted tendon stretch

@@ -1,6 +1,6 @@
 """The identified values of any robot's fit written into a copy of its transmission spec.
 
-:func:`~alpes_dyn.estimation.identification.identify` fits a URDF + spec :class:`~alpes_dyn.Model` as well as an
+:func:`~alpes_dyn.estimation.identification.identification.identify` fits a URDF + spec :class:`~alpes_dyn.Model` as well as an
 Alpes model; its result goes into the robot's own spec file (``alpes-dyn identify --model PATH.urdf --spec
 FILE.toml -o ident.toml``), which every command reads back (``--spec ident.toml``):
 
@@ -21,11 +21,11 @@ import math
 from pathlib import Path
 from typing import Any, Sequence
 
-from ..errors import ModelError
-from ..fileio import atomic_write
-from ..model.robot import Model
-from ..model.spec import Motor, TransmissionSpec
-from ..symbolic.parametric import parameter_catalogue
+from ...errors import ModelError
+from ...fileio import atomic_write
+from ...model.robot import Model
+from ...model.spec import Motor, TransmissionSpec
+from ...symbolic.parametric import parameter_catalogue
 from .fit_result import _printable, _record  # the same record as a parameter file's [identification.<chain>]
 
 __all__ = ["identified_spec", "write_identified_spec", "spec_misfits"]
@@ -43,7 +43,7 @@ def spec_misfits(model: Model, names: Sequence[str]) -> list[str]:
 
 def identified_spec(result: Any, base: TransmissionSpec) -> TransmissionSpec:
     """``base`` with the fitted values of ``result`` (an
-    :class:`~alpes_dyn.estimation.identification.IdentificationResult` of a model built on ``base``, or on its
+    :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult` of a model built on ``base``, or on its
     restriction to some branches, :meth:`~alpes_dyn.model.robot.Model.subtree`: the whole robot's spec with
     those values replaced) and the ``[identified]`` section: their standard errors and the fit's record (the
     module doc).

@@ -1,4 +1,4 @@
-"""The linear algebra of the multiple-shooting fit (:mod:`alpes_dyn.estimation.shooting`), sparse.
+"""The linear algebra of the multiple-shooting fit (:mod:`alpes_dyn.estimation.identification.shooting`), sparse.
 
 The fit's unknowns are S intervals' local variables (each interval's start state and torque correction, ``nb``
 per interval) and ``ng`` global ones (the parameters and the line-coefficient corrections). Its Gauss-Newton

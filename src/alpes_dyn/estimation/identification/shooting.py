@@ -1,4 +1,4 @@
-"""The multiple-shooting output-error problem of :func:`~alpes_dyn.estimation.identification.identify`.
+"""The multiple-shooting output-error problem of :func:`~alpes_dyn.estimation.identification.identification.identify`.
 
 A recording of N samples is cut into S intervals of L samples; the unknowns are each interval's start state s_j
 (and, with a constant torque correction per interval, that correction: ``nb`` local variables per interval) and
@@ -14,8 +14,8 @@ the camera's (q - q_meas) / sigma_q where the recording has joint angles, and th
 :class:`ShootingProblem` holds the data cut at the intervals and evaluates r, the continuity defects and their
 Jacobians from the compiled sensitivities
 (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`), and the Gauss-Newton normal and KKT matrices of
-:mod:`alpes_dyn.estimation.kkt`. It knows nothing of how the problem is solved: that is
-:mod:`alpes_dyn.estimation.gauss_newton`.
+:mod:`alpes_dyn.estimation.identification.kkt`. It knows nothing of how the problem is solved: that is
+:mod:`alpes_dyn.estimation.identification.gauss_newton`.
 """
 
 from __future__ import annotations
@@ -26,13 +26,13 @@ from typing import Mapping, Sequence
 
 import numpy as np
 
-from ..checks import as_float_array
-from ..errors import InputError, ModelError
-from ..model.robot import Model
-from ..model.transmission import torque_before
-from ..simulation.sensitivity import SensitivityModel
+from ...checks import as_float_array
+from ...errors import InputError, ModelError
+from ...model.robot import Model
+from ...model.transmission import torque_before
+from ...simulation.sensitivity import SensitivityModel
 from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
-from .recording import Recording
+from ..experiments.recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK"]

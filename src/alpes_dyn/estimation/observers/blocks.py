@@ -1,13 +1,13 @@
 """Estimation blocks of :func:`alpes_dyn.simulation.loop.run_loop`: an observer, and a recording played back.
 
-* :class:`Observer`: a Kalman filter of :mod:`alpes_dyn.estimation.observers` at the sample rate: at t_0 its prior
+* :class:`Observer`: a Kalman filter of :mod:`alpes_dyn.estimation.observers.observers` at the sample rate: at t_0 its prior
   (updated with the first measurement, or not), then each sample one predict-update step
   (``filter_step_p``) with the known inputs of the previous period and the measurement at t_k. Its whole-record
-  response is the filter's :meth:`~alpes_dyn.estimation.observers.KalmanFilter.run` (one compiled loop).
+  response is the filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` (one compiled loop).
 * :class:`ObserverBank`: observers of the same model advanced together, one compiled call per sample;
 * :func:`step_caller` / :func:`batch_step_caller`: the filter step of one filter, or of B filters of the same model
   in one call of compiled C (CasADi's virtual machine without a compiler).
-* :class:`RecordingPlayback`: a :class:`~alpes_dyn.estimation.recording.Recording` as the plant: its encoder counts,
+* :class:`RecordingPlayback`: a :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant: its encoder counts,
   its motor torques (sample and period signals) and, where recorded, the true joint angles.
 """
 
@@ -17,11 +17,11 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ..errors import InputError
-from ..model.transmission import torque_before
-from ..simulation.loop import Block
+from ...errors import InputError
+from ...model.transmission import torque_before
+from ...simulation.loop import Block
 from .observers import KalmanFilter
-from .recording import Recording
+from ..experiments.recording import Recording
 
 __all__ = ["Observer", "ObserverBank", "RecordingPlayback", "step_caller", "batch_step_caller"]
 
@@ -34,13 +34,13 @@ def batch_step_caller(step: Any, label: str, compiled: bool,
     or its ``filter_step_p`` with ``parameters`` its model's numbers (``filt.model.values``: the compiled library
     then keyed on the model's structure, shared by models of other values)."""
     if parameters is not None:
-        from ..simulation.codegen import _step_parameters
+        from ...simulation.codegen import _step_parameters
 
         p = _step_parameters(step, parameters)  # checked against the step's input p (InputError naming it)
         step_p = step
         step = lambda s, wy: step_p(s, wy, p)  # noqa: E731 - the VM's call
     if compiled:
-        from ..simulation.integrate import CompiledStepLoop, CompilerError
+        from ...simulation.integrate import CompiledStepLoop, CompilerError
 
         try:
             loop = CompiledStepLoop(step_p if parameters is not None else step, label, threads=1, vectorize=False,
@@ -77,7 +77,7 @@ class Observer(Block):
 
     Parameters
     ----------
-    filt: a :class:`~alpes_dyn.estimation.observers.KalmanFilter` (EKF, UKF). z0: (nz,) prior mean; P0: (nz,)
+    filt: a :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` (EKF, UKF). z0: (nz,) prior mean; P0: (nz,)
         variances or (nz, nz) covariance.
     known: the signals whose values, flattened and concatenated, are the known input w (nw,) of the predict over
         [t_k-1, t_k]: period signals (the previous period's: a torque held over it) or sample signals read at t_k.
@@ -86,7 +86,7 @@ class Observer(Block):
     first_update: update the prior with the measurement at t_0 (as :meth:`KalmanFilter.run`); else the estimate
         at t_0 is the prior.
     step: the step s, wy -> s_next (:func:`step_caller`; default the filter's ``filter_step_p`` with its model's
-        numbers in CasADi's VM: :meth:`~alpes_dyn.estimation.observers.KalmanFilter.run`'s step).
+        numbers in CasADi's VM: :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run`'s step).
     label: the name of its compiled step in an :class:`ObserverBank` (default ``<kind>_<model name>``).
     """
 
@@ -95,7 +95,7 @@ class Observer(Block):
                  first_update: bool = True, step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
                  label: str | None = None, name: str = "observer") -> None:
         if not isinstance(filt, KalmanFilter):
-            raise InputError(f"filt: expected a KalmanFilter of alpes_dyn.estimation.observers, got {type(filt).__name__}")
+            raise InputError(f"filt: expected a KalmanFilter of alpes_dyn.estimation.observers.observers, got {type(filt).__name__}")
         self.filt, self.name = filt, name
         self.z0, self.P0 = filt._z(z0, "z0"), filt._P(P0, "P0")
         self.known = tuple(known)
@@ -149,7 +149,7 @@ class Observer(Block):
         return self._out()
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The filter's :meth:`~alpes_dyn.estimation.observers.KalmanFilter.run` on the record."""
+        """The filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` on the record."""
         N = self.n_periods
         W = np.hstack([np.asarray(u[s], dtype=float).reshape(np.shape(u[s])[0], -1)[:N] for s in self.known])
         Y = np.asarray(u[self.measurement], dtype=float)
@@ -203,7 +203,7 @@ class ObserverBank(Block):
 
 
 class RecordingPlayback(Block):
-    """A :class:`~alpes_dyn.estimation.recording.Recording` as the plant (run the loop with ``final=True`` over
+    """A :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant (run the loop with ``final=True`` over
     its N = n_samples - 1 periods).
 
     Writes ``encoder`` (m,) counts and ``torque`` (m,) N m at t_k (sample signals), ``before`` the torque held over

@@ -3,7 +3,7 @@
 The EKF's prediction P_pred = A P A^T + G Sigma_w G^T + Q and the measurement update of both filters (S = H P
 H^T + R, K = P H^T S^-1, z + K (y - h), the Joseph form (I - K H) P (I - K H)^T + K R K^T) are written here
 over the nonzeros of the sparse Jacobians A, G, H and over one triangle of the symmetric results, every sum in a
-stated order. The exported C (:mod:`~alpes_dyn.estimation.cexport_ekf`) runs the same
+stated order. The exported C (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`) runs the same
 loops in the same order, so the filter's step and its C give the same numbers to the last bit (up to the sign of
 an exact zero), with the arithmetic of sparse products and one triangle instead of dense ones (the hand: 134,000
 operations per step before, 60,000 after; tested in ``tests/test_cexport.py``).

@@ -35,9 +35,9 @@ s = [z; vec P]; :meth:`KalmanFilter.run` applies it N times in one call of CasAD
 machine (``mapaccum``, the default) or of compiled C (``compiled=True``:
 :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`, cached on disk), never in a Python loop.
 
-Example (the default scenario of ``alpes-dyn estimate``, see :mod:`alpes_dyn.estimation.scenario`)::
+Example (the default scenario of ``alpes-dyn estimate``, see :mod:`alpes_dyn.estimation.observers.scenario`)::
 
-    from alpes_dyn.estimation.scenario import run_estimation, plot_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation, plot_estimation
     res = run_estimation("ekf-params", mismatch=0.1, duration=5.0, seed=0)
     print(res.rmse)            # (3,) rad, RMSE of q_1..q_3 after the transient
     print(res.parameters)      # estimated and true gains
@@ -52,13 +52,13 @@ from typing import Any, Sequence
 import casadi as cs
 import numpy as np
 
-from ..checks import as_float_array
-from ..errors import InputError, ModelError
-from ..limits import check_bytes
-from ..rebuild import Rebuilt
-from ..simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
-from ..symbolic.lifted import lift_constants
-from ..symbolic.statespace import StateSpace
+from ...checks import as_float_array
+from ...errors import InputError, ModelError
+from ...limits import check_bytes
+from ...rebuild import Rebuilt
+from ...simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
+from ...symbolic.lifted import lift_constants
+from ...symbolic.statespace import StateSpace
 from .covariance import predicted_covariance, updated_state
 
 __all__ = [
@@ -70,7 +70,7 @@ OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
 PARAMETERS: tuple[str, ...] = ("input_gain", "spring_gain")
 DISTURBANCE_PREFIX = "disturbance_"
 """``disturbance_<motor>``: an additive torque on that motor, N m, estimated as a random-walk state (motor inputs
-only): what the model leaves unexplained (:mod:`alpes_dyn.estimation.replay`)."""
+only): what the model leaves unexplained (:mod:`alpes_dyn.estimation.observers.replay`)."""
 
 
 def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
@@ -264,13 +264,13 @@ class KalmanFilter(Rebuilt):
     ----------
     model: the :class:`DiscreteModel`. names: names of z's entries. backend: ``"compiled"`` or ``"casadi"``.
     filter_step: ``casadi.Function`` s = [z; vec P], [w; y] -> s_next, one predict-update step; its covariance
-        arithmetic in the order of :mod:`~alpes_dyn.estimation.covariance` (the exported C's).
+        arithmetic in the order of :mod:`~alpes_dyn.estimation.observers.covariance` (the exported C's).
     filter_step_p: the same step with the model's numbers as a third input p (``model.values``): what the compiled
         loop and :meth:`online` run, so that the library is keyed on the model's structure (its joints,
         transmission, effects and the noise settings), never recompiled for other masses or springs.
     measurement: ``casadi.Function`` z -> (h (ny,), H = dh/dz (ny, nz), sparse), what the update evaluates.
     exact_loops: True when CasADi folded no constant product in that arithmetic: the exported C's loops
-        (:mod:`~alpes_dyn.estimation.cexport_ekf`) give the step's numbers to the last bit.
+        (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`) give the step's numbers to the last bit.
     """
 
     kind = "kalman"
@@ -343,7 +343,7 @@ class KalmanFilter(Rebuilt):
 
     def _update_sym(self, z: cs.SX, P: cs.SX, y: cs.SX) -> tuple[cs.SX, cs.SX]:
         """Measurement update with a Joseph-form covariance (eq. of the linear Kalman filter), in the order of
-        :func:`~alpes_dyn.estimation.covariance.updated_state` (the exported C's)."""
+        :func:`~alpes_dyn.estimation.observers.covariance.updated_state` (the exported C's)."""
         zs = cs.SX.sym("zs", self.nz)
         hs = self.model.output(zs)
         self.measurement = cs.Function("measurement", [zs], [hs, cs.jacobian(hs, zs)], ["z"], ["h", "H"])
@@ -503,7 +503,7 @@ class ExtendedKalmanFilter(KalmanFilter):
     -------
     >>> import alpes_dyn as ad
     >>> from alpes_dyn.symbolic.statespace import StateSpace
-    >>> from alpes_dyn.estimation.observers import ExtendedKalmanFilter
+    >>> from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
     >>> ss = StateSpace(ad.Model.alpes("finger3"), input="motor", output="encoder")
     >>> ekf = ExtendedKalmanFilter(ss, 1e-3, process_noise=[1e-10] * 3 + [1e-6] * 3,
     ...                            measurement_noise=[1e-7], input_noise=[1e-8])

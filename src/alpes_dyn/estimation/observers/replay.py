@@ -1,7 +1,7 @@
 """The observer on a recording: the joints estimated from a recorded encoder and motor torque.
 
 What a user does with the real hand (``alpes-dyn estimate --data REC.csv --params FILE``,
-:func:`estimate_recording`): the recording (the CSV format of :mod:`alpes_dyn.estimation.recording`,
+:func:`estimate_recording`): the recording (the CSV format of :mod:`alpes_dyn.estimation.experiments.recording`,
 written by the hand's logger or by ``alpes-dyn experiment``) is played back into an observer of the
 model -- typically the one identified from another recording (``alpes-dyn identify -o FILE``).
 
@@ -33,18 +33,18 @@ from typing import Any
 
 import numpy as np
 
-from ..checks import as_float_array
-from ..errors import InputError, RecordingError
-from ..fileio import atomic_path
-from ..limits import check_bytes, check_physical
-from ..model.robot import Model
-from ..simulation.integrate import stable_substeps
-from ..symbolic.parametric import tilted_gravity
-from ..symbolic.statespace import StateSpace
-from ..simulation.loop import Function, run_loop
+from ...checks import as_float_array
+from ...errors import InputError, RecordingError
+from ...fileio import atomic_path
+from ...limits import check_bytes, check_physical
+from ...model.robot import Model
+from ...simulation.integrate import stable_substeps
+from ...symbolic.parametric import tilted_gravity
+from ...symbolic.statespace import StateSpace
+from ...simulation.loop import Function, run_loop
 from .blocks import Observer, RecordingPlayback
 from .observers import OBSERVERS, Estimate, make_observer
-from .recording import Recording, read_recording
+from ..experiments.recording import Recording, read_recording
 from .scenario import held_mid_range, rest_with_held_joints
 
 __all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
@@ -82,7 +82,7 @@ class RecordingEstimate:
     joint_names (n,), motor_names (m,). rmse: (n,) rad after the transient, or None (no ``true_q_*``).
     final_error: (n,) rad at the last sample, or None. disturbance: (N, m) N m, or None.
     settings: the noise levels and options used.
-    filter: the observer run (its ``model.step`` the prediction, :mod:`~alpes_dyn.estimation.observer_check`).
+    filter: the observer run (its ``model.step`` the prediction, :mod:`~alpes_dyn.estimation.identification.observer_check`).
     measurement: (N, m) rad, the encoder as the observer read it (the zero and the tendons' stretch taken off).
     """
 
@@ -251,13 +251,13 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; else 1).
     compiled: the filter in compiled C (same numbers).
     encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
-        :func:`~alpes_dyn.estimation.identification.identify`): taken off the reading. Default 0.
+        :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default 0.
     tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
         gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
         tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
         taken off it.
     torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
-        :func:`~alpes_dyn.estimation.effects.fit_effects` with ``delay``): the observer reads the torque of
+        :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the torque of
         :func:`advanced` (a replay: the later samples are recorded). Default 0.
 
     Returns
@@ -344,7 +344,7 @@ def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
 def _reading(rec: Recording, tr: Any, offsets: np.ndarray) -> np.ndarray:
     """(N, m) rad: the recorded encoder as the observer reads it, the zero ``offsets`` and the tendons' stretch
     C tau_m,k-1 taken off (what :func:`_played_back`'s ``unstretched`` block gives it)."""
-    from ..model.transmission import torque_before
+    from ...model.transmission import torque_before
 
     step = 2 * np.pi / tr.counts_per_rev
     return tr.unstretched(rec.encoder * step - offsets, torque_before(rec.torque))

@@ -32,7 +32,7 @@ One chain of the hand: ``chain`` (a finger's name) makes the finger model that f
 (``friction=True``: its ab/adduction has no spring), whose flexion motor gets the torque above and whose
 ab/adduction motor the sines times :data:`ABDUCTION_SCALE` without bias, its joint starting mid-range.
 Note that a finger with soft springs may have no rest at the 0.0222 N m bias (a fold of its static
-equilibria, see :mod:`alpes_dyn.estimation.experiment`): the scenario then fails with a one-line error.
+equilibria, see :mod:`alpes_dyn.estimation.experiments.experiment`): the scenario then fails with a one-line error.
 """
 
 from __future__ import annotations
@@ -44,18 +44,18 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..errors import InputError
-from ..fileio import atomic_path, check_output_path
-from ..limits import check_bytes
-from ..model.robot import Model
+from ...errors import InputError
+from ...fileio import atomic_path, check_output_path
+from ...limits import check_bytes
+from ...model.robot import Model
 from .observers import OBSERVERS, PARAMETERS, Estimate, make_observer, true_gains
-from ..model.params import HandParams, load_params
-from ..simulation.integrate import stable_substeps
-from ..simulation.loop import Source, run_loop
-from ..simulation.plants import SimulatorPlant
-from ..simulation.sensors import Encoder, TorqueSensor
+from ...model.params import HandParams, load_params
+from ...simulation.integrate import stable_substeps
+from ...simulation.loop import Source, run_loop
+from ...simulation.plants import SimulatorPlant
+from ...simulation.sensors import Encoder, TorqueSensor
 from .blocks import Observer
-from ..symbolic.statespace import StateSpace
+from ...symbolic.statespace import StateSpace
 
 SCENARIO_MODELS: tuple[str, ...] = ("finger2", "finger3")
 ESTIMATION_MODELS: tuple[str, ...] = SCENARIO_MODELS + ("thumb",)
@@ -302,7 +302,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
 
     Parameters
     ----------
-    observer: one of :data:`~alpes_dyn.estimation.observers.OBSERVERS`.
+    observer: one of :data:`~alpes_dyn.estimation.observers.observers.OBSERVERS`.
     scenario: the settings (default :class:`EstimationScenario`); ``overrides`` replace fields,
         e.g. ``run_estimation("ekf-params", mismatch=0.1, duration=5.0, seed=1)``.
     compiled: run the filter in compiled C (default: CasADi's virtual machine; same numbers).
