@@ -249,6 +249,10 @@ def test_estimation_short_names_and_old_paths():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
     assert out == ["True", "alpes_dyn.estimation.experiments.adapt", "1", "DeprecationWarning",
                    "alpes_dyn.estimation.experiments.adapt;"]
+    for room, name in (("identification", "identify"), ("observers", "make_observer"), ("cexport", "write_c_observer")):
+        # a room that was a module: its module's names forwarded from the room, with a warning
+        with pytest.warns(DeprecationWarning, match=f"alpes_dyn.estimation.{room}.{room}.{name}"):
+            assert getattr(importlib.import_module(f"alpes_dyn.estimation.{room}"), name) is getattr(est, name)
     for old, new in est.MOVED.items():
         assert (PACKAGE / "estimation" / f"{new.replace('.', '/')}.py").is_file() and "." not in old
         assert not (PACKAGE / "estimation" / f"{old}.py").exists()

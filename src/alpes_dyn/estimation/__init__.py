@@ -13,7 +13,9 @@ The names a user needs most are here too, so that a script reads ``from alpes_dy
     from alpes_dyn.estimation import adapted_experiment, ExperimentDesign, identify, estimate_recording
 
 The module paths of before the split (``alpes_dyn.estimation.adapt``, ...: :data:`MOVED`) still import, the same
-module, with a :class:`DeprecationWarning` naming the new path; they go in the next release (CHANGELOG.md).
+module, with a :class:`DeprecationWarning` naming the new path, and so do the names of the three modules that are
+now rooms (``from alpes_dyn.estimation.identification import identify``); they go in the next release
+(CHANGELOG.md).
 """
 
 from __future__ import annotations

@@ -4,4 +4,12 @@ covariance arithmetic in one fixed order of operations (:mod:`.covariance`), the
 simulation loop (:mod:`.blocks`), the estimation scenario -- a finger moved by its motor from the equilibrium of eq.
 2.11, its encoder (eq. 3.13) and torque sensor simulated (:mod:`.scenario`, ``alpes-dyn estimate``) -- and the
 observer run on a recording (:mod:`.replay`, ``alpes-dyn estimate --data``). Reads the recordings of
-:mod:`alpes_dyn.estimation.experiments`; knows nothing of the fit."""
+:mod:`alpes_dyn.estimation.experiments`; knows nothing of the fit.
+
+Before the split this path was the module now at ``alpes_dyn.estimation.observers.observers``: a name of that module taken
+from here still works, with a DeprecationWarning naming its new path, for one release (import it from the module,
+or from :mod:`alpes_dyn.estimation` where it is listed there)."""
+
+from ..._moved import package_getattr
+
+__getattr__ = package_getattr("estimation.observers", ("observers",))
