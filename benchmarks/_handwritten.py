@@ -32,7 +32,8 @@ PAGE: dict[str, str] = {
         "file's included (the grasp scene of that drawn hand loses its contact), and the little finger's fit "
         'lost its basin (measured on main before the ``realism`` merge)'),
     "realism": (
-        '2026-12-04, on main after every merge (the physical bounds of :mod:`~alpes_dyn.estimation.identification.bounds`, '
+        '2026-12-04, on main after every merge (the physical bounds of '
+        ':mod:`~alpes_dyn.estimation.identification.bounds`, '
         "the observer's prediction threshold 25 times the floor), load 2-3, cache warm, the same outcome as "
         'on the ``realism`` branch before (threshold 15, load 3-8); seeds 401-420 (tuned on 301-320; two '
         'rules also drawn from 401-409: the delay tried after an observer refusal, each new fit judged '

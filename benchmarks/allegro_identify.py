@@ -6,9 +6,10 @@ its two motors). Timed as a new process with ``ALPES_DYN_CACHE`` pointed at an e
 included: its share is the result's ``compile_seconds``), then again warm (the same folder).
 
 Baseline in the same run: today's whole-robot chain fit on the same recording -- the same parameters (the index
-tendon's joints, its compliance, the tilt), the same fit (:func:`alpes_dyn.estimation.identification.effects.fit_effects` with the
-documented excitation), but on the whole 16-joint hand -- also as a new process from its own empty cache. The
-fitted values of the two are compared (relative difference and in standard errors).
+tendon's joints, its compliance, the tilt), the same fit
+(:func:`alpes_dyn.estimation.identification.effects.fit_effects` with the documented excitation), but on the whole
+16-joint hand -- also as a new process from its own empty cache. The fitted values of the two are compared (relative
+difference and in standard errors).
 
 The recording: ``model_experiment`` of the shipped spec's hand with the index springs off by +10 %, -7 %, +5 % (the
 true robot), ``--duration`` s (default 4). Prints a table, or one JSON object with ``--json``; ``--no-baseline``

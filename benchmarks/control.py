@@ -12,8 +12,8 @@ scenario; the parameter file says so). References: steps 0.2 -> 1.0 -> 0.5 N (1.
 * ``pi`` (the baseline: a PI on the FlexiForce alone, tuned by the same rule as the sensor loop);
 
 then the step with the plant's parameters 10 % off the controller's, link by link: ``--plant-draws``
-plants drawn by :func:`alpes_dyn.estimation.experiments.experiment.perturbed_params` (springs, masses with inertias, and joint
-friction each times a factor uniform in [0.9, 1.1], draws 0, 1, ...), the controller keeping its own
+plants drawn by :func:`alpes_dyn.estimation.experiments.experiment.perturbed_params` (springs, masses with inertias, and
+joint friction each times a factor uniform in [0.9, 1.1], draws 0, 1, ...), the controller keeping its own
 parameter file. For each controller the loss against the matched plant is printed (mean and worst over
 the draws of the change in steady-state error, RMSE and overshoot).
 

@@ -4,9 +4,9 @@ finger3 drawn +-20 % per link (seed 21 by default: not one the other benchmarks 
 identification experiment simulated for each duration (our simulator; sensor noise on) and written to a CSV by
 one process, the default fit (K, m, friction; ``excitation`` the documented lines) of that file in a fresh one, as
 ``alpes-dyn identify --data`` does, so that its peak resident memory is the fit's own (the 60 s experiment's
-simulation alone peaks at about 500 MiB). The sparse KKT (the default, :mod:`alpes_dyn.estimation.identification.kkt`) against the dense
-one (``kkt="dense"``, the baseline, run in the same process where it fits in memory: up to 16 s), with the
-ratio of their times and their parameters' largest relative difference.
+simulation alone peaks at about 500 MiB). The sparse KKT (the default, :mod:`alpes_dyn.estimation.identification.kkt`)
+against the dense one (``kkt="dense"``, the baseline, run in the same process where it fits in memory: up to 16 s), with
+the ratio of their times and their parameters' largest relative difference.
 
     python benchmarks/fit_scaling.py [--durations 2,4,8,16,60] [--dense-up-to 16] [--seed 21] [--json]
 

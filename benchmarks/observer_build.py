@@ -1,7 +1,8 @@
 """The observer built in seconds (issue 20): the EKF's construction, its step from Python, and ``estimate --data``.
 
 For finger3, the Allegro hand's index chain (``--chain index``: its sub-model) and the Alpes hand (``--models`` may add
-``allegro``, the whole Allegro hand), the observer of ``estimate --data`` (:func:`~alpes_dyn.estimation.observers.replay.
+``allegro``, the whole Allegro hand), the observer of ``estimate --data``
+(:func:`~alpes_dyn.estimation.observers.replay.
 recording_filter`: motor torques in, encoders out, the default substeps) is built
 
     build 1st     in a fresh process, the model already loaded (its symbolic dynamics, the RK4 step, the Jacobians,

@@ -85,7 +85,8 @@ def _section(name: str, results: Path) -> list[str]:
     out = [title, "-" * len(title), "", what_it_compares(name), ""]
     rec, gen = load(name, results), generated(name, results)
     if gen is not None:
-        return out + ["Measured with " + conditions(gen) + ".", "", *(f"* {x}" for x in SUMMARIES[name](gen["result"])), ""]
+        bullets = [f"* {x}" for x in SUMMARIES[name](gen["result"])]
+        return out + ["Measured with " + conditions(gen) + ".", "", *bullets, ""]
     if rec is not None:
         out += [f"*Recorded in* ``benchmarks/results/{name}.json`` *({rec['date'][:10]}) but not yet summarised in* "
                 "``benchmarks/_summaries.py``.", ""]
@@ -151,7 +152,8 @@ def main(argv: list[str]) -> int:
         print(f"benchmarks/_handwritten.py: the entry {n!r} is replaced by its record: delete it")
     if check:
         for p in differ:
-            print(f"{p.relative_to(ROOT)} differs from what benchmarks/results/ gives: run python docs/make_benchmarks.py")
+            print(f"{p.relative_to(ROOT)} differs from what benchmarks/results/ gives: "
+                  "run python docs/make_benchmarks.py")
         return 1 if differ else 0
     for p in differ:
         p.write_text(want[p])

@@ -1,8 +1,8 @@
 """Physical bounds of the fitted parameters and the experiment adapted to the finger (issue 35).
 
-Checked against independent references: the rules of :func:`~alpes_dyn.estimation.identification.bounds.unsupported` by hand; the
-fit with a parameter not identified against a fresh fit that never had it; the compliance on MuJoCo plants (a rigid
-cable: not identified; a series-elastic one: identified, positive, written); the adapted experiment's choice on
+Checked against independent references: the rules of :func:`~alpes_dyn.estimation.identification.bounds.unsupported` by
+hand; the fit with a parameter not identified against a fresh fit that never had it; the compliance on MuJoCo plants
+(a rigid cable: not identified; a series-elastic one: identified, positive, written); the adapted experiment's choice on
 MuJoCo (the torque of the chosen design replayed on the MuJoCo finger keeps it in range where the palm-up one does
 not).
 """

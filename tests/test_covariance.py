@@ -1,5 +1,5 @@
-"""The filters' covariance arithmetic (estimation.observers.covariance) built as CasADi matrix operations: its numbers against
-numpy's closed forms of the prediction and the Joseph-form update, and its count of the products CasADi folds
+"""The filters' covariance arithmetic (estimation.observers.covariance) built as CasADi matrix operations: its numbers
+against numpy's closed forms of the prediction and the Joseph-form update, and its count of the products CasADi folds
 against the definition checked product by product."""
 
 from __future__ import annotations

@@ -1,5 +1,6 @@
-"""The experiment's bias trimmed on the hand (alpes_dyn.estimation.experiments.trim): a finger within +-20 % of the nominal values
-is held where it is no more compliant than the nominal finger at its design point, and its recording stays in range."""
+"""The experiment's bias trimmed on the hand (alpes_dyn.estimation.experiments.trim): a finger within +-20 % of the
+nominal values is held where it is no more compliant than the nominal finger at its design point, and its recording
+stays in range."""
 
 from __future__ import annotations
 

@@ -174,8 +174,8 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         orientations); default the model's.
     dt: sample period, s (default 1e-3).
     design: optional object with any of the fields ``dt``, ``substeps``, ``encoder_noise_counts``,
-        ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiments.experiment.ExperimentDesign`): the
-        defaults of the arguments of the same names.
+        ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiments.experiment.ExperimentDesign`):
+        the defaults of the arguments of the same names.
     x0: initial state (2n,); default the static equilibrium under U[0] and G[0] (where the balance alone
         does not place a joint without spring, the thumb's ab/adduction, that joint held mid-range).
     theta: parameter values (p,), default the model's (nominal).

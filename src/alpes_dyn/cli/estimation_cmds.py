@@ -22,7 +22,8 @@ from .common import (UntrustedFitWarning, _check_model_options, _check_run_files
 
 # ---- owned by the observers work (issue 4)
 def cmd_estimate(args: argparse.Namespace) -> int:
-    """Simulate the default scenario (alpes_dyn.estimation.observers.scenario) and estimate the joints from the motor encoder."""
+    """Simulate the default scenario (alpes_dyn.estimation.observers.scenario) and estimate the joints from the motor
+    encoder."""
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.observers.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
     from .common import _given
@@ -223,7 +224,8 @@ _URDF_EXPERIMENT = (
 
 def _experiment_robot(args: argparse.Namespace) -> int:
     """``experiment --model PATH.urdf --spec FILE.toml [--true-spec TRUE.toml]``: the documented multisine designed
-    on the spec's robot, simulated on the true one (:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment`)."""
+    on the spec's robot, simulated on the true one
+    (:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment`)."""
     from ..estimation.experiments.experiment import ExperimentDesign, model_experiment
 
     _refuse_for_urdf(args, _URDF_EXPERIMENT)
@@ -332,8 +334,8 @@ _URDF_IDENTIFY = (("--rotor-inertia", "rotor_inertia", False, "applies to the Al
 
 def _fit_robot(args: argparse.Namespace, freqs):
     """``identify --model PATH.urdf --spec FILE.toml``: :func:`_fit` on the spec's robot (the stick-slip law: the
-    spec's smooth_velocity at :data:`~alpes_dyn.estimation.identification.effects.STICTION_VELOCITY`); ``--chain MOTOR`` fits on
-    the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
+    spec's smooth_velocity at :data:`~alpes_dyn.estimation.identification.effects.STICTION_VELOCITY`); ``--chain MOTOR``
+    fits on the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
     other branches do not change its joints' dynamics; the recording's columns of their motors and joints are
     ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); a selection
     with masses is refused with -o (a spec holds no masses) before the fit. Returns the EffectsFit and the recording
@@ -507,8 +509,8 @@ _URDF_CODEGEN = (
 
 def _codegen_robot(args: argparse.Namespace) -> int:
     """``codegen --model PATH.urdf --spec FILE.toml``: the observer that ``estimate --data`` runs on a recording of
-    the robot (:func:`~alpes_dyn.estimation.observers.replay.recording_filter`) at the estimation scenario's sampling and sensor
-    noises, and with ``--controller`` the force controller of ``control`` on the robot
+    the robot (:func:`~alpes_dyn.estimation.observers.replay.recording_filter`) at the estimation scenario's sampling
+    and sensor noises, and with ``--controller`` the force controller of ``control`` on the robot
     (:func:`~alpes_dyn.control.cexport.robot_controller`: ``--frame``, ``--motor``), as standalone C."""
     from ..estimation.cexport.cexport import c_sources, check_output_directory, write_sources
     from ..estimation.observers.observers import OBSERVERS

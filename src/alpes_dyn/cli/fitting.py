@@ -24,9 +24,9 @@ def _identify_lines(args: argparse.Namespace):
 def _fit(args: argparse.Namespace, freqs, recordings=None):
     """The fit: --parameters as named (the stick-slip law where --effects asks for it), else the default selection
     with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
-    check names it (:mod:`alpes_dyn.estimation.identification.effects`). ``recordings``: (data, validation or None) already read
-    (a chain's of the whole hand's), else --data and --validate are read. Returns the EffectsFit and the recording
-    it fitted."""
+    check names it (:mod:`alpes_dyn.estimation.identification.effects`). ``recordings``: (data, validation or None)
+    already read (a chain's of the whole hand's), else --data and --validate are read. Returns the EffectsFit and the
+    recording it fitted."""
     from ..estimation.identification.adequacy import AdequacyWarning
     from ..estimation.identification.effects import EffectsFit, alpes_models, fit_effects, parse_effects
     from ..estimation.identification.identification import check_selection, identify

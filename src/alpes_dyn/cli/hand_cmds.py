@@ -1,6 +1,6 @@
 """``alpes-dyn experiment --model hand`` and ``alpes-dyn identify --model hand``: the whole hand in one experiment
-(:mod:`alpes_dyn.estimation.experiments.hand_experiment`), one recording of its six motors, every chain fitted from it into one
-parameter file."""
+(:mod:`alpes_dyn.estimation.experiments.hand_experiment`), one recording of its six motors, every chain fitted from it
+into one parameter file."""
 
 from __future__ import annotations
 

@@ -2,13 +2,14 @@
 
 :func:`~alpes_dyn.estimation.cexport.cexport.c_sources` exports the EKF this way (``code="sparse"``). The model -- the
 RK4 step z_next = F(z, w), its Jacobian A = dF/dz (sparse, CSC) and the noise's share N = G Sigma_w G^T + Q (its
-lower triangle, G = dF/dw), the filter's :attr:`~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter.linearized`
--- is CasADi's instructions written out by block (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four
-fingers side by side in vector lanes, its thumb alone) or, where the model has one block (a finger) or
-``chains=False``, CasADi's generated code of it; the measurement h(z) and H = dh/dz, its
-:attr:`~alpes_dyn.estimation.observers.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic is C
-loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.observers.covariance`, the
-order in which the filter's own step (``filter_step_p``, what ``run``, ``online`` and the compiled loop evaluate) is
+lower triangle, G = dF/dw), the
+filter's :attr:`~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter.linearized` -- is CasADi's instructions
+written out by block (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers side by side in
+vector lanes, its thumb alone) or, where the model has one block (a finger) or ``chains=False``, CasADi's generated code
+of it; the measurement h(z) and H = dh/dz, its
+:attr:`~alpes_dyn.estimation.observers.observers.KalmanFilter.measurement`, is CasADi's code. The covariance arithmetic
+is C loops over the nonzeros of A and H in the order of operations of :mod:`alpes_dyn.estimation.observers.covariance`,
+the order in which the filter's own step (``filter_step_p``, what ``run``, ``online`` and the compiled loop evaluate) is
 built: the same operations, the same numbers, to the last bit. Each sum accumulates in a register and is stored
 once. The blocks: the states that A, N, H and R couple (the hand: its five chains); when P's entries between two
 blocks are exact zeros (a prior diagonal or block-diagonal by chain; A P A^T + N and the update keep them so) the

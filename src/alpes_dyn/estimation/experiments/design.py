@@ -1,5 +1,6 @@
-"""The identification experiment's settings (:class:`ExperimentDesign`): what :mod:`alpes_dyn.estimation.experiments.experiment`
-designs, trims and simulates, each field checked with one line naming it."""
+"""The identification experiment's settings (:class:`ExperimentDesign`):
+what :mod:`alpes_dyn.estimation.experiments.experiment` designs, trims and simulates, each field checked with one line
+naming it."""
 
 from __future__ import annotations
 
@@ -41,7 +42,8 @@ class ExperimentDesign:
     @property
     def lines(self) -> tuple[float, ...]:
         """The excitation's lines, Hz: the multisine's ``frequencies`` and, with a dither, its frequency (what
-        :func:`~alpes_dyn.estimation.identification.identification.identify`'s ``excitation`` takes for this experiment)."""
+        :func:`~alpes_dyn.estimation.identification.identification.identify`'s ``excitation`` takes for this
+        experiment)."""
         return tuple(float(f) for f in self.frequencies) + ((float(self.dither_frequency),) if self.dither > 0 else ())
 
     @property

@@ -27,8 +27,8 @@ The standard error goes as about 130 %-counts / excursion until the fit loses it
 ab/adduction on the documented 1 s experiment (friction only, no spring) and far below the 730-1520 counts of the
 Alpes fingers' flexion (0.5-1 s) and the 583-637 of this finger at its test's ratios of 2.0 and 1.5. :func:`small_excursions` names each motor below it
 (:func:`~alpes_dyn.estimation.experiments.experiment.experiment` and
-:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment` warn with it, ``alpes-dyn experiment`` and ``identify``
-print it); whether a selection is identified from a given experiment is the Fisher information's to say.
+:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment` warn with it, ``alpes-dyn experiment`` and
+``identify`` print it); whether a selection is identified from a given experiment is the Fisher information's to say.
 """
 
 from __future__ import annotations

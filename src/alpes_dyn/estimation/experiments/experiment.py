@@ -15,15 +15,15 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
   joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
-* the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.experiments.trim`): before recording, a
-  slow loop on the measured encoder moves the bias until the finger rests where the nominal one would (the real
-  finger, not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
+* the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.experiments.trim`): before
+  recording, a slow loop on the measured encoder moves the bias until the finger rests where the nominal one would (the
+  real finger, not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
   q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a fold of its
   static equilibria), as high as the excitation keeps clear of the fold. Palm up a finger within +-20 % of the
   nominal values is up to 6.4 times as compliant mid-range as the nominal, and the excitation then swings it past
-  its stops: :data:`alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits' precision)
-  holds such a finger no higher than where it is as compliant as the nominal at its design point, its multisine
-  and dither shrunk with the room its joints have left below;
+  its stops: :data:`alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits'
+  precision) holds such a finger no higher than where it is as compliant as the nominal at its design point, its
+  multisine and dither shrunk with the room its joints have left below;
 * optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
   ``camera_noise`` (rad);
 * the sensors of the estimation scenario (:mod:`alpes_dyn.estimation.observers.scenario`): encoder quantised to
@@ -44,11 +44,12 @@ multisine across the joint range brings every parameter below 0.8 % (masses 0.08
 identification user guide for the full comparison.
 
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
-(and writes) a :class:`~alpes_dyn.estimation.experiments.recording.Recording` with the true joint angles in ``true_q_*``.
+(and writes) a :class:`~alpes_dyn.estimation.experiments.recording.Recording` with the true joint angles in
+``true_q_*``.
 :func:`model_experiment` does the same on any tendon-driven robot (a URDF + spec :class:`~alpes_dyn.Model`),
 its searches scaled by the robot's own static torques. Both warn
-(:class:`~alpes_dyn.estimation.experiments.excursion.SmallExcursionWarning`, one per motor) where the recording moved a motor's
-encoder by fewer counts than a fit can use
+(:class:`~alpes_dyn.estimation.experiments.excursion.SmallExcursionWarning`, one per motor) where the recording moved a
+motor's encoder by fewer counts than a fit can use
 (:mod:`alpes_dyn.estimation.experiments.excursion`).
 """
 
@@ -238,9 +239,9 @@ def _trim_on_hand(truth: Model, nominal: Model, design: ExperimentDesign, t: np.
                   amp: np.ndarray, dither: np.ndarray, gravity: np.ndarray
                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(bias, amp, dither), N m per motor, as the experimenter's slow loop on the encoder leaves them on ``truth``
-    under ``gravity`` (3,) (:func:`~alpes_dyn.estimation.experiments.trim._trimmed_bias`: the nominal finger's encoder readings
-    at the design's first orientation as the target, found on the finger as it is; the multisine's and the dither's
-    amplitudes scaled with it, 1 but on a finger held lower); unchanged where the design gives its own
+    under ``gravity`` (3,) (:func:`~alpes_dyn.estimation.experiments.trim._trimmed_bias`: the nominal finger's encoder
+    readings at the design's first orientation as the target, found on the finger as it is; the multisine's and the
+    dither's amplitudes scaled with it, 1 but on a finger held lower); unchanged where the design gives its own
     ``torque_bias`` or no ``trim_bias``. The fold check's peak is the multisine's and the dither's, the multisine's
     alone under :data:`~alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE`."""
     if not design.trim_bias or design.torque_bias is not None:
@@ -308,8 +309,8 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
 
     Returns
     -------
-    :class:`~alpes_dyn.estimation.experiments.recording.Recording` with encoder counts, measured torque, the camera's joint
-    angles (if any), gravity (when not the model's constant) and the true joint angles.
+    :class:`~alpes_dyn.estimation.experiments.recording.Recording` with encoder counts, measured torque, the camera's
+    joint angles (if any), gravity (when not the model's constant) and the true joint angles.
     """
     if model not in EXPERIMENT_MODELS:
         raise InputError(f"model: the identification experiment is defined for one chain "

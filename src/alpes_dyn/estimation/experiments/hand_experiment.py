@@ -4,16 +4,16 @@ With the palm fixed the hand's chains do not move one another: its mass matrix, 
 diagonal by chain (:meth:`~alpes_dyn.model.robot.Model.alpes`'s ``"hand"``; each finger's tendon moves its own three
 joints, the thumb's two motors its three), so the hand driven by its six motors at once is its five chains each
 driven by its own, side by side. :func:`hand_experiment` runs each chain's identification experiment
-(:func:`~alpes_dyn.estimation.experiments.adapt.adapted_experiment`: a finger as ``finger3`` with that finger's own values, the
-thumb as ``thumb``) over the same time base in one orientation of the hand, each with its own sensor noise, and
-writes them as one recording of the hand's six encoders and torques and its fifteen joints
+(:func:`~alpes_dyn.estimation.experiments.adapt.adapted_experiment`: a finger as ``finger3`` with that finger's own
+values, the thumb as ``thumb``) over the same time base in one orientation of the hand, each with its own sensor noise,
+and writes them as one recording of the hand's six encoders and torques and its fifteen joints
 (:func:`hand_recording`). The orientation is the hand's, not a chain's: ``rig="auto"`` keeps the palm up where
 every chain stays inside its range there with the full excitation, else hangs the whole hand fingers down (each
 chain's excitation then scaled down where it still leaves its range: per motor, which the hand allows).
 
 :func:`chain_recording` cuts the hand's recording back into a chain's, named as the chain's model names its motors
-and joints, for :func:`~alpes_dyn.estimation.identification.identification.identify` (``alpes-dyn identify --model hand`` fits
-every chain from the one file and writes one parameter file).
+and joints, for :func:`~alpes_dyn.estimation.identification.identification.identify`
+(``alpes-dyn identify --model hand`` fits every chain from the one file and writes one parameter file).
 """
 
 from __future__ import annotations
@@ -122,7 +122,8 @@ def hand_experiment(true_params: HandParams | str | Path | None = None, design: 
     """The identification experiment of the whole hand (the module docstring): every chain's, at once, in one
     orientation. ``true_params`` the hand as it is (each chain its own values), ``nominal_params`` what the
     experimenter knows (default: the shipped file), ``design`` each chain's (default the documented one), ``seed``
-    of the sensor noise (each chain's drawn from it), ``rig`` one of :data:`~alpes_dyn.estimation.experiments.adapt.RIGS`.
+    of the sensor noise (each chain's drawn from it), ``rig`` one
+    of :data:`~alpes_dyn.estimation.experiments.adapt.RIGS`.
     Returns the recording of the six motors (written to ``path``) and each chain's
     :class:`~alpes_dyn.estimation.experiments.adapt.Adaptation`."""
     if rig not in RIGS:

@@ -1,5 +1,5 @@
-"""The experiment's torque signals: each motor's multisine and the dither on it (:mod:`alpes_dyn.estimation.experiments.experiment`
-designs their bias and amplitudes).
+"""The experiment's torque signals: each motor's multisine and the dither on it
+(:mod:`alpes_dyn.estimation.experiments.experiment` designs their bias and amplitudes).
 
 The multisine: tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f / 2) over the design's ``frequencies`` (Schroeder
 phases, shifted between the motors of one chain); the dither: a sine at ``dither_frequency`` of
@@ -80,8 +80,9 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     joint's breakaway torque of 4.5e-4) carried the ab/adduction from 45 degrees onto its 0 degree stop, and the
     fit with every effect of a real hand ended at 12.3 counts, not converged, springs 12 % off; even on the plant
     with the model's own structure the ab/adduction swept 24-57 degrees through its friction, which the fit
-    holds at the nominal value (:data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`): 0.70 counts, not converged. Without it:
-    41-52 degrees, 0.58 counts with the model's structure, 0.66 with every effect (springs within 0.35 %)."""
+    holds at the nominal value (:data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`): 0.70
+    counts, not converged. Without it: 41-52 degrees, 0.58 counts with the model's structure, 0.66 with every effect
+    (springs within 0.35 %)."""
     joints, _, free = _motor_groups(model)
     S = model.transmission.S
     out = np.zeros(S.shape[0])

@@ -1,4 +1,5 @@
-"""Recordings of an experiment on the hand: the CSV format that :func:`~alpes_dyn.estimation.identification.identification.identify` reads.
+"""Recordings of an experiment on the hand: the CSV format
+that :func:`~alpes_dyn.estimation.identification.identification.identify` reads.
 
 One row per sample, uniformly spaced, a header line naming the columns (any order):
 

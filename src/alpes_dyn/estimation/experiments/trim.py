@@ -1,6 +1,6 @@
-"""The experiment's bias trimmed on the hand (:mod:`alpes_dyn.estimation.experiments.experiment` designs it on the nominal model):
-the static equilibria it is designed and trimmed on, the torque searches, and what the experimenter's slow loop on the
-encoder settles to on the real finger (:func:`_trimmed_bias`).
+"""The experiment's bias trimmed on the hand (:mod:`alpes_dyn.estimation.experiments.experiment` designs it on the
+nominal model): the static equilibria it is designed and trimmed on, the torque searches, and what the experimenter's
+slow loop on the encoder settles to on the real finger (:func:`_trimmed_bias`).
 
 Why the trim is more than the nominal's encoder reading: palm up, the Alpes finger at mid-range is close to a fold of
 its static equilibria (gravity's torque nearly outgrows its springs: the nominal finger3's compliance there,

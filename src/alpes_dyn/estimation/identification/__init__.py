@@ -8,9 +8,9 @@ explain the record or only fit it (:mod:`.adequacy`, :mod:`.harmonics`), judged 
 (:mod:`.observer_check`) -- and the fit extended with the real hand's effects (:mod:`.effects`, rotor inertia J_m
 of eq. 2.8, stick-slip, the tendon's compliance, the tilt). Uses the experiments' recordings and the observers.
 
-Before the split this path was the module now at ``alpes_dyn.estimation.identification.identification``: a name of that module taken
-from here still works, with a DeprecationWarning naming its new path, for one release (import it from the module,
-or from :mod:`alpes_dyn.estimation` where it is listed there)."""
+Before the split this path was the module now at ``alpes_dyn.estimation.identification.identification``: a name of that
+module taken from here still works, with a DeprecationWarning naming its new path, for one release (import it from the
+module, or from :mod:`alpes_dyn.estimation` where it is listed there)."""
 
 from ..._moved import package_getattr
 

@@ -443,8 +443,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     ``reversal_ratio``. range_exit: where the fitted joints leave their range, which and how far (the caller's
     :func:`range_exit`): a reason of its own, and a joint stop named first among the likely missing effects.
     lines: the excitation's frequencies (Hz) and dt the sample time (s): the residual's power at their harmonics
-    and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``) names a
-    nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``.
+    and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``)
+    names a nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``.
     """
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
@@ -555,8 +555,8 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
     acceleration (dry friction, viscous friction, a rotor's inertia on the tendon) and the torque's own forward
     difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
-    torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite differences of
-    batched runs, states only."""
+    torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite
+    differences of batched runs, states only."""
     n = sens.n
     B, L = Ub.shape[0], Ub.shape[1]
     N1 = x_fit.shape[0]

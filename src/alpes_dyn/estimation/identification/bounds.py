@@ -16,11 +16,12 @@ encoder_offset, tilt (-inf, inf)    of the rig and its sensors, either sign: nev
 
 A parameter is **not identified** (:func:`unsupported`) where its value is outside that range or pinned at a bound,
 or where its 95 % interval (value +- :data:`Z_INTERVAL` standard errors) reaches past 0 (the data cannot tell it from
-no such effect). :func:`~alpes_dyn.estimation.identification.identification.identify` then fits again with it held (at its bound 0
-where it crossed it, else at the model's value: the file's prior), warm-started from the first fit, so that the
-values written are those of a fit whose every parameter is identified; the result names each one not identified
-and the effect the data do not support (:attr:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.not_identified`),
-and the parameter file never receives its value. A parameter the recording does not see at all (its standard error
+no such effect). :func:`~alpes_dyn.estimation.identification.identification.identify` then fits again with it held (at
+its bound 0 where it crossed it, else at the model's value: the file's prior), warm-started from the first fit, so that
+the values written are those of a fit whose every parameter is identified; the result names each one not identified
+and the effect the data do not support
+(:attr:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.not_identified`), and the parameter file
+never receives its value. A parameter the recording does not see at all (its standard error
 infinite: ``tilt_x`` at a level palm) is left as :func:`identify` leaves it (at its start, never written).
 """
 

@@ -1,5 +1,5 @@
-"""The result of a fit (:func:`~alpes_dyn.estimation.identification.identification.identify`): its estimates and diagnostics,
-and the parameter file they make (:func:`identified_params`)."""
+"""The result of a fit (:func:`~alpes_dyn.estimation.identification.identification.identify`): its estimates and
+diagnostics, and the parameter file they make (:func:`identified_params`)."""
 
 from __future__ import annotations
 
@@ -52,12 +52,12 @@ class IdentificationResult:
     residual: np.ndarray | None = field(default=None, repr=False)
     adequacy: Adequacy | None = None
     solution: Any = field(default=None, repr=False, compare=False)
-    """The fit's shooting variables (:class:`~alpes_dyn.estimation.identification.shooting.ShootingSolution`) for a warm start of
-    another fit of the same recording (``identify(..., start=result)``); not written to the file."""
+    """The fit's shooting variables (:class:`~alpes_dyn.estimation.identification.shooting.ShootingSolution`) for a warm
+    start of another fit of the same recording (``identify(..., start=result)``); not written to the file."""
     not_identified: dict[str, str] = field(default_factory=dict)
     """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
-    interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not support):
-    held in the fit kept, never written to a file."""
+    interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not
+    support): held in the fit kept, never written to a file."""
 
     @property
     def trustworthy(self) -> bool:

@@ -1,7 +1,7 @@
 """The identified values of any robot's fit written into a copy of its transmission spec.
 
-:func:`~alpes_dyn.estimation.identification.identification.identify` fits a URDF + spec :class:`~alpes_dyn.Model` as well as an
-Alpes model; its result goes into the robot's own spec file (``alpes-dyn identify --model PATH.urdf --spec
+:func:`~alpes_dyn.estimation.identification.identification.identify` fits a URDF + spec :class:`~alpes_dyn.Model` as
+well as an Alpes model; its result goes into the robot's own spec file (``alpes-dyn identify --model PATH.urdf --spec
 FILE.toml -o ident.toml``), which every command reads back (``--spec ident.toml``):
 
 * a spring ``K_<joint>`` into ``[stiffness]``, a friction ``F_s_<joint>``, ``F_v_<joint>`` into ``[coulomb]``,
@@ -43,8 +43,8 @@ def spec_misfits(model: Model, names: Sequence[str]) -> list[str]:
 
 def identified_spec(result: Any, base: TransmissionSpec) -> TransmissionSpec:
     """``base`` with the fitted values of ``result`` (an
-    :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult` of a model built on ``base``, or on its
-    restriction to some branches, :meth:`~alpes_dyn.model.robot.Model.subtree`: the whole robot's spec with
+    :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult` of a model built on ``base``, or
+    on its restriction to some branches, :meth:`~alpes_dyn.model.robot.Model.subtree`: the whole robot's spec with
     those values replaced) and the ``[identified]`` section: their standard errors and the fit's record (the
     module doc).
     :class:`~alpes_dyn.ModelError` for a mass, or a result whose joints or motors are not the spec's."""

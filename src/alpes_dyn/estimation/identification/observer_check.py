@@ -1,7 +1,7 @@
 """The adequacy verdict judged by the observer it feeds (issue 38).
 
-The fit's own verdict (:mod:`alpes_dyn.estimation.identification.adequacy`) judges the multiple-shooting residual: every 50-100
-ms the fit restarts from states it chose, so a model whose stick-slip or friction level is off can leave a white
+The fit's own verdict (:mod:`alpes_dyn.estimation.identification.adequacy`) judges the multiple-shooting residual: every
+50-100 ms the fit restarts from states it chose, so a model whose stick-slip or friction level is off can leave a white
 residual at the sensor floor while the EKF built on the file lags by degrees (MuJoCo's stick-slip finger3, issue
 38: adequate, F_s 19 % off, the EKF 1.9 degrees RMSE). Here the identified file is judged by what the observer does
 with it, on a recording (the fitted one, or a held-out one where given), from what a user has (no true joints):
@@ -10,17 +10,18 @@ with it, on a recording (the fitted one, or a held-out one where given), from wh
   identified file -- its friction law, the stick-slip one included, its tendon compliance, the fitted palm tilt and
   encoder offset;
 * its **innovation** i_k = y_k - h(F(z_k-1|k-1, u_k-1)) (counts): the encoder against the filter's one-step
-  prediction, its RMS against the recording's sensor floor (:func:`~alpes_dyn.estimation.identification.adequacy.sensor_floor`)
-  and its whiteness (:func:`~alpes_dyn.estimation.identification.adequacy.whiteness`);
+  prediction, its RMS against the recording's sensor floor
+  (:func:`~alpes_dyn.estimation.identification.adequacy.sensor_floor`) and its whiteness
+  (:func:`~alpes_dyn.estimation.identification.adequacy.whiteness`);
 * its **prediction** of the encoder ``horizon`` s ahead (default :data:`OBSERVER_THRESHOLDS` ``horizon_s``):
   from the filter's estimate z_k|k every ``stride`` samples, the identified model run open loop on the recorded
   torque, e_k+H = y_k+H - h(z_k+H) (counts). An observer whose state is right but whose model drifts, or whose
   joints are wrong where the encoder sees only their sum (the model's friction deciding which joint sticks), gives a
   prediction error far above the floor.
 
-:func:`judge` appends the observer's reason to the fit's :class:`~alpes_dyn.estimation.identification.adequacy.Adequacy` (the
-verdict is then *not adequate*, the reason names the observer): :func:`~alpes_dyn.estimation.identification.effects.fit_effects`
-calls it on the fit it keeps.
+:func:`judge` appends the observer's reason to the fit's :class:`~alpes_dyn.estimation.identification.adequacy.Adequacy`
+(the verdict is then *not adequate*, the reason names the
+observer): :func:`~alpes_dyn.estimation.identification.effects.fit_effects` calls it on the fit it keeps.
 """
 
 from __future__ import annotations
@@ -93,10 +94,10 @@ class ObserverCheck:
 
 
 def identified_model(result: Any) -> Model | None:
-    """The observer's model of a fit (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`): the fitted
-    model's kind (an Alpes finger or thumb, friction on, its rotor where it had one, its gravity) from the file the
-    fit writes (:meth:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.params`). None for a model that has no
-    parameter file (a URDF robot)."""
+    """The observer's model of a fit (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`):
+    the fitted model's kind (an Alpes finger or thumb, friction on, its rotor where it had one, its gravity) from the
+    file the fit writes (:meth:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.params`). None for
+    a model that has no parameter file (a URDF robot)."""
     m = getattr(result, "model", None)
     if not isinstance(m, Model) or m.params is None or m.layout is None or m.name not in ("finger2", "finger3", "thumb"):
         return None
@@ -190,9 +191,9 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
 
 def mildly_coloured(adequacy: Any) -> bool:
     """True when a verdict's only reason is a residual coloured by the Ljung-Box test alone: every lag within
-    ``max_acf_bands`` of the 99 % band (:data:`~alpes_dyn.estimation.identification.adequacy.THRESHOLDS`), the RMS at the floor, no
-    correlation with the torque (MuJoCo's finger3 with all the effects at once, seed 402: lags up to 0.05 against a
-    band of 0.041, p = 1.2e-7, residual 1.0x the floor; K 0.7 %, m 0.5 %, the EKF 0.42 degree)."""
+    ``max_acf_bands`` of the 99 % band (:data:`~alpes_dyn.estimation.identification.adequacy.THRESHOLDS`), the RMS at
+    the floor, no correlation with the torque (MuJoCo's finger3 with all the effects at once, seed 402: lags up to 0.05
+    against a band of 0.041, p = 1.2e-7, residual 1.0x the floor; K 0.7 %, m 0.5 %, the EKF 0.42 degree)."""
     from .adequacy import THRESHOLDS
 
     w = getattr(adequacy, "whiteness", None)

@@ -6,8 +6,8 @@ simulation loop (:mod:`.blocks`), the estimation scenario -- a finger moved by i
 observer run on a recording (:mod:`.replay`, ``alpes-dyn estimate --data``). Reads the recordings of
 :mod:`alpes_dyn.estimation.experiments`; knows nothing of the fit.
 
-Before the split this path was the module now at ``alpes_dyn.estimation.observers.observers``: a name of that module taken
-from here still works, with a DeprecationWarning naming its new path, for one release (import it from the module,
+Before the split this path was the module now at ``alpes_dyn.estimation.observers.observers``: a name of that module
+taken from here still works, with a DeprecationWarning naming its new path, for one release (import it from the module,
 or from :mod:`alpes_dyn.estimation` where it is listed there)."""
 
 from ..._moved import package_getattr

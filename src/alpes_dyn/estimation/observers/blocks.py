@@ -1,14 +1,14 @@
 """Estimation blocks of :func:`alpes_dyn.simulation.loop.run_loop`: an observer, and a recording played back.
 
-* :class:`Observer`: a Kalman filter of :mod:`alpes_dyn.estimation.observers.observers` at the sample rate: at t_0 its prior
-  (updated with the first measurement, or not), then each sample one predict-update step
+* :class:`Observer`: a Kalman filter of :mod:`alpes_dyn.estimation.observers.observers` at the sample rate: at t_0 its
+  prior (updated with the first measurement, or not), then each sample one predict-update step
   (``filter_step_p``) with the known inputs of the previous period and the measurement at t_k. Its whole-record
   response is the filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` (one compiled loop).
 * :class:`ObserverBank`: observers of the same model advanced together, one compiled call per sample;
 * :func:`step_caller` / :func:`batch_step_caller`: the filter step of one filter, or of B filters of the same model
   in one call of compiled C (CasADi's virtual machine without a compiler).
-* :class:`RecordingPlayback`: a :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant: its encoder counts,
-  its motor torques (sample and period signals) and, where recorded, the true joint angles.
+* :class:`RecordingPlayback`: a :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant: its encoder
+  counts, its motor torques (sample and period signals) and, where recorded, the true joint angles.
 """
 
 from __future__ import annotations
@@ -203,8 +203,8 @@ class ObserverBank(Block):
 
 
 class RecordingPlayback(Block):
-    """A :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant (run the loop with ``final=True`` over
-    its N = n_samples - 1 periods).
+    """A :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant (run the loop with ``final=True``
+    over its N = n_samples - 1 periods).
 
     Writes ``encoder`` (m,) counts and ``torque`` (m,) N m at t_k (sample signals), ``before`` the torque held over
     the period before t_k (the first sample's own at t_0: what the tendons' tension balances at the reading,

@@ -82,7 +82,8 @@ class RecordingEstimate:
     joint_names (n,), motor_names (m,). rmse: (n,) rad after the transient, or None (no ``true_q_*``).
     final_error: (n,) rad at the last sample, or None. disturbance: (N, m) N m, or None.
     settings: the noise levels and options used.
-    filter: the observer run (its ``model.step`` the prediction, :mod:`~alpes_dyn.estimation.identification.observer_check`).
+    filter: the observer run (its ``model.step`` the prediction,
+        :mod:`~alpes_dyn.estimation.identification.observer_check`).
     measurement: (N, m) rad, the encoder as the observer read it (the zero and the tendons' stretch taken off).
     """
 
@@ -257,8 +258,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
         taken off it.
     torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
-        :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the torque of
-        :func:`advanced` (a replay: the later samples are recorded). Default 0.
+        :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
+        torque of :func:`advanced` (a replay: the later samples are recorded). Default 0.
 
     Returns
     -------
