@@ -57,7 +57,11 @@ with the reason.
 the experiment designed and trimmed in that orientation, the fits and the EKF on the models turned to it (the
 tilt cases' 3 degrees on top). Palm up, a finger with soft springs folds (its static equilibria snap through
 before it reaches mid-range): held below the fold it rests on its stop, and no fit holds (5 of the 20 draws of
-seeds 30-49). Hanging, none folds.
+seeds 30-49). Hanging, none folds. ``--adapt auto`` (the default) does what ``alpes-dyn experiment --rig auto``
+does, on the plant's own joint angles (:func:`~alpes_dyn.studies.realism.plant_experiment`): the whole record is
+checked against the joints' range and the hand hung where palm up the finger leaves it, then the excitation scaled
+to 0.7 and 0.5; the table's last column says which rig each row ran on (``l`` level, ``h`` hung, the scale where not
+1, ``!`` where it adapted) and the JSON rows hold the ``adaptation``. ``--adapt none`` runs ``--rig`` as given.
 
 ``--seeds`` takes ranges (``301-320,5``). After the rows, the distribution per case
 (:func:`~alpes_dyn.studies.realism.summarise`): the median and worst of each kind's error up to the common scale,
@@ -91,7 +95,7 @@ from pathlib import Path
 from alpes_dyn.errors import InputError
 from alpes_dyn.model.params import load_params
 from alpes_dyn.model.stops import JointRangeWarning
-from alpes_dyn.studies.realism import (CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
+from alpes_dyn.studies.realism import (ADAPT, CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
                                        EKF_GOAL_DEG, MASS_GOAL_PCT, parse_seeds, realism_case, realism_row, rig_design,
                                        summarise, tendon_stiffness)
 from alpes_dyn.studies.sweep import local_client, sweep
@@ -105,10 +109,10 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--rig", choices=tuple(RIGS), default="level",
                     help="the hand's orientation during the experiments: level (palm up, the file's gravity; "
                          "default) or hanging (fingers down: no fold of a soft finger's equilibria)")
-    ap.add_argument("--adapt", choices=("auto", "none"), default="auto",
-                    help="auto (default): the experiment adapted on the plant as alpes-dyn experiment adapts it (hung "
-                         "fingers down where palm up the finger leaves its range, then smaller amplitudes); none: the "
-                         "design as given")
+    ap.add_argument("--adapt", choices=ADAPT, default="auto",
+                    help="auto (default): the experiment adapted on the plant as alpes-dyn experiment --rig auto adapts "
+                         "it (hung fingers down where palm up the finger leaves its range, then smaller amplitudes); "
+                         "level / hanging: that orientation only, the amplitudes adapting; none: the design as given")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--no-rigid", action="store_true", help="skip the rigid fit (the extended fit and the EKF only)")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")

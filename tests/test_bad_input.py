@@ -1699,6 +1699,10 @@ API: list[Api] = [
       "rig: expected one of level, hanging, got 'upside'"),
     A("adapted_experiment", lambda c: _adapted(rig="upside"), InputError,
       "rig: expected one of auto, level, hanging, got 'upside'"),
+    A("realism_row", lambda c: _realism().realism_row(1, adapt="sideways"), InputError,
+      "adapt: expected one of auto, level, hanging, none, got 'sideways'"),
+    A("plant_experiment", lambda c: _realism().plant_experiment(None, 1, None, None, adapt="sideways"), InputError,
+      "adapt: expected one of auto, level, hanging, none, got 'sideways'"),
 
     A("realism_draw", lambda c: _realism().realism_draw(1, chain="pinky"), InputError,
       "chain: unknown chain 'pinky' (expected one of index, middle, ring, little, thumb)"),

@@ -546,7 +546,8 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     """The decision rule of --effects auto on stand-in fits: a second fit with the stick-slip law where the first
     is flagged (stick-slip named among the likely missing effects, or nothing named), none where it is adequate,
     the lower residual kept, each round started from the last one's values; while the kept fit is flagged, the
-    next effect not yet tried (the rotor after the stick-slip law), each effect once."""
+    next effect not yet tried (the rotor after the stick-slip law, then the torque delay and the encoder's offset),
+    each effect once."""
     from types import SimpleNamespace
 
     from alpes_dyn.estimation.identification import effects as eff
@@ -559,6 +560,11 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
         return SimpleNamespace(residual_rms=residual, adequacy=verdict(ok, missing), names=names, values=list(values),
                                std=list(std), trustworthy=ok, converged=True)
 
+    from alpes_dyn.estimation.experiments.recording import Recording
+
+    n = 20  # a stand-in recording: the fits are stand-ins too (the delay's round reads its torque)
+    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=np.full((n, 1), 0.02),
+                    motor_names=("finger",), joint_names=("j1", "j2"))
     calls, rotors, starts = [], [], []
     outcomes = {}
 
@@ -576,39 +582,40 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     stick_slip = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
     outcomes = {False: fitted(0.9, False, ["viscous friction", stick_slip]),
                 True: fitted(0.6, True)}
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"))
     assert fit.effects == ("compliance", "tilt", "stiction") and fit.result is outcomes[True]
     assert fit.tried is outcomes[False] and fit.tried_effects == ("compliance", "tilt")
     assert calls == [(False, "K,m,friction,tendon_compliance,tilt_y"), (True, "K,m,friction,tendon_compliance,tilt_y")]
     calls.clear()
-    outcomes[True] = fitted(1.5, False)  # worse: the first is kept, and (still flagged) the rotor tried on it
+    outcomes[True] = fitted(1.5, False)  # worse: the first is kept, and (still flagged) the others tried on it
     rotors.clear()
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"))
-    assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 3
-    assert rotors == [False, False, True] and [c[0] for c in calls] == [False, True, False]
-    assert fit.tried_effects == ("compliance", "tilt", "rotor")  # every effect tried once: the rounds end
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"))
+    assert fit.effects == ("compliance", "tilt") and fit.result is outcomes[False] and len(calls) == 5
+    assert rotors == [False, False, True, False, False] and [c[0] for c in calls] == [False, True, False, False, False]
+    assert calls[-1][1].endswith("encoder_offset")  # then the torque delay and the encoder's offset
+    assert fit.tried_effects == ("compliance", "tilt", "offset")  # every effect tried once: the rounds end
     calls.clear()
     outcomes[False] = fitted(0.6, False, ["viscous friction"])  # flagged, stick-slip not named: tried all the same
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)
     assert calls[:2] == [(False, "K,m,friction,tendon_compliance"), (True, "K,m,friction,tendon_compliance")]
-    assert fit.result is outcomes[False] and fit.tried_effects == ("compliance", "tilt", "rotor") and len(calls) == 3
+    assert fit.result is outcomes[False] and fit.tried_effects == ("compliance", "tilt", "offset") and len(calls) == 5
     calls.clear()
     outcomes[False] = fitted(0.58, True)  # adequate: one fit
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)
     assert fit.tried is None and calls == [(False, "K,m,friction,tendon_compliance")]
     calls.clear()
     rotor = "rotor inertia (a torque following the motor acceleration; or a wrong inertia)"
     outcomes[False] = fitted(0.9, False, [rotor, stick_slip])
     outcomes[True] = fitted(0.6, True)
     rotors.clear()
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)
     assert fit.effects == ("compliance", "tilt", "stiction", "rotor") and rotors == [False, True]
     assert fit.result is outcomes[True] and len(calls) == 2
     calls.clear()
     rotors.clear()  # a compliance seen (above 3 standard errors): the rotor joins the second fit, unnamed
     outcomes[False] = fitted(0.7, False, ["viscous friction"], names=("K_1", "tendon_compliance_finger"),
                              values=[0.04, 6.0], std=[1e-4, 0.2])  # flagged, naming nothing, but stretching:
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)  # the rotor, alone
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)  # the rotor, alone
     assert fit.effects == ("compliance", "tilt", "rotor") and rotors == [False, True] and len(calls) == 2
     assert [c[0] for c in calls] == [False, False]  # no stick-slip law: the rotor's fit (0.6) is adequate
     assert starts[-1] is outcomes[False]  # the second round from the first (its values and trajectory)
@@ -617,24 +624,24 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     outcomes[True] = fitted(0.7, False, ["viscous friction"], names=("tendon_compliance_finger",), values=[6.0],
                             std=[0.2])
     starts.clear()
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
-    assert len(calls) == 3 and fit.effects == ("compliance", "tilt", "stiction")  # the third no lower: kept 2nd
-    assert fit.tried_effects == ("compliance", "tilt", "stiction", "rotor")
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)
+    assert len(calls) == 5 and fit.effects == ("compliance", "tilt", "stiction")  # none after it lower: kept 2nd
+    assert fit.tried_effects == ("compliance", "tilt", "stiction", "offset")  # the rotor, the delay, the offset
     assert starts[0] is None and starts[1] is outcomes[False] and starts[2] is outcomes[True]
     calls.clear()
-    fit = eff.fit_effects(model_of, "rec.csv", ("stiction",))
+    fit = eff.fit_effects(model_of, rec, ("stiction",))
     assert calls == [(True, None)] and fit.effects == ("stiction",)
     # a compliance below minus three standard errors (a cable shortening under tension): a last round without it
     calls.clear()
     starts.clear()
     outcomes[False] = fitted(0.6, True, names=("K_1", "tendon_compliance_finger"), values=[0.04, -0.42],
                              std=[1e-4, 0.1])
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)
     assert calls == [(False, "K,m,friction,tendon_compliance"), (False, None)] and fit.effects == ("tilt",)
     assert fit.tried_effects == ("compliance", "tilt") and starts[-1] is fit.tried
     calls.clear()  # within three standard errors of 0: kept as it is
     outcomes[False] = fitted(0.6, True, names=("tendon_compliance_finger",), values=[-0.25], std=[0.1])
-    fit = eff.fit_effects(model_of, "rec.csv", eff.parse_effects("auto"), has_gravity=True)
+    fit = eff.fit_effects(model_of, rec, eff.parse_effects("auto"), has_gravity=True)
     assert len(calls) == 1 and fit.effects == ("compliance", "tilt")
 
 

@@ -126,8 +126,8 @@ def test_mildly_coloured_is_the_ljung_box_alone():
 
 def test_fit_effects_finds_the_torque_delay(monkeypatch):
     """auto's delay on stand-in fits: the first fit's verdict names a torque delay, so the fit is made again on the
-    torque read 1, then 2 samples earlier (each round from the last); the residual lowest at 1 sample: kept, with
-    EffectsFit.delay = 1 and the torque the fit saw the recorded one advanced by exactly one sample."""
+    torque read 1 sample earlier (from the first fit); its verdict names nothing: kept, with EffectsFit.delay = 1 and
+    the torque the fit saw the recorded one advanced by exactly one sample, 2 samples not tried."""
     from types import SimpleNamespace
 
     from alpes_dyn.estimation.identification import effects as eff
@@ -154,13 +154,46 @@ def test_fit_effects_finds_the_torque_delay(monkeypatch):
     monkeypatch.setattr(ident_mod, "identify", fake_identify)
     fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), rec, eff.parse_effects("auto"),
                           has_gravity=True)
-    assert [d for d, _, _ in seen] == [0, 1, 2]
+    assert [d for d, _, _ in seen] == [0, 1]
     assert fit.delay == 1 and fit.effects == ("compliance", "tilt", "delay") and fit.result.residual_rms == 0.6
     np.testing.assert_array_equal(seen[1][1][:-1], tau[1:])  # advanced by one sample, the last repeated
     assert seen[1][1][-1, 0] == tau[-1, 0]
-    assert seen[1][2] is not None and seen[2][2] is fit.result  # each round from the last
+    assert seen[1][2] is not None  # from the first fit
     assert fit.observer is None  # a stand-in has no file to run the EKF on
 
+
+
+def test_a_flagged_fit_naming_nothing_tries_the_delay_after_stiction_and_the_rotor(monkeypatch):
+    """auto on stand-in fits whose verdict names no effect (as MuJoCo's hung all-effects finger3 of seeds 413 and
+    416: a residual at 1.09 times the floor, mildly coloured): the stick-slip law and the rotor do not help, so the
+    torque delay is tried last, found at 1 sample and kept; every effect one round at most."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.experiments.recording import Recording
+    from alpes_dyn.model.params import load_params
+
+    n = 50
+    tau = np.linspace(0.01, 0.02, n)[:, None]
+    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
+                    joint_names=("j1", "j2", "j3"))
+    seen = []
+
+    def fake_identify(model, data, parameters, **kw):
+        d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))
+        seen.append(d)
+        ok = d == 1
+        return SimpleNamespace(residual_rms=0.6 + 0.1 * abs(d - 1), converged=True, reason="", names=(), values=[],
+                               std=[], trustworthy=ok, adequacy=SimpleNamespace(adequate=ok, likely_missing=[]))
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), rec, eff.parse_effects("auto"),
+                          has_gravity=True, observe=False)
+    assert [e for e, _ in fit.rounds] == [("compliance", "tilt"), ("compliance", "tilt", "stiction"),
+                                          ("compliance", "tilt", "rotor"), ("compliance", "tilt", "delay")]
+    assert seen == [0, 0, 0, 1]  # each round on the torque as fitted; 2 samples not tried: 1 is adequate
+    assert fit.delay == 1 and fit.effects == ("compliance", "tilt", "delay") and fit.result.trustworthy
 
 def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
     """The observer's check never refuses the truth: on our simulator's recording of finger2 seed 3 (the fitted
@@ -179,3 +212,44 @@ def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
     assert good.passed and 12 * good.floor < good.prediction_rms < 0.8 * ratio * good.floor
     assert not bad.passed and bad.prediction_rms > 10 * ratio * bad.floor
 
+
+
+
+def test_the_delay_search_goes_on_while_the_verdict_names_it(monkeypatch):
+    """Past the first sample, one more is tried only while the last fit's verdict still names the torque delay:
+    stand-in fits two samples late (the residual lowest at 2, the verdict naming the delay below it) stop at 3, whose
+    residual is higher; fits one sample late stop at 1 (its verdict names nothing), never fitting 2."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.adequacy import SIGNATURES
+    from alpes_dyn.estimation.experiments.recording import Recording
+    from alpes_dyn.model.params import load_params
+
+    n = 50
+    tau = np.linspace(0.01, 0.02, n)[:, None]
+    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
+                    joint_names=("j1", "j2", "j3"))
+
+    def search(late):
+        seen = []
+
+        def fake_identify(model, data, parameters, **kw):
+            d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))
+            seen.append(d)
+            ok = d == late
+            missing = [SIGNATURES["torque_rate"]] if d < late else ["a nonlinearity"] if d > late else []
+            return SimpleNamespace(residual_rms=0.6 + 0.1 * abs(d - late), converged=True, reason="", names=(),
+                                   values=[], std=[], trustworthy=ok,
+                                   adequacy=SimpleNamespace(adequate=ok, likely_missing=missing))
+
+        monkeypatch.setattr(ident_mod, "identify", fake_identify)
+        fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), rec, eff.parse_effects("auto"),
+                              has_gravity=True, observe=False)
+        return seen, fit
+
+    seen, fit = search(2)
+    assert seen == [0, 1, 2] and fit.delay == 2 and fit.result.trustworthy and fit.result.residual_rms == 0.6
+    seen, fit = search(1)
+    assert seen == [0, 1] and fit.delay == 1 and fit.result.trustworthy

@@ -38,8 +38,8 @@ from ..model.params import load_params, write_params
 from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 
-__all__ = ["CASE_NAMES", "RIGS", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
-           "realism_case", "realism_row", "realism_draw", "rig_design", "errors", "parse_seeds", "summarise",
+__all__ = ["CASE_NAMES", "RIGS", "ADAPT", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
+           "plant_experiment", "realism_case", "realism_row", "realism_draw", "rig_design", "errors", "parse_seeds", "summarise",
            "EKF_GOAL_DEG", "MASS_GOAL_PCT"]
 
 KINDS = ("K", "m", "F_s", "F_v")
@@ -364,11 +364,11 @@ def realism_row(seed: int, case: str = "all", rig: str = "level", chain: str | N
 
 
 def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
-                 duration: float = 4.0, cable: tuple[float, float] | None = None) -> dict[str, Any]:
+                 duration: float = 4.0, cable: tuple[float, float] | None = None, adapt: str = "auto") -> dict[str, Any]:
     """:func:`realism_row` flattened to numbers: the worst errors up to the common scale (%), the residuals
     (counts), the verdicts (1: flagged), the extended fit's time (s, every round) and the EKF's RMSE per joint
     (deg)."""
-    row = realism_row(seed, case, rig, chain, duration, cable)
+    row = realism_row(seed, case, rig, chain, duration, cable, adapt)
     a, b = row["rigid"], row["extended"]
     out: dict[str, Any] = {"rigid_flagged": int(a["flagged"]), "rigid_residual_counts": a["residual_counts"]}
     for kind in KINDS:
