@@ -9,7 +9,6 @@ JSON does not hold: a goal is "met" where the script says so.
 
 from __future__ import annotations
 
-from statistics import median
 from typing import Any, Callable
 
 Result = dict[str, Any]
@@ -41,8 +40,12 @@ def observability(r: Result) -> list[str]:
     for m in ("finger2", "finger3", "hand"):
         d = r[m]
         o, s = d["ours"], d["sympy"]
-        ref = {"done": f"sympy {s['seconds']:.1f} s ({d['speedup']:.0f}x)",
-               "exceeded": f"sympy over its {s.get('cap', 0):.0f} s cap (> {d['speedup']:.0f}x)"}.get(s["status"], "sympy not run")
+        if s["status"] == "done":
+            ref = f"sympy {s['seconds']:.1f} s ({d['speedup']:.0f}x)"
+        elif s["status"] == "exceeded":
+            ref = f"sympy over its {s['cap']:.0f} s cap (> {d['speedup']:.0f}x)"
+        else:
+            ref = "sympy not run"
         out.append(f"{m}: rank {o['rank']}/{o['n_states']} (index {o['index']}) in {o['seconds']:.3f} s; {ref}")
     c = r["cli_hand"]
     out.append(f"``alpes-dyn observability --model hand`` with process start {c['seconds']:.2f} s (goal "
@@ -83,9 +86,174 @@ def mimic(r: Result) -> list[str]:
             f"the projection route {p['us_projection_route']:.1f} µs"]
 
 
+def _pct(x: float) -> str:
+    return f"{100 * x:.2f} %"
+
+
+def identification(r: Result) -> list[str]:
+    rows = r["finger3"]
+    out = []
+    for d in rows:
+        p = d["parameters"]
+        worst = {k: max(abs(v["error_pct"]) for n, v in p.items() if n.startswith(k + "_")) for k in ("K", "m", "F_s", "F_v")}
+        out.append(f"finger3 seed {d['seed']}: K within {worst['K']:.2f} %, m within {worst['m']:.2f} %, friction "
+                   f"F_s {worst['F_s']:.2f} %, F_v {worst['F_v']:.2f} %; EKF on the identified file "
+                   f"{max(d['rmse_deg_after']):.3f} deg on the worst joint (on the nominal file "
+                   f"{max(d['rmse_deg_before']):.1f} deg); fit {d['fit_seconds']:.1f} s (compile {d['compile_seconds']:.1f} s), "
+                   f"{d['iterations']} iterations, {'converged' if d['converged'] else 'not converged'}, residual "
+                   f"{d['residual_counts']:.2f} counts")
+    return out
+
+
+def fit_scaling(r: Result) -> list[str]:
+    out = []
+    for d in r["rows"]:
+        s = d["sparse"]
+        dense = (f"; dense {d['dense']['seconds']:.1f} s, equal to {d['max_relative_difference']:.0e}"
+                 if "dense" in d else " (dense not run)")
+        out.append(f"{d['duration_s']:.0f} s record: sparse {s['seconds']:.1f} s, {s['iterations']} iterations, "
+                   f"{'converged' if s['converged'] else 'not converged'}, peak {d['peak_rss_mib_sparse']:.0f} MiB "
+                   f"({d['rss_before_fit_mib']:.0f} before the fit){dense}")
+    return out
+
+
+def observer_step(r: Result) -> list[str]:
+    out = []
+    for d in r["rows"]:
+        m = d["model"]
+        out.append(f"{m} ({d['states']} states): ``OnlineFilter.step`` {d['online_us']:.1f} µs vs ``step()`` "
+                   f"{d['step_us']:.0f} µs vs filterpy {d['filterpy_us']:.0f} µs ({d['online_vs_filterpy']:.3f}x); equal "
+                   f"to ``run()`` bit for bit: {d['online_equals_run']}; built in {d['online_build_s']:.1f} s; goal "
+                   f"{_met(r['goals_met'][m])}")
+        if d.get("c_us") is not None:
+            out.append(f"{m} standalone C (``alpes-dyn codegen``, {d['c_opt']}): {d['c_us']:.2f} µs "
+                       f"({d['c_cpu_us']:.2f} processor), CasADi's code of the same step {d['c_casadi_us']:.2f} µs "
+                       f"({d['c_vs_c_casadi']:.2f}x), of the whole model {d['c_whole_model_us']:.2f} µs "
+                       f"({d['c_vs_c_whole_model']:.2f}x); difference to ``run()`` {d['c_max_diff_vs_run']:.1e}; goal "
+                       f"{_met(r['c_goals_met'][m])}")
+    return out
+
+
+def observer_build(r: Result) -> list[str]:
+    out = [f"{d['model']}: built {d['build_first_s']:.2f} s in a fresh process, {d['build_again_s']:.2f} s again; "
+           f"{d['instructions']} instructions, VM step {d['vm_us']:.0f} µs ({d['vm_cse_us']:.0f} µs merged again by "
+           f"``cse``)" for d in r["rows"]]
+    base = "" if r["base_estimate_s"] is None else f" (the baseline {r['base_estimate_s']:.1f} s)"
+    out.append(f"``alpes-dyn estimate --data --chain index`` on the Allegro hand: {r['estimate_s']:.1f} s{base}, "
+               f"{r['estimate_warm_s']:.1f} s again; finger3's ``online()`` step compiled from an empty cache "
+               f"{r['online_empty_s']:.1f} s, {r['online_warm_s']:.2f} s warm")
+    return out
+
+
+def param_cache(r: Result) -> list[str]:
+    lifted, baked = r["ways"]["lifted"], r["ways"]["baked"]
+    drawn = {w: next(b for b in r["ways"][w]["builds"] if b["model"] == "drawn") for w in ("lifted", "baked")}
+    return [f"{r['model']} drawn ±20 % (seed {r['seed']}) after the nominal: the filter {drawn['lifted']['build_s']:.2f} s, "
+            f"{'compiled' if drawn['lifted']['compiled'] else 'nothing compiled'}, {len(lifted['libraries'])} library; "
+            f"with the numbers as C literals {drawn['baked']['build_s']:.2f} s, "
+            f"{'compiled again' if drawn['baked']['compiled'] else 'nothing compiled'}, {len(baked['libraries'])} libraries",
+            f"the step {r['step_us']['lifted']:.2f} vs {r['step_us']['baked']:.2f} µs ({r['lifted_vs_baked']:.3f}x); runs "
+            f"equal to {r['max_diff_run']:.1e}"]
+
+
+def sweep(r: Result) -> list[str]:
+    return [f"{r['draws']} draws (seeds from {r['seed']}), {r['rounds']} round(s), {r['workers']} workers: Dask "
+            f"{r['median_dask_s']:.1f} s vs the serial loop {r['median_serial_s']:.1f} s (**{r['median_speedup']:.2f}x**) "
+            f"and the serial loop on one thread {r['median_serial_1thread_s']:.1f} s ({r['median_speedup_vs_1thread']:.2f}x); "
+            f"the bound 2 x serial / serial on one thread {r['median_speedup_bound']:.2f}x; the same rows: {r['same_rows']}"]
+
+
+def _runs(runs: dict, keys: list[str]) -> list[str]:
+    out = []
+    for k in keys:
+        d = runs[k]
+        step = ("" if d["steady_state_error"] is None else
+                f"steady-state error {_pct(d['steady_state_error'])}, overshoot {_pct(d['overshoot'])}, rise "
+                f"{1e3 * d['rise_time_s']:.0f} ms, ")
+        out.append(f"{k}: {step}RMSE {d['force_rmse']:.3f} N, {d['realtime_ratio']:.1f}x real time")
+    return out
+
+
+def control(r: Result) -> list[str]:
+    out = _runs(r["runs"], [k for k in r["runs"] if "off" not in k])
+    for c, v in r["plant_mismatch_loss"].items():
+        sse = [d["steady_state_error"] for k, d in r["runs"].items() if "off" in k and k.endswith("/ " + c)]
+        out.append(f"{c} on {len(sse)} plants drawn 10 % off per link: steady-state error {_pct(min(sse))}-"
+                   f"{_pct(max(sse))}")
+    out.append("goals: " + ", ".join(f"{k} {_met(v)}" for k, v in r["goals"].items()))
+    return out
+
+
+def hand_control(r: Result) -> list[str]:
+    out = []
+    for c, d in r["runs"].items():
+        ch = d["chains"]
+        q = [x["q_rmse_deg"] for x in ch if x["q_rmse_deg"] is not None]
+        out.append(f"{c}: the five forces within {_pct(max(x['steady_state_error'] for x in ch))}, overshoot "
+                   f"{_pct(min(x['overshoot'] for x in ch))}-{_pct(max(x['overshoot'] for x in ch))}, rise "
+                   f"{1e3 * min(x['rise_time_s'] for x in ch):.0f}-{1e3 * max(x['rise_time_s'] for x in ch):.0f} ms, RMSE "
+                   f"{min(x['force_rmse'] for x in ch):.3f}-{max(x['force_rmse'] for x in ch):.3f} N"
+                   + (f", q̂ RMSE {min(q):.2f}-{max(q):.2f} deg" if q else "")
+                   + f"; {d['realtime_ratio']:.2f}x real time"
+                   + ("" if c == "pi" else f", {d['wall_vs_pi']:.1f}x the PIs' wall time"))
+    return out
+
+
+def urdf_control(r: Result) -> list[str]:
+    out = _runs(r["runs"], list(r["runs"]))
+    out.append("goals: " + ", ".join(f"{k} {_met(v)}" for k, v in r["goals"].items()))
+    return out
+
+
+def any_robot(r: Result) -> list[str]:
+    out = []
+    for name, d in r["robots"].items():
+        o, i, e, c = d["observability"], d["identify"], d["estimate"], d["control"]
+        out.append(f"{name}{'' if d['chain'] is None else ' (--chain ' + d['chain'] + ')'}: rank {o['rank']}/{o['n_states']}; "
+                   f"springs within {100 * max(abs(v) for v in i['spring_error'].values()):.3f} % ({i['iterations']} iterations, "
+                   f"identify {i['identify_wall_s']:.1f} s); EKF worst joint {e['worst_rmse_deg']:.3f} deg (the starting "
+                   f"spec's {e['baseline_worst_rmse_deg']:.2f} deg); force steady-state error "
+                   f"{_pct(c['steady_state_error'])}; goals "
+                   + ", ".join(f"{k} {_met(d[k]['goal_met'])}" for k in ("observability", "identify", "estimate", "control")))
+    rt = r["round_trip"]
+    out.append("the MJCF round trip: " + ", ".join(f"{k} {max(v['A'], v['C'], v['G'], v['forward_dynamics_rel']):.1e}"
+                                                    for k, v in rt.items()))
+    return out
+
+
+def allegro_identify(r: Result) -> list[str]:
+    out = [f"{r['sub_model']} ({r['duration_s']:.0f} s record), first ``identify`` from its own empty cache: "
+           f"**{r['sub_cold_wall_s']:.1f} s** (processor {r['sub_cold_cpu_s']:.1f} s, compile {r['sub_cold_compile_s']:.1f} s, "
+           f"fit {r['sub_cold_fit_s']:.1f} s, {r['sub_iterations']} iterations), warm {r['sub_warm_wall_s']:.1f} s; goal "
+           f"< {r['goal_s']:.0f} s: {_met(r['sub_cold_wall_s'] < r['goal_s'])}",
+           "springs against the truth: " + ", ".join(f"{k} {100 * v:+.3f} %" for k, v in r["K_error_rel"].items())]
+    if r["whole_cold_wall_s"] is not None:
+        out.append(f"the whole hand (baseline): {r['whole_cold_wall_s']:.1f} s ({r['speedup_cold']:.1f}x)")
+    return out
+
+
+def _identification_headline(r: Result) -> str:
+    rows = r["finger3"]
+    worst = {k: max(abs(v["error_pct"]) for d in rows for n, v in d["parameters"].items() if n.startswith(k + "_"))
+             for k in ("K", "m")}
+    ekf = [max(d["rmse_deg_after"]) for d in rows]
+    return (f"K within {worst['K']:.2f} %, m within {worst['m']:.2f} %, EKF on the identified file {min(ekf):.2f}-"
+            f"{max(ekf):.2f} deg (seeds {', '.join(str(d['seed']) for d in rows)}; fits "
+            f"{min(d['fit_seconds'] for d in rows):.1f}-{max(d['fit_seconds'] for d in rows):.1f} s)")
+
+
+def _observer_step_headline(r: Result) -> str:
+    d = {x["model"]: x for x in r["rows"]}
+    return (f"`OnlineFilter.step` finger3 {d['finger3']['online_us']:.1f} µs, hand {d['hand']['online_us']:.1f} µs; "
+            f"C export finger3 {d['finger3']['c_us']:.2f} µs, hand {d['hand']['c_us']:.1f} µs (builds excluded)")
+
+
 SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "dynamics": dynamics, "observability": observability, "allegro": allegro,
-    "rollout": rollout, "mimic": mimic,
+    "rollout": rollout, "mimic": mimic, "identification": identification, "fit_scaling": fit_scaling,
+    "observer_step": observer_step, "observer_build": observer_build, "param_cache": param_cache, "sweep": sweep,
+    "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
+    "allegro_identify": allegro_identify,
 }
 
 ORDER = ["default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
@@ -94,7 +262,17 @@ ORDER = ["default_path", "force_realism", "realism", "long_records", "identifica
 """The page's order: the lead issues' benchmarks first."""
 
 HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {
-    "observability": ("observability of the whole hand (30 states)",
-                      lambda r: f"{r['hand']['ours']['seconds']:.2f} s in process; the command "
+    "observability": ("observability of the whole hand (30 states, rank test over the state space)",
+                      lambda r: f"{r['hand']['ours']['seconds']:.2f} s in process; `alpes-dyn observability --model hand` "
                                 f"{r['cli_hand']['seconds']:.2f} s with process start"),
+    "identification": ("identification of a finger (K, m, friction; 4 s record)", _identification_headline),
+    "observer_step": ("EKF step for a real-time loop / standalone C", _observer_step_headline),
+    "sweep": ("sweeps on a local Dask cluster (2 workers)",
+              lambda r: f"{r['median_speedup']:.2f}x the serial loop over {r['draws']} draws, {r['rounds']} round(s) "
+                        f"({r['median_speedup_vs_1thread']:.2f}x the loop on one thread)"),
 }
+"""The README's generated rows: ``(what, figure)``, ``figure(result)`` the text."""
+
+HEADLINE_ORDER = ["observability", "default_path", "force_realism", "realism", "identification", "observer_step",
+                  "sweep"]
+"""The README's rows in order; a name without a record or a figure keeps its row of ``_handwritten.README_ROWS``."""

@@ -6,9 +6,10 @@ its two motors). Timed as a new process with ``ALPES_DYN_CACHE`` pointed at an e
 included: its share is the result's ``compile_seconds``), then again warm (the same folder).
 
 Baseline in the same run: today's whole-robot chain fit on the same recording -- the same parameters (the index
-tendon's joints, its compliance, the tilt), the same fit (:func:`alpes_dyn.estimation.effects.fit_effects` with the
-documented excitation), but on the whole 16-joint hand -- also as a new process from its own empty cache. The
-fitted values of the two are compared (relative difference and in standard errors).
+tendon's joints, its compliance, the tilt), the same fit
+(:func:`alpes_dyn.estimation.identification.effects.fit_effects` with the documented excitation), but on the whole
+16-joint hand -- also as a new process from its own empty cache. The fitted values of the two are compared (relative
+difference and in standard errors).
 
 The recording: ``model_experiment`` of the shipped spec's hand with the index springs off by +10 %, -7 %, +5 % (the
 true robot), ``--duration`` s (default 4). Prints a table, or one JSON object with ``--json``; ``--no-baseline``
@@ -47,7 +48,7 @@ def make_recording(folder: Path, duration: float) -> Path:
     import dataclasses
 
     import alpes_dyn as ad
-    from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment
     from alpes_dyn.model.spec import load_spec
 
     urdf, spec_path = _paths()
@@ -64,9 +65,9 @@ def whole_chain_fit(rec: str) -> None:
     the chain's parameters of the default selection and effects, fitted on the whole hand."""
     import alpes_dyn as ad
     from alpes_dyn.cli.estimation_cmds import _chain_names
-    from alpes_dyn.estimation.effects import fit_effects, parse_effects
-    from alpes_dyn.estimation.experiment import ExperimentDesign
-    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.identification.effects import fit_effects, parse_effects
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign
+    from alpes_dyn.estimation.experiments.recording import read_recording
 
     urdf, spec = _paths()
     model = ad.Model.from_urdf_file(urdf, spec)

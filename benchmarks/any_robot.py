@@ -97,7 +97,7 @@ def run_robot(name: str, r: dict[str, Any], seed: int, duration: float, skip: se
     """The steps of the module doc on one robot; each step's figures and wall time."""
     import alpes_dyn as ad
     from alpes_dyn.control.plants import mjcf_recording
-    from alpes_dyn.estimation.recording import read_recording, write_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
     from alpes_dyn.model.spec import load_spec
 
     out: dict[str, Any] = {"chain": r["chain"]}

@@ -12,8 +12,8 @@ scenario; the parameter file says so). References: steps 0.2 -> 1.0 -> 0.5 N (1.
 * ``pi`` (the baseline: a PI on the FlexiForce alone, tuned by the same rule as the sensor loop);
 
 then the step with the plant's parameters 10 % off the controller's, link by link: ``--plant-draws``
-plants drawn by :func:`alpes_dyn.estimation.experiment.perturbed_params` (springs, masses with inertias, and joint
-friction each times a factor uniform in [0.9, 1.1], draws 0, 1, ...), the controller keeping its own
+plants drawn by :func:`alpes_dyn.estimation.experiments.experiment.perturbed_params` (springs, masses with inertias, and
+joint friction each times a factor uniform in [0.9, 1.1], draws 0, 1, ...), the controller keeping its own
 parameter file. For each controller the loss against the matched plant is printed (mean and worst over
 the draws of the change in steady-state error, RMSE and overshoot).
 
@@ -37,7 +37,7 @@ import numpy as np
 
 import alpes_dyn as ad
 from alpes_dyn.control import CONTROLLERS, run_control
-from alpes_dyn.estimation.experiment import perturbed_params
+from alpes_dyn.estimation.experiments.experiment import perturbed_params
 from _table import cell  # noqa: E402 (this folder is on the path)
 
 METRICS = ("steady_state_error", "force_rmse", "overshoot")

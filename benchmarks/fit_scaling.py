@@ -4,9 +4,9 @@ finger3 drawn +-20 % per link (seed 21 by default: not one the other benchmarks 
 identification experiment simulated for each duration (our simulator; sensor noise on) and written to a CSV by
 one process, the default fit (K, m, friction; ``excitation`` the documented lines) of that file in a fresh one, as
 ``alpes-dyn identify --data`` does, so that its peak resident memory is the fit's own (the 60 s experiment's
-simulation alone peaks at about 500 MiB). The sparse KKT (the default, :mod:`alpes_dyn.estimation.kkt`) against the dense
-one (``kkt="dense"``, the baseline, run in the same process where it fits in memory: up to 16 s), with the
-ratio of their times and their parameters' largest relative difference.
+simulation alone peaks at about 500 MiB). The sparse KKT (the default, :mod:`alpes_dyn.estimation.identification.kkt`)
+against the dense one (``kkt="dense"``, the baseline, run in the same process where it fits in memory: up to 16 s), with
+the ratio of their times and their parameters' largest relative difference.
 
     python benchmarks/fit_scaling.py [--durations 2,4,8,16,60] [--dense-up-to 16] [--seed 21] [--json]
 
@@ -29,8 +29,8 @@ def make(duration: float, seed: int, path: str) -> None:
     """The record of one duration, written to ``path`` (the recording CSV)."""
     import warnings
 
-    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-    from alpes_dyn.estimation.recording import write_recording
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.experiments.recording import write_recording
     from alpes_dyn.model.stops import JointRangeWarning
 
     warnings.simplefilter("ignore", JointRangeWarning)
@@ -46,10 +46,10 @@ def child(duration: float, seed: int, dense: bool, path: str) -> dict:
     import numpy as np
 
     import alpes_dyn as ad
-    from alpes_dyn.estimation.adequacy import AdequacyWarning
-    from alpes_dyn.estimation.experiment import ExperimentDesign, perturbed_params
-    from alpes_dyn.estimation.identification import identify
-    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.identification.adequacy import AdequacyWarning
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, perturbed_params
+    from alpes_dyn.estimation.identification.identification import identify
+    from alpes_dyn.estimation.experiments.recording import read_recording
 
     warnings.simplefilter("ignore", AdequacyWarning)
     true = perturbed_params(spread=0.2, seed=seed)

@@ -56,7 +56,7 @@ from alpes_dyn.cli.control_cmds import realism_effects
 from alpes_dyn.control import run_control
 from alpes_dyn.control.realism_loop import NO_COMPENSATION, Compensation
 from alpes_dyn.errors import InputError
-from alpes_dyn.estimation.draws import perturbed_params
+from alpes_dyn.estimation.experiments.draws import perturbed_params
 from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.control import run_hand_control
 from alpes_dyn.model.params import load_params, with_values, write_params

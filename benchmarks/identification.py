@@ -23,10 +23,10 @@ from pathlib import Path
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-from alpes_dyn.estimation.identification import identify
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+from alpes_dyn.estimation.identification.identification import identify
 from alpes_dyn.model.params import load_params, write_params
-from alpes_dyn.estimation.scenario import run_estimation
+from alpes_dyn.estimation.observers.scenario import run_estimation
 
 
 def one(seed: int, tmp: Path) -> dict:

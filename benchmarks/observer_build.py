@@ -1,7 +1,8 @@
 """The observer built in seconds (issue 20): the EKF's construction, its step from Python, and ``estimate --data``.
 
 For finger3, the Allegro hand's index chain (``--chain index``: its sub-model) and the Alpes hand (``--models`` may add
-``allegro``, the whole Allegro hand), the observer of ``estimate --data`` (:func:`~alpes_dyn.estimation.replay.
+``allegro``, the whole Allegro hand), the observer of ``estimate --data``
+(:func:`~alpes_dyn.estimation.observers.replay.
 recording_filter`: motor torques in, encoders out, the default substeps) is built
 
     build 1st     in a fresh process, the model already loaded (its symbolic dynamics, the RK4 step, the Jacobians,
@@ -67,7 +68,7 @@ def measure(name: str) -> dict:
     import casadi as cs
     import numpy as np
 
-    from alpes_dyn.estimation.replay import recording_filter
+    from alpes_dyn.estimation.observers.replay import recording_filter
 
     m = _model(name)
     t0 = time.perf_counter()
@@ -143,7 +144,7 @@ def estimate_wall(src: Path, rec: Path, cache: Path) -> float:
 
 def online_build(cache: Path) -> tuple[float, float]:
     """finger3's compiled step (``online()``) built from the empty ``cache`` and again from it warm, s."""
-    code = ("import time\nfrom alpes_dyn.estimation.replay import recording_filter\nimport alpes_dyn as ad\n"
+    code = ("import time\nfrom alpes_dyn.estimation.observers.replay import recording_filter\nimport alpes_dyn as ad\n"
             "f, z0, P0 = recording_filter(ad.Model.alpes('finger3', friction=True), 'ekf', 1e-3)\n"
             "t = time.perf_counter(); f.online(z0, P0); print(time.perf_counter() - t)\n")
     src = ROOT / "src"

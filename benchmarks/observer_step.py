@@ -1,4 +1,6 @@
-"""The observer's step for a real-time loop (issue 20): microseconds per sample, in the same process, of
+"""The observer's step for a real-time loop (issue 20): microseconds per sample, the compiled step against filterpy.
+
+Timed in the same process:
 
     OnlineFilter.step   (KalmanFilter.online: one call into the compiled predict-update step)
     C export            (alpes-dyn codegen: alpes_ekf_step in the exported C, its default code -- on the hand the
@@ -40,8 +42,8 @@ import numpy as np
 import pinocchio as pin
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.cexport import main_input, read_main_output, write_c_observer
-from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.estimation.cexport.cexport import main_input, read_main_output, write_c_observer
+from alpes_dyn.estimation.observers.observers import make_observer
 from alpes_dyn.simulation.codegen import _LARGE_SOURCE
 from alpes_dyn.symbolic.statespace import StateSpace
 

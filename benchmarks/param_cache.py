@@ -68,9 +68,9 @@ def _main(argv: list[str] | None, cache: Path) -> int:
     a = ap.parse_args(argv)
     os.environ["ALPES_DYN_CACHE"] = str(cache)  # read at each build (simulation.codegen.cache_dir)
     import alpes_dyn as ad
-    from alpes_dyn.estimation.experiment import perturbed_params
-    from alpes_dyn.estimation.observers import ExtendedKalmanFilter
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
+    from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
+    from alpes_dyn.estimation.observers.scenario import run_estimation
     from alpes_dyn.simulation.codegen import CompiledStepLoop
     from alpes_dyn.symbolic.statespace import StateSpace
 

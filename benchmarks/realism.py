@@ -3,7 +3,7 @@
 The identification benchmark fits data from the library's own simulator, whose structure is the fitted
 model's. Here the plant is the finger exported to MuJoCo (:mod:`alpes_dyn.control.plants`: joint stops on,
 RK4 at 0.1 ms, our encoder and torque sensors at 1 kHz), finger3 drawn +-20 % per link
-(:func:`~alpes_dyn.estimation.experiment.perturbed_params`, seeds 11, 12, 13 by default: the identification
+(:func:`~alpes_dyn.estimation.experiments.experiment.perturbed_params`, seeds 11, 12, 13 by default: the identification
 benchmark uses 1-4; issue 38's fresh draws: ``--seeds 401-420``), with one effect of a real hand at a time, or all
 of them:
 
@@ -31,20 +31,20 @@ the true finger as it stands) replayed on the plant, and two fits of it:
 
 * **rigid**: the rigid, smooth-friction model (K, m, F_s, F_v; ``alpes-dyn identify --effects none``), whose
   adequacy verdict must flag every plant with an effect and none with the model's own structure;
-* **extended**: what ``alpes-dyn identify`` fits by default (``--effects auto``, :mod:`alpes_dyn.estimation.effects`):
+* **extended**: what ``alpes-dyn identify`` fits by default (``--effects auto``, :mod:`alpes_dyn.estimation.identification.effects`):
   the tendon's compliance and the palm's tilt, then rounds with the stick-slip law and the rotor where a fit asks
-  for them (:func:`~alpes_dyn.estimation.effects.fit_effects`), the lower residual kept; from the nominal file.
+  for them (:func:`~alpes_dyn.estimation.identification.effects.fit_effects`), the lower residual kept; from the nominal file.
   Its time is every round's (``fit_seconds_total``; each round in ``rounds``).
 
 For each, the worst error (%) of each kind, also up to the one common scale (exp of the mean log ratio over
 K and m: the torque constant scales every parameter together, and the encoder cannot see it), the residual
 (counts; the sensor floor is 0.58), ``converged``, the fit time, the verdict. Then the EKF
-(:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``) on the extended
+(:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`, as ``alpes-dyn estimate --data``) on the extended
 fit's file, with its fitted tilt and offset, and for comparison on the true file (rigid, level: it knows
 neither), on a fresh run of the plant -- the experiment's design on other lines (0.4-12.7 Hz: a torque the fit
 never saw), from the plant's rest -- from that run's recorded encoder and torque: RMSE after 1 s, deg per joint.
 (The estimation scenario's torque is not used: it takes the nominal finger outside its joint range, into
-MuJoCo's stops.) The verdict is the fit's adequacy check (:mod:`alpes_dyn.estimation.adequacy`, in-sample:
+MuJoCo's stops.) The verdict is the fit's adequacy check (:mod:`alpes_dyn.estimation.identification.adequacy`, in-sample:
 whiteness, cross-correlation with the torque, residual against the sensor floor): "adequate", or "FLAGGED"
 with the reason.
 
@@ -73,7 +73,7 @@ fit flagged) each with its verdict, and the runs that raised. ``--no-rigid`` ski
 
 ``--chains``: the hand's chains instead of finger3, one at a time, each as ``alpes-dyn identify`` fits it (a finger
 as ``--model finger3 --chain <name>``; the thumb as ``--model thumb``, its flexion springs, masses and friction,
-:data:`~alpes_dyn.estimation.identification.THUMB_PARAMETERS`, its ab/adduction on its own geared motor), from the nominal file; the
+:data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`, its ab/adduction on its own geared motor), from the nominal file; the
 true hand is the nominal one with every chain drawn +-20 % (``perturbed_params(..., chains=<all the hand's
 chains>)``, seed ``--hand-seed``, which also seeds the sensors' noise). The errors are over the parameters of the
 chain's catalogue (:func:`~alpes_dyn.symbolic.parametric.parameter_catalogue`) that the fit holds and whose truth

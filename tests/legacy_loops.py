@@ -13,9 +13,9 @@ import dataclasses
 import numpy as np
 
 from alpes_dyn.model.transmission import torque_before
-from alpes_dyn.estimation.blocks import batch_step_caller, step_caller
-from alpes_dyn.estimation.observers import make_observer, true_gains
-from alpes_dyn.estimation.scenario import (EstimationScenario, _held_joints, _torque, default_noise,
+from alpes_dyn.estimation.observers.blocks import batch_step_caller, step_caller
+from alpes_dyn.estimation.observers.observers import make_observer, true_gains
+from alpes_dyn.estimation.observers.scenario import (EstimationScenario, _held_joints, _torque, default_noise,
                                            mismatched_params, rest_with_held_joints, static_equilibrium)
 from alpes_dyn.model.params import HandParams, load_params
 from alpes_dyn.model.robot import Model
@@ -328,7 +328,7 @@ def legacy_mujoco_recording(model, true_params, torque, dt=1e-3, *, effects=None
 def legacy_estimate_recording(rec, model, observer="ekf", *, torque_noise=None, disturbance=False,
                               disturbance_walk=2e-4) -> dict[str, np.ndarray]:
     """The old estimate_recording (no gravity columns, no tilt, no encoder offset, no encoder noise): z, P."""
-    from alpes_dyn.estimation.replay import _initial_state
+    from alpes_dyn.estimation.observers.replay import _initial_state
 
     dt = rec.dt
     if torque_noise is None:

@@ -9,8 +9,8 @@ import math
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.experiment import ExperimentDesign, _simulate, _schedule, experiment
-from alpes_dyn.estimation.recording import Recording
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, _simulate, _schedule, experiment
+from alpes_dyn.estimation.experiments.recording import Recording
 from alpes_dyn.model.params import HandParams, Param, with_values
 
 KINDS = ("match", "rotor", "tilt", "offset", "tendon", "coulomb")

@@ -14,11 +14,11 @@ from scipy import stats
 
 import alpes_dyn as ad
 from alpes_dyn.errors import InputError, ModelError
-from alpes_dyn.estimation.adequacy import (BAND_99, AdequacyWarning, cross_correlation, encoder_resolution, fit_percent, nrmse,
+from alpes_dyn.estimation.identification.adequacy import (BAND_99, AdequacyWarning, cross_correlation, encoder_resolution, fit_percent, nrmse,
                                            sensor_floor, whiteness, white_noise_level)
-from alpes_dyn.estimation.experiment import ExperimentDesign, perturbed_params
-from alpes_dyn.estimation.identification import identify
-from alpes_dyn.estimation.recording import read_recording, write_recording
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, perturbed_params
+from alpes_dyn.estimation.identification.identification import identify
+from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
 from alpes_dyn.model.params import load_params, write_params
 from alpes_dyn.model.robot import Model
 from mismatch_plants import mismatched
@@ -168,7 +168,7 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
     """Exit 3 and no file without --force; with it the file is written, says NOT TRUSTWORTHY, records the
     verdict, and every command that takes a parameter file reads it. (The CLI gets the fixture's fit of
     this recording instead of fitting it again: the fit itself is tested above.)"""
-    import alpes_dyn.estimation.identification as ident
+    import alpes_dyn.estimation.identification.identification as ident
     from alpes_dyn.cli import EXIT_UNTRUSTED, main
 
     rec = write_recording(fits["rotor"][0], tmp_path / "rotor.csv")
@@ -247,7 +247,7 @@ def test_identification_record_errors(tmp_path, table, pattern):
 def test_a_fit_that_stops_gives_its_reason():
     """One Gauss-Newton iteration allowed: the fit stops at the cap, says so, is not trustworthy, and the
     parameter file it would write records it (converged false, the stop reason)."""
-    from alpes_dyn.estimation.experiment import experiment
+    from alpes_dyn.estimation.experiments.experiment import experiment
 
     rec = experiment("finger2", perturbed_params(spread=0.2, seed=3), ExperimentDesign(duration=0.5), seed=3)
     with pytest.warns(AdequacyWarning, match="did not converge"):
@@ -262,7 +262,7 @@ def test_a_fit_that_stops_gives_its_reason():
 def test_assess_rules_on_synthetic_residuals():
     """White noise at the floor: adequate. The same plus a constant: too large, the bias named. An AR(1)
     residual: coloured, unless the floor says the torque noise's (coloured) response dominates it."""
-    from alpes_dyn.estimation.adequacy import SensorFloor, assess
+    from alpes_dyn.estimation.identification.adequacy import SensorFloor, assess
 
     rng = np.random.default_rng(4)
     N = 3000
@@ -287,7 +287,7 @@ def test_assess_rules_on_synthetic_residuals():
 def test_reversal_ratio_sees_a_residual_at_velocity_reversals():
     """A residual of white noise: ratio ~1 (within 15 %); with bursts of 3x within 10 ms of each zero of
     the velocity (what sticking does): above 2, and assess names stick-slip first."""
-    from alpes_dyn.estimation.adequacy import SensorFloor, assess, reversal_ratio
+    from alpes_dyn.estimation.identification.adequacy import SensorFloor, assess, reversal_ratio
 
     rng = np.random.default_rng(5)
     t = np.arange(4000) * 1e-3
@@ -304,7 +304,7 @@ def test_reversal_ratio_sees_a_residual_at_velocity_reversals():
 
 def test_intermodulation_products_by_hand():
     """Lines 1 and 5 Hz: order 2 gives 2, 10, 6, 4; order 3 gives 3, 15, 7, |2 - 5| = 3, 11, |1 - 10| = 9."""
-    from alpes_dyn.estimation.harmonics import intermodulation
+    from alpes_dyn.estimation.identification.harmonics import intermodulation
 
     assert intermodulation([1.0, 5.0], 100.0).tolist() == [2.0, 3.0, 4.0, 6.0, 7.0, 9.0, 10.0, 11.0, 15.0]
     assert intermodulation([1.0, 5.0], 100.0, orders=(2,)).tolist() == [2.0, 4.0, 6.0, 10.0]
@@ -316,8 +316,8 @@ def test_harmonic_ratio_sees_the_excitations_products():
     tones a friction reversing with the 20 Hz dither makes (3 x 20 Hz and 20 + 11.3 Hz, each of amplitude a):
     the products' bins gain a^2 N^2 / 4 per tone over 2 x 3 + ... bins of mean N sigma^2, so the ratio is 1 +
     that share; assess then names a nonlinearity, after the others."""
-    from alpes_dyn.estimation.adequacy import SensorFloor, assess
-    from alpes_dyn.estimation.harmonics import NONLINEARITY, harmonic_ratio, intermodulation
+    from alpes_dyn.estimation.identification.adequacy import SensorFloor, assess
+    from alpes_dyn.estimation.identification.harmonics import NONLINEARITY, harmonic_ratio, intermodulation
 
     lines = ExperimentDesign().lines
     dt, N = 1e-3, 4000  # 0.25 Hz bins: 60 and 31.25 Hz on bins
@@ -352,7 +352,7 @@ def test_a_fitted_trajectory_leaving_the_joint_range_names_a_joint_stop():
     """range_exit: the joints whose fitted angles pass a limit by more than RANGE_TOLERANCE (1 deg), each with how
     far; assess then fails the fit on it and names a joint stop first (MuJoCo's seed 32 drives q_1 to -15 deg into
     its stop; the fit of it left j1 at -23 to -28 deg and named the stop)."""
-    from alpes_dyn.estimation.adequacy import JOINT_STOP, RANGE_TOLERANCE, assess, range_exit, sensor_floor
+    from alpes_dyn.estimation.identification.adequacy import JOINT_STOP, RANGE_TOLERANCE, assess, range_exit, sensor_floor
 
     q = np.zeros((100, 3))
     q[:, 1] = np.linspace(0.0, 1.0, 100)

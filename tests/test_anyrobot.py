@@ -79,7 +79,7 @@ def recording(robot):
 
 
 def test_experiment_writes_a_recording_the_model_reads(robot, recording):
-    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording
 
     model = ad.Model.from_urdf_file(robot / "finger.urdf", robot / "finger.toml")
     rec = read_recording(recording, model)
@@ -178,7 +178,7 @@ def test_allegro_experiment_and_observer(tmp_path, capsys):
     """The shipped Allegro example: its 8 motors excited at once for 0.5 s (the ab/adduction's direct motors
     through zero), every joint inside its range, and the EKF on the recording."""
     # (not its fit: the 16-joint sensitivity code takes minutes to compile)
-    from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment
 
     urdf, spec = ad.example_robot_urdf("allegro_hand", "allegro_right_hand"), example_spec_path()
     m = ad.Model.from_urdf_file(urdf, spec)

@@ -102,10 +102,10 @@ def test_only_the_command_line_imports_the_package_front_door():
 def test_the_front_door_rule_sees_every_spelling(monkeypatch):
     """The import counter on made-up text of a module: the relative, absolute and plain spellings of an import of
     the package's front door each count; a module of the package imported by name does not."""
-    mod = PACKAGE / "estimation" / "cexport.py"
-    for text, door in (("from .. import __version__", True), ("from alpes_dyn import __version__", True),
-                       ("import alpes_dyn", True), ("from .. import errors", False),
-                       ("from alpes_dyn import errors", False), ("from .._version import __version__", False)):
+    mod = PACKAGE / "estimation" / "cexport" / "cexport.py"
+    for text, door in (("from ... import __version__", True), ("from alpes_dyn import __version__", True),
+                       ("import alpes_dyn", True), ("from ... import errors", False),
+                       ("from alpes_dyn import errors", False), ("from ..._version import __version__", False)):
         monkeypatch.setattr(Path, "read_text", lambda self, *a, _t=text, **k: _t)
         assert ("__init__" in module_imports(mod)) is door, text
 
@@ -204,6 +204,58 @@ def test_public_old_module_as_an_attribute_of_the_package():
     assert alpes_dyn.observability is importlib.import_module("alpes_dyn.analysis.observability")
     with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
         alpes_dyn.nonexistent
+
+
+# ----------------------------------------------------------------------------- the estimation floor's rooms
+ESTIMATION_ROOMS = ("experiments", "observers", "identification", "cexport")
+"""The estimation floor's sub-packages in order: each imports only those before it (issue 36), except that
+``cexport`` (the observer as C) needs no fit: it may import experiments and observers, not identification."""
+
+
+def test_estimation_sub_packages_point_only_at_those_before_them():
+    est = PACKAGE / "estimation"
+    assert {p.parent.name for p in est.glob("*/__init__.py")} == set(ESTIMATION_ROOMS)
+    assert sorted(p.name for p in est.glob("*.py")) == ["__init__.py"]  # every module in a room
+    wrong = []
+    for room in ESTIMATION_ROOMS:
+        allowed = set(ESTIMATION_ROOMS[: ESTIMATION_ROOMS.index(room) + 1]) - ({"identification"} if room == "cexport"
+                                                                               else set())
+        for path in (est / room).glob("*.py"):
+            for target in module_imports(path):
+                parts = target.split(".")
+                if parts[0] == "estimation" and (len(parts) < 3 or parts[1] not in allowed):
+                    wrong.append(f"{room}/{path.name} imports {target}")
+        doc = ast.get_docstring(ast.parse((est / room / "__init__.py").read_text())) or ""
+        assert len(doc.split()) > 40 and "eq" in doc, f"estimation/{room}/__init__.py: a paragraph naming the equations"
+    assert wrong == []
+
+
+def test_estimation_short_names_and_old_paths():
+    """The common names at ``alpes_dyn.estimation`` are the defining module's objects; a module path of before the
+    split imports the same module with one DeprecationWarning naming its new path (a fresh process)."""
+    import alpes_dyn.estimation as est
+
+    for name, module in est.EXPORTS.items():
+        assert getattr(est, name) is getattr(importlib.import_module(f"alpes_dyn.estimation.{module}"), name), name
+        assert getattr(est, name).__module__.startswith("alpes_dyn.estimation."), name
+    assert set(est.__all__) == set(est.EXPORTS) and "identify" in dir(est)
+    with pytest.raises(AttributeError, match="no attribute 'nonexistent'"):
+        est.nonexistent
+    code = ("import warnings, importlib; warnings.simplefilter('always')\n"
+            "with warnings.catch_warnings(record=True) as w:\n"
+            "    old = importlib.import_module('alpes_dyn.estimation.adapt')\n"
+            "new = importlib.import_module('alpes_dyn.estimation.experiments.adapt')\n"
+            "print(old is new, new.__spec__.name, len(w), w[0].category.__name__, str(w[0].message).split()[3])")
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.split()
+    assert out == ["True", "alpes_dyn.estimation.experiments.adapt", "1", "DeprecationWarning",
+                   "alpes_dyn.estimation.experiments.adapt;"]
+    for room, name in (("identification", "identify"), ("observers", "make_observer"), ("cexport", "write_c_observer")):
+        # a room that was a module: its module's names forwarded from the room, with a warning
+        with pytest.warns(DeprecationWarning, match=f"alpes_dyn.estimation.{room}.{room}.{name}"):
+            assert getattr(importlib.import_module(f"alpes_dyn.estimation.{room}"), name) is getattr(est, name)
+    for old, new in est.MOVED.items():
+        assert (PACKAGE / "estimation" / f"{new.replace('.', '/')}.py").is_file() and "." not in old
+        assert not (PACKAGE / "estimation" / f"{old}.py").exists()
 
 
 # ----------------------------------------------------------------------------- sizes a newcomer can read

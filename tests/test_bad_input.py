@@ -138,8 +138,8 @@ def _recordings() -> dict[str, str]:
     if not _RECORDINGS:
         import tempfile
 
-        from alpes_dyn.estimation.experiment import ExperimentDesign, experiment
-        from alpes_dyn.estimation.recording import write_recording
+        from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment
+        from alpes_dyn.estimation.experiments.recording import write_recording
 
         with tempfile.TemporaryDirectory() as d:
             for m in ("finger2", "finger3"):
@@ -1099,13 +1099,13 @@ def _steploop(lifted=True, **kw):
 
 
 def _ekf(c, **kw):
-    from alpes_dyn.estimation.observers import ExtendedKalmanFilter
+    from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
 
     return ExtendedKalmanFilter(c.ss, 1e-3, **{"process_noise": 1e-9, "measurement_noise": 1e-7, **kw})
 
 
 def _ukf(c, **kw):
-    from alpes_dyn.estimation.observers import UnscentedKalmanFilter
+    from alpes_dyn.estimation.observers.observers import UnscentedKalmanFilter
 
     return UnscentedKalmanFilter(c.ss, 1e-3, process_noise=1e-9, measurement_noise=1e-7, **kw)
 
@@ -1123,7 +1123,7 @@ def _sim(c, **kw):
 
 
 def _est(**kw):
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     return run_estimation("ekf", **kw)
 
@@ -1135,27 +1135,27 @@ def _rollout(c, **kw):
 
 
 def _design(**kw):
-    from alpes_dyn.estimation.experiment import ExperimentDesign
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign
 
     return ExperimentDesign(**{"duration": 0.2, **kw})
 
 
 def _exp(**kw):
-    from alpes_dyn.estimation.experiment import experiment
+    from alpes_dyn.estimation.experiments.experiment import experiment
 
     return experiment(**{"model": "finger2", "design": _design(), **kw})
 
 
 def _model_exp(nominal, **kw):
-    from alpes_dyn.estimation.experiment import model_experiment
+    from alpes_dyn.estimation.experiments.experiment import model_experiment
 
     return model_experiment(nominal, **{"design": _design(), **kw})
 
 
 def _ident_spec(names, base=None):
     """identified_spec of a made-up fit of ``names`` on the URDF robot (no fit run: the refusals come first)."""
-    from alpes_dyn.estimation.identification import IdentificationResult
-    from alpes_dyn.estimation.identified_spec import identified_spec
+    from alpes_dyn.estimation.identification.identification import IdentificationResult
+    from alpes_dyn.estimation.identification.identified_spec import identified_spec
 
     spec = TransmissionSpec.from_toml(ROBOT_SPEC)
     p = len(names)
@@ -1168,21 +1168,21 @@ def _ident_spec(names, base=None):
 
 
 def _replay(c, **kw):
-    from alpes_dyn.estimation.recording import read_recording
-    from alpes_dyn.estimation.replay import estimate_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording
+    from alpes_dyn.estimation.observers.replay import estimate_recording
 
     kw = {"recording": read_recording(c.f["replay_csv"], c.m), "model": c.m, **kw}
     return estimate_recording(**kw)
 
 
 def _pp(**kw):
-    from alpes_dyn.estimation.experiment import perturbed_params
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
 
     return perturbed_params(**kw)
 
 
 def _ident(c, recording=None, **kw):
-    from alpes_dyn.estimation.identification import identify
+    from alpes_dyn.estimation.identification.identification import identify
 
     if recording is None:
         recording = _exp()
@@ -1200,7 +1200,7 @@ def _diverging():
 
 
 def _adq(name, *args):
-    from alpes_dyn.estimation import adequacy
+    from alpes_dyn.estimation.identification import adequacy
 
     return getattr(adequacy, name)(*args)
 
@@ -1263,7 +1263,7 @@ def _nd(v, names):
 
 
 def _harm():
-    return __import__("alpes_dyn.estimation.harmonics", fromlist=["x"])
+    return __import__("alpes_dyn.estimation.identification.harmonics", fromlist=["x"])
 
 
 def _realism():
@@ -1410,7 +1410,7 @@ API: list[Api] = [
     A("StateSpace", lambda c: c.ss.linearize(np.zeros(6), np.zeros(1), dt=1e308), InputError,
       "dt: 1e+308 s is outside [1e-09, 1e+06] s"),
     A("compile_rollout", lambda c: _rollout(c, dt=1e-320), InputError, "dt: 9.99989e-321 s is outside [1e-09, 1e+06] s"),
-    A("ExtendedKalmanFilter", lambda c: __import__("alpes_dyn.estimation.observers", fromlist=["x"]).ExtendedKalmanFilter(
+    A("ExtendedKalmanFilter", lambda c: __import__("alpes_dyn.estimation.observers.observers", fromlist=["x"]).ExtendedKalmanFilter(
         c.ss, 1e300, process_noise=1e-9, measurement_noise=1e-7), InputError, "dt: 1e+300 s is outside"),
     A("fisher_information", lambda c: _fim(c, U=[10**400] * 10), InputError, "U: expected an array of numbers, got a "
       "number too large"),
@@ -1443,11 +1443,11 @@ API: list[Api] = [
     A("write_params", lambda c: _write_params(c.f["fifo"]), ModelError, "is a FIFO (named pipe); only a regular file"),
     A("write_recording", lambda c: _write_rec(c.f["device"]), RecordingError, "is a character device"),
     A("read_recording", lambda c: _read_rec(c.f["fifo"]), RecordingError, "recording '{fifo}': is a FIFO"),
-    A("read_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).read_recording(
+    A("read_recording", lambda c: __import__("alpes_dyn.estimation.experiments.recording", fromlist=["x"]).read_recording(
         c.f["rec3_csv"], "finger3"), RecordingError,
       "model: expected an alpes_dyn Model (it names the columns), got str"),
     A("read_recording", lambda c: _read_rec(c.f["unders_csv"]), RecordingError, "not a number ('1_0"),
-    A("read_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).read_recording(
+    A("read_recording", lambda c: __import__("alpes_dyn.estimation.experiments.recording", fromlist=["x"]).read_recording(
         c.f["rec3_csv"], c.m, ignore_others_of="hand"), RecordingError,
       "ignore_others_of: expected an alpes_dyn Model or None, got str"),
     # a sub-model on some branches (Model.subtree)
@@ -1658,7 +1658,7 @@ API: list[Api] = [
       "path: '{params_toml}' is the input of true_params; refusing to write over it"),
     A("experiment", lambda c: _exp(path=c.f["tmp"] + "/newdir/"), InputError, "path: '{tmp}/newdir/' ends with '/'"),
     A("experiment", lambda c: _exp(path=c.f["link"]), InputError, "path: '{link}' is a symbolic link"),
-    A("write_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).write_recording(
+    A("write_recording", lambda c: __import__("alpes_dyn.estimation.experiments.recording", fromlist=["x"]).write_recording(
         _exp(), c.f["tmp"] + "/newdir/"), InputError, "ends with '/'"),
     A("experiment", lambda c: _exp(model="hand"), InputError, "defined for one chain"),
     A("experiment", lambda c: _exp(model="finger3", chain="pinky"), ModelError, "chain: unknown finger 'pinky'"),
@@ -1827,7 +1827,7 @@ API: list[Api] = [
     A("CompiledStepLoop", lambda c: _steploop(parameters=[np.inf, 0.0]), InputError, "parameters: contains NaN or inf"),
     A("CompiledStepLoop", lambda c: _steploop(lifted=False, parameters=[1.0]), InputError,
       "parameters: the step (x, w) -> x_next takes none"),
-    A("batch_step_caller", lambda c: __import__("alpes_dyn.estimation.blocks", fromlist=["x"]).batch_step_caller(
+    A("batch_step_caller", lambda c: __import__("alpes_dyn.estimation.observers.blocks", fromlist=["x"]).batch_step_caller(
         _ekf(c).filter_step_p, "bad", False, [1.0, 2.0]), InputError,
       "numbers, the step's input p, got '[1.0, 2.0]'"),
     A("lift_constants", lambda c: __import__("alpes_dyn.symbolic.lifted", fromlist=["x"]).lift_constants("f"),
@@ -1973,7 +1973,7 @@ API: list[Api] = [
 
 
 def _recfilt(model, **kw):
-    from alpes_dyn.estimation.replay import recording_filter
+    from alpes_dyn.estimation.observers.replay import recording_filter
 
     return recording_filter(model, **kw)
 
@@ -2006,13 +2006,13 @@ def _write_params(path):
 
 
 def _write_rec(path):
-    from alpes_dyn.estimation.recording import write_recording
+    from alpes_dyn.estimation.experiments.recording import write_recording
 
     return write_recording(_exp(), path)
 
 
 def _read_rec(path, torque_constant=None):
-    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording
 
     return read_recording(path, ad.Model.alpes("finger3"), torque_constant)
 
@@ -2121,13 +2121,13 @@ def _eff(**kw):
 
 
 def _adapted(**kw):
-    from alpes_dyn.estimation.adapt import adapted_experiment
+    from alpes_dyn.estimation.experiments.adapt import adapted_experiment
 
     return adapted_experiment(kw.pop("model", "finger3"), design=_design(), **kw)
 
 
 def _exptorque(**kw):
-    from alpes_dyn.estimation.experiment import experiment_torque
+    from alpes_dyn.estimation.experiments.experiment import experiment_torque
 
     return experiment_torque(kw.pop("model", "finger3"), **kw)
 
@@ -2139,13 +2139,13 @@ def _mjcf(**kw):
 
 
 def _plot_path(p):
-    from alpes_dyn.estimation.scenario import check_plot_path
+    from alpes_dyn.estimation.observers.scenario import check_plot_path
 
     return check_plot_path(p)
 
 
 def _cexport(c, what, *a, **kw):
-    from alpes_dyn.estimation import cexport
+    from alpes_dyn.estimation.cexport import cexport
 
     return getattr(cexport, what)(*a, **kw)
 
@@ -2199,7 +2199,7 @@ def _loop(what: str, *a, **kw):
 
 
 def _eblock(what: str, *a, **kw):
-    from alpes_dyn.estimation import blocks
+    from alpes_dyn.estimation.observers import blocks
 
     return getattr(blocks, what)(*a, **kw)
 
@@ -2361,7 +2361,7 @@ def _one(seed: int, x: float = 1.0) -> dict:
 
 
 def _replay_rec3(c, **kw):
-    from alpes_dyn.estimation.replay import estimate_recording
+    from alpes_dyn.estimation.observers.replay import estimate_recording
 
     return estimate_recording(c.f["rec3_csv"], c.m, **kw)
 
@@ -2411,7 +2411,7 @@ API.extend([  # issue 19's third re-check: mimic attributes, the hot paths' boun
     A("estimate_recording", lambda c: _replay_rec3(c, encoder_offset=[1e-320]), InputError,
       "encoder_offset: 1e-320 rad is a subnormal number"),
     A("estimate_recording", lambda c: _replay_rec3(c, compiled="yes"), InputError, "compiled: expected True or False"),
-    A("read_recording", lambda c: __import__("alpes_dyn.estimation.recording", fromlist=["x"]).read_recording(3, c.m),
+    A("read_recording", lambda c: __import__("alpes_dyn.estimation.experiments.recording", fromlist=["x"]).read_recording(3, c.m),
       RecordingError, "recording: expected a file path, got int"),
     A("write_sources", lambda c: __import__("alpes_dyn.fileio", fromlist=["x"]).write_directory(
         {"a\0.c": "int x;"}, c.f["tmp"] + "/cg"), InputError, "files: 'a\\x00.c' is not a plain file name"),
@@ -2454,7 +2454,7 @@ def _read_branch_fa(override: dict[str, float]):
     sub-model of motor fa, row 50 (line 52) of the columns ``override`` set to their values."""
     import tempfile
 
-    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording
 
     whole = ad.Model(BRANCHES_URDF, TransmissionSpec.from_toml(BRANCHES_SPEC.split("[[motor]]\nname = \"across\"")[0]
                                                                + "[stiffness]\nja = 0.1\njb = 0.1\n"))
@@ -2474,19 +2474,19 @@ def _read_branch_fa(override: dict[str, float]):
 
 
 def _parse_effects(text):
-    from alpes_dyn.estimation.effects import parse_effects
+    from alpes_dyn.estimation.identification.effects import parse_effects
 
     return parse_effects(text)
 
 
 def _excursion(fn, recording, *args):
-    from alpes_dyn.estimation import excursion
+    from alpes_dyn.estimation.experiments import excursion
 
     return getattr(excursion, fn)(recording, *args)
 
 
 def _rec_of(counts):
-    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.estimation.experiments.recording import Recording
 
     enc = np.asarray(counts, dtype=float).reshape(-1, 1)
     return Recording(t=np.arange(enc.shape[0]) * 1e-3, encoder=enc, torque=np.zeros_like(enc), motor_names=("m",),
@@ -2762,7 +2762,7 @@ def test_help_on_an_ascii_terminal():
 
 def test_byte_order_mark_accepted(tmp_path):
     """A UTF-8 BOM (as Windows editors write) is read as nothing: TOML, spec, CSV."""
-    from alpes_dyn.estimation.recording import read_recording, write_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
     from alpes_dyn.model.spec import load_spec
 
     files = bad_files(tmp_path)
@@ -2795,7 +2795,7 @@ def test_header_with_control_characters_reads_back(tmp_path):
 
 def test_recording_row_limit(tmp_path, monkeypatch):
     """Rows are counted before the CSV is parsed (the limit lowered here to 50: a real one is 20 million)."""
-    from alpes_dyn.estimation import recording
+    from alpes_dyn.estimation.experiments import recording
 
     path = recording.write_recording(_exp(), tmp_path / "rec.csv")  # 201 rows
     monkeypatch.setattr(recording, "MAX_CSV_ROWS", 50)
@@ -2819,7 +2819,7 @@ def test_unix_epoch_time_stamps_accepted(tmp_path):
     a real jitter of 1 % of a period still refused."""
     import dataclasses
 
-    from alpes_dyn.estimation.recording import read_recording, write_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
 
     rec = _exp()
     m = ad.Model.alpes("finger2")
@@ -2848,7 +2848,7 @@ def test_numpy_reprs_are_plain_in_warnings_and_cli_lines():
     import warnings
 
     from alpes_dyn.cli.common import UntrustedFitWarning, _one_line
-    from alpes_dyn.estimation.adequacy import AdequacyWarning
+    from alpes_dyn.estimation.identification.adequacy import AdequacyWarning
     from alpes_dyn.model.stops import JointRangeWarning
 
     for cls in (JointRangeWarning, AdequacyWarning, UntrustedFitWarning):
@@ -2884,7 +2884,7 @@ def test_experiment_on_the_file_true_params_out_wrote():
     """``experiment --params TRUE.toml`` on the finger ``--perturb 0.2 --seed 11`` drew: its springs spread the joints
     so that the bias putting their mean mid-range leaves j1 out of range; the bias then moves to where every joint's
     static equilibrium (solved here again, on the finger itself) is in range, instead of refusing the file."""
-    from alpes_dyn.estimation.experiment import ExperimentDesign, excitation, perturbed_params
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, excitation, perturbed_params
 
     true = perturbed_params(spread=0.2, seed=11)
     finger = ad.Model.alpes("finger3", friction=True, params=true)

@@ -1,8 +1,8 @@
 """Physical bounds of the fitted parameters and the experiment adapted to the finger (issue 35).
 
-Checked against independent references: the rules of :func:`~alpes_dyn.estimation.bounds.unsupported` by hand; the
-fit with a parameter not identified against a fresh fit that never had it; the compliance on MuJoCo plants (a rigid
-cable: not identified; a series-elastic one: identified, positive, written); the adapted experiment's choice on
+Checked against independent references: the rules of :func:`~alpes_dyn.estimation.identification.bounds.unsupported` by
+hand; the fit with a parameter not identified against a fresh fit that never had it; the compliance on MuJoCo plants
+(a rigid cable: not identified; a series-elastic one: identified, positive, written); the adapted experiment's choice on
 MuJoCo (the torque of the chosen design replayed on the MuJoCo finger keeps it in range where the palm-up one does
 not).
 """
@@ -16,12 +16,12 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.errors import ModelError
-from alpes_dyn.estimation.adapt import RANGE_MARGIN, adapted_experiment, range_excess
-from alpes_dyn.estimation.bounds import describe, held_value, physical_range, unsupported
-from alpes_dyn.estimation.design import ExperimentDesign
-from alpes_dyn.estimation.draws import perturbed_params
-from alpes_dyn.estimation.experiment import experiment, experiment_torque
-from alpes_dyn.estimation.identification import identify
+from alpes_dyn.estimation.experiments.adapt import RANGE_MARGIN, adapted_experiment, range_excess
+from alpes_dyn.estimation.identification.bounds import describe, held_value, physical_range, unsupported
+from alpes_dyn.estimation.experiments.design import ExperimentDesign
+from alpes_dyn.estimation.experiments.draws import perturbed_params
+from alpes_dyn.estimation.experiments.experiment import experiment, experiment_torque
+from alpes_dyn.estimation.identification.identification import identify
 from alpes_dyn.model.params import Param, load_params, with_values
 
 

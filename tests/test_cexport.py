@@ -13,8 +13,8 @@ import pytest
 
 from alpes_dyn import cli, fileio
 from alpes_dyn.errors import InputError
-from alpes_dyn.estimation import cexport
-from alpes_dyn.estimation.cexport import c_sources, main_input, read_main_output, scenario_filter, write_c_observer
+from alpes_dyn.estimation.cexport import cexport
+from alpes_dyn.estimation.cexport.cexport import c_sources, main_input, read_main_output, scenario_filter, write_c_observer
 
 CC = shutil.which("cc") or shutil.which("gcc")
 needs_cc = pytest.mark.skipif(CC is None, reason="no C compiler (cc or gcc) on PATH: the exported C is not built")
@@ -29,7 +29,7 @@ def _build(d, prefix="alpes_ekf", opt="-O2"):
 
 @needs_cc
 def test_c_export_equals_the_python_filter_on_the_scenario(tmp_path):
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     res = run_estimation("ekf", duration=1.0)  # 1000 steps of finger3, the Python path (CasADi's VM)
     filt, z0, P0 = scenario_filter("ekf", "finger3")
@@ -149,7 +149,7 @@ def test_c_export_of_the_hand_equals_the_filter_bit_for_bit(tmp_path):
     are). Built at -O0 (seconds for its 1 MB source; x86-64's SSE arithmetic is the same at any level, and
     -std=c99 contracts no multiply-add)."""
     import alpes_dyn as ad
-    from alpes_dyn.estimation.observers import make_observer
+    from alpes_dyn.estimation.observers.observers import make_observer
     from alpes_dyn.symbolic.statespace import StateSpace
 
     m = ad.Model.alpes("hand")
@@ -184,7 +184,7 @@ def test_c_export_of_each_code_equals_the_filter(observer, code, tmp_path):
     """finger3: the EKF's loops (its default is CasADi's code of the whole step, tested above), with its gains as
     states too (constant rows in its Jacobian), and the UKF (only CasADi's code): each equal to the filter's run()
     on the scenario's record, bit for bit."""
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     res = run_estimation("ekf", duration=0.3)
     filt, z0, P0 = scenario_filter(observer, "finger3")
@@ -201,7 +201,7 @@ def test_folded_products_are_counted_and_refused_for_the_loops(monkeypatch):
     (by default it exports CasADi's code of the whole step there)."""
     import casadi as cs
 
-    from alpes_dyn.estimation.covariance import _count_folds
+    from alpes_dyn.estimation.observers.covariance import _count_folds
 
     x = cs.SX.sym("x")
     folds: list[int] = []
@@ -235,8 +235,8 @@ def test_c_export_of_a_urdf_robot_equals_estimate_on_its_recording(tmp_path, cap
     """``codegen --model finger_edu.urdf --spec ...``'s observer, compiled, gives what ``estimate --data`` gives on a
     recording of the robot (the Python path: estimate_recording) with the same noise settings, step for step."""
     from alpes_dyn import Model
-    from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
-    from alpes_dyn.estimation.replay import estimate_recording, recording_filter
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment
+    from alpes_dyn.estimation.observers.replay import estimate_recording, recording_filter
 
     import re
 
@@ -321,8 +321,8 @@ def test_c_export_takes_the_model_numbers_as_an_input(tmp_path):
     """finger3 and a finger3 of other masses, springs and friction: their exported C differ only in the array of the
     model's numbers, and the nominal's code given the other's array (its one line) (alpes_ekf_step_p) gives the other filter's
     run() bit for bit (the numbers reach the code; the code is the structure's)."""
-    from alpes_dyn.estimation.experiment import perturbed_params
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
+    from alpes_dyn.estimation.observers.scenario import run_estimation
     from alpes_dyn.model.params import write_params
 
     res = run_estimation("ekf", duration=0.2)

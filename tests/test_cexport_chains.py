@@ -1,5 +1,5 @@
-"""The model's C code by blocks (estimation.cexport_chains): the blocks of one structure share a function, side by
-side in vector lanes (GCC, Clang) or one call each (-DALPES_NO_LANES); either gives CasADi's numbers to the last
+"""The model's C code by blocks (estimation.cexport.cexport_chains): the blocks of one structure share a function, side
+by side in vector lanes (GCC, Clang) or one call each (-DALPES_NO_LANES); either gives CasADi's numbers to the last
 bit, on a small function with three blocks -- two of one structure with different constants, one of another --,
 with 2 lanes (SSE2), 4 (AVX: a spare lane) or none."""
 
@@ -13,7 +13,7 @@ import casadi as cs
 import numpy as np
 import pytest
 
-from alpes_dyn.estimation.cexport_chains import chain_model_source, model_blocks
+from alpes_dyn.estimation.cexport.cexport_chains import chain_model_source, model_blocks
 
 CC = shutil.which("cc") or shutil.which("gcc")
 

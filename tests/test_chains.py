@@ -207,7 +207,7 @@ def test_bad_chain_names(hand_params):
 
 def _result(model: ad.Model, names: tuple[str, ...], values: list[float], std: list[float]):
     """An IdentificationResult as identify() returns it (the fit itself is tested elsewhere)."""
-    from alpes_dyn.estimation.identification import IdentificationResult
+    from alpes_dyn.estimation.identification.identification import IdentificationResult
 
     p = len(names)
     return IdentificationResult(names=names, values=np.array(values), std=np.array(std), initial=np.array(values),
@@ -219,7 +219,7 @@ def _result(model: ad.Model, names: tuple[str, ...], values: list[float], std: l
 def test_identified_values_go_to_the_chains_table(hand_params, tmp_path):
     """A finger model of the ring writes [finger.ring] (the fitted fields; its other own values and the shared
     [finger] untouched), and the hand built from the file has those values on the ring only."""
-    from alpes_dyn.estimation.identification import identified_params
+    from alpes_dyn.estimation.identification.identification import identified_params
 
     p = hand_params
     ring = ad.Model.alpes("finger3", friction=True, params=p, chain="ring")
@@ -245,7 +245,7 @@ def test_identified_values_go_to_the_chains_table(hand_params, tmp_path):
 
 
 def test_identified_thumb_values_go_to_the_thumb(hand_params):
-    from alpes_dyn.estimation.identification import identified_params
+    from alpes_dyn.estimation.identification.identification import identified_params
 
     p = hand_params
     th = ad.Model.alpes("thumb", friction=True, params=p)
@@ -307,8 +307,8 @@ def test_identify_the_thumb_from_noise_free_data():
     ab/adduction axis, is not fitted: the truth keeps the nominal one)."""
     import math
 
-    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-    from alpes_dyn.estimation.identification import identify
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.identification.identification import identify
 
     true = perturbed_params(spread=0.2, seed=3, chains=("thumb",))
     true = with_values(true, {"thumb.base_mass": load_params().raw["thumb.base_mass"]})
@@ -365,7 +365,7 @@ def test_estimation_scenario_on_a_chain(hand_params):
     """run_estimation(chain=) is the scenario on that finger of the hand (the same run as on the file projected
     on it); on the thumb (friction on) the EKF with the exact model tracks all three joints, the ab/adduction
     creeping by degrees under its scaled sines."""
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     p = hand_params
     a = run_estimation("ekf", model="finger3", chain="index", friction=True, params=p, duration=1.0)
@@ -386,8 +386,8 @@ def test_experiment_stops_below_a_fold():
     """A little finger with K_1 18 % soft snaps through (a fold of its static equilibria) at 0.0215 N m, below
     the nominal's mid-range bias: the trimmed bias stays below the fold by 1.25 times the multisine's peak,
     and the recorded finger stays on its branch (q_1 under 80 degrees)."""
-    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-    from alpes_dyn.estimation.trim import _fold_torque
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.experiments.trim import _fold_torque
 
     nominal = load_params()
     true = perturbed_params(nominal, spread=0.2, seed=1, chains=nominal.chain_names)
@@ -411,8 +411,8 @@ def test_hanging_hand_has_no_fold():
     mid-range with no warning; the orientation is the palm turned -90 degrees about the joints' axes."""
     import warnings
 
-    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment_torque, perturbed_params
-    from alpes_dyn.estimation.trim import _fold_torque
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment_torque, perturbed_params
+    from alpes_dyn.estimation.experiments.trim import _fold_torque
     from alpes_dyn.model.mjcf import hanging_gravity
 
     nominal = load_params()
@@ -449,7 +449,7 @@ def test_cli_experiment_on_the_hanging_rig(tmp_path, capsys):
     import warnings
 
     from alpes_dyn.cli import main
-    from alpes_dyn.estimation.recording import read_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording
 
     out = tmp_path / "r.csv"
     with warnings.catch_warnings():

@@ -106,7 +106,7 @@ def test_help_description_is_the_package_docstring(capsys):
 
 
 def test_estimate_help_lists_every_observer(capsys):
-    from alpes_dyn.estimation.observers import OBSERVERS
+    from alpes_dyn.estimation.observers.observers import OBSERVERS
 
     with pytest.raises(SystemExit) as e:
         main(["estimate", "--help"])

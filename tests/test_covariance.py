@@ -1,5 +1,5 @@
-"""The filters' covariance arithmetic (estimation.covariance) built as CasADi matrix operations: its numbers against
-numpy's closed forms of the prediction and the Joseph-form update, and its count of the products CasADi folds
+"""The filters' covariance arithmetic (estimation.observers.covariance) built as CasADi matrix operations: its numbers
+against numpy's closed forms of the prediction and the Joseph-form update, and its count of the products CasADi folds
 against the definition checked product by product."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import casadi as cs
 import numpy as np
 import pytest
 
-from alpes_dyn.estimation.covariance import _count_folds, predicted_covariance, updated_state
+from alpes_dyn.estimation.observers.covariance import _count_folds, predicted_covariance, updated_state
 
 
 def _sparse_sym(name: str, mask: np.ndarray) -> cs.SX:

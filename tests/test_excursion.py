@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.excursion import (MIN_EXCURSION_COUNTS, SmallExcursionWarning, encoder_excursions,
+from alpes_dyn.estimation.experiments.excursion import (MIN_EXCURSION_COUNTS, SmallExcursionWarning, encoder_excursions,
                                             small_excursions)
-from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
-from alpes_dyn.estimation.recording import Recording
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment
+from alpes_dyn.estimation.experiments.recording import Recording
 
 
 def _finger(tmp_path, ratios: tuple[float, float]) -> tuple[str, str]:

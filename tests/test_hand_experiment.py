@@ -15,12 +15,12 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.adapt import adapted_experiment
-from alpes_dyn.estimation.design import ExperimentDesign
-from alpes_dyn.estimation.draws import perturbed_params
-from alpes_dyn.estimation.hand_experiment import (_chain_seeds, chain_names, chain_recording, hand_chains,
+from alpes_dyn.estimation.experiments.adapt import adapted_experiment
+from alpes_dyn.estimation.experiments.design import ExperimentDesign
+from alpes_dyn.estimation.experiments.draws import perturbed_params
+from alpes_dyn.estimation.experiments.hand_experiment import (_chain_seeds, chain_names, chain_recording, hand_chains,
                                                   hand_experiment, hand_recording)
-from alpes_dyn.estimation.recording import read_recording
+from alpes_dyn.estimation.experiments.recording import read_recording
 
 DESIGN = ExperimentDesign(duration=1.0)
 

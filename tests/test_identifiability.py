@@ -158,7 +158,7 @@ def test_thumb_springless_abduction_rests_mid_range():
     """The thumb: structurally, its springs are identifiable (rank 2n + p); the Fisher information's
     default initial state holds the springless ab/adduction mid-range (the static balance cannot place
     it) and the flexion springs come out to a fraction of a percent from 0.5 s of its experiment."""
-    from alpes_dyn.estimation.experiment import ExperimentDesign, experiment
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment
 
     thumb = ad.Model.alpes("thumb", friction=True)
     rep = identifiability(thumb, parameters="K")

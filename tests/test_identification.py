@@ -11,12 +11,12 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.errors import ModelError, RecordingError
-from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-from alpes_dyn.estimation.identification import identify, project_torque
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+from alpes_dyn.estimation.identification.identification import identify, project_torque
 from alpes_dyn.symbolic.parametric import ParametricDynamics, select_parameters, tilted_gravity
 from alpes_dyn.model.params import load_params, write_params
 from alpes_dyn.model.transmission import torque_before
-from alpes_dyn.estimation.recording import read_recording, write_recording
+from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
 from alpes_dyn.simulation.sensitivity import SensitivityModel
 
 
@@ -184,7 +184,7 @@ def test_line_corrections_trust_region_grows_only_on_a_crawl():
     to MAX_COEF_GROWTH; a shortened or failed step, a step log theta cuts, or one inside the region resets it."""
     from types import SimpleNamespace
 
-    from alpes_dyn.estimation.gauss_newton import CRAWL_STEPS, MAX_COEF_GROWTH, GaussNewton
+    from alpes_dyn.estimation.identification.gauss_newton import CRAWL_STEPS, MAX_COEF_GROWTH, GaussNewton
 
     assert (CRAWL_STEPS, MAX_COEF_GROWTH) == (3, 16.0)
     pb = SimpleNamespace(p=2, nv=3, nz=3 + 2 + 4, N=4000)  # 3 local variables, 2 parameters, 4 line coefficients
@@ -218,7 +218,7 @@ def test_line_search_corrects_a_curved_step_until_the_merit_takes_it(monkeypatch
     rule before) it finds no step."""
     from types import SimpleNamespace
 
-    from alpes_dyn.estimation import gauss_newton as gn
+    from alpes_dyn.estimation.identification import gauss_newton as gn
 
     def evaluate(nodes, offs, glob, jac=False):
         v, g = float(nodes[0, 0]), float(glob[0])
@@ -281,15 +281,15 @@ def test_identify_recovers_exact_parameters_from_noise_free_data(finger2, monkey
     far = identify(finger2, rec, progress=False, start={"m_1": true.finger.m[0] / 2, "K_2": 2 * true.finger.K[1]})
     assert far.converged and "(at 50 ms intervals; at 100 ms both starts missed" in far.reason
     assert np.max(np.abs(far.values / truth - 1)) < 1e-6
-    # the dense KKT (the reference of the sparse default, alpes_dyn.estimation.kkt): the same fit
+    # the dense KKT (the reference of the sparse default, alpes_dyn.estimation.identification.kkt): the same fit
     ref = identify(finger2, rec, progress=False, kkt="dense")
     assert ref.iterations == res.iterations and np.max(np.abs(ref.values / res.values - 1)) < 1e-9
     assert np.max(np.abs(ref.std / res.std - 1)) < 1e-6
     # a warm start from the result (fit_effects' rounds): stages 1-2 never run, the values and trajectory are kept
-    from alpes_dyn.estimation.gauss_newton import GaussNewton
+    from alpes_dyn.estimation.identification.gauss_newton import GaussNewton
 
     assert res.solution.nodes.shape == res.states.shape and res.solution.samples == 100
-    from alpes_dyn.estimation.shooting import ShootingProblem
+    from alpes_dyn.estimation.identification.shooting import ShootingProblem
 
     seen, runs = [], []
     monkeypatch.setattr(GaussNewton, "fit_nodes", staticmethod(lambda pb, nodes, *a, **k: seen.append(1) or nodes))
@@ -360,7 +360,7 @@ def test_identify_finds_the_torque_constant_with_the_masses_held(finger2):
     """The torque constant 5 % off (the true motor torque is 1.05 times the recorded one): with the masses known
     (the maker's) and held, input_gain, K and friction are recovered to 1e-6; with every mass free too the scale
     is not seen, and identify refuses the selection."""
-    from alpes_dyn.estimation.identification import check_selection
+    from alpes_dyn.estimation.identification.identification import check_selection
     from alpes_dyn.model.params import with_values
 
     true = perturbed_params(spread=0.2, seed=3)
@@ -408,7 +408,7 @@ def test_estimate_cli_with_parameter_files(tmp_path, capsys):
     import json
 
     from alpes_dyn.cli import main
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     true = write_params(perturbed_params(spread=0.2, seed=5), tmp_path / "true.toml")
     code = main(["estimate", "--friction", "--true-params", str(true), "--observer-params", str(true),
@@ -455,7 +455,7 @@ def test_identify_with_torque_noise_and_the_ekf_on_its_file(tmp_path):
     encoder noise. The errors-in-variables fit lands within a few standard errors of the truth, the
     residual is the encoder noise (0.58 counts), and the EKF on the identified file is as good as on the
     true one, where the shipped file leaves it degrees off."""
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     true = perturbed_params(spread=0.2, seed=2)
     design = ExperimentDesign(duration=2.0)
@@ -550,8 +550,8 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
     each effect once."""
     from types import SimpleNamespace
 
-    from alpes_dyn.estimation import effects as eff
-    from alpes_dyn.estimation import identification as ident_mod
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
 
     def verdict(ok, missing=()):
         return SimpleNamespace(adequate=ok, likely_missing=list(missing))
@@ -560,7 +560,7 @@ def test_fit_effects_tries_the_stick_slip_law_where_the_verdict_names_it(monkeyp
         return SimpleNamespace(residual_rms=residual, adequacy=verdict(ok, missing), names=names, values=list(values),
                                std=list(std), trustworthy=ok, converged=True)
 
-    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.estimation.experiments.recording import Recording
 
     n = 20  # a stand-in recording: the fits are stand-ins too (the delay's round reads its torque)
     rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=np.full((n, 1), 0.02),
@@ -651,7 +651,7 @@ def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_p
     import json
 
     from alpes_dyn.cli import main
-    from alpes_dyn.estimation.recording import write_recording
+    from alpes_dyn.estimation.experiments.recording import write_recording
 
     kt = 0.05
     torque = write_recording(experiment("finger2", design=ExperimentDesign(duration=1.0), seed=1), tmp_path / "t.csv")
@@ -683,12 +683,12 @@ def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_p
 
 
 def test_shooting_problem_jacobians_equal_finite_differences(finger2):
-    """The fit's problem alone (:class:`~alpes_dyn.estimation.shooting.ShootingProblem`): the Jacobians of its
+    """The fit's problem alone (:class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`): the Jacobians of its
     residuals and continuity defects, with respect to every node, torque line coefficient and parameter (log K, m,
     friction; the additive encoder offset; the compliance in its scale), equal central differences of the residuals
     themselves (relative 1e-5 of the largest entry), on 0.3 s of finger2 with camera columns and the lines' errors in
     variables: every term of the residual."""
-    from alpes_dyn.estimation.shooting import ShootingProblem, torque_model
+    from alpes_dyn.estimation.identification.shooting import ShootingProblem, torque_model
 
     true = perturbed_params(spread=0.2, seed=4)
     design = ExperimentDesign(duration=0.3)

@@ -1,11 +1,11 @@
-"""The shooting fit's sparse linear algebra (alpes_dyn.estimation.kkt) against matrices assembled by hand."""
+"""The shooting fit's sparse linear algebra (alpes_dyn.estimation.identification.kkt) against matrices assembled by hand."""
 
 from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
 
-from alpes_dyn.estimation.kkt import Shape, continuity_jacobian, factorize, kkt_matrix, normal_matrix
+from alpes_dyn.estimation.identification.kkt import Shape, continuity_jacobian, factorize, kkt_matrix, normal_matrix
 
 
 def _full_jacobian(J: np.ndarray, shape: Shape) -> np.ndarray:

@@ -13,8 +13,8 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.errors import InputError, ModelError
-from alpes_dyn.estimation.experiment import perturbed_params
-from alpes_dyn.estimation.observers import ExtendedKalmanFilter, UnscentedKalmanFilter
+from alpes_dyn.estimation.experiments.experiment import perturbed_params
+from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter, UnscentedKalmanFilter
 from alpes_dyn.simulation.codegen import CompiledStepLoop
 from alpes_dyn.symbolic.lifted import lift_constants
 from alpes_dyn.symbolic.statespace import StateSpace
@@ -82,7 +82,7 @@ KW = dict(process_noise=[1e-10] * 3 + [1e-6] * 3, measurement_noise=[1e-7], inpu
 @pytest.fixture(scope="module")
 def scenario_record():
     """The default estimation scenario's record (finger3, 1 s): measured torques (N, 1), encoder (N+1, 1), truth."""
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     r = run_estimation("ekf", duration=1.0, seed=3)
     return r.u_meas, r.y, r.x_true

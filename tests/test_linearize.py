@@ -14,7 +14,7 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.model import Contact
-from alpes_dyn.estimation.scenario import static_equilibrium
+from alpes_dyn.estimation.observers.scenario import static_equilibrium
 from alpes_dyn.model.spec import example_spec_path
 from alpes_dyn.symbolic.statespace import StateSpace
 

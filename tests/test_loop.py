@@ -10,8 +10,8 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.errors import InputError
-from alpes_dyn.estimation.blocks import Observer, ObserverBank
-from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.estimation.observers.blocks import Observer, ObserverBank
+from alpes_dyn.estimation.observers.observers import make_observer
 from alpes_dyn.simulation.integrate import rk4_step_function, simulate
 from alpes_dyn.simulation.loop import Block, Delay, Function, Source, run_loop
 from alpes_dyn.simulation.plants import SimulatorPlant
@@ -239,7 +239,7 @@ def test_observer_block_is_its_filter_and_a_bank_is_its_observers(finger):
     ("ekf-params", dict(seed=2, duration=0.3, mismatch=0.05)), ("ekf", dict(seed=3, duration=0.2, model="finger2")),
     ("ekf", dict(seed=0, duration=0.2, model="thumb", friction=True))])
 def test_run_estimation_reproduces_the_hand_written_scenario(observer, kw):
-    from alpes_dyn.estimation.scenario import run_estimation
+    from alpes_dyn.estimation.observers.scenario import run_estimation
 
     new, old = run_estimation(observer, **kw), legacy.legacy_estimation(observer, **kw)
     assert same(new.x_true, old["x_true"]) and same(new.y, old["y"]) and same(new.u_meas, old["u_meas"])
@@ -279,7 +279,7 @@ def test_run_hand_control_reproduces_the_hand_written_loops(controller):
 def test_recording_plant_and_replay_reproduce_the_hand_written_ones(finger):
     pytest.importorskip("mujoco")
     from alpes_dyn.control.plants import PlantEffects, mujoco_recording
-    from alpes_dyn.estimation.replay import estimate_recording
+    from alpes_dyn.estimation.observers.replay import estimate_recording
 
     t = 1e-3 * np.arange(301)
     u = (0.0222 + 0.002 * np.sin(2 * np.pi * 1.3 * t))[:, None]
@@ -296,7 +296,7 @@ def test_recording_plant_and_replay_reproduce_the_hand_written_ones(finger):
 
 def test_the_estimation_scenario_stepped_gives_its_whole_record_run(monkeypatch):
     """The open loop of run_estimation evaluated block by block (auto) and sample by sample (step): the same bits."""
-    from alpes_dyn.estimation import scenario
+    from alpes_dyn.estimation.observers import scenario
     from alpes_dyn.simulation import loop
 
     modes = []

@@ -308,7 +308,7 @@ def test_panda_gripper_experiment_refused_in_one_line(tmp_path, capsys):
     fingers' 0.04 m travel an empty range; the margin is now at most a tenth of a joint's range). Welded, the
     gripper alone is refused by the symbolic backend in one line (ADAM's recursive Newton-Euler fails on this tree)."""
     from alpes_dyn.cli import main
-    from alpes_dyn.estimation.experiment import _joint_margins
+    from alpes_dyn.estimation.experiments.experiment import _joint_margins
 
     spec = tmp_path / "gripper.toml"
     spec.write_text(GRIPPER_SPEC)

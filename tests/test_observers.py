@@ -18,8 +18,8 @@ import alpes_dyn as ad
 from alpes_dyn.cli import main
 from alpes_dyn.errors import InputError, ModelError
 from alpes_dyn.model.extras import JointExtras
-from alpes_dyn.estimation.observers import ExtendedKalmanFilter, UnscentedKalmanFilter, make_observer
-from alpes_dyn.estimation.scenario import run_estimation
+from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter, UnscentedKalmanFilter, make_observer
+from alpes_dyn.estimation.observers.scenario import run_estimation
 from alpes_dyn.symbolic.statespace import StateSpace
 
 from test_simulation import C_OSC, I_OSC, K_OSC, OSC_URDF
@@ -173,7 +173,7 @@ def test_cli_estimate(tmp_path, capsys):
 
 def test_online_filter_equals_run_bit_for_bit():
     """KalmanFilter.online: one compiled call per sample gives run()'s estimates to the last bit."""
-    from alpes_dyn.estimation.observers import OnlineFilter
+    from alpes_dyn.estimation.observers.observers import OnlineFilter
 
     m = ad.Model.alpes("finger2")
     ss = StateSpace(m, input="motor", output="encoder")

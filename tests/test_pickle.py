@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.estimation.observers.observers import make_observer
 from alpes_dyn.model.spec import example_spec_path
 from alpes_dyn.simulation.integrate import compile_rollout
 from alpes_dyn.symbolic.statespace import StateSpace

@@ -9,8 +9,8 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.control.plants import PlantEffects, mujoco_recording, plant_mjcf, plant_model
-from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, experiment_torque
-from alpes_dyn.estimation.recording import read_recording, write_recording
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, experiment_torque
+from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
 from alpes_dyn.model.mjcf import tilted_gravity
 from alpes_dyn.simulation.integrate import simulate
 
@@ -96,7 +96,7 @@ def test_tendon_dead_band_is_an_encoder_shift_while_the_cable_is_taut():
     """A cable with play delta (m) under a torque that moves the finger but keeps the cable taut (0.022 +- 0.008 N m at
     3 Hz, the experiment's range), from its rest: the joints move as without the play (the tension is the same), the
     rotor turned further by delta / r_m all along (the slack taken up first). So a taut cable's slack is the encoder's
-    offset, what ``--effects auto`` fits for it (:mod:`alpes_dyn.estimation.effects`)."""
+    offset, what ``--effects auto`` fits for it (:mod:`alpes_dyn.estimation.identification.effects`)."""
     p = ad.load_params()
     delta = p.r_m * np.radians(0.5)  # 0.5 degree of backlash at the motor shaft
     u = (0.022 + 0.008 * np.sin(2 * np.pi * 3.0 * DT * np.arange(301)))[:, None]
@@ -174,7 +174,7 @@ def test_dither_keeps_every_joint_sliding_on_a_stick_slip_plant():
     finger3 (a closed form), a line of the design; on MuJoCo's stick-slip finger (``frictionloss``, a stiff
     constraint) the multisine alone leaves q_3 stuck (|qd_3| < 0.01 rad/s) on a large share of the samples, with
     the dither on under 2 % of them on every joint."""
-    from alpes_dyn.estimation.experiment import dither_amplitude
+    from alpes_dyn.estimation.experiments.experiment import dither_amplitude
     from alpes_dyn.model.mjcf import STICTION_TIMECONST
 
     p = ad.load_params()
@@ -203,7 +203,7 @@ def _tilted_thumb():
     the gravity it feels."""
     import math
 
-    from alpes_dyn.estimation.experiment import perturbed_params
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
 
     true = perturbed_params(ad.load_params(), spread=0.2, seed=5, chains="thumb")
     eff = PlantEffects(tilt=math.radians(3.0))
@@ -216,7 +216,7 @@ def test_thumb_abduction_gets_no_dither_and_its_trimmed_torque_holds_it_on_a_til
     other parts constant: no multisine, no dither) holds it on MuJoCo's plant, which computes gravity on its own:
     under 0.05 degree of drift in 1 s, where the untrimmed bias (the gravity torque of the level palm, 0 there)
     let it creep 1.1 degrees (measured) under the smooth friction law."""
-    from alpes_dyn.estimation.experiment import dither_amplitude
+    from alpes_dyn.estimation.experiments.experiment import dither_amplitude
 
     m = ad.Model.alpes("thumb", friction=True)
     S = m.transmission.S

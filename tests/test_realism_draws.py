@@ -10,7 +10,7 @@ import pytest
 
 from alpes_dyn.control.plants import PlantEffects, mujoco_recording
 from alpes_dyn.errors import InputError
-from alpes_dyn.estimation.replay import advanced, estimate_recording
+from alpes_dyn.estimation.observers.replay import advanced, estimate_recording
 from alpes_dyn.studies.realism import cases, parse_seeds, summarise
 
 
@@ -79,7 +79,7 @@ def test_the_observer_check_passes_the_true_file_and_fails_a_wrong_one():
     12.5 times the sensor floor; the nominal file's EKF (5.5 degrees off) 140 times: refused, the reason naming the
     observer."""
     import alpes_dyn as ad
-    from alpes_dyn.estimation.observer_check import OBSERVER_THRESHOLDS, observer_statistics
+    from alpes_dyn.estimation.identification.observer_check import OBSERVER_THRESHOLDS, observer_statistics
     from alpes_dyn.model.mjcf import STICTION_TIMECONST
     from alpes_dyn.studies.realism import FINGER3, fresh_run, rig_design
 
@@ -102,8 +102,8 @@ def test_mildly_coloured_is_the_ljung_box_alone():
     slow part as large as the white one (lags to 0.45) is not; nor a mild one far above the floor."""
     from scipy.signal import lfilter
 
-    from alpes_dyn.estimation.adequacy import assess, sensor_floor
-    from alpes_dyn.estimation.observer_check import mildly_coloured
+    from alpes_dyn.estimation.identification.adequacy import assess, sensor_floor
+    from alpes_dyn.estimation.identification.observer_check import mildly_coloured
 
     rng = np.random.default_rng(4)
     w, v = rng.standard_normal(4000), rng.standard_normal(4000)
@@ -130,10 +130,10 @@ def test_fit_effects_finds_the_torque_delay(monkeypatch):
     the torque the fit saw the recorded one advanced by exactly one sample, 2 samples not tried."""
     from types import SimpleNamespace
 
-    from alpes_dyn.estimation import effects as eff
-    from alpes_dyn.estimation import identification as ident_mod
-    from alpes_dyn.estimation.adequacy import SIGNATURES
-    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.adequacy import SIGNATURES
+    from alpes_dyn.estimation.experiments.recording import Recording
     from alpes_dyn.model.params import load_params
 
     n = 50
@@ -169,9 +169,9 @@ def test_a_flagged_fit_naming_nothing_tries_the_delay_after_stiction_and_the_rot
     torque delay is tried last, found at 1 sample and kept; every effect one round at most."""
     from types import SimpleNamespace
 
-    from alpes_dyn.estimation import effects as eff
-    from alpes_dyn.estimation import identification as ident_mod
-    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.experiments.recording import Recording
     from alpes_dyn.model.params import load_params
 
     n = 50
@@ -200,9 +200,9 @@ def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
     model's exact structure) the true file's EKF predicts the encoder 20 ms ahead within the threshold (measured
     16.0 times the floor, which the first threshold, 15, refused), the nominal file's far beyond it (310 times)."""
     import alpes_dyn as ad
-    from alpes_dyn.estimation.adapt import adapted_experiment
-    from alpes_dyn.estimation.draws import perturbed_params
-    from alpes_dyn.estimation.observer_check import OBSERVER_THRESHOLDS, observer_statistics
+    from alpes_dyn.estimation.experiments.adapt import adapted_experiment
+    from alpes_dyn.estimation.experiments.draws import perturbed_params
+    from alpes_dyn.estimation.identification.observer_check import OBSERVER_THRESHOLDS, observer_statistics
 
     true = perturbed_params(spread=0.2, seed=3)
     rec, _ = adapted_experiment("finger2", true, seed=3)
@@ -221,10 +221,10 @@ def test_the_delay_search_goes_on_while_the_verdict_names_it(monkeypatch):
     residual is higher; fits one sample late stop at 1 (its verdict names nothing), never fitting 2."""
     from types import SimpleNamespace
 
-    from alpes_dyn.estimation import effects as eff
-    from alpes_dyn.estimation import identification as ident_mod
-    from alpes_dyn.estimation.adequacy import SIGNATURES
-    from alpes_dyn.estimation.recording import Recording
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.adequacy import SIGNATURES
+    from alpes_dyn.estimation.experiments.recording import Recording
     from alpes_dyn.model.params import load_params
 
     n = 50

@@ -1,4 +1,4 @@
-"""The observer on a recording (estimation.replay, ``alpes-dyn estimate --data``): against the recorded true
+"""The observer on a recording (estimation.observers.replay, ``alpes-dyn estimate --data``): against the recorded true
 joints of a simulated experiment, a torque bias absorbed by the disturbance state (closed form: d -> -bias), and
 the command line."""
 
@@ -13,9 +13,9 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-from alpes_dyn.estimation.recording import read_recording, write_recording
-from alpes_dyn.estimation.replay import estimate_recording
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
+from alpes_dyn.estimation.observers.replay import estimate_recording
 
 
 @pytest.fixture(scope="module")

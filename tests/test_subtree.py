@@ -170,7 +170,7 @@ def test_what_would_couple_two_branches_is_refused():
 
 
 def test_read_recording_ignores_the_other_branches_columns(hand, tmp_path):
-    from alpes_dyn.estimation.recording import Recording, read_recording, write_recording
+    from alpes_dyn.estimation.experiments.recording import Recording, read_recording, write_recording
 
     t = np.arange(200) * 1e-3
     rng = np.random.default_rng(1)

@@ -182,8 +182,8 @@ def test_sweep_command_on_a_urdf_robot_runs_its_draws(tmp_path, capsys):
 
     import alpes_dyn as ad
     from alpes_dyn import Model, cli
-    from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
-    from alpes_dyn.estimation.replay import estimate_recording
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment
+    from alpes_dyn.estimation.observers.replay import estimate_recording
     from alpes_dyn.model.spec import example_spec_path
     from alpes_dyn.studies.sweep import drawn_spec
 

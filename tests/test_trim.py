@@ -1,5 +1,6 @@
-"""The experiment's bias trimmed on the hand (alpes_dyn.estimation.trim): a finger within +-20 % of the nominal values
-is held where it is no more compliant than the nominal finger at its design point, and its recording stays in range."""
+"""The experiment's bias trimmed on the hand (alpes_dyn.estimation.experiments.trim): a finger within +-20 % of the
+nominal values is held where it is no more compliant than the nominal finger at its design point, and its recording
+stays in range."""
 
 from __future__ import annotations
 
@@ -10,9 +11,9 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.experiment import ExperimentDesign, _excitation, experiment
-from alpes_dyn.estimation import trim
-from alpes_dyn.estimation.trim import _fold_torque, _trimmed_bias
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, _excitation, experiment
+from alpes_dyn.estimation.experiments import trim
+from alpes_dyn.estimation.experiments.trim import _fold_torque, _trimmed_bias
 from alpes_dyn.model.params import load_params, with_values
 from alpes_dyn.model.stops import JointRangeWarning
 
@@ -92,7 +93,7 @@ def test_a_folding_little_finger_is_held_below_its_fold_and_in_range():
     its 1 s recording stays on its branch and inside its range, with no range warning (without the rule the trim
     stops 1.25 multisine-and-dither peaks below the fold, where q_1 rests on its 0 degree stop:
     tests/test_chains.py)."""
-    from alpes_dyn.estimation.experiment import perturbed_params
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
 
     nominal = load_params()
     true = perturbed_params(nominal, spread=0.2, seed=1, chains=nominal.chain_names)

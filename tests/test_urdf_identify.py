@@ -14,8 +14,8 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.experiment import ExperimentDesign, model_experiment
-from alpes_dyn.estimation.identification import identify
+from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment
+from alpes_dyn.estimation.identification.identification import identify
 from alpes_dyn.model.spec import example_spec_path
 
 

@@ -17,7 +17,7 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.observers import make_observer
+from alpes_dyn.estimation import make_observer
 from alpes_dyn.model.stops import JointStops
 from alpes_dyn.simulation import simulate
 from alpes_dyn.model.spec import TransmissionSpec, example_spec_path

@@ -10,18 +10,18 @@ identified parameter file, which then serves the joint observer of every chain.
 
 The "true" hand is the shipped one with every chain's springs K_i, masses m_i (inertias with
 them) and friction F_s, F_v drawn independently within +-20 % per link
-(:func:`~alpes_dyn.estimation.experiment.perturbed_params` with ``chains=``: each finger gets values of its
+(:func:`~alpes_dyn.estimation.experiments.experiment.perturbed_params` with ``chains=``: each finger gets values of its
 own, ``[finger.<name>]`` in the file). For each chain:
 
-1. :func:`~alpes_dyn.estimation.experiment.experiment` simulates the documented experiment on it (a multisine
+1. :func:`~alpes_dyn.estimation.experiments.experiment.experiment` simulates the documented experiment on it (a multisine
    on each of its motors, the thumb's two at once), recorded as on the hand: quantised encoders with
    noise, noisy motor torques;
-2. :func:`~alpes_dyn.estimation.identification.identify` fits the chain model built from the nominal file
+2. :func:`~alpes_dyn.estimation.identification.identification.identify` fits the chain model built from the nominal file
    (``Model.alpes("finger3", chain="index")``, ``Model.alpes("thumb")``);
-3. :meth:`~alpes_dyn.estimation.identification.IdentificationResult.params` writes the fitted values into that
+3. :meth:`~alpes_dyn.estimation.identification.identification.IdentificationResult.params` writes the fitted values into that
    chain's section of the growing identified hand file.
 
-Then the EKF of the estimation scenario (:func:`~alpes_dyn.estimation.scenario.run_estimation`, friction on)
+Then the EKF of the estimation scenario (:func:`~alpes_dyn.estimation.observers.scenario.run_estimation`, friction on)
 runs on each chain of the true hand, once with the nominal file (before) and once with the
 identified file (after).
 
@@ -38,12 +38,11 @@ import matplotlib.pyplot as plt
 import numpy as np
 
 import alpes_dyn as ad
-from alpes_dyn.estimation.identification import THUMB_PARAMETERS
-from alpes_dyn.estimation.experiment import ExperimentDesign, experiment, perturbed_params
-from alpes_dyn.estimation.identification import identify
+from alpes_dyn.estimation.identification.identification import THUMB_PARAMETERS
+from alpes_dyn.estimation import ExperimentDesign, experiment, identify, perturbed_params
 from alpes_dyn.symbolic.parametric import parameter_catalogue
 from alpes_dyn.model.params import load_params, write_params
-from alpes_dyn.estimation.scenario import run_estimation
+from alpes_dyn.estimation import run_estimation
 
 # Seed 5: every chain of this draw has a rest for the scenario's torques. Not every draw does: with seed 1
 # the little finger's K_1 is 18 % soft, and its static equilibria fold (it snaps to full flexion) at

@@ -20,7 +20,7 @@ The true hand is the shipped one with every chain's springs, masses and friction
 link (seed 5). For each chain, :func:`~alpes_dyn.studies.realism.realism_case` records the
 documented identification experiment on the plant, fits it as ``alpes-dyn identify`` does by default
 (``--effects auto``: the tendon's compliance and the palm's tilt, then the stick-slip law and the
-rotor where the fit's adequacy check asks for them; :func:`~alpes_dyn.estimation.effects.fit_effects`)
+rotor where the fit's adequacy check asks for them; :func:`~alpes_dyn.estimation.identification.effects.fit_effects`)
 from the nominal file, and runs the EKF (as ``alpes-dyn estimate --data``) on a fresh run of the plant
 -- a torque the fit never saw -- with the identified file, and with the *true* file of the rigid model
 (exact springs and masses, but neither the cable, the tilt nor the offset). ``benchmarks/realism.py

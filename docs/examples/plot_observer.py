@@ -7,7 +7,7 @@ three joint angles can be estimated. Here a simulated ``finger3`` is moved by it
 extended Kalman filter (EKF) estimates q_1, q_2, q_3 and their velocities from the encoder
 reading q_m = (r/r_m)(q_1 + q_2 + q_3) and the measured motor torque alone.
 
-The scenario is the one of ``alpes-dyn estimate`` (:func:`alpes_dyn.estimation.scenario.run_estimation`,
+The scenario is the one of ``alpes-dyn estimate`` (:func:`alpes_dyn.estimation.observers.scenario.run_estimation`,
 whose documentation lists every setting): the true finger starts at rest, flexed, while the
 observer starts from the stretched position q = 0; the motor torque holds the finger half-flexed
 plus a few sines; the encoder is quantised (4096 counts per motor revolution) and noisy, the
@@ -17,7 +17,7 @@ torque measurement noisy; the observer runs at 1 kHz.
 import matplotlib.pyplot as plt
 import numpy as np
 
-from alpes_dyn.estimation.scenario import run_estimation
+from alpes_dyn.estimation import run_estimation
 
 # %%
 # A run with the exact model

@@ -23,8 +23,9 @@ REMOVED: dict[str, str] = {
     "parametric": "symbolic.parametric", "statespace": "symbolic.statespace",
     "identifiability": "analysis.identifiability",
     "sensitivity": "simulation.sensitivity", "buildcache": "simulation.buildcache",
-    "observers": "estimation.observers", "recording": "estimation.recording", "experiment": "estimation.experiment",
-    "identification": "estimation.identification", "scenario": "estimation.scenario",
+    "observers": "estimation.observers.observers", "recording": "estimation.experiments.recording",
+    "experiment": "estimation.experiments.experiment", "identification": "estimation.identification.identification",
+    "scenario": "estimation.observers.scenario",
 }
 """The old module paths of version 0.1 that were deprecated aliases and are removed -> where the module is."""
 

@@ -174,8 +174,8 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
         orientations); default the model's.
     dt: sample period, s (default 1e-3).
     design: optional object with any of the fields ``dt``, ``substeps``, ``encoder_noise_counts``,
-        ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiment.ExperimentDesign`): the
-        defaults of the arguments of the same names.
+        ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiments.experiment.ExperimentDesign`):
+        the defaults of the arguments of the same names.
     x0: initial state (2n,); default the static equilibrium under U[0] and G[0] (where the balance alone
         does not place a joint without spring, the thumb's ab/adduction, that joint held mid-range).
     theta: parameter values (p,), default the model's (nominal).
@@ -335,7 +335,7 @@ def _initial_state(model: Model, x0: Any, Ua: np.ndarray, Ga: np.ndarray) -> np.
     except InputError:
         if tr is None or not model.springless_joints:
             raise
-        from ..estimation.experiment import _mean_equilibrium  # the experiment's rest: joints without spring mid-range
+        from ..estimation.experiments.experiment import _mean_equilibrium  # the experiment's rest: joints without spring mid-range
 
         q_rest = _mean_equilibrium(model, Ua[0], Ga[0])
     return np.concatenate([q_rest, np.zeros(n)])

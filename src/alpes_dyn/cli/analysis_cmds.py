@@ -73,7 +73,7 @@ def _identifiability_report(args: argparse.Namespace, model, spec: str, torque) 
     experiment whose motor torque ``torque(design, t)`` gives (N, m) on the design's grid; one JSON object or
     the text."""
     from ..analysis.identifiability import fisher_information, identifiability
-    from ..estimation.experiment import ExperimentDesign, _schedule
+    from ..estimation.experiments.experiment import ExperimentDesign, _schedule
 
     cams = tuple(float(c) for c in parse_vector(args.camera_times, "camera-times")) if args.camera_times else ()
     design = ExperimentDesign(duration=args.duration, camera_times=cams).check() if args.design != "none" else None
@@ -93,9 +93,9 @@ def _identifiability_report(args: argparse.Namespace, model, spec: str, torque) 
 
 def cmd_identifiability(args: argparse.Namespace) -> int:
     """Structural identifiability of physical parameters, and the Cramér-Rao bounds of an experiment."""
-    from ..estimation.experiment import _profile, dither_amplitude, excitation
+    from ..estimation.experiments.experiment import _profile, dither_amplitude, excitation
     from ..model.robot import Model
-    from ..estimation.scenario import SCENARIO_MODELS, EstimationScenario, _torque
+    from ..estimation.observers.scenario import SCENARIO_MODELS, EstimationScenario, _torque
     from ..model.stops import JointRangeWarning
 
     if _is_urdf_path(args.model):
@@ -124,8 +124,8 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
 def _identifiability_robot(args: argparse.Namespace) -> int:
     """``identifiability --model PATH.urdf --spec FILE.toml``: the structural test on the spec's robot and the
     Cramér-Rao bounds of its documented experiment (the multisine designed for its own joint ranges and masses,
-    :func:`~alpes_dyn.estimation.experiment.model_experiment`'s), or structural only (``--design none``)."""
-    from ..estimation.experiment import _excitation, _profiles, dither_amplitude
+    :func:`~alpes_dyn.estimation.experiments.experiment.model_experiment`'s), or structural only (``--design none``)."""
+    from ..estimation.experiments.experiment import _excitation, _profiles, dither_amplitude
     from ..model.stops import JointRangeWarning
 
     _one_of(args.design, DESIGNS, "--design", "design")

@@ -375,9 +375,10 @@ def _one_line(text: str) -> str:
 
 
 def _excursion_lines(rec: Any, obj: dict[str, Any]) -> str:
-    """:func:`~alpes_dyn.estimation.excursion.excursion_report` of the recording ``rec`` into ``obj``; its lines, one
-    per motor whose encoder barely moved, each on a line of its own after a command's text (experiment, identify)."""
-    from ..estimation.excursion import excursion_report
+    """:func:`~alpes_dyn.estimation.experiments.excursion.excursion_report` of the recording ``rec`` into ``obj``; its
+    lines, one per motor whose encoder barely moved, each on a line of its own after a command's text (experiment,
+    identify)."""
+    from ..estimation.experiments.excursion import excursion_report
 
     obj.update(excursion_report(rec))
     return "".join(f"\n  WARNING: {line}" for line in obj["small_excursions"])

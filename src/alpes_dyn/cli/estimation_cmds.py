@@ -12,8 +12,8 @@ import warnings
 import numpy as np
 
 from ..errors import InputError
-from ..estimation.excursion import SmallExcursionWarning, excursion_report
-from ..estimation.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
+from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
+from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .fitting import _fit, _identify_lines
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
@@ -22,9 +22,10 @@ from .common import (UntrustedFitWarning, _check_model_options, _check_run_files
 
 # ---- owned by the observers work (issue 4)
 def cmd_estimate(args: argparse.Namespace) -> int:
-    """Simulate the default scenario (alpes_dyn.estimation.scenario) and estimate the joints from the motor encoder."""
-    from ..estimation.observers import OBSERVERS
-    from ..estimation.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
+    """Simulate the default scenario (alpes_dyn.estimation.observers.scenario) and estimate the joints from the motor
+    encoder."""
+    from ..estimation.observers.observers import OBSERVERS
+    from ..estimation.observers.scenario import ESTIMATION_MODELS, check_plot_path, plot_estimation, run_estimation
     from .common import _given
 
     if args.data is not None:
@@ -88,10 +89,10 @@ _SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.
 
 
 def _estimate_data(args: argparse.Namespace) -> int:
-    """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.replay)."""
-    from ..estimation.observers import OBSERVERS
-    from ..estimation.recording import read_recording
-    from ..estimation.replay import MAX_DELAY, estimate_recording
+    """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.observers.replay)."""
+    from ..estimation.observers.observers import OBSERVERS
+    from ..estimation.experiments.recording import read_recording
+    from ..estimation.observers.replay import MAX_DELAY, estimate_recording
     from ..model.robot import Model
 
     for flag, dest, default in _SCENARIO_ONLY:
@@ -168,8 +169,8 @@ def _without_friction(model):
 def cmd_experiment(args: argparse.Namespace) -> int:
     """Simulate the documented identification experiment and write its recording."""
     from ..model.description import model_params
-    from ..estimation.adapt import adapted_experiment
-    from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign, perturbed_params
+    from ..estimation.experiments.adapt import adapted_experiment
+    from ..estimation.experiments.experiment import EXPERIMENT_MODELS, ExperimentDesign, perturbed_params
     from ..model.params import load_params, write_params
 
     if _is_urdf_path(args.model):
@@ -227,8 +228,9 @@ _URDF_EXPERIMENT = (
 
 def _experiment_robot(args: argparse.Namespace) -> int:
     """``experiment --model PATH.urdf --spec FILE.toml [--true-spec TRUE.toml]``: the documented multisine designed
-    on the spec's robot, simulated on the true one (:func:`~alpes_dyn.estimation.experiment.model_experiment`)."""
-    from ..estimation.experiment import ExperimentDesign, model_experiment
+    on the spec's robot, simulated on the true one
+    (:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment`)."""
+    from ..estimation.experiments.experiment import ExperimentDesign, model_experiment
 
     _refuse_for_urdf(args, _URDF_EXPERIMENT)
     _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
@@ -248,9 +250,9 @@ def _experiment_robot(args: argparse.Namespace) -> int:
 
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
-    (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identified_spec`)."""
-    from ..estimation.experiment import EXPERIMENT_MODELS
-    from ..estimation.identified_spec import write_identified_spec
+    (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
+    from ..estimation.experiments.experiment import EXPERIMENT_MODELS
+    from ..estimation.identification.identified_spec import write_identified_spec
     from ..model.spec import load_spec
 
     urdf = _is_urdf_path(args.model)
@@ -293,7 +295,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     w = max(10, *(len(n) for n in res.names))
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
-    for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.bounds)
+    for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.identification.bounds)
         lines.append(f"  {n:{w}s} not identified: {why}")
     held = _held_masses(model, args) if urdf else ()
     obj["held"] = list(held)
@@ -341,18 +343,18 @@ _URDF_IDENTIFY = (("--rotor-inertia", "rotor_inertia", False, "applies to the Al
 
 def _fit_robot(args: argparse.Namespace, freqs):
     """``identify --model PATH.urdf --spec FILE.toml``: :func:`_fit` on the spec's robot (the stick-slip law: the
-    spec's smooth_velocity at :data:`~alpes_dyn.estimation.effects.STICTION_VELOCITY`); ``--chain MOTOR`` fits on
-    the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
+    spec's smooth_velocity at :data:`~alpes_dyn.estimation.identification.effects.STICTION_VELOCITY`); ``--chain MOTOR``
+    fits on the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
     other branches do not change its joints' dynamics; the recording's columns of their motors and joints are
     ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); a selection
     with masses is refused with -o (a spec holds no masses) before the fit. Returns the EffectsFit and the recording
     it read."""
     import dataclasses
 
-    from ..estimation.adequacy import AdequacyWarning
-    from ..estimation.effects import STICTION_VELOCITY, EffectsFit, fit_effects, parse_effects
-    from ..estimation.identification import check_selection, identify
-    from ..estimation.identified_spec import spec_misfits
+    from ..estimation.identification.adequacy import AdequacyWarning
+    from ..estimation.identification.effects import STICTION_VELOCITY, EffectsFit, fit_effects, parse_effects
+    from ..estimation.identification.identification import check_selection, identify
+    from ..estimation.identification.identified_spec import spec_misfits
     from ..model.robot import Model
 
     _refuse_for_urdf(args, _URDF_IDENTIFY)
@@ -415,7 +417,7 @@ def _chain_model(model, motor: str | None):
 def _robot_recordings(args: argparse.Namespace, model, whole=None):
     """--data and --validate read for ``model`` (with --chain a sub-model of the robot ``whole``, whose other
     columns are then ignored), with --torque-constant where they hold currents."""
-    from ..estimation.recording import read_recording
+    from ..estimation.experiments.recording import read_recording
 
     data = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     validate = None if args.validate is None else read_recording(args.validate, model, args.torque_constant,
@@ -454,11 +456,11 @@ def _motor_chain(model, chosen, motor: str):
 # ---- the observer's step as standalone C (issue 20)
 def cmd_codegen(args: argparse.Namespace) -> int:
     """``codegen``: write the observer's step (the estimation scenario's filter) as C source, header and test
-    program into a new directory (alpes_dyn.estimation.cexport), with --controller the force controller's too
+    program into a new directory (alpes_dyn.estimation.cexport.cexport), with --controller the force controller's too
     (alpes_dyn.control.cexport)."""
-    from ..estimation.cexport import c_sources, check_output_directory, scenario_filter, write_sources
-    from ..estimation.observers import OBSERVERS
-    from ..estimation.scenario import ESTIMATION_MODELS
+    from ..estimation.cexport.cexport import c_sources, check_output_directory, scenario_filter, write_sources
+    from ..estimation.observers.observers import OBSERVERS
+    from ..estimation.observers.scenario import ESTIMATION_MODELS
 
     if _is_urdf_path(args.model):
         return _codegen_robot(args)
@@ -516,13 +518,13 @@ _URDF_CODEGEN = (
 
 def _codegen_robot(args: argparse.Namespace) -> int:
     """``codegen --model PATH.urdf --spec FILE.toml``: the observer that ``estimate --data`` runs on a recording of
-    the robot (:func:`~alpes_dyn.estimation.replay.recording_filter`) at the estimation scenario's sampling and sensor
-    noises, and with ``--controller`` the force controller of ``control`` on the robot
+    the robot (:func:`~alpes_dyn.estimation.observers.replay.recording_filter`) at the estimation scenario's sampling
+    and sensor noises, and with ``--controller`` the force controller of ``control`` on the robot
     (:func:`~alpes_dyn.control.cexport.robot_controller`: ``--frame``, ``--motor``), as standalone C."""
-    from ..estimation.cexport import c_sources, check_output_directory, write_sources
-    from ..estimation.observers import OBSERVERS
-    from ..estimation.replay import recording_filter
-    from ..estimation.scenario import EstimationScenario
+    from ..estimation.cexport.cexport import c_sources, check_output_directory, write_sources
+    from ..estimation.observers.observers import OBSERVERS
+    from ..estimation.observers.replay import recording_filter
+    from ..estimation.observers.scenario import EstimationScenario
 
     _refuse_for_urdf(args, _URDF_CODEGEN)
     _one_of(args.observer, OBSERVERS, "--observer", "observer")

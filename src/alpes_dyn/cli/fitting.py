@@ -7,13 +7,13 @@ import argparse
 import warnings
 
 from ..errors import InputError
-from ..estimation.identification import THUMB_PARAMETERS
+from ..estimation.identification.identification import THUMB_PARAMETERS
 from .common import parse_vector
 
 
 def _identify_lines(args: argparse.Namespace):
     """--excitation's lines, Hz (``documented``: the multisine's and the dither's; ``none``: None)."""
-    from ..estimation.experiment import ExperimentDesign
+    from ..estimation.experiments.experiment import ExperimentDesign
 
     if args.excitation == "documented":
         return ExperimentDesign().lines
@@ -24,13 +24,13 @@ def _identify_lines(args: argparse.Namespace):
 def _fit(args: argparse.Namespace, freqs, recordings=None):
     """The fit: --parameters as named (the stick-slip law where --effects asks for it), else the default selection
     with the effects' parameters added, --effects auto trying the stick-slip law where the first fit's adequacy
-    check names it (:mod:`alpes_dyn.estimation.effects`). ``recordings``: (data, validation or None) already read
-    (a chain's of the whole hand's), else --data and --validate are read. Returns the EffectsFit and the recording
-    it fitted."""
-    from ..estimation.adequacy import AdequacyWarning
-    from ..estimation.effects import EffectsFit, alpes_models, fit_effects, parse_effects
-    from ..estimation.identification import check_selection, identify
-    from ..estimation.recording import read_recording
+    check names it (:mod:`alpes_dyn.estimation.identification.effects`). ``recordings``: (data, validation or None)
+    already read (a chain's of the whole hand's), else --data and --validate are read. Returns the EffectsFit and the
+    recording it fitted."""
+    from ..estimation.identification.adequacy import AdequacyWarning
+    from ..estimation.identification.effects import EffectsFit, alpes_models, fit_effects, parse_effects
+    from ..estimation.identification.identification import check_selection, identify
+    from ..estimation.experiments.recording import read_recording
     from ..model.params import load_params
 
     effects = parse_effects(args.effects) if args.effects is not None else (

@@ -1,6 +1,6 @@
 """``alpes-dyn experiment --model hand`` and ``alpes-dyn identify --model hand``: the whole hand in one experiment
-(:mod:`alpes_dyn.estimation.hand_experiment`), one recording of its six motors, every chain fitted from it into one
-parameter file."""
+(:mod:`alpes_dyn.estimation.experiments.hand_experiment`), one recording of its six motors, every chain fitted from it
+into one parameter file."""
 
 from __future__ import annotations
 
@@ -8,15 +8,15 @@ import argparse
 import warnings
 
 from ..errors import InputError
-from ..estimation.excursion import SmallExcursionWarning
+from ..estimation.experiments.excursion import SmallExcursionWarning
 from .common import _Untrusted, _check_run_files, _emit, _excursion_lines
 
 
 def experiment_hand(args: argparse.Namespace) -> int:
     """The six motors excited at once (each chain's experiment, one orientation of the hand), one recording."""
-    from ..estimation.design import ExperimentDesign
-    from ..estimation.draws import perturbed_params
-    from ..estimation.hand_experiment import hand_chains, hand_experiment
+    from ..estimation.experiments.design import ExperimentDesign
+    from ..estimation.experiments.draws import perturbed_params
+    from ..estimation.experiments.hand_experiment import hand_chains, hand_experiment
     from ..model.params import load_params, write_params
 
     if args.chain is not None:
@@ -65,8 +65,8 @@ def identify_hand(args: argparse.Namespace) -> int:
     """Every chain of the hand (or ``--chain``'s) fitted from one recording of its six motors (--data), each as
     ``identify --model finger3 --chain NAME`` / ``--model thumb`` fits it; one parameter file (-o) with every chain's
     section, written only where every chain's fit is to be trusted (or with --force)."""
-    from ..estimation.hand_experiment import chain_model_name, chain_recording, hand_chains
-    from ..estimation.recording import read_recording
+    from ..estimation.experiments.hand_experiment import chain_model_name, chain_recording, hand_chains
+    from ..estimation.experiments.recording import read_recording
     from ..model.params import load_params, write_params
     from ..model.robot import Model
     from .fitting import _fit, _identify_lines

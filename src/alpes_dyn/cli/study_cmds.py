@@ -11,7 +11,7 @@ from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _urdf_robot
 
 def cmd_sweep(args: argparse.Namespace) -> int:
     """A study over seeded draws, on Dask workers or serially (studies.sweep)."""
-    from ..estimation.experiment import EXPERIMENT_MODELS, ExperimentDesign
+    from ..estimation.experiments.experiment import EXPERIMENT_MODELS, ExperimentDesign
     from ..studies.sweep import ROBOT_DRAWN, ROBOT_HELD, STUDIES, robot_robustness_draw, sweep
 
     _one_of(args.study, tuple(STUDIES), "--study", "study")

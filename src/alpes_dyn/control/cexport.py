@@ -1,5 +1,5 @@
 """A standalone C export of the fingertip force controller (issue 20): :class:`~.controller.ForceController`'s
-``update`` as C, beside the observer's (:mod:`alpes_dyn.estimation.cexport`).
+``update`` as C, beside the observer's (:mod:`alpes_dyn.estimation.cexport.cexport`).
 
 :func:`controller_c_sources` writes ``alpes_force.h`` (the API, the settings in its comment), ``alpes_force.c``
 (the controller's logic -- prefilter, contact onset and loss, bumpless transfer, saturation, anti-windup -- line

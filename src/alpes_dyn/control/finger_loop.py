@@ -29,10 +29,10 @@ from ..limits import check_bytes, check_duration
 from ..model.block_scene import BlockScene, block_scene_mjcf, place_block
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
 from ..model.robot import Model
-from ..estimation.blocks import Observer, step_caller
-from ..estimation.observers import make_observer
+from ..estimation.observers.blocks import Observer, step_caller
+from ..estimation.observers.observers import make_observer
 from ..model.params import HandParams, load_params
-from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
+from ..estimation.observers.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
 from ..simulation.loop import Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant

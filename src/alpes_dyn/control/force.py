@@ -4,7 +4,7 @@ The report is titled *Control in effort of a robotic hand*: its model carries th
 J^T F (eq. 2.9-2.13), F measured by the fingertip's FlexiForce sensor. This module closes the loop.
 The controller sees only the hand's sensors -- the motor encoder q_m (quantised, noisy), the motor
 torque tau_m (from the current, noisy) and, if it uses it, the FlexiForce reading F_z (noisy,
-quantised) -- and the joints q_hat estimated by the library's EKF (:mod:`alpes_dyn.estimation.observers`).
+quantised) -- and the joints q_hat estimated by the library's EKF (:mod:`alpes_dyn.estimation.observers.observers`).
 
 Its pieces, one module each, every name re-exported here (``alpes_dyn.control.force.X`` is what it was):
 
@@ -22,7 +22,7 @@ Its pieces, one module each, every name re-exported here (``alpes_dyn.control.fo
 
 from __future__ import annotations
 
-from ..estimation.blocks import batch_step_caller as _batch_step_caller, step_caller as _step_caller  # noqa: F401
+from ..estimation.observers.blocks import batch_step_caller as _batch_step_caller, step_caller as _step_caller  # noqa: F401
 from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, _normal,  # noqa: F401
                          reference_profile, static_contact_force, static_motor_torque)
 from .figures import _save_figure, plot_control, plot_hand_control  # noqa: F401

@@ -6,7 +6,7 @@ and the thumb, :func:`chain_model`), the contact normal the cylinder's at the es
 (:func:`cylinder_normal`), the thumb's ab/adduction held by a PD on its encoder
 (:class:`HandControlScenario`, :class:`HandControlResult`). Like the finger's, a composition of blocks run by
 :func:`~alpes_dyn.simulation.loop.run_loop`, the EKFs of the four fingers in one
-:class:`~alpes_dyn.estimation.blocks.ObserverBank` (one compiled call per sample).
+:class:`~alpes_dyn.estimation.observers.blocks.ObserverBank` (one compiled call per sample).
 
 """
 
@@ -25,10 +25,10 @@ from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string
 from ..model.robot import Model
-from ..estimation.blocks import Observer, ObserverBank
-from ..estimation.observers import make_observer
+from ..estimation.observers.blocks import Observer, ObserverBank
+from ..estimation.observers.observers import make_observer
 from ..model.params import HandParams
-from ..estimation.scenario import default_noise, static_equilibrium, EstimationScenario
+from ..estimation.observers.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
 from ..simulation.loop import Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant

@@ -4,10 +4,10 @@ The library's identification and observers are exact on data from its own simula
 is the fitted one. :func:`mujoco_recording` makes the data a user gets from a real hand instead: the
 finger exported by :func:`~alpes_dyn.model.mjcf.mjcf_string` and stepped by MuJoCo (an independent engine;
 joint stops on, RK4 at 0.1 ms by default), a motor torque replayed on it (e.g. the identification
-experiment's, :func:`~alpes_dyn.estimation.experiment.experiment_torque`), read through the sensors of
-:mod:`alpes_dyn.estimation.experiment` (the encoder quantised to ``counts_per_rev`` with 0.5 count of
+experiment's, :func:`~alpes_dyn.estimation.experiments.experiment.experiment_torque`), read through the sensors of
+:mod:`alpes_dyn.estimation.experiments.experiment` (the encoder quantised to ``counts_per_rev`` with 0.5 count of
 Gaussian noise, the torque with 5e-4 N m of white noise, 1 kHz), into a
-:class:`~alpes_dyn.estimation.recording.Recording` that :func:`~alpes_dyn.estimation.identification.identify`
+:class:`~alpes_dyn.estimation.experiments.recording.Recording` that :func:`~alpes_dyn.estimation.identification.identification.identify`
 reads, with the true joint angles in ``true_q_*``.
 
 The effects (:class:`PlantEffects`, each off by default):
@@ -43,7 +43,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ..errors import InputError, ModelError
-from ..estimation.recording import Recording
+from ..estimation.experiments.recording import Recording
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, tilted_gravity
 from ..model.params import HandParams, load_params
 from ..model.robot import Model
@@ -191,7 +191,7 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
 
     Returns
     -------
-    :class:`~alpes_dyn.estimation.recording.Recording`: ``encoder`` the plant's ``encoder_<motor>`` sensor
+    :class:`~alpes_dyn.estimation.experiments.recording.Recording`: ``encoder`` the plant's ``encoder_<motor>`` sensor
     (the rotor with the elastic tendon) quantised, plus ``encoder_offset``; ``torque`` (1 +
     ``torque_constant_error``) x torque + noise; ``true_q`` MuJoCo's joint angles; no gravity columns.
     Cost: the loop of :func:`~alpes_dyn.simulation.loop.run_loop` over the N samples, MuJoCo stepping each sample's
@@ -263,8 +263,8 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
     unless ``q0`` (rad) is given. ``torque`` (N+1, m), N m, held over each period; ``dt`` the sample period, s;
     ``seed``, ``encoder_noise_counts``, ``torque_noise`` as :func:`mujoco_recording`'s.
 
-    Returns the :class:`~alpes_dyn.estimation.recording.Recording` (encoder counts, measured torque, MuJoCo's joint
-    angles as ``true_q``), which :func:`~alpes_dyn.estimation.recording.write_recording` writes for ``alpes-dyn
+    Returns the :class:`~alpes_dyn.estimation.experiments.recording.Recording` (encoder counts, measured torque, MuJoCo's joint
+    angles as ``true_q``), which :func:`~alpes_dyn.estimation.experiments.recording.write_recording` writes for ``alpes-dyn
     estimate --data``. A mimic joint starts at its rule's value of the initial q.
     """
     import mujoco  # load_mujoco below gives the one-line error when it is missing

@@ -144,7 +144,8 @@ joints' axes from level, gravity along the fingers' length at q = 0 (+x of the b
 def hanging_gravity(gravity: Sequence[float]) -> np.ndarray:
     """Gravity (3,), m/s^2, in the base frame of the hand hung fingers down (:data:`HANGING_TILT`): the
     identification experiment's orientation for fingers whose springs cannot hold them mid-range palm up (gravity
-    then pulls along the finger, its static equilibria do not fold; :mod:`alpes_dyn.estimation.experiment`)."""
+    then pulls along the finger, its static equilibria do not
+    fold; :mod:`alpes_dyn.estimation.experiments.experiment`)."""
     return tilted_gravity(gravity, HANGING_TILT)
 
 

@@ -103,7 +103,7 @@ the fit converged and why it stopped, the adequacy verdict (``adequate``, its on
 ``likely_missing`` effects), ``trustworthy`` (converged and adequate: false only in a file written with
 ``alpes-dyn identify --force``), the residual and the sensor floor (counts RMS), and ``not_identified``: each
 parameter the fit did not identify, with why and the effect the data do not support (its value never written:
-:mod:`~alpes_dyn.estimation.bounds`)."""
+:mod:`~alpes_dyn.estimation.identification.bounds`)."""
 
 
 @dataclass(frozen=True)

@@ -5,7 +5,7 @@ of :class:`Block` objects -- a plant, its sensors, observers, controllers, sourc
 and writing *named signals*; :func:`run_loop` connects them by name, steps them at the sample period ``dt`` and
 logs every signal (:class:`LoopLog`). The plants and sensors are in :mod:`alpes_dyn.simulation.plants` and
 :mod:`alpes_dyn.simulation.sensors`, the observer and the recording played back in
-:mod:`alpes_dyn.estimation.blocks`, the force controllers in :mod:`alpes_dyn.control.blocks`.
+:mod:`alpes_dyn.estimation.observers.blocks`, the force controllers in :mod:`alpes_dyn.control.blocks`.
 
 Time. Samples k = 0 .. N-1 (and k = N with ``final=True``) at t_k = k dt; periods k = 0 .. N-1 are [t_k, t_k+1).
 A signal is either

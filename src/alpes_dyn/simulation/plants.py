@@ -6,7 +6,7 @@
   whole-record response: one :func:`~alpes_dyn.simulation.integrate.simulate` call.
 * :class:`MujocoPlant`: MuJoCo stepping a model (e.g. the MJCF of :func:`~alpes_dyn.model.mjcf.mjcf_string`)
   ``substeps`` times per period; signals are its joints' qpos, its sensors' data and its actuators' controls,
-  by name. The recording played back is :class:`alpes_dyn.estimation.blocks.RecordingPlayback`.
+  by name. The recording played back is :class:`alpes_dyn.estimation.observers.blocks.RecordingPlayback`.
 """
 
 from __future__ import annotations

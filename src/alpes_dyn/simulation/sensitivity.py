@@ -17,7 +17,7 @@ information study.
 Input corrections. With ``input_basis=b`` the input is u_k + C phi_k, where phi_k (b,) are known basis
 values per sample (e.g. 1, sin 2 pi f t, cos 2 pi f t of a multisine's lines) and C (nu x b) constant
 coefficients per segment, and X also holds dx/d vec(C) (column-major): the errors-in-variables fits of
-:func:`~alpes_dyn.estimation.identification.identify` fit the true torque as the measured one plus such a
+:func:`~alpes_dyn.estimation.identification.identification.identify` fit the true torque as the measured one plus such a
 correction. ``input_offset=True`` is ``input_basis=1`` with phi = 1: a constant correction per segment.
 """
 

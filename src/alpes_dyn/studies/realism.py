@@ -26,13 +26,13 @@ import numpy as np
 
 from ..control.plants import PlantEffects, mujoco_recording, plant_model
 from ..errors import InputError
-from ..estimation.adapt import Adaptation, adaptation_of, candidate_designs, first_in_range
-from ..estimation.design import ExperimentDesign
-from ..estimation.draws import perturbed_params
-from ..estimation.effects import alpes_models, fit_effects, parse_effects
-from ..estimation.experiment import experiment_torque
-from ..estimation.identification import THUMB_PARAMETERS, identify
-from ..estimation.replay import estimate_recording
+from ..estimation.experiments.adapt import Adaptation, adaptation_of, candidate_designs, first_in_range
+from ..estimation.experiments.design import ExperimentDesign
+from ..estimation.experiments.draws import perturbed_params
+from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
+from ..estimation.experiments.experiment import experiment_torque
+from ..estimation.identification.identification import THUMB_PARAMETERS, identify
+from ..estimation.observers.replay import estimate_recording
 from ..model.mjcf import HANGING_TILT, STICTION_TIMECONST, tilted_gravity
 from ..model.params import load_params, write_params
 from ..model.robot import Model
@@ -119,7 +119,7 @@ def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffec
 
 
 def verdict(res) -> str:
-    """The fit's own word on itself (:mod:`alpes_dyn.estimation.adequacy`): adequate, or why not (the stop reason,
+    """The fit's own word on itself (:mod:`alpes_dyn.estimation.identification.adequacy`): adequate, or why not (the stop reason,
     the failed checks, the likely missing effect)."""
     if res.trustworthy:
         return "adequate"
@@ -137,7 +137,7 @@ def verdict(res) -> str:
 class Plant:
     """What is identified: ``label`` (the table's), the Alpes ``model`` (finger3 or thumb) and the hand's ``chain``
     (None: the shared ``[finger]`` values of the default finger3 run), and the parameters the fits start from and
-    select (``base``: None for a finger's default K, m and friction; :data:`~alpes_dyn.estimation.identification.THUMB_PARAMETERS` for the
+    select (``base``: None for a finger's default K, m and friction; :data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS` for the
     thumb)."""
 
     label: str
@@ -172,7 +172,7 @@ def hand_plant(chain: str) -> Plant:
 def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
              plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0) -> np.ndarray:
     """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
-    torque (:func:`~alpes_dyn.estimation.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
+    torque (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
     the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
     fitted)."""
@@ -216,7 +216,7 @@ def rig_of(design: ExperimentDesign) -> np.ndarray | None:
 
 
 def rig_design(rig: str = "level", duration: float | None = None) -> ExperimentDesign:
-    """The documented experiment (:class:`~alpes_dyn.estimation.design.ExperimentDesign`; ``duration`` s if given) in
+    """The documented experiment (:class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`; ``duration`` s if given) in
     the rig's orientation (:data:`RIGS`: designed, trimmed and fitted there)."""
     if rig not in RIGS:
         raise InputError(f"rig: expected one of {', '.join(RIGS)}, got {rig!r}")
@@ -262,11 +262,11 @@ def _rig_tilt(design: ExperimentDesign) -> float:
 def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign, true, plant: Plant = FINGER3,
                      adapt: str = "auto") -> tuple[Any, ExperimentDesign, PlantEffects, Adaptation]:
     """The identification experiment run on the MuJoCo plant (``effects``, the truth ``true``), adapted as
-    ``alpes-dyn experiment`` adapts it (:func:`~alpes_dyn.estimation.adapt.first_in_range`: the whole record checked
+    ``alpes-dyn experiment`` adapts it (:func:`~alpes_dyn.estimation.experiments.adapt.first_in_range`: the whole record checked
     against the joints' range; ``adapt``: its ``--rig``, ``auto`` hanging the hand where palm up the finger leaves
     its range, then smaller amplitudes), but on the plant's own joint angles -- what the experimenter sees of
     the real finger on its stop. Returns (the recording, the design chosen, the plant's effects in its orientation
-    (the tilt error on top of the rig's), the :class:`~alpes_dyn.estimation.adapt.Adaptation`)."""
+    (the tilt error on top of the rig's), the :class:`~alpes_dyn.estimation.experiments.adapt.Adaptation`)."""
     if adapt not in ADAPT:
         raise InputError(f"adapt: expected one of {', '.join(ADAPT)}, got {adapt!r}")
     own = _rig_tilt(design)

@@ -11,7 +11,7 @@ ran: every draw is seeded by its own seed only (tested against the serial loop).
 
 :func:`robustness_draw` is the study of ``alpes-dyn sweep``: a finger drawn within the tolerances,
 its identification experiment, the fit, and the EKF on the recording with the nominal and with the
-identified file (:mod:`alpes_dyn.estimation.replay`); :func:`robot_robustness_draw` is the same study on any
+identified file (:mod:`alpes_dyn.estimation.observers.replay`); :func:`robot_robustness_draw` is the same study on any
 URDF + spec robot (``alpes-dyn sweep --model ROBOT.urdf --spec FILE.toml``): what its spec holds drawn.
 """
 
@@ -317,9 +317,9 @@ def robustness_draw(seed: int, model: str = "finger3", spread: float = 0.2, dura
     ``seed``), its identification experiment of ``duration`` s (our simulator), the fit (``fit``), and the EKF
     on the recording with the nominal file (``rmse_deg_before``, degrees per joint) and the identified one
     (``rmse_deg_after``); the worst parameter errors in %, the fit's time, convergence and residual (counts)."""
-    from ..estimation.experiment import ExperimentDesign, experiment, perturbed_params
-    from ..estimation.identification import identified_params, identify
-    from ..estimation.replay import estimate_recording
+    from ..estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+    from ..estimation.identification.identification import identified_params, identify
+    from ..estimation.observers.replay import estimate_recording
     from ..model.robot import Model
 
     true = perturbed_params(spread=spread, seed=seed)
@@ -393,7 +393,7 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
     """One draw of the robustness study on a URDF + spec robot (the files ``urdf`` and ``spec``: their paths travel
     to the workers, which read them): the true robot's spec drawn within +-``spread`` (:func:`drawn_spec`, seed ``seed``), the
     identification experiment of ``duration`` s designed on the nominal robot and simulated on the drawn one
-    (:func:`~alpes_dyn.estimation.experiment.model_experiment`), the fit (``fit``) of what was drawn
+    (:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment`), the fit (``fit``) of what was drawn
     (:data:`ROBOT_DRAWN`: K, F_s, F_v of every joint that has them), and the EKF on the recording with the nominal spec
     (``rmse_deg_before``, degrees per joint) and the identified one (``rmse_deg_after``); the worst errors of the
     fitted K, F_s, F_v in %, the fit's time, convergence and residual (counts).
@@ -423,11 +423,11 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
     do not converge, the fit is run in one stage too and the converged one kept (``one_stage_restart`` in the row)."""
     import warnings
 
-    from ..estimation.adequacy import AdequacyWarning
-    from ..estimation.experiment import ExperimentDesign, model_experiment
-    from ..estimation.identification import identify
-    from ..estimation.identified_spec import identified_spec
-    from ..estimation.replay import estimate_recording
+    from ..estimation.identification.adequacy import AdequacyWarning
+    from ..estimation.experiments.experiment import ExperimentDesign, model_experiment
+    from ..estimation.identification.identification import identify
+    from ..estimation.identification.identified_spec import identified_spec
+    from ..estimation.observers.replay import estimate_recording
     from ..model.robot import Model
     from ..symbolic.parametric import select_parameters
 

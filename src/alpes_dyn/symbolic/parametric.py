@@ -39,7 +39,7 @@ kind                  meaning                                                   
 ===================== =========================================================== ==========
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
-(:func:`~alpes_dyn.estimation.identification.identify`); ``encoder_offset`` and ``tilt`` have the
+(:func:`~alpes_dyn.estimation.identification.identification.identify`); ``encoder_offset`` and ``tilt`` have the
 nominal value 0, can be negative and are fitted as they are (:data:`ADDITIVE_KINDS`); so is
 ``tendon_compliance`` (nominal: the model's, 0 for a rigid tendon).
 

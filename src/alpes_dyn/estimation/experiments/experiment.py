@@ -1,0 +1,433 @@
+"""The identification experiment: what to do with the hand so that its parameters can be fitted.
+
+The documented experiment on one finger (``finger2``, ``finger3``):
+
+* the palm held still in one or more orientations (``orientations``, gravity vectors in the base frame;
+  default palm up, gravity along -z as in the report);
+* the motor driven by a multisine torque, tau_m(t) = tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f /
+  2) over ``frequencies`` (default 0.3 to 11.3 Hz, Schroeder phases), so that the springs, gravity,
+  inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
+  mean joint angle mid-range (on a robot whose springs already rest there, the middle of the range its tendon
+  reaches pulling: :func:`_pulled_target`), the amplitude a is the largest that keeps the nominal finger's static
+  equilibria within its joint limits (a ``margin`` inside), both from the model the user starts with;
+* a dither on top (``dither``, default 20 times the breakaway torque of the motor's joints, at
+  ``dither_frequency``, 20 Hz; 0 turns it off): it keeps every joint sliding through its dry friction, whose
+  stick phases no memoryless friction law fits (:func:`dither_amplitude`); none on a motor of springless
+  joints (the thumb's ab/adduction), which it would let drift away from where they are placed. The experiment's lines, the
+  multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
+* the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.experiments.trim`): before
+  recording, a slow loop on the measured encoder moves the bias until the finger rests where the nominal one would (the
+  real finger, not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
+  q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a fold of its
+  static equilibria), as high as the excitation keeps clear of the fold. Palm up a finger within +-20 % of the
+  nominal values is up to 6.4 times as compliant mid-range as the nominal, and the excitation then swings it past
+  its stops: :data:`alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits'
+  precision) holds such a finger no higher than where it is as compliant as the nominal at its design point, its
+  multisine and dither shrunk with the room its joints have left below;
+* optionally, at ``camera_times``, the joint angles measured once by a camera or a jig with noise
+  ``camera_noise`` (rad);
+* the sensors of the estimation scenario (:mod:`alpes_dyn.estimation.observers.scenario`): encoder quantised to
+  ``counts_per_rev`` with 0.5 count of Gaussian noise, motor torque with white noise of 5e-4 N m,
+  sampled at 1 kHz.
+
+The hand is identified one chain at a time (:data:`EXPERIMENT_MODELS`): a finger model built from one
+finger of the hand (``chain=``), or the ``thumb`` model, whose two motors are excited at once, each with
+the multisine (phases shifted between them): the flexion tendon as a finger's, the ab/adduction (no
+spring; its joint placed mid-range) about the torque that balances gravity there (trimmed on the hand:
+the gravity it feels, not the design's), its amplitude searched down from four times its joint's breakaway
+(Coulomb) torque until a nominal run stays in range, and no dither on it (nothing but its friction holds it).
+
+Why this design (measured with :func:`~alpes_dyn.analysis.identifiability.fisher_information`, the Cramér-Rao
+bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
+the estimation scenario's small torque wiggle leaves F_v_3 at 10 % and the masses at up to 0.64 %; the
+multisine across the joint range brings every parameter below 0.8 % (masses 0.08-0.26 %). See the
+identification user guide for the full comparison.
+
+:func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
+(and writes) a :class:`~alpes_dyn.estimation.experiments.recording.Recording` with the true joint angles in
+``true_q_*``.
+:func:`model_experiment` does the same on any tendon-driven robot (a URDF + spec :class:`~alpes_dyn.Model`),
+its searches scaled by the robot's own static torques. Both warn
+(:class:`~alpes_dyn.estimation.experiments.excursion.SmallExcursionWarning`, one per motor) where the recording moved a
+motor's encoder by fewer counts than a fit can use
+(:mod:`alpes_dyn.estimation.experiments.excursion`).
+"""
+
+from __future__ import annotations
+
+import math
+import warnings
+from pathlib import Path
+from typing import Callable, Sequence
+
+import numpy as np
+
+from ...errors import InputError
+from ...fileio import check_outputs
+from ...limits import MAX_SEED
+from ...model.robot import Model
+from ...model.params import HandParams, load_params
+from ...model.transmission import torque_before
+from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
+from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported)
+from .draws import perturbed_params  # noqa: F401 (re-exported)
+from .excursion import warn_small_excursions
+from . import trim as _trim
+from .trim import (_fmt, _holding_bias, _mean_equilibrium, _oriented, _rest_torque, _torque_ceiling, _trimmed_bias,
+                   _with)
+from .recording import Recording, write_recording
+from ...simulation.integrate import simulate, stable_substeps
+from ...model.stops import JointRangeWarning
+
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "model_experiment",
+           "perturbed_params", "dither_amplitude"]  # dither_amplitude: from .multisine
+
+EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
+"""The models the identification experiment is defined for: one finger, or the thumb (one chain at a time)."""
+
+
+def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | tuple[np.ndarray, np.ndarray]:
+    """(tau_b, a): the multisine's bias and amplitude for ``model`` (see the module docstring), N m; numbers
+    for a one-motor model, arrays (m,) per motor otherwise (the thumb: flexion and ab/adduction)."""
+    bias, amp = _excitation(model, design)
+    if model.transmission.n_motors == 1:
+        return float(bias[0]), float(amp[0])
+    return bias, amp
+
+
+def _unheld_joints(model: Model) -> list[str]:
+    """The joints that no motor's tendon moves and no spring holds (a robot arm's joints under a tendon gripper):
+    no static equilibrium to design the experiment about, and a simulation of them falls through their range."""
+    k = np.asarray(model.extras.stiffness, dtype=float)
+    return [j for j, d, k_j in zip(model.joint_names, model.transmission.driven, k) if not d and not k_j > 0]
+
+
+MARGIN_FRACTION = 0.1
+"""The most of a joint's range the design's ``margin`` takes at each end: a short range keeps its middle."""
+
+
+def _joint_margins(model: Model, margin: float) -> np.ndarray:
+    """(n,) rad or m: the design's ``margin`` inside each joint limit, at most :data:`MARGIN_FRACTION` of the joint's
+    range (the 0.05 rad default is 0.05 m on a prismatic joint: more than the whole 0.04 m travel of Panda's
+    fingers, whose design range was then empty). Where a range is wider than 10 margins (the Alpes joints' 1.57 rad)
+    it is the margin itself."""
+    span = np.where(np.isfinite(model.upper - model.lower), model.upper - model.lower, np.inf)
+    return np.minimum(margin, MARGIN_FRACTION * span)
+
+
+def _excitation(model: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray]:
+    """Bias and amplitude per motor (m,), N m. A motor against springs: bias putting the mean of its joints
+    mid-range, amplitude the largest keeping the static equilibria in range; a motor on springless joints
+    (the thumb's ab/adduction): bias balancing gravity there, amplitude from the motor's limit down.
+    Then every amplitude whose joints a nominal run takes out of range shrinks by 15 % until none does."""
+    unheld = _unheld_joints(model)
+    if unheld:
+        raise InputError(f"model: {', '.join(unheld)} {'has' if len(unheld) == 1 else 'have'} neither a motor nor a "
+                         "spring, so nothing holds {} still for the experiment to start from; weld {} in the URDF "
+                         "(type=\"fixed\") or give {} a spring ([stiffness]) or a motor".format(
+                             *(["it"] * 3 if len(unheld) == 1 else ["them"] * 3)))
+    margin = _joint_margins(model, design.margin)
+    lo, hi = model.lower + margin, model.upper - margin
+    g0 = np.asarray(design.orientations[0], dtype=float)
+    n_m = model.transmission.n_motors
+    joints, sprung, free = _motor_groups(model)
+
+    def within(tau: np.ndarray) -> bool:
+        try:
+            return all(np.all((q >= lo) & (q <= hi)) for q in
+                       (_mean_equilibrium(model, tau, np.asarray(g, dtype=float)) for g in design.orientations))
+        except InputError:
+            return False
+
+    bias = np.zeros(n_m)
+    for k in sprung:
+        if design.torque_bias is not None:
+            bias[k] = design.torque_bias
+        else:  # mean joint angle of the motor's joints mid-range (or mid pulled range: _pulled_target)
+            js = joints[k]
+            bias[k] = _rest_torque(model, lambda q, js=js: float(np.mean(q[js])),
+                                   _pulled_target(model, bias, k, js, g0), g0, _torque_ceiling(model, k),
+                                   lambda c, k=k: _with(bias, k, c))
+    bias = _holding_bias(model, bias, free, joints, g0)
+    if design.torque_amplitude is not None:
+        return bias, np.full(n_m, float(design.torque_amplitude))
+    if not within(bias) and design.torque_bias is None:
+        bias = _bias_in_range(model, bias, sprung, within)
+    if not within(bias):
+        raise InputError(f"torque_bias: the nominal finger's equilibrium at {_fmt(bias)} N m leaves its joint range")
+    amp = np.zeros(n_m)
+    for k in sprung:
+        a, b = 0.0, _amplitude_ceiling(model, k, bias[k])
+        for _ in range(40):
+            c = 0.5 * (a + b)
+            a, b = (c, b) if within(_with(bias, k, bias[k] + c)) and within(_with(bias, k, bias[k] - c)) else (a, c)
+        amp[k] = a
+    cap = float(model.params.tau_max) if model.params is not None else None
+    S = model.transmission.S
+    for k in free:  # from 4 x the breakaway torque (Coulomb friction) of its joints: a larger one runs away
+        js = joints[k]
+        breakaway = float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
+        cap_k = cap if cap is not None else _torque_ceiling(model, k)
+        amp[k] = min(cap_k, 4.0 * breakaway) if breakaway > 0 else cap_k
+    # resonances swing the finger further than its static equilibria: shrink until a nominal run stays in range.
+    # First the springless joints' motors alone (a wild swing there also throws the other joints out of range),
+    # then every motor whose joints leave the range.
+    t, seg, G = _schedule(design)
+    dither = dither_amplitude(model, design)  # the range is checked with it (it is part of the torque)
+    for shrinking in ((free,) if free else ()) + (tuple(range(n_m)),):
+        for _ in range(60):
+            with warnings.catch_warnings():  # a trial amplitude may leave the range: that is what is tested
+                warnings.simplefilter("ignore", JointRangeWarning)
+                q = _simulate(model, design, _profiles(design, t, bias, amp, dither), G, seg)[:, : model.n]
+            out = np.any((q < lo) | (q > hi), axis=0)
+            hit = [k for k in shrinking if out[joints[k]].any()]
+            if not hit:
+                break
+            for k in hit:
+                amp[k] *= 0.85
+    return bias, amp * design.amplitude_fraction
+
+
+def _pulled_target(model: Model, bias: np.ndarray, k: int, js: np.ndarray, gravity: np.ndarray) -> float:
+    """The mean joint angle (rad) that motor ``k``'s bias puts its joints ``js`` at: mid-range; but on a motor that
+    pulls only (:func:`_amplitude_ceiling` = its bias) whose joints' springs already hold them mid-range or beyond
+    with the motor off, the middle of the range the tendon reaches pulling, between that unloaded rest and the
+    joints' upper limits. Without it a spring resting mid-range asks for no bias, hence no multisine (amplitude <=
+    bias): on finger_edu (springs resting at 0 in ranges symmetric about 0) the excitation was the dither alone,
+    0.012 N m, the joints moved by 0.2 deg, and the fit lost its basin even from the true values."""
+    target = float(np.mean(0.5 * (model.lower + model.upper)[js]))
+    if _amplitude_ceiling(model, k, 0.0) > 0:  # a motor that pushes too: mid-range about no bias is fine
+        return target
+    try:
+        unloaded = float(np.mean(_mean_equilibrium(model, _with(bias, k, 0.0), gravity)[js]))
+    except InputError:
+        return target
+    return target if target > unloaded else 0.5 * (unloaded + float(np.mean(model.upper[js])))
+
+
+def _bias_in_range(model: Model, bias: np.ndarray, sprung: list[int], within: Callable[[np.ndarray], bool],
+                   points: int = 81) -> np.ndarray:
+    """``bias`` with each sprung motor's entry moved to the nearest torque (on a grid of ``points`` over
+    [-ceiling, ceiling]) whose equilibrium keeps every joint in range: springs of unequal stiffness spread the
+    joints so that the bias putting their mean mid-range can leave one of them out (a finger drawn by
+    ``perturbed_params``); the middle of the feasible torques nearest the first choice then. Unchanged where no
+    grid torque is feasible (the caller refuses it)."""
+    out = bias.copy()
+    for k in sprung:
+        c = _torque_ceiling(model, k)
+        grid = np.linspace(-c, c, points)
+        ok = np.array([within(_with(out, k, float(tau))) for tau in grid])
+        if not ok.any():
+            continue
+        runs = np.split(np.arange(points), np.flatnonzero(np.diff(ok.astype(int))) + 1)  # feasible and not runs
+        feasible = [r for r in runs if ok[r[0]]]
+        best = min(feasible, key=lambda r: float(np.min(np.abs(grid[r] - out[k]))))
+        out[k] = float(0.5 * (grid[best[0]] + grid[best[-1]]))
+    return out
+
+
+def _amplitude_ceiling(model: Model, k: int, bias: float) -> float:
+    """The largest multisine amplitude searched on motor ``k``: its bias (a tendon pulls only: the torque stays
+    >= 0), but on a robot other than an Alpes model a motor that drives one joint alone (a direct drive or a
+    gear, both ways) may swing through zero, up to :func:`_torque_ceiling`."""
+    if model.params is not None or np.count_nonzero(model.transmission.S[k]) != 1:
+        return bias
+    return max(bias, _torque_ceiling(model, k))
+
+
+def _trim_on_hand(truth: Model, nominal: Model, design: ExperimentDesign, t: np.ndarray, bias: np.ndarray,
+                  amp: np.ndarray, dither: np.ndarray, gravity: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(bias, amp, dither), N m per motor, as the experimenter's slow loop on the encoder leaves them on ``truth``
+    under ``gravity`` (3,) (:func:`~alpes_dyn.estimation.experiments.trim._trimmed_bias`: the nominal finger's encoder
+    readings at the design's first orientation as the target, found on the finger as it is; the multisine's and the
+    dither's amplitudes scaled with it, 1 but on a finger held lower); unchanged where the design gives its own
+    ``torque_bias`` or no ``trim_bias``. The fold check's peak is the multisine's and the dither's, the multisine's
+    alone under :data:`~alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE`."""
+    if not design.trim_bias or design.torque_bias is not None:
+        return bias, amp, dither
+    extra = None if _trim.MATCH_COMPLIANCE else dither
+    peak = np.max(np.abs(_profiles(design, t, np.zeros_like(bias), amp, extra)), axis=0)
+    g_design = np.asarray(design.orientations[0], dtype=float)
+    bias, scale = _trimmed_bias(truth, nominal, bias, gravity, peak, design_gravity=g_design)
+    return bias, amp * scale, dither * scale
+
+
+def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Sample times (N+1,), orientation segment of each sample and gravity (N+1, 3)."""
+    N = design.n_samples - 1
+    t = design.dt * np.arange(N + 1)
+    n_or = len(design.orientations)
+    seg = np.minimum((np.arange(N + 1) * n_or) // (N + 1), n_or - 1)
+    return t, seg, np.asarray(design.orientations, dtype=float)[seg]
+
+
+def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
+    """States (N+1, 2n) from the static equilibrium at u[0], RK4 with the design's substeps (more where the truth's
+    friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`), the torques u (N+1, m) held
+    per sample, segment by segment of constant gravity."""
+    N = u.shape[0] - 1
+    sub = max(design.substeps, stable_substeps(truth, design.dt))  # a sharper friction sign asks for more
+    x = np.zeros((N + 1, 2 * truth.n))
+    x[0, : truth.n] = _mean_equilibrium(truth, u[0], G[0])
+    start = 0
+    while start < N:
+        stop = start + 1
+        while stop < N and seg[stop] == seg[start]:
+            stop += 1
+        m = _oriented(truth, G[start])
+        k = stop - start
+        sim = simulate(m, x[start], np.repeat(u[start:stop], sub, axis=0), k * design.dt,
+                       design.dt / sub, "rk4", input="motor", output="encoder")
+        x[start + 1: stop + 1] = sim.x[sub::sub]
+        start = stop
+    return x
+
+
+def experiment(model: str, true_params: HandParams | str | Path | None = None,
+               design: ExperimentDesign | None = None, seed: int = 0, path: str | Path | None = None,
+               nominal_params: HandParams | str | Path | None = None, chain: str | None = None,
+               rotor_inertia: bool = False) -> Recording:
+    """Simulate the identification experiment on a finger (or the thumb) with ``true_params`` (friction included).
+
+    Parameters
+    ----------
+    model: ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors
+        are excited at once, each with the multisine (phases shifted between them): the flexion tendon
+        about a bias that holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about
+        the torque that balances gravity there (trimmed on the hand too), its joint starting mid-range, its
+        amplitude the largest that keeps the nominal thumb in range (x ``amplitude_fraction``), without dither.
+    true_params: the true parameters (a :class:`~alpes_dyn.model.params.HandParams` or a file).
+    design: the :class:`ExperimentDesign` (default: the documented one).
+    seed: seed of the sensor noise. path: write the recording there as CSV too.
+    nominal_params: the parameters the experimenter knows, from which the excitation is designed
+        (default: the shipped file).
+    chain: for a finger model, the hand's finger it is (its own ``[finger.<name>]`` values, in the true
+        and the nominal file; see :meth:`Model.alpes <alpes_dyn.Model.alpes>`).
+    rotor_inertia: the true finger (and the nominal one the excitation is designed on) with each file's
+        rotor inertia J_m on its tendon (eq. 2.8; default off, the rigid finger of the documented experiment).
+
+    Returns
+    -------
+    :class:`~alpes_dyn.estimation.experiments.recording.Recording` with encoder counts, measured torque, the camera's
+    joint angles (if any), gravity (when not the model's constant) and the true joint angles.
+    """
+    if model not in EXPERIMENT_MODELS:
+        raise InputError(f"model: the identification experiment is defined for one chain "
+                         f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:
+        raise InputError(f"seed: expected an integer from 0 to {MAX_SEED}, got {seed!r:.60}")
+    design = _checked_design(design)
+    if path is not None:  # the output policy before any work: not over the parameter files read, nor a link...
+        check_outputs([("path", path)], [(name, f) for name, f in (("true_params", true_params),
+                                                                   ("nominal_params", nominal_params))
+                                         if isinstance(f, (str, Path))])
+    p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
+    p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
+    nominal = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_nom, chain=chain)
+    truth = Model.alpes(model, friction=True, rotor_inertia=rotor_inertia, params=p_true, chain=chain)
+    return _run(truth, nominal, design, seed, path)
+
+
+def model_experiment(nominal: Model, truth: Model | None = None, design: ExperimentDesign | None = None,
+                     seed: int = 0, path: str | Path | None = None) -> Recording:
+    """The identification experiment of :func:`experiment` on any tendon-driven robot (a URDF + spec
+    :class:`~alpes_dyn.Model`): the multisine designed on ``nominal`` (the bias that puts each motor's joints
+    mid-range, the amplitude the largest that keeps the static equilibria and a nominal run in the joint range,
+    both searched up to the robot's own static torque scale), the bias trimmed on ``truth`` (default: the
+    nominal itself), simulated on ``truth`` with the sensors of the design.
+
+    ``truth`` must have the nominal's joints and motors (e.g. the same URDF with a perturbed spec). Returns
+    (and writes to ``path``) the :class:`~alpes_dyn.estimation.experiments.recording.Recording`, readable by
+    :func:`~alpes_dyn.estimation.experiments.recording.read_recording` with either model.
+    """
+    if not isinstance(nominal, Model):
+        raise InputError(f"nominal: expected an alpes_dyn Model, got {type(nominal).__name__}")
+    truth = nominal if truth is None else truth
+    if not isinstance(truth, Model):
+        raise InputError(f"truth: expected an alpes_dyn Model, got {type(truth).__name__}")
+    if nominal.transmission is None:
+        raise InputError(f"nominal: model {nominal.name!r} has no motors (give its spec's [[motor]] tables)")
+    if truth.joint_names != nominal.joint_names or truth.motor_names != nominal.motor_names:
+        raise InputError(f"truth: expected the nominal's joints {', '.join(nominal.joint_names)} and motors "
+                         f"{', '.join(nominal.motor_names)}, got {', '.join(truth.joint_names)} and "
+                         f"{', '.join(truth.motor_names)}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:
+        raise InputError(f"seed: expected an integer from 0 to {MAX_SEED}, got {seed!r:.60}")
+    design = _checked_design(design)
+    if path is not None:
+        check_outputs([("path", path)])
+    return _run(truth, nominal, design, seed, path)
+
+
+def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path: str | Path | None) -> Recording:
+    """The experiment designed on ``nominal``, trimmed on and simulated with ``truth``, with the sensors."""
+    bias, amp = _excitation(nominal, design)
+    dither = dither_amplitude(nominal, design)
+    t, seg, G = _schedule(design)
+    bias, amp, dither = _trim_on_hand(truth, nominal, design, t, bias, amp, dither,
+                                      np.asarray(design.orientations[0], dtype=float))
+    rng = np.random.default_rng(seed)
+    N = t.shape[0] - 1
+    n_or = len(design.orientations)
+    u = _profiles(design, t, bias, amp, dither)
+    x = _simulate(truth, design, u, G, seg)
+    tr = truth.transmission
+    step = 2 * np.pi / tr.counts_per_rev
+    qm = tr.encoder_angles(x[:, : truth.n], torque_before(u))  # S q, plus the stretch C u_k-1 where elastic
+    counts = np.round((qm + design.encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step)
+    torque = u + design.torque_noise * rng.standard_normal(u.shape)
+    q_meas = None
+    if design.camera_times:
+        q_meas = np.full((N + 1, truth.n), np.nan)
+        for tc in design.camera_times:
+            k = int(round(tc / design.dt))
+            q_meas[k] = x[k, : truth.n] + design.camera_noise * rng.standard_normal(truth.n)
+    same_g = n_or == 1 and np.array_equal(G[0], truth.gravity)
+    rec = Recording(t=t, encoder=counts, torque=torque, motor_names=tr.motor_names, joint_names=truth.joint_names,
+                    q=q_meas, gravity=None if same_g else G, true_q=x[:, : truth.n].copy())
+    if path is not None:
+        write_recording(rec, path)
+    warn_small_excursions(rec)  # one SmallExcursionWarning per motor whose encoder barely moved
+    return rec
+
+
+def experiment_torque(model: str, true_params: HandParams | str | Path | None = None,
+                      design: ExperimentDesign | None = None, nominal_params: HandParams | str | Path | None = None,
+                      chain: str | None = None,
+                      true_gravity: Sequence[float] | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The motor torque of the experiment that :func:`experiment` runs on ``true_params``, without sensors: the
+    input to replay on another plant (a MuJoCo finger, :func:`alpes_dyn.control.plants.mujoco_recording`).
+
+    The arguments are :func:`experiment`'s (the bias trimmed on the true finger as there: what the
+    experimenter's slow loop on the encoder finds with the library's model of that finger).
+    ``true_gravity`` (3,), m/s^2: the gravity the true finger feels, if not the design's first orientation (a
+    palm tilted unknown to the experimenter: the excitation is designed for the orientation the design
+    names, the bias trimmed and the rest found on the finger as it is). One orientation only.
+
+    Returns
+    -------
+    t: (N+1,) s. u: (N+1, m) true motor torque, N m, u[k] held on [t_k, t_k+1). x0: (2n,) the initial state
+    (the true finger at rest under u[0], first orientation), rad and rad/s.
+    """
+    if model not in EXPERIMENT_MODELS:
+        raise InputError(f"model: the identification experiment is defined for one chain "
+                         f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
+    design = _checked_design(design)
+    if len(design.orientations) != 1:
+        raise InputError(f"orientations: experiment_torque replays one orientation, got {len(design.orientations)}")
+    g_true = np.asarray(design.orientations[0] if true_gravity is None else true_gravity, dtype=float)
+    if g_true.shape != (3,) or not np.isfinite(g_true).all():
+        raise InputError(f"true_gravity: expected 3 finite numbers (m/s^2), got {np.asarray(true_gravity).tolist()!r}")
+    p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
+    p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
+    nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
+    bias, amp = _excitation(nominal, design)
+    dither = dither_amplitude(nominal, design)
+    truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
+    t, _, _ = _schedule(design)
+    bias, amp, dither = _trim_on_hand(truth, nominal, design, t, bias, amp, dither, g_true)
+    u = _profiles(design, t, bias, amp, dither)
+    x0 = np.zeros(2 * truth.n)
+    x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true)
+    return t, u, x0

@@ -1,0 +1,94 @@
+"""The experiment's torque signals: each motor's multisine and the dither on it
+(:mod:`alpes_dyn.estimation.experiments.experiment` designs their bias and amplitudes).
+
+The multisine: tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f / 2) over the design's ``frequencies`` (Schroeder
+phases, shifted between the motors of one chain); the dither: a sine at ``dither_frequency`` of
+:func:`dither_amplitude` (``dither`` times the breakaway torque of the motor's joints; none on the motors of
+springless joints).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Any
+
+import numpy as np
+
+from ...model.robot import Model
+
+ExperimentDesign = Any  # alpes_dyn.estimation.experiments.experiment.ExperimentDesign (which imports this module)
+
+__all__ = ["dither_amplitude"]
+
+
+def _motor_groups(model: Model) -> tuple[list[np.ndarray], list[int], list[int]]:
+    """Each motor's joints, the motors whose joints all have springs (a tendon against its return springs) and
+    the others (a motor driving springless joints both ways, held at mid-range by its bias)."""
+    S = model.transmission.S
+    held = {model.joint_index(j) for j in model.springless_joints}
+    joints = [np.flatnonzero(S[k]) for k in range(S.shape[0])]
+    sprung = [k for k, js in enumerate(joints) if not held.intersection(js.tolist())]
+    return joints, sprung, [k for k in range(S.shape[0]) if k not in sprung]
+
+
+def _profile(design: ExperimentDesign, t: np.ndarray, bias: float, amp: float, motor: int = 0,
+             n_motors: int = 1, dither: float = 0.0) -> np.ndarray:
+    """One motor's multisine (len(t),), N m: Schroeder phases (a low crest factor), shifted by pi k i / m on
+    line i for motor k of m (the motors of one chain excited at once, out of phase); plus the dither, ``dither``
+    N m at ``design.dither_frequency`` (shifted by pi k / m)."""
+    f = np.asarray(design.frequencies, dtype=float)
+    k = np.arange(1, f.size + 1)
+    phases = -np.pi * k * (k - 1) / f.size - np.pi * motor * k / n_motors
+    s = np.sin(2 * np.pi * f[None, :] * t[:, None] + phases[None, :]).sum(axis=1)
+    out = bias + amp * s / math.sqrt(f.size / 2)
+    if dither:
+        out = out + dither * np.sin(2 * np.pi * design.dither_frequency * t + np.pi * motor / n_motors)
+    return out
+
+
+def _profiles(design: ExperimentDesign, t: np.ndarray, bias: np.ndarray, amp: np.ndarray,
+              dither: np.ndarray | None = None) -> np.ndarray:
+    """(len(t), m): every motor's multisine, with its dither amplitude ``dither`` (m,), N m (default none)."""
+    m = len(bias)
+    d = np.zeros(m) if dither is None else np.asarray(dither, dtype=float)
+    return np.column_stack([_profile(design, t, float(bias[k]), float(amp[k]), k, m, float(d[k])) for k in range(m)])
+
+
+def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
+    """The dither's amplitude per motor (m,), N m: ``design.dither`` times the largest breakaway torque of the
+    motor's joints, max_j F_s_j / |S_kj| (their dry friction seen at the motor; the model's F_s, the nominal one
+    for a designed experiment), so that every joint keeps sliding through its friction; 0 without friction.
+
+    Why a dither: on a plant with stick-slip friction (MuJoCo's finger3, ``benchmarks/realism.py``) the multisine
+    alone leaves q_3 stuck half the time (|qd_3| < 0.01 rad/s on 53 % of the samples, seed 12), where no
+    memoryless friction law matches it: the fit's springs came out 1-2 % off and the EKF on its file 1.2 degrees
+    off on q_3. A 20 Hz dither of 12 breakaway torques (3e-3 N m on finger3's motor, about 5 % of its mean torque)
+    brings the stuck time to about 1 % on every joint. Measured on the all-effects plants of seeds 13 and 14 (4 s,
+    ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
+    the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
+    10 Hz dither left q_3 stuck on 23-39 % of the samples. 20, with the multisine at 0.5 of its amplitude ceiling
+    instead of 0.6 (``amplitude_fraction``, so that the finger's range holds the larger swing): on the all-effects
+    plants of seeds 31 and 42, where 12 had left the masses 7.1 and 5.8 % off (the stick-slip round trading the
+    masses against the tilt and the friction), 2.1 and 2.4 %, and 0.7 and 1.0 % on seeds 46 and 47, not tuned on
+    (2026-12-03, ``benchmarks/realism.py``); with the dither at 20 and the multisine still at 0.6, seed 31's q_3 swung
+    21 degrees peak to peak instead of 14.
+
+    Not on a motor of springless joints (the thumb's ab/adduction; 0 there): nothing but their dry friction holds
+    them where the design places them, and a dither that keeps them sliding lets any torque the design did not
+    balance carry them away. Measured on MuJoCo's thumb of hand seed 5 (``benchmarks/realism.py --chains thumb``,
+    4 s): with the dither, a palm 3 degrees off (a gravity torque of 1e-4 N m at mid-range, 3.5e-4 at 0, below the
+    joint's breakaway torque of 4.5e-4) carried the ab/adduction from 45 degrees onto its 0 degree stop, and the
+    fit with every effect of a real hand ended at 12.3 counts, not converged, springs 12 % off; even on the plant
+    with the model's own structure the ab/adduction swept 24-57 degrees through its friction, which the fit
+    holds at the nominal value (:data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`): 0.70
+    counts, not converged. Without it: 41-52 degrees, 0.58 counts with the model's structure, 0.66 with every effect
+    (springs within 0.35 %)."""
+    joints, _, free = _motor_groups(model)
+    S = model.transmission.S
+    out = np.zeros(S.shape[0])
+    if design.dither <= 0:
+        return out
+    for k, js in enumerate(joints):
+        if js.size and k not in free:
+            out[k] = design.dither * float(np.max(model.extras.coulomb[js] / np.abs(S[k, js])))
+    return out

@@ -1,0 +1,427 @@
+"""Recordings of an experiment on the hand: the CSV format
+that :func:`~alpes_dyn.estimation.identification.identification.identify` reads.
+
+One row per sample, uniformly spaced, a header line naming the columns (any order):
+
+=========================== ======== ==========================================================================
+column                      unit     meaning
+=========================== ======== ==========================================================================
+``t``                       s        sample time, strictly increasing, uniform spacing (the sample period)
+``encoder_<motor>``         counts   motor encoder, q_m = (2 pi / counts_per_rev) counts (Section 3, eq. 3.13)
+``torque_<motor>``          N m      measured motor torque, held until the next sample; or instead
+``current_<motor>``         A        motor current, converted with a torque constant (``torque_constant``, N m/A)
+``force_z``                 N        optional: fingertip normal force (FlexiForce, eq. 2.13)
+``q_<joint>``               rad      optional: a joint angle measured now and then (camera, jig); empty elsewhere
+``gravity_x,_y,_z``         m/s^2    optional, all three: gravity in the hand's base frame (its orientation)
+``true_q_<joint>``          rad      optional: the true joint angles of a simulated experiment; never read by a fit
+=========================== ======== ==========================================================================
+
+``<motor>`` and ``<joint>`` are the model's names (:attr:`Transmission.motor_names
+<alpes_dyn.Transmission.motor_names>`, :attr:`Model.joint_names <alpes_dyn.Model.joint_names>`): on
+``finger3`` the columns are ``t, encoder_finger, torque_finger`` and ``q_j1, q_j2, q_j3``. Only
+``q_*`` and ``force_z`` may have empty cells; the true angles ``true_q_*`` are every joint's at every sample, or
+not in the file (the RMSE of ``estimate --data`` needs them all). On the command line, ``identify`` and
+``estimate --data`` read ``current_<motor>`` columns with ``--torque-constant NM_PER_A``. An encoder
+reading far outside what the joints' ranges allow (more than the range and a motor turn beyond it) is
+refused by name: it is not this model's encoder in counts. Every defect is one
+:class:`~alpes_dyn.errors.RecordingError` naming the column (and the row): an unknown or missing
+column, a non-number (``1_0`` too: no digit separators), NaN where not allowed, time not increasing or not
+uniform, a joint angle or gravity in the wrong unit (degrees, g: the gravity's norm must be 9.81 m/s^2 within
+10 %), a recording too short or without excitation.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import itertools
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ...errors import RecordingError
+from ...fileio import atomic_write, read_bytes
+from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
+from ...model.robot import Model
+
+__all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
+
+MIN_SAMPLES = 100  # a shorter recording cannot tell a finger's dynamics
+
+GRAVITY = 9.81
+"""The gravity a recording's ``gravity_*`` columns (and an experiment's orientations) hold, m/s^2."""
+
+GRAVITY_TOLERANCE = 0.1
+"""Relative tolerance on the norm of a recorded gravity vector: 9.81 m/s^2 +- 10 % (an accelerometer's scale
+error; a norm of 14.9 or of 1 m/s^2 is not the Earth's gravity in m/s^2, and a fit would read it as such)."""
+
+
+def gravity_norm_off(gravity: np.ndarray) -> np.ndarray:
+    """Indices of the rows of ``gravity`` (N, 3), m/s^2, whose norm is not :data:`GRAVITY` within
+    :data:`GRAVITY_TOLERANCE`."""
+    g = np.linalg.norm(np.atleast_2d(np.asarray(gravity, dtype=float)), axis=1)
+    return np.flatnonzero(~(np.abs(g - GRAVITY) <= GRAVITY_TOLERANCE * GRAVITY))
+
+
+@dataclass
+class Recording:
+    """A recorded (or simulated) experiment; every array has one row per sample.
+
+    Attributes
+    ----------
+    t: (N,) s. encoder: (N, m) counts. torque: (N, m) N m (torque[k] held on [t_k, t_k+1)).
+    motor_names (m,), joint_names (n,): the model's names.
+    q: (N, n) rad, NaN where not measured, or None. force_z: (N,) N or None.
+    gravity: (N, 3) m/s^2 or None. true_q: (N, n) rad or None (simulated experiments only).
+    """
+
+    t: np.ndarray
+    encoder: np.ndarray
+    torque: np.ndarray
+    motor_names: tuple[str, ...]
+    joint_names: tuple[str, ...]
+    q: np.ndarray | None = None
+    force_z: np.ndarray | None = None
+    gravity: np.ndarray | None = None
+    true_q: np.ndarray | None = None
+
+    @property
+    def n_samples(self) -> int:
+        return int(self.t.shape[0])
+
+    @property
+    def dt(self) -> float:
+        """Sample period, s."""
+        return float((self.t[-1] - self.t[0]) / (self.n_samples - 1))
+
+    @property
+    def duration(self) -> float:
+        return float(self.t[-1] - self.t[0])
+
+    def columns(self) -> dict[str, np.ndarray]:
+        """The CSV columns, in the documented order."""
+        out = {"t": self.t}
+        for j, mname in enumerate(self.motor_names):
+            out[f"encoder_{mname}"] = self.encoder[:, j]
+            out[f"torque_{mname}"] = self.torque[:, j]
+        if self.force_z is not None:
+            out["force_z"] = self.force_z
+        if self.q is not None:
+            out.update({f"q_{jn}": self.q[:, i] for i, jn in enumerate(self.joint_names)})
+        if self.gravity is not None:
+            out.update({f"gravity_{a}": self.gravity[:, i] for i, a in enumerate("xyz")})
+        if self.true_q is not None:
+            out.update({f"true_q_{jn}": self.true_q[:, i] for i, jn in enumerate(self.joint_names)})
+        return out
+
+
+def _fmt(x: float) -> str:
+    return "" if math.isnan(x) else repr(float(x))
+
+
+def write_recording(rec: Recording, path: str | Path) -> Path:
+    """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
+    check_recording(rec)
+    cols = rec.columns()
+    names = list(cols)
+    data = np.column_stack([cols[c] for c in names])
+    buf = io.StringIO()
+    buf.write(",".join(names) + "\n")
+    for row in data:
+        buf.write(",".join(_fmt(x) for x in row) + "\n")
+    return atomic_write(path, buf.getvalue(), "recording", RecordingError)
+
+
+def _next_row(rows, p: Path) -> list[str] | None:
+    """The next row of the CSV reader ``rows`` (None at the end); a one-line RecordingError for what csv refuses."""
+    try:
+        return next(rows)
+    except StopIteration:
+        return None
+    except csv.Error as exc:  # a cell over the csv module's own limit (131072 characters)
+        if "field larger" in str(exc):
+            raise RecordingError(f"recording {str(p)!r}: a cell over the limit of {MAX_CSV_CELL} characters") from None
+        raise RecordingError(f"recording {str(p)!r}: not a CSV file ({exc})") from None
+
+
+def _finite(x: object) -> bool:
+    """Whether the real number ``x`` is finite (an integer too large for a float is not)."""
+    try:
+        return math.isfinite(x)  # type: ignore[arg-type]
+    except OverflowError:
+        return False
+
+
+def read_recording(path: str | Path, model: Model, torque_constant: float | None = None, *,
+                   ignore_others_of: Model | None = None) -> Recording:
+    """Read and validate a recording CSV for ``model`` (which names the motors and joints).
+
+    ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
+    them and refused without them. ``ignore_others_of``: a wider model (e.g. the whole robot of a
+    :meth:`~alpes_dyn.model.robot.Model.subtree` ``model``) whose columns of motors and joints that ``model``
+    does not have are accepted and ignored (a recording of the whole hand read for one finger; their
+    cells are still numbers, and their encoders within the wider model's joint ranges); a column of neither model
+    is still refused. Raises :class:`~alpes_dyn.errors.RecordingError`.
+    """
+    _check_reader(torque_constant, model)
+    if ignore_others_of is not None and not isinstance(ignore_others_of, Model):
+        raise RecordingError(f"ignore_others_of: expected an alpes_dyn Model or None, got "
+                             f"{type(ignore_others_of).__name__}")
+    text = _read_text(path)  # (a path that is not a str or os.PathLike: RecordingError, before Path() sees it)
+    p = Path(path)
+    n_lines = text.count("\n")
+    if n_lines > MAX_CSV_ROWS + 1:
+        raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
+    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
+    rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
+    header = _header(rows, p, model, ignore_others_of)
+    data = _parse_rows(rows, p, header, n_lines)
+    del text
+    own = _known_columns(model)
+    col = {h: data[:, j] for j, h in enumerate(header) if h in own}
+    if "t" not in col:
+        raise RecordingError("recording: missing column 't' (time, s)")
+    motors, joints = model.transmission.motor_names, model.joint_names
+    _check_true_columns(col, joints)
+    enc, torque = _motor_columns(col, motors, torque_constant, p)
+    rec = Recording(t=col["t"], encoder=np.column_stack(enc), torque=np.column_stack(torque),
+                    motor_names=tuple(motors), joint_names=tuple(joints), q=_joint_columns(col, joints, "q"),
+                    force_z=col.get("force_z"), gravity=_gravity_columns(col),
+                    true_q=_joint_columns(col, joints, "true_q"))
+    check_recording(rec)
+    _check_encoder_range(rec, model)
+    if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
+        others = {h[len("encoder_"):]: data[:, j] for j, h in enumerate(header)
+                  if h not in own and h.startswith("encoder_")}
+        _check_encoder_columns(others, ignore_others_of)
+    return rec
+
+
+def _check_reader(torque_constant: float | None, model: Model) -> None:
+    """The arguments of :func:`read_recording`: a positive torque constant (N m/A) or None, an alpes_dyn Model."""
+    if torque_constant is not None and not (isinstance(torque_constant, (int, float, np.integer, np.floating))
+                                            and not isinstance(torque_constant, (bool, np.bool_))
+                                            and _finite(torque_constant) and torque_constant > 0):
+        raise RecordingError(f"torque_constant: expected a positive number of N m/A, got {torque_constant!r:.60}")
+    if torque_constant is not None:  # an absurd one (1e300 N m/A) or a subnormal number
+        check_physical(float(torque_constant), "torque_constant", "N m/A", "pos", RecordingError)
+    if not isinstance(model, Model):
+        raise RecordingError(f"model: expected an alpes_dyn Model (it names the columns), got {type(model).__name__}")
+
+
+def _read_text(path: str | Path) -> str:
+    """The recording's text (UTF-8, a byte-order mark accepted; at most :data:`MAX_RECORDING_BYTES`)."""
+    data_bytes = read_bytes(path, "recording", RecordingError, MAX_RECORDING_BYTES)
+    try:
+        return data_bytes.decode("utf-8-sig")  # a byte-order mark is accepted
+    except UnicodeDecodeError:
+        raise RecordingError(f"recording {str(Path(path))!r}: not a UTF-8 text file") from None
+
+
+def _known_columns(model: Model) -> set[str]:
+    """The columns a recording of ``model`` may hold (its motors' and joints' names in them)."""
+    motors, joints = model.transmission.motor_names, model.joint_names
+    known = {"t", "force_z", "gravity_x", "gravity_y", "gravity_z"}
+    known |= {f"{k}_{mn}" for k in ("encoder", "torque", "current") for mn in motors}
+    return known | {f"{k}_{jn}" for k in ("q", "true_q") for jn in joints}
+
+
+def _header(rows, p: Path, model: Model, wider: Model | None = None) -> list[str]:
+    """The column names of the first row of ``rows``: each at most :data:`MAX_CSV_CELL` characters, once, and a
+    column of ``model`` (its motors' and joints' names) or of the ``wider`` model."""
+    first = _next_row(rows, p)
+    if first is None:
+        raise RecordingError(f"recording {str(p)!r}: empty file")
+    header = [h.strip() for h in first]
+    long = next((h for h in header if len(h) > MAX_CSV_CELL), None)
+    if long is not None:
+        raise RecordingError(f"recording: a column name of {len(long)} characters, over the limit of {MAX_CSV_CELL}")
+    if len(set(header)) != len(header):
+        dup = next(h for h in header if header.count(h) > 1)
+        raise RecordingError(f"recording: column {dup!r} appears twice")
+    tr = model.transmission
+    if tr is None:
+        raise RecordingError(f"recording: model {model.name!r} has no tendon transmission (no motors to read)")
+    motors, joints = tr.motor_names, model.joint_names
+    known = _known_columns(model)
+    if wider is not None and wider.transmission is not None:
+        known |= _known_columns(wider)
+    for h in header:
+        if h not in known:
+            raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
+                                 f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
+    return header
+
+
+def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:
+    """The data rows as an array (rows, columns): numbers (no digit separators), empty or NaN cells only in the
+    optional measurements (``q_*``, ``force_z``: NaN there; ``true_q_*`` is a simulation's, every sample)."""
+    optional_nan = {h for h in header if h.startswith("q_") or h == "force_z"}
+    data = np.empty((n_lines + 1, len(header)))  # at least one row per line: trimmed below
+    n_rows = 0
+    for i in itertools.count(2):
+        row = _next_row(rows, p)
+        if row is None:
+            break
+        n_rows += 1
+        if len(row) != len(header):
+            raise RecordingError(f"recording: line {i} has {len(row)} fields, the header {len(header)}")
+        for j, cell in enumerate(row):
+            c = cell.strip()
+            if len(c) > MAX_CSV_CELL:
+                raise RecordingError(f"recording: column {header[j]!r} line {i}: a cell of {len(c)} characters, "
+                                     f"over the limit of {MAX_CSV_CELL}")
+            if c == "":
+                if header[j] not in optional_nan:
+                    raise RecordingError(f"recording: column {header[j]!r} is empty at line {i} "
+                                         "(only q_* and force_z may have empty cells)")
+                data[i - 2, j] = np.nan
+                continue
+            try:
+                if "_" in c:  # Python reads 1_000 as 1000; a CSV number has no digit separators
+                    raise ValueError(c)
+                data[i - 2, j] = float(c)
+            except ValueError:
+                raise RecordingError(f"recording: column {header[j]!r} line {i}: not a number ({c!r})") from None
+            if not math.isfinite(data[i - 2, j]) and header[j] not in optional_nan:
+                raise RecordingError(f"recording: column {header[j]!r} line {i}: NaN or inf")
+    data = data[:n_rows]
+    tiny = np.argwhere((data != 0) & (np.abs(data) < np.finfo(float).tiny))  # (NaN compares False: not tiny)
+    if tiny.size:  # no sensor reads 1e-320: a value written wrong (and its digits are not a float's)
+        k, j = (int(x) for x in tiny[0])
+        check_not_subnormal(float(data[k, j]), f"recording: column {header[j]!r} line {k + 2}", error=RecordingError)
+    return data
+
+
+def _motor_columns(col: dict[str, np.ndarray], motors: tuple[str, ...], torque_constant: float | None, p: Path
+                   ) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Each motor's encoder (counts) and torque (N m: ``torque_<motor>``, or ``current_<motor>`` A times the
+    torque constant), (N,) each; the torque constant refused where no column is a current."""
+    enc, torque = [], []
+    for mn in motors:
+        if f"encoder_{mn}" not in col:
+            raise RecordingError(f"recording: missing column 'encoder_{mn}' (counts)")
+        enc.append(col[f"encoder_{mn}"])
+        has_t, has_c = f"torque_{mn}" in col, f"current_{mn}" in col
+        if has_t == has_c:
+            raise RecordingError(f"recording: motor {mn!r} needs exactly one of 'torque_{mn}' (N m) and "
+                                 f"'current_{mn}' (A)")
+        if has_c:
+            if torque_constant is None:
+                raise RecordingError(f"recording: column 'current_{mn}' needs a torque constant (N m/A: "
+                                     "torque_constant, or --torque-constant on the command line)")
+            torque.append(float(torque_constant) * col[f"current_{mn}"])
+        else:
+            torque.append(col[f"torque_{mn}"])
+    if torque_constant is not None and not any(f"current_{mn}" in col for mn in motors):
+        raise RecordingError(f"recording {str(p)!r}: a torque constant is given but it has no current_<motor> column "
+                             f"(its torques are torque_<motor>, N m)")
+    return enc, torque
+
+
+def _check_true_columns(col: dict[str, np.ndarray], joints: tuple[str, ...]) -> None:
+    """The true angles ``true_q_<joint>`` for every joint of the model or for none (with some missing, every joint's
+    RMSE was silently dropped: the estimate said the file had no true angles)."""
+    missing = [jn for jn in joints if f"true_q_{jn}" not in col]
+    if len(missing) not in (0, len(joints)):
+        raise RecordingError(f"recording: true_q_* has no column for joint{'s' if len(missing) > 1 else ''} "
+                             f"{', '.join(repr(j) for j in missing[:5])}: the true angles of every joint, or none")
+
+
+def _joint_columns(col: dict[str, np.ndarray], joints: tuple[str, ...], prefix: str) -> np.ndarray | None:
+    """The columns ``<prefix>_<joint>`` as (N, n) rad (NaN for a joint without a column), or None without any."""
+    names = [f"{prefix}_{jn}" for jn in joints]
+    present = [n for n in names if n in col]
+    if not present:
+        return None
+    return np.column_stack([col[n] if n in col else np.full(len(col["t"]), np.nan) for n in names])
+
+
+def _gravity_columns(col: dict[str, np.ndarray]) -> np.ndarray | None:
+    """The gravity columns as (N, 3) m/s^2, None without them; all three or none."""
+    grav_cols = [f"gravity_{a}" for a in "xyz"]
+    present = [g for g in grav_cols if g in col]
+    if present and len(present) != 3:
+        raise RecordingError(f"recording: gravity needs all three columns gravity_x, gravity_y, gravity_z "
+                             f"(got {', '.join(present)})")
+    return np.column_stack([col[g] for g in grav_cols]) if present else None
+
+
+def _check_encoder_range(rec: Recording, model: Model) -> None:
+    """Each encoder column within what its joints' ranges allow (S q over the range box, in counts), with a
+    margin of the whole range and one motor turn on each side (an encoder's zero, stops overrun): a reading
+    far outside is not this model's encoder in counts, and would send a fit or an observer to overflow."""
+    _check_encoder_columns(dict(zip(rec.motor_names, rec.encoder.T)), model)
+
+
+def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> None:
+    """:func:`_check_encoder_range` of the columns ``encoders`` (motor name of ``model`` -> counts (N,))."""
+    tr = model.transmission
+    S = np.asarray(tr.S, dtype=float)
+    lo_q, hi_q = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
+    cpr = float(tr.counts_per_rev)
+    for mn, e in encoders.items():
+        i = tr.motor_names.index(mn)
+        used = S[i] != 0
+        if not (np.isfinite(lo_q[used]).all() and np.isfinite(hi_q[used]).all()):
+            continue  # an unbounded joint: no range to check against
+        a, b = S[i] * lo_q, S[i] * hi_q
+        lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
+        hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
+        margin = (hi - lo) + cpr
+        bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"recording: column 'encoder_{mn}' line {k + 2}: {float(e[k]):g} counts is beyond "
+                                 f"what the joint ranges allow ({lo:.6g} to {hi:.6g} counts, give or take the range "
+                                 "and a turn); is it this model's encoder, in counts?")
+
+
+def check_recording(rec: Recording) -> Recording:
+    """Validate a :class:`Recording` (shapes, time, units, length, excitation); returns it."""
+    t = np.asarray(rec.t, dtype=float)
+    N = t.shape[0]
+    if t.ndim != 1 or N < MIN_SAMPLES:
+        raise RecordingError(f"recording: too short ({N} samples; at least {MIN_SAMPLES} are needed)")
+    m, n = len(rec.motor_names), len(rec.joint_names)
+    for name, a, shape in (("encoder", rec.encoder, (N, m)), ("torque", rec.torque, (N, m)),
+                           ("q", rec.q, (N, n)), ("true_q", rec.true_q, (N, n)), ("force_z", rec.force_z, (N,)),
+                           ("gravity", rec.gravity, (N, 3))):
+        if a is not None and np.shape(a) != shape:
+            raise RecordingError(f"recording: {name} has shape {np.shape(a)}, expected {shape}")
+    for name, a in (("t", t), ("encoder", rec.encoder), ("torque", rec.torque), ("gravity", rec.gravity)):
+        if a is not None and not np.isfinite(a).all():
+            raise RecordingError(f"recording: {name} contains NaN or inf")
+    dts = np.diff(t)
+    if np.any(dts <= 0):
+        k = int(np.argmax(dts <= 0))
+        raise RecordingError(f"recording: t is not strictly increasing (row {k + 2}: {t[k + 1]!r} after {t[k]!r})")
+    dt = (t[-1] - t[0]) / (N - 1)
+    # tolerance: 1e-6 of the period, or the float resolution of the time stamps (Unix-epoch times, ~1.7e9 s,
+    # hold only ~0.24 us: their steps jitter by that much)
+    if np.max(np.abs(dts - dt)) > 1e-6 * dt + 1e-12 + 4 * float(np.spacing(max(abs(t[0]), abs(t[-1])))):
+        k = int(np.argmax(np.abs(dts - dt)))
+        raise RecordingError(f"recording: t is not uniformly sampled (step {dts[k]:g} s at row {k + 2}, "
+                             f"mean {dt:g} s)")
+    if not 1e-6 <= dt <= 0.1:
+        raise RecordingError(f"recording: sample period {dt:g} s is outside [1e-6, 0.1] s (is t in seconds?)")
+    resolution = float(np.spacing(max(abs(t[0]), abs(t[-1]))))
+    if resolution > 1e-3 * dt:  # Unix-epoch seconds (1.7e9: 2.4e-7 s) hold a 1 ms period; 1e12 s does not
+        raise RecordingError(f"recording: t reaches {max(abs(t[0]), abs(t[-1])):g} s, where a float holds time only to "
+                             f"{resolution:.2g} s, over 1e-3 of the sample period {dt:g} s: subtract the start time")
+    for name, a in (("q", rec.q), ("true_q", rec.true_q)):
+        if a is not None and np.nanmax(np.abs(a), initial=0.0) > 2 * np.pi:
+            raise RecordingError(f"recording: {name}_* exceeds 2 pi in magnitude: joint angles must be in rad, "
+                                 "not degrees")
+    if rec.gravity is not None:
+        bad = gravity_norm_off(rec.gravity)
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"recording: gravity has norm {np.linalg.norm(rec.gravity[k]):g} m/s^2 at row {k + 2}; "
+                                 f"expected {GRAVITY:g} m/s^2 within {100 * GRAVITY_TOLERANCE:g} % (m/s^2, not units of g)")
+    enc = np.asarray(rec.encoder, dtype=float)
+    if np.all(np.ptp(enc, axis=0) < 2) and np.all(np.ptp(np.asarray(rec.torque), axis=0) == 0):
+        raise RecordingError("recording: no excitation (the torque is constant and no encoder moves)")
+    return rec

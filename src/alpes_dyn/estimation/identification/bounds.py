@@ -1,0 +1,90 @@
+"""The physical range of every fitted parameter, and what a fit reports where the data do not support one (issue 35).
+
+A fit's value is only a result where it is physical and the data determine it. The ranges:
+
+==================== ============== ===================================================================
+kind                 range          how the fit keeps it
+==================== ============== ===================================================================
+K, m (with I), F_s,  (0, inf)       fitted as log theta (:mod:`~alpes_dyn.estimation.identification.identification`):
+F_v, J_m, input_gain                every iterate is positive; a value that ran off by more than
+                                    :data:`RUNAWAY` times its start is at the bound (0 or inf) in effect
+tendon_compliance    [0, inf)       fitted as it is (nominal 0): a cable does not shorten under tension,
+                                    so a value below 0 has the bound active -- the bounded fit's optimum
+                                    is the fit with the compliance held at 0 (the active set)
+encoder_offset, tilt (-inf, inf)    of the rig and its sensors, either sign: never bounded
+==================== ============== ===================================================================
+
+A parameter is **not identified** (:func:`unsupported`) where its value is outside that range or pinned at a bound,
+or where its 95 % interval (value +- :data:`Z_INTERVAL` standard errors) reaches past 0 (the data cannot tell it from
+no such effect). :func:`~alpes_dyn.estimation.identification.identification.identify` then fits again with it held (at
+its bound 0 where it crossed it, else at the model's value: the file's prior), warm-started from the first fit, so that
+the values written are those of a fit whose every parameter is identified; the result names each one not identified
+and the effect the data do not support
+(:attr:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.not_identified`), and the parameter file
+never receives its value. A parameter the recording does not see at all (its standard error
+infinite: ``tilt_x`` at a level palm) is left as :func:`identify` leaves it (at its start, never written).
+"""
+
+from __future__ import annotations
+
+import math
+from typing import Sequence
+
+__all__ = ["Z_INTERVAL", "RUNAWAY", "LOWER_BOUND", "EFFECT_OF", "physical_range", "unsupported", "held_value",
+           "describe"]
+
+Z_INTERVAL = 1.96
+"""Standard errors on each side of a value: its 95 % interval (normal errors)."""
+RUNAWAY = 1e3
+"""A log-fitted parameter that moved by more than this factor from its start (either way) is at its bound in effect
+(a mass run off to 0 in a wrong basin: 1e-6 times its start; the +-20 % draws stay within 1.5 times)."""
+LOWER_BOUND: dict[str, float] = {"K": 0.0, "m": 0.0, "F_s": 0.0, "F_v": 0.0, "J_m": 0.0, "input_gain": 0.0,
+                                 "tendon_compliance": 0.0}
+"""The physical lower bound of each bounded kind (the unbounded ones, encoder offsets and tilts, are not listed)."""
+EFFECT_OF: dict[str, str] = {"K": "a return spring", "m": "a link's mass", "F_s": "dry friction",
+                             "F_v": "viscous friction", "J_m": "the rotor inertia", "input_gain": "a torque-constant error",
+                             "tendon_compliance": "an elastic tendon"}
+"""The effect a parameter of each kind stands for, as the verdict names it when the data do not support it."""
+
+
+def physical_range(kind: str) -> tuple[float, float, bool]:
+    """(lower, upper, lower bound closed) of a parameter kind (:data:`~alpes_dyn.symbolic.parametric.KINDS`): open
+    (0, inf) for the log-fitted kinds, [0, inf) for the tendon compliance, the whole line for the rig's own."""
+    if kind not in LOWER_BOUND:
+        return -math.inf, math.inf, False
+    return LOWER_BOUND[kind], math.inf, kind == "tendon_compliance"
+
+
+def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[float], std: Sequence[float],
+                initial: Sequence[float], units: Sequence[str]) -> dict[str, str]:
+    """The fitted parameters the data do not support, name -> why (one clause with the value +- its standard error
+    and the effect, e.g. ``"-0.054 +- 0.032 rad/(N m): below its physical bound 0 (held there); the data do not
+    support an elastic tendon"``). The rules: the module docstring. Arrays (p,) in the fit's units."""
+    out: dict[str, str] = {}
+    for name, kind, v, sd, v0, unit in zip(names, kinds, values, std, initial, units):
+        if kind not in LOWER_BOUND or not math.isfinite(sd):
+            continue  # the rig's own (either sign), or not seen at all (left at its start by identify)
+        lo = LOWER_BOUND[kind]
+        what = f"{v:.3g} +- {sd:.2g} {unit}"
+        effect = f"the data do not support {EFFECT_OF[kind]}"
+        if v < lo:
+            out[name] = f"{what}: below its physical bound {lo:g} (held there); {effect}"
+        elif kind != "tendon_compliance" and v0 > 0 and not (1.0 / RUNAWAY <= v / v0 <= RUNAWAY):
+            out[name] = f"{what}: ran off to its bound ({v / v0:.2g} times its start; held at the start); {effect}"
+        elif v - Z_INTERVAL * sd <= lo:
+            out[name] = f"{what}: its 95 % interval reaches past {lo:g} (held at the start); {effect}"
+    return out
+
+
+def held_value(kind: str, value: float, start: float) -> float:
+    """The value a parameter not identified is held at in the fit again: its bound where the fit crossed it, else
+    its start (the model's value, the file's prior)."""
+    lo = LOWER_BOUND.get(kind, -math.inf)
+    return lo if value < lo else start
+
+
+def describe(not_identified: dict[str, str]) -> str:
+    """One clause for a verdict: ``"not identified: NAME (WHY); ..."`` (empty where every parameter is)."""
+    if not not_identified:
+        return ""
+    return "not identified: " + "; ".join(f"{n} ({why})" for n, why in not_identified.items())

@@ -1,0 +1,281 @@
+"""The result of a fit (:func:`~alpes_dyn.estimation.identification.identification.identify`): its estimates and
+diagnostics, and the parameter file they make (:func:`identified_params`)."""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...errors import ModelError
+from ...model.params import HandParams, Param, with_values, write_params
+from ...model.robot import Model
+from ...symbolic.parametric import parameter_catalogue
+from .adequacy import Adequacy, _finite
+from .bounds import describe
+
+__all__ = ["IdentificationResult", "identified_params"]
+
+
+@dataclass
+class IdentificationResult:
+    """Estimates and diagnostics of :func:`identify`.
+
+    Attributes
+    ----------
+    names: parameter names (p,). values, std, initial: (p,) in their units. units: (p,).
+    correlation: (p, p). residual_rms: RMS encoder residual, counts. iterations, converged.
+    seconds: wall time of the fit; compile_seconds: of it, compiling the sensitivity code (0 when
+    cached). states: (S, 2n) fitted states at the shooting nodes; node_times (S,) s. solution: the shooting
+    variables, to start another fit from.
+    """
+
+    names: tuple[str, ...]
+    values: np.ndarray
+    std: np.ndarray
+    initial: np.ndarray
+    units: tuple[str, ...]
+    correlation: np.ndarray
+    residual_rms: float
+    iterations: int
+    converged: bool
+    seconds: float
+    compile_seconds: float
+    states: np.ndarray
+    node_times: np.ndarray
+    model: Model = field(repr=False)
+    recording_path: str = ""
+    reason: str = ""
+    residual: np.ndarray | None = field(default=None, repr=False)
+    adequacy: Adequacy | None = None
+    solution: Any = field(default=None, repr=False, compare=False)
+    """The fit's shooting variables (:class:`~alpes_dyn.estimation.identification.shooting.ShootingSolution`) for a warm
+    start of another fit of the same recording (``identify(..., start=result)``); not written to the file."""
+    not_identified: dict[str, str] = field(default_factory=dict)
+    """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
+    interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not
+    support): held in the fit kept, never written to a file."""
+
+    @property
+    def trustworthy(self) -> bool:
+        """Converged, and the model adequate to the recording (:attr:`adequacy`)."""
+        return bool(self.converged and (self.adequacy is None or self.adequacy.adequate))
+
+    def status(self) -> str:
+        """One line: why the fit is (not) to be trusted."""
+        parts = [] if self.converged else [f"the fit did not converge ({self.reason})"]
+        if self.adequacy is not None and not self.adequacy.adequate:
+            parts.append(self.adequacy.summary())
+        text = "; ".join(parts) if parts else "converged; " + (self.adequacy.summary() if self.adequacy else "")
+        return text + (f"; {describe(self.not_identified)}" if self.not_identified else "")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``alpes-dyn identify --json`` (an unbounded std, a parameter the data do not see, is null)."""
+        return {
+            "parameters": {n: {"value": _finite(v), "std": _finite(s), "initial": _finite(i), "unit": u}
+                           for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
+            "residual_rms": _finite(self.residual_rms), "residual_unit": "counts", "iterations": self.iterations,
+            "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
+            "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
+            "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
+            "not_identified": dict(self.not_identified),
+        }
+
+    def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
+        """The parameter set with the fitted values (see :func:`identified_params`)."""
+        return identified_params(self, base, chain)
+
+    def write(self, path: str | Path, base: HandParams | None = None, chain: str | None = None) -> Path:
+        """Write the identified parameter file (the base file with each fitted value ``identified``)."""
+        header = (f"Identified by alpes_dyn from {_printable(self.recording_path) or 'a recording'} "
+                  f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
+        if not self.trustworthy:
+            header += f"\nNOT TRUSTWORTHY (written with --force): {_printable(self.status())}"
+        return write_params(self.params(base, chain), path, header=header)
+
+
+def identified_params(result: IdentificationResult, base: HandParams | None = None,
+                      chain: str | None = None) -> HandParams:
+    """``base`` (default: the model's parameter file) with the fitted values of a chain, each marked
+    ``source = "identified"`` with its standard error.
+
+    Where they go (``chain``, default the model's :attr:`~alpes_dyn.Model.chain`):
+
+    * a finger model without a chain: the shared ``[finger]`` values -- K_i -> ``finger.K``, m_i ->
+      ``finger.m`` and ``finger.I`` (scaled with the mass), F_s_i, F_v_i -> ``finger.F_s``, ``finger.F_v``;
+    * a finger model with ``chain`` a finger's name: that finger's own values ``[finger.<name>]`` (the
+      fields fitted, the others untouched);
+    * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
+      ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
+    * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``;
+    * the chain's tendon compliance ``tendon_compliance_<motor>``: ``transmission.tendon_compliance`` (the
+      ab/adduction gear's stays in the result).
+
+    Encoder offsets, the tilt angles and ``input_gain`` are of the recording and its sensors (the encoder's
+    zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
+    the hand: they stay in the result (and ``identify --json``), not in the file.
+    """
+    p, chain, thumb = _destination(result, base, chain)
+    reason = _provenance(result)
+    own = p.chain("finger" if chain is None else chain)
+    arrays, stds, touched, scalars = _fitted_values(result, own, p, thumb)
+    sec = "thumb" if thumb else ("finger" if chain is None else f"finger.{chain}")
+    upd = _array_params(p, sec, arrays, stds, touched, reason)
+    upd.update(_scalar_params(p, scalars, reason))
+    key = "thumb" if thumb else ("finger" if chain is None else chain)
+    return with_values(p, upd, identification={key: _record(result)})
+
+
+_UNITS = {"K": "N m/rad", "m": "kg", "I": "kg m^2", "F_s": "N m", "F_v": "N m s/rad", "abduction_K": "N m/rad",
+          "base_mass": "kg", "abduction_F_s": "N m", "abduction_F_v": "N m s/rad"}
+"""The units of the parameter file's fields that a fit writes."""
+
+
+def _destination(result: IdentificationResult, base: HandParams | None, chain: str | None
+                 ) -> tuple[HandParams, str | None, bool]:
+    """(the parameter set written into, the chain, whether it is the thumb's), checked: a model with a file, of a
+    finger or the thumb, a chain of its kind."""
+    p = base if base is not None else result.model.params
+    if p is None:
+        raise ModelError("identified parameters: the model has no parameter file; pass base=")
+    model = result.model
+    if model.name not in ("finger2", "finger3", "thumb"):
+        raise ModelError(f"identified parameters: writing a parameter file is supported for finger2, finger3 and "
+                         f"thumb, not {model.name!r}")
+    if chain is None:
+        chain = model.chain
+    thumb = model.name == "thumb"
+    if thumb and chain != "thumb":
+        raise ModelError(f"chain: the thumb model's values go to the thumb, not {chain!r}")
+    if not thumb and chain is not None and chain not in p.finger_names:
+        raise ModelError(f"chain: unknown finger {chain!r} (expected one of {', '.join(p.finger_names)})")
+    return p, chain, thumb
+
+
+def _provenance(result: IdentificationResult) -> str:
+    """The ``reason`` written with every identified value: the recording, the residual, the verdict, the parameters
+    without a standard error."""
+    reason = (f"identified from {_printable(result.recording_path) or 'a recording'} by multiple shooting "
+              f"({result.residual_rms:.3g} counts RMS residual)")
+    if not result.trustworthy:
+        reason += f"; NOT TRUSTWORTHY: {result.status()}"
+    unbounded = [n_ for n_, sd in zip(result.names, result.std) if not math.isfinite(sd)]
+    if unbounded:  # not seen by this recording: the value is its start, no standard error to write
+        reason += f"; no standard error for {', '.join(unbounded)} (not seen by the recording)"
+    return reason
+
+
+def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb: bool
+                   ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], set[str], dict[str, tuple[float, Any]]]:
+    """The chain's per-joint fields with the fitted values (K, m with I scaled with it, F_s, F_v: values and
+    standard errors, (k,) each, and the fields touched) and the scalar fields fitted (field -> (value, std)):
+    the thumb's ab/adduction joint, J_m, the tendon compliance. The recording's own parameters (encoder offsets,
+    tilt, input gain) and the ab/adduction gear's compliance are left out."""
+    model = result.model
+    k = own.n
+    arrays = {"K": own.K.copy(), "m": own.m.copy(), "I": own.I.copy(),
+              "F_s": (own.F_s if own.F_s is not None else np.full(k, p.F_s)).copy(),
+              "F_v": (own.F_v if own.F_v is not None else np.full(k, p.F_v)).copy()}
+    stds = {kind: np.zeros(k) for kind in arrays}
+    scalars: dict[str, tuple[float, Any]] = {}  # thumb scalars: field -> (value, std)
+    touched = set()
+    cat = {pp.name: pp for pp in parameter_catalogue(model)}
+    flexion = [j for j in model.joint_names if j != "thumb_abd"]
+    for name, value, sd in zip(result.names, result.values, result.std):
+        if name in result.not_identified:
+            continue  # not identified (outside its physical range, or not told from 0): never written
+        pp = cat.get(name)
+        if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
+            continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
+        if pp is not None and pp.kind == "tendon_compliance":
+            if pp.motor.endswith("_abduction"):
+                continue  # the ab/adduction gear's stretch: of this rig's gear, kept in the result, not the file
+            scalars["tendon_compliance"] = (float(value), _sd(sd))
+            continue
+        if pp is not None and pp.kind == "J_m":
+            if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
+                raise ModelError("identified parameters: the file has one rotor inertia transmission.J_m for "
+                                 "every motor; fit one motor's J_m")
+            scalars["J_m"] = (float(value), _sd(sd))
+            continue
+        if pp is None or pp.kind not in ("K", "m", "F_s", "F_v"):
+            raise ModelError(f"identified parameters: {name!r} has no place in the parameter file")
+        if thumb and pp.joint == "thumb_abd":
+            field_ = {"K": "abduction_K", "m": "base_mass", "F_s": "abduction_F_s", "F_v": "abduction_F_v"}[pp.kind]
+            scalars[field_] = (float(value), _sd(sd))
+            continue
+        i = flexion.index(pp.joint)
+        if pp.kind == "m":
+            scale = value / arrays["m"][i]
+            arrays["I"][i] *= scale
+            stds["I"][i] = arrays["I"][i] * sd / value
+            touched.add("I")
+        arrays[pp.kind][i] = value
+        stds[pp.kind][i] = sd
+        touched.add(pp.kind)
+    return arrays, stds, touched, scalars
+
+
+def _array_params(p: HandParams, sec: str, arrays: dict[str, np.ndarray], stds: dict[str, np.ndarray],
+                  touched: set[str], reason: str) -> dict[str, Param]:
+    """The per-joint fields touched as ``identified`` :class:`Param` of section ``sec`` (their description the
+    file's; no std for a field with one unseen entry)."""
+    upd = {}
+    for kind in touched:
+        old = p.raw.get(f"{sec}.{kind}") or p.raw.get(f"finger.{kind}")
+        desc = old.description if old is not None else f"per-joint {kind}"
+        std = stds[kind] if np.isfinite(stds[kind]).all() else None  # one unseen entry: no std for the field
+        upd[f"{sec}.{kind}"] = Param(arrays[kind], _UNITS[kind], "identified", reason, desc, std)
+    return upd
+
+
+def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason: str) -> dict[str, Param]:
+    """The scalar fields fitted as ``identified`` :class:`Param`: ``transmission.tendon_compliance``,
+    ``transmission.J_m`` and the thumb's ab/adduction fields."""
+    upd = {}
+    for field_, (value, sd) in scalars.items():
+        if field_ == "tendon_compliance":
+            old = p.raw.get("transmission.tendon_compliance")
+            upd["transmission.tendon_compliance"] = Param(
+                value, "rad/(N m)", "identified", reason, old.description if old is not None else
+                "the flexion tendons' stretch seen by the encoder per N m of motor torque (y_k = S q_k + C tau_m,k-1)", sd)
+            continue
+        if field_ == "J_m":
+            old = p.raw.get("transmission.J_m")
+            upd["transmission.J_m"] = Param(value, "kg m^2", "identified", reason,
+                                            old.description if old is not None else "rotor inertia J_m (eq. 2.8)", sd)
+            continue
+        old = p.raw.get(f"thumb.{field_}")
+        desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
+        upd[f"thumb.{field_}"] = Param(value, _UNITS[field_], "identified", reason, desc, sd)
+    return upd
+
+
+def _sd(sd: float) -> float | None:
+    """A standard error to write: None where the recording does not see the parameter (inf)."""
+    return float(sd) if math.isfinite(sd) else None
+
+
+def _printable(text: str) -> str:
+    """``text`` with control characters replaced by '?' (it goes into a file's header and fields)."""
+    return "".join(c if c.isprintable() else "?" for c in str(text))
+
+
+def _record(result: IdentificationResult) -> dict[str, Any]:
+    """The ``[identification.<chain>]`` record of a fit (:data:`~alpes_dyn.model.params.IDENTIFICATION_FIELDS`)."""
+    rec: dict[str, Any] = {"model": result.model.name, "recording": _printable(result.recording_path),
+                           "converged": bool(result.converged), "stop": _printable(result.reason),
+                           "trustworthy": result.trustworthy}
+    if math.isfinite(result.residual_rms):
+        rec["residual_rms"] = float(result.residual_rms)
+    a = result.adequacy
+    if a is not None:
+        rec.update(adequate=bool(a.adequate), verdict=_printable(a.summary()), likely_missing=list(a.likely_missing))
+        if math.isfinite(a.floor.total):
+            rec["sensor_floor"] = float(a.floor.total)
+    if result.not_identified:
+        rec["not_identified"] = [_printable(f"{n}: {why}") for n, why in result.not_identified.items()]
+    return rec

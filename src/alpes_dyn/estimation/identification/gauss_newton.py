@@ -1,0 +1,407 @@
+"""The solver of the multiple-shooting fit: constrained Gauss-Newton with a homotopy and two starts.
+
+It drives a :class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem` (residuals, defects, their Jacobians and the
+KKT matrices) and knows nothing of the model. Three stages:
+
+1. :meth:`GaussNewton.fit_nodes`: each interval's start state alone on its encoder samples (theta fixed, the
+   intervals decoupled), Levenberg-Marquardt per interval;
+2. :meth:`GaussNewton.homotopy`: continuity as a quadratic penalty tightened tenfold per phase (four phases of
+   Levenberg-Marquardt), friction and the torque lines held on the first start; a step whose parameter part the
+   trust region shortens has its nodes solved again for the shortened step;
+3. :meth:`GaussNewton.constrained`: the constrained problem, Gauss-Newton on the KKT system (Levenberg-Marquardt
+   damped), an l1-merit line search (:meth:`GaussNewton.line_search`) with a second-order correction (Nocedal &
+   Wright, Section 18.3) and a filter's second chance against the Maratos effect.
+
+:meth:`GaussNewton.solve` runs stages 2-3 from two starts (friction held during the homotopy, then free) where the
+first ends above the basin limit (three times the quantisation floor: wrong basins leave 4-8 counts). Why each
+stage exists is told in :mod:`alpes_dyn.estimation.identification.identification` and at each rule below. Compared on the same
+problem with IPOPT (CasADi's ``nlpsol``): at parity on fit time (5.4 vs 5.5 s), and this one converges without
+tight bounds where IPOPT did not (the issue 18 measurement).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+import scipy.sparse as sp
+
+from ...progress import _Progress
+from .kkt import factorize
+from .shooting import Evaluation, ShootingProblem
+
+__all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
+           "CRAWL_STEPS", "SOC_STEPS", "SOFT_PHASES", "BASIN_LIMIT"]
+
+MAX_LOG_STEP = 0.3
+"""The trust region on log theta per iteration (at most a 35 % change of any parameter)."""
+MAX_COEF_STEP = 1.0
+COEF_STEP_RECORD = 4000
+"""The trust region on the torque's line corrections per iteration: a whitened coefficient by at most
+MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1)) prior standard deviations over N samples: one standard deviation up
+to a 4 s record at 1 kHz, growing as sqrt(N) beyond (a torque error of a given size is sqrt(N) times more standard
+deviations of a coefficient in a longer record). One standard deviation whatever the record left long fits
+crawling (finger3 seed 21: 16 s, 37 iterations; 60 s, 78), the coefficients asking for tens of them per step. A cap
+of 0.1 sigma_u per line (4.5 standard deviations at 4 s) sent the MuJoCo plants of seed 14 in
+``benchmarks/realism.py`` to other basins (masses 8-22 % off, four fits of eight not converged)."""
+MAX_COEF_GROWTH = 16.0
+"""The most the constrained stage (stage 3) widens the line corrections' trust region (:data:`COEF_STEP_RECORD`'s
+rule), doubling it at each step they alone cut and that is taken whole, from the :data:`CRAWL_STEPS`-th such step
+in a row (:meth:`GaussNewton.next_radius`). On MuJoCo's all-effects finger3 plants with
+the documented experiment (dither of 20 breakaway torques) the coefficients asked for 20-57 standard deviations per
+step and the fit crawled one per step: 40-48 iterations of stage 3 in each of two rounds (seeds 31, 40)."""
+CRAWL_STEPS = 3
+"""Steps in a row cut by the line corrections' trust region, each taken whole, before it grows (:meth:`GaussNewton.next_radius`)."""
+SOC_STEPS = 4
+"""Second-order corrections at most, one after another, of a stage-3 step whose whole length the merit refuses
+(:meth:`GaussNewton.line_search`), each while the defects fall by half or more. On MuJoCo's finger3 plant with the
+palm 3 degrees off (seed 14) a Gauss-Newton step along the tilt-mass valley lowered the cost by 100 and raised the
+defects quadratically (to 0.5 from 1e-4); one correction left 4e-2, the merit (penalty 1.3e6) refused every length
+down to 1/30, and the fit crawled at the damped steps' 10-20 per iteration into the iteration cap (masses 9.9 % off).
+Two to three corrections bring the defects to 1e-3-1e-5 with the cost's fall intact: converged in 13 iterations,
+masses within 0.9 %."""
+SOFT_PHASES = 4
+"""Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
+BASIN_LIMIT = 3.0 / math.sqrt(12.0)
+"""counts: an encoder residual above three times the quantisation floor (1/sqrt(12) count) asks for the second
+start (the wrong basins leave 4-8 counts, the right one the encoder noise, 0.58)."""
+
+
+@dataclass
+class SolverResult:
+    """Where a start of stages 2-3 ended: the variables, the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation`
+    there (with its Jacobians), the Gauss-Newton iterations, whether the stopping rule was met and why it stopped."""
+
+    nodes: np.ndarray
+    offs: np.ndarray
+    glob: np.ndarray
+    at: Evaluation
+    iterations: int
+    converged: bool
+    reason: str
+
+
+class GaussNewton:
+    """The solver; ``max_iterations`` per start of stage 3, ``tol`` the stopping rule's relative cost change,
+    ``show`` a progress line on stderr."""
+
+    def __init__(self, max_iterations: int = 50, tol: float = 1e-6, show: bool = False) -> None:
+        self.max_iterations, self.tol, self.show = max_iterations, tol, show
+
+    # --- stage 1 ----------------------------------------------------------------------------------------------
+
+    @staticmethod
+    def fit_nodes(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                  sweeps: int = 8) -> np.ndarray:
+        """Stage 1: the nodes alone (theta fixed, intervals decoupled), ``sweeps`` Levenberg-Marquardt steps per
+        interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`."""
+        nx, n_int = pb.nx, pb.n_int
+        nodes = nodes.copy()
+        mu_n = 1e-2 * np.ones(n_int)
+        for _ in range(sweeps):
+            e = pb.evaluate(nodes, offs, glob)
+            A = e.J[:, :, :nx]
+            Hn = np.einsum("ski,skj->sij", A, A)
+            gn = np.einsum("sk,ski->si", e.r, A)
+            Dn = np.einsum("sii->si", Hn)
+            dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)),
+                                  gn[:, :, None])
+            r2 = pb.evaluate(nodes + dn[:, :, 0], offs, glob, jac=False).r
+            better = np.sum(r2**2, axis=1) < np.sum(e.r**2, axis=1)
+            nodes[better] += dn[better, :, 0]
+            mu_n = np.where(better, mu_n / 10, mu_n * 10)
+        return nodes
+
+    # --- the trust region ---------------------------------------------------------------------------------------
+
+    @staticmethod
+    def coef_cap(pb: ShootingProblem, coef_radius: float) -> float:
+        """The line corrections' trust region per line, in whitened units: :data:`COEF_STEP_RECORD`'s rule
+        (MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1))) times ``coef_radius``."""
+        return MAX_COEF_STEP * coef_radius * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0))
+
+    @staticmethod
+    def limited(pb: ShootingProblem, d: np.ndarray, coef_radius: float = 1.0) -> tuple[np.ndarray, np.ndarray, bool]:
+        """A trust region (no jump into a far basin): log theta by at most :data:`MAX_LOG_STEP`, each line of the
+        torque's line corrections within :data:`COEF_STEP_RECORD`'s rule times ``coef_radius``, the whole step
+        scaled down. In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
+        for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
+        three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
+        and whether the step is whole."""
+        p = pb.p
+        dv, dg = d[:pb.nv].reshape(pb.n_int, pb.nb), d[pb.nv:pb.nz]
+        big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP,
+                  float(np.max(np.abs(dg[p:]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius))
+        return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
+
+    @staticmethod
+    def next_radius(pb: ShootingProblem, d: np.ndarray, coef_radius: float, streak: int,
+                    found: Any) -> tuple[float, int]:
+        """The line corrections' trust region (a multiple of :data:`COEF_STEP_RECORD`'s rule) for the next step of
+        stage 3, and the streak of steps they alone cut, after the step ``d`` cut by ``coef_radius`` and its line
+        search ``found``: where the line corrections, not log theta, cut the step and the cut step was taken whole,
+        the streak grows, and from :data:`CRAWL_STEPS` such steps in a row the region doubles (up to
+        :data:`MAX_COEF_GROWTH`: a crawl down a valley the linearisation sees right); at any other step, one and
+        no streak (the textbook rule, Nocedal and Wright ch. 4, on this one block, started late: doubling from
+        the first such step sent the model's own structure of seed 14 on a path that met no stopping rule in 50
+        iterations, where it converged in 16 at one standard deviation)."""
+        p = pb.p
+        dg = d[pb.nv:pb.nz]
+        coef = float(np.max(np.abs(dg[p:]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius)
+        if not (found is not None and found[0] == 1.0 and coef > 1.0
+                and coef >= float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP):
+            return 1.0, 0
+        streak += 1
+        return (min(2.0 * coef_radius, MAX_COEF_GROWTH) if streak >= CRAWL_STEPS else coef_radius), streak
+
+    # --- stage 2 ----------------------------------------------------------------------------------------------
+
+    def homotopy(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                 freeze: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation]:
+        """Stage 2: continuity as a soft penalty, tightened tenfold per phase (a homotopy from the decoupled
+        intervals to the shooting problem); ``freeze``: friction held. With the starting parameters wrong, a 100 ms
+        interval of the finger (tiny inertias, a soft balance of springs and gravity) drifts by degrees and rad/s;
+        imposing continuity at once lets Gauss-Newton trade the fit for the defects and stall far from the truth.
+        (Its length: the loop of the phases and of Levenberg-Marquardt inside them, one block.)"""
+        nx, nv, nz, n_int, dense = pb.nx, pb.nv, pb.nz, pb.n_int, pb.dense
+        e = pb.evaluate(nodes, offs, glob)
+        defect0 = np.maximum(np.abs(e.c).max(axis=0), 1e-9)  # per state component
+        # the softly-coupled problem lets friction absorb the defects (F_v_1 went to 8x, F_s_1 to 0.4x and the
+        # fit to another basin): during the homotopy only the springs, masses, gains and torque lines move; on the
+        # first start not the torque lines either: their trust region (a standard deviation per step) shortened
+        # every step to ~1 % and the springs stayed put (finger_edu, springs 12-15 % off: log K moved by -0.08,
+        # -0.02, +0.01 towards +0.14, -0.16, +0.11; held, 0.15, -0.16, 0.11)
+        frozen = nv + np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith("F_")]
+                               + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)
+        for level in range(SOFT_PHASES):
+            wdef = np.tile(10.0**level / defect0, n_int - 1)  # 1 / sigma of each defect
+            mu_s = 1e-3
+            for _ in range(6):
+                soft_cost = 0.5 * float(np.sum(e.r**2) + np.sum(e.rg**2) + np.sum((e.c.reshape(-1) * wdef) ** 2))
+                C = pb.continuity(e.Cv, e.Cr)
+                C = C * wdef[:, None] if dense else sp.diags(wdef) @ C
+                H = pb.normal(e.J, mu_s) + C.T @ C
+                hold = np.zeros(nz)  # friction waits for the hard phase
+                hold[frozen] = 1e12 * np.maximum(H.diagonal()[frozen], 1.0)
+                H = H + (np.diag(hold) if dense else sp.diags(hold, format="csc"))
+                g = pb.grad(e.r, e.J, e.rg) + C.T @ (e.c.reshape(-1) * wdef)
+                d = -factorize(H)(g)  # the least-squares solution where H is singular
+                dv, dg, whole = self.limited(pb, d)
+                if not whole:
+                    # the global step shortened, the local variables solved again for it: with continuity a
+                    # penalty the data hold the nodes, and they follow the parameters (scaled with them, the
+                    # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
+                    # iterations at 1/10-1/60 of the Gauss-Newton step)
+                    try:
+                        dv = factorize(H[:nv, :nv])(-g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, pb.nb)
+                    except np.linalg.LinAlgError:
+                        pass
+                trial = pb.evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
+                new_cost = 0.5 * float(np.sum(trial.r ** 2) + np.sum(trial.rg ** 2)
+                                       + np.sum((trial.c.reshape(-1) * wdef) ** 2))
+                if np.isfinite(new_cost) and new_cost < soft_cost:
+                    nodes, offs, glob = nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg
+                    e = pb.evaluate(nodes, offs, glob)
+                    mu_s = max(mu_s / 10.0, 1e-9)
+                    if soft_cost - new_cost < 1e-3 * soft_cost:
+                        break
+                else:
+                    mu_s *= 10.0
+                    if mu_s > 1e6:
+                        break
+        return nodes, offs, glob, e
+
+    # --- stage 3 ----------------------------------------------------------------------------------------------
+
+    @staticmethod
+    def line_search(pb: ShootingProblem, at: Evaluation, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                    dv: np.ndarray, dg: np.ndarray, merit: float, nu_merit: float, solve_K):
+        """The step's length: 1, 1/2, 1/4, 1/10, 1/30 of (dv, dg) on the l1 merit cost + nu |c|_1, or (a
+        filter's second chance, against the Maratos effect near the solution) a step that halves the defects
+        while the cost stays put. Where the whole step (as the trust region left it) fails, first second-order
+        corrections (Nocedal & Wright, 18.3), up to :data:`SOC_STEPS` in a row while each halves the defects: the
+        step's own defects removed by a minimum-norm correction from the same factorised system ``solve_K``;
+        the curvature of the shooting map makes a Gauss-Newton step raise the defects quadratically though the
+        cost falls, and without the corrections the line search crawls. Returns (alpha, dv, dg, the cost there)
+        or None where no candidate is accepted."""
+        nx, nz, nv = pb.nx, pb.nz, pb.nv
+        cost = at.cost
+        candidates = [(1.0, dv, dg), (0.5, dv, dg), (0.25, dv, dg), (0.1, dv, dg), (0.03, dv, dg)]
+        soc_done, k_try, c_last, c_at = 0, 0, math.inf, float(np.sum(np.abs(at.c)))
+        while k_try < len(candidates):
+            alpha, sv, sg = candidates[k_try]
+            k_try += 1
+            trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
+            if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
+                continue
+            cost_new, c_now = trial.cost, float(np.sum(np.abs(trial.c)))
+            if cost_new + nu_merit * c_now < merit or (c_now < 0.5 * c_at and cost_new <= cost * (1.0 + 1e-6)):
+                return alpha, sv, sg, cost_new
+            if alpha == 1.0 and soc_done < SOC_STEPS and c_now <= 0.5 * c_last:
+                soc_done, c_last = soc_done + 1, c_now
+                try:
+                    d2 = solve_K(np.concatenate([np.zeros(nz), -trial.c.reshape(-1)]))[:nz]
+                except np.linalg.LinAlgError:
+                    continue
+                candidates.insert(k_try, (1.0, sv + d2[:nv].reshape(pb.n_int, pb.nb), sg + d2[nv:]))
+        return None
+
+    def stalled(self, history: list[float], cost: float) -> bool:
+        """The accepted costs ``history`` down by at most max(tol ``cost``, 0.5) over the last five steps (chi^2 by 1
+        in 5: the data's resolution)."""
+        return len(history) > 5 and history[-6] - history[-1] <= max(self.tol * cost, 0.5)
+
+    @staticmethod
+    def restore(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, at: Evaluation,
+                solve_K, c_scale: np.ndarray, slack: float):
+        """Continuity restored without a Gauss-Newton step: the minimum-norm correction that removes the defects
+        ``at.c`` to first order (the second-order correction of :meth:`line_search`, from the same factorised KKT
+        system ``solve_K``). Returns (nodes, offs, glob, the evaluation there with its Jacobians) where the defects
+        fall below 1e-6 of ``c_scale`` and the cost rises by at most ``slack``, else None."""
+        nx, nz, nv = pb.nx, pb.nz, pb.nv
+        try:
+            d2 = solve_K(np.concatenate([np.zeros(nz), -at.c.reshape(-1)]))[:nz]
+        except np.linalg.LinAlgError:
+            return None
+        dv, dg = d2[:nv].reshape(pb.n_int, pb.nb), d2[nv:]
+        new = (nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg)
+        trial = pb.evaluate(*new, jac=False)
+        if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
+            return None
+        if float(np.max(np.abs(trial.c) / c_scale, initial=0.0)) >= 1e-6 or trial.cost > at.cost + slack:
+            return None
+        return (*new, pb.evaluate(*new))
+
+    def constrained(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                    e: Evaluation, c_scale: np.ndarray, bar: _Progress) -> SolverResult:
+        """Stage 3: the shooting problem, continuity as constraints (constrained Gauss-Newton, l1 merit), to the
+        stopping rule: continuous to 1e-6 (per state component, relative to ``c_scale``) and either the next step
+        moving no parameter by more than a tenth of its standard error, or a predicted or realised (whole step)
+        change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1), or chi^2 down by less than 1 over five
+        iterations. On noisy data (the residual at least half the encoder's quantisation floor), where the next
+        step is within a tenth of a standard error, chi^2 has stalled with the step within one, or no step
+        within half of one lowers the merit, continuity is restored (:meth:`restore`) and the fit ends there.
+        (Its length: the stopping rule and the lost-basin rule read the iteration's own variables.)"""
+        nv, nz, p, nx, tol = pb.nv, pb.nz, pb.p, pb.nx, self.tol
+        nu_merit, mu, converged, lost, it, radius, streak = 1.0, 1e-3, False, 0, 0, 1.0, 0
+        history: list[float] = []
+        reason = f"iteration cap: {self.max_iterations} Gauss-Newton iterations without meeting the stopping rule"
+        for it in range(1, self.max_iterations + 1):
+            solve_K = None  # the last iteration's factorisation freed before the next (a 60 s record's: 110 MB)
+            cost = e.cost
+            rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
+            # the step, and the parameters' block of the inverse (their covariance up to the scale)
+            solve_K = factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu))  # once per iteration: the step and the correction
+            sol = solve_K(np.column_stack([rhs, pb.unit_p]))
+            sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
+            d, lam = sol[:nz], sol[nz:]
+            viol = float(np.max(np.abs(e.c) / c_scale, initial=0.0))
+            sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 1e-300) * max(2.0 * cost / pb.dof, 1e-300))
+            step_sigma = float(np.max(np.abs(d[nv:nv + p]) / sd_rho, initial=0.0))
+            within = abs(float(rhs[:nz] @ d)) <= max(tol * cost, 0.05) or step_sigma < 0.1
+            stalled = self.stalled(history, cost)
+            noisy = 2.0 * cost > 0.25 * pb.dof  # residual at least half the quantisation floor: sigma is statistical
+            if viol >= 1e-6 and noisy and (step_sigma < 0.1 or (stalled and step_sigma < 1.0)):
+                # the fit is done but for continuity (steps shortened by the line search leave part of each
+                # defect): the defects alone removed, from the same factorisation (on MuJoCo's stick-slip plants
+                # the tail spent 5-15 iterations of failed line searches on defects of 1e-6 to 5e-5). Only on
+                # noisy data: on noise-free data (exact recovery) the standard errors are the residual's, not the
+                # sensor's, and Newton's own convergence is what takes the parameters to 1e-6.
+                restored = self.restore(pb, nodes, offs, glob, e, solve_K, c_scale, max(tol * cost, 0.5))
+                if restored is not None:
+                    (nodes, offs, glob, e), converged = restored, True
+                    reason = ("converged: the next step within the data's resolution" if step_sigma < 0.1 else
+                              "converged: the cost no longer falls") + ", continuity restored"
+                    break
+            if viol < 1e-6 and within:
+                # continuous, and Gauss-Newton predicts a decrease of chi^2 below 0.1 or no parameter moving by
+                # a tenth of its standard error: the statistical resolution of the data
+                converged = True
+                reason = "converged: continuous, and the next step within the data's resolution"
+                break
+            nu_merit = max(nu_merit, 1.5 * float(np.max(np.abs(lam), initial=0.0)))
+            merit, (dv, dg, full) = cost + nu_merit * float(np.sum(np.abs(e.c))), self.limited(pb, d, radius)
+            found = self.line_search(pb, e, nodes, offs, glob, dv, dg, merit, nu_merit, solve_K)
+            radius, streak = self.next_radius(pb, d, radius, streak, found)
+            bar.update(1)
+            if found is None and noisy and step_sigma < 0.5:
+                # no step along a direction that moves no parameter by half a standard error: the data cannot tell
+                # what is left from the noise (the stick-slip law's sharp sign makes the merit rough at that scale:
+                # on MuJoCo's plants 6-9 line searches in a row failed there while the damping climbed from 1e-9)
+                restored = self.restore(pb, nodes, offs, glob, e, solve_K, c_scale, max(tol * cost, 0.5))
+                if restored is not None:
+                    (nodes, offs, glob, e), converged = restored, True
+                    reason = "converged: no step within half a standard error lowers the cost, continuity restored"
+                    break
+            if found is None:
+                mu *= 10.0
+                if mu > 1e8:
+                    reason = (f"step failure: no step lowered the merit function (Levenberg-Marquardt damping "
+                              f"above 1e8, iteration {it})")
+                    break
+                continue
+            alpha, dv, dg, cost_new = found
+            step_g = float(np.max(np.abs(alpha * dg), initial=0.0))
+            nodes, offs, glob = nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], glob + alpha * dg
+            e = pb.evaluate(nodes, offs, glob)
+            mu = max(mu / 10.0, 1e-9) if alpha == 1.0 else min(mu * 3.0, 1e6)
+            viol = float(np.max(np.abs(e.c) / c_scale, initial=0.0))
+            small_change = alpha == 1.0 and abs(cost - cost_new) <= max(tol * cost, 0.05)  # chi^2 by less than 0.1
+            history.append(cost_new)
+            far = not full and float(np.max(np.abs(d[nv:nv + p]), initial=0.0)) > 100.0 * MAX_LOG_STEP
+            lost = lost + 1 if far else 0
+            if lost >= 3 and viol > 1e-3:
+                # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
+                # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
+                reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
+                          f"{100.0 * MAX_LOG_STEP:g} (iteration {it})")
+                break
+            stalled = self.stalled(history, cost)
+            if viol < 1e-6 and (small_change or stalled or step_g < tol):
+                converged = True
+                reason = "converged: continuous, and the cost no longer falls"
+                break
+        return SolverResult(nodes, offs, glob, e, it, converged, reason)
+
+    # --- the two starts ---------------------------------------------------------------------------------------
+
+    def solve(self, pb: ShootingProblem, nodes: np.ndarray | Callable[[], np.ndarray], offs: np.ndarray,
+              glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SolverResult:
+        """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; or a
+        function giving them, called only where no warm start converges: a run of the whole record): stage 1,
+        then stages 2-3 with friction held during the homotopy, and again with it free where the first ends
+        above :data:`BASIN_LIMIT` (each alone missed the right basin on one of five +-20 % fingers). ``warm``: the
+        variables of another fit of the recording (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.warm_variables`):
+        stage 3 from them first, kept where it converges within :data:`BASIN_LIMIT`, else stages 1-3 as above (the
+        homotopy brings a start from the model's own response near the data; a converged fit of a neighbouring
+        model already is: on MuJoCo's all-effects finger3 plants, seeds 40-41, the rounds with the rotor and the
+        stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
+        The result's ``iterations`` count every start."""
+        total_its = 0
+        if warm is not None:
+            bar = _Progress(self.max_iterations, "identify (warm start)", self.show)
+            c_scale = np.maximum(np.abs(warm[0]).max(axis=0), 1e-3)
+            out = self.constrained(pb, *warm, pb.evaluate(*warm), c_scale, bar)
+            bar.close()
+            if out.converged and pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
+                return out
+            total_its = out.iterations
+        nodes = self.fit_nodes(pb, nodes() if callable(nodes) else nodes, offs, glob)
+        c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)  # per state component
+        bar = _Progress(self.max_iterations, "identify", self.show)
+        first = (nodes.copy(), offs.copy(), glob.copy())  # both starts from the stage-1 nodes
+        for freeze in (True, False):
+            if not freeze:  # the second start has its own progress line (each start takes up to max_iterations)
+                bar.close()
+                bar = _Progress(self.max_iterations, "identify (second start)", self.show)
+            start = [a.copy() for a in first]
+            nd, of, gl, e = self.homotopy(pb, *start, freeze)
+            out = self.constrained(pb, nd, of, gl, e, c_scale, bar)
+            total_its += out.iterations
+            if pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
+                break
+        bar.close()
+        out.iterations = total_its
+        return out

@@ -1,0 +1,142 @@
+"""The linear algebra of the multiple-shooting fit (:mod:`alpes_dyn.estimation.identification.shooting`), sparse.
+
+The fit's unknowns are S intervals' local variables (each interval's start state and torque correction, ``nb``
+per interval) and ``ng`` global ones (the parameters and the line-coefficient corrections). Its Gauss-Newton
+normal matrix is an arrow: S diagonal blocks (nb x nb), a dense border of ng columns, and the ng x ng corner;
+the continuity Jacobian is block-bidiagonal with the same border. Held densely, the KKT matrix of a record of
+T seconds at 50 ms intervals has (240 T)^2 entries: 16 s took 120 MB and a cubic solve, a 60 s record 1.7 GB.
+Held sparse and factorised by SuperLU (:func:`scipy.sparse.linalg.splu`, COLAMD ordering), its fill stays
+linear in S (the border's ng columns) and so do the time and memory of a step.
+
+Every function takes the sizes of the problem, ``Shape``; ``dense=True`` gives the same matrices as arrays
+(the reference the sparse path is tested against).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+
+__all__ = ["Shape", "normal_matrix", "continuity_jacobian", "kkt_matrix", "factorize", "DENSE_LIMIT"]
+
+DENSE_LIMIT = 4000
+"""Largest system solved by a dense least-squares fallback where the sparse factorisation finds it singular."""
+
+
+@dataclass(frozen=True)
+class Shape:
+    """Sizes of the shooting problem: ``n_int`` intervals, ``nb`` local variables per interval (the first ``nx``
+    of them the state), ``ng`` global variables; ``nv = n_int nb``, ``nz = nv + ng``, ``nc = (n_int - 1) nx``."""
+
+    n_int: int
+    nb: int
+    nx: int
+    ng: int
+
+    @property
+    def nv(self) -> int:
+        return self.n_int * self.nb
+
+    @property
+    def nz(self) -> int:
+        return self.nv + self.ng
+
+    @property
+    def nc(self) -> int:
+        return (self.n_int - 1) * self.nx
+
+
+def _block_diagonal(blocks: np.ndarray, row0: int = 0, col0: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """COO triplets of (S, a, b) blocks laid along the diagonal from (row0, col0)."""
+    S, a, b = blocks.shape
+    i = row0 + np.arange(S)[:, None, None] * a + np.arange(a)[None, :, None]
+    j = col0 + np.arange(S)[:, None, None] * b + np.arange(b)[None, None, :]
+    return np.broadcast_to(i, blocks.shape).ravel(), np.broadcast_to(j, blocks.shape).ravel(), blocks.ravel()
+
+
+def normal_matrix(J: np.ndarray, shape: Shape, mu: float, prior: np.ndarray, dense: bool = False):
+    """The Gauss-Newton normal matrix J^T J of the interval-structured residuals, plus ``prior`` (ng,) on the
+    global variables' diagonal, Levenberg-Marquardt damped: mu max(d, 1e-12 max(d_max, 1)) added to each diagonal
+    entry d. J: (S, rows, nb + ng) per interval. Returns an (nz, nz) CSC matrix (an array if dense)."""
+    nb, nv, nz = shape.nb, shape.nv, shape.nz
+    A, P = J[:, :, :nb], J[:, :, nb:]
+    AA = np.einsum("ski,skj->sij", A, A)  # (S, nb, nb)
+    AP = np.einsum("ski,skj->sij", A, P)  # (S, nb, ng)
+    PP = np.einsum("ski,skj->ij", P, P) + np.diag(prior)
+    i1, j1, v1 = _block_diagonal(AA)
+    rows = np.arange(nv)
+    i2 = np.repeat(rows, shape.ng)
+    j2 = np.tile(nv + np.arange(shape.ng), nv)
+    v2 = AP.reshape(nv, shape.ng).ravel()
+    i3, j3 = np.meshgrid(nv + np.arange(shape.ng), nv + np.arange(shape.ng), indexing="ij")
+    H = sp.csc_matrix((np.concatenate([v1, v2, v2, PP.ravel()]),
+                       (np.concatenate([i1, i2, j2, i3.ravel()]), np.concatenate([j1, j2, i2, j3.ravel()]))),
+                      shape=(nz, nz))
+    D = H.diagonal()
+    H = H + sp.diags(mu * np.maximum(D, 1e-12 * max(float(D.max(initial=0.0)), 1.0)), format="csc")
+    return H.toarray() if dense else H
+
+
+def continuity_jacobian(Cv: np.ndarray, Cr: np.ndarray, shape: Shape, dense: bool = False):
+    """(nc, nz) Jacobian of the continuity defects x_end(j) - x_start(j+1): Cv (S-1, nx, nb) on interval j's
+    local variables, -I on the next one's start state, Cr (S-1, nx, ng) on the global ones. CSC (array if dense)."""
+    nx, nb, nv = shape.nx, shape.nb, shape.nv
+    m = shape.n_int - 1
+    i1, j1, v1 = _block_diagonal(Cv[:m])
+    i2 = np.arange(m * nx)
+    j2 = (np.arange(m)[:, None] + 1) * nb + np.arange(nx)[None, :]
+    i3 = np.repeat(np.arange(m * nx), shape.ng)
+    j3 = np.tile(nv + np.arange(shape.ng), m * nx)
+    C = sp.csc_matrix((np.concatenate([v1, -np.ones(m * nx), Cr[:m].reshape(-1)]),
+                       (np.concatenate([i1, i2, i3]), np.concatenate([j1, j2.ravel(), j3]))),
+                      shape=(shape.nc, shape.nz))
+    return C.toarray() if dense else C
+
+
+def kkt_matrix(H, C):
+    """[[H, C^T], [C, 0]]: the constrained Gauss-Newton system (sparse where H is, else an array)."""
+    if sp.issparse(H):
+        return sp.bmat([[H, C.T], [C, None]], format="csc")
+    nz, nc = H.shape[0], C.shape[0]
+    K = np.zeros((nz + nc, nz + nc))
+    K[:nz, :nz], K[:nz, nz:], K[nz:, :nz] = H, C.T, C
+    return K
+
+
+def factorize(M) -> Callable[[np.ndarray], np.ndarray]:
+    """A solver x = M^-1 b for one factorisation of M, reused for every right-hand side (b: (n,) or (n, k)).
+
+    Sparse M: SuperLU; where it finds M exactly singular, the least-squares (minimum-norm) solution of the dense
+    matrix if it has at most :data:`DENSE_LIMIT` rows (a parameter the recording does not see, e.g. tilt_x at a
+    level palm), else a ``numpy.linalg.LinAlgError``. Dense M: LU, the same least-squares fallback."""
+    if sp.issparse(M):
+        try:
+            lu = splu(sp.csc_matrix(M))
+        except RuntimeError:  # "Factor is exactly singular"
+            if M.shape[0] > DENSE_LIMIT:
+                raise np.linalg.LinAlgError(f"the shooting fit's {M.shape[0]}-row system is singular") from None
+            Md = M.toarray()
+            return lambda b: np.linalg.lstsq(Md, b, rcond=None)[0]
+        return lambda b: lu.solve(np.asarray(b, dtype=float))
+    try:
+        lu_d = _dense_lu(M)
+    except np.linalg.LinAlgError:
+        return lambda b: np.linalg.lstsq(M, b, rcond=None)[0]
+    return lu_d
+
+
+def _dense_lu(M: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
+    import warnings
+
+    import scipy.linalg as sla
+
+    with np.errstate(all="ignore"), warnings.catch_warnings():
+        warnings.simplefilter("ignore", sla.LinAlgWarning)  # a zero pivot: the least-squares fallback below
+        lu, piv = sla.lu_factor(M, check_finite=False)
+    if not np.all(np.isfinite(lu)) or np.any(np.diag(lu) == 0.0):
+        raise np.linalg.LinAlgError("singular")
+    return lambda b: sla.lu_solve((lu, piv), b, check_finite=False)

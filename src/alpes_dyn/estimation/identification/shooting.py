@@ -1,0 +1,454 @@
+"""The multiple-shooting output-error problem of :func:`~alpes_dyn.estimation.identification.identification.identify`.
+
+A recording of N samples is cut into S intervals of L samples; the unknowns are each interval's start state s_j
+(and, with a constant torque correction per interval, that correction: ``nb`` local variables per interval) and
+``ng`` global ones: the parameters rho (log theta / theta_0; the additive ones, encoder offsets and tilt angles, as
+(theta - theta_0) / scale) and, with the excitation's lines, the whitened line-coefficient corrections c of the
+torque. The problem is
+
+    min  1/2 |r(s, rho, c)|^2 + 1/2 |c|^2    subject to  s_j+1 = x(end of interval j; s_j, rho, c),
+
+with r the encoder residuals (S q_k + offset + C u_k-1 - y_k) / sigma_y (Section 3, eq. 3.13; C the tendon's
+compliance, u_k-1 the torque held before the sample: :func:`~alpes_dyn.model.transmission.torque_before`),
+the camera's (q - q_meas) / sigma_q where the recording has joint angles, and the per-interval corrections' prior.
+:class:`ShootingProblem` holds the data cut at the intervals and evaluates r, the continuity defects and their
+Jacobians from the compiled sensitivities
+(:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`), and the Gauss-Newton normal and KKT matrices of
+:mod:`alpes_dyn.estimation.identification.kkt`. It knows nothing of how the problem is solved: that is
+:mod:`alpes_dyn.estimation.identification.gauss_newton`.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Mapping, Sequence
+
+import numpy as np
+
+from ...checks import as_float_array
+from ...errors import InputError, ModelError
+from ...model.robot import Model
+from ...model.transmission import torque_before
+from ...simulation.sensitivity import SensitivityModel
+from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
+from ..experiments.recording import Recording
+
+__all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
+           "JACOBIAN_CHUNK"]
+
+JACOBIAN_CHUNK = 2**20
+"""Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
+chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
+two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
+
+
+def line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
+    """(N, 2 n_f + 1): 1, sin(2 pi f t), cos(2 pi f t) for f in ``frequencies`` (Hz), t from t[0]."""
+    f = as_float_array(frequencies, "excitation", "frequencies in Hz").reshape(-1)
+    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
+        raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
+    t = np.asarray(t, dtype=float)
+    fs = 1.0 / ((t[-1] - t[0]) / (t.shape[0] - 1))
+    if np.any(f >= 0.5 * fs):
+        raise InputError(f"excitation: frequencies must be below the Nyquist frequency {0.5 * fs:g} Hz")
+    if 2 * f.size + 1 >= t.shape[0] // 4:
+        raise InputError(f"excitation: {f.size} frequencies are too many for {t.shape[0]} samples")
+    w = 2 * np.pi * f[None, :] * (t - t[0])[:, None]
+    return np.hstack([np.ones((t.shape[0], 1)), np.sin(w), np.cos(w)])
+
+
+@dataclass
+class TorqueModel:
+    """How the fit takes the recorded torque (errors in variables). ``U`` (N, nu): the torque at the held samples
+    (projected on the excitation's lines, or as recorded), ``U_last`` (1, nu) at the last sample; ``noise``:
+    sigma_u, N m; with the lines (``lines``), ``Q`` (N, nphi) their orthonormal basis and ``Q_last`` (nphi,) at the
+    last sample: the true torque is U + sigma_u Q c, c ~ N(0, I) fitted; without them and sigma_u > 0, a constant
+    correction per interval (``eiv`` and not ``lines``)."""
+
+    U: np.ndarray
+    U_last: np.ndarray
+    noise: float
+    Q: np.ndarray | None = None
+    Q_last: np.ndarray | None = None
+
+    @property
+    def eiv(self) -> bool:
+        """The torque is corrected (errors in variables): sigma_u > 0."""
+        return self.noise > 0
+
+    @property
+    def lines(self) -> bool:
+        """The correction lies on the excitation's lines."""
+        return self.eiv and self.Q is not None
+
+    @property
+    def nphi(self) -> int:
+        """Number of basis functions of the lines (0 without them)."""
+        return self.Q.shape[1] if self.lines else 0
+
+
+def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_noise: float | None) -> TorqueModel:
+    """The :class:`TorqueModel` of a recording: with ``excitation`` (Hz) the measured torque projected on the lines,
+    sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given."""
+    if excitation is None:
+        return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
+    Phi_all = line_basis(rec.t, excitation)
+    Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
+    Q, R_q = np.linalg.qr(Phi)
+    U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
+    Q_last = np.linalg.solve(R_q.T, Phi_all[-1])  # the basis at the last sample (Q = Phi R^-1)
+    U_last = (Q_last @ (Q.T @ rec.torque[:-1]))[None]
+    if torque_noise is None:  # what is off the lines is the noise: its standard deviation
+        off_lines = rec.torque[:-1] - U
+        torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
+    return TorqueModel(U, U_last, torque_noise, Q, Q_last)
+
+
+@dataclass(frozen=True)
+class ShootingSolution:
+    """A fit's shooting variables at its end, to start another fit of the same recording from (a warm start):
+    ``nodes`` (S, nx) the intervals' start states, ``offs`` (S, no) their torque corrections, ``lines`` (ncg,) the
+    whitened line-coefficient corrections, ``samples`` the samples per interval (L) they were cut at."""
+
+    nodes: np.ndarray
+    offs: np.ndarray
+    lines: np.ndarray
+    samples: int
+
+
+@dataclass
+class Evaluation:
+    """The problem at one point: residuals ``r`` (S, R), their Jacobians ``J`` (S, R, nb + ng) with respect to the
+    interval's local variables and the global ones, continuity defects ``c`` (S-1, nx) and their Jacobians ``Cv``
+    (S-1, nx, nb), ``Cr`` (S-1, nx, ng), the global residuals ``rg`` (ng,) (the line corrections' prior; zeros for
+    theta) and the states ``xs`` (S, L+1, nx). Without the sensitivities J, Cv and Cr are None."""
+
+    r: np.ndarray
+    J: np.ndarray | None
+    c: np.ndarray
+    Cv: np.ndarray | None
+    Cr: np.ndarray | None
+    rg: np.ndarray
+    xs: np.ndarray
+
+    @property
+    def cost(self) -> float:
+        """1/2 (|r|^2 + |rg|^2)."""
+        return 0.5 * float(np.sum(self.r**2) + np.sum(self.rg**2))
+
+
+class ShootingProblem:
+    """The fit of ``sens``' parameters to a recording by multiple shooting at ``L`` samples per interval.
+
+    Parameters
+    ----------
+    model: the finger (its transmission reads the encoder). rec: the recording. sens: the compiled sensitivities of
+    the selection (with the torque model's correction: ``input_offset`` without the lines, ``input_basis`` with).
+    L: samples per interval. torque: :func:`torque_model`. camera_noise: sigma_q, rad. start: starting values by
+    name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
+
+    The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,); :meth:`values` maps ``glob`` to theta.
+    """
+
+    def __init__(self, model: Model, rec: Recording, sens: SensitivityModel, L: int, torque: TorqueModel,
+                 camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False) -> None:
+        self.model, self.rec, self.sens, self.L, self.torque = model, rec, sens, L, torque
+        self.camera_noise = camera_noise
+        self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
+        eiv, lines, nphi = torque.eiv, torque.lines, torque.nphi
+        self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
+        self.ncg = sens.no if lines else 0  # global line-coefficient corrections
+        self.ng = self.p + self.ncg
+        self.nb = self.nx + self.no  # local variables of an interval: its start state and its torque correction
+        tr = model.transmission
+        self.S_enc = np.asarray(tr.S, dtype=float)
+        self.ny = self.S_enc.shape[0]
+        self.step = 2 * np.pi / tr.counts_per_rev
+        self.y = rec.encoder * self.step  # motor angle, rad
+        self.sig_y = self.step / math.sqrt(12.0)
+        self.sig_off = torque.noise / math.sqrt(L) if eiv else 1.0  # the mean of L white samples
+        N = self.N = rec.n_samples - 1
+        self.G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (N, 3))
+        n_int = self.n_int = -(-N // L)
+        pad = n_int * L - N
+        U, nu = torque.U, self.nu
+        self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
+        self.Gb = np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+        self.Psi = self.Psib = None
+        if lines:
+            self.Psi = torque.noise * torque.Q
+            self.Psib = np.concatenate([self.Psi, np.repeat(self.Psi[-1:], pad, axis=0)]).reshape(n_int, L, nphi)
+        # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
+        k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
+        valid = k_idx <= N
+        valid[:-1, L] = False  # an interval's end is the next one's start
+        self.valid = valid
+        self.kk = np.minimum(k_idx, N)
+        self.Yb = self.y[self.kk]  # (S, L+1, m)
+        self.Qm = rec.q[self.kk] if rec.q is not None else None  # (S, L+1, n) with NaN
+        self.q_mask = np.isfinite(self.Qm) & valid[:, :, None] if self.Qm is not None else None
+        self._parameters(start)
+        self.Ufull = np.concatenate([U, torque.U_last])  # the modelled torque at every sample, the last one's too
+        # the torque each residual's stretch C u is under: the one held over the period before its sample (the
+        # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
+        self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
+        self.Psik = (torque_before(np.concatenate([self.Psi, torque.noise * torque.Q_last[None]]))[self.kk]
+                     if lines else None)
+        self.shape = Shape(n_int, self.nb, self.nx, self.ng)
+        self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
+        self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
+        self.dense = dense
+        n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
+                 + n_int * self.no + self.ncg)
+        self.dof = max(n_res - (self.nz - self.nc), 1)  # residuals less free variables (constraints count back)
+        self.unit_p = np.zeros((self.nz + self.nc, self.p))  # right-hand sides that give the parameters' covariance
+        self.unit_p[self.nv + np.arange(self.p), np.arange(self.p)] = 1.0
+
+    def _parameters(self, start: Mapping[str, float] | None) -> None:
+        """theta_0, which parameters are additive, their scales and the encoder offsets' and compliances' columns."""
+        sens, model, p = self.sens, self.model, self.p
+        theta0 = sens.nominal.copy()
+        # additive parameters (encoder offsets, tilt angles: nominal 0, either sign) are fitted as they are, the
+        # others as log theta / theta_0; the encoder offsets enter the output only (their state sensitivities are 0)
+        additive = np.array([pp.additive for pp in sens.dynamics.parameters], dtype=bool)
+        if start is not None:
+            theta0 = start_values(theta0, sens.names, additive, start)
+        self.off_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
+                         if pp.kind == "encoder_offset"]
+        # tendon compliances (y_k = S q_k + offset + C u_k-1, u the modelled torque): fitted in units of
+        # the recording's own encoder-to-torque scale std(y) / std(u), so that a unit step is of the data's order
+        self.comp_cols = [(k, model.motor_index(pp.motor)) for k, pp in enumerate(sens.dynamics.parameters)
+                          if pp.kind == "tendon_compliance"]
+        scale = np.ones(p)
+        for k, mo in self.comp_cols:
+            su, sy = float(np.std(self.rec.torque[:, mo])), float(np.std(self.y[:, mo]))
+            scale[k] = sy / su if su > 0 and sy > 0 else 1.0
+        if np.any((theta0 <= 0) & ~additive):
+            bad = sens.names[int(np.argmax((theta0 <= 0) & ~additive))]
+            raise ModelError(f"parameters: {bad} has the starting value {theta0[sens.names.index(bad)]:g}; a fitted "
+                             "parameter needs a positive starting value (use a model with that term switched on)")
+        self.theta0, self.additive, self.scale = theta0, additive, scale
+
+    # --- the parameters and the output ------------------------------------------------------------------------
+
+    def values(self, glob: np.ndarray) -> np.ndarray:
+        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + scale rho for the additive ones."""
+        p, additive = self.p, self.additive
+        return np.where(additive, self.theta0 + self.scale * glob[:p],
+                        self.theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
+
+    def per_motor(self, theta: np.ndarray, cols: list[tuple[int, int]]) -> np.ndarray:
+        """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere."""
+        out = np.zeros(self.ny)
+        for k, mo in cols:
+            out[mo] += theta[k]
+        return out
+
+    def offset(self, theta: np.ndarray) -> np.ndarray:
+        """(m,) the encoder offsets, rad."""
+        return self.per_motor(theta, self.off_cols)
+
+    def compliance(self, theta: np.ndarray) -> np.ndarray:
+        """(m,) the tendon compliances, rad / (N m)."""
+        return self.per_motor(theta, self.comp_cols)
+
+    def torque_at(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
+        """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
+        tendons' tension balances at each residual's sample: the one held over the period before it
+        (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
+        if self.torque.lines:
+            return self.Uk + np.einsum("skl,il->ski", self.Psik, glob[self.p:].reshape(self.torque.nphi, self.nu).T)
+        if self.torque.eiv:
+            return self.Uk + offs[:, None, :]
+        return self.Uk
+
+    def stretch(self, theta: np.ndarray, u_k: np.ndarray | None) -> np.ndarray | float:
+        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad, for the modelled torque u_k-1
+        (:meth:`torque_at`; None without compliance: 0)."""
+        return 0.0 if u_k is None else u_k * self.compliance(theta)
+
+    def correction(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
+        """The torque correction the sensitivities take: the line coefficients (nu, nphi), the per-interval
+        constants (S, nu), or None."""
+        if self.torque.lines:
+            return glob[self.p:].reshape(self.torque.nphi, self.nu).T  # C (nu, nphi) from its column-major vec
+        return offs if self.torque.eiv else None
+
+    def encoder_rms(self, r: np.ndarray) -> float:
+        """RMS of the encoder residuals in r, counts."""
+        enc = r[:, : (self.L + 1) * self.ny] * self.sig_y / self.step
+        return float(np.sqrt(np.sum(enc**2) / max(int(self.valid.sum()) * self.ny, 1)))
+
+    # --- the residuals, the defects and their Jacobians ---------------------------------------------------------
+
+    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool = True) -> Evaluation:
+        """The :class:`Evaluation` at (nodes, offs, glob). ``jac=False``: r, c, rg and the states alone (J, Cv, Cr
+        None), from the step without its sensitivities (a tenth of the time). With them, the intervals go through
+        the compiled sensitivities :data:`JACOBIAN_CHUNK` doubles of sensitivities at a time, each chunk reduced to
+        its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it)."""
+        theta = self.values(glob)
+        if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
+            raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
+                             "the recording's encoders this model's, in counts, and its torques in N m?")
+        n, L = self.n, self.L
+        u_k = self.torque_at(glob, offs) if self.comp_cols else None
+        corr = self.correction(glob, offs)
+        xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac)
+        q = xs[:, :, :n]
+        r_enc = ((np.einsum("ij,skj->ski", self.S_enc, q) + self.offset(theta) + self.stretch(theta, u_k) - self.Yb)
+                 / self.sig_y * self.valid[:, :, None])
+        c = xs[:-1, L] - nodes[1:]
+        rg = np.concatenate([np.zeros(self.p), glob[self.p:]])
+        rq = (np.where(self.q_mask, q - np.nan_to_num(self.Qm), 0.0) / self.camera_noise
+              if self.Qm is not None else None)
+        res = [r_enc.reshape(self.n_int, -1)]
+        if rq is not None:
+            res.append(rq.reshape(self.n_int, -1))
+        if self.no:  # the per-interval torque corrections' prior: zero mean, sigma_u / sqrt(L)
+            res.append(offs / self.sig_off)
+        r = np.concatenate(res, axis=1)
+        if not jac:
+            return Evaluation(r, None, c, None, None, rg, xs)
+        return Evaluation(r, J, c, Cv, Cr, rg, xs)
+
+    def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
+                       u_k: np.ndarray | None, jac: bool = True):
+        """The states xs (S, L+1, nx) and, with ``jac``, J (S, R, nb + ng) and the end-of-interval sensitivities Cv
+        (S-1, nx, nb), Cr (S-1, nx, ng) (else None), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of
+        sensitivities (or of the compiled step's per-sample inputs, without them)."""
+        n_int, L, nx = self.n_int, self.L, self.nx
+        per_interval = (L + 1) * nx * (nx + self.p + self.sens.no) if jac else L * self.sens.nw
+        chunk = max(1, JACOBIAN_CHUNK // per_interval)
+        xs = np.empty((n_int, L + 1, nx))
+        J = Cv = Cr = None
+        for a in range(0, n_int, chunk):
+            sl = slice(a, min(a + chunk, n_int))
+            corr_sl = corr[sl] if (corr is not None and self.no) else corr  # per interval, or the lines' (global)
+            x_c, X_c = self.sens.run(nodes[sl], self.Ub[sl], self.Gb[sl], theta, corr_sl,
+                                     basis=self.Psib[sl] if self.Psib is not None else None, sensitivities=jac)
+            xs[sl] = x_c
+            if not jac:
+                continue
+            J_c, Xv_end, Xr_end = self._jacobian(X_c, theta, None if u_k is None else u_k[sl], sl)
+            del X_c
+            if J is None:
+                J = np.empty((n_int,) + J_c.shape[1:])
+                Cv = np.empty((n_int - 1,) + Xv_end.shape[1:])
+                Cr = np.empty((n_int - 1,) + Xr_end.shape[1:])
+            J[sl] = J_c
+            last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
+            Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
+        return xs, J, Cv, Cr
+
+    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice):
+        """J (s, R, nb + ng) of the residuals of the intervals ``sl`` from their sensitivities X (s, L+1, nx,
+        nx + p + no), and the sensitivities at their ends with respect to the local (nx, nb) and global (nx, ng)
+        variables."""
+        nx, p, n, nb, ng, nu = self.nx, self.p, self.n, self.nb, self.ng, self.nu
+        s_int = X.shape[0]
+        iv, ip, io = slice(0, nx), slice(nx, nx + p), slice(nx + p, nx + p + self.sens.no)
+        Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if self.no else X[..., iv]  # (s, L+1, nx, nb)
+        Xr = X[..., ip] * np.where(self.additive, self.scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
+        if self.torque.lines:
+            Xr = np.concatenate([Xr, X[..., io]], axis=-1)
+        w = self.valid[sl, :, None, None] / self.sig_y
+        S_enc = self.S_enc
+        J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
+                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
+        for k, mo in self.off_cols:  # y = S q + offset: d r / d offset_m = e_m
+            J_enc[:, :, mo, nb + k] += 1.0
+        if self.comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
+            for k, mo in self.comp_cols:
+                J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
+                if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
+                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.Psik[sl]
+                elif self.torque.eiv:
+                    J_enc[:, :, mo, nx + mo] += theta[k]
+        J_enc = J_enc * w
+        jac = [J_enc.reshape(s_int, -1, nb + ng)]
+        if self.Qm is not None:
+            Jq = (np.concatenate([Xv[:, :, :n], Xr[:, :, :n]], axis=-1) / self.camera_noise
+                  * self.q_mask[sl, :, :, None])
+            jac.append(Jq.reshape(s_int, -1, nb + ng))
+        if self.no:
+            Jo = np.zeros((s_int, self.no, nb + ng))
+            Jo[:, :, nx:nb] = np.eye(self.no) / self.sig_off
+            jac.append(Jo)
+        return np.concatenate(jac, axis=1), Xv[:, self.L], Xr[:, self.L]
+
+    # --- the linear algebra (module kkt) ------------------------------------------------------------------------
+
+    def normal(self, J: np.ndarray, mu: float):
+        """Gauss-Newton normal matrix of the interval-structured residuals, LM-damped by mu (:mod:`.kkt`)."""
+        return normal_matrix(J, self.shape, mu, self.prior, self.dense)
+
+    def continuity(self, Cv: np.ndarray, Cr: np.ndarray):
+        """(nc, nz) Jacobian of the continuity defects."""
+        return continuity_jacobian(Cv, Cr, self.shape, self.dense)
+
+    def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
+        """Normal equations of the interval-structured least squares, with the continuity constraints."""
+        return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+
+    def grad(self, r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
+        """(nz,) the cost's gradient J^T r (+ rg for the global variables)."""
+        nb = self.nb
+        gs = np.einsum("sk,skd->sd", r, J)
+        return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0) + rg])
+
+    # --- the start --------------------------------------------------------------------------------------------
+
+    def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> ShootingSolution:
+        """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
+        name, :func:`start_values`)."""
+        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:].copy(), self.L)
+
+    def warm_variables(self, sol: ShootingSolution | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
+        """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
+        line corrections, theta at theta_0 (the start's values, given by name). None where the two problems are
+        not cut alike (another interval, state size or torque model: another model's states, a retry at half the
+        interval), or where ``sol`` is None."""
+        if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
+                or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
+            return None
+        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines])
+
+    def initial_nodes(self, q0: np.ndarray) -> np.ndarray:
+        """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
+        onto the measured encoder (the stretch of the start's compliance off): a start close to the data."""
+        n, L, n_int, nu = self.n, self.L, self.n_int, self.nu
+        x_nom, _ = self.sens.run(np.concatenate([q0, np.zeros(n)])[None], self.torque.U[None], self.G[None],
+                                 self.theta0, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
+                                 basis=self.Psi[None] if self.torque.lines else None, sensitivities=False)
+        nodes = x_nom[0, np.arange(n_int) * L].copy()
+        if not np.isfinite(nodes).all():
+            nodes[:] = np.concatenate([q0, np.zeros(n)])
+        k_nodes = np.arange(n_int) * L
+        S_enc, y = self.S_enc, self.y
+        Sp = np.linalg.pinv(S_enc)
+        C0 = np.asarray(self.model.transmission.tendon_compliance)
+        y_rigid = y - torque_before(self.Ufull) * C0 if self.comp_cols else y
+        nodes[:, :n] += (y_rigid[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
+        nodes[:, n:] += (np.gradient(y, self.rec.dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+        return nodes
+
+
+def start_values(theta0: np.ndarray, names: Sequence[str], additive: np.ndarray,
+                 start: Mapping[str, float]) -> np.ndarray:
+    """``theta0`` with the values of ``start`` (by parameter name) put in; :class:`~alpes_dyn.InputError` naming
+    a parameter that is not fitted, or a value that is not a finite number (positive unless additive)."""
+    if not isinstance(start, Mapping):
+        raise InputError(f"start: expected a mapping of parameter names to values (or an earlier "
+                         f"IdentificationResult), got {type(start).__name__}")
+    theta = theta0.copy()
+    for name, v in start.items():
+        if name not in names:
+            raise InputError(f"start: {name!r} is not a parameter of this fit (fitted: {', '.join(names)})")
+        k = list(names).index(name)
+        ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, (bool, np.bool_))
+        if not ok or not math.isfinite(float(v)) or (not additive[k] and float(v) <= 0):
+            need = "a finite number" if additive[k] else "a finite number > 0"
+            raise InputError(f"start: {name} = {v!r}: expected {need}")
+        theta[k] = float(v)
+    return theta

@@ -1,0 +1,248 @@
+"""Estimation blocks of :func:`alpes_dyn.simulation.loop.run_loop`: an observer, and a recording played back.
+
+* :class:`Observer`: a Kalman filter of :mod:`alpes_dyn.estimation.observers.observers` at the sample rate: at t_0 its
+  prior (updated with the first measurement, or not), then each sample one predict-update step
+  (``filter_step_p``) with the known inputs of the previous period and the measurement at t_k. Its whole-record
+  response is the filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` (one compiled loop).
+* :class:`ObserverBank`: observers of the same model advanced together, one compiled call per sample;
+* :func:`step_caller` / :func:`batch_step_caller`: the filter step of one filter, or of B filters of the same model
+  in one call of compiled C (CasADi's virtual machine without a compiler).
+* :class:`RecordingPlayback`: a :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant: its encoder
+  counts, its motor torques (sample and period signals) and, where recorded, the true joint angles.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Callable, Sequence
+
+import numpy as np
+
+from ...errors import InputError
+from ...model.transmission import torque_before
+from ...simulation.loop import Block
+from .observers import KalmanFilter
+from ..experiments.recording import Recording
+
+__all__ = ["Observer", "ObserverBank", "RecordingPlayback", "step_caller", "batch_step_caller"]
+
+
+def batch_step_caller(step: Any, label: str, compiled: bool,
+                      parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
+    of compiled C (cached, :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`) when ``compiled`` and a C
+    compiler is there, else CasADi's virtual machine (one call per filter). ``step``: a filter's ``filter_step``,
+    or its ``filter_step_p`` with ``parameters`` its model's numbers (``filt.model.values``: the compiled library
+    then keyed on the model's structure, shared by models of other values)."""
+    if parameters is not None:
+        from ...simulation.codegen import _step_parameters
+
+        p = _step_parameters(step, parameters)  # checked against the step's input p (InputError naming it)
+        step_p = step
+        step = lambda s, wy: step_p(s, wy, p)  # noqa: E731 - the VM's call
+    if compiled:
+        from ...simulation.integrate import CompiledStepLoop, CompilerError
+
+        try:
+            loop = CompiledStepLoop(step_p if parameters is not None else step, label, threads=1, vectorize=False,
+                                    parameters=parameters)
+        except CompilerError:
+            loop = None
+        if loop is not None:
+            run = loop.run
+
+            def call(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
+                return run(S, WY[:, None, :])[:, 1]
+
+            return call
+
+    def call_vm(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
+        return np.stack([np.asarray(step(s, wy)).reshape(-1) for s, wy in zip(S, WY)])
+
+    return call_vm
+
+
+def step_caller(step: Any, label: str, compiled: bool,
+                parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """s (ns,), wy (nw,) -> s_next (ns,): one filter step (:func:`batch_step_caller` with B = 1)."""
+    batch = batch_step_caller(step, label, compiled, parameters)
+
+    def call(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
+        return batch(s[None], wy[None])[0]
+
+    return call
+
+
+class Observer(Block):
+    """A Kalman filter as a block.
+
+    Parameters
+    ----------
+    filt: a :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` (EKF, UKF). z0: (nz,) prior mean; P0: (nz,)
+        variances or (nz, nz) covariance.
+    known: the signals whose values, flattened and concatenated, are the known input w (nw,) of the predict over
+        [t_k-1, t_k]: period signals (the previous period's: a torque held over it) or sample signals read at t_k.
+    measurement: the measurement's signal (ny,) at t_k. estimate, covariance: the signals written, z (nz,) and P
+        (nz, nz) at t_k (``covariance=None``: not written).
+    first_update: update the prior with the measurement at t_0 (as :meth:`KalmanFilter.run`); else the estimate
+        at t_0 is the prior.
+    step: the step s, wy -> s_next (:func:`step_caller`; default the filter's ``filter_step_p`` with its model's
+        numbers in CasADi's VM: :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run`'s step).
+    label: the name of its compiled step in an :class:`ObserverBank` (default ``<kind>_<model name>``).
+    """
+
+    def __init__(self, filt: KalmanFilter, z0: Any, P0: Any, *, known: Sequence[str] = ("u",),
+                 measurement: str = "y", estimate: str = "z", covariance: str | None = "P",
+                 first_update: bool = True, step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
+                 label: str | None = None, name: str = "observer") -> None:
+        if not isinstance(filt, KalmanFilter):
+            raise InputError(f"filt: expected a KalmanFilter of alpes_dyn.estimation.observers.observers, got {type(filt).__name__}")
+        self.filt, self.name = filt, name
+        self.z0, self.P0 = filt._z(z0, "z0"), filt._P(P0, "P0")
+        self.known = tuple(known)
+        self.measurement, self.estimate, self.covariance = measurement, estimate, covariance
+        self.first_update = bool(first_update)
+        self._step = step
+        self.label = label or f"{filt.kind}_{filt.model.system.model.name}"
+        self.inputs = (*self.known, measurement)
+        self.outputs = (estimate,) if covariance is None else (estimate, covariance)
+        self.has_response = self.first_update and step is None
+
+    def start(self, n_periods: int, dt: float, final: bool) -> None:
+        self.n_periods, self._slots = n_periods, None
+        if self._step is None:
+            fs, p = self.filt.filter_step_p, self.filt.model.values
+            self._call = lambda s, wy: np.asarray(fs(s, wy, p)).reshape(-1)
+        else:
+            self._call = self._step
+
+    def _out(self) -> dict[str, Any]:
+        nz = self.filt.nz
+        out: dict[str, Any] = {self.estimate: self._s[:nz]}
+        if self.covariance is not None:
+            out[self.covariance] = self._s[nz:].reshape(nz, nz, order="F")
+        return out
+
+    def first(self, u: dict[str, Any]) -> np.ndarray:
+        """The state s = [z; vec P] at t_0: the prior, updated with the first measurement or not."""
+        z, P = self.z0, self.P0
+        if self.first_update:
+            z, P = self.filt._update(z, P, np.ravel(u[self.measurement]))
+        self._s = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
+        return self._s
+
+    def wy(self, u: dict[str, Any]) -> np.ndarray:
+        """[w; y] (nw + ny,) from the input signals (a buffer reused at each sample)."""
+        if self._slots is None:  # where each signal goes
+            sizes = np.cumsum([0] + [np.size(u[s]) for s in self.inputs])
+            self._slots = [(s, slice(int(a), int(b))) for s, a, b in zip(self.inputs, sizes[:-1], sizes[1:])]
+            self._wy = np.empty(int(sizes[-1]))
+        wy = self._wy
+        for s, sl in self._slots:
+            wy[sl] = u[s]
+        return wy
+
+    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
+        if k == 0:
+            self.first(u)
+        else:
+            self._s = self._call(self._s, self.wy(u))
+        return self._out()
+
+    def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        """The filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` on the record."""
+        N = self.n_periods
+        W = np.hstack([np.asarray(u[s], dtype=float).reshape(np.shape(u[s])[0], -1)[:N] for s in self.known])
+        Y = np.asarray(u[self.measurement], dtype=float)
+        est = self.filt.run(self.z0, self.P0, W, Y.reshape(Y.shape[0], -1))
+        out = {self.estimate: est.z}
+        if self.covariance is not None:
+            out[self.covariance] = est.P
+        return out
+
+
+class ObserverBank(Block):
+    """Several :class:`Observer` blocks as one: those whose filters share a step function and its numbers (the
+    same model and noise settings: the hand's four fingers) advance together, in one call of compiled C per sample
+    (:func:`batch_step_caller`; ``compiled=False``: CasADi's virtual machine); those of one structure but other
+    numbers load the same library. Each observer keeps its own signals."""
+
+    def __init__(self, observers: Sequence[Observer], *, compiled: bool = True, name: str = "observers") -> None:
+        observers = list(observers)
+        if not observers or not all(isinstance(o, Observer) for o in observers):
+            raise InputError("observers: expected a non-empty list of Observer blocks")
+        self.observers, self.name = observers, name
+        groups: dict[str, list[int]] = {}
+        self._callers: dict[str, Callable[[np.ndarray, np.ndarray], np.ndarray]] = {}
+        for i, o in enumerate(observers):
+            key = o.filt.filter_step_p.serialize() + o.filt.model.values.tobytes().hex()
+            if key not in self._callers:
+                self._callers[key] = batch_step_caller(o.filt.filter_step_p, o.label, compiled, o.filt.model.values)
+            groups.setdefault(key, []).append(i)
+        self._groups = list(groups.items())
+        self.inputs = tuple(dict.fromkeys(s for o in observers for s in o.inputs))
+        self.outputs = tuple(s for o in observers for s in o.outputs)
+
+    def start(self, n_periods: int, dt: float, final: bool) -> None:
+        for o in self.observers:
+            o.start(n_periods, dt, final)
+
+    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
+        obs = self.observers
+        if k == 0:
+            for o in obs:
+                o.first(u)
+        else:
+            for key, idx in self._groups:
+                S = self._callers[key](np.stack([obs[i]._s for i in idx]), np.stack([obs[i].wy(u) for i in idx]))
+                for j, i in enumerate(idx):
+                    obs[i]._s = S[j]
+        out: dict[str, Any] = {}
+        for o in obs:
+            out.update(o._out())
+        return out
+
+
+class RecordingPlayback(Block):
+    """A :class:`~alpes_dyn.estimation.experiments.recording.Recording` as the plant (run the loop with ``final=True``
+    over its N = n_samples - 1 periods).
+
+    Writes ``encoder`` (m,) counts and ``torque`` (m,) N m at t_k (sample signals), ``before`` the torque held over
+    the period before t_k (the first sample's own at t_0: what the tendons' tension balances at the reading,
+    :func:`~alpes_dyn.model.transmission.torque_before`), ``held`` the torque over [t_k, t_k+1) (a period signal:
+    what a known input reads), and ``true_q`` (n,) rad where the recording has it.
+    """
+
+    has_response = True
+
+    def __init__(self, recording: Recording, *, encoder: str = "counts", torque: str = "tau",
+                 held: str = "tau_held", true_q: str | None = "true_q", before: str | None = None,
+                 name: str = "recording") -> None:
+        if not isinstance(recording, Recording):
+            raise InputError(f"recording: expected a Recording, got {type(recording).__name__}")
+        self.rec, self.name = recording, name
+        self._sample = {encoder: recording.encoder, torque: recording.torque}
+        if before is not None:
+            self._sample[before] = torque_before(recording.torque)
+        if true_q is not None and recording.true_q is not None:
+            self._sample[true_q] = recording.true_q
+        self.outputs = tuple(self._sample)
+        self.held = held
+        self.period_outputs = (held,)
+
+    def start(self, n_periods: int, dt: float, final: bool) -> None:
+        rows = self.rec.encoder.shape[0]
+        if n_periods + int(final) > rows:
+            raise InputError(f"n_periods: the recording has {rows} samples, not {n_periods + int(final)}")
+        self._rows = n_periods + int(final)
+        self._N = n_periods
+
+    def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
+        return {s: v[k] for s, v in self._sample.items()}
+
+    def update(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
+        return {self.held: self.rec.torque[k]}
+
+    def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+        out = {s: v[: self._rows] for s, v in self._sample.items()}
+        out[self.held] = self.rec.torque[: self._N]
+        return out

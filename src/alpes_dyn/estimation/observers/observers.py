@@ -1,0 +1,595 @@
+"""State observers: the passive joints q_1..q_n of a finger estimated from its motor encoder.
+
+The report ends where this module begins (Conclusion: the finger is observable, "it is possible to
+investigate the synthesis of an observer"). Two discrete-time observers of the report's system
+(eq. 3.1, 3.3, 3.16), discretised by one classical RK4 step per sample period ``dt`` with the known
+input held over the period:
+
+* :class:`ExtendedKalmanFilter` -- the EKF: state and covariance predicted through the RK4 step,
+  its Jacobians with respect to the state and to the known input obtained by CasADi's automatic
+  differentiation of the discretised model;
+* :class:`UnscentedKalmanFilter` -- the UKF (Julier-Uhlmann, scaled sigma points, Wan-van der
+  Merwe weights): 2 nz + 1 sigma points propagated through the same RK4 step.
+
+Both can estimate, with the state, two uncertain gains as random-walk states (``parameters=``):
+
+* ``"input_gain"`` a -- multiplies the known torques (S^T tau_m, and J^T F);
+* ``"spring_gain"`` b -- multiplies the spring torques k q;
+
+and, on a state space with motor inputs, a disturbance torque per motor, ``"disturbance_<motor>"`` d (N m,
+added to the measured motor torque: tau = a S^T (u + d)).
+
+If the observer's masses and inertias are (1 + d_m) times the true ones and its springs (1 + d_K)
+times, dividing its dynamics by (1 + d_m) shows that the truth is exactly its model with
+a = 1 + d_m and b = (1 + d_m) / (1 + d_K): these two gains remove the bias of a uniformly
+mis-scaled model (:func:`true_gains`).
+
+Measurements y_k = h(x(t_k)) (the motor encoder q_m = (r/r_m) sum q, Section 3), known inputs
+w_k = [u_k; F_k] held on [t_k, t_k+1) (the measured motor torque, optionally the measured contact
+force). Noise model: the known input carries white noise of covariance ``input_noise`` (it enters
+the prediction through G = dF/dw), plus additive ``process_noise`` on the state, and
+``measurement_noise`` on y.
+
+Each filter step (predict with w_k, update with y_k+1) is one CasADi function of
+s = [z; vec P]; :meth:`KalmanFilter.run` applies it N times in one call of CasADi's virtual
+machine (``mapaccum``, the default) or of compiled C (``compiled=True``:
+:class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`, cached on disk), never in a Python loop.
+
+Example (the default scenario of ``alpes-dyn estimate``, see :mod:`alpes_dyn.estimation.observers.scenario`)::
+
+    from alpes_dyn.estimation.observers.scenario import run_estimation, plot_estimation
+    res = run_estimation("ekf-params", mismatch=0.1, duration=5.0, seed=0)
+    print(res.rmse)            # (3,) rad, RMSE of q_1..q_3 after the transient
+    print(res.parameters)      # estimated and true gains
+    plot_estimation(res, "estimate.png")
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Sequence
+
+import casadi as cs
+import numpy as np
+
+from ...checks import as_float_array
+from ...errors import InputError, ModelError
+from ...limits import check_bytes
+from ...rebuild import Rebuilt
+from ...simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
+from ...symbolic.lifted import lift_constants
+from ...symbolic.statespace import StateSpace
+from .covariance import predicted_covariance, updated_state
+
+__all__ = [
+    "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
+    "Estimate", "true_gains", "make_observer", "OnlineFilter",
+]
+
+OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
+PARAMETERS: tuple[str, ...] = ("input_gain", "spring_gain")
+DISTURBANCE_PREFIX = "disturbance_"
+"""``disturbance_<motor>``: an additive torque on that motor, N m, estimated as a random-walk state (motor inputs
+only): what the model leaves unexplained (:mod:`alpes_dyn.estimation.observers.replay`)."""
+
+
+def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
+    """Gains a, b that make an observer's mis-scaled model exact.
+
+    ``mass_scale`` = observer's masses (and inertias) / true ones, ``spring_scale`` = observer's
+    springs / true ones. Returns ``{"input_gain": mass_scale, "spring_gain": mass_scale / spring_scale}``.
+    """
+    return {"input_gain": float(mass_scale), "spring_gain": float(mass_scale) / float(spring_scale)}
+
+
+class DiscreteModel:
+    """z_{k+1} = F(z_k, w_k), y_k = h(z_k): the RK4-discretised state space, optionally with gains.
+
+    Parameters
+    ----------
+    system: the continuous state space (eq. 3.3); its output is the measurement.
+    dt: sample period, s. substeps: RK4 steps per sample period (default 1).
+    parameters: names from :data:`PARAMETERS` appended to the state as constants (z = [x; theta]).
+
+    Attributes
+    ----------
+    nz, nx, nw, ny: sizes of z, x = [q; qd], w = [u; F] and y.
+    names: names of z's entries.
+    values: (np,) the model's numbers in the right-hand side, one per use (:func:`~alpes_dyn.symbolic.lifted.
+        lift_constants`): masses, inertias, lengths, springs, friction, ratios and the constants among them.
+    step_p: ``casadi.Function`` (z, w, p) -> z_next (SX), the step with those numbers as the input p (np,): its
+        code is the model's structure, the same for a model of other values.
+    step: ``casadi.Function`` (z, w) -> z_next (SX), ``step_p`` at p = ``values``.
+    output: ``casadi.Function`` z -> y (SX).
+    """
+
+    def __init__(self, system: StateSpace, dt: float, parameters: Sequence[str] = (), substeps: int = 1) -> None:
+        if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or not 1 <= substeps <= 64:
+            raise InputError(f"substeps: expected an integer in [1, 64], got {substeps!r}")
+        self.substeps = int(substeps)
+        if not isinstance(system, StateSpace):
+            raise InputError(f"system: expected a StateSpace, got {type(system).__name__}")
+        self.system = system
+        self.dt = _check_dt(dt)
+        params = tuple(parameters)
+        motors = system.model.transmission.motor_names if system.model.transmission is not None else ()
+        disturbances = tuple(f"{DISTURBANCE_PREFIX}{mn}" for mn in motors) if system.input == "motor" else ()
+        for p in params:
+            if p not in PARAMETERS and p not in disturbances:
+                extra = f", or {', '.join(disturbances)}" if disturbances else ""
+                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)}{extra})")
+        if len(set(params)) != len(params):
+            raise ModelError(f"parameters: repeated name in {params}")
+        if "spring_gain" in params and not system.model.extras.has_spring:
+            raise ModelError("parameter 'spring_gain': the model has no spring")
+        self.parameters = params
+        n = system.n
+        self.nx = 2 * n
+        self.nz = self.nx + len(params)
+        self.nw = _n_known_inputs(system)
+        self.ny = system.n_outputs
+        self.names = system.state_names + params
+        z = cs.SX.sym("z", self.nz)
+        w = cs.SX.sym("w", self.nw)
+        # the model's numbers (masses, inertias, springs, friction, ratios) lifted out of the right-hand side into
+        # the input p, one entry per use (symbolic.lifted): the step's code is then the model's structure, and a
+        # model of other values shares its compiled library; lifted before cse, which would merge equal values
+        rhs, self.values = lift_constants(cs.Function("rhs", [z, w], [self._rhs(z, w)]))
+        p = cs.SX.sym("p", self.values.size)
+        # the common subexpressions merged once, in the right-hand side (milliseconds), not in the RK4 step that
+        # calls it 4 x substeps times (the step's cse took 0.3 s on finger3, 2-4 s on an Allegro finger, for the
+        # same instructions: each call of zdot is already one node per instruction of its merged expression)
+        zdot = cs.Function("zdot", [z, w, p], [cs.cse(rhs(z, w, p))])
+        zn = z
+        for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
+            zn = rk4_expression(lambda x, u: zdot(x, u, p), zn, w, self.dt / self.substeps)
+        self.step_p = cs.Function("step", [z, w, p], [zn], ["z", "w", "p"], ["z_next"])
+        self.step = cs.Function("step", [z, w], [self.step_p(z, w, cs.DM(self.values))], ["z", "w"], ["z_next"])
+        self.output = cs.Function("h", [z], [system.h_function(z[: self.nx])], ["z"], ["y"])
+
+    def _rhs(self, z: cs.SX, w: cs.SX) -> cs.SX:
+        ss = self.system
+        n = ss.n
+        q, v = z[:n], z[n: 2 * n]
+        th = {p: z[self.nx + i] for i, p in enumerate(self.parameters)}
+        a = th.get("input_gain", 1.0)
+        u = w[: ss.n_inputs]
+        motors = ss.model.transmission.motor_names if any(p.startswith(DISTURBANCE_PREFIX) for p in th) else ()
+        d = [th.get(f"{DISTURBANCE_PREFIX}{mn}", 0.0) for mn in motors]
+        if motors:  # an additive torque per motor (N m), a random-walk state
+            u = u + cs.vertcat(*d)
+        tau = a * cs.mtimes(cs.DM(ss.B), u)
+        if "spring_gain" in th:  # the model applies k (q - q_rest); the gain b makes it b k (q - q_rest)
+            tau = tau + (1.0 - th["spring_gain"]) * ss.model.extras.spring_torque(q, cs)
+        F = a * w[ss.n_inputs:] if ss.force else None
+        qdd = joint_accelerations(ss, q, v, tau, F)
+        return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))
+
+
+def _finite_number(x: Any, name: str) -> float:
+    try:
+        v = float(x)
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not np.isfinite(v):
+        raise InputError(f"{name}: expected a finite number, got {x!r}")
+    return v
+
+
+MAX_VARIANCE = 1e12
+"""Largest entry of a noise covariance or an initial covariance (squared units of a state or an output: rad^2,
+(rad/s)^2, ...): a standard deviation of 10^6 is no prior at all."""
+
+
+def _cov(value: Any, n: int, name: str) -> np.ndarray:
+    """A covariance from variances (n,) or a matrix (n, n), checked symmetric positive semidefinite."""
+    a = as_float_array(value, name, f"{n} variances or an ({n}, {n}) covariance")
+    if a.ndim == 0:
+        a = np.full(n, float(a))
+    if a.shape == (n,):
+        a = np.diag(a)
+    if a.shape != (n, n):
+        raise InputError(f"{name}: expected {n} variances or an ({n}, {n}) covariance, got shape {a.shape}")
+    if not np.isfinite(a).all():
+        raise InputError(f"{name}: contains NaN or inf")
+    big = float(np.abs(a).max()) if a.size else 0.0
+    if big > MAX_VARIANCE:  # a variance of 1e300: squared units of a state, never that large
+        raise InputError(f"{name}: an entry of {big:g} is over the limit of {MAX_VARIANCE:g} (a variance, in the "
+                         "squared units of its state or output)")
+    tiny = a[(a != 0) & (np.abs(a) < np.finfo(float).tiny)]
+    if tiny.size:
+        raise InputError(f"{name}: {float(tiny[0])!r} is a subnormal number (below 2.2e-308): write 0 or a "
+                         "physical variance")
+    if not np.allclose(a, a.T, rtol=1e-10, atol=1e-300):
+        raise InputError(f"{name}: covariance must be symmetric")
+    if np.linalg.eigvalsh(a).min() < -1e-12 * max(1.0, float(np.abs(a).max())):
+        raise InputError(f"{name}: covariance must be positive semidefinite")
+    return a
+
+
+@dataclass
+class Estimate:
+    """The output of an observer run.
+
+    Attributes
+    ----------
+    t: (N+1,) sample times, s.
+    z: (N+1, nz) estimates [q; qd; theta] after each measurement update (rad, rad/s, -).
+    P: (N+1, nz, nz) their covariances.
+    names: names of z's entries.
+    """
+
+    t: np.ndarray
+    z: np.ndarray
+    P: np.ndarray
+    names: tuple[str, ...]
+
+    @property
+    def std(self) -> np.ndarray:
+        """(N+1, nz) standard deviations sqrt(diag P)."""
+        return np.sqrt(np.maximum(np.diagonal(self.P, axis1=1, axis2=2), 0.0))
+
+
+class KalmanFilter(Rebuilt):
+    """Common machinery of the discrete Kalman filters (see :class:`ExtendedKalmanFilter`).
+
+    Parameters
+    ----------
+    system:
+        The continuous state space; its input u (and F if ``force=True``) is the known input and
+        its output the measurement, e.g. ``StateSpace(finger, input="motor", output="encoder")``.
+    dt:
+        Sample period, s.
+    process_noise:
+        Covariance per step of an additive noise on z (variances (nz,) or (nz, nz)); for the
+        parameter states it is their random-walk variance per step.
+    measurement_noise:
+        Covariance of the measurement noise, (p,) or (p, p), output units squared (rad^2).
+    input_noise:
+        Covariance of the known input's noise, (m[+3],) or square, N^2 m^2 (and N^2), default 0.
+    parameters:
+        Gains estimated with the state, from :data:`PARAMETERS`.
+    substeps:
+        RK4 steps per sample period in the discretised model (default 1; use the simulation's with the
+        smooth friction, whose time constant is a fraction of a millisecond).
+    compiled:
+        Run :meth:`run` in C generated by CasADi and compiled once per model structure and noise setting
+        (the model's numbers are an input of the compiled step, :attr:`filter_step_p`: a model of other masses,
+        springs or friction loads the same library; cached on disk, a few seconds of gcc; raises
+        :class:`~alpes_dyn.simulation.integrate.CompilerError`
+        without a C compiler): worth it for long or repeated runs. Default False: CasADi's
+        virtual machine (about 0.1-0.3 ms per step on finger3). Both give the same numbers.
+
+    Attributes
+    ----------
+    model: the :class:`DiscreteModel`. names: names of z's entries. backend: ``"compiled"`` or ``"casadi"``.
+    filter_step: ``casadi.Function`` s = [z; vec P], [w; y] -> s_next, one predict-update step; its covariance
+        arithmetic in the order of :mod:`~alpes_dyn.estimation.observers.covariance` (the exported C's).
+    filter_step_p: the same step with the model's numbers as a third input p (``model.values``): what the compiled
+        loop and :meth:`online` run, so that the library is keyed on the model's structure (its joints,
+        transmission, effects and the noise settings), never recompiled for other masses or springs.
+    measurement: ``casadi.Function`` z -> (h (ny,), H = dh/dz (ny, nz), sparse), what the update evaluates.
+    exact_loops: True when CasADi folded no constant product in that arithmetic: the exported C's loops
+        (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`) give the step's numbers to the last bit.
+    """
+
+    kind = "kalman"
+
+    def __init__(self, system: StateSpace, dt: float, *, process_noise: Any, measurement_noise: Any,
+                 input_noise: Any = None, parameters: Sequence[str] = (), compiled: bool = False,
+                 substeps: int = 1) -> None:
+        self._remember(system, dt, process_noise=process_noise, measurement_noise=measurement_noise,
+                       input_noise=input_noise, parameters=parameters, compiled=compiled, substeps=substeps)
+        self.model = DiscreteModel(system, dt, parameters, substeps)
+        mdl = self.model
+        self.dt = mdl.dt
+        self.names = mdl.names
+        self.nz, self.nw, self.ny = mdl.nz, mdl.nw, mdl.ny
+        self.Q = _cov(process_noise, mdl.nz, "process_noise")
+        self.R = _cov(measurement_noise, mdl.ny, "measurement_noise")
+        self.Sw = _cov(0.0 if input_noise is None else input_noise, mdl.nw, "input_noise")
+        z = cs.SX.sym("z", mdl.nz)
+        P = cs.SX.sym("P", mdl.nz, mdl.nz)
+        y = cs.SX.sym("y", mdl.ny)
+        nz = mdl.nz
+        self._p = cs.SX.sym("p", mdl.values.size)  # the model's numbers, an input of the compiled step
+        self._folds: list[int] = []  # the products CasADi folded (covariance._mul)
+        self._predict_fn: cs.Function | None = None  # built on first use (predict())
+        # the update built once, on symbols (where it folds a product, it folds it on any P: the folds come from
+        # the constant entries of H and R), and called on the prediction's expressions in the step (the same
+        # operations in the same order; building it twice took 3-6 s on the Allegro hand's 32 states)
+        self._update = cs.Function("update", [z, P, y], list(self._update_sym(z, P, y)), ["z", "P", "y"],
+                                   ["z_upd", "P_upd"])
+        # one step on s = [z; vec P] and [w; y], the prediction built from the expressions (so that the products
+        # CasADi folds are seen: self.exact_loops, for the exported C)
+        s = cs.SX.sym("s", nz + nz * nz)
+        r = cs.SX.sym("wy", mdl.nw + mdl.ny)
+        zp, Pp = self._predict_sym(s[:nz], cs.reshape(s[nz:], nz, nz), r[: mdl.nw])
+        zu, Pu = self._update(zp, Pp, r[mdl.nw:])
+        self.exact_loops = not self._folds
+        out = cs.vertcat(zu, cs.vec(Pu))
+        # no cse of the whole step: built from merged pieces, it has 1-2 % more instructions than merged again, and
+        # merging them took 0.3 s on finger3, 2-4 s on an Allegro finger (benchmarks/observer_build.py)
+        self.filter_step_p = cs.Function(f"{self.kind}_step", [s, r, self._p], [out], ["s", "wy", "p"], ["s_next"])
+        self.filter_step = cs.Function(f"{self.kind}_step", [s, r], [self.filter_step_p(s, r, cs.DM(mdl.values))],
+                                       ["s", "wy"], ["s_next"])
+        self._loop: CompiledStepLoop | None = None
+        self._online_loop: CompiledStepLoop | None = None  # built by online() for a filter that runs in the VM
+        self.backend = "casadi"
+        if compiled:
+            self._loop = self._compiled_loop()
+            self.backend = "compiled"
+
+    def _compiled_loop(self) -> CompiledStepLoop:
+        """The step in compiled C with the model's numbers as its input p: one library per model *structure*
+        and noise setting, shared by every model of other values (masses, springs, ...; cached on disk)."""
+        return CompiledStepLoop(self.filter_step_p, f"{self.kind}_{self.model.system.model.name}", threads=1,
+                                vectorize=False, parameters=self.model.values)
+
+    # ------------------------------------------------------------------ symbolic pieces
+    @property
+    def _predict(self) -> cs.Function:
+        """The time update, (z, P, w) -> (z_pred, P_pred), built on first use (:meth:`predict`; the step is
+        built from the expressions)."""
+        if self._predict_fn is None:
+            z, P, w = cs.SX.sym("z", self.nz), cs.SX.sym("P", self.nz, self.nz), cs.SX.sym("w", self.nw)
+            fp = cs.Function("predict", [z, P, w, self._p], list(self._predict_sym(z, P, w)))
+            self._predict_fn = cs.Function("predict", [z, P, w], fp(z, P, w, cs.DM(self.model.values)),
+                                           ["z", "P", "w"], ["z_pred", "P_pred"])
+        return self._predict_fn
+
+    def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def _update_sym(self, z: cs.SX, P: cs.SX, y: cs.SX) -> tuple[cs.SX, cs.SX]:
+        """Measurement update with a Joseph-form covariance (eq. of the linear Kalman filter), in the order of
+        :func:`~alpes_dyn.estimation.observers.covariance.updated_state` (the exported C's)."""
+        zs = cs.SX.sym("zs", self.nz)
+        hs = self.model.output(zs)
+        self.measurement = cs.Function("measurement", [zs], [hs, cs.jacobian(hs, zs)], ["z"], ["h", "H"])
+        h, H = self.measurement(z)
+        return updated_state(z, P, y, h, H, self.R, self._folds)
+
+    # ------------------------------------------------------------------ numeric API
+    def _z(self, z: Any, name: str = "z") -> np.ndarray:
+        return self.model.system.model.vector(z, name, self.nz)
+
+    def _P(self, P: Any, name: str = "P") -> np.ndarray:
+        return _cov(P, self.nz, name)
+
+    def predict(self, z: Any, P: Any, w: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Time update over one period with the known input w (m[+3],): (z (nz,), P (nz, nz))."""
+        w = self.model.system.model.vector(w, "w", self.nw)
+        zp, Pp = self._predict(self._z(z), self._P(P), w)
+        return np.array(zp).reshape(-1), np.array(Pp)
+
+    def update(self, z: Any, P: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Measurement update with y (p,): (z (nz,), P (nz, nz))."""
+        y = self.model.system.model.vector(y, "y", self.ny)
+        zu, Pu = self._update(self._z(z), self._P(P), y)
+        return np.array(zu).reshape(-1), np.array(Pu)
+
+    def step(self, z: Any, P: Any, w: Any, y: Any) -> tuple[np.ndarray, np.ndarray]:
+        """One filter step: predict with w_k, then update with y_k+1."""
+        zp, Pp = self.predict(z, P, w)
+        return self.update(zp, Pp, y)
+
+    def online(self, z0: Any, P0: Any, y0: Any = None) -> "OnlineFilter":
+        """A filter for a real-time loop: :meth:`OnlineFilter.step` is one call into compiled C per sample.
+
+        ``z0``, ``P0``: the prior at t_0; ``y0``: the first measurement (updated into the prior when given).
+        Compiles the filter step on first use when the filter was not built with ``compiled=True`` (cached on
+        disk). The same numbers as :meth:`run` on the same samples (tested to the last bit).
+        """
+        if self._loop is None and self._online_loop is None:  # run() keeps its own backend
+            self._online_loop = self._compiled_loop()
+        z, P = self._z(z0, "z0"), self._P(P0, "P0")
+        if y0 is not None:
+            y0 = self.model.system.model.vector(y0, "y0", self.ny)
+            z, P = self._update(z, P, y0)
+        return OnlineFilter(self, np.array(z).reshape(-1), np.array(P))
+
+    def run(self, z0: Any, P0: Any, W: Any, Y: Any) -> Estimate:
+        """Filter a whole record.
+
+        Parameters
+        ----------
+        z0, P0: prior mean (nz,) and covariance (nz,) variances or (nz, nz) at t_0.
+        W: (N, m[+3]) known inputs, W[k] held on [t_k, t_k+1) (N m, N).
+        Y: (N+1, p) measurements at t_0 .. t_N (rad).
+
+        Returns
+        -------
+        :class:`Estimate` with z (N+1, nz), P (N+1, nz, nz): z[k] uses Y[0..k].
+        """
+        z0, P0 = self._z(z0, "z0"), self._P(P0, "P0")
+        W = as_float_array(W, "W", "an array of known inputs")
+        Y = as_float_array(Y, "Y", "an array of measurements")
+        if W.ndim == 1 and self.nw == 1:
+            W = W[:, None]
+        if Y.ndim == 1 and self.ny == 1:
+            Y = Y[:, None]
+        if W.ndim != 2 or W.shape[1] != self.nw or W.shape[0] < 1:
+            raise InputError(f"W: expected shape (N, {self.nw}), got {W.shape}")
+        N = W.shape[0]
+        check_bytes(16.0 * (N + 1) * (self.nz + self.nz * self.nz), "W",
+                    f"{N} samples of {self.nz} states and their covariance")
+        if Y.shape != (N + 1, self.ny):
+            raise InputError(f"Y: expected shape ({N + 1}, {self.ny}) (one more sample than W), got {Y.shape}")
+        for a, name in ((W, "W"), (Y, "Y")):
+            if not np.isfinite(a).all():
+                raise InputError(f"{name}: contains NaN or inf")
+        z, P = self._update(z0, P0, Y[0])
+        s0 = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
+        WY = np.hstack([W, Y[1:]])
+        if self._loop is not None:
+            S = self._loop.run(s0[None], WY[None])[0]
+        else:
+            # the step of the compiled loop, the model's numbers as its input: the same numbers as online(), to the bit
+            S = np.vstack([s0, np.array(self.filter_step_p.mapaccum(N)(s0, WY.T, self.model.values)).T])
+        nz = self.nz
+        Z = S[:, :nz]
+        Ps = S[:, nz:].reshape(N + 1, nz, nz).transpose(0, 2, 1)  # column-major vec(P)
+        if not np.isfinite(S[-1]).all():
+            raise InputError(f"{self.kind}: the filter diverged (non-finite estimate); check the noise settings")
+        return Estimate(t=self.dt * np.arange(N + 1), z=Z, P=Ps, names=self.names)
+
+
+class OnlineFilter:
+    """One filter step per call, in compiled C, for a loop at the sample rate (:meth:`KalmanFilter.online`).
+
+    :meth:`step` copies w and y into a preallocated buffer, calls the compiled predict-update step once
+    and returns the new estimate z as a view of the filter's buffer (valid until the next step: copy it to
+    keep it); :attr:`P` is the covariance. No allocation and no check per step beyond the shapes of w and
+    y (numpy's assignment): what a 1 kHz loop from Python can afford. Measured in
+    ``benchmarks/observer_step.py``.
+    """
+
+    def __init__(self, filt: KalmanFilter, z: np.ndarray, P: np.ndarray) -> None:
+        self.filter = filt
+        self._loop = filt._loop or filt._online_loop  # held: its library and its parameters' buffer
+        nz, nw, ny = filt.nz, filt.nw, filt.ny
+        self.nz, self.nw, self.ny = nz, nw, ny
+        ns = nz + nz * nz
+        self._X = np.zeros((1, 2, ns))
+        self._X[0, 0, :nz] = z
+        self._X[0, 0, nz:] = np.asarray(P, dtype=float).reshape(-1, order="F")
+        self._W = np.zeros((1, 1, nw + ny))
+        loop = filt._loop or filt._online_loop
+        assert loop is not None
+        self._fn = loop._fn
+        self._pp = loop._pp  # the model's numbers (the loop holds their buffer)
+        self._wp = self._W.ctypes.data_as(loop._dp)
+        self._xp = self._X.ctypes.data_as(loop._dp)
+        self._s, self._next = self._X[0, 0], self._X[0, 1]
+        self._w, self._y = self._W[0, 0, :nw], self._W[0, 0, nw:]
+        self._zview = self._s[:nz]
+        self._zview.flags.writeable = False
+
+    @property
+    def z(self) -> np.ndarray:
+        """(nz,) the current estimate [q; qd; theta] (a read-only view)."""
+        return self._zview
+
+    @property
+    def P(self) -> np.ndarray:
+        """(nz, nz) its covariance (a copy)."""
+        return self._s[self.nz:].reshape(self.nz, self.nz, order="F").copy()
+
+    def step(self, w: Any, y: Any) -> np.ndarray:
+        """Predict with the input w (nw,) held over the period, update with the measurement y (ny,) at its end;
+        return the estimate z (nz,) (a read-only view, valid until the next step)."""
+        try:
+            self._w[:] = w
+            self._y[:] = y
+        except (ValueError, TypeError):
+            raise InputError(f"w, y: expected {self.nw} and {self.ny} numbers, got {np.shape(w)} and {np.shape(y)}") \
+                from None
+        if self._fn(self._wp, self._xp, self._pp, 1, 1, 0, 1, 1) != 0:
+            raise InputError(f"{self.filter.kind}: the compiled step failed")
+        self._s[:] = self._next
+        return self._zview
+
+
+class ExtendedKalmanFilter(KalmanFilter):
+    """Extended Kalman filter of the RK4-discretised model (see :class:`KalmanFilter` for parameters).
+
+    Prediction: z_k+1 = F(z_k, w_k), P_k+1 = A P A^T + G Sigma_w G^T + Q with A = dF/dz and
+    G = dF/dw by CasADi automatic differentiation of the RK4 step. Update: the Kalman gain with
+    H = dh/dz and a Joseph-form covariance. Attribute ``linearized``: ``casadi.Function`` (z, w) -> (z_next,
+    A (sparse), N = the lower triangle of G Sigma_w G^T + Q); ``linearized_p`` the same of (z, w, p).
+
+    Example
+    -------
+    >>> import alpes_dyn as ad
+    >>> from alpes_dyn.symbolic.statespace import StateSpace
+    >>> from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
+    >>> ss = StateSpace(ad.Model.alpes("finger3"), input="motor", output="encoder")
+    >>> ekf = ExtendedKalmanFilter(ss, 1e-3, process_noise=[1e-10] * 3 + [1e-6] * 3,
+    ...                            measurement_noise=[1e-7], input_noise=[1e-8])
+    """
+
+    kind = "ekf"
+
+    def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
+        zs, ws, ps = cs.SX.sym("zs", self.nz), cs.SX.sym("ws", self.nw), cs.SX.sym("ps", self._p.numel())
+        zn = self.model.step_p(zs, ws, ps)
+        G = cs.jacobian(zn, ws)
+        noise = cs.mtimes([G, cs.sparsify(cs.DM(self.Sw)), G.T]) + cs.sparsify(cs.DM(self.Q))
+        self.linearized_p = cs.Function("linearized", [zs, ws, ps], [zn, cs.jacobian(zn, zs), cs.tril(noise)],
+                                        ["z", "w", "p"], ["z_next", "A", "N"])
+        self.linearized = cs.Function("linearized", [zs, ws], self.linearized_p(zs, ws, cs.DM(self.model.values)),
+                                      ["z", "w"], ["z_next", "A", "N"])
+        zn, A, N = self.linearized_p(z, w, self._p)
+        return zn, predicted_covariance(A, N, P, self._folds)
+
+
+def _chol_sym(P: cs.SX) -> cs.SX:
+    """Lower Cholesky factor of a symbolic symmetric positive definite matrix (unrolled)."""
+    n = P.shape[0]
+    L = [[cs.SX(0) for _ in range(n)] for _ in range(n)]
+    for j in range(n):
+        d = P[j, j] - sum((L[j][k] * L[j][k] for k in range(j)), cs.SX(0))
+        L[j][j] = cs.sqrt(cs.fmax(d, 1e-300))
+        for i in range(j + 1, n):
+            L[i][j] = (P[i, j] - sum((L[i][k] * L[j][k] for k in range(j)), cs.SX(0))) / L[j][j]
+    return cs.vertcat(*[cs.horzcat(*row) for row in L])
+
+
+class UnscentedKalmanFilter(KalmanFilter):
+    """Unscented Kalman filter of the RK4-discretised model (see :class:`KalmanFilter` for parameters).
+
+    Sigma points z +- sqrt(nz + lambda) L e_i (P = L L^T, lambda = alpha^2 (nz + kappa) - nz) go
+    through the RK4 step; mean and covariance are their weighted sums (Wan & van der Merwe, 2000),
+    plus G Sigma_w G^T + Q (G = dF/dw at the mean, by AD). The measurement is linear in the state
+    for the encoder, so the update is the Kalman update of :class:`KalmanFilter`.
+
+    Extra parameters: ``alpha`` (default 1, > 0), ``beta`` (2, optimal for Gaussians), ``kappa`` (0; with
+    alpha^2 (nz + kappa) > 0), all finite.
+    """
+
+    kind = "ukf"
+
+    def __init__(self, system: StateSpace, dt: float, *, alpha: float = 1.0, beta: float = 2.0,
+                 kappa: float = 0.0, **kwargs: Any) -> None:
+        self.alpha, self.beta, self.kappa = (_finite_number(x, name) for x, name in
+                                             ((alpha, "alpha"), (beta, "beta"), (kappa, "kappa")))
+        if not self.alpha > 0:
+            raise InputError(f"alpha: expected a positive number, got {alpha!r}")
+        super().__init__(system, dt, **kwargs)
+        self._remember(system, dt, alpha=alpha, beta=beta, kappa=kappa, **kwargs)
+
+    def _predict_sym(self, z: cs.SX, P: cs.SX, w: cs.SX) -> tuple[cs.SX, cs.SX]:
+        n = self.model.nz
+        lam = self.alpha**2 * (n + self.kappa) - n
+        if not n + lam > 0:  # the sigma points' spread sqrt(n + lambda) and the weights 1 / (n + lambda)
+            raise InputError(f"kappa: alpha^2 (nz + kappa) must be > 0 (nz = {n}, alpha = {self.alpha:g}, "
+                             f"kappa = {self.kappa:g})")
+        c = np.sqrt(n + lam)
+        Wm = np.full(2 * n + 1, 0.5 / (n + lam))
+        Wc = Wm.copy()
+        Wm[0] = lam / (n + lam)
+        Wc[0] = Wm[0] + 1.0 - self.alpha**2 + self.beta
+        L = _chol_sym(P)
+        pts = [z] + [z + c * L[:, i] for i in range(n)] + [z - c * L[:, i] for i in range(n)]
+        X = [self.model.step_p(p, w, self._p) for p in pts]
+        zm = sum((Wm[i] * X[i] for i in range(2 * n + 1)), cs.SX.zeros(n))
+        Pn = sum((Wc[i] * cs.mtimes(X[i] - zm, (X[i] - zm).T) for i in range(2 * n + 1)), cs.SX.zeros(n, n))
+        G = cs.jacobian(self.model.step_p(z, w, self._p), w)
+        Pn = Pn + cs.mtimes([G, cs.DM(self.Sw), G.T]) + cs.DM(self.Q)
+        return zm, 0.5 * (Pn + Pn.T)
+
+
+def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> KalmanFilter:
+    """An observer by name: ``ekf``, ``ukf``, ``ekf-params``, ``ukf-params`` (the last two estimate
+    both :data:`PARAMETERS`; any of them may add the ``disturbance_<motor>`` states in ``parameters``); keyword
+    arguments go to the filter."""
+    if name not in OBSERVERS:
+        raise InputError(f"unknown observer {name!r} (expected one of {', '.join(OBSERVERS)})")
+    base, _, extra = name.partition("-")
+    if extra:
+        kwargs.setdefault("parameters", PARAMETERS)
+    elif any(p in PARAMETERS for p in kwargs.get("parameters") or ()):
+        raise InputError(f"observer {name!r} estimates no gain; use {name}-params")
+    cls = ExtendedKalmanFilter if base == "ekf" else UnscentedKalmanFilter
+    return cls(system, dt, **kwargs)

@@ -1,0 +1,375 @@
+"""The observer on a recording: the joints estimated from a recorded encoder and motor torque.
+
+What a user does with the real hand (``alpes-dyn estimate --data REC.csv --params FILE``,
+:func:`estimate_recording`): the recording (the CSV format of :mod:`alpes_dyn.estimation.experiments.recording`,
+written by the hand's logger or by ``alpes-dyn experiment``) is played back into an observer of the
+model -- typically the one identified from another recording (``alpes-dyn identify -o FILE``).
+
+* Measurement y_k: the encoder, q_m = (2 pi / counts_per_rev) counts (Section 3, eq. 3.13), of
+  variance q_step^2 / 12 (the quantisation) plus ``encoder_noise_counts`` squared.
+* Known input w_k: the recorded motor torque, held on [t_k, t_k+1), with white noise of standard
+  deviation ``torque_noise`` (default: estimated from the recording, sqrt(mean(diff(tau, 2)^2) / 6),
+  which a white noise on a smooth excitation gives, the dither's 20 Hz included).
+* Optionally (``disturbance=True``) one slowly varying torque per motor, d_j, added to the recorded
+  torque (tau = S^T (u + d)) as a random-walk state of the observer: what identification leaves --
+  a friction the smooth law does not hold, a torque constant a few percent off, a gravity load of a
+  palm not level -- is absorbed there instead of in the joint estimates. Its random walk
+  (``disturbance_walk``, N m per sqrt(s)) sets how fast it may move.
+* Initial state: the static equilibrium under the first recorded torque (the hand at rest when the
+  recording starts), joints without spring mid-range; covariance 0.5 rad, 1 rad/s (as the scenario).
+* A recording with ``gravity_*`` columns sets the model's gravity when they are constant (a fixed
+  orientation); a varying orientation is refused (the observer has no gravity input).
+* Where the recording has ``true_q_*`` columns (a simulated experiment, or a jig), the RMSE of each
+  joint after ``transient`` seconds (default min(1 s, duration / 5)), as ``alpes-dyn estimate`` prints.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ...checks import as_float_array
+from ...errors import InputError, RecordingError
+from ...fileio import atomic_path
+from ...limits import check_bytes, check_physical
+from ...model.robot import Model
+from ...simulation.integrate import stable_substeps
+from ...symbolic.parametric import tilted_gravity
+from ...symbolic.statespace import StateSpace
+from ...simulation.loop import Function, run_loop
+from .blocks import Observer, RecordingPlayback
+from .observers import OBSERVERS, Estimate, make_observer
+from ..experiments.recording import Recording, read_recording
+from .scenario import held_mid_range, rest_with_held_joints
+
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
+
+MAX_DELAY = 100
+"""The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
+
+
+def advanced(recording: Recording, samples: int) -> Recording:
+    """``recording`` with its torque read ``samples`` whole samples earlier: row k of the torque is row k + samples
+    of the recorded one, the last ``samples`` rows repeat the last (the applied torque of a sensor that lags by
+    ``samples``: :class:`~alpes_dyn.control.plants.PlantEffects` ``torque_delay``). The recording itself for 0."""
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 0 <= samples <= MAX_DELAY:
+        raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_DELAY}, got {samples!r}")
+    if samples == 0:
+        return recording
+    if samples >= recording.n_samples:
+        raise InputError(f"torque_delay: {samples} samples, the recording has {recording.n_samples}")
+    tau = np.concatenate([recording.torque[samples:], np.repeat(recording.torque[-1:], samples, axis=0)])
+    return dataclasses.replace(recording, torque=tau)
+
+DISTURBANCE_WALK = 2e-4
+"""Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
+0.2 mN m, a tenth of the torque that holds a finger half-flexed, and follow stick-slip friction's breakaway
+within tens of milliseconds."""
+
+
+@dataclass
+class RecordingEstimate:
+    """An observer run on a recording.
+
+    Attributes
+    ----------
+    t: (N,) s. estimate: the observer's :class:`Estimate` (z = [q; qd; d]).
+    joint_names (n,), motor_names (m,). rmse: (n,) rad after the transient, or None (no ``true_q_*``).
+    final_error: (n,) rad at the last sample, or None. disturbance: (N, m) N m, or None.
+    settings: the noise levels and options used.
+    filter: the observer run (its ``model.step`` the prediction,
+        :mod:`~alpes_dyn.estimation.identification.observer_check`).
+    measurement: (N, m) rad, the encoder as the observer read it (the zero and the tendons' stretch taken off).
+    """
+
+    t: np.ndarray
+    estimate: Estimate
+    joint_names: tuple[str, ...]
+    motor_names: tuple[str, ...]
+    rmse: np.ndarray | None
+    final_error: np.ndarray | None
+    disturbance: np.ndarray | None
+    settings: dict[str, Any]
+    filter: Any = None
+    measurement: np.ndarray | None = None
+
+    @property
+    def q_hat(self) -> np.ndarray:
+        """(N, n) estimated joint angles, rad."""
+        return self.estimate.z[:, : len(self.joint_names)]
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON summary of ``alpes-dyn estimate --data --json`` (rmse in rad per joint, as ``estimate``)."""
+        n = len(self.joint_names)
+        out: dict[str, Any] = {
+            "joints": list(self.joint_names), "motors": list(self.motor_names), "samples": int(self.t.shape[0]),
+            "duration_s": float(self.t[-1] - self.t[0]),
+            "rmse": None if self.rmse is None else self.rmse.tolist(),
+            "rmse_deg": None if self.rmse is None else np.degrees(self.rmse).tolist(),
+            "final_error": None if self.final_error is None else self.final_error.tolist(),
+            "final_q": self.q_hat[-1].tolist(), "final_q_std": self.estimate.std[-1, :n].tolist(),
+        }
+        if self.disturbance is not None:
+            out["final_disturbance_Nm"] = self.disturbance[-1].tolist()
+        out.update(self.settings)
+        return out
+
+    def to_csv(self, path: str | Path) -> Path:
+        """Write t, q_hat_*, qd_hat_*, q_std_* (and d_hat_*) as CSV, atomically."""
+        n = len(self.joint_names)
+        cols = {"t": self.t}
+        cols.update({f"q_hat_{j}": self.estimate.z[:, i] for i, j in enumerate(self.joint_names)})
+        cols.update({f"qd_hat_{j}": self.estimate.z[:, n + i] for i, j in enumerate(self.joint_names)})
+        cols.update({f"q_std_{j}": self.estimate.std[:, i] for i, j in enumerate(self.joint_names)})
+        if self.disturbance is not None:
+            cols.update({f"d_hat_{mn}": self.disturbance[:, k] for k, mn in enumerate(self.motor_names)})
+        data = np.column_stack(list(cols.values()))
+        with atomic_path(path) as tmp:
+            np.savetxt(tmp, data, delimiter=",", header=",".join(cols), comments="", fmt="%.17g")
+        return Path(path)
+
+
+def _nonnegative(x: Any, name: str, unit: str) -> float:
+    """``x`` as a finite float >= 0 within its unit's accepted range (:func:`~alpes_dyn.limits.check_physical`)."""
+    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
+        raise InputError(f"{name}: expected a non-negative number of {unit}, got {x!r}")
+    try:
+        v = float(x)
+    except OverflowError:
+        v = math.inf
+    if not math.isfinite(v) or v < 0:
+        raise InputError(f"{name}: expected a non-negative number of {unit}, got {x!r:.40}")
+    return float(check_physical(v, name, unit, "nonneg"))
+
+
+def _finite_vector(x: Any, n: int, name: str, unit: str) -> np.ndarray:
+    """``x`` as (n,) finite floats (:func:`~alpes_dyn.checks.as_float_array`: no string, bool or complex)."""
+    expected = f"{n} finite numbers ({unit})"
+    a = as_float_array(x, name, expected).reshape(-1)
+    if a.shape != (n,) or not np.isfinite(a).all():
+        raise InputError(f"{name}: expected {expected}, got {np.asarray(x).tolist()!r}")
+    return check_physical(a.copy(), name, unit, "any")
+
+
+def _model_for(model: Model, rec: Recording) -> Model:
+    """The model in the recording's orientation (constant ``gravity_*`` columns), else the model itself."""
+    if rec.gravity is None:
+        return model
+    g = rec.gravity
+    if np.max(np.abs(g - g[0])) > 1e-9 * max(1.0, float(np.abs(g).max())):
+        raise RecordingError("recording: gravity_x,_y,_z vary over the recording; the observer takes one orientation "
+                             "(split the recording where the hand turns)")
+    return model.copy(gravity=g[0])
+
+
+def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
+    """[q; 0]: the static equilibrium under the first torque, joints without spring mid-range (fixed there)."""
+    try:
+        q0 = rest_with_held_joints(model, u0)
+    except InputError:  # no rest under this torque (a fold, a springless chain): start stretched, as the scenario
+        q0 = held_mid_range(model)
+    return np.concatenate([q0, np.zeros(model.n)])
+
+
+def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque_noise: float,
+                   encoder_noise_counts: float, disturbance_walk: float, gains: tuple[str, ...], pars: tuple[str, ...],
+                   u0: np.ndarray, compiled: bool) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The observer of :func:`estimate_recording` and its prior: (filter, z0 (nz,), P0 (nz,) variances); ``u0`` (m,)
+    the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C."""
+    n, m = m_obs.n, m_obs.transmission.n_motors
+    tr = m_obs.transmission
+    step = 2 * np.pi / tr.counts_per_rev
+    # the measurement's noise: the encoder's, and the torque noise through the tendon's stretch
+    meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
+    Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
+    ss = StateSpace(m_obs, input="motor", output="encoder")
+    filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
+                         process_noise=Q, measurement_noise=list(meas_var * np.ones(m)), input_noise=[torque_noise**2] * m)
+    z0 = np.concatenate([_initial_state(m_obs, u0), np.ones(len(gains)), np.zeros(len(pars))])
+    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
+    return filt, z0, P0
+
+
+def _substeps(model: Model, dt: float, substeps: int | None) -> int:
+    """The observer's RK4 steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
+    (:func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth law at 1 kHz), 1 without friction."""
+    if substeps is not None:
+        return substeps
+    has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
+    return stable_substeps(model, dt) if has_friction else 1
+
+
+def recording_filter(model: Model, observer: str = "ekf", dt: float = 1e-3, *, torque_noise: float = 5e-4,
+                     encoder_noise_counts: float = 0.0, substeps: int | None = None,
+                     u0: Any = None) -> tuple[Any, np.ndarray, np.ndarray]:
+    """The observer :func:`estimate_recording` runs on a recording of ``model`` sampled every ``dt`` s with the
+    torque noise ``torque_noise`` (N m) and the encoder noise ``encoder_noise_counts`` (counts beyond the
+    quantisation), without disturbance states: (filter, z0 (nz,), P0 (nz,) variances), z0 the rest under the motor
+    torques ``u0`` ((m,) N m, default 0). ``substeps`` as :func:`estimate_recording`'s (default: as many as the
+    model's friction asks, else 1). The C export of a URDF robot's observer (``alpes-dyn codegen``) is this
+    filter."""
+    if not isinstance(model, Model) or model.transmission is None:
+        raise InputError("model: expected an alpes_dyn Model with motors (a URDF and its spec's [[motor]] tables)")
+    if observer not in OBSERVERS:
+        raise InputError(f"observer: unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
+    dt = _nonnegative(dt, "dt", "s")
+    if not dt > 0:
+        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
+    torque_noise = _nonnegative(torque_noise, "torque_noise", "N m")
+    encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
+    substeps = _substeps(model, dt, substeps)
+    m = model.transmission.n_motors
+    u0 = np.zeros(m) if u0 is None else _finite_vector(u0, m, "u0", "N m")
+    gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
+    return _replay_filter(model, observer, dt, substeps, torque_noise, encoder_noise_counts, DISTURBANCE_WALK, gains,
+                          (), u0, False)
+
+
+def estimate_recording(recording: Recording | str | Path, model: Model, observer: str = "ekf", *,
+                       torque_noise: float | None = None, encoder_noise_counts: float = 0.0,
+                       disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
+                       transient: float | None = None, substeps: int | None = None,
+                       compiled: bool = False, encoder_offset: Any = None,
+                       tilt: Any = None, torque_delay: int = 0) -> RecordingEstimate:
+    """Run an observer on a recording (see the module docstring).
+
+    Parameters
+    ----------
+    recording: a :class:`Recording` or the path of its CSV (read for ``model``).
+    model: the observer's model, e.g. ``Model.alpes("finger3", friction=True, params="ident.toml")``.
+    observer: ``"ekf"`` or ``"ukf"`` (the ``-params`` variants estimate two gains as well).
+    torque_noise: the recorded torque's white noise, N m (default: estimated from the recording).
+    encoder_noise_counts: encoder noise beyond the quantisation, counts.
+    disturbance: estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``
+        N m per sqrt(s).
+    transient: start of the error metrics, s (default min(1 s, duration / 5)).
+    substeps: RK4 steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
+        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; else 1).
+    compiled: the filter in compiled C (same numbers).
+    encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
+        :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default 0.
+    tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
+        gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
+        tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
+        taken off it.
+    torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
+        :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
+        torque of :func:`advanced` (a replay: the later samples are recorded). Default 0.
+
+    Returns
+    -------
+    :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
+    """
+    rec = advanced(_replay_recording(recording, model, observer), torque_delay)
+    encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
+    disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
+    for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
+        if not isinstance(flag, (bool, np.bool_)):
+            raise InputError(f"{name}: expected True or False, got {flag!r:.40}")
+    N, dt = rec.n_samples, rec.dt
+    duration = rec.duration
+    t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")
+    if not t_start < duration:
+        raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
+    torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
+    m_obs, angles, offsets = _observer_model(model, rec, tilt, encoder_offset)
+    substeps = _substeps(m_obs, dt, substeps)
+    n, m = m_obs.n, m_obs.transmission.n_motors
+    pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
+    gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
+    nz = 2 * n + len(pars) + len(gains)
+    check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
+    tr = m_obs.transmission
+    filt, z0, P0 = _replay_filter(m_obs, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
+                                  gains, pars, rec.torque[0], compiled)
+    est = _played_back(rec, filt, z0, P0, tr, offsets)
+    rmse, final = _errors(est, rec, t_start, n)
+    dist = est.z[:, 2 * n + len(gains):] if pars else None
+    settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
+                "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
+                "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
+                "encoder_offset_rad": offsets.tolist(), "tilt_rad": angles,
+                "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay)}
+    return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
+                             motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
+                             disturbance=dist, settings=settings, filter=filt,
+                             measurement=_reading(rec, tr, offsets))
+
+
+def _replay_recording(recording: Recording | str | Path, model: Model, observer: str) -> Recording:
+    """The recording (read for ``model`` from a path), checked to be of the model's motors and joints; the model
+    (with a transmission) and the observer's name checked first."""
+    if not isinstance(model, Model):
+        raise InputError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
+    if model.transmission is None:
+        raise InputError(f"model: {model.name!r} has no tendon transmission (no encoder to observe)")
+    if observer not in OBSERVERS:
+        raise InputError(f"observer: expected one of {', '.join(OBSERVERS)}, got {observer!r}")
+    if not isinstance(recording, (Recording, str, Path)):
+        raise InputError(f"recording: expected a Recording or a CSV path, got {type(recording).__name__}")
+    rec = recording if isinstance(recording, Recording) else read_recording(recording, model)
+    if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or \
+            tuple(rec.joint_names) != tuple(model.joint_names):
+        raise RecordingError(f"recording: made for motors {list(rec.motor_names)} and joints {list(rec.joint_names)}, "
+                             f"not the model's {list(model.transmission.motor_names)} and {list(model.joint_names)}")
+    return rec
+
+
+def _torque_noise(rec: Recording) -> float:
+    """The recorded torque's white noise, N m, from its second difference."""
+    # the second difference of a white noise has variance 6 sigma^2; the torque's own motion leaves (2 pi f dt)^2
+    # of its amplitude there: 1.6 % at the dither's 20 Hz (the first difference left 13 %, 7 % too high a sigma)
+    d2_tau = np.diff(rec.torque, n=2, axis=0)
+    return float(np.sqrt(np.mean(d2_tau**2) / 6.0))
+
+
+def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
+                    ) -> tuple[Model, list[float] | None, np.ndarray]:
+    """(the observer's model in the recording's orientation, turned by ``tilt``; the tilt angles as given, rad, or
+    None; the encoders' zero (m,) rad)."""
+    m_obs = _model_for(model, rec)
+    angles = None
+    if tilt is not None:
+        angles = _finite_vector(tilt, 2, "tilt", "rad").tolist()
+        m_obs = m_obs.copy(gravity=tilted_gravity(m_obs.gravity, angles[0], angles[1]))
+    offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
+        _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
+    return m_obs, angles, offsets
+
+
+def _reading(rec: Recording, tr: Any, offsets: np.ndarray) -> np.ndarray:
+    """(N, m) rad: the recorded encoder as the observer reads it, the zero ``offsets`` and the tendons' stretch
+    C tau_m,k-1 taken off (what :func:`_played_back`'s ``unstretched`` block gives it)."""
+    from ...model.transmission import torque_before
+
+    step = 2 * np.pi / tr.counts_per_rev
+    return tr.unstretched(rec.encoder * step - offsets, torque_before(rec.torque))
+
+
+def _played_back(rec: Recording, filt: Any, z0: np.ndarray, P0: np.ndarray, tr: Any, offsets: np.ndarray
+                 ) -> Estimate:
+    """The observer's estimate over the recording: the composition recording played back -> the encoder's zero
+    and the tendons' stretch C tau_m,k-1 taken off -> observer, run by :func:`run_loop`."""
+    step = 2 * np.pi / tr.counts_per_rev
+    blocks = [RecordingPlayback(rec, encoder="counts", torque="tau", held="tau_held", before="tau_before"),
+              Function(lambda counts, tau_before: tr.unstretched(counts * step - offsets, tau_before),
+                       ("counts", "tau_before"), "y",
+                       name="unstretched", vectorized=True),
+              Observer(filt, z0, P0, known=("tau_held",), measurement="y")]
+    log = run_loop(blocks, rec.n_samples - 1, rec.dt, final=True)
+    return Estimate(t=rec.t.copy(), z=log["z"], P=log["P"], names=filt.names)
+
+
+def _errors(est: Estimate, rec: Recording, t_start: float, n: int) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """(RMSE (n,) rad after ``t_start`` s, the last sample's error (n,) rad) against the recording's true joints;
+    (None, None) without them."""
+    if rec.true_q is None or not np.isfinite(rec.true_q).all():
+        return None, None
+    k0 = int(round(t_start / rec.dt))
+    err = est.z[:, :n] - rec.true_q
+    return np.sqrt(np.mean(err[k0:] ** 2, axis=0)), np.abs(err[-1])
