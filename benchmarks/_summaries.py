@@ -232,6 +232,47 @@ def allegro_identify(r: Result) -> list[str]:
     return out
 
 
+def _mw(st: dict, fmt: str = ".2f") -> str:
+    return "n/a" if st["median"] is None else f"{format(st['median'], fmt)} / {format(st['worst'], fmt)}"
+
+
+def _seeds(r: Result) -> str:
+    s = r["seeds"]
+    return f"{s[0]}-{s[-1]}" if s == list(range(s[0], s[-1] + 1)) else ", ".join(str(x) for x in s)
+
+
+def realism(r: Result) -> list[str]:
+    rows = [x for x in r["rows"] if "adaptation" in x]
+    hung = sum(x["adaptation"]["rig"] == "hanging" for x in rows)
+    scaled = sum(x["adaptation"]["amplitude_scale"] != 1.0 for x in rows)
+    out = [f"{r['model']} drawn +-20 %, seeds {_seeds(r)}, {r['duration_s']:g} s experiments on the "
+           f"{r['rig']} rig, adapted on the plant (``--adapt {r.get('adapt', 'none')}``): {hung} of {len(rows)} hung "
+           f"fingers down, {scaled} scaled"]
+    for case, c in r["summary"].items():
+        g = c["goal"]
+        misses = ", ".join(f"seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg, m {m['m_pct']:.1f} %"
+                           for m in c["silent_misses"]) or "none"
+        refused = "; ".join(f"seed {x['seed']}: {x['verdict']}" for x in c["refusals"]) or "none"
+        out.append(f"**{case}** ({c['n']} draws; median / worst, errors up to the common scale): **{c['adequate']} "
+                   f"adequate**, K {_mw(c['K_pct'])} %, m {_mw(c['m_pct'])} %, F_s {_mw(c['F_s_pct'], '.1f')} %, "
+                   f"EKF {_mw(c['ekf_deg'])} deg (worst joint), fit {_mw(c['fit_seconds'], '.1f')} s (every round and "
+                   f"the observer's check); silent misses: {misses}; refused: {refused}; runs that raised: "
+                   f"{len(c['errors'])}")
+        out.append(f"{case}'s goals (EKF < {g['ekf_deg']:g} deg, K {g['K_pct']:g} %, m {g['m_pct']:g} % on every "
+                   f"adequate file, no silent miss): {_met(g['accuracy_met'])}; median fit < {g['fit_seconds']:g} s: "
+                   f"{_met(g['time_met'])}")
+    return out
+
+
+def _realism_headline(r: Result) -> str:
+    c = r["summary"].get("all") or next(iter(r["summary"].values()))
+    n_miss = len(c["silent_misses"])
+    return (f"seeds {_seeds(r)}: {c['adequate']} of {c['n']} adequate (K within {c['K_pct']['worst']:.2f} %, "
+            f"m within {c['m_pct']['worst']:.2f} %, EKF within {c['ekf_deg']['worst']:.2f} deg over all), "
+            f"{n_miss} silent miss{'es' if n_miss != 1 else ''}, {len(c['refusals'])} refused; fit with the "
+            f"observer's check {c['fit_seconds']['median']:.0f} s median")
+
+
 def _identification_headline(r: Result) -> str:
     rows = r["finger3"]
     worst = {k: max(abs(v["error_pct"]) for d in rows for n, v in d["parameters"].items() if n.startswith(k + "_"))
@@ -253,7 +294,7 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "rollout": rollout, "mimic": mimic, "identification": identification, "fit_scaling": fit_scaling,
     "observer_step": observer_step, "observer_build": observer_build, "param_cache": param_cache, "sweep": sweep,
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
-    "allegro_identify": allegro_identify,
+    "allegro_identify": allegro_identify, "realism": realism,
 }
 
 ORDER = ["default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
@@ -266,6 +307,8 @@ HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {
                       lambda r: f"{r['hand']['ours']['seconds']:.2f} s in process; `alpes-dyn observability --model hand` "
                                 f"{r['cli_hand']['seconds']:.2f} s with process start"),
     "identification": ("identification of a finger (K, m, friction; 4 s record)", _identification_headline),
+    "realism": ("realism: identify and the EKF on MuJoCo plants drawn +-20 %, every effect at once with 0.5 deg slack "
+                "and the torque 1 ms late, fresh seeds", _realism_headline),
     "observer_step": ("EKF step for a real-time loop / standalone C", _observer_step_headline),
     "sweep": ("sweeps on a local Dask cluster (2 workers)",
               lambda r: f"{r['median_speedup']:.2f}x the serial loop over {r['draws']} draws, {r['rounds']} round(s) "

@@ -52,6 +52,7 @@ with the reason.
                                  [--json] [--log FILE]
     python benchmarks/realism.py --chains index,middle,ring,little,thumb [--hand-seed 5] [--cases ...]
     python benchmarks/realism.py ... --workers 2      # each case's seeds on a local Dask cluster (the same rows)
+    python benchmarks/realism.py --from-log FILE [--json]   # the table of a run's --log rows, nothing measured
 
 ``--rig hanging``: the hand hung fingers down during the experiments (:func:`~alpes_dyn.model.mjcf.hanging_gravity`),
 the experiment designed and trimmed in that orientation, the fits and the EKF on the models turned to it (the
@@ -116,6 +117,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--no-rigid", action="store_true", help="skip the rigid fit (the extended fit and the EKF only)")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
+    ap.add_argument("--from-log", metavar="FILE",
+                    help="measure nothing: the table (or --json object) of the rows a run's --log FILE holds, with "
+                         "this script's distribution and goals (a run interrupted, or summarised again)")
     ap.add_argument("--chains", help="the hand's chains instead of finger3, comma-separated (index, middle, ring, "
                                      "little, thumb)")
     ap.add_argument("--workers", type=int, default=0,
@@ -124,6 +128,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--hand-seed", type=int, default=None,
                     help="with --chains: the seed of the hand's draw and of the sensors' noise (default 5)")
     args = ap.parse_args(argv)
+    if args.from_log is not None:
+        return _from_log(ap, args)
     try:
         seeds = parse_seeds(args.seeds)
     except InputError as e:
@@ -198,6 +204,26 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
+def _from_log(ap: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """--from-log FILE: the output of the run whose rows FILE holds (one JSON object a line), nothing measured but
+    the tendon's sizing (one MuJoCo run, as the run did it); the rig and adapt as given on this command line."""
+    try:
+        lines = Path(args.from_log).read_text(encoding="utf-8").splitlines()
+        rows = [json.loads(x) for x in lines if x.strip()]
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as e:
+        ap.error(f"--from-log: cannot read {args.from_log}: {e}")
+    if not rows or not all(isinstance(r, dict) and "case" in r and "seed" in r for r in rows):
+        ap.error(f"--from-log: {args.from_log} holds no rows of this benchmark (JSON objects with case and seed)")
+    design = rig_design(args.rig, 2.0 if args.quick else None)
+    warnings.simplefilter("ignore", JointRangeWarning)
+    info = tendon_stiffness(rig_design("level", design.duration))[2]
+    out = {"model": MODEL, "seeds": list(dict.fromkeys(r["seed"] for r in rows)), "duration_s": design.duration,
+           "rig": args.rig, "adapt": args.adapt, "tendon": info, "case_seconds": {}, "rows": rows,
+           "summary": summarise(rows), "from_log": args.from_log}
+    print(json.dumps(out) if args.json else table_text(out))
+    return 0
+
+
 def table_text(out: dict) -> str:
     """The table of a run (the --json object): per case and seed the rigid fit (its worst K and m errors, residual,
     verdict) and the extended one (worst errors up to the common scale, residual, converged, fit time, verdict),
@@ -264,6 +290,10 @@ def summary_text(summary: dict) -> list[str]:
             lines.append(f"    refused seed {r['seed']}: {r['verdict'][:150]}")
         for seed, err in s["errors"]:
             lines.append(f"    raised seed {seed}: {err[:150]}")
+        g = s["goal"]
+        lines.append(f"    goal: adequate files within EKF {g['ekf_deg']:g} deg, K {g['K_pct']:g} %, m {g['m_pct']:g} % and no "
+                     f"silent miss: {'met' if g['accuracy_met'] else 'MISSED'}; median fit within {g['fit_seconds']:g} s: "
+                     f"{'met' if g['time_met'] else 'MISSED'}")
     return lines
 
 

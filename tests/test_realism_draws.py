@@ -45,6 +45,10 @@ def test_summarise_counts_silent_misses_and_refusals():
     assert a["ekf_deg"] == {"median": pytest.approx(0.6), "worst": pytest.approx(3.0)}  # worst joints .3 .9 .3 3
     assert a["m_pct"] == {"median": pytest.approx(4.0), "worst": pytest.approx(9.0)}
     assert s["stiction"]["silent_misses"] == [] and s["stiction"]["ekf_deg"]["worst"] == pytest.approx(0.4)
+    assert not a["goal"]["accuracy_met"] and s["stiction"]["goal"]["accuracy_met"]  # misses and a raised run
+    assert s["stiction"]["goal"]["time_met"] == (s["stiction"]["fit_seconds"]["median"] <= 20.0)
+    ok = summarise([_row("all", 1, False, [0.1, 0.2, 0.3], 2.0), _row("all", 4, True, [3.0, 0.2, 0.3], 9.0, "FLAGGED")])
+    assert ok["all"]["goal"]["accuracy_met"]  # a refusal naming its cause is no miss
 
 
 def test_cases_hold_the_slack_and_the_delay():

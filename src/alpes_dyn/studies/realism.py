@@ -40,7 +40,7 @@ from ..symbolic.parametric import parameter_catalogue
 
 __all__ = ["CASE_NAMES", "RIGS", "ADAPT", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
            "plant_experiment", "realism_case", "realism_row", "realism_draw", "rig_design", "errors", "parse_seeds", "summarise",
-           "EKF_GOAL_DEG", "MASS_GOAL_PCT"]
+           "EKF_GOAL_DEG", "MASS_GOAL_PCT", "SPRING_GOAL_PCT", "FIT_GOAL_S"]
 
 KINDS = ("K", "m", "F_s", "F_v")
 """The kinds of parameter whose worst errors a row gives."""
@@ -384,6 +384,10 @@ EKF_GOAL_DEG = 0.5
 """deg: the EKF's RMSE on every joint that an adequate file must give (issue 38)."""
 MASS_GOAL_PCT = 5.0
 """%: the masses' worst error, up to the common scale, that an adequate file must keep."""
+SPRING_GOAL_PCT = 3.0
+"""%: the springs' worst error, up to the common scale, that an adequate file must keep."""
+FIT_GOAL_S = 20.0
+"""s: the median time of a fit, every round of ``--effects auto`` and the observer's check, cache warm (issue 38)."""
 
 
 def parse_seeds(text: str) -> list[int]:
@@ -416,7 +420,9 @@ def summarise(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG,
     extended file (deg, the worst joint of each row) and of the fit's time (s, every round); ``adequate``;
     ``silent_misses``: the adequate rows whose EKF is above ``ekf_goal`` deg on a joint or whose masses are more
     than ``mass_goal`` % off (each as seed, EKF, m); ``refusals``: the flagged rows (each as seed and verdict);
-    ``errors``: (seed, message)."""
+    ``errors``: (seed, message); ``goal``: the goals (``ekf_deg``, ``K_pct``, ``m_pct``, ``fit_seconds``) and whether
+    they are met: ``accuracy_met`` (no run raised, no silent miss, every adequate row's springs within ``K_pct``; a
+    refusal names its cause in its verdict), ``time_met`` (the median fit within ``fit_seconds``)."""
     out: dict[str, dict[str, Any]] = {}
     for case in dict.fromkeys(r["case"] for r in rows):
         mine = [r for r in rows if r["case"] == case]
@@ -433,5 +439,10 @@ def summarise(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG,
                               for r, e, d in zip(ok, ext, ekf)
                               if not e["flagged"] and (d > ekf_goal or e["worst_error_common_scale_pct"]["m"] > mass_goal)]
         s["refusals"] = [{"seed": r["seed"], "verdict": e["verdict"]} for r, e in zip(ok, ext) if e["flagged"]]
+        good = [e for e in ext if not e["flagged"]]
+        s["goal"] = {"ekf_deg": ekf_goal, "K_pct": SPRING_GOAL_PCT, "m_pct": mass_goal, "fit_seconds": FIT_GOAL_S,
+                     "accuracy_met": not s["errors"] and not s["silent_misses"] and all(
+                         e["worst_error_common_scale_pct"]["K"] <= SPRING_GOAL_PCT for e in good),
+                     "time_met": s["fit_seconds"]["median"] is not None and s["fit_seconds"]["median"] <= FIT_GOAL_S}
         out[case] = s
     return out
