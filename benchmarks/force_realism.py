@@ -58,7 +58,7 @@ from alpes_dyn.control.realism_loop import NO_COMPENSATION, Compensation
 from alpes_dyn.errors import InputError
 from alpes_dyn.estimation.draws import perturbed_params
 from alpes_dyn.model.stops import JointRangeWarning
-from alpes_dyn.control import run_hand_control
+from alpes_dyn.control import grasp_levels, grasp_limits, run_hand_control
 from alpes_dyn.model.params import load_params, with_values, write_params
 from alpes_dyn.studies.realism import FINGER3, Plant, hand_plant, realism_case, rig_design
 
@@ -175,7 +175,10 @@ def hand_file(fits: dict[str, Path], out: Path) -> Path:
 
 def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict]]:
     """The hand: each chain identified as the realism study does it (the hand drawn with ``seed``), one file, then
-    every controller and variant grasping the cylinder; (identification rows, control rows)."""
+    every controller and variant grasping the cylinder with the references of that drawn hand's grasp
+    (:func:`~alpes_dyn.control.hand_loop.grasp_levels` of the forces its pads hold,
+    :func:`~alpes_dyn.control.hand_loop.grasp_limits`, measured on the plant); (identification rows, with the
+    grasp's as chain ``grasp``, control rows)."""
     idents, fits, tilts = [], {}, []
     for chain in load_params().chain_names:
         plant = hand_plant(chain)
@@ -191,6 +194,11 @@ def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict
     ident = hand_file(fits, tmp / f"ident_hand_{seed}.toml")
     truth = hand_plant("index").true_params(seed)
     converged = all(i["converged"] for i in idents)
+    t0 = time.perf_counter()
+    limits = grasp_limits(truth, truth, effects, Compensation(), seed=seed)  # the scene of this drawn hand
+    levels = grasp_levels(limits)
+    idents.append({"model": "hand", "chain": "grasp", "seed": seed, "grasp_limits_N": limits,
+                   "levels_N": {c: list(v) for c, v in levels.items()}, "wall_s": time.perf_counter() - t0})
     rows = []
     for variant in VARIANTS:
         params = None if variant == "shipped" else str(ident)
@@ -199,7 +207,7 @@ def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict
         for ctl in CONTROLLERS:
             t0 = time.perf_counter()
             res = run_hand_control(ctl, params=params, plant_params=truth, seed=seed, effects=effects,
-                                   compensation=comp)
+                                   compensation=comp, levels=levels)
             worst = max(r["steady_state_error"] for r in res.table())
             rows.append({"model": "hand", "seed": seed, "variant": variant, "controller": ctl, "reference": "step",
                          "chains": res.table(), "worst_sse_pct": 100 * worst, "goal_met": bool(100 * worst < 5),
@@ -300,6 +308,11 @@ def table_text(out: dict) -> str:
              f"delay), levels {out['levels_N']} N, seeds {out['seeds']}",
              "identification (realism_case, level rig, --effects auto):"]
     for i in out["identifications"]:
+        if i.get("chain") == "grasp":
+            lines.append(f"  hand seed {i['seed']}: the pads hold (N) " + ", ".join(
+                f"{c} {v:.3f}" for c, v in i["grasp_limits_N"].items()) + "; references (N) " + ", ".join(
+                f"{c} {a:.3f}/{b:.3f}" for c, (a, b) in i["levels_N"].items()) + f" ({i['wall_s']:.0f} s)")
+            continue
         w = i["worst_error_common_scale_pct"]
         lines.append(f"  {i['model']}{' ' + i['chain'] if 'chain' in i else ''} seed {i['seed']}: converged {i['converged']}, {i['verdict'][:90]}; K {w['K']:.2f} %, "
                      f"m {w['m']:.2f} %, fit {i['fit_seconds']:.1f} s, tilt_y {i['tilt_y']:.4f} rad")

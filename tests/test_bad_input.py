@@ -1862,6 +1862,12 @@ API: list[Api] = [
     A("run_hand_control", lambda c: _hand(abduction_kp="1"), InputError, "abduction_kp: expected a finite number"),
     A("run_hand_control", lambda c: _hand(abduction_kd=-0.01), InputError, "abduction_kd: expected a number >= 0"),
     A("run_hand_control", lambda c: _hand(substeps=0), InputError, "substeps: expected a positive integer, got 0"),
+    A("run_hand_control", lambda c: _hand(ramp_s=-1.0), InputError, "ramp_s: expected a number >= 0"),
+    A("run_hand_control", lambda c: _hand(ramp_s=2.0), InputError, "ramp_s: the ramp ends after the run"),
+    A("grasp_levels", lambda c: _grasp_levels({"index": 0.5}), InputError,
+      "limits: expected a positive force (N) for chain 'middle'"),
+    A("grasp_levels", lambda c: _grasp_levels({k: float("nan") for k in _hand_levels()}), InputError,
+      "limits: expected a positive force (N) for chain 'index', got nan"),
     A("run_hand_control", lambda c: _hand(params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
     A("chain_frame", lambda c: _chain_frame("pinky"), InputError, "chain: unknown chain 'pinky'"),
     A("chain_model", lambda c: _chain_model("thumb2"), InputError, "chain: unknown chain 'thumb2'"),
@@ -2071,6 +2077,12 @@ def _hand(controller="sensor", **kw):
     from alpes_dyn.control import run_hand_control
 
     return run_hand_control(controller, **kw)
+
+
+def _grasp_levels(limits):
+    from alpes_dyn.control import grasp_levels
+
+    return grasp_levels(limits)
 
 
 def _hand_levels():
