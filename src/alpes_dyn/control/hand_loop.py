@@ -315,7 +315,8 @@ def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gai
            Delay(f"w_F_{c}", f"w_F_prev_{c}", np.zeros(3), name=f"delay_{c}"), *fx["blocks"]]
     if kind == "sensorless":
         out.append(SensorlessForce(m, sc.dt / (sc.force_filter_s + sc.dt), estimate=f"z_{c}",
-                                   torque=fx["torque"], normal=f"normal_{c}", force=F, name=f"sensorless_{c}"))
+                                   torque=fx["torque"], normal=f"normal_{c}", force=F, name=f"sensorless_{c}",
+                                   scale=fx["force_scale"]))
     return out
 
 
@@ -476,3 +477,30 @@ def grasp_levels(limits: dict[str, float], margin: float = GRASP_MARGIN) -> dict
         s = min(1.0, margin * float(limits[c]) / b)
         out[c] = (a * s, b * s)
     return out
+
+
+def force_scale_of(result: ControlResult | HandControlResult, previous: Any = 1.0) -> float | dict[str, float]:
+    """The one-point calibration of the sensorless force against the fingertip sensor: from a ``sensorless`` run
+    (:func:`~alpes_dyn.control.finger_loop.run_control`, or :func:`run_hand_control`: per chain), the mean force the
+    loop estimated over the last 200 ms of its first level over the mean the FlexiForce read there, times
+    ``previous`` (the :attr:`~alpes_dyn.control.realism_loop.Compensation.force_scale` the run had): the
+    ``force_scale`` that makes the estimate read what the sensor reads. What it corrects is the torque constant's
+    error (the estimate is the motor current through it, which the encoder cannot see: an identification scales
+    every torque parameter with it, and the estimate with them by 1 + e) and whatever else is proportional to the
+    force; it carries over the sensor's own accuracy (the plant's FlexiForce is noise and resolution only)."""
+    def one(r: ControlResult, prev: float) -> float:
+        sc = r.scenario
+        if sc.controller != "sensorless":
+            raise InputError(f"result: the calibration reads a sensorless run, got {sc.controller!r}")
+        t1 = sc.step_times[0]
+        k = (r.t >= t1 - 0.2) & (r.t < t1)
+        F_s = float(np.mean(r.F_meas[k]))
+        if not F_s > 0.02:
+            raise InputError(f"result: the fingertip sensor reads {F_s:.3g} N before the step: no contact to "
+                             "calibrate on")
+        return prev * float(np.mean(r.F_hat[k])) / F_s
+
+    if isinstance(result, HandControlResult):
+        return {c: one(r, float(previous.get(c, 1.0)) if isinstance(previous, dict) else float(previous))
+                for c, r in result.chains.items()}
+    return one(result, float(previous))
