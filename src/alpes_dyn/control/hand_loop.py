@@ -498,7 +498,11 @@ def force_scale_of(result: ControlResult | HandControlResult, previous: Any = 1.
         if not F_s > 0.02:
             raise InputError(f"result: the fingertip sensor reads {F_s:.3g} N before the step: no contact to "
                              "calibrate on")
-        return prev * float(np.mean(r.F_hat[k])) / F_s
+        s = prev * float(np.mean(r.F_hat[k])) / F_s
+        if not 0.5 <= s <= 2.0:
+            raise InputError(f"result: the estimate reads {s:.3g} times the fingertip sensor: beyond a scale to "
+                             "calibrate (0.5-2), the model is off")
+        return s
 
     if isinstance(result, HandControlResult):
         return {c: one(r, float(previous.get(c, 1.0)) if isinstance(previous, dict) else float(previous))
