@@ -138,6 +138,10 @@ def test_torque_constant_is_the_sensorless_floor_and_one_point_calibrates_it():
     assert r1.steady_state_error < 0.01
     with pytest.raises(ad.InputError, match="the calibration reads a sensorless run, got 'sensor'"):
         force_scale_of(dataclasses.replace(r, scenario=dataclasses.replace(r.scenario, controller="sensor")))
+    with pytest.raises(ad.InputError, match="times the fingertip sensor: beyond a scale to calibrate"):
+        force_scale_of(dataclasses.replace(r, F_meas=r.F_meas / 3.0))
+    with pytest.raises(ad.InputError, match="no contact to calibrate on"):
+        force_scale_of(dataclasses.replace(r, F_meas=0.0 * r.F_meas))
 
 
 def test_cli_end_to_end(ident, tmp_path, capsys):
