@@ -443,8 +443,9 @@ def grasp_limits(params: Any = None, plant_params: Any = None, effects: Any = No
     the sensor loops of :func:`run_hand_control` (controller's parameters ``params``, the plant's
     ``plant_params``, ``effects``, ``compensation``, ``seed``) with each reference ramped from its first level
     of :data:`HAND_LEVELS` to :data:`GRASP_PROBE_TOP` times its second over :data:`GRASP_PROBE_RAMP_S` s; a chain's
-    limit is the largest MuJoCo force (mean over 20 ms) reached before it falls under half the reference, the
-    ramp's top where it never does.
+    limit is the reference where its MuJoCo force (mean over 20 ms) first leaves 20 % of it on the ramp (the
+    largest force the loop held; not the force's own peak, which the pad's slip can spike), the ramp's top where
+    it never does.
 
     The cylinder is frictionless: a pad holds it only while the finger's springs and the tendon keep the contact
     normal within the pad, which depends on the finger's stiffness -- a hand drawn +-20 % per spring can let go
@@ -459,10 +460,8 @@ def grasp_limits(params: Any = None, plant_params: Any = None, effects: Any = No
     for c, r in res.chains.items():
         w = max(1, int(round(0.02 / sc.dt)))
         F = np.convolve(r.F_true, np.ones(w) / w, mode="same")
-        k = r.t >= sc.step_time
-        lost = np.nonzero(k & (F < 0.5 * r.F_ref))[0]
-        upto = lost[0] if lost.size else r.t.size
-        out[c] = float(np.max(F[k[:upto].nonzero()[0]])) if lost.size else float(r.F_ref[-1])
+        left = np.nonzero((r.t >= sc.step_time) & (np.abs(F - r.F_ref) > 0.2 * r.F_ref))[0]
+        out[c] = float(r.F_ref[left[0]]) if left.size else float(r.F_ref[-1])
     return out
 
 
