@@ -2206,6 +2206,12 @@ def _eblock(what: str, *a, **kw):
     return getattr(blocks, what)(*a, **kw)
 
 
+def _compensation(**kw):
+    from alpes_dyn.control.realism_loop import Compensation
+
+    return Compensation(**kw).check()
+
+
 def _cblock(what: str, *a, **kw):
     from alpes_dyn.control import blocks
 
@@ -2271,6 +2277,11 @@ API.extend([
     A("ForceLoop", lambda c: _cblock("ForceLoop", c.m), InputError, "controller: expected a ForceController, got Model"),
     A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.m, 1.5), InputError, "alpha: expected a number in (0, 1]"),
     A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.ss, 0.5), InputError, "model: expected an alpes_dyn.Model"),
+    A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.m, 0.5, scale=0.0), InputError,
+      "scale: expected a positive number, got 0.0"),
+    A("Compensation", lambda c: _compensation(force_scale=True), InputError, "force_scale: expected a number in [0.5, 2]"),
+    A("Compensation", lambda c: _compensation(force_scale={"thumb": float("nan")}), InputError,
+      "force_scale: expected a number in [0.5, 2] (or a dict chain -> number), got nan"),
     A("force_input", lambda c: _cblock("force_input", "F", "w", (0.0, 1.0)), InputError, "normal: expected 3 numbers"),
     A("EncoderPD", lambda c: _cblock("EncoderPD", 0.5, 1.0, 0.1, 0.0), InputError, "alpha: expected a number in (0, 1]"),
 ])

@@ -34,6 +34,10 @@ through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
   reading that lags by the torque delay -- a Smith-predictor-like use of the known actuator;
 * ``tilt``: the controller's and the observer's gravity turned by the palm's orientation the identification fitted
   (``tilt_y``; of the rig, not in the file).
+* ``force_scale``: the sensorless estimate divided by its ratio to the fingertip sensor's reading, measured once
+  (:func:`~alpes_dyn.control.hand_loop.force_scale_of`): the torque constant's error scales every identified torque
+  parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of e / (1 + e) on the
+  uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
 
 Measured and left out: a smoothed Coulomb feedforward of the identified F_s, F_v on the observer's velocities (the
 overshoot 13.6 -> 16.3 %: the stick-slip the loop meets is the passive joints' redistribution as the fingertip rolls
