@@ -46,7 +46,9 @@ def what_it_compares(name: str) -> str:
 
 
 def load(name: str, results: Path = RESULTS) -> dict | None:
-    """The record ``benchmarks/record.py`` kept for ``name`` in ``results``, or None where there is none."""
+    """The record ``benchmarks/record.py`` kept for ``name`` in ``results``, or None where there is none. A run of
+    the same script with other arguments may be kept beside it as ``NAME.PART.json`` (``record.py --output``: e.g.
+    ``force_realism.hand.json``), cited by the hand-written text until a summary reads it."""
     path = results / f"{name}.json"
     return json.loads(path.read_text()) if path.is_file() else None
 

@@ -1872,6 +1872,12 @@ API: list[Api] = [
     A("run_hand_control", lambda c: _hand(abduction_kp="1"), InputError, "abduction_kp: expected a finite number"),
     A("run_hand_control", lambda c: _hand(abduction_kd=-0.01), InputError, "abduction_kd: expected a number >= 0"),
     A("run_hand_control", lambda c: _hand(substeps=0), InputError, "substeps: expected a positive integer, got 0"),
+    A("run_hand_control", lambda c: _hand(ramp_s=-1.0), InputError, "ramp_s: expected a number >= 0"),
+    A("run_hand_control", lambda c: _hand(ramp_s=2.0), InputError, "ramp_s: the ramp ends after the run"),
+    A("grasp_levels", lambda c: _grasp_levels({"index": 0.5}), InputError,
+      "limits: expected a positive force (N) for chain 'middle'"),
+    A("grasp_levels", lambda c: _grasp_levels({k: float("nan") for k in _hand_levels()}), InputError,
+      "limits: expected a positive force (N) for chain 'index', got nan"),
     A("run_hand_control", lambda c: _hand(params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
     A("chain_frame", lambda c: _chain_frame("pinky"), InputError, "chain: unknown chain 'pinky'"),
     A("chain_model", lambda c: _chain_model("thumb2"), InputError, "chain: unknown chain 'thumb2'"),
@@ -2083,6 +2089,12 @@ def _hand(controller="sensor", **kw):
     return run_hand_control(controller, **kw)
 
 
+def _grasp_levels(limits):
+    from alpes_dyn.control import grasp_levels
+
+    return grasp_levels(limits)
+
+
 def _hand_levels():
     from alpes_dyn.control import HAND_LEVELS
 
@@ -2204,6 +2216,12 @@ def _eblock(what: str, *a, **kw):
     return getattr(blocks, what)(*a, **kw)
 
 
+def _compensation(**kw):
+    from alpes_dyn.control.realism_loop import Compensation
+
+    return Compensation(**kw).check()
+
+
 def _cblock(what: str, *a, **kw):
     from alpes_dyn.control import blocks
 
@@ -2269,6 +2287,11 @@ API.extend([
     A("ForceLoop", lambda c: _cblock("ForceLoop", c.m), InputError, "controller: expected a ForceController, got Model"),
     A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.m, 1.5), InputError, "alpha: expected a number in (0, 1]"),
     A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.ss, 0.5), InputError, "model: expected an alpes_dyn.Model"),
+    A("SensorlessForce", lambda c: _cblock("SensorlessForce", c.m, 0.5, scale=0.0), InputError,
+      "scale: expected a positive number, got 0.0"),
+    A("Compensation", lambda c: _compensation(force_scale=True), InputError, "force_scale: expected a number in [0.5, 2]"),
+    A("Compensation", lambda c: _compensation(force_scale={"thumb": float("nan")}), InputError,
+      "force_scale: expected a number in [0.5, 2] (or a dict chain -> number), got nan"),
     A("force_input", lambda c: _cblock("force_input", "F", "w", (0.0, 1.0)), InputError, "normal: expected 3 numbers"),
     A("EncoderPD", lambda c: _cblock("EncoderPD", 0.5, 1.0, 0.1, 0.0), InputError, "alpha: expected a number in (0, 1]"),
 ])

@@ -106,6 +106,42 @@ def test_negative_compliance_refused(ident):
         run_control("sensor", compensation=Compensation(), duration=0.6)
     with pytest.raises(ad.InputError, match="tilt: expected"):
         run_control("sensor", effects=EFFECTS, compensation=Compensation(tilt=(0.0, 2.0)), duration=0.6)
+    with pytest.raises(ad.InputError, match=r"force_scale: expected a number in \[0.5, 2\]"):
+        run_control("sensor", effects=EFFECTS, compensation=Compensation(force_scale={"index": 3.0}), duration=0.6)
+    with pytest.raises(ad.InputError, match="force_scale: a finger's loop takes one number, got a dict"):
+        run_control("sensorless", effects=EFFECTS, compensation=Compensation(force_scale={"index": 1.0}),
+                    duration=0.6)
+
+
+def test_torque_constant_is_the_sensorless_floor_and_one_point_calibrates_it():
+    """The torque constant 5 % off alone, the controller's file what an identification returns under it (every torque
+    parameter -- masses, inertias, springs, friction, rotor -- 1.05 times the plant's: the encoder sees the torque
+    reading's scale, :mod:`alpes_dyn.estimation.effects`): the sensorless estimate is the reading through that file,
+    1.05 times the force, so the loop holds F_ref / 1.05 at both levels (the closed form, within 0.6 %: 4.8 % low);
+    :func:`force_scale_of` on that run reads 1.05 from the FlexiForce (within 1 %) and the loop calibrated with it
+    holds both levels within 1 % (another noise draw)."""
+    from alpes_dyn.control import force_scale_of
+
+    e, f = 0.05, P.finger
+    up = lambda x: None if x is None else (1 + e) * np.asarray(x)  # noqa: E731
+    fit = dataclasses.replace(P, finger=dataclasses.replace(f, m=up(f.m), I=up(f.I), K=up(f.K), F_s=up(f.F_s),
+                                                            F_v=up(f.F_v)),
+                              F_s=(1 + e) * P.F_s, F_v=(1 + e) * P.F_v, J_m=(1 + e) * P.J_m)
+    run = dict(params=fit, plant_params=P, effects=PlantEffects(torque_constant_error=e), levels=(0.2, 0.6, 0.6),
+               step_times=(1.0, 1.8), duration=1.8)
+    r = run_control("sensorless", compensation=Compensation(), **run)
+    held = [float(np.mean(r.F_true[(r.t >= t0) & (r.t < t0 + 0.2)])) for t0 in (0.8, 1.6)]
+    assert np.allclose(np.array([0.2, 0.6]) / held, 1 + e, rtol=0.006), held
+    scale = force_scale_of(r)
+    assert scale == pytest.approx(1 + e, rel=0.01)
+    r1 = run_control("sensorless", compensation=Compensation(force_scale=scale), seed=1, **run)
+    assert r1.steady_state_error < 0.01
+    with pytest.raises(ad.InputError, match="the calibration reads a sensorless run, got 'sensor'"):
+        force_scale_of(dataclasses.replace(r, scenario=dataclasses.replace(r.scenario, controller="sensor")))
+    with pytest.raises(ad.InputError, match="times the fingertip sensor: beyond a scale to calibrate"):
+        force_scale_of(dataclasses.replace(r, F_meas=r.F_meas / 3.0))
+    with pytest.raises(ad.InputError, match="no contact to calibrate on"):
+        force_scale_of(dataclasses.replace(r, F_meas=0.0 * r.F_meas))
 
 
 def test_cli_end_to_end(ident, tmp_path, capsys):

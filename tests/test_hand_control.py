@@ -158,3 +158,51 @@ def test_cli_control_hand_json_log_plot(capsys, tmp_path):
     assert len(rows) == 2751 and rows[0][0] == "t_s" and rows[0][-1] == "q_thumb_abd_rad"
     assert "thumb_F_mujoco_N" in rows[0] and "q_hat_index_j3_rad" in rows[0] and len(rows[0]) == 1 + 6 * 5 + 2 * 14 + 1
     assert fig.stat().st_size > 10_000
+
+
+def test_hand_reference_ramps_over_ramp_s():
+    """``ramp_s`` > 0: each chain's reference rises linearly from its first level to its second between
+    ``step_time`` and ``step_time + ramp_s`` (the grasp probe's reference), exactly, sample by sample."""
+    lv = {c: (0.1, 0.3) for c in HAND_LEVELS}
+    r = run_hand_control("pi", duration=0.6, settle=0.0, step_time=0.25, ramp_s=0.2, levels=lv, compiled=False)
+    for x in r.chains.values():
+        assert np.allclose(x.F_ref, 0.1 + 0.2 * np.clip((x.t - 0.25) / 0.2, 0.0, 1.0), atol=1e-15)
+
+
+def test_grasp_limits_reads_where_each_pad_lets_go(monkeypatch):
+    """:func:`grasp_limits` on made-up traces (the loop replaced): the MuJoCo force follows the ramp, then falls to 0
+    where a chain lets go (index at 0.42 N, after a 30 % spike over 5 ms; thumb at 1.2 N) or never (the others: the
+    ramp's top); the limit read is that reference within 1 % (the 20 ms mean centred on the drop leads it by up to
+    10 ms of ramp, 0.4-0.7 N/s), not the spike; :func:`grasp_levels` then scales the index's two levels by
+    0.8 x 0.42 / 0.4 and keeps the others."""
+    from alpes_dyn.control import hand_loop as hl
+
+    let_go = {"index": 0.42, "thumb": 1.2}
+    seen = {}
+
+    def fake(controller, sc, **kw):
+        seen.update(controller=controller, ramp=sc.ramp_s, levels=kw["levels"])
+        t = np.arange(0.0, sc.duration, sc.dt)
+        chains = {}
+        for c, (a, b) in kw["levels"].items():
+            ref = a + (b - a) * np.clip((t - sc.step_time) / sc.ramp_s, 0.0, 1.0)
+            F = ref.copy()
+            if c in let_go:
+                i = int(np.argmax(ref >= let_go[c]))
+                F[i:] = 0.0
+                if c == "index":  # the pad's slip spikes the force before it falls
+                    F[i - 5:i] *= 1.3
+            chains[c] = type("R", (), {"t": t, "F_true": F, "F_ref": ref})()
+        return type("H", (), {"chains": chains})()
+
+    monkeypatch.setattr(hl, "run_hand_control", fake)
+    lim = hl.grasp_limits()
+    assert seen["controller"] == "sensor" and seen["ramp"] == hl.GRASP_PROBE_RAMP_S
+    for c, (a, b) in HAND_LEVELS.items():
+        assert seen["levels"][c] == (a, hl.GRASP_PROBE_TOP * b)
+        want = let_go.get(c, hl.GRASP_PROBE_TOP * b)
+        assert abs(lim[c] - want) < 0.01 * want, (c, lim[c], want)
+    lv = hl.grasp_levels(lim)
+    s = 0.8 * lim["index"] / HAND_LEVELS["index"][1]
+    assert np.allclose(lv["index"], np.array(HAND_LEVELS["index"]) * s) and s < 0.9
+    assert all(lv[c] == HAND_LEVELS[c] for c in HAND_LEVELS if c != "index")

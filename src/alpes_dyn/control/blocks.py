@@ -12,6 +12,8 @@ the contact force as the observer's known input, a PD on an encoder.
 
 from __future__ import annotations
 
+import math
+
 from typing import Any, Sequence
 
 import numpy as np
@@ -71,14 +73,17 @@ class SensorlessForce(Block):
     estimate (q_hat its first n entries). torque: the motor torque's reading (the previous period's, N m).
     normal: the contact normal (3,) -- a signal name, or a constant vector. force: the signal written, N.
     tip: the contact frame (None: the model's default tip). The torque's reading: one motor's (a float), or every
-    motor's (m,).
+    motor's (m,). scale: F_est divided by it (a calibration against the fingertip sensor, > 0; 1: none).
     """
 
     def __init__(self, model: Model, alpha: float, *, estimate: str = "z", torque: str = "tau_meas",
                  normal: str | Sequence[float] = (0.0, 0.0, 1.0), force: str = "F_fb", name: str = "sensorless",
-                 tip: str | None = None) -> None:
+                 tip: str | None = None, scale: float = 1.0) -> None:
         if not isinstance(model, Model):
             raise InputError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
+        if isinstance(scale, bool) or not isinstance(scale, (int, float)) or not (math.isfinite(scale) and scale > 0):
+            raise InputError(f"scale: expected a positive number, got {scale!r}")
+        self.scale = float(scale)
         self.model, self.alpha, self.name = model, _fraction(alpha, "alpha"), name
         self.estimate, self.torque, self.tip = estimate, torque, tip
         self._motors = len(model.transmission.motor_names) if model.transmission is not None else 1
@@ -96,7 +101,7 @@ class SensorlessForce(Block):
         tau = np.array([u[self.torque]]).reshape(-1)
         if tau.shape[0] != self._motors:  # a scalar before the first period's reading: every motor at it
             tau = np.broadcast_to(tau, (self._motors,))
-        F_est = static_contact_force(self.model, q_hat, tau, normal, self.tip)
+        F_est = static_contact_force(self.model, q_hat, tau, normal, self.tip) / self.scale
         self.F += self.alpha * (max(F_est, 0.0) - self.F)
         return {self.outputs[0]: self.F}
 

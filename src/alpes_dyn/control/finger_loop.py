@@ -474,10 +474,12 @@ def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: st
     e = sc.effects
     sig = {k: k + suffix for k in ("tau", "tau_motor", "tau_meas", "tau_meas_raw", "tau_prev", "y", "y_obs")}
     out: dict[str, Any] = {"applied": sig["tau"], "offset": 0.0, "reading": sig["tau_meas"], "gain": 1.0,
-                           "torque": sig["tau_meas"], "measurement": sig["y"], "blocks": [], "controller": {}}
+                           "torque": sig["tau_meas"], "measurement": sig["y"], "blocks": [], "controller": {},
+                           "force_scale": 1.0}
     if e is None:
         return out
     comp = Compensation() if sc.compensation is None else sc.compensation
+    out["force_scale"] = comp.scale_of(suffix[1:] or None)
     out.update(applied=sig["tau_motor"], offset=float(e.encoder_offset), gain=1.0 + float(e.torque_constant_error))
     blocks = torque_constant_blocks(e, sig["tau"], sig["tau_motor"], name="motor" + suffix)
     if e.torque_delay:
@@ -552,7 +554,7 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
                    _force_ekf(sc, model, s.frame, torque=fx["torque"], measurement=fx["measurement"])]
     if kind == "sensorless":
         blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal, tip=s.frame,
-                                   torque=fx["torque"]),
+                                   torque=fx["torque"], scale=fx["force_scale"]),
                    Delay("F_fb", "F_fb_prev", 0.0)]
     log = run_loop(blocks, N, sc.dt)
     q_hat = log["z"][:, :n] if kind != "pi" else np.full((N, n), np.nan)
