@@ -21,7 +21,7 @@ PAGE: dict[str, str] = {
     "force_realism": (
         '2026-12-05, fresh seeds 201-206 (tuned on finger3 seed 1; the calibration on finger3 seeds 1, 4, 5),'
         ' cache warm, ``benchmarks/results/force_realism.json`` (fingers, 18.6 min, load 4.7-7.8) and ``force'
-        '_realism_hand.json`` (``--models "" --hand-seeds 201,...,206``, 42 min, load 7-11): finger3 sensor ('
+        '_realism.hand.json`` (``--models "" --hand-seeds 201,...,206``, 42 min, load 7-11): finger3 sensor ('
         'identified + compensation) **6/6**, RMSE 1.56 % median (1.99 worst), overshoot 7.7 (8.6) %, rise 92 '
         '(94) ms; the rigid design and the shipped file 0/6 (the cable rings at 250 Hz: 32-34 % of the step);'
         ' sensorless 6/6 within 10 % (6.3 % median, 7.5 worst; calibrated once against the fingertip sensor 1'
