@@ -29,7 +29,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from ..progress import _Progress
-from .kkt import factorize
 from .shooting import Evaluation, ShootingProblem
 
 __all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
@@ -187,7 +186,7 @@ class GaussNewton:
                 hold[frozen] = 1e12 * np.maximum(H.diagonal()[frozen], 1.0)
                 H = H + (np.diag(hold) if dense else sp.diags(hold, format="csc"))
                 g = pb.grad(e.r, e.J, e.rg) + C.T @ (e.c.reshape(-1) * wdef)
-                d = -factorize(H)(g)  # the least-squares solution where H is singular
+                d = -pb.factorize(H, "normal")(g)  # the least-squares solution where H is singular
                 dv, dg, whole = self.limited(pb, d)
                 if not whole:
                     # the global step shortened, the local variables solved again for it: with continuity a
@@ -195,7 +194,7 @@ class GaussNewton:
                     # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
                     # iterations at 1/10-1/60 of the Gauss-Newton step)
                     try:
-                        dv = factorize(H[:nv, :nv])(-g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, pb.nb)
+                        dv = pb.factorize(H[:nv, :nv], "local")(-g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, pb.nb)
                     except np.linalg.LinAlgError:
                         pass
                 trial = pb.evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
@@ -293,7 +292,7 @@ class GaussNewton:
             cost = e.cost
             rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)
-            solve_K = factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu))  # once per iteration: the step and the correction
+            solve_K = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu), "kkt")  # once per iteration: the step and the correction
             sol = solve_K(np.column_stack([rhs, pb.unit_p]))
             sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]

@@ -31,7 +31,7 @@ from ..errors import InputError, ModelError
 from ..model.robot import Model
 from ..model.transmission import torque_before
 from ..simulation.sensitivity import SensitivityModel
-from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
+from .kkt import Shape, bordered_factorize, continuity_jacobian, factorize, kkt_matrix, kkt_order, normal_matrix
 from .recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
@@ -146,13 +146,16 @@ class ShootingProblem:
     model: the finger (its transmission reads the encoder). rec: the recording. sens: the compiled sensitivities of
     the selection (with the torque model's correction: ``input_offset`` without the lines, ``input_basis`` with).
     L: samples per interval. torque: :func:`torque_model`. camera_noise: sigma_q, rad. start: starting values by
-    name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
+    name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse. structured:
+    sparse matrices factorised by their band-and-border structure (:func:`~alpes_dyn.estimation.kkt.bordered_factorize`,
+    the default) or, False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
 
     The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,); :meth:`values` maps ``glob`` to theta.
     """
 
     def __init__(self, model: Model, rec: Recording, sens: SensitivityModel, L: int, torque: TorqueModel,
-                 camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False) -> None:
+                 camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False,
+                 structured: bool = True) -> None:
         self.model, self.rec, self.sens, self.L, self.torque = model, rec, sens, L, torque
         self.camera_noise = camera_noise
         self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
@@ -198,7 +201,7 @@ class ShootingProblem:
         self.shape = Shape(n_int, self.nb, self.nx, self.ng)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
-        self.dense = dense
+        self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
                  + n_int * self.no + self.ncg)
         self.dof = max(n_res - (self.nz - self.nc), 1)  # residuals less free variables (constraints count back)
@@ -390,6 +393,19 @@ class ShootingProblem:
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
         return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+
+    def factorize(self, M, system: str):
+        """A solver x = M^-1 b for one of the problem's matrices: ``system`` "kkt" (:meth:`kkt_system`), "normal"
+        (the (nz, nz) normal matrix, with or without the continuity penalty C'WC) or "local" (its local variables'
+        (nv, nv) block); by :func:`~alpes_dyn.estimation.kkt.bordered_factorize` in the order that makes it banded
+        but for the global variables where :attr:`structured`, else :func:`~alpes_dyn.estimation.kkt.factorize`."""
+        if not self.structured:
+            return factorize(M)
+        if system == "kkt":
+            return bordered_factorize(M, kkt_order(self.shape), self.ng)
+        if system not in ("normal", "local"):
+            raise ValueError(f"system: expected 'kkt', 'normal' or 'local', got {system!r}")
+        return bordered_factorize(M, np.arange(M.shape[0]), self.ng if system == "normal" else 0)
 
     def grad(self, r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
         """(nz,) the cost's gradient J^T r (+ rg for the global variables)."""
