@@ -74,6 +74,7 @@ from ..simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
 from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
+from .long_record import window_start
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -208,16 +209,21 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     values, solution = _start_of(start, sens.names)
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse")
+    q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
+          else np.zeros(pb.n))  # the rest the model's own response starts from
+
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
         """The initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder."""
-        q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
-              else np.zeros(pb.n))
         return pb.initial_nodes(q0)
     offs = np.zeros((pb.n_int, pb.no))
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)
-    out = GaussNewton(max_iterations, tol, show).solve(pb, nodes, offs, glob, warm=pb.warm_variables(solution))
-    it, reason = out.iterations, out.reason
+    solver = GaussNewton(max_iterations, tol, show)
+    warm, it_window = pb.warm_variables(solution), 0
+    if warm is None:  # a long record: the globalisation on its first seconds (module long_record)
+        warm, it_window = window_start(pb, solver, excitation, q0)
+    out = solver.solve(pb, nodes, offs, glob, warm=warm)
+    it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
     missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, encoder_noise).total \
