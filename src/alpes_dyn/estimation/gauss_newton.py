@@ -158,11 +158,13 @@ class GaussNewton:
     # --- stage 2 ----------------------------------------------------------------------------------------------
 
     def homotopy(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
-                 freeze: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation]:
+                 freeze: bool, first: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation]:
         """Stage 2: continuity as a soft penalty, tightened tenfold per phase (a homotopy from the decoupled
         intervals to the shooting problem); ``freeze``: friction held. With the starting parameters wrong, a 100 ms
         interval of the finger (tiny inertias, a soft balance of springs and gravity) drifts by degrees and rad/s;
         imposing continuity at once lets Gauss-Newton trade the fit for the defects and stall far from the truth.
+        ``first``: the phase to start from (0: weight 1; a start already close, :mod:`~alpes_dyn.estimation.long_record`,
+        skips the softest).
         (Its length: the loop of the phases and of Levenberg-Marquardt inside them, one block.)"""
         nx, nv, nz, n_int, dense = pb.nx, pb.nv, pb.nz, pb.n_int, pb.dense
         e = pb.evaluate(nodes, offs, glob)
@@ -174,7 +176,7 @@ class GaussNewton:
         # -0.02, +0.01 towards +0.14, -0.16, +0.11; held, 0.15, -0.16, 0.11)
         frozen = nv + np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith("F_")]
                                + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)
-        for level in range(SOFT_PHASES):
+        for level in range(first, SOFT_PHASES):
             wdef = np.tile(10.0**level / defect0, n_int - 1)  # 1 / sigma of each defect
             mu_s = 1e-3
             for _ in range(6):
