@@ -57,6 +57,13 @@ def _errors(names, values, truth: dict) -> dict:
     return err
 
 
+def _cpu() -> float:
+    """CPU seconds of this process so far (user and system): the fit's own work, less sensitive than the wall
+    clock to the other processes of a shared machine."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
 def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str) -> dict:
     """One duration, in this process: the record read from ``path``, the fit (``api`` or ``cli``), then the
     references ``kkt`` (``dense``, ``superlu``) on the same record; peak RSS after the fit."""
@@ -77,7 +84,7 @@ def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str)
                  "rss_before_fit_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
     design = ExperimentDesign(duration=duration)
     model = ad.Model.alpes("finger3", friction=True)
-    t0 = time.perf_counter()
+    t0, cpu0 = time.perf_counter(), _cpu()
     if fit == "cli":
         import contextlib
         import io
@@ -97,7 +104,7 @@ def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str)
         names, values = list(res.names), list(map(float, res.values))
         res_d = {"iterations": res.iterations, "converged": bool(res.converged), "residual_counts": res.residual_rms,
                  "compile_seconds": res.compile_seconds}
-    out["seconds"] = time.perf_counter() - t0
+    out["seconds"], out["cpu_seconds"] = time.perf_counter() - t0, _cpu() - cpu0
     out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     out.update(res_d)
     out["worst_error_pct"] = _errors(names, values, truth)
@@ -115,13 +122,13 @@ def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str)
 def _table(rows: list[dict], seed: int, fit: str) -> None:
     print(f"finger3 seed {seed}: identify ({'alpes-dyn identify, --effects auto' if fit == 'cli' else 'K, m, friction'})"
           " on records of each length; ratios to the first row (same run)")
-    print(f"{'T s':>5} {'design':>24} | {'fit s':>6} {'x':>5} {'peak MiB':>8} {'x':>5} {'its':>4} {'resid':>5} "
+    print(f"{'T s':>5} {'design':>24} | {'fit s':>6} {'x':>5} {'cpu s':>6} {'peak MiB':>8} {'x':>5} {'its':>4} {'resid':>5} "
           f"{'K%':>5} {'m%':>5} | refs (kkt: s, max rel diff)")
     t0, m0 = rows[0]["seconds"], rows[0]["peak_rss_mib"]
     for r in rows:
         refs = "  ".join(f"{k} {r[k]['seconds']:.1f} s {r[k]['max_relative_difference']:.0e}" for k in ("dense", "superlu")
                          if k in r)
-        print(f"{r['duration_s']:5g} {r.get('design', '')[:24]:>24} | {r['seconds']:6.1f} {r['seconds'] / t0:5.1f} "
+        print(f"{r['duration_s']:5g} {r.get('design', '')[:24]:>24} | {r['seconds']:6.1f} {r['seconds'] / t0:5.1f} {r['cpu_seconds']:6.1f} "
               f"{r['peak_rss_mib']:8.0f} {r['peak_rss_mib'] / m0:5.2f} {r['iterations']:4d} {r['residual_counts']:5.2f} "
               f"{r['worst_error_pct']['K']:5.2f} {r['worst_error_pct']['m']:5.2f} | {refs}")
 
@@ -177,6 +184,7 @@ def main(argv: list[str] | None = None) -> int:
     t0, m0 = rows[0]["seconds"], rows[0]["peak_rss_mib"]
     for r in rows:
         r["time_ratio"], r["memory_ratio"] = r["seconds"] / t0, r["peak_rss_mib"] / m0
+        r["cpu_ratio"] = r["cpu_seconds"] / rows[0]["cpu_seconds"]
     if args.json:
         print(json.dumps({"model": "finger3", "fit": args.fit, "rows": rows}))
         return 0
