@@ -146,9 +146,9 @@ class ShootingProblem:
     model: the finger (its transmission reads the encoder). rec: the recording. sens: the compiled sensitivities of
     the selection (with the torque model's correction: ``input_offset`` without the lines, ``input_basis`` with).
     L: samples per interval. torque: :func:`torque_model`. camera_noise: sigma_q, rad. start: starting values by
-    name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse. structured:
-    sparse matrices factorised by their band-and-border structure (:func:`~alpes_dyn.estimation.kkt.bordered_factorize`,
-    the default) or, False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
+    name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
+    structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
+    False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
 
     The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,); :meth:`values` maps ``glob`` to theta.
     """
@@ -159,7 +159,7 @@ class ShootingProblem:
         self.model, self.rec, self.sens, self.L, self.torque = model, rec, sens, L, torque
         self.camera_noise = camera_noise
         self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
-        eiv, lines, nphi = torque.eiv, torque.lines, torque.nphi
+        eiv, lines = torque.eiv, torque.lines
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
         self.ncg = sens.no if lines else 0  # global line-coefficient corrections
         self.ng = self.p + self.ncg
@@ -178,10 +178,6 @@ class ShootingProblem:
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
         self.Gb = np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
-        self.Psi = self.Psib = None
-        if lines:
-            self.Psi = torque.noise * torque.Q
-            self.Psib = np.concatenate([self.Psi, np.repeat(self.Psi[-1:], pad, axis=0)]).reshape(n_int, L, nphi)
         # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
         k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
         valid = k_idx <= N
@@ -196,8 +192,12 @@ class ShootingProblem:
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
         self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
-        self.Psik = (torque_before(np.concatenate([self.Psi, torque.noise * torque.Q_last[None]]))[self.kk]
+        self.Psik = (torque_before(torque.noise * np.concatenate([torque.Q, torque.Q_last[None]]))[self.kk]
                      if lines else None)
+        # the lines' basis over each interval's sample periods (S, L, nphi), the last interval's padded with the
+        # last period's: Psik[s, j+1] is the basis of period sL + j (torque_before), so a view, not a copy (at
+        # 600 s each copy of the basis is 91 MB)
+        self.Psib = self.Psik[:, 1:] if lines else None
         self.shape = Shape(n_int, self.nb, self.nx, self.ng)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
@@ -438,7 +438,8 @@ class ShootingProblem:
         n, L, n_int, nu = self.n, self.L, self.n_int, self.nu
         x_nom, _ = self.sens.run(np.concatenate([q0, np.zeros(n)])[None], self.torque.U[None], self.G[None],
                                  self.theta0 if theta is None else theta, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
-                                 basis=self.Psi[None] if self.torque.lines else None, sensitivities=False)
+                                 basis=self.torque.noise * self.torque.Q[None] if self.torque.lines else None,
+                                 sensitivities=False)
         nodes = x_nom[0, np.arange(n_int) * L].copy()
         if not np.isfinite(nodes).all():
             nodes[:] = np.concatenate([q0, np.zeros(n)])
