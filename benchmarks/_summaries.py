@@ -108,12 +108,13 @@ def identification(r: Result) -> list[str]:
 def fit_scaling(r: Result) -> list[str]:
     out = []
     for d in r["rows"]:
-        s = d["sparse"]
-        dense = (f"; dense {d['dense']['seconds']:.1f} s, equal to {d['max_relative_difference']:.0e}"
-                 if "dense" in d else " (dense not run)")
-        out.append(f"{d['duration_s']:.0f} s record: sparse {s['seconds']:.1f} s, {s['iterations']} iterations, "
-                   f"{'converged' if s['converged'] else 'not converged'}, peak {d['peak_rss_mib_sparse']:.0f} MiB "
-                   f"({d['rss_before_fit_mib']:.0f} before the fit){dense}")
+        w = d.get("worst_error_pct") or {}
+        errs = f", K within {w['K']:.2f} %, m within {w['m']:.2f} %" if w else ""
+        out.append(f"{r['model']} {d['duration_s']:.0f} s record (seed {d['seed']}, fit {d['fit']}): {d['seconds']:.1f} s "
+                   f"({d['time_ratio']:.1f}x the first row; {d['cpu_seconds']:.1f} s of CPU), peak {d['peak_rss_mib']:.0f} MiB "
+                   f"({d['memory_ratio']:.2f}x), {d['iterations']} iterations, "
+                   f"{'converged' if d['converged'] else 'not converged'}, "
+                   f"{'adequate' if d['trustworthy'] else 'flagged'}{errs}")
     return out
 
 

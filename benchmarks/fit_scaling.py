@@ -1,16 +1,22 @@
-"""Fit cost against the record's length (issue 20, item 2): time and peak memory of ``identify`` on 2-60 s records.
+"""Fit cost against the record's length (issues 20 and 39): time and peak memory of ``identify`` on 4 s to 10 min.
 
 finger3 drawn +-20 % per link (seed 21 by default: not one the other benchmarks tune on), the documented
-identification experiment simulated for each duration (our simulator; sensor noise on) and written to a CSV by
-one process, the default fit (K, m, friction; ``excitation`` the documented lines) of that file in a fresh one, as
-``alpes-dyn identify --data`` does, so that its peak resident memory is the fit's own (the 60 s experiment's
-simulation alone peaks at about 500 MiB). The sparse KKT (the default, :mod:`alpes_dyn.estimation.identification.kkt`)
-against the dense one (``kkt="dense"``, the baseline, run in the same process where it fits in memory: up to 16 s), with
-the ratio of their times and their parameters' largest relative difference.
+identification experiment simulated for each duration as ``alpes-dyn experiment`` makes it (the design adapted over
+the whole record: :func:`~alpes_dyn.estimation.experiments.adapt.adapted_experiment`; our simulator, sensor noise on) and
+written to a CSV by one process (kept in ``--records DIR`` where given: a 600 s record takes 10-20 minutes to
+simulate), then fitted in a fresh process, so that its peak resident memory is the fit's own (the 60 s experiment's
+simulation alone peaks at about 500 MiB). Two fits: ``api``, ``identify`` with the default selection (K, m,
+friction; ``excitation`` the documented lines), and ``cli``, ``alpes-dyn identify --data FILE`` as a user runs it
+(``--effects auto``: the tendon compliance fitted, then the fit again without it where the data do not support it).
+Each row's time and peak memory also as ratios to the 4 s fit of the same run (the first duration), and the worst
+error of K and m against the truth. Optionally the dense KKT (``kkt="dense"``, the baseline, up to
+``--dense-up-to`` seconds) and SuperLU (``kkt="superlu"``, the general sparse LU the banded one replaced).
 
-    python benchmarks/fit_scaling.py [--durations 2,4,8,16,60] [--dense-up-to 16] [--seed 21] [--json]
+    python benchmarks/fit_scaling.py [--durations 4,16,60] [--fit api|cli] [--records DIR] [--seed 21]
+                                     [--dense-up-to 0] [--superlu-up-to 0] [--json]
 
-Goal: time and memory linear in the record; a 60 s record under 60 s and 500 MB.
+Goal (issue 39): time and memory linear in the record; with the cache warm, ``alpes-dyn identify`` on 60 s under
+20 s and 400 MiB, on 600 s under 3 min and 1 GiB, the parameters as accurate as the 4 s fit's (K 3 %, m 5 %).
 """
 
 from __future__ import annotations
@@ -26,21 +32,41 @@ from pathlib import Path
 
 
 def make(duration: float, seed: int, path: str) -> None:
-    """The record of one duration, written to ``path`` (the recording CSV)."""
+    """The record of one duration, written to ``path`` (the recording CSV), as ``alpes-dyn experiment --model
+    finger3 --perturb 0.2 --seed SEED --duration D`` writes it (the design adapted, ``--rig auto``)."""
     import warnings
 
-    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
-    from alpes_dyn.estimation.experiments.recording import write_recording
-    from alpes_dyn.model.stops import JointRangeWarning
+    from alpes_dyn.estimation.experiments.adapt import adapted_experiment
+    from alpes_dyn.estimation.experiments.excursion import SmallExcursionWarning
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, perturbed_params
 
-    warnings.simplefilter("ignore", JointRangeWarning)
-    write_recording(experiment("finger3", perturbed_params(spread=0.2, seed=seed), ExperimentDesign(duration=duration),
-                               seed=seed), path)
+    warnings.simplefilter("ignore", SmallExcursionWarning)
+    _, adaptation = adapted_experiment("finger3", perturbed_params(spread=0.2, seed=seed),
+                                       ExperimentDesign(duration=duration), seed=seed, path=path)
+    print(json.dumps({"design": adaptation.note}))
 
 
-def child(duration: float, seed: int, dense: bool, path: str) -> dict:
-    """One duration, in this process: the record read from ``path``, the sparse fit, optionally the dense one; peak
-    RSS at the end."""
+def _errors(names, values, truth: dict) -> dict:
+    import numpy as np
+
+    err = {k: 0.0 for k in ("K", "m", "F_s", "F_v")}
+    for nm, v in zip(names, values):
+        kind = nm.rsplit("_", 1)[0]
+        if nm in truth and kind in err:
+            err[kind] = max(err[kind], float(np.abs(100.0 * (v / truth[nm] - 1.0))))
+    return err
+
+
+def _cpu() -> float:
+    """CPU seconds of this process so far (user and system): the fit's own work, less sensitive than the wall
+    clock to the other processes of a shared machine."""
+    r = resource.getrusage(resource.RUSAGE_SELF)
+    return r.ru_utime + r.ru_stime
+
+
+def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str) -> dict:
+    """One duration, in this process: the record read from ``path``, the fit (``api`` or ``cli``), then the
+    references ``kkt`` (``dense``, ``superlu``) on the same record; peak RSS after the fit."""
     import warnings
 
     import numpy as np
@@ -52,41 +78,72 @@ def child(duration: float, seed: int, dense: bool, path: str) -> dict:
     from alpes_dyn.estimation.experiments.recording import read_recording
 
     warnings.simplefilter("ignore", AdequacyWarning)
-    true = perturbed_params(spread=0.2, seed=seed)
+    f = perturbed_params(spread=0.2, seed=seed).finger
+    truth = {f"{k}_{i + 1}": float(getattr(f, k)[i]) for k in ("K", "m", "F_s", "F_v") for i in range(3)}
+    out: dict = {"duration_s": duration, "seed": seed, "fit": fit,
+                 "rss_before_fit_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0}
     design = ExperimentDesign(duration=duration)
     model = ad.Model.alpes("finger3", friction=True)
-    rec = read_recording(path, model)
-    truth = np.r_[true.finger.K, true.finger.m, true.finger.F_s, true.finger.F_v]
-    out: dict = {"duration_s": duration, "seed": seed}
-    rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    t0 = time.perf_counter()
-    res = identify(model, rec, excitation=design.lines, progress=False)
-    out["sparse"] = {"seconds": time.perf_counter() - t0, "compile_seconds": res.compile_seconds,
-                     "iterations": res.iterations, "converged": bool(res.converged),
-                     "residual_counts": res.residual_rms,
-                     "worst_error_pct": {k: float(np.max(np.abs(100 * (res.values[i:i + 3] / truth[i:i + 3] - 1))))
-                                         for k, i in (("K", 0), ("m", 3), ("F_s", 6), ("F_v", 9))}}
-    out["peak_rss_mib_sparse"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-    out["rss_before_fit_mib"] = rss0
-    if dense:
+    t0, cpu0 = time.perf_counter(), _cpu()
+    if fit == "cli":
+        import contextlib
+        import io
+
+        from alpes_dyn.cli import main as cli_main
+
+        with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()) as so:
+            rc = cli_main(["identify", "--data", path, "-o", str(Path(tmp) / "fit.toml"), "--json"])
+        obj = json.loads(so.getvalue().strip().splitlines()[-1])
+        names = list(obj["parameters"])
+        values = [obj["parameters"][n]["value"] for n in names]
+        res_d = {"exit": rc, "iterations": obj["iterations"], "converged": bool(obj["converged"]),
+                 "residual_counts": obj["residual_rms"], "trustworthy": obj["trustworthy"]}
+    else:
+        rec = read_recording(path, model)
+        res = identify(model, rec, excitation=design.lines, progress=False)
+        names, values = list(res.names), list(map(float, res.values))
+        res_d = {"iterations": res.iterations, "converged": bool(res.converged), "residual_counts": res.residual_rms,
+                 "compile_seconds": res.compile_seconds}
+    out["seconds"], out["cpu_seconds"] = time.perf_counter() - t0, _cpu() - cpu0
+    out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+    out.update(res_d)
+    out["worst_error_pct"] = _errors(names, values, truth)
+    if kkt:
+        rec = read_recording(path, model)
+        base = identify(model, rec, excitation=design.lines, progress=False) if fit == "cli" else res
+    for k in kkt:
         t0 = time.perf_counter()
-        ref = identify(model, rec, excitation=design.lines, progress=False, kkt="dense")
-        out["dense"] = {"seconds": time.perf_counter() - t0, "iterations": ref.iterations,
-                        "residual_counts": ref.residual_rms}
-        out["dense_over_sparse_time"] = out["dense"]["seconds"] / out["sparse"]["seconds"]
-        out["max_relative_difference"] = float(np.max(np.abs(ref.values / res.values - 1)))
-        out["peak_rss_mib_with_dense"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+        ref = identify(model, rec, excitation=design.lines, progress=False, kkt=k)
+        out[k] = {"seconds": time.perf_counter() - t0, "iterations": ref.iterations,
+                  "max_relative_difference": float(np.max(np.abs(ref.values / base.values - 1)))}
     return out
+
+
+def _table(rows: list[dict], seed: int, fit: str) -> None:
+    print(f"finger3 seed {seed}: identify ({'alpes-dyn identify, --effects auto' if fit == 'cli' else 'K, m, friction'})"
+          " on records of each length; ratios to the first row (same run)")
+    print(f"{'T s':>5} {'design':>24} | {'fit s':>6} {'x':>5} {'cpu s':>6} {'peak MiB':>8} {'x':>5} {'its':>4} {'resid':>5} "
+          f"{'K%':>5} {'m%':>5} | refs (kkt: s, max rel diff)")
+    t0, m0 = rows[0]["seconds"], rows[0]["peak_rss_mib"]
+    for r in rows:
+        refs = "  ".join(f"{k} {r[k]['seconds']:.1f} s {r[k]['max_relative_difference']:.0e}" for k in ("dense", "superlu")
+                         if k in r)
+        print(f"{r['duration_s']:5g} {r.get('design', '')[:24]:>24} | {r['seconds']:6.1f} {r['seconds'] / t0:5.1f} {r['cpu_seconds']:6.1f} "
+              f"{r['peak_rss_mib']:8.0f} {r['peak_rss_mib'] / m0:5.2f} {r['iterations']:4d} {r['residual_counts']:5.2f} "
+              f"{r['worst_error_pct']['K']:5.2f} {r['worst_error_pct']['m']:5.2f} | {refs}")
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--durations", default="2,4,8,16,60")
-    ap.add_argument("--dense-up-to", type=float, default=16.0, help="run the dense baseline up to this length, s")
+    ap.add_argument("--durations", default="4,16,60")
+    ap.add_argument("--fit", choices=("api", "cli"), default="api")
+    ap.add_argument("--records", help="a directory to keep the simulated records in (reused where present)")
+    ap.add_argument("--dense-up-to", type=float, default=0.0, help="run the dense KKT too up to this length, s")
+    ap.add_argument("--superlu-up-to", type=float, default=0.0, help="run SuperLU too up to this length, s")
     ap.add_argument("--seed", type=int, default=21)
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--child", type=float, help=argparse.SUPPRESS)
-    ap.add_argument("--dense", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--kkt", default="", help=argparse.SUPPRESS)
     ap.add_argument("--make", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--data", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
@@ -94,7 +151,8 @@ def main(argv: list[str] | None = None) -> int:
         make(args.make, args.seed, args.data)
         return 0
     if args.child is not None:
-        print(json.dumps(child(args.child, args.seed, args.dense, args.data)))
+        print(json.dumps(child(args.child, args.seed, args.fit, tuple(k for k in args.kkt.split(",") if k),
+                               args.data)))
         return 0
     try:
         durations = [float(d) for d in args.durations.split(",")]
@@ -102,30 +160,35 @@ def main(argv: list[str] | None = None) -> int:
         ap.error(f"--durations: expected comma-separated seconds, got {args.durations!r}")
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(args.records) if args.records else Path(tmp)
+        folder.mkdir(parents=True, exist_ok=True)
         for d in durations:
-            path = str(Path(tmp) / f"rec_{d:g}.csv")
-            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", path]
-            cmd = base + ["--child", str(d)] + (["--dense"] if d <= args.dense_up_to else [])
-            for step in (base + ["--make", str(d)], cmd):
-                done = subprocess.run(step, capture_output=True, text=True, check=False)
+            path = folder / f"finger3_seed{args.seed}_{d:g}s.csv"
+            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path)]
+            design = "(record reused)"
+            if not path.exists():
+                done = subprocess.run(base + ["--make", str(d)], capture_output=True, text=True, check=False)
                 if done.returncode != 0:
-                    print(f"{d:g} s: the child failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
+                    print(f"{d:g} s: the experiment failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
                     return 1
-            rows.append(json.loads(done.stdout.strip().splitlines()[-1]))
-    if args.json:
-        print(json.dumps({"model": "finger3", "rows": rows}))
-        return 0
-    print(f"finger3 seed {args.seed}: identify (K, m, friction) on records of each length; sparse KKT (default) "
-          "against dense (baseline, same process)")
-    print(f"{'T s':>5} | {'sparse s':>8} {'its':>4} {'resid':>5} {'K%':>5} {'m%':>5} {'peak MiB':>8} | "
-          f"{'dense s':>7} {'dense/sparse':>12} {'max rel diff':>12}")
+                design = json.loads(done.stdout.strip().splitlines()[-1])["design"] or "as designed (level)"
+            kkt = [k for k, up in (("dense", args.dense_up_to), ("superlu", args.superlu_up_to)) if d <= up]
+            done = subprocess.run(base + ["--child", str(d), "--fit", args.fit, "--kkt", ",".join(kkt)],
+                                  capture_output=True, text=True, check=False)
+            if done.returncode != 0:
+                print(f"{d:g} s: the fit failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)
+                return 1
+            row = json.loads(done.stdout.strip().splitlines()[-1])
+            row["design"] = design
+            rows.append(row)
+    t0, m0 = rows[0]["seconds"], rows[0]["peak_rss_mib"]
     for r in rows:
-        s = r["sparse"]
-        dn = r.get("dense")
-        tail = (f"{dn['seconds']:7.1f} {r['dense_over_sparse_time']:12.2f} {r['max_relative_difference']:12.1e}"
-                if dn else f"{'-':>7} {'-':>12} {'-':>12}")
-        print(f"{r['duration_s']:5g} | {s['seconds']:8.1f} {s['iterations']:4d} {s['residual_counts']:5.2f} "
-              f"{s['worst_error_pct']['K']:5.2f} {s['worst_error_pct']['m']:5.2f} {r['peak_rss_mib_sparse']:8.0f} | {tail}")
+        r["time_ratio"], r["memory_ratio"] = r["seconds"] / t0, r["peak_rss_mib"] / m0
+        r["cpu_ratio"] = r["cpu_seconds"] / rows[0]["cpu_seconds"]
+    if args.json:
+        print(json.dumps({"model": "finger3", "fit": args.fit, "rows": rows}))
+        return 0
+    _table(rows, args.seed, args.fit)
     return 0
 
 

@@ -1731,7 +1731,7 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, start={"m_1": True}), InputError, "start: m_1 = True: expected a finite number"),
     A("identify", lambda c: _ident(c, start={"K_1": float("nan")}), InputError, "start: K_1 = nan: expected a finite"),
     A("identify", lambda c: _ident(c, start=[0.05]), InputError, "start: expected a mapping of parameter names"),
-    A("identify", lambda c: _ident(c, kkt="qr"), InputError, "kkt: expected 'sparse' or 'dense', got 'qr'"),
+    A("identify", lambda c: _ident(c, kkt="qr"), InputError, "kkt: expected 'sparse', 'superlu' or 'dense', got 'qr'"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
     A("identify", lambda c: _ident(c, recording=_diverging()), InputError, "identify: the fit diverged (its parameters "

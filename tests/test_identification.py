@@ -285,6 +285,9 @@ def test_identify_recovers_exact_parameters_from_noise_free_data(finger2, monkey
     ref = identify(finger2, rec, progress=False, kkt="dense")
     assert ref.iterations == res.iterations and np.max(np.abs(ref.values / res.values - 1)) < 1e-9
     assert np.max(np.abs(ref.std / res.std - 1)) < 1e-6
+    # SuperLU on the same sparse matrices (the reference of the banded-and-bordered factorisation, issue 39)
+    gen = identify(finger2, rec, progress=False, kkt="superlu")
+    assert gen.iterations == res.iterations and np.max(np.abs(gen.values / res.values - 1)) < 1e-9
     # a warm start from the result (fit_effects' rounds): stages 1-2 never run, the values and trajectory are kept
     from alpes_dyn.estimation.identification.gauss_newton import GaussNewton
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from alpes_dyn.estimation.identification.kkt import Shape, continuity_jacobian, factorize, kkt_matrix, normal_matrix
+from alpes_dyn.estimation.identification.kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_matrix, kkt_order,
+                                     normal_matrix)
 
 
 def _full_jacobian(J: np.ndarray, shape: Shape) -> np.ndarray:
@@ -52,3 +53,57 @@ def test_a_singular_system_gets_its_minimum_norm_solution():
     M = sp.csc_matrix(np.diag([2.0, 0.0, 4.0]))
     assert np.allclose(factorize(M)(np.array([2.0, 0.0, 8.0])), [1.0, 0.0, 2.0])
     assert np.allclose(factorize(M.toarray())(np.array([2.0, 0.0, 8.0])), [1.0, 0.0, 2.0])
+
+
+def _problem(rng, shape: Shape, mu: float):
+    J = rng.normal(size=(shape.n_int, 9, shape.nb + shape.ng))
+    H = normal_matrix(J, shape, mu, np.r_[np.zeros(2), np.ones(shape.ng - 2)])
+    m = shape.n_int - 1
+    C = continuity_jacobian(rng.normal(size=(m, shape.nx, shape.nb)), rng.normal(size=(m, shape.nx, shape.ng)), shape)
+    return H, C
+
+
+def test_the_banded_and_bordered_factorisation_solves_as_the_dense_one():
+    """The KKT system in its interleaved order (kkt_order: banded but for the global variables), the homotopy's
+    H + C'C in its own order, and the local block without a border: each solved as numpy's dense solve does."""
+    rng = np.random.default_rng(7)
+    shape = Shape(n_int=9, nb=6, nx=4, ng=5)
+    H, C = _problem(rng, shape, 1e-3)
+    K = kkt_matrix(H, C)
+    order = kkt_order(shape)
+    assert sorted(order.tolist()) == list(range(shape.nz + shape.nc))
+    # interval j's local variables and multipliers, then interval j+1's: half-bandwidth nb + nx - 1
+    Kp = K.toarray()[np.ix_(order, order)][: -shape.ng, : -shape.ng]
+    ii, jj = np.nonzero(Kp)
+    assert np.max(np.abs(ii - jj)) == shape.nb + shape.nx - 1
+    b = rng.normal(size=(shape.nz + shape.nc, 3))
+    x = bordered_factorize(K, order, shape.ng)(b)
+    ref = np.linalg.solve(K.toarray(), b)
+    assert np.abs(x - ref).max() < 1e-9 * np.abs(ref).max()
+    assert np.abs(bordered_factorize(K, order, shape.ng)(b[:, 0]) - ref[:, 0]).max() < 1e-9 * np.abs(ref).max()
+    N = H + C.T @ C
+    xn = bordered_factorize(N, np.arange(shape.nz), shape.ng)(b[:shape.nz])
+    assert np.abs(xn - np.linalg.solve(N.toarray(), b[:shape.nz])).max() < 1e-9 * np.abs(xn).max()
+    Nl = N[:shape.nv, :shape.nv]
+    xl = bordered_factorize(Nl, np.arange(shape.nv), 0)(b[:shape.nv, 0])
+    assert np.abs(xl - np.linalg.solve(Nl.toarray(), b[:shape.nv, 0])).max() < 1e-9 * np.abs(xl).max()
+
+
+def test_a_blind_global_variable_gets_the_least_squares_answer_in_the_border():
+    """A global variable no residual or defect sees (its row and column zero, undamped): the Schur complement is
+    singular, its least-squares solution gives that variable 0 and the rest as the system without it."""
+    rng = np.random.default_rng(8)
+    shape = Shape(n_int=6, nb=4, nx=4, ng=3)
+    J = rng.normal(size=(6, 7, 7))
+    J[:, :, -1] = 0.0
+    m = 5
+    Cr = rng.normal(size=(m, 4, 3))
+    Cr[:, :, -1] = 0.0
+    K = kkt_matrix(normal_matrix(J, shape, 0.0, np.zeros(3)),
+                   continuity_jacobian(rng.normal(size=(m, 4, 4)), Cr, shape))
+    b = rng.normal(size=shape.nz + shape.nc)
+    b[shape.nz - 1] = 0.0
+    x = bordered_factorize(K, kkt_order(shape), shape.ng)(b)
+    keep = np.arange(shape.nz + shape.nc) != shape.nz - 1
+    ref = np.linalg.solve(K.toarray()[np.ix_(keep, keep)], b[keep])
+    assert x[shape.nz - 1] == 0.0 and np.abs(x[keep] - ref).max() < 1e-9 * np.abs(ref).max()

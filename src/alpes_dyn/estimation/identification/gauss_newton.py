@@ -29,7 +29,6 @@ import numpy as np
 import scipy.sparse as sp
 
 from ...progress import _Progress
-from .kkt import factorize
 from .shooting import Evaluation, ShootingProblem
 
 __all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
@@ -112,6 +111,7 @@ class GaussNewton:
             better = np.sum(r2**2, axis=1) < np.sum(e.r**2, axis=1)
             nodes[better] += dn[better, :, 0]
             mu_n = np.where(better, mu_n / 10, mu_n * 10)
+            e = A = None  # this sweep's Jacobian freed before the next one's (each 180 MB at 600 s)
         return nodes
 
     # --- the trust region ---------------------------------------------------------------------------------------
@@ -159,11 +159,13 @@ class GaussNewton:
     # --- stage 2 ----------------------------------------------------------------------------------------------
 
     def homotopy(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
-                 freeze: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation]:
+                 freeze: bool, first: int = 0) -> tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation]:
         """Stage 2: continuity as a soft penalty, tightened tenfold per phase (a homotopy from the decoupled
         intervals to the shooting problem); ``freeze``: friction held. With the starting parameters wrong, a 100 ms
         interval of the finger (tiny inertias, a soft balance of springs and gravity) drifts by degrees and rad/s;
         imposing continuity at once lets Gauss-Newton trade the fit for the defects and stall far from the truth.
+        ``first``: the phase to start from (0: weight 1; a start already close, :mod:`~alpes_dyn.estimation.identification.long_record`,
+        skips the softest).
         (Its length: the loop of the phases and of Levenberg-Marquardt inside them, one block.)"""
         nx, nv, nz, n_int, dense = pb.nx, pb.nv, pb.nz, pb.n_int, pb.dense
         e = pb.evaluate(nodes, offs, glob)
@@ -175,7 +177,7 @@ class GaussNewton:
         # -0.02, +0.01 towards +0.14, -0.16, +0.11; held, 0.15, -0.16, 0.11)
         frozen = nv + np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith("F_")]
                                + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)
-        for level in range(SOFT_PHASES):
+        for level in range(first, SOFT_PHASES):
             wdef = np.tile(10.0**level / defect0, n_int - 1)  # 1 / sigma of each defect
             mu_s = 1e-3
             for _ in range(6):
@@ -187,7 +189,7 @@ class GaussNewton:
                 hold[frozen] = 1e12 * np.maximum(H.diagonal()[frozen], 1.0)
                 H = H + (np.diag(hold) if dense else sp.diags(hold, format="csc"))
                 g = pb.grad(e.r, e.J, e.rg) + C.T @ (e.c.reshape(-1) * wdef)
-                d = -factorize(H)(g)  # the least-squares solution where H is singular
+                d = -pb.factorize(H, "normal")(g)  # the least-squares solution where H is singular
                 dv, dg, whole = self.limited(pb, d)
                 if not whole:
                     # the global step shortened, the local variables solved again for it: with continuity a
@@ -195,7 +197,7 @@ class GaussNewton:
                     # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
                     # iterations at 1/10-1/60 of the Gauss-Newton step)
                     try:
-                        dv = factorize(H[:nv, :nv])(-g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, pb.nb)
+                        dv = pb.factorize(H[:nv, :nv], "local")(-g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, pb.nb)
                     except np.linalg.LinAlgError:
                         pass
                 trial = pb.evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
@@ -203,6 +205,7 @@ class GaussNewton:
                                        + np.sum((trial.c.reshape(-1) * wdef) ** 2))
                 if np.isfinite(new_cost) and new_cost < soft_cost:
                     nodes, offs, glob = nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg
+                    e = trial = H = C = None  # freed before the next Jacobian (each 180 MB at 600 s)
                     e = pb.evaluate(nodes, offs, glob)
                     mu_s = max(mu_s / 10.0, 1e-9)
                     if soft_cost - new_cost < 1e-3 * soft_cost:
@@ -293,7 +296,7 @@ class GaussNewton:
             cost = e.cost
             rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)
-            solve_K = factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu))  # once per iteration: the step and the correction
+            solve_K = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu), "kkt")  # once per iteration: the step and the correction
             sol = solve_K(np.column_stack([rhs, pb.unit_p]))
             sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]
@@ -342,7 +345,7 @@ class GaussNewton:
                               f"above 1e8, iteration {it})")
                     break
                 continue
-            alpha, dv, dg, cost_new = found
+            (alpha, dv, dg, cost_new), e, solve_K = found, None, None  # freed before the next (600 s: 180 + 80 MB)
             step_g = float(np.max(np.abs(alpha * dg), initial=0.0))
             nodes, offs, glob = nodes + alpha * dv[:, :nx], offs + alpha * dv[:, nx:], glob + alpha * dg
             e = pb.evaluate(nodes, offs, glob)

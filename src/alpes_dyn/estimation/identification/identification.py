@@ -72,9 +72,9 @@ from ..observers.scenario import static_equilibrium
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
-from .kkt import factorize
 from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
+from .long_record import window_start
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -180,8 +180,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         its trajectory: the fit's last stage from there (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve`),
         the whole fit where that does not converge.
     kkt: ``"sparse"`` (default): the shooting problem's normal and KKT matrices held sparse and factorised once per
-        iteration (:mod:`alpes_dyn.estimation.identification.kkt`), time and memory linear in the record; ``"dense"``: as arrays
-        (the reference; quadratic memory, cubic time).
+        iteration by their band-and-border structure (:func:`~alpes_dyn.estimation.identification.kkt.bordered_factorize`), time
+        and memory linear in the record; ``"superlu"``: the same matrices by the general sparse LU (SuperLU: the
+        reference of the structured one; its fill grows faster than the record: 0.5-2.6 s a factorisation at
+        60 s); ``"dense"``: as arrays (the reference; quadratic memory, cubic time).
 
     The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
     failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
@@ -205,17 +207,23 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)
-    pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense")
+    pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
+                         structured=kkt == "sparse")
+    q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
+          else np.zeros(pb.n))  # the rest the model's own response starts from
+
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
         """The initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder."""
-        q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
-              else np.zeros(pb.n))
         return pb.initial_nodes(q0)
     offs = np.zeros((pb.n_int, pb.no))
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)
-    out = GaussNewton(max_iterations, tol, show).solve(pb, nodes, offs, glob, warm=pb.warm_variables(solution))
-    it, reason = out.iterations, out.reason
+    solver = GaussNewton(max_iterations, tol, show)
+    warm, it_window = pb.warm_variables(solution), 0
+    if warm is None:  # a long record: the globalisation on its first seconds (module long_record)
+        warm, it_window = window_start(pb, solver, excitation, q0)
+    out = solver.solve(pb, nodes, offs, glob, warm=warm)
+    it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
     missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, encoder_noise).total \
@@ -231,6 +239,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
+    pb = out = warm = None  # this fit's problem and Jacobians freed before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
@@ -365,8 +374,8 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
         if v.n_samples == rec.n_samples and np.array_equal(v.encoder, rec.encoder) and np.array_equal(v.torque, rec.torque):
             raise RecordingError("validation: the same samples as the recording fitted (its encoder and torque "
                                  "columns are identical); a held-out recording is another run of the experiment")
-    if not isinstance(kkt, str) or kkt not in ("sparse", "dense"):
-        raise InputError(f"kkt: expected 'sparse' or 'dense', got {kkt!r}")
+    if not isinstance(kkt, str) or kkt not in ("sparse", "superlu", "dense"):
+        raise InputError(f"kkt: expected 'sparse', 'superlu' or 'dense', got {kkt!r}")
     if isinstance(max_iterations, bool) or not isinstance(max_iterations, int) or max_iterations < 1:
         raise InputError(f"max_iterations: expected a positive integer, got {max_iterations!r}")
     N = rec.n_samples - 1
@@ -387,7 +396,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     adequacy of the fitted model (module adequacy) with each effect's regressor less what the fit absorbs of it."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
-    solve_Kz = factorize(pb.kkt_system(e.J, e.Cv, e.Cr, 0.0))  # undamped: the covariance and the effects' regressors
+    solve_Kz = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, 0.0), "kkt")  # undamped: the covariance and the effects' regressors
     P_rho = solve_Kz(pb.unit_p)[nv:nv + p] * s2
     theta = pb.values(out.glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))

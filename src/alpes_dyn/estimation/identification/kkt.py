@@ -5,8 +5,12 @@ per interval) and ``ng`` global ones (the parameters and the line-coefficient co
 normal matrix is an arrow: S diagonal blocks (nb x nb), a dense border of ng columns, and the ng x ng corner;
 the continuity Jacobian is block-bidiagonal with the same border. Held densely, the KKT matrix of a record of
 T seconds at 50 ms intervals has (240 T)^2 entries: 16 s took 120 MB and a cubic solve, a 60 s record 1.7 GB.
-Held sparse and factorised by SuperLU (:func:`scipy.sparse.linalg.splu`, COLAMD ordering), its fill stays
-linear in S (the border's ng columns) and so do the time and memory of a step.
+Held sparse, its nonzeros are linear in S; factorised by SuperLU (:func:`scipy.sparse.linalg.splu`, COLAMD
+ordering) its fill was not: at 60 s a factorisation took 0.5-2.6 s and 33 of them half of a 3-minute fit
+(issue 39). :func:`bordered_factorize` exploits the structure instead: with each interval's local variables and
+its continuity multipliers taken together, interval after interval, the matrix less its border is banded
+(half-bandwidth nb + nx - 1), factorised by LAPACK's band LU with partial pivoting, and the border by its dense
+ng x ng Schur complement: time and memory O(S (nb + nx)^2 ng), linear in the record.
 
 Every function takes the sizes of the problem, ``Shape``; ``dense=True`` gives the same matrices as arrays
 (the reference the sparse path is tested against).
@@ -21,10 +25,14 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-__all__ = ["Shape", "normal_matrix", "continuity_jacobian", "kkt_matrix", "factorize", "DENSE_LIMIT"]
+__all__ = ["Shape", "normal_matrix", "continuity_jacobian", "kkt_matrix", "factorize", "bordered_factorize",
+           "kkt_order", "DENSE_LIMIT"]
 
 DENSE_LIMIT = 4000
 """Largest system solved by a dense least-squares fallback where the sparse factorisation finds it singular."""
+
+
+Solver = Callable[[np.ndarray], np.ndarray]
 
 
 @dataclass(frozen=True)
@@ -140,3 +148,64 @@ def _dense_lu(M: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
     if not np.all(np.isfinite(lu)) or np.any(np.diag(lu) == 0.0):
         raise np.linalg.LinAlgError("singular")
     return lambda b: sla.lu_solve((lu, piv), b, check_finite=False)
+
+
+def kkt_order(shape: Shape) -> np.ndarray:
+    """(nz + nc,) the KKT matrix's rows and columns (:func:`kkt_matrix`: local variables, global ones, multipliers)
+    in the order that makes all but its last ng banded: interval j's local variables then its continuity
+    multipliers (which tie them to interval j+1's start state), interval after interval, the global ones last."""
+    nb, nx, nv, nz, m = shape.nb, shape.nx, shape.nv, shape.nz, shape.n_int - 1
+    pairs = np.concatenate([np.arange(m)[:, None] * nb + np.arange(nb)[None, :],
+                            nz + np.arange(m)[:, None] * nx + np.arange(nx)[None, :]], axis=1)
+    return np.concatenate([pairs.reshape(-1), m * nb + np.arange(nb), nv + np.arange(shape.ng)])
+
+
+def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
+    """A solver x = M^-1 b (b: (n,) or (n, k)) for a sparse M whose rows and columns taken in ``order`` are banded
+    but for the last ``border`` of them (an arrow: :func:`kkt_order`; the homotopy's normal matrix in its own
+    order). The banded block A by LAPACK's band LU with partial pivoting (``dgbtrf``), the border by its Schur
+    complement D - B' A^-1 B (dense, border x border, :func:`factorize`: its least-squares solution where it is
+    singular, a parameter the recording does not see). Where A itself is singular, :func:`factorize` of M (SuperLU).
+    Time O(n w (w + border)) and memory O(n (w + border)) for half-bandwidth w: linear in the record."""
+    from scipy.linalg.lapack import dgbtrf, dgbtrs
+
+    M = sp.csr_matrix(M)
+    M.sum_duplicates()
+    N = M.shape[0]
+    n = N - border
+    order = np.asarray(order)
+    loc, bor = order[:n], order[n:]
+    # the blocks taken by slicing (no triplets of the border's entries, most of M's: 5e6 at 600 s)
+    rows_loc = M[loc]
+    A = rows_loc[:, loc].tocoo()
+    il, jl = A.row.astype(np.int64), A.col.astype(np.int64)
+    kl, ku = int(max(np.max(il - jl, initial=0), 0)), int(max(np.max(jl - il, initial=0), 0))
+    ab = np.zeros((2 * kl + ku + 1, n))
+    ab[kl + ku + il - jl, jl] = A.data
+    del A, il, jl
+    B = rows_loc[:, bor].toarray()
+    del rows_loc
+    rows_bor = M[bor]
+    Bt, D = rows_bor[:, loc].toarray(), rows_bor[:, bor].toarray()
+    del rows_bor
+    lu, piv, info = dgbtrf(ab, kl, ku, overwrite_ab=1)
+    if info != 0 or not np.isfinite(lu[kl:]).all():
+        return factorize(M)
+    X = dgbtrs(lu, kl, ku, B, piv)[0] if border else B  # A^-1 B, (n, border)
+    solve_S = factorize(D - Bt @ X) if border else None
+    order = np.asarray(order)
+
+    def solve(b: np.ndarray) -> np.ndarray:
+        b = np.asarray(b, dtype=float)
+        bp = b.reshape(N, -1)[order]
+        y = dgbtrs(lu, kl, ku, bp[:n], piv)[0]
+        x = np.empty_like(bp)
+        if border:
+            x2 = solve_S(bp[n:] - Bt @ y)
+            x[n:], y = x2, y - X @ x2
+        x[:n] = y
+        out = np.empty_like(x)
+        out[order] = x
+        return out.reshape(b.shape)
+
+    return solve

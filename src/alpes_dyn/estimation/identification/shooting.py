@@ -31,7 +31,7 @@ from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
-from .kkt import Shape, continuity_jacobian, kkt_matrix, normal_matrix
+from .kkt import Shape, bordered_factorize, continuity_jacobian, factorize, kkt_matrix, kkt_order, normal_matrix
 from ..experiments.recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
@@ -147,16 +147,19 @@ class ShootingProblem:
     the selection (with the torque model's correction: ``input_offset`` without the lines, ``input_basis`` with).
     L: samples per interval. torque: :func:`torque_model`. camera_noise: sigma_q, rad. start: starting values by
     name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
+    structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
+    False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
 
     The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,); :meth:`values` maps ``glob`` to theta.
     """
 
     def __init__(self, model: Model, rec: Recording, sens: SensitivityModel, L: int, torque: TorqueModel,
-                 camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False) -> None:
+                 camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False,
+                 structured: bool = True) -> None:
         self.model, self.rec, self.sens, self.L, self.torque = model, rec, sens, L, torque
         self.camera_noise = camera_noise
         self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
-        eiv, lines, nphi = torque.eiv, torque.lines, torque.nphi
+        eiv, lines = torque.eiv, torque.lines
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
         self.ncg = sens.no if lines else 0  # global line-coefficient corrections
         self.ng = self.p + self.ncg
@@ -175,10 +178,6 @@ class ShootingProblem:
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
         self.Gb = np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
-        self.Psi = self.Psib = None
-        if lines:
-            self.Psi = torque.noise * torque.Q
-            self.Psib = np.concatenate([self.Psi, np.repeat(self.Psi[-1:], pad, axis=0)]).reshape(n_int, L, nphi)
         # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
         k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
         valid = k_idx <= N
@@ -193,12 +192,16 @@ class ShootingProblem:
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
         self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
-        self.Psik = (torque_before(np.concatenate([self.Psi, torque.noise * torque.Q_last[None]]))[self.kk]
+        self.Psik = (torque_before(torque.noise * np.concatenate([torque.Q, torque.Q_last[None]]))[self.kk]
                      if lines else None)
+        # the lines' basis over each interval's sample periods (S, L, nphi), the last interval's padded with the
+        # last period's: Psik[s, j+1] is the basis of period sL + j (torque_before), so a view, not a copy (at
+        # 600 s each copy of the basis is 91 MB)
+        self.Psib = self.Psik[:, 1:] if lines else None
         self.shape = Shape(n_int, self.nb, self.nx, self.ng)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
-        self.dense = dense
+        self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
                  + n_int * self.no + self.ncg)
         self.dof = max(n_res - (self.nz - self.nc), 1)  # residuals less free variables (constraints count back)
@@ -391,6 +394,19 @@ class ShootingProblem:
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
         return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
 
+    def factorize(self, M, system: str):
+        """A solver x = M^-1 b for one of the problem's matrices: ``system`` "kkt" (:meth:`kkt_system`), "normal"
+        (the (nz, nz) normal matrix, with or without the continuity penalty C'WC) or "local" (its local variables'
+        (nv, nv) block); by :func:`~alpes_dyn.estimation.identification.kkt.bordered_factorize` in the order that makes it banded
+        but for the global variables where :attr:`structured`, else :func:`~alpes_dyn.estimation.identification.kkt.factorize`."""
+        if not self.structured:
+            return factorize(M)
+        if system == "kkt":
+            return bordered_factorize(M, kkt_order(self.shape), self.ng)
+        if system not in ("normal", "local"):
+            raise ValueError(f"system: expected 'kkt', 'normal' or 'local', got {system!r}")
+        return bordered_factorize(M, np.arange(M.shape[0]), self.ng if system == "normal" else 0)
+
     def grad(self, r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
         """(nz,) the cost's gradient J^T r (+ rg for the global variables)."""
         nb = self.nb
@@ -414,13 +430,16 @@ class ShootingProblem:
             return None
         return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines])
 
-    def initial_nodes(self, q0: np.ndarray) -> np.ndarray:
+    def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
-        onto the measured encoder (the stretch of the start's compliance off): a start close to the data."""
+        onto the measured encoder (the stretch of the start's compliance off): a start close to the data. ``theta``:
+        the parameters to simulate with (default theta_0). (Not shifted, the response alone is no start on a long
+        record even with the parameters right: over 16 s of finger3 it drifted to 460 counts from the encoder.)"""
         n, L, n_int, nu = self.n, self.L, self.n_int, self.nu
         x_nom, _ = self.sens.run(np.concatenate([q0, np.zeros(n)])[None], self.torque.U[None], self.G[None],
-                                 self.theta0, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
-                                 basis=self.Psi[None] if self.torque.lines else None, sensitivities=False)
+                                 self.theta0 if theta is None else theta, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
+                                 basis=self.torque.noise * self.torque.Q[None] if self.torque.lines else None,
+                                 sensitivities=False)
         nodes = x_nom[0, np.arange(n_int) * L].copy()
         if not np.isfinite(nodes).all():
             nodes[:] = np.concatenate([q0, np.zeros(n)])

@@ -1,0 +1,77 @@
+"""A long recording's fit started from a window of it (issue 39).
+
+The globalisation of the shooting fit (:class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`: stage 1, each
+interval's start state alone; stage 2, the homotopy, four phases of Levenberg-Marquardt; two starts) costs some
+twenty to thirty evaluations of the whole record with its sensitivities, each linear in its length: on a 60 s record
+of finger3 the compiled sensitivities were 48 s of a 60 s fit (2026-12-05, load 6-7 on 2 cores), the linear algebra
+under 1 s. Its only purpose is to find the basin, and a few seconds of the record find it as well: a 4 s finger3
+record fits K within 0.1 % and m within 0.5 % (``benchmarks/fit_scaling.py``). So a record longer than
+:data:`LONG_RECORD` is fitted in two steps: the whole fit (stages 1-3, both starts) on its first :data:`WINDOW`
+seconds; then, on the whole record from the window's parameters, stage 1 (:data:`NODE_SWEEPS` sweeps), the
+homotopy's last phase alone (:data:`FIRST_PHASE`) and stage 3. The homotopy is not skipped: with the tendon
+compliance fitted (``--effects auto``'s first round) stage 3 straight from stage 1 took 34-36 iterations on a 16 s
+record (the window's compliance, barely seen in 4 s, 3.7 times the whole record's, dragging the masses and the
+torque's lines), with the last phase 4 (and 18-22 evaluations of the whole record in all, against about 70 for the
+whole fit). Where that does not converge within the basin limit,
+:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole record, as
+for any warm start: the answer is the same problem's, only its start differs.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+
+from .gauss_newton import BASIN_LIMIT, GaussNewton
+from ..experiments.recording import Recording
+from .shooting import ShootingProblem, torque_model
+
+__all__ = ["LONG_RECORD", "WINDOW", "window_start"]
+
+LONG_RECORD = 12.0
+"""s: records longer than this start from a fit of their first :data:`WINDOW` seconds."""
+WINDOW = 4.0
+"""s: the window whose fit starts a long record's (the documented experiment's length)."""
+FIRST_PHASE = 3
+"""The homotopy's phase (of :data:`~alpes_dyn.estimation.identification.gauss_newton.SOFT_PHASES`) the whole record starts from:
+the last, continuity weighed 1000 / the initial defect."""
+NODE_SWEEPS = 4
+"""Levenberg-Marquardt sweeps of stage 1 (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.fit_nodes`) on the
+whole record at the window's parameters: the intervals' start states fitted to their own samples."""
+
+
+def window(rec: Recording, seconds: float) -> Recording:
+    """The first ``seconds`` of ``rec`` (every per-sample column cut alike)."""
+    k = min(int(round(seconds / rec.dt)) + 1, rec.n_samples)
+    cut = {f.name: getattr(rec, f.name)[:k] for f in dataclasses.fields(rec)
+           if isinstance(getattr(rec, f.name), np.ndarray) and getattr(rec, f.name).shape[:1] == (rec.n_samples,)}
+    return dataclasses.replace(rec, **cut)
+
+
+def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.ndarray,
+                 ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray] | None, int]:
+    """The start of ``pb``'s fit from its record's first :data:`WINDOW` seconds: the whole fit there (``solver``,
+    stages 1-3; ``excitation`` the lines, Hz, or None, the torque noise the whole record's), then (nodes, offs,
+    glob) of ``pb`` from the window's parameters: the model's response under them from the rest ``q0`` (rad) on
+    the encoder, stage 1 and the homotopy's last phase (the module docstring). Returns (that start, or None where the record is not longer than :data:`LONG_RECORD` or the
+    window's fit did not converge within :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the window's
+    iterations)."""
+    if pb.rec.duration <= LONG_RECORD:
+        return None, 0
+    sub = window(pb.rec, WINDOW)
+    pw = ShootingProblem(pb.model, sub, pb.sens, pb.L, torque_model(sub, excitation, pb.torque.noise),
+                         pb.camera_noise, dict(zip(pb.sens.names, pb.theta0)), dense=pb.dense,
+                         structured=pb.structured)
+    out = solver.solve(pw, lambda: pw.initial_nodes(q0), np.zeros((pw.n_int, pw.no)), np.zeros(pw.ng))
+    if not out.converged or pw.encoder_rms(out.at.r) > BASIN_LIMIT:
+        return None, out.iterations
+    theta = pw.values(out.glob)
+    rho = (theta - pb.theta0) / pb.scale  # the additive parameters' (encoder offsets, tilt angles)
+    mult = ~pb.additive
+    rho[mult] = np.log(theta[mult] / pb.theta0[mult])
+    glob = np.concatenate([rho, np.zeros(pb.ncg)])
+    offs = np.zeros((pb.n_int, pb.no))
+    nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=NODE_SWEEPS)
+    nodes, offs, glob, _ = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=FIRST_PHASE)
+    return (nodes, offs, glob), out.iterations
