@@ -33,21 +33,6 @@ PAGE: dict[str, str] = {
         'rigid design and the shipped file hold it) --; sensorless uncalibrated **0/6** within 5 % (6.5-9.8 %'
         " worst, every chain above the torque constant's 4.8 % floor); calibrated (``Compensation(force_scale"
         '=)`` from ``control.force_scale_of``) **5/6** (2.4-3.9 %; seed 203 5.9 %); the shipped file 21-55 %'),
-    "realism": (
-        '2026-12-04, on main after every merge (the physical bounds of '
-        ':mod:`~alpes_dyn.estimation.identification.bounds`, '
-        "the observer's prediction threshold 25 times the floor), load 2-3, cache warm, the same outcome as "
-        'on the ``realism`` branch before (threshold 15, load 3-8); seeds 401-420 (tuned on 301-320; two '
-        'rules also drawn from 401-409: the delay tried after an observer refusal, each new fit judged '
-        'again): **all**: 14 adequate, 2 silent misses (seed 417: m 6.2 %, 420: m 5.3 %), 6 refused (403, '
-        "406, 411, 413, 416, 418: lost basin, the verdict naming a joint stop: the plant's j1 goes to -15 to "
-        '-27 degrees palm up); the 14 adequate: K within 0.86 % (median 0.67), m within 6.24 % (1.73), EKF '
-        'within 0.47 degree on every joint (0.40), the 1-sample delay found on all, every round and the '
-        "observer's check 27 s median, 44 s worst (goal 20 s: missed); **stiction** (seeds 401-406): 4 "
-        'adequate, EKF within 0.19 degree, 2 refused (403, 406: the same joint stop); **delay** (401-402): 2 '
-        'adequate, K 0.10 %, m 0.50 %, EKF 0.11 degree; **slack** (401-402): 2 refused by the observer (a '
-        "delay fitted that the plant does not have: a false refusal). Main's fit before (seeds 301-320, all):"
-        ' 9 adequate, 11 refused, 0 silent'),
 }
 
 README_ROWS: dict[str, str] = {
@@ -66,10 +51,4 @@ README_ROWS: dict[str, str] = {
         "he fingertip sensor); the hand: sensor within 0.3 % on 5/6 seeds (203's index lets go), sensorless 0"
         "/6 within 5 % (the torque constant's 4.8 % floor), 5/6 calibrated (2026-12-05, load 5-11) | [`force_"
         'realism.py`](benchmarks/force_realism.py) |'),
-    "realism": (
-        '| realism: identify and the EKF on MuJoCo plants drawn +-20 %, every effect at once with 0.5 deg '
-        'slack and the torque 1 ms late, fresh seeds 401-420 | 14 adequate (K within 0.86 %, m within 6.24 %,'
-        ' EKF within 0.47 deg on every joint), 2 silent misses (m 5.3, 6.2 %), 6 refused naming a joint stop;'
-        " fit with the observer's check 27 s median (goal 20 s: missed) (2026-12-04, load 2-3, cache warm) | "
-        '[`realism.py`](benchmarks/realism.py) |'),
 }
