@@ -128,6 +128,24 @@ def test_mildly_coloured_is_the_ljung_box_alone():
     assert len(loud.reasons) == 2 and not mildly_coloured(loud)
 
 
+_RAMP = np.linspace(0.01, 0.02, 50)[:, None]
+"""N m: the stand-in recordings' torque, a ramp: how far a fit's torque was advanced reads off its first sample."""
+
+
+def _ramp_recording():
+    """A 50-sample recording of finger3's motor, its torque :data:`_RAMP` (for stand-in fits of fit_effects)."""
+    from alpes_dyn.estimation.experiments.recording import Recording
+
+    n = _RAMP.shape[0]
+    return Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=_RAMP, motor_names=("finger",),
+                     joint_names=("j1", "j2", "j3"))
+
+
+def _advanced_by(data) -> int:
+    """The samples by which a stand-in fit's recording had its torque read earlier (advanced)."""
+    return int(round((data.torque[0, 0] - _RAMP[0, 0]) / (_RAMP[1, 0] - _RAMP[0, 0])))
+
+
 def test_fit_effects_finds_the_torque_delay(monkeypatch):
     """auto's delay on stand-in fits: the first fit's verdict names a torque delay, so the fit is made again on the
     torque read 1 sample earlier (from the first fit); its verdict names nothing: kept, with EffectsFit.delay = 1 and
@@ -137,17 +155,13 @@ def test_fit_effects_finds_the_torque_delay(monkeypatch):
     from alpes_dyn.estimation.identification import effects as eff
     from alpes_dyn.estimation.identification import identification as ident_mod
     from alpes_dyn.estimation.identification.adequacy import SIGNATURES
-    from alpes_dyn.estimation.experiments.recording import Recording
     from alpes_dyn.model.params import load_params
 
-    n = 50
-    tau = np.linspace(0.01, 0.02, n)[:, None]
-    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
-                    joint_names=("j1", "j2", "j3"))
+    rec = _ramp_recording()
     seen = []
 
     def fake_identify(model, data, parameters, **kw):
-        d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))  # the samples it was advanced by
+        d = _advanced_by(data)
         seen.append((d, data.torque.copy(), kw.get("start")))
         ok = d == 1
         missing = [] if ok else [SIGNATURES["torque_rate"]]
@@ -160,8 +174,8 @@ def test_fit_effects_finds_the_torque_delay(monkeypatch):
                           has_gravity=True)
     assert [d for d, _, _ in seen] == [0, 1]
     assert fit.delay == 1 and fit.effects == ("compliance", "tilt", "delay") and fit.result.residual_rms == 0.6
-    np.testing.assert_array_equal(seen[1][1][:-1], tau[1:])  # advanced by one sample, the last repeated
-    assert seen[1][1][-1, 0] == tau[-1, 0]
+    np.testing.assert_array_equal(seen[1][1][:-1], _RAMP[1:])  # advanced by one sample, the last repeated
+    assert seen[1][1][-1, 0] == _RAMP[-1, 0]
     assert seen[1][2] is not None  # from the first fit
     assert fit.observer is None  # a stand-in has no file to run the EKF on
 
@@ -175,17 +189,13 @@ def test_a_flagged_fit_naming_nothing_tries_the_delay_after_stiction_and_the_rot
 
     from alpes_dyn.estimation.identification import effects as eff
     from alpes_dyn.estimation.identification import identification as ident_mod
-    from alpes_dyn.estimation.experiments.recording import Recording
     from alpes_dyn.model.params import load_params
 
-    n = 50
-    tau = np.linspace(0.01, 0.02, n)[:, None]
-    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
-                    joint_names=("j1", "j2", "j3"))
+    rec = _ramp_recording()
     seen = []
 
     def fake_identify(model, data, parameters, **kw):
-        d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))
+        d = _advanced_by(data)
         seen.append(d)
         ok = d == 1
         return SimpleNamespace(residual_rms=0.6 + 0.1 * abs(d - 1), converged=True, reason="", names=(), values=[],
@@ -228,19 +238,15 @@ def test_the_delay_search_goes_on_while_the_verdict_names_it(monkeypatch):
     from alpes_dyn.estimation.identification import effects as eff
     from alpes_dyn.estimation.identification import identification as ident_mod
     from alpes_dyn.estimation.identification.adequacy import SIGNATURES
-    from alpes_dyn.estimation.experiments.recording import Recording
     from alpes_dyn.model.params import load_params
 
-    n = 50
-    tau = np.linspace(0.01, 0.02, n)[:, None]
-    rec = Recording(t=np.arange(n) * 1e-3, encoder=np.zeros((n, 1)), torque=tau, motor_names=("finger",),
-                    joint_names=("j1", "j2", "j3"))
+    rec = _ramp_recording()
 
     def search(late):
         seen = []
 
         def fake_identify(model, data, parameters, **kw):
-            d = int(round((data.torque[0, 0] - tau[0, 0]) / (tau[1, 0] - tau[0, 0])))
+            d = _advanced_by(data)
             seen.append(d)
             ok = d == late
             missing = [SIGNATURES["torque_rate"]] if d < late else ["a nonlinearity"] if d > late else []
