@@ -278,6 +278,26 @@ def _adequate_worst(r: Result, case: str) -> dict[str, float] | None:
             "ekf": max(max(x["ekf_rmse_deg"]) for x in good)}
 
 
+def default_path(r: Result) -> list[str]:
+    out = []
+    for model, c in r["summary"].items():
+        out.append(f"{model}, seeds {_seeds(r)}: **{c['exit_0']} of {c['n']} exit 0** ({c['hung']} hung fingers down by "
+                   f"the experiment, {c['scaled']} scaled); springs within {_r(c['K_pct']['worst'])} % (median "
+                   f"{_r(c['K_pct']['median'])}), masses within {_r(c['m_pct']['worst'])} % (median "
+                   f"{_r(c['m_pct']['median'])}); over K 3 %: {c['over_K'] or 'none'}, over m 5 %: {c['over_m'] or 'none'}; "
+                   f"refused: {c['refused'] or 'none'}; files with a non-physical value: {c['unphysical'] or 'none'}; "
+                   f"identify {c['fit_seconds_median']:.1f} s median; goals (exit 0, K 3 %, m 5 %, physical): "
+                   f"{_met(c['goal_met'])}")
+    return out
+
+
+def _default_path_headline(r: Result) -> str:
+    parts = [f"{m} {c['exit_0']} of {c['n']} exit 0, springs within {_r(c['K_pct']['worst'])} %, masses within "
+             f"{_r(c['m_pct']['worst'])} %" for m, c in r["summary"].items()]
+    bad = sum(len(c["unphysical"]) for c in r["summary"].values())
+    return f"seeds {_seeds(r)}: " + "; ".join(parts) + f"; {bad or 'no'} file with a non-physical value"
+
+
 def _realism_headline(r: Result) -> str:
     case = "all" if "all" in r["summary"] else next(iter(r["summary"]))
     c, w = r["summary"][case], _adequate_worst(r, case)
@@ -311,7 +331,7 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "rollout": rollout, "mimic": mimic, "identification": identification, "fit_scaling": fit_scaling,
     "observer_step": observer_step, "observer_build": observer_build, "param_cache": param_cache, "sweep": sweep,
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
-    "allegro_identify": allegro_identify, "realism": realism,
+    "allegro_identify": allegro_identify, "realism": realism, "default_path": default_path,
 }
 
 ORDER = ["default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
@@ -324,6 +344,8 @@ HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {
                       lambda r: f"{r['hand']['ours']['seconds']:.2f} s in process; `alpes-dyn observability --model hand` "
                                 f"{r['cli_hand']['seconds']:.2f} s with process start"),
     "identification": ("identification of a finger (K, m, friction; 4 s record)", _identification_headline),
+    "default_path": ("the default path on every draw: `experiment` then `identify`, no options, fingers drawn +-20 %",
+                     _default_path_headline),
     "realism": ("realism: identify and the EKF on MuJoCo plants drawn +-20 %, every effect at once with 0.5 deg slack "
                 "and the torque 1 ms late, fresh seeds", _realism_headline),
     "observer_step": ("EKF step for a real-time loop / standalone C", _observer_step_headline),
