@@ -9,15 +9,6 @@ generated text replaces it: delete the entry then (``tests/test_benchmark_page.p
 from __future__ import annotations
 
 PAGE: dict[str, str] = {
-    "default_path": (
-        '2026-12-04, load 7-8 (other jobs on the 2 cores), cache warm: **finger3 seeds 1-60: 60/60 exit 0**, '
-        'springs within 0.22 % (median 0.08), masses within 1.60 % (median 0.34), 12 draws hung fingers down '
-        'by the experiment (seeds 2, 3, 8, 11, 30, 32, 34, 36, 44, 48, 53, 60), none scaled; the tendon '
-        "compliance not identified on every draw (our simulator's cable is rigid: never written); **finger2 "
-        'seeds 1-60: 60/60 exit 0**, springs within 0.13 % (median 0.04), masses within 0.16 % (median 0.06),'
-        ' seed 42 hung; no written file with a non-physical value (both models); hand seed 5: palm up, the '
-        "five chains converged and adequate (91 s of fits); hand seed 6: hung, the thumb's fit flagged "
-        '(residual coloured): exit 3'),
     "force_realism": (
         '2026-12-05, fresh seeds 201-206 (tuned on finger3 seed 1; the calibration on finger3 seeds 1, 4, 5),'
         ' cache warm, ``benchmarks/results/force_realism.json`` (fingers, 18.6 min, load 4.7-7.8) and ``force'
@@ -36,12 +27,6 @@ PAGE: dict[str, str] = {
 }
 
 README_ROWS: dict[str, str] = {
-    "default_path": (
-        '| the default path on every draw: `experiment` then `identify`, no options, fingers drawn +-20 % | '
-        'seeds 1-60: finger3 60 of 60 exit 0 (12 hung fingers down by the experiment itself), springs within '
-        '0.22 %, masses within 1.60 %; finger2 60 of 60, 0.13 % / 0.16 %; no non-physical value written '
-        '(2026-12-04, load 3-8 with other jobs, cache warm) | [`default_path.py`](benchmarks/default_path.py)'
-        ' |'),
     "force_realism": (
         '| force control on MuJoCo with every effect of a real hand (stick-slip, elastic cable with rotor and'
         ' 0.5 deg slack, tilt, torque constant 5 % off, encoder offset, torque 1 ms late), experiment -> iden'

@@ -344,6 +344,11 @@ HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {
                       lambda r: f"{r['hand']['ours']['seconds']:.2f} s in process; `alpes-dyn observability --model hand` "
                                 f"{r['cli_hand']['seconds']:.2f} s with process start"),
     "identification": ("identification of a finger (K, m, friction; 4 s record)", _identification_headline),
+    "fit_scaling": ("identify on long records (`alpes-dyn identify` on `alpes-dyn experiment --duration` records)",
+                    lambda r: "; ".join(f"{d['duration_s']:.0f} s {d['seconds']:.0f} s, {d['peak_rss_mib']:.0f} MiB"
+                                        for d in r["rows"])
+                    + f" ({r['model']}, ratios to the {r['rows'][0]['duration_s']:.0f} s fit "
+                      f"{', '.join(format(d['time_ratio'], '.1f') + 'x' for d in r['rows'][1:])} in time)"),
     "default_path": ("the default path on every draw: `experiment` then `identify`, no options, fingers drawn +-20 %",
                      _default_path_headline),
     "realism": ("realism: identify and the EKF on MuJoCo plants drawn +-20 %, every effect at once with 0.5 deg slack "
@@ -355,6 +360,6 @@ HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {
 }
 """The README's generated rows: ``(what, figure)``, ``figure(result)`` the text."""
 
-HEADLINE_ORDER = ["observability", "default_path", "force_realism", "realism", "identification", "observer_step",
-                  "sweep"]
+HEADLINE_ORDER = ["observability", "default_path", "force_realism", "realism", "identification", "fit_scaling",
+                  "observer_step", "sweep"]
 """The README's rows in order; a name without a record or a figure keeps its row of ``_handwritten.README_ROWS``."""
