@@ -9,21 +9,6 @@ generated text replaces it: delete the entry then (``tests/test_benchmark_page.p
 from __future__ import annotations
 
 PAGE: dict[str, str] = {
-    "force_realism": (
-        '2026-12-05, fresh seeds 201-206 (tuned on finger3 seed 1; the calibration on finger3 seeds 1, 4, 5),'
-        ' cache warm, ``benchmarks/results/force_realism.json`` (fingers, 18.6 min, load 4.7-7.8) and ``force'
-        '_realism.hand.json`` (``--models "" --hand-seeds 201,...,206``, 42 min, load 7-11): finger3 sensor ('
-        'identified + compensation) **6/6**, RMSE 1.56 % median (1.99 worst), overshoot 7.7 (8.6) %, rise 92 '
-        '(94) ms; the rigid design and the shipped file 0/6 (the cable rings at 250 Hz: 32-34 % of the step);'
-        ' sensorless 6/6 within 10 % (6.3 % median, 7.5 worst; calibrated once against the fingertip sensor 1'
-        ".8 / 4.1 %; the shipped file 28 / 39 %); finger2: seed 204's fit lost its basin (not converged), on "
-        'the other five sensor 5/5 (RMSE 0.43 %, overshoot 1.4 %, rise 68 ms), sensorless 5/5 (4.8 / 5.5 %; c'
-        "alibrated 0.86 / 1.9 %; the shipped file 1/6). The hand (29 of 30 chain fits converged; the grasp's "
-        "references from the drawn hand's probe, ``control.grasp_limits``): sensor within 0.3 % on 5/6 seeds "
-        "-- seed 203's index lets go of the cylinder at its lowered 0.35 N step in the compensated loop (the "
-        'rigid design and the shipped file hold it) --; sensorless uncalibrated **0/6** within 5 % (6.5-9.8 %'
-        " worst, every chain above the torque constant's 4.8 % floor); calibrated (``Compensation(force_scale"
-        '=)`` from ``control.force_scale_of``) **5/6** (2.4-3.9 %; seed 203 5.9 %); the shipped file 21-55 %'),
 }
 
 README_ROWS: dict[str, str] = {

@@ -278,6 +278,36 @@ def _adequate_worst(r: Result, case: str) -> dict[str, float] | None:
             "ekf": max(max(x["ekf_rmse_deg"]) for x in good)}
 
 
+def force_realism(r: Result) -> list[str]:
+    """Per model / variant / controller (the script's ``summary``): the runs, how many met the goals, the figures."""
+    who = ", ".join(r["models"]) + (f" on seeds {', '.join(str(x) for x in r['seeds'])}" if r["models"] else "")
+    if r["hand_seeds"]:
+        who += ("; " if who else "") + f"the hand on seeds {', '.join(str(x) for x in r['hand_seeds'])}"
+    ids = [i for i in r["identifications"] if "converged" in i]  # the fits (the hand's grasp probes apart)
+    probe = " (the hand's per chain, scaled from its grasp probe)" if r["hand_seeds"] else ""
+    out = [f"{who}; levels {' -> '.join(f'{x:g}' for x in r['levels_N'])} N{probe}; identifications: "
+           f"{sum(i['converged'] for i in ids)} of {len(ids)} converged, {sum(not i['flagged'] for i in ids)} adequate"]
+    for key, c in r["summary"].items():
+        parts = [f"{c['runs']} runs"]
+        if "goal_met" in c:
+            parts.append(f"**{c['goal_met']} met the goals**")
+        if "rmse_pct" in c:
+            parts.append(f"RMSE after the rise {_mw(_mm(c['rmse_pct']))} %, overshoot {_mw(_mm(c['overshoot_pct']), '.1f')} %, "
+                         f"rise {_mw(_mm(c['rise_ms']), '.0f')} ms, steady-state error {_mw(_mm(c['sse_pct']))} % "
+                         "(median / worst)")
+        if "worst_sse_pct" in c:
+            parts.append(f"worst force error {c['worst_sse_pct']:.2f} %")
+        if c.get("failed"):
+            parts.append(f"{c['failed']} failed")
+        out.append(f"``{key}``: " + ", ".join(parts))
+    return out
+
+
+def _mm(st: dict) -> dict:
+    """A ``{median, max}`` statistic as ``{median, worst}``."""
+    return {"median": st["median"], "worst": st["max"]}
+
+
 def default_path(r: Result) -> list[str]:
     out = []
     for model, c in r["summary"].items():
@@ -332,6 +362,7 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "observer_step": observer_step, "observer_build": observer_build, "param_cache": param_cache, "sweep": sweep,
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "realism": realism, "default_path": default_path,
+    "force_realism": force_realism, "force_realism.hand": force_realism,
 }
 
 ORDER = ["default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",

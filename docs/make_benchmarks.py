@@ -88,7 +88,14 @@ def _section(name: str, results: Path) -> list[str]:
     rec, gen = load(name, results), generated(name, results)
     if gen is not None:
         bullets = [f"* {x}" for x in SUMMARIES[name](gen["result"])]
-        return out + ["Measured with " + conditions(gen) + ".", "", *bullets, ""]
+        out += ["Measured with " + conditions(gen) + ".", "", *bullets, ""]
+        for path in sorted(results.glob(f"{name}.*.json")):  # its other records (NAME.PART.json), each summarised
+            key = path.name[: -len(".json")]
+            if key in SUMMARIES:
+                part = json.loads(path.read_text())
+                out += [f"And ``{key[len(name) + 1:]}``, measured with " + conditions(part) + ".", "",
+                        *[f"* {x}" for x in SUMMARIES[key](part["result"])], ""]
+        return out
     if rec is not None:
         out += [f"*Recorded in* ``benchmarks/results/{name}.json`` *({rec['date'][:10]}) but not yet summarised in* "
                 "``benchmarks/_summaries.py``.", ""]
