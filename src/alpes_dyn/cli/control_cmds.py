@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import dataclasses
 import importlib
+import math
 from typing import Any
 
 import numpy as np
@@ -128,6 +129,7 @@ def cmd_control(args: argparse.Namespace) -> int:
                              "a URDF --model's plant is its spec's MJCF")
     effects = _plant_effects(args)
     fx = {} if effects is None else {"effects": effects, **({"compensation": _rigid()} if args.no_compensation else {})}
+    _check_calibration(args, fx, urdf)
     if args.model == "hand":
         return _control_hand(args, fx)
     if args.duration is None:
@@ -151,10 +153,13 @@ def cmd_control(args: argparse.Namespace) -> int:
                  f"{', '.join(f'{x:.3f}' for x in res.block.normal)})")
     else:
         _check_control_outputs(args)
+        scale = _force_scale(args, fx, run_control)
         res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
                           seed=args.seed, params=args.params, plant_params=args.plant_params, **fx)
         where = f"{args.model} pressing a block" + _effects_words(fx)
     obj = _write_control_outputs(res, args, plot_control)
+    if not urdf:
+        obj["force_scale"] = scale
     f = _na
 
     lines = [
@@ -169,8 +174,59 @@ def cmd_control(args: argparse.Namespace) -> int:
         f"  motor torque limit {res.tau_max:g} N m, saturated {res.saturated:.1%} of the time; "
         f"loop {res.realtime_ratio:.1f}x faster than real time",
     ]
+    if not urdf and scale is not None:
+        lines.append(f"  sensorless force estimate divided by {scale:.4f} ("
+                     f"{'read by a calibration run, seed ' + str(args.seed + CALIBRATION_SEED) if args.calibrate else '--force-scale'})")
     _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0
+
+
+CALIBRATION_SEED = 1000
+"""--calibrate's run: the loop's seed plus this (another draw of the sensors' noise than the run's)."""
+
+
+def _check_calibration(args: argparse.Namespace, fx: dict, urdf: bool) -> None:
+    """--force-scale and --calibrate: the sensorless controller of a finger on a plant with effects, one of them."""
+    flag = "--force-scale" if args.force_scale is not None else "--calibrate" if args.calibrate else None
+    if flag is None:
+        return
+    if args.force_scale is not None and args.calibrate:
+        raise InputError("--force-scale: give it or --calibrate (which reads it from a calibration run), not both")
+    if urdf or args.model == "hand":
+        raise InputError(f"{flag}: applies to a finger model (finger2, finger3); the hand's chains are calibrated "
+                         "from Python (control.force_scale_of on a sensorless run_hand_control)")
+    if args.controller != "sensorless":
+        raise InputError(f"{flag}: applies to the sensorless controller (--controller sensorless), got "
+                         f"{args.controller!r}: the sensor and pi loops read the fingertip sensor itself")
+    if not fx:
+        raise InputError(f"{flag}: applies to a plant with a real hand's effects (--plant-effects all, or an effect's "
+                         "flag): the torque constant's error it undoes is one of them")
+    if args.force_scale is not None and not (math.isfinite(args.force_scale) and 0.5 <= args.force_scale <= 2.0):
+        raise InputError(f"--force-scale: expected a scale from 0.5 to 2 (the estimate over the fingertip sensor), "
+                         f"got {args.force_scale!r}")
+
+
+def _force_scale(args: argparse.Namespace, fx: dict, run_control: Any) -> float | None:
+    """The scale the loop's sensorless estimate is divided by (--force-scale, or read by --calibrate's run), put
+    into ``fx``'s compensation; None without either."""
+    from ..control.hand_loop import force_scale_of
+    from ..control.realism_loop import Compensation
+
+    if args.force_scale is None and not args.calibrate:
+        return None
+    comp = fx.get("compensation") or Compensation()
+    if args.calibrate:
+        first = run_control("sensorless", model=args.model, reference="step", duration=args.duration,
+                            seed=args.seed + CALIBRATION_SEED, params=args.params, plant_params=args.plant_params,
+                            **{**fx, "compensation": comp})
+        try:
+            scale = float(force_scale_of(first, comp.force_scale))
+        except InputError as exc:
+            raise InputError(f"--calibrate: {str(exc).partition(': ')[2]}") from None
+    else:
+        scale = float(args.force_scale)
+    fx["compensation"] = dataclasses.replace(comp, force_scale=scale)
+    return scale
 
 
 _URDF_ONLY = (("--spec", "spec"), ("--frame", "frame"), ("--motor", "motor"), ("--contact-q", "contact_q"),

@@ -559,6 +559,14 @@ def _add_control(sub: argparse._SubParsersAction) -> None:
                    help="with plant effects: the rigid design (the observer and the controllers blind to them); "
                         "default: the tendon's stretch off the encoder, the command as the observer's torque, the "
                         "identified friction's feedforward")
+    s.add_argument("--force-scale", type=_strict_float, default=None, metavar="SCALE",
+                   help="sensorless controller on a finger with plant effects: the force estimate divided by SCALE "
+                        "(0.5-2; a one-point calibration against the fingertip sensor, control.force_scale_of: 1.05 "
+                        "undoes a torque constant 5 %% high, which the encoder cannot see)")
+    s.add_argument("--calibrate", action="store_true",
+                   help="sensorless controller on a finger with plant effects: first a calibration run (another noise "
+                        "draw, seed + 1000) reads the scale, the estimate over the fingertip sensor at the first level; "
+                        "the loop then runs with it (--force-scale given by the data)")
     s.add_argument("--duration", type=_positive_seconds, default=None,
                    help="simulated time, s (default 3 for a finger or a URDF, 3.5 for the hand)")
     s.add_argument("--seed", type=_SEED, default=0, help="random seed (default %(default)s)")
