@@ -280,10 +280,11 @@ def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign,
                                chain=plant.chain)
         return (rec, d, e), rec.true_q
 
-    rig = adapt if adapt != "auto" or own == 0.0 else "hanging"
-    candidates = candidate_designs(design, rig, np.asarray(load_params().gravity, dtype=float))
     if adapt == "none":
-        candidates = candidates[:1]
+        candidates = [("level", 1.0, design)]  # the design as given, in its own orientation
+    else:
+        rig = adapt if adapt != "auto" or own == 0.0 else "hanging"  # a hung design stays hung
+        candidates = candidate_designs(design, rig, np.asarray(load_params().gravity, dtype=float))
     (out, _, _, k), tried = first_in_range(run, candidates, limits.lower, limits.upper)
     return (*out, adaptation_of(tried, k, limits))
 
