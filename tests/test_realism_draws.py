@@ -209,6 +209,37 @@ def test_a_flagged_fit_naming_nothing_tries_the_delay_after_stiction_and_the_rot
     assert seen == [0, 0, 0, 1]  # each round on the torque as fitted; 2 samples not tried: 1 is adequate
     assert fit.delay == 1 and fit.effects == ("compliance", "tilt", "delay") and fit.result.trustworthy
 
+def test_a_lost_first_fit_naming_a_joint_stop_still_gets_the_staged_start_and_autos_rounds(monkeypatch):
+    """auto on stand-in fits shaped as MuJoCo's all-effects finger3 of seed 536 (in range on the plant): the first
+    fit loses its basin and its verdict names a joint stop. A lost fit's trajectory is not believed: the staged
+    start runs (its rigid fit lost too: noted), then auto's rounds; the rotor's converges, adequate, and is kept.
+    (Before, the stop ended the fit at the first round, refused for the wrong cause.)"""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.adequacy import JOINT_STOP
+    from alpes_dyn.model.params import load_params
+
+    seen = []
+
+    def fake_identify(model, data, parameters, **kw):
+        seen.append(parameters)
+        ok = len(seen) == 4  # the 4th fit: the rotor's round
+        return SimpleNamespace(residual_rms=0.6 if ok else 14.4 + len(seen), converged=ok,
+                               reason="converged" if ok else "lost basin: three Gauss-Newton steps in a row",
+                               names=(), values=[], std=[], trustworthy=ok,
+                               adequacy=SimpleNamespace(adequate=ok, likely_missing=[] if ok else [JOINT_STOP]))
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    fit = eff.fit_effects(eff.alpes_models("finger3", load_params()), _ramp_recording(), eff.parse_effects("auto"),
+                          has_gravity=True, observe=False)
+    assert [e for e, _ in fit.rounds] == [("compliance", "tilt"), (), ("compliance", "tilt", "stiction"),
+                                          ("compliance", "tilt", "rotor")]
+    assert fit.effects == ("compliance", "tilt", "rotor") and fit.result.converged and fit.result.trustworthy
+    assert fit.notes and "rigid fit itself did not converge" in fit.notes[0]
+
+
 def test_the_true_file_passes_the_observer_check_on_the_models_own_structure():
     """The observer's check never refuses the truth: on our simulator's recording of finger2 seed 3 (the fitted
     model's exact structure) the true file's EKF predicts the encoder 20 ms ahead within the threshold (measured
