@@ -685,13 +685,18 @@ def test_identify_and_estimate_read_current_columns_with_a_torque_constant(tmp_p
     assert np.allclose(est[0]["rmse_deg"], est[1]["rmse_deg"], rtol=1e-6)
 
 
-def test_shooting_problem_jacobians_equal_finite_differences(finger2):
+@pytest.mark.parametrize("rotor", [False, True], ids=["rigid", "rotor"])
+def test_shooting_problem_jacobians_equal_finite_differences(finger2, rotor):
     """The fit's problem alone (:class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`): the Jacobians of its
     residuals and continuity defects, with respect to every node, torque line coefficient and parameter (log K, m,
     friction; the additive encoder offset; the compliance in its scale), equal central differences of the residuals
     themselves (relative 1e-5 of the largest entry), on 0.3 s of finger2 with camera columns and the lines' errors in
-    variables: every term of the residual."""
+    variables: every term of the residual. With the rotor, the stretch is C (u - J_m S qdd)
+    (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.tension_torque`), its qdd the states'."""
     from alpes_dyn.estimation.identification.shooting import ShootingProblem, torque_model
+
+    if rotor:
+        finger2 = ad.Model.alpes("finger2", friction=True, rotor_inertia=True)
 
     true = perturbed_params(spread=0.2, seed=4)
     design = ExperimentDesign(duration=0.3)
@@ -711,6 +716,14 @@ def test_shooting_problem_jacobians_equal_finite_differences(finger2):
     glob = 0.05 * rng.standard_normal(pb.ng)
     e = pb.evaluate(nodes, offs, glob)
     assert pb.q_mask.sum() > 0 and e.r.shape[1] > (pb.L + 1) * pb.ny  # camera residuals are in
+    assert (pb.rotor is not None) == rotor
+    if rotor:  # the rotor's share: J_m times the motor's acceleration over the period before each sample
+        qd, u = e.xs[:, :, pb.n: 2 * pb.n], pb.torque_at(glob, offs)
+        share = (u - pb.tension_torque(u, e.xs)) / finger2.transmission.rotor_inertia
+        acc = (qd[:, 1:] - qd[:, :-1]).sum(axis=2) * 2.0 / rec.dt  # finger2: q_m = (r / r_m) (q_1 + q_2), r / r_m = 2
+        assert np.allclose(share[:, 1:, 0], acc, rtol=1e-9, atol=1e-9 * np.abs(acc).max())
+        assert np.array_equal(share[:, 0], share[:, 1])  # an interval's first sample: its first period's
+        assert np.abs(u - pb.tension_torque(u, e.xs)).max() > 1e-3 * np.abs(u).max()  # not negligible here
     h = 1e-6
 
     def fd(s, k, glob_index=None):

@@ -16,7 +16,7 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError
 
-__all__ = ["Transmission", "torque_before"]
+__all__ = ["Transmission", "acceleration_before", "torque_before"]
 
 
 def torque_before(tau_m: np.ndarray) -> np.ndarray:
@@ -31,6 +31,18 @@ def torque_before(tau_m: np.ndarray) -> np.ndarray:
     if tau_m.ndim == 0 or tau_m.shape[0] == 0:
         raise InputError(f"tau_m: expected one row per sample, got shape {tau_m.shape}")
     return np.concatenate([tau_m[:1], tau_m[:-1]])
+
+
+def acceleration_before(qd_m: np.ndarray, dt: float) -> np.ndarray:
+    """(N, m) the motors' acceleration over the period before each sample, rad/s^2, (qd_m,k - qd_m,k-1) / dt, from
+    their velocities qd_m (N, m) rad/s sampled every ``dt`` s; the first sample takes the first period's. With
+    :func:`torque_before`, what the cable's tension balances at a reading: r_m T = tau_m,k-1 - J_m qdd_m
+    (:meth:`Transmission.encoder_angles`)."""
+    qd_m = as_float_array(qd_m, "qd_m", "motor velocities")
+    if qd_m.ndim == 0 or qd_m.shape[0] < 2:
+        raise InputError(f"qd_m: expected two rows or more (one per sample), got shape {qd_m.shape}")
+    d = np.diff(qd_m, axis=0) / dt
+    return np.concatenate([d[:1], d])
 
 
 @dataclass(frozen=True)
@@ -75,17 +87,24 @@ class Transmission:
         """True when a tendon has a non-zero compliance (the encoder then reads S q + C tau_m)."""
         return bool(np.any(self.tendon_compliance != 0))
 
-    def encoder_angles(self, q: np.ndarray, tau_m: np.ndarray | None = None) -> np.ndarray:
-        """What the encoders read, rad: S q + C tau_m (the tendons' stretch under the motor torque tau_m,
-        N m, that the tension balances at the reading's instant: in a sampled record, the torque held over the
-        period before it, :func:`torque_before`; without it, or with rigid tendons, S q). q: (..., n),
-        tau_m: (..., m) -> (..., m)."""
+    def encoder_angles(self, q: np.ndarray, tau_m: np.ndarray | None = None,
+                       qdd_m: np.ndarray | None = None) -> np.ndarray:
+        """What the encoders read, rad: S q + C (tau_m - J_m qdd_m), the tendons' stretch under their tension:
+        the motor torque tau_m (N m) that the tension balances at the reading's instant (in a sampled record the
+        torque held over the period before it, :func:`torque_before`) less what accelerates the rotor, J_m qdd_m
+        (qdd_m (..., m) rad/s^2, :func:`acceleration_before`; None: not taken off). Without tau_m, or with rigid
+        tendons, S q. q: (..., n), tau_m: (..., m) -> (..., m)."""
         y = self.motor_positions(q)
         if tau_m is None or not self.elastic:
             return y
         tau_m = as_float_array(tau_m, "tau_m", "motor torques")
         if tau_m.shape[-1:] != (self.n_motors,):
             raise InputError(f"tau_m: expected last dimension {self.n_motors}, got shape {tau_m.shape}")
+        if qdd_m is not None:
+            qdd_m = as_float_array(qdd_m, "qdd_m", "motor accelerations")
+            if qdd_m.shape != tau_m.shape:
+                raise InputError(f"qdd_m: expected the shape of tau_m {tau_m.shape}, got {qdd_m.shape}")
+            tau_m = tau_m - self.rotor_inertia * qdd_m
         return y + tau_m * self.tendon_compliance
 
     @property

@@ -67,7 +67,7 @@ from ...fileio import check_outputs
 from ...limits import MAX_SEED
 from ...model.robot import Model
 from ...model.params import HandParams, load_params
-from ...model.transmission import torque_before
+from ...model.transmission import acceleration_before, torque_before
 from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported)
 from .draws import perturbed_params  # noqa: F401 (re-exported)
@@ -374,7 +374,9 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
     x = _simulate(truth, design, u, G, seg)
     tr = truth.transmission
     step = 2 * np.pi / tr.counts_per_rev
-    qm = tr.encoder_angles(x[:, : truth.n], torque_before(u))  # S q, plus the stretch C u_k-1 where elastic
+    # S q, plus the stretch C (u_k-1 - J_m qdd_m) where elastic (the fit's ShootingProblem.tension_torque)
+    qm = tr.encoder_angles(x[:, : truth.n], torque_before(u),
+                           acceleration_before(tr.motor_positions(x[:, truth.n: 2 * truth.n]), design.dt))
     counts = np.round((qm + design.encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step)
     torque = u + design.torque_noise * rng.standard_normal(u.shape)
     q_meas = None

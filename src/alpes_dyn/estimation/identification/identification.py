@@ -428,7 +428,8 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
     """The fitted trajectory at the samples (the intervals cut at their valid samples, sample order) and its
     encoder reading y_k = S q_k + offset + C u_k-1, counts."""
     x_fit = out.at.xs[pb.valid]
-    u_fit = pb.stretch(theta, pb.torque_at(out.glob, out.offs))[pb.valid] if pb.comp_cols else 0.0
+    u_fit = (pb.stretch(theta, pb.tension_torque(pb.torque_at(out.glob, out.offs), out.at.xs))[pb.valid]
+             if pb.comp_cols else 0.0)
     return x_fit, (x_fit[:, :pb.n] @ pb.S_enc.T + pb.offset(theta) + u_fit) / pb.step
 
 
