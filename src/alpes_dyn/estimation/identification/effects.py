@@ -35,7 +35,9 @@ A first fit that loses its basin (its stop reason "lost basin"; the joint stop i
 one, each from the last; where one breaks it, the last converged stage is kept and :attr:`EffectsFit.notes` names
 the effect. The fit kept is then judged by the observer it feeds
 (:func:`~alpes_dyn.estimation.identification.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
-is not adequate, the reason naming the observer, and ``auto`` tries the effects not yet tried.
+is not adequate, the reason naming the observer, and ``auto`` tries the effects not yet tried; where all were, the
+rounds as good a fit (residual within :data:`OBSERVER_RESIDUAL_RATIO` of the kept one's) are judged too, and the first
+the observer passes is kept.
 
 Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
 asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
@@ -74,7 +76,7 @@ from ...model.params import HandParams, with_values
 from ...model.robot import Model
 from ...symbolic.parametric import select_parameters, unseen_masses
 
-__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
+__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay")
@@ -231,6 +233,30 @@ def _contracting(result: Any) -> bool:
     """True when a fit found a tendon compliance below minus three of its standard errors (a cable read as
     shortening under tension: no cable does)."""
     return any(value < -3.0 * sd for value, sd in _compliances(result))
+
+
+OBSERVER_RESIDUAL_RATIO = 1.05
+"""A round whose residual is within this ratio of the kept fit's is as good a fit (:func:`_observer_choice`)."""
+
+
+def _observer_choice(rounds: Sequence[tuple[tuple[str, ...], Any]], best: Any, recording: Any,
+                     delays: dict[int, int]) -> tuple[tuple[tuple[str, ...], Any], Any] | None:
+    """Where the observer fails the kept fit ``best``: the rounds as good a fit (converged, residual within
+    :data:`OBSERVER_RESIDUAL_RATIO` of its), lowest residual first, judged by the observer too
+    (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, on ``recording``, each with its torque
+    delay); the first that passes, ((effects, fit), its check), or None. Why: two rounds a hair apart in residual
+    are the same fit to the encoder, and the observer tells them apart (MuJoCo's all-effects finger3 of seed 541,
+    the torque 1 sample late, 2026-12-05: the delay's round 0.603 counts against 0.594 without it, not kept on its
+    residual; the EKF without the delay predicted the encoder 20 ms ahead at 33x the floor, refused)."""
+    from .observer_check import judge
+
+    for effs, res in sorted(rounds, key=lambda er: er[1].residual_rms):
+        if res is best or not res.converged or res.residual_rms > OBSERVER_RESIDUAL_RATIO * best.residual_rms:
+            continue
+        check = judge(res, recording, delays[id(res)])
+        if check is not None and check.passed:
+            return (effs, res), check
+    return None
 
 
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
@@ -403,4 +429,9 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
                 break
             best, best_effects, tried, tried_effects = again
             check = judge(best, on, delays[id(best)])
+        if auto and check is not None and not check.passed:
+            other = _observer_choice(rounds, best, on, delays)
+            if other is not None:
+                tried, tried_effects = best, best_effects
+                (best_effects, best), check = other
     return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds), delays[id(best)], check, notes)
