@@ -25,10 +25,16 @@ PAGE = ROOT / "docs" / "benchmarks.rst"
 README = ROOT / "README.md"
 START, END = "<!-- headline:start -->", "<!-- headline:end -->"
 
+# the helpers imported from benchmarks/, whose path is taken off again: left on sys.path, its scripts would hide
+# packages of their names for whoever imports this module (benchmarks/control.py hid python-control from a test run
+# in the same process after tests/test_benchmark_page.py)
 sys.path.insert(0, str(BENCH))
-from _handwritten import PAGE as HAND_PAGE  # noqa: E402
-from _handwritten import README_ROWS as HAND_ROWS  # noqa: E402
-from _summaries import HEADLINE_ORDER, HEADLINES, ORDER, SUMMARIES  # noqa: E402
+try:
+    from _handwritten import PAGE as HAND_PAGE  # noqa: E402
+    from _handwritten import README_ROWS as HAND_ROWS  # noqa: E402
+    from _summaries import HEADLINE_ORDER, HEADLINES, ORDER, SUMMARIES  # noqa: E402
+finally:
+    sys.path.remove(str(BENCH))
 
 
 def scripts() -> list[str]:
