@@ -92,6 +92,9 @@ def cmd_import(args: argparse.Namespace) -> int:
                          "no plain name (rename the file)")
     check_output_directory(args.output, "-o")  # before MuJoCo compiles: a new or empty directory, never a file
     urdf, spec, model = _mjcf_import(args.model)
+    from ..model.mjcf_import import _compile, not_imported
+
+    lost = not_imported(_compile(args.model))  # the JSON's and the text's "not imported" lines
     toml = (f"# the transmission spec of {Path(args.model).name} (alpes-dyn import): give it as --spec with "
             f"--model {name}.urdf\n" + spec.to_toml())
     if TransmissionSpec.from_toml(toml) != spec:  # never written as if it were the model's (to_toml's promise)
@@ -100,11 +103,11 @@ def cmd_import(args: argparse.Namespace) -> int:
     paths = {k: str(v) for k, v in written.items()}
     obj = {"model": args.model, "name": model.name, "directory": args.output, "urdf": paths[f"{name}.urdf"],
            "spec": paths[f"{name}.toml"], "joints": list(model.joint_names), "motors": list(model.motor_names),
-           "tips": list(model.tip_names)}
+           "tips": list(model.tip_names), "not_imported": lost}
     text = (f"{model.name}: {model.n} joints, {len(model.motor_names)} motor"
             f"{'s' if len(model.motor_names) != 1 else ''} ({', '.join(model.motor_names) or 'none'}), tips "
             f"{', '.join(model.tip_names) or 'none'}; written to {args.output}/ ({name}.urdf, {name}.toml)\n"
-            f"  use: --model {obj['urdf']} --spec {obj['spec']}")
+            f"  use: --model {obj['urdf']} --spec {obj['spec']}" + "".join(f"\n  not imported: {x}" for x in lost))
     _emit(obj, text, args.json)
     return 0
 

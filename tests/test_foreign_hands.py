@@ -1,0 +1,108 @@
+"""A real hand from MuJoCo Menagerie (issue 37): the Shadow Hand E3M5 shipped in ``alpes_dyn/data/shadow_hand``
+(its kinematics and dynamics as published, meshes replaced by primitives), imported as a URDF + spec and checked
+against MuJoCo on the MJCF itself: the mass matrix, the bias, the passive damping, a pulled tendon's joint torques
+and the forward dynamics, at random states. Nothing is downloaded."""
+
+from __future__ import annotations
+
+import json
+import warnings
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.cli import main
+
+mujoco = pytest.importorskip("mujoco")
+from alpes_dyn.model.mjcf_import import MjcfImportWarning, example_mjcf_path, mjcf_to_urdf  # noqa: E402
+
+TENDONS = {"rh_A_FFJ0": ("rh_FFJ2", "rh_FFJ1"), "rh_A_MFJ0": ("rh_MFJ2", "rh_MFJ1"),
+           "rh_A_RFJ0": ("rh_RFJ2", "rh_RFJ1"), "rh_A_LFJ0": ("rh_LFJ2", "rh_LFJ1")}
+
+
+@pytest.fixture(scope="module")
+def shadow():
+    path = example_mjcf_path("shadow_hand")
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        urdf, spec = mjcf_to_urdf(path)
+    model = ad.Model(urdf, spec)
+    mj = mujoco.MjModel.from_xml_path(str(path))
+    return model, mj, caught
+
+
+def _mj_joints(mj) -> list[str]:
+    return [mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(mj.njnt)]
+
+
+def test_shadow_hand_imports_with_its_couplings_and_says_what_it_drops(shadow):
+    model, mj, caught = shadow
+    assert model.n == 24 and len(model.motor_names) == 20 and model.name == "right_shadow_hand"
+    assert sorted(_mj_joints(mj)) == sorted(model.joint_names)  # Pinocchio orders them its own way
+    S = model.transmission.S
+    for motor, joints in TENDONS.items():  # the fixed tendon: q_m = q_J2 + q_J1
+        row = S[model.motor_names.index(motor)]
+        assert {model.joint_names[i]: row[i] for i in np.flatnonzero(row)} == {j: 1.0 for j in joints}
+    assert np.count_nonzero(S) == 16 + 8  # 16 one-joint servos, 4 tendons over 2 joints
+    for field, value in (("armature", 2e-4), ("coulomb", 0.01)):
+        np.testing.assert_array_equal(getattr(model.extras, field), np.full(24, value))
+    assert model.extras.viscous[model.joint_names.index("rh_WRJ1")] == 0.5  # the wrist class's damping
+    assert model.tip_names == ("rh_ffdistal", "rh_mfdistal", "rh_rfdistal", "rh_lfdistal", "rh_thdistal")
+    msgs = [str(w.message) for w in caught if issubclass(w.category, MjcfImportWarning)]
+    assert len(msgs) == 1 and "gainprm/biasprm" in msgs[0] and "forcerange" in msgs[0], msgs
+
+
+def test_shadow_hand_dynamics_equal_mujoco(shadow):
+    """M(q) (armature in both), the bias C(q, v) v + g(q), the damping's passive force, the actuators' joint torques
+    (a pulled tendon: S^T of MuJoCo's actuator forces is its qfrc_actuator, nonzero on the tendon's two joints only)
+    and the forward dynamics, to 1e-9 (relative to each term's size) at random states."""
+    model, mj, _ = shadow
+    mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS | mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    d = mujoco.MjData(mj)
+    rng = np.random.default_rng(37)
+    nu = mj.nu
+    p = [model.joint_names.index(j) for j in _mj_joints(mj)]  # MuJoCo's joint k is the model's p[k]
+    for k in range(4):
+        q, v = model.random_state(rng)  # inside the ranges: no limit active
+        d.qpos[:], d.qvel[:] = q[p], v[p]
+        mujoco.mj_kinematics(mj, d)
+        mujoco.mj_comPos(mj, d)
+        mujoco.mj_tendon(mj, d)
+        mujoco.mj_transmission(mj, d)
+        d.ctrl[:] = d.actuator_length + rng.uniform(-0.2, 0.2, nu)  # every servo pulls (forcerange clips some)
+        if k == 0:  # one pulled tendon alone: the first finger's, the other servos at their set point
+            d.ctrl[:] = d.actuator_length
+            d.ctrl[model.motor_names.index("rh_A_FFJ0")] += 1.0
+        mujoco.mj_forward(mj, d)
+        assert d.nefc == 0  # no limit, contact or friction constraint: the plain equations of motion
+        M = np.zeros((mj.nv, mj.nv))
+        mujoco.mj_fullM(mj, d, M)
+        A = model.inertia_matrix(q)[np.ix_(p, p)]
+        assert np.max(np.abs(A - M)) <= 1e-9 * np.max(np.abs(M))
+        bias = (model.coriolis_matrix(q, v) @ v + model.gravity_torque(q))[p]
+        assert np.max(np.abs(bias - d.qfrc_bias)) <= 1e-9 * np.max(np.abs(d.qfrc_bias))
+        np.testing.assert_allclose((-model.extras.viscous * v)[p], d.qfrc_passive, rtol=1e-12, atol=1e-15)
+        tau = model.transmission.joint_torque(d.actuator_force)  # Gamma = S^T tau_m (motors in MuJoCo's order)
+        assert np.max(np.abs(tau[p] - d.qfrc_actuator)) <= 1e-12 * np.max(np.abs(d.qfrc_actuator))
+        if k == 0:
+            moved = np.flatnonzero(np.abs(d.qfrc_actuator) > 1e-12)
+            assert {_mj_joints(mj)[i] for i in moved} == set(TENDONS["rh_A_FFJ0"])
+            assert np.all(d.qfrc_actuator[moved] > 0.1)  # pulled by kp (ctrl - length) = 0.5 N m, clipped to 1
+        # the library's Coulomb friction cancelled (MuJoCo's frictionloss, a constraint, is disabled here)
+        qdd = model.forward_dynamics(q, v, tau + model.extras.coulomb * np.sign(v))
+        assert np.max(np.abs(qdd[p] - d.qacc)) <= 1e-9 * np.max(np.abs(d.qacc))
+
+
+def test_shadow_hand_import_cli(capsys, tmp_path):
+    """``alpes-dyn import`` on the shipped file: the pair written, the JSON's "not_imported" naming the servo gains,
+    the force ranges and the geoms; one warning line on stderr; the pair loads as the model Model.from_mjcf gives."""
+    code = main(["import", "--model", str(example_mjcf_path()), "-o", str(tmp_path / "out"), "--json"])
+    out, err = capsys.readouterr()
+    assert code == 0, err
+    obj = json.loads(out)
+    assert err.startswith("alpes-dyn: warning: MjcfImportWarning: mjcf: not imported: actuators rh_A_WRJ2")
+    lost = obj["not_imported"]
+    assert len(lost) == 3 and "gainprm/biasprm" in lost[0] and "forcerange" in lost[1] and lost[2].startswith("geoms")
+    m = ad.Model.from_urdf_file(obj["urdf"], obj["spec"])
+    assert m.joint_names == tuple(obj["joints"]) and len(obj["motors"]) == 20
