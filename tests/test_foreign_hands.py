@@ -106,3 +106,10 @@ def test_shadow_hand_import_cli(capsys, tmp_path):
     assert len(lost) == 3 and "gainprm/biasprm" in lost[0] and "forcerange" in lost[1] and lost[2].startswith("geoms")
     m = ad.Model.from_urdf_file(obj["urdf"], obj["spec"])
     assert m.joint_names == tuple(obj["joints"]) and len(obj["motors"]) == 20
+    # the pair exported back to MJCF (its root link is named "world": MuJoCo's own world body, not a second one)
+    assert main(["mjcf", "--model", obj["urdf"], "--spec", obj["spec"], "-o", str(tmp_path / "back.xml")]) == 0
+    back = ad.Model.from_mjcf(tmp_path / "back.xml")
+    q = m.random_state(np.random.default_rng(1))[0]
+    assert back.joint_names == m.joint_names and back.motor_names == m.motor_names
+    np.testing.assert_allclose(back.inertia_matrix(q), m.inertia_matrix(q), rtol=0, atol=1e-15)
+    np.testing.assert_allclose(back.gravity_torque(q), m.gravity_torque(q), rtol=0, atol=1e-14)
