@@ -252,8 +252,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
     from ..estimation.experiments.experiment import EXPERIMENT_MODELS
-    from ..estimation.identification.identified_spec import write_identified_spec
-    from ..model.spec import load_spec
+    from ..estimation.identification.identified_spec import spec_misfits
 
     urdf = _is_urdf_path(args.model)
     if args.model == "hand":  # every chain from one recording of the six motors
@@ -273,7 +272,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
     written = args.output is not None and (res.trustworthy or args.force)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
-        res.write(args.output) if not urdf else write_identified_spec(res, load_spec(args.spec), args.output)
+        if not urdf:
+            res.write(args.output)
+        else:
+            _write_robot(res, args)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
@@ -317,8 +319,12 @@ def cmd_identify(args: argparse.Namespace) -> int:
             v = a.validation
             lines.append(f"  validation on {args.validate}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
                          f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
+    obj["urdf_output"] = _mass_urdf_path(args.output) if written and urdf and spec_misfits(model, res.names) else None
     if written:
-        lines.append(f"  written to {args.output}" + ("" if res.trustworthy else " (marked NOT trustworthy)"))
+        lines.append(f"  written to {args.output}" + (f" and {obj['urdf_output']} (the masses; use --model "
+                                                     f"{obj['urdf_output']} --spec {args.output})"
+                                                     if obj["urdf_output"] else "")
+                     + ("" if res.trustworthy else " (marked NOT trustworthy)"))
     _emit(obj, "\n".join(lines), args.json)
     if not res.trustworthy:
         why = res.status()
@@ -327,6 +333,32 @@ def cmd_identify(args: argparse.Namespace) -> int:
                              f" (--force writes it anyway): {why}")
         warnings.warn(UntrustedFitWarning(f"identify --force: {args.output or 'the fit'} is NOT trustworthy: {why}"))
     return 0
+
+
+def _mass_urdf_path(output: str) -> str:
+    """The URDF written beside ``identify -o FILE.toml`` when the fit has masses: ``FILE.urdf``."""
+    from pathlib import Path
+
+    return str(Path(output).with_suffix(".urdf"))
+
+
+def _write_robot(res, args: argparse.Namespace) -> None:
+    """A URDF robot's fit written: the identified spec at -o, and where it fitted masses the URDF ``--model`` with
+    them beside it (:func:`_mass_urdf_path`; :func:`~alpes_dyn.estimation.identification.identified_spec.identified_urdf`):
+    both built before either is written, the spec last (a failed URDF write leaves no spec naming it)."""
+    from ..estimation.identification.identified_spec import (identified_spec, identified_urdf, spec_misfits,
+                                                             write_identified_spec)
+    from ..fileio import atomic_write, read_text
+    from ..model.spec import load_spec
+
+    base = load_spec(args.spec)
+    if spec_misfits(res.model, res.names):
+        text = identified_urdf(res, read_text(args.model, "--model"))
+        identified_spec(res, base, masses="urdf")  # the spec's errors before the URDF is written
+        atomic_write(_mass_urdf_path(args.output), text, "-o")
+        write_identified_spec(res, base, args.output, masses="urdf")
+    else:
+        write_identified_spec(res, base, args.output)
 
 
 def _held_masses(model, args: argparse.Namespace) -> tuple[str, ...]:
@@ -375,9 +407,8 @@ def _fit_robot(args: argparse.Namespace, freqs):
         return sticky if "stiction" in effs else model
 
     masses = spec_misfits(model, _chain_names(model, args.parameters, args.chain))  # the effects add none
-    if masses and args.output is not None:
-        raise InputError(f"-o: {', '.join(masses)}: a spec file holds no masses (they are the URDF's); fit "
-                         "--parameters K,friction to write the identified spec, or leave out -o to see the masses")
+    if masses and args.output is not None:  # written into a copy of the URDF beside -o (cmd_identify)
+        _check_run_files(args, {"-o": ("toml",)}, [("-o's URDF", _mass_urdf_path(args.output))])
     data, validate = _robot_recordings(args, model, whole if args.chain is not None else None)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)
