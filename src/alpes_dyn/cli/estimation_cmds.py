@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .fitting import _fit, _identify_lines
+from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      parse_vector)
@@ -272,10 +272,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     written = args.output is not None and (res.trustworthy or args.force)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
-        if not urdf:
-            res.write(args.output)
-        else:
-            _write_robot(res, args)
+        res.write(args.output) if not urdf else _write_robot(res, args)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
@@ -321,10 +318,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
                          f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
     obj["urdf_output"] = _mass_urdf_path(args.output) if written and urdf and spec_misfits(model, res.names) else None
     if written:
-        lines.append(f"  written to {args.output}" + (f" and {obj['urdf_output']} (the masses; use --model "
-                                                     f"{obj['urdf_output']} --spec {args.output})"
-                                                     if obj["urdf_output"] else "")
-                     + ("" if res.trustworthy else " (marked NOT trustworthy)"))
+        u = obj["urdf_output"]
+        lines.append(f"  written to {args.output}" + (f" and {u} (the masses; use --model {u} --spec {args.output})"
+                                                     if u else "") + ("" if res.trustworthy else " (marked NOT trustworthy)"))
     _emit(obj, "\n".join(lines), args.json)
     if not res.trustworthy:
         why = res.status()
@@ -333,32 +329,6 @@ def cmd_identify(args: argparse.Namespace) -> int:
                              f" (--force writes it anyway): {why}")
         warnings.warn(UntrustedFitWarning(f"identify --force: {args.output or 'the fit'} is NOT trustworthy: {why}"))
     return 0
-
-
-def _mass_urdf_path(output: str) -> str:
-    """The URDF written beside ``identify -o FILE.toml`` when the fit has masses: ``FILE.urdf``."""
-    from pathlib import Path
-
-    return str(Path(output).with_suffix(".urdf"))
-
-
-def _write_robot(res, args: argparse.Namespace) -> None:
-    """A URDF robot's fit written: the identified spec at -o, and where it fitted masses the URDF ``--model`` with
-    them beside it (:func:`_mass_urdf_path`; :func:`~alpes_dyn.estimation.identification.identified_spec.identified_urdf`):
-    both built before either is written, the spec last (a failed URDF write leaves no spec naming it)."""
-    from ..estimation.identification.identified_spec import (identified_spec, identified_urdf, spec_misfits,
-                                                             write_identified_spec)
-    from ..fileio import atomic_write, read_text
-    from ..model.spec import load_spec
-
-    base = load_spec(args.spec)
-    if spec_misfits(res.model, res.names):
-        text = identified_urdf(res, read_text(args.model, "--model"))
-        identified_spec(res, base, masses="urdf")  # the spec's errors before the URDF is written
-        atomic_write(_mass_urdf_path(args.output), text, "-o")
-        write_identified_spec(res, base, args.output, masses="urdf")
-    else:
-        write_identified_spec(res, base, args.output)
 
 
 def _held_masses(model, args: argparse.Namespace) -> tuple[str, ...]:
@@ -378,9 +348,9 @@ def _fit_robot(args: argparse.Namespace, freqs):
     spec's smooth_velocity at :data:`~alpes_dyn.estimation.identification.effects.STICTION_VELOCITY`); ``--chain MOTOR``
     fits on the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
     other branches do not change its joints' dynamics; the recording's columns of their motors and joints are
-    ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); a selection
-    with masses is refused with -o (a spec holds no masses) before the fit. Returns the EffectsFit and the recording
-    it read."""
+    ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); with -o and
+    masses in the selection, the URDF written beside -o is checked against the inputs before the fit. Returns the
+    EffectsFit and the recording it read."""
     import dataclasses
 
     from ..estimation.identification.adequacy import AdequacyWarning
