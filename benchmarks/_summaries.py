@@ -250,6 +250,10 @@ def foreign_hands(r: Result) -> list[str]:
                        + ", ".join(f"{k} {v:.2f}" for k, v in e.get("rmse_deg", {}).items())
                        + (" deg; final estimate " + ", ".join(f"{k} {v:.1f}" for k, v in e["final_q_deg"].items())
                           + " deg" if e.get("final_q_deg") else ""))
+        c = f.get("control")
+        if c:
+            out.append(f"control {c['wall_s']:.1f} s: " + (f"steady-state error {_pct(c['steady_state_error'])}"
+                                                          if c["error"] is None else f"``{c['error']}``"))
     return out
 
 

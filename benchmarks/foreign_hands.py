@@ -22,7 +22,8 @@ Three parts, each command timed:
    ident.toml --data mujoco.csv``: the EKF's RMSE after 1 s, worst joint (goal < 0.5 deg; baseline: the nominal
    finger's); ``identifiability`` of the same selection (structural rank, the masses' Cramer-Rao relative standard
    deviations on the documented experiment) and ``codegen`` on the finger. Also reported: each joint's swing in
-   MuJoCo (its ``frictionloss`` is stick-slip: a joint the experiment barely moves says little of its mass).
+   MuJoCo (its ``frictionloss`` is stick-slip: a joint the experiment barely moves says little of its mass), and
+   ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or its one-line refusal.
 
 Every command's wall time is a first run as a new process: imports, and compiles where the compile cache
 (:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
@@ -57,13 +58,16 @@ m^2 about it, and FFJ4's encoder moves 4 counts in the experiment: the Cramer-Ra
 
 
 def cli(*args: str, as_json: bool = True, ok: tuple[int, ...] = (0,)) -> tuple[float, dict[str, Any]]:
-    """Wall time (s) and JSON output of ``alpes-dyn ARGS [--json]`` as a new process."""
+    """Wall time (s) and JSON output of ``alpes-dyn ARGS [--json]`` as a new process; an exit code of ``ok`` other
+    than 0 gives ``{"exit": code, "error": its stderr line}``."""
     cmd = [sys.executable, "-m", "alpes_dyn.cli", *args] + (["--json"] if as_json else [])
     t0 = time.perf_counter()
     r = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - t0
     if r.returncode not in ok:
         raise RuntimeError(f"alpes-dyn {' '.join(args[:1])}: exit {r.returncode}: {r.stderr.strip()[-600:]}")
+    if r.returncode != 0:
+        return wall, {"exit": r.returncode, "error": r.stderr.strip()}
     return wall, (json.loads(r.stdout) if as_json and r.stdout.strip() else {})
 
 
@@ -201,6 +205,10 @@ def finger(d: Path, seed: int, duration: float) -> dict[str, Any]:
                            "final_q_deg": dict(zip(ekf["joints"], np.degrees(ekf["final_q"]).tolist())),
                            "baseline_wall_s": w0, "goal_met": bool(worst < GOALS["ekf_rmse_deg"])}
     out["codegen_wall_s"], _ = cli("codegen", *base, "-o", str(d / "ekf_c"))
+    # the force loop on the tendon: refused (exit 2) where the springless finger's rest leaves its range
+    w, ctl = cli("control", *base, "--controller", "sensor", "--frame", "rh_ffdistal", "--motor", "rh_A_FFJ0",
+                 ok=(0, 2))
+    out["control"] = {"wall_s": w, "steady_state_error": ctl.get("steady_state_error"), "error": ctl.get("error")}
     return out
 
 
@@ -239,6 +247,10 @@ def _table(r: dict[str, Any]) -> str:
                          f"{GOALS['ekf_rmse_deg']} deg: {'met' if e['goal_met'] else 'NOT met'}); RMSE "
                          + ", ".join(f"{k} {v:.2f}" for k, v in e["rmse_deg"].items()) + " deg; final estimate "
                          + ", ".join(f"{k} {v:.1f}" for k, v in e["final_q_deg"].items()) + " deg")
+    if f and "control" in f:
+        c = f["control"]
+        lines.append(f"  control {c['wall_s']:.1f} s: " + (f"steady-state error {100 * c['steady_state_error']:.2f} %"
+                                                            if c["error"] is None else c["error"]))
     lines.append(f"uptime after: {r['uptime_after']}; {r['seconds']:.0f} s")
     return "\n".join(lines)
 

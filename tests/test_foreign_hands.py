@@ -57,7 +57,8 @@ def test_shadow_hand_dynamics_equal_mujoco(shadow):
     """M(q) (armature in both), the bias C(q, v) v + g(q), the damping's passive force, the actuators' joint torques
     (a pulled tendon: S^T of MuJoCo's actuator forces is its qfrc_actuator, nonzero on the tendon's two joints only)
     and the forward dynamics, to 1e-9 (relative to each term's size) at random states."""
-    model, mj, _ = shadow
+    model = shadow[0]
+    mj = mujoco.MjModel.from_xml_path(str(example_mjcf_path()))  # a copy of its own: changed below
     mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS | mujoco.mjtDisableBit.mjDSBL_CONTACT)
     d = mujoco.MjData(mj)
     rng = np.random.default_rng(37)
@@ -113,3 +114,45 @@ def test_shadow_hand_import_cli(capsys, tmp_path):
     assert back.joint_names == m.joint_names and back.motor_names == m.motor_names
     np.testing.assert_allclose(back.inertia_matrix(q), m.inertia_matrix(q), rtol=0, atol=1e-15)
     np.testing.assert_allclose(back.gravity_torque(q), m.gravity_torque(q), rtol=0, atol=1e-14)
+
+
+def test_a_pulled_tendon_moves_the_same_joints_as_in_mujoco(shadow):
+    """MuJoCo steps the MJCF (RK4, 0.1 ms) with one tendon pulled at 0.3 N m, the other servos off and gravity, limits,
+    contacts and frictionloss off; the imported model integrated by the same RK4 on tau = S^T f (the spec without
+    its Coulomb friction) follows it over 30 ms to 1e-9 rad, and the tendon's two joints move the most."""
+    import dataclasses
+
+    model = shadow[0]
+    mj = mujoco.MjModel.from_xml_path(str(example_mjcf_path()))  # a copy of its own: changed below
+    free = ad.Model(model.urdf, dataclasses.replace(model.spec, coulomb={}, gravity=(0.0, 0.0, 0.0)))
+    D = mujoco.mjtDisableBit
+    mj.opt.disableflags |= int(D.mjDSBL_FRICTIONLOSS | D.mjDSBL_CONTACT | D.mjDSBL_LIMIT | D.mjDSBL_GRAVITY)
+    mj.opt.integrator, mj.opt.timestep = int(mujoco.mjtIntegrator.mjINT_RK4), 1e-4
+    a = model.motor_names.index("rh_A_FFJ0")
+    mj.actuator_gainprm[:] = 0.0
+    mj.actuator_biasprm[:] = 0.0
+    mj.actuator_gainprm[a, 0] = 1.0  # force = ctrl along the tendon, every other servo off
+    mj.actuator_forcelimited[:] = 0
+    mj.actuator_ctrllimited[:] = 0
+    d = mujoco.MjData(mj)
+    p = [model.joint_names.index(j) for j in _mj_joints(mj)]
+    q0 = 0.5 * (model.lower + model.upper)
+    d.qpos[:] = q0[p]
+    d.ctrl[a] = 0.3
+    f = np.zeros(len(model.motor_names))
+    f[a] = 0.3
+    tau = free.transmission.joint_torque(f)
+    x, h = np.concatenate([q0, np.zeros(model.n)]), 1e-4
+
+    def rhs(x):
+        return np.concatenate([x[model.n:], free.forward_dynamics(x[:model.n], x[model.n:], tau)])
+    for _ in range(300):
+        mujoco.mj_step(mj, d)
+        k1 = rhs(x)
+        k2 = rhs(x + h / 2 * k1)
+        k3 = rhs(x + h / 2 * k2)
+        x = x + h / 6 * (k1 + 2 * k2 + 2 * k3 + rhs(x + h * k3))
+    np.testing.assert_allclose(x[:model.n][p], d.qpos, rtol=0, atol=1e-9)  # seen: 1e-18
+    moved = np.abs(x[:model.n] - q0)
+    top = {model.joint_names[i] for i in np.argsort(moved)[-2:]}
+    assert top == set(TENDONS["rh_A_FFJ0"]) and moved.max() > 1e-3, moved
