@@ -1164,6 +1164,12 @@ def _model_exp(nominal, **kw):
     return model_experiment(nominal, **{"design": _design(), **kw})
 
 
+def _example_mjcf(name):
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    return example_mjcf_path(name)
+
+
 def _ident_urdf(names, urdf=None, value=0.05):
     """identified_urdf of a made-up fit of ``names`` on the URDF robot, every value ``value``."""
     import types
@@ -1414,6 +1420,9 @@ API: list[Api] = [
       ModelError, "mjcf: equality 'e' on joint 'k' is not a linear coupling of two joints"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint joint1="k"/>')),
       ModelError, "mjcf: equality 'equality0' on joint 'k' is not a linear coupling of two joints"),
+    A("example_mjcf_path", lambda c: _example_mjcf("allegro"), ModelError,
+      "unknown example MJCF 'allegro' (shipped: shadow_hand)"),
+    A("example_mjcf_path", lambda c: _example_mjcf(3), ModelError, "unknown example MJCF 3 (shipped: shadow_hand)"),
     A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
     A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
     A("simulate", lambda c: _sim(c, method="cvodes", rtol="x"), InputError, "rtol: expected a positive number, got 'x'"),

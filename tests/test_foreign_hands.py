@@ -156,3 +156,25 @@ def test_a_pulled_tendon_moves_the_same_joints_as_in_mujoco(shadow):
     moved = np.abs(x[:model.n] - q0)
     top = {model.joint_names[i] for i in np.argsort(moved)[-2:]}
     assert top == set(TENDONS["rh_A_FFJ0"]) and moved.max() > 1e-3, moved
+
+
+def test_what_changes_the_motors_and_is_not_imported_is_named():
+    """A tendon's length limit, activation dynamics and a force range: one MjcfImportWarning naming each field (the
+    spec's motors are torque sources on the same transmission, S unchanged); a plain motor gets none."""
+    xml = """<mujoco><worldbody><body><joint name="a" range="-1 1"/><inertial pos="0.1 0 0" mass="1"
+      diaginertia="1e-3 1e-3 1e-3"/></body></worldbody>
+      <tendon><fixed name="t" range="-0.5 0.5"><joint joint="a" coef="0.01"/></fixed></tendon>
+      <actuator><general name="g" tendon="t" dyntype="filter" dynprm="0.05" gear="50" forcerange="-2 2"/>
+      </actuator></mujoco>"""
+    with pytest.warns(MjcfImportWarning) as caught:
+        m = ad.Model.from_mjcf(xml)
+    (msg,) = [str(w.message) for w in caught]
+    for needle in ("actuators g: activation dynamics (dyntype)", "actuators g: forcerange",
+                   "tendons t: range (a tendon length limit)"):
+        assert needle in msg, msg
+    assert "gainprm" not in msg  # a general actuator of gain 1 and no bias is a torque source
+    np.testing.assert_allclose(m.transmission.S, [[0.5]], rtol=1e-15)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        ad.Model.from_mjcf(xml.replace(' dyntype="filter" dynprm="0.05"', "").replace(' forcerange="-2 2"', "")
+                           .replace(' range="-0.5 0.5"', ""))
