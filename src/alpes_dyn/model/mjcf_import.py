@@ -18,7 +18,11 @@ backends read:
   gravity from ``<option gravity>``; the tips: the first site of each leaf body, or the leaf body's own frame where
   it has no site (the link's origin, on its joint's axis: a fingertip point needs a site).
 
-What the library does not model is refused with one line naming it, never dropped: free, ball and slide
+What would change how the motors act and has no place in the spec is said in one :class:`MjcfImportWarning`
+naming each field (:func:`not_imported`: a servo's ``gainprm``/``biasprm``, ``dyntype``, ``forcerange``, a tendon's
+``range``; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
+import`` only. MuJoCo Menagerie's Shadow Hand E3M5 ships as an example (:func:`example_mjcf_path`; tested against
+MuJoCo on that MJCF). What the library does not model is refused with one line naming it, never dropped: free, ball and slide
 joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
 an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
 (``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
