@@ -246,7 +246,8 @@ def foreign_hands(r: Result) -> list[str]:
         if "estimate" in f:
             e = f["estimate"]
             out.append(f"EKF on the identified pair: worst joint {e['worst_rmse_deg']:.3f} deg (nominal "
-                       f"{e['baseline_worst_rmse_deg']:.3f} deg; goal < 0.5 deg: {_met(e['goal_met'])}); RMSE "
+                       f"{e['baseline_worst_rmse_deg']:.3f} deg, the true finger "
+                       f"{e.get('truth_worst_rmse_deg', float('nan')):.3f} deg; goal < 0.5 deg: {_met(e['goal_met'])}); RMSE "
                        + ", ".join(f"{k} {v:.2f}" for k, v in e.get("rmse_deg", {}).items())
                        + (" deg; final estimate " + ", ".join(f"{k} {v:.1f}" for k, v in e["final_q_deg"].items())
                           + " deg" if e.get("final_q_deg") else ""))

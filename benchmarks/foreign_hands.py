@@ -10,20 +10,21 @@ Three parts, each command timed:
    disabled, the library's Coulomb term cancelled): the largest error relative to each term's size (goal <= 1e-9);
 2. ``dynamics``, ``observability --input motor --output encoder`` and ``mjcf`` on the whole hand (new processes), and
    the exported MJCF read back (:meth:`Model.from_mjcf <alpes_dyn.Model.from_mjcf>`: the largest difference of M);
-3. the first finger of the hand with the wrist held (the MJCF's two wrist joints and servos removed: on a fixed
-   palm the other branches cannot change its joints' dynamics), written as its own URDF + spec
-   (:meth:`Model.subtree <alpes_dyn.Model.subtree>` of its three motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1;
-   4 joints). Its link masses drawn x (1 + U(-15 %, +15 %)) (``--seed``) as ``true.urdf``; ``experiment`` on the
-   nominal finger (our simulator: its torque only is used), that torque replayed on MuJoCo stepping ``alpes-dyn mjcf
-   --model true.urdf`` (:func:`~alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms, MuJoCo's stick-slip
-   ``frictionloss``) as ``mujoco.csv``; ``identify --parameters FIT -o ident.toml`` on it (the masses written
-   as ``ident.urdf``; ``--force``: written even if not trusted, the JSON says): each mass against the drawn one
-   (goal: within 5 %; ``FIT``: the flexion joints' masses and friction); ``estimate --model ident.urdf --spec
-   ident.toml --data mujoco.csv``: the EKF's RMSE after 1 s, worst joint (goal < 0.5 deg; baseline: the nominal
-   finger's); ``identifiability`` of the same selection (structural rank, the masses' Cramer-Rao relative standard
-   deviations on the documented experiment) and ``codegen`` on the finger. Also reported: each joint's swing in
-   MuJoCo (its ``frictionloss`` is stick-slip: a joint the experiment barely moves says little of its mass), and
-   ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or its one-line refusal.
+3. the first finger of the hand with the wrist held (the MJCF's two wrist joints and servos removed: on a fixed palm
+   the other branches cannot change its joints' dynamics), written as its own URDF + spec (:meth:`Model.subtree
+   <alpes_dyn.Model.subtree>` of its three motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1; 4 joints). Its link masses
+   drawn x (1 + U(-15 %, +15 %)) (``--seed``) as ``true.urdf``; ``experiment`` on the nominal finger (our simulator: its
+   torque only is used), that torque replayed on MuJoCo stepping ``alpes-dyn mjcf --model true.urdf``
+   (:func:`~alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms, MuJoCo's stick-slip ``frictionloss``) as
+   ``mujoco.csv``, started where the experiment started; ``identify --parameters FIT -o ident.toml`` on it (the masses
+   written as ``ident.urdf``; ``--force``: written even if not trusted, the JSON says): each mass against the drawn one
+   (goal: within 5 %; ``FIT``: the flexion joints' masses and friction); ``estimate --model ident.urdf --spec ident.toml
+   --data mujoco.csv``: the EKF's RMSE after 1 s, worst joint (goal < 0.5 deg; beside it the nominal finger's and the
+   true finger's: what the observer does with a perfect model); ``identifiability`` of the same selection (structural
+   rank, the masses' Cramer-Rao relative standard deviations on the documented experiment) and ``codegen`` on the
+   finger. Also reported: each joint's swing in MuJoCo (its ``frictionloss`` is stick-slip: a joint the experiment
+   barely moves says little of its mass), and ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or its one-line
+   refusal.
 
 Every command's wall time is a first run as a new process: imports, and compiles where the compile cache
 (:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
@@ -181,7 +182,9 @@ def finger(d: Path, seed: int, duration: float) -> dict[str, Any]:
     truth = ad.Model(true_text, sub.spec)
     data = read_recording(d / "rec.csv", truth)
     t0 = time.perf_counter()
-    rec = mjcf_recording(d / "plant.xml", truth, data.torque, float(data.dt), seed=seed + 1)
+    # started where the experiment started (the default, the static equilibrium with the springless joints at 0,
+    # puts this finger on its stops from the first step)
+    rec = mjcf_recording(d / "plant.xml", truth, data.torque, float(data.dt), seed=seed + 1, q0=data.true_q[0])
     out["mujoco_recording_s"] = time.perf_counter() - t0
     out["mujoco_swing_deg"] = dict(zip(sub.joint_names, np.degrees(np.ptp(rec.true_q, axis=0)).tolist()))
     write_recording(rec, d / "mujoco.csv")
@@ -199,8 +202,11 @@ def finger(d: Path, seed: int, duration: float) -> dict[str, Any]:
         w, ekf = cli("estimate", "--model", fit["urdf_output"], "--spec", str(d / "ident.toml"), "--data",
                      str(d / "mujoco.csv"))
         w0, ekf0 = cli("estimate", *base, "--data", str(d / "mujoco.csv"))
+        _, ekf_t = cli("estimate", "--model", str(d / "true.urdf"), "--spec", str(spec), "--data",
+                       str(d / "mujoco.csv"))
         worst, worst0 = max(np.degrees(ekf["rmse"])), max(np.degrees(ekf0["rmse"]))
         out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(worst), "baseline_worst_rmse_deg": float(worst0),
+                           "truth_worst_rmse_deg": float(max(np.degrees(ekf_t["rmse"]))),
                            "rmse_deg": dict(zip(ekf["joints"], np.degrees(ekf["rmse"]).tolist())),
                            "final_q_deg": dict(zip(ekf["joints"], np.degrees(ekf["final_q"]).tolist())),
                            "baseline_wall_s": w0, "goal_met": bool(worst < GOALS["ekf_rmse_deg"])}
@@ -243,7 +249,8 @@ def _table(r: dict[str, Any]) -> str:
         if "estimate" in f:
             e = f["estimate"]
             lines.append(f"  EKF on the identified pair: worst joint {e['worst_rmse_deg']:.3f} deg (nominal "
-                         f"{e['baseline_worst_rmse_deg']:.3f} deg), estimate {e['wall_s']:.1f} s (goal < "
+                         f"{e['baseline_worst_rmse_deg']:.3f} deg, true {e['truth_worst_rmse_deg']:.3f} deg), "
+                         f"estimate {e['wall_s']:.1f} s (goal < "
                          f"{GOALS['ekf_rmse_deg']} deg: {'met' if e['goal_met'] else 'NOT met'}); RMSE "
                          + ", ".join(f"{k} {v:.2f}" for k, v in e["rmse_deg"].items()) + " deg; final estimate "
                          + ", ".join(f"{k} {v:.1f}" for k, v in e["final_q_deg"].items()) + " deg")

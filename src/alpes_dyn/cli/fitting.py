@@ -70,7 +70,8 @@ def _mass_urdf_path(output: str) -> str:
 def _write_robot(res, args: argparse.Namespace) -> None:
     """A URDF robot's fit written: the identified spec at -o, and where it fitted masses the URDF ``--model`` with
     them beside it (:func:`_mass_urdf_path`;
-    :func:`~alpes_dyn.estimation.identification.identified_spec.identified_urdf`): both built before either is written, the spec last (a failed URDF write leaves no spec naming it)."""
+    :func:`~alpes_dyn.estimation.identification.identified_spec.identified_urdf`): both built before either is
+    written, the spec last (a failed URDF write leaves no spec naming it)."""
     from ..estimation.identification.identified_spec import (identified_spec, identified_urdf, spec_misfits,
                                                              write_identified_spec)
     from ..fileio import atomic_write, read_text
