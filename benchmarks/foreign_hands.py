@@ -148,7 +148,7 @@ def _drawn_urdf(model, seed: int) -> tuple[str, dict[str, float]]:
     rng = np.random.default_rng(seed)
     true = {p.name: p.nominal * (1 + rng.uniform(-MASS_SPREAD, MASS_SPREAD)) for p in masses}
     fake = types.SimpleNamespace(model=model, names=tuple(true), values=np.array(list(true.values())),
-                                 std=np.zeros(len(true)), recording_path="the benchmark's draw")
+                                 std=np.zeros(len(true)), recording_path="the benchmark's draw", trustworthy=True)
     return identified_urdf(fake, model.urdf), true
 
 

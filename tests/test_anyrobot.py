@@ -139,7 +139,7 @@ def test_identified_urdf_is_the_fits_parametrisation(robot):
     model = ad.Model.from_urdf_file(robot / "finger.urdf", robot / "finger.toml")
     theta = np.array([0.021, 0.0333])  # m_pip -> 0.021 kg (was 0.018), m_mcp -> 0.0333 (was 0.028)
     res = types.SimpleNamespace(model=model, names=("m_pip", "m_mcp"), values=theta, std=np.array([1e-4, 2e-4]),
-                                recording_path="rec.csv")
+                                recording_path="rec.csv", trustworthy=True)
     text = identified_urdf(res, FINGER_URDF)
     assert "distal: 0.021 kg (was 0.018, standard error 0.0001)" in text
     back = ad.Model(text, model.spec)
@@ -153,6 +153,12 @@ def test_identified_urdf_is_the_fits_parametrisation(robot):
         np.testing.assert_allclose(back.inertia_matrix(qq), M, rtol=1e-12, atol=1e-15)
         ref = back.coriolis_matrix(qq, vv) @ vv + back.gravity_torque(qq) - back.extras.spring_torque(qq)
         np.testing.assert_allclose(ref, b.ravel(), rtol=1e-10, atol=1e-14)
+    untrusted = types.SimpleNamespace(**{**vars(res), "trustworthy": False, "status": lambda: "lost basin -- x",
+                                         "recording_path": "a--b.csv"})
+    marked = identified_urdf(untrusted, FINGER_URDF)
+    assert "<!-- NOT TRUSTWORTHY (written with identify's force option): lost basin - - x -->" in marked
+    assert "<!-- identified by alpes_dyn from a- -b.csv" in marked  # "--" ends an XML comment
+    assert ad.Model(marked, model.spec).inertia_matrix(np.zeros(2)) == pytest.approx(back.inertia_matrix(np.zeros(2)))
     with pytest.raises(ModelError, match="identified urdf: m_pip = -0.1 kg is not a positive mass"):
         identified_urdf(types.SimpleNamespace(**{**vars(res), "values": np.array([-0.1, 0.03])}), FINGER_URDF)
 

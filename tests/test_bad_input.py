@@ -1178,7 +1178,8 @@ def _ident_urdf(names, urdf=None, value=0.05):
 
     p = len(names)
     res = types.SimpleNamespace(names=tuple(names), values=np.full(p, value), std=np.full(p, 1e-5),
-                                recording_path=None, model=ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(ROBOT_SPEC)))
+                                recording_path=None, model=ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(ROBOT_SPEC)),
+                                trustworthy=True)
     return identified_urdf(res, ROBOT_URDF if urdf is None else urdf)
 
 

@@ -104,7 +104,9 @@ def identified_urdf(result: Any, urdf: str) -> str:
     """``urdf`` (the text of the robot fitted, or of the whole robot a ``--chain`` sub-model was cut from: the links
     have the same names) with each fitted mass ``m_<joint>`` of ``result`` written on the joint's child link: mass
     m [kg], inertia tensor times m / m0, centre of mass kept (the module doc), and an XML comment with the values and
-    their standard errors. :class:`~alpes_dyn.ModelError` if a fitted link is not in ``urdf`` or has no mass."""
+    their standard errors (and, for a fit not trustworthy, written with ``--force``, a second comment saying so with
+    its status, as the spec's header does). :class:`~alpes_dyn.ModelError` if a fitted link is not in ``urdf`` or
+    has no mass."""
     import xml.etree.ElementTree as ET
 
     from ...symbolic.parametric import _child_links
@@ -137,6 +139,10 @@ def identified_urdf(result: Any, urdf: str) -> str:
         notes.append(f"{link.get('name')}: {m:.6g} kg (was {m0:.6g}, standard error {float(sd):.3g})")
     if not notes:
         raise ModelError("identified urdf: the fit has no mass (--parameters m or m_<joint>)")
-    head = (f"<!-- identified by alpes_dyn from {_printable(result.recording_path) or 'a recording'} (model "
-            f"{_printable(result.model.name)}): {'; '.join(notes)} -->\n")
+    said = (f"identified by alpes_dyn from {_printable(result.recording_path) or 'a recording'} (model "
+            f"{_printable(result.model.name)}): {'; '.join(notes)}")
+    head = f"<!-- {said.replace('--', '- -')} -->\n"  # no "--" inside an XML comment
+    if not result.trustworthy:  # as the spec's header says it (write_identified_spec)
+        why = _printable(result.status()).replace("--", "- -")
+        head += f"<!-- NOT TRUSTWORTHY (written with identify's force option): {why} -->\n"
     return '<?xml version="1.0"?>\n' + head + ET.tostring(root, encoding="unicode") + "\n"
