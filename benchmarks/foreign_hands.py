@@ -10,11 +10,12 @@ Three parts, each command timed:
    disabled, the library's Coulomb term cancelled): the largest error relative to each term's size (goal <= 1e-9);
 2. ``dynamics``, ``observability --input motor --output encoder`` and ``mjcf`` on the whole hand (new processes), and
    the exported MJCF read back (:meth:`Model.from_mjcf <alpes_dyn.Model.from_mjcf>`: the largest difference of M);
-3. the first finger of the hand with the wrist held (the MJCF's two wrist joints and servos removed: on a fixed palm
-   the other branches cannot change its joints' dynamics), written as its own URDF + spec (:meth:`Model.subtree
-   <alpes_dyn.Model.subtree>` of its three motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1; 4 joints). Its link masses
-   drawn x (1 + U(-15 %, +15 %)) (``--seed``) as ``true.urdf``; ``experiment`` on the nominal finger (our simulator: its
-   torque only is used), that torque replayed on MuJoCo stepping ``alpes-dyn mjcf --model true.urdf``
+3. the first finger of the hand with the wrist held (``Model.from_mjcf(..., hold=["rh_WRJ2", "rh_WRJ1"])``, ``import
+   --hold``: the two wrist joints welded, their servos dropped; on a fixed palm the other branches cannot change its
+   joints' dynamics), written as its own URDF + spec (:meth:`Model.subtree <alpes_dyn.Model.subtree>` of its three
+   motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1; 4 joints). Its link masses drawn x (1 + U(-15 %, +15 %))
+   (``--seed``) as ``true.urdf``; ``experiment`` on the nominal finger (our simulator: its torque only is used), that
+   torque replayed on MuJoCo stepping ``alpes-dyn mjcf --model true.urdf``
    (:func:`~alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms, MuJoCo's stick-slip ``frictionloss``) as
    ``mujoco.csv``, started where the experiment started; ``identify --parameters FIT -o ident.toml`` on it (the masses
    written as ``ident.urdf``; ``--force``: written even if not trusted, the JSON says): each mass against the drawn one
@@ -38,7 +39,6 @@ from __future__ import annotations
 import argparse
 import json
 import os
-import re
 import subprocess
 import sys
 import tempfile
@@ -126,19 +126,6 @@ def whole_hand(d: Path, states: int, seed: int) -> dict[str, Any]:
     return out
 
 
-def fixed_wrist_mjcf(d: Path) -> Path:
-    """The shipped MJCF with its two wrist joints and their servos removed (the palm fixed to the forearm)."""
-    from alpes_dyn.model.mjcf_import import example_mjcf_path
-
-    text = example_mjcf_path("shadow_hand").read_text()
-    text, n = re.subn(r'\s*<joint class="wrist_[xy]" name="rh_WRJ[12]"/>', "", text)
-    text, k = re.subn(r'\s*<position name="rh_A_WRJ[12]"[^>]*/>', "", text)
-    assert (n, k) == (2, 2), (n, k)
-    path = d / "fixed_wrist.xml"
-    path.write_text(text)
-    return path
-
-
 def _drawn_urdf(model, seed: int) -> tuple[str, dict[str, float]]:
     """The finger's URDF with every link mass times 1 + U(-MASS_SPREAD, MASS_SPREAD) (identified_urdf's scaling)."""
     from alpes_dyn.estimation.identification.identified_spec import identified_urdf
@@ -157,10 +144,11 @@ def finger(d: Path, seed: int, duration: float) -> dict[str, Any]:
     import alpes_dyn as ad
     from alpes_dyn.control.plants import mjcf_recording
     from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
 
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        hand = ad.Model.from_mjcf(fixed_wrist_mjcf(d))
+        hand = ad.Model.from_mjcf(example_mjcf_path("shadow_hand"), hold=["rh_WRJ2", "rh_WRJ1"])
     sub = hand.subtree(list(FINGER_MOTORS))
     urdf, spec = d / "finger.urdf", d / "finger.toml"
     urdf.write_text(sub.urdf)

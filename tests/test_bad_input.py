@@ -676,6 +676,12 @@ CLI: dict[str, list[Cli]] = {
     "import": [
         C("import", "-o", "{tmp}/out", needle="the following arguments are required: --model"),
         C("import", "--model", "{arm_xml}", needle="the following arguments are required: -o/--output"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--hold", "jz",
+          needle="--hold: unknown joint 'jz' (joints: ja)"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--hold", "ja",
+          needle="--hold: joint 'ja' is on tendon 't'; hold joints no tendon crosses"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--hold", "ja,,jb",
+          needle="--hold: expected comma-separated joint names, got 'ja,,jb'"),
         C("import", "--model", "finger3", "-o", "{tmp}/out", needle="--model: import reads an MJCF file (FILE.xml), "
           "got 'finger3'; an Alpes model's MJCF: 'alpes-dyn mjcf --model finger3 -o FILE.xml'"),
         C("import", "--model", "{robot_urdf}", "-o", "{tmp}/out", needle="is a URDF already; give it with its spec"),
@@ -1421,6 +1427,10 @@ API: list[Api] = [
       ModelError, "mjcf: equality 'e' on joint 'k' is not a linear coupling of two joints"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint joint1="k"/>')),
       ModelError, "mjcf: equality 'equality0' on joint 'k' is not a linear coupling of two joints"),
+    A("Model", lambda c: ad.Model.from_mjcf(ARM_MJCF, hold="ja"), ModelError,
+      "hold: expected a list of joint names, got 'ja'"),
+    A("Model", lambda c: ad.Model.from_mjcf(ARM_MJCF, hold=["ja", 3]), ModelError,
+      "hold: expected a list of joint names, got ['ja', 3]"),
     A("example_mjcf_path", lambda c: _example_mjcf("allegro"), ModelError,
       "unknown example MJCF 'allegro' (shipped: shadow_hand)"),
     A("example_mjcf_path", lambda c: _example_mjcf(3), ModelError, "unknown example MJCF 3 (shipped: shadow_hand)"),

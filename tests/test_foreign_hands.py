@@ -106,7 +106,11 @@ def test_shadow_hand_import_cli(capsys, tmp_path):
     lost = obj["not_imported"]
     assert len(lost) == 3 and "gainprm/biasprm" in lost[0] and "forcerange" in lost[1] and lost[2].startswith("geoms")
     m = ad.Model.from_urdf_file(obj["urdf"], obj["spec"])
-    assert m.joint_names == tuple(obj["joints"]) and len(obj["motors"]) == 20
+    assert m.joint_names == tuple(obj["joints"]) and len(obj["motors"]) == 20 and obj["held"] == []
+    assert main(["import", "--model", str(example_mjcf_path()), "-o", str(tmp_path / "held"), "--hold",
+                 "rh_WRJ2,rh_WRJ1", "--json"]) == 0
+    held = json.loads(capsys.readouterr().out)
+    assert held["held"] == ["rh_WRJ2", "rh_WRJ1"] and len(held["joints"]) == 22 and "rh_A_WRJ2" not in held["motors"]
     # the pair exported back to MJCF (its root link is named "world": MuJoCo's own world body, not a second one)
     assert main(["mjcf", "--model", obj["urdf"], "--spec", obj["spec"], "-o", str(tmp_path / "back.xml")]) == 0
     back = ad.Model.from_mjcf(tmp_path / "back.xml")
@@ -178,3 +182,34 @@ def test_what_changes_the_motors_and_is_not_imported_is_named():
         warnings.simplefilter("error")
         ad.Model.from_mjcf(xml.replace(' dyntype="filter" dynprm="0.05"', "").replace(' forcerange="-2 2"', "")
                            .replace(' range="-0.5 0.5"', ""))
+
+
+def test_held_wrist_makes_each_finger_a_branch(shadow):
+    """``hold`` welds the wrist: 22 joints, 18 motors, the same M and bias as MuJoCo on the MJCF with the two wrist
+    joints and servos deleted from its text; the first finger's tendon then closes over its own 4 joints only."""
+    import re
+
+    from alpes_dyn.model.subtree import closed_motors
+
+    text = example_mjcf_path().read_text()
+    text = re.sub(r'\s*<joint class="wrist_[xy]" name="rh_WRJ[12]"/>', "", text)
+    text = re.sub(r'\s*<position name="rh_A_WRJ[12]"[^>]*/>', "", text)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", MjcfImportWarning)
+        held = ad.Model.from_mjcf(example_mjcf_path(), hold=["rh_WRJ2", "rh_WRJ1"])
+    assert held.n == 22 and len(held.motor_names) == 18 and "rh_A_WRJ1" not in held.motor_names
+    mj = mujoco.MjModel.from_string(text) if hasattr(mujoco.MjModel, "from_string") else \
+        mujoco.MjModel.from_xml_string(text)
+    assert mj.nq == 22
+    d = mujoco.MjData(mj)
+    p = [held.joint_names.index(j) for j in _mj_joints(mj)]
+    q, v = held.random_state(np.random.default_rng(5))
+    d.qpos[:], d.qvel[:] = q[p], v[p]
+    mujoco.mj_forward(mj, d)
+    M = np.zeros((mj.nv, mj.nv))
+    mujoco.mj_fullM(mj, d, M)
+    assert np.max(np.abs(held.inertia_matrix(q)[np.ix_(p, p)] - M)) <= 1e-12 * np.max(np.abs(M))
+    bias = (held.coriolis_matrix(q, v) @ v + held.gravity_torque(q))[p]
+    assert np.max(np.abs(bias - d.qfrc_bias)) <= 1e-12 * np.max(np.abs(d.qfrc_bias))
+    assert set(closed_motors(held, "rh_A_FFJ0")) == {"rh_A_FFJ4", "rh_A_FFJ3", "rh_A_FFJ0"}
+    assert len(closed_motors(shadow[0], "rh_A_FFJ0")) == 20  # with the wrist free: the whole hand

@@ -22,8 +22,9 @@ What would change how the motors act and has no place in the spec is said in one
 naming each field (:func:`not_imported`: a servo's ``gainprm``/``biasprm``, ``dyntype``, ``forcerange``, a tendon's
 ``range``; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
 import`` only. MuJoCo Menagerie's Shadow Hand E3M5 ships as an example (:func:`example_mjcf_path`; tested against
-MuJoCo on that MJCF). What the library does not model is refused with one line naming it, never dropped: free, ball and slide
-joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
+MuJoCo on that MJCF). ``hold=`` welds hinges at their reference angle, the actuators on them dropped (e.g. a hand's
+wrist: each finger then a branch of its own). What the library does not model is refused with one line naming it,
+never dropped: free, ball and slide joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
 an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
 (``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
 :mod:`alpes_dyn.model.mimic`). An MJCF file must be a regular file within
@@ -35,6 +36,7 @@ from __future__ import annotations
 
 import xml.sax.saxutils as su
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
@@ -92,6 +94,44 @@ def _compile(mjcf: str | Path):
         return mujoco.MjModel.from_xml_path(str(mjcf))
     except ValueError as exc:
         raise ModelError(f"mjcf: MuJoCo cannot compile it ({str(exc).splitlines()[0]})") from None
+
+
+def _compile_held(mjcf: str | Path, hold: Sequence[str] = ()):
+    """:func:`_compile`, with the hinges named in ``hold`` removed (MuJoCo's ``MjSpec``: each body welded to its
+    parent at its pose as written, the joint's reference angle) with the actuators on them. A held joint that a
+    tendon crosses or an equality names is refused (the tendon's length or the equality would change meaning)."""
+    m = _compile(mjcf)
+    if isinstance(hold, str) or not all(isinstance(j, str) for j in hold):
+        raise ModelError(f"hold: expected a list of joint names, got {hold!r}")
+    if not hold:
+        return m
+    mujoco = _mj()
+    O = mujoco.mjtObj
+    names = [_name(mujoco, m, O.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
+    for j in hold:
+        if j not in names:
+            raise ModelError(f"hold: unknown joint {j!r} (joints: {', '.join(names)})")
+    ids = {names.index(j) for j in hold}
+    for w in range(m.nwrap):
+        if m.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT and int(m.wrap_objid[w]) in ids:
+            t = int(np.searchsorted(m.tendon_adr, w, side="right") - 1)
+            raise ModelError(f"hold: joint {names[int(m.wrap_objid[w])]!r} is on tendon "
+                             f"{_name(mujoco, m, O.mjOBJ_TENDON, t, 'tendon')!r}; hold joints no tendon crosses")
+    for e in range(m.neq):
+        if {int(m.eq_obj1id[e]), int(m.eq_obj2id[e])} & ids and m.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT:
+            raise ModelError(f"hold: equality {_name(mujoco, m, O.mjOBJ_EQUALITY, e, 'equality')!r} names a held joint")
+    is_text = isinstance(mjcf, str) and "<" in mjcf
+    spec = mujoco.MjSpec.from_string(mjcf) if is_text else mujoco.MjSpec.from_file(str(mjcf))
+    for a in list(spec.actuators):
+        if a.trntype == mujoco.mjtTrn.mjTRN_JOINT and a.target in hold:
+            spec.delete(a)
+    for j in hold:
+        spec.delete(spec.joint(j))
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        raise ModelError(f"hold: MuJoCo cannot compile the MJCF with {', '.join(hold)} held "
+                         f"({str(exc).splitlines()[0]})") from None
 
 
 def _name(mujoco, m, kind, i: int, prefix: str) -> str:
@@ -221,13 +261,15 @@ def not_imported(m) -> list[str]:
     return out
 
 
-def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
+def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, TransmissionSpec]:
     """The URDF text and the spec of an MJCF (text or path); see the module docstring. What changes the motors'
-    action and is not imported (:func:`not_imported`) is said in one :class:`MjcfImportWarning`."""
+    action and is not imported (:func:`not_imported`) is said in one :class:`MjcfImportWarning`. ``hold``: hinges
+    welded at their reference angle, with the actuators on them dropped (e.g. a hand's wrist, so that each finger
+    is a branch of its own: :meth:`Model.subtree <alpes_dyn.model.robot.Model.subtree>`, ``--chain``)."""
     import warnings
 
     mujoco = _mj()
-    m = _compile(mjcf)
+    m = _compile_held(mjcf, hold)
     _check_supported(mujoco, m)
     lost = [x for x in not_imported(m) if not x.startswith("geoms")]
     if lost:
