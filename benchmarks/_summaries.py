@@ -233,6 +233,12 @@ def foreign_hands(r: Result) -> list[str]:
         out.append(f"first runs, new processes: import {h['import_wall_s']:.1f} s, dynamics {h['dynamics_wall_s']:.1f} s, "
                    f"observability {h['observability_wall_s']:.1f} s (rank {h['observability_rank']}), mjcf "
                    f"{h['mjcf_wall_s']:.1f} s")
+    hh = r.get("held")
+    if hh:
+        out.append(f"the whole hand with its wrist held ({hh['n']} joints, ``import --hold``): experiment "
+                   f"{hh['experiment_wall_s']:.1f} s, identify --chain rh_A_FFJ0 {hh['identify']['wall_s']:.1f} s "
+                   f"(converged {hh['identify']['converged']}), estimate --chain {hh['estimate']['wall_s']:.1f} s "
+                   f"(worst joint {hh['estimate']['worst_rmse_deg']:.3f} deg on our simulator's recording)")
     if f:
         i, idf = f["identify"], f["identifiability"]
         out.append(f"first finger, wrist held ({f['n']} joints): identifiability {f['identifiability_wall_s']:.1f} s "

@@ -2,7 +2,8 @@
 ``alpes_dyn/data/shadow_hand`` (:func:`~alpes_dyn.model.mjcf_import.example_mjcf_path`; Menagerie's kinematics and
 dynamics, meshes replaced by primitives: 24 hinges, 20 position servos, 4 on fixed tendons J2 + J1).
 
-Three parts, each command timed:
+Three parts (and a fourth, ``held``: the whole hand with its wrist held, ``experiment``, ``identify --chain`` and
+``estimate --chain`` on our simulator's recording), each command timed:
 
 1. ``import`` of the shipped MJCF (a new process) and the dynamics of the pair it writes against MuJoCo on the MJCF
    itself, over ``--states`` random states: M(q) (armature in both), the bias C v + g, S^T of MuJoCo's actuator
@@ -31,7 +32,7 @@ Every command's wall time is a first run as a new process: imports, and compiles
 (:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
 Prints a table, or one JSON object with ``--json``; ``uptime`` before and after.
 
-    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--skip finger] [--cold]
+    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--skip held,finger] [--cold]
 """
 
 from __future__ import annotations
@@ -123,6 +124,28 @@ def whole_hand(d: Path, states: int, seed: int) -> dict[str, Any]:
     rng = np.random.default_rng(seed)
     out["mjcf_round_trip_M"] = max(float(np.max(np.abs(back.inertia_matrix(q) - model.inertia_matrix(q))))
                                    for q in (model.random_state(rng)[0] for _ in range(5)))
+    return out
+
+
+def held_hand(d: Path, seed: int, duration: float) -> dict[str, Any]:
+    """Part 2b: the whole hand with its wrist held (``import --hold``, 22 joints, 18 motors) through ``experiment``
+    (our simulator, the nominal hand), ``identify --chain rh_A_FFJ0`` (the tendon's two joints' masses and friction)
+    and ``estimate --chain rh_A_FFJ0`` on that recording: the times of a user's first runs on the whole hand."""
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    w_imp, imp = cli("import", "--model", str(example_mjcf_path("shadow_hand")), "-o", str(d / "held"), "--hold",
+                     "rh_WRJ2,rh_WRJ1")
+    base = ["--model", imp["urdf"], "--spec", imp["spec"]]
+    out: dict[str, Any] = {"n": len(imp["joints"]), "motors": len(imp["motors"]), "import_wall_s": w_imp}
+    out["experiment_wall_s"], _ = cli("experiment", *base, "-o", str(d / "rec.csv"), "--duration", f"{duration:g}",
+                                      "--seed", str(seed))
+    w, fit = cli("identify", *base, "--data", str(d / "rec.csv"), "--chain", "rh_A_FFJ0", "--parameters", FIT,
+                 ok=(0, 3))
+    out["identify"] = {"wall_s": w, "converged": fit.get("converged"), "trustworthy": fit.get("trustworthy"),
+                       "compile_s": fit.get("compile_seconds"),
+                       "values": {k: v["value"] for k, v in fit.get("parameters", {}).items()}}
+    w, ekf = cli("estimate", *base, "--data", str(d / "rec.csv"), "--chain", "rh_A_FFJ0")
+    out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(max(np.degrees(ekf["rmse"])))}
     return out
 
 
@@ -221,6 +244,13 @@ def _table(r: dict[str, Any]) -> str:
                   f"  import {h['import_wall_s']:.1f} s, dynamics {h['dynamics_wall_s']:.1f} s, observability "
                   f"{h['observability_wall_s']:.1f} s (rank {h['observability_rank']}), mjcf {h['mjcf_wall_s']:.1f} s "
                   f"(read back: M within {h['mjcf_round_trip_M']:.1e})"]
+    hh = r.get("held")
+    if hh:
+        lines.append(f"the hand with its wrist held ({hh['n']} joints, {hh['motors']} motors): import "
+                     f"{hh['import_wall_s']:.1f} s, experiment {hh['experiment_wall_s']:.1f} s, identify --chain "
+                     f"rh_A_FFJ0 {hh['identify']['wall_s']:.1f} s (converged {hh['identify']['converged']}), estimate "
+                     f"--chain rh_A_FFJ0 {hh['estimate']['wall_s']:.1f} s (worst joint "
+                     f"{hh['estimate']['worst_rmse_deg']:.3f} deg on our simulator's recording)")
     f = r.get("finger")
     if f:
         i = f["identify"]
@@ -256,12 +286,13 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0, help="the drawn masses' and the states' seed (default 0)")
     ap.add_argument("--states", type=int, default=20, help="random states of the MuJoCo check (default 20)")
     ap.add_argument("--duration", type=float, default=4.0, help="the experiment's length, s (default 4)")
-    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, finger")
+    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger")
     ap.add_argument("--cold", action="store_true", help="a private, empty compile cache (compiles in the times)")
     a = ap.parse_args()
     skip = {s for s in a.skip.split(",") if s}
-    if skip - {"hand", "finger"}:
-        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - {'hand', 'finger'}))} (hand, finger)")
+    parts = {"hand", "held", "finger"}
+    if skip - parts:
+        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} (hand, held, finger)")
     t0 = time.perf_counter()
     r: dict[str, Any] = {"uptime_before": _uptime(), "seed": a.seed, "goals": GOALS}
     with tempfile.TemporaryDirectory() as tmp:
@@ -271,6 +302,9 @@ def main() -> None:
         if "hand" not in skip:
             (d / "h").mkdir()
             r["hand"] = whole_hand(d / "h", a.states, a.seed)
+        if "held" not in skip:
+            (d / "hh").mkdir()
+            r["held"] = held_hand(d / "hh", a.seed, a.duration)
         if "finger" not in skip:
             (d / "f").mkdir()
             r["finger"] = finger(d / "f", a.seed, a.duration)
