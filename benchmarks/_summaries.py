@@ -222,6 +222,48 @@ def any_robot(r: Result) -> list[str]:
     return out
 
 
+def foreign_hands(r: Result) -> list[str]:
+    out = []
+    h, f = r.get("hand"), r.get("finger")
+    if h:
+        e = h["dynamics_vs_mujoco"]
+        out.append(f"Shadow Hand E3M5 ({h['n']} joints, {h['motors']} motors) against MuJoCo on its MJCF, {h['states']} "
+                   f"states: M {e['M']:.1e}, bias {e['bias']:.1e}, S^T f {e['actuator']:.1e}, forward dynamics "
+                   f"{e['qdd']:.1e} (relative; goal <= 1e-9: {_met(h['dynamics_goal_met'])})")
+        out.append(f"first runs, new processes: import {h['import_wall_s']:.1f} s, dynamics {h['dynamics_wall_s']:.1f} s, "
+                   f"observability {h['observability_wall_s']:.1f} s (rank {h['observability_rank']}), mjcf "
+                   f"{h['mjcf_wall_s']:.1f} s")
+    hh = r.get("held")
+    if hh:
+        out.append(f"the whole hand with its wrist held ({hh['n']} joints, ``import --hold``): experiment "
+                   f"{hh['experiment_wall_s']:.1f} s, identify --chain rh_A_FFJ0 {hh['identify']['wall_s']:.1f} s "
+                   f"(converged {hh['identify']['converged']}), estimate --chain {hh['estimate']['wall_s']:.1f} s "
+                   f"(worst joint {hh['estimate']['worst_rmse_deg']:.3f} deg on our simulator's recording)")
+    if f:
+        i, idf = f["identify"], f["identifiability"]
+        out.append(f"first finger, wrist held ({f['n']} joints): identifiability {f['identifiability_wall_s']:.1f} s "
+                   f"(Cramér-Rao " + ", ".join(f"{k} {100 * v:.1f} %" for k, v in idf["mass_relative_std"].items())
+                   + f"), experiment {f['experiment_wall_s']:.1f} s, identify {i['wall_s']:.1f} s, codegen "
+                   f"{f['codegen_wall_s']:.1f} s")
+        out.append("masses on the MuJoCo recording: " + ", ".join(f"{k} {100 * v:+.1f} %" for k, v in
+                                                                  i["mass_error"].items())
+                   + f" (converged {i['converged']}, trustworthy {i['trustworthy']}; goal within 5 %: "
+                   f"{_met(i['goal_met'])})")
+        if "estimate" in f:
+            e = f["estimate"]
+            out.append(f"EKF on the identified pair: worst joint {e['worst_rmse_deg']:.3f} deg (nominal "
+                       f"{e['baseline_worst_rmse_deg']:.3f} deg, the true finger "
+                       f"{e.get('truth_worst_rmse_deg', float('nan')):.3f} deg; goal < 0.5 deg: {_met(e['goal_met'])}); RMSE "
+                       + ", ".join(f"{k} {v:.2f}" for k, v in e.get("rmse_deg", {}).items())
+                       + (" deg; final estimate " + ", ".join(f"{k} {v:.1f}" for k, v in e["final_q_deg"].items())
+                          + " deg" if e.get("final_q_deg") else ""))
+        c = f.get("control")
+        if c:
+            out.append(f"control {c['wall_s']:.1f} s: " + (f"steady-state error {_pct(c['steady_state_error'])}"
+                                                          if c["error"] is None else f"``{c['error']}``"))
+    return out
+
+
 def allegro_identify(r: Result) -> list[str]:
     out = [f"{r['sub_model']} ({r['duration_s']:.0f} s record), first ``identify`` from its own empty cache: "
            f"**{r['sub_cold_wall_s']:.1f} s** (processor {r['sub_cold_cpu_s']:.1f} s, compile {r['sub_cold_compile_s']:.1f} s, "
@@ -361,13 +403,13 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "rollout": rollout, "mimic": mimic, "identification": identification, "fit_scaling": fit_scaling,
     "observer_step": observer_step, "observer_build": observer_build, "param_cache": param_cache, "sweep": sweep,
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
-    "allegro_identify": allegro_identify, "realism": realism, "default_path": default_path,
+    "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism,
 }
 
 ORDER = ["default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
          "allegro", "dynamics", "rollout", "observer_step", "observer_build", "param_cache", "control", "hand_control",
-         "urdf_control", "any_robot", "allegro_identify", "mimic", "sweep"]
+         "urdf_control", "any_robot", "foreign_hands", "allegro_identify", "mimic", "sweep"]
 """The page's order: the lead issues' benchmarks first."""
 
 HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {

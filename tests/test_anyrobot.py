@@ -125,11 +125,67 @@ def test_estimate_friction_free_and_the_nominal_spec(robot, recording, capsys):
     assert rc == 0 and free["rmse"] != nominal["rmse"]
 
 
-def test_identify_with_masses_and_output_is_refused_before_the_fit(robot, capsys):
-    rc = main(["identify", "--model", str(robot / "finger.urdf"), "--spec", str(robot / "finger.toml"), "--data",
-               "x.csv", "-o", str(robot / "m.toml")])
-    assert rc == 2 and not (robot / "m.toml").exists()
-    assert "m_mcp, m_pip: a spec file holds no masses" in capsys.readouterr().err
+def test_identified_urdf_is_the_fits_parametrisation(robot):
+    """identified_urdf writes the fitted mass on the joint's child link with its inertia scaled (CoM kept): the
+    URDF + spec read back by Pinocchio give the fit's own CasADi dynamics (ParametricDynamics at the fitted theta:
+    the link's spatial inertia times m / m0) at random states, to 1e-12."""
+    import types
+
+    import casadi as cs
+
+    from alpes_dyn.estimation.identification.identified_spec import identified_urdf
+    from alpes_dyn.symbolic.parametric import ParametricDynamics
+
+    model = ad.Model.from_urdf_file(robot / "finger.urdf", robot / "finger.toml")
+    theta = np.array([0.021, 0.0333])  # m_pip -> 0.021 kg (was 0.018), m_mcp -> 0.0333 (was 0.028)
+    res = types.SimpleNamespace(model=model, names=("m_pip", "m_mcp"), values=theta, std=np.array([1e-4, 2e-4]),
+                                recording_path="rec.csv", trustworthy=True)
+    text = identified_urdf(res, FINGER_URDF)
+    assert "distal: 0.021 kg (was 0.018, standard error 0.0001)" in text
+    back = ad.Model(text, model.spec)
+    P = ParametricDynamics(model, list(res.names))
+    q, v, th = cs.SX.sym("q", 2), cs.SX.sym("v", 2), cs.SX.sym("th", 2)
+    f = cs.Function("f", [q, v, th], [P.inertia_matrix(q, th), P.bias_torque(q, v, th, cs.DM(model.gravity))])
+    rng = np.random.default_rng(3)
+    for _ in range(3):
+        qq, vv = back.random_state(rng)
+        M, b = (np.array(x) for x in f(qq, vv, theta))
+        np.testing.assert_allclose(back.inertia_matrix(qq), M, rtol=1e-12, atol=1e-15)
+        ref = back.coriolis_matrix(qq, vv) @ vv + back.gravity_torque(qq) - back.extras.spring_torque(qq)
+        np.testing.assert_allclose(ref, b.ravel(), rtol=1e-10, atol=1e-14)
+    untrusted = types.SimpleNamespace(**{**vars(res), "trustworthy": False, "status": lambda: "lost basin -- x",
+                                         "recording_path": "a--b.csv"})
+    marked = identified_urdf(untrusted, FINGER_URDF)
+    assert "<!-- NOT TRUSTWORTHY (written with identify's force option): lost basin - - x -->" in marked
+    assert "<!-- identified by alpes_dyn from a- -b.csv" in marked  # "--" ends an XML comment
+    assert ad.Model(marked, model.spec).inertia_matrix(np.zeros(2)) == pytest.approx(back.inertia_matrix(np.zeros(2)))
+    with pytest.raises(ModelError, match="identified urdf: m_pip = -0.1 kg is not a positive mass"):
+        identified_urdf(types.SimpleNamespace(**{**vars(res), "values": np.array([-0.1, 0.03])}), FINGER_URDF)
+
+
+def test_identify_with_masses_writes_the_urdf_beside_the_spec(robot, recording, capsys):
+    """``identify -o m.toml`` with masses in the fit (K, m, friction: one fit, no effects tried) writes m.urdf beside it
+    (the masses, inertias scaled) and m.toml; the pair is the identified robot every command loads."""
+    import xml.etree.ElementTree as ET
+
+    urdf, out = str(robot / "finger.urdf"), robot / "m.toml"
+    rc, obj = run(capsys, "identify", "--model", urdf, "--spec", str(robot / "finger.toml"), "--data",
+                  str(recording), "--parameters", "K,m,friction", "-o", str(out))
+    assert rc == 0 and obj["trustworthy"] and obj["urdf_output"] == str(robot / "m.urdf")
+    links = {k.get("name"): k for k in ET.parse(robot / "m.urdf").getroot().iter("link")}
+    for j, link, m0, izz in (("mcp", "proximal", 0.028, 5e-6), ("pip", "distal", 0.018, 1.4e-6)):
+        m = obj["parameters"][f"m_{j}"]["value"]
+        assert float(links[link].find("inertial/mass").get("value")) == m
+        assert float(links[link].find("inertial/inertia").get("izz")) == pytest.approx(izz * m / m0, rel=1e-15)
+        assert m == pytest.approx(m0, rel=0.05)  # the true robot has the URDF's masses
+    spec = load_spec(out)
+    assert spec.stiffness["mcp"] == obj["parameters"]["K_mcp"]["value"]
+    for argv in (["dynamics"], ["observability", "--input", "motor", "--output", "encoder", "--points", "2"]):
+        assert main([argv[0], "--model", str(robot / "m.urdf"), "--spec", str(out), *argv[1:]]) == 0, argv
+        capsys.readouterr()
+    assert main(["mjcf", "--model", str(robot / "m.urdf"), "--spec", str(out), "-o", str(robot / "m.xml")]) == 0
+    assert ad.Model.from_mjcf(robot / "m.xml").inertia_matrix(np.array([0.3, 0.4])) == pytest.approx(
+        ad.Model.from_urdf_file(robot / "m.urdf", out).inertia_matrix(np.array([0.3, 0.4])), rel=1e-12)
 
 
 def test_chain_motor_keeps_that_motors_joints(robot):

@@ -378,8 +378,8 @@ CLI: dict[str, list[Cli]] = {
           "across", "--parameters", "K", needle="recording: unknown column 'encoder_finger' for model 'branches'"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robottwo_toml}", "--data", "{replay_csv}", "--chain",
           "distal", "--parameters", "K", needle="recording: unknown column 'encoder_finger' for model 'tendon_robot'"),
-        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/i.toml",
-          needle="-o: m_1, m_2, m_3: a spec file holds no masses (they are the URDF's)"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robotctl_toml}", "--data", "x.csv", "-o",
+          "{tmp}/robot.toml", needle="-o's URDF: '{tmp}/robot.urdf' is the input of --model; refusing to write over it"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--parameters", "K_9",
           needle="unknown parameter 'K_9'"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robotident_toml}", "--data", "x.csv",
@@ -676,6 +676,12 @@ CLI: dict[str, list[Cli]] = {
     "import": [
         C("import", "-o", "{tmp}/out", needle="the following arguments are required: --model"),
         C("import", "--model", "{arm_xml}", needle="the following arguments are required: -o/--output"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--hold", "jz",
+          needle="--hold: unknown joint 'jz' (joints: ja)"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--hold", "ja",
+          needle="--hold: joint 'ja' is on tendon 't'; hold joints no tendon crosses"),
+        C("import", "--model", "{arm_xml}", "-o", "{tmp}/out", "--hold", "ja,,jb",
+          needle="--hold: expected comma-separated joint names, got 'ja,,jb'"),
         C("import", "--model", "finger3", "-o", "{tmp}/out", needle="--model: import reads an MJCF file (FILE.xml), "
           "got 'finger3'; an Alpes model's MJCF: 'alpes-dyn mjcf --model finger3 -o FILE.xml'"),
         C("import", "--model", "{robot_urdf}", "-o", "{tmp}/out", needle="is a URDF already; give it with its spec"),
@@ -1164,7 +1170,26 @@ def _model_exp(nominal, **kw):
     return model_experiment(nominal, **{"design": _design(), **kw})
 
 
-def _ident_spec(names, base=None):
+def _example_mjcf(name):
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    return example_mjcf_path(name)
+
+
+def _ident_urdf(names, urdf=None, value=0.05):
+    """identified_urdf of a made-up fit of ``names`` on the URDF robot, every value ``value``."""
+    import types
+
+    from alpes_dyn.estimation.identification.identified_spec import identified_urdf
+
+    p = len(names)
+    res = types.SimpleNamespace(names=tuple(names), values=np.full(p, value), std=np.full(p, 1e-5),
+                                recording_path=None, model=ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(ROBOT_SPEC)),
+                                trustworthy=True)
+    return identified_urdf(res, ROBOT_URDF if urdf is None else urdf)
+
+
+def _ident_spec(names, base=None, masses="refuse"):
     """identified_spec of a made-up fit of ``names`` on the URDF robot (no fit run: the refusals come first)."""
     from alpes_dyn.estimation.identification.identification import IdentificationResult
     from alpes_dyn.estimation.identification.identified_spec import identified_spec
@@ -1176,7 +1201,7 @@ def _ident_spec(names, base=None):
                                correlation=np.eye(p), residual_rms=0.5, iterations=1, converged=True, seconds=0.0,
                                compile_seconds=0.0, states=np.zeros((1, 6)), node_times=np.zeros(1),
                                model=ad.Model(ROBOT_URDF, spec))
-    return identified_spec(res, spec if base is None else base)
+    return identified_spec(res, spec if base is None else base, masses)
 
 
 def _replay(c, **kw):
@@ -1402,6 +1427,13 @@ API: list[Api] = [
       ModelError, "mjcf: equality 'e' on joint 'k' is not a linear coupling of two joints"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint joint1="k"/>')),
       ModelError, "mjcf: equality 'equality0' on joint 'k' is not a linear coupling of two joints"),
+    A("Model", lambda c: ad.Model.from_mjcf(ARM_MJCF, hold="ja"), ModelError,
+      "hold: expected a list of joint names, got 'ja'"),
+    A("Model", lambda c: ad.Model.from_mjcf(ARM_MJCF, hold=["ja", 3]), ModelError,
+      "hold: expected a list of joint names, got ['ja', 3]"),
+    A("example_mjcf_path", lambda c: _example_mjcf("allegro"), ModelError,
+      "unknown example MJCF 'allegro' (shipped: shadow_hand)"),
+    A("example_mjcf_path", lambda c: _example_mjcf(3), ModelError, "unknown example MJCF 3 (shipped: shadow_hand)"),
     A("Model", lambda c: ad.Model(FINGER3, gravity=[True, False, True]), ModelError, "gravity: expected 3 finite"),
     A("simulate", lambda c: _sim(c, inputs=np.full(3, 1e-3 + 1e-3j)), InputError, "inputs: complex values"),
     A("simulate", lambda c: _sim(c, method="cvodes", rtol="x"), InputError, "rtol: expected a positive number, got 'x'"),
@@ -1645,6 +1677,13 @@ API: list[Api] = [
     A("identified_spec", lambda c: _ident_spec(("K_1",), base="x"), ModelError, "base: expected a TransmissionSpec"),
     A("identified_spec", lambda c: _ident_spec(("K_1", "m_2")), ModelError,
       "identified spec: m_2: a spec file holds no masses"),
+    A("identified_spec", lambda c: _ident_spec(("K_1", "m_2"), masses="spec"), ModelError,
+      "masses: expected 'refuse' or 'urdf', got 'spec'"),
+    A("identified_urdf", lambda c: _ident_urdf(("K_1",)), ModelError,
+      "identified urdf: the fit has no mass (--parameters m or m_<joint>)"),
+    A("identified_urdf", lambda c: _ident_urdf(("m_2",), urdf="<robot"), ModelError, "urdf: not XML"),
+    A("identified_urdf", lambda c: _ident_urdf(("m_2",), value=float("nan")), ModelError,
+      "identified urdf: m_2 = nan kg is not a positive mass; not written"),
     A("identified_spec", lambda c: _ident_spec(("K_1",), base=TransmissionSpec.from_toml(
         ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon do not hold the fitted"),
     # state space, observability

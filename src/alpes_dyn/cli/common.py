@@ -199,17 +199,18 @@ _INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("true_spec", "--t
 _OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), ("log", "--log"), ("plot", "--plot"))
 
 
-def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[str]] | None = None) -> None:
+def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[str]] | None = None,
+                     more: Sequence[tuple[str, str]] = ()) -> None:
     """The output policy (:func:`alpes_dyn.fileio.check_outputs`) of the command in ``args``, before any work:
     every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
     (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF or MJCF --model) and
-    the others."""
+    the others; ``more``: (what, path) of the other files it writes (identify's URDF beside -o)."""
     inputs = [(flag, getattr(args, dest)) for dest, flag in _INPUT_OPTIONS if isinstance(getattr(args, dest, None), str)]
     model = getattr(args, "model", None)
     if isinstance(model, str) and (_is_urdf_path(model) or _is_mjcf_path(model)):
         inputs.append(("--model", model))
     outputs = [(flag, getattr(args, dest, None)) for dest, flag in _OUTPUT_OPTIONS]
-    outputs = [(f, v) for f, v in outputs if isinstance(v, str)]  # (--output of linearize is a list of names)
+    outputs = [(f, v) for f, v in outputs if isinstance(v, str)] + list(more)  # (linearize's --output: names)
     # --log FILE.csv is a CSV, --true-params-out a parameter file (TOML), by their names
     check_outputs(outputs, inputs, {"--log": ("csv",), "--true-params-out": ("toml",), **(extensions or {})})
 

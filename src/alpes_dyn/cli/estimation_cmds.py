@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .fitting import _fit, _identify_lines
+from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      parse_vector)
@@ -252,8 +252,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
     from ..estimation.experiments.experiment import EXPERIMENT_MODELS
-    from ..estimation.identification.identified_spec import write_identified_spec
-    from ..model.spec import load_spec
+    from ..estimation.identification.identified_spec import spec_misfits
 
     urdf = _is_urdf_path(args.model)
     if args.model == "hand":  # every chain from one recording of the six motors
@@ -273,7 +272,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     written = args.output is not None and (res.trustworthy or args.force)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
-        res.write(args.output) if not urdf else write_identified_spec(res, load_spec(args.spec), args.output)
+        res.write(args.output) if not urdf else _write_robot(res, args)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
@@ -317,8 +316,11 @@ def cmd_identify(args: argparse.Namespace) -> int:
             v = a.validation
             lines.append(f"  validation on {args.validate}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
                          f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
+    obj["urdf_output"] = _mass_urdf_path(args.output) if written and urdf and spec_misfits(model, res.names) else None
     if written:
-        lines.append(f"  written to {args.output}" + ("" if res.trustworthy else " (marked NOT trustworthy)"))
+        u = obj["urdf_output"]
+        lines.append(f"  written to {args.output}" + (f" and {u} (the masses; use --model {u} --spec {args.output})"
+                                                     if u else "") + ("" if res.trustworthy else " (marked NOT trustworthy)"))
     _emit(obj, "\n".join(lines), args.json)
     if not res.trustworthy:
         why = res.status()
@@ -346,9 +348,9 @@ def _fit_robot(args: argparse.Namespace, freqs):
     spec's smooth_velocity at :data:`~alpes_dyn.estimation.identification.effects.STICTION_VELOCITY`); ``--chain MOTOR``
     fits on the sub-model of that motor's branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: on a fixed base the
     other branches do not change its joints' dynamics; the recording's columns of their motors and joints are
-    ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); a selection
-    with masses is refused with -o (a spec holds no masses) before the fit. Returns the EffectsFit and the recording
-    it read."""
+    ignored) and keeps the parameters of the joints that motor drives and its own (compliance, offset); with -o and
+    masses in the selection, the URDF written beside -o is checked against the inputs before the fit. Returns the
+    EffectsFit and the recording it read."""
     import dataclasses
 
     from ..estimation.identification.adequacy import AdequacyWarning
@@ -375,9 +377,8 @@ def _fit_robot(args: argparse.Namespace, freqs):
         return sticky if "stiction" in effs else model
 
     masses = spec_misfits(model, _chain_names(model, args.parameters, args.chain))  # the effects add none
-    if masses and args.output is not None:
-        raise InputError(f"-o: {', '.join(masses)}: a spec file holds no masses (they are the URDF's); fit "
-                         "--parameters K,friction to write the identified spec, or leave out -o to see the masses")
+    if masses and args.output is not None:  # written into a copy of the URDF beside -o (cmd_identify)
+        _check_run_files(args, {"-o": ("toml",)}, [("-o's URDF", _mass_urdf_path(args.output))])
     data, validate = _robot_recordings(args, model, whole if args.chain is not None else None)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
               encoder_noise=args.encoder_noise)

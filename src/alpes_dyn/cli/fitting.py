@@ -1,5 +1,6 @@
 """The fit behind ``alpes-dyn identify`` on an Alpes model: the effects' rounds on a recording (the whole hand's
-chains too, :mod:`alpes_dyn.cli.hand_cmds`), and the excitation's lines the fit takes."""
+chains too, :mod:`alpes_dyn.cli.hand_cmds`), and the excitation's lines the fit takes; a URDF robot's fit written
+(its spec, and the URDF with its masses)."""
 
 from __future__ import annotations
 
@@ -57,3 +58,30 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
             return EffectsFit.single(identify(model, data, args.parameters, **kw), effects), data
     base = THUMB_PARAMETERS if args.model == "thumb" else None
     return fit_effects(model_of, data, effects, base, data.gravity is not None, **kw), data  # tilt where not given
+
+
+def _mass_urdf_path(output: str) -> str:
+    """The URDF written beside ``identify -o FILE.toml`` when the fit has masses: ``FILE.urdf``."""
+    from pathlib import Path
+
+    return str(Path(output).with_suffix(".urdf"))
+
+
+def _write_robot(res, args: argparse.Namespace) -> None:
+    """A URDF robot's fit written: the identified spec at -o, and where it fitted masses the URDF ``--model`` with
+    them beside it (:func:`_mass_urdf_path`;
+    :func:`~alpes_dyn.estimation.identification.identified_spec.identified_urdf`): both built before either is
+    written, the spec last (a failed URDF write leaves no spec naming it)."""
+    from ..estimation.identification.identified_spec import (identified_spec, identified_urdf, spec_misfits,
+                                                             write_identified_spec)
+    from ..fileio import atomic_write, read_text
+    from ..model.spec import load_spec
+
+    base = load_spec(args.spec)
+    if spec_misfits(res.model, res.names):
+        text = identified_urdf(res, read_text(args.model, "--model"))
+        identified_spec(res, base, masses="urdf")  # the spec's errors before the URDF is written
+        atomic_write(_mass_urdf_path(args.output), text, "-o")
+        write_identified_spec(res, base, args.output, masses="urdf")
+    else:
+        write_identified_spec(res, base, args.output)

@@ -57,7 +57,7 @@ def _mjcf_urdf(path: str) -> str:
     return _mjcf_import(path)[0]
 
 
-def _mjcf_import(path: str):
+def _mjcf_import(path: str, hold: tuple[str, ...] = ()):
     """(URDF text, spec, Model) of an MJCF file: what ``import`` writes and ``urdf --model FILE.xml`` prints, the
     pair loaded once as a Model (a URDF the library cannot load is refused before anything is written)."""
     from ..errors import ModelError
@@ -65,10 +65,11 @@ def _mjcf_import(path: str):
     from ..model.robot import Model
 
     try:
-        urdf, spec = mjcf_to_urdf(path)
+        urdf, spec = mjcf_to_urdf(path, hold)
     except ModelError as exc:
         head, sep, tail = str(exc).partition(": ")
-        raise InputError(f"--model: {tail}" if sep and head == "mjcf" else str(exc)) from None
+        raise InputError(f"--model: {tail}" if sep and head == "mjcf" else f"--hold: {tail}" if sep and head == "hold"
+                         else str(exc)) from None
     return urdf, spec, Model(urdf, spec)
 
 
@@ -91,7 +92,13 @@ def cmd_import(args: argparse.Namespace) -> int:
         raise InputError(f"--model: the files written are named after the MJCF file; {Path(args.model).name!r} gives "
                          "no plain name (rename the file)")
     check_output_directory(args.output, "-o")  # before MuJoCo compiles: a new or empty directory, never a file
-    urdf, spec, model = _mjcf_import(args.model)
+    hold = tuple(j.strip() for j in args.hold.split(",")) if args.hold is not None else ()
+    if any(not j for j in hold):
+        raise InputError(f"--hold: expected comma-separated joint names, got {args.hold!r}")
+    urdf, spec, model = _mjcf_import(args.model, hold)
+    from ..model.mjcf_import import _compile_held, not_imported
+
+    lost = not_imported(_compile_held(args.model, hold))  # the JSON's and the text's "not imported" lines
     toml = (f"# the transmission spec of {Path(args.model).name} (alpes-dyn import): give it as --spec with "
             f"--model {name}.urdf\n" + spec.to_toml())
     if TransmissionSpec.from_toml(toml) != spec:  # never written as if it were the model's (to_toml's promise)
@@ -100,11 +107,11 @@ def cmd_import(args: argparse.Namespace) -> int:
     paths = {k: str(v) for k, v in written.items()}
     obj = {"model": args.model, "name": model.name, "directory": args.output, "urdf": paths[f"{name}.urdf"],
            "spec": paths[f"{name}.toml"], "joints": list(model.joint_names), "motors": list(model.motor_names),
-           "tips": list(model.tip_names)}
+           "tips": list(model.tip_names), "not_imported": lost, "held": list(hold)}
     text = (f"{model.name}: {model.n} joints, {len(model.motor_names)} motor"
             f"{'s' if len(model.motor_names) != 1 else ''} ({', '.join(model.motor_names) or 'none'}), tips "
             f"{', '.join(model.tip_names) or 'none'}; written to {args.output}/ ({name}.urdf, {name}.toml)\n"
-            f"  use: --model {obj['urdf']} --spec {obj['spec']}")
+            f"  use: --model {obj['urdf']} --spec {obj['spec']}" + "".join(f"\n  not imported: {x}" for x in lost))
     _emit(obj, text, args.json)
     return 0
 

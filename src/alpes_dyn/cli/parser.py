@@ -144,6 +144,8 @@ def _add_import(sub: argparse._SubParsersAction) -> None:
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <name>.urdf and <name>.toml, <name> the MJCF "
                         "file's name without its extension; written whole or not at all")
+    s.add_argument("--hold", metavar="J1,J2,...", help="hinges to weld at their reference angle, the actuators on "
+                   "them dropped (e.g. a hand's wrist: each finger then a branch of its own for --chain)")
     _json_option(s)
     s.set_defaults(func=cmd_import)
 

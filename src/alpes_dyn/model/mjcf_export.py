@@ -243,7 +243,10 @@ def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[
         children.setdefault(int(pm.parents[i]), []).append(i)
     tips = _tips(model, set(names), tip_radius)
     solref = stop_solref(model) if limits else {}
-    lines = ["  <worldbody>", f"    <body name={_q(root)}>"]
+    # a root link named "world" (an imported MJCF's, a common URDF root) is MuJoCo's world body itself: no body of
+    # that name (MuJoCo refuses a repeated 'world'), its frames and children placed in <worldbody>
+    wrap = root != "world"
+    lines = ["  <worldbody>"] + ([f"    <body name={_q(root)}>"] if wrap else [])
 
     def body(i: int, depth: int) -> None:
         ind = "  " * depth
@@ -262,7 +265,7 @@ def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[
     lines.extend(f"      {s}" for s in tips.get(0, ()))
     for i in children.get(0, ()):
         body(i, 3)
-    lines += ["    </body>", "  </worldbody>"]
+    lines += (["    </body>"] if wrap else []) + ["  </worldbody>"]
     sites = {t: (f"{t}_site" if t in names else t) for t in model.tips}
     return lines, sites
 

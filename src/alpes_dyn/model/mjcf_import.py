@@ -15,10 +15,16 @@ backends read:
   (-stiffness -damping, what the export writes for a spec's ``[stops]``) as the ``[stops]`` row k = -solref[0] / w,
   d = -solref[1] / w, w the joint's ``dof_invweight0`` (the library's spring-damper stop where the limit's impedance
   is small, as the export's 1e-4; a limit in the time-constant form gets no row: sized by the library);
-  gravity from ``<option gravity>``; the tips: the first site of each leaf body.
+  gravity from ``<option gravity>``; the tips: the first site of each leaf body, or the leaf body's own frame where
+  it has no site (the link's origin, on its joint's axis: a fingertip point needs a site).
 
-What the library does not model is refused with one line naming it, never dropped: free, ball and slide
-joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
+What would change how the motors act and has no place in the spec is said in one :class:`MjcfImportWarning`
+naming each field (:func:`not_imported`: a servo's ``gainprm``/``biasprm``, ``dyntype``, ``forcerange``, a tendon's
+``range``; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
+import`` only. MuJoCo Menagerie's Shadow Hand E3M5 ships as an example (:func:`example_mjcf_path`; tested against
+MuJoCo on that MJCF). ``hold=`` welds hinges at their reference angle, the actuators on them dropped (e.g. a hand's
+wrist: each finger then a branch of its own). What the library does not model is refused with one line naming it,
+never dropped: free, ball and slide joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
 an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
 (``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
 :mod:`alpes_dyn.model.mimic`). An MJCF file must be a regular file within
@@ -30,14 +36,36 @@ from __future__ import annotations
 
 import xml.sax.saxutils as su
 from pathlib import Path
+from typing import Sequence
 
 import numpy as np
 
-from ..errors import ModelError
+from ..errors import AlpesDynWarning, ModelError
 from ..fileio import read_bytes
 from .spec import Motor, TransmissionSpec
 
-__all__ = ["mjcf_to_urdf"]
+__all__ = ["MjcfImportWarning", "example_mjcf_path", "mjcf_to_urdf", "not_imported"]
+
+
+class MjcfImportWarning(AlpesDynWarning):
+    """An MJCF field that changes the actuators' dynamics is not in the spec (e.g. a position servo's gain): the
+    message names each field (:func:`not_imported`)."""
+
+
+EXAMPLE_MJCF = {"shadow_hand": "shadow_hand/right_hand.xml"}
+"""The MJCF files shipped with the package (:func:`example_mjcf_path`), each with its LICENSE and NOTICE."""
+
+
+def example_mjcf_path(name: str = "shadow_hand") -> Path:
+    """Path of an MJCF shipped with the package: ``"shadow_hand"``, MuJoCo Menagerie's Shadow Hand E3M5 (right
+    hand; 24 hinges, 20 position actuators, 4 of them on fixed tendons coupling each finger's two distal joints),
+    its kinematics and dynamics as published, meshes replaced by primitive geoms (Apache-2.0; the folder's NOTICE
+    says what changed)."""
+    from importlib import resources
+
+    if not isinstance(name, str) or name not in EXAMPLE_MJCF:
+        raise ModelError(f"unknown example MJCF {name!r} (shipped: {', '.join(sorted(EXAMPLE_MJCF))})")
+    return Path(str(resources.files("alpes_dyn") / "data")) / EXAMPLE_MJCF[name]
 
 
 def _mj():
@@ -66,6 +94,44 @@ def _compile(mjcf: str | Path):
         return mujoco.MjModel.from_xml_path(str(mjcf))
     except ValueError as exc:
         raise ModelError(f"mjcf: MuJoCo cannot compile it ({str(exc).splitlines()[0]})") from None
+
+
+def _compile_held(mjcf: str | Path, hold: Sequence[str] = ()):
+    """:func:`_compile`, with the hinges named in ``hold`` removed (MuJoCo's ``MjSpec``: each body welded to its
+    parent at its pose as written, the joint's reference angle) with the actuators on them. A held joint that a
+    tendon crosses or an equality names is refused (the tendon's length or the equality would change meaning)."""
+    m = _compile(mjcf)
+    if isinstance(hold, str) or not all(isinstance(j, str) for j in hold):
+        raise ModelError(f"hold: expected a list of joint names, got {hold!r}")
+    if not hold:
+        return m
+    mujoco = _mj()
+    O = mujoco.mjtObj
+    names = [_name(mujoco, m, O.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
+    for j in hold:
+        if j not in names:
+            raise ModelError(f"hold: unknown joint {j!r} (joints: {', '.join(names)})")
+    ids = {names.index(j) for j in hold}
+    for w in range(m.nwrap):
+        if m.wrap_type[w] == mujoco.mjtWrap.mjWRAP_JOINT and int(m.wrap_objid[w]) in ids:
+            t = int(np.searchsorted(m.tendon_adr, w, side="right") - 1)
+            raise ModelError(f"hold: joint {names[int(m.wrap_objid[w])]!r} is on tendon "
+                             f"{_name(mujoco, m, O.mjOBJ_TENDON, t, 'tendon')!r}; hold joints no tendon crosses")
+    for e in range(m.neq):
+        if {int(m.eq_obj1id[e]), int(m.eq_obj2id[e])} & ids and m.eq_type[e] == mujoco.mjtEq.mjEQ_JOINT:
+            raise ModelError(f"hold: equality {_name(mujoco, m, O.mjOBJ_EQUALITY, e, 'equality')!r} names a held joint")
+    is_text = isinstance(mjcf, str) and "<" in mjcf
+    spec = mujoco.MjSpec.from_string(mjcf) if is_text else mujoco.MjSpec.from_file(str(mjcf))
+    for a in list(spec.actuators):
+        if a.trntype == mujoco.mjtTrn.mjTRN_JOINT and a.target in hold:
+            spec.delete(a)
+    for j in hold:
+        spec.delete(spec.joint(j))
+    try:
+        return spec.compile()
+    except ValueError as exc:
+        raise ModelError(f"hold: MuJoCo cannot compile the MJCF with {', '.join(hold)} held "
+                         f"({str(exc).splitlines()[0]})") from None
 
 
 def _name(mujoco, m, kind, i: int, prefix: str) -> str:
@@ -153,11 +219,61 @@ def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
     return out
 
 
-def mjcf_to_urdf(mjcf: str | Path) -> tuple[str, TransmissionSpec]:
-    """The URDF text and the spec of an MJCF (text or path); see the module docstring."""
+def _named(mujoco, m, kind, ids, prefix: str) -> str:
+    names = [_name(mujoco, m, kind, int(i), prefix) for i in ids]
+    return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+def not_imported(m) -> list[str]:
+    """What of a compiled MuJoCo model ``m`` (``mujoco.MjModel``) the URDF + spec do not hold, one line per kind,
+    naming the MJCF field and the first elements that have it. The first lines (up to the one starting with
+    ``geoms``) change how the motors act (:class:`MjcfImportWarning`): the spec's motors are torque sources
+    (tau = S^T tau_m, the actuator's force taken as the motor torque), so a servo's gain and bias (``position``,
+    ``velocity``, ``intvelocity`` and ``general`` actuators: ``gainprm``/``biasprm``), activation dynamics
+    (``dyntype``), a force saturation (``forcerange``) and a tendon's length limit (``range``) are left to the
+    user's controller or recorded torques. Collision geometry and the solver's options are never imported (the
+    library's contact is its own, :mod:`alpes_dyn.model.contact`)."""
     mujoco = _mj()
-    m = _compile(mjcf)
+    O = mujoco.mjtObj
+    out = []
+    gain = np.asarray(m.actuator_gainprm)[:, 0] if m.nu else np.zeros(0)
+    servo = [a for a in range(m.nu) if m.actuator_biastype[a] != 0 or m.actuator_gaintype[a] != 0 or gain[a] != 1]
+    if servo:
+        kp = sorted({float(gain[a]) for a in servo})
+        out.append(f"actuators {_named(mujoco, m, O.mjOBJ_ACTUATOR, servo, 'motor')}: a gain or bias (gainprm/biasprm: "
+                   f"a servo, kp in {{{', '.join(f'{k:g}' for k in kp[:6])}}}); imported as torque motors on the same "
+                   "transmission (the servo is the controller's)")
+    dyn = [a for a in range(m.nu) if m.actuator_dyntype[a] != 0]
+    if dyn:
+        out.append(f"actuators {_named(mujoco, m, O.mjOBJ_ACTUATOR, dyn, 'motor')}: activation dynamics (dyntype) not "
+                   "imported")
+    lim = [a for a in range(m.nu) if m.actuator_forcelimited[a]]
+    if lim:
+        out.append(f"actuators {_named(mujoco, m, O.mjOBJ_ACTUATOR, lim, 'motor')}: forcerange (a torque "
+                   "saturation) not imported")
+    tlim = [t for t in range(m.ntendon) if m.tendon_limited[t]]
+    if tlim:
+        out.append(f"tendons {_named(mujoco, m, O.mjOBJ_TENDON, tlim, 'tendon')}: range (a tendon length limit) not "
+                   "imported")
+    if m.ngeom:
+        out.append(f"geoms: {m.ngeom} collision/visual geoms and the contact options not imported (the library's "
+                   "contact is its own)")
+    return out
+
+
+def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, TransmissionSpec]:
+    """The URDF text and the spec of an MJCF (text or path); see the module docstring. What changes the motors'
+    action and is not imported (:func:`not_imported`) is said in one :class:`MjcfImportWarning`. ``hold``: hinges
+    welded at their reference angle, with the actuators on them dropped (e.g. a hand's wrist, so that each finger
+    is a branch of its own: :meth:`Model.subtree <alpes_dyn.model.robot.Model.subtree>`, ``--chain``)."""
+    import warnings
+
+    mujoco = _mj()
+    m = _compile_held(mjcf, hold)
     _check_supported(mujoco, m)
+    lost = [x for x in not_imported(m) if not x.startswith("geoms")]
+    if lost:
+        warnings.warn("mjcf: not imported: " + "; ".join(lost), MjcfImportWarning, stacklevel=2)
     O = mujoco.mjtObj
     body = [_name(mujoco, m, O.mjOBJ_BODY, b, "body") for b in range(m.nbody)]
     body[0] = "world"
@@ -259,11 +375,12 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
             w = float(m.dof_invweight0[d])
             stops[jname] = {"stiffness": -float(m.jnt_solref[j, 0]) / w, "damping": -float(m.jnt_solref[j, 1]) / w}
     children = set(int(p) for p in m.body_parentid[1:])
-    tips, seen = [], set()
+    first_site: dict[int, str] = {}
     for sname, b in sites:
-        if b not in children and b not in seen:
-            tips.append(sname)
-            seen.add(b)
+        first_site.setdefault(b, sname)
+    # each leaf body's first site, or (no site: Menagerie's Shadow hand's distal phalanges) its own link frame
+    tips = [first_site.get(b, _name(mujoco, m, O.mjOBJ_BODY, b, "body")) for b in range(1, m.nbody)
+            if b not in children]
     return TransmissionSpec(motors=tuple(motors), gravity=tuple(float(g) for g in m.opt.gravity),
                             tips=tuple(tips) or None, name=model_name, stops={"joints": stops} if stops else None,
                             **tables)

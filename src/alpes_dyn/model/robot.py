@@ -270,12 +270,13 @@ class Model(FrameKinematics):
         return "thumb" if self.layout.model == "thumb" else self.layout.chain
 
     @classmethod
-    def from_mjcf(cls, mjcf: str | Path, **kwargs) -> "Model":
+    def from_mjcf(cls, mjcf: str | Path, hold: Sequence[str] = (), **kwargs) -> "Model":
         """A MuJoCo model with fixed tendons (MJCF text or path; needs ``mujoco``): its tree as a URDF, its tendons,
-        springs, armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`)."""
+        springs, armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`; ``hold``: hinges
+        welded at their reference angle, their actuators dropped)."""
         from .mjcf_import import mjcf_to_urdf
 
-        urdf, spec = mjcf_to_urdf(mjcf)
+        urdf, spec = mjcf_to_urdf(mjcf, hold)
         return cls(urdf, spec, **kwargs)
 
     def to_mjcf(self, **kwargs) -> str:

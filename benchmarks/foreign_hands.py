@@ -1,0 +1,316 @@
+"""Issue 37: a real hand from MuJoCo Menagerie through every command -- the Shadow Hand E3M5 shipped in
+``alpes_dyn/data/shadow_hand`` (:func:`~alpes_dyn.model.mjcf_import.example_mjcf_path`; Menagerie's kinematics and
+dynamics, meshes replaced by primitives: 24 hinges, 20 position servos, 4 on fixed tendons J2 + J1).
+
+Three parts (and a fourth, ``held``: the whole hand with its wrist held, ``experiment``, ``identify --chain`` and
+``estimate --chain`` on our simulator's recording), each command timed:
+
+1. ``import`` of the shipped MJCF (a new process) and the dynamics of the pair it writes against MuJoCo on the MJCF
+   itself, over ``--states`` random states: M(q) (armature in both), the bias C v + g, S^T of MuJoCo's actuator
+   forces against its ``qfrc_actuator`` (every servo pulling) and the forward dynamics (MuJoCo's ``frictionloss``
+   disabled, the library's Coulomb term cancelled): the largest error relative to each term's size (goal <= 1e-9);
+2. ``dynamics``, ``observability --input motor --output encoder`` and ``mjcf`` on the whole hand (new processes), and
+   the exported MJCF read back (:meth:`Model.from_mjcf <alpes_dyn.Model.from_mjcf>`: the largest difference of M);
+3. the first finger of the hand with the wrist held (``Model.from_mjcf(..., hold=["rh_WRJ2", "rh_WRJ1"])``, ``import
+   --hold``: the two wrist joints welded, their servos dropped; on a fixed palm the other branches cannot change its
+   joints' dynamics), written as its own URDF + spec (:meth:`Model.subtree <alpes_dyn.Model.subtree>` of its three
+   motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1; 4 joints). Its link masses drawn x (1 + U(-15 %, +15 %))
+   (``--seed``) as ``true.urdf``; ``experiment`` on the nominal finger (our simulator: its torque only is used), that
+   torque replayed on MuJoCo stepping ``alpes-dyn mjcf --model true.urdf``
+   (:func:`~alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms, MuJoCo's stick-slip ``frictionloss``) as
+   ``mujoco.csv``, started where the experiment started; ``identify --parameters FIT -o ident.toml`` on it (the masses
+   written as ``ident.urdf``; ``--force``: written even if not trusted, the JSON says): each mass against the drawn one
+   (goal: within 5 %; ``FIT``: the flexion joints' masses and friction); ``estimate --model ident.urdf --spec ident.toml
+   --data mujoco.csv``: the EKF's RMSE after 1 s, worst joint (goal < 0.5 deg; beside it the nominal finger's and the
+   true finger's: what the observer does with a perfect model); ``identifiability`` of the same selection (structural
+   rank, the masses' Cramer-Rao relative standard deviations on the documented experiment) and ``codegen`` on the
+   finger. Also reported: each joint's swing in MuJoCo (its ``frictionloss`` is stick-slip: a joint the experiment
+   barely moves says little of its mass), and ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or its one-line
+   refusal.
+
+Every command's wall time is a first run as a new process: imports, and compiles where the compile cache
+(:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
+Prints a table, or one JSON object with ``--json``; ``uptime`` before and after.
+
+    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--skip held,finger] [--cold]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import tempfile
+import time
+import types
+import warnings
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+GOALS = {"dynamics_rel": 1e-9, "mass_error": 0.05, "ekf_rmse_deg": 0.5}
+MASS_SPREAD = 0.15
+FINGER_MOTORS = ("rh_A_FFJ4", "rh_A_FFJ3", "rh_A_FFJ0")
+FIT = ("m_rh_FFJ3,m_rh_FFJ2,m_rh_FFJ1,F_s_rh_FFJ3,F_s_rh_FFJ2,F_s_rh_FFJ1,F_v_rh_FFJ3,F_v_rh_FFJ2,F_v_rh_FFJ1")
+"""The fit: the masses and friction of the three flexion joints (the knuckle's mass sits on the FFJ4 axis, 3e-7 kg
+m^2 about it, and FFJ4's encoder moves 4 counts in the experiment: the Cramer-Rao bounds give it no information)."""
+
+
+def cli(*args: str, as_json: bool = True, ok: tuple[int, ...] = (0,)) -> tuple[float, dict[str, Any]]:
+    """Wall time (s) and JSON output of ``alpes-dyn ARGS [--json]`` as a new process; an exit code of ``ok`` other
+    than 0 gives ``{"exit": code, "error": its stderr line}``."""
+    cmd = [sys.executable, "-m", "alpes_dyn.cli", *args] + (["--json"] if as_json else [])
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    wall = time.perf_counter() - t0
+    if r.returncode not in ok:
+        raise RuntimeError(f"alpes-dyn {' '.join(args[:1])}: exit {r.returncode}: {r.stderr.strip()[-600:]}")
+    if r.returncode != 0:
+        return wall, {"exit": r.returncode, "error": r.stderr.strip()}
+    return wall, (json.loads(r.stdout) if as_json and r.stdout.strip() else {})
+
+
+def dynamics_vs_mujoco(model, mjcf: Path, states: int, seed: int) -> dict[str, float]:
+    """The largest relative errors of the model's M, bias, S^T f and forward dynamics against MuJoCo's (item 1)."""
+    import mujoco
+
+    mj = mujoco.MjModel.from_xml_path(str(mjcf))
+    mj.opt.disableflags |= int(mujoco.mjtDisableBit.mjDSBL_FRICTIONLOSS | mujoco.mjtDisableBit.mjDSBL_CONTACT)
+    d = mujoco.MjData(mj)
+    p = [model.joint_names.index(mujoco.mj_id2name(mj, mujoco.mjtObj.mjOBJ_JOINT, j)) for j in range(mj.njnt)]
+    rng = np.random.default_rng(seed)
+    err = {"M": 0.0, "bias": 0.0, "actuator": 0.0, "qdd": 0.0}
+
+    def rel(a: np.ndarray, b: np.ndarray) -> float:
+        return float(np.max(np.abs(a - b)) / max(np.max(np.abs(b)), 1e-300))
+    for _ in range(states):
+        q, v = model.random_state(rng)
+        d.qpos[:], d.qvel[:] = q[p], v[p]
+        d.ctrl[:] = rng.uniform(-0.5, 0.5, mj.nu)
+        mujoco.mj_forward(mj, d)
+        M = np.zeros((mj.nv, mj.nv))
+        mujoco.mj_fullM(mj, d, M)
+        tau = model.transmission.joint_torque(d.actuator_force)
+        qdd = model.forward_dynamics(q, v, tau + model.extras.coulomb * np.sign(v))
+        for k, a, b in (("M", model.inertia_matrix(q)[np.ix_(p, p)], M),
+                        ("bias", (model.coriolis_matrix(q, v) @ v + model.gravity_torque(q))[p], d.qfrc_bias),
+                        ("actuator", tau[p], d.qfrc_actuator), ("qdd", qdd[p], d.qacc)):
+            err[k] = max(err[k], rel(a, b))
+    return err
+
+
+def whole_hand(d: Path, states: int, seed: int) -> dict[str, Any]:
+    """Items 1 and 2 on the shipped hand."""
+    import alpes_dyn as ad
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    src = example_mjcf_path("shadow_hand")
+    w_imp, imp = cli("import", "--model", str(src), "-o", str(d / "hand"))
+    urdf, spec = imp["urdf"], imp["spec"]
+    model = ad.Model.from_urdf_file(urdf, spec)
+    err = dynamics_vs_mujoco(model, src, states, seed)
+    out: dict[str, Any] = {"n": model.n, "motors": len(model.motor_names), "import_wall_s": w_imp,
+                           "not_imported": imp["not_imported"], "dynamics_vs_mujoco": err, "states": states,
+                           "dynamics_goal_met": max(err.values()) <= GOALS["dynamics_rel"]}
+    out["dynamics_wall_s"], _ = cli("dynamics", "--model", urdf, "--spec", spec)
+    out["observability_wall_s"], obs = cli("observability", "--model", urdf, "--spec", spec, "--input", "motor",
+                                           "--output", "encoder")
+    out["observability_rank"] = f"{obs['rank']}/{obs['n_states']}"
+    out["mjcf_wall_s"], _ = cli("mjcf", "--model", urdf, "--spec", spec, "-o", str(d / "export.xml"), as_json=False)
+    back = ad.Model.from_mjcf(d / "export.xml")
+    rng = np.random.default_rng(seed)
+    out["mjcf_round_trip_M"] = max(float(np.max(np.abs(back.inertia_matrix(q) - model.inertia_matrix(q))))
+                                   for q in (model.random_state(rng)[0] for _ in range(5)))
+    return out
+
+
+def held_hand(d: Path, seed: int, duration: float) -> dict[str, Any]:
+    """Part 2b: the whole hand with its wrist held (``import --hold``, 22 joints, 18 motors) through ``experiment``
+    (our simulator, the nominal hand), ``identify --chain rh_A_FFJ0`` (the tendon's two joints' masses and friction)
+    and ``estimate --chain rh_A_FFJ0`` on that recording: the times of a user's first runs on the whole hand."""
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    w_imp, imp = cli("import", "--model", str(example_mjcf_path("shadow_hand")), "-o", str(d / "held"), "--hold",
+                     "rh_WRJ2,rh_WRJ1")
+    base = ["--model", imp["urdf"], "--spec", imp["spec"]]
+    out: dict[str, Any] = {"n": len(imp["joints"]), "motors": len(imp["motors"]), "import_wall_s": w_imp}
+    out["experiment_wall_s"], _ = cli("experiment", *base, "-o", str(d / "rec.csv"), "--duration", f"{duration:g}",
+                                      "--seed", str(seed))
+    w, fit = cli("identify", *base, "--data", str(d / "rec.csv"), "--chain", "rh_A_FFJ0", "--parameters", FIT,
+                 ok=(0, 3))
+    out["identify"] = {"wall_s": w, "converged": fit.get("converged"), "trustworthy": fit.get("trustworthy"),
+                       "compile_s": fit.get("compile_seconds"),
+                       "values": {k: v["value"] for k, v in fit.get("parameters", {}).items()}}
+    w, ekf = cli("estimate", *base, "--data", str(d / "rec.csv"), "--chain", "rh_A_FFJ0")
+    out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(max(np.degrees(ekf["rmse"])))}
+    return out
+
+
+def _drawn_urdf(model, seed: int) -> tuple[str, dict[str, float]]:
+    """The finger's URDF with every link mass times 1 + U(-MASS_SPREAD, MASS_SPREAD) (identified_urdf's scaling)."""
+    from alpes_dyn.estimation.identification.identified_spec import identified_urdf
+    from alpes_dyn.symbolic.parametric import parameter_catalogue
+
+    masses = [p for p in parameter_catalogue(model) if p.kind == "m" and p.nominal > 0]
+    rng = np.random.default_rng(seed)
+    true = {p.name: p.nominal * (1 + rng.uniform(-MASS_SPREAD, MASS_SPREAD)) for p in masses}
+    fake = types.SimpleNamespace(model=model, names=tuple(true), values=np.array(list(true.values())),
+                                 std=np.zeros(len(true)), recording_path="the benchmark's draw", trustworthy=True)
+    return identified_urdf(fake, model.urdf), true
+
+
+def finger(d: Path, seed: int, duration: float) -> dict[str, Any]:
+    """Item 3: the first finger on a fixed palm, from the MJCF to the EKF on a MuJoCo recording."""
+    import alpes_dyn as ad
+    from alpes_dyn.control.plants import mjcf_recording
+    from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        hand = ad.Model.from_mjcf(example_mjcf_path("shadow_hand"), hold=["rh_WRJ2", "rh_WRJ1"])
+    sub = hand.subtree(list(FINGER_MOTORS))
+    urdf, spec = d / "finger.urdf", d / "finger.toml"
+    urdf.write_text(sub.urdf)
+    spec.write_text(sub.spec.to_toml())
+    true_text, true_m = _drawn_urdf(sub, seed)
+    (d / "true.urdf").write_text(true_text)
+    base = ["--model", str(urdf), "--spec", str(spec)]
+    out: dict[str, Any] = {"n": sub.n, "joints": list(sub.joint_names), "motors": list(sub.motor_names),
+                           "true_masses": true_m}
+    out["identifiability_wall_s"], idf = cli("identifiability", *base, "--parameters", FIT)
+    st, pr = idf["structural"], idf["practical"]
+    out["identifiability"] = {"rank": f"{st['rank']}/{st['dimension']}", "identifiable": st["identifiable"],
+                              "mass_relative_std": {k: v["relative_std"] for k, v in pr["parameters"].items()
+                                                    if k.startswith("m_")}}
+    w, _ = cli("experiment", *base, "-o", str(d / "rec.csv"), "--duration", f"{duration:g}", "--seed", str(seed))
+    out["experiment_wall_s"] = w
+    out["mjcf_wall_s"], _ = cli("mjcf", "--model", str(d / "true.urdf"), "--spec", str(spec), "-o",
+                                str(d / "plant.xml"), as_json=False)
+    truth = ad.Model(true_text, sub.spec)
+    data = read_recording(d / "rec.csv", truth)
+    t0 = time.perf_counter()
+    # started where the experiment started (the default, the static equilibrium with the springless joints at 0,
+    # puts this finger on its stops from the first step)
+    rec = mjcf_recording(d / "plant.xml", truth, data.torque, float(data.dt), seed=seed + 1, q0=data.true_q[0])
+    out["mujoco_recording_s"] = time.perf_counter() - t0
+    out["mujoco_swing_deg"] = dict(zip(sub.joint_names, np.degrees(np.ptp(rec.true_q, axis=0)).tolist()))
+    write_recording(rec, d / "mujoco.csv")
+    # --force: an untrustworthy fit is written too (marked so in its header) so that the EKF runs on it; the JSON
+    # says whether it was trusted
+    w, fit = cli("identify", *base, "--data", str(d / "mujoco.csv"), "--parameters", FIT, "-o",
+                 str(d / "ident.toml"), "--force", ok=(0,))
+    mass_err = {k: fit["parameters"][k]["value"] / v - 1 for k, v in true_m.items() if k in fit["parameters"]}
+    out["identify"] = {"wall_s": w, "compile_s": fit.get("compile_seconds"), "iterations": fit.get("iterations"),
+                       "converged": fit.get("converged"), "trustworthy": fit.get("trustworthy"),
+                       "residual_rms": fit.get("residual_rms"), "mass_error": mass_err,
+                       "urdf_output": fit.get("urdf_output"),
+                       "goal_met": bool(mass_err) and max(abs(e) for e in mass_err.values()) < GOALS["mass_error"]}
+    if fit.get("urdf_output"):
+        w, ekf = cli("estimate", "--model", fit["urdf_output"], "--spec", str(d / "ident.toml"), "--data",
+                     str(d / "mujoco.csv"))
+        w0, ekf0 = cli("estimate", *base, "--data", str(d / "mujoco.csv"))
+        _, ekf_t = cli("estimate", "--model", str(d / "true.urdf"), "--spec", str(spec), "--data",
+                       str(d / "mujoco.csv"))
+        worst, worst0 = max(np.degrees(ekf["rmse"])), max(np.degrees(ekf0["rmse"]))
+        out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(worst), "baseline_worst_rmse_deg": float(worst0),
+                           "truth_worst_rmse_deg": float(max(np.degrees(ekf_t["rmse"]))),
+                           "rmse_deg": dict(zip(ekf["joints"], np.degrees(ekf["rmse"]).tolist())),
+                           "final_q_deg": dict(zip(ekf["joints"], np.degrees(ekf["final_q"]).tolist())),
+                           "baseline_wall_s": w0, "goal_met": bool(worst < GOALS["ekf_rmse_deg"])}
+    out["codegen_wall_s"], _ = cli("codegen", *base, "-o", str(d / "ekf_c"))
+    # the force loop on the tendon: refused (exit 2) where the springless finger's rest leaves its range
+    w, ctl = cli("control", *base, "--controller", "sensor", "--frame", "rh_ffdistal", "--motor", "rh_A_FFJ0",
+                 ok=(0, 2))
+    out["control"] = {"wall_s": w, "steady_state_error": ctl.get("steady_state_error"), "error": ctl.get("error")}
+    return out
+
+
+def _uptime() -> str:
+    return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
+
+
+def _table(r: dict[str, Any]) -> str:
+    lines = [f"uptime before: {r['uptime_before']}"]
+    h = r.get("hand")
+    if h:
+        e = h["dynamics_vs_mujoco"]
+        lines += [f"Shadow Hand E3M5 ({h['n']} joints, {h['motors']} motors), {h['states']} random states vs MuJoCo:",
+                  f"  M {e['M']:.1e}  bias {e['bias']:.1e}  S^T f {e['actuator']:.1e}  qdd {e['qdd']:.1e} "
+                  f"(goal <= {GOALS['dynamics_rel']:.0e}: {'met' if h['dynamics_goal_met'] else 'NOT met'})",
+                  f"  import {h['import_wall_s']:.1f} s, dynamics {h['dynamics_wall_s']:.1f} s, observability "
+                  f"{h['observability_wall_s']:.1f} s (rank {h['observability_rank']}), mjcf {h['mjcf_wall_s']:.1f} s "
+                  f"(read back: M within {h['mjcf_round_trip_M']:.1e})"]
+    hh = r.get("held")
+    if hh:
+        lines.append(f"the hand with its wrist held ({hh['n']} joints, {hh['motors']} motors): import "
+                     f"{hh['import_wall_s']:.1f} s, experiment {hh['experiment_wall_s']:.1f} s, identify --chain "
+                     f"rh_A_FFJ0 {hh['identify']['wall_s']:.1f} s (converged {hh['identify']['converged']}), estimate "
+                     f"--chain rh_A_FFJ0 {hh['estimate']['wall_s']:.1f} s (worst joint "
+                     f"{hh['estimate']['worst_rmse_deg']:.3f} deg on our simulator's recording)")
+    f = r.get("finger")
+    if f:
+        i = f["identify"]
+        idf = f["identifiability"]
+        lines += [f"first finger, wrist held ({f['n']} joints, motors {', '.join(f['motors'])}):",
+                  f"  identifiability {f['identifiability_wall_s']:.1f} s (rank {idf['rank']}; Cramer-Rao "
+                  + ", ".join(f"{k} {100 * v:.1f} %" for k, v in idf["mass_relative_std"].items()) + "), "
+                  f"experiment {f['experiment_wall_s']:.1f} s, mjcf {f['mjcf_wall_s']:.1f} s, MuJoCo recording "
+                  f"{f['mujoco_recording_s']:.1f} s, identify {i['wall_s']:.1f} s ({i['iterations']} iterations, "
+                  f"converged {i['converged']}, trustworthy {i['trustworthy']}), codegen {f['codegen_wall_s']:.1f} s",
+                  "  swing in MuJoCo: " + ", ".join(f"{k} {v:.2f} deg" for k, v in f["mujoco_swing_deg"].items()),
+                  "  masses vs drawn: " + ", ".join(f"{k} {100 * v:+.2f} %" for k, v in i["mass_error"].items())
+                  + f" (goal within {100 * GOALS['mass_error']:.0f} %: {'met' if i['goal_met'] else 'NOT met'})"]
+        if "estimate" in f:
+            e = f["estimate"]
+            lines.append(f"  EKF on the identified pair: worst joint {e['worst_rmse_deg']:.3f} deg (nominal "
+                         f"{e['baseline_worst_rmse_deg']:.3f} deg, true {e['truth_worst_rmse_deg']:.3f} deg), "
+                         f"estimate {e['wall_s']:.1f} s (goal < "
+                         f"{GOALS['ekf_rmse_deg']} deg: {'met' if e['goal_met'] else 'NOT met'}); RMSE "
+                         + ", ".join(f"{k} {v:.2f}" for k, v in e["rmse_deg"].items()) + " deg; final estimate "
+                         + ", ".join(f"{k} {v:.1f}" for k, v in e["final_q_deg"].items()) + " deg")
+    if f and "control" in f:
+        c = f["control"]
+        lines.append(f"  control {c['wall_s']:.1f} s: " + (f"steady-state error {100 * c['steady_state_error']:.2f} %"
+                                                            if c["error"] is None else c["error"]))
+    lines.append(f"uptime after: {r['uptime_after']}; {r['seconds']:.0f} s")
+    return "\n".join(lines)
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--json", action="store_true", help="print one JSON object")
+    ap.add_argument("--seed", type=int, default=0, help="the drawn masses' and the states' seed (default 0)")
+    ap.add_argument("--states", type=int, default=20, help="random states of the MuJoCo check (default 20)")
+    ap.add_argument("--duration", type=float, default=4.0, help="the experiment's length, s (default 4)")
+    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger")
+    ap.add_argument("--cold", action="store_true", help="a private, empty compile cache (compiles in the times)")
+    a = ap.parse_args()
+    skip = {s for s in a.skip.split(",") if s}
+    parts = {"hand", "held", "finger"}
+    if skip - parts:
+        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} (hand, held, finger)")
+    t0 = time.perf_counter()
+    r: dict[str, Any] = {"uptime_before": _uptime(), "seed": a.seed, "goals": GOALS}
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp)
+        if a.cold:
+            os.environ["ALPES_DYN_CACHE"] = str(d / "cache")
+        if "hand" not in skip:
+            (d / "h").mkdir()
+            r["hand"] = whole_hand(d / "h", a.states, a.seed)
+        if "held" not in skip:
+            (d / "hh").mkdir()
+            r["held"] = held_hand(d / "hh", a.seed, a.duration)
+        if "finger" not in skip:
+            (d / "f").mkdir()
+            r["finger"] = finger(d / "f", a.seed, a.duration)
+    r["uptime_after"], r["seconds"] = _uptime(), time.perf_counter() - t0
+    print(json.dumps(r) if a.json else _table(r))
+
+
+if __name__ == "__main__":
+    main()
