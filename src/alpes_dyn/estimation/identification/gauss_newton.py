@@ -95,13 +95,15 @@ class GaussNewton:
     def fit_nodes(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                   sweeps: int = 8) -> np.ndarray:
         """Stage 1: the nodes alone (theta fixed, intervals decoupled), ``sweeps`` Levenberg-Marquardt steps per
-        interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`."""
+        interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; the
+        Jacobians with respect to the start states alone (``evaluate(..., jac="state")``: the same numbers as the
+        first nx columns of the whole Jacobian, at a third to a fifth of its cost)."""
         nx, n_int = pb.nx, pb.n_int
         nodes = nodes.copy()
         mu_n = 1e-2 * np.ones(n_int)
         for _ in range(sweeps):
-            e = pb.evaluate(nodes, offs, glob)
-            A = e.J[:, :, :nx]
+            e = pb.evaluate(nodes, offs, glob, jac="state")  # the start states' sensitivities alone
+            A = e.J
             Hn = np.einsum("ski,skj->sij", A, A)
             gn = np.einsum("sk,ski->si", e.r, A)
             Dn = np.einsum("sii->si", Hn)
@@ -111,7 +113,7 @@ class GaussNewton:
             better = np.sum(r2**2, axis=1) < np.sum(e.r**2, axis=1)
             nodes[better] += dn[better, :, 0]
             mu_n = np.where(better, mu_n / 10, mu_n * 10)
-            e = A = None  # this sweep's Jacobian freed before the next one's (each 180 MB at 600 s)
+            e = A = None  # this sweep's Jacobian freed before the next one's
         return nodes
 
     # --- the trust region ---------------------------------------------------------------------------------------
@@ -371,7 +373,8 @@ class GaussNewton:
     # --- the two starts ---------------------------------------------------------------------------------------
 
     def solve(self, pb: ShootingProblem, nodes: np.ndarray | Callable[[], np.ndarray], offs: np.ndarray,
-              glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SolverResult:
+              glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+              warm_at: list[Evaluation] | None = None) -> SolverResult:
         """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; or a
         function giving them, called only where no warm start converges: a run of the whole record): stage 1,
         then stages 2-3 with friction held during the homotopy, and again with it free where the first ends
@@ -381,12 +384,14 @@ class GaussNewton:
         homotopy brings a start from the model's own response near the data; a converged fit of a neighbouring
         model already is: on MuJoCo's all-effects finger3 plants, seeds 40-41, the rounds with the rotor and the
         stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
-        The result's ``iterations`` count every start."""
+        ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
+        Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:
+        one evaluation of the whole record fewer); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
         total_its = 0
         if warm is not None:
             bar = _Progress(self.max_iterations, "identify (warm start)", self.show)
             c_scale = np.maximum(np.abs(warm[0]).max(axis=0), 1e-3)
-            out = self.constrained(pb, *warm, pb.evaluate(*warm), c_scale, bar)
+            out = self.constrained(pb, *warm, warm_at.pop() if warm_at else pb.evaluate(*warm), c_scale, bar)
             bar.close()
             if out.converged and pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
                 return out

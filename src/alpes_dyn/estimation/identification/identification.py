@@ -219,10 +219,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)
     solver = GaussNewton(max_iterations, tol, show)
-    warm, it_window = pb.warm_variables(solution), 0
+    warm, warm_at, it_window = pb.warm_variables(solution), [], 0
     if warm is None:  # a long record: the globalisation on its first seconds (module long_record)
-        warm, it_window = window_start(pb, solver, excitation, q0)
-    out = solver.solve(pb, nodes, offs, glob, warm=warm)
+        start_w, it_window = window_start(pb, solver, excitation, q0)
+        if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
+            warm, warm_at = start_w[:3], [start_w[3]]
+        start_w = None
+    out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
     it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)

@@ -285,9 +285,11 @@ class ShootingProblem:
 
     # --- the residuals, the defects and their Jacobians ---------------------------------------------------------
 
-    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool = True) -> Evaluation:
+    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool | str = True) -> Evaluation:
         """The :class:`Evaluation` at (nodes, offs, glob). ``jac=False``: r, c, rg and the states alone (J, Cv, Cr
-        None), from the step without its sensitivities (a tenth of the time). With them, the intervals go through
+        None), from the step without its sensitivities (a tenth of the time). ``jac="state"``: J (S, R, nx) with
+        respect to the start states alone (Cv, Cr None; stage 1's sweeps, theta fixed: the sensitivities of the
+        state alone, a third to a fifth of the time of all of them). With them, the intervals go through
         the compiled sensitivities :data:`JACOBIAN_CHUNK` doubles of sensitivities at a time, each chunk reduced to
         its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it)."""
         theta = self.values(glob)
@@ -311,8 +313,8 @@ class ShootingProblem:
         if self.no:  # the per-interval torque corrections' prior: zero mean, sigma_u / sqrt(L)
             res.append(offs / self.sig_off)
         r = np.concatenate(res, axis=1)
-        if not jac:
-            return Evaluation(r, None, c, None, None, rg, xs)
+        if not jac or jac == "state":
+            return Evaluation(r, J if jac else None, c, None, None, rg, xs)
         return Evaluation(r, J, c, Cv, Cr, rg, xs)
 
     def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
@@ -321,7 +323,9 @@ class ShootingProblem:
         (S-1, nx, nb), Cr (S-1, nx, ng) (else None), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of
         sensitivities (or of the compiled step's per-sample inputs, without them)."""
         n_int, L, nx = self.n_int, self.L, self.nx
-        per_interval = (L + 1) * nx * (nx + self.p + self.sens.no) if jac else L * self.sens.nw
+        state = jac == "state"
+        per_interval = ((L + 1) * nx * (nx if state else nx + self.p + self.sens.no) if jac
+                        else L * self.sens.nw)
         chunk = max(1, JACOBIAN_CHUNK // per_interval)
         xs = np.empty((n_int, L + 1, nx))
         J = Cv = Cr = None
@@ -333,6 +337,11 @@ class ShootingProblem:
             xs[sl] = x_c
             if not jac:
                 continue
+            if state:
+                A_c = self._state_jacobian(X_c, sl)
+                J = np.empty((n_int,) + A_c.shape[1:]) if J is None else J
+                J[sl] = A_c
+                continue
             J_c, Xv_end, Xr_end = self._jacobian(X_c, theta, None if u_k is None else u_k[sl], sl)
             del X_c
             if J is None:
@@ -343,6 +352,19 @@ class ShootingProblem:
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
         return xs, J, Cv, Cr
+
+    def _state_jacobian(self, X: np.ndarray, sl: slice) -> np.ndarray:
+        """(s, R, nx) the residuals' Jacobian of the intervals ``sl`` with respect to their start states alone, from
+        the state sensitivities X (s, L+1, nx, nx): the first nx columns of :meth:`_jacobian`'s J, by the same
+        operations."""
+        n, s_int = self.n, X.shape[0]
+        w = self.valid[sl, :, None, None] / self.sig_y
+        jac = [(np.einsum("ij,skjd->skid", self.S_enc, X[:, :, :n]) * w).reshape(s_int, -1, self.nx)]
+        if self.Qm is not None:
+            jac.append((X[:, :, :n] / self.camera_noise * self.q_mask[sl, :, :, None]).reshape(s_int, -1, self.nx))
+        if self.no:
+            jac.append(np.zeros((s_int, self.no, self.nx)))
+        return np.concatenate(jac, axis=1)
 
     def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice):
         """J (s, R, nb + ng) of the residuals of the intervals ``sl`` from their sensitivities X (s, L+1, nx,
