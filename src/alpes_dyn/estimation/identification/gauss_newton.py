@@ -298,7 +298,7 @@ class GaussNewton:
             cost = e.cost
             rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)
-            solve_K = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu), "kkt")  # once per iteration: the step and the correction
+            solve_K = pb.kkt_solver(e.J, e.Cv, e.Cr, mu)  # once per iteration: the step and the correction
             sol = solve_K(np.column_stack([rhs, pb.unit_p]))
             sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]

@@ -399,7 +399,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     adequacy of the fitted model (module adequacy) with each effect's regressor less what the fit absorbs of it."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
-    solve_Kz = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, 0.0), "kkt")  # undamped: the covariance and the effects' regressors
+    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance and the effects' regressors
     P_rho = solve_Kz(pb.unit_p)[nv:nv + p] * s2
     theta = pb.values(out.glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))

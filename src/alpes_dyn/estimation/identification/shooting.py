@@ -31,7 +31,8 @@ from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
-from .kkt import Shape, bordered_factorize, continuity_jacobian, factorize, kkt_matrix, kkt_order, normal_matrix
+from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
+                  normal_matrix)
 from ..experiments.recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
@@ -415,6 +416,15 @@ class ShootingProblem:
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
         return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+
+    def kkt_solver(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
+        """A solver of :meth:`kkt_system` (J, Cv, Cr, mu): where :attr:`structured`, laid out in band and border from
+        the intervals' blocks (:func:`~alpes_dyn.estimation.identification.kkt.kkt_from_blocks`: no sparse matrix
+        formed), else :meth:`factorize` of the matrix."""
+        if not self.structured:
+            return self.factorize(self.kkt_system(J, Cv, Cr, mu), "kkt")
+        return kkt_from_blocks(J, Cv, Cr, self.shape, mu, self.prior,
+                               lambda: factorize(self.kkt_system(J, Cv, Cr, mu)))
 
     def factorize(self, M, system: str):
         """A solver x = M^-1 b for one of the problem's matrices: ``system`` "kkt" (:meth:`kkt_system`), "normal"
