@@ -6,7 +6,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from alpes_dyn.estimation.identification.kkt import (Shape, bordered_factorize, continuity_jacobian, factorize,
-                                                    kkt_from_blocks, kkt_matrix, kkt_order, normal_matrix)
+                                                    kkt_from_blocks, kkt_matrix, kkt_order, normal_matrix,
+                                                    penalized_from_blocks)
 
 
 def _full_jacobian(J: np.ndarray, shape: Shape) -> np.ndarray:
@@ -139,3 +140,26 @@ def test_the_kkt_laid_out_from_the_blocks_solves_as_the_sparse_and_the_dense_one
     Cv0 = Cv.copy()
     Cv0[:, :, 0] = 0.0
     assert kkt_from_blocks(J0, Cv0, Cr, shape, 0.0, prior, lambda: "fallback") == "fallback"
+
+
+def test_the_homotopy_system_laid_out_from_the_blocks_solves_as_the_sparse_one():
+    """penalized_from_blocks: H + C'WC with two global variables held (1e12 max(d, 1) on their diagonal), laid out
+    from the blocks, against that matrix assembled sparse (normal_matrix, continuity_jacobian) and solved densely;
+    its local solver against the dense solve of H[:nv, :nv], its border against H[:nv, nv:]."""
+    rng = np.random.default_rng(10)
+    shape = Shape(n_int=7, nb=6, nx=4, ng=5)
+    J = rng.normal(size=(7, 9, 11))
+    Cv, Cr = rng.normal(size=(6, 4, 6)), rng.normal(size=(6, 4, 5))
+    prior, wv, hold, mu = np.r_[np.zeros(2), np.ones(3)], np.array([1.0, 3.0, 0.5, 2.0]), np.array([1, 4]), 1e-3
+    C = sp.diags(np.tile(wv, 6)) @ continuity_jacobian(Cv, Cr, shape)
+    H = (normal_matrix(J, shape, mu, prior) + C.T @ C).toarray()
+    idx = shape.nv + hold
+    H[idx, idx] += 1e12 * np.maximum(H[idx, idx], 1.0)
+    solve, solve_local, border = penalized_from_blocks(J, Cv, Cr, wv, shape, mu, prior, hold, lambda: None)
+    b = rng.normal(size=shape.nz)
+    ref = np.linalg.solve(H, b)
+    assert np.abs(solve(b) - ref).max() < 1e-9 * np.abs(ref).max()
+    nv = shape.nv
+    assert np.abs(border - H[:nv, nv:]).max() <= 1e-12 * np.abs(H[:nv, nv:]).max()
+    ref_l = np.linalg.solve(H[:nv, :nv], b[:nv])
+    assert np.abs(solve_local(b[:nv]) - ref_l).max() < 1e-9 * np.abs(ref_l).max()

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
+import scipy.sparse as sp
 
 from ...checks import as_float_array
 from ...errors import InputError, ModelError
@@ -32,7 +33,7 @@ from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
-                  normal_matrix)
+                  normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
@@ -416,6 +417,38 @@ class ShootingProblem:
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
         return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+
+    def continuity_t(self, Cv: np.ndarray, Cr: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks."""
+        out = np.zeros((self.n_int, self.nb))
+        out[:-1] += np.einsum("sia,si->sa", Cv, v)
+        out[1:, :self.nx] -= v
+        return np.concatenate([out.reshape(-1), np.einsum("sig,si->g", Cr, v)])
+
+    def penalized_solver(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
+        """The homotopy's system at ``e``: H (:meth:`normal`, damped by ``mu``) + C' W C (the defects' rows weighted
+        by ``wv`` (nx,)), 1e12 max(d, 1) added to the diagonal d of the global variables ``hold`` (indices 0..ng-1).
+        Returns (its solver, the solver of its local variables' block H[:nv, :nv], that block's border H[:nv, nv:]):
+        where :attr:`structured`, from the blocks (:func:`~alpes_dyn.estimation.identification.kkt.penalized_from_blocks`),
+        else from the matrices (dense or SuperLU)."""
+        nv = self.nv
+        if self.structured:
+            def fallback():
+                return factorize(self._penalized_matrix(e, mu, wv, hold))
+            return penalized_from_blocks(e.J, e.Cv, e.Cr, wv, self.shape, mu, self.prior, hold, fallback)
+        H = self._penalized_matrix(e, mu, wv, hold)
+        return factorize(H), factorize(H[:nv, :nv]), H[:nv, nv:]
+
+    def _penalized_matrix(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
+        """:meth:`penalized_solver`'s matrix, (nz, nz), sparse (an array if :attr:`dense`)."""
+        wdef = np.tile(wv, self.n_int - 1)
+        C = self.continuity(e.Cv, e.Cr)
+        C = C * wdef[:, None] if self.dense else sp.diags(wdef) @ C
+        H = self.normal(e.J, mu) + C.T @ C
+        h = np.zeros(self.nz)
+        idx = self.nv + np.asarray(hold, dtype=int)
+        h[idx] = 1e12 * np.maximum(H.diagonal()[idx], 1.0)
+        return H + (np.diag(h) if self.dense else sp.diags(h, format="csc"))
 
     def kkt_solver(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """A solver of :meth:`kkt_system` (J, Cv, Cr, mu): where :attr:`structured`, laid out in band and border from
