@@ -53,3 +53,30 @@ def test_a_long_record_fits_from_its_window_to_the_truth(clean, monkeypatch):
     assert res.converged and lengths[-1] == (1200, 3) and {n for n, f in lengths[:-1]} == {500}
     assert np.max(np.abs(res.values[:4] / truth[:4] - 1)) < 1e-6 and np.max(np.abs(res.values / truth - 1)) < 5e-4
     assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # the start reported is the model's, not the window's
+
+
+def test_the_whole_record_runs_in_chunks_give_the_same_states(clean, monkeypatch):
+    """A long record's states-only runs go in pieces (the per-sample inputs 8 MiB at a time): the model's response
+    from rest (ShootingProblem.initial_nodes: each piece from the last one's end) and the effects' responses
+    (adequacy.effect_responses: the intervals in chunks), with the chunks made a few intervals long here, equal the
+    runs in one piece bit for bit."""
+    from alpes_dyn.estimation.identification import adequacy, shooting
+    from alpes_dyn.estimation.identification.shooting import ShootingProblem, torque_model
+    from alpes_dyn.simulation.sensitivity import SensitivityModel
+
+    finger2, rec, _ = clean
+    torque = torque_model(rec, ExperimentDesign().lines[:3], None)
+    sens = SensitivityModel(finger2, None, dt=rec.dt, substeps=4, input_basis=torque.nphi)
+    pb = ShootingProblem(finger2, rec, sens, 100, torque, 0.01)
+    whole = pb.initial_nodes(np.zeros(pb.n))
+    nodes = whole + 1e-3
+    args = (sens, nodes, pb.Ub, pb.Gb, pb.theta0, pb.correction(np.full(pb.ng, 0.1), None), pb.Psib, pb.valid,
+            rec.true_q[:, [0, 1, 0, 1]], pb.S_enc, pb.step, rec.dt)
+    resp = adequacy.effect_responses(*args)
+    small = 3 * 100 * sens.nw + 5  # three intervals' inputs
+    monkeypatch.setattr(shooting, "JACOBIAN_CHUNK", small)
+    monkeypatch.setattr(adequacy, "STATE_CHUNK", small)
+    assert np.array_equal(pb.initial_nodes(np.zeros(pb.n)), whole) and pb.n_int == 12
+    resp_c = adequacy.effect_responses(*args)
+    assert resp.keys() == resp_c.keys() and all(np.array_equal(resp[k], resp_c[k]) for k in resp)
+    assert all(np.abs(resp[k]).max() > 0 for k in resp)

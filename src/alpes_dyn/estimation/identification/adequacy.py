@@ -548,6 +548,11 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
                       recording_path=recording_path)
 
 
+STATE_CHUNK = 2**20
+"""Doubles of the compiled step's per-sample inputs at a time in :func:`effect_responses`' runs (8 MiB): the
+intervals in chunks."""
+
+
 def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
                corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
                step: float, dt: float) -> dict[str, np.ndarray]:
@@ -572,9 +577,17 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))
     y = []
+    per_interval = corr is not None and Psib is None  # a constant correction per interval, else the lines' (global)
+    chunk = max(1, STATE_CHUNK // (L * sens.nw))  # intervals per run (600 s at once: 264 MB of inputs)
     for d in [0.0] + pert:  # the fitted run, then one per effect (one at a time: a 60 s record's are 30 MB each)
-        xs, _ = sens.run(nodes, Ub + d, Gb, theta, corr, basis=Psib, sensitivities=False)
-        y.append(np.einsum("ij,bkj->bki", S, xs[:, :, :n]) / step)
+        U = Ub + d
+        yd = np.empty(Ub.shape[:1] + (L + 1, S.shape[0]))
+        for a in range(0, B, chunk):
+            sl = slice(a, a + chunk)
+            xs, _ = sens.run(nodes[sl], U[sl], Gb[sl], theta, corr[sl] if per_interval else corr,
+                             basis=None if Psib is None else Psib[sl], sensitivities=False)
+            yd[sl] = np.einsum("ij,bkj->bki", S, xs[:, :, :n]) / step
+        y.append(yd)
     return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
 
 

@@ -194,8 +194,10 @@ class ShootingProblem:
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
         self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
-        self.Psik = (torque_before(torque.noise * np.concatenate([torque.Q, torque.Q_last[None]]))[self.kk]
-                     if lines else None)
+        # (torque_before(X)[k] is X[max(k - 1, 0)]: rows of Q alone, one gather, no copy of the whole basis first)
+        self.Psik = torque.Q[np.maximum(self.kk - 1, 0)] if lines else None
+        if lines:
+            self.Psik *= torque.noise
         # the lines' basis over each interval's sample periods (S, L, nphi), the last interval's padded with the
         # last period's: Psik[s, j+1] is the basis of period sL + j (torque_before), so a view, not a copy (at
         # 600 s each copy of the basis is 91 MB)
@@ -500,12 +502,21 @@ class ShootingProblem:
         onto the measured encoder (the stretch of the start's compliance off): a start close to the data. ``theta``:
         the parameters to simulate with (default theta_0). (Not shifted, the response alone is no start on a long
         record even with the parameters right: over 16 s of finger3 it drifted to 460 counts from the encoder.)"""
-        n, L, n_int, nu = self.n, self.L, self.n_int, self.nu
-        x_nom, _ = self.sens.run(np.concatenate([q0, np.zeros(n)])[None], self.torque.U[None], self.G[None],
-                                 self.theta0 if theta is None else theta, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
-                                 basis=self.torque.noise * self.torque.Q[None] if self.torque.lines else None,
-                                 sensitivities=False)
-        nodes = x_nom[0, np.arange(n_int) * L].copy()
+        n, L, n_int, nu, N = self.n, self.L, self.n_int, self.nu, self.N
+        theta = self.theta0 if theta is None else theta
+        C = np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None
+        # the record in pieces of whole intervals, each from the last one's end (the same steps: its per-sample
+        # inputs 8 MiB at a time, not the whole record's at once: 264 MB at 600 s)
+        K = L * max(1, JACOBIAN_CHUNK // (L * self.sens.nw))
+        nodes = np.empty((n_int, self.nx))
+        x = np.concatenate([q0, np.zeros(n)])
+        for a in range(0, N, K):
+            b = min(a + K, N)
+            basis = self.torque.noise * self.torque.Q[None, a:b] if self.torque.lines else None
+            x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
+                                   sensitivities=False)
+            nodes[a // L: -(-b // L)] = x_c[0, 0:b - a:L]
+            x = x_c[0, -1]
         if not np.isfinite(nodes).all():
             nodes[:] = np.concatenate([q0, np.zeros(n)])
         k_nodes = np.arange(n_int) * L
