@@ -80,3 +80,24 @@ def test_the_whole_record_runs_in_chunks_give_the_same_states(clean, monkeypatch
     resp_c = adequacy.effect_responses(*args)
     assert resp.keys() == resp_c.keys() and all(np.array_equal(resp[k], resp_c[k]) for k in resp)
     assert all(np.abs(resp[k]).max() > 0 for k in resp)
+
+
+def test_a_long_records_lines_are_orthonormalised_as_householder_does():
+    """shooting._thin_qr above CHOLESKY_QR_ROWS (Cholesky QR twice): Q R = Phi, Q'Q = I, R upper triangular, and Q
+    numpy's Householder Q up to its columns' signs, on 40 s of the documented lines at 1 kHz; two equal columns
+    (a singular basis) fall back to Householder's."""
+    from alpes_dyn.estimation.identification.shooting import CHOLESKY_QR_ROWS, _thin_qr, line_basis
+
+    t = np.arange(40001) * 1e-3
+    Phi = line_basis(t, ExperimentDesign().lines)[:-1]
+    assert Phi.shape[0] > CHOLESKY_QR_ROWS
+    Q, R = _thin_qr(Phi)
+    Qh, Rh = np.linalg.qr(Phi)
+    k = Phi.shape[1]
+    assert np.abs(Q.T @ Q - np.eye(k)).max() < 1e-13 and np.abs(Q @ R - Phi).max() < 1e-12
+    assert np.array_equal(R, np.triu(R)) and np.all(np.diag(R) > 0)
+    assert np.abs(Q - Qh * np.sign(np.diag(Rh))).max() < 1e-12
+    Phi[:, 1] = Phi[:, 2]
+    Q2, R2 = _thin_qr(Phi)
+    Qh2, Rh2 = np.linalg.qr(Phi)
+    assert np.array_equal(Q2, Qh2) and np.array_equal(R2, Rh2)

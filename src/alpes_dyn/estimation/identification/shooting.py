@@ -90,6 +90,35 @@ class TorqueModel:
         return self.Q.shape[1] if self.lines else 0
 
 
+CHOLESKY_QR_ROWS = 2**15
+"""Rows (samples) of the lines' basis above which :func:`torque_model` orthonormalises it by Cholesky QR (33 s at
+1 kHz; below, Householder's QR)."""
+
+
+def _thin_qr(Phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Q (N, k) with orthonormal columns and R (k, k) upper triangular with a positive diagonal, Phi = Q R, by
+    Cholesky QR twice (Fukaya et al. 2014: the second pass restores orthogonality to rounding for cond(Phi) up to
+    ~1e7; the lines' basis is near orthogonal). Each pass one product Q' Q (k x k) and one triangular solve, the
+    second in place: on 600 s of the documented lines 20x faster than Householder's QR (numpy.linalg.qr, whose R
+    may have negative entries on its diagonal: the columns' signs are the only difference, which the fit's
+    whitened line coefficients do not see) and one copy of Phi, Q, instead of three. Householder's where Phi has
+    at most :data:`CHOLESKY_QR_ROWS` rows (there it is cheap, and the fits are as they were) or where the Cholesky
+    factorisation fails (lines too close for the record's length: Phi near singular)."""
+    import scipy.linalg as sla
+
+    if Phi.shape[0] <= CHOLESKY_QR_ROWS:
+        return np.linalg.qr(Phi)
+    R, Qt = np.eye(Phi.shape[1]), Phi.T  # Q' (k, N), Fortran order
+    for k in range(2):
+        try:
+            R1 = sla.cholesky(Qt @ Qt.T, lower=False, check_finite=False)  # Q'Q = R1' R1
+        except np.linalg.LinAlgError:  # lines too close for the record's length: Householder's
+            return np.linalg.qr(Phi)
+        Qt = sla.solve_triangular(R1, Qt, trans="T", lower=False, overwrite_b=k > 0, check_finite=False)
+        R = R1 @ R
+    return Qt.T, R
+
+
 def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_noise: float | None) -> TorqueModel:
     """The :class:`TorqueModel` of a recording: with ``excitation`` (Hz) the measured torque projected on the lines,
     sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given."""
@@ -97,7 +126,7 @@ def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_nois
         return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
     Phi_all = line_basis(rec.t, excitation)
     Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
-    Q, R_q = np.linalg.qr(Phi)
+    Q, R_q = _thin_qr(Phi)
     U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
     Q_last = np.linalg.solve(R_q.T, Phi_all[-1])  # the basis at the last sample (Q = Phi R^-1)
     U_last = (Q_last @ (Q.T @ rec.torque[:-1]))[None]
