@@ -242,7 +242,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
-    pb = out = warm = None  # this fit's problem and Jacobians freed before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
+    # this fit's problem, Jacobians, torque model (the lines' basis: 91 MB at 600 s) and compiled sensitivities freed
+    # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak), and the freed heap handed back
+    pb = out = warm = torque = sens = None
+    _release_memory()
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
@@ -250,6 +253,19 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
+
+
+def _release_memory() -> None:
+    """Hand the heap's free pages back to the system (glibc's ``malloc_trim``; elsewhere nothing): glibc keeps what
+    a fit freed for the process, and a fit again (:func:`_within_bounds`) peaked on top of it (600 s, ``--effects
+    auto``: the second fit's start at 1.26 GB resident)."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim(0)
+    except (OSError, AttributeError):  # not glibc
+        pass
 
 
 def _within_bounds(model: Model, recording: Recording | str | Path, result: IdentificationResult,
