@@ -209,7 +209,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     values, solution = _start_of(start, sens.names)
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse")
-    q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
+    torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
+    q0 = (_rest_guess(model, model.transmission.joint_torque(pb.torque.U[0]), pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))  # the rest the model's own response starts from
 
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
@@ -242,9 +243,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
-    # this fit's problem, Jacobians, torque model (the lines' basis: 91 MB at 600 s) and compiled sensitivities freed
+    # this fit's problem (with the lines' basis: 91 MB at 600 s), Jacobians and compiled sensitivities freed
     # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak), and the freed heap handed back
-    pb = out = warm = torque = sens = None
+    pb = out = warm = sens = None
     _release_memory()
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,

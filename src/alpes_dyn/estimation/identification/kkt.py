@@ -178,7 +178,7 @@ def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
     A = rows_loc[:, loc].tocoo()
     il, jl = A.row.astype(np.int64), A.col.astype(np.int64)
     kl, ku = int(max(np.max(il - jl, initial=0), 0)), int(max(np.max(jl - il, initial=0), 0))
-    ab = np.zeros((2 * kl + ku + 1, n))
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")  # Fortran order: dgbtrf factorises it in place, no copy
     ab[kl + ku + il - jl, jl] = A.data
     del A, il, jl
     B = rows_loc[:, bor].toarray()
@@ -242,7 +242,7 @@ def _band(blocks: np.ndarray, upper: np.ndarray | None, kl: int, ku: int) -> np.
     below (None: none). A loop over the blocks' entries (b^2), each laid for every block at once."""
     S, b = blocks.shape[:2]
     n = S * b
-    ab = np.zeros((2 * kl + ku + 1, n))
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")  # Fortran order: dgbtrf factorises it in place, no copy
     for a in range(b):
         for c in range(b):
             ab[kl + ku + a - c, c::b] = blocks[:, a, c]
@@ -303,7 +303,7 @@ def kkt_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, shape: Shape,
     AA, AP, D = _normal_blocks(J, shape, mu, prior)
     n = m * w + nb
     kl = ku = w - 1
-    ab = np.zeros((2 * kl + ku + 1, n))
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")  # Fortran order: dgbtrf factorises it in place, no copy
     blocks = np.zeros((m, w, w))  # interval j's local variables and its multipliers: [[AA_j, Cv_j'], [Cv_j, 0]]
     blocks[:, :nb, :nb] = AA[:m]
     blocks[:, :nb, nb:] = Cv[:m].transpose(0, 2, 1)

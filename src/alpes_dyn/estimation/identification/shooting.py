@@ -20,6 +20,7 @@ Jacobians from the compiled sensitivities
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
@@ -66,7 +67,8 @@ class TorqueModel:
     (projected on the excitation's lines, or as recorded), ``U_last`` (1, nu) at the last sample; ``noise``:
     sigma_u, N m; with the lines (``lines``), ``Q`` (N, nphi) their orthonormal basis and ``Q_last`` (nphi,) at the
     last sample: the true torque is U + sigma_u Q c, c ~ N(0, I) fitted; without them and sigma_u > 0, a constant
-    correction per interval (``eiv`` and not ``lines``)."""
+    correction per interval (``eiv`` and not ``lines``). A :class:`ShootingProblem` keeps its own copy without
+    ``Q`` (None: the basis lives on there, scaled and cut at the intervals; 91 MB at 600 s)."""
 
     U: np.ndarray
     U_last: np.ndarray
@@ -82,12 +84,12 @@ class TorqueModel:
     @property
     def lines(self) -> bool:
         """The correction lies on the excitation's lines."""
-        return self.eiv and self.Q is not None
+        return self.eiv and self.Q_last is not None
 
     @property
     def nphi(self) -> int:
         """Number of basis functions of the lines (0 without them)."""
-        return self.Q.shape[1] if self.lines else 0
+        return self.Q_last.shape[0] if self.lines else 0
 
 
 CHOLESKY_QR_ROWS = 2**15
@@ -224,13 +226,15 @@ class ShootingProblem:
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
         self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
         # (torque_before(X)[k] is X[max(k - 1, 0)]: rows of Q alone, one gather, no copy of the whole basis first)
-        self.Psik = torque.Q[np.maximum(self.kk - 1, 0)] if lines else None
-        if lines:
-            self.Psik *= torque.noise
-        # the lines' basis over each interval's sample periods (S, L, nphi), the last interval's padded with the
-        # last period's: Psik[s, j+1] is the basis of period sL + j (torque_before), so a view, not a copy (at
-        # 600 s each copy of the basis is 91 MB)
-        self.Psib = self.Psik[:, 1:] if lines else None
+        self.Psib = self.Psi0 = None
+        if lines:  # sigma_u Q at the held samples, the last interval padded with the last one's
+            QS = np.empty((n_int * L, torque.nphi))
+            QS[:N], QS[N:] = torque.Q, torque.Q[-1]
+            QS *= torque.noise
+            self.Psib = QS.reshape(n_int, L, torque.nphi)  # (S, L, nphi): the basis over each interval's periods
+            self.Psi0 = QS[np.maximum(np.arange(n_int) * L - 1, 0)]  # (S, nphi): over the period before each
+            torque = dataclasses.replace(torque, Q=None)
+        self.torque = torque
         self.shape = Shape(n_int, self.nb, self.nx, self.ng)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
@@ -274,6 +278,12 @@ class ShootingProblem:
         return np.where(additive, self.theta0 + self.scale * glob[:p],
                         self.theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
 
+    def psik(self, sl: slice) -> np.ndarray:
+        """(s, L+1, nphi) the lines' basis (times sigma_u) over the period before each residual's sample of the
+        intervals ``sl`` (:func:`~alpes_dyn.model.transmission.torque_before`: the first residual's the period
+        before the interval, the others' the interval's own)."""
+        return np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1)
+
     def per_motor(self, theta: np.ndarray, cols: list[tuple[int, int]]) -> np.ndarray:
         """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere."""
         out = np.zeros(self.ny)
@@ -294,7 +304,11 @@ class ShootingProblem:
         tendons' tension balances at each residual's sample: the one held over the period before it
         (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
         if self.torque.lines:
-            return self.Uk + np.einsum("skl,il->ski", self.Psik, glob[self.p:].reshape(self.torque.nphi, self.nu).T)
+            C = glob[self.p:].reshape(self.torque.nphi, self.nu).T
+            u = self.Uk.copy()
+            u[:, 0] += self.Psi0 @ C.T
+            u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
+            return u
         if self.torque.eiv:
             return self.Uk + offs[:, None, :]
         return self.Uk
@@ -420,7 +434,7 @@ class ShootingProblem:
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
                 if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
-                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.Psik[sl]
+                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.psik(sl)
                 elif self.torque.eiv:
                     J_enc[:, :, mo, nx + mo] += theta[k]
         J_enc = J_enc * w
@@ -541,7 +555,7 @@ class ShootingProblem:
         x = np.concatenate([q0, np.zeros(n)])
         for a in range(0, N, K):
             b = min(a + K, N)
-            basis = self.torque.noise * self.torque.Q[None, a:b] if self.torque.lines else None
+            basis = self.Psib.reshape(-1, self.torque.nphi)[None, a:b] if self.torque.lines else None
             x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
                                    sensitivities=False)
             nodes[a // L: -(-b // L)] = x_c[0, 0:b - a:L]
