@@ -74,7 +74,7 @@ from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
 from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
-from .long_record import window_start
+from .long_record import LONG_RECORD, window_start
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -199,6 +199,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     rec, rec_path, val_rec = _check_inputs(model, recording, validation, encoder_noise, interval, camera_noise, tol,
                                            kkt, max_iterations, torque_noise)
     dt = rec.dt
+    if rec.duration > LONG_RECORD:
+        _map_large_blocks()
     L = int(round(interval / dt))
     torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
@@ -244,9 +246,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             return again
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
     # this fit's problem (with the lines' basis: 91 MB at 600 s), Jacobians and compiled sensitivities freed
-    # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak), and the freed heap handed back
+    # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
     pb = out = warm = sens = None
-    _release_memory()
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
@@ -256,15 +257,22 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     return result
 
 
-def _release_memory() -> None:
-    """Hand the heap's free pages back to the system (glibc's ``malloc_trim``; elsewhere nothing): glibc keeps what
-    a fit freed for the process, and a fit again (:func:`_within_bounds`) peaked on top of it (600 s, ``--effects
-    auto``: the second fit's start at 1.26 GB resident)."""
+MMAP_THRESHOLD = 2**20
+"""Bytes: from a record longer than :data:`~alpes_dyn.estimation.identification.long_record.LONG_RECORD`, glibc's
+allocator maps every block this large or larger on its own (``mallopt(M_MMAP_THRESHOLD)``) and gives it back to
+the system when it is freed. By default the threshold follows the largest block freed, up to 32 MiB, so a long
+fit's 8-30 MB arrays (a chunk's sensitivities, the states, the KKT system's blocks) came from the heap and stayed
+resident once freed: ``alpes-dyn identify`` on 600 s peaked at 1178 MiB, with this 1048 MiB (finger3 seed 21,
+2026-12-05, load 5)."""
+
+
+def _map_large_blocks() -> None:
+    """:data:`MMAP_THRESHOLD` set in glibc's allocator (process-wide; elsewhere nothing)."""
     import ctypes
     import ctypes.util
 
     try:
-        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").malloc_trim(0)
+        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
     except (OSError, AttributeError):  # not glibc
         pass
 

@@ -210,7 +210,8 @@ class ShootingProblem:
         pad = n_int * L - N
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
-        self.Gb = np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+        self.Gb = (np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+                   if rec.gravity is not None else np.broadcast_to(model.gravity, (n_int, L, 3)))  # (a view: constant)
         # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
         k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
         valid = k_idx <= N
