@@ -75,9 +75,8 @@ def test_the_whole_record_runs_in_chunks_give_the_same_states(clean, monkeypatch
     resp = adequacy.effect_responses(*args)
     small = 3 * 100 * sens.nw + 5  # three intervals' inputs
     monkeypatch.setattr(shooting, "JACOBIAN_CHUNK", small)
-    monkeypatch.setattr(adequacy, "STATE_CHUNK", small)
     assert np.array_equal(pb.initial_nodes(np.zeros(pb.n)), whole) and pb.n_int == 12
-    resp_c = adequacy.effect_responses(*args)
+    resp_c = adequacy.effect_responses(*args, chunk_doubles=small)
     assert resp.keys() == resp_c.keys() and all(np.array_equal(resp[k], resp_c[k]) for k in resp)
     assert all(np.abs(resp[k]).max() > 0 for k in resp)
 
