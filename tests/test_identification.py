@@ -151,6 +151,8 @@ def test_sensitivities_equal_finite_differences_and_the_states_alone(finger2, rn
     x, X = sm.run(x0, U, G, th, C, basis=phi)
     xs, none = sm.run(x0, U, G, th, C, basis=phi, sensitivities=False)
     assert none is None and np.array_equal(x, xs)
+    xa, Xa = sm.run(x0, U, G, th, C, basis=phi, sensitivities="state")  # dx/dx0 alone: the same numbers
+    assert np.array_equal(x, xa) and np.array_equal(Xa, X[..., :sm.nx])
 
     def states(x0_, th_, C_):
         return sm.run(x0_, U, G, th_, C_, basis=phi, sensitivities=False)[0]
@@ -750,3 +752,5 @@ def test_shooting_problem_jacobians_equal_finite_differences(finger2, rotor):
         col, ccol = e.J[:, :, pb.nb + g], e.Cr[:, :, g]
         assert np.allclose(dr, col, rtol=0, atol=1e-5 * np.abs(col).max()), sens.names[g] if g < pb.p else g
         assert np.allclose(dc, ccol, rtol=0, atol=1e-5 * max(np.abs(ccol).max(), 1e-12))
+    es = pb.evaluate(nodes, offs, glob, jac="state")  # stage 1's: the start states' columns alone, the same numbers
+    assert es.Cv is None and np.array_equal(es.r, e.r) and np.array_equal(es.J, e.J[:, :, :pb.nx])

@@ -5,8 +5,9 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
-from alpes_dyn.estimation.identification.kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_matrix, kkt_order,
-                                     normal_matrix)
+from alpes_dyn.estimation.identification.kkt import (Shape, bordered_factorize, continuity_jacobian, factorize,
+                                                    kkt_from_blocks, kkt_matrix, kkt_order, normal_matrix,
+                                                    penalized_from_blocks)
 
 
 def _full_jacobian(J: np.ndarray, shape: Shape) -> np.ndarray:
@@ -107,3 +108,58 @@ def test_a_blind_global_variable_gets_the_least_squares_answer_in_the_border():
     keep = np.arange(shape.nz + shape.nc) != shape.nz - 1
     ref = np.linalg.solve(K.toarray()[np.ix_(keep, keep)], b[keep])
     assert x[shape.nz - 1] == 0.0 and np.abs(x[keep] - ref).max() < 1e-9 * np.abs(ref).max()
+
+
+def test_the_kkt_laid_out_from_the_blocks_solves_as_the_sparse_and_the_dense_one():
+    """kkt_from_blocks (the band and border filled from J, Cv, Cr, no sparse matrix) against the sparse path
+    (bordered_factorize of kkt_matrix: the same band, so the same solution to rounding) and numpy's dense solve of
+    the matrix assembled by hand, damped and undamped; a singular band falls back to the given solver."""
+    rng = np.random.default_rng(9)
+    shape = Shape(n_int=8, nb=7, nx=4, ng=5)
+    J = rng.normal(size=(8, 9, 12))
+    Cv, Cr = rng.normal(size=(7, 4, 7)), rng.normal(size=(7, 4, 5))
+    prior = np.r_[np.zeros(2), np.ones(3)]
+    F = _full_jacobian(J, shape)
+    C_ref = np.zeros((shape.nc, shape.nz))
+    for j in range(7):
+        C_ref[4 * j:4 * j + 4, 7 * j:7 * j + 7] = Cv[j]
+        C_ref[4 * j:4 * j + 4, 7 * (j + 1):7 * (j + 1) + 4] -= np.eye(4)
+        C_ref[4 * j:4 * j + 4, shape.nv:] = Cr[j]
+    b = rng.normal(size=(shape.nz + shape.nc, 2))
+    for mu in (0.0, 1e-2):
+        H_ref = F.T @ F + np.diag(np.r_[np.zeros(shape.nv), prior])
+        H_ref[np.diag_indices(shape.nz)] += mu * np.diag(H_ref)
+        K_ref = np.block([[H_ref, C_ref.T], [C_ref, np.zeros((shape.nc, shape.nc))]])
+        x = kkt_from_blocks(J, Cv, Cr, shape, mu, prior, lambda: None)(b)
+        K = kkt_matrix(normal_matrix(J, shape, mu, prior), continuity_jacobian(Cv, Cr, shape))
+        x_sparse = bordered_factorize(K, kkt_order(shape), shape.ng)(b)
+        assert np.abs(x - x_sparse).max() <= 1e-12 * np.abs(x).max()
+        assert np.abs(x - np.linalg.solve(K_ref, b)).max() < 1e-9 * np.abs(x).max()
+    J0 = J.copy()
+    J0[:, :, 0] = 0.0  # interval 0's first local variable seen by nothing but its multipliers' -I: none, the band singular
+    Cv0 = Cv.copy()
+    Cv0[:, :, 0] = 0.0
+    assert kkt_from_blocks(J0, Cv0, Cr, shape, 0.0, prior, lambda: "fallback") == "fallback"
+
+
+def test_the_homotopy_system_laid_out_from_the_blocks_solves_as_the_sparse_one():
+    """penalized_from_blocks: H + C'WC with two global variables held (1e12 max(d, 1) on their diagonal), laid out
+    from the blocks, against that matrix assembled sparse (normal_matrix, continuity_jacobian) and solved densely;
+    its local solver against the dense solve of H[:nv, :nv], its border against H[:nv, nv:]."""
+    rng = np.random.default_rng(10)
+    shape = Shape(n_int=7, nb=6, nx=4, ng=5)
+    J = rng.normal(size=(7, 9, 11))
+    Cv, Cr = rng.normal(size=(6, 4, 6)), rng.normal(size=(6, 4, 5))
+    prior, wv, hold, mu = np.r_[np.zeros(2), np.ones(3)], np.array([1.0, 3.0, 0.5, 2.0]), np.array([1, 4]), 1e-3
+    C = sp.diags(np.tile(wv, 6)) @ continuity_jacobian(Cv, Cr, shape)
+    H = (normal_matrix(J, shape, mu, prior) + C.T @ C).toarray()
+    idx = shape.nv + hold
+    H[idx, idx] += 1e12 * np.maximum(H[idx, idx], 1.0)
+    solve, solve_local, border = penalized_from_blocks(J, Cv, Cr, wv, shape, mu, prior, hold, lambda: None)
+    b = rng.normal(size=shape.nz)
+    ref = np.linalg.solve(H, b)
+    assert np.abs(solve(b) - ref).max() < 1e-9 * np.abs(ref).max()
+    nv = shape.nv
+    assert np.abs(border - H[:nv, nv:]).max() <= 1e-12 * np.abs(H[:nv, nv:]).max()
+    ref_l = np.linalg.solve(H[:nv, :nv], b[:nv])
+    assert np.abs(solve_local(b[:nv]) - ref_l).max() < 1e-9 * np.abs(ref_l).max()

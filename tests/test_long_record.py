@@ -53,3 +53,50 @@ def test_a_long_record_fits_from_its_window_to_the_truth(clean, monkeypatch):
     assert res.converged and lengths[-1] == (1200, 3) and {n for n, f in lengths[:-1]} == {500}
     assert np.max(np.abs(res.values[:4] / truth[:4] - 1)) < 1e-6 and np.max(np.abs(res.values / truth - 1)) < 5e-4
     assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # the start reported is the model's, not the window's
+
+
+def test_the_whole_record_runs_in_chunks_give_the_same_states(clean, monkeypatch):
+    """A long record's states-only runs go in pieces (the per-sample inputs 8 MiB at a time): the model's response
+    from rest (ShootingProblem.initial_nodes: each piece from the last one's end) and the effects' responses
+    (adequacy.effect_responses: the intervals in chunks), with the chunks made a few intervals long here, equal the
+    runs in one piece bit for bit."""
+    from alpes_dyn.estimation.identification import adequacy, shooting
+    from alpes_dyn.estimation.identification.shooting import ShootingProblem, torque_model
+    from alpes_dyn.simulation.sensitivity import SensitivityModel
+
+    finger2, rec, _ = clean
+    torque = torque_model(rec, ExperimentDesign().lines[:3], None)
+    sens = SensitivityModel(finger2, None, dt=rec.dt, substeps=4, input_basis=torque.nphi)
+    pb = ShootingProblem(finger2, rec, sens, 100, torque, 0.01)
+    whole = pb.initial_nodes(np.zeros(pb.n))
+    nodes = whole + 1e-3
+    args = (sens, nodes, pb.Ub, pb.Gb, pb.theta0, pb.correction(np.full(pb.ng, 0.1), None), pb.Psib, pb.valid,
+            rec.true_q[:, [0, 1, 0, 1]], pb.S_enc, pb.step, rec.dt)
+    resp = adequacy.effect_responses(*args)
+    small = 3 * 100 * sens.nw + 5  # three intervals' inputs
+    monkeypatch.setattr(shooting, "JACOBIAN_CHUNK", small)
+    assert np.array_equal(pb.initial_nodes(np.zeros(pb.n)), whole) and pb.n_int == 12
+    resp_c = adequacy.effect_responses(*args, chunk_doubles=small)
+    assert resp.keys() == resp_c.keys() and all(np.array_equal(resp[k], resp_c[k]) for k in resp)
+    assert all(np.abs(resp[k]).max() > 0 for k in resp)
+
+
+def test_a_long_records_lines_are_orthonormalised_as_householder_does():
+    """shooting._thin_qr above CHOLESKY_QR_ROWS (Cholesky QR twice): Q R = Phi, Q'Q = I, R upper triangular, and Q
+    numpy's Householder Q up to its columns' signs, on 40 s of the documented lines at 1 kHz; two equal columns
+    (a singular basis) fall back to Householder's."""
+    from alpes_dyn.estimation.identification.shooting import CHOLESKY_QR_ROWS, _thin_qr, line_basis
+
+    t = np.arange(40001) * 1e-3
+    Phi = line_basis(t, ExperimentDesign().lines)[:-1]
+    assert Phi.shape[0] > CHOLESKY_QR_ROWS
+    Q, R = _thin_qr(Phi)
+    Qh, Rh = np.linalg.qr(Phi)
+    k = Phi.shape[1]
+    assert np.abs(Q.T @ Q - np.eye(k)).max() < 1e-13 and np.abs(Q @ R - Phi).max() < 1e-12
+    assert np.array_equal(R, np.triu(R)) and np.all(np.diag(R) > 0)
+    assert np.abs(Q - Qh * np.sign(np.diag(Rh))).max() < 1e-12
+    Phi[:, 1] = Phi[:, 2]
+    Q2, R2 = _thin_qr(Phi)
+    Qh2, Rh2 = np.linalg.qr(Phi)
+    assert np.array_equal(Q2, Qh2) and np.array_equal(R2, Rh2)

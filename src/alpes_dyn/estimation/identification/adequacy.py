@@ -550,15 +550,14 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
 
 def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
                corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
-               step: float, dt: float) -> dict[str, np.ndarray]:
+               step: float, dt: float, chunk_doubles: int = 2**20) -> dict[str, np.ndarray]:
     """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
     fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
     acceleration (dry friction, viscous friction, a rotor's inertia on the tendon) and the torque's own forward
     difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
     torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite
-    differences of batched runs, states only."""
-    n = sens.n
-    B, L = Ub.shape[0], Ub.shape[1]
+    differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
+    n, (B, L) = sens.n, Ub.shape[:2]
     N1 = x_fit.shape[0]
     vm = x_fit[:, n:] @ S.T  # (N+1, m) motor velocity, rad/s
     held = Ub.reshape(B * L, -1)[: N1 - 1]  # (N, nu) the torque held over each period, as the fit takes it
@@ -571,9 +570,11 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))
-    y = []
+    y, per_int, k = [], corr is not None and Psib is None, max(1, chunk_doubles // (L * sens.nw))  # (600 s: 264 MB)
     for d in [0.0] + pert:  # the fitted run, then one per effect (one at a time: a 60 s record's are 30 MB each)
-        xs, _ = sens.run(nodes, Ub + d, Gb, theta, corr, basis=Psib, sensitivities=False)
+        U, C = Ub + d, (lambda a: corr[a:a + k]) if per_int else (lambda a: corr)
+        xs = np.concatenate([sens.run(nodes[a:a + k], U[a:a + k], Gb[a:a + k], theta, C(a), sensitivities=False,
+                                      basis=None if Psib is None else Psib[a:a + k])[0] for a in range(0, B, k)])
         y.append(np.einsum("ij,bkj->bki", S, xs[:, :, :n]) / step)
     return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
 

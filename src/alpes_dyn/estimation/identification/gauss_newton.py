@@ -26,7 +26,6 @@ from dataclasses import dataclass
 from typing import Any, Callable
 
 import numpy as np
-import scipy.sparse as sp
 
 from ...progress import _Progress
 from .shooting import Evaluation, ShootingProblem
@@ -95,13 +94,15 @@ class GaussNewton:
     def fit_nodes(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                   sweeps: int = 8) -> np.ndarray:
         """Stage 1: the nodes alone (theta fixed, intervals decoupled), ``sweeps`` Levenberg-Marquardt steps per
-        interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`."""
+        interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; the
+        Jacobians with respect to the start states alone (``evaluate(..., jac="state")``: the same numbers as the
+        first nx columns of the whole Jacobian, at a third to a fifth of its cost)."""
         nx, n_int = pb.nx, pb.n_int
         nodes = nodes.copy()
         mu_n = 1e-2 * np.ones(n_int)
         for _ in range(sweeps):
-            e = pb.evaluate(nodes, offs, glob)
-            A = e.J[:, :, :nx]
+            e = pb.evaluate(nodes, offs, glob, jac="state")  # the start states' sensitivities alone
+            A = e.J
             Hn = np.einsum("ski,skj->sij", A, A)
             gn = np.einsum("sk,ski->si", e.r, A)
             Dn = np.einsum("sii->si", Hn)
@@ -111,7 +112,7 @@ class GaussNewton:
             better = np.sum(r2**2, axis=1) < np.sum(e.r**2, axis=1)
             nodes[better] += dn[better, :, 0]
             mu_n = np.where(better, mu_n / 10, mu_n * 10)
-            e = A = None  # this sweep's Jacobian freed before the next one's (each 180 MB at 600 s)
+            e = A = None  # this sweep's Jacobian freed before the next one's
         return nodes
 
     # --- the trust region ---------------------------------------------------------------------------------------
@@ -167,7 +168,7 @@ class GaussNewton:
         ``first``: the phase to start from (0: weight 1; a start already close, :mod:`~alpes_dyn.estimation.identification.long_record`,
         skips the softest).
         (Its length: the loop of the phases and of Levenberg-Marquardt inside them, one block.)"""
-        nx, nv, nz, n_int, dense = pb.nx, pb.nv, pb.nz, pb.n_int, pb.dense
+        nx, nv, n_int = pb.nx, pb.nv, pb.n_int
         e = pb.evaluate(nodes, offs, glob)
         defect0 = np.maximum(np.abs(e.c).max(axis=0), 1e-9)  # per state component
         # the softly-coupled problem lets friction absorb the defects (F_v_1 went to 8x, F_s_1 to 0.4x and the
@@ -175,21 +176,16 @@ class GaussNewton:
         # first start not the torque lines either: their trust region (a standard deviation per step) shortened
         # every step to ~1 % and the springs stayed put (finger_edu, springs 12-15 % off: log K moved by -0.08,
         # -0.02, +0.01 towards +0.14, -0.16, +0.11; held, 0.15, -0.16, 0.11)
-        frozen = nv + np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith("F_")]
-                               + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)
+        frozen = np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith("F_")]
+                          + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)  # friction waits for the hard phase
         for level in range(first, SOFT_PHASES):
-            wdef = np.tile(10.0**level / defect0, n_int - 1)  # 1 / sigma of each defect
+            wv = 10.0**level / defect0  # 1 / sigma of each defect's components
             mu_s = 1e-3
             for _ in range(6):
-                soft_cost = 0.5 * float(np.sum(e.r**2) + np.sum(e.rg**2) + np.sum((e.c.reshape(-1) * wdef) ** 2))
-                C = pb.continuity(e.Cv, e.Cr)
-                C = C * wdef[:, None] if dense else sp.diags(wdef) @ C
-                H = pb.normal(e.J, mu_s) + C.T @ C
-                hold = np.zeros(nz)  # friction waits for the hard phase
-                hold[frozen] = 1e12 * np.maximum(H.diagonal()[frozen], 1.0)
-                H = H + (np.diag(hold) if dense else sp.diags(hold, format="csc"))
-                g = pb.grad(e.r, e.J, e.rg) + C.T @ (e.c.reshape(-1) * wdef)
-                d = -pb.factorize(H, "normal")(g)  # the least-squares solution where H is singular
+                soft_cost = 0.5 * float(np.sum(e.r**2) + np.sum(e.rg**2) + np.sum((e.c * wv) ** 2))
+                solve_H, solve_local, H_border = pb.penalized_solver(e, mu_s, wv, frozen)
+                g = pb.grad(e.r, e.J, e.rg) + pb.continuity_t(e.Cv, e.Cr, e.c * wv**2)
+                d = -solve_H(g)  # the least-squares solution where H is singular
                 dv, dg, whole = self.limited(pb, d)
                 if not whole:
                     # the global step shortened, the local variables solved again for it: with continuity a
@@ -197,15 +193,15 @@ class GaussNewton:
                     # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
                     # iterations at 1/10-1/60 of the Gauss-Newton step)
                     try:
-                        dv = pb.factorize(H[:nv, :nv], "local")(-g[:nv] - H[:nv, nv:] @ dg).reshape(n_int, pb.nb)
+                        dv = solve_local(-g[:nv] - H_border @ dg).reshape(n_int, pb.nb)
                     except np.linalg.LinAlgError:
                         pass
                 trial = pb.evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
                 new_cost = 0.5 * float(np.sum(trial.r ** 2) + np.sum(trial.rg ** 2)
-                                       + np.sum((trial.c.reshape(-1) * wdef) ** 2))
+                                       + np.sum((trial.c * wv) ** 2))
                 if np.isfinite(new_cost) and new_cost < soft_cost:
                     nodes, offs, glob = nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg
-                    e = trial = H = C = None  # freed before the next Jacobian (each 180 MB at 600 s)
+                    e = trial = solve_H = solve_local = H_border = None  # freed before the next Jacobian
                     e = pb.evaluate(nodes, offs, glob)
                     mu_s = max(mu_s / 10.0, 1e-9)
                     if soft_cost - new_cost < 1e-3 * soft_cost:
@@ -296,7 +292,7 @@ class GaussNewton:
             cost = e.cost
             rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)
-            solve_K = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, mu), "kkt")  # once per iteration: the step and the correction
+            solve_K = pb.kkt_solver(e.J, e.Cv, e.Cr, mu)  # once per iteration: the step and the correction
             sol = solve_K(np.column_stack([rhs, pb.unit_p]))
             sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]
@@ -371,7 +367,8 @@ class GaussNewton:
     # --- the two starts ---------------------------------------------------------------------------------------
 
     def solve(self, pb: ShootingProblem, nodes: np.ndarray | Callable[[], np.ndarray], offs: np.ndarray,
-              glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None) -> SolverResult:
+              glob: np.ndarray, warm: tuple[np.ndarray, np.ndarray, np.ndarray] | None = None,
+              warm_at: list[Evaluation] | None = None) -> SolverResult:
         """Stages 1-3 from ``nodes`` (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; or a
         function giving them, called only where no warm start converges: a run of the whole record): stage 1,
         then stages 2-3 with friction held during the homotopy, and again with it free where the first ends
@@ -381,12 +378,14 @@ class GaussNewton:
         homotopy brings a start from the model's own response near the data; a converged fit of a neighbouring
         model already is: on MuJoCo's all-effects finger3 plants, seeds 40-41, the rounds with the rotor and the
         stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
-        The result's ``iterations`` count every start."""
+        ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
+        Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:
+        one evaluation of the whole record fewer); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
         total_its = 0
         if warm is not None:
             bar = _Progress(self.max_iterations, "identify (warm start)", self.show)
             c_scale = np.maximum(np.abs(warm[0]).max(axis=0), 1e-3)
-            out = self.constrained(pb, *warm, pb.evaluate(*warm), c_scale, bar)
+            out = self.constrained(pb, *warm, warm_at.pop() if warm_at else pb.evaluate(*warm), c_scale, bar)
             bar.close()
             if out.converged and pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
                 return out

@@ -74,7 +74,7 @@ from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
 from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
-from .long_record import window_start
+from .long_record import LONG_RECORD, window_start
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -199,6 +199,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     rec, rec_path, val_rec = _check_inputs(model, recording, validation, encoder_noise, interval, camera_noise, tol,
                                            kkt, max_iterations, torque_noise)
     dt = rec.dt
+    if rec.duration > LONG_RECORD:
+        _map_large_blocks()
     L = int(round(interval / dt))
     torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
@@ -209,7 +211,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     values, solution = _start_of(start, sens.names)
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse")
-    q0 = (_rest_guess(model, model.transmission.joint_torque(torque.U[0]), pb.y[0]) if rec.gravity is None
+    torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
+    q0 = (_rest_guess(model, model.transmission.joint_torque(pb.torque.U[0]), pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))  # the rest the model's own response starts from
 
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
@@ -219,10 +222,13 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     glob = np.zeros(pb.ng)  # log theta / theta_0, then the whitened line-coefficient corrections
     show = sys.stderr.isatty() if progress is None else bool(progress)
     solver = GaussNewton(max_iterations, tol, show)
-    warm, it_window = pb.warm_variables(solution), 0
+    warm, warm_at, it_window = pb.warm_variables(solution), [], 0
     if warm is None:  # a long record: the globalisation on its first seconds (module long_record)
-        warm, it_window = window_start(pb, solver, excitation, q0)
-    out = solver.solve(pb, nodes, offs, glob, warm=warm)
+        start_w, it_window = window_start(pb, solver, excitation, q0)
+        if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
+            warm, warm_at = start_w[:3], [start_w[3]]
+        start_w = None
+    out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
     it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
@@ -239,7 +245,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
     result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
-    pb = out = warm = None  # this fit's problem and Jacobians freed before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
+    # this fit's problem (with the lines' basis: 91 MB at 600 s), Jacobians and compiled sensitivities freed
+    # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
+    pb = out = warm = sens = None
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
@@ -247,6 +255,26 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
+
+
+MMAP_THRESHOLD = 2**20
+"""Bytes: from a record longer than :data:`~alpes_dyn.estimation.identification.long_record.LONG_RECORD`, glibc's
+allocator maps every block this large or larger on its own (``mallopt(M_MMAP_THRESHOLD)``) and gives it back to
+the system when it is freed. By default the threshold follows the largest block freed, up to 32 MiB, so a long
+fit's 8-30 MB arrays (a chunk's sensitivities, the states, the KKT system's blocks) came from the heap and stayed
+resident once freed: ``alpes-dyn identify`` on 600 s peaked at 1178 MiB, with this 1048 MiB (finger3 seed 21,
+2026-12-05, load 5)."""
+
+
+def _map_large_blocks() -> None:
+    """:data:`MMAP_THRESHOLD` set in glibc's allocator (process-wide; elsewhere nothing)."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):  # not glibc
+        pass
 
 
 def _within_bounds(model: Model, recording: Recording | str | Path, result: IdentificationResult,
@@ -396,7 +424,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     adequacy of the fitted model (module adequacy) with each effect's regressor less what the fit absorbs of it."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
-    solve_Kz = pb.factorize(pb.kkt_system(e.J, e.Cv, e.Cr, 0.0), "kkt")  # undamped: the covariance and the effects' regressors
+    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance and the effects' regressors
     P_rho = solve_Kz(pb.unit_p)[nv:nv + p] * s2
     theta = pb.values(out.glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))

@@ -26,7 +26,7 @@ import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
 __all__ = ["Shape", "normal_matrix", "continuity_jacobian", "kkt_matrix", "factorize", "bordered_factorize",
-           "kkt_order", "DENSE_LIMIT"]
+           "kkt_order", "kkt_from_blocks", "penalized_from_blocks", "DENSE_LIMIT"]
 
 DENSE_LIMIT = 4000
 """Largest system solved by a dense least-squares fallback where the sparse factorisation finds it singular."""
@@ -167,8 +167,6 @@ def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
     complement D - B' A^-1 B (dense, border x border, :func:`factorize`: its least-squares solution where it is
     singular, a parameter the recording does not see). Where A itself is singular, :func:`factorize` of M (SuperLU).
     Time O(n w (w + border)) and memory O(n (w + border)) for half-bandwidth w: linear in the record."""
-    from scipy.linalg.lapack import dgbtrf, dgbtrs
-
     M = sp.csr_matrix(M)
     M.sum_duplicates()
     N = M.shape[0]
@@ -180,7 +178,7 @@ def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
     A = rows_loc[:, loc].tocoo()
     il, jl = A.row.astype(np.int64), A.col.astype(np.int64)
     kl, ku = int(max(np.max(il - jl, initial=0), 0)), int(max(np.max(jl - il, initial=0), 0))
-    ab = np.zeros((2 * kl + ku + 1, n))
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")  # Fortran order: dgbtrf factorises it in place, no copy
     ab[kl + ku + il - jl, jl] = A.data
     del A, il, jl
     B = rows_loc[:, bor].toarray()
@@ -188,9 +186,21 @@ def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
     rows_bor = M[bor]
     Bt, D = rows_bor[:, loc].toarray(), rows_bor[:, bor].toarray()
     del rows_bor
+    return _band_border_solver(ab, kl, ku, B, Bt, D, order, lambda: factorize(M))
+
+
+def _band_border_solver(ab: np.ndarray, kl: int, ku: int, B: np.ndarray, Bt: np.ndarray, D: np.ndarray,
+                        order: np.ndarray, fallback: Callable[[], Solver]) -> Solver:
+    """The solver of :func:`bordered_factorize` from its blocks: the banded block A in LAPACK's band storage ``ab``
+    (2 kl + ku + 1, n; overwritten), the border's columns B (n, border) and rows Bt (border, n), the corner D, and
+    ``order`` (the rows and columns of the whole matrix in that order); ``fallback()`` where A is singular."""
+    from scipy.linalg.lapack import dgbtrf, dgbtrs
+
+    n, border = ab.shape[1], B.shape[1]
+    N = n + border
     lu, piv, info = dgbtrf(ab, kl, ku, overwrite_ab=1)
     if info != 0 or not np.isfinite(lu[kl:]).all():
-        return factorize(M)
+        return fallback()
     X = dgbtrs(lu, kl, ku, B, piv)[0] if border else B  # A^-1 B, (n, border)
     solve_S = factorize(D - Bt @ X) if border else None
     order = np.asarray(order)
@@ -208,4 +218,107 @@ def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
         out[order] = x
         return out.reshape(b.shape)
 
+    solve.band = (lu, piv)  # type: ignore[attr-defined]  # the band's LU (penalized_from_blocks' local solves)
     return solve
+
+
+def _normal_blocks(J: np.ndarray, shape: Shape, mu: float, prior: np.ndarray):
+    """:func:`normal_matrix`'s blocks by the same operations: AA (S, nb, nb) the intervals' diagonal blocks, AP (S,
+    nb, ng) their border, D (ng, ng) the corner (with ``prior``), the diagonal damped as there."""
+    nb = shape.nb
+    A, P = J[:, :, :nb], J[:, :, nb:]
+    AA = np.einsum("ski,skj->sij", A, A)  # (S, nb, nb), as normal_matrix
+    AP = np.einsum("ski,skj->sij", A, P)  # (S, nb, ng)
+    PP = np.einsum("ski,skj->ij", P, P) + np.diag(prior)
+    diag_l, diag_g = np.einsum("sii->si", AA).copy(), np.diag(PP).copy()
+    big = max(float(max(diag_l.max(initial=0.0), diag_g.max(initial=0.0))), 1.0)
+    AA[:, np.arange(nb), np.arange(nb)] += mu * np.maximum(diag_l, 1e-12 * big)
+    return AA, AP, PP + np.diag(mu * np.maximum(diag_g, 1e-12 * big))
+
+
+def _band(blocks: np.ndarray, upper: np.ndarray | None, kl: int, ku: int) -> np.ndarray:
+    """LAPACK band storage (2 kl + ku + 1, n) of a block-tridiagonal matrix: ``blocks`` (S, b, b) along the
+    diagonal, ``upper`` (S-1, b, c) the block right of block j (its first c columns of block j+1) and its transpose
+    below (None: none). A loop over the blocks' entries (b^2), each laid for every block at once."""
+    S, b = blocks.shape[:2]
+    n = S * b
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")  # Fortran order: dgbtrf factorises it in place, no copy
+    for a in range(b):
+        for c in range(b):
+            ab[kl + ku + a - c, c::b] = blocks[:, a, c]
+    if upper is not None:
+        for a in range(b):
+            for c in range(upper.shape[2]):
+                ab[kl + ku + a - (b + c), b + c::b] = upper[:, a, c]  # row: block j's a, column: block j+1's c
+                ab[kl + ku + (b + c) - a, a:(S - 1) * b:b] = upper[:, a, c]
+    return ab
+
+
+def penalized_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, wv: np.ndarray, shape: Shape, mu: float,
+                          prior: np.ndarray, hold: np.ndarray, fallback: Callable[[], Solver]):
+    """The homotopy's system H + C' W C (:func:`normal_matrix` damped by ``mu``, the continuity Jacobian's rows
+    weighted by ``wv`` (nx,), the same weights for every defect), plus 1e12 max(d, 1) on the diagonal of the global
+    variables ``hold`` (indices in 0..ng-1; d that diagonal), factorised in its natural order by band and border from
+    the intervals' blocks (no sparse matrix formed). Returns (the solver of the whole system, the solver of its
+    local variables' block H[:nv, :nv] (the band's LU itself), that block's border H[:nv, nv:] (nv, ng)); the first
+    is ``fallback()`` and the second raises ``numpy.linalg.LinAlgError`` where the band is singular."""
+    nb, nx, ng, S = shape.nb, shape.nx, shape.ng, shape.n_int
+    AA, AP, D = _normal_blocks(J, shape, mu, prior)
+    W = wv**2
+    Cw = Cv * W[None, :, None]  # W Cv_j (S-1, nx, nb)
+    AA[:-1] += np.einsum("sia,sib->sab", Cv, Cw)
+    AA[1:, np.arange(nx), np.arange(nx)] += W
+    upper = -Cw.transpose(0, 2, 1)  # (S-1, nb, nx): interval j's variables against interval j+1's start state
+    B = AP.copy()
+    B[:-1] += np.einsum("sia,sig->sag", Cw, Cr)
+    B[1:, :nx] -= Cr * W[None, :, None]
+    D = D + np.einsum("sig,sih->gh", Cr * W[None, :, None], Cr)
+    d = np.diag(D)
+    D[hold, hold] += 1e12 * np.maximum(d[hold], 1.0)
+    kl = ku = nb + nx - 1
+    ab = _band(AA, upper, kl, ku)
+    B = B.reshape(S * nb, ng)
+    from scipy.linalg.lapack import dgbtrs
+
+    solve = _band_border_solver(ab, kl, ku, B, B.T, D, np.arange(S * nb + ng), fallback)
+    band = getattr(solve, "band", None)
+
+    def solve_local(b: np.ndarray) -> np.ndarray:
+        if band is None:
+            raise np.linalg.LinAlgError("the homotopy's local block is singular")
+        return dgbtrs(band[0], kl, ku, np.asarray(b, dtype=float), band[1])[0]
+
+    return solve, solve_local, B
+
+
+def kkt_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, shape: Shape, mu: float, prior: np.ndarray,
+                    fallback: Callable[[], Solver]) -> Solver:
+    """:func:`bordered_factorize` of :func:`kkt_matrix` (``normal_matrix(J, shape, mu, prior)``, ``continuity_jacobian(Cv,
+    Cr, shape)``) in :func:`kkt_order`, its band and border laid out from the intervals' blocks directly: no sparse
+    matrix is formed (at 600 s its triplets, their CSC, CSR and slices peaked at about 400 MB above the Jacobian). The
+    same numbers in the same band as the sparse path (the products J'J by the same einsums), so the same solution
+    to rounding. ``fallback()``: the solver where the band is singular (the sparse path's)."""
+    nb, nx, ng, S = shape.nb, shape.nx, shape.ng, shape.n_int
+    m, w = S - 1, nb + nx
+    AA, AP, D = _normal_blocks(J, shape, mu, prior)
+    n = m * w + nb
+    kl = ku = w - 1
+    ab = np.zeros((2 * kl + ku + 1, n), order="F")  # Fortran order: dgbtrf factorises it in place, no copy
+    blocks = np.zeros((m, w, w))  # interval j's local variables and its multipliers: [[AA_j, Cv_j'], [Cv_j, 0]]
+    blocks[:, :nb, :nb] = AA[:m]
+    blocks[:, :nb, nb:] = Cv[:m].transpose(0, 2, 1)
+    blocks[:, nb:, :nb] = Cv[:m]
+    for a in range(w):  # a loop over the block's entries (w^2), each laid for every interval at once
+        for b in range(w):
+            ab[kl + ku + a - b, b:m * w:w] = blocks[:, a, b]
+    for a in range(nb):  # the last interval's local variables
+        for b in range(nb):
+            ab[kl + ku + a - b, m * w + b] = AA[m, a, b]
+    for i in range(nx):  # the multipliers of interval j on interval j+1's start state: -I, both ways
+        ab[kl + ku + (nb + i) - (w + i), w + i::w] = -1.0  # row: multiplier j, column: state of j+1
+        ab[kl + ku + (w + i) - (nb + i), nb + i:m * w:w] = -1.0  # row: state of j+1, column: multiplier j
+    B = np.empty((n, ng))
+    B[:m * w].reshape(m, w, ng)[:, :nb] = AP[:m]
+    B[:m * w].reshape(m, w, ng)[:, nb:] = Cr[:m]
+    B[m * w:] = AP[m]
+    return _band_border_solver(ab, kl, ku, B, B.T, D, kkt_order(shape), fallback)

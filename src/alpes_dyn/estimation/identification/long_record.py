@@ -25,7 +25,7 @@ import numpy as np
 
 from .gauss_newton import BASIN_LIMIT, GaussNewton
 from ..experiments.recording import Recording
-from .shooting import ShootingProblem, torque_model
+from .shooting import Evaluation, ShootingProblem, torque_model
 
 __all__ = ["LONG_RECORD", "WINDOW", "window_start"]
 
@@ -50,11 +50,12 @@ def window(rec: Recording, seconds: float) -> Recording:
 
 
 def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.ndarray,
-                 ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray] | None, int]:
+                 ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation] | None, int]:
     """The start of ``pb``'s fit from its record's first :data:`WINDOW` seconds: the whole fit there (``solver``,
     stages 1-3; ``excitation`` the lines, Hz, or None, the torque noise the whole record's), then (nodes, offs,
     glob) of ``pb`` from the window's parameters: the model's response under them from the rest ``q0`` (rad) on
-    the encoder, stage 1 and the homotopy's last phase (the module docstring). Returns (that start, or None where the record is not longer than :data:`LONG_RECORD` or the
+    the encoder, stage 1 and the homotopy's last phase (the module docstring). Returns (that start and the
+    :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians, or None where the record is not longer than :data:`LONG_RECORD` or the
     window's fit did not converge within :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the window's
     iterations)."""
     if pb.rec.duration <= LONG_RECORD:
@@ -73,5 +74,5 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     glob = np.concatenate([rho, np.zeros(pb.ncg)])
     offs = np.zeros((pb.n_int, pb.no))
     nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=NODE_SWEEPS)
-    nodes, offs, glob, _ = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=FIRST_PHASE)
-    return (nodes, offs, glob), out.iterations
+    nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=FIRST_PHASE)
+    return (nodes, offs, glob, at), out.iterations

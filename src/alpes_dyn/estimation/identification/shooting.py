@@ -21,18 +21,21 @@ Jacobians from the compiled sensitivities
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Mapping, Sequence
 
 import numpy as np
+import scipy.sparse as sp
 
 from ...checks import as_float_array
 from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
-from .kkt import Shape, bordered_factorize, continuity_jacobian, factorize, kkt_matrix, kkt_order, normal_matrix
+from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
+                  normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
@@ -65,7 +68,8 @@ class TorqueModel:
     (projected on the excitation's lines, or as recorded), ``U_last`` (1, nu) at the last sample; ``noise``:
     sigma_u, N m; with the lines (``lines``), ``Q`` (N, nphi) their orthonormal basis and ``Q_last`` (nphi,) at the
     last sample: the true torque is U + sigma_u Q c, c ~ N(0, I) fitted; without them and sigma_u > 0, a constant
-    correction per interval (``eiv`` and not ``lines``)."""
+    correction per interval (``eiv`` and not ``lines``). A :class:`ShootingProblem` keeps its own copy without
+    ``Q`` (None: the basis lives on there, scaled and cut at the intervals; 91 MB at 600 s)."""
 
     U: np.ndarray
     U_last: np.ndarray
@@ -81,12 +85,41 @@ class TorqueModel:
     @property
     def lines(self) -> bool:
         """The correction lies on the excitation's lines."""
-        return self.eiv and self.Q is not None
+        return self.eiv and self.Q_last is not None
 
     @property
     def nphi(self) -> int:
         """Number of basis functions of the lines (0 without them)."""
-        return self.Q.shape[1] if self.lines else 0
+        return self.Q_last.shape[0] if self.lines else 0
+
+
+CHOLESKY_QR_ROWS = 2**15
+"""Rows (samples) of the lines' basis above which :func:`torque_model` orthonormalises it by Cholesky QR (33 s at
+1 kHz; below, Householder's QR)."""
+
+
+def _thin_qr(Phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Q (N, k) with orthonormal columns and R (k, k) upper triangular with a positive diagonal, Phi = Q R, by
+    Cholesky QR twice (Fukaya et al. 2014: the second pass restores orthogonality to rounding for cond(Phi) up to
+    ~1e7; the lines' basis is near orthogonal). Each pass one product Q' Q (k x k) and one triangular solve, the
+    second in place: on 600 s of the documented lines 20x faster than Householder's QR (numpy.linalg.qr, whose R
+    may have negative entries on its diagonal: the columns' signs are the only difference, which the fit's
+    whitened line coefficients do not see) and one copy of Phi, Q, instead of three. Householder's where Phi has
+    at most :data:`CHOLESKY_QR_ROWS` rows (there it is cheap, and the fits are as they were) or where the Cholesky
+    factorisation fails (lines too close for the record's length: Phi near singular)."""
+    import scipy.linalg as sla
+
+    if Phi.shape[0] <= CHOLESKY_QR_ROWS:
+        return np.linalg.qr(Phi)
+    R, Qt = np.eye(Phi.shape[1]), Phi.T  # Q' (k, N), Fortran order
+    for k in range(2):
+        try:
+            R1 = sla.cholesky(Qt @ Qt.T, lower=False, check_finite=False)  # Q'Q = R1' R1
+        except np.linalg.LinAlgError:  # lines too close for the record's length: Householder's
+            return np.linalg.qr(Phi)
+        Qt = sla.solve_triangular(R1, Qt, trans="T", lower=False, overwrite_b=k > 0, check_finite=False)
+        R = R1 @ R
+    return Qt.T, R
 
 
 def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_noise: float | None) -> TorqueModel:
@@ -96,7 +129,7 @@ def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_nois
         return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
     Phi_all = line_basis(rec.t, excitation)
     Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
-    Q, R_q = np.linalg.qr(Phi)
+    Q, R_q = _thin_qr(Phi)
     U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
     Q_last = np.linalg.solve(R_q.T, Phi_all[-1])  # the basis at the last sample (Q = Phi R^-1)
     U_last = (Q_last @ (Q.T @ rec.torque[:-1]))[None]
@@ -178,7 +211,8 @@ class ShootingProblem:
         pad = n_int * L - N
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
-        self.Gb = np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+        self.Gb = (np.concatenate([self.G, np.repeat(self.G[-1:], pad, axis=0)]).reshape(n_int, L, 3)
+                   if rec.gravity is not None else np.broadcast_to(model.gravity, (n_int, L, 3)))  # (a view: constant)
         # residual layout per interval: samples j = 0..L-1 (the last interval also its final sample)
         k_idx = np.arange(n_int)[:, None] * L + np.arange(L + 1)[None, :]
         valid = k_idx <= N
@@ -197,12 +231,16 @@ class ShootingProblem:
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
         self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
-        self.Psik = (torque_before(torque.noise * np.concatenate([torque.Q, torque.Q_last[None]]))[self.kk]
-                     if lines else None)
-        # the lines' basis over each interval's sample periods (S, L, nphi), the last interval's padded with the
-        # last period's: Psik[s, j+1] is the basis of period sL + j (torque_before), so a view, not a copy (at
-        # 600 s each copy of the basis is 91 MB)
-        self.Psib = self.Psik[:, 1:] if lines else None
+        # (torque_before(X)[k] is X[max(k - 1, 0)]: rows of Q alone, one gather, no copy of the whole basis first)
+        self.Psib = self.Psi0 = None
+        if lines:  # sigma_u Q at the held samples, the last interval padded with the last one's
+            QS = np.empty((n_int * L, torque.nphi))
+            QS[:N], QS[N:] = torque.Q, torque.Q[-1]
+            QS *= torque.noise
+            self.Psib = QS.reshape(n_int, L, torque.nphi)  # (S, L, nphi): the basis over each interval's periods
+            self.Psi0 = QS[np.maximum(np.arange(n_int) * L - 1, 0)]  # (S, nphi): over the period before each
+            torque = dataclasses.replace(torque, Q=None)
+        self.torque = torque
         self.shape = Shape(n_int, self.nb, self.nx, self.ng)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
@@ -246,6 +284,12 @@ class ShootingProblem:
         return np.where(additive, self.theta0 + self.scale * glob[:p],
                         self.theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
 
+    def psik(self, sl: slice) -> np.ndarray:
+        """(s, L+1, nphi) the lines' basis (times sigma_u) over the period before each residual's sample of the
+        intervals ``sl`` (:func:`~alpes_dyn.model.transmission.torque_before`: the first residual's the period
+        before the interval, the others' the interval's own)."""
+        return np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1)
+
     def per_motor(self, theta: np.ndarray, cols: list[tuple[int, int]]) -> np.ndarray:
         """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere."""
         out = np.zeros(self.ny)
@@ -266,7 +310,11 @@ class ShootingProblem:
         tendons' tension balances at each residual's sample: the one held over the period before it
         (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
         if self.torque.lines:
-            return self.Uk + np.einsum("skl,il->ski", self.Psik, glob[self.p:].reshape(self.torque.nphi, self.nu).T)
+            C = glob[self.p:].reshape(self.torque.nphi, self.nu).T
+            u = self.Uk.copy()
+            u[:, 0] += self.Psi0 @ C.T
+            u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
+            return u
         if self.torque.eiv:
             return self.Uk + offs[:, None, :]
         return self.Uk
@@ -310,9 +358,11 @@ class ShootingProblem:
 
     # --- the residuals, the defects and their Jacobians ---------------------------------------------------------
 
-    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool = True) -> Evaluation:
+    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool | str = True) -> Evaluation:
         """The :class:`Evaluation` at (nodes, offs, glob). ``jac=False``: r, c, rg and the states alone (J, Cv, Cr
-        None), from the step without its sensitivities (a tenth of the time). With them, the intervals go through
+        None), from the step without its sensitivities (a tenth of the time). ``jac="state"``: J (S, R, nx) with
+        respect to the start states alone (Cv, Cr None; stage 1's sweeps, theta fixed: the sensitivities of the
+        state alone, a third to a fifth of the time of all of them). With them, the intervals go through
         the compiled sensitivities :data:`JACOBIAN_CHUNK` doubles of sensitivities at a time, each chunk reduced to
         its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it)."""
         theta = self.values(glob)
@@ -337,8 +387,8 @@ class ShootingProblem:
         if self.no:  # the per-interval torque corrections' prior: zero mean, sigma_u / sqrt(L)
             res.append(offs / self.sig_off)
         r = np.concatenate(res, axis=1)
-        if not jac:
-            return Evaluation(r, None, c, None, None, rg, xs)
+        if not jac or jac == "state":
+            return Evaluation(r, J if jac else None, c, None, None, rg, xs)
         return Evaluation(r, J, c, Cv, Cr, rg, xs)
 
     def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
@@ -347,7 +397,9 @@ class ShootingProblem:
         (S-1, nx, nb), Cr (S-1, nx, ng) (else None), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of
         sensitivities (or of the compiled step's per-sample inputs, without them)."""
         n_int, L, nx = self.n_int, self.L, self.nx
-        per_interval = (L + 1) * nx * (nx + self.p + self.sens.no) if jac else L * self.sens.nw
+        state = jac == "state"
+        per_interval = ((L + 1) * nx * (nx if state else nx + self.p + self.sens.no) if jac
+                        else L * self.sens.nw)
         chunk = max(1, JACOBIAN_CHUNK // per_interval)
         xs = np.empty((n_int, L + 1, nx))
         J = Cv = Cr = None
@@ -359,8 +411,13 @@ class ShootingProblem:
             xs[sl] = x_c
             if not jac:
                 continue
-            J_c, Xv_end, Xr_end = self._jacobian(X_c, theta, None if u_k is None else self.tension_torque(u_k[sl], x_c),
-                                                 sl)
+            if state:
+                A_c = self._state_jacobian(X_c, sl, theta)
+                J = np.empty((n_int,) + A_c.shape[1:]) if J is None else J
+                J[sl] = A_c
+                continue
+            J_c, Xv_end, Xr_end = self._jacobian(X_c, theta,
+                                                 None if u_k is None else self.tension_torque(u_k[sl], x_c), sl)
             del X_c
             if J is None:
                 J = np.empty((n_int,) + J_c.shape[1:])
@@ -370,6 +427,22 @@ class ShootingProblem:
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
         return xs, J, Cv, Cr
+
+    def _state_jacobian(self, X: np.ndarray, sl: slice, theta: np.ndarray) -> np.ndarray:
+        """(s, R, nx) the residuals' Jacobian of the intervals ``sl`` with respect to their start states alone, from
+        the state sensitivities X (s, L+1, nx, nx): the first nx columns of :meth:`_jacobian`'s J, by the same
+        operations (``theta``: the parameters, for the rotor's share of the stretch)."""
+        n, s_int = self.n, X.shape[0]
+        w = self.valid[sl, :, None, None] / self.sig_y
+        J_enc = np.einsum("ij,skjd->skid", self.S_enc, X[:, :, :n])
+        if self.rotor is not None:  # C (u - J_m S qdd): through qdd, as in _jacobian
+            J_enc -= (self.compliance(theta) * self.rotor)[:, None] * self.motor_acceleration(X[:, :, n: 2 * n])
+        jac = [(J_enc * w).reshape(s_int, -1, self.nx)]
+        if self.Qm is not None:
+            jac.append((X[:, :, :n] / self.camera_noise * self.q_mask[sl, :, :, None]).reshape(s_int, -1, self.nx))
+        if self.no:
+            jac.append(np.zeros((s_int, self.no, self.nx)))
+        return np.concatenate(jac, axis=1)
 
     def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice):
         """J (s, R, nb + ng) of the residuals of the intervals ``sl`` from their sensitivities X (s, L+1, nx,
@@ -392,7 +465,7 @@ class ShootingProblem:
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
                 if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
-                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.Psik[sl]
+                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.psik(sl)
                 elif self.torque.eiv:
                     J_enc[:, :, mo, nx + mo] += theta[k]
         if self.rotor is not None:  # C (u - J_m S qdd): d/d the states and parameters through qdd
@@ -423,6 +496,47 @@ class ShootingProblem:
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
         return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+
+    def continuity_t(self, Cv: np.ndarray, Cr: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks."""
+        out = np.zeros((self.n_int, self.nb))
+        out[:-1] += np.einsum("sia,si->sa", Cv, v)
+        out[1:, :self.nx] -= v
+        return np.concatenate([out.reshape(-1), np.einsum("sig,si->g", Cr, v)])
+
+    def penalized_solver(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
+        """The homotopy's system at ``e``: H (:meth:`normal`, damped by ``mu``) + C' W C (the defects' rows weighted
+        by ``wv`` (nx,)), 1e12 max(d, 1) added to the diagonal d of the global variables ``hold`` (indices 0..ng-1).
+        Returns (its solver, the solver of its local variables' block H[:nv, :nv], that block's border H[:nv, nv:]):
+        where :attr:`structured`, from the blocks (:func:`~alpes_dyn.estimation.identification.kkt.penalized_from_blocks`),
+        else from the matrices (dense or SuperLU)."""
+        nv = self.nv
+        if self.structured:
+            def fallback():
+                return factorize(self._penalized_matrix(e, mu, wv, hold))
+            return penalized_from_blocks(e.J, e.Cv, e.Cr, wv, self.shape, mu, self.prior, hold, fallback)
+        H = self._penalized_matrix(e, mu, wv, hold)
+        return factorize(H), factorize(H[:nv, :nv]), H[:nv, nv:]
+
+    def _penalized_matrix(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
+        """:meth:`penalized_solver`'s matrix, (nz, nz), sparse (an array if :attr:`dense`)."""
+        wdef = np.tile(wv, self.n_int - 1)
+        C = self.continuity(e.Cv, e.Cr)
+        C = C * wdef[:, None] if self.dense else sp.diags(wdef) @ C
+        H = self.normal(e.J, mu) + C.T @ C
+        h = np.zeros(self.nz)
+        idx = self.nv + np.asarray(hold, dtype=int)
+        h[idx] = 1e12 * np.maximum(H.diagonal()[idx], 1.0)
+        return H + (np.diag(h) if self.dense else sp.diags(h, format="csc"))
+
+    def kkt_solver(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
+        """A solver of :meth:`kkt_system` (J, Cv, Cr, mu): where :attr:`structured`, laid out in band and border from
+        the intervals' blocks (:func:`~alpes_dyn.estimation.identification.kkt.kkt_from_blocks`: no sparse matrix
+        formed), else :meth:`factorize` of the matrix."""
+        if not self.structured:
+            return self.factorize(self.kkt_system(J, Cv, Cr, mu), "kkt")
+        return kkt_from_blocks(J, Cv, Cr, self.shape, mu, self.prior,
+                               lambda: factorize(self.kkt_system(J, Cv, Cr, mu)))
 
     def factorize(self, M, system: str):
         """A solver x = M^-1 b for one of the problem's matrices: ``system`` "kkt" (:meth:`kkt_system`), "normal"
@@ -465,12 +579,21 @@ class ShootingProblem:
         onto the measured encoder (the stretch of the start's compliance off): a start close to the data. ``theta``:
         the parameters to simulate with (default theta_0). (Not shifted, the response alone is no start on a long
         record even with the parameters right: over 16 s of finger3 it drifted to 460 counts from the encoder.)"""
-        n, L, n_int, nu = self.n, self.L, self.n_int, self.nu
-        x_nom, _ = self.sens.run(np.concatenate([q0, np.zeros(n)])[None], self.torque.U[None], self.G[None],
-                                 self.theta0 if theta is None else theta, np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None,
-                                 basis=self.torque.noise * self.torque.Q[None] if self.torque.lines else None,
-                                 sensitivities=False)
-        nodes = x_nom[0, np.arange(n_int) * L].copy()
+        n, L, n_int, nu, N = self.n, self.L, self.n_int, self.nu, self.N
+        theta = self.theta0 if theta is None else theta
+        C = np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None
+        # the record in pieces of whole intervals, each from the last one's end (the same steps: its per-sample
+        # inputs 8 MiB at a time, not the whole record's at once: 264 MB at 600 s)
+        K = L * max(1, JACOBIAN_CHUNK // (L * self.sens.nw))
+        nodes = np.empty((n_int, self.nx))
+        x = np.concatenate([q0, np.zeros(n)])
+        for a in range(0, N, K):
+            b = min(a + K, N)
+            basis = self.Psib.reshape(-1, self.torque.nphi)[None, a:b] if self.torque.lines else None
+            x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
+                                   sensitivities=False)
+            nodes[a // L: -(-b // L)] = x_c[0, 0:b - a:L]
+            x = x_c[0, -1]
         if not np.isfinite(nodes).all():
             nodes[:] = np.concatenate([q0, np.zeros(n)])
         k_nodes = np.arange(n_int) * L
