@@ -10,7 +10,8 @@ torque. The problem is
 
 with r the encoder residuals (S q_k + offset + C u_k-1 - y_k) / sigma_y (Section 3, eq. 3.13; C the tendon's
 compliance, u_k-1 the torque held before the sample: :func:`~alpes_dyn.model.transmission.torque_before`, less
-J_m S qdd where the model has a rotor: :meth:`ShootingProblem.tension_torque`),
+J_m S qdd where the model has a rotor:
+:meth:`~alpes_dyn.estimation.identification.encoder_output.EncoderOutput.tension_torque`),
 the camera's (q - q_meas) / sigma_q where the recording has joint angles, and the per-interval corrections' prior.
 :class:`ShootingProblem` holds the data cut at the intervals and evaluates r, the continuity defects and their
 Jacobians from the compiled sensitivities
@@ -34,6 +35,7 @@ from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
+from .encoder_output import EncoderOutput
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
                   normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
@@ -172,7 +174,7 @@ class Evaluation:
         return 0.5 * float(np.sum(self.r**2) + np.sum(self.rg**2))
 
 
-class ShootingProblem:
+class ShootingProblem(EncoderOutput):
     """The fit of ``sens``' parameters to a recording by multiple shooting at ``L`` samples per interval.
 
     Parameters
@@ -290,21 +292,6 @@ class ShootingProblem:
         before the interval, the others' the interval's own)."""
         return np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1)
 
-    def per_motor(self, theta: np.ndarray, cols: list[tuple[int, int]]) -> np.ndarray:
-        """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere."""
-        out = np.zeros(self.ny)
-        for k, mo in cols:
-            out[mo] += theta[k]
-        return out
-
-    def offset(self, theta: np.ndarray) -> np.ndarray:
-        """(m,) the encoder offsets, rad."""
-        return self.per_motor(theta, self.off_cols)
-
-    def compliance(self, theta: np.ndarray) -> np.ndarray:
-        """(m,) the tendon compliances, rad / (N m)."""
-        return self.per_motor(theta, self.comp_cols)
-
     def torque_at(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
         """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
         tendons' tension balances at each residual's sample: the one held over the period before it
@@ -318,31 +305,6 @@ class ShootingProblem:
         if self.torque.eiv:
             return self.Uk + offs[:, None, :]
         return self.Uk
-
-    def stretch(self, theta: np.ndarray, u_k: np.ndarray | None) -> np.ndarray | float:
-        """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad, for the modelled torque u_k-1
-        (:meth:`torque_at`; None without compliance: 0)."""
-        return 0.0 if u_k is None else u_k * self.compliance(theta)
-
-    def motor_acceleration(self, qd: np.ndarray) -> np.ndarray:
-        """(s, L+1, m[, d]) the motors' acceleration S qdd over the period before each sample, rad/s^2, from the
-        joint velocities qd (s, L+1, n[, d]) of each interval's samples (or their sensitivities, d columns):
-        S (qd_k - qd_k-1) / dt; an interval's first sample takes its first period's (its own interval's states
-        only: the Jacobian keeps its block structure)."""
-        d = np.diff(qd, axis=1) / self.dt
-        return np.einsum("ij,skj...->ski...", self.S_enc, np.concatenate([d[:, :1], d], axis=1))
-
-    def tension_torque(self, u_k: np.ndarray | None, xs: np.ndarray) -> np.ndarray | None:
-        """(s, L+1, m) the torque that the tendon's tension balances at each sample, N m: the modelled torque u_k-1
-        (:meth:`torque_at`) less what accelerates the rotor, J_m S qdd (:meth:`motor_acceleration`; xs (s, L+1, nx)
-        the states), where the model has a rotor and a compliance (else u_k itself). Why: the cable is stretched by
-        its tension, r_m T = tau_m - J_m qdd_m, not by the motor's torque. Measured on MuJoCo's elastic tendon with
-        its rotor (``benchmarks/realism.py``'s cable; the encoder corrected by the plant's own J_m qdd_m, 2026-12-05):
-        4.1 counts RMS on finger2, 0.8 on finger3; finger2 of seed 204, all effects, went from masses 2.2 % and the
-        EKF 1.09 degree off to 0.7 % and 0.24 degree; finger3 of seed 510, the cable alone, F_s_3 from 7.5 to 0.3 %."""
-        if self.rotor is None or u_k is None:
-            return u_k
-        return u_k - self.rotor * self.motor_acceleration(xs[..., self.n: 2 * self.n])
 
     def correction(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
         """The torque correction the sensitivities take: the line coefficients (nu, nphi), the per-interval
