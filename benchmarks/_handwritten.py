@@ -18,8 +18,7 @@ README_ROWS: dict[str, str] = {
         'tify -> control | fresh seeds 201-206, all 12 finger fits adequate: sensor loop 6/6 on finger3 (RMSE'
         ' after the rise <= 1.98 %, overshoot <= 8.5 %, rise <= 97 ms) and 6/6 on finger2; the shipped file 0'
         '/6 on finger3; sensorless within 10 % on the fingers (uncalibrated; 4.1 % worst calibrated once on t'
-        "he fingertip sensor) (2026-12-05 14:32, load 4.8-7.0); the hand (11:44, load 5-11, before the day's "
-        "fit changes): sensor within 0.3 % on 5/6 seeds (203's index lets go), sensorless 0/6 within 5 % (the"
-        " torque constant's 4.8 % floor), 5/6 calibrated | [`force_realism.py`](benchmarks/force_realism.py) "
-        '|'),
+        'he fingertip sensor) (2026-12-05 14:32, load 4.8-7.0); the hand (15:20, load 0.4-2.0): sensor within'
+        " 0.33 % on 6/6 seeds, sensorless 0/6 within 5 % (the torque constant's 4.8 % floor), 5/6 calibrated "
+        '| [`force_realism.py`](benchmarks/force_realism.py) |'),
 }
