@@ -1581,6 +1581,13 @@ API: list[Api] = [
       .encoder_angles(np.zeros(3), [1.0, 2.0]), InputError, "tau_m: expected last dimension 1"),
     A("torque_before", lambda c: __import__("alpes_dyn.model.transmission", fromlist=["x"]).torque_before(1.0),
       InputError, "tau_m: expected one row per sample, got shape ()"),
+    A("acceleration_before", lambda c: __import__("alpes_dyn.model.transmission", fromlist=["x"])
+      .acceleration_before(np.zeros((1, 2)), 1e-3), InputError, "qd_m: expected two samples or more along axis 0"),
+    A("acceleration_before", lambda c: __import__("alpes_dyn.model.transmission", fromlist=["x"])
+      .acceleration_before("fast", 1e-3), InputError, "qd_m: expected motor velocities, got a string"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, None, [1.0])
+      .encoder_angles(np.zeros((2, 3)), np.zeros((2, 1)), np.zeros((3, 1))), InputError,
+      "qdd_m: expected the shape of tau_m (2, 1), got (3, 1)"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'tendon_compliance = "x"\n'),
       ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),

@@ -33,16 +33,17 @@ def torque_before(tau_m: np.ndarray) -> np.ndarray:
     return np.concatenate([tau_m[:1], tau_m[:-1]])
 
 
-def acceleration_before(qd_m: np.ndarray, dt: float) -> np.ndarray:
-    """(N, m) the motors' acceleration over the period before each sample, rad/s^2, (qd_m,k - qd_m,k-1) / dt, from
-    their velocities qd_m (N, m) rad/s sampled every ``dt`` s; the first sample takes the first period's. With
-    :func:`torque_before`, what the cable's tension balances at a reading: r_m T = tau_m,k-1 - J_m qdd_m
-    (:meth:`Transmission.encoder_angles`)."""
+def acceleration_before(qd_m: np.ndarray, dt: float, axis: int = 0) -> np.ndarray:
+    """The acceleration over the period before each sample, rad/s^2, (qd_k - qd_k-1) / dt, from velocities qd
+    (rad/s, the samples along ``axis``, every ``dt`` s; e.g. the motors' (N, m)); the first sample takes the first
+    period's. With :func:`torque_before`, what the cable's tension balances at a reading: r_m T = tau_m,k-1 - J_m
+    qdd_m (:meth:`Transmission.encoder_angles`; the fit's
+    :meth:`~alpes_dyn.estimation.identification.encoder_output.EncoderOutput.motor_acceleration`, per interval)."""
     qd_m = as_float_array(qd_m, "qd_m", "motor velocities")
-    if qd_m.ndim == 0 or qd_m.shape[0] < 2:
-        raise InputError(f"qd_m: expected two rows or more (one per sample), got shape {qd_m.shape}")
-    d = np.diff(qd_m, axis=0) / dt
-    return np.concatenate([d[:1], d])
+    if qd_m.ndim <= axis or qd_m.shape[axis] < 2:
+        raise InputError(f"qd_m: expected two samples or more along axis {axis}, got shape {qd_m.shape}")
+    d = np.diff(qd_m, axis=axis) / dt
+    return np.concatenate([d.take([0], axis=axis), d], axis=axis)
 
 
 @dataclass(frozen=True)

@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...model.transmission import acceleration_before
+
 __all__ = ["EncoderOutput"]
 
 
@@ -50,8 +52,7 @@ class EncoderOutput:
         joint velocities qd (s, L+1, n[, d]) of each interval's samples (or their sensitivities, d columns):
         S (qd_k - qd_k-1) / dt; an interval's first sample takes its first period's (its own interval's states
         only: the Jacobian keeps its block structure)."""
-        d = np.diff(qd, axis=1) / self.dt
-        return np.einsum("ij,skj...->ski...", self.S_enc, np.concatenate([d[:, :1], d], axis=1))
+        return np.einsum("ij,skj...->ski...", self.S_enc, acceleration_before(qd, self.dt, axis=1))
 
     def tension_torque(self, u_k: np.ndarray | None, xs: np.ndarray) -> np.ndarray | None:
         """(s, L+1, m) the torque that the tendon's tension balances at each sample, N m: the modelled torque u_k-1
