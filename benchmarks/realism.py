@@ -63,6 +63,10 @@ does, on the plant's own joint angles (:func:`~alpes_dyn.studies.realism.plant_e
 checked against the joints' range and the hand hung where palm up the finger leaves it, then the excitation scaled
 to 0.7 and 0.5; the table's last column says which rig each row ran on (``l`` level, ``h`` hung, the scale where not
 1, ``!`` where it adapted) and the JSON rows hold the ``adaptation``. ``--adapt none`` runs ``--rig`` as given.
+``--adapt both`` does what ``alpes-dyn experiment --rig both`` does (issue 38): the first half of the record palm up,
+the second hung fingers down, each its own run of the excitation, MuJoCo turned between them (its state carrying
+on), the recording's gravity columns the two nominal orientations (the plant's 3 degree tilt on top of each, fitted);
+palm up alone, then hung alone where the finger leaves its range (``b`` in the last column); the EKF's run palm up.
 
 ``--seeds`` takes ranges (``301-320,5``). After the rows, the distribution per case
 (:func:`~alpes_dyn.studies.realism.summarise`): the median and worst of each kind's error up to the common scale,
@@ -113,7 +117,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--adapt", choices=ADAPT, default="auto",
                     help="auto (default): the experiment adapted on the plant as alpes-dyn experiment --rig auto adapts "
                          "it (hung fingers down where palm up the finger leaves its range, then smaller amplitudes); "
-                         "level / hanging: that orientation only, the amplitudes adapting; none: the design as given")
+                         "level / hanging: that orientation only, the amplitudes adapting; both: palm up then hung in "
+                         "one record (alpes-dyn experiment --rig both); none: the design as given")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--no-rigid", action="store_true", help="skip the rigid fit (the extended fit and the EKF only)")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")

@@ -288,6 +288,7 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--rig", "hanging", "-o", "{tmp}/r.csv",
           needle="--rig: hangs an Alpes hand fingers down"),
         C("experiment", "--rig", "sideways", "-o", "{tmp}/r.csv", needle="argument --rig: invalid choice: 'sideways'"),
+        C("experiment", "--model", "hand", "--rig", "both", "-o", "{tmp}/r.csv", needle="--rig both: one finger at a time"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--params", "x.toml", "-o", "{tmp}/r.csv",
           needle="--params: applies to the Alpes models"),
         C("experiment", "--true-spec", "x.toml", "-o", "{tmp}/r.csv", needle="--true-spec: applies to a URDF --model"),
@@ -1762,11 +1763,11 @@ API: list[Api] = [
     A("realism_draw", lambda c: _realism().realism_draw(1, rig="upside"), InputError,
       "rig: expected one of level, hanging, got 'upside'"),
     A("adapted_experiment", lambda c: _adapted(rig="upside"), InputError,
-      "rig: expected one of auto, level, hanging, got 'upside'"),
+      "rig: expected one of auto, level, hanging, both, got 'upside'"),
     A("realism_row", lambda c: _realism().realism_row(1, adapt="sideways"), InputError,
-      "adapt: expected one of auto, level, hanging, none, got 'sideways'"),
+      "adapt: expected one of auto, level, hanging, both, none, got 'sideways'"),
     A("plant_experiment", lambda c: _realism().plant_experiment(None, 1, None, None, adapt="sideways"), InputError,
-      "adapt: expected one of auto, level, hanging, none, got 'sideways'"),
+      "adapt: expected one of auto, level, hanging, both, none, got 'sideways'"),
 
     A("realism_draw", lambda c: _realism().realism_draw(1, chain="pinky"), InputError,
       "chain: unknown chain 'pinky' (expected one of index, middle, ring, little, thumb)"),
@@ -2009,8 +2010,15 @@ API: list[Api] = [
     A("experiment_torque", lambda c: _exptorque(model="hand"), InputError, "defined for one chain"),
     A("experiment_torque", lambda c: _exptorque(true_gravity=[0.0, -9.81]), InputError,
       "true_gravity: expected 3 finite numbers"),
-    A("experiment_torque", lambda c: _exptorque(design=_design(orientations=((0, 0, -9.81), (0, 0, 9.81)))),
-      InputError, "orientations: experiment_torque replays one orientation, got 2"),
+    A("experiment_torque", lambda c: _exptorque(design=_design(orientations=((0, 0, -9.81), (9.81, 0, 0))),
+                                                true_gravity=[0.0, 0.0, -9.81]),
+      InputError, "true_gravity: expected 3 finite numbers (m/s^2) per orientation (2)"),
+    A("mujoco_recording", lambda c: _mjrec(gravity=np.zeros((199, 3))), InputError,
+      "gravity: expected finite gravity vectors (m/s^2) of shape (200, 3)"),
+    A("mujoco_recording", lambda c: _mjrec(gravity=np.full((200, 3), np.nan)), InputError,
+      "gravity: expected finite gravity vectors"),
+    A("line_basis", lambda c: _line_basis([0, 990]), InputError,
+      "excitation: 2 frequencies are too many for 11 samples in the segment from t = 0.99 s"),
     A("check_plot_path", lambda c: _plot_path(c.f["dir"]), InputError, "--plot: '{dir}' is a directory"),
     A("check_plot_path", lambda c: _plot_path("x.xyz"), InputError, "--plot: 'x.xyz' has extension 'xyz'"),
     A("recording_filter", lambda c: _recfilt("finger3"), InputError, "model: expected an alpes_dyn Model with motors"),
@@ -2194,6 +2202,12 @@ def _adapted(**kw):
     from alpes_dyn.estimation.experiments.adapt import adapted_experiment
 
     return adapted_experiment(kw.pop("model", "finger3"), design=_design(), **kw)
+
+
+def _line_basis(starts):
+    from alpes_dyn.estimation.identification.lines import line_basis
+
+    return line_basis(1e-3 * np.arange(1001), (0.7, 3.1), starts)
 
 
 def _exptorque(**kw):

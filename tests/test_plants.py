@@ -4,6 +4,8 @@ tendon, the experiment's torque as experiment() applies it. Short runs (0.3 s)."
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -246,3 +248,51 @@ def test_thumb_experiment_keeps_the_abduction_mid_range_on_a_tilted_palm():
     abd = np.degrees(rec.true_q[:, 0])
     assert np.ptp(np.degrees(rec.true_q[:, 1:]), axis=0).min() > 20  # the flexion joints swing
     assert abd.min() > 40 and abd.max() < 50
+
+
+def test_turned_plant_is_the_library_simulator_turned_at_the_same_sample():
+    """gravity= (issue 38's two-orientation record): MuJoCo turned from palm up to hung fingers down at sample 150
+    and the library's RK4 integrating the two orientations in turn from the same state give the same joint angles
+    (1e-6 rad over 0.3 s), the state carrying on through the turn (the finger swings off: the turn is seen)."""
+    from alpes_dyn.model.mjcf import hanging_gravity
+
+    m = ad.Model.alpes("finger3", friction=True)
+    u = _torque()
+    g_hung = hanging_gravity(m.gravity)
+    G = np.repeat(np.asarray(m.gravity, dtype=float)[None], u.shape[0], axis=0)
+    G[150:] = g_hung
+    rec = mujoco_recording("finger3", None, u, DT, encoder_noise_counts=0.0, torque_noise=0.0, gravity=G)
+    q0 = m.static_equilibrium(m.transmission.joint_torque(u[0]))
+    first = simulate(m, np.r_[q0, np.zeros(3)], np.repeat(u[:150], 10, axis=0), 0.15, 1e-4, "rk4", input="motor")
+    hung = m.copy(gravity=g_hung)
+    second = simulate(hung, first.x[-1], np.repeat(u[150:-1], 10, axis=0), 0.15, 1e-4, "rk4", input="motor")
+    q_lib = np.concatenate([first.x[::10, :3], second.x[10::10, :3]])
+    assert rec.gravity is None and rec.true_q.shape == (301, 3)
+    assert np.abs(rec.true_q[200] - rec.true_q[150]).max() > 0.05  # it swings after the turn
+    assert np.abs(rec.true_q - q_lib).max() < 1e-6
+    with pytest.raises(ad.InputError, match=r"gravity: expected finite gravity vectors .* shape \(301, 3\)"):
+        mujoco_recording("finger3", None, u, DT, gravity=G[:-1])
+
+
+def test_turned_experiment_runs_each_orientation_trimmed_in_it():
+    """A design with two orientations (palm up, then hung): the torque's second half is the experiment trimmed in
+    the hung orientation (its bias differs from palm up's), and each half starts its multisine at the segment's
+    first sample; orientation_segments splits the record evenly."""
+    from alpes_dyn.estimation.experiments.experiment import orientation_segments
+    from alpes_dyn.model.mjcf import hanging_gravity
+
+    p = ad.load_params()
+    level = ExperimentDesign(duration=0.5, torque_amplitude=0.004)
+    hung = tuple(float(x) for x in hanging_gravity(p.gravity))
+    both = dataclasses.replace(level, orientations=(tuple(level.orientations[0]), hung))
+    seg = orientation_segments(both)
+    assert seg.shape == (501,) and seg[250] == 0 and seg[251] == 1 and np.all(np.diff(seg) >= 0)
+    _, u, x0 = experiment_torque("finger3", p, both)
+    _, u_level, x0_level = experiment_torque("finger3", p, dataclasses.replace(level, duration=0.25))
+    _, u_hung, _ = experiment_torque("finger3", p, dataclasses.replace(level, duration=0.25, orientations=(hung,)))
+    np.testing.assert_array_equal(x0, x0_level)
+    # the halves: each the single-orientation torque of that orientation, restarted (the trim's peak over the
+    # segment: the same bias where the shorter design's amplitude search agrees)
+    assert np.abs(u[:251] - u_level).max() < 1e-9
+    assert np.abs(u[251:] - u_hung[:250]).max() < 1e-9
+    assert abs(np.mean(u[251:]) - np.mean(u[:251])) > 1e-3  # hung asks for another bias

@@ -25,6 +25,9 @@ def experiment_hand(args: argparse.Namespace) -> int:
     _check_run_files(args, {"-o": ("csv",)})
     if args.perturb is None and args.true_params_out is not None:
         raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
+    if args.rig == "both":
+        raise InputError("--rig both: one finger at a time (--model finger2/finger3/thumb --chain NAME); the hand's "
+                         "six motors are excited at once in one orientation: auto, level or hanging")
     truth = load_params(args.params)
     if args.perturb is not None:  # every chain its own values, drawn
         truth = perturbed_params(truth, args.perturb, args.seed, chains=hand_chains(truth))

@@ -364,12 +364,14 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--true-params-out", default=None, metavar="FILE", help="Alpes models, with --perturb: write the drawn true parameters "
                    "there")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
-    s.add_argument("--rig", choices=("auto", "level", "hanging"), default="auto",
+    s.add_argument("--rig", choices=("auto", "level", "hanging", "both"), default="auto",
                    help="the hand's orientation during the experiment (an Alpes model): auto (default): palm up as "
                         "the file's gravity unless the finger leaves its range there (folds onto a stop, or swings "
                         "past one), then hung fingers down, the excitation scaled down where even that leaves it; "
-                        "level: palm up; hanging: fingers down (the recording gets gravity columns). Each checks the "
-                        "whole record before it is written and says what it chose")
+                        "level: palm up; hanging: fingers down (the recording gets gravity columns); both (one "
+                        "finger): the first half palm up, the second hung fingers down, each its own run of the "
+                        "excitation (gravity columns; the masses' split pinned, identify fits each run on its own "
+                        "lines). Each checks the whole record before it is written and says what it chose")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
     s.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="the recording to write")
     s.add_argument("--json", action="store_true", help="print one JSON object")

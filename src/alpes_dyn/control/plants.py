@@ -175,7 +175,8 @@ def _initial_state(mj, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np.nd
 def mujoco_recording(model: str, true_params: HandParams | str | None, torque: np.ndarray, dt: float = 1e-3, *,
                      effects: PlantEffects | None = None, q0: Sequence[float] | None = None, seed: int = 0,
                      chain: str | None = None, timestep: float = 1e-4, integrator: str = "rk4",
-                     encoder_noise_counts: float = 0.5, torque_noise: float = 5e-4) -> Recording:
+                     encoder_noise_counts: float = 0.5, torque_noise: float = 5e-4,
+                     gravity: np.ndarray | None = None) -> Recording:
     """Replay a motor torque on a MuJoCo plant of ``model`` with ``effects`` and record it as the hand's sensors do.
 
     Parameters
@@ -188,6 +189,10 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
         at rest (qd = 0), each series-elastic rotor holding the cable's static tension.
     seed: seed of the sensor noise. integrator: ``rk4`` (default), ``implicit`` or ``implicitfast``.
     encoder_noise_counts: Gaussian noise (counts) added before the encoder's quantisation. torque_noise: N m.
+    gravity: (N+1, 3) m/s^2, the gravity the plant feels at each sample (default its MJCF's, the ``tilt`` of
+        ``effects`` in it): the hand turned where it changes (the state carries on; the sensors' noise of each
+        orientation's run seeded apart); the recording holds no gravity columns (the rig's nominal
+        orientations are the caller's to write).
 
     Returns
     -------
@@ -211,18 +216,48 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     mj = load_mujoco(plant_mjcf(model, p, e, chain, timestep))
     mj.opt.integrator = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
                          "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}[integrator]
+    edges = _gravity_segments(gravity, u.shape[0])
+    if gravity is not None:  # the rest (q0's default) found in the first orientation
+        mj.opt.gravity[:] = gravity[0]
+        truth = truth.copy(gravity=np.asarray(gravity[0], dtype=float))
     d = _plant_at_rest(mj, truth, q0, u[0], p, e)
     previous = mujoco.get_mjcb_passive()
     if e.stiction is None:
         mujoco.set_mjcb_passive(_smooth_friction(mj, truth))
     try:
-        rec = _sensed_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise,
-                          offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
+        parts = []
+        for i, (a, b) in enumerate(zip(edges[:-1], edges[1:])):  # a loop over the orientations (one or two)
+            if i:
+                mj.opt.gravity[:] = gravity[a]  # the hand turned: the state carries on
+            parts.append(_sensed_run(mj, d, sub, u[a: b + 1], dt, truth, None, seed + 7919 * i,
+                                     encoder_noise_counts, torque_noise, offset=e.encoder_offset,
+                                     gain=1.0 + e.torque_constant_error))
     finally:
         mujoco.set_mjcb_passive(previous)
+    rec = parts[0] if len(parts) == 1 else _joined(parts, dt)
     if e.torque_delay:  # the sensor's reading of sample k is the torque (and its noise) of sample k - d
         rec.torque = delayed(rec.torque, e.torque_delay)
     return rec
+
+
+def _gravity_segments(gravity: np.ndarray | None, n_samples: int) -> np.ndarray:
+    """Sample indices [0, a_1, ..., N]: where the plant's ``gravity`` (N+1, 3) changes (checked: finite, the
+    record's length), 0 and the last sample around them; [0, N] without."""
+    if gravity is None:
+        return np.array([0, n_samples - 1])
+    G = np.asarray(gravity, dtype=float)
+    if G.shape != (n_samples, 3) or not np.isfinite(G).all():
+        raise InputError(f"gravity: expected finite gravity vectors (m/s^2) of shape ({n_samples}, 3), one per "
+                         f"sample, got shape {G.shape}")
+    return np.concatenate([[0], np.flatnonzero(np.any(G[1:] != G[:-1], axis=1)) + 1, [n_samples - 1]])
+
+
+def _joined(parts: list[Recording], dt: float) -> Recording:
+    """One recording of runs that follow each other (each one's first sample the last one's final state)."""
+    cat = {f: np.concatenate([getattr(r, f)[:-1] for r in parts[:-1]] + [getattr(parts[-1], f)])
+           for f in ("encoder", "torque", "true_q")}
+    return Recording(t=dt * np.arange(cat["encoder"].shape[0]), motor_names=parts[0].motor_names,
+                     joint_names=parts[0].joint_names, **cat)
 
 
 def _sensed_run(mj: Any, d: Any, sub: int, u: np.ndarray, dt: float, model: Model, actuators: list[str] | None,

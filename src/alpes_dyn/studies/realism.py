@@ -30,7 +30,7 @@ from ..estimation.experiments.adapt import Adaptation, adaptation_of, candidate_
 from ..estimation.experiments.design import ExperimentDesign
 from ..estimation.experiments.draws import perturbed_params
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
-from ..estimation.experiments.experiment import experiment_torque
+from ..estimation.experiments.experiment import experiment_torque, orientation_segments
 from ..estimation.identification.identification import THUMB_PARAMETERS, identify
 from ..estimation.observers.replay import estimate_recording
 from ..model.mjcf import HANGING_TILT, STICTION_TIMECONST, tilted_gravity
@@ -69,7 +69,7 @@ FIT_EFFECTS = "auto"
 RIGS = {"level": 0.0, "hanging": HANGING_TILT}
 """The rig's orientation (rad about the joints' axes from the file's palm-up gravity, :func:`tilted_gravity`)."""
 
-ADAPT = ("auto", "level", "hanging", "none")
+ADAPT = ("auto", "level", "hanging", "both", "none")
 """How :func:`plant_experiment` adapts the experiment to the plant (``auto``: as ``alpes-dyn experiment --rig auto``)."""
 
 CASE_NAMES = ("none", "stiction", "tendon", "rotor", "tilt", "kt", "offset", "slack", "delay", "all")
@@ -189,7 +189,7 @@ _TORQUES: dict = {}
 
 def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray, plant: Plant = FINGER3):
     """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim)."""
-    key = (plant, seed, design, tuple(np.round(gravity, 12)))
+    key = (plant, seed, design, np.round(np.asarray(gravity, dtype=float), 12).tobytes())
     if key not in _TORQUES:
         _TORQUES[key] = experiment_torque(plant.model, p, design, chain=plant.chain, true_gravity=gravity)
     return _TORQUES[key]
@@ -198,7 +198,8 @@ def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray, plant
 def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, plant: Plant = FINGER3):
     """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
     the fit never saw, in the joint range by the same design rule), from the plant's rest."""
-    fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0)  # in use: no dither, stick phases
+    fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0,  # in use: no dither, stick phases
+                                orientations=design.orientations[:1])  # and palm up (the first orientation)
     _, u, x0 = torque_of(seed, p, fresh, plant_model(plant.model, p, effects, plant.chain).gravity, plant)
     return mujoco_recording(plant.model, p, u, fresh.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed + 1000,
                             chain=plant.chain)
@@ -254,9 +255,17 @@ def _fit_row(fit: Any, truth: dict[str, float], effects: list[str]) -> dict[str,
 
 
 def _rig_tilt(design: ExperimentDesign) -> float:
-    """rad: the design's orientation as a tilt (:func:`~alpes_dyn.model.mjcf.tilted_gravity`) of the file's gravity."""
-    g, g0 = np.asarray(design.orientations[0], dtype=float), np.asarray(load_params().gravity, dtype=float)
-    return math.atan2(g0[2] * g[0] - g0[0] * g[2], g0[0] * g[0] + g0[2] * g[2])
+    """rad: the design's (first) orientation as a tilt (:func:`~alpes_dyn.model.mjcf.tilted_gravity`) of the file's
+    gravity."""
+    return _orientation_tilts(design)[0]
+
+
+def _orientation_tilts(design: ExperimentDesign) -> list[float]:
+    """rad: each of the design's orientations as a tilt (:func:`~alpes_dyn.model.mjcf.tilted_gravity`) of the file's
+    gravity."""
+    g0 = np.asarray(load_params().gravity, dtype=float)
+    return [math.atan2(g0[2] * g[0] - g0[0] * g[2], g0[0] * g[0] + g0[2] * g[2])
+            for g in np.asarray(design.orientations, dtype=float)]
 
 
 def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign, true, plant: Plant = FINGER3,
@@ -274,10 +283,15 @@ def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign,
 
     def run(r: str, d: ExperimentDesign):
         e = effects if r == "level" else dataclasses.replace(effects, tilt=effects.tilt - own + _rig_tilt(d))
-        g_true = plant_model(plant.model, true, e, plant.chain).gravity
-        _, u, x0 = torque_of(seed, true, d, g_true, plant)
+        felt = np.array([plant_model(plant.model, true, dataclasses.replace(e, tilt=e.tilt - _rig_tilt(d) + a),
+                                     plant.chain).gravity for a in _orientation_tilts(d)])  # each orientation's
+        _, u, x0 = torque_of(seed, true, d, felt, plant)
+        seg = orientation_segments(d)
+        turned = len(d.orientations) > 1
         rec = mujoco_recording(plant.model, true, u, d.dt, effects=e, q0=x0[: x0.size // 2], seed=seed,
-                               chain=plant.chain)
+                               chain=plant.chain, gravity=felt[seg] if turned else None)
+        if turned:  # the rig's nominal orientations, as the experimenter writes them (the tilt fitted on top)
+            rec.gravity = np.asarray(d.orientations, dtype=float)[seg]
         return (rec, d, e), rec.true_q
 
     if adapt == "none":

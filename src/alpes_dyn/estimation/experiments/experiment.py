@@ -3,7 +3,10 @@
 The documented experiment on one finger (``finger2``, ``finger3``):
 
 * the palm held still in one or more orientations (``orientations``, gravity vectors in the base frame;
-  default palm up, gravity along -z as in the report);
+  default palm up, gravity along -z as in the report); with several, the record is split among them and the
+  hand turned between runs of the excitation, each run designed and trimmed in its own orientation
+  (:func:`_orientation_torques`; palm up then hung fingers down, ``alpes-dyn experiment --rig both``: gravity
+  across the finger, then along it, pins the split of the masses that one orientation leaves to the friction);
 * the motor driven by a multisine torque, tau_m(t) = tau_b + a sum_i sin(2 pi f_i t + phi_i) / sqrt(n_f /
   2) over ``frequencies`` (default 0.3 to 11.3 Hz, Schroeder phases), so that the springs, gravity,
   inertias and friction all leave their mark on the encoder. The bias tau_b puts the nominal finger's
@@ -55,6 +58,7 @@ motor's encoder by fewer counts than a fit can use
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from pathlib import Path
@@ -79,7 +83,7 @@ from .recording import Recording, write_recording
 from ...simulation.integrate import simulate, stable_substeps
 from ...model.stops import JointRangeWarning
 
-__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "excitation", "model_experiment",
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments", "excitation", "model_experiment",
            "perturbed_params", "dither_amplitude"]  # dither_amplitude: from .multisine
 
 EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
@@ -262,6 +266,12 @@ def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndar
     return t, seg, np.asarray(design.orientations, dtype=float)[seg]
 
 
+def orientation_segments(design: ExperimentDesign) -> np.ndarray:
+    """(N+1,) int: the index of the orientation (``design.orientations``) each sample of the record is taken in (the
+    record split evenly among them, in turn)."""
+    return _schedule(design)[1]
+
+
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
     """States (N+1, 2n) from the static equilibrium at u[0], RK4 with the design's substeps (more where the truth's
     friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`), the torques u (N+1, m) held
@@ -360,17 +370,34 @@ def model_experiment(nominal: Model, truth: Model | None = None, design: Experim
     return _run(truth, nominal, design, seed, path)
 
 
+def _orientation_torques(truth: Model, nominal: Model, design: ExperimentDesign, t: np.ndarray, seg: np.ndarray,
+                         felt: np.ndarray) -> np.ndarray:
+    """u (N+1, m), N m: the excitation of each orientation's segment (``seg`` (N+1,) its index per sample) designed
+    on ``nominal`` in that orientation alone and trimmed on ``truth`` under ``felt`` (k, 3), m/s^2, the gravity the
+    finger feels there, the multisine restarting at the segment's first sample: the hand turned between two runs
+    of the experiment (palm up, then hung fingers down), each run with the bias and amplitudes its orientation asks
+    for -- hung, gravity pulls along the finger and the palm-up bias would be the wrong one. The fit takes each
+    segment on its own lines (:func:`~alpes_dyn.estimation.identification.lines.line_basis`). One orientation: the
+    documented experiment as it was."""
+    u = np.empty((t.shape[0], nominal.transmission.n_motors))
+    for i, g in enumerate(design.orientations):  # a loop over the orientations (one or two)
+        one = dataclasses.replace(design, orientations=(tuple(g),))
+        rows = np.flatnonzero(seg == i)
+        ti = t[rows] - t[rows[0]]
+        bias, amp = _excitation(nominal, one)
+        dither = dither_amplitude(nominal, one)
+        bias, amp, dither = _trim_on_hand(truth, nominal, one, ti, bias, amp, dither, np.asarray(felt[i], dtype=float))
+        u[rows] = _profiles(one, ti, bias, amp, dither)
+    return u
+
+
 def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path: str | Path | None) -> Recording:
     """The experiment designed on ``nominal``, trimmed on and simulated with ``truth``, with the sensors."""
-    bias, amp = _excitation(nominal, design)
-    dither = dither_amplitude(nominal, design)
     t, seg, G = _schedule(design)
-    bias, amp, dither = _trim_on_hand(truth, nominal, design, t, bias, amp, dither,
-                                      np.asarray(design.orientations[0], dtype=float))
+    u = _orientation_torques(truth, nominal, design, t, seg, np.asarray(design.orientations, dtype=float))
     rng = np.random.default_rng(seed)
     N = t.shape[0] - 1
     n_or = len(design.orientations)
-    u = _profiles(design, t, bias, amp, dither)
     x = _simulate(truth, design, u, G, seg)
     tr = truth.transmission
     step = 2 * np.pi / tr.counts_per_rev
@@ -403,9 +430,11 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
 
     The arguments are :func:`experiment`'s (the bias trimmed on the true finger as there: what the
     experimenter's slow loop on the encoder finds with the library's model of that finger).
-    ``true_gravity`` (3,), m/s^2: the gravity the true finger feels, if not the design's first orientation (a
-    palm tilted unknown to the experimenter: the excitation is designed for the orientation the design
-    names, the bias trimmed and the rest found on the finger as it is). One orientation only.
+    ``true_gravity`` (3,) or (k, 3), m/s^2: the gravity the true finger feels in each of the design's k
+    orientations, if not the design's own (a palm tilted unknown to the experimenter: the excitation is designed
+    for the orientation the design names, the bias trimmed and the rest found on the finger as it is). Several
+    orientations: one run of the excitation each, in turn (:func:`_orientation_torques`); the plant turned
+    at the segments' first samples (:func:`~alpes_dyn.control.plants.mujoco_recording`'s ``gravity``).
 
     Returns
     -------
@@ -416,20 +445,18 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
         raise InputError(f"model: the identification experiment is defined for one chain "
                          f"({', '.join(EXPERIMENT_MODELS)}), got {model!r}")
     design = _checked_design(design)
-    if len(design.orientations) != 1:
-        raise InputError(f"orientations: experiment_torque replays one orientation, got {len(design.orientations)}")
-    g_true = np.asarray(design.orientations[0] if true_gravity is None else true_gravity, dtype=float)
-    if g_true.shape != (3,) or not np.isfinite(g_true).all():
-        raise InputError(f"true_gravity: expected 3 finite numbers (m/s^2), got {np.asarray(true_gravity).tolist()!r}")
+    n_or = len(design.orientations)
+    g_true = np.asarray(design.orientations if true_gravity is None else true_gravity, dtype=float)
+    g_true = g_true[None] if g_true.shape == (3,) else g_true
+    if g_true.shape != (n_or, 3) or not np.isfinite(g_true).all():
+        raise InputError(f"true_gravity: expected 3 finite numbers (m/s^2) per orientation ({n_or}), got "
+                         f"{np.asarray(true_gravity).tolist()!r:.80}")
     p_true = true_params if isinstance(true_params, HandParams) else load_params(true_params)
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
     nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
-    bias, amp = _excitation(nominal, design)
-    dither = dither_amplitude(nominal, design)
     truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
-    t, _, _ = _schedule(design)
-    bias, amp, dither = _trim_on_hand(truth, nominal, design, t, bias, amp, dither, g_true)
-    u = _profiles(design, t, bias, amp, dither)
+    t, seg, _ = _schedule(design)
+    u = _orientation_torques(truth, nominal, design, t, seg, g_true)
     x0 = np.zeros(2 * truth.n)
-    x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true)
+    x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true[0])
     return t, u, x0

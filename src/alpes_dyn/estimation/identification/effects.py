@@ -75,6 +75,7 @@ from ...model.extras import STICTION_VELOCITY
 from ...model.params import HandParams, with_values
 from ...model.robot import Model
 from ...symbolic.parametric import select_parameters, unseen_masses
+from .lines import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
@@ -135,7 +136,8 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
                       base: str | None = None) -> str | None:
     """The fit's selection for ``effects``: ``base`` (default K, m and friction: None) with ``tendon_compliance``
     (compliance), ``tilt_y`` or ``tilt`` (tilt, only where the recording has no gravity columns: else its
-    orientation is known) and ``encoder_offset`` (offset) added. None when nothing is added to the default."""
+    orientation is known; :func:`fit_effects` fits it on a recording turned between orientations too: its
+    columns the rig's nominal orientations, the mount's error on top of them unknown) and ``encoder_offset`` (offset) added. None when nothing is added to the default."""
     extra = []
     if "compliance" in effects:
         extra.append("tendon_compliance")
@@ -294,6 +296,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     chosen = tuple(e for e in effects if e != "auto")
     if not isinstance(recording, Recording):  # read once: every round fits it, the delay's on its torque advanced
         recording = read_recording(recording, model_of(chosen))
+    # a hand turned between orientations: the gravity columns are the rig's nominal ones, its mount's tilt unknown
+    has_gravity = has_gravity and segment_starts(recording.gravity).size == 1
     rounds: list[tuple[tuple[str, ...], Any]] = []
     delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
 

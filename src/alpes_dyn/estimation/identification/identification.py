@@ -72,7 +72,8 @@ from ..observers.scenario import static_equilibrium
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
-from .shooting import ShootingProblem, line_basis, torque_model
+from .lines import line_basis, segment_starts
+from .shooting import ShootingProblem, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
 from .fit_result import IdentificationResult, identified_params
@@ -108,10 +109,12 @@ def check_selection(model: Model, parameters: str | Sequence[str] | None) -> Non
                          "maker) and fit input_gain with the springs and friction, or leave input_gain out")
 
 
-def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
+def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float],
+                   starts: Sequence[int] | None = None) -> np.ndarray:
     """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
-    ``frequencies`` (Hz): the excitation without the measurement noise off its lines."""
-    Q = np.linalg.qr(line_basis(t, frequencies))[0]
+    ``frequencies`` (Hz), per segment (``starts``, :func:`~alpes_dyn.estimation.identification.lines.line_basis`;
+    default one): the excitation without the measurement noise off its lines."""
+    Q = np.linalg.qr(line_basis(t, frequencies, starts))[0]
     return Q @ (Q.T @ np.asarray(torque, dtype=float))
 
 
@@ -502,7 +505,9 @@ def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording
     sensors' (taken off the held-out encoder), and ``compliance`` (m,) rad/(N m): the fitted tendon stretch
     C u, u the held-out torque as the fit takes it (taken off too)."""
     rec, path = recording
-    U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation)
+    G = rec.gravity[:-1] if rec.gravity is not None else None
+    U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation,
+                                                                   segment_starts(G))
     G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
     tr = model.transmission
     step = 2 * np.pi / tr.counts_per_rev

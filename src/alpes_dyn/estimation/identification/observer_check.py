@@ -35,6 +35,7 @@ import numpy as np
 
 from ...model.robot import Model
 from .adequacy import Whiteness, sensor_floor, whiteness
+from .lines import segment_starts
 from ..experiments.recording import Recording
 from ..observers.replay import advanced, estimate_recording
 
@@ -130,8 +131,10 @@ def _predicted(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray, hori
 
 
 def _first(rec: Recording, seconds: float) -> Recording:
-    """The recording's first ``seconds`` s (all of it where shorter)."""
-    k = int(round(seconds / rec.dt)) + 1
+    """The recording's first ``seconds`` s (all of it where shorter), within its first orientation (where the
+    hand turns, :func:`~alpes_dyn.estimation.identification.lines.segment_starts`: the observer takes one)."""
+    starts = segment_starts(rec.gravity)
+    k = min(int(round(seconds / rec.dt)) + 1, int(starts[1]) if starts.size > 1 else rec.n_samples)
     if k >= rec.n_samples:
         return rec
     cut = {f: (getattr(rec, f)[:k] if isinstance(getattr(rec, f), np.ndarray) else getattr(rec, f))

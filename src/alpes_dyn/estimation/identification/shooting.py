@@ -30,38 +30,23 @@ from typing import Mapping, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from ...checks import as_float_array
 from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
 from .encoder_output import EncoderOutput
+from .lines import line_basis, segment_starts
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
                   normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
 
-__all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
+__all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK"]
 
 JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
-
-
-def line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
-    """(N, 2 n_f + 1): 1, sin(2 pi f t), cos(2 pi f t) for f in ``frequencies`` (Hz), t from t[0]."""
-    f = as_float_array(frequencies, "excitation", "frequencies in Hz").reshape(-1)
-    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
-        raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
-    t = np.asarray(t, dtype=float)
-    fs = 1.0 / ((t[-1] - t[0]) / (t.shape[0] - 1))
-    if np.any(f >= 0.5 * fs):
-        raise InputError(f"excitation: frequencies must be below the Nyquist frequency {0.5 * fs:g} Hz")
-    if 2 * f.size + 1 >= t.shape[0] // 4:
-        raise InputError(f"excitation: {f.size} frequencies are too many for {t.shape[0]} samples")
-    w = 2 * np.pi * f[None, :] * (t - t[0])[:, None]
-    return np.hstack([np.ones((t.shape[0], 1)), np.sin(w), np.cos(w)])
 
 
 @dataclass
@@ -129,7 +114,7 @@ def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_nois
     sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given."""
     if excitation is None:
         return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
-    Phi_all = line_basis(rec.t, excitation)
+    Phi_all = line_basis(rec.t, excitation, segment_starts(rec.gravity))  # a block per orientation segment
     Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
     Q, R_q = _thin_qr(Phi)
     U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
