@@ -46,7 +46,7 @@ from ...fileio import atomic_write, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 
-__all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES"]
+__all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES", "MAX_SEGMENTS", "segment_starts"]
 
 MIN_SAMPLES = 100  # a shorter recording cannot tell a finger's dynamics
 
@@ -426,3 +426,21 @@ def check_recording(rec: Recording) -> Recording:
     if np.all(np.ptp(enc, axis=0) < 2) and np.all(np.ptp(np.asarray(rec.torque), axis=0) == 0):
         raise RecordingError("recording: no excitation (the torque is constant and no encoder moves)")
     return rec
+
+
+MAX_SEGMENTS = 16
+"""At most this many orientation segments: gravity columns that change more often are a hand moving through its
+orientations (an IMU's reading), one segment, the lines over the whole record."""
+
+
+def segment_starts(gravity: np.ndarray | None) -> np.ndarray:
+    """Sample indices (k,) where a segment of constant gravity starts, 0 first: each row of ``gravity`` (N+1, 3),
+    m/s^2, that differs from the row before, where there are at most :data:`MAX_SEGMENTS` segments; [0] without
+    gravity columns or where they change more often."""
+    if gravity is None:
+        return np.zeros(1, dtype=int)
+    G = np.asarray(gravity, dtype=float)
+    change = np.flatnonzero(np.any(G[1:] != G[:-1], axis=1)) + 1
+    if change.size == 0 or change.size >= MAX_SEGMENTS:
+        return np.zeros(1, dtype=int)
+    return np.concatenate([[0], change])

@@ -18,26 +18,9 @@ import numpy as np
 
 from ...checks import as_float_array
 from ...errors import InputError
+from ..experiments.recording import MAX_SEGMENTS, segment_starts  # noqa: F401 (re-exported)
 
 __all__ = ["MAX_SEGMENTS", "segment_starts", "line_basis"]
-
-MAX_SEGMENTS = 16
-"""At most this many orientation segments: gravity columns that change more often are a hand moving through its
-orientations (an IMU's reading), one segment, the lines over the whole record."""
-
-
-def segment_starts(gravity: np.ndarray | None) -> np.ndarray:
-    """Sample indices (k,) where a segment of constant gravity starts, 0 first: each row of ``gravity`` (N+1, 3),
-    m/s^2, that differs from the row before, where there are at most :data:`MAX_SEGMENTS` segments; [0] without
-    gravity columns or where they change more often."""
-    if gravity is None:
-        return np.zeros(1, dtype=int)
-    G = np.asarray(gravity, dtype=float)
-    change = np.flatnonzero(np.any(G[1:] != G[:-1], axis=1)) + 1
-    if change.size == 0 or change.size >= MAX_SEGMENTS:
-        return np.zeros(1, dtype=int)
-    return np.concatenate([[0], change])
-
 
 def line_basis(t: np.ndarray, frequencies: Sequence[float], starts: Sequence[int] | None = None) -> np.ndarray:
     """(N, k (2 n_f + 1)): per segment (``starts``, sample indices of :func:`segment_starts`; default one segment)

@@ -18,7 +18,10 @@ model -- typically the one identified from another recording (``alpes-dyn identi
 * Initial state: the static equilibrium under the first recorded torque (the hand at rest when the
   recording starts), joints without spring mid-range; covariance 0.5 rad, 1 rad/s (as the scenario).
 * A recording with ``gravity_*`` columns sets the model's gravity when they are constant (a fixed
-  orientation); a varying orientation is refused (the observer has no gravity input).
+  orientation); a recording turned between a few orientations (``alpes-dyn experiment --rig both``: constant
+  over each segment, :func:`~alpes_dyn.estimation.experiments.recording.segment_starts`) is run one orientation
+  after the other, the filter carrying its estimate and covariance over each turn; gravity varying at every
+  sample is refused (the observer has no gravity input).
 * Where the recording has ``true_q_*`` columns (a simulated experiment, or a jig), the RMSE of each
   joint after ``transient`` seconds (default min(1 s, duration / 5)), as ``alpes-dyn estimate`` prints.
 """
@@ -44,7 +47,7 @@ from ...symbolic.statespace import StateSpace
 from ...simulation.loop import Function, run_loop
 from .blocks import Observer, RecordingPlayback
 from .observers import OBSERVERS, Estimate, make_observer
-from ..experiments.recording import Recording, read_recording
+from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
 
 __all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
@@ -163,8 +166,21 @@ def _model_for(model: Model, rec: Recording) -> Model:
     g = rec.gravity
     if np.max(np.abs(g - g[0])) > 1e-9 * max(1.0, float(np.abs(g).max())):
         raise RecordingError("recording: gravity_x,_y,_z vary over the recording; the observer takes one orientation "
-                             "(split the recording where the hand turns)")
+                             f"at a time, held over at most {MAX_SEGMENTS} segments (split the recording where the "
+                             "hand turns)")
     return model.copy(gravity=g[0])
+
+
+def _piece(rec: Recording, a: int, b: int) -> Recording:
+    """Samples a..b (both in) of ``rec``: one orientation of a turned recording, its last sample the next one's
+    first (reached under this orientation's gravity: its gravity row is this one's)."""
+    if a == 0 and b == rec.n_samples - 1:
+        return rec
+    cut = {f: getattr(rec, f)[a: b + 1] for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q")
+           if isinstance(getattr(rec, f), np.ndarray)}
+    if "gravity" in cut:
+        cut["gravity"] = np.repeat(cut["gravity"][:1], b + 1 - a, axis=0)
+    return dataclasses.replace(rec, **cut)
 
 
 def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
@@ -277,7 +293,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     if not t_start < duration:
         raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
     torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
-    m_obs, angles, offsets = _observer_model(model, rec, tilt, encoder_offset)
+    edges = np.append(segment_starts(rec.gravity), N - 1)  # a recording turned between orientations: in turn
+    m_obs, angles, offsets = _observer_model(model, _piece(rec, edges[0], edges[1]), tilt, encoder_offset)
     substeps = _substeps(m_obs, dt, substeps)
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
@@ -285,9 +302,20 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     nz = 2 * n + len(pars) + len(gains)
     check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
     tr = m_obs.transmission
-    filt, z0, P0 = _replay_filter(m_obs, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
-                                  gains, pars, rec.torque[0], compiled)
-    est = _played_back(rec, filt, z0, P0, tr, offsets)
+    parts: list[Estimate] = []
+    for a, b in zip(edges[:-1], edges[1:]):  # a loop over the orientations (one, or the few a rig was turned to)
+        piece = _piece(rec, a, b)
+        m_i = m_obs if a == 0 else _observer_model(model, piece, tilt, encoder_offset)[0]
+        f, z0, P0 = _replay_filter(m_i, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
+                                   gains, pars, piece.torque[0], compiled)
+        if parts:  # the hand turned: the filter carries on from its last estimate
+            z0, P0 = parts[-1].z[-1], parts[-1].P[-1]
+        else:
+            filt = f
+        parts.append(_played_back(piece, f, z0, P0, tr, offsets))
+    est = parts[0] if len(parts) == 1 else Estimate(
+        t=rec.t.copy(), z=np.concatenate([p.z[:-1] for p in parts[:-1]] + [parts[-1].z]),
+        P=np.concatenate([p.P[:-1] for p in parts[:-1]] + [parts[-1].P]), names=filt.names)
     rmse, final = _errors(est, rec, t_start, n)
     dist = est.z[:, 2 * n + len(gains):] if pars else None
     settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
