@@ -287,10 +287,12 @@ def _seeds(r: Result) -> str:
 def realism(r: Result) -> list[str]:
     rows = [x for x in r["rows"] if "adaptation" in x]
     hung = sum(x["adaptation"]["rig"] == "hanging" for x in rows)
+    turned = sum(x["adaptation"]["rig"] == "both" for x in rows)
     scaled = sum(x["adaptation"]["amplitude_scale"] != 1.0 for x in rows)
     out = [f"{r['model']} drawn +-20 %, seeds {_seeds(r)}, {r['duration_s']:g} s experiments on the "
-           f"{r['rig']} rig, adapted on the plant (``--adapt {r.get('adapt', 'none')}``): {hung} of {len(rows)} hung "
-           f"fingers down, {scaled} scaled"]
+           f"{r['rig']} rig, adapted on the plant (``--adapt {r.get('adapt', 'none')}``): "
+           + (f"{turned} of {len(rows)} turned halfway (palm up, then hung), " if turned else "")
+           + f"{hung} of {len(rows)} hung fingers down, {scaled} scaled"]
     for case, c in r["summary"].items():
         g = c["goal"]
         misses = ", ".join(f"seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg, m {m['m_pct']:.1f} %"
