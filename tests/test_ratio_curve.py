@@ -1,0 +1,180 @@
+"""Configuration-dependent transmissions (issue 37, part 2): a tendon whose ratio changes with q, in the spec, on both
+backends, and imported from an MJCF spatial tendon, checked against MuJoCo's own tendon (length, Jacobian, forward
+dynamics under a motor torque, the tendon's armature as a rotor)."""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.model.ratio_curve import fit_ratio_curve
+from alpes_dyn.model.spec import Motor, TransmissionSpec
+
+mujoco = pytest.importorskip("mujoco")
+
+FINGER = """<mujoco model="tendon_finger">
+  <compiler angle="radian"/>
+  <option gravity="0 0 -9.81" timestep="0.0001" integrator="RK4"/>
+  <worldbody>
+    <body name="palm">
+      <site name="s0" pos="-0.02 0 -0.008"/>
+      <body name="p1">
+        <joint name="j1" axis="0 1 0" range="-0.3 1.2" stiffness="0.05" damping="0.002"/>
+        <inertial pos="0.02 0 0" mass="0.03" diaginertia="1e-6 4e-6 4e-6"/>
+        <site name="s1a" pos="0.012 0 -0.007"/>
+        <site name="s1b" pos="0.032 0 -0.002"/>
+        <geom name="c2" type="cylinder" pos="0.04 0 0.001" size="0.005 0.005" zaxis="0 1 0" contype="0" conaffinity="0"/>
+        <site name="side2" pos="0.04 0 -0.02"/>
+        <body name="p2" pos="0.04 0 0">
+          <joint name="j2" axis="0 1 0" range="-0.3 0.5" stiffness="0.04" damping="0.002"/>
+          <inertial pos="0.015 0 0" mass="0.02" diaginertia="6e-7 2e-6 2e-6"/>
+          <site name="s2a" pos="0.008 0 -0.002"/>
+          <site name="s2b" pos="0.022 0 -0.002"/>
+          <geom name="c3" type="cylinder" pos="0.03 0 0" size="0.004 0.004" zaxis="0 1 0" contype="0" conaffinity="0"/>
+          <site name="side3" pos="0.03 0 -0.02"/>
+          <body name="p3" pos="0.03 0 0">
+            <joint name="j3" axis="0 1 0" range="-0.3 0.5" stiffness="0.03" damping="0.002"/>
+            <inertial pos="0.012 0 0" mass="0.01" diaginertia="2e-7 8e-7 8e-7"/>
+            <site name="s3" pos="0.008 0 -0.002"/>
+          </body>
+        </body>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <spatial name="flexor">
+      <site site="s0"/><site site="s1a"/><site site="s1b"/>
+      <geom geom="c2" sidesite="side2"/>
+      <site site="s2a"/><site site="s2b"/>
+      <geom geom="c3" sidesite="side3"/>
+      <site site="s3"/>
+    </spatial>
+  </tendon>
+  <actuator>
+    <motor name="flex" tendon="flexor" gear="-100"/>
+  </actuator>
+</mujoco>"""
+"""A 3-joint finger whose flexor runs over sites (a straight segment across j1: a moment arm that grows by 86 % over
+its range), wraps a cylinder off j2's axis (a curve) and one on j3's axis (a constant moment arm, 4 mm)."""
+
+SITES = (FINGER.replace('<geom geom="c2" sidesite="side2"/>', "").replace('<geom geom="c3" sidesite="side3"/>', "")
+         .replace('<spatial name="flexor">', '<spatial name="flexor" armature="0.05">'))
+"""The same tendon over sites only, with an armature (MuJoCo allows none on a wrapping tendon): a rotor of
+J_t / gear^2 on a ratio that changes with q, its velocity product included."""
+
+
+def _import(xml):
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # the fit is exact to 1e-9 of the ratio: no MjcfCurveWarning
+        return ad.Model.from_mjcf(xml)
+
+
+def _mujoco_states(xml, n=12, seed=1):
+    """(q, v, u, L - L(0), gear * ten_J, qacc) at random states within the ranges, MuJoCo's."""
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_forward(m, d)
+    L0, g = float(d.ten_length[0]), float(m.actuator_gear[0, 0])
+    rng = np.random.default_rng(seed)
+    out = []
+    for _ in range(n):
+        q = m.jnt_range[:, 0] + np.ptp(m.jnt_range, axis=1) * rng.random(3)
+        v, u = 3.0 * rng.normal(size=3), 0.05 * rng.normal(size=1)
+        d.qpos[:], d.qvel[:], d.ctrl[:] = q, v, u
+        mujoco.mj_forward(m, d)
+        out.append((q, v, u, g * (float(d.ten_length[0]) - L0), g * d.ten_J.reshape(1, 3)[0].copy(), d.qacc.copy()))
+    return out
+
+
+def test_spec_form_round_trip_and_length_gradient():
+    """The spec's ratio_curve: TOML round trip; the motor angle s(q) is the integral of the ratio (its central
+    difference is rho(q) to 1e-9); the joint torque rho(q)^T tau_m; without a curve, S q exactly."""
+    spec = TransmissionSpec(motors=(Motor("a", {"j1": 1.0, "j2": 0.5}, ratio_curve={"j1": (0.2, -0.1, 0.03)}),))
+    assert TransmissionSpec.from_toml(spec.to_toml()) == spec
+    assert "ratio_curve = { j1 = [0.2, -0.1, 0.03] }" in spec.to_toml()
+    tr = spec.transmission(("j1", "j2", "j3"))
+    q = np.array([0.7, -0.4, 0.2])
+    assert tr.motor_positions(q)[0] == pytest.approx(0.7 + 0.2 * 0.7**2 / 2 - 0.1 * 0.7**3 / 3 + 0.03 * 0.7**4 / 4
+                                                     + 0.5 * -0.4, abs=1e-15)
+    h = 1e-6
+    fd = np.array([(tr.motor_positions(q + h * e) - tr.motor_positions(q - h * e)) / (2 * h) for e in np.eye(3)]).T
+    np.testing.assert_allclose(fd, tr.ratio(q), atol=1e-9)
+    np.testing.assert_allclose(tr.ratio(q)[0], [1.0 + 0.2 * 0.7 - 0.1 * 0.49 + 0.03 * 0.343, 0.5, 0.0], atol=1e-15)
+    np.testing.assert_allclose(tr.joint_torque([2.0], q), 2.0 * tr.ratio(q)[0], atol=1e-15)
+    flat = TransmissionSpec(motors=(Motor("a", {"j1": 1.0, "j2": 0.5}),)).transmission(("j1", "j2", "j3"))
+    assert not flat.curved and np.array_equal(flat.motor_positions(q), q @ flat.S.T)
+
+
+def test_fit_ratio_curve_recovers_a_polynomial():
+    q = np.linspace(-0.5, 1.5, 30)
+    c, err = fit_ratio_curve(q, 0.8 - 0.1 * q + 0.02 * q**3, 3)
+    np.testing.assert_allclose(c, [0.8, -0.1, 0.0, 0.02], atol=1e-12)
+    assert err < 1e-13
+
+
+def test_spatial_tendon_import_against_mujoco():
+    """The imported spatial tendon against MuJoCo at 12 random states: the ratio g dL/dq (ten_J) to 1e-9 of the
+    largest ratio (the fit's error), j3 wrapped on its own axis constant (exact, no curve), the motor angle
+    g (L(q) - L(0)) to 1e-9 rad, and the forward dynamics under a motor torque to 1e-8 relative."""
+    model = _import(FINGER)
+    tr, motor = model.transmission, model.spec.motors[0]
+    assert tr.curved and set(motor.ratio_curve) == {"j1", "j2"} and motor.joints["j3"] == pytest.approx(0.4, abs=1e-12)
+    for q, v, u, dL, J, qacc in _mujoco_states(FINGER):
+        np.testing.assert_allclose(tr.ratio(q)[0], J, atol=1e-9 * 0.75)
+        assert abs(tr.motor_positions(q)[0] - dL) < 1e-9
+        qdd = model.forward_dynamics(q, v, tr.joint_torque(u, q))
+        assert np.max(np.abs(qdd - qacc)) < 1e-8 * np.max(np.abs(qacc))
+
+
+def test_rotor_on_a_curved_ratio_against_mujoco():
+    """A tendon's armature J_t on a spatial tendon over sites: the rotor rho(q)^T J_m rho(q) with its velocity
+    product (MuJoCo's tendon bias), forward dynamics to 1e-8 relative at 12 states (without the velocity product the
+    error is over 1e-6); inverse dynamics undoes it."""
+    model = _import(SITES)
+    tr = model.transmission
+    assert tr.rotor_inertia[0] == pytest.approx(0.05 / 100**2)
+    worst = seen = 0.0
+    for q, v, u, dL, J, qacc in _mujoco_states(SITES):
+        qdd = model.forward_dynamics(q, v, tr.joint_torque(u, q))
+        worst = max(worst, np.max(np.abs(qdd - qacc)) / np.max(np.abs(qacc)))
+        np.testing.assert_allclose(model.inverse_dynamics(q, v, qdd), tr.joint_torque(u, q), atol=1e-12)
+        no_bias = np.linalg.solve(model.inertia_matrix(q), tr.joint_torque(u, q) - model.inverse_dynamics(
+            q, v, np.zeros(3)) + tr.rotor_bias(q, v))
+        seen = max(seen, np.max(np.abs(no_bias - qacc)) / np.max(np.abs(qacc)))
+    assert worst < 1e-8 and seen > 1e-6  # the velocity product is seen: 100 times the tolerance
+
+
+def test_symbolic_path_equals_numeric():
+    """The CasADi state space (motor input, encoder output) equals the numeric one: f to 1e-9 relative (with the
+    rotor's velocity product), h = s(q) to 1e-15, and h's Jacobian -- the observer's measurement matrix -- is rho(q)."""
+    import casadi as cs
+
+    model = _import(SITES)
+    ss = ad.StateSpace(model, input="motor", output="encoder")
+    assert ss.H is None  # the encoder is nonlinear in q
+    dh = cs.Function("dh", [ss.x], [cs.jacobian(ss.h_expr, ss.x)])
+    rng = np.random.default_rng(3)
+    for _ in range(4):
+        x = np.r_[rng.uniform(-0.3, 0.5, 3), 2.0 * rng.normal(size=3)]
+        u = 0.05 * rng.normal(size=1)
+        f = np.asarray(ss.f_function(x, u)).ravel()
+        np.testing.assert_allclose(f, ss.f(x, u), rtol=1e-9, atol=1e-9 * np.max(np.abs(f)))
+        assert abs(float(ss.h_function(x)) - model.transmission.motor_positions(x[:3])[0]) < 1e-15
+        np.testing.assert_allclose(np.asarray(dh(x))[0], np.r_[model.transmission.ratio(x[:3])[0], 0, 0, 0],
+                                   atol=1e-14)
+    xe = ss.equilibrium([0.02])  # G(q) = rho(q)^T u at rest
+    np.testing.assert_allclose(model.gravity_torque(xe[:3]), model.transmission.joint_torque([0.02], xe[:3]),
+                               atol=1e-11)
+
+
+def test_spatial_tendon_over_several_joints_says_its_error():
+    """A segment that spans two joints (s1b to s3 straight, skipping p2's sites) is not a sum of one function per
+    joint: the import says the error of its fit (MjcfCurveWarning) instead of passing it for exact."""
+    from alpes_dyn.model.mjcf_spatial import MjcfCurveWarning
+
+    xml = SITES.replace('<site site="s2a"/><site site="s2b"/>', "")
+    with pytest.warns(MjcfCurveWarning, match="largest error .* rad/rad"):
+        ad.Model.from_mjcf(xml)
