@@ -178,3 +178,67 @@ def test_spatial_tendon_over_several_joints_says_its_error():
     xml = SITES.replace('<site site="s2a"/><site site="s2b"/>', "")
     with pytest.warns(MjcfCurveWarning, match="largest error .* rad/rad"):
         ad.Model.from_mjcf(xml)
+
+
+def _drive(N):
+    """A motor torque (N, 1), N m, that flexes the finger within its ranges."""
+    t = np.arange(N) * 1e-3
+    return (0.015 + 0.008 * np.sin(2 * np.pi * 1.5 * t) + 0.005 * np.sin(2 * np.pi * 4.1 * t + 1.0)
+            + 0.004 * np.sin(2 * np.pi * 0.7 * t))[:, None]
+
+
+def test_simulation_against_mujoco():
+    """Our simulator (CVODES on the CasADi path, motor input rho(q)^T u) against MuJoCo's RK4 at 0.1 ms on the
+    wrapping tendon, 0.3 s of a flexing torque from q = 0.1: the joint angles to 1e-7 rad (measured 5.6e-9 over
+    0.5 s), the encoder output y = s(q)."""
+    from alpes_dyn.simulation.integrate import simulate
+
+    model = _import(FINGER)
+    N, x0 = 300, np.r_[0.1, 0.1, 0.1, 0.0, 0.0, 0.0]
+    u = _drive(N)
+    res = simulate(model, x0, u, duration=N * 1e-3, dt=1e-3, input="motor", output="encoder", method="cvodes",
+                   smooth=False)
+    m = mujoco.MjModel.from_xml_string(FINGER)
+    d = mujoco.MjData(m)
+    d.qpos[:] = x0[:3]
+    q = [d.qpos.copy()]
+    for k in range(N):
+        d.ctrl[:] = u[k]
+        for _ in range(10):
+            mujoco.mj_step(m, d)
+        q.append(d.qpos.copy())
+    q = np.array(q)
+    assert np.ptp(q[:, 0]) > 0.2  # the finger moved
+    np.testing.assert_allclose(res.x[:, :3], q, atol=1e-7)
+    np.testing.assert_allclose(res.y, model.transmission.motor_positions(res.x[:, :3]), atol=1e-15)
+
+
+def test_ekf_and_observability_on_a_curved_tendon():
+    """On our own simulation of the wrapping finger (0.6 s, the encoder reading s(q) = L(q)/r_m quantised to 4096
+    counts per turn), the EKF from q = 0 (truth 0.1 rad) tracks the three joints within 0.05 deg RMS after 0.3 s
+    (measured 0.005 deg); the same EKF on the ratios at q = 0 (no curve) is 4.5-6.6 deg off. Its state space is
+    observable from the one encoder (generic rank 6/6)."""
+    import dataclasses
+
+    from alpes_dyn.analysis.observability import check_observability
+    from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
+    from alpes_dyn.simulation.integrate import simulate
+
+    model = _import(FINGER)
+    assert check_observability(model, input="motor", output="encoder").rank == 6
+    N, x0 = 600, np.r_[0.1, 0.1, 0.1, 0.0, 0.0, 0.0]
+    u = _drive(N)
+    res = simulate(model, x0, u, duration=N * 1e-3, dt=1e-3, input="motor", output="encoder", method="cvodes",
+                   smooth=False)
+    step = 2 * np.pi / 4096
+    Y = np.round(res.y / step) * step
+    motor = model.spec.motors[0]
+    flat = ad.Model(model.urdf, dataclasses.replace(model.spec, motors=(Motor(motor.name, motor.joints),)))
+    rms = []
+    for m in (model, flat):
+        ekf = ExtendedKalmanFilter(ad.StateSpace(m, input="motor", output="encoder"), 1e-3,
+                                   process_noise=[1e-10] * 3 + [1e-5] * 3, measurement_noise=[step**2 / 12],
+                                   input_noise=[1e-8], substeps=4)
+        est = ekf.run(np.zeros(6), [0.05] * 3 + [1.0] * 3, u, Y)
+        rms.append(np.degrees(np.sqrt(np.mean((est.z[300:, :3] - res.x[300:, :3]) ** 2, axis=0))))
+    assert np.all(rms[0] < 0.05) and np.max(rms[1]) > 1.0
