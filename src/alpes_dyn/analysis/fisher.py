@@ -329,9 +329,8 @@ def _initial_state(model: Model, x0: Any, Ua: np.ndarray, Ga: np.ndarray) -> np.
             raise InputError(f"x0: expected {nx} values (q, qd), got {x0a.shape[0]}")
         return x0a
     m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
-    tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
     try:
-        q_rest = m0.static_equilibrium(tau0)
+        q_rest = m0.static_equilibrium(None, tau_m=Ua[0]) if tr is not None else m0.static_equilibrium(Ua[0])
     except InputError:
         if tr is None or not model.springless_joints:
             raise

@@ -192,7 +192,7 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         if tau_m.shape != (m.transmission.n_motors,):
             raise InputError(f"--tau-m: model {m.name!r} has {m.transmission.n_motors} motors "
                              f"({', '.join(m.motor_names)}), got {tau_m.size} values")
-        tau = m.transmission.joint_torque(tau_m)  # Gamma = S^T tau_m (eq. 3.13)
+        tau = m.transmission.joint_torque(tau_m, q)  # Gamma = S^T tau_m (eq. 3.13; rho(q)^T tau_m on a ratio_curve)
     F = None
     if args.force is not None:
         F = parse_vector(args.force, "force")

@@ -102,7 +102,7 @@ def static_contact_force(model: Model, q: np.ndarray, tau_m: np.ndarray, normal:
     Least squares over the joints of G(q) - S^T tau_m = -F_z J(q)^T n.
     """
     jn = model.fingertip_jacobian(q, tip).T @ _normal(normal)
-    r = model.gravity_torque(q) - model.transmission.joint_torque(np.atleast_1d(tau_m))
+    r = model.gravity_torque(q) - model.transmission.joint_torque(np.atleast_1d(tau_m), q)
     return float(-(jn @ r) / (jn @ jn))
 
 

@@ -30,7 +30,7 @@ import numpy as np
 
 from ..errors import InputError
 
-__all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve"]
+__all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve", "encoder_angles", "encoder_rates", "encoder_sensitivity"]
 
 MAX_CURVE_DEGREE = 12
 """The highest power of q in a ratio curve (a straight tendon segment over a 1.5 rad range needs 12 for a relative
@@ -105,6 +105,11 @@ class RatioCurve:
             out = out + c * qp
         return out
 
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(m, n), S's."""
+        return self.S.shape
+
     def rate_product(self, q: Any, v: Any, xp: Any = np) -> Any:
         """(drho/dt) qd, (m,): sum_i rho'_ki(q_i) qd_i^2, rad/s^2 (the rotor's acceleration that qdd does not
         give). q, v: (n,) numpy or CasADi columns."""
@@ -120,6 +125,27 @@ class RatioCurve:
             qp = qp * q
             out = out + xp.mtimes(_sparse(c, xp), qp * v2)
         return out
+
+
+def encoder_angles(enc: "np.ndarray | RatioCurve", q: np.ndarray) -> np.ndarray:
+    """The motor angles (..., m), rad, of joint angles q (..., n): S q for a constant S (m, n), s(q) for a
+    :class:`RatioCurve` (the fit's encoder map, either form)."""
+    if isinstance(enc, np.ndarray):  # (the fit's own forms, so that constant ratios give the same bits as before)
+        return np.einsum("ij,skj->ski", enc, q) if q.ndim == 3 else q @ enc.T
+    return enc.angle(q)
+
+
+def encoder_rates(enc: "np.ndarray | RatioCurve", q: np.ndarray, v: np.ndarray) -> np.ndarray:
+    """The motor velocities (..., m), rad/s: S v, or rho(q) v, for q, v (..., n)."""
+    return v @ enc.T if isinstance(enc, np.ndarray) else np.einsum("...ij,...j->...i", enc.ratio(q), v)
+
+
+def encoder_sensitivity(enc: "np.ndarray | RatioCurve", q: np.ndarray, X: np.ndarray) -> np.ndarray:
+    """The motor angles' sensitivities (..., m, d) from the joint angles' X (..., n, d) at q (..., n): S X, or
+    rho(q) X."""
+    if isinstance(enc, np.ndarray):
+        return np.einsum({4: "ij,skjd->skid", 3: "ij,kjd->kid"}.get(X.ndim, "ij,...jd->...id"), enc, X)
+    return np.einsum("...ij,...jd->...id", enc.ratio(q), X)
 
 
 def fit_ratio_curve(q: Any, ratio: Any, degree: int) -> tuple[np.ndarray, float]:

@@ -512,23 +512,38 @@ class Model(FrameKinematics):
             tau -= self.contact_torque(q, F, tip, contacts)
         return tau
 
-    def static_equilibrium(self, tau: np.ndarray, q0: np.ndarray | None = None, tol: float = 1e-12,
-                           fixed: Sequence[str] = ()) -> np.ndarray:
+    def static_equilibrium(self, tau: np.ndarray | None, q0: np.ndarray | None = None, tol: float = 1e-12,
+                           fixed: Sequence[str] = (), tau_m: np.ndarray | None = None) -> np.ndarray:
         """Joint angles q (n,), rad, where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
 
         Newton's method from ``q0`` (default 0) with the analytic Jacobian of G (:meth:`gravity_jacobian`),
         at most 0.5 rad per step, until max |G(q) - tau| < ``tol`` (N m); raises
         :class:`~alpes_dyn.InputError` if the stiffness is singular or it does not converge in 50 iterations.
         ``fixed``: joint names held at their ``q0`` values (e.g. a joint without spring that its own motor
-        holds, the thumb's ab/adduction): the balance is solved on the other joints only.
+        holds, the thumb's ab/adduction): the balance is solved on the other joints only. ``tau_m`` (m,) N m:
+        motor torques added, S^T tau_m, or rho(q)^T tau_m where the ratios change with q (its Jacobian
+        diag(tau_m . drho/dq) then in Newton's); ``tau`` None: zero.
         """
-        tau = self.vector(tau, "tau")
+        tau = np.zeros(self.n) if tau is None else self.vector(tau, "tau")
+        tr, curve = self.transmission, None
+        if tau_m is not None:
+            tau_m = np.atleast_1d(np.asarray(tau_m, dtype=float))
+            if tr.curved:
+                curve = tr.curve
+            else:
+                tau = tau + tr.joint_torque(tau_m)
+
+        def res(q: np.ndarray) -> np.ndarray:
+            return self.gravity_torque(q) - tau if curve is None else self.gravity_torque(q) - tau - curve.ratio(q).T @ tau_m
+
+        def jac(q: np.ndarray) -> np.ndarray:
+            return self.gravity_jacobian(q) if curve is None else self.gravity_jacobian(q) - np.diag(tau_m @ curve.slope(q))
         q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
         if isinstance(fixed, str):
             fixed = (fixed,)
         held = [self.joint_index(j) for j in fixed]
         if not held:
-            return newton_equilibrium(lambda q: self.gravity_torque(q) - tau, self.gravity_jacobian, q0, tol)
+            return newton_equilibrium(res, jac, q0, tol)
         free = np.setdiff1d(np.arange(self.n), held)
         if free.size == 0:
             return q0.copy()
@@ -538,8 +553,8 @@ class Model(FrameKinematics):
             q[free] = qf
             return q
 
-        qf = newton_equilibrium(lambda qf: (self.gravity_torque(full(qf)) - tau)[free],
-                                lambda qf: self.gravity_jacobian(full(qf))[np.ix_(free, free)], q0[free], tol)
+        qf = newton_equilibrium(lambda qf: res(full(qf))[free], lambda qf: jac(full(qf))[np.ix_(free, free)],
+                                q0[free], tol)
         return full(qf)
 
     # ------------------------------------------------------------------ helpers

@@ -182,6 +182,13 @@ class Transmission:
         q = self._joints(q)
         return q @ self.S.T if self._curve is None else self._curve.angle(q)
 
+    def motor_velocities(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Motor velocities qd_m = S qd, or rho(q) qd with a :attr:`ratio_curve` (rad/s); q, v: (..., n) ->
+        (..., m)."""
+        v = self._joints(v, "v")
+        return v @ self.S.T if self._curve is None else np.einsum("...ij,...j->...i", self._curve.ratio(
+            self._joints(q)), v)
+
     def unstretched(self, y: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
         """S q from an encoder reading y (rad): y - C tau_m, the tendons' stretch under the motor torque tau_m
         (N m; the one held before the reading, :func:`torque_before`) taken off (y itself for rigid tendons).

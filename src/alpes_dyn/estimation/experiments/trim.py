@@ -52,8 +52,7 @@ def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarr
     for j in held:
         i = m.joint_index(j)
         q0[i] = 0.5 * (m.lower[i] + m.upper[i])
-    return m.static_equilibrium(m.transmission.joint_torque(np.atleast_1d(np.asarray(tau_m, dtype=float))), q0,
-                                fixed=held)
+    return m.static_equilibrium(None, q0, fixed=held, tau_m=np.atleast_1d(np.asarray(tau_m, dtype=float)))
 
 
 def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[np.ndarray],
@@ -64,7 +63,7 @@ def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[
         return out
     q = _mean_equilibrium(model, out, gravity)
     m = _oriented(model, gravity)
-    G = m.gravity_torque(q) - m.transmission.joint_torque(out)  # what the held joints still need
+    G = m.gravity_torque(q) - m.transmission.joint_torque(out, q)  # what the held joints still need
     S = m.transmission.S
     for k in free:
         js = joints[k]
