@@ -1287,6 +1287,14 @@ def _tendon(*args):
     return ElasticTendon(*args)
 
 
+def _curved():
+    """finger3's URDF with one motor whose ratio on j1 changes with q_1 (a ratio_curve)."""
+    from alpes_dyn.model.spec import Motor, TransmissionSpec
+
+    return ad.Model(FINGER3, TransmissionSpec(motors=(Motor("m", {"j1": 1.0, "j2": 1.0}, ratio_curve={"j1": (0.1,)}),),
+                                              name="curved"))
+
+
 def _ses(model, tendon, **kw):
     from alpes_dyn.symbolic.elastic_tendon import SeriesElasticSystem
     return SeriesElasticSystem(model, tendon, **kw)
@@ -1993,6 +2001,10 @@ API: list[Api] = [
     A("ElasticTendon", lambda c: _tendon(1.0, -1.0, 0.0), InputError, "damping: expected 1 finite non-negative"),
     A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), rotor_inertia=np.nan), InputError,
       "rotor_inertia: expected 1 finite positive"),
+    A("SeriesElasticSystem", lambda c: _ses(_curved(), _tendon(1.0, 0.0, 0.0)), InputError,
+      "model: 'curved''s ratios change with q (ratio_curve); the series-elastic tendon is built for constant ratios"),
+    A("model_mjcf", lambda c: _curved().to_mjcf(), ModelError,
+      "model: 'curved''s ratios change with q (ratio_curve); the MJCF export writes fixed tendons"),
     A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), smooth="yes"), InputError,
       "smooth: expected True or False"),
     A("SeriesElasticSystem.simulate", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0)).simulate(np.zeros(8), [[0.0, 1.0]],
