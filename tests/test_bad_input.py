@@ -1604,7 +1604,7 @@ API: list[Api] = [
       ModelError, "motor 'a'.ratio_curve.j2: joint 'j2' is not one of the motor's joints (j1)"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'ratio_curve = { j1 = [] }\n'),
-      ModelError, "motor 'a'.ratio_curve.j1: expected a list of 1 to 12 coefficients"),
+      ModelError, "motor 'a'.ratio_curve.j1: expected a list of 1 to 16 coefficients"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'ratio_curve = { j1 = [0.1, "x"] }\n'),
       ModelError, "motor 'a'.ratio_curve.j1: expected a number, got 'x'"),
@@ -1620,7 +1620,7 @@ API: list[Api] = [
     A("fit_ratio_curve", lambda c: __import__("alpes_dyn.model.ratio_curve", fromlist=["x"])
       .fit_ratio_curve([0.0, 1.0], [1.0, 1.0], 2), InputError, "q, ratio: expected as many finite samples"),
     A("fit_ratio_curve", lambda c: __import__("alpes_dyn.model.ratio_curve", fromlist=["x"])
-      .fit_ratio_curve([0.0, 1.0], [1.0, 1.0], 13), InputError, "degree: expected an integer in 1..12"),
+      .fit_ratio_curve([0.0, 1.0], [1.0, 1.0], 17), InputError, "degree: expected an integer in 1..16"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified.coulomb]\nj1 = 1e-5\n"),
       ModelError, "identified.coulomb.j1: the spec has no coulomb value for joint 'j1'"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified]\nresidual_rms = -1\n"),

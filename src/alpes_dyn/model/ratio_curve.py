@@ -32,9 +32,9 @@ from ..errors import InputError
 
 __all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve", "encoder_angles", "encoder_rates", "encoder_sensitivity"]
 
-MAX_CURVE_DEGREE = 12
-"""The highest power of q in a ratio curve (a straight tendon segment over a 1.5 rad range needs 12 for a relative
-error of 1e-10; more is ill-conditioned)."""
+MAX_CURVE_DEGREE = 16
+"""The highest power of q in a ratio curve (a straight tendon segment across a joint of 1.5 rad range needs 13 for
+a relative error of 1e-11; much more is ill-conditioned)."""
 
 
 def _sparse(A: np.ndarray, cs: Any) -> Any:

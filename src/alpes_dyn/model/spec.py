@@ -30,7 +30,7 @@ taut; the joints' dynamics are the rigid tendon's (with the rotor's J_m S^T S). 
 
 Configuration-dependent ratios (a tendon over sites and wrapping geometry, a measured moment-arm curve): a motor's
 ``ratio_curve`` {joint: [c_1, ..., c_P]} makes that joint's ratio rho_i(q_i) = ratio_i + c_1 q_i + ... + c_P q_i^P
-(P <= 12; ``joints`` gives the ratio at q = 0). The motor angle is then the tendon's length over the pulley radius,
+(P <= 16; ``joints`` gives the ratio at q = 0). The motor angle is then the tendon's length over the pulley radius,
 s(q) = sum_i int_0^q_i rho_i, its Jacobian rho(q) maps the motor torques onto the joints (rho(q)^T tau_m) and the
 rotor adds rho(q)^T J_m rho(q) and its velocity product (:mod:`alpes_dyn.model.ratio_curve`;
 :func:`~alpes_dyn.model.ratio_curve.fit_ratio_curve` turns a measured curve into these coefficients). Without it
