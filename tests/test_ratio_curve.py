@@ -282,3 +282,30 @@ def test_identification_on_a_curved_tendon():
         assert abs(got[f"K_{i}"] / nominal.spec.stiffness[j] - 1) > 0.05  # it moved from the start
     for i, mass in enumerate((0.03, 0.02, 0.01), start=1):
         assert got[f"m_{i}"] == pytest.approx(mass, rel=0.03)
+
+
+def test_fisher_information_on_a_curved_tendon():
+    """The Cramér-Rao bound of one spring on the wrapping finger (y = s(q), its sensitivities rho(q) dq/dK) equals
+    the one from central differences of our simulated encoder, (sum_k (dy_k/dK)^2 / sigma^2)^-1/2, to 1e-4 relative
+    (initial state known)."""
+    import dataclasses
+
+    from alpes_dyn.analysis.fisher import fisher_information
+    from alpes_dyn.simulation.integrate import simulate
+
+    model = _import(FINGER)
+    N, sub = 300, 4
+    u = _drive(N)
+    x0 = np.r_[model.static_equilibrium(None, tau_m=u[0]), np.zeros(3)]
+    rep = fisher_information(model, "K_2", U=u, dt=1e-3, x0=x0, initial_state="known", substeps=sub,
+                             encoder_noise_counts=0.5)
+    k2, h = model.spec.stiffness["j2"], 1e-5
+
+    def y(k: float) -> np.ndarray:
+        m = ad.Model(model.urdf, dataclasses.replace(model.spec, stiffness={**model.spec.stiffness, "j2": k}))
+        return simulate(m, x0, np.repeat(u, sub, axis=0), duration=N * 1e-3, dt=1e-3 / sub, method="rk4",
+                        input="motor", output="encoder", smooth=False).y[::sub, 0]
+    dy = (y(k2 * (1 + h)) - y(k2 * (1 - h))) / (2 * h * k2)
+    step = 2 * np.pi / model.transmission.counts_per_rev
+    sigma2 = (0.5 * step) ** 2 + step**2 / 12
+    assert rep.std[0] == pytest.approx(np.sum(dy**2 / sigma2) ** -0.5, rel=1e-4)

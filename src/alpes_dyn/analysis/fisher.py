@@ -348,11 +348,14 @@ def _information(model: Model, sm: Any, x0a: np.ndarray, Ua: np.ndarray, Ga: np.
     ``sigma`` rad) and of the camera's joint angles at ``cam_idx`` (noise ``cam_noise`` rad)."""
     n, nx, p = model.n, 2 * model.n, sm.p
     tr = model.transmission
-    _, X = sm.run(x0a[None], Ua[None], Ga[None], th)
+    xs, X = sm.run(x0a[None], Ua[None], Ga[None], th)
     X = X[0]  # (N+1, nx, nx + p): d x_k / d(x0, theta)
     cols = np.concatenate([np.arange(nx, nx + p), np.arange(nx)])  # (theta, x0)
     S = np.asarray(tr.S, dtype=float) if tr is not None else np.eye(n)
-    Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
+    if tr is not None and tr.curved:  # y = s(q): its sensitivities rho(q) dq
+        Jy = np.einsum("kmj,kjd->kmd", tr.ratio(xs[0, :, :n]), X[:, :n, :][:, :, cols])
+    else:
+        Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
     for k, i in sm.dynamics._sel["encoder_offset"]:  # y = S q + offset
         Jy[:, i, k] += 1.0
     U_samples = torque_before(np.concatenate([Ua, Ua[-1:]]))  # the torque held before each sample
