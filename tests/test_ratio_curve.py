@@ -104,6 +104,11 @@ def test_spec_form_round_trip_and_length_gradient():
     np.testing.assert_allclose(fd, tr.ratio(q), atol=1e-9)
     np.testing.assert_allclose(tr.ratio(q)[0], [1.0 + 0.2 * 0.7 - 0.1 * 0.49 + 0.03 * 0.343, 0.5, 0.0], atol=1e-15)
     np.testing.assert_allclose(tr.joint_torque([2.0], q), 2.0 * tr.ratio(q)[0], atol=1e-15)
+    import pickle
+
+    model = ad.Model(ad.urdf_string("finger3"), spec)  # pickled as its URDF and its spec's TOML
+    np.testing.assert_array_equal(pickle.loads(pickle.dumps(model)).transmission.motor_positions(q),
+                                  model.transmission.motor_positions(q))
     flat = TransmissionSpec(motors=(Motor("a", {"j1": 1.0, "j2": 0.5}),)).transmission(("j1", "j2", "j3"))
     assert not flat.curved and np.array_equal(flat.motor_positions(q), q @ flat.S.T)
 
@@ -282,6 +287,10 @@ def test_identification_on_a_curved_tendon():
         assert abs(got[f"K_{i}"] / nominal.spec.stiffness[j] - 1) > 0.05  # it moved from the start
     for i, mass in enumerate((0.03, 0.02, 0.01), start=1):
         assert got[f"m_{i}"] == pytest.approx(mass, rel=0.03)
+    from alpes_dyn.estimation.identification.identified_spec import identified_spec
+
+    written = identified_spec(fit, nominal.spec, masses="urdf")  # `identify -o`'s spec keeps the curve
+    assert written.motors[0].ratio_curve == nominal.spec.motors[0].ratio_curve
 
 
 def test_fisher_information_on_a_curved_tendon():
