@@ -174,6 +174,11 @@ def test_symbolic_path_equals_numeric():
     xe = ss.equilibrium([0.02])  # G(q) = rho(q)^T u at rest
     np.testing.assert_allclose(model.gravity_torque(xe[:3]), model.transmission.joint_torque([0.02], xe[:3]),
                                atol=1e-11)
+    np.testing.assert_allclose(model.static_equilibrium(None, tau_m=[0.02]), xe[:3], atol=1e-12)
+    from alpes_dyn.control.controller import static_contact_force, static_motor_torque
+
+    assert abs(static_contact_force(model, xe[:3], np.array([0.02]), [0.0, 0.0, 1.0])) < 1e-9  # nothing to push
+    assert static_motor_torque(model, xe[:3], 0.0, [0.0, 0.0, 1.0]) == pytest.approx(0.02, rel=1e-9)
 
 
 def test_spatial_tendon_over_several_joints_says_its_error():
