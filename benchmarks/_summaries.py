@@ -261,6 +261,19 @@ def foreign_hands(r: Result) -> list[str]:
         if c:
             out.append(f"control {c['wall_s']:.1f} s: " + (f"steady-state error {_pct(c['steady_state_error'])}"
                                                           if c["error"] is None else f"``{c['error']}``"))
+    sp = r.get("spatial")
+    if sp:
+        e, i = sp["dynamics_vs_mujoco"], sp["identify"]
+        out.append(f"spatial-tendon finger (3 joints, a flexor over sites and two wrapping cylinders; ``import`` "
+                   f"{sp['import_wall_s']:.1f} s, its moment arms fitted) against MuJoCo: ratio {e['ratio']:.1e}, "
+                   f"motor angle {e['angle_rad']:.1e} rad, forward dynamics {e['qdd']:.1e} (relative; goal <= 1e-9: "
+                   f"{_met(sp['dynamics_goal_met'])})")
+        out.append(f"spatial finger on a MuJoCo recording (masses drawn +-15 %, springs +-10 %): identify "
+                   f"{i['wall_s']:.1f} s, " + ", ".join(f"{k} {100 * v:+.2f} %" for k, v in i["error"].items())
+                   + f" (converged {i['converged']}, trustworthy {i['trustworthy']}; goal springs 3 %, masses 5 %: "
+                   f"{_met(i['goal_met'])})" + (f"; EKF on the identified pair: worst joint "
+                                                f"{sp['estimate']['worst_rmse_deg']:.3f} deg (goal < 0.5 deg: "
+                                                f"{_met(sp['estimate']['goal_met'])})" if "estimate" in sp else ""))
     return out
 
 

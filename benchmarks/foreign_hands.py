@@ -2,7 +2,7 @@
 ``alpes_dyn/data/shadow_hand`` (:func:`~alpes_dyn.model.mjcf_import.example_mjcf_path`; Menagerie's kinematics and
 dynamics, meshes replaced by primitives: 24 hinges, 20 position servos, 4 on fixed tendons J2 + J1).
 
-Three parts (and a fourth, ``held``: the whole hand with its wrist held, ``experiment``, ``identify --chain`` and
+Three parts on the Shadow hand (and a fourth, ``held``: the whole hand with its wrist held, ``experiment``, ``identify --chain`` and
 ``estimate --chain`` on our simulator's recording), each command timed:
 
 1. ``import`` of the shipped MJCF (a new process) and the dynamics of the pair it writes against MuJoCo on the MJCF
@@ -28,11 +28,20 @@ Three parts (and a fourth, ``held``: the whole hand with its wrist held, ``exper
    barely moves says little of its mass), and ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or its one-line
    refusal.
 
+4. ``spatial`` (part 2 of the issue): the 3-joint finger of ``tests/test_ratio_curve.py`` whose flexor runs over
+   sites, a cylinder off one joint's axis and one on another's (MJCF written by that test): ``import`` (its moment
+   arms fitted on MuJoCo's ``ten_J``), the ratio, the motor angle and the forward dynamics against MuJoCo over
+   ``--states`` random states (goal <= 1e-9 relative), a MuJoCo recording (RK4 at 0.1 ms, the encoder MuJoCo's own
+   tendon length) of the finger with its masses drawn x (1 + U(-15 %, +15 %)) and its springs x (1 + U(-10 %, +10 %))
+   under a pulling multisine of ``--spatial-duration`` s (default 8), ``identify`` (springs, masses, viscous friction; goals 3 % and 5 %)
+   and ``estimate`` on the identified pair (goal < 0.5 deg).
+
 Every command's wall time is a first run as a new process: imports, and compiles where the compile cache
 (:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
 Prints a table, or one JSON object with ``--json``; ``uptime`` before and after.
 
-    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--skip held,finger] [--cold]
+    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--spatial-duration 8]
+                                       [--skip held,finger,spatial] [--cold]
 """
 
 from __future__ import annotations
@@ -229,6 +238,125 @@ def finger(d: Path, seed: int, duration: float) -> dict[str, Any]:
     return out
 
 
+SPATIAL_LINES = (0.7, 1.3, 2.1, 3.7, 5.3, 7.9, 11.3)
+"""The spatial finger's multisine (Hz)."""
+SPATIAL_PULL = (0.015, 0.004)
+"""Its motor torque, N m: the pull, and each line's amplitude."""
+
+
+def _spatial_mjcf(seed: int) -> tuple[str, str, dict[str, float]]:
+    """The nominal finger of ``tests/test_ratio_curve.py`` (a flexor over sites and two wrapping cylinders, written by
+    that test), the true one with each link's mass and inertia times 1 + U(-MASS_SPREAD, MASS_SPREAD) and each spring
+    times 1 + U(-0.1, 0.1), and the true values by parameter name."""
+    import importlib.util
+    import re
+
+    spec = importlib.util.spec_from_file_location("test_ratio_curve", Path(__file__).parents[1] / "tests"
+                                                  / "test_ratio_curve.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    rng = np.random.default_rng(seed)
+    text, masses, springs = mod.FINGER, [], []
+
+    def body(mt: re.Match) -> str:
+        f = 1 + rng.uniform(-MASS_SPREAD, MASS_SPREAD)
+        masses.append(float(mt.group(2)) * f)
+        inertia = " ".join(repr(float(x) * f) for x in mt.group(3).split())
+        return f'{mt.group(1)}mass="{masses[-1]!r}" diaginertia="{inertia}"'
+
+    def spring(mt: re.Match) -> str:
+        springs.append(float(mt.group(1)) * (1 + rng.uniform(-0.1, 0.1)))
+        return f'stiffness="{springs[-1]!r}"'
+    out = re.sub(r'(<inertial pos="[^"]*" )mass="([^"]*)" diaginertia="([^"]*)"', body, text)
+    out = re.sub(r'stiffness="([^"]*)"', spring, out)
+    true = {f"K_{i}": k for i, k in enumerate(springs, 1)} | {f"m_{i}": m for i, m in enumerate(masses, 1)}
+    return text, out, true
+
+
+def _mujoco_record(xml: str, u: np.ndarray, q0: np.ndarray, seed: int) -> Any:
+    """MuJoCo (RK4 at 0.1 ms) driven by the motor torque u (N+1, 1) held per 1 ms, from rest at q0: the encoder is
+    MuJoCo's own tendon, gear (L(q) - L(0)), at 4096 counts per turn with 0.3 count of noise."""
+    import mujoco
+
+    from alpes_dyn.estimation.experiments.recording import Recording
+
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_fwdPosition(m, d)
+    L0, g = float(d.ten_length[0]), float(m.actuator_gear[0, 0])
+    d.qpos[:] = q0
+    mujoco.mj_forward(m, d)
+    q, y = [d.qpos.copy()], [g * (float(d.ten_length[0]) - L0)]
+    for k in range(u.shape[0] - 1):
+        d.ctrl[:] = u[k]
+        for _ in range(10):
+            mujoco.mj_step(m, d)
+        mujoco.mj_fwdPosition(m, d)
+        q.append(d.qpos.copy())
+        y.append(g * (float(d.ten_length[0]) - L0))
+    rng, step = np.random.default_rng(seed), 2 * np.pi / 4096
+    enc = np.round((np.array(y)[:, None] + 0.3 * step * rng.standard_normal((len(y), 1))) / step)
+    names = tuple(mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_JOINT, j) for j in range(m.njnt))
+    return Recording(t=np.arange(u.shape[0]) * 1e-3, encoder=enc, torque=u + 1e-5 * rng.standard_normal(u.shape),
+                     motor_names=("flex",), joint_names=names, q=None, gravity=None, true_q=np.array(q))
+
+
+def spatial(d: Path, seed: int, duration: float, states: int) -> dict[str, Any]:
+    """A spatial-tendon finger (part 2 of issue 37): ``import`` of its MJCF (the tendon's moment arms fitted), its
+    ratio, motor angle and forward dynamics against MuJoCo, a MuJoCo recording of a finger with drawn masses and
+    springs, ``identify`` and ``estimate`` on it."""
+    import mujoco
+
+    import alpes_dyn as ad
+    from alpes_dyn.estimation.experiments.recording import write_recording
+
+    nominal_xml, true_xml, true = _spatial_mjcf(seed)
+    (d / "finger.xml").write_text(nominal_xml)
+    out: dict[str, Any] = {}
+    out["import_wall_s"], imp = cli("import", "--model", str(d / "finger.xml"), "-o", str(d / "finger"))
+    base = ["--model", imp["urdf"], "--spec", imp["spec"]]
+    model = ad.Model.from_urdf_file(imp["urdf"], imp["spec"])
+    tr, m = model.transmission, mujoco.MjModel.from_xml_string(nominal_xml)
+    mj, g, rng = mujoco.MjData(m), float(m.actuator_gear[0, 0]), np.random.default_rng(seed)
+    mujoco.mj_fwdPosition(m, mj)
+    L0, err = float(mj.ten_length[0]), {"ratio": 0.0, "angle_rad": 0.0, "qdd": 0.0}
+    for _ in range(states):
+        q = m.jnt_range[:, 0] + np.ptp(m.jnt_range, axis=1) * rng.random(3)
+        mj.qpos[:], mj.qvel[:], mj.ctrl[:] = q, 3 * rng.standard_normal(3), 0.05 * rng.standard_normal(1)
+        mujoco.mj_forward(m, mj)
+        J = g * np.asarray(mj.ten_J).reshape(1, 3)[0]
+        err["ratio"] = max(err["ratio"], float(np.max(np.abs(tr.ratio(q)[0] - J)) / np.max(np.abs(J))))
+        err["angle_rad"] = max(err["angle_rad"], abs(float(tr.motor_positions(q)[0]) - g * (mj.ten_length[0] - L0)))
+        qdd = model.forward_dynamics(q, mj.qvel.copy(), tr.joint_torque(mj.ctrl.copy(), q))
+        err["qdd"] = max(err["qdd"], float(np.max(np.abs(qdd - mj.qacc)) / np.max(np.abs(mj.qacc))))
+    out["dynamics_vs_mujoco"] = err
+    out["dynamics_goal_met"] = max(err["ratio"], err["qdd"]) <= GOALS["dynamics_rel"]
+    N = int(round(duration / 1e-3))
+    t = np.arange(N + 1) * 1e-3
+    u = (SPATIAL_PULL[0] + sum(SPATIAL_PULL[1] * np.sin(2 * np.pi * f * t + rng.uniform(0, 2 * np.pi))
+                               for f in SPATIAL_LINES))[:, None]
+    truth = ad.Model.from_mjcf(true_xml)
+    t0 = time.perf_counter()
+    rec = _mujoco_record(true_xml, u, truth.static_equilibrium(None, tau_m=u[0]), seed + 1)
+    out["mujoco_recording_s"] = time.perf_counter() - t0
+    out["mujoco_swing_deg"] = dict(zip(rec.joint_names, np.degrees(np.ptp(rec.true_q, axis=0)).tolist()))
+    write_recording(rec, d / "mujoco.csv")
+    w, fit = cli("identify", *base, "--data", str(d / "mujoco.csv"), "--excitation",
+                 ",".join(f"{f:g}" for f in SPATIAL_LINES), "-o", str(d / "ident.toml"), "--force")
+    errs = {k: fit["parameters"][k]["value"] / v - 1 for k, v in true.items() if k in fit["parameters"]}
+    z = {k: (fit["parameters"][k]["value"] - v) / (fit["parameters"][k]["std"] or np.nan) for k, v in true.items()
+         if k in fit["parameters"]}
+    out["identify"] = {"wall_s": w, "converged": fit.get("converged"), "trustworthy": fit.get("trustworthy"),
+                       "iterations": fit.get("iterations"), "error": errs, "z": z, "goal_met": bool(errs) and all(
+                           abs(e) < (0.03 if k.startswith("K") else GOALS["mass_error"]) for k, e in errs.items())}
+    if fit.get("urdf_output"):
+        w, ekf = cli("estimate", "--model", fit["urdf_output"], "--spec", str(d / "ident.toml"), "--data",
+                     str(d / "mujoco.csv"))
+        worst = float(max(np.degrees(ekf["rmse"])))
+        out["estimate"] = {"wall_s": w, "worst_rmse_deg": worst, "goal_met": worst < GOALS["ekf_rmse_deg"]}
+    return out
+
+
 def _uptime() -> str:
     return subprocess.run(["uptime"], capture_output=True, text=True).stdout.strip()
 
@@ -276,6 +404,24 @@ def _table(r: dict[str, Any]) -> str:
         c = f["control"]
         lines.append(f"  control {c['wall_s']:.1f} s: " + (f"steady-state error {100 * c['steady_state_error']:.2f} %"
                                                             if c["error"] is None else c["error"]))
+    sp = r.get("spatial")
+    if sp:
+        e, i = sp["dynamics_vs_mujoco"], sp["identify"]
+        lines += ["spatial-tendon finger (3 joints, a flexor over sites and two wrapping cylinders, its moment arms "
+                  f"fitted on import, {sp['import_wall_s']:.1f} s):",
+                  f"  vs MuJoCo: ratio {e['ratio']:.1e} (relative), motor angle {e['angle_rad']:.1e} rad, qdd "
+                  f"{e['qdd']:.1e} (goal <= {GOALS['dynamics_rel']:.0e}: {'met' if sp['dynamics_goal_met'] else 'NOT met'})",
+                  f"  MuJoCo recording {sp['mujoco_recording_s']:.1f} s (swing "
+                  + ", ".join(f"{k} {v:.1f}" for k, v in sp["mujoco_swing_deg"].items()) + " deg); identify "
+                  f"{i['wall_s']:.1f} s ({i['iterations']} iterations, converged {i['converged']}, trustworthy "
+                  f"{i['trustworthy']}): " + ", ".join(f"{k} {100 * v:+.2f} % ({i['z'][k]:+.1f} sd)"
+                                                         for k, v in i["error"].items())
+                  + f" (goal springs 3 %, masses {100 * GOALS['mass_error']:.0f} %: "
+                  f"{'met' if i['goal_met'] else 'NOT met'})"]
+        if "estimate" in sp:
+            es = sp["estimate"]
+            lines.append(f"  estimate {es['wall_s']:.1f} s: EKF worst joint {es['worst_rmse_deg']:.3f} deg (goal < "
+                         f"{GOALS['ekf_rmse_deg']} deg: {'met' if es['goal_met'] else 'NOT met'})")
     lines.append(f"uptime after: {r['uptime_after']}; {r['seconds']:.0f} s")
     return "\n".join(lines)
 
@@ -286,13 +432,16 @@ def main() -> None:
     ap.add_argument("--seed", type=int, default=0, help="the drawn masses' and the states' seed (default 0)")
     ap.add_argument("--states", type=int, default=20, help="random states of the MuJoCo check (default 20)")
     ap.add_argument("--duration", type=float, default=4.0, help="the experiment's length, s (default 4)")
-    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger")
+    ap.add_argument("--spatial-duration", type=float, default=8.0,
+                    help="the spatial finger's MuJoCo recording, s (default 8: at 4 s its masses' standard errors are "
+                         "about 4 %%)")
+    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger, spatial")
     ap.add_argument("--cold", action="store_true", help="a private, empty compile cache (compiles in the times)")
     a = ap.parse_args()
     skip = {s for s in a.skip.split(",") if s}
-    parts = {"hand", "held", "finger"}
+    parts = {"hand", "held", "finger", "spatial"}
     if skip - parts:
-        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} (hand, held, finger)")
+        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} (hand, held, finger, spatial)")
     t0 = time.perf_counter()
     r: dict[str, Any] = {"uptime_before": _uptime(), "seed": a.seed, "goals": GOALS}
     with tempfile.TemporaryDirectory() as tmp:
@@ -308,6 +457,9 @@ def main() -> None:
         if "finger" not in skip:
             (d / "f").mkdir()
             r["finger"] = finger(d / "f", a.seed, a.duration)
+        if "spatial" not in skip:
+            (d / "s").mkdir()
+            r["spatial"] = spatial(d / "s", a.seed, a.spatial_duration, a.states)
     r["uptime_after"], r["seconds"] = _uptime(), time.perf_counter() - t0
     print(json.dumps(r) if a.json else _table(r))
 

@@ -1288,6 +1288,14 @@ def _tendon(*args):
     return ElasticTendon(*args)
 
 
+def _curved():
+    """finger3's URDF with one motor whose ratio on j1 changes with q_1 (a ratio_curve)."""
+    from alpes_dyn.model.spec import Motor, TransmissionSpec
+
+    return ad.Model(FINGER3, TransmissionSpec(motors=(Motor("m", {"j1": 1.0, "j2": 1.0}, ratio_curve={"j1": (0.1,)}),),
+                                              name="curved"))
+
+
 def _ses(model, tendon, **kw):
     from alpes_dyn.symbolic.elastic_tendon import SeriesElasticSystem
     return SeriesElasticSystem(model, tendon, **kw)
@@ -1592,6 +1600,28 @@ API: list[Api] = [
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'tendon_compliance = "x"\n'),
       ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'ratio_curve = { j2 = [0.1] }\n'),
+      ModelError, "motor 'a'.ratio_curve.j2: joint 'j2' is not one of the motor's joints (j1)"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'ratio_curve = { j1 = [] }\n'),
+      ModelError, "motor 'a'.ratio_curve.j1: expected a list of 1 to 16 coefficients"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'ratio_curve = { j1 = [0.1, "x"] }\n'),
+      ModelError, "motor 'a'.ratio_curve.j1: expected a number, got 'x'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'ratio_curve = [0.1]\n'),
+      ModelError, "motor 'a'.ratio_curve: expected a table joint name -> [c_1, ..., c_P]"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, None, None,
+                                                np.ones((1, 1, 3))).joint_torque([1.0]), InputError,
+      "q: a transmission whose ratios change with the joints (ratio_curve) needs the joint angles"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.eye(1, 3), np.ones((1, 3)), 4096.0, None, None,
+                                                np.ones((1, 1, 3))), InputError,
+      "ratio_curve: expected finite coefficients, only on a joint its motor drives"),
+    A("fit_ratio_curve", lambda c: __import__("alpes_dyn.model.ratio_curve", fromlist=["x"])
+      .fit_ratio_curve([0.0, 1.0], [1.0, 1.0], 2), InputError, "q, ratio: expected as many finite samples"),
+    A("fit_ratio_curve", lambda c: __import__("alpes_dyn.model.ratio_curve", fromlist=["x"])
+      .fit_ratio_curve([0.0, 1.0], [1.0, 1.0], 17), InputError, "degree: expected an integer in 1..16"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified.coulomb]\nj1 = 1e-5\n"),
       ModelError, "identified.coulomb.j1: the spec has no coulomb value for joint 'j1'"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml(ROBOT_SPEC + "[identified]\nresidual_rms = -1\n"),
@@ -1972,6 +2002,10 @@ API: list[Api] = [
     A("ElasticTendon", lambda c: _tendon(1.0, -1.0, 0.0), InputError, "damping: expected 1 finite non-negative"),
     A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), rotor_inertia=np.nan), InputError,
       "rotor_inertia: expected 1 finite positive"),
+    A("SeriesElasticSystem", lambda c: _ses(_curved(), _tendon(1.0, 0.0, 0.0)), InputError,
+      "model: 'curved''s ratios change with q (ratio_curve); the series-elastic tendon is built for constant ratios"),
+    A("model_mjcf", lambda c: _curved().to_mjcf(), ModelError,
+      "model: 'curved''s ratios change with q (ratio_curve); the MJCF export writes fixed tendons"),
     A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), smooth="yes"), InputError,
       "smooth: expected True or False"),
     A("SeriesElasticSystem.simulate", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0)).simulate(np.zeros(8), [[0.0, 1.0]],

@@ -329,9 +329,8 @@ def _initial_state(model: Model, x0: Any, Ua: np.ndarray, Ga: np.ndarray) -> np.
             raise InputError(f"x0: expected {nx} values (q, qd), got {x0a.shape[0]}")
         return x0a
     m0 = model if np.array_equal(model.gravity, Ga[0]) else model.copy(gravity=Ga[0])
-    tau0 = tr.joint_torque(Ua[0]) if tr is not None else Ua[0]
     try:
-        q_rest = m0.static_equilibrium(tau0)
+        q_rest = m0.static_equilibrium(None, tau_m=Ua[0]) if tr is not None else m0.static_equilibrium(Ua[0])
     except InputError:
         if tr is None or not model.springless_joints:
             raise
@@ -349,11 +348,14 @@ def _information(model: Model, sm: Any, x0a: np.ndarray, Ua: np.ndarray, Ga: np.
     ``sigma`` rad) and of the camera's joint angles at ``cam_idx`` (noise ``cam_noise`` rad)."""
     n, nx, p = model.n, 2 * model.n, sm.p
     tr = model.transmission
-    _, X = sm.run(x0a[None], Ua[None], Ga[None], th)
+    xs, X = sm.run(x0a[None], Ua[None], Ga[None], th)
     X = X[0]  # (N+1, nx, nx + p): d x_k / d(x0, theta)
     cols = np.concatenate([np.arange(nx, nx + p), np.arange(nx)])  # (theta, x0)
     S = np.asarray(tr.S, dtype=float) if tr is not None else np.eye(n)
-    Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
+    if tr is not None and tr.curved:  # y = s(q): its sensitivities rho(q) dq
+        Jy = np.einsum("kmj,kjd->kmd", tr.ratio(xs[0, :, :n]), X[:, :n, :][:, :, cols])
+    else:
+        Jy = np.einsum("mj,kjd->kmd", S, X[:, :n, :][:, :, cols])
     for k, i in sm.dynamics._sel["encoder_offset"]:  # y = S q + offset
         Jy[:, i, k] += 1.0
     U_samples = torque_before(np.concatenate([Ua, Ua[-1:]]))  # the torque held before each sample

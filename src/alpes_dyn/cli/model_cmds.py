@@ -192,7 +192,7 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         if tau_m.shape != (m.transmission.n_motors,):
             raise InputError(f"--tau-m: model {m.name!r} has {m.transmission.n_motors} motors "
                              f"({', '.join(m.motor_names)}), got {tau_m.size} values")
-        tau = m.transmission.joint_torque(tau_m)  # Gamma = S^T tau_m (eq. 3.13)
+        tau = m.transmission.joint_torque(tau_m, q)  # Gamma = S^T tau_m (eq. 3.13; rho(q)^T tau_m on a ratio_curve)
     F = None
     if args.force is not None:
         F = parse_vector(args.force, "force")
@@ -218,8 +218,9 @@ def cmd_dynamics(args: argparse.Namespace) -> int:
         obj["tau_m"] = None if tau_m is None else tau_m.tolist()
         cols = ("q_m", "tau_m") if tau_m is not None else ("q_m",)
         vals = np.column_stack([q_m, tau_m]) if tau_m is not None else q_m[:, None]
-        motor_lines = ["per motor: encoder angle q_m = S q [rad]" + (", motor torque tau_m [N m] (tau = S^T tau_m)"
-                                                                     if tau_m is not None else "") + ":",
+        S, St = ("s(q) = L(q)/r_m", "rho(q)^T") if m.transmission.curved else ("S q", "S^T")
+        motor_lines = [f"per motor: encoder angle q_m = {S} [rad]" + (f", motor torque tau_m [N m] (tau = {St} tau_m)"
+                                                                      if tau_m is not None else "") + ":",
                        _fmt_table(vals, m.motor_names, cols)]
     text = "\n".join([
         f"model {m.name} ({n} joints in Pinocchio's order), spring model {m.spring}" + "".join(

@@ -240,6 +240,9 @@ def _feedforward_function(ctl: ForceController, name: str) -> cs.Function:
     F = cs.SX.sym("F")
     S = np.asarray(m.transmission.S[ctl.motor], dtype=float)
     b = sym.gravity_torque(q) + F * cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, cs.DM(ctl.normal))
+    if m.transmission.curved:  # the motor's row of rho(q)
+        row = m.transmission.curve.ratio(q, cs)[ctl.motor, :].T
+        return cs.Function(name, [q, F], [cs.dot(row, b) / cs.dot(row, row)], ["q", "F"], ["tau_ff"])
     return cs.Function(name, [q, F], [cs.dot(cs.DM(S), b) / float(S @ S)], ["q", "F"], ["tau_ff"])
 
 
@@ -251,7 +254,9 @@ def _contact_force_function(ctl: ForceController, name: str) -> cs.Function:
     q = cs.SX.sym("q", m.n)
     tau = cs.SX.sym("tau_m")
     jn = cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, cs.DM(ctl.normal))
-    r = sym.gravity_torque(q) - cs.DM(np.asarray(m.transmission.S[ctl.motor], dtype=float)) * tau
+    tr = m.transmission
+    row = tr.curve.ratio(q, cs)[ctl.motor, :].T if tr.curved else cs.DM(np.asarray(tr.S[ctl.motor], dtype=float))
+    r = sym.gravity_torque(q) - row * tau
     return cs.Function(name, [q, tau], [-cs.dot(jn, r) / cs.dot(jn, jn)], ["q", "tau_m"], ["F_z"])
 
 

@@ -87,10 +87,10 @@ def static_motor_torque(model: Model, q: np.ndarray, F_z: float, normal: Sequenc
                         tip: str | None = None) -> float:
     """Motor torque tau_m (N m) that holds the normal force F_z (N) at joint angles q (rad) (eq. 2.11 at rest).
 
-    Least squares over the motor's joints of S^T tau_m = G(q) + F_z J(q)^T n; ``normal`` n (3,) is the
-    object's surface normal (base frame) along which the fingertip presses.
+    Least squares over the motor's joints of S^T tau_m = G(q) + F_z J(q)^T n (rho(q)^T where the ratios change with
+    q); ``normal`` n (3,) is the object's surface normal (base frame) along which the fingertip presses.
     """
-    S = model.transmission.S[motor]
+    S = model.transmission.ratio(q)[motor]
     b = model.gravity_torque(q) + float(F_z) * (model.fingertip_jacobian(q, tip).T @ _normal(normal))
     return float(S @ b / (S @ S))
 
@@ -102,7 +102,7 @@ def static_contact_force(model: Model, q: np.ndarray, tau_m: np.ndarray, normal:
     Least squares over the joints of G(q) - S^T tau_m = -F_z J(q)^T n.
     """
     jn = model.fingertip_jacobian(q, tip).T @ _normal(normal)
-    r = model.gravity_torque(q) - model.transmission.joint_torque(np.atleast_1d(tau_m))
+    r = model.gravity_torque(q) - model.transmission.joint_torque(np.atleast_1d(tau_m), q)
     return float(-(jn @ r) / (jn @ jn))
 
 

@@ -319,7 +319,7 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
     u = u[:, None] if u.ndim == 1 else u
     sub = _check_run("finger3", u, dt, float(mj.opt.timestep), "rk4", tr.n_motors)
     d = mujoco.MjData(mj)
-    q_init = (model.static_equilibrium(tr.joint_torque(u[0]), np.zeros(model.n), fixed=model.springless_joints)
+    q_init = (model.static_equilibrium(None, np.zeros(model.n), fixed=model.springless_joints, tau_m=u[0])
               if q0 is None else np.asarray(q0, dtype=float))
     if q_init.shape != (model.n,) or not np.isfinite(q_init).all():
         raise InputError(f"q0: expected {model.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
@@ -351,8 +351,7 @@ def _plant_at_rest(mj, truth: Model, q0: Sequence[float] | None, u0: np.ndarray,
     d = mujoco.MjData(mj)
     perm = joint_permutation(mj, truth.joint_names)
     if q0 is None:
-        q_init = truth.static_equilibrium(truth.transmission.joint_torque(u0), np.zeros(truth.n),
-                                          fixed=truth.springless_joints)
+        q_init = truth.static_equilibrium(None, np.zeros(truth.n), fixed=truth.springless_joints, tau_m=u0)
     else:
         q_init = np.asarray(q0, dtype=float)
         if q_init.shape != (truth.n,) or not np.isfinite(q_init).all():

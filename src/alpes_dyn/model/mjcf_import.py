@@ -9,7 +9,10 @@ backends read:
   fingertip or a sensor can name). A hinge placed off its body's origin (``pos``) moves the URDF link frame onto
   the joint axis: the same kinematics, the body's inertial and children expressed from there;
 * the **spec**: one motor per actuator on a fixed tendon, q_m = gear * sum_i coef_i q_i, so the ratio of joint i
-  is gear * coef_i, or on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
+  is gear * coef_i, on a spatial tendon (sites, wrapping cylinders and spheres) q_m = gear * L(q), its ratios
+  gear * dL/dq fitted as the spec's ``ratio_curve`` from MuJoCo's own tendon Jacobian over the joint ranges
+  (:mod:`alpes_dyn.model.mjcf_spatial`; the fit's error said in an ``MjcfCurveWarning`` where it is not exact), or
+  on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
   (with ``springref``, the spring's rest angle: the spec's ``[rest_angle]`` where it is not 0), ``armature``,
   ``frictionloss`` (Coulomb) and ``damping`` (viscous); a joint limit's ``solreflimit`` in MuJoCo's direct form
   (-stiffness -damping, what the export writes for a spec's ``[stops]``) as the ``[stops]`` row k = -solref[0] / w,
@@ -24,7 +27,7 @@ naming each field (:func:`not_imported`: a servo's ``gainprm``/``biasprm``, ``dy
 import`` only. MuJoCo Menagerie's Shadow Hand E3M5 ships as an example (:func:`example_mjcf_path`; tested against
 MuJoCo on that MJCF). ``hold=`` welds hinges at their reference angle, the actuators on them dropped (e.g. a hand's
 wrist: each finger then a branch of its own). What the library does not model is refused with one line naming it,
-never dropped: free, ball and slide joints, a hinge without range, a body with several joints, actuators on spatial tendons or sites, a tendon spring,
+never dropped: free, ball and slide joints, a hinge without range, a body with several joints, actuators on sites, a tendon spring,
 an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
 (``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
 :mod:`alpes_dyn.model.mimic`). An MJCF file must be a regular file within
@@ -337,6 +340,27 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
     return urdf, spec
 
 
+def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> Motor:
+    """The motor of actuator ``a`` on spatial tendon ``t``: its ratios g dL/dq fitted as the spec's ``ratio_curve``
+    (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`); an :class:`MjcfCurveWarning` gives the fit's
+    error where it is not exact (relative error over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`)."""
+    import warnings
+
+    from .mjcf_spatial import TOLERANCE, MjcfCurveWarning, fit_spatial_tendon
+
+    names = [_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
+    fit = fit_spatial_tendon(mujoco, m, t, gear, names)
+    if not fit.joints:
+        raise ModelError(f"mjcf: actuator {aname!r}'s spatial tendon crosses no joint")
+    if fit.error > TOLERANCE * fit.scale:
+        tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
+        warnings.warn(f"mjcf: spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as "
+                      f"polynomials of each joint's angle, largest error {fit.error:.2g} rad/rad "
+                      f"({fit.error / fit.scale:.2g} of the largest ratio), motor angle g L(q) to {fit.length_error:.2g}"
+                      " rad, over the joint ranges", MjcfCurveWarning, stacklevel=4)
+    return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve)
+
+
 def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> TransmissionSpec:
     O = mujoco.mjtObj
     motors = []
@@ -351,10 +375,13 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
                              "pull fixed tendons")
         t = int(m.actuator_trnid[a, 0])
         adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
+        if m.wrap_type[adr] != mujoco.mjtWrap.mjWRAP_JOINT:  # a spatial tendon: its ratios fitted as curves of q
+            motors.append(_spatial_motor(mujoco, m, a, t, aname, gear))
+            continue
         ratios = {}
         for w in range(adr, adr + num):
             if m.wrap_type[w] != mujoco.mjtWrap.mjWRAP_JOINT:
-                raise ModelError(f"mjcf: actuator {aname!r} pulls a spatial tendon; fixed tendons only")
+                raise ModelError(f"mjcf: actuator {aname!r}'s tendon mixes joints and sites")
             jname = _name(mujoco, m, O.mjOBJ_JOINT, int(m.wrap_objid[w]), "joint")
             ratios[jname] = gear * float(m.wrap_prm[w])
         # the tendon's armature J_t acts on its length sum coef_i q_i: J_t coef coef^T = (J_t / gear^2) S^T S

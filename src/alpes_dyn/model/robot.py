@@ -226,7 +226,9 @@ class Model(FrameKinematics):
         self._rotor_upper = np.triu(R)
         ids = [self.pin_model.getJointId(j) for j in self.joint_names]  # Pinocchio's ids (a mimic joint has one)
         sup = [set(self.pin_model.supports[ids[j]]) for j in range(n)]  # joint j's ancestors and itself
-        self._rotor_tree = self.mimic is None and all(ids[i] in sup[j] for i, j in zip(*np.nonzero(self._rotor_upper)))
+        self._rotor_curved = self._rotor and tr.curved  # rho(q)^T J_m rho(q) and its velocity product, per call
+        self._rotor_tree = (self.mimic is None and not self._rotor_curved
+                            and all(ids[i] in sup[j] for i, j in zip(*np.nonzero(self._rotor_upper))))
         self._dense = self._rotor or self.mimic is not None  # CRBA and a dense solve (no ABA on a mimic model)
         if self._rotor:
             _check_positive(self.pin_model, self.pin_data, R)
@@ -369,14 +371,15 @@ class Model(FrameKinematics):
         """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8): the joint-side
         ``armature`` on the diagonal and the rotors' S^T diag(J_m) S (:attr:`rotor_matrix`)."""
         q = self.vector(q, "q")
+        R = self.transmission.rotor_matrix_at(q) if self._rotor_curved else self.rotor_matrix
         if self.mimic is not None:  # (Pinocchio's CRBA on a mimic model is right on its first call only)
             M = self.mimic.mass_matrix(q)
             M[np.diag_indices(self.n)] += self.pin_model.armature
-            return M + self.rotor_matrix if self._rotor else M
+            return M + R if self._rotor else M
         M = pin.crba(self.pin_model, self.pin_data, q).copy()
         M[self._lower] = M.T[self._lower]  # CRBA fills the upper triangle
         if self._rotor:
-            M += self.rotor_matrix
+            M += R
         return M
 
     def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -428,7 +431,9 @@ class Model(FrameKinematics):
 
         With rotor inertia on the tendons (:attr:`rotor_matrix` non-zero; ABA takes only a diagonal
         armature), or mimic joints (:attr:`mimic`; Pinocchio's ABA refuses them): CRBA + S^T diag(J_m) S, the
-        bias by RNEA at zero acceleration, a Cholesky solve.
+        bias by RNEA at zero acceleration, a Cholesky solve. With ratios that change with q (the transmission's
+        ``ratio_curve``) the rotors' rho(q)^T diag(J_m) rho(q) and their velocity product
+        (:meth:`~alpes_dyn.model.transmission.Transmission.rotor_bias`).
 
         ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
         or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
@@ -467,6 +472,8 @@ class Model(FrameKinematics):
         non-finite input: the caller's finiteness check names it).
         """
         pm, pd = self.pin_model, self.pin_data
+        if self._rotor_curved:  # the rotors' velocity product (drho/dt) qd on the joints
+            tau = tau - self.transmission.rotor_bias(q, v)
         if self.mimic is not None:  # the whole tree's CRBA, projected (mimic.MimicCoupling.mass_matrix)
             b = tau - _nle(pm, pd, q, v)
             if not _isfinite(b.dot(self._tiny)):
@@ -482,7 +489,8 @@ class Model(FrameKinematics):
             M += self._rotor_upper  # in place: Pinocchio's factorisation reads data.M's upper triangle
             _chol_decompose(pm, pd)
             return _chol_solve(pm, pd, b)
-        c, info = _potrf(pd.M + self.rotor_matrix, lower=0, clean=0, overwrite_a=1)
+        R = self.transmission.rotor_matrix_at(q) if self._rotor_curved else self.rotor_matrix
+        c, info = _potrf(pd.M + R, lower=0, clean=0, overwrite_a=1)
         if info != 0:
             return np.full(self.n, np.nan)
         return _potrs(c, b)[0]
@@ -492,7 +500,9 @@ class Model(FrameKinematics):
         """Joint torques Gamma (n,), N m, that produce accelerations ``a`` (eq. 2.10; RNEA + extras)."""
         q, v, a = self.vector(q, "q"), self.vector(v, "v"), self.vector(a, "a")
         tau = pin.rnea(self.pin_model, self.pin_data, q, v, a).copy()
-        if self._rotor:
+        if self._rotor_curved:
+            tau += self.transmission.rotor_matrix_at(q) @ a + self.transmission.rotor_bias(q, v)
+        elif self._rotor:
             tau += self.rotor_matrix @ a
         if self._spring:
             tau += self.extras.spring_torque(q)
@@ -502,23 +512,38 @@ class Model(FrameKinematics):
             tau -= self.contact_torque(q, F, tip, contacts)
         return tau
 
-    def static_equilibrium(self, tau: np.ndarray, q0: np.ndarray | None = None, tol: float = 1e-12,
-                           fixed: Sequence[str] = ()) -> np.ndarray:
+    def static_equilibrium(self, tau: np.ndarray | None, q0: np.ndarray | None = None, tol: float = 1e-12,
+                           fixed: Sequence[str] = (), tau_m: np.ndarray | None = None) -> np.ndarray:
         """Joint angles q (n,), rad, where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
 
         Newton's method from ``q0`` (default 0) with the analytic Jacobian of G (:meth:`gravity_jacobian`),
         at most 0.5 rad per step, until max |G(q) - tau| < ``tol`` (N m); raises
         :class:`~alpes_dyn.InputError` if the stiffness is singular or it does not converge in 50 iterations.
         ``fixed``: joint names held at their ``q0`` values (e.g. a joint without spring that its own motor
-        holds, the thumb's ab/adduction): the balance is solved on the other joints only.
+        holds, the thumb's ab/adduction): the balance is solved on the other joints only. ``tau_m`` (m,) N m:
+        motor torques added, S^T tau_m, or rho(q)^T tau_m where the ratios change with q (its Jacobian
+        diag(tau_m . drho/dq) then in Newton's); ``tau`` None: zero.
         """
-        tau = self.vector(tau, "tau")
+        tau = np.zeros(self.n) if tau is None else self.vector(tau, "tau")
+        tr, curve = self.transmission, None
+        if tau_m is not None:
+            tau_m = np.atleast_1d(np.asarray(tau_m, dtype=float))
+            if tr.curved:
+                curve = tr.curve
+            else:
+                tau = tau + tr.joint_torque(tau_m)
+
+        def res(q: np.ndarray) -> np.ndarray:
+            return self.gravity_torque(q) - tau if curve is None else self.gravity_torque(q) - tau - curve.ratio(q).T @ tau_m
+
+        def jac(q: np.ndarray) -> np.ndarray:
+            return self.gravity_jacobian(q) if curve is None else self.gravity_jacobian(q) - np.diag(tau_m @ curve.slope(q))
         q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
         if isinstance(fixed, str):
             fixed = (fixed,)
         held = [self.joint_index(j) for j in fixed]
         if not held:
-            return newton_equilibrium(lambda q: self.gravity_torque(q) - tau, self.gravity_jacobian, q0, tol)
+            return newton_equilibrium(res, jac, q0, tol)
         free = np.setdiff1d(np.arange(self.n), held)
         if free.size == 0:
             return q0.copy()
@@ -528,8 +553,8 @@ class Model(FrameKinematics):
             q[free] = qf
             return q
 
-        qf = newton_equilibrium(lambda qf: (self.gravity_torque(full(qf)) - tau)[free],
-                                lambda qf: self.gravity_jacobian(full(qf))[np.ix_(free, free)], q0[free], tol)
+        qf = newton_equilibrium(lambda qf: res(full(qf))[free], lambda qf: jac(full(qf))[np.ix_(free, free)],
+                                q0[free], tol)
         return full(qf)
 
     # ------------------------------------------------------------------ helpers

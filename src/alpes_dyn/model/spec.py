@@ -28,6 +28,14 @@ t_j has seen the torque of [t_j-1, t_j): :func:`~alpes_dyn.model.transmission.to
 while the rotor on the cable (J_m on k_t r_m^2) resonates well above the motion's band and the cable stays
 taut; the joints' dynamics are the rigid tendon's (with the rotor's J_m S^T S). 0 (default): a rigid tendon.
 
+Configuration-dependent ratios (a tendon over sites and wrapping geometry, a measured moment-arm curve): a motor's
+``ratio_curve`` {joint: [c_1, ..., c_P]} makes that joint's ratio rho_i(q_i) = ratio_i + c_1 q_i + ... + c_P q_i^P
+(P <= 16; ``joints`` gives the ratio at q = 0). The motor angle is then the tendon's length over the pulley radius,
+s(q) = sum_i int_0^q_i rho_i, its Jacobian rho(q) maps the motor torques onto the joints (rho(q)^T tau_m) and the
+rotor adds rho(q)^T J_m rho(q) and its velocity product (:mod:`alpes_dyn.model.ratio_curve`;
+:func:`~alpes_dyn.model.ratio_curve.fit_ratio_curve` turns a measured curve into these coefficients). Without it
+the ratios are constant and everything is as above.
+
 The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``joints``)::
 
     name = "allegro_tendon"        # model label (default: the URDF's robot name)
@@ -42,6 +50,7 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     joints = { "joint_1.0" = 2.0, "joint_2.0" = 1.6, "joint_3.0" = 1.2 }   # joint -> ratio
     rotor_inertia = 1.0e-7         # kg m^2 on the motor shaft (optional, default 0)
     tendon_compliance = 0.1        # rad/(N m): the tendon's stretch seen by the encoder (optional, default 0)
+    ratio_curve = { "joint_1.0" = [-0.5, 0.1] }   # optional: the ratio changes with the joint (below)
 
     [stiffness]                    # N m/rad
     "joint_1.0" = 0.2
@@ -99,7 +108,7 @@ from ..errors import ModelError
 from ..fileio import load_toml, read_text
 from .extras import JointExtras, spring_stiffness
 from .params import IDENTIFICATION_FIELDS, HandParams
-from .spec_values import STOP_KEYS, STOPS_TABLE, _name, _number, parse_stops, stop_values, stops_toml
+from .spec_values import STOP_KEYS, STOPS_TABLE, _name, _number, _ratio_curve, parse_stops, stop_values, stops_toml
 from .transmission import Transmission
 
 __all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES",
@@ -116,7 +125,7 @@ _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "sp
 IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_inertia", "tendon_compliance")
 """The tables of a spec's ``[identified]`` section: the standard error of each identified value, by joint (the
 per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``)."""
-_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance")
+_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance", "ratio_curve")
 _MOTOR_REQUIRED = ("name", "joints")
 
 
@@ -129,12 +138,16 @@ class Motor:
     rotor (and gearbox) about the motor shaft, which adds J_m ratio_i ratio_j to the mass matrix's
     entry (i, j) (eq. 2.8's I_a on the tendon coordinate; see the module doc). ``tendon_compliance``: C
     (rad/(N m), finite) of the tendon: the encoder reads S q + C tau_m, tau_m held before the reading (the module doc; 0 is rigid).
+    ``ratio_curve``: {joint name: (c_1, ..., c_P)} the coefficients of q^1 .. q^P of that joint's ratio
+    (rad/rad^(p+1); P <= :data:`~alpes_dyn.model.ratio_curve.MAX_CURVE_DEGREE`), each joint one of ``joints``; empty
+    (default): constant ratios.
     """
 
     name: str
     joints: Mapping[str, float]
     rotor_inertia: float = 0.0
     tendon_compliance: float = 0.0
+    ratio_curve: Mapping[str, Sequence[float]] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         _name(self.name, "motor.name")
@@ -153,6 +166,7 @@ class Motor:
                                                                    unit="kg m^2"))
         object.__setattr__(self, "tendon_compliance", _number(self.tendon_compliance, f"{where}.tendon_compliance",
                                                                        0.0, unit="rad/(N m)"))
+        object.__setattr__(self, "ratio_curve", _ratio_curve(self.ratio_curve, clean, where))
 
 
 _TABLE_UNITS = {"stiffness": "N m/rad", "coulomb": "N m", "viscous": "N m s/rad", "armature": "kg m^2", "rest_angle": "rad"}
@@ -268,7 +282,8 @@ class TransmissionSpec:
             for k in _MOTOR_REQUIRED:
                 if k not in m:
                     raise ModelError(f"motor[{i}].{k}: missing field")
-            motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0), m.get("tendon_compliance", 0.0)))
+            motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0), m.get("tendon_compliance", 0.0),
+                                m.get("ratio_curve", {})))
         kw = {k: data[k] for k in _TOP_KEYS if k in data and k != "motor"}
         if "tips" in kw and isinstance(kw["tips"], list):
             kw["tips"] = tuple(kw["tips"])
@@ -309,6 +324,9 @@ class TransmissionSpec:
                 out.append(f"rotor_inertia = {m.rotor_inertia!r}")
             if m.tendon_compliance:
                 out.append(f"tendon_compliance = {m.tendon_compliance!r}")
+            if m.ratio_curve:
+                out.append("ratio_curve = { " + ", ".join(f"{q(j)} = [{', '.join(repr(x) for x in c)}]"
+                                                          for j, c in m.ratio_curve.items()) + " }")
         for t in JOINT_TABLES + (REST_TABLE,):
             table = getattr(self, t)
             if table:
@@ -387,9 +405,14 @@ class TransmissionSpec:
         for k, m in enumerate(self.motors):
             for j, r in m.joints.items():
                 S[k, idx[j]] = r
+        P = max((len(c) for m in self.motors for c in m.ratio_curve.values()), default=0)
+        C = np.zeros((P, len(self.motors), len(joint_names))) if P else None
+        for k, m in enumerate(self.motors):
+            for j, c in m.ratio_curve.items():
+                C[:len(c), k, idx[j]] = c
         return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts,
                             np.array([m.rotor_inertia for m in self.motors]),
-                            np.array([m.tendon_compliance for m in self.motors]))
+                            np.array([m.tendon_compliance for m in self.motors]), C)
 
 
 def _identified(data: Any, spec: "TransmissionSpec") -> Mapping[str, Any]:

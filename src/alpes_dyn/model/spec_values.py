@@ -1,4 +1,5 @@
-"""The values of a transmission spec (:mod:`alpes_dyn.model.spec`): a number in its physical range, a name, and the
+"""The values of a transmission spec (:mod:`alpes_dyn.model.spec`): a number in its physical range, a name, a motor's
+``ratio_curve``, and the
 ``[stops]`` table (joint stops a user gives, robot-wide and per joint: read, placed in joint order, written)."""
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..limits import MAX_NAME, check_physical
+from .ratio_curve import MAX_CURVE_DEGREE
 
 __all__ = ["STOPS_TABLE", "STOP_KEYS", "parse_stops", "stop_values", "stops_toml"]
 
@@ -111,3 +113,21 @@ def stops_toml(stops: Mapping[str, Any] | None, key: Callable[[str], str]) -> li
             f"{key(j)} = {{ " + ", ".join(f"{k} = {x!r}" for k, x in e.items()) + " }"
             for j, e in stops["joints"].items()]
     return out
+
+
+def _ratio_curve(value: Any, joints: Mapping[str, float], where: str) -> Mapping[str, tuple[float, ...]]:
+    """A motor's ``ratio_curve`` validated: {joint of ``joints``: (c_1, ..., c_P)}, 1 <= P <= MAX_CURVE_DEGREE."""
+    if not isinstance(value, Mapping):
+        raise ModelError(f"{where}.ratio_curve: expected a table joint name -> [c_1, ..., c_P], got {value!r}")
+    out = {}
+    for j, c in value.items():
+        _name(j, f"{where}.ratio_curve")
+        if j not in joints:
+            raise ModelError(f"{where}.ratio_curve.{j}: joint {j!r} is not one of the motor's joints "
+                             f"({', '.join(joints)})")
+        if isinstance(c, (str, bytes, Mapping)) or not isinstance(c, Sequence) or not 1 <= len(c) <= MAX_CURVE_DEGREE:
+            raise ModelError(f"{where}.ratio_curve.{j}: expected a list of 1 to {MAX_CURVE_DEGREE} coefficients "
+                             f"(of q^1, q^2, ...), got {c!r}")
+        out[j] = tuple(_number(x, f"{where}.ratio_curve.{j}", unit="-") for x in c)
+    return MappingProxyType(out)
+

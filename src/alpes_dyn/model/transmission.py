@@ -15,6 +15,7 @@ import numpy as np
 
 from ..checks import as_float_array
 from ..errors import InputError
+from .ratio_curve import RatioCurve
 
 __all__ = ["Transmission", "acceleration_before", "torque_before"]
 
@@ -60,6 +61,10 @@ class Transmission:
     tendon_compliance: (m,) C of each motor's tendon, rad/(N m) (default zeros: rigid): the encoder reads
         y_k = S q_k + C tau_m,k-1 (:meth:`encoder_angles` with :func:`torque_before`; the series-elastic tendon's
         quasi-static limit, :mod:`alpes_dyn.model.spec`).
+    ratio_curve: (P, m, n) or None (default: constant ratios): the coefficients of q^1 .. q^P of each ratio,
+        rho_ki(q_i) = S_ki + sum_p c_ki,p q_i^p (:mod:`alpes_dyn.model.ratio_curve`); S is then the ratio at q = 0,
+        the motor angle is s(q) = L(q) / r_m (:meth:`motor_positions`), the joint torque rho(q)^T tau_m
+        (:meth:`joint_torque` with q) and the rotors' inertia rho(q)^T diag(J_m) rho(q) (:meth:`rotor_matrix_at`).
     """
 
     motor_names: tuple[str, ...]
@@ -68,6 +73,7 @@ class Transmission:
     counts_per_rev: float
     rotor_inertia: np.ndarray | None = None
     tendon_compliance: np.ndarray | None = None
+    ratio_curve: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         J = np.zeros(self.S.shape[0]) if self.rotor_inertia is None else np.asarray(self.rotor_inertia, dtype=float)
@@ -82,6 +88,42 @@ class Transmission:
             raise InputError(f"tendon_compliance: expected {m} finite numbers (rad/(N m)), got {C.tolist()!r}")
         C.flags.writeable = False
         object.__setattr__(self, "tendon_compliance", C)
+        curve = None if self.ratio_curve is None else RatioCurve(self.S, self.ratio_curve)
+        object.__setattr__(self, "_curve", curve)
+
+    @property
+    def curved(self) -> bool:
+        """True when a ratio changes with the joint angle (:attr:`ratio_curve`), False for a constant S."""
+        return self._curve is not None
+
+    @property
+    def curve(self) -> RatioCurve | None:
+        """The q-dependent ratios (:class:`~alpes_dyn.model.ratio_curve.RatioCurve`), None for a constant S."""
+        return self._curve
+
+    def ratio(self, q: np.ndarray) -> np.ndarray:
+        """rho(q) = ds/dq (m, n), rad of motor per rad of joint (S itself for constant ratios); (..., m, n) for q
+        (..., n)."""
+        q = self._joints(q)
+        if self._curve is None:
+            return np.broadcast_to(self.S, q.shape[:-1] + self.S.shape).copy()
+        return self._curve.ratio(q)
+
+    def rotor_matrix_at(self, q: np.ndarray) -> np.ndarray:
+        """rho(q)^T diag(J_m) rho(q) (n, n), kg m^2: the rotors' inertia on the joints at q (:attr:`rotor_matrix`
+        for constant ratios). q: (n,)."""
+        if self._curve is None:
+            return self.rotor_matrix
+        R = self._curve.ratio(self._joints(q))
+        return R.T @ (self.rotor_inertia[:, None] * R)
+
+    def rotor_bias(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """rho(q)^T diag(J_m) (drho/dt) qd (n,), N m: the rotors' velocity-product torque on the joints (zeros for
+        constant ratios). q, v: (n,) rad, rad/s."""
+        if self._curve is None:
+            return np.zeros(self.S.shape[1])
+        q, v = self._joints(q), self._joints(v, "v")
+        return self._curve.ratio(q).T @ (self.rotor_inertia * self._curve.rate_product(q, v))
 
     @property
     def elastic(self) -> bool:
@@ -128,12 +170,24 @@ class Transmission:
         """B = S^T, shape (n, m): joint torques tau = B tau_m."""
         return self.S.T
 
-    def motor_positions(self, q: np.ndarray) -> np.ndarray:
-        """Encoder angles q_m = S q (rad), q: (n,) or (..., n) -> (m,) or (..., m)."""
-        q = as_float_array(q, "q", "joint angles")
+    def _joints(self, q: np.ndarray, name: str = "q") -> np.ndarray:
+        q = as_float_array(q, name, "joint angles" if name == "q" else "joint velocities")
         if q.shape[-1:] != (self.S.shape[1],):
-            raise InputError(f"q: expected last dimension {self.S.shape[1]}, got shape {q.shape}")
-        return q @ self.S.T
+            raise InputError(f"{name}: expected last dimension {self.S.shape[1]}, got shape {q.shape}")
+        return q
+
+    def motor_positions(self, q: np.ndarray) -> np.ndarray:
+        """Encoder angles q_m = S q (rad), or s(q) = L(q) / r_m with a :attr:`ratio_curve`; q: (n,) or (..., n) ->
+        (m,) or (..., m)."""
+        q = self._joints(q)
+        return q @ self.S.T if self._curve is None else self._curve.angle(q)
+
+    def motor_velocities(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
+        """Motor velocities qd_m = S qd, or rho(q) qd with a :attr:`ratio_curve` (rad/s); q, v: (..., n) ->
+        (..., m)."""
+        v = self._joints(v, "v")
+        return v @ self.S.T if self._curve is None else np.einsum("...ij,...j->...i", self._curve.ratio(
+            self._joints(q)), v)
 
     def unstretched(self, y: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
         """S q from an encoder reading y (rad): y - C tau_m, the tendons' stretch under the motor torque tau_m
@@ -144,12 +198,18 @@ class Transmission:
             return y
         return y - as_float_array(tau_m, "tau_m", "motor torques") * self.tendon_compliance
 
-    def joint_torque(self, tau_m: np.ndarray) -> np.ndarray:
-        """Joint torques S^T tau_m (N m) from motor torques tau_m (N m), (m,) or (..., m)."""
+    def joint_torque(self, tau_m: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
+        """Joint torques S^T tau_m (N m) from motor torques tau_m (N m), (m,) or (..., m); with a
+        :attr:`ratio_curve`, rho(q)^T tau_m at the joint angles q ((n,) or (..., n), required)."""
         tau_m = as_float_array(tau_m, "tau_m", "motor torques")
         if tau_m.shape[-1:] != (self.n_motors,):
             raise InputError(f"tau_m: expected last dimension {self.n_motors}, got shape {tau_m.shape}")
-        return tau_m @ self.S
+        if self._curve is None:
+            return tau_m @ self.S
+        if q is None:
+            raise InputError("q: a transmission whose ratios change with the joints (ratio_curve) needs the joint "
+                             "angles to map motor torques onto the joints")
+        return np.einsum("...k,...ki->...i", tau_m, self._curve.ratio(self._joints(q)))
 
     def quantize(self, q_m: np.ndarray) -> np.ndarray:
         """Encoder reading: q_m rounded to the encoder's resolution 2 pi / counts_per_rev (rad)."""

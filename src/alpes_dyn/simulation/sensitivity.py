@@ -131,7 +131,9 @@ class SensitivityModel:
         off = cs.SX.sym("coef", self.no)
         w = cs.vertcat(u, pd.g, pd.theta, phi, off)
         u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
-        qdd = pd.forward_dynamics(x[:n], x[n:], cs.mtimes(cs.DM(self.B), u_eff), pd.theta, pd.g)
+        tau = (cs.mtimes(tr.curve.ratio(x[:n], cs).T, u_eff) if tr is not None and tr.curved  # rho(q)^T u
+               else cs.mtimes(cs.DM(self.B), u_eff))
+        qdd = pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g)
         rhs = cs.vertcat(x[n:], qdd)
         h = self.dt / self.substeps
         # one call per sample period: the substeps in the compiled step, the input held, the states at the samples

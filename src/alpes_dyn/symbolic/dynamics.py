@@ -232,9 +232,21 @@ class SymbolicDynamics:
         M = self._be.mass_matrix(q)
         if np.any(self.extras.armature != 0):
             M = M + cs.diag(cs.DM(self.extras.armature))
-        if self.model._rotor:
+        if self.model._rotor_curved:  # rho(q)^T diag(J_m) rho(q), rho's structure that of S
+            tr = self.model.transmission
+            rho = tr.curve.ratio(q, cs)
+            M = M + cs.mtimes(rho.T, cs.mtimes(cs.diag(cs.DM(tr.rotor_inertia)), rho))
+        elif self.model._rotor:
             M = M + sparse_dm(self.model.rotor_matrix)
         return M
+
+    def rotor_bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
+        """rho(q)^T diag(J_m) (drho/dt) qd (n,), the rotors' velocity product on ratios that change with q (zeros
+        otherwise; :meth:`Transmission.rotor_bias <alpes_dyn.model.transmission.Transmission.rotor_bias>`)."""
+        if not self.model._rotor_curved:
+            return cs.SX.zeros(self.n)
+        tr = self.model.transmission
+        return cs.mtimes(tr.curve.ratio(q, cs).T, cs.DM(tr.rotor_inertia) * tr.curve.rate_product(q, v, cs))
 
     def bias_torque(self, q: cs.SX, v: cs.SX) -> cs.SX:
         """C(q, qd) qd + gravity torque (no springs), (n,)."""
@@ -310,6 +322,8 @@ class SymbolicDynamics:
         (several frames, forces or wrenches, see :meth:`contact_torque`) the stacked F of them all.
         """
         rhs = tau - self.bias_torque(q, v) - self.extras.passive_torque(q, v, smooth, cs)
+        if self.model._rotor_curved:
+            rhs = rhs - self.rotor_bias(q, v)
         if F is not None and contacts is not None:
             rhs = rhs + self.contact_torque(q, F, contacts)
         elif F is not None:

@@ -84,6 +84,9 @@ class SeriesElasticSystem:
         tr = model.transmission
         if tr is None:
             raise InputError(f"model: {model.name!r} has no motors: a series-elastic tendon links motors to joints")
+        if tr.curved:
+            raise InputError(f"model: {model.name!r}'s ratios change with q (ratio_curve); the series-elastic tendon "
+                             "is built for constant ratios")
         if tendon.n_motors != tr.n_motors:
             raise InputError(f"tendon: expected {tr.n_motors} motors' values ({', '.join(tr.motor_names)}), "
                              f"got {tendon.n_motors}")

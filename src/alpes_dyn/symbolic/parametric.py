@@ -333,6 +333,7 @@ class ParametricDynamics:
         self._S = sparse_dm(tr.S) if tr is not None else None
         self._Jm = cs.DM(tr.rotor_inertia) if tr is not None else None
         self._rotor = model.rotor_matrix if model._rotor else None
+        self._curve = tr.curve if tr is not None else None
         self.smooth_velocity = float(model.extras.smooth_velocity)
 
     # ------------------------------------------------------------------ pieces
@@ -352,12 +353,23 @@ class ParametricDynamics:
             M = M + self._rest[1].mass_matrix(q)
         if np.any(self._armature != 0):
             M = M + cs.diag(cs.DM(self._armature))
-        if self._sel["J_m"]:  # S^T diag(J_m) S with J_m fitted (S sparse: the blocks stay apart)
+        if self._curve is not None and (self._sel["J_m"] or self._rotor is not None):  # rho(q)^T diag(J_m) rho(q)
+            rho = self._curve.ratio(q, cs)
+            M = M + cs.mtimes(rho.T, cs.mtimes(cs.diag(self._vector("J_m", self._Jm, theta)), rho))
+        elif self._sel["J_m"]:  # S^T diag(J_m) S with J_m fitted (S sparse: the blocks stay apart)
             J = self._vector("J_m", self._Jm, theta)
             M = M + cs.mtimes(self._S.T, cs.mtimes(cs.diag(J), self._S))
         elif self._rotor is not None:
             M = M + sparse_dm(self._rotor)
         return M
+
+    def rotor_bias(self, q: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX | float:
+        """rho(q)^T diag(J_m) (drho/dt) qd (n,), N m, the rotors' velocity product where the ratios change with q
+        (:meth:`Transmission.rotor_bias <alpes_dyn.model.transmission.Transmission.rotor_bias>`); 0 otherwise."""
+        if self._curve is None or not (self._sel["J_m"] or self._rotor is not None):
+            return 0.0
+        J = self._vector("J_m", self._Jm, theta)
+        return cs.mtimes(self._curve.ratio(q, cs).T, J * self._curve.rate_product(q, v, cs))
 
     def bias_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, g: Any) -> cs.SX:
         """C(q, qd) qd + gravity torque (no springs) for gravity g (3,), N m; g turned by the tilt
@@ -400,6 +412,8 @@ class ParametricDynamics:
         """qdd (n,) of eq. 2.10 with joint torques ``input_gain * tau`` (+ ``F_torque``, e.g. J^T F)."""
         theta = self.theta if theta is None else theta
         rhs = self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g) - self.passive_torque(q, v, theta)
+        if self._curve is not None:
+            rhs = rhs - self.rotor_bias(q, v, theta)
         if F_torque is not None:
             rhs = rhs + F_torque
         return block_solve(self.inertia_matrix(q, theta), rhs)

@@ -6,7 +6,8 @@ Inputs (``input=``):
 
 * ``"joint"`` -- u = Gamma, the joint torques (n), the report's choice;
 * ``"motor"`` -- u = tau_m, the motor torques (m), acting through the tendon transmission
-  Gamma = S^T tau_m (:class:`~alpes_dyn.Transmission`).
+  Gamma = S^T tau_m (:class:`~alpes_dyn.Transmission`), rho(q)^T tau_m where the ratios change with q
+  (:meth:`StateSpace.input_torque`).
 
 Measured contact forces are optional known inputs F: ``force=True`` is the report's one force
 (eq. 2.9, 2.13: a 3-vector at the model's first tip, or ``tip``, base axes); ``contacts=`` any number
@@ -17,7 +18,8 @@ order given.
 Outputs (``output=``; one of them, or a list of them stacked in order):
 
 * ``"sum"`` -- y = q_1 + ... + q_k per motor (the report's, one row per motor: the joints it drives);
-* ``"encoder"`` -- q_m = S q per motor (Section 3: (r/r_m) sum q on the Alpes hand);
+* ``"encoder"`` -- q_m = S q per motor (Section 3: (r/r_m) sum q on the Alpes hand); s(q) = L(q) / r_m where the
+  ratios change with q (the transmission's ``ratio_curve``, :mod:`alpes_dyn.model.ratio_curve`);
 * ``"joints"`` -- y = q, every joint; ``"joints:<a>,<b>"`` -- the named joints;
 * ``"tip_position:<frame>"`` -- the frame's position in the base frame (3 rows, m);
 * a (p, n) array -- y = H q; a (p, 2n) array -- y = H x = H [q; qd];
@@ -164,7 +166,8 @@ class StateSpace(Rebuilt):
         self.u = cs.SX.sym("u", self.B.shape[1])
         self.F = cs.SX.sym("F", len(self.force_names)) if self.force else None
         q, v = self.x[:n], self.x[n:]
-        tau = cs.mtimes(cs.DM(self.B), self.u)
+        self._curve = tr.curve if input == "motor" and tr.curved else None
+        tau = self.input_torque(q, self.u)
         qdd = self.sym.forward_dynamics(q, v, tau, self.F, self.tip, smooth,
                                         None if (self._legacy_force or not self.force) else self.contacts)
         self.f_expr: cs.SX = cs.vertcat(v, qdd)
@@ -202,8 +205,12 @@ class StateSpace(Rebuilt):
             if kind in ("sum", "encoder") and not arg:
                 if tr is None:
                     raise ModelError(f"output {output!r} needs a tendon transmission; model {model.name!r} has none")
-                H = (tr.sum_matrix if kind == "sum" else tr.S).copy()
                 prefix = "sum" if kind == "sum" else "q_m"
+                if kind == "encoder" and tr.curved:  # s(q) = L(q) / r_m: nonlinear, its Jacobian rho(q)
+                    c = tr.curve
+                    return [_Output(lambda q, v: c.angle(q, cs), lambda q, v: c.angle(q),
+                                    tuple(f"{prefix}_{m}" for m in tr.motor_names), None)]
+                H = (tr.sum_matrix if kind == "sum" else tr.S).copy()
                 return [self._linear(np.hstack([H, np.zeros_like(H)]), tuple(f"{prefix}_{m}" for m in tr.motor_names))]
             if kind == "joints":
                 names = model.joint_names if not arg else tuple(j.strip() for j in arg.split(","))
@@ -248,6 +255,15 @@ class StateSpace(Rebuilt):
                            lambda q, v: Hq @ q + Hv @ v, names, H)
         return _Output(lambda q, v: cs.mtimes(cs.DM(Hq), q), lambda q, v: Hq @ q, names, H)
 
+    def input_torque(self, q: Any, u: Any) -> Any:
+        """The joint torques Gamma (n,) of the input u: B u, or rho(q)^T u for motor torques on ratios that change
+        with q (the transmission's ``ratio_curve``; :attr:`B` is then rho(0)^T). CasADi q, u give SX, numpy
+        arrays give numpy."""
+        numeric = isinstance(u, np.ndarray) and isinstance(q, np.ndarray)
+        if self._curve is None:
+            return self.B @ u if numeric else cs.mtimes(cs.DM(self.B), u)
+        return self._curve.ratio(q).T @ u if numeric else cs.mtimes(self._curve.ratio(q, cs).T, u)
+
     # ---------------------------------------------------------------- sizes
     @property
     def n_states(self) -> int:
@@ -282,9 +298,10 @@ class StateSpace(Rebuilt):
             raise InputError(f"F: this state space has contact forces as an input; pass F ({self.n_force},)")
         n = self.n
         if self.force and not self._legacy_force:
-            qdd = self.model.forward_dynamics(x[:n], x[n:], self.B @ u, F, None, self.smooth, self.contacts)
+            qdd = self.model.forward_dynamics(x[:n], x[n:], self.input_torque(x[:n], u), F, None, self.smooth,
+                                              self.contacts)
         else:
-            qdd = self.model.forward_dynamics(x[:n], x[n:], self.B @ u, F if self.force else None, self.tip,
+            qdd = self.model.forward_dynamics(x[:n], x[n:], self.input_torque(x[:n], u), F if self.force else None, self.tip,
                                               self.smooth)
         return np.concatenate([x[n:], qdd])
 
@@ -300,7 +317,15 @@ class StateSpace(Rebuilt):
         tau = self.B @ u
         F = self._force_value(F)
         q0 = np.zeros(self.n) if q0 is None else self.model.vector(q0, "q0", self.n)
-        if F is None:
+        if self._curve is not None:  # G(q) = rho(q)^T u: its Jacobian diag(sum_k u_k drho_ki/dq_i) off dG/dq
+            from ..model.robot import newton_equilibrium
+
+            if F is not None:
+                raise InputError("F: the equilibrium under contact forces is not built for ratios that change with q")
+            c = self._curve
+            q = newton_equilibrium(lambda q: self.model.gravity_torque(q) - c.ratio(q).T @ u,
+                                   lambda q: self.model.gravity_jacobian(q) - np.diag(u @ c.slope(q)), q0, tol)
+        elif F is None:
             q = self.model.static_equilibrium(tau, q0, tol)
         else:
             from ..model.robot import newton_equilibrium

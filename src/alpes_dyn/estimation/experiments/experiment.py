@@ -403,7 +403,8 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
     step = 2 * np.pi / tr.counts_per_rev
     # S q, plus the stretch C (u_k-1 - J_m qdd_m) where elastic (the fit's ShootingProblem.tension_torque)
     qm = tr.encoder_angles(x[:, : truth.n], torque_before(u),
-                           acceleration_before(tr.motor_positions(x[:, truth.n: 2 * truth.n]), design.dt))
+                           acceleration_before(tr.motor_velocities(x[:, : truth.n], x[:, truth.n: 2 * truth.n]),
+                                               design.dt))
     counts = np.round((qm + design.encoder_noise_counts * step * rng.standard_normal(qm.shape)) / step)
     torque = u + design.torque_noise * rng.standard_normal(u.shape)
     q_meas = None

@@ -52,8 +52,7 @@ def _mean_equilibrium(model: Model, tau_m: float | np.ndarray, gravity: np.ndarr
     for j in held:
         i = m.joint_index(j)
         q0[i] = 0.5 * (m.lower[i] + m.upper[i])
-    return m.static_equilibrium(m.transmission.joint_torque(np.atleast_1d(np.asarray(tau_m, dtype=float))), q0,
-                                fixed=held)
+    return m.static_equilibrium(None, q0, fixed=held, tau_m=np.atleast_1d(np.asarray(tau_m, dtype=float)))
 
 
 def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[np.ndarray],
@@ -64,7 +63,7 @@ def _holding_bias(model: Model, bias: np.ndarray, free: list[int], joints: list[
         return out
     q = _mean_equilibrium(model, out, gravity)
     m = _oriented(model, gravity)
-    G = m.gravity_torque(q) - m.transmission.joint_torque(out)  # what the held joints still need
+    G = m.gravity_torque(q) - m.transmission.joint_torque(out, q)  # what the held joints still need
     S = m.transmission.S
     for k in free:
         js = joints[k]
@@ -152,23 +151,22 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     multisine alone: the 20 Hz dither is too fast to carry the finger over) above the rest, the loop stops there
     instead. ``design_gravity`` (3,): the orientation the nominal design is made for (default ``gravity``), where
     the nominal's encoder readings at ``bias`` are the loop's target."""
-    S = nominal.transmission.S
     joints, sprung, free = _motor_groups(nominal)
     g_design = gravity if design_gravity is None else design_gravity
     q_design = _mean_equilibrium(nominal, bias, g_design)
-    target = S @ q_design
+    target = _reading(nominal, q_design)
     truth = _oriented(truth, gravity)  # once: each search below solves hundreds of equilibria under this gravity
     out = np.asarray(bias, dtype=float).copy()
     scale = np.ones(out.size)
     for k in sprung:
         upper = max(4.0 * out[k], _torque_ceiling(nominal, k))
-        out[k] = _rest_torque(truth, lambda q, k=k: float(S[k] @ q), float(target[k]), gravity, upper,
+        out[k] = _rest_torque(truth, lambda q, k=k: float(_reading(nominal, q, k)), float(target[k]), gravity, upper,
                               lambda c, k=k: _with(out, k, c))
         if MATCH_COMPLIANCE:  # the nominal's compliance at its design point: the most the finger may have
             allowed = _compliance(nominal, k, bias, g_design)
             if _compliance(truth, k, out, gravity) > allowed * (1 + 1e-6):
                 out[k] = _matched_compliance(truth, k, out, gravity, allowed)
-                reading = float(S[k] @ _mean_equilibrium(truth, out, gravity))
+                reading = float(_reading(nominal, _mean_equilibrium(truth, out, gravity), k))
                 scale[k] = _room_below(nominal, k, bias, reading, g_design, q_design)
         if peak is not None:
             fold = _fold_torque(truth, lambda c, k=k: _with(out, k, c), gravity, upper)
@@ -178,16 +176,25 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     return _holding_bias(truth, out, free, joints, gravity), scale
 
 
+def _reading(model: Model, q: np.ndarray, k: int | None = None) -> np.ndarray | float:
+    """The encoder reading (rad) at the joint angles q (n,): S q (or S_k q of motor ``k``), s(q) where the ratios
+    change with q (:meth:`~alpes_dyn.model.transmission.Transmission.motor_positions`)."""
+    tr = model.transmission
+    if tr.curved:
+        y = tr.motor_positions(q)
+        return y if k is None else y[k]
+    return tr.S @ q if k is None else tr.S[k] @ q
+
+
 def _compliance(model: Model, k: int, tau: np.ndarray, gravity: np.ndarray) -> float:
     """d(S_k q)/d tau_k at the static equilibrium under the motor torques ``tau`` (m,), rad of motor ``k``'s encoder
     reading per N m: a central difference over +-1e-3 of the motor's torque scale (:func:`_torque_ceiling`; 2e-4 N m
     on an Alpes finger), what a slow loop on the encoder reads by stepping the bias; infinite where either step has
     no equilibrium near q = 0 (past a fold)."""
     h = 1e-3 * _torque_ceiling(model, k)
-    S = model.transmission.S[k]
     try:
-        hi = float(S @ _mean_equilibrium(model, _with(tau, k, float(tau[k]) + h), gravity))
-        lo = float(S @ _mean_equilibrium(model, _with(tau, k, float(tau[k]) - h), gravity))
+        hi = float(_reading(model, _mean_equilibrium(model, _with(tau, k, float(tau[k]) + h), gravity), k))
+        lo = float(_reading(model, _mean_equilibrium(model, _with(tau, k, float(tau[k]) - h), gravity), k))
     except InputError:
         return math.inf
     return (hi - lo) / (2 * h)
@@ -219,7 +226,8 @@ def _room_below(nominal: Model, k: int, bias: np.ndarray, reading: float, gravit
     more inside (4 s, 2026-12-03)."""
     S = nominal.transmission.S[k]
     upper = max(4.0 * float(bias[k]), _torque_ceiling(nominal, k))
-    tau = _rest_torque(nominal, lambda q: float(S @ q), reading, gravity, upper, lambda c: _with(bias, k, c))
+    tau = _rest_torque(nominal, lambda q: float(_reading(nominal, q, k)), reading, gravity, upper,
+                       lambda c: _with(bias, k, c))
     q = _mean_equilibrium(nominal, _with(bias, k, tau), gravity)
     js = np.flatnonzero(S)
     limit = np.where(S[js] > 0, nominal.lower[js], nominal.upper[js])

@@ -46,6 +46,7 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ...errors import AlpesDynWarning, InputError
+from ...model.ratio_curve import encoder_angles, encoder_rates, encoder_sensitivity
 from .harmonics import NONLINEARITY, harmonic_ratio
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
@@ -509,7 +510,7 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
 
     sens: the fit's :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`; theta (p,) its
     identified parameters. x0 (2n,): a first guess of the initial state (the rest under U[0]).
-    U (N, nu) N m; G (N, 3) m/s^2; y (N+1, m) encoder, counts; S (m, n) the transmission; step: rad per
+    U (N, nu) N m; G (N, 3) m/s^2; y (N+1, m) encoder, counts; S (m, n) the transmission or RatioCurve; step: rad per
     count. prefix: samples (>= 2) of the initial-state estimate, excluded from the score: with the
     start state unknown the finger's lightly damped modes would otherwise weigh on the score, and
     scoring the samples that fixed it would flatter the model (MATLAB estimates it the same way, its
@@ -528,18 +529,18 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
     for _ in range(10):  # Levenberg-Marquardt on the initial state alone, on the prefix
         xs, X = sens.run(x[None], U[None, :prefix], G[None, :prefix], theta, None if C is None else C,
                          basis=None if phi is None else phi[:, :prefix])
-        r = (xs[0, :, :n] @ S.T - yp).reshape(-1)
-        A = np.einsum("ij,kjd->kid", S, X[0, :, :n, : 2 * n]).reshape(-1, 2 * n)
+        r = (encoder_angles(S, xs[0, :, :n]) - yp).reshape(-1)
+        A = encoder_sensitivity(S, xs[0, :, :n], X[0, :, :n, : 2 * n]).reshape(-1, 2 * n)
         H = A.T @ A
         d = -np.linalg.lstsq(H + mu * np.diag(np.diag(H) + 1e-300), A.T @ r, rcond=None)[0]
         xt, _ = sens.run((x + d)[None], U[None, :prefix], G[None, :prefix], theta, C,
                          basis=None if phi is None else phi[:, :prefix], sensitivities=False)
-        if np.isfinite(xt).all() and np.sum((xt[0, :, :n] @ S.T - yp) ** 2) < np.sum(r**2):
+        if np.isfinite(xt).all() and np.sum((encoder_angles(S, xt[0, :, :n]) - yp) ** 2) < np.sum(r**2):
             x, mu = x + d, mu / 10
         else:
             mu *= 10
     xs, _ = sens.run(x[None], U[None], G[None], theta, C, basis=phi, sensitivities=False)
-    yhat = xs[0, :, :n] @ S.T / step
+    yhat = encoder_angles(S, xs[0, :, :n]) / step
     if not np.isfinite(yhat).all():
         yhat = np.nan_to_num(yhat, nan=0.0, posinf=0.0, neginf=0.0)  # diverged: the fit % shows it
     ys, yh = y[prefix:], yhat[prefix:]
@@ -559,7 +560,7 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
     n, (B, L) = sens.n, Ub.shape[:2]
     N1 = x_fit.shape[0]
-    vm = x_fit[:, n:] @ S.T  # (N+1, m) motor velocity, rad/s
+    vm = encoder_rates(S, x_fit[:, :n], x_fit[:, n:])  # (N+1, m) motor velocity, rad/s
     held = Ub.reshape(B * L, -1)[: N1 - 1]  # (N, nu) the torque held over each period, as the fit takes it
     rate = np.diff(held, axis=0, append=held[-1:])
     sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
@@ -575,7 +576,7 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
         U, C = Ub + d, (lambda a: corr[a:a + k]) if per_int else (lambda a: corr)
         xs = np.concatenate([sens.run(nodes[a:a + k], U[a:a + k], Gb[a:a + k], theta, C(a), sensitivities=False,
                                       basis=None if Psib is None else Psib[a:a + k])[0] for a in range(0, B, k)])
-        y.append(np.einsum("ij,bkj->bki", S, xs[:, :, :n]) / step)
+        y.append(encoder_angles(S, xs[:, :, :n]) / step)
     return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
 
 
@@ -594,6 +595,6 @@ def torque_explained(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     G = np.tile(Gb, (R + 1, 1, 1))
     off = np.tile(offs, (R + 1, 1))
     xs, _ = sens.run(x0, U, G, theta, off, sensitivities=False)
-    y = np.einsum("ij,bkj->bki", S, xs[:, :, : S.shape[1]]).reshape(R + 1, B, L + 1, -1) / step
+    y = encoder_angles(S, xs[:, :, : S.shape[1]]).reshape(R + 1, B, L + 1, -1) / step
     d = (y[1:] - y[:1]) * valid[None, :, :, None]
     return float(np.sqrt(np.sum(d**2) / (R * max(int(valid.sum()), 1) * S.shape[0])))

@@ -65,10 +65,10 @@ from ...errors import InputError, ModelError, RecordingError
 from ...model.robot import Model
 from ...model.transmission import torque_before
 from ...symbolic.parametric import common_scale, parameter_catalogue, select_parameters
+from ...model.ratio_curve import encoder_angles, encoder_rates
 from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, range_exit, sensor_floor,
                        torque_explained)
 from ..experiments.recording import Recording, check_recording
-from ..observers.scenario import static_equilibrium
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
@@ -215,7 +215,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse")
     torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
-    q0 = (_rest_guess(model, model.transmission.joint_torque(pb.torque.U[0]), pb.y[0]) if rec.gravity is None
+    q0 = (_rest_guess(model, pb.torque.U[0], pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))  # the rest the model's own response starts from
 
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
@@ -461,7 +461,7 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
     x_fit = out.at.xs[pb.valid]
     u_fit = (pb.stretch(theta, pb.tension_torque(pb.torque_at(out.glob, out.offs), out.at.xs))[pb.valid]
              if pb.comp_cols else 0.0)
-    return x_fit, (x_fit[:, :pb.n] @ pb.S_enc.T + pb.offset(theta) + u_fit) / pb.step
+    return x_fit, (encoder_angles(pb.enc, x_fit[:, :pb.n]) + pb.offset(theta) + u_fit) / pb.step
 
 
 def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_Kz, x_fit: np.ndarray,
@@ -473,11 +473,11 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     e, sens, rec, L, ny, n_int, nb, nz, nv = out.at, pb.sens, pb.rec, pb.L, pb.ny, pb.n_int, pb.nb, pb.nz, pb.nv
     explained = 0.0
     if pb.torque.eiv and not pb.torque.lines:  # what the torque noise explains through the model (lines: fitted away)
-        explained = torque_explained(sens, out.nodes, pb.Ub, pb.Gb, theta, out.offs, pb.valid, pb.S_enc, pb.step,
+        explained = torque_explained(sens, out.nodes, pb.Ub, pb.Gb, theta, out.offs, pb.valid, pb.enc, pb.step,
                                      pb.torque.noise, L)
     floor = sensor_floor(rec.encoder, explained, encoder_noise)
     resp = effect_responses(sens, out.nodes, pb.Ub, pb.Gb, theta, pb.correction(out.glob, out.offs), pb.Psib,
-                            pb.valid, x_fit, pb.S_enc, pb.step, rec.dt)
+                            pb.valid, x_fit, pb.enc, pb.step, rec.dt)
     # the tendon's stretch follows the tension: the torque held before each sample (torque_before)
     resp["torque"] = torque_before(rec.torque - rec.torque.mean(axis=0))[pb.kk] * pb.valid[:, :, None]
     regressors = {}
@@ -492,7 +492,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
         val = _validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
-    return assess(res, rec.torque, floor, regressors, val, velocity=x_fit[:, pb.n:] @ pb.S_enc.T, range_exit=exit_,
+    return assess(res, rec.torque, floor, regressors, val, velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
                   lines=excitation, dt=rec.dt)
 
 
@@ -515,20 +515,21 @@ def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording
     enc = rec.encoder if offset is None else rec.encoder - np.asarray(offset) / step
     if compliance is not None and np.any(compliance != 0):
         enc = enc - torque_before(np.concatenate([U, U[-1:]])) * np.asarray(compliance) / step
-    q0 = _rest_guess(model, tr.joint_torque(U[0]), enc[0] * step) if rec.gravity is None else np.zeros(model.n)
+    q0 = _rest_guess(model, U[0], enc[0] * step) if rec.gravity is None else np.zeros(model.n)
     val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, enc,
-                  np.asarray(tr.S, dtype=float), step, prefix, path)
+                  tr.curve if tr.curved else np.asarray(tr.S, dtype=float), step, prefix, path)
     val.prefix_s = prefix * rec.dt
     return val
 
 
-def _rest_guess(model: Model, tau: np.ndarray, y0: np.ndarray) -> np.ndarray:
-    """The static equilibrium under the joint torques ``tau``, the joints without spring (the thumb's
-    ab/adduction, which its own motor holds) held where the first encoder reading ``y0`` puts them."""
+def _rest_guess(model: Model, u: np.ndarray, y0: np.ndarray) -> np.ndarray:
+    """The static equilibrium under the motor torques ``u`` (m,), N m (S^T u, or rho(q)^T u where the ratios change
+    with q), the joints without spring (the thumb's ab/adduction, which its own motor holds) held where the first
+    encoder reading ``y0`` puts them."""
     held = model.springless_joints
     if not held:
-        return static_equilibrium(model, tau)
+        return model.static_equilibrium(None, tau_m=u)
     q = np.zeros(model.n)
     idx = [model.joint_index(j) for j in held]
     q[idx] = (np.linalg.pinv(model.transmission.S) @ y0)[idx]
-    return model.static_equilibrium(tau, q, fixed=held)
+    return model.static_equilibrium(None, q, fixed=held, tau_m=u)

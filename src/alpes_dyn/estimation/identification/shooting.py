@@ -32,6 +32,7 @@ import scipy.sparse as sp
 
 from ...errors import InputError, ModelError
 from ...model.robot import Model
+from ...model.ratio_curve import encoder_angles, encoder_sensitivity
 from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
 from .encoder_output import EncoderOutput
@@ -187,6 +188,7 @@ class ShootingProblem(EncoderOutput):
         self.nb = self.nx + self.no  # local variables of an interval: its start state and its torque correction
         tr = model.transmission
         self.S_enc = np.asarray(tr.S, dtype=float)
+        self.enc = tr.curve if tr.curved else self.S_enc  # the encoder map: S q, or s(q) on q-dependent ratios
         self.ny = self.S_enc.shape[0]
         self.step = 2 * np.pi / tr.counts_per_rev
         self.y = rec.encoder * self.step  # motor angle, rad
@@ -214,6 +216,9 @@ class ShootingProblem(EncoderOutput):
         J_m = np.asarray(tr.rotor_inertia, dtype=float)
         # the rotor in the stretch (y_k = S q_k + C (u_k-1 - J_m S qdd)): with a compliance and a rotor only
         self.rotor = J_m if (self.comp_cols and np.any(J_m > 0)) else None
+        if self.rotor is not None and tr.curved:
+            raise ModelError("identify: the rotor's share of the tendon's stretch (a compliance fitted with a rotor) "
+                             "is built for constant ratios; this transmission's change with q (ratio_curve)")
         self.Ufull = np.concatenate([U, torque.U_last])  # the modelled torque at every sample, the last one's too
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
@@ -321,7 +326,7 @@ class ShootingProblem(EncoderOutput):
         corr = self.correction(glob, offs)
         xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac)
         q = xs[:, :, :n]
-        r_enc = ((np.einsum("ij,skj->ski", self.S_enc, q) + self.offset(theta)
+        r_enc = ((encoder_angles(self.enc, q) + self.offset(theta)
                   + self.stretch(theta, self.tension_torque(u_k, xs)) - self.Yb)
                  / self.sig_y * self.valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
@@ -359,12 +364,13 @@ class ShootingProblem(EncoderOutput):
             if not jac:
                 continue
             if state:
-                A_c = self._state_jacobian(X_c, sl, theta)
+                A_c = self._state_jacobian(X_c, sl, theta, x_c[:, :, : self.n])
                 J = np.empty((n_int,) + A_c.shape[1:]) if J is None else J
                 J[sl] = A_c
                 continue
             J_c, Xv_end, Xr_end = self._jacobian(X_c, theta,
-                                                 None if u_k is None else self.tension_torque(u_k[sl], x_c), sl)
+                                                 None if u_k is None else self.tension_torque(u_k[sl], x_c), sl,
+                                                 x_c[:, :, : self.n])
             del X_c
             if J is None:
                 J = np.empty((n_int,) + J_c.shape[1:])
@@ -375,13 +381,14 @@ class ShootingProblem(EncoderOutput):
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
         return xs, J, Cv, Cr
 
-    def _state_jacobian(self, X: np.ndarray, sl: slice, theta: np.ndarray) -> np.ndarray:
+    def _state_jacobian(self, X: np.ndarray, sl: slice, theta: np.ndarray, q: np.ndarray) -> np.ndarray:
         """(s, R, nx) the residuals' Jacobian of the intervals ``sl`` with respect to their start states alone, from
         the state sensitivities X (s, L+1, nx, nx): the first nx columns of :meth:`_jacobian`'s J, by the same
-        operations (``theta``: the parameters, for the rotor's share of the stretch)."""
+        operations (``theta``: the parameters, for the rotor's share of the stretch; ``q`` (s, L+1, n) the joint
+        angles, where the encoder's ratios change with them)."""
         n, s_int = self.n, X.shape[0]
         w = self.valid[sl, :, None, None] / self.sig_y
-        J_enc = np.einsum("ij,skjd->skid", self.S_enc, X[:, :, :n])
+        J_enc = encoder_sensitivity(self.enc, q, X[:, :, :n])
         if self.rotor is not None:  # C (u - J_m S qdd): through qdd, as in _jacobian
             J_enc -= (self.compliance(theta) * self.rotor)[:, None] * self.motor_acceleration(X[:, :, n: 2 * n])
         jac = [(J_enc * w).reshape(s_int, -1, self.nx)]
@@ -391,7 +398,7 @@ class ShootingProblem(EncoderOutput):
             jac.append(np.zeros((s_int, self.no, self.nx)))
         return np.concatenate(jac, axis=1)
 
-    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice):
+    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice, q: np.ndarray):
         """J (s, R, nb + ng) of the residuals of the intervals ``sl`` from their sensitivities X (s, L+1, nx,
         nx + p + no), and the sensitivities at their ends with respect to the local (nx, nb) and global (nx, ng)
         variables."""
@@ -403,9 +410,8 @@ class ShootingProblem(EncoderOutput):
         if self.torque.lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
         w = self.valid[sl, :, None, None] / self.sig_y
-        S_enc = self.S_enc
-        J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
-                                np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
+        J_enc = np.concatenate([encoder_sensitivity(self.enc, q, Xv[:, :, :n]),
+                                encoder_sensitivity(self.enc, q, Xr[:, :, :n])], axis=-1)
         for k, mo in self.off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
         if self.comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
@@ -548,7 +554,7 @@ class ShootingProblem(EncoderOutput):
         Sp = np.linalg.pinv(S_enc)
         C0 = np.asarray(self.model.transmission.tendon_compliance)
         y_rigid = y - torque_before(self.Ufull) * C0 if self.comp_cols else y
-        nodes[:, :n] += (y_rigid[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
+        nodes[:, :n] += (y_rigid[k_nodes] - encoder_angles(self.enc, nodes[:, :n])) @ Sp.T  # (S: rho(0), a start)
         nodes[:, n:] += (np.gradient(y, self.rec.dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
         return nodes
 

@@ -253,8 +253,7 @@ def rest_with_held_joints(model: Model, tau_m: np.ndarray) -> np.ndarray:
     """Joint angles q (n,), rad: the static equilibrium under the motor torques ``tau_m`` (m,), N m, the
     joints without spring held mid-range (:func:`held_mid_range`; eq. 2.11; raises
     :class:`~alpes_dyn.InputError` where there is no rest)."""
-    return model.static_equilibrium(model.transmission.joint_torque(tau_m), held_mid_range(model),
-                                    fixed=model.springless_joints)
+    return model.static_equilibrium(None, held_mid_range(model), fixed=model.springless_joints, tau_m=tau_m)
 
 
 def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_var: float) -> dict[str, Any]:
