@@ -493,7 +493,12 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
     return assess(res, rec.torque, floor, regressors, val, velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
-                  lines=excitation, dt=rec.dt)
+                  lines=excitation, dt=rec.dt, runs=_parts(segment_starts(rec.gravity), res.shape[0]))
+
+
+def _parts(starts: np.ndarray, n: int) -> np.ndarray:
+    """The residual's (n rows, one per sample) parts whose excitation restarts: their first rows, then n."""
+    return np.append(starts[starts < n], n)
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
