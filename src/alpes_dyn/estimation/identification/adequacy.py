@@ -432,7 +432,8 @@ def reversal_ratio(e: np.ndarray, velocity: np.ndarray, window: int = 20) -> flo
 def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping[str, np.ndarray] | None = None,
            validation: Validation | None = None, thresholds: Mapping[str, float] | None = None,
            velocity: np.ndarray | None = None, range_exit: str | None = None,
-           lines: Sequence[float] | None = None, dt: float | None = None) -> Adequacy:
+           lines: Sequence[float] | None = None, dt: float | None = None,
+           runs: Sequence[int] | None = None) -> Adequacy:
     """The verdict on a fit's encoder residual.
 
     e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
@@ -445,6 +446,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     lines: the excitation's frequencies (Hz) and dt the sample time (s): the residual's power at their harmonics
     and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``)
     names a nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``.
+    runs: the first sample of each run then N, for a recording of several runs (the harmonics run by run).
     """
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
@@ -482,7 +484,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
     if lines is not None and len(lines) and dt is not None:
-        sig["harmonics"] = {"share": harmonic_ratio(e, lines, dt), "coefficient": 0.0}
+        sig["harmonics"] = {"share": harmonic_ratio(e, lines, dt, runs=runs), "coefficient": 0.0}
     if range_exit:
         reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []

@@ -44,16 +44,24 @@ def intermodulation(lines: Sequence[float], nyquist: float, orders: Sequence[int
     return prods[(prods > 0) & (prods < nyquist) & ~on_line]
 
 
-def harmonic_ratio(e: np.ndarray, lines: Sequence[float], dt: float, halfwidth: int = 1) -> float:
+def harmonic_ratio(e: np.ndarray, lines: Sequence[float], dt: float, halfwidth: int = 1,
+                   runs: Sequence[int] | None = None) -> float:
     """Mean periodogram power of the residual ``e`` ((N,) or (N, m), counts; sample time ``dt`` s) within
     ``halfwidth`` bins of the excitation's products (:func:`intermodulation`, two bins or more from a line and
     from 0 Hz), over its mean power at the other frequencies off the lines; per encoder, the largest. About 1
     for a white residual (its spread about 1/sqrt(number of bins)); large where the residual answers the
-    excitation nonlinearly. 1.0 where the record is too short to hold both sets (fewer than 8 bins each)."""
+    excitation nonlinearly. 1.0 where the record is too short to hold both sets (fewer than 8 bins each).
+    ``runs``: the first sample of each run and then N (a recording of several runs,
+    :meth:`~alpes_dyn.estimation.experiments.recording.Recording.run_starts`): the ratio of each run apart (no
+    spectrum across a jump between runs), their mean weighted by the runs' lengths."""
     e = np.asarray(e, dtype=float)
     e = e[:, None] if e.ndim == 1 else e
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):
         raise InputError(f"dt: expected a positive time step in s, got {dt!r}")
+    if runs is not None and len(runs) > 2:
+        b = np.asarray(runs, dtype=int)
+        ratios = [harmonic_ratio(e[a:z], lines, dt, halfwidth) for a, z in zip(b[:-1], b[1:])]  # (a few runs)
+        return float(np.average(ratios, weights=np.diff(b)))
     n = e.shape[0]
     f = np.fft.rfftfreq(n, dt)
     df = f[1] if f.size > 1 else math.inf

@@ -75,6 +75,7 @@ from .bounds import held_value, unsupported
 from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
+from .runs import aligned, split
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -202,6 +203,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if rec.duration > LONG_RECORD:
         _map_large_blocks()
     L = int(round(interval / dt))
+    rec = aligned(rec, L)  # several runs: each on whole intervals (module runs)
     torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
     if substeps is None:
@@ -395,8 +397,10 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
         if abs(val_rec[0].dt - rec.dt) > 1e-9 * rec.dt:
             raise RecordingError(f"validation: sample period {val_rec[0].dt:g} s differs from the recording's {rec.dt:g} s")
         pre = max(2, int(round(max(interval, VALIDATION_PREFIX) / rec.dt)))  # the prefix that fixes the start
-        if val_rec[0].n_samples <= 4 * pre:
-            raise RecordingError(f"validation: {val_rec[0].n_samples} samples are too few (the first {pre} fix the "
+        shortest = int(np.diff(val_rec[0].run_starts()).min())  # each run validated apart, from its own prefix
+        if shortest <= 4 * pre:
+            runs = "" if val_rec[0].n_runs == 1 else " in a run"
+            raise RecordingError(f"validation: {shortest} samples{runs} are too few (the first {pre} fix the "
                                  f"start; give more than {4 * pre})")
         v = val_rec[0]
         if v.n_samples == rec.n_samples and np.array_equal(v.encoder, rec.encoder) and np.array_equal(v.torque, rec.torque):
@@ -476,7 +480,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     resp = effect_responses(sens, out.nodes, pb.Ub, pb.Gb, theta, pb.correction(out.glob, out.offs), pb.Psib,
                             pb.valid, x_fit, pb.S_enc, pb.step, rec.dt)
     # the tendon's stretch follows the tension: the torque held before each sample (torque_before)
-    resp["torque"] = torque_before(rec.torque - rec.torque.mean(axis=0))[pb.kk] * pb.valid[:, :, None]
+    resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[pb.before][pb.kk] * pb.valid[:, :, None]
     regressors = {}
     for name, R in resp.items():  # a loop over the four effects
         Rr = np.zeros_like(e.r)
@@ -490,12 +494,28 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
     return assess(res, rec.torque, floor, regressors, val, velocity=x_fit[:, pb.n:] @ pb.S_enc.T, range_exit=exit_,
-                  lines=excitation, dt=rec.dt)
+                  lines=excitation, dt=rec.dt, runs=rec.run_starts())
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
               excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
               compliance: np.ndarray | None = None) -> Validation:
+    """:func:`_validate_run` of each run of the held-out recording (module runs), each from its own initial state;
+    of several, the worst run's fit % and NRMSE per encoder, the RMS residual over all the scored samples."""
+    rec, path = recording
+    vals = [_validate_run(model, sens, theta, (r, path), excitation, prefix_s, offset, compliance) for r in split(rec)]
+    if len(vals) == 1:
+        return vals[0]
+    n = np.array([v.samples for v in vals])
+    rms = float(np.sqrt(np.sum(n * np.array([v.residual_rms for v in vals]) ** 2) / n.sum()))
+    return Validation(fit_percent=np.min([v.fit_percent for v in vals], axis=0),
+                      nrmse=np.max([v.nrmse for v in vals], axis=0), residual_rms=rms, prefix_s=vals[0].prefix_s,
+                      samples=int(n.sum()), recording_path=path)
+
+
+def _validate_run(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
+                  excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
+                  compliance: np.ndarray | None = None) -> Validation:
     """:func:`~alpes_dyn.estimation.identification.adequacy.compare` of the fitted model on a held-out recording, its
     torque projected on the excitation's lines as in the fit, the initial state estimated on the first
     ``prefix_s`` seconds (one shooting interval); ``offset`` (m,) rad: the fitted encoder offsets, the same

@@ -30,15 +30,15 @@ from typing import Mapping, Sequence
 import numpy as np
 import scipy.sparse as sp
 
-from ...checks import as_float_array
 from ...errors import InputError, ModelError
 from ...model.robot import Model
-from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
 from .encoder_output import EncoderOutput
+from .torque_lines import CHOLESKY_QR_ROWS, TorqueModel, _thin_qr, line_basis, torque_model  # noqa: F401
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
                   normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
+from .runs import run_cuts
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK"]
@@ -47,98 +47,6 @@ JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
-
-
-def line_basis(t: np.ndarray, frequencies: Sequence[float]) -> np.ndarray:
-    """(N, 2 n_f + 1): 1, sin(2 pi f t), cos(2 pi f t) for f in ``frequencies`` (Hz), t from t[0]."""
-    f = as_float_array(frequencies, "excitation", "frequencies in Hz").reshape(-1)
-    if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
-        raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
-    t = np.asarray(t, dtype=float)
-    fs = 1.0 / ((t[-1] - t[0]) / (t.shape[0] - 1))
-    if np.any(f >= 0.5 * fs):
-        raise InputError(f"excitation: frequencies must be below the Nyquist frequency {0.5 * fs:g} Hz")
-    if 2 * f.size + 1 >= t.shape[0] // 4:
-        raise InputError(f"excitation: {f.size} frequencies are too many for {t.shape[0]} samples")
-    w = 2 * np.pi * f[None, :] * (t - t[0])[:, None]
-    return np.hstack([np.ones((t.shape[0], 1)), np.sin(w), np.cos(w)])
-
-
-@dataclass
-class TorqueModel:
-    """How the fit takes the recorded torque (errors in variables). ``U`` (N, nu): the torque at the held samples
-    (projected on the excitation's lines, or as recorded), ``U_last`` (1, nu) at the last sample; ``noise``:
-    sigma_u, N m; with the lines (``lines``), ``Q`` (N, nphi) their orthonormal basis and ``Q_last`` (nphi,) at the
-    last sample: the true torque is U + sigma_u Q c, c ~ N(0, I) fitted; without them and sigma_u > 0, a constant
-    correction per interval (``eiv`` and not ``lines``). A :class:`ShootingProblem` keeps its own copy without
-    ``Q`` (None: the basis lives on there, scaled and cut at the intervals; 91 MB at 600 s)."""
-
-    U: np.ndarray
-    U_last: np.ndarray
-    noise: float
-    Q: np.ndarray | None = None
-    Q_last: np.ndarray | None = None
-
-    @property
-    def eiv(self) -> bool:
-        """The torque is corrected (errors in variables): sigma_u > 0."""
-        return self.noise > 0
-
-    @property
-    def lines(self) -> bool:
-        """The correction lies on the excitation's lines."""
-        return self.eiv and self.Q_last is not None
-
-    @property
-    def nphi(self) -> int:
-        """Number of basis functions of the lines (0 without them)."""
-        return self.Q_last.shape[0] if self.lines else 0
-
-
-CHOLESKY_QR_ROWS = 2**15
-"""Rows (samples) of the lines' basis above which :func:`torque_model` orthonormalises it by Cholesky QR (33 s at
-1 kHz; below, Householder's QR)."""
-
-
-def _thin_qr(Phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Q (N, k) with orthonormal columns and R (k, k) upper triangular with a positive diagonal, Phi = Q R, by
-    Cholesky QR twice (Fukaya et al. 2014: the second pass restores orthogonality to rounding for cond(Phi) up to
-    ~1e7; the lines' basis is near orthogonal). Each pass one product Q' Q (k x k) and one triangular solve, the
-    second in place: on 600 s of the documented lines 20x faster than Householder's QR (numpy.linalg.qr, whose R
-    may have negative entries on its diagonal: the columns' signs are the only difference, which the fit's
-    whitened line coefficients do not see) and one copy of Phi, Q, instead of three. Householder's where Phi has
-    at most :data:`CHOLESKY_QR_ROWS` rows (there it is cheap, and the fits are as they were) or where the Cholesky
-    factorisation fails (lines too close for the record's length: Phi near singular)."""
-    import scipy.linalg as sla
-
-    if Phi.shape[0] <= CHOLESKY_QR_ROWS:
-        return np.linalg.qr(Phi)
-    R, Qt = np.eye(Phi.shape[1]), Phi.T  # Q' (k, N), Fortran order
-    for k in range(2):
-        try:
-            R1 = sla.cholesky(Qt @ Qt.T, lower=False, check_finite=False)  # Q'Q = R1' R1
-        except np.linalg.LinAlgError:  # lines too close for the record's length: Householder's
-            return np.linalg.qr(Phi)
-        Qt = sla.solve_triangular(R1, Qt, trans="T", lower=False, overwrite_b=k > 0, check_finite=False)
-        R = R1 @ R
-    return Qt.T, R
-
-
-def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_noise: float | None) -> TorqueModel:
-    """The :class:`TorqueModel` of a recording: with ``excitation`` (Hz) the measured torque projected on the lines,
-    sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given."""
-    if excitation is None:
-        return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
-    Phi_all = line_basis(rec.t, excitation)
-    Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
-    Q, R_q = _thin_qr(Phi)
-    U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
-    Q_last = np.linalg.solve(R_q.T, Phi_all[-1])  # the basis at the last sample (Q = Phi R^-1)
-    U_last = (Q_last @ (Q.T @ rec.torque[:-1]))[None]
-    if torque_noise is None:  # what is off the lines is the noise: its standard deviation
-        off_lines = rec.torque[:-1] - U
-        torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
-    return TorqueModel(U, U_last, torque_noise, Q, Q_last)
 
 
 @dataclass(frozen=True)
@@ -210,6 +118,7 @@ class ShootingProblem(EncoderOutput):
         N = self.N = rec.n_samples - 1
         self.G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (N, 3))
         n_int = self.n_int = -(-N // L)
+        self.cut, self.before = run_cuts(rec, L, n_int)
         pad = n_int * L - N
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
@@ -232,7 +141,7 @@ class ShootingProblem(EncoderOutput):
         self.Ufull = np.concatenate([U, torque.U_last])  # the modelled torque at every sample, the last one's too
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
-        self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
+        self.Uk = self.Ufull[self.before][self.kk]  # (S, L+1, nu) (torque_before within each run)
         # (torque_before(X)[k] is X[max(k - 1, 0)]: rows of Q alone, one gather, no copy of the whole basis first)
         self.Psib = self.Psi0 = None
         if lines:  # sigma_u Q at the held samples, the last interval padded with the last one's
@@ -240,16 +149,17 @@ class ShootingProblem(EncoderOutput):
             QS[:N], QS[N:] = torque.Q, torque.Q[-1]
             QS *= torque.noise
             self.Psib = QS.reshape(n_int, L, torque.nphi)  # (S, L, nphi): the basis over each interval's periods
-            self.Psi0 = QS[np.maximum(np.arange(n_int) * L - 1, 0)]  # (S, nphi): over the period before each
+            self.Psi0 = QS[self.before[np.arange(n_int) * L]]  # (S, nphi): over the period before each
             torque = dataclasses.replace(torque, Q=None)
         self.torque = torque
-        self.shape = Shape(n_int, self.nb, self.nx, self.ng)
+        self.shape = Shape(n_int, self.nb, self.nx, self.ng, self.cut)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
         self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
                  + n_int * self.no + self.ncg)
-        self.dof = max(n_res - (self.nz - self.nc), 1)  # residuals less free variables (constraints count back)
+        nc_held = self.nc - int(self.cut.sum()) * self.nx  # the constraints that hold (none across a run's start)
+        self.dof = max(n_res - (self.nz - nc_held), 1)  # residuals less free variables (constraints count back)
         self.unit_p = np.zeros((self.nz + self.nc, self.p))  # right-hand sides that give the parameters' covariance
         self.unit_p[self.nv + np.arange(self.p), np.arange(self.p)] = 1.0
 
@@ -340,6 +250,7 @@ class ShootingProblem(EncoderOutput):
                   + self.stretch(theta, self.tension_torque(u_k, xs)) - self.Yb)
                  / self.sig_y * self.valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
+        c[self.cut] = 0.0  # no continuity into a run's first interval
         rg = np.concatenate([np.zeros(self.p), glob[self.p:]])
         rq = (np.where(self.q_mask, q - np.nan_to_num(self.Qm), 0.0) / self.camera_noise
               if self.Qm is not None else None)
@@ -388,6 +299,8 @@ class ShootingProblem(EncoderOutput):
             J[sl] = J_c
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
+        if Cv is not None:
+            Cv[self.cut], Cr[self.cut] = 0.0, 0.0
         return xs, J, Cv, Cr
 
     def _state_jacobian(self, X: np.ndarray, sl: slice, theta: np.ndarray) -> np.ndarray:
@@ -457,13 +370,13 @@ class ShootingProblem(EncoderOutput):
 
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
-        return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+        return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr), self.shape.dropped)
 
     def continuity_t(self, Cv: np.ndarray, Cr: np.ndarray, v: np.ndarray) -> np.ndarray:
         """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks."""
         out = np.zeros((self.n_int, self.nb))
         out[:-1] += np.einsum("sia,si->sa", Cv, v)
-        out[1:, :self.nx] -= v
+        out[1:, :self.nx] -= v * self.shape.keep[:, None]
         return np.concatenate([out.reshape(-1), np.einsum("sig,si->g", Cr, v)])
 
     def penalized_solver(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
@@ -482,7 +395,7 @@ class ShootingProblem(EncoderOutput):
 
     def _penalized_matrix(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
         """:meth:`penalized_solver`'s matrix, (nz, nz), sparse (an array if :attr:`dense`)."""
-        wdef = np.tile(wv, self.n_int - 1)
+        wdef = np.tile(wv, self.n_int - 1) * np.repeat(self.shape.keep, self.nx)
         C = self.continuity(e.Cv, e.Cr)
         C = C * wdef[:, None] if self.dense else sp.diags(wdef) @ C
         H = self.normal(e.J, mu) + C.T @ C
@@ -548,9 +461,12 @@ class ShootingProblem(EncoderOutput):
         # inputs 8 MiB at a time, not the whole record's at once: 264 MB at 600 s)
         K = L * max(1, JACOBIAN_CHUNK // (L * self.sens.nw))
         nodes = np.empty((n_int, self.nx))
-        x = np.concatenate([q0, np.zeros(n)])
-        for a in range(0, N, K):
-            b = min(a + K, N)
+        runs = self.rec.run_starts()
+        first = np.zeros(N + 1, dtype=bool)
+        first[runs[:-1]] = True  # each run from the rest, its pieces within it (runs start on a node: run_cuts)
+        for a, b in ((a, min(a + K, N, int(runs[np.searchsorted(runs, a, side="right")])))
+                     for a0, a1 in zip(runs[:-1], runs[1:]) for a in range(int(a0), min(int(a1), N), K)):
+            x = np.concatenate([q0, np.zeros(n)]) if first[a] else x
             basis = self.Psib.reshape(-1, self.torque.nphi)[None, a:b] if self.torque.lines else None
             x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
                                    sensitivities=False)
@@ -562,9 +478,10 @@ class ShootingProblem(EncoderOutput):
         S_enc, y = self.S_enc, self.y
         Sp = np.linalg.pinv(S_enc)
         C0 = np.asarray(self.model.transmission.tendon_compliance)
-        y_rigid = y - torque_before(self.Ufull) * C0 if self.comp_cols else y
+        y_rigid = y - self.Ufull[self.before] * C0 if self.comp_cols else y
         nodes[:, :n] += (y_rigid[k_nodes] - nodes[:, :n] @ S_enc.T) @ Sp.T
-        nodes[:, n:] += (np.gradient(y, self.rec.dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+        yd = np.concatenate([np.gradient(y[a:b], self.rec.dt, axis=0) for a, b in zip(runs[:-1], runs[1:])])
+        nodes[:, n:] += (yd[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
         return nodes
 
 
