@@ -130,12 +130,13 @@ def _predicted(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray, hori
 
 
 def _first(rec: Recording, seconds: float) -> Recording:
-    """The recording's first ``seconds`` s (all of it where shorter)."""
-    k = int(round(seconds / rec.dt)) + 1
+    """The recording's first ``seconds`` s (all of it where shorter), within its first run (the observer runs on
+    one: no jump of the states)."""
+    k = min(int(round(seconds / rec.dt)) + 1, int(rec.run_starts()[1]))
     if k >= rec.n_samples:
         return rec
     cut = {f: (getattr(rec, f)[:k] if isinstance(getattr(rec, f), np.ndarray) else getattr(rec, f))
-           for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q")}
+           for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q", "run")}
     return dataclasses.replace(rec, **cut)
 
 

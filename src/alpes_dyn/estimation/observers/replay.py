@@ -317,6 +317,9 @@ def _replay_recording(recording: Recording | str | Path, model: Model, observer:
             tuple(rec.joint_names) != tuple(model.joint_names):
         raise RecordingError(f"recording: made for motors {list(rec.motor_names)} and joints {list(rec.joint_names)}, "
                              f"not the model's {list(model.transmission.motor_names)} and {list(model.joint_names)}")
+    if rec.n_runs > 1:  # the states jump between runs: a filter would take the jump for a measurement
+        raise RecordingError(f"recording: {rec.n_runs} runs (column 'run'); an observer runs on one: give one run's "
+                             "rows")
     return rec
 
 
