@@ -296,6 +296,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
     for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.identification.bounds)
         lines.append(f"  {n:{w}s} not identified: {why}")
+    for motor, d in (res.drift or {}).get("counts", {}).items():  # --drift offset: the encoders' fitted drift
+        lines.append(f"  encoder_{motor} drift: " + ", ".join(f"{v:+.3g}" for v in d) + " counts at "
+                     + ", ".join(f"{t:.3g}" for t in res.drift["knots_s"]) + " s")
     held = _held_masses(model, args) if urdf else ()
     obj["held"] = list(held)
     if held:
@@ -381,7 +384,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
         _check_run_files(args, {"-o": ("toml",)}, [("-o's URDF", _mass_urdf_path(args.output))])
     data, validate = _robot_recordings(args, model, whole if args.chain is not None else None)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
-              encoder_noise=args.encoder_noise)
+              encoder_noise=args.encoder_noise, drift=args.drift)
     if args.parameters is not None:
         fitted = model_of(effects)
         names = _chain_names(fitted, args.parameters, args.chain)

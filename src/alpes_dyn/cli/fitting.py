@@ -50,7 +50,7 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
         data = read_recording(args.data, model_of(()), args.torque_constant)
         validate = None if args.validate is None else read_recording(args.validate, model_of(()), args.torque_constant)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
-              encoder_noise=args.encoder_noise)
+              encoder_noise=args.encoder_noise, drift=args.drift)
     if args.parameters is not None:
         model = model_of(effects)
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line

@@ -433,6 +433,10 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--validate", default=None, metavar="REC2.csv",
                    help="a held-out recording of the same finger: the fitted model simulated on its torque, fit %% "
                         "and NRMSE per encoder (MATLAB's compare), part of the adequacy verdict")
+    s.add_argument("--drift", choices=("offset",), default=None,
+                   help="'offset': each encoder's offset drifts, piecewise linear in time from 0 at the first sample "
+                        "(knots every 15 s; a shorter record: a ramp), fitted with the parameters (the JSON's 'drift'); "
+                        "without it the verdict names a drift where the residual trends with time")
     s.add_argument("--encoder-noise", type=_strict_float, default=None, metavar="COUNTS",
                    help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
                         "adequacy check (default: estimated from the recording)")

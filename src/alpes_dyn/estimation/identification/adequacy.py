@@ -115,6 +115,7 @@ SIGNATURES: dict[str, str] = {
     "acceleration": "rotor inertia (a torque following the motor acceleration; or a wrong inertia)",
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
     "bias": "an encoder offset or a tilted palm (a constant bias of the residual)",
+    "drift": "a drift of the encoder offset (a residual trending with time; --drift offset)",
     "torque_rate": "a torque delay (the recorded torque lagging the motor's: a torque following the torque's own "
                    "rate; --effects delay)",
 }

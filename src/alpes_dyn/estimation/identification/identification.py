@@ -76,6 +76,7 @@ from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
 from .runs import aligned, split
+from .drift import check_drift, recorded_time
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -130,7 +131,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
              progress: bool | None = None, validation: Recording | str | Path | None = None,
              encoder_noise: float | None = None, start: Mapping[str, float] | IdentificationResult | None = None,
-             kkt: str = "sparse") -> IdentificationResult:
+             kkt: str = "sparse", drift: str | None = None) -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
     Parameters
@@ -185,6 +186,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         and memory linear in the record; ``"superlu"``: the same matrices by the general sparse LU (SuperLU: the
         reference of the structured one; its fill grows faster than the record: 0.5-2.6 s a factorisation at
         60 s); ``"dense"``: as arrays (the reference; quadratic memory, cubic time).
+    drift: ``"offset"``: each encoder's offset drifts, piecewise linear in the recorded time from 0 at the first
+        sample, knots every 15 s (a shorter record: a ramp), fitted with the parameters
+        (:mod:`~alpes_dyn.estimation.identification.drift`; the result's ``drift``); None (default): no drift,
+        and the verdict names one where the residual trends with time.
 
     The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
     failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
@@ -206,13 +211,14 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     rec = aligned(rec, L)  # several runs: each on whole intervals (module runs)
     torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
+    check_drift(drift)
     if substeps is None:
         substeps = stable_substeps(model, dt)
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
-                         structured=kkt == "sparse")
+                         structured=kkt == "sparse", drift=drift)
     torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
     q0 = (_rest_guess(model, model.transmission.joint_torque(pb.torque.U[0]), pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))  # the rest the model's own response starts from
@@ -239,7 +245,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if missed and interval >= RETRY_INTERVAL * (1 - 1e-9) and int(round(0.5 * interval / dt)) >= 2:
         settings = dict(excitation=excitation, substeps=substeps, torque_noise=torque_noise, camera_noise=camera_noise,
                         max_iterations=max_iterations, tol=tol, threads=threads, progress=progress,
-                        validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt)
+                        validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt, drift=drift)
         again, it, reason = _retry_at_half_interval(model, recording, parameters, settings, interval, rms, it, reason,
                                                     t_start)
         if again is not None:
@@ -252,7 +258,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     pb = out = warm = sens = None
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
-                    progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
+                    progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt, drift=drift)
     result = _within_bounds(model, recording, result, settings, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
@@ -453,7 +459,18 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         iterations=it, converged=out.converged, seconds=time.perf_counter() - t_start,
         compile_seconds=sens.compile_seconds, states=out.nodes, node_times=pb.rec.t[np.arange(pb.n_int) * pb.L],
         model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=verdict,
-        solution=pb.solution(out.nodes, out.offs, out.glob))
+        solution=pb.solution(out.nodes, out.offs, out.glob), drift=_drift_of(pb, out.glob))
+
+
+def _drift_of(pb: ShootingProblem, glob: np.ndarray) -> dict[str, Any] | None:
+    """The fitted drift of :attr:`IdentificationResult.drift` (None without one)."""
+    if not pb.nd:
+        return None
+    D = glob[pb.p + pb.ncg:].reshape(pb.ny, -1)
+    K = D.shape[1]
+    T = float(recorded_time(pb.rec)[-1])
+    return {"knots_s": [T * k / K for k in range(K + 1)],
+            "counts": {m: [0.0] + [float(v) for v in D[i]] for i, m in enumerate(pb.model.transmission.motor_names)}}
 
 
 def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -462,7 +479,8 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
     x_fit = out.at.xs[pb.valid]
     u_fit = (pb.stretch(theta, pb.tension_torque(pb.torque_at(out.glob, out.offs), out.at.xs))[pb.valid]
              if pb.comp_cols else 0.0)
-    return x_fit, (x_fit[:, :pb.n] @ pb.S_enc.T + pb.offset(theta) + u_fit) / pb.step
+    drift = pb.drift_offset(out.glob)[pb.valid] if pb.nd else 0.0
+    return x_fit, (x_fit[:, :pb.n] @ pb.S_enc.T + pb.offset(theta) + drift + u_fit) / pb.step
 
 
 def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_Kz, x_fit: np.ndarray,
@@ -481,6 +499,10 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
                             pb.valid, x_fit, pb.S_enc, pb.step, rec.dt)
     # the tendon's stretch follows the tension: the torque held before each sample (torque_before)
     resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[pb.before][pb.kk] * pb.valid[:, :, None]
+    if not pb.nd:  # a drift of the encoders' offsets: a ramp in the recorded time (module drift)
+        tau = recorded_time(rec)
+        ramp = (tau - tau.mean()) / max(float(np.ptp(tau)), 1e-300)
+        resp["drift"] = np.repeat(ramp[pb.kk][:, :, None], pb.ny, axis=2) * pb.valid[:, :, None]
     regressors = {}
     for name, R in resp.items():  # a loop over the four effects
         Rr = np.zeros_like(e.r)

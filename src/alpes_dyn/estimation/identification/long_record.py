@@ -63,7 +63,7 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     sub = window(pb.rec, WINDOW)
     pw = ShootingProblem(pb.model, sub, pb.sens, pb.L, torque_model(sub, excitation, pb.torque.noise),
                          pb.camera_noise, dict(zip(pb.sens.names, pb.theta0)), dense=pb.dense,
-                         structured=pb.structured)
+                         structured=pb.structured, drift=pb.drift)
     out = solver.solve(pw, lambda: pw.initial_nodes(q0), np.zeros((pw.n_int, pw.no)), np.zeros(pw.ng))
     if not out.converged or pw.encoder_rms(out.at.r) > BASIN_LIMIT:
         return None, out.iterations
@@ -71,7 +71,7 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     rho = (theta - pb.theta0) / pb.scale  # the additive parameters' (encoder offsets, tilt angles)
     mult = ~pb.additive
     rho[mult] = np.log(theta[mult] / pb.theta0[mult])
-    glob = np.concatenate([rho, np.zeros(pb.ncg)])
+    glob = np.concatenate([rho, np.zeros(pb.ng - pb.p)])  # the line corrections and any drift from 0
     offs = np.zeros((pb.n_int, pb.no))
     nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=NODE_SWEEPS)
     nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=FIRST_PHASE)

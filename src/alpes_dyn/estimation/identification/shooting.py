@@ -39,6 +39,7 @@ from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt
                   normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
 from .runs import run_cuts
+from .drift import drift_basis
 
 __all__ = ["TorqueModel", "torque_model", "line_basis", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK"]
@@ -99,14 +100,17 @@ class ShootingProblem(EncoderOutput):
 
     def __init__(self, model: Model, rec: Recording, sens: SensitivityModel, L: int, torque: TorqueModel,
                  camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False,
-                 structured: bool = True) -> None:
+                 structured: bool = True, drift: str | None = None) -> None:
         self.model, self.rec, self.sens, self.L, self.torque = model, rec, sens, L, torque
         self.camera_noise = camera_noise
         self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
         eiv, lines = torque.eiv, torque.lines
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
         self.ncg = sens.no if lines else 0  # global line-coefficient corrections
-        self.ng = self.p + self.ncg
+        self.drift = drift
+        self.H = drift_basis(rec) if drift == "offset" else np.zeros((rec.n_samples, 0))  # (N+1, K) module drift
+        self.nd = np.shape(model.transmission.S)[0] * self.H.shape[1]
+        self.ng = self.p + self.ncg + self.nd  # parameters, line corrections, the drift's knots (counts)
         self.nb = self.nx + self.no  # local variables of an interval: its start state and its torque correction
         tr = model.transmission
         self.S_enc = np.asarray(tr.S, dtype=float)
@@ -154,7 +158,8 @@ class ShootingProblem(EncoderOutput):
         self.torque = torque
         self.shape = Shape(n_int, self.nb, self.nx, self.ng, self.cut)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
-        self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
+        self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg), np.zeros(self.nd)]  # d rg / d glob, squared
+        self.Hb = self.H[self.kk] * self.step  # (S, L+1, K) rad per count of the drift's knots
         self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
                  + n_int * self.no + self.ncg)
@@ -207,7 +212,7 @@ class ShootingProblem(EncoderOutput):
         tendons' tension balances at each residual's sample: the one held over the period before it
         (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
         if self.torque.lines:
-            C = glob[self.p:].reshape(self.torque.nphi, self.nu).T
+            C = glob[self.p:self.p + self.ncg].reshape(self.torque.nphi, self.nu).T
             u = self.Uk.copy()
             u[:, 0] += self.Psi0 @ C.T
             u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
@@ -220,8 +225,16 @@ class ShootingProblem(EncoderOutput):
         """The torque correction the sensitivities take: the line coefficients (nu, nphi), the per-interval
         constants (S, nu), or None."""
         if self.torque.lines:
-            return glob[self.p:].reshape(self.torque.nphi, self.nu).T  # C (nu, nphi) from its column-major vec
+            return glob[self.p:self.p + self.ncg].reshape(self.torque.nphi, self.nu).T  # C (nu, nphi), column-major vec
         return offs if self.torque.eiv else None
+
+    def drift_offset(self, glob: np.ndarray, sl: slice = slice(None)) -> np.ndarray | float:
+        """(s, L+1, m) rad the encoders' drift at each residual's sample of the intervals ``sl`` (module drift:
+        the hat functions times the knots' values, counts, in ``glob`` after the line corrections), or 0.0."""
+        if not self.nd:
+            return 0.0
+        D = glob[self.p + self.ncg:].reshape(self.ny, -1)  # (m, K) counts
+        return np.einsum("skK,mK->skm", self.Hb[sl], D)
 
     def encoder_rms(self, r: np.ndarray) -> float:
         """RMS of the encoder residuals in r, counts."""
@@ -246,12 +259,12 @@ class ShootingProblem(EncoderOutput):
         corr = self.correction(glob, offs)
         xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac)
         q = xs[:, :, :n]
-        r_enc = ((np.einsum("ij,skj->ski", self.S_enc, q) + self.offset(theta)
+        r_enc = ((np.einsum("ij,skj->ski", self.S_enc, q) + self.offset(theta) + self.drift_offset(glob)
                   + self.stretch(theta, self.tension_torque(u_k, xs)) - self.Yb)
                  / self.sig_y * self.valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
         c[self.cut] = 0.0  # no continuity into a run's first interval
-        rg = np.concatenate([np.zeros(self.p), glob[self.p:]])
+        rg = np.concatenate([np.zeros(self.p), glob[self.p:self.p + self.ncg], np.zeros(self.nd)])
         rq = (np.where(self.q_mask, q - np.nan_to_num(self.Qm), 0.0) / self.camera_noise
               if self.Qm is not None else None)
         res = [r_enc.reshape(self.n_int, -1)]
@@ -330,12 +343,18 @@ class ShootingProblem(EncoderOutput):
         Xr = X[..., ip] * np.where(self.additive, self.scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
         if self.torque.lines:
             Xr = np.concatenate([Xr, X[..., io]], axis=-1)
+        if self.nd:  # the drift's knots: no state depends on them (output only)
+            Xr = np.concatenate([Xr, np.zeros(Xr.shape[:-1] + (self.nd,))], axis=-1)
         w = self.valid[sl, :, None, None] / self.sig_y
         S_enc = self.S_enc
         J_enc = np.concatenate([np.einsum("ij,skjd->skid", S_enc, Xv[:, :, :n]),
                                 np.einsum("ij,skjd->skid", S_enc, Xr[:, :, :n])], axis=-1)
         for k, mo in self.off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
+        if self.nd:  # y += H d (module drift): motor mo's knots at columns nb + p + ncg + mo K ...
+            K, d0 = self.H.shape[1], nb + p + self.ncg
+            for mo in range(self.ny):  # a loop over the motors (one or two)
+                J_enc[:, :, mo, d0 + mo * K: d0 + (mo + 1) * K] += self.Hb[sl]
         if self.comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
@@ -437,7 +456,7 @@ class ShootingProblem(EncoderOutput):
     def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> ShootingSolution:
         """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
         name, :func:`start_values`)."""
-        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:].copy(), self.L)
+        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L)
 
     def warm_variables(self, sol: ShootingSolution | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
@@ -447,7 +466,7 @@ class ShootingProblem(EncoderOutput):
         if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
                 or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
             return None
-        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines])
+        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, np.zeros(self.nd)])
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
