@@ -130,3 +130,27 @@ def test_the_harmonics_are_judged_run_by_run():
     runs = [0, 1800, 3000]
     expect = (1800 * harmonic_ratio(e[:1800], LINES, 1e-3) + 1200 * harmonic_ratio(e[1800:], LINES, 1e-3)) / 3000
     assert harmonic_ratio(e, LINES, 1e-3, runs=runs) == pytest.approx(expect, rel=1e-12)
+
+
+def test_a_torque_delay_shifts_each_run_apart():
+    """observers.replay.advanced (the delay effect's torque read earlier) on two runs: each run's torque from its own
+    rows, its last rows repeating its own last, as each run advanced alone."""
+    from alpes_dyn.estimation.observers.replay import advanced
+
+    finger2 = ad.Model.alpes("finger2", friction=True)
+    a, b = _clean(finger2, 0.15, 1), _clean(finger2, 0.12, 2)
+    b = dataclasses.replace(b, torque=b.torque + 1.0)
+    got = advanced(join_runs([a, b]), 3).torque
+    assert np.array_equal(got, np.concatenate([advanced(a, 3).torque, advanced(b, 3).torque]))
+
+
+def test_a_long_records_window_ends_before_a_run_too_short_to_hold_the_lines():
+    """long_record.window on two runs: a window reaching 21 samples into the second run ends at its start (a run of
+    21 samples holds no line of the excitation); one reaching 0.55 s into it keeps them, the run column with them."""
+    from alpes_dyn.estimation.identification.long_record import window
+
+    finger2 = ad.Model.alpes("finger2", friction=True)
+    j = aligned(join_runs([_clean(finger2, 0.65, 3), _clean(finger2, 0.7, 4)]), 100)  # runs at 0 and 600
+    assert window(j, 0.62).n_samples == 600 and window(j, 0.62).n_runs == 1
+    w = window(j, 1.15)
+    assert w.n_samples == 1151 and np.array_equal(w.run_starts(), [0, 600, 1151])

@@ -248,6 +248,12 @@ def _experiment_robot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _drift_lines(drift: dict | None) -> list[str]:
+    """``identify --drift offset``'s text: each encoder's fitted drift at the knots (none without it)."""
+    return [f"  encoder_{motor} drift: " + ", ".join(f"{v:+.3g}" for v in d) + " counts at "
+            + ", ".join(f"{t:.3g}" for t in drift["knots_s"]) + " s" for motor, d in (drift or {}).get("counts", {}).items()]
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
@@ -296,9 +302,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
     for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.identification.bounds)
         lines.append(f"  {n:{w}s} not identified: {why}")
-    for motor, d in (res.drift or {}).get("counts", {}).items():  # --drift offset: the encoders' fitted drift
-        lines.append(f"  encoder_{motor} drift: " + ", ".join(f"{v:+.3g}" for v in d) + " counts at "
-                     + ", ".join(f"{t:.3g}" for t in res.drift["knots_s"]) + " s")
+    lines += _drift_lines(res.drift)
     held = _held_masses(model, args) if urdf else ()
     obj["held"] = list(held)
     if held:

@@ -59,15 +59,8 @@ class AdequacyWarning(AlpesDynWarning):
 BAND_99 = 2.5758293035489004  # the standard normal's 99.5 % quantile: the two-sided 99 % band
 
 THRESHOLDS: dict[str, float] = {
-    "lags": 25,
-    "exact_counts": 0.05,
-    "ljung_box_p": 1e-6,
-    "max_acf_bands": 3.0,
-    "max_xcorr_bands": 2.0,
-    "floor_ratio": 1.15,
-    "validation_fit_percent": 70.0,
-    "signature_share": 0.02,
-    "reversal_ratio": 2.0,
+    "lags": 25, "exact_counts": 0.05, "ljung_box_p": 1e-6, "max_acf_bands": 3.0, "max_xcorr_bands": 2.0,
+    "floor_ratio": 1.15, "validation_fit_percent": 70.0, "signature_share": 0.02, "reversal_ratio": 2.0,
     "harmonic_ratio": 1.5,
 }
 """The verdict's thresholds.
@@ -481,7 +474,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"residual {rms:.3g} counts RMS is {ratio:.2f}x the sensor floor {floor.total:.3g}")
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
-    sig = signatures(e, regressors or {})
+    regs = dict(regressors or {})
+    drift = regs.pop("drift", None)  # a ramp, judged alone: in the joint regression it takes the others' shares
+    sig = {**signatures(e, regs), **({"drift": signatures(e, {"drift": drift})["drift"]} if drift is not None else {})}
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
     if lines is not None and len(lines) and dt is not None:
@@ -490,11 +485,13 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []
     if reasons:
-        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
+        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES and k != "drift"), reverse=True)
         top = ranked[0][0] if ranked else 0.0
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
                    and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
         # acceleration response is close to the torque's rate (a rotor mismatch named both)
+        if not missing and sig.get("drift", {}).get("share", 0.0) >= th["signature_share"]:  # any slow misfit
+            missing = [SIGNATURES["drift"]]  # trends too (a lost basin's, a rotor's): named by its own effect first
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]

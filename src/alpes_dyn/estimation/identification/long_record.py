@@ -41,9 +41,19 @@ NODE_SWEEPS = 4
 whole record at the window's parameters: the intervals' start states fitted to their own samples."""
 
 
+WINDOW_RUN = 0.5
+"""s: a recording of several runs: the window ends at the start of its last run where that run would have less
+than this in it (a run of a few samples holds no line of the excitation)."""
+
+
 def window(rec: Recording, seconds: float) -> Recording:
-    """The first ``seconds`` of ``rec`` (every per-sample column cut alike)."""
+    """The first ``seconds`` of ``rec`` (every per-sample column cut alike; of several runs, not a last run
+    shorter than :data:`WINDOW_RUN`)."""
     k = min(int(round(seconds / rec.dt)) + 1, rec.n_samples)
+    b = rec.run_starts()
+    last = int(b[np.searchsorted(b, k, side="left") - 1])  # the start of the run sample k - 1 is in
+    if 0 < last and (k - last) * rec.dt < WINDOW_RUN:
+        k = last
     cut = {f.name: getattr(rec, f.name)[:k] for f in dataclasses.fields(rec)
            if isinstance(getattr(rec, f.name), np.ndarray) and getattr(rec, f.name).shape[:1] == (rec.n_samples,)}
     return dataclasses.replace(rec, **cut)

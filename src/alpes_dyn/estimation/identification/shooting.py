@@ -108,8 +108,9 @@ class ShootingProblem(EncoderOutput):
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
         self.ncg = sens.no if lines else 0  # global line-coefficient corrections
         self.drift = drift
-        self.H = drift_basis(rec) if drift == "offset" else np.zeros((rec.n_samples, 0))  # (N+1, K) module drift
-        self.nd = np.shape(model.transmission.S)[0] * self.H.shape[1]
+        H = drift_basis(rec) if drift == "offset" else np.zeros((rec.n_samples, 0))  # (N+1, K): module drift
+        self.nK = H.shape[1]
+        self.nd = np.shape(model.transmission.S)[0] * self.nK
         self.ng = self.p + self.ncg + self.nd  # parameters, line corrections, the drift's knots (counts)
         self.nb = self.nx + self.no  # local variables of an interval: its start state and its torque correction
         tr = model.transmission
@@ -159,7 +160,8 @@ class ShootingProblem(EncoderOutput):
         self.shape = Shape(n_int, self.nb, self.nx, self.ng, self.cut)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg), np.zeros(self.nd)]  # d rg / d glob, squared
-        self.Hb = self.H[self.kk] * self.step  # (S, L+1, K) rad per count of the drift's knots
+        self.Hb = H[self.kk] * self.step  # (S, L+1, K) rad per count of the drift's knots
+        del H
         self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
                  + n_int * self.no + self.ncg)
@@ -352,7 +354,7 @@ class ShootingProblem(EncoderOutput):
         for k, mo in self.off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
         if self.nd:  # y += H d (module drift): motor mo's knots at columns nb + p + ncg + mo K ...
-            K, d0 = self.H.shape[1], nb + p + self.ncg
+            K, d0 = self.nK, nb + p + self.ncg
             for mo in range(self.ny):  # a loop over the motors (one or two)
                 J_enc[:, :, mo, d0 + mo * K: d0 + (mo + 1) * K] += self.Hb[sl]
         if self.comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
