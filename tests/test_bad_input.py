@@ -235,6 +235,8 @@ def bad_files(d: Path) -> dict[str, str]:
     for name, run in run_files.items():
         files[f"{name}_csv"] = "\n".join([lines[0] + ",run"] + [row + "," + run(i) for i, row in enumerate(lines[1:])]
                                          ).encode()
+    files["gravok_csv"] = "\n".join([lines[0] + ",gravity_x,gravity_y,gravity_z"]
+                                     + [row + ",0,0,-9.81" for row in lines[1:]]).encode()  # a good one, hung level
     files["unders_csv"] = "\n".join(lines[:5] + [lines[5].replace(",", ",1_0", 1)] + lines[6:]).encode()
     files["current_csv"] = _recordings()["finger3"].replace("torque_finger", "current_finger", 1).encode()
     out = {}
@@ -367,6 +369,12 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{grav149_csv}", "-o", "{tmp}/i.toml",
           needle="gravity has norm 14.9 m/s^2 at row 2; expected 9.81 m/s^2 within 10 %"),
         C("identify", "--data", "{unders_csv}", "-o", "{tmp}/i.toml", needle="line 6: not a number ('1_0"),
+        C("identify", "--data", "{rec3_csv}", "{gravok_csv}", "-o", "{tmp}/i.toml",
+          needle="join_runs: gravity is in some of the recordings only"),
+        C("identify", "--data", "{rec3_csv}", "{gravok_csv}", "-o", "{gravok_csv}",
+          needle="-o: '{gravok_csv}' is the input of --data"),
+        C("identify", "--data", "{rec3_csv}", "{tmp}/none.csv", "-o", "{tmp}/i.toml", needle="cannot be read"),
+        C("identify", "--data", "-o", "{tmp}/i.toml", needle="argument --data: expected at least one argument"),
         C("identify", "--data", "{rec3_csv}", "--drift", "torque", "-o", "{tmp}/i.toml",
           needle="argument --drift: invalid choice: 'torque' (choose from 'offset')"),
         C("identify", "--data", "{rec3_csv}", "--drift", "-o", "{tmp}/i.toml", needle="argument --drift: expected one argument"),

@@ -154,3 +154,22 @@ def test_a_long_records_window_ends_before_a_run_too_short_to_hold_the_lines():
     assert window(j, 0.62).n_samples == 600 and window(j, 0.62).n_runs == 1
     w = window(j, 1.15)
     assert w.n_samples == 1151 and np.array_equal(w.run_starts(), [0, 600, 1151])
+
+
+def test_identify_reads_several_data_files_as_runs(tmp_path):
+    """alpes-dyn identify --data A.csv B.csv: the files read and joined as runs (cli.common.read_data), the label
+    naming both; one file read as it is."""
+    import argparse
+
+    from alpes_dyn.cli.common import data_label, read_data
+
+    finger2 = ad.Model.alpes("finger2", friction=True)
+    a, b = _clean(finger2, 0.2, 1), _clean(finger2, 0.15, 2)
+    pa, pb = write_recording(a, tmp_path / "a.csv"), write_recording(b, tmp_path / "b.csv")
+    args = argparse.Namespace(data=[str(pa), str(pb)], torque_constant=None)
+    j = read_data(args, finger2)
+    assert j.n_runs == 2 and np.array_equal(j.run_starts(), [0, 201, 352]) and np.array_equal(j.t[201:], b.t)
+    assert np.array_equal(j.encoder[:201], read_recording(pa, finger2).encoder)
+    assert data_label(args) == f"{pa}, {pb}"
+    one = argparse.Namespace(data=[str(pa)], torque_constant=None)
+    assert read_data(one, finger2).run is None and data_label(one) == str(pa)

@@ -17,7 +17,7 @@ from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa:
 from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
-                     parse_vector)
+                     data_label, parse_vector, read_data)
 
 
 # ---- owned by the observers work (issue 4)
@@ -274,7 +274,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     freqs = _identify_lines(args)
     fit, data = _fit_robot(args, freqs) if urdf else _fit(args, freqs)
     res, model = fit.result, fit.result.model
-    res.recording_path = args.data  # the identified file's header names the recording read
+    res.recording_path = data_label(args)  # the identified file's header names the recording(s) read
     written = args.output is not None and (res.trustworthy or args.force)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
@@ -293,7 +293,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     more = (f"; {len(fit.rounds)} fits in {fit.seconds:.1f} s: "
             + ", ".join(f"{'+'.join(e) or 'rigid'} {r.residual_rms:.3g} counts" for e, r in fit.rounds)
             if len(fit.rounds) > 1 else "")
-    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
+    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {data_label(args)} "
              f"({res.iterations} Gauss-Newton iterations, "
              f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s{more})",
              f"  {'parameter':{max(10, *(len(n) for n in res.names))}s} {'value':>12s} {'std':>10s} {'start':>12s}  unit"]
@@ -427,7 +427,7 @@ def _robot_recordings(args: argparse.Namespace, model, whole=None):
     columns are then ignored), with --torque-constant where they hold currents."""
     from ..estimation.experiments.recording import read_recording
 
-    data = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
+    data = read_data(args, model, ignore_others_of=whole)
     validate = None if args.validate is None else read_recording(args.validate, model, args.torque_constant,
                                                                  ignore_others_of=whole)
     return data, validate

@@ -394,9 +394,10 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "name: fit only the parameters of the joints it drives (and its own), on the sub-model of "
                         "its branches from the base (the recording's columns of the other motors and joints are "
                         "ignored; -o writes the whole robot's spec with the chain's values replaced)")
-    s.add_argument("--data", required=True, metavar="FILE.csv",
-                   help="the recording (documented CSV format); with a 'run' column, several runs fitted together, "
-                        "each from its own initial state, the parameters shared")
+    s.add_argument("--data", required=True, nargs="+", metavar="FILE.csv",
+                   help="the recording (documented CSV format); with a 'run' column, or several files (each a run "
+                        "of its own), several runs fitted together, each from its own initial state, the parameters "
+                        "shared")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="Alpes models: parameter file to start from, and the base of the written file (default: the "
                         "shipped one)")

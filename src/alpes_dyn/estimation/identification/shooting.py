@@ -361,7 +361,7 @@ class ShootingProblem(EncoderOutput):
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
                 if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
-                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.psik(sl)
+                    J_enc[:, :, mo, nb + p + mo:nb + p + self.ncg:nu] += theta[k] * self.psik(sl)
                 elif self.torque.eiv:
                     J_enc[:, :, mo, nx + mo] += theta[k]
         if self.rotor is not None:  # C (u - J_m S qdd): d/d the states and parameters through qdd
