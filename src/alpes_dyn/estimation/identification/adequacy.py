@@ -61,7 +61,7 @@ BAND_99 = 2.5758293035489004  # the standard normal's 99.5 % quantile: the two-s
 THRESHOLDS: dict[str, float] = {
     "lags": 25, "exact_counts": 0.05, "ljung_box_p": 1e-6, "max_acf_bands": 3.0, "max_xcorr_bands": 2.0,
     "floor_ratio": 1.15, "validation_fit_percent": 70.0, "signature_share": 0.02, "reversal_ratio": 2.0,
-    "harmonic_ratio": 1.5,
+    "harmonic_ratio": 1.5, "drift_share": 0.5,
 }
 """The verdict's thresholds.
 
@@ -78,7 +78,8 @@ explains at least ``signature_share`` of the residual and at least half what the
 within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere; a
 nonlinearity shaped otherwise than in the model named (last) where the residual's power at the excitation's
 harmonics and intermodulation products is over ``harmonic_ratio`` times its power elsewhere
-(:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1)."""
+(:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1); a
+drift (a ramp, judged alone) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")
@@ -490,8 +491,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
                    and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
         # acceleration response is close to the torque's rate (a rotor mismatch named both)
-        if not missing and sig.get("drift", {}).get("share", 0.0) >= th["signature_share"]:  # any slow misfit
-            missing = [SIGNATURES["drift"]]  # trends too (a lost basin's, a rotor's): named by its own effect first
+        if sig.get("drift", {}).get("share", 0.0) >= (th["drift_share"] if missing else th["signature_share"]):
+            missing = [SIGNATURES["drift"]] + missing  # (THRESHOLDS' docstring)
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
