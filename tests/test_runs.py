@@ -81,17 +81,18 @@ def test_the_run_column_round_trips_and_is_checked(tmp_path):
     assert np.array_equal(c.run_starts(), [0, 200, 351]) and np.array_equal(c.t[200:], b.t)
 
 
-def test_two_clean_runs_fit_together_to_the_truth():
-    """Two noise-free runs of one finger, the second's excitation from its own start (time restarted, the state
-    jumps): fitted as one recording of two runs, K, m, F_s, F_v come back within 1e-6 (each run from its own
-    initial state; the first run cut to 600 samples: whole intervals)."""
+def test_four_clean_runs_fit_together_to_the_truth():
+    """Four noise-free runs of one finger, each one's excitation from its own start (time restarted, the state
+    jumps), the torque on each run's own lines (4 x 19 coefficients per motor, each run's 19 through the compiled
+    step): fitted as one recording of four runs, K, m, F_s, F_v come back within 2e-5 (6.4e-6 measured; each run
+    from its own initial state, each but the last cut to 300 samples: whole intervals)."""
     finger2 = ad.Model.alpes("finger2", friction=True)
-    j = join_runs([_clean(finger2, 0.65, 3), _clean(finger2, 0.55, 4)])
+    four = join_runs([_clean(finger2, 0.35, s) for s in range(4)])
     truth = np.r_[TRUE.finger.K[:2], TRUE.finger.m[:2], TRUE.finger.F_s[:2], TRUE.finger.F_v[:2]]
-    res = identify(finger2, j, progress=False)
-    assert res.converged and np.max(np.abs(res.values / truth - 1)) < 1e-6
-    assert res.residual.shape == (1202 - 51, 1)  # the first run's last 51 samples are not whole intervals
-    assert np.array_equal(res.node_times[[5, 6, 7]], [0.5, 0.0, 0.1])  # the second run's nodes from its own t
+    res = identify(finger2, four, progress=False, excitation=LINES, torque_noise=1e-4)
+    assert res.converged and np.max(np.abs(res.values / truth - 1)) < 2e-5
+    assert res.residual.shape == (4 * 351 - 3 * 51, 1)  # the first three runs' last 51 samples: no whole interval
+    assert np.allclose(res.node_times[[2, 3, 4, 9]], [0.2, 0.0, 0.1, 0.0])  # each run's nodes from its own t
 
 
 @pytest.fixture(scope="module")
@@ -173,3 +174,28 @@ def test_identify_reads_several_data_files_as_runs(tmp_path):
     assert data_label(args) == f"{pa}, {pb}"
     one = argparse.Namespace(data=[str(pa)], torque_constant=None)
     assert read_data(one, finger2).run is None and data_label(one) == str(pa)
+
+
+def test_the_torque_is_projected_on_each_runs_own_lines():
+    """torque_model on four runs (the second's time shifted, the others restarted): each run's projected torque and
+    basis rows those of the run projected alone (its last sample's from its own lines), held compact (nphi columns,
+    four blocks: 4 x 19 = 76 coefficients per motor, over the compiled step's 64 basis functions side by side)."""
+    from alpes_dyn.estimation.identification.torque_lines import torque_model
+
+    finger2 = ad.Model.alpes("finger2", friction=True)
+    runs = [_clean(finger2, d, s) for d, s in ((0.3, 1), (0.25, 2), (0.3, 3), (0.2, 4))]
+    runs[1] = dataclasses.replace(runs[1], t=runs[1].t + 7.0, torque=runs[1].torque * 1.5)
+    tm = torque_model(join_runs(runs), LINES, None)
+    assert tm.blocks == 4 and tm.nphi == 2 * len(LINES) + 1 and tm.Q.shape == (1054 - 1, tm.nphi)
+    assert tm.nlines == 4 * tm.nphi
+    a = 0
+    for r in runs:
+        alone = torque_model(r, LINES, tm.noise)
+        n = r.n_samples
+        held = slice(a, a + n - 1)
+        assert np.allclose(tm.U[held], alone.U, atol=1e-15) and np.allclose(tm.Q[held], alone.Q, atol=1e-12)
+        if a + n < 1054:  # the run's last sample from its own lines
+            assert np.allclose(tm.U[a + n - 1], alone.U_last[0], atol=1e-15)
+            assert np.allclose(tm.Q[a + n - 1], alone.Q_last, atol=1e-12)
+        a += n
+    assert np.allclose(tm.Q_last, alone.Q_last) and np.allclose(tm.U_last, alone.U_last)

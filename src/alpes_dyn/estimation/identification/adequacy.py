@@ -475,8 +475,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"residual {rms:.3g} counts RMS is {ratio:.2f}x the sensor floor {floor.total:.3g}")
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
-    regs = dict(regressors or {})
-    drift = regs.pop("drift", None)  # a ramp, judged alone: in the joint regression it takes the others' shares
+    drift = (regs := dict(regressors or {})).pop("drift", None)  # a ramp, judged alone (it takes others' shares)
     sig = {**signatures(e, regs), **({"drift": signatures(e, {"drift": drift})["drift"]} if drift is not None else {})}
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
@@ -571,7 +570,8 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))
-    y, per_int, k = [], corr is not None and Psib is None, max(1, chunk_doubles // (L * sens.nw))  # (600 s: 264 MB)
+    per_int = corr is not None and (Psib is None or np.ndim(corr) == 3)  # per interval (a run's own lines too)
+    y, k = [], max(1, chunk_doubles // (L * sens.nw))  # (600 s: 264 MB)
     for d in [0.0] + pert:  # the fitted run, then one per effect (one at a time: a 60 s record's are 30 MB each)
         U, C = Ub + d, (lambda a: corr[a:a + k]) if per_int else (lambda a: corr)
         xs = np.concatenate([sens.run(nodes[a:a + k], U[a:a + k], Gb[a:a + k], theta, C(a), sensitivities=False,

@@ -106,7 +106,7 @@ class ShootingProblem(EncoderOutput):
         self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
         eiv, lines = torque.eiv, torque.lines
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
-        self.ncg = sens.no if lines else 0  # global line-coefficient corrections
+        self.ncg = sens.no * torque.blocks if lines else 0  # global line-coefficient corrections (every run's)
         self.drift = drift
         H = drift_basis(rec) if drift == "offset" else np.zeros((rec.n_samples, 0))  # (N+1, K): module drift
         self.nK = H.shape[1]
@@ -124,6 +124,7 @@ class ShootingProblem(EncoderOutput):
         self.G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (N, 3))
         n_int = self.n_int = -(-N // L)
         self.cut, self.before = run_cuts(rec, L, n_int)
+        self.blk = np.cumsum(np.r_[0, self.cut]) if torque.blocks > 1 else None  # (S,) each interval's run
         pad = n_int * L - N
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
@@ -203,21 +204,38 @@ class ShootingProblem(EncoderOutput):
         return np.where(additive, self.theta0 + self.scale * glob[:p],
                         self.theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
 
+    def _scatter(self, A: np.ndarray, sl: slice) -> np.ndarray:
+        """(s, ..., ncg) the last axis of ``A`` (s, ..., w), the intervals ``sl``' own run's block of a quantity
+        per line coefficient (w of them per run: its lines' or its coefficients'), laid in that run's place among
+        every run's (zero elsewhere); ``A`` itself with one run."""
+        if self.blk is None:
+            return A
+        w = A.shape[-1]
+        out = np.zeros(A.shape[:-1] + (w * self.torque.blocks,))
+        blk = self.blk[sl]
+        for r in np.unique(blk):  # a loop over the runs in these intervals (one or two)
+            out[blk == r, ..., r * w:(r + 1) * w] = A[blk == r]
+        return out
+
     def psik(self, sl: slice) -> np.ndarray:
         """(s, L+1, nphi) the lines' basis (times sigma_u) over the period before each residual's sample of the
         intervals ``sl`` (:func:`~alpes_dyn.model.transmission.torque_before`: the first residual's the period
         before the interval, the others' the interval's own)."""
-        return np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1)
+        return self._scatter(np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1), sl)
 
     def torque_at(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
         """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
         tendons' tension balances at each residual's sample: the one held over the period before it
         (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
         if self.torque.lines:
-            C = glob[self.p:self.p + self.ncg].reshape(self.torque.nphi, self.nu).T
+            C = self.correction(glob, offs)  # (nu, nphi), or per interval (S, nu, nphi): its run's
             u = self.Uk.copy()
-            u[:, 0] += self.Psi0 @ C.T
-            u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
+            if C.ndim == 2:  # one run
+                u[:, 0] += self.Psi0 @ C.T
+                u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
+            else:
+                u[:, 0] += np.einsum("sl,sil->si", self.Psi0, C)
+                u[:, 1:] += np.einsum("skl,sil->ski", self.Psib, C)
             return u
         if self.torque.eiv:
             return self.Uk + offs[:, None, :]
@@ -227,7 +245,10 @@ class ShootingProblem(EncoderOutput):
         """The torque correction the sensitivities take: the line coefficients (nu, nphi), the per-interval
         constants (S, nu), or None."""
         if self.torque.lines:
-            return glob[self.p:self.p + self.ncg].reshape(self.torque.nphi, self.nu).T  # C (nu, nphi), column-major vec
+            C = glob[self.p:self.p + self.ncg].reshape(self.torque.nlines, self.nu).T  # (nu, nlines), column-major
+            if self.blk is None:
+                return C
+            return C.reshape(self.nu, self.torque.blocks, -1)[:, self.blk].transpose(1, 0, 2)  # its run's, (S, nu, nphi)
         return offs if self.torque.eiv else None
 
     def drift_offset(self, glob: np.ndarray, sl: slice = slice(None)) -> np.ndarray | float:
@@ -293,7 +314,8 @@ class ShootingProblem(EncoderOutput):
         J = Cv = Cr = None
         for a in range(0, n_int, chunk):
             sl = slice(a, min(a + chunk, n_int))
-            corr_sl = corr[sl] if (corr is not None and self.no) else corr  # per interval, or the lines' (global)
+            per = corr is not None and (self.no or corr.ndim == 3)  # per interval, or the lines' (global)
+            corr_sl = corr[sl] if per else corr
             x_c, X_c = self.sens.run(nodes[sl], self.Ub[sl], self.Gb[sl], theta, corr_sl,
                                      basis=self.Psib[sl] if self.Psib is not None else None, sensitivities=jac)
             xs[sl] = x_c
@@ -343,8 +365,8 @@ class ShootingProblem(EncoderOutput):
         iv, ip, io = slice(0, nx), slice(nx, nx + p), slice(nx + p, nx + p + self.sens.no)
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if self.no else X[..., iv]  # (s, L+1, nx, nb)
         Xr = X[..., ip] * np.where(self.additive, self.scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
-        if self.torque.lines:
-            Xr = np.concatenate([Xr, X[..., io]], axis=-1)
+        if self.torque.lines:  # each interval's run's coefficients in their place (several runs: _scatter)
+            Xr = np.concatenate([Xr, self._scatter(X[..., io], sl)], axis=-1)
         if self.nd:  # the drift's knots: no state depends on them (output only)
             Xr = np.concatenate([Xr, np.zeros(Xr.shape[:-1] + (self.nd,))], axis=-1)
         w = self.valid[sl, :, None, None] / self.sig_y

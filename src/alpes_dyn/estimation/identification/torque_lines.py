@@ -3,8 +3,9 @@ projected on the excitation's lines with the projection's error fitted (errors i
 
 A recording of several runs (its ``run`` column, :class:`~alpes_dyn.estimation.experiments.recording.Recording`)
 is projected run by run: each run on its own lines, their time from the run's own first sample, each run's
-correction its own coefficients (the basis block-diagonal over the runs). Neither the excitation's phase nor the
-noise's projection carries from one run to the next: a run may restart the excitation or start another.
+correction its own coefficients (the basis block-diagonal over the runs, held compact: each sample's row of its
+own run's block, :attr:`TorqueModel.blocks` of them). Neither the excitation's phase nor the noise's projection
+carries from one run to the next: a run may restart the excitation or start another.
 """
 
 from __future__ import annotations
@@ -43,13 +44,16 @@ class TorqueModel:
     sigma_u, N m; with the lines (``lines``), ``Q`` (N, nphi) their orthonormal basis and ``Q_last`` (nphi,) at the
     last sample: the true torque is U + sigma_u Q c, c ~ N(0, I) fitted; without them and sigma_u > 0, a constant
     correction per interval (``eiv`` and not ``lines``). A :class:`ShootingProblem` keeps its own copy without
-    ``Q`` (None: the basis lives on there, scaled and cut at the intervals; 91 MB at 600 s)."""
+    ``Q`` (None: the basis lives on there, scaled and cut at the intervals; 91 MB at 600 s). ``blocks``: the runs
+    whose lines are their own (a recording of several runs): ``Q``'s row k is the basis of sample k's run, the
+    coefficients c those of every run in turn (:attr:`nlines` per motor)."""
 
     U: np.ndarray
     U_last: np.ndarray
     noise: float
     Q: np.ndarray | None = None
     Q_last: np.ndarray | None = None
+    blocks: int = 1
 
     @property
     def eiv(self) -> bool:
@@ -65,6 +69,11 @@ class TorqueModel:
     def nphi(self) -> int:
         """Number of basis functions of the lines (0 without them)."""
         return self.Q_last.shape[0] if self.lines else 0
+
+    @property
+    def nlines(self) -> int:
+        """Number of line coefficients per motor: :attr:`nphi` for each of the :attr:`blocks` runs."""
+        return self.nphi * self.blocks
 
 
 CHOLESKY_QR_ROWS = 2**15
@@ -106,20 +115,20 @@ def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_nois
         U, Q, U_last, Q_last = _project(rec.t, rec.torque, excitation)
     else:  # run by run, the basis block-diagonal (the module docstring); the runs' blocks laid in place
         N, nu = rec.n_samples - 1, rec.torque.shape[1]
-        k = 2 * np.size(excitation) + 1
-        R = len(b) - 1
-        U, Q = np.empty((N, nu)), np.zeros((N, R * k))
+        k, R = 2 * np.size(excitation) + 1, len(b) - 1
+        U, Q = np.empty((N, nu)), np.empty((N, k))
         for r in range(R):  # a loop over the runs (a few)
             a, e = b[r], b[r + 1]
             U_r, Q_r, U_e, Q_e = _project(rec.t[a:e], rec.torque[a:e], excitation)
-            U[a:e - 1], Q[a:e - 1, r * k:(r + 1) * k] = U_r, Q_r
+            U[a:e - 1], Q[a:e - 1] = U_r, Q_r
             if r < R - 1:  # the run's last sample (held over no period of its own) from its lines too
-                U[e - 1], Q[e - 1, r * k:(r + 1) * k] = U_e[0], Q_e
-        U_last, Q_last = U_e, np.concatenate([np.zeros((R - 1) * k), Q_e])
+                U[e - 1], Q[e - 1] = U_e[0], Q_e
+        U_last, Q_last = U_e, Q_e
+    blocks = len(b) - 1
     if torque_noise is None:  # what is off the lines is the noise: its standard deviation
         off_lines = rec.torque[:-1] - U
-        torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
-    return TorqueModel(U, U_last, torque_noise, Q, Q_last)
+        torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - blocks * Q.shape[1] * U.shape[1])))
+    return TorqueModel(U, U_last, torque_noise, Q, Q_last, blocks)
 
 
 def _project(t: np.ndarray, torque: np.ndarray, excitation: Sequence[float]):
