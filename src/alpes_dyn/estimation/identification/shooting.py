@@ -94,8 +94,13 @@ class ShootingProblem(EncoderOutput):
     name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
     structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
     False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
+    drift: ``"offset"``: the encoders' offset drift fitted too (module drift: ``nd`` knots' values, counts, after the
+    line corrections in ``glob``). A recording of several runs (module runs: each run starting on a node,
+    :func:`~alpes_dyn.estimation.identification.runs.aligned`)
+    has no continuity into a run's first interval (``cut``) and each run's own line coefficients (``blk``).
 
-    The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,); :meth:`values` maps ``glob`` to theta.
+    The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,): theta's (p), the line corrections (ncg),
+    the drift's (nd); :meth:`values` maps ``glob`` to theta.
     """
 
     def __init__(self, model: Model, rec: Recording, sens: SensitivityModel, L: int, torque: TorqueModel,
