@@ -95,9 +95,9 @@ class ShootingProblem(EncoderOutput):
     structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
     False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
     drift: ``"offset"``: the encoders' offset drift fitted too (module drift: ``nd`` knots' values, counts, after the
-    line corrections in ``glob``). A recording of several runs (module runs: each run starting on a node,
-    :func:`~alpes_dyn.estimation.identification.runs.aligned`)
-    has no continuity into a run's first interval (``cut``) and each run's own line coefficients (``blk``).
+    line corrections in ``glob``). A recording of several runs (module runs: each run starting on a node, see
+    ``runs.aligned``) has no continuity into a run's first interval (``cut``) and each run's own line coefficients
+    (``blk``).
 
     The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,): theta's (p), the line corrections (ncg),
     the drift's (nd); :meth:`values` maps ``glob`` to theta.
