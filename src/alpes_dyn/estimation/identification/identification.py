@@ -76,6 +76,7 @@ from .shooting import ShootingProblem, line_basis, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
 from .runs import aligned, split
+from .runs import encoder_noise as run_noise
 from .drift import check_drift, recorded_time
 from .fit_result import IdentificationResult, identified_params
 
@@ -240,7 +241,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
-    missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, encoder_noise).total \
+    missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, run_noise(rec, encoder_noise)).total \
         and not reason.startswith("iteration")
     if missed and interval >= RETRY_INTERVAL * (1 - 1e-9) and int(round(0.5 * interval / dt)) >= 2:
         settings = dict(excitation=excitation, substeps=substeps, torque_noise=torque_noise, camera_noise=camera_noise,
@@ -494,7 +495,9 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     if pb.torque.eiv and not pb.torque.lines:  # what the torque noise explains through the model (lines: fitted away)
         explained = torque_explained(sens, out.nodes, pb.Ub, pb.Gb, theta, out.offs, pb.valid, pb.S_enc, pb.step,
                                      pb.torque.noise, L)
-    floor = sensor_floor(rec.encoder, explained, encoder_noise)
+    floor = sensor_floor(rec.encoder, explained, run_noise(rec, encoder_noise))
+    if encoder_noise is None and rec.n_runs > 1:  # (module runs: no difference across a jump between runs)
+        floor.noise_source = "estimated from the recording run by run (fourth difference)"
     resp = effect_responses(sens, out.nodes, pb.Ub, pb.Gb, theta, pb.correction(out.glob, out.offs), pb.Psib,
                             pb.valid, x_fit, pb.S_enc, pb.step, rec.dt)
     # the tendon's stretch follows the tension: the torque held before each sample (torque_before)

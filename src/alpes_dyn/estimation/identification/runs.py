@@ -10,7 +10,7 @@ samples, each run but the last is cut to a whole number of intervals (:func:`ali
 each run's end, under one interval, 100 ms at the default, are not fitted). The torque's lines are each run's own
 (:func:`~alpes_dyn.estimation.identification.torque_lines.torque_model`), the tendon's tension at a run's first sample
 is under that sample's torque (no torque held before it), and the verdict's checks look at each run apart where
-the order of the samples matters (the harmonics' spectrum).
+the order of the samples matters (the sensor floor's noise, :func:`encoder_noise`; the harmonics' spectrum).
 """
 
 from __future__ import annotations
@@ -22,7 +22,7 @@ import numpy as np
 from ...errors import InputError
 from ..experiments.recording import Recording
 
-__all__ = ["aligned", "run_cuts", "split"]
+__all__ = ["aligned", "run_cuts", "split", "encoder_noise"]
 
 
 def aligned(rec: Recording, L: int) -> Recording:
@@ -77,3 +77,19 @@ def split(rec: Recording) -> list[Recording]:
                if isinstance(getattr(rec, f.name), np.ndarray) and getattr(rec, f.name).shape[:1] == (rec.n_samples,)}
         out.append(dataclasses.replace(rec, **cut, run=None))
     return out
+
+
+def encoder_noise(rec: Recording, given: float | None) -> float | None:
+    """The encoder's white noise beyond its quantisation, counts, for the sensor floor of a recording of several
+    runs: ``given``, else estimated run by run (each run's fourth difference,
+    :func:`~alpes_dyn.estimation.identification.adequacy.white_noise_level`: none across a jump between runs, which
+    made it 5 to 7 times the floor on three joined finger2 runs); None for one run (the floor's own estimate)."""
+    from .adequacy import encoder_resolution, white_noise_level
+
+    if given is not None or rec.n_runs == 1:
+        return given
+    b = rec.run_starts()
+    n = np.diff(b) - 4  # fourth differences per run
+    white2 = sum(k * white_noise_level(rec.encoder[a:z]) ** 2 for a, z, k in zip(b[:-1], b[1:], n)) / n.sum()
+    quant = encoder_resolution(rec.encoder) / np.sqrt(12.0)
+    return float(np.sqrt(max(float(np.mean(white2)) - quant**2, 0.0)))
