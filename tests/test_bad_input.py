@@ -229,6 +229,14 @@ def bad_files(d: Path) -> dict[str, str]:
     lines = _recordings()["finger3"].splitlines()
     files["grav149_csv"] = "\n".join([lines[0] + ",gravity_x,gravity_y,gravity_z"]
                                      + [row + ",0,0,-14.9" for row in lines[1:]]).encode()  # 1.5 g: not the Earth's
+    run_files = {"runfrac": lambda i: "0.5" if i == 7 else "0", "rundown": lambda i: "1" if i < 120 else "0",
+                 "runshort": lambda i: "0" if i < 150 else "1", "runhuge": lambda i: "0" if i < 110 else "1e17",
+                 "runtwo": lambda i: "0" if i < 101 else "1"}  # the run column's defects, and two good runs
+    for name, run in run_files.items():
+        files[f"{name}_csv"] = "\n".join([lines[0] + ",run"] + [row + "," + run(i) for i, row in enumerate(lines[1:])]
+                                         ).encode()
+    files["gravok_csv"] = "\n".join([lines[0] + ",gravity_x,gravity_y,gravity_z"]
+                                     + [row + ",0,0,-9.81" for row in lines[1:]]).encode()  # a good one, hung level
     files["unders_csv"] = "\n".join(lines[:5] + [lines[5].replace(",", ",1_0", 1)] + lines[6:]).encode()
     files["current_csv"] = _recordings()["finger3"].replace("torque_finger", "current_finger", 1).encode()
     out = {}
@@ -362,6 +370,23 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "{grav149_csv}", "-o", "{tmp}/i.toml",
           needle="gravity has norm 14.9 m/s^2 at row 2; expected 9.81 m/s^2 within 10 %"),
         C("identify", "--data", "{unders_csv}", "-o", "{tmp}/i.toml", needle="line 6: not a number ('1_0"),
+        C("identify", "--data", "{rec3_csv}", "{gravok_csv}", "-o", "{tmp}/i.toml",
+          needle="join_runs: gravity is in some of the recordings only"),
+        C("identify", "--data", "{rec3_csv}", "{gravok_csv}", "-o", "{gravok_csv}",
+          needle="-o: '{gravok_csv}' is the input of --data"),
+        C("identify", "--data", "{rec3_csv}", "{tmp}/none.csv", "-o", "{tmp}/i.toml", needle="cannot be read"),
+        C("identify", "--data", "-o", "{tmp}/i.toml", needle="argument --data: expected at least one argument"),
+        C("identify", "--data", "{rec3_csv}", "--drift", "torque", "-o", "{tmp}/i.toml",
+          needle="argument --drift: invalid choice: 'torque' (choose from 'offset')"),
+        C("identify", "--data", "{rec3_csv}", "--drift", "-o", "{tmp}/i.toml", needle="argument --drift: expected one argument"),
+        C("identify", "--data", "{runfrac_csv}", "-o", "{tmp}/i.toml",
+          needle="column 'run' line 9: 0.5 is not an integer (the run's number)"),
+        C("identify", "--data", "{rundown_csv}", "-o", "{tmp}/i.toml",
+          needle="column 'run' decreases at line 122 (1 then 0): each run's samples together, the runs in order"),
+        C("identify", "--data", "{runshort_csv}", "-o", "{tmp}/i.toml",
+          needle="run 1 (from line 152) has 51 samples; each run needs at least 100"),
+        C("identify", "--data", "{runhuge_csv}", "-o", "{tmp}/i.toml",
+          needle="column 'run' line 112: 1e+17 is beyond the integers a float holds"),
         C("identify", "--data", "{rec3_csv}", "--torque-noise", "1e308", "-o", "{tmp}/i.toml",
           needle="--torque-noise: 1e+308 N m is outside the accepted range [0, 1e+06] N m"),
         C("identify", "--data", "{rec3_csv}", "--encoder-noise", "1_0", "-o", "{tmp}/i.toml",
@@ -842,6 +867,8 @@ CLI: dict[str, list[Cli]] = {
     ],
     "estimate": [
         C("estimate", "--data", "{grav149_csv}", needle="gravity has norm 14.9 m/s^2"),
+        C("estimate", "--data", "{runtwo_csv}", "--model", "finger3",
+          needle="recording: 2 runs (column 'run'); an observer runs on one: give one run's rows"),
         C("estimate", "--duration", "1_0", needle="--duration: invalid float value: '1_0'"),
         C("control", "--duration", "1_0", needle="--duration: expected a positive number of seconds, got '1_0'"),
         C("estimate", "--model", "{robot_urdf}", "--spec", "{robot_toml}",
@@ -1227,6 +1254,12 @@ def _ident(c, recording=None, **kw):
     return identify(ad.Model.alpes("finger2", friction=True), recording, **kw)
 
 
+def _ident3(path, **kw):
+    from alpes_dyn.estimation.identification.identification import identify
+
+    return identify(ad.Model.alpes("finger3", friction=True), path, **kw)
+
+
 def _diverging():
     """A Recording object (no reader's range check) whose encoder jumps to 1e15 counts: the fit overflows."""
     import dataclasses
@@ -1500,6 +1533,14 @@ API: list[Api] = [
         c.f["rec3_csv"], "finger3"), RecordingError,
       "model: expected an alpes_dyn Model (it names the columns), got str"),
     A("read_recording", lambda c: _read_rec(c.f["unders_csv"]), RecordingError, "not a number ('1_0"),
+    A("read_recording", lambda c: _read_rec(c.f["runshort_csv"]), RecordingError, "each run needs at least 100"),
+    A("join_runs", lambda c: _join_runs([]), RecordingError, "join_runs: expected one or more Recordings"),
+    A("join_runs", lambda c: _join_runs([_read_rec(c.f["rec3_csv"]), "b.csv"]), RecordingError,
+      "join_runs: expected one or more Recordings"),
+    A("join_runs", lambda c: _join_runs([_read_rec(c.f["rec3_csv"]), _slow(_read_rec(c.f["rec3_csv"]))]),
+      RecordingError, "join_runs: sample period 0.002 s differs from the first recording's 0.001 s"),
+    A("join_runs", lambda c: _join_runs([_read_rec(c.f["rec3_csv"]), _slow(_read_rec(c.f["rec3_csv"]), None)]),
+      RecordingError, "join_runs: gravity is in some of the recordings only"),
     A("read_recording", lambda c: __import__("alpes_dyn.estimation.experiments.recording", fromlist=["x"]).read_recording(
         c.f["rec3_csv"], c.m, ignore_others_of="hand"), RecordingError,
       "ignore_others_of: expected an alpes_dyn Model or None, got str"),
@@ -1767,6 +1808,10 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, interval=0.0), InputError, "interval: expected a positive number"),
     A("identify", lambda c: _ident(c, interval=1e308), InputError, "interval: 1e+308 s must hold 2 to"),
     A("identify", lambda c: _ident(c, interval=True), InputError, "interval: expected a positive number, got True"),
+    A("identify", lambda c: _ident(c, drift="torque"), InputError, "drift: expected None or one of offset, got 'torque'"),
+    A("identify", lambda c: _ident(c, drift=1), InputError, "drift: expected None or one of offset, got 1"),
+    A("identify", lambda c: _ident3(c.f["runtwo_csv"], interval=0.15),
+      InputError, "interval: 150 samples is longer than run 0 (101 samples): each run needs at least one whole"),
     A("identify", lambda c: _ident(c, substeps=10**9), InputError, "substeps: expected an integer from 1 to 1000"),
     A("sweep", lambda c: __import__("alpes_dyn.studies.sweep", fromlist=["x"]).sweep(
         lambda seed: {"x": 1.0}, 1, options=5, serial=True), InputError, "options: expected a dict of keyword arguments"),
@@ -2117,6 +2162,21 @@ def _write_rec(path):
     return write_recording(_exp(), path)
 
 
+def _slow(rec, gravity=False):
+    """``rec`` at twice its sample period (``gravity`` False), or with gravity columns (None)."""
+    import dataclasses
+
+    if gravity is None:
+        return dataclasses.replace(rec, gravity=np.tile([0.0, 0.0, -9.81], (rec.n_samples, 1)))
+    return dataclasses.replace(rec, t=2 * rec.t)
+
+
+def _join_runs(recs):
+    from alpes_dyn.estimation.experiments.recording import join_runs
+
+    return join_runs(recs)
+
+
 def _read_rec(path, torque_constant=None):
     from alpes_dyn.estimation.experiments.recording import read_recording
 
@@ -2239,7 +2299,7 @@ def _adapted(**kw):
 
 
 def _line_basis(starts):
-    from alpes_dyn.estimation.identification.lines import line_basis
+    from alpes_dyn.estimation.identification.torque_lines import line_basis
 
     return line_basis(1e-3 * np.arange(1001), (0.7, 3.1), starts)
 

@@ -189,7 +189,7 @@ def test_line_corrections_trust_region_grows_only_on_a_crawl():
     from alpes_dyn.estimation.identification.gauss_newton import CRAWL_STEPS, MAX_COEF_GROWTH, GaussNewton
 
     assert (CRAWL_STEPS, MAX_COEF_GROWTH) == (3, 16.0)
-    pb = SimpleNamespace(p=2, nv=3, nz=3 + 2 + 4, N=4000)  # 3 local variables, 2 parameters, 4 line coefficients
+    pb = SimpleNamespace(p=2, ncg=4, nv=3, nz=3 + 2 + 4, N=4000)  # 3 local variables, 2 parameters, 4 line coefficients
     d = np.zeros(pb.nz)
     d[pb.nv + pb.p + 1] = 10.0
     whole, short = (1.0, None, None, 0.0), (0.5, None, None, 0.0)
@@ -207,7 +207,7 @@ def test_line_corrections_trust_region_grows_only_on_a_crawl():
     d_big = d * 4.0  # 40 sigma: the region doubles to its cap
     assert GaussNewton.next_radius(pb, d_big, 16.0, 9, whole) == (16.0, 10)
     # beyond 4 s the rule's sqrt(N / 4000) widens every radius: 10 sigma at 16 s is inside one
-    assert GaussNewton.next_radius(SimpleNamespace(p=2, nv=3, nz=9, N=16000 * 100), d, 1.0, 2, whole) == (1.0, 0)
+    assert GaussNewton.next_radius(SimpleNamespace(p=2, ncg=4, nv=3, nz=9, N=16000 * 100), d, 1.0, 2, whole) == (1.0, 0)
 
 
 def test_line_search_corrects_a_curved_step_until_the_merit_takes_it(monkeypatch):

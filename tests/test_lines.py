@@ -10,8 +10,9 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, experiment_torque
-from alpes_dyn.estimation.identification.lines import MAX_SEGMENTS, line_basis, segment_starts
-from alpes_dyn.estimation.identification.shooting import torque_model
+from alpes_dyn.estimation.experiments.recording import MAX_SEGMENTS, segment_starts
+from alpes_dyn.estimation.identification.torque_lines import line_basis
+from alpes_dyn.estimation.identification.torque_lines import torque_model
 from alpes_dyn.model.mjcf import hanging_gravity
 
 

@@ -205,7 +205,7 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
     every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
     (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF or MJCF --model) and
     the others; ``more``: (what, path) of the other files it writes (identify's URDF beside -o)."""
-    inputs = [(flag, getattr(args, dest)) for dest, flag in _INPUT_OPTIONS if isinstance(getattr(args, dest, None), str)]
+    inputs = [(flag, f) for dest, flag in _INPUT_OPTIONS for f in _files(getattr(args, dest, None))]
     model = getattr(args, "model", None)
     if isinstance(model, str) and (_is_urdf_path(model) or _is_mjcf_path(model)):
         inputs.append(("--model", model))
@@ -213,6 +213,28 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
     outputs = [(f, v) for f, v in outputs if isinstance(v, str)] + list(more)  # (linearize's --output: names)
     # --log FILE.csv is a CSV, --true-params-out a parameter file (TOML), by their names
     check_outputs(outputs, inputs, {"--log": ("csv",), "--true-params-out": ("toml",), **(extensions or {})})
+
+
+def _files(value: Any) -> list[str]:
+    """An input option's files: its one path, or each of a list of paths (``identify --data A.csv B.csv``)."""
+    if isinstance(value, str):
+        return [value]
+    return [v for v in value if isinstance(v, str)] if isinstance(value, (list, tuple)) else []
+
+
+def data_label(args: argparse.Namespace) -> str:
+    """``--data`` as the text and the identified file name it: its path, or its paths joined by ", "."""
+    return ", ".join(_files(args.data))
+
+
+def read_data(args: argparse.Namespace, model: Any, **kw: Any) -> Any:
+    """The recording of ``--data`` read for ``model`` (with ``--torque-constant``; ``kw`` to
+    :func:`~alpes_dyn.estimation.experiments.recording.read_recording`): of several files, one recording of several
+    runs, each file its own (:func:`~alpes_dyn.estimation.experiments.recording.join_runs`)."""
+    from ..estimation.experiments.recording import join_runs, read_recording
+
+    recs = [read_recording(f, model, args.torque_constant, **kw) for f in _files(args.data)]
+    return recs[0] if len(recs) == 1 else join_runs(recs)
 
 
 def _is_urdf_path(model: str) -> bool:

@@ -17,7 +17,7 @@ from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa:
 from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
-                     parse_vector)
+                     data_label, parse_vector, read_data)
 
 
 # ---- owned by the observers work (issue 4)
@@ -248,6 +248,12 @@ def _experiment_robot(args: argparse.Namespace) -> int:
     return 0
 
 
+def _drift_lines(drift: dict | None) -> list[str]:
+    """``identify --drift offset``'s text: each encoder's fitted drift at the knots (none without it)."""
+    return [f"  encoder_{motor} drift: " + ", ".join(f"{v:+.3g}" for v in d) + " counts at "
+            + ", ".join(f"{t:.3g}" for t in drift["knots_s"]) + " s" for motor, d in (drift or {}).get("counts", {}).items()]
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
@@ -268,7 +274,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     freqs = _identify_lines(args)
     fit, data = _fit_robot(args, freqs) if urdf else _fit(args, freqs)
     res, model = fit.result, fit.result.model
-    res.recording_path = args.data  # the identified file's header names the recording read
+    res.recording_path = data_label(args)  # the identified file's header names the recording(s) read
     written = args.output is not None and (res.trustworthy or args.force)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
@@ -287,7 +293,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     more = (f"; {len(fit.rounds)} fits in {fit.seconds:.1f} s: "
             + ", ".join(f"{'+'.join(e) or 'rigid'} {r.residual_rms:.3g} counts" for e, r in fit.rounds)
             if len(fit.rounds) > 1 else "")
-    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {args.data} "
+    lines = [f"{args.model}{f' ({args.chain})' if args.chain else ''}: parameters identified from {data_label(args)} "
              f"({res.iterations} Gauss-Newton iterations, "
              f"{'converged' if res.converged else 'NOT converged'}, {res.seconds:.1f} s{more})",
              f"  {'parameter':{max(10, *(len(n) for n in res.names))}s} {'value':>12s} {'std':>10s} {'start':>12s}  unit"]
@@ -296,6 +302,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
     for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.identification.bounds)
         lines.append(f"  {n:{w}s} not identified: {why}")
+    lines += _drift_lines(res.drift)
     held = _held_masses(model, args) if urdf else ()
     obj["held"] = list(held)
     if held:
@@ -381,7 +388,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
         _check_run_files(args, {"-o": ("toml",)}, [("-o's URDF", _mass_urdf_path(args.output))])
     data, validate = _robot_recordings(args, model, whole if args.chain is not None else None)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
-              encoder_noise=args.encoder_noise)
+              encoder_noise=args.encoder_noise, drift=args.drift)
     if args.parameters is not None:
         fitted = model_of(effects)
         names = _chain_names(fitted, args.parameters, args.chain)
@@ -420,7 +427,7 @@ def _robot_recordings(args: argparse.Namespace, model, whole=None):
     columns are then ignored), with --torque-constant where they hold currents."""
     from ..estimation.experiments.recording import read_recording
 
-    data = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
+    data = read_data(args, model, ignore_others_of=whole)
     validate = None if args.validate is None else read_recording(args.validate, model, args.torque_constant,
                                                                  ignore_others_of=whole)
     return data, validate

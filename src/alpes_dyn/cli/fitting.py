@@ -9,7 +9,7 @@ import warnings
 
 from ..errors import InputError
 from ..estimation.identification.identification import THUMB_PARAMETERS
-from .common import parse_vector
+from .common import parse_vector, read_data
 
 
 def _identify_lines(args: argparse.Namespace):
@@ -47,10 +47,10 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
     if recordings is not None:
         data, validate = recordings
     else:
-        data = read_recording(args.data, model_of(()), args.torque_constant)
+        data = read_data(args, model_of(()))
         validate = None if args.validate is None else read_recording(args.validate, model_of(()), args.torque_constant)
     kw = dict(excitation=freqs, torque_noise=args.torque_noise, validation=validate,
-              encoder_noise=args.encoder_noise)
+              encoder_noise=args.encoder_noise, drift=args.drift)
     if args.parameters is not None:
         model = model_of(effects)
         with warnings.catch_warnings():  # the command reports the verdict itself, in its one line

@@ -9,7 +9,7 @@ import warnings
 
 from ..errors import InputError
 from ..estimation.experiments.excursion import SmallExcursionWarning
-from .common import _Untrusted, _check_run_files, _emit, _excursion_lines
+from .common import _Untrusted, _check_run_files, _emit, _excursion_lines, data_label, read_data
 
 
 def experiment_hand(args: argparse.Namespace) -> int:
@@ -86,28 +86,28 @@ def identify_hand(args: argparse.Namespace) -> int:
         raise InputError(f"--chain: unknown chain {args.chain!r} of the hand (expected one of {', '.join(chains)})")
     freqs = _identify_lines(args)
     hand = Model.alpes("hand", params=p)
-    data = read_recording(args.data, hand, args.torque_constant)
+    data = read_data(args, hand)
     val = None if args.validate is None else read_recording(args.validate, hand, args.torque_constant)
     out, fits, lines = p, {}, []
     for chain in (args.chain,) if args.chain else chains:
         a = argparse.Namespace(**{**vars(args), "model": chain_model_name(chain),
                                   "chain": None if chain == "thumb" else chain})
         fit, _ = _fit(a, freqs, (chain_recording(data, chain), None if val is None else chain_recording(val, chain)))
-        fit.result.recording_path = args.data
+        fit.result.recording_path = data_label(args)
         fits[chain] = fit
         out = fit.result.params(out, chain)
         lines += _chain_lines(chain, fit)
     untrusted = {c: f.result.status() for c, f in fits.items() if not f.result.trustworthy}
     written = args.output is not None and (not untrusted or args.force)
     if written:
-        header = f"Identified by alpes_dyn from {args.data}, chain by chain ({', '.join(fits)})"
+        header = f"Identified by alpes_dyn from {data_label(args)}, chain by chain ({', '.join(fits)})"
         if untrusted:
             header += f"\nNOT TRUSTWORTHY (written with --force): {', '.join(untrusted)}"
         write_params(out, args.output, header=header)
     obj = {"model": "hand", "output": args.output if written else None, "trustworthy": not untrusted,
            "seconds": sum(f.seconds for f in fits.values()),
            "chains": {c: {**f.result.to_dict(), "effects": list(f.effects)} for c, f in fits.items()}}
-    text = (f"hand: {len(fits)} chains identified from {args.data} in {obj['seconds']:.1f} s"
+    text = (f"hand: {len(fits)} chains identified from {data_label(args)} in {obj['seconds']:.1f} s"
             + (f", written to {args.output}" if written else "") + "\n" + "\n".join(lines))
     _emit(obj, text, args.json)
     if untrusted and not args.force:

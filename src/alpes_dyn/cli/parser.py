@@ -396,7 +396,10 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "name: fit only the parameters of the joints it drives (and its own), on the sub-model of "
                         "its branches from the base (the recording's columns of the other motors and joints are "
                         "ignored; -o writes the whole robot's spec with the chain's values replaced)")
-    s.add_argument("--data", required=True, metavar="FILE.csv", help="the recording (documented CSV format)")
+    s.add_argument("--data", required=True, nargs="+", metavar="FILE.csv",
+                   help="the recording (documented CSV format); with a 'run' column, or several files (each a run "
+                        "of its own), several runs fitted together, each from its own initial state, the parameters "
+                        "shared")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="Alpes models: parameter file to start from, and the base of the written file (default: the "
                         "shipped one)")
@@ -433,6 +436,10 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--validate", default=None, metavar="REC2.csv",
                    help="a held-out recording of the same finger: the fitted model simulated on its torque, fit %% "
                         "and NRMSE per encoder (MATLAB's compare), part of the adequacy verdict")
+    s.add_argument("--drift", choices=("offset",), default=None,
+                   help="'offset': each encoder's offset drifts, piecewise linear in time from 0 at the first sample "
+                        "(knots every 15 s; a shorter record: a ramp), fitted with the parameters (the JSON's 'drift'); "
+                        "without it the verdict names a drift where the residual trends with time")
     s.add_argument("--encoder-noise", type=_strict_float, default=None, metavar="COUNTS",
                    help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
                         "adequacy check (default: estimated from the recording)")

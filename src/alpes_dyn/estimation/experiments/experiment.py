@@ -377,7 +377,7 @@ def _orientation_torques(truth: Model, nominal: Model, design: ExperimentDesign,
     finger feels there, the multisine restarting at the segment's first sample: the hand turned between two runs
     of the experiment (palm up, then hung fingers down), each run with the bias and amplitudes its orientation asks
     for -- hung, gravity pulls along the finger and the palm-up bias would be the wrong one. The fit takes each
-    segment on its own lines (:func:`~alpes_dyn.estimation.identification.lines.line_basis`). One orientation: the
+    segment on its own lines (:func:`~alpes_dyn.estimation.identification.torque_lines.line_basis`). One orientation: the
     documented experiment as it was."""
     u = np.empty((t.shape[0], nominal.transmission.n_motors))
     for i, g in enumerate(design.orientations):  # a loop over the orientations (one or two)

@@ -74,7 +74,8 @@ def chain_recording(rec: Recording, chain: str) -> Recording:
     pick = (lambda a: None if a is None else a[:, ji].copy())
     return Recording(t=rec.t.copy(), encoder=rec.encoder[:, mi].copy(), torque=rec.torque[:, mi].copy(),
                      motor_names=tuple(motors), joint_names=tuple(joints), q=pick(rec.q),
-                     gravity=None if rec.gravity is None else rec.gravity.copy(), true_q=pick(rec.true_q))
+                     gravity=None if rec.gravity is None else rec.gravity.copy(), true_q=pick(rec.true_q),
+                     run=None if rec.run is None else rec.run.copy())
 
 
 def hand_recording(chains: dict[str, Recording], hand: Model) -> Recording:

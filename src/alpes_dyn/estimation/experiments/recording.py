@@ -7,6 +7,7 @@ One row per sample, uniformly spaced, a header line naming the columns (any orde
 column                      unit     meaning
 =========================== ======== ==========================================================================
 ``t``                       s        sample time, strictly increasing, uniform spacing (the sample period)
+``run``                     --       optional: the run each sample belongs to, an integer, non-decreasing
 ``encoder_<motor>``         counts   motor encoder, q_m = (2 pi / counts_per_rev) counts (Section 3, eq. 3.13)
 ``torque_<motor>``          N m      measured motor torque, held until the next sample; or instead
 ``current_<motor>``         A        motor current, converted with a torque constant (``torque_constant``, N m/A)
@@ -28,6 +29,13 @@ refused by name: it is not this model's encoder in counts. Every defect is one
 column, a non-number (``1_0`` too: no digit separators), NaN where not allowed, time not increasing or not
 uniform, a joint angle or gravity in the wrong unit (degrees, g: the gravity's norm must be 9.81 m/s^2 within
 10 %), a recording too short or without excitation.
+
+Several runs in one file (issue 39): a ``run`` column numbers the excitation runs of a bench session (any
+integers, non-decreasing: 0 0 ... 0 1 1 ... 1). Each run is a recording of its own as above (at least
+:data:`MIN_SAMPLES` samples, its time strictly increasing and uniform, every run at the same sample period);
+between two runs the time may jump or start again, and the states jump: a fit starts each run from its own
+initial state (:func:`~alpes_dyn.estimation.identification.identification.identify`), the parameters shared.
+Without the column the file is one run, and a jump in its time is refused as before.
 """
 
 from __future__ import annotations
@@ -46,7 +54,8 @@ from ...fileio import atomic_write, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 
-__all__ = ["Recording", "read_recording", "write_recording", "MIN_SAMPLES", "MAX_SEGMENTS", "segment_starts"]
+__all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
+           "segment_starts", "excitation_parts"]
 
 MIN_SAMPLES = 100  # a shorter recording cannot tell a finger's dynamics
 
@@ -75,6 +84,7 @@ class Recording:
     motor_names (m,), joint_names (n,): the model's names.
     q: (N, n) rad, NaN where not measured, or None. force_z: (N,) N or None.
     gravity: (N, 3) m/s^2 or None. true_q: (N, n) rad or None (simulated experiments only).
+    run: (N,) integers, non-decreasing: the run of each sample, or None (one run).
     """
 
     t: np.ndarray
@@ -86,23 +96,43 @@ class Recording:
     force_z: np.ndarray | None = None
     gravity: np.ndarray | None = None
     true_q: np.ndarray | None = None
+    run: np.ndarray | None = None
 
     @property
     def n_samples(self) -> int:
         return int(self.t.shape[0])
 
+    def run_starts(self) -> np.ndarray:
+        """(R + 1,) the first sample of each of the R runs, then the number of samples (one run without
+        :attr:`run`)."""
+        if self.run is None:
+            return np.array([0, self.n_samples])
+        cut = np.flatnonzero(np.diff(np.asarray(self.run)) != 0) + 1
+        return np.concatenate([[0], cut, [self.n_samples]])
+
+    @property
+    def n_runs(self) -> int:
+        return len(self.run_starts()) - 1
+
     @property
     def dt(self) -> float:
-        """Sample period, s."""
-        return float((self.t[-1] - self.t[0]) / (self.n_samples - 1))
+        """Sample period, s (within the runs: the time between runs is not a period)."""
+        b = self.run_starts()
+        t = np.asarray(self.t, dtype=float)
+        return float(np.sum(t[b[1:] - 1] - t[b[:-1]]) / (self.n_samples - self.n_runs))
 
     @property
     def duration(self) -> float:
-        return float(self.t[-1] - self.t[0])
+        """The time recorded, s: the runs' durations summed (one run: t[-1] - t[0])."""
+        b = self.run_starts()
+        t = np.asarray(self.t, dtype=float)
+        return float(np.sum(t[b[1:] - 1] - t[b[:-1]]))
 
     def columns(self) -> dict[str, np.ndarray]:
         """The CSV columns, in the documented order."""
         out = {"t": self.t}
+        if self.run is not None:
+            out["run"] = self.run
         for j, mname in enumerate(self.motor_names):
             out[f"encoder_{mname}"] = self.encoder[:, j]
             out[f"torque_{mname}"] = self.torque[:, j]
@@ -129,8 +159,9 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
     data = np.column_stack([cols[c] for c in names])
     buf = io.StringIO()
     buf.write(",".join(names) + "\n")
+    fmt = [(lambda x: str(int(x))) if c == "run" else _fmt for c in names]  # the run an integer
     for row in data:
-        buf.write(",".join(_fmt(x) for x in row) + "\n")
+        buf.write(",".join(f(x) for f, x in zip(fmt, row)) + "\n")
     return atomic_write(path, buf.getvalue(), "recording", RecordingError)
 
 
@@ -190,7 +221,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     rec = Recording(t=col["t"].copy(), encoder=np.column_stack(enc), torque=np.column_stack(torque),
                     motor_names=tuple(motors), joint_names=tuple(joints), q=_joint_columns(col, joints, "q"),
                     force_z=col["force_z"].copy() if "force_z" in col else None, gravity=_gravity_columns(col),
-                    true_q=_joint_columns(col, joints, "true_q"))
+                    true_q=_joint_columns(col, joints, "true_q"), run=_run_column(col))
     check_recording(rec)
     _check_encoder_range(rec, model)
     if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
@@ -224,7 +255,7 @@ def _read_text(path: str | Path) -> str:
 def _known_columns(model: Model) -> set[str]:
     """The columns a recording of ``model`` may hold (its motors' and joints' names in them)."""
     motors, joints = model.transmission.motor_names, model.joint_names
-    known = {"t", "force_z", "gravity_x", "gravity_y", "gravity_z"}
+    known = {"t", "run", "force_z", "gravity_x", "gravity_y", "gravity_z"}
     known |= {f"{k}_{mn}" for k in ("encoder", "torque", "current") for mn in motors}
     return known | {f"{k}_{jn}" for k in ("q", "true_q") for jn in joints}
 
@@ -322,6 +353,22 @@ def _motor_columns(col: dict[str, np.ndarray], motors: tuple[str, ...], torque_c
     return enc, torque
 
 
+def _run_column(col: dict[str, np.ndarray]) -> np.ndarray | None:
+    """The ``run`` column as (N,) integers (None without it): each cell a whole number (``2``, ``2.0``), not
+    decreasing (its runs in order, each one contiguous)."""
+    if "run" not in col:
+        return None
+    r = col["run"]
+    frac = np.flatnonzero(r != np.round(r))
+    if frac.size:
+        k = int(frac[0])
+        raise RecordingError(f"recording: column 'run' line {k + 2}: {r[k]!r} is not an integer (the run's number)")
+    if np.any(np.abs(r) > 2**53):
+        k = int(np.argmax(np.abs(r) > 2**53))
+        raise RecordingError(f"recording: column 'run' line {k + 2}: {r[k]:g} is beyond the integers a float holds")
+    return r.astype(np.int64)
+
+
 def _check_true_columns(col: dict[str, np.ndarray], joints: tuple[str, ...]) -> None:
     """The true angles ``true_q_<joint>`` for every joint of the model or for none (with some missing, every joint's
     RMSE was silently dropped: the estimate said the file had no true angles)."""
@@ -380,6 +427,29 @@ def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> Non
                                  "and a turn); is it this model's encoder, in counts?")
 
 
+def _check_runs(rec: Recording, N: int) -> np.ndarray:
+    """The ``run`` column of ``rec`` (None, or (N,) integers not decreasing, each run at least :data:`MIN_SAMPLES`
+    samples); returns :meth:`Recording.run_starts`."""
+    if rec.run is None:
+        return np.array([0, N])
+    r = np.asarray(rec.run)
+    if r.shape != (N,) or not (np.issubdtype(r.dtype, np.integer)
+                                or (np.issubdtype(r.dtype, np.floating) and np.all(r == np.round(r)))):
+        raise RecordingError(f"recording: run has shape {r.shape} and type {r.dtype}, expected ({N},) integers")
+    down = np.flatnonzero(np.diff(r) < 0)
+    if down.size:
+        k = int(down[0]) + 1
+        raise RecordingError(f"recording: column 'run' decreases at line {k + 2} ({int(r[k - 1])} then {int(r[k])}): "
+                             "each run's samples together, the runs in order")
+    b = rec.run_starts()
+    short = np.flatnonzero(np.diff(b) < MIN_SAMPLES)
+    if short.size:
+        j = int(short[0])
+        raise RecordingError(f"recording: run {int(r[b[j]])} (from line {b[j] + 2}) has {int(b[j + 1] - b[j])} "
+                             f"samples; each run needs at least {MIN_SAMPLES}")
+    return b
+
+
 def check_recording(rec: Recording) -> Recording:
     """Validate a :class:`Recording` (shapes, time, units, length, excitation); returns it."""
     t = np.asarray(rec.t, dtype=float)
@@ -395,22 +465,27 @@ def check_recording(rec: Recording) -> Recording:
     for name, a in (("t", t), ("encoder", rec.encoder), ("torque", rec.torque), ("gravity", rec.gravity)):
         if a is not None and not np.isfinite(a).all():
             raise RecordingError(f"recording: {name} contains NaN or inf")
+    b = _check_runs(rec, N)
     dts = np.diff(t)
-    if np.any(dts <= 0):
-        k = int(np.argmax(dts <= 0))
+    within = np.ones(N - 1, dtype=bool)
+    within[b[1:-1] - 1] = False  # the step from a run's last sample to the next one's first is no period
+    if np.any((dts <= 0) & within):
+        k = int(np.argmax((dts <= 0) & within))
         raise RecordingError(f"recording: t is not strictly increasing (row {k + 2}: {t[k + 1]!r} after {t[k]!r})")
-    dt = (t[-1] - t[0]) / (N - 1)
+    dt = float(np.sum(t[b[1:] - 1] - t[b[:-1]]) / (N - (len(b) - 1)))  # the period within the runs
     # tolerance: 1e-6 of the period, or the float resolution of the time stamps (Unix-epoch times, ~1.7e9 s,
     # hold only ~0.24 us: their steps jitter by that much)
-    if np.max(np.abs(dts - dt)) > 1e-6 * dt + 1e-12 + 4 * float(np.spacing(max(abs(t[0]), abs(t[-1])))):
-        k = int(np.argmax(np.abs(dts - dt)))
+    off = np.where(within, np.abs(dts - dt), 0.0)
+    if np.max(off) > 1e-6 * dt + 1e-12 + 4 * float(np.spacing(np.max(np.abs(t)))):
+        k = int(np.argmax(off))
+        where = "" if len(b) == 2 else f" (run {int(rec.run[k])}: every run at the one sample period)"
         raise RecordingError(f"recording: t is not uniformly sampled (step {dts[k]:g} s at row {k + 2}, "
-                             f"mean {dt:g} s)")
+                             f"mean {dt:g} s){where}")
     if not 1e-6 <= dt <= 0.1:
         raise RecordingError(f"recording: sample period {dt:g} s is outside [1e-6, 0.1] s (is t in seconds?)")
-    resolution = float(np.spacing(max(abs(t[0]), abs(t[-1]))))
+    resolution = float(np.spacing(np.max(np.abs(t))))
     if resolution > 1e-3 * dt:  # Unix-epoch seconds (1.7e9: 2.4e-7 s) hold a 1 ms period; 1e12 s does not
-        raise RecordingError(f"recording: t reaches {max(abs(t[0]), abs(t[-1])):g} s, where a float holds time only to "
+        raise RecordingError(f"recording: t reaches {np.max(np.abs(t)):g} s, where a float holds time only to "
                              f"{resolution:.2g} s, over 1e-3 of the sample period {dt:g} s: subtract the start time")
     for name, a in (("q", rec.q), ("true_q", rec.true_q)):
         if a is not None and np.nanmax(np.abs(a), initial=0.0) > 2 * np.pi:
@@ -426,6 +501,40 @@ def check_recording(rec: Recording) -> Recording:
     if np.all(np.ptp(enc, axis=0) < 2) and np.all(np.ptp(np.asarray(rec.torque), axis=0) == 0):
         raise RecordingError("recording: no excitation (the torque is constant and no encoder moves)")
     return rec
+
+
+def join_runs(recordings: "list[Recording] | tuple[Recording, ...]") -> Recording:
+    """One :class:`Recording` of several runs: ``recordings`` (of one model, at one sample period) one after
+    the other, each its own run (``run`` 0, 1, ...; a recording that has runs already keeps them apart, numbered
+    on), each its own time. Raises :class:`~alpes_dyn.errors.RecordingError` for recordings that do not go together
+    (other motors or joints, optional columns in some only, another sample period)."""
+    recs = list(recordings)
+    if not recs or not all(isinstance(r, Recording) for r in recs):
+        raise RecordingError("join_runs: expected one or more Recordings")
+    first = recs[0]
+    for r in recs[1:]:
+        if r.motor_names != first.motor_names or r.joint_names != first.joint_names:
+            raise RecordingError(f"join_runs: motors {r.motor_names} / joints {r.joint_names} differ from the first "
+                                 f"recording's {first.motor_names} / {first.joint_names}")
+        if abs(r.dt - first.dt) > 1e-6 * first.dt:
+            raise RecordingError(f"join_runs: sample period {r.dt:g} s differs from the first recording's "
+                                 f"{first.dt:g} s")
+    cols = {}
+    for name in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q"):
+        parts = [getattr(r, name) for r in recs]
+        if all(p is None for p in parts):
+            cols[name] = None
+        elif any(p is None for p in parts):
+            raise RecordingError(f"join_runs: {name} is in some of the recordings only")
+        else:
+            cols[name] = np.concatenate(parts)
+    run, base = [], 0
+    for r in recs:  # a loop over the recordings (a few)
+        own = np.repeat(np.arange(r.n_runs), np.diff(r.run_starts()))
+        run.append(base + own)
+        base += r.n_runs
+    return check_recording(Recording(motor_names=first.motor_names, joint_names=first.joint_names,
+                                     run=np.concatenate(run), **cols))
 
 
 MAX_SEGMENTS = 16
@@ -444,3 +553,12 @@ def segment_starts(gravity: np.ndarray | None) -> np.ndarray:
     if change.size == 0 or change.size >= MAX_SEGMENTS:
         return np.zeros(1, dtype=int)
     return np.concatenate([[0], change])
+
+
+def excitation_parts(rec: "Recording") -> np.ndarray:
+    """(k+1,) the first sample of each part of ``rec`` whose excitation restarts -- each run
+    (:meth:`Recording.run_starts`) and, within a run, each orientation of a hand turned between runs of the
+    excitation (:func:`segment_starts`: ``alpes-dyn experiment --rig both``) -- then the number of samples. The
+    fit takes each part on its own lines, the harmonics and the observer's check part by part."""
+    return np.union1d(rec.run_starts(), segment_starts(rec.gravity)).astype(int)
+

@@ -60,16 +60,9 @@ class AdequacyWarning(AlpesDynWarning):
 BAND_99 = 2.5758293035489004  # the standard normal's 99.5 % quantile: the two-sided 99 % band
 
 THRESHOLDS: dict[str, float] = {
-    "lags": 25,
-    "exact_counts": 0.05,
-    "ljung_box_p": 1e-6,
-    "max_acf_bands": 3.0,
-    "max_xcorr_bands": 2.0,
-    "floor_ratio": 1.15,
-    "validation_fit_percent": 70.0,
-    "signature_share": 0.02,
-    "reversal_ratio": 2.0,
-    "harmonic_ratio": 1.5,
+    "lags": 25, "exact_counts": 0.05, "ljung_box_p": 1e-6, "max_acf_bands": 3.0, "max_xcorr_bands": 2.0,
+    "floor_ratio": 1.15, "validation_fit_percent": 70.0, "signature_share": 0.02, "reversal_ratio": 2.0,
+    "harmonic_ratio": 1.5, "drift_share": 0.5,
 }
 """The verdict's thresholds.
 
@@ -86,13 +79,12 @@ explains at least ``signature_share`` of the residual and at least half what the
 within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times its mean square elsewhere; a
 nonlinearity shaped otherwise than in the model named (last) where the residual's power at the excitation's
 harmonics and intermodulation products is over ``harmonic_ratio`` times its power elsewhere
-(:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1)."""
+(:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1); a
+drift (a ramp, judged alone) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
-              "model does not have; lower the excitation or trim its bias)")
-"""The likely missing effect named first where the fitted trajectory leaves the joint range (:func:`range_exit`)."""
-RANGE_TOLERANCE = math.radians(1.0)
-"""rad: how far past a joint limit the fitted trajectory may go before :func:`range_exit` reports it."""
+              "model does not have; lower the excitation or trim its bias)")  # named first (range_exit)
+RANGE_TOLERANCE = math.radians(1.0)  # rad: how far past a joint limit the fitted trajectory may go (range_exit)
 
 
 def range_exit(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, names: Sequence[str]) -> str | None:
@@ -116,6 +108,7 @@ SIGNATURES: dict[str, str] = {
     "acceleration": "rotor inertia (a torque following the motor acceleration; or a wrong inertia)",
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
     "bias": "an encoder offset or a tilted palm (a constant bias of the residual)",
+    "drift": "a drift of the encoder offset (a residual trending with time; --drift offset)",
     "torque_rate": "a torque delay (the recorded torque lagging the motor's: a torque following the torque's own "
                    "rate; --effects delay)",
 }
@@ -446,10 +439,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     :func:`range_exit`): a reason of its own, and a joint stop named first among the likely missing effects.
     lines: the excitation's frequencies (Hz) and dt the sample time (s): the residual's power at their harmonics
     and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``)
-    names a nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``.
-    runs: the first sample of each part whose excitation restarts (a turned recording's orientations), then N:
-    the harmonics part by part.
-    """
+    names a nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``; part by
+    part where ``runs`` gives the first sample of each part whose excitation restarts, then N (runs, a turned
+    recording's orientations)."""
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
     rms = float(np.sqrt(np.mean(e**2)))
@@ -482,7 +474,8 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"residual {rms:.3g} counts RMS is {ratio:.2f}x the sensor floor {floor.total:.3g}")
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
-    sig = signatures(e, regressors or {})
+    drift = (regs := dict(regressors or {})).pop("drift", None)  # a ramp, judged alone (it takes others' shares)
+    sig = {**signatures(e, regs), **({"drift": signatures(e, {"drift": drift})["drift"]} if drift is not None else {})}
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
     if lines is not None and len(lines) and dt is not None:
@@ -491,11 +484,13 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []
     if reasons:
-        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES), reverse=True)
+        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES and k != "drift"), reverse=True)
         top = ranked[0][0] if ranked else 0.0
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
                    and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
         # acceleration response is close to the torque's rate (a rotor mismatch named both)
+        if sig.get("drift", {}).get("share", 0.0) >= (th["drift_share"] if missing else th["signature_share"]):
+            missing = [SIGNATURES["drift"]] + missing  # (THRESHOLDS' docstring)
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
@@ -574,7 +569,8 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))
-    y, per_int, k = [], corr is not None and Psib is None, max(1, chunk_doubles // (L * sens.nw))  # (600 s: 264 MB)
+    per_int = corr is not None and (Psib is None or np.ndim(corr) == 3)  # per interval (a run's own lines too)
+    y, k = [], max(1, chunk_doubles // (L * sens.nw))  # (600 s: 264 MB)
     for d in [0.0] + pert:  # the fitted run, then one per effect (one at a time: a 60 s record's are 30 MB each)
         U, C = Ub + d, (lambda a: corr[a:a + k]) if per_int else (lambda a: corr)
         xs = np.concatenate([sens.run(nodes[a:a + k], U[a:a + k], Gb[a:a + k], theta, C(a), sensitivities=False,

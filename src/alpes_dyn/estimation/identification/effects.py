@@ -76,7 +76,7 @@ from ...model.params import HandParams, with_values
 from ...model.robot import Model
 from ...symbolic.parametric import select_parameters, unseen_masses
 from .harmonics import NONLINEARITY
-from .lines import segment_starts
+from ..experiments.recording import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]

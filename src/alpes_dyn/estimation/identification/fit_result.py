@@ -58,6 +58,10 @@ class IdentificationResult:
     """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
     interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not
     support): held in the fit kept, never written to a file."""
+    drift: dict[str, Any] | None = None
+    """With ``identify(drift="offset")``: the encoders' fitted drift (:mod:`~alpes_dyn.estimation.identification.drift`),
+    ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}``;
+    else None."""
 
     @property
     def trustworthy(self) -> bool:
@@ -81,7 +85,7 @@ class IdentificationResult:
             "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
-            "not_identified": dict(self.not_identified),
+            "not_identified": dict(self.not_identified), "drift": self.drift,
         }
 
     def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:

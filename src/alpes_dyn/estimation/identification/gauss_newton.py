@@ -134,7 +134,7 @@ class GaussNewton:
         p = pb.p
         dv, dg = d[:pb.nv].reshape(pb.n_int, pb.nb), d[pb.nv:pb.nz]
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP,
-                  float(np.max(np.abs(dg[p:]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius))
+                  float(np.max(np.abs(dg[p:p + pb.ncg]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius))
         return (dv / big, dg / big, False) if big > 1.0 else (dv, dg, True)
 
     @staticmethod
@@ -150,7 +150,7 @@ class GaussNewton:
         iterations, where it converged in 16 at one standard deviation)."""
         p = pb.p
         dg = d[pb.nv:pb.nz]
-        coef = float(np.max(np.abs(dg[p:]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius)
+        coef = float(np.max(np.abs(dg[p:p + pb.ncg]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius)
         if not (found is not None and found[0] == 1.0 and coef > 1.0
                 and coef >= float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP):
             return 1.0, 0

@@ -51,10 +51,11 @@ def harmonic_ratio(e: np.ndarray, lines: Sequence[float], dt: float, halfwidth: 
     from 0 Hz), over its mean power at the other frequencies off the lines; per encoder, the largest. About 1
     for a white residual (its spread about 1/sqrt(number of bins)); large where the residual answers the
     excitation nonlinearly. 1.0 where the record is too short to hold both sets (fewer than 8 bins each).
-    ``runs``: the first sample of each part and then N, for a recording whose excitation restarts (a hand turned
-    between orientations, :func:`~alpes_dyn.estimation.experiments.recording.segment_starts`: each part its own
-    multisine, phases and bias): the ratio of each part apart (no spectrum across a restart, whose jump spreads the
-    lines' power over the products' bins), their mean weighted by the parts' lengths."""
+    ``runs``: the first sample of each part whose excitation restarts, then N (the runs of a recording of several,
+    :meth:`~alpes_dyn.estimation.experiments.recording.Recording.run_starts`; the orientations of a turned one,
+    :func:`~alpes_dyn.estimation.experiments.recording.segment_starts`): the ratio of each part apart (no spectrum
+    across a jump or a restart, whose jump spreads the lines' power over the products' bins), their mean weighted
+    by the parts' lengths."""
     e = np.asarray(e, dtype=float)
     e = e[:, None] if e.ndim == 1 else e
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):

@@ -68,14 +68,17 @@ from ...symbolic.parametric import common_scale, parameter_catalogue, select_par
 from ...model.ratio_curve import encoder_angles, encoder_rates
 from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, range_exit, sensor_floor,
                        torque_explained)
-from ..experiments.recording import Recording, check_recording
+from ..experiments.recording import Recording, check_recording, excitation_parts
+from .torque_lines import line_basis
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
-from .lines import line_basis, segment_starts
 from .shooting import ShootingProblem, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
+from .runs import aligned, split
+from .runs import encoder_noise as run_noise
+from .drift import check_drift, recorded_time
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -112,7 +115,7 @@ def check_selection(model: Model, parameters: str | Sequence[str] | None) -> Non
 def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float],
                    starts: Sequence[int] | None = None) -> np.ndarray:
     """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
-    ``frequencies`` (Hz), per segment (``starts``, :func:`~alpes_dyn.estimation.identification.lines.line_basis`;
+    ``frequencies`` (Hz), per part (``starts``, :func:`~alpes_dyn.estimation.identification.torque_lines.line_basis`;
     default one): the excitation without the measurement noise off its lines."""
     Q = np.linalg.qr(line_basis(t, frequencies, starts))[0]
     return Q @ (Q.T @ np.asarray(torque, dtype=float))
@@ -132,7 +135,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
              progress: bool | None = None, validation: Recording | str | Path | None = None,
              encoder_noise: float | None = None, start: Mapping[str, float] | IdentificationResult | None = None,
-             kkt: str = "sparse") -> IdentificationResult:
+             kkt: str = "sparse", drift: str | None = None) -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
     Parameters
@@ -187,6 +190,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         and memory linear in the record; ``"superlu"``: the same matrices by the general sparse LU (SuperLU: the
         reference of the structured one; its fill grows faster than the record: 0.5-2.6 s a factorisation at
         60 s); ``"dense"``: as arrays (the reference; quadratic memory, cubic time).
+    drift: ``"offset"``: each encoder's offset drifts, piecewise linear in the recorded time from 0 at the first
+        sample, knots every 15 s (a shorter record: a ramp), fitted with the parameters
+        (:mod:`~alpes_dyn.estimation.identification.drift`; the result's ``drift``); None (default): no drift,
+        and the verdict names one where the residual trends with time.
 
     The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
     failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
@@ -205,15 +212,17 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if rec.duration > LONG_RECORD:
         _map_large_blocks()
     L = int(round(interval / dt))
+    rec = aligned(rec, L)  # several runs: each on whole intervals (module runs)
     torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
+    check_drift(drift)
     if substeps is None:
         substeps = stable_substeps(model, dt)
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
-                         structured=kkt == "sparse")
+                         structured=kkt == "sparse", drift=drift)
     torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
     q0 = (_rest_guess(model, pb.torque.U[0], pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))  # the rest the model's own response starts from
@@ -235,12 +244,12 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
-    missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, encoder_noise).total \
+    missed = rms > RETRY_FLOOR_RATIO * sensor_floor(rec.encoder, 0.0, run_noise(rec, encoder_noise)).total \
         and not reason.startswith("iteration")
     if missed and interval >= RETRY_INTERVAL * (1 - 1e-9) and int(round(0.5 * interval / dt)) >= 2:
         settings = dict(excitation=excitation, substeps=substeps, torque_noise=torque_noise, camera_noise=camera_noise,
                         max_iterations=max_iterations, tol=tol, threads=threads, progress=progress,
-                        validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt)
+                        validation=validation, encoder_noise=encoder_noise, start=start, kkt=kkt, drift=drift)
         again, it, reason = _retry_at_half_interval(model, recording, parameters, settings, interval, rms, it, reason,
                                                     t_start)
         if again is not None:
@@ -253,7 +262,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     pb = out = warm = sens = None
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
-                    progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt)
+                    progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt, drift=drift)
     result = _within_bounds(model, recording, result, settings, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
@@ -398,8 +407,10 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
         if abs(val_rec[0].dt - rec.dt) > 1e-9 * rec.dt:
             raise RecordingError(f"validation: sample period {val_rec[0].dt:g} s differs from the recording's {rec.dt:g} s")
         pre = max(2, int(round(max(interval, VALIDATION_PREFIX) / rec.dt)))  # the prefix that fixes the start
-        if val_rec[0].n_samples <= 4 * pre:
-            raise RecordingError(f"validation: {val_rec[0].n_samples} samples are too few (the first {pre} fix the "
+        shortest = int(np.diff(val_rec[0].run_starts()).min())  # each run validated apart, from its own prefix
+        if shortest <= 4 * pre:
+            runs = "" if val_rec[0].n_runs == 1 else " in a run"
+            raise RecordingError(f"validation: {shortest} samples{runs} are too few (the first {pre} fix the "
                                  f"start; give more than {4 * pre})")
         v = val_rec[0]
         if v.n_samples == rec.n_samples and np.array_equal(v.encoder, rec.encoder) and np.array_equal(v.torque, rec.torque):
@@ -452,7 +463,18 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         iterations=it, converged=out.converged, seconds=time.perf_counter() - t_start,
         compile_seconds=sens.compile_seconds, states=out.nodes, node_times=pb.rec.t[np.arange(pb.n_int) * pb.L],
         model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=verdict,
-        solution=pb.solution(out.nodes, out.offs, out.glob))
+        solution=pb.solution(out.nodes, out.offs, out.glob), drift=_drift_of(pb, out.glob))
+
+
+def _drift_of(pb: ShootingProblem, glob: np.ndarray) -> dict[str, Any] | None:
+    """The fitted drift of :attr:`IdentificationResult.drift` (None without one)."""
+    if not pb.nd:
+        return None
+    D = glob[pb.p + pb.ncg:].reshape(pb.ny, -1)
+    K = D.shape[1]
+    T = float(recorded_time(pb.rec)[-1])
+    return {"knots_s": [T * k / K for k in range(K + 1)],
+            "counts": {m: [0.0] + [float(v) for v in D[i]] for i, m in enumerate(pb.model.transmission.motor_names)}}
 
 
 def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -461,7 +483,8 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
     x_fit = out.at.xs[pb.valid]
     u_fit = (pb.stretch(theta, pb.tension_torque(pb.torque_at(out.glob, out.offs), out.at.xs))[pb.valid]
              if pb.comp_cols else 0.0)
-    return x_fit, (encoder_angles(pb.enc, x_fit[:, :pb.n]) + pb.offset(theta) + u_fit) / pb.step
+    drift = pb.drift_offset(out.glob)[pb.valid] if pb.nd else 0.0
+    return x_fit, (encoder_angles(pb.enc, x_fit[:, :pb.n]) + pb.offset(theta) + drift + u_fit) / pb.step
 
 
 def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_Kz, x_fit: np.ndarray,
@@ -475,11 +498,17 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     if pb.torque.eiv and not pb.torque.lines:  # what the torque noise explains through the model (lines: fitted away)
         explained = torque_explained(sens, out.nodes, pb.Ub, pb.Gb, theta, out.offs, pb.valid, pb.enc, pb.step,
                                      pb.torque.noise, L)
-    floor = sensor_floor(rec.encoder, explained, encoder_noise)
+    floor = sensor_floor(rec.encoder, explained, run_noise(rec, encoder_noise))
+    if encoder_noise is None and rec.n_runs > 1:  # (module runs: no difference across a jump between runs)
+        floor.noise_source = "estimated from the recording run by run (fourth difference)"
     resp = effect_responses(sens, out.nodes, pb.Ub, pb.Gb, theta, pb.correction(out.glob, out.offs), pb.Psib,
                             pb.valid, x_fit, pb.enc, pb.step, rec.dt)
     # the tendon's stretch follows the tension: the torque held before each sample (torque_before)
-    resp["torque"] = torque_before(rec.torque - rec.torque.mean(axis=0))[pb.kk] * pb.valid[:, :, None]
+    resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[pb.before][pb.kk] * pb.valid[:, :, None]
+    if not pb.nd:  # a drift of the encoders' offsets: a ramp in the recorded time (module drift)
+        tau = recorded_time(rec)
+        ramp = (tau - tau.mean()) / max(float(np.ptp(tau)), 1e-300)
+        resp["drift"] = np.repeat(ramp[pb.kk][:, :, None], pb.ny, axis=2) * pb.valid[:, :, None]
     regressors = {}
     for name, R in resp.items():  # a loop over the four effects
         Rr = np.zeros_like(e.r)
@@ -492,27 +521,45 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
         val = _validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
-    return assess(res, rec.torque, floor, regressors, val, velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
-                  lines=excitation, dt=rec.dt, runs=_parts(segment_starts(rec.gravity), res.shape[0]))
+    return assess(res, rec.torque, floor, regressors, val,
+                  velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
+                  lines=excitation, dt=rec.dt, runs=_parts(excitation_parts(rec), res.shape[0]))
 
 
-def _parts(starts: np.ndarray, n: int) -> np.ndarray:
-    """The residual's (n rows, one per sample) parts whose excitation restarts: their first rows, then n."""
-    return np.append(starts[starts < n], n)
+def _parts(bounds: np.ndarray, n: int) -> np.ndarray:
+    """The residual's (n rows, one per sample) parts whose excitation restarts (``bounds``:
+    :func:`~alpes_dyn.estimation.experiments.recording.excitation_parts`): their first rows, then n."""
+    return np.append(bounds[bounds < n], n)
 
 
 def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
               excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
               compliance: np.ndarray | None = None) -> Validation:
+    """:func:`_validate_run` of each run of the held-out recording (module runs), each from its own initial state;
+    of several, the worst run's fit % and NRMSE per encoder, the RMS residual over all the scored samples."""
+    rec, path = recording
+    vals = [_validate_run(model, sens, theta, (r, path), excitation, prefix_s, offset, compliance) for r in split(rec)]
+    if len(vals) == 1:
+        return vals[0]
+    n = np.array([v.samples for v in vals])
+    rms = float(np.sqrt(np.sum(n * np.array([v.residual_rms for v in vals]) ** 2) / n.sum()))
+    return Validation(fit_percent=np.min([v.fit_percent for v in vals], axis=0),
+                      nrmse=np.max([v.nrmse for v in vals], axis=0), residual_rms=rms, prefix_s=vals[0].prefix_s,
+                      samples=int(n.sum()), recording_path=path)
+
+
+def _validate_run(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
+                  excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
+                  compliance: np.ndarray | None = None) -> Validation:
     """:func:`~alpes_dyn.estimation.identification.adequacy.compare` of the fitted model on a held-out recording, its
     torque projected on the excitation's lines as in the fit, the initial state estimated on the first
     ``prefix_s`` seconds (one shooting interval); ``offset`` (m,) rad: the fitted encoder offsets, the same
     sensors' (taken off the held-out encoder), and ``compliance`` (m,) rad/(N m): the fitted tendon stretch
     C u, u the held-out torque as the fit takes it (taken off too)."""
     rec, path = recording
-    G = rec.gravity[:-1] if rec.gravity is not None else None
+    starts = excitation_parts(rec)[:-1]  # one run here (split); a turned one's orientations each on its lines
     U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation,
-                                                                   segment_starts(G))
+                                                                   starts[starts < rec.n_samples - 1])
     G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
     tr = model.transmission
     step = 2 * np.pi / tr.counts_per_rev

@@ -18,7 +18,7 @@ Every function takes the sizes of the problem, ``Shape``; ``dense=True`` gives t
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
@@ -38,12 +38,27 @@ Solver = Callable[[np.ndarray], np.ndarray]
 @dataclass(frozen=True)
 class Shape:
     """Sizes of the shooting problem: ``n_int`` intervals, ``nb`` local variables per interval (the first ``nx``
-    of them the state), ``ng`` global variables; ``nv = n_int nb``, ``nz = nv + ng``, ``nc = (n_int - 1) nx``."""
+    of them the state), ``ng`` global variables; ``nv = n_int nb``, ``nz = nv + ng``, ``nc = (n_int - 1) nx``.
+    ``cut`` (n_int - 1,) bool or None: where interval j+1 starts a run of its own (a recording of several runs): no
+    continuity between j and j+1. The constraint's rows stay (the layout is the same), with no entry but a unit
+    diagonal in the KKT matrix's multiplier block and a zero defect: their multipliers are 0 and interval j+1's
+    start state is free."""
 
     n_int: int
     nb: int
     nx: int
     ng: int
+    cut: np.ndarray | None = field(default=None, compare=False)
+
+    @property
+    def keep(self) -> np.ndarray:
+        """(n_int - 1,) 1.0 where continuity holds between interval j and j+1, 0.0 at a cut."""
+        return np.ones(self.n_int - 1) if self.cut is None else 1.0 - np.asarray(self.cut, dtype=float)
+
+    @property
+    def dropped(self) -> np.ndarray:
+        """(nc,) 1.0 on the rows of the constraints cut (:attr:`cut`), else 0.0."""
+        return np.repeat(1.0 - self.keep, self.nx)
 
     @property
     def nv(self) -> int:
@@ -91,7 +106,8 @@ def normal_matrix(J: np.ndarray, shape: Shape, mu: float, prior: np.ndarray, den
 
 def continuity_jacobian(Cv: np.ndarray, Cr: np.ndarray, shape: Shape, dense: bool = False):
     """(nc, nz) Jacobian of the continuity defects x_end(j) - x_start(j+1): Cv (S-1, nx, nb) on interval j's
-    local variables, -I on the next one's start state, Cr (S-1, nx, ng) on the global ones. CSC (array if dense)."""
+    local variables, -I on the next one's start state (0 at a cut, :attr:`Shape.cut`, where Cv and Cr are 0 too),
+    Cr (S-1, nx, ng) on the global ones. CSC (array if dense)."""
     nx, nb, nv = shape.nx, shape.nb, shape.nv
     m = shape.n_int - 1
     i1, j1, v1 = _block_diagonal(Cv[:m])
@@ -99,19 +115,22 @@ def continuity_jacobian(Cv: np.ndarray, Cr: np.ndarray, shape: Shape, dense: boo
     j2 = (np.arange(m)[:, None] + 1) * nb + np.arange(nx)[None, :]
     i3 = np.repeat(np.arange(m * nx), shape.ng)
     j3 = np.tile(nv + np.arange(shape.ng), m * nx)
-    C = sp.csc_matrix((np.concatenate([v1, -np.ones(m * nx), Cr[:m].reshape(-1)]),
+    C = sp.csc_matrix((np.concatenate([v1, -np.repeat(shape.keep, nx), Cr[:m].reshape(-1)]),
                        (np.concatenate([i1, i2, i3]), np.concatenate([j1, j2.ravel(), j3]))),
                       shape=(shape.nc, shape.nz))
     return C.toarray() if dense else C
 
 
-def kkt_matrix(H, C):
-    """[[H, C^T], [C, 0]]: the constrained Gauss-Newton system (sparse where H is, else an array)."""
-    if sp.issparse(H):
-        return sp.bmat([[H, C.T], [C, None]], format="csc")
+def kkt_matrix(H, C, dropped: np.ndarray | None = None):
+    """[[H, C^T], [C, D]]: the constrained Gauss-Newton system (sparse where H is, else an array); D = diag(``dropped``)
+    (nc,), 1 on the rows of the constraints cut (:attr:`Shape.dropped`, their rows of C zero), else 0."""
     nz, nc = H.shape[0], C.shape[0]
+    d = np.zeros(nc) if dropped is None else np.asarray(dropped, dtype=float)
+    if sp.issparse(H):
+        return sp.bmat([[H, C.T], [C, sp.diags(d) if d.any() else None]], format="csc")
     K = np.zeros((nz + nc, nz + nc))
     K[:nz, :nz], K[:nz, nz:], K[nz:, :nz] = H, C.T, C
+    K[nz + np.arange(nc), nz + np.arange(nc)] = d
     return K
 
 
@@ -264,15 +283,15 @@ def penalized_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, wv: np.
     is ``fallback()`` and the second raises ``numpy.linalg.LinAlgError`` where the band is singular."""
     nb, nx, ng, S = shape.nb, shape.nx, shape.ng, shape.n_int
     AA, AP, D = _normal_blocks(J, shape, mu, prior)
-    W = wv**2
-    Cw = Cv * W[None, :, None]  # W Cv_j (S-1, nx, nb)
+    W = shape.keep[:, None] * wv[None, :]**2  # (S-1, nx): no weight on a cut (Shape.cut)
+    Cw = Cv * W[:, :, None]  # W Cv_j (S-1, nx, nb)
     AA[:-1] += np.einsum("sia,sib->sab", Cv, Cw)
     AA[1:, np.arange(nx), np.arange(nx)] += W
     upper = -Cw.transpose(0, 2, 1)  # (S-1, nb, nx): interval j's variables against interval j+1's start state
     B = AP.copy()
     B[:-1] += np.einsum("sia,sig->sag", Cw, Cr)
-    B[1:, :nx] -= Cr * W[None, :, None]
-    D = D + np.einsum("sig,sih->gh", Cr * W[None, :, None], Cr)
+    B[1:, :nx] -= Cr * W[:, :, None]
+    D = D + np.einsum("sig,sih->gh", Cr * W[:, :, None], Cr)
     d = np.diag(D)
     D[hold, hold] += 1e12 * np.maximum(d[hold], 1.0)
     kl = ku = nb + nx - 1
@@ -308,15 +327,17 @@ def kkt_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, shape: Shape,
     blocks[:, :nb, :nb] = AA[:m]
     blocks[:, :nb, nb:] = Cv[:m].transpose(0, 2, 1)
     blocks[:, nb:, :nb] = Cv[:m]
+    blocks[:, np.arange(nb, w), np.arange(nb, w)] = 1.0 - shape.keep[:, None]  # a cut's multipliers: 0 (Shape.cut)
     for a in range(w):  # a loop over the block's entries (w^2), each laid for every interval at once
         for b in range(w):
             ab[kl + ku + a - b, b:m * w:w] = blocks[:, a, b]
     for a in range(nb):  # the last interval's local variables
         for b in range(nb):
             ab[kl + ku + a - b, m * w + b] = AA[m, a, b]
-    for i in range(nx):  # the multipliers of interval j on interval j+1's start state: -I, both ways
-        ab[kl + ku + (nb + i) - (w + i), w + i::w] = -1.0  # row: multiplier j, column: state of j+1
-        ab[kl + ku + (w + i) - (nb + i), nb + i:m * w:w] = -1.0  # row: state of j+1, column: multiplier j
+    keep = shape.keep
+    for i in range(nx):  # the multipliers of interval j on interval j+1's start state: -I, both ways (0 at a cut)
+        ab[kl + ku + (nb + i) - (w + i), w + i::w] = -keep  # row: multiplier j, column: state of j+1
+        ab[kl + ku + (w + i) - (nb + i), nb + i:m * w:w] = -keep  # row: state of j+1, column: multiplier j
     B = np.empty((n, ng))
     B[:m * w].reshape(m, w, ng)[:, :nb] = AP[:m]
     B[:m * w].reshape(m, w, ng)[:, nb:] = Cr[:m]

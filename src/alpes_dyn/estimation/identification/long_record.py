@@ -41,9 +41,19 @@ NODE_SWEEPS = 4
 whole record at the window's parameters: the intervals' start states fitted to their own samples."""
 
 
+WINDOW_RUN = 0.5
+"""s: a recording of several runs: the window ends at the start of its last run where that run would have less
+than this in it (a run of a few samples holds no line of the excitation)."""
+
+
 def window(rec: Recording, seconds: float) -> Recording:
-    """The first ``seconds`` of ``rec`` (every per-sample column cut alike)."""
+    """The first ``seconds`` of ``rec`` (every per-sample column cut alike; of several runs, not a last run
+    shorter than :data:`WINDOW_RUN`)."""
     k = min(int(round(seconds / rec.dt)) + 1, rec.n_samples)
+    b = rec.run_starts()
+    last = int(b[np.searchsorted(b, k, side="left") - 1])  # the start of the run sample k - 1 is in
+    if 0 < last and (k - last) * rec.dt < WINDOW_RUN:
+        k = last
     cut = {f.name: getattr(rec, f.name)[:k] for f in dataclasses.fields(rec)
            if isinstance(getattr(rec, f.name), np.ndarray) and getattr(rec, f.name).shape[:1] == (rec.n_samples,)}
     return dataclasses.replace(rec, **cut)
@@ -63,7 +73,7 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     sub = window(pb.rec, WINDOW)
     pw = ShootingProblem(pb.model, sub, pb.sens, pb.L, torque_model(sub, excitation, pb.torque.noise),
                          pb.camera_noise, dict(zip(pb.sens.names, pb.theta0)), dense=pb.dense,
-                         structured=pb.structured)
+                         structured=pb.structured, drift=pb.drift)
     out = solver.solve(pw, lambda: pw.initial_nodes(q0), np.zeros((pw.n_int, pw.no)), np.zeros(pw.ng))
     if not out.converged or pw.encoder_rms(out.at.r) > BASIN_LIMIT:
         return None, out.iterations
@@ -71,7 +81,7 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     rho = (theta - pb.theta0) / pb.scale  # the additive parameters' (encoder offsets, tilt angles)
     mult = ~pb.additive
     rho[mult] = np.log(theta[mult] / pb.theta0[mult])
-    glob = np.concatenate([rho, np.zeros(pb.ncg)])
+    glob = np.concatenate([rho, np.zeros(pb.ng - pb.p)])  # the line corrections and any drift from 0
     offs = np.zeros((pb.n_int, pb.no))
     nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=NODE_SWEEPS)
     nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=FIRST_PHASE)

@@ -35,8 +35,7 @@ import numpy as np
 
 from ...model.robot import Model
 from .adequacy import Whiteness, sensor_floor, whiteness
-from .lines import segment_starts
-from ..experiments.recording import Recording
+from ..experiments.recording import Recording, excitation_parts
 from ..observers.replay import advanced, estimate_recording
 
 __all__ = ["mildly_coloured", "OBSERVER_THRESHOLDS", "ObserverCheck", "identified_model", "observer_check", "observer_statistics",
@@ -131,14 +130,14 @@ def _predicted(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray, hori
 
 
 def _first(rec: Recording, seconds: float) -> Recording:
-    """The recording's first ``seconds`` s (all of it where shorter), within its first orientation (where the
-    hand turns, :func:`~alpes_dyn.estimation.identification.lines.segment_starts`: the observer takes one)."""
-    starts = segment_starts(rec.gravity)
-    k = min(int(round(seconds / rec.dt)) + 1, int(starts[1]) if starts.size > 1 else rec.n_samples)
+    """The recording's first ``seconds`` s (all of it where shorter), within its first run and orientation (the
+    observer runs on one: no jump of the states, one gravity; :func:`~alpes_dyn.estimation.experiments.
+    recording.excitation_parts`)."""
+    k = min(int(round(seconds / rec.dt)) + 1, int(excitation_parts(rec)[1]))
     if k >= rec.n_samples:
         return rec
     cut = {f: (getattr(rec, f)[:k] if isinstance(getattr(rec, f), np.ndarray) else getattr(rec, f))
-           for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q")}
+           for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q", "run")}
     return dataclasses.replace(rec, **cut)
 
 

@@ -33,13 +33,14 @@ import scipy.sparse as sp
 from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.ratio_curve import encoder_angles, encoder_sensitivity
-from ...model.transmission import torque_before
 from ...simulation.sensitivity import SensitivityModel
 from .encoder_output import EncoderOutput
-from .lines import line_basis, segment_starts
+from .torque_lines import CHOLESKY_QR_ROWS, TorqueModel, _thin_qr, line_basis, torque_model  # noqa: F401
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
                   normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
+from .runs import run_cuts
+from .drift import drift_basis
 
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK"]
@@ -48,83 +49,6 @@ JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
-
-
-@dataclass
-class TorqueModel:
-    """How the fit takes the recorded torque (errors in variables). ``U`` (N, nu): the torque at the held samples
-    (projected on the excitation's lines, or as recorded), ``U_last`` (1, nu) at the last sample; ``noise``:
-    sigma_u, N m; with the lines (``lines``), ``Q`` (N, nphi) their orthonormal basis and ``Q_last`` (nphi,) at the
-    last sample: the true torque is U + sigma_u Q c, c ~ N(0, I) fitted; without them and sigma_u > 0, a constant
-    correction per interval (``eiv`` and not ``lines``). A :class:`ShootingProblem` keeps its own copy without
-    ``Q`` (None: the basis lives on there, scaled and cut at the intervals; 91 MB at 600 s)."""
-
-    U: np.ndarray
-    U_last: np.ndarray
-    noise: float
-    Q: np.ndarray | None = None
-    Q_last: np.ndarray | None = None
-
-    @property
-    def eiv(self) -> bool:
-        """The torque is corrected (errors in variables): sigma_u > 0."""
-        return self.noise > 0
-
-    @property
-    def lines(self) -> bool:
-        """The correction lies on the excitation's lines."""
-        return self.eiv and self.Q_last is not None
-
-    @property
-    def nphi(self) -> int:
-        """Number of basis functions of the lines (0 without them)."""
-        return self.Q_last.shape[0] if self.lines else 0
-
-
-CHOLESKY_QR_ROWS = 2**15
-"""Rows (samples) of the lines' basis above which :func:`torque_model` orthonormalises it by Cholesky QR (33 s at
-1 kHz; below, Householder's QR)."""
-
-
-def _thin_qr(Phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Q (N, k) with orthonormal columns and R (k, k) upper triangular with a positive diagonal, Phi = Q R, by
-    Cholesky QR twice (Fukaya et al. 2014: the second pass restores orthogonality to rounding for cond(Phi) up to
-    ~1e7; the lines' basis is near orthogonal). Each pass one product Q' Q (k x k) and one triangular solve, the
-    second in place: on 600 s of the documented lines 20x faster than Householder's QR (numpy.linalg.qr, whose R
-    may have negative entries on its diagonal: the columns' signs are the only difference, which the fit's
-    whitened line coefficients do not see) and one copy of Phi, Q, instead of three. Householder's where Phi has
-    at most :data:`CHOLESKY_QR_ROWS` rows (there it is cheap, and the fits are as they were) or where the Cholesky
-    factorisation fails (lines too close for the record's length: Phi near singular)."""
-    import scipy.linalg as sla
-
-    if Phi.shape[0] <= CHOLESKY_QR_ROWS:
-        return np.linalg.qr(Phi)
-    R, Qt = np.eye(Phi.shape[1]), Phi.T  # Q' (k, N), Fortran order
-    for k in range(2):
-        try:
-            R1 = sla.cholesky(Qt @ Qt.T, lower=False, check_finite=False)  # Q'Q = R1' R1
-        except np.linalg.LinAlgError:  # lines too close for the record's length: Householder's
-            return np.linalg.qr(Phi)
-        Qt = sla.solve_triangular(R1, Qt, trans="T", lower=False, overwrite_b=k > 0, check_finite=False)
-        R = R1 @ R
-    return Qt.T, R
-
-
-def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_noise: float | None) -> TorqueModel:
-    """The :class:`TorqueModel` of a recording: with ``excitation`` (Hz) the measured torque projected on the lines,
-    sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given."""
-    if excitation is None:
-        return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
-    Phi_all = line_basis(rec.t, excitation, segment_starts(rec.gravity))  # a block per orientation segment
-    Phi = Phi_all[:-1]  # (N, nphi): 1, sin, cos of each line, at the held samples
-    Q, R_q = _thin_qr(Phi)
-    U = Q @ (Q.T @ rec.torque[:-1])  # the measured torque projected on the lines
-    Q_last = np.linalg.solve(R_q.T, Phi_all[-1])  # the basis at the last sample (Q = Phi R^-1)
-    U_last = (Q_last @ (Q.T @ rec.torque[:-1]))[None]
-    if torque_noise is None:  # what is off the lines is the noise: its standard deviation
-        off_lines = rec.torque[:-1] - U
-        torque_noise = float(np.sqrt(np.sum(off_lines**2) / (off_lines.size - Q.shape[1] * U.shape[1])))
-    return TorqueModel(U, U_last, torque_noise, Q, Q_last)
 
 
 @dataclass(frozen=True)
@@ -171,20 +95,29 @@ class ShootingProblem(EncoderOutput):
     name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
     structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
     False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
+    drift: ``"offset"``: the encoders' offset drift fitted too (module drift: ``nd`` knots' values, counts, after the
+    line corrections in ``glob``). A recording of several runs (module runs: each run starting on a node, see
+    ``runs.aligned``) has no continuity into a run's first interval (``cut``) and each run's own line coefficients
+    (``blk``).
 
-    The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,); :meth:`values` maps ``glob`` to theta.
+    The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,): theta's (p), the line corrections (ncg),
+    the drift's (nd); :meth:`values` maps ``glob`` to theta.
     """
 
     def __init__(self, model: Model, rec: Recording, sens: SensitivityModel, L: int, torque: TorqueModel,
                  camera_noise: float, start: Mapping[str, float] | None = None, dense: bool = False,
-                 structured: bool = True) -> None:
+                 structured: bool = True, drift: str | None = None) -> None:
         self.model, self.rec, self.sens, self.L, self.torque = model, rec, sens, L, torque
         self.camera_noise = camera_noise
         self.nx, self.p, self.nu, self.n = sens.nx, sens.p, sens.nu, sens.n
         eiv, lines = torque.eiv, torque.lines
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
-        self.ncg = sens.no if lines else 0  # global line-coefficient corrections
-        self.ng = self.p + self.ncg
+        self.ncg = sens.no * torque.blocks if lines else 0  # global line-coefficient corrections (every run's)
+        self.drift = drift
+        H = drift_basis(rec) if drift == "offset" else np.zeros((rec.n_samples, 0))  # (N+1, K): module drift
+        self.nK = H.shape[1]
+        self.nd = np.shape(model.transmission.S)[0] * self.nK
+        self.ng = self.p + self.ncg + self.nd  # parameters, line corrections, the drift's knots (counts)
         self.nb = self.nx + self.no  # local variables of an interval: its start state and its torque correction
         tr = model.transmission
         self.S_enc = np.asarray(tr.S, dtype=float)
@@ -197,6 +130,8 @@ class ShootingProblem(EncoderOutput):
         N = self.N = rec.n_samples - 1
         self.G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (N, 3))
         n_int = self.n_int = -(-N // L)
+        self.cut, self.before = run_cuts(rec, L, n_int)
+        self.blk = np.cumsum(np.r_[0, self.cut]) if torque.blocks > 1 else None  # (S,) each interval's run
         pad = n_int * L - N
         U, nu = torque.U, self.nu
         self.Ub = np.concatenate([U, np.repeat(U[-1:], pad, axis=0)]).reshape(n_int, L, nu)
@@ -222,7 +157,7 @@ class ShootingProblem(EncoderOutput):
         self.Ufull = np.concatenate([U, torque.U_last])  # the modelled torque at every sample, the last one's too
         # the torque each residual's stretch C u is under: the one held over the period before its sample (the
         # cable's tension at t_k has seen u_k-1: model.transmission.torque_before), and the lines' basis with it
-        self.Uk = torque_before(self.Ufull)[self.kk]  # (S, L+1, nu)
+        self.Uk = self.Ufull[self.before][self.kk]  # (S, L+1, nu) (torque_before within each run)
         # (torque_before(X)[k] is X[max(k - 1, 0)]: rows of Q alone, one gather, no copy of the whole basis first)
         self.Psib = self.Psi0 = None
         if lines:  # sigma_u Q at the held samples, the last interval padded with the last one's
@@ -230,16 +165,19 @@ class ShootingProblem(EncoderOutput):
             QS[:N], QS[N:] = torque.Q, torque.Q[-1]
             QS *= torque.noise
             self.Psib = QS.reshape(n_int, L, torque.nphi)  # (S, L, nphi): the basis over each interval's periods
-            self.Psi0 = QS[np.maximum(np.arange(n_int) * L - 1, 0)]  # (S, nphi): over the period before each
+            self.Psi0 = QS[self.before[np.arange(n_int) * L]]  # (S, nphi): over the period before each
             torque = dataclasses.replace(torque, Q=None)
         self.torque = torque
-        self.shape = Shape(n_int, self.nb, self.nx, self.ng)
+        self.shape = Shape(n_int, self.nb, self.nx, self.ng, self.cut)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
-        self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg)]  # d rg / d glob, squared
+        self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg), np.zeros(self.nd)]  # d rg / d glob, squared
+        self.Hb = H[self.kk] * self.step  # (S, L+1, K) rad per count of the drift's knots
+        del H
         self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
                  + n_int * self.no + self.ncg)
-        self.dof = max(n_res - (self.nz - self.nc), 1)  # residuals less free variables (constraints count back)
+        nc_held = self.nc - int(self.cut.sum()) * self.nx  # the constraints that hold (none across a run's start)
+        self.dof = max(n_res - (self.nz - nc_held), 1)  # residuals less free variables (constraints count back)
         self.unit_p = np.zeros((self.nz + self.nc, self.p))  # right-hand sides that give the parameters' covariance
         self.unit_p[self.nv + np.arange(self.p), np.arange(self.p)] = 1.0
 
@@ -276,21 +214,38 @@ class ShootingProblem(EncoderOutput):
         return np.where(additive, self.theta0 + self.scale * glob[:p],
                         self.theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
 
+    def _scatter(self, A: np.ndarray, sl: slice) -> np.ndarray:
+        """(s, ..., ncg) the last axis of ``A`` (s, ..., w), the intervals ``sl``' own run's block of a quantity
+        per line coefficient (w of them per run: its lines' or its coefficients'), laid in that run's place among
+        every run's (zero elsewhere); ``A`` itself with one run."""
+        if self.blk is None:
+            return A
+        w = A.shape[-1]
+        out = np.zeros(A.shape[:-1] + (w * self.torque.blocks,))
+        blk = self.blk[sl]
+        for r in np.unique(blk):  # a loop over the runs in these intervals (one or two)
+            out[blk == r, ..., r * w:(r + 1) * w] = A[blk == r]
+        return out
+
     def psik(self, sl: slice) -> np.ndarray:
         """(s, L+1, nphi) the lines' basis (times sigma_u) over the period before each residual's sample of the
         intervals ``sl`` (:func:`~alpes_dyn.model.transmission.torque_before`: the first residual's the period
         before the interval, the others' the interval's own)."""
-        return np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1)
+        return self._scatter(np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1), sl)
 
     def torque_at(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
         """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
         tendons' tension balances at each residual's sample: the one held over the period before it
         (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
         if self.torque.lines:
-            C = glob[self.p:].reshape(self.torque.nphi, self.nu).T
+            C = self.correction(glob, offs)  # (nu, nphi), or per interval (S, nu, nphi): its run's
             u = self.Uk.copy()
-            u[:, 0] += self.Psi0 @ C.T
-            u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
+            if C.ndim == 2:  # one run
+                u[:, 0] += self.Psi0 @ C.T
+                u[:, 1:] += np.einsum("skl,il->ski", self.Psib, C)
+            else:
+                u[:, 0] += np.einsum("sl,sil->si", self.Psi0, C)
+                u[:, 1:] += np.einsum("skl,sil->ski", self.Psib, C)
             return u
         if self.torque.eiv:
             return self.Uk + offs[:, None, :]
@@ -300,8 +255,19 @@ class ShootingProblem(EncoderOutput):
         """The torque correction the sensitivities take: the line coefficients (nu, nphi), the per-interval
         constants (S, nu), or None."""
         if self.torque.lines:
-            return glob[self.p:].reshape(self.torque.nphi, self.nu).T  # C (nu, nphi) from its column-major vec
+            C = glob[self.p:self.p + self.ncg].reshape(self.torque.nlines, self.nu).T  # (nu, nlines), column-major
+            if self.blk is None:
+                return C
+            return C.reshape(self.nu, self.torque.blocks, -1)[:, self.blk].transpose(1, 0, 2)  # its run's, (S, nu, nphi)
         return offs if self.torque.eiv else None
+
+    def drift_offset(self, glob: np.ndarray, sl: slice = slice(None)) -> np.ndarray | float:
+        """(s, L+1, m) rad the encoders' drift at each residual's sample of the intervals ``sl`` (module drift:
+        the hat functions times the knots' values, counts, in ``glob`` after the line corrections), or 0.0."""
+        if not self.nd:
+            return 0.0
+        D = glob[self.p + self.ncg:].reshape(self.ny, -1)  # (m, K) counts
+        return np.einsum("skK,mK->skm", self.Hb[sl], D)
 
     def encoder_rms(self, r: np.ndarray) -> float:
         """RMS of the encoder residuals in r, counts."""
@@ -326,11 +292,12 @@ class ShootingProblem(EncoderOutput):
         corr = self.correction(glob, offs)
         xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac)
         q = xs[:, :, :n]
-        r_enc = ((encoder_angles(self.enc, q) + self.offset(theta)
+        r_enc = ((encoder_angles(self.enc, q) + self.offset(theta) + self.drift_offset(glob)
                   + self.stretch(theta, self.tension_torque(u_k, xs)) - self.Yb)
                  / self.sig_y * self.valid[:, :, None])
         c = xs[:-1, L] - nodes[1:]
-        rg = np.concatenate([np.zeros(self.p), glob[self.p:]])
+        c[self.cut] = 0.0  # no continuity into a run's first interval
+        rg = np.concatenate([np.zeros(self.p), glob[self.p:self.p + self.ncg], np.zeros(self.nd)])
         rq = (np.where(self.q_mask, q - np.nan_to_num(self.Qm), 0.0) / self.camera_noise
               if self.Qm is not None else None)
         res = [r_enc.reshape(self.n_int, -1)]
@@ -357,7 +324,8 @@ class ShootingProblem(EncoderOutput):
         J = Cv = Cr = None
         for a in range(0, n_int, chunk):
             sl = slice(a, min(a + chunk, n_int))
-            corr_sl = corr[sl] if (corr is not None and self.no) else corr  # per interval, or the lines' (global)
+            per = corr is not None and (self.no or corr.ndim == 3)  # per interval, or the lines' (global)
+            corr_sl = corr[sl] if per else corr
             x_c, X_c = self.sens.run(nodes[sl], self.Ub[sl], self.Gb[sl], theta, corr_sl,
                                      basis=self.Psib[sl] if self.Psib is not None else None, sensitivities=jac)
             xs[sl] = x_c
@@ -379,6 +347,8 @@ class ShootingProblem(EncoderOutput):
             J[sl] = J_c
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
+        if Cv is not None:
+            Cv[self.cut], Cr[self.cut] = 0.0, 0.0
         return xs, J, Cv, Cr
 
     def _state_jacobian(self, X: np.ndarray, sl: slice, theta: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -407,18 +377,24 @@ class ShootingProblem(EncoderOutput):
         iv, ip, io = slice(0, nx), slice(nx, nx + p), slice(nx + p, nx + p + self.sens.no)
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if self.no else X[..., iv]  # (s, L+1, nx, nb)
         Xr = X[..., ip] * np.where(self.additive, self.scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
-        if self.torque.lines:
-            Xr = np.concatenate([Xr, X[..., io]], axis=-1)
+        if self.torque.lines:  # each interval's run's coefficients in their place (several runs: _scatter)
+            Xr = np.concatenate([Xr, self._scatter(X[..., io], sl)], axis=-1)
+        if self.nd:  # the drift's knots: no state depends on them (output only)
+            Xr = np.concatenate([Xr, np.zeros(Xr.shape[:-1] + (self.nd,))], axis=-1)
         w = self.valid[sl, :, None, None] / self.sig_y
         J_enc = np.concatenate([encoder_sensitivity(self.enc, q, Xv[:, :, :n]),
                                 encoder_sensitivity(self.enc, q, Xr[:, :, :n])], axis=-1)
         for k, mo in self.off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
+        if self.nd:  # y += H d (module drift): motor mo's knots at columns nb + p + ncg + mo K ...
+            K, d0 = self.nK, nb + p + self.ncg
+            for mo in range(self.ny):  # a loop over the motors (one or two)
+                J_enc[:, :, mo, d0 + mo * K: d0 + (mo + 1) * K] += self.Hb[sl]
         if self.comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
                 if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
-                    J_enc[:, :, mo, nb + p + mo::nu] += theta[k] * self.psik(sl)
+                    J_enc[:, :, mo, nb + p + mo:nb + p + self.ncg:nu] += theta[k] * self.psik(sl)
                 elif self.torque.eiv:
                     J_enc[:, :, mo, nx + mo] += theta[k]
         if self.rotor is not None:  # C (u - J_m S qdd): d/d the states and parameters through qdd
@@ -448,13 +424,13 @@ class ShootingProblem(EncoderOutput):
 
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """Normal equations of the interval-structured least squares, with the continuity constraints."""
-        return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr))
+        return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr), self.shape.dropped)
 
     def continuity_t(self, Cv: np.ndarray, Cr: np.ndarray, v: np.ndarray) -> np.ndarray:
         """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks."""
         out = np.zeros((self.n_int, self.nb))
         out[:-1] += np.einsum("sia,si->sa", Cv, v)
-        out[1:, :self.nx] -= v
+        out[1:, :self.nx] -= v * self.shape.keep[:, None]
         return np.concatenate([out.reshape(-1), np.einsum("sig,si->g", Cr, v)])
 
     def penalized_solver(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
@@ -473,7 +449,7 @@ class ShootingProblem(EncoderOutput):
 
     def _penalized_matrix(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
         """:meth:`penalized_solver`'s matrix, (nz, nz), sparse (an array if :attr:`dense`)."""
-        wdef = np.tile(wv, self.n_int - 1)
+        wdef = np.tile(wv, self.n_int - 1) * np.repeat(self.shape.keep, self.nx)
         C = self.continuity(e.Cv, e.Cr)
         C = C * wdef[:, None] if self.dense else sp.diags(wdef) @ C
         H = self.normal(e.J, mu) + C.T @ C
@@ -515,7 +491,7 @@ class ShootingProblem(EncoderOutput):
     def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> ShootingSolution:
         """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
         name, :func:`start_values`)."""
-        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:].copy(), self.L)
+        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L)
 
     def warm_variables(self, sol: ShootingSolution | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
@@ -525,7 +501,7 @@ class ShootingProblem(EncoderOutput):
         if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
                 or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
             return None
-        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines])
+        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, np.zeros(self.nd)])
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
@@ -539,9 +515,12 @@ class ShootingProblem(EncoderOutput):
         # inputs 8 MiB at a time, not the whole record's at once: 264 MB at 600 s)
         K = L * max(1, JACOBIAN_CHUNK // (L * self.sens.nw))
         nodes = np.empty((n_int, self.nx))
-        x = np.concatenate([q0, np.zeros(n)])
-        for a in range(0, N, K):
-            b = min(a + K, N)
+        runs = self.rec.run_starts()
+        first = np.zeros(N + 1, dtype=bool)
+        first[runs[:-1]] = True  # each run from the rest, its pieces within it (runs start on a node: run_cuts)
+        for a, b in ((a, min(a + K, N, int(runs[np.searchsorted(runs, a, side="right")])))
+                     for a0, a1 in zip(runs[:-1], runs[1:]) for a in range(int(a0), min(int(a1), N), K)):
+            x = np.concatenate([q0, np.zeros(n)]) if first[a] else x
             basis = self.Psib.reshape(-1, self.torque.nphi)[None, a:b] if self.torque.lines else None
             x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
                                    sensitivities=False)
@@ -553,9 +532,10 @@ class ShootingProblem(EncoderOutput):
         S_enc, y = self.S_enc, self.y
         Sp = np.linalg.pinv(S_enc)
         C0 = np.asarray(self.model.transmission.tendon_compliance)
-        y_rigid = y - torque_before(self.Ufull) * C0 if self.comp_cols else y
+        y_rigid = y - self.Ufull[self.before] * C0 if self.comp_cols else y
         nodes[:, :n] += (y_rigid[k_nodes] - encoder_angles(self.enc, nodes[:, :n])) @ Sp.T  # (S: rho(0), a start)
-        nodes[:, n:] += (np.gradient(y, self.rec.dt, axis=0)[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+        yd = np.concatenate([np.gradient(y[a:b], self.rec.dt, axis=0) for a, b in zip(runs[:-1], runs[1:])])
+        nodes[:, n:] += (yd[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
         return nodes
 
 

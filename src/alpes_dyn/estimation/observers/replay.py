@@ -59,14 +59,17 @@ MAX_DELAY = 100
 def advanced(recording: Recording, samples: int) -> Recording:
     """``recording`` with its torque read ``samples`` whole samples earlier: row k of the torque is row k + samples
     of the recorded one, the last ``samples`` rows repeat the last (the applied torque of a sensor that lags by
-    ``samples``: :class:`~alpes_dyn.control.plants.PlantEffects` ``torque_delay``). The recording itself for 0."""
+    ``samples``: :class:`~alpes_dyn.control.plants.PlantEffects` ``torque_delay``), run by run where the recording
+    has several. The recording itself for 0."""
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 0 <= samples <= MAX_DELAY:
         raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_DELAY}, got {samples!r}")
     if samples == 0:
         return recording
     if samples >= recording.n_samples:
         raise InputError(f"torque_delay: {samples} samples, the recording has {recording.n_samples}")
-    tau = np.concatenate([recording.torque[samples:], np.repeat(recording.torque[-1:], samples, axis=0)])
+    b = recording.run_starts()  # a recording of several runs: each run's own torque, its last rows repeating its last
+    last = np.repeat(b[1:] - 1, np.diff(b))
+    tau = recording.torque[np.minimum(np.arange(recording.n_samples) + samples, last)]
     return dataclasses.replace(recording, torque=tau)
 
 DISTURBANCE_WALK = 2e-4
@@ -345,6 +348,9 @@ def _replay_recording(recording: Recording | str | Path, model: Model, observer:
             tuple(rec.joint_names) != tuple(model.joint_names):
         raise RecordingError(f"recording: made for motors {list(rec.motor_names)} and joints {list(rec.joint_names)}, "
                              f"not the model's {list(model.transmission.motor_names)} and {list(model.joint_names)}")
+    if rec.n_runs > 1:  # the states jump between runs: a filter would take the jump for a measurement
+        raise RecordingError(f"recording: {rec.n_runs} runs (column 'run'); an observer runs on one: give one run's "
+                             "rows")
     return rec
 
 
