@@ -391,7 +391,11 @@ def _realism_headline(r: Result) -> str:
     n_miss = len(c["silent_misses"])
     within = "" if w is None else (f" (K within {w['K']:.2f} %, m within {w['m']:.2f} %, EKF within {w['ekf']:.2f} "
                                    f"deg on every joint)")
-    return (f"seeds {_seeds(r)}: {c['adequate']} of {c['n']} adequate{within}, {n_miss} silent "
+    rows = [x for x in r["rows"] if "adaptation" in x]
+    turned = sum(x["adaptation"]["rig"] == "both" for x in rows)
+    rig = (f" (`experiment --rig both`: palm up then hung in one record, {turned} of {len(rows)}; the others "
+           f"hung alone, palm up leaving the range)" if turned else "")
+    return (f"seeds {_seeds(r)}{rig}: {c['adequate']} of {c['n']} adequate{within}, {n_miss} silent "
             f"miss{'es' if n_miss != 1 else ''} (adequate, EKF > {c['goal']['ekf_deg']:g} deg or m > "
             f"{c['goal']['m_pct']:g} %), {len(c['refusals'])} refused naming a cause; fit with the observer's check "
             f"{c['fit_seconds']['median']:.0f} s median")
