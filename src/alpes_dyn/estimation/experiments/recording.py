@@ -41,6 +41,7 @@ Without the column the file is one run, and a jump in its time is refused as bef
 from __future__ import annotations
 
 import csv
+import dataclasses
 import io
 import itertools
 import math
@@ -101,6 +102,13 @@ class Recording:
     @property
     def n_samples(self) -> int:
         return int(self.t.shape[0])
+
+    def take(self, rows: slice | np.ndarray) -> "Recording":
+        """The recording of this one's samples ``rows`` (a slice or an index array): every per-sample column
+        taken, the names kept; not checked again."""
+        cut = {f.name: getattr(self, f.name)[rows] for f in dataclasses.fields(self)
+               if isinstance(getattr(self, f.name), np.ndarray) and getattr(self, f.name).shape[:1] == (self.n_samples,)}
+        return dataclasses.replace(self, **cut)
 
     def run_starts(self) -> np.ndarray:
         """(R + 1,) the first sample of each of the R runs, then the number of samples (one run without

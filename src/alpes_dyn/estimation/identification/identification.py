@@ -557,9 +557,9 @@ def _validate_run(model: Model, sens: SensitivityModel, theta: np.ndarray, recor
     sensors' (taken off the held-out encoder), and ``compliance`` (m,) rad/(N m): the fitted tendon stretch
     C u, u the held-out torque as the fit takes it (taken off too)."""
     rec, path = recording
-    starts = excitation_parts(rec)[:-1]  # one run here (split); a turned one's orientations each on its lines
+    held = rec.n_samples - 1  # one run here (split); a turned one's orientations each on its lines
     U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation,
-                                                                   starts[starts < rec.n_samples - 1])
+                                                                   _parts(excitation_parts(rec), held)[:-1])
     G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
     tr = model.transmission
     step = 2 * np.pi / tr.counts_per_rev

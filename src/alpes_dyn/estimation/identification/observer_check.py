@@ -26,7 +26,6 @@ observer): :func:`~alpes_dyn.estimation.identification.effects.fit_effects` call
 
 from __future__ import annotations
 
-import dataclasses
 import time
 from dataclasses import dataclass, field
 from typing import Any, Mapping
@@ -134,11 +133,7 @@ def _first(rec: Recording, seconds: float) -> Recording:
     observer runs on one: no jump of the states, one gravity; :func:`~alpes_dyn.estimation.experiments.
     recording.excitation_parts`)."""
     k = min(int(round(seconds / rec.dt)) + 1, int(excitation_parts(rec)[1]))
-    if k >= rec.n_samples:
-        return rec
-    cut = {f: (getattr(rec, f)[:k] if isinstance(getattr(rec, f), np.ndarray) else getattr(rec, f))
-           for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q", "run")}
-    return dataclasses.replace(rec, **cut)
+    return rec if k >= rec.n_samples else rec.take(slice(0, k))
 
 
 def observer_check(result: Any, recording: Recording, torque_delay: int = 0,

@@ -41,10 +41,7 @@ def aligned(rec: Recording, L: int) -> Recording:
     keep[-1] = n[-1]
     if np.array_equal(keep, n):
         return rec
-    idx = np.concatenate([np.arange(a, a + k) for a, k in zip(b[:-1], keep)])  # a loop over the runs (a few)
-    cut = {f.name: getattr(rec, f.name)[idx] for f in dataclasses.fields(rec)
-           if isinstance(getattr(rec, f.name), np.ndarray) and getattr(rec, f.name).shape[:1] == (rec.n_samples,)}
-    return dataclasses.replace(rec, **cut)
+    return rec.take(np.concatenate([np.arange(a, a + k) for a, k in zip(b[:-1], keep)]))  # (a loop over the runs)
 
 
 def run_cuts(rec: Recording, L: int, n_int: int) -> tuple[np.ndarray, np.ndarray]:
@@ -71,12 +68,7 @@ def split(rec: Recording) -> list[Recording]:
     b = rec.run_starts()
     if len(b) == 2:
         return [rec]
-    out = []
-    for a, z in zip(b[:-1], b[1:]):  # a loop over the runs (a few)
-        cut = {f.name: getattr(rec, f.name)[a:z] for f in dataclasses.fields(rec)
-               if isinstance(getattr(rec, f.name), np.ndarray) and getattr(rec, f.name).shape[:1] == (rec.n_samples,)}
-        out.append(dataclasses.replace(rec, **cut, run=None))
-    return out
+    return [dataclasses.replace(rec.take(slice(a, z)), run=None) for a, z in zip(b[:-1], b[1:])]  # (a few runs)
 
 
 def encoder_noise(rec: Recording, given: float | None) -> float | None:

@@ -179,11 +179,10 @@ def _piece(rec: Recording, a: int, b: int) -> Recording:
     first (reached under this orientation's gravity: its gravity row is this one's)."""
     if a == 0 and b == rec.n_samples - 1:
         return rec
-    cut = {f: getattr(rec, f)[a: b + 1] for f in ("t", "encoder", "torque", "q", "force_z", "gravity", "true_q")
-           if isinstance(getattr(rec, f), np.ndarray)}
-    if "gravity" in cut:
-        cut["gravity"] = np.repeat(cut["gravity"][:1], b + 1 - a, axis=0)
-    return dataclasses.replace(rec, **cut)
+    piece = rec.take(slice(a, b + 1))
+    if piece.gravity is not None:
+        piece.gravity = np.repeat(piece.gravity[:1], b + 1 - a, axis=0)
+    return piece
 
 
 def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
