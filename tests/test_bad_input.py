@@ -1712,6 +1712,8 @@ API: list[Api] = [
       "seed: expected a non-negative integer, got -1"),
     A("mjcf_recording", lambda c: _mjcf_recording("{d}/missing.xml".format(d=c.d), None, np.zeros((5, 1))),
       InputError, "missing.xml"),
+    A("mjcf_recording", lambda c: _mjcf_recording({}, None, np.zeros((5, 1)), gravity=np.full((5, 3), np.nan)),
+      InputError, "gravity: expected finite gravity vectors (m/s^2) of shape (5, 3), one per sample, got shape (5, 3)"),
     A("JointStops", lambda c: _stops(ad.Model(FINGER3.replace('lower="0.0" upper="1.5707963267948966"',
                                                               'lower="-1e4" upper="1e4"'),
                                               TransmissionSpec(stops={"joints": {"j1": {"stiffness": 1.0}}}))),

@@ -47,3 +47,26 @@ def test_mjcf_recording_follows_our_simulator_and_the_encoder_law(tmp_path):
     np.testing.assert_array_equal(rec.encoder[:, 0], np.round(rec.true_q @ m.transmission.S[0] / step))
     np.testing.assert_array_equal(rec.torque, u)
     assert rec.motor_names == ("flexor",) and rec.joint_names == m.joint_names
+
+
+def test_mjcf_recording_turned_mid_record_follows_our_simulator_turned():
+    """gravity= (the foreign finger's two-orientation record): the same tendon finger palm up for 0.25 s, then
+    turned so that gravity runs along its fingers-down axis (+x), MuJoCo's state carrying on through the turn;
+    our RK4 integrating the two orientations in turn from the same state: the same joints to 1e-6 rad, and the turn
+    is seen (the finger swings off where it was). A gravity of the wrong length is refused naming it."""
+    m = _robot()
+    u = np.full((501, 1), 0.02)
+    G = np.repeat(np.array([[0.0, 0.0, -9.81]]), 501, axis=0)
+    G[250:] = (9.81, 0.0, 0.0)
+    rec = mjcf_recording(m.to_mjcf(), m, u, 1e-3, encoder_noise_counts=0.0, torque_noise=0.0, gravity=G)
+    x0 = np.concatenate([m.static_equilibrium(m.transmission.joint_torque(u[0]), np.zeros(m.n)), np.zeros(m.n)])
+    first = simulate(m, x0, u[:250], duration=0.25, dt=1e-3, input="motor", output="joints", joint_range="ignore")
+    turned = m.copy(gravity=np.array([9.81, 0.0, 0.0]))
+    second = simulate(turned, first.x[-1], u[250:-1], duration=0.25, dt=1e-3, input="motor", output="joints",
+                      joint_range="ignore")
+    ours = np.concatenate([first.x[:, : m.n], second.x[1:, : m.n]])
+    assert rec.gravity is None and rec.true_q.shape == (501, m.n)
+    assert np.abs(rec.true_q[400] - rec.true_q[250]).max() > 0.01  # it swings after the turn
+    assert np.max(np.abs(rec.true_q - ours)) < 1e-6
+    with pytest.raises(ad.InputError, match=r"gravity: expected finite gravity vectors .* shape \(501, 3\)"):
+        mjcf_recording(m.to_mjcf(), m, u, 1e-3, gravity=G[:-1])

@@ -225,16 +225,10 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     if e.stiction is None:
         mujoco.set_mjcb_passive(_smooth_friction(mj, truth))
     try:
-        parts = []
-        for i, (a, b) in enumerate(zip(edges[:-1], edges[1:])):  # a loop over the orientations (one or two)
-            if i:
-                mj.opt.gravity[:] = gravity[a]  # the hand turned: the state carries on
-            parts.append(_sensed_run(mj, d, sub, u[a: b + 1], dt, truth, None, seed + 7919 * i,
-                                     encoder_noise_counts, torque_noise, offset=e.encoder_offset,
-                                     gain=1.0 + e.torque_constant_error))
+        rec = _turned_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise, gravity, edges,
+                          offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
     finally:
         mujoco.set_mjcb_passive(previous)
-    rec = parts[0] if len(parts) == 1 else _joined(parts, dt)
     if e.torque_delay:  # the sensor's reading of sample k is the torque (and its noise) of sample k - d
         rec.torque = delayed(rec.torque, e.torque_delay)
     return rec
@@ -250,6 +244,21 @@ def _gravity_segments(gravity: np.ndarray | None, n_samples: int) -> np.ndarray:
         raise InputError(f"gravity: expected finite gravity vectors (m/s^2) of shape ({n_samples}, 3), one per "
                          f"sample, got shape {G.shape}")
     return np.concatenate([[0], np.flatnonzero(np.any(G[1:] != G[:-1], axis=1)) + 1, [n_samples - 1]])
+
+
+def _turned_run(mj: Any, d: Any, sub: int, u: np.ndarray, dt: float, model: Model, actuators: list[str] | None,
+                seed: int, encoder_noise_counts: float, torque_noise: float, gravity: np.ndarray | None,
+                edges: np.ndarray, **sensors: float) -> Recording:
+    """:func:`_sensed_run` segment by segment of constant ``gravity`` (``edges`` from :func:`_gravity_segments`):
+    MuJoCo's gravity set to each segment's at its first sample (the hand turned: the state carries on), the sensors'
+    noise of each segment seeded apart (``seed + 7919 i``); one segment: :func:`_sensed_run` itself."""
+    parts = []
+    for i, (a, b) in enumerate(zip(edges[:-1], edges[1:])):  # a loop over the orientations (one or two)
+        if i:
+            mj.opt.gravity[:] = gravity[a]
+        parts.append(_sensed_run(mj, d, sub, u[a: b + 1], dt, model, actuators, seed + 7919 * i,
+                                 encoder_noise_counts, torque_noise, **sensors))
+    return parts[0] if len(parts) == 1 else _joined(parts, dt)
 
 
 def _joined(parts: list[Recording], dt: float) -> Recording:
@@ -286,7 +295,7 @@ def _sensed_run(mj: Any, d: Any, sub: int, u: np.ndarray, dt: float, model: Mode
 
 def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt: float = 1e-3, *,
                    q0: Sequence[float] | None = None, seed: int = 0, encoder_noise_counts: float = 0.5,
-                   torque_noise: float = 5e-4) -> Recording:
+                   torque_noise: float = 5e-4, gravity: np.ndarray | None = None) -> Recording:
     """Replay a motor torque on MuJoCo stepping an MJCF of any robot, and record it as :func:`mujoco_recording` does.
 
     ``mjcf``: the MJCF text, or the path of its file -- e.g. what ``alpes-dyn mjcf --model ROBOT.urdf --spec
@@ -300,7 +309,9 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
 
     Returns the :class:`~alpes_dyn.estimation.experiments.recording.Recording` (encoder counts, measured torque, MuJoCo's joint
     angles as ``true_q``), which :func:`~alpes_dyn.estimation.experiments.recording.write_recording` writes for ``alpes-dyn
-    estimate --data``. A mimic joint starts at its rule's value of the initial q.
+    estimate --data``. A mimic joint starts at its rule's value of the initial q. ``gravity``: (N+1, 3) m/s^2, the
+    gravity the robot feels at each sample, as :func:`mujoco_recording`'s (default the MJCF's; the rest found in the
+    first orientation; no gravity columns written: the rig's nominal orientations are the caller's).
     """
     import mujoco  # load_mujoco below gives the one-line error when it is missing
 
@@ -318,6 +329,10 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
     u = np.asarray(torque, dtype=float)
     u = u[:, None] if u.ndim == 1 else u
     sub = _check_run("finger3", u, dt, float(mj.opt.timestep), "rk4", tr.n_motors)
+    edges = _gravity_segments(gravity, u.shape[0])
+    if gravity is not None:
+        mj.opt.gravity[:] = gravity[0]
+        model = model.copy(gravity=np.asarray(gravity[0], dtype=float))
     d = mujoco.MjData(mj)
     q_init = (model.static_equilibrium(None, np.zeros(model.n), fixed=model.springless_joints, tau_m=u[0])
               if q0 is None else np.asarray(q0, dtype=float))
@@ -328,7 +343,8 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
         d.qpos[mj.joint(mimic.name).qposadr[0]] = mimic.multiplier * q_init[model.joint_index(mimic.primary)] \
             + mimic.offset
     mujoco.mj_forward(mj, d)
-    return _sensed_run(mj, d, sub, u, dt, model, list(tr.motor_names), seed, encoder_noise_counts, torque_noise)
+    return _turned_run(mj, d, sub, u, dt, model, list(tr.motor_names), seed, encoder_noise_counts, torque_noise,
+                       gravity, edges)
 
 
 def _check_recording_settings(model: str, seed: Any, encoder_noise_counts: Any, torque_noise: Any) -> None:
