@@ -528,6 +528,8 @@ CLI: dict[str, list[Cli]] = {
         C("mjcf", "--model", "finger3", "--params", "{latin1_toml}", needle="not UTF-8 text"),
         C("mjcf", "--model", "finger3", "--stiction", "-1", needle="stiction: expected a positive time constant in s"),
         C("mjcf", "--model", "finger3", "--stiction", "abc", needle="argument --stiction: invalid float value"),
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--stiction", "-1",
+          needle="stiction: expected a positive time constant in s"),
         C("mjcf", "--model", "finger3", "--tendon-stiffness", "0", needle="tendon_stiffness: expected a positive stiffness"),
         C("mjcf", "--model", "finger3", "--tendon-stiffness", "inf", needle="tendon_stiffness: expected a positive stiffness"),
         C("mjcf", "--model", "finger3", "--tendon-damping", "2", needle="tendon_damping: needs tendon_stiffness"),

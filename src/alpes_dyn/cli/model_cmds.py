@@ -136,7 +136,7 @@ def cmd_mjcf(args: argparse.Namespace) -> int:
 
 _MJCF_ALPES_ONLY = (("params", "--params", None), ("spring", "--spring", None), ("friction", "--friction", False),
                     ("rotor_inertia", "--rotor-inertia", False), ("no_contact", "--no-contact", False),
-                    ("scene", "--scene", "none"), ("palm_down", "--palm-down", False), ("stiction", "--stiction", None),
+                    ("scene", "--scene", "none"), ("palm_down", "--palm-down", False),
                     ("tendon_stiffness", "--tendon-stiffness", None), ("tendon_damping", "--tendon-damping", 0.0),
                     ("tendon_dead_band", "--tendon-dead-band", 0.0), ("tendon_rotor", "--tendon-rotor", False), ("tilt", "--tilt", 0.0))
 
@@ -161,7 +161,7 @@ def _urdf_mjcf(args: argparse.Namespace) -> str:
             raise InputError(f"{flag}: applies to the Alpes models (finger2, finger3, hand, thumb); "
                              + _MJCF_URDF_WHY.get(dest, "a URDF model's springs, friction and rotor inertia come from "
                                                         "its --spec"))
-    return model_mjcf(Model.from_urdf_file(args.model, args.spec), limits=not args.no_limits)
+    return model_mjcf(Model.from_urdf_file(args.model, args.spec), limits=not args.no_limits, stiction=args.stiction)
 
 
 def _alpes_mjcf(args: argparse.Namespace, mjcf_string, load_params) -> str:

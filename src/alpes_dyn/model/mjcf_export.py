@@ -55,6 +55,7 @@ site ``<tip>_site`` (the import makes a link of each site).
 from __future__ import annotations
 
 import math
+import numbers
 import xml.sax.saxutils as su
 from typing import Any, Sequence
 
@@ -151,9 +152,11 @@ def _body_names(model: Any) -> tuple[str, list[str]]:
     return root, names
 
 
-def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, float]]) -> str:
+def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, float]],
+               stiction: float | None = None) -> str:
     """The ``<joint>`` of Pinocchio joint i (1-based): axis, range, spring, armature, friction (a mimic joint has
-    none of the last four: the spec names the joint it follows)."""
+    none of the last four: the spec names the joint it follows); with ``stiction`` (s) a joint with dry friction
+    gets ``solreffriction`` of that time constant."""
     pm = tree_model(model)
     name = pm.names[i]
     kind, axis = _joint_kind(pm.joints[i], name)
@@ -174,6 +177,8 @@ def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, 
     for attr, values in (("armature", ex.armature), ("frictionloss", ex.coulomb), ("damping", ex.viscous)):
         if values[e] != 0:
             attrs.append(f'{attr}="{_f(values[e])}"')
+    if stiction is not None and ex.coulomb[e] != 0:
+        attrs.append(f'solreffriction="{_f(stiction)} 1"')
     return f"<joint {' '.join(attrs)}/>"
 
 
@@ -234,7 +239,8 @@ def _tips(model: Any, bodies: set[str], tip_radius: float) -> dict[int, list[str
     return out
 
 
-def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[str, str]]:
+def _tree(model: Any, limits: bool, tip_radius: float, stiction: float | None = None
+          ) -> tuple[list[str], dict[str, str]]:
     """The ``<worldbody>`` lines (depth first, Pinocchio's joint order) and the site name of each tip."""
     pm = tree_model(model)
     root, names = _body_names(model)
@@ -254,7 +260,7 @@ def _tree(model: Any, limits: bool, tip_radius: float) -> tuple[list[str], dict[
         mass, c, I = float(Y.mass), np.asarray(Y.lever), np.asarray(Y.inertia)
         _check_inertia(names[i - 1], mass, I)
         lines.append(f"{ind}<body name={_q(names[i - 1])} {_pose(pm.jointPlacements[i])}>")
-        lines.append(f"{ind}  {_joint_xml(model, i, limits, solref)}")
+        lines.append(f"{ind}  {_joint_xml(model, i, limits, solref, stiction)}")
         lines.append(f'{ind}  <inertial pos="{_v(c)}" mass="{_f(mass)}" fullinertia="'
                      f'{_v((I[0, 0], I[1, 1], I[2, 2], I[0, 1], I[0, 2], I[1, 2]))}"/>')
         lines.extend(f"{ind}  {s}" for s in tips.get(i, ()))
@@ -359,7 +365,7 @@ def _check_tendon(model: Any, tendon: Any) -> None:
 
 
 def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integrator: str = "RK4",
-               tip_radius: float = 0.005, tendon: Any = None) -> str:
+               tip_radius: float = 0.005, tendon: Any = None, stiction: float | None = None) -> str:
     """MJCF text of ``model`` (any :class:`~alpes_dyn.Model`: a URDF with or without a spec, an Alpes model).
 
     Parameters
@@ -380,6 +386,9 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
         :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` (tested against MuJoCo). A model with a
         tendon compliance needs it (``ElasticTendon.of(model)``: the quasi-static stretch is a sensor law MuJoCo
         cannot hold, the cable's dynamics are); default None: rigid tendons.
+    stiction: time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) on every joint with Coulomb
+        friction, e.g. :data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST` (0.5 ms): a real stick-slip, where MuJoCo's
+        default (20 ms) is soft on a light finger (it slides below F_s); default None: MuJoCo's default.
 
     Returns
     -------
@@ -399,7 +408,10 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
     elif tr is not None and tr.elastic:  # nothing silently dropped: the quasi-static stretch has no MJCF form
         raise ModelError("tendon_compliance: an elastic tendon (y = S q + C tau_m) is a sensor law MuJoCo cannot "
                          "hold; export its cable's dynamics (tendon=ElasticTendon.of(model)) or rigid tendons")
-    tree, sites = _tree(model, bool(limits), float(tip_radius))
+    if stiction is not None and not (isinstance(stiction, numbers.Real) and not isinstance(stiction, bool)
+                                     and math.isfinite(stiction) and stiction > 0):
+        raise InputError(f"stiction: expected a positive time constant in s (e.g. 0.0005), got {stiction!r}")
+    tree, sites = _tree(model, bool(limits), float(tip_radius), None if stiction is None else float(stiction))
     if tendon is not None:
         tree[-1:-1] = _rotor_bodies(model)  # before </worldbody>
     head = [f"<mujoco model={_q(model.name)}>",
