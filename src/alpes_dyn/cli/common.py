@@ -190,7 +190,8 @@ def _join_negative_vectors(argv: Sequence[str]) -> list[str]:
     return out
 
 
-_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("true_spec", "--true-spec"), ("data", "--data"),
+_INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("true_spec", "--true-spec"),
+                  ("true_model", "--true-model"), ("data", "--data"),
                   ("validate", "--validate"),
                   ("true_params", "--true-params"), ("observer_params", "--observer-params"),
                   ("plant_params", "--plant-params"))

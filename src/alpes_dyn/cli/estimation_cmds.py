@@ -5,13 +5,15 @@ recording), ``experiment`` (the identification experiment simulated, its recordi
 
 from __future__ import annotations
 
+import math
+
 import argparse
 import time
 import warnings
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ModelError
 from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
@@ -173,11 +175,14 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     from ..estimation.experiments.experiment import EXPERIMENT_MODELS, ExperimentDesign, perturbed_params
     from ..model.params import load_params, write_params
 
+    if not (math.isfinite(args.amplitude) and 0 < args.amplitude <= 1):
+        raise InputError(f"--amplitude: expected a fraction in (0, 1], got {args.amplitude!r}")
     if _is_urdf_path(args.model):
         return _experiment_robot(args)
-    if args.true_spec is not None:
-        raise InputError(f"--true-spec: applies to a URDF --model; the Alpes model {args.model!r} takes the true "
-                         "finger from --params (or --perturb)")
+    for flag, value in (("--true-spec", args.true_spec), ("--true-model", args.true_model)):
+        if value is not None:
+            raise InputError(f"{flag}: applies to a URDF --model; the Alpes model {args.model!r} takes the true "
+                             "finger from --params (or --perturb)")
     _check_model_options(args)
     if args.model == "hand":  # the six motors at once, one recording
         from .hand_cmds import experiment_hand
@@ -192,7 +197,7 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     if args.perturb is not None:  # the chain's own values drawn (the thumb's, a finger's, or the shared finger's)
         chains = ("thumb",) if args.model == "thumb" else ((args.chain,) if args.chain else None)
         truth = perturbed_params(truth, args.perturb, args.seed, chains=chains)
-    design = ExperimentDesign(duration=args.duration)
+    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude)
     with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
         warnings.simplefilter("ignore", SmallExcursionWarning)
         # the design checked over the whole record on the finger before it is written; --rig auto: palm up
@@ -231,19 +236,32 @@ def _experiment_robot(args: argparse.Namespace) -> int:
     on the spec's robot, simulated on the true one
     (:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment`)."""
     from ..estimation.experiments.experiment import ExperimentDesign, model_experiment
+    from ..model.robot import Model
 
     _refuse_for_urdf(args, _URDF_EXPERIMENT)
     _check_run_files(args, {"-o": ("csv",)})  # a recording: a CSV by its name
     nominal = _urdf_robot(args, "the identification experiment")
-    truth = _urdf_robot(args, "the identification experiment", args.true_spec) if args.true_spec else None
+    truth = None
+    if args.true_spec or args.true_model:
+        try:
+            truth = Model.from_urdf_file(args.true_model or args.model, args.true_spec or args.spec)
+        except (InputError, ModelError) as e:
+            raise InputError(f"{'--true-model' if args.true_model else '--true-spec'}: {e}") from None
+        if truth.joint_names != nominal.joint_names or truth.motor_names != nominal.motor_names:
+            flag = "--true-model" if args.true_model else "--true-spec"
+            raise InputError(f"{flag}: the true robot has joints {', '.join(truth.joint_names)} and motors "
+                             f"{', '.join(truth.motor_names)}; expected the --model's {', '.join(nominal.joint_names)} "
+                             f"and {', '.join(nominal.motor_names)}")
+    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude)
     with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
         warnings.simplefilter("ignore", SmallExcursionWarning)
-        rec = model_experiment(nominal, truth, ExperimentDesign(duration=args.duration), seed=args.seed,
-                               path=args.output)
-    obj = {"model": args.model, "spec": args.spec, "true_spec": args.true_spec, "output": args.output,
-           "samples": rec.n_samples, "duration_s": rec.duration, "dt_s": rec.dt, "columns": list(rec.columns())}
+        rec = model_experiment(nominal, truth, design, seed=args.seed, path=args.output)
+    obj = {"model": args.model, "spec": args.spec, "true_spec": args.true_spec, "true_model": args.true_model,
+           "amplitude": args.amplitude, "output": args.output, "samples": rec.n_samples, "duration_s": rec.duration,
+           "dt_s": rec.dt, "columns": list(rec.columns())}
+    true_robot = " + ".join(x for x in (args.true_model, args.true_spec) if x) or args.spec
     text = (f"{nominal.name}: identification experiment on {', '.join(nominal.motor_names)}, {rec.n_samples} samples "
-            f"over {rec.duration:g} s (true robot: {args.true_spec or args.spec}) written to {args.output}")
+            f"over {rec.duration:g} s (true robot: {true_robot}) written to {args.output}")
     _emit(obj, text + _excursion_lines(rec, obj), args.json)
     return 0
 

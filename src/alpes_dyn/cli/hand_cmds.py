@@ -33,7 +33,7 @@ def experiment_hand(args: argparse.Namespace) -> int:
         truth = perturbed_params(truth, args.perturb, args.seed, chains=hand_chains(truth))
     with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
         warnings.simplefilter("ignore", SmallExcursionWarning)
-        rec, how = hand_experiment(truth, ExperimentDesign(duration=args.duration), seed=args.seed,
+        rec, how = hand_experiment(truth, ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude), seed=args.seed,
                                    path=args.output, nominal_params=args.params, rig=args.rig)
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters drawn by alpes-dyn experiment --model "

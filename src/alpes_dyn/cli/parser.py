@@ -352,6 +352,10 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                         "one, unless --true-spec)")
     s.add_argument("--true-spec", default=None, metavar="TRUE.toml",
                    help="a URDF --model: the spec of the simulated (true) robot, e.g. with other springs")
+    s.add_argument("--true-model", default=None, metavar="TRUE.urdf",
+                   help="a URDF --model: the URDF of the simulated (true) robot, e.g. with other masses (the same "
+                        "joints; its spec --true-spec, else --spec); the bias is trimmed on it as the bench's slow "
+                        "loop does on the real robot")
     s.add_argument("--chain", default=None, metavar="FINGER",
                    help="Alpes models: a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
                         "values in --params)")
@@ -364,6 +368,11 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--true-params-out", default=None, metavar="FILE", help="Alpes models, with --perturb: write the drawn true parameters "
                    "there")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
+    s.add_argument("--amplitude", type=_strict_float, default=0.5, metavar="FRACTION",
+                   help="the multisine's amplitude as a fraction in (0, 1] of the largest that keeps the nominal "
+                        "robot in its range (default %(default)s: room for a true robot unlike the nominal one); 1 "
+                        "on a robot whose friction hides its masses (a springless finger: its largest is 4 x the "
+                        "joints' breakaway torque)")
     s.add_argument("--rig", choices=("auto", "level", "hanging", "both"), default="auto",
                    help="the hand's orientation during the experiment (an Alpes model): auto (default): palm up as "
                         "the file's gravity unless the finger leaves its range there (folds onto a stop, or swings "
