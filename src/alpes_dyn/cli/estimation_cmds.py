@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
+from .fitting import _check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_out_path, _write_robot
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      data_label, parse_vector, read_data)
@@ -261,6 +261,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     from ..estimation.identification.identified_spec import spec_misfits
 
     urdf = _is_urdf_path(args.model)
+    if args.mjcf is not None and not urdf:
+        raise InputError(f"--mjcf: applies to a URDF --model imported from that MJCF (alpes-dyn import); the Alpes "
+                         f"model {args.model!r}'s MJCF: alpes-dyn mjcf --model {args.model}")
     if args.model == "hand":  # every chain from one recording of the six motors
         from .hand_cmds import identify_hand
 
@@ -276,11 +279,17 @@ def cmd_identify(args: argparse.Namespace) -> int:
     res, model = fit.result, fit.result.model
     res.recording_path = data_label(args)  # the identified file's header names the recording(s) read
     written = args.output is not None and (res.trustworthy or args.force)
+    omitted: list[str] = []  # what the MJCF beside -o cannot hold (--mjcf)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
-        res.write(args.output) if not urdf else _write_robot(res, args)
+        if urdf:
+            omitted = _write_robot(res, args)
+        else:
+            res.write(args.output)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
+    obj["mjcf_output"] = _mjcf_out_path(args.output) if written and urdf and args.mjcf is not None else None
+    obj["mjcf_omitted"] = list(omitted) if obj["mjcf_output"] else []
     obj["chain"] = args.chain if urdf else model.chain
     obj["effects"] = list(fit.effects)
     obj["torque_delay"] = fit.delay  # samples, of the rig's sensors (not in the file): estimate --data --torque-delay
@@ -328,6 +337,10 @@ def cmd_identify(args: argparse.Namespace) -> int:
         u = obj["urdf_output"]
         lines.append(f"  written to {args.output}" + (f" and {u} (the masses; use --model {u} --spec {args.output})"
                                                      if u else "") + ("" if res.trustworthy else " (marked NOT trustworthy)"))
+        if obj["mjcf_output"]:
+            lines.append(f"  the MJCF {args.mjcf} with the identified values: {obj['mjcf_output']}"
+                         + (f" (not in it: {', '.join(obj['mjcf_omitted'])}, a sensor law MuJoCo's rigid tendon cannot "
+                            "hold; in the spec)" if obj["mjcf_omitted"] else ""))
     _emit(obj, "\n".join(lines), args.json)
     if not res.trustworthy:
         why = res.status()
@@ -368,6 +381,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
 
     _refuse_for_urdf(args, _URDF_IDENTIFY)
     whole = _urdf_robot(args, "identification")
+    _check_mjcf_option(args, whole)  # the MJCF written beside -o: the model's origin, checked before the fit
     model = _chain_model(whole, args.chain)
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))

@@ -447,8 +447,12 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                    help="write -o even when the fit did not converge or the model is not adequate (the file is "
                         "marked not trustworthy); without it such a fit writes nothing and exits with code 3")
     s.add_argument("-o", "--output", default=None, metavar="FILE.toml",
-                   help="write the identified parameter file (a URDF --model: its identified spec; a spec holds no "
-                        "masses: fit without m to write one)")
+                   help="write the identified parameter file (a URDF --model: its identified spec, and where the fit "
+                        "has masses the URDF with them beside it, FILE.urdf)")
+    s.add_argument("--mjcf", default=None, metavar="ROBOT.xml",
+                   help="a URDF --model imported from this MJCF (alpes-dyn import): with -o FILE.toml also write "
+                        "FILE.xml, the MJCF with the identified masses (inertias scaled), joint stiffness, damping, "
+                        "frictionloss and rotors written in, everything else as written")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identify)
 

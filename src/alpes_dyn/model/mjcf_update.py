@@ -45,7 +45,7 @@ from ..errors import ModelError
 from ..fileio import decode_utf8, read_bytes
 from .mjcf_import import _compile, _mj, _name
 
-__all__ = ["JOINT_ATTRIBUTES", "updated_mjcf"]
+__all__ = ["JOINT_ATTRIBUTES", "check_origin", "updated_mjcf"]
 
 JOINT_ATTRIBUTES: tuple[str, ...] = ("stiffness", "springref", "damping", "frictionloss", "armature")
 """The joint attributes :func:`updated_mjcf` writes (SI, ``springref`` in rad)."""
@@ -323,7 +323,7 @@ def _compile_at(text: str, out: Path):
             return _mj().MjModel.from_xml_path(tmp)
         except ValueError as exc:
             raise ModelError(f"mjcf: MuJoCo cannot compile the updated MJCF from {str(out.resolve().parent)!r} "
-                             f"({str(exc).splitlines()[0]}); nothing written") from None
+                             f"({str(exc).splitlines()[0]})") from None
     finally:
         Path(tmp).unlink(missing_ok=True)
 
@@ -336,7 +336,7 @@ def _check_compiled(mujoco, m, n, masses: dict[int, float], edits: dict[int, dic
     for s, what in sizes.items():
         if getattr(n, s) != getattr(m, s):
             raise ModelError(f"mjcf: the updated MJCF compiles to {getattr(n, s)} {what}, the original to "
-                             f"{getattr(m, s)}; nothing written")
+                             f"{getattr(m, s)}")
     want = {k: np.array(getattr(m, k), dtype=float) for k in
             ("body_mass", "body_inertia", "jnt_stiffness", "qpos_spring", "dof_damping", "dof_frictionloss",
              "dof_armature", "body_pos", "body_quat", "jnt_axis")}
@@ -361,4 +361,32 @@ def _check_compiled(mujoco, m, n, masses: dict[int, float], edits: dict[int, dic
         if bad.size:
             i = tuple(bad[0])
             raise ModelError(f"mjcf: the updated MJCF compiles to {k}{list(i)} = {got[i]!r}, not {w[i]!r} (a compiler "
-                             "option or a class MuJoCo applies after the file's own attribute?); nothing written")
+                             "option or a class MuJoCo applies after the file's own attribute?)")
+
+
+def check_origin(model, mjcf: str | Path) -> None:
+    """That ``model`` (a :class:`~alpes_dyn.Model`) was imported from the MJCF file ``mjcf``: each of its joints a
+    hinge of the MJCF, each of its URDF's links with a mass a body of the same mass (to 1e-9); else
+    :class:`~alpes_dyn.ModelError` naming the first that differs (before a fit whose values are to be written
+    into that file)."""
+    import xml.etree.ElementTree as ET
+
+    mujoco = _mj()
+    m = _compile(mjcf)
+    O = mujoco.mjtObj
+    hinges = {_name(mujoco, m, O.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)
+              if m.jnt_type[j] == mujoco.mjtJoint.mjJNT_HINGE}
+    for j in model.joint_names:
+        if j not in hinges:
+            raise ModelError(f"mjcf: the model's joint {j!r} is not a hinge of {str(mjcf)!r}; not the MJCF the model "
+                             "was imported from")
+    bodies = {_name(mujoco, m, O.mjOBJ_BODY, b, "body"): float(m.body_mass[b]) for b in range(1, m.nbody)}
+    for link in ET.fromstring(model.urdf).iter("link"):
+        mass = link.find("inertial/mass")
+        if mass is None or not float(mass.get("value", 0)) > 0:
+            continue
+        name, value = link.get("name"), float(mass.get("value"))
+        if name not in bodies or not math.isclose(bodies[name], value, rel_tol=1e-9):
+            was = f"{bodies[name]:.6g} kg" if name in bodies else "no such body"
+            raise ModelError(f"mjcf: link {name!r}: {value:.6g} kg in the model's URDF, {was} in {str(mjcf)!r}; not "
+                             "the MJCF the model was imported from")

@@ -168,7 +168,7 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
     a second one saying so). Returns (text, the fitted parameters the MJCF cannot hold: ``tendon_compliance_<motor>``,
     named in the comment). :class:`~alpes_dyn.ModelError` if a fitted mass's body has not the URDF's mass in the
     MJCF (not the file the robot was imported from) or for what ``updated_mjcf`` refuses."""
-    from ...model.mjcf_import import _compile, _mj
+    from ...model.mjcf_import import _compile, _mj, _name
     from ...model.mjcf_update import updated_mjcf
     from ...symbolic.parametric import _child_links
 
@@ -176,6 +176,9 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
         raise ModelError(f"base: expected a TransmissionSpec, got {type(base).__name__}")
     mujoco = _mj()
     m = _compile(mjcf)
+    O = mujoco.mjtObj
+    bodies = {_name(mujoco, m, O.mjOBJ_BODY, b, "body"): b for b in range(1, m.nbody)}  # the import's names
+    hinges = {_name(mujoco, m, O.mjOBJ_JOINT, j, "joint"): j for j in range(m.njnt)}
     cat = {p.name: p for p in parameter_catalogue(result.model)}
     links = _child_links(result.model)
     masses: dict[str, float] = {}
@@ -194,7 +197,7 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
             continue
         if p.kind == "m":
             body = links[p.joint]
-            b = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, body)
+            b = bodies.get(body, -1)
             if b < 0 or not math.isclose(float(m.body_mass[b]), p.nominal, rel_tol=1e-9):
                 was = "none" if b < 0 else f"{float(m.body_mass[b]):.6g} kg"
                 raise ModelError(f"mjcf: body {body!r} (of {name}): {was} in the MJCF, {p.nominal:.6g} kg in the "
@@ -205,7 +208,7 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
         elif p.kind in _MJCF_JOINT:
             v = max(v, 0.0)
             joints.setdefault(p.joint, {})[_MJCF_JOINT[p.kind]] = v
-            j = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, p.joint)
+            j = hinges.get(p.joint, -1)
             rest = float(base.rest_angle.get(p.joint, 0.0))
             if p.kind == "K" and j >= 0 and float(m.qpos_spring[m.jnt_qposadr[j]]) != rest:
                 joints[p.joint]["springref"] = rest
