@@ -14,7 +14,8 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .fitting import _check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_out_path, _write_robot
+from .fitting import (_check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_applies, _write_robot,
+                      _written_lines)
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      data_label, parse_vector, read_data)
@@ -258,12 +259,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
     from ..estimation.experiments.experiment import EXPERIMENT_MODELS
-    from ..estimation.identification.identified_spec import spec_misfits
 
     urdf = _is_urdf_path(args.model)
-    if args.mjcf is not None and not urdf:
-        raise InputError(f"--mjcf: applies to a URDF --model imported from that MJCF (alpes-dyn import); the Alpes "
-                         f"model {args.model!r}'s MJCF: alpes-dyn mjcf --model {args.model}")
+    _mjcf_applies(args, urdf)
     if args.model == "hand":  # every chain from one recording of the six motors
         from .hand_cmds import identify_hand
 
@@ -288,8 +286,6 @@ def cmd_identify(args: argparse.Namespace) -> int:
             res.write(args.output)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
-    obj["mjcf_output"] = _mjcf_out_path(args.output) if written and urdf and args.mjcf is not None else None
-    obj["mjcf_omitted"] = list(omitted) if obj["mjcf_output"] else []
     obj["chain"] = args.chain if urdf else model.chain
     obj["effects"] = list(fit.effects)
     obj["torque_delay"] = fit.delay  # samples, of the rig's sensors (not in the file): estimate --data --torque-delay
@@ -332,15 +328,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             v = a.validation
             lines.append(f"  validation on {args.validate}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
                          f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
-    obj["urdf_output"] = _mass_urdf_path(args.output) if written and urdf and spec_misfits(model, res.names) else None
-    if written:
-        u = obj["urdf_output"]
-        lines.append(f"  written to {args.output}" + (f" and {u} (the masses; use --model {u} --spec {args.output})"
-                                                     if u else "") + ("" if res.trustworthy else " (marked NOT trustworthy)"))
-        if obj["mjcf_output"]:
-            lines.append(f"  the MJCF {args.mjcf} with the identified values: {obj['mjcf_output']}"
-                         + (f" (not in it: {', '.join(obj['mjcf_omitted'])}, a sensor law MuJoCo's rigid tendon cannot "
-                            "hold; in the spec)" if obj["mjcf_omitted"] else ""))
+    lines += _written_lines(obj, args, res, urdf and written, written, omitted)
     _emit(obj, "\n".join(lines), args.json)
     if not res.trustworthy:
         why = res.status()

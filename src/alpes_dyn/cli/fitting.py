@@ -74,6 +74,35 @@ def _mjcf_out_path(output: str) -> str:
     return str(Path(output).with_suffix(".xml"))
 
 
+def _mjcf_applies(args: argparse.Namespace, urdf: bool) -> None:
+    """``identify --mjcf`` refused on an Alpes model (its MJCF is ``alpes-dyn mjcf``'s, nothing to write back)."""
+    if args.mjcf is not None and not urdf:
+        raise InputError(f"--mjcf: applies to a URDF --model imported from that MJCF (alpes-dyn import); the Alpes "
+                         f"model {args.model!r}'s MJCF: alpes-dyn mjcf --model {args.model}")
+
+
+def _written_lines(obj: dict, args: argparse.Namespace, res, robot: bool, written: bool,
+                   omitted: list[str]) -> list[str]:
+    """identify's files in its JSON (``urdf_output``, ``mjcf_output``, ``mjcf_omitted``: None or empty where not
+    written) and its text's lines saying them; ``robot``: a URDF robot's fit written (:func:`_write_robot`)."""
+    from ..estimation.identification.identified_spec import spec_misfits
+
+    obj["urdf_output"] = _mass_urdf_path(args.output) if robot and spec_misfits(res.model, res.names) else None
+    obj["mjcf_output"] = _mjcf_out_path(args.output) if robot and args.mjcf is not None else None
+    obj["mjcf_omitted"] = list(omitted) if obj["mjcf_output"] else []
+    if not written:
+        return []
+    u = obj["urdf_output"]
+    lines = [f"  written to {args.output}"
+             + (f" and {u} (the masses; use --model {u} --spec {args.output})" if u else "")
+             + ("" if res.trustworthy else " (marked NOT trustworthy)")]
+    if obj["mjcf_output"]:
+        lines.append(f"  the MJCF {args.mjcf} with the identified values: {obj['mjcf_output']}"
+                     + (f" (not in it: {', '.join(obj['mjcf_omitted'])}, a sensor law MuJoCo's rigid tendon cannot "
+                        "hold; in the spec)" if obj["mjcf_omitted"] else ""))
+    return lines
+
+
 def _check_mjcf_option(args: argparse.Namespace, model) -> None:
     """``identify --mjcf ROBOT.xml``, before the fit: with -o, on a URDF --model imported from that MJCF
     (:func:`~alpes_dyn.model.mjcf_update.check_origin`); its file beside -o none of the inputs."""
