@@ -2,10 +2,12 @@
 back to a MuJoCo user (``alpes-dyn identify ... --mjcf ROBOT.xml -o ident.toml`` writes ``ident.xml``;
 :func:`~alpes_dyn.estimation.identification.identified_spec.identified_mjcf` maps a fit to the values here).
 
-:func:`updated_mjcf` edits the file's own XML (comments, defaults, classes, geoms, meshes, contacts, actuators,
-tendons, sites, sensors, attribute order kept; the text re-serialised, so quoting and empty-element spacing may
-differ) where the import (:mod:`alpes_dyn.model.mjcf_import`) read the values, each written as an explicit attribute
-on the element (which overrides any ``<default>`` class, so MuJoCo takes it):
+:func:`updated_mjcf` edits the file's own text: only the start tags of the elements whose values change differ
+(and a comment before ``<mujoco>``), the rest byte for byte as written (comments, defaults, classes, geoms, meshes,
+contacts, actuators, tendons, sites, sensors; the tags found at expat's byte offsets). The values go where the import
+(:mod:`alpes_dyn.model.mjcf_import`) read them, each as an explicit attribute on the element (which overrides any
+``<default>`` class, so MuJoCo takes it; an unnamed element, which the import names ``body3`` or ``joint2``, found by
+its index in the file):
 
 * a body's mass: ``<inertial mass>``, its inertia (``diaginertia`` or ``fullinertia``) times m / m0, m0 the compiled
   mass, its centre of mass and principal axes kept (what
@@ -35,9 +37,9 @@ import math
 import os
 import posixpath
 import tempfile
-from xml.sax.saxutils import escape
 from pathlib import Path
 from typing import Mapping, Sequence
+from xml.sax.saxutils import escape
 
 import numpy as np
 
