@@ -169,3 +169,32 @@ def test_what_cannot_be_written_is_refused(tmp_path):
     with pytest.raises(ModelError, match='inertiafromgeom="true">: MuJoCo takes every mass from the geoms'):
         updated_mjcf(geoms, tmp_path / "o.xml", masses={"a": 0.1})
     assert sorted(p.name for p in tmp_path.iterdir()) == ["body.xml", "geoms.xml", "inc.xml", "part.xml"]
+
+
+TET = "v 0 0 0\nv 0.02 0 0\nv 0 0.02 0\nv 0 0 0.02\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n"
+
+
+@pytest.mark.parametrize("meshdir", [True, False])
+def test_meshes_resolve_from_the_output_folder(tmp_path, meshdir):
+    """A mesh geom (its file under <compiler meshdir>, or named relative to the MJCF's folder) whose body's mass
+    MuJoCo computes from it: written into another folder, the meshdir (or the mesh's file) is rewritten relative
+    to it, MuJoCo loads the file from there, and the body has the new mass with its inertia scaled."""
+    from alpes_dyn.model.mjcf_update import updated_mjcf
+
+    (tmp_path / "robot" / "assets").mkdir(parents=True)
+    (tmp_path / "robot" / "assets" / "tet.obj").write_text(TET)
+    (tmp_path / "out").mkdir()
+    compiler = '<compiler angle="radian" meshdir="assets"/>' if meshdir else '<compiler angle="radian"/>'
+    src = tmp_path / "robot" / "r.xml"
+    src.write_text(f'<mujoco>{compiler}<asset><mesh name="tet" file="{"" if meshdir else "assets/"}tet.obj"/>'
+                   '</asset><worldbody><body name="a"><joint name="ja" axis="0 1 0" range="-1 1"/>'
+                   '<geom type="mesh" mesh="tet" density="1000"/></body></worldbody></mujoco>')
+    m0 = mujoco.MjModel.from_xml_path(str(src))
+    out = tmp_path / "out" / "r.xml"
+    text = updated_mjcf(src, out, masses={"a": 2 * m0.body_mass[1]}, joints={"ja": {"damping": 0.1}})
+    out.write_text(text)
+    assert ('meshdir="../robot/assets"' if meshdir else 'file="../robot/assets/tet.obj"') in text
+    m = mujoco.MjModel.from_xml_path(str(out))
+    assert m.body_mass[1] == 2 * m0.body_mass[1] and m.dof_damping[0] == 0.1
+    np.testing.assert_allclose(m.body_inertia[1], 2 * m0.body_inertia[1], rtol=1e-12)
+    np.testing.assert_allclose(m.body_ipos[1], m0.body_ipos[1], rtol=0, atol=1e-15)
