@@ -198,3 +198,32 @@ def test_meshes_resolve_from_the_output_folder(tmp_path, meshdir):
     assert m.body_mass[1] == 2 * m0.body_mass[1] and m.dof_damping[0] == 0.1
     np.testing.assert_allclose(m.body_inertia[1], 2 * m0.body_inertia[1], rtol=1e-12)
     np.testing.assert_allclose(m.body_ipos[1], m0.body_ipos[1], rtol=0, atol=1e-15)
+
+
+def test_a_rotor_on_a_spatial_tendon(tmp_path):
+    """A motor's rotor on a spatial tendon (test_ratio_curve's finger): over sites it is the tendon's armature
+    J_m gear^2 and the import of the written file is the identified robot (its rotor J_m back, M(q) to 1e-12, the
+    ratio curve as before to 1e-10, its fit on MuJoCo's tendon Jacobian refitted); over wrapping cylinders MuJoCo allows no tendon armature: refused with MuJoCo's reason,
+    nothing written."""
+    from test_ratio_curve import FINGER, SITES
+
+    for name, text in (("sites", SITES), ("wraps", FINGER)):
+        src = tmp_path / f"{name}.xml"
+        src.write_text(text)
+        model = _import(src)
+        fit = _fake_fit(model, {"J_m_flex": 2e-5, "K_2": 0.05, "m_3": 0.012})
+        out = tmp_path / f"{name}_ident.xml"
+        if name == "wraps":
+            with pytest.raises(ModelError, match="MuJoCo cannot compile the updated MJCF .*geom wrapping not "
+                                                 "supported by tendon armature"):
+                identified_mjcf(fit, model.spec, src, out)
+            continue
+        out.write_text(identified_mjcf(fit, model.spec, src, out)[0])
+        assert mujoco.MjModel.from_xml_path(str(out)).tendon_armature[0] == pytest.approx(2e-5 * 100**2, rel=1e-15)
+        back = _import(out)
+        ident = ad.Model(identified_urdf(fit, model.urdf), identified_spec(fit, model.spec, masses="urdf"))
+        assert back.spec.motors[0].rotor_inertia == pytest.approx(2e-5, rel=1e-15)
+        for j, c in model.spec.motors[0].ratio_curve.items():  # refitted on MuJoCo's ten_J: the same to rounding
+            assert back.spec.motors[0].ratio_curve[j] == pytest.approx(c, rel=0, abs=1e-10)
+        _same_robot(ident, back)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["sites.xml", "sites_ident.xml", "wraps.xml"]
