@@ -249,6 +249,9 @@ def foreign_hands(r: Result) -> list[str]:
                                                                   i["mass_error"].items())
                    + f" (converged {i['converged']}, trustworthy {i['trustworthy']}; goal within 5 %: "
                    f"{_met(i['goal_met'])})")
+        if i.get("mjcf_output"):
+            out.append("the fit written back into the Shadow hand's MJCF (``identify --mjcf``): MuJoCo's compiled masses "
+                       f"and frictions vs the fit's, largest relative difference {i['mjcf_mismatch']:.1g}")
         if "estimate" in f:
             e = f["estimate"]
             out.append(f"EKF on the identified pair: worst joint {e['worst_rmse_deg']:.3f} deg (nominal "

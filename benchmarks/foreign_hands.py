@@ -171,6 +171,30 @@ def _drawn_urdf(model, seed: int) -> tuple[str, dict[str, float]]:
     return identified_urdf(fake, model.urdf), true
 
 
+def _written_back(fit: dict[str, Any], model) -> float | None:
+    """The largest relative difference between the fit's values (a negative one written as 0, as in the spec) and
+    what MuJoCo compiles of the MJCF ``identify --mjcf`` wrote (None where it wrote none): 0 when the Shadow hand's
+    file holds the fit."""
+    import mujoco
+
+    from alpes_dyn.symbolic.parametric import _child_links, parameter_catalogue
+
+    if not fit.get("mjcf_output"):
+        return None
+    m, links, O = mujoco.MjModel.from_xml_path(fit["mjcf_output"]), _child_links(model), mujoco.mjtObj
+    cat, worst = {p.name: p for p in parameter_catalogue(model)}, 0.0
+    for name, par in fit["parameters"].items():
+        p, value = cat[name], max(float(par["value"]), 0.0)
+        if p.kind == "m":
+            got = float(m.body_mass[mujoco.mj_name2id(m, O.mjOBJ_BODY, links[p.joint])])
+        else:
+            j = mujoco.mj_name2id(m, O.mjOBJ_JOINT, p.joint)
+            got = float({"F_s": m.dof_frictionloss, "F_v": m.dof_damping}[p.kind][m.jnt_dofadr[j]] if p.kind != "K"
+                        else m.jnt_stiffness[j])
+        worst = max(worst, abs(got / value - 1) if value > 0 else abs(got))
+    return worst
+
+
 FINGER_SMOOTH_VELOCITY = 0.003
 """v_s (rad/s) of the finger's smooth dry-friction law in its spec (the import writes the spec's default 0.01): the
 plant's dry friction is MuJoCo's stick-slip, which a law sharper than the import's default follows closer. On seed 0
@@ -224,8 +248,9 @@ def finger(d: Path, seed: int, duration: float, smooth_velocity: float = FINGER_
     write_recording(rec, d / "mujoco.csv")
     # --force: an untrustworthy fit is written too (marked so in its header) so that the EKF runs on it; the JSON
     # says whether it was trusted and why not
+    # --mjcf: the fit also written back into the Shadow hand's own MJCF (ident.xml beside ident.toml)
     w, fit = cli("identify", *base, "--data", str(d / "mujoco.csv"), "--parameters", FIT, "-o",
-                 str(d / "ident.toml"), "--force", ok=(0,))
+                 str(d / "ident.toml"), "--force", "--mjcf", str(example_mjcf_path("shadow_hand")), ok=(0,))
     mass_err = {k: fit["parameters"][k]["value"] / v - 1 for k, v in true_m.items() if k in fit["parameters"]}
     mass_std = {k: fit["parameters"][k]["std"] / v for k, v in true_m.items() if k in fit["parameters"]}
     ade = fit.get("adequacy") or {}
@@ -234,7 +259,8 @@ def finger(d: Path, seed: int, duration: float, smooth_velocity: float = FINGER_
                        "reasons": ade.get("reasons"), "likely_missing": ade.get("likely_missing"),
                        "residual_rms": fit.get("residual_rms"), "mass_error": mass_err, "mass_std": mass_std,
                        "friction": {k: v["value"] for k, v in fit["parameters"].items() if k.startswith("F_")},
-                       "urdf_output": fit.get("urdf_output"),
+                       "urdf_output": fit.get("urdf_output"), "mjcf_output": fit.get("mjcf_output"),
+                       "mjcf_mismatch": _written_back(fit, sub),
                        "goal_met": bool(mass_err) and max(abs(e) for e in mass_err.values()) < GOALS["mass_error"]}
     if fit.get("urdf_output"):
         w, ekf = cli("estimate", "--model", fit["urdf_output"], "--spec", str(d / "ident.toml"), "--data",
@@ -414,6 +440,9 @@ def _table(r: dict[str, Any]) -> str:
                   "  masses vs drawn: " + ", ".join(f"{k} {100 * v:+.2f} % (sd {100 * i['mass_std'][k]:.1f} %)"
                                                     for k, v in i["mass_error"].items())
                   + f" (goal within {100 * GOALS['mass_error']:.0f} %: {'met' if i['goal_met'] else 'NOT met'})"]
+        if i.get("mjcf_output"):
+            lines.append(f"  written back into the Shadow hand's MJCF: {i['mjcf_output']} (MuJoCo's compiled masses "
+                         f"and frictions vs the fit's: largest relative difference {i['mjcf_mismatch']:.1g})")
         if not i["trustworthy"]:
             lines.append("  not trusted: " + "; ".join(i["reasons"] or []) + ("; likely missing: "
                                                                            + "; ".join(i["likely_missing"])

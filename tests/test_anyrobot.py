@@ -165,13 +165,30 @@ def test_identified_urdf_is_the_fits_parametrisation(robot):
 
 def test_identify_with_masses_writes_the_urdf_beside_the_spec(robot, recording, capsys):
     """``identify -o m.toml`` with masses in the fit (K, m, friction: one fit, no effects tried) writes m.urdf beside it
-    (the masses, inertias scaled) and m.toml; the pair is the identified robot every command loads."""
+    (the masses, inertias scaled) and m.toml; the pair is the identified robot every command loads. With ``--mjcf``
+    (the finger as an MJCF file, what ``import`` reads back into this URDF + spec) also m.xml: that file with the
+    fitted values, which MuJoCo compiles to them and which imports as the identified robot (to 1e-12)."""
     import xml.etree.ElementTree as ET
 
-    urdf, out = str(robot / "finger.urdf"), robot / "m.toml"
+    import mujoco
+
+    urdf, out, src = str(robot / "finger.urdf"), robot / "m.toml", robot / "finger_mj.xml"
+    assert main(["mjcf", "--model", urdf, "--spec", str(robot / "finger.toml"), "-o", str(src)]) == 0
+    before = src.read_bytes()
     rc, obj = run(capsys, "identify", "--model", urdf, "--spec", str(robot / "finger.toml"), "--data",
-                  str(recording), "--parameters", "K,m,friction", "-o", str(out))
+                  str(recording), "--parameters", "K,m,friction", "-o", str(out), "--mjcf", str(src))
     assert rc == 0 and obj["trustworthy"] and obj["urdf_output"] == str(robot / "m.urdf")
+    assert obj["mjcf_output"] == str(robot / "m.xml") and obj["mjcf_omitted"] == [] and src.read_bytes() == before
+    mj, p = mujoco.MjModel.from_xml_path(str(robot / "m.xml")), obj["parameters"]
+    assert mj.body_mass[-2:].tolist() == [p["m_mcp"]["value"], p["m_pip"]["value"]]  # (after the palm)
+    assert mj.jnt_stiffness.tolist() == [p["K_mcp"]["value"], p["K_pip"]["value"]]
+    assert mj.dof_frictionloss.tolist() == [p["F_s_mcp"]["value"], p["F_s_pip"]["value"]]
+    assert mj.dof_damping.tolist() == [p["F_v_mcp"]["value"], p["F_v_pip"]["value"]]
+    back, ident = ad.Model.from_mjcf(robot / "m.xml"), ad.Model.from_urdf_file(robot / "m.urdf", out)
+    for q in (np.array([0.3, 0.4]), np.array([1.2, 0.1])):
+        assert back.inertia_matrix(q) == pytest.approx(ident.inertia_matrix(q), rel=1e-12, abs=0)
+        assert back.gravity_torque(q) == pytest.approx(ident.gravity_torque(q), rel=1e-12, abs=0)
+        assert back.extras.spring_torque(q) == pytest.approx(ident.extras.spring_torque(q), rel=1e-12, abs=0)
     links = {k.get("name"): k for k in ET.parse(robot / "m.urdf").getroot().iter("link")}
     for j, link, m0, izz in (("mcp", "proximal", 0.028, 5e-6), ("pip", "distal", 0.018, 1.4e-6)):
         m = obj["parameters"][f"m_{j}"]["value"]
@@ -183,9 +200,40 @@ def test_identify_with_masses_writes_the_urdf_beside_the_spec(robot, recording, 
     for argv in (["dynamics"], ["observability", "--input", "motor", "--output", "encoder", "--points", "2"]):
         assert main([argv[0], "--model", str(robot / "m.urdf"), "--spec", str(out), *argv[1:]]) == 0, argv
         capsys.readouterr()
-    assert main(["mjcf", "--model", str(robot / "m.urdf"), "--spec", str(out), "-o", str(robot / "m.xml")]) == 0
-    assert ad.Model.from_mjcf(robot / "m.xml").inertia_matrix(np.array([0.3, 0.4])) == pytest.approx(
+    assert main(["mjcf", "--model", str(robot / "m.urdf"), "--spec", str(out), "-o", str(robot / "m_ex.xml")]) == 0
+    assert ad.Model.from_mjcf(robot / "m_ex.xml").inertia_matrix(np.array([0.3, 0.4])) == pytest.approx(
         ad.Model.from_urdf_file(robot / "m.urdf", out).inertia_matrix(np.array([0.3, 0.4])), rel=1e-12)
+
+
+def test_identify_mjcf_not_trustworthy_writes_nothing_unless_forced(robot, recording, capsys, monkeypatch, tmp_path):
+    """``identify --mjcf`` on a fit that is not trustworthy (made up here: no fit run): exit 3, no file (neither the
+    spec, the URDF nor the MJCF); with --force the MJCF is written, marked NOT TRUSTWORTHY as the spec is."""
+    import alpes_dyn.estimation.identification.identification as ident
+    from alpes_dyn.estimation.identification.fit_result import IdentificationResult
+
+    src = tmp_path / "finger.xml"
+    assert main(["mjcf", "--model", str(robot / "finger.urdf"), "--spec", str(robot / "finger.toml"), "-o",
+                 str(src)]) == 0
+
+    def fake(model, data, names, **kw):
+        n = len(names)
+        return IdentificationResult(tuple(names), np.array([0.05, 0.02]), np.full(n, 1e-4), np.array([0.045, 0.018]),
+                                    ("N m/rad", "kg"), np.eye(n), 3.0, 50, False, 0.0, 0.0, np.zeros((1, 4)),
+                                    np.zeros(1), model, reason="iteration limit")
+
+    monkeypatch.setattr(ident, "identify", fake)
+    out = tmp_path / "u.toml"
+    argv = ["identify", "--model", str(robot / "finger.urdf"), "--spec", str(robot / "finger.toml"), "--data",
+            str(recording), "--parameters", "K_mcp,m_pip", "-o", str(out), "--mjcf", str(src)]
+    assert main(argv) == 3
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "not trustworthy, nothing written" in err
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["finger.xml"]
+    assert main([*argv, "--force"]) == 0
+    assert "UntrustedFitWarning" in capsys.readouterr().err
+    text = (tmp_path / "u.xml").read_text()
+    assert "<!-- NOT TRUSTWORTHY (written with identify's force option): the fit did not converge" in text
+    assert 'stiffness="0.05"' in text and 'mass="0.02"' in text and (tmp_path / "u.urdf").exists() and out.exists()
 
 
 def test_chain_motor_keeps_that_motors_joints(robot):

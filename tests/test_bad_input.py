@@ -219,7 +219,9 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotcounts_toml=("encoder_counts = 4096.5\n" + ROBOT_SPEC).encode(),
                  robotempty_toml=b"# a spec with nothing in it\n", arm_xml=ARM_MJCF.encode(),
                  slide_xml=ARM_MJCF.replace('<joint name="ja" type="hinge"', '<joint name="ja" type="slide"').encode(),
-                 norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n")
+                 norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n",
+                 geomass_xml=ARM_MJCF.replace('<compiler angle="radian"/>', '<compiler angle="radian" inertiafromgeom='
+                                              '"true"/>').replace("<site ", '<geom size="0.01"/><site ').encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
     rows = ["t,encoder_finger,torque_finger,true_q_j1,true_q_j2,true_q_j3"]
     rows += [f"{1e-3 * int(i)!r},{int(i % 7)},{0.02 + 1e-3 * float(np.sin(0.1 * i))!r},0.1,0.2,0.3" for i in k]
@@ -418,6 +420,19 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--model", "{robot_urdf}", "--spec", "{robotident_toml}", "--data", "x.csv",
           needle="identified.stiffness.j9: the spec has no stiffness value"),
         C("identify", "--spec", "{robot_toml}", "--data", "x.csv", needle="--spec: applies to a URDF --model"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--mjcf", "{arm_xml}",
+          needle="--mjcf: the identified MJCF is written beside -o FILE.toml (as FILE.xml); give -o"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/i.toml",
+          "--mjcf", "{robot_toml}", needle="--mjcf: expected the MJCF file the --model was imported from (FILE.xml)"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/i.toml",
+          "--mjcf", "{arm_xml}", needle="--mjcf: the model's joint 'j1' is not a hinge of '{arm_xml}'; not the MJCF "
+          "the model was imported from"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/arm.toml",
+          "--mjcf", "{arm_xml}", needle="-o's MJCF: '{arm_xml}' is the input of --mjcf; refusing to write over it"),
+        C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "-o", "{tmp}/i.toml",
+          "--mjcf", "{tmp}/none.xml", needle="--mjcf: '{tmp}/none.xml' is not a file"),
+        C("identify", "--data", "x.csv", "-o", "{tmp}/i.toml", "--mjcf", "{arm_xml}",
+          needle="--mjcf: applies to a URDF --model imported from that MJCF (alpes-dyn import)"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "x.csv", "--effects", "rotor",
           needle="--effects: rotor applies to the Alpes models"),
         C("identify", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--data", "{robot_toml}", "-o",
@@ -1226,6 +1241,30 @@ def _ident_urdf(names, urdf=None, value=0.05):
     return identified_urdf(res, ROBOT_URDF if urdf is None else urdf)
 
 
+def _ident_mjcf(c, names, value=0.05, base=None):
+    """identified_mjcf of a made-up fit of ``names`` on the one-hinge MJCF (ARM_MJCF) imported, every value
+    ``value``, into a file beside it."""
+    import types
+    import warnings
+
+    from alpes_dyn.estimation.identification.identified_spec import identified_mjcf
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")
+        model = ad.Model.from_mjcf(c.f["arm_xml"])
+    p = len(names)
+    res = types.SimpleNamespace(names=tuple(names), values=np.full(p, value), std=np.full(p, 1e-5),
+                                recording_path=None, model=model, trustworthy=True)
+    return identified_mjcf(res, model.spec if base is None else base, c.f["arm_xml"], c.d / "ident.xml")
+
+
+def _update_mjcf(c, mjcf=None, out=None, **kw):
+    """updated_mjcf of the one-hinge MJCF (or ``mjcf``) into a file beside it (or ``out``)."""
+    from alpes_dyn.model.mjcf_update import updated_mjcf
+
+    return updated_mjcf(c.f["arm_xml"] if mjcf is None else mjcf, c.d / "o.xml" if out is None else out, **kw)
+
+
 def _ident_spec(names, base=None, masses="refuse"):
     """identified_spec of a made-up fit of ``names`` on the URDF robot (no fit run: the refusals come first)."""
     from alpes_dyn.estimation.identification.identification import IdentificationResult
@@ -1776,6 +1815,27 @@ API: list[Api] = [
       "identified urdf: m_2 = nan kg is not a positive mass; not written"),
     A("identified_spec", lambda c: _ident_spec(("K_1",), base=TransmissionSpec.from_toml(
         ROBOT_SPEC.replace('"flexor"', '"tendon"'))), ModelError, "base: the spec's motors tendon do not hold the fitted"),
+    A("identified_mjcf", lambda c: _ident_mjcf(c, ("m_ja",), value=-0.1), ModelError,
+      "identified mjcf: m_ja = -0.1 kg is not a positive mass; not written"),
+    A("identified_mjcf", lambda c: _ident_mjcf(c, ("K_ja",), base="x"), ModelError,
+      "base: expected a TransmissionSpec, got str"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, masses={"b": 0.1}), ModelError, "mjcf: no body 'b' in the MJCF"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, masses={"a": float("inf")}), ModelError,
+      "masses: a: inf kg is not a positive mass"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, joints={"ja": {"spring": 1.0}}), ModelError,
+      "joints: ja: unknown attribute 'spring'"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, joints={"ja": {"damping": -1.0}}), ModelError,
+      "joints: ja: damping = -1.0 is not a finite value"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, joints={"jz": {"damping": 1.0}}), ModelError,
+      "mjcf: no joint 'jz' in the MJCF"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, rotors={"m": float("nan")}), ModelError,
+      "rotors: m: nan kg m^2 is not a rotor inertia"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, out=c.d / "none" / "o.xml"), ModelError,
+      "out: the folder of '{tmp}/none/o.xml' is not a directory"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, mjcf=c.f["notxml_xml"]), ModelError, "mjcf: MuJoCo cannot compile it"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, mjcf=c.d / "none.xml"), ModelError, "is not a file"),
+    A("updated_mjcf", lambda c: _update_mjcf(c, mjcf=c.f["geomass_xml"], masses={"a": 0.1}), ModelError,
+      '<compiler inertiafromgeom="true">: MuJoCo takes every mass from the geoms'),
     # state space, observability
     A("StateSpace", lambda c: ad.StateSpace(c.m, output=lambda q, xp: "abc"), ModelError,
       "output function: returned str 'abc'"),

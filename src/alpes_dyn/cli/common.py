@@ -194,7 +194,7 @@ _INPUT_OPTIONS = (("params", "--params"), ("spec", "--spec"), ("true_spec", "--t
                   ("true_model", "--true-model"), ("data", "--data"),
                   ("validate", "--validate"),
                   ("true_params", "--true-params"), ("observer_params", "--observer-params"),
-                  ("plant_params", "--plant-params"))
+                  ("plant_params", "--plant-params"), ("mjcf", "--mjcf"))
 
 
 _OUTPUT_OPTIONS = (("output", "-o"), ("true_params_out", "--true-params-out"), ("log", "--log"), ("plot", "--plot"))
@@ -204,7 +204,7 @@ def _check_run_files(args: argparse.Namespace, extensions: dict[str, Sequence[st
                      more: Sequence[tuple[str, str]] = ()) -> None:
     """The output policy (:func:`alpes_dyn.fileio.check_outputs`) of the command in ``args``, before any work:
     every output it writes (-o, --true-params-out, --log, --plot) checked against every file it reads
-    (--params, --spec, --data, --true-params, --observer-params, --plant-params, a URDF or MJCF --model) and
+    (--params, --spec, --data, --true-params, --observer-params, --plant-params, --mjcf, a URDF or MJCF --model) and
     the others; ``more``: (what, path) of the other files it writes (identify's URDF beside -o)."""
     inputs = [(flag, f) for dest, flag in _INPUT_OPTIONS for f in _files(getattr(args, dest, None))]
     model = getattr(args, "model", None)

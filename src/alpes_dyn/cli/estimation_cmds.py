@@ -16,7 +16,8 @@ import numpy as np
 from ..errors import InputError, ModelError
 from ..estimation.experiments.excursion import SmallExcursionWarning, excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
-from .fitting import _fit, _identify_lines, _mass_urdf_path, _write_robot
+from .fitting import (_check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_applies, _write_robot,
+                      _written_lines)
 from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _excursion_lines,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      data_label, parse_vector, read_data)
@@ -276,9 +277,9 @@ def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
     from ..estimation.experiments.experiment import EXPERIMENT_MODELS
-    from ..estimation.identification.identified_spec import spec_misfits
 
     urdf = _is_urdf_path(args.model)
+    _mjcf_applies(args, urdf)
     if args.model == "hand":  # every chain from one recording of the six motors
         from .hand_cmds import identify_hand
 
@@ -294,9 +295,13 @@ def cmd_identify(args: argparse.Namespace) -> int:
     res, model = fit.result, fit.result.model
     res.recording_path = data_label(args)  # the identified file's header names the recording(s) read
     written = args.output is not None and (res.trustworthy or args.force)
+    omitted: list[str] = []  # what the MJCF beside -o cannot hold (--mjcf)
     if written:  # a URDF robot's into a copy of its whole spec (the stick-slip law's smooth_velocity kept, as in a
         # file; with --chain the chain's values replaced, the other motors' and joints' as they were)
-        res.write(args.output) if not urdf else _write_robot(res, args)
+        if urdf:
+            omitted = _write_robot(res, args)
+        else:
+            res.write(args.output)
     obj = res.to_dict()
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
@@ -341,11 +346,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
             v = a.validation
             lines.append(f"  validation on {args.validate}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
                          f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
-    obj["urdf_output"] = _mass_urdf_path(args.output) if written and urdf and spec_misfits(model, res.names) else None
-    if written:
-        u = obj["urdf_output"]
-        lines.append(f"  written to {args.output}" + (f" and {u} (the masses; use --model {u} --spec {args.output})"
-                                                     if u else "") + ("" if res.trustworthy else " (marked NOT trustworthy)"))
+    lines += _written_lines(obj, args, res, urdf and written, written, omitted)
     _emit(obj, "\n".join(lines), args.json)
     if not res.trustworthy:
         why = res.status()
@@ -386,6 +387,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
 
     _refuse_for_urdf(args, _URDF_IDENTIFY)
     whole = _urdf_robot(args, "identification")
+    _check_mjcf_option(args, whole)  # the MJCF written beside -o: the model's origin, checked before the fit
     model = _chain_model(whole, args.chain)
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))

@@ -393,12 +393,11 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                               "Exit codes: 0 written (or --force), 2 bad input, 3 the fit did not converge or the "
                               "model is not adequate to the recording (residual coloured, correlated with the "
                               "torque, above the sensor floor, or a poor --validate fit): nothing written")
-    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, hand (every chain from one recording "
-                   "of the six motors, one file; --chain NAME: that chain only), or a URDF path (with --spec) "
-                   "(default %(default)s)")
-    s.add_argument("--spec", default=None, metavar="FILE.toml",
-                   help="a URDF --model's transmission spec: the values to start from, and the base of the written "
-                        "spec (-o: the identified values, their standard errors in [identified])")
+    s.add_argument("--model", default="finger3", help="finger2, finger3, thumb, hand (every chain from one "
+                   "recording of the six motors, one file; --chain NAME: that chain only), or a URDF path (with "
+                   "--spec) (default %(default)s)")
+    s.add_argument("--spec", default=None, metavar="FILE.toml", help="a URDF --model's spec: the values to start "
+                   "from and the base of -o's spec (the identified values, their standard errors in [identified])")
     s.add_argument("--chain", default=None, metavar="FINGER|MOTOR",
                    help="a finger model as that finger of the hand: starts from its own values and writes the fit "
                         "into its [finger.<name>] table (the thumb's go to [thumb]); on a URDF --model a motor's "
@@ -452,12 +451,13 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--encoder-noise", type=_strict_float, default=None, metavar="COUNTS",
                    help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
                         "adequacy check (default: estimated from the recording)")
-    s.add_argument("--force", action="store_true",
-                   help="write -o even when the fit did not converge or the model is not adequate (the file is "
-                        "marked not trustworthy); without it such a fit writes nothing and exits with code 3")
-    s.add_argument("-o", "--output", default=None, metavar="FILE.toml",
-                   help="write the identified parameter file (a URDF --model: its identified spec; a spec holds no "
-                        "masses: fit without m to write one)")
+    s.add_argument("--force", action="store_true", help="write -o even when the fit did not converge or the model is "
+                   "not adequate (marked not trustworthy); without it such a fit writes nothing and exits with code 3")
+    s.add_argument("-o", "--output", default=None, metavar="FILE.toml", help="write the identified parameter file "
+                   "(a URDF --model: its identified spec, and where the fit has masses the URDF with them, FILE.urdf)")
+    s.add_argument("--mjcf", default=None, metavar="ROBOT.xml", help="a URDF --model imported from this MJCF "
+                   "(alpes-dyn import): with -o FILE.toml also write FILE.xml, the MJCF with the identified masses "
+                   "(inertias scaled), joint stiffness, damping, frictionloss and rotors, everything else as written")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_identify)
 

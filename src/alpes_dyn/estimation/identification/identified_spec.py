@@ -15,7 +15,12 @@ FILE.toml -o ident.toml``), which every command reads back (``--spec ident.toml`
   inertia tensor scaled by the same ratio, its centre of mass kept (the fit's own parametrisation, the link's
   spatial inertia times m / m0, :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`), so that the pair
   ``--model ident.urdf --spec ident.toml`` is the identified robot; ``input_gain``, the encoder offsets and the tilt
-  angles are of the recording and its sensors, not of the robot: they stay in the result.
+  angles are of the recording and its sensors, not of the robot: they stay in the result;
+* a robot imported from an MJCF (``alpes-dyn import``) gets that MJCF back with the fitted values written in
+  (:func:`identified_mjcf`, ``identify ... --mjcf ROBOT.xml -o ident.toml`` writes ``ident.xml``): the masses as
+  :func:`identified_urdf` writes them, the springs, frictions and rotors where the import read them
+  (:mod:`alpes_dyn.model.mjcf_update`), everything else as written; a tendon compliance (the encoder's reading of
+  the cable's stretch, a sensor law MuJoCo's rigid tendon cannot hold) stays in the spec, said in the file.
 """
 
 from __future__ import annotations
@@ -32,7 +37,7 @@ from ...model.spec import Motor, TransmissionSpec
 from ...symbolic.parametric import parameter_catalogue
 from .fit_result import _printable, _record  # the same record as a parameter file's [identification.<chain>]
 
-__all__ = ["identified_spec", "identified_urdf", "write_identified_spec", "spec_misfits"]
+__all__ = ["identified_spec", "identified_urdf", "identified_mjcf", "write_identified_spec", "spec_misfits"]
 
 _TABLE = {"K": "stiffness", "F_s": "coulomb", "F_v": "viscous"}
 _MOTOR_FIELD = {"J_m": "rotor_inertia", "tendon_compliance": "tendon_compliance"}
@@ -146,3 +151,74 @@ def identified_urdf(result: Any, urdf: str) -> str:
         why = _printable(result.status()).replace("--", "- -")
         head += f"<!-- NOT TRUSTWORTHY (written with identify's force option): {why} -->\n"
     return '<?xml version="1.0"?>\n' + head + ET.tostring(root, encoding="unicode") + "\n"
+
+
+_MJCF_JOINT = {"K": "stiffness", "F_s": "frictionloss", "F_v": "damping"}
+
+
+def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: str | Path) -> tuple[str, list[str]]:
+    """The text of the MJCF file ``mjcf`` that the fitted robot was imported from (``alpes-dyn import``;
+    :mod:`alpes_dyn.model.mjcf_import`), with the values of ``result`` (a fit on the imported URDF + ``base``, or on
+    a sub-model of it) written in for the file to be saved at ``out``
+    (:func:`~alpes_dyn.model.mjcf_update.updated_mjcf`): ``m_<joint>`` as the joint's child body's mass (its
+    inertia times m / m0, as :func:`identified_urdf`), ``K_<joint>`` as the joint's ``stiffness`` (and its
+    ``springref``, where MuJoCo's differs, set to the spec's rest angle), ``F_s_<joint>`` as ``frictionloss``,
+    ``F_v_<joint>`` as ``damping``, ``J_m_<motor>`` as the rotor of the motor's actuator; an XML comment before
+    ``<mujoco>`` with the values and standard errors (and, for a fit not trustworthy, written with ``--force``,
+    a second one saying so). Returns (text, the fitted parameters the MJCF cannot hold: ``tendon_compliance_<motor>``,
+    named in the comment). :class:`~alpes_dyn.ModelError` if a fitted mass's body has not the URDF's mass in the
+    MJCF (not the file the robot was imported from) or for what ``updated_mjcf`` refuses."""
+    from ...model.mjcf_import import _compile, _mj, _name
+    from ...model.mjcf_update import updated_mjcf
+    from ...symbolic.parametric import _child_links
+
+    if not isinstance(base, TransmissionSpec):
+        raise ModelError(f"base: expected a TransmissionSpec, got {type(base).__name__}")
+    mujoco = _mj()
+    m = _compile(mjcf)
+    O = mujoco.mjtObj
+    bodies = {_name(mujoco, m, O.mjOBJ_BODY, b, "body"): b for b in range(1, m.nbody)}  # the import's names
+    hinges = {_name(mujoco, m, O.mjOBJ_JOINT, j, "joint"): j for j in range(m.njnt)}
+    cat = {p.name: p for p in parameter_catalogue(result.model)}
+    links = _child_links(result.model)
+    masses: dict[str, float] = {}
+    joints: dict[str, dict[str, float]] = {}
+    rotors: dict[str, float] = {}
+    notes, omitted = [], []
+    for name, value, sd in zip(result.names, result.values, result.std):
+        p = cat.get(name)
+        if p is None or p.kind in _OF_THE_RECORDING:
+            continue
+        v = float(value)
+        if p.kind == "tendon_compliance":
+            omitted.append(name)
+            notes.append(f"{name} {v:.6g} {p.unit} NOT in this file (a sensor law MuJoCo's rigid tendon cannot hold; "
+                         "in the spec)")
+            continue
+        if p.kind == "m":
+            body = links[p.joint]
+            b = bodies.get(body, -1)
+            if b < 0 or not math.isclose(float(m.body_mass[b]), p.nominal, rel_tol=1e-9):
+                was = "none" if b < 0 else f"{float(m.body_mass[b]):.6g} kg"
+                raise ModelError(f"mjcf: body {body!r} (of {name}): {was} in the MJCF, {p.nominal:.6g} kg in the "
+                                 "model's URDF; not the MJCF the model was imported from")
+            if not (math.isfinite(v) and v > 0):
+                raise ModelError(f"identified mjcf: {name} = {v!r} kg is not a positive mass; not written")
+            masses[body] = v
+        elif p.kind in _MJCF_JOINT:
+            v = max(v, 0.0)
+            joints.setdefault(p.joint, {})[_MJCF_JOINT[p.kind]] = v
+            j = hinges.get(p.joint, -1)
+            rest = float(base.rest_angle.get(p.joint, 0.0))
+            if p.kind == "K" and j >= 0 and float(m.qpos_spring[m.jnt_qposadr[j]]) != rest:
+                joints[p.joint]["springref"] = rest
+        elif p.kind == "J_m":
+            v = rotors[p.motor] = max(v, 0.0)
+        else:
+            raise ModelError(f"identified mjcf: {name!r} has no place in an MJCF file")
+        notes.append(f"{name} {v:.6g} {p.unit} (was {p.nominal:.6g}, standard error {float(sd):.3g})")
+    said = (f"identified by alpes_dyn from {_printable(result.recording_path) or 'a recording'} (model "
+            f"{_printable(result.model.name)}): {'; '.join(notes)}")
+    lines = [said] + ([] if result.trustworthy else [
+        f"NOT TRUSTWORTHY (written with identify's force option): {_printable(result.status())}"])
+    return updated_mjcf(mjcf, out, masses=masses, joints=joints, rotors=rotors, note=lines), omitted
