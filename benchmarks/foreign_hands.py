@@ -14,19 +14,23 @@ Three parts on the Shadow hand (and a fourth, ``held``: the whole hand with its 
 3. the first finger of the hand with the wrist held (``Model.from_mjcf(..., hold=["rh_WRJ2", "rh_WRJ1"])``, ``import
    --hold``: the two wrist joints welded, their servos dropped; on a fixed palm the other branches cannot change its
    joints' dynamics), written as its own URDF + spec (:meth:`Model.subtree <alpes_dyn.Model.subtree>` of its three
-   motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1; 4 joints). Its link masses drawn x (1 + U(-15 %, +15 %))
-   (``--seed``) as ``true.urdf``; ``experiment`` on the nominal finger (our simulator: its torque only is used), that
-   torque replayed on MuJoCo stepping ``alpes-dyn mjcf --model true.urdf``
-   (:func:`~alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms, MuJoCo's stick-slip ``frictionloss``) as
-   ``mujoco.csv``, started where the experiment started; ``identify --parameters FIT -o ident.toml`` on it (the masses
-   written as ``ident.urdf``; ``--force``: written even if not trusted, the JSON says): each mass against the drawn one
-   (goal: within 5 %; ``FIT``: the flexion joints' masses and friction); ``estimate --model ident.urdf --spec ident.toml
-   --data mujoco.csv``: the EKF's RMSE after 1 s, worst joint (goal < 0.5 deg; beside it the nominal finger's and the
-   true finger's: what the observer does with a perfect model); ``identifiability`` of the same selection (structural
-   rank, the masses' Cramer-Rao relative standard deviations on the documented experiment) and ``codegen`` on the
-   finger. Also reported: each joint's swing in MuJoCo (its ``frictionloss`` is stick-slip: a joint the experiment
-   barely moves says little of its mass), and ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or its one-line
-   refusal.
+   motors: FFJ4, FFJ3, the tendon FFJ0 over J2 + J1; 4 joints), its spec's smooth dry-friction velocity v_s set to
+   3 mrad/s (:data:`FINGER_SMOOTH_VELOCITY`; the import's default 10 mrad/s follows MuJoCo's stick-slip less
+   closely). Its link masses drawn x (1 + U(-15 %, +15 %)) (``--seed``) as ``true.urdf``; ``experiment
+   --true-model true.urdf --amplitude 1 --duration --finger-duration`` (our simulator, the bias trimmed on the drawn
+   finger as the bench's slow loop does; its torque only is used), that torque replayed on MuJoCo stepping
+   ``alpes-dyn mjcf --model true.urdf --stiction`` (:func:`~alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms,
+   MuJoCo's ``frictionloss`` a real stick-slip, solreffriction 0.5 ms: MuJoCo's 20 ms default lets this light finger
+   slide below F_s) as ``mujoco.csv``, started where the experiment started; ``identify --parameters FIT -o
+   ident.toml --mjcf`` on it (the masses written as ``ident.urdf`` and into the Shadow hand's MJCF as ``ident.xml``;
+   ``--force``: written even if not trusted, the JSON says why): each mass against the drawn one (goal: within 5 %;
+   ``FIT``: the flexion joints' masses and friction), with its standard error; ``estimate --model ident.urdf --spec
+   ident.toml --data mujoco.csv``: the EKF's RMSE after 1 s, worst joint (goal < 0.5 deg; beside it the nominal
+   finger's and the true finger's: what the observer does with a perfect model); ``identifiability`` of the same
+   selection over the same length (structural rank, the masses' Cramer-Rao relative standard deviations) and
+   ``codegen`` on the finger. Also reported: each joint's swing in MuJoCo, the largest difference between MuJoCo's
+   joints and our simulator's under the same torque, and ``control --frame rh_ffdistal --motor rh_A_FFJ0``'s result or
+   its one-line refusal.
 
 4. ``spatial`` (part 2 of the issue): the 3-joint finger of ``tests/test_ratio_curve.py`` whose flexor runs over
    sites, a cylinder off one joint's axis and one on another's (MJCF written by that test): ``import`` (its moment
@@ -40,7 +44,8 @@ Every command's wall time is a first run as a new process: imports, and compiles
 (:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
 Prints a table, or one JSON object with ``--json``; ``uptime`` before and after.
 
-    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--spatial-duration 8]
+    python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--finger-duration 32]
+                                       [--spatial-duration 8]
                                        [--skip held,finger,spatial] [--cold]
 """
 
