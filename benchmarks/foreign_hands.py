@@ -160,6 +160,12 @@ def held_hand(d: Path, seed: int, duration: float) -> dict[str, Any]:
                        "values": {k: v["value"] for k, v in fit.get("parameters", {}).items()}}
     w, ekf = cli("estimate", *base, "--data", str(d / "rec.csv"), "--chain", "rh_A_FFJ0")
     out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(max(np.degrees(ekf["rmse"])))}
+    # the whole held hand's observer as C (44 states, 18 motors): generated, not compiled here (gcc -O1 on it ran
+    # over 4 min and 5.9 GB before it was stopped, 2026-12-05)
+    w, cg = cli("codegen", *base, "-o", str(d / "hand_c"))
+    c_file = d / "hand_c" / "alpes_ekf.c"
+    out["codegen"] = {"wall_s": w, "states": cg.get("nz"), "c_bytes": c_file.stat().st_size,
+                      "c_lines": c_file.read_text().count("\n")}
     return out
 
 
@@ -428,6 +434,10 @@ def _table(r: dict[str, Any]) -> str:
                      f"rh_A_FFJ0 {hh['identify']['wall_s']:.1f} s (converged {hh['identify']['converged']}), estimate "
                      f"--chain rh_A_FFJ0 {hh['estimate']['wall_s']:.1f} s (worst joint "
                      f"{hh['estimate']['worst_rmse_deg']:.3f} deg on our simulator's recording)")
+        if "codegen" in hh:
+            c = hh["codegen"]
+            lines.append(f"  codegen of the held hand's EKF ({c['states']} states) {c['wall_s']:.1f} s: "
+                         f"{c['c_bytes'] / 1e6:.1f} MB of C, {c['c_lines']} lines (not compiled here)")
     f = r.get("finger")
     if f:
         i = f["identify"]
