@@ -39,7 +39,8 @@ from .common import (_ALPES_ONLY, _INPUT_OPTIONS, _NUMLIST, _OUTPUT_OPTIONS, VEC
 from .control_cmds import (_check_control_outputs, _control_hand, _na, _output_lines,  # noqa: F401
                            _write_control_outputs, cmd_control)
 from .estimation_cmds import (_SCENARIO_ONLY, THUMB_PARAMETERS, _estimate_data, cmd_estimate,  # noqa: F401
-                              cmd_experiment, cmd_identify)
+                              cmd_identify)
+from .experiment_cmds import cmd_experiment  # noqa: F401
 from .model_cmds import cmd_dynamics, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf, dynamics_crosscheck  # noqa: F401
 from .parser import (_POINTS, _SEED, DESCRIPTION, OUTPUT_HELP, _int_at_least, _outputs, _Parser,  # noqa: F401
                      _positive_seconds)

@@ -14,7 +14,8 @@ from ..limits import MAX_POINTS, MAX_SEED
 from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import _UsageError, _strict_int
 from .control_cmds import cmd_control
-from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_experiment, cmd_identify
+from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
+from .experiment_cmds import cmd_experiment
 from .model_cmds import cmd_dynamics, cmd_import, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
 from .study_cmds import cmd_sweep
 
@@ -172,9 +173,8 @@ def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--palm-down", action="store_true", help="Alpes models: gravity reversed: the hand turned over "
                    "(control scene)")
     s.add_argument("--stiction", type=_strict_float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
-                   help="stick-slip dry friction: frictionloss F_s with solreffriction of this time constant "
-                        "(default %(const)g s when given without a value; MuJoCo's own 0.02 s is soft on a light "
-                        "finger); a URDF model: on every joint its --spec gives Coulomb friction")
+                   help="stick-slip dry friction: solreffriction of this time constant (default %(const)g s; "
+                        "MuJoCo's 0.02 s is soft on a light finger) on every joint with Coulomb friction")
     s.add_argument("--tendon-stiffness", type=_strict_float, default=None, metavar="N_PER_M",
                    help="Alpes models: series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
     s.add_argument("--tendon-damping", type=_strict_float, default=0.0, metavar="N_S_PER_M",
@@ -352,10 +352,8 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                         "one, unless --true-spec)")
     s.add_argument("--true-spec", default=None, metavar="TRUE.toml",
                    help="a URDF --model: the spec of the simulated (true) robot, e.g. with other springs")
-    s.add_argument("--true-model", default=None, metavar="TRUE.urdf",
-                   help="a URDF --model: the URDF of the simulated (true) robot, e.g. with other masses (the same "
-                        "joints; its spec --true-spec, else --spec); the bias is trimmed on it as the bench's slow "
-                        "loop does on the real robot")
+    s.add_argument("--true-model", default=None, metavar="TRUE.urdf", help="a URDF --model: the simulated (true) "
+                   "robot's URDF, e.g. other masses (spec: --true-spec, else --spec); the bias is trimmed on it")
     s.add_argument("--chain", default=None, metavar="FINGER",
                    help="Alpes models: a finger model as that finger of the hand (index, middle, ...: its own [finger.<name>] "
                         "values in --params)")
@@ -369,18 +367,13 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                    "there")
     s.add_argument("--duration", type=_strict_float, default=4.0, help="experiment length, s (default %(default)s)")
     s.add_argument("--amplitude", type=_strict_float, default=0.5, metavar="FRACTION",
-                   help="the multisine's amplitude as a fraction in (0, 1] of the largest that keeps the nominal "
-                        "robot in its range (default %(default)s: room for a true robot unlike the nominal one); 1 "
-                        "on a robot whose friction hides its masses (a springless finger: its largest is 4 x the "
-                        "joints' breakaway torque)")
+                   help="the multisine's amplitude, a fraction in (0, 1] of the largest keeping the nominal robot "
+                        "in range (default %(default)s); 1 where friction hides the masses")
     s.add_argument("--rig", choices=("auto", "level", "hanging", "both"), default="auto",
-                   help="the hand's orientation during the experiment (an Alpes model): auto (default): palm up as "
-                        "the file's gravity unless the finger leaves its range there (folds onto a stop, or swings "
-                        "past one), then hung fingers down, the excitation scaled down where even that leaves it; "
-                        "level: palm up; hanging: fingers down (the recording gets gravity columns); both (one "
-                        "finger): the first half palm up, the second hung fingers down, each its own run of the "
-                        "excitation (gravity columns; the masses' split pinned, identify fits each run on its own "
-                        "lines). Each checks the whole record before it is written and says what it chose")
+                   help="an Alpes hand's orientation: auto (default): palm up unless the finger leaves its range "
+                        "there, then hung fingers down, scaled down where even that leaves it; level: palm up; "
+                        "hanging: fingers down; both (one finger): half palm up, half hung, each its own run (the "
+                        "masses' split pinned). Each checks the whole record first and says what it chose")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
     s.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="the recording to write")
     s.add_argument("--json", action="store_true", help="print one JSON object")
@@ -399,11 +392,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--spec", default=None, metavar="FILE.toml", help="a URDF --model's spec: the values to start "
                    "from and the base of -o's spec (the identified values, their standard errors in [identified])")
     s.add_argument("--chain", default=None, metavar="FINGER|MOTOR",
-                   help="a finger model as that finger of the hand: starts from its own values and writes the fit "
-                        "into its [finger.<name>] table (the thumb's go to [thumb]); on a URDF --model a motor's "
-                        "name: fit only the parameters of the joints it drives (and its own), on the sub-model of "
-                        "its branches from the base (the recording's columns of the other motors and joints are "
-                        "ignored; -o writes the whole robot's spec with the chain's values replaced)")
+                   help="a finger model as that finger of the hand (its own values, the fit into [finger.<name>]; "
+                        "the thumb's [thumb]); a URDF --model: a motor, fit only its joints' parameters (and its "
+                        "own) on its branches' sub-model (-o: the whole spec with the chain's values replaced)")
     s.add_argument("--data", required=True, nargs="+", metavar="FILE.csv",
                    help="the recording (documented CSV format); with a 'run' column, or several files (each a run "
                         "of its own), several runs fitted together, each from its own initial state, the parameters "
