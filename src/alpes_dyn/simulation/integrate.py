@@ -135,7 +135,7 @@ def _rhs_function(ss: StateSpace, stops: JointStops | None = None) -> cs.Functio
     w = cs.SX.sym("w", _n_known_inputs(ss))
     n = ss.n
     q, v = ss.x[:n], ss.x[n:]
-    tau = ss.input_torque(q, w[: ss.n_inputs])
+    tau = ss.input_torque(q, w[: ss.n_inputs], v)
     if stops is not None:
         tau = tau + stops.torque(q, v, cs)
     qdd = joint_accelerations(ss, q, v, tau, w[ss.n_inputs:] if ss.force else None)

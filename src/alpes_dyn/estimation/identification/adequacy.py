@@ -27,8 +27,8 @@ the model's reading S q on the fit's multiple-shooting trajectory, one column pe
   per encoder and NRMSE = ||y - yhat|| / ||y - mean y|| on a recording the fit did not see.
 * **Signatures** (:func:`signatures`): the share of the residual explained by each known missing
   effect, measured as the encoder's response to that effect through the fitted model (a motor torque
-  following the sign of the motor velocity: dry friction; the velocity: viscous friction; the
-  acceleration: a rotor's inertia on the tendon; an encoder reading ahead by the torque: an elastic
+  following the sign of the motor velocity: dry friction; the tension times that sign: the tendon's sheath
+  friction (capstan); the velocity: viscous friction; the acceleration: a rotor's inertia on the tendon; an encoder reading ahead by the torque: an elastic
   tendon; a constant: an offset), in one joint regression (partial R^2).
 
 The verdict (:func:`assess`, :class:`Adequacy`) is *not adequate* when the residual is coloured or
@@ -47,6 +47,7 @@ import numpy as np
 
 from ...errors import AlpesDynWarning, InputError
 from ...model.ratio_curve import encoder_angles, encoder_rates, encoder_sensitivity
+from ...model.transmission import capstan_velocity
 from .harmonics import NONLINEARITY, harmonic_ratio
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
@@ -104,6 +105,8 @@ def range_exit(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, names: Seque
 
 SIGNATURES: dict[str, str] = {
     "sign_velocity": "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)",
+    "tension_sign_velocity": "tendon-sheath friction, growing with the tension (a torque following |tau_m| times "
+                             "the sign of the motor velocity: the capstan; --effects capstan)",
     "velocity": "viscous friction (a torque following the motor velocity)",
     "acceleration": "rotor inertia (a torque following the motor acceleration; or a wrong inertia)",
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
@@ -551,8 +554,9 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
                corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
                step: float, dt: float, chunk_doubles: int = 2**20) -> dict[str, np.ndarray]:
     """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
-    fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
-    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon) and the torque's own forward
+    fitted node) to a motor torque following the sign of the motor velocity, the tension |tau_m| times that sign,
+    the velocity, the acceleration (dry friction, the tendon's sheath friction growing with the tension, viscous
+    friction, a rotor's inertia on the tendon) and the torque's own forward
     difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
     torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite
     differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
@@ -561,11 +565,22 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     vm = encoder_rates(S, x_fit[:, :n], x_fit[:, n:])  # (N+1, m) motor velocity, rad/s
     held = Ub.reshape(B * L, -1)[: N1 - 1]  # (N, nu) the torque held over each period, as the fit takes it
     rate = np.diff(held, axis=0, append=held[-1:])
-    sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
-            "acceleration": np.gradient(vm, dt, axis=0), "torque_rate": np.concatenate([rate, rate[-1:]])}
+    sign = np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12))
+    # the sheath friction's share that the tension's changes make (|tau_m| less its mean, times the sign): its mean's
+    # share is the dry friction's, which the first regressor holds (with a biased torque the two were one direction)
+    # (its sign smoothed as the model's capstan law smooths it, capstan_torque: the response of a missing capstan)
+    tension = np.abs(np.concatenate([held, held[-1:]]))  # (N+1, m): the motors' torques, as the sheaths see them
+    tension = tension - tension.mean(axis=0)
+    tr = getattr(sens.model, "transmission", None)
+    sheath = (tension * np.tanh(vm / capstan_velocity(tr.S, sens.model.extras.smooth_velocity))
+              if tr is not None and tension.shape == vm.shape else None)
+    sigs = {"sign_velocity": sign, "tension_sign_velocity": sheath,
+            "velocity": vm, "acceleration": np.gradient(vm, dt, axis=0),
+            "torque_rate": np.concatenate([rate, rate[-1:]])}
+    sigs = {k: g for k, g in sigs.items() if g is not None}  # joint torques (no motors): no tension to weigh
     eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
     pert = []
-    for g in sigs.values():  # a loop over the four effects
+    for g in sigs.values():  # a loop over the five effects
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))
