@@ -435,7 +435,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
 
     e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
     regressors: name -> (N, m) the encoder's responses to candidate missing effects (keys of
-    :data:`SIGNATURES`, see :func:`signatures`). validation: a held-out recording's :class:`Validation`.
+    :data:`SIGNATURES`, see :func:`signatures`; the tendon-sheath friction's ``tension_sign_velocity`` is judged in
+    the regression with the others, and theirs without it: it did not change what they name, e.g. a rotor's, whose
+    acceleration lost a third of its share to it on finger3). validation: a held-out recording's :class:`Validation`.
     thresholds: overrides of :data:`THRESHOLDS`. velocity: (N, m) the fitted motor velocity, rad/s:
     the residual at its reversals (:func:`reversal_ratio`) names stick-slip friction first when above
     ``reversal_ratio``. range_exit: where the fitted joints leave their range, which and how far (the caller's
@@ -478,7 +480,10 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
     drift = (regs := dict(regressors or {})).pop("drift", None)  # a ramp, judged alone (it takes others' shares)
+    sheath = regs.pop("tension_sign_velocity", None)  # its share in the regression with the others, theirs without it
     sig = {**signatures(e, regs), **({"drift": signatures(e, {"drift": drift})["drift"]} if drift is not None else {})}
+    if sheath is not None:
+        sig["tension_sign_velocity"] = signatures(e, {**regs, "tension_sign_velocity": sheath})["tension_sign_velocity"]
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
     if lines is not None and len(lines) and dt is not None:
