@@ -193,6 +193,10 @@ def bad_files(d: Path) -> dict[str, str]:
                                                  'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["cable_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = 3.0, '
                                             'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
+    files["capstan_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ncapstan = { value = nan, '
+                                              'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
+    files["negative_capstan_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ncapstan = { value = -0.2, '
+                                                       'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     # physical ranges (issue 19): an angle, a ratio, gravity of 1e300, a subnormal spring, an axis of 1e300
     files["angle_toml"] = _toml_field("finger.upper", '{ value = 1e300, unit = "rad", source = "report" }')
@@ -209,6 +213,10 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
+                 robotcapstan_toml=ROBOT_SPEC.replace("joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n",
+                                                      "joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\ncapstan = -0.3\n",
+                                                      1).encode(),
+                 robotcapstanid_toml=(ROBOT_SPEC + "\n[identified.capstan]\nextensor = 0.01\n").encode(),
                  robotstops_toml=(ROBOT_SPEC + "\n[stops]\nstiffness = -2.0\n").encode(),
                  robotstopj_toml=(ROBOT_SPEC + "\n[stops.joints]\nj9 = { stiffness = 2.0 }\n").encode(),
                  robotctl_toml=ROBOT_CONTROL_SPEC.encode(), branches_urdf=BRANCHES_URDF.encode(),
@@ -307,6 +315,10 @@ CLI: dict[str, list[Cli]] = {
           "{tmp}/r.csv", needle="identified.stiffness.j9: the spec has no stiffness value for joint 'j9'"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotstd_toml}", "-o",
           "{tmp}/r.csv", needle="identified.viscous.j1: expected a standard error >= 0"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robotcapstan_toml}", "-o", "{tmp}/r.csv",
+          needle="motor 'flexor'.capstan: expected a number >= 0, got -0.3"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotcapstanid_toml}",
+          "-o", "{tmp}/r.csv", needle="identified.capstan.extensor: unknown motor 'extensor' (motors: flexor)"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{robot_toml}",
           needle="-o: '{robot_toml}' is the input of --spec"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotstd_toml}", "-o",
@@ -427,6 +439,12 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "x.csv", "--parameters", "encoder_offset_index",
           needle="unknown parameter 'encoder_offset_index'"),
         C("identify", "--data", "x.csv", "--parameters", "J_m", needle="'J_m' selects nothing"),
+        C("identify", "--data", "x.csv", "--parameters", "K,capstan_pinky", needle="unknown parameter 'capstan_pinky'"),
+        C("identify", "--data", "x.csv", "--effects", "capstan", "--parameters", "K",
+          needle="--effects: capstan with --parameters: name their parameters there"),
+        C("identify", "--data", "x.csv", "--effects", "capstan,capstan", needle="effects: an effect is named twice"),
+        C("identify", "--params", "{negative_capstan_toml}", "--data", "x.csv",
+          needle="transmission.capstan: value must be >= 0"),
         C("identify", "--data", "x.csv", "--effects", "friction", needle="effects: unknown effect 'friction'"),
         C("identify", "--data", "x.csv", "--effects", "tilt,tilt", needle="effects: an effect is named twice"),
         C("identify", "--data", "x.csv", "--effects", "none,stiction", needle="effects: 'none' goes alone"),
@@ -693,6 +711,7 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "--model", "finger3", "--params", "{fifo}", needle="parameter file '{fifo}': is a FIFO (named pipe)"),
         C("urdf", "--model", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
         C("urdf", "--model", "finger3", "--params", "{compliance_toml}", needle="transmission.tendon_compliance: value must be finite"),
+        C("urdf", "--model", "finger3", "--params", "{capstan_toml}", needle="transmission.capstan: value must be finite"),
         C("urdf", "--model", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
         C("urdf", "--model", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
         C("urdf", "--model", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
@@ -1641,6 +1660,23 @@ API: list[Api] = [
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'tendon_compliance = "x"\n'),
       ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'capstan = -0.1\n'),
+      ModelError, "motor 'a'.capstan: expected a number >= 0, got -0.1"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'capstan = nan\n'),
+      ModelError, "motor 'a'.capstan: expected a finite number, got nan"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  '[identified.capstan]\nb = 0.01\n'),
+      ModelError, "identified.capstan.b: unknown motor 'b' (motors: a)"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, capstan=[-0.1]),
+      InputError, "capstan: expected 1 finite numbers >= 0 (mu theta, dimensionless), got [-0.1]"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, capstan=[0.1, 0.2]),
+      InputError, "capstan: expected 1 finite numbers >= 0"),
+    A("StateSpace", lambda c: __import__("alpes_dyn.symbolic.statespace", fromlist=["x"]).StateSpace(
+        ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(ROBOT_SPEC.replace("j3 = 2.0 }\n", "j3 = 2.0 }\ncapstan = 0.2\n",
+                                                                           1))), input="motor")
+      .input_torque(np.zeros(3), np.ones(1)), InputError, "v: motor torques through tendons with sheath friction"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'ratio_curve = { j2 = [0.1] }\n'),
       ModelError, "motor 'a'.ratio_curve.j2: joint 'j2' is not one of the motor's joints (j1)"),
