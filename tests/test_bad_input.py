@@ -2107,6 +2107,8 @@ API: list[Api] = [
     A("mujoco_recording", lambda c: _mjrec(torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("mujoco_recording", lambda c: _mjrec(q0=[0.1, 0.2]), InputError, "q0: expected 3 finite joint angles (rad)"),
     A("mujoco_recording", lambda c: _mjrec(true_params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
+    A("mujoco_recording", lambda c: _mjrec(true_params=_sheathed(), effects=_eff(tendon_stiffness=1e4)), InputError,
+      "capstan: the MuJoCo plant puts the tendons' sheath friction on a rigid tendon"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(torque_constant_error=0.7)), InputError,
       "torque_constant_error: expected a fraction in (-0.5, 0.5)"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(encoder_offset=np.nan)), InputError,
@@ -2320,6 +2322,13 @@ def _mjrec(**kw):
 
     kw = {"model": "finger3", "true_params": None, "torque": np.full((200, 1), 0.02), **kw}
     return mujoco_recording(kw.pop("model"), kw.pop("true_params"), kw.pop("torque"), **kw)
+
+
+def _sheathed():
+    """The shipped parameters with a sheath friction (mu theta 0.2) on the tendons."""
+    from alpes_dyn.model.params import Param, with_values
+
+    return with_values(ad.load_params(), {"transmission.capstan": Param(0.2, "-", "assumed", "test", "sheath")})
 
 
 def _eff(**kw):
