@@ -217,6 +217,9 @@ def bad_files(d: Path) -> dict[str, str]:
                                                       "joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\ncapstan = -0.3\n",
                                                       1).encode(),
                  robotcapstanid_toml=(ROBOT_SPEC + "\n[identified.capstan]\nextensor = 0.01\n").encode(),
+                 robotsheath_toml=ROBOT_SPEC.replace("joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n",
+                                                     "joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\ncapstan = 0.3\n",
+                                                     1).encode(),
                  robotstops_toml=(ROBOT_SPEC + "\n[stops]\nstiffness = -2.0\n").encode(),
                  robotstopj_toml=(ROBOT_SPEC + "\n[stops.joints]\nj9 = { stiffness = 2.0 }\n").encode(),
                  robotctl_toml=ROBOT_CONTROL_SPEC.encode(), branches_urdf=BRANCHES_URDF.encode(),
@@ -531,6 +534,8 @@ CLI: dict[str, list[Cli]] = {
     "mjcf": [
         C("mjcf", "--model", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
           needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robotsheath_toml}",
+          needle="capstan: a tendon's sheath friction (mu theta) has no MJCF form"),
         C("mjcf", "--model", "finger3", "--tilt", "1e308", needle="--tilt: 1e+308 deg is outside the accepted range [-180, 180] deg"),
         C("mjcf", "--model", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--model", "finger3", needle="--model: given with the positional model 'hand'; give "

@@ -12,6 +12,8 @@ import numpy as np
 import pytest
 
 import alpes_dyn as ad
+from alpes_dyn.errors import AlpesDynWarning
+from alpes_dyn.model.mjcf import mjcf_string
 from alpes_dyn.model.params import Param, load_params, with_values
 from alpes_dyn.model.spec import TransmissionSpec
 from alpes_dyn.model.transmission import capstan_torque, capstan_velocity
@@ -125,6 +127,8 @@ def test_the_spec_field_the_parameter_file_and_the_catalogue(tmp_path):
     assert np.array_equal(StateSpace(plain, input="motor").f(x, u),
                           StateSpace(ad.Model.alpes("finger2", friction=True, params=_with_capstan(load_params(), 0.0)),
                                      input="motor").f(x, u))
+    with pytest.warns(AlpesDynWarning, match=r"transmission.capstan: MuJoCo has no tendon-sheath friction"):
+        mjcf_string("finger2", _with_capstan(load_params(), 0.2))  # nothing silently dropped
     hand = ad.Model.alpes("hand", params=_with_capstan(load_params(), 0.2))
     mu = dict(zip(hand.transmission.motor_names, hand.transmission.capstan))
     assert mu["index"] == 0.2 and mu["thumb"] == 0.2 and mu["thumb_abduction"] == 0.0

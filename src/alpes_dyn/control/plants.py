@@ -49,7 +49,7 @@ import numpy as np
 from ..errors import InputError, ModelError
 from ..estimation.experiments.recording import Recording
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, tilted_gravity
-from ..model.params import HandParams, load_params
+from ..model.params import HandParams, Param, load_params, with_values
 from ..model.robot import Model
 from ..model.transmission import capstan_torque, capstan_velocity
 from ..simulation.loop import Source, run_loop
@@ -131,7 +131,10 @@ def plant_mjcf(model: str, params: HandParams | str | None = None, effects: Plan
     """MJCF text of the plant: ``model`` from ``params`` with the MJCF side of ``effects`` (joint stops on,
     contact off: a finger moving freely; friction as the module docstring says)."""
     e = (effects or PlantEffects()).check()
-    return mjcf_string(model, _params(params), chain=chain, friction=False, contact=False, timestep=timestep,
+    p = _params(params)
+    if p.capstan > 0:  # not in the MJCF: mujoco_recording's passive callback adds the sheath friction
+        p = with_values(p, {"transmission.capstan": Param(0.0, "-", "assumed", "in the plant's callback", "sheath")})
+    return mjcf_string(model, p, chain=chain, friction=False, contact=False, timestep=timestep,
                        stiction=e.stiction, tendon_stiffness=e.tendon_stiffness, tendon_damping=e.tendon_damping,
                        tendon_rotor=e.tendon_rotor, tilt=e.tilt, tendon_dead_band=e.tendon_dead_band)
 

@@ -399,6 +399,9 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
     elif tr is not None and tr.elastic:  # nothing silently dropped: the quasi-static stretch has no MJCF form
         raise ModelError("tendon_compliance: an elastic tendon (y = S q + C tau_m) is a sensor law MuJoCo cannot "
                          "hold; export its cable's dynamics (tendon=ElasticTendon.of(model)) or rigid tendons")
+    if tr is not None and tr.has_capstan:  # nor the sheath friction: MuJoCo has none
+        raise ModelError("capstan: a tendon's sheath friction (mu theta) has no MJCF form (MuJoCo has no "
+                         "tension-dependent tendon friction); export the spec without it")
     tree, sites = _tree(model, bool(limits), float(tip_radius))
     if tendon is not None:
         tree[-1:-1] = _rotor_bodies(model)  # before </worldbody>
