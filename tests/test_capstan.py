@@ -166,3 +166,24 @@ def test_the_verdict_names_the_sheath_friction_and_the_fit_finds_it(tmp_path):
     back = ad.Model.alpes("finger2", friction=True, params=res.write(tmp_path / "ident.toml"))
     assert back.transmission.capstan[0] == pytest.approx(got["capstan_finger"], rel=1e-12)
     assert back.params.raw["transmission.capstan"].source == "identified"
+
+
+def test_identified_spec_holds_the_fitted_sheath_friction():
+    """``identify -o`` on a URDF + spec robot: a fitted capstan_<motor> goes into its [[motor]] entry and its standard
+    error into [identified.capstan]; the spec written reads back (a made-up fit: the writing alone)."""
+    from alpes_dyn.estimation.identification.identification import IdentificationResult
+    from alpes_dyn.estimation.identification.identified_spec import identified_spec
+
+    spec = TransmissionSpec.from_toml('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0 }\n\n'
+                                      "[stiffness]\nj1 = 0.04\nj2 = 0.05\n")
+    model = ad.Model(ad.urdf_string("finger2"), spec)  # finger2's URDF, its joints j1, j2 on one tendon
+    names = ("K_1", "capstan_flexor")
+    res = IdentificationResult(names=names, values=np.array([0.041, 0.023]), std=np.array([1e-5, 4e-4]),
+                               initial=np.array([0.04, 0.0]), units=("N m/rad", "-"), correlation=np.eye(2),
+                               residual_rms=0.5, iterations=1, converged=True, seconds=0.0, compile_seconds=0.0,
+                               states=np.zeros((1, 4)), node_times=np.zeros(1), model=model)
+    out = identified_spec(res, spec)
+    assert out.motors[0].capstan == 0.023 and dict(out.identified["capstan"]) == {"flexor": 4e-4}
+    back = TransmissionSpec.from_toml(out.to_toml())
+    assert back.motors[0].capstan == 0.023 and back.identified["capstan"]["flexor"] == 4e-4
+    assert ad.Model(ad.urdf_string("finger2"), back).transmission.capstan.tolist() == [0.023]
