@@ -28,8 +28,9 @@ the model's reading S q on the fit's multiple-shooting trajectory, one column pe
 * **Signatures** (:func:`signatures`): the share of the residual explained by each known missing
   effect, measured as the encoder's response to that effect through the fitted model (a motor torque
   following the sign of the motor velocity: dry friction; the tension times that sign: the tendon's sheath
-  friction (capstan); the velocity: viscous friction; the acceleration: a rotor's inertia on the tendon; an encoder reading ahead by the torque: an elastic
-  tendon; a constant: an offset), in one joint regression (partial R^2).
+  friction (capstan); the velocity: viscous friction; the acceleration: a rotor's inertia on the tendon; an
+  encoder reading ahead by the torque: an elastic tendon; a constant: an offset), in one joint regression
+  (partial R^2).
 
 The verdict (:func:`assess`, :class:`Adequacy`) is *not adequate* when the residual is coloured or
 correlated with the input beyond the thresholds of :data:`THRESHOLDS` (measured on recordings of our
@@ -83,8 +84,9 @@ harmonics and intermodulation products is over ``harmonic_ratio`` times its powe
 (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1); a
 drift (a ramp, judged alone) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05); the
 tendon-sheath friction (judged in the regression with the others, theirs without it) named first from
-``sheath_share``, beside what the others name (on our simulator's finger2 with mu theta 0.02: 0.19 turned, 0.25 level;
-without one, MuJoCo's finger3 on an elastic damped cable: 0.056, with a rotor the model lacks: 0.005)."""
+``sheath_share``, beside what the others name (our simulator's finger2 with mu theta 0.02: 0.19-0.32 turned at 100 /
+50 ms intervals, 0.25 level; without one, MuJoCo's finger3 on an elastic damped cable: 0.056, with a rotor the model
+lacks: 0.005)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")  # named first (range_exit)
