@@ -86,20 +86,21 @@ def test_the_symbolic_and_parametric_paths_equal_the_numeric_one(finger2, rng):
 def test_mujoco_with_the_sheath_on_its_rigid_tendon_moves_as_our_simulator():
     """MuJoCo has no sheath friction: its plant adds the library's law through its passive-force callback (the
     actuator's torque as the tension, S qd as the tendon's velocity). finger2 drawn +-20 % with mu theta = 0.3 under
-    the experiment's torque, 0.3 s, rest start: MuJoCo (RK4 at 0.1 ms) and our compiled RK4 at the same step agree to
-    1e-9 rad (measured 1e-16); our finger without the sheath is degrees away from MuJoCo's."""
+    a bias and two sines (the tendon sliding both ways), 0.3 s from rest: MuJoCo (RK4 at 0.1 ms) and our compiled RK4
+    at the same step agree to 1e-9 rad (measured 1e-16); our finger without the sheath is degrees away."""
     from alpes_dyn.control.plants import mujoco_recording
-    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment_torque, perturbed_params
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
     from alpes_dyn.simulation.integrate import compile_rollout
 
     base = perturbed_params(spread=0.2, seed=3)
     true = _with_capstan(base, MU)
-    design = ExperimentDesign(duration=0.3)
-    _, u, x0 = experiment_torque("finger2", true, design)
-    rec = mujoco_recording("finger2", true, u, design.dt, q0=x0[:2], encoder_noise_counts=0.0, torque_noise=0.0)
+    t = 1e-3 * np.arange(301)
+    u = (0.02 + 0.008 * np.sin(2 * np.pi * 4 * t) + 0.004 * np.sin(2 * np.pi * 11 * t))[:, None]  # N m
+    model = ad.Model.alpes("finger2", friction=True, params=true)
+    x0 = np.r_[model.static_equilibrium(None, tau_m=u[0]), 0.0, 0.0]
+    rec = mujoco_recording("finger2", true, u, 1e-3, q0=x0[:2], encoder_noise_counts=0.0, torque_noise=0.0)
     U = np.repeat(u[:-1], 10, axis=0)[None]  # each sample's torque held over ten 0.1 ms steps
-    ours = compile_rollout(ad.Model.alpes("finger2", friction=True, params=true), 1e-4, input="motor")
-    q = np.asarray(ours.rollout(x0[None], U))[0, ::10, :2]
+    q = np.asarray(compile_rollout(model, 1e-4, input="motor").rollout(x0[None], U))[0, ::10, :2]
     assert np.abs(q - rec.true_q).max() < 1e-9
     bare = compile_rollout(ad.Model.alpes("finger2", friction=True, params=base), 1e-4, input="motor")
     assert np.degrees(np.abs(np.asarray(bare.rollout(x0[None], U))[0, ::10, :2] - rec.true_q).max()) > 1.0
