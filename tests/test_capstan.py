@@ -83,6 +83,17 @@ def test_the_symbolic_and_parametric_paths_equal_the_numeric_one(finger2, rng):
         assert float(loss @ vm) >= 0.0 and np.all(np.abs(loss) <= (1 - math.exp(-MU)) * np.abs(us) + 1e-18)
 
 
+def test_the_sheath_under_tension_asks_for_more_rk4_steps(finger2):
+    """The sheath's friction slope S^T (1 - exp(-mu theta)) |tau_m| / v_c S grows with the tension: the RK4 steps per
+    sample count it where the tension is given (the experiment, the fit and the observer give the recording's largest
+    torque), and nothing changes without it or at zero tension."""
+    from alpes_dyn.simulation.integrate import friction_rate, stable_substeps
+
+    assert friction_rate(finger2, tension=0.0) == friction_rate(finger2) > 0
+    assert stable_substeps(finger2, 1e-3) == 4 < stable_substeps(finger2, 1e-3, tension=0.03)
+    assert friction_rate(finger2, tension=0.06) > friction_rate(finger2, tension=0.03) > friction_rate(finger2)
+
+
 def test_mujoco_with_the_sheath_on_its_rigid_tendon_moves_as_our_simulator():
     """MuJoCo has no sheath friction: its plant adds the library's law through its passive-force callback (the
     actuator's torque as the tension, S qd as the tendon's velocity). finger2 drawn +-20 % with mu theta = 0.3 under
