@@ -389,6 +389,12 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
             more = tuple(e for e in named_effects(best) if e not in attempted)
             if "rotor" not in attempted and "rotor" not in more and _elastic(best):
                 more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
+            if "capstan" in more:
+                # alone: a friction growing with the tension is also a cable "stretching" with it. Our finger2 with
+                # mu theta 0.02, `experiment --rig both` then `identify` (2026-12-05): the sheath named after the
+                # stick-slip round, with the rotor for the compliance seen: 1.53 counts, worse, flagged; alone 0.588,
+                # adequate, mu theta 0.0195, K and m within 0.05 %
+                more = ("capstan",)
             if not more and not best.trustworthy:
                 # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
                 # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
