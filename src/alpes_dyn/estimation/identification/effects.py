@@ -32,7 +32,8 @@ effect         what the fit does
 ``capstan``    (asked for; ``auto`` adds it where a fit's verdict names "tendon-sheath friction", the residual
                following the tension times the sign of the motor velocity) each tendon's sheath friction
                ``capstan_<motor>`` (mu theta: the joints get tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c),
-               :func:`~alpes_dyn.model.transmission.capstan_torque`): fitted from 0, written to the file.
+               :func:`~alpes_dyn.model.transmission.capstan_torque`): fitted from 0, written to the file; its
+               round alone (not with the rotor of a compliance seen: the tension's friction looks like a stretch).
 ============== ======================================================================================
 
 A first fit that loses its basin (its stop reason "lost basin"; the joint stop its verdict may name is not believed of a lost fit) is made again in stages: the rigid fit, then the effects one by
