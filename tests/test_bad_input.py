@@ -2082,6 +2082,9 @@ API: list[Api] = [
     # the series-elastic tendon with its rotor as a state (symbolic.elastic_tendon), its cable in the MJCF export
     A("model_mjcf", lambda c: _model_mjcf(c.m, tendon=[1.0]), InputError, "tendon: expected an ElasticTendon"),
     A("ElasticTendon.of", lambda c: _tendon_of(c.m), InputError, "tendon_compliance: motor 'finger' has a rigid"),
+    A("SeriesElasticSystem", lambda c: __import__("alpes_dyn.symbolic.elastic_tendon", fromlist=["x"]).SeriesElasticSystem(
+        ad.Model.alpes("finger2", params=_sheathed()), __import__("alpes_dyn.model.tendon", fromlist=["x"]).ElasticTendon(
+            [10.0], [0.0], [0.0])), InputError, "tendons have sheath friction (capstan); the series-elastic tendon"),
     A("ElasticTendon.from_cable", lambda c: _cable(1, "4e4", 0.002), InputError, "cable_stiffness: expected numbers of N/m, got a string"),
     A("ElasticTendon.from_cable", lambda c: _cable(1, 4e4, 0.002, dead_band=[1e-4, 2e-4]), InputError,
       "dead_band: expected 1 finite non-negative numbers"),
