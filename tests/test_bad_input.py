@@ -193,6 +193,10 @@ def bad_files(d: Path) -> dict[str, str]:
                                                  'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
     files["cable_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntendon_compliance = { value = 3.0, '
                                             'unit = "rad/(N m)", source = "assumed", reason = "x" }\n', 1).encode()
+    files["capstan_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ncapstan = { value = nan, '
+                                              'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
+    files["negative_capstan_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ncapstan = { value = -0.2, '
+                                                       'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     # physical ranges (issue 19): an angle, a ratio, gravity of 1e300, a subnormal spring, an axis of 1e300
     files["angle_toml"] = _toml_field("finger.upper", '{ value = 1e300, unit = "rad", source = "report" }')
@@ -209,6 +213,13 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotrecord_toml=(ROBOT_SPEC + '\n[identified]\nsource = "cad"\n').encode(),
                  robottwo_toml=(ROBOT_SPEC + '\n[[motor]]\nname = "distal"\njoints = { j3 = 1.0 }\n').encode(),
                  robotrest_toml=(ROBOT_SPEC + "\n[rest_angle]\nj1 = 0.1\nj9 = 0.2\n").encode(),
+                 robotcapstan_toml=ROBOT_SPEC.replace("joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n",
+                                                      "joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\ncapstan = -0.3\n",
+                                                      1).encode(),
+                 robotcapstanid_toml=(ROBOT_SPEC + "\n[identified.capstan]\nextensor = 0.01\n").encode(),
+                 robotsheath_toml=ROBOT_SPEC.replace("joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\n",
+                                                     "joints = { j1 = 2.0, j2 = 2.0, j3 = 2.0 }\ncapstan = 0.3\n",
+                                                     1).encode(),
                  robotstops_toml=(ROBOT_SPEC + "\n[stops]\nstiffness = -2.0\n").encode(),
                  robotstopj_toml=(ROBOT_SPEC + "\n[stops.joints]\nj9 = { stiffness = 2.0 }\n").encode(),
                  robotctl_toml=ROBOT_CONTROL_SPEC.encode(), branches_urdf=BRANCHES_URDF.encode(),
@@ -316,6 +327,10 @@ CLI: dict[str, list[Cli]] = {
           "{tmp}/r.csv", needle="identified.stiffness.j9: the spec has no stiffness value for joint 'j9'"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotstd_toml}", "-o",
           "{tmp}/r.csv", needle="identified.viscous.j1: expected a standard error >= 0"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robotcapstan_toml}", "-o", "{tmp}/r.csv",
+          needle="motor 'flexor'.capstan: expected a number >= 0, got -0.3"),
+        C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotcapstanid_toml}",
+          "-o", "{tmp}/r.csv", needle="identified.capstan.extensor: unknown motor 'extensor' (motors: flexor)"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{robot_toml}",
           needle="-o: '{robot_toml}' is the input of --spec"),
         C("experiment", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "--true-spec", "{robotstd_toml}", "-o",
@@ -449,6 +464,12 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "x.csv", "--parameters", "encoder_offset_index",
           needle="unknown parameter 'encoder_offset_index'"),
         C("identify", "--data", "x.csv", "--parameters", "J_m", needle="'J_m' selects nothing"),
+        C("identify", "--data", "x.csv", "--parameters", "K,capstan_pinky", needle="unknown parameter 'capstan_pinky'"),
+        C("identify", "--data", "x.csv", "--effects", "capstan", "--parameters", "K",
+          needle="--effects: capstan with --parameters: name their parameters there"),
+        C("identify", "--data", "x.csv", "--effects", "capstan,capstan", needle="effects: an effect is named twice"),
+        C("identify", "--params", "{negative_capstan_toml}", "--data", "x.csv",
+          needle="transmission.capstan: value must be >= 0"),
         C("identify", "--data", "x.csv", "--effects", "friction", needle="effects: unknown effect 'friction'"),
         C("identify", "--data", "x.csv", "--effects", "tilt,tilt", needle="effects: an effect is named twice"),
         C("identify", "--data", "x.csv", "--effects", "none,stiction", needle="effects: 'none' goes alone"),
@@ -535,6 +556,8 @@ CLI: dict[str, list[Cli]] = {
     "mjcf": [
         C("mjcf", "--model", "{robot_urdf}", "--spec", "{robotctrlchar_toml}",
           needle="motor.name: 'fl\\x01exor' holds a control character; a name is printable text"),
+        C("mjcf", "--model", "{robot_urdf}", "--spec", "{robotsheath_toml}",
+          needle="capstan: a tendon's sheath friction (mu theta) has no MJCF form"),
         C("mjcf", "--model", "finger3", "--tilt", "1e308", needle="--tilt: 1e+308 deg is outside the accepted range [-180, 180] deg"),
         C("mjcf", "--model", "finger7", needle="unknown model 'finger7'"),
         C("mjcf", "hand", "--model", "finger3", needle="--model: given with the positional model 'hand'; give "
@@ -717,6 +740,7 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "--model", "finger3", "--params", "{fifo}", needle="parameter file '{fifo}': is a FIFO (named pipe)"),
         C("urdf", "--model", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
         C("urdf", "--model", "finger3", "--params", "{compliance_toml}", needle="transmission.tendon_compliance: value must be finite"),
+        C("urdf", "--model", "finger3", "--params", "{capstan_toml}", needle="transmission.capstan: value must be finite"),
         C("urdf", "--model", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
         C("urdf", "--model", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
         C("urdf", "--model", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
@@ -1690,6 +1714,23 @@ API: list[Api] = [
                                                                   'tendon_compliance = "x"\n'),
       ModelError, "motor 'a'.tendon_compliance: expected a number, got 'x'"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'capstan = -0.1\n'),
+      ModelError, "motor 'a'.capstan: expected a number >= 0, got -0.1"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'capstan = nan\n'),
+      ModelError, "motor 'a'.capstan: expected a finite number, got nan"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  '[identified.capstan]\nb = 0.01\n'),
+      ModelError, "identified.capstan.b: unknown motor 'b' (motors: a)"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, capstan=[-0.1]),
+      InputError, "capstan: expected 1 finite numbers >= 0 (mu theta, dimensionless), got [-0.1]"),
+    A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, capstan=[0.1, 0.2]),
+      InputError, "capstan: expected 1 finite numbers >= 0"),
+    A("StateSpace", lambda c: __import__("alpes_dyn.symbolic.statespace", fromlist=["x"]).StateSpace(
+        ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(ROBOT_SPEC.replace("j3 = 2.0 }\n", "j3 = 2.0 }\ncapstan = 0.2\n",
+                                                                           1))), input="motor")
+      .input_torque(np.zeros(3), np.ones(1)), InputError, "v: motor torques through tendons with sheath friction"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'ratio_curve = { j2 = [0.1] }\n'),
       ModelError, "motor 'a'.ratio_curve.j2: joint 'j2' is not one of the motor's joints (j1)"),
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
@@ -2112,6 +2153,9 @@ API: list[Api] = [
     # the series-elastic tendon with its rotor as a state (symbolic.elastic_tendon), its cable in the MJCF export
     A("model_mjcf", lambda c: _model_mjcf(c.m, tendon=[1.0]), InputError, "tendon: expected an ElasticTendon"),
     A("ElasticTendon.of", lambda c: _tendon_of(c.m), InputError, "tendon_compliance: motor 'finger' has a rigid"),
+    A("SeriesElasticSystem", lambda c: __import__("alpes_dyn.symbolic.elastic_tendon", fromlist=["x"]).SeriesElasticSystem(
+        ad.Model.alpes("finger2", params=_sheathed()), __import__("alpes_dyn.model.tendon", fromlist=["x"]).ElasticTendon(
+            [10.0], [0.0], [0.0])), InputError, "tendons have sheath friction (capstan); the series-elastic tendon"),
     A("ElasticTendon.from_cable", lambda c: _cable(1, "4e4", 0.002), InputError, "cable_stiffness: expected numbers of N/m, got a string"),
     A("ElasticTendon.from_cable", lambda c: _cable(1, 4e4, 0.002, dead_band=[1e-4, 2e-4]), InputError,
       "dead_band: expected 1 finite non-negative numbers"),
@@ -2142,6 +2186,8 @@ API: list[Api] = [
     A("mujoco_recording", lambda c: _mjrec(torque_noise=-1.0), InputError, "torque_noise: expected a non-negative"),
     A("mujoco_recording", lambda c: _mjrec(q0=[0.1, 0.2]), InputError, "q0: expected 3 finite joint angles (rad)"),
     A("mujoco_recording", lambda c: _mjrec(true_params=c.f["latin1_toml"]), ModelError, "not UTF-8 text"),
+    A("mujoco_recording", lambda c: _mjrec(true_params=_sheathed(), effects=_eff(tendon_stiffness=1e4)), InputError,
+      "capstan: the MuJoCo plant puts the tendons' sheath friction on a rigid tendon"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(torque_constant_error=0.7)), InputError,
       "torque_constant_error: expected a fraction in (-0.5, 0.5)"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(encoder_offset=np.nan)), InputError,
@@ -2355,6 +2401,13 @@ def _mjrec(**kw):
 
     kw = {"model": "finger3", "true_params": None, "torque": np.full((200, 1), 0.02), **kw}
     return mujoco_recording(kw.pop("model"), kw.pop("true_params"), kw.pop("torque"), **kw)
+
+
+def _sheathed():
+    """The shipped parameters with a sheath friction (mu theta 0.2) on the tendons."""
+    from alpes_dyn.model.params import Param, with_values
+
+    return with_values(ad.load_params(), {"transmission.capstan": Param(0.2, "-", "assumed", "test", "sheath")})
 
 
 def _eff(**kw):

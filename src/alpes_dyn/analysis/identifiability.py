@@ -95,7 +95,9 @@ class _AugmentedStateSpace(StateSpace):
         self.u = base.u
         self.x = cs.vertcat(base.x, pd.theta)
         q, v = base.x[:n], base.x[n:]
-        qdd = pd.forward_dynamics(q, v, cs.mtimes(cs.DM(base.B), base.u), pd.theta, cs.DM(gravity))
+        tau = (pd.input_torque(q, v, base.u, pd.theta) if base.input == "motor"  # the capstan's share taken off
+               else cs.mtimes(cs.DM(base.B), base.u))
+        qdd = pd.forward_dynamics(q, v, tau, pd.theta, cs.DM(gravity))
         self.f_expr = cs.vertcat(v, qdd, cs.SX.zeros(pd.p))
         self.h_expr = base.h_expr
         self.output_names = base.output_names

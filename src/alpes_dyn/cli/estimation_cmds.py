@@ -296,7 +296,7 @@ def _fit_robot(args: argparse.Namespace, freqs):
                          "--parameters J_m)")
     if args.parameters is not None and set(effects) - {"stiction"}:
         raise InputError(f"--effects: {', '.join(e for e in effects if e != 'stiction')} with --parameters: name their "
-                         "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
+                         "parameters there (tendon_compliance, tilt_y or tilt, encoder_offset, capstan)")
     sticky = Model(model.urdf, dataclasses.replace(model.spec, smooth_velocity=STICTION_VELOCITY), name=model.name)
 
     def model_of(effs: tuple[str, ...]) -> Model:  # "rotor", named by auto's verdict, is the spec's rotors: on
@@ -362,7 +362,8 @@ def _chain_names(model, parameters: str | None, motor: str | None, own: tuple[st
     if motor is None:
         return [p.name for p in chosen]
     names = [p.name for p in _motor_chain(model, chosen, motor)]
-    extra = {"compliance": f"tendon_compliance_{motor}", "offset": f"encoder_offset_{motor}"}
+    extra = {"compliance": f"tendon_compliance_{motor}", "offset": f"encoder_offset_{motor}",
+             "capstan": f"capstan_{motor}"}
     return names + [extra[e] for e in own if extra[e] not in names]
 
 

@@ -38,7 +38,8 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
         () if args.parameters is not None else parse_effects(None))
     if args.parameters is not None and set(effects) - {"stiction", "rotor"}:
         raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor'))} with "
-                         "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset)")
+                         "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset, "
+                         "capstan)")
     model_of = alpes_models(args.model, load_params(args.params), rotor_inertia=args.rotor_inertia, chain=args.chain)
 
     if args.parameters is not None:

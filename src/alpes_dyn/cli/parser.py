@@ -420,9 +420,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "v_s = 0.02 rad/s, kept in the file), rotor (the file's rotor inertia J_m on each tendon, "
                         "held), compliance (the tendon's stretch, tendon_compliance), "
                         "tilt (the palm's orientation where the recording has no gravity columns), offset (the "
-                        "encoders' zero); 'auto' (the default): compliance,tilt, then the fit again with stiction and/or "
-                        "rotor where the first one's adequacy check names them, the lower residual kept; "
-                        "'none' for the rigid, smooth-friction fit (with --parameters the default is none)")
+                        "encoders' zero), delay, capstan (the tendons' sheath friction); 'auto' (the default): "
+                        "compliance,tilt, then the fit again with what the first one's adequacy check names, the "
+                        "lower residual kept; 'none' for the rigid, smooth-friction fit (with --parameters: none)")
     s.add_argument("--rotor-inertia", action="store_true",
                    help="Alpes models: the model with the file's rotor inertia J_m on each tendon (eq. 2.8); fit it "
                         "with J_m (a URDF --model's rotors are its spec's, always on)")

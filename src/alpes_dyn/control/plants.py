@@ -29,6 +29,10 @@ The effects (:class:`PlantEffects`, each off by default):
 * ``torque_delay``: the torque measured this many whole samples late (the current's filter and the bus): the
   recording's torque at t_k is what the motor gave at t_(k-d) (the first d rows repeat the first torque).
 
+The tendons' sheath friction (capstan) where the plant's parameters hold ``transmission.capstan``: MuJoCo has none,
+so the passive callback adds the library's law (:func:`~alpes_dyn.model.transmission.capstan_torque`) on the rigid
+tendon, its tension the actuator's torque (refused with the series-elastic tendon, whose tension is the cable's).
+
 The passive callback is MuJoCo's process-wide ``mjcb_passive``: :func:`mujoco_recording` sets it for its run and
 restores the previous one (not thread-safe: one smooth-friction run at a time per process).
 """
@@ -45,8 +49,9 @@ import numpy as np
 from ..errors import InputError, ModelError
 from ..estimation.experiments.recording import Recording
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, tilted_gravity
-from ..model.params import HandParams, load_params
+from ..model.params import HandParams, Param, load_params, with_values
 from ..model.robot import Model
+from ..model.transmission import capstan_torque, capstan_velocity
 from ..simulation.loop import Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, TorqueSensor
@@ -126,7 +131,10 @@ def plant_mjcf(model: str, params: HandParams | str | None = None, effects: Plan
     """MJCF text of the plant: ``model`` from ``params`` with the MJCF side of ``effects`` (joint stops on,
     contact off: a finger moving freely; friction as the module docstring says)."""
     e = (effects or PlantEffects()).check()
-    return mjcf_string(model, _params(params), chain=chain, friction=False, contact=False, timestep=timestep,
+    p = _params(params)
+    if p.capstan > 0:  # not in the MJCF: mujoco_recording's passive callback adds the sheath friction
+        p = with_values(p, {"transmission.capstan": Param(0.0, "-", "assumed", "in the plant's callback", "sheath")})
+    return mjcf_string(model, p, chain=chain, friction=False, contact=False, timestep=timestep,
                        stiction=e.stiction, tendon_stiffness=e.tendon_stiffness, tendon_damping=e.tendon_damping,
                        tendon_rotor=e.tendon_rotor, tilt=e.tilt, tendon_dead_band=e.tendon_dead_band)
 
@@ -222,8 +230,9 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
         truth = truth.copy(gravity=np.asarray(gravity[0], dtype=float))
     d = _plant_at_rest(mj, truth, q0, u[0], p, e)
     previous = mujoco.get_mjcb_passive()
-    if e.stiction is None:
-        mujoco.set_mjcb_passive(_smooth_friction(mj, truth))
+    passive = _passive_forces(mj, truth, e)
+    if passive is not None:
+        mujoco.set_mjcb_passive(passive)
     try:
         rec = _turned_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise, gravity, edges,
                           offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
@@ -377,14 +386,29 @@ def _plant_at_rest(mj, truth: Model, q0: Sequence[float] | None, u0: np.ndarray,
     return d
 
 
-def _smooth_friction(mj, truth: Model) -> Callable[[Any, Any], None]:
-    """MuJoCo's passive-force callback of the library's smooth friction law on ``truth``'s joints (N m), applied
-    at every RK4 stage."""
-    ex = truth.extras
+def _passive_forces(mj, truth: Model, e: PlantEffects) -> Callable[[Any, Any], None] | None:
+    """MuJoCo's passive-force callback of what the plant adds to MuJoCo at every RK4 stage (N m on ``truth``'s
+    joints): the library's smooth friction law (without ``stiction``: MuJoCo's own dry friction then) and the tendons'
+    sheath friction where ``truth`` has one (``capstan``: S^T of the capstan's loss at the actuators' torque, d.ctrl,
+    and the motor velocity S qd); None where there is nothing to add."""
+    ex, tr = truth.extras, truth.transmission
+    sheath = tr is not None and tr.has_capstan
+    if sheath and e.tendon_stiffness is not None:
+        raise InputError("capstan: the MuJoCo plant puts the tendons' sheath friction on a rigid tendon (its tension "
+                         "the motor's torque); with tendon_stiffness the tension is the cable's")
+    if e.stiction is not None and not sheath:
+        return None
     dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
+    smooth = e.stiction is None
+    if sheath:  # the law's constants once (the callback runs at every RK4 stage)
+        S, m, mu, v_c = tr.S, tr.n_motors, tr.capstan, capstan_velocity(tr.S, ex.smooth_velocity)
 
-    def smooth_friction(_m, dd) -> None:  # the library's law, at every RK4 stage
+    def passive(_m, dd) -> None:  # the library's laws, at every RK4 stage
         v = dd.qvel[dofs]
-        dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
+        if smooth:
+            dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
+        if sheath:
+            u = dd.ctrl[:m]
+            dd.qfrc_passive[dofs] -= (u - capstan_torque(u, S @ v, mu, v_c)) @ S
 
-    return smooth_friction
+    return passive

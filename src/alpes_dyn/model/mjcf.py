@@ -280,6 +280,11 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
     _check_mjcf_arguments(model, spring, scene, timestep, block_friction, block_tilt, contact_q)
     p = model_params(model, _params(params), chain)
     tendon_stiffness = _file_cable(p, tendon_stiffness)
+    if p.capstan > 0:  # nothing silently dropped: MuJoCo has no sheath friction
+        warnings.warn(AlpesDynWarning(
+            f"transmission.capstan: MuJoCo has no tendon-sheath friction; the file's (mu theta {p.capstan:g}) is not "
+            "in this MJCF (the recording plant, alpes_dyn.control.plants, adds it by a passive-force callback)"),
+            stacklevel=2)
     _check_effects(stiction, tendon_stiffness, tendon_damping, tendon_rotor, tilt, rotor_inertia, tendon_dead_band)
     if palm_down:
         p = palm_down_params(p)

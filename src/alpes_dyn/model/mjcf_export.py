@@ -408,6 +408,9 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
     elif tr is not None and tr.elastic:  # nothing silently dropped: the quasi-static stretch has no MJCF form
         raise ModelError("tendon_compliance: an elastic tendon (y = S q + C tau_m) is a sensor law MuJoCo cannot "
                          "hold; export its cable's dynamics (tendon=ElasticTendon.of(model)) or rigid tendons")
+    if tr is not None and tr.has_capstan:  # nor the sheath friction: MuJoCo has none
+        raise ModelError("capstan: a tendon's sheath friction (mu theta) has no MJCF form (MuJoCo has no "
+                         "tension-dependent tendon friction); export the spec without it")
     if stiction is not None and not (isinstance(stiction, numbers.Real) and not isinstance(stiction, bool)
                                      and math.isfinite(stiction) and stiction > 0):
         raise InputError(f"stiction: expected a positive time constant in s (e.g. 0.0005), got {stiction!r}")

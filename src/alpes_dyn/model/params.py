@@ -61,14 +61,14 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "transmission": {
         "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
         "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
-        "tendon_compliance": (None, "nonneg"),
+        "tendon_compliance": (None, "nonneg"), "capstan": (None, "nonneg"),
     },
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
     "environment": {"gravity": (3, "any")},
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
 _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v",
-             "transmission.tendon_compliance"}
+             "transmission.tendon_compliance", "transmission.capstan"}
 # the unit each field's value is read in: a file giving another one is refused (no conversion is made)
 _UNITS: dict[str, str] = {
     **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
@@ -81,7 +81,7 @@ _UNITS: dict[str, str] = {
     "palm.finger_names": "-", "palm.finger_x": "m", "palm.finger_y": "m", "palm.thumb_xyz": "m", "palm.thumb_yaw": "rad",
     "transmission.r_m": "m", "transmission.abduction_ratio": "-", "transmission.J_m": "kg m^2", "transmission.N": "-",
     "transmission.encoder_counts": "counts/rev", "transmission.tau_max": "N m",
-    "transmission.tendon_compliance": "rad/(N m)",
+    "transmission.tendon_compliance": "rad/(N m)", "transmission.capstan": "-",
     "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
     "environment.gravity": "m/s^2",
 }
@@ -194,6 +194,10 @@ class HandParams:
     tendon_compliance: float = 0.0
     """C_t, rad/(N m): the flexion tendons' stretch seen by the encoder per N m of recorded motor torque,
     y_k = S q_k + C_t tau_m,k-1, the torque held before the reading (optional ``transmission.tendon_compliance``; 0, the default, is a rigid tendon)."""
+    capstan: float = 0.0
+    """mu theta (dimensionless): the flexion tendons' sheath friction, the joints getting
+    tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c) (optional ``transmission.capstan``; 0, the default: none;
+    :func:`~alpes_dyn.model.transmission.capstan_torque`)."""
     identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
 
@@ -465,6 +469,7 @@ def _from_text(text: str, path: str) -> HandParams:
         thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
         abduction_F_s=v.get("thumb.abduction_F_s"), abduction_F_v=v.get("thumb.abduction_F_v"),
         identification=ident, tendon_compliance=float(v.get("transmission.tendon_compliance", 0.0)),
+        capstan=float(v.get("transmission.capstan", 0.0)),
     )
 
 

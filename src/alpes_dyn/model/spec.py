@@ -28,6 +28,14 @@ t_j has seen the torque of [t_j-1, t_j): :func:`~alpes_dyn.model.transmission.to
 while the rotor on the cable (J_m on k_t r_m^2) resonates well above the motion's band and the cable stays
 taut; the joints' dynamics are the rigid tendon's (with the rotor's J_m S^T S). 0 (default): a rigid tendon.
 
+Tendon-sheath friction (capstan): motor k's ``capstan`` mu theta (dimensionless, >= 0: the friction coefficient of
+its cable on the sheaths and pulleys it slides over times their total wrap angle, rad) makes the tendon lose a
+fraction of its tension that grows with the tension, 1 - exp(-mu theta) where the motor pulls the cable (the capstan
+equation T_out = T_in exp(-mu theta)): the joints get S^T (tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c)), a
+friction on the motor side proportional to the tension and opposing the tendon's velocity v_m = S qd
+(:func:`~alpes_dyn.model.transmission.capstan_torque`, the smooth sign's scale v_c = v_s max_i |ratio_i|). 0
+(default): no sheath friction. A Bowden sheath bent through 90 degrees with mu = 0.2 is mu theta = 0.31.
+
 Configuration-dependent ratios (a tendon over sites and wrapping geometry, a measured moment-arm curve): a motor's
 ``ratio_curve`` {joint: [c_1, ..., c_P]} makes that joint's ratio rho_i(q_i) = ratio_i + c_1 q_i + ... + c_P q_i^P
 (P <= 16; ``joints`` gives the ratio at q = 0). The motor angle is then the tendon's length over the pulley radius,
@@ -50,6 +58,7 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     joints = { "joint_1.0" = 2.0, "joint_2.0" = 1.6, "joint_3.0" = 1.2 }   # joint -> ratio
     rotor_inertia = 1.0e-7         # kg m^2 on the motor shaft (optional, default 0)
     tendon_compliance = 0.1        # rad/(N m): the tendon's stretch seen by the encoder (optional, default 0)
+    capstan = 0.3                  # mu theta: the tendon-sheath friction (optional, default 0; see below)
     ratio_curve = { "joint_1.0" = [-0.5, 0.1] }   # optional: the ratio changes with the joint (below)
 
     [stiffness]                    # N m/rad
@@ -74,7 +83,7 @@ The TOML file (every key optional except ``[[motor]]`` entries' ``name`` and ``j
     residual_rms = 0.58            # counts RMS
     [identified.stiffness]         # ... and the standard error of each value it wrote, in the value's unit
     "joint_1.0" = 4.0e-5           # (inf: a value the recording does not see; the start kept)
-    [identified.tendon_compliance] # per motor: rotor_inertia, tendon_compliance
+    [identified.tendon_compliance] # per motor: rotor_inertia, tendon_compliance, capstan
     index = 1.0e-3
 
 The ``[stops]`` table gives the unilateral spring-damper end stops of :class:`~alpes_dyn.model.stops.JointStops`
@@ -122,10 +131,11 @@ REST_TABLE = "rest_angle"
 k (q - q_rest) (:func:`~alpes_dyn.model.extras.spring_law`). Only on a joint the ``[stiffness]`` table lists."""
 _TOP_KEYS = ("name", "encoder_counts", "smooth_velocity", "gravity", "tips", "spring", "motor") + JOINT_TABLES + (
     REST_TABLE, STOPS_TABLE, "identified")
-IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_inertia", "tendon_compliance")
+IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_inertia", "tendon_compliance",
+                                      "capstan")
 """The tables of a spec's ``[identified]`` section: the standard error of each identified value, by joint (the
-per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``)."""
-_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance", "ratio_curve")
+per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``, ``capstan``)."""
+_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance", "ratio_curve", "capstan")
 _MOTOR_REQUIRED = ("name", "joints")
 
 
@@ -140,7 +150,8 @@ class Motor:
     (rad/(N m), finite) of the tendon: the encoder reads S q + C tau_m, tau_m held before the reading (the module doc; 0 is rigid).
     ``ratio_curve``: {joint name: (c_1, ..., c_P)} the coefficients of q^1 .. q^P of that joint's ratio
     (rad/rad^(p+1); P <= :data:`~alpes_dyn.model.ratio_curve.MAX_CURVE_DEGREE`), each joint one of ``joints``; empty
-    (default): constant ratios.
+    (default): constant ratios. ``capstan``: mu theta (dimensionless, finite, >= 0) of the tendon's sheath friction
+    (the module doc; 0: none).
     """
 
     name: str
@@ -148,6 +159,7 @@ class Motor:
     rotor_inertia: float = 0.0
     tendon_compliance: float = 0.0
     ratio_curve: Mapping[str, Sequence[float]] = field(default_factory=dict)
+    capstan: float = 0.0
 
     def __post_init__(self) -> None:
         _name(self.name, "motor.name")
@@ -167,6 +179,7 @@ class Motor:
         object.__setattr__(self, "tendon_compliance", _number(self.tendon_compliance, f"{where}.tendon_compliance",
                                                                        0.0, unit="rad/(N m)"))
         object.__setattr__(self, "ratio_curve", _ratio_curve(self.ratio_curve, clean, where))
+        object.__setattr__(self, "capstan", _number(self.capstan, f"{where}.capstan", 0.0, unit="-"))
 
 
 _TABLE_UNITS = {"stiffness": "N m/rad", "coulomb": "N m", "viscous": "N m s/rad", "armature": "kg m^2", "rest_angle": "rad"}
@@ -283,7 +296,7 @@ class TransmissionSpec:
                 if k not in m:
                     raise ModelError(f"motor[{i}].{k}: missing field")
             motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0), m.get("tendon_compliance", 0.0),
-                                m.get("ratio_curve", {})))
+                                m.get("ratio_curve", {}), m.get("capstan", 0.0)))
         kw = {k: data[k] for k in _TOP_KEYS if k in data and k != "motor"}
         if "tips" in kw and isinstance(kw["tips"], list):
             kw["tips"] = tuple(kw["tips"])
@@ -324,6 +337,8 @@ class TransmissionSpec:
                 out.append(f"rotor_inertia = {m.rotor_inertia!r}")
             if m.tendon_compliance:
                 out.append(f"tendon_compliance = {m.tendon_compliance!r}")
+            if m.capstan:
+                out.append(f"capstan = {m.capstan!r}")
             if m.ratio_curve:
                 out.append("ratio_curve = { " + ", ".join(f"{q(j)} = [{', '.join(repr(x) for x in c)}]"
                                                           for j, c in m.ratio_curve.items()) + " }")
@@ -412,7 +427,8 @@ class TransmissionSpec:
                 C[:len(c), k, idx[j]] = c
         return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts,
                             np.array([m.rotor_inertia for m in self.motors]),
-                            np.array([m.tendon_compliance for m in self.motors]), C)
+                            np.array([m.tendon_compliance for m in self.motors]), C,
+                            np.array([m.capstan for m in self.motors]))
 
 
 def _identified(data: Any, spec: "TransmissionSpec") -> Mapping[str, Any]:
@@ -510,12 +526,13 @@ def example_spec_path(name: str = "allegro_hand") -> Path:
 
 
 def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float, rotor_inertia: float = 0.0,
-                 tendon_compliance: float = 0.0) -> tuple[Motor, ...]:
+                 tendon_compliance: float = 0.0, capstan: float = 0.0) -> tuple[Motor, ...]:
     """The Alpes motors: one per chain (``ratio`` on each of its joints, chain order), then one per
     ab/adduction joint (``abduction_ratio``), named ``<chain>_abduction``; each with ``rotor_inertia``
-    J_m (kg m^2 on the motor shaft); the chains' tendons with ``tendon_compliance`` (rad/(N m); the
-    ab/adduction is a gear, rigid)."""
-    motors = [Motor(ch.name, {j: ratio for j in ch.joints}, rotor_inertia, tendon_compliance) for ch in lay.chains]
+    J_m (kg m^2 on the motor shaft); the chains' tendons with ``tendon_compliance`` (rad/(N m)) and the sheath
+    friction ``capstan`` (mu theta; the ab/adduction is a gear, rigid, without sheath)."""
+    motors = [Motor(ch.name, {j: ratio for j in ch.joints}, rotor_inertia, tendon_compliance, capstan=capstan)
+              for ch in lay.chains]
     motors += [Motor(f"{ch.name}_abduction", {ch.abduction: abduction_ratio}, rotor_inertia)
                for ch in lay.chains if ch.abduction]
     return tuple(motors)
@@ -543,10 +560,12 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
     chain's motor adds (r/r_m)^2 J_m to every entry of its chain's block of the mass matrix, the
     ab/adduction motor abduction_ratio^2 J_m on its joint. (``transmission.N`` is not used: the
     tendon's ratio is r/r_m, which the file's N equals.) The file's ``transmission.tendon_compliance``
-    (default 0) goes on every chain's motor: it changes the encoder reading only.
+    (default 0) goes on every chain's motor: it changes the encoder reading only; so does its
+    ``transmission.capstan`` (mu theta, default 0: the tendons' sheath friction).
     """
     ratio, abd = params.transmission_ratio, params.abduction_ratio
-    motors = alpes_motors(lay, ratio, abd, params.J_m if rotor_inertia else 0.0, params.tendon_compliance)
+    motors = alpes_motors(lay, ratio, abd, params.J_m if rotor_inertia else 0.0, params.tendon_compliance,
+                          params.capstan)
     K: dict[str, float] = {}
     Fs: dict[str, float] = {}
     Fv: dict[str, float] = {}

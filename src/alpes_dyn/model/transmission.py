@@ -10,6 +10,7 @@ joints) and thumb ab/adduction (on its own joint, ratio ``transmission.abduction
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -17,7 +18,46 @@ from ..checks import as_float_array
 from ..errors import InputError
 from .ratio_curve import RatioCurve
 
-__all__ = ["Transmission", "acceleration_before", "torque_before"]
+__all__ = ["Transmission", "acceleration_before", "torque_before", "capstan_loss", "capstan_torque",
+           "capstan_velocity"]
+
+
+def capstan_loss(mu_theta: Any, xp: Any = np) -> Any:
+    """1 - exp(-mu theta): the fraction of a tendon's tension lost over a sheath or pulley of wrap angle theta (rad)
+    and friction coefficient mu while the motor pulls the cable (the capstan equation T_out = T_in exp(-mu theta)).
+    ``mu_theta`` (m,) dimensionless, >= 0 (numpy array or CasADi column)."""
+    return 1.0 - xp.exp(-mu_theta)
+
+
+def capstan_velocity(S: np.ndarray, smooth_velocity: float) -> np.ndarray:
+    """(m,) rad/s of motor shaft: the smooth sign's scale of each tendon, v_s max_i |S_ki| (the motor's velocity when
+    its fastest joint moves alone at the joints' v_s, so that the tendon's sign is as sharp as the joints')."""
+    scale = np.max(np.abs(np.asarray(S, dtype=float)), axis=1)
+    return float(smooth_velocity) * np.where(scale > 0, scale, 1.0)
+
+
+def capstan_torque(tau_m: Any, v_m: Any, mu_theta: Any, v_c: Any, xp: Any = np) -> Any:
+    """The motor torque that reaches the joints through a tendon with sheath friction (capstan), N m:
+
+        tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c)
+
+    a friction on the motor side proportional to the tension (|tau_m| / r_m), opposing the tendon's sliding, its
+    sign smoothed as the joints' friction is. Written once here for the numeric and the symbolic and parametric
+    paths. Why this form and not the capstan's own exp(-mu theta sign v): it is the same where the motor pulls the
+    cable (v_m > 0: the joints get tau_m exp(-mu theta)), to first order in mu theta where the joints pull it back
+    (tau_m (2 - exp(-mu theta)) against tau_m exp(mu theta)), and it is a friction: its power
+    -(1 - exp(-mu theta)) |tau_m| |v_m| tanh-smoothed never feeds energy in, and at v_m = 0 it vanishes smoothly
+    (the exponential's jump in sign v would be a step in the joint torque at every reversal). The tension is the
+    motor torque (the rotor's inertia and the cable's stretch ignored: the tension the sheath sees). tau_m, v_m
+    (..., m) N m and rad/s of motor shaft; mu_theta (m,) dimensionless; v_c (m,) rad/s (:func:`capstan_velocity`);
+    numpy arrays or CasADi columns (``xp``)."""
+    if xp is np:
+        return tau_m - capstan_loss(np.asarray(mu_theta, dtype=float)) * np.abs(tau_m) * np.tanh(v_m / v_c)
+    if isinstance(mu_theta, np.ndarray):
+        mu_theta = xp.DM(mu_theta)
+    if isinstance(v_c, np.ndarray):
+        v_c = xp.DM(v_c)
+    return tau_m - capstan_loss(mu_theta, xp) * xp.fabs(tau_m) * xp.tanh(v_m / v_c)
 
 
 def torque_before(tau_m: np.ndarray) -> np.ndarray:
@@ -65,6 +105,9 @@ class Transmission:
         rho_ki(q_i) = S_ki + sum_p c_ki,p q_i^p (:mod:`alpes_dyn.model.ratio_curve`); S is then the ratio at q = 0,
         the motor angle is s(q) = L(q) / r_m (:meth:`motor_positions`), the joint torque rho(q)^T tau_m
         (:meth:`joint_torque` with q) and the rotors' inertia rho(q)^T diag(J_m) rho(q) (:meth:`rotor_matrix_at`).
+    capstan: (m,) mu theta of each motor's tendon, dimensionless, >= 0 (default zeros: no sheath friction): the
+        friction coefficient times the wrap angle of the sheaths and pulleys it slides over; the motor torque that
+        reaches the joints is :func:`capstan_torque`'s (:meth:`transmitted`).
     """
 
     motor_names: tuple[str, ...]
@@ -74,6 +117,7 @@ class Transmission:
     rotor_inertia: np.ndarray | None = None
     tendon_compliance: np.ndarray | None = None
     ratio_curve: np.ndarray | None = None
+    capstan: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         J = np.zeros(self.S.shape[0]) if self.rotor_inertia is None else np.asarray(self.rotor_inertia, dtype=float)
@@ -88,6 +132,11 @@ class Transmission:
             raise InputError(f"tendon_compliance: expected {m} finite numbers (rad/(N m)), got {C.tolist()!r}")
         C.flags.writeable = False
         object.__setattr__(self, "tendon_compliance", C)
+        mu = np.zeros(m) if self.capstan is None else np.array(self.capstan, dtype=float)
+        if mu.shape != (m,) or not np.all(np.isfinite(mu)) or np.any(mu < 0):
+            raise InputError(f"capstan: expected {m} finite numbers >= 0 (mu theta, dimensionless), got {mu.tolist()!r}")
+        mu.flags.writeable = False
+        object.__setattr__(self, "capstan", mu)
         curve = None if self.ratio_curve is None else RatioCurve(self.S, self.ratio_curve)
         object.__setattr__(self, "_curve", curve)
 
@@ -124,6 +173,20 @@ class Transmission:
             return np.zeros(self.S.shape[1])
         q, v = self._joints(q), self._joints(v, "v")
         return self._curve.ratio(q).T @ (self.rotor_inertia * self._curve.rate_product(q, v))
+
+    @property
+    def has_capstan(self) -> bool:
+        """True when a tendon has sheath friction (a non-zero :attr:`capstan`)."""
+        return bool(np.any(self.capstan != 0))
+
+    def transmitted(self, tau_m: Any, v_m: Any, smooth_velocity: float, xp: Any = np) -> Any:
+        """The motor torques that reach the joints through the tendons' sheaths (N m, (..., m)): tau_m less the
+        capstan friction (:func:`capstan_torque`) at the motor velocities v_m (rad/s, (..., m)), its sign smoothed at
+        :func:`capstan_velocity` of the joints' ``smooth_velocity`` (rad/s); tau_m itself without sheath friction.
+        numpy arrays or CasADi columns (``xp``)."""
+        if not self.has_capstan:
+            return tau_m
+        return capstan_torque(tau_m, v_m, self.capstan, capstan_velocity(self.S, smooth_velocity), xp)
 
     @property
     def elastic(self) -> bool:

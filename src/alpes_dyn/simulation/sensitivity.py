@@ -131,7 +131,7 @@ class SensitivityModel:
         off = cs.SX.sym("coef", self.no)
         w = cs.vertcat(u, pd.g, pd.theta, phi, off)
         u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
-        tau = (cs.mtimes(tr.curve.ratio(x[:n], cs).T, u_eff) if tr is not None and tr.curved  # rho(q)^T u
+        tau = (pd.input_torque(x[:n], x[n:], u_eff, pd.theta) if tr is not None  # S^T u, rho(q)^T u, the capstan's
                else cs.mtimes(cs.DM(self.B), u_eff))
         qdd = pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g)
         rhs = cs.vertcat(x[n:], qdd)

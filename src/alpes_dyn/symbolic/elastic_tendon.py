@@ -87,6 +87,9 @@ class SeriesElasticSystem:
         if tr.curved:
             raise InputError(f"model: {model.name!r}'s ratios change with q (ratio_curve); the series-elastic tendon "
                              "is built for constant ratios")
+        if tr.has_capstan:  # nothing silently dropped: the sheath's friction on an elastic cable is not built
+            raise InputError(f"model: {model.name!r}'s tendons have sheath friction (capstan); the series-elastic "
+                             "tendon is built without it (its tension is the cable's, not the motor's torque)")
         if tendon.n_motors != tr.n_motors:
             raise InputError(f"tendon: expected {tr.n_motors} motors' values ({', '.join(tr.motor_names)}), "
                              f"got {tendon.n_motors}")

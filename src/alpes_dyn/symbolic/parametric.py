@@ -36,12 +36,16 @@ kind                  meaning                                                   
                       y_k = S q_k + offset + C tau_m,k-1, the torque held
                       before the reading (``tendon_compliance_<motor>``;
                       output only; the tendon's quasi-static limit)
+``capstan``           mu theta of a motor's tendon-sheath friction: the joints    --
+                      get S^T (u - (1 - exp(-mu theta)) |u| tanh(S qd / v_c))
+                      (``capstan_<motor>``; :func:`~alpes_dyn.model.transmission.
+                      capstan_torque`)
 ===================== =========================================================== ==========
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
 (:func:`~alpes_dyn.estimation.identification.identification.identify`); ``encoder_offset`` and ``tilt`` have the
 nominal value 0, can be negative and are fitted as they are (:data:`ADDITIVE_KINDS`); so is
-``tendon_compliance`` (nominal: the model's, 0 for a rigid tendon).
+``tendon_compliance`` and ``capstan`` (nominal: the model's, 0 for a rigid tendon without sheath friction).
 
 Tilt. With the base rotated by R = R_x(tilt_x) R_y(tilt_y) against the frame the gravity vector g is
 given in (the recording's ``gravity_*`` columns, else the model's constant), the gravity in the base
@@ -64,20 +68,22 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.extras import spring_law
+from ..model.transmission import capstan_torque, capstan_velocity
 from ..model.robot import Model
 from .dynamics import block_solve, sparse_dm
 
 __all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "unseen_masses", "ParametricDynamics"]
 
-KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt", "tendon_compliance")
-ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt", "tendon_compliance")
+KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt", "tendon_compliance",
+                          "capstan")
+ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt", "tendon_compliance", "capstan")
 """Kinds fitted as they are (nominal 0, either sign), not in log."""
 OUTPUT_KINDS: tuple[str, ...] = ("encoder_offset", "tendon_compliance")
 """Kinds that change the measured output only, not the dynamics."""
 _UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-", "J_m": "kg m^2",
-          "encoder_offset": "rad", "tilt": "rad", "tendon_compliance": "rad/(N m)"}
+          "encoder_offset": "rad", "tilt": "rad", "tendon_compliance": "rad/(N m)", "capstan": "-"}
 _GROUPS = {"friction": ("F_s", "F_v")}
-_ALWAYS = ("input_gain", "encoder_offset", "tilt", "tendon_compliance")  # a kind selects these even at nominal 0
+_ALWAYS = ("input_gain", "encoder_offset", "tilt", "tendon_compliance", "capstan")  # a kind selects these even at nominal 0
 
 
 @dataclass(frozen=True)
@@ -144,10 +150,10 @@ def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     out.append(PhysicalParameter("input_gain", "input_gain", None, 1.0, "-"))
     tr = model.transmission
     if tr is not None:
-        for kind in ("J_m", "encoder_offset", "tendon_compliance"):
+        for kind in ("J_m", "encoder_offset", "tendon_compliance", "capstan"):
             for k, mo in enumerate(tr.motor_names):
                 nominal = {"J_m": float(tr.rotor_inertia[k]), "encoder_offset": 0.0,
-                           "tendon_compliance": float(tr.tendon_compliance[k])}[kind]
+                           "tendon_compliance": float(tr.tendon_compliance[k]), "capstan": float(tr.capstan[k])}[kind]
                 out.append(PhysicalParameter(f"{kind}_{mo}", kind, None, nominal, _UNITS[kind], mo))
     out += [PhysicalParameter(f"tilt_{a}", "tilt", None, 0.0, "rad") for a in ("x", "y")]
     return out
@@ -317,7 +323,7 @@ class ParametricDynamics:
                 parameterised.add(link)
                 urdf_b, _ = _only_massive(model.urdf, {link})
                 self._mass_params.append((k, masses[link], _Adam(_Shim(urdf_b, model.joint_names))))
-            elif prm.kind in ("J_m", "encoder_offset", "tendon_compliance"):
+            elif prm.kind in ("J_m", "encoder_offset", "tendon_compliance", "capstan"):
                 self._sel[prm.kind].append((k, model.motor_index(prm.motor)))
             elif prm.kind == "tilt":
                 self._sel[prm.kind].append((k, "xy".index(prm.name[-1])))
@@ -335,6 +341,8 @@ class ParametricDynamics:
         self._rotor = model.rotor_matrix if model._rotor else None
         self._curve = tr.curve if tr is not None else None
         self.smooth_velocity = float(model.extras.smooth_velocity)
+        self._capstan = cs.DM(tr.capstan) if tr is not None else None
+        self._capstan_velocity = capstan_velocity(tr.S, self.smooth_velocity) if tr is not None else None
 
     # ------------------------------------------------------------------ pieces
     def _vector(self, kind: str, base: cs.DM, theta: cs.SX) -> cs.SX:
@@ -406,6 +414,19 @@ class ParametricDynamics:
     def input_gain(self, theta: cs.SX) -> Any:
         sel = self._sel["input_gain"]
         return theta[sel[0][0]] if sel else 1.0
+
+    def input_torque(self, q: cs.SX, v: cs.SX, u: cs.SX, theta: cs.SX | None = None) -> cs.SX:
+        """The joint torques (n,), N m, of the motor torques u (m,) through the tendons: S^T u, rho(q)^T u on ratios
+        that change with q, less the tendons' sheath friction where a ``capstan`` is fitted or the model has one
+        (:func:`~alpes_dyn.model.transmission.capstan_torque` at the motor velocities rho(q) v, rad/s). The
+        transmission's :meth:`~alpes_dyn.model.transmission.Transmission.transmitted` with theta's values."""
+        theta = self.theta if theta is None else theta
+        tr = self.model.transmission
+        rho = cs.DM(tr.S) if self._curve is None else self._curve.ratio(q, cs)
+        if self._sel["capstan"] or tr.has_capstan:
+            mu = self._vector("capstan", self._capstan, theta)
+            u = capstan_torque(u, cs.mtimes(rho, v), mu, self._capstan_velocity, cs)
+        return cs.mtimes(self._S.T, u) if self._curve is None else cs.mtimes(rho.T, u)
 
     def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
                          F_torque: cs.SX | None = None) -> cs.SX:

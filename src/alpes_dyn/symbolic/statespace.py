@@ -167,7 +167,7 @@ class StateSpace(Rebuilt):
         self.F = cs.SX.sym("F", len(self.force_names)) if self.force else None
         q, v = self.x[:n], self.x[n:]
         self._curve = tr.curve if input == "motor" and tr.curved else None
-        tau = self.input_torque(q, self.u)
+        tau = self.input_torque(q, self.u, v)
         qdd = self.sym.forward_dynamics(q, v, tau, self.F, self.tip, smooth,
                                         None if (self._legacy_force or not self.force) else self.contacts)
         self.f_expr: cs.SX = cs.vertcat(v, qdd)
@@ -255,11 +255,25 @@ class StateSpace(Rebuilt):
                            lambda q, v: Hq @ q + Hv @ v, names, H)
         return _Output(lambda q, v: cs.mtimes(cs.DM(Hq), q), lambda q, v: Hq @ q, names, H)
 
-    def input_torque(self, q: Any, u: Any) -> Any:
+    def input_torque(self, q: Any, u: Any, v: Any = None) -> Any:
         """The joint torques Gamma (n,) of the input u: B u, or rho(q)^T u for motor torques on ratios that change
-        with q (the transmission's ``ratio_curve``; :attr:`B` is then rho(0)^T). CasADi q, u give SX, numpy
-        arrays give numpy."""
+        with q (the transmission's ``ratio_curve``; :attr:`B` is then rho(0)^T). Motor torques through tendons with
+        sheath friction (the transmission's ``capstan``) lose :func:`~alpes_dyn.model.transmission.capstan_torque`'s
+        share at the motor velocities rho(q) v (joint velocities ``v``, rad/s; required then). CasADi q, u give SX,
+        numpy arrays give numpy."""
         numeric = isinstance(u, np.ndarray) and isinstance(q, np.ndarray)
+        tr = self.model.transmission
+        if self.input == "motor" and tr.has_capstan:
+            if v is None:
+                raise InputError("v: motor torques through tendons with sheath friction (capstan) need the joint "
+                                 "velocities")
+            if numeric:
+                vm = v @ self.B if self._curve is None else self._curve.ratio(q) @ v
+                u = tr.transmitted(u, vm, self.model.extras.smooth_velocity)
+            else:
+                vm = (cs.mtimes(cs.DM(self.B.T), v) if self._curve is None
+                      else cs.mtimes(self._curve.ratio(q, cs), v))
+                u = tr.transmitted(u, vm, self.model.extras.smooth_velocity, cs)
         if self._curve is None:
             return self.B @ u if numeric else cs.mtimes(cs.DM(self.B), u)
         return self._curve.ratio(q).T @ u if numeric else cs.mtimes(self._curve.ratio(q, cs).T, u)
@@ -298,10 +312,10 @@ class StateSpace(Rebuilt):
             raise InputError(f"F: this state space has contact forces as an input; pass F ({self.n_force},)")
         n = self.n
         if self.force and not self._legacy_force:
-            qdd = self.model.forward_dynamics(x[:n], x[n:], self.input_torque(x[:n], u), F, None, self.smooth,
+            qdd = self.model.forward_dynamics(x[:n], x[n:], self.input_torque(x[:n], u, x[n:]), F, None, self.smooth,
                                               self.contacts)
         else:
-            qdd = self.model.forward_dynamics(x[:n], x[n:], self.input_torque(x[:n], u), F if self.force else None, self.tip,
+            qdd = self.model.forward_dynamics(x[:n], x[n:], self.input_torque(x[:n], u, x[n:]), F if self.force else None, self.tip,
                                               self.smooth)
         return np.concatenate([x[n:], qdd])
 

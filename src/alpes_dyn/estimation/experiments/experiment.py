@@ -277,7 +277,8 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
     friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`), the torques u (N+1, m) held
     per sample, segment by segment of constant gravity."""
     N = u.shape[0] - 1
-    sub = max(design.substeps, stable_substeps(truth, design.dt))  # a sharper friction sign asks for more
+    # a sharper friction sign asks for more, and so does a sheath's friction under the torque's tension
+    sub = max(design.substeps, stable_substeps(truth, design.dt, tension=np.abs(u).max(axis=0)))
     x = np.zeros((N + 1, 2 * truth.n))
     x[0, : truth.n] = _mean_equilibrium(truth, u[0], G[0])
     start = 0

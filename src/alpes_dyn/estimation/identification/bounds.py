@@ -11,6 +11,8 @@ F_v, J_m, input_gain                every iterate is positive; a value that ran 
 tendon_compliance    [0, inf)       fitted as it is (nominal 0): a cable does not shorten under tension,
                                     so a value below 0 has the bound active -- the bounded fit's optimum
                                     is the fit with the compliance held at 0 (the active set)
+capstan              [0, inf)       fitted as it is (nominal 0): a sheath's friction does not push the cable
+                                    (mu theta >= 0); below 0 not identified, held at the model's value
 encoder_offset, tilt (-inf, inf)    of the rig and its sensors, either sign: never bounded
 ==================== ============== ===================================================================
 
@@ -39,12 +41,16 @@ RUNAWAY = 1e3
 """A log-fitted parameter that moved by more than this factor from its start (either way) is at its bound in effect
 (a mass run off to 0 in a wrong basin: 1e-6 times its start; the +-20 % draws stay within 1.5 times)."""
 LOWER_BOUND: dict[str, float] = {"K": 0.0, "m": 0.0, "F_s": 0.0, "F_v": 0.0, "J_m": 0.0, "input_gain": 0.0,
-                                 "tendon_compliance": 0.0}
+                                 "tendon_compliance": 0.0, "capstan": 0.0}
 """The physical lower bound of each bounded kind (the unbounded ones, encoder offsets and tilts, are not listed)."""
 EFFECT_OF: dict[str, str] = {"K": "a return spring", "m": "a link's mass", "F_s": "dry friction",
                              "F_v": "viscous friction", "J_m": "the rotor inertia", "input_gain": "a torque-constant error",
-                             "tendon_compliance": "an elastic tendon"}
+                             "tendon_compliance": "an elastic tendon", "capstan": "tendon-sheath friction"}
 """The effect a parameter of each kind stands for, as the verdict names it when the data do not support it."""
+
+
+ADDITIVE_BOUNDED: tuple[str, ...] = ("tendon_compliance", "capstan")
+"""The bounded kinds fitted as they are (nominal 0), their bound 0 closed: no runaway rule (a log-fit's)."""
 
 
 def physical_range(kind: str) -> tuple[float, float, bool]:
@@ -52,7 +58,7 @@ def physical_range(kind: str) -> tuple[float, float, bool]:
     (0, inf) for the log-fitted kinds, [0, inf) for the tendon compliance, the whole line for the rig's own."""
     if kind not in LOWER_BOUND:
         return -math.inf, math.inf, False
-    return LOWER_BOUND[kind], math.inf, kind == "tendon_compliance"
+    return LOWER_BOUND[kind], math.inf, kind in ADDITIVE_BOUNDED
 
 
 def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[float], std: Sequence[float],
@@ -69,7 +75,7 @@ def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[flo
         effect = f"the data do not support {EFFECT_OF[kind]}"
         if v < lo:
             out[name] = f"{what}: below its physical bound {lo:g} (held there); {effect}"
-        elif kind != "tendon_compliance" and v0 > 0 and not (1.0 / RUNAWAY <= v / v0 <= RUNAWAY):
+        elif kind not in ADDITIVE_BOUNDED and v0 > 0 and not (1.0 / RUNAWAY <= v / v0 <= RUNAWAY):
             out[name] = f"{what}: ran off to its bound ({v / v0:.2g} times its start; held at the start); {effect}"
         elif v - Z_INTERVAL * sd <= lo:
             out[name] = f"{what}: its 95 % interval reaches past {lo:g} (held at the start); {effect}"

@@ -29,6 +29,11 @@ effect         what the fit does
                1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.observers.replay.advanced`) while the residual
                falls and the verdict still names it, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
                sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
+``capstan``    (asked for; ``auto`` adds it where a fit's verdict names "tendon-sheath friction", the residual
+               following the tension times the sign of the motor velocity) each tendon's sheath friction
+               ``capstan_<motor>`` (mu theta: the joints get tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c),
+               :func:`~alpes_dyn.model.transmission.capstan_torque`): fitted from 0, written to the file; its
+               round alone (not with the rotor of a compliance seen: the tension's friction looks like a stretch).
 ============== ======================================================================================
 
 A first fit that loses its basin (its stop reason "lost basin"; the joint stop its verdict may name is not believed of a lost fit) is made again in stages: the rigid fit, then the effects one by
@@ -81,8 +86,9 @@ from ..experiments.recording import segment_starts
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
-EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay")
-NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay"}
+EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan")
+NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
+                            "capstan": "tendon-sheath friction"}
 """The effects ``auto`` adds where the first fit's adequacy check names them (a word of the likely missing effect)."""
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 MAX_FIT_DELAY = 3
@@ -138,10 +144,14 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
     """The fit's selection for ``effects``: ``base`` (default K, m and friction: None) with ``tendon_compliance``
     (compliance), ``tilt_y`` or ``tilt`` (tilt, only where the recording has no gravity columns: else its
     orientation is known; :func:`fit_effects` fits it on a recording turned between orientations too: its
-    columns the rig's nominal orientations, the mount's error on top of them unknown) and ``encoder_offset`` (offset) added. None when nothing is added to the default."""
+    columns the rig's nominal orientations, the mount's error on top of them unknown), ``encoder_offset`` (offset)
+    and ``capstan`` (capstan: each tendon's sheath friction, from the model's value, 0 without one) added. None
+    when nothing is added to the default."""
     extra = []
     if "compliance" in effects:
         extra.append("tendon_compliance")
+    if "capstan" in effects:
+        extra.append("capstan")
     if "tilt" in effects and not has_gravity:
         extra.append("tilt_y" if _planar(model) else "tilt")
     if "offset" in effects:
@@ -380,6 +390,12 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
             more = tuple(e for e in named_effects(best) if e not in attempted)
             if "rotor" not in attempted and "rotor" not in more and _elastic(best):
                 more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
+            if "capstan" in more:
+                # alone: a friction growing with the tension is also a cable "stretching" with it. Our finger2 with
+                # mu theta 0.02, `experiment --rig both` then `identify` (2026-12-05): the sheath named after the
+                # stick-slip round, with the rotor for the compliance seen: 1.53 counts, worse, flagged; alone 0.588,
+                # adequate, mu theta 0.0195, K and m within 0.05 %
+                more = ("capstan",)
             if not more and not best.trustworthy:
                 # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
                 # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on

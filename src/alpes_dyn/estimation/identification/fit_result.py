@@ -116,7 +116,8 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
       ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
     * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``;
     * the chain's tendon compliance ``tendon_compliance_<motor>``: ``transmission.tendon_compliance`` (the
-      ab/adduction gear's stays in the result).
+      ab/adduction gear's stays in the result); its sheath friction ``capstan_<motor>``: ``transmission.capstan``
+      (likewise).
 
     Encoder offsets, the tilt angles and ``input_gain`` are of the recording and its sensors (the encoder's
     zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
@@ -194,10 +195,10 @@ def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb:
         pp = cat.get(name)
         if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
             continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
-        if pp is not None and pp.kind == "tendon_compliance":
+        if pp is not None and pp.kind in ("tendon_compliance", "capstan"):
             if pp.motor.endswith("_abduction"):
-                continue  # the ab/adduction gear's stretch: of this rig's gear, kept in the result, not the file
-            scalars["tendon_compliance"] = (float(value), _sd(sd))
+                continue  # the ab/adduction gear's stretch or friction: of this rig's gear, kept in the result
+            scalars[pp.kind] = (float(value), _sd(sd))
             continue
         if pp is not None and pp.kind == "J_m":
             if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
@@ -246,6 +247,13 @@ def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason:
             upd["transmission.tendon_compliance"] = Param(
                 value, "rad/(N m)", "identified", reason, old.description if old is not None else
                 "the flexion tendons' stretch seen by the encoder per N m of motor torque (y_k = S q_k + C tau_m,k-1)", sd)
+            continue
+        if field_ == "capstan":
+            old = p.raw.get("transmission.capstan")
+            upd["transmission.capstan"] = Param(
+                value, "-", "identified", reason, old.description if old is not None else
+                "mu theta of the flexion tendons' sheath friction (the joints get "
+                "tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c))", sd)
             continue
         if field_ == "J_m":
             old = p.raw.get("transmission.J_m")

@@ -217,7 +217,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     check_selection(model, parameters)  # before anything is compiled
     check_drift(drift)
     if substeps is None:
-        substeps = stable_substeps(model, dt)
+        substeps = stable_substeps(model, dt, tension=np.abs(rec.torque).max(axis=0))  # (a sheath's, if any)
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)

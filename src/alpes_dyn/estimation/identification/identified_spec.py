@@ -5,7 +5,7 @@ well as an Alpes model; its result goes into the robot's own spec file (``alpes-
 FILE.toml -o ident.toml``), which every command reads back (``--spec ident.toml``):
 
 * a spring ``K_<joint>`` into ``[stiffness]``, a friction ``F_s_<joint>``, ``F_v_<joint>`` into ``[coulomb]``,
-  ``[viscous]``; a motor's ``J_m_<motor>`` and ``tendon_compliance_<motor>`` into its ``[[motor]]`` entry;
+  ``[viscous]``; a motor's ``J_m_<motor>``, ``tendon_compliance_<motor>`` and ``capstan_<motor>`` into its ``[[motor]]`` entry;
 * each with its standard error in the ``[identified]`` section (``source = "identified"``), with the fit's
   record (converged, trustworthy, the adequacy verdict, the residual: the fields of
   :data:`~alpes_dyn.model.params.IDENTIFICATION_FIELDS`);
@@ -40,7 +40,7 @@ from .fit_result import _printable, _record  # the same record as a parameter fi
 __all__ = ["identified_spec", "identified_urdf", "identified_mjcf", "write_identified_spec", "spec_misfits"]
 
 _TABLE = {"K": "stiffness", "F_s": "coulomb", "F_v": "viscous"}
-_MOTOR_FIELD = {"J_m": "rotor_inertia", "tendon_compliance": "tendon_compliance"}
+_MOTOR_FIELD = {"J_m": "rotor_inertia", "tendon_compliance": "tendon_compliance", "capstan": "capstan"}
 _OF_THE_RECORDING = ("encoder_offset", "tilt", "input_gain")
 
 
@@ -73,8 +73,8 @@ def identified_spec(result: Any, base: TransmissionSpec, masses: str = "refuse")
                          "fit without them (e.g. --parameters K,friction) to write a spec")
     cat = {p.name: p for p in parameter_catalogue(model)}
     tables = {t: dict(getattr(base, t)) for t in _TABLE.values()}
-    motors = {m.name: {"rotor_inertia": m.rotor_inertia, "tendon_compliance": m.tendon_compliance}
-              for m in base.motors}
+    motors = {m.name: {"rotor_inertia": m.rotor_inertia, "tendon_compliance": m.tendon_compliance,
+                       "capstan": m.capstan} for m in base.motors}
     std: dict[str, dict[str, float]] = {}
     for name, value, sd in zip(result.names, result.values, result.std):
         p = cat.get(name)
@@ -85,7 +85,7 @@ def identified_spec(result: Any, base: TransmissionSpec, masses: str = "refuse")
             tables[_TABLE[p.kind]][p.joint] = max(float(value), 0.0)
             std.setdefault(_TABLE[p.kind], {})[p.joint] = sd
         elif p.kind in _MOTOR_FIELD:
-            value = max(float(value), 0.0) if p.kind == "J_m" else float(value)
+            value = max(float(value), 0.0) if p.kind in ("J_m", "capstan") else float(value)
             motors[p.motor][_MOTOR_FIELD[p.kind]] = value
             std.setdefault(_MOTOR_FIELD[p.kind], {})[p.motor] = sd
         else:

@@ -158,7 +158,7 @@ class DiscreteModel:
         d = [th.get(f"{DISTURBANCE_PREFIX}{mn}", 0.0) for mn in motors]
         if motors:  # an additive torque per motor (N m), a random-walk state
             u = u + cs.vertcat(*d)
-        tau = a * ss.input_torque(q, u)
+        tau = a * ss.input_torque(q, u, v)
         if "spring_gain" in th:  # the model applies k (q - q_rest); the gain b makes it b k (q - q_rest)
             tau = tau + (1.0 - th["spring_gain"]) * ss.model.extras.spring_torque(q, cs)
         F = a * w[ss.n_inputs:] if ss.force else None

@@ -213,13 +213,14 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     return filt, z0, P0
 
 
-def _substeps(model: Model, dt: float, substeps: int | None) -> int:
+def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None) -> int:
     """The observer's RK4 steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
-    (:func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth law at 1 kHz), 1 without friction."""
+    (:func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth law at 1 kHz; with the tendons' sheath
+    friction at ``tension``, the recording's largest torques, where given), 1 without friction."""
     if substeps is not None:
         return substeps
     has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
-    return stable_substeps(model, dt) if has_friction else 1
+    return stable_substeps(model, dt, tension=tension) if has_friction else 1
 
 
 def recording_filter(model: Model, observer: str = "ekf", dt: float = 1e-3, *, torque_noise: float = 5e-4,
@@ -297,7 +298,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
     edges = np.append(segment_starts(rec.gravity), N - 1)  # a recording turned between orientations: in turn
     m_obs, angles, offsets = _observer_model(model, _piece(rec, edges[0], edges[1]), tilt, encoder_offset)
-    substeps = _substeps(m_obs, dt, substeps)
+    substeps = _substeps(m_obs, dt, substeps, np.abs(rec.torque).max(axis=0))
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
