@@ -234,8 +234,8 @@ def finger(d: Path, seed: int, duration: float, smooth_velocity: float = FINGER_
     base = ["--model", str(urdf), "--spec", str(spec)]
     out: dict[str, Any] = {"n": sub.n, "joints": list(sub.joint_names), "motors": list(sub.motor_names),
                            "true_masses": true_m, "duration_s": duration, "smooth_velocity": smooth_velocity}
-    # on the documented 4 s experiment: over 32 s the springless finger's sensitivities grow without bound (its
-    # coupled pair's split is held by friction alone) and the command refuses them as not finite
+    # on the documented 4 s experiment: over 32 s the command refused this springless finger's sensitivities as not
+    # finite (2026-12-05, seed 7)
     out["identifiability_wall_s"], idf = cli("identifiability", *base, "--parameters", FIT)
     st, pr = idf["structural"], idf["practical"]
     out["identifiability"] = {"rank": f"{st['rank']}/{st['dimension']}", "identifiable": st["identifiable"],
