@@ -239,16 +239,32 @@ def foreign_hands(r: Result) -> list[str]:
                    f"{hh['experiment_wall_s']:.1f} s, identify --chain rh_A_FFJ0 {hh['identify']['wall_s']:.1f} s "
                    f"(converged {hh['identify']['converged']}), estimate --chain {hh['estimate']['wall_s']:.1f} s "
                    f"(worst joint {hh['estimate']['worst_rmse_deg']:.3f} deg on our simulator's recording)")
+        if hh.get("codegen"):
+            c = hh["codegen"]
+            out.append(f"codegen of the held hand's EKF ({c['states']} states) {c['wall_s']:.1f} s: "
+                       f"{c['c_bytes'] / 1e6:.1f} MB of C, {c['c_lines']} lines (not compiled by the benchmark)")
     if f:
         i, idf = f["identify"], f["identifiability"]
         out.append(f"first finger, wrist held ({f['n']} joints): identifiability {f['identifiability_wall_s']:.1f} s "
-                   f"(Cramér-Rao " + ", ".join(f"{k} {100 * v:.1f} %" for k, v in idf["mass_relative_std"].items())
+                   f"(Cramér-Rao on the 4 s experiment " + ", ".join(f"{k} {100 * v:.1f} %" if v is not None else
+                                                                    f"{k} none"
+                                                                    for k, v in idf["mass_relative_std"].items())
                    + f"), experiment {f['experiment_wall_s']:.1f} s, identify {i['wall_s']:.1f} s, codegen "
                    f"{f['codegen_wall_s']:.1f} s")
-        out.append("masses on the MuJoCo recording: " + ", ".join(f"{k} {100 * v:+.1f} %" for k, v in
-                                                                  i["mass_error"].items())
+        if "duration_s" in f:
+            out.append(f"the finger's experiment {f['duration_s']:g} s, trimmed on the drawn finger (``--true-model``, "
+                       f"``--amplitude 1``), MuJoCo's dry friction a real stick-slip (``mjcf --stiction``), the fit's "
+                       f"v_s {f['smooth_velocity']:g} rad/s; MuJoCo's joints within {f['mujoco_vs_ours_deg']:.2f} deg "
+                       "of our simulator's under the same torque")
+        std = i.get("mass_std", {})
+        out.append("masses on the MuJoCo recording: " + ", ".join(
+            f"{k} {100 * v:+.1f} %" + (f" (sd {100 * std[k]:.1f} %)" if k in std else "")
+            for k, v in i["mass_error"].items())
                    + f" (converged {i['converged']}, trustworthy {i['trustworthy']}; goal within 5 %: "
                    f"{_met(i['goal_met'])})")
+        if i.get("reasons") and not i["trustworthy"]:
+            out.append("not trusted: " + "; ".join(i["reasons"]) + ("; likely missing: " + "; ".join(
+                i["likely_missing"]) if i.get("likely_missing") else ""))
         if i.get("mjcf_output"):
             out.append("the fit written back into the Shadow hand's MJCF (``identify --mjcf``): MuJoCo's compiled masses "
                        f"and frictions vs the fit's, largest relative difference {i['mjcf_mismatch']:.1g}")
