@@ -73,6 +73,7 @@ from .torque_lines import line_basis
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
+from .held import held_start
 from .shooting import ShootingProblem, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
@@ -313,9 +314,13 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
         result.reason += "; no fitted parameter is identified"
         return result
     held = {n: v for n, v in zip(result.names, result.values) if n in bad and kind.get(n) == "tendon_compliance"}
+    held_model = _compliance_held(model, held)
+    at = {pp.name: pp.nominal for pp in parameter_catalogue(held_model) if pp.name in bad}
+    # started where the first fit's linearisation puts the fit with them held (module held), else from the first fit
+    start = held_start(result, at) if len(at) == len(bad) else None
     with warnings.catch_warnings():  # the verdict is reported on the fit kept
         warnings.simplefilter("ignore", AdequacyWarning)
-        again = identify(_compliance_held(model, held), recording, keep, start=result, **settings)
+        again = identify(held_model, recording, keep, start=start or result, **settings)
     again.not_identified = {**bad, **again.not_identified}
     first = dict(zip(result.names, result.initial))
     again.initial = np.array([first.get(n, v) for n, v in zip(again.names, again.initial)])
@@ -439,7 +444,8 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
     solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance and the effects' regressors
-    P_rho = solve_Kz(pb.unit_p)[nv:nv + p] * s2
+    Z = solve_Kz(pb.unit_p)  # (nz + nc, p): the covariance's columns, and how the optimum moves with each parameter
+    P_rho = Z[nv:nv + p] * s2
     theta = pb.values(out.glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     # a parameter the data do not see at the solution (its columns zero: tilt_x on a planar finger at a level
@@ -463,7 +469,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         iterations=it, converged=out.converged, seconds=time.perf_counter() - t_start,
         compile_seconds=sens.compile_seconds, states=out.nodes, node_times=pb.rec.t[np.arange(pb.n_int) * pb.L],
         model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=verdict,
-        solution=pb.solution(out.nodes, out.offs, out.glob), drift=_drift_of(pb, out.glob))
+        solution=pb.solution(out.nodes, out.offs, out.glob, Z[:pb.nz].copy()), drift=_drift_of(pb, out.glob))
 
 
 def _drift_of(pb: ShootingProblem, glob: np.ndarray) -> dict[str, Any] | None:

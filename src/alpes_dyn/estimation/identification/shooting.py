@@ -55,12 +55,20 @@ two chunks); the states alone likewise, by the compiled step's per-sample inputs
 class ShootingSolution:
     """A fit's shooting variables at its end, to start another fit of the same recording from (a warm start):
     ``nodes`` (S, nx) the intervals' start states, ``offs`` (S, no) their torque corrections, ``lines`` (ncg,) the
-    whitened line-coefficient corrections, ``samples`` the samples per interval (L) they were cut at."""
+    whitened line-coefficient corrections, ``samples`` the samples per interval (L) they were cut at, ``drift`` (nd,)
+    the drift's knots (counts; empty without one). ``response`` (nz, p): how the optimum moves with each parameter
+    held off it, to first order (the undamped KKT system's inverse applied to each parameter's unit vector: the
+    variables' part), with ``additive`` (p,) and ``scale`` (p,) how the fit's variables map to the values
+    (:meth:`ShootingProblem.values`); None where not computed (:mod:`~alpes_dyn.estimation.identification.held`)."""
 
     nodes: np.ndarray
     offs: np.ndarray
     lines: np.ndarray
     samples: int
+    drift: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    response: np.ndarray | None = None
+    additive: np.ndarray | None = None
+    scale: np.ndarray | None = None
 
 
 @dataclass
@@ -488,10 +496,12 @@ class ShootingProblem(EncoderOutput):
 
     # --- the start --------------------------------------------------------------------------------------------
 
-    def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> ShootingSolution:
+    def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                 response: np.ndarray | None = None) -> ShootingSolution:
         """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
-        name, :func:`start_values`)."""
-        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L)
+        name, :func:`start_values`), with the optimum's ``response`` (nz, p) where given."""
+        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L,
+                                glob[self.p + self.ncg:].copy(), response, self.additive.copy(), self.scale.copy())
 
     def warm_variables(self, sol: ShootingSolution | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
@@ -501,7 +511,8 @@ class ShootingProblem(EncoderOutput):
         if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
                 or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
             return None
-        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, np.zeros(self.nd)])
+        drift = sol.drift if sol.drift.shape == (self.nd,) else np.zeros(self.nd)  # the same drift, else from 0
+        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, drift])
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
