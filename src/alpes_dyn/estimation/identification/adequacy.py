@@ -46,8 +46,9 @@ from typing import Any, Mapping, Sequence
 import numpy as np
 
 from ...errors import AlpesDynWarning, InputError
-from ...model.ratio_curve import encoder_angles, encoder_rates, encoder_sensitivity
+from ...model.ratio_curve import encoder_angles, encoder_sensitivity
 from .harmonics import NONLINEARITY, harmonic_ratio
+from .responses import effect_responses, torque_explained  # noqa: F401  (their home before)
 
 __all__ = ["AdequacyWarning", "effect_responses", "torque_explained", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
@@ -80,7 +81,8 @@ within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times 
 nonlinearity shaped otherwise than in the model named (last) where the residual's power at the excitation's
 harmonics and intermodulation products is over ``harmonic_ratio`` times its power elsewhere
 (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1); a
-drift (a ramp, judged alone) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05)."""
+drift (a ramp of the offset or the torque's response to a ramp of the gain, each judged alone, the one explaining
+more) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")  # named first (range_exit)
@@ -109,6 +111,7 @@ SIGNATURES: dict[str, str] = {
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
     "bias": "an encoder offset or a tilted palm (a constant bias of the residual)",
     "drift": "a drift of the encoder offset (a residual trending with time; --drift offset)",
+    "gain_drift": "a drift of the torque constant (the response to the torque growing with time; --drift gain)",
     "torque_rate": "a torque delay (the recorded torque lagging the motor's: a torque following the torque's own "
                    "rate; --effects delay)",
 }
@@ -474,8 +477,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"residual {rms:.3g} counts RMS is {ratio:.2f}x the sensor floor {floor.total:.3g}")
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
-    drift = (regs := dict(regressors or {})).pop("drift", None)  # a ramp, judged alone (it takes others' shares)
-    sig = {**signatures(e, regs), **({"drift": signatures(e, {"drift": drift})["drift"]} if drift is not None else {})}
+    regs = dict(regressors or {})  # the drifts' (a ramp of the offset, of the gain) judged alone: they take others' shares
+    ramps = {k: regs.pop(k) for k in ("drift", "gain_drift") if k in regs}
+    sig = {**signatures(e, regs), **{k: signatures(e, {k: R})[k] for k, R in ramps.items()}}
     if velocity is not None:
         sig["reversals"] = {"share": reversal_ratio(e, velocity), "coefficient": 0.0}
     if lines is not None and len(lines) and dt is not None:
@@ -484,13 +488,14 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []
     if reasons:
-        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES and k != "drift"), reverse=True)
+        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES and k not in ramps), reverse=True)
         top = ranked[0][0] if ranked else 0.0
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
                    and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
         # acceleration response is close to the torque's rate (a rotor mismatch named both)
-        if sig.get("drift", {}).get("share", 0.0) >= (th["drift_share"] if missing else th["signature_share"]):
-            missing = [SIGNATURES["drift"]] + missing  # (THRESHOLDS' docstring)
+        ramp = max(ramps, key=lambda k: sig[k]["share"], default=None)  # the offset's or the gain's, the stronger
+        if ramp and sig[ramp]["share"] >= (th["drift_share"] if missing else th["signature_share"]):
+            missing = [SIGNATURES[ramp]] + missing  # (THRESHOLDS' docstring)
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:
             stick = SIGNATURES["sign_velocity"]
             missing = [stick] + [m for m in missing if m != stick]
@@ -545,55 +550,3 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
     return Validation(fit_percent=fit_percent(ys, yh), nrmse=nrmse(ys, yh),
                       residual_rms=float(np.sqrt(np.mean((ys - yh) ** 2))), prefix_s=0.0, samples=int(ys.shape[0]),
                       recording_path=recording_path)
-
-
-def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
-               corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
-               step: float, dt: float, chunk_doubles: int = 2**20) -> dict[str, np.ndarray]:
-    """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
-    fitted node) to a motor torque following the sign of the motor velocity, the velocity, the
-    acceleration (dry friction, viscous friction, a rotor's inertia on the tendon) and the torque's own forward
-    difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
-    torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite
-    differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
-    n, (B, L) = sens.n, Ub.shape[:2]
-    N1 = x_fit.shape[0]
-    vm = encoder_rates(S, x_fit[:, :n], x_fit[:, n:])  # (N+1, m) motor velocity, rad/s
-    held = Ub.reshape(B * L, -1)[: N1 - 1]  # (N, nu) the torque held over each period, as the fit takes it
-    rate = np.diff(held, axis=0, append=held[-1:])
-    sigs = {"sign_velocity": np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12)), "velocity": vm,
-            "acceleration": np.gradient(vm, dt, axis=0), "torque_rate": np.concatenate([rate, rate[-1:]])}
-    eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
-    pert = []
-    for g in sigs.values():  # a loop over the four effects
-        g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
-        gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
-        pert.append(gp.reshape(B, L, -1))
-    per_int = corr is not None and (Psib is None or np.ndim(corr) == 3)  # per interval (a run's own lines too)
-    y, k = [], max(1, chunk_doubles // (L * sens.nw))  # (600 s: 264 MB)
-    for d in [0.0] + pert:  # the fitted run, then one per effect (one at a time: a 60 s record's are 30 MB each)
-        U, C = Ub + d, (lambda a: corr[a:a + k]) if per_int else (lambda a: corr)
-        xs = np.concatenate([sens.run(nodes[a:a + k], U[a:a + k], Gb[a:a + k], theta, C(a), sensitivities=False,
-                                      basis=None if Psib is None else Psib[a:a + k])[0] for a in range(0, B, k)])
-        y.append(encoder_angles(S, xs[:, :, :n]) / step)
-    return {name: (y[i + 1] - y[0]) * valid[:, :, None] / eps for i, name in enumerate(sigs)}
-
-
-def torque_explained(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
-                      offs: np.ndarray, valid: np.ndarray, S: np.ndarray, step: float, sigma: float, L: int) -> float:
-    """RMS encoder difference (counts) the recorded torque's white noise ``sigma`` (N m) makes through the
-    fitted model, each interval from its fitted node, the noise's per-interval mean removed (the fit's
-    per-interval corrections take it): a Monte Carlo of two draws (seed 0), states only."""
-    rng = np.random.default_rng(0)
-    R = 2
-    w = sigma * rng.standard_normal((R,) + Ub.shape)
-    w -= w.mean(axis=2, keepdims=True)
-    B = Ub.shape[0]
-    U = np.concatenate([Ub[None], Ub[None] + w]).reshape((R + 1) * B, L, -1)
-    x0 = np.tile(nodes, (R + 1, 1))
-    G = np.tile(Gb, (R + 1, 1, 1))
-    off = np.tile(offs, (R + 1, 1))
-    xs, _ = sens.run(x0, U, G, theta, off, sensitivities=False)
-    y = encoder_angles(S, xs[:, :, : S.shape[1]]).reshape(R + 1, B, L + 1, -1) / step
-    d = (y[1:] - y[:1]) * valid[None, :, :, None]
-    return float(np.sqrt(np.sum(d**2) / (R * max(int(valid.sum()), 1) * S.shape[0])))

@@ -1,4 +1,6 @@
-"""The start of a fit again with parameters held, from the first fit's linearisation (issue 39).
+"""Warm starts of the shooting fit: what a fit leaves to start another from (:class:`ShootingSolution`), the values it
+starts from (:func:`start_values`), and the start of a fit again with parameters held, from the first fit's
+linearisation (:func:`held_start`, issue 39).
 
 Where a fitted parameter is not identified (:mod:`~alpes_dyn.estimation.identification.bounds`: a tendon compliance
 whose 95 % interval reaches past 0, say), :func:`~alpes_dyn.estimation.identification.identification.identify` fits
@@ -11,7 +13,7 @@ equality-constrained quadratic problem of the last Gauss-Newton step with E' z =
     dz = Z_H (P_HH)^-1 delta,
 
 Z_H the columns of the undamped KKT system's inverse for the parameters H (the variables' rows:
-:attr:`~alpes_dyn.estimation.identification.shooting.ShootingSolution.response`, computed with the covariance at
+:attr:`~alpes_dyn.estimation.identification.held.ShootingSolution.response`, computed with the covariance at
 no extra factorisation) and P_HH their rows of it (the covariance's block, unscaled). :func:`held_start` gives the
 fit again that start; its stopping rule, continuity and the line search still decide (the whole fit runs where the
 warm start does not converge: :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve`).
@@ -21,11 +23,55 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from typing import Any, Mapping
+from dataclasses import dataclass
+from typing import Any, Mapping, Sequence
 
 import numpy as np
 
-__all__ = ["held_start"]
+from ...errors import InputError
+
+__all__ = ["held_start", "ShootingSolution", "start_values"]
+
+
+@dataclass(frozen=True)
+class ShootingSolution:
+    """A fit's shooting variables at its end, to start another fit of the same recording from (a warm start):
+    ``nodes`` (S, nx) the intervals' start states, ``offs`` (S, no) their torque corrections, ``lines`` (ncg,) the
+    whitened line-coefficient corrections, ``samples`` the samples per interval (L) they were cut at, ``drift`` (nd,)
+    the drift's knots (counts; empty without one). ``response`` (nz, p): how the optimum moves with each parameter
+    held off it, to first order (the undamped KKT system's inverse applied to each parameter's unit vector: the
+    variables' part), with ``additive`` (p,) and ``scale`` (p,) how the fit's variables map to the values
+    (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.values`); None where not computed
+    (:func:`held_start`)."""
+
+    nodes: np.ndarray
+    offs: np.ndarray
+    lines: np.ndarray
+    samples: int
+    drift: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    response: np.ndarray | None = None
+    additive: np.ndarray | None = None
+    scale: np.ndarray | None = None
+
+
+def start_values(theta0: np.ndarray, names: Sequence[str], additive: np.ndarray,
+                 start: Mapping[str, float]) -> np.ndarray:
+    """``theta0`` with the values of ``start`` (by parameter name) put in; :class:`~alpes_dyn.InputError` naming
+    a parameter that is not fitted, or a value that is not a finite number (positive unless additive)."""
+    if not isinstance(start, Mapping):
+        raise InputError(f"start: expected a mapping of parameter names to values (or an earlier "
+                         f"IdentificationResult), got {type(start).__name__}")
+    theta = theta0.copy()
+    for name, v in start.items():
+        if name not in names:
+            raise InputError(f"start: {name!r} is not a parameter of this fit (fitted: {', '.join(names)})")
+        k = list(names).index(name)
+        ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, (bool, np.bool_))
+        if not ok or not math.isfinite(float(v)) or (not additive[k] and float(v) <= 0):
+            need = "a finite number" if additive[k] else "a finite number > 0"
+            raise InputError(f"start: {name} = {v!r}: expected {need}")
+        theta[k] = float(v)
+    return theta
 
 
 def held_start(result: Any, held: Mapping[str, float]) -> Any | None:
@@ -33,7 +79,7 @@ def held_start(result: Any, held: Mapping[str, float]) -> Any | None:
     linearised optimum with the parameters ``held`` (name -> the value each is held at, in its unit) at those
     values: its ``values`` and its ``solution``'s nodes, torque corrections, line corrections and drift moved by dz
     (the module docstring), to start ``identify(..., start=...)`` from. None where the result carries no response
-    (:attr:`~alpes_dyn.estimation.identification.shooting.ShootingSolution.response`), a held value is not
+    (:attr:`~alpes_dyn.estimation.identification.held.ShootingSolution.response`), a held value is not
     reachable in the fit's variables (a log-fitted one at or below 0: its bound, not a value), or the move is not
     finite."""
     sol = getattr(result, "solution", None)
