@@ -21,6 +21,7 @@ tight bounds where IPOPT did not (the issue 18 measurement).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -303,8 +304,13 @@ class GaussNewton:
                 solve_K, c_scale: np.ndarray, slack: float):
         """Continuity restored without a Gauss-Newton step: the minimum-norm correction that removes the defects
         ``at.c`` to first order (the second-order correction of :meth:`line_search`, from the same factorised KKT
-        system ``solve_K``). Returns (nodes, offs, glob, the evaluation there with its Jacobians) where the defects
-        fall below 1e-6 of ``c_scale`` and the cost rises by at most ``slack``, else None."""
+        system ``solve_K``). Returns (nodes, offs, glob, the evaluation there) where the defects fall below 1e-6 of
+        ``c_scale`` and the cost rises by at most ``slack``, else None. The evaluation's residuals, defects and states
+        are the new point's, its Jacobians ``at``'s: the correction moves no parameter by a tenth of its standard
+        error (the stopping rule that asks for it), so the Jacobians differ to second order in it, and the
+        covariance and the verdict's projections taken with them are the same to that order; evaluating them again
+        was the dearest evaluation of a fit (all the sensitivities of the whole record: 1.5 s of a 60 s record's,
+        twice in ``--effects auto``'s two fits)."""
         nx, nz, nv = pb.nx, pb.nz, pb.nv
         try:
             d2 = solve_K(np.concatenate([np.zeros(nz), -at.c.reshape(-1)]))[:nz]
@@ -317,7 +323,7 @@ class GaussNewton:
             return None
         if float(np.max(np.abs(trial.c) / c_scale, initial=0.0)) >= 1e-6 or trial.cost > at.cost + slack:
             return None
-        return (*new, pb.evaluate(*new))
+        return (*new, dataclasses.replace(trial, J=at.J, Cv=at.Cv, Cr=at.Cr))
 
     def constrained(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                     e: Evaluation, c_scale: np.ndarray, bar: _Progress) -> SolverResult:
