@@ -104,9 +104,10 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str, model: str = "finger3") -> dict:
+def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str, robot: str = "finger3") -> dict:
     """One duration, in this process: the record read from ``path``, the fit (``api`` or ``cli``), then the
-    references ``kkt`` (``dense``, ``superlu``) on the same record; peak RSS after the fit."""
+    references ``kkt`` (``dense``, ``superlu``) on the same record; peak RSS after the fit. ``robot`` hand:
+    ``alpes-dyn identify --model hand`` (:func:`_hand_row`)."""
     import warnings
 
     import numpy as np
@@ -125,7 +126,7 @@ def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str,
     design = ExperimentDesign(duration=duration)
     model = ad.Model.alpes("finger3", friction=True)
     t0, cpu0 = time.perf_counter(), _cpu()
-    if model == "hand":
+    if robot == "hand":
         import contextlib
         import io
 

@@ -63,7 +63,8 @@ def test_a_drifting_torque_constant_is_fitted_with_the_gain_drift_and_flagged_wi
     """finger2 +-20 % (seed 3), 1 s, the documented sensors (seed 1), the plant's torque constant ramping by 5 % (the
     torque applied 1 + 0.05 t / T times the recorded one: a warming motor). With drift="gain": converged, adequate,
     the scale at the end within a fifth of the ramp of 1.05 and 1 at the start (the relative drift), K and m within
-    1 %. Without: the verdict is not adequate. With "offset,gain": both drifts reported, the offset's near 0."""
+    1 % (0.13 % measured, 2026-12-05). Without: the verdict is not adequate and names the torque constant's drift
+    first (K and m 1.0-3.9 % off). Both drifts at once: the Jacobian test below."""
     import alpes_dyn.estimation.experiments.experiment as ex
 
     simulate = ex._simulate
@@ -80,18 +81,12 @@ def test_a_drifting_torque_constant_is_fitted_with_the_gain_drift_and_flagged_wi
     fit = identify(f, rec, progress=False, excitation=lines, drift="gain")
     err = np.abs(fit.values[:4] / truth - 1)
     scale = fit.drift["torque_scale"]["finger"]
-    print(err, scale, fit.adequacy.summary())
     assert fit.trustworthy and np.max(err) < 0.01
     assert scale[0] == 1.0 and abs(scale[1] - 1.05) < 0.2 * 0.05 and "counts" not in fit.drift
     with pytest.warns(Warning):
         plain = identify(f, rec, progress=False, excitation=lines)
-    print(np.abs(plain.values[:4] / truth - 1), plain.adequacy.summary())
     assert not plain.adequacy.adequate and plain.drift is None
     assert plain.adequacy.likely_missing[0] == SIGNATURES["gain_drift"]
-    both = identify(f, rec, progress=False, excitation=lines, drift="offset,gain")
-    print(both.drift)
-    assert both.trustworthy and abs(both.drift["torque_scale"]["finger"][1] - 1.05) < 0.2 * 0.05
-    assert abs(both.drift["counts"]["finger"][1]) < 2.0
 
 
 def test_the_gain_drifts_jacobian_against_central_differences():
