@@ -32,7 +32,8 @@ from ...progress import _Progress
 from .shooting import Evaluation, ShootingProblem
 
 __all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
-           "CRAWL_STEPS", "SOC_STEPS", "SOFT_PHASES", "BASIN_LIMIT", "JOIN_STEPS"]
+           "CRAWL_STEPS", "SOC_STEPS", "SOFT_PHASES", "BASIN_LIMIT", "JOIN_STEPS",
+           "WINDOW_ITERATIONS"]
 
 MAX_LOG_STEP = 0.3
 """The trust region on log theta per iteration (at most a 35 % change of any parameter)."""
@@ -67,6 +68,11 @@ JOIN_STEPS = 2
 """Gauss-Newton steps at most of :meth:`GaussNewton.join_nodes`: on 60 s of finger3 (seed 21) from the model's
 response at the window's parameters, the defects fell to 0.26 and 0.007 of the nodes' scale in two steps, and stage 3
 converged in as many iterations from there as after four steps (defects 9e-5) or after the homotopy."""
+WINDOW_ITERATIONS = 15
+"""Stage 3's iterations at most from a long record's window start (:mod:`~alpes_dyn.estimation.identification.long_record`;
+then the whole fit of the whole record): the fingers' took 4-6 (finger3 seed 21 at 16, 60 and 600 s, the hand's four
+fingers at 60 s), while the hand's thumb at 60 s (seed 21) crawled from it into the 50-iteration cap at 34.8 counts
+(100 s of a 271 s fit) before the whole fit converged in 8."""
 BASIN_LIMIT = 3.0 / math.sqrt(12.0)
 """counts: an encoder residual above three times the quantisation floor (1/sqrt(12) count) asks for the second
 start (the wrong basins leave 4-8 counts, the right one the encoder noise, 0.58)."""
@@ -432,12 +438,17 @@ class GaussNewton:
         stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
         ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
         Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:
-        one evaluation of the whole record fewer); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
+        one evaluation of the whole record fewer; stage 3 from there at most :data:`WINDOW_ITERATIONS`); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
         total_its = 0
         if warm is not None:
             bar = _Progress(self.max_iterations, "identify (warm start)", self.show)
             c_scale = np.maximum(np.abs(warm[0]).max(axis=0), 1e-3)
-            out = self.constrained(pb, *warm, warm_at.pop() if warm_at else pb.evaluate(*warm), c_scale, bar)
+            cap, self.max_iterations = self.max_iterations, (min(self.max_iterations, WINDOW_ITERATIONS) if warm_at
+                                                             else self.max_iterations)
+            try:  # a long record's start from its window: given up after WINDOW_ITERATIONS
+                out = self.constrained(pb, *warm, warm_at.pop() if warm_at else pb.evaluate(*warm), c_scale, bar)
+            finally:
+                self.max_iterations = cap
             bar.close()
             if out.converged and pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
                 return out
