@@ -13,7 +13,12 @@ error of K and m against the truth. Optionally the dense KKT (``kkt="dense"``, t
 ``--dense-up-to`` seconds) and SuperLU (``kkt="superlu"``, the general sparse LU the banded one replaced).
 
     python benchmarks/fit_scaling.py [--durations 4,16,60] [--fit api|cli] [--records DIR] [--seed 21]
-                                     [--dense-up-to 0] [--superlu-up-to 0] [--json]
+                                     [--dense-up-to 0] [--superlu-up-to 0] [--model finger3|hand] [--json]
+
+``--model hand``: the whole hand, every chain drawn +-20 % (``alpes-dyn experiment --model hand --perturb 0.2``: the
+six motors excited at once) and fitted chain by chain as ``alpes-dyn identify --model hand`` fits it (``--fit cli``
+only); a row's iterations are every chain's, its errors the worst chain's (the thumb's springs and masses of its two
+flexion joints with the fingers'), converged and adequate only where every chain is.
 
 Goal (issue 39): time and memory linear in the record; with the cache warm, ``alpes-dyn identify`` on 60 s under
 20 s and 400 MiB, on 600 s under 3 min and 1 GiB, the parameters as accurate as the 4 s fit's (K 3 %, m 5 %).
@@ -31,9 +36,20 @@ import time
 from pathlib import Path
 
 
-def make(duration: float, seed: int, path: str) -> None:
+def _hand_truth(seed: int):
+    """The hand drawn as ``alpes-dyn experiment --model hand --perturb 0.2 --seed SEED`` draws it."""
+    from alpes_dyn.estimation.experiments.experiment import perturbed_params
+    from alpes_dyn.estimation.experiments.hand_experiment import hand_chains
+    from alpes_dyn.model.params import load_params
+
+    nominal = load_params(None)
+    return perturbed_params(nominal, 0.2, seed, chains=hand_chains(nominal))
+
+
+def make(duration: float, seed: int, path: str, model: str = "finger3") -> None:
     """The record of one duration, written to ``path`` (the recording CSV), as ``alpes-dyn experiment --model
-    finger3 --perturb 0.2 --seed SEED --duration D`` writes it (the design adapted, ``--rig auto``)."""
+    finger3 --perturb 0.2 --seed SEED --duration D`` writes it (the design adapted, ``--rig auto``; ``model`` hand:
+    ``--model hand``)."""
     import warnings
 
     from alpes_dyn.estimation.experiments.adapt import adapted_experiment
@@ -41,6 +57,12 @@ def make(duration: float, seed: int, path: str) -> None:
     from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, perturbed_params
 
     warnings.simplefilter("ignore", SmallExcursionWarning)
+    if model == "hand":
+        from alpes_dyn.estimation.experiments.hand_experiment import hand_experiment
+
+        _, how = hand_experiment(_hand_truth(seed), ExperimentDesign(duration=duration), seed=seed, path=path)
+        print(json.dumps({"design": "; ".join(f"{c}: {a.note}" for c, a in how.items() if a.note)}))
+        return
     _, adaptation = adapted_experiment("finger3", perturbed_params(spread=0.2, seed=seed),
                                        ExperimentDesign(duration=duration), seed=seed, path=path)
     print(json.dumps({"design": adaptation.note}))
@@ -57,6 +79,24 @@ def _errors(names, values, truth: dict) -> dict:
     return err
 
 
+def _hand_row(obj: dict, seed: int) -> dict:
+    """A ``identify --model hand --json`` object as a row's fields: every chain's iterations summed, converged and
+    adequate where all are, the worst residual, the worst K and m errors against the drawn truth (module docstring)."""
+    truth = _hand_truth(seed)
+    err = {"K": 0.0, "m": 0.0}
+    for chain, c in obj["chains"].items():  # a loop over the five chains
+        ch = truth.chain(chain)
+        for name, v in c["parameters"].items():
+            kind, _, j = name.rpartition("_j") if chain == "thumb" else name.rpartition("_")
+            kind = kind.removesuffix("_thumb")
+            if kind in err and j.isdigit():
+                err[kind] = max(err[kind], abs(100.0 * (v["value"] / float(getattr(ch, kind)[int(j) - 1]) - 1.0)))
+    cs = obj["chains"].values()
+    return {"iterations": sum(c["iterations"] for c in cs), "converged": all(c["converged"] for c in cs),
+            "residual_counts": max(c["residual_rms"] for c in cs), "trustworthy": bool(obj["trustworthy"]),
+            "chains": len(obj["chains"]), "worst_error_pct": err}
+
+
 def _cpu() -> float:
     """CPU seconds of this process so far (user and system): the fit's own work, less sensitive than the wall
     clock to the other processes of a shared machine."""
@@ -64,9 +104,10 @@ def _cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str) -> dict:
+def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str, robot: str = "finger3") -> dict:
     """One duration, in this process: the record read from ``path``, the fit (``api`` or ``cli``), then the
-    references ``kkt`` (``dense``, ``superlu``) on the same record; peak RSS after the fit."""
+    references ``kkt`` (``dense``, ``superlu``) on the same record; peak RSS after the fit. ``robot`` hand:
+    ``alpes-dyn identify --model hand`` (:func:`_hand_row`)."""
     import warnings
 
     import numpy as np
@@ -85,6 +126,18 @@ def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str)
     design = ExperimentDesign(duration=duration)
     model = ad.Model.alpes("finger3", friction=True)
     t0, cpu0 = time.perf_counter(), _cpu()
+    if robot == "hand":
+        import contextlib
+        import io
+
+        from alpes_dyn.cli import main as cli_main
+
+        with tempfile.TemporaryDirectory() as tmp, contextlib.redirect_stdout(io.StringIO()) as so:
+            rc = cli_main(["identify", "--model", "hand", "--data", path, "-o", str(Path(tmp) / "fit.toml"), "--json"])
+        out["seconds"], out["cpu_seconds"] = time.perf_counter() - t0, _cpu() - cpu0
+        out["peak_rss_mib"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+        out.update({"exit": rc, "model": "hand", **_hand_row(json.loads(so.getvalue().strip().splitlines()[-1]), seed)})
+        return out
     if fit == "cli":
         import contextlib
         import io
@@ -119,8 +172,8 @@ def child(duration: float, seed: int, fit: str, kkt: tuple[str, ...], path: str)
     return out
 
 
-def _table(rows: list[dict], seed: int, fit: str) -> None:
-    print(f"finger3 seed {seed}: identify ({'alpes-dyn identify, --effects auto' if fit == 'cli' else 'K, m, friction'})"
+def _table(rows: list[dict], seed: int, fit: str, model: str = "finger3") -> None:
+    print(f"{model} seed {seed}: identify ({'alpes-dyn identify, --effects auto' if fit == 'cli' else 'K, m, friction'})"
           " on records of each length; ratios to the first row (same run)")
     print(f"{'T s':>5} {'design':>24} | {'fit s':>6} {'x':>5} {'cpu s':>6} {'peak MiB':>8} {'x':>5} {'its':>4} {'resid':>5} "
           f"{'K%':>5} {'m%':>5} | refs (kkt: s, max rel diff)")
@@ -141,18 +194,21 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--dense-up-to", type=float, default=0.0, help="run the dense KKT too up to this length, s")
     ap.add_argument("--superlu-up-to", type=float, default=0.0, help="run SuperLU too up to this length, s")
     ap.add_argument("--seed", type=int, default=21)
+    ap.add_argument("--model", choices=("finger3", "hand"), default="finger3")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--child", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--kkt", default="", help=argparse.SUPPRESS)
     ap.add_argument("--make", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--data", help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if args.model == "hand" and (args.fit != "cli" or args.dense_up_to or args.superlu_up_to):
+        ap.error("--model hand: the command line's fit alone (--fit cli), no KKT references")
     if args.make is not None:
-        make(args.make, args.seed, args.data)
+        make(args.make, args.seed, args.data, args.model)
         return 0
     if args.child is not None:
         print(json.dumps(child(args.child, args.seed, args.fit, tuple(k for k in args.kkt.split(",") if k),
-                               args.data)))
+                               args.data, args.model)))
         return 0
     try:
         durations = [float(d) for d in args.durations.split(",")]
@@ -163,8 +219,8 @@ def main(argv: list[str] | None = None) -> int:
         folder = Path(args.records) if args.records else Path(tmp)
         folder.mkdir(parents=True, exist_ok=True)
         for d in durations:
-            path = folder / f"finger3_seed{args.seed}_{d:g}s.csv"
-            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path)]
+            path = folder / f"{args.model}_seed{args.seed}_{d:g}s.csv"
+            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path), "--model", args.model]
             design = "(record reused)"
             if not path.exists():
                 done = subprocess.run(base + ["--make", str(d)], capture_output=True, text=True, check=False)
@@ -186,9 +242,9 @@ def main(argv: list[str] | None = None) -> int:
         r["time_ratio"], r["memory_ratio"] = r["seconds"] / t0, r["peak_rss_mib"] / m0
         r["cpu_ratio"] = r["cpu_seconds"] / rows[0]["cpu_seconds"]
     if args.json:
-        print(json.dumps({"model": "finger3", "fit": args.fit, "rows": rows}))
+        print(json.dumps({"model": args.model, "fit": args.fit, "rows": rows}))
         return 0
-    _table(rows, args.seed, args.fit)
+    _table(rows, args.seed, args.fit, args.model)
     return 0
 
 

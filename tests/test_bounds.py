@@ -80,6 +80,29 @@ def test_a_compliance_the_data_do_not_support_is_held_and_never_written(rigid_re
     assert p.identification["finger"]["not_identified"][0].startswith("tendon_compliance_finger: ")
 
 
+def test_the_fit_again_starts_from_the_first_fits_linearised_optimum(rigid_recording):
+    """held_start: the first fit moved to the linearised optimum with a parameter held (issue 39) predicts the fit
+    with it held (a fresh fit of the others from the first's start) to a small part of the move, and the fit from
+    there converges to the same values in fewer iterations."""
+    from alpes_dyn.estimation.identification.held import held_start
+
+    model = ad.Model.alpes("finger2", friction=True)
+    first = identify(model, rigid_recording, "K,m,friction", progress=False, excitation=LINES)
+    assert first.solution.response.shape[1] == len(first.names)
+    keep = [n for n in first.names if n != "F_v_1"]
+    moved = held_start(first, {"F_v_1": 1e-4})  # the model's value (the fit found another)
+    assert abs(first.values[first.names.index("F_v_1")] / 1e-4 - 1) > 0.05  # a real move
+    assert moved.values[moved.names.index("F_v_1")] == pytest.approx(1e-4, rel=1e-12)
+    fresh = identify(model, rigid_recording, keep, progress=False, excitation=LINES, start=first)
+    warm = identify(model, rigid_recording, keep, progress=False, excitation=LINES, start=moved)
+    k = [first.names.index(n) for n in keep]
+    off = lambda v: np.linalg.norm((v[k] - fresh.values) / fresh.std)  # noqa: E731 (in standard errors)
+    assert off(moved.values) < 0.2 * off(first.values)  # the linearisation: within a fifth of the move
+    assert np.all(np.abs(warm.values - fresh.values) < 0.1 * fresh.std)
+    assert warm.converged and warm.iterations < fresh.iterations
+    assert held_start(first, {"F_v_1": 0.0}) is None and held_start(first, {}) is None  # a log-fitted bound: none
+
+
 def test_a_negative_compliance_in_a_file_is_refused(tmp_path):
     """No file holds a compliance below 0 (a cable does not shorten under tension): the parameter set refuses it,
     naming the field, and so does the loader on a file edited by hand."""

@@ -36,21 +36,30 @@ def test_window_cuts_every_per_sample_column(clean):
 
 
 def test_a_long_record_fits_from_its_window_to_the_truth(clean, monkeypatch):
-    """With the record 'long' (LONG_RECORD lowered to 0.6 s, a 0.5 s window): the whole fit runs on the window,
-    the whole record gets stage 1 at the window's values, the homotopy's last phase and stage 3, and lands on the
-    truth as the whole fit does: K, m within 1e-6; the friction within 5e-4 (stage 3 from a close start stops at the stopping rule's
-    chi^2 step of 0.05 counts-units sooner than the cold fit's 3e-6: on these unquantised data a chi^2 of 0.05 is
-    far below any sensor's resolution; F_s is the least seen, 2.3e-4 off)."""
+    """With the record 'long' (LONG_RECORD lowered to 0.6 s, a 0.5 s window): the whole fit runs on the window
+    (the homotopy there only), the whole record gets the model's response at the window's values joined
+    (GaussNewton.join_nodes: continuous to 1e-3 of the nodes' scale or better) and stage 3, and lands on the truth as
+    the whole fit does: K, m within 1e-6; the friction within 5e-4 (stage 3 from a close start stops at the stopping
+    rule's chi^2 step of 0.05 counts-units sooner than the cold fit's 3e-6: on these unquantised data a chi^2 of
+    0.05 is far below any sensor's resolution; F_s is the least seen, 2.3e-4 off)."""
     finger2, rec, truth = clean
     monkeypatch.setattr(long_record, "LONG_RECORD", 0.6)
     monkeypatch.setattr(long_record, "WINDOW", 0.5)
-    lengths = []
-    homotopy = GaussNewton.homotopy
+    lengths, joined = [], []
+    homotopy, join = GaussNewton.homotopy, GaussNewton.join_nodes
+
+    def join_spy(pb, nodes, offs, glob, *a):
+        out = join(pb, nodes, offs, glob, *a)
+        e = pb.evaluate(out, offs, glob, jac=False)
+        joined.append((pb.N, float(np.max(np.abs(e.c) / np.maximum(np.abs(out).max(axis=0), 1e-3)))))
+        return out
     monkeypatch.setattr(GaussNewton, "homotopy",
-                        lambda self, pb, *a, **k: lengths.append((pb.N, k.get("first", 0))) or homotopy(self, pb, *a, **k))
+                        lambda self, pb, *a, **k: lengths.append(pb.N) or homotopy(self, pb, *a, **k))
+    monkeypatch.setattr(GaussNewton, "join_nodes", staticmethod(join_spy))
     res = identify(finger2, rec, progress=False)
-    # the window's homotopy in full (two starts at most), the whole record's from its last phase, once
-    assert res.converged and lengths[-1] == (1200, 3) and {n for n, f in lengths[:-1]} == {500}
+    # the window's homotopy in full (two starts at most), the whole record joined once, no homotopy of it
+    assert res.converged and set(lengths) == {500} and len(joined) == 1 and joined[0][0] == 1200
+    assert joined[0][1] < 1e-3
     assert np.max(np.abs(res.values[:4] / truth[:4] - 1)) < 1e-6 and np.max(np.abs(res.values / truth - 1)) < 5e-4
     assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # the start reported is the model's, not the window's
 

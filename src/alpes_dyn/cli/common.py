@@ -406,3 +406,16 @@ def _excursion_lines(rec: Any, obj: dict[str, Any]) -> str:
 
     obj.update(excursion_report(rec))
     return "".join(f"\n  WARNING: {line}" for line in obj["small_excursions"])
+
+
+def _drift_choice(text: str) -> str:
+    """``--drift``: a comma-separated choice of the drifts (:data:`~alpes_dyn.estimation.identification.drift.DRIFTS`),
+    checked here (argparse's one line), passed on as given."""
+    from ..errors import InputError
+    from ..estimation.identification.drift import check_drift
+
+    try:
+        check_drift(text)
+    except InputError as err:
+        raise argparse.ArgumentTypeError(str(err).removeprefix("drift: ")) from None
+    return text

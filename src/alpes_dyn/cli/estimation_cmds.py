@@ -167,9 +167,13 @@ def _without_friction(model):
 
 
 def _drift_lines(drift: dict | None) -> list[str]:
-    """``identify --drift offset``'s text: each encoder's fitted drift at the knots (none without it)."""
-    return [f"  encoder_{motor} drift: " + ", ".join(f"{v:+.3g}" for v in d) + " counts at "
-            + ", ".join(f"{t:.3g}" for t in drift["knots_s"]) + " s" for motor, d in (drift or {}).get("counts", {}).items()]
+    """``identify --drift``'s text: each encoder's fitted offset drift and each motor's torque-constant scale at the
+    knots (none without them)."""
+    at = " at " + ", ".join(f"{t:.3g}" for t in (drift or {}).get("knots_s", [])) + " s"
+    return ([f"  encoder_{motor} drift: " + ", ".join(f"{v:+.3g}" for v in d) + " counts" + at
+             for motor, d in (drift or {}).get("counts", {}).items()]
+            + [f"  torque constant {motor} scale: " + ", ".join(f"{v:.4f}" for v in d) + " (relative to the first "
+               "sample)" + at for motor, d in (drift or {}).get("torque_scale", {}).items()])
 
 
 def cmd_identify(args: argparse.Namespace) -> int:

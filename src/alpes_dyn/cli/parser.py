@@ -12,7 +12,7 @@ from .. import __version__
 from ..analysis.observability_matrix import MAX_INSTRUCTIONS
 from ..limits import MAX_POINTS, MAX_SEED
 from .analysis_cmds import cmd_identifiability, cmd_observability
-from .common import _UsageError, _strict_int
+from .common import _UsageError, _drift_choice, _strict_int
 from .control_cmds import cmd_control
 from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
@@ -435,10 +435,10 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--validate", default=None, metavar="REC2.csv",
                    help="a held-out recording of the same finger: the fitted model simulated on its torque, fit %% "
                         "and NRMSE per encoder (MATLAB's compare), part of the adequacy verdict")
-    s.add_argument("--drift", choices=("offset",), default=None,
-                   help="'offset': each encoder's offset drifts, piecewise linear in time from 0 at the first sample "
-                        "(knots every 15 s; a shorter record: a ramp), fitted with the parameters (the JSON's 'drift'); "
-                        "without it the verdict names a drift where the residual trends with time")
+    s.add_argument("--drift", type=_drift_choice, default=None, metavar="offset|gain|offset,gain",
+                   help="'offset': each encoder's offset drifts, piecewise linear in time (knots every 15 s), 0 at the "
+                        "first sample, fitted (the JSON's 'drift'); 'gain': each motor's torque constant likewise, "
+                        "relative to the first sample's (the encoder sees no absolute scale); 'offset,gain': both")
     s.add_argument("--encoder-noise", type=_strict_float, default=None, metavar="COUNTS",
                    help="the encoder's white noise beyond its quantisation, counts, for the sensor floor of the "
                         "adequacy check (default: estimated from the recording)")

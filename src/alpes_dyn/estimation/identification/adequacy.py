@@ -82,11 +82,11 @@ within 20 ms of the motor velocity's reversals exceeds ``reversal_ratio`` times 
 nonlinearity shaped otherwise than in the model named (last) where the residual's power at the excitation's
 harmonics and intermodulation products is over ``harmonic_ratio`` times its power elsewhere
 (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`: white noise gives 1 within about 0.1); a
-drift (a ramp, judged alone) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05); the
-tendon-sheath friction (judged in the regression with the others, theirs without it) named first from
-``sheath_share``, beside what the others name (our simulator's finger2 with mu theta 0.02: 0.19-0.32 turned at 100 /
-50 ms intervals, 0.25 level; without one, MuJoCo's finger3 on an elastic damped cable: 0.056, with a rotor the model
-lacks: 0.005)."""
+drift (a ramp of the offset or the torque's response to a ramp of the gain, each judged alone, the one explaining
+more) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05); the tendon-sheath friction
+(judged in the regression with the others, theirs without it) named first from ``sheath_share``, beside what the
+others name (our simulator's finger2 with mu theta 0.02: 0.19-0.32 turned at 100 / 50 ms intervals, 0.25 level;
+without one, MuJoCo's finger3 on an elastic damped cable: 0.056, with a rotor the model lacks: 0.005)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")  # named first (range_exit)
@@ -117,6 +117,7 @@ SIGNATURES: dict[str, str] = {
     "torque": "tendon elasticity (an encoder reading ahead of the joints by the motor torque)",
     "bias": "an encoder offset or a tilted palm (a constant bias of the residual)",
     "drift": "a drift of the encoder offset (a residual trending with time; --drift offset)",
+    "gain_drift": "a drift of the torque constant (the response to the torque growing with time; --drift gain)",
     "torque_rate": "a torque delay (the recorded torque lagging the motor's: a torque following the torque's own "
                    "rate; --effects delay)",
 }
@@ -485,9 +486,10 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"residual {rms:.3g} counts RMS is {ratio:.2f}x the sensor floor {floor.total:.3g}")
     if validation is not None and np.min(validation.fit_percent) < th["validation_fit_percent"]:
         reasons.append(f"validation fit {np.min(validation.fit_percent):.1f} % < {th['validation_fit_percent']:g} %")
-    drift = (regs := dict(regressors or {})).pop("drift", None)  # a ramp, judged alone (it takes others' shares)
+    regs = dict(regressors or {})  # the drifts' (a ramp of the offset, of the gain) judged alone: they take others' shares
+    ramps = {k: regs.pop(k) for k in ("drift", "gain_drift") if k in regs}
     sheath = regs.pop(SHEATH, None)  # its share in the regression with the others, theirs without it
-    sig = {**signatures(e, regs), **({"drift": signatures(e, {"drift": drift})["drift"]} if drift is not None else {})}
+    sig = {**signatures(e, regs), **{k: signatures(e, {k: R})[k] for k, R in ramps.items()}}
     if sheath is not None:
         sig[SHEATH] = signatures(e, {**regs, SHEATH: sheath})[SHEATH]
     if velocity is not None:
@@ -498,14 +500,15 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
         reasons.append(f"the fitted joints leave their range ({range_exit})")
     missing: list[str] = []
     if reasons:
-        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES and k not in ("drift", SHEATH)),
-                        reverse=True)
+        ranked = sorted(((v["share"], k) for k, v in sig.items() if k in SIGNATURES and k not in ramps
+                         and k != SHEATH), reverse=True)
         top = ranked[0][0] if ranked else 0.0
         missing = [SIGNATURES[k] for s, k in ranked if s >= max(th["signature_share"], 0.5 * top)
                    and (k != "torque_rate" or s == top)]  # a delay named where it explains the most: a rotor's
         # acceleration response is close to the torque's rate (a rotor mismatch named both)
-        if sig.get("drift", {}).get("share", 0.0) >= (th["drift_share"] if missing else th["signature_share"]):
-            missing = [SIGNATURES["drift"]] + missing  # (THRESHOLDS' docstring)
+        ramp = max(ramps, key=lambda k: sig[k]["share"], default=None)  # the offset's or the gain's, the stronger
+        if ramp and sig[ramp]["share"] >= (th["drift_share"] if missing else th["signature_share"]):
+            missing = [SIGNATURES[ramp]] + missing  # (THRESHOLDS' docstring)
         if sig.get(SHEATH, {}).get("share", 0.0) >= th["sheath_share"]:
             missing = [SIGNATURES[SHEATH]] + missing
         if "reversals" in sig and sig["reversals"]["share"] > th["reversal_ratio"]:

@@ -52,16 +52,17 @@ class IdentificationResult:
     residual: np.ndarray | None = field(default=None, repr=False)
     adequacy: Adequacy | None = None
     solution: Any = field(default=None, repr=False, compare=False)
-    """The fit's shooting variables (:class:`~alpes_dyn.estimation.identification.shooting.ShootingSolution`) for a warm
+    """The fit's shooting variables (:class:`~alpes_dyn.estimation.identification.held.ShootingSolution`) for a warm
     start of another fit of the same recording (``identify(..., start=result)``); not written to the file."""
     not_identified: dict[str, str] = field(default_factory=dict)
     """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
     interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not
     support): held in the fit kept, never written to a file."""
     drift: dict[str, Any] | None = None
-    """With ``identify(drift="offset")``: the encoders' fitted drift (:mod:`~alpes_dyn.estimation.identification.drift`),
-    ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}``;
-    else None."""
+    """With ``identify(drift=...)``: the fitted drifts (:mod:`~alpes_dyn.estimation.identification.drift`),
+    ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}`` (the
+    encoder offsets', with ``"offset"``) and ``"torque_scale": {motor: [...] (K+1,), 1 at the first knot}`` (the
+    torque constants' scale relative to the first sample's, with ``"gain"``); else None."""
 
     @property
     def trustworthy(self) -> bool:

@@ -21,6 +21,7 @@ tight bounds where IPOPT did not (the issue 18 measurement).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 from typing import Any, Callable
@@ -31,7 +32,8 @@ from ...progress import _Progress
 from .shooting import Evaluation, ShootingProblem
 
 __all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
-           "CRAWL_STEPS", "SOC_STEPS", "SOFT_PHASES", "BASIN_LIMIT"]
+           "CRAWL_STEPS", "SOC_STEPS", "SOFT_PHASES", "BASIN_LIMIT", "JOIN_STEPS",
+           "WINDOW_ITERATIONS"]
 
 MAX_LOG_STEP = 0.3
 """The trust region on log theta per iteration (at most a 35 % change of any parameter)."""
@@ -62,6 +64,15 @@ Two to three corrections bring the defects to 1e-3-1e-5 with the cost's fall int
 masses within 0.9 %."""
 SOFT_PHASES = 4
 """Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
+JOIN_STEPS = 2
+"""Gauss-Newton steps at most of :meth:`GaussNewton.join_nodes`: on 60 s of finger3 (seed 21) from the model's
+response at the window's parameters, the defects fell to 0.26 and 0.007 of the nodes' scale in two steps, and stage 3
+converged in as many iterations from there as after four steps (defects 9e-5) or after the homotopy."""
+WINDOW_ITERATIONS = 15
+"""Stage 3's iterations at most from a long record's window start (:mod:`~alpes_dyn.estimation.identification.long_record`;
+then the whole fit of the whole record): the fingers' took 4-6 (finger3 seed 21 at 16, 60 and 600 s, the hand's four
+fingers at 60 s), while the hand's thumb at 60 s (seed 21) crawled from it into the 50-iteration cap at 34.8 counts
+(100 s of a 271 s fit) before the whole fit converged in 8."""
 BASIN_LIMIT = 3.0 / math.sqrt(12.0)
 """counts: an encoder residual above three times the quantisation floor (1/sqrt(12) count) asks for the second
 start (the wrong basins leave 4-8 counts, the right one the encoder noise, 0.58)."""
@@ -113,6 +124,48 @@ class GaussNewton:
             nodes[better] += dn[better, :, 0]
             mu_n = np.where(better, mu_n / 10, mu_n * 10)
             e = A = None  # this sweep's Jacobian freed before the next one's
+        return nodes
+
+    @staticmethod
+    def join_nodes(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                   steps: int = JOIN_STEPS) -> np.ndarray:
+        """Stage 1's nodes made continuous at the parameters held (``offs`` and ``glob`` fixed): Gauss-Newton on the
+        start states alone with continuity as a constraint, up to ``steps`` steps, each taken where it lowers the
+        l1 merit (cost + nu |defects|) or halved up to three times; the Jacobians with respect to the start
+        states alone (``evaluate(..., jac="state")``, a third to a fifth of the whole), the KKT system banded
+        (:func:`~alpes_dyn.estimation.identification.kkt.kkt_from_blocks` with no global variable). Stops where the
+        defects are below 1e-6 of ``c_scale``'s rule. A problem with per-interval torque corrections (``no``):
+        the nodes as given. Why: a long record's start from its window (:mod:`~alpes_dyn.estimation.identification.long_record`)."""
+        from .kkt import Shape, kkt_from_blocks
+
+        nx, n_int = pb.nx, pb.n_int
+        if pb.no or n_int < 2:
+            return nodes
+        shape = Shape(n_int, nx, nx, 0, pb.cut)
+        c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)
+        nodes = nodes.copy()
+        e = pb.evaluate(nodes, offs, glob, jac="state")
+        for _ in range(steps):
+            if float(np.max(np.abs(e.c) / c_scale, initial=0.0)) < 1e-6:
+                break
+            Cr = np.zeros((n_int - 1, nx, 0))
+            solve = kkt_from_blocks(e.J, e.Cv, Cr, shape, 1e-9, np.zeros(0), lambda: None)
+            if solve is None:
+                break
+            gs = np.einsum("sk,skd->sd", e.r, e.J).reshape(-1)
+            sol = solve(np.concatenate([-gs, -e.c.reshape(-1)]))
+            d, lam = sol[:shape.nz].reshape(n_int, nx), sol[shape.nz:]
+            nu = 1.5 * float(np.max(np.abs(lam), initial=0.0)) + 1e-12
+            merit = e.cost + nu * float(np.sum(np.abs(e.c)))
+            for alpha in (1.0, 0.5, 0.25, 0.125):
+                trial = pb.evaluate(nodes + alpha * d, offs, glob, jac=False)
+                if np.isfinite(trial.r).all() and trial.cost + nu * float(np.sum(np.abs(trial.c))) < merit:
+                    break
+            else:
+                break
+            nodes += alpha * d
+            e = trial = None
+            e = pb.evaluate(nodes, offs, glob, jac="state")
         return nodes
 
     # --- the trust region ---------------------------------------------------------------------------------------
@@ -257,8 +310,13 @@ class GaussNewton:
                 solve_K, c_scale: np.ndarray, slack: float):
         """Continuity restored without a Gauss-Newton step: the minimum-norm correction that removes the defects
         ``at.c`` to first order (the second-order correction of :meth:`line_search`, from the same factorised KKT
-        system ``solve_K``). Returns (nodes, offs, glob, the evaluation there with its Jacobians) where the defects
-        fall below 1e-6 of ``c_scale`` and the cost rises by at most ``slack``, else None."""
+        system ``solve_K``). Returns (nodes, offs, glob, the evaluation there) where the defects fall below 1e-6 of
+        ``c_scale`` and the cost rises by at most ``slack``, else None. The evaluation's residuals, defects and states
+        are the new point's, its Jacobians ``at``'s: the correction moves no parameter by a tenth of its standard
+        error (the stopping rule that asks for it), so the Jacobians differ to second order in it, and the
+        covariance and the verdict's projections taken with them are the same to that order; evaluating them again
+        was the dearest evaluation of a fit (all the sensitivities of the whole record: 1.5 s of a 60 s record's,
+        twice in ``--effects auto``'s two fits)."""
         nx, nz, nv = pb.nx, pb.nz, pb.nv
         try:
             d2 = solve_K(np.concatenate([np.zeros(nz), -at.c.reshape(-1)]))[:nz]
@@ -271,7 +329,7 @@ class GaussNewton:
             return None
         if float(np.max(np.abs(trial.c) / c_scale, initial=0.0)) >= 1e-6 or trial.cost > at.cost + slack:
             return None
-        return (*new, pb.evaluate(*new))
+        return (*new, dataclasses.replace(trial, J=at.J, Cv=at.Cv, Cr=at.Cr))
 
     def constrained(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                     e: Evaluation, c_scale: np.ndarray, bar: _Progress) -> SolverResult:
@@ -380,12 +438,17 @@ class GaussNewton:
         stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
         ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
         Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:
-        one evaluation of the whole record fewer); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
+        one evaluation of the whole record fewer; stage 3 from there at most :data:`WINDOW_ITERATIONS`); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
         total_its = 0
         if warm is not None:
             bar = _Progress(self.max_iterations, "identify (warm start)", self.show)
             c_scale = np.maximum(np.abs(warm[0]).max(axis=0), 1e-3)
-            out = self.constrained(pb, *warm, warm_at.pop() if warm_at else pb.evaluate(*warm), c_scale, bar)
+            cap, self.max_iterations = self.max_iterations, (min(self.max_iterations, WINDOW_ITERATIONS) if warm_at
+                                                             else self.max_iterations)
+            try:  # a long record's start from its window: given up after WINDOW_ITERATIONS
+                out = self.constrained(pb, *warm, warm_at.pop() if warm_at else pb.evaluate(*warm), c_scale, bar)
+            finally:
+                self.max_iterations = cap
             bar.close()
             if out.converged and pb.encoder_rms(out.at.r) <= BASIN_LIMIT:
                 return out

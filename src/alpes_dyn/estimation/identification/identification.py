@@ -63,22 +63,21 @@ import numpy as np
 
 from ...errors import InputError, ModelError, RecordingError
 from ...model.robot import Model
-from ...model.transmission import torque_before
 from ...symbolic.parametric import common_scale, parameter_catalogue, select_parameters
 from ...model.ratio_curve import encoder_angles, encoder_rates
-from .adequacy import (AdequacyWarning, Validation, assess, compare, effect_responses, range_exit, sensor_floor,
-                       torque_explained)
+from .adequacy import AdequacyWarning, assess, effect_responses, range_exit, sensor_floor, torque_explained
 from ..experiments.recording import Recording, check_recording, excitation_parts
-from .torque_lines import line_basis
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
+from .held import held_start
 from .shooting import ShootingProblem, torque_model
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
-from .runs import aligned, split
+from .runs import aligned
+from .heldout import parts, project_torque, rest_guess, validate  # noqa: F401  (project_torque: its old home)
 from .runs import encoder_noise as run_noise
-from .drift import check_drift, recorded_time
+from .drift import GAIN_NEEDS_LINES, check_drift, recorded_time
 from .fit_result import IdentificationResult, identified_params
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
@@ -112,15 +111,6 @@ def check_selection(model: Model, parameters: str | Sequence[str] | None) -> Non
                          "maker) and fit input_gain with the springs and friction, or leave input_gain out")
 
 
-def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[float],
-                   starts: Sequence[int] | None = None) -> np.ndarray:
-    """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
-    ``frequencies`` (Hz), per part (``starts``, :func:`~alpes_dyn.estimation.identification.torque_lines.line_basis`;
-    default one): the excitation without the measurement noise off its lines."""
-    Q = np.linalg.qr(line_basis(t, frequencies, starts))[0]
-    return Q @ (Q.T @ np.asarray(torque, dtype=float))
-
-
 def _as_recording(recording: Recording | str | Path, model: Model) -> tuple[Recording, str]:
     if isinstance(recording, Recording):
         return check_recording(recording), ""
@@ -135,7 +125,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              max_iterations: int = 50, tol: float = 1e-6, threads: int | None = None,
              progress: bool | None = None, validation: Recording | str | Path | None = None,
              encoder_noise: float | None = None, start: Mapping[str, float] | IdentificationResult | None = None,
-             kkt: str = "sparse", drift: str | None = None) -> IdentificationResult:
+             kkt: str = "sparse", drift: str | Sequence[str] | None = None) -> IdentificationResult:
     """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
 
     Parameters
@@ -192,8 +182,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         60 s); ``"dense"``: as arrays (the reference; quadratic memory, cubic time).
     drift: ``"offset"``: each encoder's offset drifts, piecewise linear in the recorded time from 0 at the first
         sample, knots every 15 s (a shorter record: a ramp), fitted with the parameters
-        (:mod:`~alpes_dyn.estimation.identification.drift`; the result's ``drift``); None (default): no drift,
-        and the verdict names one where the residual trends with time.
+        (:mod:`~alpes_dyn.estimation.identification.drift`; the result's ``drift``); ``"gain"``: each motor's torque
+        constant drifts likewise, relative to the first sample's (1 there: its absolute scale is not observable from
+        the encoder; needs ``excitation``); ``"offset,gain"`` (or a list): both; None (default): no drift, and the
+        verdict names one where the residual trends with time.
 
     The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
     failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
@@ -215,7 +207,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     rec = aligned(rec, L)  # several runs: each on whole intervals (module runs)
     torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
-    check_drift(drift)
+    drift = check_drift(drift)
+    if "gain" in drift and not torque.lines:  # before anything is compiled
+        raise InputError(GAIN_NEEDS_LINES)
     if substeps is None:
         substeps = stable_substeps(model, dt, tension=np.abs(rec.torque).max(axis=0))  # (a sheath's, if any)
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
@@ -224,7 +218,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse", drift=drift)
     torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
-    q0 = (_rest_guess(model, pb.torque.U[0], pb.y[0]) if rec.gravity is None
+    q0 = (rest_guess(model, pb.torque.U[0], pb.y[0]) if rec.gravity is None
           else np.zeros(pb.n))  # the rest the model's own response starts from
 
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
@@ -256,7 +250,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             if not again.trustworthy:
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
-    result = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
+    result, judge = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
+    if not _held_again(result):  # judged here unless fitted again with parameters held (that fit's verdict kept)
+        result.adequacy = judge()
+    judge = None
     # this fit's problem (with the lines' basis: 91 MB at 600 s), Jacobians and compiled sensitivities freed
     # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
     pb = out = warm = sens = None
@@ -289,6 +286,21 @@ def _map_large_blocks() -> None:
         pass
 
 
+def _unsupported(result: IdentificationResult) -> dict[str, str]:
+    """:func:`~alpes_dyn.estimation.identification.bounds.unsupported` of ``result``'s parameters."""
+    kind = {pp.name: pp.kind for pp in parameter_catalogue(result.model)}
+    return unsupported(result.names, [kind.get(n, "") for n in result.names], result.values, result.std,
+                       result.initial, result.units)
+
+
+def _held_again(result: IdentificationResult) -> bool:
+    """True where :func:`_within_bounds` will fit again with parameters held: converged, some fitted parameter
+    not identified, and another one left (its verdict, not yet judged, would decide first where not trustworthy:
+    the fit again's is judged instead; an inadequate first fit gives an inadequate fit with fewer parameters)."""
+    bad = _unsupported(result)
+    return bool(result.converged and bad and any(n not in bad for n in result.names))
+
+
 def _within_bounds(model: Model, recording: Recording | str | Path, result: IdentificationResult,
                    settings: dict[str, Any], t_start: float) -> IdentificationResult:
     """``result`` where every fitted parameter is identified (:func:`~alpes_dyn.estimation.identification.bounds.unsupported`:
@@ -296,11 +308,11 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
     where the fit crossed it, else at the model's value), warm-started from ``result``, the ones held named in its
     :attr:`~IdentificationResult.not_identified` with the effect the data do not support. ``settings``: the other
     arguments of :func:`identify`. Where no parameter is left, ``result`` itself, its parameters all named (and not
-    converged); where ``result`` is not to be trusted (not converged, or not adequate), ``result`` with them named
-    and not fitted again (its file, written only with ``--force``, does not receive them either)."""
+    converged); where ``result`` is not to be trusted (not converged, or judged not adequate), ``result`` with them
+    named and not fitted again (its file, written only with ``--force``, does not receive them either). A converged
+    ``result`` to fit again comes unjudged (:func:`_held_again`): the verdict reported is the fit again's."""
     kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}
-    bad = unsupported(result.names, [kind.get(n, "") for n in result.names], result.values, result.std,
-                      result.initial, result.units)
+    bad = _unsupported(result)
     if not bad:
         return result
     if not result.trustworthy:  # not a result to keep: its parameters not identified named (never written), no refit
@@ -313,9 +325,13 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
         result.reason += "; no fitted parameter is identified"
         return result
     held = {n: v for n, v in zip(result.names, result.values) if n in bad and kind.get(n) == "tendon_compliance"}
+    held_model = _compliance_held(model, held)
+    at = {pp.name: pp.nominal for pp in parameter_catalogue(held_model) if pp.name in bad}
+    # started where the first fit's linearisation puts the fit with them held (module held), else from the first fit
+    start = held_start(result, at) if len(at) == len(bad) else None
     with warnings.catch_warnings():  # the verdict is reported on the fit kept
         warnings.simplefilter("ignore", AdequacyWarning)
-        again = identify(_compliance_held(model, held), recording, keep, start=result, **settings)
+        again = identify(held_model, recording, keep, start=result if start is None else start, **settings)
     again.not_identified = {**bad, **again.not_identified}
     first = dict(zip(result.names, result.initial))
     again.initial = np.array([first.get(n, v) for n, v in zip(again.names, again.initial)])
@@ -432,14 +448,18 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
 
 
 def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_rec, excitation, interval: float,
-              encoder_noise: float | None, rec_path: str, t_start: float) -> IdentificationResult:
+              encoder_noise: float | None, rec_path: str, t_start: float):
     """The result at the solver's end: the parameters' covariance (the parameters' block of the undamped
-    Gauss-Newton KKT inverse, scaled by the residual variance), the parameters the recording does not see, and the
-    adequacy of the fitted model (module adequacy) with each effect's regressor less what the fit absorbs of it."""
+    Gauss-Newton KKT inverse, scaled by the residual variance) and the parameters the recording does not see; and
+    a function giving the adequacy of the fitted model (module adequacy, each effect's regressor less what the fit
+    absorbs of it), called by :func:`identify` unless the fit is made again with parameters held (the verdict is
+    the kept fit's: on a 600 s record the first's cost 17 s). Returns (result without its adequacy, that
+    function)."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
     solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance and the effects' regressors
-    P_rho = solve_Kz(pb.unit_p)[nv:nv + p] * s2
+    Z = solve_Kz(pb.unit_p)  # (nz + nc, p): the covariance's columns, and how the optimum moves with each parameter
+    P_rho = Z[nv:nv + p] * s2
     theta = pb.values(out.glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     # a parameter the data do not see at the solution (its columns zero: tilt_x on a planar finger at a level
@@ -456,25 +476,32 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         corr = P_rho / np.outer(sd_c, sd_c)
     x_fit, yhat = _fitted_output(pb, out, theta)
     residual = pb.rec.encoder - yhat
-    verdict = _adequacy(pb, out, theta, solve_Kz, x_fit, residual, val_rec, excitation, interval, encoder_noise)
+
+    def judge():
+        return _adequacy(pb, out, theta, solve_Kz, x_fit, residual, val_rec, excitation, interval, encoder_noise)
     return IdentificationResult(
         names=sens.names, values=theta, std=np.where(pb.additive, pb.scale, theta) * sd_rho, initial=pb.theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=pb.encoder_rms(e.r),
         iterations=it, converged=out.converged, seconds=time.perf_counter() - t_start,
         compile_seconds=sens.compile_seconds, states=out.nodes, node_times=pb.rec.t[np.arange(pb.n_int) * pb.L],
-        model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=verdict,
-        solution=pb.solution(out.nodes, out.offs, out.glob), drift=_drift_of(pb, out.glob))
+        model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=None,
+        solution=pb.solution(out.nodes, out.offs, out.glob, Z[:pb.nz].copy()), drift=_drift_of(pb, out.glob)), judge
 
 
 def _drift_of(pb: ShootingProblem, glob: np.ndarray) -> dict[str, Any] | None:
     """The fitted drift of :attr:`IdentificationResult.drift` (None without one)."""
     if not pb.nd:
         return None
-    D = glob[pb.p + pb.ncg:].reshape(pb.ny, -1)
-    K = D.shape[1]
+    K, d0, motors = pb.nK, pb.p + pb.ncg, pb.model.transmission.motor_names
     T = float(recorded_time(pb.rec)[-1])
-    return {"knots_s": [T * k / K for k in range(K + 1)],
-            "counts": {m: [0.0] + [float(v) for v in D[i]] for i, m in enumerate(pb.model.transmission.motor_names)}}
+    out: dict[str, Any] = {"knots_s": [T * k / K for k in range(K + 1)]}
+    if pb.nd_off:
+        D = glob[d0:d0 + pb.nd_off].reshape(pb.ny, K)
+        out["counts"] = {m: [0.0] + [float(v) for v in D[i]] for i, m in enumerate(motors)}
+    if pb.nd_gain:  # the torque constant's scale relative to the first sample's (module drift)
+        D = glob[d0 + pb.nd_off:].reshape(pb.nu, K)
+        out["torque_scale"] = {m: [1.0] + [1.0 + float(v) for v in D[i]] for i, m in enumerate(motors)}
+    return out
 
 
 def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -483,7 +510,7 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
     x_fit = out.at.xs[pb.valid]
     u_fit = (pb.stretch(theta, pb.tension_torque(pb.torque_at(out.glob, out.offs), out.at.xs))[pb.valid]
              if pb.comp_cols else 0.0)
-    drift = pb.drift_offset(out.glob)[pb.valid] if pb.nd else 0.0
+    drift = pb.drift_offset(out.glob)[pb.valid] if pb.nd_off else 0.0
     return x_fit, (encoder_angles(pb.enc, x_fit[:, :pb.n]) + pb.offset(theta) + drift + u_fit) / pb.step
 
 
@@ -501,13 +528,14 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     floor = sensor_floor(rec.encoder, explained, run_noise(rec, encoder_noise))
     if encoder_noise is None and rec.n_runs > 1:  # (module runs: no difference across a jump between runs)
         floor.noise_source = "estimated from the recording run by run (fourth difference)"
-    resp = effect_responses(sens, out.nodes, pb.Ub, pb.Gb, theta, pb.correction(out.glob, out.offs), pb.Psib,
-                            pb.valid, x_fit, pb.enc, pb.step, rec.dt)
+    Ub, corr = pb.inputs(out.glob, out.offs)  # as the dynamics took them (the gain's drift on)
+    tau = recorded_time(rec)
+    ramp = (tau - tau.mean()) / max(float(np.ptp(tau)), 1e-300)  # (module drift)
+    resp = effect_responses(sens, out.nodes, Ub, pb.Gb, theta, corr, pb.Psib, pb.valid, x_fit, pb.enc, pb.step,
+                            rec.dt, ramp=None if pb.nd_gain else ramp)
     # the tendon's stretch follows the tension: the torque held before each sample (torque_before)
     resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[pb.before][pb.kk] * pb.valid[:, :, None]
-    if not pb.nd:  # a drift of the encoders' offsets: a ramp in the recorded time (module drift)
-        tau = recorded_time(rec)
-        ramp = (tau - tau.mean()) / max(float(np.ptp(tau)), 1e-300)
+    if not pb.nd_off:  # a drift of the encoders' offsets: a ramp in the recorded time (module drift)
         resp["drift"] = np.repeat(ramp[pb.kk][:, :, None], pb.ny, axis=2) * pb.valid[:, :, None]
     regressors = {}
     for name, R in resp.items():  # a loop over the four effects
@@ -518,70 +546,9 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
         regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * pb.sig_y / pb.step)[pb.valid]
     val = None
     if val_rec is not None:
-        val = _validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
+        val = validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
     return assess(res, rec.torque, floor, regressors, val,
                   velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
-                  lines=excitation, dt=rec.dt, runs=_parts(excitation_parts(rec), res.shape[0]))
-
-
-def _parts(bounds: np.ndarray, n: int) -> np.ndarray:
-    """The residual's (n rows, one per sample) parts whose excitation restarts (``bounds``:
-    :func:`~alpes_dyn.estimation.experiments.recording.excitation_parts`): their first rows, then n."""
-    return np.append(bounds[bounds < n], n)
-
-
-def _validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
-              excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
-              compliance: np.ndarray | None = None) -> Validation:
-    """:func:`_validate_run` of each run of the held-out recording (module runs), each from its own initial state;
-    of several, the worst run's fit % and NRMSE per encoder, the RMS residual over all the scored samples."""
-    rec, path = recording
-    vals = [_validate_run(model, sens, theta, (r, path), excitation, prefix_s, offset, compliance) for r in split(rec)]
-    if len(vals) == 1:
-        return vals[0]
-    n = np.array([v.samples for v in vals])
-    rms = float(np.sqrt(np.sum(n * np.array([v.residual_rms for v in vals]) ** 2) / n.sum()))
-    return Validation(fit_percent=np.min([v.fit_percent for v in vals], axis=0),
-                      nrmse=np.max([v.nrmse for v in vals], axis=0), residual_rms=rms, prefix_s=vals[0].prefix_s,
-                      samples=int(n.sum()), recording_path=path)
-
-
-def _validate_run(model: Model, sens: SensitivityModel, theta: np.ndarray, recording: tuple[Recording, str],
-                  excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
-                  compliance: np.ndarray | None = None) -> Validation:
-    """:func:`~alpes_dyn.estimation.identification.adequacy.compare` of the fitted model on a held-out recording, its
-    torque projected on the excitation's lines as in the fit, the initial state estimated on the first
-    ``prefix_s`` seconds (one shooting interval); ``offset`` (m,) rad: the fitted encoder offsets, the same
-    sensors' (taken off the held-out encoder), and ``compliance`` (m,) rad/(N m): the fitted tendon stretch
-    C u, u the held-out torque as the fit takes it (taken off too)."""
-    rec, path = recording
-    held = rec.n_samples - 1  # one run here (split); a turned one's orientations each on its lines
-    U = rec.torque[:-1] if excitation is None else project_torque(rec.t[:-1], rec.torque[:-1], excitation,
-                                                                   _parts(excitation_parts(rec), held)[:-1])
-    G = rec.gravity[:-1] if rec.gravity is not None else np.broadcast_to(model.gravity, (rec.n_samples - 1, 3))
-    tr = model.transmission
-    step = 2 * np.pi / tr.counts_per_rev
-    prefix = max(2, int(round(prefix_s / rec.dt)))  # checked against the length in identify
-    enc = rec.encoder if offset is None else rec.encoder - np.asarray(offset) / step
-    if compliance is not None and np.any(compliance != 0):
-        enc = enc - torque_before(np.concatenate([U, U[-1:]])) * np.asarray(compliance) / step
-    q0 = _rest_guess(model, U[0], enc[0] * step) if rec.gravity is None else np.zeros(model.n)
-    val = compare(sens, theta, np.concatenate([q0, np.zeros(model.n)]), U, G, enc,
-                  tr.curve if tr.curved else np.asarray(tr.S, dtype=float), step, prefix, path)
-    val.prefix_s = prefix * rec.dt
-    return val
-
-
-def _rest_guess(model: Model, u: np.ndarray, y0: np.ndarray) -> np.ndarray:
-    """The static equilibrium under the motor torques ``u`` (m,), N m (S^T u, or rho(q)^T u where the ratios change
-    with q), the joints without spring (the thumb's ab/adduction, which its own motor holds) held where the first
-    encoder reading ``y0`` puts them."""
-    held = model.springless_joints
-    if not held:
-        return model.static_equilibrium(None, tau_m=u)
-    q = np.zeros(model.n)
-    idx = [model.joint_index(j) for j in held]
-    q[idx] = (np.linalg.pinv(model.transmission.S) @ y0)[idx]
-    return model.static_equilibrium(None, q, fixed=held, tau_m=u)
+                  lines=excitation, dt=rec.dt, runs=parts(excitation_parts(rec), res.shape[0]))

@@ -7,14 +7,18 @@ of finger3 the compiled sensitivities were 48 s of a 60 s fit (2026-12-05, load 
 under 1 s. Its only purpose is to find the basin, and a few seconds of the record find it as well: a 4 s finger3
 record fits K within 0.1 % and m within 0.5 % (``benchmarks/fit_scaling.py``). So a record longer than
 :data:`LONG_RECORD` is fitted in two steps: the whole fit (stages 1-3, both starts) on its first :data:`WINDOW`
-seconds; then, on the whole record from the window's parameters, stage 1 (:data:`NODE_SWEEPS` sweeps), the
-homotopy's last phase alone (:data:`FIRST_PHASE`) and stage 3. The homotopy is not skipped: with the tendon
-compliance fitted (``--effects auto``'s first round) stage 3 straight from stage 1 took 34-36 iterations on a 16 s
-record (the window's compliance, barely seen in 4 s, 3.7 times the whole record's, dragging the masses and the
-torque's lines), with the last phase 4 (and 18-22 evaluations of the whole record in all, against about 70 for the
-whole fit). Where that does not converge within the basin limit,
-:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole record, as
-for any warm start: the answer is the same problem's, only its start differs.
+seconds; then, on the whole record from the window's parameters, the model's response under them (the nodes on
+the encoder, :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`) made continuous in
+the start states alone (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`: their
+sensitivities alone, a third of the whole's) and stage 3 from there. Stage 3 needs a continuous start: from stage 1's
+nodes (each interval fitted alone, defects of its noise) it crawled into the 50-iteration cap on 16 s and 60 s of
+finger3 (seed 21) with a 4 s or a 12 s window (the line search held to short steps by the defects). From the joined
+nodes, though their residual is some 12 counts (the window's parameters, and the torque's line corrections at 0,
+over a minute), it converges in 5 iterations on 60 s, as it did after the homotopy's last phase (five evaluations of
+the whole record with all its sensitivities, and stage 1's four sweeps, which the join replaces: 2026-12-05, the
+whole 60 s fit 22 s of CPU against 27). Where stage 3 does not converge within the basin limit,
+:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole
+record, as for any warm start: the answer is the same problem's, only its start differs.
 """
 
 from __future__ import annotations
@@ -23,7 +27,7 @@ import dataclasses
 
 import numpy as np
 
-from .gauss_newton import BASIN_LIMIT, GaussNewton
+from .gauss_newton import BASIN_LIMIT, SOFT_PHASES, GaussNewton
 from ..experiments.recording import Recording
 from .shooting import Evaluation, ShootingProblem, torque_model
 
@@ -33,14 +37,6 @@ LONG_RECORD = 12.0
 """s: records longer than this start from a fit of their first :data:`WINDOW` seconds."""
 WINDOW = 4.0
 """s: the window whose fit starts a long record's (the documented experiment's length)."""
-FIRST_PHASE = 3
-"""The homotopy's phase (of :data:`~alpes_dyn.estimation.identification.gauss_newton.SOFT_PHASES`) the whole record starts from:
-the last, continuity weighed 1000 / the initial defect."""
-NODE_SWEEPS = 4
-"""Levenberg-Marquardt sweeps of stage 1 (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.fit_nodes`) on the
-whole record at the window's parameters: the intervals' start states fitted to their own samples."""
-
-
 WINDOW_RUN = 0.5
 """s: a recording of several runs: the window ends at the start of its last run where that run would have less
 than this in it (a run of a few samples holds no line of the excitation)."""
@@ -64,7 +60,8 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     """The start of ``pb``'s fit from its record's first :data:`WINDOW` seconds: the whole fit there (``solver``,
     stages 1-3; ``excitation`` the lines, Hz, or None, the torque noise the whole record's), then (nodes, offs,
     glob) of ``pb`` from the window's parameters: the model's response under them from the rest ``q0`` (rad) on
-    the encoder, stage 1 and the homotopy's last phase (the module docstring). Returns (that start and the
+    the encoder, joined (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`; the module
+    docstring). Returns (that start and the
     :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians, or None where the record is not longer than :data:`LONG_RECORD` or the
     window's fit did not converge within :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the window's
     iterations)."""
@@ -83,6 +80,9 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     rho[mult] = np.log(theta[mult] / pb.theta0[mult])
     glob = np.concatenate([rho, np.zeros(pb.ng - pb.p)])  # the line corrections and any drift from 0
     offs = np.zeros((pb.n_int, pb.no))
-    nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=NODE_SWEEPS)
-    nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=FIRST_PHASE)
-    return (nodes, offs, glob, at), out.iterations
+    if pb.no:  # per-interval torque corrections (no lines), which the join does not move: stage 1 and the homotopy's
+        nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=4)  # last phase, as before
+        nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=SOFT_PHASES - 1)
+        return (nodes, offs, glob, at), out.iterations
+    nodes = solver.join_nodes(pb, pb.initial_nodes(q0, theta), offs, glob)
+    return (nodes, offs, glob, pb.evaluate(nodes, offs, glob)), out.iterations

@@ -2,9 +2,10 @@
 
 Split from :mod:`~alpes_dyn.estimation.identification.adequacy` (its 600-line bound), which re-exports both: the
 responses are the regressors of :func:`~alpes_dyn.estimation.identification.adequacy.signatures` (each then projected
-off the fit's tangent space by :func:`~alpes_dyn.estimation.identification.identification.identify`), and what the
-recorded torque's noise explains is a part of the sensor floor (:func:`~alpes_dyn.estimation.identification.adequacy.
-sensor_floor`).
+off the fit's tangent space by :func:`~alpes_dyn.estimation.identification.identification.identify`), each missing
+effect's signature through the fitted model, each interval from its fitted node (:func:`effect_responses`), and what
+the recorded torque's white noise makes of the encoder, a part of the sensor floor (:func:`torque_explained`).
+States-only runs of the compiled step, in chunks of intervals.
 """
 
 from __future__ import annotations
@@ -21,11 +22,13 @@ __all__ = ["effect_responses", "torque_explained"]
 
 def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarray, theta: np.ndarray,
                corr: np.ndarray | None, Psib: np.ndarray | None, valid: np.ndarray, x_fit: np.ndarray, S: np.ndarray,
-               step: float, dt: float, chunk_doubles: int = 2**20) -> dict[str, np.ndarray]:
+               step: float, dt: float, chunk_doubles: int = 2**20, ramp: np.ndarray | None = None
+               ) -> dict[str, np.ndarray]:
     """The encoder's responses (S, L+1, m), counts per N m, through the fitted model (each interval from its
     fitted node) to a motor torque following the sign of the motor velocity, the tension |tau_m| times that sign,
     the velocity, the acceleration (dry friction, the tendon's sheath friction growing with the tension, viscous
-    friction, a rotor's inertia on the tendon) and the torque's own forward
+    friction, a rotor's inertia on the tendon), the torque times ``ramp`` (N+1,) where given (a drifting torque
+    constant) and the torque's own forward
     difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
     torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite
     differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
@@ -47,9 +50,11 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
             "velocity": vm, "acceleration": np.gradient(vm, dt, axis=0),
             "torque_rate": np.concatenate([rate, rate[-1:]])}
     sigs = {k: g for k, g in sigs.items() if g is not None}  # joint torques (no motors): no tension to weigh
+    if ramp is not None:  # the torque times a ramp of the recorded time (N+1,): a drifting torque constant
+        sigs["gain_drift"] = np.concatenate([held, held[-1:]]) * ramp[:, None]
     eps = 1e-6  # N m RMS of each perturbation: the response stays linear (about 0.1 count)
     pert = []
-    for g in sigs.values():  # a loop over the five effects
+    for g in sigs.values():  # a loop over the effects (four to six)
         g = g / max(float(np.sqrt(np.mean(g**2))), 1e-300) * eps
         gp = np.concatenate([g[:-1], np.repeat(g[-2:-1], B * L - (N1 - 1), axis=0)])
         pert.append(gp.reshape(B, L, -1))

@@ -25,7 +25,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
-from typing import Mapping, Sequence
+from typing import Mapping
 
 import numpy as np
 import scipy.sparse as sp
@@ -36,11 +36,12 @@ from ...model.ratio_curve import encoder_angles, encoder_sensitivity
 from ...simulation.sensitivity import SensitivityModel
 from .encoder_output import EncoderOutput
 from .torque_lines import CHOLESKY_QR_ROWS, TorqueModel, _thin_qr, line_basis, torque_model  # noqa: F401
+from .held import ShootingSolution, start_values  # noqa: F401  (re-exported: their home before)
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
                   normal_matrix, penalized_from_blocks)
 from ..experiments.recording import Recording
 from .runs import run_cuts
-from .drift import drift_basis
+from .drift import GAIN_NEEDS_LINES, check_drift, drift_basis, gain_sensitivity, line_coefficients, recorded_time
 
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK"]
@@ -49,18 +50,6 @@ JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
-
-
-@dataclass(frozen=True)
-class ShootingSolution:
-    """A fit's shooting variables at its end, to start another fit of the same recording from (a warm start):
-    ``nodes`` (S, nx) the intervals' start states, ``offs`` (S, no) their torque corrections, ``lines`` (ncg,) the
-    whitened line-coefficient corrections, ``samples`` the samples per interval (L) they were cut at."""
-
-    nodes: np.ndarray
-    offs: np.ndarray
-    lines: np.ndarray
-    samples: int
 
 
 @dataclass
@@ -95,8 +84,9 @@ class ShootingProblem(EncoderOutput):
     name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
     structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
     False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
-    drift: ``"offset"``: the encoders' offset drift fitted too (module drift: ``nd`` knots' values, counts, after the
-    line corrections in ``glob``). A recording of several runs (module runs: each run starting on a node, see
+    drift: ``"offset"``, ``"gain"`` or both (:func:`~alpes_dyn.estimation.identification.drift.check_drift`): the
+    encoders' offset drift (``nd_off`` knots' values, counts) and the torque constants' relative drift (``nd_gain``)
+    fitted too (module drift), after the line corrections in ``glob``. A recording of several runs (module runs: each run starting on a node, see
     ``runs.aligned``) has no continuity into a run's first interval (``cut``) and each run's own line coefficients
     (``blk``).
 
@@ -113,11 +103,15 @@ class ShootingProblem(EncoderOutput):
         eiv, lines = torque.eiv, torque.lines
         self.no = sens.no if (eiv and not lines) else 0  # local torque corrections per interval
         self.ncg = sens.no * torque.blocks if lines else 0  # global line-coefficient corrections (every run's)
-        self.drift = drift
-        H = drift_basis(rec) if drift == "offset" else np.zeros((rec.n_samples, 0))  # (N+1, K): module drift
+        self.drift = drift = check_drift(drift)
+        if "gain" in drift and not lines:
+            raise InputError(GAIN_NEEDS_LINES)
+        H = drift_basis(rec) if drift else np.zeros((rec.n_samples, 0))  # (N+1, K): module drift
         self.nK = H.shape[1]
-        self.nd = np.shape(model.transmission.S)[0] * self.nK
-        self.ng = self.p + self.ncg + self.nd  # parameters, line corrections, the drift's knots (counts)
+        self.nd_off = np.shape(model.transmission.S)[0] * self.nK if "offset" in drift else 0  # counts
+        self.nd_gain = self.nu * self.nK if "gain" in drift else 0  # the torque constants' relative scale
+        self.nd = self.nd_off + self.nd_gain
+        self.ng = self.p + self.ncg + self.nd  # parameters, line corrections, the drifts' knots
         self.nb = self.nx + self.no  # local variables of an interval: its start state and its torque correction
         tr = model.transmission
         self.S_enc = np.asarray(tr.S, dtype=float)
@@ -166,12 +160,14 @@ class ShootingProblem(EncoderOutput):
             QS *= torque.noise
             self.Psib = QS.reshape(n_int, L, torque.nphi)  # (S, L, nphi): the basis over each interval's periods
             self.Psi0 = QS[self.before[np.arange(n_int) * L]]  # (S, nphi): over the period before each
+            self.Acoef = (line_coefficients(QS[:N], U, np.minimum(rec.run_starts()[:-1], N), self.blk, n_int)
+                          if self.nd_gain else None)  # (S, nu, nphi): the gain's direction (module drift)
             torque = dataclasses.replace(torque, Q=None)
         self.torque = torque
         self.shape = Shape(n_int, self.nb, self.nx, self.ng, self.cut)
         self.nv, self.nz, self.nc = self.shape.nv, self.shape.nz, self.shape.nc
         self.prior = np.r_[np.zeros(self.p), np.ones(self.ncg), np.zeros(self.nd)]  # d rg / d glob, squared
-        self.Hb = H[self.kk] * self.step  # (S, L+1, K) rad per count of the drift's knots
+        self._drift_bases(H)
         del H
         self.dense, self.structured = dense, structured and not dense
         n_res = (int(valid.sum()) * self.ny + (int(self.q_mask.sum()) if self.q_mask is not None else 0)
@@ -180,6 +176,14 @@ class ShootingProblem(EncoderOutput):
         self.dof = max(n_res - (self.nz - nc_held), 1)  # residuals less free variables (constraints count back)
         self.unit_p = np.zeros((self.nz + self.nc, self.p))  # right-hand sides that give the parameters' covariance
         self.unit_p[self.nv + np.arange(self.p), np.arange(self.p)] = 1.0
+
+    def _drift_bases(self, H: np.ndarray) -> None:
+        """The drifts' hat functions (``H`` (N+1, K), module drift) where the fit takes them: at each residual's
+        sample in rad per count (the offset's, ``Hb`` (S, L+1, K)), at each interval's middle sample (the gain's,
+        ``Hs`` (S, K)), and the samples' recorded time ``tau_k`` (S, L+1) s (the gain's, sample by sample)."""
+        self.Hb = H[self.kk] * self.step if self.nd_off else None
+        self.Hs = H[self.kk[:, self.L // 2]] if self.nd_gain else None
+        self.tau_k = recorded_time(self.rec)[self.kk] if self.nd_gain else None
 
     def _parameters(self, start: Mapping[str, float] | None) -> None:
         """theta_0, which parameters are additive, their scales and the encoder offsets' and compliances' columns."""
@@ -233,10 +237,13 @@ class ShootingProblem(EncoderOutput):
         before the interval, the others' the interval's own)."""
         return self._scatter(np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1), sl)
 
-    def torque_at(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray:
+    def torque_at(self, glob: np.ndarray, offs: np.ndarray, gained: bool = True) -> np.ndarray:
         """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
         tendons' tension balances at each residual's sample: the one held over the period before it
-        (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own)."""
+        (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own);
+        times the gain's drift where fitted (:meth:`gain`; ``gained=False``: without it)."""
+        if self.nd_gain and gained:
+            return self.torque_at(glob, offs, False) * self.gain(glob, per_sample=True)
         if self.torque.lines:
             C = self.correction(glob, offs)  # (nu, nphi), or per interval (S, nu, nphi): its run's
             u = self.Uk.copy()
@@ -264,10 +271,36 @@ class ShootingProblem(EncoderOutput):
     def drift_offset(self, glob: np.ndarray, sl: slice = slice(None)) -> np.ndarray | float:
         """(s, L+1, m) rad the encoders' drift at each residual's sample of the intervals ``sl`` (module drift:
         the hat functions times the knots' values, counts, in ``glob`` after the line corrections), or 0.0."""
-        if not self.nd:
+        if not self.nd_off:
             return 0.0
-        D = glob[self.p + self.ncg:].reshape(self.ny, -1)  # (m, K) counts
+        d0 = self.p + self.ncg
+        D = glob[d0:d0 + self.nd_off].reshape(self.ny, -1)  # (m, K) counts
         return np.einsum("skK,mK->skm", self.Hb[sl], D)
+
+    def gain(self, glob: np.ndarray, per_sample: bool = False) -> np.ndarray | None:
+        """(S, nu) each motor's torque-constant scale at each interval's middle sample, relative to the first
+        sample's (module drift: 1 plus the hat functions times the knots' values, the last of ``glob``), or
+        ``per_sample`` (S, L+1, nu) at each residual's sample; None without the gain's drift."""
+        if not self.nd_gain:
+            return None
+        D = glob[self.ng - self.nd_gain:].reshape(self.nu, -1)  # (nu, K)
+        if not per_sample:
+            return 1.0 + self.Hs @ D.T
+        T = float(recorded_time(self.rec)[-1])
+        knots = np.linspace(0.0, T, self.nK + 1)
+        return 1.0 + np.stack([np.interp(self.tau_k, knots, np.r_[0.0, d]) for d in D], axis=-1)  # (a few motors)
+
+    def inputs(self, glob: np.ndarray, offs: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+        """(the torque per interval (S, L, nu), the correction the sensitivities take: :meth:`correction`) as the
+        dynamics see them: with the gain's drift the torque times :meth:`gain` at each sample (piecewise linear in
+        time, as drifted) and the correction (per interval, (S, nu, nphi); the noise's size) times its value at the
+        interval's middle; else as they are."""
+        corr = self.correction(glob, offs)
+        g = self.gain(glob)
+        if g is None:
+            return self.Ub, corr
+        C = np.broadcast_to(corr, (self.n_int,) + corr.shape[-2:]) if corr.ndim == 2 else corr
+        return self.Ub * self.gain(glob, per_sample=True)[:, :self.L], C * g[:, :, None]
 
     def encoder_rms(self, r: np.ndarray) -> float:
         """RMS of the encoder residuals in r, counts."""
@@ -278,8 +311,8 @@ class ShootingProblem(EncoderOutput):
 
     def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool | str = True) -> Evaluation:
         """The :class:`Evaluation` at (nodes, offs, glob). ``jac=False``: r, c, rg and the states alone (J, Cv, Cr
-        None), from the step without its sensitivities (a tenth of the time). ``jac="state"``: J (S, R, nx) with
-        respect to the start states alone (Cv, Cr None; stage 1's sweeps, theta fixed: the sensitivities of the
+        None), from the step without its sensitivities (a tenth of the time). ``jac="state"``: J (S, R, nx) and Cv
+        (S-1, nx, nx) with respect to the start states alone (Cr None; stage 1's sweeps, theta fixed: the sensitivities of the
         state alone, a third to a fifth of the time of all of them). With them, the intervals go through
         the compiled sensitivities :data:`JACOBIAN_CHUNK` doubles of sensitivities at a time, each chunk reduced to
         its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it)."""
@@ -288,9 +321,13 @@ class ShootingProblem(EncoderOutput):
             raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
                              "the recording's encoders this model's, in counts, and its torques in N m?")
         n, L = self.n, self.L
-        u_k = self.torque_at(glob, offs) if self.comp_cols else None
-        corr = self.correction(glob, offs)
-        xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac)
+        u_raw = self.torque_at(glob, offs, gained=False) if self.comp_cols else None
+        g = self.gain(glob)
+        u_k = u_raw * g[:, None, :] if (u_raw is not None and g is not None) else u_raw
+        Ub, corr = self.inputs(glob, offs)
+        gain = None if g is None else (g, self.Acoef + (np.broadcast_to(self.correction(glob, offs), self.Acoef.shape)),
+                                       u_raw)
+        xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac, Ub, gain)
         q = xs[:, :, :n]
         r_enc = ((encoder_angles(self.enc, q) + self.offset(theta) + self.drift_offset(glob)
                   + self.stretch(theta, self.tension_torque(u_k, xs)) - self.Yb)
@@ -306,15 +343,20 @@ class ShootingProblem(EncoderOutput):
         if self.no:  # the per-interval torque corrections' prior: zero mean, sigma_u / sqrt(L)
             res.append(offs / self.sig_off)
         r = np.concatenate(res, axis=1)
-        if not jac or jac == "state":
-            return Evaluation(r, J if jac else None, c, None, None, rg, xs)
+        if not jac:
+            return Evaluation(r, None, c, None, None, rg, xs)
+        if jac == "state":
+            return Evaluation(r, J, c, Cv, None, rg, xs)
         return Evaluation(r, J, c, Cv, Cr, rg, xs)
 
     def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
-                       u_k: np.ndarray | None, jac: bool = True):
+                       u_k: np.ndarray | None, jac: bool = True, Ub: np.ndarray | None = None, gain=None):
         """The states xs (S, L+1, nx) and, with ``jac``, J (S, R, nb + ng) and the end-of-interval sensitivities Cv
         (S-1, nx, nb), Cr (S-1, nx, ng) (else None), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of
-        sensitivities (or of the compiled step's per-sample inputs, without them)."""
+        sensitivities (or of the compiled step's per-sample inputs, without them). ``Ub``: the torque per interval
+        (default :attr:`Ub`; :meth:`inputs`); ``gain``: (the gain (S, nu), the torque's coefficients ungained (S,
+        nu, nphi), the tension's torque ungained (S, L+1, nu) or None) where its drift is fitted."""
+        Ub = self.Ub if Ub is None else Ub
         n_int, L, nx = self.n_int, self.L, self.nx
         state = jac == "state"
         per_interval = ((L + 1) * nx * (nx if state else nx + self.p + self.sens.no) if jac
@@ -326,19 +368,23 @@ class ShootingProblem(EncoderOutput):
             sl = slice(a, min(a + chunk, n_int))
             per = corr is not None and (self.no or corr.ndim == 3)  # per interval, or the lines' (global)
             corr_sl = corr[sl] if per else corr
-            x_c, X_c = self.sens.run(nodes[sl], self.Ub[sl], self.Gb[sl], theta, corr_sl,
+            x_c, X_c = self.sens.run(nodes[sl], Ub[sl], self.Gb[sl], theta, corr_sl,
                                      basis=self.Psib[sl] if self.Psib is not None else None, sensitivities=jac)
             xs[sl] = x_c
             if not jac:
                 continue
             if state:
                 A_c = self._state_jacobian(X_c, sl, theta, x_c[:, :, : self.n])
-                J = np.empty((n_int,) + A_c.shape[1:]) if J is None else J
+                if J is None:
+                    J, Cv = np.empty((n_int,) + A_c.shape[1:]), np.empty((n_int - 1, nx, nx))
                 J[sl] = A_c
+                last = min(sl.stop, n_int - 1)
+                Cv[a:last] = X_c[: last - a, L]  # the end states' sensitivities to the start states
                 continue
             J_c, Xv_end, Xr_end = self._jacobian(X_c, theta,
                                                  None if u_k is None else self.tension_torque(u_k[sl], x_c), sl,
-                                                 x_c[:, :, : self.n])
+                                                 x_c[:, :, : self.n], None if gain is None else
+                                                 (gain[0][sl], gain[1][sl], None if gain[2] is None else gain[2][sl]))
             del X_c
             if J is None:
                 J = np.empty((n_int,) + J_c.shape[1:])
@@ -348,7 +394,9 @@ class ShootingProblem(EncoderOutput):
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
         if Cv is not None:
-            Cv[self.cut], Cr[self.cut] = 0.0, 0.0
+            Cv[self.cut] = 0.0
+        if Cr is not None:
+            Cr[self.cut] = 0.0
         return xs, J, Cv, Cr
 
     def _state_jacobian(self, X: np.ndarray, sl: slice, theta: np.ndarray, q: np.ndarray) -> np.ndarray:
@@ -368,35 +416,44 @@ class ShootingProblem(EncoderOutput):
             jac.append(np.zeros((s_int, self.no, self.nx)))
         return np.concatenate(jac, axis=1)
 
-    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice, q: np.ndarray):
+    def _jacobian(self, X: np.ndarray, theta: np.ndarray, u_k: np.ndarray | None, sl: slice, q: np.ndarray,
+                  gain=None):
         """J (s, R, nb + ng) of the residuals of the intervals ``sl`` from their sensitivities X (s, L+1, nx,
         nx + p + no), and the sensitivities at their ends with respect to the local (nx, nb) and global (nx, ng)
-        variables."""
+        variables. ``gain``: (g (s, nu), the torque's coefficients W (s, nu, nphi), the tension's torque (s, L+1,
+        nu) or None), all ungained, where the gain's drift is fitted (module drift; its columns last)."""
         nx, p, n, nb, ng, nu = self.nx, self.p, self.n, self.nb, self.ng, self.nu
         s_int = X.shape[0]
         iv, ip, io = slice(0, nx), slice(nx, nx + p), slice(nx + p, nx + p + self.sens.no)
         Xv = np.concatenate([X[..., iv], X[..., io]], axis=-1) if self.no else X[..., iv]  # (s, L+1, nx, nb)
         Xr = X[..., ip] * np.where(self.additive, self.scale, theta)  # d/d log theta (d/d (theta / scale) if additive)
         if self.torque.lines:  # each interval's run's coefficients in their place (several runs: _scatter)
-            Xr = np.concatenate([Xr, self._scatter(X[..., io], sl)], axis=-1)
-        if self.nd:  # the drift's knots: no state depends on them (output only)
-            Xr = np.concatenate([Xr, np.zeros(Xr.shape[:-1] + (self.nd,))], axis=-1)
+            X_io = X[..., io] if gain is None else X[..., io] * np.tile(gain[0], self.torque.nphi)[:, None, None, :]
+            Xr = np.concatenate([Xr, self._scatter(X_io, sl)], axis=-1)  # (the dynamics see g C: d/dC = g X_io)
+        if self.nd_off:  # the offset's knots: no state depends on them (output only)
+            Xr = np.concatenate([Xr, np.zeros(Xr.shape[:-1] + (self.nd_off,))], axis=-1)
+        if self.nd_gain:  # the gain's knots: the torque's own direction on the lines (module drift)
+            Xr = np.concatenate([Xr, gain_sensitivity(X[..., io], gain[1], self.Hs[sl], nu)], axis=-1)
         w = self.valid[sl, :, None, None] / self.sig_y
         J_enc = np.concatenate([encoder_sensitivity(self.enc, q, Xv[:, :, :n]),
                                 encoder_sensitivity(self.enc, q, Xr[:, :, :n])], axis=-1)
         for k, mo in self.off_cols:  # y = S q + offset: d r / d offset_m = e_m
             J_enc[:, :, mo, nb + k] += 1.0
-        if self.nd:  # y += H d (module drift): motor mo's knots at columns nb + p + ncg + mo K ...
+        if self.nd_off:  # y += H d (module drift): motor mo's knots at columns nb + p + ncg + mo K ...
             K, d0 = self.nK, nb + p + self.ncg
             for mo in range(self.ny):  # a loop over the motors (one or two)
                 J_enc[:, :, mo, d0 + mo * K: d0 + (mo + 1) * K] += self.Hb[sl]
         if self.comp_cols:  # y += C u: d/d C (in its scale) = u scale; d/d the torque's correction = C
             for k, mo in self.comp_cols:
                 J_enc[:, :, mo, nb + k] += u_k[:, :, mo] * self.scale[k]
+                gk = 1.0 if gain is None else gain[0][:, None, mo, None]  # the stretch is under g u
                 if self.torque.lines:  # vec(C_lines) is column-major: coefficient (motor mo, line l) at l * nu + mo
-                    J_enc[:, :, mo, nb + p + mo:nb + p + self.ncg:nu] += theta[k] * self.psik(sl)
+                    J_enc[:, :, mo, nb + p + mo:nb + p + self.ncg:nu] += theta[k] * gk * self.psik(sl)
                 elif self.torque.eiv:
                     J_enc[:, :, mo, nx + mo] += theta[k]
+                if self.nd_gain:  # d (C g u) / d the gain's knots of motor mo: C u (ungained) times each hat
+                    g0, K = nb + p + self.ncg + self.nd_off + mo * self.nK, self.nK
+                    J_enc[:, :, mo, g0:g0 + K] += theta[k] * gain[2][:, :, mo, None] * self.Hs[sl][:, None, :]
         if self.rotor is not None:  # C (u - J_m S qdd): d/d the states and parameters through qdd
             dA = self.motor_acceleration(np.concatenate([Xv[:, :, n: 2 * n], Xr[:, :, n: 2 * n]], axis=-1))
             J_enc -= (self.compliance(theta) * self.rotor)[:, None] * dA
@@ -488,10 +545,12 @@ class ShootingProblem(EncoderOutput):
 
     # --- the start --------------------------------------------------------------------------------------------
 
-    def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> ShootingSolution:
+    def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
+                 response: np.ndarray | None = None) -> ShootingSolution:
         """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
-        name, :func:`start_values`)."""
-        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L)
+        name, :func:`start_values`), with the optimum's ``response`` (nz, p) where given."""
+        return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L,
+                                glob[self.p + self.ncg:].copy(), response, self.additive.copy(), self.scale.copy())
 
     def warm_variables(self, sol: ShootingSolution | None) -> tuple[np.ndarray, np.ndarray, np.ndarray] | None:
         """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
@@ -501,7 +560,8 @@ class ShootingProblem(EncoderOutput):
         if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
                 or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
             return None
-        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, np.zeros(self.nd)])
+        drift = sol.drift if sol.drift.shape == (self.nd,) else np.zeros(self.nd)  # the same drift, else from 0
+        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, drift])
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
@@ -537,23 +597,3 @@ class ShootingProblem(EncoderOutput):
         yd = np.concatenate([np.gradient(y[a:b], self.rec.dt, axis=0) for a, b in zip(runs[:-1], runs[1:])])
         nodes[:, n:] += (yd[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
         return nodes
-
-
-def start_values(theta0: np.ndarray, names: Sequence[str], additive: np.ndarray,
-                 start: Mapping[str, float]) -> np.ndarray:
-    """``theta0`` with the values of ``start`` (by parameter name) put in; :class:`~alpes_dyn.InputError` naming
-    a parameter that is not fitted, or a value that is not a finite number (positive unless additive)."""
-    if not isinstance(start, Mapping):
-        raise InputError(f"start: expected a mapping of parameter names to values (or an earlier "
-                         f"IdentificationResult), got {type(start).__name__}")
-    theta = theta0.copy()
-    for name, v in start.items():
-        if name not in names:
-            raise InputError(f"start: {name!r} is not a parameter of this fit (fitted: {', '.join(names)})")
-        k = list(names).index(name)
-        ok = isinstance(v, (int, float, np.floating, np.integer)) and not isinstance(v, (bool, np.bool_))
-        if not ok or not math.isfinite(float(v)) or (not additive[k] and float(v) <= 0):
-            need = "a finite number" if additive[k] else "a finite number > 0"
-            raise InputError(f"start: {name} = {v!r}: expected {need}")
-        theta[k] = float(v)
-    return theta
