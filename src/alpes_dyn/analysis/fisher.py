@@ -184,7 +184,10 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     camera_times: times (s, within the experiment, on the sample grid) where every joint angle is
         measured once, with noise ``camera_noise`` (rad, default 0.1 degree).
     initial_state: ``"unknown"`` (nuisance parameters, marginalised; default) or ``"known"``.
-    substeps: RK4 steps per sample period (default 4).
+    substeps: RK4 steps per sample period (default the design's, 4, or more where the model's friction asks for
+        them: :func:`~alpes_dyn.simulation.integrate.stable_substeps`, as the experiment's simulation; with 4 a
+        dry friction of v_s = 3 mrad/s made the Shadow finger's sensitivities overflow into a FIM of 1e39 with
+        negative diagonal entries).
     sensitivity: a :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` of the same model, parameters, dt
         and substeps to reuse (its compiled code), else one is built.
     counts_per_rev: encoder resolution (default the transmission's; required without a transmission).
@@ -192,8 +195,13 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
     t0 = time.perf_counter()
     if not isinstance(model, Model):
         raise ModelError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
+    given = substeps is not None or sensitivity is not None
     dt, substeps, noise, cam_times, cam_noise = _settings(design, dt, substeps, encoder_noise_counts, camera_times,
                                                           camera_noise)
+    if not given:  # as the experiment integrates it: more steps where the friction's sign is sharper
+        from ..simulation.integrate import stable_substeps
+
+        substeps = max(int(substeps), stable_substeps(model, dt))
     if initial_state not in INITIAL_STATES:
         raise InputError(f"initial_state: expected one of {', '.join(INITIAL_STATES)}, got {initial_state!r}")
     tr = model.transmission
@@ -382,6 +390,10 @@ def _marginal_information(F: np.ndarray, p: int, initial_state: str) -> np.ndarr
         Flog = Ftt - Fxt.T @ np.linalg.pinv(Fxx, rcond=1e-13, hermitian=True) @ Fxt
     else:
         Flog = Ftt
+    d = np.diag(Flog)
+    if np.any(d < -1e-8 * max(float(np.max(np.abs(np.diag(Ftt)))), 1e-300)):  # information is never negative
+        raise InputError("fisher_information: the information lost its sign marginalising the initial state (the "
+                         "sensitivities grew past double precision: experiment unstable, or too few RK4 substeps)")
     return 0.5 * (Flog + Flog.T)
 
 
