@@ -242,7 +242,11 @@ def foreign_hands(r: Result) -> list[str]:
         if hh.get("codegen"):
             c = hh["codegen"]
             out.append(f"codegen of the held hand's EKF ({c['states']} states) {c['wall_s']:.1f} s: "
-                       f"{c['c_bytes'] / 1e6:.1f} MB of C, {c['c_lines']} lines (not compiled by the benchmark)")
+                       f"{c['c_bytes'] / 1e6:.1f} MB of C, {c['c_lines']} lines"
+                       + (f"; compiled (cc {c['compile_flags']}) in {c['compile_s']:.0f} s, the compiler's peak "
+                          f"{c['compiler_peak_mib']:.0f} MiB; against ``estimate --data``'s filter over {c['samples']} "
+                          f"samples: z within {c['max_z_diff']:.1e}, P within {c['max_P_diff']:.1e}; "
+                          f"{c['step_us']:.0f} us per step" if "compile_s" in c else " (not compiled by the benchmark)"))
     if f:
         i, idf = f["identify"], f["identifiability"]
         out.append(f"first finger, wrist held ({f['n']} joints): identifiability {f['identifiability_wall_s']:.1f} s "

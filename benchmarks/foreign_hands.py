@@ -141,7 +141,41 @@ def whole_hand(d: Path, states: int, seed: int) -> dict[str, Any]:
     return out
 
 
-def held_hand(d: Path, seed: int, duration: float) -> dict[str, Any]:
+def _compiled_hand_observer(c_dir: Path, urdf: str, spec: str, rec_csv: Path) -> dict[str, Any]:
+    """The C observer ``codegen`` wrote in ``c_dir``, compiled (``cc -O0``, its wall time and the compiler's peak
+    memory), run by its ``main.c`` on the first second of the recording, against the Python filter of ``estimate
+    --data`` (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`) with the same noise settings: the
+    largest difference of the estimate and of its covariance, and the step's time (``main -t 3``)."""
+    import resource
+
+    import alpes_dyn as ad
+    from alpes_dyn.estimation.cexport.cexport import main_input, read_main_output
+    from alpes_dyn.estimation.experiments.recording import read_recording
+    from alpes_dyn.estimation.observers.replay import estimate_recording, recording_filter
+
+    cc = os.environ.get("CC", "cc")
+    t0 = time.perf_counter()
+    subprocess.run([cc, "-O0", "-o", str(c_dir / "main"), str(c_dir / "main.c"), str(c_dir / "alpes_ekf.c"), "-lm"],
+                   check=True, capture_output=True)
+    out: dict[str, Any] = {"compile_s": time.perf_counter() - t0, "compile_flags": "-O0",
+                           "compiler_peak_mib": resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024}
+    model = ad.Model.from_urdf_file(urdf, spec)
+    rec = read_recording(rec_csv, model).take(slice(0, 1001))
+    est = estimate_recording(rec, model, torque_noise=5e-4, encoder_noise_counts=0.5)
+    _, z0, P0 = recording_filter(model, "ekf", rec.dt, torque_noise=5e-4, encoder_noise_counts=0.5, u0=rec.torque[0])
+    Y = rec.encoder * (2 * np.pi / model.transmission.counts_per_rev)
+    (c_dir / "in.txt").write_text(main_input(z0, P0, Y[0], rec.torque[:-1], Y[1:]))
+    run = subprocess.run([str(c_dir / "main"), str(c_dir / "in.txt")], check=True, capture_output=True, text=True)
+    Z, P = read_main_output(run.stdout, model.n * 2)
+    timed = subprocess.run([str(c_dir / "main"), "-t", "3", str(c_dir / "in.txt")], check=True, capture_output=True,
+                           text=True).stdout.split()
+    out.update({"samples": rec.n_samples, "max_z_diff": float(np.abs(Z - est.estimate.z).max()),
+                "max_P_diff": float(np.abs(P - est.estimate.P).max()),
+                "step_us": float(timed[timed.index("us") - 1]) if "us" in timed else None})
+    return out
+
+
+def held_hand(d: Path, seed: int, duration: float, compile_c: bool = True) -> dict[str, Any]:
     """Part 2b: the whole hand with its wrist held (``import --hold``, 22 joints, 18 motors) through ``experiment``
     (our simulator, the nominal hand), ``identify --chain rh_A_FFJ0`` (the tendon's two joints' masses and friction)
     and ``estimate --chain rh_A_FFJ0`` on that recording: the times of a user's first runs on the whole hand."""
@@ -160,12 +194,14 @@ def held_hand(d: Path, seed: int, duration: float) -> dict[str, Any]:
                        "values": {k: v["value"] for k, v in fit.get("parameters", {}).items()}}
     w, ekf = cli("estimate", *base, "--data", str(d / "rec.csv"), "--chain", "rh_A_FFJ0")
     out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(max(np.degrees(ekf["rmse"])))}
-    # the whole held hand's observer as C (44 states, 18 motors): generated, not compiled here (gcc -O1 on it ran
-    # over 4 min and 5.9 GB before it was stopped, 2026-12-05)
+    # the whole held hand's observer as C (44 states, 18 motors), compiled at -O0 (gcc -O1 on it ran over 4 min
+    # and 5.9 GB before it was stopped, 2026-12-05) and run on 1 s of the recording against estimate --data's filter
     w, cg = cli("codegen", *base, "-o", str(d / "hand_c"))
     c_file = d / "hand_c" / "alpes_ekf.c"
     out["codegen"] = {"wall_s": w, "states": cg.get("nz"), "c_bytes": c_file.stat().st_size,
                       "c_lines": c_file.read_text().count("\n")}
+    if compile_c:
+        out["codegen"].update(_compiled_hand_observer(d / "hand_c", imp["urdf"], imp["spec"], d / "rec.csv"))
     return out
 
 
@@ -438,7 +474,10 @@ def _table(r: dict[str, Any]) -> str:
         if "codegen" in hh:
             c = hh["codegen"]
             lines.append(f"  codegen of the held hand's EKF ({c['states']} states) {c['wall_s']:.1f} s: "
-                         f"{c['c_bytes'] / 1e6:.1f} MB of C, {c['c_lines']} lines (not compiled here)")
+                         f"{c['c_bytes'] / 1e6:.1f} MB of C, {c['c_lines']} lines"
+                         + (f"; cc -O0 {c['compile_s']:.0f} s ({c['compiler_peak_mib']:.0f} MiB), against estimate "
+                            f"--data's filter over {c['samples']} samples: z within {c['max_z_diff']:.1e}, P within "
+                            f"{c['max_P_diff']:.1e}, {c['step_us']:.0f} us per step" if "compile_s" in c else ""))
     f = r.get("finger")
     if f:
         i = f["identify"]
@@ -513,6 +552,8 @@ def main() -> None:
                     help="the spatial finger's MuJoCo recording, s (default 8: at 4 s its masses' standard errors are "
                          "about 4 %%)")
     ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger, spatial")
+    ap.add_argument("--no-compile", action="store_true",
+                    help="do not compile the held hand's C observer (cc -O0: about 45 s and 3.3 GB)")
     ap.add_argument("--cold", action="store_true", help="a private, empty compile cache (compiles in the times)")
     a = ap.parse_args()
     skip = {s for s in a.skip.split(",") if s}
@@ -530,7 +571,7 @@ def main() -> None:
             r["hand"] = whole_hand(d / "h", a.states, a.seed)
         if "held" not in skip:
             (d / "hh").mkdir()
-            r["held"] = held_hand(d / "hh", a.seed, a.duration)
+            r["held"] = held_hand(d / "hh", a.seed, a.duration, compile_c=not a.no_compile)
         if "finger" not in skip:
             (d / "f").mkdir()
             r["finger"] = finger(d / "f", a.seed, a.finger_duration)
