@@ -80,6 +80,7 @@ from ..checks import as_float_array
 from ..errors import AlpesDynWarning, InputError, ModelError
 from ..limits import check_physical
 from .extras import spring_stiffness
+from .mjcf_export import check_stiction
 from .params import ChainParams, HandParams, load_params
 
 __all__ = ["SCENES", "STICTION_TIMECONST", "STICTION_IMPEDANCE", "tilted_gravity", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
@@ -481,9 +482,7 @@ def _check_effects(stiction: float | None, tendon_stiffness: float | None, tendo
     def number(x: object) -> bool:
         return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and _finite(x)
 
-    if stiction is not None and not (number(stiction) and stiction > 0):
-        raise InputError(f"stiction: expected a positive time constant in s (e.g. {STICTION_TIMECONST:g}), "
-                         f"got {stiction!r}")
+    check_stiction(stiction)
     if tendon_stiffness is not None and not (number(tendon_stiffness) and tendon_stiffness > 0):
         raise InputError(f"tendon_stiffness: expected a positive stiffness in N/m, got {tendon_stiffness!r}")
     if not (number(tendon_damping) and tendon_damping >= 0):

@@ -182,6 +182,19 @@ def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, 
     return f"<joint {' '.join(attrs)}/>"
 
 
+def check_stiction(stiction: Any) -> None:
+    """InputError unless ``stiction`` (the dry-friction constraint's time constant, s: ``solreffriction``) is None
+    or a finite real number > 0 (a bool is not a number): the check of both MJCF writers' ``stiction``."""
+    if stiction is None:
+        return
+    try:  # an integer too large for a float is not finite
+        ok = isinstance(stiction, numbers.Real) and not isinstance(stiction, bool) and math.isfinite(stiction)
+    except OverflowError:
+        ok = False
+    if not (ok and stiction > 0):
+        raise InputError(f"stiction: expected a positive time constant in s (e.g. 0.0005), got {stiction!r}")
+
+
 def stop_solref(model: Any) -> dict[str, tuple[float, float]]:
     """{joint: (solreflimit's two numbers)} of the stops the export writes: empty without a spec ``[stops]`` table;
     else every limited joint's -k w and -d w, k and d :meth:`JointStops.of <alpes_dyn.model.stops.JointStops.of>`'s
@@ -411,9 +424,7 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
     if tr is not None and tr.has_capstan:  # nor the sheath friction: MuJoCo has none
         raise ModelError("capstan: a tendon's sheath friction (mu theta) has no MJCF form (MuJoCo has no "
                          "tension-dependent tendon friction); export the spec without it")
-    if stiction is not None and not (isinstance(stiction, numbers.Real) and not isinstance(stiction, bool)
-                                     and math.isfinite(stiction) and stiction > 0):
-        raise InputError(f"stiction: expected a positive time constant in s (e.g. 0.0005), got {stiction!r}")
+    check_stiction(stiction)
     tree, sites = _tree(model, bool(limits), float(tip_radius), None if stiction is None else float(stiction))
     if tendon is not None:
         tree[-1:-1] = _rotor_bodies(model)  # before </worldbody>
