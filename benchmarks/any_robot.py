@@ -13,7 +13,9 @@ For each, in a temporary folder, as new processes of ``alpes-dyn ... --model URD
    (goal: every spring of the fitted joints within 1 %);
 3. ``mjcf --spec true.toml -o plant.xml``: the drawn robot exported; MuJoCo stepped on that file
    (:func:`alpes_dyn.control.plants.mjcf_recording`: RK4 at 0.1 ms, MuJoCo's stick-slip ``frictionloss``, our
-   encoder and torque sensors at 1 kHz) with the experiment's recorded torque replayed, written as ``mujoco.csv``;
+   encoder and torque sensors at 1 kHz) with the experiment's command replayed
+   (:func:`~alpes_dyn.estimation.experiments.experiment.model_experiment_torque`: the recording's torque less the
+   sensor's noise, checked), written as ``mujoco.csv``;
    ``estimate --spec ident.toml --data mujoco.csv [--chain index]`` (the EKF, reading the identified spec back): the
    RMSE after 1 s, worst joint (goal: < 0.5 degree). Baseline in the same run: the same EKF with the spec the fit
    started from (the ratio says what the identification bought);
@@ -97,6 +99,7 @@ def run_robot(name: str, r: dict[str, Any], seed: int, duration: float, skip: se
     """The steps of the module doc on one robot; each step's figures and wall time."""
     import alpes_dyn as ad
     from alpes_dyn.control.plants import mjcf_recording
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, model_experiment_torque
     from alpes_dyn.estimation.experiments.recording import read_recording, write_recording
     from alpes_dyn.model.spec import load_spec
 
@@ -131,7 +134,11 @@ def run_robot(name: str, r: dict[str, Any], seed: int, duration: float, skip: se
         truth = ad.Model.from_urdf_file(r["urdf"], true_path)
         t0 = time.perf_counter()
         data = read_recording(rec, truth)
-        mj_rec = mjcf_recording(plant, truth, data.torque, float(data.dt), seed=seed + 1)
+        # the experiment's command (the recording's torque less the sensor's noise), not the measured torque
+        design = ExperimentDesign(duration=duration)
+        _, u, x0 = model_experiment_torque(ad.Model.from_urdf_file(r["urdf"], r["spec"]), truth, design)
+        assert np.max(np.abs(data.torque - u)) < 6.0 * design.torque_noise
+        mj_rec = mjcf_recording(plant, truth, u, float(data.dt), seed=seed + 1, q0=x0[: truth.n])
         w_rec = time.perf_counter() - t0
         write_recording(mj_rec, d / "mujoco.csv")
         w_ekf, ekf = cli("estimate", *base, "--spec", str(ident), "--data", str(d / "mujoco.csv"), *chain)

@@ -324,3 +324,16 @@ def test_experiment_true_model_and_amplitude(robot, capsys):
     own = model_experiment(nominal, None, ExperimentDesign(duration=1.0, amplitude_fraction=1.0), seed=0)
     assert np.degrees(np.abs(own.true_q[0] - api.true_q[0]).max()) > 1.0
     assert 1.8 < swing["1"] / swing["0.5"] < 2.2, swing
+    # the command without the sensors (model_experiment_torque): our RK4 from its x0 under it gives the recording's
+    # true joints, and the recording's torque is it plus the sensor's white noise (5e-4 N m)
+    from alpes_dyn.estimation.experiments.experiment import model_experiment_torque
+    from alpes_dyn.simulation.integrate import simulate, stable_substeps
+
+    design = ExperimentDesign(duration=1.0, amplitude_fraction=1.0)
+    t, u, x0 = model_experiment_torque(nominal, truth, design)
+    np.testing.assert_allclose(t, api.t, rtol=0, atol=1e-15)
+    k = max(design.substeps, stable_substeps(truth, design.dt))
+    sim = simulate(truth, x0, np.repeat(u[:-1], k, axis=0), 1.0, design.dt / k, input="motor")
+    np.testing.assert_allclose(sim.x[::k, : truth.n], api.true_q, rtol=0, atol=1e-9)
+    noise = api.torque - u
+    assert abs(noise.std() / design.torque_noise - 1) < 0.1 and abs(noise.mean()) < 0.1 * design.torque_noise

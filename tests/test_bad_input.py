@@ -1250,6 +1250,12 @@ def _model_exp(nominal, **kw):
     return model_experiment(nominal, **{"design": _design(), **kw})
 
 
+def _model_torque(nominal, **kw):
+    from alpes_dyn.estimation.experiments.experiment import model_experiment_torque
+
+    return model_experiment_torque(nominal, **{"design": _design(), **kw})
+
+
 def _example_mjcf(name):
     from alpes_dyn.model.mjcf_import import example_mjcf_path
 
@@ -1848,6 +1854,13 @@ API: list[Api] = [
     A("model_experiment", lambda c: _model_exp(ad.Model(ROBOT_URDF)), InputError, "nominal: model 'tendon_robot' has "
       "no motors"),
     A("model_experiment", lambda c: _model_exp(c.m, design=_design(dt=0.0)), InputError, "dt: expected a sample period"),
+    A("model_experiment_torque", lambda c: _model_torque("finger3"), InputError,
+      "nominal: expected an alpes_dyn Model, got str"),
+    A("model_experiment_torque", lambda c: _model_torque(c.m, truth=ad.Model.alpes("finger2")), InputError,
+      "truth: expected the nominal's joints j1, j2, j3"),
+    A("model_experiment_torque", lambda c: _model_torque(ad.Model(ROBOT_URDF)), InputError,
+      "nominal: model 'tendon_robot' has no motors"),
+    A("model_experiment_torque", lambda c: _model_torque(c.m, design="4 s"), InputError, "design: expected"),
     A("identified_spec", lambda c: _ident_spec(("K_1",), base="x"), ModelError, "base: expected a TransmissionSpec"),
     A("identified_spec", lambda c: _ident_spec(("K_1", "m_2")), ModelError,
       "identified spec: m_2: a spec file holds no masses"),

@@ -80,7 +80,7 @@ from ..checks import as_float_array
 from ..errors import AlpesDynWarning, InputError, ModelError
 from ..limits import check_physical
 from .extras import spring_stiffness
-from .mjcf_export import check_stiction
+from .mjcf_export import STICTION_IMPEDANCE, check_stiction, stiction_attributes
 from .params import ChainParams, HandParams, load_params
 
 __all__ = ["SCENES", "STICTION_TIMECONST", "STICTION_IMPEDANCE", "tilted_gravity", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
@@ -98,9 +98,6 @@ BLOCK_TILT: float = 0.15
 #: the hand palm down (see :func:`alpes_dyn.control.hand_loop.run_hand_control`).
 #: Time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) that gives stick-slip on the finger.
 STICTION_TIMECONST: float = 5e-4
-#: Impedance d of that constraint (``solimpfriction``): a stuck joint creeps at a velocity proportional to
-#: (1 - d) / d; MuJoCo's default 0.9 lets joint 3 creep at 0.012 rad/s under 0.8 F_s after 0.1 s, 0.999 at 1.2e-4.
-STICTION_IMPEDANCE: float = 0.999
 #: The rotor bodies of the series-elastic tendon: a point mass (kg) and inertia (kg m^2) that MuJoCo needs for a
 #: body, 1e-5 of the rotor's J_m = 1e-7 kg m^2 (the rotor's inertia is the joint's ``armature``).
 _ROTOR_MASS, _ROTOR_INERTIA = 1e-6, 1e-12
@@ -197,8 +194,7 @@ class _Writer:
             Fs = self.p.F_s if F_s is None else F_s
             attrs += [f'damping="{_f(Fv)}"', f'frictionloss="{_f(Fs)}"']
             if self.stiction is not None:
-                attrs.append(f'solreffriction="{_f(self.stiction)} 1" '
-                             f'solimpfriction="{_f(STICTION_IMPEDANCE)} {_f(STICTION_IMPEDANCE)} 0.001"')
+                attrs.append(stiction_attributes(self.stiction))
         return f"{ind}<joint {' '.join(attrs)}/>\n"
 
     def chain(self, prefix: str, ch: ChainParams, n: int, K: np.ndarray, pos: Sequence[float], quat: Sequence[float],

@@ -178,8 +178,21 @@ def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, 
         if values[e] != 0:
             attrs.append(f'{attr}="{_f(values[e])}"')
     if stiction is not None and ex.coulomb[e] != 0:
-        attrs.append(f'solreffriction="{_f(stiction)} 1"')
+        attrs.append(stiction_attributes(stiction))
     return f"<joint {' '.join(attrs)}/>"
+
+
+#: Impedance d of the dry-friction constraint that ``stiction`` writes (``solimpfriction``): a stuck joint creeps at
+#: a velocity proportional to (1 - d) / d; MuJoCo's default 0.9 lets finger3's joint 3 creep at 0.012 rad/s under
+#: 0.8 F_s after 0.1 s, 0.999 at 1.2e-4.
+STICTION_IMPEDANCE: float = 0.999
+
+
+def stiction_attributes(stiction: float) -> str:
+    """The ``<joint>`` attributes of a real stick-slip, written by both MJCF writers: ``solreffriction`` of time
+    constant ``stiction`` (s; critically damped) and ``solimpfriction`` of impedance :data:`STICTION_IMPEDANCE`."""
+    d = _f(STICTION_IMPEDANCE)
+    return f'solreffriction="{_f(stiction)} 1" solimpfriction="{d} {d} 0.001"'
 
 
 def check_stiction(stiction: Any) -> None:
@@ -400,8 +413,9 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
         tendon compliance needs it (``ElasticTendon.of(model)``: the quasi-static stretch is a sensor law MuJoCo
         cannot hold, the cable's dynamics are); default None: rigid tendons.
     stiction: time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) on every joint with Coulomb
-        friction, e.g. :data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST` (0.5 ms): a real stick-slip, where MuJoCo's
-        default (20 ms) is soft on a light finger (it slides below F_s); default None: MuJoCo's default.
+        friction, e.g. :data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST` (0.5 ms), with the impedance
+        :data:`STICTION_IMPEDANCE` (``solimpfriction``, as the Alpes writer's): a real stick-slip, where MuJoCo's
+        default (20 ms, 0.9) is soft on a light finger (it slides below F_s); default None: MuJoCo's default.
 
     Returns
     -------
