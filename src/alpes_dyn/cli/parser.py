@@ -173,9 +173,8 @@ def _add_mjcf(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--palm-down", action="store_true", help="Alpes models: gravity reversed: the hand turned over "
                    "(control scene)")
     s.add_argument("--stiction", type=_strict_float, nargs="?", const=5e-4, default=None, metavar="SECONDS",
-                   help="stick-slip dry friction: solreffriction of this time constant (default %(const)g s; "
-                        "MuJoCo's 0.02 s is soft on a light finger) and solimpfriction 0.999 on every joint with "
-                        "Coulomb friction")
+                   help="stick-slip dry friction on every joint with Coulomb friction: solreffriction of this time "
+                        "constant (default %(const)g s; MuJoCo's 0.02 s is soft on a light finger), solimpfriction 0.999")
     s.add_argument("--tendon-stiffness", type=_strict_float, default=None, metavar="N_PER_M",
                    help="Alpes models: series-elastic, pull-only tendon of stiffness k_t with a rotor joint per motor")
     s.add_argument("--tendon-damping", type=_strict_float, default=0.0, metavar="N_S_PER_M",
