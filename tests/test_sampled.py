@@ -11,6 +11,7 @@ import pytest
 import alpes_dyn as ad
 from alpes_dyn.errors import InputError
 from alpes_dyn.estimation.experiments.experiment import perturbed_params
+from alpes_dyn.estimation.experiments import recording
 from alpes_dyn.estimation.experiments.recording import Recording, write_recording
 from alpes_dyn.model.mjcf import hanging_gravity
 from alpes_dyn.simulation import sampled
@@ -55,9 +56,11 @@ def test_a_diverging_run_and_bad_shapes_are_one_line_errors(finger):
         sampled.sampled_rk4(m, x0, u, 1e-3, 0)
 
 
-def test_the_recording_is_written_as_the_row_by_row_writer_wrote_it(tmp_path):
+def test_the_recording_is_written_as_the_row_by_row_writer_wrote_it(tmp_path, monkeypatch):
     """The reference: each row's cells as repr of the float ("" for NaN, the run an integer), joined by commas:
-    the writer before issue 39, on a record with a run column, camera gaps, -0.0, a subnormal and a large value."""
+    the writer before issue 39, on a record with a run column, camera gaps, -0.0, a subnormal and a large value,
+    written 300 rows at a time (the joins crossed)."""
+    monkeypatch.setattr(recording, "WRITE_ROWS", 300)
     rng = np.random.default_rng(1)
     N = 2001
     q = np.full((N, 3), np.nan)

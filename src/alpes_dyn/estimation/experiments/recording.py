@@ -45,13 +45,14 @@ import dataclasses
 import io
 import itertools
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import RecordingError
-from ...fileio import atomic_write, read_bytes
+from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 
@@ -155,6 +156,10 @@ class Recording:
         return out
 
 
+WRITE_ROWS = 1 << 15
+"""Rows :func:`write_recording` formats at a time."""
+
+
 def _fmt(x: float) -> str:
     return "" if math.isnan(x) else repr(float(x))
 
@@ -162,13 +167,19 @@ def _fmt(x: float) -> str:
 def write_recording(rec: Recording, path: str | Path) -> Path:
     """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
     check_recording(rec)
-    cols = rec.columns()
-    names = list(cols)
-    # column by column (the cells formatted by map in C, not a Python loop over the rows: 600 s of the hand is 18
-    # million cells), each cell as _fmt writes it: repr of the float, "" for NaN, the run an integer
-    text = [_column_text(c, np.asarray(v, dtype=float)) for c, v in cols.items()]
-    body = "\n".join(map(",".join, zip(*text)))
-    return atomic_write(path, ",".join(names) + "\n" + body + "\n", "recording", RecordingError)
+    cols = {c: np.asarray(v, dtype=float) for c, v in rec.columns().items()}
+    with atomic_path(path, "recording", RecordingError) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as f:
+            f.write(",".join(cols) + "\n")
+            # WRITE_ROWS rows at a time, column by column (the cells formatted by map in C, not a Python loop over
+            # the rows: 600 s of the hand is 18 million cells; a chunk's cells, not the record's, held at once),
+            # each cell as _fmt writes it: repr of the float, "" for NaN, the run an integer
+            for k0 in range(0, rec.n_samples, WRITE_ROWS):  # a loop over chunks of rows
+                text = [_column_text(c, v[k0: k0 + WRITE_ROWS]) for c, v in cols.items()]
+                f.write("\n".join(map(",".join, zip(*text))) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+    return Path(path)
 
 
 def _column_text(name: str, values: np.ndarray) -> list[str]:
