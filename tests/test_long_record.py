@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 import pytest
 
 import alpes_dyn as ad
+from alpes_dyn.estimation.identification import identification as identification_module
 from alpes_dyn.estimation.identification import long_record
+from alpes_dyn.estimation.identification.shooting import ShootingProblem
 from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
 from alpes_dyn.estimation.identification.gauss_newton import GaussNewton
 from alpes_dyn.estimation.identification.identification import identify
@@ -56,7 +59,24 @@ def test_a_long_record_fits_from_its_window_to_the_truth(clean, monkeypatch):
     monkeypatch.setattr(GaussNewton, "homotopy",
                         lambda self, pb, *a, **k: lengths.append(pb.N) or homotopy(self, pb, *a, **k))
     monkeypatch.setattr(GaussNewton, "join_nodes", staticmethod(join_spy))
+    # the window start's evaluation (its Jacobian: 190 MB at 600 s) is not held once stage 3 has stepped from it:
+    # a weak reference to it, read at each evaluation with the Jacobians after it is handed over
+    handed, alive = [], []
+    start, evaluate = identification_module.window_start, ShootingProblem.evaluate
+
+    def start_spy(*a, **k):
+        out = start(*a, **k)
+        handed.append(weakref.ref(out[0][3]))
+        return out
+
+    def evaluate_spy(self, *a, **k):
+        if handed and k.get("jac", True) is True:
+            alive.append(handed[0]() is not None)
+        return evaluate(self, *a, **k)
+    monkeypatch.setattr(identification_module, "window_start", start_spy)
+    monkeypatch.setattr(ShootingProblem, "evaluate", evaluate_spy)
     res = identify(finger2, rec, progress=False)
+    assert alive and not any(alive)
     # the window's homotopy in full (two starts at most), the whole record joined once, no homotopy of it
     assert res.converged and set(lengths) == {500} and len(joined) == 1 and joined[0][0] == 1200
     assert joined[0][1] < 1e-3
