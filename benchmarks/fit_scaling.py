@@ -221,7 +221,8 @@ def main(argv: list[str] | None = None) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         for d in durations:
             path = folder / f"{args.model}_seed{args.seed}_{d:g}s.csv"
-            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path), "--model", args.model]
+            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path), "--model", args.model,
+                    "--fit", args.fit]  # (--model hand takes --fit cli alone, its --make too)
             design = "(record reused)"
             if not path.exists():
                 done = subprocess.run(base + ["--make", str(d)], capture_output=True, text=True, check=False)
@@ -230,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
                     return 1
                 design = json.loads(done.stdout.strip().splitlines()[-1])["design"] or "as designed (level)"
             kkt = [k for k, up in (("dense", args.dense_up_to), ("superlu", args.superlu_up_to)) if d <= up]
-            done = subprocess.run(base + ["--child", str(d), "--fit", args.fit, "--kkt", ",".join(kkt)],
+            done = subprocess.run(base + ["--child", str(d), "--kkt", ",".join(kkt)],
                                   capture_output=True, text=True, check=False)
             if done.returncode != 0:
                 print(f"{d:g} s: the fit failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)

@@ -75,3 +75,32 @@ def test_the_recording_is_written_as_the_row_by_row_writer_wrote_it(tmp_path, mo
     rows = [",".join(str(int(cols[c][k])) if c == "run" else ("" if math.isnan(cols[c][k]) else repr(float(cols[c][k])))
                      for c in cols) for k in range(N)]
     assert path.read_text() == ",".join(cols) + "\n" + "\n".join(rows) + "\n"
+
+
+def test_the_effects_signatures_are_the_subsets_least_squares():
+    """adequacy.signatures from one QR of the regressors against the reference it replaced: numpy's lstsq of the
+    residual on each subset of the scaled columns (all, then each left out), a column collinear with two others
+    and a zero one among them (lstsq's minimum-norm answer): shares and coefficients to 1e-9 (the zero column's
+    share)."""
+    from alpes_dyn.estimation.identification.adequacy import signatures
+
+    rng = np.random.default_rng(4)
+    N = 3000
+    a, b = rng.standard_normal((N, 2)), rng.standard_normal((N, 2))
+    resp = {"a": a, "b": b, "ab": a - 2 * b, "zero": np.zeros((N, 2)), "c": rng.standard_normal((N, 2))}
+    e = 0.3 * a + 0.5 * resp["c"] + 0.05 + rng.standard_normal((N, 2))
+    got = signatures(e, resp)
+    A = np.column_stack([r.reshape(-1) for r in resp.values()] + [np.ones(2 * N)])
+    scale = np.maximum(np.linalg.norm(A, axis=0), 1e-300)
+    A, y = A / scale, e.reshape(-1)
+
+    def sse(cols):
+        c = np.linalg.lstsq(A[:, cols], y, rcond=None)[0]
+        return float(np.sum((y - A[:, cols] @ c) ** 2)), c
+    full, coef = sse(list(range(6)))
+    for i, k in enumerate(list(resp) + ["bias"]):
+        share = max(sse([j for j in range(6) if j != i])[0] - full, 0.0) / float(y @ y)
+        assert got[k]["share"] == pytest.approx(share, rel=1e-9, abs=1e-12)
+        if k != "zero":  # (its coefficient is a rounding of 0 over the 1e-300 scale, in both)
+            assert got[k]["coefficient"] == pytest.approx(coef[i] / scale[i], rel=1e-9, abs=1e-12)
+    assert got["c"]["share"] > 0.1 and got["a"]["share"] == 0.0 == got["zero"]["share"]  # a: in b and ab
