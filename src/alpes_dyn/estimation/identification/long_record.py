@@ -16,7 +16,9 @@ finger3 (seed 21) with a 4 s or a 12 s window (the line search held to short ste
 nodes, though their residual is some 12 counts (the window's parameters, and the torque's line corrections at 0,
 over a minute), it converges in 5 iterations on 60 s, as it did after the homotopy's last phase (five evaluations of
 the whole record with all its sensitivities, and stage 1's four sweeps, which the join replaces: 2026-12-05, the
-whole 60 s fit 22 s of CPU against 27). Where stage 3 does not converge within the basin limit,
+whole 60 s fit 22 s of CPU against 27). Where the join leaves the start discontinuous (:data:`JOIN_LIMIT`: a joint
+without spring, whose response from rest drifts over minutes, the thumb's ab/adduction), stage 1's nodes and the
+homotopy's last phase start stage 3 instead, as before the join. Where stage 3 does not converge within the basin limit,
 :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole
 record, as for any warm start: the answer is the same problem's, only its start differs.
 """
