@@ -104,3 +104,12 @@ def test_the_effects_signatures_are_the_subsets_least_squares():
         if k != "zero":  # (its coefficient is a rounding of 0 over the 1e-300 scale, in both)
             assert got[k]["coefficient"] == pytest.approx(coef[i] / scale[i], rel=1e-9, abs=1e-12)
     assert got["c"]["share"] > 0.1 and got["a"]["share"] == 0.0 == got["zero"]["share"]  # a: in b and ab
+
+
+@pytest.mark.parametrize("text", ["t,a\n0,1\n1,2\n", "t,a\r\n0,1\r\n1,2", "t,a\r0,1\n\n1,2\u2028x\n", "", "\n", "a"])
+def test_the_recordings_lines_are_cut_as_stringio_cut_them(text):
+    """recording._lines (the reader's lines, cut one at a time from the text) against io.StringIO's iteration, the
+    reader's before: the same lines, "\\r", "\\r\\n" and "\\u2028" left inside them, a last line without "\\n"."""
+    import io
+
+    assert list(recording._lines(text)) == list(io.StringIO(text))
