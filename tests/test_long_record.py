@@ -84,6 +84,22 @@ def test_a_long_record_fits_from_its_window_to_the_truth(clean, monkeypatch):
     assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # the start reported is the model's, not the window's
 
 
+def test_a_start_the_join_leaves_discontinuous_goes_through_the_homotopys_last_phase(clean, monkeypatch):
+    """Where the joined start's defects exceed JOIN_LIMIT (lowered to 0 here: every join refused; the thumb's drifting
+    response on a real record), stage 1's nodes and the homotopy's last phase of the whole record start stage 3,
+    which lands on the truth as from the join: K, m within 1e-6, the friction within 5e-4."""
+    finger2, rec, truth = clean
+    monkeypatch.setattr(long_record, "LONG_RECORD", 0.6)
+    monkeypatch.setattr(long_record, "WINDOW", 0.5)
+    monkeypatch.setattr(long_record, "JOIN_LIMIT", 0.0)
+    phases, homotopy = [], GaussNewton.homotopy
+    monkeypatch.setattr(GaussNewton, "homotopy", lambda self, pb, *a, **k: phases.append(
+        (pb.N, k.get("first", 0))) or homotopy(self, pb, *a, **k))
+    res = identify(finger2, rec, progress=False)
+    assert res.converged and (1200, long_record.SOFT_PHASES - 1) in phases and {n for n, _ in phases} == {500, 1200}
+    assert np.max(np.abs(res.values[:4] / truth[:4] - 1)) < 1e-6 and np.max(np.abs(res.values / truth - 1)) < 5e-4
+
+
 def test_the_whole_record_runs_in_chunks_give_the_same_states(clean, monkeypatch):
     """A long record's states-only runs go in pieces (the per-sample inputs 8 MiB at a time): the model's response
     from rest (ShootingProblem.initial_nodes: each piece from the last one's end) and the effects' responses
