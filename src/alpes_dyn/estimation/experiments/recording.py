@@ -159,10 +159,6 @@ WRITE_ROWS = 1 << 15
 """Rows :func:`write_recording` formats at a time."""
 
 
-def _fmt(x: float) -> str:
-    return "" if math.isnan(x) else repr(float(x))
-
-
 def write_recording(rec: Recording, path: str | Path) -> Path:
     """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
     check_recording(rec)
@@ -172,7 +168,7 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
             f.write(",".join(cols) + "\n")
             # WRITE_ROWS rows at a time, column by column (the cells formatted by map in C, not a Python loop over
             # the rows: 600 s of the hand is 18 million cells; a chunk's cells, not the record's, held at once),
-            # each cell as _fmt writes it: repr of the float, "" for NaN, the run an integer
+            # each cell the repr of its float, "" for NaN, the run an integer
             for k0 in range(0, rec.n_samples, WRITE_ROWS):  # a loop over chunks of rows
                 text = [_column_text(c, v[k0: k0 + WRITE_ROWS]) for c, v in cols.items()]
                 f.write("\n".join(map(",".join, zip(*text))) + "\n")
@@ -182,17 +178,13 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
 
 
 def _column_text(name: str, values: np.ndarray) -> list[str]:
-    """The cells of one column (N,) as :func:`write_recording` writes them: :func:`_fmt`'s (``repr`` of the float,
-    "" for NaN), the ``run`` column's as integers."""
+    """The cells of one column (N,) as :func:`write_recording` writes them: ``repr`` of the float, "" for NaN; the
+    ``run`` column's as integers."""
     if name == "run":
         return list(map(str, values.astype(np.int64).tolist()))
-    cells = list(map(repr, values.tolist()))
-    missing = np.isnan(values)
-    if not missing.any():
-        return cells
-    out = np.array(cells, dtype=object)
-    out[missing] = ""
-    return out.tolist()
+    cells = np.array(list(map(repr, values.tolist())), dtype=object)
+    cells[np.isnan(values)] = ""
+    return cells.tolist()
 
 
 def _next_row(rows, p: Path) -> list[str] | None:
