@@ -3,9 +3,10 @@
 finger3 drawn +-20 % per link (seed 21 by default: not one the other benchmarks tune on), the documented
 identification experiment simulated for each duration as ``alpes-dyn experiment`` makes it (the design adapted over
 the whole record: :func:`~alpes_dyn.estimation.experiments.adapt.adapted_experiment`; our simulator, sensor noise on) and
-written to a CSV by one process (kept in ``--records DIR`` where given: a 600 s record takes 10-20 minutes to
-simulate), then fitted in a fresh process, so that its peak resident memory is the fit's own (the 60 s experiment's
-simulation alone peaks at about 500 MiB). Two fits: ``api``, ``identify`` with the default selection (K, m,
+written to a CSV by one process (kept in ``--records DIR`` where given; simulated at the sample rate in compiled C,
+:func:`~alpes_dyn.simulation.sampled.sampled_rk4`: a 600 s record of finger3 in 16 s and 381 MiB, of the hand in 3.6
+min, 105 s of CPU, 655 MiB, load 2-3.7, 2026-12-05; it took 10-20 minutes per chain through the whole-run
+``simulate``), then fitted in a fresh process, so that its peak resident memory is the fit's own. Two fits: ``api``, ``identify`` with the default selection (K, m,
 friction; ``excitation`` the documented lines), and ``cli``, ``alpes-dyn identify --data FILE`` as a user runs it
 (``--effects auto``: the tendon compliance fitted, then the fit again without it where the data do not support it).
 Each row's time and peak memory also as ratios to the 4 s fit of the same run (the first duration), and the worst
@@ -220,7 +221,8 @@ def main(argv: list[str] | None = None) -> int:
         folder.mkdir(parents=True, exist_ok=True)
         for d in durations:
             path = folder / f"{args.model}_seed{args.seed}_{d:g}s.csv"
-            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path), "--model", args.model]
+            base = [sys.executable, __file__, "--seed", str(args.seed), "--data", str(path), "--model", args.model,
+                    "--fit", args.fit]  # (--model hand takes --fit cli alone, its --make too)
             design = "(record reused)"
             if not path.exists():
                 done = subprocess.run(base + ["--make", str(d)], capture_output=True, text=True, check=False)
@@ -229,7 +231,7 @@ def main(argv: list[str] | None = None) -> int:
                     return 1
                 design = json.loads(done.stdout.strip().splitlines()[-1])["design"] or "as designed (level)"
             kkt = [k for k, up in (("dense", args.dense_up_to), ("superlu", args.superlu_up_to)) if d <= up]
-            done = subprocess.run(base + ["--child", str(d), "--fit", args.fit, "--kkt", ",".join(kkt)],
+            done = subprocess.run(base + ["--child", str(d), "--kkt", ",".join(kkt)],
                                   capture_output=True, text=True, check=False)
             if done.returncode != 0:
                 print(f"{d:g} s: the fit failed: {done.stderr.strip().splitlines()[-1:]}", file=sys.stderr)

@@ -92,3 +92,32 @@ def test_identify_a_chain_from_the_hand_recording(drawn, hand_rec, tmp_path, cap
     got, want = ad.load_params(out).chain("index"), drawn.chain("index")
     assert np.max(np.abs(got.K / want.K - 1)) < 0.01 and np.max(np.abs(got.m / want.m - 1)) < 0.03
     assert ad.load_params(out).chain("middle").K.tolist() == ad.load_params().chain("middle").K.tolist()
+
+
+def test_identify_the_hand_from_a_file_of_two_runs(drawn, hand_rec, tmp_path, capsys):
+    """A hand's recording of two excitation runs in one file (a ``run`` column: the 1 s record's halves, each its
+    own run, its own time): read for the hand, each chain's columns keep the runs (chain_recording), and
+    ``identify --model hand --chain index`` fits the index finger from it to the drawn finger (springs and masses
+    within 3 %: two half-second runs, each its own start state and lines)."""
+    import dataclasses
+
+    from alpes_dyn.cli import main
+    from alpes_dyn.estimation.experiments.recording import join_runs, write_recording
+
+    rec, _, _ = hand_rec
+
+    def part(a, b):
+        return dataclasses.replace(rec, **{f.name: getattr(rec, f.name)[a:b] for f in dataclasses.fields(rec)
+                                           if isinstance(getattr(rec, f.name), np.ndarray)})
+    path = write_recording(join_runs([part(0, 501), part(501, None)]), tmp_path / "runs.csv")
+    back = read_recording(path, ad.Model.alpes("hand"))
+    index = chain_recording(back, "index")
+    assert np.array_equal(index.run_starts(), [0, 501, 1001]) and np.array_equal(index.t[501:], rec.t[501:])
+    assert np.array_equal(index.encoder, chain_recording(rec, "index").encoder)
+    out = tmp_path / "ident.toml"
+    assert main(["identify", "--model", "hand", "--chain", "index", "--data", str(path), "-o", str(out),
+                 "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert list(res["chains"]) == ["index"] and res["trustworthy"]
+    got, want = ad.load_params(out).chain("index"), drawn.chain("index")
+    assert np.max(np.abs(got.K / want.K - 1)) < 0.03 and np.max(np.abs(got.m / want.m - 1)) < 0.03

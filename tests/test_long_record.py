@@ -3,12 +3,15 @@
 from __future__ import annotations
 
 import math
+import weakref
 
 import numpy as np
 import pytest
 
 import alpes_dyn as ad
+from alpes_dyn.estimation.identification import identification as identification_module
 from alpes_dyn.estimation.identification import long_record
+from alpes_dyn.estimation.identification.shooting import ShootingProblem
 from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
 from alpes_dyn.estimation.identification.gauss_newton import GaussNewton
 from alpes_dyn.estimation.identification.identification import identify
@@ -56,12 +59,45 @@ def test_a_long_record_fits_from_its_window_to_the_truth(clean, monkeypatch):
     monkeypatch.setattr(GaussNewton, "homotopy",
                         lambda self, pb, *a, **k: lengths.append(pb.N) or homotopy(self, pb, *a, **k))
     monkeypatch.setattr(GaussNewton, "join_nodes", staticmethod(join_spy))
+    # the window start's evaluation (its Jacobian: 190 MB at 600 s) is not held once stage 3 has stepped from it:
+    # a weak reference to it, read at each evaluation with the Jacobians after it is handed over
+    handed, alive = [], []
+    start, evaluate = identification_module.window_start, ShootingProblem.evaluate
+
+    def start_spy(*a, **k):
+        out = start(*a, **k)
+        handed.append(weakref.ref(out[0][3]))
+        return out
+
+    def evaluate_spy(self, *a, **k):
+        if handed and k.get("jac", True) is True:
+            alive.append(handed[0]() is not None)
+        return evaluate(self, *a, **k)
+    monkeypatch.setattr(identification_module, "window_start", start_spy)
+    monkeypatch.setattr(ShootingProblem, "evaluate", evaluate_spy)
     res = identify(finger2, rec, progress=False)
+    assert alive and not any(alive)
     # the window's homotopy in full (two starts at most), the whole record joined once, no homotopy of it
     assert res.converged and set(lengths) == {500} and len(joined) == 1 and joined[0][0] == 1200
     assert joined[0][1] < 1e-3
     assert np.max(np.abs(res.values[:4] / truth[:4] - 1)) < 1e-6 and np.max(np.abs(res.values / truth - 1)) < 5e-4
     assert np.max(np.abs(res.initial / truth - 1)) > 0.02  # the start reported is the model's, not the window's
+
+
+def test_a_start_the_join_leaves_discontinuous_goes_through_the_homotopys_last_phase(clean, monkeypatch):
+    """Where the joined start's defects exceed JOIN_LIMIT (lowered to 0 here: every join refused; the thumb's drifting
+    response on a real record), stage 1's nodes and the homotopy's last phase of the whole record start stage 3,
+    which lands on the truth as from the join: K, m within 1e-6, the friction within 5e-4."""
+    finger2, rec, truth = clean
+    monkeypatch.setattr(long_record, "LONG_RECORD", 0.6)
+    monkeypatch.setattr(long_record, "WINDOW", 0.5)
+    monkeypatch.setattr(long_record, "JOIN_LIMIT", 0.0)
+    phases, homotopy = [], GaussNewton.homotopy
+    monkeypatch.setattr(GaussNewton, "homotopy", lambda self, pb, *a, **k: phases.append(
+        (pb.N, k.get("first", 0))) or homotopy(self, pb, *a, **k))
+    res = identify(finger2, rec, progress=False)
+    assert res.converged and (1200, long_record.SOFT_PHASES - 1) in phases and {n for n, _ in phases} == {500, 1200}
+    assert np.max(np.abs(res.values[:4] / truth[:4] - 1)) < 1e-6 and np.max(np.abs(res.values / truth - 1)) < 5e-4
 
 
 def test_the_whole_record_runs_in_chunks_give_the_same_states(clean, monkeypatch):

@@ -80,8 +80,9 @@ from . import trim as _trim
 from .trim import (_fmt, _holding_bias, _mean_equilibrium, _oriented, _rest_torque, _torque_ceiling, _trimmed_bias,
                    _with)
 from .recording import Recording, write_recording
-from ...simulation.integrate import simulate, stable_substeps
-from ...model.stops import JointRangeWarning
+from ...simulation.integrate import stable_substeps
+from ...simulation.sampled import sampled_rk4
+from ...model.stops import JointRangeWarning, check_range
 
 __all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments", "excitation", "model_experiment",
            "model_experiment_torque",
@@ -276,7 +277,10 @@ def orientation_segments(design: ExperimentDesign) -> np.ndarray:
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
     """States (N+1, 2n) from the static equilibrium at u[0], RK4 with the design's substeps (more where the truth's
     friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`), the torques u (N+1, m) held
-    per sample, segment by segment of constant gravity."""
+    per sample, segment by segment of constant gravity: compiled, the states kept at the samples
+    (:func:`~alpes_dyn.simulation.sampled.sampled_rk4`, :func:`~alpes_dyn.simulation.integrate.simulate`'s RK4 to
+    the bit, linear in the record); a :class:`~alpes_dyn.model.stops.JointRangeWarning` where a sample leaves the
+    joint range."""
     N = u.shape[0] - 1
     # a sharper friction sign asks for more, and so does a sheath's friction under the torque's tension
     sub = max(design.substeps, stable_substeps(truth, design.dt, tension=np.abs(u).max(axis=0)))
@@ -288,11 +292,10 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
         while stop < N and seg[stop] == seg[start]:
             stop += 1
         m = _oriented(truth, G[start])
-        k = stop - start
-        sim = simulate(m, x[start], np.repeat(u[start:stop], sub, axis=0), k * design.dt,
-                       design.dt / sub, "rk4", input="motor", output="encoder")
-        x[start + 1: stop + 1] = sim.x[sub::sub]
+        x[start + 1: stop + 1] = sampled_rk4(m, x[start], u[start:stop], design.dt, sub)[1:]
         start = stop
+    check_range(design.dt * np.arange(N + 1), x[:, : truth.n], truth.lower, truth.upper, truth.joint_names, "warn",
+                rest=np.where(truth.extras.stiffness != 0, truth.extras.rest, np.nan))
     return x
 
 

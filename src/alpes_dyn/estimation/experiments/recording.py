@@ -42,16 +42,16 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import io
 import itertools
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
 from ...errors import RecordingError
-from ...fileio import atomic_write, read_bytes
+from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 
@@ -155,22 +155,36 @@ class Recording:
         return out
 
 
-def _fmt(x: float) -> str:
-    return "" if math.isnan(x) else repr(float(x))
+WRITE_ROWS = 1 << 15
+"""Rows :func:`write_recording` formats at a time."""
 
 
 def write_recording(rec: Recording, path: str | Path) -> Path:
     """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
     check_recording(rec)
-    cols = rec.columns()
-    names = list(cols)
-    data = np.column_stack([cols[c] for c in names])
-    buf = io.StringIO()
-    buf.write(",".join(names) + "\n")
-    fmt = [(lambda x: str(int(x))) if c == "run" else _fmt for c in names]  # the run an integer
-    for row in data:
-        buf.write(",".join(f(x) for f, x in zip(fmt, row)) + "\n")
-    return atomic_write(path, buf.getvalue(), "recording", RecordingError)
+    cols = {c: np.asarray(v, dtype=float) for c, v in rec.columns().items()}
+    with atomic_path(path, "recording", RecordingError) as tmp:
+        with open(tmp, "w", encoding="utf-8", newline="") as f:
+            f.write(",".join(cols) + "\n")
+            # WRITE_ROWS rows at a time, column by column (the cells formatted by map in C, not a Python loop over
+            # the rows: 600 s of the hand is 18 million cells; a chunk's cells, not the record's, held at once),
+            # each cell the repr of its float, "" for NaN, the run an integer
+            for k0 in range(0, rec.n_samples, WRITE_ROWS):  # a loop over chunks of rows
+                text = [_column_text(c, v[k0: k0 + WRITE_ROWS]) for c, v in cols.items()]
+                f.write("\n".join(map(",".join, zip(*text))) + "\n")
+            f.flush()
+            os.fsync(f.fileno())
+    return Path(path)
+
+
+def _column_text(name: str, values: np.ndarray) -> list[str]:
+    """The cells of one column (N,) as :func:`write_recording` writes them: ``repr`` of the float, "" for NaN; the
+    ``run`` column's as integers."""
+    if name == "run":
+        return list(map(str, values.astype(np.int64).tolist()))
+    cells = np.array(list(map(repr, values.tolist())), dtype=object)
+    cells[np.isnan(values)] = ""
+    return cells.tolist()
 
 
 def _next_row(rows, p: Path) -> list[str] | None:
@@ -213,8 +227,9 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     n_lines = text.count("\n")
     if n_lines > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
-    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record)
-    rows = (r for r in csv.reader(io.StringIO(text)) if r and any(c.strip() for c in r))
+    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record), the
+    # lines cut from the text as read (io.StringIO keeps a copy of 4 bytes a character: 1 GiB for 600 s of the hand)
+    rows = (r for r in csv.reader(_lines(text)) if r and any(c.strip() for c in r))
     header = _header(rows, p, model, ignore_others_of)
     data = _parse_rows(rows, p, header, n_lines)
     del text
@@ -293,6 +308,17 @@ def _header(rows, p: Path, model: Model, wider: Model | None = None) -> list[str
             raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
                                  f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
     return header
+
+
+def _lines(text: str):
+    """The lines of ``text``, each with its "\\n", as ``io.StringIO(text)`` gives them (newline "\\n": no other
+    line ending cuts a line), cut one at a time."""
+    start, n = 0, len(text)
+    while start < n:  # a loop over the lines (csv.reader takes one at a time)
+        end = text.find("\n", start)
+        end = n if end < 0 else end + 1
+        yield text[start:end]
+        start = end
 
 
 def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:

@@ -52,6 +52,7 @@ theta = theta_0 exp(rho).
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import sys
 import time
@@ -457,8 +458,9 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     function)."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
-    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance and the effects' regressors
+    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance
     Z = solve_Kz(pb.unit_p)  # (nz + nc, p): the covariance's columns, and how the optimum moves with each parameter
+    solve_Kz = None  # not held through the effects' responses (the verdict factorises it again: _adequacy)
     P_rho = Z[nv:nv + p] * s2
     theta = pb.values(out.glob)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
@@ -478,7 +480,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     residual = pb.rec.encoder - yhat
 
     def judge():
-        return _adequacy(pb, out, theta, solve_Kz, x_fit, residual, val_rec, excitation, interval, encoder_noise)
+        return _adequacy(pb, out, theta, x_fit, residual, val_rec, excitation, interval, encoder_noise)
     return IdentificationResult(
         names=sens.names, values=theta, std=np.where(pb.additive, pb.scale, theta) * sd_rho, initial=pb.theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=pb.encoder_rms(e.r),
@@ -514,7 +516,7 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
     return x_fit, (encoder_angles(pb.enc, x_fit[:, :pb.n]) + pb.offset(theta) + drift + u_fit) / pb.step
 
 
-def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_Kz, x_fit: np.ndarray,
+def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: np.ndarray,
               res: np.ndarray, val_rec, excitation, interval: float, encoder_noise: float | None):
     """:func:`~alpes_dyn.estimation.identification.adequacy.assess` of the fit: the residual, the sensor floor, each missing
     effect's response less its projection on the fit's tangent space (the nodes and parameters, continuity kept:
@@ -537,6 +539,10 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
     resp["torque"] = (rec.torque - rec.torque.mean(axis=0))[pb.before][pb.kk] * pb.valid[:, :, None]
     if not pb.nd_off:  # a drift of the encoders' offsets: a ramp in the recorded time (module drift)
         resp["drift"] = np.repeat(ramp[pb.kk][:, :, None], pb.ny, axis=2) * pb.valid[:, :, None]
+    # the undamped KKT system of _conclude factorised again (the same numbers), after the effects' responses: not
+    # held through them; then it and the Jacobians let go before the verdict's regressions, ``out``'s too (not read
+    # after the verdict: identify drops it): 150 + 190 MB at 600 s of finger3, whose peak was the regressions' QR
+    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)
     regressors = {}
     for name, R in resp.items():  # a loop over the four effects
         Rr = np.zeros_like(e.r)
@@ -544,6 +550,8 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, solve_K
         z = solve_Kz(np.concatenate([pb.grad(Rr, e.J, np.zeros(pb.ng)), np.zeros(pb.nc)]))[:nz]
         Jz = np.einsum("skd,sd->sk", e.J[:, :, :nb], z[:nv].reshape(n_int, nb)) + e.J[:, :, nb:] @ z[nv:nz]
         regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * pb.sig_y / pb.step)[pb.valid]
+    solve_Kz = e = Rr = Jz = z = None
+    out.at = dataclasses.replace(out.at, J=None, Cv=None, Cr=None)
     val = None
     if val_rec is not None:
         val = validate(pb.model, sens, theta, val_rec, excitation, max(interval, VALIDATION_PREFIX),
