@@ -398,12 +398,19 @@ def model_experiment_torque(nominal: Model, truth: Model | None = None, design: 
     t: (N+1,) s. u: (N+1, m) true motor torque, N m, u[k] held on [t_k, t_k+1). x0: (2n,) the initial state
     (the true robot at rest under u[0], first orientation), rad and rad/s: the recording's first true state.
     """
-    truth = _checked_robots(nominal, truth)
-    design = _checked_design(design)
-    t, seg, G = _schedule(design)
-    u = _orientation_torques(truth, nominal, design, t, seg, np.asarray(design.orientations, dtype=float))
+    return _command(_checked_robots(nominal, truth), nominal, _checked_design(design))
+
+
+def _command(truth: Model, nominal: Model, design: ExperimentDesign, felt: np.ndarray | None = None
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(t, u, x0) of :func:`experiment_torque` and :func:`model_experiment_torque`: the excitation designed on
+    ``nominal``, trimmed on ``truth`` under ``felt`` (k, 3), m/s^2, the gravity it feels in each orientation (default
+    the design's own), and the truth at rest under u[0] in the first."""
+    felt = np.asarray(design.orientations if felt is None else felt, dtype=float)
+    t, seg, _ = _schedule(design)
+    u = _orientation_torques(truth, nominal, design, t, seg, felt)
     x0 = np.zeros(2 * truth.n)
-    x0[: truth.n] = _mean_equilibrium(truth, u[0], G[0])
+    x0[: truth.n] = _mean_equilibrium(truth, u[0], felt[0])
     return t, u, x0
 
 
@@ -493,8 +500,4 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
     p_nom = nominal_params if isinstance(nominal_params, HandParams) else load_params(nominal_params)
     nominal = Model.alpes(model, friction=True, params=p_nom, chain=chain)
     truth = Model.alpes(model, friction=True, params=p_true, chain=chain)
-    t, seg, _ = _schedule(design)
-    u = _orientation_torques(truth, nominal, design, t, seg, g_true)
-    x0 = np.zeros(2 * truth.n)
-    x0[: truth.n] = _mean_equilibrium(truth, u[0], g_true[0])
-    return t, u, x0
+    return _command(truth, nominal, design, g_true)
