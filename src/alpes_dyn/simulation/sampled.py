@@ -26,7 +26,7 @@ from ..errors import InputError
 from ..model.robot import Model
 from ..symbolic.lifted import lift_constants
 from .buildcache import CompilerError
-from .codegen import CompiledStepLoop
+from .codegen import CasadiStepLoop, CompiledStepLoop
 from .integrate import _check_dt, _rhs_function, as_statespace, rk4_expression
 
 __all__ = ["CHUNK_STEPS", "sampled_rk4"]
@@ -54,12 +54,17 @@ def _lifted_step(ss: Any) -> tuple[cs.Function, np.ndarray]:
     return cache["_lifted_rk4"]
 
 
-def _loop(ss: Any, step: cs.Function, parameters: np.ndarray) -> CompiledStepLoop | None:
-    """The compiled loop of ``step`` with ``parameters``, or None where no C compiler can build it."""
-    try:
-        return CompiledStepLoop(step, f"sampled_{ss.model.name}", threads=1, vectorize=False, parameters=parameters)
-    except CompilerError:
-        return None
+def _loop(ss: Any, step: cs.Function, parameters: np.ndarray, compiled: bool) -> CompiledStepLoop | CasadiStepLoop:
+    """The loop of ``step`` with ``parameters``: compiled, or on CasADi's virtual machine where ``compiled`` is False
+    or no C compiler can build it (both with :meth:`CompiledStepLoop.run`'s interface)."""
+    if compiled:
+        try:
+            return CompiledStepLoop(step, f"sampled_{ss.model.name}", threads=1, vectorize=False,
+                                    parameters=parameters)
+        except CompilerError:
+            pass
+    x, w = cs.SX.sym("x", step.size1_in(0)), cs.SX.sym("w", step.size1_in(1))
+    return CasadiStepLoop(cs.Function("rk4_fixed", [x, w], [step(x, w, parameters)]), threads=1)
 
 
 def sampled_rk4(model: Model, x0: np.ndarray, u: np.ndarray, dt: float, substeps: int, input: str = "motor",
@@ -86,22 +91,14 @@ def sampled_rk4(model: Model, x0: np.ndarray, u: np.ndarray, dt: float, substeps
         raise InputError(f"x0: expected shape ({ss.n_states},), got {x0.shape}")
     step, values = _lifted_step(ss)
     params = np.r_[values, dt / sub]
-    loop = _loop(ss, step, params) if compiled else None
+    loop = _loop(ss, step, params, compiled)
     N = u.shape[0]
     x = np.empty((N + 1, ss.n_states))
     x[0] = x0
     per = max(1, CHUNK_STEPS // sub)  # samples per chunk
-    vm: dict[int, cs.Function] = {}
     for k0 in range(0, N, per):  # a loop over chunks of samples (the steps themselves in C)
         k1 = min(N, k0 + per)
-        W = np.repeat(u[k0:k1], sub, axis=0)
-        if loop is not None:
-            X = loop.run(x[k0][None], W[None])[0, sub::sub]
-        else:
-            n = W.shape[0]
-            if n not in vm:
-                vm[n] = step.mapaccum(n)
-            X = np.array(vm[n](x[k0], W.T, params)).T[sub - 1::sub]
+        X = loop.run(x[k0][None], np.repeat(u[k0:k1], sub, axis=0)[None])[0, sub::sub]
         x[k0 + 1: k1 + 1] = X
         if not np.isfinite(X[-1]).all():
             break
