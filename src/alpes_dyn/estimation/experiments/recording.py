@@ -44,7 +44,6 @@ import csv
 import dataclasses
 import itertools
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -163,17 +162,15 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
     """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
     check_recording(rec)
     cols = {c: np.asarray(v, dtype=float) for c, v in rec.columns().items()}
-    with atomic_path(path, "recording", RecordingError) as tmp:
-        with open(tmp, "w", encoding="utf-8", newline="") as f:
-            f.write(",".join(cols) + "\n")
-            # WRITE_ROWS rows at a time, column by column (the cells formatted by map in C, not a Python loop over
-            # the rows: 600 s of the hand is 18 million cells; a chunk's cells, not the record's, held at once),
-            # each cell the repr of its float, "" for NaN, the run an integer
-            for k0 in range(0, rec.n_samples, WRITE_ROWS):  # a loop over chunks of rows
-                text = [_column_text(c, v[k0: k0 + WRITE_ROWS]) for c, v in cols.items()]
-                f.write("\n".join(map(",".join, zip(*text))) + "\n")
-            f.flush()
-            os.fsync(f.fileno())
+    # atomic_path flushes the file to disk before it renames it over path
+    with atomic_path(path, "recording", RecordingError) as tmp, open(tmp, "w", encoding="utf-8", newline="") as f:
+        f.write(",".join(cols) + "\n")
+        # WRITE_ROWS rows at a time, column by column (the cells formatted by map in C, not a Python loop over
+        # the rows: 600 s of the hand is 18 million cells; a chunk's cells, not the record's, held at once),
+        # each cell the repr of its float, "" for NaN, the run an integer
+        for k0 in range(0, rec.n_samples, WRITE_ROWS):  # a loop over chunks of rows
+            text = [_column_text(c, v[k0: k0 + WRITE_ROWS]) for c, v in cols.items()]
+            f.write("\n".join(map(",".join, zip(*text))) + "\n")
     return Path(path)
 
 
