@@ -53,6 +53,7 @@ from ...errors import RecordingError
 from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
+from .csv_numbers import plain_rows
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
            "segment_starts", "excitation_parts"]
@@ -228,7 +229,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     # lines cut from the text as read (io.StringIO keeps a copy of 4 bytes a character: 1 GiB for 600 s of the hand)
     rows = (r for r in csv.reader(_lines(text)) if r and any(c.strip() for c in r))
     header = _header(rows, p, model, ignore_others_of)
-    data = _parse_rows(rows, p, header, n_lines)
+    data = plain_rows(text, len(header))  # a logger's plain numbers by NumPy's parser; else cell by cell
+    data = _parse_rows(rows, p, header, n_lines) if data is None else data
     del text
     own = _known_columns(model)
     col = {h: data[:, j] for j, h in enumerate(header) if h in own}

@@ -237,7 +237,7 @@ class GaussNewton:
             for _ in range(6):
                 soft_cost = 0.5 * float(np.sum(e.r**2) + np.sum(e.rg**2) + np.sum((e.c * wv) ** 2))
                 solve_H, solve_local, H_border = pb.penalized_solver(e, mu_s, wv, frozen)
-                g = pb.grad(e.r, e.J, e.rg) + pb.continuity_t(e.Cv, e.Cr, e.c * wv**2)
+                g = pb.gradient(e) + pb.continuity_t(e.Cv, e.Cr, e.c * wv**2)
                 d = -solve_H(g)  # the least-squares solution where H is singular
                 dv, dg, whole = self.limited(pb, d)
                 if not whole:
@@ -329,7 +329,8 @@ class GaussNewton:
             return None
         if float(np.max(np.abs(trial.c) / c_scale, initial=0.0)) >= 1e-6 or trial.cost > at.cost + slack:
             return None
-        return (*new, dataclasses.replace(trial, J=at.J, Cv=at.Cv, Cr=at.Cr))
+        return (*new, dataclasses.replace(trial, J=at.J, Cv=at.Cv, Cr=at.Cr, normal=at.normal,
+                                               point=at.point))
 
     def constrained(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                     e: Evaluation, c_scale: np.ndarray, bar: _Progress) -> SolverResult:
@@ -348,9 +349,9 @@ class GaussNewton:
         for it in range(1, self.max_iterations + 1):
             solve_K = None  # the last iteration's factorisation freed before the next (a 60 s record's: 110 MB)
             cost = e.cost
-            rhs = np.concatenate([-pb.grad(e.r, e.J, e.rg), -e.c.reshape(-1)])
+            rhs = np.concatenate([-pb.gradient(e), -e.c.reshape(-1)])
             # the step, and the parameters' block of the inverse (their covariance up to the scale)
-            solve_K = pb.kkt_solver(e.J, e.Cv, e.Cr, mu)  # once per iteration: the step and the correction
+            solve_K = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, mu)  # once per iteration: step and correction
             sol = solve_K(np.column_stack([rhs, pb.unit_p]))
             sol, P_rho = sol[:, 0], sol[nv:nv + p, 1:]
             d, lam = sol[:nz], sol[nz:]

@@ -73,6 +73,7 @@ from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
 from .held import held_start
 from .shooting import ShootingProblem, torque_model
+from .normal_blocks import remainders
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
 from .runs import aligned
@@ -458,7 +459,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     function)."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
-    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)  # undamped: the covariance
+    solve_Kz = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)  # undamped: the covariance
     Z = solve_Kz(pb.unit_p)  # (nz + nc, p): the covariance's columns, and how the optimum moves with each parameter
     solve_Kz = None  # not held through the effects' responses (the verdict factorises it again: _adequacy)
     P_rho = Z[nv:nv + p] * s2
@@ -466,7 +467,8 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     # a parameter the data do not see at the solution (its columns zero: tilt_x on a planar finger at a level
     # palm, seen only through cos tilt_x): the least-squares step left it at its start, its std is unbounded
-    info = (np.einsum("skd,skd->d", e.J[:, :, nb:nb + p], e.J[:, :, nb:nb + p])
+    info = ((np.diag(e.normal.PP)[:p].copy() if e.normal is not None  # (a compact Jacobian's: module normal_blocks)
+             else np.einsum("skd,skd->d", e.J[:, :, nb:nb + p], e.J[:, :, nb:nb + p]))
             + np.einsum("sid,sid->d", e.Cr[:, :, :p], e.Cr[:, :, :p]))
     blind = info <= 1e-20 * max(float(info.max(initial=0.0)), 1e-300)
     if blind.any():
@@ -542,15 +544,19 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
     # the undamped KKT system of _conclude factorised again (the same numbers), after the effects' responses: not
     # held through them; then it and the Jacobians let go before the verdict's regressions, ``out``'s too (not read
     # after the verdict: identify drops it): 150 + 190 MB at 600 s of finger3, whose peak was the regressions' QR
-    solve_Kz = pb.kkt_solver(e.J, e.Cv, e.Cr, 0.0)
-    regressors = {}
-    for name, R in resp.items():  # a loop over the four effects
-        Rr = np.zeros_like(e.r)
-        Rr[:, : (L + 1) * ny] = (R * pb.step / pb.sig_y).reshape(n_int, -1)
-        z = solve_Kz(np.concatenate([pb.grad(Rr, e.J, np.zeros(pb.ng)), np.zeros(pb.nc)]))[:nz]
-        Jz = np.einsum("skd,sd->sk", e.J[:, :, :nb], z[:nv].reshape(n_int, nb)) + e.J[:, :, nb:] @ z[nv:nz]
-        regressors[name] = ((Rr - Jz)[:, : (L + 1) * ny].reshape(n_int, L + 1, ny) * pb.sig_y / pb.step)[pb.valid]
-    solve_Kz = e = Rr = Jz = z = None
+    solve_Kz = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)
+    Rr = np.zeros((len(resp),) + e.r.shape)
+    for i, R in enumerate(resp.values()):  # a loop over the four effects
+        Rr[i, :, : (L + 1) * ny] = (R * pb.step / pb.sig_y).reshape(n_int, -1)
+    if e.normal is not None:  # J not held (module normal_blocks): two passes over its chunks where it was taken
+        Rr = remainders(pb, e.point, solve_Kz, Rr)
+    else:
+        for i in range(Rr.shape[0]):  # a loop over the four effects
+            z = solve_Kz(np.concatenate([pb.grad(Rr[i], e.J, np.zeros(pb.ng)), np.zeros(pb.nc)]))[:nz]
+            Rr[i] -= np.einsum("skd,sd->sk", e.J[:, :, :nb], z[:nv].reshape(n_int, nb)) + e.J[:, :, nb:] @ z[nv:nz]
+    regressors = {name: (Rr[i, :, : (L + 1) * ny].reshape(n_int, L + 1, ny) * pb.sig_y / pb.step)[pb.valid]
+                  for i, name in enumerate(resp)}
+    solve_Kz = e = Rr = z = None
     out.at = dataclasses.replace(out.at, J=None, Cv=None, Cr=None)
     val = None
     if val_rec is not None:

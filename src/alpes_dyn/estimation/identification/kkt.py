@@ -25,6 +25,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
+from .normal_blocks import NormalBlocks
+
 __all__ = ["Shape", "normal_matrix", "continuity_jacobian", "kkt_matrix", "factorize", "bordered_factorize",
            "kkt_order", "kkt_from_blocks", "penalized_from_blocks", "DENSE_LIMIT"]
 
@@ -81,15 +83,23 @@ def _block_diagonal(blocks: np.ndarray, row0: int = 0, col0: int = 0) -> tuple[n
     return np.broadcast_to(i, blocks.shape).ravel(), np.broadcast_to(j, blocks.shape).ravel(), blocks.ravel()
 
 
-def normal_matrix(J: np.ndarray, shape: Shape, mu: float, prior: np.ndarray, dense: bool = False):
+def _raw_blocks(J: "np.ndarray | NormalBlocks", nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A'A (S, nb, nb), A'P (S, nb, ng), sum of P'P (ng, ng)) of J (S, rows, nb + ng), or a compact Jacobian's
+    (:class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`: the same numbers, copies)."""
+    if isinstance(J, NormalBlocks):
+        return J.AA.copy(), J.AP, J.PP.copy()
+    A, P = J[:, :, :nb], J[:, :, nb:]
+    return np.einsum("ski,skj->sij", A, A), np.einsum("ski,skj->sij", A, P), np.einsum("ski,skj->ij", P, P)
+
+
+def normal_matrix(J: "np.ndarray | NormalBlocks", shape: Shape, mu: float, prior: np.ndarray, dense: bool = False):
     """The Gauss-Newton normal matrix J^T J of the interval-structured residuals, plus ``prior`` (ng,) on the
     global variables' diagonal, Levenberg-Marquardt damped: mu max(d, 1e-12 max(d_max, 1)) added to each diagonal
-    entry d. J: (S, rows, nb + ng) per interval. Returns an (nz, nz) CSC matrix (an array if dense)."""
+    entry d. J: (S, rows, nb + ng) per interval, or its :class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`.
+    Returns an (nz, nz) CSC matrix (an array if dense)."""
     nb, nv, nz = shape.nb, shape.nv, shape.nz
-    A, P = J[:, :, :nb], J[:, :, nb:]
-    AA = np.einsum("ski,skj->sij", A, A)  # (S, nb, nb)
-    AP = np.einsum("ski,skj->sij", A, P)  # (S, nb, ng)
-    PP = np.einsum("ski,skj->ij", P, P) + np.diag(prior)
+    AA, AP, PP = _raw_blocks(J, nb)  # (S, nb, nb), (S, nb, ng), (ng, ng)
+    PP = PP + np.diag(prior)
     i1, j1, v1 = _block_diagonal(AA)
     rows = np.arange(nv)
     i2 = np.repeat(rows, shape.ng)
@@ -241,14 +251,12 @@ def _band_border_solver(ab: np.ndarray, kl: int, ku: int, B: np.ndarray, Bt: np.
     return solve
 
 
-def _normal_blocks(J: np.ndarray, shape: Shape, mu: float, prior: np.ndarray):
+def _normal_blocks(J: "np.ndarray | NormalBlocks", shape: Shape, mu: float, prior: np.ndarray):
     """:func:`normal_matrix`'s blocks by the same operations: AA (S, nb, nb) the intervals' diagonal blocks, AP (S,
-    nb, ng) their border, D (ng, ng) the corner (with ``prior``), the diagonal damped as there."""
+    nb, ng) their border, D (ng, ng) the corner (with ``prior``), the diagonal damped as there. J as there."""
     nb = shape.nb
-    A, P = J[:, :, :nb], J[:, :, nb:]
-    AA = np.einsum("ski,skj->sij", A, A)  # (S, nb, nb), as normal_matrix
-    AP = np.einsum("ski,skj->sij", A, P)  # (S, nb, ng)
-    PP = np.einsum("ski,skj->ij", P, P) + np.diag(prior)
+    AA, AP, PP = _raw_blocks(J, nb)  # AA a copy: damped in place below
+    PP = PP + np.diag(prior)
     diag_l, diag_g = np.einsum("sii->si", AA).copy(), np.diag(PP).copy()
     big = max(float(max(diag_l.max(initial=0.0), diag_g.max(initial=0.0))), 1.0)
     AA[:, np.arange(nb), np.arange(nb)] += mu * np.maximum(diag_l, 1e-12 * big)

@@ -16,7 +16,8 @@ the camera's (q - q_meas) / sigma_q where the recording has joint angles, and th
 :class:`ShootingProblem` holds the data cut at the intervals and evaluates r, the continuity defects and their
 Jacobians from the compiled sensitivities
 (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`), and the Gauss-Newton normal and KKT matrices of
-:mod:`alpes_dyn.estimation.identification.kkt`. It knows nothing of how the problem is solved: that is
+:mod:`alpes_dyn.estimation.identification.kkt` (its part :mod:`~alpes_dyn.estimation.identification.shooting_algebra`;
+a long record's Jacobian held compact: :mod:`~alpes_dyn.estimation.identification.normal_blocks`). It knows nothing of how the problem is solved: that is
 :mod:`alpes_dyn.estimation.identification.gauss_newton`.
 """
 
@@ -24,23 +25,23 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from dataclasses import dataclass
 from typing import Mapping
 
 import numpy as np
-import scipy.sparse as sp
 
 from ...errors import InputError, ModelError
 from ...model.robot import Model
 from ...model.ratio_curve import encoder_angles, encoder_sensitivity
 from ...simulation.sensitivity import SensitivityModel
 from .encoder_output import EncoderOutput
+from .shooting_algebra import Evaluation, ShootingAlgebra
 from .torque_lines import CHOLESKY_QR_ROWS, TorqueModel, _thin_qr, line_basis, torque_model  # noqa: F401
 from .held import ShootingSolution, start_values  # noqa: F401  (re-exported: their home before)
-from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
-                  normal_matrix, penalized_from_blocks)
+from .kkt import Shape
 from ..experiments.recording import Recording
 from .runs import run_cuts
+from . import normal_blocks
+from .normal_blocks import NormalBlocks
 from .drift import GAIN_NEEDS_LINES, check_drift, drift_basis, gain_sensitivity, line_coefficients, recorded_time
 
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
@@ -52,28 +53,7 @@ chunks of at most this many, each reduced to its rows of the Jacobian before the
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
 
 
-@dataclass
-class Evaluation:
-    """The problem at one point: residuals ``r`` (S, R), their Jacobians ``J`` (S, R, nb + ng) with respect to the
-    interval's local variables and the global ones, continuity defects ``c`` (S-1, nx) and their Jacobians ``Cv``
-    (S-1, nx, nb), ``Cr`` (S-1, nx, ng), the global residuals ``rg`` (ng,) (the line corrections' prior; zeros for
-    theta) and the states ``xs`` (S, L+1, nx). Without the sensitivities J, Cv and Cr are None."""
-
-    r: np.ndarray
-    J: np.ndarray | None
-    c: np.ndarray
-    Cv: np.ndarray | None
-    Cr: np.ndarray | None
-    rg: np.ndarray
-    xs: np.ndarray
-
-    @property
-    def cost(self) -> float:
-        """1/2 (|r|^2 + |rg|^2)."""
-        return 0.5 * float(np.sum(self.r**2) + np.sum(self.rg**2))
-
-
-class ShootingProblem(EncoderOutput):
+class ShootingProblem(EncoderOutput, ShootingAlgebra):
     """The fit of ``sens``' parameters to a recording by multiple shooting at ``L`` samples per interval.
 
     Parameters
@@ -174,8 +154,15 @@ class ShootingProblem(EncoderOutput):
                  + n_int * self.no + self.ncg)
         nc_held = self.nc - int(self.cut.sum()) * self.nx  # the constraints that hold (none across a run's start)
         self.dof = max(n_res - (self.nz - nc_held), 1)  # residuals less free variables (constraints count back)
+        self.compact = self.jacobian_bytes() > normal_blocks.COMPACT_BYTES  # (module normal_blocks)
         self.unit_p = np.zeros((self.nz + self.nc, self.p))  # right-hand sides that give the parameters' covariance
         self.unit_p[self.nv + np.arange(self.p), np.arange(self.p)] = 1.0
+
+    def jacobian_bytes(self) -> int:
+        """Bytes of the residuals' Jacobian J (S, R, nb + ng) in double precision (R: the encoders', the camera's
+        where recorded and the torque corrections' residuals per interval)."""
+        rows = (self.L + 1) * (self.ny + (self.n if self.Qm is not None else 0)) + self.no
+        return self.n_int * rows * (self.nb + self.ng) * 8
 
     def _drift_bases(self, H: np.ndarray) -> None:
         """The drifts' hat functions (``H`` (N+1, K), module drift) where the fit takes them: at each residual's
@@ -309,13 +296,17 @@ class ShootingProblem(EncoderOutput):
 
     # --- the residuals, the defects and their Jacobians ---------------------------------------------------------
 
-    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool | str = True) -> Evaluation:
+    def evaluate(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray, jac: bool | str = True,
+                 sink=None) -> Evaluation:
         """The :class:`Evaluation` at (nodes, offs, glob). ``jac=False``: r, c, rg and the states alone (J, Cv, Cr
         None), from the step without its sensitivities (a tenth of the time). ``jac="state"``: J (S, R, nx) and Cv
         (S-1, nx, nx) with respect to the start states alone (Cr None; stage 1's sweeps, theta fixed: the sensitivities of the
         state alone, a third to a fifth of the time of all of them). With them, the intervals go through
         the compiled sensitivities :data:`JACOBIAN_CHUNK` doubles of sensitivities at a time, each chunk reduced to
-        its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it)."""
+        its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it).
+        Where :attr:`compact` (module normal_blocks), J is not kept: its normal blocks are (``normal``; J None); or
+        ``sink(sl, J_c, x_c)`` takes each chunk's rows of J (the intervals ``sl``, their states), J not kept (a pass
+        over the Jacobian for its products: :func:`~alpes_dyn.estimation.identification.normal_blocks.remainders`)."""
         theta = self.values(glob)
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
             raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
@@ -327,33 +318,48 @@ class ShootingProblem(EncoderOutput):
         Ub, corr = self.inputs(glob, offs)
         gain = None if g is None else (g, self.Acoef + (np.broadcast_to(self.correction(glob, offs), self.Acoef.shape)),
                                        u_raw)
-        xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac, Ub, gain)
-        q = xs[:, :, :n]
-        r_enc = ((encoder_angles(self.enc, q) + self.offset(theta) + self.drift_offset(glob)
-                  + self.stretch(theta, self.tension_torque(u_k, xs)) - self.Yb)
-                 / self.sig_y * self.valid[:, :, None])
+        def residuals(x: np.ndarray, sl: slice = slice(None)) -> np.ndarray:
+            return self._residuals(x, sl, theta, glob, offs, u_k)
+        normal = None
+        if jac is True and self.compact and sink is None:
+            normal = NormalBlocks.empty(self.n_int, self.nb, self.ng)
+
+            def sink(sl: slice, J_c: np.ndarray, x_c: np.ndarray) -> None:
+                normal.add(sl, J_c, residuals(x_c, sl))
+        xs, J, Cv, Cr = self._sensitivities(nodes, theta, corr, u_k, jac, Ub, gain, sink)
         c = xs[:-1, L] - nodes[1:]
         c[self.cut] = 0.0  # no continuity into a run's first interval
         rg = np.concatenate([np.zeros(self.p), glob[self.p:self.p + self.ncg], np.zeros(self.nd)])
-        rq = (np.where(self.q_mask, q - np.nan_to_num(self.Qm), 0.0) / self.camera_noise
-              if self.Qm is not None else None)
-        res = [r_enc.reshape(self.n_int, -1)]
-        if rq is not None:
-            res.append(rq.reshape(self.n_int, -1))
-        if self.no:  # the per-interval torque corrections' prior: zero mean, sigma_u / sqrt(L)
-            res.append(offs / self.sig_off)
-        r = np.concatenate(res, axis=1)
+        r = residuals(xs)
         if not jac:
             return Evaluation(r, None, c, None, None, rg, xs)
         if jac == "state":
             return Evaluation(r, J, c, Cv, None, rg, xs)
-        return Evaluation(r, J, c, Cv, Cr, rg, xs)
+        return Evaluation(r, J, c, Cv, Cr, rg, xs, normal, (nodes, offs, glob))
+
+    def _residuals(self, xs: np.ndarray, sl: slice, theta: np.ndarray, glob: np.ndarray, offs: np.ndarray,
+                   u_k: np.ndarray | None) -> np.ndarray:
+        """(s, R) the residuals of the intervals ``sl`` from their states ``xs`` (s, L+1, nx): the encoder's, the
+        camera's where recorded, the per-interval torque corrections' prior (zero mean, sigma_u / sqrt(L))."""
+        q = xs[:, :, :self.n]
+        u = None if u_k is None else u_k[sl]
+        res = [((encoder_angles(self.enc, q) + self.offset(theta) + self.drift_offset(glob, sl)
+                 + self.stretch(theta, self.tension_torque(u, xs)) - self.Yb[sl])
+                / self.sig_y * self.valid[sl, :, None]).reshape(xs.shape[0], -1)]
+        if self.Qm is not None:
+            res.append((np.where(self.q_mask[sl], q - np.nan_to_num(self.Qm[sl]), 0.0)
+                        / self.camera_noise).reshape(xs.shape[0], -1))
+        if self.no:
+            res.append(offs[sl] / self.sig_off)
+        return np.concatenate(res, axis=1)
 
     def _sensitivities(self, nodes: np.ndarray, theta: np.ndarray, corr: np.ndarray | None,
-                       u_k: np.ndarray | None, jac: bool = True, Ub: np.ndarray | None = None, gain=None):
+                       u_k: np.ndarray | None, jac: bool = True, Ub: np.ndarray | None = None, gain=None,
+                       sink=None):
         """The states xs (S, L+1, nx) and, with ``jac``, J (S, R, nb + ng) and the end-of-interval sensitivities Cv
         (S-1, nx, nb), Cr (S-1, nx, ng) (else None), the intervals in chunks of :data:`JACOBIAN_CHUNK` doubles of
-        sensitivities (or of the compiled step's per-sample inputs, without them). ``Ub``: the torque per interval
+        sensitivities (or of the compiled step's per-sample inputs, without them); with ``sink``, each chunk's rows
+        of J given to ``sink(sl, J_c, x_c)`` (its intervals, their states) and J not kept (None). ``Ub``: the torque per interval
         (default :attr:`Ub`; :meth:`inputs`); ``gain``: (the gain (S, nu), the torque's coefficients ungained (S,
         nu, nphi), the tension's torque ungained (S, L+1, nu) or None) where its drift is fitted."""
         Ub = self.Ub if Ub is None else Ub
@@ -386,11 +392,15 @@ class ShootingProblem(EncoderOutput):
                                                  x_c[:, :, : self.n], None if gain is None else
                                                  (gain[0][sl], gain[1][sl], None if gain[2] is None else gain[2][sl]))
             del X_c
-            if J is None:
+            if sink is not None:
+                sink(sl, J_c, x_c)
+            elif J is None:
                 J = np.empty((n_int,) + J_c.shape[1:])
+            if Cv is None:
                 Cv = np.empty((n_int - 1,) + Xv_end.shape[1:])
                 Cr = np.empty((n_int - 1,) + Xr_end.shape[1:])
-            J[sl] = J_c
+            if sink is None:
+                J[sl] = J_c
             last = min(sl.stop, n_int - 1)  # the last interval has no continuity constraint
             Cv[a:last], Cr[a:last] = Xv_end[: last - a], Xr_end[: last - a]
         if Cv is not None:
@@ -468,80 +478,6 @@ class ShootingProblem(EncoderOutput):
             Jo[:, :, nx:nb] = np.eye(self.no) / self.sig_off
             jac.append(Jo)
         return np.concatenate(jac, axis=1), Xv[:, self.L], Xr[:, self.L]
-
-    # --- the linear algebra (module kkt) ------------------------------------------------------------------------
-
-    def normal(self, J: np.ndarray, mu: float):
-        """Gauss-Newton normal matrix of the interval-structured residuals, LM-damped by mu (:mod:`.kkt`)."""
-        return normal_matrix(J, self.shape, mu, self.prior, self.dense)
-
-    def continuity(self, Cv: np.ndarray, Cr: np.ndarray):
-        """(nc, nz) Jacobian of the continuity defects."""
-        return continuity_jacobian(Cv, Cr, self.shape, self.dense)
-
-    def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
-        """Normal equations of the interval-structured least squares, with the continuity constraints."""
-        return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr), self.shape.dropped)
-
-    def continuity_t(self, Cv: np.ndarray, Cr: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks."""
-        out = np.zeros((self.n_int, self.nb))
-        out[:-1] += np.einsum("sia,si->sa", Cv, v)
-        out[1:, :self.nx] -= v * self.shape.keep[:, None]
-        return np.concatenate([out.reshape(-1), np.einsum("sig,si->g", Cr, v)])
-
-    def penalized_solver(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
-        """The homotopy's system at ``e``: H (:meth:`normal`, damped by ``mu``) + C' W C (the defects' rows weighted
-        by ``wv`` (nx,)), 1e12 max(d, 1) added to the diagonal d of the global variables ``hold`` (indices 0..ng-1).
-        Returns (its solver, the solver of its local variables' block H[:nv, :nv], that block's border H[:nv, nv:]):
-        where :attr:`structured`, from the blocks (:func:`~alpes_dyn.estimation.identification.kkt.penalized_from_blocks`),
-        else from the matrices (dense or SuperLU)."""
-        nv = self.nv
-        if self.structured:
-            def fallback():
-                return factorize(self._penalized_matrix(e, mu, wv, hold))
-            return penalized_from_blocks(e.J, e.Cv, e.Cr, wv, self.shape, mu, self.prior, hold, fallback)
-        H = self._penalized_matrix(e, mu, wv, hold)
-        return factorize(H), factorize(H[:nv, :nv]), H[:nv, nv:]
-
-    def _penalized_matrix(self, e: Evaluation, mu: float, wv: np.ndarray, hold: np.ndarray):
-        """:meth:`penalized_solver`'s matrix, (nz, nz), sparse (an array if :attr:`dense`)."""
-        wdef = np.tile(wv, self.n_int - 1) * np.repeat(self.shape.keep, self.nx)
-        C = self.continuity(e.Cv, e.Cr)
-        C = C * wdef[:, None] if self.dense else sp.diags(wdef) @ C
-        H = self.normal(e.J, mu) + C.T @ C
-        h = np.zeros(self.nz)
-        idx = self.nv + np.asarray(hold, dtype=int)
-        h[idx] = 1e12 * np.maximum(H.diagonal()[idx], 1.0)
-        return H + (np.diag(h) if self.dense else sp.diags(h, format="csc"))
-
-    def kkt_solver(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
-        """A solver of :meth:`kkt_system` (J, Cv, Cr, mu): where :attr:`structured`, laid out in band and border from
-        the intervals' blocks (:func:`~alpes_dyn.estimation.identification.kkt.kkt_from_blocks`: no sparse matrix
-        formed), else :meth:`factorize` of the matrix."""
-        if not self.structured:
-            return self.factorize(self.kkt_system(J, Cv, Cr, mu), "kkt")
-        return kkt_from_blocks(J, Cv, Cr, self.shape, mu, self.prior,
-                               lambda: factorize(self.kkt_system(J, Cv, Cr, mu)))
-
-    def factorize(self, M, system: str):
-        """A solver x = M^-1 b for one of the problem's matrices: ``system`` "kkt" (:meth:`kkt_system`), "normal"
-        (the (nz, nz) normal matrix, with or without the continuity penalty C'WC) or "local" (its local variables'
-        (nv, nv) block); by :func:`~alpes_dyn.estimation.identification.kkt.bordered_factorize` in the order that makes it banded
-        but for the global variables where :attr:`structured`, else :func:`~alpes_dyn.estimation.identification.kkt.factorize`."""
-        if not self.structured:
-            return factorize(M)
-        if system == "kkt":
-            return bordered_factorize(M, kkt_order(self.shape), self.ng)
-        if system not in ("normal", "local"):
-            raise ValueError(f"system: expected 'kkt', 'normal' or 'local', got {system!r}")
-        return bordered_factorize(M, np.arange(M.shape[0]), self.ng if system == "normal" else 0)
-
-    def grad(self, r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
-        """(nz,) the cost's gradient J^T r (+ rg for the global variables)."""
-        nb = self.nb
-        gs = np.einsum("sk,skd->sd", r, J)
-        return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0) + rg])
 
     # --- the start --------------------------------------------------------------------------------------------
 

@@ -1,0 +1,58 @@
+"""A recording's data rows read by NumPy's C parser where they are plain numbers (issue 39).
+
+:func:`~alpes_dyn.estimation.experiments.recording.read_recording` checks every cell on its own, in Python (the one
+line naming the column and the line of a bad cell): 26 s of a 600 s fit of the hand went there, for 600 001 rows of
+45 cells (2026-12-05). Most recordings are a logger's plain numbers, and :func:`plain_rows` reads those with
+:func:`numpy.loadtxt` (its C parser, ``comments=None``: no line is skipped as a comment). It gives up -- returns None,
+and the cell-by-cell reader runs and names what is wrong -- on anything else: a cell that is not a plain number (an
+empty one, a quoted one, digit separators, text), a row of another length, a NaN or an infinity anywhere (only the
+optional columns may hold one, and the cell-by-cell reader says which), a subnormal value, or a cell longer than
+:data:`~alpes_dyn.limits.MAX_CSV_CELL` (the cell-by-cell reader's limit).
+"""
+
+from __future__ import annotations
+
+import warnings
+
+import numpy as np
+
+from ...limits import MAX_CSV_CELL
+
+__all__ = ["plain_rows"]
+
+
+class _LongLine(ValueError):
+    """A cell longer than :data:`MAX_CSV_CELL` characters (the exact reader's limit)."""
+
+
+def _data_lines(text: str):
+    """The lines of ``text`` after its first (the header), each with its "\\n", one at a time (no copy of the text);
+    :class:`_LongLine` at a cell longer than :data:`MAX_CSV_CELL` characters (only a longer line is split to see)."""
+    start, n = text.find("\n") + 1, len(text)
+    while 0 < start < n:  # a loop over the lines (loadtxt takes them one at a time)
+        end = text.find("\n", start)
+        end = n if end < 0 else end + 1
+        line = text[start:end]
+        if end - start > MAX_CSV_CELL and max(map(len, line.split(","))) > MAX_CSV_CELL:
+            raise _LongLine(f"line {line[:40]!r}...: a cell over {MAX_CSV_CELL} characters")
+        yield line
+        start = end
+
+
+def plain_rows(text: str, columns: int) -> np.ndarray | None:
+    """(rows, ``columns``) the data rows of a recording's CSV ``text`` whose first line is its header, where every
+    cell of every other non-blank line is a plain finite number, normal or zero (the module doc); else None."""
+    first = text.find("\n")
+    if first < 0 or not text[:first].strip() or '"' in text:
+        return None  # one line, a blank first line, or quoted cells: the exact reader
+    try:
+        with warnings.catch_warnings():  # (loadtxt warns of no data: None below)
+            warnings.simplefilter("ignore")
+            data = np.loadtxt(_data_lines(text), delimiter=",", comments=None, dtype=float, ndmin=2)
+    except (ValueError, TypeError):  # (_LongLine too)
+        return None
+    if data.shape[0] == 0 or data.shape[1] != columns or not np.isfinite(data).all():
+        return None
+    if np.any((data != 0) & (np.abs(data) < np.finfo(float).tiny)):
+        return None
+    return data

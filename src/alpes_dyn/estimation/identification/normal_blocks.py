@@ -1,0 +1,88 @@
+"""A long record's Jacobian held compact: its normal blocks, not itself (issue 39).
+
+The shooting fit's residual Jacobian J (S, R, nb + ng) (:class:`~alpes_dyn.estimation.identification.shooting.Evaluation`)
+is the largest array of a fit: for the hand's thumb on a 600 s record (12 000 intervals of 50 ms, two encoders,
+56 columns) 548 MB, above the 450-550 MB the record and its problem already hold, and the fit peaked at 1.48 GB
+(2026-12-05). Gauss-Newton needs only J's normal blocks -- each interval's A'A (nb, nb) and A'P (nb, ng), the sum of
+the P'P (ng, ng), with A the interval's local columns and P the global ones -- and each interval's J'r (nb + ng):
+accumulated chunk by chunk while the sensitivities are computed (:meth:`NormalBlocks.add`), by the einsums of
+:func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`, they are the same numbers as from the whole J (the sum
+of the P'P in another order: within 1e-12), and the steps, the covariance and the stopping rule read them alone.
+The one use of J itself is the verdict's projection of each missing effect's response R on the fit's tangent space
+(J'R, the KKT solve, then R - J z): :func:`remainders` takes it in two more passes over the sensitivities at the fit's
+end, chunk by chunk, instead of holding J (two evaluations of the whole record with its sensitivities: 10-13 s each
+for a chain of the hand at 600 s).
+
+A problem holds its Jacobians compact where J would take more than :data:`COMPACT_BYTES`
+(:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.evaluate`): a 600 s record; shorter ones keep
+the whole J, as before.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable
+
+import numpy as np
+
+__all__ = ["COMPACT_BYTES", "NormalBlocks", "remainders"]
+
+COMPACT_BYTES = 2**27
+"""Bytes (128 MiB): a problem whose Jacobian J (S, R, nb + ng) in double precision would take more holds it compact
+(module doc). finger3 at 60 s: 17 MB (whole); at 600 s: 175 MB (compact); the hand's thumb at 600 s: 548 MB."""
+
+
+@dataclass
+class NormalBlocks:
+    """J's normal blocks, undamped and without the prior: ``AA`` (S, nb, nb) each interval's A'A, ``AP`` (S, nb, ng)
+    its A'P, ``PP`` (ng, ng) the sum of the P'P; and ``gs`` (S, nb + ng) each interval's J'r (r the residuals the
+    blocks were accumulated with)."""
+
+    AA: np.ndarray
+    AP: np.ndarray
+    PP: np.ndarray
+    gs: np.ndarray
+
+    @classmethod
+    def empty(cls, n_int: int, nb: int, ng: int) -> "NormalBlocks":
+        return cls(np.zeros((n_int, nb, nb)), np.zeros((n_int, nb, ng)), np.zeros((ng, ng)), np.zeros((n_int, nb + ng)))
+
+    def add(self, sl: slice, J: np.ndarray, r: np.ndarray) -> None:
+        """The intervals ``sl``' blocks from their rows of J (s, R, nb + ng), double precision, and residuals r (s, R),
+        by the einsums of :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`."""
+        nb = self.AA.shape[1]
+        A, P = J[:, :, :nb], J[:, :, nb:]
+        self.AA[sl] = np.einsum("ski,skj->sij", A, A)
+        self.AP[sl] = np.einsum("ski,skj->sij", A, P)
+        self.PP += np.einsum("ski,skj->ij", P, P)
+        self.gs[sl] = np.einsum("sk,skd->sd", r, J)
+
+    def gradient(self, rg: np.ndarray) -> np.ndarray:
+        """(nz,) the cost's gradient J'r (+ ``rg`` for the global variables), as
+        :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.grad` gives it from J."""
+        nb = self.AA.shape[1]
+        return np.concatenate([self.gs[:, :nb].reshape(-1), self.gs[:, nb:].sum(axis=0) + rg])
+
+
+def remainders(pb: Any, point: tuple[np.ndarray, np.ndarray, np.ndarray], solve: Callable[[np.ndarray], np.ndarray],
+               R: np.ndarray) -> np.ndarray:
+    """(k, S, rows) each R_i - J z_i, z_i = ``solve``([J'R_i; 0]) (the KKT system's solver: the projection of R_i on
+    the fit's tangent space, continuity kept), for ``R`` (k, S, rows) residual-shaped responses, J the Jacobian of
+    ``pb`` (a :class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`) at ``point`` (nodes, offs, glob),
+    never held whole: one pass over its chunks for every J'R_i, one for every J z_i (module doc)."""
+    k, nb, nv, nz = R.shape[0], pb.nb, pb.nv, pb.nz
+    G = np.zeros((k, pb.n_int, nb + pb.ng))
+
+    def products(sl: slice, J_c: np.ndarray, x_c: np.ndarray) -> None:
+        G[:, sl] = np.einsum("esk,skd->esd", R[:, sl], J_c)
+    pb.evaluate(*point, sink=products)
+    Z = [solve(np.concatenate([g[:, :nb].reshape(-1), g[:, nb:].sum(axis=0), np.zeros(pb.nc)]))[:nz] for g in G]
+    G = None
+    out = R.copy()
+
+    def subtract(sl: slice, J_c: np.ndarray, x_c: np.ndarray) -> None:
+        for i, z in enumerate(Z):  # a loop over the responses (four or five)
+            out[i, sl] -= (np.einsum("skd,sd->sk", J_c[:, :, :nb], z[:nv].reshape(-1, nb)[sl])
+                           + J_c[:, :, nb:] @ z[nv:])
+    pb.evaluate(*point, sink=subtract)
+    return out
