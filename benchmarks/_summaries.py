@@ -256,7 +256,11 @@ def foreign_hands(r: Result) -> list[str]:
                    + f"), experiment {f['experiment_wall_s']:.1f} s, identify {i['wall_s']:.1f} s, codegen "
                    f"{f['codegen_wall_s']:.1f} s")
         if "duration_s" in f:
-            out.append(f"the finger's experiment {f['duration_s']:g} s, trimmed on the drawn finger (``--true-model``, "
+            runs = f.get("runs", 1)
+            out.append(f"the finger's experiment {f['duration_s']:g} s"
+                       + (f", {runs} runs of it fitted together (the command replayed on MuJoCo each time, its own "
+                          "sensor noise; the EKF on one more run, not fitted)" if runs > 1 else "")
+                       + ", trimmed on the drawn finger (``--true-model``, "
                        f"``--amplitude 1``), MuJoCo's dry friction a real stick-slip (``mjcf --stiction``), the fit's "
                        f"v_s {f['smooth_velocity']:g} rad/s; MuJoCo's joints within {f['mujoco_vs_ours_deg']:.2f} deg "
                        "of our simulator's under the same torque")

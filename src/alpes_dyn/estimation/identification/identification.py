@@ -545,9 +545,9 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
     # held through them; then it and the Jacobians let go before the verdict's regressions, ``out``'s too (not read
     # after the verdict: identify drops it): 150 + 190 MB at 600 s of finger3, whose peak was the regressions' QR
     solve_Kz = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)
-    Rr = np.zeros((len(resp),) + e.r.shape)
-    for i, R in enumerate(resp.values()):  # a loop over the four effects
-        Rr[i, :, : (L + 1) * ny] = (R * pb.step / pb.sig_y).reshape(n_int, -1)
+    Rr, names = np.zeros((len(resp),) + e.r.shape), list(resp)
+    for i, name in enumerate(names):  # a loop over the four effects, each response let go once laid in Rr
+        Rr[i, :, : (L + 1) * ny] = (resp.pop(name) * pb.step / pb.sig_y).reshape(n_int, -1)
     if e.normal is not None:  # J not held (module normal_blocks): two passes over its chunks where it was taken
         Rr = remainders(pb, e.point, solve_Kz, Rr)
     else:
@@ -555,7 +555,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
             z = solve_Kz(np.concatenate([pb.grad(Rr[i], e.J, np.zeros(pb.ng)), np.zeros(pb.nc)]))[:nz]
             Rr[i] -= np.einsum("skd,sd->sk", e.J[:, :, :nb], z[:nv].reshape(n_int, nb)) + e.J[:, :, nb:] @ z[nv:nz]
     regressors = {name: (Rr[i, :, : (L + 1) * ny].reshape(n_int, L + 1, ny) * pb.sig_y / pb.step)[pb.valid]
-                  for i, name in enumerate(resp)}
+                  for i, name in enumerate(names)}
     solve_Kz = e = Rr = z = None
     out.at = dataclasses.replace(out.at, J=None, Cv=None, Cr=None)
     val = None
