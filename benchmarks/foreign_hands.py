@@ -586,6 +586,8 @@ def main() -> None:
     a = ap.parse_args()
     skip = {s for s in a.skip.split(",") if s}
     parts = {"hand", "held", "finger", "spatial"}
+    if a.finger_runs < 1:
+        ap.error(f"--finger-runs: expected at least 1 run, got {a.finger_runs}")
     if skip - parts:
         ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} (hand, held, finger, spatial)")
     t0 = time.perf_counter()
