@@ -22,7 +22,9 @@ only); a row's iterations are every chain's, its errors the worst chain's (the t
 flexion joints with the fingers'), converged and adequate only where every chain is.
 
 Goal (issue 39): time and memory linear in the record; with the cache warm, ``alpes-dyn identify`` on 60 s under
-20 s and 400 MiB, on 600 s under 3 min and 1 GiB, the parameters as accurate as the 4 s fit's (K 3 %, m 5 %).
+20 s and 400 MiB, on 600 s under 3 min and 1 GiB, the parameters as accurate as the 4 s fit's (K 3 %, m 5 %). The
+figures are one finger's (finger3, the default); the whole hand's five chains are fitted one after the other (its 4 s
+fit alone takes half a minute): for it, the ratios to its 4 s fit, and memory within 1 GiB.
 """
 
 from __future__ import annotations
