@@ -108,8 +108,10 @@ def test_the_effects_signatures_are_the_subsets_least_squares():
 
 @pytest.mark.parametrize("text", ["t,a\n0,1\n1,2\n", "t,a\r\n0,1\r\n1,2", "t,a\r0,1\n\n1,2\u2028x\n", "", "\n", "a"])
 def test_the_recordings_lines_are_cut_as_stringio_cut_them(text):
-    """recording._lines (the reader's lines, cut one at a time from the text) against io.StringIO's iteration, the
+    """csv_numbers.lines (the reader's lines, cut one at a time from the text) against io.StringIO's iteration, the
     reader's before: the same lines, "\\r", "\\r\\n" and "\\u2028" left inside them, a last line without "\\n"."""
     import io
 
-    assert list(recording._lines(text)) == list(io.StringIO(text))
+    from alpes_dyn.estimation.experiments.csv_numbers import lines
+
+    assert list(lines(text)) == list(io.StringIO(text))

@@ -53,7 +53,7 @@ from ...errors import RecordingError
 from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
-from .csv_numbers import plain_rows
+from .csv_numbers import lines, plain_rows
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
            "segment_starts", "excitation_parts"]
@@ -226,8 +226,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     if n_lines > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
     # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record), the
-    # lines cut from the text as read (io.StringIO keeps a copy of 4 bytes a character: 1 GiB for 600 s of the hand)
-    rows = (r for r in csv.reader(_lines(text)) if r and any(c.strip() for c in r))
+    # lines cut from the text as read (csv_numbers.lines: no copy of the text)
+    rows = (r for r in csv.reader(lines(text)) if r and any(c.strip() for c in r))
     header = _header(rows, p, model, ignore_others_of)
     data = plain_rows(text, len(header))  # a logger's plain numbers by NumPy's parser; else cell by cell
     data = _parse_rows(rows, p, header, n_lines) if data is None else data
@@ -307,17 +307,6 @@ def _header(rows, p: Path, model: Model, wider: Model | None = None) -> list[str
             raise RecordingError(f"recording: unknown column {h!r} for model {model.name!r} "
                                  f"(motors {', '.join(motors)}; joints {', '.join(joints)})")
     return header
-
-
-def _lines(text: str):
-    """The lines of ``text``, each with its "\\n", as ``io.StringIO(text)`` gives them (newline "\\n": no other
-    line ending cuts a line), cut one at a time."""
-    start, n = 0, len(text)
-    while start < n:  # a loop over the lines (csv.reader takes one at a time)
-        end = text.find("\n", start)
-        end = n if end < 0 else end + 1
-        yield text[start:end]
-        start = end
 
 
 def _parse_rows(rows, p: Path, header: list[str], n_lines: int) -> np.ndarray:

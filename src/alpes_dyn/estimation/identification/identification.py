@@ -73,7 +73,7 @@ from ...simulation.sensitivity import SensitivityModel
 from .bounds import held_value, unsupported
 from .held import held_start
 from .shooting import ShootingProblem, torque_model
-from .normal_blocks import remainders
+from .normal_blocks import j_dot, remainders
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, window_start
 from .runs import aligned
@@ -553,7 +553,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
     else:
         for i in range(Rr.shape[0]):  # a loop over the four effects
             z = solve_Kz(np.concatenate([pb.grad(Rr[i], e.J, np.zeros(pb.ng)), np.zeros(pb.nc)]))[:nz]
-            Rr[i] -= np.einsum("skd,sd->sk", e.J[:, :, :nb], z[:nv].reshape(n_int, nb)) + e.J[:, :, nb:] @ z[nv:nz]
+            Rr[i] -= j_dot(e.J, z[:nv].reshape(n_int, nb), z[nv:nz])
     regressors = {name: (Rr[i, :, : (L + 1) * ny].reshape(n_int, L + 1, ny) * pb.sig_y / pb.step)[pb.valid]
                   for i, name in enumerate(names)}
     solve_Kz = e = Rr = z = None

@@ -25,7 +25,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from .normal_blocks import NormalBlocks
+from .normal_blocks import NormalBlocks, blocks_of
 
 __all__ = ["Shape", "normal_matrix", "continuity_jacobian", "kkt_matrix", "factorize", "bordered_factorize",
            "kkt_order", "kkt_from_blocks", "penalized_from_blocks", "DENSE_LIMIT"]
@@ -85,11 +85,11 @@ def _block_diagonal(blocks: np.ndarray, row0: int = 0, col0: int = 0) -> tuple[n
 
 def _raw_blocks(J: "np.ndarray | NormalBlocks", nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(A'A (S, nb, nb), A'P (S, nb, ng), sum of P'P (ng, ng)) of J (S, rows, nb + ng), or a compact Jacobian's
-    (:class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`: the same numbers, copies)."""
+    (:class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`: the same numbers, A'A a copy, which
+    :func:`_normal_blocks` damps in place)."""
     if isinstance(J, NormalBlocks):
-        return J.AA.copy(), J.AP, J.PP.copy()
-    A, P = J[:, :, :nb], J[:, :, nb:]
-    return np.einsum("ski,skj->sij", A, A), np.einsum("ski,skj->sij", A, P), np.einsum("ski,skj->ij", P, P)
+        return J.AA.copy(), J.AP, J.PP
+    return blocks_of(J, nb)
 
 
 def normal_matrix(J: "np.ndarray | NormalBlocks", shape: Shape, mu: float, prior: np.ndarray, dense: bool = False):

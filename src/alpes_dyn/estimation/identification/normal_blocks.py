@@ -25,11 +25,31 @@ from typing import Any, Callable
 
 import numpy as np
 
-__all__ = ["COMPACT_BYTES", "NormalBlocks", "remainders"]
+__all__ = ["COMPACT_BYTES", "NormalBlocks", "blocks_of", "assembled", "j_dot", "remainders"]
 
 COMPACT_BYTES = 2**27
 """Bytes (128 MiB): a problem whose Jacobian J (S, R, nb + ng) in double precision would take more holds it compact
 (module doc). finger3 at 60 s: 17 MB (whole); at 600 s: 175 MB (compact); the hand's thumb at 600 s: 548 MB."""
+
+
+def blocks_of(J: np.ndarray, nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(A'A (s, nb, nb), A'P (s, nb, ng), the sum of the P'P (ng, ng)) of J (s, rows, nb + ng): A its first ``nb``
+    columns (the intervals' local variables), P the others (the global ones). The one place these products are
+    taken (:func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`, :meth:`NormalBlocks.add`)."""
+    A, P = J[:, :, :nb], J[:, :, nb:]
+    return np.einsum("ski,skj->sij", A, A), np.einsum("ski,skj->sij", A, P), np.einsum("ski,skj->ij", P, P)
+
+
+def assembled(gs: np.ndarray, rg: np.ndarray | float, nb: int) -> np.ndarray:
+    """(S nb + ng,) the vector J'r in the fit's layout from each interval's J_s'r_s ``gs`` (S, nb + ng): the local
+    variables' parts interval by interval, then the global ones summed (plus ``rg``)."""
+    return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0) + rg])
+
+
+def j_dot(J: np.ndarray, z_local: np.ndarray, z_glob: np.ndarray) -> np.ndarray:
+    """(s, rows) J z of J (s, rows, nb + ng) for z's local part ``z_local`` (s, nb) and global part ``z_glob`` (ng,)."""
+    nb = z_local.shape[1]
+    return np.einsum("skd,sd->sk", J[:, :, :nb], z_local) + J[:, :, nb:] @ z_glob
 
 
 @dataclass
@@ -49,19 +69,16 @@ class NormalBlocks:
 
     def add(self, sl: slice, J: np.ndarray, r: np.ndarray) -> None:
         """The intervals ``sl``' blocks from their rows of J (s, R, nb + ng), double precision, and residuals r (s, R),
-        by the einsums of :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`."""
-        nb = self.AA.shape[1]
-        A, P = J[:, :, :nb], J[:, :, nb:]
-        self.AA[sl] = np.einsum("ski,skj->sij", A, A)
-        self.AP[sl] = np.einsum("ski,skj->sij", A, P)
-        self.PP += np.einsum("ski,skj->ij", P, P)
+        by :func:`blocks_of`, as :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix` takes them."""
+        AA, AP, PP = blocks_of(J, self.AA.shape[1])
+        self.AA[sl], self.AP[sl] = AA, AP
+        self.PP += PP
         self.gs[sl] = np.einsum("sk,skd->sd", r, J)
 
     def gradient(self, rg: np.ndarray) -> np.ndarray:
         """(nz,) the cost's gradient J'r (+ ``rg`` for the global variables), as
         :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.grad` gives it from J."""
-        nb = self.AA.shape[1]
-        return np.concatenate([self.gs[:, :nb].reshape(-1), self.gs[:, nb:].sum(axis=0) + rg])
+        return assembled(self.gs, rg, self.AA.shape[1])
 
 
 def remainders(pb: Any, point: tuple[np.ndarray, np.ndarray, np.ndarray], solve: Callable[[np.ndarray], np.ndarray],
@@ -76,13 +93,12 @@ def remainders(pb: Any, point: tuple[np.ndarray, np.ndarray, np.ndarray], solve:
     def products(sl: slice, J_c: np.ndarray, x_c: np.ndarray) -> None:
         G[:, sl] = np.einsum("esk,skd->esd", R[:, sl], J_c)
     pb.evaluate(*point, sink=products)
-    Z = [solve(np.concatenate([g[:, :nb].reshape(-1), g[:, nb:].sum(axis=0), np.zeros(pb.nc)]))[:nz] for g in G]
+    Z = [solve(np.concatenate([assembled(g, 0.0, nb), np.zeros(pb.nc)]))[:nz] for g in G]
     G = None
     out = R  # in place: R's memory (the responses' copy, 60 MB for the hand's thumb at 600 s) held once
 
     def subtract(sl: slice, J_c: np.ndarray, x_c: np.ndarray) -> None:
         for i, z in enumerate(Z):  # a loop over the responses (four or five)
-            out[i, sl] -= (np.einsum("skd,sd->sk", J_c[:, :, :nb], z[:nv].reshape(-1, nb)[sl])
-                           + J_c[:, :, nb:] @ z[nv:])
+            out[i, sl] -= j_dot(J_c, z[:nv].reshape(-1, nb)[sl], z[nv:])
     pb.evaluate(*point, sink=subtract)
     return out

@@ -311,7 +311,7 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
             raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
                              "the recording's encoders this model's, in counts, and its torques in N m?")
-        n, L = self.n, self.L
+        L = self.L
         u_raw = self.torque_at(glob, offs, gained=False) if self.comp_cols else None
         g = self.gain(glob)
         u_k = u_raw * g[:, None, :] if (u_raw is not None and g is not None) else u_raw

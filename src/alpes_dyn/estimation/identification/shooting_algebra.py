@@ -15,7 +15,7 @@ import scipy.sparse as sp
 
 from .kkt import (Shape, bordered_factorize, continuity_jacobian, factorize, kkt_from_blocks, kkt_matrix, kkt_order,
                   normal_matrix, penalized_from_blocks)
-from .normal_blocks import NormalBlocks
+from .normal_blocks import NormalBlocks, assembled
 
 __all__ = ["Evaluation", "ShootingAlgebra"]
 
@@ -131,9 +131,7 @@ class ShootingAlgebra:
 
     def grad(self, r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
         """(nz,) the cost's gradient J^T r (+ rg for the global variables)."""
-        nb = self.nb
-        gs = np.einsum("sk,skd->sd", r, J)
-        return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0) + rg])
+        return assembled(np.einsum("sk,skd->sd", r, J), rg, self.nb)
 
     def gradient(self, e: Evaluation) -> np.ndarray:
         """(nz,) the cost's gradient at ``e``: :meth:`grad`, or its compact Jacobian's (the same numbers)."""
