@@ -19,7 +19,7 @@ PACKAGE = Path(alpes_dyn.__file__).parent
 
 # Floors from the ground up; a module may import its own floor and the floors below it. The top floor is the
 # package alpes_dyn.cli: its front door (main, exit codes), parser, common helpers and command-family modules.
-FLOORS = ("base", "model", "symbolic", "simulation", "estimation", "analysis", "control", "studies", "cli")
+FLOORS = ("base", "model", "symbolic", "simulation", "bench", "estimation", "analysis", "control", "studies", "cli")
 BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "_moved", "_version"}
 
 
