@@ -150,8 +150,8 @@ class MujocoHand:
         e0 = e or PlantEffects()
         if scene == "free":
             truth = plant_model(model, p, e0)
-            m = truth.transmission.n_motors
-            mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, np.zeros(m))
+            at_rest = np.zeros(truth.transmission.n_motors)  # the motor off
+            mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, at_rest)
             self._passive = passive_forces(mj, truth, e0)
         else:
             mj, d, truth = block_plant(model, palm_down_params(p), e, None, PERIOD / sub, q0)
