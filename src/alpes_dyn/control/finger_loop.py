@@ -424,11 +424,10 @@ def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: st
     if comp.command_input:  # the command held over the period before: what the reading shows, without its lag
         out["torque"] = sig["tau_prev"]
         blocks.append(Delay(sig["tau"], sig["tau_prev"], 0.0, name="command_held" + suffix))
-    C = float(model.transmission.tendon_compliance[0])  # >= 0: a parameter file refuses a negative one
     if comp.observer_compliance:
-        torque, y = out["torque"], sig["y"]
+        torque, y, tr = out["torque"], sig["y"], model.transmission
         out["measurement"] = sig["y_obs"]
-        blocks.append(Function(lambda **u: comp.unstretched(u[y], u[torque], C), (y, torque), sig["y_obs"],
+        blocks.append(Function(lambda **u: comp.unstretched(tr, u[y], u[torque]), (y, torque), sig["y_obs"],
                                name="unstretched" + suffix))
     out["controller"].update(comp.notch_settings(model, params, sc.dt))
     return out

@@ -133,11 +133,11 @@ class Compensation:
             return {}
         return {"notch_hz": f_c, "notch_zeta": self.notch_zeta}
 
-    def unstretched(self, y: Any, tau: Any, C: Any) -> Any:
-        """The encoder's reading y (rad of motor) without the tendon's stretch C tau (C rad/(N m), tau the torque
-        held over the period before the reading, N m) and without :attr:`encoder_offset` (rad):
-        y - offset - C tau (what the rigid model's encoder would read)."""
-        return y - self.encoder_offset - C * tau
+    def unstretched(self, transmission: Any, y: Any, tau: Any) -> Any:
+        """The encoder's reading y (rad of motor) without :attr:`encoder_offset` (rad) and without the tendon's
+        stretch C tau (:meth:`~alpes_dyn.model.transmission.Transmission.unstretched`; tau the torque held over the
+        period before the reading, N m): y - offset - C tau, what the rigid model's encoder would read."""
+        return transmission.unstretched(y - self.encoder_offset, tau)
 
     def turned_gravity(self, gravity: Any) -> np.ndarray:
         """``gravity`` (3,), m/s^2, turned by the identified palm orientation (:attr:`tilt`)."""

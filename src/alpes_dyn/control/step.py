@@ -52,6 +52,10 @@ __all__ = ["ForceStep", "LoopDesign", "CONTROL_MODELS", "force_ekf", "alpes_desi
 
 CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
 
+GAIN_NAMES: tuple[str, ...] = ("kp", "ki", "contact_threshold", "approach_rate", "prefilter_s", "loss_s", "onset_s",
+                               "prefilter_order", "setpoint_weight", "notch_hz", "notch_zeta")
+"""The :class:`~alpes_dyn.control.controller.ForceController` settings a ``gains`` dict may set."""
+
 _DEFAULT_F_MAX = 1.0
 """N: the largest force of the default references (:class:`~alpes_dyn.control.finger_loop.ControlScenario`'s step
 0.2 -> 1.0 -> 0.5 N), which sizes a URDF robot's default motor limit."""
@@ -259,6 +263,10 @@ class ForceStep:
         comp.check()
         if gains is not None and not isinstance(gains, dict):
             raise InputError(f"gains: expected a dict of ForceController settings, got {type(gains).__name__}")
+        unknown = sorted(set(gains or {}) - set(GAIN_NAMES))
+        if unknown:
+            raise InputError(f"gains: unknown setting(s) {', '.join(map(repr, unknown))} (expected "
+                             f"{', '.join(GAIN_NAMES)})")
         if robot:
             if params is not None:
                 raise InputError("params: applies to the Alpes fingers; a URDF model's parameters are its spec")
@@ -306,7 +314,7 @@ class ForceStep:
         self.tau_max = float(design.tau_max)
         self.counts_per_rev = tr.counts_per_rev
         self._rad_per_count = 2 * np.pi / tr.counts_per_rev
-        self._C = np.asarray(tr.tendon_compliance, dtype=float)  # (m,) rad/(N m), >= 0
+        self._transmission = tr
         self._normal = np.asarray(design.normal, dtype=float)
         tip = {} if design.frame is None else {"motor": design.motor, "tip": design.frame}
         self._controller_args = dict(kind=kind, model=model, normal=self._normal, dt=self.dt, tau_max=self.tau_max,
@@ -378,7 +386,7 @@ class ForceStep:
                 wy, m = self._wy, self.m
                 wy[:m] = tau
                 wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * self._normal
-                wy[m + 3:] = comp.unstretched(y, tau, self._C) if comp.observer_compliance else y
+                wy[m + 3:] = comp.unstretched(self._transmission, y, tau) if comp.observer_compliance else y
                 self._s = self.filter_step(self._s, wy)
             q_hat = self._s[:self.n]
             if self._sensorless is not None:
