@@ -22,21 +22,20 @@ from typing import Any
 
 import numpy as np
 
+from ..bench.effects import PlantEffects
+from ..bench.mujoco_plant import block_plant
 from ..errors import InputError, ModelError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.block_scene import BlockScene, block_scene_mjcf
-from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, palm_down_params
+from ..model.mjcf import joint_permutation, load_mujoco, palm_down_params
 from ..model.robot import Model
 from ..model.params import HandParams, load_params
-from ..estimation.observers.scenario import static_equilibrium
 from ..simulation.loop import Block, Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .controller import CONTROLLERS, REFERENCES, reference_profile
-from .plants import PlantEffects
-from .realism_loop import (NO_COMPENSATION, Compensation, SampleLag, effects_mjcf_kwargs, plant_gravity, rotor_rest,
-                           torque_constant_blocks)
+from .realism_loop import NO_COMPENSATION, Compensation, SampleLag, torque_constant_blocks
 from .step import (CONTROL_MODELS, ForceStep, LoopDesign, alpes_design, finger3_contact, robot_design,  # noqa: F401
                    scaled_gains)
 
@@ -349,21 +348,10 @@ def _compensation(sc: Any) -> Compensation:
 
 def _alpes_setup(sc: ControlScenario) -> _Setup:
     """finger2/finger3 on the Alpes block scene, palm down (the loop of version 0.2, unchanged)."""
-    mujoco, p, pp = _plant_and_params(sc)
+    _, p, pp = _plant_and_params(sc)
     design = alpes_design(sc.model, p, sc.controller, sc.contact_q, _compensation(sc), sc.gains)
-    model = design.model
-    plant_model = Model.alpes(sc.model, params=pp)
-    fx = {} if sc.effects is None else effects_mjcf_kwargs(sc.effects)
-    mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=design.contact_q,
-                                 timestep=sc.dt / sc.substeps, **fx))
-    d = mujoco.MjData(mj)
-    perm = joint_permutation(mj, model.joint_names)
     # the plant starts at rest: the finger hanging on its springs (in the plant's gravity), motor off
-    plant_model = plant_model.copy(gravity=plant_gravity(plant_model.gravity, sc.effects))
-    q0 = static_equilibrium(plant_model, np.zeros(plant_model.n))
-    d.qpos[perm] = q0
-    rotor_rest(mj, d, list(model.transmission.motor_names), plant_model, q0, sc.effects)
-    mujoco.mj_forward(mj, d)
+    mj, d, _ = block_plant(sc.model, pp, sc.effects, design.contact_q, sc.dt / sc.substeps)
     return _Setup(design, mj, d, "finger", "encoder_finger", "torque_finger", "flexiforce_finger")
 
 
