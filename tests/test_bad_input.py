@@ -2610,6 +2610,44 @@ API.extend([
 ])
 
 
+def _force_step(*a, **kw):
+    from alpes_dyn.control import ForceStep
+
+    return ForceStep(*a, **{"compiled": False, **kw})
+
+
+def _bench(hw_kw=None, **kw):
+    from alpes_dyn.bench import Loopback
+    from alpes_dyn.control import run_on_bench
+
+    return run_on_bench(Loopback(**(hw_kw or {})), _force_step("finger3", controller="pi"),
+                        kw.pop("reference", 0.3), kw.pop("duration", 0.01), **kw)
+
+
+# the force loop's public step (issue 49): its construction, one sample, the loop through a hardware interface
+API.extend([
+    A("ForceStep", lambda c: _force_step(controller="pid"), InputError, "controller: unknown controller 'pid'"),
+    A("ForceStep", lambda c: _force_step("hand"), InputError, "model: the force step is defined for one finger"),
+    A("ForceStep", lambda c: _force_step(gains={"kq": 1.0}), InputError, "gains: unknown setting(s) 'kq'"),
+    A("ForceStep", lambda c: _force_step(compensation=1), InputError, "compensation: expected a Compensation"),
+    A("ForceStep", lambda c: _force_step(dt=-1e-3), InputError, "dt: expected a positive number of seconds"),
+    A("ForceStep", lambda c: _force_step(tau_max=0.1), InputError, "tau_max: applies to a URDF + spec model"),
+    A("ForceStep", lambda c: _force_step(params=c.f["negative_k_toml"]), ModelError, "finger.K: value must be >= 0"),
+    A("ForceStep.step", lambda c: _force_step().step([0.0, 0.0], [0.0], 0.1, 0.2), InputError,
+      "counts: expected 1 encoder counts, got shape (2,)"),
+    A("ForceStep.step", lambda c: _force_step().step([float("nan")], [0.0], 0.1, 0.2), InputError,
+      "counts: expected finite encoder counts"),
+    A("ForceStep.step", lambda c: _force_step().step([0.0], [0.0], None, 0.2), InputError,
+      "force: the sensor controller needs the fingertip force"),
+    A("ForceController.tuned", lambda c: __import__("alpes_dyn.control", fromlist=["x"]).ForceController.tuned(
+        "pid", c.m, (0.0, 0.0, 1.0), 1e-3, 0.05), InputError, "controller: unknown controller 'pid'"),
+    A("run_on_bench", lambda c: _bench({"period": 2e-3}), InputError, "period: the hardware's period 0.002 s"),
+    A("run_on_bench", lambda c: _bench({"tau_max": 0.01}), InputError, "tau_max: the step commands up to 0.05 N m"),
+    A("run_on_bench", lambda c: _bench(duration=float("nan")), InputError, "duration: expected a positive number"),
+    A("run_on_bench", lambda c: _bench(reference=[0.1]), InputError, "reference: expected one force per tick"),
+])
+
+
 def _mj_plant(**kw):
     pytest.importorskip("mujoco")
     import mujoco

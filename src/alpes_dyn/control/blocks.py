@@ -97,13 +97,19 @@ class SensorlessForce(Block):
 
     def output(self, k: int, u: dict[str, Any]) -> dict[str, Any]:
         normal = self._normal if self._normal_signal is None else u[self._normal_signal]
-        q_hat = u[self.estimate][: self.model.n]
-        tau = np.array([u[self.torque]]).reshape(-1)
+        return {self.outputs[0]: self.sample(u[self.estimate][: self.model.n], u[self.torque], normal)}
+
+    def sample(self, q_hat: np.ndarray, tau: Any, normal: Any = None) -> float:
+        """One sample of the filtered estimate, N: from q_hat (n,) rad, the motor torque (a number, or (m,) N m)
+        and the normal (3,) (None: the constant one given); the filter's state advances (:meth:`start` clears
+        it)."""
+        tau = np.array([tau]).reshape(-1)
         if tau.shape[0] != self._motors:  # a scalar before the first period's reading: every motor at it
             tau = np.broadcast_to(tau, (self._motors,))
-        F_est = static_contact_force(self.model, q_hat, tau, normal, self.tip) / self.scale
+        F_est = static_contact_force(self.model, q_hat, tau, self._normal if normal is None else normal,
+                                     self.tip) / self.scale
         self.F += self.alpha * (max(F_est, 0.0) - self.F)
-        return {self.outputs[0]: self.F}
+        return self.F
 
 
 def force_input(force: str, output: str, normal: str | Sequence[float], name: str = "force_input") -> Function:

@@ -128,6 +128,10 @@ class ForceController:
     notch_hz: the command through a notch (s^2 + w^2) / (s^2 + 2 zeta w s + w^2) at this frequency, Hz (None: no
         notch), damping ratio ``notch_zeta``: the series-elastic cable's mode on its rotor, which the proportional
         path excites (:mod:`alpes_dyn.control.realism_loop`).
+
+    The field defaults are generic starting values, **not** the gains tuned on the block scene: build the tuned
+    controller with :meth:`tuned` (:data:`DEFAULT_GAINS` of its kind), or use
+    :class:`~alpes_dyn.control.step.ForceStep`, which holds it with the observer and the compensation.
     """
 
     kind: str
@@ -156,6 +160,15 @@ class ForceController:
     F_ref_f: float | None = None
     F_ref_f2: float | None = None
     _below: int = 0
+
+    @classmethod
+    def tuned(cls, kind: str, model: Model, normal: Sequence[float], dt: float, tau_max: float,
+              **overrides: float) -> "ForceController":
+        """The controller with the tuned settings of ``kind`` (:data:`DEFAULT_GAINS`), ``overrides`` (any field)
+        replacing them: ``ForceController.tuned("sensor", model, n, 1e-3, 0.05)``. InputError for an unknown kind."""
+        if kind not in CONTROLLERS:
+            raise InputError(f"controller: unknown controller {kind!r} (expected one of {', '.join(CONTROLLERS)})")
+        return cls(kind, model, normal, dt, tau_max, **{**DEFAULT_GAINS[kind], **overrides})
 
     def __post_init__(self) -> None:
         if self.kind not in CONTROLLERS:

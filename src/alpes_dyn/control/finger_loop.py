@@ -16,7 +16,6 @@ from __future__ import annotations
 
 import csv
 import dataclasses
-import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -28,24 +27,17 @@ from ..bench.mujoco_plant import block_plant
 from ..errors import InputError, ModelError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
-from ..model.block_scene import BlockScene, block_scene_mjcf, place_block
-from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, palm_down_params
+from ..model.block_scene import BlockScene, block_scene_mjcf
+from ..model.mjcf import joint_permutation, load_mujoco, palm_down_params
 from ..model.robot import Model
-from ..estimation.observers.blocks import Observer, step_caller
-from ..estimation.observers.observers import make_observer
 from ..model.params import HandParams, load_params
-from ..estimation.observers.scenario import default_noise, static_equilibrium, EstimationScenario
-from ..symbolic.statespace import StateSpace
-from ..simulation.loop import Delay, Function, Source, run_loop
+from ..simulation.loop import Block, Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
-from .blocks import ForceLoop, SensorlessForce, force_input
-from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile,
-                         static_motor_torque)
-from .realism_loop import Compensation, SampleLag, torque_constant_blocks
-
-
-CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
+from .controller import CONTROLLERS, REFERENCES, reference_profile
+from .realism_loop import NO_COMPENSATION, Compensation, SampleLag, torque_constant_blocks
+from .step import (CONTROL_MODELS, ForceStep, LoopDesign, alpes_design, finger3_contact, robot_design,  # noqa: F401
+                   scaled_gains)
 
 
 @dataclass(frozen=True)
@@ -333,134 +325,73 @@ def _mujoco() -> Any:
 
 @dataclass
 class _Setup:
-    """What the loop needs of its robot: the controller's (and the EKF's) model, MuJoCo's model and data (at the
-    plant's initial state), the contact normal (3,), the motor limit (N m), the motor's row of S, the contact
-    frame (None: the model's default tip), the MuJoCo names (actuator, encoders, torque sensors, touch sensor),
-    the controller's gains and the block's placement (None on an Alpes finger)."""
+    """What the loop needs of its robot: the controller's side (:class:`~alpes_dyn.control.step.LoopDesign`),
+    MuJoCo's model and data (at the plant's initial state), the MuJoCo names (actuator, encoders, torque sensors,
+    touch sensor)."""
 
-    model: Model
+    design: LoopDesign
     mj: Any
     data: Any
-    normal: np.ndarray
-    tau_max: float
-    motor: int
-    frame: str | None
     actuator: str
     encoders: str | list[str]
     torques: str | list[str]
     touch: str
-    gains: dict[str, float]
-    block: BlockScene | None = None
-    params: HandParams | None = None  # an Alpes finger's controller parameters (palm down)
+
+
+def _compensation(sc: Any) -> Compensation:
+    """What the controller does about the plant's effects: ``sc.compensation`` (default every one) with effects,
+    the rigid design (:data:`~alpes_dyn.control.realism_loop.NO_COMPENSATION`) without."""
+    if sc.effects is None:
+        return NO_COMPENSATION
+    return Compensation() if sc.compensation is None else sc.compensation
 
 
 def _alpes_setup(sc: ControlScenario) -> _Setup:
     """finger2/finger3 on the Alpes block scene, palm down (the loop of version 0.2, unchanged)."""
     _, p, pp = _plant_and_params(sc)
-    n = 2 if sc.model == "finger2" else 3
-    cq = tuple((BLOCK_CONTACT_Q if sc.contact_q is None else sc.contact_q)[:n])
-    model = Model.alpes(sc.model, params=p)
-    if sc.effects is not None:  # the controller's model in the palm's orientation as identified
-        model = (Compensation() if sc.compensation is None else sc.compensation).turned(model)
+    design = alpes_design(sc.model, p, sc.controller, sc.contact_q, _compensation(sc), sc.gains)
     # the plant starts at rest: the finger hanging on its springs (in the plant's gravity), motor off
-    mj, d, _ = block_plant(sc.model, pp, sc.effects, cq, sc.dt / sc.substeps)
-    return _Setup(model, mj, d, block_normal(cq), p.tau_max, 0, None, "finger", "encoder_finger", "torque_finger",
-                  "flexiforce_finger", {**DEFAULT_GAINS[sc.controller], **sc.gains}, params=p)
-
-
-@functools.lru_cache(maxsize=1)
-def finger3_contact() -> tuple[float, float]:
-    """(dtau_m/dF_z (m), the static motor torque at F_z = 0 (N m)) of finger3 (shipped parameters, palm down) at
-    its block's contact (:data:`BLOCK_CONTACT_Q`): where the default gains were tuned (:data:`.DEFAULT_GAINS`)."""
-    m = Model.alpes("finger3", params=palm_down_params(load_params(None)))
-    q, S = np.asarray(BLOCK_CONTACT_Q, dtype=float), m.transmission.S[0]
-    n = block_normal(q)
-    return float(S @ (m.fingertip_jacobian(q).T @ n) / (S @ S)), static_motor_torque(m, q, 0.0, n)
-
-
-def scaled_gains(controller: str, lever: float, tau_contact: float) -> dict[str, float]:
-    """:data:`.DEFAULT_GAINS` of ``controller`` for a robot whose motor needs ``lever`` (m) N m per newton pressed
-    and ``tau_contact`` (N m) to bring the tip to the block: kp and ki times lever / finger3's lever (the same
-    force-to-force loop gain), the approach rate times tau_contact / finger3's (the same approach time, about
-    0.4 s); the other settings (in newtons or seconds) as they are."""
-    lever3, tau3 = finger3_contact()
-    defaults = {f.name: f.default for f in dataclasses.fields(ForceController)}
-    gains = dict(DEFAULT_GAINS[controller])
-    for g in ("kp", "ki"):
-        gains[g] = lever / lever3 * gains.get(g, defaults[g])
-    gains["approach_rate"] = max(tau_contact, 0.0) / tau3 * gains.get("approach_rate", defaults["approach_rate"])
-    return gains
+    mj, d, _ = block_plant(sc.model, pp, sc.effects, design.contact_q, sc.dt / sc.substeps)
+    return _Setup(design, mj, d, "finger", "encoder_finger", "torque_finger", "flexiforce_finger")
 
 
 def robot_control_settings(sc: ControlScenario) -> tuple[Model, BlockScene, float, dict[str, float]]:
     """What a URDF + spec robot's loop sets before MuJoCo (class doc): (the controller's model -- the robot without
     its spec's friction --, the block of :func:`~alpes_dyn.model.block_scene.place_block`, the motor limit tau_max
-    (N m), the controller's gains); the C export's controller is built from them too
-    (:func:`~alpes_dyn.control.cexport.robot_controller`)."""
-    robot: Model = sc.model
-    block = place_block(robot, sc.frame, sc.motor, sc.contact_q)
-    if robot.spec is not None and (robot.spec.coulomb or robot.spec.viscous):  # the controller's model: no friction
-        spec = dataclasses.replace(robot.spec, coulomb={}, viscous={}, identified=None)
-        model = Model(robot.urdf, spec, gravity=None if spec.gravity is not None else robot.gravity, name=robot.name,
-                      check_inertia=robot.check_inertia)
-    else:
-        model = robot
-    k, frame = block.motor_index, block.frame
-    F_max = max(max(sc.levels), max(sc.sine[:2]))
-    tau_max = sc.tau_max if sc.tau_max is not None else 2.0 * static_motor_torque(
-        model, block.contact_q, F_max, block.normal, motor=k, tip=frame)
-    if not tau_max > 0:
-        raise InputError(f"tau_max: the static balance at contact_q needs no pulling torque ({tau_max:.3g} N m): "
-                         "the block cannot be pressed by the motor (give tau_max, or another contact_q)")
-    tau_contact = static_motor_torque(model, block.contact_q, 0.0, block.normal, motor=k, tip=frame)
-    gains = scaled_gains(sc.controller, block.lever, tau_contact)
-    return model, block, float(tau_max), {**gains, **sc.gains}
+    (N m), the controller's gains) of :func:`~alpes_dyn.control.step.robot_design`; the C export's controller is
+    built from them too (:func:`~alpes_dyn.control.cexport.robot_controller`)."""
+    d = _robot_design(sc)
+    return d.model, d.block, d.tau_max, d.gains
+
+
+def _robot_design(sc: ControlScenario) -> LoopDesign:
+    return robot_design(sc.model, sc.controller, frame=sc.frame, motor=sc.motor, contact_q=sc.contact_q,
+                        F_max=max(max(sc.levels), max(sc.sine[:2])), tau_max=sc.tau_max, gains=sc.gains)
 
 
 def _robot_setup(sc: ControlScenario) -> _Setup:
     """Any URDF + spec model: the block placed from its kinematics, the MJCF export plus the block (class doc)."""
     mujoco = _mujoco()
     robot: Model = sc.model
-    model, block, tau_max, gains = robot_control_settings(sc)
+    design = _robot_design(sc)
+    block = design.block
     mj = load_mujoco(block_scene_mjcf(robot, block, timestep=sc.dt / sc.substeps, integrator="implicitfast"))
     d = mujoco.MjData(mj)
     d.qpos[joint_permutation(mj, robot.joint_names)] = block.rest_q  # at rest: the springs and gravity, motors off
     mujoco.mj_forward(mj, d)
-    k, frame = block.motor_index, block.frame
-    tr = model.transmission
-    motors = tr.motor_names
+    motors = design.model.transmission.motor_names
     encoders = [f"encoder_{m}" for m in motors] if len(motors) > 1 else f"encoder_{motors[0]}"
     torques = [f"torque_{m}" for m in motors] if len(motors) > 1 else f"torque_{motors[0]}"
-    return _Setup(model, mj, d, block.normal, tau_max, k, frame, motors[k], encoders, torques,
-                  f"touch_{frame}", gains, block)
+    return _Setup(design, mj, d, motors[design.motor], encoders, torques, f"touch_{design.frame}")
 
 
-def _force_ekf(sc: ControlScenario, model: Model, frame: str | None = None, torque: str = "tau_meas",
-              measurement: str = "y") -> Observer:
-    """The EKF of the finger's loop as a block: known inputs the measured motor torques ``tau_meas`` (N m, the
-    previous period's) and the contact force ``w_F`` (3,) (N) at ``frame`` (None: the default tip), the encoders
-    ``y`` measured (rad); the estimate ``z`` = [q; qd] starts at the finger's rest, standard deviations 0.05 rad and
-    0.1 rad/s, not updated at t_0."""
-    n, m = model.n, len(model.transmission.motor_names)
-    step = 2 * np.pi / model.transmission.counts_per_rev
-    ss = StateSpace(model, input="motor", output="encoder", force=True, tip=frame)
-    est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
-    meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-    noise = default_noise(est_sc, n, m, 0, meas_var)
-    f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
-    noise["input_noise"] = [sc.torque_noise**2] * m + [f_var] * 3
-    ekf = make_observer("ekf", ss, sc.dt, **noise)
-    z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
-    P0 = np.array([0.05**2] * n + [0.1**2] * n)
-    return Observer(ekf, z0, P0, known=(torque, "w_F"), measurement=measurement, covariance=None, first_update=False,
-                    step=step_caller(ekf.filter_step_p, f"ekf_force_{sc.model_name}", sc.compiled, ekf.model.values))
-
-
-def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: str = "") -> dict[str, Any]:
+def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: str = "",
+                    controller: bool = True) -> dict[str, Any]:
     """The signal names and blocks of the plant's effects and of their compensation (:mod:`.realism_loop`): the
     applied torque's signal, the encoder's offset (counts), the torque reading's signal and gain, the observer's
     torque input and measurement, extra blocks, extra :class:`.ForceController` settings. ``suffix``: appended to
-    every signal and block name (a chain's of the hand, ``"_index"``: :func:`~.hand_loop.run_hand_control`)."""
+    every signal and block name (a chain's of the hand, ``"_index"``: :func:`~.hand_loop.run_hand_control`).
+    ``controller=False``: the plant's side only (a :class:`~alpes_dyn.control.step.ForceStep` compensates)."""
     e = sc.effects
     sig = {k: k + suffix for k in ("tau", "tau_motor", "tau_meas", "tau_meas_raw", "tau_prev", "y", "y_obs")}
     out: dict[str, Any] = {"applied": sig["tau"], "offset": 0.0, "reading": sig["tau_meas"], "gain": 1.0,
@@ -468,27 +399,49 @@ def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: st
                            "force_scale": 1.0}
     if e is None:
         return out
-    comp = Compensation() if sc.compensation is None else sc.compensation
+    comp = _compensation(sc)
     out["force_scale"] = comp.scale_of(suffix[1:] or None)
     out.update(applied=sig["tau_motor"], offset=float(e.encoder_offset), gain=1.0 + float(e.torque_constant_error))
     blocks = torque_constant_blocks(e, sig["tau"], sig["tau_motor"], name="motor" + suffix)
     if e.torque_delay:
         out["reading"] = sig["tau_meas_raw"]
         blocks.append(SampleLag(sig["tau_meas_raw"], sig["tau_meas"], e.torque_delay, name="torque_delay" + suffix))
+    out["blocks"] = blocks
+    if not controller:
+        return out
     if comp.command_input:  # the command held over the period before: what the reading shows, without its lag
         out["torque"] = sig["tau_prev"]
         blocks.append(Delay(sig["tau"], sig["tau_prev"], 0.0, name="command_held" + suffix))
-    C = float(model.transmission.tendon_compliance[0])  # >= 0: a parameter file refuses a negative one
     if comp.observer_compliance:
-        off, torque, y = float(comp.encoder_offset), out["torque"], sig["y"]
+        torque, y, tr = out["torque"], sig["y"], model.transmission
         out["measurement"] = sig["y_obs"]
-        blocks.append(Function(lambda **u: u[y] - off - C * u[torque], (y, torque), sig["y_obs"],
+        blocks.append(Function(lambda **u: comp.unstretched(tr, u[y], u[torque]), (y, torque), sig["y_obs"],
                                name="unstretched" + suffix))
-    f_c = comp.cable_mode_hz(model, params)
-    if f_c is not None and f_c < 0.45 / sc.dt:  # a notch below the Nyquist frequency
-        out["controller"].update(notch_hz=f_c, notch_zeta=comp.notch_zeta)
-    out["blocks"] = blocks
+    out["controller"].update(comp.notch_settings(model, params, sc.dt))
     return out
+
+
+class _StepBlock(Block):
+    """A :class:`~alpes_dyn.control.step.ForceStep` as a block: the reference, the encoder's counts, the torque
+    reading (a period signal: the previous period's) and the fingertip sensor's reading in; the command ``tau``
+    (the pulling motor's, N m), the EKF's estimate ``z`` = [q_hat; qd_hat] and the force fed back ``F_fb`` out."""
+
+    name = "force_step"
+    outputs = ("tau", "z", "F_fb")
+
+    def __init__(self, step: ForceStep, counts: str, torque: str, force: str, reference: str = "F_ref") -> None:
+        self.step = step
+        self.inputs = (reference, counts, torque, force)
+
+    def start(self, n_periods: int, dt: float, final: bool) -> None:
+        self.step.reset()
+
+    def output(self, k: int, u: Any) -> dict[str, Any]:
+        st = self.step
+        ref, counts, torque, force = self.inputs
+        tau = u[torque]  # a scalar before the first period's reading (the loop's initial value): every motor's
+        u_cmd = st.step(u[counts], tau if np.ndim(tau) else np.full(st.m, tau), u[force], u[ref])
+        return {"tau": float(u_cmd[st.motor]), "z": st.state, "F_fb": st.force_estimate}
 
 
 def run_control(controller: str = "sensor", scenario: ControlScenario | None = None, **overrides: Any) -> ControlResult:
@@ -513,7 +466,8 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     sc = dataclasses.replace(scenario or ControlScenario(), controller=controller, **overrides)
     sc.check()
     s = _robot_setup(sc) if sc.robot else _alpes_setup(sc)
-    model, normal = s.model, s.normal
+    design = s.design
+    model = design.model
     m = len(model.transmission.motor_names)
     n = model.n
     tr = model.transmission
@@ -523,35 +477,30 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     F_ref = reference_profile(sc.reference, t, sc.levels, sc.sine, sc.step_times)
     shape = () if m == 1 else (m,)
     kind = sc.controller
-    tip = {} if s.frame is None else {"motor": s.motor, "tip": s.frame}
-    fx = _effect_signals(sc, model, s.params)
+    fx = _effect_signals(sc, model, design.params, controller=False)
+    step = ForceStep.from_design(design, kind, sc.dt, _compensation(sc), compiled=sc.compiled,
+                                 force_filter_s=sc.force_filter_s, label=f"ekf_force_{sc.model_name}",
+                                 noise={k: getattr(sc, k) for k in ("torque_noise", "encoder_noise_counts",
+                                                                    "force_noise", "force_resolution")})
     blocks = [Source("reference", F_ref=F_ref),
               MujocoPlant(s.mj, s.data, substeps=sc.substeps, joints={"q": model.joint_names},
                           actuators={fx["applied"]: s.actuator}, sensors={"q_m": s.encoders, "F_touch": s.touch},
                           period_sensors={"tau_applied": s.torques}),
               # the sensors' noise, drawn in this order (the encoder's one row more than read: the old draw)
-              Encoder("q_m", "y", tr.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng, draws=N + 1,
-                      shape=shape, offset=fx["offset"]),
+              Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=sc.encoder_noise_counts, rng=rng, draws=N + 1,
+                      shape=shape, offset=fx["offset"], counts=True),
               TorqueSensor("tau_applied", fx["reading"], noise=sc.torque_noise, rng=rng, timing="period", shape=shape,
                            gain=fx["gain"]),
               ForceSensor("F_touch", "F_meas", noise=sc.force_noise, resolution=sc.force_resolution, rng=rng),
-              ForceLoop(ForceController(kind, model, normal, sc.dt, s.tau_max, **tip, **s.gains, **fx["controller"]),
-                        force="F_fb" if kind == "sensorless" else "F_meas", estimate=None if kind == "pi" else "z"),
+              # the observer, the compensation, the sensorless estimate and the controller: the user's ForceStep
+              _StepBlock(step, "counts", "tau_meas", "F_meas"),
               *fx["blocks"]]
-    if kind != "pi":  # the EKF: motor torque and contact force as known inputs, the encoder measured
-        F_in = "F_fb_prev" if kind == "sensorless" else "F_meas"  # the sensorless force of the previous sample
-        blocks += [force_input(F_in, "w_F", normal),
-                   _force_ekf(sc, model, s.frame, torque=fx["torque"], measurement=fx["measurement"])]
-    if kind == "sensorless":
-        blocks += [SensorlessForce(model, sc.dt / (sc.force_filter_s + sc.dt), normal=normal, tip=s.frame,
-                                   torque=fx["torque"], scale=fx["force_scale"]),
-                   Delay("F_fb", "F_fb_prev", 0.0)]
     log = run_loop(blocks, N, sc.dt)
     q_hat = log["z"][:, :n] if kind != "pi" else np.full((N, n), np.nan)
-    tau_meas = log["tau_meas"] if m == 1 else log["tau_meas"][:, s.motor]
+    tau_meas = log["tau_meas"] if m == 1 else log["tau_meas"][:, design.motor]
     res = ControlResult(scenario=sc, t=t, F_ref=F_ref, F_true=log["F_touch"], F_meas=log["F_meas"],
                         F_hat=log["F_fb" if kind == "sensorless" else "F_meas"], q_true=log["q"], q_hat=q_hat,
                         tau_cmd=log["tau"], tau_meas=tau_meas, joint_names=model.joint_names,
-                        tau_max=s.tau_max, wall_s=log.wall_s, block=s.block)
+                        tau_max=design.tau_max, wall_s=log.wall_s, block=design.block)
     _metrics(res)
     return res

@@ -12,6 +12,10 @@ Its pieces, one module each, every name re-exported here (``alpes_dyn.control.fo
   :func:`~alpes_dyn.control.controller.static_contact_force`) and the controllers
   (:data:`~alpes_dyn.control.controller.CONTROLLERS`, :class:`~alpes_dyn.control.controller.ForceController`,
   :func:`~alpes_dyn.control.controller.reference_profile`);
+* :mod:`alpes_dyn.control.step` -- one sample of the force loop for a user's own 1 kHz loop
+  (:class:`~alpes_dyn.control.step.ForceStep`: the observer, the effects' compensation and the tuned controller,
+  built once), and :mod:`alpes_dyn.control.bench_loop` -- the loop closed through a hardware interface
+  (:func:`~alpes_dyn.control.bench_loop.run_on_bench`);
 * :mod:`alpes_dyn.control.finger_loop` -- one finger pressing a block, MuJoCo as the plant
   (:func:`~alpes_dyn.control.finger_loop.run_control`);
 * :mod:`alpes_dyn.control.hand_loop` -- the whole hand grasping a cylinder, one loop per flexion motor
@@ -23,11 +27,14 @@ Its pieces, one module each, every name re-exported here (``alpes_dyn.control.fo
 from __future__ import annotations
 
 from ..estimation.observers.blocks import batch_step_caller as _batch_step_caller, step_caller as _step_caller  # noqa: F401
+from .bench_loop import BenchRun, run_on_bench
+from .blocks import SensorlessForce
 from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, _normal,  # noqa: F401
                          reference_profile, static_contact_force, static_motor_torque)
 from .figures import _save_figure, plot_control, plot_hand_control  # noqa: F401
 from .finger_loop import (_METRIC_WINDOW_S, _SAMPLE_ARRAYS, CONTROL_MODELS, ControlResult,  # noqa: F401
                           ControlScenario, _metrics, _plant_and_params, run_control)
+from .step import ForceStep
 from .hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlResult, HandControlScenario, _rotation,  # noqa: F401
                         chain_frame, chain_model, cylinder_normal, force_scale_of, grasp_levels, grasp_limits,
                         hand_chains, run_hand_control)
@@ -37,4 +44,5 @@ __all__ = [
     "ControlScenario", "ControlResult", "run_control", "plot_control", "reference_profile",
     "HAND_LEVELS", "HAND_GAINS", "hand_chains", "chain_frame", "chain_model", "cylinder_normal", "HandControlScenario",
     "HandControlResult", "run_hand_control", "plot_hand_control", "grasp_limits", "grasp_levels", "force_scale_of",
+    "ForceStep", "SensorlessForce", "run_on_bench", "BenchRun",
 ]

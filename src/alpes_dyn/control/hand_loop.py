@@ -26,10 +26,8 @@ from ..limits import check_bytes, check_duration
 from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string
 from ..model.robot import Model
 from ..estimation.observers.blocks import Observer, ObserverBank
-from ..estimation.observers.observers import make_observer
 from ..model.params import HandParams
-from ..estimation.observers.scenario import default_noise, static_equilibrium, EstimationScenario
-from ..symbolic.statespace import StateSpace
+from ..estimation.observers.scenario import static_equilibrium
 from ..simulation.loop import Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
@@ -38,6 +36,7 @@ from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal
 from .finger_loop import (_SAMPLE_ARRAYS, ControlResult, ControlScenario, _check_effects, _effect_signals, _metrics,
                           _plant_and_params)
 from .realism_loop import Compensation, effects_mjcf_kwargs, plant_gravity, rotor_rest
+from .step import force_ekf
 
 
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
@@ -323,16 +322,10 @@ def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gai
 def _chain_ekf(ch: dict[str, Any], sc: HandControlScenario) -> Observer:
     """The EKF of one chain (known inputs its torque reading and the previous sample's force input, its encoder
     measured), started at the chain's rest with standard deviations 0.05 rad and 0.1 rad/s, not updated at t_0."""
-    c, m, n = ch["name"], ch["model"], ch["n"]
-    step = 2 * np.pi / m.transmission.counts_per_rev
-    est_sc = EstimationScenario(torque_noise=sc.torque_noise, encoder_noise_counts=sc.encoder_noise_counts)
-    meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-    f_var = (sc.force_noise**2 + sc.force_resolution**2 / 12) if sc.controller == "sensor" else 0.05**2
-    noise = default_noise(est_sc, n, 1, 0, meas_var)
-    noise["input_noise"] = [sc.torque_noise**2] + [f_var] * 3
-    ekf = make_observer("ekf", StateSpace(m, input="motor", output="encoder", force=True), sc.dt, **noise)
-    z0 = np.concatenate([static_equilibrium(m, np.zeros(n)), np.zeros(n)])
-    return Observer(ekf, z0, np.diag([0.05**2] * n + [0.1**2] * n), known=(ch["effects"]["torque"], f"w_F_prev_{c}"),
+    c, m = ch["name"], ch["model"]
+    ekf, z0, P0 = force_ekf(m, sc.dt, sc.controller, torque_noise=sc.torque_noise, force_noise=sc.force_noise,
+                            encoder_noise_counts=sc.encoder_noise_counts, force_resolution=sc.force_resolution)
+    return Observer(ekf, z0, P0, known=(ch["effects"]["torque"], f"w_F_prev_{c}"),
                     measurement=ch["effects"]["measurement"], estimate=f"z_{c}", covariance=None, first_update=False,
                     label=f"ekf_force_hand_{m.name}", name=f"ekf_{c}")
 

@@ -126,6 +126,21 @@ class Compensation:
             return None
         return math.sqrt(1.0 / (C * float(params.J_m))) / (2 * math.pi)
 
+    def notch_settings(self, model: Model, params: Any, dt: float) -> dict[str, float]:
+        """The :class:`~alpes_dyn.control.controller.ForceController` settings of the notch (``notch_hz``,
+        ``notch_zeta``) at :meth:`cable_mode_hz` when it lies below the Nyquist frequency of the period ``dt`` (s)
+        (0.45 / dt); none otherwise, or without ``params`` (a URDF robot: no rotor in a file)."""
+        f_c = None if params is None else self.cable_mode_hz(model, params)
+        if f_c is None or not f_c < 0.45 / dt:
+            return {}
+        return {"notch_hz": f_c, "notch_zeta": self.notch_zeta}
+
+    def unstretched(self, transmission: Any, y: Any, tau: Any) -> Any:
+        """The encoder's reading y (rad of motor) without :attr:`encoder_offset` (rad) and without the tendon's
+        stretch C tau (:meth:`~alpes_dyn.model.transmission.Transmission.unstretched`; tau the torque held over the
+        period before the reading, N m): y - offset - C tau, what the rigid model's encoder would read."""
+        return transmission.unstretched(y - self.encoder_offset, tau)
+
     def turned_gravity(self, gravity: Any) -> np.ndarray:
         """``gravity`` (3,), m/s^2, turned by the identified palm orientation (:attr:`tilt`)."""
         from ..symbolic.parametric import tilted_gravity as turn

@@ -411,6 +411,20 @@ class CompiledStepLoop:
         self._fn = fn
         self._dp = dp
         self._pp = self.parameters.ctypes.data_as(dp)  # the parameters' buffer, held by this loop
+        self._one: tuple | None = None  # step()'s buffers
+
+    def step(self, x: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """x_next (nx,) from x (nx,) and w (nw,): one step of one sequence, on buffers the loop keeps (a control
+        loop's call at each sample, without :meth:`run`'s batch checks and allocations); :meth:`run`'s numbers."""
+        if self._one is None:
+            X, W = np.empty((1, 2, self.nx)), np.empty((1, 1, self.nw))
+            self._one = (X, W, W.ctypes.data_as(self._dp), X.ctypes.data_as(self._dp))
+        X, W, wp, xp = self._one
+        X[0, 0] = x
+        W[0, 0] = w
+        if self._fn(wp, xp, self._pp, 1, 1, 0, 1, 1) != 0:
+            raise InputError("step: the compiled step failed")
+        return X[0, 1].copy()
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
         """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), both float64 (checked by the caller)."""

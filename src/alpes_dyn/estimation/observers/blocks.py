@@ -26,6 +26,27 @@ from ..experiments.recording import Recording
 __all__ = ["Observer", "ObserverBank", "RecordingPlayback", "step_caller", "batch_step_caller"]
 
 
+def _compiled_loop(step: Any, label: str, parameters: Any) -> Any:
+    """The step's :class:`~alpes_dyn.simulation.codegen.CompiledStepLoop` (built, or loaded from the cache), or None
+    without a C compiler."""
+    from ...simulation.integrate import CompiledStepLoop, CompilerError
+
+    try:
+        return CompiledStepLoop(step, label, threads=1, vectorize=False, parameters=parameters)
+    except CompilerError:
+        return None
+
+
+def _vm_step(step: Any, parameters: Any) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
+    """(s, wy) -> s_next of the step in CasADi's virtual machine (its model's numbers ``parameters``, if any)."""
+    if parameters is None:
+        return lambda s, wy: np.asarray(step(s, wy)).reshape(-1)
+    from ...simulation.codegen import _step_parameters
+
+    p = _step_parameters(step, parameters)  # checked against the step's input p (InputError naming it)
+    return lambda s, wy: np.asarray(step(s, wy, p)).reshape(-1)
+
+
 def batch_step_caller(step: Any, label: str, compiled: bool,
                       parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
@@ -33,43 +54,30 @@ def batch_step_caller(step: Any, label: str, compiled: bool,
     compiler is there, else CasADi's virtual machine (one call per filter). ``step``: a filter's ``filter_step``,
     or its ``filter_step_p`` with ``parameters`` its model's numbers (``filt.model.values``: the compiled library
     then keyed on the model's structure, shared by models of other values)."""
-    if parameters is not None:
-        from ...simulation.codegen import _step_parameters
+    vm = _vm_step(step, parameters)
+    loop = _compiled_loop(step, label, parameters) if compiled else None
+    if loop is not None:
+        run = loop.run
 
-        p = _step_parameters(step, parameters)  # checked against the step's input p (InputError naming it)
-        step_p = step
-        step = lambda s, wy: step_p(s, wy, p)  # noqa: E731 - the VM's call
-    if compiled:
-        from ...simulation.integrate import CompiledStepLoop, CompilerError
+        def call(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
+            return run(S, WY[:, None, :])[:, 1]
 
-        try:
-            loop = CompiledStepLoop(step_p if parameters is not None else step, label, threads=1, vectorize=False,
-                                    parameters=parameters)
-        except CompilerError:
-            loop = None
-        if loop is not None:
-            run = loop.run
-
-            def call(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
-                return run(S, WY[:, None, :])[:, 1]
-
-            return call
+        return call
 
     def call_vm(S: np.ndarray, WY: np.ndarray) -> np.ndarray:
-        return np.stack([np.asarray(step(s, wy)).reshape(-1) for s, wy in zip(S, WY)])
+        return np.stack([vm(s, wy) for s, wy in zip(S, WY)])
 
     return call_vm
 
 
 def step_caller(step: Any, label: str, compiled: bool,
                 parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
-    """s (ns,), wy (nw,) -> s_next (ns,): one filter step (:func:`batch_step_caller` with B = 1)."""
-    batch = batch_step_caller(step, label, compiled, parameters)
-
-    def call(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
-        return batch(s[None], wy[None])[0]
-
-    return call
+    """s (ns,), wy (nw,) -> s_next (ns,): one filter step (:func:`batch_step_caller` with B = 1; compiled, one
+    call of :meth:`CompiledStepLoop.step <alpes_dyn.simulation.codegen.CompiledStepLoop.step>` on buffers it
+    keeps: a control loop's call at each sample)."""
+    vm = _vm_step(step, parameters)
+    loop = _compiled_loop(step, label, parameters) if compiled else None
+    return loop.step if loop is not None else vm
 
 
 class Observer(Block):
