@@ -277,7 +277,8 @@ def legacy_mujoco_recording(model, true_params, torque, dt=1e-3, *, effects=None
     """The old mujoco_recording (q0 the plant's rest, RK4): encoder counts, torque, true_q."""
     import mujoco
 
-    from alpes_dyn.control.plants import PlantEffects, _initial_state, _params, plant_mjcf, plant_model
+    from alpes_dyn.bench.mujoco_plant import as_params as _params, initial_qpos as _initial_state
+    from alpes_dyn.control.plants import PlantEffects, plant_mjcf, plant_model
     from alpes_dyn.model.mjcf import joint_permutation, load_mujoco
 
     e = (effects or PlantEffects()).check()

@@ -4,6 +4,10 @@ the MuJoCo stand-in with a real hand's effects (its truth hidden) that the tests
 Everything that must run on the hand goes through :class:`HardwareInterface`.
 """
 
+from .effects import PlantEffects, real_hand_effects
 from .interface import HardwareInterface, Loopback, Reading, check_command
+from .mujoco_hand import MujocoHand
+from .play import play
 
-__all__ = ["HardwareInterface", "Loopback", "Reading", "check_command"]
+__all__ = ["HardwareInterface", "Loopback", "Reading", "check_command", "MujocoHand", "PlantEffects",
+           "real_hand_effects", "play"]

@@ -56,18 +56,13 @@ _EFFECT_FLAGS = (("--stiction", "stiction"), ("--tendon-stiffness", "tendon_stif
 
 
 def realism_effects() -> Any:
-    """The ``--plant-effects all`` plant (``benchmarks/force_realism.py``'s): the realism study's ``all`` case
-    (:func:`~alpes_dyn.studies.realism.cases`, its cable sized by :func:`~alpes_dyn.studies.realism.tendon_stiffness`
-    on the documented experiment) plus 0.5 degree of the cable's slack at the motor shaft (r_m radians(0.5), m) and
-    the torque read 1 sample late."""
-    import math
+    """The ``--plant-effects all`` plant (``benchmarks/force_realism.py``'s): a real hand's effects,
+    :func:`~alpes_dyn.bench.effects.real_hand_effects` (the realism study's ``all`` case,
+    :func:`~alpes_dyn.studies.realism.cases`, on the cable :func:`~alpes_dyn.studies.realism.tendon_stiffness` sizes
+    on the documented experiment: 0.5 degree of its slack at the motor shaft, the torque read 1 sample late)."""
+    from ..bench.effects import real_hand_effects
 
-    from ..model.params import load_params
-    from ..studies.realism import cases, rig_design, tendon_stiffness
-
-    k_t, c_t, _ = tendon_stiffness(rig_design("level"))
-    return dataclasses.replace(cases(k_t, c_t)["all"], tendon_dead_band=load_params().r_m * math.radians(0.5),
-                               torque_delay=1)
+    return real_hand_effects()
 
 
 def _plant_effects(args: argparse.Namespace) -> Any:

@@ -23,11 +23,13 @@ from typing import Any
 
 import numpy as np
 
+from ..bench.effects import PlantEffects
+from ..bench.mujoco_plant import block_plant
 from ..errors import InputError, ModelError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.block_scene import BlockScene, block_scene_mjcf, place_block
-from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, mjcf_string, palm_down_params
+from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_mujoco, palm_down_params
 from ..model.robot import Model
 from ..estimation.observers.blocks import Observer, step_caller
 from ..estimation.observers.observers import make_observer
@@ -40,9 +42,7 @@ from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .blocks import ForceLoop, SensorlessForce, force_input
 from .controller import (CONTROLLERS, DEFAULT_GAINS, REFERENCES, ForceController, reference_profile,
                          static_motor_torque)
-from .plants import PlantEffects
-from .realism_loop import (Compensation, SampleLag, effects_mjcf_kwargs, plant_gravity, rotor_rest,
-                           torque_constant_blocks)
+from .realism_loop import Compensation, SampleLag, torque_constant_blocks
 
 
 CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
@@ -356,24 +356,14 @@ class _Setup:
 
 def _alpes_setup(sc: ControlScenario) -> _Setup:
     """finger2/finger3 on the Alpes block scene, palm down (the loop of version 0.2, unchanged)."""
-    mujoco, p, pp = _plant_and_params(sc)
+    _, p, pp = _plant_and_params(sc)
     n = 2 if sc.model == "finger2" else 3
     cq = tuple((BLOCK_CONTACT_Q if sc.contact_q is None else sc.contact_q)[:n])
     model = Model.alpes(sc.model, params=p)
     if sc.effects is not None:  # the controller's model in the palm's orientation as identified
         model = (Compensation() if sc.compensation is None else sc.compensation).turned(model)
-    plant_model = Model.alpes(sc.model, params=pp)
-    fx = {} if sc.effects is None else effects_mjcf_kwargs(sc.effects)
-    mj = load_mujoco(mjcf_string(sc.model, pp, friction=True, scene="block", contact_q=cq,
-                                 timestep=sc.dt / sc.substeps, **fx))
-    d = mujoco.MjData(mj)
-    perm = joint_permutation(mj, model.joint_names)
     # the plant starts at rest: the finger hanging on its springs (in the plant's gravity), motor off
-    plant_model = plant_model.copy(gravity=plant_gravity(plant_model.gravity, sc.effects))
-    q0 = static_equilibrium(plant_model, np.zeros(plant_model.n))
-    d.qpos[perm] = q0
-    rotor_rest(mj, d, list(model.transmission.motor_names), plant_model, q0, sc.effects)
-    mujoco.mj_forward(mj, d)
+    mj, d, _ = block_plant(sc.model, pp, sc.effects, cq, sc.dt / sc.substeps)
     return _Setup(model, mj, d, block_normal(cq), p.tau_max, 0, None, "finger", "encoder_finger", "torque_finger",
                   "flexiforce_finger", {**DEFAULT_GAINS[sc.controller], **sc.gains}, params=p)
 

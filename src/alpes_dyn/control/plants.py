@@ -10,24 +10,12 @@ Gaussian noise, the torque with 5e-4 N m of white noise, 1 kHz), into a
 :class:`~alpes_dyn.estimation.experiments.recording.Recording` that :func:`~alpes_dyn.estimation.identification.identification.identify`
 reads, with the true joint angles in ``true_q_*``.
 
-The effects (:class:`PlantEffects`, each off by default):
-
-* ``stiction``: stick-slip dry friction, MuJoCo's ``frictionloss`` F_s with a stiff constraint
-  (:data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST`); off, the joints get the library's own smooth law
-  F_s tanh(v / v_s) + F_v v (:class:`~alpes_dyn.model.extras.JointExtras`), added to MuJoCo's passive forces
-  by a callback at every RK4 stage: the plant then has the fitted model's friction structure;
-* ``tendon_stiffness`` / ``tendon_damping``: the series-elastic, pull-only tendon with a rotor per motor
-  (its inertia J_m on the motor side); the encoder measures the rotor;
-* ``tendon_rotor``: the rotor inertia on the rigid tendon (J_m S^T S on the joints' mass matrix);
-* ``tilt``: the palm tilted in the finger's plane (rad); the recording has no ``gravity_*`` columns (the
-  user does not know the tilt);
-* ``torque_constant_error`` e: the recorded torque is (1 + e) times the true one (a torque constant e off);
-* ``encoder_offset``: the encoder's zero off by this many counts;
-* ``tendon_dead_band`` (m, with ``tendon_stiffness``): the cable's slack at the motor shaft, a dead band on the
-  tendon's stretch (the cable pulls k_t max(e - delta, 0)): 0.5 degree of backlash at the shaft is
-  ``r_m * radians(0.5)``;
-* ``torque_delay``: the torque measured this many whole samples late (the current's filter and the bus): the
-  recording's torque at t_k is what the motor gave at t_(k-d) (the first d rows repeat the first torque).
+The effects (:class:`PlantEffects`: stick-slip, the series-elastic tendon with its rotor and slack, the rotor on
+the rigid tendon, the palm's tilt, the torque constant's and the encoder's errors, the torque read late) and the
+plant's MuJoCo side (:func:`plant_mjcf`, :func:`plant_model`, its rest and its passive forces) are the bench's
+(:mod:`alpes_dyn.bench.effects`, :mod:`alpes_dyn.bench.mujoco_plant`), re-exported here. On a recording: with
+``tilt`` it has no ``gravity_*`` columns (the user does not know the tilt); with ``torque_delay`` d its torque at
+t_k is what the motor gave at t_(k-d) (the first d rows repeat the first torque).
 
 The tendons' sheath friction (capstan) where the plant's parameters hold ``transmission.capstan``: MuJoCo has none,
 so the passive callback adds the library's law (:func:`~alpes_dyn.model.transmission.capstan_torque`) on the rigid
@@ -39,113 +27,25 @@ restores the previous one (not thread-safe: one smooth-friction run at a time pe
 
 from __future__ import annotations
 
-import math
 import os
-from dataclasses import dataclass
-from typing import Any, Callable, Sequence
+from typing import Any, Sequence
 
 import numpy as np
 
+from ..bench.effects import MAX_TORQUE_DELAY, PlantEffects, _number, delayed
+from ..bench.mujoco_plant import (INTEGRATORS, PLANT_MODELS, as_params, free_plant, passive_forces, plant_mjcf,
+                                  plant_model)
 from ..errors import InputError, ModelError
 from ..estimation.experiments.recording import Recording
-from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string, tilted_gravity
-from ..model.params import HandParams, Param, load_params, with_values
+from ..model.mjcf import joint_permutation, load_mujoco
+from ..model.params import HandParams
 from ..model.robot import Model
-from ..model.transmission import capstan_torque, capstan_velocity
 from ..simulation.loop import Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, TorqueSensor
 
 __all__ = ["PLANT_MODELS", "INTEGRATORS", "MAX_TORQUE_DELAY", "PlantEffects", "delayed", "plant_mjcf", "plant_model",
            "mujoco_recording", "mjcf_recording"]
-
-PLANT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
-"""The models a recording plant is built for: one chain, as the identification experiment."""
-INTEGRATORS: tuple[str, ...] = ("rk4", "implicit", "implicitfast")
-
-
-def _number(x: object) -> bool:
-    return isinstance(x, (int, float, np.integer, np.floating)) and not isinstance(x, bool) and math.isfinite(x)
-
-
-@dataclass(frozen=True)
-class PlantEffects:
-    """The unmodelled effects of a real hand on a MuJoCo plant (see the module docstring); SI units.
-
-    stiction: time constant (s) of MuJoCo's dry-friction constraint, or None (the library's smooth law).
-    tendon_stiffness: k_t (N/m) of a series-elastic tendon, or None (rigid). tendon_damping: c_t (N s/m).
-    tendon_rotor: the rotor's inertia on the rigid tendon. tilt: rad, in the finger's plane.
-    torque_constant_error: e, the recorded torque (1 + e) times the true one. encoder_offset: counts.
-    tendon_dead_band: m, the cable's slack (with ``tendon_stiffness``). torque_delay: whole samples (>= 0) by which
-    the recorded torque lags the applied one.
-    """
-
-    stiction: float | None = None
-    tendon_stiffness: float | None = None
-    tendon_damping: float = 0.0
-    tendon_rotor: bool = False
-    tilt: float = 0.0
-    torque_constant_error: float = 0.0
-    encoder_offset: float = 0.0
-    tendon_dead_band: float = 0.0
-    torque_delay: int = 0
-
-    def check(self) -> "PlantEffects":
-        """Numbers in range (:class:`~alpes_dyn.InputError` naming the field); the MJCF options are checked by
-        :func:`~alpes_dyn.model.mjcf.mjcf_string`."""
-        if not (_number(self.torque_constant_error) and -0.5 < self.torque_constant_error < 0.5):
-            raise InputError(f"torque_constant_error: expected a fraction in (-0.5, 0.5), got "
-                             f"{self.torque_constant_error!r}")
-        if not (_number(self.encoder_offset) and abs(self.encoder_offset) <= 1e6):
-            raise InputError(f"encoder_offset: expected a finite number of counts, got {self.encoder_offset!r}")
-        if not (isinstance(self.torque_delay, (int, np.integer)) and not isinstance(self.torque_delay, bool)
-                and 0 <= self.torque_delay <= MAX_TORQUE_DELAY):
-            raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_TORQUE_DELAY}, got "
-                             f"{self.torque_delay!r}")
-        if self.tendon_dead_band and self.tendon_stiffness is None:
-            raise InputError("tendon_dead_band: the cable's slack needs the series-elastic tendon (tendon_stiffness)")
-        return self
-
-
-MAX_TORQUE_DELAY = 100
-"""The longest torque delay a plant takes, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
-
-
-def delayed(signal: np.ndarray, samples: int) -> np.ndarray:
-    """``signal`` (N+1, ...) seen ``samples`` whole samples late: row k is row k - samples of ``signal``, the first
-    ``samples`` rows repeat row 0 (what a sensor that lags by a fixed number of samples reads from a held start)."""
-    if samples == 0:
-        return signal
-    out = np.empty_like(signal)
-    out[samples:] = signal[:-samples]
-    out[:samples] = signal[0]
-    return out
-
-
-def _params(params: HandParams | str | None) -> HandParams:
-    return params if isinstance(params, HandParams) else load_params(params)
-
-
-def plant_mjcf(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
-               chain: str | None = None, timestep: float = 1e-4) -> str:
-    """MJCF text of the plant: ``model`` from ``params`` with the MJCF side of ``effects`` (joint stops on,
-    contact off: a finger moving freely; friction as the module docstring says)."""
-    e = (effects or PlantEffects()).check()
-    p = _params(params)
-    if p.capstan > 0:  # not in the MJCF: mujoco_recording's passive callback adds the sheath friction
-        p = with_values(p, {"transmission.capstan": Param(0.0, "-", "assumed", "in the plant's callback", "sheath")})
-    return mjcf_string(model, p, chain=chain, friction=False, contact=False, timestep=timestep,
-                       stiction=e.stiction, tendon_stiffness=e.tendon_stiffness, tendon_damping=e.tendon_damping,
-                       tendon_rotor=e.tendon_rotor, tilt=e.tilt, tendon_dead_band=e.tendon_dead_band)
-
-
-def plant_model(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
-                chain: str | None = None) -> Model:
-    """The library's rigid model of the same finger (friction on), with the plant's tilted gravity: what the
-    plant is without its other effects (its rest states, its smooth friction law)."""
-    e = (effects or PlantEffects()).check()
-    m = Model.alpes(model, friction=True, params=_params(params), chain=chain)
-    return m if e.tilt == 0 else m.copy(gravity=tilted_gravity(m.gravity, e.tilt))
 
 
 def _check_run(model: str, u: np.ndarray, dt: float, timestep: float, integrator: str, m: int) -> int:
@@ -162,22 +62,6 @@ def _check_run(model: str, u: np.ndarray, dt: float, timestep: float, integrator
     if abs(sub * timestep - dt) > 1e-9 * dt:
         raise InputError(f"timestep: {timestep:g} s does not divide the sample period {dt:g} s")
     return sub
-
-
-def _initial_state(mj, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np.ndarray, p: HandParams,
-                   effects: PlantEffects) -> np.ndarray:
-    """qpos of the plant at joint angles q0 (rad), at rest: each rotor (series-elastic tendon) turned so that the
-    cable holds the motor torque u0 (the static tension T = tau_m / r_m, stretch T / k_t, plus the cable's slack)."""
-    qpos = mj.qpos0.copy()
-    qpos[perm] = q0
-    if effects.tendon_stiffness is not None:
-        S = truth.transmission.S
-        for k, mn in enumerate(truth.transmission.motor_names):
-            if mn.endswith("abduction"):
-                continue
-            stretch = float(u0[k]) / (p.r_m * effects.tendon_stiffness) + effects.tendon_dead_band  # slack taken up
-            qpos[mj.joint(f"{mn}_rotor").qposadr[0]] = float(S[k] @ q0) + stretch / p.r_m  # e = r_m theta - r sum q
-    return qpos
 
 
 def mujoco_recording(model: str, true_params: HandParams | str | None, torque: np.ndarray, dt: float = 1e-3, *,
@@ -215,22 +99,18 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
 
     e = (effects or PlantEffects()).check()
     _check_recording_settings(model, seed, encoder_noise_counts, torque_noise)
-    p = _params(true_params)
+    p = as_params(true_params)
     truth = plant_model(model, p, e, chain)
     m = truth.transmission.n_motors
     u = np.asarray(torque, dtype=float)
     u = u[:, None] if u.ndim == 1 else u
     sub = _check_run(model, u, dt, timestep, integrator, m)
-    mj = load_mujoco(plant_mjcf(model, p, e, chain, timestep))
-    mj.opt.integrator = {"rk4": mujoco.mjtIntegrator.mjINT_RK4, "implicit": mujoco.mjtIntegrator.mjINT_IMPLICIT,
-                         "implicitfast": mujoco.mjtIntegrator.mjINT_IMPLICITFAST}[integrator]
     edges = _gravity_segments(gravity, u.shape[0])
-    if gravity is not None:  # the rest (q0's default) found in the first orientation
-        mj.opt.gravity[:] = gravity[0]
-        truth = truth.copy(gravity=np.asarray(gravity[0], dtype=float))
-    d = _plant_at_rest(mj, truth, q0, u[0], p, e)
+    # the rest (q0's default) found in the first orientation
+    mj, d, truth = free_plant(truth, model, p, e, chain, timestep, integrator, q0, u[0],
+                              None if gravity is None else gravity[0])
     previous = mujoco.get_mjcb_passive()
-    passive = _passive_forces(mj, truth, e)
+    passive = passive_forces(mj, truth, e)
     if passive is not None:
         mujoco.set_mjcb_passive(passive)
     try:
@@ -365,50 +245,3 @@ def _check_recording_settings(model: str, seed: Any, encoder_noise_counts: Any, 
             raise InputError(f"{name}: expected a non-negative number, got {v!r}")
     if model not in PLANT_MODELS:
         raise InputError(f"model: a recording plant is one chain ({', '.join(PLANT_MODELS)}), got {model!r}")
-
-
-def _plant_at_rest(mj, truth: Model, q0: Sequence[float] | None, u0: np.ndarray, p: HandParams,
-                   effects: PlantEffects):
-    """The plant's MjData at joint angles ``q0`` (rad; default the rest of ``truth`` under the torque ``u0``, N m)
-    at rest, its derived quantities computed (``mj_forward``)."""
-    import mujoco
-
-    d = mujoco.MjData(mj)
-    perm = joint_permutation(mj, truth.joint_names)
-    if q0 is None:
-        q_init = truth.static_equilibrium(None, np.zeros(truth.n), fixed=truth.springless_joints, tau_m=u0)
-    else:
-        q_init = np.asarray(q0, dtype=float)
-        if q_init.shape != (truth.n,) or not np.isfinite(q_init).all():
-            raise InputError(f"q0: expected {truth.n} finite joint angles (rad), got {np.asarray(q0).tolist()!r}")
-    d.qpos[:] = _initial_state(mj, truth, perm, q_init, u0, p, effects)
-    mujoco.mj_forward(mj, d)
-    return d
-
-
-def _passive_forces(mj, truth: Model, e: PlantEffects) -> Callable[[Any, Any], None] | None:
-    """MuJoCo's passive-force callback of what the plant adds to MuJoCo at every RK4 stage (N m on ``truth``'s
-    joints): the library's smooth friction law (without ``stiction``: MuJoCo's own dry friction then) and the tendons'
-    sheath friction where ``truth`` has one (``capstan``: S^T of the capstan's loss at the actuators' torque, d.ctrl,
-    and the motor velocity S qd); None where there is nothing to add."""
-    ex, tr = truth.extras, truth.transmission
-    sheath = tr is not None and tr.has_capstan
-    if sheath and e.tendon_stiffness is not None:
-        raise InputError("capstan: the MuJoCo plant puts the tendons' sheath friction on a rigid tendon (its tension "
-                         "the motor's torque); with tendon_stiffness the tension is the cable's")
-    if e.stiction is not None and not sheath:
-        return None
-    dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
-    smooth = e.stiction is None
-    if sheath:  # the law's constants once (the callback runs at every RK4 stage)
-        S, m, mu, v_c = tr.S, tr.n_motors, tr.capstan, capstan_velocity(tr.S, ex.smooth_velocity)
-
-    def passive(_m, dd) -> None:  # the library's laws, at every RK4 stage
-        v = dd.qvel[dofs]
-        if smooth:
-            dd.qfrc_passive[dofs] -= ex.coulomb * np.tanh(v / ex.smooth_velocity) + ex.viscous * v
-        if sheath:
-            u = dd.ctrl[:m]
-            dd.qfrc_passive[dofs] -= (u - capstan_torque(u, S @ v, mu, v_c)) @ S
-
-    return passive

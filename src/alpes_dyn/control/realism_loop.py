@@ -3,8 +3,10 @@
 :func:`~alpes_dyn.control.finger_loop.run_control` and :func:`~alpes_dyn.control.hand_loop.run_hand_control` take
 ``effects`` (a :class:`~alpes_dyn.control.plants.PlantEffects`): the plant is then the MJCF of
 :func:`~alpes_dyn.model.mjcf.mjcf_string` with the MJCF side of the effects (stick-slip friction, the series-elastic
-pull-only tendon with its rotor and the cable's slack, the rotor on the rigid tendon, the palm's tilt) and the
-sensor side of them as this module's blocks:
+pull-only tendon with its rotor and the cable's slack, the rotor on the rigid tendon, the palm's tilt:
+:func:`~alpes_dyn.bench.effects.effects_mjcf_kwargs`, :func:`~alpes_dyn.bench.effects.plant_gravity`,
+:func:`~alpes_dyn.bench.mujoco_plant.rotor_rest`, re-exported here) and the sensor side of them as this module's
+blocks:
 
 * the torque constant e off: the motor gives tau_cmd / (1 + e) for the command tau_cmd (the driver turns the
   command into a current with a constant (1 + e) times the true one), and the current sensor reads (1 + e) times
@@ -56,11 +58,11 @@ from typing import Any, Mapping
 
 import numpy as np
 
+from ..bench.effects import PlantEffects, effects_mjcf_kwargs, plant_gravity
+from ..bench.mujoco_plant import rotor_rest
 from ..errors import InputError
-from ..model.mjcf import tilted_gravity
 from ..model.robot import Model
 from ..simulation.loop import Block, Function
-from .plants import PlantEffects
 
 __all__ = ["Compensation", "SampleLag", "effects_mjcf_kwargs", "torque_constant_blocks", "rotor_rest",
            "plant_gravity", "NO_COMPENSATION"]
@@ -166,32 +168,9 @@ class SampleLag(Block):
         return {self.period_outputs[0]: self._buf.popleft()}
 
 
-def effects_mjcf_kwargs(effects: PlantEffects) -> dict[str, Any]:
-    """The MJCF side of ``effects`` as keyword arguments of :func:`~alpes_dyn.model.mjcf.mjcf_string`."""
-    e = effects.check()
-    return {"stiction": e.stiction, "tendon_stiffness": e.tendon_stiffness, "tendon_damping": e.tendon_damping,
-            "tendon_dead_band": e.tendon_dead_band, "tendon_rotor": e.tendon_rotor, "tilt": e.tilt}
-
-
-def plant_gravity(gravity: np.ndarray, effects: PlantEffects | None) -> np.ndarray:
-    """The plant's gravity (3,), m/s^2: ``gravity`` (the scene's, palm down) turned by the effects' tilt."""
-    g = np.asarray(gravity, dtype=float)
-    return g if effects is None or effects.tilt == 0 else tilted_gravity(g, effects.tilt)
-
-
 def torque_constant_blocks(effects: PlantEffects | None, command: str, applied: str, name: str = "motor") -> list:
     """The motor as the driver drives it: ``applied`` = ``command`` / (1 + e), N m (e the torque constant's error;
     no block without one: the command is applied as it is, under the name ``applied``)."""
     e = 0.0 if effects is None else float(effects.torque_constant_error)
     gain = 1.0 / (1.0 + e)
     return [Function(lambda **u: gain * u[command], (command,), applied, name=name)]
-
-
-def rotor_rest(mj: Any, d: Any, motors: list[str], model: Model, q0: np.ndarray, effects: PlantEffects | None) -> None:
-    """Each series-elastic rotor of ``motors`` (its MuJoCo joint ``<motor>_rotor``) where the cable is just slack at
-    joint angles ``q0`` (rad): theta = S q0 (the stretch e = r_m theta - r sum q at 0, the slack still to take up)."""
-    if effects is None or effects.tendon_stiffness is None:
-        return
-    S = model.transmission.S
-    for k, mn in enumerate(motors):
-        d.qpos[mj.joint(f"{mn}_rotor").qposadr[0]] = float(S[k] @ q0)

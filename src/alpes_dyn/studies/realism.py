@@ -24,7 +24,9 @@ from typing import Any
 
 import numpy as np
 
-from ..control.plants import PlantEffects, mujoco_recording, plant_model
+from ..bench.effects import (DELAY_SAMPLES, KT_ERROR, OFFSET_COUNTS, SLACK_DEG, TILT_DEG, ZETA,  # noqa: F401 (kept)
+                             PlantEffects, cable_damping, cable_slack, real_hand_effects)
+from ..control.plants import mujoco_recording, plant_model
 from ..errors import InputError
 from ..estimation.experiments.adapt import Adaptation, adaptation_of, candidate_designs, first_in_range
 from ..estimation.experiments.design import ExperimentDesign
@@ -48,18 +50,6 @@ KINDS = ("K", "m", "F_s", "F_v")
 MODEL = "finger3"
 STRETCH = 0.03
 """The cable's stretch under the experiment's mean tension, as a fraction of the tendon's travel (:func:`tendon_stiffness`)."""
-ZETA = 0.2
-"""The damping ratio of the rotor-on-cable mode."""
-TILT_DEG = 3.0
-"""deg: the palm's tilt in the finger's plane, unknown to the fits (a rig's level a few degrees off)."""
-KT_ERROR = 0.05
-"""The torque constant's relative error: the recorded torque is 1.05 times the true one."""
-OFFSET_COUNTS = 4.0
-"""counts: the encoder's zero error."""
-SLACK_DEG = 0.5
-"""deg: the cable's slack (backlash) at the motor shaft, a dead band r_m radians(SLACK_DEG) on the tendon's stretch."""
-DELAY_SAMPLES = 1
-"""The torque measured this many samples (1 ms) late."""
 FRESH_FREQUENCIES = (0.4, 0.9, 1.7, 2.9, 4.3, 6.1, 8.9, 12.7)
 """Hz: the lines of the EKF's validation run (:func:`fresh_run`), none of the experiment's."""
 FIT_EFFECTS = "auto"
@@ -86,7 +76,7 @@ def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
     travel = p.r * float(np.mean(rec.true_q.sum(axis=1)))
     tension = float(np.mean(u)) / p.r_m
     k_t = tension / (STRETCH * travel)
-    c_t = 2 * ZETA * math.sqrt(k_t * p.J_m) / p.r_m
+    c_t = cable_damping(k_t)
     info = {"mean_tension_N": tension, "tension_swing_N": float(np.ptp(u)) / p.r_m, "tendon_travel_m": travel,
             "swing_travel_m": p.r * float(np.ptp(rec.true_q.sum(axis=1))), "k_t_N_per_m": k_t,
             "c_t_N_s_per_m": c_t, "rotor_mode_Hz": math.sqrt(k_t * p.r_m**2 / p.J_m) / (2 * math.pi)}
@@ -97,7 +87,7 @@ def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffec
     """Each case's plant effects; ``rig_tilt`` (rad): the rig's orientation (:func:`tilted_gravity`), under every
     plant (the tilt cases' error on top of it). ``slack``: the elastic tendon with :data:`SLACK_DEG` of backlash at
     the motor shaft; ``delay``: the torque :data:`DELAY_SAMPLES` late; ``all``: every effect, these two included."""
-    slack = load_params().r_m * math.radians(SLACK_DEG)  # m of cable
+    slack = cable_slack()  # m of cable
     one = {
         "none": PlantEffects(),
         "stiction": PlantEffects(stiction=STICTION_TIMECONST),
@@ -110,9 +100,7 @@ def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffec
         "delay": PlantEffects(torque_delay=DELAY_SAMPLES),
     }
     # all: every effect; the elastic tendon carries the rotor (tendon_rotor is its rigid limit)
-    one["all"] = PlantEffects(stiction=STICTION_TIMECONST, tendon_stiffness=k_t, tendon_damping=c_t,
-                              tilt=math.radians(TILT_DEG), torque_constant_error=KT_ERROR,
-                              encoder_offset=OFFSET_COUNTS, tendon_dead_band=slack, torque_delay=DELAY_SAMPLES)
+    one["all"] = real_hand_effects(k_t, c_t)
     if rig_tilt:
         one = {c: dataclasses.replace(e, tilt=rig_tilt + e.tilt) for c, e in one.items()}
     return one

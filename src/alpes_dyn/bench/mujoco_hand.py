@@ -1,0 +1,231 @@
+"""The MuJoCo stand-in for a hand on the bench: a :class:`~alpes_dyn.bench.interface.HardwareInterface` on a
+MuJoCo finger with a real hand's effects, its truth hidden behind the interface.
+
+:class:`MujocoHand` is the reference hand that the tests and benchmarks drive as a user drives their own: its
+parameters (the "true" finger, drawn by the caller) and its state stay private; what it shows is what a driver
+shows -- the encoder counts, the motor torque read from the current, the fingertip force, every
+:attr:`~MujocoHand.period`.
+
+The plant (:mod:`alpes_dyn.bench.mujoco_plant`), in one of two scenes:
+
+* ``"free"``: the finger moving freely (joint stops on, contact off; RK4 at 0.1 ms), as
+  :func:`~alpes_dyn.control.plants.mujoco_recording` records it; no force sensor (the force reads NaN);
+* ``"block"``: the finger palm down over the block of the force loop (contact on, MuJoCo's joint friction, at
+  0.25 ms), as :func:`~alpes_dyn.control.finger_loop.run_control` presses it; the FlexiForce reads MuJoCo's touch
+  sensor.
+
+The effects (:class:`~alpes_dyn.bench.effects.PlantEffects`, default a real hand's:
+:func:`~alpes_dyn.bench.effects.real_hand_effects`) and the sensors, as the library's own runs have them:
+
+* the driver: the motor gives command / (1 + e) for the command (its torque constant e off, e the effects'
+  ``torque_constant_error``);
+* the encoder: the rotor's (series-elastic tendon) or the motor's angle plus ``encoder_noise_counts`` counts of
+  Gaussian noise, quantised to ``counts_per_rev`` counts per revolution, its zero ``encoder_offset`` counts off;
+* the torque: (1 + e) times the torque the motor applied over a period plus ``torque_noise`` N m of white noise,
+  read at the tick that ends the period, ``torque_delay`` whole periods late (the reading at tick k is of the
+  period [t_(k-1-d), t_(k-d)); before the first command, of the motor at rest, 0 N m);
+* the force (block scene): MuJoCo's touch sensor plus ``force_noise`` N of noise, quantised to 4.4 / 1024 N
+  (a 10-bit reading of a 4.4 N FlexiForce), >= 0.
+
+The sensors' noise comes from one generator seeded by ``seed``, drawn tick by tick (the torque's as the period
+ends, then the encoder's, then the force's): the same seed and the same commands give the same readings.
+
+The hand starts at rest: the free finger on its springs in the plant's gravity, motor off, each series-elastic
+rotor holding the cable's tension (its slack taken up, :func:`~alpes_dyn.bench.mujoco_plant.initial_qpos`); the
+block scene's finger hanging on its springs, the cable just slack (:func:`~alpes_dyn.bench.mujoco_plant.rotor_rest`);
+or at the joint angles ``q0``.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+from collections import deque
+from typing import Any, Sequence
+
+import numpy as np
+
+from ..errors import InputError, ModelError
+from ..model.mjcf import palm_down_params
+from ..model.params import HandParams
+from ..simulation.plants import MujocoPlant
+from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
+from .effects import PlantEffects, _number, real_hand_effects
+from .interface import Reading, check_command
+from .mujoco_plant import as_params, block_plant, free_plant, passive_forces, plant_model
+
+__all__ = ["MujocoHand", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
+
+HAND_MODELS: tuple[str, ...] = ("finger2", "finger3")
+"""The fingers the stand-in is built for."""
+SCENES: tuple[str, ...] = ("free", "block")
+"""The stand-in's scenes (module docstring)."""
+PERIOD = 1e-3
+"""The stand-in's sample period, s (the hand's 1 kHz loop)."""
+SUBSTEPS = {"free": 10, "block": 4}
+"""MuJoCo steps per period of each scene (RK4 at 0.1 ms as the recordings', the force loop's 0.25 ms)."""
+
+
+def _mujoco() -> Any:
+    try:
+        import mujoco
+    except ImportError:
+        raise ModelError("the MuJoCo stand-in needs mujoco (pip install 'alpes_dyn[mujoco]')") from None
+    return mujoco
+
+
+def _checked(model: Any, params: Any, effects: Any, scene: Any, seed: Any,
+             noises: dict[str, Any]) -> PlantEffects | None:
+    """One-line :class:`~alpes_dyn.InputError` naming the bad argument of :class:`MujocoHand`; the effects checked."""
+    if model not in HAND_MODELS:
+        raise InputError(f"model: the MuJoCo stand-in is one finger ({', '.join(HAND_MODELS)}), got {model!r}")
+    if scene not in SCENES:
+        raise InputError(f"scene: expected one of {', '.join(SCENES)}, got {scene!r}")
+    if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
+        raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
+    for name, v in noises.items():
+        if not (_number(v) and v >= 0):
+            raise InputError(f"{name}: expected a non-negative number, got {v!r}")
+    if params is not None and not isinstance(params, (HandParams, str, os.PathLike)):
+        raise InputError(f"params: expected HandParams or the path of a parameter file, got {type(params).__name__}")
+    if isinstance(effects, str) and effects == "real":
+        return real_hand_effects()
+    if effects is not None and not isinstance(effects, PlantEffects):
+        raise InputError(f"effects: expected a PlantEffects, None (none) or 'real' (a real hand's), got {effects!r}")
+    return None if effects is None else effects.check()
+
+
+class MujocoHand:
+    """A :class:`~alpes_dyn.bench.interface.HardwareInterface` on a MuJoCo finger (module docstring).
+
+    Parameters
+    ----------
+    model : str
+        ``finger2`` or ``finger3`` (:data:`HAND_MODELS`).
+    params : HandParams or str or path, optional
+        The finger's true parameters, or the path of their file (default the shipped file); kept private.
+    effects : PlantEffects or None or "real"
+        The plant's effects: ``"real"`` (default) a real hand's (:func:`~alpes_dyn.bench.effects.real_hand_effects`),
+        None or ``PlantEffects()`` none.
+    scene : str
+        ``"free"`` (default) or ``"block"`` (:data:`SCENES`).
+    seed : int
+        Seed of the sensors' noise.
+    q0 : sequence of float, optional
+        Initial joint angles, rad (at rest, qd = 0); default the rest of the module docstring.
+    encoder_noise_counts, torque_noise, force_noise : float
+        The sensors' noise: counts (0.5), N m (5e-4), N (0.005).
+
+    Attributes
+    ----------
+    period : float
+        :data:`PERIOD`, s.
+    motor_names : tuple of str
+        The finger's motor (one).
+    counts_per_rev : int
+        Encoder counts per motor revolution.
+    tau_max : float
+        The motor's limit, N m (the commands lie in [0, tau_max]).
+    model, scene : str
+        As given.
+    closed : bool
+        Whether :meth:`close` was called (a write is then refused).
+
+    Raises
+    ------
+    InputError
+        A bad argument (one line naming it).
+    ModelError
+        MuJoCo missing, or an unreadable parameter file.
+    """
+
+    def __init__(self, model: str = "finger3", params: HandParams | str | os.PathLike | None = None, *,
+                 effects: PlantEffects | str | None = "real", scene: str = "free", seed: int = 0,
+                 q0: Sequence[float] | None = None, encoder_noise_counts: float = 0.5, torque_noise: float = 5e-4,
+                 force_noise: float = 0.005) -> None:
+        e = _checked(model, params, effects, scene, seed, {"encoder_noise_counts": encoder_noise_counts,
+                                                           "torque_noise": torque_noise, "force_noise": force_noise})
+        self._mujoco = _mujoco()
+        p, sub = as_params(params), SUBSTEPS[scene]
+        e0 = e or PlantEffects()
+        if scene == "free":
+            truth = plant_model(model, p, e0)
+            m = truth.transmission.n_motors
+            mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, np.zeros(m))
+            self._passive = passive_forces(mj, truth, e0)
+        else:
+            mj, d, truth = block_plant(model, palm_down_params(p), e, None, PERIOD / sub, q0)
+            self._passive = None
+        tr = truth.transmission
+        motors = list(tr.motor_names)
+        m = len(motors)
+        self.model, self.scene, self.period = model, scene, PERIOD
+        self.motor_names, self.counts_per_rev, self.tau_max = tuple(motors), int(tr.counts_per_rev), float(p.tau_max)
+        self.closed = False
+        self._data, self._k, self._gain = d, 0, 1.0 + e0.torque_constant_error
+        self._rng = np.random.default_rng(seed)
+        touch = {"F": "flexiforce_finger"} if scene == "block" else {}  # the finger's chain
+        # mj_step's position sensors are those of the state before its last integration: recomputed at the tick
+        self._plant = MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True,
+                                  sensors={"q_m": [f"encoder_{mn}" for mn in motors], **touch},
+                                  actuators={"tau": motors}, period_sensors={"tau": [f"torque_{mn}" for mn in motors]})
+        self._encoder = Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True,
+                                offset=e0.encoder_offset, shape=(m,))
+        self._torque = TorqueSensor("tau", "tau_meas", noise=torque_noise, gain=self._gain, shape=(m,))
+        self._force = ForceSensor("F", "F_meas", noise=force_noise) if scene == "block" else None
+        # the torque readings of the last d + 1 periods, the oldest read now (before the start: the motor at rest)
+        self._torques = deque([self._measured_torque(np.zeros(m))] * (e0.torque_delay + 1))
+        self._reading = self._sense()
+
+    @property
+    def t(self) -> float:
+        """The current tick's time, s."""
+        return self._k * self.period
+
+    def _measured_torque(self, applied: np.ndarray) -> np.ndarray:
+        return self._torque.measure(applied, self._torque.std * self._rng.standard_normal(applied.shape))
+
+    def _sense(self) -> Reading:
+        """The reading at the current tick: the encoder's noise drawn, then the force's."""
+        out = self._plant.output(self._k, {})
+        q_m = np.asarray(out["q_m"], dtype=float)
+        counts = self._encoder.measure(q_m, self._encoder.std * self._rng.standard_normal(q_m.shape))
+        force = math.nan
+        if self._force is not None:
+            force = float(self._force.measure(out["F"], self._force.std * self._rng.standard_normal()))
+        return Reading(self.t, counts, self._torques[0].copy(), force)
+
+    def read(self) -> Reading:
+        """The sensors at the current tick (the same reading until the next :meth:`write`)."""
+        r = self._reading
+        return Reading(r.t, r.counts.copy(), r.torque.copy(), r.force)
+
+    def write(self, command: Sequence[float]) -> None:
+        """Apply ``command`` ((m,) N m, in [0, :attr:`tau_max`]: :func:`~alpes_dyn.bench.interface.check_command`)
+        over the current period: MuJoCo steps the period; the next tick's sensors are read. Raises
+        :class:`~alpes_dyn.InputError` naming ``command`` (or ``write`` once closed),
+        :class:`~alpes_dyn.ModelError` where MuJoCo diverged."""
+        if self.closed:
+            raise InputError("write: the MuJoCo stand-in is closed")
+        u = check_command(command, len(self.motor_names), self.tau_max)
+        applied = u / self._gain if self._gain != 1.0 else u  # the driver's constant (1 + e) times the true one
+        mujoco = self._mujoco
+        previous = mujoco.get_mjcb_passive() if self._passive is not None else None
+        if self._passive is not None:
+            mujoco.set_mjcb_passive(self._passive)
+        try:
+            out = self._plant.update(self._k, {"tau": applied})
+        finally:
+            if self._passive is not None:
+                mujoco.set_mjcb_passive(previous)
+        if not np.isfinite(self._data.qpos).all():
+            raise ModelError("the MuJoCo stand-in diverged (NaN in its state)")
+        self._torques.append(self._measured_torque(np.asarray(out["tau"], dtype=float)))
+        self._torques.popleft()
+        self._k += 1
+        self._reading = self._sense()
+
+    def close(self) -> None:
+        """Relax the hand (the motor's control at 0) and refuse further writes."""
+        self._data.ctrl[:] = 0.0
+        self.closed = True
