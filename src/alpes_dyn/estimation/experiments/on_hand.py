@@ -57,7 +57,7 @@ from ...fileio import atomic_path, check_outputs
 from ...model.robot import Model
 from .calibration import Calibration, calibrate
 from .design import ExperimentDesign, _checked_design
-from .experiment import _excitation
+from .experiment import _excitation, _simulate
 from .hand_session import HandSession, SessionLog
 from .multisine import _motor_groups, _profiles, dither_amplitude
 from .recording import Recording, write_recording
@@ -65,8 +65,9 @@ from .trim import _mean_equilibrium, _reading
 
 __all__ = ["OnHandResult", "run_experiment", "designed_torque", "write_torque_profile", "STAGES"]
 
-STAGES: tuple[float, ...] = (0.25, 0.5, 1.0)
-"""The multisine's amplitude steps before the record, fractions of the design's amplitude."""
+STAGES: tuple[float, ...] = (0.25, 0.5, 1.0, 1.0)
+"""The multisine's amplitude steps before the record, fractions of the design's amplitude (the last repeated: a
+second correction of the bias at the full amplitude)."""
 
 START_SHARE = 0.5
 """The trim's first hold: the calibrated torque of this share of the way from the guard band's lower end to the target. The ramp that
@@ -240,9 +241,9 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
     """
     design = _checked_run(hw, nominal, design, calibration, path)
     st = np.asarray(stages, dtype=float)
-    if st.ndim != 1 or st.size == 0 or not (np.all(np.isfinite(st)) and np.all(np.diff(st) > 0) and st[0] > 0
+    if st.ndim != 1 or st.size == 0 or not (np.all(np.isfinite(st)) and np.all(np.diff(st) >= 0) and st[0] > 0
                                             and st[-1] <= 1):
-        raise InputError(f"stages: expected increasing fractions in (0, 1], got {list(stages)!r}")
+        raise InputError(f"stages: expected non-decreasing fractions in (0, 1], got {list(stages)!r}")
     for name, v, lo in (("stage_seconds", stage_seconds, 0.1), ("hold", hold, 0.1), ("tolerance", tolerance, 0.0)):
         if isinstance(v, bool) or not (isinstance(v, (int, float)) and math.isfinite(v) and v > lo):
             raise InputError(f"{name}: expected a number above {lo:g}, got {v!r}")
@@ -264,10 +265,11 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
         raise InputError(f"design: the excitation about the bias {bias.tolist()} N m (peak {peak.tolist()} N m) leaves "
                          f"the driver's [0, {hw.tau_max:g}] N m")
     s.ramp_to(np.maximum(bias, 0.0), 1.0)
-    clock = _Clock(design, s, amp, dither)
+    clock = _Clock(design, s, amp, dither, bias0)
     holds = _trim(s, clock, cal, target, bias, peak, cap, hold, max_holds if trim else 1, tolerance)
     bias, rest = holds[-1][0], holds[-1][1]
-    scale = _amplitude_steps(s, clock, bias, rest, low, high, st, stage_seconds, peak, amp, hold)
+    bias, scale, _ = _stages(s, clock, nominal, cal, bias, rest, low, high, st, stage_seconds, peak,
+                             (peak, cap) if trim else None, hold)
     rows = s.run(clock.commands(bias, scale, design.n_samples))
     s.relax()
     held = s.held_torque(rows)
@@ -304,8 +306,9 @@ class _Clock:
     multisine carries on into the record without a jump. :meth:`commands` of the next K ticks at a bias and a
     multisine scale, the dither at full."""
 
-    def __init__(self, design: ExperimentDesign, s: HandSession, amp: np.ndarray, dither: np.ndarray) -> None:
-        self.design, self.s, self.amp, self.dither, self.k = design, s, amp, dither, 0
+    def __init__(self, design: ExperimentDesign, s: HandSession, amp: np.ndarray, dither: np.ndarray,
+                 bias0: np.ndarray) -> None:
+        self.design, self.s, self.amp, self.dither, self.bias0, self.k = design, s, amp, dither, bias0, 0
 
     def commands(self, bias: np.ndarray, scale: float, n: int) -> np.ndarray:
         t = self.design.dt * (self.k + np.arange(n))
@@ -337,24 +340,46 @@ def _trim(s: HandSession, clock: _Clock, cal: Calibration, target: np.ndarray, b
     return holds
 
 
-def _amplitude_steps(s: HandSession, clock: _Clock, bias: np.ndarray, rest: np.ndarray, low: np.ndarray,
-                     high: np.ndarray, stages: np.ndarray, seconds: float, peak: np.ndarray, amp: np.ndarray,
-                     hold: float) -> float:
+def _stages(s: HandSession, clock: _Clock, nominal: Model, cal: Calibration, bias: np.ndarray, rest: np.ndarray,
+            low: np.ndarray, high: np.ndarray, stages: np.ndarray, seconds: float, peak: np.ndarray,
+            bounds: tuple[np.ndarray, np.ndarray] | None, hold: float) -> tuple[np.ndarray, float, list]:
     """Bring the multisine up stage by stage (the module docstring, step 4), on the ticks just before the record
-    (every stage runs, at the smaller of its step and the amplitude found to fit); the scale the record runs at."""
+    (every stage runs, at the smaller of its step and the amplitude found to fit), the bias corrected after each
+    where ``bounds`` (floor, cap) are given (:func:`_running_correction`); (bias, the scale the record runs at,
+    [(bias, scale, hand's mean counts, nominal's mean counts), ...] per stage)."""
     s.arm()
     n = max(2, int(round(seconds / s.period)))
     last = s.log().counts[-max(2, int(round(hold / s.period)) // 2):]
     swing_dither = np.max(np.abs(last - rest), axis=0)
-    room = np.minimum(high - rest, rest - low)
     ms_peak = np.maximum(peak - clock.dither, 0.0)  # the multisine's own peak over the record (N m)
-    allowed = 1.0
+    allowed, out = 1.0, []
     clock.k = -n * stages.size  # the record starts where the stages end
-    for a in stages:  # three steps or so
-        rows = s.run(clock.commands(bias, min(float(a), allowed), n))
+    for a in stages:  # three or four steps
+        scale = min(float(a), allowed)
+        rows = s.run(clock.commands(bias, scale, n))
+        counts = s.log().counts[rows]
         torque = np.max(np.abs(clock.multisine(rows, bias)), axis=0)
-        swing = np.maximum(np.max(np.abs(s.log().counts[rows] - rest), axis=0) - swing_dither, 0.0)
-        full = np.where(torque > 0, swing / np.maximum(torque, 1e-300), 0.0) * ms_peak * (amp > 0)
+        mid = counts[n // 2:].mean(axis=0)
+        room = np.minimum(high - mid, mid - low)
+        swing = np.maximum(np.max(np.abs(counts - mid), axis=0) - swing_dither, 0.0)
+        full = np.where(torque > 0, swing / np.maximum(torque, 1e-300), 0.0) * ms_peak * (clock.amp > 0)
         fit = np.where(full > 0, (room / FOLD_PEAKS - swing_dither) / np.maximum(full, 1e-300), np.inf)
         allowed = min(allowed, float(np.clip(np.min(fit), 0.0, 1.0)))
-    return min(float(stages[-1]), allowed)
+        ref = _nominal_mean(nominal, clock, s.log().command[rows] - bias, n)
+        out.append((bias.copy(), scale, mid, ref))
+        if bounds is not None:
+            bias = np.clip(bias + STEP_GAIN * (cal.torque_at(ref) - cal.torque_at(mid)), *bounds)
+    return bias, min(float(stages[-1]), allowed), out
+
+
+def _nominal_mean(nominal: Model, clock: _Clock, excitation: np.ndarray, n: int) -> np.ndarray:
+    """(m,) counts: the nominal finger's mean encoder reading over the second half of ``n`` ticks of ``excitation``
+    (n, m), N m, about the nominal bias, from its rest under the first torque: what the hand's mean over the same
+    stage is trimmed to (the designed trajectory's, not the static rest's: under the multisine the mean reading of a
+    finger close to its fold moves off its rest, by 150 counts on the MuJoCo stand-in's finger3)."""
+    design = clock.design
+    u = excitation + clock.bias0
+    g = np.asarray(design.orientations[0], dtype=float)
+    x = _simulate(nominal, design, u, np.repeat(g[None], n, 0), np.zeros(n, dtype=int))
+    y = np.asarray(_reading(nominal, x[:, : nominal.n].T), dtype=float).reshape(-1, n).T  # (n, m) rad
+    return y[n // 2:].mean(axis=0) * nominal.transmission.counts_per_rev / (2 * np.pi)
