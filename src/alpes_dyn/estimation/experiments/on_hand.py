@@ -155,7 +155,8 @@ def designed_torque(nominal: Model, design: ExperimentDesign | None = None
     """
     design = _checked_design(design)
     g = _one_orientation(design)
-    _check_sprung(nominal)
+    if not isinstance(nominal, Model) or nominal.transmission is None:
+        raise InputError(f"nominal: expected an alpes_dyn Model with motors, got {type(nominal).__name__}")
     bias, amp = _excitation(nominal, design)
     t = design.dt * np.arange(design.n_samples)
     u = _profiles(design, t, bias, amp, dither_amplitude(nominal, design))
