@@ -16,7 +16,8 @@ __all__ = ["cmd_experiment"]
 
 
 def cmd_experiment(args: argparse.Namespace) -> int:
-    """Simulate the documented identification experiment and write its recording."""
+    """Simulate the documented identification experiment and write its recording; with ``--design-only`` write its
+    torque profile, with ``--bench mujoco`` run it on the MuJoCo stand-in (:mod:`alpes_dyn.cli.on_hand_cmds`)."""
     from ..model.description import model_params
     from ..estimation.experiments.adapt import adapted_experiment
     from ..estimation.experiments.experiment import EXPERIMENT_MODELS, ExperimentDesign, perturbed_params
@@ -24,6 +25,10 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
     if not (math.isfinite(args.amplitude) and 0 < args.amplitude <= 1):
         raise InputError(f"--amplitude: expected a fraction in (0, 1], got {args.amplitude!r}")
+    if args.design_only or args.bench is not None:  # no simulated truth: the torque alone, or a hand through its interface
+        from .on_hand_cmds import experiment_on_hand
+
+        return experiment_on_hand(args)
     if _is_urdf_path(args.model):
         return _experiment_robot(args)
     for flag, value in (("--true-spec", args.true_spec), ("--true-model", args.true_model)):

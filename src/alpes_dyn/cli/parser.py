@@ -375,7 +375,15 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                         "hanging: fingers down; both (one finger): half palm up, half hung, each its own run (the "
                         "masses' split pinned). Each checks the whole record first and says what it chose")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
-    s.add_argument("-o", "--output", required=True, metavar="FILE.csv", help="the recording to write")
+    s.add_argument("--design-only", action="store_true",
+                   help="write the experiment's torque profile designed on --params (columns t in s, torque_<motor> in "
+                        "N m, one row per 1 ms sample) for a hand you drive with your own tools, instead of a recording")
+    s.add_argument("--bench", choices=("mujoco",), default=None,
+                   help="run the experiment on a hand through the hardware interface: mujoco, the MuJoCo stand-in "
+                        "(finger2, finger3; a real hand's effects; its finger drawn by --perturb, --seed and hidden): "
+                        "calibration, the bias trimmed on the hand, the guarded run; exit 3 where the guard stops it")
+    s.add_argument("-o", "--output", required=True, metavar="FILE.csv",
+                   help="the recording to write (with --design-only: the torque profile)")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.set_defaults(func=cmd_experiment)
 

@@ -1,0 +1,144 @@
+"""``experiment --design-only`` and ``experiment --bench mujoco``: the identification experiment without a simulated
+truth.
+
+``alpes-dyn experiment --model finger3 --design-only -o torque.csv`` writes the experiment's motor torque as designed
+on the nominal model (``--params``: the file the experimenter starts from), for a user who plays it on their hand
+with their own tools. The CSV: a header line, then one row per sample at the design's rate (1 kHz; ``--duration``
+s, 4 by default):
+
+=================== ===== =============================================================================
+column              unit  meaning
+=================== ===== =============================================================================
+``t``               s     the sample's time, from 0, uniform (the period 1 / rate: 1e-3 s)
+``torque_<motor>``  N m   the motor torque to apply from this row's time to the next (bias, multisine,
+                          dither); ``<motor>`` the model's motor name (``finger`` on finger2, finger3)
+=================== ===== =============================================================================
+
+The bias is the nominal finger's (no finger to trim it on): on a real finger it leaves the motion 3 to 9 degrees off
+the designed trajectory, and a soft finger can reach its stop. The command prints the encoder reading (counts) the
+bias should hold the finger at, so that the user can trim it; ``--bench`` does that on the hand itself.
+
+``alpes-dyn experiment --model finger3 --bench mujoco -o rec.csv`` runs the whole experiment through the hardware
+interface on the MuJoCo stand-in (:class:`~alpes_dyn.bench.mujoco_hand.MujocoHand`, a real hand's effects, its
+parameters drawn from ``--params`` by ``--perturb`` and ``--seed`` and hidden from the experiment): the calibration
+(:func:`~alpes_dyn.estimation.experiments.calibration.calibrate`), then the guarded experiment
+(:func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment`), designed on ``--params``; the recording is the
+documented CSV that ``alpes-dyn identify`` reads. A guard trip (the encoder near a stop, a missed period) relaxes the
+finger, writes nothing and exits 3 with its reason.
+"""
+
+from __future__ import annotations
+
+import argparse
+
+from ..errors import InputError
+from .common import _check_run_files, _emit
+
+__all__ = ["experiment_on_hand", "GUARD_EXIT"]
+
+GUARD_EXIT = 3
+"""The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file)."""
+
+_NOT_WITH = (("--true-spec", "true_spec"), ("--true-model", "true_model"), ("--spec", "spec"))
+
+
+def _checked(args: argparse.Namespace) -> None:
+    """One line for every option that does not go with --design-only / --bench, before any work."""
+    mode = "--design-only" if args.design_only else f"--bench {args.bench}"
+    if args.design_only and args.bench is not None:
+        raise InputError("--bench: runs the experiment on a hand; --design-only writes its torque alone (one of them)")
+    for flag, dest in _NOT_WITH:
+        if getattr(args, dest) is not None:
+            raise InputError(f"{flag}: goes with a URDF --model's simulated experiment, not {mode} (an Alpes "
+                             "finger's)")
+    models = ("finger2", "finger3", "thumb") if args.design_only else ("finger2", "finger3")
+    if args.model not in models:
+        raise InputError(f"--model: {mode} is defined for {', '.join(models)}, got {args.model!r}")
+    if args.rig in ("hanging", "both"):
+        raise InputError(f"--rig {args.rig}: {mode} runs palm up (level); hang the hand and design for it in Python "
+                         "(ExperimentDesign(orientations=...))")
+    if args.design_only:
+        for flag, dest in (("--perturb", "perturb"), ("--true-params-out", "true_params_out")):
+            if getattr(args, dest) is not None:
+                raise InputError(f"{flag}: --design-only draws no true finger (the torque is designed on --params)")
+        if args.seed != 0:
+            raise InputError("--seed: --design-only has no noise to seed (the torque is designed on --params)")
+    else:
+        if args.chain is not None:
+            raise InputError(f"--chain: the MuJoCo stand-in is one finger ({args.model}) of the shipped file")
+        if args.perturb is None and args.true_params_out is not None:
+            raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
+    _check_run_files(args, {"-o": ("csv",)})
+
+
+def experiment_on_hand(args: argparse.Namespace) -> int:
+    """``experiment --design-only`` or ``experiment --bench mujoco`` (the module docstring)."""
+    from ..estimation.experiments.design import ExperimentDesign
+    from ..model.params import load_params
+    from ..model.robot import Model
+
+    _checked(args)
+    nominal_params = load_params(args.params)
+    nominal = Model.alpes(args.model, friction=True, params=nominal_params, chain=args.chain)
+    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude)
+    if args.design_only:
+        return _design_only(args, nominal, design)
+    return _bench(args, nominal, nominal_params, design)
+
+
+def _design_only(args: argparse.Namespace, nominal, design) -> int:
+    from ..estimation.experiments.on_hand import designed_torque, write_torque_profile
+
+    t, u, target = designed_torque(nominal, design)
+    names = nominal.transmission.motor_names
+    write_torque_profile(args.output, t, u, names)
+    cols = ["t"] + [f"torque_{n}" for n in names]
+    obj = {"model": args.model, "output": args.output, "samples": int(t.size), "rate_hz": 1.0 / design.dt,
+           "duration_s": float(t[-1]), "columns": cols, "units": {"t": "s", **{c: "N m" for c in cols[1:]}},
+           "target_counts": {n: float(c) for n, c in zip(names, target)},
+           "torque_range_nm": {n: [float(u[:, k].min()), float(u[:, k].max())] for k, n in enumerate(names)}}
+    text = (f"{args.model}: the identification experiment's torque, {t.size} samples at {1 / design.dt:g} Hz "
+            f"({', '.join(cols)}; s, N m) written to {args.output}\n  designed on the nominal model: trim the bias "
+            "on your hand until the encoder rests at " + ", ".join(f"{c:.0f} counts ({n})" for n, c in
+                                                                     zip(names, target)))
+    _emit(obj, text, args.json)
+    return 0
+
+
+def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
+    import sys
+
+    from ..bench.mujoco_hand import MujocoHand
+    from ..estimation.experiments.calibration import calibrate
+    from ..estimation.experiments.draws import perturbed_params
+    from ..estimation.experiments.excursion import excursion_report
+    from ..estimation.experiments.hand_session import GuardTripped
+    from ..estimation.experiments.on_hand import run_experiment
+    from ..model.params import write_params
+
+    truth = nominal_params if args.perturb is None else perturbed_params(nominal_params, args.perturb, args.seed)
+    hw = MujocoHand(args.model, truth, seed=args.seed)
+    try:
+        cal = calibrate(hw, nominal)
+        res = run_experiment(hw, nominal, design, cal, path=args.output)
+    except GuardTripped as trip:
+        sys.stderr.write(f"alpes-dyn: experiment stopped: {trip} (no recording written)\n")
+        return GUARD_EXIT
+    finally:
+        hw.close()
+    if args.true_params_out is not None:
+        write_params(truth, args.true_params_out, header=f"true parameters of the MuJoCo stand-in drawn by alpes-dyn "
+                                                         f"experiment --bench (spread {args.perturb:g}, seed {args.seed})")
+    rec = res.recording
+    obj = {"model": args.model, "bench": args.bench, "output": args.output, "samples": rec.n_samples,
+           "duration_s": rec.duration, "dt_s": rec.dt, "columns": list(rec.columns()),
+           "true_params": args.true_params_out,
+           "calibration": {k: v for k, v in cal.to_dict().items() if not k.startswith("curve")},
+           "run": res.to_dict(), **excursion_report(rec)}
+    text = (f"{args.model}: identification experiment on the MuJoCo stand-in, {rec.n_samples} samples over "
+            f"{rec.duration:g} s written to {args.output}\n  calibration: rest "
+            f"{', '.join(f'{v:.0f}' for v in cal.rest)} counts, usable range {', '.join(f'{a:.0f}-{b:.0f}' for a, b in zip(cal.low, cal.high))} counts"
+            f"\n  trim: bias {', '.join(f'{b:.5g}' for b in res.bias)} N m (nominal "
+            f"{', '.join(f'{b:.5g}' for b in res.nominal_bias)}), multisine at {res.amplitude_scale:.2g} of the design's")
+    _emit(obj, text, args.json)
+    return 0
