@@ -93,7 +93,10 @@ class HardwareInterface(Protocol):
 def check_command(command: Sequence[float], m: int, tau_max: float) -> np.ndarray:
     """``command`` as an (m,) array of motor torques (N m) in [0, ``tau_max``]; :class:`~alpes_dyn.InputError`
     naming ``command`` otherwise (wrong shape, NaN or inf, negative: a cable only pulls, above ``tau_max``)."""
-    u = np.atleast_1d(np.asarray(command, dtype=float))
+    try:
+        u = np.atleast_1d(np.asarray(command, dtype=float))
+    except (TypeError, ValueError):
+        raise InputError(f"command: expected {m} motor torque(s) in N m, got {command!r:.80}") from None
     if u.shape != (m,):
         raise InputError(f"command: expected {m} motor torque(s) in N m, got shape {u.shape}")
     if not np.isfinite(u).all():

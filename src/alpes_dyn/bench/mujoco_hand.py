@@ -50,7 +50,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError, ModelError
-from ..model.mjcf import palm_down_params
+from ..model.mjcf import joint_permutation, palm_down_params
 from ..model.params import HandParams
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
@@ -58,7 +58,7 @@ from .effects import PlantEffects, _number, real_hand_effects
 from .interface import Reading, check_command
 from .mujoco_plant import as_params, block_plant, free_plant, passive_forces, plant_model
 
-__all__ = ["MujocoHand", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
+__all__ = ["MujocoHand", "scoring_joint_angles", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
 HAND_MODELS: tuple[str, ...] = ("finger2", "finger3", "hand")
 """The models the stand-in is built for: a finger, or the hand's five chains (free scene only)."""
@@ -169,6 +169,7 @@ class MujocoHand:
         self.motor_names, self.counts_per_rev, self.tau_max = tuple(motors), int(tr.counts_per_rev), float(p.tau_max)
         self.closed = False
         self._data, self._k, self._gain = d, 0, 1.0 + e0.torque_constant_error
+        self._joints = joint_permutation(mj, truth.joint_names)  # qpos of the joints, for scoring_joint_angles
         self._rng = np.random.default_rng(seed)
         touch = {"F": "flexiforce_finger"} if scene == "block" else {}  # the finger's chain
         # mj_step's position sensors are those of the state before its last integration: recomputed at the tick
@@ -235,3 +236,15 @@ class MujocoHand:
         """Relax the hand (the motor's control at 0) and refuse further writes."""
         self._data.ctrl[:] = 0.0
         self.closed = True
+
+
+def scoring_joint_angles(hw: MujocoHand) -> np.ndarray:
+    """The stand-in's true joint angles at its current tick, rad, (n,) in its model's joint order.
+
+    For the tests and benchmarks that score an estimate (or check that no stop was reached) against the truth they
+    drew; nothing that runs on a hand calls it (a real hand has no such reading). Raises
+    :class:`~alpes_dyn.InputError` for anything but a :class:`MujocoHand`.
+    """
+    if not isinstance(hw, MujocoHand):
+        raise InputError(f"hw: the true joint angles are the MuJoCo stand-in's, got {type(hw).__name__}")
+    return np.asarray(hw._data.qpos[hw._joints], dtype=float).copy()
