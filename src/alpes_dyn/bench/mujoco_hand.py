@@ -58,7 +58,7 @@ from .effects import PlantEffects, _number, real_hand_effects
 from .interface import Reading, check_command
 from .mujoco_plant import as_params, block_plant, free_plant, passive_forces, plant_model
 
-__all__ = ["MujocoHand", "scoring_joint_angles", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
+__all__ = ["MujocoHand", "scoring_truth", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
 HAND_MODELS: tuple[str, ...] = ("finger2", "finger3", "hand")
 """The models the stand-in is built for: a finger, or the hand's five chains (free scene only)."""
@@ -169,7 +169,7 @@ class MujocoHand:
         self.motor_names, self.counts_per_rev, self.tau_max = tuple(motors), int(tr.counts_per_rev), float(p.tau_max)
         self.closed = False
         self._data, self._k, self._gain = d, 0, 1.0 + e0.torque_constant_error
-        self._joints = joint_permutation(mj, truth.joint_names)  # qpos of the joints, for scoring_joint_angles
+        self._joints = joint_permutation(mj, truth.joint_names)  # qpos of the joints, for scoring_truth
         self._rng = np.random.default_rng(seed)
         touch = {"F": "flexiforce_finger"} if scene == "block" else {}  # the finger's chain
         # mj_step's position sensors are those of the state before its last integration: recomputed at the tick
@@ -238,13 +238,15 @@ class MujocoHand:
         self.closed = True
 
 
-def scoring_joint_angles(hw: MujocoHand) -> np.ndarray:
-    """The stand-in's true joint angles at its current tick, rad, (n,) in its model's joint order.
+def scoring_truth(hw: MujocoHand) -> tuple[np.ndarray, float]:
+    """The stand-in's truth at its current tick: the joint angles (rad, (n,) in its model's joint order) and the
+    contact force (N, MuJoCo's touch sensor without the FlexiForce's noise and quantisation; NaN in the free scene).
 
-    For the tests and benchmarks that score an estimate (or check that no stop was reached) against the truth they
-    drew; nothing that runs on a hand calls it (a real hand has no such reading). Raises
+    For the tests and benchmarks that score an estimate or a force loop (or check that no stop was reached) against
+    the truth they drew; nothing that runs on a hand calls it (a real hand has no such reading). Raises
     :class:`~alpes_dyn.InputError` for anything but a :class:`MujocoHand`.
     """
     if not isinstance(hw, MujocoHand):
-        raise InputError(f"hw: the true joint angles are the MuJoCo stand-in's, got {type(hw).__name__}")
-    return np.asarray(hw._data.qpos[hw._joints], dtype=float).copy()
+        raise InputError(f"hw: the truth is the MuJoCo stand-in's, got {type(hw).__name__}")
+    force = float(np.asarray(hw._plant.output(hw._k, {})["F"]).sum()) if hw.scene == "block" else math.nan
+    return np.asarray(hw._data.qpos[hw._joints], dtype=float).copy(), force
