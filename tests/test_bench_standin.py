@@ -13,12 +13,21 @@ pytest.importorskip("mujoco")
 
 from alpes_dyn.bench import HardwareInterface, MujocoHand, PlantEffects, play, real_hand_effects  # noqa: E402
 from alpes_dyn.bench.effects import CABLE_STIFFNESS, cable_damping  # noqa: E402
+from alpes_dyn.bench.mujoco_hand import SETTLE_S, scoring_truth  # noqa: E402
+from alpes_dyn.bench.mujoco_plant import plant_model  # noqa: E402
 from alpes_dyn.control.plants import mujoco_recording  # noqa: E402
 from alpes_dyn.errors import InputError  # noqa: E402
 from alpes_dyn.model.params import HandParams, load_params  # noqa: E402
 from alpes_dyn.model.robot import Model  # noqa: E402
 
 QUIET = {"encoder_noise_counts": 0.0, "torque_noise": 0.0, "force_noise": 0.0}
+
+
+def _rest(model: str, effects: PlantEffects | None) -> np.ndarray:
+    """The joints' rest under springs and gravity, motor off, stops ignored: the recording plant's default start,
+    given to the stand-in as ``q0`` (its own default settles against the stops first)."""
+    m = plant_model(model, None, effects)
+    return m.static_equilibrium(None, np.zeros(m.n), fixed=m.springless_joints, tau_m=np.zeros(m.transmission.n_motors))
 
 
 def _profile(n: int = 600, top: float = 0.02) -> np.ndarray:
@@ -41,7 +50,7 @@ def test_free_scene_reads_what_the_recording_plant_records(effects):
     k (the reading of a period comes at the tick that ends it; the recording pairs it with the period's start), to
     1e-12, with the torque delay and the torque constant's error of a real hand, or the smooth-friction callback."""
     u = _profile()
-    out = play(MujocoHand("finger3", effects=effects, **QUIET), u)
+    out = play(MujocoHand("finger3", effects=effects, q0=_rest("finger3", effects), **QUIET), u)
     rec = _recorded(u, effects, encoder_noise_counts=0.0, torque_noise=0.0)
     assert out["counts"].shape == rec.encoder.shape == (601, 1)
     np.testing.assert_array_equal(out["counts"], rec.encoder)
@@ -58,7 +67,7 @@ def test_the_hands_chains_read_what_each_chains_recording_plant_records():
     the recording plant of that chain alone (finger3 on the index's parameters, the thumb with its abduction motor at
     0), the chains being apart in MuJoCo: to a count at a rounding's edge, the torques to 1e-12."""
     e, u = real_hand_effects(), _profile(300)
-    hw = MujocoHand("hand", effects=e, **QUIET)
+    hw = MujocoHand("hand", effects=e, q0=_rest("hand", e), **QUIET)
     assert hw.motor_names == ("index", "middle", "ring", "little", "thumb", "thumb_abduction")
     out = play(hw, np.hstack([np.repeat(u, 5, axis=1), 0 * u]))
     applied = np.vstack([u, u[-1:]]) / (1.0 + e.torque_constant_error)
@@ -76,12 +85,13 @@ def test_free_scene_noise_is_seeded_and_of_the_recordings_size():
     """Noise on: the same seed gives the same readings, another seed others; the torque's and the encoder's noise
     (about the noise-free readings) of the size of the recording plant's, 5e-4 N m and sqrt(0.5^2 + 1/12) counts."""
     e, u = real_hand_effects(), _profile(800)
-    a, b = play(MujocoHand(effects=e, seed=4), u), play(MujocoHand(effects=e, seed=4), u)
-    c = play(MujocoHand(effects=e, seed=5), u)
+    q0 = _rest("finger3", e)
+    a, b = play(MujocoHand(effects=e, seed=4, q0=q0), u), play(MujocoHand(effects=e, seed=4, q0=q0), u)
+    c = play(MujocoHand(effects=e, seed=5, q0=q0), u)
     for key in ("counts", "torque"):
         np.testing.assert_array_equal(a[key], b[key])
     assert not np.array_equal(a["torque"], c["torque"])
-    clean = play(MujocoHand(effects=e, **QUIET), u)
+    clean = play(MujocoHand(effects=e, q0=q0, **QUIET), u)
     rec, rec0 = _recorded(u, e, seed=4), _recorded(u, e, encoder_noise_counts=0.0, torque_noise=0.0)
     mine = (np.std(a["torque"] - clean["torque"]), np.std(a["counts"] - clean["counts"]))
     theirs = (np.std(rec.torque - rec0.torque), np.std(rec.encoder - rec0.encoder))
@@ -149,3 +159,18 @@ def test_real_hand_cable_is_the_realism_studys():
     study = cases(k_t, c_t)["all"]
     assert dataclasses.replace(study, tendon_stiffness=CABLE_STIFFNESS, tendon_damping=cable_damping(CABLE_STIFFNESS)) \
         == real_hand_effects()
+
+
+def test_free_finger_starts_settled_against_its_stops():
+    """Palm up, the springs' and gravity's rest lies beyond the lower stops (the recording plant starts there); the
+    stand-in's default start is the finger left to rest for SETTLE_S against them: every joint within 5 degrees of
+    its range, still (the encoder and the joints unchanged over 0.3 s of rest)."""
+    free = _rest("finger3", real_hand_effects())
+    m = plant_model("finger3")
+    assert (free < m.lower - np.radians(10)).any()  # the case this start is for
+    hw = MujocoHand("finger3", **QUIET)
+    q = scoring_truth(hw)[0]
+    assert (q > m.lower - np.radians(5)).all() and (q < m.upper).all()
+    out = play(hw, np.zeros((300, 1)))
+    assert np.ptp(out["counts"]) <= 2 and np.abs(scoring_truth(hw)[0] - q).max() < np.radians(0.05)
+    assert SETTLE_S >= 0.5

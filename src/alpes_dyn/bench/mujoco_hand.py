@@ -68,6 +68,8 @@ PERIOD = 1e-3
 """The stand-in's sample period, s (the hand's 1 kHz loop)."""
 SUBSTEPS = {"free": 10, "block": 4}
 """MuJoCo steps per period of each scene (RK4 at 0.1 ms as the recordings', the force loop's 0.25 ms)."""
+SETTLE_S = 1.0
+"""s: how long the free finger rests, motor off, before the first tick (its default start)."""
 
 
 def _mujoco() -> Any:
@@ -159,6 +161,8 @@ class MujocoHand:
             at_rest = np.zeros(truth.transmission.n_motors)  # the motor off
             mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, at_rest)
             self._passive = passive_forces(mj, truth, e0)
+            if q0 is None:
+                self._settle(mj, d, truth)
         else:
             mj, d, truth = block_plant(model, palm_down_params(p), e, None, PERIOD / sub, q0)
             self._passive = None
@@ -183,6 +187,25 @@ class MujocoHand:
         # the torque readings of the last d + 1 periods, the oldest read now (before the start: the motor at rest)
         self._torques = deque([self._measured_torque(np.zeros(m))] * (e0.torque_delay + 1))
         self._reading = self._sense()
+
+    def _settle(self, mj: Any, d: Any, truth: Any) -> None:
+        """The free finger left to rest, motor off, for :data:`SETTLE_S` before the first tick: the rest the
+        springs and gravity find may lie beyond a joint stop (palm up), where the stop holds the finger; the
+        joints start clipped into their range and MuJoCo settles them against the stops."""
+        mujoco = self._mujoco
+        perm = joint_permutation(mj, truth.joint_names)
+        d.qpos[perm] = np.clip(d.qpos[perm], truth.lower, truth.upper)
+        d.ctrl[:] = 0.0
+        previous = mujoco.get_mjcb_passive()
+        if self._passive is not None:
+            mujoco.set_mjcb_passive(self._passive)
+        try:
+            mujoco.mj_forward(mj, d)
+            mujoco.mj_step(mj, d, nstep=int(round(SETTLE_S / mj.opt.timestep)))
+        finally:
+            mujoco.set_mjcb_passive(previous)
+        d.time = 0.0
+        mujoco.mj_forward(mj, d)
 
     @property
     def t(self) -> float:
