@@ -2,8 +2,8 @@
 
 The classical covariance of a least-squares fit, s^2 (J'J)^-1 (here the parameters' block of the undamped KKT
 inverse of the multiple-shooting problem, scaled by the residual variance s^2), holds where the residual is white.
-Where the model misses an effect (stick-slip friction on a smooth friction law), the residual is coloured and the
-errors of the parameters are several times those standard errors (issue 50: MuJoCo stick-slip, RMS of
+Where the model misses an effect (stick-slip friction on a smooth friction law), the residual can be coloured, and
+the errors of the parameters several times those standard errors (issue 50: MuJoCo stick-slip, RMS of
 error / sigma 3.3). The sandwich replaces the white residual's s^2 J'J in the middle by the long-run covariance of
 the gradient's contributions:
 
@@ -22,15 +22,20 @@ smallest lag with W >= :data:`WINDOW_C` tau(W)), the largest over the encoders, 
 optimum). White: W = 5 samples; an AR(1) residual of coefficient 0.7: about 30.
 
 The series h_t is per sample (:func:`influence`): from the fit's Jacobian J, or, where a long record holds it compact
-(:mod:`~alpes_dyn.estimation.identification.normal_blocks`), from one more pass over its chunks (the same numbers;
-on finger3 at 600 s a few seconds of a fit of minutes).
+(:mod:`~alpes_dyn.estimation.identification.normal_blocks`), from one more pass over its chunks (the same numbers,
+for the cost of one Gauss-Newton iteration's Jacobian).
 
 What a fit reports (:func:`reported_covariance`): each parameter's variance the larger of the classical and the
 robust one. Not the robust alone: on a white residual the sandwich is the classical covariance plus its sampling
-error (a sum of squares of the data instead of s^2 times a model's matrix: +-10-20 % on short records) and Bartlett's
-weights bias it low; the classical is what the sensor noise alone leaves, a floor. Where the residual is coloured
-the robust one is the larger, and the fit's errors follow it (the measurements in the fit's JSON,
-``standard_errors``).
+error (a sum of squares of the data instead of s^2 times a model's matrix: 0.91-1.03 times it on 4 s fits of the
+library's own simulator) and Bartlett's weights bias it low; the classical is what the sensor noise alone leaves, a
+floor. Where the residual is coloured the robust one is the larger (up to 3 times on a MuJoCo stick-slip fit whose
+residual is correlated over 150 samples, where the errors were 5.7 classical standard errors RMS, 3.1 robust ones).
+
+What it cannot see: a model error that leaves the residual white at the sensor floor. On MuJoCo's stick-slip
+finger3 palm up the fits called adequate have F_s_2 9-20 % high with a residual window of 6-8 samples; the sandwich
+is then the classical covariance and their friction errors stay 3-5 standard errors (springs and masses are
+covered). No covariance of the residual covers an error the residual does not show.
 """
 
 from __future__ import annotations
