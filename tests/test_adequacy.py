@@ -238,6 +238,7 @@ def test_identified_file_of_a_trusted_fit_records_it(tmp_path, fits):
     ("[identification.finger]\nfoo = 1\n", r"identification.finger.foo: unknown key"),
     ("[identification.finger]\nresidual_rms = -1.0\n", r"residual_rms: expected a non-negative number"),
     ("[identification.finger]\nlikely_missing = [1]\n", r"likely_missing: expected a list of strings"),
+    ("[identification.finger]\nstandard_errors = 1\n", r"standard_errors: expected a string"),
 ])
 def test_identification_record_errors(tmp_path, table, pattern):
     path = tmp_path / "p.toml"

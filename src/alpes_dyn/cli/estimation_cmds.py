@@ -226,6 +226,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     w = max(10, *(len(n) for n in res.names))
     for n, v, sd, i, u in zip(res.names, res.values, res.std, res.initial, res.units):
         lines.append(f"  {n:{w}s} {v:12.6g} {sd:10.3g} {i:12.6g}  {u}")
+    lines += [f"  {res.standard_errors.summary(res.names)}"] if res.standard_errors is not None else []  # which std
     for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.identification.bounds)
         lines.append(f"  {n:{w}s} not identified: {why}")
     lines += _drift_lines(res.drift)

@@ -61,6 +61,8 @@ def _chain_lines(chain: str, fit) -> list[str]:
     w = max(10, *(len(n) for n in res.names))
     lines += [f"    {n:{w}s} {v:12.6g} {sd:10.3g}  {u}" for n, v, sd, u in zip(res.names, res.values, res.std,
                                                                              res.units)]
+    if res.standard_errors is not None:  # which covariance each std is (estimation.identification.robust_covariance)
+        lines.append(f"    {res.standard_errors.summary(res.names)}")
     lines += [f"    {n:{w}s} not identified: {why}" for n, why in res.not_identified.items()]
     return lines
 

@@ -97,13 +97,16 @@ SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
 IDENTIFICATION_FIELDS: dict[str, type] = {
     "model": str, "recording": str, "converged": bool, "stop": str, "adequate": bool, "trustworthy": bool,
     "verdict": str, "likely_missing": list, "residual_rms": float, "sensor_floor": float, "not_identified": list,
+    "standard_errors": str,
 }
 """Fields of a table ``[identification.<chain>]`` (each optional): the model fitted, the recording, whether
 the fit converged and why it stopped, the adequacy verdict (``adequate``, its one-line ``verdict``, the
 ``likely_missing`` effects), ``trustworthy`` (converged and adequate: false only in a file written with
 ``alpes-dyn identify --force``), the residual and the sensor floor (counts RMS), and ``not_identified``: each
 parameter the fit did not identify, with why and the effect the data do not support (its value never written:
-:mod:`~alpes_dyn.estimation.identification.bounds`)."""
+:mod:`~alpes_dyn.estimation.identification.bounds`), and ``standard_errors``: how the ``std`` written were made
+(the larger of the classical and the robust HAC sandwich's, which parameters the robust one:
+:mod:`~alpes_dyn.estimation.identification.robust_covariance`)."""
 
 
 @dataclass(frozen=True)

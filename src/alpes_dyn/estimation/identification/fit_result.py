@@ -17,7 +17,40 @@ from ...symbolic.parametric import parameter_catalogue
 from .adequacy import Adequacy, _finite
 from .bounds import describe
 
-__all__ = ["IdentificationResult", "identified_params"]
+__all__ = ["IdentificationResult", "StandardErrors", "identified_params"]
+
+
+@dataclass
+class StandardErrors:
+    """How a fit's standard errors were made (:mod:`~alpes_dyn.estimation.identification.robust_covariance`):
+    ``classical`` (p,) s^2 (J'J)^-1's, ``robust`` (p,) the HAC sandwich's (both in the parameters' units, inf where
+    the recording does not see one), ``robust_larger`` (p,) bool where the robust one is reported (the larger),
+    ``method`` the sandwich (:class:`~alpes_dyn.estimation.identification.robust_covariance.RobustCovariance`)."""
+
+    classical: np.ndarray
+    robust: np.ndarray
+    robust_larger: np.ndarray
+    method: Any = None
+
+    RULE = "max(classical, robust) per parameter"
+
+    def kind(self, i: int) -> str:
+        """``"robust"`` or ``"classical"``: which one parameter ``i`` reports."""
+        return "robust" if self.robust_larger[i] else "classical"
+
+    def summary(self, names: tuple[str, ...]) -> str:
+        """One line for the fit's table and file: the rule, the sandwich, the parameters whose robust error is
+        reported."""
+        which = [n for n, b in zip(names, self.robust_larger) if b]
+        how = self.method.describe() if self.method is not None else "HAC sandwich"
+        return (f"std = {self.RULE} ({how}); robust for {', '.join(which)}" if which
+                else f"std = {self.RULE} ({how}); classical for all")
+
+    def to_dict(self) -> dict[str, Any]:
+        out = {"rule": self.RULE}
+        if self.method is not None:
+            out.update(self.method.to_dict())
+        return out
 
 
 @dataclass
@@ -30,7 +63,8 @@ class IdentificationResult:
     correlation: (p, p). residual_rms: RMS encoder residual, counts. iterations, converged.
     seconds: wall time of the fit; compile_seconds: of it, compiling the sensitivity code (0 when
     cached). states: (S, 2n) fitted states at the shooting nodes; node_times (S,) s. solution: the shooting
-    variables, to start another fit from.
+    variables, to start another fit from. standard_errors: how ``std`` was made (classical and robust, which one
+    each parameter reports: :class:`StandardErrors`); ``std`` and ``correlation`` are of the covariance reported.
     """
 
     names: tuple[str, ...]
@@ -63,6 +97,7 @@ class IdentificationResult:
     ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}`` (the
     encoder offsets', with ``"offset"``) and ``"torque_scale": {motor: [...] (K+1,), 1 at the first knot}`` (the
     torque constants' scale relative to the first sample's, with ``"gain"``); else None."""
+    standard_errors: StandardErrors | None = field(default=None, repr=False)
 
     @property
     def trustworthy(self) -> bool:
@@ -80,14 +115,24 @@ class IdentificationResult:
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``alpes-dyn identify --json`` (an unbounded std, a parameter the data do not see, is null)."""
         return {
-            "parameters": {n: {"value": _finite(v), "std": _finite(s), "initial": _finite(i), "unit": u}
-                           for n, v, s, i, u in zip(self.names, self.values, self.std, self.initial, self.units)},
+            "parameters": {n: {"value": _finite(v), "std": _finite(s), "initial": _finite(i), "unit": u,
+                               **self._std_fields(k)}
+                           for k, (n, v, s, i, u) in enumerate(zip(self.names, self.values, self.std, self.initial,
+                                                                   self.units))},
+            "standard_errors": self.standard_errors.to_dict() if self.standard_errors is not None else None,
             "residual_rms": _finite(self.residual_rms), "residual_unit": "counts", "iterations": self.iterations,
             "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
             "not_identified": dict(self.not_identified), "drift": self.drift,
         }
+
+    def _std_fields(self, k: int) -> dict[str, Any]:
+        """Parameter ``k``'s classical and robust standard errors and which one ``std`` is (none without them)."""
+        se = self.standard_errors
+        if se is None:
+            return {}
+        return {"std_classical": _finite(se.classical[k]), "std_robust": _finite(se.robust[k]), "std_from": se.kind(k)}
 
     def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
         """The parameter set with the fitted values (see :func:`identified_params`)."""
@@ -289,6 +334,8 @@ def _record(result: IdentificationResult) -> dict[str, Any]:
         rec.update(adequate=bool(a.adequate), verdict=_printable(a.summary()), likely_missing=list(a.likely_missing))
         if math.isfinite(a.floor.total):
             rec["sensor_floor"] = float(a.floor.total)
+    if result.standard_errors is not None:
+        rec["standard_errors"] = _printable(result.standard_errors.summary(result.names))
     if result.not_identified:
         rec["not_identified"] = [_printable(f"{n}: {why}") for n, why in result.not_identified.items()]
     return rec

@@ -80,7 +80,8 @@ from .runs import aligned
 from .heldout import parts, project_torque, rest_guess, validate  # noqa: F401  (project_torque: its old home)
 from .runs import encoder_noise as run_noise
 from .drift import GAIN_NEEDS_LINES, check_drift, recorded_time
-from .fit_result import IdentificationResult, identified_params
+from .fit_result import IdentificationResult, StandardErrors, identified_params
+from .robust_covariance import reported_covariance, robust_covariance
 
 __all__ = ["IdentificationResult", "identify", "identified_params", "project_torque", "check_selection",
            "THUMB_PARAMETERS"]
@@ -462,8 +463,12 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     solve_Kz = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)  # undamped: the covariance
     Z = solve_Kz(pb.unit_p)  # (nz + nc, p): the covariance's columns, and how the optimum moves with each parameter
     solve_Kz = None  # not held through the effects' responses (the verdict factorises it again: _adequacy)
-    P_rho = Z[nv:nv + p] * s2
+    P_classical = Z[nv:nv + p] * s2
     theta = pb.values(out.glob)
+    x_fit, yhat = _fitted_output(pb, out, theta)
+    residual = pb.rec.encoder - yhat
+    robust = robust_covariance(pb, e, Z, s2, residual)
+    P_rho, robust_larger = reported_covariance(P_classical, robust.covariance)
     sd_rho = np.sqrt(np.maximum(np.diag(P_rho), 0.0))
     # a parameter the data do not see at the solution (its columns zero: tilt_x on a planar finger at a level
     # palm, seen only through cos tilt_x): the least-squares step left it at its start, its std is unbounded
@@ -475,21 +480,27 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         sd_rho = np.where(blind, np.inf, sd_rho)
         warnings.warn(f"identify: {', '.join(n_ for n_, b in zip(sens.names, blind) if b)}: no information in "
                       "this recording (the encoder does not see it here); left at its start, std inf", stacklevel=3)
+    to_theta = np.where(pb.additive, pb.scale, theta)  # the delta method on theta = theta_0 exp(rho)
     with np.errstate(invalid="ignore", over="ignore"):
         sd_c = np.where(np.isfinite(sd_rho), np.maximum(sd_rho, 1e-300), np.nan)
         corr = P_rho / np.outer(sd_c, sd_c)
-    x_fit, yhat = _fitted_output(pb, out, theta)
-    residual = pb.rec.encoder - yhat
 
     def judge():
         return _adequacy(pb, out, theta, x_fit, residual, val_rec, excitation, interval, encoder_noise)
     return IdentificationResult(
-        names=sens.names, values=theta, std=np.where(pb.additive, pb.scale, theta) * sd_rho, initial=pb.theta0,
+        names=sens.names, values=theta, std=to_theta * sd_rho, initial=pb.theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=pb.encoder_rms(e.r),
         iterations=it, converged=out.converged, seconds=time.perf_counter() - t_start,
         compile_seconds=sens.compile_seconds, states=out.nodes, node_times=pb.rec.t[np.arange(pb.n_int) * pb.L],
         model=pb.model, recording_path=rec_path, reason=reason, residual=residual, adequacy=None,
-        solution=pb.solution(out.nodes, out.offs, out.glob, Z[:pb.nz].copy()), drift=_drift_of(pb, out.glob)), judge
+        solution=pb.solution(out.nodes, out.offs, out.glob, Z[:pb.nz].copy()), drift=_drift_of(pb, out.glob),
+        standard_errors=StandardErrors(to_theta * _sd(P_classical, blind), to_theta * _sd(robust.covariance, blind),
+                                       robust_larger, robust)), judge
+
+
+def _sd(P: np.ndarray, blind: np.ndarray) -> np.ndarray:
+    """The standard errors (p,) of a covariance of rho, inf where the recording does not see the parameter."""
+    return np.where(blind, np.inf, np.sqrt(np.maximum(np.diag(P), 0.0)))
 
 
 def _drift_of(pb: ShootingProblem, glob: np.ndarray) -> dict[str, Any] | None:
