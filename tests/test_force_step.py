@@ -264,3 +264,24 @@ def test_closed_loop_on_the_mujoco_stand_in():
     contact = run.force > 0.05
     err = np.degrees(np.sqrt(np.mean((run.q_hat[contact] - np.array(q_true)[contact]) ** 2, axis=0)))
     assert contact.mean() > 0.6 and (err < 2.0).all(), err
+
+
+def test_a_urdf_robot_step_is_run_controls(tmp_path):
+    """A URDF + spec robot (test_anyrobot's tendon finger): the step's motor limit, gains and normal are
+    run_control's (robot_control_settings), its command (m,) has the pulling motor's entry; params refused."""
+    from test_anyrobot import FINGER_URDF, finger_spec
+
+    import alpes_dyn as ad
+    from alpes_dyn.control.finger_loop import ControlScenario, robot_control_settings
+
+    (tmp_path / "f.urdf").write_text(FINGER_URDF)
+    (tmp_path / "f.toml").write_text(finger_spec(Fs=(0.0, 0.0)) + "\n[rest_angle]\nmcp = 0.5\npip = 0.5\n")
+    robot = ad.Model.from_urdf_file(tmp_path / "f.urdf", tmp_path / "f.toml")
+    model, block, tau_max, gains = robot_control_settings(ControlScenario(model=robot, controller="sensor"))
+    s = ForceStep(robot, controller="sensor", compiled=False, compensation=NO_COMPENSATION)
+    assert s.tau_max == pytest.approx(tau_max, rel=1e-12) and s.controller.kp == pytest.approx(gains["kp"])
+    assert np.allclose(s.controller.normal, block.normal / np.linalg.norm(block.normal)) and s.design.frame == "fingertip"
+    u = s.step(np.zeros(s.m), np.zeros(s.m), 0.0, 0.3)
+    assert u.shape == (s.m,) and u[s.motor] > 0 and np.count_nonzero(u) == 1
+    with pytest.raises(InputError, match="^params: applies to the Alpes fingers"):
+        ForceStep(robot, "x.toml", compiled=False)
