@@ -285,3 +285,15 @@ def test_a_urdf_robot_step_is_run_controls(tmp_path):
     assert u.shape == (s.m,) and u[s.motor] > 0 and np.count_nonzero(u) == 1
     with pytest.raises(InputError, match="^params: applies to the Alpes fingers"):
         ForceStep(robot, "x.toml", compiled=False)
+
+
+def test_a_diverging_filter_is_named_and_leaves_the_state():
+    """A current in mA read as N m (2306 against a 0.05 N m limit): the EKF leaves any joint range within a few
+    samples; the step says so in one line naming the readings and keeps its last sane state."""
+    s = ForceStep("finger3", compiled=False)
+    with pytest.raises(InputError) as e:
+        for _ in range(50):
+            s.step([1e6], [2306.0], 0.1, 0.3)
+    msg = str(e.value)
+    assert msg.startswith("readings: the EKF diverged at sample") and "units" in msg and "\n" not in msg
+    assert np.isfinite(s.state).all() and (np.abs(s.state) < 1e6).all() and s.k < 50
