@@ -153,6 +153,8 @@ BAD_STEP = [
     (dict(frame="tip"), "frame: applies to a URDF + spec model"),
     (dict(torque_noise=-1.0), "torque_noise: expected a non-negative number"),
     (dict(normal=(0.0, 0.0, 0.0)), "normal: expected a non-zero 3-vector"),
+    (dict(contact_q=(0.5, math.nan, 0.4)), "contact_q: expected 3 finite joint angles in rad"),
+    (dict(model="finger2", contact_q=(0.5,)), "contact_q: expected 2 finite joint angles in rad"),
 ]
 
 

@@ -281,6 +281,7 @@ class ForceStep:
                 if v is not None:
                     raise InputError(f"{name}: applies to a URDF + spec model; the Alpes finger presses with its "
                                      "fingertip, its motor and its tau_max are the parameter file's")
+            _check_contact_q(contact_q, 2 if model == "finger2" else 3)
             p = params if isinstance(params, HandParams) else load_params(params)
             design = alpes_design(model, palm_down_params(p) if palm_down else p, controller, contact_q, comp,
                                   dict(gains or {}))
@@ -463,6 +464,18 @@ class ForceStep:
     def __repr__(self) -> str:
         return (f"ForceStep({self.model.name!r}, controller={self.kind!r}, dt={self.dt:g}, tau_max={self.tau_max:g}, "
                 f"sample {self.k})")
+
+
+def _check_contact_q(contact_q: Any, n: int) -> None:
+    """None, or at least ``n`` finite joint angles (rad; the first n are the finger's); InputError naming it."""
+    if contact_q is None:
+        return
+    try:
+        q = np.asarray(contact_q, dtype=float)
+    except (TypeError, ValueError):
+        q = np.array([np.nan])
+    if q.ndim != 1 or q.shape[0] < n or not np.isfinite(q).all():
+        raise InputError(f"contact_q: expected {n} finite joint angles in rad, got {contact_q!r}")
 
 
 def _check_kind(kind: Any) -> None:
