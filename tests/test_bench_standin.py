@@ -53,6 +53,25 @@ def test_free_scene_reads_what_the_recording_plant_records(effects):
         np.testing.assert_allclose(out["torque"][2:], u[:-1], rtol=0, atol=1e-12)
 
 
+def test_the_hands_chains_read_what_each_chains_recording_plant_records():
+    """The hand (free scene, a real hand's effects, noise off): the index's and the thumb's counts and torques those of
+    the recording plant of that chain alone (finger3 on the index's parameters, the thumb with its abduction motor at
+    0), the chains being apart in MuJoCo: to a count at a rounding's edge, the torques to 1e-12."""
+    e, u = real_hand_effects(), _profile(300)
+    hw = MujocoHand("hand", effects=e, **QUIET)
+    assert hw.motor_names == ("index", "middle", "ring", "little", "thumb", "thumb_abduction")
+    out = play(hw, np.hstack([np.repeat(u, 5, axis=1), 0 * u]))
+    applied = np.vstack([u, u[-1:]]) / (1.0 + e.torque_constant_error)
+    quiet = {"encoder_noise_counts": 0.0, "torque_noise": 0.0, "effects": e}
+    index = mujoco_recording("finger3", None, applied, chain="index", **quiet)
+    thumb = mujoco_recording("thumb", None, np.hstack([applied, 0 * applied]), **quiet)
+    for rec, cols in ((index, [0]), (thumb, [4, 5])):
+        d = out["counts"][:, cols] - rec.encoder
+        assert np.abs(d).max() <= 1 and (d == 0).mean() > 0.99
+        np.testing.assert_allclose(out["torque"][1:, cols], rec.torque[:-1], rtol=0, atol=1e-12)
+    assert np.ptp(out["counts"][:, :5], axis=0).min() > 500 and np.isnan(out["force"]).all()
+
+
 def test_free_scene_noise_is_seeded_and_of_the_recordings_size():
     """Noise on: the same seed gives the same readings, another seed others; the torque's and the encoder's noise
     (about the noise-free readings) of the size of the recording plant's, 5e-4 N m and sqrt(0.5^2 + 1/12) counts."""
@@ -107,6 +126,7 @@ def test_the_stand_in_is_an_interface_that_hides_its_truth(tmp_path):
 
 @pytest.mark.parametrize("kw, field", [
     ({"model": "finger4"}, "model"), ({"model": "thumb"}, "model"), ({"scene": "table"}, "scene"),
+    ({"model": "hand", "scene": "block"}, "scene"),
     ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"seed": True}, "seed"), ({"effects": "all"}, "effects"),
     ({"effects": 3}, "effects"), ({"encoder_noise_counts": -1.0}, "encoder_noise_counts"),
     ({"force_noise": float("nan")}, "force_noise"), ({"params": 5}, "params"), ({"q0": [0.1]}, "q0"),

@@ -1,5 +1,5 @@
 """The MuJoCo stand-in for a hand on the bench: a :class:`~alpes_dyn.bench.interface.HardwareInterface` on a
-MuJoCo finger with a real hand's effects, its truth hidden behind the interface.
+MuJoCo finger (or the hand) with a real hand's effects, its truth hidden behind the interface.
 
 :class:`MujocoHand` is the reference hand that the tests and benchmarks drive as a user drives their own: its
 parameters (the "true" finger, drawn by the caller) and its state stay private; what it shows is what a driver
@@ -8,11 +8,15 @@ shows -- the encoder counts, the motor torque read from the current, the fingert
 
 The plant (:mod:`alpes_dyn.bench.mujoco_plant`), in one of two scenes:
 
-* ``"free"``: the finger moving freely (joint stops on, contact off; RK4 at 0.1 ms), as
-  :func:`~alpes_dyn.control.plants.mujoco_recording` records it; no force sensor (the force reads NaN);
-* ``"block"``: the finger palm down over the block of the force loop (contact on, MuJoCo's joint friction, at
-  0.25 ms), as :func:`~alpes_dyn.control.finger_loop.run_control` presses it; the FlexiForce reads MuJoCo's touch
-  sensor.
+* ``"free"``: the finger (or the hand's five chains) moving freely (joint stops on, contact off; RK4 at 0.1 ms),
+  as :func:`~alpes_dyn.control.plants.mujoco_recording` records a finger; no force sensor (the force reads NaN);
+* ``"block"`` (a finger): the finger palm down over the block of the force loop (contact on, MuJoCo's joint
+  friction, at 0.25 ms), as :func:`~alpes_dyn.control.finger_loop.run_control` presses it; the FlexiForce reads
+  MuJoCo's touch sensor.
+
+The hand's thumb abduction motor drives its joint both ways in MuJoCo (its range +-tau_max), but takes commands in
+[0, tau_max] through the interface, as every motor (:func:`~alpes_dyn.bench.interface.check_command`): at 0 its
+joint, which has no spring, is left to its friction and its stops.
 
 The effects (:class:`~alpes_dyn.bench.effects.PlantEffects`, default a real hand's:
 :func:`~alpes_dyn.bench.effects.real_hand_effects`) and the sensors, as the library's own runs have them:
@@ -56,8 +60,8 @@ from .mujoco_plant import as_params, block_plant, free_plant, passive_forces, pl
 
 __all__ = ["MujocoHand", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
-HAND_MODELS: tuple[str, ...] = ("finger2", "finger3")
-"""The fingers the stand-in is built for."""
+HAND_MODELS: tuple[str, ...] = ("finger2", "finger3", "hand")
+"""The models the stand-in is built for: a finger, or the hand's five chains (free scene only)."""
 SCENES: tuple[str, ...] = ("free", "block")
 """The stand-in's scenes (module docstring)."""
 PERIOD = 1e-3
@@ -78,9 +82,11 @@ def _checked(model: Any, params: Any, effects: Any, scene: Any, seed: Any,
              noises: dict[str, Any]) -> PlantEffects | None:
     """One-line :class:`~alpes_dyn.InputError` naming the bad argument of :class:`MujocoHand`; the effects checked."""
     if model not in HAND_MODELS:
-        raise InputError(f"model: the MuJoCo stand-in is one finger ({', '.join(HAND_MODELS)}), got {model!r}")
+        raise InputError(f"model: the MuJoCo stand-in is built for {', '.join(HAND_MODELS)}, got {model!r}")
     if scene not in SCENES:
         raise InputError(f"scene: expected one of {', '.join(SCENES)}, got {scene!r}")
+    if scene == "block" and model == "hand":
+        raise InputError("scene: the block scene is a finger's (finger2, finger3); the hand's stand-in is free")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
     for name, v in noises.items():
@@ -101,7 +107,7 @@ class MujocoHand:
     Parameters
     ----------
     model : str
-        ``finger2`` or ``finger3`` (:data:`HAND_MODELS`).
+        ``finger2``, ``finger3`` or ``hand`` (:data:`HAND_MODELS`; the hand in the free scene only).
     params : HandParams or str or path, optional
         The finger's true parameters, or the path of their file (default the shipped file); kept private.
     effects : PlantEffects or None or "real"
@@ -121,7 +127,7 @@ class MujocoHand:
     period : float
         :data:`PERIOD`, s.
     motor_names : tuple of str
-        The finger's motor (one).
+        The motors: a finger's one; the hand's six (index, middle, ring, little, thumb, thumb_abduction).
     counts_per_rev : int
         Encoder counts per motor revolution.
     tau_max : float
@@ -150,8 +156,8 @@ class MujocoHand:
         e0 = e or PlantEffects()
         if scene == "free":
             truth = plant_model(model, p, e0)
-            m = truth.transmission.n_motors
-            mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, np.zeros(m))
+            at_rest = np.zeros(truth.transmission.n_motors)  # the motor off
+            mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, at_rest)
             self._passive = passive_forces(mj, truth, e0)
         else:
             mj, d, truth = block_plant(model, palm_down_params(p), e, None, PERIOD / sub, q0)

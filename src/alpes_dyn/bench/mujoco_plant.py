@@ -158,9 +158,10 @@ def block_plant(model: str, p: HandParams, effects: PlantEffects | None, contact
                 timestep: float, q0: Sequence[float] | None = None) -> tuple[Any, Any, Model]:
     """The block scene of the force loop: (MjModel, MjData at rest, the library's model of the plant in the plant's
     gravity) -- ``model`` (finger2, finger3) of ``p`` (palm down: :func:`~alpes_dyn.model.mjcf.palm_down_params`)
-    over the block met at ``contact_q`` (rad; None: :data:`~alpes_dyn.model.mjcf.BLOCK_CONTACT_Q`), contact on, MuJoCo's joint friction, ``effects`` (None: none), at MuJoCo
-    step ``timestep`` (s); at joint angles ``q0`` (rad; default the finger hanging on its springs in the plant's
-    gravity, motor off), each series-elastic rotor where the cable is just slack (:func:`rotor_rest`)."""
+    over the block met at ``contact_q`` (rad; None: :data:`~alpes_dyn.model.mjcf.BLOCK_CONTACT_Q`), contact on,
+    MuJoCo's joint friction, ``effects`` (None: none), at MuJoCo step ``timestep`` (s); at joint angles ``q0`` (rad;
+    default the finger hanging on its springs in the plant's gravity, motor off), each series-elastic rotor where the
+    cable is just slack (:func:`rotor_rest`); :class:`~alpes_dyn.InputError` naming ``q0``."""
     import mujoco
 
     truth = Model.alpes(model, params=p)

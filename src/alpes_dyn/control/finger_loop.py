@@ -83,7 +83,7 @@ class ControlScenario:
     contact over finger3's, the approach rate by its motor torque at the contact over finger3's); ``gains`` then
     override them. ``params``, ``plant_params`` are the Alpes models' (refused here); the plant is the model.
 
-    **A real hand's effects** (the Alpes fingers): ``effects`` a :class:`~alpes_dyn.control.plants.PlantEffects` --
+    **A real hand's effects** (the Alpes fingers): ``effects`` a :class:`~alpes_dyn.bench.effects.PlantEffects` --
     stick-slip friction, the series-elastic tendon with its rotor and slack, the palm's tilt, the torque constant's
     error, the encoder's offset, the torque read late -- on the plant (:mod:`alpes_dyn.control.realism_loop`), and
     ``compensation`` a :class:`~alpes_dyn.control.realism_loop.Compensation`, what the controllers do about them

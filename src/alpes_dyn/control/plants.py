@@ -10,12 +10,13 @@ Gaussian noise, the torque with 5e-4 N m of white noise, 1 kHz), into a
 :class:`~alpes_dyn.estimation.experiments.recording.Recording` that :func:`~alpes_dyn.estimation.identification.identification.identify`
 reads, with the true joint angles in ``true_q_*``.
 
-The effects (:class:`PlantEffects`: stick-slip, the series-elastic tendon with its rotor and slack, the rotor on
-the rigid tendon, the palm's tilt, the torque constant's and the encoder's errors, the torque read late) and the
-plant's MuJoCo side (:func:`plant_mjcf`, :func:`plant_model`, its rest and its passive forces) are the bench's
-(:mod:`alpes_dyn.bench.effects`, :mod:`alpes_dyn.bench.mujoco_plant`), re-exported here. On a recording: with
-``tilt`` it has no ``gravity_*`` columns (the user does not know the tilt); with ``torque_delay`` d its torque at
-t_k is what the motor gave at t_(k-d) (the first d rows repeat the first torque).
+The effects (:class:`~alpes_dyn.bench.effects.PlantEffects`: stick-slip, the series-elastic tendon with its rotor
+and slack, the rotor on the rigid tendon, the palm's tilt, the torque constant's and the encoder's errors, the torque
+read late) and the plant's MuJoCo side (:func:`~alpes_dyn.bench.mujoco_plant.plant_mjcf`,
+:func:`~alpes_dyn.bench.mujoco_plant.plant_model`, its rest and its passive forces) are the bench's
+(:mod:`alpes_dyn.bench.effects`, :mod:`alpes_dyn.bench.mujoco_plant`), importable from here as before. On a
+recording: with ``tilt`` it has no ``gravity_*`` columns (the user does not know the tilt); with ``torque_delay`` d its
+torque at t_k is what the motor gave at t_(k-d) (the first d rows repeat the first torque).
 
 The tendons' sheath friction (capstan) where the plant's parameters hold ``transmission.capstan``: MuJoCo has none,
 so the passive callback adds the library's law (:func:`~alpes_dyn.model.transmission.capstan_torque`) on the rigid
@@ -32,9 +33,10 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ..bench.effects import MAX_TORQUE_DELAY, PlantEffects, _number, delayed
-from ..bench.mujoco_plant import (INTEGRATORS, PLANT_MODELS, as_params, free_plant, passive_forces, plant_mjcf,
-                                  plant_model)
+# the bench's, importable from here as before (documented there: not in __all__)
+from ..bench.effects import MAX_TORQUE_DELAY, PlantEffects, _number, delayed  # noqa: F401
+from ..bench.mujoco_plant import (INTEGRATORS, PLANT_MODELS, as_params, free_plant, passive_forces,  # noqa: F401
+                                  plant_mjcf, plant_model)
 from ..errors import InputError, ModelError
 from ..estimation.experiments.recording import Recording
 from ..model.mjcf import joint_permutation, load_mujoco
@@ -44,8 +46,7 @@ from ..simulation.loop import Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, TorqueSensor
 
-__all__ = ["PLANT_MODELS", "INTEGRATORS", "MAX_TORQUE_DELAY", "PlantEffects", "delayed", "plant_mjcf", "plant_model",
-           "mujoco_recording", "mjcf_recording"]
+__all__ = ["mujoco_recording", "mjcf_recording"]
 
 
 def _check_run(model: str, u: np.ndarray, dt: float, timestep: float, integrator: str, m: int) -> int:
@@ -73,12 +74,15 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
 
     Parameters
     ----------
-    model: ``finger2``, ``finger3`` or ``thumb`` (:data:`PLANT_MODELS`). true_params: the plant's parameters.
+    model: ``finger2``, ``finger3`` or ``thumb`` (:data:`~alpes_dyn.bench.mujoco_plant.PLANT_MODELS`).
+    true_params: the plant's parameters.
     torque: (N+1, m) true motor torque, N m, torque[k] held on [t_k, t_k+1) (the last row is recorded only).
     dt: sample period, s. timestep: MuJoCo's step, s (a divisor of dt; default 0.1 ms).
-    effects: :class:`PlantEffects` (default none: the library's own model structure, its smooth friction).
-    q0: initial joint angles (rad; default the plant's rest under torque[0], as :func:`plant_model` finds it),
-        at rest (qd = 0), each series-elastic rotor holding the cable's static tension.
+    effects: :class:`~alpes_dyn.bench.effects.PlantEffects` (default none: the library's own model structure, its
+        smooth friction).
+    q0: initial joint angles (rad; default the plant's rest under torque[0], as
+        :func:`~alpes_dyn.bench.mujoco_plant.plant_model` finds it), at rest (qd = 0), each series-elastic rotor
+        holding the cable's static tension.
     seed: seed of the sensor noise. integrator: ``rk4`` (default), ``implicit`` or ``implicitfast``.
     encoder_noise_counts: Gaussian noise (counts) added before the encoder's quantisation. torque_noise: N m.
     gravity: (N+1, 3) m/s^2, the gravity the plant feels at each sample (default its MJCF's, the ``tilt`` of

@@ -1,12 +1,12 @@
 """Force control on a plant we did not write: the MuJoCo finger (or hand) with the effects of a real hand.
 
 :func:`~alpes_dyn.control.finger_loop.run_control` and :func:`~alpes_dyn.control.hand_loop.run_hand_control` take
-``effects`` (a :class:`~alpes_dyn.control.plants.PlantEffects`): the plant is then the MJCF of
+``effects`` (a :class:`~alpes_dyn.bench.effects.PlantEffects`): the plant is then the MJCF of
 :func:`~alpes_dyn.model.mjcf.mjcf_string` with the MJCF side of the effects (stick-slip friction, the series-elastic
 pull-only tendon with its rotor and the cable's slack, the rotor on the rigid tendon, the palm's tilt:
 :func:`~alpes_dyn.bench.effects.effects_mjcf_kwargs`, :func:`~alpes_dyn.bench.effects.plant_gravity`,
-:func:`~alpes_dyn.bench.mujoco_plant.rotor_rest`, re-exported here) and the sensor side of them as this module's
-blocks:
+:func:`~alpes_dyn.bench.mujoco_plant.rotor_rest`, importable from here as before) and the sensor side of them as
+this module's blocks:
 
 * the torque constant e off: the motor gives tau_cmd / (1 + e) for the command tau_cmd (the driver turns the
   command into a current with a constant (1 + e) times the true one), and the current sensor reads (1 + e) times
@@ -58,14 +58,14 @@ from typing import Any, Mapping
 
 import numpy as np
 
-from ..bench.effects import PlantEffects, effects_mjcf_kwargs, plant_gravity
-from ..bench.mujoco_plant import rotor_rest
+# effects_mjcf_kwargs, plant_gravity, rotor_rest: the bench's, importable from here as before (not in __all__)
+from ..bench.effects import PlantEffects, effects_mjcf_kwargs, plant_gravity  # noqa: F401
+from ..bench.mujoco_plant import rotor_rest  # noqa: F401
 from ..errors import InputError
 from ..model.robot import Model
 from ..simulation.loop import Block, Function
 
-__all__ = ["Compensation", "SampleLag", "effects_mjcf_kwargs", "torque_constant_blocks", "rotor_rest",
-           "plant_gravity", "NO_COMPENSATION"]
+__all__ = ["Compensation", "SampleLag", "torque_constant_blocks", "NO_COMPENSATION"]
 
 
 @dataclass(frozen=True)

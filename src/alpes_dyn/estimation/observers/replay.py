@@ -59,7 +59,7 @@ MAX_DELAY = 100
 def advanced(recording: Recording, samples: int) -> Recording:
     """``recording`` with its torque read ``samples`` whole samples earlier: row k of the torque is row k + samples
     of the recorded one, the last ``samples`` rows repeat the last (the applied torque of a sensor that lags by
-    ``samples``: :class:`~alpes_dyn.control.plants.PlantEffects` ``torque_delay``), run by run where the recording
+    ``samples``: :class:`~alpes_dyn.bench.effects.PlantEffects` ``torque_delay``), run by run where the recording
     has several. The recording itself for 0."""
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 0 <= samples <= MAX_DELAY:
         raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_DELAY}, got {samples!r}")
