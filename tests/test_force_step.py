@@ -153,6 +153,8 @@ BAD_STEP = [
     (dict(frame="tip"), "frame: applies to a URDF + spec model"),
     (dict(torque_noise=-1.0), "torque_noise: expected a non-negative number"),
     (dict(normal=(0.0, 0.0, 0.0)), "normal: expected a non-zero 3-vector"),
+    (dict(contact_q=(0.5, math.nan, 0.4)), "contact_q: expected 3 finite joint angles in rad"),
+    (dict(model="finger2", contact_q=(0.5,)), "contact_q: expected 2 finite joint angles in rad"),
 ]
 
 
@@ -264,3 +266,36 @@ def test_closed_loop_on_the_mujoco_stand_in():
     contact = run.force > 0.05
     err = np.degrees(np.sqrt(np.mean((run.q_hat[contact] - np.array(q_true)[contact]) ** 2, axis=0)))
     assert contact.mean() > 0.6 and (err < 2.0).all(), err
+
+
+def test_a_urdf_robot_step_is_run_controls(tmp_path):
+    """A URDF + spec robot (test_anyrobot's tendon finger): the step's motor limit, gains and normal are
+    run_control's (robot_control_settings), its command (m,) has the pulling motor's entry; params refused."""
+    from test_anyrobot import FINGER_URDF, finger_spec
+
+    import alpes_dyn as ad
+    from alpes_dyn.control.finger_loop import ControlScenario, robot_control_settings
+
+    (tmp_path / "f.urdf").write_text(FINGER_URDF)
+    (tmp_path / "f.toml").write_text(finger_spec(Fs=(0.0, 0.0)) + "\n[rest_angle]\nmcp = 0.5\npip = 0.5\n")
+    robot = ad.Model.from_urdf_file(tmp_path / "f.urdf", tmp_path / "f.toml")
+    model, block, tau_max, gains = robot_control_settings(ControlScenario(model=robot, controller="sensor"))
+    s = ForceStep(robot, controller="sensor", compiled=False, compensation=NO_COMPENSATION)
+    assert s.tau_max == pytest.approx(tau_max, rel=1e-12) and s.controller.kp == pytest.approx(gains["kp"])
+    assert np.allclose(s.controller.normal, block.normal / np.linalg.norm(block.normal)) and s.design.frame == "fingertip"
+    u = s.step(np.zeros(s.m), np.zeros(s.m), 0.0, 0.3)
+    assert u.shape == (s.m,) and u[s.motor] > 0 and np.count_nonzero(u) == 1
+    with pytest.raises(InputError, match="^params: applies to the Alpes fingers"):
+        ForceStep(robot, "x.toml", compiled=False)
+
+
+def test_a_diverging_filter_is_named_and_leaves_the_state():
+    """A current in mA read as N m (2306 against a 0.05 N m limit): the EKF leaves any joint range within a few
+    samples; the step says so in one line naming the readings and keeps its last sane state."""
+    s = ForceStep("finger3", compiled=False)
+    with pytest.raises(InputError) as e:
+        for _ in range(50):
+            s.step([1e6], [2306.0], 0.1, 0.3)
+    msg = str(e.value)
+    assert msg.startswith("readings: the EKF diverged at sample") and "units" in msg and "\n" not in msg
+    assert np.isfinite(s.state).all() and (np.abs(s.state) < 1e6).all() and s.k < 50

@@ -56,6 +56,9 @@ GAIN_NAMES: tuple[str, ...] = ("kp", "ki", "contact_threshold", "approach_rate",
                                "prefilter_order", "setpoint_weight", "notch_hz", "notch_zeta")
 """The :class:`~alpes_dyn.control.controller.ForceController` settings a ``gains`` dict may set."""
 
+_DIVERGED = 1e6
+"""rad, rad/s: a joint estimate beyond it is a filter that diverged (:meth:`ForceStep.step` refuses it)."""
+
 _DEFAULT_F_MAX = 1.0
 """N: the largest force of the default references (:class:`~alpes_dyn.control.finger_loop.ControlScenario`'s step
 0.2 -> 1.0 -> 0.5 N), which sizes a URDF robot's default motor limit."""
@@ -278,6 +281,7 @@ class ForceStep:
                 if v is not None:
                     raise InputError(f"{name}: applies to a URDF + spec model; the Alpes finger presses with its "
                                      "fingertip, its motor and its tau_max are the parameter file's")
+            _check_contact_q(contact_q, 2 if model == "finger2" else 3)
             p = params if isinstance(params, HandParams) else load_params(params)
             design = alpes_design(model, palm_down_params(p) if palm_down else p, controller, contact_q, comp,
                                   dict(gains or {}))
@@ -365,8 +369,8 @@ class ForceStep:
         Raises
         ------
         InputError
-            A reading of the wrong shape, not finite (NaN counts), a missing force for ``"sensor"``/``"pi"``
-            (one line naming it).
+            A reading of the wrong shape, not finite (NaN counts), a missing force for ``"sensor"``/``"pi"``, an
+            EKF that diverged on the readings (one line naming it; the step's state is left as it was).
         """
         y = self._vector(counts, "counts", "encoder counts") * self._rad_per_count
         tau_r = self._vector(torque, "torque", "motor torques in N m")
@@ -387,7 +391,12 @@ class ForceStep:
                 wy[:m] = tau
                 wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * self._normal
                 wy[m + 3:] = comp.unstretched(self._transmission, y, tau) if comp.observer_compliance else y
-                self._s = self.filter_step(self._s, wy)
+                s = self.filter_step(self._s, wy)
+                if not (np.abs(s[:2 * self.n]) < _DIVERGED).all():  # NaN too
+                    raise InputError(f"readings: the EKF diverged at sample {self.k} (joint estimate "
+                                     f"{np.array2string(s[:self.n], precision=3)} rad): check the readings' units "
+                                     "(counts, N m, N) and the parameter file; reset() to start again")
+                self._s = s
             q_hat = self._s[:self.n]
             if self._sensorless is not None:
                 F_fb = self._sensorless.sample(q_hat, tau)
@@ -455,6 +464,18 @@ class ForceStep:
     def __repr__(self) -> str:
         return (f"ForceStep({self.model.name!r}, controller={self.kind!r}, dt={self.dt:g}, tau_max={self.tau_max:g}, "
                 f"sample {self.k})")
+
+
+def _check_contact_q(contact_q: Any, n: int) -> None:
+    """None, or at least ``n`` finite joint angles (rad; the first n are the finger's); InputError naming it."""
+    if contact_q is None:
+        return
+    try:
+        q = np.asarray(contact_q, dtype=float)
+    except (TypeError, ValueError):
+        q = np.array([np.nan])
+    if q.ndim != 1 or q.shape[0] < n or not np.isfinite(q).all():
+        raise InputError(f"contact_q: expected {n} finite joint angles in rad, got {contact_q!r}")
 
 
 def _check_kind(kind: Any) -> None:
