@@ -540,12 +540,12 @@ def _add_control(sub: argparse._SubParsersAction) -> None:
                         "block (default: where the motor's free pull covers 25 %% of its joints' ranges)")
     s.add_argument("--tau-max", type=_positive_number("N m"), default=None, metavar="NM",
                    help="a URDF --model only: the motor torque limit, N m (default: twice the static torque of "
-                        "the largest reference force at the contact)")
+                        "the largest reference force, at least 1 N, at the contact)")
     s.add_argument("--controller", default="sensor",
                    help="sensor (feedforward + PI on the FlexiForce), sensorless (force estimated from the motor "
                         "torque and the observer), pi (PI on the FlexiForce alone) (default %(default)s)")
     s.add_argument("--reference", default="step",
-                   help="step (0.2, 1.0, 0.5 N), ramp (0.2 to 1.0 N in 1 s), sine (0.3-0.8 N at 1 Hz) "
+                   help="step (0.2, 0.6, 0.2 N), ramp (0.2 to 0.6 N in 1 s), sine (0.3-0.8 N at 1 Hz) "
                         "(default %(default)s)")
     s.add_argument("--params", default=None, metavar="FILE",
                    help="the Alpes models only: the controller's parameter file (default: shipped)")

@@ -34,9 +34,9 @@ from ..model.params import HandParams, load_params
 from ..simulation.loop import Block, Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
-from .controller import CONTROLLERS, REFERENCES, reference_profile
+from .controller import CONTROLLERS, DEFAULT_LEVELS, REFERENCES, reference_profile
 from .realism_loop import NO_COMPENSATION, Compensation, SampleLag, torque_constant_blocks
-from .step import (CONTROL_MODELS, ForceStep, LoopDesign, alpes_design, finger3_contact, robot_design,  # noqa: F401
+from .step import (_DEFAULT_F_MAX, CONTROL_MODELS, ForceStep, LoopDesign, alpes_design, finger3_contact, robot_design,  # noqa: F401
                    scaled_gains)
 
 
@@ -78,7 +78,7 @@ class ControlScenario:
     the sensors: ``encoder_<motor>``, ``torque_<motor>`` and the touch sensor ``touch_<frame>`` with the noises
     above. The controller's and the EKF's model: ``model`` without its spec's friction, as the Alpes loop's; the
     EKF's contact force acts at ``frame``. ``tau_max`` (N m): the motor's limit (a spec holds none; default twice
-    the static-balance torque of the largest reference force at ``contact_q``). The gains of :data:`.DEFAULT_GAINS`
+    the static-balance torque of the largest reference force, at least 1 N, at ``contact_q``). The gains of :data:`.DEFAULT_GAINS`
     (tuned on finger3) are scaled to the robot (:func:`scaled_gains`: kp and ki by its lever dtau_m/dF_z at the
     contact over finger3's, the approach rate by its motor torque at the contact over finger3's); ``gains`` then
     override them. ``params``, ``plant_params`` are the Alpes models' (refused here); the plant is the model.
@@ -98,7 +98,7 @@ class ControlScenario:
     dt: float = 1e-3
     substeps: int = 4
     seed: int = 0
-    levels: tuple[float, float, float] = (0.2, 1.0, 0.5)
+    levels: tuple[float, float, float] = DEFAULT_LEVELS
     sine: tuple[float, float, float] = (0.3, 0.8, 1.0)
     step_times: tuple[float, float] = (1.0, 2.0)
     settle: float = 0.5
@@ -366,7 +366,7 @@ def robot_control_settings(sc: ControlScenario) -> tuple[Model, BlockScene, floa
 
 def _robot_design(sc: ControlScenario) -> LoopDesign:
     return robot_design(sc.model, sc.controller, frame=sc.frame, motor=sc.motor, contact_q=sc.contact_q,
-                        F_max=max(max(sc.levels), max(sc.sine[:2])), tau_max=sc.tau_max, gains=sc.gains)
+                        F_max=max(_DEFAULT_F_MAX, *sc.levels, *sc.sine[:2]), tau_max=sc.tau_max, gains=sc.gains)
 
 
 def _robot_setup(sc: ControlScenario) -> _Setup:

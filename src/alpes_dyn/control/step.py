@@ -60,8 +60,9 @@ _DIVERGED = 1e6
 """rad, rad/s: a joint estimate beyond it is a filter that diverged (:meth:`ForceStep.step` refuses it)."""
 
 _DEFAULT_F_MAX = 1.0
-"""N: the largest force of the default references (:class:`~alpes_dyn.control.finger_loop.ControlScenario`'s step
-0.2 -> 1.0 -> 0.5 N), which sizes a URDF robot's default motor limit."""
+"""N: the least force a URDF robot's default motor limit is sized for (twice the static torque of the larger of this
+and the references' largest force), so that the limit leaves room above the default references (0.2 -> 0.6 -> 0.2 N
+and the 0.8 N sine)."""
 
 
 @dataclass(frozen=True)
