@@ -42,6 +42,7 @@ from ...fileio import atomic_path
 from ...limits import check_bytes, check_physical
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
+from ...simulation.stick import check_friction_law
 from ...symbolic.parametric import tilted_gravity
 from ...symbolic.statespace import StateSpace
 from ...simulation.loop import Function, run_loop
@@ -196,9 +197,10 @@ def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
 
 def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque_noise: float,
                    encoder_noise_counts: float, disturbance_walk: float, gains: tuple[str, ...], pars: tuple[str, ...],
-                   u0: np.ndarray, compiled: bool) -> tuple[Any, np.ndarray, np.ndarray]:
+                   u0: np.ndarray, compiled: bool, friction_law: str = "smooth") -> tuple[Any, np.ndarray, np.ndarray]:
     """The observer of :func:`estimate_recording` and its prior: (filter, z0 (nz,), P0 (nz,) variances); ``u0`` (m,)
-    the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C."""
+    the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C;
+    ``friction_law``: the discrete model's (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
     n, m = m_obs.n, m_obs.transmission.n_motors
     tr = m_obs.transmission
     step = 2 * np.pi / tr.counts_per_rev
@@ -207,7 +209,8 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
     ss = StateSpace(m_obs, input="motor", output="encoder")
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         process_noise=Q, measurement_noise=list(meas_var * np.ones(m)), input_noise=[torque_noise**2] * m)
+                         friction_law=friction_law, process_noise=Q, measurement_noise=list(meas_var * np.ones(m)),
+                         input_noise=[torque_noise**2] * m)
     z0 = np.concatenate([_initial_state(m_obs, u0), np.ones(len(gains)), np.zeros(len(pars))])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
     return filt, z0, P0
@@ -254,7 +257,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int = 0) -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int = 0, friction_law: str = "smooth") -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -279,12 +282,16 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
         :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
         torque of :func:`advanced` (a replay: the later samples are recorded). Default 0.
+    friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
+        F_s tanh(v / v_s) or ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
+        (:mod:`alpes_dyn.simulation.stick`).
 
     Returns
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
     rec = advanced(_replay_recording(recording, model, observer), torque_delay)
+    friction_law = check_friction_law(friction_law)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
     for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
@@ -310,7 +317,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         piece = _piece(rec, a, b)
         m_i = m_obs if a == 0 else _observer_model(model, piece, tilt, encoder_offset)[0]
         f, z0, P0 = _replay_filter(m_i, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
-                                   gains, pars, piece.torque[0], compiled)
+                                   gains, pars, piece.torque[0], compiled, friction_law)
         if parts:  # the hand turned: the filter carries on from its last estimate
             z0, P0 = parts[-1].z[-1], parts[-1].P[-1]
         else:
@@ -325,7 +332,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                 "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
                 "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
                 "encoder_offset_rad": offsets.tolist(), "tilt_rad": angles,
-                "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay)}
+                "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay),
+                "friction_law": filt.model.friction_law}
     return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
                              motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
                              disturbance=dist, settings=settings, filter=filt,
