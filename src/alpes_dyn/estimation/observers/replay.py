@@ -51,7 +51,8 @@ from .observers import OBSERVERS, Estimate, make_observer
 from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
 
-__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY",
+           "averaged", "STICK_TORQUE_WINDOW"]
 
 MAX_DELAY = 100
 """The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
@@ -72,6 +73,28 @@ def advanced(recording: Recording, samples: int) -> Recording:
     last = np.repeat(b[1:] - 1, np.diff(b))
     tau = recording.torque[np.minimum(np.arange(recording.n_samples) + samples, last)]
     return dataclasses.replace(recording, torque=tau)
+
+STICK_TORQUE_WINDOW = 10
+"""Samples of the causal moving average of the recorded torque that the ``stick`` law's observer reads by default
+(:func:`averaged`): the law decides stick or slip from the torque, and a white torque noise as large as F_s (0.5 mN
+m on the Alpes finger) makes it slip where the joint holds; averaged over 10 ms its noise is a third, for a lag of
+4.5 ms on a motion of a few hertz."""
+
+
+def averaged(recording: Recording, samples: int) -> Recording:
+    """``recording`` with its torque replaced by the causal moving average of its last ``samples`` rows (before the
+    recording, the mean of its first ``samples`` rows: the hand at rest when it starts, the observer's first rest
+    state found under that mean): what the observer reads, its white noise divided by sqrt(``samples``). The
+    recording itself for 1."""
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= MAX_DELAY:
+        raise InputError(f"torque_window: expected a whole number of samples from 1 to {MAX_DELAY}, got {samples!r}")
+    if samples == 1:
+        return recording
+    tau = recording.torque
+    padded = np.concatenate([np.repeat(tau[:samples].mean(axis=0, keepdims=True), samples, axis=0), tau])
+    c = np.cumsum(padded, axis=0)
+    return dataclasses.replace(recording, torque=(c[samples:] - c[:-samples]) / samples)
+
 
 DISTURBANCE_WALK = 2e-4
 """Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
@@ -216,12 +239,16 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     return filt, z0, P0
 
 
-def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None) -> int:
-    """The observer's RK4 steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
+def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None, friction_law: str = "smooth"
+              ) -> int:
+    """The observer's steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
     (:func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth law at 1 kHz; with the tendons' sheath
-    friction at ``tension``, the recording's largest torques, where given), 1 without friction."""
+    friction at ``tension``, the recording's largest torques, where given), 1 without friction; 1 with the ``stick``
+    law, whose step resolves the dry friction implicitly (on finger3 at 1 kHz, 2 or 4 steps gave the same errors)."""
     if substeps is not None:
         return substeps
+    if friction_law == "stick" and np.any(model.extras.coulomb):
+        return 1
     has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
     return stable_substeps(model, dt, tension=tension) if has_friction else 1
 
@@ -257,7 +284,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int = 0, friction_law: str = "smooth") -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int = 0, friction_law: str = "smooth",
+                       torque_window: int | None = None) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -270,8 +298,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     disturbance: estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``
         N m per sqrt(s).
     transient: start of the error metrics, s (default min(1 s, duration / 5)).
-    substeps: RK4 steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
-        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; else 1).
+    substeps: steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
+        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; 1 with ``friction_law="stick"`` or
+        without friction).
     compiled: the filter in compiled C (same numbers).
     encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
         :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default 0.
@@ -285,6 +314,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
         F_s tanh(v / v_s) or ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
         (:mod:`alpes_dyn.simulation.stick`).
+    torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
+        noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
+        stick law, else 1 (the torque as recorded).
 
     Returns
     -------
@@ -292,6 +324,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     """
     rec = advanced(_replay_recording(recording, model, observer), torque_delay)
     friction_law = check_friction_law(friction_law)
+    window = (STICK_TORQUE_WINDOW if friction_law == "stick" else 1) if torque_window is None else torque_window
+    raw_noise = _torque_noise(rec) if torque_noise is None else torque_noise
+    rec = averaged(rec, window)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
     for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
@@ -302,10 +337,10 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")
     if not t_start < duration:
         raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
-    torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
+    torque_noise = _nonnegative(raw_noise, "torque_noise", "N m") / math.sqrt(window)
     edges = np.append(segment_starts(rec.gravity), N - 1)  # a recording turned between orientations: in turn
     m_obs, angles, offsets = _observer_model(model, _piece(rec, edges[0], edges[1]), tilt, encoder_offset)
-    substeps = _substeps(m_obs, dt, substeps, np.abs(rec.torque).max(axis=0))
+    substeps = _substeps(m_obs, dt, substeps, np.abs(rec.torque).max(axis=0), friction_law)
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
@@ -333,7 +368,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                 "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
                 "encoder_offset_rad": offsets.tolist(), "tilt_rad": angles,
                 "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay),
-                "friction_law": filt.model.friction_law}
+                "friction_law": filt.model.friction_law, "torque_window_samples": int(window)}
     return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
                              motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
                              disturbance=dist, settings=settings, filter=filt,
