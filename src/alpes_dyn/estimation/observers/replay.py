@@ -234,9 +234,30 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
                          friction_law=friction_law, process_noise=Q, measurement_noise=list(meas_var * np.ones(m)),
                          input_noise=[torque_noise**2] * m)
-    z0 = np.concatenate([_initial_state(m_obs, u0), np.ones(len(gains)), np.zeros(len(pars))])
-    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
+    x0 = _initial_state(m_obs, u0)
+    z0 = np.concatenate([x0, np.ones(len(gains)), np.zeros(len(pars))])
+    sd_q = _rest_spread(m_obs, x0[:n], ss.B, torque_noise) if filt.model.friction_law == "stick" else np.full(n, 0.5)
+    P0 = np.concatenate([sd_q**2, [1.0**2] * n, [0.2**2] * len(gains), [(10 * torque_noise + 1e-4) ** 2] * len(pars)])
     return filt, z0, P0
+
+
+def _rest_spread(model: Model, q0: np.ndarray, B: np.ndarray, torque_noise: float) -> np.ndarray:
+    """(n,) rad: the prior standard deviation of the joints at rest for the stick law, at most 0.5 rad (the smooth
+    law's). Dry friction holds a finger anywhere the net torque is below F_s: |J dq| <= F_s about the frictionless
+    rest q0 (J = dG/dq, springs and gravity), a box in dq whose extent on joint i is sum_j |J^-1_ij| F_s,j; the rest
+    itself is found under a torque of noise ``torque_noise`` (N m, per motor through ``B`` (n, m)), J^-1 B sigma
+    more. A prior as wide as the smooth law's would let the first breakaway throw the split (which a joint held by
+    friction does not observe) by tens of degrees. Joints without spring keep 0.5 rad."""
+    J = model.gravity_jacobian(q0)
+    try:
+        Ji = np.linalg.inv(J)
+    except np.linalg.LinAlgError:
+        return np.full(q0.size, 0.5)
+    band = np.abs(Ji) @ model.extras.coulomb
+    noise = np.abs(Ji @ B).sum(axis=1) * torque_noise
+    sd = np.minimum(np.hypot(band, noise), 0.5)
+    sd[~(model.extras.stiffness > 0)] = 0.5
+    return np.where(np.isfinite(sd), sd, 0.5)
 
 
 def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None, friction_law: str = "smooth"
