@@ -186,3 +186,25 @@ def test_ekf_holds_stuck_joints_on_mujoco(stick_slip_recording):
     assert np.all(smooth > 1.0), smooth
     assert np.all(stick < 0.5), stick
     assert res.settings["friction_law"] == "stick" and res.settings["torque_window_samples"] == 10
+
+
+def test_torque_average_is_causal_and_checked(stick_slip_recording):
+    """averaged: row k is the mean of rows k-w+1..k (np.convolve here), the rows before the recording the mean of its
+    first w; its white noise divided by about sqrt(w); bad windows and laws refused with one line naming them."""
+    from alpes_dyn.estimation.observers.replay import averaged, estimate_recording
+
+    rec, model = stick_slip_recording
+    w = 10
+    tau = rec.torque[:, 0]
+    ref = np.convolve(np.r_[np.full(w - 1, tau[:w].mean()), tau], np.ones(w) / w, "valid")
+    np.testing.assert_allclose(averaged(rec, w).torque[:, 0], ref, rtol=0, atol=1e-12)  # a running sum
+    assert averaged(rec, 1) is rec
+    noise = rec.torque[:, 0] - np.interp(rec.t, [0, 0.3, 0.8, 1.8, 2.3, 4.0],
+                                         [0.020, 0.020, 0.028, 0.028, 0.024, 0.024])
+    ratio = np.std(np.convolve(noise, np.ones(w) / w, "valid")) / np.std(noise)
+    assert abs(ratio - 1 / np.sqrt(w)) < 0.05
+    for bad in (0, 101, 2.5, True):
+        with pytest.raises(InputError, match="torque_window: expected a whole number of samples from 1 to 100"):
+            averaged(rec, bad)
+    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, got 'lugre'"):
+        estimate_recording(rec, model, "ekf", friction_law="lugre")
