@@ -208,3 +208,24 @@ def test_torque_average_is_causal_and_checked(stick_slip_recording):
             averaged(rec, bad)
     with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, got 'lugre'"):
         estimate_recording(rec, model, "ekf", friction_law="lugre")
+
+
+def test_prior_is_the_dead_band():
+    """The stick law's prior on the joints at rest: the extent sum_j |J^-1_ij| F_s,j of the box |J dq| <= F_s about the
+    frictionless rest (J = dG/dq here by central differences of the numeric gravity and springs), with the rest's
+    torque noise in quadrature; the smooth law's 0.5 rad where that is wider."""
+    from alpes_dyn.estimation.observers.replay import _rest_spread
+
+    model = ad.Model.alpes("finger3", friction=True)
+    ss = StateSpace(model, input="motor", output="encoder")
+    q0 = model.static_equilibrium(ss.B @ np.array([0.02]))
+    eps = 1e-6
+    J = np.column_stack([(model.gravity_torque(q0 + eps * e) - model.gravity_torque(q0 - eps * e)) / (2 * eps)
+                         for e in np.eye(3)])
+    Ji = np.linalg.inv(J)
+    sigma = 5e-4 / np.sqrt(10)
+    ref = np.hypot(np.abs(Ji) @ model.extras.coulomb, np.abs(Ji @ ss.B).sum(axis=1) * sigma)
+    sd = _rest_spread(model, q0, ss.B, sigma)
+    np.testing.assert_allclose(sd, ref, rtol=1e-5)
+    assert np.all(sd < 0.1) and np.all(sd > 0.005)  # a few tenths of a degree to a few degrees, not 0.5 rad
+    assert np.all(_rest_spread(model, q0, ss.B, 1.0) == 0.5)  # a torque noise of 1 N m: no better than the smooth law
