@@ -229,3 +229,32 @@ def test_prior_is_the_dead_band():
     np.testing.assert_allclose(sd, ref, rtol=1e-5)
     assert np.all(sd < 0.1) and np.all(sd > 0.005)  # a few tenths of a degree to a few degrees, not 0.5 rad
     assert np.all(_rest_spread(model, q0, ss.B, 1.0) == 0.5)  # a torque noise of 1 N m: no better than the smooth law
+
+
+def test_hand_resolved_finger_by_finger():
+    """The hand's 15 joints (a mass matrix dense in structure from the symbolic backend, block diagonal in value):
+    :func:`mass_blocks` finds the fingers and the thumb's two blocks, and the step is the brute force's per block
+    on the numeric model."""
+    from alpes_dyn.simulation.stick import mass_blocks
+
+    model = ad.Model.alpes("hand", friction=True)
+    free = ad.Model.alpes("hand", friction=False)
+    blocks = mass_blocks(model)
+    assert sorted(map(len, blocks)) == [1, 2, 3, 3, 3, 3] and sorted(sum(blocks, [])) == list(range(15))
+    ss = StateSpace(model, input="motor", output="encoder")
+    dm = DiscreteModel(ss, H, friction_law="stick")
+    from alpes_dyn.estimation.observers.scenario import rest_with_held_joints
+
+    u = np.array([0.02 if mn != "thumb_abduction" else 0.0 for mn in model.transmission.motor_names])
+    q = rest_with_held_joints(model, u)  # every finger at its frictionless rest: held, ...
+    q[:3] += 0.05  # ... but the index, pulled off it by 3 degrees: let go
+    v = np.zeros(15)
+    z = np.array(dm.step(np.r_[q, v], u)).ravel()
+    M = model.inertia_matrix(q)
+    N = M @ free.forward_dynamics(q, v, ss.B @ u)
+    A, b, lim = M + H * np.diag(model.extras.viscous), M @ v + H * N, H * model.extras.coulomb
+    ref = np.zeros(15)
+    for rows in blocks:
+        ref[rows] = brute_force(A[np.ix_(rows, rows)], b[rows], lim[rows])
+    np.testing.assert_allclose(z[15:], ref, rtol=1e-7, atol=1e-11)
+    assert np.all(z[18:] == 0.0) and np.all(z[15:18] != 0.0)  # the other fingers held, the index moving

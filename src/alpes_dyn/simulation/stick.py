@@ -25,16 +25,18 @@ From rest (v = 0), the joints all stay at rest exactly when the static condition
 from __future__ import annotations
 
 import itertools
-from typing import Any
+from typing import Any, Sequence
 
 import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
+from ..model.robot import Model
 from ..symbolic.dynamics import block_solve
 from ..symbolic.statespace import StateSpace
 
-__all__ = ["FRICTION_LAWS", "MAX_DRY_JOINTS", "check_friction_law", "coulomb_velocity", "stick_step_expression"]
+__all__ = ["FRICTION_LAWS", "MAX_DRY_JOINTS", "check_friction_law", "coulomb_velocity", "mass_blocks",
+           "stick_step_expression"]
 
 FRICTION_LAWS: tuple[str, ...] = ("smooth", "stick")
 """The observers' dry-friction laws: ``smooth`` F_s tanh(v / v_s) through RK4, ``stick`` the time-stepping
@@ -42,7 +44,7 @@ Coulomb law of this module."""
 
 MAX_DRY_JOINTS = 5
 """The most joints with dry friction in one coupled chain (a block of the mass matrix) that :func:`coulomb_velocity`
-resolves: it enumerates 3^k modes (243 at 5; the Alpes fingers have 3, the thumb 4 with its ab/adduction)."""
+resolves: it enumerates 3^k modes (243 at 5; an Alpes finger has 3 joints, the thumb 2 on its tendon)."""
 
 
 def check_friction_law(law: Any) -> str:
@@ -52,7 +54,7 @@ def check_friction_law(law: Any) -> str:
     return law
 
 
-def coulomb_velocity(A: cs.SX, b: cs.SX, limit: Any) -> cs.SX:
+def coulomb_velocity(A: cs.SX, b: cs.SX, limit: Any, blocks: Sequence[Sequence[int]] | None = None) -> cs.SX:
     """argmin_v 1/2 v^T A v - b^T v + sum_i limit_i |v_i|, exactly, by enumerating the joints' modes.
 
     Block by block over the structural strongly connected components of A (one per finger of the hand, as
@@ -72,6 +74,10 @@ def coulomb_velocity(A: cs.SX, b: cs.SX, limit: Any) -> cs.SX:
         (n,) kg m^2 rad/s, M v + h N.
     limit : array_like
         (n,) numbers >= 0, h F_s (N m s).
+    blocks : sequence of sequences of int, optional
+        The joints of each block, where A's entries between blocks are zero in value but not in structure (a hand's
+        mass matrix from a backend that does not keep its zeros, :func:`mass_blocks`); default A's structural
+        blocks.
 
     Returns
     -------
@@ -85,10 +91,12 @@ def coulomb_velocity(A: cs.SX, b: cs.SX, limit: Any) -> cs.SX:
     """
     n = b.shape[0]
     lim = np.asarray(limit, dtype=float).reshape(-1)
-    nb, perm, offsets = A.sparsity().scc()
+    if blocks is None:
+        nb, perm, offsets = A.sparsity().scc()
+        blocks = [list(perm[offsets[k]:offsets[k + 1]]) for k in range(nb)]
     v: list[Any] = [None] * n
-    for blk in range(nb):  # a loop over the hand's fingers, when the expression is built
-        rows = list(perm[offsets[blk]:offsets[blk + 1]])
+    for rows in blocks:  # a loop over the hand's fingers, when the expression is built
+        rows = list(rows)
         vb = _block_velocity(A[rows, rows], b[rows], lim[rows])
         for i, row in enumerate(rows):
             v[row] = vb[i]
@@ -120,6 +128,20 @@ def _block_velocity(A: cs.SX, b: cs.SX, lim: np.ndarray) -> cs.SX:
     return out
 
 
+def mass_blocks(model: Model) -> list[list[int]]:
+    """The joints of each block of ``model``'s mass matrix (with its rotors), from its value at a generic
+    configuration (the mid-point of each joint's range, or 0.3 rad where the range is open): two joints share a block
+    where one drives the other through the tree or a tendon. A fixed-base tree's branches from the root never couple,
+    whatever q, so the blocks found at one q are those at every q."""
+    lo, hi = model.lower, model.upper
+    q = np.where(np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 10.0), 0.5 * (lo + hi), 0.3)
+    coupled = model.inertia_matrix(q) != 0.0
+    label = np.arange(model.n)
+    for _ in range(model.n):  # propagate the smallest joint index along the couplings (n joints: n rounds at most)
+        label = np.min(np.where(coupled, label[None, :], model.n), axis=1)
+    return [np.flatnonzero(label == k).tolist() for k in np.unique(label)]
+
+
 def stick_step_expression(ss: StateSpace, x: cs.SX, tau: cs.SX, F: Any, h: float) -> cs.SX:
     """One step of h seconds of the time-stepping Coulomb law (module docstring): x+ = [q + h v+; v+], (2n,).
 
@@ -148,5 +170,5 @@ def stick_step_expression(ss: StateSpace, x: cs.SX, tau: cs.SX, F: Any, h: float
     M = sym.inertia_matrix(q)
     A = M + cs.diag(cs.DM(h * ex.viscous)) if np.any(ex.viscous) else M
     b = cs.mtimes(M, v) + h * net
-    vn = coulomb_velocity(A, b, h * np.asarray(ex.coulomb, dtype=float))
+    vn = coulomb_velocity(A, b, h * np.asarray(ex.coulomb, dtype=float), mass_blocks(ss.model))
     return cs.vertcat(q + h * vn, vn)
