@@ -20,6 +20,12 @@ from .common import (UntrustedFitWarning, _check_model_options, _check_run_files
                      data_label, parse_vector, read_data)
 
 
+FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh(v/v_s), the default) or stick (the "
+                     "time-stepping Coulomb law, which holds a joint at rest under a torque below F_s; the torque "
+                     "read through a 10-sample moving average)")
+"""``estimate --friction-law``'s help (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
+
+
 # ---- owned by the observers work (issue 4)
 def cmd_estimate(args: argparse.Namespace) -> int:
     """Simulate the default scenario (alpes_dyn.estimation.observers.scenario) and estimate the joints from the motor
@@ -32,7 +38,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         return _estimate_data(args)
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
-                       ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay")):
+                       ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay"),
+                       ("--friction-law", "friction_law")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -94,12 +101,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
     from ..model.robot import Model
+    from ..simulation.stick import FRICTION_LAWS
 
     for flag, dest, default in _SCENARIO_ONLY:
         if getattr(args, dest) != default:
             hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
             raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    law = "smooth" if args.friction_law is None else args.friction_law
+    _one_of(law, FRICTION_LAWS, "--friction-law", "friction law")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     t0 = time.perf_counter()
     whole = None
@@ -125,7 +135,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
-                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay)
+                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay,
+                             friction_law=law)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -138,7 +149,9 @@ def _estimate_data(args: argparse.Namespace) -> int:
              f"{args.data} ({rec.n_samples} samples, {rec.duration:g} s)",
              f"  torque noise {res.settings['torque_noise_Nm']:.3g} N m"
              + (" (estimated from the recording)" if args.torque_noise is None else "")
-             + ("; a disturbance torque per motor" if args.disturbance else "")]
+             + ("; a disturbance torque per motor" if args.disturbance else "")
+             + (f"; stick-slip friction law, the torque averaged over {res.settings['torque_window_samples']} samples"
+                if res.settings["friction_law"] == "stick" else "")]
     if res.rmse is not None:
         head = f"RMSE after {res.settings['transient_s']:g} s [deg]:"
         lines.append(f"  {head:30s}"

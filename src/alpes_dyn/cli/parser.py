@@ -14,7 +14,7 @@ from ..limits import MAX_POINTS, MAX_SEED
 from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import _UsageError, _drift_choice, _strict_int
 from .control_cmds import cmd_control
-from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
+from .estimation_cmds import FRICTION_LAW_HELP, THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
 from .model_cmds import cmd_dynamics, cmd_import, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
 from .study_cmds import cmd_sweep
@@ -263,8 +263,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--mismatch", type=_strict_float, default=0.0,
                    help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
     s.add_argument("--duration", type=_strict_float, default=5.0, help="simulated time, s (default %(default)s)")
-    s.add_argument("--seed", type=_SEED, default=0, help="random seed of the simulated scenario (default "
-                   "%(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed of the simulated scenario (default %(default)s)")
     s.add_argument("--plot", metavar="FILE.png", help="the simulated scenario (not with --data): write a figure "
                    "of true and estimated joints (format by extension: .png, .pdf, .svg...)")
     s.add_argument("--true-params", default=None, metavar="FILE",
@@ -301,6 +300,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
                    help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
                         "torque_delay): the observer reads it that many samples earlier")
+    s.add_argument("--friction-law", default=None, metavar="LAW", help=FRICTION_LAW_HELP)
     s.set_defaults(func=cmd_estimate)
 
 

@@ -321,14 +321,24 @@ class SymbolicDynamics:
         ``F`` is a 3-vector (SX or numbers) at ``tip`` in the base frame, or None; with ``contacts``
         (several frames, forces or wrenches, see :meth:`contact_torque`) the stacked F of them all.
         """
-        rhs = tau - self.bias_torque(q, v) - self.extras.passive_torque(q, v, smooth, cs)
+        rhs = self.net_torque(q, v, tau, self.extras.passive_torque(q, v, smooth, cs), F, tip, contacts)
+        return block_solve(self.inertia_matrix(q), rhs)
+
+    def net_torque(self, q: cs.SX, v: cs.SX, tau: cs.SX, passive: Any, F: Any = None, tip: str | None = None,
+                   contacts: Any = None) -> cs.SX:
+        """The right side of eq. 3.3, tau + J^T F - C qd - G - ``passive``, (n,) N m: what the mass matrix
+        accelerates. ``passive`` (n,) N m: the extras' torque (springs and friction,
+        :meth:`~alpes_dyn.model.extras.JointExtras.passive_torque`, in :meth:`forward_dynamics`; the springs alone
+        in a step that resolves the dry friction itself, :mod:`alpes_dyn.simulation.stick`). ``F``, ``tip``,
+        ``contacts`` as :meth:`forward_dynamics`'s."""
+        rhs = tau - self.bias_torque(q, v) - passive
         if self.model._rotor_curved:
             rhs = rhs - self.rotor_bias(q, v)
         if F is not None and contacts is not None:
             rhs = rhs + self.contact_torque(q, F, contacts)
         elif F is not None:
             rhs = rhs + cs.mtimes(self.fingertip_jacobian(q, tip).T, F)
-        return block_solve(self.inertia_matrix(q), rhs)
+        return rhs
 
     def forward_dynamics_function(self, with_force: bool = False, tip: str | None = None,
                                   smooth: bool = True) -> cs.Function:

@@ -1,5 +1,6 @@
 """The observers: a finger's passive joints q_1..q_n estimated from its motor encoder. The EKF and UKF on the
-report's state space (eqs. 3.1, 3.3, 3.16) discretised by one RK4 step per sample (:mod:`.observers`), their
+report's state space (eqs. 3.1, 3.3, 3.16) discretised by one RK4 step per sample (:mod:`.observers`; the discrete
+model, or the stick-slip law's steps, :mod:`.discrete`), their
 covariance arithmetic in one fixed order of operations (:mod:`.covariance`), the observer as a block of the
 simulation loop (:mod:`.blocks`), the estimation scenario -- a finger moved by its motor from the equilibrium of eq.
 2.11, its encoder (eq. 3.13) and torque sensor simulated (:mod:`.scenario`, ``alpes-dyn estimate``) -- and the

@@ -3,7 +3,8 @@
 The report ends where this module begins (Conclusion: the finger is observable, "it is possible to
 investigate the synthesis of an observer"). Two discrete-time observers of the report's system
 (eq. 3.1, 3.3, 3.16), discretised by one classical RK4 step per sample period ``dt`` with the known
-input held over the period:
+input held over the period (or several; or, with ``friction_law="stick"``, by steps of the time-stepping Coulomb law
+that holds a joint at rest: :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`):
 
 * :class:`ExtendedKalmanFilter` -- the EKF: state and covariance predicted through the RK4 step,
   its Jacobians with respect to the state and to the known input obtained by CasADi's automatic
@@ -60,6 +61,7 @@ from ...simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs
 from ...symbolic.lifted import lift_constants
 from ...symbolic.statespace import StateSpace
 from .covariance import predicted_covariance, updated_state
+from .discrete import DISTURBANCE_PREFIX, PARAMETERS, DiscreteModel
 
 __all__ = [
     "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
@@ -67,12 +69,6 @@ __all__ = [
 ]
 
 OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
-PARAMETERS: tuple[str, ...] = ("input_gain", "spring_gain")
-DISTURBANCE_PREFIX = "disturbance_"
-"""``disturbance_<motor>``: an additive torque on that motor, N m, estimated as a random-walk state (motor inputs
-only): what the model leaves unexplained (:mod:`alpes_dyn.estimation.observers.replay`)."""
-
-
 def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
     """Gains a, b that make an observer's mis-scaled model exact.
 
@@ -80,90 +76,6 @@ def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
     springs / true ones. Returns ``{"input_gain": mass_scale, "spring_gain": mass_scale / spring_scale}``.
     """
     return {"input_gain": float(mass_scale), "spring_gain": float(mass_scale) / float(spring_scale)}
-
-
-class DiscreteModel:
-    """z_{k+1} = F(z_k, w_k), y_k = h(z_k): the RK4-discretised state space, optionally with gains.
-
-    Parameters
-    ----------
-    system: the continuous state space (eq. 3.3); its output is the measurement.
-    dt: sample period, s. substeps: RK4 steps per sample period (default 1).
-    parameters: names from :data:`PARAMETERS` appended to the state as constants (z = [x; theta]).
-
-    Attributes
-    ----------
-    nz, nx, nw, ny: sizes of z, x = [q; qd], w = [u; F] and y.
-    names: names of z's entries.
-    values: (np,) the model's numbers in the right-hand side, one per use (:func:`~alpes_dyn.symbolic.lifted.
-        lift_constants`): masses, inertias, lengths, springs, friction, ratios and the constants among them.
-    step_p: ``casadi.Function`` (z, w, p) -> z_next (SX), the step with those numbers as the input p (np,): its
-        code is the model's structure, the same for a model of other values.
-    step: ``casadi.Function`` (z, w) -> z_next (SX), ``step_p`` at p = ``values``.
-    output: ``casadi.Function`` z -> y (SX).
-    """
-
-    def __init__(self, system: StateSpace, dt: float, parameters: Sequence[str] = (), substeps: int = 1) -> None:
-        if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or not 1 <= substeps <= 64:
-            raise InputError(f"substeps: expected an integer in [1, 64], got {substeps!r}")
-        self.substeps = int(substeps)
-        if not isinstance(system, StateSpace):
-            raise InputError(f"system: expected a StateSpace, got {type(system).__name__}")
-        self.system = system
-        self.dt = _check_dt(dt)
-        params = tuple(parameters)
-        motors = system.model.transmission.motor_names if system.model.transmission is not None else ()
-        disturbances = tuple(f"{DISTURBANCE_PREFIX}{mn}" for mn in motors) if system.input == "motor" else ()
-        for p in params:
-            if p not in PARAMETERS and p not in disturbances:
-                extra = f", or {', '.join(disturbances)}" if disturbances else ""
-                raise ModelError(f"unknown parameter {p!r} (expected one of {', '.join(PARAMETERS)}{extra})")
-        if len(set(params)) != len(params):
-            raise ModelError(f"parameters: repeated name in {params}")
-        if "spring_gain" in params and not system.model.extras.has_spring:
-            raise ModelError("parameter 'spring_gain': the model has no spring")
-        self.parameters = params
-        n = system.n
-        self.nx = 2 * n
-        self.nz = self.nx + len(params)
-        self.nw = _n_known_inputs(system)
-        self.ny = system.n_outputs
-        self.names = system.state_names + params
-        z = cs.SX.sym("z", self.nz)
-        w = cs.SX.sym("w", self.nw)
-        # the model's numbers (masses, inertias, springs, friction, ratios) lifted out of the right-hand side into
-        # the input p, one entry per use (symbolic.lifted): the step's code is then the model's structure, and a
-        # model of other values shares its compiled library; lifted before cse, which would merge equal values
-        rhs, self.values = lift_constants(cs.Function("rhs", [z, w], [self._rhs(z, w)]))
-        p = cs.SX.sym("p", self.values.size)
-        # the common subexpressions merged once, in the right-hand side (milliseconds), not in the RK4 step that
-        # calls it 4 x substeps times (the step's cse took 0.3 s on finger3, 2-4 s on an Allegro finger, for the
-        # same instructions: each call of zdot is already one node per instruction of its merged expression)
-        zdot = cs.Function("zdot", [z, w, p], [cs.cse(rhs(z, w, p))])
-        zn = z
-        for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
-            zn = rk4_expression(lambda x, u: zdot(x, u, p), zn, w, self.dt / self.substeps)
-        self.step_p = cs.Function("step", [z, w, p], [zn], ["z", "w", "p"], ["z_next"])
-        self.step = cs.Function("step", [z, w], [self.step_p(z, w, cs.DM(self.values))], ["z", "w"], ["z_next"])
-        self.output = cs.Function("h", [z], [system.h_function(z[: self.nx])], ["z"], ["y"])
-
-    def _rhs(self, z: cs.SX, w: cs.SX) -> cs.SX:
-        ss = self.system
-        n = ss.n
-        q, v = z[:n], z[n: 2 * n]
-        th = {p: z[self.nx + i] for i, p in enumerate(self.parameters)}
-        a = th.get("input_gain", 1.0)
-        u = w[: ss.n_inputs]
-        motors = ss.model.transmission.motor_names if any(p.startswith(DISTURBANCE_PREFIX) for p in th) else ()
-        d = [th.get(f"{DISTURBANCE_PREFIX}{mn}", 0.0) for mn in motors]
-        if motors:  # an additive torque per motor (N m), a random-walk state
-            u = u + cs.vertcat(*d)
-        tau = a * ss.input_torque(q, u, v)
-        if "spring_gain" in th:  # the model applies k (q - q_rest); the gain b makes it b k (q - q_rest)
-            tau = tau + (1.0 - th["spring_gain"]) * ss.model.extras.spring_torque(q, cs)
-        F = a * w[ss.n_inputs:] if ss.force else None
-        qdd = joint_accelerations(ss, q, v, tau, F)
-        return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))
 
 
 def _finite_number(x: Any, name: str) -> float:
@@ -250,8 +162,12 @@ class KalmanFilter(Rebuilt):
     parameters:
         Gains estimated with the state, from :data:`PARAMETERS`.
     substeps:
-        RK4 steps per sample period in the discretised model (default 1; use the simulation's with the
+        Steps per sample period in the discretised model (default 1; use the simulation's with the
         smooth friction, whose time constant is a fraction of a millisecond).
+    friction_law:
+        ``"smooth"`` (default; RK4 on F_s tanh(v / v_s)) or ``"stick"`` (the time-stepping Coulomb law that holds a
+        joint at rest under a net torque below F_s, :mod:`alpes_dyn.simulation.stick`): the
+        :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`'s.
     compiled:
         Run :meth:`run` in C generated by CasADi and compiled once per model structure and noise setting
         (the model's numbers are an input of the compiled step, :attr:`filter_step_p`: a model of other masses,
@@ -277,10 +193,11 @@ class KalmanFilter(Rebuilt):
 
     def __init__(self, system: StateSpace, dt: float, *, process_noise: Any, measurement_noise: Any,
                  input_noise: Any = None, parameters: Sequence[str] = (), compiled: bool = False,
-                 substeps: int = 1) -> None:
+                 substeps: int = 1, friction_law: str = "smooth") -> None:
         self._remember(system, dt, process_noise=process_noise, measurement_noise=measurement_noise,
-                       input_noise=input_noise, parameters=parameters, compiled=compiled, substeps=substeps)
-        self.model = DiscreteModel(system, dt, parameters, substeps)
+                       input_noise=input_noise, parameters=parameters, compiled=compiled, substeps=substeps,
+                       friction_law=friction_law)
+        self.model = DiscreteModel(system, dt, parameters, substeps, friction_law)
         mdl = self.model
         self.dt = mdl.dt
         self.names = mdl.names

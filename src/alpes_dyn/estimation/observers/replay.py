@@ -42,6 +42,7 @@ from ...fileio import atomic_path
 from ...limits import check_bytes, check_physical
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
+from ...simulation.stick import check_friction_law
 from ...symbolic.parametric import tilted_gravity
 from ...symbolic.statespace import StateSpace
 from ...simulation.loop import Function, run_loop
@@ -50,7 +51,8 @@ from .observers import OBSERVERS, Estimate, make_observer
 from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
 
-__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY",
+           "averaged", "STICK_TORQUE_WINDOW"]
 
 MAX_DELAY = 100
 """The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
@@ -71,6 +73,28 @@ def advanced(recording: Recording, samples: int) -> Recording:
     last = np.repeat(b[1:] - 1, np.diff(b))
     tau = recording.torque[np.minimum(np.arange(recording.n_samples) + samples, last)]
     return dataclasses.replace(recording, torque=tau)
+
+STICK_TORQUE_WINDOW = 10
+"""Samples of the causal moving average of the recorded torque that the ``stick`` law's observer reads by default
+(:func:`averaged`): the law decides stick or slip from the torque, and a white torque noise as large as F_s (0.5 mN
+m on the Alpes finger) makes it slip where the joint holds; averaged over 10 ms its noise is a third, for a lag of
+4.5 ms on a motion of a few hertz."""
+
+
+def averaged(recording: Recording, samples: int) -> Recording:
+    """``recording`` with its torque replaced by the causal moving average of its last ``samples`` rows (before the
+    recording, the mean of its first ``samples`` rows: the hand at rest when it starts, the observer's first rest
+    state found under that mean): what the observer reads, its white noise divided by sqrt(``samples``). The
+    recording itself for 1."""
+    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= MAX_DELAY:
+        raise InputError(f"torque_window: expected a whole number of samples from 1 to {MAX_DELAY}, got {samples!r}")
+    if samples == 1:
+        return recording
+    tau = recording.torque
+    padded = np.concatenate([np.repeat(tau[:samples].mean(axis=0, keepdims=True), samples, axis=0), tau])
+    c = np.cumsum(padded, axis=0)
+    return dataclasses.replace(recording, torque=(c[samples:] - c[:-samples]) / samples)
+
 
 DISTURBANCE_WALK = 2e-4
 """Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
@@ -196,9 +220,10 @@ def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
 
 def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque_noise: float,
                    encoder_noise_counts: float, disturbance_walk: float, gains: tuple[str, ...], pars: tuple[str, ...],
-                   u0: np.ndarray, compiled: bool) -> tuple[Any, np.ndarray, np.ndarray]:
+                   u0: np.ndarray, compiled: bool, friction_law: str = "smooth") -> tuple[Any, np.ndarray, np.ndarray]:
     """The observer of :func:`estimate_recording` and its prior: (filter, z0 (nz,), P0 (nz,) variances); ``u0`` (m,)
-    the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C."""
+    the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C;
+    ``friction_law``: the discrete model's (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
     n, m = m_obs.n, m_obs.transmission.n_motors
     tr = m_obs.transmission
     step = 2 * np.pi / tr.counts_per_rev
@@ -207,18 +232,44 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
     ss = StateSpace(m_obs, input="motor", output="encoder")
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         process_noise=Q, measurement_noise=list(meas_var * np.ones(m)), input_noise=[torque_noise**2] * m)
-    z0 = np.concatenate([_initial_state(m_obs, u0), np.ones(len(gains)), np.zeros(len(pars))])
-    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(gains) + [(10 * torque_noise + 1e-4) ** 2] * len(pars))
+                         friction_law=friction_law, process_noise=Q, measurement_noise=list(meas_var * np.ones(m)),
+                         input_noise=[torque_noise**2] * m)
+    x0 = _initial_state(m_obs, u0)
+    z0 = np.concatenate([x0, np.ones(len(gains)), np.zeros(len(pars))])
+    sd_q = _rest_spread(m_obs, x0[:n], ss.B, torque_noise) if filt.model.friction_law == "stick" else np.full(n, 0.5)
+    P0 = np.concatenate([sd_q**2, [1.0**2] * n, [0.2**2] * len(gains), [(10 * torque_noise + 1e-4) ** 2] * len(pars)])
     return filt, z0, P0
 
 
-def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None) -> int:
-    """The observer's RK4 steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
+def _rest_spread(model: Model, q0: np.ndarray, B: np.ndarray, torque_noise: float) -> np.ndarray:
+    """(n,) rad: the prior standard deviation of the joints at rest for the stick law, at most 0.5 rad (the smooth
+    law's). Dry friction holds a finger anywhere the net torque is below F_s: |J dq| <= F_s about the frictionless
+    rest q0 (J = dG/dq, springs and gravity), a box in dq whose extent on joint i is sum_j |J^-1_ij| F_s,j; the rest
+    itself is found under a torque of noise ``torque_noise`` (N m, per motor through ``B`` (n, m)), J^-1 B sigma
+    more. A prior as wide as the smooth law's would let the first breakaway throw the split (which a joint held by
+    friction does not observe) by tens of degrees. Joints without spring keep 0.5 rad."""
+    J = model.gravity_jacobian(q0)
+    try:
+        Ji = np.linalg.inv(J)
+    except np.linalg.LinAlgError:
+        return np.full(q0.size, 0.5)
+    band = np.abs(Ji) @ model.extras.coulomb
+    noise = np.abs(Ji @ B).sum(axis=1) * torque_noise
+    sd = np.minimum(np.hypot(band, noise), 0.5)
+    sd[~(model.extras.stiffness > 0)] = 0.5
+    return np.where(np.isfinite(sd), sd, 0.5)
+
+
+def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None, friction_law: str = "smooth"
+              ) -> int:
+    """The observer's steps per sample: ``substeps``, or by default as many as the friction's stiffness asks
     (:func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth law at 1 kHz; with the tendons' sheath
-    friction at ``tension``, the recording's largest torques, where given), 1 without friction."""
+    friction at ``tension``, the recording's largest torques, where given), 1 without friction; 1 with the ``stick``
+    law, whose step resolves the dry friction implicitly (on finger3 at 1 kHz, 2 or 4 steps gave the same errors)."""
     if substeps is not None:
         return substeps
+    if friction_law == "stick" and np.any(model.extras.coulomb):
+        return 1
     has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
     return stable_substeps(model, dt, tension=tension) if has_friction else 1
 
@@ -254,7 +305,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int = 0) -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int = 0, friction_law: str = "smooth",
+                       torque_window: int | None = None) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -267,8 +319,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     disturbance: estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``
         N m per sqrt(s).
     transient: start of the error metrics, s (default min(1 s, duration / 5)).
-    substeps: RK4 steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
-        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; else 1).
+    substeps: steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
+        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; 1 with ``friction_law="stick"`` or
+        without friction).
     compiled: the filter in compiled C (same numbers).
     encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
         :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default 0.
@@ -279,12 +332,22 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
         :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
         torque of :func:`advanced` (a replay: the later samples are recorded). Default 0.
+    friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
+        F_s tanh(v / v_s) or ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
+        (:mod:`alpes_dyn.simulation.stick`).
+    torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
+        noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
+        stick law, else 1 (the torque as recorded).
 
     Returns
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
     rec = advanced(_replay_recording(recording, model, observer), torque_delay)
+    friction_law = check_friction_law(friction_law)
+    window = (STICK_TORQUE_WINDOW if friction_law == "stick" else 1) if torque_window is None else torque_window
+    raw_noise = _torque_noise(rec) if torque_noise is None else torque_noise
+    rec = averaged(rec, window)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
     for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
@@ -295,10 +358,10 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     t_start = min(1.0, 0.2 * duration) if transient is None else _nonnegative(transient, "transient", "s")
     if not t_start < duration:
         raise InputError(f"transient: {t_start:g} s must be shorter than the recording's {duration:g} s")
-    torque_noise = _nonnegative(_torque_noise(rec) if torque_noise is None else torque_noise, "torque_noise", "N m")
+    torque_noise = _nonnegative(raw_noise, "torque_noise", "N m") / math.sqrt(window)
     edges = np.append(segment_starts(rec.gravity), N - 1)  # a recording turned between orientations: in turn
     m_obs, angles, offsets = _observer_model(model, _piece(rec, edges[0], edges[1]), tilt, encoder_offset)
-    substeps = _substeps(m_obs, dt, substeps, np.abs(rec.torque).max(axis=0))
+    substeps = _substeps(m_obs, dt, substeps, np.abs(rec.torque).max(axis=0), friction_law)
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
@@ -310,7 +373,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         piece = _piece(rec, a, b)
         m_i = m_obs if a == 0 else _observer_model(model, piece, tilt, encoder_offset)[0]
         f, z0, P0 = _replay_filter(m_i, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
-                                   gains, pars, piece.torque[0], compiled)
+                                   gains, pars, piece.torque[0], compiled, friction_law)
         if parts:  # the hand turned: the filter carries on from its last estimate
             z0, P0 = parts[-1].z[-1], parts[-1].P[-1]
         else:
@@ -325,7 +388,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                 "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
                 "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
                 "encoder_offset_rad": offsets.tolist(), "tilt_rad": angles,
-                "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay)}
+                "tendon_compliance": tr.tendon_compliance.tolist(), "torque_delay_samples": int(torque_delay),
+                "friction_law": filt.model.friction_law, "torque_window_samples": int(window)}
     return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
                              motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
                              disturbance=dist, settings=settings, filter=filt,
