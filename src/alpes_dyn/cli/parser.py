@@ -301,6 +301,10 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
                    help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
                         "torque_delay): the observer reads it that many samples earlier")
+    s.add_argument("--sigma-limit", type=_strict_float, default=None, metavar="DEG",
+                   help="a joint that no 0.5 s window of the motion pins within DEG degrees (one standard deviation, "
+                        "at the encoders' noise, dry friction unknown within F_c) is flagged as not observed "
+                        "(default 1)")
     s.set_defaults(func=cmd_estimate)
 
 
