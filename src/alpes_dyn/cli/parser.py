@@ -285,8 +285,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--torque-constant", type=_strict_float, default=None, metavar="NM_PER_A",
                    help="with --data: the motors' torque constant, N m/A, to read a recording's current_<motor> "
                         "columns (A) as motor torques (a recording with current columns needs it)")
-    s.add_argument("--disturbance", action="store_true",
-                   help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
+    s.add_argument("--disturbance", action="store_true", help="with --data: also estimate a slowly varying torque per motor")
     s.add_argument("--log", default=None, metavar="FILE.csv",
                    help="with --data: write the estimated joints, velocities and standard deviations as CSV")
     s.add_argument("--rotor-inertia", action="store_true",
@@ -298,13 +297,10 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--tilt", default=None, metavar="TILT_X,TILT_Y",
                    help="with --data: the palm's orientation, rad (identify's tilt_x, tilt_y): the observer's "
                         "gravity turned by it")
-    s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
-                   help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
-                        "torque_delay): the observer reads it that many samples earlier")
-    s.add_argument("--sigma-limit", type=_strict_float, default=None, metavar="DEG",
-                   help="a joint that no 0.5 s window of the motion pins within DEG degrees (one standard deviation, "
-                        "at the encoders' noise, dry friction unknown within F_c) is flagged as not observed "
-                        "(default 1)")
+    s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES", help="with --data: the recorded "
+                   "torque lags the motor's by this many whole samples (identify's torque_delay): read that much earlier")
+    s.add_argument("--sigma-limit", type=_strict_float, default=None, metavar="DEG", help="a joint that no 0.5 s "
+                   "window of the motion pins within DEG degrees (1 sigma, dry friction unknown) is flagged (default 1)")
     s.set_defaults(func=cmd_estimate)
 
 
