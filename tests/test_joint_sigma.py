@@ -109,20 +109,33 @@ def test_nees_band_predicts_the_spread_of_a_linear_filter():
     assert 0.65 < np.var(values, ddof=1) / np.mean(pred) < 1.5
 
 
-@pytest.mark.filterwarnings("ignore::DeprecationWarning")
-def test_nees_on_a_mujoco_smooth_friction_plant():
+def _mujoco_nees(torque_noise: float):
     """finger3 on MuJoCo with the library's smooth friction law (PlantEffects() default: the model is right), the
-    estimation scenario's torque for 2 s, the observer with the true file: with a noiseless torque sensor the NEES
-    is in its band."""
+    estimation scenario's torque for 2 s, its torque sensor of ``torque_noise`` N m, the observer with the true file:
+    the NEES of the joints."""
     pytest.importorskip("mujoco")
     from alpes_dyn.control.plants import mujoco_recording
     from alpes_dyn.estimation.observers.replay import estimate_recording
     from alpes_dyn.estimation.observers.scenario import EstimationScenario, _torque
 
     u = _torque(EstimationScenario(), 1e-3 * np.arange(2001), 1)
-    rec = mujoco_recording("finger3", None, u, 1e-3, seed=9101, torque_noise=0.0)
-    r = estimate_recording(rec, ad.Model.alpes("finger3", friction=True), torque_noise=0.0)
-    v = nees(r.estimate, rec.true_q, r.filter, r.inputs, start=r.settings["transient_s"])
+    rec = mujoco_recording("finger3", None, u, 1e-3, seed=9101, torque_noise=torque_noise)
+    r = estimate_recording(rec, ad.Model.alpes("finger3", friction=True), torque_noise=torque_noise)
+    return nees(r.estimate, rec.true_q, r.filter, r.inputs, start=r.settings["transient_s"])
+
+
+def test_nees_on_a_mujoco_smooth_friction_plant():
+    """With a noiseless torque sensor the NEES on MuJoCo's smooth-friction plant is in its band."""
+    v = _mujoco_nees(0.0)
+    assert v.consistent, v.to_dict()
+
+
+@pytest.mark.xfail(strict=True, reason="issue 50: the torque sensor's noise kicks the filter's joints far beyond the "
+                   "smooth friction law's band and its linearised covariance does not carry it: NEES 23-27 for 3 "
+                   "(docs/user-guide/observers.rst); to be mended by the friction observer")
+def test_nees_on_a_mujoco_smooth_friction_plant_with_torque_noise():
+    """The same plant with the estimation scenario's torque noise (5e-4 N m)."""
+    v = _mujoco_nees(5e-4)
     assert v.consistent, v.to_dict()
 
 
