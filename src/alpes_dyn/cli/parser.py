@@ -4,15 +4,12 @@ examples (one function per command, in the order ``alpes-dyn --help`` lists them
 from __future__ import annotations
 
 import argparse
-from typing import Callable
-
-import numpy as np
-
 from .. import __version__
 from ..analysis.observability_matrix import MAX_INSTRUCTIONS
-from ..limits import MAX_POINTS, MAX_SEED
+from .arguments import (OUTPUT_HELP, _POINTS, _SEED, _common, _int_at_least, _json_option,  # noqa: F401
+                        _model_option, _outputs, _positive_number, _positive_seconds, _strict_float)
 from .analysis_cmds import cmd_identifiability, cmd_observability
-from .common import _UsageError, _drift_choice, _strict_int
+from .common import _UsageError, _drift_choice
 from .control_cmds import cmd_control
 from .estimation_cmds import FRICTION_LAW_HELP, THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
@@ -26,102 +23,6 @@ DESCRIPTION = "Command line ``alpes-dyn``: URDF generation, dynamics, the report
 class _Parser(argparse.ArgumentParser):
     def error(self, message: str) -> None:  # one line, exit 2
         raise _UsageError(f"{self.prog}: {message}")
-
-
-def _int_at_least(low: int, high: int | None = None) -> Callable[[str], int]:
-    want = f"an integer >= {low}" if high is None else f"an integer from {low} to {high}"
-
-    def parse(text: str) -> int:
-        try:
-            value = _strict_int(text)
-        except ValueError:
-            raise argparse.ArgumentTypeError(f"expected {want}, got {text!r}") from None
-        if value < low or (high is not None and value > high):
-            raise argparse.ArgumentTypeError(f"expected {want}, got {value}")
-        return value
-
-    parse.__name__ = want
-    return parse
-
-
-_SEED = _int_at_least(0, MAX_SEED)
-_POINTS = _int_at_least(1, MAX_POINTS)
-
-
-def _strict_float(text: str) -> float:
-    """A number as argparse's ``type=float`` reads it, less Python's digit separators (``1_0`` is not 10)."""
-    if "_" in text:
-        raise ValueError(text)
-    return float(text)
-
-
-_strict_float.__name__ = "float"  # argparse's message: "invalid float value: 'x'"
-
-
-def _positive_seconds(text: str) -> float:
-    try:
-        value = _strict_float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}") from None
-    if not (np.isfinite(value) and value > 0):
-        raise argparse.ArgumentTypeError(f"expected a positive number of seconds, got {text!r}")
-    return value
-
-
-_positive_seconds.__name__ = "seconds"
-
-
-def _positive_number(unit: str) -> Callable[[str], float]:
-    def parse(text: str) -> float:
-        try:
-            value = _strict_float(text)
-        except ValueError:
-            value = float("nan")
-        if not (np.isfinite(value) and value > 0):
-            raise argparse.ArgumentTypeError(f"expected a positive number of {unit}, got {text!r}")
-        return value
-
-    parse.__name__ = unit
-    return parse
-
-
-OUTPUT_HELP = ("y: sum (of each motor's joint angles, default), encoder (q_m = S q), joints, joints:<a>,<b>, "
-               "tip_position:<frame>; several joined by '+', e.g. encoder+tip_position:tip")
-
-
-def _outputs(text: str) -> list[str]:
-    parts = [p.strip() for p in text.split("+")]
-    if not all(parts):
-        raise argparse.ArgumentTypeError(f"expected output names joined by '+', got {text!r}")
-    return parts
-
-
-def _common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") -> None:
-    """The options of the commands on one model: --model, --spec, --spring, --params, --json."""
-    sp.add_argument("--model", default=model_default, required=model_default is None,
-                    help="finger2, finger3, hand, or a path to a fixed-base URDF file (default %(default)s)")
-    sp.add_argument("--spec", default=None, metavar="FILE.toml",
-                    help="transmission spec of a URDF --model: motors, ratios, encoder, springs, friction, "
-                         "rotor inertia (see the user guide, 'Your own robot')")
-    sp.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
-                    help="Alpes models: spring model torsional 1/2 K q^2 (default), report (eq. 2.14 literally), "
-                         "none")
-    sp.add_argument("--params", default=None, metavar="FILE",
-                    help="Alpes models: parameter file (default: the shipped one)")
-    sp.add_argument("--json", action="store_true", help="print one JSON object")
-
-
-def _json_option(sp: argparse.ArgumentParser) -> None:
-    """``--json``: the command's result as one JSON object on stdout (every command has it)."""
-    sp.add_argument("--json", action="store_true", help="print one JSON object")
-
-
-def _model_option(sp: argparse.ArgumentParser, help: str) -> None:
-    """``--model`` (default finger3, as every command's) and the deprecated positional MODEL of version 0.1
-    (:func:`~alpes_dyn.cli.common.positional_model`: one warning line naming --model)."""
-    sp.add_argument("legacy_model", nargs="?", default=None, metavar="MODEL",
-                    help="deprecated: the model as a positional argument; give --model MODEL")
-    sp.add_argument("--model", default=None, help=help + " (default finger3)")
 
 
 def _add_urdf(sub: argparse._SubParsersAction) -> None:
@@ -284,8 +185,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--torque-constant", type=_strict_float, default=None, metavar="NM_PER_A",
                    help="with --data: the motors' torque constant, N m/A, to read a recording's current_<motor> "
                         "columns (A) as motor torques (a recording with current columns needs it)")
-    s.add_argument("--disturbance", action="store_true",
-                   help="with --data: also estimate a slowly varying torque per motor (what the model leaves)")
+    s.add_argument("--disturbance", action="store_true", help="with --data: also estimate a slowly varying torque per motor")
     s.add_argument("--log", default=None, metavar="FILE.csv",
                    help="with --data: write the estimated joints, velocities and standard deviations as CSV")
     s.add_argument("--rotor-inertia", action="store_true",
@@ -297,9 +197,10 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--tilt", default=None, metavar="TILT_X,TILT_Y",
                    help="with --data: the palm's orientation, rad (identify's tilt_x, tilt_y): the observer's "
                         "gravity turned by it")
-    s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
-                   help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
-                        "torque_delay): the observer reads it that many samples earlier")
+    s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES", help="with --data: the recorded "
+                   "torque lags the motor's by this many whole samples (identify's torque_delay): read that much earlier")
+    s.add_argument("--sigma-limit", type=_strict_float, default=None, metavar="DEG", help="a joint that no 0.5 s "
+                   "window of the motion pins within DEG degrees (1 sigma, dry friction unknown) is flagged (default 1)")
     s.add_argument("--friction-law", default=None, metavar="LAW", help=FRICTION_LAW_HELP)
     s.set_defaults(func=cmd_estimate)
 

@@ -115,6 +115,8 @@ class RecordingEstimate:
     filter: the observer run (its ``model.step`` the prediction,
         :mod:`~alpes_dyn.estimation.identification.observer_check`).
     measurement: (N, m) rad, the encoder as the observer read it (the zero and the tendons' stretch taken off).
+    inputs: (N-1, m) N m, the torque the observer read, row k held from sample k to k+1 (``torque_delay`` applied).
+    segments: the orientations run in turn (each its own filter; ``filter`` is the first's).
     """
 
     t: np.ndarray
@@ -127,6 +129,8 @@ class RecordingEstimate:
     settings: dict[str, Any]
     filter: Any = None
     measurement: np.ndarray | None = None
+    inputs: np.ndarray | None = None
+    segments: int = 1
 
     @property
     def q_hat(self) -> np.ndarray:
@@ -393,7 +397,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     return RecordingEstimate(t=rec.t.copy(), estimate=est, joint_names=m_obs.joint_names,
                              motor_names=m_obs.transmission.motor_names, rmse=rmse, final_error=final,
                              disturbance=dist, settings=settings, filter=filt,
-                             measurement=_reading(rec, tr, offsets))
+                             measurement=_reading(rec, tr, offsets), inputs=rec.torque[:-1].copy(),
+                             segments=len(parts))
 
 
 def _replay_recording(recording: Recording | str | Path, model: Model, observer: str) -> Recording:

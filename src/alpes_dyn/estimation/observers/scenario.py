@@ -169,6 +169,7 @@ class EstimationResult:
     rmse: (n,) RMSE of each q_i after the transient, rad. final_error: (n,) |q_hat - q| at t_N, rad.
     parameters: estimated gains at t_N and their true values, by name.
     backend: ``"compiled"`` or ``"casadi"``. counts_per_rev: encoder resolution used.
+    filter: the observer run (its known inputs ``u_meas``, :func:`~alpes_dyn.estimation.observers.consistency.nees`).
     """
 
     scenario: EstimationScenario
@@ -184,6 +185,7 @@ class EstimationResult:
     parameters: dict[str, dict[str, float]]
     backend: str
     counts_per_rev: float
+    filter: Any = None
 
     @property
     def q_true(self) -> np.ndarray:
@@ -359,7 +361,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     res = EstimationResult(scenario=sc, observer=observer, t=t, x_true=x_true, estimate=est, y=y, u_meas=u_meas,
                            rmse=rmse, final_error=np.abs(err[-1]), joint_names=truth.joint_names,
                            parameters=params_out, backend=filt.backend,
-                           counts_per_rev=float(truth.transmission.counts_per_rev))
+                           counts_per_rev=float(truth.transmission.counts_per_rev), filter=filt)
     return res
 
 

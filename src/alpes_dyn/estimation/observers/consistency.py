@@ -1,0 +1,191 @@
+"""Does an observer's reported uncertainty tell the truth? Each joint's standard deviation along a run, and the
+normalised estimation error squared (NEES) against true joints with its chi-square band.
+
+For an estimate q_hat_k of covariance P_k (its joints' block) and the true joints q_k, the NEES of a sample is
+
+    eps_k = (q_hat_k - q_k)^T P_k^-1 (q_hat_k - q_k),
+
+chi-square with n degrees of freedom when the filter is consistent (its error zero-mean with the covariance it
+reports; Bar-Shalom, Li & Kirubarajan, *Estimation with Applications to Tracking and Navigation*, 2001, Sec. 5.4).
+Its average over M independent samples is chi-square with n M degrees of freedom divided by M. A filter's errors
+are not independent from one sample to the next: :func:`nees` takes one sample every ``every`` seconds (a coarse
+decimation), and, given the filter and its inputs, counts them by the filter's own model of its error: the error
+after sample k+1 is (I - K H) A_k times the error after sample k plus the step's noises, so the filter predicts the
+correlation C_ba = Phi(k_b, k_a) P_a of its errors at two samples, and for Gaussian errors the covariance
+2 tr(P_a^-1 C_ab P_b^-1 C_ba) of their NEES; the variance V of the average so predicted is that of a chi-square of
+n M_eff degrees of freedom over M_eff for M_eff = 2 n / V (Satterthwaite's match of the first two moments; an
+error that rings for a second, as a frictionless finger's internal mode does, is fewer independent samples than
+its count). The band of the average: [chi2_{(1-level)/2}(n M_eff), chi2_{(1+level)/2}(n M_eff)]
+/ M_eff. Above the band the filter is over-confident (its sigma too small), below it is cautious.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ...checks import as_float_array
+from ...errors import InputError
+from .observers import Estimate
+
+__all__ = ["Nees", "nees", "joint_sigma", "NEES_EVERY"]
+
+NEES_EVERY = 0.1
+"""Default decimation of :func:`nees`, s: a filter's error at 1 kHz is correlated over tens of milliseconds (the
+autocorrelation of finger3's normalised error falls to 0.1-0.2 at 50 ms on the estimation scenario); what remains
+beyond (a frictionless finger's internal mode rings for seconds) is counted by the filter's error model."""
+
+
+@dataclass
+class Nees:
+    """The NEES of an observer's joints over a run (see the module docstring).
+
+    Attributes
+    ----------
+    value: the time-averaged NEES over the samples used (n for a consistent filter).
+    low, high: its band at ``level`` (default 95 %): [chi2 quantiles of n M_eff degrees of freedom] / M_eff.
+    dof: n, the joints. samples: M, the samples used (one every ``every`` s after ``start``).
+    effective: M_eff, the independent samples the M count for (M without the filter).
+    per_joint: (n,) time average of (q_hat_i - q_i)^2 / P_ii (1 for a consistent filter).
+    level: the band's probability. every: the decimation, s. start: the first time used, s.
+    """
+
+    value: float
+    low: float
+    high: float
+    dof: int
+    samples: int
+    effective: float
+    per_joint: np.ndarray
+    level: float
+    every: float
+    start: float
+
+    @property
+    def consistent(self) -> bool:
+        """Whether the NEES lies in its band."""
+        return bool(self.low <= self.value <= self.high)
+
+    @property
+    def verdict(self) -> str:
+        """``"consistent"``, ``"over-confident"`` (above the band: the sigma too small) or ``"cautious"``."""
+        return "consistent" if self.consistent else ("over-confident" if self.value > self.high else "cautious")
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``alpes-dyn estimate --json`` (its ``nees`` object)."""
+        return {"value": self.value, "band": [self.low, self.high], "level": self.level, "dof": self.dof,
+                "samples": self.samples, "effective_samples": self.effective, "every_s": self.every,
+                "start_s": self.start, "per_joint": self.per_joint.tolist(), "verdict": self.verdict}
+
+
+def _error_transitions(filt: Any, estimate: Estimate, W: np.ndarray) -> np.ndarray:
+    """(N-1, nz, nz) Phi_k: the filter's error after sample k+1 is Phi_k times its error after sample k, plus the
+    noises of the step (its linearisation): Phi_k = (I - K_k+1 H) A_k = P_k+1 P_pred^-1 A_k, with A_k = dF/dz at
+    (z_k, w_k) and P_pred = A_k P_k A_k^T + G Sigma_w G^T + Q (the optimal gain's (I - K H) P_pred = P_k+1)."""
+    import casadi as cs
+
+    mdl = filt.model
+    z, w = cs.SX.sym("z", mdl.nz), cs.SX.sym("w", mdl.nw)
+    zn = mdl.step(z, w)
+    lin = cs.Function("lin", [z, w], [cs.densify(cs.jacobian(zn, z)), cs.densify(cs.jacobian(zn, w))])
+    N, nz = W.shape[0], mdl.nz
+    A, G = lin.map(N)(estimate.z[:N].T, W.T)
+    A = np.asarray(A).reshape(nz, N, nz).transpose(1, 0, 2)  # the map stacks the samples side by side
+    G = np.asarray(G).reshape(nz, N, mdl.nw).transpose(1, 0, 2)
+    P = estimate.P
+    P_pred = A @ P[:N] @ A.transpose(0, 2, 1) + G @ filt.Sw @ G.transpose(0, 2, 1) + filt.Q
+    return P[1: N + 1] @ np.linalg.solve(P_pred, A)
+
+
+def _predicted_variance(Phi: np.ndarray, P: np.ndarray, k: np.ndarray, n: int) -> float:
+    """Var of the mean of eps over the samples ``k`` under the filter's own model of its error: its errors at k_a
+    and k_b > k_a correlated by C_ba = Phi(k_b, k_a) P_a (the transitions of :func:`_error_transitions`), and for
+    Gaussian errors cov(eps_a, eps_b) = 2 tr(P_a^-1 C_ab P_b^-1 C_ba) (the joints' blocks)."""
+    M, step = k.size, int(k[1] - k[0])
+    T = np.broadcast_to(np.eye(Phi.shape[1]), (M - 1,) + Phi.shape[1:]).copy()
+    for j in range(step):  # the transitions over one decimation interval, every interval at once
+        T = Phi[k[:-1] + j] @ T
+    Winv = np.linalg.inv(P[k, :n, :n])
+    C = P[k[:-1]]  # C[a] = Phi(k_a+l, k_a) P_a, lag l = 0 first
+    total = 2.0 * n * M
+    for lag in range(1, M):  # a loop over the lags, every pair at that lag at once
+        C = T[lag - 1: M - 1] @ C[: M - lag]
+        Cq = C[:, :n, :n]
+        total += 4.0 * np.einsum("aij,ajk,akl,ail->", Winv[lag:], Cq, Winv[: M - lag], Cq)
+    return total / M**2
+
+
+def nees(estimate: Estimate, true_q: Any, filter: Any = None, inputs: Any = None, *, start: float = 0.0,
+         every: float = NEES_EVERY, level: float = 0.95) -> Nees:
+    """The time-averaged NEES of the joints of ``estimate`` against ``true_q`` and its band (module docstring).
+
+    Parameters
+    ----------
+    estimate: the observer's :class:`~alpes_dyn.estimation.observers.observers.Estimate` (N samples, its first n
+        states the joints, rad).
+    true_q: (N, n) the true joints, rad.
+    filter, inputs: the filter that made ``estimate`` (a :class:`~alpes_dyn.estimation.observers.observers.
+        KalmanFilter`) and its known inputs (N-1, nw), row k the input held from sample k to k+1: the band then
+        counts the samples by the filter's own model of its error's correlation (module docstring). Without them
+        the decimated samples are taken as independent.
+    start: the first time used, s from the estimate's first sample (after the transient).
+    every: one sample every ``every`` s (>= the sample period).
+    level: the band's probability, in (0, 1).
+
+    Returns
+    -------
+    :class:`Nees`. Raises :class:`~alpes_dyn.InputError` naming the argument: ``true_q`` of another shape or not
+    finite, ``start`` past the run, ``every`` or ``level`` out of range, fewer than two samples left.
+    """
+    from scipy.special import gammaincinv  # chi2.ppf(p, k) = 2 gammaincinv(k / 2, p) (scipy.stats: seconds to import)
+
+    if not isinstance(estimate, Estimate):
+        raise InputError(f"estimate: expected an Estimate, got {type(estimate).__name__}")
+    q = as_float_array(true_q, "true_q", "(N, n) joint angles in rad")
+    N = estimate.z.shape[0]
+    if q.ndim != 2 or q.shape[0] != N or not 1 <= q.shape[1] <= estimate.z.shape[1]:
+        raise InputError(f"true_q: expected ({N}, n) joint angles, got shape {q.shape}")
+    if not np.isfinite(q).all():
+        raise InputError("true_q: contains NaN or inf")
+    dt = float(estimate.t[1] - estimate.t[0]) if N > 1 else 0.0
+    for x, name in ((start, "start"), (every, "every"), (level, "level")):
+        if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)) \
+                or not np.isfinite(x):
+            raise InputError(f"{name}: expected a finite number, got {x!r:.40}")
+    if not 0 < level < 1:
+        raise InputError(f"level: expected a probability in (0, 1), got {level!r}")
+    if not (dt > 0 and every >= dt * (1 - 1e-9)):
+        raise InputError(f"every: expected at least the sample period {dt:g} s, got {every!r}")
+    if not 0 <= start < estimate.t[-1] - estimate.t[0]:
+        raise InputError(f"start: expected a time in [0, {estimate.t[-1] - estimate.t[0]:g}) s, got {start!r}")
+    n = q.shape[1]
+    k = np.arange(int(round(start / dt)), N, max(1, int(round(every / dt))))
+    if k.size < 2:
+        raise InputError(f"every: {every:g} s leaves {k.size} sample after {start:g} s (at least 2 needed)")
+    e = estimate.z[k, :n] - q[k]
+    P = estimate.P[k, :n, :n]
+    eps = np.einsum("ki,ki->k", e, np.linalg.solve(P, e[:, :, None])[:, :, 0])
+    m_eff = float(k.size)
+    if filter is not None:
+        W = as_float_array(inputs, "inputs", f"({N - 1}, {filter.nw}) known inputs")
+        if W.shape != (N - 1, filter.nw) or not np.isfinite(W).all():
+            raise InputError(f"inputs: expected ({N - 1}, {filter.nw}) finite known inputs, got shape {W.shape}")
+        if estimate.z.shape[1] != filter.nz:
+            raise InputError(f"filter: its {filter.nz} states are not the estimate's {estimate.z.shape[1]}")
+        Phi = _error_transitions(filter, estimate, W)
+        m_eff = min(m_eff, 2.0 * n / _predicted_variance(Phi, estimate.P, k, n))
+    low, high = 2.0 * gammaincinv(n * m_eff / 2.0, np.array([(1 - level) / 2, (1 + level) / 2])) / m_eff
+    per_joint = np.mean(e**2 / np.diagonal(P, axis1=1, axis2=2), axis=0)
+    return Nees(value=float(eps.mean()), low=float(low), high=float(high), dof=n, samples=int(k.size),
+                effective=float(m_eff), per_joint=per_joint, level=float(level), every=float(every),
+                start=float(start))
+
+
+def joint_sigma(estimate: Estimate, n: int, start: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """Each joint's reported standard deviation along the run after ``start`` s: (median (n,), worst (n,)), rad,
+    of sqrt(P_ii) (:attr:`~alpes_dyn.estimation.observers.observers.Estimate.std`)."""
+    k0 = int(round(start / (estimate.t[1] - estimate.t[0]))) if estimate.t.size > 1 else 0
+    sd = estimate.std[min(k0, estimate.t.size - 1):, :n]
+    return np.median(sd, axis=0), sd.max(axis=0)
