@@ -92,7 +92,7 @@ def test_force_held_on_the_urdf_and_equal_to_the_static_balance(model):
     r = run_control("sensor", model=model, duration=1.8, step_times=(0.8, 1.3))
     assert r.steady_state_error < 0.02 and max(r.q_rmse_deg) < 2.0
     n = r.block.normal
-    for hi, level in ((0.8, 0.2), (1.3, 1.0), (1.8, 0.5)):  # each level's last 200 ms
+    for hi, level in zip((0.8, 1.3, 1.8), r.scenario.levels):  # each level's last 200 ms (0.2, 0.6, 0.2 N)
         w = (r.t >= hi - 0.2) & (r.t < hi)
         q, tau, F_touch = r.q_true[w].mean(0), r.tau_cmd[w].mean(), r.F_true[w].mean()
         assert F_touch == pytest.approx(level, rel=0.02)  # MuJoCo's touch sensor holds the reference
