@@ -69,8 +69,9 @@ def _composition(sc):
                            gain=fx["gain"]),
               ForceSensor("F_touch", "F_meas", noise=sc.force_noise, resolution=sc.force_resolution, rng=rng),
               ForceLoop(ctl, force="F_fb" if kind == "sensorless" else "F_meas", estimate="z"), *fx["blocks"]]
-    ekf, z0, P0 = force_ekf(model, sc.dt, kind, torque_noise=sc.torque_noise, force_noise=sc.force_noise,
-                            encoder_noise_counts=sc.encoder_noise_counts, force_resolution=sc.force_resolution)
+    ekf, z0, P0 = force_ekf(d.observer_model or model, sc.dt, kind, torque_noise=sc.torque_noise,
+                            force_noise=sc.force_noise, encoder_noise_counts=sc.encoder_noise_counts,
+                            force_resolution=sc.force_resolution)
     blocks += [force_input("F_fb_prev" if kind == "sensorless" else "F_meas", "w_F", d.normal),
                Observer(ekf, z0, P0, known=(fx["torque"], "w_F"), measurement=fx["measurement"], covariance=None,
                         first_update=False, step=step_caller(ekf.filter_step_p, "t", False, ekf.model.values))]

@@ -50,7 +50,8 @@ class ControlScenario:
     (damping F_v, frictionloss F_s of the parameter file), the hand palm down (gravity reversed: the
     finger flexes with gravity toward the block under it), at ``dt / substeps``; its parameters are
     ``plant_params`` (default: the controller's). The controller's model is
-    ``Model.alpes(model, params)`` palm down, no friction (the report's eq. 2.11).
+    ``Model.alpes(model, params)`` palm down, no friction (the report's eq. 2.11); the EKF's, the same with the
+    file's friction (eq. 2.6-2.7; ``observer_friction=False``: frictionless as the controller's).
 
     Sensors, sampled every ``dt`` (1 kHz): the encoder as in the estimation scenario
     (``transmission.encoder_counts`` counts per motor revolution, plus ``encoder_noise_counts`` counts
@@ -117,6 +118,7 @@ class ControlScenario:
     tau_max: float | None = None
     effects: Any = field(default=None, compare=False)  # a PlantEffects: the plant's unmodelled effects (realism_loop)
     compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
+    observer_friction: bool = True  # an Alpes finger's EKF runs its file's friction (ForceStep's observer_friction)
 
     @property
     def robot(self) -> bool:
@@ -349,7 +351,8 @@ def _compensation(sc: Any) -> Compensation:
 def _alpes_setup(sc: ControlScenario) -> _Setup:
     """finger2/finger3 on the Alpes block scene, palm down (the loop of version 0.2, unchanged)."""
     _, p, pp = _plant_and_params(sc)
-    design = alpes_design(sc.model, p, sc.controller, sc.contact_q, _compensation(sc), sc.gains)
+    design = alpes_design(sc.model, p, sc.controller, sc.contact_q, _compensation(sc), sc.gains,
+                          observer_friction=sc.observer_friction)
     # the plant starts at rest: the finger hanging on its springs (in the plant's gravity), motor off
     mj, d, _ = block_plant(sc.model, pp, sc.effects, design.contact_q, sc.dt / sc.substeps)
     return _Setup(design, mj, d, "finger", "encoder_finger", "torque_finger", "flexiforce_finger")

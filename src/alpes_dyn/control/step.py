@@ -70,7 +70,8 @@ class LoopDesign:
     """The controller's side of a force loop: its model (and the EKF's), the contact normal n (3,), base frame, the
     motor limit (N m), the controller's settings (gains), the motor's row of S, the contact frame (None: the
     model's default tip), the Alpes finger's parameters (palm down; None for a URDF robot), the contact
-    configuration (rad) and a URDF robot's block (None on an Alpes finger)."""
+    configuration (rad), a URDF robot's block (None on an Alpes finger) and the EKF's model where it is not the
+    controller's (an Alpes finger's with its file's friction, :func:`alpes_design`; None: ``model``)."""
 
     model: Model
     normal: np.ndarray
@@ -81,18 +82,23 @@ class LoopDesign:
     params: HandParams | None = None
     contact_q: tuple[float, ...] = ()
     block: BlockScene | None = None
+    observer_model: Model | None = None  # the EKF's model; None: ``model``
 
 
 def alpes_design(name: str, params: HandParams, controller: str, contact_q: Sequence[float] | None,
-                 compensation: Compensation, gains: dict) -> LoopDesign:
+                 compensation: Compensation, gains: dict, observer_friction: bool = True) -> LoopDesign:
     """finger2/finger3 pressing the block scene's face at ``contact_q`` (default :data:`BLOCK_CONTACT_Q`): the
     model of ``params`` (already oriented, e.g. palm down) turned by the compensation's tilt, the block's normal,
-    the file's tau_max, :data:`.DEFAULT_GAINS` of ``controller`` overridden by ``gains``."""
+    the file's tau_max, :data:`.DEFAULT_GAINS` of ``controller`` overridden by ``gains``; with ``observer_friction``
+    the EKF's model is the finger with the file's friction (F_s tanh(v / v_s) + F_v v, eq. 2.6-2.7): the joints
+    that friction holds in contact are then where the encoder's sum leaves them, not where a frictionless model
+    would let them slide."""
     n = 2 if name == "finger2" else 3
     cq = tuple((BLOCK_CONTACT_Q if contact_q is None else contact_q)[:n])
     model = compensation.turned(Model.alpes(name, params=params))
+    observer = compensation.turned(Model.alpes(name, friction=True, params=params)) if observer_friction else None
     return LoopDesign(model, block_normal(cq), params.tau_max, {**DEFAULT_GAINS[controller], **gains},
-                      params=params, contact_q=cq)
+                      params=params, contact_q=cq, observer_model=observer)
 
 
 @functools.lru_cache(maxsize=1)
@@ -231,6 +237,9 @@ class ForceStep:
         The sensorless estimate's low-pass time constant, s.
     frame, motor, tau_max
         A URDF model's contact frame, pulling motor and motor limit (N m), as :class:`.ControlScenario`'s.
+    observer_friction : bool
+        The Alpes finger's EKF runs the file's friction (eq. 2.6-2.7, :func:`alpes_design`; the controller's static
+        balance stays frictionless, eq. 2.11). False: the frictionless model of version 0.2's loop.
 
     Attributes
     ----------
@@ -255,7 +264,8 @@ class ForceStep:
                  gains: dict | None = None, compensation: Compensation | None = None, palm_down: bool = True,
                  compiled: bool = True, torque_noise: float = 5e-4, encoder_noise_counts: float = 0.5,
                  force_noise: float = 0.005, force_resolution: float = 4.4 / 1024, force_filter_s: float = 0.01,
-                 frame: str | None = None, motor: str | None = None, tau_max: float | None = None) -> None:
+                 frame: str | None = None, motor: str | None = None, tau_max: float | None = None,
+                 observer_friction: bool = True) -> None:
         robot = isinstance(model, Model)
         if not robot and (not isinstance(model, str) or model not in CONTROL_MODELS):
             raise InputError(f"model: the force step is defined for one finger ({', '.join(CONTROL_MODELS)}) "
@@ -285,7 +295,7 @@ class ForceStep:
             _check_contact_q(contact_q, 2 if model == "finger2" else 3)
             p = params if isinstance(params, HandParams) else load_params(params)
             design = alpes_design(model, palm_down_params(p) if palm_down else p, controller, contact_q, comp,
-                                  dict(gains or {}))
+                                  dict(gains or {}), observer_friction=bool(observer_friction))
         if normal is not None:
             design = dataclasses.replace(design, normal=_normal(normal))
         noise = {k: _number(v, k, u, nonneg=True) for k, v, u in (
@@ -327,7 +337,7 @@ class ForceStep:
         ForceController(**self._controller_args)  # the settings checked here, not at the first sample
         self.filter_step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
         if kind != "pi":
-            ekf, z0, P0 = force_ekf(model, self.dt, kind, tip=design.frame, **noise)
+            ekf, z0, P0 = force_ekf(design.observer_model or model, self.dt, kind, tip=design.frame, **noise)
             self._ekf = ekf
             self._s0 = np.concatenate([np.array(ekf._z(z0, "z0")).reshape(-1),
                                        np.array(ekf._P(P0, "P0")).reshape(-1, order="F")])
