@@ -14,8 +14,8 @@ column              unit  meaning
                           dither); ``<motor>`` the model's motor name (``finger`` on finger2, finger3)
 =================== ===== =============================================================================
 
-The bias is the nominal finger's (no finger to trim it on): on a real finger it leaves the motion 3 to 9 degrees off
-the designed trajectory, and a soft finger can reach its stop. The command prints the encoder reading (counts) the
+The bias is the nominal finger's (no finger to trim it on): on the MuJoCo stand-in's drawn fingers it left the motion
+up to 16 degrees per joint off the designed trajectory, and pulled a soft finger onto its stop. The command prints the encoder reading (counts) the
 bias should hold the finger at, so that the user can trim it; ``--bench`` does that on the hand itself.
 
 ``alpes-dyn experiment --model finger3 --bench mujoco -o rec.csv`` runs the whole experiment through the hardware
