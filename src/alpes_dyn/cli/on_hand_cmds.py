@@ -34,10 +34,24 @@ import argparse
 from ..errors import InputError
 from .common import _check_run_files, _emit
 
-__all__ = ["experiment_on_hand", "GUARD_EXIT"]
+__all__ = ["add_options", "experiment_on_hand", "GUARD_EXIT"]
 
 GUARD_EXIT = 3
 """The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file)."""
+
+def add_options(s: argparse.ArgumentParser) -> None:
+    """``experiment``'s --design-only and --bench, and its -o and --json (their help says what each writes)."""
+    s.add_argument("--design-only", action="store_true",
+                   help="write the experiment's torque profile designed on --params (columns t in s, torque_<motor> in "
+                        "N m, one row per 1 ms sample) for a hand you drive with your own tools, instead of a recording")
+    s.add_argument("--bench", choices=("mujoco",), default=None,
+                   help="run the experiment on a hand through the hardware interface: mujoco, the MuJoCo stand-in "
+                        "(finger2, finger3; a real hand's effects; its finger drawn by --perturb, --seed and hidden): "
+                        "calibration, the bias trimmed on the hand, the guarded run; exit 3 where the guard stops it")
+    s.add_argument("-o", "--output", required=True, metavar="FILE.csv",
+                   help="the recording to write (with --design-only: the torque profile)")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+
 
 _NOT_WITH = (("--true-spec", "true_spec"), ("--true-model", "true_model"), ("--spec", "spec"))
 
