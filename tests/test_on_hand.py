@@ -248,3 +248,25 @@ def test_calibration_type_checks():
     with pytest.raises(InputError, match="hw: its motors thumb_flexion, thumb_abduction are not the model's finger"):
         calibrate(Loopback(motor_names=("thumb_flexion", "thumb_abduction")), FINGER3)
     assert isinstance(Calibration, type)
+
+
+def test_cli_bench_guard_trip_is_exit_3_one_line_no_file(tmp_path, monkeypatch, capfd):
+    """The CLI's side of a trip (the trip itself: the guard tests above, and the stand-in's folding draws): the
+    calibration and the run replaced by a toy's, the run raising as the guard does."""
+    pytest.importorskip("mujoco")
+    from alpes_dyn import cli
+    from alpes_dyn.estimation.experiments import calibration as calib_mod
+    from alpes_dyn.estimation.experiments import on_hand as on_hand_mod
+    from alpes_dyn.estimation.experiments.hand_session import SessionLog
+
+    def tripped(*a, **kw):
+        raise GuardTripped("guard: motor finger: encoder at 4695 counts left the guard band [2055, 4678]", "stop",
+                           1.0, np.array([4695.0]), SessionLog(*(np.zeros((1, 1)),) * 5))
+
+    monkeypatch.setattr(calib_mod, "calibrate", lambda hw, model, **kw: None)
+    monkeypatch.setattr(on_hand_mod, "run_experiment", tripped)
+    out = tmp_path / "rec.csv"
+    code = cli.main(["experiment", "--bench", "mujoco", "-o", str(out)])
+    _, err = capfd.readouterr()
+    assert code == 3 and not out.exists()
+    assert err.count("\n") == 1 and "experiment stopped: guard: motor finger: encoder at 4695 counts" in err

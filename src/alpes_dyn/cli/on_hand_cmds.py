@@ -32,12 +32,13 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
-from .common import _check_run_files, _emit
+from .common import EXIT_UNTRUSTED, _check_run_files, _emit, _Untrusted
 
 __all__ = ["add_options", "experiment_on_hand", "GUARD_EXIT"]
 
-GUARD_EXIT = 3
-"""The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file)."""
+GUARD_EXIT = EXIT_UNTRUSTED
+"""The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file): 3,
+as ``identify``'s for a fit not to be trusted (the run went, but its result is not there to use)."""
 
 def add_options(s: argparse.ArgumentParser) -> None:
     """``experiment``'s --design-only and --bench, and its -o and --json (their help says what each writes)."""
@@ -120,8 +121,6 @@ def _design_only(args: argparse.Namespace, nominal, design) -> int:
 
 
 def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
-    import sys
-
     from ..bench.mujoco_hand import MujocoHand
     from ..estimation.experiments.calibration import calibrate
     from ..estimation.experiments.draws import perturbed_params
@@ -135,9 +134,8 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     try:
         cal = calibrate(hw, nominal)
         res = run_experiment(hw, nominal, design, cal, path=args.output)
-    except GuardTripped as trip:
-        sys.stderr.write(f"alpes-dyn: experiment stopped: {trip} (no recording written)\n")
-        return GUARD_EXIT
+    except GuardTripped as trip:  # one line on stderr, exit 3 (GUARD_EXIT)
+        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written)") from None
     finally:
         hw.close()
     if args.true_params_out is not None:
