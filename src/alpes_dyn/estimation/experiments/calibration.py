@@ -6,8 +6,10 @@ only (no model of the finger is trusted for them).
 
 1. the rest: the command held at 0 N m for ``settle`` s (the cable slack, the springs and gravity alone), the median
    of the encoder over its second half;
-2. a slow torque ramp from 0 at ``rate`` N m/s (quasi-static: the finger's slowest mode, a few tenths of a second
-   near its fold, lags it by well under a tenth of the torque) up to ``safe_torque`` at most, stopped at the first
+2. a slow torque ramp from 0 at ``rate`` N m/s, the torque held while the encoder moves faster than ``speed``
+   counts/s (quasi-static where the finger is most compliant: near its fold a torque step of 1e-3 N m moves it
+   by 800 counts, and its slowest mode takes a few tenths of a second), up to ``safe_torque`` at most, stopped at the
+   first
    knee, where the motion stops growing with the torque as it did: once the encoder has left the rest by
    :data:`MIN_MOVE_COUNTS`, the slope over the last :data:`KNEE_WINDOW` of the safe torque below
    :data:`KNEE_FRACTION` of the steepest one seen (a joint reached its stop, or the springs balance the pull). The
@@ -21,7 +23,11 @@ only (no model of the finger is trusted for them).
    Alpes finger's static equilibria can end where gravity's torque outgrows its springs', and the finger then snaps
    to its stops (a window of 2 % of the safe torque moving the encoder by more than :data:`SNAP_FRACTION` of the
    range); its torque is where the experiment's bias must stay below;
-4. the command ramped back to 0 N m, four times as fast.
+4. the command ramped back to 0 N m, four times as fast (at ``rate``: unhindered by the speed hold).
+
+The ramp has no dither: rising, the finger's dry friction holds it back, so the curve reads fewer counts at a torque
+than the finger rests at once a dither keeps its joints sliding (the experiment's trim starts below its target and
+corrects on the hand, for that reason).
 
 The :class:`Calibration` is plain data; :meth:`Calibration.save` and :func:`load_calibration` keep it as a small JSON
 file. The encoder's counts are taken in the model's frame (q_m = 2 pi counts / counts_per_rev = S q, up to a few
