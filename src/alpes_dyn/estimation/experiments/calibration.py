@@ -17,7 +17,7 @@ only (no model of the finger is trusted for them).
    finger3 (palm up) q_1 reaches its 90 degree stop at 4900 counts, 0.026 N m, where the slope falls from 8e5 to
    1.3e5 counts per N m, while the sum grows on to 6600 counts at the safe 0.05 N m as q_2 and q_3 follow. The
    reading at the knee (or at the safe torque) is the usable range's upper end. Its lower end is the knee below the
-   steepest slope, where a joint left its stop (:func:`_lower_end`), or the rest;
+   steepest slope, where a joint left its stop (:func:`_lower_end`, :data:`LIFT_FRACTION`), or the rest;
 3. the ramp's curve (counts against torque, :data:`CURVE_POINTS` points) kept: the static relation the trim of
    :func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment` starts from, and a fold found on it: palm up an
    Alpes finger's static equilibria can end where gravity's torque outgrows its springs', and the finger then snaps
@@ -53,7 +53,7 @@ from .hand_session import HandSession
 from .recording import _check_encoder_columns
 
 __all__ = ["Calibration", "calibrate", "load_calibration", "MIN_MOVE_COUNTS", "KNEE_WINDOW", "KNEE_FRACTION",
-           "SNAP_FRACTION", "CURVE_POINTS"]
+           "LIFT_FRACTION", "SNAP_FRACTION", "CURVE_POINTS"]
 
 MIN_MOVE_COUNTS = 50.0
 """Counts the encoder must leave the rest by before the ramp may call the motion stopped (a slack cable's dead band
@@ -62,8 +62,15 @@ KNEE_WINDOW = 0.05
 """The window of the knee test, a fraction of the safe torque (2.5e-3 N m of the Alpes fingers' 0.05): the slope
 is the encoder's growth over it."""
 KNEE_FRACTION = 0.3
-"""The knee: the slope over the last window below this share of the steepest seen on the ramp (a joint reached its
-stop, or the springs balance the pull)."""
+"""The upper knee: the slope over the last window below this share of the steepest seen on the ramp (a joint reached
+its stop, or the springs balance the pull). Palm up, finger3's q_1 reaches its stop first and the slope falls to a
+sixth. Hung fingers down (the MuJoCo stand-in turned) q_2 reaches its stop first and the slope falls by a third only
+(q_1 and q_3 still move): this rule misses it and the range runs on to q_1's stop 900 counts later, while 0.6,
+which catches it, ends the palm-up range 700 counts early, on the slope's fall past the fold (a known limit: the
+calibration is for the palm-up rig)."""
+LIFT_FRACTION = 0.3
+"""The lower knee: the last window below the steepest slope whose slope is under this share of it (a joint lifting
+off its stop is a jump of the slope; a slope that grows smoothly, hung, keeps the rest as the lower end)."""
 SNAP_FRACTION = 0.25
 """A fold: a window of 2 % of the safe torque that moved the encoder by more than this share of the usable range."""
 CURVE_POINTS = 200
@@ -283,7 +290,7 @@ def _upper_end(tau: np.ndarray, cnt: np.ndarray, knee: int, n_smooth: int) -> tu
 
 def _lower_end(tau: np.ndarray, cnt: np.ndarray, window: float, rest: float) -> tuple[float, float]:
     """(counts, torque) of the usable range's lower end on the binned curve (P,), (P,): below the steepest slope
-    (over ``window`` N m), the end of the last window whose slope is under :data:`KNEE_FRACTION` of it (palm up,
+    (over ``window`` N m), the middle of the last window whose slope is under :data:`LIFT_FRACTION` of it (palm up,
     finger3's q_1 lies on its 0 degree stop until 1800 counts, 0.019 N m, while q_2 and q_3 move: a slope of 1e5
     counts per N m, then 8e5 once it lifts off); the rest (0 N m) where the slope stays above it all the way."""
     w = max(1, int(np.searchsorted(tau, tau[0] + window)))
@@ -291,7 +298,7 @@ def _lower_end(tau: np.ndarray, cnt: np.ndarray, window: float, rest: float) -> 
         return rest, 0.0
     slope = (cnt[w:] - cnt[:-w]) / np.maximum(tau[w:] - tau[:-w], 1e-300)
     top = int(np.argmax(slope))
-    flat = np.flatnonzero(slope[:top] < KNEE_FRACTION * slope[top])
+    flat = np.flatnonzero(slope[:top] < LIFT_FRACTION * slope[top])
     if flat.size == 0:
         return rest, 0.0
     i = int(flat[-1]) + w // 2  # the knee within the window, taken at its middle
