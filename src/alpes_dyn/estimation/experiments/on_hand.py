@@ -159,6 +159,13 @@ def designed_torque(nominal: Model, design: ExperimentDesign | None = None
         (N, m) motor torque, N m, u[k] held over [t_k, t_k+1): the nominal bias, the multisine and the dither.
     target : numpy.ndarray
         (m,) the nominal finger's encoder reading at rest under the bias, counts (what a trim on the hand aims at).
+
+    Examples
+    --------
+    >>> from alpes_dyn import Model
+    >>> t, u, target = designed_torque(Model.alpes("finger3", friction=True))
+    >>> u.shape, float(t[1]), round(float(target[0]))
+    ((4001, 1), 0.001, 3072)
     """
     design = _checked_design(design)
     g = _one_orientation(design)
