@@ -354,6 +354,34 @@ CLI: dict[str, list[Cli]] = {
           needle="is also the output of -o"),
         C("experiment", "--params", "{params_toml}", "-o", "{params_toml}", needle="-o: '{params_toml}' is the input of "
           "--params; refusing to write over it"),
+        # --design-only and --bench (issue 49): the torque alone, or the experiment on the MuJoCo stand-in
+        C("experiment", "--design-only", "--bench", "mujoco", "-o", "{tmp}/t.csv",
+          needle="--bench: runs the experiment on a hand; --design-only writes its torque alone"),
+        C("experiment", "--design-only", "--perturb", "0.1", "-o", "{tmp}/t.csv",
+          needle="--perturb: --design-only draws no true finger"),
+        C("experiment", "--design-only", "--seed", "3", "-o", "{tmp}/t.csv", needle="--seed: --design-only has no noise"),
+        C("experiment", "--design-only", "--rig", "both", "-o", "{tmp}/t.csv", needle="--rig both: --design-only runs "
+          "palm up"),
+        C("experiment", "--design-only", "--model", "hand", "-o", "{tmp}/t.csv",
+          needle="--model: --design-only is defined for finger2, finger3, thumb, got 'hand'"),
+        C("experiment", "--design-only", "--duration", "0.01", "-o", "{tmp}/t.csv",
+          needle="duration: expected a whole number of at least 100"),
+        C("experiment", "--design-only", "--amplitude", "2", "-o", "{tmp}/t.csv", needle="--amplitude: expected a "
+          "fraction in (0, 1]"),
+        C("experiment", "--design-only", "-o", "{tmp}/t.toml", needle="-o"),
+        C("experiment", "--design-only", "--params", "{params_toml}", "-o", "{params_toml}",
+          needle="-o: '{params_toml}' is the input of --params; refusing to write over it"),
+        C("experiment", "--bench", "mujoco", "--model", "thumb", "-o", "{tmp}/r.csv",
+          needle="--model: --bench mujoco is defined for finger2, finger3, got 'thumb'"),
+        C("experiment", "--bench", "mujoco", "--chain", "index", "-o", "{tmp}/r.csv",
+          needle="--chain: the MuJoCo stand-in is one finger"),
+        C("experiment", "--bench", "mujoco", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv",
+          needle="--true-params-out: goes with --perturb"),
+        C("experiment", "--bench", "mujoco", "--rig", "hanging", "-o", "{tmp}/r.csv",
+          needle="--rig hanging: --bench mujoco runs palm up"),
+        C("experiment", "--bench", "real", "-o", "{tmp}/r.csv", needle="argument --bench: invalid choice: 'real'"),
+        C("experiment", "--bench", "mujoco", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{tmp}/r.csv",
+          needle="--spec: goes with a URDF --model's simulated experiment, not --bench mujoco"),
         C("experiment", "--params", "{params_toml}", "-o", "{hardlink}", needle="-o: '{hardlink}' is the input of "
           "--params"),  # the same inode under another name
         C("experiment", "-o", "{link}", needle="-o: '{link}' is a symbolic link; refusing to replace it"),
@@ -1173,6 +1201,24 @@ def A(api: str, call: Callable[[Any], Any], error: type[AlpesDynError], needle: 
     return Api(api, call, error, needle)
 
 
+def _on_hand(name: str) -> Any:
+    from alpes_dyn.estimation.experiments import on_hand
+
+    return getattr(on_hand, name)
+
+
+def _calibration(name: str) -> Any:
+    from alpes_dyn.estimation.experiments import calibration
+
+    return getattr(calibration, name)
+
+
+def _loopback(motors: tuple[str, ...] = ("finger",)) -> Any:
+    from alpes_dyn.bench.interface import Loopback
+
+    return Loopback(motor_names=motors)
+
+
 def _branches():
     """The two-branch robot of :data:`BRANCHES_URDF` with its spec."""
     return ad.Model(BRANCHES_URDF, TransmissionSpec.from_toml(BRANCHES_SPEC))
@@ -1867,6 +1913,31 @@ API: list[Api] = [
       "truth: expected the nominal's joints j1, j2, j3"),
     A("model_experiment_torque", lambda c: _model_torque(ad.Model(ROBOT_URDF)), InputError,
       "nominal: model 'tendon_robot' has no motors"),
+    # the experiment on the hand (issue 49): bad settings refused before the hand moves
+    A("run_experiment", lambda c: _on_hand("run_experiment")(_loopback(), c.m, _design(orientations=((0, 0, -9.81),
+                                                                                                      (0, 0, 9.81)))),
+      InputError, "orientations: the experiment on the hand runs in one orientation"),
+    A("run_experiment", lambda c: _on_hand("run_experiment")(_loopback(), c.m, stages=(0.5, 0.2)), InputError,
+      "stages: expected non-decreasing fractions in (0, 1]"),
+    A("run_experiment", lambda c: _on_hand("run_experiment")(_loopback(), c.m, hold=0.0), InputError,
+      "hold: expected a number above 0.1"),
+    A("run_experiment", lambda c: _on_hand("run_experiment")(_loopback(), c.m, calibration=3), InputError,
+      "calibration: expected a Calibration of the hand's motors (finger)"),
+    A("run_experiment", lambda c: _on_hand("run_experiment")(3, c.m), InputError, "hw: expected a HardwareInterface"),
+    A("run_experiment", lambda c: _on_hand("run_experiment")(_loopback(), c.m, path=c.d / "r.txt"), InputError,
+      "path"),
+    A("designed_torque", lambda c: _on_hand("designed_torque")("finger3"), InputError,
+      "nominal: expected an alpes_dyn Model with motors, got str"),
+    A("calibrate", lambda c: _calibration("calibrate")(_loopback(), c.m, safe_torque=1.0), InputError,
+      "safe_torque: expected a torque in (0, 0.05] N m"),
+    A("calibrate", lambda c: _calibration("calibrate")(_loopback(), c.m, rate=-1.0), InputError,
+      "rate: expected a ramp rate"),
+    A("calibrate", lambda c: _calibration("calibrate")(_loopback(), c.m, speed=math.nan), InputError,
+      "speed: expected a positive encoder speed"),
+    A("calibrate", lambda c: _calibration("calibrate")(_loopback(("a", "b")), c.m), InputError,
+      "hw: its motors a, b are not the model's finger"),
+    A("load_calibration", lambda c: _calibration("load_calibration")(c.f["params_toml"]), InputError,
+      "not a calibration file"),
     A("model_experiment_torque", lambda c: _model_torque(c.m, design="4 s"), InputError, "design: expected"),
     A("identified_spec", lambda c: _ident_spec(("K_1",), base="x"), ModelError, "base: expected a TransmissionSpec"),
     A("identified_spec", lambda c: _ident_spec(("K_1", "m_2")), ModelError,

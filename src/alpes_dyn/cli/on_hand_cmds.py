@@ -14,8 +14,8 @@ column              unit  meaning
                           dither); ``<motor>`` the model's motor name (``finger`` on finger2, finger3)
 =================== ===== =============================================================================
 
-The bias is the nominal finger's (no finger to trim it on): on a real finger it leaves the motion 3 to 9 degrees off
-the designed trajectory, and a soft finger can reach its stop. The command prints the encoder reading (counts) the
+The bias is the nominal finger's (no finger to trim it on): on the MuJoCo stand-in's drawn fingers it left the motion
+up to 16 degrees per joint off the designed trajectory, and pulled a soft finger onto its stop. The command prints the encoder reading (counts) the
 bias should hold the finger at, so that the user can trim it; ``--bench`` does that on the hand itself.
 
 ``alpes-dyn experiment --model finger3 --bench mujoco -o rec.csv`` runs the whole experiment through the hardware
@@ -32,12 +32,27 @@ from __future__ import annotations
 import argparse
 
 from ..errors import InputError
-from .common import _check_run_files, _emit
+from .common import EXIT_UNTRUSTED, _check_run_files, _emit, _Untrusted
 
-__all__ = ["experiment_on_hand", "GUARD_EXIT"]
+__all__ = ["add_options", "experiment_on_hand", "GUARD_EXIT"]
 
-GUARD_EXIT = 3
-"""The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file)."""
+GUARD_EXIT = EXIT_UNTRUSTED
+"""The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file): 3,
+as ``identify``'s for a fit not to be trusted (the run went, but its result is not there to use)."""
+
+def add_options(s: argparse.ArgumentParser) -> None:
+    """``experiment``'s --design-only and --bench, and its -o and --json (their help says what each writes)."""
+    s.add_argument("--design-only", action="store_true",
+                   help="write the experiment's torque profile designed on --params (columns t in s, torque_<motor> in "
+                        "N m, one row per 1 ms sample) for a hand you drive with your own tools, instead of a recording")
+    s.add_argument("--bench", choices=("mujoco",), default=None,
+                   help="run the experiment on a hand through the hardware interface: mujoco, the MuJoCo stand-in "
+                        "(finger2, finger3; a real hand's effects; its finger drawn by --perturb, --seed and hidden): "
+                        "calibration, the bias trimmed on the hand, the guarded run; exit 3 where the guard stops it")
+    s.add_argument("-o", "--output", required=True, metavar="FILE.csv",
+                   help="the recording to write (with --design-only: the torque profile)")
+    s.add_argument("--json", action="store_true", help="print one JSON object")
+
 
 _NOT_WITH = (("--true-spec", "true_spec"), ("--true-model", "true_model"), ("--spec", "spec"))
 
@@ -106,8 +121,6 @@ def _design_only(args: argparse.Namespace, nominal, design) -> int:
 
 
 def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
-    import sys
-
     from ..bench.mujoco_hand import MujocoHand
     from ..estimation.experiments.calibration import calibrate
     from ..estimation.experiments.draws import perturbed_params
@@ -121,9 +134,8 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     try:
         cal = calibrate(hw, nominal)
         res = run_experiment(hw, nominal, design, cal, path=args.output)
-    except GuardTripped as trip:
-        sys.stderr.write(f"alpes-dyn: experiment stopped: {trip} (no recording written)\n")
-        return GUARD_EXIT
+    except GuardTripped as trip:  # one line on stderr, exit 3 (GUARD_EXIT)
+        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written)") from None
     finally:
         hw.close()
     if args.true_params_out is not None:

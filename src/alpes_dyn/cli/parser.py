@@ -13,6 +13,7 @@ from .common import _UsageError, _drift_choice
 from .control_cmds import cmd_control
 from .estimation_cmds import FRICTION_LAW_HELP, THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
+from .on_hand_cmds import add_options as add_on_hand_options
 from .model_cmds import cmd_dynamics, cmd_import, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
 from .study_cmds import cmd_sweep
 
@@ -276,16 +277,7 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                         "hanging: fingers down; both (one finger): half palm up, half hung, each its own run (the "
                         "masses' split pinned). Each checks the whole record first and says what it chose")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
-    s.add_argument("--design-only", action="store_true",
-                   help="write the experiment's torque profile designed on --params (columns t in s, torque_<motor> in "
-                        "N m, one row per 1 ms sample) for a hand you drive with your own tools, instead of a recording")
-    s.add_argument("--bench", choices=("mujoco",), default=None,
-                   help="run the experiment on a hand through the hardware interface: mujoco, the MuJoCo stand-in "
-                        "(finger2, finger3; a real hand's effects; its finger drawn by --perturb, --seed and hidden): "
-                        "calibration, the bias trimmed on the hand, the guarded run; exit 3 where the guard stops it")
-    s.add_argument("-o", "--output", required=True, metavar="FILE.csv",
-                   help="the recording to write (with --design-only: the torque profile)")
-    s.add_argument("--json", action="store_true", help="print one JSON object")
+    add_on_hand_options(s)  # --design-only, --bench, -o, --json (cli.on_hand_cmds)
     s.set_defaults(func=cmd_experiment)
 
 

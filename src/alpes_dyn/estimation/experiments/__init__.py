@@ -4,5 +4,7 @@ the motor torques; the fingertip force of eq. 2.13), the experiment's settings (
 (:mod:`.multisine`: a multisine per motor and its dither), the bias trimmed on the finger at the static equilibrium
 of eq. 2.11 (:mod:`.trim`), the experiment simulated (:mod:`.experiment`) and adapted to the finger it runs on
 (:mod:`.adapt`, ``alpes-dyn experiment``'s default), the whole hand in one record (:mod:`.hand_experiment`), the
-encoder's excursion check (:mod:`.excursion`) and the seeded draws of a hand within its tolerances (:mod:`.draws`).
+encoder's excursion check (:mod:`.excursion`) and the seeded draws of a hand within its tolerances (:mod:`.draws`);
+on a hand through the hardware interface, with no truth: the guarded session (:mod:`.hand_session`), the
+calibration of its rest and range (:mod:`.calibration`) and the experiment trimmed and guarded on it (:mod:`.on_hand`).
 Nothing here imports the observers or the fit: they read what this sub-package writes."""

@@ -6,8 +6,10 @@ only (no model of the finger is trusted for them).
 
 1. the rest: the command held at 0 N m for ``settle`` s (the cable slack, the springs and gravity alone), the median
    of the encoder over its second half;
-2. a slow torque ramp from 0 at ``rate`` N m/s (quasi-static: the finger's slowest mode, a few tenths of a second
-   near its fold, lags it by well under a tenth of the torque) up to ``safe_torque`` at most, stopped at the first
+2. a slow torque ramp from 0 at ``rate`` N m/s, the torque held while the encoder moves faster than ``speed``
+   counts/s (quasi-static where the finger is most compliant: near its fold a torque step of 1e-3 N m moves it
+   by 800 counts, and its slowest mode takes a few tenths of a second), up to ``safe_torque`` at most, stopped at the
+   first
    knee, where the motion stops growing with the torque as it did: once the encoder has left the rest by
    :data:`MIN_MOVE_COUNTS`, the slope over the last :data:`KNEE_WINDOW` of the safe torque below
    :data:`KNEE_FRACTION` of the steepest one seen (a joint reached its stop, or the springs balance the pull). The
@@ -15,13 +17,17 @@ only (no model of the finger is trusted for them).
    finger3 (palm up) q_1 reaches its 90 degree stop at 4900 counts, 0.026 N m, where the slope falls from 8e5 to
    1.3e5 counts per N m, while the sum grows on to 6600 counts at the safe 0.05 N m as q_2 and q_3 follow. The
    reading at the knee (or at the safe torque) is the usable range's upper end. Its lower end is the knee below the
-   steepest slope, where a joint left its stop (:func:`_lower_end`), or the rest;
+   steepest slope, where a joint left its stop (:func:`_lower_end`, :data:`LIFT_FRACTION`), or the rest;
 3. the ramp's curve (counts against torque, :data:`CURVE_POINTS` points) kept: the static relation the trim of
    :func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment` starts from, and a fold found on it: palm up an
    Alpes finger's static equilibria can end where gravity's torque outgrows its springs', and the finger then snaps
    to its stops (a window of 2 % of the safe torque moving the encoder by more than :data:`SNAP_FRACTION` of the
    range); its torque is where the experiment's bias must stay below;
-4. the command ramped back to 0 N m, four times as fast.
+4. the command ramped back to 0 N m, four times as fast (at ``rate``: unhindered by the speed hold).
+
+The ramp has no dither: rising, the finger's dry friction holds it back, so the curve reads fewer counts at a torque
+than the finger rests at once a dither keeps its joints sliding (the experiment's trim starts below its target and
+corrects on the hand, for that reason).
 
 The :class:`Calibration` is plain data; :meth:`Calibration.save` and :func:`load_calibration` keep it as a small JSON
 file. The encoder's counts are taken in the model's frame (q_m = 2 pi counts / counts_per_rev = S q, up to a few
@@ -47,7 +53,7 @@ from .hand_session import HandSession
 from .recording import _check_encoder_columns
 
 __all__ = ["Calibration", "calibrate", "load_calibration", "MIN_MOVE_COUNTS", "KNEE_WINDOW", "KNEE_FRACTION",
-           "SNAP_FRACTION", "CURVE_POINTS"]
+           "LIFT_FRACTION", "SNAP_FRACTION", "CURVE_POINTS"]
 
 MIN_MOVE_COUNTS = 50.0
 """Counts the encoder must leave the rest by before the ramp may call the motion stopped (a slack cable's dead band
@@ -56,8 +62,15 @@ KNEE_WINDOW = 0.05
 """The window of the knee test, a fraction of the safe torque (2.5e-3 N m of the Alpes fingers' 0.05): the slope
 is the encoder's growth over it."""
 KNEE_FRACTION = 0.3
-"""The knee: the slope over the last window below this share of the steepest seen on the ramp (a joint reached its
-stop, or the springs balance the pull)."""
+"""The upper knee: the slope over the last window below this share of the steepest seen on the ramp (a joint reached
+its stop, or the springs balance the pull). Palm up, finger3's q_1 reaches its stop first and the slope falls to a
+sixth. Hung fingers down (the MuJoCo stand-in turned) q_2 reaches its stop first and the slope falls by a third only
+(q_1 and q_3 still move): this rule misses it and the range runs on to q_1's stop 900 counts later, while 0.6,
+which catches it, ends the palm-up range 700 counts early, on the slope's fall past the fold (a known limit: the
+calibration is for the palm-up rig)."""
+LIFT_FRACTION = 0.3
+"""The lower knee: the last window below the steepest slope whose slope is under this share of it (a joint lifting
+off its stop is a jump of the slope; a slope that grows smoothly, hung, keeps the rest as the lower end)."""
 SNAP_FRACTION = 0.25
 """A fold: a window of 2 % of the safe torque that moved the encoder by more than this share of the usable range."""
 CURVE_POINTS = 200
@@ -277,7 +290,7 @@ def _upper_end(tau: np.ndarray, cnt: np.ndarray, knee: int, n_smooth: int) -> tu
 
 def _lower_end(tau: np.ndarray, cnt: np.ndarray, window: float, rest: float) -> tuple[float, float]:
     """(counts, torque) of the usable range's lower end on the binned curve (P,), (P,): below the steepest slope
-    (over ``window`` N m), the end of the last window whose slope is under :data:`KNEE_FRACTION` of it (palm up,
+    (over ``window`` N m), the middle of the last window whose slope is under :data:`LIFT_FRACTION` of it (palm up,
     finger3's q_1 lies on its 0 degree stop until 1800 counts, 0.019 N m, while q_2 and q_3 move: a slope of 1e5
     counts per N m, then 8e5 once it lifts off); the rest (0 N m) where the slope stays above it all the way."""
     w = max(1, int(np.searchsorted(tau, tau[0] + window)))
@@ -285,7 +298,7 @@ def _lower_end(tau: np.ndarray, cnt: np.ndarray, window: float, rest: float) -> 
         return rest, 0.0
     slope = (cnt[w:] - cnt[:-w]) / np.maximum(tau[w:] - tau[:-w], 1e-300)
     top = int(np.argmax(slope))
-    flat = np.flatnonzero(slope[:top] < KNEE_FRACTION * slope[top])
+    flat = np.flatnonzero(slope[:top] < LIFT_FRACTION * slope[top])
     if flat.size == 0:
         return rest, 0.0
     i = int(flat[-1]) + w // 2  # the knee within the window, taken at its middle

@@ -35,8 +35,10 @@ __all__ = ["MAX_GAP", "RELAX_SECONDS", "GuardTripped", "HandSession", "SessionLo
 MAX_GAP = 1.5
 """A reading more than this many periods after the previous one trips the guard (the loop missed its period)."""
 
-RELAX_SECONDS = 0.3
-"""The ramp from the last command to the rest torque after a trip or at the end of a run, s."""
+RELAX_SECONDS = 0.05
+"""The ramp from the last command to the rest torque after a trip or at the end of a run, s: short, since a finger
+running away towards its stop (past its fold) goes on while the torque is still above what holds it; 50 ms at its
+speed must lie within the guard's margin (a step to 0 would let the springs snap it back at once)."""
 
 
 @dataclass
@@ -150,11 +152,12 @@ class HandSession:
         return r
 
     def run(self, commands: np.ndarray, guarded: bool = True) -> slice:
-        """:meth:`step` through the rows of ``commands`` (K, m), N m; the log's rows of the readings they led to."""
-        start = self.k + 1
+        """:meth:`step` through the rows of ``commands`` (K, m), N m; the log's rows at which they were written (the
+        reading each followed: row r holds the counts at t_r and the command held over [t_r, t_r+1))."""
+        start = self.k
         for u in np.asarray(commands, dtype=float).reshape(-1, self.m):  # the loop of the bench: one tick a row
             self.step(u, guarded)
-        return slice(start, self.k + 1)
+        return slice(start, self.k)
 
     def ramp_to(self, target: np.ndarray, seconds: float, guarded: bool = True) -> slice:
         """Ramp the command linearly from the last one written to ``target`` (m,), N m, over ``seconds``."""
@@ -198,6 +201,6 @@ class HandSession:
                            r.t, r.counts, self.log())
 
     def held_torque(self, rows: slice) -> np.ndarray:
-        """(len(rows), m) N m: the torque measured over each period [t_k, t_k+1) of the log's ``rows``, read at
-        the next tick (the module docstring); the last row's next reading must exist."""
+        """(len(rows), m) N m: the torque measured over each period [t_k, t_k+1) of the log's ``rows`` (those of
+        :meth:`run`), read at the next tick (the module docstring)."""
         return np.array(self._torque[rows.start + 1: rows.stop + 1]).reshape(-1, self.m)

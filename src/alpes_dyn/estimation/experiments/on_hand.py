@@ -24,9 +24,13 @@ with their own tools (:func:`designed_torque`, :func:`write_torque_profile`).
    over the range. The bias is kept below a fold the calibration found by 1.25 times the excitation's peak (the rule
    of :func:`~alpes_dyn.estimation.experiments.trim._trimmed_bias`); with ``design.trim_bias`` off (or a given
    ``torque_bias``) the nominal bias is used as it is;
-4. the multisine's amplitude brought up in ``stages`` (fractions of the design's), each ``stage_seconds`` long:
-   after each, the encoder's swing per N m of the multisine measured there predicts the full swing, and the
-   amplitude stops where 1.25 times it would leave the guard band (the result's ``amplitude_scale``);
+4. the multisine's amplitude brought up in ``stages`` (fractions of the design's), each ``stage_seconds`` long
+   (the record's first seconds replayed): after each, the encoder's swing per N m of the multisine measured there
+   predicts the full swing, and the amplitude stops where 1.25 times it would leave the guard band (the result's
+   ``amplitude_scale``); and the bias is corrected again, by the calibrated curve, for the difference between the
+   hand's mean reading over the stage's second half and the nominal finger's under the same excitation about the
+   nominal bias (simulated through every stage so far): the trim's target under the multisine is the designed
+   trajectory's mean, which for a finger near its fold is not its static rest;
 5. the record: the design's ``duration`` at that amplitude, the bias frozen (no feedback in the recorded torque:
    it stays on the multisine's lines, which the fit's errors in variables take), the guard on; then the finger
    relaxed (the command ramped to 0 N m).
@@ -111,6 +115,8 @@ class OnHandResult:
         Everything read and written during the run.
     record_rows : slice
         The log's rows of the record.
+    stages : list of tuple
+        (bias (m,), scale, the hand's mean counts (m,), the nominal's mean counts (m,)) of each amplitude stage.
     """
 
     recording: Recording
@@ -124,6 +130,7 @@ class OnHandResult:
     calibration: Calibration
     log: SessionLog
     record_rows: slice
+    stages: list
 
     def to_dict(self) -> dict:
         """The run's figures as plain JSON types (N m, counts)."""
@@ -152,6 +159,13 @@ def designed_torque(nominal: Model, design: ExperimentDesign | None = None
         (N, m) motor torque, N m, u[k] held over [t_k, t_k+1): the nominal bias, the multisine and the dither.
     target : numpy.ndarray
         (m,) the nominal finger's encoder reading at rest under the bias, counts (what a trim on the hand aims at).
+
+    Examples
+    --------
+    >>> from alpes_dyn import Model
+    >>> t, u, target = designed_torque(Model.alpes("finger3", friction=True))
+    >>> u.shape, float(t[1]), round(float(target[0]))
+    ((4001, 1), 0.001, 3072)
     """
     design = _checked_design(design)
     g = _one_orientation(design)
@@ -269,8 +283,9 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
     clock = _Clock(design, s, amp, dither, bias0)
     holds = _trim(s, clock, cal, target, bias, peak, cap, hold, max_holds if trim else 1, tolerance)
     bias, rest = holds[-1][0], holds[-1][1]
-    bias, scale, _ = _stages(s, clock, nominal, cal, bias, rest, low, high, st, stage_seconds, peak,
+    bias, scale, stage_log = _stages(s, clock, nominal, cal, bias, rest, low, high, st, stage_seconds, peak,
                              (peak, cap) if trim else None, hold)
+    clock.k = 0
     rows = s.run(clock.commands(bias, scale, design.n_samples))
     s.relax()
     held = s.held_torque(rows)
@@ -280,7 +295,7 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
     if path is not None:
         write_recording(rec, path)
     return OnHandResult(rec, bias, bias0, target, rest, scale, holds, bool(np.any(bias >= cap - 1e-12)), cal,
-                        s.log(), rows)
+                        s.log(), rows, stage_log)
 
 
 def _band(nominal: Model, design: ExperimentDesign, cal: Calibration, margin: float | None
@@ -303,9 +318,11 @@ def _band(nominal: Model, design: ExperimentDesign, cal: Calibration, margin: fl
 
 class _Clock:
     """The excitation's time axis: the record's first tick is t = 0 (the multisine from its designed phase, the
-    recorded torque the designed one but for the bias); the amplitude steps run on the ticks before it, so that the
-    multisine carries on into the record without a jump. :meth:`commands` of the next K ticks at a bias and a
-    multisine scale, the dither at full."""
+    recorded torque the designed one but for the bias), and so is each amplitude stage's (each replays the record's
+    first ticks: the design checked its amplitude on the nominal finger over the record's window only, and the
+    multisine's crest elsewhere in its 10 s period can be higher -- the nominal finger driven through the 2 s before
+    the window went past its fold). :meth:`commands` of the next K ticks at a bias and a multisine scale, the dither
+    at full."""
 
     def __init__(self, design: ExperimentDesign, s: HandSession, amp: np.ndarray, dither: np.ndarray,
                  bias0: np.ndarray) -> None:
@@ -349,13 +366,13 @@ def _stages(s: HandSession, clock: _Clock, nominal: Model, cal: Calibration, bia
     where ``bounds`` (floor, cap) are given (:func:`_running_correction`); (bias, the scale the record runs at,
     [(bias, scale, hand's mean counts, nominal's mean counts), ...] per stage)."""
     s.arm()
-    n = max(2, int(round(seconds / s.period)))
+    n = min(max(2, int(round(seconds / s.period))), clock.design.n_samples)
     last = s.log().counts[-max(2, int(round(hold / s.period)) // 2):]
     swing_dither = np.max(np.abs(last - rest), axis=0)
     ms_peak = np.maximum(peak - clock.dither, 0.0)  # the multisine's own peak over the record (N m)
-    allowed, out = 1.0, []
-    clock.k = -n * stages.size  # the record starts where the stages end
+    allowed, out, excitation = 1.0, [], []
     for a in stages:  # three or four steps
+        clock.k = 0  # each stage replays the record's first ticks: the excitation the design checked
         scale = min(float(a), allowed)
         rows = s.run(clock.commands(bias, scale, n))
         counts = s.log().counts[rows]
@@ -366,7 +383,8 @@ def _stages(s: HandSession, clock: _Clock, nominal: Model, cal: Calibration, bia
         full = np.where(torque > 0, swing / np.maximum(torque, 1e-300), 0.0) * ms_peak * (clock.amp > 0)
         fit = np.where(full > 0, (room / FOLD_PEAKS - swing_dither) / np.maximum(full, 1e-300), np.inf)
         allowed = min(allowed, float(np.clip(np.min(fit), 0.0, 1.0)))
-        ref = _nominal_mean(nominal, clock, s.log().command[rows] - bias, n)
+        excitation.append(s.log().command[rows] - bias)
+        ref = _nominal_mean(nominal, clock, np.concatenate(excitation), n)
         out.append((bias.copy(), scale, mid, ref))
         if bounds is not None:
             bias = np.clip(bias + STEP_GAIN * (cal.torque_at(ref) - cal.torque_at(mid)), *bounds)
@@ -374,13 +392,15 @@ def _stages(s: HandSession, clock: _Clock, nominal: Model, cal: Calibration, bia
 
 
 def _nominal_mean(nominal: Model, clock: _Clock, excitation: np.ndarray, n: int) -> np.ndarray:
-    """(m,) counts: the nominal finger's mean encoder reading over the second half of ``n`` ticks of ``excitation``
-    (n, m), N m, about the nominal bias, from its rest under the first torque: what the hand's mean over the same
-    stage is trimmed to (the designed trajectory's, not the static rest's: under the multisine the mean reading of a
-    finger close to its fold moves off its rest, by 150 counts on the MuJoCo stand-in's finger3)."""
+    """(m,) counts: the nominal finger's mean encoder reading over the second half of the last ``n`` ticks of
+    ``excitation`` (K, m), N m, every stage's so far about the nominal bias, from its rest under the first torque
+    (the stages before spend its transient): what the hand's mean over the same ticks is trimmed to -- the designed
+    trajectory's, not the static rest's: under the multisine the mean reading of a finger close to its fold moves
+    off its rest, by 150 counts on the MuJoCo stand-in's finger3."""
     design = clock.design
     u = excitation + clock.bias0
+    k = u.shape[0]
     g = np.asarray(design.orientations[0], dtype=float)
-    x = _simulate(nominal, design, u, np.repeat(g[None], n, 0), np.zeros(n, dtype=int))
-    y = np.asarray(_reading(nominal, x[:, : nominal.n].T), dtype=float).reshape(-1, n).T  # (n, m) rad
-    return y[n // 2:].mean(axis=0) * nominal.transmission.counts_per_rev / (2 * np.pi)
+    x = _simulate(nominal, design, u, np.repeat(g[None], k, 0), np.zeros(k, dtype=int))
+    y = np.asarray(_reading(nominal, x[k - n + n // 2:, : nominal.n].T), dtype=float).reshape(-1, n - n // 2).T
+    return y.mean(axis=0) * nominal.transmission.counts_per_rev / (2 * np.pi)
