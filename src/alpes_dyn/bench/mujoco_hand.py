@@ -56,7 +56,7 @@ from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .effects import PlantEffects, _number, real_hand_effects
 from .interface import Reading, check_command
-from .mujoco_plant import as_params, block_plant, free_plant, passive_forces, plant_model
+from .mujoco_plant import as_params, block_plant, free_plant, initial_qpos, passive_forces, plant_model
 
 __all__ = ["MujocoHand", "scoring_truth", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
@@ -162,7 +162,7 @@ class MujocoHand:
             mj, d, truth = free_plant(truth, model, p, e0, None, PERIOD / sub, "rk4", q0, at_rest)
             self._passive = passive_forces(mj, truth, e0)
             if q0 is None:
-                self._settle(mj, d, truth)
+                self._settle(mj, d, truth, p, e0)
         else:
             mj, d, truth = block_plant(model, palm_down_params(p), e, None, PERIOD / sub, q0)
             self._passive = None
@@ -188,10 +188,12 @@ class MujocoHand:
         self._torques = deque([self._measured_torque(np.zeros(m))] * (e0.torque_delay + 1))
         self._reading = self._sense()
 
-    def _settle(self, mj: Any, d: Any, truth: Any) -> None:
+    def _settle(self, mj: Any, d: Any, truth: Any, p: HandParams, e: PlantEffects) -> None:
         """The free finger left to rest, motor off, for :data:`SETTLE_S` before the first tick: the rest the
         springs and gravity find may lie beyond a joint stop (palm up), where the stop holds the finger; the
-        joints start clipped into their range and MuJoCo settles them against the stops."""
+        joints start clipped into their range and MuJoCo settles them against the stops. Each series-elastic rotor
+        is then put back where its cable is just taut, at rest (a frictionless rotor on a slack cable would
+        otherwise drift on, where a real motor's friction holds it)."""
         mujoco = self._mujoco
         perm = joint_permutation(mj, truth.joint_names)
         d.qpos[perm] = np.clip(d.qpos[perm], truth.lower, truth.upper)
@@ -205,6 +207,8 @@ class MujocoHand:
         finally:
             mujoco.set_mjcb_passive(previous)
         d.time = 0.0
+        d.qpos[:] = initial_qpos(mj, truth, perm, d.qpos[perm].copy(), np.zeros(truth.transmission.n_motors), p, e)
+        d.qvel[:] = 0.0
         mujoco.mj_forward(mj, d)
 
     @property
