@@ -15,7 +15,7 @@ from ..estimation.experiments.excursion import excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .fitting import (_check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_applies, _write_robot,
                       _written_lines)
-from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit,
+from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _trust_notes,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      data_label, parse_vector, read_data)
 
@@ -52,6 +52,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         raise InputError("--true-params: give either --params or --true-params (the simulated finger's file)")
     if args.observer_params is not None and args.mismatch != 0:
         raise InputError("--observer-params: give either --mismatch or --observer-params, not both")
+    notes = _trust_notes(args, [("--params", args.params), ("--observer-params", args.observer_params)])
     res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional",
                          params=args.true_params if args.true_params is not None else args.params,
                          observer_params=args.observer_params, friction=args.friction,
@@ -79,8 +80,16 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.plot is not None:
         lines.append(f"  figure: {args.plot}")
     lines.append(f"  {obj['seconds']:.1f} s")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _note_untrusted(obj: dict, lines: list[str], notes: list[str]) -> None:
+    """The files used with --force though marked not trustworthy (:func:`~.common._trust_notes`): ``obj``'s
+    ``not_trustworthy`` (a list, empty when none) and a WARNING line each."""
+    obj["not_trustworthy"] = list(notes)
+    lines += [f"  WARNING: {n}" for n in notes]
 
 
 _SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.0), ("--seed", "seed", 0),
@@ -102,6 +111,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     t0 = time.perf_counter()
+    notes = _trust_notes(args, [("--spec", args.spec) if _is_urdf_path(args.model) else ("--params", args.params)])
     whole = None
     if _is_urdf_path(args.model):
         whole = _urdf_robot(args, "the observer")
@@ -116,7 +126,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     else:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
-                            rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain)
+                            rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain, force=args.force)
     delay = 0 if args.torque_delay is None else args.torque_delay
     if not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
@@ -153,6 +163,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     if args.log is not None:
         lines.append(f"  log: {args.log}")
     lines.append(f"  {obj['seconds']:.1f} s")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
 
@@ -410,9 +421,10 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             raise InputError("--controller: the force controller is exported for finger2 and finger3 on the block "
                              "(alpes-dyn control's scene), without --chain and --friction")
     check_output_directory(args.output, "-o")  # before the build: a new or empty directory, never a file
+    notes = _trust_notes(args, [("--params", args.params)])
     t0 = time.perf_counter()
     filt, z0, P0 = scenario_filter(args.observer, args.model, params=args.params, chain=args.chain,
-                                   friction=args.friction)
+                                   friction=args.friction, force=args.force)
     about = (f"Model {args.model}{f' (chain {args.chain})' if args.chain else ''}, parameter file "
              f"{args.params or 'shipped with alpes_dyn'}{', with friction' if args.friction else ''}; observer "
              f"{args.observer} with the noise settings of 'alpes-dyn estimate'.")
@@ -420,7 +432,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     if args.controller is not None:
         from ..control.cexport import block_controller, controller_c_sources
 
-        files.update(controller_c_sources(block_controller(args.controller, args.model, args.params)))
+        files.update(controller_c_sources(block_controller(args.controller, args.model, args.params, args.force)))
     written = write_sources(files, args.output, "-o")
     prefix = f"alpes_{filt.kind}"
     obj = {"model": args.model, "chain": args.chain, "params": args.params, "observer": args.observer,
@@ -435,6 +447,7 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     if args.controller is not None:
         lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
                      "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
 
@@ -468,6 +481,7 @@ def _codegen_robot(args: argparse.Namespace) -> int:
         raise InputError(f"{'--frame' if args.frame is not None else '--motor'}: names the force controller's tip "
                          "frame or motor; give it with --controller")
     check_output_directory(args.output, "-o")  # before the build: a new or empty directory, never a file
+    notes = _trust_notes(args, [("--spec", args.spec)])
     t0 = time.perf_counter()
     model = _urdf_robot(args, "the C export")
     ctl = None
@@ -505,5 +519,6 @@ def _codegen_robot(args: argparse.Namespace) -> int:
     if ctl is not None:
         lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
                      "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0

@@ -301,6 +301,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
                    help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
                         "torque_delay): the observer reads it that many samples earlier")
+    s.add_argument("--force", action="store_true",
+                   help="use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify "
+                        "--force'); without it such a file is refused with its reason; the output says it is not")
     s.set_defaults(func=cmd_estimate)
 
 
@@ -337,6 +340,9 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--force", action="store_true",
+                   help="use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify "
+                        "--force'); without it such a file is refused with its reason; the output says it is not")
     s.set_defaults(func=cmd_codegen)
 
 
@@ -584,6 +590,9 @@ def _add_control(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
     s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--force", action="store_true",
+                   help="use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify "
+                        "--force'); without it such a file is refused with its reason; the output says it is not")
     s.set_defaults(func=cmd_control)
 
 

@@ -31,7 +31,7 @@ from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_
 from ..model.robot import Model
 from ..estimation.observers.blocks import Observer, step_caller
 from ..estimation.observers.observers import make_observer
-from ..model.params import HandParams, load_params
+from ..model.params import HandParams, check_trusted, load_params
 from ..estimation.observers.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
 from ..simulation.loop import Delay, Function, Source, run_loop
@@ -125,6 +125,7 @@ class ControlScenario:
     tau_max: float | None = None
     effects: Any = field(default=None, compare=False)  # a PlantEffects: the plant's unmodelled effects (realism_loop)
     compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
+    force: bool = False  # a controller's file marked not trustworthy used anyway (model.params.check_trusted)
 
     @property
     def robot(self) -> bool:
@@ -315,9 +316,11 @@ def _metrics(res: ControlResult) -> None:
 
 def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
-    (the plant's default: the controller's), both turned palm down."""
+    (the plant's default: the controller's), both turned palm down. The controller's file marked not trustworthy:
+    :class:`~alpes_dyn.ModelError` naming it, unless ``sc.force`` (:func:`~alpes_dyn.model.params.check_trusted`)."""
     mujoco = _mujoco()
     p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
+    check_trusted(p, bool(getattr(sc, "force", False)))
     pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
         load_params(sc.plant_params) if sc.plant_params is not None else p)
     return mujoco, palm_down_params(p), palm_down_params(pp)
@@ -518,7 +521,8 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     Raises
     ------
     InputError: bad settings (a frame, a motor or a block that cannot be placed: one line naming it).
-    ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra) or an unreadable parameter file.
+    ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra), an unreadable parameter file, or the
+        controller's file marked not trustworthy (its reason; ``force=True`` runs it).
     """
     sc = dataclasses.replace(scenario or ControlScenario(), controller=controller, **overrides)
     sc.check()
