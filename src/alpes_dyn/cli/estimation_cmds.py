@@ -126,9 +126,10 @@ def _estimate_data(args: argparse.Namespace) -> int:
     else:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
-                            rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain, force=args.force)
-    delay = 0 if args.torque_delay is None else args.torque_delay
-    if not 0 <= delay <= MAX_DELAY:
+                            rotor_inertia=args.rotor_inertia or _rotor_identified(args.params), params=args.params,
+                            chain=args.chain, force=args.force)
+    delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
+    if delay is not None and not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
                          f"torque_delay), got {delay}")
     rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
@@ -149,6 +150,13 @@ def _estimate_data(args: argparse.Namespace) -> int:
              f"  torque noise {res.settings['torque_noise_Nm']:.3g} N m"
              + (" (estimated from the recording)" if args.torque_noise is None else "")
              + ("; a disturbance torque per motor" if args.disturbance else "")]
+    from_file = [w for w, given, v in (
+        (f"torque delay {res.settings['torque_delay_samples']} samples", args.torque_delay,
+         res.settings["torque_delay_samples"]),
+        ("encoder offset " + ", ".join(f"{x:.4g}" for x in res.settings["encoder_offset_rad"]) + " rad",
+         args.encoder_offset, any(res.settings["encoder_offset_rad"]))) if given is None and v]
+    if from_file:
+        lines.append(f"  from --params: {'; '.join(from_file)} (as identified)")
     if res.rmse is not None:
         head = f"RMSE after {res.settings['transient_s']:g} s [deg]:"
         lines.append(f"  {head:30s}"
@@ -166,6 +174,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _rotor_identified(params: str | None) -> bool:
+    """Whether the parameter file's rotor inertia ``transmission.J_m`` was identified (``identify`` fitted it with
+    the rotor on the tendons: the observer's model takes it the same way, as ``--rotor-inertia``)."""
+    from ..model.params import load_params
+
+    prm = load_params(params).raw.get("transmission.J_m")
+    return prm is not None and prm.source == "identified"
 
 
 def _without_friction(model):
@@ -220,7 +237,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
     obj["effects"] = list(fit.effects)
-    obj["torque_delay"] = fit.delay  # samples, of the rig's sensors (not in the file): estimate --data --torque-delay
+    obj["torque_delay"] = fit.delay  # samples, of the rig's sensors: the file's transmission.torque_delay
     obj["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_rms": fit.tried.residual_rms, "converged": fit.tried.converged,
         "verdict": fit.tried.status()}
@@ -248,8 +265,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
     if fit.delay:
         lines.append(f"  torque delay: the recorded torque {fit.delay} sample{'s' if fit.delay > 1 else ''} late (the "
-                     f"rig's sensors, not written to the file: give it to the observer, estimate --data ... "
-                     f"--torque-delay {fit.delay})")
+                     f"rig's sensors: transmission.torque_delay in the file, which estimate --data reads)")
     obj.update(excursion_report(data))  # the fit's data: its motors whose encoder barely moved
     lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
     a = res.adequacy
@@ -425,9 +441,10 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     filt, z0, P0 = scenario_filter(args.observer, args.model, params=args.params, chain=args.chain,
                                    friction=args.friction, force=args.force)
+    rig = _rig_words(args)
     about = (f"Model {args.model}{f' (chain {args.chain})' if args.chain else ''}, parameter file "
              f"{args.params or 'shipped with alpes_dyn'}{', with friction' if args.friction else ''}; observer "
-             f"{args.observer} with the noise settings of 'alpes-dyn estimate'.")
+             f"{args.observer} with the noise settings of 'alpes-dyn estimate'." + (f" {rig[0]}" if rig[0] else ""))
     files = c_sources(filt, about=about, z0=z0, P0=P0)
     if args.controller is not None:
         from ..control.cexport import block_controller, controller_c_sources
@@ -438,18 +455,37 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     obj = {"model": args.model, "chain": args.chain, "params": args.params, "observer": args.observer,
            "controller": args.controller, "directory": args.output, "files": sorted(written), "prefix": prefix,
            "nz": filt.nz, "nw": filt.nw, "ny": filt.ny, "dt": filt.dt, "states": list(filt.names),
-           "seconds": time.perf_counter() - t0}
+           "seconds": time.perf_counter() - t0, **rig[1]}
     lines = [f"{args.model}: {args.observer} step{f' and {args.controller} controller' if args.controller else ''} "
              f"written to {args.output}/ ({', '.join(sorted(written))})",
              f"  {prefix}_step(z[{filt.nz}], P[{filt.nz}*{filt.nz}], w[{filt.nw}], y[{filt.ny}], z_out, P_out, "
              f"work), dt = {filt.dt:g} s; the API in {prefix}.h",
              f"  build: cc -O2 -o {prefix}_main main.c {prefix}.c -lm"]
+    if rig[0]:
+        lines.append(f"  {rig[0]}")
     if args.controller is not None:
         lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
                      "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _rig_words(args: argparse.Namespace) -> tuple[str, dict]:
+    """What the exported step leaves to its caller of the rig's side identified in --params: (a sentence, empty
+    without any; the JSON's ``encoder_offset_rad`` (per motor) and ``torque_delay_samples``). The tilt is in the
+    file's gravity, which the step's model holds."""
+    from ..estimation.observers.replay import file_encoder_offsets
+    from ..model.params import load_params
+    from ..model.robot import Model
+
+    p = load_params(args.params)
+    off = file_encoder_offsets(Model.alpes(args.model, params=p, chain=args.chain)).tolist()
+    words = ([f"Subtract the identified encoder zero ({', '.join(f'{x:.6g}' for x in off)} rad of the motor) from the "
+              "reading before y."] if any(off) else []) + (
+        [f"The recorded torque lags the motor's by {p.torque_delay} samples (identified): give w the command held, "
+         "not the late reading."] if p.torque_delay else [])
+    return " ".join(words), {"encoder_offset_rad": off, "torque_delay_samples": int(p.torque_delay)}
 
 
 _URDF_CODEGEN = (

@@ -493,7 +493,8 @@ def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: st
         blocks.append(Delay(sig["tau"], sig["tau_prev"], 0.0, name="command_held" + suffix))
     C = float(model.transmission.tendon_compliance[0])  # >= 0: a parameter file refuses a negative one
     if comp.observer_compliance:
-        off, torque, y = float(comp.encoder_offset), out["torque"], sig["y"]
+        off = comp.offset_of(params, suffix[1:] or "finger", model.chain)
+        torque, y = out["torque"], sig["y"]
         out["measurement"] = sig["y_obs"]
         blocks.append(Function(lambda **u: u[y] - off - C * u[torque], (y, torque), sig["y_obs"],
                                name="unstretched" + suffix))

@@ -50,7 +50,8 @@ from .observers import OBSERVERS, Estimate, make_observer
 from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
 
-__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY"]
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY",
+           "file_encoder_offsets"]
 
 MAX_DELAY = 100
 """The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
@@ -254,7 +255,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int = 0) -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int | None = None) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -271,19 +272,24 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; else 1).
     compiled: the filter in compiled C (same numbers).
     encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
-        :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default 0.
+        :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default: the
+        model's parameter file's (``encoder_offset`` of the chain's section, written by ``identify``), else 0.
     tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
         gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
         tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
         taken off it.
     torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
         :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
-        torque of :func:`advanced` (a replay: the later samples are recorded). Default 0.
+        torque of :func:`advanced` (a replay: the later samples are recorded). Default: the model's parameter
+        file's ``transmission.torque_delay`` (written by ``identify``), else 0. The palm's tilt identified is in
+        the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
 
     Returns
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
+    if torque_delay is None:
+        torque_delay = int(getattr(model.params, "torque_delay", 0))
     rec = advanced(_replay_recording(recording, model, observer), torque_delay)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
@@ -362,6 +368,14 @@ def _torque_noise(rec: Recording) -> float:
     return float(np.sqrt(np.mean(d2_tau**2) / 6.0))
 
 
+def file_encoder_offsets(model: Model) -> np.ndarray:
+    """(m,) rad: the encoders' zeros the model's parameter file holds for its motors
+    (:meth:`~alpes_dyn.model.params.HandParams.encoder_offset_of`: written by ``identify``), zeros without a file."""
+    p = model.params
+    return np.array([0.0 if p is None else p.encoder_offset_of(mn, model.chain)
+                     for mn in model.transmission.motor_names])
+
+
 def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
                     ) -> tuple[Model, list[float] | None, np.ndarray]:
     """(the observer's model in the recording's orientation, turned by ``tilt``; the tilt angles as given, rad, or
@@ -371,7 +385,7 @@ def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
     if tilt is not None:
         angles = _finite_vector(tilt, 2, "tilt", "rad").tolist()
         m_obs = m_obs.copy(gravity=tilted_gravity(m_obs.gravity, angles[0], angles[1]))
-    offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
+    offsets = file_encoder_offsets(model) if encoder_offset is None else \
         _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
     return m_obs, angles, offsets
 
