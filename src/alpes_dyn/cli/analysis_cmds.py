@@ -107,12 +107,12 @@ def cmd_identifiability(args: argparse.Namespace) -> int:
     _one_of(args.design, DESIGNS, "--design", "design")
     spec = args.parameters if args.parameters is not None else "K,m,friction"
     friction = any(k in spec for k in ("F_s", "F_v", "friction"))
-    model = Model.alpes(args.model, friction=friction, params=args.params, force=True)  # an analysis of the file as it is
+    model = Model.alpes(args.model, friction=friction, params=args.params)
 
     def torque(design, t):
         if args.design != "documented":
             return _torque(EstimationScenario(model=args.model), t[:-1], model.transmission.n_motors)
-        nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params, force=True)
+        nominal = model if friction else Model.alpes(args.model, friction=True, params=args.params)
         with warnings.catch_warnings():  # the amplitude search tries runs that leave the joint range
             warnings.simplefilter("ignore", JointRangeWarning)
             bias, amp = excitation(nominal, design)

@@ -127,7 +127,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
                             rotor_inertia=args.rotor_inertia or _rotor_identified(args.params), params=args.params,
-                            chain=args.chain, force=args.force)
+                            chain=args.chain)
     delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
     if delay is not None and not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
@@ -136,7 +136,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
-                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay)
+                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay,
+                             force=args.force)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()

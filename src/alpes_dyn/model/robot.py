@@ -36,7 +36,7 @@ from .inertial import check_inertials
 from .mimic import MimicCoupling, refuse_mimic_names
 from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args, _tips,
                            newton_equilibrium)
-from .params import HandParams, check_trusted, load_params
+from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
 from .contact import REFERENCE_FRAMES, Contact, as_contacts  # noqa: F401  (importable from here, as before)
@@ -245,21 +245,18 @@ class Model(FrameKinematics):
     @classmethod
     def alpes(cls, model: str = "finger3", spring: str = "torsional", friction: bool = False,
               rotor_inertia: bool = False, params: HandParams | str | Path | None = None,
-              chain: str | None = None, force: bool = False) -> "Model":
+              chain: str | None = None) -> "Model":
         """An Alpes model (``finger2``, ``finger3``, ``hand`` or ``thumb``) built from the parameter file.
 
         ``spring`` is ``"torsional"`` (default), ``"report"`` (eq. 2.14 literally) or ``"none"``;
         ``friction`` and ``rotor_inertia`` switch on eq. 2.6-2.7 and eq. 2.8 with the file's values.
         ``chain``: a finger model built from that finger of the hand (a name of ``palm.finger_names``:
         the shared ``[finger]`` values with its own ``[finger.<name>]`` ones); :attr:`chain` keeps it and
-        :attr:`params` the whole file. A file (a path) marked not trustworthy is refused
-        (:func:`~alpes_dyn.model.params.check_trusted`, :class:`~alpes_dyn.ModelError` with the reason it records)
-        unless ``force``; a :class:`HandParams` given is used as it is (:attr:`HandParams.untrusted` tells).
+        :attr:`params` the whole file (a file marked not trustworthy too: :attr:`HandParams.untrusted`; the
+        loaders that use its values refuse it, :func:`~alpes_dyn.model.params.check_trusted`).
         """
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)
-        if not isinstance(params, HandParams):
-            check_trusted(p, force)
         pc = model_params(model, p, chain)
         lay = layout(model, pc, None)
         if chain is not None:

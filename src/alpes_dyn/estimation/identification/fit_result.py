@@ -3,6 +3,7 @@ diagnostics, and the parameter file they make (:func:`identified_params`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -129,7 +130,9 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
       palm's tilt ``tilt_x``, ``tilt_y``: ``environment.gravity``, the model's file's gravity turned by it
       (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`, its standard error through the tilt's covariance;
       with the hand's chains, the last chain's); the torque delay :attr:`IdentificationResult.torque_delay`:
-      ``transmission.torque_delay`` (samples).
+      ``transmission.torque_delay`` (samples; the rig's current sensing, one for every motor: a fit that tried none
+      leaves the file's). A chain's encoder zero the fit did not fit is taken out of the file (the fit assumed
+      none).
 
     ``input_gain`` (the torque sensor's scale: multiply the torque constant by it) stays in the result (and
     ``identify --json``), not in the file.
@@ -142,6 +145,10 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     upd = _array_params(p, sec, arrays, stds, touched, reason)
     upd.update(_scalar_params(p, scalars, reason))
     upd.update(_rig_params(result, p, sec, reason))
+    stale = [k for k in (f"{sec}.encoder_offset",) + (("thumb.abduction_encoder_offset",) if thumb else ())
+             if k in p.raw and k not in upd]
+    if stale:  # the chain's zero of an earlier recording, which this fit did not assume (it fitted with none)
+        p = dataclasses.replace(p, raw={k: v for k, v in p.raw.items() if k not in stale})
     key = "thumb" if thumb else ("finger" if chain is None else chain)
     return with_values(p, upd, identification={key: _record(result)})
 

@@ -40,6 +40,7 @@ from ...checks import as_float_array
 from ...errors import InputError, RecordingError
 from ...fileio import atomic_path
 from ...limits import check_bytes, check_physical
+from ...model.params import check_trusted
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
 from ...symbolic.parametric import tilted_gravity
@@ -255,7 +256,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int | None = None) -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int | None = None, force: bool = False) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -283,11 +284,15 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         torque of :func:`advanced` (a replay: the later samples are recorded). Default: the model's parameter
         file's ``transmission.torque_delay`` (written by ``identify``), else 0. The palm's tilt identified is in
         the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
+    force: run on a model whose parameter file is marked not trustworthy (refused otherwise:
+        :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.params.check_trusted`).
 
     Returns
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
+    if getattr(model, "params", None) is not None:
+        check_trusted(model.params, force)
     if torque_delay is None:
         torque_delay = int(getattr(model.params, "torque_delay", 0))
     rec = advanced(_replay_recording(recording, model, observer), torque_delay)
