@@ -20,7 +20,8 @@ import pytest
 import alpes_dyn as ad
 from alpes_dyn.cli import main
 from alpes_dyn.errors import ModelError
-from alpes_dyn.model.params import Param, check_trusted, load_params, with_values, write_params
+from alpes_dyn.model.params import Param, load_params, with_values, write_params
+from alpes_dyn.model.trust import check_trusted
 from alpes_dyn.symbolic.parametric import tilted_gravity
 
 TILT_DEG, DELAY, OFFSET_COUNTS = 3.0, 1, 4.0

@@ -12,7 +12,7 @@ from .. import __version__
 from ..analysis.observability_matrix import MAX_INSTRUCTIONS
 from ..limits import MAX_POINTS, MAX_SEED
 from .analysis_cmds import cmd_identifiability, cmd_observability
-from .common import _UsageError, _drift_choice, _strict_int
+from .common import FORCE_USE_HELP, _UsageError, _drift_choice, _strict_int
 from .control_cmds import cmd_control
 from .estimation_cmds import THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
@@ -104,8 +104,7 @@ def _common(sp: argparse.ArgumentParser, model_default: str | None = "finger3") 
                     help="transmission spec of a URDF --model: motors, ratios, encoder, springs, friction, "
                          "rotor inertia (see the user guide, 'Your own robot')")
     sp.add_argument("--spring", default=None, choices=("report", "torsional", "none"),
-                    help="Alpes models: spring model torsional 1/2 K q^2 (default), report (eq. 2.14 literally), "
-                         "none")
+                    help="Alpes models: spring model torsional 1/2 K q^2 (default), report (eq. 2.14 literally), none")
     sp.add_argument("--params", default=None, metavar="FILE",
                     help="Alpes models: parameter file (default: the shipped one)")
     sp.add_argument("--json", action="store_true", help="print one JSON object")
@@ -263,8 +262,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--mismatch", type=_strict_float, default=0.0,
                    help="relative error of the observer's springs and masses, e.g. 0.1 (default %(default)s)")
     s.add_argument("--duration", type=_strict_float, default=5.0, help="simulated time, s (default %(default)s)")
-    s.add_argument("--seed", type=_SEED, default=0, help="random seed of the simulated scenario (default "
-                   "%(default)s)")
+    s.add_argument("--seed", type=_SEED, default=0, help="random seed of the simulated scenario (default %(default)s)")
     s.add_argument("--plot", metavar="FILE.png", help="the simulated scenario (not with --data): write a figure "
                    "of true and estimated joints (format by extension: .png, .pdf, .svg...)")
     s.add_argument("--true-params", default=None, metavar="FILE",
@@ -301,9 +299,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--torque-delay", type=int, default=None, metavar="SAMPLES",
                    help="with --data: the recorded torque lags the motor's by this many whole samples (identify's "
                         "torque_delay): the observer reads it that many samples earlier")
-    s.add_argument("--force", action="store_true",
-                   help="use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify "
-                        "--force'); without it such a file is refused with its reason; the output says it is not")
+    s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_estimate)
 
 
@@ -340,9 +336,7 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")
-    s.add_argument("--force", action="store_true",
-                   help="use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify "
-                        "--force'); without it such a file is refused with its reason; the output says it is not")
+    s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_codegen)
 
 
@@ -469,8 +463,7 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--params", default=None, metavar="FILE", help="Alpes models: parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
                    help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
-                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
-                        "chosen)")
+                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are chosen)")
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
@@ -590,9 +583,7 @@ def _add_control(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
     s.add_argument("--json", action="store_true", help="print one JSON object")
-    s.add_argument("--force", action="store_true",
-                   help="use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify "
-                        "--force'); without it such a file is refused with its reason; the output says it is not")
+    s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_control)
 
 

@@ -304,9 +304,10 @@ def block_controller(kind: str = "sensor", model: str = "finger3", params: Any =
     :data:`~.controller.CONTROLLERS` with its :data:`~.controller.DEFAULT_GAINS`, on ``model`` (finger2,
     finger3) with the parameter file ``params``, the block's face normal, the scenario's period and
     ``tau_max``; a fresh one (its state at zero). A file marked not trustworthy: :class:`~alpes_dyn.ModelError`
-    naming it unless ``force`` (:func:`~alpes_dyn.model.params.check_trusted`)."""
+    naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
     from ..model.mjcf import BLOCK_CONTACT_Q, block_normal
-    from ..model.params import HandParams, check_trusted, load_params
+    from ..model.params import HandParams, load_params
+    from ..model.trust import check_trusted
     from ..model.robot import Model
     from .controller import CONTROLLERS, DEFAULT_GAINS
     from .finger_loop import ControlScenario

@@ -31,7 +31,8 @@ from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, joint_permutation, load_
 from ..model.robot import Model
 from ..estimation.observers.blocks import Observer, step_caller
 from ..estimation.observers.observers import make_observer
-from ..model.params import HandParams, check_trusted, load_params
+from ..model.params import HandParams, load_params
+from ..model.trust import check_trusted
 from ..estimation.observers.scenario import default_noise, static_equilibrium, EstimationScenario
 from ..symbolic.statespace import StateSpace
 from ..simulation.loop import Delay, Function, Source, run_loop
@@ -125,7 +126,7 @@ class ControlScenario:
     tau_max: float | None = None
     effects: Any = field(default=None, compare=False)  # a PlantEffects: the plant's unmodelled effects (realism_loop)
     compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
-    force: bool = False  # a controller's file marked not trustworthy used anyway (model.params.check_trusted)
+    force: bool = False  # a controller's file marked not trustworthy used anyway (model.trust.check_trusted)
 
     @property
     def robot(self) -> bool:
@@ -317,7 +318,7 @@ def _metrics(res: ControlResult) -> None:
 def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
     (the plant's default: the controller's), both turned palm down. The controller's file marked not trustworthy:
-    :class:`~alpes_dyn.ModelError` naming it, unless ``sc.force`` (:func:`~alpes_dyn.model.params.check_trusted`)."""
+    :class:`~alpes_dyn.ModelError` naming it, unless ``sc.force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
     mujoco = _mujoco()
     p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
     check_trusted(p, bool(getattr(sc, "force", False)))

@@ -9,15 +9,19 @@ a subnormal 1e-320 are refused with the field's name and the range).
 
 The four fingers share ``[finger]``; a finger may have values of its own in a table ``[finger.<name>]``
 (``<name>`` from ``palm.finger_names``) holding any of :data:`OVERRIDE_FIELDS` (``K``, ``m``, ``I``,
-``F_s``, ``F_v``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
+``F_s``, ``F_v``, ``encoder_offset``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
 :func:`chain_params`): an identified hand differs link by link.
+
+What ``identify`` finds of the rig is in the file too (optional): a chain's encoder zero ``encoder_offset`` (rad of
+its motor, :meth:`HandParams.encoder_offset_of`), the torque's lag ``transmission.torque_delay`` (whole samples),
+the palm's tilt as the ``environment.gravity`` it turns.
 
 An identified file also records, per chain fitted, how far the fit is to be trusted: an optional table
 ``[identification.<chain>]`` (``<chain>``: ``finger`` for the shared values, a finger's name, or
 ``thumb``) with the fields of :data:`IDENTIFICATION_FIELDS` (``converged``, ``adequate``,
 ``trustworthy``, the stop reason, the verdict...; :attr:`HandParams.identification`). A file with a chain
 marked ``trustworthy = false`` (written with ``alpes-dyn identify --force``) is refused by the commands and loaders
-that use its values (:func:`check_trusted`: one line with the reason the file records) unless forced.
+that use its values unless forced (:func:`~alpes_dyn.model.trust.check_trusted`).
 """
 
 from __future__ import annotations
@@ -39,8 +43,7 @@ from ..limits import check_not_subnormal, check_physical
 
 __all__ = [
     "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
-    "params_toml", "with_values", "write_params", "chain_params", "IDENTIFICATION_FIELDS", "check_trusted",
-    "untrusted_reason",
+    "params_toml", "with_values", "write_params", "chain_params", "IDENTIFICATION_FIELDS",
 ]
 
 # field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
@@ -220,11 +223,6 @@ class HandParams:
     def untrusted(self) -> list[str]:
         """The chains whose identified values are marked not trustworthy (written with ``--force``)."""
         return [c for c, rec in self.identification.items() if rec.get("trustworthy") is False]
-
-    def untrusted_reasons(self) -> dict[str, str]:
-        """Each chain marked not trustworthy (:attr:`untrusted`) -> why, in the words its record keeps: the fit
-        that did not converge (its stop reason), the adequacy verdict."""
-        return {chain: untrusted_reason(self.identification[chain]) for chain in self.untrusted}
 
     def encoder_offset_of(self, motor: str, chain: str | None = None) -> float:
         """The encoder zero (rad of the motor) the file holds for ``motor``: ``finger`` (a finger model's motor: the
@@ -577,49 +575,6 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "",
     ident = {**params.identification, **(identification or {})}
     text = params_toml(raw, header, ident)
     return _from_text(text, params.path or "<updated>")
-
-
-def untrusted_reason(record: dict[str, Any]) -> str:
-    """Why a fit's record (:data:`IDENTIFICATION_FIELDS`, or a spec's ``[identified]``) is not to be trusted, in its
-    own words: the fit that did not converge (its stop reason), the adequacy verdict."""
-    why = ([f"the fit did not converge ({record.get('stop', '')})"] if record.get("converged") is False else []) + (
-        [record.get("verdict") or "the model is not adequate"] if record.get("adequate") is False else [])
-    return "; ".join(why) or "marked trustworthy = false"
-
-
-def check_trusted(params: HandParams, force: bool = False, name: str = "params",
-                  hint: str = "force=True uses it anyway") -> str:
-    """Refuse a parameter file marked not trustworthy (:attr:`HandParams.untrusted`) unless ``force``.
-
-    Parameters
-    ----------
-    params : HandParams
-        The loaded file.
-    force : bool
-        Use it anyway: the note of what is not to be trusted is returned instead.
-    name : str
-        The field or option the error names (``params``, ``--params``).
-    hint : str
-        How to force it, at the end of the line (the API's ``force=True``, the CLI's ``--force``).
-
-    Returns
-    -------
-    str
-        ``""`` for a trusted file; when forced, one line: ``<path> is NOT trustworthy (<chain>: <why>)``.
-
-    Raises
-    ------
-    ModelError
-        ``<name>: <path> is marked not trustworthy (<chain>: <why>); <hint>``, the reason as the file records it.
-    """
-    why = params.untrusted_reasons()
-    if not why:
-        return ""
-    where = repr(params.path) if params.path else "the parameter set"
-    text = "; ".join(f"{c}: {w}" for c, w in why.items())
-    if not force:
-        raise ModelError(f"{name}: {where} is marked not trustworthy ({text}); {hint}")
-    return f"{where} is NOT trustworthy ({text})"
 
 
 def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:

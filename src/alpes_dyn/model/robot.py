@@ -253,7 +253,7 @@ class Model(FrameKinematics):
         ``chain``: a finger model built from that finger of the hand (a name of ``palm.finger_names``:
         the shared ``[finger]`` values with its own ``[finger.<name>]`` ones); :attr:`chain` keeps it and
         :attr:`params` the whole file (a file marked not trustworthy too: :attr:`HandParams.untrusted`; the
-        loaders that use its values refuse it, :func:`~alpes_dyn.model.params.check_trusted`).
+        loaders that use its values refuse it, :func:`~alpes_dyn.model.trust.check_trusted`).
         """
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)

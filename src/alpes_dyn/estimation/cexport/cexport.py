@@ -434,8 +434,9 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     """The observer of the estimation scenario (:func:`~alpes_dyn.estimation.observers.scenario.run_estimation`, no
     mismatch) on ``model`` with the parameter file ``params``: (filter, z0, P0), its noise settings, substeps and
     prior those of the scenario (the same filter: tested against its estimate). A file marked not trustworthy:
-    :class:`~alpes_dyn.ModelError` naming it unless ``force`` (:func:`~alpes_dyn.model.params.check_trusted`)."""
-    from ...model.params import check_trusted, load_params
+    :class:`~alpes_dyn.ModelError` naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
+    from ...model.params import load_params
+    from ...model.trust import check_trusted
     from ...model.robot import Model
     from ...simulation.integrate import stable_substeps
     from ...symbolic.statespace import StateSpace

@@ -26,7 +26,7 @@ not in the file (the RMSE of ``estimate --data`` needs them all). On the command
 reading far outside what the joints' ranges allow (more than the range and a motor turn beyond it) is
 refused by name: it is not this model's encoder in counts; so is an encoder column of fractional values swinging no
 more than the joints' range in degrees of the motor (the angle in radians or degrees), a torque beyond
-:data:`TORQUE_SCALE_LIMIT` times the file's ``tau_max`` (a current in A or mA) and a sample period over 0.1 s
+:data:`~alpes_dyn.estimation.experiments.units.TORQUE_SCALE_LIMIT` times the file's ``tau_max`` (a current in A or mA) and a sample period over 0.1 s
 (t in ms). Every defect is one
 :class:`~alpes_dyn.errors.RecordingError` naming the column (and the row): an unknown or missing
 column, a non-number (``1_0`` too: no digit separators), NaN where not allowed, time not increasing or not
@@ -57,6 +57,7 @@ from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 from .csv_numbers import lines, plain_rows
+from .units import check_counts, check_torque_scale
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
            "segment_starts", "excitation_parts"]
@@ -249,7 +250,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                     true_q=_joint_columns(col, joints, "true_q"), run=_run_column(col))
     check_recording(rec)
     _check_encoder_range(rec, model)
-    _check_torque_scale(rec, model, "current" if torque_constant is not None else "torque")
+    check_torque_scale(rec, model, "current" if torque_constant is not None else "torque")
     if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
         others = {h[len("encoder_"):]: data[:, j] for j, h in enumerate(header)
                   if h not in own and h.startswith("encoder_")}
@@ -445,51 +446,13 @@ def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> Non
         lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
         hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
         margin = (hi - lo) + cpr
-        _check_counts(mn, e, hi - lo, cpr)
+        check_counts(mn, e, hi - lo, cpr)
         bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
         if bad.size:
             k = int(bad[0])
             raise RecordingError(f"recording: column 'encoder_{mn}' line {k + 2}: {float(e[k]):g} counts is beyond "
                                  f"what the joint ranges allow ({lo:.6g} to {hi:.6g} counts, give or take the range "
                                  "and a turn); is it this model's encoder, in counts?")
-
-
-TORQUE_SCALE_LIMIT = 10.0
-"""A recorded torque beyond this many times the parameter file's ``tau_max`` is not N m (a current in A or mA)."""
-
-
-def _check_counts(motor: str, e: np.ndarray, span: float, cpr: float) -> None:
-    """An encoder column (counts, (N,)) that is not counts: most of its values not whole numbers and its swing within
-    what the joints' range ``span`` (counts) makes in degrees of the motor -- the motor's angle in radians or
-    degrees, which a fit or an observer would read as a few counts of motion."""
-    e = np.asarray(e, dtype=float)
-    if e.size == 0 or np.mean(e != np.round(e)) <= 0.5:
-        return
-    swing = float(np.ptp(e))
-    rad, deg = span * 2 * np.pi / cpr, span * 360.0 / cpr
-    if swing > 1.2 * deg:
-        return
-    unit = "radians" if swing <= 1.2 * rad else "degrees"
-    raise RecordingError(f"recording: column 'encoder_{motor}': values not whole numbers swinging {swing:.3g}, where "
-                         f"the joints' range spans {span:.6g} counts ({rad:.3g} rad, {deg:.3g} deg of the motor): the "
-                         f"motor angle in {unit}? the recording's encoder is in counts ({cpr:g} per turn)")
-
-
-def _check_torque_scale(rec: Recording, model: Model, column: str) -> None:
-    """Each recorded torque within :data:`TORQUE_SCALE_LIMIT` times the parameter file's motor limit ``tau_max`` (an
-    Alpes model's; none to check on another robot): far beyond it, the column is a current (in A, or in mA), not
-    N m. ``column``: ``torque`` or ``current`` (read with a torque constant), the column's name in the message."""
-    params = getattr(model, "params", None)
-    tau_max = getattr(params, "tau_max", None)
-    if tau_max is None or rec.torque.size == 0:
-        return
-    peak = np.max(np.abs(rec.torque), axis=0)
-    for mn, v in zip(rec.motor_names, peak):
-        if v > TORQUE_SCALE_LIMIT * tau_max:
-            guess = "a current in mA" if column == "current" or v > 1000 * tau_max else "a current in A"
-            unit = "N m" if column == "torque" else "A (times the torque constant, N m)"
-            raise RecordingError(f"recording: column '{column}_{mn}': values up to {float(v):.6g} against tau_max "
-                                 f"{tau_max:g} N m: {guess}? the recording's {column} is in {unit}")
 
 
 def _check_runs(rec: Recording, N: int) -> np.ndarray:

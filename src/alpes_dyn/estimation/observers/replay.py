@@ -40,7 +40,7 @@ from ...checks import as_float_array
 from ...errors import InputError, RecordingError
 from ...fileio import atomic_path
 from ...limits import check_bytes, check_physical
-from ...model.params import check_trusted
+from ...model.trust import check_trusted
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
 from ...symbolic.parametric import tilted_gravity
@@ -285,7 +285,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         file's ``transmission.torque_delay`` (written by ``identify``), else 0. The palm's tilt identified is in
         the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
     force: run on a model whose parameter file is marked not trustworthy (refused otherwise:
-        :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.params.check_trusted`).
+        :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
 
     Returns
     -------
