@@ -129,7 +129,8 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
       ``[finger.<name>]``, ``[thumb]``; the thumb's ab/adduction motor's ``thumb.abduction_encoder_offset``); the
       palm's tilt ``tilt_x``, ``tilt_y``: ``environment.gravity``, the model's file's gravity turned by it
       (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`, its standard error through the tilt's covariance;
-      with the hand's chains, the last chain's); the torque delay :attr:`IdentificationResult.torque_delay`:
+      with the hand's chains, the last finger's; not the thumb's, whose angles are in its own base frame, yawed
+      from the palm's: they stay in the result); the torque delay :attr:`IdentificationResult.torque_delay`:
       ``transmission.torque_delay`` (samples; the rig's current sensing, one for every motor: a fit that tried none
       leaves the file's). A chain's encoder zero the fit did not fit is taken out of the file (the fit assumed
       none).
@@ -287,7 +288,7 @@ def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason:
 
 def _rig_params(result: IdentificationResult, p: HandParams, sec: str, reason: str) -> dict[str, Param]:
     """The rig's side of a fit as ``identified`` :class:`Param`: the encoders' zeros (``<sec>.encoder_offset``, the
-    thumb's ab/adduction motor's ``thumb.abduction_encoder_offset``), the gravity turned by the fitted tilt
+    thumb's ab/adduction motor's ``thumb.abduction_encoder_offset``), the gravity turned by a finger's fitted tilt
     (``environment.gravity``), the torque delay (``transmission.torque_delay``); each only where fitted and
     identified."""
     fitted = {n: (float(v), float(sd)) for n, v, sd in zip(result.names, result.values, result.std)
@@ -301,7 +302,7 @@ def _rig_params(result: IdentificationResult, p: HandParams, sec: str, reason: s
         upd[name] = Param(value, "rad", "identified", reason,
                           f"the zero of the {motor} motor's encoder, rad of the motor: y = S q + offset", _sd(sd))
     angles = [n for n in ("tilt_x", "tilt_y") if n in fitted]
-    if angles:
+    if angles and sec != "thumb":  # (the thumb's angles are in its own base frame, yawed from the palm's)
         g0 = (result.model.params or p).gravity  # the file's gravity the fit's model was built from
         g, std = _turned_gravity(g0, {n: fitted[n] for n in angles},
                                  np.asarray(result.correlation, dtype=float)[np.ix_(
