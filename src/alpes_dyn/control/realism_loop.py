@@ -35,14 +35,14 @@ through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
 * ``tilt``: the controller's and the observer's gravity turned further by a palm's orientation (``tilt_x``,
   ``tilt_y``); the tilt ``identify`` fitted is already in its file's gravity (``environment.gravity``), which the
   controller's model takes.
-
-The identified torque delay (the file's ``transmission.torque_delay``) needs no block of its own: with
-``command_input`` the observer and the sensorless estimate take the command, which the reading's lag does not
-touch.
 * ``force_scale``: the sensorless estimate divided by its ratio to the fingertip sensor's reading, measured once
   (:func:`~alpes_dyn.control.hand_loop.force_scale_of`): the torque constant's error scales every identified torque
   parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of e / (1 + e) on the
   uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
+
+The identified torque delay (the file's ``transmission.torque_delay``) needs no block of its own: with
+``command_input`` the observer and the sensorless estimate take the command, which the reading's lag does not
+touch.
 
 Measured and left out: a smoothed Coulomb feedforward of the identified F_s, F_v on the observer's velocities (the
 overshoot 13.6 -> 16.3 %: the stick-slip the loop meets is the passive joints' redistribution as the fingertip rolls
@@ -102,8 +102,10 @@ class Compensation:
         for name in ("observer_compliance", "command_input", "notch"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"{name}: expected True or False, got {getattr(self, name)!r}")
-        for name, v, lo, hi in ((("encoder_offset", self.encoder_offset, -1.0, 1.0),)
-                                if self.encoder_offset is not None else ()) + (("notch_zeta", self.notch_zeta, 0.05, 2.0),):
+        ranges = [("notch_zeta", self.notch_zeta, 0.05, 2.0)]
+        if self.encoder_offset is not None:  # (None: the controller's file's)
+            ranges.append(("encoder_offset", self.encoder_offset, -1.0, 1.0))
+        for name, v, lo, hi in ranges:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and lo <= v <= hi):
                 raise InputError(f"{name}: expected a number in [{lo:g}, {hi:g}], got {v!r}")
         scales = self.force_scale.values() if isinstance(self.force_scale, Mapping) else (self.force_scale,)

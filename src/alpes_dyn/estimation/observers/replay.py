@@ -291,11 +291,10 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
-    if getattr(model, "params", None) is not None:
+    rec = _replay_recording(recording, model, observer)  # (the model checked first)
+    if model.params is not None:
         check_trusted(model.params, force)
-    if torque_delay is None:
-        torque_delay = int(getattr(model.params, "torque_delay", 0))
-    rec = advanced(_replay_recording(recording, model, observer), torque_delay)
+    rec = advanced(rec, int(getattr(model.params, "torque_delay", 0)) if torque_delay is None else torque_delay)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
     for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
