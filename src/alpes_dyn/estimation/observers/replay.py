@@ -294,7 +294,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     rec = _replay_recording(recording, model, observer)  # (the model checked first)
     if model.params is not None:
         check_trusted(model.params, force)
-    rec = advanced(rec, int(getattr(model.params, "torque_delay", 0)) if torque_delay is None else torque_delay)
+    if torque_delay is None:
+        torque_delay = int(getattr(model.params, "torque_delay", 0))
+    rec = advanced(rec, torque_delay)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
     for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
