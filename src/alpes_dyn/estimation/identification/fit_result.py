@@ -16,7 +16,7 @@ from ...model.params import HandParams, Param, with_values, write_params
 from ...model.robot import Model
 from ...symbolic.parametric import parameter_catalogue
 from .adequacy import Adequacy, _finite
-from .bounds import describe
+from .bounds import Z_INTERVAL, describe
 
 __all__ = ["IdentificationResult", "identified_params"]
 
@@ -290,9 +290,12 @@ def _rig_params(result: IdentificationResult, p: HandParams, sec: str, reason: s
     """The rig's side of a fit as ``identified`` :class:`Param`: the encoders' zeros (``<sec>.encoder_offset``, the
     thumb's ab/adduction motor's ``thumb.abduction_encoder_offset``), the gravity turned by a finger's fitted tilt
     (``environment.gravity``), the torque delay (``transmission.torque_delay``); each only where fitted and
-    identified."""
+    identified: a zero or an angle whose 95 % interval reaches past 0 (:data:`~.bounds.Z_INTERVAL` standard errors,
+    none where the recording does not see it) is not written (the rig's, never held by the fit: the data cannot tell
+    it from none, and a wrong zero costs the observer more than none)."""
     fitted = {n: (float(v), float(sd)) for n, v, sd in zip(result.names, result.values, result.std)
-              if n not in result.not_identified}
+              if n not in result.not_identified and (not n.startswith(("encoder_offset_", "tilt_"))
+                                                     or abs(v) > Z_INTERVAL * sd)}
     upd: dict[str, Param] = {}
     for motor in result.model.transmission.motor_names:
         if f"encoder_offset_{motor}" not in fitted:
