@@ -15,8 +15,9 @@ Per model and seed:
    ``sensorless``, ``pi``) on the step reference 0.2 -> 0.6 -> 0.2 N (steps at 1 and 2 s: 0.4 N up and down), with
 
    * ``identified``: the identified file, the controllers' compensation of the effects on
-     (:class:`alpes_dyn.control.realism_loop.Compensation`, with the fit's tilt);
-   * ``rigid``: the identified file, the rigid design (``NO_COMPENSATION``: what fails, measured);
+     (:class:`alpes_dyn.control.realism_loop.Compensation`; the fit's tilt, delay and encoder zero in the file);
+   * ``rigid``: the identified file, the rigid design (``NO_COMPENSATION``: what fails, measured; the fit's tilt is
+     in the file's gravity, so the rigid design has it too);
    * ``shipped``: the shipped parameter file, the same loop (no identified cable, tilt or friction to use);
    * ``calibrated`` (sensorless only): the ``identified`` loop with its force estimate calibrated once against the
      fingertip sensor (:func:`alpes_dyn.control.hand_loop.force_scale_of` on a sensorless run with another noise
@@ -125,14 +126,14 @@ def goals(ctl: str, m: dict[str, Any]) -> bool | None:
     return None
 
 
-def control_rows(model: str, seed: int, effects: Any, ident: Path | None, tilt_y: float, truth: Any) -> list[dict]:
+def control_rows(model: str, seed: int, effects: Any, ident: Path | None, truth: Any) -> list[dict]:
     """Every controller and variant on the plant (``truth``) with ``effects``; a failed run is a row with its error."""
     rows = []
     for variant in VARIANTS:
         if variant != "shipped" and ident is None:
             continue
         params = None if variant == "shipped" else str(ident)
-        comp = NO_COMPENSATION if variant == "rigid" else Compensation(tilt=(0.0, tilt_y if variant == "identified" else 0.0))
+        comp = NO_COMPENSATION if variant == "rigid" else Compensation()  # the fit's tilt: in the file's gravity
         refs = ("step", "ramp", "sine") if variant == "identified" else ("step",)
         for ctl in CONTROLLERS:
             for ref in refs if ctl == "sensor" else ("step",):
@@ -140,7 +141,7 @@ def control_rows(model: str, seed: int, effects: Any, ident: Path | None, tilt_y
                 t0 = time.perf_counter()
                 try:
                     r = run_control(ctl, model=model, params=params, plant_params=truth, seed=seed, effects=effects,
-                                    compensation=comp, levels=LEVELS, reference=ref)
+                                    compensation=comp, levels=LEVELS, reference=ref, force=True)  # flagged fits too
                 except InputError as exc:
                     rows.append({**row, "error": str(exc)})
                     continue
@@ -151,22 +152,22 @@ def control_rows(model: str, seed: int, effects: Any, ident: Path | None, tilt_y
                     row["rmse_pct"] = 100 * r.force_rmse / STEP
                 rows.append({**row, "wall_s": time.perf_counter() - t0})
     if ident is not None:
-        rows.append(calibrated_row(model, seed, effects, ident, tilt_y, truth))
+        rows.append(calibrated_row(model, seed, effects, ident, truth))
     return rows
 
 
-def calibrated_row(model: str, seed: int, effects: Any, ident: Path, tilt_y: float, truth: Any) -> dict:
+def calibrated_row(model: str, seed: int, effects: Any, ident: Path, truth: Any) -> dict:
     """The sensorless loop on the identified file, its force estimate calibrated once against the fingertip sensor
     (:func:`~alpes_dyn.control.hand_loop.force_scale_of` of a sensorless run with another noise draw, seed
     ``CALIBRATION_SEED + seed``, at the first level); a failed run is a row with its error."""
     row = {"model": model, "seed": seed, "variant": "calibrated", "controller": "sensorless", "reference": "step"}
     t0 = time.perf_counter()
-    kw = dict(model=model, params=str(ident), plant_params=truth, effects=effects, levels=LEVELS, reference="step")
+    kw = dict(model=model, params=str(ident), plant_params=truth, effects=effects, levels=LEVELS, reference="step",
+              force=True)
     try:
-        scale = force_scale_of(run_control("sensorless", seed=CALIBRATION_SEED + seed,
-                                           compensation=Compensation(tilt=(0.0, tilt_y)), **kw))
-        r = run_control("sensorless", seed=seed, compensation=Compensation(tilt=(0.0, tilt_y), force_scale=scale),
-                        **kw)
+        scale = force_scale_of(run_control("sensorless", seed=CALIBRATION_SEED + seed, compensation=Compensation(),
+                                           **kw))
+        r = run_control("sensorless", seed=seed, compensation=Compensation(force_scale=scale), **kw)
     except InputError as exc:
         return {**row, "error": str(exc)}
     m = metrics(r)
@@ -212,7 +213,7 @@ def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict
     (:func:`~alpes_dyn.control.hand_loop.grasp_levels` of the forces its pads hold,
     :func:`~alpes_dyn.control.hand_loop.grasp_limits`, measured on the plant); (identification rows, with the
     grasp's as chain ``grasp``, control rows)."""
-    idents, fits, tilts = [], {}, []
+    idents, fits = [], {}
     for chain in load_params().chain_names:
         plant = hand_plant(chain)
         row = realism_case("all", effects, seed, rig_design("level"), tmp, plant, rigid=False)
@@ -222,8 +223,6 @@ def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict
                        "worst_error_common_scale_pct": ext["worst_error_common_scale_pct"],
                        "tilt_y": ext["values"].get("tilt_y", 0.0)})
         fits[chain] = tmp / f"ident_{plant.label}_all_{seed}.toml"
-        if chain != "thumb":
-            tilts.append(idents[-1]["tilt_y"])
     ident = hand_file(fits, tmp / f"ident_hand_{seed}.toml")
     truth = hand_plant("index").true_params(seed)
     converged = all(i["converged"] for i in idents)
@@ -235,28 +234,26 @@ def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict
     rows = []
     for variant in VARIANTS:
         params = None if variant == "shipped" else str(ident)
-        comp = NO_COMPENSATION if variant == "rigid" else Compensation(
-            tilt=(0.0, float(np.median(tilts)) if variant == "identified" else 0.0))
+        comp = NO_COMPENSATION if variant == "rigid" else Compensation()  # the fits' tilt: in the file's gravity
         for ctl in CONTROLLERS:
             t0 = time.perf_counter()
             res = run_hand_control(ctl, params=params, plant_params=truth, seed=seed, effects=effects,
-                                   compensation=comp, levels=levels)
+                                   compensation=comp, levels=levels, force=True)
             worst = max(r["steady_state_error"] for r in res.table())
             rows.append({"model": "hand", "seed": seed, "variant": variant, "controller": ctl, "reference": "step",
                          "chains": res.table(), "worst_sse_pct": 100 * worst, "goal_met": bool(100 * worst < 5),
                          "ident_converged": converged, "wall_s": time.perf_counter() - t0})
     t0 = time.perf_counter()  # the sensorless loops calibrated once against the fingertip sensors (calibrated_row)
-    kw = dict(params=str(ident), plant_params=truth, effects=effects, levels=levels)
-    tilt = (0.0, float(np.median(tilts)))
+    kw = dict(params=str(ident), plant_params=truth, effects=effects, levels=levels, force=True)
     row = {"model": "hand", "seed": seed, "variant": "calibrated", "controller": "sensorless", "reference": "step",
            "ident_converged": converged}
     try:
-        cal = run_hand_control("sensorless", seed=CALIBRATION_SEED + seed, compensation=Compensation(tilt=tilt), **kw)
+        cal = run_hand_control("sensorless", seed=CALIBRATION_SEED + seed, compensation=Compensation(), **kw)
         scale = force_scale_of(cal)
     except InputError as exc:  # a chain's estimate beyond a scale: no calibrated run
         rows.append({**row, "error": str(exc), "goal_met": False, "wall_s": time.perf_counter() - t0})
         return idents, rows
-    res = run_hand_control("sensorless", seed=seed, compensation=Compensation(tilt=tilt, force_scale=scale), **kw)
+    res = run_hand_control("sensorless", seed=seed, compensation=Compensation(force_scale=scale), **kw)
     worst = max(r["steady_state_error"] for r in res.table())
     rows.append({**row, "chains": res.table(), "worst_sse_pct": 100 * worst, "goal_met": bool(100 * worst < 5),
                  "force_scale": scale, "wall_s": time.perf_counter() - t0})
@@ -296,7 +293,7 @@ def main(argv: list[str] | None = None) -> int:
                 ident, path = identify_row(model, seed, effects, Path(d))
                 idents.append(ident)
                 log([ident])
-                new = control_rows(model, seed, effects, path, ident["tilt_y"], PLANTS[model].true_params(seed))
+                new = control_rows(model, seed, effects, path, PLANTS[model].true_params(seed))
                 for r in new:
                     r["ident_converged"] = ident["converged"]
                 rows += new

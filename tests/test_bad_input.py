@@ -198,6 +198,21 @@ def bad_files(d: Path) -> dict[str, str]:
     files["negative_capstan_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ncapstan = { value = -0.2, '
                                                        'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
+    files["untrusted_toml"] = (BASE_TOML + '\n[identification.finger]\nconverged = false\nstop = "lost basin"\n'
+                               "trustworthy = false\n").encode()  # written by identify --force
+    files["halfdelay_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntorque_delay = { value = 1.5, '
+                                                'unit = "samples", source = "identified", reason = "x" }\n', 1).encode()
+    files["longdelay_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ntorque_delay = { value = 500, '
+                                                'unit = "samples", source = "identified", reason = "x" }\n', 1).encode()
+    files["countsoffset_toml"] = BASE_TOML.replace("[thumb]\n", 'encoder_offset = { value = 4.0, unit = "counts", '
+                                                   'source = "identified", reason = "x" }\n\n[thumb]\n', 1).encode()
+    rec3 = _recordings()["finger3"].splitlines()  # the unit mistakes of a recording (issue 49)
+    files["ma_csv"] = _scaled_column(rec3, "torque_finger", 1e5)  # a current in mA, not N m
+    files["rad_csv"] = _scaled_column(rec3, "encoder_finger", 2 * math.pi / 4096)  # the motor's angle in rad
+    files["deg_csv"] = _scaled_column(rec3, "encoder_finger", 360 / 4096)  # ... in degrees
+    files["ms_csv"] = _scaled_column(rec3, "t", 1e3)  # the time in ms
+    files["macurrent_csv"] = _scaled_column([rec3[0].replace("torque_finger", "current_finger")] + rec3[1:],
+                                            "current_finger", 1e5)  # a current in mA, read with a constant in N m/A
     # physical ranges (issue 19): an angle, a ratio, gravity of 1e300, a subnormal spring, an axis of 1e300
     files["angle_toml"] = _toml_field("finger.upper", '{ value = 1e300, unit = "rad", source = "report" }')
     files["ratio_toml"] = _toml_field("transmission.N", '{ value = 1e300, unit = "-", source = "report" }')
@@ -271,6 +286,15 @@ def bad_files(d: Path) -> dict[str, str]:
     out.update(hardlink=str(d / "hardlink.toml"), link=str(d / "link.png"), fifo=str(d / "fifo.toml"),
                big_urdf=str(d / "big.urdf"), device=_device(d))
     return out
+
+
+def _scaled_column(lines: list[str], column: str, scale: float) -> bytes:
+    """A recording's CSV ``lines`` with ``column`` times ``scale`` (a unit mistake), as bytes."""
+    j = lines[0].split(",").index(column)
+    rows = [r.split(",") for r in lines[1:]]
+    for r in rows:
+        r[j] = repr(float(r[j]) * scale)
+    return "\n".join([lines[0]] + [",".join(r) for r in rows]).encode() + b"\n"
 
 
 def _device(d: Path) -> str:
@@ -539,6 +563,14 @@ CLI: dict[str, list[Cli]] = {
         C("identify", "--data", "x.csv", "--torque-constant", "0.05 N m/A", needle="--torque-constant: invalid float"),
         C("identify", "--data", "{current_csv}", "--torque-constant", "0.05", "--validate", "{rec3_csv}",
           needle="recording '{rec3_csv}': a torque constant is given but it has no current_<motor> column"),
+        C("identify", "--data", "{ma_csv}", needle="recording: column 'torque_finger': values up to"),
+        C("identify", "--data", "{ma_csv}", needle="against tau_max 0.05 N m: a current in mA? the recording's torque "
+          "is in N m"),
+        C("identify", "--data", "{rad_csv}", needle="column 'encoder_finger': values not whole numbers swinging"),
+        C("identify", "--data", "{deg_csv}", needle="the motor angle in degrees? the recording's encoder is in counts"),
+        C("identify", "--data", "{ms_csv}", needle="sample period 1 s is outside [1e-6, 0.1] s: t in milliseconds?"),
+        C("identify", "--data", "{macurrent_csv}", "--torque-constant", "0.05", needle="column 'current_finger': values "
+          "up to"),
         C("identify", "--data", "{enchuge_csv}", needle="recording: column 'encoder_finger' line 103: 1e+15 counts is "
           "beyond what the joint ranges allow (0 to 6144 counts"),
         C("identify", "--data", "{rec3_csv}", "--validate", "{tmp}/none.csv", needle="cannot be read"),
@@ -635,6 +667,9 @@ CLI: dict[str, list[Cli]] = {
     ],
     "control": [
         C("control", "--controller", "pid", needle="unknown controller 'pid'"),
+        C("control", "--params", "{untrusted_toml}", needle="--params: '{untrusted_toml}' is marked not trustworthy "
+          "(finger: the fit did not converge (lost basin)); --force uses it anyway"),
+        C("control", "--model", "hand", "--params", "{untrusted_toml}", needle="is marked not trustworthy"),
         C("control", "--plant-effects", "some", needle="--plant-effects: invalid choice: 'some'"),
         C("control", "--plant-effects", "none", "--stiction", needle="--plant-effects: 'none' with an effect's flag"),
         C("control", "--stiction", "-1", needle="--stiction: expected a positive time constant in s"),
@@ -885,6 +920,8 @@ CLI: dict[str, list[Cli]] = {
     ],
     "codegen": [
         C("codegen", needle="the following arguments are required: -o/--output"),
+        C("codegen", "--params", "{untrusted_toml}", "-o", "c_out", needle="--params: '{untrusted_toml}' is marked "
+          "not trustworthy (finger: the fit did not converge (lost basin)); --force uses it anyway"),
         C("codegen", "-o", "", needle="-o: expected a directory name, got ''"),
         C("codegen", "-o", "{tmp}", needle="-o: directory '{tmp}' is not empty; refusing to write over it"),
         C("codegen", "-o", "{params_toml}", needle="-o: '{params_toml}' exists and is not a directory"),
@@ -947,6 +984,17 @@ CLI: dict[str, list[Cli]] = {
     ],
     "estimate": [
         C("estimate", "--data", "{grav149_csv}", needle="gravity has norm 14.9 m/s^2"),
+        # a file written by identify --force, refused with its reason (issue 49)
+        C("estimate", "--params", "{untrusted_toml}", needle="--params: '{untrusted_toml}' is marked not trustworthy "
+          "(finger: the fit did not converge (lost basin)); --force uses it anyway"),
+        C("estimate", "--observer-params", "{untrusted_toml}", needle="--observer-params: '{untrusted_toml}' is marked "
+          "not trustworthy"),
+        C("estimate", "--data", "{rec3_csv}", "--params", "{untrusted_toml}", needle="--params: '{untrusted_toml}' is "
+          "marked not trustworthy"),
+        # the recording's unit mistakes, named (issue 49; they ran into a diverged filter)
+        C("estimate", "--data", "{ma_csv}", needle="column 'torque_finger': values up to"),
+        C("estimate", "--data", "{rad_csv}", needle="the motor angle in radians? the recording's encoder is in counts"),
+        C("estimate", "--data", "{ms_csv}", needle="t in milliseconds? the recording's time is in s"),
         C("estimate", "--data", "{runtwo_csv}", "--model", "finger3",
           needle="recording: 2 runs (column 'run'); an observer runs on one: give one run's rows"),
         C("estimate", "--duration", "1_0", needle="--duration: invalid float value: '1_0'"),
@@ -1579,6 +1627,22 @@ API: list[Api] = [
       "transmission.encoder_counts: value must be a whole number, got 4096.5"),
     A("load_params", lambda c: ad.load_params(c.f["mm_toml"]), ModelError,
       "finger.r.unit: the value is read in 'm', got 'mm'"),
+    A("load_params", lambda c: ad.load_params(c.f["halfdelay_toml"]), ModelError,
+      "transmission.torque_delay: value must be a whole number, got 1.5"),
+    A("load_params", lambda c: ad.load_params(c.f["longdelay_toml"]), ModelError,
+      "transmission.torque_delay: 500 samples is outside the accepted range [0, 100] samples"),
+    A("load_params", lambda c: ad.load_params(c.f["countsoffset_toml"]), ModelError,
+      "finger.encoder_offset.unit: the value is read in 'rad', got 'counts'"),
+    A("estimate_recording", lambda c: _replay(c, model=ad.Model.alpes("finger3", params=c.f["untrusted_toml"])),
+      ModelError, "params: '{untrusted_toml}' is marked not trustworthy (finger: the fit did not converge (lost "
+      "basin)); force=True uses it anyway"),
+    A("run_control", lambda c: __import__("alpes_dyn.control", fromlist=["x"]).run_control(
+        "sensor", params=c.f["untrusted_toml"], duration=0.6), ModelError, "params: '{untrusted_toml}' is marked not "
+      "trustworthy"),
+    A("scenario_filter", lambda c: __import__("alpes_dyn.estimation.cexport.cexport", fromlist=["x"]).scenario_filter(
+        params=c.f["untrusted_toml"]), ModelError, "is marked not trustworthy"),
+    A("block_controller", lambda c: __import__("alpes_dyn.control.cexport", fromlist=["x"]).block_controller(
+        params=c.f["untrusted_toml"]), ModelError, "is marked not trustworthy"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["big_urdf"]), ModelError, "over the limit of 16777216 bytes"),
     A("Model", lambda c: ad.Model.from_urdf_file(c.f["fifo"]), ModelError, "is a FIFO"),
     A("Model", lambda c: ad.Model.from_mjcf(c.f["big_urdf"]), ModelError, "mjcf '{big_urdf}': 16777217 bytes, over the"),
@@ -1669,6 +1733,12 @@ API: list[Api] = [
       "model: expected an alpes_dyn Model (it names the columns), got str"),
     A("read_recording", lambda c: _read_rec(c.f["unders_csv"]), RecordingError, "not a number ('1_0"),
     A("read_recording", lambda c: _read_rec(c.f["runshort_csv"]), RecordingError, "each run needs at least 100"),
+    A("read_recording", lambda c: _read_rec(c.f["ma_csv"]), RecordingError, "column 'torque_finger': values up to"),
+    A("read_recording", lambda c: _read_rec(c.f["rad_csv"]), RecordingError, "the motor angle in radians?"),
+    A("read_recording", lambda c: _read_rec(c.f["deg_csv"]), RecordingError, "the motor angle in degrees?"),
+    A("read_recording", lambda c: _read_rec(c.f["ms_csv"]), RecordingError, "t in milliseconds?"),
+    A("read_recording", lambda c: _read_rec(c.f["macurrent_csv"], 0.05), RecordingError,
+      "column 'current_finger': values up to"),
     A("join_runs", lambda c: _join_runs([]), RecordingError, "join_runs: expected one or more Recordings"),
     A("join_runs", lambda c: _join_runs([_read_rec(c.f["rec3_csv"]), "b.csv"]), RecordingError,
       "join_runs: expected one or more Recordings"),

@@ -173,7 +173,7 @@ def test_mjcf_uses_each_fingers_values(hand_params):
     ("[finger.index]\nK = { value = [0.04, 0.05], unit = \"N m/rad\", source = \"report\" }\n",
      r"finger\.index\.K: value must be a list of 3 numbers"),
     ("[finger.index]\nL = { value = [0.04, 0.05, 0.02], unit = \"m\", source = \"report\" }\n",
-     r"finger\.index\.L: unknown key \(a finger's own values are K, m, I, F_s, F_v\)"),
+     r"finger\.index\.L: unknown key \(a finger's own values are K, m, I, F_s, F_v, encoder_offset\)"),
     ("[finger.index]\nm = { value = [0.3, 0.02, 0.023], unit = \"kg\", source = \"report\" }\n",
      r"finger\.index\.I: not physically consistent"),
     ("[finger.index]\nF_s = { value = [0.001, -0.001, 0.0], unit = \"N m\", source = \"report\" }\n",

@@ -124,6 +124,7 @@ PHYSICAL_RANGES: dict[str, tuple[float, float]] = {
     "counts": (1e-9, 1e9),
     "s": (1e-9, 1e6),
     "Hz": (1e-6, 1e6),
+    "samples": (1.0, 100.0),  # a sensor's delay in whole sample periods (0.1 s at 1 kHz: beyond, a wrong clock)
 }
 """The accepted magnitudes of a physical quantity, by its unit: (smallest, largest) magnitude of a non-zero value.
 A value must be finite, not subnormal and at most the largest in magnitude; a quantity that must be positive (a

@@ -30,6 +30,10 @@ class _UsageError(Exception):
     pass
 
 
+FORCE_USE_HELP = ("use a parameter file (or a URDF --spec) marked not trustworthy (written by 'identify --force'); "
+                  "without it such a file is refused with its reason; the output says it is not")
+"""The help of ``--force`` on the commands that use a parameter file's values (estimate, codegen, control)."""
+
 EXIT_UNTRUSTED = 3
 """Exit code of ``identify`` when the fit did not converge or the model is not adequate (and no --force)."""
 
@@ -419,3 +423,32 @@ def _drift_choice(text: str) -> str:
     except InputError as err:
         raise argparse.ArgumentTypeError(str(err).removeprefix("drift: ")) from None
     return text
+
+
+def _trust_notes(args: argparse.Namespace, files: Sequence[tuple[str, str | None]]) -> list[str]:
+    """The parameter files or URDF specs a command uses, ``(option, path or None)``, each refused when it is marked
+    not trustworthy (a file written by ``identify --force``: :func:`~alpes_dyn.model.trust.check_trusted`; a spec's
+    ``[identified]`` record with ``trustworthy = false``) -- one line with the reason the file records, exit 2 --
+    unless ``--force`` (``args.force``); then its lines ``<option>: <path> is NOT trustworthy (<why>)`` for the output."""
+    from ..errors import ModelError
+    from ..model.params import load_params
+    from ..model.trust import check_trusted, untrusted_reason
+    from ..model.spec import load_spec
+
+    notes = []
+    for option, path in files:
+        if path is None:
+            continue
+        if _is_urdf_path(getattr(args, "model", "")) and option == "--spec":
+            rec = (load_spec(path).identified or {}).get("record", {})
+            if rec.get("trustworthy") is not False:
+                continue
+            why = untrusted_reason(rec)
+            if not args.force:
+                raise ModelError(f"{option}: {path!r} is marked not trustworthy ({why}); --force uses it anyway")
+            notes.append(f"{option}: {path!r} is NOT trustworthy ({why})")
+            continue
+        note = check_trusted(load_params(path), bool(args.force), option, "--force uses it anyway")
+        if note:
+            notes.append(f"{option}: {note}")
+    return notes

@@ -13,7 +13,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _urdf_robot, parse_vector
+from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _trust_notes, _urdf_robot, parse_vector
 
 
 def _check_control_outputs(args: argparse.Namespace) -> None:
@@ -125,8 +125,9 @@ def cmd_control(args: argparse.Namespace) -> int:
     effects = _plant_effects(args)
     fx = {} if effects is None else {"effects": effects, **({"compensation": _rigid()} if args.no_compensation else {})}
     _check_calibration(args, fx, urdf)
+    notes = _trust_notes(args, [("--spec", args.spec) if urdf else ("--params", args.params)])
     if args.model == "hand":
-        return _control_hand(args, fx)
+        return _control_hand(args, fx, notes)
     if args.duration is None:
         args.duration = 3.0
     kw: dict[str, Any] = {}
@@ -150,7 +151,7 @@ def cmd_control(args: argparse.Namespace) -> int:
         _check_control_outputs(args)
         scale = _force_scale(args, fx, run_control)
         res = run_control(args.controller, model=args.model, reference=args.reference, duration=args.duration,
-                          seed=args.seed, params=args.params, plant_params=args.plant_params, **fx)
+                          seed=args.seed, params=args.params, plant_params=args.plant_params, force=args.force, **fx)
         where = f"{args.model} pressing a block" + _effects_words(fx)
     obj = _write_control_outputs(res, args, plot_control)
     if not urdf:
@@ -172,6 +173,7 @@ def cmd_control(args: argparse.Namespace) -> int:
     if not urdf and scale is not None:
         lines.append(f"  sensorless force estimate divided by {scale:.4f} ("
                      f"{'read by a calibration run, seed ' + str(args.seed + CALIBRATION_SEED) if args.calibrate else '--force-scale'})")
+    _untrusted_lines(obj, lines, notes)
     _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0
 
@@ -213,7 +215,7 @@ def _force_scale(args: argparse.Namespace, fx: dict, run_control: Any) -> float 
     if args.calibrate:
         first = run_control("sensorless", model=args.model, reference="step", duration=args.duration,
                             seed=args.seed + CALIBRATION_SEED, params=args.params, plant_params=args.plant_params,
-                            **{**fx, "compensation": comp})
+                            force=args.force, **{**fx, "compensation": comp})
         try:
             scale = float(force_scale_of(first, comp.force_scale))
         except InputError as exc:
@@ -251,7 +253,13 @@ def _effects_words(fx: dict) -> str:
     return f" (plant effects: {', '.join(on) or 'none'}; {'rigid' if 'compensation' in fx else 'compensated'} design)"
 
 
-def _control_hand(args: argparse.Namespace, fx: dict | None = None) -> int:
+def _untrusted_lines(obj: dict, lines: list[str], notes: list[str]) -> None:
+    """The files used with --force though marked not trustworthy: ``obj``'s ``not_trustworthy`` and a line each."""
+    obj["not_trustworthy"] = list(notes)
+    lines += [f"  WARNING: {n}" for n in notes]
+
+
+def _control_hand(args: argparse.Namespace, fx: dict | None = None, notes: list[str] = ()) -> int:
     """``alpes-dyn control --model hand``: run_hand_control, one loop per motor, per-chain metrics."""
     from ..control.force import HandControlScenario, plot_hand_control, run_hand_control
 
@@ -265,7 +273,7 @@ def _control_hand(args: argparse.Namespace, fx: dict | None = None) -> int:
                          f"step up at {sc.step_time:g} s), got {duration:g}")
     _check_control_outputs(args)
     res = run_hand_control(args.controller, duration=duration, seed=args.seed, params=args.params,
-                           plant_params=args.plant_params, **(fx or {}))
+                           plant_params=args.plant_params, force=args.force, **(fx or {}))
     obj = _write_control_outputs(res, args, plot_hand_control)
     f = _na
 
@@ -280,5 +288,6 @@ def _control_hand(args: argparse.Namespace, fx: dict | None = None) -> int:
                      f"{row['force_rmse']:6.4f} N {f(row['q_rmse_deg'], '5.2f')}{'' if row['q_rmse_deg'] is None else ' deg'}")
     lines.append(f"  thumb ab/adduction held at {np.degrees(res.q_abduction[-1]):.1f} deg; "
                  f"loop {res.realtime_ratio:.1f}x faster than real time")
+    _untrusted_lines(obj, lines, list(notes))
     _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
     return 0

@@ -15,7 +15,8 @@ from ..estimation.experiments.excursion import excursion_report
 from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa: F401  (its old place)
 from .fitting import (_check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_applies, _write_robot,
                       _written_lines)
-from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit,
+from .uncertainty import _sigma_limit, _uncertainty
+from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _trust_notes,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      data_label, parse_vector, read_data)
 
@@ -60,6 +61,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
         raise InputError("--true-params: give either --params or --true-params (the simulated finger's file)")
     if args.observer_params is not None and args.mismatch != 0:
         raise InputError("--observer-params: give either --mismatch or --observer-params, not both")
+    notes = _trust_notes(args, [("--params", args.params), ("--observer-params", args.observer_params)])
     res = run_estimation(args.observer, model=args.model, spring=args.spring or "torsional",
                          params=args.true_params if args.true_params is not None else args.params,
                          observer_params=args.observer_params, friction=args.friction,
@@ -92,54 +94,16 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     if args.plot is not None:
         lines.append(f"  figure: {args.plot}")
     lines.append(f"  {obj['seconds']:.1f} s")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
 
 
-def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start: float, joints: tuple[str, ...],
-                 limit_deg: float, whole: bool = True) -> tuple[dict, list[str]]:
-    """What ``estimate`` says of its own uncertainty: each joint's reported sigma along the run after ``start`` s
-    (median and worst), each joint's observability by the encoders along the estimated motion
-    (:func:`~alpes_dyn.analysis.joint_observability.joint_observability`: flagged above ``limit_deg``), and with
-    true joints the NEES and its band (:func:`~alpes_dyn.estimation.observers.consistency.nees`; the band from the
-    filter's own error model when one filter ran the whole record, ``whole``). Returns (the JSON's keys, the
-    table's lines)."""
-    from ..analysis.joint_observability import joint_observability
-    from ..estimation.observers.consistency import joint_sigma, nees
-
-    n, deg = len(joints), np.degrees
-    med, worst = joint_sigma(est, n, start)
-    obs = joint_observability(filt.model.system.model, est.z, inputs, filt.dt, filt.R, limit=np.radians(limit_deg))
-    flags = obs.unobserved
-    obj: dict = {"q_std_median_deg": deg(med).tolist(), "q_std_worst_deg": deg(worst).tolist(),
-                 "observability": obs.to_dict(), "unobserved": list(flags), "nees": None}
-    lines = [f"  {'sigma median/worst [deg]:':30s}"
-             + "  ".join(f"{j} {deg(a):.3f}/{deg(b):.3f}" for j, a, b in zip(joints, med, worst)),
-             f"  {f'observed within [deg]:':30s}"
-             + "  ".join(f"{j} {deg(b):.3f}{' NOT OBSERVED' if j in flags else ''}" for j, b in zip(joints, obs.best))
-             + f" (best {obs.window:g} s window)"]
-    if true_q is not None:
-        r = nees(est, true_q, filt if whole else None, inputs if whole else None, start=start)
-        obj["nees"] = r.to_dict()
-        lines.append(f"  {'NEES of the joints:':30s}{r.value:.3g} (95 % band {r.low:.3g}-{r.high:.3g} for {r.dof} "
-                     f"joints, {r.effective:.3g} independent samples): {r.verdict}")
-    if flags:
-        lines.append(f"  WARNING: {', '.join(flags)} not observed by this motion: the encoders pin "
-                     f"{'it' if len(flags) == 1 else 'them'} no closer than "
-                     f"{deg(min(obs.best[joints.index(j)] for j in flags)):.3g} degrees (limit {limit_deg:g}, "
-                     f"--sigma-limit): the estimate there is the model's guess, not a measurement")
-    return obj, lines
-
-
-def _sigma_limit(value: float | None) -> float:
-    """``--sigma-limit`` in degrees (default 1), checked: a finite number in (0, 180]."""
-    from ..analysis.joint_observability import UNOBSERVED_LIMIT
-
-    if value is None:
-        return float(np.degrees(UNOBSERVED_LIMIT))
-    if not (np.isfinite(value) and 0 < value <= 180):
-        raise InputError(f"--sigma-limit: expected degrees in (0, 180], got {value!r}")
-    return float(value)
+def _note_untrusted(obj: dict, lines: list[str], notes: list[str]) -> None:
+    """The files used with --force though marked not trustworthy (:func:`~.common._trust_notes`): ``obj``'s
+    ``not_trustworthy`` (a list, empty when none) and a WARNING line each."""
+    obj["not_trustworthy"] = list(notes)
+    lines += [f"  WARNING: {n}" for n in notes]
 
 
 _SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.0), ("--seed", "seed", 0),
@@ -165,6 +129,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     limit = _sigma_limit(args.sigma_limit)
     t0 = time.perf_counter()
+    notes = _trust_notes(args, [("--spec", args.spec) if _is_urdf_path(args.model) else ("--params", args.params)])
     whole = None
     if _is_urdf_path(args.model):
         whole = _urdf_robot(args, "the observer")
@@ -179,9 +144,10 @@ def _estimate_data(args: argparse.Namespace) -> int:
     else:
         _check_model_options(args)
         model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
-                            rotor_inertia=args.rotor_inertia, params=args.params, chain=args.chain)
-    delay = 0 if args.torque_delay is None else args.torque_delay
-    if not 0 <= delay <= MAX_DELAY:
+                            rotor_inertia=args.rotor_inertia or _rotor_identified(args.params), params=args.params,
+                            chain=args.chain)
+    delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
+    if delay is not None and not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
                          f"torque_delay), got {delay}")
     rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
@@ -189,7 +155,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
                              disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay,
-                             friction_law=law)
+                             friction_law=law, force=args.force)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -205,6 +171,13 @@ def _estimate_data(args: argparse.Namespace) -> int:
              + ("; a disturbance torque per motor" if args.disturbance else "")
              + (f"; stick-slip friction law, the torque averaged over {res.settings['torque_window_samples']} samples"
                 if res.settings["friction_law"] == "stick" else "")]
+    from_file = [w for w, given, v in (
+        (f"torque delay {res.settings['torque_delay_samples']} samples", args.torque_delay,
+         res.settings["torque_delay_samples"]),
+        ("encoder offset " + ", ".join(f"{x:.4g}" for x in res.settings["encoder_offset_rad"]) + " rad",
+         args.encoder_offset, any(res.settings["encoder_offset_rad"]))) if given is None and v]
+    if from_file:
+        lines.append(f"  from --params: {'; '.join(from_file)} (as identified)")
     if res.rmse is not None:
         head = f"RMSE after {res.settings['transient_s']:g} s [deg]:"
         lines.append(f"  {head:30s}"
@@ -224,8 +197,18 @@ def _estimate_data(args: argparse.Namespace) -> int:
     if args.log is not None:
         lines.append(f"  log: {args.log}")
     lines.append(f"  {obj['seconds']:.1f} s")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _rotor_identified(params: str | None) -> bool:
+    """Whether the parameter file's rotor inertia ``transmission.J_m`` was identified (``identify`` fitted it with
+    the rotor on the tendons: the observer's model takes it the same way, as ``--rotor-inertia``)."""
+    from ..model.params import load_params
+
+    prm = load_params(params).raw.get("transmission.J_m")
+    return prm is not None and prm.source == "identified"
 
 
 def _without_friction(model):
@@ -280,7 +263,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     obj["output"] = args.output if written else None
     obj["chain"] = args.chain if urdf else model.chain
     obj["effects"] = list(fit.effects)
-    obj["torque_delay"] = fit.delay  # samples, of the rig's sensors (not in the file): estimate --data --torque-delay
+    obj["torque_delay"] = fit.delay  # samples, of the rig's sensors: the file's transmission.torque_delay
     obj["tried"] = None if fit.tried is None else {
         "effects": list(fit.tried_effects), "residual_rms": fit.tried.residual_rms, "converged": fit.tried.converged,
         "verdict": fit.tried.status()}
@@ -309,8 +292,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     lines.append(f"  encoder residual {res.residual_rms:.3g} counts RMS")
     if fit.delay:
         lines.append(f"  torque delay: the recorded torque {fit.delay} sample{'s' if fit.delay > 1 else ''} late (the "
-                     f"rig's sensors, not written to the file: give it to the observer, estimate --data ... "
-                     f"--torque-delay {fit.delay})")
+                     f"rig's sensors: transmission.torque_delay in the file, which estimate --data reads)")
     obj.update(excursion_report(data))  # the fit's data: its motors whose encoder barely moved
     lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
     a = res.adequacy
@@ -482,33 +464,55 @@ def cmd_codegen(args: argparse.Namespace) -> int:
             raise InputError("--controller: the force controller is exported for finger2 and finger3 on the block "
                              "(alpes-dyn control's scene), without --chain and --friction")
     check_output_directory(args.output, "-o")  # before the build: a new or empty directory, never a file
+    notes = _trust_notes(args, [("--params", args.params)])
     t0 = time.perf_counter()
     filt, z0, P0 = scenario_filter(args.observer, args.model, params=args.params, chain=args.chain,
-                                   friction=args.friction)
+                                   friction=args.friction, force=args.force)
+    rig = _rig_words(args)
     about = (f"Model {args.model}{f' (chain {args.chain})' if args.chain else ''}, parameter file "
              f"{args.params or 'shipped with alpes_dyn'}{', with friction' if args.friction else ''}; observer "
-             f"{args.observer} with the noise settings of 'alpes-dyn estimate'.")
+             f"{args.observer} with the noise settings of 'alpes-dyn estimate'." + (f" {rig[0]}" if rig[0] else ""))
     files = c_sources(filt, about=about, z0=z0, P0=P0)
     if args.controller is not None:
         from ..control.cexport import block_controller, controller_c_sources
 
-        files.update(controller_c_sources(block_controller(args.controller, args.model, args.params)))
+        files.update(controller_c_sources(block_controller(args.controller, args.model, args.params, args.force)))
     written = write_sources(files, args.output, "-o")
     prefix = f"alpes_{filt.kind}"
     obj = {"model": args.model, "chain": args.chain, "params": args.params, "observer": args.observer,
            "controller": args.controller, "directory": args.output, "files": sorted(written), "prefix": prefix,
            "nz": filt.nz, "nw": filt.nw, "ny": filt.ny, "dt": filt.dt, "states": list(filt.names),
-           "seconds": time.perf_counter() - t0}
+           "seconds": time.perf_counter() - t0, **rig[1]}
     lines = [f"{args.model}: {args.observer} step{f' and {args.controller} controller' if args.controller else ''} "
              f"written to {args.output}/ ({', '.join(sorted(written))})",
              f"  {prefix}_step(z[{filt.nz}], P[{filt.nz}*{filt.nz}], w[{filt.nw}], y[{filt.ny}], z_out, P_out, "
              f"work), dt = {filt.dt:g} s; the API in {prefix}.h",
              f"  build: cc -O2 -o {prefix}_main main.c {prefix}.c -lm"]
+    if rig[0]:
+        lines.append(f"  {rig[0]}")
     if args.controller is not None:
         lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
                      "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _rig_words(args: argparse.Namespace) -> tuple[str, dict]:
+    """What the exported step leaves to its caller of the rig's side identified in --params: (a sentence, empty
+    without any; the JSON's ``encoder_offset_rad`` (per motor) and ``torque_delay_samples``). The tilt is in the
+    file's gravity, which the step's model holds."""
+    from ..estimation.observers.replay import file_encoder_offsets
+    from ..model.params import load_params
+    from ..model.robot import Model
+
+    p = load_params(args.params)
+    off = file_encoder_offsets(Model.alpes(args.model, params=p, chain=args.chain)).tolist()
+    words = ([f"Subtract the identified encoder zero ({', '.join(f'{x:.6g}' for x in off)} rad of the motor) from the "
+              "reading before y."] if any(off) else []) + (
+        [f"The recorded torque lags the motor's by {p.torque_delay} samples (identified): give w the command held, "
+         "not the late reading."] if p.torque_delay else [])
+    return " ".join(words), {"encoder_offset_rad": off, "torque_delay_samples": int(p.torque_delay)}
 
 
 _URDF_CODEGEN = (
@@ -540,6 +544,7 @@ def _codegen_robot(args: argparse.Namespace) -> int:
         raise InputError(f"{'--frame' if args.frame is not None else '--motor'}: names the force controller's tip "
                          "frame or motor; give it with --controller")
     check_output_directory(args.output, "-o")  # before the build: a new or empty directory, never a file
+    notes = _trust_notes(args, [("--spec", args.spec)])
     t0 = time.perf_counter()
     model = _urdf_robot(args, "the C export")
     ctl = None
@@ -577,5 +582,6 @@ def _codegen_robot(args: argparse.Namespace) -> int:
     if ctl is not None:
         lines.append("  alpes_force_update(&state, F_ref, F_fb, q_hat, &tau, work): the API in alpes_force.h; "
                      "build: cc -O2 -o alpes_force_main force_main.c alpes_force.c -lm")
+    _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0

@@ -9,7 +9,7 @@ from ..analysis.observability_matrix import MAX_INSTRUCTIONS
 from .arguments import (OUTPUT_HELP, _POINTS, _SEED, _common, _int_at_least, _json_option,  # noqa: F401
                         _model_option, _outputs, _positive_number, _positive_seconds, _strict_float)
 from .analysis_cmds import cmd_identifiability, cmd_observability
-from .common import _UsageError, _drift_choice
+from .common import FORCE_USE_HELP, _UsageError, _drift_choice
 from .control_cmds import cmd_control
 from .estimation_cmds import FRICTION_LAW_HELP, THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
@@ -203,6 +203,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--sigma-limit", type=_strict_float, default=None, metavar="DEG", help="a joint that no 0.5 s "
                    "window of the motion pins within DEG degrees (1 sigma, dry friction unknown) is flagged (default 1)")
     s.add_argument("--friction-law", default=None, metavar="LAW", help=FRICTION_LAW_HELP)
+    s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_estimate)
 
 
@@ -239,6 +240,7 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
     s.add_argument("-o", "--output", required=True, metavar="DIR",
                    help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_codegen)
 
 
@@ -364,8 +366,7 @@ def _add_identifiability(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--params", default=None, metavar="FILE", help="Alpes models: parameter file (default: the shipped one)")
     s.add_argument("--parameters", default=None,
                    help="kinds K, m, F_s, F_v, friction, input_gain, encoder_offset, tilt and/or names K_1, m_2, "
-                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are "
-                        "chosen)")
+                        "tilt_y... (default K,m,friction; the finger has friction when friction parameters are chosen)")
     s.add_argument("--output", default="encoder", type=_outputs, help="the measured output (default encoder: S q)")
     s.add_argument("--design", default="documented",
                    help="experiment of the Cramér-Rao bounds: documented (the identification multisine, default), "
@@ -485,6 +486,7 @@ def _add_control(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--log", metavar="FILE.csv", help="write the traces (t, F_ref, F_z, q, q_hat, tau_m) as CSV")
     s.add_argument("--plot", metavar="FILE.png", help="write a figure of force, torque and joints")
     s.add_argument("--json", action="store_true", help="print one JSON object")
+    s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_control)
 
 

@@ -298,13 +298,16 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
             "force_main.c": _MAIN.format(prefix=prefix, P=P, nq=nq)}
 
 
-def block_controller(kind: str = "sensor", model: str = "finger3", params: Any = None) -> ForceController:
+def block_controller(kind: str = "sensor", model: str = "finger3", params: Any = None,
+                     force: bool = False) -> ForceController:
     """The controller of ``alpes-dyn control`` (:func:`~.finger_loop.run_control`'s block scene): ``kind`` from
     :data:`~.controller.CONTROLLERS` with its :data:`~.controller.DEFAULT_GAINS`, on ``model`` (finger2,
     finger3) with the parameter file ``params``, the block's face normal, the scenario's period and
-    ``tau_max``; a fresh one (its state at zero)."""
+    ``tau_max``; a fresh one (its state at zero). A file marked not trustworthy: :class:`~alpes_dyn.ModelError`
+    naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
     from ..model.mjcf import BLOCK_CONTACT_Q, block_normal
-    from ..model.params import load_params
+    from ..model.params import HandParams, load_params
+    from ..model.trust import check_trusted
     from ..model.robot import Model
     from .controller import CONTROLLERS, DEFAULT_GAINS
     from .finger_loop import ControlScenario
@@ -315,7 +318,8 @@ def block_controller(kind: str = "sensor", model: str = "finger3", params: Any =
         raise InputError(f"model: the force controller's C export is defined for finger2 and finger3 on the block, "
                          f"got {model!r}")
     sc = ControlScenario(model=model, controller=kind)
-    p = load_params(params)
+    p = params if isinstance(params, HandParams) else load_params(params)
+    check_trusted(p, force)
     m = Model.alpes(model, params=p)
     return ForceController(kind, m, block_normal(tuple((sc.contact_q or BLOCK_CONTACT_Q)[: m.n])), sc.dt, p.tau_max, **DEFAULT_GAINS[kind])
 

@@ -31,6 +31,7 @@ from ..model.block_scene import BlockScene, block_scene_mjcf
 from ..model.mjcf import joint_permutation, load_mujoco, palm_down_params
 from ..model.robot import Model
 from ..model.params import HandParams, load_params
+from ..model.trust import check_trusted
 from ..simulation.loop import Block, Delay, Function, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
@@ -119,6 +120,7 @@ class ControlScenario:
     effects: Any = field(default=None, compare=False)  # a PlantEffects: the plant's unmodelled effects (realism_loop)
     compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
     observer_friction: bool = True  # an Alpes finger's EKF runs its file's friction (ForceStep's observer_friction)
+    force: bool = False  # a controller's file marked not trustworthy used anyway (model.trust.check_trusted)
 
     @property
     def robot(self) -> bool:
@@ -309,9 +311,11 @@ def _metrics(res: ControlResult) -> None:
 
 def _plant_and_params(sc: Any) -> tuple[Any, HandParams, HandParams]:
     """MuJoCo (one line naming the extra if it is missing), the controller's and the plant's parameters
-    (the plant's default: the controller's), both turned palm down."""
+    (the plant's default: the controller's), both turned palm down. The controller's file marked not trustworthy:
+    :class:`~alpes_dyn.ModelError` naming it, unless ``sc.force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
     mujoco = _mujoco()
     p = sc.params if isinstance(sc.params, HandParams) else load_params(sc.params)
+    check_trusted(p, bool(getattr(sc, "force", False)))
     pp = sc.plant_params if isinstance(sc.plant_params, HandParams) else (
         load_params(sc.plant_params) if sc.plant_params is not None else p)
     return mujoco, palm_down_params(p), palm_down_params(pp)
@@ -416,9 +420,10 @@ def _effect_signals(sc: Any, model: Model, params: HandParams | None, suffix: st
         out["torque"] = sig["tau_prev"]
         blocks.append(Delay(sig["tau"], sig["tau_prev"], 0.0, name="command_held" + suffix))
     if comp.observer_compliance:
+        off = comp.offset_of(params, suffix[1:] or "finger", model.chain)
         torque, y, tr = out["torque"], sig["y"], model.transmission
         out["measurement"] = sig["y_obs"]
-        blocks.append(Function(lambda **u: comp.unstretched(tr, u[y], u[torque]), (y, torque), sig["y_obs"],
+        blocks.append(Function(lambda **u: comp.unstretched(tr, u[y], u[torque], off), (y, torque), sig["y_obs"],
                                name="unstretched" + suffix))
     out["controller"].update(comp.notch_settings(model, params, sc.dt))
     return out
@@ -464,7 +469,8 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
     Raises
     ------
     InputError: bad settings (a frame, a motor or a block that cannot be placed: one line naming it).
-    ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra) or an unreadable parameter file.
+    ModelError: MuJoCo missing (one line naming the ``[mujoco]`` extra), an unreadable parameter file, or the
+        controller's file marked not trustworthy (its reason; ``force=True`` runs it).
     """
     sc = dataclasses.replace(scenario or ControlScenario(), controller=controller, **overrides)
     sc.check()

@@ -158,6 +158,7 @@ class HandControlScenario:
     plant_params: Any = field(default=None, compare=False)
     effects: Any = field(default=None, compare=False)  # a PlantEffects (realism_loop), on every flexion chain
     compensation: Any = field(default=None, compare=False)  # a Compensation (default: all on with effects)
+    force: bool = False  # a controller's file marked not trustworthy used anyway (model.trust.check_trusted)
 
     def check(self, chains: Sequence[str] | None = None) -> None:
         _check_effects(self.effects, self.compensation, False)

@@ -30,16 +30,21 @@ through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
   one-sample delay) excites;
 * ``observer_compliance``: the EKF on the encoder with the identified tendon's stretch taken off, y - C tau_m,k-1
   (as ``alpes-dyn estimate --data`` does; the joints' estimate 2.5 -> 1.2 degrees on the worst joint), and
-  ``encoder_offset`` (rad of motor);
+  ``encoder_offset`` (rad of motor; default the controller's parameter file's, as ``identify`` wrote it);
 * ``command_input``: the EKF and the sensorless estimate take the command held over the last period (in the current
   sensor's units: what the reading shows, without its delay and its noise) as the motor torque, instead of the
   reading that lags by the torque delay -- a Smith-predictor-like use of the known actuator;
-* ``tilt``: the controller's and the observer's gravity turned by the palm's orientation the identification fitted
-  (``tilt_y``; of the rig, not in the file).
+* ``tilt``: the controller's and the observer's gravity turned further by a palm's orientation (``tilt_x``,
+  ``tilt_y``); the tilt ``identify`` fitted is already in its file's gravity (``environment.gravity``), which the
+  controller's model takes.
 * ``force_scale``: the sensorless estimate divided by its ratio to the fingertip sensor's reading, measured once
   (:func:`~alpes_dyn.control.hand_loop.force_scale_of`): the torque constant's error scales every identified torque
   parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of e / (1 + e) on the
   uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
+
+The identified torque delay (the file's ``transmission.torque_delay``) needs no block of its own: with
+``command_input`` the observer and the sensorless estimate take the command, which the reading's lag does not
+touch.
 
 Measured and left out: a smoothed Coulomb feedforward of the identified F_s, F_v on the observer's velocities (the
 overshoot 13.6 -> 16.3 %: the stick-slip the loop meets is the passive joints' redistribution as the fingertip rolls
@@ -76,9 +81,11 @@ class Compensation:
         motor) off the encoder's reading. command_input: the EKF and the sensorless estimate take the command as the
         motor torque (not the reading, late by the torque delay). notch: the command through a notch at the cable's
         mode identified, f_c = sqrt(1 / (C J_m)) / (2 pi) (the file's compliance C and rotor J_m; none with a rigid
-        file), damping ratio ``notch_zeta``. tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified
-        (``tilt_x``, ``tilt_y`` of the fit, :func:`~alpes_dyn.symbolic.parametric.tilted_gravity`): the controller's
-        and the observer's gravity turned by it. force_scale: the sensorless force estimate divided by it -- the
+        file), damping ratio ``notch_zeta``. tilt: (tilt_x, tilt_y) rad, a palm's orientation
+        (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`): the controller's and the observer's gravity turned
+        by it, on top of the file's (which holds the tilt ``identify`` fitted). encoder_offset: rad of the motor,
+        or None (the default): the controller's file's (:meth:`~alpes_dyn.model.params.HandParams.encoder_offset_of`,
+        as ``identify`` wrote it; 0 without). force_scale: the sensorless force estimate divided by it -- the
         ratio of that estimate to the fingertip sensor's reading, measured once on the plant
         (:func:`~alpes_dyn.control.hand_loop.force_scale_of`: the torque constant's error, which the encoder
         cannot see, scales the estimate); a number, or for the hand a dict chain -> number (1 where a chain is
@@ -90,15 +97,17 @@ class Compensation:
     notch: bool = True
     notch_zeta: float = 0.7
     tilt: tuple[float, float] = (0.0, 0.0)
-    encoder_offset: float = 0.0
+    encoder_offset: float | None = None
     force_scale: Any = field(default=1.0, compare=False)
 
     def check(self) -> "Compensation":
         for name in ("observer_compliance", "command_input", "notch"):
             if not isinstance(getattr(self, name), bool):
                 raise InputError(f"{name}: expected True or False, got {getattr(self, name)!r}")
-        for name, v, lo, hi in (("encoder_offset", self.encoder_offset, -1.0, 1.0),
-                                ("notch_zeta", self.notch_zeta, 0.05, 2.0)):
+        ranges = [("notch_zeta", self.notch_zeta, 0.05, 2.0)]
+        if self.encoder_offset is not None:  # (None: the controller's file's)
+            ranges.append(("encoder_offset", self.encoder_offset, -1.0, 1.0))
+        for name, v, lo, hi in ranges:
             if isinstance(v, bool) or not isinstance(v, (int, float)) or not (math.isfinite(v) and lo <= v <= hi):
                 raise InputError(f"{name}: expected a number in [{lo:g}, {hi:g}], got {v!r}")
         scales = self.force_scale.values() if isinstance(self.force_scale, Mapping) else (self.force_scale,)
@@ -135,11 +144,19 @@ class Compensation:
             return {}
         return {"notch_hz": f_c, "notch_zeta": self.notch_zeta}
 
-    def unstretched(self, transmission: Any, y: Any, tau: Any) -> Any:
-        """The encoder's reading y (rad of motor) without :attr:`encoder_offset` (rad) and without the tendon's
-        stretch C tau (:meth:`~alpes_dyn.model.transmission.Transmission.unstretched`; tau the torque held over the
-        period before the reading, N m): y - offset - C tau, what the rigid model's encoder would read."""
-        return transmission.unstretched(y - self.encoder_offset, tau)
+    def unstretched(self, transmission: Any, y: Any, tau: Any, offset: float = 0.0) -> Any:
+        """The encoder's reading y (rad of motor) without the encoder's zero ``offset`` (rad, :meth:`offset_of`)
+        and without the tendon's stretch C tau (:meth:`~alpes_dyn.model.transmission.Transmission.unstretched`; tau
+        the torque held over the period before the reading, N m): y - offset - C tau, what the rigid model's encoder
+        would read."""
+        return transmission.unstretched(y - offset, tau)
+
+    def offset_of(self, params: Any, motor: str, chain: str | None = None) -> float:
+        """The encoder zero (rad of the motor) taken off the reading: :attr:`encoder_offset`, or where None the
+        controller's file's for ``motor`` (``params`` a HandParams, or None: 0)."""
+        if self.encoder_offset is not None:
+            return float(self.encoder_offset)
+        return 0.0 if params is None else float(params.encoder_offset_of(motor, chain))
 
     def turned_gravity(self, gravity: Any) -> np.ndarray:
         """``gravity`` (3,), m/s^2, turned by the identified palm orientation (:attr:`tilt`)."""

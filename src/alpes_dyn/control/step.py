@@ -40,6 +40,7 @@ from ..estimation.observers.observers import make_observer
 from ..estimation.observers.scenario import EstimationScenario, default_noise, static_equilibrium
 from ..model.block_scene import BlockScene, place_block
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, palm_down_params
+from ..model.trust import check_trusted
 from ..model.params import HandParams, load_params
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
@@ -237,6 +238,9 @@ class ForceStep:
         The sensorless estimate's low-pass time constant, s.
     frame, motor, tau_max
         A URDF model's contact frame, pulling motor and motor limit (N m), as :class:`.ControlScenario`'s.
+    force : bool
+        Use a parameter file marked not trustworthy (refused otherwise: :class:`~alpes_dyn.ModelError` with the
+        reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
     observer_friction : bool
         The Alpes finger's EKF runs the file's friction (eq. 2.6-2.7, :func:`alpes_design`; the controller's static
         balance stays frictionless, eq. 2.11). False: the frictionless model of version 0.2's loop.
@@ -265,7 +269,7 @@ class ForceStep:
                  compiled: bool = True, torque_noise: float = 5e-4, encoder_noise_counts: float = 0.5,
                  force_noise: float = 0.005, force_resolution: float = 4.4 / 1024, force_filter_s: float = 0.01,
                  frame: str | None = None, motor: str | None = None, tau_max: float | None = None,
-                 observer_friction: bool = True) -> None:
+                 observer_friction: bool = True, force: bool = False) -> None:
         robot = isinstance(model, Model)
         if not robot and (not isinstance(model, str) or model not in CONTROL_MODELS):
             raise InputError(f"model: the force step is defined for one finger ({', '.join(CONTROL_MODELS)}) "
@@ -294,6 +298,7 @@ class ForceStep:
                                      "fingertip, its motor and its tau_max are the parameter file's")
             _check_contact_q(contact_q, 2 if model == "finger2" else 3)
             p = params if isinstance(params, HandParams) else load_params(params)
+            check_trusted(p, bool(force))
             design = alpes_design(model, palm_down_params(p) if palm_down else p, controller, contact_q, comp,
                                   dict(gains or {}), observer_friction=bool(observer_friction))
         if normal is not None:
@@ -330,6 +335,8 @@ class ForceStep:
         self.counts_per_rev = tr.counts_per_rev
         self._rad_per_count = 2 * np.pi / tr.counts_per_rev
         self._transmission = tr
+        # the encoder's zero taken off the reading: the compensation's, else the file's (identify's encoder_offset)
+        self._offset = comp.offset_of(design.params, tr.motor_names[design.motor], model.chain)
         self._normal = np.asarray(design.normal, dtype=float)
         tip = {} if design.frame is None else {"motor": design.motor, "tip": design.frame}
         self._controller_args = dict(kind=kind, model=model, normal=self._normal, dt=self.dt, tau_max=self.tau_max,
@@ -401,7 +408,7 @@ class ForceStep:
                 wy, m = self._wy, self.m
                 wy[:m] = tau
                 wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * self._normal
-                wy[m + 3:] = comp.unstretched(self._transmission, y, tau) if comp.observer_compliance else y
+                wy[m + 3:] = comp.unstretched(self._transmission, y, tau, self._offset) if comp.observer_compliance else y
                 s = self.filter_step(self._s, wy)
                 if not (np.abs(s[:2 * self.n]) < _DIVERGED).all():  # NaN too
                     raise InputError(f"readings: the EKF diverged at sample {self.k} (joint estimate "

@@ -9,14 +9,19 @@ a subnormal 1e-320 are refused with the field's name and the range).
 
 The four fingers share ``[finger]``; a finger may have values of its own in a table ``[finger.<name>]``
 (``<name>`` from ``palm.finger_names``) holding any of :data:`OVERRIDE_FIELDS` (``K``, ``m``, ``I``,
-``F_s``, ``F_v``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
+``F_s``, ``F_v``, ``encoder_offset``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
 :func:`chain_params`): an identified hand differs link by link.
+
+What ``identify`` finds of the rig is in the file too (optional): a chain's encoder zero ``encoder_offset`` (rad of
+its motor, :meth:`HandParams.encoder_offset_of`), the torque's lag ``transmission.torque_delay`` (whole samples),
+the palm's tilt as the ``environment.gravity`` it turns.
 
 An identified file also records, per chain fitted, how far the fit is to be trusted: an optional table
 ``[identification.<chain>]`` (``<chain>``: ``finger`` for the shared values, a finger's name, or
 ``thumb``) with the fields of :data:`IDENTIFICATION_FIELDS` (``converged``, ``adequate``,
-``trustworthy``, the stop reason, the verdict...; :attr:`HandParams.identification`). Every command
-reads such a file; the record is informative, the values are used as they are.
+``trustworthy``, the stop reason, the verdict...; :attr:`HandParams.identification`). A file with a chain
+marked ``trustworthy = false`` (written with ``alpes-dyn identify --force``) is refused by the commands and loaders
+that use its values unless forced (:func:`~alpes_dyn.model.trust.check_trusted`).
 """
 
 from __future__ import annotations
@@ -47,12 +52,14 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
         "L": (3, "pos"), "s": (3, "pos"), "m": (3, "pos"), "I": (3, "pos"), "r": (None, "pos"),
         "K": (3, "nonneg"), "b": (None, "nonneg"), "radius": (None, "pos"),
         "lower": (None, "any"), "upper": (None, "any"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
+        "encoder_offset": (None, "any"),
     },
     "thumb": {
         "L": (2, "pos"), "s": (2, "pos"), "m": (2, "pos"), "I": (2, "pos"), "K": (2, "nonneg"),
         "radius": (None, "pos"), "base_mass": (None, "pos"), "abduction_K": (None, "nonneg"), "abduction_axis": (3, "unit"),
         "abduction_lower": (None, "any"), "abduction_upper": (None, "any"), "F_s": (2, "nonneg"), "F_v": (2, "nonneg"),
         "abduction_F_s": (None, "nonneg"), "abduction_F_v": (None, "nonneg"),
+        "encoder_offset": (None, "any"), "abduction_encoder_offset": (None, "any"),
     },
     "palm": {
         "finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"),
@@ -61,38 +68,41 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     "transmission": {
         "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
         "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
-        "tendon_compliance": (None, "nonneg"), "capstan": (None, "nonneg"),
+        "tendon_compliance": (None, "nonneg"), "capstan": (None, "nonneg"), "torque_delay": (None, "nonneg"),
     },
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
     "environment": {"gravity": (3, "any")},
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
 _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v",
-             "transmission.tendon_compliance", "transmission.capstan"}
+             "transmission.tendon_compliance", "transmission.capstan", "transmission.torque_delay",
+             "finger.encoder_offset", "thumb.encoder_offset", "thumb.abduction_encoder_offset"}
 # the unit each field's value is read in: a file giving another one is refused (no conversion is made)
 _UNITS: dict[str, str] = {
     **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
     "finger.K": "N m/rad", "finger.lower": "rad", "finger.upper": "rad", "finger.F_s": "N m",
-    "finger.F_v": "N m s/rad",
+    "finger.F_v": "N m s/rad", "finger.encoder_offset": "rad",
     **{f"thumb.{k}": "m" for k in ("L", "s", "radius")}, "thumb.m": "kg", "thumb.I": "kg m^2", "thumb.K": "N m/rad",
     "thumb.base_mass": "kg", "thumb.abduction_K": "N m/rad", "thumb.abduction_axis": "-", "thumb.abduction_lower": "rad",
     "thumb.abduction_upper": "rad", "thumb.F_s": "N m", "thumb.F_v": "N m s/rad", "thumb.abduction_F_s": "N m",
-    "thumb.abduction_F_v": "N m s/rad",
+    "thumb.abduction_F_v": "N m s/rad", "thumb.encoder_offset": "rad", "thumb.abduction_encoder_offset": "rad",
     "palm.finger_names": "-", "palm.finger_x": "m", "palm.finger_y": "m", "palm.thumb_xyz": "m", "palm.thumb_yaw": "rad",
     "transmission.r_m": "m", "transmission.abduction_ratio": "-", "transmission.J_m": "kg m^2", "transmission.N": "-",
     "transmission.encoder_counts": "counts/rev", "transmission.tau_max": "N m",
-    "transmission.tendon_compliance": "rad/(N m)", "transmission.capstan": "-",
+    "transmission.tendon_compliance": "rad/(N m)", "transmission.capstan": "-", "transmission.torque_delay": "samples",
     "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
     "environment.gravity": "m/s^2",
 }
-_INTEGER = {"transmission.encoder_counts"}  # fields whose value must be a whole number
+_INTEGER = {"transmission.encoder_counts", "transmission.torque_delay"}  # fields whose value must be a whole number
 _ENTRY_KEYS = {"value", "unit", "source", "reason", "description", "std"}
 # per-finger overrides: a table [finger.<name>] (name from palm.finger_names) with any of these fields, which
 # replace the shared [finger] values on that finger only (a real hand's fingers differ link by link)
 OVERRIDE_FIELDS: dict[str, tuple[int, str]] = {
     "K": (3, "nonneg"), "m": (3, "pos"), "I": (3, "pos"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
+    "encoder_offset": (None, "any"),
 }
-"""Fields a per-finger section ``[finger.<name>]`` may hold: 3-arrays, one entry per phalanx."""
+"""Fields a per-finger section ``[finger.<name>]`` may hold: 3-arrays, one entry per phalanx, and that finger's
+encoder zero ``encoder_offset`` (rad of its motor)."""
 SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
 IDENTIFICATION_FIELDS: dict[str, type] = {
     "model": str, "recording": str, "converged": bool, "stop": str, "adequate": bool, "trustworthy": bool,
@@ -140,6 +150,9 @@ class ChainParams:
     radius: float
     F_s: np.ndarray | None = None
     F_v: np.ndarray | None = None
+    encoder_offset: float = 0.0
+    """rad of the chain's (flexion) motor: its encoder's zero as identified, y = S q + offset (optional
+    ``encoder_offset``; 0, the default: the encoder reads 0 at q = 0)."""
 
     @property
     def n(self) -> int:
@@ -197,6 +210,11 @@ class HandParams:
     tendon_compliance: float = 0.0
     """C_t, rad/(N m): the flexion tendons' stretch seen by the encoder per N m of recorded motor torque,
     y_k = S q_k + C_t tau_m,k-1, the torque held before the reading (optional ``transmission.tendon_compliance``; 0, the default, is a rigid tendon)."""
+    torque_delay: int = 0
+    """Whole samples by which the recorded motor torque lags the motor's (the current's filter and the bus), as
+    identified (optional ``transmission.torque_delay``; 0, the default: none)."""
+    abduction_encoder_offset: float = 0.0
+    """rad of the thumb's ab/adduction motor: its encoder's zero (optional ``thumb.abduction_encoder_offset``)."""
     capstan: float = 0.0
     """mu theta (dimensionless): the flexion tendons' sheath friction, the joints getting
     tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c) (optional ``transmission.capstan``; 0, the default: none;
@@ -208,6 +226,18 @@ class HandParams:
     def untrusted(self) -> list[str]:
         """The chains whose identified values are marked not trustworthy (written with ``--force``)."""
         return [c for c, rec in self.identification.items() if rec.get("trustworthy") is False]
+
+    def encoder_offset_of(self, motor: str, chain: str | None = None) -> float:
+        """The encoder zero (rad of the motor) the file holds for ``motor``: ``finger`` (a finger model's motor: the
+        finger ``chain``'s, default the shared ``[finger]``), a finger's name, ``thumb``, ``thumb_abduction``; 0 for
+        another name (no such motor in the file)."""
+        if motor == "thumb_abduction":
+            return float(self.abduction_encoder_offset)
+        if motor == "finger":
+            return float(self.chain(chain or "finger").encoder_offset)
+        if motor == "thumb" or motor in self.finger_names:
+            return float(self.chain(motor).encoder_offset)
+        return 0.0
 
     def chain(self, name: str) -> ChainParams:
         """The parameters of one chain: a finger by its name (``palm.finger_names``, the shared ``[finger]``
@@ -410,7 +440,7 @@ def _chain(raw: dict[str, Param], sec: str, K: np.ndarray, over: str = "") -> Ch
 
     L, s, m, I = (get(k) for k in ("L", "s", "m", "I"))
     K = get("K") if over else K
-    Fs, Fv, radius = get("F_s"), get("F_v"), get("radius")
+    Fs, Fv, radius, offset = get("F_s"), get("F_v"), get("radius"), get("encoder_offset")
     sec = over or sec
     if np.any(s > L):
         i = int(np.argmax(s > L))
@@ -423,7 +453,8 @@ def _chain(raw: dict[str, Param], sec: str, K: np.ndarray, over: str = "") -> Ch
             f"{sec}.I: not physically consistent: I about the joint must exceed m d^2 = {m[i] * d[i] ** 2:.4g} "
             f"(parallel-axis theorem, d = L - s) but is {I[i]:.4g} at index {i}"
         )
-    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=radius, F_s=Fs, F_v=Fv)
+    return ChainParams(L=L, s=s, m=m, I=I, K=K, radius=radius, F_s=Fs, F_v=Fv,
+                       encoder_offset=0.0 if offset is None else float(offset))
 
 
 def load_params(path: str | Path | None = None) -> HandParams:
@@ -472,7 +503,8 @@ def _from_text(text: str, path: str) -> HandParams:
         thumb_xyz=v["palm.thumb_xyz"], thumb_yaw=v["palm.thumb_yaw"], path=path, raw=raw, fingers=fingers,
         abduction_F_s=v.get("thumb.abduction_F_s"), abduction_F_v=v.get("thumb.abduction_F_v"),
         identification=ident, tendon_compliance=float(v.get("transmission.tendon_compliance", 0.0)),
-        capstan=float(v.get("transmission.capstan", 0.0)),
+        capstan=float(v.get("transmission.capstan", 0.0)), torque_delay=int(v.get("transmission.torque_delay", 0)),
+        abduction_encoder_offset=float(v.get("thumb.abduction_encoder_offset", 0.0)),
     )
 
 

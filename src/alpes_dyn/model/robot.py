@@ -252,7 +252,8 @@ class Model(FrameKinematics):
         ``friction`` and ``rotor_inertia`` switch on eq. 2.6-2.7 and eq. 2.8 with the file's values.
         ``chain``: a finger model built from that finger of the hand (a name of ``palm.finger_names``:
         the shared ``[finger]`` values with its own ``[finger.<name>]`` ones); :attr:`chain` keeps it and
-        :attr:`params` the whole file.
+        :attr:`params` the whole file (a file marked not trustworthy too: :attr:`HandParams.untrusted`; the
+        loaders that use its values refuse it, :func:`~alpes_dyn.model.trust.check_trusted`).
         """
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)

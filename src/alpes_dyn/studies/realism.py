@@ -164,11 +164,13 @@ def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor:
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
     the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
     fitted)."""
-    obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path), rig)
+    # the rig's gravity, or the shipped file's: the fitted tilt is turned on below (the file's gravity holds it too)
+    obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path),
+                  rig if rig is not None else load_params().gravity)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
     est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
-                             torque_delay=torque_delay)
+                             torque_delay=torque_delay, force=True)  # a flagged fit judged too
     return est.rmse
 
 

@@ -430,11 +430,13 @@ def read_main_output(text: str, nz: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: Any = None, chain: str | None = None,
-                    friction: bool = False) -> tuple[KalmanFilter, np.ndarray, np.ndarray]:
+                    friction: bool = False, force: bool = False) -> tuple[KalmanFilter, np.ndarray, np.ndarray]:
     """The observer of the estimation scenario (:func:`~alpes_dyn.estimation.observers.scenario.run_estimation`, no
     mismatch) on ``model`` with the parameter file ``params``: (filter, z0, P0), its noise settings, substeps and
-    prior those of the scenario (the same filter: tested against its estimate)."""
+    prior those of the scenario (the same filter: tested against its estimate). A file marked not trustworthy:
+    :class:`~alpes_dyn.ModelError` naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
     from ...model.params import load_params
+    from ...model.trust import check_trusted
     from ...model.robot import Model
     from ...simulation.integrate import stable_substeps
     from ...symbolic.statespace import StateSpace
@@ -445,7 +447,9 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
         raise InputError(f"unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
     sc = EstimationScenario(model=model, friction=bool(friction), chain=chain)
     sc.check()
-    m = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=load_params(params), chain=sc.chain)
+    p = load_params(params)
+    check_trusted(p, force)
+    m = Model.alpes(sc.model, spring=sc.spring, friction=sc.friction, params=p, chain=sc.chain)
     n, nm = m.n, m.transmission.n_motors
     step = 2 * np.pi / m.transmission.counts_per_rev
     meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2

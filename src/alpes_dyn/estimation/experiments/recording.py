@@ -24,7 +24,10 @@ column                      unit     meaning
 not in the file (the RMSE of ``estimate --data`` needs them all). On the command line, ``identify`` and
 ``estimate --data`` read ``current_<motor>`` columns with ``--torque-constant NM_PER_A``. An encoder
 reading far outside what the joints' ranges allow (more than the range and a motor turn beyond it) is
-refused by name: it is not this model's encoder in counts. Every defect is one
+refused by name: it is not this model's encoder in counts; so is an encoder column of fractional values swinging no
+more than the joints' range in degrees of the motor (the angle in radians or degrees), a torque beyond
+:data:`~alpes_dyn.estimation.experiments.units.TORQUE_SCALE_LIMIT` times the file's ``tau_max`` (a current in A or mA) and a sample period over 0.1 s
+(t in ms). Every defect is one
 :class:`~alpes_dyn.errors.RecordingError` naming the column (and the row): an unknown or missing
 column, a non-number (``1_0`` too: no digit separators), NaN where not allowed, time not increasing or not
 uniform, a joint angle or gravity in the wrong unit (degrees, g: the gravity's norm must be 9.81 m/s^2 within
@@ -54,6 +57,7 @@ from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 from .csv_numbers import lines, plain_rows
+from .units import check_counts, check_torque_scale
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
            "segment_starts", "excitation_parts"]
@@ -246,6 +250,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                     true_q=_joint_columns(col, joints, "true_q"), run=_run_column(col))
     check_recording(rec)
     _check_encoder_range(rec, model)
+    check_torque_scale(rec, model, "current" if torque_constant is not None else "torque")
     if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
         others = {h[len("encoder_"):]: data[:, j] for j, h in enumerate(header)
                   if h not in own and h.startswith("encoder_")}
@@ -441,6 +446,7 @@ def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> Non
         lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
         hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
         margin = (hi - lo) + cpr
+        check_counts(mn, e, hi - lo, cpr)
         bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
         if bad.size:
             k = int(bad[0])
@@ -504,7 +510,10 @@ def check_recording(rec: Recording) -> Recording:
         raise RecordingError(f"recording: t is not uniformly sampled (step {dts[k]:g} s at row {k + 2}, "
                              f"mean {dt:g} s){where}")
     if not 1e-6 <= dt <= 0.1:
-        raise RecordingError(f"recording: sample period {dt:g} s is outside [1e-6, 0.1] s (is t in seconds?)")
+        unit = next((u for u, f in (("milliseconds", 1e-3), ("microseconds", 1e-6)) if 1e-6 <= dt * f <= 0.1), None)
+        raise RecordingError(f"recording: sample period {dt:g} s is outside [1e-6, 0.1] s"
+                             + (f": t in {unit}? the recording's time is in s" if unit and dt > 0.1 else
+                                " (is t in seconds?)"))
     resolution = float(np.spacing(np.max(np.abs(t))))
     if resolution > 1e-3 * dt:  # Unix-epoch seconds (1.7e9: 2.4e-7 s) hold a 1 ms period; 1e12 s does not
         raise RecordingError(f"recording: t reaches {np.max(np.abs(t)):g} s, where a float holds time only to "

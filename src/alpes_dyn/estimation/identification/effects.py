@@ -28,7 +28,7 @@ effect         what the fit does
                the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
                1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.observers.replay.advanced`) while the residual
                falls and the verdict still names it, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
-               sensors, not in the file: ``estimate_recording(..., torque_delay=)``).
+               sensors; written to the file, ``transmission.torque_delay``).
 ``capstan``    (asked for; ``auto`` adds it where a fit's verdict names "tendon-sheath friction", the residual
                following the tension times the sign of the motor velocity) each tendon's sheath friction
                ``capstan_<motor>`` (mu theta: the joints get tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c),
@@ -222,8 +222,8 @@ class EffectsFit:
     rounds: tuple[tuple[tuple[str, ...], Any], ...] = ()
     delay: int = 0
     """Whole samples by which the kept fit found the recorded torque lagging the motor's (``delay``; 0 without it):
-    of the rig's sensors, kept here, not in the file (the EKF on a recording takes it,
-    :func:`~alpes_dyn.estimation.observers.replay.estimate_recording` ``torque_delay``)."""
+    of the rig's sensors, also the kept result's ``torque_delay``, written to its file (``transmission.torque_delay``,
+    which the EKF on a recording reads: :func:`~alpes_dyn.estimation.observers.replay.estimate_recording`)."""
     observer: Any = None
     """The observer's check of the kept fit (:func:`~alpes_dyn.estimation.identification.observer_check.judge`), or None."""
     notes: list[str] = dataclasses.field(default_factory=list)
@@ -337,6 +337,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
             res = identify(model, advanced(recording, delay), selection, **kw)
+        res.torque_delay = delay if "delay" in effs else None  # written to the file with the fit (fit_result)
         rounds.append((effs, res))
         delays[id(res)] = delay
         return res

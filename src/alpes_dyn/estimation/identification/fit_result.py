@@ -3,6 +3,7 @@ diagnostics, and the parameter file they make (:func:`identified_params`)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -15,7 +16,7 @@ from ...model.params import HandParams, Param, with_values, write_params
 from ...model.robot import Model
 from ...symbolic.parametric import parameter_catalogue
 from .adequacy import Adequacy, _finite
-from .bounds import describe
+from .bounds import Z_INTERVAL, describe
 
 __all__ = ["IdentificationResult", "StandardErrors", "identified_params"]
 
@@ -92,6 +93,10 @@ class IdentificationResult:
     """The parameters fitted first but not identified (outside their physical range, at a bound, or their 95 %
     interval past 0: :mod:`~alpes_dyn.estimation.identification.bounds`), name -> why (with the effect the data do not
     support): held in the fit kept, never written to a file."""
+    torque_delay: int | None = None
+    """Whole samples by which the recorded torque was read earlier for this fit (the ``delay`` effect of
+    :func:`~alpes_dyn.estimation.identification.effects.fit_effects`: the recorded torque found lagging the motor's),
+    None where the fit did not try one; written to the file as ``transmission.torque_delay``."""
     drift: dict[str, Any] | None = None
     """With ``identify(drift=...)``: the fitted drifts (:mod:`~alpes_dyn.estimation.identification.drift`),
     ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}`` (the
@@ -124,7 +129,7 @@ class IdentificationResult:
             "converged": self.converged, "reason": self.reason, "trustworthy": self.trustworthy,
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
-            "not_identified": dict(self.not_identified), "drift": self.drift,
+            "not_identified": dict(self.not_identified), "drift": self.drift, "torque_delay": self.torque_delay,
         }
 
     def _std_fields(self, k: int) -> dict[str, Any]:
@@ -163,11 +168,20 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``;
     * the chain's tendon compliance ``tendon_compliance_<motor>``: ``transmission.tendon_compliance`` (the
       ab/adduction gear's stays in the result); its sheath friction ``capstan_<motor>``: ``transmission.capstan``
-      (likewise).
+      (likewise);
+    * the rig's side, read back by every command that takes the file: the chain's encoder zero
+      ``encoder_offset_<motor>`` (rad of the motor): ``encoder_offset`` of the chain's section (``[finger]``,
+      ``[finger.<name>]``, ``[thumb]``; the thumb's ab/adduction motor's ``thumb.abduction_encoder_offset``); the
+      palm's tilt ``tilt_x``, ``tilt_y``: ``environment.gravity``, the model's file's gravity turned by it
+      (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`, its standard error through the tilt's covariance;
+      with the hand's chains, the last finger's; not the thumb's, whose angles are in its own base frame, yawed
+      from the palm's: they stay in the result); the torque delay :attr:`IdentificationResult.torque_delay`:
+      ``transmission.torque_delay`` (samples; the rig's current sensing, one for every motor: a fit that tried none
+      leaves the file's). A chain's encoder zero the fit did not fit is taken out of the file (the fit assumed
+      none).
 
-    Encoder offsets, the tilt angles and ``input_gain`` are of the recording and its sensors (the encoder's
-    zero, the palm's orientation, the torque sensor's scale: multiply the torque constant by it), not of
-    the hand: they stay in the result (and ``identify --json``), not in the file.
+    ``input_gain`` (the torque sensor's scale: multiply the torque constant by it) stays in the result (and
+    ``identify --json``), not in the file.
     """
     p, chain, thumb = _destination(result, base, chain)
     reason = _provenance(result)
@@ -176,6 +190,11 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     sec = "thumb" if thumb else ("finger" if chain is None else f"finger.{chain}")
     upd = _array_params(p, sec, arrays, stds, touched, reason)
     upd.update(_scalar_params(p, scalars, reason))
+    upd.update(_rig_params(result, p, sec, reason))
+    stale = [k for k in (f"{sec}.encoder_offset",) + (("thumb.abduction_encoder_offset",) if thumb else ())
+             if k in p.raw and k not in upd]
+    if stale:  # the chain's zero of an earlier recording, which this fit did not assume (it fitted with none)
+        p = dataclasses.replace(p, raw={k: v for k, v in p.raw.items() if k not in stale})
     key = "thumb" if thumb else ("finger" if chain is None else chain)
     return with_values(p, upd, identification={key: _record(result)})
 
@@ -240,7 +259,7 @@ def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb:
             continue  # not identified (outside its physical range, or not told from 0): never written
         pp = cat.get(name)
         if pp is not None and pp.kind in ("encoder_offset", "tilt", "input_gain"):
-            continue  # of the recording and its sensors (encoder zero, palm orientation, torque scale), not the hand
+            continue  # the rig's side (_rig_params), and the torque sensor's scale (not in the file)
         if pp is not None and pp.kind in ("tendon_compliance", "capstan"):
             if pp.motor.endswith("_abduction"):
                 continue  # the ab/adduction gear's stretch or friction: of this rig's gear, kept in the result
@@ -310,6 +329,62 @@ def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason:
         desc = old.description if old is not None else f"ab/adduction joint's {field_.removeprefix('abduction_')}"
         upd[f"thumb.{field_}"] = Param(value, _UNITS[field_], "identified", reason, desc, sd)
     return upd
+
+
+def _rig_params(result: IdentificationResult, p: HandParams, sec: str, reason: str) -> dict[str, Param]:
+    """The rig's side of a fit as ``identified`` :class:`Param`: the encoders' zeros (``<sec>.encoder_offset``, the
+    thumb's ab/adduction motor's ``thumb.abduction_encoder_offset``), the gravity turned by a finger's fitted tilt
+    (``environment.gravity``), the torque delay (``transmission.torque_delay``); each only where fitted and
+    identified: a zero or an angle whose 95 % interval reaches past 0 (:data:`~.bounds.Z_INTERVAL` standard errors,
+    none where the recording does not see it) is not written (the rig's, never held by the fit: the data cannot tell
+    it from none, and a wrong zero costs the observer more than none)."""
+    fitted = {n: (float(v), float(sd)) for n, v, sd in zip(result.names, result.values, result.std)
+              if n not in result.not_identified and (not n.startswith(("encoder_offset_", "tilt_"))
+                                                     or abs(v) > Z_INTERVAL * sd)}
+    upd: dict[str, Param] = {}
+    for motor in result.model.transmission.motor_names:
+        if f"encoder_offset_{motor}" not in fitted:
+            continue
+        value, sd = fitted[f"encoder_offset_{motor}"]
+        name = "thumb.abduction_encoder_offset" if motor.endswith("_abduction") else f"{sec}.encoder_offset"
+        upd[name] = Param(value, "rad", "identified", reason,
+                          f"the zero of the {motor} motor's encoder, rad of the motor: y = S q + offset", _sd(sd))
+    angles = [n for n in ("tilt_x", "tilt_y") if n in fitted]
+    if angles and sec != "thumb":  # (the thumb's angles are in its own base frame, yawed from the palm's)
+        g0 = (result.model.params or p).gravity  # the file's gravity the fit's model was built from
+        g, std = _turned_gravity(g0, {n: fitted[n] for n in angles},
+                                 np.asarray(result.correlation, dtype=float)[np.ix_(
+                                     *[[result.names.index(n) for n in angles]] * 2)])
+        words = ", ".join(f"{n} = {fitted[n][0]:.6g} rad" for n in angles)
+        upd["environment.gravity"] = Param(g, "m/s^2", "identified", f"{reason}; the file's gravity turned by the "
+                                           f"palm's tilt fitted, {words}", "gravity in the hand's base frame, as "
+                                           "identified (the palm's tilt on the file's orientation)", std)
+    if result.torque_delay is not None:
+        upd["transmission.torque_delay"] = Param(int(result.torque_delay), "samples", "identified", reason,
+                                                 "the recorded motor torque's lag behind the motor's, whole samples")
+    return upd
+
+
+def _turned_gravity(g0: Any, tilt: dict[str, tuple[float, float]], correlation: np.ndarray
+                    ) -> tuple[np.ndarray, np.ndarray | None]:
+    """(R^T g0 (3,), m/s^2, the gravity ``g0`` turned by the tilt fitted,
+    :func:`~alpes_dyn.symbolic.parametric.tilted_gravity`; its standard error (3,), the tilt's covariance carried
+    through the rotation's Jacobian (central differences of 1e-7 rad), or None where a tilt has none). ``tilt``:
+    ``tilt_x`` and/or ``tilt_y`` -> (value, std), rad; ``correlation``: theirs, in that order."""
+    from ...symbolic.parametric import tilted_gravity
+
+    names = list(tilt)
+
+    def turned(delta: dict[str, float]) -> np.ndarray:
+        a = {n: tilt.get(n, (0.0, 0.0))[0] + delta.get(n, 0.0) for n in ("tilt_x", "tilt_y")}
+        return np.asarray(tilted_gravity(np.asarray(g0, dtype=float), a["tilt_x"], a["tilt_y"]), dtype=float)
+
+    h = 1e-7
+    J = np.column_stack([(turned({n: h}) - turned({n: -h})) / (2 * h) for n in names])
+    sds = np.asarray([tilt[n][1] for n in names])
+    cov = np.outer(sds, sds) * correlation
+    std = np.sqrt(np.clip(np.diag(J @ cov @ J.T), 0.0, None)) if np.isfinite(cov).all() else None
+    return turned({}), std
 
 
 def _sd(sd: float) -> float | None:

@@ -159,8 +159,10 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     t0 = time.perf_counter()
     recording = _first(recording, th["window_s"])
     transient = min(th["transient_s"], 0.5 * recording.duration)
+    if encoder_offset is None:  # the fit's zero (none fitted: 0), not one a base file held from another recording
+        encoder_offset = np.zeros(model.transmission.n_motors)
     est = estimate_recording(recording, model, "ekf", encoder_offset=encoder_offset, tilt=tilt, transient=transient,
-                             torque_delay=torque_delay)
+                             torque_delay=torque_delay, force=True)  # a flagged fit is judged too
     filt, tr = est.filter, model.transmission
     step = 2 * np.pi / tr.counts_per_rev
     y = est.measurement  # (N, m) rad: the encoder as the filter reads it (zero and stretch taken off)

@@ -40,6 +40,7 @@ from ...checks import as_float_array
 from ...errors import InputError, RecordingError
 from ...fileio import atomic_path
 from ...limits import check_bytes, check_physical
+from ...model.trust import check_trusted
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
 from ...simulation.stick import check_friction_law
@@ -52,7 +53,7 @@ from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, seg
 from .scenario import held_mid_range, rest_with_held_joints
 
 __all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY",
-           "averaged", "STICK_TORQUE_WINDOW"]
+           "averaged", "STICK_TORQUE_WINDOW", "file_encoder_offsets"]
 
 MAX_DELAY = 100
 """The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
@@ -309,8 +310,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int = 0, friction_law: str = "smooth",
-                       torque_window: int | None = None) -> RecordingEstimate:
+                       tilt: Any = None, torque_delay: int | None = None, friction_law: str = "smooth",
+                       torque_window: int | None = None, force: bool = False) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -328,26 +329,36 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         without friction).
     compiled: the filter in compiled C (same numbers).
     encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
-        :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default 0.
+        :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default: the
+        model's parameter file's (``encoder_offset`` of the chain's section, written by ``identify``), else 0.
     tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
         gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
         tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
         taken off it.
     torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
         :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
-        torque of :func:`advanced` (a replay: the later samples are recorded). Default 0.
+        torque of :func:`advanced` (a replay: the later samples are recorded). Default: the model's parameter
+        file's ``transmission.torque_delay`` (written by ``identify``), else 0. The palm's tilt identified is in
+        the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
     friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
         F_s tanh(v / v_s) or ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
         (:mod:`alpes_dyn.simulation.stick`).
     torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
         noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
         stick law, else 1 (the torque as recorded).
+    force: run on a model whose parameter file is marked not trustworthy (refused otherwise:
+        :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
 
     Returns
     -------
     :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
-    rec = advanced(_replay_recording(recording, model, observer), torque_delay)
+    rec = _replay_recording(recording, model, observer)  # (the model checked first)
+    if model.params is not None:
+        check_trusted(model.params, force)
+    if torque_delay is None:
+        torque_delay = int(getattr(model.params, "torque_delay", 0))
+    rec = advanced(rec, torque_delay)
     friction_law = check_friction_law(friction_law)
     window = (STICK_TORQUE_WINDOW if friction_law == "stick" else 1) if torque_window is None else torque_window
     raw_noise = _torque_noise(rec) if torque_noise is None else torque_noise
@@ -431,6 +442,14 @@ def _torque_noise(rec: Recording) -> float:
     return float(np.sqrt(np.mean(d2_tau**2) / 6.0))
 
 
+def file_encoder_offsets(model: Model) -> np.ndarray:
+    """(m,) rad: the encoders' zeros the model's parameter file holds for its motors
+    (:meth:`~alpes_dyn.model.params.HandParams.encoder_offset_of`: written by ``identify``), zeros without a file."""
+    p = model.params
+    return np.array([0.0 if p is None else p.encoder_offset_of(mn, model.chain)
+                     for mn in model.transmission.motor_names])
+
+
 def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
                     ) -> tuple[Model, list[float] | None, np.ndarray]:
     """(the observer's model in the recording's orientation, turned by ``tilt``; the tilt angles as given, rad, or
@@ -440,7 +459,7 @@ def _observer_model(model: Model, rec: Recording, tilt: Any, encoder_offset: Any
     if tilt is not None:
         angles = _finite_vector(tilt, 2, "tilt", "rad").tolist()
         m_obs = m_obs.copy(gravity=tilted_gravity(m_obs.gravity, angles[0], angles[1]))
-    offsets = np.zeros(model.transmission.n_motors) if encoder_offset is None else \
+    offsets = file_encoder_offsets(model) if encoder_offset is None else \
         _finite_vector(encoder_offset, model.transmission.n_motors, "encoder_offset", "rad")
     return m_obs, angles, offsets
 

@@ -1,0 +1,54 @@
+"""What ``alpes-dyn estimate`` says of its own uncertainty: each joint's sigma, its observability by the encoders
+along the motion, the NEES where the recording has true joints (the table's lines and the JSON's keys)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ..errors import InputError
+
+
+def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start: float, joints: tuple[str, ...],
+                 limit_deg: float, whole: bool = True) -> tuple[dict, list[str]]:
+    """What ``estimate`` says of its own uncertainty: each joint's reported sigma along the run after ``start`` s
+    (median and worst), each joint's observability by the encoders along the estimated motion
+    (:func:`~alpes_dyn.analysis.joint_observability.joint_observability`: flagged above ``limit_deg``), and with
+    true joints the NEES and its band (:func:`~alpes_dyn.estimation.observers.consistency.nees`; the band from the
+    filter's own error model when one filter ran the whole record, ``whole``). Returns (the JSON's keys, the
+    table's lines)."""
+    from ..analysis.joint_observability import joint_observability
+    from ..estimation.observers.consistency import joint_sigma, nees
+
+    n, deg = len(joints), np.degrees
+    med, worst = joint_sigma(est, n, start)
+    obs = joint_observability(filt.model.system.model, est.z, inputs, filt.dt, filt.R, limit=np.radians(limit_deg))
+    flags = obs.unobserved
+    obj: dict = {"q_std_median_deg": deg(med).tolist(), "q_std_worst_deg": deg(worst).tolist(),
+                 "observability": obs.to_dict(), "unobserved": list(flags), "nees": None}
+    lines = [f"  {'sigma median/worst [deg]:':30s}"
+             + "  ".join(f"{j} {deg(a):.3f}/{deg(b):.3f}" for j, a, b in zip(joints, med, worst)),
+             f"  {f'observed within [deg]:':30s}"
+             + "  ".join(f"{j} {deg(b):.3f}{' NOT OBSERVED' if j in flags else ''}" for j, b in zip(joints, obs.best))
+             + f" (best {obs.window:g} s window)"]
+    if true_q is not None:
+        r = nees(est, true_q, filt if whole else None, inputs if whole else None, start=start)
+        obj["nees"] = r.to_dict()
+        lines.append(f"  {'NEES of the joints:':30s}{r.value:.3g} (95 % band {r.low:.3g}-{r.high:.3g} for {r.dof} "
+                     f"joints, {r.effective:.3g} independent samples): {r.verdict}")
+    if flags:
+        lines.append(f"  WARNING: {', '.join(flags)} not observed by this motion: the encoders pin "
+                     f"{'it' if len(flags) == 1 else 'them'} no closer than "
+                     f"{deg(min(obs.best[joints.index(j)] for j in flags)):.3g} degrees (limit {limit_deg:g}, "
+                     f"--sigma-limit): the estimate there is the model's guess, not a measurement")
+    return obj, lines
+
+
+def _sigma_limit(value: float | None) -> float:
+    """``--sigma-limit`` in degrees (default 1), checked: a finite number in (0, 180]."""
+    from ..analysis.joint_observability import UNOBSERVED_LIMIT
+
+    if value is None:
+        return float(np.degrees(UNOBSERVED_LIMIT))
+    if not (np.isfinite(value) and 0 < value <= 180):
+        raise InputError(f"--sigma-limit: expected degrees in (0, 180], got {value!r}")
+    return float(value)

@@ -1,0 +1,53 @@
+"""A recording's units, checked for plausibility (issue 49): the mistakes a bench's logger makes -- a motor current
+(in A or mA) in the torque column, the motor's angle in radians or degrees in the encoder's, which a fit or an
+observer reads as a huge torque or a few counts of motion ("the filter diverged", "Newton's method did not
+converge") -- refused by :func:`~alpes_dyn.estimation.experiments.recording.read_recording` with one
+:class:`~alpes_dyn.errors.RecordingError` naming the column and the likely mistake. (Its time in ms is the
+reader's sample-period check.)"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ...errors import RecordingError
+
+__all__ = ["TORQUE_SCALE_LIMIT", "check_counts", "check_torque_scale"]
+
+TORQUE_SCALE_LIMIT = 10.0
+"""A recorded torque beyond this many times the parameter file's ``tau_max`` is not N m (a current in A or mA)."""
+
+
+def check_counts(motor: str, e: np.ndarray, span: float, cpr: float) -> None:
+    """An encoder column (counts, (N,)) that is not counts: most of its values not whole numbers and its swing within
+    what the joints' range ``span`` (counts) makes in degrees of the motor -- the motor's angle in radians or
+    degrees, which a fit or an observer would read as a few counts of motion."""
+    e = np.asarray(e, dtype=float)
+    if e.size == 0 or np.mean(e != np.round(e)) <= 0.5:
+        return
+    swing = float(np.ptp(e))
+    rad, deg = span * 2 * np.pi / cpr, span * 360.0 / cpr
+    if swing > 1.2 * deg:
+        return
+    unit = "radians" if swing <= 1.2 * rad else "degrees"
+    raise RecordingError(f"recording: column 'encoder_{motor}': values not whole numbers swinging {swing:.3g}, where "
+                         f"the joints' range spans {span:.6g} counts ({rad:.3g} rad, {deg:.3g} deg of the motor): the "
+                         f"motor angle in {unit}? the recording's encoder is in counts ({cpr:g} per turn)")
+
+
+def check_torque_scale(rec: Any, model: Any, column: str) -> None:
+    """Each torque of ``rec`` (a Recording) within :data:`TORQUE_SCALE_LIMIT` times the parameter file's motor limit ``tau_max`` (an
+    Alpes model's; none to check on another robot): far beyond it, the column is a current (in A, or in mA), not
+    N m. ``column``: ``torque`` or ``current`` (read with a torque constant), the column's name in the message."""
+    params = getattr(model, "params", None)
+    tau_max = getattr(params, "tau_max", None)
+    if tau_max is None or rec.torque.size == 0:
+        return
+    peak = np.max(np.abs(rec.torque), axis=0)
+    for mn, v in zip(rec.motor_names, peak):
+        if v > TORQUE_SCALE_LIMIT * tau_max:
+            guess = "a current in mA" if column == "current" or v > 1000 * tau_max else "a current in A"
+            unit = "N m" if column == "torque" else "A (times the torque constant, N m)"
+            raise RecordingError(f"recording: column '{column}_{mn}': values up to {float(v):.6g} against tau_max "
+                                 f"{tau_max:g} N m: {guess}? the recording's {column} is in {unit}")
