@@ -25,7 +25,7 @@ def _fake_fit(model, values: dict[str, float], trustworthy: bool = True):
     return types.SimpleNamespace(model=model, names=tuple(values), values=np.array(list(values.values())),
                                  std=np.full(len(values), 1e-4), recording_path="rec.csv", trustworthy=trustworthy,
                                  converged=trustworthy, reason="made up", residual_rms=0.5, adequacy=None,
-                                 not_identified={}, status=lambda: "made up -- not converged")
+                                 not_identified={}, status=lambda: "made up -- not converged", standard_errors=None)
 
 
 def _import(path):

@@ -42,6 +42,7 @@ or at the joint angles ``q0``.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import os
 from collections import deque
@@ -50,7 +51,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError, ModelError
-from ..model.mjcf import joint_permutation, palm_down_params
+from ..model.mjcf import HANGING_TILT, joint_permutation, palm_down_params
 from ..model.params import HandParams
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
@@ -68,6 +69,9 @@ PERIOD = 1e-3
 """The stand-in's sample period, s (the hand's 1 kHz loop)."""
 SUBSTEPS = {"free": 10, "block": 4}
 """MuJoCo steps per period of each scene (RK4 at 0.1 ms as the recordings', the force loop's 0.25 ms)."""
+RIGS: dict[str, float] = {"level": 0.0, "hanging": HANGING_TILT}
+"""The free scene's orientations: rad about the joints' axes from the file's palm-up gravity (``hanging``: fingers
+down, :data:`~alpes_dyn.model.mjcf.HANGING_TILT`), the effects' tilt on top of it."""
 SETTLE_S = 1.0
 """s: how long the free finger rests, motor off, before the first tick (its default start)."""
 
@@ -123,6 +127,9 @@ class MujocoHand:
         Initial joint angles, rad (at rest, qd = 0); default the rest of the module docstring.
     encoder_noise_counts, torque_noise, force_noise : float
         The sensors' noise: counts (0.5), N m (5e-4), N (0.005).
+    rig : str
+        The free scene's orientation (:data:`RIGS`): ``"level"`` (palm up, the file's gravity) or ``"hanging"``
+        (fingers down); a real hand's tilt on top of it.
 
     Attributes
     ----------
@@ -150,11 +157,16 @@ class MujocoHand:
     def __init__(self, model: str = "finger3", params: HandParams | str | os.PathLike | None = None, *,
                  effects: PlantEffects | str | None = "real", scene: str = "free", seed: int = 0,
                  q0: Sequence[float] | None = None, encoder_noise_counts: float = 0.5, torque_noise: float = 5e-4,
-                 force_noise: float = 0.005) -> None:
+                 force_noise: float = 0.005, rig: str = "level") -> None:
         e = _checked(model, params, effects, scene, seed, {"encoder_noise_counts": encoder_noise_counts,
                                                            "torque_noise": torque_noise, "force_noise": force_noise})
         self._mujoco = _mujoco()
         p, sub = as_params(params), SUBSTEPS[scene]
+        if rig not in RIGS or (rig != "level" and scene != "free"):
+            raise InputError(f"rig: expected one of {', '.join(RIGS)} (the free scene; the block scene is palm down), "
+                             f"got {rig!r}")
+        if RIGS[rig]:  # the hand turned on its rig: the effects' tilt on top of the rig's
+            e = dataclasses.replace(e or PlantEffects(), tilt=(e or PlantEffects()).tilt + RIGS[rig])
         e0 = e or PlantEffects()
         if scene == "free":
             truth = plant_model(model, p, e0)

@@ -7,6 +7,7 @@ from __future__ import annotations
 import argparse
 import time
 import warnings
+from typing import Any
 
 import numpy as np
 
@@ -116,7 +117,6 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
-    from ..model.robot import Model
     from ..simulation.stick import FRICTION_LAWS
 
     for flag, dest, default in _SCENARIO_ONLY:
@@ -130,22 +130,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     limit = _sigma_limit(args.sigma_limit)
     t0 = time.perf_counter()
     notes = _trust_notes(args, [("--spec", args.spec) if _is_urdf_path(args.model) else ("--params", args.params)])
-    whole = None
-    if _is_urdf_path(args.model):
-        whole = _urdf_robot(args, "the observer")
-        model = _chain_model(whole, args.chain)  # --chain MOTOR: the observer on that motor's branches alone
-        if args.friction_free:
-            model = _without_friction(model)
-        if args.chain is None:
-            whole = None
-    elif args.friction_free:
-        raise InputError("--friction-free: applies to a URDF --model (its spec's friction taken off); the Alpes "
-                         "models take --friction")
-    else:
-        _check_model_options(args)
-        model = Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
-                            rotor_inertia=args.rotor_inertia or _rotor_identified(args.params), params=args.params,
-                            chain=args.chain)
+    model, whole = _data_model(args)
     delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
     if delay is not None and not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
@@ -200,6 +185,26 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:
+    """``estimate --data``'s observer model and, with ``--chain`` on a URDF, the whole robot whose other columns the
+    recording may hold (None otherwise)."""
+    from ..model.robot import Model
+
+    if _is_urdf_path(args.model):
+        whole = _urdf_robot(args, "the observer")
+        model = _chain_model(whole, args.chain)  # --chain MOTOR: the observer on that motor's branches alone
+        if args.friction_free:
+            model = _without_friction(model)
+        return model, (whole if args.chain is not None else None)
+    if args.friction_free:
+        raise InputError("--friction-free: applies to a URDF --model (its spec's friction taken off); the Alpes "
+                         "models take --friction")
+    _check_model_options(args)
+    return Model.alpes(args.model, spring=args.spring or "torsional", friction=args.friction,
+                       rotor_inertia=args.rotor_inertia or _rotor_identified(args.params), params=args.params,
+                       chain=args.chain), None
 
 
 def _rotor_identified(params: str | None) -> bool:

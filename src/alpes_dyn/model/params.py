@@ -12,16 +12,12 @@ The four fingers share ``[finger]``; a finger may have values of its own in a ta
 ``F_s``, ``F_v``, ``encoder_offset``), which replace the shared ones on that finger only (:meth:`HandParams.chain`,
 :func:`chain_params`): an identified hand differs link by link.
 
-What ``identify`` finds of the rig is in the file too (optional): a chain's encoder zero ``encoder_offset`` (rad of
-its motor, :meth:`HandParams.encoder_offset_of`), the torque's lag ``transmission.torque_delay`` (whole samples),
-the palm's tilt as the ``environment.gravity`` it turns.
-
-An identified file also records, per chain fitted, how far the fit is to be trusted: an optional table
-``[identification.<chain>]`` (``<chain>``: ``finger`` for the shared values, a finger's name, or
-``thumb``) with the fields of :data:`IDENTIFICATION_FIELDS` (``converged``, ``adequate``,
-``trustworthy``, the stop reason, the verdict...; :attr:`HandParams.identification`). A file with a chain
-marked ``trustworthy = false`` (written with ``alpes-dyn identify --force``) is refused by the commands and loaders
-that use its values unless forced (:func:`~alpes_dyn.model.trust.check_trusted`).
+What ``identify`` finds of the rig is in the file too (optional): a chain's encoder zero ``encoder_offset`` (rad,
+:meth:`HandParams.encoder_offset_of`), the torque's lag ``transmission.torque_delay`` (samples), the palm's tilt as
+the ``environment.gravity`` it turns. An identified file records per chain how far the fit is to be trusted:
+``[identification.<chain>]`` (``finger``, a finger's name, ``thumb``) with :data:`IDENTIFICATION_FIELDS`
+(:attr:`HandParams.identification`); a chain marked ``trustworthy = false`` (``identify --force``) is refused by
+the commands and loaders that use its values unless forced (:func:`~alpes_dyn.model.trust.check_trusted`).
 """
 
 from __future__ import annotations
