@@ -52,10 +52,12 @@ from alpes_dyn.estimation.experiments.on_hand import run_experiment
 from alpes_dyn.estimation.experiments.recording import write_recording
 from alpes_dyn.model.params import load_params
 from alpes_dyn.model.robot import Model
-from alpes_dyn.studies.realism import errors
+from alpes_dyn.studies.realism import errors, rig_design
 
 from force_realism import metrics
 
+RIGS = ("level", "hanging")
+"""The rigs tried in turn: palm up, then hung fingers down."""
 STOP_MARGIN_DEG = 0.5
 """A true joint within this of its stop counts as a stop reached."""
 CONTROLLERS = ("sensor", "sensorless")
@@ -91,22 +93,32 @@ class Scored:
 
 
 def experiment_row(model: str, truth: Any, seed: int, tmp: Path) -> tuple[dict, Path | None]:
-    """Calibration and the guarded experiment on the free stand-in; the recording's path (None if it failed)."""
-    hw = Scored(MujocoHand(model, truth, scene="free", seed=seed))
+    """Calibration and the guarded experiment on the free stand-in, palm up, then hung fingers down where the guard
+    found no room palm up (as a user turns the hand: ``alpes-dyn experiment --rig auto``'s rule); the recording's
+    path (None if both failed)."""
     nominal = Model.alpes(model, friction=True)
     t0 = time.perf_counter()
-    row: dict[str, Any] = {"model": model, "seed": seed}
-    try:
-        res = run_experiment(hw, nominal)
-    except AlpesDynError as e:
-        row.update(experiment_error=str(e), experiment_s=time.perf_counter() - t0)
+    row: dict[str, Any] = {"model": model, "seed": seed, "tried": []}
+    for rig in RIGS:
+        hw = Scored(MujocoHand(model, truth, scene="free", seed=seed, rig=rig))
+        try:
+            res = run_experiment(hw, nominal, rig_design(rig))
+            break
+        except AlpesDynError as e:
+            row["tried"].append(f"{rig}: {e}")
+    else:
+        row.update(experiment_error=row["tried"][-1], experiment_s=time.perf_counter() - t0)
         return row, None
+    row["rig"] = rig
     row["experiment_s"] = time.perf_counter() - t0
     lo, hi = nominal.lower, nominal.upper  # the URDF's joint stops (the MJCF's ranges)
-    q = np.array(hw.q)
+    q = np.array(hw.q)  # q[k]: the truth at tick k (the first, before any command)
     margin = math.radians(STOP_MARGIN_DEG)
-    row["stop_reached"] = bool(((q <= lo + margin) | (q >= hi - margin)).any())
-    row["q_range_deg"] = [[float(np.degrees(a)), float(np.degrees(b))] for a, b in zip(q.min(0), q.max(0))]
+    at_stop = (q <= lo + margin) | (q >= hi - margin)
+    rec = q[res.record_rows]
+    row["stop_reached"] = bool(at_stop[res.record_rows].any())  # during the record
+    row["stop_before_record"] = bool(at_stop[1: res.record_rows.start].any())  # calibration, trim, stages
+    row["record_q_range_deg"] = [[float(np.degrees(a)), float(np.degrees(b))] for a, b in zip(rec.min(0), rec.max(0))]
     row.update(res.to_dict())
     path = tmp / f"rec_{model}_{seed}.csv"
     write_recording(res.recording, path)
