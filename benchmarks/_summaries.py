@@ -444,6 +444,49 @@ def _observer_step_headline(r: Result) -> str:
             f"C export finger3 {d['finger3']['c_us']:.2f} µs, hand {d['hand']['c_us']:.1f} µs (builds excluded)")
 
 
+def _bench_counts(r: Result) -> dict[str, str]:
+    """Each goal of ``bench_loop``: how many draws met it, of those that reached it."""
+    rows = r["rows"]
+    return {g: f"{sum(1 for x in rows if x['goals'][g])} of {sum(1 for x in rows if x['goals'][g] is not None)}"
+            for g in rows[0]["goals"]} if rows else {}
+
+
+def bench_loop(r: Result) -> list[str]:
+    """Per draw: where the workflow stopped, or its figures; then how many draws met each goal."""
+    out = []
+    for x in r["rows"]:
+        head = f"{x['model']} seed {x['seed']}"
+        if "experiment_error" in x:
+            out.append(f"{head}: the experiment refused on every rig ({x['experiment_error'][:160]})")
+            continue
+        rig = f"{x['rig']} rig, a stop reached in the record: {x['stop_reached']}"
+        if "identify_error" in x:
+            out.append(f"{head}: {rig}; identify refused ({x['identify_error'][:160]})")
+            continue
+        loops = {y["controller"]: y for y in x.get("loops", [])}
+        s, sl = loops.get("sensor", {}), loops.get("sensorless", {})
+        q = s.get("q_rmse_deg_joints")
+        out.append(f"{head}: {rig}; springs {_r(x['K_pct'])} %, masses {_r(x['m_pct'])} % ({x['verdict']}); sensor "
+                   f"RMSE {_r(s.get('rmse_pct'))} %, overshoot {_r(s.get('overshoot_pct'), '.1f')} %, rise "
+                   f"{_r(s.get('rise_ms'), '.0f')} ms; sensorless {_r(sl.get('sse_pct'))} %; joints in contact "
+                   f"{'n/a' if not q else ' / '.join(f'{v:.2f}' for v in q)} deg")
+    counts = _bench_counts(r)
+    out.append("goals met (of the draws that reached them): " + ", ".join(f"{g} {c}" for g, c in counts.items()))
+    return out
+
+
+def _bench_loop_headline(r: Result) -> str:
+    c = _bench_counts(r)
+    fitted = sum(1 for x in r["rows"] if x.get("verdict") == "adequate")
+    refused = sum(1 for x in r["rows"] if "identify_error" in x or "experiment_error" in x)
+    wrong = sum(1 for x in r["rows"] if x.get("verdict") == "adequate"
+                and any(v is False for g, v in x["goals"].items() if g != "no_stop"))
+    return (f"{r['draws']} fresh draws of finger2 and finger3: {fitted} identified adequate ({wrong} of them off a "
+            f"goal), {refused} refused naming why; no stop in the record {c['no_stop']}, springs within 3 % "
+            f"{c['springs_3pct']}, masses within 5 % {c['masses_5pct']}, sensor loop {c['sensor_loop']}, sensorless "
+            f"within 10 % {c['sensorless_10pct']}, joints within 1 degree {c['joints_1deg']}")
+
+
 SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "dynamics": dynamics, "observability": observability, "allegro": allegro,
     "rollout": rollout, "mimic": mimic, "identification": identification, "fit_scaling": fit_scaling,
@@ -451,9 +494,10 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism, "fit_scaling.hand": fit_scaling,
+    "bench_loop": bench_loop,
 }
 
-ORDER = ["default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
+ORDER = ["bench_loop", "default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
          "allegro", "dynamics", "rollout", "observer_step", "observer_build", "param_cache", "control", "hand_control",
          "urdf_control", "any_robot", "foreign_hands", "allegro_identify", "mimic", "sweep"]
 """The page's order: the lead issues' benchmarks first."""
@@ -473,12 +517,14 @@ HEADLINES: dict[str, tuple[str, Callable[[Result], str]]] = {
     "realism": ("realism: identify and the EKF on MuJoCo plants drawn +-20 %, every effect at once with 0.5 deg slack "
                 "and the torque 1 ms late, fresh seeds", _realism_headline),
     "observer_step": ("EKF step for a real-time loop / standalone C", _observer_step_headline),
+    "bench_loop": ("the whole workflow through the hardware interface on the MuJoCo stand-in (calibration, guarded "
+                   "experiment, identify, force loop; truth hidden)", _bench_loop_headline),
     "sweep": ("sweeps on a local Dask cluster (2 workers)",
               lambda r: f"{r['median_speedup']:.2f}x the serial loop over {r['draws']} draws, {r['rounds']} round(s) "
                         f"({r['median_speedup_vs_1thread']:.2f}x the loop on one thread)"),
 }
 """The README's generated rows: ``(what, figure)``, ``figure(result)`` the text."""
 
-HEADLINE_ORDER = ["observability", "default_path", "force_realism", "realism", "identification", "fit_scaling",
+HEADLINE_ORDER = ["observability", "bench_loop", "default_path", "force_realism", "realism", "identification", "fit_scaling",
                   "observer_step", "sweep"]
 """The README's rows in order; a name without a record or a figure keeps its row of ``_handwritten.README_ROWS``."""
