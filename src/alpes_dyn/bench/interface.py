@@ -4,7 +4,7 @@ A user's driver implements :class:`HardwareInterface` -- a small protocol, in th
 pair: a fixed sample period, a :meth:`~HardwareInterface.read` of the sensors at the current tick and a
 :meth:`~HardwareInterface.write` of the motor command that holds over the period that starts there. Everything
 that must run on the hand (the calibration and the guarded identification experiment of
-:mod:`alpes_dyn.bench.experiment`, the force loop of :class:`alpes_dyn.control.step.ForceStep`) drives the hand
+:mod:`alpes_dyn.estimation.experiments.on_hand`, the force loop of :class:`alpes_dyn.control.step.ForceStep`) drives the hand
 through it and nothing else, so what CI runs against the MuJoCo stand-in
 (:class:`alpes_dyn.bench.mujoco_hand.MujocoHand`) is what runs on the hand.
 

@@ -51,9 +51,9 @@ from ..model.robot import Model
 CONTROLLERS: tuple[str, ...] = ("sensor", "sensorless", "pi")
 REFERENCES: tuple[str, ...] = ("step", "ramp", "sine")
 DEFAULT_LEVELS: tuple[float, float, float] = (0.2, 0.6, 0.2)
-"""N: the default step reference, 0.2 -> 0.6 -> 0.2 N (steps of 0.4 N up and down). The finger pressing the block
-holds its contact at these forces on every draw of finger3 +-20 % measured (``benchmarks/bench_loop.py``); at 1.0 N
-the fingertip rolls off the block on some draws, whatever the parameter file."""
+"""N: the default step reference, 0.2 -> 0.6 -> 0.2 N (steps of 0.4 N up and down): the finger pressing the block
+keeps its contact there on the drawn fingers of ``benchmarks/bench_loop.py``'s record; at 1.0 N the fingertip rolls
+off the block on some draws of finger3 +-20 %, whatever the parameter file (the changelog gives the count)."""
 
 
 #: Default settings of :class:`ForceController` per controller, tuned on the block scene of finger3 by one
