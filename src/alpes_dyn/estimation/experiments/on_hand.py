@@ -234,7 +234,7 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
         The hand: its motors those of ``nominal``, its period the design's ``dt``.
     nominal : Model
         The model the experiment is designed on (e.g. ``Model.alpes("finger3", friction=True)``).
-    design : ExperimentDesign, optional
+    design : ~alpes_dyn.estimation.experiments.design.ExperimentDesign, optional
         The design (default the documented one); one orientation (the gravity the hand is in).
     calibration : Calibration, optional
         The hand's calibration (default: :func:`~alpes_dyn.estimation.experiments.calibration.calibrate` first).
