@@ -238,7 +238,13 @@ def read_data(args: argparse.Namespace, model: Any, **kw: Any) -> Any:
     runs, each file its own (:func:`~alpes_dyn.estimation.experiments.recording.join_runs`)."""
     from ..estimation.experiments.recording import join_runs, read_recording
 
-    recs = [read_recording(f, model, args.torque_constant, **kw) for f in _files(args.data)]
+    files = _files(args.data)
+    real = [os.path.realpath(f) for f in files]
+    for i, f in enumerate(files):  # a loop over the few files
+        if real[i] in real[:i]:
+            raise InputError(f"--data: {f!r} is given twice: a run fitted twice makes its standard errors sqrt(2) "
+                             "too small")
+    recs = [read_recording(f, model, args.torque_constant, **kw) for f in files]
     return recs[0] if len(recs) == 1 else join_runs(recs)
 
 
