@@ -41,7 +41,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay"),
-                       ("--friction-law", "friction_law")):
+                       ("--friction-law", "friction_law"), ("--stops", "stops")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -140,7 +140,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
                              disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay,
-                             friction_law=law, force=args.force)
+                             friction_law=law, force=args.force, stops=args.stops)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()

@@ -203,6 +203,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--sigma-limit", type=_strict_float, default=None, metavar="DEG", help="a joint that no 0.5 s "
                    "window of the motion pins within DEG degrees (1 sigma, dry friction unknown) is flagged (default 1)")
     s.add_argument("--friction-law", default=None, metavar="LAW", help=FRICTION_LAW_HELP)
+    s.add_argument("--stops", action="store_true", help="with --data: the joints' end stops in the observer's model "
+                   "(for a finger whose joints reach their stops)")
     s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_estimate)
 

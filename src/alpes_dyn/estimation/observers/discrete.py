@@ -18,6 +18,7 @@ from typing import Any, Callable, Sequence
 import casadi as cs
 import numpy as np
 
+from ...model.stops import JointStops
 from ...errors import InputError, ModelError
 from ...simulation.integrate import _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from ...simulation.stick import check_friction_law, stick_step_expression
@@ -42,6 +43,8 @@ class DiscreteModel:
     parameters: names from :data:`PARAMETERS` appended to the state as constants (z = [x; theta]).
     friction_law: ``"smooth"`` (default: RK4 on the smooth sign) or ``"stick"`` (the time-stepping Coulomb law,
         :mod:`alpes_dyn.simulation.stick`); see the module docstring.
+    stops: the joints' end stops in the model (:class:`~alpes_dyn.model.stops.JointStops`, e.g.
+        ``JointStops.of(model)``: a stiff unilateral spring-damper at each end of the range); default none (eq. 3.3).
 
     Attributes
     ----------
@@ -56,14 +59,16 @@ class DiscreteModel:
     """
 
     def __init__(self, system: StateSpace, dt: float, parameters: Sequence[str] = (), substeps: int = 1,
-                 friction_law: str = "smooth") -> None:
+                 friction_law: str = "smooth", stops: JointStops | None = None) -> None:
         if not isinstance(substeps, (int, np.integer)) or isinstance(substeps, bool) or not 1 <= substeps <= 64:
             raise InputError(f"substeps: expected an integer in [1, 64], got {substeps!r}")
         self.substeps = int(substeps)
         if not isinstance(system, StateSpace):
             raise InputError(f"system: expected a StateSpace, got {type(system).__name__}")
         check_friction_law(friction_law)
-        self.system = system
+        if stops is not None and not isinstance(stops, JointStops):
+            raise InputError(f"stops: expected a JointStops or None, got {type(stops).__name__}")
+        self.system, self.stops = system, stops
         self.dt = _check_dt(dt)
         params = tuple(parameters)
         motors = system.model.transmission.motor_names if system.model.transmission is not None else ()
@@ -124,6 +129,8 @@ class DiscreteModel:
         if motors:  # an additive torque per motor (N m), a random-walk state
             u = u + cs.vertcat(*d)
         tau = a * ss.input_torque(q, u, v)
+        if self.stops is not None:  # the end stops' torque back into the range (model.stops)
+            tau = tau + self.stops.torque(q, v, cs)
         if "spring_gain" in th:  # the model applies k (q - q_rest); the gain b makes it b k (q - q_rest)
             tau = tau + (1.0 - th["spring_gain"]) * ss.model.extras.spring_torque(q, cs)
         F = a * w[ss.n_inputs:] if ss.force else None

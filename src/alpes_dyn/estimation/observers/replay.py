@@ -40,6 +40,7 @@ from ...checks import as_float_array
 from ...errors import InputError, RecordingError
 from ...fileio import atomic_path
 from ...limits import check_bytes, check_physical
+from ...model.stops import JointStops
 from ...model.trust import check_trusted
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
@@ -225,10 +226,12 @@ def _initial_state(model: Model, u0: np.ndarray) -> np.ndarray:
 
 def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque_noise: float,
                    encoder_noise_counts: float, disturbance_walk: float, gains: tuple[str, ...], pars: tuple[str, ...],
-                   u0: np.ndarray, compiled: bool, friction_law: str = "smooth") -> tuple[Any, np.ndarray, np.ndarray]:
+                   u0: np.ndarray, compiled: bool, friction_law: str = "smooth",
+                   stops: bool = False) -> tuple[Any, np.ndarray, np.ndarray]:
     """The observer of :func:`estimate_recording` and its prior: (filter, z0 (nz,), P0 (nz,) variances); ``u0`` (m,)
     the first recorded torque, N m (the rest state under it); ``compiled``: the filter in compiled C;
-    ``friction_law``: the discrete model's (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
+    ``friction_law``: the discrete model's (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`); ``stops``: the
+    model's joint stops in it (:meth:`~alpes_dyn.model.stops.JointStops.of`)."""
     n, m = m_obs.n, m_obs.transmission.n_motors
     tr = m_obs.transmission
     step = 2 * np.pi / tr.counts_per_rev
@@ -237,7 +240,8 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
     ss = StateSpace(m_obs, input="motor", output="encoder")
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         friction_law=friction_law, process_noise=Q, measurement_noise=list(meas_var * np.ones(m)),
+                         friction_law=friction_law, stops=JointStops.of(m_obs) if stops else None, process_noise=Q,
+                         measurement_noise=list(meas_var * np.ones(m)),
                          input_noise=[torque_noise**2] * m)
     x0 = _initial_state(m_obs, u0)
     z0 = np.concatenate([x0, np.ones(len(gains)), np.zeros(len(pars))])
@@ -311,7 +315,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
                        tilt: Any = None, torque_delay: int | None = None, friction_law: str = "smooth",
-                       torque_window: int | None = None, force: bool = False) -> RecordingEstimate:
+                       torque_window: int | None = None, force: bool = False, stops: bool = False) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
     Parameters
@@ -346,6 +350,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
         noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
         stick law, else 1 (the torque as recorded).
+    stops: the joints' end stops in the observer's model (:meth:`~alpes_dyn.model.stops.JointStops.of`: a stiff
+        spring-damper at each end of the URDF's range), for a hand whose joints reach their stops; default off.
     force: run on a model whose parameter file is marked not trustworthy (refused otherwise:
         :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
 
@@ -365,7 +371,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     rec = averaged(rec, window)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
     disturbance_walk = _nonnegative(disturbance_walk, "disturbance_walk", "N m per sqrt(s)")
-    for flag, name in ((disturbance, "disturbance"), (compiled, "compiled")):
+    for flag, name in ((disturbance, "disturbance"), (compiled, "compiled"), (stops, "stops")):
         if not isinstance(flag, (bool, np.bool_)):
             raise InputError(f"{name}: expected True or False, got {flag!r:.40}")
     N, dt = rec.n_samples, rec.dt
@@ -388,7 +394,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         piece = _piece(rec, a, b)
         m_i = m_obs if a == 0 else _observer_model(model, piece, tilt, encoder_offset)[0]
         f, z0, P0 = _replay_filter(m_i, observer, dt, substeps, torque_noise, encoder_noise_counts, disturbance_walk,
-                                   gains, pars, piece.torque[0], compiled, friction_law)
+                                   gains, pars, piece.torque[0], compiled, friction_law, bool(stops))
         if parts:  # the hand turned: the filter carries on from its last estimate
             z0, P0 = parts[-1].z[-1], parts[-1].P[-1]
         else:
