@@ -452,7 +452,8 @@ CLI: dict[str, list[Cli]] = {
           needle="-o: '{gravok_csv}' is the input of --data"),
         C("identify", "--data", "{rec3_csv}", "{tmp}/none.csv", "-o", "{tmp}/i.toml", needle="cannot be read"),
         C("identify", "--data", "{rec3_csv}", "{rec3_csv}", "-o", "{tmp}/i.toml",
-          needle="--data: '{rec3_csv}' is given twice: a run fitted twice makes its standard errors sqrt(2) too small"),
+          needle="--data: '{rec3_csv}' is the same recording as '{rec3_csv}': a run fitted twice makes its standard "
+          "errors sqrt(2) too small"),
         C("identify", "--data", "-o", "{tmp}/i.toml", needle="argument --data: expected at least one argument"),
         C("identify", "--data", "{rec3_csv}", "--drift", "torque", "-o", "{tmp}/i.toml",
           needle="argument --drift: expected None or a comma-separated choice of offset, gain, got 'torque'"),
@@ -1749,8 +1750,6 @@ API: list[Api] = [
       RecordingError, "join_runs: sample period 0.002 s differs from the first recording's 0.001 s"),
     A("join_runs", lambda c: _join_runs([_read_rec(c.f["rec3_csv"]), _slow(_read_rec(c.f["rec3_csv"]), None)]),
       RecordingError, "join_runs: gravity is in some of the recordings only"),
-    A("join_runs", lambda c: _join_runs([_read_rec(c.f["rec3_csv"]), _read_rec(c.f["rec3_csv"])]), RecordingError,
-      "join_runs: run 1 repeats an earlier one sample for sample (a run given twice)"),
     A("read_recording", lambda c: __import__("alpes_dyn.estimation.experiments.recording", fromlist=["x"]).read_recording(
         c.f["rec3_csv"], c.m, ignore_others_of="hand"), RecordingError,
       "ignore_others_of: expected an alpes_dyn Model or None, got str"),

@@ -81,6 +81,23 @@ def test_the_run_column_round_trips_and_is_checked(tmp_path):
     assert np.array_equal(c.run_starts(), [0, 200, 351]) and np.array_equal(c.t[200:], b.t)
 
 
+def test_identify_refuses_one_recording_given_twice(tmp_path, capsys):
+    """``identify --data A.csv B.csv`` where B is A under another name (or A itself): exit 2, one line naming both; a
+    run fitted twice would make its standard errors sqrt(2) too small. Two different recordings pass that check."""
+    from alpes_dyn.cli import main
+
+    finger2 = ad.Model.alpes("finger2", friction=True)
+    a = write_recording(_clean(finger2, 0.25, 1), tmp_path / "a.csv")
+    b = tmp_path / "b.csv"
+    b.write_bytes(a.read_bytes())
+    for second in (a, b):
+        capsys.readouterr()
+        assert main(["identify", "--model", "finger2", "--data", str(a), str(second), "-o", str(tmp_path / "i.toml")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert f"--data: '{second}' is the same recording as '{a}'" in err and "\n" not in err
+    assert not (tmp_path / "i.toml").exists()
+
+
 def test_four_clean_runs_fit_together_to_the_truth():
     """Four noise-free runs of one finger, each one's excitation from its own start (time restarted, the state
     jumps), the torque on each run's own lines (4 x 19 coefficients per motor, each run's 19 through the compiled

@@ -239,13 +239,26 @@ def read_data(args: argparse.Namespace, model: Any, **kw: Any) -> Any:
     from ..estimation.experiments.recording import join_runs, read_recording
 
     files = _files(args.data)
-    real = [os.path.realpath(f) for f in files]
-    for i, f in enumerate(files):  # a loop over the few files
-        if real[i] in real[:i]:
-            raise InputError(f"--data: {f!r} is given twice: a run fitted twice makes its standard errors sqrt(2) "
-                             "too small")
+    seen: dict[Any, str] = {}
+    for f in files:  # a loop over the few files: the same file, or a copy of it, given twice
+        key = (os.path.realpath(f), None) if not os.path.isfile(f) else _content_key(f)
+        if key in seen:
+            raise InputError(f"--data: {f!r} is the same recording as {seen[key]!r}: a run fitted twice makes its "
+                             "standard errors sqrt(2) too small")
+        seen[key] = f
     recs = [read_recording(f, model, args.torque_constant, **kw) for f in files]
     return recs[0] if len(recs) == 1 else join_runs(recs)
+
+
+def _content_key(path: str) -> tuple[int, str]:
+    """(size, SHA-256 of the bytes) of a readable file: two names of one recording have the same key."""
+    import hashlib
+
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for block in iter(lambda: f.read(1 << 20), b""):
+            h.update(block)
+    return os.path.getsize(path), h.hexdigest()
 
 
 def _is_urdf_path(model: str) -> bool:

@@ -538,7 +538,7 @@ def join_runs(recordings: "list[Recording] | tuple[Recording, ...]") -> Recordin
     """One :class:`Recording` of several runs: ``recordings`` (of one model, at one sample period) one after
     the other, each its own run (``run`` 0, 1, ...; a recording that has runs already keeps them apart, numbered
     on), each its own time. Raises :class:`~alpes_dyn.errors.RecordingError` for recordings that do not go together
-    (other motors or joints, optional columns in some only, another sample period) or a run given twice."""
+    (other motors or joints, optional columns in some only, another sample period)."""
     recs = list(recordings)
     if not recs or not all(isinstance(r, Recording) for r in recs):
         raise RecordingError("join_runs: expected one or more Recordings")
@@ -559,10 +559,6 @@ def join_runs(recordings: "list[Recording] | tuple[Recording, ...]") -> Recordin
             raise RecordingError(f"join_runs: {name} is in some of the recordings only")
         else:
             cols[name] = np.concatenate(parts)
-    for i, r in enumerate(recs[1:], 1):  # fitted twice, a run's errors would come out sqrt(2) too small
-        if any(r.encoder.shape == o.encoder.shape and np.array_equal(r.encoder, o.encoder)
-               and np.array_equal(r.torque, o.torque) for o in recs[:i]):
-            raise RecordingError(f"join_runs: run {i} repeats an earlier one sample for sample (a run given twice)")
     run, base = [], 0
     for r in recs:  # a loop over the recordings (a few)
         own = np.repeat(np.arange(r.n_runs), np.diff(r.run_starts()))
