@@ -140,7 +140,8 @@ def test_the_stand_in_is_an_interface_that_hides_its_truth(tmp_path):
     ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"seed": True}, "seed"), ({"effects": "all"}, "effects"),
     ({"effects": 3}, "effects"), ({"encoder_noise_counts": -1.0}, "encoder_noise_counts"),
     ({"force_noise": float("nan")}, "force_noise"), ({"params": 5}, "params"), ({"q0": [0.1]}, "q0"),
-    ({"effects": PlantEffects(torque_delay=-1)}, "torque_delay")])
+    ({"effects": PlantEffects(torque_delay=-1)}, "torque_delay"), ({"rig": "upside"}, "rig"),
+    ({"rig": "hanging", "scene": "block"}, "rig")])
 def test_bad_constructor_inputs_are_one_line(kw, field):
     with pytest.raises(InputError) as info:
         MujocoHand(**kw)
@@ -174,3 +175,11 @@ def test_free_finger_starts_settled_against_its_stops():
     out = play(hw, np.zeros((300, 1)))
     assert np.ptp(out["counts"]) <= 2 and np.abs(scoring_truth(hw)[0] - q).max() < np.radians(0.05)
     assert SETTLE_S >= 0.5
+
+
+def test_hung_on_its_rig_the_finger_rests_along_gravity():
+    """rig="hanging": the palm turned -90 degrees (fingers down), the real hand's 3 degree tilt on top: the settled
+    finger hangs straight (every joint within 3 degrees of 0, where palm up the springs' rest lies past the stops)."""
+    hw = MujocoHand("finger3", rig="hanging", **QUIET)
+    q = np.degrees(scoring_truth(hw)[0])
+    assert np.abs(q).max() < 3.0, q
