@@ -57,7 +57,8 @@ from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .effects import PlantEffects, _number, real_hand_effects
 from .interface import Reading, check_command
-from .mujoco_plant import as_params, block_plant, free_plant, initial_qpos, passive_forces, plant_model
+from .mujoco_plant import (as_params, block_plant, free_plant, initial_qpos, passive_callback, passive_forces,
+                           plant_model)
 
 __all__ = ["MujocoHand", "scoring_truth", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
@@ -210,14 +211,9 @@ class MujocoHand:
         perm = joint_permutation(mj, truth.joint_names)
         d.qpos[perm] = np.clip(d.qpos[perm], truth.lower, truth.upper)
         d.ctrl[:] = 0.0
-        previous = mujoco.get_mjcb_passive()
-        if self._passive is not None:
-            mujoco.set_mjcb_passive(self._passive)
-        try:
+        with passive_callback(self._passive):
             mujoco.mj_forward(mj, d)
             mujoco.mj_step(mj, d, nstep=int(round(SETTLE_S / mj.opt.timestep)))
-        finally:
-            mujoco.set_mjcb_passive(previous)
         d.time = 0.0
         d.qpos[:] = initial_qpos(mj, truth, perm, d.qpos[perm].copy(), np.zeros(truth.transmission.n_motors), p, e)
         d.qvel[:] = 0.0
@@ -255,15 +251,8 @@ class MujocoHand:
             raise InputError("write: the MuJoCo stand-in is closed")
         u = check_command(command, len(self.motor_names), self.tau_max)
         applied = u / self._gain if self._gain != 1.0 else u  # the driver's constant (1 + e) times the true one
-        mujoco = self._mujoco
-        previous = mujoco.get_mjcb_passive() if self._passive is not None else None
-        if self._passive is not None:
-            mujoco.set_mjcb_passive(self._passive)
-        try:
+        with passive_callback(self._passive):
             out = self._plant.update(self._k, {"tau": applied})
-        finally:
-            if self._passive is not None:
-                mujoco.set_mjcb_passive(previous)
         if not np.isfinite(self._data.qpos).all():
             raise ModelError("the MuJoCo stand-in diverged (NaN in its state)")
         self._torques.append(self._measured_torque(np.asarray(out["tau"], dtype=float)))

@@ -17,7 +17,8 @@ The effects' MJCF side (:func:`~alpes_dyn.bench.effects.effects_mjcf_kwargs`) is
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence
+from contextlib import contextmanager
+from typing import Any, Callable, Iterator, Sequence
 
 import numpy as np
 
@@ -95,6 +96,23 @@ def plant_at_rest(mj: Any, truth: Model, q0: Sequence[float] | None, u0: np.ndar
     d.qpos[:] = initial_qpos(mj, truth, perm, q_init, u0, p, effects)
     mujoco.mj_forward(mj, d)
     return d
+
+
+@contextmanager
+def passive_callback(passive: Callable[[Any, Any], None] | None) -> Iterator[None]:
+    """MuJoCo's process-wide ``mjcb_passive`` set to ``passive`` (:func:`passive_forces`) for the steps in the
+    ``with`` block, the previous callback restored after (also on an error); nothing done where ``passive`` is None."""
+    if passive is None:
+        yield
+        return
+    import mujoco
+
+    previous = mujoco.get_mjcb_passive()
+    mujoco.set_mjcb_passive(passive)
+    try:
+        yield
+    finally:
+        mujoco.set_mjcb_passive(previous)
 
 
 def passive_forces(mj: Any, truth: Model, e: PlantEffects) -> Callable[[Any, Any], None] | None:

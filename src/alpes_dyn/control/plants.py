@@ -35,8 +35,8 @@ import numpy as np
 
 # the bench's, importable from here as before (documented there: not in __all__)
 from ..bench.effects import MAX_TORQUE_DELAY, PlantEffects, _number, delayed  # noqa: F401
-from ..bench.mujoco_plant import (INTEGRATORS, PLANT_MODELS, as_params, free_plant, passive_forces,  # noqa: F401
-                                  plant_mjcf, plant_model)
+from ..bench.mujoco_plant import (INTEGRATORS, PLANT_MODELS, as_params, free_plant, passive_callback,  # noqa: F401
+                                  passive_forces, plant_mjcf, plant_model)
 from ..errors import InputError, ModelError
 from ..estimation.experiments.recording import Recording
 from ..model.mjcf import joint_permutation, load_mujoco
@@ -99,8 +99,6 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     substeps (``mj_step`` with ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
     callback, 0.9 s with ``stiction`` (no callback).
     """
-    import mujoco  # load_mujoco below gives the one-line error when it is missing
-
     e = (effects or PlantEffects()).check()
     _check_recording_settings(model, seed, encoder_noise_counts, torque_noise)
     p = as_params(true_params)
@@ -113,15 +111,9 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     # the rest (q0's default) found in the first orientation
     mj, d, truth = free_plant(truth, model, p, e, chain, timestep, integrator, q0, u[0],
                               None if gravity is None else gravity[0])
-    previous = mujoco.get_mjcb_passive()
-    passive = passive_forces(mj, truth, e)
-    if passive is not None:
-        mujoco.set_mjcb_passive(passive)
-    try:
+    with passive_callback(passive_forces(mj, truth, e)):
         rec = _turned_run(mj, d, sub, u, dt, truth, None, seed, encoder_noise_counts, torque_noise, gravity, edges,
                           offset=e.encoder_offset, gain=1.0 + e.torque_constant_error)
-    finally:
-        mujoco.set_mjcb_passive(previous)
     if e.torque_delay:  # the sensor's reading of sample k is the torque (and its noise) of sample k - d
         rec.torque = delayed(rec.torque, e.torque_delay)
     return rec
