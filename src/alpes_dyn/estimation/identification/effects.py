@@ -36,34 +36,22 @@ effect         what the fit does
                round alone (not with the rotor of a compliance seen: the tension's friction looks like a stretch).
 ============== ======================================================================================
 
-A first fit that loses its basin (its stop reason "lost basin"; the joint stop its verdict may name is not believed of a lost fit) is made again in stages: the rigid fit, then the effects one by
-one, each from the last; where one breaks it, the last converged stage is kept and :attr:`EffectsFit.notes` names
-the effect. The fit kept is then judged by the observer it feeds
-(:func:`~alpes_dyn.estimation.identification.observer_check.judge`): where the EKF on its file predicts the encoder badly, the fit
-is not adequate, the reason naming the observer, and ``auto`` tries the effects not yet tried; where all were, the
-rounds as good a fit (residual within :data:`OBSERVER_RESIDUAL_RATIO` of the kept one's) are judged too, and the first
-the observer passes is kept.
+Which effects ``--effects auto`` tries, in which order, from which start and with which rule to keep a fit is
+the table :data:`~alpes_dyn.estimation.identification.rounds.ROUNDS` (:mod:`~alpes_dyn.estimation.identification.rounds`),
+walked by :func:`fit_effects`. A first fit that loses its basin is made again in stages (the rigid fit, then the
+effects one by one, each from the last; where one breaks it, the last converged stage is kept and
+:attr:`EffectsFit.notes` names the effect); the joint stop a lost fit's verdict may name is not believed. The fit
+kept is then judged by the observer it feeds (:func:`~alpes_dyn.estimation.identification.observer_check.judge`):
+where the EKF on its file predicts the encoder badly, the fit is not adequate, the reason naming the observer, and
+``auto`` tries the effects not yet tried; where all were, the rounds as good a fit (residual within
+:data:`OBSERVER_RESIDUAL_RATIO` of the kept one's) are judged too, and the first the observer passes is kept.
 
-Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0) and stiction is
-asked for, because the sharper sign is a different law from the smooth one of the library's own simulator
+Why these defaults: compliance and tilt cost nothing where they are absent (the fit finds 0); stiction is asked
+for, not a default, because the sharper sign is a different law from the smooth one of the library's own simulator
 (``alpes-dyn experiment``), whose recordings it would call inadequate, and costs 15 RK4 steps per sample instead
-of 4. Measured with today's documented experiment (``benchmarks/realism.py``, MuJoCo plants of finger3 drawn +-20 %,
-all effects at once, seeds 40-43, 45 and 31, not tuned on, 2026-12-03, load 1.8-2.6, cache warm): the rigid fit
-flagged on all six; ``--effects auto`` stops after the rotor's round (compliance and tilt, then the rotor for the
-stretching cable), adequate, springs within 0.88 %, masses within 3.6 %, the EKF within 0.43 degree, all rounds
-6.8-8.6 s. Measured with the experiment before it (dither 12, multisine at 0.6 of its ceiling; seeds 12-14,
-2026-12-02, load about 1.5, cache warm): the rigid fit of every plant with an effect is
-flagged but the torque constant's (only seed 13's, whose rigid fit loses its basin: the encoder cannot see the
-scale) and the encoder offset's (never: the excitation's constant line absorbs it, harmlessly), and none of the
-model's own structure is; with
-``--effects auto`` every effect alone lands the springs within 0.47 %, the masses within 3.6 % and the EKF within
-0.28 degree. All of them at once: springs within 0.64 %, masses within 4.0 % (1.50 / 2.33 / 4.02), the EKF within
-0.27 degree on every joint, all rounds 7.4-9.7 s. Two things made the masses: the tendon's stretch under the torque
-held *before* each reading (:func:`~alpes_dyn.model.transmission.torque_before`; under the same sample's torque the
-masses were 4.5-11.3 % off, the elastic tendon alone's 12.8 %), and, while a fit is flagged, the rotor tried after
-the stick-slip law (the rotor on a rigid tendon of seed 13, which the verdict does not name: K 4.2 -> 0.17 %, EKF 1.8
--> 0.09 degree). Without the dither the stick phases biased the springs by 1-2 % and the EKF was 0.74-1.30 degrees
-off.
+of 4. What ``--effects auto`` achieves on MuJoCo's plants of finger3 with a real hand's effects (springs, masses,
+the EKF on the file, each round's time) is ``benchmarks/realism.py``'s record, ``benchmarks/results/realism.json``
+(the benchmarks page).
 """
 
 from __future__ import annotations
@@ -80,25 +68,21 @@ from ...model.extras import STICTION_VELOCITY
 from ...model.params import HandParams, with_values
 from ...model.robot import Model
 from ...symbolic.parametric import select_parameters, unseen_masses
-from .harmonics import NONLINEARITY
+from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
 from ..experiments.recording import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
            "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan")
-NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
-                            "capstan": "tendon-sheath friction"}
-"""The effects ``auto`` adds where the first fit's adequacy check names them (a word of the likely missing effect)."""
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 MAX_FIT_DELAY = 3
 """The longest torque delay (samples) the ``delay`` effect tries: 1, 2, ... while the residual falls and the last
 fit's verdict still names the delay."""
 EFFECTS_INTERVAL = 0.05
 """s: the shooting interval of :func:`fit_effects`' fits unless the caller names one (``identify``'s own default is
-100 ms). On MuJoCo's finger3 plants with all the effects at once (seeds 12-14), 100 ms lost the basin of seed 13
-from both starts (2.53 counts, EKF 4.95 degrees), and its fit at 50 ms could not be rejoined by the later rounds;
-at 50 ms every round held (0.69-0.99 counts, K within 2.4 %, masses within 4.6 %)."""
+100 ms): at 100 ms one of MuJoCo's finger3 plants with all the effects at once lost its basin from both starts,
+where at 50 ms every round held (``benchmarks/realism.py``, ``benchmarks/results/realism.json``)."""
 
 
 def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
@@ -189,26 +173,6 @@ def alpes_models(model: str, params: HandParams, *, rotor_inertia: bool = False,
     return model_of
 
 
-def _nonlinear(result: Any) -> bool:
-    """A flagged fit whose verdict names a nonlinearity (the residual's power at the excitation's harmonics): not
-    for the encoder's offset, which adds a constant to the output. Tried anyway, it only nudged a borderline
-    verdict: on MuJoCo's all-effects finger3 turned halfway (``experiment --rig both``, seeds 588, 606 and 616 of
-    ``benchmarks/realism.py``) the offset's round lowered the residual by 0.16-0.34 %, was called adequate, and
-    its offset came out -0.023 to -0.029 rad against the plant's +0.015 (its 4 counts and the cable's 0.5 degree of
-    slack), the palm's tilt traded against it: the EKF on its file 0.50-0.57 degree off on j1, against 0.11-0.32
-    without it."""
-    a = getattr(result, "adequacy", None)
-    return a is not None and not a.adequate and any(NONLINEARITY in m for m in a.likely_missing)
-
-
-def named_effects(result: Any) -> tuple[str, ...]:
-    """The effects of :data:`NAMED_BY` that a flagged fit's adequacy check names among the likely missing ones."""
-    a = getattr(result, "adequacy", None)
-    if a is None or a.adequate:
-        return ()
-    return tuple(e for e, word in NAMED_BY.items() if any(word in m for m in a.likely_missing))
-
-
 @dataclass
 class EffectsFit:
     """What :func:`fit_effects` did: the result kept and the effects it was fitted with; ``tried``: the other fit
@@ -243,25 +207,10 @@ class EffectsFit:
         return float(sum(r.seconds for _, r in self.rounds))
 
 
-def _compliances(result: Any) -> list[tuple[float, float]]:
-    """(value, standard error) of each tendon compliance a fit found with a finite standard error."""
-    return [(value, sd) for name, value, sd in zip(result.names, result.values, result.std)
-            if name.startswith("tendon_compliance") and np.isfinite(sd)]
-
-
-def _elastic(result: Any) -> bool:
-    """True when a fit found a tendon compliance above three of its standard errors (the cable is seen stretching)."""
-    return any(value > 3.0 * sd for value, sd in _compliances(result))
-
-
-def _contracting(result: Any) -> bool:
-    """True when a fit found a tendon compliance below minus three of its standard errors (a cable read as
-    shortening under tension: no cable does)."""
-    return any(value < -3.0 * sd for value, sd in _compliances(result))
-
-
 OBSERVER_RESIDUAL_RATIO = 1.05
-"""A round whose residual is within this ratio of the kept fit's is as good a fit (:func:`_observer_choice`)."""
+"""A round whose residual is within this ratio of the kept fit's is as good a fit (:func:`_observer_choice`): two
+rounds a hair apart in residual are the same fit to the encoder, and the observer tells them apart (a torque one
+sample late: ``benchmarks/realism.py``'s records, ``benchmarks/results/realism.json``)."""
 
 
 def _observer_choice(rounds: Sequence[tuple[tuple[str, ...], Any]], best: Any, recording: Any,
@@ -269,10 +218,7 @@ def _observer_choice(rounds: Sequence[tuple[tuple[str, ...], Any]], best: Any, r
     """Where the observer fails the kept fit ``best``: the rounds as good a fit (converged, residual within
     :data:`OBSERVER_RESIDUAL_RATIO` of its), lowest residual first, judged by the observer too
     (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, on ``recording``, each with its torque
-    delay); the first that passes, ((effects, fit), its check), or None. Why: two rounds a hair apart in residual
-    are the same fit to the encoder, and the observer tells them apart (MuJoCo's all-effects finger3 of seed 541,
-    the torque 1 sample late, 2026-12-05: the delay's round 0.603 counts against 0.594 without it, not kept on its
-    residual; the EKF without the delay predicted the encoder 20 ms ahead at 33x the floor, refused)."""
+    delay); the first that passes, ((effects, fit), its check), or None."""
     from .observer_check import judge
 
     for effs, res in sorted(rounds, key=lambda er: er[1].residual_rms):
@@ -284,189 +230,230 @@ def _observer_choice(rounds: Sequence[tuple[tuple[str, ...], Any]], best: Any, r
     return None
 
 
-def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
-                base: str | None = None, has_gravity: bool = False, observe: bool = True,
-                **kwargs: Any) -> EffectsFit:
-    """Identify with ``effects`` (:func:`parse_effects`). ``model_of(effects)`` builds the model to fit from (the
-    stick-slip law where ``"stiction"`` is in them, the rotor where ``"rotor"`` is). With ``"auto"`` among the
-    effects: the fit without those first; then a fit with what it asks for: the effects its adequacy check names
-    (:func:`named_effects`: stick-slip, the rotor), the rotor where it sees the tendon stretching (a compliance
-    above three standard errors: the quasi-static cable carries the rotor's J_m S^T S to the joints, which the
-    verdict does not tell from a wrong inertia), or, where it is flagged and asks for none of these (a lost
-    basin, or several effects mixed), the stick-slip law, the rotor, the torque delay, then the encoder's offset
-    (a taut cable's slack); kept if its residual is lower, and so on
-    while the kept fit asks for more or is flagged (each effect in one round at most; ``tried`` is the last fit not
-    kept, or the one before the kept one). Where the kept fit's compliance is below minus three standard errors
-    (a cable shortening under tension: another effect absorbed), a last round without it, kept where it
-    converges. Each round starts from the last converged one's values
-    (:func:`~alpes_dyn.estimation.identification.identification.identify`'s ``start``), at :data:`EFFECTS_INTERVAL` unless
-    ``kwargs`` (which go to ``identify``) name an ``interval``. With ``delay``: the torque read 1, 2, ... samples
-    earlier while the residual falls and the last fit's verdict names the delay (``EffectsFit.delay``). ``observe``: the kept fit judged by the observer it
-    feeds (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, on the ``validation`` recording where one is given,
-    else the fitted one): where the EKF on its file fails, the fit is not adequate, the reason naming the
-    observer.
+@dataclass
+class Kept:
+    """The fit kept by the rounds so far: ``result`` with ``effects``; ``tried``, ``tried_effects``: the last fit
+    not kept (a refused round's, or the one a round replaced)."""
 
-    Long because its stages (the delay search, the staged start, auto's rounds, the observer's judgement) share the
-    rounds made, each fit's delay, the effects attempted and the notes through closures; the next step is a class
-    holding that state, one method per stage (issue 36's split of estimation/)."""
-    from .adequacy import AdequacyWarning
-    from .identification import identify
-    from .observer_check import judge
-    from ..experiments.recording import Recording, read_recording
-    from ..observers.replay import advanced
+    result: Any
+    effects: tuple[str, ...]
+    tried: Any = None
+    tried_effects: tuple[str, ...] | None = None
 
-    auto = "auto" in effects
-    chosen = tuple(e for e in effects if e != "auto")
-    if not isinstance(recording, Recording):  # read once: every round fits it, the delay's on its torque advanced
-        recording = read_recording(recording, model_of(chosen))
-    # a hand turned between orientations: the gravity columns are the rig's nominal ones, its mount's tilt unknown
-    has_gravity = has_gravity and segment_starts(recording.gravity).size == 1
-    rounds: list[tuple[tuple[str, ...], Any]] = []
-    delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
+    def take(self, result: Any, effects: tuple[str, ...]) -> None:
+        """``result`` kept in place of the current fit, which becomes ``tried``."""
+        self.tried, self.tried_effects, self.result, self.effects = self.result, self.effects, result, effects
 
-    def one(effs: tuple[str, ...], warm: Any, delay: int):
-        model = model_of(tuple(e for e in effs if e != "delay"))
-        selection = effect_parameters(model, effs, has_gravity, base)
-        kw = dict(kwargs)
+    def refuse(self, result: Any, effects: tuple[str, ...]) -> None:
+        """``result`` not kept: it becomes ``tried``."""
+        self.tried, self.tried_effects = result, effects
+
+
+class RoundWalker:
+    """The rounds of :func:`fit_effects` on one recording: each fit made (:attr:`rounds`), its torque delay, the
+    effects attempted and the notes, shared by the stages that walk :data:`~.rounds.ROUNDS`.
+
+    Parameters
+    ----------
+    model_of : callable
+        ``model_of(effects) -> Model``: the model to fit with ``effects`` (:func:`alpes_models`).
+    recording : Recording
+        The recording every round fits (its torque advanced by a round's delay).
+    has_gravity : bool
+        The recording's gravity columns are its orientation (else the tilt is fitted, where asked).
+    base : str or None
+        The fit's selection before the effects' parameters (:func:`effect_parameters`).
+    identify_kwargs : dict
+        Passed to :func:`~alpes_dyn.estimation.identification.identification.identify` (``interval``:
+        :data:`EFFECTS_INTERVAL` unless given; ``start``: the kept fit unless given).
+    """
+
+    def __init__(self, model_of: Callable[[tuple[str, ...]], Model], recording: Any, has_gravity: bool,
+                 base: str | None, identify_kwargs: dict[str, Any]):
+        self.model_of, self.recording, self.has_gravity, self.base = model_of, recording, has_gravity, base
+        self.kwargs = identify_kwargs
+        self.rounds: list[tuple[tuple[str, ...], Any]] = []
+        self.delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
+        self.attempted: set[str] = set()  # every effect a round was made with: none is tried twice
+        self.notes: list[str] = []
+
+    def one(self, effs: tuple[str, ...], warm: Any, delay: int) -> Any:
+        """One fit with ``effs`` on the torque read ``delay`` samples earlier, from ``warm`` where it converged."""
+        from .adequacy import AdequacyWarning
+        from .identification import identify
+        from ..observers.replay import advanced
+
+        model = self.model_of(tuple(e for e in effs if e != "delay"))
+        selection = effect_parameters(model, effs, self.has_gravity, self.base)
+        kw = dict(self.kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
         if warm is not None and warm.converged and "start" not in kw:
-            # the next round from the last one's values and trajectory, in its basin (all-effects seed 12: the
-            # rotor's round took 6 iterations from the stick-slip round's values; seeds 40-41: the rotor's and the
-            # stick-slip law's rounds 3.2-8.2 s from the trajectory instead of 5.0-16.5 s after a homotopy)
-            kw["start"] = warm
+            kw["start"] = warm  # the next round from the last one's values and trajectory, in its basin
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
-            res = identify(model, advanced(recording, delay), selection, **kw)
+            res = identify(model, advanced(self.recording, delay), selection, **kw)
         res.torque_delay = delay if "delay" in effs else None  # written to the file with the fit (fit_result)
-        rounds.append((effs, res))
-        delays[id(res)] = delay
+        self.rounds.append((effs, res))
+        self.delays[id(res)] = delay
         return res
 
-    def run(effs: tuple[str, ...], warm: Any = None):
+    def run(self, effs: tuple[str, ...], warm: Any = None) -> Any:
         """One fit with ``effs``; with ``delay`` among them, the torque read 1, 2, ... samples earlier (each from
-        the last, warm) while the residual falls, up to :data:`MAX_FIT_DELAY`: the lowest kept."""
+        the last) while the residual falls and the last fit's verdict still names the delay, up to
+        :data:`MAX_FIT_DELAY`: the lowest kept."""
         if "delay" not in effs:
-            return one(effs, warm, 0)
-        if warm is not None and "delay" in _effects_of(warm):
-            return one(effs, warm, delays[id(warm)])  # found by an earlier round
-        res = one(effs, warm, 1)
+            return self.one(effs, warm, 0)
+        if warm is not None and "delay" in next((e for e, r in self.rounds if r is warm), ()):
+            return self.one(effs, warm, self.delays[id(warm)])  # found by an earlier round
+        res = self.one(effs, warm, 1)
         if warm is not None and res.residual_rms >= warm.residual_rms:
             return res  # a sample's delay does not help: none longer is tried
         for d in range(2, MAX_FIT_DELAY + 1):
-            # one sample more only while the last fit's verdict still names the delay (its residual following the
-            # torque's rate): MuJoCo's all-effects finger3 of seed 417, one sample late, adequate at 1 sample, took
-            # 20 iterations, 10 s, at 2 to end above it
             if "delay" not in named_effects(res):
                 break
-            nxt = one(effs, res, d)
+            nxt = self.one(effs, res, d)
             if not (nxt.converged and nxt.residual_rms < res.residual_rms):
                 break
             res = nxt
         return res
 
-    def _effects_of(res: Any) -> tuple[str, ...]:
-        return next((e for e, r in rounds if r is res), ())
+    def first(self, chosen: tuple[str, ...]) -> Kept:
+        """The ``first`` stage: the fit with ``chosen``; where it lost its basin, the ``staged`` round."""
+        first_round, staged = rounds_of("first")
+        self.attempted.update(chosen)
+        res = self.run(first_round.proposal(None, chosen))
+        kept = Kept(res, chosen)
+        target = staged.proposal(res, chosen)
+        if target is not None:
+            best, effs = self.staged(target, res)
+            if best is not res:
+                kept = Kept(best, effs, res, chosen)
+        return kept
 
-    def staged(target: tuple[str, ...], failed: Any) -> tuple[Any, tuple[str, ...]]:
-        """A first fit that lost its basin, made again in stages: the rigid fit from the start, then the effects of
-        ``target`` one by one, each round from the last (its values and trajectory); where a stage does not
-        converge, the last converged one is kept and the note names the effect that broke it."""
-        prev, stage = run(()), ()
-        if not prev.converged:
-            notes.append(f"staged start: the rigid fit itself did not converge ({prev.reason})")
+    def staged(self, target: tuple[str, ...], failed: Any) -> tuple[Any, tuple[str, ...]]:
+        """The rigid fit, then the effects of ``target`` one by one, each round from the last; where a stage does
+        not converge, the last converged one is kept and a note names the effect that broke it."""
+        accepts = dict((r.name, r) for r in ROUNDS)["staged"].accepts
+        prev, stage = self.run(()), ()
+        if not accepts(prev, failed):
+            self.notes.append(f"staged start: the rigid fit itself did not converge ({prev.reason})")
             return failed, target
         for e in target:
-            nxt = run(stage + (e,), prev)
-            if not nxt.converged:
-                notes.append(f"staged start: adding {e} to the converged {'+'.join(stage) or 'rigid'} fit broke it "
-                             f"({nxt.reason}); kept without it")
-                attempted.add(e)
+            nxt = self.run(stage + (e,), prev)
+            if not accepts(nxt, prev):
+                self.notes.append(f"staged start: adding {e} to the converged {'+'.join(stage) or 'rigid'} fit "
+                                  f"broke it ({nxt.reason}); kept without it")
+                self.attempted.add(e)
                 return prev, stage
             prev, stage = nxt, stage + (e,)
         return prev, stage
 
-    def extend(best: Any, best_effects: tuple[str, ...], tried: Any, tried_effects: Any, fallback: tuple[str, ...]):
-        """auto's rounds from the kept fit: what it asks for, or while flagged the effects of ``fallback``."""
-        while True:
-            more = tuple(e for e in named_effects(best) if e not in attempted)
-            if "rotor" not in attempted and "rotor" not in more and _elastic(best):
-                more += ("rotor",)  # a cable seen stretching carries the motor's rotor: J_m S^T S below its mode
-            if "capstan" in more:
-                # alone: a friction growing with the tension is also a cable "stretching" with it. Our finger2 with
-                # mu theta 0.02, `experiment --rig both` then `identify` (2026-12-05): the sheath named after the
-                # stick-slip round, with the rotor for the compliance seen: 1.53 counts, worse, flagged; alone 0.588,
-                # adequate, mu theta 0.0195, K and m within 0.05 %
-                more = ("capstan",)
-            if not more and not best.trustworthy:
-                # a flagged fit whose signature names nothing (a lost basin, or several effects mixed): stick-slip,
-                # the effect every tendon-driven hand has (on MuJoCo's all-effects plants the verdict named it on
-                # two seeds of three); only then, as added to a fit it does not explain it made the rotor's round
-                # worse (a stretching cable's fit, K 2 % and EKF 1.1 degrees off where the rotor alone gave 0.6 %);
-                # and where the stick-slip law did not help or the fit is still flagged with it, the rotor (on
-                # MuJoCo's rotor on a rigid tendon, seed 13, the verdict named neither)
-                more = next(((e,) for e in fallback if e not in attempted and not (e == "offset" and _nonlinear(best))),
-                            ())
-            if not more:
-                break
-            attempted.update(more)
-            effs = best_effects + more
-            res = run(effs, best)
-            if res.residual_rms >= best.residual_rms:
-                tried, tried_effects = res, effs
-                if best.trustworthy:
-                    break
-                continue  # still flagged: the next effect not yet tried, on the fit kept
-            tried, tried_effects = best, best_effects
-            best, best_effects = res, effs
-        return best, best_effects, tried, tried_effects
+    def play(self, rnd: Round, kept: Kept) -> bool:
+        """One round from ``kept``: its fit made where :meth:`Round.proposal` proposes one (from the kept fit), kept
+        where the round accepts it (``kept`` updated). True where a fit was made."""
+        effs = rnd.proposal(kept.result, kept.effects, self.attempted)
+        if effs is None:
+            return False
+        if rnd.stage == "auto":
+            self.attempted.update(e for e in effs if e not in kept.effects)
+        res = self.run(effs, kept.result)
+        if rnd.accepts(res, kept.result):
+            kept.take(res, effs)
+        else:
+            kept.refuse(res, effs)
+        return True
 
-    notes: list[str] = []
-    attempted = set(chosen)  # every effect a round was made with (the kept fit's among them): none is tried twice
-    best, best_effects, tried, tried_effects = run(chosen), chosen, None, None
-    if (not best.converged and "lost basin" in str(getattr(best, "reason", ""))
-            and any(e != "stiction" and e != "rotor" for e in chosen)):
-        # a lost basin from the start (MuJoCo's all-effects finger3 of seed 306: 45.8 counts, j1 at -52 deg). Its
-        # verdict's joint stop is not believed: a lost fit's trajectory wanders out of range by itself (seed 536, in
-        # range on the plant, 2026-12-05: the first round lost at 14.4 counts named a stop; ending there refused it
-        # for the wrong cause, while auto's rounds, the rotor then the delay, fitted it: adequate, masses within
-        # 1.8 %, 135 s). A plant truly on its stop (seeds 306 and 311 before the experiment adapted to the plant)
-        # costs the rounds (150 s) before the refusal, which names the stop.
-        first = best
-        best, best_effects = staged(chosen, first)
-        if best is not first:
-            tried, tried_effects = first, chosen
-    # a flagged fit naming nothing: stick-slip, the rotor, the torque delay (named by the verdict only where the
-    # residual follows the torque's rate), then the encoder's offset, which a taut cable's slack is (MuJoCo's
-    # all-effects finger3 hung fingers down, seed 413: flagged after the first three, residual 1.09 times the floor,
-    # lag 1 at 0.15; the slack's 5.7 counts on the plant's 4: adequate with the offset, masses within 1.2 %)
-    fallback = ("stiction", "rotor", "delay", "offset")
-    if auto:
-        best, best_effects, tried, tried_effects = extend(best, best_effects, tried, tried_effects, fallback)
-    if auto and "compliance" in best_effects and _contracting(best):
-        # a cable does not shorten under tension: the compliance absorbed another effect (MuJoCo's stick-slip
-        # plant of seed 31, a rigid tendon: -0.42 +- 0.10 with the masses 5.2 % off; held at 0, within 2.6 %)
-        effs = tuple(e for e in best_effects if e != "compliance")
-        res = run(effs, best)
-        if res.converged:
-            tried, tried_effects, best, best_effects = best, best_effects, res, effs
-    check = None
-    if observe:
-        val = kwargs.get("validation")
-        on = val if isinstance(val, type(recording)) else recording
-        check = judge(best, on, delays[id(best)])
-        while auto and check is not None and not check.passed and any(e not in attempted for e in fallback):
-            # the EKF on the kept file fails where the fit's own verdict passed: the effects not yet tried, from it,
-            # the torque delay among them (MuJoCo's all-effects finger3, seeds 405-409: the fit adequate without
-            # it, its EKF predicting the encoder 20 ms ahead within 28-43 times the floor; 9-13 with it); each new
-            # fit kept judged again
-            again = extend(best, best_effects, tried, tried_effects, fallback)
-            if again[0] is best:
+    def auto(self, kept: Kept) -> None:
+        """The ``auto`` stage: the first of its rounds that proposes a fit, again while one does; ends where none
+        does, or where a round is refused while the kept fit is adequate."""
+        while True:
+            rnd = next((r for r in rounds_of("auto")
+                        if r.proposal(kept.result, kept.effects, self.attempted) is not None), None)
+            if rnd is None:
+                return
+            before = kept.result
+            self.play(rnd, kept)
+            if kept.result is before and before.trustworthy:
+                return
+
+    def cable(self, kept: Kept) -> None:
+        """The ``cable`` stage: each of its rounds once."""
+        for rnd in rounds_of("cable"):
+            self.play(rnd, kept)
+
+    def observe(self, kept: Kept, auto: bool, validation: Any = None) -> Any:
+        """The kept fit judged by the observer it feeds (on ``validation`` where it is a recording, else the fitted
+        one); with ``auto``, while it fails, the ``auto`` stage again, then the rounds as good a fit
+        (:func:`_observer_choice`). The last check, or None."""
+        from .observer_check import judge
+
+        on = validation if isinstance(validation, type(self.recording)) else self.recording
+        check = judge(kept.result, on, self.delays[id(kept.result)])
+        while auto and check is not None and not check.passed and any(e not in self.attempted for e in FALLBACK):
+            before = dataclasses.replace(kept)
+            self.auto(kept)
+            if kept.result is before.result:
+                kept.tried, kept.tried_effects = before.tried, before.tried_effects  # nothing new kept
                 break
-            best, best_effects, tried, tried_effects = again
-            check = judge(best, on, delays[id(best)])
+            check = judge(kept.result, on, self.delays[id(kept.result)])
         if auto and check is not None and not check.passed:
-            other = _observer_choice(rounds, best, on, delays)
+            other = _observer_choice(self.rounds, kept.result, on, self.delays)
             if other is not None:
-                tried, tried_effects = best, best_effects
-                (best_effects, best), check = other
-    return EffectsFit(best, best_effects, tried, tried_effects, tuple(rounds), delays[id(best)], check, notes)
+                (effs, res), check = other
+                kept.take(res, effs)
+        return check
+
+
+def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
+                base: str | None = None, has_gravity: bool = False, observe: bool = True,
+                **kwargs: Any) -> EffectsFit:
+    """Identify with ``effects``, walking the rounds of :data:`~alpes_dyn.estimation.identification.rounds.ROUNDS`.
+
+    Without ``"auto"`` among ``effects``: one fit (and the staged start where it lost its basin). With it: the
+    ``auto`` rounds from the first fit (what its verdict names, the rotor for a cable seen stretching, or, while it
+    is flagged asking for nothing, the stick-slip law, the rotor, the torque delay, the encoder's offset), each from
+    the fit kept, kept where its residual is lower; then the rigid cable's round; then, where the observer the kept
+    fit feeds fails it, the ``auto`` rounds not yet tried and the rounds as good a fit (:func:`_observer_choice`).
+
+    Parameters
+    ----------
+    model_of : callable
+        ``model_of(effects) -> Model``: the model to fit with ``effects`` (the stick-slip law where ``"stiction"``
+        is among them, the rotor where ``"rotor"`` is; :func:`alpes_models`).
+    recording : Recording or str or path
+        The recording (read once with the first model where a path).
+    effects : sequence of str
+        The effects (:func:`parse_effects`), ``"auto"`` among them for the rounds.
+    base : str or None, optional
+        The selection before the effects' parameters (default: K, m and friction).
+    has_gravity : bool, optional
+        The recording's gravity columns are its orientation (a recording turned between orientations is not: its
+        columns are the rig's nominal ones, the tilt is fitted).
+    observe : bool, optional
+        Judge the kept fit by the observer it feeds
+        (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, on ``kwargs["validation"]`` where it
+        is a recording): where the EKF on its file fails, the fit is not adequate, the reason naming the observer.
+    **kwargs
+        Passed to :func:`~alpes_dyn.estimation.identification.identification.identify` (``interval``:
+        :data:`EFFECTS_INTERVAL` unless given).
+
+    Returns
+    -------
+    EffectsFit
+        The fit kept, its effects, the other rounds, its torque delay, the observer's check and the notes.
+    """
+    from ..experiments.recording import Recording, read_recording
+
+    auto = "auto" in effects
+    chosen = tuple(e for e in effects if e != "auto")
+    if not isinstance(recording, Recording):  # read once: every round fits it, the delay's on its torque advanced
+        recording = read_recording(recording, model_of(chosen))
+    has_gravity = has_gravity and segment_starts(recording.gravity).size == 1
+    walk = RoundWalker(model_of, recording, has_gravity, base, kwargs)
+    kept = walk.first(chosen)
+    if auto:
+        walk.auto(kept)
+        walk.cable(kept)
+    check = walk.observe(kept, auto, kwargs.get("validation")) if observe else None
+    return EffectsFit(kept.result, kept.effects, kept.tried, kept.tried_effects, tuple(walk.rounds),
+                      walk.delays[id(kept.result)], check, walk.notes)

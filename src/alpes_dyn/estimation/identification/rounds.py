@@ -1,0 +1,258 @@
+"""The rounds of ``alpes-dyn identify --effects auto`` as data: which effects each round adds to the fit kept, from
+which start, and the rule that keeps its fit (issue 52). :func:`~alpes_dyn.estimation.identification.effects.fit_effects`
+walks :data:`ROUNDS`; each row is one round, testable alone (:meth:`Round.proposal`, :meth:`Round.accepts`).
+
+=================== ========= ====================================================== ==================== =================
+round               stage     made when (adds)                                       starts from          kept when
+=================== ========= ====================================================== ==================== =================
+``first``           first     always (the effects asked for)                         the model's values   always
+``staged``          first     the first fit lost its basin with an effect beyond     the rigid fit, then  each stage
+                              stiction and the rotor (the rigid fit, then those      each stage from the  converged
+                              effects one by one)                                    last
+``asked``           auto      the kept fit's verdict names effects not yet tried     the kept fit         lower residual
+                              (:func:`named_effects`), or it sees the cable
+                              stretching (the rotor); the tendon-sheath friction
+                              alone
+``stiction``        auto      the kept fit is flagged and asks for nothing           the kept fit         lower residual
+``rotor``           auto      likewise, the stick-slip law tried                     the kept fit         lower residual
+``delay``           auto      likewise, the rotor tried                              the kept fit         lower residual
+``offset``          auto      likewise, the delay tried, its verdict naming no       the kept fit         lower residual
+                              nonlinearity
+``rigid cable``     cable     the kept fit's compliance is below minus three         the kept fit         converged
+                              standard errors (removes the compliance)
+=================== ========= ====================================================== ==================== =================
+
+The ``auto`` stage is walked again while the kept fit's check by the observer it feeds fails
+(:func:`~alpes_dyn.estimation.identification.observer_check.judge`, which marks the fit flagged); each effect is tried
+in one round at most. A refused round's fit is :attr:`EffectsFit.tried`. The measurements behind each rule are
+``benchmarks/realism.py``'s records (``benchmarks/results/realism.json``) and the user guide's identification page.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, Callable, Collection
+
+import numpy as np
+
+from .harmonics import NONLINEARITY
+
+__all__ = ["Round", "ROUNDS", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
+
+NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
+                            "capstan": "tendon-sheath friction"}
+"""The effects ``auto`` adds where a fit's adequacy check names them (a word of the likely missing effect)."""
+
+Proposal = Callable[[Any, tuple[str, ...], Collection[str]], "tuple[str, ...] | None"]
+
+
+def named_effects(result: Any) -> tuple[str, ...]:
+    """The effects of :data:`NAMED_BY` that a flagged fit's adequacy check names among the likely missing ones.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A fit (anything with an ``adequacy`` verdict: ``adequate`` and ``likely_missing``).
+
+    Returns
+    -------
+    tuple of str
+        The named effects, in :data:`NAMED_BY`'s order; empty where the fit is adequate or has no verdict.
+    """
+    a = getattr(result, "adequacy", None)
+    if a is None or a.adequate:
+        return ()
+    return tuple(e for e, word in NAMED_BY.items() if any(word in m for m in a.likely_missing))
+
+
+def _compliances(result: Any) -> list[tuple[float, float]]:
+    """(value, standard error) of each tendon compliance a fit found with a finite standard error."""
+    return [(value, sd) for name, value, sd in zip(result.names, result.values, result.std)
+            if name.startswith("tendon_compliance") and np.isfinite(sd)]
+
+
+def elastic(result: Any) -> bool:
+    """True when a fit found a tendon compliance above three of its standard errors (the cable seen stretching)."""
+    return any(value > 3.0 * sd for value, sd in _compliances(result))
+
+
+def contracting(result: Any) -> bool:
+    """True when a fit found a tendon compliance below minus three of its standard errors (a cable read as
+    shortening under tension: no cable does, the compliance absorbed another effect)."""
+    return any(value < -3.0 * sd for value, sd in _compliances(result))
+
+
+def nonlinear(result: Any) -> bool:
+    """A flagged fit whose verdict names a nonlinearity (the residual's power at the excitation's harmonics): a
+    constant in the output (the encoder's offset) makes no harmonics, so the offset's round is not made for it."""
+    a = getattr(result, "adequacy", None)
+    return a is not None and not a.adequate and any(NONLINEARITY in m for m in a.likely_missing)
+
+
+def _lower_residual(new: Any, kept: Any) -> bool:
+    """The new fit's residual below the kept one's."""
+    return bool(new.residual_rms < kept.residual_rms)
+
+
+def _converged(new: Any, kept: Any) -> bool:
+    """The new fit converged."""
+    return bool(new.converged)
+
+
+def _always(new: Any, kept: Any) -> bool:
+    """Kept whatever it is (the first fit)."""
+    return True
+
+
+def _first(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...]:
+    """The effects asked for (``effects``: the caller's, without ``auto``)."""
+    return effects
+
+
+def _staged(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
+    """The effects to reach in stages where the first fit lost its basin with an effect beyond stiction and the
+    rotor (the two change the model, not the parameters: the rigid fit would not be a stage towards them)."""
+    lost = not result.converged and "lost basin" in str(getattr(result, "reason", ""))
+    return effects if lost and any(e not in ("stiction", "rotor") for e in effects) else None
+
+
+def _asked(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
+    """The effects the kept fit asks for: those its verdict names, the rotor where it sees the cable stretching (the
+    quasi-static cable carries the rotor's J_m S^T S to the joints, which the verdict does not tell from a wrong
+    inertia); the tendon-sheath friction alone (a friction growing with the tension is also a cable stretching with
+    it: with the rotor its fit was worse)."""
+    more = tuple(e for e in named_effects(result) if e not in attempted)
+    if "rotor" not in attempted and "rotor" not in more and elastic(result):
+        more += ("rotor",)
+    if "capstan" in more:
+        more = ("capstan",)
+    return effects + more if more else None
+
+
+def _flagged(effect: str) -> Proposal:
+    """The proposal of a round made on a flagged fit that asks for nothing: ``effect`` added, once."""
+    def proposal(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
+        if result.trustworthy or effect in attempted or (effect == "offset" and nonlinear(result)):
+            return None
+        return effects + (effect,)
+
+    proposal.__doc__ = f"``{effect}`` added to a flagged fit asking for nothing, where not yet tried."
+    return proposal
+
+
+def _rigid_cable(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
+    """The kept effects without the compliance, where the kept fit's is below minus three standard errors."""
+    if "compliance" not in effects or not contracting(result):
+        return None
+    return tuple(e for e in effects if e != "compliance")
+
+
+@dataclass(frozen=True)
+class Round:
+    """One round of ``--effects auto``: one fit, the effects it is made with, its start and the rule that keeps it.
+
+    Attributes
+    ----------
+    name : str
+        The round's name (the table's first column).
+    stage : str
+        When it is walked: ``"first"`` (the first fit, and the staged start after a lost basin), ``"auto"`` (while
+        the kept fit asks for an effect or is flagged; the first ``auto`` row proposing a fit makes it), ``"cable"``
+        (once, after the ``auto`` rounds).
+    adds : tuple of str
+        The effects the round may add (``"rigid cable"``: the one it removes).
+    when : str
+        When the round is made, in words.
+    propose : callable
+        ``propose(kept, kept_effects, attempted)``: the round's effects (a tuple of str), or None where the round
+        is not made; ``kept`` the fit kept so far, ``kept_effects`` its effects, ``attempted`` the effects some
+        round was made with.
+    start_from : str
+        Where the round's fit starts, in words (``"kept"``: the kept fit's values and trajectory).
+    accept : callable
+        ``accept(new, kept) -> bool``: the new fit replaces the kept one.
+    """
+
+    name: str
+    stage: str
+    adds: tuple[str, ...]
+    when: str
+    propose: Proposal
+    start_from: str
+    accept: Callable[[Any, Any], bool]
+
+    def proposal(self, kept: Any, kept_effects: tuple[str, ...],
+                 attempted: Collection[str] = ()) -> tuple[str, ...] | None:
+        """The round's effects from the fit kept, or None where it is not made.
+
+        Parameters
+        ----------
+        kept : IdentificationResult
+            The fit kept so far.
+        kept_effects : tuple of str
+            Its effects.
+        attempted : collection of str
+            The effects some round was already made with (none is tried twice).
+
+        Returns
+        -------
+        tuple of str or None
+            The effects of the round's fit.
+        """
+        return self.propose(kept, tuple(kept_effects), attempted)
+
+    def accepts(self, new: Any, kept: Any) -> bool:
+        """Whether the round's fit ``new`` replaces ``kept``.
+
+        Parameters
+        ----------
+        new : IdentificationResult
+            The round's fit.
+        kept : IdentificationResult
+            The fit kept before it.
+
+        Returns
+        -------
+        bool
+            True where ``new`` is kept.
+        """
+        return bool(self.accept(new, kept))
+
+
+_FLAGGED = "the kept fit flagged, asking for nothing"
+
+ROUNDS: tuple[Round, ...] = (
+    Round("first", "first", (), "always", _first, "the model's values", _always),
+    Round("staged", "first", (), "the first fit lost its basin", _staged, "the rigid fit, then the last stage",
+          _converged),
+    Round("asked", "auto", tuple(NAMED_BY), "its verdict names effects, or it sees the cable stretching", _asked,
+          "kept", _lower_residual),
+    Round("stiction", "auto", ("stiction",), _FLAGGED, _flagged("stiction"), "kept", _lower_residual),
+    Round("rotor", "auto", ("rotor",), _FLAGGED, _flagged("rotor"), "kept", _lower_residual),
+    Round("delay", "auto", ("delay",), _FLAGGED, _flagged("delay"), "kept", _lower_residual),
+    Round("offset", "auto", ("offset",), _FLAGGED + ", naming no nonlinearity", _flagged("offset"), "kept",
+          _lower_residual),
+    Round("rigid cable", "cable", ("compliance",), "the compliance below minus three standard errors",
+          _rigid_cable, "kept", _converged),
+)
+"""The rounds of ``--effects auto``, in the order they are walked (the module's table)."""
+
+FALLBACK: tuple[str, ...] = tuple(r.adds[0] for r in ROUNDS if r.when.startswith(_FLAGGED))
+"""The effects tried, in order, on a flagged fit that asks for none (stick-slip, the rotor, the torque delay, the
+encoder's offset); the observer's failure walks them again."""
+
+
+def rounds_of(stage: str) -> tuple[Round, ...]:
+    """The rows of :data:`ROUNDS` walked at ``stage`` (``"first"``, ``"auto"`` or ``"cable"``), in order.
+
+    Parameters
+    ----------
+    stage : str
+        The stage.
+
+    Returns
+    -------
+    tuple of Round
+        Its rounds.
+    """
+    return tuple(r for r in ROUNDS if r.stage == stage)

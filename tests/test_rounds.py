@@ -1,0 +1,158 @@
+"""The rounds of ``--effects auto`` as data (:mod:`alpes_dyn.estimation.identification.rounds`): the table is the
+module's documented one, each round's proposal and acceptance rule alone on stand-in fits, and one round played on
+a short simulated recording with real fits."""
+
+from __future__ import annotations
+
+import dataclasses
+import re
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+from alpes_dyn.estimation.identification import rounds as rd
+from alpes_dyn.estimation.identification.adequacy import JOINT_STOP, SIGNATURES
+from alpes_dyn.estimation.identification.harmonics import NONLINEARITY
+
+ROW = {r.name: r for r in rd.ROUNDS}
+KEPT = ("compliance", "tilt")
+
+
+def fit(residual=0.6, ok=False, missing=(), converged=True, reason="", names=(), values=(), std=()):
+    """A stand-in fit: what the rounds read of an IdentificationResult."""
+    return SimpleNamespace(residual_rms=residual, converged=converged, reason=reason, trustworthy=ok,
+                           names=tuple(names), values=list(values), std=list(std),
+                           adequacy=SimpleNamespace(adequate=ok, likely_missing=list(missing)))
+
+
+def test_the_table_is_the_documented_one():
+    """The module docstring's table lists the rounds of ROUNDS, in order, each with its stage; the fallback
+    effects are the four the user guide names, in its order."""
+    documented = re.findall(r"^``([a-z ]+)``\s+(\w+)\s", rd.__doc__, flags=re.M)
+    assert documented == [(r.name, r.stage) for r in rd.ROUNDS]
+    assert rd.FALLBACK == ("stiction", "rotor", "delay", "offset")
+    assert [r.name for r in rd.rounds_of("auto")] == ["asked", "stiction", "rotor", "delay", "offset"]
+    assert all(r.start_from == "kept" for r in rd.rounds_of("auto") + rd.rounds_of("cable"))
+
+
+def test_first_and_staged_rounds():
+    """The first round fits the effects asked for and is kept whatever it is; the staged start is made only for a
+    first fit that lost its basin with an effect beyond stiction and the rotor, each stage kept where it converged."""
+    assert ROW["first"].proposal(None, KEPT) == KEPT and ROW["first"].accepts(fit(9.0), fit(0.1))
+    lost = fit(14.4, converged=False, reason="lost basin: three steps", missing=[JOINT_STOP])
+    assert ROW["staged"].proposal(lost, KEPT) == KEPT
+    assert ROW["staged"].proposal(lost, ("stiction", "rotor")) is None
+    assert ROW["staged"].proposal(fit(14.4, converged=False, reason="iteration cap"), KEPT) is None
+    assert ROW["staged"].accepts(fit(9.0), lost) and not ROW["staged"].accepts(lost, fit(0.6))
+
+
+def test_the_asked_round():
+    """What the kept fit asks for: the effects its verdict names, not yet tried; the rotor where a compliance is
+    above three standard errors; the tendon-sheath friction alone; nothing for an adequate fit. Kept on a lower
+    residual."""
+    asked = ROW["asked"]
+    stick = "stick-slip / Coulomb friction"
+    assert asked.proposal(fit(missing=[stick, SIGNATURES["torque_rate"]]), KEPT) == KEPT + ("stiction", "delay")
+    assert asked.proposal(fit(missing=[stick]), KEPT, {"stiction"}) is None
+    stretching = dict(names=("K_1", "tendon_compliance_finger"), values=[0.04, 6.0], std=[1e-4, 0.2])
+    assert asked.proposal(fit(**stretching), KEPT) == KEPT + ("rotor",)
+    assert asked.proposal(fit(ok=True, **stretching), KEPT) == KEPT + ("rotor",)  # adequate, but stretching
+    assert asked.proposal(fit(**stretching), KEPT, {"rotor"}) is None
+    within = dict(names=("tendon_compliance_finger",), values=[0.5], std=[0.2])  # 2.5 standard errors
+    assert asked.proposal(fit(**within), KEPT) is None
+    sheath = "tendon-sheath friction (a torque following the tension times the sign of the motor velocity)"
+    assert asked.proposal(fit(missing=[stick, sheath], **stretching), KEPT) == KEPT + ("capstan",)
+    assert asked.proposal(fit(ok=True, missing=[stick]), KEPT) is None
+    assert asked.accepts(fit(0.59), fit(0.6)) and not asked.accepts(fit(0.6), fit(0.6))
+
+
+@pytest.mark.parametrize("effect", ["stiction", "rotor", "delay", "offset"])
+def test_the_flagged_rounds(effect):
+    """A flagged fit asking for nothing gets each fallback effect once; an adequate one none; the offset not where
+    the verdict names a nonlinearity (a constant in the output makes no harmonics)."""
+    rnd = ROW[effect]
+    assert rnd.proposal(fit(), KEPT) == KEPT + (effect,)
+    assert rnd.proposal(fit(ok=True), KEPT) is None
+    assert rnd.proposal(fit(), KEPT, {effect}) is None
+    assert (rnd.proposal(fit(missing=[NONLINEARITY]), KEPT) is None) == (effect == "offset")
+    assert rnd.accepts(fit(0.5), fit(0.6)) and not rnd.accepts(fit(0.7), fit(0.6))
+
+
+def test_the_rigid_cable_round():
+    """A compliance below minus three standard errors (a cable shortening under tension): the round without it,
+    kept where it converges; within three standard errors, no round."""
+    rnd = ROW["rigid cable"]
+    short = dict(names=("K_1", "tendon_compliance_finger"), values=[0.04, -0.42], std=[1e-4, 0.1])
+    assert rnd.proposal(fit(ok=True, **short), KEPT) == ("tilt",)
+    assert rnd.proposal(fit(ok=True, **short), ("tilt",)) is None
+    assert rnd.proposal(fit(ok=True, names=short["names"], values=[0.04, -0.25], std=short["std"]), KEPT) is None
+    assert rnd.accepts(fit(0.9), fit(0.6)) and not rnd.accepts(fit(0.5, converged=False), fit(0.6))
+
+
+def test_each_round_is_made_once_and_the_walk_follows_the_table():
+    """The walk of the auto stage on stand-ins always flagged naming nothing: the fallback rounds in the table's
+    order, each once, then none (every rule's proposal None)."""
+    kept_effects, attempted, made = KEPT, set(KEPT), []
+    flagged = fit()
+    while (rnd := next((r for r in rd.rounds_of("auto") if r.proposal(flagged, kept_effects, attempted)), None)):
+        effs = rnd.proposal(flagged, kept_effects, attempted)
+        attempted.update(effs)
+        made.append(rnd.name)
+    assert made == list(rd.FALLBACK)
+
+
+def test_one_round_played_on_a_simulated_recording():
+    """One round alone with real fits: the first fit (compliance) on 1 s of our simulator's finger2 drawn 10 % off, then the rotor
+    round (its proposal forced: the first fit is adequate) from it. The round starts from the kept fit (its
+    values and trajectory), is recorded, and is kept exactly where its residual is lower (the acceptance rule),
+    the other fit being ``tried``."""
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.effects import Kept, RoundWalker, alpes_models
+    from alpes_dyn.model.params import load_params
+
+    design = ExperimentDesign(duration=1.0)
+    rec = experiment("finger2", perturbed_params(spread=0.1, seed=2), design=design, seed=2)
+    starts, depth = [], []
+    real = ident_mod.identify
+
+    def spy(*args, **kw):  # the rounds' calls, not identify's own refit of a parameter it holds
+        if not depth:
+            starts.append(kw.get("start"))
+        depth.append(1)
+        try:
+            return real(*args, **kw)
+        finally:
+            depth.pop()
+
+    walk = RoundWalker(alpes_models("finger2", load_params()), rec, True, None, {"excitation": design.lines})
+    mp = pytest.MonkeyPatch()
+    mp.setattr(ident_mod, "identify", spy)
+    try:
+        kept = walk.first(("compliance",))
+        first = kept.result
+        assert first.converged and ROW["rotor"].proposal(first, kept.effects, walk.attempted) is None  # adequate
+        forced = dataclasses.replace(ROW["rotor"], propose=lambda res, effs, att: effs + ("rotor",))
+        assert walk.play(forced, kept)
+    finally:
+        mp.undo()
+    (e1, r1), (e2, r2) = walk.rounds
+    assert e1 == ("compliance",) and e2 == ("compliance", "rotor") and r1 is first
+    assert len(starts) == 2 and starts[0] is None and starts[1] is first  # the rotor's round from the first fit
+    lower = r2.residual_rms < r1.residual_rms
+    assert (kept.result is r2) == lower and (kept.tried is (r1 if lower else r2))
+    assert kept.effects == (e2 if lower else e1)
+    assert np.isfinite(r2.residual_rms) and r2.converged
+
+
+def test_kept_take_and_refuse():
+    """Kept: a taken fit makes the former one ``tried``; a refused fit is ``tried``."""
+    from alpes_dyn.estimation.identification.effects import Kept
+
+    a, b, c = fit(0.6), fit(0.5), fit(0.7)
+    k = Kept(a, KEPT)
+    k.take(b, KEPT + ("rotor",))
+    assert k.result is b and k.tried is a and k.tried_effects == KEPT
+    k.refuse(c, KEPT + ("delay",))
+    assert k.result is b and k.tried is c and k.tried_effects == KEPT + ("delay",)
