@@ -207,6 +207,7 @@ def bad_files(d: Path) -> dict[str, str]:
     files["countsoffset_toml"] = BASE_TOML.replace("[thumb]\n", 'encoder_offset = { value = 4.0, unit = "counts", '
                                                    'source = "identified", reason = "x" }\n\n[thumb]\n', 1).encode()
     rec3 = _recordings()["finger3"].splitlines()  # the unit mistakes of a recording (issue 49)
+    files["midblank_csv"] = ("\n".join(rec3[:100] + [",,,,"] + rec3[100:]) + "\n").encode()  # a lost sample (52)
     files["ma_csv"] = _scaled_column(rec3, "torque_finger", 1e5)  # a current in mA, not N m
     files["rad_csv"] = _scaled_column(rec3, "encoder_finger", 2 * math.pi / 4096)  # the motor's angle in rad
     files["deg_csv"] = _scaled_column(rec3, "encoder_finger", 360 / 4096)  # ... in degrees
@@ -1156,6 +1157,14 @@ CLI["identify"] += [C("identify", "--data", "x.csv", "--encoder-noise", "1e300",
                       needle="-o: '{tmp}/i.csv' has extension 'csv'; expected one of .toml")]
 CLI["experiment"] += [C("experiment", "--perturb", "0.1", "-o", "{tmp}/r.csv", "--true-params-out", "{tmp}/t.csv",
                         needle="--true-params-out: '{tmp}/t.csv' has extension 'csv'; expected one of .toml")]
+
+CLI["experiment"] += [  # issue 52's silent cases
+    C("experiment", "--model", "finger2", "--rig", "both", "--duration", "0.15", "-o", "{tmp}/r.csv",
+      needle="duration: 0.15 s gives 75 samples to each of the 2 orientations; each needs at least 100")]
+CLI["identify"] += [C("identify", "--model", "finger3", "--data", "{midblank_csv}", "--effects", "none",
+                      needle="line 101 is empty between data rows (a lost sample")]
+CLI["estimate"] += [C("estimate", "--model", "finger3", "--data", "{midblank_csv}",
+                      needle="line 101 is empty between data rows (a lost sample")]
 
 CLI_ROWS = [(cmd, row) for cmd, rows in CLI.items() for row in rows]
 
@@ -3116,6 +3125,36 @@ def test_sweep_api_output_in_a_read_only_folder(tmp_path):
         assert list(ro.iterdir()) == []
     finally:
         ro.chmod(0o755)
+
+
+def _ratio_model(curve: tuple[float, ...]) -> ad.Model:
+    """finger3's URDF with one motor whose ratio on j1 is 1 + curve(q_1) (joint range [0, pi/2])."""
+    from alpes_dyn.model.spec import Motor
+
+    return ad.Model(FINGER3, TransmissionSpec(motors=(Motor("m", {"j1": 1.0, "j2": 1.0}, ratio_curve={"j1": curve}),),
+                                              name="curved"))
+
+
+def _steep_run() -> Any:
+    """A steep ratio curve (1 + 50 q_1^3) simulated under a constant motor torque: j1 leaves its range, the curve
+    beyond it crosses 0 and the state diverges."""
+    from alpes_dyn.simulation.integrate import simulate
+
+    m = _ratio_model((0.0, 0.0, 50.0))
+    return simulate(m, np.zeros(2 * m.n), np.array([0.05]), duration=1.0, input="motor")
+
+
+API.extend([  # issue 52's silent cases
+    A("ExperimentDesign", lambda c: __import__("alpes_dyn.estimation", fromlist=["x"]).ExperimentDesign(
+        duration=0.15, orientations=((0.0, 0.0, -9.81), (9.81, 0.0, 0.0))).check(),
+      InputError, "duration: 0.15 s gives 75 samples to each of the 2 orientations; each needs at least 100"),
+    A("Model", lambda c: _ratio_model((-2.0,)), ModelError,
+      "motor 'm'.ratio_curve.j1: the ratio is 0 at q = 0.5 rad, inside the joint's range [0, 1.5708] rad"),
+    A("Model", lambda c: _ratio_model((-4.0, 4.0)), ModelError,  # touching 0 (a double root) is 0 too
+      "motor 'm'.ratio_curve.j1: the ratio is 0 at q = 0.5 rad"),
+    A("simulate", lambda c: _steep_run(), InputError,
+      "after joint 'j1' left its range [0, 1.5708] rad at t = "),
+])
 
 
 def test_every_public_api_has_rows():

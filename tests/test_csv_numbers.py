@@ -58,3 +58,21 @@ def test_the_cell_by_cell_reader_still_names_the_bad_cell(written, tmp_path, cel
     with pytest.raises(RecordingError, match="encoder_finger") as exc:
         read_recording(bad, model)
     assert message in str(exc.value) and "\n" not in str(exc.value)
+
+
+@pytest.mark.parametrize("row", ["", ",,,,,", "   ", " , ,\r"], ids=["blank", "commas", "spaces", "crlf"])
+def test_an_empty_row_between_data_rows_is_refused_naming_its_line(written, tmp_path, row):
+    """A row of empty cells (or a blank line) in mid-recording is a lost sample: refused by both readers, naming its
+    line (issue 52: it was skipped without a word). Blank lines after the last row (a file's trailing newlines) are
+    no sample: the same recording as without them."""
+    path, model = written
+    lines = path.read_text().splitlines()
+    bad = tmp_path / "bad.csv"
+    bad.write_text("\n".join(lines[:500] + [row] + lines[500:]) + "\n")
+    with pytest.raises(RecordingError, match="line 501 is empty between data rows") as exc:
+        read_recording(bad, model)
+    assert "\n" not in str(exc.value)
+    trailing = tmp_path / "trailing.csv"
+    trailing.write_text("\n".join(lines + [row, ""]) + "\n")
+    assert np.array_equal(read_recording(trailing, model).encoder, read_recording(path, model).encoder)
+    assert csv_numbers.empty_row("\n\n" + "\n".join(lines)) is None  # blank lines before the header: not a sample

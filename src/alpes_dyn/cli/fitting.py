@@ -5,9 +5,10 @@ chains too, :mod:`alpes_dyn.cli.hand_cmds`), and the excitation's lines the fit 
 from __future__ import annotations
 
 import argparse
+import os
 import warnings
 
-from ..errors import InputError
+from ..errors import AlpesDynWarning, InputError
 from ..estimation.identification.identification import THUMB_PARAMETERS
 from .common import parse_vector, read_data
 
@@ -151,6 +152,9 @@ def _write_robot(res, args: argparse.Namespace) -> list[str]:
             head, sep, tail = str(exc).partition(": ")
             raise InputError(f"--mjcf: {tail}; nothing written" if sep and head == "mjcf" else str(exc)) from None
     if text is not None:
+        if os.path.lexists(_mass_urdf_path(args.output)):  # not named by the user: said, never replaced silently
+            warnings.warn(AlpesDynWarning(f"-o: {_mass_urdf_path(args.output)} (the URDF with the fit's masses beside "
+                                          f"{args.output}) existed and is replaced"))
         atomic_write(_mass_urdf_path(args.output), text, "-o")
     if mjcf is not None:
         atomic_write(_mjcf_out_path(args.output), mjcf, "-o")

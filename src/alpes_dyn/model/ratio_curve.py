@@ -28,9 +28,10 @@ from typing import Any
 
 import numpy as np
 
-from ..errors import InputError
+from ..errors import InputError, ModelError
 
-__all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve", "encoder_angles", "encoder_rates", "encoder_sensitivity"]
+__all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve", "encoder_angles", "encoder_rates", "encoder_sensitivity",
+           "ratio_zero", "check_ratio_range"]
 
 MAX_CURVE_DEGREE = 16
 """The highest power of q in a ratio curve (a straight tendon segment across a joint of 1.5 rad range needs 13 for
@@ -125,6 +126,54 @@ class RatioCurve:
             qp = qp * q
             out = out + xp.mtimes(_sparse(c, xp), qp * v2)
         return out
+
+
+def ratio_zero(curve: RatioCurve, lower: np.ndarray, upper: np.ndarray) -> tuple[int, int, float] | None:
+    """The first ratio of ``curve`` that is 0 inside its joint's range: (motor k, joint i, the lowest such q_i), or None.
+
+    Parameters
+    ----------
+    curve : RatioCurve
+        The ratios rho(q) (m, n).
+    lower, upper : ndarray
+        (n,) the joints' limits, rad.
+
+    Returns
+    -------
+    tuple of (int, int, float) or None
+        Where rho_ki(q_i) = 0 with lower_i <= q_i <= upper_i (a real root of its polynomial).
+    """
+    for k, i in zip(*np.nonzero(curve.S)):  # a loop over the tendon's crossings (a few)
+        roots = np.polynomial.polynomial.polyroots(np.r_[curve.S[k, i], curve.C[:, k, i]])
+        real = roots.real[np.abs(roots.imag) <= 1e-9 * np.maximum(1.0, np.abs(roots.real))]
+        inside = real[(real >= lower[i]) & (real <= upper[i])]
+        if inside.size:
+            return int(k), int(i), float(inside.min())
+    return None
+
+
+def check_ratio_range(transmission: Any, lower: np.ndarray, upper: np.ndarray, joint_names: Any) -> None:
+    """:class:`~alpes_dyn.errors.ModelError` naming the motor and the joint where a ratio curve crosses 0 inside the
+    joint's range (a moment arm of 0 there: the tendon would not move the joint, as a constant ratio of 0 is refused).
+
+    Parameters
+    ----------
+    transmission : Transmission or None
+        The model's transmission (nothing checked without a ratio curve).
+    lower, upper : ndarray
+        (n,) the joints' limits, rad.
+    joint_names : sequence of str
+        The joints' names.
+    """
+    curve = None if transmission is None else transmission.curve
+    if curve is None or np.shape(lower) != (curve.S.shape[1],):
+        return
+    zero = ratio_zero(curve, np.asarray(lower), np.asarray(upper))
+    if zero is not None:
+        k, i, q = zero
+        raise ModelError(f"motor {transmission.motor_names[k]!r}.ratio_curve.{joint_names[i]}: the ratio is 0 at q = "
+                         f"{q:.4g} rad, inside the joint's range [{lower[i]:g}, {upper[i]:g}] rad (a moment arm of 0: "
+                         "the tendon would not drive the joint there)")
 
 
 def encoder_angles(enc: "np.ndarray | RatioCurve", q: np.ndarray) -> np.ndarray:

@@ -33,6 +33,7 @@ from ..errors import InputError, ModelError
 from .extras import JointExtras
 from ..fileio import read_text
 from .inertial import check_inertials
+from .ratio_curve import check_ratio_range
 from .mimic import MimicCoupling, refuse_mimic_names
 from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args, _tips,
                            newton_equilibrium)
@@ -155,6 +156,7 @@ class Model(FrameKinematics):
         if spec is None and layout is not None and params is not None:  # the former Model(urdf, extras, ..., layout, params)
             self.transmission = alpes_transmission(layout, self.joint_names, params.transmission_ratio,
                                                          params.abduction_ratio, params.encoder_counts)
+        check_ratio_range(self.transmission, self.lower, self.upper, self.joint_names)  # a moment arm of 0
         self.rotor_matrix: np.ndarray = self._set_rotor()
         """S^T diag(J_m) S (n, n), kg m^2: the motors' rotor inertia on the joints (eq. 2.8; zeros without)."""
 

@@ -370,3 +370,37 @@ def check_range(t: np.ndarray, q: np.ndarray, lower: np.ndarray, upper: np.ndarr
     if mode == "warn":
         warnings.warn(msg, JointRangeWarning, stacklevel=3)
     return msg
+
+
+def divergence_message(t: np.ndarray, q: np.ndarray, k: int, lower: np.ndarray, upper: np.ndarray,
+                       names: Sequence[str], curved: bool) -> str:
+    """The one line of a simulation whose state is first not finite at sample ``k``: where a ratio curve's model
+    (``curved``) saw a joint leave its range before, that joint (the curve's polynomial holds only within the
+    range, and outside it can grow without bound), else the step and the inputs.
+
+    Parameters
+    ----------
+    t : ndarray
+        (N+1,) the times, s.
+    q : ndarray
+        (N+1, n) the joint angles, rad (finite before ``k``).
+    k : int
+        The first sample with a non-finite state.
+    lower, upper : ndarray
+        (n,) the joints' limits, rad.
+    names : sequence of str
+        The joints' names.
+    curved : bool
+        The model's transmission has a ratio curve.
+
+    Returns
+    -------
+    str
+        The message.
+    """
+    head = f"simulation diverged (non-finite state at t = {t[k]:g} s)"
+    left = check_range(t[:k], q[:k], lower, upper, names, "ignore") if curved and k > 0 else ""
+    if left:
+        return (f"{head} after {left.split(' and no joint stop')[0]}, where its ratio_curve no longer holds (keep the "
+                "joints in range: stops=JointStops.of(model), or smaller inputs)")
+    return f"{head}; reduce dt or the inputs"

@@ -45,7 +45,7 @@ from ..limits import check_bytes, check_time_step, hot_magnitude_error
 from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
-from ..model.stops import JointStops, check_range
+from ..model.stops import JointStops, check_range, divergence_message
 from ..model.transmission import capstan_loss, capstan_velocity
 
 __all__ = [
@@ -436,7 +436,9 @@ def _trajectory(ss: StateSpace, x0: np.ndarray, W: np.ndarray, t: np.ndarray, dt
     x = np.vstack([x0, X.T])
     if not np.isfinite(x).all():
         k = int(np.argmax(~np.isfinite(x).all(axis=1)))
-        raise InputError(f"simulation diverged (non-finite state at t = {t[k]:g} s); reduce dt or the inputs")
+        m, tr = ss.model, ss.model.transmission
+        raise InputError(divergence_message(t, x[:, : ss.n], k, m.lower, m.upper, m.joint_names,
+                                            tr is not None and tr.curved))
     return x
 
 

@@ -2,7 +2,7 @@
 
 :func:`~alpes_dyn.estimation.experiments.recording.read_recording` checks every cell on its own, in Python (the one
 line naming the column and the line of a bad cell): 26 s of a 600 s fit of the hand went there, for 600 001 rows of
-45 cells (2026-12-05). Most recordings are a logger's plain numbers, and :func:`plain_rows` reads those with
+45 cells. Most recordings are a logger's plain numbers, and :func:`plain_rows` reads those with
 :func:`numpy.loadtxt` (its C parser, ``comments=None``: no line is skipped as a comment). It gives up -- returns None,
 and the cell-by-cell reader runs and names what is wrong -- on anything else: a cell that is not a plain number (an
 empty one, a quoted one, digit separators, text), a row of another length, a NaN or an infinity anywhere (only the
@@ -12,13 +12,52 @@ optional columns may hold one, and the cell-by-cell reader says which), a subnor
 
 from __future__ import annotations
 
+import re
 import warnings
 
 import numpy as np
 
+from ...errors import RecordingError
 from ...limits import MAX_CSV_CELL
 
-__all__ = ["plain_rows", "lines"]
+__all__ = ["plain_rows", "lines", "empty_row", "refuse_empty_row"]
+
+_BLANK_ROW = re.compile(r"\n[ \t\r,]*\n")  # a line of nothing but blanks and commas, after another line
+_LEADING_BLANKS = re.compile(r"(?:[ \t\r,]*\n)*")
+_CONTENT = re.compile(r"[^\s,]")
+
+
+def empty_row(text: str) -> int | None:
+    """The line number (1-based) of the first empty row of a recording's CSV ``text`` (blank, or every cell empty)
+    that lies between its header and a later data row, or None. Empty lines before the header and after the last
+    data row are not counted (a file's trailing newlines); one in between is a lost sample, never skipped.
+
+    Parameters
+    ----------
+    text : str
+        The recording's text.
+
+    Returns
+    -------
+    int or None
+        The empty row's line number.
+    """
+    header = text.find("\n", _LEADING_BLANKS.match(text).end())
+    if header < 0:
+        return None
+    blank = _BLANK_ROW.search(text, header)
+    if blank is None or _CONTENT.search(text, blank.end() - 1) is None:
+        return None
+    return text.count("\n", 0, blank.start() + 1) + 1
+
+
+def refuse_empty_row(text: str, path: object) -> None:
+    """:class:`~alpes_dyn.errors.RecordingError` naming the line of an empty row between data rows
+    (:func:`empty_row`) of the recording ``path``'s ``text``."""
+    line = empty_row(text)
+    if line is not None:
+        raise RecordingError(f"recording {str(path)!r}: line {line} is empty between data rows (a lost sample: fill "
+                             "it or remove the line)")
 
 
 class _LongLine(ValueError):

@@ -85,6 +85,9 @@ class ExperimentDesign:
         g = np.asarray(self.orientations, dtype=float)
         if g.ndim != 2 or g.shape[1] != 3 or g.shape[0] < 1 or not np.isfinite(g).all():
             raise InputError(f"orientations: expected gravity vectors (3 numbers each), got {self.orientations!r}")
+        if (N + 1) // g.shape[0] < 100:  # each orientation's run identified on its own lines (torque_lines)
+            raise InputError(f"duration: {self.duration:g} s gives {(N + 1) // g.shape[0]} samples to each of the "
+                             f"{g.shape[0]} orientations; each needs at least 100")
         off = gravity_norm_off(g)
         if off.size:
             raise InputError(f"orientations: gravity vector {g[off[0]].tolist()} has norm {np.linalg.norm(g[off[0]]):g} "

@@ -56,7 +56,7 @@ from ...errors import RecordingError
 from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
-from .csv_numbers import lines, plain_rows
+from .csv_numbers import lines, plain_rows, refuse_empty_row
 from .units import check_counts, check_torque_scale
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
@@ -229,6 +229,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     n_lines = text.count("\n")
     if n_lines > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
+    refuse_empty_row(text, p)  # (never skipped: a lost sample)
     # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record), the
     # lines cut from the text as read (csv_numbers.lines: no copy of the text)
     rows = (r for r in csv.reader(lines(text)) if r and any(c.strip() for c in r))

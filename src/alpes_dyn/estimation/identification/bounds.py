@@ -62,10 +62,12 @@ def physical_range(kind: str) -> tuple[float, float, bool]:
 
 
 def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[float], std: Sequence[float],
-                initial: Sequence[float], units: Sequence[str]) -> dict[str, str]:
+                initial: Sequence[float], units: Sequence[str], held: bool = True) -> dict[str, str]:
     """The fitted parameters the data do not support, name -> why (one clause with the value +- its standard error
     and the effect, e.g. ``"-0.054 +- 0.032 rad/(N m): below its physical bound 0 (held there); the data do not
-    support an elastic tendon"``). The rules: the module docstring. Arrays (p,) in the fit's units."""
+    support an elastic tendon"``). The rules: the module docstring. Arrays (p,) in the fit's units. ``held``: the
+    parameters are held in a fit again (the clause says where); False: no fit again is made (a fit not to be
+    trusted), and the clause says so."""
     out: dict[str, str] = {}
     for name, kind, v, sd, v0, unit in zip(names, kinds, values, std, initial, units):
         if kind not in LOWER_BOUND or not math.isfinite(sd):
@@ -73,12 +75,13 @@ def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[flo
         lo = LOWER_BOUND[kind]
         what = f"{v:.3g} +- {sd:.2g} {unit}"
         effect = f"the data do not support {EFFECT_OF[kind]}"
+        there, start = ("held there", "held at the start") if held else ("not fitted again", "not fitted again")
         if v < lo:
-            out[name] = f"{what}: below its physical bound {lo:g} (held there); {effect}"
+            out[name] = f"{what}: below its physical bound {lo:g} ({there}); {effect}"
         elif kind not in ADDITIVE_BOUNDED and v0 > 0 and not (1.0 / RUNAWAY <= v / v0 <= RUNAWAY):
-            out[name] = f"{what}: ran off to its bound ({v / v0:.2g} times its start; held at the start); {effect}"
+            out[name] = f"{what}: ran off to its bound ({v / v0:.2g} times its start; {start}); {effect}"
         elif v - Z_INTERVAL * sd <= lo:
-            out[name] = f"{what}: its 95 % interval reaches past {lo:g} (held at the start); {effect}"
+            out[name] = f"{what}: its 95 % interval reaches past {lo:g} ({start}); {effect}"
     return out
 
 

@@ -75,7 +75,7 @@ from .held import held_start
 from .shooting import ShootingProblem, torque_model
 from .normal_blocks import j_dot, remainders
 from .gauss_newton import GaussNewton, SolverResult
-from .long_record import LONG_RECORD, window_start
+from .long_record import LONG_RECORD, check_fit_size, window_start
 from .runs import aligned
 from .heldout import parts, project_torque, rest_guess, validate  # noqa: F401  (project_torque: its old home)
 from .runs import encoder_noise as run_noise
@@ -208,8 +208,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         _map_large_blocks()
     L = int(round(interval / dt))
     rec = aligned(rec, L)  # several runs: each on whole intervals (module runs)
-    torque = torque_model(rec, excitation, torque_noise)
     check_selection(model, parameters)  # before anything is compiled
+    check_fit_size(rec, model, parameters, excitation)  # before the fit's arrays are made
+    torque = torque_model(rec, excitation, torque_noise)
     drift = check_drift(drift)
     if "gain" in drift and not torque.lines:  # before anything is compiled
         raise InputError(GAIN_NEEDS_LINES)
@@ -289,11 +290,12 @@ def _map_large_blocks() -> None:
         pass
 
 
-def _unsupported(result: IdentificationResult) -> dict[str, str]:
-    """:func:`~alpes_dyn.estimation.identification.bounds.unsupported` of ``result``'s parameters."""
+def _unsupported(result: IdentificationResult, held: bool = True) -> dict[str, str]:
+    """:func:`~alpes_dyn.estimation.identification.bounds.unsupported` of ``result``'s parameters (``held``: in a
+    fit again)."""
     kind = {pp.name: pp.kind for pp in parameter_catalogue(result.model)}
     return unsupported(result.names, [kind.get(n, "") for n in result.names], result.values, result.std,
-                       result.initial, result.units)
+                       result.initial, result.units, held)
 
 
 def _held_again(result: IdentificationResult) -> bool:
@@ -318,14 +320,12 @@ def _within_bounds(model: Model, recording: Recording | str | Path, result: Iden
     bad = _unsupported(result)
     if not bad:
         return result
-    if not result.trustworthy:  # not a result to keep: its parameters not identified named (never written), no refit
-        result.not_identified = bad
-        return result
     keep = [n for n in result.names if n not in bad]
-    if not keep:  # nothing the data support: not a result to write (identify's caller refuses it)
-        result.not_identified = bad
-        result.converged = False
-        result.reason += "; no fitted parameter is identified"
+    if not result.trustworthy or not keep:  # not a result to keep (never written but with --force), no refit;
+        result.not_identified = _unsupported(result, held=False)  # or nothing the data support: refused
+        if result.trustworthy:
+            result.converged = False
+            result.reason += "; no fitted parameter is identified"
         return result
     held = {n: v for n, v in zip(result.names, result.values) if n in bad and kind.get(n) == "tendon_compliance"}
     held_model = _compliance_held(model, held)

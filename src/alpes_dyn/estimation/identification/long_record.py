@@ -29,11 +29,15 @@ import dataclasses
 
 import numpy as np
 
+from ...limits import check_bytes
+from ...model.robot import Model
+from ...symbolic.parametric import select_parameters
+from ..experiments.recording import segment_starts
 from .gauss_newton import BASIN_LIMIT, SOFT_PHASES, GaussNewton
 from ..experiments.recording import Recording
 from .shooting import Evaluation, ShootingProblem, torque_model
 
-__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "window_start"]
+__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "window_start", "fit_bytes", "check_fit_size"]
 
 LONG_RECORD = 12.0
 """s: records longer than this start from a fit of their first :data:`WINDOW` seconds."""
@@ -49,6 +53,54 @@ of residual, defects 0.52 of the scale after the join's two steps, and stage 3 f
 WINDOW_RUN = 0.5
 """s: a recording of several runs: the window ends at the start of its last run where that run would have less
 than this in it (a run of a few samples holds no line of the excitation)."""
+
+
+def fit_bytes(samples: int, states: int, outputs: int, parameters: int, basis: int) -> float:
+    """Bytes of the arrays a fit holds for every sample of its record, each counted twice (the solve's copy): the
+    torque lines' basis, the Jacobian's rows (each output's sensitivity to its interval's start state, the
+    parameters and the lines' coefficients) and the states. A lower bound of the fit's peak.
+
+    Parameters
+    ----------
+    samples : int
+        The record's samples N.
+    states : int
+        The model's states (2 n).
+    outputs : int
+        The encoders (and cameras) read at each sample.
+    parameters : int
+        The parameters fitted.
+    basis : int
+        The torque lines' basis width (2 lines + 1, times the record's orientations).
+
+    Returns
+    -------
+    float
+        Bytes.
+    """
+    return 16.0 * samples * (basis + outputs * (states + parameters + basis) + states)
+
+
+def check_fit_size(rec: Recording, model: Model, parameters: object, excitation: object) -> None:
+    """:class:`~alpes_dyn.InputError` naming ``recording`` where the fit of ``rec`` would hold more than
+    :func:`~alpes_dyn.limits.max_bytes` of arrays (:func:`fit_bytes`), before any is made: the guard
+    :func:`~alpes_dyn.estimation.observers.replay.estimate_recording` has for its observer.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording to fit.
+    model : Model
+        The model fitted.
+    parameters : str or sequence of str or None
+        The selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`).
+    excitation : sequence of float or None
+        The excitation's lines, Hz.
+    """
+    N = rec.t.shape[0]
+    basis = (2 * int(np.size(excitation)) + 1) * segment_starts(rec.gravity).size if excitation is not None else 1
+    p = len(select_parameters(model, parameters))
+    check_bytes(fit_bytes(N, 2 * model.n, rec.encoder.shape[1], p, basis), "recording", f"{N} samples for the fit")
 
 
 def window(rec: Recording, seconds: float) -> Recording:
