@@ -183,11 +183,15 @@ def test_symbolic_path_equals_numeric():
 
 def test_spatial_tendon_over_several_joints_says_its_error():
     """A segment that spans two joints (s1b to s3 straight, skipping p2's sites) is not a sum of one function per
-    joint: the import says the error of its fit (MjcfCurveWarning) instead of passing it for exact."""
+    joint: the import says the error of its fit (MjcfCurveWarning) instead of passing it for exact. Its ratio on j2
+    then reaches 0 inside j2's range (the straight segment crosses j2's axis near -0.3 rad): refused, naming the
+    motor, the joint and the angle (issue 52: a moment arm of 0 inside the range is not a tendon driving the joint)."""
+    from alpes_dyn.errors import ModelError
     from alpes_dyn.model.mjcf_spatial import MjcfCurveWarning
 
     xml = SITES.replace('<site site="s2a"/><site site="s2b"/>', "")
-    with pytest.warns(MjcfCurveWarning, match="largest error .* rad/rad"):
+    with pytest.warns(MjcfCurveWarning, match="largest error .* rad/rad"), \
+            pytest.raises(ModelError, match=r"motor 'flex'\.ratio_curve\.j2: the ratio is 0 at q = -0\.29"):
         ad.Model.from_mjcf(xml)
 
 

@@ -338,21 +338,35 @@ def check_observability(system: Model | StateSpace | str, input: str | None = No
 
     Parameters
     ----------
-    system: a :class:`StateSpace`, a :class:`Model`, or an Alpes model name (``finger2``, ``finger3``,
-        ``hand``; built with :meth:`Model.alpes` and ``spring``).
-    input, output: of the :class:`StateSpace` built for a model (default ``"joint"``, ``"sum"``: the
+    system : StateSpace or Model or str
+        A :class:`StateSpace`, a :class:`Model`, or an Alpes model name (``finger2``, ``finger3``, ``hand``; built
+        with :meth:`Model.alpes` and ``spring``).
+    input, output : str or None, optional
+        The input and output of the :class:`StateSpace` built for a model (default ``"joint"``, ``"sum"``: the
         report's u = Gamma, y = sum q); not allowed with a StateSpace (it has its own).
-    spring: spring model for a model name (default ``"torsional"``).
-    points: random points for the generic rank (1 to :data:`alpes_dyn.limits.MAX_POINTS` = 10000).
-        seed: their seed (an integer >= 0).
-    constant_input: u' = u'' = ... = 0 instead of free input derivatives.
-    order: ``"auto"`` (stop at full rank or when the filtration stops growing, see the module doc),
-        ``"report"`` (y .. y^(n-1), eq. 3.8, stopping early only at full rank) or an int.
-    parts: ``"auto"`` (the subtrees from the root, :func:`tree_parts`: the Alpes hand's fingers and thumb),
-        None, or {name: joint names}.
-    max_operations: size cap of one derivative order's CasADi function (default
-        :data:`~alpes_dyn.analysis.observability_matrix.MAX_INSTRUCTIONS`); above it
-        :class:`~alpes_dyn.InputError` says so. Raise it for large trees whose outputs need high orders.
+    spring : str or None, optional
+        The spring model for a model name (default ``"torsional"``).
+    points : int, optional
+        Random points for the generic rank (1 to :data:`alpes_dyn.limits.MAX_POINTS` = 10000).
+    seed : int, optional
+        Their seed (an integer >= 0).
+    constant_input : bool, optional
+        u' = u'' = ... = 0 instead of free input derivatives.
+    order : {"auto", "report"} or int, optional
+        ``"auto"`` (stop at full rank or when the filtration stops growing, see the module doc), ``"report"``
+        (y .. y^(n-1), eq. 3.8, stopping early only at full rank) or the highest derivative order.
+    parts : "auto" or None or dict, optional
+        ``"auto"`` (the subtrees from the root, :func:`tree_parts`: the Alpes hand's fingers and thumb), None, or
+        {name: joint names}.
+    max_operations : int, optional
+        The size cap of one derivative order's CasADi function (default
+        :data:`~alpes_dyn.analysis.observability_matrix.MAX_INSTRUCTIONS`); above it :class:`~alpes_dyn.InputError`
+        says so. Raise it for large trees whose outputs need high orders.
+
+    Returns
+    -------
+    ObservabilityReport
+        The rank at each order, the unobservable directions named, the verdict.
 
     Also available as ``observability`` (the former name, kept as an alias).
     """

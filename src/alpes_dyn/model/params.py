@@ -37,10 +37,8 @@ from ..errors import ModelError
 from ..fileio import atomic_write, load_toml, read_text
 from ..limits import check_not_subnormal, check_physical
 
-__all__ = [
-    "Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
-    "params_toml", "with_values", "write_params", "chain_params", "IDENTIFICATION_FIELDS",
-]
+__all__ = ["Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
+           "params_toml", "with_values", "write_params", "chain_params", "IDENTIFICATION_FIELDS"]
 
 # field name -> (length or None for a scalar, constraint) ; constraint in {"pos", "nonneg", "any", "str", "unit"}
 _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
@@ -48,19 +46,15 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
         "L": (3, "pos"), "s": (3, "pos"), "m": (3, "pos"), "I": (3, "pos"), "r": (None, "pos"),
         "K": (3, "nonneg"), "b": (None, "nonneg"), "radius": (None, "pos"),
         "lower": (None, "any"), "upper": (None, "any"), "F_s": (3, "nonneg"), "F_v": (3, "nonneg"),
-        "encoder_offset": (None, "any"),
-    },
+        "encoder_offset": (None, "any")},
     "thumb": {
         "L": (2, "pos"), "s": (2, "pos"), "m": (2, "pos"), "I": (2, "pos"), "K": (2, "nonneg"),
         "radius": (None, "pos"), "base_mass": (None, "pos"), "abduction_K": (None, "nonneg"), "abduction_axis": (3, "unit"),
         "abduction_lower": (None, "any"), "abduction_upper": (None, "any"), "F_s": (2, "nonneg"), "F_v": (2, "nonneg"),
         "abduction_F_s": (None, "nonneg"), "abduction_F_v": (None, "nonneg"),
-        "encoder_offset": (None, "any"), "abduction_encoder_offset": (None, "any"),
-    },
-    "palm": {
-        "finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"),
-        "thumb_xyz": (3, "any"), "thumb_yaw": (None, "any"),
-    },
+        "encoder_offset": (None, "any"), "abduction_encoder_offset": (None, "any")},
+    "palm": {"finger_names": (4, "str"), "finger_x": (4, "any"), "finger_y": (4, "any"), "thumb_xyz": (3, "any"),
+             "thumb_yaw": (None, "any")},
     "transmission": {
         "r_m": (None, "pos"), "abduction_ratio": (None, "pos"), "J_m": (None, "nonneg"),
         "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
@@ -458,8 +452,13 @@ def load_params(path: str | Path | None = None) -> HandParams:
 
     Parameters
     ----------
-    path:
-        TOML file; ``None`` loads the shipped ``alpes_hand.toml``.
+    path : str or Path or None, optional
+        The TOML file; ``None`` loads the shipped ``alpes_hand.toml``.
+
+    Returns
+    -------
+    HandParams
+        The parameters, each with its unit, source and reason.
 
     Raises
     ------

@@ -90,8 +90,8 @@ THUMB_PARAMETERS = "K,m_thumb_j1,m_thumb_j2,F_s_thumb_j1,F_s_thumb_j2,F_v_thumb_
 """What ``alpes-dyn identify --model thumb`` fits by default: the flexion joints' springs, masses and friction.
 Not the ab/adduction joint's own parameters: its base's mass sits on the axis (nothing the encoders see depends on
 it: standard error 100 %), and its friction is weak (F_v 21 % standard error: the joint only creeps) and, fitted
-from 20 % off, spoils the rest on some thumbs (seed 2: 0.66 counts after 50 iterations, a mass 2.8 % off; without
-it 0.58 counts, 0.32 %). Ask for them by name (``F_s_thumb_abd``...)."""
+from 20 % off, spoils the rest on some thumbs (0.66 counts after 50 iterations, a mass 2.8 % off; without it
+0.58 counts, 0.32 %). Ask for them by name (``F_s_thumb_abd``...)."""
 
 VALIDATION_PREFIX = 0.1
 """s: the held-out recording's prefix that fixes its initial state (at least one shooting interval)."""
@@ -129,76 +129,97 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
              progress: bool | None = None, validation: Recording | str | Path | None = None,
              encoder_noise: float | None = None, start: Mapping[str, float] | IdentificationResult | None = None,
              kkt: str = "sparse", drift: str | Sequence[str] | None = None) -> IdentificationResult:
-    """Fit ``parameters`` of ``model`` (and the initial states) to a recording.
+    """Fit ``parameters`` of ``model`` (and the initial states) to a recording by multiple shooting.
 
     Parameters
     ----------
-    model: the finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``);
-        parameters not fitted keep its values.
-    recording: a :class:`~alpes_dyn.estimation.experiments.recording.Recording` or a CSV path (:func:`~alpes_dyn.estimation.experiments.recording.read_recording`).
-    parameters: selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction;
-        by name also ``J_m`` (a model with rotors), ``encoder_offset``, ``tilt`` (``tilt_y`` on a planar finger:
+    model : Model
+        The finger with the values to start from (e.g. ``Model.alpes("finger3", friction=True)``); parameters not
+        fitted keep its values.
+    recording : Recording or str or Path
+        The recording, or a CSV path (:func:`~alpes_dyn.estimation.experiments.recording.read_recording`).
+    parameters : str or sequence of str or None, optional
+        The selection (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), default K, m and friction; by
+        name also ``J_m`` (a model with rotors), ``encoder_offset``, ``tilt`` (``tilt_y`` on a planar finger:
         ``tilt_x`` is seen only through its cosine) and ``input_gain`` (with the masses held:
         :func:`check_selection`).
-    excitation: the frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().lines``):
-        the true torque is taken to lie on a constant and these sines and cosines (periodic-excitation
-        identification). The measured torque is projected on them, and the projection's error (what
-        the noise leaves on the lines) is fitted with the parameters: u = P u_meas + sigma_u Q c with Q
-        the lines' orthonormal basis and c ~ N(0, I) a priori (errors in variables, maximum likelihood).
-        None: the measured torque as it is.
-    interval: multiple-shooting interval, s (default 100 ms; where both starts miss the basin, the fit runs again
-        at half of it, :data:`RETRY_INTERVAL`: on MuJoCo's +-20 % fingers with the effects of a real hand one
-        seed of three lost its basin from both starts at 100 ms and fitted to the sensor floor at 50 ms, while
-        on a 1 s recording of the model's own structure 50 ms crawled into the 50-iteration cap where 100 ms
-        converged in 13). substeps: RK4 steps per sample (default
-        :func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth friction law at 1 kHz, 15 for the
-        stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY` on finger3).
-    torque_noise: standard deviation sigma_u of the recorded torque's white noise, N m. Default: with
-        ``excitation``, estimated from what the measured torque has off the lines; without, 0 (the torque
-        taken as exact). Without ``excitation`` a positive value gives each interval a constant torque
-        correction with prior sigma_u / sqrt(samples per interval). Why it matters: near its gravity
-        balance a finger turns 3e-5 N m of in-band torque error into 13 counts of encoder misfit.
-    camera_noise: standard deviation of the recording's joint-angle measurements, rad (weights them
-        against the encoder, whose noise is its quantisation step / sqrt(12) plus the fit's residual).
-    max_iterations, tol: Gauss-Newton stopping rule: continuous to 1e-6 and either the next step moving
-        no parameter by more than a tenth of its standard error, or a predicted or realised (whole step)
-        change of the cost below max(tol * cost, 0.05) (chi^2 by 0.1), or chi^2 down by less than 1 over
-        five iterations.
-    progress: a progress line on stderr (default: when stderr is a terminal).
-    validation: a held-out recording of the same finger (another run of the experiment): the fitted
-        model is simulated open-loop on its torque (:func:`~alpes_dyn.estimation.identification.adequacy.compare`, fit %).
-    encoder_noise: the encoder's white noise beyond its quantisation, counts, for the adequacy's sensor
-        floor (default: estimated from the recording, :func:`~alpes_dyn.estimation.identification.adequacy.white_noise_level`).
-    start: values to start the fit from, by the fit's parameter names (e.g. an earlier fit's
-        ``dict(zip(result.names, result.values))``, as :func:`~alpes_dyn.estimation.identification.effects.fit_effects` does from
-        one round to the next); the parameters not named start from the model's values. A name that is not
-        fitted here, or a value that is not finite (positive where the parameter is fitted as log theta), is an
-        :class:`~alpes_dyn.InputError`. Or an earlier :class:`IdentificationResult` of the same recording (a
-        warm start, as :func:`~alpes_dyn.estimation.identification.effects.fit_effects` does from one round to the next): its
-        values of the parameters fitted here, and, where it was cut at the same interval with the same state,
-        its trajectory: the fit's last stage from there (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve`),
-        the whole fit where that does not converge.
-    kkt: ``"sparse"`` (default): the shooting problem's normal and KKT matrices held sparse and factorised once per
-        iteration by their band-and-border structure (:func:`~alpes_dyn.estimation.identification.kkt.bordered_factorize`), time
-        and memory linear in the record; ``"superlu"``: the same matrices by the general sparse LU (SuperLU: the
-        reference of the structured one; its fill grows faster than the record: 0.5-2.6 s a factorisation at
-        60 s); ``"dense"``: as arrays (the reference; quadratic memory, cubic time).
-    drift: ``"offset"``: each encoder's offset drifts, piecewise linear in the recorded time from 0 at the first
-        sample, knots every 15 s (a shorter record: a ramp), fitted with the parameters
-        (:mod:`~alpes_dyn.estimation.identification.drift`; the result's ``drift``); ``"gain"``: each motor's torque
-        constant drifts likewise, relative to the first sample's (1 there: its absolute scale is not observable from
-        the encoder; needs ``excitation``); ``"offset,gain"`` (or a list): both; None (default): no drift, and the
+    excitation : sequence of float or None, optional
+        The frequencies (Hz) of a multisine excitation (e.g. ``ExperimentDesign().lines``): the true torque is
+        taken to lie on a constant and these sines and cosines (periodic-excitation identification). The measured
+        torque is projected on them, and the projection's error is fitted with the parameters:
+        u = P u_meas + sigma_u Q c with Q the lines' orthonormal basis and c ~ N(0, I) a priori (errors in
+        variables, maximum likelihood). None: the measured torque as it is.
+    interval : float, optional
+        The multiple-shooting interval, s (default 100 ms). Where both starts end above
+        :data:`RETRY_FLOOR_RATIO` times the sensor floor, the fit runs again once at half of it
+        (:data:`RETRY_INTERVAL`).
+    substeps : int or None, optional
+        RK4 steps per sample (default :func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth
+        friction law at 1 kHz, 15 for the stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY` on
+        finger3).
+    torque_noise : float or None, optional
+        The standard deviation sigma_u of the recorded torque's white noise, N m. Default: with ``excitation``,
+        estimated from what the measured torque has off the lines; without, 0 (the torque taken as exact). Without
+        ``excitation`` a positive value gives each interval a constant torque correction with prior
+        sigma_u / sqrt(samples per interval) (near its gravity balance a finger turns 3e-5 N m of in-band torque
+        error into 13 counts of encoder misfit).
+    camera_noise : float, optional
+        The standard deviation of the recording's joint-angle measurements, rad (weights them against the encoder,
+        whose noise is its quantisation step / sqrt(12) plus the fit's residual).
+    max_iterations : int, optional
+        The Gauss-Newton iterations at most.
+    tol : float, optional
+        The stopping rule: continuous to 1e-6 and either the next step moving no parameter by more than a tenth of
+        its standard error, or a predicted or realised change of the cost below max(tol * cost, 0.05) (chi^2 by
+        0.1), or chi^2 down by less than 1 over five iterations.
+    threads : int or None, optional
+        The threads (1 to 64) that evaluate the intervals' compiled sensitivities
+        (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`); default: the CPUs this process may use, at
+        most ``OMP_NUM_THREADS``.
+    progress : bool or None, optional
+        A progress line on stderr (default: when stderr is a terminal).
+    validation : Recording or str or Path or None, optional
+        A held-out recording of the same finger (another run of the experiment): the fitted model is simulated
+        open-loop on its torque (:func:`~alpes_dyn.estimation.identification.adequacy.compare`, fit %).
+    encoder_noise : float or None, optional
+        The encoder's white noise beyond its quantisation, counts, for the adequacy's sensor floor (default:
+        estimated from the recording, :func:`~alpes_dyn.estimation.identification.adequacy.white_noise_level`).
+    start : mapping of str to float, or IdentificationResult, or None, optional
+        Values to start the fit from, by the fit's parameter names (the others start from the model's values; a
+        name not fitted here or a value that is not finite, or not positive where the parameter is fitted as
+        log theta, is an :class:`~alpes_dyn.InputError`). Or an earlier :class:`IdentificationResult` of the same
+        recording (a warm start, as :func:`~alpes_dyn.estimation.identification.effects.fit_effects` does from one
+        round to the next): its values and, where it was cut at the same interval with the same state, its
+        trajectory (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve`).
+    kkt : {"sparse", "superlu", "dense"}, optional
+        How the normal and KKT matrices are held and factorised: ``"sparse"`` (default) by their band-and-border
+        structure (:func:`~alpes_dyn.estimation.identification.kkt.bordered_factorize`, time and memory linear in
+        the record); ``"superlu"`` by the general sparse LU (the structured one's reference); ``"dense"`` as
+        arrays (the reference; quadratic memory, cubic time).
+    drift : str or sequence of str or None, optional
+        ``"offset"``: each encoder's offset drifts, piecewise linear in the recorded time from 0 at the first
+        sample, knots every 15 s, fitted with the parameters (:mod:`~alpes_dyn.estimation.identification.drift`;
+        the result's ``drift``); ``"gain"``: each motor's torque constant drifts likewise, relative to the first
+        sample's (needs ``excitation``); ``"offset,gain"`` (or a list): both; None (default): no drift, and the
         verdict names one where the residual trends with time.
-
-    The result carries the fit's ``reason`` (why it stopped: converged, iteration cap, lost basin, step
-    failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
-    (:func:`~alpes_dyn.estimation.identification.adequacy.assess`: whiteness, independence of the torque, RMS against the
-    sensor floor, the validation).
 
     Returns
     -------
-    :class:`IdentificationResult`. Raises :class:`~alpes_dyn.errors.RecordingError` for a recording
-    that does not fit the model, :class:`~alpes_dyn.InputError` for bad settings.
+    IdentificationResult
+        The fit: its values and standard errors, ``reason`` (why it stopped: converged, iteration cap, lost basin,
+        step failure), the encoder ``residual`` (N, m) counts and its ``adequacy``
+        (:func:`~alpes_dyn.estimation.identification.adequacy.assess`: whiteness, independence of the torque, RMS
+        against the sensor floor, the validation).
+
+    Raises
+    ------
+    RecordingError
+        A recording that does not fit the model.
+    InputError
+        Bad settings, or a fit whose arrays would exceed :func:`~alpes_dyn.limits.max_bytes`
+        (:func:`~alpes_dyn.estimation.identification.long_record.check_fit_size`).
+    ModelError
+        A selection it cannot fit (:func:`check_selection`).
     """
     t_start = time.perf_counter()
     rec, rec_path, val_rec = _check_inputs(model, recording, validation, encoder_noise, interval, camera_noise, tol,
@@ -275,8 +296,7 @@ MMAP_THRESHOLD = 2**20
 allocator maps every block this large or larger on its own (``mallopt(M_MMAP_THRESHOLD)``) and gives it back to
 the system when it is freed. By default the threshold follows the largest block freed, up to 32 MiB, so a long
 fit's 8-30 MB arrays (a chunk's sensitivities, the states, the KKT system's blocks) came from the heap and stayed
-resident once freed: ``alpes-dyn identify`` on 600 s peaked at 1178 MiB, with this 1048 MiB (finger3 seed 21,
-2026-12-05, load 5)."""
+resident once freed (``benchmarks/fit_scaling.py``'s peak memory, ``benchmarks/results/fit_scaling.json``)."""
 
 
 def _map_large_blocks() -> None:
