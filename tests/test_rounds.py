@@ -103,9 +103,9 @@ def test_each_round_is_made_once_and_the_walk_follows_the_table():
 
 
 def test_one_round_played_on_a_simulated_recording():
-    """One round alone with real fits: the first fit (compliance) on 1 s of our simulator's finger2 drawn 10 % off, then the rotor
-    round (its proposal forced: the first fit is adequate) from it. The round starts from the kept fit (its
-    values and trajectory), is recorded, and is kept exactly where its residual is lower (the acceptance rule),
+    """One round alone with real fits: the first fit (compliance) on 1 s of our simulator's finger2 drawn 10 % off,
+    then the rotor round (its proposal forced: the first fit is adequate) from it. The round starts from the kept
+    fit (its values and trajectory), is recorded, and is kept exactly where its residual is lower (the acceptance rule),
     the other fit being ``tried``."""
     from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
     from alpes_dyn.estimation.identification import identification as ident_mod

@@ -59,7 +59,7 @@ off the block on some draws of finger3 +-20 %, whatever the parameter file (the 
 #: Default settings of :class:`ForceController` per controller, tuned on the block scene of finger3 by one
 #: rule for the ``sensor`` loop and the ``pi`` baseline: on the grid kp in {0.002, 0.004, 0.006, 0.008,
 #: 0.012} N m/N x ki in {0.8, 1.2, 1.6, 2.0, 2.4} N m/(N s), the lowest force RMSE on the step reference
-#: (0.2 -> 1.0 -> 0.5 N) with an overshoot below 10 % for the noise seeds 0-3 (kp = 0.012 loses the contact
+#: (0.2 -> 1.0 -> 0.5 N) with an overshoot below 10 % on four noise draws (kp = 0.012 loses the contact
 #: for both). The sensor loop's 2-DOF structure is fixed before the grid: a first-order prefilter on the
 #: reference of the feedforward and the integral, the proportional term on the raw reference; its time
 #: constant, 25 ms, is the shortest of {15, 20, 25} ms with which the loop keeps the contact on the five

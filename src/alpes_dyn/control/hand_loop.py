@@ -49,8 +49,8 @@ HAND_LEVELS: dict[str, tuple[float, float]] = {
 #: :class:`.ForceController` settings of the hand's loops over :data:`.DEFAULT_GAINS` (then the scenario's
 #: ``gains``): a slower approach (15 mN m/s; at 30 mN m/s the fingertips reach the cylinder faster and bounce on
 #: it for 0.3 s) and, for the model-based loops, a 40 ms prefilter, the shortest of {25, 30, 40, 50} ms with the
-#: fingers' overshoots near 10 % on :data:`HAND_LEVELS` (seed 0): with 25 ms (the block's) the middle finger's pad
-#: slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
+#: fingers' overshoots near 10 % on :data:`HAND_LEVELS` (one noise draw): with 25 ms (the block's) the middle
+#: finger's pad slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
 #: 40 ms 7-10.5 %, 10-90 % rise 77-97 ms.
 HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04}
 
@@ -443,8 +443,8 @@ def grasp_limits(params: Any = None, plant_params: Any = None, effects: Any = No
 
     The cylinder is frictionless: a pad holds it only while the finger's springs and the tendon keep the contact
     normal within the pad, which depends on the finger's stiffness -- a hand drawn +-20 % per spring can let go
-    below :data:`HAND_LEVELS` (the index finger of the benchmark's seed 203 at 0.3-0.4 N, the nominal hand's
-    above them). What an experimenter does on the real hand with its FlexiForce sensors: one 4.8 s run."""
+    below :data:`HAND_LEVELS` (an index finger of ``benchmarks/hand_control.py``'s draws at 0.3-0.4 N, the nominal
+    hand's above them). What an experimenter does on the real hand with its FlexiForce sensors: one 4.8 s run."""
     lv = {c: (a, GRASP_PROBE_TOP * b) for c, (a, b) in HAND_LEVELS.items()}
     sc = HandControlScenario(duration=HandControlScenario.step_time + GRASP_PROBE_RAMP_S + 0.25,
                              ramp_s=GRASP_PROBE_RAMP_S)

@@ -20,7 +20,7 @@ The plant starts at rest, motor off: the finger hanging on its springs in the pl
 series-elastic rotor where the cable is just slack (the approach takes the slack up).
 
 The controllers' side of the effects (:class:`Compensation`, on by default with ``effects``;
-:data:`NO_COMPENSATION` is the rigid design), measured by ``benchmarks/force_realism.py`` (finger3, tuning seed 1,
+:data:`NO_COMPENSATION` is the rigid design), measured by ``benchmarks/force_realism.py`` (finger3, one tuning draw,
 every effect, the sensor loop: the rigid design's 10-90 % "rise" of 1 ms is the cable's mode ringing at 250 Hz
 through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
 

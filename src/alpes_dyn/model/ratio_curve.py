@@ -30,8 +30,8 @@ import numpy as np
 
 from ..errors import InputError, ModelError
 
-__all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve", "encoder_angles", "encoder_rates", "encoder_sensitivity",
-           "ratio_zero", "check_ratio_range"]
+__all__ = ["MAX_CURVE_DEGREE", "RatioCurve", "fit_ratio_curve", "encoder_angles", "encoder_rates",
+           "encoder_sensitivity", "ratio_zero", "check_ratio_range"]
 
 MAX_CURVE_DEGREE = 16
 """The highest power of q in a ratio curve (a straight tendon segment across a joint of 1.5 rad range needs 13 for
@@ -129,7 +129,7 @@ class RatioCurve:
 
 
 def ratio_zero(curve: RatioCurve, lower: np.ndarray, upper: np.ndarray) -> tuple[int, int, float] | None:
-    """The first ratio of ``curve`` that is 0 inside its joint's range: (motor k, joint i, the lowest such q_i), or None.
+    """The first ratio of ``curve`` that is 0 inside its joint's range.
 
     Parameters
     ----------

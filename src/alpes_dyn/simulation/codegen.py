@@ -90,7 +90,7 @@ _LANES = 2
 _LARGE_SOURCE = 500_000
 """Generated C above this many characters is compiled at ``-O1`` instead of ``-O3``. Measured (2-core machine):
 the hand's EKF step (3.1 MB, quiet): ``-O3`` 150 s to compile, ``-O1`` 16 s, both 82 us per step (``-O2`` the same
-speed, ``-O0`` 433 us); an Allegro hand's sensitivities (730 kB, load 4, 2026-12-02): ``-O3`` 50 s, ``-O2`` 60 s,
+speed, ``-O0`` 433 us); an Allegro hand's sensitivities (730 kB): ``-O3`` 50 s, ``-O2`` 60 s,
 ``-O1`` 22 s, the batch run 10 % slower at ``-O1`` (507 against 461 ms). Below it (finger3's sensitivities, 56 kB,
 about a second; the fingers' and the hand's roll-outs, 46-217 kB) ``-O3`` stays."""
 

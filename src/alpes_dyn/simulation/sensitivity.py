@@ -70,7 +70,7 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
     ``p`` (np,) is a subvector of ``w`` (the parameters, input corrections). The augmented right-hand side is
     one SX function called four times by an MX step, so the generated C holds it once, not the RK4 step's
     derivative inlined: for finger3's 12 parameters the source is 56 kB instead of 1.4 MB, it compiles in ~1 s instead
-    of ~32 s at -O3 and runs ~2x faster (2-core machine, 2026-12-02; the SIMD lanes of
+    of ~32 s at -O3 and runs ~2x faster (2-core machine; the SIMD lanes of
     :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop` are not used by a step with calls).
     """
     nx = x.numel()

@@ -351,7 +351,7 @@ int {prefix}_step(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const
 _LOOPS_FROM = 5000
 """The EKF's default code is ``"sparse"`` when its covariance arithmetic takes more operations than this in the
 filter's step (the hand: 30,000; finger3: 700, where CasADi's straight-line code of the whole step took 3.7 us of
-processor time per step against the loops' 4.3, timed in turn on 2026-12-02)."""
+processor time per step against the loops' 4.3, timed in turn: ``benchmarks/observer_step.py``)."""
 
 
 def _covariance_operations(filt: ExtendedKalmanFilter) -> int:

@@ -26,7 +26,7 @@ CasADi's code of the whole step.
 Bit for bit needs the C compiler's IEEE arithmetic as written: no ``-ffast-math``, and no contraction of a
 multiply and an add into one (``-std=c99``, or ``-ffp-contract=off`` on targets with a fused multiply-add); with
 those, any optimisation level and ``-march`` give the same numbers (the hand's export at -O1, -O2, -O3 and
-``-O1 -march=native`` printed the same estimates, 2026-12-02).
+``-O1 -march=native`` printed the same estimates).
 """
 
 from __future__ import annotations

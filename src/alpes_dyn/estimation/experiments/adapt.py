@@ -3,8 +3,8 @@
 The documented experiment (:class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`, palm up) is designed on the
 nominal file and trimmed on the finger (:mod:`alpes_dyn.estimation.experiments.trim`), but no one design keeps every finger of
 the +-20 % family off its stops palm up: a soft finger's static equilibria fold (gravity outgrows its springs) and
-it rests on its 0 degree stop (finger3 seeds 8, 11, 30, 32, 48), or the excitation swings a soft joint past its 90
-degree stop (seeds 2, 3). A fit cannot explain a stop its model does not have, and ``identify`` honestly refuses
+it rests on its 0 degree stop (five finger3 draws of fifty), or the excitation swings a soft joint past its 90
+degree stop (two more). A fit cannot explain a stop its model does not have, and ``identify`` honestly refuses
 such a recording ("the fitted joints leave their range"). :func:`adapted_experiment` therefore runs the design on the
 finger and checks the whole record before anything is written: where a joint leaves its range (less
 :data:`RANGE_MARGIN`) or the trim finds the finger folding, it tries, in order, the hand hung fingers down
@@ -52,7 +52,7 @@ fingers down), the orientation fixed (the amplitudes still adapt), or ``both``: 
 the second hung fingers down, the hand turned between two runs of the excitation (each designed and trimmed in its
 orientation: :func:`~alpes_dyn.estimation.experiments.experiment.experiment`); palm up alone, then hung alone,
 where the finger leaves its range in one of them. Why ``both``: one orientation leaves the split of the masses
-m_1 / m_2 to the friction and the cable's model error (MuJoCo's all-effects finger3, seeds 560 and 576 of
+m_1 / m_2 to the friction and the cable's model error (MuJoCo's all-effects finger3, two draws of
 ``benchmarks/realism.py``: m_1 -5.1 / -7.6 %, m_2 +6.5 / +8.1 % palm up, adequate, the fit's own standard error 1.4
 %); gravity across the finger, then along it, pins it (the same draws, 2 + 2 s: masses within 2.9 and 1.3 %, the
 EKF palm up within 0.21 degree)."""

@@ -9,7 +9,7 @@ parameter's standard error goes as 1 / excursion.
 
 Measured (the 2-joint finger of ``tests/test_urdf_identify.py``, whose DIP mimics its PIP, the documented 2 s
 experiment, springs 10 % off the spec's, the encoder's counts per revolution lowered to shrink its excursion; the
-default selection K, m, friction; 2026-12-03):
+default selection K, m, friction):
 
 =====================  =========  =========================  =======================
 excursion (counts)     converged  springs' error (mcp, pip)  standard error of K_mcp

@@ -390,8 +390,8 @@ def model_experiment_torque(nominal: Model, truth: Model | None = None, design: 
 
     Replay this, not the recording's measured torque: the measured one carries the torque sensor's noise
     (``design.torque_noise``), which a plant driven by it feels. On a springless finger that noise walks the joints
-    (1.9 degrees over 16 s on the Shadow hand's first finger, seed 1), a motion no model driven by the excitation
-    explains: the fit's masses came 4-20 % off on MuJoCo, against 1.1 % replaying this torque (2026-12-05).
+    (1.9 degrees over 16 s on the Shadow hand's first finger), a motion no model driven by the excitation
+    explains: the fit's masses came 4-20 % off on MuJoCo, against 1.1 % replaying this torque.
 
     Returns
     -------

@@ -60,22 +60,22 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     for a designed experiment), so that every joint keeps sliding through its friction; 0 without friction.
 
     Why a dither: on a plant with stick-slip friction (MuJoCo's finger3, ``benchmarks/realism.py``) the multisine
-    alone leaves q_3 stuck half the time (|qd_3| < 0.01 rad/s on 53 % of the samples, seed 12), where no
+    alone leaves q_3 stuck half the time (|qd_3| < 0.01 rad/s on 53 % of the samples), where no
     memoryless friction law matches it: the fit's springs came out 1-2 % off and the EKF on its file 1.2 degrees
     off on q_3. A 20 Hz dither of 12 breakaway torques (3e-3 N m on finger3's motor, about 5 % of its mean torque)
-    brings the stuck time to about 1 % on every joint. Measured on the all-effects plants of seeds 13 and 14 (4 s,
+    brings the stuck time to about 1 % on every joint. Measured on two all-effects plants (4 s,
     ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
     the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
     10 Hz dither left q_3 stuck on 23-39 % of the samples. 20, with the multisine at 0.5 of its amplitude ceiling
-    instead of 0.6 (``amplitude_fraction``, so that the finger's range holds the larger swing): on the all-effects
-    plants of seeds 31 and 42, where 12 had left the masses 7.1 and 5.8 % off (the stick-slip round trading the
-    masses against the tilt and the friction), 2.1 and 2.4 %, and 0.7 and 1.0 % on seeds 46 and 47, not tuned on
-    (2026-12-03, ``benchmarks/realism.py``); with the dither at 20 and the multisine still at 0.6, seed 31's q_3 swung
-    21 degrees peak to peak instead of 14.
+    instead of 0.6 (``amplitude_fraction``, so that the finger's range holds the larger swing): on two all-effects
+    plants where 12 had left the masses 7.1 and 5.8 % off (the stick-slip round trading the masses against the tilt
+    and the friction), 2.1 and 2.4 %, and 0.7 and 1.0 % on two more, not tuned on (``benchmarks/realism.py``,
+    ``benchmarks/results/realism.json``); with the dither at 20 and the multisine still at 0.6, the first one's q_3
+    swung 21 degrees peak to peak instead of 14.
 
     Not on a motor of springless joints (the thumb's ab/adduction; 0 there): nothing but their dry friction holds
     them where the design places them, and a dither that keeps them sliding lets any torque the design did not
-    balance carry them away. Measured on MuJoCo's thumb of hand seed 5 (``benchmarks/realism.py --chains thumb``,
+    balance carry them away. Measured on a MuJoCo thumb of the hand (``benchmarks/realism.py --chains thumb``,
     4 s): with the dither, a palm 3 degrees off (a gravity torque of 1e-4 N m at mid-range, 3.5e-4 at 0, below the
     joint's breakaway torque of 4.5e-4) carried the ab/adduction from 45 degrees onto its 0 degree stop, and the
     fit with every effect of a real hand ended at 12.3 counts, not converged, springs 12 % off; even on the plant

@@ -5,12 +5,12 @@ slow loop on the encoder settles to on the real finger (:func:`_trimmed_bias`).
 Why the trim is more than the nominal's encoder reading: palm up, the Alpes finger at mid-range is close to a fold of
 its static equilibria (gravity's torque nearly outgrows its springs: the nominal finger3's compliance there,
 d(S q)/d tau, is 1036 rad of encoder reading per N m, 6.2 times its compliance unloaded), so a finger within +-20 %
-per link of the nominal values (finger3, seeds 1-30 of ``perturbed_params(spread=0.2)``) is 0.51 to 6.4 times as
-compliant at the nominal's reading, or has no rest there at all (seeds 11 and 30: it folds below it). The nominal
+per link of the nominal values (finger3, thirty draws of ``perturbed_params(spread=0.2)``) is 0.51 to 6.4 times as
+compliant at the nominal's reading, or has no rest there at all (two of them fold below it). The nominal
 design's room (its multisine at 0.5 of the amplitude that keeps a nominal run in range) covers about a factor of 2:
 on the softer fingers the multisine and the dither together (each alone stayed inside) swung q_1 past its 90 degree
-stop (seeds 2 and 3: to 95 and 99 degrees), and the folding ones, held below their fold, rested q_1 on its 0 degree
-stop (seeds 8, 11, 30: 13-21 degrees past it). No one bias serves the whole +-20 % box palm up: over its 64 corners
+stop (to 95 and 99 degrees), and the folding ones, held below their fold, rested q_1 on its 0 degree
+stop (13-21 degrees past it). No one bias serves the whole +-20 % box palm up: over its 64 corners
 (K_i, m_i each 0.8 or 1.2 times nominal) the encoder readings at which a corner rests with every joint 0.05 rad
 inside its range do not overlap (one corner needs q_1 + q_2 + q_3 of at least 110 degrees, another at most 91).
 The trim therefore measures the finger it holds: where it is more compliant than the nominal finger at its design
@@ -121,10 +121,10 @@ def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: f
 
 MATCH_COMPLIANCE = False
 """Whether :func:`_trimmed_bias` holds a finger more compliant than the nominal lower, its excitation shrunk (the
-module docstring). Off by default (2026-12-03): it keeps every drawn finger in its range, but the fits of the fingers
-it holds lower lose precision (benchmarks/identification.py seeds 2 and 3: masses 4.2 % off instead of 0.49 %;
-MuJoCo's all-effects seed 40: masses 12.4 % instead of 2.1 %; six tests then fail, among them the fit on drawn seed
-2, masses 6.3 % off against a 5 % bound, and the noise-free recoveries on drawn fingers), a trade-off to weigh.
+module docstring). Off by default: it keeps every drawn finger in its range, but the fits of the fingers
+it holds lower lose precision (two draws of ``benchmarks/identification.py``: masses 4.2 % off instead of 0.49 %;
+one of MuJoCo's all-effects plants: masses 12.4 % instead of 2.1 %; six tests then fail, among them a fit on a drawn
+finger, masses 6.3 % off against a 5 % bound, and the noise-free recoveries on drawn fingers), a trade-off to weigh.
 ``trim.MATCH_COMPLIANCE = True`` turns it on."""
 
 
@@ -139,8 +139,8 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     nominal design places them (mid-range) on ``truth`` under ``gravity``: what the same loop settles to on
     that motor's encoder. Their bias from the nominal model, which balances the gravity the design names,
     leaves an unknown tilt's torque unbalanced: with the palm 3 degrees off, the thumb's ab/adduction
-    (no spring) drifted from mid-range onto its 0 degree stop within the 4 s experiment (MuJoCo plant, hand
-    seeds 5 and 6), which no fit without the stop explains (12 counts of residual, springs 12 % off).
+    (no spring) drifted from mid-range onto its 0 degree stop within the 4 s experiment (two MuJoCo plants of
+    the hand), which no fit without the stop explains (12 counts of residual, springs 12 % off).
 
     A finger more compliant there than the nominal one at its design point (:func:`_compliance`, the encoder's
     slope against the bias, which the same loop reads by stepping the bias) is held lower, where the compliances
@@ -219,11 +219,11 @@ def _room_below(nominal: Model, k: int, bias: np.ndarray, reading: float, gravit
     keeps at that reading, against its rest at the design point ``q_design`` (n,). The nominal model, not the
     finger, gives the joints' split (the encoder reads their sum only); measured on finger3's draws 1-30: with the
     multisine unshrunk, the matched rest left q_1 at 14-18 degrees and the excitation swung it to -0.8 to -5.5
-    degrees on seeds 2, 11, 22 and 30 (the nominal finger's q_1 swings 18 degrees below its rest); the multisine
+    degrees on four draws (the nominal finger's q_1 swings 18 degrees below its rest); the multisine
     alone shrunk (0.41-0.68 there), q_1 stayed 3.1 degrees or more above it on every draw, but finger2's distal
-    joint, which the 20 Hz dither swings as far as the multisine, dipped 2.1 and 0.9 degrees below its stop (seeds 3
-    and 8; 2.2 degrees or more inside with the nominal's reading); both shrunk, finger3's q_1 stays 3.5 degrees or
-    more inside (4 s, 2026-12-03)."""
+    joint, which the 20 Hz dither swings as far as the multisine, dipped 2.1 and 0.9 degrees below its stop (two draws;
+    2.2 degrees or more inside with the nominal's reading); both shrunk, finger3's q_1 stays 3.5 degrees or
+    more inside (4 s)."""
     S = nominal.transmission.S[k]
     upper = max(4.0 * float(bias[k]), _torque_ceiling(nominal, k))
     tau = _rest_torque(nominal, lambda q: float(_reading(nominal, q, k)), reading, gravity, upper,

@@ -59,9 +59,9 @@ class EncoderOutput:
         (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.torque_at`) less what accelerates the rotor, J_m S qdd (:meth:`motor_acceleration`; xs (s, L+1, nx)
         the states), where the model has a rotor and a compliance (else u_k itself). Why: the cable is stretched by
         its tension, r_m T = tau_m - J_m qdd_m, not by the motor's torque. Measured on MuJoCo's elastic tendon with
-        its rotor (``benchmarks/realism.py``'s cable; the encoder corrected by the plant's own J_m qdd_m, 2026-12-05):
-        4.1 counts RMS on finger2, 0.8 on finger3; finger2 of seed 204, all effects, went from masses 2.2 % and the
-        EKF 1.09 degree off to 0.7 % and 0.24 degree; finger3 of seed 510, the cable alone, F_s_3 from 7.5 to 0.3 %."""
+        its rotor (``benchmarks/realism.py``'s cable; the encoder corrected by the plant's own J_m qdd_m):
+        4.1 counts RMS on finger2, 0.8 on finger3; a finger2 with all effects went from masses 2.2 % and the
+        EKF 1.09 degree off to 0.7 % and 0.24 degree; a finger3 with the cable alone, F_s_3 from 7.5 to 0.3 %."""
         if self.rotor is None or u_k is None:
             return u_k
         return u_k - self.rotor * self.motor_acceleration(xs[..., self.n: 2 * self.n])

@@ -43,21 +43,21 @@ COEF_STEP_RECORD = 4000
 MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1)) prior standard deviations over N samples: one standard deviation up
 to a 4 s record at 1 kHz, growing as sqrt(N) beyond (a torque error of a given size is sqrt(N) times more standard
 deviations of a coefficient in a longer record). One standard deviation whatever the record left long fits
-crawling (finger3 seed 21: 16 s, 37 iterations; 60 s, 78), the coefficients asking for tens of them per step. A cap
-of 0.1 sigma_u per line (4.5 standard deviations at 4 s) sent the MuJoCo plants of seed 14 in
+crawling (finger3: 16 s, 37 iterations; 60 s, 78), the coefficients asking for tens of them per step. A cap
+of 0.1 sigma_u per line (4.5 standard deviations at 4 s) sent one MuJoCo plant's fits in
 ``benchmarks/realism.py`` to other basins (masses 8-22 % off, four fits of eight not converged)."""
 MAX_COEF_GROWTH = 16.0
 """The most the constrained stage (stage 3) widens the line corrections' trust region (:data:`COEF_STEP_RECORD`'s
 rule), doubling it at each step they alone cut and that is taken whole, from the :data:`CRAWL_STEPS`-th such step
 in a row (:meth:`GaussNewton.next_radius`). On MuJoCo's all-effects finger3 plants with
 the documented experiment (dither of 20 breakaway torques) the coefficients asked for 20-57 standard deviations per
-step and the fit crawled one per step: 40-48 iterations of stage 3 in each of two rounds (seeds 31, 40)."""
+step and the fit crawled one per step: 40-48 iterations of stage 3 in each of two rounds (``benchmarks/realism.py``)."""
 CRAWL_STEPS = 3
 """Steps in a row cut by the line corrections' trust region, each taken whole, before it grows (:meth:`GaussNewton.next_radius`)."""
 SOC_STEPS = 4
 """Second-order corrections at most, one after another, of a stage-3 step whose whole length the merit refuses
 (:meth:`GaussNewton.line_search`), each while the defects fall by half or more. On MuJoCo's finger3 plant with the
-palm 3 degrees off (seed 14) a Gauss-Newton step along the tilt-mass valley lowered the cost by 100 and raised the
+palm 3 degrees off a Gauss-Newton step along the tilt-mass valley lowered the cost by 100 and raised the
 defects quadratically (to 0.5 from 1e-4); one correction left 4e-2, the merit (penalty 1.3e6) refused every length
 down to 1/30, and the fit crawled at the damped steps' 10-20 per iteration into the iteration cap (masses 9.9 % off).
 Two to three corrections bring the defects to 1e-3-1e-5 with the cost's fall intact: converged in 13 iterations,
@@ -65,13 +65,13 @@ masses within 0.9 %."""
 SOFT_PHASES = 4
 """Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
 JOIN_STEPS = 2
-"""Gauss-Newton steps at most of :meth:`GaussNewton.join_nodes`: on 60 s of finger3 (seed 21) from the model's
+"""Gauss-Newton steps at most of :meth:`GaussNewton.join_nodes`: on 60 s of finger3 from the model's
 response at the window's parameters, the defects fell to 0.26 and 0.007 of the nodes' scale in two steps, and stage 3
 converged in as many iterations from there as after four steps (defects 9e-5) or after the homotopy."""
 WINDOW_ITERATIONS = 15
 """Stage 3's iterations at most from a long record's window start (:mod:`~alpes_dyn.estimation.identification.long_record`;
-then the whole fit of the whole record): the fingers' took 4-6 (finger3 seed 21 at 16, 60 and 600 s, the hand's four
-fingers at 60 s), while the hand's thumb at 60 s (seed 21) crawled from it into the 50-iteration cap at 34.8 counts
+then the whole fit of the whole record): the fingers' took 4-6 (finger3 at 16, 60 and 600 s, the hand's four
+fingers at 60 s), while the hand's thumb at 60 s crawled from it into the 50-iteration cap at 34.8 counts
 (100 s of a 271 s fit) before the whole fit converged in 8."""
 BASIN_LIMIT = 3.0 / math.sqrt(12.0)
 """counts: an encoder residual above three times the quantisation floor (1/sqrt(12) count) asks for the second
@@ -199,7 +199,7 @@ class GaussNewton:
         the streak grows, and from :data:`CRAWL_STEPS` such steps in a row the region doubles (up to
         :data:`MAX_COEF_GROWTH`: a crawl down a valley the linearisation sees right); at any other step, one and
         no streak (the textbook rule, Nocedal and Wright ch. 4, on this one block, started late: doubling from
-        the first such step sent the model's own structure of seed 14 on a path that met no stopping rule in 50
+        the first such step sent a fit of the model's own structure on a path that met no stopping rule in 50
         iterations, where it converged in 16 at one standard deviation)."""
         p = pb.p
         dg = d[pb.nv:pb.nz]
@@ -435,7 +435,7 @@ class GaussNewton:
         variables of another fit of the recording (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.warm_variables`):
         stage 3 from them first, kept where it converges within :data:`BASIN_LIMIT`, else stages 1-3 as above (the
         homotopy brings a start from the model's own response near the data; a converged fit of a neighbouring
-        model already is: on MuJoCo's all-effects finger3 plants, seeds 40-41, the rounds with the rotor and the
+        model already is: on MuJoCo's all-effects finger3 plants the rounds with the rotor and the
         stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
         ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
         Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:

@@ -3,7 +3,7 @@
 The globalisation of the shooting fit (:class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`: stage 1, each
 interval's start state alone; stage 2, the homotopy, four phases of Levenberg-Marquardt; two starts) costs some
 twenty to thirty evaluations of the whole record with its sensitivities, each linear in its length: on a 60 s record
-of finger3 the compiled sensitivities were 48 s of a 60 s fit (2026-12-05, load 6-7 on 2 cores), the linear algebra
+of finger3 the compiled sensitivities were 48 s of a 60 s fit (``benchmarks/fit_scaling.py``), the linear algebra
 under 1 s. Its only purpose is to find the basin, and a few seconds of the record find it as well: a 4 s finger3
 record fits K within 0.1 % and m within 0.5 % (``benchmarks/fit_scaling.py``). So a record longer than
 :data:`LONG_RECORD` is fitted in two steps: the whole fit (stages 1-3, both starts) on its first :data:`WINDOW`
@@ -12,10 +12,10 @@ the encoder, :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProble
 the start states alone (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`: their
 sensitivities alone, a third of the whole's) and stage 3 from there. Stage 3 needs a continuous start: from stage 1's
 nodes (each interval fitted alone, defects of its noise) it crawled into the 50-iteration cap on 16 s and 60 s of
-finger3 (seed 21) with a 4 s or a 12 s window (the line search held to short steps by the defects). From the joined
+finger3 with a 4 s or a 12 s window (the line search held to short steps by the defects). From the joined
 nodes, though their residual is some 12 counts (the window's parameters, and the torque's line corrections at 0,
 over a minute), it converges in 5 iterations on 60 s, as it did after the homotopy's last phase (five evaluations of
-the whole record with all its sensitivities, and stage 1's four sweeps, which the join replaces: 2026-12-05, the
+the whole record with all its sensitivities, and stage 1's four sweeps, which the join replaces: the
 whole 60 s fit 22 s of CPU against 27). Where the join leaves the start discontinuous (:data:`JOIN_LIMIT`: a joint
 without spring, whose response from rest drifts over minutes, the thumb's ab/adduction), stage 1's nodes and the
 homotopy's last phase start stage 3 instead, as before the join. Where stage 3 does not converge within the basin limit,
@@ -46,7 +46,7 @@ WINDOW = 4.0
 JOIN_LIMIT = 0.1
 """The joined start is kept where its defects are at most this fraction of the nodes' scale (per state component);
 else stage 1's nodes and the homotopy's last phase start stage 3. The model's response from rest under the window's
-parameters drifts where a joint has no spring (the thumb's ab/adduction: the hand's 60 s record, seed 21, 96 counts
+parameters drifts where a joint has no spring (the thumb's ab/adduction: the hand's 60 s record, 96 counts
 of residual, defects 0.52 of the scale after the join's two steps, and stage 3 from there crawled into its cap of
 :data:`~alpes_dyn.estimation.identification.gauss_newton.WINDOW_ITERATIONS`); a finger's, on springs, joins to 0.01
 (the same record's index finger)."""

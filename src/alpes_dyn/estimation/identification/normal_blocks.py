@@ -3,7 +3,8 @@
 The shooting fit's residual Jacobian J (S, R, nb + ng) (:class:`~alpes_dyn.estimation.identification.shooting.Evaluation`)
 is the largest array of a fit: for the hand's thumb on a 600 s record (12 000 intervals of 50 ms, two encoders,
 56 columns) 548 MB, above the 450-550 MB the record and its problem already hold, and the fit peaked at 1.48 GB
-(2026-12-05). Gauss-Newton needs only J's normal blocks -- each interval's A'A (nb, nb) and A'P (nb, ng), the sum of
+(``benchmarks/fit_scaling.py``). Gauss-Newton needs only J's normal blocks -- each interval's A'A (nb, nb) and
+A'P (nb, ng), the sum of
 the P'P (ng, ng), with A the interval's local columns and P the global ones -- and each interval's J'r (nb + ng):
 accumulated chunk by chunk while the sensitivities are computed (:meth:`NormalBlocks.add`), by the einsums of
 :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`, they are the same numbers as from the whole J (the sum

@@ -54,9 +54,9 @@ the sensor floor or the prediction's ``prediction_ratio`` times it; on the recor
 at rest at its start, as the filter's prior: the stick-slip law's EKF runs at about 1.3 ms per sample, 18 RK4 steps
 each, in CasADi's virtual machine; a compiled one took minutes of gcc). Why 25 for the prediction: the true file
 itself, on our own simulator's recording of the experiment (the model's exact structure), predicts finger2 20 ms
-ahead within 12.1-16.0 times the floor (seeds 1, 3, 5; the nominal file 310-385 times), finger3 on MuJoCo's stick-slip
-plant within 12.5 (seed 302; the nominal 140); at 15 the default path refused finger2 seeds 3 and 5, whose fits were
-within 0.13 % of the truth (2026-12-04). Fits missing the torque delay measured 28-43 times (seeds 405-409)."""
+ahead within 12.1-16.0 times the floor (three draws; the nominal file 310-385 times), finger3 on MuJoCo's stick-slip
+plant within 12.5 (the nominal 140); at 15 the default path refused two finger2 draws whose fits were within
+0.13 % of the truth. Fits missing the torque delay measured 28-43 times (``benchmarks/realism.py``)."""
 
 
 @dataclass
@@ -191,7 +191,7 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
 def mildly_coloured(adequacy: Any) -> bool:
     """True when a verdict's only reason is a residual coloured by the Ljung-Box test alone: every lag within
     ``max_acf_bands`` of the 99 % band (:data:`~alpes_dyn.estimation.identification.adequacy.THRESHOLDS`), the RMS at
-    the floor, no correlation with the torque (MuJoCo's finger3 with all the effects at once, seed 402: lags up to 0.05
+    the floor, no correlation with the torque (MuJoCo's finger3 with all the effects at once, one draw: lags up to 0.05
     against a band of 0.041, p = 1.2e-7, residual 1.0x the floor; K 0.7 %, m 0.5 %, the EKF 0.42 degree)."""
     from .adequacy import THRESHOLDS
 

@@ -72,7 +72,8 @@ def torque_explained(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
                       offs: np.ndarray, valid: np.ndarray, S: np.ndarray, step: float, sigma: float, L: int) -> float:
     """RMS encoder difference (counts) the recorded torque's white noise ``sigma`` (N m) makes through the
     fitted model, each interval from its fitted node, the noise's per-interval mean removed (the fit's
-    per-interval corrections take it): a Monte Carlo of two draws (seed 0), states only."""
+    per-interval corrections take it): a Monte Carlo of two draws (a fixed generator: the same number each call),
+    states only."""
     rng = np.random.default_rng(0)
     R = 2
     w = sigma * rng.standard_normal((R,) + Ub.shape)

@@ -1,26 +1,27 @@
 """The rounds of ``alpes-dyn identify --effects auto`` as data: which effects each round adds to the fit kept, from
-which start, and the rule that keeps its fit (issue 52). :func:`~alpes_dyn.estimation.identification.effects.fit_effects`
-walks :data:`ROUNDS`; each row is one round, testable alone (:meth:`Round.proposal`, :meth:`Round.accepts`).
+which start, and the rule that keeps its fit (issue 52).
+:func:`~alpes_dyn.estimation.identification.effects.fit_effects` walks :data:`ROUNDS`; each row is one round,
+testable alone (:meth:`Round.proposal`, :meth:`Round.accepts`).
 
-=================== ========= ====================================================== ==================== =================
-round               stage     made when (adds)                                       starts from          kept when
-=================== ========= ====================================================== ==================== =================
-``first``           first     always (the effects asked for)                         the model's values   always
-``staged``          first     the first fit lost its basin with an effect beyond     the rigid fit, then  each stage
-                              stiction and the rotor (the rigid fit, then those      each stage from the  converged
-                              effects one by one)                                    last
-``asked``           auto      the kept fit's verdict names effects not yet tried     the kept fit         lower residual
-                              (:func:`named_effects`), or it sees the cable
-                              stretching (the rotor); the tendon-sheath friction
-                              alone
-``stiction``        auto      the kept fit is flagged and asks for nothing           the kept fit         lower residual
-``rotor``           auto      likewise, the stick-slip law tried                     the kept fit         lower residual
-``delay``           auto      likewise, the rotor tried                              the kept fit         lower residual
-``offset``          auto      likewise, the delay tried, its verdict naming no       the kept fit         lower residual
-                              nonlinearity
-``rigid cable``     cable     the kept fit's compliance is below minus three         the kept fit         converged
-                              standard errors (removes the compliance)
-=================== ========= ====================================================== ==================== =================
+=============== ====== =========================================================== ============== ===============
+round           stage  made when (adds)                                            starts from    kept when
+=============== ====== =========================================================== ============== ===============
+``first``       first  always (the effects asked for)                              the model's    always
+                                                                                   values
+``staged``      first  the first fit lost its basin with an effect beyond          the rigid fit, each stage
+                       stiction and the rotor (the rigid fit, then those effects   then the last  converged
+                       one by one)                                                 stage
+``asked``       auto   the kept fit's verdict names effects not yet tried          the kept fit   lower residual
+                       (:func:`named_effects`), or it sees the cable stretching
+                       (the rotor); the tendon-sheath friction alone
+``stiction``    auto   the kept fit is flagged and asks for nothing                the kept fit   lower residual
+``rotor``       auto   likewise, the stick-slip law tried                          the kept fit   lower residual
+``delay``       auto   likewise, the rotor tried                                   the kept fit   lower residual
+``offset``      auto   likewise, the delay tried, its verdict naming no            the kept fit   lower residual
+                       nonlinearity
+``rigid cable`` cable  the kept fit's compliance is below minus three standard     the kept fit   converged
+                       errors (removes the compliance)
+=============== ====== =========================================================== ============== ===============
 
 The ``auto`` stage is walked again while the kept fit's check by the observer it feeds fails
 (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, which marks the fit flagged); each effect is tried

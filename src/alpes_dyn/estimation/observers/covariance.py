@@ -20,7 +20,7 @@ They are built as CasADi matrix operations (``mtimes``, ``mac``, column and oute
 these orders: CasADi's sparse product accumulates z[i, j] += x[i, k] y[k, j] over the nonzeros k of y's column j,
 ascending, from z's entry (a structural zero, or R's in ``mac``) -- the same operations, the same numbers as the
 scalar loops written out entry by entry before (the hand's 30 states: 4.9 s of Python to build the step's
-covariance arithmetic entry by entry, 0.4 s as matrices, both on the loaded 2-core machine, 2026-12-03; the whole
+covariance arithmetic entry by entry, 0.4 s as matrices, on a 2-core machine; the whole
 build: ``benchmarks/observer_build.py``). The products by a constant that CasADi
 folds are found on the matrices' entries (:func:`_count_folds`), not by a Python call per product.
 """

@@ -6,7 +6,7 @@ What is simulated (``alpes-dyn estimate``, :func:`run_estimation`), all seeded b
   report's working model, eq. 2.11) -- integrated with RK4 at dt / 4 (0.25 ms);
 * the motor torque (N m, per motor): a bias of 0.0222 N m that holds the finger half-flexed plus
   sines of 1.5, 0.5 and 0.2 mN m at 0.2, 0.7 and 3.1 Hz, so that the finger sweeps its range
-  (q_1 between about -15 and 95 degrees with seed 0: nothing damps the finger, the report's model
+  (q_1 between about -15 and 95 degrees: nothing damps the finger, the report's model
   has no friction, and no joint stop is modelled);
 * the true finger starts at rest (qd = 0) near its static equilibrium under the initial torque
   (q_1..q_3 about 0.3, 0.8, 0.7 rad), each joint offset by a seeded draw uniform in +-0.1 rad, while

@@ -1,0 +1,51 @@
+"""No lab notes in ``src/`` (issue 52): no line of the library cites a date, a machine load or a seed number. A
+docstring says what a thing is; the measurements that justify a choice belong in the benchmarks' records
+(``benchmarks/results/*.json``), cited by name."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+SRC = Path(__file__).resolve().parents[1] / "src" / "alpes_dyn"
+
+NOTE = re.compile(
+    r"\b20\d\d-\d\d-\d\d\b"  # a date
+    r"|\bloads? (?:of |about |near |around |~)?\d"  # a machine load ("load 1.8-2.6", "load about 1.5")
+    r"|(?<!-)\bseeds? \d")  # a seed number ("seed 13", "seeds 40-43"); not a command line's --seed 1
+"""What a lab note looks like."""
+
+# The modules whose notes are still to be moved to the benchmarks' records, with how many lines: the count only
+# falls (test_the_allow_list_only_shrinks), no module joins.
+NOT_YET: dict[str, int] = {}
+
+
+def notes() -> dict[str, list[tuple[int, str]]]:
+    """Module path (relative to src/alpes_dyn) -> its lines (number, text) that look like a lab note."""
+    out: dict[str, list[tuple[int, str]]] = {}
+    for path in sorted(SRC.rglob("*.py")):
+        for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1):
+            if NOTE.search(line):
+                out.setdefault(str(path.relative_to(SRC)), []).append((i, line.strip()))
+    return out
+
+
+def test_no_dates_loads_or_seed_numbers_in_src():
+    found = notes()
+    over = {m: lines for m, lines in found.items() if len(lines) > NOT_YET.get(m, 0)}
+    assert not over, "lab notes in src/: " + "; ".join(f"{m}:{i}: {t[:80]}" for m, ls in over.items() for i, t in ls)
+
+
+def test_the_allow_list_only_shrinks():
+    found = notes()
+    stale = {m: n for m, n in NOT_YET.items() if len(found.get(m, ())) < n}
+    assert not stale, f"fewer notes than allowed: lower NOT_YET to {({m: len(found.get(m, ())) for m in stale})}"
+
+
+def test_the_pattern_finds_each_kind():
+    """The three kinds are found, in the forms the library used; a command line's ``--seed 1`` is not a note."""
+    for text in ("(finger3 seed 21, 2026-12-05, load 5)", "seeds 40-43", "load about 1.5", "2026-12-03",
+                 "load 1.8-2.6"):
+        assert NOTE.search(text), text
+    for text in ("alpes-dyn sweep --seed 1 -o x.csv", "the loads of the joints", "a seed >= 0"):
+        assert not NOTE.search(text), text
