@@ -6,7 +6,8 @@ eq. 3.13) against the recorded one. The fit (:mod:`.identification`, ``alpes-dyn
 makes (:mod:`.fit_result`, :mod:`.identified_spec` for any robot's spec), the adequacy verdict -- does the model
 explain the record or only fit it (:mod:`.adequacy`, :mod:`.harmonics`), judged again by the observer the file feeds
 (:mod:`.observer_check`) -- and the fit extended with the real hand's effects (:mod:`.effects`, rotor inertia J_m
-of eq. 2.8, stick-slip, the tendon's compliance, the tilt). Uses the experiments' recordings and the observers.
+of eq. 2.8, stick-slip, the tendon's compliance, the tilt; ``--effects auto``'s rounds a table, :mod:`.rounds`).
+Uses the experiments' recordings and the observers.
 
 Before the split this path was the module now at ``alpes_dyn.estimation.identification.identification``: a name of that
 module taken from here still works, with a DeprecationWarning naming its new path, for one release (import it from the
