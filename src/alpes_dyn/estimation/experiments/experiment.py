@@ -307,25 +307,34 @@ def experiment(model: str, true_params: HandParams | str | Path | None = None,
 
     Parameters
     ----------
-    model: ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors
-        are excited at once, each with the multisine (phases shifted between them): the flexion tendon
-        about a bias that holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about
-        the torque that balances gravity there (trimmed on the hand too), its joint starting mid-range, its
-        amplitude the largest that keeps the nominal thumb in range (x ``amplitude_fraction``), without dither.
-    true_params: the true parameters (a :class:`~alpes_dyn.model.params.HandParams` or a file).
-    design: the :class:`ExperimentDesign` (default: the documented one).
-    seed: seed of the sensor noise. path: write the recording there as CSV too.
-    nominal_params: the parameters the experimenter knows, from which the excitation is designed
-        (default: the shipped file).
-    chain: for a finger model, the hand's finger it is (its own ``[finger.<name>]`` values, in the true
-        and the nominal file; see :meth:`Model.alpes <alpes_dyn.Model.alpes>`).
-    rotor_inertia: the true finger (and the nominal one the excitation is designed on) with each file's
-        rotor inertia J_m on its tendon (eq. 2.8; default off, the rigid finger of the documented experiment).
+    model : str
+        ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`). On the thumb both motors are
+        excited at once, each with the multisine (phases shifted between them): the flexion tendon about a bias that
+        holds the flexion joints mid-range (trimmed on the hand), the ab/adduction about the torque that balances
+        gravity there (trimmed on the hand too), its joint starting mid-range, its amplitude the largest that keeps
+        the nominal thumb in range (x ``amplitude_fraction``), without dither.
+    true_params : HandParams or str or Path or None, optional
+        The true parameters, or their file (default: the shipped one).
+    design : ExperimentDesign or None, optional
+        The design (default: the documented one).
+    seed : int, optional
+        The sensor noise's seed (0 to :data:`~alpes_dyn.limits.MAX_SEED`).
+    path : str or Path or None, optional
+        Where to write the recording as CSV too.
+    nominal_params : HandParams or str or Path or None, optional
+        The parameters the experimenter knows, from which the excitation is designed (default: the shipped file).
+    chain : str or None, optional
+        For a finger model, the hand's finger it is (its own ``[finger.<name>]`` values, in the true and the
+        nominal file; see :meth:`Model.alpes <alpes_dyn.Model.alpes>`).
+    rotor_inertia : bool, optional
+        The true finger (and the nominal one the excitation is designed on) with each file's rotor inertia J_m on
+        its tendon (eq. 2.8; default off, the rigid finger of the documented experiment).
 
     Returns
     -------
-    :class:`~alpes_dyn.estimation.experiments.recording.Recording` with encoder counts, measured torque, the camera's
-    joint angles (if any), gravity (when not the model's constant) and the true joint angles.
+    Recording
+        Encoder counts, measured torque, the camera's joint angles (if any), gravity (when not the model's
+        constant) and the true joint angles.
     """
     if model not in EXPERIMENT_MODELS:
         raise InputError(f"model: the identification experiment is defined for one chain "

@@ -320,44 +320,61 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
 
     Parameters
     ----------
-    recording: a :class:`Recording` or the path of its CSV (read for ``model``).
-    model: the observer's model, e.g. ``Model.alpes("finger3", friction=True, params="ident.toml")``.
-    observer: ``"ekf"`` or ``"ukf"`` (the ``-params`` variants estimate two gains as well).
-    torque_noise: the recorded torque's white noise, N m (default: estimated from the recording).
-    encoder_noise_counts: encoder noise beyond the quantisation, counts.
-    disturbance: estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``
-        N m per sqrt(s).
-    transient: start of the error metrics, s (default min(1 s, duration / 5)).
-    substeps: steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`,
-        4 for the smooth sign at 1 kHz, 15 for the stick-slip law on finger3; 1 with ``friction_law="stick"`` or
-        without friction).
-    compiled: the filter in compiled C (same numbers).
-    encoder_offset: (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
+    recording : Recording or str or Path
+        The recording, or the path of its CSV (read for ``model``).
+    model : Model
+        The observer's model, e.g. ``Model.alpes("finger3", friction=True, params="ident.toml")``.
+    observer : {"ekf", "ukf", "ekf-params", "ukf-params"}, optional
+        The filter (the ``-params`` variants estimate two gains as well).
+    torque_noise : float or None, optional
+        The recorded torque's white noise, N m (default: estimated from the recording).
+    encoder_noise_counts : float, optional
+        The encoder's noise beyond the quantisation, counts.
+    disturbance : bool, optional
+        Estimate one additive torque per motor (N m) as a random walk of ``disturbance_walk``.
+    disturbance_walk : float, optional
+        That walk's intensity, N m per sqrt(s).
+    transient : float or None, optional
+        The start of the error metrics, s (default min(1 s, duration / 5)).
+    substeps : int or None, optional
+        Steps per sample (default with friction :func:`~alpes_dyn.simulation.integrate.stable_substeps`, 4 for the
+        smooth sign at 1 kHz, 15 for the stick-slip law on finger3; 1 with ``friction_law="stick"`` or without
+        friction).
+    compiled : bool, optional
+        The filter in compiled C (the same numbers).
+    encoder_offset : array_like or None, optional
+        (m,) rad, the encoders' zero as identified on this rig (``encoder_offset_<motor>`` of
         :func:`~alpes_dyn.estimation.identification.identification.identify`): taken off the reading. Default: the
         model's parameter file's (``encoder_offset`` of the chain's section, written by ``identify``), else 0.
-    tilt: (tilt_x, tilt_y) rad, the palm's orientation as identified (``tilt_x``, ``tilt_y``): the observer's
-        gravity turned by it (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The
-        tendons' stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
-        taken off it.
-    torque_delay: whole samples by which the recorded torque lags the motor's (as identified,
+    tilt : array_like or None, optional
+        (tilt_x, tilt_y) rad, the palm's orientation as identified: the observer's gravity turned by it
+        (:func:`~alpes_dyn.symbolic.parametric.tilted_gravity`). Default level. The palm's tilt identified is in
+        the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further. The tendons'
+        stretch C tau_m,k-1 (the model's ``tendon_compliance``, under the torque held before the reading) is always
+        taken off the reading.
+    torque_delay : int or None, optional
+        Whole samples by which the recorded torque lags the motor's (as identified,
         :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
         torque of :func:`advanced` (a replay: the later samples are recorded). Default: the model's parameter
-        file's ``transmission.torque_delay`` (written by ``identify``), else 0. The palm's tilt identified is in
-        the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
-    friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
-        F_s tanh(v / v_s) or ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
-        (:mod:`alpes_dyn.simulation.stick`).
-    torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
-        noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
-        stick law, else 1 (the torque as recorded).
-    stops: the joints' end stops in the observer's model (:meth:`~alpes_dyn.model.stops.JointStops.of`: a stiff
-        spring-damper at each end of the URDF's range), for a hand whose joints reach their stops; default off.
-    force: run on a model whose parameter file is marked not trustworthy (refused otherwise:
+        file's ``transmission.torque_delay`` (written by ``identify``), else 0.
+    friction_law : {"smooth", "stick"}, optional
+        The observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): F_s tanh(v / v_s), or the
+        time-stepping Coulomb law that holds a joint at rest (:mod:`alpes_dyn.simulation.stick`).
+    torque_window : int or None, optional
+        Samples of the causal moving average of the torque the observer reads (:func:`averaged`; its noise, given
+        or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the stick law,
+        else 1 (the torque as recorded).
+    force : bool, optional
+        Run on a model whose parameter file is marked not trustworthy (refused otherwise:
         :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
+    stops : bool, optional
+        The joints' end stops in the observer's model (:meth:`~alpes_dyn.model.stops.JointStops.of`: a stiff
+        spring-damper at each end of the URDF's range), for a hand whose joints reach their stops; default off.
 
     Returns
     -------
-    :class:`RecordingEstimate`; ``rmse`` (n,) rad where the recording has ``true_q_*``.
+    RecordingEstimate
+        The estimates; ``rmse`` (n,) rad where the recording has ``true_q_*``.
     """
     rec = _replay_recording(recording, model, observer)  # (the model checked first)
     if model.params is not None:
