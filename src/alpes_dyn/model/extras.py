@@ -139,6 +139,18 @@ class JointExtras:
 
     @classmethod
     def zeros(cls, n: int) -> "JointExtras":
+        """No spring, armature nor friction on ``n`` joints.
+
+        Parameters
+        ----------
+        n : int
+            The joints.
+
+        Returns
+        -------
+        JointExtras
+            Zeros, (n,) each.
+        """
         z = np.zeros(n)
         return cls(z, z.copy(), z.copy(), z.copy())
 
@@ -156,22 +168,77 @@ class JointExtras:
         return self._rest_used is not None
 
     def spring_torque(self, q: Any, xp: Any = np) -> Any:
-        """Spring torque k (q - q_rest) (N m, :func:`spring_law`), the spring part of G(q) in eq. 2.11; q: (n,)
-        array or casadi column."""
+        """Spring torque k (q - q_rest) (:func:`spring_law`), the spring part of G(q) in eq. 2.11.
+
+        Parameters
+        ----------
+        q : array_like or casadi.SX
+            (n,) joint angles, rad.
+        xp : module, optional
+            ``numpy`` or ``casadi``.
+
+        Returns
+        -------
+        ndarray or casadi.SX
+            (n,) N m.
+        """
         return spring_law(self.stiffness, self._rest_used, q, xp)  # no rest angle: k q, the hot path
 
     def spring_energy(self, q: Any, xp: Any = np) -> Any:
-        """Spring potential energy sum 1/2 k_i (q_i - q_rest,i)^2 (J): 1/2 tau_s . (q - q_rest)."""
+        """Spring potential energy sum 1/2 k_i (q_i - q_rest,i)^2 = 1/2 tau_s . (q - q_rest).
+
+        Parameters
+        ----------
+        q : array_like or casadi.SX
+            (n,) joint angles, rad.
+        xp : module, optional
+            ``numpy`` or ``casadi``.
+
+        Returns
+        -------
+        float or casadi.SX
+            J.
+        """
         dq = q - _as(xp, self.rest) if self.has_rest else q
         return 0.5 * xp.dot(self.spring_torque(q, xp), dq)
 
     def friction_torque(self, v: Any, smooth: bool = False, xp: Any = np) -> Any:
-        """Friction torque F_s sign(v) + F_v v (eq. 2.6-2.7), sign -> tanh(v/v_s) when ``smooth``."""
+        """Friction torque F_s sign(v) + F_v v (eq. 2.6-2.7).
+
+        Parameters
+        ----------
+        v : array_like or casadi.SX
+            (n,) joint velocities, rad/s.
+        smooth : bool, optional
+            sign(v) as tanh(v / v_s) (v_s: ``smooth_velocity``).
+        xp : module, optional
+            ``numpy`` or ``casadi``.
+
+        Returns
+        -------
+        ndarray or casadi.SX
+            (n,) N m.
+        """
         sgn = xp.tanh(v / self.smooth_velocity) if smooth else xp.sign(v)
         return _as(xp, self.coulomb) * sgn + _as(xp, self.viscous) * v
 
     def passive_torque(self, q: Any, v: Any, smooth: bool = False, xp: Any = np) -> Any:
-        """Springs plus friction, the extras' share of the left side of eq. 2.10."""
+        """Springs plus friction, the extras' share of the left side of eq. 2.10.
+
+        Parameters
+        ----------
+        q, v : array_like or casadi.SX
+            (n,) joint angles, rad, and velocities, rad/s.
+        smooth : bool, optional
+            The friction's sign smoothed (:meth:`friction_torque`).
+        xp : module, optional
+            ``numpy`` or ``casadi``.
+
+        Returns
+        -------
+        ndarray or casadi.SX
+            (n,) N m.
+        """
         out = self.spring_torque(q, xp)
         if self.has_friction:
             out = out + self.friction_torque(v, smooth, xp)

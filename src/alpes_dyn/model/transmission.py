@@ -151,24 +151,56 @@ class Transmission:
         return self._curve
 
     def ratio(self, q: np.ndarray) -> np.ndarray:
-        """rho(q) = ds/dq (m, n), rad of motor per rad of joint (S itself for constant ratios); (..., m, n) for q
-        (..., n)."""
+        """rho(q) = ds/dq, rad of motor per rad of joint (S itself for constant ratios).
+
+        Parameters
+        ----------
+        q : array_like
+            (n,) or (..., n) joint angles, rad.
+
+        Returns
+        -------
+        ndarray
+            (m, n), or (..., m, n).
+        """
         q = self._joints(q)
         if self._curve is None:
             return np.broadcast_to(self.S, q.shape[:-1] + self.S.shape).copy()
         return self._curve.ratio(q)
 
     def rotor_matrix_at(self, q: np.ndarray) -> np.ndarray:
-        """rho(q)^T diag(J_m) rho(q) (n, n), kg m^2: the rotors' inertia on the joints at q (:attr:`rotor_matrix`
-        for constant ratios). q: (n,)."""
+        """rho(q)^T diag(J_m) rho(q), kg m^2: the rotors' inertia on the joints at q (:attr:`rotor_matrix` for
+        constant ratios).
+
+        Parameters
+        ----------
+        q : array_like
+            (n,) joint angles, rad.
+
+        Returns
+        -------
+        ndarray
+            (n, n).
+        """
         if self._curve is None:
             return self.rotor_matrix
         R = self._curve.ratio(self._joints(q))
         return R.T @ (self.rotor_inertia[:, None] * R)
 
     def rotor_bias(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """rho(q)^T diag(J_m) (drho/dt) qd (n,), N m: the rotors' velocity-product torque on the joints (zeros for
-        constant ratios). q, v: (n,) rad, rad/s."""
+        """rho(q)^T diag(J_m) (drho/dt) qd, N m: the rotors' velocity-product torque on the joints (zeros for
+        constant ratios).
+
+        Parameters
+        ----------
+        q, v : array_like
+            (n,) joint angles, rad, and velocities, rad/s.
+
+        Returns
+        -------
+        ndarray
+            (n,).
+        """
         if self._curve is None:
             return np.zeros(self.S.shape[1])
         q, v = self._joints(q), self._joints(v, "v")
@@ -180,10 +212,25 @@ class Transmission:
         return bool(np.any(self.capstan != 0))
 
     def transmitted(self, tau_m: Any, v_m: Any, smooth_velocity: float, xp: Any = np) -> Any:
-        """The motor torques that reach the joints through the tendons' sheaths (N m, (..., m)): tau_m less the
-        capstan friction (:func:`capstan_torque`) at the motor velocities v_m (rad/s, (..., m)), its sign smoothed at
-        :func:`capstan_velocity` of the joints' ``smooth_velocity`` (rad/s); tau_m itself without sheath friction.
-        numpy arrays or CasADi columns (``xp``)."""
+        """The motor torques that reach the joints through the tendons' sheaths: tau_m less the capstan friction
+        (:func:`capstan_torque`) at the motor velocities; tau_m itself without sheath friction.
+
+        Parameters
+        ----------
+        tau_m : array_like or casadi.SX
+            (..., m) motor torques, N m.
+        v_m : array_like or casadi.SX
+            (..., m) motor velocities, rad/s.
+        smooth_velocity : float
+            The joints' friction sign's v_s, rad/s (the sheath's: :func:`capstan_velocity` of it).
+        xp : module, optional
+            ``numpy`` or ``casadi``.
+
+        Returns
+        -------
+        ndarray or casadi.SX
+            (..., m) N m.
+        """
         if not self.has_capstan:
             return tau_m
         return capstan_torque(tau_m, v_m, self.capstan, capstan_velocity(self.S, smooth_velocity), xp)
@@ -195,11 +242,25 @@ class Transmission:
 
     def encoder_angles(self, q: np.ndarray, tau_m: np.ndarray | None = None,
                        qdd_m: np.ndarray | None = None) -> np.ndarray:
-        """What the encoders read, rad: S q + C (tau_m - J_m qdd_m), the tendons' stretch under their tension:
-        the motor torque tau_m (N m) that the tension balances at the reading's instant (in a sampled record the
-        torque held over the period before it, :func:`torque_before`) less what accelerates the rotor, J_m qdd_m
-        (qdd_m (..., m) rad/s^2, :func:`acceleration_before`; None: not taken off). Without tau_m, or with rigid
-        tendons, S q. q: (..., n), tau_m: (..., m) -> (..., m)."""
+        """What the encoders read, rad: S q + C (tau_m - J_m qdd_m), the tendons' stretch under their tension (S q
+        without tau_m, or with rigid tendons).
+
+        Parameters
+        ----------
+        q : array_like
+            (..., n) joint angles, rad.
+        tau_m : array_like or None, optional
+            (..., m) the motor torque the tension balances at the reading's instant, N m (in a sampled record the
+            torque held over the period before it, :func:`torque_before`).
+        qdd_m : array_like or None, optional
+            (..., m) the motor accelerations, rad/s^2 (:func:`acceleration_before`): J_m qdd_m, what accelerates the
+            rotor, taken off tau_m; None: not taken off.
+
+        Returns
+        -------
+        ndarray
+            (..., m) rad.
+        """
         y = self.motor_positions(q)
         if tau_m is None or not self.elastic:
             return y
@@ -240,30 +301,73 @@ class Transmission:
         return q
 
     def motor_positions(self, q: np.ndarray) -> np.ndarray:
-        """Encoder angles q_m = S q (rad), or s(q) = L(q) / r_m with a :attr:`ratio_curve`; q: (n,) or (..., n) ->
-        (m,) or (..., m)."""
+        """Encoder angles q_m = S q, or s(q) = L(q) / r_m with a :attr:`ratio_curve`.
+
+        Parameters
+        ----------
+        q : array_like
+            (n,) or (..., n) joint angles, rad.
+
+        Returns
+        -------
+        ndarray
+            (m,) or (..., m) rad.
+        """
         q = self._joints(q)
         return q @ self.S.T if self._curve is None else self._curve.angle(q)
 
     def motor_velocities(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """Motor velocities qd_m = S qd, or rho(q) qd with a :attr:`ratio_curve` (rad/s); q, v: (..., n) ->
-        (..., m)."""
+        """Motor velocities qd_m = S qd, or rho(q) qd with a :attr:`ratio_curve`.
+
+        Parameters
+        ----------
+        q, v : array_like
+            (..., n) joint angles, rad, and velocities, rad/s.
+
+        Returns
+        -------
+        ndarray
+            (..., m) rad/s.
+        """
         v = self._joints(v, "v")
         return v @ self.S.T if self._curve is None else np.einsum("...ij,...j->...i", self._curve.ratio(
             self._joints(q)), v)
 
     def unstretched(self, y: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
-        """S q from an encoder reading y (rad): y - C tau_m, the tendons' stretch under the motor torque tau_m
-        (N m; the one held before the reading, :func:`torque_before`) taken off (y itself for rigid tendons).
-        y, tau_m: (..., m)."""
+        """S q from an encoder reading: y - C tau_m, the tendons' stretch taken off (y itself for rigid tendons).
+
+        Parameters
+        ----------
+        y : array_like
+            (..., m) encoder angles, rad.
+        tau_m : array_like
+            (..., m) the motor torque held before the reading, N m (:func:`torque_before`).
+
+        Returns
+        -------
+        ndarray
+            (..., m) rad.
+        """
         y = as_float_array(y, "y", "encoder angles")
         if not self.elastic:
             return y
         return y - as_float_array(tau_m, "tau_m", "motor torques") * self.tendon_compliance
 
     def joint_torque(self, tau_m: np.ndarray, q: np.ndarray | None = None) -> np.ndarray:
-        """Joint torques S^T tau_m (N m) from motor torques tau_m (N m), (m,) or (..., m); with a
-        :attr:`ratio_curve`, rho(q)^T tau_m at the joint angles q ((n,) or (..., n), required)."""
+        """Joint torques S^T tau_m; with a :attr:`ratio_curve`, rho(q)^T tau_m.
+
+        Parameters
+        ----------
+        tau_m : array_like
+            (m,) or (..., m) motor torques, N m.
+        q : array_like or None, optional
+            (n,) or (..., n) joint angles, rad (required with a :attr:`ratio_curve`).
+
+        Returns
+        -------
+        ndarray
+            (n,) or (..., n) N m.
+        """
         tau_m = as_float_array(tau_m, "tau_m", "motor torques")
         if tau_m.shape[-1:] != (self.n_motors,):
             raise InputError(f"tau_m: expected last dimension {self.n_motors}, got shape {tau_m.shape}")
@@ -275,6 +379,17 @@ class Transmission:
         return np.einsum("...k,...ki->...i", tau_m, self._curve.ratio(self._joints(q)))
 
     def quantize(self, q_m: np.ndarray) -> np.ndarray:
-        """Encoder reading: q_m rounded to the encoder's resolution 2 pi / counts_per_rev (rad)."""
+        """Encoder reading: q_m rounded to the encoder's resolution 2 pi / counts_per_rev.
+
+        Parameters
+        ----------
+        q_m : array_like
+            Motor angles, rad.
+
+        Returns
+        -------
+        ndarray
+            The reading, rad, the shape of ``q_m``.
+        """
         step = 2.0 * np.pi / self.counts_per_rev
         return np.round(as_float_array(q_m, "q_m", "motor angles") / step) * step
