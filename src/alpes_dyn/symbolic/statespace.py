@@ -90,17 +90,25 @@ class StateSpace(Rebuilt):
 
     Parameters
     ----------
-    model: the dynamics.
-    input: ``"joint"`` or ``"motor"``.
-    output: a preset (``"sum"``, ``"encoder"``, ``"joints"``, ``"joints:<a>,<b>"``,
-        ``"tip_position:<frame>"``), a (p, n) or (p, 2n) matrix, a callable ``g(q, xp)`` or
-        ``g(q, v, xp)``, or a list of these (rows stacked in order); see the module doc.
-    force: add the contact force F (3,) at ``tip`` (base axes) as a known input.
-    tip: tip frame of F (default: the model's first tip).
-    smooth: use tanh for the Coulomb sign (default True: f is differentiable).
-    backend: symbolic backend, see :class:`~alpes_dyn.symbolic.dynamics.SymbolicDynamics`.
-    contacts: several contact forces/wrenches as known inputs, a list of
-        :class:`~alpes_dyn.model.contact.Contact` or frame names (instead of ``force``/``tip``).
+    model : Model
+        The dynamics.
+    input : {"joint", "motor"}, optional
+        Joint torques Gamma or motor torques tau_m.
+    output : str or array_like or callable or list, optional
+        A preset (``"sum"``, ``"encoder"``, ``"joints"``, ``"joints:<a>,<b>"``, ``"tip_position:<frame>"``), a
+        (p, n) or (p, 2n) matrix, a callable ``g(q, xp)`` or ``g(q, v, xp)``, or a list of these (rows stacked in
+        order); see the module doc.
+    force : bool, optional
+        Add the contact force F (3,) at ``tip`` (base axes) as a known input.
+    tip : str or None, optional
+        The tip frame of F (default: the model's first tip).
+    smooth : bool, optional
+        tanh for the Coulomb sign (default True: f is differentiable).
+    backend : str, optional
+        The symbolic backend, see :class:`~alpes_dyn.symbolic.dynamics.SymbolicDynamics`.
+    contacts : list or None, optional
+        Several contact forces/wrenches as known inputs, a list of :class:`~alpes_dyn.model.contact.Contact` or
+        frame names (instead of ``force``/``tip``).
 
     Attributes
     ----------
@@ -259,8 +267,22 @@ class StateSpace(Rebuilt):
         """The joint torques Gamma (n,) of the input u: B u, or rho(q)^T u for motor torques on ratios that change
         with q (the transmission's ``ratio_curve``; :attr:`B` is then rho(0)^T). Motor torques through tendons with
         sheath friction (the transmission's ``capstan``) lose :func:`~alpes_dyn.model.transmission.capstan_torque`'s
-        share at the motor velocities rho(q) v (joint velocities ``v``, rad/s; required then). CasADi q, u give SX,
-        numpy arrays give numpy."""
+        share at the motor velocities rho(q) v.
+
+        Parameters
+        ----------
+        q : ndarray or casadi.SX
+            (n,) joint angles, rad.
+        u : ndarray or casadi.SX
+            (m,) the input (joint or motor torques, N m).
+        v : ndarray or casadi.SX or None, optional
+            (n,) joint velocities, rad/s (required with sheath friction).
+
+        Returns
+        -------
+        ndarray or casadi.SX
+            (n,) N m (SX for CasADi q, u).
+        """
         numeric = isinstance(u, np.ndarray) and isinstance(q, np.ndarray)
         tr = self.model.transmission
         if self.input == "motor" and tr.has_capstan:
@@ -305,7 +327,22 @@ class StateSpace(Rebuilt):
         return self.model.vector(x, "x", 2 * self.n)
 
     def f(self, x: np.ndarray, u: np.ndarray, F: np.ndarray | None = None) -> np.ndarray:
-        """xdot = f(x, u[, F]) (2n,), numerically with Pinocchio's ABA (eq. 3.3)."""
+        """xdot = f(x, u[, F]), numerically with Pinocchio's ABA (eq. 3.3).
+
+        Parameters
+        ----------
+        x : array_like
+            (2n,) the state [q; v].
+        u : array_like
+            (m,) the input.
+        F : array_like or None, optional
+            The contact forces (with ``force`` or ``contacts``).
+
+        Returns
+        -------
+        ndarray
+            (2n,).
+        """
         x = self._check_x(x)
         u = self.model.vector(u, "u", self.n_inputs)
         if self.force and F is None:
@@ -325,7 +362,28 @@ class StateSpace(Rebuilt):
         forces) balance the input torques B u. Newton's method from ``q0`` (default 0) on
         G(q) - B u - sum J_c^T F_c = 0 (N m, eq. 2.10 at rest) to ``tol``, with the analytic Jacobian
         (:meth:`Model.static_equilibrium <alpes_dyn.Model.static_equilibrium>` without contacts; the
-        contact term's by automatic differentiation); :class:`~alpes_dyn.InputError` if it does not converge.
+        contact term's by automatic differentiation).
+
+        Parameters
+        ----------
+        u : array_like
+            (m,) the input.
+        F : array_like or None, optional
+            The contact forces.
+        q0 : array_like or None, optional
+            (n,) Newton's start, rad (default 0).
+        tol : float, optional
+            The residual's tolerance, N m.
+
+        Returns
+        -------
+        ndarray
+            (2n,) the rest state.
+
+        Raises
+        ------
+        InputError
+            Newton's method does not converge.
         """
         u = self.model.vector(u, "u", self.n_inputs)
         tau = self.B @ u
@@ -385,6 +443,24 @@ class StateSpace(Rebuilt):
         Discrete (``dt`` > 0, s): x[k+1] = A_d x[k] + B_d w[k] with ``method`` ``"zoh"`` (the input held
         over the step: exp([[A, B], [0, 0]] dt), as ``control.sample_system(..., 'zoh')``) or
         ``"euler"`` (A_d = I + A dt, B_d = B dt); C and D are unchanged.
+
+        Parameters
+        ----------
+        x0 : array_like
+            (2n,) the operating state.
+        u0 : array_like
+            (m,) the operating input.
+        F0 : array_like or None, optional
+            The operating contact forces.
+        dt : float or None, optional
+            The sample period, s (None: continuous).
+        method : {"zoh", "euler"}, optional
+            The discretisation.
+
+        Returns
+        -------
+        tuple of ndarray
+            (A, B, C, D).
         """
         x0 = self._check_x(x0)
         u0 = self.model.vector(u0, "u", self.n_inputs)
@@ -424,7 +500,18 @@ class StateSpace(Rebuilt):
     def to_control(self, x0: Any, u0: Any, F0: Any = None, dt: float | None = None, method: str = "zoh") -> Any:
         """The linearisation (:meth:`linearize`) as a ``control.StateSpace`` (python-control, optional extra
         ``alpes_dyn[control]``) named after the model, with its state, input and output names; discrete
-        with ``dt``."""
+        with ``dt``.
+
+        Parameters
+        ----------
+        x0, u0, F0, dt, method : see :meth:`linearize`
+            The operating point and the discretisation.
+
+        Returns
+        -------
+        control.StateSpace
+            The linear system.
+        """
         try:
             import control
         except ImportError:
@@ -435,7 +522,18 @@ class StateSpace(Rebuilt):
                           name=self.model.name)
 
     def h(self, x: np.ndarray) -> np.ndarray:
-        """y = h(x) (p,), numerically (Pinocchio for frame positions)."""
+        """y = h(x), numerically (Pinocchio for frame positions).
+
+        Parameters
+        ----------
+        x : array_like
+            (2n,) the state.
+
+        Returns
+        -------
+        ndarray
+            (p,).
+        """
         x = self._check_x(x)
         q, v = x[: self.n], x[self.n:]
         return np.concatenate([np.asarray(pc.num(q, v), dtype=float).reshape(-1) for pc in self._pieces])
