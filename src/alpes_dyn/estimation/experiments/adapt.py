@@ -160,11 +160,26 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
                        nominal_params: HandParams | str | Path | None = None, chain: str | None = None,
                        rotor_inertia: bool = False, rig: str = "auto",
                        scales: Sequence[float] = AMPLITUDE_SCALES) -> tuple[Recording, Adaptation]:
-    """:func:`~alpes_dyn.estimation.experiments.experiment.experiment` (its arguments) with the design adapted until the finger
-    stays inside its range over the whole record (the module docstring); ``rig``: one of :data:`RIGS` (``level``:
-    ``design``'s own orientation, default palm up); ``scales``: the amplitude factors to try after the full excitation
-    (default :data:`AMPLITUDE_SCALES`; none: the orientation alone adapts). Returns the recording (written to ``path`` only once chosen) and
-    the :class:`Adaptation`. Each run tried costs one experiment's simulation (about 1 s for 4 s of finger3)."""
+    """:func:`~alpes_dyn.estimation.experiments.experiment.experiment` with the design adapted until the finger
+    stays inside its range over the whole record (the module docstring). Each run tried costs one experiment's
+    simulation (about 1 s for 4 s of finger3).
+
+    Parameters
+    ----------
+    model, true_params, design, seed, path, nominal_params, chain, rotor_inertia : see experiment
+        :func:`~alpes_dyn.estimation.experiments.experiment.experiment`'s (the recording written to ``path`` only
+        once chosen).
+    rig : str, optional
+        One of :data:`RIGS` (``level``: ``design``'s own orientation, default palm up).
+    scales : sequence of float, optional
+        The amplitude factors to try after the full excitation (default :data:`AMPLITUDE_SCALES`; none: the
+        orientation alone adapts).
+
+    Returns
+    -------
+    tuple of (Recording, Adaptation)
+        The recording and how the design was adapted.
+    """
     from ...errors import InputError
     from .experiment import experiment
 

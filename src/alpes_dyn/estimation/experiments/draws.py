@@ -20,13 +20,27 @@ def perturbed_params(params: HandParams | None = None, spread: float = 0.2, seed
     """``params`` with the finger's springs K_i, masses m_i (inertias I_i with them) and per-joint
     friction F_s, F_v each multiplied by an independent factor uniform in [1 - spread, 1 + spread].
 
-    ``chains``: which chains are drawn, each independently (one seeded generator, in the order given):
-    None (default) the shared ``[finger]`` values; finger names (``palm.finger_names``) give each of those
-    fingers values of its own (``[finger.<name>]``, drawn around its current ones); ``"thumb"`` draws the
-    thumb's flexion springs, masses (its base's too) and friction, and its ab/adduction friction.
+    Parameters
+    ----------
+    params : HandParams or None, optional
+        The parameters drawn around (default: the shipped file).
+    spread : float, optional
+        The relative half-width of the draw, in [0, 1).
+    seed : int, optional
+        The generator's seed.
+    kinds : sequence of str, optional
+        Which kinds are drawn: ``"K"``, ``"m"``, ``"friction"``.
+    chains : sequence of str or str or None, optional
+        Which chains are drawn, each independently (one seeded generator, in the order given): None (default) the
+        shared ``[finger]`` values; finger names (``palm.finger_names``) give each of those fingers values of its
+        own (``[finger.<name>]``, drawn around its current ones); ``"thumb"`` draws the thumb's flexion springs,
+        masses (its base's too) and friction, and its ab/adduction friction.
 
-    The result is a valid parameter set (the changed entries marked ``assumed`` with the draw as reason),
-    e.g. the "true" finger (or hand) of a simulated identification experiment.
+    Returns
+    -------
+    HandParams
+        A valid parameter set (the changed entries marked ``assumed`` with the draw as reason), e.g. the "true"
+        finger (or hand) of a simulated identification experiment.
     """
     if not (math.isfinite(spread) and 0 <= spread < 1):
         raise InputError(f"spread: expected a fraction in [0, 1), got {spread!r}")

@@ -361,9 +361,24 @@ def model_experiment(nominal: Model, truth: Model | None = None, design: Experim
     both searched up to the robot's own static torque scale), the bias trimmed on ``truth`` (default: the
     nominal itself), simulated on ``truth`` with the sensors of the design.
 
-    ``truth`` must have the nominal's joints and motors (e.g. the same URDF with a perturbed spec). Returns
-    (and writes to ``path``) the :class:`~alpes_dyn.estimation.experiments.recording.Recording`, readable by
-    :func:`~alpes_dyn.estimation.experiments.recording.read_recording` with either model.
+    Parameters
+    ----------
+    nominal : Model
+        The robot the experimenter knows (a URDF + spec model).
+    truth : Model or None, optional
+        The robot as it is, with the nominal's joints and motors (e.g. the same URDF with a perturbed spec);
+        default: the nominal itself.
+    design : ExperimentDesign or None, optional
+        The design (default: the documented one).
+    seed : int, optional
+        The sensor noise's seed.
+    path : str or Path or None, optional
+        Where to write the recording as CSV too.
+
+    Returns
+    -------
+    Recording
+        Readable by :func:`~alpes_dyn.estimation.experiments.recording.read_recording` with either model.
     """
     truth = _checked_robots(nominal, truth)
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or not 0 <= seed <= MAX_SEED:

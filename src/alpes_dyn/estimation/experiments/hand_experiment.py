@@ -121,12 +121,28 @@ def hand_experiment(true_params: HandParams | str | Path | None = None, design: 
                     nominal_params: HandParams | str | Path | None = None,
                     rig: str = "auto") -> tuple[Recording, dict[str, Adaptation]]:
     """The identification experiment of the whole hand (the module docstring): every chain's, at once, in one
-    orientation. ``true_params`` the hand as it is (each chain its own values), ``nominal_params`` what the
-    experimenter knows (default: the shipped file), ``design`` each chain's (default the documented one), ``seed``
-    of the sensor noise (each chain's drawn from it), ``rig`` one
-    of :data:`~alpes_dyn.estimation.experiments.adapt.RIGS`.
-    Returns the recording of the six motors (written to ``path``) and each chain's
-    :class:`~alpes_dyn.estimation.experiments.adapt.Adaptation`."""
+    orientation.
+
+    Parameters
+    ----------
+    true_params : HandParams or str or Path or None, optional
+        The hand as it is (each chain its own values), or its file.
+    design : ExperimentDesign or None, optional
+        Each chain's design (default: the documented one).
+    seed : int, optional
+        The sensor noise's seed (each chain's drawn from it).
+    path : str or Path or None, optional
+        Where to write the recording as CSV too.
+    nominal_params : HandParams or str or Path or None, optional
+        What the experimenter knows (default: the shipped file).
+    rig : str, optional
+        One of :data:`~alpes_dyn.estimation.experiments.adapt.RIGS`.
+
+    Returns
+    -------
+    tuple of (Recording, dict)
+        The recording of the six motors and each chain's :class:`~alpes_dyn.estimation.experiments.adapt.Adaptation`.
+    """
     if rig not in RIGS:
         raise InputError(f"rig: expected one of {', '.join(RIGS)}, got {rig!r:.40}")
     if path is not None:

@@ -140,11 +140,39 @@ class IdentificationResult:
         return {"std_classical": _finite(se.classical[k]), "std_robust": _finite(se.robust[k]), "std_from": se.kind(k)}
 
     def params(self, base: HandParams | None = None, chain: str | None = None) -> HandParams:
-        """The parameter set with the fitted values (see :func:`identified_params`)."""
+        """The parameter set with the fitted values (see :func:`identified_params`).
+
+        Parameters
+        ----------
+        base : HandParams or None, optional
+            The parameter file the fit's values go into (default: the model's).
+        chain : str or None, optional
+            The chain the values are of (default: the model's :attr:`~alpes_dyn.Model.chain`).
+
+        Returns
+        -------
+        HandParams
+            ``base`` with the fitted values, each ``identified``.
+        """
         return identified_params(self, base, chain)
 
     def write(self, path: str | Path, base: HandParams | None = None, chain: str | None = None) -> Path:
-        """Write the identified parameter file (the base file with each fitted value ``identified``)."""
+        """Write the identified parameter file (the base file with each fitted value ``identified``).
+
+        Parameters
+        ----------
+        path : str or Path
+            The TOML file.
+        base : HandParams or None, optional
+            The parameter file the fit's values go into (default: the model's).
+        chain : str or None, optional
+            The chain the values are of (default: the model's :attr:`~alpes_dyn.Model.chain`).
+
+        Returns
+        -------
+        Path
+            The file written.
+        """
         header = (f"Identified by alpes_dyn from {_printable(self.recording_path) or 'a recording'} "
                   f"(model {self.model.name}, residual {self.residual_rms:.3g} counts RMS)")
         if not self.trustworthy:
@@ -182,6 +210,20 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
 
     ``input_gain`` (the torque sensor's scale: multiply the torque constant by it) stays in the result (and
     ``identify --json``), not in the file.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        The fit.
+    base : HandParams or None, optional
+        The parameter file the values go into (default: the model's).
+    chain : str or None, optional
+        The chain (default: the model's :attr:`~alpes_dyn.Model.chain`).
+
+    Returns
+    -------
+    HandParams
+        ``base`` with the fitted values.
     """
     p, chain, thumb = _destination(result, base, chain)
     reason = _provenance(result)

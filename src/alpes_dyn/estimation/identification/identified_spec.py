@@ -95,7 +95,25 @@ def identified_spec(result: Any, base: TransmissionSpec, masses: str = "refuse")
 
 
 def write_identified_spec(result: Any, base: TransmissionSpec, path: str | Path, masses: str = "refuse") -> Path:
-    """Write :func:`identified_spec` to ``path`` (atomically), with a header naming the fit."""
+    """Write :func:`identified_spec` to ``path`` (atomically), with a header naming the fit.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        The fit of a URDF robot.
+    base : TransmissionSpec
+        The spec fitted from, whose values the fit's replace.
+    path : str or Path
+        The TOML file.
+    masses : {"refuse", "urdf"}, optional
+        Fitted masses refused (a spec holds none), or left to the URDF written beside
+        (:func:`identified_urdf`).
+
+    Returns
+    -------
+    Path
+        The file written.
+    """
     spec = identified_spec(result, base, masses)
     header = (f"# Identified by alpes_dyn from {_printable(result.recording_path) or 'a recording'} "
               f"(model {_printable(result.model.name)}, residual {result.residual_rms:.3g} counts RMS)\n")
