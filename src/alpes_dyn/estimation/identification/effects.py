@@ -71,8 +71,9 @@ from ...symbolic.parametric import select_parameters, unseen_masses
 from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
 from ..experiments.recording import segment_starts
 
-__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO", "STICTION_VELOCITY", "parse_effects", "effect_parameters",
-           "stiction_params", "alpes_models", "named_effects", "fit_effects", "EffectsFit", "NAMED_BY"]
+__all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO",
+           "STICTION_VELOCITY", "parse_effects", "effect_parameters", "stiction_params", "alpes_models", "fit_effects",
+           "EffectsFit", "Kept", "RoundWalker"]  # (NAMED_BY, named_effects: the rounds module's, imported here)
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan")
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
