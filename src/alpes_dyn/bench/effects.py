@@ -165,7 +165,20 @@ def real_hand_effects(tendon_stiffness: float = CABLE_STIFFNESS, tendon_damping:
     (:data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST`), the series-elastic cable (``tendon_stiffness`` N/m,
     ``tendon_damping`` N s/m, default :func:`cable_damping`) with its rotor and :func:`cable_slack`, the palm
     :data:`TILT_DEG` off, the torque constant :data:`KT_ERROR` off, the encoder :data:`OFFSET_COUNTS` off, the torque
-    :data:`DELAY_SAMPLES` late."""
+    :data:`DELAY_SAMPLES` late.
+
+    Parameters
+    ----------
+    tendon_stiffness : float, optional
+        The cable's stiffness, N/m.
+    tendon_damping : float or None, optional
+        Its damping, N s/m (default :func:`cable_damping` of the stiffness).
+
+    Returns
+    -------
+    PlantEffects
+        Every effect at once.
+    """
     if not (_number(tendon_stiffness) and tendon_stiffness > 0):
         raise InputError(f"tendon_stiffness: expected a positive stiffness in N/m, got {tendon_stiffness!r}")
     c_t = cable_damping(tendon_stiffness) if tendon_damping is None else tendon_damping

@@ -80,9 +80,18 @@ class HardwareInterface(Protocol):
         ...
 
     def write(self, command: Sequence[float]) -> None:
-        """Apply ``command`` ((m,) motor torques, N m, in [0, tau_max]) over the current period and move to the
-        next tick. Raises :class:`~alpes_dyn.InputError` for a command of the wrong shape, not finite or out of
-        range (nothing is clipped silently)."""
+        """Apply ``command`` over the current period and move to the next tick.
+
+        Parameters
+        ----------
+        command : sequence of float
+            (m,) motor torques, N m, in [0, tau_max].
+
+        Raises
+        ------
+        InputError
+            A command of the wrong shape, not finite or out of range (nothing is clipped silently).
+        """
         ...
 
     def close(self) -> None:
@@ -91,8 +100,27 @@ class HardwareInterface(Protocol):
 
 
 def check_command(command: Sequence[float], m: int, tau_max: float) -> np.ndarray:
-    """``command`` as an (m,) array of motor torques (N m) in [0, ``tau_max``]; :class:`~alpes_dyn.InputError`
-    naming ``command`` otherwise (wrong shape, NaN or inf, negative: a cable only pulls, above ``tau_max``)."""
+    """``command`` as an (m,) array of motor torques (N m) in [0, ``tau_max``].
+
+    Parameters
+    ----------
+    command : sequence of float
+        The motor torques, N m.
+    m : int
+        The motors.
+    tau_max : float
+        The largest torque a motor gives, N m.
+
+    Returns
+    -------
+    ndarray
+        (m,) N m.
+
+    Raises
+    ------
+    InputError
+        Naming ``command``: wrong shape, NaN or inf, negative (a cable only pulls), above ``tau_max``.
+    """
     try:
         u = np.atleast_1d(np.asarray(command, dtype=float))
     except (TypeError, ValueError):
@@ -148,6 +176,13 @@ class Loopback:
                        np.asarray(torque, dtype=float).reshape(m), float(force))
 
     def write(self, command: Sequence[float]) -> None:
+        """Record ``command`` (checked: :func:`check_command`) and move to the next tick.
+
+        Parameters
+        ----------
+        command : sequence of float
+            (m,) motor torques, N m, in [0, tau_max].
+        """
         if self.closed:
             raise InputError("write: the loopback is closed")
         self._commands.append(check_command(command, len(self.motor_names), self.tau_max))

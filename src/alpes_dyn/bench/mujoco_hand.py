@@ -243,10 +243,20 @@ class MujocoHand:
         return Reading(r.t, r.counts.copy(), r.torque.copy(), r.force)
 
     def write(self, command: Sequence[float]) -> None:
-        """Apply ``command`` ((m,) N m, in [0, :attr:`tau_max`]: :func:`~alpes_dyn.bench.interface.check_command`)
-        over the current period: MuJoCo steps the period; the next tick's sensors are read. Raises
-        :class:`~alpes_dyn.InputError` naming ``command`` (or ``write`` once closed),
-        :class:`~alpes_dyn.ModelError` where MuJoCo diverged."""
+        """Apply ``command`` over the current period: MuJoCo steps the period; the next tick's sensors are read.
+
+        Parameters
+        ----------
+        command : sequence of float
+            (m,) motor torques, N m, in [0, :attr:`tau_max`] (:func:`~alpes_dyn.bench.interface.check_command`).
+
+        Raises
+        ------
+        InputError
+            Naming ``command`` (or ``write`` once closed).
+        ModelError
+            MuJoCo diverged.
+        """
         if self.closed:
             raise InputError("write: the MuJoCo stand-in is closed")
         u = check_command(command, len(self.motor_names), self.tau_max)
