@@ -195,9 +195,9 @@ class SymbolicDynamics:
 
     Parameters
     ----------
-    model:
+    model : Model
         The numeric model; its URDF, gravity and extras are reused as they are.
-    backend:
+    backend : str, optional
         ``"auto"`` (``pinocchio.casadi`` if it imports, else ``"adam"``), ``"adam"`` or
         ``"pinocchio.casadi"``.
 
@@ -228,7 +228,18 @@ class SymbolicDynamics:
         """A(q) + I_a (n, n): the rigid-body mass matrix plus the joint-side ``armature`` on the
         diagonal and the rotors' S^T diag(J_m) S (eq. 2.8, :attr:`Model.rotor_matrix
         <alpes_dyn.Model.rotor_matrix>`; its structural zeros kept, so :func:`block_solve` still
-        splits the hand by finger)."""
+        splits the hand by finger).
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+
+        Returns
+        -------
+        casadi.SX
+            (n, n) kg m^2.
+        """
         M = self._be.mass_matrix(q)
         if np.any(self.extras.armature != 0):
             M = M + cs.diag(cs.DM(self.extras.armature))
@@ -242,26 +253,89 @@ class SymbolicDynamics:
 
     def rotor_bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
         """rho(q)^T diag(J_m) (drho/dt) qd (n,), the rotors' velocity product on ratios that change with q (zeros
-        otherwise; :meth:`Transmission.rotor_bias <alpes_dyn.model.transmission.Transmission.rotor_bias>`)."""
+        otherwise; :meth:`Transmission.rotor_bias <alpes_dyn.model.transmission.Transmission.rotor_bias>`).
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        v : casadi.SX
+            (n,) joint velocities, rad/s.
+
+        Returns
+        -------
+        casadi.SX
+            (n,) N m.
+        """
         if not self.model._rotor_curved:
             return cs.SX.zeros(self.n)
         tr = self.model.transmission
         return cs.mtimes(tr.curve.ratio(q, cs).T, cs.DM(tr.rotor_inertia) * tr.curve.rate_product(q, v, cs))
 
     def bias_torque(self, q: cs.SX, v: cs.SX) -> cs.SX:
-        """C(q, qd) qd + gravity torque (no springs), (n,)."""
+        """C(q, qd) qd + gravity torque (no springs).
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        v : casadi.SX
+            (n,) joint velocities, rad/s.
+
+        Returns
+        -------
+        casadi.SX
+            (n,) N m.
+        """
         return self._be.bias(q, v)
 
     def gravity_torque(self, q: cs.SX) -> cs.SX:
-        """G(q) of eq. 2.11: gravity plus springs, (n,)."""
+        """G(q) of eq. 2.11: gravity plus springs.
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+
+        Returns
+        -------
+        casadi.SX
+            (n,) N m.
+        """
         return self._be.gravity(q) + self.extras.spring_torque(q, cs)
 
     def fingertip_position(self, q: cs.SX, tip: str | None = None) -> cs.SX:
-        """Tip position in the base frame, (3,)."""
+        """Tip position in the base frame.
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        tip : str or None, optional
+            The tip frame (default: the model's first tip).
+
+        Returns
+        -------
+        casadi.SX
+            (3,) m.
+        """
         return self._be.tip_position(q, self._tip(tip))
 
     def fingertip_jacobian(self, q: cs.SX, tip: str | None = None) -> cs.SX:
-        """Linear Jacobian of a tip in the base frame, (3, n) (Section 2.2), by AD of its position."""
+        """Linear Jacobian of a tip in the base frame (Section 2.2), by AD of its position.
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        tip : str or None, optional
+            The tip frame (default: the model's first tip).
+
+        Returns
+        -------
+        casadi.SX
+            (3, n) m/rad.
+        """
         if not isinstance(q, cs.SX) or not q.is_valid_input():
             qs = cs.SX.sym("q", self.n)
             J = cs.jacobian(self.fingertip_position(qs, tip), qs)
@@ -269,7 +343,20 @@ class SymbolicDynamics:
         return cs.jacobian(self.fingertip_position(q, tip), q)
 
     def frame_pose(self, q: cs.SX, frame: str) -> tuple[cs.SX, cs.SX]:
-        """(R (3, 3), p (3,)) of ``frame`` in the base frame."""
+        """The pose of ``frame`` in the base frame.
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        frame : str
+            The frame's name.
+
+        Returns
+        -------
+        tuple of casadi.SX
+            (R (3, 3), p (3,) m).
+        """
         return self._be.frame_pose(q, self._tip(frame))
 
     def frame_jacobian(self, q: cs.SX, frame: str | None = None, reference: str = "local_world_aligned",
@@ -277,7 +364,24 @@ class SymbolicDynamics:
         """Frame Jacobian (6, n) [linear; angular] or (3, n) linear rows, in Pinocchio's ``reference``
         (:data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`), by AD of the frame pose (R, p):
         J_v = dp/dq, column j of the angular part in base axes vee((dR/dq_j) R^T); ``local`` rotates
-        both by R^T, ``world`` moves the linear part to the base origin, J_v + [p]x J_w."""
+        both by R^T, ``world`` moves the linear part to the base origin, J_v + [p]x J_w.
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        frame : str or None, optional
+            The frame (default: the model's first tip).
+        reference : str, optional
+            One of :data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`.
+        dim : {3, 6}, optional
+            The linear rows alone, or linear and angular.
+
+        Returns
+        -------
+        casadi.SX
+            (dim, n).
+        """
         if reference not in REFERENCE_FRAMES:
             raise ModelError(f"reference: unknown {reference!r} (expected one of {', '.join(REFERENCE_FRAMES)})")
         if dim not in (3, 6) or isinstance(dim, bool):
@@ -303,7 +407,22 @@ class SymbolicDynamics:
 
     def contact_torque(self, q: cs.SX, F: Any, contacts: Any) -> cs.SX:
         """Sum of J_c^T F_c (eq. 2.9), (n,), for ``contacts`` (:class:`~alpes_dyn.model.contact.Contact` or frame
-        names) and their stacked forces/wrenches F (sum of dims,)."""
+        names) and their stacked forces/wrenches.
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        F : casadi.SX or array_like
+            (sum of the contacts' dims,) the stacked forces (N) and wrenches.
+        contacts : sequence
+            :class:`~alpes_dyn.model.contact.Contact` or frame names.
+
+        Returns
+        -------
+        casadi.SX
+            (n,) N m.
+        """
         cts = as_contacts(contacts)
         out = cs.SX.zeros(self.n)
         k = 0
@@ -317,9 +436,28 @@ class SymbolicDynamics:
                          smooth: bool = True, contacts: Any = None) -> cs.SX:
         """qdd = (A + I_a)^-1 (tau + J^T F - C qd - G - friction) (eq. 3.3, 3.12), (n,).
 
-        ``smooth`` (default True) uses tanh for the Coulomb sign so that the result is differentiable.
-        ``F`` is a 3-vector (SX or numbers) at ``tip`` in the base frame, or None; with ``contacts``
-        (several frames, forces or wrenches, see :meth:`contact_torque`) the stacked F of them all.
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        v : casadi.SX
+            (n,) joint velocities, rad/s.
+        tau : casadi.SX
+            (n,) joint torques, N m.
+        F : casadi.SX or array_like or None, optional
+            A 3-vector at ``tip`` in the base frame, or with ``contacts`` the stacked F of them all
+            (:meth:`contact_torque`).
+        tip : str or None, optional
+            The tip frame (default: the model's first tip).
+        contacts : sequence or None, optional
+            Several frames, forces or wrenches (:meth:`contact_torque`).
+        smooth : bool, optional
+            tanh for the Coulomb sign (default True: the result is differentiable).
+
+        Returns
+        -------
+        casadi.SX
+            (n,) rad/s^2.
         """
         rhs = self.net_torque(q, v, tau, self.extras.passive_torque(q, v, smooth, cs), F, tip, contacts)
         return block_solve(self.inertia_matrix(q), rhs)
@@ -329,8 +467,31 @@ class SymbolicDynamics:
         """The right side of eq. 3.3, tau + J^T F - C qd - G - ``passive``, (n,) N m: what the mass matrix
         accelerates. ``passive`` (n,) N m: the extras' torque (springs and friction,
         :meth:`~alpes_dyn.model.extras.JointExtras.passive_torque`, in :meth:`forward_dynamics`; the springs alone
-        in a step that resolves the dry friction itself, :mod:`alpes_dyn.simulation.stick`). ``F``, ``tip``,
-        ``contacts`` as :meth:`forward_dynamics`'s."""
+        in a step that resolves the dry friction itself, :mod:`alpes_dyn.simulation.stick`).
+
+        Parameters
+        ----------
+        q : casadi.SX
+            (n,) joint angles, rad.
+        v : casadi.SX
+            (n,) joint velocities, rad/s.
+        tau : casadi.SX
+            (n,) joint torques, N m.
+        passive : casadi.SX
+            (n,) the extras' torque, N m.
+        F : casadi.SX or array_like or None, optional
+            A 3-vector at ``tip`` in the base frame, or with ``contacts`` the stacked F of them all
+            (:meth:`contact_torque`).
+        tip : str or None, optional
+            The tip frame (default: the model's first tip).
+        contacts : sequence or None, optional
+            Several frames, forces or wrenches (:meth:`contact_torque`).
+
+        Returns
+        -------
+        casadi.SX
+            (n,) N m.
+        """
         rhs = tau - self.bias_torque(q, v) - passive
         if self.model._rotor_curved:
             rhs = rhs - self.rotor_bias(q, v)
@@ -342,7 +503,22 @@ class SymbolicDynamics:
 
     def forward_dynamics_function(self, with_force: bool = False, tip: str | None = None,
                                   smooth: bool = True) -> cs.Function:
-        """``casadi.Function`` ``fd(q, v, tau[, F]) -> qdd``."""
+        """``casadi.Function`` ``fd(q, v, tau[, F]) -> qdd``.
+
+        Parameters
+        ----------
+        with_force : bool, optional
+            F (3,) at ``tip`` an input.
+        tip : str or None, optional
+            The tip frame (default: the model's first tip).
+        smooth : bool, optional
+            tanh for the Coulomb sign.
+
+        Returns
+        -------
+        casadi.Function
+            The forward dynamics.
+        """
         q, v, tau = (cs.SX.sym(s, self.n) for s in ("q", "v", "tau"))
         if with_force:
             F = cs.SX.sym("F", 3)
