@@ -352,18 +352,18 @@ class CompiledStepLoop:
 
     Parameters
     ----------
-    step:
+    step : casadi.Function
         A ``casadi.Function`` ``(x (nx,), w (nw,)) -> x_next (nx,)`` (dense columns), or ``(x, w, p (np,)) ->
         x_next`` with ``parameters``: the numbers of a model as an input (:func:`~alpes_dyn.symbolic.lifted.
         lift_constants`), so that the library is keyed on the step's structure and shared by models of other
         values.
-    parameters:
+    parameters : array_like or None, optional
         (np,) the values of p for this loop's runs (finite numbers; copied), with a step of three inputs.
-    label:
+    label : str, optional
         Stem of the cached library's file name.
-    threads:
+    threads : int or None, optional
         Worker threads, 1 to 64 (default: the CPUs this process may use).
-    vectorize:
+    vectorize : bool, optional
         Advance two sequences at once in SIMD lanes (GCC vector extensions; the same operations
         in the same order as the scalar code, so the same bits); falls back to scalar code when
         the step uses a construct the rewrite does not handle (``lanes`` tells which was built).
@@ -414,8 +414,21 @@ class CompiledStepLoop:
         self._one: tuple | None = None  # step()'s buffers
 
     def step(self, x: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """x_next (nx,) from x (nx,) and w (nw,): one step of one sequence, on buffers the loop keeps (a control
-        loop's call at each sample, without :meth:`run`'s batch checks and allocations); :meth:`run`'s numbers."""
+        """One step of one sequence, on buffers the loop keeps (a control loop's call at each sample, without
+        :meth:`run`'s batch checks and allocations); :meth:`run`'s numbers.
+
+        Parameters
+        ----------
+        x : ndarray
+            (nx,) the state.
+        w : ndarray
+            (nw,) the input held over the step.
+
+        Returns
+        -------
+        ndarray
+            (nx,) the next state.
+        """
         if self._one is None:
             X, W = np.empty((1, 2, self.nx)), np.empty((1, 1, self.nw))
             self._one = (X, W, W.ctypes.data_as(self._dp), X.ctypes.data_as(self._dp))
@@ -427,7 +440,24 @@ class CompiledStepLoop:
         return X[0, 1].copy()
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
-        """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), both float64 (checked by the caller)."""
+        """The B sequences of N steps.
+
+        Parameters
+        ----------
+        x0 : ndarray
+            (B, nx) the initial states, float64.
+        W : ndarray
+            (B, N, nw) the inputs, float64 (checked by the caller).
+        progress : bool, optional
+            A progress bar on stderr.
+        label : str, optional
+            The bar's and the errors' name.
+
+        Returns
+        -------
+        ndarray
+            X (B, N+1, nx), X[:, 0] = x0.
+        """
         x0, W, X = _batch(x0, W, self.nx, self.nw)
         B, N = W.shape[0], W.shape[1]
         chunks = 50 if progress else 1
