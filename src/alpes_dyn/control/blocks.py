@@ -69,11 +69,25 @@ class SensorlessForce(Block):
 
     Parameters
     ----------
-    model: the controller's model. alpha: the low-pass's weight, dt / (tau_f + dt). estimate: the observer's
-    estimate (q_hat its first n entries). torque: the motor torque's reading (the previous period's, N m).
-    normal: the contact normal (3,) -- a signal name, or a constant vector. force: the signal written, N.
-    tip: the contact frame (None: the model's default tip). The torque's reading: one motor's (a float), or every
-    motor's (m,). scale: F_est divided by it (a calibration against the fingertip sensor, > 0; 1: none).
+    model : Model
+        The controller's model.
+    alpha : float
+        The low-pass's weight, dt / (tau_f + dt).
+    estimate : str, optional
+        The observer's estimate's signal (q_hat its first n entries).
+    torque : str, optional
+        The motor torque's reading's signal (the previous period's, N m: one motor's, a float, or every motor's,
+        (m,)).
+    normal : str or sequence of float, optional
+        The contact normal (3,): a signal name, or a constant vector.
+    force : str, optional
+        The signal written, N.
+    name : str, optional
+        The block's name.
+    tip : str or None, optional
+        The contact frame (None: the model's default tip).
+    scale : float, optional
+        F_est divided by it (a calibration against the fingertip sensor, > 0; 1: none).
     """
 
     def __init__(self, model: Model, alpha: float, *, estimate: str = "z", torque: str = "tau_meas",
@@ -101,8 +115,22 @@ class SensorlessForce(Block):
 
     def sample(self, q_hat: np.ndarray, tau: Any, normal: Any = None) -> float:
         """One sample of the filtered estimate, N: from q_hat (n,) rad, the motor torque (a number, or (m,) N m)
-        and the normal (3,) (None: the constant one given); the filter's state advances (:meth:`start` clears
-        it)."""
+        and the normal; the filter's state advances (:meth:`start` clears it).
+
+        Parameters
+        ----------
+        q_hat : ndarray
+            (n,) the estimated joint angles, rad.
+        tau : float or ndarray
+            The motor torque (a number, or (m,) N m).
+        normal : array_like or None, optional
+            (3,) the contact normal (None: the constant one given).
+
+        Returns
+        -------
+        float
+            N.
+        """
         tau = np.array([tau]).reshape(-1)
         if tau.shape[0] != self._motors:  # a scalar before the first period's reading: every motor at it
             tau = np.broadcast_to(tau, (self._motors,))

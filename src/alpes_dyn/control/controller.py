@@ -92,7 +92,27 @@ def static_motor_torque(model: Model, q: np.ndarray, F_z: float, normal: Sequenc
     """Motor torque tau_m (N m) that holds the normal force F_z (N) at joint angles q (rad) (eq. 2.11 at rest).
 
     Least squares over the motor's joints of S^T tau_m = G(q) + F_z J(q)^T n (rho(q)^T where the ratios change with
-    q); ``normal`` n (3,) is the object's surface normal (base frame) along which the fingertip presses.
+    q).
+
+    Parameters
+    ----------
+    model : Model
+        The finger.
+    q : ndarray
+        (n,) joint angles, rad.
+    F_z : float
+        The normal force, N.
+    normal : sequence of float
+        n (3,), the object's surface normal (base frame) along which the fingertip presses.
+    motor : int, optional
+        The motor's index.
+    tip : str or None, optional
+        The contact frame (default: the model's first tip).
+
+    Returns
+    -------
+    float
+        tau_m, N m.
     """
     S = model.transmission.ratio(q)[motor]
     b = model.gravity_torque(q) + float(F_z) * (model.fingertip_jacobian(q, tip).T @ _normal(normal))
@@ -104,6 +124,24 @@ def static_contact_force(model: Model, q: np.ndarray, tau_m: np.ndarray, normal:
     """Normal contact force F_z (N) that balances the motor torques tau_m (N m) at q (rad) (eq. 2.11 at rest).
 
     Least squares over the joints of G(q) - S^T tau_m = -F_z J(q)^T n.
+
+    Parameters
+    ----------
+    model : Model
+        The finger.
+    q : ndarray
+        (n,) joint angles, rad.
+    tau_m : ndarray
+        (m,) motor torques, N m.
+    normal : sequence of float
+        n (3,), the object's surface normal (base frame).
+    tip : str or None, optional
+        The contact frame (default: the model's first tip).
+
+    Returns
+    -------
+    float
+        F_z, N.
     """
     jn = model.fingertip_jacobian(q, tip).T @ _normal(normal)
     r = model.gravity_torque(q) - model.transmission.joint_torque(np.atleast_1d(tau_m), q)
@@ -169,7 +207,32 @@ class ForceController:
     def tuned(cls, kind: str, model: Model, normal: Sequence[float], dt: float, tau_max: float,
               **overrides: float) -> "ForceController":
         """The controller with the tuned settings of ``kind`` (:data:`DEFAULT_GAINS`), ``overrides`` (any field)
-        replacing them: ``ForceController.tuned("sensor", model, n, 1e-3, 0.05)``. InputError for an unknown kind."""
+        replacing them: ``ForceController.tuned("sensor", model, n, 1e-3, 0.05)``.
+
+        Parameters
+        ----------
+        kind : str
+            One of :data:`DEFAULT_GAINS`' keys.
+        model : Model
+            The controller's model.
+        normal : sequence of float
+            (3,) the contact normal (base frame).
+        dt : float
+            The control period, s.
+        tau_max : float
+            The largest motor torque, N m.
+        **overrides
+            Any field, replacing its tuned value.
+
+        Returns
+        -------
+        ForceController
+            The controller.
+
+        Raises
+        ------
+        InputError
+            An unknown kind."""
         if kind not in CONTROLLERS:
             raise InputError(f"controller: unknown controller {kind!r} (expected one of {', '.join(CONTROLLERS)})")
         return cls(kind, model, normal, dt, tau_max, **{**DEFAULT_GAINS[kind], **overrides})
@@ -184,7 +247,20 @@ class ForceController:
             raise InputError(f"setpoint_weight: expected a number in [0, 1], got {self.setpoint_weight!r}")
 
     def feedforward(self, q_hat: np.ndarray, F_ref: float) -> float:
-        """Static-balance torque at q_hat for F_ref (0 for the ``"pi"`` baseline), N m."""
+        """Static-balance torque at q_hat for F_ref (0 for the ``"pi"`` baseline).
+
+        Parameters
+        ----------
+        q_hat : ndarray
+            (n,) the estimated joint angles, rad.
+        F_ref : float
+            The force reference, N.
+
+        Returns
+        -------
+        float
+            N m.
+        """
         if self.kind == "pi":
             return 0.0
         return static_motor_torque(self.model, q_hat, F_ref, self.normal, self.motor, self.tip)
@@ -192,7 +268,23 @@ class ForceController:
     def update(self, F_ref: float, F_fb: float, q_hat: np.ndarray | None,
                normal: Sequence[float] | None = None) -> float:
         """The motor torque command (N m): :meth:`command`, through the notch at ``notch_hz`` (if any) and clipped
-        to [0, tau_max] again."""
+        to [0, tau_max] again.
+
+        Parameters
+        ----------
+        F_ref : float
+            The force reference, N.
+        F_fb : float
+            The force fed back, N.
+        q_hat : ndarray or None
+            (n,) the estimated joint angles, rad (None for the ``"pi"`` baseline).
+        normal : sequence of float or None, optional
+            (3,), from this step on, in place of :attr:`normal`.
+
+        Returns
+        -------
+        float
+            N m."""
         tau = self.command(F_ref, F_fb, q_hat, normal)
         if self.notch_hz is None:
             return tau
@@ -215,6 +307,22 @@ class ForceController:
         on the object) for the feedforward and the integral; the proportional term acts on
         ``setpoint_weight`` x the raw reference + (1 - ``setpoint_weight``) x the prefiltered one; contact
         is lost when F_fb stays below the threshold for ``loss_s``, and the approach starts again.
+
+        Parameters
+        ----------
+        F_ref : float
+            The force reference, N.
+        F_fb : float
+            The force fed back, N.
+        q_hat : ndarray or None
+            (n,) the estimated joint angles, rad (None for the ``"pi"`` baseline).
+        normal : sequence of float or None, optional
+            (3,), from this step on, in place of :attr:`normal`.
+
+        Returns
+        -------
+        float
+            N m.
         """
         if normal is not None:
             self.normal = _normal(normal)
@@ -272,6 +380,24 @@ def reference_profile(kind: str, t: np.ndarray, levels: Sequence[float] = DEFAUL
     ``"ramp"``: levels[0] until step_times[0], a linear ramp to levels[1] over 1 s, then held;
     ``"sine"``: levels[0] until step_times[0], then a sine between sine[0] and sine[1] at sine[2] Hz
     starting at its mean value.
+
+    Parameters
+    ----------
+    kind : {"step", "ramp", "sine"}
+        The profile.
+    t : ndarray
+        Times, s.
+    levels : sequence of float, optional
+        Three levels, N.
+    sine : sequence of float, optional
+        The sine's low and high levels (N) and its frequency (Hz).
+    step_times : sequence of float, optional
+        Two times, s.
+
+    Returns
+    -------
+    ndarray
+        F_z reference, N, the shape of t.
     """
     t = np.asarray(t, dtype=float)
     a, b, c = levels

@@ -25,7 +25,14 @@ def _save_figure(fig: Any, plt: Any, path: str) -> None:
 
 
 def plot_hand_control(result: HandControlResult, path: str) -> None:
-    """Write a figure (PNG): per chain, the F_z reference and MuJoCo's force; the motor torques. Needs matplotlib."""
+    """Write a figure (PNG): per chain, the F_z reference and MuJoCo's force; the motor torques. Needs matplotlib.
+
+    Parameters
+    ----------
+    result : HandControlResult
+        The run.
+    path : str
+        The PNG file."""
     try:
         import matplotlib
 
@@ -51,7 +58,14 @@ def plot_hand_control(result: HandControlResult, path: str) -> None:
 
 def plot_control(result: ControlResult, path: str) -> None:
     """Write a figure (PNG): F_z reference, MuJoCo's and the fed-back force; motor torque; joints true and
-    estimated (degrees). Needs matplotlib."""
+    estimated (degrees). Needs matplotlib.
+
+    Parameters
+    ----------
+    result : ControlResult
+        The run.
+    path : str
+        The PNG file."""
     try:
         import matplotlib
 

@@ -69,23 +69,69 @@ class Block:
     initial: Mapping[str, Any] = MappingProxyType({})
 
     def start(self, n_periods: int, dt: float, final: bool) -> None:
-        """Before the run: N periods of ``dt`` s; ``final``: the outputs at t_N are evaluated too."""
+        """Before the run.
+
+        Parameters
+        ----------
+        n_periods : int
+            N periods.
+        dt : float
+            Of ``dt`` s.
+        final : bool
+            The outputs at t_N are evaluated too.
+        """
 
     def output(self, k: int, u: Mapping[str, Any]) -> dict[str, Any]:
         """The sample signals at t_k from the inputs: ``u[name]`` for each name of ``inputs`` (``u`` is a read-only
-        mapping of the loop's current values; read the declared inputs only)."""
+        mapping of the loop's current values; read the declared inputs only).
+
+        Parameters
+        ----------
+        k : int
+            The sample.
+        u : mapping
+            The inputs by name.
+
+        Returns
+        -------
+        dict
+            The outputs by name.
+        """
         return {}
 
     def update(self, k: int, u: Mapping[str, Any]) -> dict[str, Any] | None:
-        """Advance over [t_k, t_k+1) with ``u[name]`` for each name of ``update_inputs``; return the period signals
-        of that period (or None)."""
+        """Advance over [t_k, t_k+1) with ``u[name]`` for each name of ``update_inputs``.
+
+        Parameters
+        ----------
+        k : int
+            The period.
+        u : mapping
+            The inputs by name.
+
+        Returns
+        -------
+        dict or None
+            The period signals of that period (or None).
+        """
         return None
 
     has_response = False  # True where response() is implemented
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
         """The whole record at once: ``u`` maps every signal the block reads to its array (sample signals one
-        row per sample, period signals one row per period); returns the arrays of its outputs."""
+        row per sample, period signals one row per period).
+
+        Parameters
+        ----------
+        u : dict
+            The signals' arrays by name.
+
+        Returns
+        -------
+        dict
+            The arrays of its outputs.
+        """
         raise NotImplementedError
 
 

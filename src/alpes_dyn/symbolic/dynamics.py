@@ -52,7 +52,18 @@ def available_backends() -> tuple[str, ...]:
 
 def sparse_dm(A: np.ndarray) -> cs.DM:
     """A numeric matrix as a CasADi DM with only its non-zero entries structural (a dense DM would make
-    every entry structurally non-zero and merge the blocks of :func:`block_solve`)."""
+    every entry structurally non-zero and merge the blocks of :func:`block_solve`).
+
+    Parameters
+    ----------
+    A : array_like
+        The matrix.
+
+    Returns
+    -------
+    casadi.DM
+        Its non-zero entries, structural.
+    """
     A = np.asarray(A, dtype=float)
     rows, cols = np.nonzero(A)
     return cs.DM.triplet(rows.tolist(), cols.tolist(), cs.DM(A[rows, cols]), A.shape[0], A.shape[1])
@@ -64,6 +75,18 @@ def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
     Block by block over the structural strongly connected components of M (one per finger of the
     hand), each by an unrolled LDL^T factorisation: no square root, one division per pivot, fewer
     operations than a QR in generated code, and expressions that stay small under AD.
+
+    Parameters
+    ----------
+    M : casadi.SX
+        (n, n) the matrix.
+    b : casadi.SX
+        (n,) or (n, k) the right side.
+
+    Returns
+    -------
+    casadi.SX
+        x, the shape of b.
     """
     nb, perm, offsets = M.sparsity().scc()
     x: list[Any] = [None] * M.shape[0]
