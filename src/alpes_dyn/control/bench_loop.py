@@ -66,8 +66,20 @@ class BenchRun:
     wall_s: float
 
     def force_rmse(self, after: float = 0.0, force: np.ndarray | None = None) -> float:
-        """RMS of ``force`` (default the sensor's reading; e.g. a stand-in's true force) minus F_ref over the ticks
-        from ``after`` s on (from the first tick's time), N."""
+        """RMS of ``force`` minus F_ref over the ticks from ``after`` s on.
+
+        Parameters
+        ----------
+        after : float, optional
+            s, from the first tick's time.
+        force : ndarray or None, optional
+            The force, N (default the sensor's reading; e.g. a stand-in's true force).
+
+        Returns
+        -------
+        float
+            N.
+        """
         F = self.force if force is None else np.asarray(force, dtype=float)
         k = (self.t - self.t[0]) >= after
         return float(np.sqrt(np.mean((F[k] - self.F_ref[k]) ** 2)))

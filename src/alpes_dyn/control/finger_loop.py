@@ -255,7 +255,12 @@ class ControlResult:
 
     def to_csv(self, path: str) -> None:
         """Write t, F_ref, F_z measured by MuJoCo's sensor, the FlexiForce reading, the force fed back, true
-        and estimated q, motor torque command and measurement, one row per sample."""
+        and estimated q, motor torque command and measurement, one row per sample.
+
+        Parameters
+        ----------
+        path : str
+            The CSV file."""
         n = len(self.joint_names)
         head = (["t_s", "F_ref_N", "F_mujoco_N", "F_flexiforce_N", "F_feedback_N"]
                 + [f"q_true_{j}_rad" for j in self.joint_names] + [f"q_hat_{j}_rad" for j in self.joint_names]
@@ -457,14 +462,19 @@ def run_control(controller: str = "sensor", scenario: ControlScenario | None = N
 
     Parameters
     ----------
-    controller: one of :data:`.CONTROLLERS`.
-    scenario: the settings (default :class:`ControlScenario`); ``overrides`` replace fields, e.g.
-        ``run_control("sensor", reference="sine", duration=4.0, plant_params="plant.toml")``, or on any robot
-        ``run_control("sensor", model=Model.from_urdf_file(urdf, spec), frame="fingertip")``.
+    controller : str, optional
+        One of :data:`.CONTROLLERS`.
+    scenario : ControlScenario or None, optional
+        The settings (default :class:`ControlScenario`).
+    **overrides
+        Fields of the scenario replaced, e.g. ``run_control("sensor", reference="sine", duration=4.0,
+        plant_params="plant.toml")``, or on any robot ``run_control("sensor", model=Model.from_urdf_file(urdf,
+        spec), frame="fingertip")``.
 
     Returns
     -------
-    :class:`ControlResult` with the traces and the metrics.
+    ControlResult
+        The traces and the metrics.
 
     Raises
     ------

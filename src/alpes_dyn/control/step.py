@@ -236,8 +236,10 @@ class ForceStep:
         step on the fingertip force (the defaults: the simulated bench's, :class:`.ControlScenario`).
     force_filter_s : float
         The sensorless estimate's low-pass time constant, s.
-    frame, motor, tau_max
-        A URDF model's contact frame, pulling motor and motor limit (N m), as :class:`.ControlScenario`'s.
+    frame, motor : str or None
+        A URDF model's contact frame and pulling motor, as :class:`.ControlScenario`'s.
+    tau_max : float or None
+        Its motor limit, N m.
     force : bool
         Use a parameter file marked not trustworthy (refused otherwise: :class:`~alpes_dyn.ModelError` with the
         reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
@@ -315,9 +317,33 @@ class ForceStep:
     def from_design(cls, design: LoopDesign, controller: str, dt: float, compensation: Compensation, *,
                     noise: dict, force_filter_s: float, compiled: bool, label: str) -> "ForceStep":
         """A step from a :class:`LoopDesign` (the settings already checked): what
-        :func:`~alpes_dyn.control.finger_loop.run_control` builds from its scenario. ``noise``: the keyword
-        arguments ``torque_noise``, ``encoder_noise_counts``, ``force_noise``, ``force_resolution`` of
-        :func:`force_ekf`; ``label``: the compiled EKF's cache name."""
+        :func:`~alpes_dyn.control.finger_loop.run_control` builds from its scenario.
+
+        Parameters
+        ----------
+        design : LoopDesign
+            The loop's model, contact and limits.
+        controller : str
+            The controller's kind.
+        dt : float
+            The period, s.
+        compensation : Compensation
+            The effects' compensation.
+        noise : dict
+            The keyword arguments ``torque_noise``, ``encoder_noise_counts``, ``force_noise``, ``force_resolution``
+            of :func:`force_ekf`.
+        force_filter_s : float
+            The sensorless estimate's low-pass time constant, s.
+        compiled : bool
+            The EKF's step compiled.
+        label : str
+            The compiled EKF's cache name.
+
+        Returns
+        -------
+        ForceStep
+            The step.
+        """
         self = cls.__new__(cls)
         self._build(design, controller, dt, compensation, noise, force_filter_s, compiled, label)
         return self

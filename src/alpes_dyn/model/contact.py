@@ -53,7 +53,18 @@ class Contact:
 
 
 def as_contacts(contacts: Any) -> tuple[Contact, ...]:
-    """A tuple of :class:`Contact` from Contacts and frame names (a name is a 3-D force in base axes)."""
+    """A tuple of :class:`Contact` from Contacts and frame names (a name is a 3-D force in base axes).
+
+    Parameters
+    ----------
+    contacts : Contact or str or sequence of them
+        The contacts.
+
+    Returns
+    -------
+    tuple of Contact
+        In order.
+    """
     if isinstance(contacts, (str, Contact)):
         contacts = (contacts,)
     if not isinstance(contacts, (list, tuple)):

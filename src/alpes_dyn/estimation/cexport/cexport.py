@@ -401,7 +401,22 @@ def _header_fields(filt: KalmanFilter, about: str, nwork: int, z0: Any, P0: Any)
 def write_c_observer(filt: KalmanFilter, directory: str | os.PathLike[str], *, what: str = "-o",
                      **kwargs: Any) -> dict[str, Path]:
     """Write :func:`c_sources` into ``directory``, a new (or empty) directory (:func:`write_sources`).
-    Returns {file name: path}."""
+
+    Parameters
+    ----------
+    filt : KalmanFilter
+        The filter exported.
+    directory : str or PathLike
+        The folder.
+    what : str, optional
+        The option named in errors (the CLI's ``-o``).
+    **kwargs
+        Passed to :func:`c_sources`.
+
+    Returns
+    -------
+    dict of str to Path
+        {file name: path}."""
     check_output_directory(directory, what)
     return write_sources(c_sources(filt, **kwargs), directory, what)
 

@@ -303,14 +303,19 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
 
     Parameters
     ----------
-    observer: one of :data:`~alpes_dyn.estimation.observers.observers.OBSERVERS`.
-    scenario: the settings (default :class:`EstimationScenario`); ``overrides`` replace fields,
-        e.g. ``run_estimation("ekf-params", mismatch=0.1, duration=5.0, seed=1)``.
-    compiled: run the filter in compiled C (default: CasADi's virtual machine; same numbers).
+    observer : str, optional
+        One of :data:`~alpes_dyn.estimation.observers.observers.OBSERVERS`.
+    scenario : EstimationScenario or None, optional
+        The settings (default :class:`EstimationScenario`).
+    compiled : bool, optional
+        Run the filter in compiled C (default: CasADi's virtual machine; the same numbers).
+    **overrides
+        Fields of the scenario replaced, e.g. ``run_estimation("ekf-params", mismatch=0.1, duration=5.0)``.
 
     Returns
     -------
-    :class:`EstimationResult` with the RMSE of each q_i after the transient (rad).
+    EstimationResult
+        With the RMSE of each q_i after the transient (rad).
     """
     sc = dataclasses.replace(scenario or EstimationScenario(), **overrides)
     sc.check()
