@@ -63,7 +63,13 @@ def _rotation(axis: Sequence[float], angle: float) -> np.ndarray:
 
 
 def hand_chains(params: HandParams) -> tuple[str, ...]:
-    """The hand's flexion chains, one motor each: the fingers of the parameter file, then ``"thumb"``."""
+    """The hand's flexion chains, one motor each: the fingers of the parameter file, then ``"thumb"``.
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters.
+    """
     return (*params.finger_names, "thumb")
 
 
@@ -71,7 +77,16 @@ def chain_frame(params: HandParams, chain: str, abduction: float = 0.0) -> tuple
     """(R (3, 3), p (3,)): orientation and position (m) of a chain's base frame -- its first flexion joint's
     frame at q = 0, the frame of a standalone finger model -- in the palm frame, the thumb at the
     ab/adduction angle ``abduction`` (rad). A finger's frame is the palm's, translated; the thumb's is
-    turned by ``palm.thumb_yaw`` about z, then by ``abduction`` about ``thumb.abduction_axis``."""
+    turned by ``palm.thumb_yaw`` about z, then by ``abduction`` about ``thumb.abduction_axis``.
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters.
+    chain : str
+        A chain of :func:`hand_chains`.
+    abduction : float, optional
+        The thumb's ab/adduction angle, rad."""
     if chain in params.finger_names:
         x, y = params.finger_xy[list(params.finger_names).index(chain)]
         return np.eye(3), np.array([x, y, 0.0])
@@ -85,7 +100,16 @@ def chain_model(params: HandParams, chain: str, abduction: float = 0.0) -> Model
     """The controller's model of one chain of the hand: ``finger3`` for a finger; for the thumb's flexion
     chain (the ab/adduction held at ``abduction``, rad) a two-phalanx finger with the ``[thumb]`` table's
     values. Gravity is the parameter file's, expressed in the chain's base frame (R^T g,
-    :func:`chain_frame`), so that the chain's G(q), J(q) and encoder are the hand's on its joints."""
+    :func:`chain_frame`), so that the chain's G(q), J(q) and encoder are the hand's on its joints.
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters.
+    chain : str
+        A chain of :func:`hand_chains`.
+    abduction : float, optional
+        The thumb's ab/adduction angle, rad."""
     R, _ = chain_frame(params, chain, abduction)
     g = R.T @ np.asarray(params.gravity, dtype=float)
     if chain == "thumb":
@@ -97,7 +121,18 @@ def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: 
                     tip: str | None = None) -> np.ndarray:
     """Unit normal n (3,) of a cylinder's surface at the fingertip, the model's base frame: from the tip frame
     (the centre of the fingertip's rounded end) toward the cylinder's axis, the direction the fingertip
-    presses in. ``center``: a point of the axis, ``axis``: its direction (base frame, m)."""
+    presses in.
+
+    Parameters
+    ----------
+    model : Model
+        The chain's model.
+    q : ndarray
+        (n,) joint angles, rad.
+    center, axis : sequence of float
+        A point of the cylinder's axis, m, and its direction (base frame).
+    tip : str or None, optional
+        The fingertip's frame (default: the model's first tip)."""
     a = _normal(axis)
     d = np.asarray(center, dtype=float) - model.fingertip_position(q, tip)
     d = d - a * (d @ a)
@@ -161,6 +196,13 @@ class HandControlScenario:
     force: bool = False  # a controller's file marked not trustworthy used anyway (model.trust.check_trusted)
 
     def check(self, chains: Sequence[str] | None = None) -> None:
+        """The settings checked (:class:`~alpes_dyn.InputError` naming the first bad one).
+
+        Parameters
+        ----------
+        chains : sequence of str or None, optional
+            The hand's chains (:func:`hand_chains`), for the per-chain settings.
+        """
         _check_effects(self.effects, self.compensation, False)
         if self.controller not in CONTROLLERS:
             raise InputError(f"controller: unknown controller {self.controller!r} "
@@ -243,7 +285,12 @@ class HandControlResult:
     def to_csv(self, path: str) -> None:
         """Write one row per sample: t, then per chain F_ref, F_z measured by MuJoCo's sensor, the FlexiForce
         reading, the force fed back, true and estimated q, motor torque command and measurement (columns
-        prefixed by the chain's name), then the thumb's ab/adduction angle."""
+        prefixed by the chain's name), then the thumb's ab/adduction angle.
+
+    Parameters
+    ----------
+    path : str
+        The CSV file."""
         head, cols = ["t_s"], [self.t]
         for c, r in self.chains.items():
             head += [f"{c}_F_ref_N", f"{c}_F_mujoco_N", f"{c}_F_flexiforce_N", f"{c}_F_feedback_N"]
@@ -366,9 +413,19 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     estimated fingertip (:func:`cylinder_normal`). The EKFs of chains with the same model (the four fingers)
     advance in one call of compiled code. See :class:`HandControlScenario` for the settings.
 
+    Parameters
+    ----------
+    controller : str, optional
+        One of :data:`.CONTROLLERS`.
+    scenario : HandControlScenario or None, optional
+        The settings (default :class:`HandControlScenario`).
+    **overrides
+        Fields of the scenario replaced.
+
     Returns
     -------
-    :class:`HandControlResult`.
+    HandControlResult
+        The traces and the metrics.
 
     Raises
     ------
