@@ -426,6 +426,7 @@ def spatial(d: Path, seed: int, duration: float, states: int) -> dict[str, Any]:
 
     import alpes_dyn as ad
     from alpes_dyn.estimation.experiments.recording import write_recording
+    from alpes_dyn.model.mjcf_spatial import tendon_jacobian
 
     nominal_xml, true_xml, true = _spatial_mjcf(seed)
     (d / "finger.xml").write_text(nominal_xml)
@@ -441,7 +442,7 @@ def spatial(d: Path, seed: int, duration: float, states: int) -> dict[str, Any]:
         q = m.jnt_range[:, 0] + np.ptp(m.jnt_range, axis=1) * rng.random(3)
         mj.qpos[:], mj.qvel[:], mj.ctrl[:] = q, 3 * rng.standard_normal(3), 0.05 * rng.standard_normal(1)
         mujoco.mj_forward(m, mj)
-        J = g * np.asarray(mj.ten_J).reshape(1, 3)[0]
+        J = g * tendon_jacobian(m, mj)[0]
         err["ratio"] = max(err["ratio"], float(np.max(np.abs(tr.ratio(q)[0] - J)) / np.max(np.abs(J))))
         err["angle_rad"] = max(err["angle_rad"], abs(float(tr.motor_positions(q)[0]) - g * (mj.ten_length[0] - L0)))
         qdd = model.forward_dynamics(q, mj.qvel.copy(), tr.joint_torque(mj.ctrl.copy(), q))

@@ -340,30 +340,45 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
     return urdf, spec
 
 
-def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> Motor:
+def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> tuple[Motor, float, str]:
     """The motor of actuator ``a`` on spatial tendon ``t``: its ratios g dL/dq fitted as the spec's ``ratio_curve``
-    (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`); an :class:`MjcfCurveWarning` gives the fit's
-    error where it is not exact (relative error over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`)."""
-    import warnings
-
-    from .mjcf_spatial import TOLERANCE, MjcfCurveWarning, fit_spatial_tendon
+    (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`), the fit's relative error and, where it is not exact
+    (over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`), the line an :class:`MjcfCurveWarning` says. A tendon the
+    form cannot follow (its path changes over a joint's range: a wrapping geom touched, left or wrapped on its other
+    side; a segment over several joints) is refused, the tendon and the reason named."""
+    from .mjcf_spatial import TOLERANCE, fit_spatial_tendon
 
     names = [_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
     fit = fit_spatial_tendon(mujoco, m, t, gear, names)
     if not fit.joints:
         raise ModelError(f"mjcf: actuator {aname!r}'s spatial tendon crosses no joint")
-    if fit.error > TOLERANCE * fit.scale:
-        tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
-        warnings.warn(f"mjcf: spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as "
-                      f"polynomials of each joint's angle, largest error {fit.error:.2g} rad/rad "
-                      f"({fit.error / fit.scale:.2g} of the largest ratio), motor angle g L(q) to {fit.length_error:.2g}"
-                      " rad, over the joint ranges", MjcfCurveWarning, stacklevel=4)
-    return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve)
+    rel = fit.error / fit.scale if fit.scale else 0.0
+    tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
+    if rel > TOLERANCE and fit.reason:
+        raise ModelError(f"mjcf: spatial tendon {tname!r} (actuator {aname!r}): {fit.reason}; the spec's ratios are "
+                         f"one polynomial per joint (best fit {rel:.2g} off, relative): not imported")
+    note = ""
+    if rel > TOLERANCE:
+        note = (f"spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as polynomials of each "
+                f"joint's angle, largest error {fit.error:.2g} rad/rad ({rel:.2g} of the largest ratio), motor angle "
+                f"g L(q) to {fit.length_error:.2g} rad, over the joint ranges")
+    return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve), rel, note
+
+
+def _curve_warning(notes: list[tuple[float, str]]) -> None:
+    """One :class:`MjcfCurveWarning` for the spatial tendons fitted with an error, the worst first."""
+    import warnings
+
+    from .mjcf_spatial import MjcfCurveWarning
+
+    if notes:
+        lines = [n for _, n in sorted(notes, key=lambda x: -x[0])]
+        warnings.warn("mjcf: " + "; ".join(lines), MjcfCurveWarning, stacklevel=4)
 
 
 def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> TransmissionSpec:
     O = mujoco.mjtObj
-    motors = []
+    motors, notes = [], []
     for a in range(m.nu):
         aname = _name(mujoco, m, O.mjOBJ_ACTUATOR, a, "motor")
         gear = float(m.actuator_gear[a, 0])
@@ -376,7 +391,9 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         t = int(m.actuator_trnid[a, 0])
         adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
         if m.wrap_type[adr] != mujoco.mjtWrap.mjWRAP_JOINT:  # a spatial tendon: its ratios fitted as curves of q
-            motors.append(_spatial_motor(mujoco, m, a, t, aname, gear))
+            motor, rel, note = _spatial_motor(mujoco, m, a, t, aname, gear)
+            motors.append(motor)
+            notes += [(rel, note)] if note else []
             continue
         ratios = {}
         for w in range(adr, adr + num):
@@ -386,6 +403,7 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
             ratios[jname] = gear * float(m.wrap_prm[w])
         # the tendon's armature J_t acts on its length sum coef_i q_i: J_t coef coef^T = (J_t / gear^2) S^T S
         motors.append(Motor(aname, ratios, rotor_inertia=_tendon_armature(m, t) / gear**2))
+    _curve_warning(notes)
     tables: dict[str, dict[str, float]] = {"stiffness": {}, "armature": {}, "coulomb": {}, "viscous": {}}
     stops: dict[str, dict[str, float]] = {}
     for j in range(m.njnt):
