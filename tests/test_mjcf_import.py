@@ -108,3 +108,51 @@ def test_springref_is_the_rest_angle():
                            "diaginertia='1 1 1'/></body></body></worldbody></mujoco>")
     assert m.spec.rest_angle == {"a": pytest.approx(math.radians(0.3), rel=1e-12)}
     assert m.spring_torque(np.array([0.0, 0.0]))[0] == pytest.approx(-math.radians(0.3), rel=1e-12)
+
+
+TIED = """<mujoco model="tied"><compiler angle="radian"/><option gravity="0 0 -9.81"/><worldbody>
+  <body name="a"><joint name="j" axis="0 1 0" range="-1 1" stiffness="0.1" springref="0.2"/>
+    <inertial pos="0.05 0 0" mass="0.1" diaginertia="1e-4 2e-4 3e-4"/>
+    <body name="b" pos="0.1 0 0"><joint name="k" axis="0 1 0" range="-1 1" stiffness="0.2" springref="-0.1"
+        damping="0.01" armature="1e-5" frictionloss="0.003"/>
+      <inertial pos="0.05 0 0.01" mass="0.08" diaginertia="1e-4 1e-4 1e-4"/>
+      <body name="c" pos="0.1 0 0"><joint name="l" axis="0 0.6 0.8" range="-1 1" stiffness="0.05" springref="0.3"
+          damping="0.02" armature="2e-5" frictionloss="0.002"/>
+        <inertial pos="0.04 0 0" mass="0.05" diaginertia="5e-5 6e-5 7e-5"/><site name="tip" pos="0.05 0 0"/></body>
+    </body></body></worldbody>
+  <equality><joint name="couple" joint1="l" joint2="k" polycoef="0.05 0.8 0 0 0"/></equality>
+  <tendon><fixed name="t"><joint joint="j" coef="0.01"/><joint joint="k" coef="0.01"/><joint joint="l" coef="0.005"/>
+  </fixed></tendon>
+  <actuator><motor name="m" tendon="t" gear="100"/><motor name="ml" joint="l" gear="3"/></actuator>
+</mujoco>"""
+"""Three hinges, the last tied to the second by a joint equality (q_l = 0.05 + 0.8 q_k), each with a spring, the
+two coupled ones with damping, armature and friction, a fixed tendon over all three and a motor on the tied joint."""
+
+
+def test_joint_equality_with_fixed_tendon_against_mujoco():
+    """The tied joint's rows are moved onto the joint it follows, as the same energies: the import's model (2
+    coordinates) equals MuJoCo's full model projected on q_full = G q + o (G^T M G, G^T bias, G^T springs, G^T of the
+    actuators' forces, G^T D G) to 1e-12 at random states; Coulomb F_k + |a| F_l. The tied joint's range is named
+    as not imported (the library's limits are the independent joints')."""
+    from alpes_dyn.model.mjcf_import import MjcfImportWarning
+
+    with pytest.warns(MjcfImportWarning, match=r"joints l \(tied by a joint equality\): range not imported"):
+        model = ad.Model.from_mjcf(TIED)
+    assert model.joint_names == ("j", "k") and model.spec.motors[0].joints == {"j": 1.0, "k": pytest.approx(1.4)}
+    assert model.spec.motors[1].joints == {"k": pytest.approx(2.4)}
+    np.testing.assert_allclose(model.extras.coulomb, [0.0, 0.003 + 0.8 * 0.002], rtol=1e-14)
+    mj = mujoco.MjModel.from_xml_string(TIED)
+    d = mujoco.MjData(mj)
+    G, o = np.array([[1, 0], [0, 1], [0, 0.8]]), np.array([0, 0, 0.05])
+    rng = np.random.default_rng(12)
+    for _ in range(4):
+        q, v, u = rng.uniform(-0.8, 0.8, 2), rng.normal(size=2), rng.normal(size=2)
+        d.qpos[:], d.qvel[:], d.ctrl[:] = G @ q + o, G @ v, u
+        mujoco.mj_forward(mj, d)
+        M = np.zeros((3, 3))
+        mujoco.mj_fullM(mj, d, M)
+        np.testing.assert_allclose(model.inertia_matrix(q), G.T @ M @ G, rtol=0, atol=1e-12)
+        cg = model.coriolis_matrix(q, v) @ v + model.gravity_torque(q)
+        np.testing.assert_allclose(cg, G.T @ (d.qfrc_bias - d.qfrc_spring), rtol=0, atol=1e-12)
+        np.testing.assert_allclose(model.transmission.joint_torque(u, q), G.T @ d.qfrc_actuator, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(-model.extras.viscous * v, G.T @ d.qfrc_damper, rtol=0, atol=1e-12)

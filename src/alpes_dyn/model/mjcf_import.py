@@ -206,6 +206,13 @@ def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
     O = mujoco.mjtObj
     for e in range(m.neq):
         ename = _name(mujoco, m, O.mjOBJ_EQUALITY, e, "equality")
+        if int(m.eq_type[e]) in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
+            kind = "connect" if int(m.eq_type[e]) == int(mujoco.mjtEq.mjEQ_CONNECT) else "weld"
+            ends = " and ".join(repr(_name(mujoco, m, O.mjOBJ_BODY if m.eq_objtype[e] == O.mjOBJ_BODY
+                                           else O.mjOBJ_SITE, int(i), "body")) for i in (m.eq_obj1id[e], m.eq_obj2id[e]))
+            raise ModelError(f"mjcf: equality {ename!r} is a {kind} between {ends}: a closed kinematic loop; the "
+                             "library models kinematic trees (a joint coupling joint1 = b + a joint2 is the only "
+                             "equality imported), not closed linkages")
         if m.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT:
             raise ModelError(f"mjcf: equality {ename!r} is not a joint equality; only joint equalities (a URDF "
                              "<mimic>, joint1 = b + a joint2) are modelled")
@@ -216,9 +223,66 @@ def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
             raise ModelError(f"mjcf: equality {ename!r} on joint {j1name!r} is not a linear coupling of two joints "
                              "active from the start (joint1 = b + a joint2: give joint2 and polycoef=\"b a 0 0 0\")")
         y0, x0 = float(m.qpos0[m.jnt_qposadr[j1]]), float(m.qpos0[m.jnt_qposadr[j2]])
+        a, b = float(c[1]), float(c[0] + y0 - c[1] * x0)
+        if j1 < j2 and a != 0:  # a joint tied to a later one (its child): the later follows (the URDF's order)
+            j1, j2, a, b = j2, j1, 1.0 / a, -b / a
         if j1 in out:
-            raise ModelError(f"mjcf: joint {j1name!r} is coupled by two joint equalities; one is modelled")
-        out[j1] = (j2, float(c[1]), float(c[0] + y0 - c[1] * x0))
+            raise ModelError(f"mjcf: joint {_name(mujoco, m, O.mjOBJ_JOINT, j1, 'joint')!r} is coupled by two joint "
+                             "equalities; one is modelled")
+        out[j1] = (j2, a, b)
+    for j1 in list(out):  # a joint tied to a tied joint: composed onto the independent one
+        j2, a, b = out[j1]
+        for _ in range(len(out)):
+            if j2 not in out:
+                break
+            k, a2, b2 = out[j2]
+            j2, a, b = k, a * a2, a * b2 + b
+        if j2 in out or j2 == j1:
+            raise ModelError(f"mjcf: joint {_name(mujoco, m, O.mjOBJ_JOINT, j1, 'joint')!r}'s joint equalities "
+                             "form a cycle; tie each joint to one independent joint")
+        out[j1] = (j2, a, b)
+    return out
+
+
+def _fold_mimics(motors: list, tables: dict, stops: dict, fold: dict) -> list:
+    """The spec's rows of joints tied by a joint equality (``fold`` {joint: (primary, a, b)}, q_joint = a q_primary
+    + b) moved onto the joint they follow, as the same energies and powers on its coordinate: a motor's ratio
+    rho -> a rho (added to the primary's), armature and viscous x a^2, Coulomb x |a|, a spring k (q - r) -> a^2 k
+    about (r - b) / a, summed with the primary's own (stiffness and rest angle combined). The tied joint's own
+    limit stop is left to its range (named in :func:`not_imported`). A spatial tendon over a tied joint is refused.
+    ``tables`` and ``stops`` are changed in place; returns the motors."""
+    import dataclasses
+
+    out = []
+    for mo in motors:
+        tied = [j for j in mo.joints if j in fold]
+        bent = [j for j in tied if j in mo.ratio_curve]
+        if bent:
+            raise ModelError(f"mjcf: actuator {mo.name!r}'s spatial tendon crosses joint {bent[0]!r}, which a joint "
+                             f"equality ties to {fold[bent[0]][0]!r}; a curved ratio on a tied joint is not modelled")
+        joints = dict(mo.joints)
+        for j in tied:
+            k, a, _ = fold[j]
+            joints[k] = joints.get(k, 0.0) + a * joints.pop(j)
+        out.append(dataclasses.replace(mo, joints=joints) if tied else mo)
+    rest = tables.setdefault("rest_angle", {})
+    for j, (k, a, b) in fold.items():
+        for key, w in (("armature", a * a), ("viscous", a * a), ("coulomb", abs(a))):
+            v = tables[key].pop(j, 0.0)
+            if v * w:
+                tables[key][k] = tables[key].get(k, 0.0) + w * v
+        kj, rj = tables["stiffness"].pop(j, 0.0), rest.pop(j, 0.0)
+        if kj * a:
+            kk = tables["stiffness"].get(k, 0.0)
+            K = kk + a * a * kj
+            r = (kk * rest.get(k, 0.0) + a * kj * (rj - b)) / K
+            tables["stiffness"][k] = K
+            rest.pop(k, None)
+            if r != 0:
+                rest[k] = r
+        stops.pop(j, None)
+    if not rest:
+        del tables["rest_angle"]
     return out
 
 
@@ -254,6 +318,13 @@ def not_imported(m) -> list[str]:
     if lim:
         out.append(f"actuators {_named(mujoco, m, O.mjOBJ_ACTUATOR, lim, 'motor')}: forcerange (a torque "
                    "saturation) not imported")
+    try:
+        tied = [j for j in _mimics(mujoco, m) if m.jnt_limited[j]]
+    except ModelError:  # an equality the import refuses: said by the import
+        tied = []
+    if tied:
+        out.append(f"joints {_named(mujoco, m, O.mjOBJ_JOINT, tied, 'joint')} (tied by a joint equality): range not "
+                   "imported (the library's limits are those of the joints they follow)")
     tlim = [t for t in range(m.ntendon) if m.tendon_limited[t]]
     if tlim:
         out.append(f"tendons {_named(mujoco, m, O.mjOBJ_TENDON, tlim, 'tendon')}: range (a tendon length limit) not "
@@ -419,6 +490,10 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         if m.jnt_limited[j] and m.jnt_solref[j, 0] < 0:  # a stop in MuJoCo's direct form: the export's [stops]
             w = float(m.dof_invweight0[d])
             stops[jname] = {"stiffness": -float(m.jnt_solref[j, 0]) / w, "damping": -float(m.jnt_solref[j, 1]) / w}
+    mimics = _mimics(mujoco, m)
+    if mimics:
+        jn = lambda j: _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")  # noqa: E731
+        motors = _fold_mimics(motors, tables, stops, {jn(j1): (jn(j2), a, b) for j1, (j2, a, b) in mimics.items()})
     children = set(int(p) for p in m.body_parentid[1:])
     first_site: dict[int, str] = {}
     for sname, b in sites:
