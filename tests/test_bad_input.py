@@ -253,7 +253,9 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotempty_toml=b"# a spec with nothing in it\n", arm_xml=ARM_MJCF.encode(),
                  slide_xml=ARM_MJCF.replace('<joint name="ja" type="hinge"', '<joint name="ja" type="slide"').encode(),
                  norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n",
-                 flip_xml=_MJCF_FLIP.encode(),
+                 flip_xml=_MJCF_FLIP.encode(), gear0_xml=ARM_MJCF.replace('gear="100"', 'gear="0"').encode(),
+                 muscle_xml=ARM_MJCF.replace('<motor name="m" tendon="t" gear="100"/>',
+                                             '<muscle name="m" tendon="t"/>').encode(),
                  loop_xml=_MJCF_EQ.format('<connect name="loop" body1="b" body2="world" anchor="0 0 0"/>').encode(),
                  geomass_xml=ARM_MJCF.replace('<compiler angle="radian"/>', '<compiler angle="radian" inertiafromgeom='
                                               '"true"/>').replace("<site ", '<geom size="0.01"/><site ').encode())
@@ -846,6 +848,9 @@ CLI: dict[str, list[Cli]] = {
         C("import", "--model", "{notxml_xml}", "-o", "{tmp}/out", needle="--model: MuJoCo cannot compile it"),
         C("import", "--model", "{flip_xml}", "-o", "{tmp}/out", needle="--model: spatial tendon 'EE' (actuator 'EE'): "
           "it changes side of its wrapping geom 'elbow'"),
+        C("import", "--model", "{gear0_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' has gear 0; a motor's "
+          "gear (its ratio) must be a non-zero number"),
+        C("import", "--model", "{muscle_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' is a muscle"),
         C("import", "--model", "{loop_xml}", "-o", "{tmp}/out", needle="--model: equality 'loop' is a connect between "
           "'b' and 'world': a closed kinematic loop"),
         C("import", "--model", "{tmp}/.xml", "-o", "{tmp}/out", needle="--model: the files written are named after "

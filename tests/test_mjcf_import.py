@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -81,6 +82,9 @@ def test_hand_written_mjcf_against_mujoco():
                                    b.fingertip_position(q, "tip"), d.site_xpos[0], rtol=0, atol=1e-7)
 
 
+TIED_LATER = object()  # TIED with a connect equality (a closed loop), defined below
+
+
 @pytest.mark.parametrize("xml, needle", [
     ("<mujoco><worldbody><body><freejoint/><inertial pos='0 0 0' mass='1' diaginertia='1 1 1'/></body>"
      "</worldbody></mujoco>", "is a free joint"),
@@ -93,9 +97,15 @@ def test_hand_written_mjcf_against_mujoco():
     ("<mujoco><worldbody><body></mujoco>", "mjcf: MuJoCo cannot compile it"),
     ("<robot name='x'/>", "expected MJCF text containing a <mujoco> element"),
     ("no/such/file.xml", "'no/such/file.xml' is not a file"),
+    (ARM.replace('gear="100"', 'gear="0"'), "actuator 'm' has gear 0; a motor's gear (its ratio) must be a non-zero"),
+    (ARM.replace('<motor name="m" tendon="t" gear="100"/>', '<muscle name="m" tendon="t"/>'),
+     "actuator 'm' is a muscle; the library's motors are torque sources"),
+    (TIED_LATER, "equality 'loop' is a connect between 'c' and 'world': a closed kinematic loop"),
 ])
 def test_bad_mjcf(xml, needle):
-    with pytest.raises(ModelError, match=needle.replace("(", r"\(")):
+    xml = TIED.replace('<joint name="couple"', '<connect name="loop" body1="c" body2="world" anchor="0.3 0 0"/>'
+                                                '<joint name="couple"') if xml is TIED_LATER else xml
+    with pytest.raises(ModelError, match=re.escape(needle)):
         ad.Model.from_mjcf(xml)
 
 
@@ -156,3 +166,34 @@ def test_joint_equality_with_fixed_tendon_against_mujoco():
         np.testing.assert_allclose(cg, G.T @ (d.qfrc_bias - d.qfrc_spring), rtol=0, atol=1e-12)
         np.testing.assert_allclose(model.transmission.joint_torque(u, q), G.T @ d.qfrc_actuator, rtol=0, atol=1e-12)
         np.testing.assert_allclose(-model.extras.viscous * v, G.T @ d.qfrc_damper, rtol=0, atol=1e-12)
+
+
+def test_hinge_ref_keeps_mujoco_coordinates():
+    """A hinge's ``ref`` (MuJoCo's angle where the body is as written) keeps MuJoCo's coordinates: the limits are
+    the MJCF's range, the tip site and M(q) are MuJoCo's at the same q (to 1e-12), the spring's rest its springref."""
+    xml = ARM.replace('range="-1 1"', 'range="-1 1" ref="0.3" springref="0.1"').replace('range="-2 2"',
+                                                                                        'range="-2 2" ref="-0.4"')
+    b = ad.Model.from_mjcf(xml)
+    mj = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(mj)
+    np.testing.assert_array_equal(b.lower, [-1.0, -2.0])
+    assert b.spec.rest_angle == {"ja": pytest.approx(0.1, rel=1e-12)}
+    for q in (np.array([0.3, -0.4]), np.array([-0.7, 1.5]), np.array([0.9, 0.2])):
+        d.qpos[:] = q
+        mujoco.mj_forward(mj, d)
+        M = np.zeros((2, 2))
+        mujoco.mj_fullM(mj, d, M)
+        np.testing.assert_allclose(b.fingertip_position(q, "tip"), d.site_xpos[0], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.inertia_matrix(q), M, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(b.spring_torque(q), -d.qfrc_spring, rtol=0, atol=1e-12)
+
+
+def test_gravcomp_is_named_as_not_imported():
+    """MuJoCo's gravity compensation of a body changes its dynamics and has no place in the spec: named in the
+    import's warning (and ``not_imported``), the body given."""
+    from alpes_dyn.model.mjcf_import import MjcfImportWarning, not_imported
+
+    xml = ARM.replace('<body name="b"', '<body name="b" gravcomp="1"')
+    with pytest.warns(MjcfImportWarning, match=r"bodies b: gravcomp \(MuJoCo's gravity compensation"):
+        ad.Model.from_mjcf(xml)
+    assert any(x.startswith("bodies b: gravcomp") for x in not_imported(mujoco.MjModel.from_xml_string(xml)))

@@ -164,6 +164,13 @@ def _quat_mat(q: np.ndarray) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
+    k = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
 def _origin(p: np.ndarray, R: np.ndarray) -> str:
     r, pi, y = _rpy(R)
     return f'<origin xyz="{_f(p[0])} {_f(p[1])} {_f(p[2])}" rpy="{_f(r)} {_f(pi)} {_f(y)}"/>'
@@ -186,6 +193,7 @@ def _check_supported(mujoco, m) -> None:
             raise ModelError(f"mjcf: body {_name(mujoco, m, mujoco.mjtObj.mjOBJ_BODY, b, 'body')!r} has "
                              f"{counts[b]} joints; one hinge per body is supported")
     _mimics(mujoco, m)
+    _check_actuators(mujoco, m)
     for t in range(m.ntendon):
         tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
         if np.any(m.tendon_stiffness[t] != 0):
@@ -196,6 +204,17 @@ def _check_supported(mujoco, m) -> None:
             raise ModelError(f"mjcf: tendon {tname!r} has an armature but no actuator; a rotor belongs to a motor")
         if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
+
+
+def _check_actuators(mujoco, m) -> None:
+    """Muscles refused as such (their force-length-velocity law and activation are not a torque source)."""
+    kinds = ((m.actuator_dyntype, mujoco.mjtDyn.mjDYN_MUSCLE), (m.actuator_gaintype, mujoco.mjtGain.mjGAIN_MUSCLE),
+             (m.actuator_biastype, mujoco.mjtBias.mjBIAS_MUSCLE))
+    for a in range(m.nu):
+        if any(int(types[a]) == int(muscle) for types, muscle in kinds):
+            raise ModelError(f"mjcf: actuator {_name(mujoco, m, mujoco.mjtObj.mjOBJ_ACTUATOR, a, 'motor')!r} is a "
+                             "muscle; the library's motors are torque sources on their transmission (replace it by a "
+                             "<motor> on the same tendon)")
 
 
 def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
@@ -298,7 +317,9 @@ def not_imported(m) -> list[str]:
     (tau = S^T tau_m, the actuator's force taken as the motor torque), so a servo's gain and bias (``position``,
     ``velocity``, ``intvelocity`` and ``general`` actuators: ``gainprm``/``biasprm``), activation dynamics
     (``dyntype``), a force saturation (``forcerange``) and a tendon's length limit (``range``) are left to the
-    user's controller or recorded torques. Collision geometry and the solver's options are never imported (the
+    user's controller or recorded torques; a body's ``gravcomp`` (MuJoCo's gravity compensation: the library's
+    gravity acts on the whole mass) and the range of a joint tied by a joint equality (the library's limits are
+    those of the joint it follows) are named too. Collision geometry and the solver's options are never imported (the
     library's contact is its own, :mod:`alpes_dyn.model.contact`)."""
     mujoco = _mj()
     O = mujoco.mjtObj
@@ -318,6 +339,10 @@ def not_imported(m) -> list[str]:
     if lim:
         out.append(f"actuators {_named(mujoco, m, O.mjOBJ_ACTUATOR, lim, 'motor')}: forcerange (a torque "
                    "saturation) not imported")
+    comp = [b for b in range(m.nbody) if getattr(m, "body_gravcomp", np.zeros(m.nbody))[b] != 0]
+    if comp:
+        out.append(f"bodies {_named(mujoco, m, O.mjOBJ_BODY, comp, 'body')}: gravcomp (MuJoCo's gravity compensation "
+                   "of their weight) not imported: the library's gravity acts on their whole mass")
     try:
         tied = [j for j in _mimics(mujoco, m) if m.jnt_limited[j]]
     except ModelError:  # an equality the import refuses: said by the import
@@ -373,6 +398,8 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
         parent = int(m.body_parentid[b])
         R = _quat_mat(m.body_quat[b])
         p = m.body_pos[b] - shift[parent] + R @ shift[b]
+        if b in jnt_of:  # a hinge's ref: MuJoCo's angle is ref where the body is as written (the URDF's is then 0)
+            R = R @ _axis_rotation(m.jnt_axis[jnt_of[b]], -float(m.qpos0[m.jnt_qposadr[jnt_of[b]]]))
         org = _origin(p, R)
         if b in jnt_of:
             j = jnt_of[b]
@@ -453,6 +480,9 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
     for a in range(m.nu):
         aname = _name(mujoco, m, O.mjOBJ_ACTUATOR, a, "motor")
         gear = float(m.actuator_gear[a, 0])
+        if not np.isfinite(gear) or gear == 0:
+            raise ModelError(f"mjcf: actuator {aname!r} has gear {gear:g}; a motor's gear (its ratio) must be a "
+                             "non-zero number")
         if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:  # a motor on one joint: q_m = gear q
             motors.append(Motor(aname, {_name(mujoco, m, O.mjOBJ_JOINT, int(m.actuator_trnid[a, 0]), "joint"): gear}))
             continue
