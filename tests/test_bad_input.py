@@ -96,6 +96,13 @@ _MJCF_FLIP = ('<mujoco><worldbody><site name="s4" pos="-0.1 -0.06 0"/><site name
               'tendon="EE"/></actuator></mujoco>')
 """MuJoCo's arm26 elbow extensor (a motor for its muscle): over 0..120 degrees its tendon changes side of the
 elbow's cylinder (its moment arm jumps from 0.08 to -0.08 m), which no polynomial of the angle follows."""
+_MJCF_BODY = '<body name="b{0}"><joint name="j{0}" range="-1 1"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>'
+_MJCF_DEEP = "<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) for i in range(500)) + "</body>" * 500 + (
+    "</worldbody></mujoco>")
+"""A chain of 500 bodies (deeper than the URDF's limit of 100; MuJoCo's own XML parser stops at 500)."""
+_MJCF_SITES = ("<mujoco><worldbody>" + _MJCF_BODY.format(0) + "".join(f'<site name="s{i}"/>' for i in range(1001))
+               + "</body></worldbody></mujoco>")
+"""One body with 1001 sites: each site a URDF link, over the limit of 1000."""
 RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
 ARM_MJCF = """<mujoco model="arm"><compiler angle="radian"/><worldbody>
   <body name="a" pos="0 0 0.1"><joint name="ja" type="hinge" axis="0 1 0" range="-1 1" stiffness="0.3"/>
@@ -253,7 +260,9 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotempty_toml=b"# a spec with nothing in it\n", arm_xml=ARM_MJCF.encode(),
                  slide_xml=ARM_MJCF.replace('<joint name="ja" type="hinge"', '<joint name="ja" type="slide"').encode(),
                  norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n",
-                 flip_xml=_MJCF_FLIP.encode(), gear0_xml=ARM_MJCF.replace('gear="100"', 'gear="0"').encode(),
+                 flip_xml=_MJCF_FLIP.encode(), deep_xml=_MJCF_DEEP.encode(), sites_xml=_MJCF_SITES.encode(),
+                 nan_xml=ARM_MJCF.replace('<body name="a" pos="0 0 0.1">', '<body name="a" pos="nan 0 0.1">').encode(),
+                 gear0_xml=ARM_MJCF.replace('gear="100"', 'gear="0"').encode(),
                  muscle_xml=ARM_MJCF.replace('<motor name="m" tendon="t" gear="100"/>',
                                              '<muscle name="m" tendon="t"/>').encode(),
                  loop_xml=_MJCF_EQ.format('<connect name="loop" body1="b" body2="world" anchor="0 0 0"/>').encode(),
@@ -848,6 +857,10 @@ CLI: dict[str, list[Cli]] = {
         C("import", "--model", "{notxml_xml}", "-o", "{tmp}/out", needle="--model: MuJoCo cannot compile it"),
         C("import", "--model", "{flip_xml}", "-o", "{tmp}/out", needle="--model: spatial tendon 'EE' (actuator 'EE'): "
           "it changes side of its wrapping geom 'elbow'"),
+        C("import", "--model", "{nan_xml}", "-o", "{tmp}/out", needle="--model: <body name='a'> pos='nan 0 0.1': a "
+          "number is NaN"),
+        C("import", "--model", "{deep_xml}", "-o", "{tmp}/out", needle="--model: bodies nested over 100 deep, the limit"),
+        C("import", "--model", "{sites_xml}", "-o", "{tmp}/out", needle="--model: over 1000 bodies and sites, the limit"),
         C("import", "--model", "{gear0_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' has gear 0; a motor's "
           "gear (its ratio) must be a non-zero number"),
         C("import", "--model", "{muscle_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' is a muscle"),

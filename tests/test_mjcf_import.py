@@ -197,3 +197,37 @@ def test_gravcomp_is_named_as_not_imported():
     with pytest.warns(MjcfImportWarning, match=r"bodies b: gravcomp \(MuJoCo's gravity compensation"):
         ad.Model.from_mjcf(xml)
     assert any(x.startswith("bodies b: gravcomp") for x in not_imported(mujoco.MjModel.from_xml_string(xml)))
+
+
+def test_huge_or_deep_mjcf_refused_before_mujoco(monkeypatch):
+    """A 200,000-site MJCF and a 500-deep chain are refused by the import's own scan (the URDF's limits), before
+    MuJoCo's parser runs (it would spend 42 s and 650 MB on the sites, and stop at the depth with 'XML parse error
+    18')."""
+    def no_compile(*args, **kwargs):
+        raise AssertionError("MuJoCo's parser was reached")
+
+    monkeypatch.setattr(mujoco.MjModel, "from_xml_string", no_compile)
+    body = '<body name="b{0}"><joint name="j{0}" range="-1 1"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>'
+    sites = ("<mujoco><worldbody>" + body.format(0) + "".join(f'<site name="s{i}"/>' for i in range(200_000))
+             + "</body></worldbody></mujoco>")
+    with pytest.raises(ModelError, match=r"^mjcf: over 1000 bodies and sites, the limit \(each a link of the "):
+        ad.Model.from_mjcf(sites)
+    deep = ("<mujoco><worldbody>" + "".join(body.format(i) for i in range(500)) + "</body>" * 500
+            + "</worldbody></mujoco>")
+    with pytest.raises(ModelError, match=r"^mjcf: bodies nested over 100 deep, the limit"):
+        ad.Model.from_mjcf(deep)
+
+
+def test_nan_named_and_no_mujoco_log(tmp_path, monkeypatch):
+    """A NaN in an MJCF is refused naming the element and attribute (not Pinocchio's URDF parser), and MuJoCo's
+    warning is not written as MUJOCO_LOG.TXT in the working folder, also where it comes from an included file."""
+    monkeypatch.chdir(tmp_path)
+    with pytest.raises(ModelError, match=r"^mjcf: <body name='b'> pos='0.1 nan 0': a number is NaN$"):
+        ad.Model.from_mjcf(ARM.replace('<body name="b" pos="0.1 0 0"', '<body name="b" pos="0.1 nan 0"'))
+    (tmp_path / "part.xml").write_text('<mujoco><worldbody><body name="n" pos="nan 0 0"><joint name="jn" '
+                                       'range="-1 1"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/></body>'
+                                       "</worldbody></mujoco>")
+    (tmp_path / "main.xml").write_text('<mujoco><include file="part.xml"/></mujoco>')
+    with pytest.raises(ModelError, match=r"^mjcf: a number is NaN \(XML contains a 'NaN'"):
+        ad.Model.from_mjcf(tmp_path / "main.xml")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["main.xml", "part.xml"]

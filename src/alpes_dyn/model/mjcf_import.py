@@ -89,14 +89,68 @@ def _compile(mjcf: str | Path):
         raise ModelError("mjcf: expected MJCF text containing a <mujoco> element, or the path of such a file")
     if not is_text and not Path(mjcf).is_file():
         raise ModelError(f"mjcf: {str(mjcf)!r} is not a file")
-    if not is_text:  # a regular file within the size limit, before MuJoCo's parser reads it
-        read_bytes(mjcf, "mjcf", ModelError)
+    # a regular file within the size limit, its bodies and sites within the URDF's, before MuJoCo's parser reads it
+    _scan(mjcf if is_text else read_bytes(mjcf, "mjcf", ModelError))
+    said: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(said.append)  # MuJoCo's warnings said here, not written to MUJOCO_LOG.TXT
     try:
-        if is_text:
-            return mujoco.MjModel.from_xml_string(mjcf)
-        return mujoco.MjModel.from_xml_path(str(mjcf))
+        m = mujoco.MjModel.from_xml_string(mjcf) if is_text else mujoco.MjModel.from_xml_path(str(mjcf))
     except ValueError as exc:
         raise ModelError(f"mjcf: MuJoCo cannot compile it ({str(exc).splitlines()[0]})") from None
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    for text in said:
+        if "nan" in text.lower():
+            raise ModelError(f"mjcf: a number is NaN ({text.strip()})")
+        import warnings
+
+        warnings.warn(f"mjcf: MuJoCo: {text.strip()}", MjcfImportWarning, stacklevel=3)
+    return m
+
+
+def _no_nan(tag: str, attrib: dict) -> None:
+    """:class:`~alpes_dyn.ModelError` naming the element and attribute where an MJCF number is NaN."""
+    for key, value in attrib.items():
+        if "nan" in value.lower() and any(w.lower().lstrip("+-") == "nan" for w in value.split()):
+            who = f"<{tag} name={attrib['name']!r}>" if "name" in attrib else f"a <{tag}>"
+            raise ModelError(f"mjcf: {who} {key}={value[:60]!r}: a number is NaN")
+
+
+def _scan(text: "str | bytes") -> None:
+    """MJCF text refused before MuJoCo compiles it where its bodies nest deeper than
+    :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` or its bodies and sites (each a URDF link) outnumber
+    :data:`~alpes_dyn.limits.MAX_URDF_LINKS` (what the import's URDF would be refused on, said before MuJoCo's own
+    parser runs out of depth or spends its time on a huge file), or where a number is NaN (:func:`_no_nan`). Text
+    the XML parser cannot read is left to MuJoCo's message."""
+    import xml.etree.ElementTree as ET
+
+    from ..limits import MAX_URDF_DEPTH, MAX_URDF_LINKS
+
+    parser = ET.XMLPullParser(events=("start", "end"))
+    depth = links = 0
+    step = 1 << 16
+    try:
+        for i in range(0, len(text), step):
+            parser.feed(text[i:i + step])
+            for event, el in parser.read_events():
+                tag = el.tag if isinstance(el.tag, str) else ""
+                if tag == "body":
+                    depth += 1 if event == "start" else -1
+                if event == "start" and tag in ("body", "site"):
+                    links += 1
+                if event == "start":
+                    _no_nan(tag, el.attrib)
+                if depth > MAX_URDF_DEPTH:
+                    raise ModelError(f"mjcf: bodies nested over {MAX_URDF_DEPTH} deep, the limit (each body a link "
+                                     "of the imported URDF's chain)")
+                if links > MAX_URDF_LINKS:
+                    raise ModelError(f"mjcf: over {MAX_URDF_LINKS} bodies and sites, the limit (each a link of the "
+                                     "imported URDF)")
+                if event == "end":
+                    el.clear()
+    except ET.ParseError:
+        return
 
 
 def _compile_held(mjcf: str | Path, hold: Sequence[str] = ()):
@@ -227,8 +281,9 @@ def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
         ename = _name(mujoco, m, O.mjOBJ_EQUALITY, e, "equality")
         if int(m.eq_type[e]) in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
             kind = "connect" if int(m.eq_type[e]) == int(mujoco.mjtEq.mjEQ_CONNECT) else "weld"
-            ends = " and ".join(repr(_name(mujoco, m, O.mjOBJ_BODY if m.eq_objtype[e] == O.mjOBJ_BODY
-                                           else O.mjOBJ_SITE, int(i), "body")) for i in (m.eq_obj1id[e], m.eq_obj2id[e]))
+            kind_obj = O.mjOBJ_BODY if m.eq_objtype[e] == O.mjOBJ_BODY else O.mjOBJ_SITE
+            ends = " and ".join(repr(_name(mujoco, m, kind_obj, int(i), "body"))
+                                for i in (m.eq_obj1id[e], m.eq_obj2id[e]))
             raise ModelError(f"mjcf: equality {ename!r} is a {kind} between {ends}: a closed kinematic loop; the "
                              "library models kinematic trees (a joint coupling joint1 = b + a joint2 is the only "
                              "equality imported), not closed linkages")
