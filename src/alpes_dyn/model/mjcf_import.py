@@ -11,27 +11,37 @@ backends read:
 * the **spec**: one motor per actuator on a fixed tendon, q_m = gear * sum_i coef_i q_i, so the ratio of joint i
   is gear * coef_i, on a spatial tendon (sites, wrapping cylinders and spheres) q_m = gear * L(q), its ratios
   gear * dL/dq fitted as the spec's ``ratio_curve`` from MuJoCo's own tendon Jacobian over the joint ranges
-  (:mod:`alpes_dyn.model.mjcf_spatial`; the fit's error said in an ``MjcfCurveWarning`` where it is not exact), or
+  (:mod:`alpes_dyn.model.mjcf_spatial`; the fit's error said in one ``MjcfCurveWarning``, the worst tendon first,
+  where it is not exact; a tendon whose path leaves, touches or changes side of its wrapping geom over a joint's range,
+  or spans two joints, refused with the reason), or
   on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
   (with ``springref``, the spring's rest angle: the spec's ``[rest_angle]`` where it is not 0), ``armature``,
   ``frictionloss`` (Coulomb) and ``damping`` (viscous); a joint limit's ``solreflimit`` in MuJoCo's direct form
   (-stiffness -damping, what the export writes for a spec's ``[stops]``) as the ``[stops]`` row k = -solref[0] / w,
   d = -solref[1] / w, w the joint's ``dof_invweight0`` (the library's spring-damper stop where the limit's impedance
   is small, as the export's 1e-4; a limit in the time-constant form gets no row: sized by the library);
+  a hinge's ``ref`` (MuJoCo's angle where the body is as written) kept: the child frame is turned by -ref about the
+  axis, so the URDF's angle is MuJoCo's and the range, ``springref`` and tendon lengths hold as written;
   gravity from ``<option gravity>``; the tips: the first site of each leaf body, or the leaf body's own frame where
   it has no site (the link's origin, on its joint's axis: a fingertip point needs a site).
 
 What would change how the motors act and has no place in the spec is said in one :class:`MjcfImportWarning`
 naming each field (:func:`not_imported`: a servo's ``gainprm``/``biasprm``, ``dyntype``, ``forcerange``, a tendon's
-``range``; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
+``range``, a body's ``gravcomp``, a tied joint's range; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
 import`` only. MuJoCo Menagerie's Shadow Hand E3M5 ships as an example (:func:`example_mjcf_path`; tested against
 MuJoCo on that MJCF). ``hold=`` welds hinges at their reference angle, the actuators on them dropped (e.g. a hand's
 wrist: each finger then a branch of its own). What the library does not model is refused with one line naming it,
 never dropped: free, ball and slide joints, a hinge without range, a body with several joints, actuators on sites, a tendon spring,
-an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
-(``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
-:mod:`alpes_dyn.model.mimic`). An MJCF file must be a regular file within
-:data:`alpes_dyn.limits.MAX_TEXT_BYTES` (checked before MuJoCo's parser reads it). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
+an armature on a tendon no actuator pulls, a muscle, a gear of 0, equality constraints other than a joint's linear
+coupling to another (``<connect>`` and ``<weld>`` are refused as closed kinematic loops, the bodies named). A joint
+equality ``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>`` is read as the URDF's ``<mimic>`` (a mimic
+joint, :mod:`alpes_dyn.model.mimic`; the later joint of the tree follows, the equality inverted if need be, chains
+composed), and the tied joint's rows of the spec are moved onto the joint it follows as the same energies
+(:func:`~alpes_dyn.model.mjcf_equality.fold_couplings`: a fixed tendon's coef a coef, springs, armature, damping, friction); its own range is named
+as not imported. An MJCF file must be a regular file within :data:`alpes_dyn.limits.MAX_TEXT_BYTES`, with bodies
+nested at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` deep, at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS`
+bodies and sites, and no NaN (checked before MuJoCo's parser reads it; MuJoCo's compile warnings are the import's,
+never a ``MUJOCO_LOG.TXT`` in the working folder). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
 and forward dynamics as the model exported, to 1e-12.
 """
 
@@ -45,6 +55,7 @@ import numpy as np
 
 from ..errors import AlpesDynWarning, ModelError
 from ..fileio import read_bytes
+from .mjcf_equality import fold_couplings, joint_couplings
 from .spec import Motor, TransmissionSpec
 
 __all__ = ["MjcfImportWarning", "example_mjcf_path", "mjcf_to_urdf", "not_imported"]
@@ -246,7 +257,7 @@ def _check_supported(mujoco, m) -> None:
         if counts[b] > 1:
             raise ModelError(f"mjcf: body {_name(mujoco, m, mujoco.mjtObj.mjOBJ_BODY, b, 'body')!r} has "
                              f"{counts[b]} joints; one hinge per body is supported")
-    _mimics(mujoco, m)
+    joint_couplings(mujoco, m)
     _check_actuators(mujoco, m)
     for t in range(m.ntendon):
         tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
@@ -269,95 +280,6 @@ def _check_actuators(mujoco, m) -> None:
             raise ModelError(f"mjcf: actuator {_name(mujoco, m, mujoco.mjtObj.mjOBJ_ACTUATOR, a, 'motor')!r} is a "
                              "muscle; the library's motors are torque sources on their transmission (replace it by a "
                              "<motor> on the same tendon)")
-
-
-def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
-    """{joint1: (joint2, a, b)} of the MJCF's joint equalities, joint1 = b + a joint2 (the URDF's ``<mimic>``):
-    ``polycoef="b' a 0 0 0"`` about the joints' reference positions (qpos0), composed into b. Any other equality
-    (connect, weld, tendon, a joint held alone, a polynomial of degree > 1, one inactive at start) is refused."""
-    out: dict[int, tuple[int, float, float]] = {}
-    O = mujoco.mjtObj
-    for e in range(m.neq):
-        ename = _name(mujoco, m, O.mjOBJ_EQUALITY, e, "equality")
-        if int(m.eq_type[e]) in (int(mujoco.mjtEq.mjEQ_CONNECT), int(mujoco.mjtEq.mjEQ_WELD)):
-            kind = "connect" if int(m.eq_type[e]) == int(mujoco.mjtEq.mjEQ_CONNECT) else "weld"
-            kind_obj = O.mjOBJ_BODY if m.eq_objtype[e] == O.mjOBJ_BODY else O.mjOBJ_SITE
-            ends = " and ".join(repr(_name(mujoco, m, kind_obj, int(i), "body"))
-                                for i in (m.eq_obj1id[e], m.eq_obj2id[e]))
-            raise ModelError(f"mjcf: equality {ename!r} is a {kind} between {ends}: a closed kinematic loop; the "
-                             "library models kinematic trees (a joint coupling joint1 = b + a joint2 is the only "
-                             "equality imported), not closed linkages")
-        if m.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT:
-            raise ModelError(f"mjcf: equality {ename!r} is not a joint equality; only joint equalities (a URDF "
-                             "<mimic>, joint1 = b + a joint2) are modelled")
-        j1, j2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
-        c = np.asarray(m.eq_data[e, :5], dtype=float)
-        j1name = _name(mujoco, m, O.mjOBJ_JOINT, j1, "joint")
-        if j2 < 0 or np.any(c[2:] != 0) or not bool(m.eq_active0[e]):
-            raise ModelError(f"mjcf: equality {ename!r} on joint {j1name!r} is not a linear coupling of two joints "
-                             "active from the start (joint1 = b + a joint2: give joint2 and polycoef=\"b a 0 0 0\")")
-        y0, x0 = float(m.qpos0[m.jnt_qposadr[j1]]), float(m.qpos0[m.jnt_qposadr[j2]])
-        a, b = float(c[1]), float(c[0] + y0 - c[1] * x0)
-        if j1 < j2 and a != 0:  # a joint tied to a later one (its child): the later follows (the URDF's order)
-            j1, j2, a, b = j2, j1, 1.0 / a, -b / a
-        if j1 in out:
-            raise ModelError(f"mjcf: joint {_name(mujoco, m, O.mjOBJ_JOINT, j1, 'joint')!r} is coupled by two joint "
-                             "equalities; one is modelled")
-        out[j1] = (j2, a, b)
-    for j1 in list(out):  # a joint tied to a tied joint: composed onto the independent one
-        j2, a, b = out[j1]
-        for _ in range(len(out)):
-            if j2 not in out:
-                break
-            k, a2, b2 = out[j2]
-            j2, a, b = k, a * a2, a * b2 + b
-        if j2 in out or j2 == j1:
-            raise ModelError(f"mjcf: joint {_name(mujoco, m, O.mjOBJ_JOINT, j1, 'joint')!r}'s joint equalities "
-                             "form a cycle; tie each joint to one independent joint")
-        out[j1] = (j2, a, b)
-    return out
-
-
-def _fold_mimics(motors: list, tables: dict, stops: dict, fold: dict) -> list:
-    """The spec's rows of joints tied by a joint equality (``fold`` {joint: (primary, a, b)}, q_joint = a q_primary
-    + b) moved onto the joint they follow, as the same energies and powers on its coordinate: a motor's ratio
-    rho -> a rho (added to the primary's), armature and viscous x a^2, Coulomb x |a|, a spring k (q - r) -> a^2 k
-    about (r - b) / a, summed with the primary's own (stiffness and rest angle combined). The tied joint's own
-    limit stop is left to its range (named in :func:`not_imported`). A spatial tendon over a tied joint is refused.
-    ``tables`` and ``stops`` are changed in place; returns the motors."""
-    import dataclasses
-
-    out = []
-    for mo in motors:
-        tied = [j for j in mo.joints if j in fold]
-        bent = [j for j in tied if j in mo.ratio_curve]
-        if bent:
-            raise ModelError(f"mjcf: actuator {mo.name!r}'s spatial tendon crosses joint {bent[0]!r}, which a joint "
-                             f"equality ties to {fold[bent[0]][0]!r}; a curved ratio on a tied joint is not modelled")
-        joints = dict(mo.joints)
-        for j in tied:
-            k, a, _ = fold[j]
-            joints[k] = joints.get(k, 0.0) + a * joints.pop(j)
-        out.append(dataclasses.replace(mo, joints=joints) if tied else mo)
-    rest = tables.setdefault("rest_angle", {})
-    for j, (k, a, b) in fold.items():
-        for key, w in (("armature", a * a), ("viscous", a * a), ("coulomb", abs(a))):
-            v = tables[key].pop(j, 0.0)
-            if v * w:
-                tables[key][k] = tables[key].get(k, 0.0) + w * v
-        kj, rj = tables["stiffness"].pop(j, 0.0), rest.pop(j, 0.0)
-        if kj * a:
-            kk = tables["stiffness"].get(k, 0.0)
-            K = kk + a * a * kj
-            r = (kk * rest.get(k, 0.0) + a * kj * (rj - b)) / K
-            tables["stiffness"][k] = K
-            rest.pop(k, None)
-            if r != 0:
-                rest[k] = r
-        stops.pop(j, None)
-    if not rest:
-        del tables["rest_angle"]
-    return out
 
 
 def _named(mujoco, m, kind, ids, prefix: str) -> str:
@@ -399,7 +321,7 @@ def not_imported(m) -> list[str]:
         out.append(f"bodies {_named(mujoco, m, O.mjOBJ_BODY, comp, 'body')}: gravcomp (MuJoCo's gravity compensation "
                    "of their weight) not imported: the library's gravity acts on their whole mass")
     try:
-        tied = [j for j in _mimics(mujoco, m) if m.jnt_limited[j]]
+        tied = [j for j in joint_couplings(mujoco, m) if m.jnt_limited[j]]
     except ModelError:  # an equality the import refuses: said by the import
         tied = []
     if tied:
@@ -436,7 +358,7 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
     shift = np.zeros((m.nbody, 3))
     for b, j in jnt_of.items():
         shift[b] = m.jnt_pos[j]
-    mimics = _mimics(mujoco, m)
+    mimics = joint_couplings(mujoco, m)
     links, joints = ['<link name="world"/>'], []
     for b in range(1, m.nbody):
         R_i = _quat_mat(m.body_iquat[b])
@@ -575,10 +497,10 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         if m.jnt_limited[j] and m.jnt_solref[j, 0] < 0:  # a stop in MuJoCo's direct form: the export's [stops]
             w = float(m.dof_invweight0[d])
             stops[jname] = {"stiffness": -float(m.jnt_solref[j, 0]) / w, "damping": -float(m.jnt_solref[j, 1]) / w}
-    mimics = _mimics(mujoco, m)
+    mimics = joint_couplings(mujoco, m)
     if mimics:
         jn = lambda j: _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")  # noqa: E731
-        motors = _fold_mimics(motors, tables, stops, {jn(j1): (jn(j2), a, b) for j1, (j2, a, b) in mimics.items()})
+        motors = fold_couplings(motors, tables, stops, {jn(j1): (jn(j2), a, b) for j1, (j2, a, b) in mimics.items()})
     children = set(int(p) for p in m.body_parentid[1:])
     first_site: dict[int, str] = {}
     for sname, b in sites:
