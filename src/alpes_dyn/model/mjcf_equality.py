@@ -6,7 +6,7 @@ parent to its child inverted, q_parent = (q_child - b) / a), a joint tied to a t
 independent one; every other equality is refused with one line naming it (``<connect>``/``<weld>`` as closed
 kinematic loops, the bodies named). :func:`fold_couplings` moves a tied joint's rows of the spec onto the joint it
 follows as the same energies and powers, so that the spec names independent joints only (what the library's mimic
-model requires).
+model requires); :func:`own_joint_values` undoes it for values written back into the MJCF (``identify --mjcf``).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ import numpy as np
 
 from ..errors import ModelError
 
-__all__ = ["fold_couplings", "joint_couplings"]
+__all__ = ["fold_couplings", "joint_couplings", "own_joint_values"]
 
 
 def _name(mujoco, m, kind, i: int, prefix: str) -> str:
@@ -110,3 +110,49 @@ def fold_couplings(motors: list, tables: dict, stops: dict, fold: dict) -> list:
     if not rest:
         del tables["rest_angle"]
     return out
+
+
+def own_joint_values(mujoco, m, joints: dict, rest: dict) -> dict:
+    """The inverse of :func:`fold_couplings` for the values written back into the MJCF: ``joints`` {joint: {MJCF
+    attribute: value}} of the spec's rows (``stiffness``, ``damping``, ``frictionloss``, ``armature``: on a joint
+    others are tied to, the sums :func:`fold_couplings` made) as the joint's own attributes, the tied joints' own
+    values as compiled in ``m`` taken off (a^2 for armature and damping, |a| for friction; a spring K about the spec's
+    rest angle ``rest`` {joint: rad} less a^2 k_l about (r_l - b) / a gives the joint's own ``stiffness`` and
+    ``springref``). Returns a new dict; :class:`~alpes_dyn.ModelError` where a value falls below what the tied joints
+    hold (not written)."""
+    O = mujoco.mjtObj
+    tied: dict[str, list] = {}
+    for j1, (j2, a, b) in joint_couplings(mujoco, m).items():
+        tied.setdefault(_name(mujoco, m, O.mjOBJ_JOINT, j2, "joint"), []).append((j1, a, b))
+    out = {j: dict(v) for j, v in joints.items()}
+    for k, ties in tied.items():
+        vals = out.get(k)
+        if not vals:
+            continue
+        for attr, arr, w in (("damping", m.dof_damping, lambda a: a * a), ("frictionloss", m.dof_frictionloss, abs),
+                             ("armature", m.dof_armature, lambda a: a * a)):
+            if attr in vals:
+                theirs = sum(w(a) * float(arr[m.jnt_dofadr[j]]) for j, a, _ in ties)
+                vals[attr] = _own(k, attr, vals[attr], theirs)
+        if "stiffness" in vals:
+            K, r = vals["stiffness"], float(rest.get(k, 0.0))
+            theirs = sum(a * a * float(m.jnt_stiffness[j]) for j, a, _ in ties)
+            own = _own(k, "stiffness", K, theirs)
+            vals["stiffness"] = own
+            if own > 0:
+                vals["springref"] = (K * r - sum(a * float(m.jnt_stiffness[j]) * (float(m.qpos_spring[
+                    m.jnt_qposadr[j]]) - b) for j, a, b in ties)) / own
+            else:
+                vals.pop("springref", None)
+    return out
+
+
+def _own(joint: str, attr: str, total: float, theirs: float) -> float:
+    """total - theirs, 0 where it is within rounding of 0; ModelError below."""
+    own = total - theirs
+    if abs(own) <= 1e-12 * max(abs(total), abs(theirs)):
+        return 0.0
+    if own < 0:
+        raise ModelError(f"identified mjcf: joint {joint!r}'s {attr} {total:.6g} is below what the joints tied to it "
+                         f"hold ({theirs:.6g}); not written")
+    return own
