@@ -188,15 +188,23 @@ def test_hinge_ref_keeps_mujoco_coordinates():
         np.testing.assert_allclose(b.spring_torque(q), -d.qfrc_spring, rtol=0, atol=1e-12)
 
 
-def test_gravcomp_is_named_as_not_imported():
-    """MuJoCo's gravity compensation of a body changes its dynamics and has no place in the spec: named in the
-    import's warning (and ``not_imported``), the body given."""
+@pytest.mark.parametrize("old, new, needle", [
+    ('<body name="b"', '<body name="b" gravcomp="1"', "bodies b: gravcomp (MuJoCo's gravity compensation"),
+    ('range="-2 2"', 'range="-2 2" stiffness="0.1 0.5 0"', "joints jb: stiffness (a spring's terms beyond the linear"),
+    ('damping="0.01"', 'damping="0.01 0 0.2"', "joints ja: damping (a damper's terms beyond the linear one"),
+    ('range="-2 2"', 'range="-2 2" stiffness="0.1" springyield="5"', "joints jb: springyield (a plastic spring"),
+    ('range="-2 2"', 'range="-2 2" actuatorfrcrange="-1 1"', "joints jb: actuatorfrcrange (a limit on the actuators"),
+])
+def test_dynamics_attributes_named_as_not_imported(old, new, needle):
+    """What changes the dynamics and has no place in the spec -- MuJoCo's gravity compensation of a body, MuJoCo 4's
+    nonlinear spring and damper terms, a plastic spring, a joint's actuator force limit -- is named in the import's
+    warning and in ``not_imported``, the element given."""
     from alpes_dyn.model.mjcf_import import MjcfImportWarning, not_imported
 
-    xml = ARM.replace('<body name="b"', '<body name="b" gravcomp="1"')
-    with pytest.warns(MjcfImportWarning, match=r"bodies b: gravcomp \(MuJoCo's gravity compensation"):
+    xml = ARM.replace(old, new, 1)
+    with pytest.warns(MjcfImportWarning, match=re.escape(needle)):
         ad.Model.from_mjcf(xml)
-    assert any(x.startswith("bodies b: gravcomp") for x in not_imported(mujoco.MjModel.from_xml_string(xml)))
+    assert any(x.startswith(needle) for x in not_imported(mujoco.MjModel.from_xml_string(xml)))
 
 
 def test_huge_or_deep_mjcf_refused_before_mujoco(monkeypatch):

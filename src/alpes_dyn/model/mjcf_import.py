@@ -261,13 +261,14 @@ def _check_supported(mujoco, m) -> None:
     _check_actuators(mujoco, m)
     for t in range(m.ntendon):
         tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
-        if np.any(m.tendon_stiffness[t] != 0):
+        if np.any(m.tendon_stiffness[t] != 0) or np.any(np.asarray(getattr(m, "tendon_stiffnesspoly", 0))[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has a stiffness; the spec holds rigid tendons only")
         driven = any(m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON and m.actuator_trnid[a, 0] == t
                      for a in range(m.nu))
         if _tendon_armature(m, t) != 0 and not driven:
             raise ModelError(f"mjcf: tendon {tname!r} has an armature but no actuator; a rotor belongs to a motor")
-        if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
+        damped = np.any(np.asarray(getattr(m, "tendon_dampingpoly", 0))[t] != 0) or np.any(m.tendon_damping[t] != 0)
+        if damped or np.any(m.tendon_frictionloss[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
 
 
@@ -287,6 +288,14 @@ def _named(mujoco, m, kind, ids, prefix: str) -> str:
     return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
 
 
+_JOINT_EXTRAS = (
+    ("jnt_stiffnesspoly", "stiffness", "a spring's terms beyond the linear one: the spec's spring is linear"),
+    ("dof_dampingpoly", "damping", "a damper's terms beyond the linear one: the spec's viscous friction is linear"),
+    ("jnt_springyield", "springyield", "a plastic spring's yield"),
+    ("jnt_actfrclimited", "actuatorfrcrange", "a limit on the actuators' force at the joint"))
+"""(MjModel field, MJCF attribute, what it is) of the joint fields :func:`not_imported` names where non-zero."""
+
+
 def not_imported(m) -> list[str]:
     """What of a compiled MuJoCo model ``m`` (``mujoco.MjModel``) the URDF + spec do not hold, one line per kind,
     naming the MJCF field and the first elements that have it. The first lines (up to the one starting with
@@ -295,8 +304,9 @@ def not_imported(m) -> list[str]:
     ``velocity``, ``intvelocity`` and ``general`` actuators: ``gainprm``/``biasprm``), activation dynamics
     (``dyntype``), a force saturation (``forcerange``) and a tendon's length limit (``range``) are left to the
     user's controller or recorded torques; a body's ``gravcomp`` (MuJoCo's gravity compensation: the library's
-    gravity acts on the whole mass) and the range of a joint tied by a joint equality (the library's limits are
-    those of the joint it follows) are named too. Collision geometry and the solver's options are never imported (the
+    gravity acts on the whole mass), the range of a joint tied by a joint equality (the library's limits are
+    those of the joint it follows), a joint's nonlinear ``stiffness`` and ``damping`` terms (MuJoCo 4's polynomials:
+    the spec's are linear), ``springyield`` and ``actuatorfrcrange`` are named too. Collision geometry and the solver's options are never imported (the
     library's contact is its own, :mod:`alpes_dyn.model.contact`)."""
     mujoco = _mj()
     O = mujoco.mjtObj
@@ -327,6 +337,11 @@ def not_imported(m) -> list[str]:
     if tied:
         out.append(f"joints {_named(mujoco, m, O.mjOBJ_JOINT, tied, 'joint')} (tied by a joint equality): range not "
                    "imported (the library's limits are those of the joints they follow)")
+    for field, attr, what in _JOINT_EXTRAS:
+        arr = np.asarray(getattr(m, field, np.zeros(0))).reshape(m.njnt, -1) if m.njnt else np.zeros((0, 1))
+        has = [j for j in range(arr.shape[0]) if np.any(arr[j] != 0)]
+        if has:
+            out.append(f"joints {_named(mujoco, m, O.mjOBJ_JOINT, has, 'joint')}: {attr} ({what}) not imported")
     tlim = [t for t in range(m.ntendon) if m.tendon_limited[t]]
     if tlim:
         out.append(f"tendons {_named(mujoco, m, O.mjOBJ_TENDON, tlim, 'tendon')}: range (a tendon length limit) not "
