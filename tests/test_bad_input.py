@@ -103,6 +103,9 @@ _MJCF_DEEP = "<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) for i in range
 _MJCF_SITES = ("<mujoco><worldbody>" + _MJCF_BODY.format(0) + "".join(f'<site name="s{i}"/>' for i in range(1001))
                + "</body></worldbody></mujoco>")
 """One body with 1001 sites: each site a URDF link, over the limit of 1000."""
+_MJCF_FLAT = ("<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) + "</body>" for i in range(201))
+              + "</worldbody></mujoco>")
+"""201 one-hinge bodies on the world: the imported URDF's 201 moving joints, over the limit of 200."""
 RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
 ARM_MJCF = """<mujoco model="arm"><compiler angle="radian"/><worldbody>
   <body name="a" pos="0 0 0.1"><joint name="ja" type="hinge" axis="0 1 0" range="-1 1" stiffness="0.3"/>
@@ -261,6 +264,7 @@ def bad_files(d: Path) -> dict[str, str]:
                  slide_xml=ARM_MJCF.replace('<joint name="ja" type="hinge"', '<joint name="ja" type="slide"').encode(),
                  norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n",
                  flip_xml=_MJCF_FLIP.encode(), deep_xml=_MJCF_DEEP.encode(), sites_xml=_MJCF_SITES.encode(),
+                 flat_xml=_MJCF_FLAT.encode(),
                  nan_xml=ARM_MJCF.replace('<body name="a" pos="0 0 0.1">', '<body name="a" pos="nan 0 0.1">').encode(),
                  gear0_xml=ARM_MJCF.replace('gear="100"', 'gear="0"').encode(),
                  muscle_xml=ARM_MJCF.replace('<motor name="m" tendon="t" gear="100"/>',
@@ -861,6 +865,8 @@ CLI: dict[str, list[Cli]] = {
           "number is NaN"),
         C("import", "--model", "{deep_xml}", "-o", "{tmp}/out", needle="--model: bodies nested over 100 deep, the limit"),
         C("import", "--model", "{sites_xml}", "-o", "{tmp}/out", needle="--model: over 1000 bodies and sites, the limit"),
+        C("import", "--model", "{flat_xml}", "-o", "{tmp}/out", needle="--model: its tree (imported as a URDF): 201 "
+          "moving joints, over the limit of 200"),
         C("import", "--model", "{gear0_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' has gear 0; a motor's "
           "gear (its ratio) must be a non-zero number"),
         C("import", "--model", "{muscle_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' is a muscle"),

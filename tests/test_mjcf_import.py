@@ -101,6 +101,9 @@ TIED_LATER = object()  # TIED with a connect equality (a closed loop), defined b
     (ARM.replace('<motor name="m" tendon="t" gear="100"/>', '<muscle name="m" tendon="t"/>'),
      "actuator 'm' is a muscle; the library's motors are torque sources"),
     (TIED_LATER, "equality 'loop' is a connect between 'c' and 'world': a closed kinematic loop"),
+    ("<mujoco><worldbody>" + "".join(f"<body pos='{i} 0 0'><joint range='-1 1'/><inertial pos='0 0 0' mass='1' "
+                                     "diaginertia='1 1 1'/></body>" for i in range(201)) + "</worldbody></mujoco>",
+     "mjcf: its tree (imported as a URDF): 201 moving joints, over the limit of 200"),
 ])
 def test_bad_mjcf(xml, needle):
     xml = TIED.replace('<joint name="couple"', '<connect name="loop" body1="c" body2="world" anchor="0.3 0 0"/>'

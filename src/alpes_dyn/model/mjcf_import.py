@@ -58,7 +58,7 @@ from ..fileio import read_bytes
 from .mjcf_equality import fold_couplings, joint_couplings
 from .spec import Motor, TransmissionSpec
 
-__all__ = ["MjcfImportWarning", "example_mjcf_path", "mjcf_to_urdf", "not_imported"]
+__all__ = ["MjcfImportWarning", "example_mjcf_path", "mjcf_model", "mjcf_to_urdf", "not_imported", "tree_error"]
 
 
 class MjcfImportWarning(AlpesDynWarning):
@@ -80,6 +80,26 @@ def example_mjcf_path(name: str = "shadow_hand") -> Path:
     if not isinstance(name, str) or name not in EXAMPLE_MJCF:
         raise ModelError(f"unknown example MJCF {name!r} (shipped: {', '.join(sorted(EXAMPLE_MJCF))})")
     return Path(str(resources.files("alpes_dyn") / "data")) / EXAMPLE_MJCF[name]
+
+
+def tree_error(exc: ModelError) -> ModelError:
+    """A refusal of the imported URDF (its message starting with ``URDF``, e.g. over
+    :data:`~alpes_dyn.limits.MAX_URDF_JOINTS` hinges) said as the MJCF's (``mjcf: its tree ...``): the user gave an
+    MJCF, not a URDF. Any other error as it is."""
+    msg = str(exc)
+    if not msg.startswith("URDF"):
+        return exc
+    return ModelError(f"mjcf: its tree (imported as a URDF): {msg[4:].lstrip(':').strip()}")
+
+
+def mjcf_model(cls, mjcf: str | Path, hold: Sequence[str] = (), **kwargs):
+    """``cls(urdf, spec, **kwargs)`` of :func:`mjcf_to_urdf` (``cls``: :class:`~alpes_dyn.model.robot.Model`), a
+    refusal of the imported URDF said of the MJCF (:func:`tree_error`)."""
+    urdf, spec = mjcf_to_urdf(mjcf, hold)
+    try:
+        return cls(urdf, spec, **kwargs)
+    except ModelError as exc:
+        raise tree_error(exc) from None
 
 
 def _mj():
