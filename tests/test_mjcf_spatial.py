@@ -144,3 +144,33 @@ def test_curve_warnings_name_the_worst_first():
     text = str(rec[0].message)
     errors = [float(x) for x in re.findall(r"\(([0-9.e+-]+) of the largest ratio\)", text)]
     assert len(errors) == 2 and errors == sorted(errors, reverse=True)
+
+
+def test_spatial_tendon_over_a_tied_joint():
+    """A spatial tendon over a joint tied by a joint equality: where its ratio there is constant (the flexor wrapped
+    on j3's own axis, j3 = 0.5 j2) it folds onto j2, the ratio MuJoCo's G^T (gear ten_J) to 1e-9 of the largest at
+    random states on the coupling; where it is curved (j2 tied to j1) the import refuses it by name."""
+    from test_ratio_curve import FINGER
+
+    def tie(eq):
+        return FINGER.replace("<tendon>", f"<equality>{eq}</equality><tendon>")
+
+    xml = tie('<joint joint1="j3" joint2="j2" polycoef="0 0.5 0 0 0"/>')
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore")  # j3's range, named as not imported
+        warnings.simplefilter("error", MjcfCurveWarning)  # the fit is exact
+        model = ad.Model.from_mjcf(xml)
+    assert model.joint_names == ("j1", "j2")
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    G = np.array([[1, 0], [0, 1], [0, 0.5]])
+    rng = np.random.default_rng(8)
+    for _ in range(6):
+        q = np.array([rng.uniform(-0.3, 1.2), rng.uniform(-0.3, 0.5)])
+        d.qpos[:] = G @ q
+        mujoco.mj_fwdPosition(m, d)
+        J = m.actuator_gear[0, 0] * tendon_jacobian(m, d)[0] @ G
+        np.testing.assert_allclose(model.transmission.ratio(q)[0], J, rtol=0, atol=1e-9 * np.max(np.abs(J)))
+    with pytest.raises(ModelError, match=r"actuator 'flex''s spatial tendon crosses joint 'j2', which a joint "
+                                         r"equality ties to 'j1'; a curved ratio on a tied joint is not modelled"):
+        ad.Model.from_mjcf(tie('<joint joint1="j2" joint2="j1" polycoef="0 0.5 0 0 0"/>'))
