@@ -105,19 +105,18 @@ def _path(mujoco, m, d, t: int) -> tuple:
     return tuple(int(o) for o in obj), tuple(sides)
 
 
-def _break(mujoco, m, before: tuple, after: tuple, joint: str, q0: float, q1: float) -> str:
-    """The reason a tendon's path changes between two angles of ``joint``: a wrapping geom touched or left (a kink
-    of the moment arm), or wrapped on its other side (a jump)."""
+def _break(mujoco, m, before: tuple, after: tuple, where: str) -> str:
+    """The reason a tendon's path differs between two configurations (``where``: "between j = a and b rad"): a
+    wrapping geom touched or left (a kink of the moment arm), or wrapped on its other side (a jump)."""
     gname = lambda g: mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}"  # noqa: E731
     sb, sa = dict(before[1]), dict(after[1])
     for g in sorted(set(sb) | set(sa)):
         if g in sb and g in sa and sb[g] != sa[g]:
-            return (f"it changes side of its wrapping geom {gname(g)!r} between {joint} = {q0:.4g} and {q1:.4g} rad "
-                    "(its moment arm jumps there)")
+            return f"it changes side of its wrapping geom {gname(g)!r} {where} (its moment arm jumps there)"
         if (g in sb) != (g in sa):
-            return (f"it {'leaves' if g in sb else 'touches'} its wrapping geom {gname(g)!r} between {joint} = "
-                    f"{q0:.4g} and {q1:.4g} rad (its moment arm is not smooth there)")
-    return f"its path changes between {joint} = {q0:.4g} and {q1:.4g} rad (its moment arm is not smooth there)"
+            return (f"it {'leaves' if g in sb else 'touches'} its wrapping geom {gname(g)!r} {where} (its moment arm "
+                    "is not smooth there)")
+    return f"its path changes {where} (its moment arm is not smooth there)"
 
 
 def fit_spatial_tendon(mujoco, m, t: int, gear: float, joint_names: list[str]) -> SpatialFit:
@@ -145,7 +144,7 @@ def fit_spatial_tendon(mujoco, m, t: int, gear: float, joint_names: list[str]) -
             r[k] = gear * _state(mujoco, m, d, q, t)[1][dof[j]]
             here = _path(mujoco, m, d, t)
             if path is not None and here != path and not reason:
-                reason = _break(mujoco, m, path, here, joint_names[j], q_prev, float(qs[k]))
+                reason = _break(mujoco, m, path, here, f"between {joint_names[j]} = {q_prev:.4g} and {qs[k]:.4g} rad")
             path, q_prev = here, float(qs[k])
         s = float(np.max(np.abs(r)))
         scale = max(scale, s)
@@ -164,14 +163,22 @@ def fit_spatial_tendon(mujoco, m, t: int, gear: float, joint_names: list[str]) -
     L0 = _state(mujoco, m, d, np.zeros(m.njnt), t)[0]
     p = np.arange(1, MAX_CURVE_DEGREE + 1)[:, None]
     len_err = 0.0
+    _state(mujoco, m, d, ref, t)
+    ref_path, moved = _path(mujoco, m, d, t), ""
     for q in boxes:  # the random configurations: a path over several joints, the fit between the sweep's points
         L, J = _state(mujoco, m, d, q, t)
+        here = _path(mujoco, m, d, t)
+        if here != ref_path and not moved:  # a change that the one-joint sweeps did not cross
+            at = ", ".join(f"{joint_names[j]} = {q[j]:.4g}" for j in sorted(coefs))
+            moved = _break(mujoco, m, ref_path, here, f"between the reference angles and {at} rad")
         rho = S + np.sum(C * q[None, :] ** p, axis=0)
         s_q = S @ q + np.sum(C * q[None, :] ** (p + 1) / (p + 1))
         err = max(err, float(np.max(np.abs(rho - gear * J[dof]))))
         len_err = max(len_err, abs(s_q - gear * (L - L0)))
     joints = {joint_names[j]: float(c[0]) for j, c in coefs.items()}
     curve = {joint_names[j]: tuple(float(v) for v in c[1:]) for j, c in coefs.items() if len(c) > 1}
+    if err > TOLERANCE * scale and not reason:
+        reason = moved
     if err > TOLERANCE * scale and not reason:
         reason = _coupled(mujoco, m, d, t, boxes[:4], ref, sorted(coefs), joint_names, TOLERANCE * scale / abs(gear))
     return SpatialFit(joints, curve, err, scale, len_err, reason)
