@@ -43,13 +43,18 @@ Three parts on the Shadow hand (and a fourth, ``held``: the whole hand with its 
    under a pulling multisine of ``--spatial-duration`` s (default 16), ``identify`` (springs, masses, viscous friction; goals 3 % and 5 %)
    and ``estimate`` on the identified pair (goal < 0.5 deg).
 
+5. ``published`` (issue 51): MJCF files as MuJoCo users write them, ``benchmarks/_published_mjcf.py``: MuJoCo's
+   ``tendon_arm/arm26`` (muscles as motors) refused by name over its 0-120 degrees and exact over 0-90, a
+   Robotiq-like four-bar closed by a ``<connect>`` refused by name, a joint equality with a fixed tendon against
+   MuJoCo's projected model.
+
 Every command's wall time is a first run as a new process: imports, and compiles where the compile cache
 (:func:`alpes_dyn.simulation.codegen.cache_dir`) is cold, included (``--cold`` empties a private cache for the run).
 Prints a table, or one JSON object with ``--json``; ``uptime`` before and after.
 
     python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--finger-duration 16]
                                        [--finger-runs 4] [--spatial-duration 16]
-                                       [--skip held,finger,spatial] [--cold]
+                                       [--skip held,finger,spatial,published] [--cold]
 """
 
 from __future__ import annotations
@@ -426,6 +431,7 @@ def spatial(d: Path, seed: int, duration: float, states: int) -> dict[str, Any]:
 
     import alpes_dyn as ad
     from alpes_dyn.estimation.experiments.recording import write_recording
+    from alpes_dyn.model.mjcf_spatial import tendon_jacobian
 
     nominal_xml, true_xml, true = _spatial_mjcf(seed)
     (d / "finger.xml").write_text(nominal_xml)
@@ -441,7 +447,7 @@ def spatial(d: Path, seed: int, duration: float, states: int) -> dict[str, Any]:
         q = m.jnt_range[:, 0] + np.ptp(m.jnt_range, axis=1) * rng.random(3)
         mj.qpos[:], mj.qvel[:], mj.ctrl[:] = q, 3 * rng.standard_normal(3), 0.05 * rng.standard_normal(1)
         mujoco.mj_forward(m, mj)
-        J = g * np.asarray(mj.ten_J).reshape(1, 3)[0]
+        J = g * tendon_jacobian(m, mj)[0]
         err["ratio"] = max(err["ratio"], float(np.max(np.abs(tr.ratio(q)[0] - J)) / np.max(np.abs(J))))
         err["angle_rad"] = max(err["angle_rad"], abs(float(tr.motor_positions(q)[0]) - g * (mj.ten_length[0] - L0)))
         qdd = model.forward_dynamics(q, mj.qvel.copy(), tr.joint_torque(mj.ctrl.copy(), q))
@@ -558,6 +564,10 @@ def _table(r: dict[str, Any]) -> str:
             es = sp["estimate"]
             lines.append(f"  estimate {es['wall_s']:.1f} s: EKF worst joint {es['worst_rmse_deg']:.3f} deg (goal < "
                          f"{GOALS['ekf_rmse_deg']} deg: {'met' if es['goal_met'] else 'NOT met'})")
+    if r.get("published"):
+        from _published_mjcf import table
+
+        lines += table(r["published"])
     lines.append(f"uptime after: {r['uptime_after']}; {r['seconds']:.0f} s")
     return "\n".join(lines)
 
@@ -579,17 +589,18 @@ def main() -> None:
                     help="the spatial finger's MuJoCo recording, s (default 16: its masses' standard errors are about "
                          "4 %% at 4 s, 2.4 %% at 8 s, where seed 13 came 5.6 %% off (2.3 sd); at 16 s seeds 13-18 "
                          "within 3.6 %%, the springs 1.9 %%)")
-    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger, spatial")
+    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger, spatial, "
+                    "published")
     ap.add_argument("--no-compile", action="store_true",
                     help="do not compile the held hand's C observer (cc -O0: about 45 s and 3.3 GB)")
     ap.add_argument("--cold", action="store_true", help="a private, empty compile cache (compiles in the times)")
     a = ap.parse_args()
     skip = {s for s in a.skip.split(",") if s}
-    parts = {"hand", "held", "finger", "spatial"}
+    parts = {"hand", "held", "finger", "spatial", "published"}
     if a.finger_runs < 1:
         ap.error(f"--finger-runs: expected at least 1 run, got {a.finger_runs}")
     if skip - parts:
-        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} (hand, held, finger, spatial)")
+        ap.error(f"--skip: unknown part(s) {', '.join(sorted(skip - parts))} ({', '.join(sorted(parts))})")
     t0 = time.perf_counter()
     r: dict[str, Any] = {"uptime_before": _uptime(), "seed": a.seed, "goals": GOALS}
     with tempfile.TemporaryDirectory() as tmp:
@@ -608,6 +619,11 @@ def main() -> None:
         if "spatial" not in skip:
             (d / "s").mkdir()
             r["spatial"] = spatial(d / "s", a.seed, a.spatial_duration, a.states)
+        if "published" not in skip:
+            from _published_mjcf import published  # (this folder is on the path)
+
+            (d / "p").mkdir()
+            r["published"] = published(d / "p", a.states, a.seed, cli)
     r["uptime_after"], r["seconds"] = _uptime(), time.perf_counter() - t0
     print(json.dumps(r) if a.json else _table(r))
 

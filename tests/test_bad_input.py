@@ -89,6 +89,23 @@ _MJCF_EQ = ('<mujoco><worldbody><body name="a"><joint name="j" range="-1 1"/><in
             'diaginertia="1 1 1"/><body name="b"><joint name="k" range="-1 1"/><inertial pos="0 0 0" mass="1" '
             'diaginertia="1 1 1"/></body></body></worldbody><equality>{}</equality></mujoco>')
 """A two-hinge MJCF with the equality given (``.format``): the import reads joint couplings only."""
+_MJCF_FLIP = ('<mujoco><worldbody><site name="s4" pos="-0.1 -0.06 0"/><site name="x1" pos="0 -0.15 0"/><body>'
+              '<joint name="elbow" axis="0 0 1" range="0 120"/><geom name="elbow" type="cylinder" size=".08 .05"/>'
+              '<site name="s8" pos="0.11 -0.05 0"/></body></worldbody><tendon><spatial name="EE"><site site="s4"/>'
+              '<geom geom="elbow" sidesite="x1"/><site site="s8"/></spatial></tendon><actuator><motor name="EE" '
+              'tendon="EE"/></actuator></mujoco>')
+"""MuJoCo's arm26 elbow extensor (a motor for its muscle): over 0..120 degrees its tendon changes side of the
+elbow's cylinder (its moment arm jumps from 0.08 to -0.08 m), which no polynomial of the angle follows."""
+_MJCF_BODY = '<body name="b{0}"><joint name="j{0}" range="-1 1"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>'
+_MJCF_DEEP = "<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) for i in range(500)) + "</body>" * 500 + (
+    "</worldbody></mujoco>")
+"""A chain of 500 bodies (deeper than the URDF's limit of 100; MuJoCo's own XML parser stops at 500)."""
+_MJCF_SITES = ("<mujoco><worldbody>" + _MJCF_BODY.format(0) + "".join(f'<site name="s{i}"/>' for i in range(1001))
+               + "</body></worldbody></mujoco>")
+"""One body with 1001 sites: each site a URDF link, over the limit of 1000."""
+_MJCF_FLAT = ("<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) + "</body>" for i in range(201))
+              + "</worldbody></mujoco>")
+"""201 one-hinge bodies on the world: the imported URDF's 201 moving joints, over the limit of 200."""
 RECORDING_HEAD = "t,encoder_finger,torque_finger\n"
 ARM_MJCF = """<mujoco model="arm"><compiler angle="radian"/><worldbody>
   <body name="a" pos="0 0 0.1"><joint name="ja" type="hinge" axis="0 1 0" range="-1 1" stiffness="0.3"/>
@@ -247,6 +264,13 @@ def bad_files(d: Path) -> dict[str, str]:
                  robotempty_toml=b"# a spec with nothing in it\n", arm_xml=ARM_MJCF.encode(),
                  slide_xml=ARM_MJCF.replace('<joint name="ja" type="hinge"', '<joint name="ja" type="slide"').encode(),
                  norange_xml=ARM_MJCF.replace(' range="-1 1"', "").encode(), notxml_xml=b"not xml at all\n",
+                 flip_xml=_MJCF_FLIP.encode(), deep_xml=_MJCF_DEEP.encode(), sites_xml=_MJCF_SITES.encode(),
+                 flat_xml=_MJCF_FLAT.encode(),
+                 nan_xml=ARM_MJCF.replace('<body name="a" pos="0 0 0.1">', '<body name="a" pos="nan 0 0.1">').encode(),
+                 gear0_xml=ARM_MJCF.replace('gear="100"', 'gear="0"').encode(),
+                 muscle_xml=ARM_MJCF.replace('<motor name="m" tendon="t" gear="100"/>',
+                                             '<muscle name="m" tendon="t"/>').encode(),
+                 loop_xml=_MJCF_EQ.format('<connect name="loop" body1="b" body2="world" anchor="0 0 0"/>').encode(),
                  geomass_xml=ARM_MJCF.replace('<compiler angle="radian"/>', '<compiler angle="radian" inertiafromgeom='
                                               '"true"/>').replace("<site ", '<geom size="0.01"/><site ').encode())
     k = np.arange(200)  # a valid finger3 recording (200 samples at 1 ms, true joints), for estimate --data
@@ -836,6 +860,19 @@ CLI: dict[str, list[Cli]] = {
         C("import", "--model", "{slide_xml}", "-o", "{tmp}/out", needle="--model: joint 'ja' is a slide joint"),
         C("import", "--model", "{norange_xml}", "-o", "{tmp}/out", needle="--model: joint 'ja' has no range"),
         C("import", "--model", "{notxml_xml}", "-o", "{tmp}/out", needle="--model: MuJoCo cannot compile it"),
+        C("import", "--model", "{flip_xml}", "-o", "{tmp}/out", needle="--model: spatial tendon 'EE' (actuator 'EE'): "
+          "it changes side of its wrapping geom 'elbow'"),
+        C("import", "--model", "{nan_xml}", "-o", "{tmp}/out", needle="--model: <body name='a'> pos='nan 0 0.1': a "
+          "number is NaN"),
+        C("import", "--model", "{deep_xml}", "-o", "{tmp}/out", needle="--model: bodies nested over 100 deep, the limit"),
+        C("import", "--model", "{sites_xml}", "-o", "{tmp}/out", needle="--model: over 1000 bodies and sites, the limit"),
+        C("import", "--model", "{flat_xml}", "-o", "{tmp}/out", needle="--model: its tree (imported as a URDF): 201 "
+          "moving joints, over the limit of 200"),
+        C("import", "--model", "{gear0_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' has gear 0; a motor's "
+          "gear (its ratio) must be a non-zero number"),
+        C("import", "--model", "{muscle_xml}", "-o", "{tmp}/out", needle="--model: actuator 'm' is a muscle"),
+        C("import", "--model", "{loop_xml}", "-o", "{tmp}/out", needle="--model: equality 'loop' is a connect between "
+          "'b' and 'world': a closed kinematic loop"),
         C("import", "--model", "{tmp}/.xml", "-o", "{tmp}/out", needle="--model: the files written are named after "
           "the MJCF file; '.xml' gives no plain name"),
         C("import", "--model", "{arm_xml}", "-o", "{tmp}", needle="-o: directory '{tmp}' is not empty; refusing to "
@@ -1676,7 +1713,12 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model(URDFS["mimic_urdf"], TransmissionSpec.from_toml('[stiffness]\nj2 = 0.1\n')),
       ModelError, "stiffness.j2: joint 'j2' is a mimic joint"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<connect body1="a" body2="world" anchor="0 0 0"/>')),
-      ModelError, "mjcf: equality 'equality0' is not a joint equality"),
+      ModelError, "mjcf: equality 'equality0' is a connect between 'a' and 'world': a closed kinematic loop; the "
+      "library models kinematic trees"),
+    A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<weld name="w" body1="b" body2="world"/>')),
+      ModelError, "mjcf: equality 'w' is a weld between 'b' and 'world': a closed kinematic loop"),
+    A("Model", lambda c: ad.Model.from_mjcf(_MJCF_FLIP), ModelError,
+      "mjcf: spatial tendon 'EE' (actuator 'EE'): it changes side of its wrapping geom 'elbow' between elbow = "),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint name="e" joint1="k" joint2="j" polycoef="0 1 2 0 0"/>')),
       ModelError, "mjcf: equality 'e' on joint 'k' is not a linear coupling of two joints"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint joint1="k"/>')),

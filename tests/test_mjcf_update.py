@@ -227,3 +227,30 @@ def test_a_rotor_on_a_spatial_tendon(tmp_path):
             assert back.spec.motors[0].ratio_curve[j] == pytest.approx(c, rel=0, abs=1e-10)
         _same_robot(ident, back)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["sites.xml", "sites_ident.xml", "wraps.xml"]
+
+
+def test_tied_joint_values_written_as_each_joint_own(tmp_path):
+    """A fit on a robot with a joint tied by a joint equality (tests/test_mjcf_import.py's TIED: the spec's values of
+    k hold l's, folded on import): written back, k's own stiffness, springref, damping and frictionloss are the fit's
+    less l's as in the file, so that the MJCF imported again gives the fitted spec values (to 1e-12) with l's own
+    values untouched; a fitted value below what l holds is refused."""
+    from test_mjcf_import import TIED
+
+    src = tmp_path / "tied.xml"
+    src.write_text(TIED)
+    model = _import(src)
+    values = {"K_k": 0.3, "F_s_k": 0.006, "F_v_k": 0.03, "K_j": 0.15}
+    text, _ = identified_mjcf(_fake_fit(model, values), model.spec, src, tmp_path / "ident.xml")
+    (tmp_path / "ident.xml").write_text(text)
+    back = _import(tmp_path / "ident.xml")
+    assert back.spec.stiffness == {"j": pytest.approx(0.15, rel=1e-12), "k": pytest.approx(0.3, rel=1e-12)}
+    assert back.spec.coulomb["k"] == pytest.approx(0.006, rel=1e-12)
+    assert back.spec.viscous["k"] == pytest.approx(0.03, rel=1e-12)
+    for j in ("j", "k"):
+        assert back.spec.rest_angle[j] == pytest.approx(model.spec.rest_angle[j], rel=1e-12)
+    m0, m = mujoco.MjModel.from_xml_string(TIED), mujoco.MjModel.from_xml_path(str(tmp_path / "ident.xml"))
+    assert (m.jnt_stiffness[2], m.dof_damping[2], m.dof_frictionloss[2]) == (
+        m0.jnt_stiffness[2], m0.dof_damping[2], m0.dof_frictionloss[2])  # l as written
+    with pytest.raises(ModelError, match=r"joint 'k''s damping 0.001 is below what the joints tied to it hold "
+                                         r"\(0.0128\); not written"):
+        identified_mjcf(_fake_fit(model, {"F_v_k": 0.001}), model.spec, src, tmp_path / "x.xml")

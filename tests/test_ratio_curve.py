@@ -14,6 +14,7 @@ from alpes_dyn.model.ratio_curve import fit_ratio_curve
 from alpes_dyn.model.spec import Motor, TransmissionSpec
 
 mujoco = pytest.importorskip("mujoco")
+from alpes_dyn.model.mjcf_spatial import tendon_jacobian  # noqa: E402
 
 FINGER = """<mujoco model="tendon_finger">
   <compiler angle="radian"/>
@@ -85,7 +86,7 @@ def _mujoco_states(xml, n=12, seed=1):
         v, u = 3.0 * rng.normal(size=3), 0.05 * rng.normal(size=1)
         d.qpos[:], d.qvel[:], d.ctrl[:] = q, v, u
         mujoco.mj_forward(m, d)
-        out.append((q, v, u, g * (float(d.ten_length[0]) - L0), g * d.ten_J.reshape(1, 3)[0].copy(), d.qacc.copy()))
+        out.append((q, v, u, g * (float(d.ten_length[0]) - L0), g * tendon_jacobian(m, d)[0], d.qacc.copy()))
     return out
 
 
@@ -181,17 +182,14 @@ def test_symbolic_path_equals_numeric():
     assert static_motor_torque(model, xe[:3], 0.0, [0.0, 0.0, 1.0]) == pytest.approx(0.02, rel=1e-9)
 
 
-def test_spatial_tendon_over_several_joints_says_its_error():
+def test_spatial_tendon_over_several_joints_is_refused():
     """A segment that spans two joints (s1b to s3 straight, skipping p2's sites) is not a sum of one function per
-    joint: the import says the error of its fit (MjcfCurveWarning) instead of passing it for exact. Its ratio on j2
-    then reaches 0 inside j2's range (the straight segment crosses j2's axis near -0.3 rad): refused, naming the
-    motor, the joint and the angle (issue 52: a moment arm of 0 inside the range is not a tendon driving the joint)."""
+    joint: the import refuses it, naming the tendon and the two joints, instead of importing a fit 5 % off."""
     from alpes_dyn.errors import ModelError
-    from alpes_dyn.model.mjcf_spatial import MjcfCurveWarning
 
     xml = SITES.replace('<site site="s2a"/><site site="s2b"/>', "")
-    with pytest.warns(MjcfCurveWarning, match="largest error .* rad/rad"), \
-            pytest.raises(ModelError, match=r"motor 'flex'\.ratio_curve\.j2: the ratio is 0 at q = -0\.29"):
+    with pytest.raises(ModelError, match=r"spatial tendon 'flexor' \(actuator 'flex'\): a segment of its path spans "
+                                         r"joints j3 and j2 .* not imported"):
         ad.Model.from_mjcf(xml)
 
 

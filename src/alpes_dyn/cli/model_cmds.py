@@ -61,16 +61,17 @@ def _mjcf_import(path: str, hold: tuple[str, ...] = ()):
     """(URDF text, spec, Model) of an MJCF file: what ``import`` writes and ``urdf --model FILE.xml`` prints, the
     pair loaded once as a Model (a URDF the library cannot load is refused before anything is written)."""
     from ..errors import ModelError
-    from ..model.mjcf_import import mjcf_to_urdf
+    from ..model.mjcf_import import mjcf_to_urdf, tree_error
     from ..model.robot import Model
 
     try:
         urdf, spec = mjcf_to_urdf(path, hold)
+        model = Model(urdf, spec)
     except ModelError as exc:
-        head, sep, tail = str(exc).partition(": ")
+        head, sep, tail = str(tree_error(exc)).partition(": ")
         raise InputError(f"--model: {tail}" if sep and head == "mjcf" else f"--hold: {tail}" if sep and head == "hold"
                          else str(exc)) from None
-    return urdf, spec, Model(urdf, spec)
+    return urdf, spec, model
 
 
 def cmd_import(args: argparse.Namespace) -> int:

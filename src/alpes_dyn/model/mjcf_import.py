@@ -11,27 +11,37 @@ backends read:
 * the **spec**: one motor per actuator on a fixed tendon, q_m = gear * sum_i coef_i q_i, so the ratio of joint i
   is gear * coef_i, on a spatial tendon (sites, wrapping cylinders and spheres) q_m = gear * L(q), its ratios
   gear * dL/dq fitted as the spec's ``ratio_curve`` from MuJoCo's own tendon Jacobian over the joint ranges
-  (:mod:`alpes_dyn.model.mjcf_spatial`; the fit's error said in an ``MjcfCurveWarning`` where it is not exact), or
+  (:mod:`alpes_dyn.model.mjcf_spatial`; the fit's error said in one ``MjcfCurveWarning``, the worst tendon first,
+  where it is not exact; a tendon whose path leaves, touches or changes side of its wrapping geom over a joint's range,
+  or spans two joints, refused with the reason), or
   on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
   (with ``springref``, the spring's rest angle: the spec's ``[rest_angle]`` where it is not 0), ``armature``,
   ``frictionloss`` (Coulomb) and ``damping`` (viscous); a joint limit's ``solreflimit`` in MuJoCo's direct form
   (-stiffness -damping, what the export writes for a spec's ``[stops]``) as the ``[stops]`` row k = -solref[0] / w,
   d = -solref[1] / w, w the joint's ``dof_invweight0`` (the library's spring-damper stop where the limit's impedance
   is small, as the export's 1e-4; a limit in the time-constant form gets no row: sized by the library);
+  a hinge's ``ref`` (MuJoCo's angle where the body is as written) kept: the child frame is turned by -ref about the
+  axis, so the URDF's angle is MuJoCo's and the range, ``springref`` and tendon lengths hold as written;
   gravity from ``<option gravity>``; the tips: the first site of each leaf body, or the leaf body's own frame where
   it has no site (the link's origin, on its joint's axis: a fingertip point needs a site).
 
 What would change how the motors act and has no place in the spec is said in one :class:`MjcfImportWarning`
 naming each field (:func:`not_imported`: a servo's ``gainprm``/``biasprm``, ``dyntype``, ``forcerange``, a tendon's
-``range``; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
+``range``, a body's ``gravcomp``, a tied joint's range; the actuators become torque motors on the same transmission), the geoms are listed by ``alpes-dyn
 import`` only. MuJoCo Menagerie's Shadow Hand E3M5 ships as an example (:func:`example_mjcf_path`; tested against
 MuJoCo on that MJCF). ``hold=`` welds hinges at their reference angle, the actuators on them dropped (e.g. a hand's
 wrist: each finger then a branch of its own). What the library does not model is refused with one line naming it,
 never dropped: free, ball and slide joints, a hinge without range, a body with several joints, actuators on sites, a tendon spring,
-an armature on a tendon no actuator pulls, equality constraints other than a joint's linear coupling to another
-(``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>``, read as the URDF's ``<mimic>``: a mimic joint,
-:mod:`alpes_dyn.model.mimic`). An MJCF file must be a regular file within
-:data:`alpes_dyn.limits.MAX_TEXT_BYTES` (checked before MuJoCo's parser reads it). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
+an armature on a tendon no actuator pulls, a muscle, a gear of 0, equality constraints other than a joint's linear
+coupling to another (``<connect>`` and ``<weld>`` are refused as closed kinematic loops, the bodies named). A joint
+equality ``<equality><joint joint1= joint2= polycoef="b a 0 0 0"/>`` is read as the URDF's ``<mimic>`` (a mimic
+joint, :mod:`alpes_dyn.model.mimic`; the later joint of the tree follows, the equality inverted if need be, chains
+composed), and the tied joint's rows of the spec are moved onto the joint it follows as the same energies
+(:func:`~alpes_dyn.model.mjcf_equality.fold_couplings`: a fixed tendon's coef a coef, springs, armature, damping, friction); its own range is named
+as not imported. An MJCF file must be a regular file within :data:`alpes_dyn.limits.MAX_TEXT_BYTES`, with bodies
+nested at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` deep, at most :data:`~alpes_dyn.limits.MAX_URDF_LINKS`
+bodies and sites, and no NaN (checked before MuJoCo's parser reads it; MuJoCo's compile warnings are the import's,
+never a ``MUJOCO_LOG.TXT`` in the working folder). Round trip (tested): ``mjcf_string(model)`` -> ``Model.from_mjcf`` gives the same A, C, G
 and forward dynamics as the model exported, to 1e-12.
 """
 
@@ -45,9 +55,10 @@ import numpy as np
 
 from ..errors import AlpesDynWarning, ModelError
 from ..fileio import read_bytes
+from .mjcf_equality import fold_couplings, joint_couplings
 from .spec import Motor, TransmissionSpec
 
-__all__ = ["MjcfImportWarning", "example_mjcf_path", "mjcf_to_urdf", "not_imported"]
+__all__ = ["MjcfImportWarning", "example_mjcf_path", "mjcf_model", "mjcf_to_urdf", "not_imported", "tree_error"]
 
 
 class MjcfImportWarning(AlpesDynWarning):
@@ -71,6 +82,26 @@ def example_mjcf_path(name: str = "shadow_hand") -> Path:
     return Path(str(resources.files("alpes_dyn") / "data")) / EXAMPLE_MJCF[name]
 
 
+def tree_error(exc: ModelError) -> ModelError:
+    """A refusal of the imported URDF (its message starting with ``URDF``, e.g. over
+    :data:`~alpes_dyn.limits.MAX_URDF_JOINTS` hinges) said as the MJCF's (``mjcf: its tree ...``): the user gave an
+    MJCF, not a URDF. Any other error as it is."""
+    msg = str(exc)
+    if not msg.startswith("URDF"):
+        return exc
+    return ModelError(f"mjcf: its tree (imported as a URDF): {msg[4:].lstrip(':').strip()}")
+
+
+def mjcf_model(cls, mjcf: str | Path, hold: Sequence[str] = (), **kwargs):
+    """``cls(urdf, spec, **kwargs)`` of :func:`mjcf_to_urdf` (``cls``: :class:`~alpes_dyn.model.robot.Model`), a
+    refusal of the imported URDF said of the MJCF (:func:`tree_error`)."""
+    urdf, spec = mjcf_to_urdf(mjcf, hold)
+    try:
+        return cls(urdf, spec, **kwargs)
+    except ModelError as exc:
+        raise tree_error(exc) from None
+
+
 def _mj():
     try:
         import mujoco
@@ -89,14 +120,68 @@ def _compile(mjcf: str | Path):
         raise ModelError("mjcf: expected MJCF text containing a <mujoco> element, or the path of such a file")
     if not is_text and not Path(mjcf).is_file():
         raise ModelError(f"mjcf: {str(mjcf)!r} is not a file")
-    if not is_text:  # a regular file within the size limit, before MuJoCo's parser reads it
-        read_bytes(mjcf, "mjcf", ModelError)
+    # a regular file within the size limit, its bodies and sites within the URDF's, before MuJoCo's parser reads it
+    _scan(mjcf if is_text else read_bytes(mjcf, "mjcf", ModelError))
+    said: list[str] = []
+    previous = mujoco.get_mju_user_warning()
+    mujoco.set_mju_user_warning(said.append)  # MuJoCo's warnings said here, not written to MUJOCO_LOG.TXT
     try:
-        if is_text:
-            return mujoco.MjModel.from_xml_string(mjcf)
-        return mujoco.MjModel.from_xml_path(str(mjcf))
+        m = mujoco.MjModel.from_xml_string(mjcf) if is_text else mujoco.MjModel.from_xml_path(str(mjcf))
     except ValueError as exc:
         raise ModelError(f"mjcf: MuJoCo cannot compile it ({str(exc).splitlines()[0]})") from None
+    finally:
+        mujoco.set_mju_user_warning(previous)
+    for text in said:
+        if "nan" in text.lower():
+            raise ModelError(f"mjcf: a number is NaN ({text.strip()})")
+        import warnings
+
+        warnings.warn(f"mjcf: MuJoCo: {text.strip()}", MjcfImportWarning, stacklevel=3)
+    return m
+
+
+def _no_nan(tag: str, attrib: dict) -> None:
+    """:class:`~alpes_dyn.ModelError` naming the element and attribute where an MJCF number is NaN."""
+    for key, value in attrib.items():
+        if "nan" in value.lower() and any(w.lower().lstrip("+-") == "nan" for w in value.split()):
+            who = f"<{tag} name={attrib['name']!r}>" if "name" in attrib else f"a <{tag}>"
+            raise ModelError(f"mjcf: {who} {key}={value[:60]!r}: a number is NaN")
+
+
+def _scan(text: "str | bytes") -> None:
+    """MJCF text refused before MuJoCo compiles it where its bodies nest deeper than
+    :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` or its bodies and sites (each a URDF link) outnumber
+    :data:`~alpes_dyn.limits.MAX_URDF_LINKS` (what the import's URDF would be refused on, said before MuJoCo's own
+    parser runs out of depth or spends its time on a huge file), or where a number is NaN (:func:`_no_nan`). Text
+    the XML parser cannot read is left to MuJoCo's message."""
+    import xml.etree.ElementTree as ET
+
+    from ..limits import MAX_URDF_DEPTH, MAX_URDF_LINKS
+
+    parser = ET.XMLPullParser(events=("start", "end"))
+    depth = links = 0
+    step = 1 << 16
+    try:
+        for i in range(0, len(text), step):
+            parser.feed(text[i:i + step])
+            for event, el in parser.read_events():
+                tag = el.tag if isinstance(el.tag, str) else ""
+                if tag == "body":
+                    depth += 1 if event == "start" else -1
+                if event == "start" and tag in ("body", "site"):
+                    links += 1
+                if event == "start":
+                    _no_nan(tag, el.attrib)
+                if depth > MAX_URDF_DEPTH:
+                    raise ModelError(f"mjcf: bodies nested over {MAX_URDF_DEPTH} deep, the limit (each body a link "
+                                     "of the imported URDF's chain)")
+                if links > MAX_URDF_LINKS:
+                    raise ModelError(f"mjcf: over {MAX_URDF_LINKS} bodies and sites, the limit (each a link of the "
+                                     "imported URDF)")
+                if event == "end":
+                    el.clear()
+    except ET.ParseError:
+        return
 
 
 def _compile_held(mjcf: str | Path, hold: Sequence[str] = ()):
@@ -164,6 +249,13 @@ def _quat_mat(q: np.ndarray) -> np.ndarray:
                      [2 * (x * z - y * w), 2 * (y * z + x * w), 1 - 2 * (x * x + y * y)]])
 
 
+def _axis_rotation(axis: np.ndarray, angle: float) -> np.ndarray:
+    """The rotation by ``angle`` (rad) about the unit ``axis`` (Rodrigues)."""
+    k = np.asarray(axis, dtype=float) / np.linalg.norm(axis)
+    K = np.array([[0, -k[2], k[1]], [k[2], 0, -k[0]], [-k[1], k[0], 0]])
+    return np.eye(3) + np.sin(angle) * K + (1 - np.cos(angle)) * K @ K
+
+
 def _origin(p: np.ndarray, R: np.ndarray) -> str:
     r, pi, y = _rpy(R)
     return f'<origin xyz="{_f(p[0])} {_f(p[1])} {_f(p[2])}" rpy="{_f(r)} {_f(pi)} {_f(y)}"/>'
@@ -185,46 +277,43 @@ def _check_supported(mujoco, m) -> None:
         if counts[b] > 1:
             raise ModelError(f"mjcf: body {_name(mujoco, m, mujoco.mjtObj.mjOBJ_BODY, b, 'body')!r} has "
                              f"{counts[b]} joints; one hinge per body is supported")
-    _mimics(mujoco, m)
+    joint_couplings(mujoco, m)
+    _check_actuators(mujoco, m)
     for t in range(m.ntendon):
         tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
-        if np.any(m.tendon_stiffness[t] != 0):
+        if np.any(m.tendon_stiffness[t] != 0) or np.any(np.asarray(getattr(m, "tendon_stiffnesspoly", 0))[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has a stiffness; the spec holds rigid tendons only")
         driven = any(m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_TENDON and m.actuator_trnid[a, 0] == t
                      for a in range(m.nu))
         if _tendon_armature(m, t) != 0 and not driven:
             raise ModelError(f"mjcf: tendon {tname!r} has an armature but no actuator; a rotor belongs to a motor")
-        if np.any(m.tendon_damping[t] != 0) or np.any(m.tendon_frictionloss[t] != 0):
+        damped = np.any(np.asarray(getattr(m, "tendon_dampingpoly", 0))[t] != 0) or np.any(m.tendon_damping[t] != 0)
+        if damped or np.any(m.tendon_frictionloss[t] != 0):
             raise ModelError(f"mjcf: tendon {tname!r} has damping or friction; the spec holds them per joint only")
 
 
-def _mimics(mujoco, m) -> dict[int, tuple[int, float, float]]:
-    """{joint1: (joint2, a, b)} of the MJCF's joint equalities, joint1 = b + a joint2 (the URDF's ``<mimic>``):
-    ``polycoef="b' a 0 0 0"`` about the joints' reference positions (qpos0), composed into b. Any other equality
-    (connect, weld, tendon, a joint held alone, a polynomial of degree > 1, one inactive at start) is refused."""
-    out: dict[int, tuple[int, float, float]] = {}
-    O = mujoco.mjtObj
-    for e in range(m.neq):
-        ename = _name(mujoco, m, O.mjOBJ_EQUALITY, e, "equality")
-        if m.eq_type[e] != mujoco.mjtEq.mjEQ_JOINT:
-            raise ModelError(f"mjcf: equality {ename!r} is not a joint equality; only joint equalities (a URDF "
-                             "<mimic>, joint1 = b + a joint2) are modelled")
-        j1, j2 = int(m.eq_obj1id[e]), int(m.eq_obj2id[e])
-        c = np.asarray(m.eq_data[e, :5], dtype=float)
-        j1name = _name(mujoco, m, O.mjOBJ_JOINT, j1, "joint")
-        if j2 < 0 or np.any(c[2:] != 0) or not bool(m.eq_active0[e]):
-            raise ModelError(f"mjcf: equality {ename!r} on joint {j1name!r} is not a linear coupling of two joints "
-                             "active from the start (joint1 = b + a joint2: give joint2 and polycoef=\"b a 0 0 0\")")
-        y0, x0 = float(m.qpos0[m.jnt_qposadr[j1]]), float(m.qpos0[m.jnt_qposadr[j2]])
-        if j1 in out:
-            raise ModelError(f"mjcf: joint {j1name!r} is coupled by two joint equalities; one is modelled")
-        out[j1] = (j2, float(c[1]), float(c[0] + y0 - c[1] * x0))
-    return out
+def _check_actuators(mujoco, m) -> None:
+    """Muscles refused as such (their force-length-velocity law and activation are not a torque source)."""
+    kinds = ((m.actuator_dyntype, mujoco.mjtDyn.mjDYN_MUSCLE), (m.actuator_gaintype, mujoco.mjtGain.mjGAIN_MUSCLE),
+             (m.actuator_biastype, mujoco.mjtBias.mjBIAS_MUSCLE))
+    for a in range(m.nu):
+        if any(int(types[a]) == int(muscle) for types, muscle in kinds):
+            raise ModelError(f"mjcf: actuator {_name(mujoco, m, mujoco.mjtObj.mjOBJ_ACTUATOR, a, 'motor')!r} is a "
+                             "muscle; the library's motors are torque sources on their transmission (replace it by a "
+                             "<motor> on the same tendon)")
 
 
 def _named(mujoco, m, kind, ids, prefix: str) -> str:
     names = [_name(mujoco, m, kind, int(i), prefix) for i in ids]
     return ", ".join(names[:3]) + (f" and {len(names) - 3} more" if len(names) > 3 else "")
+
+
+_JOINT_EXTRAS = (
+    ("jnt_stiffnesspoly", "stiffness", "a spring's terms beyond the linear one: the spec's spring is linear"),
+    ("dof_dampingpoly", "damping", "a damper's terms beyond the linear one: the spec's viscous friction is linear"),
+    ("jnt_springyield", "springyield", "a plastic spring's yield"),
+    ("jnt_actfrclimited", "actuatorfrcrange", "a limit on the actuators' force at the joint"))
+"""(MjModel field, MJCF attribute, what it is) of the joint fields :func:`not_imported` names where non-zero."""
 
 
 def not_imported(m) -> list[str]:
@@ -234,7 +323,10 @@ def not_imported(m) -> list[str]:
     (tau = S^T tau_m, the actuator's force taken as the motor torque), so a servo's gain and bias (``position``,
     ``velocity``, ``intvelocity`` and ``general`` actuators: ``gainprm``/``biasprm``), activation dynamics
     (``dyntype``), a force saturation (``forcerange``) and a tendon's length limit (``range``) are left to the
-    user's controller or recorded torques. Collision geometry and the solver's options are never imported (the
+    user's controller or recorded torques; a body's ``gravcomp`` (MuJoCo's gravity compensation: the library's
+    gravity acts on the whole mass), the range of a joint tied by a joint equality (the library's limits are
+    those of the joint it follows), a joint's nonlinear ``stiffness`` and ``damping`` terms (MuJoCo 4's polynomials:
+    the spec's are linear), ``springyield`` and ``actuatorfrcrange`` are named too. Collision geometry and the solver's options are never imported (the
     library's contact is its own, :mod:`alpes_dyn.model.contact`)."""
     mujoco = _mj()
     O = mujoco.mjtObj
@@ -254,6 +346,22 @@ def not_imported(m) -> list[str]:
     if lim:
         out.append(f"actuators {_named(mujoco, m, O.mjOBJ_ACTUATOR, lim, 'motor')}: forcerange (a torque "
                    "saturation) not imported")
+    comp = [b for b in range(m.nbody) if getattr(m, "body_gravcomp", np.zeros(m.nbody))[b] != 0]
+    if comp:
+        out.append(f"bodies {_named(mujoco, m, O.mjOBJ_BODY, comp, 'body')}: gravcomp (MuJoCo's gravity compensation "
+                   "of their weight) not imported: the library's gravity acts on their whole mass")
+    try:
+        tied = [j for j in joint_couplings(mujoco, m) if m.jnt_limited[j]]
+    except ModelError:  # an equality the import refuses: said by the import
+        tied = []
+    if tied:
+        out.append(f"joints {_named(mujoco, m, O.mjOBJ_JOINT, tied, 'joint')} (tied by a joint equality): range not "
+                   "imported (the library's limits are those of the joints they follow)")
+    for field, attr, what in _JOINT_EXTRAS:
+        arr = np.asarray(getattr(m, field, np.zeros(0))).reshape(m.njnt, -1) if m.njnt else np.zeros((0, 1))
+        has = [j for j in range(arr.shape[0]) if np.any(arr[j] != 0)]
+        if has:
+            out.append(f"joints {_named(mujoco, m, O.mjOBJ_JOINT, has, 'joint')}: {attr} ({what}) not imported")
     tlim = [t for t in range(m.ntendon) if m.tendon_limited[t]]
     if tlim:
         out.append(f"tendons {_named(mujoco, m, O.mjOBJ_TENDON, tlim, 'tendon')}: range (a tendon length limit) not "
@@ -285,7 +393,7 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
     shift = np.zeros((m.nbody, 3))
     for b, j in jnt_of.items():
         shift[b] = m.jnt_pos[j]
-    mimics = _mimics(mujoco, m)
+    mimics = joint_couplings(mujoco, m)
     links, joints = ['<link name="world"/>'], []
     for b in range(1, m.nbody):
         R_i = _quat_mat(m.body_iquat[b])
@@ -302,6 +410,8 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
         parent = int(m.body_parentid[b])
         R = _quat_mat(m.body_quat[b])
         p = m.body_pos[b] - shift[parent] + R @ shift[b]
+        if b in jnt_of:  # a hinge's ref: MuJoCo's angle is ref where the body is as written (the URDF's is then 0)
+            R = R @ _axis_rotation(m.jnt_axis[jnt_of[b]], -float(m.qpos0[m.jnt_qposadr[jnt_of[b]]]))
         org = _origin(p, R)
         if b in jnt_of:
             j = jnt_of[b]
@@ -340,33 +450,51 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
     return urdf, spec
 
 
-def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> Motor:
+def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> tuple[Motor, float, str]:
     """The motor of actuator ``a`` on spatial tendon ``t``: its ratios g dL/dq fitted as the spec's ``ratio_curve``
-    (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`); an :class:`MjcfCurveWarning` gives the fit's
-    error where it is not exact (relative error over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`)."""
-    import warnings
-
-    from .mjcf_spatial import TOLERANCE, MjcfCurveWarning, fit_spatial_tendon
+    (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`), the fit's relative error and, where it is not exact
+    (over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`), the line an :class:`MjcfCurveWarning` says. A tendon the
+    form cannot follow (its path changes over a joint's range: a wrapping geom touched, left or wrapped on its other
+    side; a segment over several joints) is refused, the tendon and the reason named."""
+    from .mjcf_spatial import TOLERANCE, fit_spatial_tendon
 
     names = [_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
     fit = fit_spatial_tendon(mujoco, m, t, gear, names)
     if not fit.joints:
         raise ModelError(f"mjcf: actuator {aname!r}'s spatial tendon crosses no joint")
-    if fit.error > TOLERANCE * fit.scale:
-        tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
-        warnings.warn(f"mjcf: spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as "
-                      f"polynomials of each joint's angle, largest error {fit.error:.2g} rad/rad "
-                      f"({fit.error / fit.scale:.2g} of the largest ratio), motor angle g L(q) to {fit.length_error:.2g}"
-                      " rad, over the joint ranges", MjcfCurveWarning, stacklevel=4)
-    return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve)
+    rel = fit.error / fit.scale if fit.scale else 0.0
+    tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
+    if rel > TOLERANCE and fit.reason:
+        raise ModelError(f"mjcf: spatial tendon {tname!r} (actuator {aname!r}): {fit.reason}; the spec's ratios are "
+                         f"one polynomial per joint (best fit {rel:.2g} off, relative): not imported")
+    note = ""
+    if rel > TOLERANCE:
+        note = (f"spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as polynomials of each "
+                f"joint's angle, largest error {fit.error:.2g} rad/rad ({rel:.2g} of the largest ratio), motor angle "
+                f"g L(q) to {fit.length_error:.2g} rad, over the joint ranges")
+    return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve), rel, note
+
+
+def _curve_warning(notes: list[tuple[float, str]]) -> None:
+    """One :class:`MjcfCurveWarning` for the spatial tendons fitted with an error, the worst first."""
+    import warnings
+
+    from .mjcf_spatial import MjcfCurveWarning
+
+    if notes:
+        lines = [n for _, n in sorted(notes, key=lambda x: -x[0])]
+        warnings.warn("mjcf: " + "; ".join(lines), MjcfCurveWarning, stacklevel=4)
 
 
 def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> TransmissionSpec:
     O = mujoco.mjtObj
-    motors = []
+    motors, notes = [], []
     for a in range(m.nu):
         aname = _name(mujoco, m, O.mjOBJ_ACTUATOR, a, "motor")
         gear = float(m.actuator_gear[a, 0])
+        if not np.isfinite(gear) or gear == 0:
+            raise ModelError(f"mjcf: actuator {aname!r} has gear {gear:g}; a motor's gear (its ratio) must be a "
+                             "non-zero number")
         if m.actuator_trntype[a] == mujoco.mjtTrn.mjTRN_JOINT:  # a motor on one joint: q_m = gear q
             motors.append(Motor(aname, {_name(mujoco, m, O.mjOBJ_JOINT, int(m.actuator_trnid[a, 0]), "joint"): gear}))
             continue
@@ -376,7 +504,9 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         t = int(m.actuator_trnid[a, 0])
         adr, num = int(m.tendon_adr[t]), int(m.tendon_num[t])
         if m.wrap_type[adr] != mujoco.mjtWrap.mjWRAP_JOINT:  # a spatial tendon: its ratios fitted as curves of q
-            motors.append(_spatial_motor(mujoco, m, a, t, aname, gear))
+            motor, rel, note = _spatial_motor(mujoco, m, a, t, aname, gear)
+            motors.append(motor)
+            notes += [(rel, note)] if note else []
             continue
         ratios = {}
         for w in range(adr, adr + num):
@@ -386,6 +516,7 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
             ratios[jname] = gear * float(m.wrap_prm[w])
         # the tendon's armature J_t acts on its length sum coef_i q_i: J_t coef coef^T = (J_t / gear^2) S^T S
         motors.append(Motor(aname, ratios, rotor_inertia=_tendon_armature(m, t) / gear**2))
+    _curve_warning(notes)
     tables: dict[str, dict[str, float]] = {"stiffness": {}, "armature": {}, "coulomb": {}, "viscous": {}}
     stops: dict[str, dict[str, float]] = {}
     for j in range(m.njnt):
@@ -401,6 +532,10 @@ def _spec(mujoco, m, sites: list[tuple[str, int]], model_name: str) -> Transmiss
         if m.jnt_limited[j] and m.jnt_solref[j, 0] < 0:  # a stop in MuJoCo's direct form: the export's [stops]
             w = float(m.dof_invweight0[d])
             stops[jname] = {"stiffness": -float(m.jnt_solref[j, 0]) / w, "damping": -float(m.jnt_solref[j, 1]) / w}
+    mimics = joint_couplings(mujoco, m)
+    if mimics:
+        jn = lambda j: _name(mujoco, m, O.mjOBJ_JOINT, j, "joint")  # noqa: E731
+        motors = fold_couplings(motors, tables, stops, {jn(j1): (jn(j2), a, b) for j1, (j2, a, b) in mimics.items()})
     children = set(int(p) for p in m.body_parentid[1:])
     first_site: dict[int, str] = {}
     for sname, b in sites:

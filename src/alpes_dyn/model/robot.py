@@ -279,10 +279,9 @@ class Model(FrameKinematics):
         """A MuJoCo model with fixed tendons (MJCF text or path; needs ``mujoco``): its tree as a URDF, its tendons,
         springs, armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`; ``hold``: hinges
         welded at their reference angle, their actuators dropped)."""
-        from .mjcf_import import mjcf_to_urdf
+        from .mjcf_import import mjcf_model
 
-        urdf, spec = mjcf_to_urdf(mjcf, hold)
-        return cls(urdf, spec, **kwargs)
+        return mjcf_model(cls, mjcf, hold, **kwargs)
 
     def to_mjcf(self, **kwargs) -> str:
         """MJCF text of this model for MuJoCo: its tree, inertias, limits, springs, armature, friction, motors as

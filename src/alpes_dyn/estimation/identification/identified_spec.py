@@ -186,6 +186,7 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
     a second one saying so). Returns (text, the fitted parameters the MJCF cannot hold: ``tendon_compliance_<motor>``,
     named in the comment). :class:`~alpes_dyn.ModelError` if a fitted mass's body has not the URDF's mass in the
     MJCF (not the file the robot was imported from) or for what ``updated_mjcf`` refuses."""
+    from ...model.mjcf_equality import own_joint_values
     from ...model.mjcf_import import _compile, _mj, _name
     from ...model.mjcf_update import updated_mjcf
     from ...symbolic.parametric import _child_links
@@ -239,4 +240,5 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
             f"{_printable(result.model.name)}): {'; '.join(notes)}")
     lines = [said] + ([] if result.trustworthy else [
         f"NOT TRUSTWORTHY (written with identify's force option): {_printable(result.status())}"])
+    joints = own_joint_values(mujoco, m, joints, base.rest_angle)  # a joint others are tied to: its own values
     return updated_mjcf(mjcf, out, masses=masses, joints=joints, rotors=rotors, note=lines), omitted
