@@ -61,12 +61,12 @@ def test_header_documents_the_api():
 
 
 def test_codegen_writes_a_whole_directory_or_nothing(tmp_path, capsys, monkeypatch):
-    assert cli.main(["codegen", "--model", "finger2", "-o", str(tmp_path / "c"), "--json"]) == 0
+    assert cli.main(["codegen", "--model", "finger2", "--out-dir", str(tmp_path / "c"), "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["files"] == ["alpes_ekf.c", "alpes_ekf.h", "main.c"] and obj["nz"] == 4
     assert sorted(p.name for p in (tmp_path / "c").iterdir()) == obj["files"]
     (tmp_path / "empty").mkdir()  # an empty directory is filled
-    assert cli.main(["codegen", "--model", "finger2", "-o", str(tmp_path / "empty")]) == 0
+    assert cli.main(["codegen", "--model", "finger2", "--out-dir", str(tmp_path / "empty")]) == 0
     assert len(list((tmp_path / "empty").iterdir())) == 3
 
     def broken(*a, **k):
@@ -74,8 +74,8 @@ def test_codegen_writes_a_whole_directory_or_nothing(tmp_path, capsys, monkeypat
 
     monkeypatch.setattr(fileio, "_write_file", broken)  # the directory writer (fileio.write_directory) fails
     capsys.readouterr()
-    assert cli.main(["codegen", "--model", "finger2", "-o", str(tmp_path / "d")]) == 2
-    assert "-o: cannot write" in capsys.readouterr().err
+    assert cli.main(["codegen", "--model", "finger2", "--out-dir", str(tmp_path / "d")]) == 2
+    assert "--out-dir: cannot write" in capsys.readouterr().err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c", "empty"]  # no partial or temporary directory
 
 
@@ -127,7 +127,7 @@ def test_force_controller_c_export_equals_python(kind, tmp_path):
 
 
 def test_codegen_with_the_controller(tmp_path, capsys):
-    assert cli.main(["codegen", "--model", "finger3", "--controller", "sensor", "-o", str(tmp_path / "c"),
+    assert cli.main(["codegen", "--model", "finger3", "--controller", "sensor", "--out-dir", str(tmp_path / "c"),
                      "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["files"] == ["alpes_ekf.c", "alpes_ekf.h", "alpes_force.c", "alpes_force.h", "force_main.c", "main.c"]
@@ -243,7 +243,7 @@ def test_c_export_of_a_urdf_robot_equals_estimate_on_its_recording(tmp_path, cap
     urdf, shipped = _finger_edu()
     spec = tmp_path / "smooth.toml"  # its spec without friction: one RK4 step per sample, C that builds in seconds
     spec.write_text(re.sub(r"\[(coulomb|viscous)\][^\[]*", "", open(shipped).read()))
-    assert cli.main(["codegen", "--model", urdf, "--spec", str(spec), "-o", str(tmp_path / "c"), "--json"]) == 0
+    assert cli.main(["codegen", "--model", urdf, "--spec", str(spec), "--out-dir", str(tmp_path / "c"), "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["nz"] == 6 and obj["nw"] == 1 and obj["ny"] == 1 and obj["controller"] is None
     model = Model.from_urdf_file(urdf, str(spec))
@@ -272,7 +272,7 @@ def test_force_controller_c_export_of_a_urdf_robot_equals_python(tmp_path, capsy
     from alpes_dyn.control.controller import static_contact_force
 
     urdf, spec = _finger_edu()
-    assert cli.main(["codegen", "--model", urdf, "--spec", spec, "--controller", "sensorless", "-o",
+    assert cli.main(["codegen", "--model", urdf, "--spec", spec, "--controller", "sensorless", "--out-dir",
                      str(tmp_path / "c"), "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert (obj["motor"], obj["frame"]) == ("flexor", "finger_tip_link")

@@ -98,7 +98,7 @@ def test_shadow_hand_dynamics_equal_mujoco(shadow):
 def test_shadow_hand_import_cli(capsys, tmp_path):
     """``alpes-dyn import`` on the shipped file: the pair written, the JSON's "not_imported" naming the servo gains,
     the force ranges and the geoms; one warning line on stderr; the pair loads as the model Model.from_mjcf gives."""
-    code = main(["import", "--model", str(example_mjcf_path()), "-o", str(tmp_path / "out"), "--json"])
+    code = main(["import", "--model", str(example_mjcf_path()), "--out-dir", str(tmp_path / "out"), "--json"])
     out, err = capsys.readouterr()
     assert code == 0, err
     obj = json.loads(out)
@@ -107,7 +107,7 @@ def test_shadow_hand_import_cli(capsys, tmp_path):
     assert len(lost) == 3 and "gainprm/biasprm" in lost[0] and "forcerange" in lost[1] and lost[2].startswith("geoms")
     m = ad.Model.from_urdf_file(obj["urdf"], obj["spec"])
     assert m.joint_names == tuple(obj["joints"]) and len(obj["motors"]) == 20 and obj["held"] == []
-    assert main(["import", "--model", str(example_mjcf_path()), "-o", str(tmp_path / "held"), "--hold",
+    assert main(["import", "--model", str(example_mjcf_path()), "--out-dir", str(tmp_path / "held"), "--hold",
                  "rh_WRJ2,rh_WRJ1", "--json"]) == 0
     held = json.loads(capsys.readouterr().out)
     assert held["held"] == ["rh_WRJ2", "rh_WRJ1"] and len(held["joints"]) == 22 and "rh_A_WRJ2" not in held["motors"]

@@ -110,7 +110,7 @@ def test_control_and_codegen_read_them_back(fitted, tmp_path, capsys):
     p = load_params(path)
     assert Compensation().offset_of(p, "finger") == pytest.approx(obj["parameters"]["encoder_offset_finger"]["value"])
     assert Compensation(encoder_offset=0.001).offset_of(p, "finger") == 0.001
-    assert main(["codegen", "--params", path, "-o", str(tmp_path / "c"), "--json"]) == 0
+    assert main(["codegen", "--params", path, "--out-dir", str(tmp_path / "c"), "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert out["torque_delay_samples"] == DELAY and out["encoder_offset_rad"] == pytest.approx([p.finger.encoder_offset])
     assert "Subtract the identified encoder zero" in (tmp_path / "c" / "alpes_ekf.h").read_text()
@@ -155,7 +155,7 @@ def untrusted(tmp_path):
 
 @pytest.mark.parametrize("argv", [
     ["estimate", "--duration", "0.3"],
-    ["codegen", "-o", "{tmp}/c"],
+    ["codegen", "--out-dir", "{tmp}/c"],
     ["control", "--duration", "0.6"],
 ], ids=["estimate", "codegen", "control"])
 def test_every_consumer_refuses_an_untrusted_file_unless_forced(argv, untrusted, tmp_path, capsys):
@@ -197,3 +197,24 @@ def test_the_api_refuses_unless_forced(untrusted):
         with pytest.raises(ModelError, match="is marked not trustworthy"):
             build(False)
         assert build(True) is not None
+
+
+def test_the_file_says_the_fit_had_friction_and_estimate_reads_it(fitted, capsys):
+    """identify records ``friction = true`` (its Alpes models fit with friction); ``estimate --data`` on the file
+    without --friction runs the observer with friction: the same estimate as with --friction given (to 1e-12), and
+    another than --no-friction's (which warns, one line, that it overrides the file)."""
+    rec, path, _ = fitted
+    assert load_params(path).identification["finger"]["friction"] is True
+    from alpes_dyn.model.trust import fitted_friction
+
+    assert fitted_friction(load_params(path), "index") is True  # a finger of the hand takes the shared record
+    runs = {}
+    for flag in ((), ("--friction",), ("--no-friction",)):
+        assert main(["estimate", "--data", rec, "--params", path, "--json", *flag]) == 0
+        out, err = capsys.readouterr()
+        runs[flag] = (json.loads(out), err)
+    (same, e0), (given, e1), (off, e2) = runs[()], runs[("--friction",)], runs[("--no-friction",)]
+    assert e0 == e1 == ""
+    np.testing.assert_allclose(same["rmse_deg"], given["rmse_deg"], rtol=1e-12, atol=0)
+    assert not np.allclose(same["rmse_deg"], off["rmse_deg"], rtol=1e-6, atol=0)
+    assert e2.count("\n") == 1 and f"--no-friction overrides --params {path}, whose fit had friction" in e2

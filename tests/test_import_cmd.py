@@ -31,7 +31,7 @@ def test_import_writes_a_pair_with_the_mjcf_dynamics(capsys, tmp_path, name):
     xml = ARM if name == "arm" else mjcf_string("hand", friction=True, rotor_inertia=True)
     src = tmp_path / f"{name}.xml"
     src.write_text(xml)
-    code, out, err = run(capsys, "import", "--model", str(src), "-o", str(tmp_path / "out"), "--json")
+    code, out, err = run(capsys, "import", "--model", str(src), "--out-dir", str(tmp_path / "out"), "--json")
     assert (code, err) == (0, "")
     obj = json.loads(out)
     urdf, spec = tmp_path / "out" / f"{name}.urdf", tmp_path / "out" / f"{name}.toml"
@@ -70,7 +70,7 @@ def test_import_writes_a_pair_with_the_mjcf_dynamics(capsys, tmp_path, name):
 def test_import_text_names_the_flags_to_use(capsys, tmp_path):
     src = tmp_path / "arm.xml"
     src.write_text(ARM)
-    code, out, err = run(capsys, "import", "--model", str(src), "-o", str(tmp_path / "o"))
+    code, out, err = run(capsys, "import", "--model", str(src), "--out-dir", str(tmp_path / "o"))
     assert (code, err) == (0, "")
     assert out.splitlines() == [f"arm: 2 joints, 1 motor (m), tips tip; written to {tmp_path / 'o'}/ (arm.urdf, "
                                 "arm.toml)", f"  use: --model {tmp_path / 'o' / 'arm.urdf'} --spec "
@@ -93,8 +93,8 @@ def test_import_writes_nothing_when_a_file_fails(capsys, tmp_path, monkeypatch):
         real(path, text)
 
     monkeypatch.setattr(fileio, "_write_file", fail_on_spec)
-    code, out, err = run(capsys, "import", "--model", str(src), "-o", str(tmp_path / "out"))
-    assert code == 2 and out == "" and "-o: cannot write" in err and "No space left on device" in err
+    code, out, err = run(capsys, "import", "--model", str(src), "--out-dir", str(tmp_path / "out"))
+    assert code == 2 and out == "" and "--out-dir: cannot write" in err and "No space left on device" in err
     assert sorted(p.name for p in tmp_path.iterdir()) == ["arm.xml"]
 
 

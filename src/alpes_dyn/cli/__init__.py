@@ -26,7 +26,7 @@ from ..errors import AlpesDynError, InputError
 from ..fileio import native_stderr_to
 from ..limits import MAX_ARGS, max_bytes
 from .common import (EXIT_UNTRUSTED, _join_negative_vectors, _one_line, _StdoutError, _Untrusted, _UsageError,
-                     _write_stdout, check_cache_before_compiling, check_option_ranges, positional_model,
+                     _write_stdout, check_cache_before_compiling, check_option_ranges, out_dir_alias, positional_model,
                      refuse_mjcf_model, refuse_repeated_options)
 from .parser import build_parser
 
@@ -56,6 +56,7 @@ def _run(argv: list[str]) -> tuple[int, str | None]:
         refuse_repeated_options(parser, argv)
         args = parser.parse_args(_join_negative_vectors(argv))
         positional_model(args)  # urdf, mjcf: the deprecated positional MODEL as --model (one warning line)
+        out_dir_alias(args)  # codegen, import: the deprecated -o DIR as --out-dir (one warning line)
         refuse_mjcf_model(args)
         check_option_ranges(args)
         max_bytes()  # $ALPES_DYN_MAX_BYTES read by every command: a bad one is refused even where no array is sized

@@ -100,6 +100,15 @@ def _json_option(sp: argparse.ArgumentParser) -> None:
     sp.add_argument("--json", action="store_true", help="print one JSON object")
 
 
+def _out_dir_option(sp: argparse.ArgumentParser, help: str) -> None:
+    """``--out-dir DIR`` (the directory a command writes: ``codegen``, ``import``) and its deprecated alias ``-o DIR``
+    of version 0.1 (``-o`` names a file in every other command; :func:`~alpes_dyn.cli.common.out_dir_alias`: one
+    warning line naming --out-dir). One of the two is required (checked after parsing)."""
+    sp.add_argument("--out-dir", default=None, metavar="DIR", help=help + " (required)")
+    sp.add_argument("-o", "--output", default=None, metavar="DIR",
+                    help="deprecated alias of --out-dir (-o names a file in every other command)")
+
+
 def _model_option(sp: argparse.ArgumentParser, help: str) -> None:
     """``--model`` (default finger3, as every command's) and the deprecated positional MODEL of version 0.1
     (:func:`~alpes_dyn.cli.common.positional_model`: one warning line naming --model)."""

@@ -297,12 +297,85 @@ def refuse_mjcf_model(args: argparse.Namespace) -> None:
     model = getattr(args, "model", None)
     if isinstance(model, str) and _is_mjcf_path(model) and args.command not in MJCF_MODEL_COMMANDS:
         stem = Path(model).stem
-        raise InputError(f"--model: {model!r} is an MJCF file; 'alpes-dyn import --model {model} -o DIR' writes its "
-                         f"URDF and spec, then give --model DIR/{stem}.urdf --spec DIR/{stem}.toml")
+        raise InputError(f"--model: {model!r} is an MJCF file; 'alpes-dyn import --model {model} --out-dir DIR' "
+                         f"writes its URDF and spec, then give --model DIR/{stem}.urdf --spec DIR/{stem}.toml")
+
+
+OUT_DIR_COMMANDS = ("codegen", "import")
+"""The commands that write a directory (``--out-dir DIR``; ``-o DIR`` its deprecated alias)."""
+
+
+def out_dir_alias(args: argparse.Namespace) -> None:
+    """``codegen`` and ``import``'s ``-o DIR`` of version 0.1, a deprecated alias of ``--out-dir DIR`` (``-o`` names
+    a file in every other command): moved into ``args.out_dir`` with one DeprecationWarning naming --out-dir (the
+    one warning line of :func:`alpes_dyn.cli.main`); ``args.out_flag`` is the option given, for the error lines.
+
+    Raises
+    ------
+    InputError
+        ``-o`` given with ``--out-dir``; neither given (``--out-dir: required ...``).
+    """
+    if getattr(args, "command", None) not in OUT_DIR_COMMANDS:
+        return
+    if args.output is not None:
+        if args.out_dir is not None:
+            raise InputError("-o: given with --out-dir; give --out-dir only (-o DIR is its deprecated alias)")
+        warnings.warn(f"'alpes-dyn {args.command} -o {args.output}': -o for a directory is deprecated (-o names a "
+                      f"file in every other command), give --out-dir {args.output}", DeprecationWarning, stacklevel=2)
+        args.out_dir, args.out_flag, args.output = args.output, "-o", None
+    elif args.out_dir is None:
+        raise InputError(f"--out-dir: required: the directory {args.command} writes (new, or empty)")
+    else:
+        args.out_flag = "--out-dir"
 
 
 _ALPES_ONLY = (("spring", "--spring"), ("params", "--params"), ("friction", "--friction"),
-               ("rotor_inertia", "--rotor-inertia"))
+               ("no_friction", "--no-friction"), ("rotor_inertia", "--rotor-inertia"))
+
+
+def friction_from_file(args: argparse.Namespace, path: str | None, flag: str) -> str:
+    """``args.friction`` for ``estimate`` and ``codegen`` on an Alpes model: ``--friction`` or ``--no-friction``
+    where given (an override: where the file says otherwise, one warning line names both), else what the parameter
+    file's fit record says (:func:`~alpes_dyn.model.trust.fitted_friction`: ``identify`` fitted with
+    friction), else no friction (the shipped file, a file without a record).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (``model``, ``chain``, ``friction``, ``no_friction``); ``args.friction`` is set.
+    path : str or None
+        The parameter file of the observer's model (None: the shipped one, which says nothing).
+    flag : str
+        The option that gave ``path`` (``--params``, ``--observer-params``), for the lines.
+
+    Returns
+    -------
+    str
+        Where the choice came from: ``"--friction"``, ``"--no-friction"``, ``"<flag>"`` or ``"default"``.
+
+    Raises
+    ------
+    InputError
+        ``--no-friction`` given with ``--friction``.
+    """
+    from ..model.params import load_params
+    from ..model.trust import fitted_friction
+
+    if args.friction and args.no_friction:
+        raise InputError("--no-friction: given with --friction; give one of them")
+    said = None
+    if path is not None:
+        said = fitted_friction(load_params(path), "thumb" if args.model == "thumb" else (args.chain or "finger"))
+    if args.friction or args.no_friction:
+        given = bool(args.friction)
+        option = "--friction" if given else "--no-friction"
+        if said is not None and said != given:
+            warnings.warn(f"{option} overrides {flag} {path}, whose fit had {'' if said else 'no '}friction: the "
+                          f"observer's model has {'' if given else 'no '}friction", AlpesDynWarning, stacklevel=2)
+        args.friction = given
+        return option
+    args.friction = bool(said)
+    return flag if said is not None else "default"
 
 
 def _given(value: object) -> bool:

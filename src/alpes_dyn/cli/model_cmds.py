@@ -92,7 +92,7 @@ def cmd_import(args: argparse.Namespace) -> int:
     if not name or name.startswith("."):
         raise InputError(f"--model: the files written are named after the MJCF file; {Path(args.model).name!r} gives "
                          "no plain name (rename the file)")
-    check_output_directory(args.output, "-o")  # before MuJoCo compiles: a new or empty directory, never a file
+    check_output_directory(args.out_dir, args.out_flag)  # before MuJoCo compiles: a new or empty directory
     hold = tuple(j.strip() for j in args.hold.split(",")) if args.hold is not None else ()
     if any(not j for j in hold):
         raise InputError(f"--hold: expected comma-separated joint names, got {args.hold!r}")
@@ -104,14 +104,14 @@ def cmd_import(args: argparse.Namespace) -> int:
             f"--model {name}.urdf\n" + spec.to_toml())
     if TransmissionSpec.from_toml(toml) != spec:  # never written as if it were the model's (to_toml's promise)
         raise RuntimeError(f"the spec of {args.model!r} does not read back equal to itself from its TOML")
-    written = write_directory({f"{name}.urdf": urdf, f"{name}.toml": toml}, args.output, "-o")
+    written = write_directory({f"{name}.urdf": urdf, f"{name}.toml": toml}, args.out_dir, args.out_flag)
     paths = {k: str(v) for k, v in written.items()}
-    obj = {"model": args.model, "name": model.name, "directory": args.output, "urdf": paths[f"{name}.urdf"],
+    obj = {"model": args.model, "name": model.name, "directory": args.out_dir, "urdf": paths[f"{name}.urdf"],
            "spec": paths[f"{name}.toml"], "joints": list(model.joint_names), "motors": list(model.motor_names),
            "tips": list(model.tip_names), "not_imported": lost, "held": list(hold)}
     text = (f"{model.name}: {model.n} joints, {len(model.motor_names)} motor"
             f"{'s' if len(model.motor_names) != 1 else ''} ({', '.join(model.motor_names) or 'none'}), tips "
-            f"{', '.join(model.tip_names) or 'none'}; written to {args.output}/ ({name}.urdf, {name}.toml)\n"
+            f"{', '.join(model.tip_names) or 'none'}; written to {args.out_dir}/ ({name}.urdf, {name}.toml)\n"
             f"  use: --model {obj['urdf']} --spec {obj['spec']}" + "".join(f"\n  not imported: {x}" for x in lost))
     _emit(obj, text, args.json)
     return 0

@@ -7,11 +7,12 @@ import argparse
 from .. import __version__
 from ..analysis.observability_matrix import MAX_INSTRUCTIONS
 from .arguments import (OUTPUT_HELP, _POINTS, _SEED, _common, _int_at_least, _json_option,  # noqa: F401
-                        _model_option, _outputs, _positive_number, _positive_seconds, _strict_float)
+                        _model_option, _out_dir_option, _outputs, _positive_number, _positive_seconds, _strict_float)
 from .analysis_cmds import cmd_identifiability, cmd_observability
 from .common import FORCE_USE_HELP, _UsageError, _drift_choice
 from .control_cmds import cmd_control
-from .estimation_cmds import FRICTION_LAW_HELP, THUMB_PARAMETERS, cmd_codegen, cmd_estimate, cmd_identify
+from .codegen_cmds import cmd_codegen
+from .estimation_cmds import FRICTION_LAW_HELP, THUMB_PARAMETERS, cmd_estimate, cmd_identify
 from .experiment_cmds import cmd_experiment
 from .on_hand_cmds import add_options as add_on_hand_options
 from .model_cmds import cmd_dynamics, cmd_import, cmd_linearize, cmd_mjcf, cmd_report, cmd_urdf
@@ -40,13 +41,12 @@ def _add_urdf(sub: argparse._SubParsersAction) -> None:
 def _add_import(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("import", help="write the URDF and the transmission spec of a MuJoCo model (MJCF) with fixed "
                        "tendons, for --model FILE.urdf --spec FILE.toml",
-                       epilog="Example: alpes-dyn import --model hand.xml -o hand; then alpes-dyn dynamics --model "
-                              "hand/hand.urdf --spec hand/hand.toml")
+                       epilog="Example: alpes-dyn import --model hand.xml --out-dir hand; then alpes-dyn dynamics "
+                              "--model hand/hand.urdf --spec hand/hand.toml")
     s.add_argument("--model", required=True, metavar="FILE.xml",
                    help="the MJCF file (MuJoCo compiles it: its includes, defaults and classes resolved)")
-    s.add_argument("-o", "--output", required=True, metavar="DIR",
-                   help="the directory to create (new, or empty): <name>.urdf and <name>.toml, <name> the MJCF "
-                        "file's name without its extension; written whole or not at all")
+    _out_dir_option(s, "the directory to create (new, or empty): <name>.urdf and <name>.toml, <name> the MJCF "
+                       "file's name without its extension; written whole or not at all")
     s.add_argument("--hold", metavar="J1,J2,...", help="hinges to weld at their reference angle, the actuators on "
                    "them dropped (e.g. a hand's wrist: each finger then a branch of its own for --chain)")
     _json_option(s)
@@ -174,11 +174,15 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                    help="parameter file of the observer's model, e.g. written by 'alpes-dyn identify' (default: the "
                         "simulated finger's, --true-params, or the shipped one, mis-scaled by --mismatch)")
     s.add_argument("--friction", action="store_true",
-                   help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model")
+                   help="the finger has friction (eq. 2.6-2.7), the true one and the observer's model (default: as "
+                        "the observer's parameter file says: friction where 'identify' fitted it with friction)")
+    s.add_argument("--no-friction", action="store_true",
+                   help="no friction, whatever the parameter file says (--friction and --no-friction override the "
+                        "file, with one warning line where it says otherwise)")
     s.add_argument("--data", default=None, metavar="REC.csv",
                    help="run the observer on this recording (encoder and torque; RMSE where it has true_q_* columns) "
                         "instead of the simulated scenario; the observer's model is --params (e.g. the file "
-                        "'alpes-dyn identify -o' wrote), with --friction if it has friction")
+                        "'alpes-dyn identify -o' wrote; its friction as the file's fit had)")
     s.add_argument("--friction-free", action="store_true",
                    help="with --data on a URDF --model: the observer's model without its spec's friction")
     s.add_argument("--torque-noise", type=_strict_float, default=None, metavar="NM",
@@ -212,7 +216,7 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
 def _add_codegen(sub: argparse._SubParsersAction) -> None:
     s = sub.add_parser("codegen", help="write the observer's step as standalone C (source, header, test program): "
                        "no Python, no heap",
-                       epilog="Example: alpes-dyn codegen --model finger3 --observer ekf -o ekf_c; then "
+                       epilog="Example: alpes-dyn codegen --model finger3 --observer ekf --out-dir ekf_c; then "
                               "cc -O2 -o ekf_c/alpes_ekf_main ekf_c/main.c ekf_c/alpes_ekf.c -lm")
     s.add_argument("--model", default="finger3", help="finger2, finger3, or thumb (with --friction), or a URDF path "
                    "(with --spec: the observer of 'estimate --data' on it) (default %(default)s)")
@@ -225,7 +229,10 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
                    help="Alpes models: the observer's parameter file, e.g. written by 'alpes-dyn identify' "
                         "(default: the shipped one)")
     s.add_argument("--friction", action="store_true", help="Alpes models: the observer's model has friction "
-                   "(eq. 2.6-2.7; a URDF --model's has its spec's)")
+                   "(eq. 2.6-2.7; default: as --params says: friction where 'identify' fitted it with friction; a "
+                   "URDF --model's has its spec's)")
+    s.add_argument("--no-friction", action="store_true", help="Alpes models: no friction, whatever --params says "
+                   "(--friction and --no-friction override the file, with one warning line where it says otherwise)")
     s.add_argument("--observer", default="ekf",
                    help="ekf, ukf, ekf-params or ukf-params (the estimation scenario's filters and noise settings) "
                         "(default %(default)s)")
@@ -239,8 +246,7 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--motor", default=None, metavar="NAME",
                    help="a URDF --model with --controller: the spec's motor that pulls (default: the only motor, or "
                         "the only one moving --frame)")
-    s.add_argument("-o", "--output", required=True, metavar="DIR",
-                   help="the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
+    _out_dir_option(s, "the directory to create (new, or empty): <prefix>.h, <prefix>.c, main.c")
     s.add_argument("--json", action="store_true", help="print one JSON object")
     s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_codegen)

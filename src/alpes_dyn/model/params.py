@@ -97,7 +97,7 @@ SOURCES: tuple[str, ...] = ("report", "assumed", "identified")
 IDENTIFICATION_FIELDS: dict[str, type] = {
     "model": str, "recording": str, "converged": bool, "stop": str, "adequate": bool, "trustworthy": bool,
     "verdict": str, "likely_missing": list, "residual_rms": float, "sensor_floor": float, "not_identified": list,
-    "standard_errors": str,
+    "standard_errors": str, "friction": bool,
 }
 """Fields of a table ``[identification.<chain>]`` (each optional): the model fitted, the recording, whether
 the fit converged and why it stopped, the adequacy verdict (``adequate``, its one-line ``verdict``, the
@@ -106,7 +106,8 @@ the fit converged and why it stopped, the adequacy verdict (``adequate``, its on
 parameter the fit did not identify, with why and the effect the data do not support (its value never written:
 :mod:`~alpes_dyn.estimation.identification.bounds`), and ``standard_errors``: how the ``std`` written were made
 (the larger of the classical and the robust HAC sandwich's, which parameters the robust one:
-:mod:`~alpes_dyn.estimation.identification.robust_covariance`)."""
+:mod:`~alpes_dyn.estimation.identification.robust_covariance`); ``friction``: the model fitted had friction
+(:func:`~alpes_dyn.model.trust.fitted_friction`)."""
 
 
 @dataclass(frozen=True)

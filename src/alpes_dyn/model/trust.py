@@ -12,7 +12,7 @@ from typing import Any
 from ..errors import ModelError
 from .params import HandParams
 
-__all__ = ["check_trusted", "untrusted_reason"]
+__all__ = ["check_trusted", "fitted_friction", "untrusted_reason"]
 
 
 def untrusted_reason(record: dict[str, Any]) -> str:
@@ -56,3 +56,29 @@ def check_trusted(params: HandParams, force: bool = False, name: str = "params",
     if not force:
         raise ModelError(f"{name}: {where} is marked not trustworthy ({text}); {hint}")
     return f"{where} is NOT trustworthy ({text})"
+
+
+def fitted_friction(params: HandParams, chain: str) -> bool | None:
+    """Whether the model fitted to ``chain`` had friction (eq. 2.6-2.7), as its ``[identification.<chain>]``
+    record says (``identify`` writes ``friction``): what ``estimate`` and ``codegen`` give the observer's model
+    unless ``--friction`` / ``--no-friction`` override it.
+
+    Parameters
+    ----------
+    params : HandParams
+        The loaded file.
+    chain : str
+        ``finger`` (a finger model of the shared values), a finger's name (its own record, else the shared
+        ``finger`` one, whose values it takes) or ``thumb``.
+
+    Returns
+    -------
+    bool or None
+        The record's ``friction``; None where the file has no record for the chain or the record does not say
+        (a file written by hand, the shipped one, or by an ``identify`` before the field).
+    """
+    for key in (chain, "finger") if chain not in ("finger", "thumb") else (chain,):
+        said = params.identification.get(key, {}).get("friction")
+        if said is not None:
+            return bool(said)
+    return None

@@ -443,7 +443,7 @@ def _record(result: IdentificationResult) -> dict[str, Any]:
     """The ``[identification.<chain>]`` record of a fit (:data:`~alpes_dyn.model.params.IDENTIFICATION_FIELDS`)."""
     rec: dict[str, Any] = {"model": result.model.name, "recording": _printable(result.recording_path),
                            "converged": bool(result.converged), "stop": _printable(result.reason),
-                           "trustworthy": result.trustworthy}
+                           "trustworthy": result.trustworthy, "friction": bool(result.model.extras.has_friction)}
     if math.isfinite(result.residual_rms):
         rec["residual_rms"] = float(result.residual_rms)
     a = result.adequacy
