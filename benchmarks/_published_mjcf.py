@@ -103,21 +103,21 @@ def published(d: Path, states: int, seed: int, cli: Callable[..., tuple[float, d
     spatial, imp = _test_module("test_mjcf_spatial"), _test_module("test_mjcf_import")
     out: dict[str, Any] = {}
     (d / "arm26.xml").write_text(spatial.ARM26)
-    wall, r = cli("import", "--model", str(d / "arm26.xml"), "-o", str(d / "arm26"), ok=(0, 2))
+    wall, r = cli("import", "--model", str(d / "arm26.xml"), "--out-dir", str(d / "arm26"), ok=(0, 2))
     out["arm26_0_120"] = {"wall_s": wall, **r}
     xml = spatial.only(spatial.ARM26, "SE", "EE", "BE", ranges="0 90")
     (d / "arm90.xml").write_text(xml)
-    wall, r = cli("import", "--model", str(d / "arm90.xml"), "-o", str(d / "arm90"))
+    wall, r = cli("import", "--model", str(d / "arm90.xml"), "--out-dir", str(d / "arm90"))
     model = ad.Model.from_urdf_file(r["urdf"], r["spec"])
     err = _arm(model, xml, states, seed)
     out["arm26_0_90"] = {"import_wall_s": wall, "tendons": ["SE", "EE", "BE"], "vs_mujoco": err,
                          "goal_met": max(err.values()) <= 1e-9}
     (d / "robotiq_like.xml").write_text(ROBOTIQ_LIKE)
-    wall, r = cli("import", "--model", str(d / "robotiq_like.xml"), "-o", str(d / "robotiq"), ok=(0, 2))
+    wall, r = cli("import", "--model", str(d / "robotiq_like.xml"), "--out-dir", str(d / "robotiq"), ok=(0, 2))
     out["robotiq_like"] = {"wall_s": wall, **r}
     (d / "tied.xml").write_text(imp.TIED)
     t0 = time.perf_counter()
-    wall, r = cli("import", "--model", str(d / "tied.xml"), "-o", str(d / "tied"))
+    wall, r = cli("import", "--model", str(d / "tied.xml"), "--out-dir", str(d / "tied"))
     err = _tied(ad.Model.from_urdf_file(r["urdf"], r["spec"]), imp.TIED, states, seed)
     out["tied"] = {"import_wall_s": wall, "vs_mujoco": err, "goal_met": max(err.values()) <= 1e-9,
                    "check_s": time.perf_counter() - t0 - wall}

@@ -130,7 +130,7 @@ def whole_hand(d: Path, states: int, seed: int) -> dict[str, Any]:
     from alpes_dyn.model.mjcf_import import example_mjcf_path
 
     src = example_mjcf_path("shadow_hand")
-    w_imp, imp = cli("import", "--model", str(src), "-o", str(d / "hand"))
+    w_imp, imp = cli("import", "--model", str(src), "--out-dir", str(d / "hand"))
     urdf, spec = imp["urdf"], imp["spec"]
     model = ad.Model.from_urdf_file(urdf, spec)
     err = dynamics_vs_mujoco(model, src, states, seed)
@@ -189,7 +189,7 @@ def held_hand(d: Path, seed: int, duration: float, compile_c: bool = True) -> di
     and ``estimate --chain rh_A_FFJ0`` on that recording: the times of a user's first runs on the whole hand."""
     from alpes_dyn.model.mjcf_import import example_mjcf_path
 
-    w_imp, imp = cli("import", "--model", str(example_mjcf_path("shadow_hand")), "-o", str(d / "held"), "--hold",
+    w_imp, imp = cli("import", "--model", str(example_mjcf_path("shadow_hand")), "--out-dir", str(d / "held"), "--hold",
                      "rh_WRJ2,rh_WRJ1")
     base = ["--model", imp["urdf"], "--spec", imp["spec"]]
     out: dict[str, Any] = {"n": len(imp["joints"]), "motors": len(imp["motors"]), "import_wall_s": w_imp}
@@ -204,7 +204,7 @@ def held_hand(d: Path, seed: int, duration: float, compile_c: bool = True) -> di
     out["estimate"] = {"wall_s": w, "worst_rmse_deg": float(max(np.degrees(ekf["rmse"])))}
     # the whole held hand's observer as C (44 states, 18 motors), compiled at -O0 (gcc -O1 on it ran over 4 min
     # and 5.9 GB before it was stopped, 2026-12-05) and run on 1 s of the recording against estimate --data's filter
-    w, cg = cli("codegen", *base, "-o", str(d / "hand_c"))
+    w, cg = cli("codegen", *base, "--out-dir", str(d / "hand_c"))
     c_file = d / "hand_c" / "alpes_ekf.c"
     out["codegen"] = {"wall_s": w, "states": cg.get("nz"), "c_bytes": c_file.stat().st_size,
                       "c_lines": c_file.read_text().count("\n")}
@@ -352,7 +352,7 @@ def finger(d: Path, seed: int, duration: float, runs: int = FINGER_RUNS,
                            "rmse_deg": dict(zip(ekf["joints"], np.degrees(ekf["rmse"]).tolist())),
                            "final_q_deg": dict(zip(ekf["joints"], np.degrees(ekf["final_q"]).tolist())),
                            "baseline_wall_s": w0, "goal_met": bool(worst < GOALS["ekf_rmse_deg"])}
-    out["codegen_wall_s"], _ = cli("codegen", *base, "-o", str(d / "ekf_c"))
+    out["codegen_wall_s"], _ = cli("codegen", *base, "--out-dir", str(d / "ekf_c"))
     # the force loop on the tendon: refused (exit 2) where the springless finger's rest leaves its range
     w, ctl = cli("control", *base, "--controller", "sensor", "--frame", "rh_ffdistal", "--motor", "rh_A_FFJ0",
                  ok=(0, 2))
@@ -436,7 +436,7 @@ def spatial(d: Path, seed: int, duration: float, states: int) -> dict[str, Any]:
     nominal_xml, true_xml, true = _spatial_mjcf(seed)
     (d / "finger.xml").write_text(nominal_xml)
     out: dict[str, Any] = {}
-    out["import_wall_s"], imp = cli("import", "--model", str(d / "finger.xml"), "-o", str(d / "finger"))
+    out["import_wall_s"], imp = cli("import", "--model", str(d / "finger.xml"), "--out-dir", str(d / "finger"))
     base = ["--model", imp["urdf"], "--spec", imp["spec"]]
     model = ad.Model.from_urdf_file(imp["urdf"], imp["spec"])
     tr, m = model.transmission, mujoco.MjModel.from_xml_string(nominal_xml)

@@ -129,11 +129,11 @@ def test_a_tendon_off_its_cylinder_is_refused_by_name(tendons, needle):
 
 
 def test_curve_warnings_name_the_worst_first():
-    """Two smooth tendons whose fits are not exact (a straight segment across a joint of 5 rad range): one warning,
+    """Two smooth tendons whose fits are not exact (a straight segment across a joint of 2.9 rad range, short of the angle where one ratio reaches 0): one warning,
     the tendon with the larger error first."""
     from test_ratio_curve import SITES
 
-    wide = SITES.replace('range="-0.3 1.2"', 'range="-2.5 2.8"')
+    wide = SITES.replace('range="-0.3 1.2"', 'range="-0.8 2.1"')
     second = ('<spatial name="short"><site site="s0"/><site site="s1a"/><site site="s1b"/><site site="s2a"/>'
               '</spatial>')
     xml = (wide.replace("</tendon>", second + "</tendon>")
