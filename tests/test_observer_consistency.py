@@ -1,0 +1,98 @@
+"""The observer's consistency from what a user measures (issue 50, item 4): the normalised innovation squared (NIS)
+and the normalised prediction error squared against their chi-square bands, and the adequacy verdict that refuses
+a file whose observer is over-confident.
+
+References: the innovations, their covariance and the H-step prediction written here in numpy for a linear filter
+(a lightly damped oscillator simulated here with exactly the filter's noises: its RK4 step is the Taylor polynomial
+of exp(A dt)); the band's probability by a Monte Carlo over runs of that filter; the over-confident filter one told
+a quarter of the encoder's true noise variance.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import InputError
+from alpes_dyn.estimation.observers.innovation import nis
+from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
+from alpes_dyn.model.extras import JointExtras
+from alpes_dyn.symbolic.statespace import StateSpace
+
+from test_simulation import C_OSC, I_OSC, K_OSC, OSC_URDF
+
+DT, N, Q, R_TRUE = 1e-3, 1500, np.diag([0.0, 1e-8]), 1e-4
+
+
+@pytest.fixture(scope="module")
+def oscillator_runs():
+    """40 runs of the oscillator seen through its angle (noise 1e-2 rad), the truth drawn here; the filter told the
+    true R and one told a quarter of it."""
+    extras = JointExtras(stiffness=np.array([K_OSC]), armature=np.zeros(1), coulomb=np.zeros(1),
+                         viscous=np.array([C_OSC]))
+    ss = StateSpace(ad.Model(OSC_URDF, extras=extras, gravity=[0.0, 0.0, 0.0]), input="joint", output=np.eye(1))
+    right = ExtendedKalmanFilter(ss, DT, process_noise=Q, measurement_noise=np.array([[R_TRUE]]))
+    proud = ExtendedKalmanFilter(ss, DT, process_noise=Q, measurement_noise=np.array([[R_TRUE / 4]]))
+    A = np.array([[0.0, 1.0], [-K_OSC / I_OSC, -C_OSC / I_OSC]])
+    Ad = sum(np.linalg.matrix_power(A * DT, k) / math.factorial(k) for k in range(5))
+    rng = np.random.default_rng(9640)
+    runs, P0 = 40, np.diag([1e-2, 1e-1])
+    X = np.zeros((runs, N + 1, 2))
+    X[:, 0] = rng.multivariate_normal(np.zeros(2), P0, runs)
+    for k in range(N):  # the truth, every run at once
+        X[:, k + 1] = X[:, k] @ Ad.T + rng.multivariate_normal(np.zeros(2), Q, runs)
+    Y = X[:, :, :1] + rng.normal(0.0, math.sqrt(R_TRUE), (runs, N + 1, 1))
+    W = np.zeros((N, 1))
+    return right, proud, Ad, W, Y, np.diag(P0)
+
+
+def test_nis_is_the_innovations_quadratic_form_written_in_numpy(oscillator_runs):
+    """One run: the NIS, and the 20-step prediction's, equal the quadratic forms of the linear filter's innovations
+    y_k+1 - H Ad z_k (resp. H Ad^20 z_k) with S = H P_pred H^T + R, P_pred = Ad P Ad^T + Q (resp. 20 such steps),
+    computed here from the filter's z and P."""
+    f, _, Ad, W, Y, P0 = oscillator_runs
+    est = f.run(np.zeros(2), P0, W, Y[0])
+    k0 = 500
+    for H, stride in ((1, 1), (20, 5)):
+        v = nis(est, Y[0], f, W, start=k0 * DT, horizon=H, stride=stride)
+        ks = np.arange(k0, N + 1 - H, stride)
+        AH = np.linalg.matrix_power(Ad, H)
+        Pp = est.P[ks]
+        for _ in range(H):
+            Pp = Ad @ Pp @ Ad.T + Q
+        S = Pp[:, 0, 0] + R_TRUE
+        i = Y[0, ks + H, 0] - (est.z[ks] @ AH.T)[:, 0]
+        assert v.samples == ks.size and v.dof == 1
+        assert v.value == pytest.approx(np.mean(i**2 / S), rel=1e-6)
+        np.testing.assert_allclose(v.reported_rms, np.sqrt(np.mean(S)), rtol=1e-6)
+
+
+def test_nis_band_holds_its_probability_and_flags_an_over_confident_filter(oscillator_runs):
+    """Over 40 runs the NIS averages 1 and lies in its 95 % band on at least 34 (Monte Carlo: 38 expected; the
+    binomial's 1 % tail is below 34); the filter told a quarter of the encoder's noise variance is above it on
+    every run (the quantity a user has: no true state read)."""
+    right, proud, _, W, Y, P0 = oscillator_runs
+    values, inside, flagged = [], 0, 0
+    for y in Y:  # a filter run per draw
+        v = nis(right.run(np.zeros(2), P0, W, y), y, right, W, start=0.5)
+        values.append(v.value)
+        inside += v.consistent
+        p = nis(proud.run(np.zeros(2), P0, W, y), y, proud, W, start=0.5)
+        flagged += p.verdict == "over-confident"
+    assert np.mean(values) == pytest.approx(1.0, abs=0.03)
+    assert inside >= 34 and flagged == len(Y)
+
+
+def test_bad_inputs_name_their_argument(oscillator_runs):
+    f, _, _, W, Y, P0 = oscillator_runs
+    est = f.run(np.zeros(2), P0, W, Y[0])
+    for kw, word in (({"measurement": Y[0][:-1]}, "measurement"), ({"measurement": Y[0] * np.nan}, "measurement"),
+                     ({"inputs": W[:-1]}, "inputs"), ({"start": 2.0}, "start"), ({"start": float("nan")}, "start"),
+                     ({"level": 1.0}, "level"), ({"lags": 0}, "lags"), ({"horizon": 0}, "horizon"),
+                     ({"stride": 10**6}, "stride"), ({"horizon": True}, "horizon")):
+        args = {"measurement": Y[0], "inputs": W, **kw}
+        with pytest.raises(InputError, match=f"^{word}:"):
+            nis(est, args.pop("measurement"), f, args.pop("inputs"), **args)
