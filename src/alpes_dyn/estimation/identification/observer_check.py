@@ -194,8 +194,8 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     H = max(1, int(round(th["horizon_s"] / recording.dt)))
     starts = np.arange(k0, N - H, int(th["stride"]))
     pred = (y[starts + H] - _predicted(filt, est.estimate.z, W, starts, H)) / step
-    consistency = [nis(est.estimate, y, filt, W, start=transient, level=th["nis_level"]),
-                   nis(est.estimate, y, filt, W, start=transient, level=th["nis_level"], horizon=H,
+    consistency = [nis(est.estimate, y, filt, est.inputs, start=transient, level=th["nis_level"]),
+                   nis(est.estimate, y, filt, est.inputs, start=transient, level=th["nis_level"], horizon=H,
                        stride=int(th["stride"]))]
     floor = floor.total
     i_rms, p_rms = float(np.sqrt(np.mean(innov**2))), float(np.sqrt(np.mean(pred**2)))
