@@ -124,3 +124,34 @@ def test_the_verdict_refuses_an_over_confident_observer_from_what_a_user_measure
     assert all("over-confident" in r for r in bad.reasons)
     assert bad.nis.verdict == "over-confident" and bad.prediction_nis.value > 3 * bad.prediction_nis.high
     assert bad.to_dict()["nis"]["verdict"] == "over-confident"
+
+
+def test_the_friction_noise_is_the_torque_noises_kick_across_the_laws_band():
+    """friction_process_noise on finger3: Q_v = dt^2 M^-1 D M^-1 with D diagonal (the friction's error a torque per
+    joint), D_i = (F_s,i / 4)^2 rho_i, rho_i = kick_i^2 / (kick_i^2 + v_s^2); its kicks dt |M^-1 B| sigma within 30 %
+    of the filter's own step's, sqrt of the velocity rows of G Sigma_w G^T (G = dF/dw of the discrete model, 4 RK4
+    steps, at a state sliding beyond the law's band: within a sample the springs and the inertia coupling act too);
+    zero without torque noise or friction."""
+    import casadi as cs
+
+    from alpes_dyn.estimation.observers.discrete import DiscreteModel
+    from alpes_dyn.estimation.observers.friction_noise import FRICTION_MODEL_ERROR, friction_process_noise
+
+    m = ad.Model.alpes("finger3", friction=True)
+    ss = StateSpace(m, input="motor", output="encoder")
+    dt, sigma = 1e-3, 5e-4
+    d = DiscreteModel(ss, dt, substeps=4)
+    z, w = cs.SX.sym("z", d.nz), cs.SX.sym("w", d.nw)
+    G = np.asarray(cs.Function("G", [z, w], [cs.jacobian(d.step(z, w), w)])(np.r_[0, 0, 0, 2, 2, 2], 0.0))
+    step_kick = np.abs(G[3:, 0]) * sigma
+    Qv = friction_process_noise(m, ss.B, dt, sigma)
+    M = m.inertia_matrix(np.zeros(3))
+    D = M @ Qv @ M / dt**2
+    np.testing.assert_allclose(D - np.diag(np.diag(D)), 0.0, atol=1e-9 * np.abs(D).max())
+    rho = np.diag(D) / (FRICTION_MODEL_ERROR * m.extras.coulomb) ** 2
+    kick = m.extras.smooth_velocity * np.sqrt(rho / (1 - rho))
+    np.testing.assert_allclose(kick, step_kick, rtol=0.3)
+    assert rho[2] > 0.9 and rho[0] < 0.2  # joint 3 kicked across the band, joint 1 within it
+    assert np.all(np.linalg.eigvalsh(Qv) > -1e-15)
+    assert not friction_process_noise(m, ss.B, dt, 0.0).any()
+    assert not friction_process_noise(ad.Model.alpes("finger3"), ss.B, dt, sigma).any()

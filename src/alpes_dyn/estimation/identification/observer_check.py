@@ -60,7 +60,8 @@ OBSERVER_THRESHOLDS: dict[str, float] = {
 ``transient_s`` s of the filter's start; not adequate where the innovation's RMS exceeds ``innovation_ratio`` times
 the sensor floor or the prediction's ``prediction_ratio`` times it, or where the filter is over-confident: its
 normalised innovation squared, or that of its prediction ``horizon_s`` ahead, above its chi-square band of
-probability ``nis_level`` (:func:`~alpes_dyn.estimation.observers.innovation.nis`); on the recording's first ``window_s`` s (the hand
+probability ``nis_level`` (:func:`~alpes_dyn.estimation.observers.innovation.nis`); on the recording's first
+``window_s`` s (the hand
 at rest at its start, as the filter's prior: the stick-slip law's EKF runs at about 1.3 ms per sample, 18 RK4 steps
 each, in CasADi's virtual machine; a compiled one took minutes of gcc). Why 25 for the prediction: the true file
 itself, on our own simulator's recording of the experiment (the model's exact structure), predicts finger2 20 ms
@@ -68,8 +69,8 @@ ahead within 12.1-16.0 times the floor (seeds 1, 3, 5; the nominal file 310-385 
 plant within 12.5 (seed 302; the nominal 140); at 15 the default path refused finger2 seeds 3 and 5, whose fits were
 within 0.13 % of the truth (2026-12-04). Fits missing the torque delay measured 28-43 times (seeds 405-409). Why a
 99 % band: two tests of a consistent filter at 95 % each refuse about one file in ten by chance; the true file on
-MuJoCo's stick-slip finger3 of seed 302 (the EKF 0.15 degree off) had its 20 ms prediction at 1.51 against a 95 %
-band reaching 1.495, the nominal file's 133 (its innovation 8.4)."""
+MuJoCo's stick-slip finger3 of ``tests/test_realism_draws.py`` (the EKF 0.15 degree off) had its 20 ms prediction
+at 1.51 against a 95 % band reaching 1.495, the nominal file's 133 (its innovation 8.4)."""
 
 
 @dataclass
