@@ -155,3 +155,29 @@ def test_the_friction_noise_is_the_torque_noises_kick_across_the_laws_band():
     assert np.all(np.linalg.eigvalsh(Qv) > -1e-15)
     assert not friction_process_noise(m, ss.B, dt, 0.0).any()
     assert not friction_process_noise(ad.Model.alpes("finger3"), ss.B, dt, sigma).any()
+
+
+def test_estimate_data_reports_the_nis(tmp_path, capsys):
+    """``estimate --data --json``: the ``nis`` object is :func:`nis` of the same filter run
+    (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording` with the command's defaults) on the
+    recording's encoder, computed here; the table prints its line."""
+    pytest.importorskip("mujoco")
+    import json
+
+    from alpes_dyn.cli import main
+    from alpes_dyn.control.plants import mujoco_recording
+    from alpes_dyn.estimation.experiments.recording import write_recording
+    from alpes_dyn.estimation.observers.replay import estimate_recording
+    from alpes_dyn.estimation.observers.scenario import EstimationScenario, _torque
+
+    u = _torque(EstimationScenario(), 1e-3 * np.arange(1201), 1)
+    path = tmp_path / "rec.csv"
+    write_recording(mujoco_recording("finger3", None, u, 1e-3, seed=9646), path)
+    assert main(["estimate", "--data", str(path), "--friction", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    r = estimate_recording(str(path), ad.Model.alpes("finger3", friction=True))
+    v = nis(r.estimate, r.measurement, r.filter, r.inputs, start=r.settings["transient_s"])
+    assert out["nis"]["value"] == pytest.approx(v.value, rel=1e-9)
+    assert out["nis"]["band"] == pytest.approx([v.low, v.high], rel=1e-9) and out["nis"]["verdict"] == v.verdict
+    assert main(["estimate", "--data", str(path), "--friction"]) == 0
+    assert "NIS of the encoders:" in capsys.readouterr().out
