@@ -61,8 +61,7 @@ OBSERVER_THRESHOLDS: dict[str, float] = {
 the sensor floor or the prediction's ``prediction_ratio`` times it, or where the filter is over-confident: its
 normalised innovation squared, or that of its prediction ``horizon_s`` ahead, above its chi-square band of
 probability ``nis_level`` (:func:`~alpes_dyn.estimation.observers.innovation.nis`); on the recording's first
-``window_s`` s (the hand
-at rest at its start, as the filter's prior: the stick-slip law's EKF runs at about 1.3 ms per sample, 18 RK4 steps
+``window_s`` s (the hand at rest at its start, as the filter's prior: the stick-slip law's EKF runs at about 1.3 ms per sample, 18 RK4 steps
 each, in CasADi's virtual machine; a compiled one took minutes of gcc). Why 25 for the prediction: the true file
 itself, on our own simulator's recording of the experiment (the model's exact structure), predicts finger2 20 ms
 ahead within 12.1-16.0 times the floor (seeds 1, 3, 5; the nominal file 310-385 times), finger3 on MuJoCo's stick-slip
@@ -183,9 +182,9 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     transient = min(th["transient_s"], 0.5 * recording.duration)
     if encoder_offset is None:  # the fit's zero (none fitted: 0), not one a base file held from another recording
         encoder_offset = np.zeros(model.transmission.n_motors)
-    floor = sensor_floor(recording.encoder)
+    sensors = sensor_floor(recording.encoder)
     est = estimate_recording(recording, model, "ekf", encoder_offset=encoder_offset, tilt=tilt, transient=transient,
-                             torque_delay=torque_delay, encoder_noise_counts=floor.noise,  # the noise it measured
+                             torque_delay=torque_delay, encoder_noise_counts=sensors.noise,  # the noise it measured
                              force=True)  # a flagged fit is judged too
     filt, tr = est.filter, model.transmission
     step = 2 * np.pi / tr.counts_per_rev
@@ -201,7 +200,7 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     consistency = [nis(est.estimate, y, filt, est.inputs, start=transient, level=th["nis_level"]),
                    nis(est.estimate, y, filt, est.inputs, start=transient, level=th["nis_level"], horizon=H,
                        stride=int(th["stride"]))]
-    floor = floor.total
+    floor = sensors.total
     i_rms, p_rms = float(np.sqrt(np.mean(innov**2))), float(np.sqrt(np.mean(pred**2)))
     white = whiteness(innov) if innov.shape[0] > 60 else None
     reasons = []
