@@ -100,7 +100,7 @@ def _prediction(filt: Any, estimate: Estimate, W: np.ndarray, starts: np.ndarray
     step = cs.Function("pred", [cs.vertcat(z, cs.vec(P)), w], [cs.vertcat(zn, cs.vec(Pn))])
     acc = step.mapaccum("ahead", horizon)
     x0 = np.concatenate([estimate.z[starts], estimate.P[starts].transpose(0, 2, 1).reshape(len(starts), -1)], axis=1)
-    Wb = np.stack([W[k: k + horizon] for k in starts])  # (B, H, nw)
+    Wb = np.lib.stride_tricks.sliding_window_view(W, horizon, axis=0)[starts].transpose(0, 2, 1)  # (B, H, nw)
     out = acc.map(len(starts))(x0.T, Wb.transpose(2, 1, 0).reshape(nw, -1, order="F"))
     xend = np.asarray(out).reshape(nz + nz * nz, horizon, len(starts), order="F")[:, -1, :]  # (nz + nz^2, B)
     zs = cs.SX.sym("zs", nz)
@@ -134,7 +134,8 @@ def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start
     Returns
     -------
     :class:`Nis`. Raises :class:`~alpes_dyn.InputError` naming the argument: ``measurement`` or ``inputs`` of
-    another shape or not finite, ``start`` past the run, ``level`` or ``lags`` out of range.
+    another shape or not finite, ``start`` past the run, ``level``, ``lags``, ``horizon`` or ``stride`` out of
+    range.
     """
     if not isinstance(estimate, Estimate):
         raise InputError(f"estimate: expected an Estimate, got {type(estimate).__name__}")
