@@ -113,7 +113,7 @@ def _prediction(filt: Any, estimate: Estimate, W: np.ndarray, starts: np.ndarray
 
 
 def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start: float = 0.0,
-        level: float = 0.95, lags: int = NIS_LAGS, horizon: int = 1, stride: int = 1) -> Nis:
+        level: float = 0.95, lags: int | None = None, horizon: int = 1, stride: int = 1) -> Nis:
     """The time-averaged NIS of ``filter``'s run ``estimate`` on ``measurement`` and its band (module docstring).
 
     Parameters
@@ -125,7 +125,8 @@ def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start
     inputs: (N-1, nw) its known inputs, row k held from sample k to k+1.
     start: the first time used, s from the estimate's first sample (after the filter's transient).
     level: the band's probability, in (0, 1).
-    lags: L, the autocorrelation's lags counted (module docstring).
+    lags: L, the autocorrelation's lags counted (module docstring); default :data:`NIS_LAGS`, at most a quarter of
+        the predictions (a short run's).
     horizon: samples ahead of the prediction (1: the innovation). Further ahead, the measurement predicted from
         z_k|k without update and its covariance propagated as the filter's prediction does: an error the encoder
         does not see at once (the split of joints it reads the sum of) reaches it through the dynamics.
@@ -156,6 +157,8 @@ def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start
         if isinstance(x, bool) or not isinstance(x, (int, np.integer)) or not 1 <= x < (N - 1 - k0) // 4:
             raise InputError(f"{name}: expected an integer from 1 to {(N - 1 - k0) // 4 - 1}, got {x!r:.40}")
     starts = np.arange(k0, N - horizon, stride)
+    if lags is None:
+        lags = max(1, min(NIS_LAGS, starts.size // 4))
     if isinstance(lags, bool) or not isinstance(lags, (int, np.integer)) or not 1 <= lags < starts.size // 2:
         raise InputError(f"lags: expected an integer from 1 to {starts.size // 2 - 1}, got {lags!r:.40}")
     yp, S = _prediction(filter, estimate, W, starts, int(horizon))
