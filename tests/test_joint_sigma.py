@@ -109,18 +109,19 @@ def test_nees_band_predicts_the_spread_of_a_linear_filter():
     assert 0.65 < np.var(values, ddof=1) / np.mean(pred) < 1.5
 
 
-def _mujoco_nees(torque_noise: float):
+def _mujoco_nees(torque_noise: float, seed: int = 9101, encoder_noise_counts: float = 0.0):
     """finger3 on MuJoCo with the library's smooth friction law (PlantEffects() default: the model is right), the
-    estimation scenario's torque for 2 s, its torque sensor of ``torque_noise`` N m, the observer with the true file:
-    the NEES of the joints."""
+    estimation scenario's torque for 2 s, its torque sensor of ``torque_noise`` N m, the observer with the true file
+    (told the encoder's noise beyond quantisation, counts): the NEES of the joints."""
     pytest.importorskip("mujoco")
     from alpes_dyn.control.plants import mujoco_recording
     from alpes_dyn.estimation.observers.replay import estimate_recording
     from alpes_dyn.estimation.observers.scenario import EstimationScenario, _torque
 
     u = _torque(EstimationScenario(), 1e-3 * np.arange(2001), 1)
-    rec = mujoco_recording("finger3", None, u, 1e-3, seed=9101, torque_noise=torque_noise)
-    r = estimate_recording(rec, ad.Model.alpes("finger3", friction=True), torque_noise=torque_noise)
+    rec = mujoco_recording("finger3", None, u, 1e-3, seed=seed, torque_noise=torque_noise)
+    r = estimate_recording(rec, ad.Model.alpes("finger3", friction=True), torque_noise=torque_noise,
+                           encoder_noise_counts=encoder_noise_counts)
     return nees(r.estimate, rec.true_q, r.filter, r.inputs, start=r.settings["transient_s"])
 
 
@@ -130,13 +131,14 @@ def test_nees_on_a_mujoco_smooth_friction_plant():
     assert v.consistent, v.to_dict()
 
 
-@pytest.mark.xfail(strict=True, reason="issue 50: the torque sensor's noise kicks the filter's joints far beyond the "
-                   "smooth friction law's band and its linearised covariance does not carry it: NEES 23-27 for 3 "
-                   "(docs/user-guide/observers.rst); to be mended by the friction observer")
 def test_nees_on_a_mujoco_smooth_friction_plant_with_torque_noise():
-    """The same plant with the estimation scenario's torque noise (5e-4 N m)."""
-    v = _mujoco_nees(5e-4)
+    """The same plant with the estimation scenario's torque noise (5e-4 N m), the filter told the plant's encoder
+    noise (0.5 count beyond quantisation, :func:`~alpes_dyn.control.plants.mujoco_recording`'s): in its band with
+    the smooth law's model error as process noise (:mod:`~alpes_dyn.estimation.observers.friction_noise`; without it
+    15-22, over-confident)."""
+    v = _mujoco_nees(5e-4, encoder_noise_counts=0.5)
     assert v.consistent, v.to_dict()
+    assert v.value > 1.5 and v.per_joint.max() < 2.0
 
 
 def test_the_shadow_fingers_coupled_pair_is_flagged_and_finger3_is_not(finger3_run):

@@ -179,7 +179,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
         lines.append(f"  {'final disturbance [N m]:':30s}"
                      + "  ".join(f"{mn} {d:.3g}" for mn, d in zip(res.motor_names, res.disturbance[-1])))
     more, extra = _uncertainty(res.estimate, res.filter, res.inputs, rec.true_q if res.rmse is not None else None,
-                               res.settings["transient_s"], res.joint_names, limit, whole=res.segments == 1)
+                               res.settings["transient_s"], res.joint_names, limit, whole=res.segments == 1,
+                               measurement=res.measurement)
     obj.update(more)
     lines += extra
     obj["seconds"] = time.perf_counter() - t0

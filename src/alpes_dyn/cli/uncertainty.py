@@ -1,5 +1,6 @@
 """What ``alpes-dyn estimate`` says of its own uncertainty: each joint's sigma, its observability by the encoders
-along the motion, the NEES where the recording has true joints (the table's lines and the JSON's keys)."""
+along the motion, the NEES where the recording has true joints, the NIS of a recording's innovations (the table's
+lines and the JSON's keys)."""
 
 from __future__ import annotations
 
@@ -9,13 +10,16 @@ from ..errors import InputError
 
 
 def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start: float, joints: tuple[str, ...],
-                 limit_deg: float, whole: bool = True) -> tuple[dict, list[str]]:
+                 limit_deg: float, whole: bool = True, measurement: np.ndarray | None = None
+                 ) -> tuple[dict, list[str]]:
     """What ``estimate`` says of its own uncertainty: each joint's reported sigma along the run after ``start`` s
     (median and worst), each joint's observability by the encoders along the estimated motion
     (:func:`~alpes_dyn.analysis.joint_observability.joint_observability`: flagged above ``limit_deg``), and with
     true joints the NEES and its band (:func:`~alpes_dyn.estimation.observers.consistency.nees`; the band from the
-    filter's own error model when one filter ran the whole record, ``whole``). Returns (the JSON's keys, the
-    table's lines)."""
+    filter's own error model when one filter ran the whole record, ``whole``); given the ``measurement`` the filter
+    read (N, m) and one filter over the whole record, the NIS of its innovations and its band, which needs no true
+    joints (:func:`~alpes_dyn.estimation.observers.innovation.nis`). Returns (the JSON's keys, the table's
+    lines)."""
     from ..analysis.joint_observability import joint_observability
     from ..estimation.observers.consistency import joint_sigma, nees
 
@@ -24,7 +28,7 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
     obs = joint_observability(filt.model.system.model, est.z, inputs, filt.dt, filt.R, limit=np.radians(limit_deg))
     flags = obs.unobserved
     obj: dict = {"q_std_median_deg": deg(med).tolist(), "q_std_worst_deg": deg(worst).tolist(),
-                 "observability": obs.to_dict(), "unobserved": list(flags), "nees": None}
+                 "observability": obs.to_dict(), "unobserved": list(flags), "nees": None, "nis": None}
     lines = [f"  {'sigma median/worst [deg]:':30s}"
              + "  ".join(f"{j} {deg(a):.3f}/{deg(b):.3f}" for j, a, b in zip(joints, med, worst)),
              f"  {f'observed within [deg]:':30s}"
@@ -35,6 +39,13 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
         obj["nees"] = r.to_dict()
         lines.append(f"  {'NEES of the joints:':30s}{r.value:.3g} (95 % band {r.low:.3g}-{r.high:.3g} for {r.dof} "
                      f"joints, {r.effective:.3g} independent samples): {r.verdict}")
+    if measurement is not None and whole:
+        from ..estimation.observers.innovation import nis
+
+        v = nis(est, measurement, filt, inputs, start=start)
+        obj["nis"] = v.to_dict()
+        lines.append(f"  {'NIS of the encoders:':30s}{v.value:.3g} (95 % band {v.low:.3g}-{v.high:.3g}, "
+                     f"{v.effective:.4g} independent samples): {v.verdict}")
     if flags:
         lines.append(f"  WARNING: {', '.join(flags)} not observed by this motion: the encoders pin "
                      f"{'it' if len(flags) == 1 else 'them'} no closer than "

@@ -73,7 +73,7 @@ from ..experiments.recording import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO",
            "STICTION_VELOCITY", "parse_effects", "effect_parameters", "stiction_params", "alpes_models", "fit_effects",
-           "EffectsFit", "Kept", "RoundWalker"]  # (NAMED_BY, named_effects: the rounds module's, imported here)
+           "EffectsFit", "Kept", "RoundWalker", "unmatched_delay"]  # (NAMED_BY, named_effects: the rounds module's, imported here)
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan")
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
@@ -172,6 +172,27 @@ def alpes_models(model: str, params: HandParams, *, rotor_inertia: bool = False,
                            params=stick[0] if "stiction" in effects else params, chain=chain)
 
     return model_of
+
+
+def unmatched_delay(best: Any, rounds: Sequence[tuple[tuple[str, ...], Any]], delay: int) -> str | None:
+    """Where the kept fit's verdict names a torque delay that the data do not hold: the kept fit has none
+    (``delay`` 0) and every round made with the torque read a sample or more earlier (``rounds``, as
+    :attr:`EffectsFit.rounds`) left a larger residual -- the best match at lag 0. Then the torque delay is taken
+    off its likely missing effects and the note returned says why (None where nothing was changed). A residual
+    that follows the torque's own rate is any lag of the plant behind the model, not only the sensor's: MuJoCo's
+    default dry friction (``solreffriction`` 0.02 s), which creeps before it slides, lags the smooth law so, and a
+    refusal had named a one-sample delay that a fit at that delay made worse."""
+    a = getattr(best, "adequacy", None)
+    word = NAMED_BY["delay"]
+    if delay or a is None or a.adequate or not any(word in m for m in a.likely_missing):
+        return None
+    late = [r.residual_rms for e, r in rounds if "delay" in e]
+    if not late or min(late) < best.residual_rms:
+        return None
+    a.likely_missing = [m for m in a.likely_missing if word not in m]
+    return (f"the residual follows the torque's rate, but a fit with the torque read a sample earlier left "
+            f"{min(late):.3g} counts against {best.residual_rms:.3g} at lag 0: no torque delay (another lag of the "
+            "plant behind the model, e.g. a dry friction that creeps before it slides)")
 
 
 @dataclass
@@ -456,5 +477,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         walk.auto(kept)
         walk.cable(kept)
     check = walk.observe(kept, auto, kwargs.get("validation")) if observe else None
+    note = unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)])
+    if note:
+        walk.notes.append(note)
     return EffectsFit(kept.result, kept.effects, kept.tried, kept.tried_effects, tuple(walk.rounds),
                       walk.delays[id(kept.result)], check, walk.notes)

@@ -30,7 +30,7 @@ from ...checks import as_float_array
 from ...errors import InputError
 from .observers import Estimate
 
-__all__ = ["Nees", "nees", "joint_sigma", "NEES_EVERY"]
+__all__ = ["Nees", "nees", "joint_sigma", "predicted_covariance", "chi2_band", "NEES_EVERY"]
 
 NEES_EVERY = 0.1
 """Default decimation of :func:`nees`, s: a filter's error at 1 kHz is correlated over tens of milliseconds (the
@@ -80,10 +80,10 @@ class Nees:
                 "start_s": self.start, "per_joint": self.per_joint.tolist(), "verdict": self.verdict}
 
 
-def _error_transitions(filt: Any, estimate: Estimate, W: np.ndarray) -> np.ndarray:
-    """(N-1, nz, nz) Phi_k: the filter's error after sample k+1 is Phi_k times its error after sample k, plus the
-    noises of the step (its linearisation): Phi_k = (I - K_k+1 H) A_k = P_k+1 P_pred^-1 A_k, with A_k = dF/dz at
-    (z_k, w_k) and P_pred = A_k P_k A_k^T + G Sigma_w G^T + Q (the optimal gain's (I - K H) P_pred = P_k+1)."""
+def predicted_covariance(filt: Any, estimate: Estimate, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The filter's one-step prediction along its run, recomputed from its estimate: (A (N-1, nz, nz), P_pred
+    (N-1, nz, nz)), A_k = dF/dz at (z_k, w_k) and P_pred,k = A_k P_k A_k^T + G Sigma_w G^T + Q (G = dF/dw), the
+    covariance of z_k+1|k. ``W`` (N-1, nw): the known inputs, row k held from sample k to k+1."""
     import casadi as cs
 
     mdl = filt.model
@@ -95,8 +95,15 @@ def _error_transitions(filt: Any, estimate: Estimate, W: np.ndarray) -> np.ndarr
     A = np.asarray(A).reshape(nz, N, nz).transpose(1, 0, 2)  # the map stacks the samples side by side
     G = np.asarray(G).reshape(nz, N, mdl.nw).transpose(1, 0, 2)
     P = estimate.P
-    P_pred = A @ P[:N] @ A.transpose(0, 2, 1) + G @ filt.Sw @ G.transpose(0, 2, 1) + filt.Q
-    return P[1: N + 1] @ np.linalg.solve(P_pred, A)
+    return A, A @ P[:N] @ A.transpose(0, 2, 1) + G @ filt.Sw @ G.transpose(0, 2, 1) + filt.Q
+
+
+def _error_transitions(filt: Any, estimate: Estimate, W: np.ndarray) -> np.ndarray:
+    """(N-1, nz, nz) Phi_k: the filter's error after sample k+1 is Phi_k times its error after sample k, plus the
+    noises of the step (its linearisation): Phi_k = (I - K_k+1 H) A_k = P_k+1 P_pred^-1 A_k, with A_k and P_pred
+    of :func:`predicted_covariance` (the optimal gain's (I - K H) P_pred = P_k+1)."""
+    A, P_pred = predicted_covariance(filt, estimate, W)
+    return estimate.P[1: W.shape[0] + 1] @ np.linalg.solve(P_pred, A)
 
 
 def _predicted_variance(Phi: np.ndarray, P: np.ndarray, k: np.ndarray, n: int) -> float:
@@ -139,8 +146,6 @@ def nees(estimate: Estimate, true_q: Any, filter: Any = None, inputs: Any = None
     :class:`Nees`. Raises :class:`~alpes_dyn.InputError` naming the argument: ``true_q`` of another shape or not
     finite, ``start`` past the run, ``every`` or ``level`` out of range, fewer than two samples left.
     """
-    from scipy.special import gammaincinv  # chi2.ppf(p, k) = 2 gammaincinv(k / 2, p) (scipy.stats: seconds to import)
-
     if not isinstance(estimate, Estimate):
         raise InputError(f"estimate: expected an Estimate, got {type(estimate).__name__}")
     q = as_float_array(true_q, "true_q", "(N, n) joint angles in rad")
@@ -176,11 +181,20 @@ def nees(estimate: Estimate, true_q: Any, filter: Any = None, inputs: Any = None
             raise InputError(f"filter: its {filter.nz} states are not the estimate's {estimate.z.shape[1]}")
         Phi = _error_transitions(filter, estimate, W)
         m_eff = min(m_eff, 2.0 * n / _predicted_variance(Phi, estimate.P, k, n))
-    low, high = 2.0 * gammaincinv(n * m_eff / 2.0, np.array([(1 - level) / 2, (1 + level) / 2])) / m_eff
+    low, high = chi2_band(n, m_eff, level)
     per_joint = np.mean(e**2 / np.diagonal(P, axis1=1, axis2=2), axis=0)
     return Nees(value=float(eps.mean()), low=float(low), high=float(high), dof=n, samples=int(k.size),
                 effective=float(m_eff), per_joint=per_joint, level=float(level), every=float(every),
                 start=float(start))
+
+
+def chi2_band(dof: int, samples: float, level: float) -> tuple[float, float]:
+    """The band of the average of ``samples`` independent chi-square variables of ``dof`` degrees of freedom at
+    probability ``level``: [chi2_{(1-level)/2}(dof M), chi2_{(1+level)/2}(dof M)] / M, M = ``samples``."""
+    from scipy.special import gammaincinv  # chi2.ppf(p, k) = 2 gammaincinv(k / 2, p) (scipy.stats: seconds to import)
+
+    low, high = 2.0 * gammaincinv(dof * samples / 2.0, np.array([(1 - level) / 2, (1 + level) / 2])) / samples
+    return float(low), float(high)
 
 
 def joint_sigma(estimate: Estimate, n: int, start: float = 0.0) -> tuple[np.ndarray, np.ndarray]:

@@ -49,6 +49,7 @@ from ...symbolic.parametric import tilted_gravity
 from ...symbolic.statespace import StateSpace
 from ...simulation.loop import Function, run_loop
 from .blocks import Observer, RecordingPlayback
+from .friction_noise import friction_process_noise
 from .observers import OBSERVERS, Estimate, make_observer
 from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
@@ -237,8 +238,10 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     step = 2 * np.pi / tr.counts_per_rev
     # the measurement's noise: the encoder's, and the torque noise through the tendon's stretch
     meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
-    Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
     ss = StateSpace(m_obs, input="motor", output="encoder")
+    Q = np.diag([1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars))
+    if friction_law == "smooth":  # the smooth law's error where the torque noise shakes the velocities across its band
+        Q[n:2 * n, n:2 * n] += friction_process_noise(m_obs, ss.B, dt, torque_noise)
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
                          friction_law=friction_law, stops=JointStops.of(m_obs) if stops else None, process_noise=Q,
                          measurement_noise=list(meas_var * np.ones(m)),
