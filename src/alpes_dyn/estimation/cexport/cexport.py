@@ -300,8 +300,12 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     arithmetic as C loops over the nonzeros in the filter's own order of operations
     (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`; the EKF only, where CasADi folded no constant in that arithmetic,
     ``filt.exact_loops``); ``"casadi"`` -- CasADi's code of the filter's whole step. Both give the filter's
-    numbers to the last bit. Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large (over
-    :data:`_LOOPS_FROM` operations: the hand), else ``"casadi"`` (a finger, the UKF). ``chains`` (``"sparse"``
+    numbers to the last bit (but ``"sparse"`` on a model of several RK4 substeps per period, a friction model: its
+    code loops over one substep, :func:`~alpes_dyn.estimation.cexport.cexport_ekf.substep_model_source`, the
+    filter's numbers to rounding). Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large
+    (over :data:`_LOOPS_FROM` operations: the hand) or whose model takes substeps (a friction model: CasADi's
+    code of the whole step writes each substep out, 1.1-1.8 MB of C for finger3 that took 30 s to several
+    minutes to build at -O2), else ``"casadi"`` (a finger, the UKF). ``chains`` (``"sparse"``
     only): the model's code by block, the blocks of one structure side by side
     (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers; the default, None, is True there);
     False: CasADi's code of the whole model. See the module docstring for the API.
@@ -312,7 +316,8 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     if not (prefix.isidentifier() and prefix.isascii() and len(prefix) <= 40):
         raise InputError(f"prefix: expected a C identifier of at most 40 characters, got {prefix!r}")
     ekf = isinstance(filt, ExtendedKalmanFilter)
-    code = ("sparse" if ekf and filt.exact_loops and _covariance_operations(filt) > _LOOPS_FROM else "casadi") \
+    code = ("sparse" if ekf and filt.exact_loops and (_covariance_operations(filt) > _LOOPS_FROM
+                                                     or filt.model.substeps > 1) else "casadi") \
         if code is None else code
     if code not in ("sparse", "casadi"):
         raise InputError(f"code: expected 'sparse' or 'casadi', got {code!r}")

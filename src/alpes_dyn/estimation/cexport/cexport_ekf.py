@@ -39,7 +39,7 @@ import numpy as np
 from .cexport_chains import chain_model_source, components, model_blocks
 from ..observers.observers import ExtendedKalmanFilter
 
-__all__ = ["ekf_c_source"]
+__all__ = ["ekf_c_source", "substep_model_source"]
 
 _ARITHMETIC = r"""
 /* ---- alpes_dyn: the EKF's covariance arithmetic (P column-major, P[i + NZ*j]), in the order of
@@ -376,6 +376,10 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
     sA, sN, sH = fmodel.sparsity_out(1), fmodel.sparsity_out(2), fmeas.sparsity_out(1)
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
     chains = chain_model_source(fmodel, model_blocks(fmodel, nz), f"{prefix}_cs_model") if by_chain else None
+    looped = substep_model_source(filt, f"{prefix}_cs_model") if chains is None else None
+    if looped is not None:  # the model's substeps as a loop over one's code
+        cg.add(looped[2])
+        chains = looped[:2]
     if chains is None:
         cg.add(fmodel)
     cg.add(fmeas)
@@ -408,3 +412,103 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
         model_arg=fmodel.sz_arg(), model_res=fmodel.sz_res(), model_iw=fmodel.sz_iw(),
         meas_arg=fmeas.sz_arg(), meas_res=fmeas.sz_res(), meas_iw=fmeas.sz_iw())
     return cg.dump() + (chains[0] if chains is not None else "") + text, nwork
+
+
+_SUBSTEPS = r"""
+/* ---- alpes_dyn: the model over the period as {S} calls of one RK4 step and its Jacobians (the chain rule):
+   z_s+1 = f(z_s, w), A = A_S ... A_1, B = sum over s of A_S ... A_s+1 B_s (A_s = df/dz, B_s = df/dw at z_s);
+   N = the lower triangle of B Sigma_w B^T + Q. The code of one step, not of {S} unrolled: the build takes
+   seconds, not minutes; the numbers are the filter's to rounding, not bit for bit. ---- */
+#include <string.h>
+static const double SUB_SW[{nw} * {nw}] = {{{Sw}}};
+static const double SUB_Q[{nz} * {nz}] = {{{Q}}};
+static const int SUB_A_colind[{nz} + 1] = {{{A_colind}}};
+static const int SUB_A_row[{A_nnz}] = {{{A_row}}};
+static const int SUB_N_colind[{nz} + 1] = {{{N_colind}}};
+static const int SUB_N_row[{N_nnz}] = {{{N_row}}};
+
+int {name}(const casadi_real** arg, casadi_real** res, casadi_int* iw, casadi_real* w, int mem) {{
+  const casadi_real* a[{g_arg}];
+  casadi_real* r[{g_res}];
+  double* zc = w;                       /* z_s */
+  double* z1 = zc + {nz};                 /* z_s+1 */
+  double* A1 = z1 + {nz};                 /* A_s, column-major */
+  double* B1 = A1 + {nz} * {nz};          /* B_s */
+  double* A = B1 + {nz} * {nw};           /* the product so far */
+  double* B = A + {nz} * {nz};
+  double* T = B + {nz} * {nw};            /* scratch: nz x max(nz, nw) */
+  double* gw = T + {nz} * {nm};
+  int s, i, j, k, l;
+  (void) mem;
+  memcpy(zc, arg[0], sizeof(double) * {nz});
+  a[0] = zc;
+  a[1] = arg[1];
+  a[2] = arg[2];
+  r[0] = z1;
+  r[1] = A1;
+  r[2] = B1;
+  for (s = 0; s < {S}; ++s) {{
+    if ({g}(a, r, iw, gw, 0)) return 1;
+    memcpy(zc, z1, sizeof(double) * {nz});
+    if (s == 0) {{
+      memcpy(A, A1, sizeof(double) * {nz} * {nz});
+      memcpy(B, B1, sizeof(double) * {nz} * {nw});
+      continue;
+    }}
+    for (j = 0; j < {nz}; ++j) /* A = A_s A */
+      for (i = 0; i < {nz}; ++i) {{
+        double t = 0.0;
+        for (k = 0; k < {nz}; ++k) t += A1[i + {nz} * k] * A[k + {nz} * j];
+        T[i + {nz} * j] = t;
+      }}
+    memcpy(A, T, sizeof(double) * {nz} * {nz});
+    for (j = 0; j < {nw}; ++j) /* B = A_s B + B_s */
+      for (i = 0; i < {nz}; ++i) {{
+        double t = B1[i + {nz} * j];
+        for (k = 0; k < {nz}; ++k) t += A1[i + {nz} * k] * B[k + {nz} * j];
+        T[i + {nz} * j] = t;
+      }}
+    memcpy(B, T, sizeof(double) * {nz} * {nw});
+  }}
+  if (res[0]) memcpy(res[0], zc, sizeof(double) * {nz});
+  if (res[1])
+    for (j = 0; j < {nz}; ++j)
+      for (k = SUB_A_colind[j]; k < SUB_A_colind[j + 1]; ++k) res[1][k] = A[SUB_A_row[k] + {nz} * j];
+  if (res[2]) {{
+    for (l = 0; l < {nw}; ++l) /* T = B Sigma_w */
+      for (i = 0; i < {nz}; ++i) {{
+        double t = 0.0;
+        for (k = 0; k < {nw}; ++k) t += B[i + {nz} * k] * SUB_SW[k + {nw} * l];
+        T[i + {nz} * l] = t;
+      }}
+    for (j = 0; j < {nz}; ++j)
+      for (k = SUB_N_colind[j]; k < SUB_N_colind[j + 1]; ++k) {{
+        double t = SUB_Q[SUB_N_row[k] + {nz} * j];
+        for (l = 0; l < {nw}; ++l) t += T[SUB_N_row[k] + {nz} * l] * B[j + {nz} * l];
+        res[2][k] = t;
+      }}
+  }}
+  return 0;
+}}
+"""
+
+
+def substep_model_source(filt: ExtendedKalmanFilter, name: str) -> tuple[str, int, cs.Function] | None:
+    """C source of ``name(arg, res, iw, w, mem)``, the filter's ``linearized_p`` (z_next, A, N) as a loop over its
+    model's RK4 substeps (the chain rule through CasADi's code of one substep and its Jacobians), the doubles of
+    work it needs and that one substep's function (to add to the code generator); None with one substep."""
+    dm = filt.model
+    if dm.substeps < 2 or getattr(dm, "substep_p", None) is None:
+        return None
+    nz, nw = filt.nz, filt.nw
+    sub = dm.substep_p
+    z, w, p = sub.sx_in()
+    z1 = sub(z, w, p)
+    g = cs.Function(f"{name}_sub", [z, w, p], cs.cse([z1, cs.densify(cs.jacobian(z1, z)), cs.densify(cs.jacobian(z1, w))]))
+    sA, sN = filt.linearized_p.sparsity_out(1), filt.linearized_p.sparsity_out(2)
+    nm = max(nz, nw)
+    text = _SUBSTEPS.format(
+        name=name, g=g.name(), S=dm.substeps, nz=nz, nw=nw, nm=nm, g_arg=g.sz_arg(), g_res=g.sz_res(),
+        Sw=_doubles(filt.Sw), Q=_doubles(filt.Q), A_colind=_ints(sA.colind()), A_row=_ints(sA.row()),
+        A_nnz=max(sA.nnz(), 1), N_colind=_ints(sN.colind()), N_row=_ints(sN.row()), N_nnz=max(sN.nnz(), 1))
+    return text, 2 * nz + 2 * nz * nz + 2 * nz * nw + nz * nm + g.sz_w(), g

@@ -108,6 +108,9 @@ class DiscreteModel:
         advance: Callable[[Any], Any] = (
             (lambda x: merged(x, w, p)) if self.friction_law == "stick"
             else (lambda x: rk4_expression(lambda y, u: merged(y, u, p), x, w, h)))
+        self.substep_p = cs.Function("substep", [z, w, p], [advance(z)], ["z", "w", "p"], ["z_next"])
+        """One of the ``substeps`` steps of :attr:`step_p` (the C export loops over it: the code of one step, not of
+        ``substeps`` unrolled)."""
         zn = z
         for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
             zn = advance(zn)
