@@ -453,6 +453,10 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.observers.scenario import ESTIMATION_MODELS
 
+    if args.step:
+        from .control_cmds import codegen_step
+
+        return codegen_step(args)
     if _is_urdf_path(args.model):
         return _codegen_robot(args)
     for flag, dest in (("--spec", "spec"), ("--frame", "frame"), ("--motor", "motor")):
