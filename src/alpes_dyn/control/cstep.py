@@ -75,16 +75,17 @@ _HEADER = r"""/* alpes_step.h -- the force step of {model} (alpes_dyn.control.st
                       the object (any length: normalised at each call); the step presses along it.
    Out: command (NM), the motor torques to write, N m (motor {motor_name} in [0, {tau_max!r}], the others 0).
    {observer_note}
-   Controller {kind}, its tuned gains: {gains}.
+   {gains}
 
    Start: alpes_step_state s; alpes_step_init(&s); double work[ALPES_STEP_NWORK];
    each tick: if (alpes_step(&s, counts, torque, force, F_ref, normal, command, work)) stop the motor.
-   Returns 0, or 1 (the generated code failed), 2 (a reading not finite: counts, torque, the force{force_read},
-   the reference; or a zero or non-finite normal), 3 (the EKF diverged: a joint estimate beyond 1e6 rad or
+   Returns 0, or 1 (the generated code failed), 2 (a reading not finite: counts, torque{force_read}, the
+   reference; or a zero or non-finite normal), 3 (the EKF diverged: a joint estimate beyond 1e6 rad or
    rad/s: check the readings' units); on an error the state is left as it was. After a call, s.z holds
    [q_hat (rad); qd_hat (rad/s)] ({nz}), s.P its covariance (column-major), s.F_fb the force fed back (N).
-   No heap, no global state; reentrant. Build: cc -O2 -std=c99 -c alpes_step.c{ekf_c} alpes_step_force.c (link
-   with -lm); the test program: {build}
+   No heap, no global state; reentrant. Build: cc -O2 -std=c99 -c alpes_step.c{ekf_c} alpes_step_force.c
+   (link with -lm); the test program:
+     {build}
 */
 #ifndef ALPES_STEP_H
 #define ALPES_STEP_H
@@ -169,6 +170,8 @@ int alpes_step(alpes_step_state* s, const double counts[NM], const double torque
   }}
   if ((NEEDS_FORCE && !isfinite(force)) || !isfinite(reference)) return 2;
   if (alpes_step_force_unit_normal(normal, n)) return 2;
+  (void) y; /* unused without the observer; */
+  (void) tau; /* ... with neither the observer nor the sensorless estimate */
 #if FILTER
   if (s->k > 0) {{ /* the EKF's predict over [t_k-1, t_k] and its update with the encoder at t_k */
     double* zn = work;
@@ -335,16 +338,17 @@ def step_c_sources(step: ForceStep, *, about: str = "") -> dict[str, str]:
         compliance=_doubles(tr.tendon_compliance if tr.elastic else np.zeros(nm)),
         z0=_doubles(z0).replace("nan", "NAN"), P0=_doubles(P0).replace("nan", "NAN"))
     build = C_STEP_BUILD if filt else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
-    gains = ", ".join(f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
-                                                               "prefilter_s", "onset_s", "loss_s", "notch_hz"))
+    gains = f"Controller {step.kind}, its tuned gains: " + ", ".join(f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
+                                                               "prefilter_s", "onset_s", "loss_s", "notch_hz")) + "."
     files["alpes_step.h"] = _HEADER.format(
         model=step.model.name, version=__version__,
-        about=(about or f"Model {step.model.name}.").replace("*/", "* /"), dt=step.dt, cpr=step.counts_per_rev,
-        torque_note=(" (with the compensation the observer takes the command held instead: read, not used)"
-                     if comp.command_input else ""),
-        force_note=" (not read by the sensorless controller: any number)" if step.kind == "sensorless" else "",
-        force_read="" if step.kind == "sensorless" else " (sensor, pi)", motor_name=tr.motor_names[step.motor],
-        tau_max=step.tau_max, kind=step.kind, gains=gains, nm=nm, n=step.n, nz=nz, nwork=nwork,
+        about=(about or f"Model {step.model.name}.").replace("*/", "* /"), dt=step.dt, cpr=int(step.counts_per_rev),
+        torque_note=("\n                      (checked, not used: with the compensation the command held over the period"
+                     "\n                      is the motor torque)" if comp.command_input else ""),
+        force_note=("\n                      (not read by the sensorless controller: any number)"
+                    if step.kind == "sensorless" else ""),
+        force_read="" if step.kind == "sensorless" else ", the force", motor_name=tr.motor_names[step.motor],
+        tau_max=step.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=step.n, nz=nz, nwork=nwork,
         observer_note=_observer_note(step) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
         z_note="" if filt else "; NaN: no observer", ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
     files["main.c"] = _MAIN.format(build=build)
