@@ -353,12 +353,22 @@ class ForceStep:
             self._ekf = ekf
             self._s0 = np.concatenate([np.array(ekf._z(z0, "z0")).reshape(-1),
                                        np.array(ekf._P(P0, "P0")).reshape(-1, order="F")])
-            self.filter_step = step_caller(ekf.filter_step_p, label, compiled, ekf.model.values)
+            self.filter_step = self._compiled_c(ekf, label) if compiled and ekf.model.substeps > 1 else None
+            if self.filter_step is None:  # the VM, or CasADi's code of the whole step, compiled and cached
+                self.filter_step = step_caller(ekf.filter_step_p, label, compiled, ekf.model.values)
         self._sensorless = None
         if kind == "sensorless":
             self._sensorless = SensorlessForce(model, self.dt / (force_filter_s + self.dt), normal=self._normal,
                                                tip=design.frame, scale=comp.scale_of())
         self.reset()
+
+    @staticmethod
+    def _compiled_c(ekf: Any, label: str) -> Callable[[np.ndarray, np.ndarray], np.ndarray] | None:
+        """The friction EKF's step from its C export (a loop over one substep: the code ``alpes-dyn codegen --step``
+        writes), built once and cached; None without a C compiler."""
+        from ..estimation.cexport.cexport import compiled_c_step
+
+        return compiled_c_step(ekf, f"{label}_c")
 
     def reset(self) -> None:
         """Back to the first sample: the controller's state cleared (approach, integral, prefilter, notch), the

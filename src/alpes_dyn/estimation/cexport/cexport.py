@@ -61,7 +61,7 @@ from .cexport_ekf import ekf_c_source
 from ..observers.observers import ExtendedKalmanFilter, KalmanFilter
 
 __all__ = ["c_sources", "write_c_observer", "write_sources", "check_output_directory", "scenario_filter",
-           "read_main_output", "main_input"]
+           "read_main_output", "main_input", "compiled_c_step"]
 
 _WRAPPERS = r"""
 /* ---- alpes_dyn wrappers: the fixed-size API of {prefix}.h ---- */
@@ -466,3 +466,54 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars))])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(pars))
     return filt, z0, P0
+
+
+_LIBRARY_STEP = r"""
+/* ---- alpes_dyn: the filter's step on its state s = [z; P (column-major)] and wy = [w; y], for ctypes ---- */
+int alpes_library_step(const double* s, const double* wy, const double* p, double* out, double* work) {{
+  return {prefix}_step_p(s, s + {P}_NZ, wy, wy + {P}_NW, p, out, out + {P}_NZ, work);
+}}
+"""
+
+
+def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> Any:
+    """(s, wy) -> s_next: ``filt``'s step from its C export (:func:`c_sources`, its default code), compiled once into
+    a shared library in the cache (:func:`~alpes_dyn.simulation.buildcache.build_library`, ``-O2``) and called through
+    ctypes; s = [z; P column-major] (nz + nz^2,), wy = [w; y]. The numbers of the exported C to the last bit; with
+    substeps (a friction model) the C loops over one substep (seconds to build, where CasADi's code of the whole
+    step, each substep written out, took minutes). ``parameters``: the model's numbers (default the filter's).
+    None without a C compiler (:class:`~alpes_dyn.simulation.buildcache.CompilerError`)."""
+    import ctypes
+
+    from ...simulation.codegen import _CFLAGS, _compiler, cache_dir
+    from ...simulation.buildcache import CompilerError, build_library
+
+    prefix = "alpes_libstep"
+    files = c_sources(filt, prefix=prefix)
+    header, body = files[f"{prefix}.h"], files[f"{prefix}.c"]
+    source = header + body.replace(f'#include "{prefix}.h"', "") + _LIBRARY_STEP.format(prefix=prefix, P=prefix.upper())
+    try:
+        _, _, _, lib = build_library(source, label, _compiler(), ("-O2",) + _CFLAGS[1:], cache_dir())
+    except CompilerError:
+        return None
+    fn = lib.alpes_library_step
+    dp = ctypes.POINTER(ctypes.c_double)
+    fn.argtypes = [dp, dp, dp, dp, dp]
+    fn.restype = ctypes.c_int
+    nwork = int(header.split(f"#define {prefix.upper()}_NWORK ")[1].split()[0])
+    p = np.ascontiguousarray(filt.model.values if parameters is None else parameters, dtype=float)
+    ns = filt.nz + filt.nz * filt.nz
+    s_in, wy_in, out, work = np.empty(ns), np.empty(filt.nw + filt.ny), np.empty(ns), np.empty(max(nwork, 1))
+    p = p if p.size else np.zeros(1)
+    ptrs = [a.ctypes.data_as(dp) for a in (s_in, wy_in, p, out, work)]
+    keep = (p, s_in, wy_in, out, work)  # the buffers live as long as the step
+
+    def step(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
+        s_in[:] = s
+        wy_in[:] = wy
+        if fn(*ptrs) != 0 and keep:
+            raise InputError("step: the compiled filter step failed (H P H^T + R not positive definite: the filter "
+                             "diverged)")
+        return out.copy()
+
+    return step
