@@ -14,7 +14,7 @@ For each finger and controller, in one process:
 The columns C/py give the C step's time as a fraction of the Python step's. The hand has no ForceStep (its loop is
 alpes_dyn.control.hand_loop's): not measured here.
 
-    python benchmarks/c_step.py [--models finger2,finger3] [--controllers sensor,sensorless] [--seed 9693] [--json]
+    python benchmarks/c_step.py [--models finger2,finger3] [--controllers sensor[,sensorless,pi]] [--seed 9693] [--json]
 """
 
 from __future__ import annotations
@@ -91,7 +91,7 @@ def bench(model: str, controller: str, seed: int, duration: float, cc: str | Non
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--models", default="finger2,finger3")
-    ap.add_argument("--controllers", default="sensor,sensorless")
+    ap.add_argument("--controllers", default="sensor")
     ap.add_argument("--seed", type=int, default=9693, help="the stand-in's noise seed of the first row (then +1)")
     ap.add_argument("--duration", type=float, default=1.5, help="s of the run on the stand-in")
     ap.add_argument("--json", action="store_true")
