@@ -14,7 +14,8 @@ from typing import Any
 import numpy as np
 
 from ..errors import InputError
-from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _trust_notes, _urdf_robot, parse_vector
+from .common import (_check_run_files, _emit, _is_urdf_path, _note_untrusted, _one_of, _trust_notes, _urdf_robot,
+                     parse_vector)
 
 
 def _check_control_outputs(args: argparse.Namespace) -> None:
@@ -301,7 +302,6 @@ def codegen_step(args: argparse.Namespace) -> int:
     from ..control.cstep import C_STEP_BUILD, write_c_step
     from ..control.step import ForceStep
     from ..estimation.cexport.cexport import check_output_directory
-    from .estimation_cmds import _note_untrusted
 
     if args.model not in ("finger2", "finger3"):
         raise InputError(f"--step: the force step is exported for finger2 and finger3, got --model {args.model!r}")
