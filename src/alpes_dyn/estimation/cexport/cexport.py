@@ -49,6 +49,7 @@ the fingers one after the other. All give the same numbers.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -491,6 +492,8 @@ def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> A
     prefix = "alpes_libstep"
     files = c_sources(filt, prefix=prefix)
     header, body = files[f"{prefix}.h"], files[f"{prefix}.c"]
+    body = re.sub(rf"(const double {prefix}_model_p\[{prefix.upper()}_NP\] = {{)[^}}]*(}};)", r"\g<1>0.0\g<2>", body)
+    # (the model's numbers are an input: the library is its structure's, shared by every file of that structure)
     source = header + body.replace(f'#include "{prefix}.h"', "") + _LIBRARY_STEP.format(prefix=prefix, P=prefix.upper())
     try:
         _, _, _, lib = build_library(source, label, _compiler(), ("-O2",) + _CFLAGS[1:], cache_dir())

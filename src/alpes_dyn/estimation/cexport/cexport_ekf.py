@@ -17,6 +17,12 @@ loops run over each column's block only and write the rest as zeros -- sums of p
 sign of a zero aside nothing changes --, else over all rows. The products by an exact zero of P H^T or of K are
 skipped likewise.
 
+A model of several substeps per period (a friction model: :func:`~alpes_dyn.simulation.integrate.stable_substeps`)
+is not written out substep by substep: :func:`substep_model_source` loops over them and over each RK4 step's four
+stages, composing A and G = dF/dw by the chain rule over CasADi's code of the right-hand side and its Jacobians
+(finger3's friction EKF: 49 kB of C instead of 1.1 MB, whose straight-line code GCC's -O2 took 30 s to minutes to
+build); its numbers are the filter's to rounding, not bit for bit.
+
 Why: CasADi's expression of the whole step is straight-line code of every scalar operation of the dense
 nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program); the model's code is 41,500
 operations, 466 kB of machine code in one function, and the loops a few kilobytes. ``benchmarks/observer_step.py``
