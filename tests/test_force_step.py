@@ -116,7 +116,8 @@ def test_the_filter_is_built_once_not_in_the_loop(monkeypatch):
     made = []
     real, real_c = mod.step_caller, mod.ForceStep._compiled_c
     monkeypatch.setattr(mod, "step_caller", lambda *a, **k: made.append(a[1]) or real(*a, **k))
-    monkeypatch.setattr(mod.ForceStep, "_compiled_c", staticmethod(lambda e, label: made.append(label) or real_c(e, label)))
+    monkeypatch.setattr(mod.ForceStep, "_compiled_c",
+                        staticmethod(lambda e, label: made.append(label) or real_c(e, label)))
     s = ForceStep("finger2", controller="sensorless")
     fn = s.filter_step
     assert made == ["ekf_force_finger2"] and callable(fn)

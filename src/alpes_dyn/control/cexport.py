@@ -372,7 +372,8 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
     notch_note = (f", the command through a notch at {ctl.notch_hz!r} Hz (damping ratio {ctl.notch_zeta!r})"
                   if notch else "")
     header = _HEADER.format(prefix=prefix, P=P, kind=ctl.kind, model=ctl.model.name, version=__version__, nq=nq,
-                            nm=nm, which=which, nwork=nwork, normal="[" + ", ".join(f"{x:.17g}" for x in ctl.normal) + "]",
+                            nm=nm, which=which, nwork=nwork,
+                            normal="[" + ", ".join(f"{x:.17g}" for x in ctl.normal) + "]",
                             pi_note=" (the pi baseline: no feedforward, q_hat unused)" if is_pi else "",
                             notch_note=notch_note, **settings)
     return {f"{prefix}.h": header, f"{prefix}.c": source,

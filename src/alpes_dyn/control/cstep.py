@@ -340,13 +340,14 @@ def step_c_sources(step: ForceStep, *, about: str = "") -> dict[str, str]:
         compliance=_doubles(tr.tendon_compliance if tr.elastic else np.zeros(nm)),
         z0=_doubles(z0).replace("nan", "NAN"), P0=_doubles(P0).replace("nan", "NAN"))
     build = C_STEP_BUILD if filt else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
-    gains = f"Controller {step.kind}, its tuned gains: " + ", ".join(f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
+    gains = f"Controller {step.kind}, its tuned gains: " + ", ".join(
+        f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
                                                                "prefilter_s", "onset_s", "loss_s", "notch_hz")) + "."
     files["alpes_step.h"] = _HEADER.format(
         model=step.model.name, version=__version__,
         about=(about or f"Model {step.model.name}.").replace("*/", "* /"), dt=step.dt, cpr=int(step.counts_per_rev),
-        torque_note=("\n                      (checked, not used: with the compensation the command held over the period"
-                     "\n                      is the motor torque)" if comp.command_input else ""),
+        torque_note=("\n" + " " * 22 + "(checked, not used: with the compensation the command held over the period"
+                     "\n" + " " * 22 + "is the motor torque)" if comp.command_input else ""),
         force_note=("\n                      (not read by the sensorless controller: any number)"
                     if step.kind == "sensorless" else ""),
         force_read="" if step.kind == "sensorless" else ", the force", motor_name=tr.motor_names[step.motor],
