@@ -487,6 +487,22 @@ def _bench_loop_headline(r: Result) -> str:
             f"within 10 % {c['sensorless_10pct']}, joints within 1 degree {c['joints_1deg']}")
 
 
+def c_step(r: Result) -> list[str]:
+    out = []
+    for d in r["rows"]:
+        dq = "" if d["diff_q"] is None else f", joints {d['diff_q']:.1e} rad"
+        out.append(f"{d['model']} {d['controller']} (EKF with friction: {d['observer_friction']}, {d['substeps']} RK4 "
+                   f"substeps): C step {d['c_us']:.1f} µs ({d['c_cpu_us']:.1f} processor) vs Python step "
+                   f"{d['py_us']:.0f} µs ({d['c_vs_py']:.3f}x); built at -O2 in {d['c_build_s']:.1f} s "
+                   f"({d['c_build_cpu_s']:.1f} s of the compiler's processor time) "
+                   f"({d['c_source_kb']:.0f} kB of C); C - Python: commands {d['diff_command']:.1e} N m{dq}, forces "
+                   f"{d['diff_force']:.1e} N; goals {_met(d['goals_met'])}")
+    out.append(f"load average {r['load_avg'][0]:.1f} -> {r['load_avg'][1]:.1f}; goals: under {r['goal_us']:.0f} µs "
+               f"of processor time per step, built in under {r['goal_build_s']:.0f} s of processor time, within "
+               f"{r['goal_diff']:.0e}")
+    return out
+
+
 SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "dynamics": dynamics, "observability": observability, "allegro": allegro,
     "rollout": rollout, "mimic": mimic, "identification": identification, "fit_scaling": fit_scaling,
@@ -494,11 +510,11 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism, "fit_scaling.hand": fit_scaling,
-    "bench_loop": bench_loop,
+    "bench_loop": bench_loop, "c_step": c_step,
 }
 
 ORDER = ["bench_loop", "default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
-         "allegro", "dynamics", "rollout", "observer_step", "observer_build", "param_cache", "control", "hand_control",
+         "allegro", "dynamics", "rollout", "observer_step", "c_step", "observer_build", "param_cache", "control", "hand_control",
          "urdf_control", "any_robot", "foreign_hands", "allegro_identify", "mimic", "sweep"]
 """The page's order: the lead issues' benchmarks first."""
 

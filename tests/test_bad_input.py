@@ -1011,6 +1011,24 @@ CLI: dict[str, list[Cli]] = {
         C("codegen", "--model", "thumb", "--friction", "--chain", "index", "--out-dir", "{tmp}/c",
           needle="chain: only a finger model"),
         C("codegen", "--observer", "pf", "--out-dir", "{tmp}/c", needle="--observer: unknown observer 'pf'"),
+        C("codegen", "--step", "--out-dir", "{tmp}/c", needle="--step: needs --controller (sensor, sensorless or pi)"),
+        C("codegen", "--step", "--controller", "pid", "--out-dir", "{tmp}/c", needle="--controller: unknown controller 'pid'"),
+        C("codegen", "--step", "--model", "hand", "--controller", "sensor", "--out-dir", "{tmp}/c",
+          needle="--step: the force step is exported for finger2 and finger3, got --model 'hand'"),
+        C("codegen", "--step", "--model", "{robot_urdf}", "--controller", "pi", "--out-dir", "{tmp}/c",
+          needle="--step: the force step is exported for finger2 and finger3"),
+        C("codegen", "--step", "--controller", "pi", "--friction", "--out-dir", "{tmp}/c",
+          needle="--friction: not with --step (the step's EKF has the --params file's friction)"),
+        C("codegen", "--step", "--controller", "pi", "--chain", "index", "--out-dir", "{tmp}/c",
+          needle="--chain: not with --step"),
+        C("codegen", "--step", "--controller", "pi", "--observer", "ukf", "--out-dir", "{tmp}/c",
+          needle="--observer: not with --step (the step's observer is the EKF)"),
+        C("codegen", "--step", "--controller", "pi", "--frame", "tip", "--out-dir", "{tmp}/c",
+          needle="--frame: not with --step"),
+        C("codegen", "--step", "--controller", "pi", "--out-dir", "{tmp}", needle="--out-dir: directory '{tmp}' is not empty"),
+        C("codegen", "--step", "--controller", "pi", "--out-dir", "{params_toml}", needle="exists and is not a directory"),
+        C("codegen", "--step", "--controller", "pi", "--params", "{untrusted_toml}", "--out-dir", "{tmp}/c",
+          needle="--params: '{untrusted_toml}' is marked"),
         C("codegen", "--params", "", "--out-dir", "{tmp}/c", needle="parameter file: empty file name"),
         C("codegen", "--params", "{latin1_toml}", "--out-dir", "{tmp}/c", needle="not UTF-8 text"),
         C("codegen", "--params", "{fifo}", "--out-dir", "{tmp}/c", needle="is a FIFO (named pipe)"),
@@ -2726,7 +2744,26 @@ API.extend([
       "defined for finger2 and finger3 on the block"),
     A("read_force_output", lambda c: _fcexport("read_force_output", "1\n"), InputError,
       "force_main.c output: expected two numbers per line"),
+    A("step_c_sources", lambda c: _cstep("step_c_sources", c.m), InputError, "step: expected a ForceStep, got Model"),
+    A("write_c_step", lambda c: _cstep("write_c_step", _pi_step(), c.d), InputError,
+      "is not empty; refusing to write over it"),
+    A("write_c_step", lambda c: _cstep("write_c_step", _pi_step(), c.f["params_toml"]), InputError,
+      "exists and is not a directory"),
+    A("read_step_output", lambda c: _cstep("read_step_output", "1 2\n", 1, 4), InputError,
+      "main.c output: expected lines of 6 numbers"),
 ])
+
+
+def _cstep(what, *a, **kw):
+    from alpes_dyn.control import cstep
+
+    return getattr(cstep, what)(*a, **kw)
+
+
+def _pi_step():
+    from alpes_dyn.control.step import ForceStep
+
+    return ForceStep("finger2", controller="pi", compiled=False)
 
 
 

@@ -109,12 +109,15 @@ def test_run_control_and_a_user_loop_are_the_block_composition(kind, ident):
 
 
 def test_the_filter_is_built_once_not_in_the_loop(monkeypatch):
-    """The EKF's compiled step is made at construction (one call of step_caller), never by step() or reset()."""
+    """The EKF's compiled step is made at construction (one build: the friction EKF's from its C export, else
+    step_caller's), never by step() or reset()."""
     import alpes_dyn.control.step as mod
 
     made = []
-    real = mod.step_caller
+    real, real_c = mod.step_caller, mod.ForceStep._compiled_c
     monkeypatch.setattr(mod, "step_caller", lambda *a, **k: made.append(a[1]) or real(*a, **k))
+    monkeypatch.setattr(mod.ForceStep, "_compiled_c",
+                        staticmethod(lambda e, label: made.append(label) or real_c(e, label)))
     s = ForceStep("finger2", controller="sensorless")
     fn = s.filter_step
     assert made == ["ekf_force_finger2"] and callable(fn)

@@ -8,9 +8,8 @@ import argparse
 import time
 
 from ..errors import InputError
-from .common import (_emit, _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _trust_notes, _urdf_robot,
-                     friction_from_file)
-from .estimation_cmds import _note_untrusted
+from .common import (_emit, _is_urdf_path, _note_untrusted, _one_chain, _one_of, _refuse_for_urdf, _trust_notes,
+                     _urdf_robot, friction_from_file)
 
 
 def cmd_codegen(args: argparse.Namespace) -> int:
@@ -21,6 +20,10 @@ def cmd_codegen(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.observers.scenario import ESTIMATION_MODELS
 
+    if args.step:
+        from .control_cmds import codegen_step
+
+        return codegen_step(args)
     if _is_urdf_path(args.model):
         return _codegen_robot(args)
     for flag, dest in (("--spec", "spec"), ("--frame", "frame"), ("--motor", "motor")):

@@ -544,3 +544,10 @@ def _trust_notes(args: argparse.Namespace, files: Sequence[tuple[str, str | None
         if note:
             notes.append(f"{option}: {note}")
     return notes
+
+
+def _note_untrusted(obj: dict, lines: list[str], notes: list[str]) -> None:
+    """The files used with --force though marked not trustworthy (:func:`_trust_notes`): ``obj``'s
+    ``not_trustworthy`` (a list, empty when none) and a WARNING line each."""
+    obj["not_trustworthy"] = list(notes)
+    lines += [f"  WARNING: {n}" for n in notes]

@@ -8,12 +8,14 @@ import argparse
 import dataclasses
 import importlib
 import math
+import time
 from typing import Any
 
 import numpy as np
 
 from ..errors import InputError
-from .common import _check_run_files, _emit, _is_urdf_path, _one_of, _trust_notes, _urdf_robot, parse_vector
+from .common import (_check_run_files, _emit, _is_urdf_path, _note_untrusted, _one_of, _trust_notes, _urdf_robot,
+                     parse_vector)
 
 
 def _check_control_outputs(args: argparse.Namespace) -> None:
@@ -290,4 +292,45 @@ def _control_hand(args: argparse.Namespace, fx: dict | None = None, notes: list[
                  f"loop {res.realtime_ratio:.1f}x faster than real time")
     _untrusted_lines(obj, lines, list(notes))
     _emit(obj, "\n".join(lines + _output_lines(args)), args.json)
+    return 0
+
+
+def codegen_step(args: argparse.Namespace) -> int:
+    """``codegen --step``: the whole force step, :class:`~alpes_dyn.control.step.ForceStep` of --model, --params and
+    --controller, as C (:func:`alpes_dyn.control.cstep.write_c_step`)."""
+    from ..control.controller import CONTROLLERS
+    from ..control.cstep import C_STEP_BUILD, write_c_step
+    from ..control.step import ForceStep
+    from ..estimation.cexport.cexport import check_output_directory
+
+    if args.model not in ("finger2", "finger3"):
+        raise InputError(f"--step: the force step is exported for finger2 and finger3, got --model {args.model!r}")
+    if args.controller is None:
+        raise InputError("--step: needs --controller (sensor, sensorless or pi)")
+    _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+    for flag, bad, why in (("--friction", args.friction, "the step's EKF has the --params file's friction"),
+                           ("--chain", args.chain is not None, "the step is one finger's"),
+                           ("--observer", args.observer != "ekf", "the step's observer is the EKF"),
+                           ("--spec", args.spec is not None, "applies to a URDF --model"),
+                           ("--frame", args.frame is not None, "applies to a URDF --model"),
+                           ("--motor", args.motor is not None, "applies to a URDF --model")):
+        if bad:
+            raise InputError(f"{flag}: not with --step ({why})")
+    check_output_directory(args.out_dir, args.out_flag)  # before the build: a new or empty directory, never a file
+    notes = _trust_notes(args, [("--params", args.params)])
+    t0 = time.perf_counter()
+    step = ForceStep(args.model, args.params, args.controller, compiled=False, force=args.force)
+    about = (f"Model {args.model}, parameter file {args.params or 'shipped with alpes_dyn'}, palm down; controller "
+             f"{args.controller} with the tuned gains and every compensation of its effects.")
+    written = write_c_step(step, args.out_dir, about=about)
+    obj = {"model": args.model, "params": args.params, "controller": args.controller, "directory": args.out_dir,
+           "files": sorted(written), "nm": step.m, "nz": 2 * step.n, "dt": step.dt, "tau_max": step.tau_max,
+           "normal": [float(x) for x in step.design.normal], "seconds": time.perf_counter() - t0}
+    build = C_STEP_BUILD if step.filter_step is not None else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
+    lines = [f"{args.model}: the {args.controller} force step written to {args.out_dir}/ ({', '.join(sorted(written))})",
+             f"  alpes_step(&state, counts[{step.m}], torque[{step.m}], force, F_ref, normal[3], command[{step.m}], "
+             "work) once per tick: the API in alpes_step.h",
+             f"  build: cd {args.out_dir} && {build}"]
+    _note_untrusted(obj, lines, notes)
+    _emit(obj, "\n".join(lines), args.json)
     return 0

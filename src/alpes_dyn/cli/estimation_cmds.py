@@ -17,8 +17,8 @@ from ..estimation.identification.identification import THUMB_PARAMETERS  # noqa:
 from .fitting import (_check_mjcf_option, _fit, _identify_lines, _mass_urdf_path, _mjcf_applies, _write_robot,
                       _written_lines)
 from .uncertainty import _sigma_limit, _uncertainty
-from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _trust_notes,
-                     friction_from_file,
+from .common import (UntrustedFitWarning, _check_model_options, _check_run_files, _emit, _note_untrusted,
+                     _trust_notes, friction_from_file,
                      _is_urdf_path, _one_chain, _one_of, _refuse_for_urdf, _Untrusted, _urdf_robot,
                      data_label, parse_vector, read_data)
 
@@ -102,13 +102,6 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
-
-
-def _note_untrusted(obj: dict, lines: list[str], notes: list[str]) -> None:
-    """The files used with --force though marked not trustworthy (:func:`~.common._trust_notes`): ``obj``'s
-    ``not_trustworthy`` (a list, empty when none) and a WARNING line each."""
-    obj["not_trustworthy"] = list(notes)
-    lines += [f"  WARNING: {n}" for n in notes]
 
 
 _SCENARIO_ONLY = (("--mismatch", "mismatch", 0.0), ("--duration", "duration", 5.0), ("--seed", "seed", 0),

@@ -240,6 +240,11 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
                    help="also the fingertip force controller of 'alpes-dyn control' (finger2, finger3 on the block, "
                         "or a URDF --model's tip frame on its block): sensor, sensorless or pi, as alpes_force.h, "
                         "alpes_force.c and force_main.c")
+    s.add_argument("--step", action="store_true",
+                   help="write the whole force step instead (ForceStep.step in C: the EKF with the file's friction, "
+                        "the compensation of its identified effects, the --controller with its tuned gains; the "
+                        "contact normal an input of each call) for finger2 or finger3 and --params: alpes_step.h, "
+                        "alpes_step.c, alpes_step_ekf.*, alpes_step_force.*, main.c")
     s.add_argument("--frame", default=None, metavar="NAME",
                    help="a URDF --model with --controller: the tip frame that presses the block (default: the only "
                         "tip the motor moves)")

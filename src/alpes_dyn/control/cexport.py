@@ -2,10 +2,11 @@
 ``update`` as C, beside the observer's (:mod:`alpes_dyn.estimation.cexport.cexport`).
 
 :func:`controller_c_sources` writes ``alpes_force.h`` (the API, the settings in its comment), ``alpes_force.c``
-(the controller's logic -- prefilter, contact onset and loss, bumpless transfer, saturation, anti-windup -- line
-for line as :meth:`ForceController.update <alpes_dyn.control.controller.ForceController.update>`, and CasADi's
-generated code of its feedforward, the static balance :func:`~.controller.static_motor_torque` at the fixed
-surface normal, and of :func:`~.controller.static_contact_force`, the sensorless loop's force estimate) and
+(the controller's logic -- prefilter, contact onset and loss, bumpless transfer, saturation, anti-windup, the
+notch -- line for line as :meth:`ForceController.update <alpes_dyn.control.controller.ForceController.update>`,
+and CasADi's generated code of its feedforward, the static balance :func:`~.controller.static_motor_torque`, and
+of :func:`~.controller.static_contact_force`, the sensorless loop's force estimate, the surface normal an input
+of both) and
 ``force_main.c`` (reads F_ref F_fb q_hat per line, prints the torque command and that force)::
 
     typedef struct { ... } alpes_force_state;          /* the controller's memory: zero it to start */
@@ -14,9 +15,16 @@ surface normal, and of :func:`~.controller.static_contact_force`, the sensorless
                            double* tau, double work[ALPES_FORCE_NWORK]);
     int alpes_force_contact_force(const double q_hat[ALPES_FORCE_NQ], double tau_m, double* F_z,
                                   double work[ALPES_FORCE_NWORK]);   /* the sensorless loop's estimate */
+    /* the same at a unit normal n given at run time (a curved object's, or another object's) */
+    int alpes_force_update_n(alpes_force_state* s, double F_ref, double F_fb, const double q_hat[NQ],
+                             const double n[3], double* tau, double work[ALPES_FORCE_NWORK]);
+    int alpes_force_contact_force_n(const double q_hat[NQ], const double tau_m[NM], const double n[3], double* F_z,
+                                    double work[ALPES_FORCE_NWORK]);
 
-No heap, no global state; ``-lm``. The surface normal is the controller's at export (a block's face: the
-per-step normal of a curved object, ``update(normal=)``, is not exported).
+No heap, no global state; ``-lm``. ``alpes_force_update`` presses along the controller's normal at export (a
+block's face); ``alpes_force_update_n`` along any unit normal given at each call (``ForceController.update(
+normal=)``). The whole force step -- observer, compensation and this controller -- is
+:mod:`alpes_dyn.control.cstep`'s.
 """
 
 from __future__ import annotations
@@ -28,12 +36,13 @@ import numpy as np
 
 from ..errors import InputError
 from ..symbolic.dynamics import SymbolicDynamics
-from .controller import ForceController
+from .controller import ForceController, _notch_coefficients
 
 __all__ = ["controller_c_sources", "block_controller", "robot_controller", "force_main_input", "read_force_output"]
 
 _LOGIC = r"""
 /* ---- alpes_dyn: ForceController.update, line for line ---- */
+#include <math.h>
 #include <string.h>
 #include "{prefix}.h"
 
@@ -49,39 +58,63 @@ _LOGIC = r"""
 #define ONSET_S {onset_s!r}
 #define ORDER {prefilter_order}
 #define SETPOINT_WEIGHT {setpoint_weight!r}
+#define NOTCH {notch}
+#define NB0 {b0!r}
+#define NB1 {b1!r}
+#define NB2 {b2!r}
+#define NA1 {a1!r}
+#define NA2 {a2!r}
 
 static double mn(double a, double b) {{ return b < a ? b : a; }}  /* Python's min(a, b) */
 static double mx(double a, double b) {{ return b > a ? b : a; }}  /* Python's max(a, b) */
 
+/* the surface normal at export (the fixed-normal API's) */
+static const double NORMAL[3] = {{{normal}}};
+
 void {prefix}_init({prefix}_state* s) {{ memset(s, 0, sizeof(*s)); }}
 
-/* one of CasADi's functions f(q (NQ), x) -> out (1), its arguments laid out in work */
-static int call_qx(int (*f)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int), const double* q,
-                   double x, double* out, double* work) {{
+int {prefix}_unit_normal(const double normal[3], double n[3]) {{
+  const double x = normal[0], y = normal[1], z = normal[2];
+  const double q = x * x + y * y + z * z;
+  if (!(q > 0.0 && q < HUGE_VAL)) return 1;
+  n[0] = x / sqrt(q);
+  n[1] = y / sqrt(q);
+  n[2] = z / sqrt(q);
+  return 0;
+}}
+
+/* one of CasADi's functions f(q (NQ), x (nx), n (3)) -> out (1), its arguments laid out in work */
+static int call_qxn(int (*f)(const casadi_real**, casadi_real**, casadi_int*, casadi_real*, int), const double* q,
+                    const double* x, int nx, const double* n, double* out, double* work) {{
   const casadi_real* arg[{n_arg}];
   casadi_real* res[{n_res}];
   casadi_int iw[{n_iw} + 1];
   double* qi = work;
   memcpy(qi, q, sizeof(double) * {P}_NQ);
-  qi[{P}_NQ] = x;
+  memcpy(qi + {P}_NQ, x, sizeof(double) * nx);
+  memcpy(qi + {P}_NQ + nx, n, sizeof(double) * 3);
   arg[0] = qi;
   arg[1] = qi + {P}_NQ;
+  arg[2] = qi + {P}_NQ + nx;
   res[0] = out;
-  return f(arg, res, iw, qi + {P}_NQ + 1, 0);
+  return f(arg, res, iw, qi + {P}_NQ + nx + 3, 0);
+}}
+
+int {prefix}_contact_force_n(const double q_hat[{P}_NQ], const double tau_m[{P}_NM], const double n[3], double* F_z,
+                             double work[{P}_NWORK]) {{
+  return call_qxn({prefix}_cs_fz, q_hat, tau_m, {P}_NM, n, F_z, work);
 }}
 
 int {prefix}_contact_force(const double q_hat[{P}_NQ], double tau_m, double* F_z, double work[{P}_NWORK]) {{
-  return call_qx({prefix}_cs_fz, q_hat, tau_m, F_z, work);
+  double t[{P}_NM];
+  memset(t, 0, sizeof(t));
+  t[{motor}] = tau_m;
+  return {prefix}_contact_force_n(q_hat, t, NORMAL, F_z, work);
 }}
 
-#if !KIND_PI
-static int feedforward(const double* q, double F, double* ff, double* work) {{
-  return call_qx({prefix}_cs_ff, q, F, ff, work);
-}}
-#endif
-
-int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], double* tau_out,
-                    double work[{P}_NWORK]) {{
+/* ForceController.command: the command before the notch */
+static int command(double* tau_out, {prefix}_state* s, double F_ref, double F_fb, const double* q_hat,
+                   const double* n, double* work) {{
   double F_raw = F_ref, ff = 0.0, e, e_p, tau, tau_u;
 #if !KIND_PI
   double a = DT / (PREFILTER_S + DT);
@@ -89,9 +122,9 @@ int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q
   s->F_ref_f += a * (F_ref - s->F_ref_f);
   s->F_ref_f2 += a * (s->F_ref_f - s->F_ref_f2);
   F_ref = ORDER == 2 ? s->F_ref_f2 : s->F_ref_f;
-  if (feedforward(q_hat, F_ref, &ff, work)) return 1;
+  if (call_qxn({prefix}_cs_ff, q_hat, &F_ref, 1, n, &ff, work)) return 1;
 #else
-  (void) q_hat; (void) work;
+  (void) q_hat; (void) work; (void) n;
 #endif
   e = F_ref - F_fb;
   e_p = e + SETPOINT_WEIGHT * (F_raw - F_ref);
@@ -122,6 +155,30 @@ int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q
   *tau_out = tau;
   return 0;
 }}
+
+int {prefix}_update_n({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], const double n[3],
+                      double* tau_out, double work[{P}_NWORK]) {{
+  double tau, out;
+  if (command(&tau, s, F_ref, F_fb, q_hat, n, work)) return 1;
+#if NOTCH /* ForceController.update: the command through the notch at the cable's mode, clipped again */
+  if (!s->notch_started) {{ s->nx[0] = s->nx[1] = s->ny[0] = s->ny[1] = tau; s->notch_started = 1; }}
+  out = NB0 * tau + NB1 * s->nx[0] + NB2 * s->nx[1] - NA1 * s->ny[0] - NA2 * s->ny[1];
+  s->nx[1] = s->nx[0];
+  s->nx[0] = tau;
+  s->ny[1] = s->ny[0];
+  s->ny[0] = out;
+  tau = mn(mx(out, 0.0), TAU_MAX);
+#else
+  (void) out;
+#endif
+  *tau_out = tau;
+  return 0;
+}}
+
+int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], double* tau_out,
+                    double work[{P}_NWORK]) {{
+  return {prefix}_update_n(s, F_ref, F_fb, q_hat, NORMAL, tau_out, work);
+}}
 """
 
 _HEADER = r"""/* {prefix}.h -- the {kind} fingertip force controller of {model} (ForceController.update in C), exported by
@@ -130,10 +187,11 @@ _HEADER = r"""/* {prefix}.h -- the {kind} fingertip force controller of {model} 
    One motor's loop ({which}) at dt = {dt!r} s: the motor torque command tau (N m, in [0, {tau_max!r}]) for the force
    reference F_ref (N) and the force fed back F_fb (N: the FlexiForce reading, or the sensorless estimate),
    with the feedforward S (G(q_hat) + F_ref J(q_hat)^T n) / (S S^T) at the observer's joint angles q_hat
-   ({nq}, rad){pi_note}. Surface normal n = {normal} (base frame, fixed). Settings: kp {kp!r} N m/N, ki {ki!r}
+   ({nq}, rad){pi_note}. Surface normal n = {normal} (base frame) in {prefix}_update, any given at
+   run time in {prefix}_update_n. Settings: kp {kp!r} N m/N, ki {ki!r}
    N m/(N s), contact threshold {contact_threshold!r} N (onset {onset_s!r} s, loss {loss_s!r} s), approach rate
    {approach_rate!r} N m/s, prefilter {prefilter_s!r} s ({prefilter_order} stage(s)), set-point weight
-   {setpoint_weight!r}.
+   {setpoint_weight!r}{notch_note}.
 
    Start: {prefix}_state s; {prefix}_init(&s); then each period: {prefix}_update(&s, F_ref, F_fb, q_hat, &tau, work).
    No heap, no global state; returns 0 (1 if the generated feedforward failed). Build: cc -O2 -c {prefix}.c
@@ -147,26 +205,40 @@ extern "C" {{
 #endif
 
 #define {P}_NQ {nq}        /* joint angles of q_hat */
+#define {P}_NM {nm}        /* motors (the torque readings of the sensorless estimate) */
 #define {P}_NWORK {nwork}  /* doubles of the work array */
 #define {P}_DT {dt!r}  /* control period, s */
 
 typedef struct {{
   double integral;   /* the PI's integral, N m */
-  double tau_prev;   /* the last command, N m */
+  double tau_prev;   /* the last command before the notch, N m */
   double F_ref_f, F_ref_f2;  /* the prefilter's stages, N */
+  double nx[2], ny[2];       /* the notch's last inputs and outputs, N m */
   long above, below; /* periods above / below the contact threshold */
-  int in_contact, started;
+  int in_contact, started, notch_started;
 }} {prefix}_state;
 
 void {prefix}_init({prefix}_state* s);
 
-/* The command tau (N m) for this period. */
+/* The command tau (N m) for this period, at the surface normal of the export. */
 int {prefix}_update({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], double* tau,
                     double work[{P}_NWORK]);
 
-/* The static contact force F_z (N) that balances the motor torque tau_m (N m) at q_hat (rad): the sensorless
-   loop's estimate (static_contact_force; the loop low-passes it, max(F_z, 0), before feeding it back). */
+/* The same at the unit surface normal n (3, base frame; {prefix}_unit_normal makes one) given at run time. */
+int {prefix}_update_n({prefix}_state* s, double F_ref, double F_fb, const double q_hat[{P}_NQ], const double n[3],
+                      double* tau, double work[{P}_NWORK]);
+
+/* The static contact force F_z (N) that balances the motor torque tau_m (N m, the controller's motor alone) at
+   q_hat (rad): the sensorless loop's estimate (static_contact_force; the loop low-passes it, max(F_z, 0), before
+   feeding it back), at the normal of the export. */
 int {prefix}_contact_force(const double q_hat[{P}_NQ], double tau_m, double* F_z, double work[{P}_NWORK]);
+
+/* The same for every motor's torque tau_m (NM) at the unit normal n (3) given at run time. */
+int {prefix}_contact_force_n(const double q_hat[{P}_NQ], const double tau_m[{P}_NM], const double n[3], double* F_z,
+                             double work[{P}_NWORK]);
+
+/* n = normal / |normal| (Python's _normal); 1 for a zero or non-finite normal. */
+int {prefix}_unit_normal(const double normal[3], double n[3]);
 
 #ifdef __cplusplus
 }}
@@ -232,37 +304,39 @@ int main(int argc, char** argv) {{
 
 
 def _feedforward_function(ctl: ForceController, name: str) -> cs.Function:
-    """tau_ff(q, F) = S_k (G(q) + F J(q)^T n) / (S_k S_k^T): :func:`~.controller.static_motor_torque` in CasADi, S_k
-    the controller's motor's row, J the Jacobian of its tip frame (``ctl.tip``; None: the model's default tip)."""
+    """tau_ff(q, F, n) = S_k (G(q) + F J(q)^T n) / (S_k S_k^T): :func:`~.controller.static_motor_torque` in CasADi,
+    S_k the controller's motor's row, J the Jacobian of its tip frame (``ctl.tip``; None: the model's default tip),
+    n the unit surface normal (3,), an input."""
     m = ctl.model
     sym = SymbolicDynamics(m)
-    q = cs.SX.sym("q", m.n)
-    F = cs.SX.sym("F")
+    q, F, n = cs.SX.sym("q", m.n), cs.SX.sym("F"), cs.SX.sym("n", 3)
     S = np.asarray(m.transmission.S[ctl.motor], dtype=float)
-    b = sym.gravity_torque(q) + F * cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, cs.DM(ctl.normal))
+    b = sym.gravity_torque(q) + F * cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, n)
     if m.transmission.curved:  # the motor's row of rho(q)
         row = m.transmission.curve.ratio(q, cs)[ctl.motor, :].T
-        return cs.Function(name, [q, F], [cs.dot(row, b) / cs.dot(row, row)], ["q", "F"], ["tau_ff"])
-    return cs.Function(name, [q, F], [cs.dot(cs.DM(S), b) / float(S @ S)], ["q", "F"], ["tau_ff"])
+        return cs.Function(name, [q, F, n], [cs.dot(row, b) / cs.dot(row, row)], ["q", "F", "n"], ["tau_ff"])
+    return cs.Function(name, [q, F, n], [cs.dot(cs.DM(S), b) / float(S @ S)], ["q", "F", "n"], ["tau_ff"])
 
 
 def _contact_force_function(ctl: ForceController, name: str) -> cs.Function:
-    """F_z(q, tau_m) = -(J^T n) . (G(q) - S_k^T tau_m) / |J^T n|^2: :func:`~.controller.static_contact_force` with
-    the controller's motor k alone pulling (the others at 0), at its tip frame."""
+    """F_z(q, tau_m, n) = -(J^T n) . (G(q) - S^T tau_m) / |J^T n|^2: :func:`~.controller.static_contact_force` with
+    every motor's torque tau_m (m,) at the controller's tip frame, n the unit surface normal (3,), an input."""
     m = ctl.model
     sym = SymbolicDynamics(m)
-    q = cs.SX.sym("q", m.n)
-    tau = cs.SX.sym("tau_m")
-    jn = cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, cs.DM(ctl.normal))
     tr = m.transmission
-    row = tr.curve.ratio(q, cs)[ctl.motor, :].T if tr.curved else cs.DM(np.asarray(tr.S[ctl.motor], dtype=float))
-    r = sym.gravity_torque(q) - row * tau
-    return cs.Function(name, [q, tau], [-cs.dot(jn, r) / cs.dot(jn, jn)], ["q", "tau_m"], ["F_z"])
+    nm = len(tr.motor_names)
+    q, tau, n = cs.SX.sym("q", m.n), cs.SX.sym("tau_m", nm), cs.SX.sym("n", 3)
+    jn = cs.mtimes(sym.fingertip_jacobian(q, ctl.tip).T, n)
+    rho = tr.curve.ratio(q, cs) if tr.curved else cs.DM(np.asarray(tr.S, dtype=float))
+    r = sym.gravity_torque(q) - cs.mtimes(rho.T, tau)
+    return cs.Function(name, [q, tau, n], [-cs.dot(jn, r) / cs.dot(jn, jn)], ["q", "tau_m", "n"], ["F_z"])
 
 
 def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -> dict[str, str]:
     """The C export of ``ctl.update``: ``{"<prefix>.h": ..., "<prefix>.c": ..., "force_main.c": ...}`` (see the
-    module docstring). ``ctl`` is a fresh controller (its settings are exported, not its state)."""
+    module docstring): the settings (gains, notch) of ``ctl``, a fresh controller (not its state), compiled in; the
+    surface normal ``ctl.normal`` that of ``<prefix>_update``, any other given at run time to
+    ``<prefix>_update_n``."""
     from .._version import __version__
 
     if not isinstance(ctl, ForceController):
@@ -275,8 +349,8 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
     cg.add(ff)
     cg.add(fc)
-    nq = ctl.model.n
-    nwork = nq + 1 + max(ff.sz_w(), fc.sz_w())
+    nq, nm = ctl.model.n, len(ctl.model.transmission.motor_names)
+    nwork = nq + nm + 3 + max(ff.sz_w(), fc.sz_w())
     settings: dict[str, Any] = {k: float(getattr(ctl, k)) for k in (
         "dt", "tau_max", "kp", "ki", "contact_threshold", "approach_rate", "prefilter_s", "loss_s", "onset_s",
         "setpoint_weight")}
@@ -284,16 +358,24 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
         if not np.isfinite(v):
             raise InputError(f"{k}: expected a finite number, got {v!r}")
     settings["prefilter_order"] = int(ctl.prefilter_order)
+    notch = ctl.notch_hz is not None
+    coef = _notch_coefficients(ctl.notch_hz, ctl.notch_zeta, ctl.dt) if notch else (0.0,) * 5
     is_pi = int(ctl.kind == "pi")
+    normal = ", ".join(repr(float(x)) for x in ctl.normal)
     source = (f"/* {prefix}.c -- generated by alpes_dyn (alpes-dyn codegen); the API is in {prefix}.h */\n"
               + cg.dump() + _LOGIC.format(prefix=prefix, P=P, is_pi=is_pi, n_arg=max(ff.sz_arg(), fc.sz_arg()),
                                           n_res=max(ff.sz_res(), fc.sz_res()), n_iw=max(ff.sz_iw(), fc.sz_iw()),
-                                          **settings))
+                                          notch=int(notch), **dict(zip(("b0", "b1", "b2", "a1", "a2"), coef)),
+                                          normal=normal, motor=int(ctl.motor), **settings))
     tr = ctl.model.transmission
     which = f"motor {tr.motor_names[ctl.motor]}, frame {ctl.tip or ctl.model.default_tip}"
-    header = _HEADER.format(prefix=prefix, P=P, kind=ctl.kind, model=ctl.model.name, version=__version__, nq=nq, which=which,
-                            nwork=nwork, normal="[" + ", ".join(f"{x:.17g}" for x in ctl.normal) + "]",
-                            pi_note=" (the pi baseline: no feedforward, q_hat unused)" if is_pi else "", **settings)
+    notch_note = (f", the command through a notch at {ctl.notch_hz!r} Hz (damping ratio {ctl.notch_zeta!r})"
+                  if notch else "")
+    header = _HEADER.format(prefix=prefix, P=P, kind=ctl.kind, model=ctl.model.name, version=__version__, nq=nq,
+                            nm=nm, which=which, nwork=nwork,
+                            normal="[" + ", ".join(f"{x:.17g}" for x in ctl.normal) + "]",
+                            pi_note=" (the pi baseline: no feedforward, q_hat unused)" if is_pi else "",
+                            notch_note=notch_note, **settings)
     return {f"{prefix}.h": header, f"{prefix}.c": source,
             "force_main.c": _MAIN.format(prefix=prefix, P=P, nq=nq)}
 

@@ -49,6 +49,7 @@ the fingers one after the other. All give the same numbers.
 from __future__ import annotations
 
 import os
+import re
 from pathlib import Path
 from typing import Any
 
@@ -61,7 +62,7 @@ from .cexport_ekf import ekf_c_source
 from ..observers.observers import ExtendedKalmanFilter, KalmanFilter
 
 __all__ = ["c_sources", "write_c_observer", "write_sources", "check_output_directory", "scenario_filter",
-           "read_main_output", "main_input"]
+           "read_main_output", "main_input", "compiled_c_step"]
 
 _WRAPPERS = r"""
 /* ---- alpes_dyn wrappers: the fixed-size API of {prefix}.h ---- */
@@ -300,8 +301,12 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     arithmetic as C loops over the nonzeros in the filter's own order of operations
     (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`; the EKF only, where CasADi folded no constant in that arithmetic,
     ``filt.exact_loops``); ``"casadi"`` -- CasADi's code of the filter's whole step. Both give the filter's
-    numbers to the last bit. Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large (over
-    :data:`_LOOPS_FROM` operations: the hand), else ``"casadi"`` (a finger, the UKF). ``chains`` (``"sparse"``
+    numbers to the last bit (but ``"sparse"`` on a model of several RK4 substeps per period, a friction model: its
+    code loops over one substep, :func:`~alpes_dyn.estimation.cexport.cexport_ekf.substep_model_source`, the
+    filter's numbers to rounding). Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large
+    (over :data:`_LOOPS_FROM` operations: the hand) or whose model takes substeps (a friction model: CasADi's
+    code of the whole step writes each substep out, 1.1-1.8 MB of C for finger3 that took 30 s to several
+    minutes to build at -O2), else ``"casadi"`` (a finger, the UKF). ``chains`` (``"sparse"``
     only): the model's code by block, the blocks of one structure side by side
     (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers; the default, None, is True there);
     False: CasADi's code of the whole model. See the module docstring for the API.
@@ -312,7 +317,8 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     if not (prefix.isidentifier() and prefix.isascii() and len(prefix) <= 40):
         raise InputError(f"prefix: expected a C identifier of at most 40 characters, got {prefix!r}")
     ekf = isinstance(filt, ExtendedKalmanFilter)
-    code = ("sparse" if ekf and filt.exact_loops and _covariance_operations(filt) > _LOOPS_FROM else "casadi") \
+    code = ("sparse" if ekf and filt.exact_loops and (_covariance_operations(filt) > _LOOPS_FROM
+                                                     or filt.model.substeps > 1) else "casadi") \
         if code is None else code
     if code not in ("sparse", "casadi"):
         raise InputError(f"code: expected 'sparse' or 'casadi', got {code!r}")
@@ -476,3 +482,56 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars))])
     P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(pars))
     return filt, z0, P0
+
+
+_LIBRARY_STEP = r"""
+/* ---- alpes_dyn: the filter's step on its state s = [z; P (column-major)] and wy = [w; y], for ctypes ---- */
+int alpes_library_step(const double* s, const double* wy, const double* p, double* out, double* work) {{
+  return {prefix}_step_p(s, s + {P}_NZ, wy, wy + {P}_NW, p, out, out + {P}_NZ, work);
+}}
+"""
+
+
+def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> Any:
+    """(s, wy) -> s_next: ``filt``'s step from its C export (:func:`c_sources`, its default code), compiled once into
+    a shared library in the cache (:func:`~alpes_dyn.simulation.buildcache.build_library`, ``-O2``) and called through
+    ctypes; s = [z; P column-major] (nz + nz^2,), wy = [w; y]. The numbers of the exported C to the last bit; with
+    substeps (a friction model) the C loops over one substep (seconds to build, where CasADi's code of the whole
+    step, each substep written out, took minutes). ``parameters``: the model's numbers (default the filter's).
+    None without a C compiler (:class:`~alpes_dyn.simulation.buildcache.CompilerError`)."""
+    import ctypes
+
+    from ...simulation.codegen import _CFLAGS, _compiler, cache_dir
+    from ...simulation.buildcache import CompilerError, build_library
+
+    prefix = "alpes_libstep"
+    files = c_sources(filt, prefix=prefix)
+    header, body = files[f"{prefix}.h"], files[f"{prefix}.c"]
+    body = re.sub(rf"(const double {prefix}_model_p\[{prefix.upper()}_NP\] = {{)[^}}]*(}};)", r"\g<1>0.0\g<2>", body)
+    # (the model's numbers are an input: the library is its structure's, shared by every file of that structure)
+    source = header + body.replace(f'#include "{prefix}.h"', "") + _LIBRARY_STEP.format(prefix=prefix, P=prefix.upper())
+    try:
+        _, _, _, lib = build_library(source, label, _compiler(), ("-O2",) + _CFLAGS[1:], cache_dir())
+    except CompilerError:
+        return None
+    fn = lib.alpes_library_step
+    dp = ctypes.POINTER(ctypes.c_double)
+    fn.argtypes = [dp, dp, dp, dp, dp]
+    fn.restype = ctypes.c_int
+    nwork = int(header.split(f"#define {prefix.upper()}_NWORK ")[1].split()[0])
+    p = np.ascontiguousarray(filt.model.values if parameters is None else parameters, dtype=float)
+    ns = filt.nz + filt.nz * filt.nz
+    s_in, wy_in, out, work = np.empty(ns), np.empty(filt.nw + filt.ny), np.empty(ns), np.empty(max(nwork, 1))
+    p = p if p.size else np.zeros(1)
+    ptrs = [a.ctypes.data_as(dp) for a in (s_in, wy_in, p, out, work)]
+    keep = (p, s_in, wy_in, out, work)  # the buffers live as long as the step
+
+    def step(s: np.ndarray, wy: np.ndarray) -> np.ndarray:
+        s_in[:] = s
+        wy_in[:] = wy
+        if fn(*ptrs) != 0 and keep:
+            raise InputError("step: the compiled filter step failed (H P H^T + R not positive definite: the filter "
+                             "diverged)")
+        return out.copy()
+
+    return step

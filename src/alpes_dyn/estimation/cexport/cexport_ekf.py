@@ -17,6 +17,12 @@ loops run over each column's block only and write the rest as zeros -- sums of p
 sign of a zero aside nothing changes --, else over all rows. The products by an exact zero of P H^T or of K are
 skipped likewise.
 
+A model of several substeps per period (a friction model: :func:`~alpes_dyn.simulation.integrate.stable_substeps`)
+is not written out substep by substep: :func:`~alpes_dyn.estimation.cexport.cexport_substeps.substep_model_source` loops over them and over each RK4 step's four
+stages, composing A and G = dF/dw by the chain rule over CasADi's code of the right-hand side and its Jacobians
+(finger3's friction EKF: 49 kB of C instead of 1.1 MB, whose straight-line code GCC's -O2 took 30 s to minutes to
+build); its numbers are the filter's to rounding, not bit for bit.
+
 Why: CasADi's expression of the whole step is straight-line code of every scalar operation of the dense
 nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program); the model's code is 41,500
 operations, 466 kB of machine code in one function, and the loops a few kilobytes. ``benchmarks/observer_step.py``
@@ -37,6 +43,7 @@ import casadi as cs
 import numpy as np
 
 from .cexport_chains import chain_model_source, components, model_blocks
+from .cexport_substeps import _doubles, _ints, substep_model_source
 from ..observers.observers import ExtendedKalmanFilter
 
 __all__ = ["ekf_c_source"]
@@ -329,14 +336,6 @@ int {prefix}_step_p(const double z[NZ], const double P[NZ * NZ], const double w[
 """
 
 
-def _ints(a: Any) -> str:
-    return ", ".join(str(int(x)) for x in a) or "0"
-
-
-def _doubles(a: np.ndarray) -> str:
-    return ", ".join(repr(float(x)) for x in np.asarray(a, float).reshape(-1, order="F"))
-
-
 def _rows(sp: cs.Sparsity) -> tuple[list[int], list[int], list[int]]:
     """A CSC sparsity by rows: (row pointers, each row's columns ascending, their places in the CSC values)."""
     colind, row = sp.colind(), sp.row()
@@ -376,6 +375,10 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
     sA, sN, sH = fmodel.sparsity_out(1), fmodel.sparsity_out(2), fmeas.sparsity_out(1)
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
     chains = chain_model_source(fmodel, model_blocks(fmodel, nz), f"{prefix}_cs_model") if by_chain else None
+    looped = substep_model_source(filt, f"{prefix}_cs_model") if chains is None else None
+    if looped is not None:  # the model's substeps as a loop over one's code
+        cg.add(looped[2])
+        chains = looped[:2]
     if chains is None:
         cg.add(fmodel)
     cg.add(fmeas)
@@ -408,3 +411,4 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
         model_arg=fmodel.sz_arg(), model_res=fmodel.sz_res(), model_iw=fmodel.sz_iw(),
         meas_arg=fmeas.sz_arg(), meas_res=fmeas.sz_res(), meas_iw=fmeas.sz_iw())
     return cg.dump() + (chains[0] if chains is not None else "") + text, nwork
+

@@ -108,6 +108,12 @@ class DiscreteModel:
         advance: Callable[[Any], Any] = (
             (lambda x: merged(x, w, p)) if self.friction_law == "stick"
             else (lambda x: rk4_expression(lambda y, u: merged(y, u, p), x, w, h)))
+        self.substep_p = cs.Function("substep", [z, w, p], [advance(z)], ["z", "w", "p"], ["z_next"])
+        """One of the ``substeps`` steps of :attr:`step_p` (the C export loops over it: the code of one step, not of
+        ``substeps`` unrolled)."""
+        self.rhs_p = merged if self.friction_law != "stick" else None
+        """The right-hand side z' = f(z, w, p) that each RK4 stage of :attr:`substep_p` evaluates (None for the stick
+        law, whose step is not RK4)."""
         zn = z
         for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
             zn = advance(zn)

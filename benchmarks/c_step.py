@@ -1,0 +1,127 @@
+"""The whole force step in C (issue 49, item 4): its build, its agreement with the Python step, its time per step.
+
+For each finger and controller, in one process:
+
+    Python step   ForceStep.step (its EKF compiled, the compile excluded and reported: "py build s"), timed over the
+                  readings of a run on the MuJoCo stand-in (the block scene, every effect of a real hand, a fresh
+                  noise seed), replayed: us per step
+    C step        alpes-dyn codegen --step's sources (alpes_dyn.control.cstep), built with cc -O2 -std=c99 ("build
+                  s", wall clock, and "(cpu)" the compiler's processor time, which a loaded machine inflates less:
+                  the goal is under 30 s), run over the same readings by its main.c: the largest
+                  difference from the Python step's commands (N m), joint estimates (rad) and forces fed back (N)
+                  (goal: 1e-9), and timed by main.c -t (us per step, wall clock and the process's processor time,
+                  which a loaded machine inflates less; goal: under 50 us per finger)
+
+The columns C/py give the C step's time as a fraction of the Python step's. The hand has no ForceStep (its loop is
+alpes_dyn.control.hand_loop's): not measured here.
+
+    python benchmarks/c_step.py [--models finger2,finger3] [--controllers sensor[,sensorless,pi]] [--seed 9693] [--json]
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+from alpes_dyn.bench.mujoco_hand import MujocoHand
+from alpes_dyn.control.bench_loop import run_on_bench
+from alpes_dyn.control.cstep import read_step_output, step_main_input, write_c_step
+from alpes_dyn.control.step import ForceStep
+
+GOAL_US = 50.0
+GOAL_BUILD_S = 30.0
+GOAL_DIFF = 1e-9
+
+
+def _python_us(step: ForceStep, run, repeat: int = 3) -> float:
+    """us per ForceStep.step over the recorded readings (the best of ``repeat`` replays)."""
+    best = np.inf
+    rows = [(run.counts[k], run.torque[k], float(run.force[k]), float(run.F_ref[k])) for k in range(len(run.t))]
+    for _ in range(repeat):
+        step.reset()
+        t0 = time.perf_counter()
+        for c, tq, f, r in rows:
+            step.step(c, tq, f, r)
+        best = min(best, (time.perf_counter() - t0) / len(rows))
+    return 1e6 * best
+
+
+def bench(model: str, controller: str, seed: int, duration: float, cc: str | None) -> dict:
+    t0 = time.perf_counter()
+    step = ForceStep(model, controller=controller)  # its EKF compiled (or loaded from the cache)
+    py_build = time.perf_counter() - t0
+    run = run_on_bench(MujocoHand(model, scene="block", seed=seed), step, 0.4, duration)
+    row = {"model": model, "controller": controller, "seed": seed, "steps": len(run.t), "py_build_s": py_build,
+           "py_us": _python_us(step, run), "observer_friction": step.design.observer_model is not None,
+           "substeps": step._ekf.model.substeps if step.filter_step is not None else None}
+    if cc is None:
+        return {**row, "c_us": None}
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp) / "c"
+        files = write_c_step(step, d)
+        row["c_source_kb"] = sum(len((d / n).read_bytes()) for n in files) / 1e3
+        sources = [str(d / n) for n in sorted(files) if n.endswith(".c")]
+        t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
+        subprocess.run([cc, "-O2", "-std=c99", "-o", str(d / "main"), *sources, "-lm"], check=True,
+                       capture_output=True, timeout=1800)
+        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+        row["c_build_s"] = time.perf_counter() - t0
+        row["c_build_cpu_s"] = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+        (d / "in.txt").write_text(step_main_input(run.counts, run.torque, run.force, run.F_ref, step.design.normal))
+        out = subprocess.run([str(d / "main"), str(d / "in.txt")], check=True, capture_output=True, text=True).stdout
+        U, Z, F = read_step_output(out, step.m, 2 * step.n)
+        row["diff_command"] = float(np.abs(U - run.command).max())
+        row["diff_q"] = float(np.nanmax(np.abs(Z[:, :step.n] - run.q_hat))) if step.filter_step is not None else None
+        row["diff_force"] = float(np.abs(F - run.F_fb).max())
+        t = subprocess.run([str(d / "main"), "-t", "20", str(d / "in.txt")], check=True, capture_output=True,
+                           text=True).stdout.split()
+        row["c_us"], row["c_cpu_us"] = float(t[4]), float(t[8])
+    row["c_vs_py"] = row["c_us"] / row["py_us"]
+    row["goals_met"] = bool(row["c_cpu_us"] < GOAL_US and row["c_build_cpu_s"] < GOAL_BUILD_S
+                            and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)
+    return row
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--models", default="finger2,finger3")
+    ap.add_argument("--controllers", default="sensor")
+    ap.add_argument("--seed", type=int, default=9693, help="the stand-in's noise seed of the first row (then +1)")
+    ap.add_argument("--duration", type=float, default=1.5, help="s of the run on the stand-in")
+    ap.add_argument("--json", action="store_true")
+    a = ap.parse_args(argv)
+    cc = shutil.which("cc") or shutil.which("gcc")
+    load0 = os.getloadavg()[0]
+    rows = []
+    for model in a.models.split(","):
+        for controller in a.controllers.split(","):
+            rows.append(bench(model, controller, a.seed + len(rows), a.duration, cc))
+    out = {"rows": rows, "load_avg": [load0, os.getloadavg()[0]], "goal_us": GOAL_US, "goal_build_s": GOAL_BUILD_S,
+           "goal_diff": GOAL_DIFF, "goals_met": all(r.get("goals_met", False) for r in rows)}
+    if a.json:
+        print(json.dumps(out))
+        return 0
+    print(f"load average {load0:.1f} -> {out['load_avg'][1]:.1f}; us per step; differences C - Python")
+    print(f"{'model':8s} {'ctl':10s} {'steps':>5s} {'py build s':>10s} {'py us':>7s} {'C kB':>6s} {'build s':>7s} "
+          f"{'(cpu)':>6s} {'C us':>6s} {'(cpu)':>6s} {'C/py':>6s} {'|du| N m':>9s} {'|dq| rad':>9s} {'|dF| N':>9s} goals")
+    for r in rows:
+        c = (f"{r['c_source_kb']:6.0f} {r['c_build_s']:7.1f} {r['c_build_cpu_s']:6.1f} {r['c_us']:6.1f} {r['c_cpu_us']:6.1f} {r['c_vs_py']:6.3f} "
+             f"{r['diff_command']:9.1e} {r['diff_q'] if r['diff_q'] is not None else float('nan'):9.1e} "
+             f"{r['diff_force']:9.1e} {'met' if r['goals_met'] else 'NOT met'}" if r["c_us"] is not None
+             else "no C compiler")
+        print(f"{r['model']:8s} {r['controller']:10s} {r['steps']:5d} {r['py_build_s']:10.1f} {r['py_us']:7.1f} {c}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,415 @@
+"""The whole force step in C: :meth:`ForceStep.step <alpes_dyn.control.step.ForceStep.step>` as standalone C, the
+contact's surface normal an input of each call.
+
+:func:`step_c_sources` writes, for a :class:`~alpes_dyn.control.step.ForceStep` (its model, parameter file,
+controller, gains, compensation and noise settings compiled in):
+
+* ``alpes_step.h`` / ``alpes_step.c`` -- the step: the encoder counts in rad, the compensation of the identified
+  effects (the encoder's zero and the tendon's stretch C tau_m,k-1 off the reading, the command held as the
+  observer's motor torque), the EKF's predict with the known input [tau_m, -F n] and its update
+  (``alpes_step_ekf``), the sensorless estimate (``"sensorless"``), the controller with its tuned gains and the
+  notch (``alpes_step_force``), in the order of the step's module docstring (:mod:`alpes_dyn.control.step`);
+* ``alpes_step_ekf.h`` / ``alpes_step_ekf.c`` -- the observer's step,
+  :func:`~alpes_dyn.estimation.cexport.cexport.c_sources` of the step's EKF (with the file's friction when the
+  step's observer has it; none for ``"pi"``);
+* ``alpes_step_force.h`` / ``alpes_step_force.c`` -- the controller,
+  :func:`~alpes_dyn.control.cexport.controller_c_sources` of the step's controller;
+* ``main.c`` -- a test program: reads one line of readings per tick (counts (NM), torque (NM), force, reference,
+  normal (3)), prints per tick the command (NM), the EKF's estimate [q_hat; qd_hat] (NZ) and the force fed back
+  (``%.17g``), or times the step (``-t REPEAT``).
+
+The API (``alpes_step.h``)::
+
+    void alpes_step_init(alpes_step_state* s);          /* the first sample: the finger at rest */
+    int alpes_step(alpes_step_state* s, const double counts[ALPES_STEP_NM], const double torque[ALPES_STEP_NM],
+                   double force, double reference, const double normal[3], double command[ALPES_STEP_NM],
+                   double work[ALPES_STEP_NWORK]);
+
+No heap, no global state, ``-lm`` only; the state (the estimate, its covariance, the controller's memory) is the
+caller's. Build::
+
+    cc -O2 -std=c99 -o alpes_step_main main.c alpes_step.c alpes_step_ekf.c alpes_step_force.c -lm
+
+:func:`write_c_step` writes them into a new directory, atomically (a temporary directory renamed).
+"""
+
+from __future__ import annotations
+
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ..errors import InputError
+from ..estimation.cexport.cexport import c_sources, check_output_directory, write_sources
+from .cexport import controller_c_sources
+from .controller import ForceController
+from .step import ForceStep
+
+__all__ = ["step_c_sources", "write_c_step", "step_main_input", "read_step_output", "C_STEP_BUILD", "STEP_ERRORS"]
+
+C_STEP_BUILD = "cc -O2 -std=c99 -o alpes_step_main main.c alpes_step.c alpes_step_ekf.c alpes_step_force.c -lm"
+"""The build of the test program (``alpes_step_ekf.c`` absent for ``"pi"``)."""
+
+STEP_ERRORS: dict[int, str] = {
+    1: "the generated code failed",
+    2: "a reading is not finite (counts, torque, the force of the sensor and pi controllers, the reference) or the "
+       "normal is zero or not finite",
+    3: "the EKF diverged on the readings (joint estimate beyond 1e6 rad or rad/s, or not finite): check their units",
+}
+"""What ``alpes_step`` returns besides 0; the state is left as it was."""
+
+_HEADER = r"""/* alpes_step.h -- the force step of {model} (alpes_dyn.control.step.ForceStep.step in C), exported by
+   alpes_dyn {version} (alpes-dyn codegen --step).
+
+   {about}
+
+   One tick at dt = {dt!r} s, called once per tick with that tick's readings; its command is held over
+   [t_k, t_k+1) -- the timing of ForceStep.step:
+     counts (NM)      the motor encoders' counts at t_k ({cpr} per revolution);
+     torque (NM)      the motor torque the current sensor reports at t_k, N m{torque_note};
+     force            the fingertip sensor's normal force at t_k, N{force_note};
+     reference        the force reference F_ref at t_k, N;
+     normal (3)       the object's surface normal at the contact, base frame, pointing from the fingertip into
+                      the object (any length: normalised at each call); the step presses along it.
+   Out: command (NM), the motor torques to write, N m (motor {motor_name} in [0, {tau_max!r}], the others 0).
+   {observer_note}
+   {gains}
+
+   Start: alpes_step_state s; alpes_step_init(&s); double work[ALPES_STEP_NWORK];
+   each tick: if (alpes_step(&s, counts, torque, force, F_ref, normal, command, work)) stop the motor.
+   Returns 0, or 1 (the generated code failed), 2 (a reading not finite: counts, torque{force_read}, the
+   reference; or a zero or non-finite normal), 3 (the EKF diverged: a joint estimate beyond 1e6 rad or
+   rad/s: check the readings' units); on an error the state is left as it was. After a call, s.z holds
+   [q_hat (rad); qd_hat (rad/s)] ({nz}), s.P its covariance (column-major), s.F_fb the force fed back (N).
+   No heap, no global state; reentrant. Build: cc -O2 -std=c99 -c alpes_step.c{ekf_c} alpes_step_force.c
+   (link with -lm); the test program:
+     {build}
+*/
+#ifndef ALPES_STEP_H
+#define ALPES_STEP_H
+
+#include "alpes_step_force.h"
+
+#ifdef __cplusplus
+extern "C" {{
+#endif
+
+#define ALPES_STEP_NM {nm}        /* motors */
+#define ALPES_STEP_NQ {n}        /* joints */
+#define ALPES_STEP_NZ {nz}        /* the EKF's states [q; qd] */
+#define ALPES_STEP_NWORK {nwork}  /* doubles of the work array */
+#define ALPES_STEP_DT {dt!r}  /* the period, s */
+#define ALPES_STEP_TAU_MAX {tau_max!r}  /* the motor limit, N m */
+
+typedef struct {{
+  double z[ALPES_STEP_NZ];                   /* [q_hat; qd_hat] (rad, rad/s){z_note} */
+  double P[ALPES_STEP_NZ * ALPES_STEP_NZ];   /* its covariance, column-major */
+  double command[ALPES_STEP_NM];             /* the last command, N m */
+  double F_fb;                               /* the force fed back at the last tick, N */
+  long k;                                    /* ticks done */
+  alpes_step_force_state controller;         /* the controller's memory */
+}} alpes_step_state;
+
+/* The first tick's state: the finger at rest (the EKF's prior), the controller cleared, the command 0. */
+void alpes_step_init(alpes_step_state* s);
+
+/* One tick: the readings in, the command out (see above). */
+int alpes_step(alpes_step_state* s, const double counts[ALPES_STEP_NM], const double torque[ALPES_STEP_NM],
+               double force, double reference, const double normal[3], double command[ALPES_STEP_NM],
+               double work[ALPES_STEP_NWORK]);
+
+#ifdef __cplusplus
+}}
+#endif
+#endif
+"""
+
+_STEP = r"""/* alpes_step.c -- generated by alpes_dyn (alpes-dyn codegen --step); the API is in alpes_step.h */
+#include <math.h>
+#include <string.h>
+#include "alpes_step.h"
+{ekf_include}
+#define NM ALPES_STEP_NM
+#define NQ ALPES_STEP_NQ
+#define NZ ALPES_STEP_NZ
+#define FILTER {filter}
+#define SENSORLESS {sensorless}
+#define NEEDS_FORCE {needs_force}
+#define COMMAND_INPUT {command_input}
+#define UNSTRETCH {unstretch}
+#define MOTOR {motor}
+#define RAD_PER_COUNT {rad_per_count!r}
+#define OFFSET {offset!r}  /* the encoder's zero, rad of the motor */
+#define ALPHA {alpha!r}    /* the sensorless estimate's low-pass weight */
+#define SCALE {scale!r}    /* the sensorless estimate's calibration */
+#define DIVERGED 1e6
+
+#if FILTER
+static const double C_TENDON[NM] = {{{compliance}}};  /* rad/(N m): the tendons' stretch */
+#endif
+static const double Z0[NZ] = {{{z0}}};
+static const double P0[NZ * NZ] = {{{P0}}};
+
+void alpes_step_init(alpes_step_state* s) {{
+  memset(s, 0, sizeof(*s));
+  memcpy(s->z, Z0, sizeof(Z0));
+  memcpy(s->P, P0, sizeof(P0));
+  alpes_step_force_init(&s->controller);
+}}
+
+int alpes_step(alpes_step_state* s, const double counts[NM], const double torque[NM], double force,
+               double reference, const double normal[3], double command[NM], double work[ALPES_STEP_NWORK]) {{
+  double n[3], y[NM], tau[NM], F_fb = force, u;
+  const double* q_hat = s->z;
+  alpes_step_force_state ctl = s->controller;
+  int i;
+  for (i = 0; i < NM; ++i) {{
+    if (!isfinite(counts[i]) || !isfinite(torque[i])) return 2;
+    y[i] = counts[i] * RAD_PER_COUNT;
+    tau[i] = COMMAND_INPUT ? s->command[i] : torque[i]; /* the motor torque over [t_k-1, t_k) */
+  }}
+  if ((NEEDS_FORCE && !isfinite(force)) || !isfinite(reference)) return 2;
+  if (alpes_step_force_unit_normal(normal, n)) return 2;
+  (void) y; /* unused without the observer; */
+  (void) tau; /* ... with neither the observer nor the sensorless estimate */
+#if FILTER
+  if (s->k > 0) {{ /* the EKF's predict over [t_k-1, t_k] and its update with the encoder at t_k */
+    double* zn = work;
+    double* Pn = zn + NZ;
+    double* w = Pn + NZ * NZ;
+    double* yy = w + NM + 3;
+    const double F_in = SENSORLESS ? s->F_fb : force;
+    for (i = 0; i < NM; ++i) {{
+      w[i] = tau[i];
+      yy[i] = UNSTRETCH ? (y[i] - OFFSET) - tau[i] * C_TENDON[i] : y[i];
+    }}
+    for (i = 0; i < 3; ++i) w[NM + i] = -F_in * n[i];
+    if (alpes_step_ekf_step(s->z, s->P, w, yy, zn, Pn, yy + NM)) return 1;
+    for (i = 0; i < NZ; ++i) if (!(fabs(zn[i]) < DIVERGED)) return 3;
+    memcpy(s->z, zn, sizeof(double) * NZ);
+    memcpy(s->P, Pn, sizeof(double) * NZ * NZ);
+  }}
+#endif
+#if SENSORLESS
+  {{
+    double F_est;
+    if (alpes_step_force_contact_force_n(q_hat, tau, n, &F_est, work)) return 1;
+    F_est = F_est / SCALE;
+    F_fb = s->F_fb + ALPHA * ((0.0 > F_est ? 0.0 : F_est) - s->F_fb);
+  }}
+#endif
+  if (alpes_step_force_update_n(&ctl, reference, F_fb, q_hat, n, &u, work)) return 1;
+  s->controller = ctl;
+  for (i = 0; i < NM; ++i) s->command[i] = command[i] = i == MOTOR ? u : 0.0;
+  s->F_fb = F_fb;
+  s->k += 1;
+  return 0;
+}}
+"""
+
+_MAIN = r"""/* main.c -- test program of alpes_step.c (alpes-dyn codegen --step).
+
+   alpes_step_main FILE|-              per tick, one line: the command (NM), [q_hat; qd_hat] (NZ), the force fed back
+   alpes_step_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor)
+
+   FILE: one tick per line: counts (NM) torque (NM) force reference normal (3) (%.17g printed: read back exactly).
+   Build: {build}
+*/
+#define _POSIX_C_SOURCE 199309L
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include "alpes_step.h"
+
+#define NM ALPES_STEP_NM
+#define NR (2 * NM + 5)
+
+int main(int argc, char** argv) {{
+  double work[ALPES_STEP_NWORK], command[NM], *rows = 0;
+  long n = 0, cap = 0, k, r, repeat = 0;
+  int a = 1, i, e;
+  alpes_step_state s;
+  FILE* f;
+  if (argc > 2 && strcmp(argv[1], "-t") == 0) {{ repeat = atol(argv[2]); a = 3; }}
+  if (argc != a + 1 || (a == 3 && repeat < 1)) {{ fprintf(stderr, "usage: %s [-t REPEAT] FILE|-\n", argv[0]); return 2; }}
+  f = strcmp(argv[a], "-") == 0 ? stdin : fopen(argv[a], "r");
+  if (!f) {{ fprintf(stderr, "%s: cannot open %s\n", argv[0], argv[a]); return 2; }}
+  for (;;) {{
+    if (n == cap) {{
+      double* more = realloc(rows, sizeof(double) * NR * (cap = cap ? 2 * cap : 1024));
+      if (!more) {{ fprintf(stderr, "%s: out of memory\n", argv[0]); return 2; }}
+      rows = more;
+    }}
+    for (i = 0; i < NR; ++i) if (fscanf(f, "%lf", &rows[n * NR + i]) != 1) break;
+    if (i == 0) break;
+    if (i != NR) {{ fprintf(stderr, "%s: line %ld: expected %d numbers\n", argv[0], n + 1, NR); return 2; }}
+    ++n;
+  }}
+  if (repeat == 0) {{
+    alpes_step_init(&s);
+    for (k = 0; k < n; ++k) {{
+      const double* x = rows + k * NR;
+      if ((e = alpes_step(&s, x, x + NM, x[2 * NM], x[2 * NM + 1], x + 2 * NM + 2, command, work))) {{
+        fprintf(stderr, "%s: line %ld: alpes_step returned %d\n", argv[0], k + 1, e);
+        return 1;
+      }}
+      for (i = 0; i < NM; ++i) printf(i ? " %.17g" : "%.17g", command[i]);
+      for (i = 0; i < ALPES_STEP_NZ; ++i) printf(" %.17g", s.z[i]);
+      printf(" %.17g\n", s.F_fb);
+    }}
+  }} else {{
+    struct timespec t0, t1;
+    double sec;
+    clock_t c0 = clock(), c1;
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (r = 0; r < repeat; ++r) {{
+      alpes_step_init(&s);
+      for (k = 0; k < n; ++k) {{
+        const double* x = rows + k * NR;
+        alpes_step(&s, x, x + NM, x[2 * NM], x[2 * NM + 1], x + 2 * NM + 2, command, work);
+      }}
+    }}
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    c1 = clock();
+    sec = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
+    printf("%ld steps x %ld: %.4f us per step, %.4f us of processor time (command[0] = %.17g)\n", n, repeat,
+           1e6 * sec / (n * repeat > 0 ? n * repeat : 1),
+           1e6 * (double)(c1 - c0) / CLOCKS_PER_SEC / (n * repeat > 0 ? n * repeat : 1), command[0]);
+  }}
+  free(rows);
+  return 0;
+}}
+"""
+
+
+def _doubles(a: Any) -> str:
+    return ", ".join(repr(float(x)) for x in np.asarray(a, dtype=float).reshape(-1)) or "0.0"
+
+
+def step_c_sources(step: ForceStep, *, about: str = "") -> dict[str, str]:
+    """The C export of ``step.step``: {file name: text} (the module docstring's files).
+
+    Parameters
+    ----------
+    step : ForceStep
+        The step (its settings are exported, not its state: the C step starts at the first sample).
+    about : str
+        A line for the header's comment (the model, its parameter file).
+
+    Returns
+    -------
+    dict of str to str
+        ``alpes_step.h``, ``alpes_step.c``, ``alpes_step_force.h``, ``alpes_step_force.c``, ``main.c`` and, but
+        for ``"pi"``, ``alpes_step_ekf.h``, ``alpes_step_ekf.c``.
+
+    Raises
+    ------
+    InputError
+        ``step`` not a ForceStep (one line).
+    """
+    from .._version import __version__
+
+    if not isinstance(step, ForceStep):
+        raise InputError(f"step: expected a ForceStep, got {type(step).__name__}")
+    ctl = ForceController(**step._controller_args)  # a fresh one: the settings, not the state
+    files = controller_c_sources(ctl, prefix="alpes_step_force")
+    del files["force_main.c"]
+    nz, nm, filt = 2 * step.n, step.m, step.filter_step is not None
+    ekf_nwork = 0
+    if filt:
+        ekf = c_sources(step._ekf, prefix="alpes_step_ekf", about=about)
+        del ekf["main.c"]
+        files.update(ekf)
+        ekf_nwork = int(ekf["alpes_step_ekf.h"].split("#define ALPES_STEP_EKF_NWORK ")[1].split()[0])
+        z0, P0 = step._s0[:nz], step._s0[nz:]
+    else:
+        z0, P0 = np.full(nz, np.nan), np.full(nz * nz, np.nan)
+    force_nwork = int(files["alpes_step_force.h"].split("#define ALPES_STEP_FORCE_NWORK ")[1].split()[0])
+    nwork = max(nz + nz * nz + 2 * nm + 3 + ekf_nwork, force_nwork)
+    comp, tr = step.compensation, step._transmission
+    sl = step._sensorless
+    files["alpes_step.c"] = _STEP.format(
+        ekf_include='#include "alpes_step_ekf.h"\n' if filt else "", filter=int(filt),
+        sensorless=int(sl is not None), needs_force=int(step.kind != "sensorless"),
+        command_input=int(comp.command_input), unstretch=int(comp.observer_compliance), motor=step.motor,
+        rad_per_count=float(step._rad_per_count), offset=float(step._offset),
+        alpha=float(sl.alpha) if sl is not None else 0.0, scale=float(sl.scale) if sl is not None else 1.0,
+        compliance=_doubles(tr.tendon_compliance if tr.elastic else np.zeros(nm)),
+        z0=_doubles(z0).replace("nan", "NAN"), P0=_doubles(P0).replace("nan", "NAN"))
+    build = C_STEP_BUILD if filt else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
+    gains = f"Controller {step.kind}, its tuned gains: " + ", ".join(
+        f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
+                                                               "prefilter_s", "onset_s", "loss_s", "notch_hz")) + "."
+    files["alpes_step.h"] = _HEADER.format(
+        model=step.model.name, version=__version__,
+        about=(about or f"Model {step.model.name}.").replace("*/", "* /"), dt=step.dt, cpr=int(step.counts_per_rev),
+        torque_note=("\n" + " " * 22 + "(checked, not used: with the compensation the command held over the period"
+                     "\n" + " " * 22 + "is the motor torque)" if comp.command_input else ""),
+        force_note=("\n                      (not read by the sensorless controller: any number)"
+                    if step.kind == "sensorless" else ""),
+        force_read="" if step.kind == "sensorless" else ", the force", motor_name=tr.motor_names[step.motor],
+        tau_max=step.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=step.n, nz=nz, nwork=nwork,
+        observer_note=_observer_note(step) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
+        z_note="" if filt else "; NaN: no observer", ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
+    files["main.c"] = _MAIN.format(build=build)
+    return dict(sorted(files.items()))
+
+
+def _observer_note(step: ForceStep) -> str:
+    """The header's words on the observer and the compensation."""
+    comp = step.compensation
+    friction = step.design.observer_model is not None  # an Alpes finger's EKF with its file's friction
+    words = [f"The EKF (alpes_step_ekf.h{', with the file' + chr(39) + 's friction' if friction else ''}) "
+             "takes the known input [tau_m, -F n] (the sensorless estimate of the tick before for F with the "
+             "sensorless controller) and the encoder"]
+    if comp.observer_compliance:
+        words.append(f"less its zero ({float(step._offset)!r} rad) and the tendon's stretch C tau_m")
+    if comp.command_input:
+        words.append("with the command held over the period as tau_m")
+    return "\n   ".join(_wrap(" ".join(words) + "; no filter step at the first tick (the estimate is the rest)."))
+
+
+def _wrap(text: str, width: int = 108) -> list[str]:
+    lines, line = [], ""
+    for word in text.split():
+        if line and len(line) + 1 + len(word) > width:
+            lines.append(line)
+            line = word
+        else:
+            line = f"{line} {word}" if line else word
+    return lines + ([line] if line else [])
+
+
+def write_c_step(step: ForceStep, directory: str | os.PathLike[str], *, what: str = "-o",
+                 **kwargs: Any) -> dict[str, Path]:
+    """Write :func:`step_c_sources` into ``directory``, a new (or empty) directory, atomically (a temporary
+    directory renamed: no partial output). Returns {file name: path}. :class:`~alpes_dyn.InputError` naming
+    ``what`` for an existing file or a non-empty directory."""
+    check_output_directory(directory, what)
+    return write_sources(step_c_sources(step, **kwargs), directory, what)
+
+
+def step_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal: Any) -> str:
+    """The text ``main.c`` reads: per tick counts (N, m), torque (N, m), force (N,) (NaN: 0, unread by the
+    sensorless step), reference (N,), normal (3,) or (N, 3); ``repr``: read back exactly."""
+    counts = np.asarray(counts, float)
+    N = len(counts)
+    cols = [counts.reshape(N, -1), np.asarray(torque, float).reshape(N, -1),
+            np.nan_to_num(np.asarray(force, float).reshape(N, 1), nan=0.0), np.asarray(reference, float).reshape(N, 1),
+            np.broadcast_to(np.asarray(normal, float), (N, 3))]
+    rows = np.hstack(cols)
+    return "".join(" ".join(repr(float(x)) for x in row) + "\n" for row in rows)
+
+
+def read_step_output(text: str, m: int, nz: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """``main.c``'s printout: (commands (N, m) N m, estimates [q_hat; qd_hat] (N, nz), forces fed back (N,) N)."""
+    try:
+        rows = np.array([[float(x) for x in line.split()] for line in text.splitlines() if line.strip()])
+    except ValueError:
+        rows = np.zeros((0, 0))
+    if rows.ndim != 2 or rows.shape[1] != m + nz + 1:
+        raise InputError(f"main.c output: expected lines of {m + nz + 1} numbers")
+    return rows[:, :m], rows[:, m:m + nz], rows[:, -1]
