@@ -45,6 +45,8 @@ from ...model.trust import check_trusted
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
 from ...simulation.stick import check_friction_law
+from ...simulation.lugre import lugre_substeps
+from ...model.friction import LuGre, lugre_of
 from ...symbolic.parametric import tilted_gravity
 from ...symbolic.statespace import StateSpace
 from ...simulation.loop import Function, run_loop
@@ -238,16 +240,27 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     # the measurement's noise: the encoder's, and the torque noise through the tendon's stretch
     meas_var = step**2 / 12 + (encoder_noise_counts * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars)
+    lugre = friction_law == "lugre" and bool(np.any(m_obs.extras.coulomb))
+    span = m_obs.extras.coulomb / (lugre_of(m_obs) or LuGre()).sigma0 if lugre else np.zeros(0)  # F_s / sigma0, rad
     ss = StateSpace(m_obs, input="motor", output="encoder")
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         friction_law=friction_law, stops=JointStops.of(m_obs) if stops else None, process_noise=Q,
+                         friction_law=friction_law, stops=JointStops.of(m_obs) if stops else None,
+                         process_noise=Q + list((BRISTLE_WALK * span) ** 2),
                          measurement_noise=list(meas_var * np.ones(m)),
                          input_noise=[torque_noise**2] * m)
     x0 = _initial_state(m_obs, u0)
-    z0 = np.concatenate([x0, np.ones(len(gains)), np.zeros(len(pars))])
-    sd_q = _rest_spread(m_obs, x0[:n], ss.B, torque_noise) if filt.model.friction_law == "stick" else np.full(n, 0.5)
-    P0 = np.concatenate([sd_q**2, [1.0**2] * n, [0.2**2] * len(gains), [(10 * torque_noise + 1e-4) ** 2] * len(pars)])
+    z0 = np.concatenate([x0, np.ones(len(gains)), np.zeros(len(pars) + span.size)])
+    sd_q = (_rest_spread(m_obs, x0[:n], ss.B, torque_noise) if filt.model.friction_law in ("stick", "lugre")
+            else np.full(n, 0.5))
+    P0 = np.concatenate([sd_q**2, [1.0**2] * n, [0.2**2] * len(gains), [(10 * torque_noise + 1e-4) ** 2] * len(pars),
+                         span**2])
     return filt, z0, P0
+
+
+BRISTLE_WALK = 0.01
+"""The LuGre observer's random walk of each bristle per step, as a fraction of the presliding displacement
+F_s / sigma0 (the bristle's prior standard deviation is the whole of it: a joint at rest holds an unknown
+friction)."""
 
 
 def _rest_spread(model: Model, q0: np.ndarray, B: np.ndarray, torque_noise: float) -> np.ndarray:
@@ -279,6 +292,8 @@ def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None
         return substeps
     if friction_law == "stick" and np.any(model.extras.coulomb):
         return 1
+    if friction_law == "lugre" and np.any(model.extras.coulomb):
+        return lugre_substeps(model, lugre_of(model) or LuGre(), dt, minimum=4)
     has_friction = bool(np.any(model.extras.coulomb) or np.any(model.extras.viscous))
     return stable_substeps(model, dt, tension=tension) if has_friction else 1
 
@@ -386,7 +401,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     n, m = m_obs.n, m_obs.transmission.n_motors
     pars = tuple(f"disturbance_{mn}" for mn in m_obs.transmission.motor_names) if disturbance else ()
     gains = ("input_gain", "spring_gain") if observer.endswith("-params") else ()
-    nz = 2 * n + len(pars) + len(gains)
+    nz = 2 * n + len(pars) + len(gains) + (n if friction_law == "lugre" else 0)
     check_bytes(48.0 * N * (2 * (nz + nz * nz) + 2 * m + n), "recording", f"{N} samples for the observer")
     tr = m_obs.transmission
     parts: list[Estimate] = []
@@ -404,7 +419,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         t=rec.t.copy(), z=np.concatenate([p.z[:-1] for p in parts[:-1]] + [parts[-1].z]),
         P=np.concatenate([p.P[:-1] for p in parts[:-1]] + [parts[-1].P]), names=filt.names)
     rmse, final = _errors(est, rec, t_start, n)
-    dist = est.z[:, 2 * n + len(gains):] if pars else None
+    dist = est.z[:, 2 * n + len(gains): 2 * n + len(gains) + len(pars)] if pars else None
     settings = {"observer": observer, "torque_noise_Nm": torque_noise, "encoder_noise_counts": encoder_noise_counts,
                 "disturbance": bool(disturbance), "disturbance_walk": disturbance_walk if disturbance else None,
                 "transient_s": t_start, "substeps": int(substeps), "dt_s": dt, "backend": filt.backend,
