@@ -148,8 +148,8 @@ def test_step_is_built_once_per_structure(finger3):
 
 def test_friction_law_checked(finger3):
     _, ss, _ = finger3
-    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick"):
-        DiscreteModel(ss, H, friction_law="lugre")
+    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, lugre"):
+        DiscreteModel(ss, H, friction_law="dahl")
     with pytest.raises(InputError, match="friction_law"):
         make_observer("ekf", ss, H, process_noise=1e-9, measurement_noise=1e-7, friction_law=None)
     # a model without dry friction: the stick law is the smooth law's RK4

@@ -329,7 +329,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
                        disturbance: bool = False, disturbance_walk: float = DISTURBANCE_WALK,
                        transient: float | None = None, substeps: int | None = None,
                        compiled: bool = False, encoder_offset: Any = None,
-                       tilt: Any = None, torque_delay: int | None = None, friction_law: str = "smooth",
+                       tilt: Any = None, torque_delay: int | None = None, friction_law: str | None = None,
                        torque_window: int | None = None, force: bool = False, stops: bool = False) -> RecordingEstimate:
     """Run an observer on a recording (see the module docstring).
 
@@ -360,8 +360,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         file's ``transmission.torque_delay`` (written by ``identify``), else 0. The palm's tilt identified is in
         the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
     friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
-        F_s tanh(v / v_s) or ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
-        (:mod:`alpes_dyn.simulation.stick`).
+        F_s tanh(v / v_s), ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
+        (:mod:`alpes_dyn.simulation.stick`), or ``"lugre"``, a bristle state per joint (:mod:`alpes_dyn.model.friction`).
+        Default: ``"lugre"`` where the model's parameter file says ``friction.law = "lugre"``, else ``"smooth"``.
     torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
         noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
         stick law, else 1 (the torque as recorded).
@@ -380,6 +381,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     if torque_delay is None:
         torque_delay = int(getattr(model.params, "torque_delay", 0))
     rec = advanced(rec, torque_delay)
+    if friction_law is None:  # the parameter file's law
+        friction_law = "lugre" if lugre_of(model) is not None else "smooth"
     friction_law = check_friction_law(friction_law)
     window = (STICK_TORQUE_WINDOW if friction_law == "stick" else 1) if torque_window is None else torque_window
     raw_noise = _torque_noise(rec) if torque_noise is None else torque_noise

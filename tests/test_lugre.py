@@ -1,0 +1,199 @@
+"""The LuGre friction law (alpes_dyn.model.friction, symbolic.lugre, simulation.lugre, the observers' "lugre") against
+independent references.
+
+References: the bristle ODE integrated by scipy's solve_ivp (its steady state F_s sign(v) / sigma0 and the sign law's
+torque F_s sign(v) + F_v v; its presliding stiffness sigma0); finger3 with the law written here in numpy on
+Pinocchio's frictionless forward dynamics, integrated by solve_ivp (Radau), against the library's RK4 rollout; and
+an EKF on MuJoCo's stiff stick-slip (``frictionloss``, 0.5 ms ``solreffriction``), which the library did not write,
+where the smooth tanh law drifts off the stuck joints.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+
+import numpy as np
+import pytest
+from scipy.integrate import solve_ivp
+
+import alpes_dyn as ad
+from alpes_dyn.errors import InputError, ModelError
+from alpes_dyn.estimation.observers.discrete import DiscreteModel
+from alpes_dyn.model.friction import LuGre, lugre_of, lugre_rate, lugre_steady, lugre_torque
+from alpes_dyn.model.params import Param, load_params, params_toml, with_values
+from alpes_dyn.simulation.lugre import lugre_substeps, simulate_lugre
+from alpes_dyn.symbolic.statespace import StateSpace
+
+FS, FV = 5e-4, 1e-4
+
+
+def bristle_ode(t, y, v, sigma0):
+    """dz/dt of eq. L1 (g = F_s), written here."""
+    return [v - sigma0 * abs(v) * y[0] / FS]
+
+
+@pytest.mark.parametrize("v", [0.3, -0.05, 2.0])
+def test_steady_state_is_the_sign_law(v):
+    """Sliding at a constant v, z settles at F_s sign(v) / sigma0 and the torque at F_s sign(v) + F_v v."""
+    law = LuGre()
+    sol = solve_ivp(bristle_ode, (0, 0.5), [0.0], args=(v, law.sigma0), method="Radau", rtol=1e-10, atol=1e-14)
+    z_ref = sol.y[0, -1]
+    z, tau = lugre_steady(np.array([v]), np.array([FS]), np.array([FV]), law.sigma0)
+    np.testing.assert_allclose(z, [z_ref], rtol=1e-6)
+    np.testing.assert_allclose(z, [np.sign(v) * FS / law.sigma0], rtol=1e-9)
+    zdot = lugre_rate(z, np.array([v]), np.array([FS]), law.sigma0)
+    np.testing.assert_allclose(zdot, [0.0], atol=1e-12)
+    np.testing.assert_allclose(lugre_torque(z, zdot, np.array([v]), np.array([FV]), law), tau, rtol=1e-12)
+    np.testing.assert_allclose(tau, [FS * np.sign(v) + FV * v], rtol=1e-12)
+
+
+def test_presliding_stiffness_is_sigma0():
+    """From an unloaded bristle, a joint that yields by dq << F_s / sigma0 gets a friction torque sigma0 dq: the
+    stiffness of a stuck joint (solve_ivp of eq. L1 over a slow creep)."""
+    law = LuGre()
+    v, T = 1e-4, 0.01  # dq = 1e-6 rad, a thousandth of the presliding displacement
+    sol = solve_ivp(bristle_ode, (0, T), [0.0], args=(v, law.sigma0), method="Radau", rtol=1e-12, atol=1e-16)
+    z = sol.y[0, -1]
+    zdot = lugre_rate(np.array([z]), np.array([0.0]), np.array([FS]), law.sigma0)
+    tau = lugre_torque(np.array([z]), zdot, np.array([0.0]), np.array([FV]), law)
+    np.testing.assert_allclose(tau / (v * T), [law.sigma0], rtol=2e-3)
+
+
+def test_rollout_matches_scipy_on_finger3():
+    """finger3 from rest under a step of joint torque, its bristles loaded then sliding: the RK4
+    rollout against solve_ivp (LSODA) of the law written here in numpy on Pinocchio's frictionless dynamics (springs
+    and gravity), within 1e-3 degree."""
+    model = ad.Model.alpes("finger3", friction=True)
+    free = ad.Model.alpes("finger3", friction=False)
+    law = LuGre()
+    n, dt, N = 3, 1e-3, 200
+    q_eq = np.array([0.4, 0.6, 0.5])
+    tau = free.gravity_torque(q_eq) + np.array([3e-3, 1e-3, 3e-4])
+
+    def rhs(s, y):
+        q, v, z = y[:n], y[n:2 * n], y[2 * n:]
+        zd = v - law.sigma0 * np.abs(v) * z / FS
+        f = law.sigma0 * z + law.sigma1 * zd + FV * v
+        return np.r_[v, free.forward_dynamics(q, v, tau - f), zd]
+
+    sol = solve_ivp(rhs, (0, N * dt), np.r_[q_eq, np.zeros(2 * n)], method="LSODA", t_eval=dt * np.arange(N + 1),
+                    rtol=1e-10, atol=1e-13)
+    ref = sol.y.T
+    res = simulate_lugre(model, np.r_[q_eq, np.zeros(n)], np.tile(tau, (N, 1)), dt, law)
+    moved = np.ptp(ref[:, :n], axis=0)
+    assert moved[0] > 1e-2 and moved.min() > FS / law.sigma0  # every joint slid (the coupled ones dragged along)
+    np.testing.assert_allclose(np.degrees(res.q), np.degrees(ref[:, :n]), atol=1e-3)
+    np.testing.assert_allclose(res.z, ref[:, 2 * n:], atol=2e-6)
+
+
+def test_parameter_file_law_round_trip(tmp_path):
+    """friction.law / sigma0 / sigma1 written and read back; the model's law follows the file; tanh without them."""
+    p = load_params()
+    assert p.friction_law == "tanh" and lugre_of(ad.Model.alpes("finger3", friction=True)) is None
+    why = "a presliding displacement of 0.5 mrad"
+    q = with_values(p, {"friction.law": Param("lugre", "-", "assumed", why),
+                        "friction.sigma0": Param(1.0, "N m/rad", "assumed", why),
+                        "friction.sigma1": Param(4e-3, "N m s/rad", "assumed", why)})
+    assert (q.friction_law, q.sigma0, q.sigma1) == ("lugre", 1.0, 4e-3)
+    path = tmp_path / "lugre.toml"
+    path.write_text(params_toml(q.raw))
+    m = ad.Model.alpes("finger3", friction=True, params=path)
+    assert lugre_of(m) == LuGre(1.0, 4e-3)
+    dm = DiscreteModel(StateSpace(m, input="motor", output="encoder"), 1e-3, substeps=2, friction_law="lugre")
+    assert dm.nz == 9 and dm.names[-3:] == tuple(f"bristle_{j}" for j in m.joint_names) and dm.law.sigma0 == 1.0
+
+
+@pytest.mark.parametrize("field, entry, needle", [
+    ("friction.law", {"value": "dahl", "unit": "-", "source": "assumed", "reason": "r"},
+     "friction.law: expected one of tanh, lugre, got 'dahl'"),
+    ("friction.law", {"value": 3, "unit": "-", "source": "assumed", "reason": "r"}, "friction.law: expected one of"),
+    ("friction.sigma0", {"value": -1.0, "unit": "N m/rad", "source": "assumed", "reason": "r"},
+     "friction.sigma0: value must be > 0"),
+    ("friction.sigma0", {"value": 0.0, "unit": "N m/rad", "source": "assumed", "reason": "r"},
+     "friction.sigma0: value must be > 0"),
+    ("friction.sigma0", {"value": "x", "unit": "N m/rad", "source": "assumed", "reason": "r"},
+     "friction.sigma0: value must be a number"),
+    ("friction.sigma0", {"value": 1.0, "unit": "N m/deg", "source": "assumed", "reason": "r"},
+     "friction.sigma0.unit: the value is read in 'N m/rad'"),
+    ("friction.sigma1", {"value": float("nan"), "unit": "N m s/rad", "source": "assumed", "reason": "r"},
+     "friction.sigma1: value must be finite"),
+])
+def test_bad_file_values(tmp_path, field, entry, needle):
+    """A bad law or bristle constant in the file: one ModelError line naming the field."""
+    import tomllib
+
+    data = load_params().raw
+    text = params_toml(data)
+    key = field.split(".")[1]
+    val = entry["value"]
+    lit = '"dahl"' if isinstance(val, str) and val == "dahl" else ('"x"' if isinstance(val, str) else
+                                                                  ("nan" if val != val else repr(val)))
+    line = f'{key} = {{ value = {lit}, unit = "{entry["unit"]}", source = "assumed", reason = "r" }}\n'
+    text = text.replace("[friction]\n", "[friction]\n" + line)
+    tomllib.loads(text)
+    path = tmp_path / "bad.toml"
+    path.write_text(text)
+    with pytest.raises(ModelError, match="^" + needle.replace("(", r"\(").replace(".", r"\.")) as e:
+        load_params(path)
+    assert "\n" not in str(e.value)
+
+
+@pytest.mark.parametrize("kw, needle", [
+    ({"sigma0": -1.0}, "friction.sigma0: expected a finite number > 0 N m/rad"),
+    ({"sigma0": float("inf")}, "friction.sigma0: expected a finite number > 0"),
+    ({"sigma1": 0.0}, "friction.sigma1: expected a finite number > 0 N m s/rad"),
+    ({"sigma1": "a"}, "friction.sigma1: expected a finite number > 0"),
+    ({"sigma0": True}, "friction.sigma0: expected a finite number > 0"),
+])
+def test_bad_law_values(kw, needle):
+    with pytest.raises(ModelError, match=needle):
+        LuGre(**kw)
+
+
+def test_bad_simulation_inputs():
+    model = ad.Model.alpes("finger3", friction=True)
+    x0 = np.r_[0.4, 0.6, 0.5, 0, 0, 0]
+    with pytest.raises(InputError, match="inputs: contains NaN or inf"):
+        simulate_lugre(model, x0, np.full((3, 3), np.nan), 1e-3)
+    with pytest.raises(InputError, match=r"inputs: expected shape \(N, 3\)"):
+        simulate_lugre(model, x0, np.zeros((3, 2)), 1e-3)
+    with pytest.raises(InputError, match="substeps: expected an integer"):
+        simulate_lugre(model, x0, np.zeros((3, 3)), 1e-3, substeps=0)
+    with pytest.raises(InputError, match="z0"):
+        simulate_lugre(model, x0, np.zeros((3, 3)), 1e-3, z0=[0.0])
+    with pytest.raises(InputError, match="law: expected a LuGre"):
+        simulate_lugre(model, x0, np.zeros((3, 3)), 1e-3, law=0.5)
+    assert lugre_substeps(model, LuGre(), 1e-3) >= 4
+
+
+@pytest.fixture(scope="module")
+def stuck_recording():
+    """finger2 on MuJoCo with stiff stick-slip (0.5 ms solreffriction) and 10 times the file's F_s (a 3 degree dead
+    band per joint), a torque that ramps up, holds, ramps half-way down and holds (4 s): the joints stay stuck away
+    from their frictionless rest (the stick law's test of tests/test_stick_observer.py, with its own seeds)."""
+    from alpes_dyn.control.plants import PlantEffects, mujoco_recording
+    from alpes_dyn.estimation.experiments.draws import perturbed_params
+    from alpes_dyn.model.mjcf import STICTION_TIMECONST
+
+    p = perturbed_params(spread=0.2, seed=9661)
+    p = dataclasses.replace(p, finger=dataclasses.replace(p.finger, F_s=10 * p.finger.F_s))
+    t = 1e-3 * np.arange(4001)
+    u = np.interp(t, [0, 0.3, 0.8, 1.8, 2.3, 4.0], [0.020, 0.020, 0.028, 0.028, 0.024, 0.024])[:, None]
+    rec = mujoco_recording("finger2", p, u, 1e-3, effects=PlantEffects(stiction=STICTION_TIMECONST), seed=9662)
+    # the file's law: LuGre with the presliding displacement F_s / sigma0 at 1 mrad of this friction
+    p = dataclasses.replace(p, friction_law="lugre", sigma0=10 * p.sigma0)
+    return rec, ad.Model.alpes("finger2", friction=True, params=p)
+
+
+def test_ekf_holds_stuck_joints_on_mujoco(stuck_recording):
+    """The EKF with the true file on MuJoCo's stick-slip: the smooth tanh law creeps back to the frictionless rest
+    (over 1 degree RMS on every joint); the LuGre law, the file's default, holds the stuck joints within 0.5 degree."""
+    from alpes_dyn.estimation.observers.replay import estimate_recording
+
+    rec, model = stuck_recording
+    smooth = np.degrees(estimate_recording(rec, model, "ekf", friction_law="smooth").rmse)
+    res = estimate_recording(rec, model, "ekf")
+    lugre = np.degrees(res.rmse)
+    assert np.all(smooth > 1.0), smooth
+    assert np.all(lugre < 0.5), lugre
+    assert res.settings["friction_law"] == "lugre" and res.estimate.z.shape[1] == 6
