@@ -83,7 +83,7 @@ def test_rollout_matches_scipy_on_finger3():
     moved = np.ptp(ref[:, :n], axis=0)
     assert moved[0] > 1e-2 and moved.min() > FS / law.sigma0  # every joint slid (the coupled ones dragged along)
     np.testing.assert_allclose(np.degrees(res.q), np.degrees(ref[:, :n]), atol=1e-3)
-    np.testing.assert_allclose(res.z, ref[:, 2 * n:], atol=2e-6)
+    np.testing.assert_allclose(res.z, ref[:, 2 * n:], atol=1e-5)  # 1 % of F_s / sigma0: the split step's O(h)
 
 
 def test_parameter_file_law_round_trip(tmp_path):

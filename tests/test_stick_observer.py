@@ -206,8 +206,8 @@ def test_torque_average_is_causal_and_checked(stick_slip_recording):
     for bad in (0, 101, 2.5, True):
         with pytest.raises(InputError, match="torque_window: expected a whole number of samples from 1 to 100"):
             averaged(rec, bad)
-    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, got 'lugre'"):
-        estimate_recording(rec, model, "ekf", friction_law="lugre")
+    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, lugre, got 'dahl'"):
+        estimate_recording(rec, model, "ekf", friction_law="dahl")
 
 
 def test_prior_is_the_dead_band():

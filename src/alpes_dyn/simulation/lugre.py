@@ -1,10 +1,12 @@
-"""Simulation with the LuGre friction (:mod:`alpes_dyn.model.friction`): the state [q; qd; z] stepped by classical RK4.
+"""Simulation with the LuGre friction (:mod:`alpes_dyn.model.friction`): the state [q; qd; z] stepped by a split step.
 
-The law is stiff where sigma0 is: a stuck joint oscillates on its bristle at sqrt(sigma0 / I) (damped by sigma1 / I),
-and a sliding one relaxes its bristle at the rate sigma0 |qd| / F_s (eq. L1). :func:`lugre_substeps` takes RK4
-steps short enough for the fastest of these (h lambda <= :data:`~alpes_dyn.simulation.integrate.RK4_REACH`) up to a
-joint speed ``v_max``. :func:`simulate_lugre` rolls a whole input record out in one CasADi call (``mapaccum`` of the
-step: no Python loop over the samples).
+The law is stiff twice over: a sliding joint relaxes its bristle at the rate sigma0 |qd| / F_s (eq. L1: 2e4 1/s at
+20 rad/s with the default sigma0 and the Alpes F_s), and a stuck joint oscillates on it at sqrt(sigma0 / I), damped
+by sigma1 / I. Each step of h seconds (:func:`~alpes_dyn.symbolic.lugre.lugre_substep`) relaxes the bristles
+exactly at the step's velocity, then takes one classical RK4 step of [q; qd] with them held: the first stiffness
+costs nothing, whatever the speed; :func:`lugre_substeps` takes steps short enough for the second (h lambda <=
+:data:`~alpes_dyn.simulation.integrate.RK4_REACH`). :func:`simulate_lugre` rolls a whole input record out in one
+CasADi call (``mapaccum`` of the step: no Python loop over the samples).
 """
 
 from __future__ import annotations
@@ -20,62 +22,57 @@ from ..checks import as_float_array
 from ..errors import InputError
 from ..model.friction import LuGre
 from ..model.robot import Model
-from ..symbolic.lugre import lugre_derivatives
+from ..symbolic.lugre import lugre_substep
 from ..symbolic.statespace import StateSpace
-from .integrate import RK4_REACH, _check_dt, _n_known_inputs, as_statespace, rk4_expression
+from .integrate import RK4_REACH, _check_dt, _n_known_inputs, as_statespace
 
-__all__ = ["LUGRE_SPEED", "lugre_rate_bound", "lugre_substeps", "lugre_step_function", "LuGreResult",
+__all__ = ["lugre_rate_bound", "lugre_substeps", "lugre_step_function", "LuGreResult",
            "simulate_lugre"]
 
-LUGRE_SPEED = 20.0
-"""rad/s: the joint speed up to which :func:`lugre_substeps` keeps the bristle's relaxation sigma0 |qd| / F_s
-stable (finger3 under a 1 Hz swing of its motor torque by 3 mN m reaches 13 rad/s on its first joint)."""
-
-
-def lugre_rate_bound(model: Model, law: LuGre, v_max: float = LUGRE_SPEED) -> float:
-    """lambda, 1/s: the fastest rate of the LuGre dynamics, the largest of the bristle's relaxation
-    sigma0 v_max / min F_s, the presliding mode's sqrt(eig(A^-1 sigma0)) and its damping eig(A^-1 (sigma1 + F_v))
-    (A the mass matrix with the rotors, at the joints' mid-range and at q = 0); 0 without dry friction."""
+def lugre_rate_bound(model: Model, law: LuGre) -> float:
+    """lambda, 1/s: the fastest rate of the split step's RK4 part, the larger of the presliding mode's
+    sqrt(eig(A^-1 sigma0)) and its damping eig(A^-1 (2 sigma1 + F_v)) (d(sigma1 z')/dqd is at most 2 sigma1 on a
+    bristle within its presliding range; A the mass matrix with the rotors, at the joints' mid-range and at q = 0);
+    0 without dry friction."""
     ex = model.extras
-    Fs = ex.coulomb[ex.coulomb > 0]
-    if Fs.size == 0:
+    if not np.any(ex.coulomb > 0):
         return 0.0
-    rate = law.sigma0 * float(v_max) / float(Fs.min())
     lo = np.where(np.isfinite(model.lower) & (np.abs(model.lower) < 1e3), model.lower, 0.0)
     hi = np.where(np.isfinite(model.upper) & (np.abs(model.upper) < 1e3), model.upper, 0.0)
     dry = (ex.coulomb > 0).astype(float)
+    rate = 0.0
     for q in (0.5 * (lo + hi), np.zeros(model.n)):  # two configurations
-        L = np.linalg.cholesky(model.inertia_matrix(q))
-        Li = np.linalg.inv(L)
+        Li = np.linalg.inv(np.linalg.cholesky(model.inertia_matrix(q)))
         k = float(np.linalg.eigvalsh(Li @ np.diag(law.sigma0 * dry) @ Li.T).max())
-        c = float(np.linalg.eigvalsh(Li @ np.diag(law.sigma1 * dry + ex.viscous) @ Li.T).max())
+        c = float(np.linalg.eigvalsh(Li @ np.diag(2 * law.sigma1 * dry + ex.viscous) @ Li.T).max())
         rate = max(rate, math.sqrt(max(k, 0.0)), c)
     return rate
 
 
-def lugre_substeps(model: Model, law: LuGre, dt: float, minimum: int = 1, v_max: float = LUGRE_SPEED) -> int:
-    """RK4 steps per period ``dt`` (s) that keep h lambda <= RK4_REACH on :func:`lugre_rate_bound`; at least
-    ``minimum``."""
+def lugre_substeps(model: Model, law: LuGre, dt: float, minimum: int = 4) -> int:
+    """Split steps per period ``dt`` (s) that keep h lambda <= RK4_REACH on :func:`lugre_rate_bound`; at least
+    ``minimum`` (4: a step of 0.25 ms at 1 kHz, the smooth law's)."""
     dt = _check_dt(dt)
-    return max(int(minimum), int(math.ceil(dt * lugre_rate_bound(model, law, v_max) / RK4_REACH - 1e-9)))
+    return max(int(minimum), int(math.ceil(dt * lugre_rate_bound(model, law) / RK4_REACH - 1e-9)))
 
 
 def lugre_step_function(ss: StateSpace, law: LuGre, dt: float, substeps: int = 1) -> cs.Function:
-    """``step(x (3n,), w (m[+3],)) -> x_next``: ``substeps`` RK4 steps of [q; qd; z] over ``dt`` s with the inputs
-    w = [u; F] held (``ss``'s input torque, tip or contacts)."""
+    """``step(x (3n,), w (m[+3],)) -> x_next``: ``substeps`` split steps (module docstring) of [q; qd; z] over
+    ``dt`` s with the inputs w = [u; F] held (``ss``'s input torque, tip or contacts)."""
     dt = _check_dt(dt)
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or not 1 <= substeps <= 1000:
         raise InputError(f"substeps: expected an integer in [1, 1000], got {substeps!r}")
     n = ss.n
     x, w = cs.SX.sym("x", 3 * n), cs.SX.sym("w", _n_known_inputs(ss))
-    q, v, z = x[:n], x[n:2 * n], x[2 * n:]
-    tau = ss.input_torque(q, w[: ss.n_inputs], v)
-    qdd, zdot = lugre_derivatives(ss, law, q, v, z, tau, w[ss.n_inputs:] if ss.force else None)
-    f = cs.Function("f", [x, w], [cs.cse(cs.vertcat(v, qdd, zdot))])
+
+    def torques(q: cs.SX, v: cs.SX) -> tuple[cs.SX, Any]:
+        return ss.input_torque(q, w[: ss.n_inputs], v), (w[ss.n_inputs:] if ss.force else None)
+
+    one = cs.Function("one", [x, w], [cs.cse(cs.vertcat(*lugre_substep(ss, law, x[:n], x[n:2 * n], x[2 * n:],
+                                                                        torques, dt / int(substeps))))])
     xn = x
-    h = dt / int(substeps)
     for _ in range(int(substeps)):  # unrolled once, when the step is built
-        xn = rk4_expression(f, xn, w, h)
+        xn = one(xn, w)
     return cs.Function("lugre_step", [x, w], [xn], ["x", "w"], ["x_next"])
 
 
@@ -109,7 +106,7 @@ def simulate_lugre(system: Model | StateSpace, x0: Any, inputs: Any, dt: float, 
     z0 : array_like, optional
         (n,) initial bristle deflections, rad (default 0: unloaded).
     substeps : int, optional
-        RK4 steps per period (default :func:`lugre_substeps`).
+        Split steps per period (default :func:`lugre_substeps`).
     input : str
         ``"joint"`` or ``"motor"``, the state space's input (for a Model).
 

@@ -9,7 +9,8 @@ Three friction laws (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, ``fricti
   of MuJoCo's ``frictionloss``. On a model without dry friction (F_s = 0 everywhere) it is the smooth law's RK4;
 * ``"lugre"``: the LuGre law (:mod:`alpes_dyn.model.friction`, the model's file's sigma0 and sigma1, else the
   defaults), its bristle deflections z (rad, one per joint, ``bristle_<joint>``) the last n entries of the state,
-  ``substeps`` RK4 steps per period (:func:`~alpes_dyn.simulation.lugre.lugre_substeps`). A stuck joint is a bristle
+  ``substeps`` split steps per period (the bristles relaxed exactly, then RK4:
+  :func:`~alpes_dyn.symbolic.lugre.lugre_substep`; :func:`~alpes_dyn.simulation.lugre.lugre_substeps`). A stuck joint is a bristle
   deflected by less than F_s / sigma0: the filter's Gaussian holds it.
 
 Either way the model may carry gains and disturbance torques as constant states (``parameters``).
@@ -27,7 +28,7 @@ from ...errors import InputError, ModelError
 from ...simulation.integrate import _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from ...model.friction import LuGre, lugre_of
 from ...simulation.stick import check_friction_law, stick_step_expression
-from ...symbolic.lugre import lugre_derivatives
+from ...symbolic.lugre import lugre_substep
 from ...symbolic.lifted import lift_constants
 from ...symbolic.statespace import StateSpace
 
@@ -108,6 +109,8 @@ class DiscreteModel:
         # would merge equal values
         if self.friction_law == "stick":
             one, self.values = lift_constants(cs.Function("stick", [z, w], [self._stick(z, w, h)]))
+        elif self.law is not None:
+            one, self.values = lift_constants(cs.Function("lugre", [z, w], [self._lugre(z, w, h)]))
         else:
             one, self.values = lift_constants(cs.Function("rhs", [z, w], [self._rhs(z, w)]))
         p = cs.SX.sym("p", self.values.size)
@@ -116,7 +119,7 @@ class DiscreteModel:
         # for the same instructions: each call is already one node per instruction of its merged expression)
         merged = cs.Function("one", [z, w, p], [cs.cse(one(z, w, p))])
         advance: Callable[[Any], Any] = (
-            (lambda x: merged(x, w, p)) if self.friction_law == "stick"
+            (lambda x: merged(x, w, p)) if self.friction_law in ("stick", "lugre")
             else (lambda x: rk4_expression(lambda y, u: merged(y, u, p), x, w, h)))
         zn = z
         for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
@@ -148,11 +151,19 @@ class DiscreteModel:
 
     def _rhs(self, z: cs.SX, w: cs.SX) -> cs.SX:
         q, v, tau, F = self._torques(z, w)
-        if self.law is not None:  # the LuGre law: its bristles the state's last n entries
-            qdd, zb = lugre_derivatives(self.system, self.law, q, v, z[self.nz - self.nb:], tau, F)
-            return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)), zb)
         qdd = joint_accelerations(self.system, q, v, tau, F)
         return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))
+
+    def _lugre(self, z: cs.SX, w: cs.SX, h: float) -> cs.SX:
+        """z after one split step of h s of the LuGre law (:func:`~alpes_dyn.symbolic.lugre.lugre_substep`; the
+        parameters carried over, the bristles z's last n entries)."""
+        n, rest = self.system.n, z[self.nx: self.nz - self.nb]
+
+        def torques(q: cs.SX, v: cs.SX) -> tuple[cs.SX, Any]:
+            return self._torques(cs.vertcat(q, v, rest), w)[2:]
+
+        q, v, zb = lugre_substep(self.system, self.law, z[:n], z[n: self.nx], z[self.nz - self.nb:], torques, h)
+        return cs.vertcat(q, v, rest, zb)
 
     def _stick(self, z: cs.SX, w: cs.SX, h: float) -> cs.SX:
         """z after one step of h s of the stick law (the parameters carried over)."""
