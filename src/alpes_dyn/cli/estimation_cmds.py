@@ -25,7 +25,8 @@ from .common import (UntrustedFitWarning, _check_model_options, _check_run_files
 FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh(v/v_s), the default), stick (the "
                      "time-stepping Coulomb law, which holds a joint at rest under a torque below F_s; the torque "
                      "read through a 10-sample moving average) or lugre (a bristle state per joint, the parameter "
-                     "file's friction.sigma0/sigma1; the default when the file's friction.law is lugre)")
+                     "file's friction.sigma0/sigma1, the torque averaged likewise; the default when the file's "
+                     "friction.law is lugre)")
 """``estimate --friction-law``'s help (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
 
 
@@ -160,7 +161,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
              + ("; a disturbance torque per motor" if args.disturbance else "")
              + (f"; stick-slip friction law, the torque averaged over {res.settings['torque_window_samples']} samples"
                 if res.settings["friction_law"] == "stick" else "")
-             + ("; LuGre friction law (a bristle state per joint)" if res.settings["friction_law"] == "lugre" else "")]
+             + (f"; LuGre friction law (a bristle state per joint), the torque averaged over "
+                f"{res.settings['torque_window_samples']} samples" if res.settings["friction_law"] == "lugre" else "")]
     from_file = [w for w, given, v in (
         (f"torque delay {res.settings['torque_delay_samples']} samples", args.torque_delay,
          res.settings["torque_delay_samples"]),
