@@ -229,3 +229,40 @@ def test_mujoco_dcmotor_lugre_is_the_same_law():
     assert np.ptp(res.q, axis=0).min() > np.radians(20)
     np.testing.assert_allclose(np.degrees(res.q[1:]), np.degrees(np.array(Q)), atol=0.02)
     np.testing.assert_allclose(res.z[1:], np.array(Z), atol=2e-4)
+
+
+def test_c_export_of_the_lugre_observer_equals_the_filter(tmp_path):
+    """The observer's C export (estimation.cexport) of a LuGre EKF on finger2, compiled with the system compiler,
+    gives the filter's numbers over 300 steps of a torque that sticks and slips."""
+    import shutil
+    import subprocess
+
+    from alpes_dyn.estimation.cexport.cexport import main_input, read_main_output, write_c_observer
+    from alpes_dyn.estimation.observers.observers import make_observer
+
+    cc = shutil.which("cc") or shutil.which("gcc")
+    if cc is None:
+        pytest.skip("no C compiler")
+    m = ad.Model.alpes("finger2", friction=True, params=dataclasses.replace(load_params(), friction_law="lugre"))
+    ss = StateSpace(m, input="motor", output="encoder")
+    span = m.extras.coulomb / lugre_of(m).sigma0
+    filt = make_observer("ekf", ss, 1e-3, friction_law="lugre", substeps=4,
+                         process_noise=[1e-18] * 2 + [4e-8] * 2 + list((1e-3 * span) ** 2),
+                         measurement_noise=[2e-7], input_noise=[2.5e-7])
+    q0 = m.static_equilibrium(ss.B @ [0.02])
+    z0, P0 = np.r_[q0, 0.0, 0.0, 0.0, 0.0], np.r_[1e-4, 1e-4, 1.0, 1.0, span**2]
+    t = 1e-3 * np.arange(300)
+    W = (0.02 + 0.003 * np.sin(2 * np.pi * 4 * t))[:, None]
+    y0 = np.asarray(ss.h(np.r_[q0, 0.0, 0.0])).reshape(-1)
+    Y = y0 + np.r_[0.0, np.cumsum(np.full(300, 2e-5))][:, None]  # the encoder creeping on: (301, 1)
+    est = filt.run(z0, P0, W, Y)
+    d = write_c_observer(filt, tmp_path / "ekf", z0=z0, P0=P0)["main.c"].parent
+    exe = d / "alpes_ekf_main"
+    subprocess.run([cc, "-O1", "-std=c99", "-o", str(exe), str(d / "main.c"), str(d / "alpes_ekf.c"), "-lm"],
+                   check=True, capture_output=True, text=True, timeout=600)
+    (tmp_path / "in.txt").write_text(main_input(z0, P0, Y[0], W, Y[1:]))
+    out = subprocess.run([str(exe), str(tmp_path / "in.txt")], check=True, capture_output=True, text=True).stdout
+    Z, P = read_main_output(out, filt.nz)
+    assert Z.shape == est.z.shape == (301, 6)
+    np.testing.assert_allclose(Z, est.z, rtol=0, atol=1e-10)
+    np.testing.assert_allclose(P, est.P, rtol=0, atol=1e-10)
