@@ -20,7 +20,7 @@ import numpy as np
 
 from ..checks import as_float_array
 from ..errors import InputError
-from ..model.friction import LuGre
+from ..model.friction import LuGre, lugre_of
 from ..model.robot import Model
 from ..symbolic.lugre import lugre_substep
 from ..symbolic.statespace import StateSpace
@@ -119,8 +119,6 @@ def simulate_lugre(system: Model | StateSpace, x0: Any, inputs: Any, dt: float, 
     InputError
         A shape or value of ``x0``, ``z0``, ``inputs`` or ``substeps`` out of place, named.
     """
-    from ..model.friction import lugre_of
-
     ss = as_statespace(system, input=input)
     n, m = ss.n, ss.n_inputs
     law = law if law is not None else (lugre_of(ss.model) or LuGre())

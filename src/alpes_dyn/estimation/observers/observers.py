@@ -165,8 +165,9 @@ class KalmanFilter(Rebuilt):
         Steps per sample period in the discretised model (default 1; use the simulation's with the
         smooth friction, whose time constant is a fraction of a millisecond).
     friction_law:
-        ``"smooth"`` (default; RK4 on F_s tanh(v / v_s)) or ``"stick"`` (the time-stepping Coulomb law that holds a
-        joint at rest under a net torque below F_s, :mod:`alpes_dyn.simulation.stick`): the
+        ``"smooth"`` (default; RK4 on F_s tanh(v / v_s)), ``"stick"`` (the time-stepping Coulomb law that holds a
+        joint at rest under a net torque below F_s, :mod:`alpes_dyn.simulation.stick`) or ``"lugre"`` (a bristle
+        state per joint appended to z, :mod:`alpes_dyn.model.friction`): the
         :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`'s.
     stops:
         The joints' end stops in the model (:class:`~alpes_dyn.model.stops.JointStops`; default none, eq. 3.3): a
