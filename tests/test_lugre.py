@@ -188,7 +188,7 @@ def stuck_recording():
 def test_ekf_holds_stuck_joints_on_mujoco(stuck_recording):
     """The EKF with the true file on MuJoCo's stick-slip: the smooth tanh law creeps back to the frictionless rest
     (over 1 degree RMS on every joint); the LuGre law, the file's default, holds the stuck joints within 0.4 degree
-    (0.27 measured; the stick law's time stepping 0.03, tests/test_stick_observer.py)."""
+    (0.27 measured, the UKF's too; the stick law's time stepping 0.03, tests/test_stick_observer.py)."""
     from alpes_dyn.estimation.observers.replay import estimate_recording
 
     rec, model = stuck_recording
@@ -199,6 +199,8 @@ def test_ekf_holds_stuck_joints_on_mujoco(stuck_recording):
     assert np.all(lugre < 0.4), lugre
     assert res.settings["friction_law"] == "lugre" and res.estimate.z.shape[1] == 6
     assert res.settings["torque_window_samples"] == 10
+    ukf = np.degrees(estimate_recording(rec, model, "ukf").rmse)  # the same law through sigma points
+    assert np.all(ukf < 0.4), ukf
 
 
 def test_mujoco_dcmotor_lugre_is_the_same_law():
