@@ -10,8 +10,8 @@ Three friction laws (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, ``fricti
 * ``"lugre"``: the LuGre law (:mod:`alpes_dyn.model.friction`, the model's file's sigma0 and sigma1, else the
   defaults), its bristle deflections z (rad, one per joint, ``bristle_<joint>``) the last n entries of the state,
   ``substeps`` split steps per period (the bristles relaxed exactly, then RK4:
-  :func:`~alpes_dyn.symbolic.lugre.lugre_substep`; :func:`~alpes_dyn.simulation.lugre.lugre_substeps`). A stuck joint is a bristle
-  deflected by less than F_s / sigma0: the filter's Gaussian holds it.
+  :func:`~alpes_dyn.symbolic.lugre.lugre_substep`; :func:`~alpes_dyn.simulation.lugre.lugre_substeps`). A stuck
+  joint is a bristle deflected by less than F_s / sigma0: the filter's Gaussian holds it.
 
 Either way the model may carry gains and disturbance torques as constant states (``parameters``).
 """

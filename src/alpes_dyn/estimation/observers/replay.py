@@ -363,7 +363,8 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         the file's gravity (``environment.gravity``), which the model holds; ``tilt`` turns it further.
     friction_law: the observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
         F_s tanh(v / v_s), ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
-        (:mod:`alpes_dyn.simulation.stick`), or ``"lugre"``, a bristle state per joint (:mod:`alpes_dyn.model.friction`).
+        (:mod:`alpes_dyn.simulation.stick`), or ``"lugre"``, a bristle state per joint
+        (:mod:`alpes_dyn.model.friction`).
         Default: ``"lugre"`` where the model's parameter file says ``friction.law = "lugre"``, else ``"smooth"``.
     torque_window: samples of the causal moving average of the torque the observer reads (:func:`averaged`; its
         noise, given or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the
