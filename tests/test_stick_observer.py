@@ -148,8 +148,8 @@ def test_step_is_built_once_per_structure(finger3):
 
 def test_friction_law_checked(finger3):
     _, ss, _ = finger3
-    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick"):
-        DiscreteModel(ss, H, friction_law="lugre")
+    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, lugre"):
+        DiscreteModel(ss, H, friction_law="dahl")
     with pytest.raises(InputError, match="friction_law"):
         make_observer("ekf", ss, H, process_noise=1e-9, measurement_noise=1e-7, friction_law=None)
     # a model without dry friction: the stick law is the smooth law's RK4
@@ -206,8 +206,8 @@ def test_torque_average_is_causal_and_checked(stick_slip_recording):
     for bad in (0, 101, 2.5, True):
         with pytest.raises(InputError, match="torque_window: expected a whole number of samples from 1 to 100"):
             averaged(rec, bad)
-    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, got 'lugre'"):
-        estimate_recording(rec, model, "ekf", friction_law="lugre")
+    with pytest.raises(InputError, match="friction_law: expected one of smooth, stick, lugre, got 'dahl'"):
+        estimate_recording(rec, model, "ekf", friction_law="dahl")
 
 
 def test_prior_is_the_dead_band():

@@ -23,9 +23,11 @@ from .common import (UntrustedFitWarning, _check_model_options, _check_run_files
                      data_label, parse_vector, read_data)
 
 
-FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh(v/v_s), the default) or stick (the "
+FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh(v/v_s), the default), stick (the "
                      "time-stepping Coulomb law, which holds a joint at rest under a torque below F_s; the torque "
-                     "read through a 10-sample moving average)")
+                     "read through a 10-sample moving average) or lugre (a bristle state per joint, the parameter "
+                     "file's friction.sigma0/sigma1, the torque averaged likewise; the default when the file's "
+                     "friction.law is lugre)")
 """``estimate --friction-law``'s help (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
 
 
@@ -114,6 +116,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
+    from ..model.friction import lugre_of
     from ..simulation.stick import FRICTION_LAWS
 
     for flag, dest, default in _SCENARIO_ONLY:
@@ -121,13 +124,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
             hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
             raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
-    law = "smooth" if args.friction_law is None else args.friction_law
-    _one_of(law, FRICTION_LAWS, "--friction-law", "friction law")
+    law = args.friction_law
+    if law is not None:
+        _one_of(law, FRICTION_LAWS, "--friction-law", "friction law")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     limit = _sigma_limit(args.sigma_limit)
     t0 = time.perf_counter()
     notes = _trust_notes(args, [("--spec", args.spec) if _is_urdf_path(args.model) else ("--params", args.params)])
     model, whole = _data_model(args)
+    law = law if law is not None else ("lugre" if lugre_of(model) is not None else "smooth")  # the file's law
     delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
     if delay is not None and not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
@@ -152,7 +157,9 @@ def _estimate_data(args: argparse.Namespace) -> int:
              + (" (estimated from the recording)" if args.torque_noise is None else "")
              + ("; a disturbance torque per motor" if args.disturbance else "")
              + (f"; stick-slip friction law, the torque averaged over {res.settings['torque_window_samples']} samples"
-                if res.settings["friction_law"] == "stick" else "")]
+                if res.settings["friction_law"] == "stick" else "")
+             + (f"; LuGre friction law (a bristle state per joint), the torque averaged over "
+                f"{res.settings['torque_window_samples']} samples" if res.settings["friction_law"] == "lugre" else "")]
     from_file = [w for w, given, v in (
         (f"torque delay {res.settings['torque_delay_samples']} samples", args.torque_delay,
          res.settings["torque_delay_samples"]),

@@ -62,6 +62,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError, ModelError
+from .friction import lugre_of
 from .mimic import tree_model
 
 __all__ = ["model_mjcf", "INTEGRATORS", "STOP_IMPEDANCE", "stop_solref"]
@@ -174,10 +175,11 @@ def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, 
         return f"<joint {' '.join(attrs)}/>"
     ex, e = model.extras, model.joint_names.index(name)
     attrs += [f'stiffness="{_f(ex.stiffness[e])}"', f'springref="{_f(ex.rest[e]) if ex.rest[e] != 0 else "0"}"']
+    lugre = lugre_of(model) is not None  # the dry friction is then a passive dcmotor's LuGre (_lugre_actuators)
     for attr, values in (("armature", ex.armature), ("frictionloss", ex.coulomb), ("damping", ex.viscous)):
-        if values[e] != 0:
+        if values[e] != 0 and not (lugre and attr == "frictionloss"):
             attrs.append(f'{attr}="{_f(values[e])}"')
-    if stiction is not None and ex.coulomb[e] != 0:
+    if stiction is not None and ex.coulomb[e] != 0 and not lugre:
         attrs.append(stiction_attributes(stiction))
     return f"<joint {' '.join(attrs)}/>"
 
@@ -350,11 +352,26 @@ def _transmission(model: Any, sites: dict[str, str], tendon: Any = None) -> list
             sensors += [f"    <tendonpos name={_q('encoder_' + motor)} tendon={_q(motor)}/>",
                         f"    <actuatorfrc name={_q('torque_' + motor)} actuator={_q(motor)}/>"]
     sensors += [f"    <touch name={_q('touch_' + t)} site={_q(s)}/>" for t, s in sites.items()]
+    actuators += _lugre_actuators(model)
     out = []
     for tag, items in (("tendon", tendons), ("actuator", actuators), ("sensor", sensors)):
         if items:
             out += [f"  <{tag}>", *items, f"  </{tag}>"]
     return out
+
+
+def _lugre_actuators(model: Any) -> list[str]:
+    """The LuGre law of the model's file (:mod:`~alpes_dyn.model.friction`) as MuJoCo 4's: one passive ``dcmotor``
+    (``input="none"``, no electrical branch: ``motorconst="0 0"``) per joint with dry friction, named
+    ``lugre_<joint>``, its ``lugre`` = "sigma0 sigma1 F_s F_s 1" (static = Coulomb level: the Stribeck velocity is
+    then moot; F_v stays the joint's ``damping``); none with the tanh law."""
+    law = lugre_of(model)
+    if law is None:
+        return []
+    ex = model.extras
+    return [f'    <dcmotor name={_q("lugre_" + j)} joint={_q(j)} input="none" motorconst="0 0" resistance="1" '
+            f'lugre="{_f(law.sigma0)} {_f(law.sigma1)} {_f(ex.coulomb[i])} {_f(ex.coulomb[i])} 1"/>'
+            for i, j in enumerate(model.joint_names) if ex.coulomb[i] > 0]
 
 
 def _check_args(timestep: Any, integrator: Any, tip_radius: Any) -> None:

@@ -25,7 +25,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import re
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
@@ -35,7 +34,9 @@ import numpy as np
 
 from ..errors import ModelError
 from ..fileio import atomic_write, load_toml, read_text
-from ..limits import check_not_subnormal, check_physical
+from ..limits import check_physical
+from .friction import SIGMA0, SIGMA1
+from .param_values import check_value
 
 __all__ = ["Param", "ChainParams", "HandParams", "SOURCES", "OVERRIDE_FIELDS", "load_params", "default_params_path",
            "params_toml", "with_values", "write_params", "chain_params", "IDENTIFICATION_FIELDS"]
@@ -60,13 +61,15 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
         "N": (None, "pos"), "encoder_counts": (None, "pos"), "tau_max": (None, "pos"),
         "tendon_compliance": (None, "nonneg"), "capstan": (None, "nonneg"), "torque_delay": (None, "nonneg"),
     },
-    "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos")},
+    "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos"),
+                 "law": (None, "law"), "sigma0": (None, "pos"), "sigma1": (None, "pos")},
     "environment": {"gravity": (3, "any")},
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
 _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduction_F_s", "thumb.abduction_F_v",
              "transmission.tendon_compliance", "transmission.capstan", "transmission.torque_delay",
-             "finger.encoder_offset", "thumb.encoder_offset", "thumb.abduction_encoder_offset"}
+             "finger.encoder_offset", "thumb.encoder_offset", "thumb.abduction_encoder_offset",
+             "friction.law", "friction.sigma0", "friction.sigma1"}  # the law with a state: model.friction
 # the unit each field's value is read in: a file giving another one is refused (no conversion is made)
 _UNITS: dict[str, str] = {
     **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
@@ -81,6 +84,7 @@ _UNITS: dict[str, str] = {
     "transmission.encoder_counts": "counts/rev", "transmission.tau_max": "N m",
     "transmission.tendon_compliance": "rad/(N m)", "transmission.capstan": "-", "transmission.torque_delay": "samples",
     "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
+    "friction.law": "-", "friction.sigma0": "N m/rad", "friction.sigma1": "N m s/rad",
     "environment.gravity": "m/s^2",
 }
 _INTEGER = {"transmission.encoder_counts", "transmission.torque_delay"}  # fields whose value must be a whole number
@@ -210,6 +214,11 @@ class HandParams:
     """mu theta (dimensionless): the flexion tendons' sheath friction, the joints getting
     tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c) (optional ``transmission.capstan``; 0, the default: none;
     :func:`~alpes_dyn.model.transmission.capstan_torque`)."""
+    friction_law: str = "tanh"
+    """The joints' friction law (optional ``friction.law``, :data:`~alpes_dyn.model.friction.FRICTION_MODELS`):
+    ``tanh`` (default) or ``lugre`` with ``sigma0`` (N m/rad) and ``sigma1`` (N m s/rad) (:mod:`~alpes_dyn.model.friction`)."""
+    sigma0: float = SIGMA0
+    sigma1: float = SIGMA1
     identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
 
@@ -267,51 +276,10 @@ def default_params_path() -> Path:
     return Path(str(resources.files("alpes_dyn") / "data" / "alpes_hand.toml"))
 
 
-_NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
-
-
 def _header_line(text: str) -> str:
     """One comment line of a file header: control characters written as escapes (TOML refuses them raw)."""
     return "".join(c if c.isprintable() else f"\\x{ord(c):02x}" if ord(c) < 256 else f"\\u{ord(c):04x}"
                    for c in text)
-
-
-def _check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
-    if kind == "str":
-        if not (isinstance(value, list) and len(value) == length and all(isinstance(v, str) and v for v in value)):
-            raise ModelError(f"{name}: value must be a list of {length} non-empty strings (got {value!r})")
-        if len(set(value)) != len(value):
-            raise ModelError(f"{name}: names must be unique (got {value!r})")
-        bad = next((v for v in value if not _NAME.fullmatch(v)), None)
-        if bad is not None:  # a name goes into URDF/MJCF attributes, joint names and CSV column names
-            raise ModelError(f"{name}: {bad[:40]!r} is not a name: letters, digits and '_', starting with a letter")
-        return tuple(value)
-    if length is None:
-        if isinstance(value, bool) or not isinstance(value, (int, float)):
-            raise ModelError(f"{name}: value must be a number (got {value!r})")
-        arr = np.array([float(value)])
-    else:
-        if not isinstance(value, list) or len(value) != length:
-            raise ModelError(f"{name}: value must be a list of {length} numbers (got {value!r})")
-        if any(isinstance(v, bool) or not isinstance(v, (int, float)) for v in value):
-            raise ModelError(f"{name}: value must be a list of {length} numbers (got {value!r})")
-        arr = np.array(value, dtype=float)
-    if not np.all(np.isfinite(arr)):
-        raise ModelError(f"{name}: value must be finite (got {value!r})")
-    if kind == "pos" and np.any(arr <= 0):
-        i = int(np.argmax(arr <= 0))
-        raise ModelError(f"{name}: value must be > 0 (got {arr[i]:g} at index {i})")
-    if kind == "nonneg" and np.any(arr < 0):
-        i = int(np.argmax(arr < 0))
-        raise ModelError(f"{name}: value must be >= 0 (got {arr[i]:g} at index {i})")
-    if kind == "unit":
-        scale = float(np.max(np.abs(arr)))  # (the norm of a component of 1e300 would overflow)
-        norm = scale * float(np.linalg.norm(arr / scale)) if scale > 0 else 0.0
-        if not math.isclose(norm, 1.0, rel_tol=1e-9):
-            raise ModelError(f"{name}: value must be a unit vector (norm {norm:g})")
-        for x in arr:
-            check_not_subnormal(float(x), name, "", ModelError)
-    return float(arr[0]) if length is None else arr
 
 
 def _identification(data: Any, names: tuple[str, ...]) -> dict[str, dict[str, Any]]:
@@ -402,7 +370,7 @@ def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
     reason = entry.get("reason", "")
     if source in ("assumed", "identified") and not (isinstance(reason, str) and reason.strip()):
         raise ModelError(f"{name}.reason: an {source} value needs a one-line reason")
-    value = _check_value(name, entry["value"], length, kind)
+    value = check_value(name, entry["value"], length, kind)
     field_name = ".".join(name.split(".")[::2]) if name.count(".") == 2 else name  # finger.<nm>.K -> finger.K
     unit, expected = entry["unit"], _UNITS.get(field_name)
     if expected is not None and (not isinstance(unit, str) or " ".join(unit.split()) not in
@@ -417,7 +385,7 @@ def _entry(name: str, entry: Any, length: int | None, kind: str) -> Param:
     if "std" in entry:
         if source != "identified":
             raise ModelError(f"{name}.std: only an identified value has a standard error")
-        std = _check_value(f"{name}.std", entry["std"], length, "nonneg" if kind != "str" else kind)
+        std = check_value(f"{name}.std", entry["std"], length, "nonneg" if kind != "str" else kind)
     return Param(value, str(entry["unit"]), source, str(reason), str(entry.get("description", "")), std)
 
 
@@ -501,6 +469,8 @@ def _from_text(text: str, path: str) -> HandParams:
         identification=ident, tendon_compliance=float(v.get("transmission.tendon_compliance", 0.0)),
         capstan=float(v.get("transmission.capstan", 0.0)), torque_delay=int(v.get("transmission.torque_delay", 0)),
         abduction_encoder_offset=float(v.get("thumb.abduction_encoder_offset", 0.0)),
+        friction_law=v.get("friction.law", "tanh"), sigma0=float(v.get("friction.sigma0", SIGMA0)),
+        sigma1=float(v.get("friction.sigma1", SIGMA1)),
     )
 
 

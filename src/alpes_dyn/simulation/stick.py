@@ -38,9 +38,10 @@ from ..symbolic.statespace import StateSpace
 __all__ = ["FRICTION_LAWS", "MAX_DRY_JOINTS", "check_friction_law", "coulomb_velocity", "mass_blocks",
            "stick_step_expression"]
 
-FRICTION_LAWS: tuple[str, ...] = ("smooth", "stick")
+FRICTION_LAWS: tuple[str, ...] = ("smooth", "stick", "lugre")
 """The observers' dry-friction laws: ``smooth`` F_s tanh(v / v_s) through RK4, ``stick`` the time-stepping
-Coulomb law of this module."""
+Coulomb law of this module, ``lugre`` the LuGre law with a bristle state per joint through RK4
+(:mod:`alpes_dyn.model.friction`, :mod:`alpes_dyn.simulation.lugre`)."""
 
 MAX_DRY_JOINTS = 5
 """The most joints with dry friction in one coupled chain (a block of the mass matrix) that :func:`coulomb_velocity`

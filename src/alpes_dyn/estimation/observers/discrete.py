@@ -1,12 +1,17 @@
 """The observers' discrete model: z_{k+1} = F(z_k, w_k), the state space stepped over one sample period.
 
-Two friction laws (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, ``friction_law=``):
+Three friction laws (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, ``friction_law=``):
 
 * ``"smooth"``: the state space's right-hand side, its dry friction F_s tanh(v / v_s) (eq. 2.6-2.7), integrated by
   ``substeps`` classical RK4 steps per period;
 * ``"stick"``: ``substeps`` steps of the time-stepping Coulomb law (:mod:`alpes_dyn.simulation.stick`: the dry
   friction resolved over each step, a joint under a net torque below F_s held at rest, semi-implicit Euler), the law
-  of MuJoCo's ``frictionloss``. On a model without dry friction (F_s = 0 everywhere) it is the smooth law's RK4.
+  of MuJoCo's ``frictionloss``. On a model without dry friction (F_s = 0 everywhere) it is the smooth law's RK4;
+* ``"lugre"``: the LuGre law (:mod:`alpes_dyn.model.friction`, the model's file's sigma0 and sigma1, else the
+  defaults), its bristle deflections z (rad, one per joint, ``bristle_<joint>``) the last n entries of the state,
+  ``substeps`` split steps per period (the bristles relaxed exactly, then RK4:
+  :func:`~alpes_dyn.symbolic.lugre.lugre_substep`; :func:`~alpes_dyn.simulation.lugre.lugre_substeps`). A stuck
+  joint is a bristle deflected by less than F_s / sigma0: the filter's Gaussian holds it.
 
 Either way the model may carry gains and disturbance torques as constant states (``parameters``).
 """
@@ -21,7 +26,9 @@ import numpy as np
 from ...model.stops import JointStops
 from ...errors import InputError, ModelError
 from ...simulation.integrate import _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
+from ...model.friction import LuGre, lugre_of
 from ...simulation.stick import check_friction_law, stick_step_expression
+from ...symbolic.lugre import lugre_substep
 from ...symbolic.lifted import lift_constants
 from ...symbolic.statespace import StateSpace
 
@@ -41,8 +48,8 @@ class DiscreteModel:
     system: the continuous state space (eq. 3.3); its output is the measurement.
     dt: sample period, s. substeps: steps per sample period (default 1).
     parameters: names from :data:`PARAMETERS` appended to the state as constants (z = [x; theta]).
-    friction_law: ``"smooth"`` (default: RK4 on the smooth sign) or ``"stick"`` (the time-stepping Coulomb law,
-        :mod:`alpes_dyn.simulation.stick`); see the module docstring.
+    friction_law: ``"smooth"`` (default: RK4 on the smooth sign), ``"stick"`` (the time-stepping Coulomb law,
+        :mod:`alpes_dyn.simulation.stick`) or ``"lugre"`` (a bristle state per joint); see the module docstring.
     stops: the joints' end stops in the model (:class:`~alpes_dyn.model.stops.JointStops`, e.g.
         ``JointStops.of(model)``: a stiff unilateral spring-damper at each end of the range); default none (eq. 3.3).
 
@@ -50,6 +57,8 @@ class DiscreteModel:
     ----------
     nz, nx, nw, ny: sizes of z, x = [q; qd], w = [u; F] and y.
     names: names of z's entries. friction_law: the law used (``"smooth"`` where the model has no dry friction).
+    law: the :class:`~alpes_dyn.model.friction.LuGre` law of ``"lugre"`` (else None); nb: its bristle states (n or 0),
+        z's last entries.
     values: (np,) the model's numbers in the right-hand side, one per use (:func:`~alpes_dyn.symbolic.lifted.
         lift_constants`): masses, inertias, lengths, springs, friction, ratios and the constants among them.
     step_p: ``casadi.Function`` (z, w, p) -> z_next (SX), the step with those numbers as the input p (np,): its
@@ -84,11 +93,13 @@ class DiscreteModel:
         self.parameters = params
         n = system.n
         self.nx = 2 * n
-        self.nz = self.nx + len(params)
+        self.friction_law = friction_law if np.any(system.model.extras.coulomb) else "smooth"
+        self.law = (lugre_of(system.model) or LuGre()) if self.friction_law == "lugre" else None
+        self.nb = n if self.law is not None else 0
+        self.nz = self.nx + len(params) + self.nb
         self.nw = _n_known_inputs(system)
         self.ny = system.n_outputs
-        self.names = system.state_names + params
-        self.friction_law = friction_law if np.any(system.model.extras.coulomb) else "smooth"
+        self.names = system.state_names + params + tuple(f"bristle_{j}" for j in system.model.joint_names[:self.nb])
         z = cs.SX.sym("z", self.nz)
         w = cs.SX.sym("w", self.nw)
         h = self.dt / self.substeps
@@ -98,6 +109,8 @@ class DiscreteModel:
         # would merge equal values
         if self.friction_law == "stick":
             one, self.values = lift_constants(cs.Function("stick", [z, w], [self._stick(z, w, h)]))
+        elif self.law is not None:
+            one, self.values = lift_constants(cs.Function("lugre", [z, w], [self._lugre(z, w, h)]))
         else:
             one, self.values = lift_constants(cs.Function("rhs", [z, w], [self._rhs(z, w)]))
         p = cs.SX.sym("p", self.values.size)
@@ -106,7 +119,7 @@ class DiscreteModel:
         # for the same instructions: each call is already one node per instruction of its merged expression)
         merged = cs.Function("one", [z, w, p], [cs.cse(one(z, w, p))])
         advance: Callable[[Any], Any] = (
-            (lambda x: merged(x, w, p)) if self.friction_law == "stick"
+            (lambda x: merged(x, w, p)) if self.friction_law in ("stick", "lugre")
             else (lambda x: rk4_expression(lambda y, u: merged(y, u, p), x, w, h)))
         self.substep_p = cs.Function("substep", [z, w, p], [advance(z)], ["z", "w", "p"], ["z_next"])
         """One of the ``substeps`` steps of :attr:`step_p` (the C export loops over it: the code of one step, not of
@@ -146,6 +159,17 @@ class DiscreteModel:
         q, v, tau, F = self._torques(z, w)
         qdd = joint_accelerations(self.system, q, v, tau, F)
         return cs.vertcat(v, qdd, cs.SX.zeros(len(self.parameters)))
+
+    def _lugre(self, z: cs.SX, w: cs.SX, h: float) -> cs.SX:
+        """z after one split step of h s of the LuGre law (:func:`~alpes_dyn.symbolic.lugre.lugre_substep`; the
+        parameters carried over, the bristles z's last n entries)."""
+        n, rest = self.system.n, z[self.nx: self.nz - self.nb]
+
+        def torques(q: cs.SX, v: cs.SX) -> tuple[cs.SX, Any]:
+            return self._torques(cs.vertcat(q, v, rest), w)[2:]
+
+        q, v, zb = lugre_substep(self.system, self.law, z[:n], z[n: self.nx], z[self.nz - self.nb:], torques, h)
+        return cs.vertcat(q, v, rest, zb)
 
     def _stick(self, z: cs.SX, w: cs.SX, h: float) -> cs.SX:
         """z after one step of h s of the stick law (the parameters carried over)."""

@@ -164,9 +164,10 @@ class KalmanFilter(Rebuilt):
     substeps : int, optional
         Steps per sample period in the discretised model (default 1; use the simulation's with the
         smooth friction, whose time constant is a fraction of a millisecond).
-    friction_law : {"smooth", "stick"}, optional
-        ``"smooth"`` (default; RK4 on F_s tanh(v / v_s)) or ``"stick"`` (the time-stepping Coulomb law that holds a
-        joint at rest under a net torque below F_s, :mod:`alpes_dyn.simulation.stick`): the
+    friction_law : {"smooth", "stick", "lugre"}, optional
+        ``"smooth"`` (default; RK4 on F_s tanh(v / v_s)), ``"stick"`` (the time-stepping Coulomb law that holds a
+        joint at rest under a net torque below F_s, :mod:`alpes_dyn.simulation.stick`) or ``"lugre"`` (a bristle
+        state per joint appended to z, :mod:`alpes_dyn.model.friction`): the
         :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`'s.
     stops : JointStops or None, optional
         The joints' end stops in the model (:class:`~alpes_dyn.model.stops.JointStops`; default none, eq. 3.3): a

@@ -1,0 +1,143 @@
+"""Dry friction with a state: the LuGre law per joint, next to the smooth tanh law of eq. 2.6-2.7.
+
+The smooth law F_s tanh(v / v_s) + F_v v (:meth:`~alpes_dyn.model.extras.JointExtras.friction_torque`) has no
+memory: under a net torque below F_s it needs a velocity v_s atanh(tau / F_s), so a modelled joint creeps where the
+real one stays, and a Gaussian filter built on it drifts through stick-slip. The LuGre law (Canudas de Wit, Olsson,
+Astrom and Lischinsky, IEEE TAC 40(3), 1995) gives each joint a bristle deflection z (rad), a state:
+
+    z' = v - sigma0 |v| z / g(v),                                   (L1)
+    tau_f = sigma0 z + sigma1 z' + F_v v,                           (L2)
+
+here with g(v) = F_s (the Coulomb and static levels equal, F_c = F_s: the parameter file's F_s, no Stribeck
+curve, so the law adds two numbers to the file, not four). A stuck joint is a bristle deflected by |z| < F_s /
+sigma0 whose spring sigma0 z holds any net torque up to F_s; sliding at a steady v, z = F_s sign(v) / sigma0 and
+tau_f = F_s sign(v) + F_v v, the sign law (eq. 2.6). The law is smooth in (z, v) (its |v| aside, Lipschitz), so an
+extended Kalman filter can carry z in its state and represent a stuck joint.
+
+Why LuGre and not the others (Dahl, generalised Maxwell-slip, a switched stick/slip law): Dahl is L1 without the
+damping sigma1 and without the static peak (here g is flat, so LuGre is Dahl plus sigma1 z', the damping of the
+presliding oscillation a stiff sigma0 otherwise leaves); Maxwell-slip needs several elements per joint (several
+states and parameters each) for a hysteresis an encoder behind a tendon cannot resolve; the switched law is not
+differentiable, which the library's observers have as :mod:`~alpes_dyn.simulation.stick` already (time stepping).
+MuJoCo 4's ``dcmotor`` actuator models LuGre friction on a motor, an independent plant for this law.
+
+The parameter file chooses the law (``friction.law = "tanh"`` (default) or ``"lugre"``) with ``friction.sigma0``
+(N m/rad) and ``friction.sigma1`` (N m s/rad), one value for every joint (:func:`lugre_of`).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ..errors import ModelError
+
+__all__ = ["FRICTION_MODELS", "LuGre", "PRESLIDING", "SIGMA0", "SIGMA1", "lugre_rate", "lugre_torque",
+           "lugre_steady", "lugre_of", "check_law"]
+
+FRICTION_MODELS: tuple[str, ...] = ("tanh", "lugre")
+"""The parameter file's ``friction.law``: ``tanh`` the memoryless smooth law, ``lugre`` the law of this module."""
+
+PRESLIDING = 1e-3
+"""rad: the default presliding displacement F_s / sigma0 of a joint, the angle a stuck joint yields elastically
+before it slides (a ball bearing or a plain pulley bush: micrometres at its radius of a few millimetres)."""
+
+SIGMA0 = 0.5
+"""N m/rad: the default bristle stiffness sigma0, F_s / :data:`PRESLIDING` at the Alpes file's F_s = 0.5 mN m: ten
+times the joints' return springs, a presliding mode of about 50 Hz on finger3's lightest phalanx (4.8e-6 kg m^2),
+slow enough for the observers' RK4 at 4 steps per millisecond, fast enough that a stuck joint moves 0.06 degree."""
+
+SIGMA1 = 3e-3
+"""N m s/rad: the default bristle damping sigma1, about critical on that presliding mode, 2 sqrt(sigma0 I) with
+I = 4.8e-6 kg m^2 (finger3's third phalanx with its share of the rotor)."""
+
+
+def check_law(law: Any, field: str = "friction.law") -> str:
+    """``law`` if it is one of :data:`FRICTION_MODELS`, else :class:`~alpes_dyn.ModelError` naming ``field``."""
+    if not isinstance(law, str) or law not in FRICTION_MODELS:
+        raise ModelError(f"{field}: expected one of {', '.join(FRICTION_MODELS)}, got {law!r:.40}")
+    return law
+
+
+def _positive(x: Any, field: str, unit: str) -> float:
+    try:
+        v = float(x) if not isinstance(x, (bool, np.bool_, str)) else float("nan")
+    except (TypeError, ValueError):
+        v = float("nan")
+    if not (math.isfinite(v) and v > 0):
+        raise ModelError(f"{field}: expected a finite number > 0 {unit}, got {x!r:.40}")
+    return v
+
+
+@dataclass(frozen=True)
+class LuGre:
+    """The LuGre law's two numbers, the same on every joint (module docstring, eq. L1-L2).
+
+    Parameters
+    ----------
+    sigma0 : float
+        Bristle stiffness, N m/rad (> 0): the presliding stiffness d tau_f / dq of a stuck joint.
+    sigma1 : float
+        Bristle damping, N m s/rad (> 0).
+
+    Raises
+    ------
+    ModelError
+        A value not finite or not > 0 (``friction.sigma0`` / ``friction.sigma1`` named).
+    """
+
+    sigma0: float = SIGMA0
+    sigma1: float = SIGMA1
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "sigma0", _positive(self.sigma0, "friction.sigma0", "N m/rad"))
+        object.__setattr__(self, "sigma1", _positive(self.sigma1, "friction.sigma1", "N m s/rad"))
+
+
+def lugre_rate(z: Any, v: Any, coulomb: np.ndarray, sigma0: Any, xp: Any = np) -> Any:
+    """z' of eq. L1 with g = F_s, (n,) rad/s; a joint with F_s = 0 has no bristle (z' = 0).
+
+    Parameters
+    ----------
+    z, v : array_like or casadi column
+        (n,) bristle deflection (rad) and joint velocity (rad/s).
+    coulomb : numpy.ndarray
+        (n,) F_s, N m (>= 0).
+    sigma0 : float or casadi scalar
+        N m/rad.
+    xp : module
+        ``numpy`` or ``casadi``.
+    """
+    Fs = np.asarray(coulomb, dtype=float)
+    dry = Fs > 0
+    inv = np.where(dry, 1.0 / np.where(dry, Fs, 1.0), 0.0)
+    if xp is np:
+        return np.where(dry, v - sigma0 * np.abs(v) * z * inv, 0.0)
+    mask, inv = xp.DM(dry.astype(float)), xp.DM(inv)
+    return mask * (v - sigma0 * xp.fabs(v) * z * inv)
+
+
+def lugre_torque(z: Any, zdot: Any, v: Any, viscous: np.ndarray, law: LuGre, xp: Any = np) -> Any:
+    """tau_f of eq. L2, (n,) N m: sigma0 z + sigma1 z' + F_v v (``viscous`` (n,) F_v, N m s/rad)."""
+    Fv = np.asarray(viscous, dtype=float)
+    return law.sigma0 * z + law.sigma1 * zdot + (Fv * v if xp is np else xp.DM(Fv) * v)
+
+
+def lugre_steady(v: Any, coulomb: np.ndarray, viscous: np.ndarray, sigma0: float) -> tuple[np.ndarray, np.ndarray]:
+    """The law in steady sliding (z' = 0) at velocity ``v`` (n,) rad/s, != 0: (z = F_s sign(v) / sigma0 (n,) rad,
+    tau_f = F_s sign(v) + F_v v (n,) N m), the sign law of eq. 2.6."""
+    v = np.asarray(v, dtype=float)
+    Fs, Fv = np.asarray(coulomb, dtype=float), np.asarray(viscous, dtype=float)
+    return Fs * np.sign(v) / sigma0, Fs * np.sign(v) + Fv * v
+
+
+def lugre_of(model: Any) -> LuGre | None:
+    """The LuGre law of ``model``'s parameter file (``friction.law = "lugre"``: its ``sigma0``/``sigma1``, else the
+    defaults :data:`SIGMA0`, :data:`SIGMA1`), or None (the file's law is ``tanh``, or the model has no file)."""
+    p = getattr(model, "params", None)
+    if p is None or getattr(p, "friction_law", "tanh") != "lugre":
+        return None
+    return LuGre(p.sigma0, p.sigma1)
