@@ -124,9 +124,9 @@ class DiscreteModel:
         self.substep_p = cs.Function("substep", [z, w, p], [advance(z)], ["z", "w", "p"], ["z_next"])
         """One of the ``substeps`` steps of :attr:`step_p` (the C export loops over it: the code of one step, not of
         ``substeps`` unrolled)."""
-        self.rhs_p = merged if self.friction_law != "stick" else None
+        self.rhs_p = merged if self.friction_law == "smooth" else None
         """The right-hand side z' = f(z, w, p) that each RK4 stage of :attr:`substep_p` evaluates (None for the stick
-        law, whose step is not RK4)."""
+        and LuGre laws, whose steps are not plain RK4: ``merged`` is then the whole substep)."""
         zn = z
         for _ in range(self.substeps):  # the smooth friction is fast: several RK4 steps per sample
             zn = advance(zn)
