@@ -182,10 +182,6 @@ def test_run_experiment_refuses_bad_settings_before_the_hand_moves():
     assert hw.commands.shape == (0, 1)  # nothing written
 
 
-@pytest.mark.xfail(strict=True, reason="the stand-in starts settled on its stops, its rotor where the cable is just "
-                   "taut: palm up, finger3 folds as its first joint lifts off and the trim finds no room for the "
-                   "excitation below the fold (GuardTripped 'no room'); it passed only while the unsettled rotor's "
-                   "drift shifted the encoder's frame (issue 49, left)")
 def test_experiment_on_the_standin_stays_off_its_stops_and_near_the_design(tmp_path):
     """finger3 with a real hand's effects (stiction, elastic cable with slack, 3 degree tilt, torque constant 5 %
     off, encoder offset, torque delay), shortened to keep the test short (a faster calibration, 1 s stages and
