@@ -14,7 +14,8 @@ import pytest
 
 from alpes_dyn.bench.interface import Loopback, Reading, check_command
 from alpes_dyn.errors import InputError
-from alpes_dyn.estimation.experiments.calibration import Calibration, calibrate, load_calibration
+from alpes_dyn.estimation.experiments.calibration import (FOLD_WINDOW, SNAP_FRACTION, Calibration, calibrate,
+                                                          load_calibration)
 from alpes_dyn.estimation.experiments.design import ExperimentDesign
 from alpes_dyn.estimation.experiments.hand_session import MAX_GAP, RELAX_SECONDS, GuardTripped, HandSession
 from alpes_dyn.estimation.experiments.on_hand import designed_torque, run_experiment
@@ -105,6 +106,23 @@ class RunawayFinger(ToyFinger):
         if self.u > self.hold:
             self.y = min(self.y + self.speed * self.period, self.stop)
         self.k += 1
+
+
+def test_calibration_tells_a_snap_from_a_steep_stable_branch():
+    """A fold is the encoder running at one held torque (:data:`FOLD_WINDOW`): the runaway toy, which runs to its
+    stop whenever the command is above 0.015 N m, folds there; a steep but stable branch (1.2e6 counts per N m
+    over 3000 counts, 0.0025 N m: q_1 sweeping its range as on the stand-in's finger3 palm up, 20 ms of lag), over
+    which a window of 2 % of the safe torque grows by more than a quarter of the range, is no fold, and its
+    curve is the toy's."""
+    steep = ToyFinger(rest=-150.0, knee1=1500.0, g1=1e5, g2=1.2e6, stop=4500.0)
+    cal = calibrate(steep, FINGER3)
+    assert math.isnan(cal.fold_torque[0]) and cal.stop[0]
+    assert 1.2e6 * 0.02 * cal.safe_torque > SNAP_FRACTION * (cal.high[0] - cal.rest[0])  # the old window's growth
+    t1 = (1500 + 150) / 1e5
+    assert cal.torque_at(np.array([3000.0]))[0] == pytest.approx(t1 + 1500 / 1.2e6, abs=2e-4)
+    snap = calibrate(RunawayFinger(hold=0.015, rest=0.0, stop=3000.0), FINGER3)
+    assert snap.fold_torque[0] == pytest.approx(0.015, abs=FOLD_WINDOW * snap.safe_torque + 1e-4)
+    assert snap.high[0] == pytest.approx(3000.0, abs=60.0)
 
 
 def test_guard_stops_before_the_stop_and_relaxes():
@@ -198,6 +216,7 @@ def test_experiment_on_the_standin_stays_off_its_stops_and_near_the_design(tmp_p
     perm = joint_permutation(hw._plant.mj, list(FINGER3.joint_names))
     cal = calibrate(hw, FINGER3, rate=0.0125, speed=1500.0)
     assert cal.stop[0] and cal.low[0] < 3072 < cal.high[0]  # the design's target inside the usable range
+    assert math.isnan(cal.fold_torque[0])  # q_1 sweeps its range over 0.006 N m, steep but stable: no fold
     design = ExperimentDesign(duration=1.0)
     q = []
     write = hw.write
