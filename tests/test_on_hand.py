@@ -187,6 +187,22 @@ def test_designed_torque_is_the_experiments_own():
     assert target[0] == pytest.approx(2 * x0[:3].sum() * 4096 / (2 * np.pi), abs=2.0)
 
 
+def test_no_room_for_the_multisine_trips_the_guard_not_a_record(monkeypatch):
+    """Where the stages leave the multisine no amplitude (scale 0: the dither alone fills the band, as on one hand
+    chain of the bench_loop record, whose record at amplitude 0 then failed to converge), the run stops there: the
+    finger relaxed, GuardTripped naming it, no recording."""
+    import alpes_dyn.estimation.experiments.on_hand as on_hand
+
+    toy = ToyFinger(rest=-150.0, knee1=1500.0, g1=1e5, g2=4e5, stop=4000.0)
+    cal = calibrate(toy, FINGER3)
+    monkeypatch.setattr(on_hand, "_stages", lambda s, clock, nominal, cal, bias, *a: (bias, 0.0, []))
+    with pytest.raises(GuardTripped, match="no room for the multisine") as exc:
+        run_experiment(toy, FINGER3, ExperimentDesign(duration=1.0), cal, hold=0.3, max_holds=2)
+    assert exc.value.reason == "stop"
+    cmd = exc.value.log.command[:, 0]
+    assert cmd[np.flatnonzero(~np.isnan(cmd))[-1]] == 0.0  # relaxed
+
+
 def test_run_experiment_refuses_bad_settings_before_the_hand_moves():
     hw = Loopback()
     with pytest.raises(InputError, match="orientations: the experiment on the hand runs in one orientation"):
