@@ -451,11 +451,41 @@ def _bench_counts(r: Result) -> dict[str, str]:
             for g in rows[0]["goals"]} if rows else {}
 
 
+def _bench_worst(r: Result) -> dict[str, float | None]:
+    """Each goal's worst figure over the draws identified adequate (None where none reached it)."""
+    rows = [x for x in r["rows"] if x.get("verdict") == "adequate"]
+    loops = [{y["controller"]: y for y in x.get("loops", [])} for x in rows]
+
+    def worst(values: list) -> float | None:
+        v = [a for a in values if a is not None]
+        return max(v) if v else None
+    return {"K_pct": worst([x.get("K_pct") for x in rows]), "m_pct": worst([x.get("m_pct") for x in rows]),
+            "rmse_pct": worst([lp.get("sensor", {}).get("rmse_pct") for lp in loops]),
+            "overshoot_pct": worst([lp.get("sensor", {}).get("overshoot_pct") for lp in loops]),
+            "rise_ms": worst([lp.get("sensor", {}).get("rise_ms") for lp in loops]),
+            "sse_pct": worst([lp.get("sensorless", {}).get("sse_pct") for lp in loops]),
+            "q_deg": worst([max(lp["sensor"]["q_rmse_deg_joints"]) for lp in loops
+                            if lp.get("sensor", {}).get("q_rmse_deg_joints")])}
+
+
+def _bench_draws(r: Result) -> str:
+    """The draws by model: "12 fresh draws of finger3, finger2 and 6 of the hand (24 finger chains)"."""
+    fingers = sorted({x["model"] for x in r["rows"] if x["model"] != "hand"})
+    n_f = sum(1 for x in r["rows"] if x["model"] != "hand")
+    hand = [x for x in r["rows"] if x["model"] == "hand"]
+    text = f"{n_f} fresh draws of {' and '.join(fingers)}" if n_f else ""
+    if hand:
+        n_h = len({x["seed"] for x in hand})
+        text += f"{' and ' if text else ''}{n_h} fresh draws of the hand ({len(hand)} finger chains)"
+    return text
+
+
 def bench_loop(r: Result) -> list[str]:
-    """Per draw: where the workflow stopped, or its figures; then how many draws met each goal."""
+    """Per draw: where the workflow stopped, or its figures; then how many draws met each goal, and each goal's
+    worst figure over the draws identified adequate."""
     out = []
     for x in r["rows"]:
-        head = f"{x['model']} seed {x['seed']}"
+        head = f"{x['model']}{'/' + x['chain'] if 'chain' in x else ''} seed {x['seed']}"
         if "experiment_error" in x:
             out.append(f"{head}: the experiment refused on every rig ({x['experiment_error'][:160]})")
             continue
@@ -472,6 +502,10 @@ def bench_loop(r: Result) -> list[str]:
                    f"{'n/a' if not q else ' / '.join(f'{v:.2f}' for v in q)} deg")
     counts = _bench_counts(r)
     out.append("goals met (of the draws that reached them): " + ", ".join(f"{g} {c}" for g, c in counts.items()))
+    w = _bench_worst(r)
+    out.append(f"worst over the draws identified adequate: springs {_r(w['K_pct'])} %, masses {_r(w['m_pct'])} %, "
+               f"sensor RMSE {_r(w['rmse_pct'])} %, overshoot {_r(w['overshoot_pct'], '.1f')} %, rise "
+               f"{_r(w['rise_ms'], '.0f')} ms, sensorless {_r(w['sse_pct'])} %, joints in contact {_r(w['q_deg'])} deg")
     return out
 
 
@@ -481,7 +515,7 @@ def _bench_loop_headline(r: Result) -> str:
     refused = sum(1 for x in r["rows"] if "identify_error" in x or "experiment_error" in x)
     wrong = sum(1 for x in r["rows"] if x.get("verdict") == "adequate"
                 and any(v is False for g, v in x["goals"].items() if g != "no_stop"))
-    return (f"{r['draws']} fresh draws of finger2 and finger3: {fitted} identified adequate ({wrong} of them off a "
+    return (f"{_bench_draws(r)}: {fitted} identified adequate ({wrong} of them off a "
             f"goal), {refused} refused naming why; no stop in the record {c['no_stop']}, springs within 3 % "
             f"{c['springs_3pct']}, masses within 5 % {c['masses_5pct']}, sensor loop {c['sensor_loop']}, sensorless "
             f"within 10 % {c['sensorless_10pct']}, joints within 1 degree {c['joints_1deg']}")
@@ -510,7 +544,7 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism, "fit_scaling.hand": fit_scaling,
-    "bench_loop": bench_loop, "c_step": c_step,
+    "bench_loop": bench_loop, "bench_loop.hand": bench_loop, "c_step": c_step,
 }
 
 ORDER = ["bench_loop", "default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",

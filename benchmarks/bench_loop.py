@@ -23,7 +23,14 @@ Goals (issue 49): springs within 3 %, masses within 5 %; sensor loop RMSE after 
 overshoot < 10 %, rise < 100 ms; sensorless within 10 %; joint estimates < 1 degree; no stop reached.
 The C step of the loop is not yet part of this benchmark (the whole loop's C export is still to come).
 
-    python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3] [--json] [--out-json PATH]
+The hand (``--models hand``) is run chain by chain: one draw of the hand (each finger its own +-20 % values,
+``perturbed_params(chains=HAND_CHAINS)``) and each finger chain's workflow as above on the stand-in of a finger3 with
+that chain's true values (:func:`~alpes_dyn.model.params.chain_params`; the hand's chains do not move one another,
+:mod:`~alpes_dyn.estimation.experiments.hand_experiment`), its own noise seeds; one row per chain. The thumb is not
+run: its abduction motor has no spring (the experiment on the hand trims motors against return springs) and the
+stand-in has no block scene for it.
+
+    python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3,hand] [--json] [--out-json PATH]
 """
 
 from __future__ import annotations
@@ -48,9 +55,10 @@ from alpes_dyn.control.finger_loop import ControlResult, ControlScenario, _metri
 from alpes_dyn.control.step import ForceStep
 from alpes_dyn.errors import AlpesDynError
 from alpes_dyn.estimation.experiments.draws import perturbed_params
+from alpes_dyn.estimation.experiments.hand_experiment import _chain_seeds
 from alpes_dyn.estimation.experiments.on_hand import run_experiment
 from alpes_dyn.estimation.experiments.recording import write_recording
-from alpes_dyn.model.params import load_params
+from alpes_dyn.model.params import chain_params, load_params
 from alpes_dyn.model.robot import Model
 from alpes_dyn.studies.realism import errors, rig_design
 
@@ -61,6 +69,8 @@ RIGS = ("level", "hanging")
 STOP_MARGIN_DEG = 0.5
 """A true joint within this of its stop counts as a stop reached."""
 CONTROLLERS = ("sensor", "sensorless")
+HAND_CHAINS = ("index", "middle", "ring", "little")
+"""The hand's chains run (the module docstring: the thumb is not)."""
 LOOP_SEED = 1000
 """The force loop's noise seed: this plus the draw's (another draw of the sensors' noise than the experiment's)."""
 
@@ -92,7 +102,7 @@ class Scored:
         self.hw.close()
 
 
-def experiment_row(model: str, truth: Any, seed: int, tmp: Path) -> tuple[dict, Path | None]:
+def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "") -> tuple[dict, Path | None]:
     """Calibration and the guarded experiment on the free stand-in, palm up, then hung fingers down where the guard
     found no room palm up (as a user turns the hand: ``alpes-dyn experiment --rig auto``'s rule); the recording's
     path (None if both failed)."""
@@ -112,15 +122,20 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path) -> tuple[dict, 
     row["rig"] = rig
     row["experiment_s"] = time.perf_counter() - t0
     lo, hi = nominal.lower, nominal.upper  # the URDF's joint stops (the MJCF's ranges)
-    q = np.array(hw.q)  # q[k]: the truth at tick k (the first, before any command)
+    # hw.q[i]: the truth after the i-th write (hw.q[0] before any); the experiment's log starts after the
+    # calibration's writes (its own session): its row k is the truth hw.q[off + k]
+    off = len(hw.q) - len(res.log.t)
+    q = np.array(hw.q)
     margin = math.radians(STOP_MARGIN_DEG)
     at_stop = (q <= lo + margin) | (q >= hi - margin)
-    rec = q[res.record_rows]
-    row["stop_reached"] = bool(at_stop[res.record_rows].any())  # during the record
-    row["stop_before_record"] = bool(at_stop[1: res.record_rows.start].any())  # calibration, trim, stages
+    rows = slice(off + res.record_rows.start, off + res.record_rows.stop)
+    rec = q[rows]
+    row["stop_reached"] = bool(at_stop[rows].any())  # during the record
+    row["stop_in_calibration"] = bool(at_stop[1: off + 1].any())  # the calibration's ramps (to a stop, by design)
+    row["stop_before_record"] = bool(at_stop[off + 1: rows.start].any())  # trim, stages
     row["record_q_range_deg"] = [[float(np.degrees(a)), float(np.degrees(b))] for a, b in zip(rec.min(0), rec.max(0))]
     row.update(res.to_dict())
-    path = tmp / f"rec_{model}_{seed}.csv"
+    path = tmp / f"rec_{model}{name}_{seed}.csv"
     write_recording(res.recording, path)
     return row, path
 
@@ -179,9 +194,14 @@ def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str) ->
             "q_rmse_deg_joints": res.q_rmse_deg}
 
 
-def draw_rows(model: str, seed: int, tmp: Path) -> dict:
-    truth = perturbed_params(spread=0.2, seed=seed)
-    row, rec = experiment_row(model, truth, seed, tmp)
+def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: int | None = None,
+              name: str = "") -> dict:
+    """One draw's workflow (``truth`` default the finger drawn with ``seed``; the sensors' noise seeded by
+    ``noise_seed``, default ``seed``)."""
+    truth = perturbed_params(spread=0.2, seed=seed) if truth is None else truth
+    noise = seed if noise_seed is None else noise_seed
+    row, rec = experiment_row(model, truth, noise, tmp, name)
+    row["seed"] = seed
     if rec is None:
         return row
     fit, ident = identify_row(model, rec, truth, tmp)
@@ -191,10 +211,23 @@ def draw_rows(model: str, seed: int, tmp: Path) -> dict:
     row["loops"] = []
     for ctl in CONTROLLERS:
         try:
-            row["loops"].append(loop_row(model, ident, truth, seed, ctl))
+            row["loops"].append(loop_row(model, ident, truth, noise, ctl))
         except AlpesDynError as e:
             row["loops"].append({"controller": ctl, "error": str(e)})
     return row
+
+
+def model_rows(model: str, seed: int, tmp: Path) -> list[dict]:
+    """A finger's draw (one row), or the hand's (one row per chain of :data:`HAND_CHAINS`, the module docstring)."""
+    if model != "hand":
+        return [draw_rows(model, seed, tmp)]
+    truth = perturbed_params(spread=0.2, seed=seed, chains=HAND_CHAINS)
+    rows = []
+    for chain, noise in zip(HAND_CHAINS, _chain_seeds(seed, len(HAND_CHAINS))):
+        noise = noise % (2 ** 31 - LOOP_SEED)  # the stand-in's seed and the loop's LOOP_SEED above it
+        row = draw_rows("finger3", seed, tmp, chain_params(truth, chain), noise, f"_{chain}")
+        rows.append({**row, "model": "hand", "chain": chain})
+    return rows
 
 
 def goals(row: dict) -> dict[str, bool | None]:
@@ -218,7 +251,7 @@ def _f(x: Any, fmt: str) -> str:
 
 
 def table_text(rows: list[dict]) -> str:
-    head = ("model    seed  stop  K %   m %   verdict        sensor rmse % / os % / rise ms  sensorless sse %  "
+    head = ("model        seed  stop  K %   m %   verdict        sensor rmse % / os % / rise ms  sensorless sse %  "
             "q deg (sensor)")
     lines = [head, "-" * len(head)]
     for r in rows:
@@ -226,7 +259,8 @@ def table_text(rows: list[dict]) -> str:
         s, sl = loops.get("sensor", {}), loops.get("sensorless", {})
         err = r.get("experiment_error") or r.get("identify_error") or s.get("error")
         qd = s.get("q_rmse_deg_joints")
-        lines.append(f"{r['model']:8s} {r['seed']:5d} {str(r.get('stop_reached', 'n/a')):5s} "
+        label = r["model"] + (f"/{r['chain']}" if "chain" in r else "")
+        lines.append(f"{label:12s} {r['seed']:5d} {str(r.get('stop_reached', 'n/a')):5s} "
                      f"{_f(r.get('K_pct'), '5.2f')} {_f(r.get('m_pct'), '5.2f')} {str(r.get('verdict', ''))[:14]:14s} "
                      f"{_f(s.get('rmse_pct'), '5.2f')} / {_f(s.get('overshoot_pct'), '5.1f')} / "
                      f"{_f(s.get('rise_ms'), '5.0f')}          {_f(sl.get('sse_pct'), '5.2f')}            "
@@ -246,11 +280,11 @@ def main(argv: list[str] | None = None) -> int:
     with tempfile.TemporaryDirectory() as d:
         for model in a.models.split(","):
             for s in seeds:
-                row = draw_rows(model, s, Path(d))
-                row["goals"] = goals(row)
-                rows.append(row)
-                if not a.json:
-                    print(table_text([row]).splitlines()[-1], flush=True)
+                for row in model_rows(model, s, Path(d)):
+                    row["goals"] = goals(row)
+                    rows.append(row)
+                    if not a.json:
+                        print(table_text([row]).splitlines()[-1], flush=True)
     out = {"rows": rows, "goals_met": {g: sum(1 for r in rows if r["goals"][g]) for g in rows[0]["goals"]} if rows
            else {}, "draws": len(rows)}
     if a.out_json:

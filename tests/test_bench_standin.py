@@ -183,3 +183,23 @@ def test_hung_on_its_rig_the_finger_rests_along_gravity():
     hw = MujocoHand("finger3", rig="hanging", **QUIET)
     q = np.degrees(scoring_truth(hw)[0])
     assert np.abs(q).max() < 3.0, q
+
+
+def test_palm_up_finger3_sweeps_q1_steeply_but_stably():
+    """Palm up, the stand-in's finger3 has no fold (what its calibration relies on, FOLD_WINDOW): ramped slowly
+    (0.004 N m/s) through q_1's sweep, 0.021 -> 0.025 -> 0.021 N m, each level held 0.7 s, q_1 lifts off its stop and
+    crosses half its range over 0.004 N m (a steep branch, more than 3.5e5 counts per N m), and each level's reading
+    is on the way down what it was on the way up within 30 % of the sweep (the joints' dry friction: 360 counts of
+    a sweep of 2430 measured; a fold's snap would leave the finger on its upper stop, the whole sweep above)."""
+    hw = MujocoHand("finger3", **QUIET)
+    play(hw, np.linspace(0.0, 0.019, 1000))
+    up, down, q, last = {}, {}, {}, 0.019
+    for tau, side in ((0.021, up), (0.023, up), (0.025, up), (0.023, down), (0.021, down)):
+        out = play(hw, np.concatenate([np.linspace(last, tau, 500), np.full(700, tau)]))
+        side[tau], last = float(np.mean(out["counts"][-200:])), tau
+        q.setdefault(tau, np.degrees(scoring_truth(hw)[0]))
+    assert up[0.021] < up[0.023] < up[0.025] and (up[0.025] - up[0.021]) / 0.004 > 3.5e5, up
+    assert q[0.021][0] > 0.5 and q[0.025][0] > 45.0, q  # q_1 off its 0 stop, then past half its range
+    sweep = up[0.025] - up[0.021]
+    for tau in (0.021, 0.023):
+        assert abs(down[tau] - up[tau]) < 0.3 * sweep, (tau, up, down)

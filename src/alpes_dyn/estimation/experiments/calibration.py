@@ -21,8 +21,12 @@ only (no model of the finger is trusted for them).
 3. the ramp's curve (counts against torque, :data:`CURVE_POINTS` points) kept: the static relation the trim of
    :func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment` starts from, and a fold found on it: palm up an
    Alpes finger's static equilibria can end where gravity's torque outgrows its springs', and the finger then snaps
-   to its stops (a window of 2 % of the safe torque moving the encoder by more than :data:`SNAP_FRACTION` of the
-   range); its torque is where the experiment's bias must stay below;
+   to its stops: the encoder growing by more than :data:`SNAP_FRACTION` of the range while the torque grows by
+   less than :data:`FOLD_WINDOW` of the safe torque (the ramp holds its torque while the encoder runs, so a snap is
+   a jump at one torque); its torque is where the experiment's bias must stay below. A steep but stable branch is no
+   fold: on the MuJoCo stand-in's finger3 palm up, q_1 sweeps from its 0 to its 90 degree stop between 0.020 and
+   0.026 N m (3100 counts, the same up and down in holds of 1.5 s: no hysteresis, no snap), 5.2e5 counts per N m,
+   which a window of 2 % of the safe torque (1e-3 N m) took for a fold;
 4. the command ramped back to 0 N m, four times as fast (at ``rate``: unhindered by the speed hold).
 
 The ramp has no dither: rising, the finger's dry friction holds it back, so the curve reads fewer counts at a torque
@@ -53,7 +57,7 @@ from .hand_session import HandSession
 from .recording import _check_encoder_columns
 
 __all__ = ["Calibration", "calibrate", "load_calibration", "MIN_MOVE_COUNTS", "KNEE_WINDOW", "KNEE_FRACTION",
-           "LIFT_FRACTION", "SNAP_FRACTION", "CURVE_POINTS"]
+           "LIFT_FRACTION", "SNAP_FRACTION", "FOLD_WINDOW", "CURVE_POINTS"]
 
 MIN_MOVE_COUNTS = 50.0
 """Counts the encoder must leave the rest by before the ramp may call the motion stopped (a slack cable's dead band
@@ -72,7 +76,12 @@ LIFT_FRACTION = 0.3
 """The lower knee: the last window below the steepest slope whose slope is under this share of it (a joint lifting
 off its stop is a jump of the slope; a slope that grows smoothly, hung, keeps the rest as the lower end)."""
 SNAP_FRACTION = 0.25
-"""A fold: a window of 2 % of the safe torque that moved the encoder by more than this share of the usable range."""
+"""A fold: a window of :data:`FOLD_WINDOW` of the safe torque that moved the encoder by more than this share of the
+usable range."""
+FOLD_WINDOW = 0.002
+"""The fold test's torque window, a fraction of the safe torque (1e-4 N m of the Alpes fingers' 0.05): a snap moves
+the encoder at one held torque; the steepest stable branch seen (5.2e5 counts per N m) moves it by 52 counts over
+the window, a fiftieth of a finger3's range."""
 CURVE_POINTS = 200
 """Points of the counts <-> torque curve kept (bins of the ramp's torque, the counts averaged in each)."""
 
@@ -306,12 +315,12 @@ def _lower_end(tau: np.ndarray, cnt: np.ndarray, window: float, rest: float) -> 
 
 
 def _fold(tau: np.ndarray, cnt: np.ndarray, safe: float, span: float) -> float:
-    """The torque (N m) at the start of the window of 2 % of ``safe`` over which the ramp's reading grew the most,
-    if it grew by more than :data:`SNAP_FRACTION` of ``span`` (a snap: a fold of the static equilibria); NaN
-    otherwise."""
+    """The torque (N m) at the start of the window of :data:`FOLD_WINDOW` of ``safe`` over which the ramp's reading
+    grew the most, if it grew by more than :data:`SNAP_FRACTION` of ``span`` (a snap: a fold of the static
+    equilibria); NaN otherwise."""
     if tau.size < 3 or not span > 0:
         return math.nan
-    j = np.searchsorted(tau, tau - 0.02 * safe)  # each sample's window start
+    j = np.searchsorted(tau, tau - FOLD_WINDOW * safe)  # each sample's window start
     growth = cnt - cnt[j]
     i = int(np.argmax(growth))
     return float(tau[j[i]]) if growth[i] > SNAP_FRACTION * span else math.nan

@@ -62,7 +62,7 @@ from ...model.robot import Model
 from .calibration import Calibration, calibrate
 from .design import ExperimentDesign, _checked_design
 from .experiment import _excitation, _simulate
-from .hand_session import HandSession, SessionLog
+from .hand_session import GuardTripped, HandSession, SessionLog
 from .multisine import _motor_groups, _profiles, dither_amplitude
 from .recording import Recording, write_recording
 from .trim import _mean_equilibrium, _reading
@@ -285,6 +285,11 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
     bias, rest = holds[-1][0], holds[-1][1]
     bias, scale, stage_log = _stages(s, clock, nominal, cal, bias, rest, low, high, st, stage_seconds, peak,
                              (peak, cap) if trim else None, hold)
+    if not scale > 0.0:  # the dither alone fills the band: a record without multisine identifies nothing
+        s.relax()
+        raise GuardTripped("guard: no room for the multisine in the guard band (the stages' swing, the dither's "
+                           "alone, leaves it at any amplitude); the excitation was stopped and the finger relaxed to "
+                           "0 N m", "stop", float(s.log().t[-1]), s.counts.copy(), s.log())
     clock.k = 0
     rows = s.run(clock.commands(bias, scale, design.n_samples))
     s.relax()
