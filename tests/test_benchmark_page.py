@@ -63,3 +63,12 @@ def test_a_missing_record_or_summary(gen, tmp_path, monkeypatch):
     monkeypatch.delitem(gen.SUMMARIES, "mimic")
     section = gen.page(tmp_path).split("``mimic.py``")[1].split("\n``")[0]
     assert "not yet summarised" in section and "Panda (its finger a mimic)" not in section
+
+
+def test_readme_headline_rows_are_short():
+    """Each README headline row says its figure in a sentence or two (issue 52: a row ran to 753 characters): at most
+    420 characters, the benchmark's link included."""
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    block = text[text.index("<!-- headline:start -->"):text.index("<!-- headline:end -->")]
+    long = [(len(r), r[:60]) for r in block.splitlines() if r.startswith("| ") and len(r) > 420]
+    assert not long, long
