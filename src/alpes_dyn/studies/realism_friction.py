@@ -22,7 +22,8 @@ Per case and seed (:func:`friction_row`): the identification experiment on the p
 --rig auto`` adapts it (:func:`~alpes_dyn.studies.realism.plant_experiment`), fitted as ``alpes-dyn identify``
 fits it (``--effects auto``), the file written; then a validation run that the fit never saw, a different motion
 (:func:`validation_torque`: the ``estimate`` scenario's torque, then a slow ramp through the stick band), the EKF
-on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`). A row holds
+on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`, the joints' end
+stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops). A row holds
 what :func:`~alpes_dyn.studies.realism.summarise` reads (the verdict, the errors up to the torque constant's
 common scale, the EKF's RMSE per joint) and, for each file, the joints' NEES against their 95 % band
 (:func:`~alpes_dyn.estimation.observers.consistency.nees`) and each fitted parameter's error in units of its
@@ -49,10 +50,10 @@ from ..estimation.observers.scenario import EstimationScenario, scenario_torque
 from ..model.mjcf import STICTION_TIMECONST
 from ..model.params import HandParams, load_params, write_params
 from ..symbolic.parametric import parameter_catalogue
-from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, ekf_run, fit_row, on_rig, plant_experiment,
-                      rig_design, rig_of, summarise)
+from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, MASS_GOAL_PCT, SPRING_GOAL_PCT, ekf_run, fit_row,
+                      on_rig, plant_experiment, rig_design, rig_of, summarise)
 
-__all__ = ["FrictionCase", "FRICTION_CASES", "FRICTION_CASE_NAMES", "CONSTRAINTS", "RAMP_TORQUE", "RAMP_SECONDS",
+__all__ = ["FrictionCase", "FRICTION_CASES", "FRICTION_CASE_NAMES", "CONSTRAINTS", "STOP_MARGIN_DEG", "RAMP_TORQUE", "RAMP_SECONDS",
            "validation_torque", "standard_scores", "friction_row", "friction_summary", "complete_seeds"]
 
 CONSTRAINTS: dict[str, tuple[float, float]] = {"soft": (0.02, 1.0), "stiff": (STICTION_TIMECONST, 1.0)}
@@ -104,6 +105,9 @@ FRICTION_CASES: tuple[FrictionCase, ...] = tuple(
 """The eight cases: each constraint at 1 and 3 times F_s, alone and with every other effect."""
 FRICTION_CASE_NAMES: tuple[str, ...] = tuple(c.name for c in FRICTION_CASES)
 
+STOP_MARGIN_DEG = 0.5
+"""deg: a validation run's joint within this of an end of its range is said to reach its stop
+(``validation_at_stops``; the EKF runs with the stops in its model, as ``estimate --stops``)."""
 RAMP_TORQUE = 0.002
 """N m: the validation ramp's swing about the scenario's bias (the scenario's sines' sum, 2.2 mN m, about 8 times
 the draw's F_s seen at the motor, r_m F_s / r)."""
@@ -155,7 +159,9 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     plant_experiment`), the files written in ``tmp`` (default a temporary directory). Keys: those of
     :func:`~alpes_dyn.studies.realism.realism_case` that :func:`~alpes_dyn.studies.realism.summarise` reads
     (``extended`` the fit, ``ekf_rmse_deg``, ``ekf_true_file_rmse_deg``), ``nees`` and ``nees_true_file``
-    (:func:`_consistency`), ``z`` (:func:`standard_scores`), ``validation_s``; :class:`~alpes_dyn.InputError` naming
+    (:func:`_consistency`), ``z`` (:func:`standard_scores`), ``validation_s``, ``validation_range_deg`` (the true
+    joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends);
+    :class:`~alpes_dyn.InputError` naming
     ``case`` on an unknown name."""
     if isinstance(case, str):
         if case not in FRICTION_CASE_NAMES:
@@ -179,8 +185,12 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     u = validation_torque(design.dt, FINGER3.alpes(params=true).transmission.n_motors)
     val = mujoco_recording(FINGER3.model, true, u, design.dt, effects=effects, seed=seed + 1000, chain=FINGER3.chain)
     fitted = dict(zip(res.names, res.values.tolist()))
-    est = ekf_run(val, str(ident), fitted, transient, rotor="rotor" in fit.effects, rig=rig, torque_delay=fit.delay)
-    est_true = ekf_run(val, str(write_params(true, tmp / f"true_{case.name}_{seed}.toml")), {}, transient, rig=rig)
+    est = ekf_run(val, str(ident), fitted, transient, rotor="rotor" in fit.effects, rig=rig, torque_delay=fit.delay,
+                  stops=True)
+    est_true = ekf_run(val, str(write_params(true, tmp / f"true_{case.name}_{seed}.toml")), {}, transient, rig=rig,
+                       stops=True)
+    lo, hi = np.degrees(val.true_q.min(axis=0)), np.degrees(val.true_q.max(axis=0))
+    limits = FINGER3.alpes(params=true)
     row = {"case": case.name, "seed": seed, "chain": FINGER3.label, "adaptation": adaptation.to_dict(),
            "extended": fit_row(res, truth, list(fit.effects))}
     ext = row["extended"]
@@ -188,6 +198,9 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
                 "torque_delay": fit.delay, "notes": list(fit.notes)})
     z = standard_scores(fitted, dict(zip(res.names, res.std.tolist())), truth, ext["common_scale"])
     row.update({"plant_seconds": plant_s, "validation_s": val.duration,
+                "validation_range_deg": [lo.tolist(), hi.tolist()],
+                "validation_at_stops": ((lo <= np.degrees(limits.lower) + STOP_MARGIN_DEG)
+                                        | (hi >= np.degrees(limits.upper) - STOP_MARGIN_DEG)).tolist(),
                 "ekf_rmse_deg": np.degrees(est.rmse).tolist(),
                 "ekf_true_file_rmse_deg": np.degrees(est_true.rmse).tolist(),
                 "nees": _consistency(est, val.true_q, transient),
@@ -214,7 +227,9 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
     ``ekf_true_file_deg`` (the EKF with the true file, worst joint), ``nees_inconsistent`` and
     ``nees_true_file_inconsistent`` (the rows with a joint's NEES outside its 95 % band), ``nees_worst`` (the
     largest joint NEES, identified file), ``z_worst`` (the largest |error / standard error| over the parameters),
-    ``z_within_3`` (the fraction of parameters within 3), ``verdicts`` (each row's, by seed)."""
+    ``z_within_3`` (the fraction of parameters within 3), ``verdicts`` (each row's, by seed); ``issue_goal_met``
+    (issue 50's goal on every row: the EKF within ``ekf_goal`` on every joint with both files, every joint's NEES in
+    its band with both, every |z| within 3, springs and masses within their goals, no run that raised)."""
     out = summarise(rows, ekf_goal)
     for case, s in out.items():
         ok = [r for r in rows if r["case"] == case and "error" not in r]
@@ -228,4 +243,10 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
             "nees_true_file_worst": _worst([max(r["nees_true_file"]["per_joint"]) for r in ok]),
             "z_worst": _worst(zs), "z_within_3": float(np.mean([z <= 3 for z in zs])) if zs else None,
             "verdicts": {str(r["seed"]): r["extended"]["verdict"] for r in ok}})
+        s["issue_goal_met"] = bool(ok) and not s["errors"] and all(
+            max(r["ekf_rmse_deg"] + r["ekf_true_file_rmse_deg"]) <= ekf_goal
+            and all(r["nees"]["joints_consistent"]) and all(r["nees_true_file"]["joints_consistent"])
+            and all(abs(v) <= 3 for v in r["z"].values())
+            and r["extended"]["worst_error_common_scale_pct"]["K"] <= SPRING_GOAL_PCT
+            and r["extended"]["worst_error_common_scale_pct"]["m"] <= MASS_GOAL_PCT for r in ok)
     return out
