@@ -18,10 +18,13 @@ from alpes_dyn.studies.realism_friction import (FRICTION_CASES, FRICTION_CASE_NA
 
 def friction_output(rows: list[dict], names: list[str], design: Any, rig: str, adapt: str,
                     case_seconds: dict[str, float], **extra: Any) -> dict[str, Any]:
-    """The ``--json`` object: the rows of the seeds that hold every case of ``names`` (the others listed apart),
-    the case table, the distribution per case (:func:`~alpes_dyn.studies.realism_friction.friction_summary`)."""
+    """The ``--json`` object: the rows of the seeds that hold every case of ``names`` (the others listed apart; a
+    case and seed measured twice, by two runs sharing a log: the first row kept), the case table, the distribution
+    per case (:func:`~alpes_dyn.studies.realism_friction.friction_summary`)."""
+    rows = list({(r["case"], r["seed"]): r for r in reversed(rows)}.values())[::-1]  # the first of each pair
     seeds = complete_seeds(rows, names)
-    kept = [r for r in rows if r["seed"] in seeds and r["case"] in names]
+    kept = sorted((r for r in rows if r["seed"] in seeds and r["case"] in names),
+                  key=lambda r: (seeds.index(r["seed"]), names.index(r["case"])))
     return {"model": "finger3", "friction": True, "seeds": seeds,
             "incomplete_seeds": [s for s in dict.fromkeys(r["seed"] for r in rows) if s not in seeds],
             "cases": [asdict(c) for c in FRICTION_CASES if c.name in names], "duration_s": design.duration,
