@@ -23,7 +23,9 @@ Per case and seed (:func:`friction_row`): the identification experiment on the p
 fits it (``--effects auto``), the file written; then a validation run that the fit never saw, a different motion
 (:func:`validation_torque`: the ``estimate`` scenario's torque, then a slow ramp through the stick band), the EKF
 on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`, the joints' end
-stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops). A row holds
+stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops; the true file
+holds the finger's true K, m and friction, not the rig's effects -- as in the realism study, with every other effect
+its EKF does not know the tilt, the encoder's zero, the torque constant, the delay nor the cable). A row holds
 what :func:`~alpes_dyn.studies.realism.summarise` reads (the verdict, the errors up to the torque constant's
 common scale, the EKF's RMSE per joint) and, for each file, the joints' NEES against their 95 % band
 (:func:`~alpes_dyn.estimation.observers.consistency.nees`) and each fitted parameter's error in units of its
