@@ -71,10 +71,11 @@ def friction_text(out: dict) -> str:
     """The table: per row the verdict, the springs' and masses' worst errors up to the common scale, the EKF's worst
     joint with the identified and the true file, the worst joint NEES of each (``!`` outside its band) and the
     largest |error / standard error|; then the distribution per case with the silent misses and the refusals."""
+    v = out["validation"]
     lines = [f"finger3, friction cases, seeds {out['seeds']} (incomplete, left out: {out['incomplete_seeds']}), "
              f"{out['duration_s']:g} s experiment, rig {out['rig']} (adapt {out['adapt']}), identify --effects "
-             f"{out['fit_effects']}; validation: the estimate scenario's torque ({out['validation']['scenario_s']:g} s) "
-             f"then a {out['validation']['ramp_s']:g} s ramp of +-{1e3 * out['validation']['ramp_torque_Nm']:g} mN m",
+             f"{out['fit_effects']}; validation: the estimate scenario's torque ({v['scenario_s']:g} s) "
+             f"then a {v['ramp_s']:g} s ramp of +-{1e3 * v['ramp_torque_Nm']:g} mN m",
              f"{'case':12} {'seed':>4} | {'verdict':>8} {'K%':>6} {'m%':>6} | {'EKF deg ident':>19} | "
              f"{'EKF deg true':>19} | {'NEES ident':>10} {'NEES true':>10} | {'|z| max':>7}"]
     for r in out["rows"]:

@@ -35,8 +35,6 @@ def test_each_case_plant_holds_its_friction_in_mujoco(case):
     for soft, 0.5 ms for stiff), the impedance MuJoCo's default 0.9 (soft) or 0.999 (stiff), F_v as joint damping;
     no smooth law added by the callback; with every other effect the cable's rotor, the palm's tilt, the torque
     constant and the encoder's zero."""
-    import mujoco
-
     drawn = perturbed_params(spread=0.2, seed=SEED)
     true, e = case.true_params(SEED), case.effects()
     mj = load_mujoco(plant_mjcf("finger3", true, e))
