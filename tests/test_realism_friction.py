@@ -4,7 +4,11 @@ other effects its row names -- and the validation torque and the standard scores
 
 from __future__ import annotations
 
+import importlib.util
+import json
 import math
+import sys
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -80,3 +84,40 @@ def test_standard_scores_count_the_error_up_to_the_common_scale_in_standard_erro
     z = standard_scores(values, std, truth, 1.05)
     assert set(z) == {"K_1", "m_1"}  # no truth (tilt) or no reported error (F_s_1): not scored
     assert z["K_1"] == pytest.approx(2.0) and z["m_1"] == pytest.approx(0.0, abs=1e-12)
+
+
+BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
+
+
+def _bench():
+    """benchmarks/realism.py as a module (its folder on the path while it runs: it imports _friction)."""
+    spec = importlib.util.spec_from_file_location("realism_bench", BENCH / "realism.py")
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_the_benchmark_summarises_its_recorded_rows_again(tmp_path, capsys):
+    """``realism.py --friction --from-log`` on the recorded rows (benchmarks/results/realism.friction.json) gives the
+    recorded seeds and summary; a duplicated row counts once; bad arguments exit 2 with the option named."""
+    rec = json.loads((BENCH / "results" / "realism.friction.json").read_text())["result"]
+    log = tmp_path / "rows.jsonl"
+    log.write_text("".join(json.dumps(r) + "\n" for r in rec["rows"] + rec["rows"][:1]))
+    sys.path.insert(0, str(BENCH))
+    try:
+        bench = _bench()
+        assert bench.main(["--friction", "--from-log", str(log), "--json"]) == 0
+        out = json.loads(capsys.readouterr().out)
+        assert out["seeds"] == rec["seeds"] and len(out["rows"]) == 8 * len(rec["seeds"])
+        for case, s in out["summary"].items():
+            r = rec["summary"][case]
+            assert (s["n"], s["adequate"], len(s["silent_misses"])) == (r["n"], r["adequate"], len(r["silent_misses"]))
+            assert s["ekf_deg"]["worst"] == pytest.approx(r["ekf_deg"]["worst"], rel=1e-12)
+        for argv, needle in ((["--friction", "--cases", "slippery"], "--cases: unknown case 'slippery'"),
+                             (["--friction", "--rig", "hanging"], "--rig: not with --friction"),
+                             (["--friction", "--workers", "2"], "--workers: not with --friction")):
+            with pytest.raises(SystemExit) as e:
+                bench.main(argv)
+            assert e.value.code == 2 and needle in capsys.readouterr().err
+    finally:
+        sys.path.remove(str(BENCH))
