@@ -352,6 +352,31 @@ def realism(r: Result) -> list[str]:
     return out
 
 
+def realism_friction(r: Result) -> list[str]:
+    """``realism.py --friction`` (issue 50): per friction case the verdicts, the worst errors and EKF, the NEES and
+    the standard scores."""
+    v = r["validation"]
+    out = [f"{r['model']} drawn +-20 %, seeds {_seeds(r)} ({len(r['seeds'])} draws per case), {r['duration_s']:g} s "
+           f"experiments (``--adapt {r['adapt']}``), ``identify --effects {r['fit_effects']}``; the EKF on a validation "
+           f"run the fit never saw: the ``estimate`` scenario's torque ({v['scenario_s']:g} s) then a "
+           f"{v['ramp_s']:g} s ramp of +-{1e3 * v['ramp_torque_Nm']:g} mN m through the stick band; cases: MuJoCo's "
+           f"``frictionloss`` with its default constraint (soft, 0.02 s: creeps) or 0.5 ms (stiff: sticks), 1x or 3x "
+           f"the draw's F_s, alone or with every other effect (``all_``)"]
+    for case, c in r["summary"].items():
+        misses = ", ".join(f"seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg" for m in c["silent_misses"]) or "none"
+        refused = "; ".join(f"seed {x['seed']}: {x['verdict']}" for x in c["refusals"]) or "none"
+        z = "n/a" if c["z_worst"] is None else f"{c['z_worst']:.1f} ({100 * c['z_within_3']:.0f} % within 3)"
+        out.append(f"**{case}** ({c['n']} draws, worst over all): **{c['adequate']} adequate**, **silent misses: "
+                   f"{len(c['silent_misses'])}** ({misses}); K {_r(c['K_pct']['worst'])} %, m "
+                   f"{_r(c['m_pct']['worst'], '.1f')} % (up to the common scale); EKF worst joint "
+                   f"{_r(c['ekf_deg']['worst'])} deg with the identified file, {_r(c['ekf_true_file_deg']['worst'])} deg "
+                   f"with the true one; draws with a joint's NEES outside its 95 % band: {c['nees_inconsistent']} "
+                   f"(identified), {c['nees_true_file_inconsistent']} (true file), worst joint NEES "
+                   f"{_r(c['nees_worst'], '.3g')}; largest |error / standard error| {z}; refused: {refused}; runs that "
+                   f"raised: {len(c['errors'])}; issue 50's goal on every draw: {_met(c['issue_goal_met'])}")
+    return out
+
+
 def _adequate_worst(r: Result, case: str) -> dict[str, float] | None:
     """The worst K and m errors (%, up to the common scale) and EKF (deg) over a case's adequate rows."""
     good = [x for x in r["rows"] if x.get("case") == case and "extended" in x and not x["extended"]["flagged"]]
@@ -533,8 +558,8 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "observer_step": observer_step, "observer_build": observer_build, "param_cache": param_cache, "sweep": sweep,
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
-    "force_realism": force_realism, "force_realism.hand": force_realism, "fit_scaling.hand": fit_scaling,
-    "bench_loop": bench_loop, "bench_loop.hand": bench_loop, "c_step": c_step,
+    "force_realism": force_realism, "force_realism.hand": force_realism, "realism.friction": realism_friction,
+    "fit_scaling.hand": fit_scaling, "bench_loop": bench_loop, "bench_loop.hand": bench_loop, "c_step": c_step,
 }
 
 ORDER = ["bench_loop", "default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",

@@ -53,6 +53,7 @@ with the reason.
     python benchmarks/realism.py --chains index,middle,ring,little,thumb [--hand-seed 5] [--cases ...]
     python benchmarks/realism.py ... --workers 2      # each case's seeds on a local Dask cluster (the same rows)
     python benchmarks/realism.py --from-log FILE [--json]   # the table of a run's --log rows, nothing measured
+    python benchmarks/realism.py --friction [--seeds ...] [--cases soft,stiff_3x,...] [--log FILE | --from-log FILE]
 
 ``--rig hanging``: the hand hung fingers down during the experiments (:func:`~alpes_dyn.model.mjcf.hanging_gravity`),
 the experiment designed and trimmed in that orientation, the fits and the EKF on the models turned to it (the
@@ -75,6 +76,21 @@ of the EKF's worst joint (deg) and of the fit's time (every round and the observ
 fit flagged) each with its verdict, and the runs that raised. ``--no-rigid`` skips the rigid fit (its columns "--").
 
 ``--quick``: one seed (the first) and a 2 s experiment.
+
+``--friction`` (issue 50): the friction cases instead (:mod:`alpes_dyn.studies.realism_friction`, the table
+:data:`~alpes_dyn.studies.realism_friction.FRICTION_CASES`): MuJoCo's own dry friction, ``soft`` (its default
+constraint, ``solreffriction`` 0.02 s: the joints creep) or ``stiff`` (0.5 ms: they stick), at 1x and 3x the draw's
+F_s (``_3x``), alone or with every other effect of a real hand (``all_``): 8 cases, run seed after seed (every case
+of a seed before the next, so that a run stopped part-way keeps the same draws for each case; the summary holds the
+seeds with every case). Per row: ``identify``'s verdict, the springs' and masses' worst errors up to the common
+scale, the EKF's worst joint on a validation run the fit never saw (the ``estimate`` scenario's torque, then a slow
+ramp through the stick band) with the identified file and with the true one, each joint's NEES against its 95 %
+band, each parameter's error in units of its reported standard error; per case the worst of each and the silent
+misses (adequate yet the EKF above 0.5 degree). The recorded run (``benchmarks/results/realism.friction.json``)::
+
+    python benchmarks/realism.py --friction --seeds 9801-9812 --log friction.jsonl     # one command, the table
+    python benchmarks/realism.py --friction --from-log friction.jsonl --json            # its JSON, nothing measured
+    python benchmarks/record.py realism --output benchmarks/results/realism.friction.json --friction --from-log FILE
 
 ``--chains``: the hand's chains instead of finger3, one at a time, each as ``alpes-dyn identify`` fits it (a finger
 as ``--model finger3 --chain <name>``; the thumb as ``--model thumb``, its flexion springs, masses and friction,
@@ -103,13 +119,18 @@ from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.studies.realism import (ADAPT, CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
                                        EKF_GOAL_DEG, MASS_GOAL_PCT, parse_seeds, realism_case, realism_row, rig_design,
                                        summarise, tendon_stiffness)
+from alpes_dyn.studies.realism_friction import FRICTION_CASE_NAMES
 from alpes_dyn.studies.sweep import local_client, sweep
 
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seeds", default="11,12,13")
-    ap.add_argument("--cases", default=",".join(CASE_NAMES))
+    ap.add_argument("--cases", default=None, help="comma-separated (default: every case of the table, or with "
+                                                     "--friction every friction case)")
+    ap.add_argument("--friction", action="store_true",
+                    help="the friction cases of issue 50 (soft, soft_3x, stiff, stiff_3x and all_ of each), seed "
+                         "after seed, with the validation run, the NEES and the standard scores")
     ap.add_argument("--quick", action="store_true", help="the first seed only and a 2 s experiment")
     ap.add_argument("--rig", choices=tuple(RIGS), default="level",
                     help="the hand's orientation during the experiments: level (palm up, the file's gravity; "
@@ -133,6 +154,8 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--hand-seed", type=int, default=None,
                     help="with --chains: the seed of the hand's draw and of the sensors' noise (default 5)")
     args = ap.parse_args(argv)
+    if args.friction:
+        return _friction_main(ap, args)
     if args.from_log is not None:
         return _from_log(ap, args)
     try:
@@ -155,7 +178,7 @@ def main(argv: list[str] | None = None) -> int:
         ap.error("--hand-seed: only with --chains (finger3's seeds are --seeds)")
     if not 0 <= args.workers <= 64:
         ap.error(f"--workers: expected 0 (in this process) to 64, got {args.workers}")
-    names = [c.strip() for c in args.cases.split(",") if c.strip()]
+    names = [c.strip() for c in (args.cases or ",".join(CASE_NAMES)).split(",") if c.strip()]
     bad = [c for c in names if c not in CASE_NAMES]
     if bad or not names:
         ap.error(f"--cases: unknown case {bad[0] if bad else ''!r} (expected some of {', '.join(CASE_NAMES)})")
@@ -206,6 +229,49 @@ def main(argv: list[str] | None = None) -> int:
     if args.chains is not None:
         out["chains"] = [p.label for p in plants]
     print(json.dumps(out) if args.json else table_text(out))
+    return 0
+
+
+def _friction_main(ap: argparse.ArgumentParser, args: argparse.Namespace) -> int:
+    """--friction: the friction cases (:mod:`alpes_dyn.studies.realism_friction`, ``_friction.py``) measured seed
+    after seed, or with --from-log the table of a run's rows (the seeds that hold every case)."""
+    from _friction import friction_output, friction_text, read_log, run_friction  # this folder is on the path
+
+    for flag, bad in (("--chains", args.chains is not None), ("--hand-seed", args.hand_seed is not None),
+                      ("--workers", args.workers != 0), ("--no-rigid", args.no_rigid),
+                      ("--rig", args.rig != "level")):
+        if bad:
+            ap.error(f"{flag}: not with --friction (finger3 on the level rig, --adapt hanging it where it must; "
+                     f"the extended fit only, in this process)")
+    names = [c.strip() for c in (args.cases or ",".join(FRICTION_CASE_NAMES)).split(",") if c.strip()]
+    bad = [c for c in names if c not in FRICTION_CASE_NAMES]
+    if bad or not names or len(set(names)) != len(names):
+        ap.error(f"--cases: {'unknown case ' + repr(bad[0]) if bad else 'none or one named twice'} (expected some "
+                 f"of {', '.join(FRICTION_CASE_NAMES)} with --friction)")
+    warnings.simplefilter("ignore", JointRangeWarning)  # the library's simulator in the design; MuJoCo has stops
+    design = rig_design("level", 2.0 if args.quick else None)
+    if args.from_log is not None:
+        try:
+            rows = read_log(args.from_log)
+        except ValueError as e:
+            ap.error(f"--from-log: {e}")
+        out = friction_output(rows, names, design, "level", args.adapt, {}, from_log=args.from_log)
+    else:
+        try:
+            seeds = parse_seeds(args.seeds)
+        except InputError as e:
+            ap.error(f"--{e}")
+        rows: list[dict] = []
+
+        def log(new_rows: list) -> None:
+            rows.extend(new_rows)
+            if args.log:
+                with open(args.log, "a", encoding="utf-8") as f:
+                    f.writelines(json.dumps(r) + "\n" for r in new_rows)
+
+        seconds = run_friction(names, seeds[:1] if args.quick else seeds, design, args.adapt, log)
+        out = friction_output(rows, names, design, "level", args.adapt, seconds)
+    print(json.dumps(out) if args.json else friction_text(out))
     return 0
 
 

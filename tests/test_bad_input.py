@@ -2456,6 +2456,11 @@ API: list[Api] = [
       "torque_delay: expected a whole number of samples"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(tendon_dead_band=1e-5)), InputError,
       "tendon_dead_band: the cable's slack needs the series-elastic tendon"),
+    A("PlantEffects", lambda c: _mjrec(effects=_eff(soft_stiction=True, stiction=5e-4)), InputError,
+      "soft_stiction: MuJoCo's default dry-friction constraint, or stiction's time constant, not both"),
+    A("PlantEffects", lambda c: _mjrec(effects=_eff(soft_stiction="yes")), InputError,
+      "soft_stiction: expected True or False"),
+    A("friction_row", lambda c: _friction_row("slippery"), InputError, "case: expected one of soft, soft_3x"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(tendon_stiffness=1e4, tendon_dead_band=-1e-5)), InputError,
       "tendon_dead_band: expected a cable's play >= 0"),
     A("experiment_torque", lambda c: _exptorque(model="hand"), InputError, "defined for one chain"),
@@ -2649,6 +2654,12 @@ def _cyl_normal(c, axis):
     from alpes_dyn.control import cylinder_normal
 
     return cylinder_normal(c.m, np.zeros(3), (0.0, 0.0, 0.05), axis)
+
+
+def _friction_row(case):
+    from alpes_dyn.studies.realism_friction import friction_row
+
+    return friction_row(case, 0)
 
 
 def _mjrec(**kw):

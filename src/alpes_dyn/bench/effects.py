@@ -8,6 +8,9 @@ The effects (:class:`PlantEffects`, each off by default):
   F_s tanh(v / v_s) + F_v v (:class:`~alpes_dyn.model.extras.JointExtras`), added to MuJoCo's passive forces
   by a callback at every RK4 stage (:func:`~alpes_dyn.bench.mujoco_plant.passive_forces`): the plant then has the
   fitted model's friction structure;
+* ``soft_stiction``: MuJoCo's ``frictionloss`` F_s with MuJoCo's own default constraint (``solreffriction``
+  0.02 s, ``solimpfriction`` 0.9 0.95 0.001, nothing written): a dry friction that creeps under a torque below F_s
+  (0.4 rad/s on finger3 at 0.8 F_s) and slides against F_s; not with ``stiction``;
 * ``tendon_stiffness`` / ``tendon_damping``: the series-elastic, pull-only tendon with a rotor per motor
   (its inertia J_m on the motor side); the encoder measures the rotor;
 * ``tendon_rotor``: the rotor inertia on the rigid tendon (J_m S^T S on the joints' mass matrix);
@@ -54,7 +57,10 @@ class PlantEffects:
     Attributes
     ----------
     stiction : float or None
-        Time constant (s) of MuJoCo's dry-friction constraint, or None (the library's smooth law).
+        Time constant (s) of MuJoCo's dry-friction constraint, or None (the library's smooth law, or
+        ``soft_stiction``).
+    soft_stiction : bool
+        MuJoCo's dry friction with its default, soft constraint (module docstring); with ``stiction`` None.
     tendon_stiffness : float or None
         k_t (N/m) of a series-elastic tendon, or None (rigid).
     tendon_damping : float
@@ -82,6 +88,13 @@ class PlantEffects:
     encoder_offset: float = 0.0
     tendon_dead_band: float = 0.0
     torque_delay: int = 0
+    soft_stiction: bool = False
+
+    @property
+    def mujoco_friction(self) -> bool:
+        """Whether MuJoCo's own dry friction (``frictionloss``, stiff or soft) is the plant's, not the library's
+        smooth law."""
+        return self.stiction is not None or bool(self.soft_stiction)
 
     def check(self) -> "PlantEffects":
         """Numbers in range (:class:`~alpes_dyn.InputError` naming the field); the MJCF options are checked by
@@ -95,6 +108,11 @@ class PlantEffects:
                 and 0 <= self.torque_delay <= MAX_TORQUE_DELAY):
             raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_TORQUE_DELAY}, got "
                              f"{self.torque_delay!r}")
+        if not isinstance(self.soft_stiction, (bool, np.bool_)):
+            raise InputError(f"soft_stiction: expected True or False, got {self.soft_stiction!r:.40}")
+        if self.soft_stiction and self.stiction is not None:
+            raise InputError("soft_stiction: MuJoCo's default dry-friction constraint, or stiction's time constant, "
+                             "not both")
         if self.tendon_dead_band and self.tendon_stiffness is None:
             raise InputError("tendon_dead_band: the cable's slack needs the series-elastic tendon (tendon_stiffness)")
         return self

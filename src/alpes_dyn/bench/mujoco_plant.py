@@ -45,12 +45,13 @@ def as_params(params: HandParams | str | None) -> HandParams:
 def plant_mjcf(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
                chain: str | None = None, timestep: float = 1e-4) -> str:
     """MJCF text of the plant: ``model`` from ``params`` with the MJCF side of ``effects`` (joint stops on,
-    contact off: a finger moving freely; friction as :func:`passive_forces` says)."""
+    contact off: a finger moving freely; friction as :func:`passive_forces` says, MuJoCo's ``frictionloss`` and
+    ``damping`` with ``stiction`` or ``soft_stiction``)."""
     e = (effects or PlantEffects()).check()
     p = as_params(params)
     if p.capstan > 0:  # not in the MJCF: the plant's passive callback adds the sheath friction
         p = with_values(p, {"transmission.capstan": Param(0.0, "-", "assumed", "in the plant's callback", "sheath")})
-    return mjcf_string(model, p, chain=chain, friction=False, contact=False, timestep=timestep,
+    return mjcf_string(model, p, chain=chain, friction=e.soft_stiction, contact=False, timestep=timestep,
                        **effects_mjcf_kwargs(e))
 
 
@@ -117,7 +118,7 @@ def passive_callback(passive: Callable[[Any, Any], None] | None) -> Iterator[Non
 
 def passive_forces(mj: Any, truth: Model, e: PlantEffects) -> Callable[[Any, Any], None] | None:
     """MuJoCo's passive-force callback of what the free plant adds to MuJoCo at every RK4 stage (N m on
-    ``truth``'s joints): the library's smooth friction law (without ``stiction``: MuJoCo's own dry friction then) and
+    ``truth``'s joints): the library's smooth friction law (without ``stiction`` or ``soft_stiction``: MuJoCo's own dry friction then) and
     the tendons' sheath friction where ``truth`` has one (``capstan``: S^T of the capstan's loss at the actuators'
     torque, d.ctrl, and the motor velocity S qd); None where there is nothing to add. The callback is MuJoCo's
     process-wide ``mjcb_passive``: its user sets it around its steps and restores the previous one."""
@@ -126,10 +127,10 @@ def passive_forces(mj: Any, truth: Model, e: PlantEffects) -> Callable[[Any, Any
     if sheath and e.tendon_stiffness is not None:
         raise InputError("capstan: the MuJoCo plant puts the tendons' sheath friction on a rigid tendon (its tension "
                          "the motor's torque); with tendon_stiffness the tension is the cable's")
-    if e.stiction is not None and not sheath:
+    if e.mujoco_friction and not sheath:
         return None
     dofs = np.array([mj.jnt_dofadr[mj.joint(j).id] for j in truth.joint_names])
-    smooth = e.stiction is None
+    smooth = not e.mujoco_friction
     if sheath:  # the law's constants once (the callback runs at every RK4 stage)
         S, m, mu, v_c = tr.S, tr.n_motors, tr.capstan, capstan_velocity(tr.S, ex.smooth_velocity)
 

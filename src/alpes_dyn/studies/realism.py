@@ -41,7 +41,7 @@ from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
 
 __all__ = ["CASE_NAMES", "RIGS", "ADAPT", "Plant", "FINGER3", "hand_plant", "tendon_stiffness", "cases", "verdict",
-           "plant_experiment", "realism_case", "realism_row", "realism_draw", "rig_design", "errors", "parse_seeds", "summarise",
+           "plant_experiment", "realism_case", "fit_row", "on_rig", "rig_of", "ekf_run", "ekf_rmse", "torque_of", "realism_row", "realism_draw", "rig_design", "errors", "parse_seeds", "summarise",
            "EKF_GOAL_DEG", "MASS_GOAL_PCT", "SPRING_GOAL_PCT", "FIT_GOAL_S"]
 
 KINDS = ("K", "m", "F_s", "F_v")
@@ -157,21 +157,28 @@ def hand_plant(chain: str) -> Plant:
     return Plant(chain, MODEL, chain)
 
 
-def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
-             plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0) -> np.ndarray:
-    """RMSE (rad, per joint) after ``transient`` s of the EKF on ``params_path`` run on a recording's encoder and
-    torque (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
+def ekf_run(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
+            plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0, stops: bool = False):
+    """The EKF on ``params_path`` run on a recording's encoder and torque
+    (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
     the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
-    fitted)."""
+    fitted; ``stops``: the joints' end stops in the observer's model, as ``estimate --stops``); its metrics after
+    ``transient`` s. Returns the
+    :class:`~alpes_dyn.estimation.observers.replay.RecordingEstimate`."""
     # the rig's gravity, or the shipped file's: the fitted tilt is turned on below (the file's gravity holds it too)
-    obs = _on_rig(plant.alpes(rotor_inertia=rotor, params=params_path),
-                  rig if rig is not None else load_params().gravity)
+    obs = on_rig(plant.alpes(rotor_inertia=rotor, params=params_path),
+                 rig if rig is not None else load_params().gravity)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
-    est = estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
-                             torque_delay=torque_delay, force=True)  # a flagged fit judged too
-    return est.rmse
+    return estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
+                              torque_delay=torque_delay, force=True, stops=stops)  # a flagged fit judged too
+
+
+def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
+             plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0) -> np.ndarray:
+    """RMSE (rad, per joint) after ``transient`` s of :func:`ekf_run` (the same arguments)."""
+    return ekf_run(rec, params_path, fitted, transient, rotor, plant, rig, torque_delay).rmse
 
 
 _TORQUES: dict = {}
@@ -195,7 +202,7 @@ def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, pla
                             chain=plant.chain)
 
 
-def _on_rig(model, rig: np.ndarray | None):
+def on_rig(model, rig: np.ndarray | None):
     """``model`` in the rig's orientation (gravity ``rig``, m/s^2), or as it is (None: the file's)."""
     return model if rig is None else model.copy(gravity=rig)
 
@@ -233,7 +240,7 @@ def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dic
     return worst, worst_c, c
 
 
-def _fit_row(fit: Any, truth: dict[str, float], effects: list[str]) -> dict[str, Any]:
+def fit_row(fit: Any, truth: dict[str, float], effects: list[str]) -> dict[str, Any]:
     """A fit's part of a row: its worst errors (plain and up to the common scale), values, residual, verdict."""
     values = dict(zip(fit.names, fit.values.tolist()))
     worst, worst_c, c = errors(values, truth)
@@ -312,10 +319,10 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     row: dict[str, Any] = {"case": case, "seed": seed, "chain": plant.label, "adaptation": adaptation.to_dict()}
     truth = {pp.name: pp.nominal for pp in parameter_catalogue(plant.alpes(params=true))}
     if rigid:
-        row["rigid"] = _fit_row(identify(_on_rig(plant.alpes(params=nominal), rig), rec, plant.base,
+        row["rigid"] = fit_row(identify(on_rig(plant.alpes(params=nominal), rig), rec, plant.base,
                                          excitation=design.lines, progress=False), truth, [])
     model_of = alpes_models(plant.model, nominal, chain=plant.chain)
-    fit = fit_effects(lambda e: _on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), plant.base,
+    fit = fit_effects(lambda e: on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), plant.base,
                       rec.gravity is not None, excitation=design.lines, progress=False)
     res = fit.result
     ident = res.write(tmp / f"ident_{plant.label}_{case}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
@@ -327,7 +334,7 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
     true_path = write_params(true, tmp / f"true_{plant.label}_{seed}.toml")
     rmse_true = ekf_rmse(fresh, str(true_path), {}, plant=plant, rig=rig)
     ekf_s = time.perf_counter() - t1
-    row["extended"] = _fit_row(res, truth, list(fit.effects))
+    row["extended"] = fit_row(res, truth, list(fit.effects))
     row["joint_range_deg"] = [np.degrees(rec.true_q.min(axis=0)).tolist(), np.degrees(rec.true_q.max(axis=0)).tolist()]
     row["extended"]["rounds"] = [{"effects": list(e), "residual_counts": r.residual_rms, "converged": bool(r.converged),
                                   "fit_seconds": r.seconds} for e, r in fit.rounds]

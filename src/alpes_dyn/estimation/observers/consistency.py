@@ -73,6 +73,16 @@ class Nees:
         """``"consistent"``, ``"over-confident"`` (above the band: the sigma too small) or ``"cautious"``."""
         return "consistent" if self.consistent else ("over-confident" if self.value > self.high else "cautious")
 
+    def joint_band(self) -> tuple[float, float]:
+        """The band at ``level`` of one joint's NEES (:attr:`per_joint`, 1 for a consistent filter): chi2 of
+        M_eff degrees of freedom over M_eff, the joints' M_eff (:attr:`effective`, an approximation: each joint's
+        error may decorrelate at its own pace)."""
+        from scipy.special import gammaincinv
+
+        p = np.array([(1 - self.level) / 2, (1 + self.level) / 2])
+        low, high = 2.0 * gammaincinv(self.effective / 2.0, p) / self.effective
+        return float(low), float(high)
+
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``alpes-dyn estimate --json`` (its ``nees`` object)."""
         return {"value": self.value, "band": [self.low, self.high], "level": self.level, "dof": self.dof,

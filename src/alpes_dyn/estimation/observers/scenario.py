@@ -68,7 +68,7 @@ load it): 0.3 mN m at most, below the joint's 0.5 mN m Coulomb friction, so that
 
 __all__ = [
     "SCENARIO_MODELS", "ESTIMATION_MODELS", "EstimationScenario", "EstimationResult", "run_estimation", "mismatched_params",
-    "plot_estimation", "check_plot_path", "static_equilibrium", "default_noise",
+    "plot_estimation", "check_plot_path", "static_equilibrium", "default_noise", "scenario_torque",
 ]
 
 
@@ -233,6 +233,12 @@ def _torque(sc: EstimationScenario, t: np.ndarray, m: int, held: Sequence[int] =
         for a, f in zip(sc.torque_amplitudes, sc.torque_frequencies):
             out[:, j] += scale * a * np.sin(2 * np.pi * f * t + j)
     return out
+
+
+def scenario_torque(scenario: EstimationScenario, t: np.ndarray, m: int) -> np.ndarray:
+    """(len(t), m) N m: the scenario's motor torque at the times ``t`` (s) on ``m`` motors, every motor biased (the
+    profile ``run_estimation`` drives a finger with; a plant of the caller's replays it)."""
+    return _torque(scenario, np.asarray(t, dtype=float), int(m))
 
 
 def _held_joints(model: Model) -> tuple[tuple[str, ...], list[int]]:
