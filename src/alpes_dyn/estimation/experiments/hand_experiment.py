@@ -127,7 +127,7 @@ def hand_experiment(true_params: HandParams | str | Path | None = None, design: 
     ----------
     true_params : HandParams or str or Path or None, optional
         The hand as it is (each chain its own values), or its file.
-    design : ExperimentDesign or None, optional
+    design : ~alpes_dyn.estimation.experiments.design.ExperimentDesign or None, optional
         Each chain's design (default: the documented one).
     seed : int, optional
         The sensor noise's seed (each chain's drawn from it).

@@ -99,7 +99,7 @@ def write_identified_spec(result: Any, base: TransmissionSpec, path: str | Path,
 
     Parameters
     ----------
-    result : IdentificationResult
+    result : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
         The fit of a URDF robot.
     base : TransmissionSpec
         The spec fitted from, whose values the fit's replace.

@@ -53,7 +53,7 @@ def named_effects(result: Any) -> tuple[str, ...]:
 
     Parameters
     ----------
-    result : IdentificationResult
+    result : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
         A fit (anything with an ``adequacy`` verdict: ``adequate`` and ``likely_missing``).
 
     Returns
@@ -189,7 +189,7 @@ class Round:
 
         Parameters
         ----------
-        kept : IdentificationResult
+        kept : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
             The fit kept so far.
         kept_effects : tuple of str
             Its effects.
@@ -208,9 +208,9 @@ class Round:
 
         Parameters
         ----------
-        new : IdentificationResult
+        new : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
             The round's fit.
-        kept : IdentificationResult
+        kept : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
             The fit kept before it.
 
         Returns
