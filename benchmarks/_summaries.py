@@ -372,7 +372,7 @@ def realism_friction(r: Result) -> list[str]:
                    f"{_r(c['ekf_deg']['worst'])} deg with the identified file, {_r(c['ekf_true_file_deg']['worst'])} deg "
                    f"with the true one; draws with a joint's NEES outside its 95 % band: {c['nees_inconsistent']} "
                    f"(identified), {c['nees_true_file_inconsistent']} (true file), worst joint NEES "
-                   f"{_r(c['nees_worst'], '.3g')}; largest |error / standard error| {z}; refused: {refused}; runs that "
+                   f"{_r(c['nees_worst'], '.3g')}; largest error in standard errors {z}; refused: {refused}; runs that "
                    f"raised: {len(c['errors'])}; issue 50's goal on every draw: {_met(c['issue_goal_met'])}")
     return out
 
