@@ -38,7 +38,7 @@ from ..errors import InputError
 from ..symbolic.dynamics import SymbolicDynamics
 from .controller import ForceController, _notch_coefficients
 
-__all__ = ["controller_c_sources", "block_controller", "robot_controller", "force_main_input", "read_force_output"]
+__all__ = ["controller_c_sources", "block_controller", "robot_controller", "force_main_input", "read_force_output", "READ_ROWS_C"]
 
 _LOGIC = r"""
 /* ---- alpes_dyn: ForceController.update, line for line ---- */
@@ -246,6 +246,25 @@ int {prefix}_unit_normal(const double normal[3], double n[3]);
 #endif
 """
 
+READ_ROWS_C = r"""  if (argc > 2 && strcmp(argv[1], "-t") == 0) { repeat = atol(argv[2]); a = 3; }
+  if (argc != a + 1 || (a == 3 && repeat < 1)) { fprintf(stderr, "usage: %s [-t REPEAT] FILE|-\n", argv[0]); return 2; }
+  f = strcmp(argv[a], "-") == 0 ? stdin : fopen(argv[a], "r");
+  if (!f) { fprintf(stderr, "%s: cannot open %s\n", argv[0], argv[a]); return 2; }
+  for (;;) {
+    if (n == cap) {
+      double* more = realloc(rows, sizeof(double) * NR * (cap = cap ? 2 * cap : 1024));
+      if (!more) { fprintf(stderr, "%s: out of memory\n", argv[0]); return 2; }
+      rows = more;
+    }
+    for (i = 0; i < NR; ++i) if (fscanf(f, "%lf", &rows[n * NR + i]) != 1) break;
+    if (i == 0) break;
+    if (i != NR) { fprintf(stderr, "%s: line %ld: expected %d numbers\n", argv[0], n + 1, NR); return 2; }
+    ++n;
+  }
+"""
+"""The test programs' reading of their input (C, in ``main``): ``-t REPEAT`` parsed, then every line of NR numbers
+into ``rows`` (n of them), one line naming a malformed line; :mod:`~alpes_dyn.control.cstep`'s ``main.c`` shares it."""
+
 _MAIN = r"""/* force_main.c -- test program of {prefix}.c: reads lines F_ref F_fb q_hat ({nq}), prints per line the command tau
    and the contact force that balances it at q_hat, {prefix}_contact_force (%.17g);
    with -t REPEAT times the updates instead. Build: cc -O2 -o {prefix}_main force_main.c {prefix}.c -lm */
@@ -264,22 +283,7 @@ int main(int argc, char** argv) {{
   int a = 1, i;
   {prefix}_state s;
   FILE* f;
-  if (argc > 2 && strcmp(argv[1], "-t") == 0) {{ repeat = atol(argv[2]); a = 3; }}
-  if (argc != a + 1 || (a == 3 && repeat < 1)) {{ fprintf(stderr, "usage: %s [-t REPEAT] FILE|-\n", argv[0]); return 2; }}
-  f = strcmp(argv[a], "-") == 0 ? stdin : fopen(argv[a], "r");
-  if (!f) {{ fprintf(stderr, "%s: cannot open %s\n", argv[0], argv[a]); return 2; }}
-  for (;;) {{
-    if (n == cap) {{
-      double* more = realloc(rows, sizeof(double) * NR * (cap = cap ? 2 * cap : 1024));
-      if (!more) {{ fprintf(stderr, "%s: out of memory\n", argv[0]); return 2; }}
-      rows = more;
-    }}
-    for (i = 0; i < NR; ++i) if (fscanf(f, "%lf", &rows[n * NR + i]) != 1) break;
-    if (i == 0) break;
-    if (i != NR) {{ fprintf(stderr, "%s: line %ld: expected %d numbers\n", argv[0], n + 1, NR); return 2; }}
-    ++n;
-  }}
-  if (repeat == 0) {{
+{read_rows}  if (repeat == 0) {{
     {prefix}_init(&s);
     for (k = 0; k < n; ++k) {{
       if ({prefix}_update(&s, rows[k * NR], rows[k * NR + 1], rows + k * NR + 2, &tau, work)) return 1;
@@ -377,7 +381,7 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
                             pi_note=" (the pi baseline: no feedforward, q_hat unused)" if is_pi else "",
                             notch_note=notch_note, **settings)
     return {f"{prefix}.h": header, f"{prefix}.c": source,
-            "force_main.c": _MAIN.format(prefix=prefix, P=P, nq=nq)}
+            "force_main.c": _MAIN.format(prefix=prefix, P=P, nq=nq, read_rows=READ_ROWS_C)}
 
 
 def block_controller(kind: str = "sensor", model: str = "finger3", params: Any = None,

@@ -43,7 +43,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.cexport.cexport import c_sources, check_output_directory, write_sources
-from .cexport import controller_c_sources
+from .cexport import READ_ROWS_C, controller_c_sources
 from .controller import ForceController
 from .step import ForceStep
 
@@ -233,22 +233,7 @@ int main(int argc, char** argv) {{
   int a = 1, i, e;
   alpes_step_state s;
   FILE* f;
-  if (argc > 2 && strcmp(argv[1], "-t") == 0) {{ repeat = atol(argv[2]); a = 3; }}
-  if (argc != a + 1 || (a == 3 && repeat < 1)) {{ fprintf(stderr, "usage: %s [-t REPEAT] FILE|-\n", argv[0]); return 2; }}
-  f = strcmp(argv[a], "-") == 0 ? stdin : fopen(argv[a], "r");
-  if (!f) {{ fprintf(stderr, "%s: cannot open %s\n", argv[0], argv[a]); return 2; }}
-  for (;;) {{
-    if (n == cap) {{
-      double* more = realloc(rows, sizeof(double) * NR * (cap = cap ? 2 * cap : 1024));
-      if (!more) {{ fprintf(stderr, "%s: out of memory\n", argv[0]); return 2; }}
-      rows = more;
-    }}
-    for (i = 0; i < NR; ++i) if (fscanf(f, "%lf", &rows[n * NR + i]) != 1) break;
-    if (i == 0) break;
-    if (i != NR) {{ fprintf(stderr, "%s: line %ld: expected %d numbers\n", argv[0], n + 1, NR); return 2; }}
-    ++n;
-  }}
-  if (repeat == 0) {{
+{read_rows}  if (repeat == 0) {{
     alpes_step_init(&s);
     for (k = 0; k < n; ++k) {{
       const double* x = rows + k * NR;
@@ -354,7 +339,7 @@ def step_c_sources(step: ForceStep, *, about: str = "") -> dict[str, str]:
         tau_max=step.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=step.n, nz=nz, nwork=nwork,
         observer_note=_observer_note(step) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
         z_note="" if filt else "; NaN: no observer", ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
-    files["main.c"] = _MAIN.format(build=build)
+    files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C)
     return dict(sorted(files.items()))
 
 

@@ -30,7 +30,7 @@ from ...checks import as_float_array
 from ...errors import InputError
 from .observers import Estimate
 
-__all__ = ["Nees", "nees", "joint_sigma", "predicted_covariance", "chi2_band", "NEES_EVERY"]
+__all__ = ["Banded", "Nees", "nees", "joint_sigma", "predicted_covariance", "chi2_band", "NEES_EVERY"]
 
 NEES_EVERY = 0.1
 """Default decimation of :func:`nees`, s: a filter's error at 1 kHz is correlated over tens of milliseconds (the
@@ -38,8 +38,29 @@ autocorrelation of finger3's normalised error falls to 0.1-0.2 at 50 ms on the e
 beyond (a frictionless finger's internal mode rings for seconds) is counted by the filter's error model."""
 
 
+class Banded:
+    """A normalised statistic with its chi-square band (:func:`chi2_band`): ``value`` (1 for a consistent filter),
+    ``low`` and ``high``, the band's ends. The base of :class:`Nees` and
+    :class:`~alpes_dyn.estimation.observers.innovation.Nis`."""
+
+    value: float
+    low: float
+    high: float
+
+    @property
+    def consistent(self) -> bool:
+        """Whether the statistic lies in its band."""
+        return bool(self.low <= self.value <= self.high)
+
+    @property
+    def verdict(self) -> str:
+        """``"consistent"``, ``"over-confident"`` (above the band: the reported sigma too small) or ``"cautious"``
+        (below it)."""
+        return "consistent" if self.consistent else ("over-confident" if self.value > self.high else "cautious")
+
+
 @dataclass
-class Nees:
+class Nees(Banded):
     """The NEES of an observer's joints over a run (see the module docstring).
 
     Attributes
@@ -62,16 +83,6 @@ class Nees:
     level: float
     every: float
     start: float
-
-    @property
-    def consistent(self) -> bool:
-        """Whether the NEES lies in its band."""
-        return bool(self.low <= self.value <= self.high)
-
-    @property
-    def verdict(self) -> str:
-        """``"consistent"``, ``"over-confident"`` (above the band: the sigma too small) or ``"cautious"``."""
-        return "consistent" if self.consistent else ("over-confident" if self.value > self.high else "cautious")
 
     def joint_band(self) -> tuple[float, float]:
         """The band at ``level`` of one joint's NEES (:attr:`per_joint`, 1 for a consistent filter): chi2 of

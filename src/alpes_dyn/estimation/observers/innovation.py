@@ -27,7 +27,7 @@ import numpy as np
 
 from ...checks import as_float_array
 from ...errors import InputError
-from .consistency import chi2_band
+from .consistency import Banded, chi2_band
 from .observers import Estimate
 
 __all__ = ["Nis", "nis", "NIS_LAGS"]
@@ -37,7 +37,7 @@ NIS_LAGS = 25
 
 
 @dataclass
-class Nis:
+class Nis(Banded):
     """The NIS of an observer over a run (see the module docstring).
 
     Attributes
@@ -63,16 +63,6 @@ class Nis:
     reported_rms: np.ndarray
     level: float
     start: float
-
-    @property
-    def consistent(self) -> bool:
-        """Whether the NIS lies in its band."""
-        return bool(self.low <= self.value <= self.high)
-
-    @property
-    def verdict(self) -> str:
-        """``"consistent"``, ``"over-confident"`` (above the band) or ``"cautious"`` (below it)."""
-        return "consistent" if self.consistent else ("over-confident" if self.value > self.high else "cautious")
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready."""
