@@ -11,6 +11,7 @@ from dataclasses import asdict
 from pathlib import Path
 from typing import Any, Callable
 
+from _table import case_notes, median_worst  # this folder is on the path
 from alpes_dyn.studies.realism import EKF_GOAL_DEG, FIT_EFFECTS
 from alpes_dyn.studies.realism_friction import (FRICTION_CASES, FRICTION_CASE_NAMES, RAMP_SECONDS, RAMP_TORQUE,
                                                 complete_seeds, friction_row, friction_summary)
@@ -97,18 +98,12 @@ def friction_text(out: dict) -> str:
                  f"{'adequate':>8} {'silent':>6} {'refused':>7} {'raised':>6} | {'NEES out':>8} {'true':>4} | "
                  f"{'|z| max':>7} {'<=3':>4}")
 
-    def mw(st: dict, fmt: str) -> str:
-        return "--" if st["median"] is None else f"{st['median']:{fmt}} / {st['worst']:{fmt}}"
+    mw = median_worst
     for c, s in out["summary"].items():
         z = "--" if s["z_worst"] is None else f"{s['z_worst']:7.1f} {100 * s['z_within_3']:3.0f}%"
         lines.append(f"{c:12} {s['n']:>3} | {mw(s['K_pct'], '5.2f'):>13} {mw(s['m_pct'], '5.1f'):>13} | "
                      f"{mw(s['ekf_deg'], '5.2f'):>13} {mw(s['ekf_true_file_deg'], '5.2f'):>13} | "
                      f"{s['adequate']:>8} {len(s['silent_misses']):>6} {len(s['refusals']):>7} {len(s['errors']):>6} | "
                      f"{s['nees_inconsistent']:>8} {s['nees_true_file_inconsistent']:>4} | {z}")
-        for m in s["silent_misses"]:
-            lines.append(f"    silent miss seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg, m {m['m_pct']:.1f} %")
-        for r in s["refusals"]:
-            lines.append(f"    refused seed {r['seed']}: {r['verdict'][:150]}")
-        for seed, err in s["errors"]:
-            lines.append(f"    raised seed {seed}: {err[:150]}")
+        lines += case_notes(s)
     return "\n".join(lines)

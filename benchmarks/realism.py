@@ -344,8 +344,9 @@ def summary_text(summary: dict) -> list[str]:
     """The distribution per case (:func:`~alpes_dyn.studies.realism.summarise`): median / worst of the extended fit's
     errors up to the common scale, of the EKF's worst joint and of the fit's time; the silent misses (adequate, but
     the EKF above EKF_GOAL_DEG or the masses above MASS_GOAL_PCT) and the refusals with their verdicts."""
-    def mw(st: dict, fmt: str = "5.2f") -> str:
-        return "--" if st["median"] is None else f"{st['median']:{fmt}} / {st['worst']:{fmt}}"
+    from _table import case_notes, median_worst  # this folder is on the path
+
+    mw = median_worst
     lines = [f"distribution per case (median / worst; extended fit, errors up to the common scale; silent miss: "
              f"adequate but EKF > {EKF_GOAL_DEG:g} deg on a joint or m > {MASS_GOAL_PCT:g} %)",
              f"{'case':9} {'n':>3} | {'K %':>13} {'m %':>13} {'F_s %':>13} {'F_v %':>13} | {'EKF deg':>13} | "
@@ -355,12 +356,7 @@ def summary_text(summary: dict) -> list[str]:
                      f"{mw(s['F_s_pct'], '5.1f'):>13} {mw(s['F_v_pct'], '5.1f'):>13} | {mw(s['ekf_deg']):>13} | "
                      f"{mw(s['fit_seconds'], '4.1f'):>11} | {s['adequate']:>8} {len(s['silent_misses']):>6} "
                      f"{len(s['refusals']):>7} {len(s['errors']):>6}")
-        for m in s["silent_misses"]:
-            lines.append(f"    silent miss seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg, m {m['m_pct']:.1f} %")
-        for r in s["refusals"]:
-            lines.append(f"    refused seed {r['seed']}: {r['verdict'][:150]}")
-        for seed, err in s["errors"]:
-            lines.append(f"    raised seed {seed}: {err[:150]}")
+        lines += case_notes(s)
         g = s["goal"]
         lines.append(f"    goal: adequate files within EKF {g['ekf_deg']:g} deg, K {g['K_pct']:g} %, m {g['m_pct']:g} % and no "
                      f"silent miss: {'met' if g['accuracy_met'] else 'MISSED'}; median fit within {g['fit_seconds']:g} s: "
