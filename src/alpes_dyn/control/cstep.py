@@ -43,6 +43,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..estimation.cexport.cexport import c_sources, check_output_directory, write_sources
+from ..estimation.cexport.cexport_substeps import _doubles  # a C initializer list, read back exactly
 from .cexport import READ_ROWS_C, controller_c_sources
 from .controller import ForceController
 from .step import ForceStep
@@ -268,10 +269,6 @@ int main(int argc, char** argv) {{
   return 0;
 }}
 """
-
-
-def _doubles(a: Any) -> str:
-    return ", ".join(repr(float(x)) for x in np.asarray(a, dtype=float).reshape(-1)) or "0.0"
 
 
 def step_c_sources(step: ForceStep, *, about: str = "") -> dict[str, str]:
