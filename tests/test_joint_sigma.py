@@ -77,26 +77,35 @@ def test_nees_on_our_simulator_is_in_its_band(finger3_run):
     np.testing.assert_allclose([free.low, free.high], chi2.ppf([0.025, 0.975], 3 * k.size) / k.size, rtol=1e-9)
 
 
+def oscillator_runs(dt: float, N: int, Q: np.ndarray, R: float, P0: np.ndarray, runs: int, seed: int):
+    """A lightly damped oscillator (test_simulation's) seen through its angle, ``runs`` draws of N periods of dt s
+    simulated here with exactly a filter's process noise Q (2, 2) and measurement noise R (rad^2), the initial state
+    drawn from N(0, P0) (its RK4 step is the Taylor polynomial of exp(A dt)): (its state space, A_d, the true states
+    (runs, N + 1, 2), the measurements (runs, N + 1, 1))."""
+    extras = JointExtras(stiffness=np.array([K_OSC]), armature=np.zeros(1), coulomb=np.zeros(1),
+                         viscous=np.array([C_OSC]))
+    ss = StateSpace(ad.Model(OSC_URDF, extras=extras, gravity=[0.0, 0.0, 0.0]), input="joint", output=np.eye(1))
+    A = np.array([[0.0, 1.0], [-K_OSC / I_OSC, -C_OSC / I_OSC]])
+    Ad = sum(np.linalg.matrix_power(A * dt, k) / math.factorial(k) for k in range(5))
+    rng = np.random.default_rng(seed)
+    X = np.zeros((runs, N + 1, 2))
+    X[:, 0] = rng.multivariate_normal(np.zeros(2), P0, runs)
+    for k in range(N):  # the truth, every run at once
+        X[:, k + 1] = X[:, k] @ Ad.T + rng.multivariate_normal(np.zeros(2), Q, runs)
+    Y = X[:, :, :1] + rng.normal(0.0, math.sqrt(R), (runs, N + 1, 1))
+    return ss, Ad, X, Y
+
+
 def test_nees_band_predicts_the_spread_of_a_linear_filter():
     """A lightly damped oscillator (1.3 Hz, damping ratio 0.03) seen through its angle, simulated here with exactly
     the filter's process and measurement noises (its RK4 step is the Taylor polynomial of exp(A dt)): over 150 runs
     the NEES averages 1 and its spread across runs is the one the band assumes, 2 n / M_eff (within the Monte Carlo
     error of a heavy-tailed variance: 1.30 and 1.11 on 200 runs of two other draws), where independent samples
     would give a tenth of it: M_eff is 3.5 of the 31 decimated samples."""
-    extras = JointExtras(stiffness=np.array([K_OSC]), armature=np.zeros(1), coulomb=np.zeros(1),
-                         viscous=np.array([C_OSC]))
-    ss = StateSpace(ad.Model(OSC_URDF, extras=extras, gravity=[0.0, 0.0, 0.0]), input="joint", output=np.eye(1))
     dt, N, Q, R = 1e-3, 2000, np.diag([0.0, 1e-8]), np.array([[1e-4]])
-    f = ExtendedKalmanFilter(ss, dt, process_noise=Q, measurement_noise=R)
-    A = np.array([[0.0, 1.0], [-K_OSC / I_OSC, -C_OSC / I_OSC]])
-    Ad = sum(np.linalg.matrix_power(A * dt, k) / math.factorial(k) for k in range(5))
-    rng = np.random.default_rng(9101)
     runs, P0 = 150, np.diag([1e-2, 1e-1])
-    X = np.zeros((runs, N + 1, 2))
-    X[:, 0] = rng.multivariate_normal(np.zeros(2), P0, runs)
-    for k in range(N):  # the truth, every run at once
-        X[:, k + 1] = X[:, k] @ Ad.T + rng.multivariate_normal(np.zeros(2), Q, runs)
-    Y = X[:, :, :1] + rng.normal(0.0, 1e-2, (runs, N + 1, 1))
+    ss, _, X, Y = oscillator_runs(dt, N, Q, float(R[0, 0]), P0, runs, seed=9101)
+    f = ExtendedKalmanFilter(ss, dt, process_noise=Q, measurement_noise=R)
     W = np.zeros((N, 1))
     values, pred = [], []
     for i in range(runs):  # a filter run per draw

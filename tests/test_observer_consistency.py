@@ -10,7 +10,6 @@ a quarter of the encoder's true noise variance.
 
 from __future__ import annotations
 
-import math
 
 import numpy as np
 import pytest
@@ -19,10 +18,9 @@ import alpes_dyn as ad
 from alpes_dyn.errors import InputError
 from alpes_dyn.estimation.observers.innovation import nis
 from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter
-from alpes_dyn.model.extras import JointExtras
 from alpes_dyn.symbolic.statespace import StateSpace
 
-from test_simulation import C_OSC, I_OSC, K_OSC, OSC_URDF
+from test_joint_sigma import oscillator_runs as simulated_oscillator
 
 DT, N, Q, R_TRUE = 1e-3, 1500, np.diag([0.0, 1e-8]), 1e-4
 
@@ -31,20 +29,10 @@ DT, N, Q, R_TRUE = 1e-3, 1500, np.diag([0.0, 1e-8]), 1e-4
 def oscillator_runs():
     """40 runs of the oscillator seen through its angle (noise 1e-2 rad), the truth drawn here; the filter told the
     true R and one told a quarter of it."""
-    extras = JointExtras(stiffness=np.array([K_OSC]), armature=np.zeros(1), coulomb=np.zeros(1),
-                         viscous=np.array([C_OSC]))
-    ss = StateSpace(ad.Model(OSC_URDF, extras=extras, gravity=[0.0, 0.0, 0.0]), input="joint", output=np.eye(1))
+    P0 = np.diag([1e-2, 1e-1])
+    ss, Ad, _, Y = simulated_oscillator(DT, N, Q, R_TRUE, P0, 40, seed=9640)
     right = ExtendedKalmanFilter(ss, DT, process_noise=Q, measurement_noise=np.array([[R_TRUE]]))
     proud = ExtendedKalmanFilter(ss, DT, process_noise=Q, measurement_noise=np.array([[R_TRUE / 4]]))
-    A = np.array([[0.0, 1.0], [-K_OSC / I_OSC, -C_OSC / I_OSC]])
-    Ad = sum(np.linalg.matrix_power(A * DT, k) / math.factorial(k) for k in range(5))
-    rng = np.random.default_rng(9640)
-    runs, P0 = 40, np.diag([1e-2, 1e-1])
-    X = np.zeros((runs, N + 1, 2))
-    X[:, 0] = rng.multivariate_normal(np.zeros(2), P0, runs)
-    for k in range(N):  # the truth, every run at once
-        X[:, k + 1] = X[:, k] @ Ad.T + rng.multivariate_normal(np.zeros(2), Q, runs)
-    Y = X[:, :, :1] + rng.normal(0.0, math.sqrt(R_TRUE), (runs, N + 1, 1))
     W = np.zeros((N, 1))
     return right, proud, Ad, W, Y, np.diag(P0)
 
