@@ -464,15 +464,34 @@ def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> tuple[
         raise ModelError(f"mjcf: actuator {aname!r}'s spatial tendon crosses no joint")
     rel = fit.error / fit.scale if fit.scale else 0.0
     tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
-    if rel > TOLERANCE and fit.reason:
-        raise ModelError(f"mjcf: spatial tendon {tname!r} (actuator {aname!r}): {fit.reason}; the spec's ratios are "
-                         f"one polynomial per joint (best fit {rel:.2g} off, relative): not imported")
+    if rel > TOLERANCE and fit.reason:  # no polynomial follows it: the tendon's geometry instead
+        return _path_motor(mujoco, m, t, aname, gear, names, f"spatial tendon {tname!r} (actuator {aname!r})"), 0.0, ""
     note = ""
     if rel > TOLERANCE:
         note = (f"spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as polynomials of each "
                 f"joint's angle, largest error {fit.error:.2g} rad/rad ({rel:.2g} of the largest ratio), motor angle "
                 f"g L(q) to {fit.length_error:.2g} rad, over the joint ranges")
     return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve), rel, note
+
+
+def _path_motor(mujoco, m, t: int, aname: str, gear: float, names: list, where: str) -> Motor:
+    """The motor of actuator ``aname`` on spatial tendon ``t`` as the tendon's path (:mod:`alpes_dyn.model.mjcf_path`),
+    checked against MuJoCo at random states over the joints' box; its ``joints`` the ratios at q = 0."""
+    from .mjcf_path import PATH_CHECKS, check_path, spatial_path
+    from .mjcf_spatial import tendon_jacobian
+
+    path = spatial_path(mujoco, m, t, gear, names, where)
+    lo, hi = m.jnt_range[:, 0], m.jnt_range[:, 1]
+    check_path(mujoco, m, t, path, names, lo + (hi - lo) * np.random.default_rng(0).random((PATH_CHECKS, m.njnt)),
+               where)
+    d = mujoco.MjData(m)
+    d.qpos[:] = 0.0
+    mujoco.mj_fwdPosition(m, d)
+    J = gear * tendon_jacobian(m, d)[t][m.jnt_dofadr]
+    joints = {names[j]: float(J[j]) for j in range(m.njnt) if J[j] != 0.0 and names[j] in path.joint_names}
+    if not joints:
+        raise ModelError(f"mjcf: {where}: its moment arms are all 0 at q = 0, where the spec's ratios are read")
+    return Motor(aname, joints, rotor_inertia=_tendon_armature(m, t) / gear**2, path=path)
 
 
 def _curve_warning(notes: list[tuple[float, str]]) -> None:

@@ -15,7 +15,10 @@ import numpy as np
 from ..errors import ModelError
 from .spatial_path import PathFrame, PathPoint, SpatialPath
 
-__all__ = ["spatial_path", "check_path"]
+__all__ = ["PATH_CHECKS", "spatial_path", "check_path"]
+
+PATH_CHECKS = 256
+"""Random states over the joints' box (a fixed seed) at which the import checks a path against MuJoCo."""
 
 AGREEMENT = 1e-9
 """The largest relative error of the path's length and ratios against MuJoCo's at which the import accepts it."""

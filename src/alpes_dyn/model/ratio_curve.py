@@ -106,6 +106,11 @@ class RatioCurve:
             out = out + c * qp
         return out
 
+    def torque_jacobian(self, q: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
+        """d(rho(q)^T tau_m)/dq (n, n), N m/rad: diagonal, each rho_ki depending on q_i alone (numpy q (n,), tau_m
+        (m,))."""
+        return np.diag(np.asarray(tau_m, dtype=float) @ self.slope(q))
+
     @property
     def shape(self) -> tuple[int, int]:
         """(m, n), S's."""

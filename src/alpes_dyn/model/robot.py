@@ -539,7 +539,7 @@ class Model(FrameKinematics):
             return self.gravity_torque(q) - tau if curve is None else self.gravity_torque(q) - tau - curve.ratio(q).T @ tau_m
 
         def jac(q: np.ndarray) -> np.ndarray:
-            return self.gravity_jacobian(q) if curve is None else self.gravity_jacobian(q) - np.diag(tau_m @ curve.slope(q))
+            return self.gravity_jacobian(q) if curve is None else self.gravity_jacobian(q) - curve.torque_jacobian(q, tau_m)
         q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
         if isinstance(fixed, str):
             fixed = (fixed,)

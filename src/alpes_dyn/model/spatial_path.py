@@ -59,6 +59,19 @@ def _table(value: Any, keys: Sequence[str], where: str) -> Mapping[str, Any]:
     return value
 
 
+def _inline(value: Any) -> str:
+    """``value`` (tables, arrays, names, numbers) as TOML inline text."""
+    import json
+
+    if isinstance(value, dict):
+        return "{ " + ", ".join(f"{k} = {_inline(v)}" for k, v in value.items()) + " }"
+    if isinstance(value, (list, tuple)):
+        return "[" + ", ".join(_inline(v) for v in value) + "]"
+    if isinstance(value, str):
+        return json.dumps(value)
+    return repr(float(value))
+
+
 def quat_matrix(quat: Sequence[float]) -> np.ndarray:
     """The rotation matrix (3, 3) of quaternion (w, x, y, z) (normalised first, as MuJoCo does)."""
     w, x, y, z = np.asarray(quat, dtype=float) / np.linalg.norm(quat)
@@ -207,6 +220,10 @@ class SpatialPath:
             return cls(t.get("gear", 1.0), frames, points)
         except ModelError as exc:
             raise ModelError(f"{where}.{exc}") from None
+
+    def to_toml(self) -> str:
+        """The spec's ``path`` table as one TOML inline table (``path = ...``'s value)."""
+        return _inline(self.to_table())
 
     def to_table(self) -> dict:
         """The spec's ``path`` table."""

@@ -135,7 +135,7 @@ IDENTIFIED_TABLES: tuple[str, ...] = ("stiffness", "coulomb", "viscous", "rotor_
                                       "capstan")
 """The tables of a spec's ``[identified]`` section: the standard error of each identified value, by joint (the
 per-joint tables) or by motor (``rotor_inertia``, ``tendon_compliance``, ``capstan``)."""
-_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance", "ratio_curve", "capstan")
+_MOTOR_KEYS = ("name", "joints", "rotor_inertia", "tendon_compliance", "ratio_curve", "capstan", "path")
 _MOTOR_REQUIRED = ("name", "joints")
 
 
@@ -151,7 +151,9 @@ class Motor:
     ``ratio_curve``: {joint name: (c_1, ..., c_P)} the coefficients of q^1 .. q^P of that joint's ratio
     (rad/rad^(p+1); P <= :data:`~alpes_dyn.model.ratio_curve.MAX_CURVE_DEGREE`), each joint one of ``joints``; empty
     (default): constant ratios. ``capstan``: mu theta (dimensionless, finite, >= 0) of the tendon's sheath friction
-    (the module doc; 0: none).
+    (the module doc; 0: none). ``path``: the tendon's geometry (a
+    :class:`~alpes_dyn.model.spatial_path.SpatialPath` or its table; None, the default: none), its ratios then from
+    its length (``joints`` its ratios at q = 0; no ``ratio_curve`` with it).
     """
 
     name: str
@@ -160,6 +162,7 @@ class Motor:
     tendon_compliance: float = 0.0
     ratio_curve: Mapping[str, Sequence[float]] = field(default_factory=dict)
     capstan: float = 0.0
+    path: Any = None
 
     def __post_init__(self) -> None:
         _name(self.name, "motor.name")
@@ -180,6 +183,13 @@ class Motor:
                                                                        0.0, unit="rad/(N m)"))
         object.__setattr__(self, "ratio_curve", _ratio_curve(self.ratio_curve, clean, where))
         object.__setattr__(self, "capstan", _number(self.capstan, f"{where}.capstan", 0.0, unit="-"))
+        if self.path is not None:
+            from .spatial_path import SpatialPath
+
+            path = self.path if isinstance(self.path, SpatialPath) else SpatialPath.from_table(self.path, where)
+            if self.ratio_curve:
+                raise ModelError(f"{where}.path: a motor has a path or a ratio_curve, not both")
+            object.__setattr__(self, "path", path)
 
 
 _TABLE_UNITS = {"stiffness": "N m/rad", "coulomb": "N m", "viscous": "N m s/rad", "armature": "kg m^2", "rest_angle": "rad"}
@@ -296,7 +306,7 @@ class TransmissionSpec:
                 if k not in m:
                     raise ModelError(f"motor[{i}].{k}: missing field")
             motors.append(Motor(m["name"], m["joints"], m.get("rotor_inertia", 0.0), m.get("tendon_compliance", 0.0),
-                                m.get("ratio_curve", {}), m.get("capstan", 0.0)))
+                                m.get("ratio_curve", {}), m.get("capstan", 0.0), m.get("path")))
         kw = {k: data[k] for k in _TOP_KEYS if k in data and k != "motor"}
         if "tips" in kw and isinstance(kw["tips"], list):
             kw["tips"] = tuple(kw["tips"])
@@ -342,6 +352,8 @@ class TransmissionSpec:
             if m.ratio_curve:
                 out.append("ratio_curve = { " + ", ".join(f"{q(j)} = [{', '.join(repr(x) for x in c)}]"
                                                           for j, c in m.ratio_curve.items()) + " }")
+            if m.path is not None:
+                out.append(f"path = {m.path.to_toml()}")
         for t in JOINT_TABLES + (REST_TABLE,):
             table = getattr(self, t)
             if table:
@@ -428,7 +440,8 @@ class TransmissionSpec:
         return Transmission(tuple(m.name for m in self.motors), S, (S != 0).astype(float), self.encoder_counts,
                             np.array([m.rotor_inertia for m in self.motors]),
                             np.array([m.tendon_compliance for m in self.motors]), C,
-                            np.array([m.capstan for m in self.motors]))
+                            np.array([m.capstan for m in self.motors]), tuple(m.path for m in self.motors),
+                            tuple(joint_names))
 
 
 def _identified(data: Any, spec: "TransmissionSpec") -> Mapping[str, Any]:

@@ -108,6 +108,10 @@ class Transmission:
     capstan: (m,) mu theta of each motor's tendon, dimensionless, >= 0 (default zeros: no sheath friction): the
         friction coefficient times the wrap angle of the sheaths and pulleys it slides over; the motor torque that
         reaches the joints is :func:`capstan_torque`'s (:meth:`transmitted`).
+    paths: (m,) a :class:`~alpes_dyn.model.spatial_path.SpatialPath` or None for each motor (default None: none):
+        a motor's spatial tendon as its geometry, its ratios from its length (:mod:`alpes_dyn.model.path_ratios`; S
+        its ratios at q = 0); :attr:`curve` is then a :class:`~alpes_dyn.model.path_ratios.PathRatios`.
+    joint_names: (n,) the joints' names, which the paths name (with ``paths``).
     """
 
     motor_names: tuple[str, ...]
@@ -118,6 +122,8 @@ class Transmission:
     tendon_compliance: np.ndarray | None = None
     ratio_curve: np.ndarray | None = None
     capstan: np.ndarray | None = None
+    paths: tuple | None = None
+    joint_names: tuple | None = None
 
     def __post_init__(self) -> None:
         J = np.zeros(self.S.shape[0]) if self.rotor_inertia is None else np.asarray(self.rotor_inertia, dtype=float)
@@ -138,6 +144,12 @@ class Transmission:
         mu.flags.writeable = False
         object.__setattr__(self, "capstan", mu)
         curve = None if self.ratio_curve is None else RatioCurve(self.S, self.ratio_curve)
+        if self.paths is not None and any(p is not None for p in self.paths):
+            from .path_ratios import PathRatios
+
+            base = curve if curve is not None else RatioCurve(self.S, np.zeros((1,) + self.S.shape))
+            curve = PathRatios(base, {k: p for k, p in enumerate(self.paths) if p is not None}, self.motor_names,
+                               self.joint_names)
         object.__setattr__(self, "_curve", curve)
 
     @property
@@ -146,8 +158,9 @@ class Transmission:
         return self._curve is not None
 
     @property
-    def curve(self) -> RatioCurve | None:
-        """The q-dependent ratios (:class:`~alpes_dyn.model.ratio_curve.RatioCurve`), None for a constant S."""
+    def curve(self) -> Any:
+        """The q-dependent ratios (:class:`~alpes_dyn.model.ratio_curve.RatioCurve`, or
+        :class:`~alpes_dyn.model.path_ratios.PathRatios` with :attr:`paths`), None for a constant S."""
         return self._curve
 
     def ratio(self, q: np.ndarray) -> np.ndarray:

@@ -396,7 +396,7 @@ class StateSpace(Rebuilt):
                 raise InputError("F: the equilibrium under contact forces is not built for ratios that change with q")
             c = self._curve
             q = newton_equilibrium(lambda q: self.model.gravity_torque(q) - c.ratio(q).T @ u,
-                                   lambda q: self.model.gravity_jacobian(q) - np.diag(u @ c.slope(q)), q0, tol)
+                                   lambda q: self.model.gravity_jacobian(q) - c.torque_jacobian(q, u), q0, tol)
         elif F is None:
             q = self.model.static_equilibrium(tau, q0, tol)
         else:
