@@ -1,0 +1,150 @@
+"""Spatial tendons that touch, leave or change side of their wrapping geoms, imported as their geometry (issue 51,
+item 1): MuJoCo's ``tendon_arm/arm26`` (its muscles replaced by motors) over its whole range, a sphere wrap and side
+sites, lengths and moment arms against MuJoCo's ``ten_length`` / ``ten_J`` to 1e-9 at random states on both sides of
+each switch, and the dynamics (numeric and CasADi) under the tendons' motors against MuJoCo's ``qacc``."""
+
+from __future__ import annotations
+
+import pickle
+
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import ModelError
+from alpes_dyn.model.spec import TransmissionSpec
+
+mujoco = pytest.importorskip("mujoco")
+from alpes_dyn.model.mjcf_spatial import tendon_jacobian  # noqa: E402
+from test_mjcf_spatial import ARM26, only  # noqa: E402
+
+SPHERE = """<mujoco model="ball">
+  <default><joint type="hinge" axis="0 1 0" limited="true" range="-150 150" damping="0.1"/></default>
+  <worldbody>
+    <site name="a" pos="-0.2 0 0.05"/><site name="side" pos="0 0 0.3"/>
+    <body pos="0 0 0">
+      <joint name="j1"/><geom name="ball" type="sphere" size="0.06" mass="0.5"/>
+      <geom type="capsule" fromto="0 0 0 0.3 0 0" size="0.02"/>
+      <site name="b" pos="0.2 0.01 0.04"/>
+      <body pos="0.3 0 0">
+        <joint name="j2" axis="0 0 1"/><geom type="capsule" fromto="0 0 0 0.2 0 0" size="0.02"/>
+        <site name="c" pos="0.15 0.03 0.02"/>
+      </body>
+    </body>
+  </worldbody>
+  <tendon>
+    <spatial name="over"><site site="a"/><geom geom="ball" sidesite="side"/><site site="b"/></spatial>
+    <spatial name="free"><site site="a"/><geom geom="ball"/><site site="c"/></spatial>
+    <spatial name="split"><site site="a"/><site site="b"/><pulley divisor="2"/><site site="a"/><site site="c"/>
+    </spatial>
+  </tendon>
+  <actuator><motor name="over" tendon="over" gear="3"/><motor name="free" tendon="free"/>
+    <motor name="split" tendon="split" gear="-2"/></actuator>
+</mujoco>"""
+"""Two hinges (about y, then z), a sphere on the first body: a tendon over it on its side site's side, one without a
+side site whose last segment spans both joints, and a pulley's two branches (divisor 2)."""
+
+
+def against_mujoco(xml: str, draws: int, seed: int) -> tuple[float, float, float, float]:
+    """The largest errors of the imported model against MuJoCo at ``draws`` random states over the joints' box:
+    ratios (relative to the largest), motor angles g (L(q) - L(0)) (rad), numeric q̈ and CasADi q̈ (relative)."""
+    from alpes_dyn.symbolic.statespace import StateSpace
+
+    model = ad.Model.from_mjcf(xml)
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_fwdPosition(m, d)
+    gear = m.actuator_gear[:, 0]
+    d.qpos[:] = 0.0
+    mujoco.mj_fwdPosition(m, d)
+    L0 = d.ten_length.copy()
+    ss = StateSpace(model, input="motor", output="encoder")
+    tr, rng = model.transmission, np.random.default_rng(seed)
+    lo, hi = m.jnt_range[:, 0], m.jnt_range[:, 1]
+    err = np.zeros(4)
+    for _ in range(draws):
+        q, v, u = lo + (hi - lo) * rng.random(m.njnt), rng.normal(size=m.nv), 0.5 * rng.normal(size=m.nu)
+        d.qpos[:], d.qvel[:], d.ctrl[:] = q, v, u
+        mujoco.mj_forward(m, d)
+        J = gear[:, None] * tendon_jacobian(m, d)
+        qdd = model.forward_dynamics(q, v, tr.joint_torque(u, q))
+        xdot = ss.f(np.r_[q, v], u)
+        scale = np.max(np.abs(d.qacc))
+        err = np.maximum(err, [np.max(np.abs(tr.ratio(q) - J)) / np.max(np.abs(J)),
+                               np.max(np.abs(tr.curve.angle(q) - gear * (d.ten_length - L0))),
+                               np.max(np.abs(qdd - d.qacc)) / scale, np.max(np.abs(xdot[m.nv:] - d.qacc)) / scale])
+    return tuple(err)
+
+
+def test_arm26_over_its_whole_range():
+    """arm26 over 0..120 degrees: SF and EF leave their cylinders, SE and EE change side, BF and BE do both over two
+    joints: each imported as its path; ratios, motor angles and q̈ (numeric and CasADi, all six motors driving)
+    equal MuJoCo's to 1e-9 at random states, which fall on both sides of each switch."""
+    model = ad.Model.from_mjcf(ARM26)
+    assert all(mo.path is not None for mo in model.spec.motors)
+    assert [sorted(mo.joints) for mo in model.spec.motors][4:] == [["elbow", "shoulder"]] * 2
+    ratio, angle, qdd, sym = against_mujoco(ARM26, 24, 9811)
+    assert ratio < 1e-9 and angle < 1e-9 and qdd < 1e-9 and sym < 1e-9
+
+
+def test_both_sides_of_a_switch():
+    """SE wraps its cylinder up to a shoulder angle near 1.95 rad, then goes straight (its side site no longer between
+    its ends); EE's side solution changes near an elbow angle of 2 rad: the imported ratio follows MuJoCo's on a fine
+    sweep through both switches, to 1e-9 m/rad."""
+    model = ad.Model.from_mjcf(only(ARM26, "SE", "EE"))
+    m = mujoco.MjModel.from_xml_string(only(ARM26, "SE", "EE"))
+    d = mujoco.MjData(m)
+    sweep = np.linspace(1.9, 2.09, 40)
+    qs = np.stack([sweep, sweep], axis=1)
+    R = model.transmission.ratio(qs)  # batched: (40, 2, 2)
+    wraps = []
+    for q, r in zip(qs, R):
+        d.qpos[:] = q
+        mujoco.mj_fwdPosition(m, d)
+        wraps.append(tuple(d.ten_wrapnum))
+        assert np.max(np.abs(r - tendon_jacobian(m, d))) < 1e-9
+    assert len(set(w[0] for w in wraps)) == 2  # SE: wrapped, then straight
+
+
+def test_sphere_side_site_pulley():
+    """A sphere wrap with a side site, one without (its segment spans two joints) and a pulley: lengths and moment
+    arms MuJoCo's to 1e-9, the dynamics too (numeric and CasADi)."""
+    ratio, angle, qdd, sym = against_mujoco(SPHERE, 16, 9812)
+    assert ratio < 1e-9 and angle < 1e-9 and qdd < 1e-9 and sym < 1e-9
+
+
+def test_path_spec_round_trip_and_pickle():
+    """The spec's ``path`` is written and read back unchanged; a pickled model gives the same ratios."""
+    model = ad.Model.from_mjcf(ARM26)
+    assert TransmissionSpec.from_toml(model.spec.to_toml()) == model.spec
+    q = np.array([1.0, 1.9])
+    np.testing.assert_allclose(pickle.loads(pickle.dumps(model)).transmission.ratio(q),
+                               model.transmission.ratio(q), rtol=0, atol=1e-15)
+
+
+@pytest.mark.parametrize("change, needle", [
+    (lambda t: t.update(kind="cone"), "path.points[1].kind: expected one of cylinder, sphere"),
+    (lambda t: t.update(radius=-1.0), "path.points[1].radius: expected a finite number > 0"),
+    (lambda t: t.update(frame="nowhere"), "path.points[1].frame: 'nowhere' is not one of the path's frames"),
+    (lambda t: t.update(extra=1), "path.points[1].extra: unknown key"),
+])
+def test_bad_path_tables_named(change, needle):
+    """A spec's path with a bad field is refused in one line naming the motor and the field."""
+    spec = ad.Model.from_mjcf(only(ARM26, "SE")).spec
+    mo = spec.motors[0]
+    table = mo.path.to_table()
+    change(table["points"][1])
+    with pytest.raises(ModelError, match=r"motor 'SE'\.") as info:
+        ad.model.spec.Motor(mo.name, dict(mo.joints), path=table)
+    assert needle in str(info.value) and "\n" not in str(info.value)
+
+
+def test_side_site_inside_its_geom_refused():
+    """A side site inside its wrapping cylinder (MuJoCo solves that path by Newton's method to 1e-6, no closed form):
+    refused, the tendon, the site and the geom named."""
+    xml = only(ARM26, "SE").replace('<site name="x0" pos="0 -0.15 0"/>', '<site name="x0" pos="0 -0.05 0"/>')
+    xml = xml.replace('<geom name="shoulder" type="cylinder"', '<site name="in" pos="0 -0.05 0"/><geom '
+                      'name="shoulder" type="cylinder"').replace('sidesite="x0"', 'sidesite="in"')
+    with pytest.raises(ModelError, match=r"spatial tendon 'SE' \(actuator 'SE'\): its side site 'in' is inside its "
+                                         r"wrapping geom 'shoulder'"):
+        ad.Model.from_mjcf(xml)
