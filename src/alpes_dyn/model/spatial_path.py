@@ -26,7 +26,7 @@ import numpy as np
 
 from ..errors import ModelError
 
-__all__ = ["PathFrame", "PathPoint", "SpatialPath"]
+__all__ = ["PathFrame", "PathPoint", "SpatialPath", "spatial_path"]
 
 KINDS = ("cylinder", "sphere")
 """The wrapping geoms represented (MuJoCo wraps on no other)."""
@@ -267,3 +267,11 @@ class SpatialPath:
                 k += 1
             total = total + seg / divisor
         return total
+
+
+def spatial_path(value: Any, curved: bool, where: str) -> SpatialPath:
+    """A motor's ``path`` (a :class:`SpatialPath` or its spec table) validated; ``curved``: the motor also has a
+    ``ratio_curve`` (refused). ModelError naming ``where`` and the field."""
+    if curved:
+        raise ModelError(f"{where}.path: a motor has a path or a ratio_curve, not both")
+    return value if isinstance(value, SpatialPath) else SpatialPath.from_table(value, where)

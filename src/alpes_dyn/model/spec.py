@@ -118,6 +118,7 @@ from ..fileio import load_toml, read_text
 from .extras import JointExtras, spring_stiffness
 from .params import IDENTIFICATION_FIELDS, HandParams
 from .spec_values import STOP_KEYS, STOPS_TABLE, _name, _number, _ratio_curve, parse_stops, stop_values, stops_toml
+from .spatial_path import spatial_path
 from .transmission import Transmission
 
 __all__ = ["Motor", "TransmissionSpec", "load_spec", "alpes_spec", "alpes_motors", "alpes_transmission", "example_spec_path", "JOINT_TABLES",
@@ -151,9 +152,8 @@ class Motor:
     ``ratio_curve``: {joint name: (c_1, ..., c_P)} the coefficients of q^1 .. q^P of that joint's ratio
     (rad/rad^(p+1); P <= :data:`~alpes_dyn.model.ratio_curve.MAX_CURVE_DEGREE`), each joint one of ``joints``; empty
     (default): constant ratios. ``capstan``: mu theta (dimensionless, finite, >= 0) of the tendon's sheath friction
-    (the module doc; 0: none). ``path``: the tendon's geometry (a
-    :class:`~alpes_dyn.model.spatial_path.SpatialPath` or its table; None, the default: none), its ratios then from
-    its length (``joints`` its ratios at q = 0; no ``ratio_curve`` with it).
+    (the module doc; 0: none). ``path``: the tendon's geometry, its ratios from its length (``joints`` those at q = 0;
+    :func:`~alpes_dyn.model.spatial_path.spatial_path`); None (default): none.
     """
 
     name: str
@@ -184,12 +184,7 @@ class Motor:
         object.__setattr__(self, "ratio_curve", _ratio_curve(self.ratio_curve, clean, where))
         object.__setattr__(self, "capstan", _number(self.capstan, f"{where}.capstan", 0.0, unit="-"))
         if self.path is not None:
-            from .spatial_path import SpatialPath
-
-            path = self.path if isinstance(self.path, SpatialPath) else SpatialPath.from_table(self.path, where)
-            if self.ratio_curve:
-                raise ModelError(f"{where}.path: a motor has a path or a ratio_curve, not both")
-            object.__setattr__(self, "path", path)
+            object.__setattr__(self, "path", spatial_path(self.path, bool(self.ratio_curve), where))
 
 
 _TABLE_UNITS = {"stiffness": "N m/rad", "coulomb": "N m", "viscous": "N m s/rad", "armature": "kg m^2", "rest_angle": "rad"}
