@@ -89,13 +89,14 @@ _MJCF_EQ = ('<mujoco><worldbody><body name="a"><joint name="j" range="-1 1"/><in
             'diaginertia="1 1 1"/><body name="b"><joint name="k" range="-1 1"/><inertial pos="0 0 0" mass="1" '
             'diaginertia="1 1 1"/></body></body></worldbody><equality>{}</equality></mujoco>')
 """A two-hinge MJCF with the equality given (``.format``): the import reads joint couplings only."""
-_MJCF_FLIP = ('<mujoco><worldbody><site name="s4" pos="-0.1 -0.06 0"/><site name="x1" pos="0 -0.15 0"/><body>'
-              '<joint name="elbow" axis="0 0 1" range="0 120"/><geom name="elbow" type="cylinder" size=".08 .05"/>'
-              '<site name="s8" pos="0.11 -0.05 0"/></body></worldbody><tendon><spatial name="EE"><site site="s4"/>'
-              '<geom geom="elbow" sidesite="x1"/><site site="s8"/></spatial></tendon><actuator><motor name="EE" '
-              'tendon="EE"/></actuator></mujoco>')
-"""MuJoCo's arm26 elbow extensor (a motor for its muscle): over 0..120 degrees its tendon changes side of the
-elbow's cylinder (its moment arm jumps from 0.08 to -0.08 m), which no polynomial of the angle follows."""
+_MJCF_FLIP = ('<mujoco><worldbody><site name="s0" pos="-0.15 0 0"/><body><joint name="shoulder" axis="0 0 1" '
+              'range="0 120"/><geom name="shoulder" type="cylinder" size=".1 .05"/><site name="in" pos="0 -0.05 0"/>'
+              '<site name="s2" pos="0.15 -0.06 0"/></body></worldbody><tendon><spatial name="SE"><site site="s0"/>'
+              '<geom geom="shoulder" sidesite="in"/><site site="s2"/></spatial></tendon><actuator><motor name="SE" '
+              'tendon="SE"/></actuator></mujoco>')
+"""MuJoCo's arm26 shoulder extensor (a motor for its muscle) with its side site moved inside the shoulder's cylinder:
+over 0..120 degrees its tendon leaves the cylinder (no polynomial follows it), and its path is MuJoCo's Newton
+iteration (``wrap_inside``, to 1e-6), which has no closed form: refused, the site and the geom named."""
 _MJCF_BODY = '<body name="b{0}"><joint name="j{0}" range="-1 1"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>'
 _MJCF_DEEP = "<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) for i in range(500)) + "</body>" * 500 + (
     "</worldbody></mujoco>")
@@ -862,8 +863,8 @@ CLI: dict[str, list[Cli]] = {
         C("import", "--model", "{slide_xml}", "--out-dir", "{tmp}/out", needle="--model: joint 'ja' is a slide joint"),
         C("import", "--model", "{norange_xml}", "--out-dir", "{tmp}/out", needle="--model: joint 'ja' has no range"),
         C("import", "--model", "{notxml_xml}", "--out-dir", "{tmp}/out", needle="--model: MuJoCo cannot compile it"),
-        C("import", "--model", "{flip_xml}", "--out-dir", "{tmp}/out", needle="--model: spatial tendon 'EE' (actuator 'EE'): "
-          "it changes side of its wrapping geom 'elbow'"),
+        C("import", "--model", "{flip_xml}", "--out-dir", "{tmp}/out", needle="--model: spatial tendon 'SE' (actuator 'SE'): "
+          "its side site 'in' is inside its wrapping geom 'shoulder'"),
         C("import", "--model", "{nan_xml}", "--out-dir", "{tmp}/out", needle="--model: <body name='a'> pos='nan 0 0.1': a "
           "number is NaN"),
         C("import", "--model", "{deep_xml}", "--out-dir", "{tmp}/out", needle="--model: bodies nested over 100 deep, the limit"),
@@ -1746,7 +1747,8 @@ API: list[Api] = [
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<weld name="w" body1="b" body2="world"/>')),
       ModelError, "mjcf: equality 'w' is a weld between 'b' and 'world': a closed kinematic loop"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_FLIP), ModelError,
-      "mjcf: spatial tendon 'EE' (actuator 'EE'): it changes side of its wrapping geom 'elbow' between elbow = "),
+      "mjcf: spatial tendon 'SE' (actuator 'SE'): its side site 'in' is inside its wrapping geom 'shoulder' (MuJoCo "
+      "then finds the path by Newton's method"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint name="e" joint1="k" joint2="j" polycoef="0 1 2 0 0"/>')),
       ModelError, "mjcf: equality 'e' on joint 'k' is not a linear coupling of two joints"),
     A("Model", lambda c: ad.Model.from_mjcf(_MJCF_EQ.format('<joint joint1="k"/>')),
