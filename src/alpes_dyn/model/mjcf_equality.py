@@ -82,7 +82,7 @@ def fold_couplings(motors: list, tables: dict, stops: dict, fold: dict) -> list:
     out = []
     for mo in motors:
         tied = [j for j in mo.joints if j in fold]
-        bent = [j for j in tied if j in mo.ratio_curve]
+        bent = [j for j in tied if j in mo.ratio_curve] + [j for j in (mo.path.joint_names if mo.path else ()) if j in fold]
         if bent:
             raise ModelError(f"mjcf: actuator {mo.name!r}'s spatial tendon crosses joint {bent[0]!r}, which a joint "
                              f"equality ties to {fold[bent[0]][0]!r}; a curved ratio on a tied joint is not modelled")

@@ -90,7 +90,8 @@ def identified_spec(result: Any, base: TransmissionSpec, masses: str = "refuse")
             std.setdefault(_MOTOR_FIELD[p.kind], {})[p.motor] = sd
         else:
             raise ModelError(f"identified spec: {name!r} has no place in a spec file")
-    new_motors = tuple(Motor(m.name, dict(m.joints), **motors[m.name], ratio_curve=m.ratio_curve) for m in base.motors)
+    new_motors = tuple(Motor(m.name, dict(m.joints), **motors[m.name], ratio_curve=m.ratio_curve,
+                             path=m.path) for m in base.motors)
     return dataclasses.replace(base, motors=new_motors, **tables, identified={"record": _record(result), **std})
 
 
