@@ -67,6 +67,9 @@ def against_mujoco(xml: str, draws: int, seed: int) -> tuple[float, float, float
         d.qpos[:], d.qvel[:], d.ctrl[:] = q, v, u
         mujoco.mj_forward(m, d)
         J = gear[:, None] * tendon_jacobian(m, d)
+        h = 1e-6  # the rate product (drho/dt) qd by AD against a central difference of the ratios along qd
+        fd = (tr.ratio(q + h * v) - tr.ratio(q - h * v)) @ v / (2 * h)
+        assert np.max(np.abs(tr.curve.rate_product(q, v) - fd)) < 1e-6 * max(1.0, np.max(np.abs(fd)))
         qdd = model.forward_dynamics(q, v, tr.joint_torque(u, q))
         xdot = ss.f(np.r_[q, v], u)
         scale = np.max(np.abs(d.qacc))
@@ -148,3 +151,38 @@ def test_side_site_inside_its_geom_refused():
     with pytest.raises(ModelError, match=r"spatial tendon 'SE' \(actuator 'SE'\): its side site 'in' is inside its "
                                          r"wrapping geom 'shoulder'"):
         ad.Model.from_mjcf(xml)
+
+
+@pytest.mark.parametrize("kind", ["cylinder", "sphere"])
+@pytest.mark.parametrize("side", [False, True])
+def test_wrap_in_closed_form_against_mujoco(kind, side):
+    """The closed form of MuJoCo's wrapping (:func:`~alpes_dyn.model.wrap.wrap_length`) on random placements of the
+    two end sites and the side site (each on three slide joints) about a tilted geom, wrapped or not, on either
+    side: length MuJoCo's ``ten_length`` to 1e-14 m, its gradient by AD MuJoCo's ``ten_J`` to 1e-12."""
+    import casadi as cs
+
+    from alpes_dyn.model.wrap import wrap_length
+
+    body = ('<body><joint type="slide" axis="1 0 0"/><joint type="slide" axis="0 1 0"/><joint type="slide" '
+            'axis="0 0 1"/><geom size=".01" mass="1"/><site name="s{}"/></body>')
+    xml = (f'<mujoco><worldbody><geom name="g" type="{kind}" size=".1 .05" euler="0.3 0.2 0.1" pos="0.01 0.02 0.03"/>'
+           + "".join(body.format(i) for i in range(3)) + '</worldbody><tendon><spatial><site site="s0"/><geom geom="g" '
+           + ('sidesite="s2"' if side else "") + '/><site site="s1"/></spatial></tendon></mujoco>')
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    mujoco.mj_fwdPosition(m, d)
+    x = cs.SX.sym("x", 9)
+    L = wrap_length(x[0:3], x[3:6], cs.DM(d.geom_xpos[0]), cs.DM(d.geom_xmat[0].reshape(3, 3)), 0.1, kind,
+                    x[6:9] if side else None)
+    rng = np.random.default_rng(9813)
+    P = rng.uniform(-0.25, 0.25, (1500, 9))
+    P = P[np.min(np.linalg.norm(P.reshape(-1, 3, 3) - d.geom_xpos[0], axis=2), axis=1) > 0.105]  # outside the geom
+    Ls, Js = (np.asarray(v) for v in cs.Function("f", [x], [L, cs.jacobian(L, x)]).map(len(P))(P.T))
+    wrapped = 0
+    for k, p in enumerate(P):
+        d.qpos[:] = p
+        mujoco.mj_fwdPosition(m, d)
+        wrapped += d.ten_wrapnum[0] == 4
+        assert abs(Ls[0, k] - d.ten_length[0]) < 1e-14
+        assert np.max(np.abs(Js[0, 9 * k:9 * k + 9] - tendon_jacobian(m, d)[0])) < 1e-12
+    assert 0.1 * len(P) < wrapped < 0.9 * len(P)  # both branches drawn

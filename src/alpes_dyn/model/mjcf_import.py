@@ -13,7 +13,7 @@ backends read:
   gear * dL/dq fitted as the spec's ``ratio_curve`` from MuJoCo's own tendon Jacobian over the joint ranges
   (:mod:`alpes_dyn.model.mjcf_spatial`; the fit's error said in one ``MjcfCurveWarning``, the worst tendon first,
   where it is not exact; a tendon whose path leaves, touches or changes side of its wrapping geom over a joint's range,
-  or spans two joints, refused with the reason), or
+  or spans two joints, carried as its geometry, the motor's ``path``: :mod:`alpes_dyn.model.mjcf_path`), or
   on one joint (ratio gear) (the inverse of the export's mapping, :mod:`alpes_dyn.model.mjcf`); the joints' ``stiffness``
   (with ``springref``, the spring's rest angle: the spec's ``[rest_angle]`` where it is not 0), ``armature``,
   ``frictionloss`` (Coulomb) and ``damping`` (viscous); a joint limit's ``solreflimit`` in MuJoCo's direct form
@@ -455,7 +455,7 @@ def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> tuple[
     (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`), the fit's relative error and, where it is not exact
     (over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`), the line an :class:`MjcfCurveWarning` says. A tendon the
     form cannot follow (its path changes over a joint's range: a wrapping geom touched, left or wrapped on its other
-    side; a segment over several joints) is refused, the tendon and the reason named."""
+    side; a segment over several joints) is carried as its path (:func:`_path_motor`)."""
     from .mjcf_spatial import TOLERANCE, fit_spatial_tendon
 
     names = [_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]

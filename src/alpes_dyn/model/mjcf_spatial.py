@@ -2,7 +2,7 @@
 
 A motor of gear g on a spatial tendon of length L(q) turns by g L(q) (the actuator's length); its ratio on joint i is
 rho_i(q) = g dL/dq_i, MuJoCo's ``gear * ten_J`` (``ten_moment`` before MuJoCo 3.3; stored sparse since, read densely
-by :func:`tendon_jacobian`). The spec's form (:mod:`alpes_dyn.model.ratio_curve`) makes each rho_i a polynomial of
+by :func:`tendon_jacobian`). The spec's polynomial form (:mod:`alpes_dyn.model.ratio_curve`) makes each rho_i a polynomial of
 q_i alone, which holds where the tendon's path between two consecutive points fixed on bodies crosses one joint (sites
 on every link, a wrapping geom on the parent of the joint it wraps): then L is a sum of one function per joint.
 :func:`fit_spatial_tendon` sweeps each joint the tendon crosses over its range (the others at their reference angle),
@@ -14,7 +14,8 @@ axis give a smooth curve, represented to the error said (an :class:`MjcfCurveWar
 :data:`TOLERANCE`).
 
 Where the fit is not exact it also says why the form cannot follow the tendon (``SpatialFit.reason``), and the import
-then refuses the tendon (:func:`~alpes_dyn.model.mjcf_import.mjcf_to_urdf`): its path changes over a joint's sweep (a
+then carries the tendon's geometry instead (the spec's ``path``, :mod:`alpes_dyn.model.mjcf_path`): its path changes
+over a joint's sweep (a
 wrapping geom touched or left, a kink of the moment arm, or wrapped on its other side, a jump: MuJoCo's
 ``tendon_arm/arm26`` over 0-120 degrees, best polynomial 0.005 to 0.7 off), or a segment spans two joints (the ratio
 on one changes with the other's angle).

@@ -50,6 +50,7 @@ class PathRatios:
         self._f = {"angle": cs.Function("path_angle", [q], [s]), "ratio": cs.Function("path_ratio", [q], [rho]),
                    "rate": cs.Function("path_rate", [q, v], [rate]),
                    "torque": cs.Function("path_torque_jacobian", [q, tau], [tj])}
+        self._maps: dict = {}
         E = np.zeros((m, len(self.rows)))
         E[self.rows, np.arange(len(self.rows))] = 1.0
         self._E, self._keep = E, np.ones(m)
@@ -67,7 +68,9 @@ class PathRatios:
         lead = q.shape[:-1]
         flat = [np.reshape(x, (-1, x.shape[-1])) for x in (q,) + tuple(np.asarray(a, dtype=float) for a in more)]
         N = flat[0].shape[0]
-        f = self._f[name] if N == 1 else self._f[name].map(N)
+        if N > 1 and (name, N) not in self._maps:  # one map per batch size, built once
+            self._maps[(name, N)] = self._f[name].map(N)
+        f = self._f[name] if N == 1 else self._maps[(name, N)]
         out = np.asarray(f(*[x.T for x in flat]))
         r = out.shape[0]
         return out.reshape(r, N, -1).transpose(1, 0, 2).reshape(lead + (r, -1))
