@@ -97,6 +97,10 @@ _MJCF_FLIP = ('<mujoco><worldbody><site name="s0" pos="-0.15 0 0"/><body><joint 
 """MuJoCo's arm26 shoulder extensor (a motor for its muscle) with its side site moved inside the shoulder's cylinder:
 over 0..120 degrees its tendon leaves the cylinder (no polynomial follows it), and its path is MuJoCo's Newton
 iteration (``wrap_inside``, to 1e-6), which has no closed form: refused, the site and the geom named."""
+_PATH = ('path = {{ frames = [{{ name = "b", pos = [0.0, 0.0, 0.0], joints = [{{ joint = "{}", axis = [0.0, 0.0, 1.0] '
+         '}}] }}], points = [{{ site = "s0", pos = [0.1, 0.0, 0.0] }}, {{ site = "s1", frame = "b", pos = [0.0, 0.1, 0.0] }}] '
+         '}}\n')
+"""A spec's spatial-tendon ``path`` (``.format`` the joint it turns about): two sites, the second on a hinged body."""
 _MJCF_BODY = '<body name="b{0}"><joint name="j{0}" range="-1 1"/><inertial pos="0 0 0" mass="1" diaginertia="1 1 1"/>'
 _MJCF_DEEP = "<mujoco><worldbody>" + "".join(_MJCF_BODY.format(i) for i in range(500)) + "</body>" * 500 + (
     "</worldbody></mujoco>")
@@ -1960,6 +1964,21 @@ API: list[Api] = [
     A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
                                                                   'ratio_curve = [0.1]\n'),
       ModelError, "motor 'a'.ratio_curve: expected a table joint name -> [c_1, ..., c_P]"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'path = [1]\n'),
+      ModelError, "motor 'a'.path: expected a table, got [1]"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'path = { points = [] }\n'),
+      ModelError, "motor 'a'.path.frames: expected an array of tables"),
+    A("TransmissionSpec", lambda c: TransmissionSpec.from_toml('[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n'
+                                                                  'ratio_curve = { j1 = [0.1] }\n' + _PATH.format("j1")),
+      ModelError, "motor 'a'.path: a motor has a path or a ratio_curve, not both"),
+    A("Model", lambda c: ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(
+        '[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n' + _PATH.format("nope"))),
+      ModelError, "motor 'a'.path: joint 'nope' is not a joint of the model"),
+    A("Model", lambda c: ad.Model(ROBOT_URDF, TransmissionSpec.from_toml(
+        '[[motor]]\nname = "a"\njoints = { j1 = 2.0 }\n' + _PATH.format("j1"))),
+      ModelError, "motor 'a'.joints.j1: the path's ratio at q = 0 is 0.07071067812, not 2"),
     A("Transmission", lambda c: ad.Transmission(("a",), np.ones((1, 3)), np.ones((1, 3)), 4096.0, None, None,
                                                 np.ones((1, 1, 3))).joint_torque([1.0]), InputError,
       "q: a transmission whose ratios change with the joints (ratio_curve) needs the joint angles"),
@@ -2422,7 +2441,7 @@ API: list[Api] = [
     A("SeriesElasticSystem", lambda c: _ses(_curved(), _tendon(1.0, 0.0, 0.0)), InputError,
       "model: 'curved''s ratios change with q (ratio_curve); the series-elastic tendon is built for constant ratios"),
     A("model_mjcf", lambda c: _curved().to_mjcf(), ModelError,
-      "model: 'curved''s ratios change with q (ratio_curve); the MJCF export writes fixed tendons"),
+      "model: 'curved''s ratios change with q (ratio_curve or path); the MJCF export writes fixed tendons"),
     A("SeriesElasticSystem", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0), smooth="yes"), InputError,
       "smooth: expected True or False"),
     A("SeriesElasticSystem.simulate", lambda c: _ses(c.m, _tendon(1.0, 0.0, 0.0)).simulate(np.zeros(8), [[0.0, 1.0]],

@@ -441,8 +441,8 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
     if not all(hasattr(model, a) for a in ("pin_model", "extras", "transmission", "tips", "gravity")):
         raise ModelError(f"model: expected an alpes_dyn.Model, got {type(model).__name__}")
     if model.transmission is not None and model.transmission.curved:
-        raise ModelError(f"model: {model.name!r}'s ratios change with q (ratio_curve); the MJCF export writes fixed "
-                         "tendons, whose ratios are constant (a spatial tendon's geometry is not in the spec)")
+        raise ModelError(f"model: {model.name!r}'s ratios change with q (ratio_curve or path); the MJCF export writes "
+                         "fixed tendons, whose ratios are constant")
     if not isinstance(limits, (bool, np.bool_)):
         raise InputError(f"limits: expected True or False, got {limits!r}")
     _check_args(timestep, integrator, tip_radius)

@@ -51,6 +51,12 @@ class PathRatios:
                    "rate": cs.Function("path_rate", [q, v], [rate]),
                    "torque": cs.Function("path_torque_jacobian", [q, tau], [tj])}
         self._maps: dict = {}
+        at0 = np.asarray(self._f["ratio"](np.zeros(n)))
+        for r, k in enumerate(self.rows):  # the spec's joints: the path's ratios at q = 0
+            i = int(np.argmax(np.abs(at0[r] - base.S[k])))
+            if abs(at0[r, i] - base.S[k, i]) > 1e-9 * max(np.max(np.abs(at0[r])), 1e-300):
+                raise ModelError(f"motor {names[k]!r}.joints.{joint_names[i]}: the path's ratio at q = 0 is "
+                                 f"{at0[r, i]:.10g}, not {base.S[k, i]:g} (a path motor's joints are its ratios there)")
         E = np.zeros((m, len(self.rows)))
         E[self.rows, np.arange(len(self.rows))] = 1.0
         self._E, self._keep = E, np.ones(m)
