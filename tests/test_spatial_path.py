@@ -186,3 +186,35 @@ def test_wrap_in_closed_form_against_mujoco(kind, side):
         assert abs(Ls[0, k] - d.ten_length[0]) < 1e-14
         assert np.max(np.abs(Js[0, 9 * k:9 * k + 9] - tendon_jacobian(m, d)[0])) < 1e-12
     assert 0.1 * len(P) < wrapped < 0.9 * len(P)  # both branches drawn
+
+
+def test_rotors_identification_model_and_equilibrium():
+    """With rotor inertia on the path motors (set in the spec: MuJoCo allows no armature on a wrapping tendon): the
+    rotors' velocity torque rho^T J_m (drho/dt) qd is Lagrange's (d/dt (M_r qd) - dT_r/dq, by central differences),
+    the identification's parametric model (CasADi, rotor inertias as parameters) gives the numeric q̈, and the static
+    equilibrium under a motor torque balances gravity (its Newton Jacobian d(rho^T tau_m)/dq a central difference's)."""
+    import dataclasses
+
+    import casadi as cs
+
+    from alpes_dyn.symbolic.parametric import ParametricDynamics
+
+    base = ad.Model.from_mjcf(SPHERE)
+    spec = dataclasses.replace(base.spec, motors=tuple(dataclasses.replace(mo, rotor_inertia=1e-3 * (k + 1))
+                                                       for k, mo in enumerate(base.spec.motors)))
+    model = ad.Model(base.urdf, spec)
+    tr, h = model.transmission, 1e-6
+    q, v, u = np.array([0.4, 0.3]), np.array([0.7, -0.4]), np.array([0.05, 0.02, -0.01])
+    M = tr.rotor_matrix_at
+    lagrange = (M(q + h * v) - M(q - h * v)) @ v / (2 * h) - np.array(
+        [(v @ M(q + h * e) @ v - v @ M(q - h * e) @ v) / (4 * h) for e in np.eye(2)])
+    np.testing.assert_allclose(tr.rotor_bias(q, v), lagrange, rtol=1e-6)
+    pd = ParametricDynamics(model, "m,J_m")
+    Q, V, U = cs.SX.sym("q", 2), cs.SX.sym("v", 2), cs.SX.sym("u", 3)
+    f = cs.Function("f", [Q, V, U, pd.theta], [pd.forward_dynamics(Q, V, pd.input_torque(Q, V, U))])
+    qdd = model.forward_dynamics(q, v, tr.joint_torque(u, q))
+    np.testing.assert_allclose(np.asarray(f(q, v, u, pd.nominal)).ravel(), qdd, rtol=1e-12, atol=1e-12)
+    fd = np.stack([(tr.joint_torque(u, q + h * e) - tr.joint_torque(u, q - h * e)) / (2 * h) for e in np.eye(2)], 1)
+    np.testing.assert_allclose(tr.curve.torque_jacobian(q, u), fd, atol=1e-8)
+    qe = model.static_equilibrium(None, q0=[0.3, 0.2], tau_m=u)
+    assert np.max(np.abs(model.gravity_torque(qe) - tr.joint_torque(u, qe))) < 1e-12
