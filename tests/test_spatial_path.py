@@ -142,14 +142,20 @@ def test_bad_path_tables_named(change, needle):
     assert needle in str(info.value) and "\n" not in str(info.value)
 
 
-def test_side_site_inside_its_geom_refused():
-    """A side site inside its wrapping cylinder (MuJoCo solves that path by Newton's method to 1e-6, no closed form):
-    refused, the tendon, the site and the geom named."""
-    xml = only(ARM26, "SE").replace('<site name="x0" pos="0 -0.15 0"/>', '<site name="x0" pos="0 -0.05 0"/>')
-    xml = xml.replace('<geom name="shoulder" type="cylinder"', '<site name="in" pos="0 -0.05 0"/><geom '
-                      'name="shoulder" type="cylinder"').replace('sidesite="x0"', 'sidesite="in"')
-    with pytest.raises(ModelError, match=r"spatial tendon 'SE' \(actuator 'SE'\): its side site 'in' is inside its "
-                                         r"wrapping geom 'shoulder'"):
+@pytest.mark.parametrize("same_body", [True, False])
+def test_side_site_inside_its_geom_refused(same_body):
+    """A side site inside its wrapping cylinder (MuJoCo solves that path by Newton's method to 1e-6, no closed form),
+    on the geom's body (seen in the file) or on another (seen at the checked states): refused, the tendon, the site and
+    the geom named."""
+    xml = only(ARM26, "SE")
+    if same_body:
+        xml = xml.replace('<geom name="shoulder" type="cylinder"', '<site name="in" pos="0 -0.05 0"/><geom '
+                          'name="shoulder" type="cylinder"').replace('sidesite="x0"', 'sidesite="in"')
+        site = "in"
+    else:
+        xml, site = xml.replace('<site name="x0" pos="0 -0.15 0"/>', '<site name="x0" pos="0.05 -0.05 0"/>'), "x0"
+    with pytest.raises(ModelError, match=rf"spatial tendon 'SE' \(actuator 'SE'\): its side site '{site}' is inside "
+                                         r"its wrapping geom 'shoulder'"):
         ad.Model.from_mjcf(xml)
 
 

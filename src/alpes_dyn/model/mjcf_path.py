@@ -143,9 +143,17 @@ def check_path(mujoco, m, t: int, path: SpatialPath, joint_names: list, states: 
     Ls, Js = (np.asarray(x) for x in f(np.asarray(states, dtype=float).T))
     d = mujoco.MjData(m)
     err = 0.0
+    adr = int(m.tendon_adr[t])
+    geoms = (mujoco.mjtWrap.mjWRAP_SPHERE, mujoco.mjtWrap.mjWRAP_CYLINDER)
+    sides = [(int(m.wrap_objid[w]), int(round(float(m.wrap_prm[w])))) for w in range(adr, adr + int(m.tendon_num[t]))
+             if int(m.wrap_type[w]) in geoms and m.wrap_prm[w] >= 0]
     for k, qk in enumerate(states):  # the import's check against MuJoCo, one state at a time
         d.qpos[:] = qk
         mujoco.mj_fwdPosition(m, d)
+        for g, s in sides:  # a side site on another body than its geom's, inside it here
+            if np.linalg.norm(d.geom_xmat[g].reshape(3, 3).T @ (d.site_xpos[s] - d.geom_xpos[g])) < m.geom_size[g, 0]:
+                raise ModelError(_inside(mujoco, m, s, mujoco.mj_id2name(m, mujoco.mjtObj.mjOBJ_GEOM, g) or f"geom{g}",
+                                         where))
         J = tendon_jacobian(m, d)[t][m.jnt_dofadr]
         scale = max(float(np.max(np.abs(J))), 1e-300)
         err = max(err, abs(Ls[0, k] - d.ten_length[t]) / max(abs(d.ten_length[t]), 1e-300),
