@@ -132,9 +132,10 @@ def test_a_tendon_off_its_cylinder_imported_as_its_path(tendons, needle):
     assert ad.Model.from_mjcf(xml).spec.motors[0].path is not None
 
 
-def test_curve_warnings_name_the_worst_first():
-    """Two smooth tendons whose fits are not exact (a straight segment across a joint of 2.9 rad range, short of the angle where one ratio reaches 0): one warning,
-    the tendon with the larger error first."""
+def test_smooth_inexact_tendons_carried_as_their_paths():
+    """Two smooth tendons whose polynomial fits are not exact (a straight segment across a joint of 2.9 rad range,
+    short of the angle where one ratio reaches 0): each is carried as its path, no warning, its ratios MuJoCo's
+    ``gear ten_J`` to 1e-9 of the largest at random states over the range."""
     from test_ratio_curve import SITES
 
     wide = SITES.replace('range="-0.3 1.2"', 'range="-0.8 2.1"')
@@ -142,12 +143,33 @@ def test_curve_warnings_name_the_worst_first():
               '</spatial>')
     xml = (wide.replace("</tendon>", second + "</tendon>")
            .replace('<motor name="flex"', '<motor name="short" tendon="short" gear="-10"/><motor name="flex"'))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", MjcfCurveWarning)
+        model = ad.Model.from_mjcf(xml)
+    assert all(mo.path is not None for mo in model.spec.motors)
+    m = mujoco.MjModel.from_xml_string(xml)
+    d = mujoco.MjData(m)
+    lo, hi = m.jnt_range[:, 0], m.jnt_range[:, 1]
+    rng = np.random.default_rng(11)
+    for _ in range(16):
+        d.qpos[:] = lo + (hi - lo) * rng.random(m.njnt)
+        mujoco.mj_forward(m, d)
+        want = m.actuator_gear[:, 0][:, None] * tendon_jacobian(m, d)[m.actuator_trnid[:, 0]]
+        got = model.transmission.ratio(d.qpos.copy())
+        assert np.max(np.abs(got - want)) < 1e-9 * np.max(np.abs(want))
+
+
+def test_curve_warnings_name_the_worst_first():
+    """The polynomial fits that stay (their paths not carried) are said in one warning, the larger error first."""
+    from alpes_dyn.model.mjcf_import import _curve_warning
+
     with pytest.warns(MjcfCurveWarning) as rec:
-        ad.Model.from_mjcf(xml)
+        _curve_warning([(1e-6, "tendon 'a' (1e-06 of the largest ratio)"), (3e-4, "tendon 'b' (0.0003 of the "
+                        "largest ratio)")])
     assert len(rec) == 1
     text = str(rec[0].message)
     errors = [float(x) for x in re.findall(r"\(([0-9.e+-]+) of the largest ratio\)", text)]
-    assert len(errors) == 2 and errors == sorted(errors, reverse=True)
+    assert errors == [3e-4, 1e-6]
 
 
 def test_spatial_tendon_over_a_tied_joint():

@@ -455,7 +455,9 @@ def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> tuple[
     (:func:`~alpes_dyn.model.mjcf_spatial.fit_spatial_tendon`), the fit's relative error and, where it is not exact
     (over :data:`~alpes_dyn.model.mjcf_spatial.TOLERANCE`), the line an :class:`MjcfCurveWarning` says. A tendon the
     form cannot follow (its path changes over a joint's range: a wrapping geom touched, left or wrapped on its other
-    side; a segment over several joints) is carried as its path (:func:`_path_motor`)."""
+    side; a segment over several joints) is carried as its path (:func:`_path_motor`), and so is a smooth tendon
+    that the polynomials follow only to over ``TOLERANCE`` where its path can be carried (else the polynomial, the
+    warning saying why its path is not)."""
     from .mjcf_spatial import TOLERANCE, fit_spatial_tendon
 
     names = [_name(mujoco, m, mujoco.mjtObj.mjOBJ_JOINT, j, "joint") for j in range(m.njnt)]
@@ -464,13 +466,17 @@ def _spatial_motor(mujoco, m, a: int, t: int, aname: str, gear: float) -> tuple[
         raise ModelError(f"mjcf: actuator {aname!r}'s spatial tendon crosses no joint")
     rel = fit.error / fit.scale if fit.scale else 0.0
     tname = _name(mujoco, m, mujoco.mjtObj.mjOBJ_TENDON, t, "tendon")
+    where = f"spatial tendon {tname!r} (actuator {aname!r})"
     if rel > TOLERANCE and fit.reason:  # no polynomial follows it: the tendon's geometry instead
-        return _path_motor(mujoco, m, t, aname, gear, names, f"spatial tendon {tname!r} (actuator {aname!r})"), 0.0, ""
+        return _path_motor(mujoco, m, t, aname, gear, names, where), 0.0, ""
     note = ""
-    if rel > TOLERANCE:
-        note = (f"spatial tendon {tname!r} (actuator {aname!r}): its ratios g dL/dq fitted as polynomials of each "
-                f"joint's angle, largest error {fit.error:.2g} rad/rad ({rel:.2g} of the largest ratio), motor angle "
-                f"g L(q) to {fit.length_error:.2g} rad, over the joint ranges")
+    if rel > TOLERANCE:  # smooth but not exact: its path where it can be carried, the polynomial (said) where not
+        try:
+            return _path_motor(mujoco, m, t, aname, gear, names, where), 0.0, ""
+        except ModelError as e:
+            note = (f"{where}: its ratios g dL/dq fitted as polynomials of each joint's angle, largest error "
+                    f"{fit.error:.2g} rad/rad ({rel:.2g} of the largest ratio), motor angle g L(q) to "
+                    f"{fit.length_error:.2g} rad, over the joint ranges (its path is not carried: {e})")
     return Motor(aname, fit.joints, rotor_inertia=_tendon_armature(m, t) / gear**2, ratio_curve=fit.curve), rel, note
 
 
