@@ -37,6 +37,7 @@ from .finger_loop import (_SAMPLE_ARRAYS, ControlResult, ControlScenario, _check
                           _plant_and_params)
 from .realism_loop import Compensation, effects_mjcf_kwargs, plant_gravity, rotor_rest
 from .step import force_ekf
+from ..model.hand_chains import _rotation, chain_frame, chain_model, hand_chains  # noqa: F401 (their home: model)
 
 
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
@@ -53,68 +54,6 @@ HAND_LEVELS: dict[str, tuple[float, float]] = {
 #: finger's pad slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
 #: 40 ms 7-10.5 %, 10-90 % rise 77-97 ms.
 HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04}
-
-
-def _rotation(axis: Sequence[float], angle: float) -> np.ndarray:
-    a = np.asarray(axis, dtype=float)
-    a = a / np.linalg.norm(a)
-    K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
-
-
-def hand_chains(params: HandParams) -> tuple[str, ...]:
-    """The hand's flexion chains, one motor each: the fingers of the parameter file, then ``"thumb"``.
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters.
-    """
-    return (*params.finger_names, "thumb")
-
-
-def chain_frame(params: HandParams, chain: str, abduction: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """(R (3, 3), p (3,)): orientation and position (m) of a chain's base frame -- its first flexion joint's
-    frame at q = 0, the frame of a standalone finger model -- in the palm frame, the thumb at the
-    ab/adduction angle ``abduction`` (rad). A finger's frame is the palm's, translated; the thumb's is
-    turned by ``palm.thumb_yaw`` about z, then by ``abduction`` about ``thumb.abduction_axis``.
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters.
-    chain : str
-        A chain of :func:`hand_chains`.
-    abduction : float, optional
-        The thumb's ab/adduction angle, rad."""
-    if chain in params.finger_names:
-        x, y = params.finger_xy[list(params.finger_names).index(chain)]
-        return np.eye(3), np.array([x, y, 0.0])
-    if chain == "thumb":
-        R = _rotation((0.0, 0.0, 1.0), params.thumb_yaw) @ _rotation(params.abduction_axis, float(abduction))
-        return R, np.asarray(params.thumb_xyz, dtype=float).copy()
-    raise InputError(f"chain: unknown chain {chain!r} (expected one of {', '.join(hand_chains(params))})")
-
-
-def chain_model(params: HandParams, chain: str, abduction: float = 0.0) -> Model:
-    """The controller's model of one chain of the hand: ``finger3`` for a finger; for the thumb's flexion
-    chain (the ab/adduction held at ``abduction``, rad) a two-phalanx finger with the ``[thumb]`` table's
-    values. Gravity is the parameter file's, expressed in the chain's base frame (R^T g,
-    :func:`chain_frame`), so that the chain's G(q), J(q) and encoder are the hand's on its joints.
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters.
-    chain : str
-        A chain of :func:`hand_chains`.
-    abduction : float, optional
-        The thumb's ab/adduction angle, rad."""
-    R, _ = chain_frame(params, chain, abduction)
-    g = R.T @ np.asarray(params.gravity, dtype=float)
-    if chain == "thumb":
-        return Model.alpes("finger2", params=dataclasses.replace(params, finger=params.thumb, gravity=g))
-    return Model.alpes("finger3", params=dataclasses.replace(params, gravity=g), chain=chain)  # the finger's own values
 
 
 def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: Sequence[float] = (0.0, 1.0, 0.0),
