@@ -303,8 +303,8 @@ def codegen_step(args: argparse.Namespace) -> int:
     from ..control.step import ForceStep
     from ..estimation.cexport.cexport import check_output_directory
 
-    if args.model not in ("finger2", "finger3"):
-        raise InputError(f"--step: the force step is exported for finger2 and finger3, got --model {args.model!r}")
+    if args.model not in ("finger2", "finger3", "hand"):
+        raise InputError(f"--step: the force step is exported for finger2, finger3 and hand, got --model {args.model!r}")
     if args.controller is None:
         raise InputError("--step: needs --controller (sensor, sensorless or pi)")
     _one_of(args.controller, CONTROLLERS, "--controller", "controller")
@@ -318,6 +318,8 @@ def codegen_step(args: argparse.Namespace) -> int:
             raise InputError(f"{flag}: not with --step ({why})")
     check_output_directory(args.out_dir, args.out_flag)  # before the build: a new or empty directory, never a file
     notes = _trust_notes(args, [("--params", args.params)])
+    if args.model == "hand":
+        return _codegen_hand_step(args, notes)
     t0 = time.perf_counter()
     step = ForceStep(args.model, args.params, args.controller, compiled=False, force=args.force)
     about = (f"Model {args.model}, parameter file {args.params or 'shipped with alpes_dyn'}, palm down; controller "
@@ -331,6 +333,29 @@ def codegen_step(args: argparse.Namespace) -> int:
              f"  alpes_step(&state, counts[{step.m}], torque[{step.m}], force, F_ref, normal[3], command[{step.m}], "
              "work) once per tick: the API in alpes_step.h",
              f"  build: cd {args.out_dir} && {build}"]
+    _note_untrusted(obj, lines, notes)
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+def _codegen_hand_step(args: argparse.Namespace, notes: Any) -> int:
+    """``codegen --step --model hand``: :class:`~alpes_dyn.control.hand_step.HandForceStep` of --params and
+    --controller as C (:func:`alpes_dyn.control.chand.write_c_hand`)."""
+    from ..control.chand import C_HAND_BUILD, write_c_hand
+    from ..control.hand_step import HandForceStep
+
+    t0 = time.perf_counter()
+    step = HandForceStep(args.params, args.controller, compiled=False, force=args.force)
+    about = (f"The hand, parameter file {args.params or 'shipped with alpes_dyn'}, palm down; controller "
+             f"{args.controller} with the hand's gains on every flexion chain, every compensation of its effects.")
+    written = write_c_hand(step, args.out_dir, about=about)
+    obj = {"model": "hand", "params": args.params, "controller": args.controller, "directory": args.out_dir,
+           "files": sorted(written), "motors": list(step.motor_names), "chains": list(step.chains), "dt": step.dt,
+           "tau_max": step.tau_max, "seconds": time.perf_counter() - t0}
+    lines = [f"hand: the {args.controller} force step written to {args.out_dir}/ ({len(written)} files)",
+             "  alpes_hand_step(&state, counts[6], torque[6], force[5], reference[5], normals[15], command[6], work) "
+             "once per tick: the API in alpes_hand.h",
+             f"  build: cd {args.out_dir} && {C_HAND_BUILD}"]
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
