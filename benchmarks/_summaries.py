@@ -542,7 +542,9 @@ def c_step(r: Result) -> list[str]:
         dq = "" if d["diff_q"] is None else f", joints {d['diff_q']:.1e} rad"
         what = (f"EKF with friction: {d['observer_friction']}, {d['substeps']} RK4 substeps" if d["model"] != "hand"
                 else "five chains' EKFs with friction and the ab/adduction PD, on the cylinder")
-        out.append(f"{d['model']} {d['controller']} ({what}): C step {d['c_us']:.1f} µs ({d['c_cpu_us']:.1f} processor) vs Python step "
+        out.append(f"{d['model']} {d['controller']} ({what}): C step {d['c_us']:.1f} µs "
+                   f"({d['c_cpu_us']:.1f} processor) "
+                   f"vs Python step "
                    f"{d['py_us']:.0f} µs ({d['c_vs_py']:.3f}x); built at -O2 in {d['c_build_s']:.1f} s "
                    f"({d['c_build_cpu_s']:.1f} s of the compiler's processor time) "
                    f"({d['c_source_kb']:.0f} kB of C); C - Python: commands {d['diff_command']:.1e} N m{dq}, forces "

@@ -27,7 +27,8 @@ KEYS = ("counts", "torque", "force", "ref", "normals", "command", "z", "F_fb")
 @pytest.fixture(scope="module")
 def hand_run():
     """The sensor step of the hand (compiled EKFs, cached) closing the loop on the stand-in for 2.4 s: 0.3 N on every
-    chain (the approach takes about 1.5 s), 0.4 N from 2 s; the readings, the normals the step used, its outputs; the truth's forces."""
+    chain (the approach takes about 1.5 s), 0.4 N from 2 s; the readings, the normals the step used, its outputs;
+    the truth's forces."""
     from alpes_dyn.bench.mujoco_hand import MujocoHand, scoring_truth
     from alpes_dyn.control.hand_step import HandForceStep
 
@@ -154,6 +155,7 @@ def test_codegen_step_hand_cli(tmp_path, capsys):
                      "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["motors"] == ["index", "middle", "ring", "little", "thumb", "thumb_abduction"]
-    assert {"alpes_hand.c", "alpes_hand.h", "main.c", "alpes_hand_thumb.c", "alpes_hand_index_force.c"} <= set(obj["files"])
+    assert {"alpes_hand.c", "alpes_hand.h", "main.c", "alpes_hand_thumb.c", "alpes_hand_index_force.c"} <= set(
+        obj["files"])
     h = (tmp_path / "c" / "alpes_hand.h").read_text()
     assert "int alpes_hand_step(alpes_hand_state* s, const double counts[6]" in h

@@ -32,7 +32,8 @@ The effects (:class:`~alpes_dyn.bench.effects.PlantEffects`, default a real hand
 * the torque: (1 + e) times the torque the motor applied over a period plus ``torque_noise`` N m of white noise,
   read at the tick that ends the period, ``torque_delay`` whole periods late (the reading at tick k is of the
   period [t_(k-1-d), t_(k-d)); before the first command, of the motor at rest, 0 N m);
-* the force (block and cylinder scenes): MuJoCo's touch sensor plus ``force_noise`` N of noise, quantised to 4.4 / 1024 N
+* the force (block and cylinder scenes): MuJoCo's touch sensor plus ``force_noise`` N of noise, quantised to
+  4.4 / 1024 N
   (a 10-bit reading of a 4.4 N FlexiForce), >= 0.
 
 The sensors' noise comes from one generator seeded by ``seed``, drawn tick by tick (the torque's as the period
@@ -61,7 +62,8 @@ from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .effects import PlantEffects, _number, real_hand_effects
 from .interface import Reading, check_command
-from .mujoco_plant import (as_params, block_plant, cylinder_plant, free_plant, initial_qpos, passive_callback, passive_forces,
+from .mujoco_plant import (as_params, block_plant, cylinder_plant, free_plant, initial_qpos, passive_callback,
+                           passive_forces,
                            plant_model)
 
 __all__ = ["MujocoHand", "scoring_truth", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]

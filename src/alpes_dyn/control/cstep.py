@@ -351,7 +351,8 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
 
 def _observer_note(parts: StepParts) -> str:
     """The header's words on the observer and the compensation."""
-    words = [f"The EKF (alpes_step_ekf.h{', with the file' + chr(39) + 's friction' if parts.observer_friction else ''}) "
+    friction = ", with the file's friction" if parts.observer_friction else ""
+    words = [f"The EKF (alpes_step_ekf.h{friction}) "
              "takes the known input [tau_m, -F n] (the sensorless estimate of the tick before for F with the "
              "sensorless controller) and the encoder"]
     if parts.unstretch:

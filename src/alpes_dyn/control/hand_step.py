@@ -130,7 +130,8 @@ class HandForceStep:
 
     def __init__(self, params: Any = None, controller: str = "sensor", *, dt: float = 1e-3,
                  thumb_abduction: float = math.radians(35.0), abduction_kp: float = 0.5, abduction_kd: float = 0.01,
-                 abduction_filter_s: float = 0.01, abduction_ramp_s: float = 1.0, gains: dict | None = None, compensation: Compensation | None = None,
+                 abduction_filter_s: float = 0.01, abduction_ramp_s: float = 1.0, gains: dict | None = None,
+                 compensation: Compensation | None = None,
                  compiled: bool = True, torque_noise: float = 5e-4, encoder_noise_counts: float = 0.5,
                  force_noise: float = 0.005, force_resolution: float = 4.4 / 1024, force_filter_s: float = 0.01,
                  observer_friction: bool = True, force: bool = False) -> None:

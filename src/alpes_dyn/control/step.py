@@ -509,7 +509,8 @@ class ForceStep:
             normal=self._normal.copy(), controller=ForceController(**self._controller_args),
             ekf=self._ekf if filt else None, z0=self._s0[:nz].copy() if filt else np.full(nz, np.nan),
             P0=self._s0[nz:].copy() if filt else np.full(nz * nz, np.nan),
-            sensorless_alpha=None if sl is None else float(sl.alpha), sensorless_scale=1.0 if sl is None else float(sl.scale))
+            sensorless_alpha=None if sl is None else float(sl.alpha),
+            sensorless_scale=1.0 if sl is None else float(sl.scale))
 
     @property
     def command(self) -> np.ndarray:
