@@ -12,7 +12,9 @@
 * the :class:`~alpes_dyn.control.controller.ForceController` with the tuned gains (:data:`.DEFAULT_GAINS`).
 
 :func:`~alpes_dyn.control.finger_loop.run_control` runs the same object at every sample of its simulated loop,
-so what a user runs on the hand is what the library's closed loop tests and measures.
+so what a user runs on the hand is what the library's closed loop tests and measures. :meth:`ForceStep.parts` gives
+its settings (:class:`~alpes_dyn.control.step_parts.StepParts`) to a code generator (:mod:`alpes_dyn.control.cstep`)
+or a port; :class:`~alpes_dyn.control.hand_step.HandForceStep` holds one per flexion chain of the whole hand.
 
 Timing (sample k at t_k, as :mod:`alpes_dyn.simulation.loop`'s and :mod:`alpes_dyn.bench.interface`'s): the
 readings of tick k -- the encoder counts at t_k, the motor torque that the current sensor reports at t_k (what the
