@@ -23,7 +23,8 @@ import numpy as np
 from ..errors import InputError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
-from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string
+from ..model.hand_chains import _rotation, chain_frame, chain_model, hand_chains  # noqa: F401 (their home: model)
+from ..model.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string
 from ..model.robot import Model
 from ..estimation.observers.blocks import Observer, ObserverBank
 from ..model.params import HandParams
@@ -37,7 +38,6 @@ from .finger_loop import (_SAMPLE_ARRAYS, ControlResult, ControlScenario, _check
                           _plant_and_params)
 from .realism_loop import Compensation, effects_mjcf_kwargs, plant_gravity, rotor_rest
 from .step import force_ekf
-from ..model.hand_chains import _rotation, chain_frame, chain_model, hand_chains  # noqa: F401 (their home: model)
 
 
 #: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
@@ -79,6 +79,28 @@ def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: 
     if not nd > 0:
         raise InputError("q: the fingertip is on the cylinder's axis; the normal is undefined")
     return d / nd
+
+
+def cylinder_in_chain(params: HandParams, chain: str, abduction: float) -> tuple[np.ndarray, np.ndarray]:
+    """(a point of the cylinder's axis (3,) m, its direction (3,)) of :data:`~alpes_dyn.model.mjcf.CYLINDER` in a
+    chain's base frame (:func:`~alpes_dyn.model.hand_chains.chain_frame`; the thumb at ``abduction`` rad).
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters (palm down).
+    chain : str
+        A chain of :func:`~alpes_dyn.model.hand_chains.hand_chains`.
+    abduction : float
+        The thumb's ab/adduction angle, rad.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The point and the direction.
+    """
+    R, pos = chain_frame(params, chain, abduction)
+    return R.T @ (np.asarray(CYLINDER["center"], dtype=float) - pos), R.T @ np.array([0.0, 1.0, 0.0])
 
 
 @dataclass(frozen=True)
@@ -256,23 +278,20 @@ def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandContr
            levels: Sequence[float], t: np.ndarray) -> dict[str, Any]:
     """One chain of the hand: the controller's model, its joints' MuJoCo names, the cylinder in its frame (m), its
     reference (N, one per sample) and its rest q0 (rad: the plant's, set in ``d.qpos``)."""
-    from ..model.mjcf import CYLINDER
-
     e = sc.effects
     comp = Compensation() if sc.compensation is None else sc.compensation
     p_ctl = p if e is None else dataclasses.replace(p, gravity=comp.turned_gravity(p.gravity))
     m = chain_model(p_ctl, c, sc.thumb_abduction)
-    R, pos = chain_frame(p, c, sc.thumb_abduction)
     names = [f"{c}_{j}" for j in m.joint_names]
     plant = chain_model(dataclasses.replace(pp, gravity=plant_gravity(pp.gravity, e)), c, sc.thumb_abduction)
     q0 = static_equilibrium(plant, np.zeros(m.n))
     d.qpos[joint_permutation(mj, names)] = q0
     rotor_rest(mj, d, [c], plant, q0, e)
     a, b = (float(x) for x in levels)
-    center = np.asarray(CYLINDER["center"], dtype=float)
+    center, axis = cylinder_in_chain(p, c, sc.thumb_abduction)
     ramp = np.clip((t - sc.step_time) / sc.ramp_s, 0.0, 1.0) if sc.ramp_s > 0 else (t >= sc.step_time).astype(float)
-    return dict(name=c, model=m, n=m.n, names=tuple(names), center=R.T @ (center - pos),
-                axis=R.T @ np.array([0.0, 1.0, 0.0]), F_ref=a + (b - a) * ramp, levels=(a, b), z0=q0)
+    return dict(name=c, model=m, n=m.n, names=tuple(names), center=center, axis=axis, F_ref=a + (b - a) * ramp,
+                levels=(a, b), z0=q0)
 
 
 def _chain_effects(ch: dict[str, Any], sc: HandControlScenario, p: HandParams) -> dict[str, Any]:

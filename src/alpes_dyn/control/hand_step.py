@@ -34,13 +34,13 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError
-from ..model.hand_chains import chain_frame, chain_model, hand_chains
-from ..model.mjcf import CYLINDER, palm_down_params
+from ..model.hand_chains import chain_model, hand_chains
+from ..model.mjcf import palm_down_params
 from ..model.params import HandParams, load_params
 from ..model.trust import check_trusted
 from .blocks import EncoderPD
 from .controller import DEFAULT_GAINS
-from .hand_loop import HAND_GAINS, cylinder_normal
+from .hand_loop import HAND_GAINS, cylinder_in_chain, cylinder_normal
 from .realism_loop import Compensation
 from .step import GAIN_NAMES, ForceStep, LoopDesign, _check_kind, _number
 
@@ -48,28 +48,6 @@ __all__ = ["HandForceStep", "ABDUCTION"]
 
 ABDUCTION = "thumb_abduction"
 """The hand's sixth motor: the thumb's ab/adduction, held by a PD (no force loop)."""
-
-
-def cylinder_in_chain(params: HandParams, chain: str, abduction: float) -> tuple[np.ndarray, np.ndarray]:
-    """(a point of the cylinder's axis (3,) m, its direction (3,)) of :data:`~alpes_dyn.model.mjcf.CYLINDER` in a
-    chain's base frame (:func:`~alpes_dyn.model.hand_chains.chain_frame`; the thumb at ``abduction`` rad).
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters (palm down).
-    chain : str
-        A chain of :func:`~alpes_dyn.model.hand_chains.hand_chains`.
-    abduction : float
-        The thumb's ab/adduction angle, rad.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The point and the direction.
-    """
-    R, pos = chain_frame(params, chain, abduction)
-    return R.T @ (np.asarray(CYLINDER["center"], dtype=float) - pos), R.T @ np.array([0.0, 1.0, 0.0])
 
 
 class HandForceStep:
