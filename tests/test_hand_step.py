@@ -34,6 +34,7 @@ def hand_run():
 
     step = HandForceStep(controller="sensor")
     hw = MujocoHand("hand", scene="cylinder", seed=9741)
+    assert hw.motor_names == step.motor_names and hw.counts_per_rev == step.chain_steps["index"].counts_per_rev
     rec = {k: [] for k in KEYS}
     F_true = []
     for k in range(2400):
