@@ -160,3 +160,15 @@ def test_codegen_step_hand_cli(tmp_path, capsys):
         obj["files"])
     h = (tmp_path / "c" / "alpes_hand.h").read_text()
     assert "int alpes_hand_step(alpes_hand_state* s, const double counts[6]" in h
+
+
+@pytest.mark.parametrize("kwargs, needle", [
+    ({"model": "finger3", "scene": "cylinder"}, "^scene: the cylinder scene is the hand's, got model 'finger3'"),
+    ({"model": "hand", "scene": "cylinder", "q0": [0.0] * 15}, "^q0: the cylinder scene starts at the hand's rest"),
+    ({"model": "hand", "scene": "block"}, "^scene: the block scene is a finger's"),
+])
+def test_stand_in_cylinder_bad_input(kwargs, needle):
+    from alpes_dyn.bench.mujoco_hand import MujocoHand
+
+    with pytest.raises(InputError, match=needle):
+        MujocoHand(**kwargs)
