@@ -4,7 +4,8 @@ Model (its tip pulled onto the block placed from its kinematics).
 The readings: those of a closed-loop run of ``control`` on the robot (MuJoCo, the block scene): the joint angles
 MuJoCo gave turned into encoder counts (S q, quantised), the motor torque and the fingertip force the loop read;
 both steps replay them (open loop: the same readings into both). Tolerance 1e-9 absolute on the commands (N m), the
-joint estimates (rad) and the forces fed back (N).
+joint estimates (rad) and the forces fed back (N). Built at -O0 (the quickest build: 785 kB of the EKF's C, 2 s of
+processor time; at -O1 14 s), the same numbers to rounding.
 """
 
 from __future__ import annotations
@@ -43,7 +44,7 @@ def test_codegen_step_on_a_urdf_equals_the_python_step(tmp_path, capsys):
     model = ad.Model.from_urdf_file(urdf, spec)
     step = ForceStep(model, controller="sensor", compiled=False)
     assert obj["frame"] == step.design.frame and obj["normal"] == pytest.approx(step.design.normal.tolist(), abs=1e-15)
-    subprocess.run([CC, "-O1", "-std=c99", "-o", str(d / "main"), *sorted(str(p) for p in d.glob("*.c")), "-lm"],
+    subprocess.run([CC, "-O0", "-std=c99", "-o", str(d / "main"), *sorted(str(p) for p in d.glob("*.c")), "-lm"],
                    check=True, capture_output=True, timeout=300)
     r = run_control("sensor", model=model, duration=0.8, step_times=(0.5, 0.7))
     parts = step.parts()

@@ -3,7 +3,7 @@
 One closed-loop run of the Python step on the MuJoCo stand-in's cylinder scene (every effect of a real hand), shared
 by the module; its readings and normals replayed through the compiled C test program. Tolerances: commands (N m),
 estimates (rad, rad/s) and forces fed back (N) to 1e-9 absolute (the C is the Python step's operations but for
-CasADi's G and J against Pinocchio's and the EKF's substep loop: rounding only).
+CasADi's G and J against Pinocchio's and the EKF's substep loop: rounding only); built at -O0, the quickest build.
 """
 
 from __future__ import annotations
@@ -68,7 +68,7 @@ def test_c_hand_step_equals_the_python_step(hand_run, tmp_path):
     files = write_c_hand(step, tmp_path / "c")
     d = tmp_path / "c"
     assert "alpes_hand.h" in files and "alpes_hand_thumb_ekf.c" in files
-    subprocess.run([CC, "-O1", "-std=c99", "-Wall", "-Werror", "-Wno-unused-function", "-Wno-unused-variable",
+    subprocess.run([CC, "-O0", "-std=c99", "-Wall", "-Werror", "-Wno-unused-function", "-Wno-unused-variable",
                     "-Wno-unused-but-set-variable", "-o", str(d / "main"),
                     *[str(d / n) for n in sorted(files) if n.endswith(".c")], "-lm"],
                    check=True, capture_output=True, text=True, timeout=600)
