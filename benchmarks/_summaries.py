@@ -540,14 +540,18 @@ def c_step(r: Result) -> list[str]:
     out = []
     for d in r["rows"]:
         dq = "" if d["diff_q"] is None else f", joints {d['diff_q']:.1e} rad"
-        out.append(f"{d['model']} {d['controller']} (EKF with friction: {d['observer_friction']}, {d['substeps']} RK4 "
-                   f"substeps): C step {d['c_us']:.1f} µs ({d['c_cpu_us']:.1f} processor) vs Python step "
+        what = (f"EKF with friction: {d['observer_friction']}, {d['substeps']} RK4 substeps" if d["model"] != "hand"
+                else "five chains' EKFs with friction and the ab/adduction PD, on the cylinder")
+        out.append(f"{d['model']} {d['controller']} ({what}): C step {d['c_us']:.1f} µs "
+                   f"({d['c_cpu_us']:.1f} processor) "
+                   f"vs Python step "
                    f"{d['py_us']:.0f} µs ({d['c_vs_py']:.3f}x); built at -O2 in {d['c_build_s']:.1f} s "
                    f"({d['c_build_cpu_s']:.1f} s of the compiler's processor time) "
                    f"({d['c_source_kb']:.0f} kB of C); C - Python: commands {d['diff_command']:.1e} N m{dq}, forces "
                    f"{d['diff_force']:.1e} N; goals {_met(d['goals_met'])}")
+    hand = f" ({r['goal_hand_us']:.0f} µs for the hand)" if "goal_hand_us" in r else ""
     out.append(f"load average {r['load_avg'][0]:.1f} -> {r['load_avg'][1]:.1f}; goals: under {r['goal_us']:.0f} µs "
-               f"of processor time per step, built in under {r['goal_build_s']:.0f} s of processor time, within "
+               f"of processor time per step{hand}, built in under {r['goal_build_s']:.0f} s of processor time, within "
                f"{r['goal_diff']:.0e}")
     return out
 

@@ -12,10 +12,14 @@ For each finger and controller, in one process:
                   (goal: 1e-9), and timed by main.c -t (us per step, wall clock and the process's processor time,
                   which a loaded machine inflates less; goal: under 50 us per finger)
 
-The columns C/py give the C step's time as a fraction of the Python step's. The hand has no ForceStep (its loop is
-alpes_dyn.control.hand_loop's): not measured here.
+The columns C/py give the C step's time as a fraction of the Python step's. The model "hand" is the whole hand's
+step (HandForceStep, alpes_dyn.control.chand's C: five chains and the ab/adduction PD; the stand-in's cylinder scene,
+every chain 0.3 N then 0.4 N after 2 s of a 2.5 s run; the normals the Python step used fed to the C step; goal:
+under 200 us per step). "py build s" is the step's construction (its EKFs compiled or loaded from the shared cache);
+"build s" the C build alone.
 
-    python benchmarks/c_step.py [--models finger2,finger3] [--controllers sensor[,sensorless,pi]] [--seed 9693] [--json]
+    python benchmarks/c_step.py [--models finger2,finger3,hand] [--controllers sensor[,sensorless,pi]] [--seed 9693]
+                                [--json]
 """
 
 from __future__ import annotations
@@ -39,6 +43,7 @@ from alpes_dyn.control.cstep import read_step_output, step_main_input, write_c_s
 from alpes_dyn.control.step import ForceStep
 
 GOAL_US = 50.0
+GOAL_HAND_US = 200.0
 GOAL_BUILD_S = 30.0
 GOAL_DIFF = 1e-9
 
@@ -56,7 +61,73 @@ def _python_us(step: ForceStep, run, repeat: int = 3) -> float:
     return 1e6 * best
 
 
+def _build_c(cc: str, d: Path, files: dict, row: dict) -> None:
+    """cc -O2 of every C file in ``d``: the wall and processor seconds into ``row``."""
+    row["c_source_kb"] = sum(len((d / n).read_bytes()) for n in files) / 1e3
+    sources = [str(d / n) for n in sorted(files) if n.endswith(".c")]
+    t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
+    subprocess.run([cc, "-O2", "-std=c99", "-o", str(d / "main"), *sources, "-lm"], check=True, capture_output=True,
+                   timeout=1800)
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    row["c_build_s"] = time.perf_counter() - t0
+    row["c_build_cpu_s"] = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+
+
+def _time_c(d: Path, row: dict) -> None:
+    t = subprocess.run([str(d / "main"), "-t", "20", str(d / "in.txt")], check=True, capture_output=True,
+                       text=True).stdout.split()
+    row["c_us"], row["c_cpu_us"] = float(t[4]), float(t[8])
+
+
+def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> dict:
+    """The whole hand's step (module docstring)."""
+    from alpes_dyn.control.chand import hand_main_input, read_hand_output, write_c_hand
+    from alpes_dyn.control.hand_step import HandForceStep
+
+    t0 = time.perf_counter()
+    step = HandForceStep(controller=controller)
+    py_build = time.perf_counter() - t0
+    hw = MujocoHand("hand", scene="cylinder", seed=seed)
+    keys = ("counts", "torque", "force", "ref", "normals", "command", "z", "F_fb")
+    rec = {k: [] for k in keys}
+    py_s = 0.0
+    for k in range(int(round(duration / hw.period))):
+        r = hw.read()
+        ref = np.full(5, 0.3 if k * hw.period < 2.0 else 0.4)
+        t1 = time.perf_counter()
+        u = step.step(r.counts, r.torque, None if controller == "sensorless" else r.force, ref)
+        py_s += time.perf_counter() - t1
+        hw.write(u)
+        for key, v in zip(keys, (r.counts, r.torque, r.force, ref, step.normals, u, step.state, step.force_estimate)):
+            rec[key].append(v)
+    rec = {k: np.array(v) for k, v in rec.items()}
+    n = len(rec["command"])
+    row = {"model": "hand", "controller": controller, "seed": seed, "steps": n, "py_build_s": py_build,
+           "py_us": 1e6 * py_s / n, "observer_friction": True, "substeps": None,
+           "F_held_N": [float(x) for x in np.nanmean(rec["force"][-300:], axis=0)]}
+    if cc is None:
+        return {**row, "c_us": None}
+    with tempfile.TemporaryDirectory() as tmp:
+        d = Path(tmp) / "c"
+        files = write_c_hand(step, d)
+        _build_c(cc, d, files, row)
+        (d / "in.txt").write_text(hand_main_input(rec["counts"], rec["torque"], rec["force"], rec["ref"],
+                                                  rec["normals"]))
+        out = subprocess.run([str(d / "main"), str(d / "in.txt")], check=True, capture_output=True, text=True).stdout
+        U, Z, F = read_hand_output(out)
+        row["diff_command"] = float(np.abs(U - rec["command"]).max())
+        row["diff_q"] = float(np.nanmax(np.abs(Z - rec["z"]))) if controller != "pi" else None
+        row["diff_force"] = float(np.abs(F - rec["F_fb"]).max())
+        _time_c(d, row)
+    row["c_vs_py"] = row["c_us"] / row["py_us"]
+    row["goals_met"] = bool(row["c_cpu_us"] < GOAL_HAND_US and row["c_build_cpu_s"] < GOAL_BUILD_S
+                            and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)
+    return row
+
+
 def bench(model: str, controller: str, seed: int, duration: float, cc: str | None) -> dict:
+    if model == "hand":
+        return bench_hand(controller, seed, max(duration, 2.5), cc)
     t0 = time.perf_counter()
     step = ForceStep(model, controller=controller)  # its EKF compiled (or loaded from the cache)
     py_build = time.perf_counter() - t0
@@ -69,23 +140,14 @@ def bench(model: str, controller: str, seed: int, duration: float, cc: str | Non
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "c"
         files = write_c_step(step, d)
-        row["c_source_kb"] = sum(len((d / n).read_bytes()) for n in files) / 1e3
-        sources = [str(d / n) for n in sorted(files) if n.endswith(".c")]
-        t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
-        subprocess.run([cc, "-O2", "-std=c99", "-o", str(d / "main"), *sources, "-lm"], check=True,
-                       capture_output=True, timeout=1800)
-        r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
-        row["c_build_s"] = time.perf_counter() - t0
-        row["c_build_cpu_s"] = (r1.ru_utime - r0.ru_utime) + (r1.ru_stime - r0.ru_stime)
+        _build_c(cc, d, files, row)
         (d / "in.txt").write_text(step_main_input(run.counts, run.torque, run.force, run.F_ref, step.design.normal))
         out = subprocess.run([str(d / "main"), str(d / "in.txt")], check=True, capture_output=True, text=True).stdout
         U, Z, F = read_step_output(out, step.m, 2 * step.n)
         row["diff_command"] = float(np.abs(U - run.command).max())
         row["diff_q"] = float(np.nanmax(np.abs(Z[:, :step.n] - run.q_hat))) if step.filter_step is not None else None
         row["diff_force"] = float(np.abs(F - run.F_fb).max())
-        t = subprocess.run([str(d / "main"), "-t", "20", str(d / "in.txt")], check=True, capture_output=True,
-                           text=True).stdout.split()
-        row["c_us"], row["c_cpu_us"] = float(t[4]), float(t[8])
+        _time_c(d, row)
     row["c_vs_py"] = row["c_us"] / row["py_us"]
     row["goals_met"] = bool(row["c_cpu_us"] < GOAL_US and row["c_build_cpu_s"] < GOAL_BUILD_S
                             and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)
@@ -106,7 +168,8 @@ def main(argv: list[str] | None = None) -> int:
     for model in a.models.split(","):
         for controller in a.controllers.split(","):
             rows.append(bench(model, controller, a.seed + len(rows), a.duration, cc))
-    out = {"rows": rows, "load_avg": [load0, os.getloadavg()[0]], "goal_us": GOAL_US, "goal_build_s": GOAL_BUILD_S,
+    out = {"rows": rows, "load_avg": [load0, os.getloadavg()[0]], "goal_us": GOAL_US, "goal_hand_us": GOAL_HAND_US,
+           "goal_build_s": GOAL_BUILD_S,
            "goal_diff": GOAL_DIFF, "goals_met": all(r.get("goals_met", False) for r in rows)}
     if a.json:
         print(json.dumps(out))

@@ -165,7 +165,7 @@ def test_codegen_step_cli(tmp_path, capsys):
 @pytest.mark.parametrize("argv, message", [
     (["--step", "--model", "finger3", "--controller", "bad"], "--controller: unknown controller 'bad'"),
     (["--step", "--model", "finger3"], "--step: needs --controller"),
-    (["--step", "--model", "hand", "--controller", "sensor"], "--step:"),
+    (["--step", "--model", "thumb", "--controller", "sensor"], "--step:"),
     (["--step", "--model", "finger3", "--controller", "sensor", "--friction"], "--friction:"),
     (["--step", "--model", "finger3", "--controller", "sensor", "--observer", "ukf"], "--observer:"),
 ])

@@ -44,8 +44,9 @@ class Reading:
         (m,) encoder counts, one per motor (whole numbers held as floats).
     torque : numpy.ndarray
         (m,) motor torque, N m: the measured current times the torque constant.
-    force : float
-        Fingertip normal force, N (``nan`` where the hand has no force sensor).
+    force : float or numpy.ndarray
+        Fingertip normal force, N (``nan`` where the hand has no force sensor); the whole hand with a sensor on
+        each flexion chain's fingertip: (5,), the chains in the motors' order.
     """
 
     t: float

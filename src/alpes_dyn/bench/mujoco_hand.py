@@ -12,7 +12,11 @@ The plant (:mod:`alpes_dyn.bench.mujoco_plant`), in one of two scenes:
   as :func:`~alpes_dyn.control.plants.mujoco_recording` records a finger; no force sensor (the force reads NaN);
 * ``"block"`` (a finger): the finger palm down over the block of the force loop (contact on, MuJoCo's joint
   friction, at 0.25 ms), as :func:`~alpes_dyn.control.finger_loop.run_control` presses it; the FlexiForce reads
-  MuJoCo's touch sensor.
+  MuJoCo's touch sensor;
+* ``"cylinder"`` (the hand): the hand palm down over the fixed, frictionless cylinder that
+  :func:`~alpes_dyn.control.hand_loop.run_hand_control` grasps (contact on, MuJoCo's joint friction, at 0.25 ms;
+  :func:`~alpes_dyn.bench.mujoco_plant.cylinder_plant`); each flexion chain's fingertip has its FlexiForce: the
+  force is read as (5,) N, the chains in the motors' order (index, middle, ring, little, thumb).
 
 The hand's thumb abduction motor drives its joint both ways in MuJoCo (its range +-tau_max), but takes commands in
 [0, tau_max] through the interface, as every motor (:func:`~alpes_dyn.bench.interface.check_command`): at 0 its
@@ -28,7 +32,8 @@ The effects (:class:`~alpes_dyn.bench.effects.PlantEffects`, default a real hand
 * the torque: (1 + e) times the torque the motor applied over a period plus ``torque_noise`` N m of white noise,
   read at the tick that ends the period, ``torque_delay`` whole periods late (the reading at tick k is of the
   period [t_(k-1-d), t_(k-d)); before the first command, of the motor at rest, 0 N m);
-* the force (block scene): MuJoCo's touch sensor plus ``force_noise`` N of noise, quantised to 4.4 / 1024 N
+* the force (block and cylinder scenes): MuJoCo's touch sensor plus ``force_noise`` N of noise, quantised to
+  4.4 / 1024 N
   (a 10-bit reading of a 4.4 N FlexiForce), >= 0.
 
 The sensors' noise comes from one generator seeded by ``seed``, drawn tick by tick (the torque's as the period
@@ -57,19 +62,20 @@ from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
 from .effects import PlantEffects, _number, real_hand_effects
 from .interface import Reading, check_command
-from .mujoco_plant import (as_params, block_plant, free_plant, initial_qpos, passive_callback, passive_forces,
+from .mujoco_plant import (as_params, block_plant, cylinder_plant, free_plant, initial_qpos, passive_callback,
+                           passive_forces,
                            plant_model)
 
 __all__ = ["MujocoHand", "scoring_truth", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
 HAND_MODELS: tuple[str, ...] = ("finger2", "finger3", "hand")
-"""The models the stand-in is built for: a finger, or the hand's five chains (free scene only)."""
-SCENES: tuple[str, ...] = ("free", "block")
+"""The models the stand-in is built for: a finger, or the hand's five chains (the free and cylinder scenes)."""
+SCENES: tuple[str, ...] = ("free", "block", "cylinder")
 """The stand-in's scenes (module docstring)."""
 PERIOD = 1e-3
 """The stand-in's sample period, s (the hand's 1 kHz loop)."""
-SUBSTEPS = {"free": 10, "block": 4}
-"""MuJoCo steps per period of each scene (RK4 at 0.1 ms as the recordings', the force loop's 0.25 ms)."""
+SUBSTEPS = {"free": 10, "block": 4, "cylinder": 4}
+"""MuJoCo steps per period of each scene (RK4 at 0.1 ms as the recordings', the force loops' 0.25 ms)."""
 RIGS: dict[str, float] = {"level": 0.0, "hanging": HANGING_TILT}
 """The free scene's orientations: rad about the joints' axes from the file's palm-up gravity (``hanging``: fingers
 down, :data:`~alpes_dyn.model.mjcf.HANGING_TILT`), the effects' tilt on top of it."""
@@ -93,7 +99,9 @@ def _checked(model: Any, params: Any, effects: Any, scene: Any, seed: Any,
     if scene not in SCENES:
         raise InputError(f"scene: expected one of {', '.join(SCENES)}, got {scene!r}")
     if scene == "block" and model == "hand":
-        raise InputError("scene: the block scene is a finger's (finger2, finger3); the hand's stand-in is free")
+        raise InputError("scene: the block scene is a finger's (finger2, finger3); the hand's is free or cylinder")
+    if scene == "cylinder" and model != "hand":
+        raise InputError(f"scene: the cylinder scene is the hand's, got model {model!r} (a finger's: free or block)")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
         raise InputError(f"seed: expected a non-negative integer, got {seed!r}")
     for name, v in noises.items():
@@ -114,14 +122,14 @@ class MujocoHand:
     Parameters
     ----------
     model : str
-        ``finger2``, ``finger3`` or ``hand`` (:data:`HAND_MODELS`; the hand in the free scene only).
+        ``finger2``, ``finger3`` or ``hand`` (:data:`HAND_MODELS`; the hand in the free and cylinder scenes).
     params : HandParams or str or path, optional
         The finger's true parameters, or the path of their file (default the shipped file); kept private.
     effects : PlantEffects or None or "real"
         The plant's effects: ``"real"`` (default) a real hand's (:func:`~alpes_dyn.bench.effects.real_hand_effects`),
         None or ``PlantEffects()`` none.
     scene : str
-        ``"free"`` (default) or ``"block"`` (:data:`SCENES`).
+        ``"free"`` (default), ``"block"`` (a finger) or ``"cylinder"`` (the hand) (:data:`SCENES`).
     seed : int
         Seed of the sensors' noise.
     q0 : sequence of float, optional
@@ -176,8 +184,13 @@ class MujocoHand:
             self._passive = passive_forces(mj, truth, e0)
             if q0 is None:
                 self._settle(mj, d, truth, p, e0)
-        else:
+        elif scene == "block":
             mj, d, truth = block_plant(model, palm_down_params(p), e, None, PERIOD / sub, q0)
+            self._passive = None
+        else:
+            if q0 is not None:
+                raise InputError("q0: the cylinder scene starts at the hand's rest (give no q0)")
+            mj, d, truth = cylinder_plant(palm_down_params(p), e, PERIOD / sub)
             self._passive = None
         tr = truth.transmission
         motors = list(tr.motor_names)
@@ -189,6 +202,8 @@ class MujocoHand:
         self._joints = joint_permutation(mj, truth.joint_names)  # qpos of the joints, for scoring_truth
         self._rng = np.random.default_rng(seed)
         touch = {"F": "flexiforce_finger"} if scene == "block" else {}  # the finger's chain
+        if scene == "cylinder":  # each flexion chain's fingertip, in the motors' order
+            touch = {"F": [f"flexiforce_{c}" for c in motors if c != "thumb_abduction"]}
         # mj_step's position sensors are those of the state before its last integration: recomputed at the tick
         self._plant = MujocoPlant(mj, d, substeps=sub, nstep=True, sample_sensors=True,
                                   sensors={"q_m": [f"encoder_{mn}" for mn in motors], **touch},
@@ -196,7 +211,7 @@ class MujocoHand:
         self._encoder = Encoder("q_m", "counts", tr.counts_per_rev, noise_counts=encoder_noise_counts, counts=True,
                                 offset=e0.encoder_offset, shape=(m,))
         self._torque = TorqueSensor("tau", "tau_meas", noise=torque_noise, gain=self._gain, shape=(m,))
-        self._force = ForceSensor("F", "F_meas", noise=force_noise) if scene == "block" else None
+        self._force = ForceSensor("F", "F_meas", noise=force_noise) if scene != "free" else None
         # the torque readings of the last d + 1 periods, the oldest read now (before the start: the motor at rest)
         self._torques = deque([self._measured_torque(np.zeros(m))] * (e0.torque_delay + 1))
         self._reading = self._sense()
@@ -232,15 +247,18 @@ class MujocoHand:
         out = self._plant.output(self._k, {})
         q_m = np.asarray(out["q_m"], dtype=float)
         counts = self._encoder.measure(q_m, self._encoder.std * self._rng.standard_normal(q_m.shape))
-        force = math.nan
-        if self._force is not None:
+        force: Any = math.nan
+        if self.scene == "block":
             force = float(self._force.measure(out["F"], self._force.std * self._rng.standard_normal()))
+        elif self.scene == "cylinder":
+            F = np.asarray(out["F"], dtype=float)
+            force = self._force.measure(F, self._force.std * self._rng.standard_normal(F.shape))
         return Reading(self.t, counts, self._torques[0].copy(), force)
 
     def read(self) -> Reading:
         """The sensors at the current tick (the same reading until the next :meth:`write`)."""
         r = self._reading
-        return Reading(r.t, r.counts.copy(), r.torque.copy(), r.force)
+        return Reading(r.t, r.counts.copy(), r.torque.copy(), np.copy(r.force) if np.ndim(r.force) else r.force)
 
     def write(self, command: Sequence[float]) -> None:
         """Apply ``command`` over the current period: MuJoCo steps the period; the next tick's sensors are read.
@@ -278,7 +296,8 @@ class MujocoHand:
 
 def scoring_truth(hw: MujocoHand) -> tuple[np.ndarray, float]:
     """The stand-in's truth at its current tick: the joint angles (rad, (n,) in its model's joint order) and the
-    contact force (N, MuJoCo's touch sensor without the FlexiForce's noise and quantisation; NaN in the free scene).
+    contact force (N, MuJoCo's touch sensor without the FlexiForce's noise and quantisation; (5,) in the cylinder
+    scene; NaN in the free scene).
 
     For the tests and benchmarks that score an estimate or a force loop (or check that no stop was reached) against
     the truth they drew; nothing that runs on a hand calls it (a real hand has no such reading). Raises
@@ -286,5 +305,9 @@ def scoring_truth(hw: MujocoHand) -> tuple[np.ndarray, float]:
     """
     if not isinstance(hw, MujocoHand):
         raise InputError(f"hw: the truth is the MuJoCo stand-in's, got {type(hw).__name__}")
-    force = float(np.asarray(hw._plant.output(hw._k, {})["F"]).sum()) if hw.scene == "block" else math.nan
+    force: Any = math.nan
+    if hw.scene == "block":
+        force = float(np.asarray(hw._plant.output(hw._k, {})["F"]).sum())
+    elif hw.scene == "cylinder":
+        force = np.asarray(hw._plant.output(hw._k, {})["F"], dtype=float).copy()
     return np.asarray(hw._data.qpos[hw._joints], dtype=float).copy(), force

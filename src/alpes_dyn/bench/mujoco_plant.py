@@ -200,3 +200,32 @@ def block_plant(model: str, p: HandParams, effects: PlantEffects | None, contact
     mujoco.mj_forward(mj, d)
     return mj, d, truth
 
+
+
+def cylinder_plant(p: HandParams, effects: PlantEffects | None, timestep: float) -> tuple[Any, Any, Model]:
+    """The hand's grasp scene: (MjModel, MjData at rest, the library's model of the hand in the plant's gravity) --
+    the hand of ``p`` (palm down: :func:`~alpes_dyn.model.mjcf.palm_down_params`) over the fixed, frictionless
+    cylinder of :data:`~alpes_dyn.model.mjcf.CYLINDER`, contact on, MuJoCo's joint friction, ``effects`` (None: none),
+    at MuJoCo step ``timestep`` (s); the scene of :func:`~alpes_dyn.control.hand_loop.run_hand_control`. At rest:
+    each flexion chain hanging on its springs in the plant's gravity (:func:`~alpes_dyn.model.hand_chains.chain_model`,
+    motor off), its series-elastic rotor where the cable is just slack (:func:`rotor_rest`), the thumb's
+    ab/adduction at 0."""
+    import dataclasses
+
+    import mujoco
+
+    from ..model.hand_chains import chain_model, hand_chains
+
+    fx = {} if effects is None else effects_mjcf_kwargs(effects)
+    mj = load_mujoco(mjcf_string("hand", p, friction=True, scene="cylinder", timestep=timestep, **fx))
+    d = mujoco.MjData(mj)
+    pg = dataclasses.replace(p, gravity=plant_gravity(p.gravity, effects))
+    for c in hand_chains(p):
+        plant = chain_model(pg, c, 0.0)
+        q0 = plant.static_equilibrium(np.zeros(plant.n))
+        d.qpos[joint_permutation(mj, [f"{c}_{j}" for j in plant.joint_names])] = q0
+        rotor_rest(mj, d, [c], plant, q0, effects)
+    d.qpos[mj.joint("thumb_abd").qposadr[0]] = 0.0
+    mujoco.mj_forward(mj, d)
+    truth = Model.alpes("hand", params=p)
+    return mj, d, truth.copy(gravity=plant_gravity(truth.gravity, effects))

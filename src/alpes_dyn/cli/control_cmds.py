@@ -303,11 +303,15 @@ def codegen_step(args: argparse.Namespace) -> int:
     from ..control.step import ForceStep
     from ..estimation.cexport.cexport import check_output_directory
 
-    if args.model not in ("finger2", "finger3"):
-        raise InputError(f"--step: the force step is exported for finger2 and finger3, got --model {args.model!r}")
+    urdf = _is_urdf_path(args.model)
+    if args.model not in ("finger2", "finger3", "hand") and not urdf:
+        raise InputError(f"--step: the force step is exported for finger2, finger3, hand and a URDF --model with its "
+                         f"--spec, got --model {args.model!r}")
     if args.controller is None:
         raise InputError("--step: needs --controller (sensor, sensorless or pi)")
     _one_of(args.controller, CONTROLLERS, "--controller", "controller")
+    if urdf:
+        return _codegen_robot_step(args)
     for flag, bad, why in (("--friction", args.friction, "the step's EKF has the --params file's friction"),
                            ("--chain", args.chain is not None, "the step is one finger's"),
                            ("--observer", args.observer != "ekf", "the step's observer is the EKF"),
@@ -318,6 +322,8 @@ def codegen_step(args: argparse.Namespace) -> int:
             raise InputError(f"{flag}: not with --step ({why})")
     check_output_directory(args.out_dir, args.out_flag)  # before the build: a new or empty directory, never a file
     notes = _trust_notes(args, [("--params", args.params)])
+    if args.model == "hand":
+        return _codegen_hand_step(args, notes)
     t0 = time.perf_counter()
     step = ForceStep(args.model, args.params, args.controller, compiled=False, force=args.force)
     about = (f"Model {args.model}, parameter file {args.params or 'shipped with alpes_dyn'}, palm down; controller "
@@ -328,6 +334,72 @@ def codegen_step(args: argparse.Namespace) -> int:
            "normal": [float(x) for x in step.design.normal], "seconds": time.perf_counter() - t0}
     build = C_STEP_BUILD if step.filter_step is not None else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
     lines = [f"{args.model}: the {args.controller} force step written to {args.out_dir}/ ({', '.join(sorted(written))})",
+             f"  alpes_step(&state, counts[{step.m}], torque[{step.m}], force, F_ref, normal[3], command[{step.m}], "
+             "work) once per tick: the API in alpes_step.h",
+             f"  build: cd {args.out_dir} && {build}"]
+    _note_untrusted(obj, lines, notes)
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+def _codegen_hand_step(args: argparse.Namespace, notes: Any) -> int:
+    """``codegen --step --model hand``: :class:`~alpes_dyn.control.hand_step.HandForceStep` of --params and
+    --controller as C (:func:`alpes_dyn.control.chand.write_c_hand`)."""
+    from ..control.chand import C_HAND_BUILD, write_c_hand
+    from ..control.hand_step import HandForceStep
+
+    t0 = time.perf_counter()
+    step = HandForceStep(args.params, args.controller, compiled=False, force=args.force)
+    about = (f"The hand, parameter file {args.params or 'shipped with alpes_dyn'}, palm down; controller "
+             f"{args.controller} with the hand's gains on every flexion chain, every compensation of its effects.")
+    written = write_c_hand(step, args.out_dir, about=about)
+    obj = {"model": "hand", "params": args.params, "controller": args.controller, "directory": args.out_dir,
+           "files": sorted(written), "motors": list(step.motor_names), "chains": list(step.chains), "dt": step.dt,
+           "tau_max": step.tau_max, "seconds": time.perf_counter() - t0}
+    lines = [f"hand: the {args.controller} force step written to {args.out_dir}/ ({len(written)} files)",
+             "  alpes_hand_step(&state, counts[6], torque[6], force[5], reference[5], normals[15], command[6], work) "
+             "once per tick: the API in alpes_hand.h",
+             f"  build: cd {args.out_dir} && {C_HAND_BUILD}"]
+    _note_untrusted(obj, lines, notes)
+    _emit(obj, "\n".join(lines), args.json)
+    return 0
+
+
+def _codegen_robot_step(args: argparse.Namespace) -> int:
+    """``codegen --step --model PATH.urdf --spec FILE.toml``: the force step of ``control`` on the robot
+    (:class:`~alpes_dyn.control.step.ForceStep` of the Model: its tip ``--frame`` pulled by ``--motor`` onto the
+    block placed from its kinematics, the EKF on the spec's model without its friction) as C."""
+    from ..control.cstep import C_STEP_BUILD, write_c_step
+    from ..control.step import ForceStep
+    from ..estimation.cexport.cexport import check_output_directory
+
+    for flag, bad, why in (("--params", args.params is not None, "applies to the Alpes models; a URDF --model's "
+                            "parameters are its --spec"),
+                           ("--friction", args.friction, "a URDF --model's step has its --spec"),
+                           ("--chain", args.chain is not None, "names a finger of the Alpes hand"),
+                           ("--observer", args.observer != "ekf", "the step's observer is the EKF")):
+        if bad:
+            raise InputError(f"{flag}: not with --step on a URDF --model ({why})")
+    check_output_directory(args.out_dir, args.out_flag)  # before the build: a new or empty directory, never a file
+    notes = _trust_notes(args, [("--spec", args.spec)])
+    t0 = time.perf_counter()
+    model = _urdf_robot(args, "the force step")
+    try:
+        step = ForceStep(model, controller=args.controller, compiled=False, frame=args.frame, motor=args.motor)
+    except InputError as exc:  # the step's argument names as the command's options
+        head, sep, tail = str(exc).partition(": ")
+        raise InputError(f"--{head}: {tail}" if sep and head in ("frame", "motor") else str(exc)) from None
+    about = (f"Model {model.name} ({args.model}, spec {args.spec}): tip {step.design.frame} pulled by motor "
+             f"{model.motor_names[step.motor]} onto its block; controller {args.controller} with the gains scaled to "
+             "the robot.")
+    written = write_c_step(step, args.out_dir, about=about)
+    obj = {"model": args.model, "spec": args.spec, "controller": args.controller, "directory": args.out_dir,
+           "frame": step.design.frame, "motor": model.motor_names[step.motor], "files": sorted(written),
+           "nm": step.m, "nz": 2 * step.n, "dt": step.dt, "tau_max": step.tau_max,
+           "normal": [float(x) for x in step.design.normal], "seconds": time.perf_counter() - t0}
+    build = C_STEP_BUILD if step.filter_step is not None else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
+    lines = [f"{model.name}: the {args.controller} force step written to {args.out_dir}/ "
+             f"({', '.join(sorted(written))})",
              f"  alpes_step(&state, counts[{step.m}], torque[{step.m}], force, F_ref, normal[3], command[{step.m}], "
              "work) once per tick: the API in alpes_step.h",
              f"  build: cd {args.out_dir} && {build}"]

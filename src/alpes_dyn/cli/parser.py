@@ -244,7 +244,10 @@ def _add_codegen(sub: argparse._SubParsersAction) -> None:
                    help="write the whole force step instead (ForceStep.step in C: the EKF with the file's friction, "
                         "the compensation of its identified effects, the --controller with its tuned gains; the "
                         "contact normal an input of each call) for finger2 or finger3 and --params: alpes_step.h, "
-                        "alpes_step.c, alpes_step_ekf.*, alpes_step_force.*, main.c")
+                        "alpes_step.c, alpes_step_ekf.*, alpes_step_force.*, main.c; for --model hand the whole "
+                        "hand's (HandForceStep: a step per flexion chain, each fingertip's force and normal an input, "
+                        "the thumb's ab/adduction PD): alpes_hand.h, alpes_hand.c, alpes_hand_<chain>*, main.c; for a URDF "
+                        "--model with --spec, the robot's ForceStep (--frame, --motor)")
     s.add_argument("--frame", default=None, metavar="NAME",
                    help="a URDF --model with --controller: the tip frame that presses the block (default: the only "
                         "tip the motor moves)")

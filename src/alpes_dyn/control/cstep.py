@@ -45,8 +45,8 @@ from ..errors import InputError
 from ..estimation.cexport.cexport import c_sources, check_output_directory, write_sources
 from ..estimation.cexport.cexport_substeps import _doubles  # a C initializer list, read back exactly
 from .cexport import READ_ROWS_C, controller_c_sources
-from .controller import ForceController
 from .step import ForceStep
+from .step_parts import StepParts
 
 __all__ = ["step_c_sources", "write_c_step", "step_main_input", "read_step_output", "C_STEP_BUILD", "STEP_ERRORS"]
 
@@ -271,85 +271,93 @@ int main(int argc, char** argv) {{
 """
 
 
-def step_c_sources(step: ForceStep, *, about: str = "") -> dict[str, str]:
+def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_step") -> dict[str, str]:
     """The C export of ``step.step``: {file name: text} (the module docstring's files).
 
     Parameters
     ----------
     step : ForceStep
-        The step (its settings are exported, not its state: the C step starts at the first sample).
+        The step (its settings, :meth:`ForceStep.parts <alpes_dyn.control.step.ForceStep.parts>`, are exported,
+        not its state: the C step starts at the first sample).
     about : str
         A line for the header's comment (the model, its parameter file).
+    prefix : str
+        The C names' prefix (files, functions, types, macros in upper case): ``alpes_step`` gives the module
+        docstring's; another lets several steps link into one program (the hand's chains,
+        :mod:`alpes_dyn.control.chand`).
 
     Returns
     -------
     dict of str to str
-        ``alpes_step.h``, ``alpes_step.c``, ``alpes_step_force.h``, ``alpes_step_force.c``, ``main.c`` and, but
-        for ``"pi"``, ``alpes_step_ekf.h``, ``alpes_step_ekf.c``.
+        ``{prefix}.h``, ``{prefix}.c``, ``{prefix}_force.h``, ``{prefix}_force.c``, ``main.c`` and, but for
+        ``"pi"``, ``{prefix}_ekf.h``, ``{prefix}_ekf.c``.
 
     Raises
     ------
     InputError
-        ``step`` not a ForceStep (one line).
+        ``step`` not a ForceStep, a prefix that is not a C identifier (one line naming it).
     """
     from .._version import __version__
 
     if not isinstance(step, ForceStep):
         raise InputError(f"step: expected a ForceStep, got {type(step).__name__}")
-    ctl = ForceController(**step._controller_args)  # a fresh one: the settings, not the state
+    if not isinstance(prefix, str) or not prefix.isidentifier() or not prefix.isascii() or prefix != prefix.lower():
+        raise InputError(f"prefix: expected a lower-case C identifier, got {prefix!r}")
+    parts = step.parts()
+    ctl = parts.controller
     files = controller_c_sources(ctl, prefix="alpes_step_force")
     del files["force_main.c"]
-    nz, nm, filt = 2 * step.n, step.m, step.filter_step is not None
+    nz, nm, filt = 2 * parts.n, parts.m, parts.ekf is not None
     ekf_nwork = 0
     if filt:
-        ekf = c_sources(step._ekf, prefix="alpes_step_ekf", about=about)
+        ekf = c_sources(parts.ekf, prefix="alpes_step_ekf", about=about)
         del ekf["main.c"]
         files.update(ekf)
         ekf_nwork = int(ekf["alpes_step_ekf.h"].split("#define ALPES_STEP_EKF_NWORK ")[1].split()[0])
-        z0, P0 = step._s0[:nz], step._s0[nz:]
-    else:
-        z0, P0 = np.full(nz, np.nan), np.full(nz * nz, np.nan)
     force_nwork = int(files["alpes_step_force.h"].split("#define ALPES_STEP_FORCE_NWORK ")[1].split()[0])
     nwork = max(nz + nz * nz + 2 * nm + 3 + ekf_nwork, force_nwork)
-    comp, tr = step.compensation, step._transmission
-    sl = step._sensorless
+    sl = parts.sensorless_alpha is not None
     files["alpes_step.c"] = _STEP.format(
         ekf_include='#include "alpes_step_ekf.h"\n' if filt else "", filter=int(filt),
-        sensorless=int(sl is not None), needs_force=int(step.kind != "sensorless"),
-        command_input=int(comp.command_input), unstretch=int(comp.observer_compliance), motor=step.motor,
-        rad_per_count=float(step._rad_per_count), offset=float(step._offset),
-        alpha=float(sl.alpha) if sl is not None else 0.0, scale=float(sl.scale) if sl is not None else 1.0,
-        compliance=_doubles(tr.tendon_compliance if tr.elastic else np.zeros(nm)),
-        z0=_doubles(z0).replace("nan", "NAN"), P0=_doubles(P0).replace("nan", "NAN"))
+        sensorless=int(sl), needs_force=int(parts.kind != "sensorless"),
+        command_input=int(parts.command_input), unstretch=int(parts.unstretch), motor=parts.motor,
+        rad_per_count=parts.rad_per_count, offset=parts.encoder_offset,
+        alpha=parts.sensorless_alpha if sl else 0.0, scale=parts.sensorless_scale,
+        compliance=_doubles(parts.tendon_compliance),
+        z0=_doubles(parts.z0).replace("nan", "NAN"), P0=_doubles(parts.P0).replace("nan", "NAN"))
     build = C_STEP_BUILD if filt else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
-    gains = f"Controller {step.kind}, its tuned gains: " + ", ".join(
+    gains = f"Controller {parts.kind}, its tuned gains: " + ", ".join(
         f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
                                                                "prefilter_s", "onset_s", "loss_s", "notch_hz")) + "."
+    name = parts.model.name
     files["alpes_step.h"] = _HEADER.format(
-        model=step.model.name, version=__version__,
-        about=(about or f"Model {step.model.name}.").replace("*/", "* /"), dt=step.dt, cpr=int(step.counts_per_rev),
+        model=name, version=__version__,
+        about=(about or f"Model {name}.").replace("*/", "* /"), dt=parts.dt,
+        cpr=int(round(2 * np.pi / parts.rad_per_count)),
         torque_note=("\n" + " " * 22 + "(checked, not used: with the compensation the command held over the period"
-                     "\n" + " " * 22 + "is the motor torque)" if comp.command_input else ""),
+                     "\n" + " " * 22 + "is the motor torque)" if parts.command_input else ""),
         force_note=("\n                      (not read by the sensorless controller: any number)"
-                    if step.kind == "sensorless" else ""),
-        force_read="" if step.kind == "sensorless" else ", the force", motor_name=tr.motor_names[step.motor],
-        tau_max=step.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=step.n, nz=nz, nwork=nwork,
-        observer_note=_observer_note(step) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
+                    if parts.kind == "sensorless" else ""),
+        force_read="" if parts.kind == "sensorless" else ", the force", motor_name=parts.motor_names[parts.motor],
+        tau_max=parts.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=parts.n, nz=nz, nwork=nwork,
+        observer_note=_observer_note(parts) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
         z_note="" if filt else "; NaN: no observer", ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
     files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C)
+    if prefix != "alpes_step":
+        files = {k.replace("alpes_step", prefix): v.replace("alpes_step", prefix).replace("ALPES_STEP", prefix.upper())
+                 for k, v in files.items()}
     return dict(sorted(files.items()))
 
 
-def _observer_note(step: ForceStep) -> str:
+def _observer_note(parts: StepParts) -> str:
     """The header's words on the observer and the compensation."""
-    comp = step.compensation
-    friction = step.design.observer_model is not None  # an Alpes finger's EKF with its file's friction
-    words = [f"The EKF (alpes_step_ekf.h{', with the file' + chr(39) + 's friction' if friction else ''}) "
+    friction = ", with the file's friction" if parts.observer_friction else ""
+    words = [f"The EKF (alpes_step_ekf.h{friction}) "
              "takes the known input [tau_m, -F n] (the sensorless estimate of the tick before for F with the "
              "sensorless controller) and the encoder"]
-    if comp.observer_compliance:
-        words.append(f"less its zero ({float(step._offset)!r} rad) and the tendon's stretch C tau_m")
-    if comp.command_input:
+    if parts.unstretch:
+        words.append(f"less its zero ({parts.encoder_offset!r} rad) and the tendon's stretch C tau_m")
+    if parts.command_input:
         words.append("with the command held over the period as tau_m")
     return "\n   ".join(_wrap(" ".join(words) + "; no filter step at the first tick (the estimate is the rest)."))
 

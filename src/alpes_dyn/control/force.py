@@ -35,14 +35,16 @@ from .figures import _save_figure, plot_control, plot_hand_control  # noqa: F401
 from .finger_loop import (_METRIC_WINDOW_S, _SAMPLE_ARRAYS, CONTROL_MODELS, ControlResult,  # noqa: F401
                           ControlScenario, _metrics, _plant_and_params, run_control)
 from .step import ForceStep
+from .step_parts import StepParts
 from .hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlResult, HandControlScenario, _rotation,  # noqa: F401
                         chain_frame, chain_model, cylinder_normal, force_scale_of, grasp_levels, grasp_limits,
                         hand_chains, run_hand_control)
+from .hand_step import HandForceStep
 
 __all__ = [
     "CONTROLLERS", "REFERENCES", "CONTROL_MODELS", "DEFAULT_GAINS", "static_motor_torque", "static_contact_force", "ForceController",
     "ControlScenario", "ControlResult", "run_control", "plot_control", "reference_profile",
     "HAND_LEVELS", "HAND_GAINS", "hand_chains", "chain_frame", "chain_model", "cylinder_normal", "HandControlScenario",
     "HandControlResult", "run_hand_control", "plot_hand_control", "grasp_limits", "grasp_levels", "force_scale_of",
-    "ForceStep", "SensorlessForce", "run_on_bench", "BenchRun",
+    "ForceStep", "SensorlessForce", "run_on_bench", "BenchRun", "StepParts", "HandForceStep",
 ]

@@ -23,7 +23,8 @@ import numpy as np
 from ..errors import InputError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
-from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string
+from ..model.hand_chains import _rotation, chain_frame, chain_model, hand_chains  # noqa: F401 (their home: model)
+from ..model.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string
 from ..model.robot import Model
 from ..estimation.observers.blocks import Observer, ObserverBank
 from ..model.params import HandParams
@@ -55,68 +56,6 @@ HAND_LEVELS: dict[str, tuple[float, float]] = {
 HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04}
 
 
-def _rotation(axis: Sequence[float], angle: float) -> np.ndarray:
-    a = np.asarray(axis, dtype=float)
-    a = a / np.linalg.norm(a)
-    K = np.array([[0.0, -a[2], a[1]], [a[2], 0.0, -a[0]], [-a[1], a[0], 0.0]])
-    return np.eye(3) + math.sin(angle) * K + (1.0 - math.cos(angle)) * K @ K
-
-
-def hand_chains(params: HandParams) -> tuple[str, ...]:
-    """The hand's flexion chains, one motor each: the fingers of the parameter file, then ``"thumb"``.
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters.
-    """
-    return (*params.finger_names, "thumb")
-
-
-def chain_frame(params: HandParams, chain: str, abduction: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
-    """(R (3, 3), p (3,)): orientation and position (m) of a chain's base frame -- its first flexion joint's
-    frame at q = 0, the frame of a standalone finger model -- in the palm frame, the thumb at the
-    ab/adduction angle ``abduction`` (rad). A finger's frame is the palm's, translated; the thumb's is
-    turned by ``palm.thumb_yaw`` about z, then by ``abduction`` about ``thumb.abduction_axis``.
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters.
-    chain : str
-        A chain of :func:`hand_chains`.
-    abduction : float, optional
-        The thumb's ab/adduction angle, rad."""
-    if chain in params.finger_names:
-        x, y = params.finger_xy[list(params.finger_names).index(chain)]
-        return np.eye(3), np.array([x, y, 0.0])
-    if chain == "thumb":
-        R = _rotation((0.0, 0.0, 1.0), params.thumb_yaw) @ _rotation(params.abduction_axis, float(abduction))
-        return R, np.asarray(params.thumb_xyz, dtype=float).copy()
-    raise InputError(f"chain: unknown chain {chain!r} (expected one of {', '.join(hand_chains(params))})")
-
-
-def chain_model(params: HandParams, chain: str, abduction: float = 0.0) -> Model:
-    """The controller's model of one chain of the hand: ``finger3`` for a finger; for the thumb's flexion
-    chain (the ab/adduction held at ``abduction``, rad) a two-phalanx finger with the ``[thumb]`` table's
-    values. Gravity is the parameter file's, expressed in the chain's base frame (R^T g,
-    :func:`chain_frame`), so that the chain's G(q), J(q) and encoder are the hand's on its joints.
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters.
-    chain : str
-        A chain of :func:`hand_chains`.
-    abduction : float, optional
-        The thumb's ab/adduction angle, rad."""
-    R, _ = chain_frame(params, chain, abduction)
-    g = R.T @ np.asarray(params.gravity, dtype=float)
-    if chain == "thumb":
-        return Model.alpes("finger2", params=dataclasses.replace(params, finger=params.thumb, gravity=g))
-    return Model.alpes("finger3", params=dataclasses.replace(params, gravity=g), chain=chain)  # the finger's own values
-
-
 def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: Sequence[float] = (0.0, 1.0, 0.0),
                     tip: str | None = None) -> np.ndarray:
     """Unit normal n (3,) of a cylinder's surface at the fingertip, the model's base frame: from the tip frame
@@ -140,6 +79,28 @@ def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: 
     if not nd > 0:
         raise InputError("q: the fingertip is on the cylinder's axis; the normal is undefined")
     return d / nd
+
+
+def cylinder_in_chain(params: HandParams, chain: str, abduction: float) -> tuple[np.ndarray, np.ndarray]:
+    """(a point of the cylinder's axis (3,) m, its direction (3,)) of :data:`~alpes_dyn.model.mjcf.CYLINDER` in a
+    chain's base frame (:func:`~alpes_dyn.model.hand_chains.chain_frame`; the thumb at ``abduction`` rad).
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters (palm down).
+    chain : str
+        A chain of :func:`~alpes_dyn.model.hand_chains.hand_chains`.
+    abduction : float
+        The thumb's ab/adduction angle, rad.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The point and the direction.
+    """
+    R, pos = chain_frame(params, chain, abduction)
+    return R.T @ (np.asarray(CYLINDER["center"], dtype=float) - pos), R.T @ np.array([0.0, 1.0, 0.0])
 
 
 @dataclass(frozen=True)
@@ -317,23 +278,20 @@ def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandContr
            levels: Sequence[float], t: np.ndarray) -> dict[str, Any]:
     """One chain of the hand: the controller's model, its joints' MuJoCo names, the cylinder in its frame (m), its
     reference (N, one per sample) and its rest q0 (rad: the plant's, set in ``d.qpos``)."""
-    from ..model.mjcf import CYLINDER
-
     e = sc.effects
     comp = Compensation() if sc.compensation is None else sc.compensation
     p_ctl = p if e is None else dataclasses.replace(p, gravity=comp.turned_gravity(p.gravity))
     m = chain_model(p_ctl, c, sc.thumb_abduction)
-    R, pos = chain_frame(p, c, sc.thumb_abduction)
     names = [f"{c}_{j}" for j in m.joint_names]
     plant = chain_model(dataclasses.replace(pp, gravity=plant_gravity(pp.gravity, e)), c, sc.thumb_abduction)
     q0 = static_equilibrium(plant, np.zeros(m.n))
     d.qpos[joint_permutation(mj, names)] = q0
     rotor_rest(mj, d, [c], plant, q0, e)
     a, b = (float(x) for x in levels)
-    center = np.asarray(CYLINDER["center"], dtype=float)
+    center, axis = cylinder_in_chain(p, c, sc.thumb_abduction)
     ramp = np.clip((t - sc.step_time) / sc.ramp_s, 0.0, 1.0) if sc.ramp_s > 0 else (t >= sc.step_time).astype(float)
-    return dict(name=c, model=m, n=m.n, names=tuple(names), center=R.T @ (center - pos),
-                axis=R.T @ np.array([0.0, 1.0, 0.0]), F_ref=a + (b - a) * ramp, levels=(a, b), z0=q0)
+    return dict(name=c, model=m, n=m.n, names=tuple(names), center=center, axis=axis, F_ref=a + (b - a) * ramp,
+                levels=(a, b), z0=q0)
 
 
 def _chain_effects(ch: dict[str, Any], sc: HandControlScenario, p: HandParams) -> dict[str, Any]:

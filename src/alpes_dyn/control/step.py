@@ -12,7 +12,9 @@
 * the :class:`~alpes_dyn.control.controller.ForceController` with the tuned gains (:data:`.DEFAULT_GAINS`).
 
 :func:`~alpes_dyn.control.finger_loop.run_control` runs the same object at every sample of its simulated loop,
-so what a user runs on the hand is what the library's closed loop tests and measures.
+so what a user runs on the hand is what the library's closed loop tests and measures. :meth:`ForceStep.parts` gives
+its settings (:class:`~alpes_dyn.control.step_parts.StepParts`) to a code generator (:mod:`alpes_dyn.control.cstep`)
+or a port; :class:`~alpes_dyn.control.hand_step.HandForceStep` holds one per flexion chain of the whole hand.
 
 Timing (sample k at t_k, as :mod:`alpes_dyn.simulation.loop`'s and :mod:`alpes_dyn.bench.interface`'s): the
 readings of tick k -- the encoder counts at t_k, the motor torque that the current sensor reports at t_k (what the
@@ -48,6 +50,7 @@ from ..symbolic.statespace import StateSpace
 from .blocks import SensorlessForce
 from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal, static_motor_torque
 from .realism_loop import Compensation
+from .step_parts import StepParts
 
 __all__ = ["ForceStep", "LoopDesign", "CONTROL_MODELS", "force_ekf", "alpes_design", "robot_design",
            "scaled_gains", "finger3_contact"]
@@ -401,6 +404,7 @@ class ForceStep:
         EKF at its prior (the finger at rest), the sensorless estimate at 0, the last command 0."""
         self.controller = ForceController(**self._controller_args)
         self.k = 0
+        self._n = self._normal.copy()  # the contact normal of the last sample (a step's ``normal`` replaces it)
         self._command = np.zeros(self.m)
         self._F_fb = 0.0
         if self.filter_step is not None:
@@ -410,7 +414,7 @@ class ForceStep:
             self._sensorless.start(0, self.dt, False)
 
     # ---------------------------------------------------------------- the sample
-    def step(self, counts: Any, torque: Any, force: Any, reference: float) -> np.ndarray:
+    def step(self, counts: Any, torque: Any, force: Any, reference: float, normal: Any = None) -> np.ndarray:
         """One sample: the readings of tick k in, the (m,) motor command (N m, in [0, tau_max]) to hold over
         [t_k, t_k+1) out (the pulling motor's; the others 0).
 
@@ -424,12 +428,16 @@ class ForceStep:
             The fingertip sensor's normal force at t_k, N; not read by ``"sensorless"`` (None or NaN there).
         reference : float
             The force reference F_ref at t_k, N.
+        normal : array_like or None
+            (3,) the object's surface normal at the contact from this sample on (base frame, from the fingertip
+            into the object, any length: normalised), for this sample's EKF input, sensorless estimate and
+            controller -- what the C step takes at each call; None: the last one (at first the step's own).
 
         Raises
         ------
         InputError
-            A reading of the wrong shape, not finite (NaN counts), a missing force for ``"sensor"``/``"pi"``, an
-            EKF that diverged on the readings (one line naming it; the step's state is left as it was).
+            A reading of the wrong shape, not finite (NaN counts), a missing force for ``"sensor"``/``"pi"``, a zero
+            ``normal``, an EKF that diverged on the readings (one line naming it; the step's state is left as it was).
         """
         y = self._vector(counts, "counts", "encoder counts") * self._rad_per_count
         tau_r = self._vector(torque, "torque", "motor torques in N m")
@@ -441,6 +449,7 @@ class ForceStep:
         if isinstance(reference, (bool, np.bool_)) or not isinstance(
                 reference, (int, float, np.integer, np.floating)) or not math.isfinite(reference):
             raise InputError(f"reference: expected a finite force reference in N, got {reference!r}")
+        n_k = self._n if normal is None else _normal(normal)
         comp = self.compensation
         tau = self._command if comp.command_input else tau_r  # the motor torque over [t_k-1, t_k)
         q_hat, F_fb = None, force
@@ -448,7 +457,7 @@ class ForceStep:
             if self.k > 0:
                 wy, m = self._wy, self.m
                 wy[:m] = tau
-                wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * self._normal
+                wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * n_k
                 wy[m + 3:] = comp.unstretched(self._transmission, y, tau, self._offset) if comp.observer_compliance else y
                 s = self.filter_step(self._s, wy)
                 if not (np.abs(s[:2 * self.n]) < _DIVERGED).all():  # NaN too
@@ -458,8 +467,9 @@ class ForceStep:
                 self._s = s
             q_hat = self._s[:self.n]
             if self._sensorless is not None:
-                F_fb = self._sensorless.sample(q_hat, tau)
-        u = self.controller.update(float(reference), F_fb, q_hat)
+                F_fb = self._sensorless.sample(q_hat, tau, n_k)
+        u = self.controller.update(float(reference), F_fb, q_hat, None if normal is None else n_k)
+        self._n = n_k
         self._command = np.zeros(self.m)
         self._command[self.motor] = u
         self._F_fb = F_fb
@@ -481,6 +491,29 @@ class ForceStep:
         return v
 
     # ---------------------------------------------------------------- what the step knows
+    def parts(self) -> StepParts:
+        """The step's settings, for a code generator or a port of the step (:class:`.StepParts`; not its state).
+
+        Returns
+        -------
+        StepParts
+            The models, the EKF and its prior, the compensation's constants, the sensorless filter, a fresh
+            controller with the step's settings.
+        """
+        nz, tr, sl, comp = 2 * self.n, self._transmission, self._sensorless, self.compensation
+        filt = self.filter_step is not None
+        return StepParts(
+            model=self.model, observer_friction=self.design.observer_model is not None, kind=self.kind, dt=self.dt,
+            motor=self.motor, motor_names=tuple(tr.motor_names), tau_max=self.tau_max,
+            rad_per_count=float(self._rad_per_count), encoder_offset=float(self._offset),
+            tendon_compliance=np.asarray(tr.tendon_compliance if tr.elastic else np.zeros(self.m), dtype=float),
+            unstretch=bool(comp.observer_compliance), command_input=bool(comp.command_input),
+            normal=self._normal.copy(), controller=ForceController(**self._controller_args),
+            ekf=self._ekf if filt else None, z0=self._s0[:nz].copy() if filt else np.full(nz, np.nan),
+            P0=self._s0[nz:].copy() if filt else np.full(nz * nz, np.nan),
+            sensorless_alpha=None if sl is None else float(sl.alpha),
+            sensorless_scale=1.0 if sl is None else float(sl.scale))
+
     @property
     def command(self) -> np.ndarray:
         """(m,) the last command returned, N m (zeros before the first sample)."""

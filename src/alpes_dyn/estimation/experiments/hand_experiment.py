@@ -27,6 +27,7 @@ import numpy as np
 
 from ...errors import InputError, RecordingError
 from ...fileio import check_outputs
+from ...model.hand_chains import hand_chains
 from ...model.params import HandParams, load_params
 from ...model.robot import Model
 from .adapt import AMPLITUDE_SCALES, RIGS, Adaptation, adapted_experiment
@@ -34,11 +35,6 @@ from .design import ExperimentDesign
 from .recording import Recording, write_recording
 
 __all__ = ["hand_chains", "chain_model_name", "chain_names", "chain_recording", "hand_recording", "hand_experiment"]
-
-
-def hand_chains(params: HandParams) -> tuple[str, ...]:
-    """The hand's chains, in its motors' order: the fingers of ``palm.finger_names``, then ``"thumb"``."""
-    return tuple(params.finger_names) + ("thumb",)
 
 
 def chain_model_name(chain: str) -> str:
