@@ -95,7 +95,7 @@ class SensitivityModel:
     Attributes
     ----------
     dynamics: the :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; names, nominal (p,): parameters.
-    nx = 2n, p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
+    nx = 2n (3n with the LuGre law's bristles, :mod:`~alpes_dyn.simulation.lugre_sensitivity`), p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
     coefficients), nd = nx + p + no (sensitivity directions).
     compile_seconds: time spent compiling now (0 when the library came from the cache).
     """
@@ -112,7 +112,8 @@ class SensitivityModel:
         self.dynamics = pd
         self.names, self.nominal, self.p = pd.names, pd.nominal, pd.p
         n = model.n
-        self.n, self.nx = n, 2 * n
+        self.lugre = pd.lugre  # the LuGre law: the bristles in the state (module lugre_sensitivity)
+        self.n, self.nx = n, (3 if pd.lugre is not None else 2) * n
         tr = model.transmission
         Bm = tr.actuation_matrix if tr is not None else np.eye(n)
         self.B = np.asarray(Bm, dtype=float)
@@ -131,19 +132,25 @@ class SensitivityModel:
         off = cs.SX.sym("coef", self.no)
         w = cs.vertcat(u, pd.g, pd.theta, phi, off)
         u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
-        tau = (pd.input_torque(x[:n], x[n:], u_eff, pd.theta) if tr is not None  # S^T u, rho(q)^T u, the capstan's
+        tau = (pd.input_torque(x[:n], x[n:2 * n], u_eff, pd.theta) if tr is not None  # S^T u, rho(q)^T u, the capstan's
                else cs.mtimes(cs.DM(self.B), u_eff))
-        qdd = pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g)
-        rhs = cs.vertcat(x[n:], qdd)
         h = self.dt / self.substeps
+        if pd.lugre is not None:
+            from .lugre_sensitivity import lugre_steps  # (it builds on this module's RK4 steps)
+            plain, sens_of = lugre_steps(pd, x, w, tau, h)
+        else:
+            rhs = cs.vertcat(x[n:], pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g))
+            plain = _rk4_calling(cs.Function("rhs", [x, w], [cs.cse(rhs)]), h, "step")
+
+            def sens_of(directions: cs.SX) -> cs.Function:
+                return variational_rk4_step(rhs, x, w, directions, h)
         # one call per sample period: the substeps in the compiled step, the input held, the states at the samples
-        self.plain_step = repeated_step(_rk4_calling(cs.Function("rhs", [x, w], [cs.cse(rhs)]), h, "step"),
-                                        self.substeps)
-        self.step = repeated_step(variational_rk4_step(rhs, x, w, cs.vertcat(pd.theta, off), h), self.substeps)
+        self.plain_step = repeated_step(plain, self.substeps)
+        self.step = repeated_step(sens_of(cs.vertcat(pd.theta, off)), self.substeps)
         # the sensitivities to the initial state alone (dx/dx_0, nx x nx), built on first use
-        self._state_parts = (rhs, x, w, h)
+        self._state_step = sens_of
         self._state_loop: CompiledStepLoop | None = None
-        label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
+        label = f"sens_{model.name}{'_lugre' if pd.lugre is not None else ''}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._loop = CompiledStepLoop(self.step, label, threads)
         self._label, self._threads = label, threads
         self._plain_loop: CompiledStepLoop | None = None  # the states alone, compiled on first use
@@ -209,8 +216,7 @@ class SensitivityModel:
             return self._plain_loop.run(x0, W, progress, "states"), None
         state = sensitivities == "state"
         if state and self._state_loop is None:
-            rhs, xs, w, h = self._state_parts
-            step = repeated_step(variational_rk4_step(rhs, xs, w, cs.SX(0, 1), h), self.substeps)
+            step = repeated_step(self._state_step(cs.SX(0, 1)), self.substeps)
             self._state_loop = CompiledStepLoop(step, self._label.replace("sens_", "xsens_", 1), self._threads)
             self.compile_seconds += self._state_loop.compile_seconds
         nd = self.nx if state else self.nd

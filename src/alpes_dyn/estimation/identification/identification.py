@@ -70,7 +70,9 @@ from .adequacy import AdequacyWarning, assess, effect_responses, range_exit, sen
 from ..experiments.recording import Recording, check_recording, excitation_parts
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
-from .bounds import held_value, unsupported
+from ...simulation.lugre import lugre_substeps
+from ...model.friction import LuGre, lugre_of
+from .bounds import SIGMA0_RANGE, held_value, unsupported
 from .held import held_start
 from .shooting import ShootingProblem, torque_model
 from .normal_blocks import j_dot, remainders
@@ -237,6 +239,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         raise InputError(GAIN_NEEDS_LINES)
     if substeps is None:
         substeps = stable_substeps(model, dt, tension=np.abs(rec.torque).max(axis=0))  # (a sheath's, if any)
+        law = lugre_of(model)
+        if law is not None:  # the presliding mode, at the upper end of sigma0's range (module bounds)
+            substeps = max(substeps, lugre_substeps(model, LuGre(SIGMA0_RANGE[1] * law.sigma0, law.sigma1), dt))
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)
@@ -595,5 +600,5 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
     return assess(res, rec.torque, floor, regressors, val,
-                  velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
+                  velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:2 * pb.n]), range_exit=exit_,
                   lines=excitation, dt=rec.dt, runs=parts(excitation_parts(rec), res.shape[0]))

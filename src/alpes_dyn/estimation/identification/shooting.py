@@ -516,14 +516,14 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         first[runs[:-1]] = True  # each run from the rest, its pieces within it (runs start on a node: run_cuts)
         for a, b in ((a, min(a + K, N, int(runs[np.searchsorted(runs, a, side="right")])))
                      for a0, a1 in zip(runs[:-1], runs[1:]) for a in range(int(a0), min(int(a1), N), K)):
-            x = np.concatenate([q0, np.zeros(n)]) if first[a] else x
+            x = np.concatenate([q0, np.zeros(self.nx - n)]) if first[a] else x
             basis = self.Psib.reshape(-1, self.torque.nphi)[None, a:b] if self.torque.lines else None
             x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
                                    sensitivities=False)
             nodes[a // L: -(-b // L)] = x_c[0, 0:b - a:L]
             x = x_c[0, -1]
         if not np.isfinite(nodes).all():
-            nodes[:] = np.concatenate([q0, np.zeros(n)])
+            nodes[:] = np.concatenate([q0, np.zeros(self.nx - n)])
         k_nodes = np.arange(n_int) * L
         S_enc, y = self.S_enc, self.y
         Sp = np.linalg.pinv(S_enc)
@@ -531,5 +531,5 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         y_rigid = y - self.Ufull[self.before] * C0 if self.comp_cols else y
         nodes[:, :n] += (y_rigid[k_nodes] - encoder_angles(self.enc, nodes[:, :n])) @ Sp.T  # (S: rho(0), a start)
         yd = np.concatenate([np.gradient(y[a:b], self.rec.dt, axis=0) for a, b in zip(runs[:-1], runs[1:])])
-        nodes[:, n:] += (yd[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+        nodes[:, n:2 * n] += (yd[k_nodes] - nodes[:, n:2 * n] @ S_enc.T) @ Sp.T  # (a LuGre law's bristles kept)
         return nodes
