@@ -26,7 +26,7 @@ from ..symbolic.lugre import lugre_substep
 from ..symbolic.statespace import StateSpace
 from .integrate import RK4_REACH, _check_dt, _n_known_inputs, as_statespace
 
-__all__ = ["lugre_rate_bound", "lugre_substeps", "lugre_step_function", "LuGreResult",
+__all__ = ["lugre_rate_bound", "lugre_substeps", "fit_substeps", "lugre_step_function", "LuGreResult",
            "simulate_lugre"]
 
 def lugre_rate_bound(model: Model, law: LuGre) -> float:
@@ -54,6 +54,13 @@ def lugre_substeps(model: Model, law: LuGre, dt: float, minimum: int = 4) -> int
     ``minimum`` (4: a step of 0.25 ms at 1 kHz, the smooth law's)."""
     dt = _check_dt(dt)
     return max(int(minimum), int(math.ceil(dt * lugre_rate_bound(model, law) / RK4_REACH - 1e-9)))
+
+
+def fit_substeps(model: Model, dt: float, stiffest: float) -> int:
+    """:func:`lugre_substeps` of ``model``'s LuGre law with its sigma0 times ``stiffest`` (the upper end of a fit's
+    range for it); 1 where the model's law is the smooth one (no bristles)."""
+    law = lugre_of(model)
+    return 1 if law is None else lugre_substeps(model, LuGre(stiffest * law.sigma0, law.sigma1), dt)
 
 
 def lugre_step_function(ss: StateSpace, law: LuGre, dt: float, substeps: int = 1) -> cs.Function:

@@ -225,6 +225,8 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
         if not isinstance(it, str) or not it:
             raise ModelError(f"parameters: empty or non-string entry in {spec!r}")
         kinds = _GROUPS.get(it, (it,) if it in KINDS else ())
+        if it in ("sigma0", "sigma1") and lugre_of(model) is None:
+            raise ModelError(f"parameters: {it} is the LuGre law's; the model's friction.law is tanh")
         if kinds:
             new = [p for p in cat if p.kind in kinds and (p.kind in _ALWAYS or p.nominal != 0.0)]
         elif it in by_name:
