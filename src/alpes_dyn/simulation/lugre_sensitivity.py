@@ -22,7 +22,7 @@ import casadi as cs
 
 from ..symbolic.lugre import relax_exactly
 from ..symbolic.parametric import ParametricDynamics
-from .sensitivity import _rk4_calling, variational_rk4_step
+from .variational import _rk4_calling, variational_rk4_step
 
 __all__ = ["lugre_steps"]
 
