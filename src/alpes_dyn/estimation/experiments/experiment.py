@@ -82,7 +82,7 @@ from .trim import (_fmt, _holding_bias, _mean_equilibrium, _oriented, _rest_torq
 from .recording import Recording, write_recording
 from ...simulation.integrate import stable_substeps
 from ...simulation.sampled import sampled_rk4
-from ...simulation.lugre import lugre_substeps, simulate_lugre
+from ...simulation.lugre import ACCURATE, lugre_substeps, simulate_lugre
 from ...model.friction import lugre_of
 from ...model.stops import JointRangeWarning, check_range
 
@@ -279,7 +279,8 @@ def orientation_segments(design: ExperimentDesign) -> np.ndarray:
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
     """States (N+1, 2n) from the static equilibrium at u[0], RK4 with the design's substeps (more where the truth's
     friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`; the truth's LuGre law, where its
-    file has it, by :func:`~alpes_dyn.simulation.lugre.simulate_lugre` from unloaded bristles), the torques u (N+1, m) held
+    file has it, by :func:`~alpes_dyn.simulation.lugre.simulate_lugre` from unloaded bristles, at
+    :data:`~alpes_dyn.simulation.lugre.ACCURATE` times its stable steps), the torques u (N+1, m) held
     per sample, segment by segment of constant gravity: compiled, the states kept at the samples
     (:func:`~alpes_dyn.simulation.sampled.sampled_rk4`, :func:`~alpes_dyn.simulation.integrate.simulate`'s RK4 to
     the bit, linear in the record); a :class:`~alpes_dyn.model.stops.JointRangeWarning` where a sample leaves the
@@ -298,7 +299,7 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
         m = _oriented(truth, G[start])
         if law is not None:
             res = simulate_lugre(m, x[start], u[start:stop], design.dt, law, z0=z, input="motor",
-                                 substeps=max(sub, lugre_substeps(m, law, design.dt)))
+                                 substeps=max(sub, ACCURATE * lugre_substeps(m, law, design.dt)))
             x[start + 1: stop + 1], z = np.hstack([res.q, res.qd])[1:], res.z[-1]
         else:
             x[start + 1: stop + 1] = sampled_rk4(m, x[start], u[start:stop], design.dt, sub)[1:]

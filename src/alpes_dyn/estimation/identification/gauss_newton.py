@@ -28,6 +28,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ...errors import InputError
+
 from ...progress import _Progress
 from .shooting import Evaluation, ShootingProblem
 
@@ -285,9 +287,10 @@ class GaussNewton:
         while k_try < len(candidates):
             alpha, sv, sg = candidates[k_try]
             k_try += 1
-            if not np.isfinite(pb.values(glob + alpha * sg)).all():
-                continue  # a correction that overflows a parameter (a law's stiffness, exp of its log): no trial
-            trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
+            try:
+                trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
+            except InputError:  # a correction that overflowed a parameter (exp of its log: a LuGre fit's): no step
+                continue
             if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
                 continue
             cost_new, c_now = trial.cost, float(np.sum(np.abs(trial.c)))
