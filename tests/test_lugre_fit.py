@@ -102,23 +102,24 @@ def lugre_fits():
 
 
 def test_fit_recovers_a_lugre_finger(lugre_fits):
-    """The LuGre fit of the LuGre recording: springs within 3 %, masses within 5 %, the residual within 1.3 times the
-    sensor floor and below the smooth law's; F_s within 15 % where its standard error is below 5 % (the proximal
-    joint's dry friction trades with its viscous one, 10-40 % off on the draws measured); sigma0 within a factor 3 of
-    the truth with sigma1 (the 2 s multisine sees the presliding only at its reversals: measured 1.9-2.1 times low
-    from the file's start 4 times low, with standard errors of 15 %: the law's least determined numbers, the guide's
-    friction page). The fit may end at its iteration cap (the law's |qd| makes Gauss-Newton's steps short)."""
+    """The LuGre fit of the LuGre recording converges at the sensor floor (adequate; the smooth law's fit leaves more):
+    springs within 3 %, masses within 5 %, F_s within 10 %; sigma0 and sigma1 within 40 % (measured 23 % and 20 % low,
+    1.6 and 1.7 standard errors: the fit's split step at 8 steps per millisecond against the plant's 12, the step's
+    O(h) bristle error, simulation.lugre.ACCURATE), neither reported not identified (the multisine's reversals show
+    the presliding)."""
     true, smooth, fit = lugre_fits
-    values, sd = dict(zip(fit.names, fit.values)), dict(zip(fit.names, fit.std))
+    values = dict(zip(fit.names, fit.values))
     err = {n: values[n] / v - 1 for n, v in [(f"K_{i + 1}", k) for i, k in enumerate(true.finger.K)]
            + [(f"m_{i + 1}", k) for i, k in enumerate(true.finger.m)]
-           + [(f"F_s_{i + 1}", k) for i, k in enumerate(true.finger.F_s)]}
-    assert fit.residual_rms < min(1.3 * fit.adequacy.floor.total, smooth.residual_rms), fit.residual_rms
+           + [(f"F_s_{i + 1}", k) for i, k in enumerate(true.finger.F_s)]
+           + [("sigma0", TRUE_SIGMA0), ("sigma1", TRUE_SIGMA1)]}
+    assert fit.converged and fit.adequacy.adequate, (fit.reason, fit.adequacy.reasons)
+    assert fit.residual_rms < min(1.15 * fit.adequacy.floor.total, smooth.residual_rms), fit.residual_rms
     assert all(abs(e) < 0.03 for n, e in err.items() if n.startswith("K_")), err
     assert all(abs(e) < 0.05 for n, e in err.items() if n.startswith("m_")), err
-    assert all(abs(e) < 0.15 for n, e in err.items() if n.startswith("F_s") and sd[n] < 0.05 * values[n]), err
-    assert 1 / 3 < values["sigma0"] / TRUE_SIGMA0 < 3 and 1 / 3 < values["sigma1"] / TRUE_SIGMA1 < 3
-    assert all(n in fit.not_identified or np.isfinite(sd[n]) for n in ("sigma0", "sigma1"))
+    assert all(abs(e) < 0.10 for n, e in err.items() if n.startswith("F_s")), err
+    assert abs(err["sigma0"]) < 0.4 and abs(err["sigma1"]) < 0.4, err
+    assert not fit.not_identified and np.isfinite(fit.std).all()
 
 
 def test_the_smooth_fit_s_verdict_names_the_stateful_friction_and_the_file_carries_the_law(lugre_fits, tmp_path):
