@@ -32,8 +32,9 @@ def test_the_table_is_the_documented_one():
     documented = re.findall(r"^``([a-z ]+)``\s+(\w+)\s", rd.__doc__, flags=re.M)
     assert documented == [(r.name, r.stage) for r in rd.ROUNDS]
     assert rd.FALLBACK == ("stiction", "rotor", "delay", "offset")
-    assert [r.name for r in rd.rounds_of("auto")] == ["asked", "stiction", "rotor", "delay", "offset"]
-    assert all(r.start_from == "kept" for r in rd.rounds_of("auto") + rd.rounds_of("cable"))
+    assert [r.name for r in rd.rounds_of("auto")] == ["asked", "lugre", "stiction", "rotor", "delay", "offset"]
+    assert all(r.start_from == "kept" for r in rd.rounds_of("auto") + rd.rounds_of("cable") if r.name != "lugre")
+    assert ROW["lugre"].start_from == "kept, its friction the file's"
 
 
 def test_first_and_staged_rounds():

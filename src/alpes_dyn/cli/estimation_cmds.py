@@ -359,6 +359,9 @@ def _fit_robot(args: argparse.Namespace, freqs):
     model = _chain_model(whole, args.chain)
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
+    if "lugre" in effects:
+        raise InputError("--effects: lugre applies to the Alpes models (their parameter file's friction.law); a URDF "
+                         "--model has no parameter file to hold the law")
     if "rotor" in effects:
         raise InputError("--effects: rotor applies to the Alpes models (their file's J_m put on the tendons); a URDF "
                          "--model's rotors are always on, its spec's motors' rotor_inertia (fit them with "

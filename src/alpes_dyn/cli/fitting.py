@@ -37,8 +37,8 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
 
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
-    if args.parameters is not None and set(effects) - {"stiction", "rotor"}:
-        raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor'))} with "
+    if args.parameters is not None and set(effects) - {"stiction", "rotor", "lugre"}:
+        raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor', 'lugre'))} with "
                          "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset, "
                          "capstan)")
     model_of = alpes_models(args.model, load_params(args.params), rotor_inertia=args.rotor_inertia, chain=args.chain)

@@ -339,7 +339,8 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "v_s = 0.02 rad/s, kept in the file), rotor (the file's rotor inertia J_m on each tendon, "
                         "held), compliance (the tendon's stretch, tendon_compliance), "
                         "tilt (the palm's orientation where the recording has no gravity columns), offset (the "
-                        "encoders' zero), delay, capstan (the tendons' sheath friction); 'auto' (the default): "
+                        "encoders' zero), delay, capstan (the tendons' sheath friction), lugre (the LuGre friction law: "
+                        "sigma0, sigma1 fitted, friction.law written); 'auto' (the default): "
                         "compliance,tilt, then the fit again with what the first one's adequacy check names, the "
                         "lower residual kept; 'none' for the rigid, smooth-friction fit (with --parameters: none)")
     s.add_argument("--rotor-inertia", action="store_true",

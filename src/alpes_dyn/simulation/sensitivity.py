@@ -31,53 +31,11 @@ import numpy as np
 from ..errors import InputError
 from ..model.robot import Model
 from ..symbolic.parametric import ParametricDynamics
-from .integrate import CompiledStepLoop, _check_dt, rk4_expression
+from .lugre_sensitivity import lugre_steps
+from .integrate import CompiledStepLoop, _check_dt
+from .variational import _rk4_calling, repeated_step, variational_rk4_step  # (re-exported: their home before)
 
 __all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
-
-
-def _rk4_calling(fn: cs.Function, h: float, name: str) -> cs.Function:
-    """One classical RK4 step of z' = fn(z, w), w held, as an MX function calling the SX ``fn`` four times (its
-    body once in the generated C, not four times inlined)."""
-    z = cs.MX.sym("z", fn.size1_in(0))
-    wm = cs.MX.sym("w", fn.size1_in(1))
-    return cs.Function(name, [z, wm], [rk4_expression(fn, z, wm, h)])
-
-
-def repeated_step(step: cs.Function, count: int) -> cs.Function:
-    """``step`` (x, w) -> x_next applied ``count`` times with the same w (an MX function calling it ``count``
-    times): the substeps of one sample period in one compiled call, so the caller's inputs and states are per
-    sample (not repeated per substep: for a stick-slip fit's 15 substeps, 15x less memory in and out)."""
-    if count == 1:
-        return step
-    z = cs.MX.sym("z", step.size1_in(0))
-    wm = cs.MX.sym("w", step.size1_in(1))
-    zk = z
-    for _ in range(count):
-        zk = step(zk, wm)
-    return cs.Function(step.name() + f"_x{count}", [z, wm], [zk])
-
-
-def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> cs.Function:
-    """One RK4 step of x' = rhs(x, w) with its sensitivities: ``sens_step([x; vec X], w) -> [x+; vec X+]``.
-
-    X = dx/d(x_0, p) (nx x (nx + np), column-major in the state vector) obeys the variational equation
-    X' = f_x X + [0 | f_p]; the step applies the same classical RK4 (step h, s) to the augmented system. For an
-    explicit Runge-Kutta method this *is* the derivative of the discrete step (differentiation and
-    discretisation commute), so the Jacobians stay exact for the discretised model, and the states are
-    computed by the same operations as :func:`~alpes_dyn.simulation.integrate.rk4_expression` (bit for bit).
-
-    ``p`` (np,) is a subvector of ``w`` (the parameters, input corrections). The augmented right-hand side is
-    one SX function called four times by an MX step, so the generated C holds it once, not the RK4 step's
-    derivative inlined: for finger3's 12 parameters the source is 56 kB instead of 1.4 MB, it compiles in ~1 s instead
-    of ~32 s at -O3 and runs ~2x faster (2-core machine; the SIMD lanes of
-    :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop` are not used by a step with calls).
-    """
-    nx = x.numel()
-    X = cs.SX.sym("X", nx, nx + p.numel())
-    dX = cs.mtimes(cs.jacobian(rhs, x), X) + cs.horzcat(cs.SX.zeros(nx, nx), cs.jacobian(rhs, p))
-    fa = cs.Function("sens_rhs", [cs.vertcat(x, cs.vec(X)), w], [cs.cse(cs.vertcat(rhs, cs.vec(dX)))])
-    return _rk4_calling(fa, h, "sens_step")
 
 
 class SensitivityModel:
@@ -95,7 +53,7 @@ class SensitivityModel:
     Attributes
     ----------
     dynamics: the :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; names, nominal (p,): parameters.
-    nx = 2n, p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
+    nx = 2n (3n with the LuGre law's bristles, :mod:`~alpes_dyn.simulation.lugre_sensitivity`), p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
     coefficients), nd = nx + p + no (sensitivity directions).
     compile_seconds: time spent compiling now (0 when the library came from the cache).
     """
@@ -112,7 +70,8 @@ class SensitivityModel:
         self.dynamics = pd
         self.names, self.nominal, self.p = pd.names, pd.nominal, pd.p
         n = model.n
-        self.n, self.nx = n, 2 * n
+        self.lugre = pd.lugre  # the LuGre law: the bristles in the state (module lugre_sensitivity)
+        self.n, self.nx = n, (3 if pd.lugre is not None else 2) * n
         tr = model.transmission
         Bm = tr.actuation_matrix if tr is not None else np.eye(n)
         self.B = np.asarray(Bm, dtype=float)
@@ -131,19 +90,24 @@ class SensitivityModel:
         off = cs.SX.sym("coef", self.no)
         w = cs.vertcat(u, pd.g, pd.theta, phi, off)
         u_eff = u + cs.mtimes(cs.reshape(off, self.nu, self.nb), phi) if self.nb else u
-        tau = (pd.input_torque(x[:n], x[n:], u_eff, pd.theta) if tr is not None  # S^T u, rho(q)^T u, the capstan's
+        tau = (pd.input_torque(x[:n], x[n:2 * n], u_eff, pd.theta) if tr is not None  # S^T u, rho(q)^T u, the capstan's
                else cs.mtimes(cs.DM(self.B), u_eff))
-        qdd = pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g)
-        rhs = cs.vertcat(x[n:], qdd)
         h = self.dt / self.substeps
+        if pd.lugre is not None:
+            plain, sens_of = lugre_steps(pd, x, w, tau, h)
+        else:
+            rhs = cs.vertcat(x[n:], pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g))
+            plain = _rk4_calling(cs.Function("rhs", [x, w], [cs.cse(rhs)]), h, "step")
+
+            def sens_of(directions: cs.SX) -> cs.Function:
+                return variational_rk4_step(rhs, x, w, directions, h)
         # one call per sample period: the substeps in the compiled step, the input held, the states at the samples
-        self.plain_step = repeated_step(_rk4_calling(cs.Function("rhs", [x, w], [cs.cse(rhs)]), h, "step"),
-                                        self.substeps)
-        self.step = repeated_step(variational_rk4_step(rhs, x, w, cs.vertcat(pd.theta, off), h), self.substeps)
+        self.plain_step = repeated_step(plain, self.substeps)
+        self.step = repeated_step(sens_of(cs.vertcat(pd.theta, off)), self.substeps)
         # the sensitivities to the initial state alone (dx/dx_0, nx x nx), built on first use
-        self._state_parts = (rhs, x, w, h)
+        self._state_step = sens_of
         self._state_loop: CompiledStepLoop | None = None
-        label = f"sens_{model.name}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
+        label = f"sens_{model.name}{'_lugre' if pd.lugre is not None else ''}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._loop = CompiledStepLoop(self.step, label, threads)
         self._label, self._threads = label, threads
         self._plain_loop: CompiledStepLoop | None = None  # the states alone, compiled on first use
@@ -209,8 +173,7 @@ class SensitivityModel:
             return self._plain_loop.run(x0, W, progress, "states"), None
         state = sensitivities == "state"
         if state and self._state_loop is None:
-            rhs, xs, w, h = self._state_parts
-            step = repeated_step(variational_rk4_step(rhs, xs, w, cs.SX(0, 1), h), self.substeps)
+            step = repeated_step(self._state_step(cs.SX(0, 1)), self.substeps)
             self._state_loop = CompiledStepLoop(step, self._label.replace("sens_", "xsens_", 1), self._threads)
             self.compile_seconds += self._state_loop.compile_seconds
         nd = self.nx if state else self.nd

@@ -20,7 +20,7 @@ from ..model.friction import LuGre, lugre_rate, lugre_torque
 from .dynamics import block_solve
 from .statespace import StateSpace
 
-__all__ = ["lugre_derivatives", "bristle_relaxed", "lugre_substep"]
+__all__ = ["lugre_derivatives", "bristle_relaxed", "relax_exactly", "lugre_substep"]
 
 
 def lugre_derivatives(ss: StateSpace, law: LuGre, q: cs.SX, v: cs.SX, z: cs.SX, tau: cs.SX, F: Any = None
@@ -57,11 +57,18 @@ def bristle_relaxed(law: LuGre, coulomb: np.ndarray, z: cs.SX, v: cs.SX, h: floa
     Fs = np.asarray(coulomb, dtype=float)
     dry = Fs > 0
     inv = cs.DM(np.where(dry, 1.0 / np.where(dry, Fs, 1.0), 0.0))
-    ah = law.sigma0 * h * cs.fabs(v) * inv
+    return relax_exactly(z, v, law.sigma0 * cs.fabs(v) * inv, cs.DM(dry.astype(float)), h)
+
+
+def relax_exactly(z: cs.SX, v: cs.SX, a: cs.SX, dry: cs.DM, h: float) -> cs.SX:
+    """z e^(-a h) + v (1 - e^(-a h)) / a, (n,) rad: eq. L1 over h seconds at the velocity v held, relaxing at the
+    rate a (n,) 1/s (sigma0 |v| / F_s; symbols where the law's parameters are, e.g. fitted); 0 where ``dry`` (n,)
+    is 0 (a joint without a bristle)."""
+    ah = a * h
     small = ah < 1e-6
     safe = cs.if_else(small, 1.0, ah)
     phi = cs.if_else(small, h * (1.0 - 0.5 * ah), -h * cs.expm1(-safe) / safe)  # (1 - e^(-a h)) / a
-    return cs.DM(dry.astype(float)) * (z * cs.exp(-ah) + v * phi)
+    return dry * (z * cs.exp(-ah) + v * phi)
 
 
 def lugre_substep(ss: StateSpace, law: LuGre, q: cs.SX, v: cs.SX, z: cs.SX,

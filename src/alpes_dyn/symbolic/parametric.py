@@ -40,7 +40,17 @@ kind                  meaning                                                   
                       get S^T (u - (1 - exp(-mu theta)) |u| tanh(S qd / v_c))
                       (``capstan_<motor>``; :func:`~alpes_dyn.model.transmission.
                       capstan_torque`)
+``sigma0``            the LuGre law's bristle stiffness, one for every joint      N m/rad
+                      (eq. L1-L2 of :mod:`~alpes_dyn.model.friction`; a model
+                      whose file's ``friction.law`` is ``lugre`` only)
+``sigma1``            the LuGre law's bristle damping (likewise)                  N m s/rad
 ===================== =========================================================== ==========
+
+The LuGre law. On a model whose parameter file has ``friction.law = "lugre"``
+(:func:`~alpes_dyn.model.friction.lugre_of`) the friction has a state, the bristles z (n,) rad: the friction
+torque is sigma0 z + sigma1 z' + F_v qd instead of F_s tanh(qd / v_s) + F_v qd (:meth:`ParametricDynamics.
+forward_dynamics` with ``z``), z' = qd - sigma0 |qd| z / F_s (:meth:`ParametricDynamics.bristle_rate`), F_s, sigma0
+and sigma1 symbols where selected (the kind ``friction`` selects all four with F_v).
 
 Scaling. K, m, F_s, F_v, input_gain and J_m are positive and fitted as log theta
 (:func:`~alpes_dyn.estimation.identification.identification.identify`); ``encoder_offset`` and ``tilt`` have the
@@ -68,6 +78,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.extras import spring_law
+from ..model.friction import lugre_of
 from ..model.transmission import capstan_torque, capstan_velocity
 from ..model.robot import Model
 from .dynamics import block_solve, sparse_dm
@@ -75,14 +86,15 @@ from .dynamics import block_solve, sparse_dm
 __all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "unseen_masses", "ParametricDynamics"]
 
 KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt", "tendon_compliance",
-                          "capstan")
+                          "capstan", "sigma0", "sigma1")
 ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt", "tendon_compliance", "capstan")
 """Kinds fitted as they are (nominal 0, either sign), not in log."""
 OUTPUT_KINDS: tuple[str, ...] = ("encoder_offset", "tendon_compliance")
 """Kinds that change the measured output only, not the dynamics."""
 _UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-", "J_m": "kg m^2",
-          "encoder_offset": "rad", "tilt": "rad", "tendon_compliance": "rad/(N m)", "capstan": "-"}
-_GROUPS = {"friction": ("F_s", "F_v")}
+          "encoder_offset": "rad", "tilt": "rad", "tendon_compliance": "rad/(N m)", "capstan": "-",
+          "sigma0": "N m/rad", "sigma1": "N m s/rad"}
+_GROUPS = {"friction": ("F_s", "F_v", "sigma0", "sigma1")}
 _ALWAYS = ("input_gain", "encoder_offset", "tilt", "tendon_compliance", "capstan")  # a kind selects these even at nominal 0
 
 
@@ -136,7 +148,7 @@ def _check_model(model: Any) -> None:
 def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     """Every parameter of ``model`` that :class:`ParametricDynamics` can make symbolic, nominal values
     from the model (stiffness, masses, friction of its extras; input gain 1; each motor's rotor inertia
-    J_m and encoder offset 0; the tilt angles 0)."""
+    J_m and encoder offset 0; the tilt angles 0; the LuGre law's sigma0 and sigma1 where the file's law is it)."""
     _check_model(model)
     ex = model.extras
     links = _child_links(model)
@@ -156,6 +168,9 @@ def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
                            "tendon_compliance": float(tr.tendon_compliance[k]), "capstan": float(tr.capstan[k])}[kind]
                 out.append(PhysicalParameter(f"{kind}_{mo}", kind, None, nominal, _UNITS[kind], mo))
     out += [PhysicalParameter(f"tilt_{a}", "tilt", None, 0.0, "rad") for a in ("x", "y")]
+    law = lugre_of(model)
+    if law is not None:
+        out += [PhysicalParameter(k, k, None, float(getattr(law, k)), _UNITS[k]) for k in ("sigma0", "sigma1")]
     return out
 
 
@@ -189,8 +204,8 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
     ``F_s``, ``F_v``, ``friction`` = F_s and F_v, ``input_gain``, ``J_m``, ``encoder_offset``, ``tilt``)
     and/or names (``K_2``, ``m_1``, ``J_m_finger``, ``encoder_offset_finger``, ``tilt_y``).
 
-    ``None`` gives K and m of every joint (but the masses of :func:`unseen_masses`, held), plus F_s and F_v where the
-    model has friction (never the rotor inertia, encoder offsets or tilt: those are asked for by name). A kind
+    ``None`` gives K and m of every joint (but the masses of :func:`unseen_masses`, held), plus F_s and F_v (and a
+    LuGre law's sigma0, sigma1) where the model has friction (never the rotor inertia, encoder offsets or tilt: those are asked for by name). A kind
     selects only the joints (motors) where its nominal value is non-zero (a joint without a spring has no K, a motor
     without rotor inertia no J_m); ``input_gain``, ``encoder_offset`` and ``tilt`` are always selected.
     Raises :class:`~alpes_dyn.ModelError` for an unknown name, a repeat, or an empty selection.
@@ -200,7 +215,7 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
     if spec is None:
         unseen = set(unseen_masses(model))
         items: list[str] = (["K"] + ([p.name for p in cat if p.kind == "m" and p.nominal != 0.0 and p.name not in unseen]
-                                     if unseen else ["m"]) + (["F_s", "F_v"] if model.extras.has_friction else []))
+                                     if unseen else ["m"]) + (["friction"] if model.extras.has_friction else []))
     elif isinstance(spec, str):
         items = [s.strip() for s in spec.split(",")]
     else:
@@ -210,6 +225,8 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
         if not isinstance(it, str) or not it:
             raise ModelError(f"parameters: empty or non-string entry in {spec!r}")
         kinds = _GROUPS.get(it, (it,) if it in KINDS else ())
+        if it in ("sigma0", "sigma1") and lugre_of(model) is None:
+            raise ModelError(f"parameters: {it} is the LuGre law's; the model's friction.law is tanh")
         if kinds:
             new = [p for p in cat if p.kind in kinds and (p.kind in _ALWAYS or p.nominal != 0.0)]
         elif it in by_name:
@@ -312,6 +329,8 @@ class ParametricDynamics:
         self._q_rest = np.asarray(model.extras.rest) if model.extras.has_rest else None  # rad, not fitted
         self._Fs = cs.DM(model.extras.coulomb)
         self._Fv = cs.DM(model.extras.viscous)
+        self.lugre = lugre_of(model)  # the law with a state (module docstring), or None: the smooth sign
+        self._dry = (np.asarray(model.extras.coulomb) > 0).astype(float)  # the joints with a bristle
         idx = {j: i for i, j in enumerate(model.joint_names)}
         parameterised = set()
         self._sel: dict[str, list[tuple[int, int]]] = {k: [] for k in KINDS}
@@ -325,6 +344,10 @@ class ParametricDynamics:
                 self._mass_params.append((k, masses[link], _Adam(_Shim(urdf_b, model.joint_names))))
             elif prm.kind in ("J_m", "encoder_offset", "tendon_compliance", "capstan"):
                 self._sel[prm.kind].append((k, model.motor_index(prm.motor)))
+            elif prm.kind in ("sigma0", "sigma1"):
+                if self.lugre is None:
+                    raise ModelError(f"parameters: {prm.name} is the LuGre law's; the model's friction.law is tanh")
+                self._sel[prm.kind].append((k, -1))
             elif prm.kind == "tilt":
                 self._sel[prm.kind].append((k, "xy".index(prm.name[-1])))
             else:
@@ -398,13 +421,34 @@ class ParametricDynamics:
             out = out + scale * (be.bias(q, v) + grav)
         return out
 
-    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
+    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, z: cs.SX | None = None) -> cs.SX:
         """Springs K (q - q_rest) (torsional; K fitted, the rest angles q_rest the model's, :func:`~alpes_dyn.model.extras.
-        spring_law`) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m."""
+        spring_law`) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m; with the bristles ``z`` (n,) rad, the
+        LuGre friction sigma0 z + sigma1 z' + F_v qd instead (eq. L2, z' of :meth:`bristle_rate`)."""
         K = self._vector("K", self._K, theta)
-        Fs = self._vector("F_s", self._Fs, theta)
         Fv = self._vector("F_v", self._Fv, theta)
+        if z is not None:
+            s0, s1 = self._law("sigma0", theta), self._law("sigma1", theta)
+            return spring_law(K, self._q_rest, q, cs) + s0 * z + s1 * self.bristle_rate(z, v, theta) + Fv * v
+        Fs = self._vector("F_s", self._Fs, theta)
         return spring_law(K, self._q_rest, q, cs) + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
+
+    def _law(self, kind: str, theta: cs.SX) -> Any:
+        """The LuGre law's ``sigma0`` or ``sigma1``: theta's where selected, else the file's."""
+        sel = self._sel[kind]
+        return theta[sel[0][0]] if sel else float(getattr(self.lugre, kind))
+
+    def bristle_terms(self, v: cs.SX, theta: cs.SX) -> tuple[cs.SX, cs.DM]:
+        """(sigma0 |qd| / F_s (n,) 1/s, the bristles' relaxation rate of eq. L1 (0 on a joint without dry friction),
+        the mask of the joints with a bristle (n,))."""
+        Fs = self._vector("F_s", self._Fs, theta)
+        dry = cs.DM(self._dry)
+        return dry * self._law("sigma0", theta) * cs.fabs(v) / (dry * Fs + (1 - dry)), dry
+
+    def bristle_rate(self, z: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
+        """z' = qd - sigma0 |qd| z / F_s (eq. L1), (n,) rad/s; 0 on a joint without dry friction."""
+        a, dry = self.bristle_terms(v, theta)
+        return dry * v - a * z
 
     def encoder_offset(self, theta: cs.SX) -> cs.SX:
         """(m,) the encoder offsets, rad: y = S q + offset (zeros where not selected)."""
@@ -429,10 +473,12 @@ class ParametricDynamics:
         return cs.mtimes(self._S.T, u) if self._curve is None else cs.mtimes(rho.T, u)
 
     def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
-                         F_torque: cs.SX | None = None) -> cs.SX:
-        """qdd (n,) of eq. 2.10 with joint torques ``input_gain * tau`` (+ ``F_torque``, e.g. J^T F)."""
+                         F_torque: cs.SX | None = None, z: cs.SX | None = None) -> cs.SX:
+        """qdd (n,) of eq. 2.10 with joint torques ``input_gain * tau`` (+ ``F_torque``, e.g. J^T F); with the
+        bristles ``z`` (n,) rad, the LuGre friction (:meth:`passive_torque`)."""
         theta = self.theta if theta is None else theta
-        rhs = self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g) - self.passive_torque(q, v, theta)
+        rhs = (self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g)
+               - self.passive_torque(q, v, theta, z))
         if self._curve is not None:
             rhs = rhs - self.rotor_bias(q, v, theta)
         if F_torque is not None:

@@ -82,6 +82,8 @@ from .trim import (_fmt, _holding_bias, _mean_equilibrium, _oriented, _rest_torq
 from .recording import Recording, write_recording
 from ...simulation.integrate import stable_substeps
 from ...simulation.sampled import sampled_rk4
+from ...simulation.lugre import ACCURATE, lugre_substeps, simulate_lugre
+from ...model.friction import lugre_of
 from ...model.stops import JointRangeWarning, check_range
 
 __all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments", "excitation", "model_experiment",
@@ -276,7 +278,9 @@ def orientation_segments(design: ExperimentDesign) -> np.ndarray:
 
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
     """States (N+1, 2n) from the static equilibrium at u[0], RK4 with the design's substeps (more where the truth's
-    friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`), the torques u (N+1, m) held
+    friction asks for them, :func:`~alpes_dyn.simulation.integrate.stable_substeps`; the truth's LuGre law, where its
+    file has it, by :func:`~alpes_dyn.simulation.lugre.simulate_lugre` from unloaded bristles, at
+    :data:`~alpes_dyn.simulation.lugre.ACCURATE` times its stable steps), the torques u (N+1, m) held
     per sample, segment by segment of constant gravity: compiled, the states kept at the samples
     (:func:`~alpes_dyn.simulation.sampled.sampled_rk4`, :func:`~alpes_dyn.simulation.integrate.simulate`'s RK4 to
     the bit, linear in the record); a :class:`~alpes_dyn.model.stops.JointRangeWarning` where a sample leaves the
@@ -286,13 +290,19 @@ def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarr
     sub = max(design.substeps, stable_substeps(truth, design.dt, tension=np.abs(u).max(axis=0)))
     x = np.zeros((N + 1, 2 * truth.n))
     x[0, : truth.n] = _mean_equilibrium(truth, u[0], G[0])
+    law, z = lugre_of(truth), np.zeros(truth.n)  # the LuGre law: its bristles carried from segment to segment
     start = 0
     while start < N:
         stop = start + 1
         while stop < N and seg[stop] == seg[start]:
             stop += 1
         m = _oriented(truth, G[start])
-        x[start + 1: stop + 1] = sampled_rk4(m, x[start], u[start:stop], design.dt, sub)[1:]
+        if law is not None:
+            res = simulate_lugre(m, x[start], u[start:stop], design.dt, law, z0=z, input="motor",
+                                 substeps=max(sub, ACCURATE * lugre_substeps(m, law, design.dt)))
+            x[start + 1: stop + 1], z = np.hstack([res.q, res.qd])[1:], res.z[-1]
+        else:
+            x[start + 1: stop + 1] = sampled_rk4(m, x[start], u[start:stop], design.dt, sub)[1:]
         start = stop
     check_range(design.dt * np.arange(N + 1), x[:, : truth.n], truth.lower, truth.upper, truth.joint_names, "warn",
                 rest=np.where(truth.extras.stiffness != 0, truth.extras.rest, np.nan))

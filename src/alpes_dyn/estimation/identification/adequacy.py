@@ -53,7 +53,7 @@ from .responses import effect_responses, torque_explained  # noqa: F401 (re-expo
 
 __all__ = ["AdequacyWarning", "compare", "THRESHOLDS", "Whiteness", "CrossCorrelation", "SensorFloor", "Validation", "Adequacy", "whiteness",
            "cross_correlation", "sensor_floor", "encoder_resolution", "white_noise_level", "fit_percent", "nrmse",
-           "signatures", "assess", "SIGNATURES", "reversal_ratio", "range_exit", "JOINT_STOP", "RANGE_TOLERANCE"]
+           "signatures", "assess", "SIGNATURES", "STATEFUL_FRICTION", "reversal_ratio", "range_exit", "JOINT_STOP", "RANGE_TOLERANCE"]
 
 class AdequacyWarning(AlpesDynWarning):
     """An identification that did not converge or whose model is not adequate to the recording (one line)."""
@@ -123,6 +123,10 @@ SIGNATURES: dict[str, str] = {
 }
 """Regressor name -> the likely missing effect it names."""
 SHEATH = "tension_sign_velocity"  # the tendon-sheath friction's regressor (THRESHOLDS' sheath_share)
+STATEFUL_FRICTION = ("a friction with a state (the residual at the velocity reversals or at the excitation's "
+                     "harmonics: presliding before the joints slide, the LuGre law; --effects lugre)")
+"""The likely missing effect :func:`assess` names where a memoryless friction's fit leaves its residual at the
+reversals or the harmonics (before the nonlinearity of :data:`~.harmonics.NONLINEARITY`)."""
 
 
 def _columns(x: np.ndarray, name: str, least: int = 10) -> np.ndarray:
@@ -449,7 +453,7 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
            validation: Validation | None = None, thresholds: Mapping[str, float] | None = None,
            velocity: np.ndarray | None = None, range_exit: str | None = None,
            lines: Sequence[float] | None = None, dt: float | None = None,
-           runs: Sequence[int] | None = None) -> Adequacy:
+           runs: Sequence[int] | None = None, stateful: bool = False) -> Adequacy:
     """The verdict on a fit's encoder residual.
 
     e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
@@ -465,7 +469,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
     and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``)
     names a nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``; part by
     part where ``runs`` gives the first sample of each part whose excitation restarts, then N (runs, a turned
-    recording's orientations)."""
+    recording's orientations). stateful: the fitted model's friction has a state already (the LuGre law); else a
+    residual at the reversals above ``reversal_ratio`` or a nonlinearity at the harmonics names a friction with
+    a state too (:data:`STATEFUL_FRICTION`, after stick-slip)."""
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
     rms = float(np.sqrt(np.mean(e**2)))
@@ -528,6 +534,9 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
             missing = [stick] + [m for m in missing if m != stick]
         if "harmonics" in sig and sig["harmonics"]["share"] > th["harmonic_ratio"]:
             missing.append(NONLINEARITY)
+        if not stateful and (NONLINEARITY in missing or sig.get("reversals", {}).get("share", 0.0)
+                             > th["reversal_ratio"]):
+            missing.insert(missing.index(NONLINEARITY) if NONLINEARITY in missing else len(missing), STATEFUL_FRICTION)
         if range_exit:
             missing = [JOINT_STOP] + missing
     return Adequacy(not reasons, reasons, missing, rms, floor, w, x, sig, validation, notes)

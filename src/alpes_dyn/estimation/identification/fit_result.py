@@ -194,6 +194,8 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
     * the thumb model (``chain`` ``"thumb"``): ``[thumb]`` -- K, m, I, F_s, F_v of its flexion joints,
       ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
     * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``;
+    * the LuGre law's ``sigma0``, ``sigma1``: ``friction.sigma0``, ``friction.sigma1``, with ``friction.law =
+      "lugre"``;
     * the chain's tendon compliance ``tendon_compliance_<motor>``: ``transmission.tendon_compliance`` (the
       ab/adduction gear's stays in the result); its sheath friction ``capstan_<motor>``: ``transmission.capstan``
       (likewise);
@@ -307,6 +309,9 @@ def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb:
                 continue  # the ab/adduction gear's stretch or friction: of this rig's gear, kept in the result
             scalars[pp.kind] = (float(value), _sd(sd))
             continue
+        if pp is not None and pp.kind in ("sigma0", "sigma1"):  # the LuGre law's, one for every joint
+            scalars[pp.kind] = (float(value), _sd(sd))
+            continue
         if pp is not None and pp.kind == "J_m":
             if sum(cat.get(n_) is not None and cat[n_].kind == "J_m" for n_ in result.names) > 1:
                 raise ModelError("identified parameters: the file has one rotor inertia transmission.J_m for "
@@ -361,6 +366,13 @@ def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason:
                 value, "-", "identified", reason, old.description if old is not None else
                 "mu theta of the flexion tendons' sheath friction (the joints get "
                 "tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c))", sd)
+            continue
+        if field_ in ("sigma0", "sigma1"):  # with the law they belong to
+            unit, what = ("N m/rad", "stiffness") if field_ == "sigma0" else ("N m s/rad", "damping")
+            old = p.raw.get(f"friction.{field_}")
+            upd[f"friction.{field_}"] = Param(value, unit, "identified", reason, old.description if old is not None
+                                              else f"the LuGre law's bristle {what}, every joint's", sd)
+            upd["friction.law"] = Param("lugre", "-", "identified", reason, "the joints' friction law")
             continue
         if field_ == "J_m":
             old = p.raw.get("transmission.J_m")

@@ -28,6 +28,8 @@ from typing import Any, Callable
 
 import numpy as np
 
+from ...errors import InputError
+
 from ...progress import _Progress
 from .shooting import Evaluation, ShootingProblem
 
@@ -229,7 +231,7 @@ class GaussNewton:
         # first start not the torque lines either: their trust region (a standard deviation per step) shortened
         # every step to ~1 % and the springs stayed put (finger_edu, springs 12-15 % off: log K moved by -0.08,
         # -0.02, +0.01 towards +0.14, -0.16, +0.11; held, 0.15, -0.16, 0.11)
-        frozen = np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith("F_")]
+        frozen = np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith(("F_", "sigma"))]
                           + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)  # friction waits for the hard phase
         for level in range(first, SOFT_PHASES):
             wv = 10.0**level / defect0  # 1 / sigma of each defect's components
@@ -285,7 +287,10 @@ class GaussNewton:
         while k_try < len(candidates):
             alpha, sv, sg = candidates[k_try]
             k_try += 1
-            trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
+            try:
+                trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
+            except InputError:  # a correction that overflowed a parameter (exp of its log: a LuGre fit's): no step
+                continue
             if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
                 continue
             cost_new, c_now = trial.cost, float(np.sum(np.abs(trial.c)))

@@ -70,12 +70,13 @@ from .adequacy import AdequacyWarning, assess, effect_responses, range_exit, sen
 from ..experiments.recording import Recording, check_recording, excitation_parts
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
-from .bounds import held_value, unsupported
+from ...simulation.lugre import fit_substeps
+from .bounds import SIGMA0_RANGE, held_value, unsupported
 from .held import held_start
 from .shooting import ShootingProblem, torque_model
 from .normal_blocks import j_dot, remainders
 from .gauss_newton import GaussNewton, SolverResult
-from .long_record import LONG_RECORD, check_fit_size, window_start
+from .long_record import LONG_RECORD, MMAP_THRESHOLD, _map_large_blocks, check_fit_size, window_start  # noqa: F401
 from .runs import aligned
 from .heldout import parts, project_torque, rest_guess, validate  # noqa: F401  (project_torque: its old home)
 from .runs import encoder_noise as run_noise
@@ -156,7 +157,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     substeps : int or None, optional
         RK4 steps per sample (default :func:`~alpes_dyn.simulation.integrate.stable_substeps`: 4 for the smooth
         friction law at 1 kHz, 15 for the stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY` on
-        finger3).
+        finger3; on a model whose file's law is LuGre, at least :func:`~alpes_dyn.simulation.lugre.fit_substeps`
+        at the top of sigma0's range, :data:`~alpes_dyn.estimation.identification.bounds.SIGMA0_RANGE`: the
+        bristles in the fit's state, sigma0 and sigma1 fitted with the friction).
     torque_noise : float or None, optional
         The standard deviation sigma_u of the recorded torque's white noise, N m. Default: with ``excitation``,
         estimated from what the measured torque has off the lines; without, 0 (the torque taken as exact). Without
@@ -236,7 +239,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if "gain" in drift and not torque.lines:  # before anything is compiled
         raise InputError(GAIN_NEEDS_LINES)
     if substeps is None:
-        substeps = stable_substeps(model, dt, tension=np.abs(rec.torque).max(axis=0))  # (a sheath's, if any)
+        substeps = max(stable_substeps(model, dt, tension=np.abs(rec.torque).max(axis=0)),  # (a sheath's, if any)
+                       fit_substeps(model, dt, SIGMA0_RANGE[1]))  # a LuGre law's, at sigma0's upper bound
     sens = SensitivityModel(model, parameters, dt=dt, substeps=substeps, threads=threads,
                             input_offset=torque.eiv and not torque.lines, input_basis=torque.nphi)
     values, solution = _start_of(start, sens.names)
@@ -289,25 +293,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
-
-
-MMAP_THRESHOLD = 2**20
-"""Bytes: from a record longer than :data:`~alpes_dyn.estimation.identification.long_record.LONG_RECORD`, glibc's
-allocator maps every block this large or larger on its own (``mallopt(M_MMAP_THRESHOLD)``) and gives it back to
-the system when it is freed. By default the threshold follows the largest block freed, up to 32 MiB, so a long
-fit's 8-30 MB arrays (a chunk's sensitivities, the states, the KKT system's blocks) came from the heap and stayed
-resident once freed (``benchmarks/fit_scaling.py``'s peak memory, ``benchmarks/results/fit_scaling.json``)."""
-
-
-def _map_large_blocks() -> None:
-    """:data:`MMAP_THRESHOLD` set in glibc's allocator (process-wide; elsewhere nothing)."""
-    import ctypes
-    import ctypes.util
-
-    try:
-        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
-    except (OSError, AttributeError):  # not glibc
-        pass
 
 
 def _unsupported(result: IdentificationResult, held: bool = True) -> dict[str, str]:
@@ -595,5 +580,6 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
                         pb.offset(theta), pb.compliance(theta))
     exit_ = range_exit(x_fit[:, :pb.n], pb.model.lower, pb.model.upper, pb.model.joint_names)
     return assess(res, rec.torque, floor, regressors, val,
-                  velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:]), range_exit=exit_,
-                  lines=excitation, dt=rec.dt, runs=parts(excitation_parts(rec), res.shape[0]))
+                  velocity=encoder_rates(pb.enc, x_fit[:, :pb.n], x_fit[:, pb.n:2 * pb.n]), range_exit=exit_,
+                  lines=excitation, dt=rec.dt, runs=parts(excitation_parts(rec), res.shape[0]),
+                  stateful=pb.sens.lugre is not None)

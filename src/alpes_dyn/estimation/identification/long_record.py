@@ -37,7 +37,7 @@ from .gauss_newton import BASIN_LIMIT, SOFT_PHASES, GaussNewton
 from ..experiments.recording import Recording
 from .shooting import Evaluation, ShootingProblem, torque_model
 
-__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "window_start", "fit_bytes", "check_fit_size"]
+__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "MMAP_THRESHOLD", "window_start", "fit_bytes", "check_fit_size"]
 
 LONG_RECORD = 12.0
 """s: records longer than this start from a fit of their first :data:`WINDOW` seconds."""
@@ -150,3 +150,22 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=4)
     nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=SOFT_PHASES - 1)
     return (nodes, offs, glob, at), out.iterations
+
+
+MMAP_THRESHOLD = 2**20
+"""Bytes: from a record longer than :data:`~alpes_dyn.estimation.identification.long_record.LONG_RECORD`, glibc's
+allocator maps every block this large or larger on its own (``mallopt(M_MMAP_THRESHOLD)``) and gives it back to
+the system when it is freed. By default the threshold follows the largest block freed, up to 32 MiB, so a long
+fit's 8-30 MB arrays (a chunk's sensitivities, the states, the KKT system's blocks) came from the heap and stayed
+resident once freed (``benchmarks/fit_scaling.py``'s peak memory, ``benchmarks/results/fit_scaling.json``)."""
+
+
+def _map_large_blocks() -> None:
+    """:data:`MMAP_THRESHOLD` set in glibc's allocator (process-wide; elsewhere nothing)."""
+    import ctypes
+    import ctypes.util
+
+    try:
+        ctypes.CDLL(ctypes.util.find_library("c") or "libc.so.6").mallopt(-3, MMAP_THRESHOLD)  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):  # not glibc
+        pass

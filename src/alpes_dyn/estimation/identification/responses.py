@@ -34,7 +34,7 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
     n, (B, L) = sens.n, Ub.shape[:2]
     N1 = x_fit.shape[0]
-    vm = encoder_rates(S, x_fit[:, :n], x_fit[:, n:])  # (N+1, m) motor velocity, rad/s
+    vm = encoder_rates(S, x_fit[:, :n], x_fit[:, n:2 * n])  # (N+1, m) motor velocity, rad/s
     held = Ub.reshape(B * L, -1)[: N1 - 1]  # (N, nu) the torque held over each period, as the fit takes it
     rate = np.diff(held, axis=0, append=held[-1:])
     sign = np.tanh(vm / max(0.05 * float(np.std(vm)), 1e-12))

@@ -14,6 +14,12 @@ round           stage  made when (adds)                                         
 ``asked``       auto   the kept fit's verdict names effects not yet tried          the kept fit   lower residual
                        (:func:`named_effects`), or it sees the cable stretching
                        (the rotor); the tendon-sheath friction alone
+``lugre``       auto   the kept fit's verdict names a friction with a state        the kept fit's lower residual
+                       (its residual at the velocity reversals or the harmonics:   values, its
+                       :data:`~.adequacy.STATEFUL_FRICTION`): the LuGre law,       friction the
+                       sigma0 and sigma1 fitted with F_s                           file's
+                                                                                   (effects.
+                                                                                   lugre_start)
 ``stiction``    auto   the kept fit is flagged and asks for nothing                the kept fit   lower residual
 ``rotor``       auto   likewise, the stick-slip law tried                          the kept fit   lower residual
 ``delay``       auto   likewise, the rotor tried                                   the kept fit   lower residual
@@ -39,7 +45,11 @@ import numpy as np
 
 from .harmonics import NONLINEARITY
 
-__all__ = ["Round", "ROUNDS", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
+STATEFUL_WORD = "a friction with a state"
+"""The words of the adequacy verdict's likely missing effect that make the ``lugre`` round
+(:data:`~alpes_dyn.estimation.identification.adequacy.STATEFUL_FRICTION` begins with them)."""
+
+__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
 
 NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
                             "capstan": "tendon-sheath friction"}
@@ -129,6 +139,17 @@ def _asked(result: Any, effects: tuple[str, ...], attempted: Collection[str]) ->
     if "capstan" in more:
         more = ("capstan",)
     return effects + more if more else None
+
+
+def _stateful(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
+    """The kept effects with the LuGre law where the kept fit's verdict names a friction with a state and the law
+    was not tried (the stick-slip law's sharper sign, a law without memory, taken off: the two are exclusive)."""
+    a = getattr(result, "adequacy", None)
+    if getattr(getattr(result, "model", None), "params", None) is None:
+        return None  # a model without a parameter file (a URDF's) has no place for the law
+    if "lugre" in attempted or a is None or a.adequate or not any(STATEFUL_WORD in m for m in a.likely_missing):
+        return None
+    return tuple(e for e in effects if e != "stiction") + ("lugre",)
 
 
 def _flagged(effect: str) -> Proposal:
@@ -229,6 +250,8 @@ ROUNDS: tuple[Round, ...] = (
           _converged),
     Round("asked", "auto", tuple(NAMED_BY), "its verdict names effects, or it sees the cable stretching", _asked,
           "kept", _lower_residual),
+    Round("lugre", "auto", ("lugre",), "its verdict names a friction with a state", _stateful,
+          "kept, its friction the file's", _lower_residual),
     Round("stiction", "auto", ("stiction",), _FLAGGED, _flagged("stiction"), "kept", _lower_residual),
     Round("rotor", "auto", ("rotor",), _FLAGGED, _flagged("rotor"), "kept", _lower_residual),
     Round("delay", "auto", ("delay",), _FLAGGED, _flagged("delay"), "kept", _lower_residual),

@@ -493,11 +493,29 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         line corrections, theta at theta_0 (the start's values, given by name). None where the two problems are
         not cut alike (another interval, state size or torque model: another model's states, a retry at half the
         interval), or where ``sol`` is None."""
-        if sol is None or sol.samples != self.L or sol.nodes.shape != (self.n_int, self.nx) \
+        nodes = None if sol is None else self.with_bristles(sol.nodes)
+        if sol is None or sol.samples != self.L or nodes.shape != (self.n_int, self.nx) \
                 or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
             return None
         drift = sol.drift if sol.drift.shape == (self.nd,) else np.zeros(self.nd)  # the same drift, else from 0
-        return sol.nodes.copy(), sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, drift])
+        return nodes, sol.offs.copy(), np.concatenate([np.zeros(self.p), sol.lines, drift])
+
+    def with_bristles(self, nodes: np.ndarray) -> np.ndarray:
+        """A copy of ``nodes`` (S, 2n) of a memoryless friction's fit with, where this problem's law is LuGre (nx =
+        3n), each node's bristles z = F_s tanh(qd / v_s) / sigma0 appended (rad, theta_0's F_s and sigma0): the
+        deflection whose spring gives the smooth law's torque at that velocity (eq. L2, z' = 0). Other nodes as they
+        are (copied)."""
+        n, lugre = self.n, self.sens.lugre
+        if lugre is None or nodes.shape[1:] != (2 * n,):
+            return nodes.copy()
+        Fs, s0 = np.array(self.model.extras.coulomb, dtype=float), lugre.sigma0
+        for k, pp in enumerate(self.sens.dynamics.parameters):  # theta_0's, where fitted
+            if pp.kind == "F_s":
+                Fs[self.model.joint_names.index(pp.joint)] = self.theta0[k]
+            elif pp.kind == "sigma0":
+                s0 = self.theta0[k]
+        v_s = self.model.extras.smooth_velocity
+        return np.hstack([nodes, Fs * np.tanh(nodes[:, n:] / v_s) / s0])
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
@@ -516,14 +534,14 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         first[runs[:-1]] = True  # each run from the rest, its pieces within it (runs start on a node: run_cuts)
         for a, b in ((a, min(a + K, N, int(runs[np.searchsorted(runs, a, side="right")])))
                      for a0, a1 in zip(runs[:-1], runs[1:]) for a in range(int(a0), min(int(a1), N), K)):
-            x = np.concatenate([q0, np.zeros(n)]) if first[a] else x
+            x = np.concatenate([q0, np.zeros(self.nx - n)]) if first[a] else x
             basis = self.Psib.reshape(-1, self.torque.nphi)[None, a:b] if self.torque.lines else None
             x_c, _ = self.sens.run(x[None], self.torque.U[None, a:b], self.G[None, a:b], theta, C, basis=basis,
                                    sensitivities=False)
             nodes[a // L: -(-b // L)] = x_c[0, 0:b - a:L]
             x = x_c[0, -1]
         if not np.isfinite(nodes).all():
-            nodes[:] = np.concatenate([q0, np.zeros(n)])
+            nodes[:] = np.concatenate([q0, np.zeros(self.nx - n)])
         k_nodes = np.arange(n_int) * L
         S_enc, y = self.S_enc, self.y
         Sp = np.linalg.pinv(S_enc)
@@ -531,5 +549,5 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         y_rigid = y - self.Ufull[self.before] * C0 if self.comp_cols else y
         nodes[:, :n] += (y_rigid[k_nodes] - encoder_angles(self.enc, nodes[:, :n])) @ Sp.T  # (S: rho(0), a start)
         yd = np.concatenate([np.gradient(y[a:b], self.rec.dt, axis=0) for a, b in zip(runs[:-1], runs[1:])])
-        nodes[:, n:] += (yd[k_nodes] - nodes[:, n:] @ S_enc.T) @ Sp.T
+        nodes[:, n:2 * n] += (yd[k_nodes] - nodes[:, n:2 * n] @ S_enc.T) @ Sp.T  # (a LuGre law's bristles kept)
         return nodes
