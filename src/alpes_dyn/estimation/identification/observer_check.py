@@ -19,7 +19,8 @@ with it, on a recording (the fitted one, or a held-out one where given), from wh
   joints are wrong where the encoder sees only their sum (the model's friction deciding which joint sticks), gives a
   prediction error far above the floor;
 * its **consistency**: the normalised innovation squared i_k^T S_k^-1 i_k with the covariance S_k the filter
-  claims, and the same of its prediction ``horizon`` s ahead, each against its chi-square band
+  claims, and the same of its predictions ``horizon_s`` and ``split_horizon_s`` s ahead (the latter sees the joints'
+  split, which the encoder shows only through the dynamics), each against its chi-square band
   (:func:`~alpes_dyn.estimation.observers.innovation.nis`; the filter told the encoder's white noise the recording
   shows, :func:`~alpes_dyn.estimation.identification.adequacy.sensor_floor`). A filter above its band reports a
   sigma that does not cover its errors: the file is not adequate, whatever its residual. Only what a user measures
