@@ -93,7 +93,10 @@ def test_c_step_takes_the_normal_at_run_time(sensor, tmp_path):
         U, Z, F = _replay(py, run)
         Uc, Zc, Fc = _run(exe, step, run, normal, tmp_path)
         np.testing.assert_allclose(Uc, U, rtol=0, atol=TOL)
-        np.testing.assert_allclose(Zc, Z, rtol=0, atol=TOL)
+        np.testing.assert_allclose(Zc[:, :py.n], Z[:, :py.n], rtol=0, atol=TOL)
+        # rad/s: the EKF's velocities take the smooth law's model error as process noise, and its large gain on them
+        # carries the build's last bits (a normal folded in or read at run time) to 1e-8
+        np.testing.assert_allclose(Zc[:, py.n:], Z[:, py.n:], rtol=0, atol=1e-7)
         results.append(U)
     assert np.abs(results[0] - results[1]).max() > 2e-4  # N m: the normal changes the commands (2 % here)
 

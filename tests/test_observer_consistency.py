@@ -11,6 +11,8 @@ a quarter of the encoder's true noise variance.
 from __future__ import annotations
 
 
+import dataclasses
+
 import numpy as np
 import pytest
 
@@ -105,10 +107,11 @@ def test_the_verdict_refuses_an_over_confident_observer_from_what_a_user_measure
     assert good.passed, good.reasons
     assert good.nis.consistent and good.prediction_nis.value < good.prediction_nis.high
     assert good.nis.level == 0.99 and np.degrees(good.ekf_rmse).max() < 0.4
+    assert good.split_nis.value < good.split_nis.high and good.to_dict()["split_nis"]["level"] == 0.99
     off = {"innovation_ratio": 1e9, "prediction_ratio": 1e9}
     blind = dataclasses.replace(rec, true_q=None)
     bad = observer_statistics(blind, ad.Model.alpes("finger3", friction=True), thresholds=off)
-    assert bad.ekf_rmse is None and not bad.passed and len(bad.reasons) == 2
+    assert bad.ekf_rmse is None and bad.nees is None and not bad.passed and len(bad.reasons) >= 2
     assert all("over-confident" in r for r in bad.reasons)
     assert bad.nis.verdict == "over-confident" and bad.prediction_nis.value > 3 * bad.prediction_nis.high
     assert bad.to_dict()["nis"]["verdict"] == "over-confident"
@@ -143,6 +146,52 @@ def test_the_friction_noise_is_the_torque_noises_kick_across_the_laws_band():
     assert np.all(np.linalg.eigvalsh(Qv) > -1e-15)
     assert not friction_process_noise(m, ss.B, dt, 0.0).any()
     assert not friction_process_noise(ad.Model.alpes("finger3"), ss.B, dt, sigma).any()
+
+
+def test_every_observer_built_from_a_file_carries_the_friction_noise():
+    """make_observer adds the friction's terms in one place: the force loop's EKF (ForceStep on finger3 with its
+    file's friction, 5e-4 N m torque noise) carries the smooth law's model error on qd, the (n, n) block computed here
+    by friction_process_noise from its model, B and dt over the scenario's 2e-4 rad/s (it had none); a recording's
+    observer (recording_filter) the same block as before the move; a LuGre filter given the noise of [q; qd] (as
+    estimate_recording gives it) walks its bristles by 1e-3 F_s / sigma0 per step; the stick law, a frictionless file and a covariance given over the bristles get
+    nothing added."""
+    from alpes_dyn.control.step import ForceStep
+    from alpes_dyn.estimation.observers.friction_noise import friction_process_noise
+    from alpes_dyn.estimation.observers.observers import make_observer
+    from alpes_dyn.estimation.observers.replay import recording_filter
+    from alpes_dyn.model.friction import lugre_of
+    from alpes_dyn.model.params import load_params
+
+    step = ForceStep("finger3", controller="sensor", compiled=False)
+    ekf = step._ekf
+    m = ekf.model.system.model
+    assert m.extras.coulomb.all() and ekf.model.friction_law == "smooth"
+    Qv = friction_process_noise(m, ekf.model.system.B, 1e-3, 5e-4)
+    assert np.sqrt(np.diag(Qv)).max() > 100 * 2e-4  # joint 3 kicked across the law's band
+    np.testing.assert_allclose(ekf.Q[3:6, 3:6], Qv + 2e-4**2 * np.eye(3), rtol=1e-12, atol=0)
+    np.testing.assert_allclose(ekf.Q[:3, :3], 1e-18 * np.eye(3), rtol=1e-12)
+    f3 = ad.Model.alpes("finger3", friction=True)
+    rf, _, _ = recording_filter(f3, torque_noise=5e-4)
+    np.testing.assert_allclose(rf.Q[3:6, 3:6], friction_process_noise(f3, rf.model.system.B, 1e-3, 5e-4)
+                               + 2e-4**2 * np.eye(3), rtol=1e-12, atol=0)
+    p = dataclasses.replace(load_params(), friction_law="lugre")
+    f2 = ad.Model.alpes("finger2", friction=True, params=p)
+    span = f2.extras.coulomb / lugre_of(f2).sigma0
+    ss = StateSpace(f2, input="motor", output="encoder")
+    noise = dict(measurement_noise=[2e-7], input_noise=[2.5e-7])
+    base = [1e-18] * 2 + [4e-8] * 2
+    lf = make_observer("ekf", ss, 1e-3, friction_law="lugre", substeps=4, process_noise=base, **noise)
+    assert lf.model.friction_law == "lugre" and lf.nz == 6
+    np.testing.assert_allclose(np.diag(lf.Q), base + list((1e-3 * span) ** 2), rtol=1e-12)
+    assert not (lf.Q - np.diag(np.diag(lf.Q))).any()  # the smooth law's term not added
+    given = [1e-18] * 2 + [4e-8] * 2 + [1e-12] * 2
+    assert np.array_equal(np.diag(make_observer("ekf", ss, 1e-3, friction_law="lugre", substeps=4,
+                                                process_noise=given, **noise).Q), given)
+    base = [1e-18] * 2 + [4e-8] * 2
+    assert np.array_equal(np.diag(make_observer("ekf", ss, 1e-3, friction_law="stick", process_noise=base,
+                                                **noise).Q), base)
+    plain = StateSpace(ad.Model.alpes("finger2"), input="motor", output="encoder")
+    assert np.array_equal(np.diag(make_observer("ekf", plain, 1e-3, process_noise=base, **noise).Q), base)
 
 
 def test_estimate_data_reports_the_nis(tmp_path, capsys):

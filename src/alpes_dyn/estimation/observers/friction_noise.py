@@ -25,19 +25,35 @@ filter unchanged, as consistent as it was), mapped on the velocities by dt M^-1:
 in the observers guide): 1 (the whole F_s) and 0.5 made the filter cautious (NEES 1.2-1.9 below its band), 0.25
 put it in its band on every draw tried; the estimate's error grows with the noise the filter admits (the worst
 joint's 0.088-0.095 degree without it, 0.070-0.111 at 0.25, 0.102-0.141 at 1).
+
+The LuGre law's bristles (``friction_law="lugre"``) carry no such term: their deflection z is a state, and it walks
+by :data:`BRISTLE_WALK` of the presliding displacement F_s / sigma0 per step. Both are added in one place,
+:func:`with_friction_noise`, which :func:`~alpes_dyn.estimation.observers.observers.make_observer` applies to the
+process noise it is given: every observer built from a parameter file (a recording's, the estimation scenario's, the
+force loop's, the exported C's) carries them.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
+from typing import Any
+
+from ...checks import as_float_array
+from ...model.friction import LuGre, lugre_of
 from ...model.robot import Model
 
-__all__ = ["FRICTION_MODEL_ERROR", "friction_process_noise"]
+__all__ = ["FRICTION_MODEL_ERROR", "BRISTLE_WALK", "friction_process_noise", "with_friction_noise"]
 
 FRICTION_MODEL_ERROR = 0.25
 """The smooth law's model error as a fraction of each joint's F_s where the torque noise covers its band (module
 docstring)."""
+
+BRISTLE_WALK = 1e-3
+"""The LuGre observer's random walk of each bristle per step, as a fraction of the presliding displacement
+F_s / sigma0 (the bristle's prior standard deviation is the whole of it: a joint at rest holds an unknown
+friction). Finger2 held by 10 times the file's F_s on MuJoCo's stick-slip: 0.27 degree RMS at 1e-3 and 1e-4,
+0.45 at 1e-2, 0.45 at 1e-1 (the bristle let free, the filter lets the split between the joints move)."""
 
 
 def friction_process_noise(model: Model, B: np.ndarray, dt: float, torque_noise: float,
@@ -56,3 +72,53 @@ def friction_process_noise(model: Model, B: np.ndarray, dt: float, torque_noise:
     rho = kick**2 / (kick**2 + vs**2)
     Qv = dt**2 * Minv @ np.diag(fraction**2 * rho * Fs**2) @ Minv.T
     return 0.5 * (Qv + Qv.T)
+
+
+def with_friction_noise(system: Any, dt: float, process_noise: Any, input_noise: Any = None,
+                        friction_law: str = "smooth", n_parameters: int = 0) -> Any:
+    """The process noise of an observer on ``system`` with the friction's terms added (module docstring).
+
+    Parameters
+    ----------
+    system : StateSpace
+        The observer's state space: its model's F_s, v_s, inertia and LuGre law, its actuation matrix B (n, m).
+    dt : float
+        The sample period, s.
+    process_noise : array_like
+        The process noise per step without the friction's: variances or a covariance over [q; qd; parameters]
+        (2n + ``n_parameters``), or, with the LuGre law, over the bristles too (2n + ``n_parameters`` + n: then
+        taken as given).
+    input_noise : array_like or None, optional
+        The known input's covariance (variances or a matrix); its first m diagonal entries are the motor torques'
+        (N^2 m^2), whose largest standard deviation is the torque noise of :func:`friction_process_noise`.
+    friction_law : {"smooth", "stick", "lugre"}, optional
+        The observer's law: ``"smooth"`` adds :func:`friction_process_noise` on qd, ``"lugre"`` appends the
+        bristles' walk (:data:`BRISTLE_WALK` F_s / sigma0 per step, rad), ``"stick"`` adds nothing.
+    n_parameters : int, optional
+        The gains and disturbances estimated with the state.
+
+    Returns
+    -------
+    ndarray or object
+        The (nz, nz) covariance; ``process_noise`` itself where the model has no friction or its shape is not one
+        of the above (the filter then names the field).
+    """
+    model = system.model
+    n, Fs = model.n, np.asarray(model.extras.coulomb, dtype=float)
+    base = 2 * n + n_parameters
+    if not np.any(Fs > 0) or friction_law == "stick":
+        return process_noise
+    Q = as_float_array(process_noise, "process_noise", f"{base} variances or a ({base}, {base}) covariance")
+    Q = np.diag(np.broadcast_to(Q, (base,))) if Q.ndim == 0 or Q.shape == (base,) else Q.copy()
+    if friction_law == "lugre":
+        span = Fs / (lugre_of(model) or LuGre()).sigma0
+        return (np.block([[Q, np.zeros((base, n))], [np.zeros((n, base)), np.diag((BRISTLE_WALK * span) ** 2)]])
+                if Q.shape == (base, base) else process_noise)
+    if Q.shape != (base, base):
+        return process_noise
+    m = system.B.shape[1]
+    Sw = np.zeros(m) if input_noise is None else as_float_array(input_noise, "input_noise", "variances")
+    Sw = np.diag(Sw) if Sw.ndim == 2 else np.broadcast_to(Sw, (max(Sw.size, m),))
+    torque_noise = float(np.sqrt(np.max(Sw[:m], initial=0.0)))
+    Q[n:2 * n, n:2 * n] += friction_process_noise(model, system.B, dt, torque_noise)
+    return Q

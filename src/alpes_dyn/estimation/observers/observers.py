@@ -62,6 +62,7 @@ from ...symbolic.lifted import lift_constants
 from ...symbolic.statespace import StateSpace
 from .covariance import predicted_covariance, updated_state
 from .discrete import DISTURBANCE_PREFIX, PARAMETERS, DiscreteModel
+from .friction_noise import with_friction_noise
 
 __all__ = [
     "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
@@ -582,7 +583,7 @@ class UnscentedKalmanFilter(KalmanFilter):
 def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> KalmanFilter:
     """An observer by name: ``ekf``, ``ukf``, ``ekf-params``, ``ukf-params`` (the last two estimate
     both :data:`PARAMETERS`; any of them may add the ``disturbance_<motor>`` states in ``parameters``); keyword
-    arguments go to the filter."""
+    arguments go to the filter, ``process_noise`` with the friction's terms (:func:`.with_friction_noise`)."""
     if name not in OBSERVERS:
         raise InputError(f"unknown observer {name!r} (expected one of {', '.join(OBSERVERS)})")
     base, _, extra = name.partition("-")
@@ -590,5 +591,9 @@ def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> Ka
         kwargs.setdefault("parameters", PARAMETERS)
     elif any(p in PARAMETERS for p in kwargs.get("parameters") or ()):
         raise InputError(f"observer {name!r} estimates no gain; use {name}-params")
+    if "process_noise" in kwargs:
+        kwargs["process_noise"] = with_friction_noise(system, dt, kwargs["process_noise"], kwargs.get("input_noise"),
+                                                      kwargs.get("friction_law", "smooth"),
+                                                      len(kwargs.get("parameters") or ()))
     cls = ExtendedKalmanFilter if base == "ekf" else UnscentedKalmanFilter
     return cls(system, dt, **kwargs)

@@ -35,7 +35,6 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-from scipy.linalg import block_diag
 
 from ...checks import as_float_array
 from ...errors import InputError, RecordingError
@@ -52,7 +51,6 @@ from ...symbolic.parametric import tilted_gravity
 from ...symbolic.statespace import StateSpace
 from ...simulation.loop import Function, run_loop
 from .blocks import Observer, RecordingPlayback
-from .friction_noise import friction_process_noise
 from .observers import OBSERVERS, Estimate, make_observer
 from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
@@ -245,12 +243,10 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     lugre = friction_law == "lugre" and bool(np.any(m_obs.extras.coulomb))
     span = m_obs.extras.coulomb / (lugre_of(m_obs) or LuGre()).sigma0 if lugre else np.zeros(0)  # F_s / sigma0, rad
     ss = StateSpace(m_obs, input="motor", output="encoder")
+    # the friction's terms (the smooth law's model error, the bristles' walk) added by make_observer
     Q = np.diag([1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars))
-    if friction_law == "smooth":  # the smooth law's error where the torque noise shakes the velocities across its band
-        Q[n:2 * n, n:2 * n] += friction_process_noise(m_obs, ss.B, dt, torque_noise)
     filt = make_observer(observer, ss, dt, compiled=compiled, parameters=gains + pars, substeps=substeps,
-                         friction_law=friction_law, stops=JointStops.of(m_obs) if stops else None,
-                         process_noise=block_diag(Q, np.diag((BRISTLE_WALK * span) ** 2)) if lugre else Q,
+                         friction_law=friction_law, stops=JointStops.of(m_obs) if stops else None, process_noise=Q,
                          measurement_noise=list(meas_var * np.ones(m)),
                          input_noise=[torque_noise**2] * m)
     x0 = _initial_state(m_obs, u0)
@@ -260,13 +256,6 @@ def _replay_filter(m_obs: Model, observer: str, dt: float, substeps: int, torque
     P0 = np.concatenate([sd_q**2, [1.0**2] * n, [0.2**2] * len(gains), [(10 * torque_noise + 1e-4) ** 2] * len(pars),
                          span**2])
     return filt, z0, P0
-
-
-BRISTLE_WALK = 1e-3
-"""The LuGre observer's random walk of each bristle per step, as a fraction of the presliding displacement
-F_s / sigma0 (the bristle's prior standard deviation is the whole of it: a joint at rest holds an unknown
-friction). Finger2 held by 10 times the file's F_s on MuJoCo's stick-slip: 0.27 degree RMS at 1e-3 and 1e-4,
-0.45 at 1e-2, 0.45 at 1e-1 (the bristle let free, the filter lets the split between the joints move)."""
 
 
 def _rest_spread(model: Model, q0: np.ndarray, B: np.ndarray, torque_noise: float) -> np.ndarray:

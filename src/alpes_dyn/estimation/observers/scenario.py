@@ -48,7 +48,6 @@ from ...errors import InputError
 from ...fileio import atomic_path, check_output_path
 from ...limits import check_bytes
 from ...model.robot import Model
-from .friction_noise import friction_process_noise
 from .observers import OBSERVERS, PARAMETERS, Estimate, make_observer, true_gains
 from ...model.params import HandParams, load_params
 from ...simulation.integrate import stable_substeps
@@ -271,8 +270,9 @@ def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_va
     Measurement: the encoder's quantisation plus its noise (``meas_var``, rad^2). Known input: the
     motor torque noise ``torque_noise`` squared on each of the m motors. Process noise per step: 1e-9 rad on q (numerical),
     2e-4 rad/s on qd (unmodelled accelerations, 0.2 rad/s^2 over a 1 ms step) and 2e-5 per step on
-    each gain (a random walk: the gains may drift by 1e-3 in a second). With friction the scenario's observer adds the smooth
-    law's model error on qd (:func:`~alpes_dyn.estimation.observers.friction_noise.friction_process_noise`).
+    each gain (a random walk: the gains may drift by 1e-3 in a second). With friction
+    :func:`~alpes_dyn.estimation.observers.observers.make_observer` adds the smooth law's model error on qd
+    (:func:`~alpes_dyn.estimation.observers.friction_noise.friction_process_noise`).
     """
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * n_params
     return {"process_noise": Q, "measurement_noise": [meas_var] * m, "input_noise": [sc.torque_noise**2] * m}
@@ -295,11 +295,7 @@ def _scenario_observer(sc: EstimationScenario, observer: str, p: HandParams, com
     n_params = len(pars)
     step = 2 * np.pi / counts_per_rev
     meas_var = step**2 / 12 + (sc.encoder_noise_counts * step) ** 2
-    noise = default_noise(sc, n, m, n_params, meas_var)
-    if sc.friction:  # the smooth law's error where the torque noise shakes the velocities across its band
-        Q = np.diag(noise["process_noise"])
-        Q[n:2 * n, n:2 * n] += friction_process_noise(obs_model, ss.B, sc.dt, sc.torque_noise)
-        noise["process_noise"] = Q
+    noise = default_noise(sc, n, m, n_params, meas_var)  # make_observer adds the smooth law's model error
     # with friction the observer's model needs the truth's RK4 substeps (h lambda of the smooth sign)
     filt = make_observer(observer, ss, sc.dt, compiled=compiled, parameters=pars,
                          substeps=max(sc.substeps, stable_substeps(obs_model, sc.dt)) if sc.friction else 1, **noise)
