@@ -67,7 +67,8 @@ from ...errors import InputError
 from ...model.extras import STICTION_VELOCITY
 from ...model.params import HandParams, with_values
 from ...model.robot import Model
-from ...symbolic.parametric import select_parameters, unseen_masses
+from ...symbolic.parametric import parameter_catalogue, select_parameters, unseen_masses
+from .creep import name_creep
 from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
 from ..experiments.recording import segment_starts
 
@@ -477,8 +478,9 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         walk.auto(kept)
         walk.cable(kept)
     check = walk.observe(kept, auto, kwargs.get("validation")) if observe else None
-    note = unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)])
-    if note:
-        walk.notes.append(note)
+    notes = [unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)])]
+    if not kept.result.trustworthy:  # a dry friction read as viscous (module creep): against the file's F_s
+        notes.append(name_creep(kept.result, {p.name: p.nominal for p in parameter_catalogue(model_of(chosen))}))
+    walk.notes += [n for n in notes if n]
     return EffectsFit(kept.result, kept.effects, kept.tried, kept.tried_effects, tuple(walk.rounds),
                       walk.delays[id(kept.result)], check, walk.notes)
