@@ -29,16 +29,16 @@ def test_other_law_toggles_the_stick_slip_law():
 
 
 def test_widen_adds_half_the_laws_difference_in_quadrature():
-    """sigma^2 = sigma_noise^2 + (0.5 |delta|)^2 per parameter; a parameter the other fit lacks or holds at inf
+    """sigma^2 = sigma_noise^2 + (w |delta|)^2, w = 1 per parameter; a parameter the other fit lacks or holds at inf
     kept; an unbounded std stays unbounded; the spread recorded on the standard errors and said in their summary."""
     from alpes_dyn.estimation.identification.law_spread import SPREAD_WEIGHT, widen
 
     kept = _fit([1.0, 2.0, 3.0], [0.1, 0.2, np.inf])
     other = SimpleNamespace(names=("K_1", "F_s_1", "x"), values=[1.4, 2.0, 9.0], std=[0.1, 0.1, 0.1])
     spread = widen(kept, other)
-    assert SPREAD_WEIGHT == 0.5
+    assert SPREAD_WEIGHT == 1.0
     assert spread == pytest.approx([0.4, 0.0, 1.0])
-    assert kept.std[0] == pytest.approx(np.sqrt(0.1**2 + 0.2**2)) and kept.std[1] == pytest.approx(0.2)
+    assert kept.std[0] == pytest.approx(np.sqrt(0.1**2 + 0.4**2)) and kept.std[1] == pytest.approx(0.2)
     assert np.isinf(kept.std[2])
     assert kept.standard_errors.law_spread is spread
     assert "other friction law" in kept.standard_errors.summary(kept.names)
@@ -70,4 +70,4 @@ def test_fit_effects_makes_the_other_law_once_and_widens_the_kept_fit(monkeypatc
     laws.clear()
     fit = eff.fit_effects(model_of, _ramp_recording(), ("compliance",), has_gravity=True, observe=False, spread=True)
     assert laws == [False, True] and starts[-1] is fit.result
-    assert fit.result.std == pytest.approx([0.1, 0.1, np.hypot(0.1, 0.15)])
+    assert fit.result.std == pytest.approx([0.1, 0.1, np.hypot(0.1, 0.3)])

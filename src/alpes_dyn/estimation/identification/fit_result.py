@@ -47,7 +47,7 @@ class StandardErrors:
         reported."""
         which = [n for n, b in zip(names, self.robust_larger) if b]
         how = self.method.describe() if self.method is not None else "HAC sandwich"
-        law = "" if self.law_spread is None else ", with half the other friction law's fit's difference added"
+        law = "" if self.law_spread is None else ", with the other friction law's fit's difference added"
         return (f"std = {self.RULE}{law} ({how}); robust for {', '.join(which)}" if which
                 else f"std = {self.RULE}{law} ({how}); classical for all")
 
