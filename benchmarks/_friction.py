@@ -71,7 +71,8 @@ def _short(verdict: str) -> str:
 def friction_text(out: dict) -> str:
     """The table: per row the verdict, the springs' and masses' worst errors up to the common scale, the EKF's worst
     joint with the identified and the true file, the worst joint NEES of each (``!`` outside its band) and the
-    largest |error / standard error|; then the distribution per case with the silent misses and the refusals."""
+    largest |error / standard error|; then the distribution per case with the silent misses and the refusals (the
+    parameters within 3 standard errors, and within 3 of the noise's alone: the classical or HAC sandwich's)."""
     v = out["validation"]
     lines = [f"finger3, friction cases, seeds {out['seeds']} (incomplete, left out: {out['incomplete_seeds']}), "
              f"{out['duration_s']:g} s experiment, rig {out['rig']} (adapt {out['adapt']}), identify --effects "
@@ -96,11 +97,13 @@ def friction_text(out: dict) -> str:
                  f"on a joint (or m over its goal); NEES: rows with a joint outside its 95 % band")
     lines.append(f"{'case':12} {'n':>3} | {'K %':>13} {'m %':>13} | {'EKF ident deg':>13} {'EKF true deg':>13} | "
                  f"{'adequate':>8} {'silent':>6} {'refused':>7} {'raised':>6} | {'NEES out':>8} {'true':>4} | "
-                 f"{'|z| max':>7} {'<=3':>4}")
+                 f"{'|z| max':>7} {'<=3':>4} {'noise':>5}")
 
     mw = median_worst
     for c, s in out["summary"].items():
-        z = "--" if s["z_worst"] is None else f"{s['z_worst']:7.1f} {100 * s['z_within_3']:3.0f}%"
+        zn = s.get("z_noise_within_3")
+        z = "--" if s["z_worst"] is None else (f"{s['z_worst']:7.1f} {100 * s['z_within_3']:3.0f}% "
+                                               f"{'--' if zn is None else f'{100 * zn:3.0f}%':>5}")
         lines.append(f"{c:12} {s['n']:>3} | {mw(s['K_pct'], '5.2f'):>13} {mw(s['m_pct'], '5.1f'):>13} | "
                      f"{mw(s['ekf_deg'], '5.2f'):>13} {mw(s['ekf_true_file_deg'], '5.2f'):>13} | "
                      f"{s['adequate']:>8} {len(s['silent_misses']):>6} {len(s['refusals']):>7} {len(s['errors']):>6} | "

@@ -365,7 +365,10 @@ def realism_friction(r: Result) -> list[str]:
     for case, c in r["summary"].items():
         misses = ", ".join(f"seed {m['seed']}: EKF {m['ekf_deg']:.2f} deg" for m in c["silent_misses"]) or "none"
         refused = "; ".join(f"seed {x['seed']}: {x['verdict']}" for x in c["refusals"]) or "none"
-        z = "n/a" if c["z_worst"] is None else f"{c['z_worst']:.1f} ({100 * c['z_within_3']:.0f} % within 3)"
+        zn = c.get("z_noise_within_3")
+        z = "n/a" if c["z_worst"] is None else (f"{c['z_worst']:.1f} ({100 * c['z_within_3']:.0f} % within 3"
+                                                + ("" if zn is None else f"; {100 * zn:.0f} % with the noise's "
+                                                   "standard errors alone") + ")")
         out.append(f"**{case}** ({c['n']} draws, worst over all): **{c['adequate']} adequate**, **silent misses: "
                    f"{len(c['silent_misses'])}** ({misses}); K {_r(c['K_pct']['worst'])} %, m "
                    f"{_r(c['m_pct']['worst'], '.1f')} % (up to the common scale); EKF worst joint "

@@ -86,9 +86,16 @@ seeds with every case). Per row: ``identify``'s verdict, the springs' and masses
 scale, the EKF's worst joint on a validation run the fit never saw (the ``estimate`` scenario's torque, then a slow
 ramp through the stick band) with the identified file and with the true one, each joint's NEES against its 95 %
 band, each parameter's error in units of its reported standard error; per case the worst of each and the silent
-misses (adequate yet the EKF above 0.5 degree). The recorded run (``benchmarks/results/realism.friction.json``)::
+misses (adequate yet the EKF above 0.5 degree). Each parameter's error is given in its reported standard errors
+(the noise's covariance and the friction law's spread, :mod:`alpes_dyn.estimation.identification.law_spread`) and
+in the noise's alone (``z_noise``). A row costs 35 s on a quiet core (the fit 13 s, the two EKF runs 9 s, their
+NEES 6 s, the two MuJoCo runs 5 s; compiles cached on disk across draws), a soft case's refused fit up to 13 min
+(its rounds). The recorded run (``benchmarks/results/realism.friction.json``), the two groups of cases in two
+processes, one log each::
 
-    python benchmarks/realism.py --friction --seeds 9801-9812 --log friction.jsonl     # one command, the table
+    python benchmarks/realism.py --friction --cases stiff,stiff_3x,all_stiff,all_stiff_3x --seeds 10001-10020 --log stiff.jsonl
+    python benchmarks/realism.py --friction --cases soft,soft_3x,all_soft,all_soft_3x --seeds 10001-10020 --log soft.jsonl
+    cat stiff.jsonl soft.jsonl > friction.jsonl
     python benchmarks/realism.py --friction --from-log friction.jsonl --json            # its JSON, nothing measured
     python benchmarks/record.py realism --output benchmarks/results/realism.friction.json --friction --from-log FILE
 

@@ -113,6 +113,9 @@ def test_the_benchmark_summarises_its_recorded_rows_again(tmp_path, capsys):
             r = rec["summary"][case]
             assert (s["n"], s["adequate"], len(s["silent_misses"])) == (r["n"], r["adequate"], len(r["silent_misses"]))
             assert s["ekf_deg"]["worst"] == pytest.approx(r["ekf_deg"]["worst"], rel=1e-12)
+            zn = [abs(v) for x in rec["rows"] if x["case"] == case and "error" not in x
+                  for v in x.get("z_noise", {}).values()]  # the noise's standard errors alone, where recorded
+            assert s["z_noise_within_3"] == (pytest.approx(np.mean([z <= 3 for z in zn])) if zn else None)
         for argv, needle in ((["--friction", "--cases", "slippery"], "--cases: unknown case 'slippery'"),
                              (["--friction", "--rig", "hanging"], "--rig: not with --friction"),
                              (["--friction", "--workers", "2"], "--workers: not with --friction")):

@@ -71,7 +71,9 @@ from ...model.extras import STICTION_VELOCITY
 from ...model.params import HandParams, Param, with_values
 from ...model.robot import Model
 from ...model.friction import lugre_of
-from ...symbolic.parametric import select_parameters, unseen_masses
+from ...symbolic.parametric import parameter_catalogue, select_parameters, unseen_masses
+from .creep import name_creep
+from .law_spread import other_law, widen
 from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
 from ..experiments.recording import segment_starts
 
@@ -459,7 +461,7 @@ class RoundWalker:
 
 
 def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, effects: Sequence[str],
-                base: str | None = None, has_gravity: bool = False, observe: bool = True,
+                base: str | None = None, has_gravity: bool = False, observe: bool = True, spread: bool = False,
                 **kwargs: Any) -> EffectsFit:
     """Identify with ``effects``, walking the rounds of :data:`~alpes_dyn.estimation.identification.rounds.ROUNDS`.
 
@@ -487,6 +489,10 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         Judge the kept fit by the observer it feeds
         (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, on ``kwargs["validation"]`` where it
         is a recording): where the EKF on its file fails, the fit is not adequate, the reason naming the observer.
+    spread : bool, optional
+        Add the model-form error to the kept fit's standard errors where it converged with friction
+        (:mod:`~alpes_dyn.estimation.identification.law_spread`): the fit made again with the other friction law,
+        from the kept one (a round that made it already is reused), each std widened by the difference.
     **kwargs
         Passed to :func:`~alpes_dyn.estimation.identification.identification.identify` (``interval``:
         :data:`EFFECTS_INTERVAL` unless given).
@@ -509,8 +515,13 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         walk.auto(kept)
         walk.cable(kept)
     check = walk.observe(kept, auto, kwargs.get("validation")) if observe else None
-    note = unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)])
-    if note:
-        walk.notes.append(note)
+    notes = [unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)])]
+    if not kept.result.trustworthy:  # a dry friction read as viscous (module creep): against the file's F_s
+        notes.append(name_creep(kept.result, {p.name: p.nominal for p in parameter_catalogue(model_of(chosen))}))
+    walk.notes += [n for n in notes if n]
+    if spread and kept.result.converged and kept.result.model.extras.has_friction:
+        other = other_law(kept.effects)
+        made = [r for e, r in walk.rounds if e == other and r.converged]
+        widen(kept.result, made[-1] if made else walk.run(other, kept.result))
     return EffectsFit(kept.result, kept.effects, kept.tried, kept.tried_effects, tuple(walk.rounds),
                       walk.delays[id(kept.result)], check, walk.notes)

@@ -26,12 +26,15 @@ class StandardErrors:
     """How a fit's standard errors were made (:mod:`~alpes_dyn.estimation.identification.robust_covariance`):
     ``classical`` (p,) s^2 (J'J)^-1's, ``robust`` (p,) the HAC sandwich's (both in the parameters' units, inf where
     the recording does not see one), ``robust_larger`` (p,) bool where the robust one is reported (the larger),
-    ``method`` the sandwich (:class:`~alpes_dyn.estimation.identification.robust_covariance.RobustCovariance`)."""
+    ``method`` the sandwich (:class:`~alpes_dyn.estimation.identification.robust_covariance.RobustCovariance`);
+    ``law_spread`` (p,) where the model-form error was added (:mod:`~alpes_dyn.estimation.identification.law_spread`:
+    |theta - theta_other law|, in the parameters' units), else None."""
 
     classical: np.ndarray
     robust: np.ndarray
     robust_larger: np.ndarray
     method: Any = None
+    law_spread: np.ndarray | None = None
 
     RULE = "max(classical, robust) per parameter"
 
@@ -44,11 +47,14 @@ class StandardErrors:
         reported."""
         which = [n for n, b in zip(names, self.robust_larger) if b]
         how = self.method.describe() if self.method is not None else "HAC sandwich"
-        return (f"std = {self.RULE} ({how}); robust for {', '.join(which)}" if which
-                else f"std = {self.RULE} ({how}); classical for all")
+        law = "" if self.law_spread is None else ", with the other friction law's fit's difference added"
+        return (f"std = {self.RULE}{law} ({how}); robust for {', '.join(which)}" if which
+                else f"std = {self.RULE}{law} ({how}); classical for all")
 
     def to_dict(self) -> dict[str, Any]:
         out = {"rule": self.RULE}
+        if self.law_spread is not None:
+            out["law_spread"] = [float(x) for x in self.law_spread]
         if self.method is not None:
             out.update(self.method.to_dict())
         return out

@@ -1,0 +1,86 @@
+"""A dry friction the smooth law reads as viscous: the cause a fit's verdict names where a joint's F_s collapses.
+
+The fit's friction is F_s tanh(qd / v_s) + F_v qd with the file's v_s (0.1 rad/s; eq. 2.6-2.7). A dry friction
+that creeps before it slides -- MuJoCo's default ``frictionloss`` constraint (``solreffriction`` 0.02 s, impedance
+0.9) is one -- holds a force that grows with the velocity up to F_s over a band that depends on the joint's inertia:
+on a drawn finger3, the heaviest joint's friction reaches F_s by 0.02 rad/s, the lightest's only by 0.3-1 rad/s
+(MuJoCo's constraint force on each joint against its velocity, the study's soft case), through most of the motion.
+The fit then moves that joint's friction into F_v and drives its F_s towards 0 (log F_s falling without end: the
+Gauss-Newton steps of a "lost basin"), and the residual left follows the plant's lag behind the model (a torque
+delay's signature, where no delay is). Neither is the cause: the friction law is.
+
+:func:`collapsed` finds the joints whose F_s ended below :data:`CREEP_FRACTION` of its start (the file's value);
+:func:`name_creep` puts :data:`CREEP` first among a fit's likely missing effects where it is not to be trusted
+and returns the note that says which F_s went where (:func:`~alpes_dyn.estimation.identification.effects.fit_effects`
+adds it to its notes).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Mapping
+
+__all__ = ["CREEP_FRACTION", "CREEP", "collapsed", "name_creep"]
+
+CREEP_FRACTION = 0.1
+"""A fitted F_s below this fraction of its start has collapsed (the +-20 % draws of a dry friction the law fits
+end within 0.5-2 times their start; a soft MuJoCo friction's lightest joint at 0.01)."""
+
+CREEP = ("a dry friction that creeps before it slides (F_s driven towards 0: its force grows with the velocity "
+         "over a wider band than the smooth law's v_s, read as viscous; a friction law with that band)")
+"""The likely missing effect :func:`name_creep` names."""
+
+
+def collapsed(names: tuple[str, ...] | list[str], values: Any, start: Mapping[str, float]) -> dict[str, tuple[float, float]]:
+    """The F_s parameters that collapsed: name -> (start, value) where value < :data:`CREEP_FRACTION` start.
+
+    Parameters
+    ----------
+    names : sequence of str
+        The fit's parameter names (``F_s_<joint>`` are looked at).
+    values : (p,) array
+        Their fitted values, N m.
+    start : mapping
+        Each parameter's start (the parameter file's value), N m; a name missing or with a start <= 0 is skipped.
+
+    Returns
+    -------
+    dict
+        In the fit's order; empty where none collapsed.
+    """
+    out = {}
+    for n, v in zip(names, values):
+        s = float(start.get(n, 0.0))
+        if n.startswith("F_s_") and s > 0 and float(v) < CREEP_FRACTION * s:
+            out[n] = (s, float(v))
+    return out
+
+
+def name_creep(result: Any, start: Mapping[str, float]) -> str | None:
+    """Where ``result`` is not to be trusted (not converged, or its verdict not adequate) and a joint's F_s
+    collapsed (:func:`collapsed`): :data:`CREEP` first among its verdict's likely missing effects (where it has a
+    verdict) and the note returned; None (nothing changed) otherwise.
+
+    Parameters
+    ----------
+    result : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
+        The fit kept.
+    start : mapping
+        Each parameter's start, the parameter file's value (the first round's ``initial``).
+
+    Returns
+    -------
+    str or None
+        One line: which F_s went from what to what, and the cause.
+    """
+    if result.trustworthy:
+        return None
+    gone = collapsed(result.names, result.values, start)
+    if not gone:
+        return None
+    a = getattr(result, "adequacy", None)
+    if a is not None:
+        if a.adequate:
+            a.adequate, a.reasons = False, [f"{', '.join(gone)} collapsed below {CREEP_FRACTION:g} of the file's"]
+        a.likely_missing = [CREEP] + [m for m in a.likely_missing if m != CREEP]
+    where = ", ".join(f"{n} {s:.2g} -> {v:.2g} N m" for n, (s, v) in gone.items())
+    return f"dry friction read as viscous ({where}): {CREEP}"

@@ -1,0 +1,74 @@
+"""The fit's model-form error (issue 50, item 3): the spread between the fits made with the two friction laws added
+to each parameter's standard error, (S1) of :mod:`alpes_dyn.estimation.identification.law_spread`.
+
+References: stand-in fits whose values and standard errors are set here (the variance sum computed by hand), and
+``fit_effects`` with a stand-in ``identify`` that records which law each fit was made with (the model's v_s).
+"""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import numpy as np
+import pytest
+
+
+def _fit(values, std, names=("K_1", "m_1", "F_s_1")):
+    from alpes_dyn.estimation.identification.fit_result import StandardErrors
+
+    s = np.asarray(std, dtype=float)
+    return SimpleNamespace(names=names, values=np.asarray(values, dtype=float), std=s.copy(),
+                           standard_errors=StandardErrors(s, s, np.zeros(len(s), bool)))
+
+
+def test_other_law_toggles_the_stick_slip_law():
+    from alpes_dyn.estimation.identification.law_spread import other_law
+
+    assert other_law(("compliance", "tilt")) == ("compliance", "tilt", "stiction")
+    assert other_law(("compliance", "stiction", "rotor")) == ("compliance", "rotor")
+    assert other_law(("lugre", "rotor")) == ("rotor",)  # a kept LuGre fit against the smooth law
+
+
+def test_widen_adds_half_the_laws_difference_in_quadrature():
+    """sigma^2 = sigma_noise^2 + (w |delta|)^2, w = 1 per parameter; a parameter the other fit lacks or holds at inf
+    kept; an unbounded std stays unbounded; the spread recorded on the standard errors and said in their summary."""
+    from alpes_dyn.estimation.identification.law_spread import SPREAD_WEIGHT, widen
+
+    kept = _fit([1.0, 2.0, 3.0], [0.1, 0.2, np.inf])
+    other = SimpleNamespace(names=("K_1", "F_s_1", "x"), values=[1.4, 2.0, 9.0], std=[0.1, 0.1, 0.1])
+    spread = widen(kept, other)
+    assert SPREAD_WEIGHT == 1.0
+    assert spread == pytest.approx([0.4, 0.0, 1.0])
+    assert kept.std[0] == pytest.approx(np.sqrt(0.1**2 + 0.4**2)) and kept.std[1] == pytest.approx(0.2)
+    assert np.isinf(kept.std[2])
+    assert kept.standard_errors.law_spread is spread
+    assert "other friction law" in kept.standard_errors.summary(kept.names)
+    assert kept.standard_errors.to_dict()["law_spread"] == pytest.approx([0.4, 0.0, 1.0])
+
+
+def test_fit_effects_makes_the_other_law_once_and_widens_the_kept_fit(monkeypatch):
+    """``fit_effects(..., spread=True)``: one more fit, with the stick-slip law (v_s = STICTION_VELOCITY), from the
+    kept fit; its difference widens the kept fit's std; without ``spread`` no such fit."""
+    from alpes_dyn.estimation.identification import effects as eff
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.model.params import load_params
+    from test_realism_draws import _ramp_recording
+
+    laws, starts = [], []
+
+    def fake_identify(model, data, parameters, **kw):
+        stick = model.extras.smooth_velocity == eff.STICTION_VELOCITY
+        laws.append(stick)
+        starts.append(kw.get("start"))
+        return SimpleNamespace(**vars(_fit([1.0, 2.0, 3.3 if stick else 3.0], [0.1, 0.1, 0.1])), residual_rms=0.6,
+                               converged=True, reason="", trustworthy=True, model=model, torque_delay=None,
+                               adequacy=SimpleNamespace(adequate=True, likely_missing=[]))
+
+    monkeypatch.setattr(ident_mod, "identify", fake_identify)
+    model_of = eff.alpes_models("finger3", load_params())
+    plain = eff.fit_effects(model_of, _ramp_recording(), ("compliance",), has_gravity=True, observe=False)
+    assert laws == [False] and plain.result.standard_errors.law_spread is None
+    laws.clear()
+    fit = eff.fit_effects(model_of, _ramp_recording(), ("compliance",), has_gravity=True, observe=False, spread=True)
+    assert laws == [False, True] and starts[-1] is fit.result
+    assert fit.result.std == pytest.approx([0.1, 0.1, np.hypot(0.1, 0.3)])
