@@ -72,3 +72,25 @@ def test_fit_effects_makes_the_other_law_once_and_widens_the_kept_fit(monkeypatc
     fit = eff.fit_effects(model_of, _ramp_recording(), ("compliance",), has_gravity=True, observe=False, spread=True)
     assert laws == [False, True] and starts[-1] is fit.result
     assert fit.result.std == pytest.approx([0.1, 0.1, np.hypot(0.1, 0.3)])
+
+
+def test_identify_law_spread_reaches_the_rounds(monkeypatch, tmp_path):
+    """``identify --law-spread`` asks ``fit_effects`` for the spread (and without it does not): the command's
+    option reaches the rounds (a stand-in ``fit_effects`` records its ``spread``, then stops the command)."""
+    from alpes_dyn.cli import main
+    from alpes_dyn.estimation.identification import effects
+    from alpes_dyn.estimation.experiments.recording import write_recording
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment
+
+    asked = []
+
+    def stand_in(*args, spread=False, **kwargs):
+        asked.append(spread)
+        raise KeyboardInterrupt  # the command stops there (it says "interrupted", exit 130)
+
+    monkeypatch.setattr(effects, "fit_effects", stand_in)
+    data = tmp_path / "rec.csv"
+    write_recording(experiment("finger2", design=ExperimentDesign(duration=0.5), seed=3), data)
+    for extra, want in (([], False), (["--law-spread"], True)):
+        assert main(["identify", "--model", "finger2", "--data", str(data), *extra]) != 0
+        assert asked[-1] is want

@@ -359,6 +359,8 @@ def _fit_robot(args: argparse.Namespace, freqs):
     model = _chain_model(whole, args.chain)
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
+    if args.law_spread and "auto" not in effects:
+        raise InputError("--law-spread: the friction law's spread is made by the rounds of --effects auto")
     if "lugre" in effects:
         raise InputError("--effects: lugre applies to the Alpes models (their parameter file's friction.law); a URDF "
                          "--model has no parameter file to hold the law")
@@ -389,10 +391,11 @@ def _fit_robot(args: argparse.Namespace, freqs):
             return EffectsFit.single(identify(fitted, data, names, **kw), effects), data
     has_gravity = data.gravity is not None  # tilt only where not given
     if args.chain is None:
-        return fit_effects(model_of, data, effects, None, has_gravity, **kw), data
+        return fit_effects(model_of, data, effects, None, has_gravity, spread=args.law_spread, **kw), data
     own = tuple(e for e in effects if e in ("compliance", "offset"))  # the motor's own, named here
     base = ",".join(_chain_names(model, None, args.chain, own))
-    fit = fit_effects(model_of, data, tuple(e for e in effects if e not in own), base, has_gravity, **kw)
+    fit = fit_effects(model_of, data, tuple(e for e in effects if e not in own), base, has_gravity,
+                      spread=args.law_spread, **kw)
     fit.effects = own + fit.effects
     return fit, data
 

@@ -37,6 +37,8 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
 
     effects = parse_effects(args.effects) if args.effects is not None else (
         () if args.parameters is not None else parse_effects(None))
+    if args.law_spread and "auto" not in effects:
+        raise InputError("--law-spread: the friction law's spread is made by the rounds of --effects auto")
     if args.parameters is not None and set(effects) - {"stiction", "rotor", "lugre"}:
         raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor', 'lugre'))} with "
                          "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset, "
@@ -59,7 +61,8 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
             warnings.simplefilter("ignore", AdequacyWarning)
             return EffectsFit.single(identify(model, data, args.parameters, **kw), effects), data
     base = THUMB_PARAMETERS if args.model == "thumb" else None
-    return fit_effects(model_of, data, effects, base, data.gravity is not None, **kw), data  # tilt where not given
+    return fit_effects(model_of, data, effects, base, data.gravity is not None, spread=args.law_spread,  # tilt
+                       **kw), data  # where not given
 
 
 def _mass_urdf_path(output: str) -> str:
