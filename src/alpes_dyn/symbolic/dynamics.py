@@ -19,7 +19,7 @@ of the 15-DoF hand small.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 import casadi as cs
 import numpy as np
@@ -29,7 +29,7 @@ from ..model.contact import REFERENCE_FRAMES, as_contacts
 from ..model.mimic import MimicCoupling, urdf_mimics
 from ..model.robot import Model
 
-__all__ = ["SymbolicDynamics", "available_backends", "block_solve", "sparse_dm"]
+__all__ = ["SymbolicDynamics", "available_backends", "block_solve", "elimination_order", "sparse_dm", "tree_pattern"]
 
 
 def available_backends() -> tuple[str, ...]:
@@ -69,12 +69,67 @@ def sparse_dm(A: np.ndarray) -> cs.DM:
     return cs.DM.triplet(rows.tolist(), cols.tolist(), cs.DM(A[rows, cols]), A.shape[0], A.shape[1])
 
 
+def tree_pattern(parents: Sequence[int]) -> cs.Sparsity:
+    """The structural pattern of a tree's joint-space mass matrix: entry (i, j) where joint i is joint j, its
+    ancestor or its descendant (Featherstone's branch-induced sparsity; every other entry is exactly zero).
+
+    Parameters
+    ----------
+    parents : sequence of int
+        (n,) each joint's parent joint index (-1 for a joint on the base), joints in any order.
+
+    Returns
+    -------
+    casadi.Sparsity
+        (n, n) the pattern.
+    """
+    n = len(parents)
+    mask = np.eye(n, dtype=bool)
+    for i in range(n):  # (a loop over the joints, once per model)
+        j, seen = int(parents[i]), 0
+        while j >= 0 and seen < n:
+            mask[i, j] = mask[j, i] = True
+            j, seen = int(parents[j]), seen + 1
+    rows, cols = np.nonzero(mask)
+    return cs.Sparsity.triplet(n, n, rows.tolist(), cols.tolist())
+
+
+def elimination_order(sp: cs.Sparsity, rows: Sequence[int]) -> list[int]:
+    """The order in which :func:`block_solve` eliminates ``rows`` of a symmetric pattern ``sp``: by the number
+    of structural entries of each row within ``rows``, fewest first (ties in their given order). On a tree's
+    pattern (:func:`tree_pattern`) a descendant's row is a subset of its ancestor's, so this is leaves first,
+    root last, and the factor has no entry outside the pattern (each row's later neighbours are its
+    ancestors and its equals: a clique).
+
+    Parameters
+    ----------
+    sp : casadi.Sparsity
+        (n, n) the symmetric pattern.
+    rows : sequence of int
+        The rows of one block.
+
+    Returns
+    -------
+    list of int
+        ``rows`` reordered.
+    """
+    rows = [int(r) for r in rows]
+    inside = np.zeros(sp.size1(), dtype=bool)
+    inside[rows] = True
+    row, colind = np.asarray(sp.row(), dtype=int), sp.colind()
+    count = {r: int(inside[row[colind[r]:colind[r + 1]]].sum()) for r in rows}
+    return sorted(rows, key=lambda r: count[r])
+
+
 def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
     """Solve M x = b for a symbolic symmetric positive definite M (a mass matrix).
 
     Block by block over the structural strongly connected components of M (one per finger of the
     hand), each by an unrolled LDL^T factorisation: no square root, one division per pivot, fewer
-    operations than a QR in generated code, and expressions that stay small under AD.
+    operations than a QR in generated code, and expressions that stay small under AD. Within a block the
+    rows are eliminated in :func:`elimination_order` (a tree's leaves first, its root last: no fill-in, so
+    a hand whose fingers hang from a free wrist costs each finger's factorisation and the wrist's, not a
+    dense one over every joint).
 
     Parameters
     ----------
@@ -92,7 +147,7 @@ def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
     x: list[Any] = [None] * M.shape[0]
     zero = cs.SX(0)
     for blk in range(nb):
-        rows = list(perm[offsets[blk]:offsets[blk + 1]])
+        rows = elimination_order(M.sparsity(), perm[offsets[blk]:offsets[blk + 1]])
         A, r, n = M[rows, rows], b[rows], len(rows)
         L = [[zero] * n for _ in range(n)]
         D: list[Any] = [None] * n
@@ -109,6 +164,20 @@ def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
         for i, row in enumerate(rows):
             x[row] = xs[i]
     return cs.vertcat(*x)
+
+
+def _adam_parents(tree: Any, names: Sequence[str]) -> list[int]:
+    """Each of ``names``' parent joint among ``names`` (-1 on the base) in ADAM's model ``tree`` (its joints'
+    parent and child links; fixed joints passed through)."""
+    by_child = {j.child: j for j in tree.joints.values()}
+    index = {name: k for k, name in enumerate(names)}
+    out = []
+    for name in names:  # (a loop over the joints, once per model)
+        j = by_child.get(tree.joints[name].parent)
+        while j is not None and j.name not in index:
+            j = by_child.get(j.parent)
+        out.append(-1 if j is None else index[j.name])
+    return out
 
 
 class _Adam:
@@ -133,6 +202,7 @@ class _Adam:
             self.kd = KinDynComputations(model.urdf, names, gravity=g6)
         except Exception as exc:  # adam raises assorted errors on bad URDFs
             raise ModelError(f"URDF could not be loaded by ADAM: {str(exc).splitlines()[0] if str(exc) else exc}") from None
+        self.pattern = tree_pattern(_adam_parents(self.kd.rbdalgos.model, names))
         self.H = cs.SX.eye(4)
         self.vb = cs.SX.zeros(6)
         self.model_name = getattr(model, "name", "")  # a shim of the parametric model has none
@@ -154,7 +224,7 @@ class _Adam:
                              f"({msg}); no symbolic model of it here") from None
 
     def mass_matrix(self, q: cs.SX) -> cs.SX:
-        M = self._adam("mass matrix", self.kd.mass_matrix, self.H, self._full(q))[6:, 6:]
+        M = cs.project(self._adam("mass matrix", self.kd.mass_matrix, self.H, self._full(q))[6:, 6:], self.pattern)
         return M if self.G is None else cs.mtimes(self.G.T, cs.mtimes(M, self.G))
 
     def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
