@@ -13,7 +13,8 @@ import pytest
 
 import alpes_dyn as ad
 from alpes_dyn.model.spec import TransmissionSpec
-from alpes_dyn.symbolic.dynamics import SymbolicDynamics, block_solve, elimination_order, tree_pattern
+from alpes_dyn.symbolic.dynamics import SymbolicDynamics
+from alpes_dyn.symbolic.tree_sparsity import block_solve, elimination_order, tree_pattern
 from alpes_dyn.symbolic.parametric import ParametricDynamics
 
 
