@@ -21,6 +21,13 @@ without spring, whose response from rest drifts over minutes, the thumb's ab/add
 homotopy's last phase start stage 3 instead, as before the join. Where stage 3 does not converge within the basin limit,
 :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole
 record, as for any warm start: the answer is the same problem's, only its start differs.
+
+A recording of several runs (issue 51: four 16 s runs of the Shadow finger took 13 min, each 16 s run alone about
+a minute) starts from its runs fitted one by one (:func:`runs_start`): each run alone the whole fit (from its own
+window where it is long), then the whole record from every run's own fitted trajectory and the runs' mean
+parameters, stage 3 alone. The window of the first run's first seconds left the other runs' starts to the model's
+response from rest, which on a springless finger drifts past :data:`JOIN_LIMIT` and sent the fit through the
+homotopy on the whole record, then to the cold fit: its cost grew with the runs faster than their number.
 """
 
 from __future__ import annotations
@@ -36,8 +43,9 @@ from ..experiments.recording import segment_starts
 from .gauss_newton import BASIN_LIMIT, SOFT_PHASES, GaussNewton
 from ..experiments.recording import Recording
 from .shooting import Evaluation, ShootingProblem, torque_model
+from .runs import split
 
-__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "window_start", "fit_bytes", "check_fit_size"]
+__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "window_start", "start_from", "runs_start", "fit_bytes", "check_fit_size"]
 
 LONG_RECORD = 12.0
 """s: records longer than this start from a fit of their first :data:`WINDOW` seconds."""
@@ -135,7 +143,16 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
     out = solver.solve(pw, lambda: pw.initial_nodes(q0), np.zeros((pw.n_int, pw.no)), np.zeros(pw.ng))
     if not out.converged or pw.encoder_rms(out.at.r) > BASIN_LIMIT:
         return None, out.iterations
-    theta = pw.values(out.glob)
+    return start_from(pb, solver, pw.values(out.glob), q0), out.iterations
+
+
+def start_from(pb: ShootingProblem, solver: GaussNewton, theta: np.ndarray, q0: np.ndarray,
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation]:
+    """(nodes, offs, glob) of ``pb`` from the parameters ``theta`` (p,) of another fit (a window of its record, an
+    earlier run): the model's response under them from the rest ``q0`` (rad) on the encoder, joined
+    (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`), else stage 1's nodes and
+    the homotopy's last phase (the module docstring), and the
+    :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians."""
     rho = (theta - pb.theta0) / pb.scale  # the additive parameters' (encoder offsets, tilt angles)
     mult = ~pb.additive
     rho[mult] = np.log(theta[mult] / pb.theta0[mult])
@@ -145,8 +162,46 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.nd
         nodes = solver.join_nodes(pb, pb.initial_nodes(q0, theta), offs, glob)
         c_scale = np.maximum(np.abs(nodes).max(axis=0), 1e-3)
         if float(np.max(np.abs(pb.evaluate(nodes, offs, glob, jac=False).c) / c_scale, initial=0.0)) <= JOIN_LIMIT:
-            return (nodes, offs, glob, pb.evaluate(nodes, offs, glob)), out.iterations
+            return nodes, offs, glob, pb.evaluate(nodes, offs, glob)
     # stage 1's nodes and the homotopy's last phase, as before the join
     nodes = solver.fit_nodes(pb, pb.initial_nodes(q0, theta), offs, glob, sweeps=4)
-    nodes, offs, glob, at = solver.homotopy(pb, nodes, offs, glob, freeze=False, first=SOFT_PHASES - 1)
-    return (nodes, offs, glob, at), out.iterations
+    return solver.homotopy(pb, nodes, offs, glob, freeze=False, first=SOFT_PHASES - 1)
+
+
+def runs_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest) -> tuple[
+        tuple[np.ndarray, np.ndarray, np.ndarray] | None, int]:
+    """The start of ``pb``'s fit where its record holds several runs: each run fitted alone (``solver``: the first
+    as a record of its own, stages 1-3 from its window where it is longer than :data:`LONG_RECORD`; each next one
+    from the runs before's mean parameters, :func:`start_from`, stage 3, stages 1-3 only where that fails; ``excitation`` the lines, Hz, or None;
+    ``rest(problem)`` the rest its model's response starts from, rad), then (nodes, offs, glob) of ``pb``: every
+    run's own fitted nodes, one after the other, and the runs' parameters averaged (log-mean of the multiplicative
+    ones, mean of the additive ones), the lines' corrections and any drift from 0. Returns (that start, or None
+    where ``pb`` has one run or a run's fit did not converge within
+    :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the iterations of the runs' fits)."""
+    runs = split(pb.rec)
+    if len(runs) < 2:
+        return None, 0
+    nodes, rhos, its = [], [], 0
+    for r in runs:  # (a loop over the few runs: each a whole fit)
+        pr = ShootingProblem(pb.model, r, pb.sens, pb.L, torque_model(r, excitation, pb.torque.noise),
+                             pb.camera_noise, dict(zip(pb.sens.names, pb.theta0)), dense=pb.dense,
+                             structured=pb.structured, drift=pb.drift)
+        q0 = rest(pr)
+        if rhos:  # from the runs before: their parameters, this run's own response under them
+            start, it_w = start_from(pr, solver, pr.values(np.concatenate([np.mean(rhos, axis=0),
+                                                                            np.zeros(pr.ng - pr.p)])), q0), 0
+        else:  # the first run as a record of its own (from its window where it is long)
+            start, it_w = window_start(pr, solver, excitation, q0)
+        out = solver.solve(pr, lambda: pr.initial_nodes(q0), np.zeros((pr.n_int, pr.no)), np.zeros(pr.ng),
+                           warm=None if start is None else start[:3], warm_at=[] if start is None else [start[3]])
+        its += it_w + out.iterations
+        start = None
+        if not out.converged or pr.encoder_rms(out.at.r) > BASIN_LIMIT:
+            return None, its
+        nodes.append(out.nodes)
+        rhos.append(out.glob[:pb.p])  # the same parametrisation as pb's (the same theta_0 and scale)
+        out = pr = None
+    if sum(len(x) for x in nodes) != pb.n_int:  # (runs start on nodes: runs.aligned; never seen otherwise)
+        return None, its
+    glob = np.concatenate([np.mean(rhos, axis=0), np.zeros(pb.ng - pb.p)])
+    return (np.concatenate(nodes), np.zeros((pb.n_int, pb.no)), glob), its
