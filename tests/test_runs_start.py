@@ -44,7 +44,7 @@ def test_the_runs_start_is_the_runs_fitted_alone_and_the_fit_the_same_minimum(ru
         start, its = real(pb, solver, excitation, rest)
         seen["glob"], seen["theta0"], seen["p"] = start[2].copy(), pb.theta0.copy(), pb.p
         return start, its
-    monkeypatch.setattr(ident, "runs_start", spy)
+    monkeypatch.setattr(long_record, "runs_start", spy)
     whole = _fit(finger2, join_runs(runs))
     assert whole.converged
     # the start: every run's own parameters, log-averaged (each run's fit by identify on that run alone, its last
@@ -53,7 +53,7 @@ def test_the_runs_start_is_the_runs_fitted_alone_and_the_fit_the_same_minimum(ru
     assert np.abs(seen["glob"][:seen["p"]] - ref)[:4].max() < 1e-4
     assert np.abs(seen["glob"][:seen["p"]] - ref).max() < 5e-3
     # the same problem from the model's own response (the runs' start off): the same minimum
-    monkeypatch.setattr(ident, "runs_start", lambda *a: (None, 0))
+    monkeypatch.setattr(long_record, "runs_start", lambda *a: (None, 0))
     cold = _fit(finger2, join_runs(runs))
     assert cold.converged
     # (K and m within 3e-5; the dry friction, flat near the minimum, within a fifth of its standard error)

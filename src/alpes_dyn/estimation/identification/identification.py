@@ -75,7 +75,7 @@ from .held import held_start
 from .shooting import ShootingProblem, torque_model
 from .normal_blocks import j_dot, remainders
 from .gauss_newton import GaussNewton, SolverResult
-from .long_record import LONG_RECORD, check_fit_size, runs_start, window_start
+from .long_record import LONG_RECORD, check_fit_size, window_start
 from .runs import aligned
 from .heldout import parts, project_torque, rest_guess, validate  # noqa: F401  (project_torque: its old home)
 from .runs import encoder_noise as run_noise
@@ -243,7 +243,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse", drift=drift)
     torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
-    q0 = _rest_of(pb, rec.gravity is None)  # the rest the model's own response starts from
+    def rest(p: ShootingProblem) -> np.ndarray:  # the rest the model's own response starts from
+        return rest_guess(model, p.torque.U[0], p.y[0]) if rec.gravity is None else np.zeros(p.n)
+    q0 = rest(pb)
 
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
         """The initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder."""
@@ -253,13 +255,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     show = sys.stderr.isatty() if progress is None else bool(progress)
     solver = GaussNewton(max_iterations, tol, show)
     warm, warm_at, it_window = pb.warm_variables(solution), [], 0
-    if warm is None and rec.n_runs > 1:  # several runs: each fitted alone first (module long_record)
-        warm, it_window = runs_start(pb, solver, excitation, lambda p: _rest_of(p, rec.gravity is None))
-    if warm is None:  # a long record: the globalisation on its first seconds (module long_record)
-        start_w, it_w = window_start(pb, solver, excitation, q0)
-        it_window += it_w
+    if warm is None:  # several runs, each fitted alone first; a long record, from its first seconds (long_record)
+        start_w, it_window = window_start(pb, solver, excitation, rest)
         if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
-            warm, warm_at = start_w[:3], [start_w[3]]
+            warm, warm_at = start_w[:3], [start_w[3]][:start_w[3] is not None]  # (runs: no cap, no evaluation)
         start_w = None
     out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
     it, reason = out.iterations + it_window, out.reason
@@ -291,13 +290,6 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
-
-
-def _rest_of(pb: ShootingProblem, level: bool) -> np.ndarray:
-    """(n,) rad: the rest the model's own response on ``pb``'s record starts from: under its first torque and
-    encoder reading (:func:`~alpes_dyn.estimation.identification.heldout.rest_guess`) where the record has no
-    gravity column (``level``), else zeros."""
-    return rest_guess(pb.model, pb.torque.U[0], pb.y[0]) if level else np.zeros(pb.n)
 
 
 MMAP_THRESHOLD = 2**20

@@ -124,26 +124,33 @@ def window(rec: Recording, seconds: float) -> Recording:
     return dataclasses.replace(rec, **cut)
 
 
-def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, q0: np.ndarray,
+def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest,
                  ) -> tuple[tuple[np.ndarray, np.ndarray, np.ndarray, Evaluation] | None, int]:
     """The start of ``pb``'s fit from its record's first :data:`WINDOW` seconds: the whole fit there (``solver``,
     stages 1-3; ``excitation`` the lines, Hz, or None, the torque noise the whole record's), then (nodes, offs,
-    glob) of ``pb`` from the window's parameters: the model's response under them from the rest ``q0`` (rad) on
-    the encoder, joined (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`; the module
+    glob) of ``pb`` from the window's parameters: the model's response under them from the rest ``rest(pb)``
+    (rad; ``rest`` a function of the problem) on the encoder, joined (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`; the module
     docstring). Returns (that start and the
     :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians, or None where the record is not longer than :data:`LONG_RECORD` or the
     window's fit did not converge within :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the window's
-    iterations)."""
+    iterations). A record of several runs: :func:`runs_start` first (whatever its length), the window where it
+    gives no start."""
+    its = 0
+    if pb.rec.n_runs > 1:
+        start, its = runs_start(pb, solver, excitation, rest)
+        if start is not None:
+            return start, its
     if pb.rec.duration <= LONG_RECORD:
-        return None, 0
+        return None, its
+    q0 = rest(pb)
     sub = window(pb.rec, WINDOW)
     pw = ShootingProblem(pb.model, sub, pb.sens, pb.L, torque_model(sub, excitation, pb.torque.noise),
                          pb.camera_noise, dict(zip(pb.sens.names, pb.theta0)), dense=pb.dense,
                          structured=pb.structured, drift=pb.drift)
     out = solver.solve(pw, lambda: pw.initial_nodes(q0), np.zeros((pw.n_int, pw.no)), np.zeros(pw.ng))
     if not out.converged or pw.encoder_rms(out.at.r) > BASIN_LIMIT:
-        return None, out.iterations
-    return start_from(pb, solver, pw.values(out.glob), q0), out.iterations
+        return None, its + out.iterations
+    return start_from(pb, solver, pw.values(out.glob), q0), its + out.iterations
 
 
 def start_from(pb: ShootingProblem, solver: GaussNewton, theta: np.ndarray, q0: np.ndarray,
@@ -169,13 +176,15 @@ def start_from(pb: ShootingProblem, solver: GaussNewton, theta: np.ndarray, q0: 
 
 
 def runs_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest) -> tuple[
-        tuple[np.ndarray, np.ndarray, np.ndarray] | None, int]:
+        tuple[np.ndarray, np.ndarray, np.ndarray, None] | None, int]:
     """The start of ``pb``'s fit where its record holds several runs: each run fitted alone (``solver``: the first
     as a record of its own, stages 1-3 from its window where it is longer than :data:`LONG_RECORD`; each next one
     from the runs before's mean parameters, :func:`start_from`, stage 3, stages 1-3 only where that fails; ``excitation`` the lines, Hz, or None;
     ``rest(problem)`` the rest its model's response starts from, rad), then (nodes, offs, glob) of ``pb``: every
     run's own fitted nodes, one after the other, and the runs' parameters averaged (log-mean of the multiplicative
-    ones, mean of the additive ones), the lines' corrections and any drift from 0. Returns (that start, or None
+    ones, mean of the additive ones), the lines' corrections and any drift from 0, and None for its evaluation
+    (stage 3 from there is not held to a window start's
+    :data:`~alpes_dyn.estimation.identification.gauss_newton.WINDOW_ITERATIONS`). Returns (that start, or None
     where ``pb`` has one run or a run's fit did not converge within
     :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the iterations of the runs' fits)."""
     runs = split(pb.rec)
@@ -186,12 +195,12 @@ def runs_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest) -> tu
         pr = ShootingProblem(pb.model, r, pb.sens, pb.L, torque_model(r, excitation, pb.torque.noise),
                              pb.camera_noise, dict(zip(pb.sens.names, pb.theta0)), dense=pb.dense,
                              structured=pb.structured, drift=pb.drift)
-        q0 = rest(pr)
+        q0 = rest(pr)  # (the window start's own rest is the same: rest(pr))
         if rhos:  # from the runs before: their parameters, this run's own response under them
             start, it_w = start_from(pr, solver, pr.values(np.concatenate([np.mean(rhos, axis=0),
                                                                             np.zeros(pr.ng - pr.p)])), q0), 0
         else:  # the first run as a record of its own (from its window where it is long)
-            start, it_w = window_start(pr, solver, excitation, q0)
+            start, it_w = window_start(pr, solver, excitation, rest)
         out = solver.solve(pr, lambda: pr.initial_nodes(q0), np.zeros((pr.n_int, pr.no)), np.zeros(pr.ng),
                            warm=None if start is None else start[:3], warm_at=[] if start is None else [start[3]])
         its += it_w + out.iterations
@@ -204,4 +213,4 @@ def runs_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest) -> tu
     if sum(len(x) for x in nodes) != pb.n_int:  # (runs start on nodes: runs.aligned; never seen otherwise)
         return None, its
     glob = np.concatenate([np.mean(rhos, axis=0), np.zeros(pb.ng - pb.p)])
-    return (np.concatenate(nodes), np.zeros((pb.n_int, pb.no)), glob), its
+    return (np.concatenate(nodes), np.zeros((pb.n_int, pb.no)), glob, None), its
