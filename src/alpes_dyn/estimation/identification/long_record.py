@@ -45,7 +45,7 @@ from ..experiments.recording import Recording
 from .shooting import Evaluation, ShootingProblem, torque_model
 from .runs import split
 
-__all__ = ["LONG_RECORD", "WINDOW", "JOIN_LIMIT", "window_start", "start_from", "runs_start", "fit_bytes", "check_fit_size"]
+__all__ = ["LONG_RECORD", "RUNS_START", "WINDOW", "JOIN_LIMIT", "window_start", "start_from", "runs_start", "fit_bytes", "check_fit_size"]
 
 LONG_RECORD = 12.0
 """s: records longer than this start from a fit of their first :data:`WINDOW` seconds."""
@@ -58,6 +58,12 @@ parameters drifts where a joint has no spring (the thumb's ab/adduction: the han
 of residual, defects 0.52 of the scale after the join's two steps, and stage 3 from there crawled into its cap of
 :data:`~alpes_dyn.estimation.identification.gauss_newton.WINDOW_ITERATIONS`); a finger's, on springs, joins to 0.01
 (the same record's index finger)."""
+RUNS_START = LONG_RECORD
+"""s: a record of several runs longer than this (their durations summed) starts from its runs fitted one by one
+(:func:`runs_start`); a shorter one, cheap to fit whole, is fitted from the model's own response as before. From the
+runs' start stage 3 stops (its relative cost change) with the flat directions less polished: on four noise-free
+finger2 runs of 0.35 s the dry friction came 8e-3 off the truth against 6e-6 fitted whole; on noisy runs within a
+fifth of its standard error of the whole fit (``tests/test_runs_start.py``)."""
 WINDOW_RUN = 0.5
 """s: a recording of several runs: the window ends at the start of its last run where that run would have less
 than this in it (a run of a few samples holds no line of the excitation)."""
@@ -133,10 +139,10 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest,
     docstring). Returns (that start and the
     :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians, or None where the record is not longer than :data:`LONG_RECORD` or the
     window's fit did not converge within :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the window's
-    iterations). A record of several runs: :func:`runs_start` first (whatever its length), the window where it
-    gives no start."""
+    iterations). A record of several runs longer than :data:`RUNS_START`: :func:`runs_start` first, the window
+    where it gives no start."""
     its = 0
-    if pb.rec.n_runs > 1:
+    if pb.rec.n_runs > 1 and pb.rec.duration > RUNS_START:
         start, its = runs_start(pb, solver, excitation, rest)
         if start is not None:
             return start, its
