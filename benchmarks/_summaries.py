@@ -233,6 +233,14 @@ def foreign_hands(r: Result) -> list[str]:
         out.append(f"first runs, new processes: import {h['import_wall_s']:.1f} s, dynamics {h['dynamics_wall_s']:.1f} s, "
                    f"observability {h['observability_wall_s']:.1f} s (rank {h['observability_rank']}), mjcf "
                    f"{h['mjcf_wall_s']:.1f} s")
+    c = r.get("commands")
+    if c:
+        g = c["goal"]
+        out.append(f"every command on the whole hand, wrist free (goal {g['wall_s']:.0f} s and {g['peak_mib']:.0f} MiB "
+                   "each; wall s / peak MiB / load before): " + ", ".join(
+                       f"{k} {v['wall_s']:.0f} s / {v['peak_mib']:.0f} MiB / {v['load']:.1f}"
+                       + (" (stopped)" if v["stopped"] else f" (exit {v['exit']})" if v["exit"] else "")
+                       for k, v in c.items() if k != "goal"))
     hh = r.get("held")
     if hh:
         out.append(f"the whole hand with its wrist held ({hh['n']} joints, ``import --hold``): experiment "

@@ -43,7 +43,11 @@ Three parts on the Shadow hand (and a fourth, ``held``: the whole hand with its 
    under a pulling multisine of ``--spatial-duration`` s (default 16), ``identify`` (springs, masses, viscous friction; goals 3 % and 5 %)
    and ``estimate`` on the identified pair (goal < 0.5 deg).
 
-5. ``published`` (issue 51): MJCF files as MuJoCo users write them, ``benchmarks/_published_mjcf.py``: MuJoCo's
+5. ``commands`` (issue 51): every command on the whole hand with its wrist free (24 joints, 20 motors), each a
+   new process: wall time, CPU time, peak memory (``os.wait4``: with the C compiler it waited for) and the load
+   before it, against the goal of 2 minutes and 2 GB each (:func:`hand_commands`).
+
+6. ``published`` (issue 51): MJCF files as MuJoCo users write them, ``benchmarks/_published_mjcf.py``: MuJoCo's
    ``tendon_arm/arm26`` (muscles as motors) refused by name over its 0-120 degrees and exact over 0-90, a
    Robotiq-like four-bar closed by a ``<connect>`` refused by name, a joint equality with a fixed tendon against
    MuJoCo's projected model.
@@ -54,7 +58,7 @@ Prints a table, or one JSON object with ``--json``; ``uptime`` before and after.
 
     python benchmarks/foreign_hands.py [--json] [--seed 0] [--states 20] [--duration 4] [--finger-duration 16]
                                        [--finger-runs 4] [--spatial-duration 16]
-                                       [--skip held,finger,spatial,published] [--cold]
+                                       [--skip hand,commands,held,finger,spatial,published] [--cold]
 """
 
 from __future__ import annotations
@@ -146,6 +150,72 @@ def whole_hand(d: Path, states: int, seed: int) -> dict[str, Any]:
     rng = np.random.default_rng(seed)
     out["mjcf_round_trip_M"] = max(float(np.max(np.abs(back.inertia_matrix(q) - model.inertia_matrix(q))))
                                    for q in (model.random_state(rng)[0] for _ in range(5)))
+    return out
+
+
+COMMAND_LIMIT_S = 300.0
+"""s: a command of ``commands`` still running after this is stopped and reported so (the goal is 120 s)."""
+SIZE_GOALS = {"wall_s": 120.0, "peak_mib": 2048.0}
+"""Issue 51: every command on the whole hand with its wrist free within 2 minutes and 2 GB."""
+
+
+def _timed_rusage(*args: str, limit: float = COMMAND_LIMIT_S) -> dict[str, Any]:
+    """``alpes-dyn ARGS`` as a new process: its wall time (s), CPU time (user + system, s, with the children it
+    waited for: the C compiler), peak resident memory (MiB, the largest of the process and those children;
+    ``os.wait4``), exit code, the one-minute load before it, its last stderr line where it failed, and whether it
+    met :data:`SIZE_GOALS`; stopped after ``limit`` s (``"stopped": true``)."""
+    load = os.getloadavg()[0]
+    t0 = time.perf_counter()
+    errf = tempfile.TemporaryFile()  # (a file, not a pipe: a long stderr never blocks the command)
+    p = subprocess.Popen([sys.executable, "-m", "alpes_dyn.cli", *args], stdout=subprocess.DEVNULL, stderr=errf,
+                         start_new_session=True)
+    stopped = False
+    while True:
+        pid, status, ru = os.wait4(p.pid, os.WNOHANG)
+        if pid:
+            break
+        if time.perf_counter() - t0 > limit:
+            os.killpg(p.pid, 9)
+            stopped = True
+        time.sleep(0.2)
+    wall = time.perf_counter() - t0
+    errf.seek(0)
+    err = errf.read().decode(errors="replace").strip()
+    errf.close()
+    code = os.waitstatus_to_exitcode(status)
+    out = {"wall_s": wall, "cpu_s": ru.ru_utime + ru.ru_stime, "peak_mib": ru.ru_maxrss / 1024, "exit": code,
+           "stopped": stopped, "load": load, "error": err.splitlines()[-1] if code and err else None}
+    out["goal_met"] = bool(code == 0 and out["wall_s"] <= SIZE_GOALS["wall_s"]
+                           and out["peak_mib"] <= SIZE_GOALS["peak_mib"])
+    return out
+
+
+def hand_commands(d: Path, seed: int, duration: float) -> dict[str, Any]:
+    """Issue 51's size goal: every command on the whole hand with its wrist free (24 joints, 20 motors), each a new
+    process timed by :func:`_timed_rusage` (wall, CPU, peak memory, the load before it): the model's commands, an
+    ``experiment`` of ``duration`` s (``--seed``), ``identifiability``, ``identify`` and ``estimate --data`` on
+    that recording, ``codegen`` and ``control`` (a refusal, exit 2, is its answer where the hand's rest leaves its
+    range)."""
+    from alpes_dyn.model.mjcf_import import example_mjcf_path
+
+    src = str(example_mjcf_path("shadow_hand"))
+    out: dict[str, Any] = {"import": _timed_rusage("import", "--model", src, "--out-dir", str(d / "hand"))}
+    base = ["--model", str(d / "hand" / "right_hand.urdf"), "--spec", str(d / "hand" / "right_hand.toml")]
+    rec = str(d / "rec.csv")
+    for name, args in (("dynamics", ["dynamics"]), ("linearize", ["linearize"]),
+                       ("observability", ["observability", "--input", "motor", "--output", "encoder"]),
+                       ("mjcf", ["mjcf", "-o", str(d / "hand.xml")]),
+                       ("experiment", ["experiment", "-o", rec, "--duration", f"{duration:g}", "--seed", str(seed)]),
+                       ("identifiability", ["identifiability"]),
+                       ("identify", ["identify", "--data", rec, "--force", "-o", str(d / "ident.toml")]),
+                       ("estimate", ["estimate", "--data", rec]),
+                       ("codegen", ["codegen", "--out-dir", str(d / "c")]),
+                       ("control", ["control", "--frame", "rh_ffdistal", "--motor", "rh_A_FFJ0"])):
+        a = [args[0], *base, *args[1:]]
+        out[name] = _timed_rusage(*a)  # (a loop over the commands)
+        if name == "experiment" and out[name]["exit"] != 0:
+            break
+    out["goal"] = SIZE_GOALS
     return out
 
 
@@ -495,6 +565,13 @@ def _table(r: dict[str, Any]) -> str:
                   f"  import {h['import_wall_s']:.1f} s, dynamics {h['dynamics_wall_s']:.1f} s, observability "
                   f"{h['observability_wall_s']:.1f} s (rank {h['observability_rank']}), mjcf {h['mjcf_wall_s']:.1f} s "
                   f"(read back: M within {h['mjcf_round_trip_M']:.1e})"]
+    c = r.get("commands")
+    if c:
+        lines.append(f"every command on the whole hand, wrist free (goal {c['goal']['wall_s']:.0f} s and "
+                     f"{c['goal']['peak_mib']:.0f} MiB each): command, wall s, CPU s, peak MiB, load before, exit")
+        lines += [f"  {k:16s} {v['wall_s']:7.1f} {v['cpu_s']:7.1f} {v['peak_mib']:7.0f} {v['load']:5.1f}  {v['exit']}"
+                  + (" (stopped)" if v["stopped"] else "") + (f"  {v['error'][:120]}" if v["error"] else "")
+                  for k, v in c.items() if k != "goal"]
     hh = r.get("held")
     if hh:
         lines.append(f"the hand with its wrist held ({hh['n']} joints, {hh['motors']} motors): import "
@@ -589,14 +666,14 @@ def main() -> None:
                     help="the spatial finger's MuJoCo recording, s (default 16: its masses' standard errors are about "
                          "4 %% at 4 s, 2.4 %% at 8 s, where seed 13 came 5.6 %% off (2.3 sd); at 16 s seeds 13-18 "
                          "within 3.6 %%, the springs 1.9 %%)")
-    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, held, finger, spatial, "
-                    "published")
+    ap.add_argument("--skip", default="", help="parts to skip, comma-separated: hand, commands, held, finger, "
+                    "spatial, published")
     ap.add_argument("--no-compile", action="store_true",
                     help="do not compile the held hand's C observer (cc -O0: about 45 s and 3.3 GB)")
     ap.add_argument("--cold", action="store_true", help="a private, empty compile cache (compiles in the times)")
     a = ap.parse_args()
     skip = {s for s in a.skip.split(",") if s}
-    parts = {"hand", "held", "finger", "spatial", "published"}
+    parts = {"hand", "commands", "held", "finger", "spatial", "published"}
     if a.finger_runs < 1:
         ap.error(f"--finger-runs: expected at least 1 run, got {a.finger_runs}")
     if skip - parts:
@@ -610,6 +687,9 @@ def main() -> None:
         if "hand" not in skip:
             (d / "h").mkdir()
             r["hand"] = whole_hand(d / "h", a.states, a.seed)
+        if "commands" not in skip:
+            (d / "c").mkdir()
+            r["commands"] = hand_commands(d / "c", a.seed, a.duration)
         if "held" not in skip:
             (d / "hh").mkdir()
             r["held"] = held_hand(d / "hh", a.seed, a.duration, compile_c=not a.no_compile)

@@ -19,7 +19,7 @@ of the 15-DoF hand small.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Sequence
 
 import casadi as cs
 import numpy as np
@@ -28,6 +28,7 @@ from ..errors import ModelError
 from ..model.contact import REFERENCE_FRAMES, as_contacts
 from ..model.mimic import MimicCoupling, urdf_mimics
 from ..model.robot import Model
+from .tree_sparsity import block_solve, sparse_dm, tree_pattern  # noqa: F401 (block_solve, sparse_dm re-exported)
 
 __all__ = ["SymbolicDynamics", "available_backends", "block_solve", "sparse_dm"]
 
@@ -50,65 +51,18 @@ def available_backends() -> tuple[str, ...]:
     return tuple(out)
 
 
-def sparse_dm(A: np.ndarray) -> cs.DM:
-    """A numeric matrix as a CasADi DM with only its non-zero entries structural (a dense DM would make
-    every entry structurally non-zero and merge the blocks of :func:`block_solve`).
-
-    Parameters
-    ----------
-    A : array_like
-        The matrix.
-
-    Returns
-    -------
-    casadi.DM
-        Its non-zero entries, structural.
-    """
-    A = np.asarray(A, dtype=float)
-    rows, cols = np.nonzero(A)
-    return cs.DM.triplet(rows.tolist(), cols.tolist(), cs.DM(A[rows, cols]), A.shape[0], A.shape[1])
-
-
-def block_solve(M: cs.SX, b: cs.SX) -> cs.SX:
-    """Solve M x = b for a symbolic symmetric positive definite M (a mass matrix).
-
-    Block by block over the structural strongly connected components of M (one per finger of the
-    hand), each by an unrolled LDL^T factorisation: no square root, one division per pivot, fewer
-    operations than a QR in generated code, and expressions that stay small under AD.
-
-    Parameters
-    ----------
-    M : casadi.SX
-        (n, n) the matrix.
-    b : casadi.SX
-        (n,) or (n, k) the right side.
-
-    Returns
-    -------
-    casadi.SX
-        x, the shape of b.
-    """
-    nb, perm, offsets = M.sparsity().scc()
-    x: list[Any] = [None] * M.shape[0]
-    zero = cs.SX(0)
-    for blk in range(nb):
-        rows = list(perm[offsets[blk]:offsets[blk + 1]])
-        A, r, n = M[rows, rows], b[rows], len(rows)
-        L = [[zero] * n for _ in range(n)]
-        D: list[Any] = [None] * n
-        for j in range(n):
-            D[j] = A[j, j] - sum((L[j][k] * L[j][k] * D[k] for k in range(j)), zero)
-            for i in range(j + 1, n):
-                L[i][j] = (A[i, j] - sum((L[i][k] * L[j][k] * D[k] for k in range(j)), zero)) / D[j]
-        y: list[Any] = [None] * n
-        for i in range(n):
-            y[i] = r[i] - sum((L[i][k] * y[k] for k in range(i)), zero)
-        xs: list[Any] = [None] * n
-        for i in reversed(range(n)):
-            xs[i] = y[i] / D[i] - sum((L[k][i] * xs[k] for k in range(i + 1, n)), zero)
-        for i, row in enumerate(rows):
-            x[row] = xs[i]
-    return cs.vertcat(*x)
+def _adam_parents(tree: Any, names: Sequence[str]) -> list[int]:
+    """Each of ``names``' parent joint among ``names`` (-1 on the base) in ADAM's model ``tree`` (its joints'
+    parent and child links; fixed joints passed through)."""
+    by_child = {j.child: j for j in tree.joints.values()}
+    index = {name: k for k, name in enumerate(names)}
+    out = []
+    for name in names:  # (a loop over the joints, once per model)
+        j = by_child.get(tree.joints[name].parent)
+        while j is not None and j.name not in index:
+            j = by_child.get(j.parent)
+        out.append(-1 if j is None else index[j.name])
+    return out
 
 
 class _Adam:
@@ -133,6 +87,7 @@ class _Adam:
             self.kd = KinDynComputations(model.urdf, names, gravity=g6)
         except Exception as exc:  # adam raises assorted errors on bad URDFs
             raise ModelError(f"URDF could not be loaded by ADAM: {str(exc).splitlines()[0] if str(exc) else exc}") from None
+        self.pattern = tree_pattern(_adam_parents(self.kd.rbdalgos.model, names))
         self.H = cs.SX.eye(4)
         self.vb = cs.SX.zeros(6)
         self.model_name = getattr(model, "name", "")  # a shim of the parametric model has none
@@ -154,7 +109,7 @@ class _Adam:
                              f"({msg}); no symbolic model of it here") from None
 
     def mass_matrix(self, q: cs.SX) -> cs.SX:
-        M = self._adam("mass matrix", self.kd.mass_matrix, self.H, self._full(q))[6:, 6:]
+        M = cs.project(self._adam("mass matrix", self.kd.mass_matrix, self.H, self._full(q))[6:, 6:], self.pattern)
         return M if self.G is None else cs.mtimes(self.G.T, cs.mtimes(M, self.G))
 
     def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:

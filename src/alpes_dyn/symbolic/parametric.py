@@ -82,6 +82,7 @@ from ..model.friction import lugre_of
 from ..model.transmission import capstan_torque, capstan_velocity
 from ..model.robot import Model
 from .dynamics import block_solve, sparse_dm
+from .link_terms import LinkTerms
 
 __all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "unseen_masses", "ParametricDynamics"]
 
@@ -267,32 +268,6 @@ def common_scale(model: Model, parameters: Sequence[PhysicalParameter]) -> bool:
                if p.kind in ("K", "m", "F_s", "F_v", "J_m") and p.nominal != 0.0)
 
 
-class _Shim:
-    """What symbolic._Adam reads of a model: a URDF, joint names and gravity."""
-
-    def __init__(self, urdf: str, joint_names: tuple[str, ...]) -> None:
-        self.urdf, self.joint_names, self.gravity = urdf, joint_names, np.zeros(3)
-
-
-def _only_massive(urdf: str, keep: set[str]) -> tuple[str, float]:
-    """The URDF with every link outside ``keep`` massless, and the total mass left."""
-    root = ET.fromstring(urdf)
-    total = 0.0
-    for link in root.iter("link"):
-        inertial = link.find("inertial")
-        if inertial is None:
-            continue
-        if link.get("name") in keep:
-            total += float(inertial.find("mass").get("value"))
-            continue
-        inertial.find("mass").set("value", "0.0")
-        inertia = inertial.find("inertia")
-        if inertia is not None:
-            for k in ("ixx", "ixy", "ixz", "iyy", "iyz", "izz"):
-                inertia.set(k, "0.0")
-    return ET.tostring(root, encoding="unicode"), total
-
-
 class ParametricDynamics:
     """qdd(q, qd, Gamma; theta, g) of eq. 2.10 with the parameters ``theta`` as CasADi symbols.
 
@@ -311,8 +286,6 @@ class ParametricDynamics:
 
     def __init__(self, model: Model, parameters: str | Sequence[str] | None = None,
                  gravity_input: bool = False) -> None:
-        from .dynamics import _Adam
-
         self.model = model
         self.n = model.n
         self.parameters = select_parameters(model, parameters)
@@ -340,8 +313,7 @@ class ParametricDynamics:
                 if masses.get(link, 0.0) <= 0:
                     raise ModelError(f"parameters: {prm.name}: body {link!r} has no mass to scale")
                 parameterised.add(link)
-                urdf_b, _ = _only_massive(model.urdf, {link})
-                self._mass_params.append((k, masses[link], _Adam(_Shim(urdf_b, model.joint_names))))
+                self._mass_params.append((k, masses[link], LinkTerms(model.urdf, {link}, model.joint_names)))
             elif prm.kind in ("J_m", "encoder_offset", "tendon_compliance", "capstan"):
                 self._sel[prm.kind].append((k, model.motor_index(prm.motor)))
             elif prm.kind in ("sigma0", "sigma1"):
@@ -355,8 +327,8 @@ class ParametricDynamics:
         rest = {name for name, mass in masses.items() if mass > 0} - parameterised
         self._rest = None
         if rest:
-            urdf_r, m_rest = _only_massive(model.urdf, rest)
-            self._rest = (m_rest, _Adam(_Shim(urdf_r, model.joint_names)))
+            terms = LinkTerms(model.urdf, rest, model.joint_names)
+            self._rest = (terms.mass, terms)
         self._armature = np.asarray(model.extras.armature, dtype=float)
         tr = model.transmission
         self._S = sparse_dm(tr.S) if tr is not None else None

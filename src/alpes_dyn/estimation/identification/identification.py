@@ -247,8 +247,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     pb = ShootingProblem(model, rec, sens, L, torque, camera_noise, values, dense=kkt == "dense",
                          structured=kkt == "sparse", drift=drift)
     torque = None  # pb's copy holds the lines' basis (scaled, cut at the intervals), not this one's
-    q0 = (rest_guess(model, pb.torque.U[0], pb.y[0]) if rec.gravity is None
-          else np.zeros(pb.n))  # the rest the model's own response starts from
+    def rest(p: ShootingProblem) -> np.ndarray:  # the rest the model's own response starts from
+        return rest_guess(model, p.torque.U[0], p.y[0]) if rec.gravity is None else np.zeros(p.n)
+    q0 = rest(pb)
 
     def nodes() -> np.ndarray:  # the cold start, only where no warm start converges (a run of the whole record)
         """The initial guess: the model's own response from its static equilibrium, cut at the nodes, on the encoder."""
@@ -258,10 +259,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     show = sys.stderr.isatty() if progress is None else bool(progress)
     solver = GaussNewton(max_iterations, tol, show)
     warm, warm_at, it_window = pb.warm_variables(solution), [], 0
-    if warm is None:  # a long record: the globalisation on its first seconds (module long_record)
-        start_w, it_window = window_start(pb, solver, excitation, q0)
+    if warm is None:  # several runs, each fitted alone first; a long record, from its first seconds (long_record)
+        start_w, it_window = window_start(pb, solver, excitation, rest)
         if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
-            warm, warm_at = start_w[:3], [start_w[3]]
+            warm, warm_at = start_w[:3], [start_w[3]][:start_w[3] is not None]  # (runs: no cap, no evaluation)
         start_w = None
     out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
     it, reason = out.iterations + it_window, out.reason
