@@ -2,7 +2,7 @@
 numpydoc's ``name : type`` form, as numpydoc's own parser reads it (after python-control's
 ``control/tests/docstrings_test.py``). The public API: the names in ``alpes_dyn.__all__`` and in each public
 sub-package's ``__all__``; of a class, its constructor's arguments (in the class's docstring or ``__init__``'s) and
-its public methods defined on it."""
+its public methods (defined on it or on a class of the library it inherits from, e.g. a mixin's)."""
 
 from __future__ import annotations
 
@@ -91,10 +91,15 @@ def _callables() -> Iterator[tuple[str, Callable, str]]:
         init = obj.__dict__.get("__init__")
         if init is not None and not hasattr(obj, "__dataclass_fields__"):  # a dataclass's fields: its Attributes
             yield qual, init, (inspect.getdoc(obj) or "") + "\n\n" + (inspect.getdoc(init) or "")
-        for name, member in obj.__dict__.items():
-            fn = member.__func__ if isinstance(member, (staticmethod, classmethod)) else member
-            if not name.startswith("_") and inspect.isfunction(fn):
-                yield f"{qual}.{name}", fn, inspect.getdoc(fn) or ""
+        seen: set[str] = set()
+        for cls in obj.__mro__:  # its own methods and those of the library's classes it inherits (a mixin's)
+            if not cls.__module__.startswith("alpes_dyn"):
+                continue
+            for name, member in cls.__dict__.items():
+                fn = member.__func__ if isinstance(member, (staticmethod, classmethod)) else member
+                if name not in seen and not name.startswith("_") and inspect.isfunction(fn):
+                    yield f"{qual}.{name}", fn, inspect.getdoc(fn) or ""
+                seen.add(name)
 
 
 @pytest.fixture(scope="module")
