@@ -36,8 +36,8 @@ from .finger_loop import (_METRIC_WINDOW_S, _SAMPLE_ARRAYS, CONTROL_MODELS, Cont
                           ControlScenario, _metrics, _plant_and_params, run_control)
 from .step import ForceStep
 from .hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlResult, HandControlScenario, _rotation,  # noqa: F401
-                        chain_frame, chain_model, cylinder_normal, force_scale_of, grasp_levels, grasp_limits,
-                        hand_chains, run_hand_control)
+                        chain_frame, chain_model, cylinder_normal, hand_chains, run_hand_control)
+from .grasp_calibration import force_scale_of, grasp_levels, grasp_limits
 
 __all__ = [
     "CONTROLLERS", "REFERENCES", "CONTROL_MODELS", "DEFAULT_GAINS", "static_motor_torque", "static_contact_force", "ForceController",
