@@ -2,7 +2,7 @@
 (:func:`grasp_limits`), the references kept under it (:func:`grasp_levels`), and the sensorless force's one-point
 calibration against the fingertip sensor (:func:`force_scale_of`).
 
-Runs of :func:`~alpes_dyn.control.hand_loop.run_hand_control` (and of
+Runs of :func:`run_hand_control` (and of
 :func:`~alpes_dyn.control.finger_loop.run_control`) read back; one concept: what a run on the plant says of the
 levels and the force scale to use.
 """
@@ -48,9 +48,9 @@ def grasp_limits(params: Any = None, plant_params: Any = None, effects: Any = No
         The controller's parameters (default: the shipped file), as :func:`run_hand_control` takes them.
     plant_params : HandParams, str or pathlib.Path, optional
         The plant's (MuJoCo's) parameters (default: the controller's).
-    effects : optional
-        The plant's real-hand effects (:func:`~alpes_dyn.bench.effects.real_hand_effects`), as
-        :func:`run_hand_control` takes them; default none.
+    effects : PlantEffects, optional
+        A real hand's effects on the plant (:class:`~alpes_dyn.bench.effects.PlantEffects`, e.g.
+        :func:`~alpes_dyn.bench.effects.real_hand_effects`), as :func:`run_hand_control` takes them; default none.
     compensation : Compensation, optional
         What the controller compensates of them (:class:`~alpes_dyn.control.realism_loop.Compensation`).
     seed : int

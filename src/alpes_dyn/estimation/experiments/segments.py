@@ -31,8 +31,9 @@ def segment_starts(gravity: np.ndarray | None) -> np.ndarray:
 
 def excitation_parts(rec: Any) -> np.ndarray:
     """(k+1,) the first sample of each part of ``rec`` whose excitation restarts -- each run
-    (:meth:`~alpes_dyn.estimation.experiments.recording.Recording.run_starts`) and, within a run, each orientation of a hand turned between runs of the
-    excitation (:func:`segment_starts`: ``alpes-dyn experiment --rig both``) -- then the number of samples. The
-    fit takes each part on its own lines, the harmonics and the observer's check part by part."""
+    (:meth:`~alpes_dyn.estimation.experiments.recording.Recording.run_starts`) and, within a run, each orientation of
+    a hand turned between runs of the excitation (:func:`segment_starts`: ``alpes-dyn experiment --rig both``) --
+    then the number of samples. The fit takes each part on its own lines, the harmonics and the observer's check
+    part by part."""
     return np.union1d(rec.run_starts(), segment_starts(rec.gravity)).astype(int)
 
