@@ -20,15 +20,15 @@ Per model and seed:
      in the file's gravity, so the rigid design has it too);
    * ``shipped``: the shipped parameter file, the same loop (no identified cable, tilt or friction to use);
    * ``calibrated`` (sensorless only): the ``identified`` loop with its force estimate calibrated once against the
-     fingertip sensor (:func:`alpes_dyn.control.hand_loop.force_scale_of` on a sensorless run with another noise
+     fingertip sensor (:func:`alpes_dyn.control.grasp_calibration.force_scale_of` on a sensorless run with another noise
      draw, seed 1000 + s, at the first level): the torque constant's error (5 %), which the encoder cannot see,
      scales every identified torque parameter and with them the estimate, a floor of 1 - 1/1.05 = 4.8 % on the
      uncalibrated loop.
 
    The sensor loop on the identified file also follows the ramp and the sine (RMSE after 0.5 s).
 3. **the hand** (``--hand-seeds``): each chain identified as above (the hand drawn, every chain +-20 %), one file;
-   the grasp's references those of that drawn hand (:func:`alpes_dyn.control.hand_loop.grasp_limits` measured on
-   the plant, :func:`~alpes_dyn.control.hand_loop.grasp_levels`: the pads of a drawn hand can let go of the
+   the grasp's references those of that drawn hand (:func:`alpes_dyn.control.grasp_calibration.grasp_limits` measured on
+   the plant, :func:`~alpes_dyn.control.grasp_calibration.grasp_levels`: the pads of a drawn hand can let go of the
    frictionless cylinder below the nominal references); every controller and variant grasping the cylinder; the
    goal each of the five forces within 5 % (steady state).
 
@@ -158,7 +158,7 @@ def control_rows(model: str, seed: int, effects: Any, ident: Path | None, truth:
 
 def calibrated_row(model: str, seed: int, effects: Any, ident: Path, truth: Any) -> dict:
     """The sensorless loop on the identified file, its force estimate calibrated once against the fingertip sensor
-    (:func:`~alpes_dyn.control.hand_loop.force_scale_of` of a sensorless run with another noise draw, seed
+    (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of` of a sensorless run with another noise draw, seed
     ``CALIBRATION_SEED + seed``, at the first level); a failed run is a row with its error."""
     row = {"model": model, "seed": seed, "variant": "calibrated", "controller": "sensorless", "reference": "step"}
     t0 = time.perf_counter()
@@ -210,8 +210,8 @@ def hand_file(fits: dict[str, Path], out: Path) -> Path:
 def hand_rows(seed: int, effects: Any, tmp: Path) -> tuple[list[dict], list[dict]]:
     """The hand: each chain identified as the realism study does it (the hand drawn with ``seed``), one file, then
     every controller and variant grasping the cylinder with the references of that drawn hand's grasp
-    (:func:`~alpes_dyn.control.hand_loop.grasp_levels` of the forces its pads hold,
-    :func:`~alpes_dyn.control.hand_loop.grasp_limits`, measured on the plant); (identification rows, with the
+    (:func:`~alpes_dyn.control.grasp_calibration.grasp_levels` of the forces its pads hold,
+    :func:`~alpes_dyn.control.grasp_calibration.grasp_limits`, measured on the plant); (identification rows, with the
     grasp's as chain ``grasp``, control rows)."""
     idents, fits = [], {}
     for chain in load_params().chain_names:

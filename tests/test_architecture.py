@@ -4,6 +4,7 @@ of version 0.1, the deprecated aliases are gone and the public one (``alpes_dyn.
 from __future__ import annotations
 
 import ast
+import functools
 import importlib
 import subprocess
 import sys
@@ -34,12 +35,26 @@ def floor_of(dotted: str) -> str:
 
 
 def module_imports(path: Path) -> set[str]:
-    """The alpes_dyn modules (dotted, relative to the package) that ``path`` imports, top level or lazily."""
+    """The alpes_dyn modules (dotted, relative to the package) that ``path`` imports, top level or lazily (each
+    module's text parsed once per session: the tests below walk the whole package several times)."""
+    return set(_imports_of(path, path.read_text()))
+
+
+@functools.lru_cache(maxsize=None)
+def syntax_tree(text: str) -> ast.Module:
+    """The module ``text`` parsed, once per session per text (the import and size rules read the same trees; none
+    changes them)."""
+    return ast.parse(text)
+
+
+@functools.lru_cache(maxsize=None)
+def _imports_of(path: Path, text: str) -> frozenset[str]:
+    """:func:`module_imports` of the module ``path`` whose text is ``text``."""
     rel = path.relative_to(PACKAGE).with_suffix("")
     parts = list(rel.parts)
     pkg = parts[:-1] if parts[-1] != "__init__" else parts[:-1]
     found: set[str] = set()
-    for node in ast.walk(ast.parse(path.read_text())):
+    for node in ast.walk(syntax_tree(text)):
         if isinstance(node, ast.ImportFrom) and node.level:
             base = pkg[: len(pkg) - (node.level - 1)]
             target = ".".join(base + ([node.module] if node.module else []))
@@ -59,7 +74,7 @@ def module_imports(path: Path) -> set[str]:
         elif isinstance(node, ast.Import):  # import alpes_dyn, import alpes_dyn.model.robot
             found |= {"__init__" if a.name == "alpes_dyn" else a.name.removeprefix("alpes_dyn.")
                       for a in node.names if a.name == "alpes_dyn" or a.name.startswith("alpes_dyn.")}
-    return found
+    return frozenset(found)
 
 
 def library_modules() -> list[Path]:
@@ -278,7 +293,7 @@ def long_functions(package: Path) -> list[str]:
     :data:`MAX_FUNCTION_LINES` lines without "long because" (any case) in its docstring."""
     found = []
     for path in sorted(package.rglob("*.py")):
-        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+        for node in ast.walk(syntax_tree(path.read_text(encoding="utf-8"))):
             if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
                 lines = function_body_lines(node)
                 if lines > MAX_FUNCTION_LINES and "long because" not in (ast.get_docstring(node) or "").lower():

@@ -15,6 +15,8 @@ To add a command or an API: add rows to ``CLI`` / ``API``; ``test_every_command_
 from __future__ import annotations
 
 import argparse
+import copy
+import functools
 import json
 import math
 import os
@@ -1445,9 +1447,22 @@ def _design(**kw):
 
 
 def _exp(**kw):
+    """finger2's experiment of :func:`_design` (0.2 s); without arguments the one recording every row that only needs
+    a valid recording shares (simulated once per process, each row given its own copy)."""
     from alpes_dyn.estimation.experiments.experiment import experiment
 
+    if not kw:
+        return copy.deepcopy(_shared_exp())
     return experiment(**{"model": "finger2", "design": _design(), **kw})
+
+
+@functools.lru_cache(maxsize=1)
+def _shared_exp():
+    """The recording of ``_exp()``, simulated once (the experiment trims its bias by hundreds of static balances:
+    seconds, repeated by each identify row before this)."""
+    from alpes_dyn.estimation.experiments.experiment import experiment
+
+    return experiment(model="finger2", design=_design())
 
 
 def _model_exp(nominal, **kw):
@@ -2916,9 +2931,20 @@ API.extend([
 
 
 def _force_step(*a, **kw):
+    """A ForceStep (Python's filter); without arguments the one finger3 step the rows of bad samples share (each
+    refused before it advances)."""
     from alpes_dyn.control import ForceStep
 
+    if not a and not kw:
+        return _shared_force_step()
     return ForceStep(*a, **{"compiled": False, **kw})
+
+
+@functools.lru_cache(maxsize=1)
+def _shared_force_step():
+    from alpes_dyn.control import ForceStep
+
+    return ForceStep(compiled=False)
 
 
 def _bench(hw_kw=None, **kw):

@@ -178,15 +178,21 @@ def test_c_export_of_the_hand_equals_the_filter_bit_for_bit(tmp_path):
         assert np.array_equal(Z, est.z) and np.array_equal(P, est.P)
 
 
+@pytest.fixture(scope="module")
+def scenario_03():
+    """The estimation scenario's 0.3 s record of finger3 (simulated and filtered once for the three codes below)."""
+    from alpes_dyn.estimation.observers.scenario import run_estimation
+
+    return run_estimation("ekf", duration=0.3)
+
+
 @needs_cc
 @pytest.mark.parametrize("observer, code", [("ekf-params", "sparse"), ("ekf", "sparse"), ("ukf", None)])
-def test_c_export_of_each_code_equals_the_filter(observer, code, tmp_path):
+def test_c_export_of_each_code_equals_the_filter(observer, code, tmp_path, scenario_03):
     """finger3: the EKF's loops (its default is CasADi's code of the whole step, tested above), with its gains as
     states too (constant rows in its Jacobian), and the UKF (only CasADi's code): each equal to the filter's run()
     on the scenario's record, bit for bit."""
-    from alpes_dyn.estimation.observers.scenario import run_estimation
-
-    res = run_estimation("ekf", duration=0.3)
+    res = scenario_03
     filt, z0, P0 = scenario_filter(observer, "finger3")
     d = write_c_observer(filt, tmp_path / "c", code=code, prefix="obs")["main.c"].parent
     assert ("obs_cs_model" in (d / "obs.c").read_text()) == (code == "sparse")

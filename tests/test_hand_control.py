@@ -175,7 +175,7 @@ def test_grasp_limits_reads_where_each_pad_lets_go(monkeypatch):
     ramp's top); the limit read is that reference within 1 % (the 20 ms mean centred on the drop leads it by up to
     10 ms of ramp, 0.4-0.7 N/s), not the spike; :func:`grasp_levels` then scales the index's two levels by
     0.8 x 0.42 / 0.4 and keeps the others."""
-    from alpes_dyn.control import hand_loop as hl
+    from alpes_dyn.control import grasp_calibration as hl  # grasp_limits' module (it runs run_hand_control)
 
     let_go = {"index": 0.42, "thumb": 1.2}
     seen = {}

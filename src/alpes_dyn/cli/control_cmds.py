@@ -208,7 +208,7 @@ def _check_calibration(args: argparse.Namespace, fx: dict, urdf: bool) -> None:
 def _force_scale(args: argparse.Namespace, fx: dict, run_control: Any) -> float | None:
     """The scale the loop's sensorless estimate is divided by (--force-scale, or read by --calibrate's run), put
     into ``fx``'s compensation; None without either."""
-    from ..control.hand_loop import force_scale_of
+    from ..control.grasp_calibration import force_scale_of
     from ..control.realism_loop import Compensation
 
     if args.force_scale is None and not args.calibrate:

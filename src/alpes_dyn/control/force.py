@@ -37,8 +37,8 @@ from .finger_loop import (_METRIC_WINDOW_S, _SAMPLE_ARRAYS, CONTROL_MODELS, Cont
 from .step import ForceStep
 from .step_parts import StepParts
 from .hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlResult, HandControlScenario, _rotation,  # noqa: F401
-                        chain_frame, chain_model, cylinder_normal, force_scale_of, grasp_levels, grasp_limits,
-                        hand_chains, run_hand_control)
+                        chain_frame, chain_model, cylinder_normal, hand_chains, run_hand_control)
+from .grasp_calibration import force_scale_of, grasp_levels, grasp_limits
 from .hand_step import HandForceStep
 
 __all__ = [

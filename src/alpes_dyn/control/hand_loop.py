@@ -122,8 +122,9 @@ class HandControlScenario:
     ``thumb_abduction`` rad, where the thumb's pad faces the cylinder.
 
     References: ``levels[chain]`` = (before, after) the step at ``step_time`` s (default :data:`HAND_LEVELS`),
-    the step a ramp over ``ramp_s`` s where ``ramp_s`` > 0 (the probe of :func:`grasp_limits`; the metrics are the
-    step's, measured from ``step_time``); metrics (per chain, as :class:`.ControlResult`) after ``settle`` s.
+    the step a ramp over ``ramp_s`` s where ``ramp_s`` > 0 (the probe of
+    :func:`~alpes_dyn.control.grasp_calibration.grasp_limits`; the metrics are the step's, measured from
+    ``step_time``); metrics (per chain, as :class:`.ControlResult`) after ``settle`` s.
 
     ``effects``, ``compensation``: a real hand's effects on the plant and what the loops do about them, as
     :class:`.ControlScenario`'s (:mod:`alpes_dyn.control.realism_loop`), on the five flexion chains (the thumb's
@@ -437,82 +438,3 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     log = run_loop(blocks, N, sc.dt)
     return HandControlResult(scenario=sc, t=t, chains=_chain_results(sc, C, log, t, p.tau_max),
                              q_abduction=log["q_abd"][:, 0], wall_s=log.wall_s)
-
-
-#: :func:`grasp_limits`' ramp: each chain's reference from its first level of :data:`HAND_LEVELS` to
-#: ``GRASP_PROBE_TOP`` times its second, over ``GRASP_PROBE_RAMP_S`` s (0.25-0.45 N/s on the fingers).
-GRASP_PROBE_TOP, GRASP_PROBE_RAMP_S = 2.5, 2.0
-#: :func:`grasp_levels`: the references kept under this fraction of the force a chain holds.
-GRASP_MARGIN = 0.8
-
-
-def grasp_limits(params: Any = None, plant_params: Any = None, effects: Any = None, compensation: Any = None,
-                 seed: int = 0) -> dict[str, float]:
-    """The force (N) each chain's pad holds on the cylinder before it slides around it, measured on the plant:
-    the sensor loops of :func:`run_hand_control` (controller's parameters ``params``, the plant's
-    ``plant_params``, ``effects``, ``compensation``, ``seed``) with each reference ramped from its first level
-    of :data:`HAND_LEVELS` to :data:`GRASP_PROBE_TOP` times its second over :data:`GRASP_PROBE_RAMP_S` s; a chain's
-    limit is the reference where its MuJoCo force (mean over 20 ms) first leaves 20 % of it on the ramp (the
-    largest force the loop held; not the force's own peak, which the pad's slip can spike), the ramp's top where
-    it never does.
-
-    The cylinder is frictionless: a pad holds it only while the finger's springs and the tendon keep the contact
-    normal within the pad, which depends on the finger's stiffness -- a hand drawn +-20 % per spring can let go
-    below :data:`HAND_LEVELS` (an index finger of ``benchmarks/hand_control.py``'s draws at 0.3-0.4 N, the nominal
-    hand's above them). What an experimenter does on the real hand with its FlexiForce sensors: one 4.8 s run."""
-    lv = {c: (a, GRASP_PROBE_TOP * b) for c, (a, b) in HAND_LEVELS.items()}
-    sc = HandControlScenario(duration=HandControlScenario.step_time + GRASP_PROBE_RAMP_S + 0.25,
-                             ramp_s=GRASP_PROBE_RAMP_S)
-    res = run_hand_control("sensor", sc, levels=lv, params=params, plant_params=plant_params, effects=effects,
-                           compensation=compensation, seed=seed)
-    out = {}
-    for c, r in res.chains.items():
-        w = max(1, int(round(0.02 / sc.dt)))
-        F = np.convolve(r.F_true, np.ones(w) / w, mode="same")
-        left = np.nonzero((r.t >= sc.step_time) & (np.abs(F - r.F_ref) > 0.2 * r.F_ref))[0]
-        out[c] = float(r.F_ref[left[0]]) if left.size else float(r.F_ref[-1])
-    return out
-
-
-def grasp_levels(limits: dict[str, float], margin: float = GRASP_MARGIN) -> dict[str, tuple[float, float]]:
-    """:data:`HAND_LEVELS`, a chain's two levels scaled down together where its second is above ``margin`` times
-    what it holds (``limits``, N per chain, :func:`grasp_limits`): the grasp scene's references for that hand."""
-    out = {}
-    for c, (a, b) in HAND_LEVELS.items():
-        if c not in limits or not (isinstance(limits[c], (int, float)) and math.isfinite(limits[c])
-                                   and limits[c] > 0):
-            raise InputError(f"limits: expected a positive force (N) for chain {c!r}, got {limits.get(c)!r}")
-        s = min(1.0, margin * float(limits[c]) / b)
-        out[c] = (a * s, b * s)
-    return out
-
-
-def force_scale_of(result: ControlResult | HandControlResult, previous: Any = 1.0) -> float | dict[str, float]:
-    """The one-point calibration of the sensorless force against the fingertip sensor: from a ``sensorless`` run
-    (:func:`~alpes_dyn.control.finger_loop.run_control`, or :func:`run_hand_control`: per chain), the mean force the
-    loop estimated over the last 200 ms of its first level over the mean the FlexiForce read there, times
-    ``previous`` (the :attr:`~alpes_dyn.control.realism_loop.Compensation.force_scale` the run had): the
-    ``force_scale`` that makes the estimate read what the sensor reads. What it corrects is the torque constant's
-    error (the estimate is the motor current through it, which the encoder cannot see: an identification scales
-    every torque parameter with it, and the estimate with them by 1 + e) and whatever else is proportional to the
-    force; it carries over the sensor's own accuracy (the plant's FlexiForce is noise and resolution only)."""
-    def one(r: ControlResult, prev: float) -> float:
-        sc = r.scenario
-        if sc.controller != "sensorless":
-            raise InputError(f"result: the calibration reads a sensorless run, got {sc.controller!r}")
-        t1 = sc.step_times[0]
-        k = (r.t >= t1 - 0.2) & (r.t < t1)
-        F_s = float(np.mean(r.F_meas[k]))
-        if not F_s > 0.02:
-            raise InputError(f"result: the fingertip sensor reads {F_s:.3g} N before the step: no contact to "
-                             "calibrate on")
-        s = prev * float(np.mean(r.F_hat[k])) / F_s
-        if not 0.5 <= s <= 2.0:
-            raise InputError(f"result: the estimate reads {s:.3g} times the fingertip sensor: beyond a scale to "
-                             "calibrate (0.5-2), the model is off")
-        return s
-
-    if isinstance(result, HandControlResult):
-        return {c: one(r, float(previous.get(c, 1.0)) if isinstance(previous, dict) else float(previous))
-                for c, r in result.chains.items()}
-    return one(result, float(previous))

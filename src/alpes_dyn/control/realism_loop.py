@@ -38,9 +38,9 @@ through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
   ``tilt_y``); the tilt ``identify`` fitted is already in its file's gravity (``environment.gravity``), which the
   controller's model takes.
 * ``force_scale``: the sensorless estimate divided by its ratio to the fingertip sensor's reading, measured once
-  (:func:`~alpes_dyn.control.hand_loop.force_scale_of`): the torque constant's error scales every identified torque
-  parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of e / (1 + e) on the
-  uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
+  (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of`): the torque constant's error scales every
+  identified torque parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of
+  e / (1 + e) on the uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
 
 The identified torque delay (the file's ``transmission.torque_delay``) needs no block of its own: with
 ``command_input`` the observer and the sensorless estimate take the command, which the reading's lag does not
@@ -87,7 +87,7 @@ class Compensation:
         or None (the default): the controller's file's (:meth:`~alpes_dyn.model.params.HandParams.encoder_offset_of`,
         as ``identify`` wrote it; 0 without). force_scale: the sensorless force estimate divided by it -- the
         ratio of that estimate to the fingertip sensor's reading, measured once on the plant
-        (:func:`~alpes_dyn.control.hand_loop.force_scale_of`: the torque constant's error, which the encoder
+        (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of`: the torque constant's error, which the encoder
         cannot see, scales the estimate); a number, or for the hand a dict chain -> number (1 where a chain is
         missing); 1: uncalibrated.
     """

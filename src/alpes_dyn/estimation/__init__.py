@@ -35,7 +35,7 @@ EXPORTS: dict[str, str] = {
     "perturbed_params": "experiments.draws",
     # observers
     "KalmanFilter": "observers.observers", "ExtendedKalmanFilter": "observers.observers",
-    "UnscentedKalmanFilter": "observers.observers", "OnlineFilter": "observers.observers",
+    "UnscentedKalmanFilter": "observers.observers", "OnlineFilter": "observers.online_filter",
     "Estimate": "observers.observers", "make_observer": "observers.observers",
     "run_estimation": "observers.scenario", "estimate_recording": "observers.replay",
     # identification

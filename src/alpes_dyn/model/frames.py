@@ -37,7 +37,22 @@ class FrameKinematics:
         return self.tips[0]
 
     def frame_id(self, tip: str | None) -> int:
-        """Pinocchio frame index of ``tip`` (default: :attr:`default_tip`)."""
+        """Pinocchio's index of a frame.
+
+        Parameters
+        ----------
+        tip : str or None
+            The frame's name (None: :attr:`default_tip`).
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        ModelError
+            An unknown frame, or None where the model has no default tip.
+        """
         if tip is None:
             tip = self.default_tip
         try:
@@ -54,20 +69,82 @@ class FrameKinematics:
         return self.vector(a, "F", 3)
 
     def fingertip_position(self, q: np.ndarray, tip: str | None = None) -> np.ndarray:
-        """Position of a tip frame in the base frame, (3,), m."""
+        """Position of a tip frame in the base frame (forward kinematics).
+
+        Parameters
+        ----------
+        q : array_like
+            Joint angles (n,), rad.
+        tip : str, optional
+            The frame (default: :attr:`default_tip`).
+
+        Returns
+        -------
+        numpy.ndarray
+            (3,), m.
+
+        Raises
+        ------
+        InputError
+            ``q`` not (n,) finite numbers below 2^40.
+        ModelError
+            An unknown frame.
+        """
         q = self.vector(q, "q")
         fid = self.frame_id(tip)
         pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
         return self.pin_data.oMf[fid].translation.copy()
 
     def fingertip_jacobian(self, q: np.ndarray, tip: str | None = None) -> np.ndarray:
-        """Linear velocity Jacobian J of a tip frame in the base frame, (3, n), m (Section 2.2, eq. 2.12)."""
+        """Linear velocity Jacobian J of a tip frame in the base frame (Section 2.2, eq. 2.12: v = J qd).
+
+        Parameters
+        ----------
+        q : array_like
+            Joint angles (n,), rad.
+        tip : str, optional
+            The frame (default: :attr:`default_tip`).
+
+        Returns
+        -------
+        numpy.ndarray
+            (3, n), m/rad.
+
+        Raises
+        ------
+        InputError
+            ``q`` not (n,) finite numbers below 2^40.
+        ModelError
+            An unknown frame.
+        """
         q = self.vector(q, "q")
         fid = self.frame_id(tip)
         return pin.computeFrameJacobian(self.pin_model, self.pin_data, q, fid, _WORLD)[:3].copy()
 
     def frame_placement(self, q: np.ndarray, frame: str) -> tuple[np.ndarray, np.ndarray]:
-        """(R (3, 3), p (3,)): orientation and position (m) of ``frame`` in the base frame."""
+        """Orientation and position of a frame in the base frame.
+
+        Parameters
+        ----------
+        q : array_like
+            Joint angles (n,), rad.
+        frame : str
+            The frame's name.
+
+        Returns
+        -------
+        R : numpy.ndarray
+            (3, 3) rotation, the frame's axes in base axes.
+        p : numpy.ndarray
+            (3,) position, m.
+
+        Raises
+        ------
+        InputError
+            ``q`` not (n,) finite numbers below 2^40.
+        ModelError
+            An unknown frame.
+        """
         q = self.vector(q, "q")
         fid = self.frame_id(frame)
         pin.framesForwardKinematics(self.pin_model, self.pin_data, q)
@@ -76,10 +153,33 @@ class FrameKinematics:
 
     def frame_jacobian(self, q: np.ndarray, frame: str | None = None, reference: str = "local_world_aligned",
                        dim: int = 6) -> np.ndarray:
-        """Jacobian of ``frame`` (default: the first tip) as Pinocchio's ``getFrameJacobian``: (6, n)
-        [linear (m/rad); angular (1)] rows, or (3, n) linear rows with ``dim=3``, in ``reference``:
-        ``"local_world_aligned"`` (default; the frame origin's velocity in base axes), ``"local"``
-        (frame axes) or ``"world"`` (spatial velocity at the base origin), see :data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`."""
+        """Jacobian of a frame as Pinocchio's ``getFrameJacobian``.
+
+        Parameters
+        ----------
+        q : array_like
+            Joint angles (n,), rad.
+        frame : str, optional
+            The frame (default: :attr:`default_tip`).
+        reference : str
+            ``"local_world_aligned"`` (default; the frame origin's velocity in base axes), ``"local"`` (frame axes)
+            or ``"world"`` (spatial velocity at the base origin), see
+            :data:`~alpes_dyn.model.contact.REFERENCE_FRAMES`.
+        dim : int
+            6 (default): linear and angular rows; 3: linear rows only.
+
+        Returns
+        -------
+        numpy.ndarray
+            (dim, n): [linear (m/rad); angular (1)] rows.
+
+        Raises
+        ------
+        InputError
+            ``q`` not (n,) finite numbers below 2^40.
+        ModelError
+            An unknown frame or reference, or a ``dim`` other than 3 or 6.
+        """
         q = self.vector(q, "q")
         fid = self.frame_id(frame)
         if reference not in REFERENCE_FRAMES:
@@ -91,11 +191,32 @@ class FrameKinematics:
 
     def contact_torque(self, q: np.ndarray, F: object = None, tip: str | None = None,
                        contacts: Any = None) -> np.ndarray:
-        """Sum of J_c^T F_c over the contacts (eq. 2.9), (n,), N m.
+        """The joint torques of the contact forces: the sum of J_c^T F_c over the contacts (eq. 2.9).
 
-        * one force at ``tip``: F (3,) in N, base axes (a scalar means [0, 0, F_z], eq. 2.13);
-        * several: ``contacts`` (a list of :class:`~alpes_dyn.model.contact.Contact` or frame names) and F their stacked
-          forces/wrenches, (sum of dims,); or F a dict {frame: force (3,) or wrench (6,)} in base axes.
+        Parameters
+        ----------
+        q : array_like
+            Joint angles (n,), rad.
+        F : float, array_like or dict, optional
+            One force at ``tip``: (3,), N, base axes (a scalar means [0, 0, F_z], eq. 2.13; None: zero). Several:
+            the stacked forces/wrenches of ``contacts``, (sum of their dims,); or a dict {frame: force (3,) or
+            wrench (6,)} in base axes.
+        tip : str, optional
+            The frame of one force (default: :attr:`default_tip`).
+        contacts : sequence of Contact or str, optional
+            Several contacts (:class:`~alpes_dyn.model.contact.Contact` or frame names), F their stacked values.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,), N m.
+
+        Raises
+        ------
+        InputError
+            ``q`` or F not of its shape, NaN, inf or over 2^40.
+        ModelError
+            An unknown frame, or ``contacts`` given together with a dict F.
         """
         if isinstance(F, dict):
             if contacts is not None:

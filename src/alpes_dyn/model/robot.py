@@ -18,17 +18,15 @@ it is not thread-safe (use :meth:`Model.copy` per thread).
 from __future__ import annotations
 
 import dataclasses
-import math
 from pathlib import Path
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 import pinocchio as pin
-from scipy.linalg import lapack as _lapack
 
 from .description import Layout, check_model_name, layout, model_params, urdf_string
 from ..checks import as_float_array
-from ..limits import _NRM2, MAX_HOT_MAGNITUDE, check_physical, hot_magnitude_error
+from ..limits import _NRM2, check_physical, hot_magnitude_error
 from ..errors import InputError, ModelError
 from .extras import JointExtras
 from ..fileio import read_text
@@ -36,27 +34,18 @@ from .inertial import check_inertials
 from .ratio_curve import check_ratio_range
 from .mimic import MimicCoupling, refuse_mimic_names
 from .robot_checks import (_build_pinocchio, _check_mass_matrix, _check_positive, _check_random_args, _tips,
-                           newton_equilibrium)
+                           newton_equilibrium)  # noqa: F401  (newton_equilibrium: importable from here, as before)
 from .params import HandParams, load_params
 from .spec import TransmissionSpec, alpes_spec, alpes_transmission, load_spec
 from .transmission import Transmission
 from .contact import REFERENCE_FRAMES, Contact, as_contacts  # noqa: F401  (importable from here, as before)
 from .frames import FrameKinematics
+from .terms import _F64, _HOT, _ND, DynamicsTerms
 
 __all__ = ["Model", "DEFAULT_GRAVITY"]
 
 DEFAULT_GRAVITY = np.array([0.0, 0.0, -9.81])
-_F64 = np.dtype(np.float64)
-_ND = np.ndarray
-_aba = pin.aba
-_crba = pin.crba
-_nle = pin.nonLinearEffects
-_potrf, _potrs = _lapack.dpotrf, _lapack.dpotrs
-_chol_decompose, _chol_solve = pin.cholesky.decompose, pin.cholesky.solve
-_isfinite = math.isfinite
 _TINY = 2.0**-1000  # |x| * _TINY < 2e7 for every finite float64 x
-_HOT = MAX_HOT_MAGNITUDE
-_INF = math.inf
 
 
 def _spec_and_extras(urdf: str, spec: TransmissionSpec | str | Path | JointExtras | None,
@@ -76,31 +65,41 @@ def _spec_and_extras(urdf: str, spec: TransmissionSpec | str | Path | JointExtra
     return spec, extras
 
 
-class Model(FrameKinematics):
+class Model(DynamicsTerms, FrameKinematics):
     """Dynamics of a fixed-base tree of 1-DoF joints (an Alpes model or any URDF).
 
     Parameters
     ----------
-    urdf:
+    urdf : str
         URDF text (not a path; see :meth:`from_urdf_file`).
-    spec:
+    spec : TransmissionSpec, str or pathlib.Path, optional
         What the URDF cannot hold: motors and their joints with ratios, encoder, per-joint springs,
         friction, rotor inertia (:class:`~alpes_dyn.model.spec.TransmissionSpec`, or the path of its TOML
         file; default: none of them). The Alpes models are built through it (:meth:`alpes`).
-    gravity:
+    gravity : array_like, optional
         Gravity vector in the base frame, m/s^2, shape (3,) (default: the spec's, else (0, 0, -9.81)).
-    name:
+    name : str, optional
         A label (default: the spec's name, else the robot name of the URDF).
-    check_inertia:
+    layout : Layout, optional
+        Set by :meth:`alpes`: the chains of an Alpes model.
+    params : HandParams, optional
+        Set by :meth:`alpes`: the parameter file's values.
+    spring : str, optional
+        Label of the spring law (default: the spec's, else ``"none"``).
+    extras : JointExtras, optional
+        Springs, friction, rotor inertia as arrays (n,) in joint order, instead of a spec (no motors).
+    check_inertia : str
         ``"relaxed"`` (default) or ``"strict"``: how the URDF's inertials are validated
         (:func:`alpes_dyn.model.inertial.check_inertials`: masses and inertias positive (semi)definite;
         strict adds the triangle inequality, which real URDFs such as the Allegro hand's break).
-    layout, params:
-        Set by :meth:`alpes`: the chains of an Alpes model and its parameters.
-    spring:
-        Label of the spring law (default: the spec's).
-    extras:
-        Springs, friction, rotor inertia as arrays in joint order, instead of a spec (no motors).
+
+    Raises
+    ------
+    ModelError
+        A URDF Pinocchio cannot read or without a ``<robot>``, a spec that does not match its joints or frames, a
+        gravity not 3 finite physical numbers (or different from the spec's), extras of the wrong shape or a
+        negative armature, a singular A(q) + I_a (a joint that moves only massless links), a moment arm of 0 in a
+        joint's range.
 
     All vectors are 1-D float arrays of length ``n`` (joints in :attr:`joint_names` order), in SI
     units (rad, rad/s, rad/s^2, N m, N).
@@ -248,14 +247,35 @@ class Model(FrameKinematics):
     def alpes(cls, model: str = "finger3", spring: str = "torsional", friction: bool = False,
               rotor_inertia: bool = False, params: HandParams | str | Path | None = None,
               chain: str | None = None) -> "Model":
-        """An Alpes model (``finger2``, ``finger3``, ``hand`` or ``thumb``) built from the parameter file.
+        """An Alpes model built from the parameter file.
 
-        ``spring`` is ``"torsional"`` (default), ``"report"`` (eq. 2.14 literally) or ``"none"``;
-        ``friction`` and ``rotor_inertia`` switch on eq. 2.6-2.7 and eq. 2.8 with the file's values.
-        ``chain``: a finger model built from that finger of the hand (a name of ``palm.finger_names``:
-        the shared ``[finger]`` values with its own ``[finger.<name>]`` ones); :attr:`chain` keeps it and
-        :attr:`params` the whole file (a file marked not trustworthy too: :attr:`HandParams.untrusted`; the
-        loaders that use its values refuse it, :func:`~alpes_dyn.model.trust.check_trusted`).
+        Parameters
+        ----------
+        model : str
+            ``"finger2"``, ``"finger3"`` (default), ``"hand"`` or ``"thumb"``.
+        spring : str
+            ``"torsional"`` (default), ``"report"`` (eq. 2.14 literally) or ``"none"``.
+        friction : bool
+            Joint friction of eq. 2.6-2.7 with the file's values (default False).
+        rotor_inertia : bool
+            The motors' rotor inertia of eq. 2.8 with the file's values (default False).
+        params : HandParams, str or pathlib.Path, optional
+            The parameter file (its values or its path; default: the one shipped with the package). A file
+            marked not trustworthy is kept (:attr:`HandParams.untrusted`; the loaders that use its values refuse
+            it, :func:`~alpes_dyn.model.trust.check_trusted`).
+        chain : str, optional
+            A finger model built from that finger of the hand (a name of ``palm.finger_names``: the shared
+            ``[finger]`` values with its own ``[finger.<name>]`` ones); :attr:`chain` keeps it and :attr:`params`
+            the whole file.
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        ModelError
+            An unknown model, spring law or chain, or a parameter file that does not load.
         """
         check_model_name(model)
         p = params if isinstance(params, HandParams) else load_params(params)
@@ -276,40 +296,122 @@ class Model(FrameKinematics):
 
     @classmethod
     def from_mjcf(cls, mjcf: str | Path, hold: Sequence[str] = (), **kwargs) -> "Model":
-        """A MuJoCo model with fixed tendons (MJCF text or path; needs ``mujoco``): its tree as a URDF, its tendons,
-        springs, armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`; ``hold``: hinges
-        welded at their reference angle, their actuators dropped)."""
+        """A MuJoCo model read as a :class:`Model` (needs ``mujoco``): its tree as a URDF, its tendons, springs,
+        armature and friction as a spec (:func:`alpes_dyn.model.mjcf_import.mjcf_to_urdf`).
+
+        Parameters
+        ----------
+        mjcf : str or pathlib.Path
+            MJCF text or the path of its file.
+        hold : sequence of str
+            Hinges welded at their reference angle, their actuators dropped (default none).
+        **kwargs
+            Passed to :class:`Model` (e.g. ``gravity``, ``name``, ``check_inertia``).
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        ModelError
+            What the import cannot represent (:mod:`alpes_dyn.model.mjcf_import` names the element), or an MJCF
+            MuJoCo refuses.
+        """
         from .mjcf_import import mjcf_model
 
         return mjcf_model(cls, mjcf, hold, **kwargs)
 
     def to_mjcf(self, **kwargs) -> str:
         """MJCF text of this model for MuJoCo: its tree, inertias, limits, springs, armature, friction, motors as
-        fixed tendons with motor actuators, rotor inertia, tip sites and gravity
-        (:func:`alpes_dyn.model.mjcf_export.model_mjcf`, whose keywords it takes); :meth:`from_mjcf` reads it back."""
+        fixed tendons with motor actuators, rotor inertia, tip sites and gravity; :meth:`from_mjcf` reads it back.
+
+        Parameters
+        ----------
+        **kwargs
+            The keywords of :func:`alpes_dyn.model.mjcf_export.model_mjcf` (its options of the export).
+
+        Returns
+        -------
+        str
+            The MJCF text.
+
+        Raises
+        ------
+        ModelError
+            What MJCF cannot hold of this model (:func:`~alpes_dyn.model.mjcf_export.model_mjcf` names it).
+        """
         from .mjcf_export import model_mjcf
 
         return model_mjcf(self, **kwargs)
 
     def subtree(self, motors: str | Sequence[str]) -> "Model":
-        """The sub-model on the branches from the base that ``motors`` (a motor name or a list of them) drive,
-        with every motor that drives one of their joints; the other branches removed from the URDF and the spec
+        """The sub-model on the branches from the base that ``motors`` drive, with every motor that drives one of
+        their joints; the other branches removed from the URDF and the spec
         (:func:`alpes_dyn.model.subtree.subtree_model`: why they cannot change the kept joints' dynamics on a
-        fixed base, and what is refused)."""
+        fixed base, and what is refused).
+
+        Parameters
+        ----------
+        motors : str or sequence of str
+            A motor name or a list of them (of :attr:`motor_names`).
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        ModelError
+            An unknown motor, or a model the cut cannot keep whole (:func:`~alpes_dyn.model.subtree.subtree_model`).
+        """
         from .subtree import subtree_model
 
         return subtree_model(self, motors)
 
     @classmethod
     def from_urdf_file(cls, path: str | Path, spec: TransmissionSpec | str | Path | None = None, **kwargs) -> "Model":
-        """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec
-        (:class:`~alpes_dyn.model.spec.TransmissionSpec` or the path of its TOML file); without one the
-        model has no motors, springs, friction or rotor inertia."""
+        """Load any fixed-base URDF file (e.g. one of example-robot-data) with an optional spec.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The URDF file.
+        spec : TransmissionSpec, str or pathlib.Path, optional
+            A :class:`~alpes_dyn.model.spec.TransmissionSpec` or the path of its TOML file; without one the model
+            has no motors, springs, friction or rotor inertia.
+        **kwargs
+            Passed to :class:`Model` (e.g. ``gravity``, ``name``, ``check_inertia``).
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        ModelError
+            A file that cannot be read, or what :class:`Model` refuses.
+        """
         return cls(read_text(path, "URDF file", ModelError), spec, **kwargs)
 
     def copy(self, gravity: Sequence[float] | None = None) -> "Model":
-        """An independent model (own Pinocchio data), e.g. for another thread; with ``gravity`` (3,),
-        m/s^2, the same robot in another orientation (the spec's gravity replaced too)."""
+        """An independent model (own Pinocchio data), e.g. for another thread.
+
+        Parameters
+        ----------
+        gravity : array_like, optional
+            (3,), m/s^2: the same robot in another orientation (the spec's gravity replaced too); default this
+            model's.
+
+        Returns
+        -------
+        Model
+
+        Raises
+        ------
+        ModelError
+            A gravity not 3 finite physical numbers.
+        """
         g = self.gravity if gravity is None else gravity
         if self.spec is not None:
             spec = self.spec
@@ -335,14 +437,44 @@ class Model(FrameKinematics):
         return tuple(self.tips)
 
     def joint_index(self, name: str) -> int:
-        """Position of joint ``name`` in :attr:`joint_names` (and in q, v, tau, the rows of A...)."""
+        """Position of a joint in :attr:`joint_names` (and in q, v, tau, the rows of A...).
+
+        Parameters
+        ----------
+        name : str
+            The joint's name.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        ModelError
+            An unknown joint (the message lists them).
+        """
         try:
             return self.joint_names.index(name)
         except ValueError:
             raise ModelError(f"unknown joint {name!r} (joints: {', '.join(self.joint_names)})") from None
 
     def motor_index(self, name: str) -> int:
-        """Position of motor ``name`` in :attr:`motor_names` (and in tau_m, the encoder vector q_m)."""
+        """Position of a motor in :attr:`motor_names` (and in tau_m, the encoder vector q_m).
+
+        Parameters
+        ----------
+        name : str
+            The motor's name.
+
+        Returns
+        -------
+        int
+
+        Raises
+        ------
+        ModelError
+            An unknown motor (the message lists them).
+        """
         try:
             return self.motor_names.index(name)
         except ValueError:
@@ -350,8 +482,29 @@ class Model(FrameKinematics):
 
     # ------------------------------------------------------------------ input checks
     def vector(self, x: object, name: str, n: int | None = None) -> np.ndarray:
-        """``x`` as a finite float vector of length n (default the model's), every entry below
-        :data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE` (2^40) in magnitude, else :class:`InputError` naming ``name``."""
+        """``x`` as a checked float vector: the argument check of every method (a float64 array of the right shape
+        is returned as it is, no copy).
+
+        Parameters
+        ----------
+        x : array_like
+            The vector.
+        name : str
+            Its name in the error message.
+        n : int, optional
+            Its length (default the model's, :attr:`n`).
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) float64.
+
+        Raises
+        ------
+        InputError
+            ``x`` not n numbers, or an entry NaN, inf or over :data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE` (2^40) in
+            magnitude; the message names ``name``.
+        """
         n = self.n if n is None else n
         if x.__class__ is _ND and x.dtype is _F64 and x.shape == (n,):  # fast path, no copy
             a = x
@@ -367,197 +520,6 @@ class Model(FrameKinematics):
         if err is not None:
             raise err
         return a
-
-    # ------------------------------------------------------------------ terms of eq. 2.10
-    def inertia_matrix(self, q: np.ndarray) -> np.ndarray:
-        """A(q) + I_a: full symmetric (n, n) inertia matrix, kg m^2 (CRBA; eq. 2.3, 2.8): the joint-side
-        ``armature`` on the diagonal and the rotors' S^T diag(J_m) S (:attr:`rotor_matrix`)."""
-        q = self.vector(q, "q")
-        R = self.transmission.rotor_matrix_at(q) if self._rotor_curved else self.rotor_matrix
-        if self.mimic is not None:  # (Pinocchio's CRBA on a mimic model is right on its first call only)
-            M = self.mimic.mass_matrix(q)
-            M[np.diag_indices(self.n)] += self.pin_model.armature
-            return M + R if self._rotor else M
-        M = pin.crba(self.pin_model, self.pin_data, q).copy()
-        M[self._lower] = M.T[self._lower]  # CRBA fills the upper triangle
-        if self._rotor:
-            M += R
-        return M
-
-    def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """C(q, qd), (n, n), N m s: C qd are the Coriolis/centrifugal torques (eq. 2.4-2.5), A_dot - 2C skew."""
-        q, v = self.vector(q, "q"), self.vector(v, "v")
-        if self.mimic is not None:
-            return self.mimic.coriolis_matrix(q, v)
-        return pin.computeCoriolisMatrix(self.pin_model, self.pin_data, q, v).copy()
-
-    def spring_torque(self, q: np.ndarray) -> np.ndarray:
-        """Spring torques k (q - q_rest), (n,), N m (eq. 2.14 under the model's spring law; q_rest the rest angles,
-        0 unless the spec's ``[rest_angle]`` gives them)."""
-        return self.extras.spring_torque(self.vector(q, "q"))
-
-    def gravity_torque(self, q: np.ndarray) -> np.ndarray:
-        """G(q) of eq. 2.11: gravity plus springs, (n,), N m."""
-        q = self.vector(q, "q")
-        g = pin.computeGeneralizedGravity(self.pin_model, self.pin_data, q)
-        return g + self.extras.spring_torque(q) if self._spring else g.copy()
-
-    def gravity_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """dG/dq (n, n), N m/rad: Pinocchio's analytic gravity derivatives plus the spring stiffness diag(k)."""
-        q = self.vector(q, "q")
-        if self.mimic is not None:
-            dG = self.mimic.gravity_jacobian(q)
-        else:
-            dG = pin.computeGeneralizedGravityDerivatives(self.pin_model, self.pin_data, q).copy()
-        dG[np.diag_indices(self.n)] += self._k
-        return dG
-
-    def friction_torque(self, v: np.ndarray, smooth: bool = False) -> np.ndarray:
-        """Friction F_v qd + f_s (eq. 2.6-2.7), (n,), N m; ``smooth`` uses tanh(qd / v_s) for sign."""
-        return self.extras.friction_torque(self.vector(v, "v"), smooth)
-
-    def kinetic_energy(self, q: np.ndarray, v: np.ndarray) -> float:
-        """E = 1/2 qd^T (A + I_a) qd (eq. 2.3), J."""
-        v = self.vector(v, "v")
-        return 0.5 * float(v @ self.inertia_matrix(q) @ v)
-
-    def potential_energy(self, q: np.ndarray) -> float:
-        """U = gravity + spring potential energy (J), zero at the base height and with every spring at its rest angle."""
-        q = self.vector(q, "q")
-        u = self.mimic.potential_energy(q) if self.mimic else pin.computePotentialEnergy(self.pin_model, self.pin_data, q)
-        return float(u) + float(self.extras.spring_energy(q))
-
-    def forward_dynamics(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray, F: object = None,
-                         tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
-        """Joint accelerations qdd (n,), rad/s^2, solving eq. 2.10 (ABA + extras).
-
-        With rotor inertia on the tendons (:attr:`rotor_matrix` non-zero; ABA takes only a diagonal
-        armature), or mimic joints (:attr:`mimic`; Pinocchio's ABA refuses them): CRBA + S^T diag(J_m) S, the
-        bias by RNEA at zero acceleration, a Cholesky solve. With ratios that change with q (the transmission's
-        ``ratio_curve``) the rotors' rho(q)^T diag(J_m) rho(q) and their velocity product
-        (:meth:`~alpes_dyn.model.transmission.Transmission.rotor_bias`).
-
-        ``tau`` is Gamma (N m); F an optional contact force at ``tip`` (N, base frame; a scalar is F_z),
-        or several contact forces/wrenches (``contacts`` and a stacked F, or F a dict; see
-        :meth:`contact_torque`).
-        This is the hot path: float64 arrays of the right shape skip conversion. Its input contract
-        (:data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE`): every entry of q, v and tau finite and below 2^40 in
-        magnitude (beyond it an angle's sine is noise, and no robot's velocity or torque comes near it), checked
-        on every call with one BLAS norm per vector; :class:`InputError` naming the input, or saying the
-        accelerations overflowed.
-        """
-        if not (q.__class__ is _ND and v.__class__ is _ND and tau.__class__ is _ND and q.dtype is _F64
-                and v.dtype is _F64 and tau.dtype is _F64 and q.shape == v.shape == tau.shape == self._shape
-                and _NRM2(q) < _HOT and _NRM2(v) < _HOT and _NRM2(tau) < _HOT):
-            q, v, tau = self.vector(q, "q"), self.vector(v, "v"), self.vector(tau, "tau")
-        if self._spring:
-            tau = tau - self.extras.spring_torque(q)
-        if self._friction:
-            tau = tau - self.extras.friction_torque(v, smooth)
-        if F is not None:
-            tau = tau + self.contact_torque(q, F, tip, contacts)
-        if self._dense:
-            qdd = self._rotor_solve(q, v, tau)
-        else:
-            qdd = _aba(self.pin_model, self.pin_data, q, v, tau)
-        if not _NRM2(qdd) < _INF and not np.isfinite(qdd).all():  # (inputs checked: an overflow inside)
-            raise InputError("forward dynamics gave non-finite accelerations (inputs too large?)")
-        return qdd
-
-    def _rotor_solve(self, q: np.ndarray, v: np.ndarray, tau: np.ndarray) -> np.ndarray:
-        """(A(q) + armature + S^T J_m S)^-1 (tau - C qd - gravity), CRBA and a Cholesky solve.
-
-        Where every tendon runs along one branch of the tree (each pair of joints it couples is an
-        ancestor and a descendant: the Alpes chains), the rotors' matrix has the tree's sparsity and
-        Pinocchio's sparse Cholesky of ``data.M`` solves it (1.6x ABA on the hand); otherwise LAPACK's
-        dense ``dpotrf``/``dpotrs`` on the upper triangle. NaN where the factorisation fails (a
-        non-finite input: the caller's finiteness check names it).
-        """
-        pm, pd = self.pin_model, self.pin_data
-        if self._rotor_curved:  # the rotors' velocity product (drho/dt) qd on the joints
-            tau = tau - self.transmission.rotor_bias(q, v)
-        if self.mimic is not None:  # the whole tree's CRBA, projected (mimic.MimicCoupling.mass_matrix)
-            b = tau - _nle(pm, pd, q, v)
-            if not _isfinite(b.dot(self._tiny)):
-                return np.full(self.n, np.nan)
-            c, info = _potrf(self.inertia_matrix(q), lower=0, clean=0, overwrite_a=1)
-            return _potrs(c, b)[0] if info == 0 else np.full(self.n, np.nan)
-        _crba(pm, pd, q)
-        b = tau - _nle(pm, pd, q, v)
-        if not _isfinite(b.dot(self._tiny)):  # a non-finite input: NaN out, no solve of inf (no numpy warning)
-            return np.full(self.n, np.nan)
-        if self._rotor_tree:
-            M = pd.M
-            M += self._rotor_upper  # in place: Pinocchio's factorisation reads data.M's upper triangle
-            _chol_decompose(pm, pd)
-            return _chol_solve(pm, pd, b)
-        R = self.transmission.rotor_matrix_at(q) if self._rotor_curved else self.rotor_matrix
-        c, info = _potrf(pd.M + R, lower=0, clean=0, overwrite_a=1)
-        if info != 0:
-            return np.full(self.n, np.nan)
-        return _potrs(c, b)[0]
-
-    def inverse_dynamics(self, q: np.ndarray, v: np.ndarray, a: np.ndarray, F: object = None,
-                         tip: str | None = None, smooth: bool = False, contacts: Any = None) -> np.ndarray:
-        """Joint torques Gamma (n,), N m, that produce accelerations ``a`` (eq. 2.10; RNEA + extras)."""
-        q, v, a = self.vector(q, "q"), self.vector(v, "v"), self.vector(a, "a")
-        tau = pin.rnea(self.pin_model, self.pin_data, q, v, a).copy()
-        if self._rotor_curved:
-            tau += self.transmission.rotor_matrix_at(q) @ a + self.transmission.rotor_bias(q, v)
-        elif self._rotor:
-            tau += self.rotor_matrix @ a
-        if self._spring:
-            tau += self.extras.spring_torque(q)
-        if self._friction:
-            tau += self.extras.friction_torque(v, smooth)
-        if F is not None:
-            tau -= self.contact_torque(q, F, tip, contacts)
-        return tau
-
-    def static_equilibrium(self, tau: np.ndarray | None, q0: np.ndarray | None = None, tol: float = 1e-12,
-                           fixed: Sequence[str] = (), tau_m: np.ndarray | None = None) -> np.ndarray:
-        """Joint angles q (n,), rad, where gravity and springs balance the joint torques: G(q) = tau (eq. 2.11).
-
-        Newton's method from ``q0`` (default 0) with the analytic Jacobian of G (:meth:`gravity_jacobian`),
-        at most 0.5 rad per step, until max |G(q) - tau| < ``tol`` (N m); raises
-        :class:`~alpes_dyn.InputError` if the stiffness is singular or it does not converge in 50 iterations.
-        ``fixed``: joint names held at their ``q0`` values (e.g. a joint without spring that its own motor
-        holds, the thumb's ab/adduction): the balance is solved on the other joints only. ``tau_m`` (m,) N m:
-        motor torques added, S^T tau_m, or rho(q)^T tau_m where the ratios change with q (its Jacobian
-        diag(tau_m . drho/dq) then in Newton's); ``tau`` None: zero.
-        """
-        tau = np.zeros(self.n) if tau is None else self.vector(tau, "tau")
-        tr, curve = self.transmission, None
-        if tau_m is not None:
-            tau_m = np.atleast_1d(np.asarray(tau_m, dtype=float))
-            if tr.curved:
-                curve = tr.curve
-            else:
-                tau = tau + tr.joint_torque(tau_m)
-
-        def res(q: np.ndarray) -> np.ndarray:
-            return self.gravity_torque(q) - tau if curve is None else self.gravity_torque(q) - tau - curve.ratio(q).T @ tau_m
-
-        def jac(q: np.ndarray) -> np.ndarray:
-            return self.gravity_jacobian(q) if curve is None else self.gravity_jacobian(q) - curve.torque_jacobian(q, tau_m)
-        q0 = np.zeros(self.n) if q0 is None else self.vector(q0, "q0")
-        if isinstance(fixed, str):
-            fixed = (fixed,)
-        held = [self.joint_index(j) for j in fixed]
-        if not held:
-            return newton_equilibrium(res, jac, q0, tol)
-        free = np.setdiff1d(np.arange(self.n), held)
-        if free.size == 0:
-            return q0.copy()
-
-        def full(qf: np.ndarray) -> np.ndarray:
-            q = q0.copy()
-            q[free] = qf
-            return q
-
-        qf = newton_equilibrium(lambda qf: res(full(qf))[free], lambda qf: jac(full(qf))[np.ix_(free, free)],
-                                q0[free], tol)
-        return full(qf)
 
     # ------------------------------------------------------------------ helpers
     @property
@@ -577,11 +539,28 @@ class Model(FrameKinematics):
 
     def random_state(self, rng: np.random.Generator | int | None, speed: float = 2.0,
                      size: int | None = None) -> tuple[np.ndarray, np.ndarray]:
-        """A random (q, v): q uniform within the joint limits (+-pi where a limit is missing or huge),
-        v uniform in [-speed, speed] rad/s; shapes (n,), or (size, n) for ``size`` states at once.
+        """A random state (q, v): q uniform within the joint limits (+-pi where a limit is missing or huge), v
+        uniform in [-speed, speed].
 
-        ``rng`` is a ``numpy.random.Generator``, or a seed (an integer >= 0, or None for fresh
-        entropy) given to ``numpy.random.default_rng``.
+        Parameters
+        ----------
+        rng : numpy.random.Generator, int or None
+            The generator, or a seed (an integer >= 0, or None for fresh entropy) given to
+            ``numpy.random.default_rng``.
+        speed : float
+            The velocities' bound, rad/s (default 2, >= 0).
+        size : int, optional
+            The number of states drawn at once (default: one).
+
+        Returns
+        -------
+        q, v : numpy.ndarray
+            Shapes (n,), or (size, n); rad and rad/s.
+
+        Raises
+        ------
+        InputError
+            A ``rng`` that is neither, a negative or non-finite ``speed``, a ``size`` not an integer >= 0.
         """
         rng, speed, size = _check_random_args(rng, speed, size)
         lo, hi = self.lower, self.upper

@@ -27,12 +27,11 @@ same order: they agree to the last bit in practice (to rounding in any case).
 
 from __future__ import annotations
 
-import math
 import re
 import sys
 import weakref
 from dataclasses import dataclass
-from typing import Any, Callable, Sequence, Union
+from typing import Any, Sequence
 
 import casadi as cs
 import numpy as np
@@ -41,12 +40,14 @@ from .buildcache import CompilerError
 from .codegen import CasadiStepLoop, CompiledStepLoop, cache_dir
 from ..checks import as_float_array
 from ..errors import InputError
-from ..limits import check_bytes, check_time_step, hot_magnitude_error
+from ..limits import check_bytes
 from ..rebuild import Rebuilt
 from ..model.robot import Model
 from ..symbolic.statespace import StateSpace
 from ..model.stops import JointStops, check_range, divergence_message
-from ..model.transmission import capstan_loss, capstan_velocity
+from .held_inputs import (InputLike, _check_dt, _finite, _n_steps, _sample, _sample_force,  # noqa: F401  (_check_dt:
+                          _tolerance)  # importable from here, as before)
+from .substeps import RK4_REACH, friction_rate, stable_substeps  # noqa: F401  (importable from here, as before)
 
 __all__ = [
     "METHODS", "SimulationResult", "simulate", "rk4_expression", "rk4_step_function", "as_statespace", "CompiledRollout",
@@ -58,50 +59,6 @@ METHODS: tuple[str, ...] = ("rk4", "cvodes", "idas")
 BACKENDS: tuple[str, ...] = ("c", "casadi", "casadi-jit")
 """Backends of :class:`CompiledRollout`: the generated C driver, CasADi's virtual machine, CasADi's JIT."""
 
-InputLike = Union[None, float, Sequence[float], np.ndarray, Callable[[float], Any]]
-
-
-# ----------------------------------------------------------------------------- the friction's stiffness
-RK4_REACH = 2.5
-"""h lambda kept below this on the friction's fastest decay rate lambda (RK4's real-axis stability ends at 2.78)."""
-
-
-def friction_rate(model: Model, tension: Any = None) -> float:
-    """lambda, 1/s: the fastest velocity decay the friction imposes near rest, the largest eigenvalue of
-    A(q)^-1 D with D = diag(F_s / v_s + F_v) (the smooth sign's slope at qd = 0, eq. 2.6-2.7) and A the mass matrix
-    with the rotor inertia, over q at the joint ranges' lower ends, middles and upper ends (0 without friction).
-    ``tension``: the motors' largest torques |tau_m| (N m, (m,) or one for all; None: not counted): the tendons'
-    sheath friction then adds its slope S^T diag((1 - exp(-mu theta)) |tau_m| / v_c) S
-    (:func:`~alpes_dyn.model.transmission.capstan_torque`), which grows with the tension (finger2 with mu theta
-    0.3 under the experiment's torque: 4 RK4 steps per ms left it 0.18 degree off a 10 us reference, against
-    0.009 without the sheath)."""
-    ex = model.extras
-    D = np.diag(ex.coulomb / ex.smooth_velocity + ex.viscous)
-    tr = model.transmission
-    if tension is not None and tr is not None and tr.has_capstan:
-        T = np.broadcast_to(np.abs(np.asarray(tension, dtype=float)), (tr.n_motors,))
-        slope = capstan_loss(tr.capstan) * T / capstan_velocity(tr.S, ex.smooth_velocity)
-        D = D + tr.S.T @ (slope[:, None] * tr.S)
-    if not np.any(D > 0):
-        return 0.0
-    lo = np.where(np.isfinite(model.lower) & (np.abs(model.lower) < 1e3), model.lower, 0.0)
-    hi = np.where(np.isfinite(model.upper) & (np.abs(model.upper) < 1e3), model.upper, 0.0)
-    rate = 0.0
-    for q in (lo, 0.5 * (lo + hi), hi, np.zeros(model.n)):  # a loop over four configurations
-        A = model.inertia_matrix(q)
-        L = np.linalg.cholesky(A)
-        Li = np.linalg.inv(L)
-        rate = max(rate, float(np.linalg.eigvalsh(Li @ D @ Li.T).max()))  # A^-1 D, symmetrised
-    return rate
-
-
-def stable_substeps(model: Model, dt: float, minimum: int = 4, tension: Any = None) -> int:
-    """RK4 steps per sample period ``dt`` (s) for the model's friction: at least ``minimum`` (4, what the smooth
-    law at v_s = 0.1 rad/s needs at 1 kHz) and enough that h lambda <= :data:`RK4_REACH` (:func:`friction_rate`,
-    with the tendons' sheath friction at ``tension``, the motors' largest torques, N m, where given).
-    A sharper sign (v_s = 0.02 rad/s, the stick-slip law of :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`) on finger3 at 1 kHz: 15."""
-    dt = _check_dt(dt)
-    return max(int(minimum), int(math.ceil(dt * friction_rate(model, tension) / RK4_REACH - 1e-9)))
 
 
 # ----------------------------------------------------------------------------- state space helpers
@@ -114,6 +71,28 @@ def as_statespace(system: Model | StateSpace, input: str = "joint", output: Any 
 
     The cache holds one state space per model and option set (string outputs only), because
     building the symbolic dynamics takes a fraction of a second.
+
+    Parameters
+    ----------
+    system : Model or StateSpace
+        The system.
+    input : str
+        The state space's input, ``"joint"`` (default) or ``"motor"`` (ignored for a state space, as the next).
+    output : str or array_like
+        Its output (default ``"sum"``).
+    force : bool
+        The contact force as an input (default False).
+    smooth : bool
+        The friction's sign as tanh (eq. 2.6-2.7; default True).
+
+    Returns
+    -------
+    StateSpace
+
+    Raises
+    ------
+    InputError
+        A ``system`` that is neither.
     """
     if isinstance(system, StateSpace):
         return system
@@ -135,7 +114,22 @@ def _n_known_inputs(ss: StateSpace) -> int:
 def joint_accelerations(ss: StateSpace, q: cs.SX, v: cs.SX, tau: cs.SX, F: Any = None) -> cs.SX:
     """qdd of eq. 3.3 for joint torques ``tau``: the state space's symbolic forward dynamics
     (:meth:`SymbolicDynamics.forward_dynamics <alpes_dyn.symbolic.dynamics.SymbolicDynamics.forward_dynamics>`,
-    the same expression as ``ss.f_expr``) with its tip and smooth-sign setting."""
+    the same expression as ``ss.f_expr``) with its tip and smooth-sign setting.
+
+    Parameters
+    ----------
+    ss : StateSpace
+        The state space.
+    q, v, tau : casadi.SX
+        Joint angles (n,) rad, velocities (n,) rad/s, torques (n,) N m.
+    F : casadi.SX, optional
+        The contact force(s), N (the state space's force input).
+
+    Returns
+    -------
+    casadi.SX
+        qdd (n,), rad/s^2.
+    """
     if F is not None and not ss._legacy_force:
         return ss.sym.forward_dynamics(q, v, tau, F, None, ss.smooth, ss.contacts)
     return ss.sym.forward_dynamics(q, v, tau, F, ss.tip, ss.smooth)
@@ -155,7 +149,22 @@ def _rhs_function(ss: StateSpace, stops: JointStops | None = None) -> cs.Functio
 
 
 def rk4_expression(f: cs.Function, x: cs.SX, w: cs.SX, dt: float) -> cs.SX:
-    """One classical Runge-Kutta step of x' = f(x, w), w held over the step: x + dt/6 (k1 + 2 k2 + 2 k3 + k4)."""
+    """One classical Runge-Kutta step of x' = f(x, w), w held over the step: x + dt/6 (k1 + 2 k2 + 2 k3 + k4).
+
+    Parameters
+    ----------
+    f : casadi.Function
+        f(x, w) -> x'.
+    x, w : casadi.SX
+        The state and the held input.
+    dt : float
+        The step, s.
+
+    Returns
+    -------
+    casadi.SX
+        The state after the step.
+    """
     k1 = f(x, w)
     k2 = f(x + 0.5 * dt * k1, w)
     k3 = f(x + 0.5 * dt * k2, w)
@@ -169,14 +178,25 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
 
     Parameters
     ----------
-    system: the state space; w = [u; F] has ``n_inputs`` (+3 with ``force=True``) entries.
-    dt: step, s (> 0).
-    stops: joint stops added to the dynamics (default none, eq. 3.3 as it is).
+    system : StateSpace
+        The state space; w = [u; F] has ``n_inputs`` (+3 with ``force=True``) entries.
+    dt : float
+        The step, s (> 0).
+    name : str
+        The function's name (default ``"rk4_step"``).
+    stops : JointStops, optional
+        Joint stops added to the dynamics (default none, eq. 3.3 as it is).
 
     Returns
     -------
-    casadi.Function ``step(x (2n,), w (m[+3],)) -> x_next (2n,)``, an SX function (inlined
-    expression), cached on the state space per ``dt``.
+    casadi.Function
+        ``step(x (2n,), w (m[+3],)) -> x_next (2n,)``, an SX function (inlined expression), cached on the state
+        space per ``dt``.
+
+    Raises
+    ------
+    InputError
+        ``dt`` not a positive finite number of seconds.
     """
     dt = _check_dt(dt)
     cache = system.__dict__.setdefault("_rk4_cache", {})
@@ -192,114 +212,6 @@ def rk4_step_function(system: StateSpace, dt: float, name: str = "rk4_step",
     step = cs.Function(name, [x, w], [cs.cse(xn)], ["x", "w"], ["x_next"])
     cache[key] = step
     return step
-
-
-# ----------------------------------------------------------------------------- input checks
-def _tolerance(x: Any, name: str) -> float:
-    """A SUNDIALS tolerance: a finite positive real number (not a bool, string or complex), else InputError."""
-    if isinstance(x, (bool, np.bool_)) or not isinstance(x, (int, float, np.integer, np.floating)):
-        raise InputError(f"{name}: expected a positive number, got {x!r:.60}")
-    v = float(x)
-    if not (math.isfinite(v) and v > 0):
-        raise InputError(f"{name}: expected a positive finite number, got {v!r}")
-    return v
-
-
-def _check_dt(dt: Any) -> float:
-    if isinstance(dt, (bool, np.bool_)):
-        raise InputError(f"dt: expected a positive number of seconds, got {dt!r}")
-    try:
-        d = float(dt)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}") from None
-    if isinstance(dt, (str, bytes, complex)):
-        raise InputError(f"dt: expected a positive number of seconds, got {dt!r:.60}")
-    if not math.isfinite(d) or d <= 0:
-        raise InputError(f"dt: expected a positive finite number of seconds, got {dt!r}")
-    return check_time_step(d)
-
-
-def _n_steps(duration: Any, dt: float) -> int:
-    if isinstance(duration, (bool, np.bool_, str, bytes, complex)):
-        raise InputError(f"duration: expected a positive number of seconds, got {duration!r:.60}")
-    try:
-        T = float(duration)
-    except (TypeError, ValueError, OverflowError):
-        raise InputError(f"duration: expected a positive finite number of seconds, got {str(duration)[:60]}") from None
-    if not math.isfinite(T) or T <= 0:
-        raise InputError(f"duration: expected a positive finite number of seconds, got {duration!r}")
-    if not T / dt < 2.0**53:
-        raise InputError(f"duration: {T:g} s at dt = {dt:g} s is more than 2^53 steps")
-    N = int(round(T / dt))
-    if N < 1 or abs(N * dt - T) > 1e-9 * max(T, dt):
-        raise InputError(f"duration: {T:g} s is not a whole number of steps dt = {dt:g} s")
-    return N
-
-
-def _finite(a: np.ndarray, name: str) -> np.ndarray:
-    """``a`` if finite with every entry below :data:`~alpes_dyn.limits.MAX_HOT_MAGNITUDE`, else InputError."""
-    if not np.isfinite(a).all():
-        raise InputError(f"{name}: contains NaN or inf")
-    err = hot_magnitude_error(a, name)
-    if err is not None:
-        raise err
-    return a
-
-
-def _sample(inputs: InputLike, t: np.ndarray, m: int, name: str) -> np.ndarray:
-    """(N, m) zero-order-hold samples of ``inputs`` at the step starts ``t`` (N,)."""
-    N = t.shape[0]
-    if inputs is None:
-        return np.zeros((N, m))
-    if callable(inputs):
-        rows = []
-        for tk in t:  # a user's Python callable: sampled once per step
-            try:
-                v = as_float_array(inputs(float(tk)), name, f"{m} numbers").reshape(-1)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"{name}: the callable must return {m} numbers ({exc})") from None
-            if v.shape != (m,):
-                raise InputError(f"{name}: the callable returned {v.size} values at t = {tk:g} s, expected {m}")
-            rows.append(v)
-        return _finite(np.array(rows), f"{name}(t)")
-    a = as_float_array(inputs, name, "an array of numbers or a callable of time")
-    if a.ndim == 0 or a.shape == (m,):
-        a = np.broadcast_to(a, (N, m)).copy()
-    elif m == 1 and a.shape == (N,):
-        a = a.reshape(N, 1)
-    elif a.shape != (N, m):
-        raise InputError(f"{name}: expected shape ({N}, {m}) (steps, inputs) or ({m},), got {a.shape}")
-    return _finite(a, name)
-
-
-def _sample_force(force: InputLike, t: np.ndarray, k: int = 3) -> np.ndarray:
-    """(N, k) contact forces. k = 3 (one force): scalars / (N,) series / callables returning a scalar are F_z
-    (eq. 2.13); several contacts (k = n_force): (k,), (N, k) or a callable returning k values."""
-    N = t.shape[0]
-    if k != 3:
-        return _sample(force, t, k, "force")
-    if callable(force):
-        out = np.zeros((N, 3))
-        for k, tk in enumerate(t):
-            try:
-                v = as_float_array(force(float(tk)), "force", "F_z or (Fx, Fy, Fz)").reshape(-1)
-            except (TypeError, ValueError) as exc:
-                raise InputError(f"force: the callable must return F_z or (Fx, Fy, Fz) ({exc})") from None
-            if v.size == 1:
-                out[k, 2] = v[0]
-            elif v.size == 3:
-                out[k] = v
-            else:
-                raise InputError(f"force: the callable returned {v.size} values at t = {tk:g} s, expected 1 or 3")
-        return _finite(out, "force(t)")
-    a = as_float_array(force, "force", "F_z or (Fx, Fy, Fz) numbers")
-    if a.ndim == 0 or a.shape == (N,):
-        out = np.zeros((N, 3))
-        out[:, 2] = a
-        return _finite(out, "force")
-    if a.shape == (3,) or a.shape == (N, 3):
-        return _finite(np.broadcast_to(a, (N, 3)).copy(), "force")
-    raise InputError(f"force: expected F_z (scalar or ({N},)), (3,) or ({N}, 3), got shape {a.shape}")
 
 
 # ----------------------------------------------------------------------------- simulate
@@ -345,43 +257,51 @@ def simulate(system: Model | StateSpace, x0: Sequence[float] | np.ndarray, input
 
     Parameters
     ----------
-    system:
+    system : Model or StateSpace
         A :class:`~alpes_dyn.Model` (its state space is built with ``input``, ``output``, ``smooth``
         and ``force=force is not None``) or a :class:`~alpes_dyn.symbolic.statespace.StateSpace`.
-    x0:
+    x0 : array_like
         Initial state [q; qd], (2n,), rad and rad/s.
-    inputs:
+    inputs : None, float, array_like or callable
         Joint torques Gamma (n) or motor torques tau_m (m), N m, per the state space's input:
         ``None`` (zero), a constant (m,), an array (N, m) with N = duration / dt, or a callable
         ``u(t) -> (m,)``. Held constant over each step.
-    duration, dt:
+    duration, dt : float
         Simulated time and step (the output grid), s; duration must be a whole number of steps.
-    method:
+    method : str
         ``"rk4"`` (fixed step, classical Runge-Kutta), ``"cvodes"`` (adaptive BDF, SUNDIALS) or
         ``"idas"`` (adaptive implicit DAE solver, SUNDIALS); the last two honour ``rtol``/``atol`` and
         restart wherever the held input changes (time-varying inputs: one run per constant stretch).
-    force:
+    force : None, float, array_like or callable
         Measured contact force at the state space's tip, N, base frame (eq. 2.9, 2.13): a scalar,
         an (N,) series or a callable returning F_z, or (3,), (N, 3), or a callable returning 3 values.
-    input, output, smooth:
-        Options of the state space built from a Model (ignored for a StateSpace).
-    stops:
+    input : str
+        The state space's input built from a Model, ``"joint"`` (default) or ``"motor"`` (ignored for a
+        StateSpace, as the next two).
+    output : str or array_like
+        Its output (default ``"sum"``).
+    smooth : bool
+        The friction's sign as tanh (default True).
+    rtol, atol : float
+        The SUNDIALS methods' relative and absolute tolerances (positive; default 1e-10, 1e-12).
+    stops : JointStops, optional
         Joint stops (:class:`~alpes_dyn.model.stops.JointStops`, e.g. ``JointStops.of(model)``): stiff
         unilateral spring-dampers at the joint limits. Default ``None``: no stop, the report's model.
-    joint_range:
+    joint_range : str
         Without stops, what happens if a joint leaves its URDF range: ``"warn"`` (default, a
         :class:`~alpes_dyn.model.stops.JointRangeWarning` naming the joint and the time), ``"error"``
         (:class:`~alpes_dyn.InputError`) or ``"ignore"``.
 
     Returns
     -------
-    SimulationResult with t (N+1,), x (N+1, 2n), y (N+1, p), u (N, m), F (N, 3) or None.
+    SimulationResult
+        t (N+1,), x (N+1, 2n), y (N+1, p), u (N, m), F (N, 3) or None.
 
     Raises
     ------
-    InputError: bad shapes, NaN, non-positive duration/dt, unknown method, a state space without
-        force input given a force, an integrator failure, or arrays over the size limit
-        (:mod:`alpes_dyn.limits`, 2 GiB by default).
+    InputError
+        Bad shapes, NaN, non-positive duration/dt, unknown method, a state space without force input given a
+        force, an integrator failure, or arrays over the size limit (:mod:`alpes_dyn.limits`, 2 GiB by default).
     """
     ss, dt, rtol, atol = _simulation_setup(system, dt, method, force, input, output, smooth, rtol, atol, stops,
                                            joint_range)
@@ -487,12 +407,18 @@ class CompiledRollout(Rebuilt):
 
     Parameters
     ----------
-    system:
+    system : StateSpace or Model
         A :class:`~alpes_dyn.symbolic.statespace.StateSpace` (or a Model, with ``input`` and ``force``).
-    dt:
+    dt : float
         RK4 step, s, fixed at compile time.
-    threads:
+    input : str
+        A Model's state space input, ``"joint"`` (default) or ``"motor"``.
+    force : bool
+        A Model's state space with the contact force as an input (default False).
+    threads : int, optional
         Worker threads, 1 to 64 (default: the CPUs this process may use).
+    backend : str
+        ``"c"``, ``"casadi"`` or ``"casadi-jit"`` (below).
 
     The step is :func:`rk4_step_function` (the one :func:`simulate` evaluates with
     ``method="rk4"``), compiled by :class:`CompiledStepLoop`: results equal :func:`simulate`'s to
@@ -500,6 +426,13 @@ class CompiledRollout(Rebuilt):
     ``backend``: ``"c"`` (default, the generated driver), ``"casadi"`` (CasADi's stock ``mapaccum`` + threaded
     ``map`` in its virtual machine: no compiler) or ``"casadi-jit"`` (the same JIT-compiled by CasADi, per
     process): :class:`~alpes_dyn.simulation.codegen.CasadiStepLoop`, the documented fallback.
+
+    Raises
+    ------
+    InputError
+        An unknown backend, a bad ``dt`` or ``threads``.
+    CompilerError
+        The C compiler failed (backend ``"c"``).
     """
 
     def __init__(self, system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
@@ -534,14 +467,25 @@ class CompiledRollout(Rebuilt):
 
         Parameters
         ----------
-        x0_batch: (B, 2n) initial states [q; qd] (rad, rad/s); (2n,) is broadcast over the batch.
-        U_batch: (B, N, m) inputs per step, N m (zero-order hold); (N, m) is broadcast over x0_batch.
-        F_batch: (B, N, 3) contact forces, N (base frame), when the state space has ``force=True``.
-        progress: show a progress bar on stderr (default: when stderr is a terminal and B N >= 1e6).
+        x0_batch : array_like
+            (B, 2n) initial states [q; qd] (rad, rad/s); (2n,) is broadcast over the batch.
+        U_batch : array_like
+            (B, N, m) inputs per step, N m (zero-order hold); (N, m) is broadcast over x0_batch.
+        F_batch : array_like, optional
+            (B, N, 3) contact forces, N (base frame), when the state space has ``force=True``.
+        progress : bool, optional
+            Show a progress bar on stderr (default: when stderr is a terminal and B N >= 1e6).
 
         Returns
         -------
-        (B, N+1, 2n) states, X[:, 0] = x0_batch.
+        numpy.ndarray
+            (B, N+1, 2n) states, X[:, 0] = x0_batch.
+
+        Raises
+        ------
+        InputError
+            Shapes that do not match, a batch size that does not match, NaN or inf, a force given to a rollout
+            without force input (or missing), arrays over the size limit, or a diverged rollout.
         """
         x0 = as_float_array(x0_batch, "x0_batch", "an array of states")
         U = as_float_array(U_batch, "U_batch", "an array of inputs")
@@ -592,5 +536,32 @@ class CompiledRollout(Rebuilt):
 
 def compile_rollout(system: Model | StateSpace, dt: float, *, input: str = "joint", force: bool = False,
                     threads: int | None = None, backend: str = "c") -> CompiledRollout:
-    """Build (or load from the cache) a :class:`CompiledRollout`; see there."""
+    """Build (or load from the cache) a :class:`CompiledRollout`.
+
+    Parameters
+    ----------
+    system : StateSpace or Model
+        The system.
+    dt : float
+        RK4 step, s.
+    input : str
+        A Model's state space input (default ``"joint"``).
+    force : bool
+        The contact force as an input (default False).
+    threads : int, optional
+        Worker threads (default: the CPUs this process may use).
+    backend : str
+        ``"c"`` (default), ``"casadi"`` or ``"casadi-jit"``.
+
+    Returns
+    -------
+    CompiledRollout
+
+    Raises
+    ------
+    InputError
+        As :class:`CompiledRollout`.
+    CompilerError
+        The C compiler failed.
+    """
     return CompiledRollout(system, dt, input=input, force=force, threads=threads, backend=backend)

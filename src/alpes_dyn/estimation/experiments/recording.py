@@ -57,7 +57,8 @@ from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 from .csv_numbers import lines, plain_rows, refuse_empty_row
-from .units import check_counts, check_torque_scale
+from .segments import MAX_SEGMENTS, excitation_parts, segment_starts  # noqa: F401  (exported from here, as before)
+from .units import _check_encoder_columns, _check_encoder_range, check_torque_scale
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
            "segment_starts", "excitation_parts"]
@@ -108,8 +109,18 @@ class Recording:
         return int(self.t.shape[0])
 
     def take(self, rows: slice | np.ndarray) -> "Recording":
-        """The recording of this one's samples ``rows`` (a slice or an index array): every per-sample column
-        taken, the names kept; not checked again."""
+        """The recording of some of this one's samples: every per-sample column taken, the names kept; not checked
+        again.
+
+        Parameters
+        ----------
+        rows : slice or numpy.ndarray
+            The samples kept: a slice, an index array or a boolean mask (N,).
+
+        Returns
+        -------
+        Recording
+        """
         cut = {f.name: getattr(self, f.name)[rows] for f in dataclasses.fields(self)
                if isinstance(getattr(self, f.name), np.ndarray) and getattr(self, f.name).shape[:1] == (self.n_samples,)}
         return dataclasses.replace(self, **cut)
@@ -164,7 +175,26 @@ WRITE_ROWS = 1 << 15
 
 
 def write_recording(rec: Recording, path: str | Path) -> Path:
-    """Write ``rec`` as CSV (atomically: nothing is left at ``path`` if writing fails)."""
+    """Write a recording as CSV in the documented column order (atomically: nothing is left at ``path`` if writing
+    fails).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (checked first, :func:`check_recording`).
+    path : str or pathlib.Path
+        The CSV file written (replaced if it exists).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    RecordingError
+        A recording :func:`check_recording` refuses, or a file that cannot be written.
+    """
     check_recording(rec)
     cols = {c: np.asarray(v, dtype=float) for c, v in rec.columns().items()}
     # atomic_path flushes the file to disk before it renames it over path
@@ -211,14 +241,30 @@ def _finite(x: object) -> bool:
 
 def read_recording(path: str | Path, model: Model, torque_constant: float | None = None, *,
                    ignore_others_of: Model | None = None) -> Recording:
-    """Read and validate a recording CSV for ``model`` (which names the motors and joints).
+    """Read and validate a recording CSV for a model.
 
-    ``torque_constant`` (N m/A) converts ``current_<motor>`` columns to torques; it is required with
-    them and refused without them. ``ignore_others_of``: a wider model (e.g. the whole robot of a
-    :meth:`~alpes_dyn.model.robot.Model.subtree` ``model``) whose columns of motors and joints that ``model``
-    does not have are accepted and ignored (a recording of the whole hand read for one finger; their
-    cells are still numbers, and their encoders within the wider model's joint ranges); a column of neither model
-    is still refused. Raises :class:`~alpes_dyn.errors.RecordingError`.
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file (columns as the module describes).
+    model : Model
+        The model whose motors and joints name the columns.
+    torque_constant : float, optional
+        N m/A: converts ``current_<motor>`` columns to torques; required with them and refused without them.
+    ignore_others_of : Model, optional
+        A wider model (e.g. the whole robot of a :meth:`~alpes_dyn.model.robot.Model.subtree` ``model``) whose
+        columns of motors and joints that ``model`` does not have are accepted and ignored (a recording of the
+        whole hand read for one finger; their cells are still numbers, and their encoders within the wider
+        model's joint ranges); a column of neither model is still refused.
+
+    Returns
+    -------
+    Recording
+
+    Raises
+    ------
+    RecordingError
+        Every defect the module lists, one line naming the column (and the row).
     """
     _check_reader(torque_constant, model)
     if ignore_others_of is not None and not isinstance(ignore_others_of, Model):
@@ -425,37 +471,6 @@ def _gravity_columns(col: dict[str, np.ndarray]) -> np.ndarray | None:
     return np.column_stack([col[g] for g in grav_cols]) if present else None
 
 
-def _check_encoder_range(rec: Recording, model: Model) -> None:
-    """Each encoder column within what its joints' ranges allow (S q over the range box, in counts), with a
-    margin of the whole range and one motor turn on each side (an encoder's zero, stops overrun): a reading
-    far outside is not this model's encoder in counts, and would send a fit or an observer to overflow."""
-    _check_encoder_columns(dict(zip(rec.motor_names, rec.encoder.T)), model)
-
-
-def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> None:
-    """:func:`_check_encoder_range` of the columns ``encoders`` (motor name of ``model`` -> counts (N,))."""
-    tr = model.transmission
-    S = np.asarray(tr.S, dtype=float)
-    lo_q, hi_q = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
-    cpr = float(tr.counts_per_rev)
-    for mn, e in encoders.items():
-        i = tr.motor_names.index(mn)
-        used = S[i] != 0
-        if not (np.isfinite(lo_q[used]).all() and np.isfinite(hi_q[used]).all()):
-            continue  # an unbounded joint: no range to check against
-        a, b = S[i] * lo_q, S[i] * hi_q
-        lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
-        hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
-        margin = (hi - lo) + cpr
-        check_counts(mn, e, hi - lo, cpr)
-        bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
-        if bad.size:
-            k = int(bad[0])
-            raise RecordingError(f"recording: column 'encoder_{mn}' line {k + 2}: {float(e[k]):g} counts is beyond "
-                                 f"what the joint ranges allow ({lo:.6g} to {hi:.6g} counts, give or take the range "
-                                 "and a turn); is it this model's encoder, in counts?")
-
-
 def _check_runs(rec: Recording, N: int) -> np.ndarray:
     """The ``run`` column of ``rec`` (None, or (N,) integers not decreasing, each run at least :data:`MIN_SAMPLES`
     samples); returns :meth:`Recording.run_starts`."""
@@ -567,30 +582,3 @@ def join_runs(recordings: "list[Recording] | tuple[Recording, ...]") -> Recordin
         base += r.n_runs
     return check_recording(Recording(motor_names=first.motor_names, joint_names=first.joint_names,
                                      run=np.concatenate(run), **cols))
-
-
-MAX_SEGMENTS = 16
-"""At most this many orientation segments: gravity columns that change more often are a hand moving through its
-orientations (an IMU's reading), one segment, the lines over the whole record."""
-
-
-def segment_starts(gravity: np.ndarray | None) -> np.ndarray:
-    """Sample indices (k,) where a segment of constant gravity starts, 0 first: each row of ``gravity`` (N+1, 3),
-    m/s^2, that differs from the row before, where there are at most :data:`MAX_SEGMENTS` segments; [0] without
-    gravity columns or where they change more often."""
-    if gravity is None:
-        return np.zeros(1, dtype=int)
-    G = np.asarray(gravity, dtype=float)
-    change = np.flatnonzero(np.any(G[1:] != G[:-1], axis=1)) + 1
-    if change.size == 0 or change.size >= MAX_SEGMENTS:
-        return np.zeros(1, dtype=int)
-    return np.concatenate([[0], change])
-
-
-def excitation_parts(rec: "Recording") -> np.ndarray:
-    """(k+1,) the first sample of each part of ``rec`` whose excitation restarts -- each run
-    (:meth:`Recording.run_starts`) and, within a run, each orientation of a hand turned between runs of the
-    excitation (:func:`segment_starts`: ``alpes-dyn experiment --rig both``) -- then the number of samples. The
-    fit takes each part on its own lines, the harmonics and the observer's check part by part."""
-    return np.union1d(rec.run_starts(), segment_starts(rec.gravity)).astype(int)
-

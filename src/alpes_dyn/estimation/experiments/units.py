@@ -12,6 +12,7 @@ from typing import Any
 import numpy as np
 
 from ...errors import RecordingError
+from ...model.robot import Model
 
 __all__ = ["TORQUE_SCALE_LIMIT", "check_counts", "check_torque_scale"]
 
@@ -51,3 +52,34 @@ def check_torque_scale(rec: Any, model: Any, column: str) -> None:
             unit = "N m" if column == "torque" else "A (times the torque constant, N m)"
             raise RecordingError(f"recording: column '{column}_{mn}': values up to {float(v):.6g} against tau_max "
                                  f"{tau_max:g} N m: {guess}? the recording's {column} is in {unit}")
+
+
+def _check_encoder_range(rec: Any, model: Model) -> None:
+    """Each encoder column within what its joints' ranges allow (S q over the range box, in counts), with a
+    margin of the whole range and one motor turn on each side (an encoder's zero, stops overrun): a reading
+    far outside is not this model's encoder in counts, and would send a fit or an observer to overflow."""
+    _check_encoder_columns(dict(zip(rec.motor_names, rec.encoder.T)), model)
+
+
+def _check_encoder_columns(encoders: dict[str, np.ndarray], model: Model) -> None:
+    """:func:`_check_encoder_range` of the columns ``encoders`` (motor name of ``model`` -> counts (N,))."""
+    tr = model.transmission
+    S = np.asarray(tr.S, dtype=float)
+    lo_q, hi_q = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
+    cpr = float(tr.counts_per_rev)
+    for mn, e in encoders.items():
+        i = tr.motor_names.index(mn)
+        used = S[i] != 0
+        if not (np.isfinite(lo_q[used]).all() and np.isfinite(hi_q[used]).all()):
+            continue  # an unbounded joint: no range to check against
+        a, b = S[i] * lo_q, S[i] * hi_q
+        lo = float(np.minimum(a, b).sum()) * cpr / (2 * np.pi)
+        hi = float(np.maximum(a, b).sum()) * cpr / (2 * np.pi)
+        margin = (hi - lo) + cpr
+        check_counts(mn, e, hi - lo, cpr)
+        bad = np.flatnonzero((e < lo - margin) | (e > hi + margin))
+        if bad.size:
+            k = int(bad[0])
+            raise RecordingError(f"recording: column 'encoder_{mn}' line {k + 2}: {float(e[k]):g} counts is beyond "
+                                 f"what the joint ranges allow ({lo:.6g} to {hi:.6g} counts, give or take the range "
+                                 "and a turn); is it this model's encoder, in counts?")

@@ -63,6 +63,7 @@ from ...symbolic.statespace import StateSpace
 from .covariance import predicted_covariance, updated_state
 from .discrete import DISTURBANCE_PREFIX, PARAMETERS, DiscreteModel
 from .friction_noise import with_friction_noise
+from .online_filter import OnlineFilter
 
 __all__ = [
     "OBSERVERS", "PARAMETERS", "DiscreteModel", "KalmanFilter", "ExtendedKalmanFilter", "UnscentedKalmanFilter",
@@ -423,74 +424,6 @@ class KalmanFilter(Rebuilt):
         return Estimate(t=self.dt * np.arange(N + 1), z=Z, P=Ps, names=self.names)
 
 
-class OnlineFilter:
-    """One filter step per call, in compiled C, for a loop at the sample rate (:meth:`KalmanFilter.online`).
-
-    :meth:`step` copies w and y into a preallocated buffer, calls the compiled predict-update step once
-    and returns the new estimate z as a view of the filter's buffer (valid until the next step: copy it to
-    keep it); :attr:`P` is the covariance. No allocation and no check per step beyond the shapes of w and
-    y (numpy's assignment): what a 1 kHz loop from Python can afford. Measured in
-    ``benchmarks/observer_step.py``.
-    """
-
-    def __init__(self, filt: KalmanFilter, z: np.ndarray, P: np.ndarray) -> None:
-        self.filter = filt
-        self._loop = filt._loop or filt._online_loop  # held: its library and its parameters' buffer
-        nz, nw, ny = filt.nz, filt.nw, filt.ny
-        self.nz, self.nw, self.ny = nz, nw, ny
-        ns = nz + nz * nz
-        self._X = np.zeros((1, 2, ns))
-        self._X[0, 0, :nz] = z
-        self._X[0, 0, nz:] = np.asarray(P, dtype=float).reshape(-1, order="F")
-        self._W = np.zeros((1, 1, nw + ny))
-        loop = filt._loop or filt._online_loop
-        assert loop is not None
-        self._fn = loop._fn
-        self._pp = loop._pp  # the model's numbers (the loop holds their buffer)
-        self._wp = self._W.ctypes.data_as(loop._dp)
-        self._xp = self._X.ctypes.data_as(loop._dp)
-        self._s, self._next = self._X[0, 0], self._X[0, 1]
-        self._w, self._y = self._W[0, 0, :nw], self._W[0, 0, nw:]
-        self._zview = self._s[:nz]
-        self._zview.flags.writeable = False
-
-    @property
-    def z(self) -> np.ndarray:
-        """(nz,) the current estimate [q; qd; theta] (a read-only view)."""
-        return self._zview
-
-    @property
-    def P(self) -> np.ndarray:
-        """(nz, nz) its covariance (a copy)."""
-        return self._s[self.nz:].reshape(self.nz, self.nz, order="F").copy()
-
-    def step(self, w: Any, y: Any) -> np.ndarray:
-        """Predict with the input held over the period, update with the measurement at its end.
-
-        Parameters
-        ----------
-        w : array_like
-            (nw,) the known input.
-        y : array_like
-            (ny,) the measurement.
-
-        Returns
-        -------
-        ndarray
-            The estimate z (nz,) (a read-only view, valid until the next step).
-        """
-        try:
-            self._w[:] = w
-            self._y[:] = y
-        except (ValueError, TypeError):
-            raise InputError(f"w, y: expected {self.nw} and {self.ny} numbers, got {np.shape(w)} and {np.shape(y)}") \
-                from None
-        if self._fn(self._wp, self._xp, self._pp, 1, 1, 0, 1, 1) != 0:
-            raise InputError(f"{self.filter.kind}: the compiled step failed")
-        self._s[:] = self._next
-        return self._zview
-
-
 class ExtendedKalmanFilter(KalmanFilter):
     """Extended Kalman filter of the RK4-discretised model (see :class:`KalmanFilter` for parameters).
 
@@ -544,8 +477,26 @@ class UnscentedKalmanFilter(KalmanFilter):
     plus G Sigma_w G^T + Q (G = dF/dw at the mean, by AD). The measurement is linear in the state
     for the encoder, so the update is the Kalman update of :class:`KalmanFilter`.
 
-    Extra parameters: ``alpha`` (default 1, > 0), ``beta`` (2, optimal for Gaussians), ``kappa`` (0; with
-    alpha^2 (nz + kappa) > 0), all finite.
+    Parameters
+    ----------
+    system : StateSpace
+        The state space observed, as for :class:`KalmanFilter`.
+    dt : float
+        The sample period, s (> 0).
+    alpha : float
+        The sigma points' spread (default 1, > 0, finite).
+    beta : float
+        The prior's kurtosis term (default 2, optimal for Gaussians; finite).
+    kappa : float
+        The secondary scaling (default 0, finite; with alpha^2 (nz + kappa) > 0).
+    **kwargs
+        The keywords of :class:`KalmanFilter` (noises, parameters, ...).
+
+    Raises
+    ------
+    InputError
+        ``alpha``, ``beta`` or ``kappa`` not finite, ``alpha`` <= 0, alpha^2 (nz + kappa) <= 0, or what
+        :class:`KalmanFilter` refuses.
     """
 
     kind = "ukf"
@@ -581,9 +532,31 @@ class UnscentedKalmanFilter(KalmanFilter):
 
 
 def make_observer(name: str, system: StateSpace, dt: float, **kwargs: Any) -> KalmanFilter:
-    """An observer by name: ``ekf``, ``ukf``, ``ekf-params``, ``ukf-params`` (the last two estimate
-    both :data:`PARAMETERS`; any of them may add the ``disturbance_<motor>`` states in ``parameters``); keyword
-    arguments go to the filter, ``process_noise`` with the friction's terms (:func:`.with_friction_noise`)."""
+    """An observer by name.
+
+    Parameters
+    ----------
+    name : str
+        ``"ekf"``, ``"ukf"``, ``"ekf-params"`` or ``"ukf-params"`` (the last two estimate both :data:`PARAMETERS`;
+        any of them may add the ``disturbance_<motor>`` states in ``parameters``).
+    system : StateSpace
+        The state space observed.
+    dt : float
+        The sample period, s (> 0).
+    **kwargs
+        The filter's keywords (:class:`KalmanFilter`, :class:`UnscentedKalmanFilter`); ``process_noise`` with the
+        friction's terms added (:func:`.with_friction_noise`).
+
+    Returns
+    -------
+    KalmanFilter
+        An :class:`ExtendedKalmanFilter` or :class:`UnscentedKalmanFilter`.
+
+    Raises
+    ------
+    InputError
+        An unknown name, a gain in ``parameters`` of an observer without ``-params``, or what the filter refuses.
+    """
     if name not in OBSERVERS:
         raise InputError(f"unknown observer {name!r} (expected one of {', '.join(OBSERVERS)})")
     base, _, extra = name.partition("-")
