@@ -66,6 +66,18 @@ def bench(model: str, controller: str, seed: int, duration: float, cc: str | Non
            "substeps": step._ekf.model.substeps if step.filter_step is not None else None}
     if cc is None:
         return {**row, "c_us": None}
+    row.update(c_columns(step, run, cc))
+    row["c_vs_py"] = row["c_us"] / row["py_us"]
+    row["goals_met"] = c_goals_met(row)
+    return row
+
+
+def c_columns(step: ForceStep, run, cc: str) -> dict:
+    """The C step of ``step`` (alpes-dyn codegen --step's sources) built with ``cc -O2 -std=c99`` and run over the
+    readings of ``run`` (a :class:`~alpes_dyn.control.bench_loop.BenchRun` of ``step``): its source size (kB), its
+    build (wall and the compiler's processor time, s), its largest differences from the Python step's commands
+    (N m), joint estimates (rad) and forces fed back (N), its time per step (wall and processor, us)."""
+    row = {}
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "c"
         files = write_c_step(step, d)
@@ -86,11 +98,14 @@ def bench(model: str, controller: str, seed: int, duration: float, cc: str | Non
         t = subprocess.run([str(d / "main"), "-t", "20", str(d / "in.txt")], check=True, capture_output=True,
                            text=True).stdout.split()
         row["c_us"], row["c_cpu_us"] = float(t[4]), float(t[8])
-    row["c_vs_py"] = row["c_us"] / row["py_us"]
-    row["goals_met"] = bool(row["c_cpu_us"] < GOAL_US and row["c_build_cpu_s"] < GOAL_BUILD_S
-                            and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)
     return row
 
+
+def c_goals_met(row: dict) -> bool:
+    """The C step's goals (:data:`GOAL_US` processor us per step, :data:`GOAL_BUILD_S` s of build,
+    :data:`GOAL_DIFF` from the Python step) on a row of :func:`c_columns`."""
+    return bool(row["c_cpu_us"] < GOAL_US and row["c_build_cpu_s"] < GOAL_BUILD_S
+                and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)
 
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
