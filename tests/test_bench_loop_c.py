@@ -14,7 +14,6 @@ import shutil
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 
 BENCH = Path(__file__).resolve().parents[1] / "benchmarks"
@@ -45,7 +44,7 @@ def pressed():
 
 
 def test_c_column_matches_the_python_step(bench, pressed):
-    c_step, bench_loop = bench
+    c_step, _ = bench
     step, run = pressed
     assert run.force.max() > 0.2  # the finger pressed the block: the contact's branch of the step ran
     row = c_step.c_columns(step, run, CC)
