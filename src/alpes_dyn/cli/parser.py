@@ -335,7 +335,8 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                    help="the real hand's effects to fit, comma-separated: stiction (the stick-slip friction law, "
                         "v_s = 0.02 rad/s, kept in the file), rotor (the file's rotor inertia J_m on each tendon, "
                         "held), compliance (the tendon's stretch, tendon_compliance), "
-                        "tilt (the palm's orientation where the recording has no gravity columns), offset (the "
+                        "tilt (the palm's tilt, on top of the recording's gravity columns where it has them: the rig's "
+                        "orientation as set up), offset (the "
                         "encoders' zero), delay, capstan (the tendons' sheath friction); 'auto' (the default): "
                         "compliance,tilt, then the fit again with what the first one's adequacy check names, the "
                         "lower residual kept; 'none' for the rigid, smooth-friction fit (with --parameters: none)")
