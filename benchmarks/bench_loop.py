@@ -40,9 +40,9 @@ stand-in has no block scene for it.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
+import resource
 import shutil
 import subprocess
 import sys
@@ -63,7 +63,7 @@ from alpes_dyn.estimation.experiments.draws import perturbed_params
 from alpes_dyn.estimation.experiments.hand_experiment import _chain_seeds
 from alpes_dyn.estimation.experiments.on_hand import run_experiment
 from alpes_dyn.estimation.experiments.recording import write_recording
-from alpes_dyn.model.params import chain_params, load_params
+from alpes_dyn.model.params import chain_params
 from alpes_dyn.model.robot import Model
 from alpes_dyn.studies.realism import errors, rig_design
 
@@ -113,7 +113,7 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
     found no room palm up (as a user turns the hand: ``alpes-dyn experiment --rig auto``'s rule); the recording's
     path (None if both failed)."""
     nominal = Model.alpes(model, friction=True)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     row: dict[str, Any] = {"model": model, "seed": seed, "tried": []}
     for rig in RIGS:
         hw = Scored(MujocoHand(model, truth, scene="free", seed=seed, rig=rig))
@@ -123,10 +123,11 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
         except AlpesDynError as e:
             row["tried"].append(f"{rig}: {e}")
     else:
-        row.update(experiment_error=row["tried"][-1], experiment_s=time.perf_counter() - t0)
+        row.update(experiment_error=row["tried"][-1], experiment_s=time.perf_counter() - t0,
+                   experiment_cpu_s=time.process_time() - c0)
         return row, None
     row["rig"] = rig
-    row["experiment_s"] = time.perf_counter() - t0
+    row["experiment_s"], row["experiment_cpu_s"] = time.perf_counter() - t0, time.process_time() - c0
     lo, hi = nominal.lower, nominal.upper  # the URDF's joint stops (the MJCF's ranges)
     # hw.q[i]: the truth after the i-th write (hw.q[0] before any); the experiment's log starts after the
     # calibration's writes (its own session): its row k is the truth hw.q[off + k]
@@ -149,10 +150,12 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
 def identify_row(model: str, rec: Path, truth: Any, tmp: Path) -> tuple[dict, Path | None]:
     """``alpes-dyn identify`` on the recording, as a user runs it; its errors against the truth."""
     out = tmp / f"ident_{rec.stem}.toml"
-    t0 = time.perf_counter()
+    t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     p = subprocess.run([sys.executable, "-m", "alpes_dyn.cli", "identify", "--model", model, "--data", str(rec),
                         "-o", str(out), "--json"], capture_output=True, text=True)
-    row: dict[str, Any] = {"identify_s": time.perf_counter() - t0, "identify_exit": p.returncode}
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    row: dict[str, Any] = {"identify_s": time.perf_counter() - t0, "identify_exit": p.returncode,
+                           "identify_cpu_s": r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime}
     if p.returncode != 0 or not out.exists():
         row["identify_error"] = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
         return row, None
@@ -161,6 +164,10 @@ def identify_row(model: str, rec: Path, truth: Any, tmp: Path) -> tuple[dict, Pa
     tv = _truth_values(truth, values)
     worst, worst_c, c = errors(values, tv)
     verdict = "adequate" if fit["trustworthy"] else ("not converged" if not fit["converged"] else "inadequate")
+    tilt = fit["parameters"].get("tilt_y", {}).get("value")
+    row["tilt_deg"] = None if tilt is None else math.degrees(tilt)  # the mount's tilt found (the stand-in's: 3)
+    row["identify_rounds"] = [{"effects": r["effects"], "residual_rms": r["residual_rms"], "seconds": r["seconds"]}
+                              for r in fit["rounds"]]
     row.update(verdict=verdict, trustworthy=fit["trustworthy"], common_scale=c,
                K_pct=worst_c["K"], m_pct=worst_c["m"], F_s_pct=worst_c["F_s"])
     return row, out
@@ -187,7 +194,7 @@ def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str, cc
     N = int(round(sc.duration / sc.dt))
     t = sc.dt * np.arange(N)
     F_ref = reference_profile(sc.reference, t, sc.levels, sc.sine, sc.step_times)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     step = ForceStep(model, ident, controller)
     build_s = time.perf_counter() - t0
     hw = Scored(MujocoHand(model, truth, scene="block", seed=LOOP_SEED + seed))
@@ -198,7 +205,8 @@ def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str, cc
                         joint_names=step.model.joint_names, tau_max=step.tau_max, wall_s=run.wall_s)
     _metrics(res)
     m = metrics(res)
-    row = {"controller": controller, "build_s": build_s, "loop_s": run.wall_s, **m, "q_rmse_deg_joints": res.q_rmse_deg}
+    row = {"controller": controller, "build_s": build_s, "loop_s": run.wall_s, "loop_cpu_s": time.process_time() - c0,
+           **m, "q_rmse_deg_joints": res.q_rmse_deg}
     if cc is not None:
         c = c_columns(step, run, cc)
         row.update(c, c_diff=max(c["diff_command"], c["diff_q"] or 0.0, c["diff_force"]), c_goals_met=c_goals_met(c))
