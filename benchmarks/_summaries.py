@@ -536,8 +536,8 @@ def _bench_loop_headline(r: Result) -> str:
     refused = sum(1 for x in r["rows"] if "identify_error" in x or "experiment_error" in x)
     return (f"{_bench_draws(r)}: {fitted} adequate, {refused} refused naming why; of the adequate: springs 3 % "
             f"{c['springs_3pct']}, masses 5 % {c['masses_5pct']}, sensor loop {c['sensor_loop']}, sensorless 10 % "
-            f"{c['sensorless_10pct']}, joints 1 deg {c['joints_1deg']}; no stop in the record {c['no_stop']}"
-            + (f"; C step {c['c_step']}" if "c_step" in c else ""))
+            f"{c['sensorless_10pct']}, joints 1 deg {c['joints_1deg']}"
+            + (f", C step {c['c_step']}" if "c_step" in c else "") + f"; no stop {c['no_stop']}")
 
 
 def c_step(r: Result) -> list[str]:
