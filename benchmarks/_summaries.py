@@ -525,10 +525,13 @@ def bench_loop(r: Result) -> list[str]:
         loops = {y["controller"]: y for y in x.get("loops", [])}
         s, sl = loops.get("sensor", {}), loops.get("sensorless", {})
         q = s.get("q_rmse_deg_joints")
+        c = [y for y in loops.values() if "c_diff" in y]
+        c_text = "" if not c else (f"; C step within {max(y['c_diff'] for y in c):.1e} of Python, "
+                                   f"{max(y['c_cpu_us'] for y in c):.1f} µs of processor time per step")
         out.append(f"{head}: {rig}; springs {_r(x['K_pct'])} %, masses {_r(x['m_pct'])} % ({x['verdict']}); sensor "
                    f"RMSE {_r(s.get('rmse_pct'))} %, overshoot {_r(s.get('overshoot_pct'), '.1f')} %, rise "
                    f"{_r(s.get('rise_ms'), '.0f')} ms; sensorless {_r(sl.get('sse_pct'))} %; joints in contact "
-                   f"{'n/a' if not q else ' / '.join(f'{v:.2f}' for v in q)} deg")
+                   f"{'n/a' if not q else ' / '.join(f'{v:.2f}' for v in q)} deg{c_text}")
     counts = _bench_counts(r)
     out.append("goals met (of the draws that reached them): " + ", ".join(f"{g} {c}" for g, c in counts.items()))
     w = _bench_worst(r)
@@ -544,7 +547,8 @@ def _bench_loop_headline(r: Result) -> str:
     refused = sum(1 for x in r["rows"] if "identify_error" in x or "experiment_error" in x)
     return (f"{_bench_draws(r)}: {fitted} adequate, {refused} refused naming why; of the adequate: springs 3 % "
             f"{c['springs_3pct']}, masses 5 % {c['masses_5pct']}, sensor loop {c['sensor_loop']}, sensorless 10 % "
-            f"{c['sensorless_10pct']}, joints 1 deg {c['joints_1deg']}; no stop in the record {c['no_stop']}")
+            f"{c['sensorless_10pct']}, joints 1 deg {c['joints_1deg']}"
+            + (f", C step {c['c_step']}" if "c_step" in c else "") + f"; no stop {c['no_stop']}")
 
 
 def c_step(r: Result) -> list[str]:

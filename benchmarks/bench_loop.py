@@ -21,7 +21,11 @@ seed ``s``) is given to :class:`~alpes_dyn.bench.mujoco_hand.MujocoHand` and to 
 
 Goals (issue 49): springs within 3 %, masses within 5 %; sensor loop RMSE after the rise < 3 % of the step,
 overshoot < 10 %, rise < 100 ms; sensorless within 10 %; joint estimates < 1 degree; no stop reached.
-The C step of the loop is not yet part of this benchmark (the whole loop's C export is still to come).
+With a C compiler (``cc``, unless ``--no-c``), each loop's step is also built as C
+(:mod:`~alpes_dyn.control.cstep`, ``alpes-dyn codegen --step``'s sources, ``benchmarks/c_step.py``'s
+:func:`c_step.c_columns`) and run over the loop's readings: its largest difference from the Python step (commands,
+joint estimates, forces fed back; goal 1e-9), its processor time per step (goal < 50 us per finger) and its build
+(goal < 30 s): the ``c_step`` goal.
 
 The hand (``--models hand``) is run chain by chain: one draw of the hand (each finger its own +-20 % values,
 ``perturbed_params(chains=HAND_CHAINS)``) and each finger chain's workflow as above on the stand-in of a finger3 with
@@ -36,9 +40,10 @@ stand-in has no block scene for it.
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
+import resource
+import shutil
 import subprocess
 import sys
 import tempfile
@@ -58,10 +63,11 @@ from alpes_dyn.estimation.experiments.draws import perturbed_params
 from alpes_dyn.estimation.experiments.hand_experiment import _chain_seeds
 from alpes_dyn.estimation.experiments.on_hand import run_experiment
 from alpes_dyn.estimation.experiments.recording import write_recording
-from alpes_dyn.model.params import chain_params, load_params
+from alpes_dyn.model.params import chain_params
 from alpes_dyn.model.robot import Model
 from alpes_dyn.studies.realism import errors, rig_design
 
+from c_step import c_columns, c_goals_met
 from force_realism import metrics
 
 RIGS = ("level", "hanging")
@@ -107,7 +113,7 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
     found no room palm up (as a user turns the hand: ``alpes-dyn experiment --rig auto``'s rule); the recording's
     path (None if both failed)."""
     nominal = Model.alpes(model, friction=True)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     row: dict[str, Any] = {"model": model, "seed": seed, "tried": []}
     for rig in RIGS:
         hw = Scored(MujocoHand(model, truth, scene="free", seed=seed, rig=rig))
@@ -117,10 +123,11 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
         except AlpesDynError as e:
             row["tried"].append(f"{rig}: {e}")
     else:
-        row.update(experiment_error=row["tried"][-1], experiment_s=time.perf_counter() - t0)
+        row.update(experiment_error=row["tried"][-1], experiment_s=time.perf_counter() - t0,
+                   experiment_cpu_s=time.process_time() - c0)
         return row, None
     row["rig"] = rig
-    row["experiment_s"] = time.perf_counter() - t0
+    row["experiment_s"], row["experiment_cpu_s"] = time.perf_counter() - t0, time.process_time() - c0
     lo, hi = nominal.lower, nominal.upper  # the URDF's joint stops (the MJCF's ranges)
     # hw.q[i]: the truth after the i-th write (hw.q[0] before any); the experiment's log starts after the
     # calibration's writes (its own session): its row k is the truth hw.q[off + k]
@@ -143,10 +150,12 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
 def identify_row(model: str, rec: Path, truth: Any, tmp: Path) -> tuple[dict, Path | None]:
     """``alpes-dyn identify`` on the recording, as a user runs it; its errors against the truth."""
     out = tmp / f"ident_{rec.stem}.toml"
-    t0 = time.perf_counter()
+    t0, r0 = time.perf_counter(), resource.getrusage(resource.RUSAGE_CHILDREN)
     p = subprocess.run([sys.executable, "-m", "alpes_dyn.cli", "identify", "--model", model, "--data", str(rec),
                         "-o", str(out), "--json"], capture_output=True, text=True)
-    row: dict[str, Any] = {"identify_s": time.perf_counter() - t0, "identify_exit": p.returncode}
+    r1 = resource.getrusage(resource.RUSAGE_CHILDREN)
+    row: dict[str, Any] = {"identify_s": time.perf_counter() - t0, "identify_exit": p.returncode,
+                           "identify_cpu_s": r1.ru_utime - r0.ru_utime + r1.ru_stime - r0.ru_stime}
     if p.returncode != 0 or not out.exists():
         row["identify_error"] = (p.stderr.strip().splitlines() or ["(no message)"])[-1]
         return row, None
@@ -155,6 +164,10 @@ def identify_row(model: str, rec: Path, truth: Any, tmp: Path) -> tuple[dict, Pa
     tv = _truth_values(truth, values)
     worst, worst_c, c = errors(values, tv)
     verdict = "adequate" if fit["trustworthy"] else ("not converged" if not fit["converged"] else "inadequate")
+    tilt = fit["parameters"].get("tilt_y", {}).get("value")
+    row["tilt_deg"] = None if tilt is None else math.degrees(tilt)  # the mount's tilt found (the stand-in's: 3)
+    row["identify_rounds"] = [{"effects": r["effects"], "residual_rms": r["residual_rms"], "seconds": r["seconds"]}
+                              for r in fit["rounds"]]
     row.update(verdict=verdict, trustworthy=fit["trustworthy"], common_scale=c,
                K_pct=worst_c["K"], m_pct=worst_c["m"], F_s_pct=worst_c["F_s"])
     return row, out
@@ -173,13 +186,15 @@ def _truth_values(truth: Any, values: dict[str, float]) -> dict[str, float]:
     return out
 
 
-def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str) -> dict:
-    """The force loop through the interface: ForceStep from the identified file on the block stand-in."""
+def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str, cc: str | None = None) -> dict:
+    """The force loop through the interface: ForceStep from the identified file on the block stand-in; with a C
+    compiler ``cc``, its C step run over the same readings (:func:`c_step.c_columns`: the largest difference from
+    the Python step, us per step, its build)."""
     sc = ControlScenario(model=model, controller=controller)
     N = int(round(sc.duration / sc.dt))
     t = sc.dt * np.arange(N)
     F_ref = reference_profile(sc.reference, t, sc.levels, sc.sine, sc.step_times)
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     step = ForceStep(model, ident, controller)
     build_s = time.perf_counter() - t0
     hw = Scored(MujocoHand(model, truth, scene="block", seed=LOOP_SEED + seed))
@@ -190,14 +205,18 @@ def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str) ->
                         joint_names=step.model.joint_names, tau_max=step.tau_max, wall_s=run.wall_s)
     _metrics(res)
     m = metrics(res)
-    return {"controller": controller, "build_s": build_s, "loop_s": run.wall_s, **m,
-            "q_rmse_deg_joints": res.q_rmse_deg}
+    row = {"controller": controller, "build_s": build_s, "loop_s": run.wall_s, "loop_cpu_s": time.process_time() - c0,
+           **m, "q_rmse_deg_joints": res.q_rmse_deg}
+    if cc is not None:
+        c = c_columns(step, run, cc)
+        row.update(c, c_diff=max(c["diff_command"], c["diff_q"] or 0.0, c["diff_force"]), c_goals_met=c_goals_met(c))
+    return row
 
 
 def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: int | None = None,
-              name: str = "") -> dict:
+              name: str = "", cc: str | None = None) -> dict:
     """One draw's workflow (``truth`` default the finger drawn with ``seed``; the sensors' noise seeded by
-    ``noise_seed``, default ``seed``)."""
+    ``noise_seed``, default ``seed``; the loops' C step built with ``cc`` where given)."""
     truth = perturbed_params(spread=0.2, seed=seed) if truth is None else truth
     noise = seed if noise_seed is None else noise_seed
     row, rec = experiment_row(model, truth, noise, tmp, name)
@@ -211,21 +230,21 @@ def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: i
     row["loops"] = []
     for ctl in CONTROLLERS:
         try:
-            row["loops"].append(loop_row(model, ident, truth, noise, ctl))
+            row["loops"].append(loop_row(model, ident, truth, noise, ctl, cc))
         except AlpesDynError as e:
             row["loops"].append({"controller": ctl, "error": str(e)})
     return row
 
 
-def model_rows(model: str, seed: int, tmp: Path) -> list[dict]:
+def model_rows(model: str, seed: int, tmp: Path, cc: str | None = None) -> list[dict]:
     """A finger's draw (one row), or the hand's (one row per chain of :data:`HAND_CHAINS`, the module docstring)."""
     if model != "hand":
-        return [draw_rows(model, seed, tmp)]
+        return [draw_rows(model, seed, tmp, cc=cc)]
     truth = perturbed_params(spread=0.2, seed=seed, chains=HAND_CHAINS)
     rows = []
     for chain, noise in zip(HAND_CHAINS, _chain_seeds(seed, len(HAND_CHAINS))):
         noise = noise % (2 ** 31 - LOOP_SEED)  # the stand-in's seed and the loop's LOOP_SEED above it
-        row = draw_rows("finger3", seed, tmp, chain_params(truth, chain), noise, f"_{chain}")
+        row = draw_rows("finger3", seed, tmp, chain_params(truth, chain), noise, f"_{chain}", cc)
         rows.append({**row, "model": "hand", "chain": chain})
     return rows
 
@@ -235,6 +254,7 @@ def goals(row: dict) -> dict[str, bool | None]:
     loops = {r["controller"]: r for r in row.get("loops", [])}
     s, sl = loops.get("sensor", {}), loops.get("sensorless", {})
     ok = lambda c: None if c is None else bool(c)  # noqa: E731
+    c = [x for x in loops.values() if "c_goals_met" in x]
     return {
         "no_stop": ok(None if "stop_reached" not in row else not row["stop_reached"]),
         "springs_3pct": ok(None if "K_pct" not in row else row["K_pct"] < 3),
@@ -243,6 +263,7 @@ def goals(row: dict) -> dict[str, bool | None]:
                           and s["rise_ms"] is not None and s["rise_ms"] < 100),
         "sensorless_10pct": ok(None if "sse_pct" not in sl else sl["sse_pct"] is not None and sl["sse_pct"] < 10),
         "joints_1deg": ok(None if not s.get("q_rmse_deg_joints") else max(s["q_rmse_deg_joints"]) < 1),
+        "c_step": ok(None if not c or len(c) < len(CONTROLLERS) else all(x["c_goals_met"] for x in c)),
     }
 
 
@@ -252,19 +273,22 @@ def _f(x: Any, fmt: str) -> str:
 
 def table_text(rows: list[dict]) -> str:
     head = ("model        seed  stop  K %   m %   verdict        sensor rmse % / os % / rise ms  sensorless sse %  "
-            "q deg (sensor)")
+            "q deg (sensor)   C |dC-py| / us")
     lines = [head, "-" * len(head)]
     for r in rows:
         loops = {x["controller"]: x for x in r.get("loops", [])}
         s, sl = loops.get("sensor", {}), loops.get("sensorless", {})
         err = r.get("experiment_error") or r.get("identify_error") or s.get("error")
         qd = s.get("q_rmse_deg_joints")
+        c = [x for x in loops.values() if "c_diff" in x]
+        cs = "n/a" if not c else f"{max(x['c_diff'] for x in c):.1e} / {max(x['c_cpu_us'] for x in c):.1f}"
         label = r["model"] + (f"/{r['chain']}" if "chain" in r else "")
         lines.append(f"{label:12s} {r['seed']:5d} {str(r.get('stop_reached', 'n/a')):5s} "
                      f"{_f(r.get('K_pct'), '5.2f')} {_f(r.get('m_pct'), '5.2f')} {str(r.get('verdict', ''))[:14]:14s} "
                      f"{_f(s.get('rmse_pct'), '5.2f')} / {_f(s.get('overshoot_pct'), '5.1f')} / "
                      f"{_f(s.get('rise_ms'), '5.0f')}          {_f(sl.get('sse_pct'), '5.2f')}            "
-                     f"{'n/a' if not qd else ' '.join(f'{x:.2f}' for x in qd)}" + (f"  ERROR: {err}" if err else ""))
+                     f"{'n/a' if not qd else ' '.join(f'{x:.2f}' for x in qd):16s} {cs}"
+                     + (f"  ERROR: {err}" if err else ""))
     return "\n".join(lines)
 
 
@@ -274,13 +298,15 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--models", default="finger2,finger3")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--out-json", default=None)
+    ap.add_argument("--no-c", action="store_true", help="skip the C step's column")
     a = ap.parse_args(argv)
+    cc = None if a.no_c else shutil.which("cc") or shutil.which("gcc")
     seeds = [int(s) for s in a.seeds.split(",") if s.strip()]
     rows = []
     with tempfile.TemporaryDirectory() as d:
         for model in a.models.split(","):
             for s in seeds:
-                for row in model_rows(model, s, Path(d)):
+                for row in model_rows(model, s, Path(d), cc):
                     row["goals"] = goals(row)
                     rows.append(row)
                     if not a.json:

@@ -61,8 +61,10 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
             warnings.simplefilter("ignore", AdequacyWarning)
             return EffectsFit.single(identify(model, data, args.parameters, **kw), effects), data
     base = THUMB_PARAMETERS if args.model == "thumb" else None
-    return fit_effects(model_of, data, effects, base, data.gravity is not None, spread=args.law_spread,  # tilt
-                       **kw), data  # where not given
+    # gravity columns are the rig's orientation as it was set up (palm up, hung: what alpes-dyn experiment and the
+    # experiment on the hand write), not a measurement: the mount's tilt on top of them is fitted where "tilt" is
+    # among the effects, as without columns (fit_effects' has_gravity False)
+    return fit_effects(model_of, data, effects, base, spread=args.law_spread, **kw), data
 
 
 def _mass_urdf_path(output: str) -> str:

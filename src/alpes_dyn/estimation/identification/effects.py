@@ -12,9 +12,10 @@ effect         what the fit does
                (:func:`~alpes_dyn.simulation.integrate.stable_substeps`). The file written keeps this v_s.
 ``compliance`` the tendon's stretch seen by the encoder, y_k = S q_k + C tau_m,k-1 (``tendon_compliance``, the
                series-elastic tendon's quasi-static limit): fitted, written to the file.
-``tilt``       the palm's orientation when the recording has no ``gravity_*`` columns: ``tilt_y`` on a
-               planar finger (``tilt_x`` is seen only through its cosine), both on the thumb. Of the rig,
-               kept in the result, not in the file.
+``tilt``       the palm's tilt: ``tilt_y`` on a planar finger (``tilt_x`` is seen only through its cosine), both on
+               the thumb; on the file's gravity, or on the recording's ``gravity_*`` columns where ``identify``
+               reads them (the rig's orientation as set up, palm up or hung: a real mount is degrees off it;
+               :func:`fit_effects`' ``has_gravity`` True holds them as measured, the tilt not fitted).
 ``rotor``      (asked for, named, where the cable is seen stretching, or where a fit with the stick-slip law is still
                flagged) the motor's rotor on its tendon, J_m S^T S with the file's
                ``transmission.J_m`` (the motor's datasheet; held, not fitted: ``--parameters J_m`` fits it)
