@@ -14,7 +14,6 @@ import numpy as np
 
 from alpes_dyn.model.transmission import torque_before
 from alpes_dyn.estimation.observers.blocks import batch_step_caller, step_caller
-from alpes_dyn.estimation.observers.friction_noise import friction_process_noise
 from alpes_dyn.estimation.observers.observers import make_observer, true_gains
 from alpes_dyn.estimation.observers.scenario import (EstimationScenario, _held_joints, _torque, default_noise,
                                            mismatched_params, rest_with_held_joints, static_equilibrium)
@@ -54,10 +53,7 @@ def legacy_estimation(observer: str = "ekf", **kw) -> dict[str, np.ndarray]:
     ss = StateSpace(obs_model, input="motor", output="encoder")
     pars = tuple(sc.parameters) if observer.endswith("-params") else ()
     noise = default_noise(sc, n, m, len(pars), meas_var)
-    if sc.friction:  # the smooth law's model error (issue 50: the library's noise setting, added since)
-        Q = np.diag(noise["process_noise"])
-        Q[n:2 * n, n:2 * n] += friction_process_noise(obs_model, ss.B, sc.dt, sc.torque_noise)
-        noise["process_noise"] = Q
+    # the smooth law's model error (issue 50, added since) is make_observer's own: with_friction_noise
     filt = make_observer(observer, ss, sc.dt, parameters=pars,
                          substeps=max(sc.substeps, stable_substeps(obs_model, sc.dt)) if sc.friction else 1, **noise)
     z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars))])
@@ -349,7 +345,7 @@ def legacy_estimate_recording(rec, model, observer="ekf", *, torque_noise=None, 
     meas_var = step**2 / 12 + (0.0 * step) ** 2 + (tr.tendon_compliance * torque_noise) ** 2
     Q = np.diag([1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * len(gains) + [disturbance_walk**2 * dt] * len(pars))
     ss = StateSpace(model, input="motor", output="encoder")
-    Q[n:2 * n, n:2 * n] += friction_process_noise(model, ss.B, dt, torque_noise)  # (issue 50, added since)
+    # (the friction's process noise, issue 50, added since: make_observer's own, with_friction_noise)
     filt = make_observer(observer, ss, dt, parameters=gains + pars,
                          substeps=substeps, process_noise=Q, measurement_noise=list(meas_var * np.ones(m)),
                          input_noise=[torque_noise**2] * m)

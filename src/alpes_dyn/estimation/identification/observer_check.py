@@ -107,7 +107,8 @@ class ObserverCheck:
     update: an error the encoder sees only through the dynamics (the split of the joints it reads the sum of)."""
     split_nis: Nis | None = None
     """The same ``split_horizon_s`` ahead (:data:`OBSERVER_THRESHOLDS`): an error in the joints' split, which the
-    encoder sees over tens of milliseconds."""
+    encoder sees over tens of milliseconds. None (as the two above) where the record after its transient is under
+    four times the horizon: not made."""
     nees: Any = None
     """The joints' :class:`~alpes_dyn.estimation.observers.consistency.Nees` where the recording has true joints
     (for the record, as ``ekf_rmse``: the verdict never reads it)."""
@@ -216,8 +217,10 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     starts = np.arange(k0, N - H, int(th["stride"]))
     pred = (y[starts + H] - _predicted(filt, est.estimate.z, W, starts, H)) / step
     H2 = max(1, int(round(th["split_horizon_s"] / recording.dt)))
+    room = (N - 1 - k0) // 4  # a horizon needs a quarter of the record after the transient (innovation.nis): a
     consistency = [nis(est.estimate, y, filt, est.inputs, start=transient, level=th["nis_level"], horizon=h,
-                       stride=1 if h == 1 else int(th["stride"])) for h in (1, H, H2)]
+                       stride=1 if h == 1 else int(th["stride"])) if h < room else None  # shorter one: not made
+                   for h in (1, H, H2)]  # (None in the check's record)
     floor = sensors.total
     i_rms, p_rms = float(np.sqrt(np.mean(innov**2))), float(np.sqrt(np.mean(pred**2)))
     white = whiteness(innov) if innov.shape[0] > 60 else None
@@ -230,7 +233,7 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
                        f"within {p_rms:.3g} counts RMS, {p_rms / floor:.2f}x the sensor floor {floor:.3g}")
     for v, what in zip(consistency, ("normalised innovation squared", *(f"normalised {1e3 * h * recording.dt:.0f} ms "
                                       "prediction error squared" for h in (H, H2)))):
-        if v.value > v.high:
+        if v is not None and v.value > v.high:
             reasons.append(f"the EKF on the identified file is over-confident: its {what} {v.value:.3g} is above its "
                            f"{100 * v.level:g} % band [{v.low:.3g}, {v.high:.3g}] (its reported covariance does not "
                            f"cover the encoder's errors: {np.max(v.innovation_rms / v.reported_rms):.2f}x)")
