@@ -413,7 +413,9 @@ def finger(d: Path, seed: int, duration: float, runs: int = FINGER_RUNS,
                        "mjcf_mismatch": _written_back(fit, sub),
                        "goal_met": bool(mass_err) and max(abs(e) for e in mass_err.values()) < GOALS["mass_error"]}
     if fit.get("urdf_output"):
-        w, ekf = cli("estimate", "--model", fit["urdf_output"], "--spec", str(d / "ident.toml"), "--data", held_out)
+        forced = () if fit.get("trustworthy") else ("--force",)  # an untrusted file runs only when forced
+        w, ekf = cli("estimate", "--model", fit["urdf_output"], "--spec", str(d / "ident.toml"), "--data", held_out,
+                     *forced)
         w0, ekf0 = cli("estimate", *base, "--data", held_out)
         _, ekf_t = cli("estimate", "--model", str(d / "true.urdf"), "--spec", str(spec), "--data", held_out)
         worst, worst0 = max(np.degrees(ekf["rmse"])), max(np.degrees(ekf0["rmse"]))
