@@ -42,7 +42,7 @@ from .blocks import EncoderPD
 from .controller import DEFAULT_GAINS
 from .hand_loop import HAND_GAINS, cylinder_in_chain, cylinder_normal
 from .realism_loop import Compensation
-from .step import GAIN_NAMES, ForceStep, LoopDesign, _check_kind, _number
+from .step import ForceStep, LoopDesign, _checked_settings, _number
 
 __all__ = ["HandForceStep", "ABDUCTION"]
 
@@ -113,17 +113,7 @@ class HandForceStep:
                  compiled: bool = True, torque_noise: float = 5e-4, encoder_noise_counts: float = 0.5,
                  force_noise: float = 0.005, force_resolution: float = 4.4 / 1024, force_filter_s: float = 0.01,
                  observer_friction: bool = True, force: bool = False) -> None:
-        _check_kind(controller)
-        comp = Compensation() if compensation is None else compensation
-        if not isinstance(comp, Compensation):
-            raise InputError(f"compensation: expected a Compensation, got {type(comp).__name__}")
-        comp.check()
-        if gains is not None and not isinstance(gains, dict):
-            raise InputError(f"gains: expected a dict of ForceController settings, got {type(gains).__name__}")
-        unknown = sorted(set(gains or {}) - set(GAIN_NAMES))
-        if unknown:
-            raise InputError(f"gains: unknown setting(s) {', '.join(map(repr, unknown))} (expected "
-                             f"{', '.join(GAIN_NAMES)})")
+        comp = _checked_settings(controller, compensation, gains)
         p = params if isinstance(params, HandParams) else load_params(params)
         check_trusted(p, bool(force))
         p = palm_down_params(p)

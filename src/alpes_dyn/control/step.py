@@ -284,17 +284,7 @@ class ForceStep:
         if not robot and (not isinstance(model, str) or model not in CONTROL_MODELS):
             raise InputError(f"model: the force step is defined for one finger ({', '.join(CONTROL_MODELS)}) "
                              f"or a URDF + spec Model, got {model!r}")
-        _check_kind(controller)
-        comp = Compensation() if compensation is None else compensation
-        if not isinstance(comp, Compensation):
-            raise InputError(f"compensation: expected a Compensation, got {type(comp).__name__}")
-        comp.check()
-        if gains is not None and not isinstance(gains, dict):
-            raise InputError(f"gains: expected a dict of ForceController settings, got {type(gains).__name__}")
-        unknown = sorted(set(gains or {}) - set(GAIN_NAMES))
-        if unknown:
-            raise InputError(f"gains: unknown setting(s) {', '.join(map(repr, unknown))} (expected "
-                             f"{', '.join(GAIN_NAMES)})")
+        comp = _checked_settings(controller, compensation, gains)
         if robot:
             if params is not None:
                 raise InputError("params: applies to the Alpes fingers; a URDF model's parameters are its spec")
@@ -568,6 +558,23 @@ def _check_contact_q(contact_q: Any, n: int) -> None:
         q = np.array([np.nan])
     if q.ndim != 1 or q.shape[0] < n or not np.isfinite(q).all():
         raise InputError(f"contact_q: expected {n} finite joint angles in rad, got {contact_q!r}")
+
+
+def _checked_settings(controller: Any, compensation: Any, gains: Any) -> Compensation:
+    """A step's controller name, compensation (None: :class:`Compensation`'s defaults) and gains checked, each
+    :class:`InputError` naming the argument; the compensation to use."""
+    _check_kind(controller)
+    comp = Compensation() if compensation is None else compensation
+    if not isinstance(comp, Compensation):
+        raise InputError(f"compensation: expected a Compensation, got {type(comp).__name__}")
+    comp.check()
+    if gains is not None and not isinstance(gains, dict):
+        raise InputError(f"gains: expected a dict of ForceController settings, got {type(gains).__name__}")
+    unknown = sorted(set(gains or {}) - set(GAIN_NAMES))
+    if unknown:
+        raise InputError(f"gains: unknown setting(s) {', '.join(map(repr, unknown))} (expected "
+                         f"{', '.join(GAIN_NAMES)})")
+    return comp
 
 
 def _check_kind(kind: Any) -> None:
