@@ -29,7 +29,7 @@ over [t_k, t_k+1) out.
 from __future__ import annotations
 
 import math
-from typing import Any, Sequence
+from typing import Any
 
 import numpy as np
 
