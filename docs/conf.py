@@ -59,6 +59,10 @@ napoleon_google_docstring = False
 napoleon_numpy_docstring = True
 napoleon_use_ivar = True          # "Attributes" as fields: no duplicate entries next to autodoc's members
 napoleon_use_rtype = False
+# A name that two classes both have as an attribute (StepParts.n and ChainParams.n; PathRatios.shape and
+# RatioCurve.shape) met in a napoleon type such as "(n,) array" or "shape" is ambiguous to Sphinx's Python domain
+# ("more than one target found"): such a word is prose, not a link, so those ambiguity warnings are not errors.
+suppress_warnings = ["ref.python"]
 
 # --- math: the report's equation numbers are written with \tag{...}
 mathjax3_config = {"tex": {"tags": "none"}}

@@ -53,8 +53,8 @@ class SensitivityModel:
     Attributes
     ----------
     dynamics: the :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; names, nominal (p,): parameters.
-    nx = 2n (3n with the LuGre law's bristles, :mod:`~alpes_dyn.simulation.lugre_sensitivity`), p, nu (inputs: motors or joints), nb (basis functions), no = nu nb (correction
-    coefficients), nd = nx + p + no (sensitivity directions).
+    nx = 2n (3n with the LuGre law's bristles, module lugre_sensitivity), p, nu (inputs: motors or joints), nb
+    (basis functions), no = nu nb (correction coefficients), nd = nx + p + no (sensitivity directions).
     compile_seconds: time spent compiling now (0 when the library came from the cache).
     """
 
