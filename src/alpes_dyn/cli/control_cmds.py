@@ -299,7 +299,7 @@ def codegen_step(args: argparse.Namespace) -> int:
     """``codegen --step``: the whole force step, :class:`~alpes_dyn.control.step.ForceStep` of --model, --params and
     --controller, as C (:func:`alpes_dyn.control.cstep.write_c_step`)."""
     from ..control.controller import CONTROLLERS
-    from ..control.cstep import C_STEP_BUILD, write_c_step
+    from ..control.cstep import write_c_step
     from ..control.step import ForceStep
     from ..estimation.cexport.cexport import check_output_directory
 
@@ -329,11 +329,20 @@ def codegen_step(args: argparse.Namespace) -> int:
     about = (f"Model {args.model}, parameter file {args.params or 'shipped with alpes_dyn'}, palm down; controller "
              f"{args.controller} with the tuned gains and every compensation of its effects.")
     written = write_c_step(step, args.out_dir, about=about)
-    obj = {"model": args.model, "params": args.params, "controller": args.controller, "directory": args.out_dir,
-           "files": sorted(written), "nm": step.m, "nz": 2 * step.n, "dt": step.dt, "tau_max": step.tau_max,
+    return _emit_step(args, step, args.model, written, {"model": args.model, "params": args.params}, t0, notes)
+
+
+def _emit_step(args: argparse.Namespace, step: Any, name: str, written: Any, head: dict, t0: float,
+               notes: Any) -> int:
+    """The summary of a force step written as C (``written``: its files) for ``name``: the JSON object (``head``
+    first) and the lines saying its API and its build, with the trust notes; exit 0."""
+    from ..control.cstep import C_STEP_BUILD
+
+    obj = {**head, "controller": args.controller, "directory": args.out_dir, "files": sorted(written),
+           "nm": step.m, "nz": 2 * step.n, "dt": step.dt, "tau_max": step.tau_max,
            "normal": [float(x) for x in step.design.normal], "seconds": time.perf_counter() - t0}
     build = C_STEP_BUILD if step.filter_step is not None else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
-    lines = [f"{args.model}: the {args.controller} force step written to {args.out_dir}/ ({', '.join(sorted(written))})",
+    lines = [f"{name}: the {args.controller} force step written to {args.out_dir}/ ({', '.join(sorted(written))})",
              f"  alpes_step(&state, counts[{step.m}], torque[{step.m}], force, F_ref, normal[3], command[{step.m}], "
              "work) once per tick: the API in alpes_step.h",
              f"  build: cd {args.out_dir} && {build}"]
@@ -369,7 +378,7 @@ def _codegen_robot_step(args: argparse.Namespace) -> int:
     """``codegen --step --model PATH.urdf --spec FILE.toml``: the force step of ``control`` on the robot
     (:class:`~alpes_dyn.control.step.ForceStep` of the Model: its tip ``--frame`` pulled by ``--motor`` onto the
     block placed from its kinematics, the EKF on the spec's model without its friction) as C."""
-    from ..control.cstep import C_STEP_BUILD, write_c_step
+    from ..control.cstep import write_c_step
     from ..control.step import ForceStep
     from ..estimation.cexport.cexport import check_output_directory
 
@@ -393,16 +402,5 @@ def _codegen_robot_step(args: argparse.Namespace) -> int:
              f"{model.motor_names[step.motor]} onto its block; controller {args.controller} with the gains scaled to "
              "the robot.")
     written = write_c_step(step, args.out_dir, about=about)
-    obj = {"model": args.model, "spec": args.spec, "controller": args.controller, "directory": args.out_dir,
-           "frame": step.design.frame, "motor": model.motor_names[step.motor], "files": sorted(written),
-           "nm": step.m, "nz": 2 * step.n, "dt": step.dt, "tau_max": step.tau_max,
-           "normal": [float(x) for x in step.design.normal], "seconds": time.perf_counter() - t0}
-    build = C_STEP_BUILD if step.filter_step is not None else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
-    lines = [f"{model.name}: the {args.controller} force step written to {args.out_dir}/ "
-             f"({', '.join(sorted(written))})",
-             f"  alpes_step(&state, counts[{step.m}], torque[{step.m}], force, F_ref, normal[3], command[{step.m}], "
-             "work) once per tick: the API in alpes_step.h",
-             f"  build: cd {args.out_dir} && {build}"]
-    _note_untrusted(obj, lines, notes)
-    _emit(obj, "\n".join(lines), args.json)
-    return 0
+    return _emit_step(args, step, model.name, written, {"model": args.model, "spec": args.spec, "frame":
+                      step.design.frame, "motor": model.motor_names[step.motor]}, t0, notes)
