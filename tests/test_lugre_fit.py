@@ -8,7 +8,6 @@ recording simulated by ``simulate_lugre`` on a finger drawn +-20 % with known si
 
 from __future__ import annotations
 
-import dataclasses
 import warnings
 from types import SimpleNamespace
 
@@ -19,8 +18,7 @@ import alpes_dyn as ad
 from alpes_dyn.estimation.identification import rounds as rd
 from alpes_dyn.estimation.identification.adequacy import STATEFUL_FRICTION, SensorFloor, assess
 from alpes_dyn.estimation.identification.bounds import SIGMA0_RANGE, unsupported
-from alpes_dyn.estimation.identification.effects import (LUGRE_INTERVAL, alpes_models, lugre_params, lugre_start,
-                                                         parse_effects)
+from alpes_dyn.estimation.identification.effects import alpes_models, lugre_params, parse_effects
 from alpes_dyn.model.friction import LuGre, lugre_of
 from alpes_dyn.model.params import load_params
 from alpes_dyn.simulation.lugre import simulate_lugre
@@ -81,23 +79,20 @@ def test_compiled_step_is_simulate_lugre_and_its_sensitivities_the_finite_differ
 
 
 @pytest.fixture(scope="module")
-def lugre_fits():
-    """finger3 drawn +-20 % with the LuGre law (sigma0, sigma1 known), 2 s of the documented experiment simulated by
-    simulate_lugre (``experiment`` follows the truth's file's law); the smooth fit, then the LuGre fit from its
-    springs and masses and the file's friction at 25 ms intervals (the ``lugre`` round's start and interval,
-    effects.lugre_start, LUGRE_INTERVAL)."""
-    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
-    from alpes_dyn.estimation.identification.identification import identify
+def lugre_fits(tmp_path_factory):
+    """finger3 drawn +-20 % with the LuGre law (sigma0, sigma1 known; seed 9902), 2 s of the documented experiment
+    simulated by simulate_lugre (``experiment`` follows the truth's file's law); the smooth fit, then the LuGre fit
+    from its springs and masses and the file's friction at 25 ms intervals (the ``lugre`` round's start and
+    interval, effects.lugre_start, LUGRE_INTERVAL): the friction guide's example, its page's blocks run here as a
+    reader pastes them (test_docs_snippets.run_page; the page is not run again there)."""
+    from test_docs_snippets import DOCS, run_page
 
-    true = dataclasses.replace(perturbed_params(spread=0.2, seed=9902), friction_law="lugre", sigma0=TRUE_SIGMA0,
-                               sigma1=TRUE_SIGMA1)
-    design = ExperimentDesign(duration=2.0)
-    rec = experiment("finger3", true, design, seed=9902)
-    kw = dict(excitation=design.lines, progress=False)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        smooth = identify(ad.Model.alpes("finger3", friction=True), rec, None, interval=0.05, **kw)
-        fit = identify(lugre_model("finger3"), rec, None, start=lugre_start(smooth), interval=LUGRE_INTERVAL, **kw)
+        ns = run_page(DOCS / "user-guide" / "friction.rst", tmp_path_factory.mktemp("friction_guide"))
+    true, design, smooth, fit = ns["true"], ns["design"], ns["smooth"], ns["fit"]
+    assert (true.sigma0, true.sigma1, design.duration) == (TRUE_SIGMA0, TRUE_SIGMA1, 2.0)
+    assert fit.model.params.friction_law == "lugre" and smooth.model.params.friction_law != "lugre"
     return true, smooth, fit
 
 
