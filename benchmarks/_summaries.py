@@ -505,7 +505,9 @@ def _bench_draws(r: Result) -> str:
     text = f"{n_f} fresh draws of {' and '.join(fingers)}" if n_f else ""
     if hand:
         n_h = len({x["seed"] for x in hand})
-        text += f"{' and ' if text else ''}{n_h} fresh draws of the hand ({len(hand)} finger chains)"
+        n_t = sum(1 for x in hand if x.get("chain") == "thumb")
+        text += (f"{' and ' if text else ''}{n_h} fresh draws of the hand ({len(hand) - n_t} finger chains"
+                 + (f", {n_t} thumbs)" if n_t else ")"))
     return text
 
 
