@@ -124,7 +124,8 @@ def check_command(command: Sequence[float], m: int, tau_max: float,
     Raises
     ------
     InputError
-        Naming ``command``: wrong shape, NaN or inf, negative (a cable only pulls), above ``tau_max``.
+        Naming ``command``: wrong shape, NaN or inf, negative (a cable only pulls), above ``tau_max``; naming
+        ``both_ways``: not one flag per motor.
     """
     try:
         u = np.atleast_1d(np.asarray(command, dtype=float))
@@ -134,7 +135,9 @@ def check_command(command: Sequence[float], m: int, tau_max: float,
         raise InputError(f"command: expected {m} motor torque(s) in N m, got shape {u.shape}")
     if not np.isfinite(u).all():
         raise InputError(f"command: expected finite motor torques in N m, got {u.tolist()!r}")
-    two = np.zeros(m, dtype=bool) if both_ways is None else np.asarray(both_ways, dtype=bool).reshape(m)
+    two = np.zeros(m, dtype=bool) if both_ways is None else np.asarray(both_ways, dtype=bool)
+    if two.shape != (m,):
+        raise InputError(f"both_ways: expected one flag per motor ({m}), got {both_ways!r:.80}")
     if ((u < 0) & ~two).any() or (np.abs(u) > tau_max * (1 + 1e-12)).any():
         raise InputError(f"command: motor torques must lie in [0, {tau_max:g}] N m (a cable only pulls; "
                          f"tau_max){'' if not two.any() else f', [-{tau_max:g}, {tau_max:g}] N m for a motor that pushes both ways'}, got {u.tolist()!r}")
