@@ -48,7 +48,8 @@ The thumb's row (:func:`thumb_row`):
    (MuJoCo's force at its fingertip, its joint estimates), the metrics' percentages of the thumb's own step; the
    hand's C step (:mod:`~alpes_dyn.control.chand`) replayed on the same readings, goal 200 us.
 
-    python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3,hand] [--json] [--out-json PATH]
+    python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3,hand] [--chains thumb] [--json]
+                                    [--out-json PATH]
 """
 
 from __future__ import annotations
@@ -313,13 +314,17 @@ def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: i
     return row
 
 
-def model_rows(model: str, seed: int, tmp: Path, cc: str | None = None) -> list[dict]:
-    """A finger's draw (one row), or the hand's (one row per chain of :data:`HAND_CHAINS`, the module docstring)."""
+def model_rows(model: str, seed: int, tmp: Path, cc: str | None = None,
+               chains: tuple[str, ...] = HAND_CHAINS) -> list[dict]:
+    """A finger's draw (one row), or the hand's (one row per chain of ``chains``, of :data:`HAND_CHAINS`, the module
+    docstring: the hand drawn whole and each chain's noise seeded as in the whole run, whichever are run)."""
     if model != "hand":
         return [draw_rows(model, seed, tmp, cc=cc)]
     truth = perturbed_params(spread=0.2, seed=seed, chains=HAND_CHAINS)
     rows = []
     for chain, noise in zip(HAND_CHAINS, _chain_seeds(seed, len(HAND_CHAINS))):
+        if chain not in chains:
+            continue
         noise = noise % (2 ** 31 - LOOP_SEED)  # the stand-in's seed and the loop's LOOP_SEED above it
         if chain == "thumb":
             row = draw_rows("thumb", seed, tmp, truth, noise, "", cc)
@@ -379,14 +384,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--out-json", default=None)
     ap.add_argument("--no-c", action="store_true", help="skip the C step's column")
+    ap.add_argument("--chains", default=",".join(HAND_CHAINS), help="--models hand: the chains run (default all)")
     a = ap.parse_args(argv)
+    chains = tuple(c.strip() for c in a.chains.split(",") if c.strip())
+    if not chains or set(chains) - set(HAND_CHAINS):
+        ap.error(f"--chains: expected some of {','.join(HAND_CHAINS)}, got {a.chains!r}")
     cc = None if a.no_c else shutil.which("cc") or shutil.which("gcc")
     seeds = [int(s) for s in a.seeds.split(",") if s.strip()]
     rows = []
     with tempfile.TemporaryDirectory() as d:
         for model in a.models.split(","):
             for s in seeds:
-                for row in model_rows(model, s, Path(d), cc):
+                for row in model_rows(model, s, Path(d), cc, chains):
                     row["goals"] = goals(row)
                     rows.append(row)
                     if not a.json:
