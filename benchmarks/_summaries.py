@@ -505,7 +505,9 @@ def _bench_draws(r: Result) -> str:
     text = f"{n_f} fresh draws of {' and '.join(fingers)}" if n_f else ""
     if hand:
         n_h = len({x["seed"] for x in hand})
-        text += f"{' and ' if text else ''}{n_h} fresh draws of the hand ({len(hand)} finger chains)"
+        n_t = sum(1 for x in hand if x.get("chain") == "thumb")
+        parts = [f"{len(hand) - n_t} finger chains"] * (len(hand) > n_t) + [f"{n_t} thumbs"] * (n_t > 0)
+        text += f"{' and ' if text else ''}{n_h} fresh draws of the hand ({', '.join(parts)})"
     return text
 
 
@@ -528,6 +530,9 @@ def bench_loop(r: Result) -> list[str]:
         c = [y for y in loops.values() if "c_diff" in y]
         c_text = "" if not c else (f"; C step within {max(y['c_diff'] for y in c):.1e} of Python, "
                                    f"{max(y['c_cpu_us'] for y in c):.1f} µs of processor time per step")
+        if s.get("scene") == "cylinder":  # the thumb: the whole hand's step on the cylinder
+            c_text += (f"; loops on the hand's cylinder, the ab/adduction ending at "
+                       f"{_r(s.get('abduction_end_deg'), '.1f')} deg (target 35)")
         out.append(f"{head}: {rig}; springs {_r(x['K_pct'])} %, masses {_r(x['m_pct'])} % ({x['verdict']}); sensor "
                    f"RMSE {_r(s.get('rmse_pct'))} %, overshoot {_r(s.get('overshoot_pct'), '.1f')} %, rise "
                    f"{_r(s.get('rise_ms'), '.0f')} ms; sensorless {_r(sl.get('sse_pct'))} %; joints in contact "
@@ -578,7 +583,8 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism, "realism.friction": realism_friction,
-    "fit_scaling.hand": fit_scaling, "bench_loop": bench_loop, "bench_loop.hand": bench_loop, "c_step": c_step,
+    "fit_scaling.hand": fit_scaling, "bench_loop": bench_loop, "bench_loop.hand": bench_loop,
+    "bench_loop.thumb": bench_loop, "c_step": c_step,
 }
 
 ORDER = ["bench_loop", "default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",

@@ -27,14 +27,29 @@ With a C compiler (``cc``, unless ``--no-c``), each loop's step is also built as
 joint estimates, forces fed back; goal 1e-9), its processor time per step (goal < 50 us per finger) and its build
 (goal < 30 s): the ``c_step`` goal.
 
-The hand (``--models hand``) is run chain by chain: one draw of the hand (each finger its own +-20 % values,
-``perturbed_params(chains=HAND_CHAINS)``) and each finger chain's workflow as above on the stand-in of a finger3 with
-that chain's true values (:func:`~alpes_dyn.model.params.chain_params`; the hand's chains do not move one another,
-:mod:`~alpes_dyn.estimation.experiments.hand_experiment`), its own noise seeds; one row per chain. The thumb is not
-run: its abduction motor has no spring (the experiment on the hand trims motors against return springs) and the
-stand-in has no block scene for it.
+The hand (``--models hand``) is run chain by chain: one draw of the hand (each finger and the thumb its own +-20 %
+values, ``perturbed_params(chains=HAND_CHAINS)``) and each finger chain's workflow as above on the stand-in of a
+finger3 with that chain's true values (:func:`~alpes_dyn.model.params.chain_params`; the hand's chains do not move
+one another, :mod:`~alpes_dyn.estimation.experiments.hand_experiment`), its own noise seeds; one row per chain.
+The thumb's row (:func:`thumb_row`):
 
-    python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3,hand] [--json] [--out-json PATH]
+1. its experiment on the stand-in of the thumb's chain (``MujocoHand("thumb")``: its flexion and ab/adduction
+   motors, the hand's true thumb), the nominal ``Model.alpes("thumb")``: the flexion excited and trimmed as a
+   finger's, the ab/adduction held relaxed at 0 N m (a motor that only pulls, on a joint without a spring:
+   :mod:`~alpes_dyn.estimation.experiments.on_hand`); stops scored on the flexion's joints (the ab/adduction
+   rests, relaxed, on its 0 degree stop: ``abduction_deg`` its range over the record);
+2. ``alpes-dyn identify --model thumb`` (its default parameters,
+   :data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`), scored as a finger's;
+3. its force loop on the stand-in's ``"cylinder"`` scene, the whole hand
+   (:class:`~alpes_dyn.control.hand_step.HandForceStep` from the thumb's identified file: its ab/adduction PD
+   brings the thumb's pad opposite the cylinder; the fingers' chains at the file's shipped values, loaded but
+   not scored), at the CLI's default references of the hand (``alpes-dyn control --model hand``:
+   :data:`~alpes_dyn.control.hand_loop.HAND_LEVELS`, the step at 2.5 s of 3.5 s); scored on the thumb's chain
+   (MuJoCo's force at its fingertip, its joint estimates), the metrics' percentages of the thumb's own step; the
+   hand's C step (:mod:`~alpes_dyn.control.chand`) replayed on the same readings, goal 200 us.
+
+    python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3,hand] [--chains thumb] [--json]
+                                    [--out-json PATH]
 """
 
 from __future__ import annotations
@@ -57,6 +72,8 @@ from alpes_dyn.bench.mujoco_hand import MujocoHand, scoring_truth
 from alpes_dyn.control.bench_loop import run_on_bench
 from alpes_dyn.control.controller import reference_profile
 from alpes_dyn.control.finger_loop import ControlResult, ControlScenario, _metrics
+from alpes_dyn.control.hand_loop import HAND_LEVELS, HandControlScenario
+from alpes_dyn.control.hand_step import HandForceStep
 from alpes_dyn.control.step import ForceStep
 from alpes_dyn.errors import AlpesDynError
 from alpes_dyn.estimation.experiments.draws import perturbed_params
@@ -66,8 +83,9 @@ from alpes_dyn.estimation.experiments.recording import write_recording
 from alpes_dyn.model.params import chain_params
 from alpes_dyn.model.robot import Model
 from alpes_dyn.studies.realism import errors, rig_design
+from alpes_dyn.symbolic.parametric import parameter_catalogue
 
-from c_step import c_columns, c_goals_met
+from c_step import GOAL_HAND_US, c_columns, c_goals_met, hand_c_columns
 from force_realism import metrics
 
 RIGS = ("level", "hanging")
@@ -75,8 +93,8 @@ RIGS = ("level", "hanging")
 STOP_MARGIN_DEG = 0.5
 """A true joint within this of its stop counts as a stop reached."""
 CONTROLLERS = ("sensor", "sensorless")
-HAND_CHAINS = ("index", "middle", "ring", "little")
-"""The hand's chains run (the module docstring: the thumb is not)."""
+HAND_CHAINS = ("index", "middle", "ring", "little", "thumb")
+"""The hand's chains run (the module docstring)."""
 LOOP_SEED = 1000
 """The force loop's noise seed: this plus the draw's (another draw of the sensors' noise than the experiment's)."""
 
@@ -134,13 +152,17 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
     off = len(hw.q) - len(res.log.t)
     q = np.array(hw.q)
     margin = math.radians(STOP_MARGIN_DEG)
+    held = [nominal.joint_index(j) for j in nominal.springless_joints]  # the thumb's ab/adduction: relaxed, held
     at_stop = (q <= lo + margin) | (q >= hi - margin)
+    at_stop[:, held] = False
     rows = slice(off + res.record_rows.start, off + res.record_rows.stop)
     rec = q[rows]
     row["stop_reached"] = bool(at_stop[rows].any())  # during the record
     row["stop_in_calibration"] = bool(at_stop[1: off + 1].any())  # the calibration's ramps (to a stop, by design)
     row["stop_before_record"] = bool(at_stop[off + 1: rows.start].any())  # trim, stages
     row["record_q_range_deg"] = [[float(np.degrees(a)), float(np.degrees(b))] for a, b in zip(rec.min(0), rec.max(0))]
+    if held:
+        row["abduction_deg"] = row["record_q_range_deg"][held[0]]
     row.update(res.to_dict())
     path = tmp / f"rec_{model}{name}_{seed}.csv"
     write_recording(res.recording, path)
@@ -161,7 +183,7 @@ def identify_row(model: str, rec: Path, truth: Any, tmp: Path) -> tuple[dict, Pa
         return row, None
     fit = json.loads(p.stdout)
     values = {k: float(v["value"]) for k, v in fit["parameters"].items() if v.get("value") is not None}
-    tv = _truth_values(truth, values)
+    tv = _truth_values(model, truth, values)
     worst, worst_c, c = errors(values, tv)
     verdict = "adequate" if fit["trustworthy"] else ("not converged" if not fit["converged"] else "inadequate")
     tilt = fit["parameters"].get("tilt_y", {}).get("value")
@@ -173,8 +195,12 @@ def identify_row(model: str, rec: Path, truth: Any, tmp: Path) -> tuple[dict, Pa
     return row, out
 
 
-def _truth_values(truth: Any, values: dict[str, float]) -> dict[str, float]:
-    """The true value of each fitted K_i, m_i, F_s_i, F_v_i of the shared finger."""
+def _truth_values(model: str, truth: Any, values: dict[str, float]) -> dict[str, float]:
+    """The true value of each fitted K_i, m_i, F_s_i, F_v_i of the shared finger (the thumb's: its parameter
+    catalogue's, as ``identify --model thumb`` names them)."""
+    if model == "thumb":
+        cat = {p.name: p.nominal for p in parameter_catalogue(Model.alpes("thumb", friction=True, params=truth))}
+        return {k: float(cat[k]) for k in values if k in cat}
     f = truth.finger
     out = {}
     for name in values:
@@ -213,10 +239,61 @@ def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str, cc
     return row
 
 
+def thumb_loop_row(ident: Path, truth: Any, seed: int, controller: str, cc: str | None = None) -> dict:
+    """The thumb's force loop through the interface (the module docstring, step 3): the whole hand's step from the
+    thumb's identified file on the stand-in's cylinder scene, at the hand's default references; scored on the
+    thumb's chain; with ``cc``, the hand's C step over the same readings."""
+    hs = HandControlScenario(controller=controller)
+    a, b = HAND_LEVELS["thumb"]
+    sc = ControlScenario(model="finger2", controller=controller, reference="step", duration=hs.duration,
+                         levels=(a, b, b), step_times=(hs.step_time, hs.duration), settle=hs.settle)
+    N = int(round(hs.duration / hs.dt))
+    t = hs.dt * np.arange(N)
+    t0, c0 = time.perf_counter(), time.process_time()
+    step = HandForceStep(ident, controller)
+    build_s = time.perf_counter() - t0
+    hw = Scored(MujocoHand("hand", truth, scene="cylinder", seed=LOOP_SEED + seed))
+    chains = list(step.chains)
+    ref = np.array([[lv[0] if tk < hs.step_time else lv[1] for lv in (HAND_LEVELS[c] for c in chains)] for tk in t])
+    keys = ("counts", "torque", "force", "ref", "normals", "command", "z", "F_fb")
+    rec: dict[str, list] = {k: [] for k in keys}
+    i = chains.index("thumb")
+    thumb = step.chain_steps["thumb"]
+    q_hat = np.empty((N, thumb.n))
+    t1 = time.perf_counter()
+    for k in range(N):  # the user's loop: read, step, write
+        r = hw.read()
+        u = step.step(r.counts, r.torque, None if controller == "sensorless" else r.force, ref[k])
+        hw.write(u)
+        q_hat[k] = thumb.estimate[0]
+        for key, v in zip(keys, (r.counts, r.torque, r.force, ref[k], step.normals, u, step.state,
+                                 step.force_estimate)):
+            rec[key].append(v)
+    wall = time.perf_counter() - t1
+    hw.close()
+    rec = {k: np.array(v) for k, v in rec.items()}
+    hand = Model.alpes("hand")
+    joints = [hand.joint_names.index(f"thumb_{j}") for j in thumb.model.joint_names]
+    res = ControlResult(scenario=sc, t=t, F_ref=ref[:, i], F_true=np.array(hw.F[:N])[:, i],
+                        F_meas=rec["force"][:, i], F_hat=rec["F_fb"][:, i], q_true=np.array(hw.q[:N])[:, joints],
+                        q_hat=q_hat, tau_cmd=rec["command"][:, i], tau_meas=rec["torque"][:, i],
+                        joint_names=thumb.model.joint_names, tau_max=step.tau_max, wall_s=wall)
+    _metrics(res)
+    row = {"controller": controller, "scene": "cylinder", "build_s": build_s, "loop_s": wall,
+           "loop_cpu_s": time.process_time() - c0, **metrics(res, step=b - a), "q_rmse_deg_joints": res.q_rmse_deg,
+           "abduction_end_deg": float(np.degrees(np.array(hw.q[N - 1])[hand.joint_names.index("thumb_abd")]))}
+    if cc is not None:
+        c = hand_c_columns(step, rec, cc)
+        row.update(c, c_diff=max(c["diff_command"], c["diff_q"] or 0.0, c["diff_force"]),
+                   c_goals_met=c_goals_met(c, GOAL_HAND_US))
+    return row
+
+
 def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: int | None = None,
               name: str = "", cc: str | None = None) -> dict:
     """One draw's workflow (``truth`` default the finger drawn with ``seed``; the sensors' noise seeded by
-    ``noise_seed``, default ``seed``; the loops' C step built with ``cc`` where given)."""
+    ``noise_seed``, default ``seed``; the loops' C step built with ``cc`` where given); ``model`` ``"thumb"``: the
+    thumb's row (the module docstring), ``truth`` the hand's."""
     truth = perturbed_params(spread=0.2, seed=seed) if truth is None else truth
     noise = seed if noise_seed is None else noise_seed
     row, rec = experiment_row(model, truth, noise, tmp, name)
@@ -230,21 +307,29 @@ def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: i
     row["loops"] = []
     for ctl in CONTROLLERS:
         try:
-            row["loops"].append(loop_row(model, ident, truth, noise, ctl, cc))
+            row["loops"].append(thumb_loop_row(ident, truth, noise, ctl, cc) if model == "thumb"
+                                else loop_row(model, ident, truth, noise, ctl, cc))
         except AlpesDynError as e:
             row["loops"].append({"controller": ctl, "error": str(e)})
     return row
 
 
-def model_rows(model: str, seed: int, tmp: Path, cc: str | None = None) -> list[dict]:
-    """A finger's draw (one row), or the hand's (one row per chain of :data:`HAND_CHAINS`, the module docstring)."""
+def model_rows(model: str, seed: int, tmp: Path, cc: str | None = None,
+               chains: tuple[str, ...] = HAND_CHAINS) -> list[dict]:
+    """A finger's draw (one row), or the hand's (one row per chain of ``chains``, of :data:`HAND_CHAINS`, the module
+    docstring: the hand drawn whole and each chain's noise seeded as in the whole run, whichever are run)."""
     if model != "hand":
         return [draw_rows(model, seed, tmp, cc=cc)]
     truth = perturbed_params(spread=0.2, seed=seed, chains=HAND_CHAINS)
     rows = []
     for chain, noise in zip(HAND_CHAINS, _chain_seeds(seed, len(HAND_CHAINS))):
+        if chain not in chains:
+            continue
         noise = noise % (2 ** 31 - LOOP_SEED)  # the stand-in's seed and the loop's LOOP_SEED above it
-        row = draw_rows("finger3", seed, tmp, chain_params(truth, chain), noise, f"_{chain}", cc)
+        if chain == "thumb":
+            row = draw_rows("thumb", seed, tmp, truth, noise, "", cc)
+        else:
+            row = draw_rows("finger3", seed, tmp, chain_params(truth, chain), noise, f"_{chain}", cc)
         rows.append({**row, "model": "hand", "chain": chain})
     return rows
 
@@ -299,14 +384,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--out-json", default=None)
     ap.add_argument("--no-c", action="store_true", help="skip the C step's column")
+    ap.add_argument("--chains", default=",".join(HAND_CHAINS), help="--models hand: the chains run (default all)")
     a = ap.parse_args(argv)
+    chains = tuple(c.strip() for c in a.chains.split(",") if c.strip())
+    if not chains or set(chains) - set(HAND_CHAINS):
+        ap.error(f"--chains: expected some of {','.join(HAND_CHAINS)}, got {a.chains!r}")
     cc = None if a.no_c else shutil.which("cc") or shutil.which("gcc")
     seeds = [int(s) for s in a.seeds.split(",") if s.strip()]
     rows = []
     with tempfile.TemporaryDirectory() as d:
         for model in a.models.split(","):
             for s in seeds:
-                for row in model_rows(model, s, Path(d), cc):
+                for row in model_rows(model, s, Path(d), cc, chains):
                     row["goals"] = goals(row)
                     rows.append(row)
                     if not a.json:

@@ -81,7 +81,6 @@ def _time_c(d: Path, row: dict) -> None:
 
 def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> dict:
     """The whole hand's step (module docstring)."""
-    from alpes_dyn.control.chand import hand_main_input, read_hand_output, write_c_hand
     from alpes_dyn.control.hand_step import HandForceStep
 
     t0 = time.perf_counter()
@@ -107,6 +106,20 @@ def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> d
            "F_held_N": [float(x) for x in np.nanmean(rec["force"][-300:], axis=0)]}
     if cc is None:
         return {**row, "c_us": None}
+    row.update(hand_c_columns(step, rec, cc))
+    row["c_vs_py"] = row["c_us"] / row["py_us"]
+    row["goals_met"] = c_goals_met(row, GOAL_HAND_US)
+    return row
+
+
+def hand_c_columns(step, rec: dict, cc: str) -> dict:
+    """The hand's C step of ``step`` (a :class:`~alpes_dyn.control.hand_step.HandForceStep`; ``alpes-dyn codegen
+    --step --model hand``'s sources) built with ``cc -O2`` and run over the readings ``rec`` of a run of ``step``
+    (arrays per tick: counts, torque, force, ref, normals and the step's command, z (state), F_fb): the columns of
+    :func:`c_columns`."""
+    from alpes_dyn.control.chand import hand_main_input, read_hand_output, write_c_hand
+
+    row: dict = {}
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "c"
         files = write_c_hand(step, d)
@@ -116,11 +129,9 @@ def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> d
         out = subprocess.run([str(d / "main"), str(d / "in.txt")], check=True, capture_output=True, text=True).stdout
         U, Z, F = read_hand_output(out)
         row["diff_command"] = float(np.abs(U - rec["command"]).max())
-        row["diff_q"] = float(np.nanmax(np.abs(Z - rec["z"]))) if controller != "pi" else None
+        row["diff_q"] = float(np.nanmax(np.abs(Z - rec["z"]))) if step.kind != "pi" else None
         row["diff_force"] = float(np.abs(F - rec["F_fb"]).max())
         _time_c(d, row)
-    row["c_vs_py"] = row["c_us"] / row["py_us"]
-    row["goals_met"] = c_goals_met(row, GOAL_HAND_US)
     return row
 
 

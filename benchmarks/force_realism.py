@@ -97,17 +97,18 @@ class Finger2(Plant):
 PLANTS = {"finger3": FINGER3, "finger2": Finger2("finger2", "finger2")}
 
 
-def metrics(r: Any) -> dict[str, Any]:
-    """The benchmark's metrics of a step run (module docstring)."""
+def metrics(r: Any, step: float = STEP) -> dict[str, Any]:
+    """The benchmark's metrics of a step run (module docstring); the percentages of ``step`` N (default the
+    default reference's step, :data:`STEP`)."""
     sc, t, F, R = r.scenario, r.t, r.F_true, r.F_ref
     t1, t2 = sc.step_times
     hold = (t >= sc.settle) & ~((t >= t1) & (t < t1 + AFTER_STEP_S)) & ~((t >= t2) & (t < t2 + AFTER_STEP_S))
     k = hold & (t >= t1)
-    rmse = float(np.sqrt(np.mean((F[k] - R[k]) ** 2))) / STEP
-    rmse_hold = float(np.sqrt(np.mean((F[hold] - R[hold]) ** 2))) / STEP
+    rmse = float(np.sqrt(np.mean((F[k] - R[k]) ** 2))) / step
+    rmse_hold = float(np.sqrt(np.mean((F[hold] - R[hold]) ** 2))) / step
     edges = (sc.settle, *sc.step_times, sc.duration)
-    osc = max(float(np.std(F[(t >= hi - OSC_WINDOW_S) & (t < hi)])) for hi in edges[1:]) / STEP
-    ring = float(np.std(np.diff(F[(t >= t1) & (t < t1 + RING_WINDOW_S)]))) / STEP
+    osc = max(float(np.std(F[(t >= hi - OSC_WINDOW_S) & (t < hi)])) for hi in edges[1:]) / step
+    ring = float(np.std(np.diff(F[(t >= t1) & (t < t1 + RING_WINDOW_S)]))) / step
     return {"rmse_pct": 100 * rmse, "rmse_from_contact_pct": 100 * rmse_hold, "overshoot_pct": None if r.overshoot is None else 100 * r.overshoot,
             "rise_ms": None if r.rise_time_s is None else 1e3 * r.rise_time_s,
             "sse_pct": None if r.steady_state_error is None else 100 * r.steady_state_error,

@@ -428,8 +428,8 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--design-only", "-o", "{tmp}/t.toml", needle="-o"),
         C("experiment", "--design-only", "--params", "{params_toml}", "-o", "{params_toml}",
           needle="-o: '{params_toml}' is the input of --params; refusing to write over it"),
-        C("experiment", "--bench", "mujoco", "--model", "thumb", "-o", "{tmp}/r.csv",
-          needle="--model: --bench mujoco is defined for finger2, finger3, got 'thumb'"),
+        C("experiment", "--bench", "mujoco", "--model", "hand", "-o", "{tmp}/r.csv",
+          needle="--model: --bench mujoco is defined for finger2, finger3, thumb, got 'hand'"),
         C("experiment", "--bench", "mujoco", "--chain", "index", "-o", "{tmp}/r.csv",
           needle="--chain: the MuJoCo stand-in is one finger"),
         C("experiment", "--bench", "mujoco", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv",
@@ -1368,6 +1368,12 @@ def _calibration(name: str) -> Any:
     return getattr(calibration, name)
 
 
+def _check_command(*args: Any, **kw: Any) -> Any:
+    from alpes_dyn.bench.interface import check_command
+
+    return check_command(*args, **kw)
+
+
 def _loopback(motors: tuple[str, ...] = ("finger",)) -> Any:
     from alpes_dyn.bench.interface import Loopback
 
@@ -2139,6 +2145,10 @@ API: list[Api] = [
       "path"),
     A("designed_torque", lambda c: _on_hand("designed_torque")("finger3"), InputError,
       "nominal: expected an alpes_dyn Model with motors, got str"),
+    A("check_command", lambda c: _check_command([0.0], 1, 0.05, both_ways=[True, False]), InputError,
+      "both_ways: expected one flag per motor (1)"),
+    A("check_command", lambda c: _check_command([0.01, -0.01], 2, 0.05, both_ways=[True, False]), InputError,
+      "command: motor torques must lie in [0, 0.05] N m"),
     A("calibrate", lambda c: _calibration("calibrate")(_loopback(), c.m, safe_torque=1.0), InputError,
       "safe_torque: expected a torque in (0, 0.05] N m"),
     A("calibrate", lambda c: _calibration("calibrate")(_loopback(), c.m, rate=-1.0), InputError,

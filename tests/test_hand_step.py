@@ -50,13 +50,17 @@ def hand_run():
 
 def test_hand_step_holds_every_fingertip(hand_run):
     """The four fingers' MuJoCo forces within 10 % of 0.3 N before the step (their pads on the cylinder); every
-    command in [0, tau_max]; the ab/adduction driven (its command positive at the start)."""
+    chain's command in [0, tau_max], the ab/adduction's in [-tau_max, tau_max]; the ab/adduction driven (its command
+    positive at the start) and held at its 35 degree target against the thumb's contact within 1 degree (its encoder
+    over the last 0.2 s: a motor clipped at 0 let the contact push it to 59 degrees)."""
     step, rec, F_true = hand_run
     held = F_true[1700:2000].mean(axis=0)
     np.testing.assert_allclose(held[:4], 0.3, rtol=0.1)
     assert held[4] > 0.05  # the thumb reached the cylinder
-    assert (rec["command"] >= 0).all() and (rec["command"] <= step.tau_max).all()
+    assert (rec["command"][:, :5] >= 0).all() and (np.abs(rec["command"]) <= step.tau_max).all()
     assert rec["command"][:50, 5].max() > 0
+    abd = np.degrees(rec["counts"][-200:, 5] * step.abduction_rad_per_count)
+    assert abs(abd.mean() - 35.0) < 1.0, abd.mean()
     assert step.motor_names == ("index", "middle", "ring", "little", "thumb", "thumb_abduction")
 
 

@@ -211,7 +211,7 @@ def test_run_experiment_refuses_bad_settings_before_the_hand_moves():
         run_experiment(hw, FINGER3, ExperimentDesign(dt=2e-3))
     with pytest.raises(InputError, match="stages: expected non-decreasing fractions"):
         run_experiment(hw, FINGER3, stages=(0.5, 0.25))
-    with pytest.raises(InputError, match="nominal: motor thumb_abduction drives joints without springs"):
+    with pytest.raises(InputError, match="hw: its motors thumb_flexion, thumb_abduction are not the model's"):
         run_experiment(Loopback(motor_names=("thumb_flexion", "thumb_abduction")), Model.alpes("thumb", friction=True))
     assert hw.commands.shape == (0, 1)  # nothing written
 

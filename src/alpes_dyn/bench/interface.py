@@ -100,8 +100,10 @@ class HardwareInterface(Protocol):
         ...
 
 
-def check_command(command: Sequence[float], m: int, tau_max: float) -> np.ndarray:
-    """``command`` as an (m,) array of motor torques (N m) in [0, ``tau_max``].
+def check_command(command: Sequence[float], m: int, tau_max: float,
+                  both_ways: Sequence[bool] | None = None) -> np.ndarray:
+    """``command`` as an (m,) array of motor torques (N m) in [0, ``tau_max``] (a cable only pulls), those of the
+    motors marked ``both_ways`` in [-``tau_max``, ``tau_max``] (a gear: the thumb's ab/adduction).
 
     Parameters
     ----------
@@ -111,6 +113,8 @@ def check_command(command: Sequence[float], m: int, tau_max: float) -> np.ndarra
         The motors.
     tau_max : float
         The largest torque a motor gives, N m.
+    both_ways : sequence of bool or None, optional
+        (m,) the motors that push both ways (default none).
 
     Returns
     -------
@@ -120,7 +124,8 @@ def check_command(command: Sequence[float], m: int, tau_max: float) -> np.ndarra
     Raises
     ------
     InputError
-        Naming ``command``: wrong shape, NaN or inf, negative (a cable only pulls), above ``tau_max``.
+        Naming ``command``: wrong shape, NaN or inf, negative (a cable only pulls), above ``tau_max``; naming
+        ``both_ways``: not one flag per motor.
     """
     try:
         u = np.atleast_1d(np.asarray(command, dtype=float))
@@ -130,9 +135,12 @@ def check_command(command: Sequence[float], m: int, tau_max: float) -> np.ndarra
         raise InputError(f"command: expected {m} motor torque(s) in N m, got shape {u.shape}")
     if not np.isfinite(u).all():
         raise InputError(f"command: expected finite motor torques in N m, got {u.tolist()!r}")
-    if (u < 0).any() or (u > tau_max * (1 + 1e-12)).any():
+    two = np.zeros(m, dtype=bool) if both_ways is None else np.asarray(both_ways, dtype=bool)
+    if two.shape != (m,):
+        raise InputError(f"both_ways: expected one flag per motor ({m}), got {both_ways!r:.80}")
+    if ((u < 0) & ~two).any() or (np.abs(u) > tau_max * (1 + 1e-12)).any():
         raise InputError(f"command: motor torques must lie in [0, {tau_max:g}] N m (a cable only pulls; "
-                         f"tau_max), got {u.tolist()!r}")
+                         f"tau_max){'' if not two.any() else f', [-{tau_max:g}, {tau_max:g}] N m for a motor that pushes both ways'}, got {u.tolist()!r}")
     return u
 
 

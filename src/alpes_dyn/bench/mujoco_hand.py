@@ -18,9 +18,11 @@ The plant (:mod:`alpes_dyn.bench.mujoco_plant`), in one of two scenes:
   :func:`~alpes_dyn.bench.mujoco_plant.cylinder_plant`); each flexion chain's fingertip has its FlexiForce: the
   force is read as (5,) N, the chains in the motors' order (index, middle, ring, little, thumb).
 
-The hand's thumb abduction motor drives its joint both ways in MuJoCo (its range +-tau_max), but takes commands in
-[0, tau_max] through the interface, as every motor (:func:`~alpes_dyn.bench.interface.check_command`): at 0 its
-joint, which has no spring, is left to its friction and its stops.
+The thumb's ab/adduction motor (the hand's and the thumb's ``thumb_abduction``) drives its joint through a gear, both
+ways: it takes commands in [-tau_max, tau_max] (:attr:`MujocoHand.both_ways`,
+:func:`~alpes_dyn.bench.interface.check_command`), every other motor, a cable's, in [0, tau_max]. Its joint has no
+spring: at 0 N m it is left to its friction and its stops, and a motor that only pulled could not hold it against
+the thumb's own contact (on the cylinder the thumb's pad pushes it from 35 to 59 degrees).
 
 The effects (:class:`~alpes_dyn.bench.effects.PlantEffects`, default a real hand's:
 :func:`~alpes_dyn.bench.effects.real_hand_effects`) and the sensors, as the library's own runs have them:
@@ -68,8 +70,9 @@ from .mujoco_plant import (as_params, block_plant, cylinder_plant, free_plant, i
 
 __all__ = ["MujocoHand", "scoring_truth", "HAND_MODELS", "SCENES", "PERIOD", "SUBSTEPS"]
 
-HAND_MODELS: tuple[str, ...] = ("finger2", "finger3", "hand")
-"""The models the stand-in is built for: a finger, or the hand's five chains (the free and cylinder scenes)."""
+HAND_MODELS: tuple[str, ...] = ("finger2", "finger3", "hand", "thumb")
+"""The models the stand-in is built for: a finger, the hand's five chains (the free and cylinder scenes), or the
+thumb's chain alone (its flexion and ab/adduction motors; the free scene)."""
 SCENES: tuple[str, ...] = ("free", "block", "cylinder")
 """The stand-in's scenes (module docstring)."""
 PERIOD = 1e-3
@@ -98,8 +101,9 @@ def _checked(model: Any, params: Any, effects: Any, scene: Any, seed: Any,
         raise InputError(f"model: the MuJoCo stand-in is built for {', '.join(HAND_MODELS)}, got {model!r}")
     if scene not in SCENES:
         raise InputError(f"scene: expected one of {', '.join(SCENES)}, got {scene!r}")
-    if scene == "block" and model == "hand":
-        raise InputError("scene: the block scene is a finger's (finger2, finger3); the hand's is free or cylinder")
+    if scene == "block" and model in ("hand", "thumb"):
+        raise InputError(f"scene: the block scene is a finger's (finger2, finger3); the {model}'s is free"
+                         + (" or cylinder" if model == "hand" else " (its force loop: the hand's cylinder)"))
     if scene == "cylinder" and model != "hand":
         raise InputError(f"scene: the cylinder scene is the hand's, got model {model!r} (a finger's: free or block)")
     if not isinstance(seed, (int, np.integer)) or isinstance(seed, bool) or seed < 0:
@@ -122,7 +126,8 @@ class MujocoHand:
     Parameters
     ----------
     model : str
-        ``finger2``, ``finger3`` or ``hand`` (:data:`HAND_MODELS`; the hand in the free and cylinder scenes).
+        ``finger2``, ``finger3``, ``hand`` or ``thumb`` (:data:`HAND_MODELS`; the hand in the free and cylinder
+        scenes, the thumb's chain in the free scene).
     params : HandParams or str or path, optional
         The finger's true parameters, or the path of their file (default the shipped file); kept private.
     effects : PlantEffects or None or "real"
@@ -145,7 +150,8 @@ class MujocoHand:
     period : float
         :data:`PERIOD`, s.
     motor_names : tuple of str
-        The motors: a finger's one; the hand's six (index, middle, ring, little, thumb, thumb_abduction).
+        The motors: a finger's one; the hand's six (index, middle, ring, little, thumb, thumb_abduction); the
+        thumb's two (thumb, thumb_abduction).
     counts_per_rev : int
         Encoder counts per motor revolution.
     tau_max : float
@@ -154,6 +160,9 @@ class MujocoHand:
         As given.
     closed : bool
         Whether :meth:`close` was called (a write is then refused).
+    both_ways : tuple of bool
+        Per motor: whether it pushes both ways (the thumb's ab/adduction, a gear), its commands then in
+        [-tau_max, tau_max].
 
     Raises
     ------
@@ -197,6 +206,7 @@ class MujocoHand:
         m = len(motors)
         self.model, self.scene, self.period = model, scene, PERIOD
         self.motor_names, self.counts_per_rev, self.tau_max = tuple(motors), int(tr.counts_per_rev), float(p.tau_max)
+        self.both_ways = tuple(mn.endswith("abduction") for mn in motors)
         self.closed = False
         self._data, self._k, self._gain = d, 0, 1.0 + e0.torque_constant_error
         self._joints = joint_permutation(mj, truth.joint_names)  # qpos of the joints, for scoring_truth
@@ -266,7 +276,8 @@ class MujocoHand:
         Parameters
         ----------
         command : sequence of float
-            (m,) motor torques, N m, in [0, :attr:`tau_max`] (:func:`~alpes_dyn.bench.interface.check_command`).
+            (m,) motor torques, N m, in [0, :attr:`tau_max`] ([-tau_max, tau_max] for :attr:`both_ways`:
+            :func:`~alpes_dyn.bench.interface.check_command`).
 
         Raises
         ------
@@ -277,7 +288,7 @@ class MujocoHand:
         """
         if self.closed:
             raise InputError("write: the MuJoCo stand-in is closed")
-        u = check_command(command, len(self.motor_names), self.tau_max)
+        u = check_command(command, len(self.motor_names), self.tau_max, self.both_ways)
         applied = u / self._gain if self._gain != 1.0 else u  # the driver's constant (1 + e) times the true one
         with passive_callback(self._passive):
             out = self._plant.update(self._k, {"tau": applied})

@@ -47,7 +47,8 @@ def add_options(s: argparse.ArgumentParser) -> None:
                         "N m, one row per 1 ms sample) for a hand you drive with your own tools, instead of a recording")
     s.add_argument("--bench", choices=("mujoco",), default=None,
                    help="run the experiment on a hand through the hardware interface: mujoco, the MuJoCo stand-in "
-                        "(finger2, finger3; a real hand's effects; its finger drawn by --perturb, --seed and hidden): "
+                        "(finger2, finger3, thumb; a real hand's effects; its finger drawn by --perturb, --seed and "
+                        "hidden; the thumb's ab/adduction held relaxed): "
                         "calibration, the bias trimmed on the hand, the guarded run; exit 3 where the guard stops it")
     s.add_argument("-o", "--output", required=True, metavar="FILE.csv",
                    help="the recording to write (with --design-only: the torque profile)")
@@ -66,7 +67,7 @@ def _checked(args: argparse.Namespace) -> None:
         if getattr(args, dest) is not None:
             raise InputError(f"{flag}: goes with a URDF --model's simulated experiment, not {mode} (an Alpes "
                              "finger's)")
-    models = ("finger2", "finger3", "thumb") if args.design_only else ("finger2", "finger3")
+    models = ("finger2", "finger3", "thumb")  # the thumb: its ab/adduction held relaxed (estimation.experiments.on_hand)
     if args.model not in models:
         raise InputError(f"--model: {mode} is defined for {', '.join(models)}, got {args.model!r}")
     if args.rig in ("hanging", "both"):
@@ -129,7 +130,9 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     from ..estimation.experiments.on_hand import run_experiment
     from ..model.params import write_params
 
-    truth = nominal_params if args.perturb is None else perturbed_params(nominal_params, args.perturb, args.seed)
+    chains = ("thumb",) if args.model == "thumb" else None  # the thumb's own values drawn (a finger's: [finger])
+    truth = nominal_params if args.perturb is None else perturbed_params(nominal_params, args.perturb, args.seed,
+                                                                          chains=chains)
     hw = MujocoHand(args.model, truth, seed=args.seed)
     try:
         cal = calibrate(hw, nominal)

@@ -9,7 +9,7 @@ controller, gains, compensation, noise settings and ab/adduction PD compiled in)
   ``alpes_hand_<c>`` (``alpes_hand_<c>.h/.c``, its EKF ``alpes_hand_<c>_ekf.h/.c`` but for ``"pi"``, its controller
   ``alpes_hand_<c>_force.h/.c``);
 * ``alpes_hand.h`` / ``alpes_hand.c`` -- the hand's step: the readings checked, each chain's step with its normal, the
-  ab/adduction's PD (its target ramped, its command clipped to [0, tau_max]), in
+  ab/adduction's PD (its target ramped, its command clipped to [-tau_max, tau_max]: a gear, both ways), in
   :meth:`~alpes_dyn.control.hand_step.HandForceStep.step`'s order;
 * ``main.c`` -- a test program: reads one line per tick (counts (6), torque (6), force (5), reference (5), normals
   (15, each chain's 3 in turn)), prints per tick the commands (6), the chains' estimates (:data:`HAND_NZ` in the
@@ -65,10 +65,10 @@ _HEADER = r"""/* alpes_hand.h -- the whole hand's force step (alpes_dyn.control.
      force (5)       the fingertip sensors' normal forces at t_k, N, the chains' order{force_note};
      reference (5)   the chains' force references at t_k, N;
      normals (15)    each chain's contact normal (3, its base frame, from the fingertip into the object, any length).
-   Out: command (6), N m, each in [0, {tau_max!r}].
+   Out: command (6), N m, the chains' in [0, {tau_max!r}], the ab/adduction's in [-{tau_max!r}, {tau_max!r}].
    Each chain is the force step of its alpes_hand_<chain>.h; the thumb's ab/adduction a PD on its encoder toward
    {target!r} rad (its target ramped from 0 over {ramp!r} s), kp {kp!r} N m/rad, kd {kd!r} N m s/rad, its velocity
-   low-passed with weight {alpha!r}, its command clipped to [0, {tau_max!r}].
+   low-passed with weight {alpha!r}, its command clipped to [-{tau_max!r}, {tau_max!r}] (a gear, both ways).
 
    Start: alpes_hand_state s; alpes_hand_init(&s); double work[ALPES_HAND_NWORK];
    each tick: if (alpes_hand_step(&s, counts, torque, force, reference, normals, command, work)) stop the motors.
@@ -151,8 +151,7 @@ int alpes_hand_step(alpes_hand_state* s, const double counts[6], const double to
   s->abd_prev = y;
   target = RAMP > 0 ? TARGET * ((double) s->k * {dt!r} / RAMP < 1.0 ? (double) s->k * {dt!r} / RAMP : 1.0) : TARGET;
   c = KP * (target - y) - KD * s->abd_v;
-  c = c < -TAU_MAX ? -TAU_MAX : (c > TAU_MAX ? TAU_MAX : c);
-  u[5] = c < 0.0 ? 0.0 : c;
+  u[5] = c < -TAU_MAX ? -TAU_MAX : (c > TAU_MAX ? TAU_MAX : c);
   memcpy(command, u, sizeof(u));
   s->k += 1;
   return 0;

@@ -5,8 +5,9 @@
 and the thumb, :func:`chain_model`), the contact normal the cylinder's at the estimated fingertip
 (:func:`cylinder_normal`), the thumb's ab/adduction held by a PD on its encoder
 (:class:`HandControlScenario`, :class:`HandControlResult`). Like the finger's, a composition of blocks run by
-:func:`~alpes_dyn.simulation.loop.run_loop`, the EKFs of the four fingers in one
-:class:`~alpes_dyn.estimation.observers.blocks.ObserverBank` (one compiled call per sample).
+:func:`~alpes_dyn.simulation.loop.run_loop`: the plant, its sensors and effects, and the user's step,
+:class:`~alpes_dyn.control.hand_step.HandForceStep` (every chain's EKF, compensation and controller, the
+ab/adduction's PD), the one step object of the simulation and of the bench.
 
 """
 
@@ -24,83 +25,18 @@ from ..errors import InputError
 from ..fileio import atomic_path
 from ..limits import check_bytes, check_duration
 from ..model.hand_chains import _rotation, chain_frame, chain_model, hand_chains  # noqa: F401 (their home: model)
-from ..model.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string
-from ..model.robot import Model
-from ..estimation.observers.blocks import Observer, ObserverBank
+from ..model.mjcf import joint_permutation, load_mujoco, mjcf_string
 from ..model.params import HandParams
 from ..estimation.observers.scenario import static_equilibrium
-from ..simulation.loop import Delay, Function, Source, run_loop
+from ..simulation.loop import Block, Source, run_loop
 from ..simulation.plants import MujocoPlant
 from ..simulation.sensors import Encoder, ForceSensor, TorqueSensor
-from .blocks import EncoderPD, ForceLoop, SensorlessForce, force_input
-from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal
-from .finger_loop import (_SAMPLE_ARRAYS, ControlResult, ControlScenario, _check_effects, _effect_signals, _metrics,
-                          _plant_and_params)
+from .controller import CONTROLLERS
+from .finger_loop import (_SAMPLE_ARRAYS, ControlResult, ControlScenario, _check_effects, _compensation,
+                          _effect_signals, _metrics, _plant_and_params)
+from .hand_grasp import HAND_GAINS, HAND_LEVELS, cylinder_in_chain, cylinder_normal  # noqa: F401 (re-exported)
+from .hand_step import HandForceStep
 from .realism_loop import Compensation, effects_mjcf_kwargs, plant_gravity, rotor_rest
-from .step import force_ekf
-
-
-#: Default references of :func:`run_hand_control` per chain, N: (before, after) the step at ``step_time``.
-#: Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` (the five motor torques ramped from 0
-#: to 0.05 N m over 4 s, palm down: the fingers' pads slide around the cylinder beyond 0.47-0.65 N, the thumb's
-#: beyond 1.48 N).
-HAND_LEVELS: dict[str, tuple[float, float]] = {
-    "index": (0.25, 0.4), "middle": (0.2, 0.35), "ring": (0.3, 0.4), "little": (0.25, 0.35), "thumb": (0.4, 0.7),
-}
-#: :class:`.ForceController` settings of the hand's loops over :data:`.DEFAULT_GAINS` (then the scenario's
-#: ``gains``): a slower approach (15 mN m/s; at 30 mN m/s the fingertips reach the cylinder faster and bounce on
-#: it for 0.3 s) and, for the model-based loops, a 40 ms prefilter, the shortest of {25, 30, 40, 50} ms with the
-#: fingers' overshoots near 10 % on :data:`HAND_LEVELS` (one noise draw): with 25 ms (the block's) the middle
-#: finger's pad slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
-#: 40 ms 7-10.5 %, 10-90 % rise 77-97 ms.
-HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04}
-
-
-def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: Sequence[float] = (0.0, 1.0, 0.0),
-                    tip: str | None = None) -> np.ndarray:
-    """Unit normal n (3,) of a cylinder's surface at the fingertip, the model's base frame: from the tip frame
-    (the centre of the fingertip's rounded end) toward the cylinder's axis, the direction the fingertip
-    presses in.
-
-    Parameters
-    ----------
-    model : Model
-        The chain's model.
-    q : ndarray
-        (n,) joint angles, rad.
-    center, axis : sequence of float
-        A point of the cylinder's axis, m, and its direction (base frame).
-    tip : str or None, optional
-        The fingertip's frame (default: the model's first tip)."""
-    a = _normal(axis)
-    d = np.asarray(center, dtype=float) - model.fingertip_position(q, tip)
-    d = d - a * (d @ a)
-    nd = float(np.linalg.norm(d))
-    if not nd > 0:
-        raise InputError("q: the fingertip is on the cylinder's axis; the normal is undefined")
-    return d / nd
-
-
-def cylinder_in_chain(params: HandParams, chain: str, abduction: float) -> tuple[np.ndarray, np.ndarray]:
-    """(a point of the cylinder's axis (3,) m, its direction (3,)) of :data:`~alpes_dyn.model.mjcf.CYLINDER` in a
-    chain's base frame (:func:`~alpes_dyn.model.hand_chains.chain_frame`; the thumb at ``abduction`` rad).
-
-    Parameters
-    ----------
-    params : HandParams
-        The hand's parameters (palm down).
-    chain : str
-        A chain of :func:`~alpes_dyn.model.hand_chains.hand_chains`.
-    abduction : float
-        The thumb's ab/adduction angle, rad.
-
-    Returns
-    -------
-    tuple of numpy.ndarray
-        The point and the direction.
-    """
-    R, pos = chain_frame(params, chain, abduction)
-    return R.T @ (np.asarray(CYLINDER["center"], dtype=float) - pos), R.T @ np.array([0.0, 1.0, 0.0])
 
 
 @dataclass(frozen=True)
@@ -277,8 +213,9 @@ class HandControlResult:
 
 def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandControlScenario,
            levels: Sequence[float], t: np.ndarray) -> dict[str, Any]:
-    """One chain of the hand: the controller's model, its joints' MuJoCo names, the cylinder in its frame (m), its
-    reference (N, one per sample) and its rest q0 (rad: the plant's, set in ``d.qpos``)."""
+    """One chain of the hand: the controller's model, its joints' MuJoCo names, its reference (N, one per sample),
+    its rest q0 (rad: the plant's, set in ``d.qpos``) and the plant's side of the effects
+    (:func:`~alpes_dyn.control.finger_loop._effect_signals`, every name suffixed with the chain's)."""
     e = sc.effects
     comp = Compensation() if sc.compensation is None else sc.compensation
     p_ctl = p if e is None else dataclasses.replace(p, gravity=comp.turned_gravity(p.gravity))
@@ -289,52 +226,51 @@ def _chain(p: HandParams, pp: HandParams, mj: Any, d: Any, c: str, sc: HandContr
     d.qpos[joint_permutation(mj, names)] = q0
     rotor_rest(mj, d, [c], plant, q0, e)
     a, b = (float(x) for x in levels)
-    center, axis = cylinder_in_chain(p, c, sc.thumb_abduction)
     ramp = np.clip((t - sc.step_time) / sc.ramp_s, 0.0, 1.0) if sc.ramp_s > 0 else (t >= sc.step_time).astype(float)
-    return dict(name=c, model=m, n=m.n, names=tuple(names), center=center, axis=axis, F_ref=a + (b - a) * ramp,
-                levels=(a, b), z0=q0)
+    return dict(name=c, model=m, n=m.n, names=tuple(names), F_ref=a + (b - a) * ramp, levels=(a, b), z0=q0,
+                effects=_effect_signals(sc, m, p, suffix=f"_{c}", controller=False))
 
 
-def _chain_effects(ch: dict[str, Any], sc: HandControlScenario, p: HandParams) -> dict[str, Any]:
-    """One chain's signals and blocks of the plant's effects and their compensation: the finger's
-    (:func:`~alpes_dyn.control.finger_loop._effect_signals`), every name suffixed with the chain's."""
-    return _effect_signals(sc, ch["model"], p, suffix=f"_{ch['name']}")
+class _HandStepBlock(Block):
+    """A :class:`~alpes_dyn.control.hand_step.HandForceStep` as a block: each chain's reference, encoder counts,
+    torque reading (a period signal: the previous period's) and fingertip force, and the ab/adduction's counts in;
+    each chain's command ``tau_<c>``, estimate ``z_<c>`` and force fed back ``F_fb_<c>``, and the ab/adduction's
+    command ``u_abd`` out."""
+
+    name = "hand_step"
+
+    def __init__(self, step: HandForceStep, torque: Sequence[str]) -> None:
+        self.step, cs = step, step.chains
+        self.refs, self.counts = [f"F_ref_{c}" for c in cs], [f"y_{c}" for c in (*cs, "abd")]
+        self.torque, self.forces = list(torque), [f"F_meas_{c}" for c in cs]
+        self.inputs = (*self.refs, *self.counts, *self.torque, *self.forces)
+        self.outputs = (*(f"{k}_{c}" for k in ("tau", "z", "F_fb") for c in cs), "u_abd")
+
+    def start(self, n_periods: int, dt: float, final: bool) -> None:
+        self.step.reset()
+
+    def output(self, k: int, u: Any) -> dict[str, Any]:
+        st = self.step
+        vec = lambda names: np.array([float(np.asarray(u[x]).reshape(-1)[0]) for x in names])  # noqa: E731
+        torque = np.append(vec(self.torque), 0.0)  # the ab/adduction's is not read
+        force = None if st.kind == "sensorless" else vec(self.forces)
+        cmd = st.step(vec(self.counts), torque, force, vec(self.refs))
+        out: dict[str, Any] = {"u_abd": float(cmd[-1])}
+        for i, (c, s) in enumerate(st.chain_steps.items()):
+            out[f"tau_{c}"], out[f"z_{c}"], out[f"F_fb_{c}"] = float(cmd[i]), s.state, s.force_estimate
+        return out
 
 
-def _chain_loop(ch: dict[str, Any], sc: HandControlScenario, tau_max: float, gains: dict) -> list:
-    """The blocks of one chain's loop: the cylinder's normal at the estimated fingertip, the sensorless force,
-    the force controller and the EKF's force input (the previous sample's -F n)."""
-    c, m, kind = ch["name"], ch["model"], sc.controller
-    fx = ch["effects"]
-    ctl = ForceController(kind, m, cylinder_normal(m, ch["z0"], ch["center"], ch["axis"]), sc.dt, tau_max, **gains,
-                          **fx["controller"])
-    if kind == "pi":
-        return [ForceLoop(ctl, reference=f"F_ref_{c}", force=f"F_meas_{c}", command=f"tau_{c}", name=f"ctl_{c}"),
-                *fx["blocks"]]
-    F = f"F_fb_{c}" if kind == "sensorless" else f"F_meas_{c}"
-    center, axis = ch["center"], ch["axis"]
-    out = [Function(lambda **u: cylinder_normal(m, u[f"z_{c}"][: m.n], center, axis), (f"z_{c}",), f"normal_{c}",
-                    name=f"normal_{c}"),
-           ForceLoop(ctl, reference=f"F_ref_{c}", force=F, estimate=f"z_{c}", normal=f"normal_{c}",
-                     command=f"tau_{c}", name=f"ctl_{c}"),
-           force_input(F, f"w_F_{c}", f"normal_{c}", name=f"w_F_{c}"),
-           Delay(f"w_F_{c}", f"w_F_prev_{c}", np.zeros(3), name=f"delay_{c}"), *fx["blocks"]]
-    if kind == "sensorless":
-        out.append(SensorlessForce(m, sc.dt / (sc.force_filter_s + sc.dt), estimate=f"z_{c}",
-                                   torque=fx["torque"], normal=f"normal_{c}", force=F, name=f"sensorless_{c}",
-                                   scale=fx["force_scale"]))
-    return out
-
-
-def _chain_ekf(ch: dict[str, Any], sc: HandControlScenario) -> Observer:
-    """The EKF of one chain (known inputs its torque reading and the previous sample's force input, its encoder
-    measured), started at the chain's rest with standard deviations 0.05 rad and 0.1 rad/s, not updated at t_0."""
-    c, m = ch["name"], ch["model"]
-    ekf, z0, P0 = force_ekf(m, sc.dt, sc.controller, torque_noise=sc.torque_noise, force_noise=sc.force_noise,
-                            encoder_noise_counts=sc.encoder_noise_counts, force_resolution=sc.force_resolution)
-    return Observer(ekf, z0, P0, known=(ch["effects"]["torque"], f"w_F_prev_{c}"),
-                    measurement=ch["effects"]["measurement"], estimate=f"z_{c}", covariance=None, first_update=False,
-                    label=f"ekf_force_hand_{m.name}", name=f"ekf_{c}")
+def _hand_step(sc: HandControlScenario) -> HandForceStep:
+    """The scenario's :class:`~alpes_dyn.control.hand_step.HandForceStep`: its settings, its EKFs without the
+    file's friction (the hand loop's own design), the ab/adduction's target at once (no ramp)."""
+    return HandForceStep(sc.params, sc.controller, dt=sc.dt, thumb_abduction=sc.thumb_abduction,
+                         abduction_kp=sc.abduction_kp, abduction_kd=sc.abduction_kd,
+                         abduction_filter_s=sc.abduction_filter_s, abduction_ramp_s=0.0, gains=sc.gains,
+                         compensation=_compensation(sc), compiled=sc.compiled, torque_noise=sc.torque_noise,
+                         encoder_noise_counts=sc.encoder_noise_counts, force_noise=sc.force_noise,
+                         force_resolution=sc.force_resolution, force_filter_s=sc.force_filter_s,
+                         observer_friction=False, force=sc.force)
 
 
 def _chain_results(sc: HandControlScenario, C: list[dict[str, Any]], log: Any, t: np.ndarray,
@@ -406,15 +342,13 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     N = int(round(sc.duration / sc.dt))
     t = sc.dt * np.arange(N)
     rng = np.random.default_rng(sc.seed)
-    kind = sc.controller
-    gains = {**DEFAULT_GAINS[kind], **HAND_GAINS, **sc.gains}
+    step = _hand_step(sc)  # the user's step: every chain's EKF, compensation and controller, the ab/adduction's PD
     C = [_chain(p, pp, mj, d, c, sc, levels[c], t) for c in chains]  # the plant starts at rest, each chain
-    for ch in C:
-        ch["effects"] = _chain_effects(ch, sc, p)
     d.qpos[mj.joint("thumb_abd").qposadr[0]] = 0.0
     mujoco.mj_forward(mj, d)
     names = [c["name"] for c in C]
-    plant = MujocoPlant(mj, d, substeps=sc.substeps, actuators={**{C[i]["effects"]["applied"]: c for i, c in enumerate(names)},
+    fx = [c["effects"] for c in C]
+    plant = MujocoPlant(mj, d, substeps=sc.substeps, actuators={**{fx[i]["applied"]: c for i, c in enumerate(names)},
                                                                 "u_abd": "thumb_abduction"},
                         joints={**{f"q_{c}": C[i]["names"] for i, c in enumerate(names)}, "q_abd": ["thumb_abd"]},
                         sensors={**{f"q_m_{c}": f"encoder_{c}" for c in names}, "q_m_abd": "encoder_thumb_abduction",
@@ -423,18 +357,15 @@ def run_hand_control(controller: str = "sensor", scenario: HandControlScenario |
     cpr = C[0]["model"].transmission.counts_per_rev
     # the sensors' noise, drawn in this order: the encoders (the chains', the ab/adduction's), torques, forces
     blocks = [Source("references", **{f"F_ref_{c['name']}": c["F_ref"] for c in C}), plant]
-    blocks += [Encoder(f"q_m_{c}", f"y_{c}", cpr, noise_counts=sc.encoder_noise_counts, rng=rng,
-                       offset=C[i]["effects"]["offset"] if i < len(C) else 0.0) for i, c in enumerate((*names, "abd"))]
-    blocks += [TorqueSensor(f"tau_applied_{c}", C[i]["effects"]["reading"], noise=sc.torque_noise, rng=rng,
-                            timing="period", gain=C[i]["effects"]["gain"]) for i, c in enumerate(names)]
+    blocks += [Encoder(f"q_m_{c}", f"y_{c}", cpr, noise_counts=sc.encoder_noise_counts, rng=rng, counts=True,
+                       offset=fx[i]["offset"] if i < len(C) else 0.0) for i, c in enumerate((*names, "abd"))]
+    blocks += [TorqueSensor(f"tau_applied_{c}", fx[i]["reading"], noise=sc.torque_noise, rng=rng,
+                            timing="period", gain=fx[i]["gain"]) for i, c in enumerate(names)]
     blocks += [ForceSensor(f"F_touch_{c}", f"F_meas_{c}", noise=sc.force_noise, resolution=sc.force_resolution,
                            rng=rng) for c in names]
-    blocks.append(EncoderPD(sc.thumb_abduction, sc.abduction_kp, sc.abduction_kd, sc.dt / (sc.abduction_filter_s + sc.dt),
-                            ratio=p.abduction_ratio, u_max=p.tau_max, reading="y_abd", command="u_abd"))
-    for ch in C:
-        blocks += _chain_loop(ch, sc, p.tau_max, gains)
-    if kind != "pi":  # one EKF per chain, those of the same model advanced in one call
-        blocks.append(ObserverBank([_chain_ekf(ch, sc) for ch in C], compiled=sc.compiled))
+    blocks.append(_HandStepBlock(step, [f["torque"] for f in fx]))
+    for f in fx:
+        blocks += f["blocks"]
     log = run_loop(blocks, N, sc.dt)
     return HandControlResult(scenario=sc, t=t, chains=_chain_results(sc, C, log, t, p.tau_max),
                              q_abduction=log["q_abd"][:, 0], wall_s=log.wall_s)

@@ -11,16 +11,17 @@ It is the loop of :func:`~alpes_dyn.control.hand_loop.run_hand_control`, the han
   :class:`~alpes_dyn.bench.mujoco_hand.MujocoHand`'s ``"cylinder"`` scene reads them;
 * each chain's model: :func:`~alpes_dyn.model.hand_chains.chain_model` of the parameter file palm down, the thumb's
   at the ab/adduction target (its EKF's with the file's friction, eq. 2.6-2.7);
-* the gains: :data:`.DEFAULT_GAINS` overridden by :data:`~alpes_dyn.control.hand_loop.HAND_GAINS`, then ``gains``;
+* the gains: :data:`.DEFAULT_GAINS` overridden by :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS`, then ``gains``;
 * the contact normal of a chain at sample k: given to :meth:`HandForceStep.step` (``normals``, (5, 3), each in its
   chain's base frame: what the C step takes), or by default the cylinder's
-  (:data:`~alpes_dyn.model.mjcf.CYLINDER`, :func:`~alpes_dyn.control.hand_loop.cylinder_normal`) at the fingertip
+  (:data:`~alpes_dyn.model.mjcf.CYLINDER`, :func:`~alpes_dyn.control.hand_grasp.cylinder_normal`) at the fingertip
   of the chain's estimate of sample k-1 (at k = 0, of its rest); the ``"pi"`` loops, without an estimate, at the
   rest's;
 * the ab/adduction: :class:`~alpes_dyn.control.blocks.EncoderPD` on its encoder toward ``thumb_abduction`` rad
-  (its target ramped up from 0 over ``abduction_ramp_s``), its command clipped to [0, tau_max] (a motor of the hand
-  takes no negative command: at 0 the joint, which has no spring, rests on its friction; the hand loop's PD, on its
-  simulated plant, pushes both ways).
+  (its target ramped up from 0 over ``abduction_ramp_s``), its command clipped to [-tau_max, tau_max]: its motor, a
+  gear, pushes both ways (:attr:`~alpes_dyn.bench.mujoco_hand.MujocoHand.both_ways`), and must: the joint has no
+  spring, and the thumb's pad pressing the cylinder pushes it open (clipped at 0, the MuJoCo stand-in's thumb went
+  from 35 to 59 degrees, its chain model, taken at 35, off by as much).
 
 Each chain's timing is :class:`~alpes_dyn.control.step.ForceStep`'s: the readings of tick k in, the command held
 over [t_k, t_k+1) out.
@@ -40,7 +41,7 @@ from ..model.params import HandParams, load_params
 from ..model.trust import check_trusted
 from .blocks import EncoderPD
 from .controller import DEFAULT_GAINS
-from .hand_loop import HAND_GAINS, cylinder_in_chain, cylinder_normal
+from .hand_grasp import HAND_GAINS, cylinder_in_chain, cylinder_normal
 from .realism_loop import Compensation
 from .step import ForceStep, LoopDesign, _checked_settings, _number
 
@@ -73,7 +74,7 @@ class HandForceStep:
         s: the PD's target ramped from 0 to ``thumb_abduction`` over it (a motor that cannot push back cannot
         brake an overshoot; 0: the target at once).
     gains : dict or None
-        Overrides of the chains' controller settings (after :data:`~alpes_dyn.control.hand_loop.HAND_GAINS`).
+        Overrides of the chains' controller settings (after :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS`).
     compensation : Compensation or None
         The effects' compensation, every chain's (its ``force_scale`` a number or a dict by chain).
     compiled : bool
@@ -98,7 +99,8 @@ class HandForceStep:
     abduction_rad_per_count : float
         rad of the ab/adduction motor per count.
     tau_max : float
-        The motor limit, N m: every command lies in [0, tau_max].
+        The motor limit, N m: every chain's command lies in [0, tau_max], the ab/adduction's in [-tau_max,
+        tau_max].
 
     Raises
     ------
@@ -163,8 +165,8 @@ class HandForceStep:
         self._command = np.zeros(len(self.motor_names))
 
     def step(self, counts: Any, torque: Any, force: Any, reference: Any, normals: Any = None) -> np.ndarray:
-        """One sample: the readings of tick k in, the (6,) motor commands (N m, in [0, tau_max]) to hold over
-        [t_k, t_k+1) out.
+        """One sample: the readings of tick k in, the (6,) motor commands (N m: the chains' in [0, tau_max], the
+        ab/adduction's in [-tau_max, tau_max]) to hold over [t_k, t_k+1) out.
 
         Parameters
         ----------
@@ -209,7 +211,7 @@ class HandForceStep:
         t_k, ramp = self.k * self.dt, self.abduction_ramp_s
         self.abduction.target = self.abduction_target * (min(1.0, t_k / ramp) if ramp > 0 else 1.0)
         pd = self.abduction.output(self.k, {"y": counts[nc] * self.abduction_rad_per_count})["u"]
-        u[nc] = min(max(pd, 0.0), self.tau_max)
+        u[nc] = min(max(pd, -self.tau_max), self.tau_max)
         self._normals = N
         self._command = u
         self.k += 1

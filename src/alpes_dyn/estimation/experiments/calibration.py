@@ -29,6 +29,11 @@ only (no model of the finger is trusted for them).
    which a window of 2 % of the safe torque (1e-3 N m) took for a fold;
 4. the command ramped back to 0 N m, four times as fast (at ``rate``: unhindered by the speed hold).
 
+A motor whose joints have no spring (the thumb's ab/adduction) is not ramped: against no spring a torque above its
+joint's friction runs the joint to a stop, so a ramp finds no static relation. Its rest is read as above and kept
+as its whole range (``low = high = rest``), its curve flat at the rest with zero torque
+(:meth:`Calibration.torque_at` reads 0 N m): the experiment holds it relaxed (:mod:`.on_hand`).
+
 The ramp has no dither: rising, the finger's dry friction holds it back, so the curve reads fewer counts at a torque
 than the finger rests at once a dither keeps its joints sliding (the experiment's trim starts below its target and
 corrects on the hand, for that reason).
@@ -54,6 +59,7 @@ from ...errors import InputError, RecordingError
 from ...fileio import atomic_path, read_bytes
 from ...model.robot import Model
 from .hand_session import HandSession
+from .multisine import _motor_groups
 from .recording import _check_encoder_columns
 
 __all__ = ["Calibration", "calibrate", "load_calibration", "MIN_MOVE_COUNTS", "KNEE_WINDOW", "KNEE_FRACTION",
@@ -238,10 +244,15 @@ def calibrate(hw: HardwareInterface, model: Model, *, safe_torque: float | None 
     rest, low, t_low, high, t_high = (np.zeros(m) for _ in range(5))
     stop, fold = np.zeros(m, dtype=bool), np.full(m, np.nan)
     curves_t, curves_c = np.zeros((CURVE_POINTS, m)), np.zeros((CURVE_POINTS, m))
+    free = set(_motor_groups(model)[2])
     for k in range(m):  # a loop over the motors, one ramp each
         rows = s.ramp_to(np.zeros(m), settle)
         held = s.log().counts[rows, k]
         rest[k] = float(np.median(held[held.size // 2:]))
+        if k in free:  # held, not ramped (the module docstring): its range and curve are its rest
+            low[k] = high[k] = rest[k]
+            curves_c[:, k] = rest[k]
+            continue
         tau, cnt, stop[k], knee = _ramp(s, k, safe, rate, rest[k], speed)
         high[k], t_high[k] = _upper_end(tau, cnt, knee, max(1, int(round(0.01 / s.period))))
         fold[k] = _fold(tau, cnt, safe, high[k] - rest[k])

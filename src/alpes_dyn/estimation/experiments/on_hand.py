@@ -39,6 +39,18 @@ Guarded throughout (:class:`~alpes_dyn.estimation.experiments.hand_session.HandS
 guard band or a missed period stops the excitation, relaxes the finger and raises
 :class:`~alpes_dyn.estimation.experiments.hand_session.GuardTripped`.
 
+A motor whose joints have no spring (the thumb's ab/adduction, ``Model.alpes("thumb")``'s second motor) is held
+relaxed, at 0 N m, through the whole run: no bias, no multisine, no dither, and the calibration does not ramp it
+(:func:`~alpes_dyn.estimation.experiments.calibration.calibrate`). With no spring there is no static rest to trim
+the bias about nor a torque-to-counts curve to trim it with: any steady torque above its joint's friction runs the
+joint to a stop (the simulated experiment holds it mid-range by a bias on the nominal model alone:
+:mod:`alpes_dyn.estimation.experiments.experiment`); relaxed, it rests where its friction or its stop holds it (the
+MuJoCo stand-in's on its 0 degree stop, beside the palm). Its guard band is its rest plus and minus the margin: the
+thumb's flexion dragging the ab/adduction off its rest trips the guard. The thumb's flexion is then recorded as a
+finger's is, the ab/adduction's encoder beside it (its mass and friction are not among the thumb's default fitted
+parameters, :data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`: the encoders barely see
+them).
+
 The recording (:class:`~alpes_dyn.estimation.experiments.recording.Recording`, the CSV that ``alpes-dyn identify``
 reads): ``t`` the ticks from the record's first (k times the period; the readings' own time stamps are what the guard
 checks), ``encoder_<motor>`` the counts read at each tick, ``torque_<motor>`` the torque measured over the period
@@ -171,9 +183,9 @@ def designed_torque(nominal: Model, design: ExperimentDesign | None = None
     g = _one_orientation(design)
     if not isinstance(nominal, Model) or nominal.transmission is None:
         raise InputError(f"nominal: expected an alpes_dyn Model with motors, got {type(nominal).__name__}")
-    bias, amp = _excitation(nominal, design)
+    bias, amp, dither = _on_hand_excitation(nominal, design)
     t = design.dt * np.arange(design.n_samples)
-    u = _profiles(design, t, bias, amp, dither_amplitude(nominal, design))
+    u = _profiles(design, t, bias, amp, dither)
     step = 2 * np.pi / nominal.transmission.counts_per_rev
     target = np.atleast_1d(_reading(nominal, _mean_equilibrium(nominal, bias, g))) / step
     return t, u, target
@@ -195,10 +207,26 @@ def _check_sprung(model: Model) -> None:
     if not isinstance(model, Model) or model.transmission is None:
         raise InputError(f"nominal: expected an alpes_dyn Model with motors, got {type(model).__name__}")
     _, sprung, free = _motor_groups(model)
-    if free:
+    if not sprung:
         names = ", ".join(model.transmission.motor_names[k] for k in free)
         raise InputError(f"nominal: motor {names} drives joints without springs (no rest to trim about); the "
                          "experiment on the hand trims motors against return springs (a finger, the thumb's flexion)")
+
+
+def _held(model: Model) -> np.ndarray:
+    """(m,) bool: the motors held relaxed through the experiment, those whose joints have no spring (the module
+    docstring)."""
+    held = np.zeros(model.transmission.n_motors, dtype=bool)
+    held[_motor_groups(model)[2]] = True
+    return held
+
+
+def _on_hand_excitation(nominal: Model, design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(bias, multisine amplitude, dither amplitude) (m,), N m, as designed on ``nominal``
+    (:func:`~alpes_dyn.estimation.experiments.experiment._excitation`), each 0 on a held motor (:func:`_held`)."""
+    bias, amp = _excitation(nominal, design)
+    keep = ~_held(nominal)
+    return bias * keep, amp * keep, dither_amplitude(nominal, design) * keep
 
 
 def _checked_run(hw: HardwareInterface, nominal: Model, design: ExperimentDesign | None,
@@ -265,13 +293,14 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
     cal = calibration if calibration is not None else calibrate(hw, nominal)
     g = _one_orientation(design)
     t_design, _, target_nominal = designed_torque(nominal, design)
-    bias0, amp = _excitation(nominal, design)
-    dither = dither_amplitude(nominal, design)
+    bias0, amp, dither = _on_hand_excitation(nominal, design)
+    held = _held(nominal)
     low, high = _band(nominal, design, cal, margin)
-    target = np.clip(target_nominal, low + 0.3 * (high - low), high - 0.3 * (high - low))
+    target = np.where(held, cal.rest, np.clip(target_nominal, low + 0.3 * (high - low), high - 0.3 * (high - low)))
     peak = np.max(np.abs(_profiles(design, t_design, np.zeros_like(bias0), amp, dither)), axis=0)
     cap = np.minimum(np.where(np.isfinite(cal.fold_torque), cal.fold_torque - FOLD_PEAKS * peak, np.inf),
                      float(hw.tau_max) - peak)  # the excitation within [0, tau_max] about any bias in [peak, cap]
+    cap[held] = 0.0  # a held motor's bias stays 0 N m through the trim and the stages
     s = HandSession(hw, low, high)
     trim = design.trim_bias and design.torque_bias is None
     start = low + START_SHARE * (target - low)  # from below: the dither lets the finger slide further up
@@ -315,6 +344,8 @@ def _band(nominal: Model, design: ExperimentDesign, cal: Calibration, margin: fl
     else:
         mc = np.full(tr.n_motors, float(margin))
     low, high = cal.low + mc, cal.high - mc
+    held = _held(nominal)  # guarded about its rest: its joint dragged by more than the margin trips the guard
+    low[held], high[held] = cal.rest[held] - mc[held], cal.rest[held] + mc[held]
     if np.any(high <= low):
         raise InputError(f"margin: {mc.tolist()} counts at each end leave nothing of the calibrated range "
                          f"[{cal.low.tolist()}, {cal.high.tolist()}] counts")

@@ -1,0 +1,82 @@
+"""The hand's grasp of the cylinder: the default references and gains of its force loops and the cylinder's normal at
+a chain's fingertip (:data:`HAND_LEVELS`, :data:`HAND_GAINS`, :func:`cylinder_normal`, :func:`cylinder_in_chain`),
+shared by the whole hand's step (:class:`~alpes_dyn.control.hand_step.HandForceStep`) and the simulated grasp
+(:func:`~alpes_dyn.control.hand_loop.run_hand_control`).
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+import numpy as np
+
+from ..errors import InputError
+from ..model.hand_chains import chain_frame
+from ..model.mjcf import CYLINDER
+from ..model.params import HandParams
+from ..model.robot import Model
+from .controller import _normal
+
+__all__ = ["HAND_LEVELS", "HAND_GAINS", "cylinder_normal", "cylinder_in_chain"]
+
+#: Default references of :func:`~alpes_dyn.control.hand_loop.run_hand_control` per chain, N: (before, after) the
+#: step at ``step_time``. Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` (the five motor torques ramped from 0
+#: to 0.05 N m over 4 s, palm down: the fingers' pads slide around the cylinder beyond 0.47-0.65 N, the thumb's
+#: beyond 1.48 N).
+HAND_LEVELS: dict[str, tuple[float, float]] = {
+    "index": (0.25, 0.4), "middle": (0.2, 0.35), "ring": (0.3, 0.4), "little": (0.25, 0.35), "thumb": (0.4, 0.7),
+}
+#: :class:`.ForceController` settings of the hand's loops over :data:`.DEFAULT_GAINS` (then the scenario's
+#: ``gains``): a slower approach (15 mN m/s; at 30 mN m/s the fingertips reach the cylinder faster and bounce on
+#: it for 0.3 s) and, for the model-based loops, a 40 ms prefilter, the shortest of {25, 30, 40, 50} ms with the
+#: fingers' overshoots near 10 % on :data:`HAND_LEVELS` (one noise draw): with 25 ms (the block's) the middle
+#: finger's pad slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
+#: 40 ms 7-10.5 %, 10-90 % rise 77-97 ms.
+HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04}
+
+
+def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: Sequence[float] = (0.0, 1.0, 0.0),
+                    tip: str | None = None) -> np.ndarray:
+    """Unit normal n (3,) of a cylinder's surface at the fingertip, the model's base frame: from the tip frame
+    (the centre of the fingertip's rounded end) toward the cylinder's axis, the direction the fingertip
+    presses in.
+
+    Parameters
+    ----------
+    model : Model
+        The chain's model.
+    q : ndarray
+        (n,) joint angles, rad.
+    center, axis : sequence of float
+        A point of the cylinder's axis, m, and its direction (base frame).
+    tip : str or None, optional
+        The fingertip's frame (default: the model's first tip)."""
+    a = _normal(axis)
+    d = np.asarray(center, dtype=float) - model.fingertip_position(q, tip)
+    d = d - a * (d @ a)
+    nd = float(np.linalg.norm(d))
+    if not nd > 0:
+        raise InputError("q: the fingertip is on the cylinder's axis; the normal is undefined")
+    return d / nd
+
+
+def cylinder_in_chain(params: HandParams, chain: str, abduction: float) -> tuple[np.ndarray, np.ndarray]:
+    """(a point of the cylinder's axis (3,) m, its direction (3,)) of :data:`~alpes_dyn.model.mjcf.CYLINDER` in a
+    chain's base frame (:func:`~alpes_dyn.model.hand_chains.chain_frame`; the thumb at ``abduction`` rad).
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters (palm down).
+    chain : str
+        A chain of :func:`~alpes_dyn.model.hand_chains.hand_chains`.
+    abduction : float
+        The thumb's ab/adduction angle, rad.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The point and the direction.
+    """
+    R, pos = chain_frame(params, chain, abduction)
+    return R.T @ (np.asarray(CYLINDER["center"], dtype=float) - pos), R.T @ np.array([0.0, 1.0, 0.0])
