@@ -14,6 +14,10 @@ effect                      field of the file
 ``encoder_offset`` (counts) ``encoder_offset`` of the chain's section, rad of the motor (counts times
                             2 pi / counts_per_rev, the encoder reading y = S q + offset)
 ``torque_delay``            ``transmission.torque_delay`` (samples)
+``stiction`` (stiff)        ``friction.smooth_velocity`` = :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`, the
+                            stick-slip law as ``identify --effects stiction`` writes it (the file's mark of a
+                            friction that sticks: the observer's law follows it,
+                            :func:`~alpes_dyn.simulation.stick.observer_friction_law`)
 ``tendon_stiffness`` k_t    ``transmission.tendon_compliance`` C = 1 / (k_t r_m^2), the cable's quasi-static
                             stretch; the observer takes the rotor's J_m on the tendons (:attr:`TruthFile.rotor`)
 ``tendon_rotor``            the rotor's J_m on the rigid tendons (:attr:`TruthFile.rotor`)
@@ -26,7 +30,8 @@ effect                      field of the file
 
 What a file cannot hold is named (:attr:`TruthFile.not_held`), never dropped in silence: the cable's damping and
 slack and its rotor's own dynamics (the file's tendon is the quasi-static limit), MuJoCo's dry-friction
-constraint (``stiction``'s time constant or ``soft_stiction``: the file holds F_s, F_v and its own law).
+constraint itself (``stiction``'s time constant, held as the stick-slip law; ``soft_stiction``, a friction that
+creeps: the file holds F_s, F_v and its smooth law).
 """
 
 from __future__ import annotations
@@ -38,6 +43,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import InputError
+from ..model.extras import STICTION_VELOCITY
 from ..model.params import HandParams, Param, load_params, with_values, write_params
 from .effects import PlantEffects
 from .mujoco_plant import PLANT_MODELS, plant_model
@@ -113,11 +119,13 @@ def _held(p: HandParams, e: PlantEffects, model: str, chain: str | None) -> tupl
             named.append(f"tendon_damping ({e.tendon_damping:.6g} N s/m): the file's tendon is quasi-static")
         if e.tendon_dead_band:
             named.append(f"tendon_dead_band ({e.tendon_dead_band:.6g} m): the cable's slack")
-    if e.stiction is not None:
-        named.append(f"stiction ({e.stiction:.6g} s): MuJoCo's stiff dry-friction constraint; the file holds F_s, "
-                     "F_v and its own law")
+    if e.stiction is not None:  # as identify writes its stick-slip law (--effects stiction)
+        upd["friction.smooth_velocity"] = Param(STICTION_VELOCITY, "rad/s", "assumed", why,
+                                                "the smooth sign's velocity scale of the stick-slip law")
+        named.append(f"stiction ({e.stiction:.6g} s): MuJoCo's stiff dry-friction constraint, held as the stick-slip "
+                     f"law's v_s = {STICTION_VELOCITY:g} rad/s")
     if e.soft_stiction:
-        named.append("soft_stiction: MuJoCo's default (creeping) dry-friction constraint; the file holds F_s, F_v "
+        named.append("soft_stiction (MuJoCo's default constraint): a dry friction that creeps; the file holds F_s, F_v "
                      "and its own law")
     return upd, named
 
