@@ -18,6 +18,7 @@ from alpes_dyn.errors import InputError
 from alpes_dyn.model.mjcf import STICTION_TIMECONST, load_mujoco
 from alpes_dyn.model.params import load_params
 from alpes_dyn.model.robot import Model
+from alpes_dyn.simulation.stick import observer_friction_law
 from alpes_dyn.studies.realism import ekf_run
 
 HELD = {"tilt", "encoder_offset", "torque_delay", "tendon_stiffness", "tendon_rotor", "torque_constant_error"}
@@ -56,19 +57,21 @@ def test_every_effect_is_in_the_file_or_named(tmp_path):
 def test_the_file_rest_and_reading_are_the_plants(tmp_path):
     """MuJoCo's plant (the elastic cable with its rotor, the tilt, the torque constant, the encoder's zero; the
     library's smooth friction: one rest) settled under a torque step: the true file's model at rest under the torque
-    *as read* (static_equilibrium) has MuJoCo's joint angles, and its encoder reading S q + C tau_read + offset is
+    *as read* (static_equilibrium; joint 1 held on its stop where MuJoCo's is) has MuJoCo's joint angles, and its encoder reading S q + C tau_read + offset is
     the recorded one, up to the one effect named that shifts it: the cable's slack, r_m radians(0.5) / r_m."""
     e = dataclasses.replace(real_hand_effects(), stiction=None, torque_delay=0)
     true = load_params()
-    u = np.concatenate([np.full(200, 1.0e-3), np.full(1301, 2.5e-3)])[:, None]
+    u = np.concatenate([np.full(200, 8e-3), np.full(1301, 12e-3)])[:, None]  # palm up: joint 1 on its stop
     rec = mujoco_recording("finger3", true, u, 1e-3, effects=e, encoder_noise_counts=0.0, torque_noise=0.0)
     t = write_truth(true, e, tmp_path / "truth.toml")
     model = Model.alpes("finger3", friction=True, rotor_inertia=t.rotor, params=t.path)
     tau_read = rec.torque[-1]
     np.testing.assert_allclose(tau_read, (1 + e.torque_constant_error) * u[-1], rtol=1e-12)
     S = model.transmission.S
-    q = model.static_equilibrium(S.T @ tau_read, q0=rec.true_q[-1])
-    np.testing.assert_allclose(q, rec.true_q[-1], atol=2e-4)  # rad: settled to 0.01 degree
+    on_stop = [nm for nm, x in zip(model.joint_names, rec.true_q[-1]) if x < 0.01]  # held there by MuJoCo's stop
+    assert on_stop == [model.joint_names[0]] and (rec.true_q[-1, 1:] > 0.1).all()
+    q = model.static_equilibrium(S.T @ tau_read, q0=rec.true_q[-1], fixed=on_stop)
+    np.testing.assert_allclose(q, rec.true_q[-1], atol=1e-3)  # rad (the torque constant left out: 0.02 rad off)
     step = 2 * np.pi / model.transmission.counts_per_rev
     y = model.transmission.encoder_angles(rec.true_q[-1], tau_read) + t.params.finger.encoder_offset
     assert any(n.startswith("tendon_dead_band") for n in t.not_held)
@@ -95,5 +98,23 @@ def test_the_ekf_with_the_truth_on_a_stick_slip_plant_stays_within_its_bound(tmp
     u = validation_torque(1e-3)[:3001]
     rec = mujoco_recording("finger3", true, u, 1e-3, effects=e, seed=3)
     t = write_truth(true, e, tmp_path / "truth.toml")
-    rmse = np.degrees(ekf_run(rec, str(t.path), None, 1.0, rotor=t.rotor, stops=True).rmse)
+    est = ekf_run(rec, str(t.path), None, 1.0, rotor=t.rotor, stops=True)
+    s = est.settings  # the file's rig side read back, the law the file's stiction chose
+    assert s["friction_law"] == "stick" and s["torque_delay_samples"] == 1
+    np.testing.assert_allclose(s["encoder_offset_rad"], [4.0 * 2 * np.pi / 4096], rtol=1e-9)
+    rmse = np.degrees(est.rmse)
     assert rmse.max() < 0.3, rmse
+
+
+def test_the_observer_law_follows_the_file(tmp_path):
+    """observer_friction_law: the shipped file smooth; a file whose smooth sign is the stick-slip law (identify's
+    --effects stiction, the truth of a stiff stiction) stick; a LuGre file lugre; a model without friction smooth."""
+    base = load_params()
+    assert observer_friction_law(Model.alpes("finger3", friction=True)) == "smooth"
+    assert observer_friction_law(Model.alpes("finger3")) == "smooth"
+    stiff = write_truth(base, PlantEffects(stiction=STICTION_TIMECONST), tmp_path / "stiff.toml")
+    assert observer_friction_law(Model.alpes("finger3", friction=True, params=stiff.path)) == "stick"
+    soft = truth_params(base, PlantEffects(soft_stiction=True))
+    assert observer_friction_law(Model.alpes("finger3", friction=True, params=soft.params)) == "smooth"
+    lugre = dataclasses.replace(stiff.params, friction_law="lugre")
+    assert observer_friction_law(Model.alpes("finger3", friction=True, params=lugre)) == "lugre"
