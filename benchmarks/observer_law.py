@@ -7,8 +7,11 @@ friction law (``smooth`` F_s tanh(v / v_s), ``stick`` the switched law, ``lugre`
 :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`). Per case, law and seed
 (:func:`~alpes_dyn.studies.realism_friction.true_file_row`): the worst joint's RMSE after 1 s (deg) and each
 joint's NEES against its 95 % band; per case and law the median and worst over the seeds; per friction kind (the
-cases' ``constraint``, soft or stiff) the law whose worst joint is smallest over the kind's rows (``choice``: what
-:func:`~alpes_dyn.estimation.observers.replay.estimate_recording` uses for a file of that kind by default).
+cases' ``constraint``, soft or stiff) the law whose worst joint is smallest over the kind's rows that ran every law
+(``choice``). The observer's default law follows it through the file
+(:func:`~alpes_dyn.simulation.stick.observer_friction_law`): the true file of a stiff plant holds its stiction as
+the stick-slip law's v_s, as ``identify --effects stiction`` writes it, and gets ``stick``; a soft plant's keeps the
+file's v_s and gets ``smooth``.
 
     python benchmarks/observer_law.py [--cases soft,stiff_3x,...] [--seeds 10101-10102] [--laws smooth,stick,lugre]
                                       [--log FILE | --from-log FILE] [--json]
@@ -31,6 +34,7 @@ from pathlib import Path
 import numpy as np
 
 from _table import cell
+from alpes_dyn.errors import InputError, ModelError
 from alpes_dyn.simulation.stick import FRICTION_LAWS
 from alpes_dyn.studies.realism import EKF_GOAL_DEG
 from alpes_dyn.studies.realism_friction import FRICTION_CASE_NAMES, FRICTION_CASES, true_file_row
@@ -65,14 +69,17 @@ def summary(rows: list[dict]) -> dict:
     """Per case and law: ``rmse_worst_joint_deg`` (median / worst over the seeds of the worst joint),
     ``nees_worst_joint`` (likewise, the largest joint NEES), ``joints_consistent`` (the fraction of joints in their
     band), ``within_goal`` (rows whose every joint is within :data:`EKF_GOAL_DEG`), ``rows``; per friction kind
-    ``choice``: the law with the smallest worst joint over the kind's rows (ties: the first of
-    :data:`FRICTION_LAWS`)."""
+    ``choice``: the law with the smallest worst joint over the kind's rows that ran every law of
+    :data:`FRICTION_LAWS` (ties: the first), with those rows' ``cases``; ``raised``: the rows whose plant did not
+    run (case, seed, the error)."""
     kind = {c.name: c.constraint for c in FRICTION_CASES}
+    raised = [{"case": r["case"], "seed": r["seed"], "error": r["error"]} for r in rows if "error" in r]
+    rows = [r for r in rows if "error" not in r]
     cases: dict = {}
     for r in rows:
         for law, v in r["laws"].items():
             cases.setdefault(r["case"], {}).setdefault(law, []).append(v)
-    out = {"cases": {}, "choice": {}}
+    out = {"cases": {}, "choice": {}, "raised": raised}
     for case, laws in cases.items():
         out["cases"][case] = {law: {
             "rmse_worst_joint_deg": _stats([max(v["rmse_deg"]) for v in vs]),
@@ -81,13 +88,11 @@ def summary(rows: list[dict]) -> dict:
             "within_goal": sum(max(v["rmse_deg"]) <= EKF_GOAL_DEG for v in vs), "rows": len(vs)}
             for law, vs in laws.items()}
     for k in sorted(set(kind.values())):
-        worst = {}
-        for law in FRICTION_LAWS:
-            vals = [max(r["laws"][law]["rmse_deg"]) for r in rows if kind[r["case"]] == k and law in r["laws"]]
-            if vals and len(vals) == sum(kind[r["case"]] == k for r in rows):
-                worst[law] = max(vals)
-        if worst:
-            out["choice"][k] = {"law": min(worst, key=worst.get), "worst_joint_deg": worst}
+        every = [r for r in rows if kind[r["case"]] == k and set(FRICTION_LAWS) <= set(r["laws"])]
+        if every:
+            worst = {law: max(max(r["laws"][law]["rmse_deg"]) for r in every) for law in FRICTION_LAWS}
+            out["choice"][k] = {"law": min(worst, key=worst.get), "worst_joint_deg": worst,
+                                "cases": sorted({r["case"] for r in every}), "rows": len(every)}
     return out
 
 
@@ -104,7 +109,8 @@ def text(out: dict) -> str:
     for k, c in out["summary"]["choice"].items():
         lines.append(f"{k}: {c['law']} (worst joint " + ", ".join(f"{law} {v:.2f}" for law, v in
                                                                  c["worst_joint_deg"].items()) + " deg)")
-    held = sorted({n.split(" ")[0] for r in out["rows"] for n in r["not_held"]})
+    lines += [f"raised {x['case']} seed {x['seed']}: {x['error'][:150]}" for x in out["summary"]["raised"]]
+    held = sorted({n.split(" ")[0] for r in out["rows"] for n in r.get("not_held", [])})
     lines.append("not held by the true file: " + (", ".join(held) or "none"))
     return "\n".join(lines)
 
@@ -131,13 +137,16 @@ def main(argv: list[str] | None = None) -> int:
             for seed in seeds_of(args.seeds):
                 if (case, seed) in done:
                     continue
-                row = true_file_row(case, seed, laws)
+                try:
+                    row = true_file_row(case, seed, laws)
+                except (InputError, ModelError) as exc:  # the plant that does not run: its row says why
+                    row = {"case": case, "seed": seed, "error": str(exc)}
                 rows.append(row)
                 if args.log:
                     with open(args.log, "a") as f:
                         f.write(json.dumps(row) + "\n")
-                print(f"{case} {seed}: " + ", ".join(f"{w} {max(v['rmse_deg']):.2f} deg"
-                                                     for w, v in row["laws"].items()), file=sys.stderr, flush=True)
+                print(f"{case} {seed}: " + (row.get("error") or ", ".join(
+                    f"{w} {max(v['rmse_deg']):.2f} deg" for w, v in row["laws"].items())), file=sys.stderr, flush=True)
     out = {"rows": rows, "summary": summary(rows), "ekf_goal_deg": EKF_GOAL_DEG,
            "from_log": bool(args.from_log)}
     print(json.dumps(out) if args.json else text(out))
