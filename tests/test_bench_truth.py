@@ -118,3 +118,12 @@ def test_the_observer_law_follows_the_file(tmp_path):
     assert observer_friction_law(Model.alpes("finger3", friction=True, params=soft.params)) == "smooth"
     lugre = dataclasses.replace(stiff.params, friction_law="lugre")
     assert observer_friction_law(Model.alpes("finger3", friction=True, params=lugre)) == "lugre"
+
+
+def test_a_urdf_robot_keeps_the_smooth_law():
+    """A model without an Alpes parameter file (a URDF robot's spec, whose smooth_velocity 0.01 rad/s is its own
+    smoothing) keeps the smooth law by default: the stick law follows the Alpes file's stick-slip mark only."""
+    m = Model.alpes("finger3", friction=True)
+    urdf = Model(m.urdf, dataclasses.replace(m.spec, smooth_velocity=0.01), name="arm")
+    assert urdf.params is None and np.any(urdf.extras.coulomb) and urdf.extras.smooth_velocity <= 0.02
+    assert observer_friction_law(urdf) == "smooth"

@@ -31,7 +31,11 @@ effect                      field of the file
 What a file cannot hold is named (:attr:`TruthFile.not_held`), never dropped in silence: the cable's damping and
 slack and its rotor's own dynamics (the file's tendon is the quasi-static limit), MuJoCo's dry-friction
 constraint itself (``stiction``'s time constant, held as the stick-slip law; ``soft_stiction``, a friction that
-creeps: the file holds F_s, F_v and its smooth law).
+creeps: the file holds F_s, F_v and its smooth law). MuJoCo's soft constraint is, per joint, a viscous law
+saturated at F_s whose slope depends on the joint's inverse inertia: creeping at v = (1 - d) A_ii t_c tau / 2 under
+a torque tau below F_s (d = 0.9 the impedance, t_c = 0.02 s, A = M^-1), its velocity scale F_s (1 - d) A_ii t_c / 2
+about 0.01, 0.2 and 0.7 rad/s on the three joints of a drawn finger3 (three times that at 3x F_s), where the
+file has one v_s for every joint: no value of it is the plant's.
 """
 
 from __future__ import annotations

@@ -58,9 +58,11 @@ def check_friction_law(law: Any) -> str:
 
 def observer_friction_law(model: Model) -> str:
     """The observer's friction law by default for ``model``'s parameter file (``estimate`` without
-    ``--friction-law``): ``"lugre"`` where the file says ``friction.law = "lugre"``, ``"stick"`` where its smooth
-    sign is the stick-slip law (v_s at most :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`, what ``identify
-    --effects stiction`` writes for a friction that sticks), else ``"smooth"``.
+    ``--friction-law``): ``"lugre"`` where the file says ``friction.law = "lugre"``, ``"stick"`` where the Alpes
+    parameter file's smooth sign is the stick-slip law (``friction.smooth_velocity`` at most
+    :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`, what ``identify --effects stiction`` writes for a friction
+    that sticks) and the model has dry friction, else ``"smooth"`` (a URDF robot's spec included: its
+    ``smooth_velocity`` is its own smoothing, not a verdict on its friction).
 
     Measured with the plants' true files on MuJoCo's dry friction (``benchmarks/observer_law.py``, recorded in
     ``benchmarks/results/observer_law.json``): where the plant's joints stick (the stiff constraint) the switched
@@ -81,8 +83,8 @@ def observer_friction_law(model: Model) -> str:
 
     if lugre_of(model) is not None:
         return "lugre"
-    ex = model.extras
-    if ex is not None and np.any(ex.coulomb) and float(ex.smooth_velocity) <= STICTION_VELOCITY:
+    p, ex = model.params, model.extras
+    if p is not None and ex is not None and np.any(ex.coulomb) and float(p.smooth_velocity) <= STICTION_VELOCITY:
         return "stick"
     return "smooth"
 
