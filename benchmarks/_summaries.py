@@ -388,6 +388,27 @@ def realism_friction(r: Result) -> list[str]:
     return out
 
 
+def observer_law(r: Result) -> list[str]:
+    """``observer_law.py`` (issue 50): per friction case and observer law, the EKF with the plant's true file; the
+    law chosen per friction kind; what the true file cannot hold."""
+    seeds = sorted({x["seed"] for x in r["rows"] if "error" not in x})
+    out = [f"finger3 drawn +-20 %, seeds {', '.join(map(str, seeds))} on every case; the EKF with the plant's true "
+           f"file (``bench.truth.write_truth``: the rig's effects in the file), no fit, on the friction study's "
+           f"validation run; worst joint's RMSE after 1 s (median / worst over the draws, goal "
+           f"{r['ekf_goal_deg']:g} deg) and its NEES"]
+    for case, laws in r["summary"]["cases"].items():
+        out.append(f"**{case}**: " + "; ".join(
+            f"{law} {_mw(s['rmse_worst_joint_deg'])} deg (NEES {_mw(s['nees_worst_joint'], '.3g')}, "
+            f"{s['within_goal']}/{s['rows']} within the goal)" for law, s in laws.items()))
+    for kind, c in r["summary"]["choice"].items():
+        out.append(f"chosen for a {kind} friction (over {', '.join(c['cases'])}): **{c['law']}** (worst joint "
+                   + ", ".join(f"{law} {v:.2f}" for law, v in c["worst_joint_deg"].items()) + " deg)")
+    held = sorted({n.split(" ")[0] for x in r["rows"] for n in x.get("not_held", [])})
+    out.append("effects the true file cannot hold (named by the writer): " + (", ".join(held) or "none"))
+    out += [f"raised: {x['case']} seed {x['seed']}: {x['error']}" for x in r["summary"]["raised"]]
+    return out
+
+
 def _adequate_worst(r: Result, case: str) -> dict[str, float] | None:
     """The worst K and m errors (%, up to the common scale) and EKF (deg) over a case's adequate rows."""
     good = [x for x in r["rows"] if x.get("case") == case and "extended" in x and not x["extended"]["flagged"]]
@@ -583,11 +604,12 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism, "realism.friction": realism_friction,
+    "observer_law": observer_law,
     "fit_scaling.hand": fit_scaling, "bench_loop": bench_loop, "bench_loop.hand": bench_loop,
     "bench_loop.thumb": bench_loop, "c_step": c_step,
 }
 
-ORDER = ["bench_loop", "default_path", "force_realism", "realism", "long_records", "identification", "fit_scaling", "observability",
+ORDER = ["bench_loop", "default_path", "force_realism", "realism", "observer_law", "long_records", "identification", "fit_scaling", "observability",
          "allegro", "dynamics", "rollout", "observer_step", "c_step", "observer_build", "param_cache", "control", "hand_control",
          "urdf_control", "any_robot", "foreign_hands", "allegro_identify", "mimic", "sweep"]
 """The page's order: the lead issues' benchmarks first."""

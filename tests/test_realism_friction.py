@@ -60,6 +60,18 @@ def test_each_case_plant_holds_its_friction_in_mujoco(case):
         assert e == PlantEffects(**{"stiction": e.stiction, "soft_stiction": e.soft_stiction})
 
 
+@pytest.mark.parametrize("case", [c for c in FRICTION_CASES if c.scale != 1.0], ids=lambda c: c.name)
+def test_the_true_file_holds_the_scaled_friction(case, tmp_path):
+    """A 3x case's true parameters written as a file and read back hold 3 x the draw's F_s (the file's entries, not
+    only the arrays: the true file once held the 1x F_s)."""
+    from alpes_dyn.model.params import load_params, write_params
+
+    back = load_params(write_params(case.true_params(SEED), tmp_path / "true.toml"))
+    drawn = perturbed_params(spread=0.2, seed=SEED)
+    np.testing.assert_allclose(back.finger.F_s, case.scale * np.asarray(drawn.finger.F_s), rtol=1e-12)
+    np.testing.assert_allclose(back.finger.K, drawn.finger.K, rtol=1e-12)
+
+
 def test_validation_torque_is_the_scenario_then_a_slow_ramp():
     """The estimate scenario's 5 s (its bias and sines, recomputed here), then the triangle of RAMP_TORQUE about the
     bias over RAMP_SECONDS: continuous, at most RAMP_TORQUE off the bias, slow (4 RAMP_TORQUE / RAMP_SECONDS)."""

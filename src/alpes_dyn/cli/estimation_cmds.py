@@ -23,11 +23,12 @@ from .common import (UntrustedFitWarning, _check_model_options, _check_run_files
                      data_label, parse_vector, read_data)
 
 
-FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh(v/v_s), the default), stick (the "
+FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh(v/v_s)), stick (the "
                      "time-stepping Coulomb law, which holds a joint at rest under a torque below F_s; the torque "
                      "read through a 10-sample moving average) or lugre (a bristle state per joint, the parameter "
-                     "file's friction.sigma0/sigma1, the torque averaged likewise; the default when the file's "
-                     "friction.law is lugre)")
+                     "file's friction.sigma0/sigma1, the torque averaged likewise). Default the file's: lugre where "
+                     "its friction.law is lugre, stick where its smooth_velocity is the stick-slip law's (identify "
+                     "--effects stiction), else smooth")
 """``estimate --friction-law``'s help (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
 
 
@@ -116,8 +117,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
-    from ..model.friction import lugre_of
-    from ..simulation.stick import FRICTION_LAWS
+    from ..simulation.stick import FRICTION_LAWS, observer_friction_law
 
     for flag, dest, default in _SCENARIO_ONLY:
         if getattr(args, dest) != default:
@@ -132,7 +132,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     t0 = time.perf_counter()
     notes = _trust_notes(args, [("--spec", args.spec) if _is_urdf_path(args.model) else ("--params", args.params)])
     model, whole = _data_model(args)
-    law = law if law is not None else ("lugre" if lugre_of(model) is not None else "smooth")  # the file's law
+    law = law if law is not None else observer_friction_law(model)  # the file's law
     delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
     if delay is not None and not 0 <= delay <= MAX_DELAY:
         raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "

@@ -31,11 +31,12 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
+from ..model.extras import STICTION_VELOCITY
 from ..model.robot import Model
 from ..symbolic.dynamics import block_solve
 from ..symbolic.statespace import StateSpace
 
-__all__ = ["FRICTION_LAWS", "MAX_DRY_JOINTS", "check_friction_law", "coulomb_velocity", "mass_blocks",
+__all__ = ["FRICTION_LAWS", "observer_friction_law", "MAX_DRY_JOINTS", "check_friction_law", "coulomb_velocity", "mass_blocks",
            "stick_step_expression"]
 
 FRICTION_LAWS: tuple[str, ...] = ("smooth", "stick", "lugre")
@@ -53,6 +54,39 @@ def check_friction_law(law: Any) -> str:
     if not isinstance(law, str) or law not in FRICTION_LAWS:
         raise InputError(f"friction_law: expected one of {', '.join(FRICTION_LAWS)}, got {law!r:.40}")
     return law
+
+
+def observer_friction_law(model: Model) -> str:
+    """The observer's friction law by default for ``model``'s parameter file (``estimate`` without
+    ``--friction-law``): ``"lugre"`` where the file says ``friction.law = "lugre"``, ``"stick"`` where the Alpes
+    parameter file's smooth sign is the stick-slip law (``friction.smooth_velocity`` at most
+    :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`, what ``identify --effects stiction`` writes for a friction
+    that sticks) and the model has dry friction, else ``"smooth"`` (a URDF robot's spec included: its
+    ``smooth_velocity`` is its own smoothing, not a verdict on its friction).
+
+    Measured with the plants' true files on MuJoCo's dry friction (``benchmarks/observer_law.py``, recorded in
+    ``benchmarks/results/observer_law.json``): where the plant's joints stick (the stiff constraint) the switched
+    law holds them and the smooth one drifts; where they creep (MuJoCo's default, soft constraint) the smooth law is
+    the closer one.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model.
+
+    Returns
+    -------
+    str
+        One of :data:`FRICTION_LAWS`.
+    """
+    from ..model.friction import lugre_of
+
+    if lugre_of(model) is not None:
+        return "lugre"
+    p, ex = model.params, model.extras
+    if p is not None and ex is not None and np.any(ex.coulomb) and float(p.smooth_velocity) <= STICTION_VELOCITY:
+        return "stick"
+    return "smooth"
 
 
 def coulomb_velocity(A: cs.SX, b: cs.SX, limit: Any, blocks: Sequence[Sequence[int]] | None = None) -> cs.SX:

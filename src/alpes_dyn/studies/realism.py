@@ -157,22 +157,30 @@ def hand_plant(chain: str) -> Plant:
     return Plant(chain, MODEL, chain)
 
 
-def ekf_run(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
-            plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0, stops: bool = False):
+def ekf_run(rec, params_path: str, fitted: dict | None, transient: float = 1.0, rotor: bool = False,
+            plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0, stops: bool = False,
+            friction_law: str | None = None):
     """The EKF on ``params_path`` run on a recording's encoder and torque
     (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
     the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
     the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
     fitted; ``stops``: the joints' end stops in the observer's model, as ``estimate --stops``); its metrics after
-    ``transient`` s. Returns the
+    ``transient`` s. ``fitted`` None: the file's own rig side (its gravity, encoder zero and torque delay, as
+    ``estimate --data`` reads them; ``rig`` and ``torque_delay`` unused), e.g. a plant's truth written by
+    :func:`~alpes_dyn.bench.truth.write_truth`. ``friction_law``: the observer's (default
+    :func:`~alpes_dyn.estimation.observers.replay.estimate_recording`'s). Returns the
     :class:`~alpes_dyn.estimation.observers.replay.RecordingEstimate`."""
+    if fitted is None:
+        return estimate_recording(rec, plant.alpes(rotor_inertia=rotor, params=params_path), "ekf",
+                                  transient=transient, force=True, stops=stops, friction_law=friction_law)
     # the rig's gravity, or the shipped file's: the fitted tilt is turned on below (the file's gravity holds it too)
     obs = on_rig(plant.alpes(rotor_inertia=rotor, params=params_path),
                  rig if rig is not None else load_params().gravity)
     off = [fitted.get(f"encoder_offset_{mo}", 0.0) for mo in obs.transmission.motor_names]
     tilt = (fitted.get("tilt_x", 0.0), fitted.get("tilt_y", 0.0))
     return estimate_recording(rec, obs, "ekf", encoder_offset=off, tilt=tilt, transient=transient,
-                              torque_delay=torque_delay, force=True, stops=stops)  # a flagged fit judged too
+                              torque_delay=torque_delay, force=True, stops=stops,  # a flagged fit judged too
+                              friction_law=friction_law)
 
 
 def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,

@@ -24,8 +24,10 @@ fits it (``--effects auto``), the file written; then a validation run that the f
 (:func:`validation_torque`: the ``estimate`` scenario's torque, then a slow ramp through the stick band), the EKF
 on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`, the joints' end
 stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops; the true file
-holds the finger's true K, m and friction, not the rig's effects -- as in the realism study, with every other effect
-its EKF does not know the tilt, the encoder's zero, the torque constant, the delay nor the cable). A row holds
+is the plant's whole truth, :func:`~alpes_dyn.bench.truth.write_truth`: the finger's true K, m and friction with the
+tilt, the encoder's zero, the delay, the cable's compliance and rotor and the torque constant in the fields
+``identify`` writes, its EKF reading them from the file; what a file cannot hold is named in the row,
+``true_file_not_held``). A row holds
 what :func:`~alpes_dyn.studies.realism.summarise` reads (the verdict, the errors up to the torque constant's
 common scale, the EKF's RMSE per joint) and, for each file, the joints' NEES against their 95 % band
 (:func:`~alpes_dyn.estimation.observers.consistency.nees`) and each fitted parameter's error in units of its
@@ -43,6 +45,7 @@ from typing import Any
 import numpy as np
 
 from ..bench.effects import PlantEffects, real_hand_effects
+from ..bench.truth import write_truth
 from ..control.plants import mujoco_recording
 from ..errors import InputError
 from ..estimation.experiments.design import ExperimentDesign
@@ -50,13 +53,13 @@ from ..estimation.identification.effects import alpes_models, fit_effects, parse
 from ..estimation.observers.consistency import nees
 from ..estimation.observers.scenario import EstimationScenario, scenario_torque
 from ..model.mjcf import STICTION_TIMECONST
-from ..model.params import HandParams, load_params, write_params
+from ..model.params import HandParams, load_params, with_values
 from ..symbolic.parametric import parameter_catalogue
 from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, MASS_GOAL_PCT, SPRING_GOAL_PCT, ekf_run, fit_row,
                       on_rig, plant_experiment, rig_design, rig_of, summarise)
 
 __all__ = ["FrictionCase", "FRICTION_CASES", "FRICTION_CASE_NAMES", "CONSTRAINTS", "STOP_MARGIN_DEG", "RAMP_TORQUE", "RAMP_SECONDS",
-           "validation_torque", "standard_scores", "friction_row", "friction_summary", "complete_seeds"]
+           "validation_torque", "standard_scores", "true_file_row", "friction_row", "friction_summary", "complete_seeds"]
 
 CONSTRAINTS: dict[str, tuple[float, float]] = {"soft": (0.02, 1.0), "stiff": (STICTION_TIMECONST, 1.0)}
 """The dry-friction constraint of each kind: MuJoCo's ``solreffriction`` (time constant s, damping ratio) the plant
@@ -98,7 +101,9 @@ class FrictionCase:
         p = FINGER3.true_params(seed)
         if self.scale == 1.0:
             return p
-        return dataclasses.replace(p, finger=dataclasses.replace(p.finger, F_s=self.scale * np.asarray(p.finger.F_s)))
+        prm = p.raw["finger.F_s"]  # through the file's entries: what write_params writes holds it too
+        return with_values(p, {"finger.F_s": dataclasses.replace(prm, value=self.scale * np.asarray(prm.value),
+                                                                 reason=f"{prm.reason}; times {self.scale:g}")})
 
 
 FRICTION_CASES: tuple[FrictionCase, ...] = tuple(
@@ -153,6 +158,42 @@ def _consistency(est, true_q: np.ndarray, transient: float) -> dict[str, Any]:
             "joints_consistent": [bool(lo <= x <= hi) for x in r.per_joint]}
 
 
+def _case(case: FrictionCase | str) -> FrictionCase:
+    """``case``, or the case of that name (:class:`~alpes_dyn.InputError` naming ``case`` on an unknown one)."""
+    if isinstance(case, str):
+        if case not in FRICTION_CASE_NAMES:
+            raise InputError(f"case: expected one of {', '.join(FRICTION_CASE_NAMES)}, got {case!r}")
+        case = FRICTION_CASES[FRICTION_CASE_NAMES.index(case)]
+    return case
+
+
+def true_file_row(case: FrictionCase | str, seed: int, laws: tuple[str, ...] = ("smooth",), tmp: Path | None = None,
+                  transient: float = 1.0, dt: float = 1e-3) -> dict[str, Any]:
+    """The EKF with the plant's true file alone (no fit): ``case`` drawn with ``seed``, its validation run
+    (:func:`validation_torque`, sample period ``dt`` s, the sensors' noise ``seed + 1000`` as in
+    :func:`friction_row`), the truth written in ``tmp`` (:func:`~alpes_dyn.bench.truth.write_truth`; default a
+    temporary directory) and the EKF on it with each observer friction law of ``laws``
+    (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`). Keys: ``case``, ``seed``, ``not_held``, ``rotor``, and per
+    law in ``laws`` (a dict by law): ``rmse_deg`` (per joint, after ``transient`` s), ``nees``
+    (:func:`_consistency`), ``seconds``; :class:`~alpes_dyn.InputError` naming ``case`` on an unknown name."""
+    case = _case(case)
+    if tmp is None:
+        with tempfile.TemporaryDirectory() as d:
+            return true_file_row(case, seed, laws, Path(d), transient, dt)
+    true, effects = case.true_params(seed), case.effects()
+    u = validation_torque(dt, FINGER3.alpes(params=true).transmission.n_motors)
+    val = mujoco_recording(FINGER3.model, true, u, dt, effects=effects, seed=seed + 1000, chain=FINGER3.chain)
+    truth = write_truth(true, effects, tmp / f"true_{case.name}_{seed}.toml", FINGER3.model, FINGER3.chain)
+    row: dict[str, Any] = {"case": case.name, "seed": seed, "not_held": list(truth.not_held), "rotor": truth.rotor,
+                           "laws": {}}
+    for law in laws:  # a few observers on one run
+        t0 = time.perf_counter()
+        est = ekf_run(val, str(truth.path), None, transient, rotor=truth.rotor, stops=True, friction_law=law)
+        row["laws"][law] = {"rmse_deg": np.degrees(est.rmse).tolist(), "nees": _consistency(est, val.true_q, transient),
+                            "seconds": time.perf_counter() - t0}
+    return row
+
+
 def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign | None = None,
                  tmp: Path | None = None, adapt: str = "auto", transient: float = 1.0) -> dict[str, Any]:
     """One row of the friction study (module docstring): ``case`` (a :class:`FrictionCase` or its name) on finger3
@@ -164,13 +205,10 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     (:func:`_consistency`), ``z`` (:func:`standard_scores`: the fit's standard errors with the model-form error of
     :mod:`~alpes_dyn.estimation.identification.law_spread` where the fit converged), ``z_noise`` (with the noise's
     alone), ``law_spread`` (it was added), ``validation_s``, ``validation_range_deg`` (the true
-    joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends);
-    :class:`~alpes_dyn.InputError` naming
-    ``case`` on an unknown name."""
-    if isinstance(case, str):
-        if case not in FRICTION_CASE_NAMES:
-            raise InputError(f"case: expected one of {', '.join(FRICTION_CASE_NAMES)}, got {case!r}")
-        case = FRICTION_CASES[FRICTION_CASE_NAMES.index(case)]
+    joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends),
+    ``true_file_not_held`` (the plant's effects the true file cannot hold, :attr:`~alpes_dyn.bench.truth.TruthFile.
+    not_held`); :class:`~alpes_dyn.InputError` naming ``case`` on an unknown name."""
+    case = _case(case)
     if tmp is None:
         with tempfile.TemporaryDirectory() as d:
             return friction_row(case, seed, design, Path(d), adapt, transient)
@@ -191,8 +229,8 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     fitted = dict(zip(res.names, res.values.tolist()))
     est = ekf_run(val, str(ident), fitted, transient, rotor="rotor" in fit.effects, rig=rig, torque_delay=fit.delay,
                   stops=True)
-    est_true = ekf_run(val, str(write_params(true, tmp / f"true_{case.name}_{seed}.toml")), {}, transient, rig=rig,
-                       stops=True)
+    truth_file = write_truth(true, effects, tmp / f"true_{case.name}_{seed}.toml", FINGER3.model, FINGER3.chain)
+    est_true = ekf_run(val, str(truth_file.path), None, transient, rotor=truth_file.rotor, stops=True)
     lo, hi = np.degrees(val.true_q.min(axis=0)), np.degrees(val.true_q.max(axis=0))
     limits = FINGER3.alpes(params=true)
     row = {"case": case.name, "seed": seed, "chain": FINGER3.label, "adaptation": adaptation.to_dict(),
@@ -213,6 +251,7 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
                 "ekf_true_file_rmse_deg": np.degrees(est_true.rmse).tolist(),
                 "nees": _consistency(est, val.true_q, transient),
                 "nees_true_file": _consistency(est_true, val.true_q, transient), "z": z,
+                "true_file_not_held": list(truth_file.not_held),
                 "ekf_seconds": time.perf_counter() - t0 - plant_s})
     return row
 

@@ -44,7 +44,7 @@ from ...model.stops import JointStops
 from ...model.trust import check_trusted
 from ...model.robot import Model
 from ...simulation.integrate import stable_substeps
-from ...simulation.stick import check_friction_law
+from ...simulation.stick import check_friction_law, observer_friction_law
 from ...simulation.lugre import lugre_substeps
 from ...model.friction import LuGre, lugre_of
 from ...symbolic.parametric import tilted_gravity
@@ -371,8 +371,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         The observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
         F_s tanh(v / v_s), ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
         (:mod:`alpes_dyn.simulation.stick`), or ``"lugre"``, a bristle state per joint
-        (:mod:`alpes_dyn.model.friction`). Default: ``"lugre"`` where the model's parameter file says
-        ``friction.law = "lugre"``, else ``"smooth"``.
+        (:mod:`alpes_dyn.model.friction`). Default: the parameter file's,
+        :func:`~alpes_dyn.simulation.stick.observer_friction_law` (``"lugre"`` where it says ``friction.law =
+        "lugre"``, ``"stick"`` where its smooth sign is the stick-slip law, else ``"smooth"``).
     torque_window : int or None, optional
         Samples of the causal moving average of the torque the observer reads (:func:`averaged`; its noise, given
         or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the stick and LuGre
@@ -396,7 +397,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         torque_delay = int(getattr(model.params, "torque_delay", 0))
     rec = advanced(rec, torque_delay)
     if friction_law is None:  # the parameter file's law
-        friction_law = "lugre" if lugre_of(model) is not None else "smooth"
+        friction_law = observer_friction_law(model)
     friction_law = check_friction_law(friction_law)
     window = (STICK_TORQUE_WINDOW if friction_law in ("stick", "lugre") else 1) if torque_window is None else \
         torque_window
