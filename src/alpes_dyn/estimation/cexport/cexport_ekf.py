@@ -370,7 +370,11 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
     (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`) where it has several, else CasADi's."""
     nz, ny = filt.nz, filt.ny
     lin, meas = filt.linearized_p, filt.measurement  # the functions the filter's step calls (p: the model's numbers)
-    fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
+    if filt.looped:  # a large state: CasADi's code of the looped model (estimation.observers.looped), never expanded
+        fmodel = cs.Function(f"{prefix}_cs_model", lin.mx_in(), lin.call(lin.mx_in()))
+        by_chain = False
+    else:
+        fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
     fmeas = cs.Function(f"{prefix}_cs_meas", meas.sx_in(), cs.cse(meas.call(meas.sx_in())))
     sA, sN, sH = fmodel.sparsity_out(1), fmodel.sparsity_out(2), fmeas.sparsity_out(1)
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
