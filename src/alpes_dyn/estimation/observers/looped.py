@@ -35,14 +35,16 @@ the Alpes hand's 30 and a finger's 4-8 stay unrolled (bit for bit with their exp
 states with its wrist held, 48 free, is looped."""
 
 
-def stage_jacobians(dm: Any, name: str = "stage") -> cs.Function:
-    """``SX`` function (z, w, p) -> (k (nz,), dk/dz (nz, nz), dk/dw (nz, nw)), dense: the right-hand side of ``dm``
+def stage_jacobians(dm: Any, name: str = "stage", dense: bool = True) -> cs.Function:
+    """``SX`` function (z, w, p) -> (k (nz,), dk/dz (nz, nz), dk/dw (nz, nw)): the right-hand side of ``dm``
     (a :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`) and its Jacobians for RK4, or one substep
-    and its Jacobians for the stick and LuGre laws (``dm.rhs_p`` None)."""
+    and its Jacobians for the stick and LuGre laws (``dm.rhs_p`` None); ``dense``: the Jacobians stored dense (the
+    exported C's arrays), else sparse (dq'/dz = [0 I]: the products by them skip the structural zeros)."""
     f = dm.rhs_p if dm.rhs_p is not None else dm.substep_p
     z, w, p = f.sx_in()
     k = f(z, w, p)
-    return cs.Function(name, [z, w, p], cs.cse([k, cs.densify(cs.jacobian(k, z)), cs.densify(cs.jacobian(k, w))]),
+    store = cs.densify if dense else (lambda x: x)
+    return cs.Function(name, [z, w, p], cs.cse([k, store(cs.jacobian(k, z)), store(cs.jacobian(k, w))]),
                        ["z", "w", "p"], ["k", "dk_dz", "dk_dw"])
 
 
@@ -72,14 +74,15 @@ def linearization(dm: Any) -> cs.Function:
     """``MX`` function (z, w, p) -> (z_next (nz,), A = dz_next/dz (nz, nz), G = dz_next/dw (nz, nw)), dense, of
     ``dm``'s ``substeps`` steps over one period, by the chain rule over :func:`stage_jacobians` (RK4's four stages
     per substep, or the stick / LuGre law's substep): the code of one right-hand side, called 4 x substeps times."""
-    f = stage_jacobians(dm, "stage_jacobians")
+    f = stage_jacobians(dm, "stage_jacobians", dense=False)
     z, w, p = cs.MX.sym("z", dm.nz), cs.MX.sym("w", dm.nw), cs.MX.sym("p", dm.values.size)
     h = dm.dt / dm.substeps
     x, A, G = z, None, None
     for _ in range(dm.substeps):
         x, As, Gs = _rk4(f, x, w, p, h) if dm.rhs_p is not None else f(x, w, p)
         A, G = (As, Gs) if A is None else (cs.mtimes(As, A), cs.mtimes(As, G) + Gs)
-    return cs.Function("linearization", [z, w, p], [x, A, G], ["z", "w", "p"], ["z_next", "A", "G"])
+    return cs.Function("linearization", [z, w, p], [x, cs.densify(A), cs.densify(G)], ["z", "w", "p"],
+                       ["z_next", "A", "G"])
 
 
 def _symmetric(M: cs.MX) -> cs.MX:
