@@ -27,7 +27,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-__all__ = ["LOOP_STATES", "stage_jacobians", "linearization", "predicted", "updated", "looped_functions"]
+__all__ = ["LOOP_STATES", "stage_jacobians", "linearization", "predicted", "updated", "looped_functions", "step_jacobians"]
 
 LOOP_STATES = 40
 """States from which the EKF's step is built as loops (:mod:`this module <alpes_dyn.estimation.observers.looped>`):
@@ -144,3 +144,17 @@ def looped_functions(filt: Any) -> dict[str, cs.Function]:
                                       ["z_next", "A", "N"]),
             "_predict_fn": cs.Function("predict", [zs, Ps, ws], predict_p(zs, Ps, ws, at), ["z", "P", "w"],
                                        ["z_pred", "P_pred"])}
+
+
+def step_jacobians(filt: Any) -> cs.Function:
+    """(z, w) -> (z_next (nz,), A = dz_next/dz, G = dz_next/dw), dense, at the model's numbers: of a looped filter
+    (``filt.looped``) by :func:`linearization` (``MX``), else by automatic differentiation of its unrolled step
+    (``SX``); what the consistency checks (:mod:`~alpes_dyn.estimation.observers.consistency`,
+    :mod:`~alpes_dyn.estimation.observers.innovation`) evaluate along a run."""
+    mdl = filt.model
+    if getattr(filt, "looped", False):
+        z, w = cs.MX.sym("z", mdl.nz), cs.MX.sym("w", mdl.nw)
+        return cs.Function("jacobians", [z, w], linearization(mdl)(z, w, cs.DM(mdl.values)))
+    z, w = cs.SX.sym("z", mdl.nz), cs.SX.sym("w", mdl.nw)
+    zn = mdl.step(z, w)
+    return cs.Function("jacobians", [z, w], [zn, cs.densify(cs.jacobian(zn, z)), cs.densify(cs.jacobian(zn, w))])
