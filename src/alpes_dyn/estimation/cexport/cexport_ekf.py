@@ -23,6 +23,10 @@ stages, composing A and G = dF/dw by the chain rule over CasADi's code of the ri
 (finger3's friction EKF: 49 kB of C instead of 1.1 MB, whose straight-line code GCC's -O2 took 30 s to minutes to
 build); its numbers are the filter's to rounding, not bit for bit.
 
+A looped filter (a large state, :mod:`~alpes_dyn.estimation.observers.looped`: the Shadow hand's 48) is exported
+from CasADi's code of its looped model -- the right-hand side and its Jacobians once, the RK4 stages, substeps and
+chain rule as loops -- never expanded into one expression; its numbers are the filter's to rounding.
+
 Why: CasADi's expression of the whole step is straight-line code of every scalar operation of the dense
 nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program); the model's code is 41,500
 operations, 466 kB of machine code in one function, and the loops a few kilobytes. ``benchmarks/observer_step.py``
