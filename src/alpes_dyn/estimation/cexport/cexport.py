@@ -317,14 +317,15 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
     if not (prefix.isidentifier() and prefix.isascii() and len(prefix) <= 40):
         raise InputError(f"prefix: expected a C identifier of at most 40 characters, got {prefix!r}")
     ekf = isinstance(filt, ExtendedKalmanFilter)
-    code = ("sparse" if ekf and filt.exact_loops and (_covariance_operations(filt) > _LOOPS_FROM
-                                                     or filt.model.substeps > 1) else "casadi") \
+    looped = ekf and filt.looped  # a large state: its model and covariance arithmetic as loops in either code
+    code = ("sparse" if ekf and (looped or filt.exact_loops and (_covariance_operations(filt) > _LOOPS_FROM
+                                                                 or filt.model.substeps > 1)) else "casadi") \
         if code is None else code
     if code not in ("sparse", "casadi"):
         raise InputError(f"code: expected 'sparse' or 'casadi', got {code!r}")
     if code == "sparse" and not ekf:
         raise InputError(f"code: 'sparse' is the EKF's; the {filt.kind} is exported as 'casadi'")
-    if code == "sparse" and not filt.exact_loops:
+    if code == "sparse" and not filt.exact_loops and not looped:
         raise InputError("code: 'sparse' would round differently from the filter's step on this model (CasADi "
                          "folds constant products in it); use 'casadi'")
     if chains is not None and not isinstance(chains, bool):
@@ -369,8 +370,9 @@ def _whole_step_source(filt: KalmanFilter, prefix: str) -> tuple[str, int]:
     """CasADi's code of the filter's own step and update with the API's wrappers: (source, nwork)."""
     step = filt.filter_step_p  # the model's numbers an input (run's and the compiled loop's step)
     upd = filt._update
-    fstep = cs.Function(f"{prefix}_cs_step", step.sx_in(), step.call(step.sx_in()))
-    fupd = cs.Function(f"{prefix}_cs_update", upd.sx_in(), upd.call(upd.sx_in()))
+    sym = (lambda f: f.mx_in()) if step.is_a("MXFunction") else (lambda f: f.sx_in())  # a looped step: its loops
+    fstep = cs.Function(f"{prefix}_cs_step", sym(step), step.call(sym(step)))
+    fupd = cs.Function(f"{prefix}_cs_update", sym(upd), upd.call(sym(upd)))
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})
     cg.add(fstep)
     cg.add(fupd)

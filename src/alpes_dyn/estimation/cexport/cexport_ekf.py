@@ -23,6 +23,10 @@ stages, composing A and G = dF/dw by the chain rule over CasADi's code of the ri
 (finger3's friction EKF: 49 kB of C instead of 1.1 MB, whose straight-line code GCC's -O2 took 30 s to minutes to
 build); its numbers are the filter's to rounding, not bit for bit.
 
+A looped filter (a large state, :mod:`~alpes_dyn.estimation.observers.looped`: the Shadow hand's 48) is exported
+from CasADi's code of its looped model -- the right-hand side and its Jacobians once, the RK4 stages, substeps and
+chain rule as loops -- never expanded into one expression; its numbers are the filter's to rounding.
+
 Why: CasADi's expression of the whole step is straight-line code of every scalar operation of the dense
 nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program); the model's code is 41,500
 operations, 466 kB of machine code in one function, and the loops a few kilobytes. ``benchmarks/observer_step.py``
@@ -370,7 +374,11 @@ def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True)
     (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`) where it has several, else CasADi's."""
     nz, ny = filt.nz, filt.ny
     lin, meas = filt.linearized_p, filt.measurement  # the functions the filter's step calls (p: the model's numbers)
-    fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
+    if filt.looped:  # a large state: CasADi's code of the looped model (estimation.observers.looped), never expanded
+        fmodel = cs.Function(f"{prefix}_cs_model", lin.mx_in(), lin.call(lin.mx_in()))
+        by_chain = False
+    else:
+        fmodel = cs.Function(f"{prefix}_cs_model", lin.sx_in(), cs.cse(lin.call(lin.sx_in())))
     fmeas = cs.Function(f"{prefix}_cs_meas", meas.sx_in(), cs.cse(meas.call(meas.sx_in())))
     sA, sN, sH = fmodel.sparsity_out(1), fmodel.sparsity_out(2), fmeas.sparsity_out(1)
     cg = cs.CodeGenerator(f"{prefix}.c", {"with_header": False, "casadi_real": "double"})

@@ -17,6 +17,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
+from ..observers.looped import stage_jacobians
 from ..observers.observers import ExtendedKalmanFilter
 
 __all__ = ["substep_model_source"]
@@ -179,9 +180,7 @@ static int {name}(const casadi_real** arg, casadi_real** res, casadi_int* iw, ca
 def _rk4_substep(dm: Any, nz: int, nw: int, name: str) -> tuple[str, int, int, int, cs.Function]:
     """One RK4 substep of ``dm`` with its Jacobians as C over CasADi's code of the right-hand side and its
     Jacobians: (source, its sz_arg, sz_res, doubles of work, the right-hand side's function)."""
-    z, w, p = dm.rhs_p.sx_in()
-    k = dm.rhs_p(z, w, p)
-    f = cs.Function(f"{name}_rhs", [z, w, p], cs.cse([k, cs.densify(cs.jacobian(k, z)), cs.densify(cs.jacobian(k, w))]))
+    f = stage_jacobians(dm, f"{name}_rhs")
     h = dm.dt / dm.substeps
     text = _RK4.format(name=name, f=f.name(), nz=nz, nw=nw, h2=0.5 * h, h=h, h6=h / 6.0, f_arg=f.sz_arg(),
                        f_res=f.sz_res())
@@ -200,11 +199,7 @@ def substep_model_source(filt: ExtendedKalmanFilter, name: str) -> tuple[str, in
         rk4, g_arg, g_res, g_w, g = _rk4_substep(dm, nz, nw, f"{name}_sub")
         g_name = f"{name}_sub"
     else:  # CasADi's code of one substep (the stick law's) and its Jacobians
-        sub = dm.substep_p
-        z, w, p = sub.sx_in()
-        z1 = sub(z, w, p)
-        g = cs.Function(f"{name}_sub", [z, w, p], cs.cse([z1, cs.densify(cs.jacobian(z1, z)),
-                                                          cs.densify(cs.jacobian(z1, w))]))
+        g = stage_jacobians(dm, f"{name}_sub")
         rk4, g_arg, g_res, g_w, g_name = "", g.sz_arg(), g.sz_res(), g.sz_w(), g.name()
     sA, sN = filt.linearized_p.sparsity_out(1), filt.linearized_p.sparsity_out(2)
     nm = max(nz, nw)

@@ -32,7 +32,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-__all__ = ["predicted_covariance", "updated_state"]
+__all__ = ["predicted_covariance", "updated_state", "chol_sym"]
 
 
 def _kinds(entries: list[Any]) -> tuple[list[bool], list[bool]]:
@@ -141,3 +141,15 @@ def updated_state(z: cs.SX, P: cs.SX, y: cs.SX, h: cs.SX, H: cs.SX, R: np.ndarra
     for r in range(ny):
         out = out + cs.mtimes(D[:, r], K[:, r].T)
     return zu, _mirrored(out)
+
+
+def chol_sym(P: cs.SX) -> cs.SX:
+    """Lower Cholesky factor of a symbolic symmetric positive definite matrix (unrolled)."""
+    n = P.shape[0]
+    L = [[cs.SX(0) for _ in range(n)] for _ in range(n)]
+    for j in range(n):
+        d = P[j, j] - sum((L[j][k] * L[j][k] for k in range(j)), cs.SX(0))
+        L[j][j] = cs.sqrt(cs.fmax(d, 1e-300))
+        for i in range(j + 1, n):
+            L[i][j] = (P[i, j] - sum((L[i][k] * L[j][k] for k in range(j)), cs.SX(0))) / L[j][j]
+    return cs.vertcat(*[cs.horzcat(*row) for row in L])

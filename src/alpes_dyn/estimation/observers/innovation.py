@@ -80,12 +80,14 @@ def _prediction(filt: Any, estimate: Estimate, W: np.ndarray, starts: np.ndarray
     at the predicted states). One CasADi step accumulated over the horizon, mapped over the starts."""
     import casadi as cs
 
+    from .looped import step_jacobians
+
     mdl = filt.model
     nz, nw = mdl.nz, mdl.nw
-    z, w = cs.SX.sym("z", nz), cs.SX.sym("w", nw)
-    P = cs.SX.sym("P", nz, nz)
-    zn = mdl.step(z, w)
-    A, G = cs.jacobian(zn, z), cs.jacobian(zn, w)
+    sym = cs.MX if getattr(filt, "looped", False) else cs.SX  # a looped filter: its chain rule (observers.looped)
+    z, w = sym.sym("z", nz), sym.sym("w", nw)
+    P = sym.sym("P", nz, nz)
+    zn, A, G = step_jacobians(filt)(z, w)
     Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, cs.DM(filt.Sw), G.T]) + cs.DM(filt.Q)
     step = cs.Function("pred", [cs.vertcat(z, cs.vec(P)), w], [cs.vertcat(zn, cs.vec(Pn))])
     acc = step.mapaccum("ahead", horizon)

@@ -1,0 +1,123 @@
+"""The EKF's step built as loops over dense matrices (estimation.observers.looped, issue 51 item 4): against the
+unrolled step on finger3 with friction (4 RK4 substeps) and on the Alpes hand (30 states), the size threshold on both
+sides, its C export against its run, and its bad inputs."""
+
+from __future__ import annotations
+
+import shutil
+import subprocess
+
+import casadi as cs
+import numpy as np
+import pytest
+
+import alpes_dyn as ad
+from alpes_dyn.errors import InputError
+from alpes_dyn.estimation.cexport.cexport import main_input, read_main_output, write_c_observer
+from alpes_dyn.estimation.observers import observers
+from alpes_dyn.estimation.observers.looped import LOOP_STATES
+from alpes_dyn.estimation.observers.observers import ExtendedKalmanFilter, UnscentedKalmanFilter
+from alpes_dyn.symbolic.statespace import StateSpace
+
+CC = shutil.which("cc") or shutil.which("gcc")
+
+
+def _pair(model, substeps, params=()):
+    """The same EKF unrolled and looped, and a record of 300 samples for it (its steps' inputs)."""
+    ss = StateSpace(model, input="motor", output="encoder")
+    n, m = model.n, ss.n_inputs
+    kw = dict(process_noise=[1e-12] * n + [1e-6] * n + [1e-8] * len(params), measurement_noise=[1e-6] * ss.n_outputs,
+              input_noise=[1e-6] * m, substeps=substeps, parameters=params)
+    unrolled, looped = ExtendedKalmanFilter(ss, 1e-3, looped=False, **kw), ExtendedKalmanFilter(ss, 1e-3, looped=True,
+                                                                                                **kw)
+    t = 1e-3 * np.arange(300)
+    W = 0.05 * np.sin(2 * np.pi * np.outer(t, 1.0 + np.arange(m)))
+    x = np.concatenate([model.rest_configuration() if hasattr(model, "rest_configuration") else np.zeros(n),
+                        np.zeros(n)])
+    return unrolled, looped, W, x
+
+
+def _compare(unrolled, looped, W, x0):
+    """The largest differences, relative to the entries' scale, of the linearisation (A, N) and of one whole step
+    from the unrolled filter's own estimates, at each of the record's samples."""
+    nz = unrolled.nz
+    P0 = np.diag(np.full(nz, 1e-4))
+    Y = np.zeros((W.shape[0] + 1, unrolled.ny))
+    Y[:] = np.asarray(unrolled.model.output(np.concatenate([x0, np.ones(nz - x0.size)]))).reshape(-1)
+    est = unrolled.run(np.concatenate([x0, np.ones(nz - x0.size)]), P0, W, Y)
+    Z, Ps = est.z[:-1], est.P[:-1]
+    z, w = cs.MX.sym("z", nz), cs.MX.sym("w", unrolled.nw)
+    lin = [cs.Function("l", [z, w], [cs.densify(o) for o in f.linearized(z, w)]).map(W.shape[0])
+           for f in (unrolled, looped)]
+    (za, Aa, Na), (zb, Ab, Nb) = ([np.asarray(o) for o in f(Z.T, W.T)] for f in lin)
+    S = np.hstack([Z, Ps.transpose(0, 2, 1).reshape(len(Z), -1)])
+    WY = np.hstack([W, Y[1:]])
+    sa, sb = (np.asarray(f.filter_step.map(W.shape[0])(S.T, WY.T)) for f in (unrolled, looped))
+    rel = lambda a, b: float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))  # noqa: E731
+    return {"z_next": rel(za, zb), "A": rel(Aa, Ab), "N": rel(Na, Nb), "z": rel(sa[:nz], sb[:nz]),
+            "P": rel(sa[nz:], sb[nz:])}
+
+
+def test_looped_step_equals_the_unrolled_on_a_finger_with_friction():
+    """finger3 with its friction (4 RK4 substeps per period) and both gains as states: the looped linearisation
+    (the chain rule over the stages) and step equal the unrolled expression's to 1e-12 (relative) at 300 states."""
+    model = ad.Model.alpes("finger3", friction=True)
+    unrolled, looped, W, x0 = _pair(model, 4, ("input_gain", "spring_gain"))
+    assert not unrolled.looped and looped.looped and unrolled.exact_loops and not looped.exact_loops
+    err = _compare(unrolled, looped, W, x0[: 2 * model.n])
+    assert max(err.values()) <= 1e-12, err
+
+
+def test_looped_step_equals_the_unrolled_on_the_alpes_hand():
+    """The Alpes hand, 30 states (5 chains, 5 motors, one RK4 step): the same to 1e-12."""
+    model = ad.Model.alpes("hand")
+    unrolled, looped, W, x0 = _pair(model, 1)
+    assert unrolled.nz == 30 and looped.filter_step_p.is_a("MXFunction")
+    err = _compare(unrolled, looped, W, x0)
+    assert max(err.values()) <= 1e-12, err
+
+
+def test_the_size_threshold_on_both_sides(monkeypatch):
+    """Looped by default from LOOP_STATES states on: one state under it unrolled, at it looped (the threshold moved
+    to finger2's 4 states); the Alpes hand's 30 stay unrolled, the Shadow hand's 48 are looped."""
+    assert 30 < LOOP_STATES <= 48
+    ss = StateSpace(ad.Model.alpes("finger2"), input="motor", output="encoder")
+    kw = dict(process_noise=[1e-10] * 4, measurement_noise=[1e-7])
+    monkeypatch.setattr(observers, "LOOP_STATES", 5)
+    assert not ExtendedKalmanFilter(ss, 1e-3, **kw).looped
+    monkeypatch.setattr(observers, "LOOP_STATES", 4)
+    f = ExtendedKalmanFilter(ss, 1e-3, **kw)
+    assert f.looped and f.filter_step_p.is_a("MXFunction")
+    assert not UnscentedKalmanFilter(ss, 1e-3, **kw).looped  # the UKF's step is unrolled
+
+
+@pytest.mark.parametrize("bad, match", [("yes", "looped: expected True, False or None"),
+                                        (1, "looped: expected True, False or None")])
+def test_bad_looped(bad, match):
+    ss = StateSpace(ad.Model.alpes("finger2"), input="motor", output="encoder")
+    with pytest.raises(InputError, match=match):
+        ExtendedKalmanFilter(ss, 1e-3, process_noise=[1e-10] * 4, measurement_noise=[1e-7], looped=bad)
+    with pytest.raises(InputError, match="looped: the EKF's step only"):
+        UnscentedKalmanFilter(ss, 1e-3, process_noise=[1e-10] * 4, measurement_noise=[1e-7], looped=True)
+
+
+@pytest.mark.skipif(CC is None, reason="no C compiler (cc or gcc) on PATH: the exported C is not built")
+@pytest.mark.parametrize("code", [None, "casadi"])
+def test_c_export_of_a_looped_filter_equals_its_run(code, tmp_path):
+    """finger3 with friction, looped: its C (the default "sparse": the substeps' loop and the covariance loops;
+    "casadi": CasADi's code of the looped step, its matrix products as loops) equals its run to rounding."""
+    model = ad.Model.alpes("finger3", friction=True)
+    _, filt, W, x0 = _pair(model, 4)
+    z0, P0 = x0, np.full(filt.nz, 1e-4)
+    Y = np.tile(np.asarray(filt.model.output(z0)).reshape(-1), (W.shape[0] + 1, 1))
+    d = write_c_observer(filt, tmp_path / "c", code=code, prefix="obs")["main.c"].parent
+    exe = tmp_path / "main"
+    subprocess.run([CC, "-O1", "-std=c99", "-o", str(exe), str(d / "main.c"), str(d / "obs.c"), "-lm"], check=True,
+                   capture_output=True, text=True, timeout=300)
+    (tmp_path / "in.txt").write_text(main_input(z0, P0, Y[0], W, Y[1:]))
+    out = subprocess.run([str(exe), str(tmp_path / "in.txt")], check=True, capture_output=True, text=True).stdout
+    Z, P = read_main_output(out, filt.nz)
+    est = filt.run(z0, P0, W, Y)
+    assert Z.shape == est.z.shape == (301, 6)
+    assert np.abs(Z - est.z).max() <= 1e-9 * np.abs(est.z).max()
+    assert np.abs(P - est.P).max() <= 1e-9 * np.abs(est.P).max()
