@@ -80,3 +80,23 @@ def test_the_observer_check_is_the_same_compiled_as_in_the_virtual_machine(stick
                                                         (new.split_nis, old.split_nis)) if x is not None)):
             assert a == pytest.approx(b, rel=1e-9)
     assert passed == [True, False]  # the true file passes, the nominal one not
+
+
+def test_the_linearisation_along_the_run_is_the_filters_and_a_finite_difference(stick_slip_run):
+    """A_k = dF/dz compiled equals the filter's own linearisation (:attr:`linearized`, the expression its prediction
+    is built from) at five samples, G_k = dF/dw a central finite difference of the model's step (relative 1e-5);
+    the virtual machine's the same (relative 1e-12)."""
+    _, _, est = stick_slip_run
+    filt, z, W = est.filter, est.estimate.z, est.inputs
+    A, G = ahead.linearised(filt, z, W)
+    assert A.shape == (W.shape[0], filt.nz, filt.nz) and G.shape == (W.shape[0], filt.nz, filt.nw)
+    for k in (500, 611, 845, 1100, 1150):
+        np.testing.assert_allclose(A[k], np.asarray(filt.linearized(z[k], W[k])[1]), rtol=1e-10, atol=1e-13)
+        h = 1e-6 * max(float(np.abs(W[k]).max()), 1e-3)
+        fd = np.column_stack([(np.asarray(filt.model.step(z[k], W[k] + h * e)) - np.asarray(
+            filt.model.step(z[k], W[k] - h * e))).reshape(-1) / (2 * h) for e in np.eye(filt.nw)])
+        np.testing.assert_allclose(G[k], fd, rtol=1e-5, atol=1e-9 * np.abs(fd).max())
+    with mock.patch.object(ahead, "_loop", lambda f, covariance: None):
+        A_vm, G_vm = ahead.linearised(filt, z[:300], W[:299])
+    np.testing.assert_allclose(A_vm, A[:299], rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(G_vm, G[:299], rtol=1e-12, atol=1e-15)

@@ -23,22 +23,29 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-__all__ = ["AHEAD_BATCH", "predicted_ahead"]
+__all__ = ["AHEAD_BATCH", "predicted_ahead", "linearised"]
 
 AHEAD_BATCH = 256
 """Starts run per call of the compiled loop: its trajectory buffer (starts x (H + 1) x (nz + nz^2) doubles) stays a
 few tens of MB for the LuGre model's states and a 0.1 s horizon."""
 
 
-def _steps(filt: Any, covariance: bool) -> tuple[cs.Function, np.ndarray]:
-    """The step (s, w, p) -> s_next, s = z (mean alone) or [z; vec P] (with ``covariance``), and its p: the model's
-    numbers (``filt.model.values``), then vec Sigma_w and vec Q where the covariance is stepped."""
+def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
+    """The step (s, w, p) -> s_next, s = z (mean alone), [z; vec P] (with ``covariance``) or [z; vec X; vec Y]
+    (``covariance="jacobians"``: X A and X G + Y, the step's Jacobians A = dF/dz, G = dF/dw from X = I, Y = 0), and
+    its p: the model's numbers (``filt.model.values``), then vec Sigma_w and vec Q where the covariance is stepped."""
     mdl = filt.model
     nz, nw = mdl.nz, mdl.nw
     z, w, pm = cs.SX.sym("z", nz), cs.SX.sym("w", nw), cs.SX.sym("p", mdl.values.size)
     zn = mdl.step_p(z, w, pm)
     if not covariance:
         return cs.Function("ahead_mean", [z, w, pm], [zn]), np.asarray(mdl.values, dtype=float)
+    if covariance == "jacobians":
+        X, Y = cs.SX.sym("X", nz, nz), cs.SX.sym("Y", nz, nw)
+        A, G = cs.jacobian(zn, z), cs.jacobian(zn, w)
+        out = cs.vertcat(zn, cs.vec(cs.mtimes(A, X)), cs.vec(cs.mtimes(A, Y) + G))
+        return (cs.Function("ahead_jac", [cs.vertcat(z, cs.vec(X), cs.vec(Y)), w, pm], [out]),
+                np.asarray(mdl.values, dtype=float))
     P, Sw, Q = cs.SX.sym("P", nz, nz), cs.SX.sym("Sw", nw, nw), cs.SX.sym("Q", nz, nz)
     A, G = cs.jacobian(zn, z), cs.jacobian(zn, w)
     Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, Sw, G.T]) + Q
@@ -49,7 +56,7 @@ def _steps(filt: Any, covariance: bool) -> tuple[cs.Function, np.ndarray]:
     return step, values
 
 
-def _loop(filt: Any, covariance: bool) -> Any:
+def _loop(filt: Any, covariance: bool | str) -> Any:
     """The filter's compiled loop of the step (:func:`_steps`), built once per filter (kept on it) and loaded from
     the disk cache by any filter of the same structure; None without a C compiler."""
     from ...simulation.integrate import CompiledStepLoop, CompilerError
@@ -58,7 +65,8 @@ def _loop(filt: Any, covariance: bool) -> Any:
     if covariance not in cache:
         step, values = _steps(filt, covariance)
         try:
-            cache[covariance] = CompiledStepLoop(step, f"ahead{'_cov' if covariance else ''}_"
+            kind = {False: "", True: "_cov", "jacobians": "_jac"}[covariance]
+            cache[covariance] = CompiledStepLoop(step, f"ahead{kind}_"
                                                        f"{filt.model.system.model.name}", threads=1,
                                                  vectorize=False, parameters=values)
         except CompilerError:
@@ -66,13 +74,49 @@ def _loop(filt: Any, covariance: bool) -> Any:
     return cache[covariance]
 
 
-def _vm(filt: Any, s0: np.ndarray, Wb: np.ndarray, covariance: bool) -> np.ndarray:
+def _vm(filt: Any, s0: np.ndarray, Wb: np.ndarray, covariance: bool | str) -> np.ndarray:
     """(B, ns) the state after the horizon by CasADi's virtual machine (the fallback without a compiler)."""
     step, values = _steps(filt, covariance)
     B, H, nw = Wb.shape
     acc = step.mapaccum("ahead", H).map(B)
     out = acc(s0.T, Wb.transpose(2, 1, 0).reshape(nw, -1, order="F"), values)
     return np.asarray(out).reshape(s0.shape[1], H, B, order="F")[:, -1, :].T
+
+
+def _run(filt: Any, s0: np.ndarray, Wb: np.ndarray, covariance: bool | str) -> np.ndarray:
+    """(B, ns) the state after the horizon from each row of s0 (B, ns) with the inputs Wb (B, H, nw): the compiled
+    loop :data:`AHEAD_BATCH` starts at a time, or the virtual machine without a compiler."""
+    loop = _loop(filt, covariance)
+    if loop is None:
+        return _vm(filt, s0, Wb, covariance)
+    return np.concatenate([loop.run(s0[b: b + AHEAD_BATCH], np.ascontiguousarray(Wb[b: b + AHEAD_BATCH]))[:, -1]
+                           for b in range(0, s0.shape[0], AHEAD_BATCH)])
+
+
+def linearised(filt: Any, z: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The filter's step linearised along its run: A_k = dF/dz and G_k = dF/dw at (z_k, w_k), compiled.
+
+    Parameters
+    ----------
+    filt : ~alpes_dyn.estimation.observers.observers.KalmanFilter
+        The filter (its ``model``).
+    z : ndarray
+        (N, nz) the filter's estimates; the first N - 1 are used.
+    W : ndarray
+        (N - 1, nw) its known inputs, row k held from sample k to k + 1.
+
+    Returns
+    -------
+    tuple of ndarray
+        (A (N-1, nz, nz), G (N-1, nz, nw)).
+    """
+    nz, nw, K = filt.model.nz, filt.model.nw, W.shape[0]
+    s0 = np.zeros((K, nz + nz * nz + nz * nw))
+    s0[:, :nz] = z[:K]
+    s0[:, nz: nz + nz * nz] = np.eye(nz).reshape(-1)
+    end = _run(filt, s0, W[:, None, :], "jacobians")
+    A = end[:, nz: nz + nz * nz].reshape(K, nz, nz).transpose(0, 2, 1)  # column-major vec
+    return A, end[:, nz + nz * nz:].reshape(K, nw, nz).transpose(0, 2, 1)
 
 
 def predicted_ahead(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray, horizon: int,
@@ -107,12 +151,7 @@ def predicted_ahead(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray,
     s0 = z[starts] if not covariance else np.concatenate(
         [z[starts], P[starts].transpose(0, 2, 1).reshape(len(starts), -1)], axis=1)
     Wb = np.lib.stride_tricks.sliding_window_view(W, horizon, axis=0)[starts].transpose(0, 2, 1)  # (B, H, nw)
-    loop = _loop(filt, covariance)
-    if loop is None:
-        end = _vm(filt, s0, Wb, covariance)
-    else:
-        end = np.concatenate([loop.run(s0[b: b + AHEAD_BATCH], np.ascontiguousarray(Wb[b: b + AHEAD_BATCH]))[:, -1]
-                              for b in range(0, len(starts), AHEAD_BATCH)])  # (B, ns)
+    end = _run(filt, s0, Wb, covariance)  # (B, ns)
     zs = cs.SX.sym("zs", nz)
     h = cs.Function("h", [zs], [mdl.output(zs), cs.densify(cs.jacobian(mdl.output(zs), zs))]).map(len(starts))
     y, Hs = h(end[:, :nz].T)
