@@ -15,6 +15,11 @@ error of K and m against the truth. Optionally the dense KKT (``kkt="dense"``, t
 
     python benchmarks/fit_scaling.py [--durations 4,16,60] [--fit api|cli] [--records DIR] [--seed 21]
                                      [--dense-up-to 0] [--superlu-up-to 0] [--model finger3|hand] [--json]
+    python benchmarks/fit_scaling.py --speed stiff [--duration 2] [--seed S] [--json]
+
+``--speed CASE``: ``identify --effects auto`` on a friction case's MuJoCo record (``studies/realism_friction.py``),
+the old path and the new one in the same process, each round's time, the observer checks', wall and CPU, and the
+two fits compared (``benchmarks/_fit_speed.py``).
 
 ``--model hand``: the whole hand, every chain drawn +-20 % (``alpes-dyn experiment --model hand --perturb 0.2``: the
 six motors excited at once) and fitted chain by chain as ``alpes-dyn identify --model hand`` fits it (``--fit cli``
@@ -189,6 +194,23 @@ def _table(rows: list[dict], seed: int, fit: str, model: str = "finger3") -> Non
               f"{r['worst_error_pct']['K']:5.2f} {r['worst_error_pct']['m']:5.2f} | {refs}")
 
 
+def _speed(args: argparse.Namespace) -> int:
+    """``--speed CASE``: benchmarks/_fit_speed.py's run, its table or its JSON."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    import _fit_speed
+    from alpes_dyn.studies.realism_friction import FRICTION_CASE_NAMES
+
+    if args.speed not in FRICTION_CASE_NAMES:
+        print(f"--speed: expected one of {', '.join(FRICTION_CASE_NAMES)}, got {args.speed!r}", file=sys.stderr)
+        return 2
+    r = _fit_speed.speed(args.speed, args.seed, args.duration)
+    if args.json:
+        print(json.dumps({"speed": r}))
+    else:
+        _fit_speed.table(r)
+    return 0
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--durations", default="4,16,60")
@@ -198,6 +220,9 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--superlu-up-to", type=float, default=0.0, help="run SuperLU too up to this length, s")
     ap.add_argument("--seed", type=int, default=21)
     ap.add_argument("--model", choices=("finger3", "hand"), default="finger3")
+    ap.add_argument("--speed", metavar="CASE", help="the old and the new path of identify --effects auto on a friction "
+                    "case's MuJoCo record (benchmarks/_fit_speed.py), instead of the durations")
+    ap.add_argument("--duration", type=float, default=2.0, help="--speed: the record's length, s")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--child", type=float, help=argparse.SUPPRESS)
     ap.add_argument("--kkt", default="", help=argparse.SUPPRESS)
@@ -206,6 +231,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.model == "hand" and (args.fit != "cli" or args.dense_up_to or args.superlu_up_to):
         ap.error("--model hand: the command line's fit alone (--fit cli), no KKT references")
+    if args.speed is not None:
+        return _speed(args)
     if args.make is not None:
         make(args.make, args.seed, args.data, args.model)
         return 0

@@ -43,6 +43,7 @@ from ...model.robot import Model
 from .adequacy import Whiteness, sensor_floor, whiteness
 from ..experiments.recording import Recording, excitation_parts
 from ..observers.consistency import nees
+from ..observers.ahead import predicted_ahead
 from ..observers.innovation import Nis, nis
 from ..observers.replay import advanced, estimate_recording
 
@@ -156,18 +157,6 @@ def fitted_rig(result: Any) -> tuple[list[float] | None, list[float] | None]:
     return off, None if tilt is None else list(tilt)
 
 
-def _predicted(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray, horizon: int) -> np.ndarray:
-    """(B, m) the encoder (rad) the filter's model predicts ``horizon`` samples after each start k of ``starts``
-    (B,), from z[k] (the estimate at t_k) with the held torques W[k .. k+horizon-1]: one batched CasADi call
-    (the step accumulated over the horizon, mapped over the starts)."""
-    step = filt.model.step
-    acc = step.mapaccum("ahead", horizon)
-    Wb = np.stack([W[k: k + horizon] for k in starts])  # (B, H, nw)
-    zf = acc.map(len(starts))(z[starts].T, Wb.transpose(2, 1, 0).reshape(W.shape[1], -1, order="F"))
-    zend = np.asarray(zf).reshape(z.shape[1], horizon, len(starts), order="F")[:, -1, :]  # (nz, B)
-    return np.asarray(filt.model.output.map(len(starts))(zend)).T
-
-
 def _first(rec: Recording, seconds: float) -> Recording:
     """The recording's first ``seconds`` s (all of it where shorter), within its first run and orientation (the
     observer runs on one: no jump of the states, one gravity; :func:`~alpes_dyn.estimation.experiments.
@@ -212,10 +201,10 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     k0 = int(round(transient / recording.dt))
     N = y.shape[0]
     ks = np.arange(k0, N - 1)
-    innov = (y[ks + 1] - _predicted(filt, est.estimate.z, W, ks, 1)) / step
+    innov = (y[ks + 1] - predicted_ahead(filt, est.estimate.z, W, ks, 1)[0]) / step
     H = max(1, int(round(th["horizon_s"] / recording.dt)))
     starts = np.arange(k0, N - H, int(th["stride"]))
-    pred = (y[starts + H] - _predicted(filt, est.estimate.z, W, starts, H)) / step
+    pred = (y[starts + H] - predicted_ahead(filt, est.estimate.z, W, starts, H)[0]) / step
     H2 = max(1, int(round(th["split_horizon_s"] / recording.dt)))
     room = (N - 1 - k0) // 4  # a horizon needs a quarter of the record after the transient (innovation.nis): a
     consistency = [nis(est.estimate, y, filt, est.inputs, start=transient, level=th["nis_level"], horizon=h,

@@ -105,13 +105,10 @@ def predicted_covariance(filt: Any, estimate: Estimate, W: np.ndarray) -> tuple[
     """The filter's one-step prediction along its run, recomputed from its estimate: (A (N-1, nz, nz), P_pred
     (N-1, nz, nz)), A_k = dF/dz at (z_k, w_k) and P_pred,k = A_k P_k A_k^T + G Sigma_w G^T + Q (G = dF/dw), the
     covariance of z_k+1|k. ``W`` (N-1, nw): the known inputs, row k held from sample k to k+1."""
-    from .looped import step_jacobians
+    from .ahead import linearised  # compiled (the virtual machine's map over the samples without a compiler)
 
-    mdl = filt.model
-    N, nz = W.shape[0], mdl.nz
-    A, G = step_jacobians(filt).map(N)(estimate.z[:N].T, W.T)[1:]
-    A = np.asarray(A).reshape(nz, N, nz).transpose(1, 0, 2)  # the map stacks the samples side by side
-    G = np.asarray(G).reshape(nz, N, mdl.nw).transpose(1, 0, 2)
+    N = W.shape[0]
+    A, G = linearised(filt, estimate.z, W)
     P = estimate.P
     return A, A @ P[:N] @ A.transpose(0, 2, 1) + G @ filt.Sw @ G.transpose(0, 2, 1) + filt.Q
 

@@ -27,6 +27,7 @@ import numpy as np
 
 from ...checks import as_float_array
 from ...errors import InputError
+from .ahead import predicted_ahead
 from .consistency import Banded, chi2_band
 from .observers import Estimate
 
@@ -70,38 +71,6 @@ class Nis(Banded):
                 "samples": self.samples, "effective_samples": self.effective, "start_s": self.start,
                 "per_output": self.per_output.tolist(), "innovation_rms": self.innovation_rms.tolist(),
                 "reported_rms": self.reported_rms.tolist(), "verdict": self.verdict}
-
-
-def _prediction(filt: Any, estimate: Estimate, W: np.ndarray, starts: np.ndarray, horizon: int
-                ) -> tuple[np.ndarray, np.ndarray]:
-    """The filter's prediction of the measurement ``horizon`` samples after each start k of ``starts`` (B,), from
-    z_k|k and P_k|k with the known inputs W[k .. k+horizon-1] and no update: (y (B, m), its covariance S (B, m, m)
-    = H P_k+horizon|k H^T + R), P propagated as the filter's prediction does (A P A^T + G Sigma_w G^T + Q, A and G
-    at the predicted states). One CasADi step accumulated over the horizon, mapped over the starts."""
-    import casadi as cs
-
-    from .looped import step_jacobians
-
-    mdl = filt.model
-    nz, nw = mdl.nz, mdl.nw
-    sym = cs.MX if getattr(filt, "looped", False) else cs.SX  # a looped filter: its chain rule (observers.looped)
-    z, w = sym.sym("z", nz), sym.sym("w", nw)
-    P = sym.sym("P", nz, nz)
-    zn, A, G = step_jacobians(filt)(z, w)
-    Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, cs.DM(filt.Sw), G.T]) + cs.DM(filt.Q)
-    step = cs.Function("pred", [cs.vertcat(z, cs.vec(P)), w], [cs.vertcat(zn, cs.vec(Pn))])
-    acc = step.mapaccum("ahead", horizon)
-    x0 = np.concatenate([estimate.z[starts], estimate.P[starts].transpose(0, 2, 1).reshape(len(starts), -1)], axis=1)
-    Wb = np.lib.stride_tricks.sliding_window_view(W, horizon, axis=0)[starts].transpose(0, 2, 1)  # (B, H, nw)
-    out = acc.map(len(starts))(x0.T, Wb.transpose(2, 1, 0).reshape(nw, -1, order="F"))
-    xend = np.asarray(out).reshape(nz + nz * nz, horizon, len(starts), order="F")[:, -1, :]  # (nz + nz^2, B)
-    zs = cs.SX.sym("zs", nz)
-    h = cs.Function("h", [zs], [mdl.output(zs), cs.densify(cs.jacobian(mdl.output(zs), zs))]).map(len(starts))
-    y, Hs = h(xend[:nz])
-    B, m = len(starts), mdl.ny
-    Hs = np.asarray(Hs).reshape(m, B, nz).transpose(1, 0, 2)
-    Pend = xend[nz:].T.reshape(B, nz, nz).transpose(0, 2, 1)
-    return np.asarray(y).T, Hs @ Pend @ Hs.transpose(0, 2, 1) + filt.R
 
 
 def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start: float = 0.0,
@@ -153,7 +122,7 @@ def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start
         lags = max(1, min(NIS_LAGS, starts.size // 4))
     if isinstance(lags, bool) or not isinstance(lags, (int, np.integer)) or not 1 <= lags < starts.size // 2:
         raise InputError(f"lags: expected an integer from 1 to {starts.size // 2 - 1}, got {lags!r:.40}")
-    yp, S = _prediction(filter, estimate, W, starts, int(horizon))
+    yp, S = predicted_ahead(filter, estimate.z, W, starts, int(horizon), estimate.P)
     i = y[starts + horizon] - yp
     r = np.linalg.solve(np.linalg.cholesky(S), i[:, :, None])[:, :, 0]  # whitened: unit variance when consistent
     eps = np.sum(r**2, axis=1)
