@@ -121,3 +121,25 @@ def test_c_export_of_a_looped_filter_equals_its_run(code, tmp_path):
     assert Z.shape == est.z.shape == (301, 6)
     assert np.abs(Z - est.z).max() <= 1e-9 * np.abs(est.z).max()
     assert np.abs(P - est.P).max() <= 1e-9 * np.abs(est.P).max()
+
+
+def test_predictions_ahead_and_linearisation_of_a_looped_filter_equal_the_unrolled():
+    """The consistency checks' linearisation along a run and their predictions 5 samples ahead with covariance
+    (estimation.observers.ahead): a looped filter (its chain rule) and the unrolled one (compiled, or the virtual
+    machine) give the same numbers to 1e-10 (relative) on finger3 with friction."""
+    from alpes_dyn.estimation.observers.ahead import linearised, predicted_ahead
+
+    model = ad.Model.alpes("finger3", friction=True)
+    unrolled, looped, W, x0 = _pair(model, 4)
+    W = W[:60]
+    nz = unrolled.nz
+    Y = np.repeat(np.asarray(unrolled.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
+    est = unrolled.run(x0, np.diag(np.full(nz, 1e-4)), W, Y)
+    rel = lambda a, b: float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))  # noqa: E731
+    for a, b in zip(linearised(unrolled, est.z, W), linearised(looped, est.z, W)):
+        assert rel(a, b) <= 1e-10
+    starts = np.arange(0, 50, 7)
+    ya, Sa = predicted_ahead(unrolled, est.z, W, starts, 5, est.P)
+    yb, Sb = predicted_ahead(looped, est.z, W, starts, 5, est.P)
+    assert ya.shape == yb.shape == (starts.size, unrolled.ny) and Sa.shape == Sb.shape
+    assert rel(ya, yb) <= 1e-10 and rel(Sa, Sb) <= 1e-10
