@@ -96,3 +96,37 @@ def test_mujoco_soft_friction_reaches_F_s_only_over_a_wide_band():
     slow, fast = (np.abs(v) > 0.03) & (np.abs(v) < 0.1), np.abs(v) > 0.3
     assert slow.sum() > 100 and fast.sum() > 100
     assert np.mean(ratio[slow]) < 0.5 and np.mean(ratio[fast]) > 0.85
+
+
+def test_soft_constraint_friction_is_mujocos_constraint_force():
+    """The law of module creep against MuJoCo itself (the reference): on the soft case's plant of a drawn finger3,
+    each joint's frictionloss row force (``efc_force``) at every step of 0.3 s equals
+    soft_constraint_friction(qacc, qvel, F_s, dof_invweight0) to 1e-9 of F_s, the joints in the band (below 0.95
+    F_s) and at F_s both seen; a bad constant is refused naming it."""
+    mujoco = pytest.importorskip("mujoco")
+    from alpes_dyn.bench.mujoco_plant import plant_mjcf
+    from alpes_dyn.errors import InputError
+    from alpes_dyn.estimation.identification.creep import soft_constraint_friction
+    from alpes_dyn.studies.realism import FINGER3
+    from alpes_dyn.studies.realism_friction import FRICTION_CASES
+
+    m = mujoco.MjModel.from_xml_string(plant_mjcf(FINGER3.model, FRICTION_CASES[0].true_params(9801),
+                                                  FRICTION_CASES[0].effects(), FINGER3.chain))
+    d = mujoco.MjData(m)
+    t = np.arange(int(0.3 / m.opt.timestep)) * m.opt.timestep
+    u = 0.004 + 0.002 * np.sin(2 * np.pi * 3.1 * t)
+    f, qdd, qd = (np.zeros((t.size, m.nv)) for _ in range(3))
+    for k in range(t.size):
+        d.ctrl[:] = u[k]
+        mujoco.mj_forward(m, d)
+        rows = np.flatnonzero(d.efc_type[: d.nefc] == mujoco.mjtConstraint.mjCNSTR_FRICTION_DOF)
+        f[k, d.efc_id[rows]] = d.efc_force[rows]
+        qdd[k], qd[k] = d.qacc, d.qvel
+        mujoco.mj_step(m, d)
+    F_s = m.dof_frictionloss
+    law = soft_constraint_friction(qdd, qd, F_s, m.dof_invweight0, *m.dof_solref[0, :1], *m.dof_solimp[0, :2])
+    assert np.max(np.abs(law - f) / F_s) < 1e-9
+    inside = np.abs(f) < 0.95 * F_s
+    assert inside.mean() > 0.1 and (~inside).mean() > 0.1
+    with pytest.raises(InputError, match="impedance"):
+        soft_constraint_friction(qdd, qd, F_s, m.dof_invweight0, impedance=1.0)
