@@ -527,7 +527,8 @@ def bench_loop(r: Result) -> list[str]:
         q = s.get("q_rmse_deg_joints")
         c = [y for y in loops.values() if "c_diff" in y]
         c_text = "" if not c else (f"; C step within {max(y['c_diff'] for y in c):.1e} of Python, "
-                                   f"{max(y['c_cpu_us'] for y in c):.1f} µs of processor time per step")
+                                   f"{max(y['c_cpu_us'] for y in c):.1f} µs of processor time per step"
+                                   + (f" (the best of {c[0]['c_passes']} passes)" if "c_passes" in c[0] else ""))
         out.append(f"{head}: {rig}; springs {_r(x['K_pct'])} %, masses {_r(x['m_pct'])} % ({x['verdict']}); sensor "
                    f"RMSE {_r(s.get('rmse_pct'))} %, overshoot {_r(s.get('overshoot_pct'), '.1f')} %, rise "
                    f"{_r(s.get('rise_ms'), '.0f')} ms; sensorless {_r(sl.get('sse_pct'))} %; joints in contact "
