@@ -64,3 +64,58 @@ def test_family_bound_is_inside_the_nominal_one(monkeypatch):
 def test_bad_input(model, margin, tau_max, match):
     with pytest.raises(InputError, match=match):
         joint_stops.joint_band(model, FINGER2.gravity, margin, tau_max)
+
+
+def _narrowed_standin(upper: float):
+    """finger3's stand-in (every effect of a real hand) and the nominal model, both with joint j2's upper stop at
+    ``upper`` rad (the others at 90 degrees): j2 reaches its stop while the encoder still rises."""
+    from alpes_dyn.bench.mujoco_hand import MujocoHand
+    from alpes_dyn.model.mjcf import joint_permutation
+
+    nominal = Model.alpes("finger3", friction=True)
+    nominal.pin_model.upperPositionLimit[1] = upper
+    hw = MujocoHand("finger3", seed=3)
+    mj = hw._plant.mj
+    mj.jnt_range[mj.dof_jntid[joint_permutation(mj, list(nominal.joint_names))[1]]][1] = upper
+    return hw, nominal
+
+
+def _run(hw, nominal, cal, monkeypatch, guard: bool):
+    """The shortened experiment on ``hw``; the true joints after every write (the test's peek), deg, and the
+    result or the guard's trip."""
+    import alpes_dyn.estimation.experiments.on_hand as on_hand
+    from alpes_dyn.bench.mujoco_hand import scoring_truth
+    from alpes_dyn.estimation.experiments.design import ExperimentDesign
+    from alpes_dyn.estimation.experiments.hand_session import GuardTripped
+
+    if not guard:  # the encoder's band alone, as before the joints' stops bounded it
+        monkeypatch.setattr(on_hand, "joint_band", lambda *a: (np.array([-np.inf]), np.array([np.inf]), ["", ""]))
+    q, write = [], hw.write
+    hw.write = lambda u: (write(u), q.append(scoring_truth(hw)[0]))
+    try:
+        out = on_hand.run_experiment(hw, nominal, ExperimentDesign(duration=1.0), cal, stage_seconds=1.0,
+                                     stages=(0.5, 1.0), hold=0.5, max_holds=3)
+    except GuardTripped as e:
+        out = e
+    monkeypatch.undo()
+    return np.degrees(np.array(q)), out
+
+
+def test_guard_keeps_a_joint_off_its_own_stop_on_the_standin(monkeypatch):
+    """j2's stop at 55 degrees, the encoder's calibrated range unchanged by it (the other joints go on): with the
+    encoder's band alone the experiment drives j2 onto its stop (the stand-in's truth, read by the test only); with
+    the joints' band no true joint comes within 0.5 degree of it, whether the run completes at a smaller amplitude
+    or the guard stops it (the finger relaxed)."""
+    pytest.importorskip("mujoco")
+    from alpes_dyn.estimation.experiments.calibration import calibrate
+
+    upper = math.radians(55.0)
+    hw, nominal = _narrowed_standin(upper)
+    cal = calibrate(hw, nominal, rate=0.0125, speed=1500.0)
+    q, _ = _run(*_narrowed_standin(upper), cal, monkeypatch, guard=False)
+    assert q[:, 1].max() > 55.0 - 0.5  # a joint would hit its stop
+    q, out = _run(*_narrowed_standin(upper), cal, monkeypatch, guard=True)
+    assert q[:, 1].max() < 55.0 - 0.5 and q[:, [0, 2]].max() < 90.0 - 0.5
+    if not hasattr(out, "amplitude_scale"):  # stopped by the guard: the finger relaxed
+        cmd = out.log.command[:, 0]
+        assert out.reason == "stop" and cmd[np.flatnonzero(~np.isnan(cmd))[-1]] == 0.0

@@ -7,7 +7,8 @@ while the motor's reading is still well inside the range that the calibration fo
 the other joints bend). :func:`joint_band` turns the joints' stops into encoder counts through the model: along a
 slow sweep of the motor torque from 0 to the driver's limit, the static equilibrium of the finger (springs and
 gravity against the tendon, eq. 2.11 at rest; a joint that reaches a stop held there while the others go on), the
-encoder reading and the joint angles of each equilibrium. The counts below which some joint lies within ``margin``
+encoder reading and the joint angles of each equilibrium; the sweep ends where no equilibrium is found near the
+last one (past a fold: the finger snaps, which the calibration finds and the encoder's band already ends before). The counts below which some joint lies within ``margin``
 of its lower stop, and above which some joint lies within ``margin`` of its upper stop, bound the excitation.
 
 The uncertainty: the joints' angles at a reading depend on the springs and masses, which the experiment is run to
@@ -39,11 +40,11 @@ SWEEP_POINTS = 121
 """The motor torques of the sweep, from 0 to the driver's limit."""
 
 
-def _sweep(model: Model, gravity: np.ndarray, tau_max: float) -> tuple[np.ndarray, np.ndarray]:
+def _sweep(model: Model, gravity: np.ndarray, tau_max: float, lo: np.ndarray, hi: np.ndarray
+           ) -> tuple[np.ndarray, np.ndarray]:
     """(counts (K,), q (K, n) rad): the static equilibria of ``model`` under the torques of the sweep, a joint past
-    a stop held at it (the stops' active set grown until no joint is past one)."""
+    its stop (``lo``, ``hi``, rad) held at it (the stops' active set grown until no joint is past one)."""
     m = _oriented(model, gravity)
-    lo, hi = np.asarray(m.lower, dtype=float), np.asarray(m.upper, dtype=float)
     names = list(m.joint_names)
     held = set(m.springless_joints)
     q = np.zeros(m.n)
@@ -52,18 +53,31 @@ def _sweep(model: Model, gravity: np.ndarray, tau_max: float) -> tuple[np.ndarra
     counts, angles = [], []
     scale = m.transmission.counts_per_rev / (2 * np.pi)
     for tau in np.linspace(0.0, tau_max, SWEEP_POINTS):
-        at_stop: set[int] = set()
-        for _ in range(m.n + 1):  # each pass holds at least one more joint at its stop, or ends
-            fixed = sorted(held | {names[i] for i in at_stop})
-            q = m.static_equilibrium(None, q, fixed=fixed, tau_m=np.array([tau]))
-            past = {i for i in range(m.n) if names[i] not in held and not lo[i] <= q[i] <= hi[i]} - at_stop
-            if not past:
-                break
-            at_stop |= past
-            q = np.clip(q, lo, hi)
+        try:
+            q = _stopped_equilibrium(m, q, tau, lo, hi, held)
+        except InputError:  # no equilibrium near the last one: past a fold, where the calibration's band ends
+            break
         counts.append(float(np.atleast_1d(_reading(m, q))[0]) * scale)
         angles.append(q.copy())
-    return np.array(counts), np.array(angles)
+    return np.array(counts), np.array(angles).reshape(-1, m.n)
+
+
+def _stopped_equilibrium(m: Model, q: np.ndarray, tau: float, lo: np.ndarray, hi: np.ndarray, held: set[str]
+                         ) -> np.ndarray:
+    """The static equilibrium under the motor torque ``tau`` from ``q``, the joints past a stop held at it."""
+    names = list(m.joint_names)
+    at_stop: set[int] = set()
+    for _ in range(m.n + 1):  # each pass holds at least one more joint at its stop, or ends
+        fixed = held | {names[i] for i in at_stop}
+        if len(fixed) == m.n:
+            return q  # every joint held: nothing left to move
+        q = m.static_equilibrium(None, q, fixed=sorted(fixed), tau_m=np.array([tau]))
+        past = {i for i in range(m.n) if names[i] not in held and not lo[i] <= q[i] <= hi[i]} - at_stop
+        if not past:
+            return q
+        at_stop |= past
+        q = np.clip(q, lo, hi)
+    return q
 
 
 def _family(nominal: Model) -> list[Model]:
@@ -86,7 +100,8 @@ def joint_band(nominal: Model, gravity: np.ndarray, margin: float, tau_max: floa
     Parameters
     ----------
     nominal : Model
-        The finger (one motor; its joint stops ``lower``, ``upper``, rad), with its parameter set for the family.
+        The finger (one motor; its joint stops ``lower``, ``upper``, rad: every member's), with its parameter set
+        for the family.
     gravity : numpy.ndarray
         (3,) the gravity the hand is in, m/s^2.
     margin : float
@@ -113,9 +128,9 @@ def joint_band(nominal: Model, gravity: np.ndarray, margin: float, tau_max: floa
             raise InputError(f"{name}: expected a positive number, got {v!r}")
     low, high, who = -np.inf, np.inf, ["", ""]
     g = np.asarray(gravity, dtype=float)
+    lo, hi = np.asarray(nominal.lower, dtype=float), np.asarray(nominal.upper, dtype=float)  # the hand's, not drawn
     for model in _family(nominal):
-        c, q = _sweep(model, g, float(tau_max))
-        lo, hi = np.asarray(model.lower, dtype=float), np.asarray(model.upper, dtype=float)
+        c, q = _sweep(model, g, float(tau_max), lo, hi)
         free = [i for i, n in enumerate(model.joint_names) if n not in set(model.springless_joints)]
         near_lo = (q[:, free] <= lo[free] + margin)
         near_hi = (q[:, free] >= hi[free] - margin)
