@@ -80,6 +80,10 @@ def _narrowed_standin(upper: float):
     return hw, nominal
 
 
+class _Hit(Exception):
+    """The test's peek saw a joint at its stop."""
+
+
 def _run(hw, nominal, cal, monkeypatch, guard: bool):
     """The shortened experiment on ``hw``; the true joints after every write (the test's peek), deg, and the
     result or the guard's trip."""
@@ -91,11 +95,18 @@ def _run(hw, nominal, cal, monkeypatch, guard: bool):
     if not guard:  # the encoder's band alone, as before the joints' stops bounded it
         monkeypatch.setattr(on_hand, "joint_band", lambda *a: (np.array([-np.inf]), np.array([np.inf]), ["", ""]))
     q, write = [], hw.write
-    hw.write = lambda u: (write(u), q.append(scoring_truth(hw)[0]))
+
+    def peek(u):
+        write(u)
+        q.append(scoring_truth(hw)[0])
+        if not guard and q[-1][1] > nominal.upper[1] - math.radians(0.5):
+            raise _Hit  # the stop reached: the rest of this run is not needed
+
+    hw.write = peek
     try:
         out = on_hand.run_experiment(hw, nominal, ExperimentDesign(duration=1.0), cal, stage_seconds=1.0,
                                      stages=(0.5, 1.0), hold=0.5, max_holds=3)
-    except GuardTripped as e:
+    except (GuardTripped, _Hit) as e:
         out = e
     monkeypatch.undo()
     return np.degrees(np.array(q)), out
@@ -112,8 +123,8 @@ def test_guard_keeps_a_joint_off_its_own_stop_on_the_standin(monkeypatch):
     upper = math.radians(55.0)
     hw, nominal = _narrowed_standin(upper)
     cal = calibrate(hw, nominal, rate=0.0125, speed=1500.0)
-    q, _ = _run(*_narrowed_standin(upper), cal, monkeypatch, guard=False)
-    assert q[:, 1].max() > 55.0 - 0.5  # a joint would hit its stop
+    q, out = _run(*_narrowed_standin(upper), cal, monkeypatch, guard=False)
+    assert isinstance(out, _Hit) and q[:, 1].max() > 55.0 - 0.5  # a joint would hit its stop
     q, out = _run(*_narrowed_standin(upper), cal, monkeypatch, guard=True)
     assert q[:, 1].max() < 55.0 - 0.5 and q[:, [0, 2]].max() < 90.0 - 0.5
     if not hasattr(out, "amplitude_scale"):  # stopped by the guard: the finger relaxed
