@@ -550,7 +550,8 @@ def bench_loop(r: Result) -> list[str]:
         q = s.get("q_rmse_deg_joints")
         c = [y for y in loops.values() if "c_diff" in y]
         c_text = "" if not c else (f"; C step within {max(y['c_diff'] for y in c):.1e} of Python, "
-                                   f"{max(y['c_cpu_us'] for y in c):.1f} µs of processor time per step")
+                                   f"{max(y['c_cpu_us'] for y in c):.1f} µs of processor time per step"
+                                   + (f" (the best of {c[0]['c_passes']} passes)" if "c_passes" in c[0] else ""))
         if s.get("scene") == "cylinder":  # the thumb: the whole hand's step on the cylinder
             c_text += (f"; loops on the hand's cylinder, the ab/adduction ending at "
                        f"{_r(s.get('abduction_end_deg'), '.1f')} deg (target 35)")

@@ -24,8 +24,9 @@ overshoot < 10 %, rise < 100 ms; sensorless within 10 %; joint estimates < 1 deg
 With a C compiler (``cc``, unless ``--no-c``), each loop's step is also built as C
 (:mod:`~alpes_dyn.control.cstep`, ``alpes-dyn codegen --step``'s sources, ``benchmarks/c_step.py``'s
 :func:`c_step.c_columns`) and run over the loop's readings: its largest difference from the Python step (commands,
-joint estimates, forces fed back; goal 1e-9), its processor time per step (goal < 50 us per finger) and its build
-(goal < 30 s): the ``c_step`` goal.
+joint estimates, forces fed back; goal 1e-9), its processor time per step (the best of ``c_step.PASSES`` passes
+over the record, ``c_step.py``'s time rule: the step's own cost on a core of its own; goal < 50 us per finger) and
+its build (goal < 30 s): the ``c_step`` goal.
 
 The hand (``--models hand``) is run chain by chain: one draw of the hand (each finger and the thumb its own +-20 %
 values, ``perturbed_params(chains=HAND_CHAINS)``) and each finger chain's workflow as above on the stand-in of a
@@ -78,7 +79,7 @@ from alpes_dyn.control.step import ForceStep
 from alpes_dyn.errors import AlpesDynError
 from alpes_dyn.estimation.experiments.draws import perturbed_params
 from alpes_dyn.estimation.experiments.hand_experiment import _chain_seeds
-from alpes_dyn.estimation.experiments.on_hand import run_experiment
+from alpes_dyn.estimation.experiments.on_hand import ROOM_SHARE, roomier, run_experiment
 from alpes_dyn.estimation.experiments.recording import write_recording
 from alpes_dyn.model.params import chain_params
 from alpes_dyn.model.robot import Model
@@ -126,24 +127,43 @@ class Scored:
         self.hw.close()
 
 
-def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "") -> tuple[dict, Path | None]:
+def run_rigs(model: str, truth: Any, seed: int, nominal: Model) -> tuple[tuple | None, list[str]]:
     """Calibration and the guarded experiment on the free stand-in, palm up, then hung fingers down where the guard
-    found no room palm up (as a user turns the hand: ``alpes-dyn experiment --rig auto``'s rule); the recording's
-    path (None if both failed)."""
-    nominal = Model.alpes(model, friction=True)
-    t0, c0 = time.perf_counter(), time.process_time()
-    row: dict[str, Any] = {"model": model, "seed": seed, "tried": []}
+    found no room palm up or palm up left less than :data:`~alpes_dyn.estimation.experiments.on_hand.ROOM_SHARE`
+    of the designed amplitude (as a user turns the hand); of two runs, the one with the larger amplitude kept
+    (:func:`~alpes_dyn.estimation.experiments.on_hand.roomier`). Returns ((rig, the scored stand-in, the
+    :class:`~alpes_dyn.estimation.experiments.on_hand.OnHandResult`) or None where every rig failed, the rigs
+    tried and why each was not kept)."""
+    kept, tried = None, []
     for rig in RIGS:
         hw = Scored(MujocoHand(model, truth, scene="free", seed=seed, rig=rig))
         try:
             res = run_experiment(hw, nominal, rig_design(rig))
-            break
         except AlpesDynError as e:
-            row["tried"].append(f"{rig}: {e}")
-    else:
-        row.update(experiment_error=row["tried"][-1], experiment_s=time.perf_counter() - t0,
+            tried.append(f"{rig}: {e}")
+            continue
+        if kept is not None:
+            tried.append(f"{kept[0]}: amplitude scale {kept[2].amplitude_scale:.3g} (below {ROOM_SHARE:g})")
+            if roomier(kept[2], res) is kept[2]:
+                tried.append(f"{rig}: amplitude scale {res.amplitude_scale:.3g} (not roomier: not kept)")
+                continue
+        kept = (rig, hw, res)
+        if res.amplitude_scale >= ROOM_SHARE:
+            break
+    return kept, tried
+
+
+def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "") -> tuple[dict, Path | None]:
+    """The experiment's row (:func:`run_rigs`: the rig rule) and the recording's path (None if every rig failed)."""
+    nominal = Model.alpes(model, friction=True)
+    t0, c0 = time.perf_counter(), time.process_time()
+    kept, tried = run_rigs(model, truth, seed, nominal)
+    row: dict[str, Any] = {"model": model, "seed": seed, "tried": tried}
+    if kept is None:
+        row.update(experiment_error=tried[-1], experiment_s=time.perf_counter() - t0,
                    experiment_cpu_s=time.process_time() - c0)
         return row, None
+    rig, hw, res = kept
     row["rig"] = rig
     row["experiment_s"], row["experiment_cpu_s"] = time.perf_counter() - t0, time.process_time() - c0
     lo, hi = nominal.lower, nominal.upper  # the URDF's joint stops (the MJCF's ranges)

@@ -9,8 +9,16 @@ For each finger and controller, in one process:
                   s", wall clock, and "(cpu)" the compiler's processor time, which a loaded machine inflates less:
                   the goal is under 30 s), run over the same readings by its main.c: the largest
                   difference from the Python step's commands (N m), joint estimates (rad) and forces fed back (N)
-                  (goal: 1e-9), and timed by main.c -t (us per step, wall clock and the process's processor time,
-                  which a loaded machine inflates less; goal: under 50 us per finger)
+                  (goal: 1e-9), and timed by main.c -t 1: one pass over the record, PASSES passes, each its own
+                  process; "C us" the best pass's wall clock, "(cpu)" its processor time per step
+
+The time rule: the goal (50 us per finger, 200 us for the hand) is real time on the user's machine, the step's
+own cost on a core of its own. The figure held against it is the best pass's processor time per step: processor
+time leaves out the ticks the process waited while other jobs ran (on this shared machine the wall clock of a pass is
+3 to 10 times its processor time), and the best of the passes leaves out those that other jobs slowed by evicting
+the step's caches or sharing its core; the passes' median processor time is kept beside it (``c_cpu_us_median``)
+and the best pass's wall clock ("C us"). Each pass runs the whole record, so the best pass is the mean over every
+step of the record, the contact's and the free motion's alike, not a best step.
 
 The columns C/py give the C step's time as a fraction of the Python step's. The model "hand" is the whole hand's
 step (HandForceStep, alpes_dyn.control.chand's C: five chains and the ab/adduction PD; the stand-in's cylinder scene,
@@ -46,6 +54,8 @@ GOAL_US = 50.0
 GOAL_HAND_US = 200.0
 GOAL_BUILD_S = 30.0
 GOAL_DIFF = 1e-9
+PASSES = 10
+"""The C step is timed over this many passes over the record, each its own process (the module docstring)."""
 
 
 def _python_us(step: ForceStep, run, repeat: int = 3) -> float:
@@ -74,9 +84,17 @@ def _build_c(cc: str, d: Path, files: dict, row: dict) -> None:
 
 
 def _time_c(d: Path, row: dict) -> None:
-    t = subprocess.run([str(d / "main"), "-t", "20", str(d / "in.txt")], check=True, capture_output=True,
-                       text=True).stdout.split()
-    row["c_us"], row["c_cpu_us"] = float(t[4]), float(t[8])
+    """The C step's time per step, us, into ``row``: ``main -t 1`` (one pass over the record) run :data:`PASSES`
+    times, each its own process; ``c_cpu_us`` the best pass's processor time per step, ``c_us`` the best pass's
+    wall clock, ``c_cpu_us_median`` the passes' median processor time (the module docstring's rule)."""
+    wall, cpu = [], []
+    for _ in range(PASSES):
+        t = subprocess.run([str(d / "main"), "-t", "1", str(d / "in.txt")], check=True, capture_output=True,
+                           text=True).stdout.split()
+        wall.append(float(t[4]))
+        cpu.append(float(t[8]))
+    row["c_us"], row["c_cpu_us"], row["c_cpu_us_median"] = min(wall), min(cpu), float(np.median(cpu))
+    row["c_passes"] = PASSES
 
 
 def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> dict:
@@ -174,7 +192,7 @@ def c_columns(step: ForceStep, run, cc: str) -> dict:
 
 
 def c_goals_met(row: dict, goal_us: float = GOAL_US) -> bool:
-    """The C step's goals (``goal_us`` processor us per step, :data:`GOAL_US` for a finger, :data:`GOAL_BUILD_S` s
+    """The C step's goals (``goal_us`` processor us per step of the best pass, the module docstring's time rule; :data:`GOAL_US` for a finger, :data:`GOAL_BUILD_S` s
     of build, :data:`GOAL_DIFF` from the Python step) on a row of :func:`c_columns`."""
     return bool(row["c_cpu_us"] < goal_us and row["c_build_cpu_s"] < GOAL_BUILD_S
                 and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)

@@ -50,6 +50,8 @@ def test_c_column_matches_the_python_step(bench, pressed):
     row = c_step.c_columns(step, run, CC)
     assert row["diff_command"] < 1e-9 and row["diff_q"] < 1e-9 and row["diff_force"] < 1e-9
     assert 0 < row["c_cpu_us"] < 1e4 and row["c_build_s"] > 0 and row["c_source_kb"] > 1
+    # the time rule (c_step's docstring): the best of PASSES passes, each a process of its own
+    assert row["c_passes"] == c_step.PASSES and row["c_cpu_us"] <= row["c_cpu_us_median"] * (1 + 1e-12)
     assert c_step.c_goals_met(row) == (row["c_cpu_us"] < c_step.GOAL_US and row["c_build_cpu_s"] < c_step.GOAL_BUILD_S)
     # a command logged 1e-6 N m off is reported as 1e-6 off
     shifted = dataclasses.replace(run, command=run.command + 1e-6)

@@ -251,7 +251,10 @@ def test_experiment_on_the_standin_stays_off_its_stops_and_near_the_design(tmp_p
     G = np.repeat(np.asarray(design.orientations, dtype=float), u.shape[0], axis=0)
     y_nom = 2 * _simulate(FINGER3, design, u, G, np.zeros(u.shape[0], dtype=int))[1000:, :3].sum(axis=1) * 4096 / (2 * np.pi)
     assert abs(rec.encoder.mean() - y_nom.mean()) < 150.0  # counts: 6.6 degrees of the joints' sum (1 count: 0.044 degree)
-    assert 0.5 <= res.amplitude_scale <= 1.0  # the band holds most of the designed swing
+    # the band holds a third of the designed swing: palm up the finger is near its fold, where j1 turns fast per
+    # count, and the joints' band (joint_stops.joint_band) ends where the family's softest member's j1 comes within
+    # the design's margin of its stop; below on_hand.ROOM_SHARE a user turns the hand (bench_loop.run_rigs)
+    assert 0.25 <= res.amplitude_scale <= 1.0
     # the recorded torque is the command held over each period, read at the next tick (the stand-in's is measured
     # DELAY_SAMPLES late: the fit's delay effect)
     from alpes_dyn.bench.effects import DELAY_SAMPLES

@@ -127,7 +127,7 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     from ..estimation.experiments.draws import perturbed_params
     from ..estimation.experiments.excursion import excursion_report
     from ..estimation.experiments.hand_session import GuardTripped
-    from ..estimation.experiments.on_hand import run_experiment
+    from ..estimation.experiments.on_hand import ROOM_SHARE, run_experiment
     from ..model.params import write_params
 
     chains = ("thumb",) if args.model == "thumb" else None  # the thumb's own values drawn (a finger's: [finger])
@@ -155,5 +155,10 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
             f"{', '.join(f'{v:.0f}' for v in cal.rest)} counts, usable range {', '.join(f'{a:.0f}-{b:.0f}' for a, b in zip(cal.low, cal.high))} counts"
             f"\n  trim: bias {', '.join(f'{b:.5g}' for b in res.bias)} N m (nominal "
             f"{', '.join(f'{b:.5g}' for b in res.nominal_bias)}), multisine at {res.amplitude_scale:.2g} of the design's")
+    if res.amplitude_scale < ROOM_SHARE:  # too small a record for the masses: say so (on_hand.ROOM_SHARE)
+        obj["note"] = (f"the multisine ran at {res.amplitude_scale:.2g} of the designed amplitude, below "
+                       f"{ROOM_SHARE:g}: too small a record to trust the masses of; hang the hand (fingers down) and "
+                       "run again, keep the run with more room (on_hand.roomier)")
+        text += f"\n  note: {obj['note']}"
     _emit(obj, text, args.json)
     return 0

@@ -192,7 +192,8 @@ class HandSession:
         if out.size:
             j = int(out[0])
             self._trip("stop", f"motor {self.hw.motor_names[j]}: encoder at {r.counts[j]:g} counts left the guard "
-                               f"band [{self.low[j]:g}, {self.high[j]:g}] (a margin inside the calibrated range) at "
+                               f"band [{self.low[j]:g}, {self.high[j]:g}] (a margin inside the calibrated range and the joints' "
+                               f"stops) at "
                                f"t = {r.t:.4g} s", r)
 
     def _trip(self, reason: str, text: str, r: Reading) -> None:

@@ -11,7 +11,10 @@ with their own tools (:func:`designed_torque`, :func:`write_torque_profile`).
    dither), and its target: the nominal finger's encoder reading at rest under the bias (mid-range);
 2. the hand's :class:`~alpes_dyn.estimation.experiments.calibration.Calibration` (made here if not given): its rest
    and usable range; the guard band is the range less ``margin`` counts at each end (default the design's joint
-   ``margin`` through the pulley ratios: 196 counts on finger3);
+   ``margin`` through the pulley ratios: 196 counts on finger3), narrowed (a finger of one motor) to the counts
+   between which the joints themselves, which no sensor reads, keep the design's ``margin`` from their own stops
+   on every finger of the tolerance family (:func:`~alpes_dyn.estimation.experiments.joint_stops.joint_band`: a
+   joint can reach its stop while the encoder is still inside the calibrated range);
 3. the bias trimmed on the hand by iterated holds (:func:`_trim`): the bias and the dither held for ``hold`` s, the
    encoder's mean over the hold's second half read, the bias corrected by the calibrated curve's torque difference
    between the target and that mean, until the mean is within ``tolerance`` counts of the target. Why holds and not
@@ -75,11 +78,13 @@ from .calibration import Calibration, calibrate
 from .design import ExperimentDesign, _checked_design
 from .experiment import _excitation, _simulate
 from .hand_session import GuardTripped, HandSession, SessionLog
+from .joint_stops import joint_band
 from .multisine import _motor_groups, _profiles, dither_amplitude
 from .recording import Recording, write_recording
 from .trim import _mean_equilibrium, _reading
 
-__all__ = ["OnHandResult", "run_experiment", "designed_torque", "write_torque_profile", "STAGES"]
+__all__ = ["OnHandResult", "run_experiment", "designed_torque", "write_torque_profile", "roomier", "STAGES",
+           "ROOM_SHARE"]
 
 STAGES: tuple[float, ...] = (0.25, 0.5, 1.0, 1.0)
 """The multisine's amplitude steps before the record, fractions of the design's amplitude (the last repeated: a
@@ -93,6 +98,13 @@ of the target read 1200 counts above it, past the guard band), so the trim comes
 STEP_GAIN = 0.7
 """The share of the curve's correction each hold applies (the finger's compliance grows towards its fold: a whole
 step from below overshoots)."""
+
+ROOM_SHARE = 0.5
+"""A run whose ``amplitude_scale`` is below this share of the designed amplitude is too small a record to trust the
+masses of (their standard errors grow as the amplitude falls; on the MuJoCo stand-in's finger3 palm up, a run left
+room for 0.22 of it: the fit called itself adequate with masses 25 % and springs 4.4 % off): turn the hand (hung
+fingers down, where the springs are not held near a fold by gravity), run again, and keep the run with more room
+(:func:`roomier`)."""
 
 FOLD_PEAKS = 1.25
 """The bias is held this many excitation peaks below a fold, and the predicted swing times this inside the band."""
@@ -150,6 +162,31 @@ class OnHandResult:
                 "target_counts": self.target.tolist(), "rest_counts": self.rest_counts.tolist(),
                 "amplitude_scale": self.amplitude_scale, "trim_holds": len(self.holds),
                 "held_below_fold": self.held_below_fold, "samples": self.recording.n_samples}
+
+
+def roomier(a: OnHandResult, b: OnHandResult) -> OnHandResult:
+    """Of two runs of the experiment (e.g. palm up and hung), the one that recorded the larger share of the designed
+    amplitude (``a`` where they are equal): the rule :data:`ROOM_SHARE` asks for.
+
+    Parameters
+    ----------
+    a, b : OnHandResult
+        Two runs on the same hand.
+
+    Returns
+    -------
+    OnHandResult
+        ``a`` or ``b``.
+
+    Raises
+    ------
+    InputError
+        Where either is not an :class:`OnHandResult`.
+    """
+    for name, r in (("a", a), ("b", b)):
+        if not isinstance(r, OnHandResult):
+            raise InputError(f"{name}: expected an OnHandResult, got {type(r).__name__}")
+    return b if b.amplitude_scale > a.amplitude_scale else a
 
 
 def _one_orientation(design: ExperimentDesign) -> np.ndarray:
@@ -296,6 +333,7 @@ def run_experiment(hw: HardwareInterface, nominal: Model, design: ExperimentDesi
     bias0, amp, dither = _on_hand_excitation(nominal, design)
     held = _held(nominal)
     low, high = _band(nominal, design, cal, margin)
+    low, high = _joint_guard(nominal, design, g, float(hw.tau_max), low, high)
     target = np.where(held, cal.rest, np.clip(target_nominal, low + 0.3 * (high - low), high - 0.3 * (high - low)))
     peak = np.max(np.abs(_profiles(design, t_design, np.zeros_like(bias0), amp, dither)), axis=0)
     cap = np.minimum(np.where(np.isfinite(cal.fold_torque), cal.fold_torque - FOLD_PEAKS * peak, np.inf),
@@ -349,6 +387,21 @@ def _band(nominal: Model, design: ExperimentDesign, cal: Calibration, margin: fl
     if np.any(high <= low):
         raise InputError(f"margin: {mc.tolist()} counts at each end leave nothing of the calibrated range "
                          f"[{cal.low.tolist()}, {cal.high.tolist()}] counts")
+    return low, high
+
+
+def _joint_guard(nominal: Model, design: ExperimentDesign, g: np.ndarray, tau_max: float, low: np.ndarray,
+                 high: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The guard band narrowed to the counts between which the joints keep the design's ``margin`` from their own
+    stops (:func:`~alpes_dyn.estimation.experiments.joint_stops.joint_band`, a finger of one motor); InputError
+    naming the joints where nothing is left."""
+    if nominal.transmission.n_motors != 1:
+        return low, high  # the joints' band is a finger's (one motor): the hand's experiment runs chain by chain
+    jl, jh, who = joint_band(nominal, g, design.margin, tau_max)
+    low, high = np.maximum(low, jl), np.minimum(high, jh)
+    if np.any(high <= low):
+        raise InputError(f"margin: the joints' stops ({who[0]} below, {who[1]} above, {math.degrees(design.margin):.3g} "
+                         f"degrees inside them) and the calibrated range leave no encoder counts for the excitation")
     return low, high
 
 
