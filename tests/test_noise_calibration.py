@@ -57,7 +57,7 @@ def test_the_search_finds_the_smallest_consistent_model_error(monkeypatch, neede
         def __init__(self, e):
             self.e, self.reasons = e, []
 
-    monkeypatch.setattr(nc, "consistency_statistic", lambda c: np.inf if c.e == 0 else (needed / c.e) ** 2)
+    monkeypatch.setattr(nc, "consistency_statistic", lambda c: np.inf if not c.e else (needed / c.e) ** 2)
     cal = nc.calibrate_model_error(ad.Model.alpes("finger3", friction=True), lambda m: Check(m.params.model_error))
     if not found:
         assert cal.value is None and "up to 16 F_s" in cal.reason and cal.check.e == 16.0
@@ -66,4 +66,20 @@ def test_the_search_finds_the_smallest_consistent_model_error(monkeypatch, neede
         assert cal.value == pytest.approx(1 / 16)
     else:
         assert needed <= cal.value <= np.sqrt(2) * needed * (1 + 1e-12)
-    assert cal.check.e == cal.value and all(s <= 1 for e, s in cal.tried if e >= cal.value)
+    assert cal.check.e == cal.value and cal.tried[0][0] is None and all(s <= 1 for e, s in cal.tried[1:]
+                                                                         if e >= cal.value)
+
+
+def test_the_files_own_noise_is_kept_where_it_is_consistent():
+    """The file's own noise tried first: consistent, nothing is searched and nothing written (value None, no
+    reason)."""
+    from alpes_dyn.estimation.identification import noise_calibration as nc
+
+    class Check:
+        nis = prediction_nis = None
+
+        class split_nis:
+            value, dof = 0.8, 1
+
+    cal = nc.calibrate_model_error(ad.Model.alpes("finger3", friction=True), lambda m: Check())
+    assert cal.value is None and not cal.reason and cal.tried == [(None, 0.8)]

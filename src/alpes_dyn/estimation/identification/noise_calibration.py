@@ -18,7 +18,8 @@ fitted on, from what a user has (the encoder, the torque, the filter's own covar
 * e is the smallest value of a geometric search (factor 2 from ``start``, then one halving of the bracket in log)
   whose statistic is at most ``target`` (covariance matching, Mehra 1972, on the statistic that sees the unobserved
   direction: the innovation's alone stays in its band while the split is wrong); 0 where the filter with no model
-  error is already consistent. Where none up to ``ceiling`` is, the file's observer is inconsistent whatever its
+  error is already consistent, and nothing (the file's own noise kept: its ``friction.model_error``, else the
+  library's default) where the filter with the file's own noise is, which is tried first. Where none up to ``ceiling`` is, the file's observer is inconsistent whatever its
   noise: :attr:`ModelErrorCalibration.reason` names it and ``identify``'s observer check refuses the file.
 
 ``identify`` writes e to the file it writes (``friction.model_error``, unit ``F_s``); every command that builds an
@@ -54,15 +55,17 @@ class ModelErrorCalibration:
     Attributes
     ----------
     value : float or None
-        e, in units of each joint's F_s (0: none needed); None where none up to the ceiling is consistent.
-    tried : list of (float, float)
-        Each trial's (e, the consistency statistic).
+        e, in units of each joint's F_s (0: none needed); None where the file's own noise is consistent (nothing to
+        write) or, with a ``reason``, where none up to the ceiling is.
+    tried : list of (float or None, float)
+        Each trial's (e, the consistency statistic); e None: the file's own noise, tried first.
     reason : str
         Why the observer is inconsistent (empty where ``value`` is found).
     seconds : float
         The calibration's time, s.
     check : ObserverCheck or None
-        The observer's statistics at ``value`` (at the ceiling where none is consistent).
+        The observer's statistics at ``value`` (at the ceiling where none is consistent; with the file's own noise
+        where it is).
     """
 
     value: float | None
@@ -109,45 +112,42 @@ def calibrate_model_error(model: Model, statistics: Callable[[Model], Any],
     """
     st = {**CALIBRATION, **(settings or {})}
     t0 = time.perf_counter()
-    tried: list[tuple[float, float]] = []
-    checks: dict[float, Any] = {}
+    tried: list[tuple[float | None, float]] = []
+    checks: dict[float | None, Any] = {}
 
-    def stat(e: float) -> float:
-        m = model.copy()
-        m.params = with_model_error(model.params, e)
-        checks[float(e)] = statistics(m)
-        s = consistency_statistic(checks[float(e)])
-        tried.append((float(e), s))
-        return s
+    def stat(e: float | None) -> float:
+        m = model
+        if e is not None:
+            m = model.copy()
+            m.params = with_model_error(model.params, e)
+        checks[e] = statistics(m)
+        tried.append((e, consistency_statistic(checks[e])))
+        return tried[-1][1]
 
     def done(value: float | None, reason: str = "") -> ModelErrorCalibration:
         return ModelErrorCalibration(value, tried, reason, time.perf_counter() - t0,
-                                     checks[tried[-1][0] if value is None else value])
+                                     checks[tried[-1][0] if reason else value])
 
     ok = lambda s: bool(np.isfinite(s) and s <= st["target"])  # noqa: E731
+    if ok(stat(None)):  # the file's own noise (its model error, else the library's default) is consistent
+        return done(None)
     lo, hi = None, None  # the largest e found inconsistent, the smallest found consistent
     e = float(st["start"])
     if ok(stat(e)):
         hi = e
         while e > st["start"] / 16 and ok(stat(e / 2)):
-            e /= 2
-            hi = e
-        lo = e / 2 if e > st["start"] / 16 else None
-        if lo is None:
+            e = hi = e / 2
+        if e <= st["start"] / 16:
             return done(0.0 if ok(stat(0.0)) else hi)
+        lo = e / 2
     else:
         lo = e
-        while e < st["ceiling"]:
+        while e < st["ceiling"] and hi is None:
             e *= 2
-            if ok(stat(e)):
-                hi = e
-                break
-            lo = e
+            lo, hi = (lo, e) if ok(stat(e)) else (e, None)
         if hi is None:
             return done(None, f"no model error up to {st['ceiling']:g} F_s makes the EKF on the file consistent on "
                               f"its record (its normalised innovation or prediction error squared "
                               f"{min(s for _, s in tried):.3g} times what it reports at best)")
     mid = float(np.sqrt(lo * hi))
-    if ok(stat(mid)):
-        hi = mid
-    return done(hi)
+    return done(mid if ok(stat(mid)) else hi)

@@ -198,9 +198,9 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
         return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
     th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
     cal = calibrate_model_error(model, lambda m: observer_statistics(recording, m, off, tilt, torque_delay, th))
-    result.model_error = cal.value
+    result.model_error = cal.value if cal.value is not None else getattr(model.params, "model_error", None)
     check = cal.check
-    if cal.value is None:
+    if cal.reason:
         check.reasons.append(cal.reason)
     check.calibration = cal
     return check
