@@ -48,7 +48,7 @@ from ..observers.innovation import Nis, nis
 from ..observers.replay import advanced, estimate_recording
 
 __all__ = ["mildly_coloured", "OBSERVER_THRESHOLDS", "ObserverCheck", "identified_model", "observer_check", "observer_statistics",
-           "judge", "fitted_rig"]
+           "calibrate_observer", "judge", "fitted_rig"]
 
 OBSERVER_THRESHOLDS: dict[str, float] = {
     "horizon_s": 0.02,
@@ -196,14 +196,26 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
     off, tilt = fitted_rig(result)
     if not calibrate:
         return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
-    th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
-    cal = calibrate_model_error(model, lambda m: observer_statistics(recording, m, off, tilt, torque_delay, th))
+    cal = calibrate_observer(recording, model, off, tilt, torque_delay, thresholds)
     result.model_error = cal.value if cal.value is not None else getattr(model.params, "model_error", None)
     check = cal.check
     if cal.reason:
         check.reasons.append(cal.reason)
     check.calibration = cal
     return check
+
+
+def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
+                       torque_delay: int = 0, thresholds: Mapping[str, float] | None = None) -> Any:
+    """The model error of ``model``'s file calibrated on ``recording``
+    (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error` over
+    :func:`observer_statistics` with ``encoder_offset``, ``tilt``, ``torque_delay`` and ``thresholds`` as there):
+    a :class:`~alpes_dyn.estimation.identification.noise_calibration.ModelErrorCalibration`. Any file, e.g. a true
+    one on the record it would have been fitted on; write its ``value`` with
+    :func:`~alpes_dyn.estimation.observers.friction_noise.with_model_error`."""
+    th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
+    return calibrate_model_error(model, lambda m: observer_statistics(recording, m, encoder_offset, tilt,
+                                                                      torque_delay, th))
 
 
 def observer_statistics(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
