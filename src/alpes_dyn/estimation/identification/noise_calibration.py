@@ -75,8 +75,10 @@ class ModelErrorCalibration:
     check: Any = field(default=None, repr=False)
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready: ``model_error`` (F_s), ``unit``, ``tried`` ([e, statistic] pairs), ``reason``, ``seconds``."""
-        return {"model_error": self.value, "unit": "F_s", "tried": [list(t) for t in self.tried],
+        """JSON-ready: ``model_error`` (F_s), ``unit``, ``tried`` ([e, statistic] pairs, null where not finite),
+        ``reason``, ``seconds``."""
+        return {"model_error": self.value, "unit": "F_s",
+                "tried": [[e, s if np.isfinite(s) else None] for e, s in self.tried],
                 "reason": self.reason, "seconds": self.seconds}
 
 
