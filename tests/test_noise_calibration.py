@@ -89,7 +89,10 @@ def test_the_calibrated_observer_of_the_true_file_covers_its_error_on_mujocos_st
     """MuJoCo's stick-slip finger3 (frictionloss, the 0.5 ms solreffriction; drawn 20 % off, seed 9801): the true
     file's EKF, over-confident with the library's default noise (its joints' NEES 39 against 1.9-4.4,
     test_stick_slip_verdict.py), gets its model error calibrated on a first 2 s record (from the encoder and the
-    torque alone) and, on a held-out run of another motion, each joint's NEES within its 95 % band."""
+    torque alone) and, on a held-out run of another motion, each joint's NEES within its 95 % band. Measured: the
+    held-out NEES 8.6, 7.8, 5.1 with the default noise (band 0.40-1.87); the search 5.4 (the file's own noise), 1.17
+    at 1 F_s, 0.64 at 2, 0.75 at 1.41: e = 1.41 F_s; the held-out NEES 1.02, 0.64, 1.23 (band 0.42-1.82), the
+    EKF 0.18, 0.12, 0.18 degree off."""
     pytest.importorskip("mujoco")
     from alpes_dyn.control.plants import mujoco_recording
     from alpes_dyn.estimation.identification.observer_check import calibrate_observer, observer_statistics
