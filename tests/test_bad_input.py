@@ -221,6 +221,10 @@ def bad_files(d: Path) -> dict[str, str]:
                                               'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
     files["negative_capstan_toml"] = BASE_TOML.replace("[transmission]\n", '[transmission]\ncapstan = { value = -0.2, '
                                                        'unit = "-", source = "assumed", reason = "x" }\n', 1).encode()
+    files["model_error_toml"] = BASE_TOML.replace("[friction]\n", '[friction]\nmodel_error = { value = -1.0, '
+                                                  'unit = "F_s", source = "identified", reason = "x" }\n', 1).encode()
+    files["model_error_unit_toml"] = BASE_TOML.replace("[friction]\n", '[friction]\nmodel_error = { value = 1.0, '
+                                                       'unit = "N m", source = "identified", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files["untrusted_toml"] = (BASE_TOML + '\n[identification.finger]\nconverged = false\nstop = "lost basin"\n'
                                "trustworthy = false\n").encode()  # written by identify --force
@@ -852,6 +856,10 @@ CLI: dict[str, list[Cli]] = {
         C("urdf", "--model", "finger3", "--params", "/dev/zero", needle="'/dev/zero': is a character device, expected a regular"),
         C("urdf", "--model", "finger3", "--params", "{compliance_toml}", needle="transmission.tendon_compliance: value must be finite"),
         C("urdf", "--model", "finger3", "--params", "{capstan_toml}", needle="transmission.capstan: value must be finite"),
+        C("estimate", "--model", "finger3", "--params", "{model_error_toml}",
+          needle="friction.model_error: value must be >= 0"),
+        C("urdf", "--model", "finger3", "--params", "{model_error_unit_toml}",
+          needle="friction.model_error.unit: the value is read in 'F_s', got 'N m'"),
         C("urdf", "--model", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
         C("urdf", "--model", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
         C("urdf", "--model", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "

@@ -304,6 +304,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     if fit.delay:
         lines.append(f"  torque delay: the recorded torque {fit.delay} sample{'s' if fit.delay > 1 else ''} late (the "
                      f"rig's sensors: transmission.torque_delay in the file, which estimate --data reads)")
+    lines += [] if res.model_error is None else [f"  observer's model error: {res.model_error:.3g} F_s (calibrated)"]
     obj.update(excursion_report(data))  # the fit's data: its motors whose encoder barely moved
     lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
     a = res.adequacy

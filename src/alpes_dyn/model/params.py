@@ -149,6 +149,13 @@ class HandParams:
     ``tanh`` (default) or ``lugre`` with ``sigma0`` (N m/rad) and ``sigma1`` (N m s/rad) (:mod:`~alpes_dyn.model.friction`)."""
     sigma0: float = SIGMA0
     sigma1: float = SIGMA1
+    model_error: float | None = None
+    """The observer's model error, in units of each joint's F_s (optional ``friction.model_error``, >= 0, unit
+    ``F_s``): a white torque per sample of standard deviation ``model_error`` F_s,i on each joint i, calibrated on
+    the identification record by ``identify``
+    (:func:`~alpes_dyn.estimation.observers.noise_calibration.calibrate_model_error`); every observer built from
+    the file carries it (:func:`~alpes_dyn.estimation.observers.friction_noise.with_friction_noise`). None: the
+    library's default."""
     identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
 
@@ -444,6 +451,7 @@ def _from_text(text: str, path: str) -> HandParams:
         abduction_encoder_offset=float(v.get("thumb.abduction_encoder_offset", 0.0)),
         friction_law=v.get("friction.law", "tanh"), sigma0=float(v.get("friction.sigma0", SIGMA0)),
         sigma1=float(v.get("friction.sigma1", SIGMA1)),
+        model_error=None if "friction.model_error" not in v else float(v["friction.model_error"]),
     )
 
 

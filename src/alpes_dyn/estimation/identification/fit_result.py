@@ -103,6 +103,10 @@ class IdentificationResult:
     """Whole samples by which the recorded torque was read earlier for this fit (the ``delay`` effect of
     :func:`~alpes_dyn.estimation.identification.effects.fit_effects`: the recorded torque found lagging the motor's),
     None where the fit did not try one; written to the file as ``transmission.torque_delay``."""
+    model_error: float | None = None
+    """The observer's model error calibrated on the fit's record, in units of each joint's F_s
+    (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`, by the observer check);
+    None where not calibrated; written to the file as ``friction.model_error``."""
     drift: dict[str, Any] | None = None
     """With ``identify(drift=...)``: the fitted drifts (:mod:`~alpes_dyn.estimation.identification.drift`),
     ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}`` (the
@@ -136,6 +140,7 @@ class IdentificationResult:
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
             "not_identified": dict(self.not_identified), "drift": self.drift, "torque_delay": self.torque_delay,
+            "model_error": self.model_error,
         }
 
     def _std_fields(self, k: int) -> dict[str, Any]:
@@ -422,6 +427,11 @@ def _rig_params(result: IdentificationResult, p: HandParams, sec: str, reason: s
     if result.torque_delay is not None:
         upd["transmission.torque_delay"] = Param(int(result.torque_delay), "samples", "identified", reason,
                                                  "the recorded motor torque's lag behind the motor's, whole samples")
+    if result.model_error is not None:
+        upd["friction.model_error"] = Param(float(result.model_error), "F_s", "identified", f"{reason}; calibrated "
+                                            "on the record: the EKF's consistency (noise_calibration)",
+                                            "the observer's model error: a white torque per sample of this times "
+                                            "each joint's F_s")
     return upd
 
 

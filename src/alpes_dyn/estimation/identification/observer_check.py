@@ -41,6 +41,7 @@ import numpy as np
 
 from ...model.robot import Model
 from .adequacy import Whiteness, sensor_floor, whiteness
+from .noise_calibration import calibrate_model_error
 from ..experiments.recording import Recording, excitation_parts
 from ..observers.consistency import nees
 from ..observers.ahead import predicted_ahead
@@ -48,7 +49,7 @@ from ..observers.innovation import Nis, nis
 from ..observers.replay import advanced, estimate_recording
 
 __all__ = ["mildly_coloured", "OBSERVER_THRESHOLDS", "ObserverCheck", "identified_model", "observer_check", "observer_statistics",
-           "judge", "fitted_rig"]
+           "calibrate_observer", "judge", "fitted_rig"]
 
 OBSERVER_THRESHOLDS: dict[str, float] = {
     "horizon_s": 0.02,
@@ -113,6 +114,10 @@ class ObserverCheck:
     nees: Any = None
     """The joints' :class:`~alpes_dyn.estimation.observers.consistency.Nees` where the recording has true joints
     (for the record, as ``ekf_rmse``: the verdict never reads it)."""
+    calibration: Any = None
+    """The observer's model error calibrated on the recording
+    (:class:`~alpes_dyn.estimation.identification.noise_calibration.ModelErrorCalibration`), where
+    :func:`observer_check` made it; the statistics above are those at its value."""
 
     @property
     def passed(self) -> bool:
@@ -130,7 +135,8 @@ class ObserverCheck:
                 "nis": None if self.nis is None else self.nis.to_dict(),
                 "prediction_nis": None if self.prediction_nis is None else self.prediction_nis.to_dict(),
                 "split_nis": None if self.split_nis is None else self.split_nis.to_dict(),
-                "nees": None if self.nees is None else self.nees.to_dict()}
+                "nees": None if self.nees is None else self.nees.to_dict(),
+                "calibration": None if self.calibration is None else self.calibration.to_dict()}
 
 
 def identified_model(result: Any) -> Model | None:
@@ -166,15 +172,39 @@ def _first(rec: Recording, seconds: float) -> Recording:
 
 
 def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
-                   thresholds: Mapping[str, float] | None = None) -> ObserverCheck | None:
+                   thresholds: Mapping[str, float] | None = None, calibrate: bool = True) -> ObserverCheck | None:
     """:func:`observer_statistics` of ``result``'s identified file (:func:`identified_model`, with the fit's encoder
     offsets and tilt, :func:`fitted_rig`) on ``recording``; ``torque_delay``: samples by which the recorded torque
-    lags, as fitted. None where the fit's model has no file (a URDF robot)."""
+    lags, as fitted. With ``calibrate`` (default), the observer's model error first calibrated on ``recording``
+    (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`), kept as
+    ``result.model_error`` (written to the file) and the statistics those at it; where none up to the ceiling makes
+    the filter consistent, its reason added. None where the fit's model has no file (a URDF robot)."""
     model = identified_model(result)
     if model is None:
         return None
     off, tilt = fitted_rig(result)
-    return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
+    if not calibrate:
+        return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
+    cal = calibrate_observer(recording, model, off, tilt, torque_delay, thresholds)
+    result.model_error = cal.value if cal.value is not None else getattr(model.params, "model_error", None)
+    check = cal.check
+    if cal.reason:
+        check.reasons.append(cal.reason)
+    check.calibration = cal
+    return check
+
+
+def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
+                       torque_delay: int = 0, thresholds: Mapping[str, float] | None = None) -> Any:
+    """The model error of ``model``'s file calibrated on ``recording``
+    (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error` over
+    :func:`observer_statistics` with ``encoder_offset``, ``tilt``, ``torque_delay`` and ``thresholds`` as there):
+    a :class:`~alpes_dyn.estimation.identification.noise_calibration.ModelErrorCalibration`. Any file, e.g. a true
+    one on the record it would have been fitted on; write its ``value`` with
+    :func:`~alpes_dyn.estimation.observers.friction_noise.with_model_error`."""
+    th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
+    return calibrate_model_error(model, lambda m: observer_statistics(recording, m, encoder_offset, tilt,
+                                                                      torque_delay, th))
 
 
 def observer_statistics(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,

@@ -27,7 +27,13 @@ put it in its band on every draw tried; the estimate's error grows with the nois
 joint's 0.088-0.095 degree without it, 0.070-0.111 at 0.25, 0.102-0.141 at 1).
 
 The LuGre law's bristles (``friction_law="lugre"``) carry no such term: their deflection z is a state, and it walks
-by :data:`BRISTLE_WALK` of the presliding displacement F_s / sigma0 per step. Both are added in one place,
+by :data:`BRISTLE_WALK` of the presliding displacement F_s / sigma0 per step. Where the parameter file holds a calibrated model error (``friction.model_error`` = e, in units of F_s, written
+by ``identify``: :mod:`~alpes_dyn.estimation.observers.noise_calibration`), it replaces the smooth law's term above
+on every law (smooth, stick, LuGre): a white torque e F_s,i on each joint,
+
+    Q_v = dt^2 M^-1 diag(e^2 F_s^2) M^-1                                               (:func:`model_error_noise`).
+
+All are added in one place,
 :func:`with_friction_noise`, which :func:`~alpes_dyn.estimation.observers.observers.make_observer` applies to the
 process noise it is given: every observer built from a parameter file (a recording's, the estimation scenario's, the
 force loop's, the exported C's) carries them.
@@ -41,9 +47,11 @@ from typing import Any
 
 from ...checks import as_float_array
 from ...model.friction import LuGre, lugre_of
+from ...model.params import HandParams, Param, with_values
 from ...model.robot import Model
 
-__all__ = ["FRICTION_MODEL_ERROR", "BRISTLE_WALK", "friction_process_noise", "with_friction_noise"]
+__all__ = ["FRICTION_MODEL_ERROR", "BRISTLE_WALK", "friction_process_noise", "model_error_noise", "model_error_of",
+           "with_model_error", "with_friction_noise"]
 
 FRICTION_MODEL_ERROR = 0.25
 """The smooth law's model error as a fraction of each joint's F_s where the torque noise covers its band (module
@@ -54,6 +62,33 @@ BRISTLE_WALK = 1e-3
 F_s / sigma0 (the bristle's prior standard deviation is the whole of it: a joint at rest holds an unknown
 friction). Finger2 held by 10 times the file's F_s on MuJoCo's stick-slip: 0.27 degree RMS at 1e-3 and 1e-4,
 0.45 at 1e-2, 0.45 at 1e-1 (the bristle let free, the filter lets the split between the joints move)."""
+
+
+def model_error_of(model: Model) -> float | None:
+    """The calibrated model error e of ``model``'s parameter file (``friction.model_error``, in units of each joint's
+    F_s), or None (no file, or none written)."""
+    p = getattr(model, "params", None)
+    e = getattr(p, "model_error", None)
+    return None if e is None else float(e)
+
+
+def with_model_error(params: HandParams, error: float, reason: str = "calibrated on the record") -> HandParams:
+    """``params`` with ``friction.model_error`` = ``error`` (in units of F_s, >= 0; :func:`model_error_noise`), both
+    the field and what :func:`~alpes_dyn.model.params.write_params` writes (source ``identified``, ``reason``:
+    how it was calibrated); :class:`~alpes_dyn.ModelError` where ``error`` is not a finite number >= 0."""
+    prm = Param(float(error), "F_s", "identified", reason, "the observer's model error: a white torque per sample of "
+                "this times each joint's F_s (calibrated on the identification record)")
+    return with_values(params, {"friction.model_error": prm})
+
+
+def model_error_noise(model: Model, dt: float, error: float) -> np.ndarray:
+    """(n, n) Q_v = dt^2 M^-1 diag(``error``^2 F_s^2) M^-1, (rad/s)^2 per sample: a white torque of ``error`` F_s,i
+    (N m) on each joint i, ``model``'s Coulomb F_s and inertia matrix at q = 0, ``dt`` the sample period (s)."""
+    n = model.n
+    Fs = np.asarray(model.extras.coulomb, dtype=float)
+    Minv = np.linalg.inv(model.inertia_matrix(np.zeros(n)))
+    Qv = dt**2 * Minv @ np.diag((float(error) * Fs) ** 2) @ Minv.T
+    return 0.5 * (Qv + Qv.T)
 
 
 def friction_process_noise(model: Model, B: np.ndarray, dt: float, torque_noise: float,
@@ -93,7 +128,9 @@ def with_friction_noise(system: Any, dt: float, process_noise: Any, input_noise:
         (N^2 m^2), whose largest standard deviation is the torque noise of :func:`friction_process_noise`.
     friction_law : {"smooth", "stick", "lugre"}, optional
         The observer's law: ``"smooth"`` adds :func:`friction_process_noise` on qd, ``"lugre"`` appends the
-        bristles' walk (:data:`BRISTLE_WALK` F_s / sigma0 per step, rad), ``"stick"`` adds nothing.
+        bristles' walk (:data:`BRISTLE_WALK` F_s / sigma0 per step, rad), ``"stick"`` adds nothing; where the
+        model's file holds a calibrated ``friction.model_error`` (:func:`model_error_of`), every law adds
+        :func:`model_error_noise` on qd instead of :func:`friction_process_noise`.
     n_parameters : int, optional
         The gains and disturbances estimated with the state.
 
@@ -106,16 +143,19 @@ def with_friction_noise(system: Any, dt: float, process_noise: Any, input_noise:
     model = system.model
     n, Fs = model.n, np.asarray(model.extras.coulomb, dtype=float)
     base = 2 * n + n_parameters
-    if not np.any(Fs > 0) or friction_law == "stick":
+    error = model_error_of(model)
+    if not np.any(Fs > 0) or (friction_law == "stick" and error is None):
         return process_noise
     Q = as_float_array(process_noise, "process_noise", f"{base} variances or a ({base}, {base}) covariance")
     Q = np.diag(np.broadcast_to(Q, (base,))) if Q.ndim == 0 or Q.shape == (base,) else Q.copy()
+    if Q.shape == (base, base) and error is not None:
+        Q[n:2 * n, n:2 * n] += model_error_noise(model, dt, error)
     if friction_law == "lugre":
         span = Fs / (lugre_of(model) or LuGre()).sigma0
         return (np.block([[Q, np.zeros((base, n))], [np.zeros((n, base)), np.diag((BRISTLE_WALK * span) ** 2)]])
                 if Q.shape == (base, base) else process_noise)
-    if Q.shape != (base, base):
-        return process_noise
+    if Q.shape != (base, base) or error is not None:
+        return Q if Q.shape == (base, base) else process_noise
     m = system.B.shape[1]
     Sw = np.zeros(m) if input_noise is None else as_float_array(input_noise, "input_noise", "variances")
     Sw = np.diag(Sw) if Sw.ndim == 2 else np.broadcast_to(Sw, (max(Sw.size, m),))
