@@ -47,7 +47,7 @@ import numpy as np
 
 from alpes_dyn.bench.mujoco_hand import MujocoHand
 from alpes_dyn.control.bench_loop import run_on_bench
-from alpes_dyn.control.cstep import read_step_output, step_main_input, write_c_step
+from alpes_dyn.control.cstep import read_step_output, step_main_input, step_state_row, write_c_step
 from alpes_dyn.control.step import ForceStep
 
 GOAL_US = 50.0
@@ -134,21 +134,31 @@ def hand_c_columns(step, rec: dict, cc: str) -> dict:
     """The hand's C step of ``step`` (a :class:`~alpes_dyn.control.hand_step.HandForceStep`; ``alpes-dyn codegen
     --step --model hand``'s sources) built with ``cc -O2`` and run over the readings ``rec`` of a run of ``step``
     (arrays per tick: counts, torque, force, ref, normals and the step's command, z (state), F_fb): the columns of
-    :func:`c_columns`."""
-    from alpes_dyn.control.chand import hand_main_input, read_hand_output, write_c_hand
+    :func:`c_columns` (one step from the Python step's state, replayed with the run's normals, and free-running)."""
+    from alpes_dyn.control.chand import hand_main_input, hand_state_row, read_hand_output, write_c_hand
 
     row: dict = {}
+    step.reset()
+    states = []
+    force = rec["force"] if step.kind != "sensorless" else [None] * len(rec["counts"])
+    for k in range(len(rec["counts"])):  # the Python step replayed: its state before each tick
+        states.append(hand_state_row(step))
+        step.step(rec["counts"][k], rec["torque"][k], force[k], rec["ref"][k], rec["normals"][k])
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "c"
         files = write_c_hand(step, d)
         _build_c(cc, d, files, row)
-        (d / "in.txt").write_text(hand_main_input(rec["counts"], rec["torque"], rec["force"], rec["ref"],
-                                                  rec["normals"]))
-        out = subprocess.run([str(d / "main"), str(d / "in.txt")], check=True, capture_output=True, text=True).stdout
-        U, Z, F = read_hand_output(out)
-        row["diff_command"] = float(np.abs(U - rec["command"]).max())
-        row["diff_q"] = float(np.nanmax(np.abs(Z - rec["z"]))) if step.kind != "pi" else None
-        row["diff_force"] = float(np.abs(F - rec["F_fb"]).max())
+        args = (rec["counts"], rec["torque"], rec["force"], rec["ref"], rec["normals"])
+        (d / "in.txt").write_text(hand_main_input(*args))
+        (d / "in_s.txt").write_text(hand_main_input(*args, states=np.array(states)))
+        for key, flag, name in (("", [], "in.txt"), ("step_", ["-s"], "in_s.txt")):
+            out = subprocess.run([str(d / "main"), *flag, str(d / name)], check=True, capture_output=True,
+                                 text=True).stdout
+            U, Z, F = read_hand_output(out)
+            row[key + "diff_command"] = float(np.abs(U - rec["command"]).max())
+            row[key + "diff_q"] = float(np.nanmax(np.abs(Z - rec["z"]))) if step.kind != "pi" else None
+            row[key + "diff_force"] = float(np.abs(F - rec["F_fb"]).max())
+        _diffs(row)
         _time_c(d, row)
     return row
 
@@ -175,27 +185,46 @@ def c_columns(step: ForceStep, run, cc: str) -> dict:
     """The C step of ``step`` (alpes-dyn codegen --step's sources) built with ``cc -O2 -std=c99`` and run over the
     readings of ``run`` (a :class:`~alpes_dyn.control.bench_loop.BenchRun` of ``step``): its source size (kB), its
     build (wall and the compiler's processor time, s), its largest differences from the Python step's commands
-    (N m), joint estimates (rad) and forces fed back (N), its time per step (wall and processor, us)."""
+    (N m), joint estimates (rad) and forces fed back (N) one step from the Python step's state (``step_diff_*``,
+    ``c_step_diff`` their largest: the goal) and free-running (``diff_*``, ``c_run_diff``: the module docstring),
+    its time per step (wall and processor, us)."""
     row = {}
+    rows = [(run.counts[k], run.torque[k], float(run.force[k]), float(run.F_ref[k])) for k in range(len(run.t))]
+    step.reset()
+    states = []
+    for c, tq, f, r in rows:  # the Python step replayed: its state before each tick
+        states.append(step_state_row(step))
+        step.step(c, tq, f, r)
     with tempfile.TemporaryDirectory() as tmp:
         d = Path(tmp) / "c"
         files = write_c_step(step, d)
         _build_c(cc, d, files, row)
-        (d / "in.txt").write_text(step_main_input(run.counts, run.torque, run.force, run.F_ref, step.design.normal))
-        out = subprocess.run([str(d / "main"), str(d / "in.txt")], check=True, capture_output=True, text=True).stdout
-        U, Z, F = read_step_output(out, step.m, 2 * step.n)
-        row["diff_command"] = float(np.abs(U - run.command).max())
-        row["diff_q"] = float(np.nanmax(np.abs(Z[:, :step.n] - run.q_hat))) if step.filter_step is not None else None
-        row["diff_force"] = float(np.abs(F - run.F_fb).max())
+        args = (run.counts, run.torque, run.force, run.F_ref, step.design.normal)
+        (d / "in.txt").write_text(step_main_input(*args))
+        (d / "in_s.txt").write_text(step_main_input(*args, states=np.array(states)))
+        for key, flag, name in (("", [], "in.txt"), ("step_", ["-s"], "in_s.txt")):
+            out = subprocess.run([str(d / "main"), *flag, str(d / name)], check=True, capture_output=True,
+                                 text=True).stdout
+            U, Z, F = read_step_output(out, step.m, 2 * step.n)
+            row[key + "diff_command"] = float(np.abs(U - run.command).max())
+            row[key + "diff_q"] = (float(np.nanmax(np.abs(Z[:, :step.n] - run.q_hat)))
+                                   if step.filter_step is not None else None)
+            row[key + "diff_force"] = float(np.abs(F - run.F_fb).max())
+        _diffs(row)
         _time_c(d, row)
     return row
+
+
+def _diffs(row: dict) -> None:
+    """``c_step_diff`` and ``c_run_diff`` into ``row``: the largest of its ``step_diff_*`` and its ``diff_*``."""
+    for key, pre in (("c_step_diff", "step_"), ("c_run_diff", "")):
+        row[key] = max(row[pre + "diff_command"], row[pre + "diff_q"] or 0.0, row[pre + "diff_force"])
 
 
 def c_goals_met(row: dict, goal_us: float = GOAL_US) -> bool:
     """The C step's goals (``goal_us`` processor us per step of the best pass, the module docstring's time rule; :data:`GOAL_US` for a finger, :data:`GOAL_BUILD_S` s
     of build, :data:`GOAL_DIFF` from the Python step) on a row of :func:`c_columns`."""
-    return bool(row["c_cpu_us"] < goal_us and row["c_build_cpu_s"] < GOAL_BUILD_S
-                and max(row["diff_command"], row["diff_q"] or 0.0, row["diff_force"]) <= GOAL_DIFF)
+    return bool(row["c_cpu_us"] < goal_us and row["c_build_cpu_s"] < GOAL_BUILD_S and row["c_step_diff"] <= GOAL_DIFF)
 
 
 def main(argv: list[str] | None = None) -> int:
