@@ -45,7 +45,8 @@ from .cexport import READ_ROWS_C
 from .cstep import LOAD_STATE_C, step_c_sources, step_state_row
 from .hand_step import HandForceStep
 
-__all__ = ["hand_c_sources", "write_c_hand", "hand_main_input", "hand_state_row", "read_hand_output", "C_HAND_BUILD", "HAND_NZ"]
+__all__ = ["hand_c_sources", "write_c_hand", "hand_main_input", "hand_state_row", "read_hand_output", "C_HAND_BUILD",
+           "HAND_NZ"]
 
 C_HAND_BUILD = "cc -O2 -std=c99 -o alpes_hand_main *.c -lm"
 """The build of the test program."""
@@ -346,7 +347,8 @@ def hand_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal
     N = len(counts)
     cols = [counts.reshape(N, 6), np.asarray(torque, float).reshape(N, 6),
             np.nan_to_num(np.asarray(force, float).reshape(N, 5), nan=0.0),
-            np.broadcast_to(np.asarray(reference, float).reshape(N, -1), (N, 5)), np.asarray(normals, float).reshape(N, 15)]
+            np.broadcast_to(np.asarray(reference, float).reshape(N, -1), (N, 5)),
+            np.asarray(normals, float).reshape(N, 15)]
     if states is not None:
         cols.append(np.asarray(states, float).reshape(N, -1))
     rows = np.hstack(cols)

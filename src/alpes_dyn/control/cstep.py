@@ -48,7 +48,8 @@ from .cexport import READ_ROWS_C, controller_c_sources
 from .step import ForceStep
 from .step_parts import StepParts
 
-__all__ = ["step_c_sources", "write_c_step", "step_main_input", "step_state_row", "read_step_output", "C_STEP_BUILD", "STEP_ERRORS"]
+__all__ = ["step_c_sources", "write_c_step", "step_main_input", "step_state_row", "read_step_output", "C_STEP_BUILD",
+           "STEP_ERRORS", "LOAD_STATE_C"]
 
 C_STEP_BUILD = "cc -O2 -std=c99 -o alpes_step_main main.c alpes_step.c alpes_step_ekf.c alpes_step_force.c -lm"
 """The build of the test program (``alpes_step_ekf.c`` absent for ``"pi"``)."""
