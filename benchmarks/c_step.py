@@ -20,10 +20,13 @@ free run (the C step fed only the readings, from its own state: ``diff_command``
 ``c_run_diff``) is kept beside it and is not a goal: the two run the same operations but for the order of a few
 sums (CasADi's feedforward and contact force against the Python step's), and the loop's filter amplifies a
 1e-17 difference by up to 1e10 where a joint's friction changes branch near rest (the smooth law's slope F_s / v_s,
-alpes_dyn.control.step.force_ekf) or where a joint in contact is barely observed: measured on an identified
-finger3 (sensor loop, 1.5 s), one step from the same state 7e-18 N m and the estimates equal, free-running 3e-8
-rad; on the hand with an identified thumb (sensor loop, 2.5 s) 1.4e-17 against 0.98 free-running, the commands
-4e-5 N m apart.
+alpes_dyn.control.step.force_ekf) or where a joint in contact is barely observed (the step's command is its
+observer's motor torque and its observer's estimate feeds its command: a loop inside the step, also in a replay).
+Measured on an identified finger3 (sensor loop, 1.5 s): one step from the same state 7e-18 N m and the estimates
+equal, free-running 3e-8 rad; on the hand with a file of the thumb's identification (sensor loop, 2.5 s): 1.4e-17
+against 0.98 rad/s free-running (the little finger's velocities; its angles 9e-3 rad, the commands 4e-5 N m apart),
+and the Python step against itself, its force readings scaled by 1 + 1e-15, 0.81 rad/s apart as much: the free run's
+difference is the loop's sensitivity, not the C's.
 
 The time rule: the goal (50 us per finger, 200 us for the hand) is real time on the user's machine, the step's
 own cost on a core of its own. The figure held against it is the best pass's processor time per step: processor
