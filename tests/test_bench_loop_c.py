@@ -2,7 +2,8 @@
 a BenchRun's readings, its difference from the Python step, and the goal it feeds (bench_loop.goals' ``c_step``).
 
 References: the Python step's own commands and estimates logged by run_on_bench (the C step must reproduce them to
-1e-9: commands about 0.03 N m, joints about 1 rad, forces about 0.5 N); a run whose logged commands are shifted by a
+1e-9 free-running, to 1e-12 one step from the Python step's state: commands about 0.03 N m, joints about 1 rad,
+forces about 0.5 N); a run whose logged commands are shifted by a
 known 1e-6 N m, which the column must report as that shift (within 1e-9).
 """
 
@@ -48,19 +49,27 @@ def test_c_column_matches_the_python_step(bench, pressed):
     step, run = pressed
     assert run.force.max() > 0.2  # the finger pressed the block: the contact's branch of the step ran
     row = c_step.c_columns(step, run, CC)
-    assert row["diff_command"] < 1e-9 and row["diff_q"] < 1e-9 and row["diff_force"] < 1e-9
+    assert row["diff_command"] < 1e-9 and row["diff_q"] < 1e-9 and row["diff_force"] < 1e-9  # the free run
+    # one step from the Python step's state (the goal's column): rounding only
+    assert row["step_diff_command"] < 1e-12 and row["step_diff_q"] < 1e-12 and row["step_diff_force"] < 1e-12
+    assert row["c_step_diff"] == max(row["step_diff_command"], row["step_diff_q"], row["step_diff_force"])
+    assert row["c_run_diff"] == max(row["diff_command"], row["diff_q"], row["diff_force"])
     assert 0 < row["c_cpu_us"] < 1e4 and row["c_build_s"] > 0 and row["c_source_kb"] > 1
     # the time rule (c_step's docstring): the best of PASSES passes, each a process of its own
     assert row["c_passes"] == c_step.PASSES and row["c_cpu_us"] <= row["c_cpu_us_median"] * (1 + 1e-12)
     assert c_step.c_goals_met(row) == (row["c_cpu_us"] < c_step.GOAL_US and row["c_build_cpu_s"] < c_step.GOAL_BUILD_S)
-    # a command logged 1e-6 N m off is reported as 1e-6 off
+    assert not c_step.c_goals_met({**row, "c_step_diff": 2e-9, "c_run_diff": 0.0})  # the goal is on the per-step one
+    assert c_step.c_goals_met({**row, "c_run_diff": 1.0}) == c_step.c_goals_met(row)
+    # a command logged 1e-6 N m off is reported as 1e-6 off, free-running and one step from the Python state
     shifted = dataclasses.replace(run, command=run.command + 1e-6)
-    assert c_step.c_columns(step, shifted, CC)["diff_command"] == pytest.approx(1e-6, abs=1e-9)
+    row = c_step.c_columns(step, shifted, CC)
+    assert row["diff_command"] == pytest.approx(1e-6, abs=1e-9)
+    assert row["step_diff_command"] == pytest.approx(1e-6, abs=1e-9)
 
 
 def test_c_step_goal_needs_both_controllers(bench):
     _, bench_loop = bench
-    good = {"c_goals_met": True, "c_diff": 1e-15, "c_cpu_us": 10.0}
+    good = {"c_goals_met": True, "c_step_diff": 1e-15, "c_run_diff": 2e-12, "c_cpu_us": 10.0}
     row = {"stop_reached": False, "loops": [{"controller": "sensor", **good}, {"controller": "sensorless", **good}]}
     assert bench_loop.goals(row)["c_step"] is True
     row["loops"][1] = {"controller": "sensorless", **good, "c_goals_met": False}
@@ -69,4 +78,4 @@ def test_c_step_goal_needs_both_controllers(bench):
     assert bench_loop.goals(row)["c_step"] is None
     assert bench_loop.goals({"stop_reached": False})["c_step"] is None
     text = bench_loop.table_text([{"model": "finger2", "seed": 1, "loops": [{"controller": "sensor", **good}]}])
-    assert "1.0e-15 / 10.0" in text
+    assert "1.0e-15 / 2.0e-12 / 10.0" in text

@@ -101,6 +101,46 @@ def test_c_step_takes_the_normal_at_run_time(sensor, tmp_path):
     assert np.abs(results[0] - results[1]).max() > 2e-4  # N m: the normal changes the commands (2 % here)
 
 
+def _states(step, run):
+    """The Python step's state before each tick of a replay of ``run`` (cstep.step_state_row, (N, S))."""
+    from alpes_dyn.control.cstep import step_state_row
+
+    step.reset()
+    S = []
+    for k in range(len(run.t)):
+        S.append(step_state_row(step))
+        step.step(run.counts[k], run.torque[k], run.force[k], float(run.F_ref[k]))
+    return np.array(S)
+
+
+def _run_from(exe, step, run, states, tmp):
+    """``main -s``: each tick one C step from the state given on its line."""
+    from alpes_dyn.control.cstep import read_step_output, step_main_input
+
+    (tmp / "in_s.txt").write_text(step_main_input(run.counts, run.torque, run.force, run.F_ref, step.design.normal,
+                                                  states=states))
+    out = subprocess.run([str(exe), "-s", str(tmp / "in_s.txt")], check=True, capture_output=True, text=True).stdout
+    return read_step_output(out, step.m, 2 * step.n)
+
+
+@needs_cc
+def test_c_step_one_step_from_the_python_state(sensor, tmp_path):
+    """``main -s``: at each tick the C step from the Python step's state before it (the benchmarks' agreement rule,
+    c_step.py's docstring) gives the Python step's command, estimate (rad, rad/s) and force fed back to 1e-12: one
+    step's rounding (the Python EKF in CasADi's VM, the C its loop over one substep); the state is read: every tick
+    from the first tick's state (the rest) gives other estimates and commands once the finger moved."""
+    step, exe, run = sensor
+    S = _states(step, run)
+    U, Z, F = _replay(step, run)
+    Uc, Zc, Fc = _run_from(exe, step, run, S, tmp_path)
+    np.testing.assert_allclose(Uc, U, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(Zc, Z, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(Fc, F, rtol=0, atol=1e-12)
+    Ur, Zr, _ = _run_from(exe, step, run, np.broadcast_to(S[0], S.shape), tmp_path)
+    assert np.abs(Zr[-100:, :step.n] - Z[-100:, :step.n]).min() > 0.05  # rad: from the rest, not the pressed finger
+    assert np.abs(Ur[-100:] - U[-100:]).max() > 1e-3  # N m
+
+
 @needs_cc
 @pytest.mark.parametrize("kind", ["sensorless", "pi"])
 def test_c_step_of_the_other_controllers(kind, sensor, tmp_path):
@@ -121,6 +161,11 @@ def test_c_step_of_the_other_controllers(kind, sensor, tmp_path):
         assert np.isnan(Z).all()
     else:
         np.testing.assert_allclose(Z[:, :step.n], run.q_hat, rtol=0, atol=TOL)
+    Uc, Zc, Fc = _run_from(exe, step, run, _states(step, run), tmp_path)  # one step from the Python state
+    np.testing.assert_allclose(Uc, run.command, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(Fc, run.F_fb, rtol=0, atol=1e-12)
+    if kind != "pi":
+        np.testing.assert_allclose(Zc[:, :step.n], run.q_hat, rtol=0, atol=1e-12)
 
 
 @needs_cc

@@ -89,6 +89,28 @@ def test_c_hand_step_equals_the_python_step(hand_run, tmp_path):
                                                rec["normals"][:2]))
     r = subprocess.run([str(d / "main"), str(d / "bad.txt")], capture_output=True, text=True)
     assert r.returncode == 1 and r.stderr.strip().endswith("line 2: alpes_hand_step returned 2")
+    # main -s: each tick one C step from the Python step's state before it (hand_state_row of a replay with the
+    # run's normals): the benchmarks' agreement rule (c_step.py's docstring), rounding of one step only
+    from alpes_dyn.control.chand import hand_state_row
+
+    step.reset()
+    S = []
+    for k in range(len(rec["counts"])):
+        S.append(hand_state_row(step))
+        step.step(rec["counts"][k], rec["torque"][k], rec["force"][k], rec["ref"][k], rec["normals"][k])
+    S = np.array(S)
+    args = (rec["counts"], rec["torque"], rec["force"], rec["ref"], rec["normals"])
+    for states, close in ((S, True), (np.broadcast_to(S[0], S.shape), False)):  # the state read: from the rest
+        (d / "in_s.txt").write_text(hand_main_input(*args, states=states))
+        out = subprocess.run([str(d / "main"), "-s", str(d / "in_s.txt")], check=True, capture_output=True,
+                             text=True).stdout
+        U, Z, F = read_hand_output(out)
+        if close:
+            for a, b in ((U, rec["command"]), (Z, rec["z"]), (F, rec["F_fb"])):
+                np.testing.assert_allclose(a, b, rtol=0, atol=1e-12)
+        else:
+            assert np.abs(Z[-100:] - rec["z"][-100:]).max() > 0.05
+            assert np.abs(U[-100:] - rec["command"][-100:]).max() > 1e-3
 
 
 def test_parts_are_the_step_settings():

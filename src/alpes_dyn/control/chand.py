@@ -42,10 +42,11 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.cexport.cexport import check_output_directory, write_sources
 from .cexport import READ_ROWS_C
-from .cstep import step_c_sources
+from .cstep import LOAD_STATE_C, step_c_sources, step_state_row
 from .hand_step import HandForceStep
 
-__all__ = ["hand_c_sources", "write_c_hand", "hand_main_input", "read_hand_output", "C_HAND_BUILD", "HAND_NZ"]
+__all__ = ["hand_c_sources", "write_c_hand", "hand_main_input", "hand_state_row", "read_hand_output", "C_HAND_BUILD",
+           "HAND_NZ"]
 
 C_HAND_BUILD = "cc -O2 -std=c99 -o alpes_hand_main *.c -lm"
 """The build of the test program."""
@@ -170,6 +171,8 @@ _MAIN = r"""/* main.c -- test program of alpes_hand.c (alpes-dyn codegen --step 
 
    alpes_hand_main FILE|-              per tick: the commands (6), the chains' estimates (ALPES_HAND_NZ), the forces fed
                                        back (5)
+   alpes_hand_main -s FILE|-           the same, each tick one step from the state given on its line (after the
+                                       readings: STATE_ROW numbers, load_state's order), not from the tick before
    alpes_hand_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor)
 
    FILE: one tick per line: counts (6) torque (6) force (5) reference (5) normals (15).
@@ -182,18 +185,30 @@ _MAIN = r"""/* main.c -- test program of alpes_hand.c (alpes-dyn codegen --step 
 #include <time.h>
 #include "alpes_hand.h"
 
-#define NR 37
+#define NX 37  /* the readings of a line */
+#define NR (NX + (per_step ? STATE_ROW : 0))
+#define STATE_ROW {state_row}
+{load_chain}
+/* The hand's state from a row (chand.hand_state_row's order): each chain's, then the PD's and the ticks done. */
+static void load_state(alpes_hand_state* s, const double* x) {{
+{load_chains}
+  s->abd_prev = *x++;
+  s->abd_v = *x++;
+  s->k = (long) *x;
+}}
 
 int main(int argc, char** argv) {{
   double work[ALPES_HAND_NWORK], command[6], z[ALPES_HAND_NZ], F[5], *rows = 0;
   long n = 0, cap = 0, k, r, repeat = 0;
-  int a = 1, i, e;
+  int a = 1, i, e, per_step = 0;
   alpes_hand_state s;
   FILE* f;
+  if (argc > 1 && strcmp(argv[1], "-s") == 0) {{ per_step = 1; --argc; ++argv; }}
 {read_rows}  if (repeat == 0) {{
     alpes_hand_init(&s);
     for (k = 0; k < n; ++k) {{
       const double* x = rows + k * NR;
+      if (per_step) load_state(&s, x + NX);
       if ((e = alpes_hand_step(&s, x, x + 6, x + 12, x + 17, x + 22, command, work))) {{
         fprintf(stderr, "%s: line %ld: alpes_hand_step returned %d\n", argv[0], k + 1, e);
         return 1;
@@ -287,8 +302,32 @@ def hand_c_sources(step: HandForceStep, *, about: str = "") -> dict[str, str]:
         build=C_HAND_BUILD, includes="\n".join(f'#include "alpes_hand_{c}.h"' for c in chains), nz=HAND_NZ,
         nwork=nwork, chain_states="\n".join(f"  alpes_hand_{c}_state {c};" for c in chains),
         **{k: v for k, v in settings.items() if k in ("dt", "target", "ramp", "kp", "kd", "alpha", "tau_max")})
-    files["main.c"] = _MAIN.format(build=C_HAND_BUILD, read_rows=READ_ROWS_C)
+    files["main.c"] = _MAIN.format(
+        build=C_HAND_BUILD, read_rows=READ_ROWS_C, state_row=len(hand_state_row(step)),
+        load_chain="".join(LOAD_STATE_C.format(name=f"load_{c}", type=f"alpes_hand_{c}_state") for c in chains),
+        load_chains="\n".join(f"  x = load_{c}(&s->{c}, x);" for c in chains))
     return dict(sorted(files.items()))
+
+
+def hand_state_row(step: HandForceStep) -> np.ndarray:
+    """The state of ``step`` now (before its next :meth:`~alpes_dyn.control.hand_step.HandForceStep.step`) as the
+    C step's, ``main -s``'s row: each chain's :func:`~alpes_dyn.control.cstep.step_state_row` in the chains' order,
+    then the ab/adduction PD's last joint angle (rad, 0 before the first tick) and filtered velocity (rad/s), the
+    ticks done.
+
+    Parameters
+    ----------
+    step : HandForceStep
+        The hand's step.
+
+    Returns
+    -------
+    numpy.ndarray
+        The row (its length: ``main.c``'s STATE_ROW).
+    """
+    pd = step.abduction
+    return np.concatenate([*(step_state_row(s) for s in step.chain_steps.values()),
+                           [pd._prev if pd._prev is not None else 0.0, pd._v, step.k]])
 
 
 def write_c_hand(step: HandForceStep, directory: str | os.PathLike[str], *, what: str = "-o",
@@ -300,15 +339,19 @@ def write_c_hand(step: HandForceStep, directory: str | os.PathLike[str], *, what
     return write_sources(hand_c_sources(step, **kwargs), directory, what)
 
 
-def hand_main_input(counts: Any, torque: Any, force: Any, reference: Any, normals: Any) -> str:
+def hand_main_input(counts: Any, torque: Any, force: Any, reference: Any, normals: Any, states: Any = None) -> str:
     """The text ``main.c`` reads: per tick counts (N, 6), torque (N, 6), force (N, 5) (NaN: 0), reference (N, 5),
-    normals (N, 5, 3); ``repr``: read back exactly."""
+    normals (N, 5, 3); with ``states`` (N, S), each tick's state (:func:`hand_state_row` of the Python step before
+    that tick) after its readings, for ``main -s`` (one step from each given state); ``repr``: read back exactly."""
     counts = np.asarray(counts, float)
     N = len(counts)
-    rows = np.hstack([counts.reshape(N, 6), np.asarray(torque, float).reshape(N, 6),
-                      np.nan_to_num(np.asarray(force, float).reshape(N, 5), nan=0.0),
-                      np.broadcast_to(np.asarray(reference, float).reshape(N, -1), (N, 5)),
-                      np.asarray(normals, float).reshape(N, 15)])
+    cols = [counts.reshape(N, 6), np.asarray(torque, float).reshape(N, 6),
+            np.nan_to_num(np.asarray(force, float).reshape(N, 5), nan=0.0),
+            np.broadcast_to(np.asarray(reference, float).reshape(N, -1), (N, 5)),
+            np.asarray(normals, float).reshape(N, 15)]
+    if states is not None:
+        cols.append(np.asarray(states, float).reshape(N, -1))
+    rows = np.hstack(cols)
     return "".join(" ".join(repr(float(x)) for x in row) + "\n" for row in rows)
 
 

@@ -48,7 +48,8 @@ from .cexport import READ_ROWS_C, controller_c_sources
 from .step import ForceStep
 from .step_parts import StepParts
 
-__all__ = ["step_c_sources", "write_c_step", "step_main_input", "read_step_output", "C_STEP_BUILD", "STEP_ERRORS"]
+__all__ = ["step_c_sources", "write_c_step", "step_main_input", "step_state_row", "read_step_output", "C_STEP_BUILD",
+           "STEP_ERRORS", "LOAD_STATE_C"]
 
 C_STEP_BUILD = "cc -O2 -std=c99 -o alpes_step_main main.c alpes_step.c alpes_step_ekf.c alpes_step_force.c -lm"
 """The build of the test program (``alpes_step_ekf.c`` absent for ``"pi"``)."""
@@ -213,6 +214,8 @@ int alpes_step(alpes_step_state* s, const double counts[NM], const double torque
 _MAIN = r"""/* main.c -- test program of alpes_step.c (alpes-dyn codegen --step).
 
    alpes_step_main FILE|-              per tick, one line: the command (NM), [q_hat; qd_hat] (NZ), the force fed back
+   alpes_step_main -s FILE|-           the same, each tick one step from the state given on its line (after the
+                                       readings: STATE_ROW numbers, load_state's order), not from the tick before
    alpes_step_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor)
 
    FILE: one tick per line: counts (NM) torque (NM) force reference normal (3) (%.17g printed: read back exactly).
@@ -226,18 +229,22 @@ _MAIN = r"""/* main.c -- test program of alpes_step.c (alpes-dyn codegen --step)
 #include "alpes_step.h"
 
 #define NM ALPES_STEP_NM
-#define NR (2 * NM + 5)
-
+#define NX (2 * NM + 5)  /* the readings of a line */
+#define NR (NX + (per_step ? STATE_ROW : 0))
+#define STATE_ROW (ALPES_STEP_NZ * (ALPES_STEP_NZ + 1) + NM + 15)
+{load_state}
 int main(int argc, char** argv) {{
   double work[ALPES_STEP_NWORK], command[NM], *rows = 0;
   long n = 0, cap = 0, k, r, repeat = 0;
-  int a = 1, i, e;
+  int a = 1, i, e, per_step = 0;
   alpes_step_state s;
   FILE* f;
+  if (argc > 1 && strcmp(argv[1], "-s") == 0) {{ per_step = 1; --argc; ++argv; }}
 {read_rows}  if (repeat == 0) {{
     alpes_step_init(&s);
     for (k = 0; k < n; ++k) {{
       const double* x = rows + k * NR;
+      if (per_step) load_state(&s, x + NX);
       if ((e = alpes_step(&s, x, x + NM, x[2 * NM], x[2 * NM + 1], x + 2 * NM + 2, command, work))) {{
         fprintf(stderr, "%s: line %ld: alpes_step returned %d\n", argv[0], k + 1, e);
         return 1;
@@ -269,6 +276,36 @@ int main(int argc, char** argv) {{
   return 0;
 }}
 """
+
+
+LOAD_STATE_C = r"""
+/* The state from a row (a test's, the Python step's state before a tick; cstep.step_state_row's order): the
+   estimate z, its covariance P (column-major), the last command, the force fed back, the ticks done, then the
+   controller's memory (integral, tau_prev, F_ref_f, F_ref_f2, nx[2], ny[2], above, below, in_contact, started,
+   notch_started). Returns the row past it. */
+static const double* {name}({type}* s, const double* x) {{
+  size_t i, nz = sizeof(s->z) / sizeof(double), nm = sizeof(s->command) / sizeof(double);
+  for (i = 0; i < nz; ++i) s->z[i] = *x++;
+  for (i = 0; i < nz * nz; ++i) s->P[i] = *x++;
+  for (i = 0; i < nm; ++i) s->command[i] = *x++;
+  s->F_fb = *x++;
+  s->k = (long) *x++;
+  s->controller.integral = *x++;
+  s->controller.tau_prev = *x++;
+  s->controller.F_ref_f = *x++;
+  s->controller.F_ref_f2 = *x++;
+  for (i = 0; i < 2; ++i) s->controller.nx[i] = *x++;
+  for (i = 0; i < 2; ++i) s->controller.ny[i] = *x++;
+  s->controller.above = (long) *x++;
+  s->controller.below = (long) *x++;
+  s->controller.in_contact = (int) *x++;
+  s->controller.started = (int) *x++;
+  s->controller.notch_started = (int) *x++;
+  return x;
+}}
+"""
+"""A C function ``name`` loading a step's state (of C type ``type``) from a row of :func:`step_state_row`'s layout
+(the test programs' ``-s`` mode: one step from a given state); ``.format(name=..., type=...)``."""
 
 
 def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_step") -> dict[str, str]:
@@ -342,7 +379,8 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
         tau_max=parts.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=parts.n, nz=nz, nwork=nwork,
         observer_note=_observer_note(parts) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
         z_note="" if filt else "; NaN: no observer", ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
-    files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C)
+    files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C,
+                                   load_state=LOAD_STATE_C.format(name="load_state", type="alpes_step_state"))
     if prefix != "alpes_step":
         files = {k.replace("alpes_step", prefix): v.replace("alpes_step", prefix).replace("ALPES_STEP", prefix.upper())
                  for k, v in files.items()}
@@ -382,16 +420,46 @@ def write_c_step(step: ForceStep, directory: str | os.PathLike[str], *, what: st
     return write_sources(step_c_sources(step, **kwargs), directory, what)
 
 
-def step_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal: Any) -> str:
+def step_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal: Any, states: Any = None) -> str:
     """The text ``main.c`` reads: per tick counts (N, m), torque (N, m), force (N,) (NaN: 0, unread by the
-    sensorless step), reference (N,), normal (3,) or (N, 3); ``repr``: read back exactly."""
+    sensorless step), reference (N,), normal (3,) or (N, 3); with ``states`` (N, S), each tick's state
+    (:func:`step_state_row` of the Python step before that tick) after its readings, for ``main -s`` (one step from
+    each given state); ``repr``: read back exactly."""
     counts = np.asarray(counts, float)
     N = len(counts)
     cols = [counts.reshape(N, -1), np.asarray(torque, float).reshape(N, -1),
             np.nan_to_num(np.asarray(force, float).reshape(N, 1), nan=0.0), np.asarray(reference, float).reshape(N, 1),
             np.broadcast_to(np.asarray(normal, float), (N, 3))]
+    if states is not None:
+        cols.append(np.asarray(states, float).reshape(N, -1))
     rows = np.hstack(cols)
     return "".join(" ".join(repr(float(x)) for x in row) + "\n" for row in rows)
+
+
+def step_state_row(step: ForceStep) -> np.ndarray:
+    """The state of ``step`` now (before its next :meth:`~alpes_dyn.control.step.ForceStep.step`) as the C step's
+    state, in :data:`LOAD_STATE_C`'s order: [z (2n); P (4n^2, column-major); the last command (m); the force fed
+    back; the ticks done; the controller's integral, tau_prev, F_ref_f, F_ref_f2, notch inputs (2), outputs (2),
+    periods above and below the threshold, in contact, started, notch started] (z and P NaN for ``"pi"``).
+
+    Parameters
+    ----------
+    step : ForceStep
+        The step.
+
+    Returns
+    -------
+    numpy.ndarray
+        (2n (2n + 1) + m + 15,) the row.
+    """
+    nz, c = 2 * step.n, step.controller
+    zP = step._s[:nz * (nz + 1)] if step.filter_step is not None else np.full(nz * (nz + 1), np.nan)
+    notch = c._notch
+    started = c.F_ref_f is not None
+    return np.concatenate([zP, step._command, [
+        step._F_fb, step.k, c.integral, c.tau_prev, c.F_ref_f if started else 0.0, c.F_ref_f2 if started else 0.0,
+        *(notch[1] if notch else (0.0, 0.0)), *(notch[2] if notch else (0.0, 0.0)), c._above, c._below,
+        float(c.in_contact), float(started), float(notch is not None)]])
 
 
 def read_step_output(text: str, m: int, nz: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
