@@ -128,14 +128,15 @@ def test_the_stand_in_is_an_interface_that_hides_its_truth(tmp_path):
     hw = MujocoHand("finger2", p, effects=real_hand_effects(), scene="free")
     assert isinstance(hw, HardwareInterface)
     public = {k: v for k, v in vars(hw).items() if not k.startswith("_")}
-    assert set(public) <= {"model", "scene", "period", "motor_names", "counts_per_rev", "tau_max", "closed"}
+    assert set(public) <= {"model", "scene", "period", "motor_names", "counts_per_rev", "tau_max", "closed",
+                           "both_ways"}
     assert not any(isinstance(v, (HandParams, Model, PlantEffects)) for v in public.values())
     assert hw.tau_max == 0.06 and hw.counts_per_rev == 4096 and hw.motor_names == ("finger",)
     assert hw.read().counts.shape == (1,) and hw.period == 1e-3
 
 
 @pytest.mark.parametrize("kw, field", [
-    ({"model": "finger4"}, "model"), ({"model": "thumb"}, "model"), ({"scene": "table"}, "scene"),
+    ({"model": "finger4"}, "model"), ({"model": "thumb_abduction"}, "model"), ({"scene": "table"}, "scene"),
     ({"model": "hand", "scene": "block"}, "scene"),
     ({"seed": -1}, "seed"), ({"seed": 1.5}, "seed"), ({"seed": True}, "seed"), ({"effects": "all"}, "effects"),
     ({"effects": 3}, "effects"), ({"encoder_noise_counts": -1.0}, "encoder_noise_counts"),

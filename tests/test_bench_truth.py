@@ -88,7 +88,7 @@ def test_bad_input_is_named():
 def test_the_ekf_with_the_truth_on_a_stick_slip_plant_stays_within_its_bound(tmp_path):
     """finger3 in MuJoCo with stick-slip (the stiff constraint), the rotor on the rigid tendon, the tilt, the
     encoder's zero, the torque constant and a one-sample delay, 3 s of the estimate scenario's torque: the EKF on
-    the truth file (its rig side read from the file, the default friction law for the file) within 0.3 degree
+    the truth file (its rig side read from the file, the stick-slip law asked for) within 0.3 degree
     RMSE on every joint after 1 s; the drawn parameters alone (no effect in the file) are further off."""
     from alpes_dyn.studies.realism_friction import validation_torque
 
@@ -98,8 +98,8 @@ def test_the_ekf_with_the_truth_on_a_stick_slip_plant_stays_within_its_bound(tmp
     u = validation_torque(1e-3)[:3001]
     rec = mujoco_recording("finger3", true, u, 1e-3, effects=e, seed=3)
     t = write_truth(true, e, tmp_path / "truth.toml")
-    est = ekf_run(rec, str(t.path), None, 1.0, rotor=t.rotor, stops=True)
-    s = est.settings  # the file's rig side read back, the law the file's stiction chose
+    est = ekf_run(rec, str(t.path), None, 1.0, rotor=t.rotor, stops=True, friction_law="stick")
+    s = est.settings  # the file's rig side read back, the stick-slip law asked for
     assert s["friction_law"] == "stick" and s["torque_delay_samples"] == 1
     np.testing.assert_allclose(s["encoder_offset_rad"], [4.0 * 2 * np.pi / 4096], rtol=1e-9)
     rmse = np.degrees(est.rmse)
@@ -108,12 +108,13 @@ def test_the_ekf_with_the_truth_on_a_stick_slip_plant_stays_within_its_bound(tmp
 
 def test_the_observer_law_follows_the_file(tmp_path):
     """observer_friction_law: the shipped file smooth; a file whose smooth sign is the stick-slip law (identify's
-    --effects stiction, the truth of a stiff stiction) stick; a LuGre file lugre; a model without friction smooth."""
+    --effects stiction, the truth of a stiff stiction) smooth too (the stick law is asked for by name); a LuGre file
+    lugre; a model without friction smooth."""
     base = load_params()
     assert observer_friction_law(Model.alpes("finger3", friction=True)) == "smooth"
     assert observer_friction_law(Model.alpes("finger3")) == "smooth"
     stiff = write_truth(base, PlantEffects(stiction=STICTION_TIMECONST), tmp_path / "stiff.toml")
-    assert observer_friction_law(Model.alpes("finger3", friction=True, params=stiff.path)) == "stick"
+    assert observer_friction_law(Model.alpes("finger3", friction=True, params=stiff.path)) == "smooth"
     soft = truth_params(base, PlantEffects(soft_stiction=True))
     assert observer_friction_law(Model.alpes("finger3", friction=True, params=soft.params)) == "smooth"
     lugre = dataclasses.replace(stiff.params, friction_law="lugre")
@@ -122,7 +123,7 @@ def test_the_observer_law_follows_the_file(tmp_path):
 
 def test_a_urdf_robot_keeps_the_smooth_law():
     """A model without an Alpes parameter file (a URDF robot's spec, whose smooth_velocity 0.01 rad/s is its own
-    smoothing) keeps the smooth law by default: the stick law follows the Alpes file's stick-slip mark only."""
+    smoothing) keeps the smooth law by default."""
     m = Model.alpes("finger3", friction=True)
     urdf = Model(m.urdf, dataclasses.replace(m.spec, smooth_velocity=0.01), name="arm")
     assert urdf.params is None and np.any(urdf.extras.coulomb) and urdf.extras.smooth_velocity <= 0.02

@@ -129,7 +129,8 @@ def test_a_fit_without_the_zero_takes_the_old_one_out():
     res = SimpleNamespace(model=model, names=("K_1",), values=np.array([0.041]), std=np.array([1e-4]),
                           not_identified={}, recording_path="r.csv", residual_rms=0.5, trustworthy=True,
                           converged=True, reason="", adequacy=None, torque_delay=None,
-                          correlation=np.eye(1), status=lambda: "converged", standard_errors=None)
+                          correlation=np.eye(1), status=lambda: "converged", standard_errors=None,
+                          model_error=None)
     p = identified_params(res, base)
     assert "finger.encoder_offset" not in p.raw and p.finger.encoder_offset == 0.0
     assert p.torque_delay == 2 and p.finger.K[0] == pytest.approx(0.041)

@@ -27,8 +27,7 @@ FRICTION_LAW_HELP = ("with --data: the observer's dry friction, smooth (F_s tanh
                      "time-stepping Coulomb law, which holds a joint at rest under a torque below F_s; the torque "
                      "read through a 10-sample moving average) or lugre (a bristle state per joint, the parameter "
                      "file's friction.sigma0/sigma1, the torque averaged likewise). Default the file's: lugre where "
-                     "its friction.law is lugre, stick where its smooth_velocity is the stick-slip law's (identify "
-                     "--effects stiction), else smooth")
+                     "its friction.law is lugre, else smooth")
 """``estimate --friction-law``'s help (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
 
 

@@ -25,11 +25,17 @@ import numpy as np
 
 from .looped import step_jacobians
 
-__all__ = ["AHEAD_BATCH", "predicted_ahead", "linearised"]
+__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "linearised"]
 
 AHEAD_BATCH = 256
 """Starts run per call of the compiled loop: its trajectory buffer (starts x (H + 1) x (nz + nz^2) doubles) stays a
 few tens of MB for the LuGre model's states and a 0.1 s horizon."""
+
+
+AHEAD_COMPILE_MAX = 100_000
+"""CasADi instructions: a step above it is run by the virtual machine, not compiled. A finger's covariance step
+(finger3 with friction, four substeps: 47k instructions) builds in seconds; the Allegro hand's (32 states: 212k) kept
+gcc busy over 5 minutes and 4 GB, longer than the virtual machine's whole run of ``estimate``'s checks."""
 
 
 def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
@@ -60,12 +66,16 @@ def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
 
 def _loop(filt: Any, covariance: bool | str) -> Any:
     """The filter's compiled loop of the step (:func:`_steps`), built once per filter (kept on it) and loaded from
-    the disk cache by any filter of the same structure; None without a C compiler."""
+    the disk cache by any filter of the same structure; None without a C compiler or above
+    :data:`AHEAD_COMPILE_MAX`."""
     from ...simulation.integrate import CompiledStepLoop, CompilerError
 
     cache = filt.__dict__.setdefault("_ahead_loops", {})
     if covariance not in cache:
         step, values = _steps(filt, covariance)
+        if step.n_instructions() > AHEAD_COMPILE_MAX:
+            cache[covariance] = None
+            return None
         try:
             kind = {False: "", True: "_cov", "jacobians": "_jac"}[covariance]
             cache[covariance] = CompiledStepLoop(step, f"ahead{kind}_"

@@ -373,7 +373,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         (:mod:`alpes_dyn.simulation.stick`), or ``"lugre"``, a bristle state per joint
         (:mod:`alpes_dyn.model.friction`). Default: the parameter file's,
         :func:`~alpes_dyn.simulation.stick.observer_friction_law` (``"lugre"`` where it says ``friction.law =
-        "lugre"``, ``"stick"`` where its smooth sign is the stick-slip law, else ``"smooth"``).
+        "lugre"``, else ``"smooth"``).
     torque_window : int or None, optional
         Samples of the causal moving average of the torque the observer reads (:func:`averaged`; its noise, given
         or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the stick and LuGre
