@@ -36,15 +36,6 @@ import numpy as np
 from _table import cell
 
 
-def seeds_of(text: str) -> list[int]:
-    """``"1-60"``, ``"3,5,9"`` or a mix (``"1-4,9"``) as a list of seeds."""
-    out: list[int] = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out.extend(range(int(a), int(b) + 1) if b else [int(a)])
-    return out
-
-
 def _run(argv: list[str]) -> tuple[int, str, str]:
     from alpes_dyn.cli import main
 
@@ -145,16 +136,18 @@ def main() -> int:
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--log", default=None, help="append each row as a JSON line to this file as it comes")
     args = ap.parse_args()
+    from alpes_dyn.studies.realism import parse_seeds  # the benchmarks' one reader of --seeds
+
     rows = []
     with tempfile.TemporaryDirectory() as tmp:
         for model in args.models.split(","):
-            for seed in seeds_of(args.seeds):
+            for seed in parse_seeds(args.seeds):
                 row = draw(model, seed, Path(tmp))
                 rows.append(row)
                 if args.log:
                     with open(args.log, "a") as f:
                         f.write(json.dumps(row) + "\n")
-    out = {"models": args.models.split(","), "seeds": seeds_of(args.seeds), "rows": rows, "summary": summary(rows)}
+    out = {"models": args.models.split(","), "seeds": parse_seeds(args.seeds), "rows": rows, "summary": summary(rows)}
     print(json.dumps(out) if args.json else table(rows))
     return 0
 

@@ -36,17 +36,8 @@ import numpy as np
 from _table import cell
 from alpes_dyn.errors import InputError, ModelError
 from alpes_dyn.simulation.stick import FRICTION_LAWS
-from alpes_dyn.studies.realism import EKF_GOAL_DEG
+from alpes_dyn.studies.realism import EKF_GOAL_DEG, parse_seeds
 from alpes_dyn.studies.realism_friction import FRICTION_CASE_NAMES, FRICTION_CASES, true_file_row
-
-
-def seeds_of(text: str) -> list[int]:
-    """``"1-4"``, ``"3,5,9"`` or a mix as a list of seeds."""
-    out: list[int] = []
-    for part in text.split(","):
-        a, _, b = part.partition("-")
-        out.extend(range(int(a), int(b) + 1) if b else [int(a)])
-    return out
 
 
 def read_logs(paths: str) -> list[dict]:
@@ -134,7 +125,7 @@ def main(argv: list[str] | None = None) -> int:
         done = {(r["case"], r["seed"]) for r in read_logs(args.log)} if args.log and Path(args.log).exists() else set()
         rows = read_logs(args.log) if done else []
         for case in names:
-            for seed in seeds_of(args.seeds):
+            for seed in parse_seeds(args.seeds):
                 if (case, seed) in done:
                     continue
                 try:
