@@ -390,7 +390,7 @@ def realism_friction(r: Result) -> list[str]:
 
 def observer_law(r: Result) -> list[str]:
     """``observer_law.py`` (issue 50): per friction case and observer law, the EKF with the plant's true file; the
-    law chosen per friction kind; what the true file cannot hold."""
+    law closest to the truth per friction kind; what the true file cannot hold."""
     seeds = sorted({x["seed"] for x in r["rows"] if "error" not in x})
     out = [f"finger3 drawn +-20 %, seeds {', '.join(map(str, seeds))} on every case; the EKF with the plant's true "
            f"file (``bench.truth.write_truth``: the rig's effects in the file), no fit, on the friction study's "
@@ -401,8 +401,9 @@ def observer_law(r: Result) -> list[str]:
             f"{law} {_mw(s['rmse_worst_joint_deg'])} deg (NEES {_mw(s['nees_worst_joint'], '.3g')}, "
             f"{s['within_goal']}/{s['rows']} within the goal)" for law, s in laws.items()))
     for kind, c in r["summary"]["choice"].items():
-        out.append(f"chosen for a {kind} friction (over {', '.join(c['cases'])}): **{c['law']}** (worst joint "
-                   + ", ".join(f"{law} {v:.2f}" for law, v in c["worst_joint_deg"].items()) + " deg)")
+        out.append(f"closest for a {kind} friction (over {', '.join(c['cases'])}): **{c['law']}** (worst joint "
+                   + ", ".join(f"{law} {v:.2f}" for law, v in c["worst_joint_deg"].items())
+                   + " deg; the observer's default stays smooth, ``--friction-law`` asks for another)")
     held = sorted({n.split(" ")[0] for x in r["rows"] for n in x.get("not_held", [])})
     out.append("effects the true file cannot hold (named by the writer): " + (", ".join(held) or "none"))
     out += [f"raised: {x['case']} seed {x['seed']}: {x['error']}" for x in r["summary"]["raised"]]

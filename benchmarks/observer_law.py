@@ -8,10 +8,10 @@ friction law (``smooth`` F_s tanh(v / v_s), ``stick`` the switched law, ``lugre`
 (:func:`~alpes_dyn.studies.realism_friction.true_file_row`): the worst joint's RMSE after 1 s (deg) and each
 joint's NEES against its 95 % band; per case and law the median and worst over the seeds; per friction kind (the
 cases' ``constraint``, soft or stiff) the law whose worst joint is smallest over the kind's rows that ran every law
-(``choice``). The observer's default law follows it through the file
-(:func:`~alpes_dyn.simulation.stick.observer_friction_law`): the true file of a stiff plant holds its stiction as
-the stick-slip law's v_s, as ``identify --effects stiction`` writes it, and gets ``stick``; a soft plant's keeps the
-file's v_s and gets ``smooth``.
+(``choice``). The observer's default law is not this choice
+(:func:`~alpes_dyn.simulation.stick.observer_friction_law`: ``lugre`` for a LuGre file, else ``smooth``): as the
+default for the files ``identify --effects stiction`` writes, the stick law's predictions failed identify's own
+observer check (the CHANGELOG); ``--friction-law stick`` asks for it.
 
     python benchmarks/observer_law.py [--cases soft,stiff_3x,...] [--seeds 10101-10102] [--laws smooth,stick,lugre]
                                       [--log FILE | --from-log FILE] [--json]

@@ -16,7 +16,7 @@ effect                      field of the file
 ``torque_delay``            ``transmission.torque_delay`` (samples)
 ``stiction`` (stiff)        ``friction.smooth_velocity`` = :data:`~alpes_dyn.model.extras.STICTION_VELOCITY`, the
                             stick-slip law as ``identify --effects stiction`` writes it (the file's mark of a
-                            friction that sticks: the observer's law follows it,
+                            friction that sticks; the observer's ``stick`` law is asked for by name,
                             :func:`~alpes_dyn.simulation.stick.observer_friction_law`)
 ``tendon_stiffness`` k_t    ``transmission.tendon_compliance`` C = 1 / (k_t r_m^2), the cable's quasi-static
                             stretch; the observer takes the rotor's J_m on the tendons (:attr:`TruthFile.rotor`)
