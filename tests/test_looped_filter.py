@@ -143,3 +143,30 @@ def test_predictions_ahead_and_linearisation_of_a_looped_filter_equal_the_unroll
     yb, Sb = predicted_ahead(looped, est.z, W, starts, 5, est.P)
     assert ya.shape == yb.shape == (starts.size, unrolled.ny) and Sa.shape == Sb.shape
     assert rel(ya, yb) <= 1e-10 and rel(Sa, Sb) <= 1e-10
+
+
+def test_one_step_prediction_of_a_looped_filter_shared_by_nees_and_nis():
+    """The NEES's error model (predicted_covariance: A_k and P_k+1|k along the run) and the NIS's one-step
+    prediction of a looped filter, from one compiled run (ahead.predicted_step), equal the unrolled filter's to 1e-10
+    (relative) on finger3 with friction; P_k+1|k against numpy's A P A^T + G Sigma_w G^T + Q; the run is computed
+    once for both (kept on the filter) and again for another run."""
+    from alpes_dyn.estimation.observers import ahead
+    from alpes_dyn.estimation.observers.consistency import predicted_covariance
+
+    model = ad.Model.alpes("finger3", friction=True)
+    unrolled, looped, W, x0 = _pair(model, 4)
+    W = W[:60]
+    nz = unrolled.nz
+    Y = np.repeat(np.asarray(unrolled.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
+    est = unrolled.run(x0, np.diag(np.full(nz, 1e-4)), W, Y)
+    rel = lambda a, b: float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))  # noqa: E731
+    for a, b in zip(predicted_covariance(unrolled, est, W), predicted_covariance(looped, est, W)):
+        assert a.shape == b.shape and rel(a, b) <= 1e-10
+    zn, Pn, A, G = ahead.predicted_step(looped, est.z, W, est.P)
+    assert rel(A @ est.P[:60] @ A.transpose(0, 2, 1) + G @ looped.Sw @ G.transpose(0, 2, 1) + looped.Q, Pn) <= 1e-12
+    starts = np.arange(3, 59, 2)
+    for a, b in zip(ahead.predicted_ahead(unrolled, est.z, W, starts, 1, est.P),
+                    ahead.predicted_ahead(looped, est.z, W, starts, 1, est.P)):
+        assert rel(a, b) <= 1e-10
+    assert ahead.predicted_step(looped, est.z, W, est.P)[1] is Pn  # kept: the NIS reads the NEES's run
+    assert ahead.predicted_step(looped, est.z, W[::-1].copy(), est.P)[1] is not Pn

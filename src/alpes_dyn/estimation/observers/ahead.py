@@ -13,7 +13,10 @@ virtual machine took most of the observer check's time. Here the step (z, P) -> 
 compiled once and run by :class:`~alpes_dyn.simulation.codegen.CompiledStepLoop` over the starts: the same
 operations as the virtual machine's expression, the same numbers to rounding. The library is keyed on the model's
 structure: its numbers, Sigma_w and Q are the step's input p, so a model of other values or another noise setting
-loads it from the cache. Without a C compiler the virtual machine's map over the starts is used.
+loads it from the cache. Without a C compiler the virtual machine's map over the starts is used. A looped
+filter's step (:mod:`~alpes_dyn.estimation.observers.looped`: the Shadow hand's 48 states) is its chain rule's graph
+with the covariance and the Jacobians in one state, compiled the same way (:func:`predicted_step`: the NEES's and the
+NIS's one-step prediction computed once for both).
 """
 
 from __future__ import annotations
@@ -23,9 +26,8 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-from .looped import step_jacobians
 
-__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "linearised"]
+__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "predicted_step", "linearised"]
 
 AHEAD_BATCH = 256
 """Starts run per call of the compiled loop: its trajectory buffer (starts x (H + 1) x (nz + nz^2) doubles) stays a
@@ -39,9 +41,13 @@ gcc busy over 5 minutes and 4 GB, longer than the virtual machine's whole run of
 
 
 def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
-    """The step (s, w, p) -> s_next, s = z (mean alone), [z; vec P] (with ``covariance``) or [z; vec X; vec Y]
-    (``covariance="jacobians"``: X A and X G + Y, the step's Jacobians A = dF/dz, G = dF/dw from X = I, Y = 0), and
-    its p: the model's numbers (``filt.model.values``), then vec Sigma_w and vec Q where the covariance is stepped."""
+    """The step (s, w, p) -> s_next, s = z (mean alone), [z; vec P] (with ``covariance``), [z; vec X; vec Y]
+    (``covariance="jacobians"``: X A and X G + Y, the step's Jacobians A = dF/dz, G = dF/dw from X = I, Y = 0) or
+    [z; vec P; vec X; vec Y] (``covariance="looped"``: both, by a looped filter's chain rule, :func:`_looped_step`),
+    and its p: the model's numbers (``filt.model.values``), then vec Sigma_w and vec Q where the covariance is
+    stepped."""
+    if covariance == "looped":
+        return _looped_step(filt)
     mdl = filt.model
     nz, nw = mdl.nz, mdl.nw
     z, w, pm = cs.SX.sym("z", nz), cs.SX.sym("w", nw), cs.SX.sym("p", mdl.values.size)
@@ -64,6 +70,26 @@ def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
     return step, values
 
 
+def _looped_step(filt: Any) -> tuple[cs.Function, np.ndarray]:
+    """A looped filter's step (:mod:`~alpes_dyn.estimation.observers.looped`) with its covariance and Jacobians,
+    ``MX``: (s = [z; vec P; vec X; vec Y], w, p) -> [F(z, w); vec(A P A^T + G Sigma_w G^T + Q); vec(A X);
+    vec(A Y + G)], A and G by :func:`~alpes_dyn.estimation.observers.looped.linearization` (the chain rule over the
+    substeps, never the unrolled step's Jacobian); p = [the model's numbers; vec Sigma_w; vec Q], with its values."""
+    from .looped import linearization
+
+    mdl = filt.model
+    nz, nw, npar = mdl.nz, mdl.nw, mdl.values.size
+    z, w, p = cs.MX.sym("z", nz), cs.MX.sym("w", nw), cs.MX.sym("p", npar + nw * nw + nz * nz)
+    P, X, Y = cs.MX.sym("P", nz, nz), cs.MX.sym("X", nz, nz), cs.MX.sym("Y", nz, nw)
+    zn, A, G = linearization(mdl)(z, w, p[:npar])
+    Sw, Q = cs.reshape(p[npar: npar + nw * nw], nw, nw), cs.reshape(p[npar + nw * nw:], nz, nz)
+    Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, Sw, G.T]) + Q
+    out = cs.vertcat(zn, cs.vec(Pn), cs.vec(cs.mtimes(A, X)), cs.vec(cs.mtimes(A, Y) + G))
+    values = np.concatenate([mdl.values, np.asarray(filt.Sw, float).reshape(-1, order="F"),
+                             np.asarray(filt.Q, float).reshape(-1, order="F")])
+    return cs.Function("ahead_looped", [cs.vertcat(z, cs.vec(P), cs.vec(X), cs.vec(Y)), w, p], [out]), values
+
+
 def _loop(filt: Any, covariance: bool | str) -> Any:
     """The filter's compiled loop of the step (:func:`_steps`), built once per filter (kept on it) and loaded from
     the disk cache by any filter of the same structure; None without a C compiler or above
@@ -77,7 +103,7 @@ def _loop(filt: Any, covariance: bool | str) -> Any:
             cache[covariance] = None
             return None
         try:
-            kind = {False: "", True: "_cov", "jacobians": "_jac"}[covariance]
+            kind = {False: "", True: "_cov", "jacobians": "_jac", "looped": "_looped"}[covariance]
             cache[covariance] = CompiledStepLoop(step, f"ahead{kind}_"
                                                        f"{filt.model.system.model.name}", threads=1,
                                                  vectorize=False, parameters=values)
@@ -105,23 +131,64 @@ def _run(filt: Any, s0: np.ndarray, Wb: np.ndarray, covariance: bool | str) -> n
                            for b in range(0, s0.shape[0], AHEAD_BATCH)])
 
 
-def _looped(filt: Any, s0: np.ndarray, Wb: np.ndarray, covariance: bool) -> np.ndarray:
+def _looped(filt: Any, z0: np.ndarray, P0: np.ndarray | None, Wb: np.ndarray) -> tuple[np.ndarray, ...]:
     """:func:`_run` for a looped filter (:mod:`~alpes_dyn.estimation.observers.looped`: a state too large for the
-    unrolled step's Jacobian): the step and its Jacobians by its chain rule (``MX``), accumulated over the horizon by
-    CasADi's ``mapaccum`` and mapped over the starts in its virtual machine. (B, ns) the end states."""
-    mdl = filt.model
-    nz, nw = mdl.nz, mdl.nw
-    B, H = Wb.shape[0], Wb.shape[1]
-    z, w = cs.MX.sym("z", nz), cs.MX.sym("w", nw)
-    zn, A, G = step_jacobians(filt)(z, w)
-    if covariance:
-        P = cs.MX.sym("P", nz, nz)
-        Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, cs.DM(filt.Sw), G.T]) + cs.DM(filt.Q)
-        step = cs.Function("pred", [cs.vertcat(z, cs.vec(P)), w], [cs.vertcat(zn, cs.vec(Pn))])
-    else:
-        step = cs.Function("pred", [z, w], [zn])
-    out = step.mapaccum("ahead", H).map(B)(s0.T, Wb.transpose(2, 1, 0).reshape(nw, -1, order="F"))
-    return np.asarray(out).reshape(s0.shape[1], H, B, order="F")[:, -1, :].T
+    unrolled step's Jacobian): its step with covariance and Jacobians (:func:`_looped_step`, compiled once and
+    cached; the virtual machine's map without a compiler) from each start z0 (B, nz), P0 (B, nz, nz) (None: zero)
+    over the inputs Wb (B, H, nw), :data:`AHEAD_BATCH` starts at a time. Returns (z (B, nz), P (B, nz, nz), A (B,
+    nz, nz), G (B, nz, nw)) after the horizon: A and G the Jacobians of the horizon's map (one step's at H = 1)."""
+    nz, nw = filt.model.nz, filt.model.nw
+    B, n2 = z0.shape[0], nz * nz
+    loop = _loop(filt, "looped")
+    out = (np.empty((B, nz)), np.empty((B, nz, nz)), np.empty((B, nz, nz)), np.empty((B, nz, nw)))
+    for b in range(0, B, AHEAD_BATCH):
+        sl = slice(b, min(b + AHEAD_BATCH, B))
+        s0 = np.zeros((sl.stop - b, nz + 2 * n2 + nz * nw))
+        s0[:, :nz] = z0[sl]
+        if P0 is not None:
+            s0[:, nz: nz + n2] = P0[sl].transpose(0, 2, 1).reshape(-1, n2)  # column-major vec
+        s0[:, nz + n2: nz + 2 * n2] = np.eye(nz).reshape(-1)
+        W = np.ascontiguousarray(Wb[sl])
+        end = loop.run(s0, W)[:, -1] if loop is not None else _vm(filt, s0, W, "looped")
+        out[0][sl] = end[:, :nz]
+        for k, (a, e, cols) in enumerate(((nz, nz + n2, nz), (nz + n2, nz + 2 * n2, nz), (nz + 2 * n2, None, nw))):
+            out[k + 1][sl] = end[:, a:e].reshape(-1, cols, nz).transpose(0, 2, 1)
+    return out
+
+
+def predicted_step(filt: Any, z: np.ndarray, W: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, ...]:
+    """A looped filter's one-step prediction from each sample of its run, compiled: what the NEES's error model
+    (:func:`~alpes_dyn.estimation.observers.consistency.predicted_covariance`) and the NIS of the innovations
+    (:func:`predicted_ahead` at ``horizon`` 1) both read, computed once for both (the last run's kept on the filter,
+    keyed on its inputs' bytes).
+
+    Parameters
+    ----------
+    filt : ~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter
+        A looped filter (``filt.looped``).
+    z : ndarray
+        (N, nz) its estimates z_k|k; the first K = N - 1 are used.
+    W : ndarray
+        (K, nw) its known inputs, row k held from sample k to k + 1.
+    P : ndarray
+        (N, nz, nz) the estimates' covariances P_k|k.
+
+    Returns
+    -------
+    tuple of ndarray
+        (z_k+1|k (K, nz), P_k+1|k = A_k P_k A_k^T + G_k Sigma_w G_k^T + Q (K, nz, nz), A_k = dF/dz (K, nz, nz),
+        G_k = dF/dw (K, nz, nw)).
+    """
+    import hashlib
+
+    K = W.shape[0]
+    z, P, W = (np.ascontiguousarray(a, dtype=float) for a in (z[:K], P[:K], W))
+    key = hashlib.blake2b(b"".join(a.tobytes() for a in (z, P, W)) + repr((z.shape, P.shape, W.shape)).encode(),
+                          digest_size=16).digest()
+    kept = filt.__dict__.get("_predicted_step")
+    if kept is None or kept[0] != key:
+        kept = filt.__dict__["_predicted_step"] = (key, _looped(filt, z, P, W[:, None, :]))
+    return kept[1]
 
 
 def linearised(filt: Any, z: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -143,9 +210,7 @@ def linearised(filt: Any, z: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.
     """
     nz, nw, K = filt.model.nz, filt.model.nw, W.shape[0]
     if getattr(filt, "looped", False):  # a large state: its chain rule, never the unrolled step's Jacobian
-        A, G = step_jacobians(filt).map(K)(z[:K].T, W.T)[1:]
-        return (np.asarray(A).reshape(nz, K, nz).transpose(1, 0, 2),  # the map stacks the samples side by side
-                np.asarray(G).reshape(nz, K, nw).transpose(1, 0, 2))
+        return _looped(filt, z[:K], None, W[:, None, :])[2:]
     s0 = np.zeros((K, nz + nz * nz + nz * nw))
     s0[:, :nz] = z[:K]
     s0[:, nz: nz + nz * nz] = np.eye(nz).reshape(-1)
@@ -183,17 +248,23 @@ def predicted_ahead(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray,
     mdl = filt.model
     nz, covariance = mdl.nz, P is not None
     starts = np.asarray(starts, dtype=int)
-    s0 = z[starts] if not covariance else np.concatenate(
-        [z[starts], P[starts].transpose(0, 2, 1).reshape(len(starts), -1)], axis=1)
     Wb = np.lib.stride_tricks.sliding_window_view(W, horizon, axis=0)[starts].transpose(0, 2, 1)  # (B, H, nw)
-    end = _looped(filt, s0, Wb, covariance) if getattr(filt, "looped", False) else _run(filt, s0, Wb, covariance)
+    if getattr(filt, "looped", False) and covariance and horizon == 1:
+        zend, Pend = (a[starts] for a in predicted_step(filt, z, W, P)[:2])  # (shared with the NEES)
+    elif getattr(filt, "looped", False):
+        zend, Pend = _looped(filt, z[starts], P[starts] if covariance else None, Wb)[:2]
+    else:
+        s0 = z[starts] if not covariance else np.concatenate(
+            [z[starts], P[starts].transpose(0, 2, 1).reshape(len(starts), -1)], axis=1)
+        end = _run(filt, s0, Wb, covariance)
+        zend = end[:, :nz]
+        Pend = end[:, nz:].reshape(len(starts), nz, nz).transpose(0, 2, 1) if covariance else None
     zs = cs.SX.sym("zs", nz)
     h = cs.Function("h", [zs], [mdl.output(zs), cs.densify(cs.jacobian(mdl.output(zs), zs))]).map(len(starts))
-    y, Hs = h(end[:, :nz].T)
+    y, Hs = h(zend.T)
     y = np.asarray(y).T
     if not covariance:
         return y, None
     B, m = len(starts), mdl.ny
     Hs = np.asarray(Hs).reshape(m, B, nz).transpose(1, 0, 2)
-    Pend = end[:, nz:].reshape(B, nz, nz).transpose(0, 2, 1)
     return y, Hs @ Pend @ Hs.transpose(0, 2, 1) + filt.R

@@ -105,9 +105,12 @@ def predicted_covariance(filt: Any, estimate: Estimate, W: np.ndarray) -> tuple[
     """The filter's one-step prediction along its run, recomputed from its estimate: (A (N-1, nz, nz), P_pred
     (N-1, nz, nz)), A_k = dF/dz at (z_k, w_k) and P_pred,k = A_k P_k A_k^T + G Sigma_w G^T + Q (G = dF/dw), the
     covariance of z_k+1|k. ``W`` (N-1, nw): the known inputs, row k held from sample k to k+1."""
-    from .ahead import linearised  # compiled (the virtual machine's map over the samples without a compiler)
+    from .ahead import linearised, predicted_step  # compiled (the VM's map over the samples without a compiler)
 
     N = W.shape[0]
+    if getattr(filt, "looped", False):  # a large state: the step's run computed once with the NIS's
+        _, P_pred, A, _ = predicted_step(filt, estimate.z, W, estimate.P)
+        return A, P_pred
     A, G = linearised(filt, estimate.z, W)
     P = estimate.P
     return A, A @ P[:N] @ A.transpose(0, 2, 1) + G @ filt.Sw @ G.transpose(0, 2, 1) + filt.Q
