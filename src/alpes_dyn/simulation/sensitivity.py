@@ -30,9 +30,11 @@ import numpy as np
 
 from ..errors import InputError
 from ..model.robot import Model
+from ..symbolic.dynamics import block_solve
 from ..symbolic.parametric import ParametricDynamics
 from .lugre_sensitivity import lugre_steps
 from .integrate import CompiledStepLoop, _check_dt
+from .variational import LOOPED_STATES, looped_variational_rk4_step
 from .variational import _rk4_calling, repeated_step, variational_rk4_step  # (re-exported: their home before)
 
 __all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
@@ -96,10 +98,13 @@ class SensitivityModel:
         if pd.lugre is not None:
             plain, sens_of = lugre_steps(pd, x, w, tau, h)
         else:
-            rhs = cs.vertcat(x[n:], pd.forward_dynamics(x[:n], x[n:], tau, pd.theta, pd.g))
+            M, r = pd.dynamics_terms(x[:n], x[n:], tau, pd.theta, pd.g)
+            rhs = cs.vertcat(x[n:], block_solve(M, r))  # (pd.forward_dynamics)
             plain = _rk4_calling(cs.Function("rhs", [x, w], [cs.cse(rhs)]), h, "step")
 
             def sens_of(directions: cs.SX) -> cs.Function:
+                if self.nx >= LOOPED_STATES:  # the implicit derivative: a large model's Jacobians stay small
+                    return looped_variational_rk4_step(rhs, M, r, x, w, directions, h)
                 return variational_rk4_step(rhs, x, w, directions, h)
         # one call per sample period: the substeps in the compiled step, the input held, the states at the samples
         self.plain_step = repeated_step(plain, self.substeps)

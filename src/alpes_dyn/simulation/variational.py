@@ -8,7 +8,7 @@ import casadi as cs
 
 from .integrate import rk4_expression
 
-__all__ = ["variational_rk4_step", "repeated_step"]
+__all__ = ["variational_rk4_step", "looped_variational_rk4_step", "repeated_step", "LOOPED_STATES"]
 
 
 def _rk4_calling(fn: cs.Function, h: float, name: str) -> cs.Function:
@@ -52,4 +52,51 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
     X = cs.SX.sym("X", nx, nx + p.numel())
     dX = cs.mtimes(cs.jacobian(rhs, x), X) + cs.horzcat(cs.SX.zeros(nx, nx), cs.jacobian(rhs, p))
     fa = cs.Function("sens_rhs", [cs.vertcat(x, cs.vec(X)), w], [cs.cse(cs.vertcat(rhs, cs.vec(dX)))])
+    return _rk4_calling(fa, h, "sens_step")
+
+
+LOOPED_STATES = 40
+"""States from which :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` builds its step by
+:func:`looped_variational_rk4_step`: the Shadow hand with its wrist free (48 states, 72 parameters) had Jacobians of
+its forward dynamics of 0.56 and 0.47 million instructions, 23 MB of C the compiler did not finish in minutes; the
+fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached libraries, bit for bit)."""
+
+
+def looped_variational_rk4_step(rhs: cs.SX, M: cs.SX, r: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX,
+                                h: float) -> cs.Function:
+    """:func:`variational_rk4_step` of x = [q; v], x' = rhs = [v; M^-1 r] (M qdd = r: eq. 2.10's terms,
+    :meth:`~alpes_dyn.symbolic.parametric.ParametricDynamics.dynamics_terms`), its derivative by the implicit
+    function instead of through the solve: with g(x, w, a) = r - M a, dqdd/d(x, p) = M^-1 dg/d(x, p) at a = qdd,
+    so X' = [X_v; M^-1 (g_x X + [0 | g_p])] (X_v the rows of v).
+
+    Parameters
+    ----------
+    rhs : casadi.SX
+        (2n,) [v; qdd], the states' right-hand side (the plain step's expression: the same states, bit for bit).
+    M, r : casadi.SX
+        (n, n) and (n,): M qdd = r, in x and w.
+    x, w, p : casadi.SX
+        The state (2n,), the held input, the directions' parameters (a subvector of w).
+    h : float
+        The step, s.
+
+    Returns
+    -------
+    casadi.Function
+        ``sens_step([x; vec X], w) -> [x+; vec X+]``, ``MX``: two ``SX`` functions (rhs; M, g_x, g_p) called four
+        times, the products by X and the solve by M (``qr``) as CasADi's dense loops; the written-out derivative's
+        numbers to rounding (sums in another order).
+    """
+    nx, n = x.numel(), M.size1()
+    nd = nx + p.numel()
+    a = cs.SX.sym("a", n)
+    g = r - cs.mtimes(M, a)
+    f_rhs = cs.Function("sens_rhs", [x, w], [cs.cse(rhs)])
+    terms = cs.Function("sens_terms", [x, w, a], cs.cse([M, cs.jacobian(g, x), cs.jacobian(g, p)]))
+    z, wm = cs.MX.sym("z", nx + nx * nd), cs.MX.sym("w", w.numel())
+    X = cs.reshape(z[nx:], nx, nd)
+    f = f_rhs(z[:nx], wm)
+    Mm, gx, gp = terms(z[:nx], wm, f[n:])
+    dv = cs.solve(cs.densify(Mm), cs.mtimes(gx, X) + cs.horzcat(cs.MX(n, nx), cs.densify(gp)), "qr")
+    fa = cs.Function("sens_rhs_x", [z, wm], [cs.vertcat(f, cs.vec(cs.vertcat(X[n:, :], dv)))])
     return _rk4_calling(fa, h, "sens_step")

@@ -447,7 +447,14 @@ class ParametricDynamics:
     def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
                          F_torque: cs.SX | None = None, z: cs.SX | None = None) -> cs.SX:
         """qdd (n,) of eq. 2.10 with joint torques ``input_gain * tau`` (+ ``F_torque``, e.g. J^T F); with the
-        bristles ``z`` (n,) rad, the LuGre friction (:meth:`passive_torque`)."""
+        bristles ``z`` (n,) rad, the LuGre friction (:meth:`passive_torque`): M^-1 r of :meth:`dynamics_terms`."""
+        return block_solve(*self.dynamics_terms(q, v, tau, theta, g, F_torque, z))
+
+    def dynamics_terms(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
+                       F_torque: cs.SX | None = None, z: cs.SX | None = None) -> tuple[cs.SX, cs.SX]:
+        """(M (n, n), r (n,)) with M qdd = r, eq. 2.10: the inertia matrix and the torques but the inertial ones
+        (``input_gain * tau`` + ``F_torque`` - bias - passive), as :meth:`forward_dynamics` solves them; what the
+        sensitivities of a large model differentiate (:mod:`~alpes_dyn.simulation.variational`)."""
         theta = self.theta if theta is None else theta
         rhs = (self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g)
                - self.passive_torque(q, v, theta, z))
@@ -455,4 +462,4 @@ class ParametricDynamics:
             rhs = rhs - self.rotor_bias(q, v, theta)
         if F_torque is not None:
             rhs = rhs + F_torque
-        return block_solve(self.inertia_matrix(q, theta), rhs)
+        return self.inertia_matrix(q, theta), rhs
