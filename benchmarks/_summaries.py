@@ -237,8 +237,8 @@ def foreign_hands(r: Result) -> list[str]:
     if c:
         g = c["goal"]
         out.append(f"every command on the whole hand, wrist free (goal {g['wall_s']:.0f} s and {g['peak_mib']:.0f} MiB "
-                   "each; wall s / peak MiB / load before): " + ", ".join(
-                       f"{k} {v['wall_s']:.0f} s / {v['peak_mib']:.0f} MiB / {v['load']:.1f}"
+                   "each; wall s / CPU s / peak MiB / load before): " + ", ".join(
+                       f"{k} {v['wall_s']:.0f} s / {v['cpu_s']:.0f} s / {v['peak_mib']:.0f} MiB / {v['load']:.1f}"
                        + (" (stopped)" if v["stopped"] else f" (exit {v['exit']})" if v["exit"] else "")
                        for k, v in c.items() if k != "goal"))
     hh = r.get("held")
