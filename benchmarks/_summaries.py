@@ -556,6 +556,8 @@ def bench_loop(r: Result) -> list[str]:
         if s.get("scene") == "cylinder":  # the thumb: the whole hand's step on the cylinder
             c_text += (f"; loops on the hand's cylinder, the ab/adduction ending at "
                        f"{_r(s.get('abduction_end_deg'), '.1f')} deg (target 35)")
+            if loops.get("calibration", {}).get("force_scale_found") is not None:  # bench_loop.thumb_loops' press
+                c_text += f", after a calibration press (force_scale {loops['calibration']['force_scale_found']:.3f})"
         out.append(f"{head}: {rig}; springs {_r(x['K_pct'])} %, masses {_r(x['m_pct'])} % ({x['verdict']}); sensor "
                    f"RMSE {_r(s.get('rmse_pct'))} %, overshoot {_r(s.get('overshoot_pct'), '.1f')} %, rise "
                    f"{_r(s.get('rise_ms'), '.0f')} ms; sensorless {_r(sl.get('sse_pct'))} %; joints in contact "

@@ -48,7 +48,12 @@ The thumb's row (:func:`thumb_row`):
    not scored), at the CLI's default references of the hand (``alpes-dyn control --model hand``:
    :data:`~alpes_dyn.control.hand_loop.HAND_LEVELS`, the step at 2.5 s of 3.5 s); scored on the thumb's chain
    (MuJoCo's force at its fingertip, its joint estimates), the metrics' percentages of the thumb's own step; the
-   hand's C step (:mod:`~alpes_dyn.control.chand`) replayed on the same readings, goal 200 us.
+   hand's C step (:mod:`~alpes_dyn.control.chand`) replayed on the same readings, goal 200 us. First the
+   calibration press (:func:`thumb_loops`, ``alpes-dyn control --calibrate``'s): the sensorless loop uncalibrated,
+   the ratio of its estimate to the fingertip sensor before the step
+   (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of`: the torque constant's error, which the
+   identification cannot see) the thumb's ``force_scale`` of both loops -- the sensorless estimate divided by it,
+   the EKF's force input multiplied by it (the sensor's newtons in the file's torque units).
 
     python benchmarks/bench_loop.py [--seeds 9501,...] [--models finger2,finger3,hand] [--chains thumb] [--json]
                                     [--out-json PATH]
@@ -74,8 +79,10 @@ from alpes_dyn.bench.mujoco_hand import MujocoHand, scoring_truth
 from alpes_dyn.control.bench_loop import run_on_bench
 from alpes_dyn.control.controller import reference_profile
 from alpes_dyn.control.finger_loop import ControlResult, ControlScenario, _metrics
+from alpes_dyn.control.grasp_calibration import force_scale_of
 from alpes_dyn.control.hand_loop import HAND_LEVELS, HandControlScenario
 from alpes_dyn.control.hand_step import HandForceStep
+from alpes_dyn.control.realism_loop import Compensation
 from alpes_dyn.control.step import ForceStep
 from alpes_dyn.errors import AlpesDynError
 from alpes_dyn.estimation.experiments.draws import perturbed_params
@@ -260,10 +267,14 @@ def loop_row(model: str, ident: Path, truth: Any, seed: int, controller: str, cc
     return row
 
 
-def thumb_loop_row(ident: Path, truth: Any, seed: int, controller: str, cc: str | None = None) -> dict:
+def thumb_loop_row(ident: Path, truth: Any, seed: int, controller: str, cc: str | None = None,
+                   force_scale: float = 1.0) -> dict:
     """The thumb's force loop through the interface (the module docstring, step 3): the whole hand's step from the
-    thumb's identified file on the stand-in's cylinder scene, at the hand's default references; scored on the
-    thumb's chain; with ``cc``, the hand's C step over the same readings."""
+    thumb's identified file on the stand-in's cylinder scene, at the hand's default references, the thumb's
+    ``force_scale`` (:class:`~alpes_dyn.control.realism_loop.Compensation`); scored on the thumb's chain; with
+    ``cc``, the hand's C step over the same readings. A sensorless loop's row also gives the scale its estimate
+    reads against the sensor (``force_scale_found``, :func:`~alpes_dyn.control.grasp_calibration.force_scale_of`:
+    the calibration press)."""
     hs = HandControlScenario(controller=controller)
     a, b = HAND_LEVELS["thumb"]
     sc = ControlScenario(model="finger2", controller=controller, reference="step", duration=hs.duration,
@@ -271,7 +282,7 @@ def thumb_loop_row(ident: Path, truth: Any, seed: int, controller: str, cc: str 
     N = int(round(hs.duration / hs.dt))
     t = hs.dt * np.arange(N)
     t0, c0 = time.perf_counter(), time.process_time()
-    step = HandForceStep(ident, controller)
+    step = HandForceStep(ident, controller, compensation=Compensation(force_scale={"thumb": force_scale}))
     build_s = time.perf_counter() - t0
     hw = Scored(MujocoHand("hand", truth, scene="cylinder", seed=LOOP_SEED + seed))
     chains = list(step.chains)
@@ -302,11 +313,36 @@ def thumb_loop_row(ident: Path, truth: Any, seed: int, controller: str, cc: str 
     _metrics(res)
     row = {"controller": controller, "scene": "cylinder", "build_s": build_s, "loop_s": wall,
            "loop_cpu_s": time.process_time() - c0, **metrics(res, step=b - a), "q_rmse_deg_joints": res.q_rmse_deg,
-           "abduction_end_deg": float(np.degrees(np.array(hw.q[N - 1])[hand.joint_names.index("thumb_abd")]))}
+           "abduction_end_deg": float(np.degrees(np.array(hw.q[N - 1])[hand.joint_names.index("thumb_abd")])),
+           "force_scale": force_scale}
+    if controller == "sensorless":
+        try:
+            row["force_scale_found"] = float(force_scale_of(res, force_scale))
+        except AlpesDynError as e:  # no contact before the step, or a ratio beyond a scale
+            row["force_scale_found"], row["force_scale_error"] = None, str(e)
     if cc is not None:
         c = hand_c_columns(step, rec, cc)
         row.update(c, c_goals_met=c_goals_met(c, GOAL_HAND_US))
     return row
+
+
+def thumb_loops(ident: Path, truth: Any, seed: int, cc: str | None = None) -> list[dict]:
+    """The thumb's loops (the module docstring, step 3): the calibration press first -- the sensorless loop
+    uncalibrated (``controller`` ``"calibration"``, no C), the scale its estimate reads against the fingertip
+    sensor before the step -- then each of :data:`CONTROLLERS` with that ``force_scale``."""
+    try:
+        cal = thumb_loop_row(ident, truth, seed, "sensorless")
+    except AlpesDynError as e:
+        return [{"controller": "calibration", "error": str(e)}]
+    loops = [{**cal, "controller": "calibration"}]
+    if cal["force_scale_found"] is None:
+        return loops + [{"controller": ctl, "error": f"calibration: {cal['force_scale_error']}"} for ctl in CONTROLLERS]
+    for ctl in CONTROLLERS:
+        try:
+            loops.append(thumb_loop_row(ident, truth, seed, ctl, cc, cal["force_scale_found"]))
+        except AlpesDynError as e:
+            loops.append({"controller": ctl, "error": str(e)})
+    return loops
 
 
 def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: int | None = None,
@@ -323,6 +359,9 @@ def draw_rows(model: str, seed: int, tmp: Path, truth: Any = None, noise_seed: i
     fit, ident = identify_row(model, rec, truth, tmp)
     row.update(fit)
     if ident is None:
+        return row
+    if model == "thumb":
+        row["loops"] = thumb_loops(ident, truth, noise, cc)
         return row
     row["loops"] = []
     for ctl in CONTROLLERS:

@@ -64,7 +64,10 @@ def sensor(tmp_path_factory):
     from alpes_dyn.control.bench_loop import run_on_bench
     from alpes_dyn.control.step import ForceStep
 
-    step = ForceStep("finger3", controller="sensor", compiled=False)
+    from alpes_dyn.control.realism_loop import Compensation
+
+    # a calibrated force_scale: the EKF's force input the sensor's reading times it, in Python and in C alike
+    step = ForceStep("finger3", controller="sensor", compiled=False, compensation=Compensation(force_scale=1.05))
     assert step.design.observer_model is not None  # the EKF runs the file's friction
     exe = _build(step, tmp_path_factory.mktemp("sensor"))
     run = run_on_bench(MujocoHand("finger3", scene="block", seed=9691), step, 0.4, 1.0)
@@ -89,7 +92,7 @@ def test_c_step_takes_the_normal_at_run_time(sensor, tmp_path):
     step, exe, run = sensor
     results = []
     for normal in ([-0.9, 0.0, -0.3], [-2.0, 0.5, -1.0]):
-        py = ForceStep("finger3", controller="sensor", compiled=False, normal=normal)
+        py = ForceStep("finger3", controller="sensor", compiled=False, normal=normal, compensation=step.compensation)
         U, Z, F = _replay(py, run)
         Uc, Zc, Fc = _run(exe, step, run, normal, tmp_path)
         np.testing.assert_allclose(Uc, U, rtol=0, atol=TOL)
@@ -144,13 +147,15 @@ def test_c_step_one_step_from_the_python_state(sensor, tmp_path):
 @needs_cc
 @pytest.mark.parametrize("kind", ["sensorless", "pi"])
 def test_c_step_of_the_other_controllers(kind, sensor, tmp_path):
-    """The sensorless step (its estimate of the force, its own gains) and the pi baseline (no observer) on finger2,
-    each over the readings of its own run on the stand-in."""
+    """The sensorless step (its estimate of the force, its own gains; calibrated: the estimate divided by the
+    force_scale, the EKF's input the estimate before it) and the pi baseline (no observer) on finger2, each over the
+    readings of its own run on the stand-in."""
     from alpes_dyn.bench.mujoco_hand import MujocoHand
     from alpes_dyn.control.bench_loop import run_on_bench
+    from alpes_dyn.control.realism_loop import Compensation
     from alpes_dyn.control.step import ForceStep
 
-    step = ForceStep("finger2", controller=kind, compiled=False)
+    step = ForceStep("finger2", controller=kind, compiled=False, compensation=Compensation(force_scale=0.95))
     exe = _build(step, tmp_path / "c")
     run = run_on_bench(MujocoHand("finger2", scene="block", seed=9692), step, 0.3, 0.6)
     U, Z, F = _run(exe, step, run, step.design.normal, tmp_path)

@@ -310,3 +310,31 @@ def test_a_diverging_filter_is_named_and_leaves_the_state():
     msg = str(e.value)
     assert msg.startswith("readings: the EKF diverged at sample") and "units" in msg and "\n" not in msg
     assert np.isfinite(s.state).all() and (np.abs(s.state) < 1e6).all() and s.k < 50
+
+
+def test_the_observers_force_input_is_in_the_files_torque_units():
+    """A torque constant off by s = 1 + e scales every torque an identification finds (springs, masses, friction,
+    the rotor) and the torque reading by s, not the fingertip sensor's newtons: the EKF of that file, its torque
+    noise scaled too, fed the readings s tau and F with ``force_scale`` s, estimates the joints of the true file's
+    EKF fed tau and F (the same equations times s); with ``force_scale`` 1 the force is s times short against the
+    file's torques, and the joints' split moves (0.45 degree here)."""
+    s = 1.05
+    p = load_params()
+    f = p.finger
+    scaled = dataclasses.replace(p, finger=dataclasses.replace(f, K=f.K * s, m=f.m * s, I=f.I * s,
+                                                               F_s=None if f.F_s is None else f.F_s * s,
+                                                               F_v=None if f.F_v is None else f.F_v * s),
+                                 F_s=p.F_s * s, F_v=p.F_v * s, J_m=p.J_m * s)
+    comp = dict(observer_compliance=False, command_input=False)  # the EKF on the reading (no command, no stretch)
+    true = ForceStep("finger2", p, "sensor", compiled=False, compensation=Compensation(**comp))
+    found = {fs: ForceStep("finger2", scaled, "sensor", compiled=False, torque_noise=5e-4 * s,
+                           compensation=Compensation(force_scale=fs, **comp)) for fs in (s, 1.0)}
+    counts0 = 1700.0  # the finger pulled to a fixed reading
+    q = {}
+    for name, step, tau in (("true", true, 0.03), ("scaled", found[s], 0.03 * s), ("unscaled", found[1.0], 0.03 * s)):
+        for _ in range(600):  # 0.6 s pressing 0.4 N
+            step.step(counts0, tau, 0.4, 0.4)
+        q[name] = step.estimate[0]
+    # the force input's own variance and the process noise are not scaled: 0.05 degree apart, against 0.45
+    np.testing.assert_allclose(q["scaled"], q["true"], rtol=0, atol=math.radians(0.1))
+    assert np.abs(q["unscaled"] - q["true"]).max() > math.radians(0.3)

@@ -157,3 +157,74 @@ def test_kept_take_and_refuse():
     assert k.result is b and k.tried is a and k.tried_effects == KEPT
     k.refuse(c, KEPT + ("delay",))
     assert k.result is b and k.tried is c and k.tried_effects == KEPT + ("delay",)
+
+
+def _recording(torque, names):
+    """A stand-in recording: what :func:`still_motors` reads (the torque (N, m), N m, and the motors' names)."""
+    return SimpleNamespace(torque=np.asarray(torque, dtype=float), motor_names=tuple(names))
+
+
+def test_still_motors_are_those_whose_torque_is_its_noise():
+    """A motor held relaxed (its torque white noise about a constant, or exactly 0) did not move; an excited one
+    (a slow sine under the same noise) did; the noise found is the noise drawn (within 5 %), the spread the
+    column's standard deviation."""
+    from alpes_dyn.estimation.identification.effects import MOVED_RATIO, still_motors
+
+    rng = np.random.default_rng(0)
+    t = np.arange(4000) * 1e-3
+    noise = 5e-4 * rng.standard_normal((t.size, 3))
+    tau = np.column_stack([0.02 + 0.004 * np.sin(2 * np.pi * 1.5 * t), 0.01 + 0 * t, 0 * t]) + noise
+    tau[:, 2] = 0.0
+    still = still_motors(_recording(tau, ("flexion", "held", "off")))
+    assert list(still) == ["held", "off"]
+    spread, found = still["held"]
+    assert spread == pytest.approx(np.std(tau[:, 1]), rel=1e-9) and found == pytest.approx(5e-4, rel=0.05)
+    assert still["off"] == (0.0, 0.0)
+    # the excited motor's spread is many times its noise; a sine just below the ratio's spread is still
+    assert np.std(tau[:, 0]) > 2.5 * MOVED_RATIO * 5e-4
+    small = 0.01 + 5e-4 * rng.standard_normal(t.size) + 0.9 * 5e-4 * np.sqrt(2) * np.sin(2 * np.pi * 1.5 * t)
+    assert list(still_motors(_recording(small[:, None], ("m",)))) == ["m"]
+
+
+def test_compliance_of_a_still_motor_is_held_and_named():
+    """The thumb (its flexion and ab/adduction motors): with the ab/adduction still, ``--effects`` compliance fits
+    the flexion's compliance only (the catalogue's other names as selected without it); each fit the walker makes
+    names the held one in ``not_identified``, with its spread and noise; without a still motor, the kind as before."""
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.effects import RoundWalker, alpes_models, effect_parameters
+    from alpes_dyn.model.params import load_params
+    from alpes_dyn.model.robot import Model
+    from alpes_dyn.symbolic.parametric import select_parameters
+
+    thumb = Model.alpes("thumb", friction=True)
+    every = [p.name for p in select_parameters(thumb, effect_parameters(thumb, ("compliance",), True))]
+    assert {"tendon_compliance_thumb", "tendon_compliance_thumb_abduction"} <= set(every)
+    held = [p.name for p in select_parameters(thumb, effect_parameters(thumb, ("compliance",), True, None,
+                                                                       ("thumb_abduction",)))]
+    assert held == [n for n in every if n != "tendon_compliance_thumb_abduction"]
+    assert effect_parameters(thumb, ("tilt",), True, None, ("thumb_abduction",)) is None  # no compliance asked
+
+    rng = np.random.default_rng(1)
+    t = np.arange(2000) * 1e-3
+    tau = np.column_stack([0.02 + 0.004 * np.sin(2 * np.pi * t), np.zeros_like(t)]) + 5e-4 * rng.standard_normal(
+        (t.size, 2))
+    rec = _recording(tau, thumb.transmission.motor_names)
+    seen = []
+
+    def stand_in(model, recording, selection, **kw):  # what the walker asks of identify, a fit returned
+        seen.append(selection)
+        return SimpleNamespace(not_identified={"K_1": "kept"}, torque_delay=None)
+
+    mp = pytest.MonkeyPatch()
+    mp.setattr(ident_mod, "identify", stand_in)
+    try:
+        walk = RoundWalker(alpes_models("thumb", load_params()), rec, True, None, {})
+        res = walk.one(("compliance", "tilt"), None, 0)
+        plain = walk.one(("tilt",), None, 0)
+    finally:
+        mp.undo()
+    assert list(walk.still) == ["thumb_abduction"]
+    assert "tendon_compliance_thumb" in seen[0] and "tendon_compliance_thumb_abduction" not in seen[0]
+    why = res.not_identified["tendon_compliance_thumb_abduction"]
+    assert "did not move" in why and "held at 0" in why and res.not_identified["K_1"] == "kept"
+    assert seen[1] is None and list(plain.not_identified) == ["K_1"]  # the default selection: no compliance

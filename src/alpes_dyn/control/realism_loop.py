@@ -41,6 +41,9 @@ through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
   (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of`): the torque constant's error scales every
   identified torque parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of
   e / (1 + e) on the uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
+  The EKF's force input is multiplied by it (the sensor's reading, or the estimate, in the file's torque units):
+  fed the sensor's newtons against the file's torques 1 + e too large, the observer's joints took the missing
+  e J^T F on their springs (the thumb's first joint 1-1.25 degrees off in contact).
 
 The identified torque delay (the file's ``transmission.torque_delay``) needs no block of its own: with
 ``command_input`` the observer and the sensorless estimate take the command, which the reading's lag does not
@@ -88,8 +91,9 @@ class Compensation:
         as ``identify`` wrote it; 0 without). force_scale: the sensorless force estimate divided by it -- the
         ratio of that estimate to the fingertip sensor's reading, measured once on the plant
         (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of`: the torque constant's error, which the encoder
-        cannot see, scales the estimate); a number, or for the hand a dict chain -> number (1 where a chain is
-        missing); 1: uncalibrated.
+        cannot see, scales the estimate), and the EKF's force input multiplied by it (the force in the file's
+        torque units); a number, or for the hand a dict chain -> number (1 where a chain is missing); 1:
+        uncalibrated.
     """
 
     observer_compliance: bool = True

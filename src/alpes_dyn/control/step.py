@@ -20,8 +20,10 @@ Timing (sample k at t_k, as :mod:`alpes_dyn.simulation.loop`'s and :mod:`alpes_d
 readings of tick k -- the encoder counts at t_k, the motor torque that the current sensor reports at t_k (what the
 motor gave over [t_k-1, t_k)), the fingertip force at t_k -- go into ``step``, whose command is then held over
 [t_k, t_k+1). Within one call: (1) the EKF's predict over [t_k-1, t_k] with the motor torque of that period (the
-command returned at k-1 with ``command_input``, else the reading) and the contact force -F n (the force sensor's
-reading at t_k; the sensorless estimate of t_k-1), then its update with the encoder at t_k; no filter step at
+command returned at k-1 with ``command_input``, else the reading) and the contact force -s F n (the force sensor's
+reading at t_k; the sensorless estimate of t_k-1; s the compensation's ``force_scale``: the force in the parameter
+file's torque units, which the torque constant's error scales with every identified torque), then its update with
+the encoder at t_k; no filter step at
 k = 0 (the estimate is the rest state); (2) the sensorless estimate at t_k from q_hat and the same motor torque;
 (3) the controller's command.
 """
@@ -375,6 +377,7 @@ class ForceStep:
             self.filter_step = self._compiled_c(ekf, label) if compiled and ekf.model.substeps > 1 else None
             if self.filter_step is None:  # the VM, or CasADi's code of the whole step, compiled and cached
                 self.filter_step = step_caller(ekf.filter_step_p, label, compiled, ekf.model.values)
+        self._force_scale = comp.scale_of()
         self._sensorless = None
         if kind == "sensorless":
             self._sensorless = SensorlessForce(model, self.dt / (force_filter_s + self.dt), normal=self._normal,
@@ -447,7 +450,8 @@ class ForceStep:
             if self.k > 0:
                 wy, m = self._wy, self.m
                 wy[:m] = tau
-                wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * n_k
+                # the force in the file's torque units: the sensor's N (the sensorless estimate's) times force_scale
+                wy[m:m + 3] = -(F_fb if self.kind == "sensor" else self._F_fb) * self._force_scale * n_k
                 wy[m + 3:] = comp.unstretched(self._transmission, y, tau, self._offset) if comp.observer_compliance else y
                 s = self.filter_step(self._s, wy)
                 if not (np.abs(s[:2 * self.n]) < _DIVERGED).all():  # NaN too
@@ -502,7 +506,7 @@ class ForceStep:
             ekf=self._ekf if filt else None, z0=self._s0[:nz].copy() if filt else np.full(nz, np.nan),
             P0=self._s0[nz:].copy() if filt else np.full(nz * nz, np.nan),
             sensorless_alpha=None if sl is None else float(sl.alpha),
-            sensorless_scale=1.0 if sl is None else float(sl.scale))
+            force_scale=float(self._force_scale))
 
     @property
     def command(self) -> np.ndarray:

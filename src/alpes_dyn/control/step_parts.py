@@ -64,8 +64,10 @@ class StepParts:
         (2n * 2n,) its covariance, column-major; NaN for ``"pi"``.
     sensorless_alpha : float or None
         The sensorless estimate's low-pass weight dt / (tau_f + dt) (None: no sensorless estimate).
-    sensorless_scale : float
-        The sensorless estimate's calibration: the static force is divided by it.
+    force_scale : float
+        The compensation's ``force_scale`` (the force sensor's N into the parameter file's torque units): the
+        sensorless estimate's static force is divided by it, the EKF's force input (the sensor's reading, the
+        sensorless estimate) multiplied by it.
     """
 
     model: Model
@@ -86,7 +88,7 @@ class StepParts:
     z0: np.ndarray
     P0: np.ndarray
     sensorless_alpha: float | None
-    sensorless_scale: float
+    force_scale: float
 
     @property
     def n(self) -> int:

@@ -11,7 +11,9 @@ effect         what the fit does
                sliding, the stick phases of dry friction; RK4 steps shortened to match
                (:func:`~alpes_dyn.simulation.integrate.stable_substeps`). The file written keeps this v_s.
 ``compliance`` the tendon's stretch seen by the encoder, y_k = S q_k + C tau_m,k-1 (``tendon_compliance``, the
-               series-elastic tendon's quasi-static limit): fitted, written to the file.
+               series-elastic tendon's quasi-static limit): fitted, written to the file; a motor whose torque
+               did not move in the recording (:func:`still_motors`: the thumb's ab/adduction held relaxed) keeps
+               the model's, named in the fit's ``not_identified`` (its stretch is not seen).
 ``tilt``       the palm's tilt: ``tilt_y`` on a planar finger (``tilt_x`` is seen only through its cosine), both on
                the thumb; on the file's gravity, or on the recording's ``gravity_*`` columns where ``identify``
                reads them (the rig's orientation as set up, palm up or hung: a real mount is degrees off it;
@@ -79,7 +81,7 @@ from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
 from ..experiments.recording import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "LUGRE_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO",
-           "STICTION_VELOCITY", "parse_effects", "effect_parameters", "stiction_params", "lugre_params", "lugre_start", "alpes_models", "fit_effects",
+           "STICTION_VELOCITY", "MOVED_RATIO", "parse_effects", "effect_parameters", "still_motors", "stiction_params", "lugre_params", "lugre_start", "alpes_models", "fit_effects",
            "EffectsFit", "Kept", "RoundWalker", "unmatched_delay"]  # (NAMED_BY, named_effects: the rounds module's, imported here)
 
 EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan", "lugre")
@@ -137,17 +139,49 @@ def _planar(model: Model) -> bool:
     return bool(np.all(np.linalg.norm(np.cross(a[0], a), axis=1) < 1e-9))
 
 
+MOVED_RATIO = 2.0
+"""A motor's torque moved in a recording where its standard deviation exceeds this many times its sample-to-sample
+noise (the standard deviation of its first differences over sqrt 2, which white noise alone gives): below, the
+torque is its noise about a constant (a motor held relaxed, the thumb's ab/adduction during the flexion's
+experiment), and its cable's stretch C tau_m is not seen (:func:`still_motors`)."""
+
+
+def still_motors(recording: Any) -> dict[str, tuple[float, float]]:
+    """The motors whose torque did not move in ``recording`` (:data:`MOVED_RATIO`), each with (its torque's standard
+    deviation, its sample-to-sample noise), N m: the fit holds their tendon compliance (:func:`effect_parameters`).
+
+    Parameters
+    ----------
+    recording : ~alpes_dyn.estimation.experiments.recording.Recording
+        The recording (its ``torque`` (N, m) N m and ``motor_names``).
+
+    Returns
+    -------
+    dict of str to tuple of float
+        Motor name -> (spread, noise), in the recording's motor order; empty where every torque moved.
+    """
+    tau = np.asarray(recording.torque, dtype=float)
+    if tau.shape[0] < 3:
+        return {}
+    spread, noise = tau.std(axis=0), np.diff(tau, axis=0).std(axis=0) / np.sqrt(2.0)
+    return {m: (float(s), float(e)) for m, s, e in zip(recording.motor_names, spread, noise)
+            if not s > MOVED_RATIO * e}
+
+
 def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
-                      base: str | None = None) -> str | None:
+                      base: str | None = None, still: Sequence[str] = ()) -> str | None:
     """The fit's selection for ``effects``: ``base`` (default K, m and friction: None) with ``tendon_compliance``
-    (compliance), ``tilt_y`` or ``tilt`` (tilt, only where the recording has no gravity columns: else its
+    (compliance: every motor's but those of ``still``, whose torque did not move, :func:`still_motors`),
+    ``tilt_y`` or ``tilt`` (tilt, only where the recording has no gravity columns: else its
     orientation is known; :func:`fit_effects` fits it on a recording turned between orientations too: its
     columns the rig's nominal orientations, the mount's error on top of them unknown), ``encoder_offset`` (offset)
     and ``capstan`` (capstan: each tendon's sheath friction, from the model's value, 0 without one) added. None
     when nothing is added to the default."""
     extra = []
     if "compliance" in effects:
-        extra.append("tendon_compliance")
+        extra += (["tendon_compliance"] if not still else
+                  [pp.name for pp in parameter_catalogue(model) if pp.kind == "tendon_compliance"
+                   and pp.motor not in still])
     if "capstan" in effects:
         extra.append("capstan")
     if "tilt" in effects and not has_gravity:
@@ -329,6 +363,7 @@ class RoundWalker:
         self.delays: dict[int, int] = {}  # id(result) -> the torque delay (samples) it was fitted with
         self.attempted: set[str] = set()  # every effect a round was made with: none is tried twice
         self.notes: list[str] = []
+        self.still = still_motors(recording)  # motor -> (spread, noise): their compliance held, named
 
     def one(self, effs: tuple[str, ...], warm: Any, delay: int) -> Any:
         """One fit with ``effs`` on the torque read ``delay`` samples earlier, from ``warm`` where it converged."""
@@ -337,7 +372,7 @@ class RoundWalker:
         from ..observers.replay import advanced
 
         model = self.model_of(tuple(e for e in effs if e != "delay"))
-        selection = effect_parameters(model, effs, self.has_gravity, self.base)
+        selection = effect_parameters(model, effs, self.has_gravity, self.base, tuple(self.still))
         kw = dict(self.kwargs)
         kw.setdefault("interval", EFFECTS_INTERVAL)
         if lugre_of(model) is not None:  # (LUGRE_INTERVAL)
@@ -350,9 +385,22 @@ class RoundWalker:
             warnings.simplefilter("ignore", AdequacyWarning)
             res = identify(model, advanced(self.recording, delay), selection, **kw)
         res.torque_delay = delay if "delay" in effs else None  # written to the file with the fit (fit_result)
+        if "compliance" in effs:
+            res.not_identified = {**self._held_compliances(model), **res.not_identified}
         self.rounds.append((effs, res))
         self.delays[id(res)] = delay
         return res
+
+    def _held_compliances(self, model: Model) -> dict[str, str]:
+        """``not_identified`` clauses of the tendon compliances held because their motor's torque did not move."""
+        out = {}
+        for pp in parameter_catalogue(model):
+            if pp.kind == "tendon_compliance" and pp.motor in self.still:
+                s, e = self.still[pp.motor]
+                out[pp.name] = (f"held at {pp.nominal:g} rad/(N m), not fitted: its motor's torque did not move in the "
+                                f"recording (spread {s:.2g} N m, within {MOVED_RATIO:g} times its noise {e:.2g} N m); "
+                                "the data do not see an elastic tendon")
+        return out
 
     def run(self, effs: tuple[str, ...], warm: Any = None) -> Any:
         """One fit with ``effs``; with ``delay`` among them, the torque read 1, 2, ... samples earlier (each from

@@ -29,6 +29,10 @@ round           stage  made when (adds)                                         
                        errors (removes the compliance)
 =============== ====== =========================================================== ============== ===============
 
+Every round with the compliance fits it on the motors whose torque moved in the recording only
+(:func:`~alpes_dyn.estimation.identification.effects.still_motors`); the others' is held at the model's value and
+named in the fit's ``not_identified``.
+
 The ``auto`` stage is walked again while the kept fit's check by the observer it feeds fails
 (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, which marks the fit flagged); each effect is tried
 in one round at most. A refused round's fit is
