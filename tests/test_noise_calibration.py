@@ -1,7 +1,7 @@
 """The observer's model error calibrated on the record (issue 50: an uncertainty that tells the truth).
 
-References: the process noise written here in numpy from the model's springs, gravity (a finite difference), tendon
-and F_s (the joints' rest under a torque error e F_s,i with the tendon held, a KKT system); the calibration's search against a statistic given in closed form (the smallest e whose
+References: the process noise written here in numpy from the model's inertia and F_s (a white torque e F_s,i per
+joint, mapped by dt M^-1); the calibration's search against a statistic given in closed form (the smallest e whose
 statistic is at most 1, found by bisection to its factor sqrt(2))."""
 
 import numpy as np
@@ -17,21 +17,10 @@ def _with_error(e):
     return with_model_error(load_params(), e, "test")
 
 
-def _split_shape(model, B):
-    """The reference S: the joints' rest under a torque error with the tendon held, solved as the KKT system
-    [J B; B^T 0] [dq; -lambda] = [dtau; 0] (J = diag K + gravity's dG/dq by central differences of G)."""
-    n, h = model.n, 1e-6
-    J = np.column_stack([(model.gravity_torque(h * e) - model.gravity_torque(-h * e)) / (2 * h) for e in np.eye(n)])
-    m = B.shape[1]
-    kkt = np.block([[J, B], [B.T, np.zeros((m, m))]])
-    return np.linalg.solve(kkt, np.vstack([np.eye(n), np.zeros((m, n))]))[:n]
-
-
 def test_the_files_model_error_is_every_observers_process_noise(tmp_path):
     """A file with friction.model_error = 2 (F_s), written and read back: the force loop's EKF (ForceStep) carries
-    dt S diag((2 F_s)^2) S^T on q (S: the joints' rest under a torque error with the tendon held, solved here as a
-    KKT system with a finite-difference stiffness) in place of the smooth law's default term on qd, the stick law's
-    observer too (which otherwise gets nothing); the field's unit and value come back."""
+    dt^2 M^-1 diag((2 F_s)^2) M^-1 on qd in place of the smooth law's default term, the stick law's observer too
+    (which otherwise gets nothing); the field's unit and value come back."""
     from alpes_dyn.control.step import ForceStep
     from alpes_dyn.estimation.observers.observers import make_observer
     from alpes_dyn.model.params import load_params, write_params
@@ -42,21 +31,19 @@ def test_the_files_model_error_is_every_observers_process_noise(tmp_path):
     assert p.model_error == pytest.approx(2.0) and p.raw["friction.model_error"].unit == "F_s"
     step = ForceStep("finger3", params=str(path), controller="sensor", compiled=False)
     ekf = step._ekf
-    ss3 = ekf.model.system
-    m = ss3.model
-    S = _split_shape(m, np.asarray(ss3.B))
-    assert np.allclose(np.asarray(ss3.B).T @ S, 0, atol=1e-9 * np.abs(S).max())  # the encoder's sum unmoved
-    np.testing.assert_allclose(ekf.Q[:3, :3], 1e-3 * S @ np.diag((2.0 * m.extras.coulomb) ** 2) @ S.T
-                               + 1e-9**2 * np.eye(3), rtol=1e-5, atol=1e-24)
-    np.testing.assert_allclose(ekf.Q[3:6, 3:6], 2e-4**2 * np.eye(3), rtol=1e-9, atol=0)
+    m = ekf.model.system.model
+    Fs = m.extras.coulomb
+    Minv = np.linalg.inv(m.inertia_matrix(np.zeros(3)))
+    Qv = 1e-3**2 * Minv @ np.diag((2.0 * Fs) ** 2) @ Minv.T
+    np.testing.assert_allclose(ekf.Q[3:6, 3:6], Qv + 2e-4**2 * np.eye(3), rtol=1e-9, atol=0)
     f2 = ad.Model.alpes("finger2", friction=True, params=p)
     ss = StateSpace(f2, input="motor", output="encoder")
     base = [1e-18] * 2 + [4e-8] * 2
     st = make_observer("ekf", ss, 1e-3, friction_law="stick", process_noise=base, measurement_noise=[2e-7],
                        input_noise=[2.5e-7])
-    S2 = _split_shape(f2, np.asarray(ss.B))
-    np.testing.assert_allclose(st.Q[:2, :2], 1e-3 * S2 @ np.diag((2.0 * f2.extras.coulomb) ** 2) @ S2.T
-                               + 1e-18 * np.eye(2), rtol=1e-5, atol=1e-24)
+    M2 = np.linalg.inv(f2.inertia_matrix(np.zeros(2)))
+    np.testing.assert_allclose(st.Q[2:, 2:], 1e-6 * M2 @ np.diag((2.0 * f2.extras.coulomb) ** 2) @ M2.T
+                               + 4e-8 * np.eye(2), rtol=1e-9)
 
 
 @pytest.mark.parametrize("needed, found", [(3.0, True), (0.3, True), (0.01, True), (40.0, False)])

@@ -7,16 +7,14 @@ covers the law's band) was chosen on the library's own plant; on MuJoCo's dry fr
 file was over-confident by 7-13 times (its joints' NEES). Here the model error is measured on the record the file was
 fitted on, from what a user has (the encoder, the torque, the filter's own covariance; never the true joints):
 
-* the model error is a torque error of e F_s,i on each joint i (``friction.model_error`` = e, in units of F_s), the
-  joints' rest walking by it in the split the encoder does not see (the shape from the springs and the tendons:
-  :func:`~alpes_dyn.estimation.observers.friction_noise.model_error_noise`), one number per file;
+* the model error is a white torque per sample of e F_s,i on each joint i (``friction.model_error`` = e, in units of
+  F_s: :func:`~alpes_dyn.estimation.observers.friction_noise.model_error_noise`), one number per file;
 * for a trial e, the EKF of ``alpes-dyn estimate --data`` on the file (its law, the fit's encoder offsets, tilt and
   delay) runs on the record's first ``window_s`` s (the observer check's)
   (:func:`~alpes_dyn.estimation.identification.observer_check.observer_statistics`), and its consistency statistic
-  is the largest of its predictions' normalised errors squared 20 and 100 ms ahead, each over its degrees of freedom
-  (1 for a consistent filter; :func:`consistency_statistic`): they see the split of the joints the encoder reads the
-  sum of, where the model error's noise acts; the innovation's NIS, which it leaves nearly unchanged, is judged by
-  the observer check itself (:mod:`~alpes_dyn.estimation.identification.observer_check`);
+  is the largest of its normalised innovation squared and of its predictions' 20 and 100 ms ahead, each over its
+  degrees of freedom (1 for a consistent filter; the 100 ms one sees the split of the joints the encoder reads the sum
+  of, :mod:`~alpes_dyn.estimation.identification.observer_check`);
 * e is the smallest value of a geometric search (factor 2 from ``start``, then one halving of the bracket in log)
   whose statistic is at most ``target`` (covariance matching, Mehra 1972, on the statistic that sees the unobserved
   direction: the innovation's alone stays in its band while the split is wrong); 0 where the filter with no model
@@ -86,14 +84,9 @@ class ModelErrorCalibration:
 
 def consistency_statistic(check: Any) -> float:
     """The largest of an :class:`~alpes_dyn.estimation.identification.observer_check.ObserverCheck`'s normalised
-    prediction errors squared 20 and 100 ms ahead (each over its degrees of freedom; 1 for a consistent filter): the
-    statistics that see the split of the joints, where the model error's noise acts
-    (:func:`~alpes_dyn.estimation.observers.friction_noise.model_error_noise`: it leaves the sum the encoder reads,
-    and so the innovation's NIS, nearly unchanged -- on MuJoCo's soft dry friction the innovation's stayed at
-    1.02-1.08 from 0 to 4 F_s while the 100 ms one fell from 1.43 to 0.67); the innovation's where neither was made
-    (a short record); nan where none was."""
-    ahead = [v.value / v.dof for v in (check.prediction_nis, check.split_nis) if v is not None]
-    vals = ahead or [v.value / v.dof for v in (check.nis,) if v is not None]
+    innovation squared and its predictions' (each over its degrees of freedom; 1 for a consistent filter); nan where
+    none was made."""
+    vals = [v.value / v.dof for v in (check.nis, check.prediction_nis, check.split_nis) if v is not None]
     return float(max(vals)) if vals else float("nan")
 
 

@@ -27,25 +27,13 @@ put it in its band on every draw tried; the estimate's error grows with the nois
 joint's 0.088-0.095 degree without it, 0.070-0.111 at 0.25, 0.102-0.141 at 1).
 
 The LuGre law's bristles (``friction_law="lugre"``) carry no such term: their deflection z is a state, and it walks
-by :data:`BRISTLE_WALK` of the presliding displacement F_s / sigma0 per step. Where the parameter file holds a
-calibrated model error (``friction.model_error`` = e, in units of F_s, written by ``identify``:
-:mod:`~alpes_dyn.estimation.identification.noise_calibration`), it replaces the smooth law's term above on every law
-(smooth, stick, LuGre): a torque error of e F_s,i on each joint i that moves the joints' rest in the split the encoder
-does not see (the tendons held, the springs letting the others move: S = Pi J^-1, :func:`split_compliance`), a
-random walk of the joints
+by :data:`BRISTLE_WALK` of the presliding displacement F_s / sigma0 per step. Where the parameter file holds a calibrated model error (``friction.model_error`` = e, in units of F_s, written
+by ``identify``: :mod:`~alpes_dyn.estimation.observers.noise_calibration`), it replaces the smooth law's term above
+on every law (smooth, stick, LuGre): a white torque e F_s,i on each joint,
 
-    Q_q = dt S diag(e^2 F_s^2) S^T                                                      (:func:`model_error_noise`),
+    Q_v = dt^2 M^-1 diag(e^2 F_s^2) M^-1                                               (:func:`model_error_noise`).
 
-(on a chain whose springs do not hold every joint, a white torque on the velocities, dt^2 M^-1 diag(e^2 F_s^2)
-M^-1, instead). Why the split's shape and not M^-1's: the smooth law's error on MuJoCo's dry friction is a joint
-held where the law lets it slide (or the reverse) for tenths of a second, slow against the joints' dynamics, so the
-error it leaves is the springs' quasi-static answer -- on finger3 the proximal and distal joints' errors correlated
-at -0.8 to -0.93, the middle one's with the distal's near 0, where the white torque's M^-1 made the filter's
-covariance correlate the proximal and middle ones (-0.81): no scale of it put the middle joint and the distal one in
-their bands together (the friction study's 11 s validation run, the true file, the joints' NEES 1.4 / 0.42 / 2.8 at
-2 F_s, EKF 0.45 / 0.27 / 0.38 degree), where the split's shape at 1.7 gave 1.57 / 1.07 / 3.28 and 0.22 / 0.15 / 0.26
-degree on the stiff case, 1.41 / 0.70 / 0.89 and 0.21 / 0.12 / 0.13 degree on the soft one (0.38 / 0.14 / 0.35 with
-the white torque at 2; the band about 0.74-1.30). All are added in one place,
+All are added in one place,
 :func:`with_friction_noise`, which :func:`~alpes_dyn.estimation.observers.observers.make_observer` applies to the
 process noise it is given: every observer built from a parameter file (a recording's, the estimation scenario's, the
 force loop's, the exported C's) carries them.
@@ -62,8 +50,8 @@ from ...model.friction import LuGre, lugre_of
 from ...model.params import HandParams, Param, with_values
 from ...model.robot import Model
 
-__all__ = ["FRICTION_MODEL_ERROR", "BRISTLE_WALK", "friction_process_noise", "split_compliance", "model_error_noise",
-           "model_error_of", "with_model_error", "with_friction_noise"]
+__all__ = ["FRICTION_MODEL_ERROR", "BRISTLE_WALK", "friction_process_noise", "model_error_noise", "model_error_of",
+           "with_model_error", "with_friction_noise"]
 
 FRICTION_MODEL_ERROR = 0.25
 """The smooth law's model error as a fraction of each joint's F_s where the torque noise covers its band (module
@@ -93,40 +81,14 @@ def with_model_error(params: HandParams, error: float, reason: str = "calibrated
     return with_values(params, {"friction.model_error": prm})
 
 
-def split_compliance(model: Model, B: np.ndarray) -> np.ndarray | None:
-    """(n, n) S = Pi J^-1, rad/(N m): how a torque error on the joints moves their rest with the tendons held, J =
-    dG/dq the springs' and gravity's stiffness at q = 0 (N m/rad), Pi = I - J^-1 B (B^T J^-1 B)^-1 B^T the
-    projection that keeps the tendons' lengths (B (n, m) the actuation matrix): a joint that sticks where the model
-    lets it slide moves the others the springs let move, the sum the encoder reads unchanged. None where J or
-    B^T J^-1 B is singular (a springless joint, a tendonless chain)."""
+def model_error_noise(model: Model, dt: float, error: float) -> np.ndarray:
+    """(n, n) Q_v = dt^2 M^-1 diag(``error``^2 F_s^2) M^-1, (rad/s)^2 per sample: a white torque of ``error`` F_s,i
+    (N m) on each joint i, ``model``'s Coulomb F_s and inertia matrix at q = 0, ``dt`` the sample period (s)."""
     n = model.n
-    B = np.asarray(B, dtype=float).reshape(n, -1)
-    try:
-        Ji = np.linalg.inv(model.gravity_jacobian(np.zeros(n)))
-        S = (np.eye(n) - Ji @ B @ np.linalg.solve(B.T @ Ji @ B, B.T)) @ Ji
-    except np.linalg.LinAlgError:
-        return None
-    return S if np.all(np.isfinite(S)) else None
-
-
-def model_error_noise(model: Model, dt: float, error: float, B: np.ndarray | None = None) -> np.ndarray:
-    """(2n, 2n) the calibrated model error's process noise over [q; qd] per sample (module docstring): a torque error
-    of ``error`` F_s,i (N m) on each joint i, ``model``'s Coulomb F_s, ``dt`` the sample period (s).
-
-    With the actuation matrix ``B`` (n, m) and a chain whose springs hold every joint (:func:`split_compliance`
-    not None), a random walk of the joints' rest in the split the encoder does not see,
-    Q_q = dt S diag(``error``^2 F_s^2) S^T (rad^2 per sample: S ``error`` F_s per sqrt(s)); otherwise a white torque
-    on the velocities, Q_v = dt^2 M^-1 diag(``error``^2 F_s^2) M^-1 ((rad/s)^2, M at q = 0)."""
-    n = model.n
-    Fs2 = (float(error) * np.asarray(model.extras.coulomb, dtype=float)) ** 2
-    Q = np.zeros((2 * n, 2 * n))
-    S = None if B is None else split_compliance(model, B)
-    if S is not None:
-        Q[:n, :n] = dt * S @ np.diag(Fs2) @ S.T
-    else:
-        Minv = np.linalg.inv(model.inertia_matrix(np.zeros(n)))
-        Q[n:, n:] = dt**2 * Minv @ np.diag(Fs2) @ Minv.T
-    return 0.5 * (Q + Q.T)
+    Fs = np.asarray(model.extras.coulomb, dtype=float)
+    Minv = np.linalg.inv(model.inertia_matrix(np.zeros(n)))
+    Qv = dt**2 * Minv @ np.diag((float(error) * Fs) ** 2) @ Minv.T
+    return 0.5 * (Qv + Qv.T)
 
 
 def friction_process_noise(model: Model, B: np.ndarray, dt: float, torque_noise: float,
@@ -168,7 +130,7 @@ def with_friction_noise(system: Any, dt: float, process_noise: Any, input_noise:
         The observer's law: ``"smooth"`` adds :func:`friction_process_noise` on qd, ``"lugre"`` appends the
         bristles' walk (:data:`BRISTLE_WALK` F_s / sigma0 per step, rad), ``"stick"`` adds nothing; where the
         model's file holds a calibrated ``friction.model_error`` (:func:`model_error_of`), every law adds
-        :func:`model_error_noise` (on q and qd, with the system's B) instead of :func:`friction_process_noise`.
+        :func:`model_error_noise` on qd instead of :func:`friction_process_noise`.
     n_parameters : int, optional
         The gains and disturbances estimated with the state.
 
@@ -187,7 +149,7 @@ def with_friction_noise(system: Any, dt: float, process_noise: Any, input_noise:
     Q = as_float_array(process_noise, "process_noise", f"{base} variances or a ({base}, {base}) covariance")
     Q = np.diag(np.broadcast_to(Q, (base,))) if Q.ndim == 0 or Q.shape == (base,) else Q.copy()
     if Q.shape == (base, base) and error is not None:
-        Q[:2 * n, :2 * n] += model_error_noise(model, dt, error, system.B)
+        Q[n:2 * n, n:2 * n] += model_error_noise(model, dt, error)
     if friction_law == "lugre":
         span = Fs / (lugre_of(model) or LuGre()).sigma0
         return (np.block([[Q, np.zeros((base, n))], [np.zeros((n, base)), np.diag((BRISTLE_WALK * span) ** 2)]])
