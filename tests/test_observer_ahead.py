@@ -100,3 +100,29 @@ def test_the_linearisation_along_the_run_is_the_filters_and_a_finite_difference(
         A_vm, G_vm = ahead.linearised(filt, z[:300], W[:299])
     np.testing.assert_allclose(A_vm, A[:299], rtol=1e-12, atol=1e-15)
     np.testing.assert_allclose(G_vm, G[:299], rtol=1e-12, atol=1e-15)
+
+
+def test_filters_of_one_structure_share_one_compiled_loop_with_their_own_noise(stick_slip_run):
+    """The model error's calibration builds one filter per trial noise: a second filter of the same model with a
+    process noise 100 times larger on the velocities reuses the first's compiled loop (built once: the same object),
+    yet predicts with its own Q -- its prediction's covariance equals the virtual machine's of that filter, and
+    differs from the first filter's; the first filter, run again after it, gets its own numbers back."""
+    from alpes_dyn.estimation.observers.observers import make_observer
+
+    _, _, est = stick_slip_run
+    f1, z, P, W = est.filter, est.estimate.z, est.estimate.P, est.inputs
+    Q2 = f1.Q.copy()
+    Q2[3:6, 3:6] *= 100.0
+    f2 = make_observer("ekf", f1.model.system, f1.dt, process_noise=Q2, measurement_noise=f1.R, input_noise=f1.Sw,
+                       substeps=f1.model.substeps, friction_law=f1.model.friction_law)
+    starts, H = np.array([500, 700, 1100]), 50
+    y1, S1 = ahead.predicted_ahead(f1, z, W, starts, H, P)
+    loop = ahead._loop(f1, True)
+    y2, S2 = ahead.predicted_ahead(f2, z, W, starts, H, P)
+    assert ahead._loop(f2, True) is loop and ahead._structure(f2) == ahead._structure(f1)
+    with mock.patch.object(ahead, "_loop", lambda f, covariance: None):
+        y2_vm, S2_vm = ahead.predicted_ahead(f2, z, W, starts, H, P)
+    np.testing.assert_allclose(y2, y2_vm, rtol=1e-12, atol=1e-15)
+    np.testing.assert_allclose(S2, S2_vm, rtol=1e-10, atol=1e-20)
+    assert np.all(np.trace(S2, axis1=1, axis2=2) > 1.5 * np.trace(S1, axis1=1, axis2=2))
+    np.testing.assert_allclose(ahead.predicted_ahead(f1, z, W, starts, H, P)[1], S1, rtol=1e-14, atol=0)

@@ -21,6 +21,8 @@ NIS's one-step prediction computed once for both).
 
 from __future__ import annotations
 
+import hashlib
+import uuid
 from typing import Any
 
 import casadi as cs
@@ -64,10 +66,40 @@ def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
     A, G = cs.jacobian(zn, z), cs.jacobian(zn, w)
     Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, Sw, G.T]) + Q
     p = cs.vertcat(pm, cs.vec(Sw), cs.vec(Q))
-    values = np.concatenate([mdl.values, np.asarray(filt.Sw, float).reshape(-1, order="F"),
-                             np.asarray(filt.Q, float).reshape(-1, order="F")])
     step = cs.Function("ahead", [cs.vertcat(z, cs.vec(P)), w, p], [cs.vertcat(zn, cs.vec(Pn))])
-    return step, values
+    return step, _values(filt, True)
+
+
+def _values(filt: Any, covariance: bool | str) -> np.ndarray:
+    """(np,) the step's p of ``filt`` (:func:`_steps`): the model's numbers, then vec Sigma_w and vec Q where the
+    covariance is stepped (column-major, as the step reads them)."""
+    values = np.asarray(filt.model.values, dtype=float)
+    if covariance not in (True, "looped"):
+        return values
+    return np.concatenate([values, np.asarray(filt.Sw, float).reshape(-1, order="F"),
+                           np.asarray(filt.Q, float).reshape(-1, order="F")])
+
+
+def _structure(filt: Any) -> str:
+    """The key of ``filt``'s step structure: a hash of its model's step (z, w, p) -> z_next serialised (the
+    expression, its numbers an input p); two filters of one key share their compiled loops (:func:`_loop`), whatever
+    their numbers or noise; a looped filter's (a large state, whose unrolled step is never built) is its own. Kept on
+    the filter."""
+    key = filt.__dict__.get("_ahead_key")
+    if key is None and getattr(filt, "looped", False):  # never the unrolled step of a large state: its own loops
+        key = filt.__dict__["_ahead_key"] = uuid.uuid4().hex
+    if key is None:
+        mdl = filt.model
+        z, w, pm = cs.SX.sym("z", mdl.nz), cs.SX.sym("w", mdl.nw), cs.SX.sym("p", mdl.values.size)
+        text = cs.Function("ahead_mean", [z, w, pm], [mdl.step_p(z, w, pm)]).serialize()
+        key = filt.__dict__["_ahead_key"] = hashlib.sha1(text.encode()).hexdigest()
+    return key
+
+
+_LOOPS: dict[tuple[str, bool | str], Any] = {}
+"""The compiled loops built in this process, by (:func:`_structure`, kind): the observer's filters of one structure
+(the model error's calibration builds one per trial noise, :mod:`~alpes_dyn.estimation.identification.
+noise_calibration`) generate and load the C once (about 0.8 s each on finger3), not once per filter."""
 
 
 def _looped_step(filt: Any) -> tuple[cs.Function, np.ndarray]:
@@ -85,31 +117,32 @@ def _looped_step(filt: Any) -> tuple[cs.Function, np.ndarray]:
     Sw, Q = cs.reshape(p[npar: npar + nw * nw], nw, nw), cs.reshape(p[npar + nw * nw:], nz, nz)
     Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, Sw, G.T]) + Q
     out = cs.vertcat(zn, cs.vec(Pn), cs.vec(cs.mtimes(A, X)), cs.vec(cs.mtimes(A, Y) + G))
-    values = np.concatenate([mdl.values, np.asarray(filt.Sw, float).reshape(-1, order="F"),
-                             np.asarray(filt.Q, float).reshape(-1, order="F")])
-    return cs.Function("ahead_looped", [cs.vertcat(z, cs.vec(P), cs.vec(X), cs.vec(Y)), w, p], [out]), values
+    return cs.Function("ahead_looped", [cs.vertcat(z, cs.vec(P), cs.vec(X), cs.vec(Y)), w, p], [out]), \
+        _values(filt, "looped")
 
 
 def _loop(filt: Any, covariance: bool | str) -> Any:
-    """The filter's compiled loop of the step (:func:`_steps`), built once per filter (kept on it) and loaded from
-    the disk cache by any filter of the same structure; None without a C compiler or above
-    :data:`AHEAD_COMPILE_MAX`."""
+    """The compiled loop of ``filt``'s step (:func:`_steps`), built once per step structure in this process
+    (:data:`_LOOPS`, :func:`_structure`) and loaded from the disk cache by any other process, its parameters set to
+    ``filt``'s numbers and noise (:func:`_values`); None without a C compiler or above :data:`AHEAD_COMPILE_MAX`."""
     from ...simulation.integrate import CompiledStepLoop, CompilerError
 
-    cache = filt.__dict__.setdefault("_ahead_loops", {})
-    if covariance not in cache:
+    key = (_structure(filt), covariance)
+    if key not in _LOOPS:
         step, values = _steps(filt, covariance)
         if step.n_instructions() > AHEAD_COMPILE_MAX:
-            cache[covariance] = None
+            _LOOPS[key] = None
             return None
         try:
             kind = {False: "", True: "_cov", "jacobians": "_jac", "looped": "_looped"}[covariance]
-            cache[covariance] = CompiledStepLoop(step, f"ahead{kind}_"
-                                                       f"{filt.model.system.model.name}", threads=1,
-                                                 vectorize=False, parameters=values)
+            _LOOPS[key] = CompiledStepLoop(step, f"ahead{kind}_{filt.model.system.model.name}", threads=1,
+                                           vectorize=False, parameters=values)
         except CompilerError:
-            cache[covariance] = None
-    return cache[covariance]
+            _LOOPS[key] = None
+    loop = _LOOPS[key]
+    if loop is not None:
+        np.copyto(loop.parameters, _values(filt, covariance))  # in place: the buffer the compiled loop reads
+    return loop
 
 
 def _vm(filt: Any, s0: np.ndarray, Wb: np.ndarray, covariance: bool | str) -> np.ndarray:
