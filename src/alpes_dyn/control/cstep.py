@@ -365,7 +365,7 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
     build = C_STEP_BUILD if filt else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
     gains = f"Controller {parts.kind}, its tuned gains: " + ", ".join(
         f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
-                                                               "prefilter_s", "onset_s", "loss_s", "notch_hz")) + "."
+                                                               "prefilter_s", "release_s", "onset_s", "loss_s", "notch_hz")) + "."
     name = parts.model.name
     files["alpes_step.h"] = _HEADER.format(
         model=name, version=__version__,
