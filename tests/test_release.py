@@ -2,7 +2,7 @@
 slower while the reference falls, so that a finger3 unloading from 0.6 to 0.2 N rolls back across the block
 without its force falling through the lower level.
 
-The physical case: a finger3 drawn +-20 % whose fingertip slipped at the down step of the CLI's default reference
+The physical case: a finger3 drawn +-20 % whose fingertip bounced on the block at the down step of the CLI's default reference
 (``benchmarks/bench_loop.py``'s row of that draw: overshoot 50 %, the force 0 N for a tick), run here on the
 MuJoCo stand-in with its true file (:func:`~alpes_dyn.bench.truth.truth_params`), through the interface
 (:func:`~alpes_dyn.control.bench_loop.run_on_bench`), the force scored on MuJoCo's noise-free contact force.
@@ -28,7 +28,7 @@ from alpes_dyn.model.mjcf import BLOCK_CONTACT_Q, block_normal
 pytest.importorskip("mujoco")
 
 SLIPPED = 10208
-"""The draw of finger3 whose fingertip slipped at the down step with the release as fast as the rise."""
+"""The draw of finger3 whose fingertip bounced on the block at the down step with the release as fast as the rise."""
 
 
 class _Scored:
@@ -72,7 +72,7 @@ def test_the_release_keeps_the_unloading_finger_above_the_lower_level():
     under, over = _undershoot(None)
     assert under < 0.05 and over < 0.10  # measured 1.9 % and 6.4 %
     fast, fast_over = _undershoot({"release_s": DEFAULT_GAINS["sensor"]["prefilter_s"]})  # the rise's 25 ms
-    assert fast > 0.10 and fast_over == pytest.approx(over, abs=0.01)  # measured 18.8 %: the tip slipped
+    assert fast > 0.10 and fast_over == pytest.approx(over, abs=0.01)  # measured 18.8 %: the fingertip bounced
 
 
 def test_release_arithmetic_and_bad_values():

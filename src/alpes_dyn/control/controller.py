@@ -71,8 +71,8 @@ off the block on some draws of finger3 +-20 %, whatever the parameter file (the 
 #: presses (``release_s`` 50 ms, the prefilter while the reference falls): unloading, the fingertip rolls back
 #: across the block (finger3's distal joint 14 degrees between 0.6 and 0.2 N) and with 25 ms its force fell 7-8 %
 #: of the step below the lower level on four finger3 drawn +-20 % of five (their true files, the CLI's default
-#: step) and 19 % on the fifth, where the tip slipped (0 N for a tick with an identified file); with 50 ms 1-3 %,
-#: the rise and the up step as they were.
+#: step) and 19 % on the fifth, where the fingertip bounced on the block (0 N for a tick with an identified
+#: file); with 50 ms 1-3 %, the rise and the up step as they were.
 DEFAULT_GAINS: dict[str, dict[str, float]] = {
     "sensor": {"kp": 0.008, "ki": 1.6, "prefilter_s": 0.025, "prefilter_order": 1, "setpoint_weight": 1.0,
                "release_s": 0.05},
