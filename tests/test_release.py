@@ -2,8 +2,8 @@
 slower while the reference falls, so that a finger3 unloading from 0.6 to 0.2 N rolls back across the block
 without its force falling through the lower level.
 
-The physical case: a finger3 drawn +-20 % whose fingertip bounced on the block at the down step of the CLI's default reference
-(``benchmarks/bench_loop.py``'s row of that draw: overshoot 50 %, the force 0 N for a tick), run here on the
+The physical case: a finger3 drawn +-20 % whose fingertip bounced on the block at the down step of the CLI's default
+reference (``benchmarks/bench_loop.py``'s row of that draw: overshoot 50 %, the force 0 N for a tick), run here on the
 MuJoCo stand-in with its true file (:func:`~alpes_dyn.bench.truth.truth_params`), through the interface
 (:func:`~alpes_dyn.control.bench_loop.run_on_bench`), the force scored on MuJoCo's noise-free contact force.
 """

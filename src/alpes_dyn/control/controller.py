@@ -256,8 +256,8 @@ class ForceController:
         if not 0.0 <= self.setpoint_weight <= 1.0:
             raise InputError(f"setpoint_weight: expected a number in [0, 1], got {self.setpoint_weight!r}")
         r = self.release_s
-        if r is not None and (isinstance(r, (bool, np.bool_)) or not isinstance(r, (int, float, np.integer, np.floating))
-                              or not (math.isfinite(r) and r >= 0)):
+        number = not isinstance(r, (bool, np.bool_)) and isinstance(r, (int, float, np.integer, np.floating))
+        if r is not None and not (number and math.isfinite(r) and r >= 0):
             raise InputError(f"release_s: expected a non-negative number of seconds or None, got {r!r}")
 
     def feedforward(self, q_hat: np.ndarray, F_ref: float) -> float:
