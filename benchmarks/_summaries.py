@@ -598,8 +598,10 @@ def c_step(r: Result) -> list[str]:
         per_step = "" if not free else f"; one step from the same state {d['c_step_diff']:.1e}"
         what = (f"EKF with friction: {d['observer_friction']}, {d['substeps']} RK4 substeps" if d["model"] != "hand"
                 else "five chains' EKFs with friction and the ab/adduction PD, on the cylinder")
+        passes = (f", the best of {d['c_passes']} passes; median {d['c_cpu_us_median']:.1f}" if "c_passes" in d
+                  else "")
         out.append(f"{d['model']} {d['controller']} ({what}): C step {d['c_us']:.1f} µs "
-                   f"({d['c_cpu_us']:.1f} processor) "
+                   f"({d['c_cpu_us']:.1f} processor{passes}) "
                    f"vs Python step "
                    f"{d['py_us']:.0f} µs ({d['c_vs_py']:.3f}x); built at -O2 in {d['c_build_s']:.1f} s "
                    f"({d['c_build_cpu_s']:.1f} s of the compiler's processor time) "

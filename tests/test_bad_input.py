@@ -2978,6 +2978,8 @@ API.extend([
     A("ForceStep", lambda c: _force_step(controller="pid"), InputError, "controller: unknown controller 'pid'"),
     A("ForceStep", lambda c: _force_step("hand"), InputError, "model: the force step is defined for one finger"),
     A("ForceStep", lambda c: _force_step(gains={"kq": 1.0}), InputError, "gains: unknown setting(s) 'kq'"),
+    A("ForceStep", lambda c: _force_step(gains={"release_s": -0.05}), InputError,
+      "release_s: expected a non-negative number of seconds or None, got -0.05"),
     A("ForceStep", lambda c: _force_step(compensation=1), InputError, "compensation: expected a Compensation"),
     A("ForceStep", lambda c: _force_step(dt=-1e-3), InputError, "dt: expected a positive number of seconds"),
     A("ForceStep", lambda c: _force_step(tau_max=0.1), InputError, "tau_max: applies to a URDF + spec model"),

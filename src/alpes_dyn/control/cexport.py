@@ -54,6 +54,7 @@ _LOGIC = r"""
 #define THRESHOLD {contact_threshold!r}
 #define APPROACH_RATE {approach_rate!r}
 #define PREFILTER_S {prefilter_s!r}
+#define RELEASE_S {release_s!r}
 #define LOSS_S {loss_s!r}
 #define ONSET_S {onset_s!r}
 #define ORDER {prefilter_order}
@@ -117,8 +118,9 @@ static int command(double* tau_out, {prefix}_state* s, double F_ref, double F_fb
                    const double* n, double* work) {{
   double F_raw = F_ref, ff = 0.0, e, e_p, tau, tau_u;
 #if !KIND_PI
-  double a = DT / (PREFILTER_S + DT);
+  double a;
   if (!s->started) {{ s->F_ref_f = s->F_ref_f2 = F_ref; s->started = 1; }}
+  a = DT / ((F_ref < s->F_ref_f ? RELEASE_S : PREFILTER_S) + DT);  /* the release while the reference falls */
   s->F_ref_f += a * (F_ref - s->F_ref_f);
   s->F_ref_f2 += a * (s->F_ref_f - s->F_ref_f2);
   F_ref = ORDER == 2 ? s->F_ref_f2 : s->F_ref_f;
@@ -190,7 +192,8 @@ _HEADER = r"""/* {prefix}.h -- the {kind} fingertip force controller of {model} 
    ({nq}, rad){pi_note}. Surface normal n = {normal} (base frame) in {prefix}_update, any given at
    run time in {prefix}_update_n. Settings: kp {kp!r} N m/N, ki {ki!r}
    N m/(N s), contact threshold {contact_threshold!r} N (onset {onset_s!r} s, loss {loss_s!r} s), approach rate
-   {approach_rate!r} N m/s, prefilter {prefilter_s!r} s ({prefilter_order} stage(s)), set-point weight
+   {approach_rate!r} N m/s, prefilter {prefilter_s!r} s ({release_s!r} s while the reference falls;
+   {prefilter_order} stage(s)), set-point weight
    {setpoint_weight!r}{notch_note}.
 
    Start: {prefix}_state s; {prefix}_init(&s); then each period: {prefix}_update(&s, F_ref, F_fb, q_hat, &tau, work).
@@ -361,6 +364,9 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
     for k, v in settings.items():
         if not np.isfinite(v):
             raise InputError(f"{k}: expected a finite number, got {v!r}")
+    settings["release_s"] = settings["prefilter_s"] if ctl.release_s is None else float(ctl.release_s)
+    if not np.isfinite(settings["release_s"]):
+        raise InputError(f"release_s: expected a finite number, got {ctl.release_s!r}")
     settings["prefilter_order"] = int(ctl.prefilter_order)
     notch = ctl.notch_hz is not None
     coef = _notch_coefficients(ctl.notch_hz, ctl.notch_zeta, ctl.dt) if notch else (0.0,) * 5

@@ -364,8 +364,8 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
         z0=_doubles(parts.z0).replace("nan", "NAN"), P0=_doubles(parts.P0).replace("nan", "NAN"))
     build = C_STEP_BUILD if filt else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
     gains = f"Controller {parts.kind}, its tuned gains: " + ", ".join(
-        f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate",
-                                                               "prefilter_s", "onset_s", "loss_s", "notch_hz")) + "."
+        f"{k} {getattr(ctl, k)!r}" for k in ("kp", "ki", "contact_threshold", "approach_rate", "prefilter_s",
+                                             "release_s", "onset_s", "loss_s", "notch_hz")) + "."
     name = parts.model.name
     files["alpes_step.h"] = _HEADER.format(
         model=name, version=__version__,

@@ -32,7 +32,8 @@ HAND_LEVELS: dict[str, tuple[float, float]] = {
 #: fingers' overshoots near 10 % on :data:`HAND_LEVELS` (one noise draw): with 25 ms (the block's) the middle
 #: finger's pad slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
 #: 40 ms 7-10.5 %, 10-90 % rise 77-97 ms.
-HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04}
+#: The release (the prefilter while a reference falls) as the rise: the hand's loops as measured with it.
+HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04, "release_s": 0.04}
 
 
 def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: Sequence[float] = (0.0, 1.0, 0.0),

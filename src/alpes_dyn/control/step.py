@@ -60,7 +60,7 @@ __all__ = ["ForceStep", "LoopDesign", "CONTROL_MODELS", "force_ekf", "alpes_desi
 CONTROL_MODELS: tuple[str, ...] = ("finger2", "finger3")
 
 GAIN_NAMES: tuple[str, ...] = ("kp", "ki", "contact_threshold", "approach_rate", "prefilter_s", "loss_s", "onset_s",
-                               "prefilter_order", "setpoint_weight", "notch_hz", "notch_zeta")
+                               "prefilter_order", "setpoint_weight", "release_s", "notch_hz", "notch_zeta")
 """The :class:`~alpes_dyn.control.controller.ForceController` settings a ``gains`` dict may set."""
 
 _DIVERGED = 1e6
