@@ -43,6 +43,17 @@ def test_built_once_then_loaded_verified(tmp_path):
     assert (path2, compiled2, seconds2) == (path, False, 0.0) and answer(lib2) == 42
 
 
+def test_the_same_source_under_another_stem_is_loaded_not_compiled(tmp_path):
+    """The hand's four fingers generate one source under four stems: the first compiles it, the others load it
+    (the key is the source's, compiler's and flags' hash); another source under that stem is compiled."""
+    path, compiled, _, _ = build(tmp_path)
+    other, compiled2, seconds2, lib2 = build_library(SOURCE, "other", _compiler(), _CFLAGS, tmp_path)
+    assert compiled and (other, compiled2, seconds2) == (path, False, 0.0) and answer(lib2) == 42
+    source = SOURCE.replace("42", "43")
+    new, compiled3, _, lib3 = build_library(source, "other", _compiler(), _CFLAGS, tmp_path)
+    assert compiled3 and new != path and new.name.startswith("other_") and int(lib3.alpes_answer()) == 43
+
+
 def built_elsewhere(tmp_path: Path, source: str = SOURCE) -> tuple[Path, Path]:
     """A library built (and loaded) in cache ``a``, then the cache copied to ``b``: this process has never
     loaded ``b``'s files (the dynamic loader would hand back a library it already has by path or inode)."""
