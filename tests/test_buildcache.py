@@ -43,6 +43,17 @@ def test_built_once_then_loaded_verified(tmp_path):
     assert (path2, compiled2, seconds2) == (path, False, 0.0) and answer(lib2) == 42
 
 
+def test_the_same_source_under_another_stem_is_loaded_not_compiled(tmp_path):
+    """The hand's four fingers generate one source under four stems: the first compiles it, the others load it
+    (the key is the source's, compiler's and flags' hash); another source under that stem is compiled."""
+    path, compiled, _, _ = build(tmp_path)
+    other, compiled2, seconds2, lib2 = build_library(SOURCE, "other", _compiler(), _CFLAGS, tmp_path)
+    assert compiled and (other, compiled2, seconds2) == (path, False, 0.0) and answer(lib2) == 42
+    source = SOURCE.replace("42", "43")
+    new, compiled3, _, lib3 = build_library(source, "other", _compiler(), _CFLAGS, tmp_path)
+    assert compiled3 and new != path and new.name.startswith("other_") and int(lib3.alpes_answer()) == 43
+
+
 def built_elsewhere(tmp_path: Path, source: str = SOURCE) -> tuple[Path, Path]:
     """A library built (and loaded) in cache ``a``, then the cache copied to ``b``: this process has never
     loaded ``b``'s files (the dynamic loader would hand back a library it already has by path or inode)."""
@@ -177,6 +188,30 @@ def test_large_generated_sources_compile_at_O1():
     assert _cflags("x" * 1000) == _CFLAGS and _cflags("x" * _LARGE_SOURCE) == _CFLAGS
     big = _cflags("x" * (_LARGE_SOURCE + 1))
     assert big[0] == "-O1" and big[1:] == _CFLAGS[1:]
+    assert _cflags("x" * (_LARGE_SOURCE + 1), "-O0") == ("-O0",) + _CFLAGS[1:]
+    assert _cflags("x" * _LARGE_SOURCE, "-O0") == _CFLAGS  # a small source stays at -O3 whatever is asked
+
+
+def test_a_large_source_at_O0_runs_the_steps_of_O3(tmp_path, monkeypatch):
+    """``large_level="-O0"`` (the prediction loops of the observer's check): a source over the size is built at
+    -O0 and steps the same numbers as the -O3 build of a small one (to rounding); any other level is refused."""
+    from alpes_dyn.errors import InputError
+    from alpes_dyn.simulation import codegen
+
+    x, w = cs.SX.sym("x", 2), cs.SX.sym("w", 1)
+    step = cs.Function("f", [x, w], [cs.vertcat(x[0] + 0.01 * x[1], x[1] + 0.01 * (w[0] - cs.sin(x[0])))])
+    X0, W = np.array([[0.3, -0.2], [1.0, 0.5]]), np.linspace(-1, 1, 2 * 50).reshape(2, 50, 1)
+    monkeypatch.setenv("ALPES_DYN_CACHE", str(tmp_path))
+    ref = CompiledStepLoop(step, "small", threads=1, vectorize=False).run(X0, W)
+    seen = []
+    monkeypatch.setattr(codegen, "_LARGE_SOURCE", 100)
+    monkeypatch.setattr(codegen, "build_library", lambda src, stem, cc, flags, d: seen.append(flags[0]) or
+                        build_library(src, stem, cc, flags, d))
+    loop = CompiledStepLoop(step, "large", threads=1, vectorize=False, large_level="-O0")
+    assert seen == ["-O0"] and loop.compiled
+    np.testing.assert_allclose(loop.run(X0, W), ref, rtol=1e-12, atol=1e-14)
+    with pytest.raises(InputError, match=r"^large_level: '-O3' is not one of -O1, -O0$"):
+        CompiledStepLoop(step, "large", large_level="-O3")
 
 
 def test_default_threads_follow_omp_num_threads(monkeypatch):

@@ -46,6 +46,25 @@ def test_the_samples_are_simulates_states_to_the_bit(finger, compiled, monkeypat
     assert np.array_equal(x, ref)
 
 
+def test_models_of_one_structure_share_the_loop_each_with_its_numbers(finger):
+    """A finger of other numbers (springs, masses, friction drawn +-20 %) reuses the loop the first built (one
+    generated C per step expression), its own numbers set: each run is simulate's on its own model (to 1e-12),
+    and the first model's run again after the second gives its first states."""
+    m, x0, u = finger
+    other = ad.Model.alpes("finger3", params=perturbed_params(spread=0.2, seed=5), friction=True).copy(
+        gravity=m.gravity)  # hung too: the same structure
+    sub, dt = 5, 1e-3
+    runs, built = [], []
+    for model in (m, other, m):
+        runs.append(sampled.sampled_rk4(model, x0, u, dt, sub))
+        built.append(dict(sampled._LOOPS.loops))
+        ref = simulate(model, x0, np.repeat(u, sub, axis=0), u.shape[0] * dt, dt / sub, "rk4", input="motor",
+                       output="encoder").x[::sub]
+        np.testing.assert_allclose(runs[-1], ref, rtol=0, atol=1e-12)
+    assert built[0] == built[1] == built[2] and np.abs(runs[1] - runs[0]).max() > 1e-3
+    np.testing.assert_allclose(runs[2], runs[0], rtol=0, atol=1e-14)
+
+
 def test_a_diverging_run_and_bad_shapes_are_one_line_errors(finger):
     m, x0, u = finger
     with pytest.raises(InputError, match=r"simulation diverged \(non-finite state at t = "):

@@ -173,7 +173,9 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
     Returns
     -------
     (path, compiled_now, seconds, library): ``compiled_now`` is False when a verified library was
-    loaded from the cache (``seconds`` 0), True when this call compiled it.
+    loaded from the cache (``seconds`` 0), True when this call compiled it. A verified library of the same
+    ``key`` (the same source, compiler and flags) built under another ``stem`` is loaded, not compiled again:
+    ``path`` is then that library's.
     """
     key = hashlib.sha256((source + "\0" + " ".join(cflags) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
     name = f"{stem}_{key}"
@@ -186,6 +188,10 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
     handle = _load(lib, key)
     if handle is not None:
         return lib, False, 0.0, handle
+    for same in sorted(d.glob(f"*_{key}.so")):  # the same source built under another stem (the hand's fingers)
+        handle = _load(same, key)
+        if handle is not None:
+            return same, False, 0.0, handle
     with _locked(d / f"{name}.lock"):
         _clean_stale(d, name)
         handle = _load(lib, key)  # built by another process while this one waited

@@ -95,9 +95,16 @@ speed, ``-O0`` 433 us); an Allegro hand's sensitivities (730 kB): ``-O3`` 50 s, 
 about a second; the fingers' and the hand's roll-outs, 46-217 kB) ``-O3`` stays."""
 
 
-def _cflags(source: str) -> tuple[str, ...]:
-    """The compiler flags for ``source``: :data:`_CFLAGS`, with ``-O1`` for a source over :data:`_LARGE_SOURCE`."""
-    return _CFLAGS if len(source) <= _LARGE_SOURCE else ("-O1",) + _CFLAGS[1:]
+_LARGE_LEVELS = ("-O1", "-O0")
+"""The optimisation levels a caller may ask for a source over :data:`_LARGE_SOURCE` (:class:`CompiledStepLoop`'s
+``large_level``): ``-O0`` for a loop run a few thousand steps per process, whose build at ``-O1`` would outlast its
+runs (the thumb's prediction covariance, 1.5 MB: about 25 s of gcc at ``-O1``, 3 s at ``-O0``)."""
+
+
+def _cflags(source: str, large_level: str = "-O1") -> tuple[str, ...]:
+    """The compiler flags for ``source``: :data:`_CFLAGS`, with ``large_level`` (one of :data:`_LARGE_LEVELS`) for a
+    source over :data:`_LARGE_SOURCE`."""
+    return _CFLAGS if len(source) <= _LARGE_SOURCE else (large_level,) + _CFLAGS[1:]
 
 
 def _compiler() -> str:
@@ -113,11 +120,11 @@ def _compiler() -> str:
     return path
 
 
-def _build_library(source: str, stem: str) -> tuple[Path, bool, float, ctypes.CDLL]:
+def _build_library(source: str, stem: str, large_level: str = "-O1") -> tuple[Path, bool, float, ctypes.CDLL]:
     """Compile ``source`` to a shared library in the cache (once) and load it; return (path,
     compiled_now, seconds, library). The cache is checked, locked and self-healing:
     :mod:`alpes_dyn.simulation.buildcache`."""
-    return build_library(source, stem, _compiler(), _cflags(source), cache_dir())
+    return build_library(source, stem, _compiler(), _cflags(source, large_level), cache_dir())
 
 
 _DRIVER = r"""
@@ -367,6 +374,9 @@ class CompiledStepLoop:
         Advance two sequences at once in SIMD lanes (GCC vector extensions; the same operations
         in the same order as the scalar code, so the same bits); falls back to scalar code when
         the step uses a construct the rewrite does not handle (``lanes`` tells which was built).
+    large_level : str, optional
+        The optimisation flag of a generated source over :data:`_LARGE_SOURCE` characters: ``"-O1"`` (default) or
+        ``"-O0"`` (:data:`_LARGE_LEVELS`) for a loop whose build would cost more than its runs.
 
     The C source is CasADi's code of ``step`` plus a driver looping over steps and splitting the
     sequences over POSIX threads; it is compiled once with ``$CC`` (default gcc) ``-O3`` and cached
@@ -376,7 +386,9 @@ class CompiledStepLoop:
     """
 
     def __init__(self, step: cs.Function, label: str = "steploop", threads: int | None = None,
-                 vectorize: bool = True, parameters: Any = None) -> None:
+                 vectorize: bool = True, parameters: Any = None, large_level: str = "-O1") -> None:
+        if large_level not in _LARGE_LEVELS:
+            raise InputError(f"large_level: {large_level!r} is not one of {', '.join(_LARGE_LEVELS)}")
         if step.n_in() not in (2, 3) or step.n_out() != 1:
             raise ModelError(f"step: expected a function (x, w) -> x_next or (x, w, p) -> x_next, got {step}")
         self.parameters = _step_parameters(step, parameters)
@@ -397,13 +409,13 @@ class CompiledStepLoop:
         if vector is not None:
             try:
                 self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
-                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label)
+                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label, large_level)
                 self.lanes = _LANES
             except CompilerError:  # a compiler without GCC vector extensions: the scalar driver
                 vector = None
         if vector is None:
             self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
-                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label)
+                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label, large_level)
         fn = self._lib.alpes_rollout
         dp = ctypes.POINTER(ctypes.c_double)
         fn.argtypes = [dp, dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]

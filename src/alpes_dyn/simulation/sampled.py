@@ -17,6 +17,8 @@ the literal; the step's ``dt / 6`` computed from the same double): the states ar
 
 from __future__ import annotations
 
+import hashlib
+import threading
 from typing import Any
 
 import casadi as cs
@@ -54,13 +56,27 @@ def _lifted_step(ss: Any) -> tuple[cs.Function, np.ndarray]:
     return cache["_lifted_rk4"]
 
 
+_LOOPS = threading.local()
+"""This thread's compiled loops by the hash of their step's serialised expression (``loops``): an experiment
+simulates many models of one structure (its gravity per orientation, its amplitudes trimmed run by run), each a new
+state space whose lifted step is the same expression; its C is generated and loaded once, its p set per run."""
+
+
 def _loop(ss: Any, step: cs.Function, parameters: np.ndarray, compiled: bool) -> CompiledStepLoop | CasadiStepLoop:
-    """The loop of ``step`` with ``parameters``: compiled, or on CasADi's virtual machine where ``compiled`` is False
-    or no C compiler can build it (both with :meth:`CompiledStepLoop.run`'s interface)."""
+    """The loop of ``step`` with ``parameters``: compiled (one per step expression in this thread, :data:`_LOOPS`), or
+    on CasADi's virtual machine where ``compiled`` is False or no C compiler can build it (both with
+    :meth:`CompiledStepLoop.run`'s interface)."""
     if compiled:
+        loops = _LOOPS.__dict__.setdefault("loops", {})
+        key = hashlib.sha1(step.serialize().encode()).hexdigest()
+        loop = loops.get(key)
+        if loop is not None:
+            np.copyto(loop.parameters, parameters)  # in place: the buffer the compiled loop reads
+            return loop
         try:
-            return CompiledStepLoop(step, f"sampled_{ss.model.name}", threads=1, vectorize=False,
-                                    parameters=parameters)
+            loop = loops[key] = CompiledStepLoop(step, f"sampled_{ss.model.name}", threads=1, vectorize=False,
+                                                 parameters=parameters)
+            return loop
         except CompilerError:
             pass
     x, w = cs.SX.sym("x", step.size1_in(0)), cs.SX.sym("w", step.size1_in(1))

@@ -39,7 +39,10 @@ few tens of MB for the LuGre model's states and a 0.1 s horizon."""
 AHEAD_COMPILE_MAX = 100_000
 """CasADi instructions: a step above it is run by the virtual machine, not compiled. A finger's covariance step
 (finger3 with friction, four substeps: 47k instructions) builds in seconds; the Allegro hand's (32 states: 212k) kept
-gcc busy over 5 minutes and 4 GB, longer than the virtual machine's whole run of ``estimate``'s checks."""
+gcc busy over 5 minutes and 4 GB, longer than the virtual machine's whole run of ``estimate``'s checks. A step whose
+C is over the compiled loops' large-source size (the thumb's covariance, 1.5 MB) is built at ``-O0``
+(:class:`~alpes_dyn.simulation.codegen.CompiledStepLoop`'s ``large_level``): seconds, where ``-O1`` took about 25 s
+of gcc, longer than the check's runs of it."""
 
 
 def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
@@ -135,8 +138,9 @@ def _loop(filt: Any, covariance: bool | str) -> Any:
             return None
         try:
             kind = {False: "", True: "_cov", "jacobians": "_jac", "looped": "_looped"}[covariance]
+            level = "-O1" if covariance == "looped" else "-O0"  # a looped filter's runs are long: optimised
             _LOOPS[key] = CompiledStepLoop(step, f"ahead{kind}_{filt.model.system.model.name}", threads=1,
-                                           vectorize=False, parameters=values)
+                                           vectorize=False, parameters=values, large_level=level)
         except CompilerError:
             _LOOPS[key] = None
     loop = _LOOPS[key]
