@@ -6,8 +6,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from alpes_dyn.estimation.identification.kkt import (Shape, bordered_factorize, continuity_jacobian, factorize,
-                                                    kkt_from_blocks, kkt_matrix, kkt_order, normal_matrix,
-                                                    penalized_from_blocks)
+                                                    kkt_from_blocks, kkt_matrix, kkt_order, minimum_norm,
+                                                    normal_matrix, penalized_from_blocks)
 
 
 def _full_jacobian(J: np.ndarray, shape: Shape) -> np.ndarray:
@@ -54,6 +54,26 @@ def test_a_singular_system_gets_its_minimum_norm_solution():
     M = sp.csc_matrix(np.diag([2.0, 0.0, 4.0]))
     assert np.allclose(factorize(M)(np.array([2.0, 0.0, 8.0])), [1.0, 0.0, 2.0])
     assert np.allclose(factorize(M.toarray())(np.array([2.0, 0.0, 8.0])), [1.0, 0.0, 2.0])
+
+
+def test_minimum_norm_equals_numpys_lstsq_on_a_singular_kkt_system():
+    """The least-squares fallback decomposed once equals numpy's lstsq (which decomposes at each call) on a KKT
+    system with a parameter the data do not see (a zero column of J), symmetric (eigh) and not (SVD)."""
+    rng = np.random.default_rng(11)
+    shape = Shape(n_int=9, nb=5, nx=4, ng=3)
+    J = rng.normal(size=(9, 11, 8))
+    J[:, :, -1] = 0.0  # the last parameter unseen
+    Cv, Cr = rng.normal(size=(8, 4, 5)), rng.normal(size=(8, 4, 3))
+    Cr[:, :, -1] = 0.0
+    K = kkt_matrix(normal_matrix(J, shape, 0.0, np.zeros(3)), continuity_jacobian(Cv, Cr, shape)).toarray()
+    assert np.linalg.matrix_rank(K) < K.shape[0]
+    b = rng.normal(size=(K.shape[0], 3))
+    for M in (K, K + np.triu(rng.normal(scale=1e-3, size=K.shape), 1) * (K != 0)):  # symmetric, then not
+        ref = np.linalg.lstsq(M, b, rcond=None)[0]
+        solve = minimum_norm(M)
+        assert np.abs(solve(b) - ref).max() < 1e-9 * np.abs(ref).max()
+        assert np.abs(solve(b[:, 1]) - ref[:, 1]).max() < 1e-9 * np.abs(ref).max()
+    assert np.abs(factorize(sp.csc_matrix(K))(b) - np.linalg.lstsq(K, b, rcond=None)[0]).max() < 1e-9 * np.abs(b).max()
 
 
 def _problem(rng, shape: Shape, mu: float):

@@ -468,7 +468,10 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
     solve_Kz = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)  # undamped: the covariance
     Z = solve_Kz(pb.unit_p)  # (nz + nc, p): the covariance's columns, and how the optimum moves with each parameter
-    solve_Kz = None  # not held through the effects' responses (the verdict factorises it again: _adequacy)
+    # not held through the effects' responses (the verdict factorises it again: _adequacy), but for the dense
+    # least-squares fallback of a singular system (kkt.minimum_norm: at most DENSE_LIMIT rows, a short record)
+    held = solve_Kz if getattr(solve_Kz, "decomposed", False) else None
+    solve_Kz = None
     P_classical = Z[nv:nv + p] * s2
     theta = pb.values(out.glob)
     x_fit, yhat = _fitted_output(pb, out, theta)
@@ -492,7 +495,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
         corr = P_rho / np.outer(sd_c, sd_c)
 
     def judge():
-        return _adequacy(pb, out, theta, x_fit, residual, val_rec, excitation, interval, encoder_noise)
+        return _adequacy(pb, out, theta, x_fit, residual, val_rec, excitation, interval, encoder_noise, held)
     return IdentificationResult(
         names=sens.names, values=theta, std=to_theta * sd_rho, initial=pb.theta0,
         units=tuple(pp.unit for pp in sens.dynamics.parameters), correlation=corr, residual_rms=pb.encoder_rms(e.r),
@@ -536,11 +539,12 @@ def _fitted_output(pb: ShootingProblem, out: SolverResult, theta: np.ndarray) ->
 
 
 def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: np.ndarray,
-              res: np.ndarray, val_rec, excitation, interval: float, encoder_noise: float | None):
+              res: np.ndarray, val_rec, excitation, interval: float, encoder_noise: float | None, held=None):
     """:func:`~alpes_dyn.estimation.identification.adequacy.assess` of the fit: the residual, the sensor floor, each missing
     effect's response less its projection on the fit's tangent space (the nodes and parameters, continuity kept:
     the residual of a missing effect is that remainder), the held-out recording's comparison. ``x_fit``: the fitted
-    trajectory at the samples, ``res`` the encoder residual, counts (:func:`_fitted_output`)."""
+    trajectory at the samples, ``res`` the encoder residual, counts (:func:`_fitted_output`); ``held``: the undamped
+    KKT system's solver where :func:`_conclude` kept it (its dense fallback), else None (factorised here)."""
     e, sens, rec, L, ny, n_int, nb, nz, nv = out.at, pb.sens, pb.rec, pb.L, pb.ny, pb.n_int, pb.nb, pb.nz, pb.nv
     explained = 0.0
     if pb.torque.eiv and not pb.torque.lines:  # what the torque noise explains through the model (lines: fitted away)
@@ -561,7 +565,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
     # the undamped KKT system of _conclude factorised again (the same numbers), after the effects' responses: not
     # held through them; then it and the Jacobians let go before the verdict's regressions, ``out``'s too (not read
     # after the verdict: identify drops it): 150 + 190 MB at 600 s of finger3, whose peak was the regressions' QR
-    solve_Kz = pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)
+    solve_Kz = held if held is not None else pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)
     Rr, names = np.zeros((len(resp),) + e.r.shape), list(resp)
     for i, name in enumerate(names):  # a loop over the four effects, each response let go once laid in Rr
         Rr[i, :, : (L + 1) * ny] = (resp.pop(name) * pb.step / pb.sig_y).reshape(n_int, -1)
