@@ -37,6 +37,11 @@ def _pair(model, substeps, params=()):
     return unrolled, looped, W, x
 
 
+def _rel(a: np.ndarray, b: np.ndarray) -> float:
+    """The largest difference of b from a, relative to a's largest entry."""
+    return float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))
+
+
 def _compare(unrolled, looped, W, x0):
     """The largest differences, relative to the entries' scale, of the linearisation (A, N) and of one whole step
     from the unrolled filter's own estimates, at each of the record's samples."""
@@ -53,9 +58,8 @@ def _compare(unrolled, looped, W, x0):
     S = np.hstack([Z, Ps.transpose(0, 2, 1).reshape(len(Z), -1)])
     WY = np.hstack([W, Y[1:]])
     sa, sb = (np.asarray(f.filter_step.map(W.shape[0])(S.T, WY.T)) for f in (unrolled, looped))
-    rel = lambda a, b: float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))  # noqa: E731
-    return {"z_next": rel(za, zb), "A": rel(Aa, Ab), "N": rel(Na, Nb), "z": rel(sa[:nz], sb[:nz]),
-            "P": rel(sa[nz:], sb[nz:])}
+    return {"z_next": _rel(za, zb), "A": _rel(Aa, Ab), "N": _rel(Na, Nb), "z": _rel(sa[:nz], sb[:nz]),
+            "P": _rel(sa[nz:], sb[nz:])}
 
 
 def test_looped_step_equals_the_unrolled_on_a_finger_with_friction():
@@ -123,26 +127,30 @@ def test_c_export_of_a_looped_filter_equals_its_run(code, tmp_path):
     assert np.abs(P - est.P).max() <= 1e-9 * np.abs(est.P).max()
 
 
+def _short_run():
+    """finger3 with friction's unrolled and looped filters (4 substeps), 60 samples of inputs and the unrolled
+    filter's run on them from rest (P0 = 1e-4 I)."""
+    model = ad.Model.alpes("finger3", friction=True)
+    unrolled, looped, W, x0 = _pair(model, 4)
+    W = W[:60]
+    Y = np.repeat(np.asarray(unrolled.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
+    return unrolled, looped, W, unrolled.run(x0, np.diag(np.full(unrolled.nz, 1e-4)), W, Y)
+
+
 def test_predictions_ahead_and_linearisation_of_a_looped_filter_equal_the_unrolled():
     """The consistency checks' linearisation along a run and their predictions 5 samples ahead with covariance
     (estimation.observers.ahead): a looped filter (its chain rule) and the unrolled one (compiled, or the virtual
     machine) give the same numbers to 1e-10 (relative) on finger3 with friction."""
     from alpes_dyn.estimation.observers.ahead import linearised, predicted_ahead
 
-    model = ad.Model.alpes("finger3", friction=True)
-    unrolled, looped, W, x0 = _pair(model, 4)
-    W = W[:60]
-    nz = unrolled.nz
-    Y = np.repeat(np.asarray(unrolled.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
-    est = unrolled.run(x0, np.diag(np.full(nz, 1e-4)), W, Y)
-    rel = lambda a, b: float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))  # noqa: E731
+    unrolled, looped, W, est = _short_run()
     for a, b in zip(linearised(unrolled, est.z, W), linearised(looped, est.z, W)):
-        assert rel(a, b) <= 1e-10
+        assert _rel(a, b) <= 1e-10
     starts = np.arange(0, 50, 7)
     ya, Sa = predicted_ahead(unrolled, est.z, W, starts, 5, est.P)
     yb, Sb = predicted_ahead(looped, est.z, W, starts, 5, est.P)
     assert ya.shape == yb.shape == (starts.size, unrolled.ny) and Sa.shape == Sb.shape
-    assert rel(ya, yb) <= 1e-10 and rel(Sa, Sb) <= 1e-10
+    assert _rel(ya, yb) <= 1e-10 and _rel(Sa, Sb) <= 1e-10
 
 
 def test_one_step_prediction_of_a_looped_filter_shared_by_nees_and_nis():
@@ -153,20 +161,14 @@ def test_one_step_prediction_of_a_looped_filter_shared_by_nees_and_nis():
     from alpes_dyn.estimation.observers import ahead
     from alpes_dyn.estimation.observers.consistency import predicted_covariance
 
-    model = ad.Model.alpes("finger3", friction=True)
-    unrolled, looped, W, x0 = _pair(model, 4)
-    W = W[:60]
-    nz = unrolled.nz
-    Y = np.repeat(np.asarray(unrolled.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
-    est = unrolled.run(x0, np.diag(np.full(nz, 1e-4)), W, Y)
-    rel = lambda a, b: float(np.abs(a - b).max() / max(np.abs(a).max(), 1e-300))  # noqa: E731
+    unrolled, looped, W, est = _short_run()
     for a, b in zip(predicted_covariance(unrolled, est, W), predicted_covariance(looped, est, W)):
-        assert a.shape == b.shape and rel(a, b) <= 1e-10
+        assert a.shape == b.shape and _rel(a, b) <= 1e-10
     zn, Pn, A, G = ahead.predicted_step(looped, est.z, W, est.P)
-    assert rel(A @ est.P[:60] @ A.transpose(0, 2, 1) + G @ looped.Sw @ G.transpose(0, 2, 1) + looped.Q, Pn) <= 1e-12
+    assert _rel(A @ est.P[:60] @ A.transpose(0, 2, 1) + G @ looped.Sw @ G.transpose(0, 2, 1) + looped.Q, Pn) <= 1e-12
     starts = np.arange(3, 59, 2)
     for a, b in zip(ahead.predicted_ahead(unrolled, est.z, W, starts, 1, est.P),
                     ahead.predicted_ahead(looped, est.z, W, starts, 1, est.P)):
-        assert rel(a, b) <= 1e-10
+        assert _rel(a, b) <= 1e-10
     assert ahead.predicted_step(looped, est.z, W, est.P)[1] is Pn  # kept: the NIS reads the NEES's run
     assert ahead.predicted_step(looped, est.z, W[::-1].copy(), est.P)[1] is not Pn
