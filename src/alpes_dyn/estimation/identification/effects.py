@@ -385,7 +385,7 @@ class RoundWalker:
             warnings.simplefilter("ignore", AdequacyWarning)
             res = identify(model, advanced(self.recording, delay), selection, **kw)
         res.torque_delay = delay if "delay" in effs else None  # written to the file with the fit (fit_result)
-        if "compliance" in effs:
+        if "compliance" in effs and self.still:
             res.not_identified = {**self._held_compliances(model), **res.not_identified}
         self.rounds.append((effs, res))
         self.delays[id(res)] = delay
