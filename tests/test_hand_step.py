@@ -126,6 +126,8 @@ def test_parts_are_the_step_settings():
     assert parts.controller is not step.controller and parts.controller.kp == pytest.approx(step.controller.kp)
     np.testing.assert_allclose(parts.rad_per_count * step.counts_per_rev, 2 * np.pi, rtol=1e-12)
     assert 0 < parts.sensorless_alpha < 1
+    with pytest.warns(DeprecationWarning, match="force_scale"):  # the old name, one release
+        assert parts.sensorless_scale == parts.force_scale
     pi = ForceStep("finger2", controller="pi", compiled=False).parts()
     assert pi.ekf is None and np.isnan(pi.z0).all() and pi.sensorless_alpha is None
 

@@ -9,6 +9,7 @@ order of the operations that use them is :mod:`alpes_dyn.control.step`'s module 
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -89,6 +90,14 @@ class StepParts:
     P0: np.ndarray
     sensorless_alpha: float | None
     force_scale: float
+
+    @property
+    def sensorless_scale(self) -> float:
+        """Deprecated name of :attr:`force_scale` (kept for one release; a :class:`DeprecationWarning` naming the
+        new one)."""
+        warnings.warn("StepParts.sensorless_scale is now StepParts.force_scale; the old name goes in the next "
+                      "release", DeprecationWarning, stacklevel=2)
+        return self.force_scale
 
     @property
     def n(self) -> int:
