@@ -22,6 +22,7 @@ NIS's one-step prediction computed once for both).
 from __future__ import annotations
 
 import hashlib
+import threading
 import uuid
 from typing import Any
 
@@ -58,13 +59,12 @@ def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
     z, w, pm = cs.SX.sym("z", nz), cs.SX.sym("w", nw), cs.SX.sym("p", mdl.values.size)
     zn = mdl.step_p(z, w, pm)
     if not covariance:
-        return cs.Function("ahead_mean", [z, w, pm], [zn]), np.asarray(mdl.values, dtype=float)
+        return cs.Function("ahead_mean", [z, w, pm], [zn]), _values(filt, covariance)
     if covariance == "jacobians":
         X, Y = cs.SX.sym("X", nz, nz), cs.SX.sym("Y", nz, nw)
         A, G = cs.jacobian(zn, z), cs.jacobian(zn, w)
         out = cs.vertcat(zn, cs.vec(cs.mtimes(A, X)), cs.vec(cs.mtimes(A, Y) + G))
-        return (cs.Function("ahead_jac", [cs.vertcat(z, cs.vec(X), cs.vec(Y)), w, pm], [out]),
-                np.asarray(mdl.values, dtype=float))
+        return cs.Function("ahead_jac", [cs.vertcat(z, cs.vec(X), cs.vec(Y)), w, pm], [out]), _values(filt, covariance)
     P, Sw, Q = cs.SX.sym("P", nz, nz), cs.SX.sym("Sw", nw, nw), cs.SX.sym("Q", nz, nz)
     A, G = cs.jacobian(zn, z), cs.jacobian(zn, w)
     Pn = cs.mtimes([A, P, A.T]) + cs.mtimes([G, Sw, G.T]) + Q
@@ -99,10 +99,11 @@ def _structure(filt: Any) -> str:
     return key
 
 
-_LOOPS: dict[tuple[str, bool | str], Any] = {}
-"""The compiled loops built in this process, by (:func:`_structure`, kind): the observer's filters of one structure
+_LOOPS = threading.local()
+"""This thread's compiled loops (``loops``), by (:func:`_structure`, kind): the observer's filters of one structure
 (the model error's calibration builds one per trial noise, :mod:`~alpes_dyn.estimation.identification.
-noise_calibration`) generate and load the C once (about 0.8 s each on finger3), not once per filter."""
+noise_calibration`) generate and load the C once (about 0.8 s each on finger3), not once per filter; per thread, as
+:mod:`~alpes_dyn.simulation.sampled`'s, since each run writes its filter's numbers into the loop's parameters."""
 
 
 def _looped_step(filt: Any) -> tuple[cs.Function, np.ndarray]:
@@ -125,25 +126,26 @@ def _looped_step(filt: Any) -> tuple[cs.Function, np.ndarray]:
 
 
 def _loop(filt: Any, covariance: bool | str) -> Any:
-    """The compiled loop of ``filt``'s step (:func:`_steps`), built once per step structure in this process
+    """The compiled loop of ``filt``'s step (:func:`_steps`), built once per step structure in this thread
     (:data:`_LOOPS`, :func:`_structure`) and loaded from the disk cache by any other process, its parameters set to
     ``filt``'s numbers and noise (:func:`_values`); None without a C compiler or above :data:`AHEAD_COMPILE_MAX`."""
     from ...simulation.integrate import CompiledStepLoop, CompilerError
 
+    loops = _LOOPS.__dict__.setdefault("loops", {})
     key = (_structure(filt), covariance)
-    if key not in _LOOPS:
+    if key not in loops:
         step, values = _steps(filt, covariance)
         if step.n_instructions() > AHEAD_COMPILE_MAX:
-            _LOOPS[key] = None
+            loops[key] = None
             return None
         try:
             kind = {False: "", True: "_cov", "jacobians": "_jac", "looped": "_looped"}[covariance]
             level = "-O1" if covariance == "looped" else "-O0"  # a looped filter's runs are long: optimised
-            _LOOPS[key] = CompiledStepLoop(step, f"ahead{kind}_{filt.model.system.model.name}", threads=1,
-                                           vectorize=False, parameters=values, large_level=level)
+            loops[key] = CompiledStepLoop(step, f"ahead{kind}_{filt.model.system.model.name}", threads=1,
+                                          vectorize=False, parameters=values, large_level=level)
         except CompilerError:
-            _LOOPS[key] = None
-    loop = _LOOPS[key]
+            loops[key] = None
+    loop = loops[key]
     if loop is not None:
         np.copyto(loop.parameters, _values(filt, covariance))  # in place: the buffer the compiled loop reads
     return loop
