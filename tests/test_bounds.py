@@ -10,6 +10,7 @@ not).
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 import pytest
@@ -101,6 +102,34 @@ def test_the_fit_again_starts_from_the_first_fits_linearised_optimum(rigid_recor
     assert np.all(np.abs(warm.values - fresh.values) < 0.1 * fresh.std)
     assert warm.converged and warm.iterations < fresh.iterations
     assert held_start(first, {"F_v_1": 0.0}) is None and held_start(first, {}) is None  # a log-fitted bound: none
+
+
+def test_a_held_start_whose_move_overflows_a_value_is_none():
+    """held_start on a stand-in fit whose linearised move takes a log-fitted parameter past float64's range (a short
+    record's flat direction: ``experiment --duration 0.1`` then identify): None (the fit again starts from the first
+    fit), not a start holding inf that identify then refused as "start: F_v_1 = inf", naming an argument never
+    given."""
+    import dataclasses
+
+    from alpes_dyn.estimation.identification.held import ShootingSolution, held_start
+
+    @dataclasses.dataclass
+    class Fit:  # what held_start reads of an IdentificationResult
+        names: tuple
+        values: np.ndarray
+        solution: ShootingSolution
+
+    def first(coupling):
+        response = np.array([[0.0, 0.0], [1.0, 0.0], [coupling, 1.0]])  # node, then the two parameters' rows
+        sol = ShootingSolution(nodes=np.zeros((1, 1)), offs=np.zeros((1, 0)), lines=np.zeros(0), samples=10,
+                               response=response, additive=np.array([False, False]), scale=np.ones(2))
+        return Fit(("K_1", "F_v_1"), np.array([0.04, 1e-4]), sol)
+
+    moved = held_start(first(0.5), {"K_1": 0.08})
+    assert moved.values == pytest.approx([0.08, 1e-4 * 2**0.5], rel=1e-12)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")  # no overflow warning either
+        assert held_start(first(1e4), {"K_1": 0.08}) is None
 
 
 def test_a_negative_compliance_in_a_file_is_refused(tmp_path):

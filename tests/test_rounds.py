@@ -159,6 +159,35 @@ def test_kept_take_and_refuse():
     assert k.result is b and k.tried is c and k.tried_effects == KEPT + ("delay",)
 
 
+def test_a_round_whose_fit_diverges_is_refused_the_kept_fit_stays(monkeypatch):
+    """A round of the auto stage whose fit overflows (FitDiverged: ``experiment --rig both --duration 0.2``'s record,
+    100 samples an orientation, diverged in a later round) is refused with a note, its overflow warnings dropped;
+    the kept fit stays (the command wrote the fit before it, not "are the encoders in counts?"). Any other error
+    still stops the walk."""
+    import warnings
+
+    from alpes_dyn.estimation.identification.effects import Kept, RoundWalker
+    from alpes_dyn.estimation.identification.shooting import FitDiverged
+
+    walk = RoundWalker(lambda effs: None, _recording(np.zeros((200, 1)), ("finger",)), True, None, {})
+    kept = Kept(fit(0.6), KEPT)
+
+    def diverging(effs, warm=None):
+        warnings.warn("overflow encountered in exp", RuntimeWarning)
+        raise FitDiverged("identify: the fit diverged")
+
+    monkeypatch.setattr(walk, "run", diverging)
+    with warnings.catch_warnings(record=True) as seen:
+        warnings.simplefilter("always")
+        assert walk.play(ROW["stiction"], kept) is True
+    assert kept.result.residual_rms == pytest.approx(0.6) and kept.tried is None and not seen
+    assert walk.notes == ["round stiction: the fit with compliance+tilt+stiction diverged (its parameters or "
+                          "states overflowed); kept without it"]
+    monkeypatch.setattr(walk, "run", lambda effs, warm=None: (_ for _ in ()).throw(ValueError("other")))
+    with pytest.raises(ValueError, match="other"):
+        walk.play(ROW["rotor"], kept)
+
+
 def _recording(torque, names):
     """A stand-in recording: what :func:`still_motors` reads (the torque (N, m), N m, and the motors' names)."""
     return SimpleNamespace(torque=np.asarray(torque, dtype=float), motor_names=tuple(names))

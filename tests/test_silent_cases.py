@@ -98,3 +98,17 @@ def test_the_per_orientation_floor_matches_what_identify_needs():
     design = ExperimentDesign(duration=0.2, orientations=two).check()
     assert design.n_samples // 2 >= 100 and 4 * (2 * len(design.lines) + 1) < 100
     assert math.isclose(design.duration, 0.2) and np.size(design.lines) > 0
+
+
+def test_the_observer_check_of_a_record_too_short_for_the_nees_is_made_without_it():
+    """identify's observer check on a simulated record with true joints: the joints' NEES (for the record only) is
+    made where two of its samples, NEES_EVERY apart, follow the transient, else None -- not the former refusal
+    "every: 0.1 s leaves 1 sample after 0.05 s", naming an option identify never had, of the 0.1 s record
+    ``experiment --duration 0.1`` writes (100 samples, the floor)."""
+    from alpes_dyn.estimation.identification.observer_check import observer_statistics
+
+    model = ad.Model.alpes("finger2", friction=True)
+    too_short = observer_statistics(experiment("finger2", design=ExperimentDesign(duration=0.1)), model)
+    assert too_short.nees is None and math.isfinite(too_short.innovation_rms)
+    made = observer_statistics(experiment("finger2", design=ExperimentDesign(duration=0.3)), model).nees
+    assert made.samples == 2 and made.start == pytest.approx(0.15) and made.low < made.value < made.high

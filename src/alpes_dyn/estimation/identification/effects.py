@@ -77,6 +77,7 @@ from ...model.friction import lugre_of
 from ...symbolic.parametric import parameter_catalogue, select_parameters, unseen_masses
 from .creep import name_creep
 from .law_spread import other_law, widen
+from .shooting import FitDiverged
 from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
 from ..experiments.recording import segment_starts
 
@@ -461,7 +462,16 @@ class RoundWalker:
             return False
         if rnd.stage == "auto":
             self.attempted.update(e for e in effs if e not in kept.effects)
-        res = self.run(effs, kept.result)
+        with warnings.catch_warnings(record=True) as seen:  # a diverged round's overflow warnings: its note instead
+            warnings.simplefilter("always")
+            try:
+                res = self.run(effs, kept.result)
+            except FitDiverged:  # a round's fit that overflowed: refused, the kept fit stays
+                self.notes.append(f"round {rnd.name}: the fit with {'+'.join(effs) or 'rigid'} diverged (its "
+                                  "parameters or states overflowed); kept without it")
+                return True
+        for w in seen:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
         if rnd.accepts(res, kept.result):
             kept.take(res, effs)
         else:

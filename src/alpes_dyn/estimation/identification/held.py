@@ -80,8 +80,8 @@ def held_start(result: Any, held: Mapping[str, float]) -> Any | None:
     values: its ``values`` and its ``solution``'s nodes, torque corrections, line corrections and drift moved by dz
     (the module docstring), to start ``identify(..., start=...)`` from. None where the result carries no response
     (:attr:`~alpes_dyn.estimation.identification.held.ShootingSolution.response`), a held value is not
-    reachable in the fit's variables (a log-fitted one at or below 0: its bound, not a value), or the move is not
-    finite."""
+    reachable in the fit's variables (a log-fitted one at or below 0: its bound, not a value), or the move (or a value it
+    gives) is not finite."""
     sol = getattr(result, "solution", None)
     if sol is None or sol.response is None or not held:
         return None
@@ -106,7 +106,10 @@ def held_start(result: Any, held: Mapping[str, float]) -> Any | None:
     if not np.isfinite(dz).all():
         return None
     drho, dn, ncg = dz[nv:nv + p], dz[:nv], sol.lines.size
-    values = np.where(sol.additive, v + sol.scale * drho, v * np.exp(np.where(sol.additive, 0.0, drho)))
+    with np.errstate(over="ignore"):  # a log-fitted value moved past float64's range: not a start (None below)
+        values = np.where(sol.additive, v + sol.scale * drho, v * np.exp(np.where(sol.additive, 0.0, drho)))
+    if not np.isfinite(values).all():
+        return None
     nb = sol.nodes.shape[1] + sol.offs.shape[1]
     local = dn.reshape(-1, nb)
     moved = dataclasses.replace(sol, nodes=sol.nodes + local[:, :sol.nodes.shape[1]],

@@ -44,7 +44,7 @@ from ...model.robot import Model
 from .adequacy import Whiteness, sensor_floor, whiteness
 from .noise_calibration import calibrate_model_error
 from ..experiments.recording import Recording, excitation_parts
-from ..observers.consistency import nees
+from ..observers.consistency import NEES_EVERY, nees
 from ..observers.ahead import predicted_ahead
 from ..observers.innovation import Nis, nis
 from ..observers.replay import advanced, estimate_recording
@@ -119,7 +119,8 @@ class ObserverCheck:
     four times the horizon: not made."""
     nees: Any = None
     """The joints' :class:`~alpes_dyn.estimation.observers.consistency.Nees` where the recording has true joints
-    (for the record, as ``ekf_rmse``: the verdict never reads it)."""
+    and at least two of its samples, :data:`~alpes_dyn.estimation.observers.consistency.NEES_EVERY` apart, after the
+    transient (for the record, as ``ekf_rmse``: the verdict never reads it); None otherwise."""
     calibration: Any = None
     """The observer's model error calibrated on the recording
     (:class:`~alpes_dyn.estimation.identification.noise_calibration.ModelErrorCalibration`), where
@@ -262,8 +263,9 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
             reasons.append(f"the EKF on the identified file is over-confident: its {what} {v.value:.3g} is above its "
                            f"{100 * v.level:g} % band [{v.low:.3g}, {v.high:.3g}] (its reported covariance does not "
                            f"cover the encoder's errors: {np.max(v.innovation_rms / v.reported_rms):.2f}x)")
-    truth = None if recording.true_q is None else nees(est.estimate, recording.true_q, filt, est.inputs,
-                                                         start=transient)
+    every = max(1, int(round(NEES_EVERY / recording.dt)))  # the NEES's decimation: two samples after the
+    truth = None if recording.true_q is None or k0 + every > N - 1 else nees(  # transient, else none (too short)
+        est.estimate, recording.true_q, filt, est.inputs, start=transient)
     return ObserverCheck(i_rms, p_rms, floor, H * recording.dt, white, est.rmse, reasons,
                          time.perf_counter() - t0, *consistency, truth)
 

@@ -45,12 +45,18 @@ from .normal_blocks import NormalBlocks
 from .drift import GAIN_NEEDS_LINES, check_drift, drift_basis, gain_sensitivity, line_coefficients, recorded_time
 
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
-           "JACOBIAN_CHUNK"]
+           "JACOBIAN_CHUNK", "FitDiverged"]
 
 JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
+
+
+class FitDiverged(InputError):
+    """The fit's parameters or states overflowed to NaN or inf (:meth:`ShootingProblem.evaluate`): on a first fit,
+    the recording's units are the likely cause; a later round of ``--effects auto`` that diverges is refused, the
+    fit before it kept (:meth:`~alpes_dyn.estimation.identification.effects.RoundWalker.play`)."""
 
 
 class ShootingProblem(EncoderOutput, ShootingAlgebra):
@@ -309,7 +315,7 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         over the Jacobian for its products: :func:`~alpes_dyn.estimation.identification.normal_blocks.remainders`)."""
         theta = self.values(glob)
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
-            raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
+            raise FitDiverged("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
                              "the recording's encoders this model's, in counts, and its torques in N m?")
         L = self.L
         u_raw = self.torque_at(glob, offs, gained=False) if self.comp_cols else None
