@@ -193,3 +193,21 @@ def test_getting_started_lists_every_extras_package():
         names = {re.split(r"[<>=!~ ;]", r, maxsplit=1)[0] for r in requirements}
         names = {"python-control" if n == "control" else n for n in names}
         assert documented.get(extra) == names, (extra, documented.get(extra), names)
+
+
+def test_the_real_time_snippet_names_where_each_of_its_names_comes_from():
+    """The observers guide's real-time block (issue 52: it used ``ekf``, ``z0``, ``P0``, ``W``, ``Y`` unexplained):
+    every name it reads and does not assign is a builtin or named in its first line, a comment saying where it is
+    built (the page's first example, which test_page_snippets_run runs before it)."""
+    import ast
+    import builtins
+
+    page = DOCS / "user-guide" / "observers.rst"
+    code = next(c for _, c in python_blocks(page) if ".online(" in c)
+    tree = ast.parse(code)
+    names = [n for n in ast.walk(tree) if isinstance(n, ast.Name)]
+    assigned = {n.id for n in names if isinstance(n.ctx, ast.Store)}
+    free = {n.id for n in names if isinstance(n.ctx, ast.Load)} - assigned - set(dir(builtins))
+    first = code.splitlines()[0]
+    assert free == {"ekf", "z0", "P0", "W", "Y"} and first.startswith("#")
+    assert all(re.search(rf"\b{name}\b", first) for name in free), first
