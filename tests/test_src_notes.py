@@ -12,7 +12,8 @@ SRC = Path(__file__).resolve().parents[1] / "src" / "alpes_dyn"
 NOTE = re.compile(
     r"\b20\d\d-\d\d-\d\d\b"  # a date
     r"|\bloads? (?:of |about |near |around |~)?\d"  # a machine load ("load 1.8-2.6", "load about 1.5")
-    r"|(?<!-)\bseeds? \d")  # a seed number ("seed 13", "seeds 40-43"); not a command line's --seed 1
+    r"|(?<!-)\bseeds? \d"  # a seed number ("seed 13", "seeds 40-43"); not a command line's --seed 1
+    r"|(?<!-)\bdraws? \d+ ?-\d")  # draws named by their seeds ("draws 1-30"); not a count ("--draws 8")
 """What a lab note looks like."""
 
 # The modules whose notes are still to be moved to the benchmarks' records, with how many lines: the count only
@@ -45,7 +46,8 @@ def test_the_allow_list_only_shrinks():
 def test_the_pattern_finds_each_kind():
     """The three kinds are found, in the forms the library used; a command line's ``--seed 1`` is not a note."""
     for text in ("(finger3 seed 21, 2026-12-05, load 5)", "seeds 40-43", "load about 1.5", "2026-12-03",
-                 "load 1.8-2.6"):
+                 "load 1.8-2.6", "finger3's draws 1-30"):
         assert NOTE.search(text), text
-    for text in ("alpes-dyn sweep --seed 1 -o x.csv", "the loads of the joints", "a seed >= 0"):
+    for text in ("alpes-dyn sweep --seed 1 -o x.csv", "the loads of the joints", "a seed >= 0",
+                 "alpes-dyn sweep --draws 8 --seed 1", "the test draws 1,500"):
         assert not NOTE.search(text), text

@@ -217,7 +217,7 @@ def _room_below(nominal: Model, k: int, bias: np.ndarray, reading: float, gravit
     (rad) below the design's: of the room each of the motor's joints has between its rest and the limit that a
     slackening tendon moves it towards (the lower limit where S_kj > 0), the smallest share the nominal finger
     keeps at that reading, against its rest at the design point ``q_design`` (n,). The nominal model, not the
-    finger, gives the joints' split (the encoder reads their sum only); measured on finger3's draws 1-30: with the
+    finger, gives the joints' split (the encoder reads their sum only); measured on thirty drawn finger3s: with the
     multisine unshrunk, the matched rest left q_1 at 14-18 degrees and the excitation swung it to -0.8 to -5.5
     degrees on four draws (the nominal finger's q_1 swings 18 degrees below its rest); the multisine
     alone shrunk (0.41-0.68 there), q_1 stayed 3.1 degrees or more above it on every draw, but finger2's distal

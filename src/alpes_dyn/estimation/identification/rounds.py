@@ -36,7 +36,8 @@ named in the fit's ``not_identified``.
 The ``auto`` stage is walked again while the kept fit's check by the observer it feeds fails
 (:func:`~alpes_dyn.estimation.identification.observer_check.judge`, which marks the fit flagged); each effect is tried
 in one round at most. A refused round's fit is
-:attr:`~alpes_dyn.estimation.identification.effects.EffectsFit.tried`. The measurements behind each rule are
+:attr:`~alpes_dyn.estimation.identification.effects.EffectsFit.tried`; a round whose fit diverges
+(:class:`~alpes_dyn.estimation.identification.shooting.FitDiverged`) is refused, a note naming it. The measurements behind each rule are
 ``benchmarks/realism.py``'s records (``benchmarks/results/realism.json``) and the user guide's identification page.
 """
 
