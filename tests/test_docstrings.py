@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib
 import inspect
+import pkgutil
 import warnings
 from typing import Any, Callable, Iterator
 
@@ -25,10 +26,11 @@ PACKAGES = ("alpes_dyn", "alpes_dyn.model", "alpes_dyn.simulation", "alpes_dyn.s
 NOT_YET: frozenset[str] = frozenset()
 
 
-def _public() -> Iterator[tuple[str, Any]]:
-    """(qualified name, object) of every public function and class, each once (under its first package)."""
+def _public(packages: tuple[str, ...] = PACKAGES) -> Iterator[tuple[str, Any]]:
+    """(qualified name, object) of every public function and class of ``packages``' ``__all__``, each once (under
+    its first package)."""
     seen: set[int] = set()
-    for pkg in PACKAGES:
+    for pkg in packages:
         module = importlib.import_module(pkg)
         for name in getattr(module, "__all__", ()):
             obj = getattr(module, name)
@@ -63,9 +65,10 @@ def _undocumented(fn: Callable, doc: str) -> list[str]:
     return [a for a in sig.parameters if a not in ("self", "cls") and not a.startswith("_") and not have.get(a)]
 
 
-def _callables() -> Iterator[tuple[str, Callable, str]]:
-    """(qualified name, callable, its docstring) of every public function, constructor and method."""
-    for qual, obj in _public():
+def _callables(packages: tuple[str, ...] = PACKAGES) -> Iterator[tuple[str, Callable, str]]:
+    """(qualified name, callable, its docstring) of every public function, constructor and method of
+    ``packages``."""
+    for qual, obj in _public(packages):
         if inspect.isfunction(obj):
             yield qual, obj, inspect.getdoc(obj) or ""
             continue
@@ -135,3 +138,160 @@ def test_the_front_door_is_clean(failing):
     front = [f"alpes_dyn.{n}" for n in ad.__all__ if inspect.isfunction(getattr(ad, n))]
     front += ["alpes_dyn.estimation.identify", "alpes_dyn.estimation.fit_effects"]
     assert not [q for q in front if q in failing or q in NOT_YET]
+
+
+# ----------------------------------------------------------------------------- the modules' own APIs
+MODULES_NOT_YET: dict[str, int] = {
+    "analysis.fisher": 1,
+    "analysis.identifiability": 2,
+    "analysis.joint_observability": 1,
+    "analysis.observability": 1,
+    "analysis.observability_matrix": 10,
+    "bench.effects": 4,
+    "bench.mujoco_hand": 1,
+    "bench.mujoco_plant": 9,
+    "checks": 3,
+    "control.blocks": 3,
+    "control.cexport": 5,
+    "control.chand": 3,
+    "control.cstep": 3,
+    "control.plants": 2,
+    "control.realism_loop": 9,
+    "control.step": 4,
+    "estimation.cexport.cexport": 5,
+    "estimation.cexport.cexport_chains": 3,
+    "estimation.cexport.cexport_ekf": 1,
+    "estimation.cexport.cexport_substeps": 1,
+    "estimation.experiments.adapt": 4,
+    "estimation.experiments.calibration": 3,
+    "estimation.experiments.csv_numbers": 3,
+    "estimation.experiments.excursion": 4,
+    "estimation.experiments.experiment": 4,
+    "estimation.experiments.hand_experiment": 4,
+    "estimation.experiments.hand_session": 4,
+    "estimation.experiments.multisine": 1,
+    "estimation.experiments.on_hand": 2,
+    "estimation.experiments.recording": 1,
+    "estimation.experiments.segments": 2,
+    "estimation.experiments.units": 2,
+    "estimation.identification.adequacy": 12,
+    "estimation.identification.bounds": 4,
+    "estimation.identification.drift": 5,
+    "estimation.identification.effects": 18,
+    "estimation.identification.encoder_output": 6,
+    "estimation.identification.fit_result": 2,
+    "estimation.identification.gauss_newton": 12,
+    "estimation.identification.harmonics": 2,
+    "estimation.identification.held": 2,
+    "estimation.identification.heldout": 4,
+    "estimation.identification.identification": 1,
+    "estimation.identification.identified_spec": 4,
+    "estimation.identification.kkt": 8,
+    "estimation.identification.law_spread": 1,
+    "estimation.identification.long_record": 3,
+    "estimation.identification.noise_calibration": 1,
+    "estimation.identification.normal_blocks": 7,
+    "estimation.identification.observer_check": 7,
+    "estimation.identification.responses": 2,
+    "estimation.identification.robust_covariance": 2,
+    "estimation.identification.runs": 4,
+    "estimation.identification.shooting": 30,
+    "estimation.identification.shooting_algebra": 10,
+    "estimation.identification.torque_lines": 2,
+    "estimation.observers.blocks": 8,
+    "estimation.observers.consistency": 4,
+    "estimation.observers.covariance": 3,
+    "estimation.observers.discrete": 1,
+    "estimation.observers.friction_noise": 4,
+    "estimation.observers.innovation": 1,
+    "estimation.observers.looped": 6,
+    "estimation.observers.observers": 1,
+    "estimation.observers.replay": 5,
+    "estimation.observers.scenario": 6,
+    "fileio": 12,
+    "limits": 6,
+    "model.block_scene": 4,
+    "model.description": 1,
+    "model.extras": 2,
+    "model.friction": 4,
+    "model.inertial": 1,
+    "model.mimic": 12,
+    "model.mjcf": 7,
+    "model.mjcf_equality": 3,
+    "model.mjcf_export": 2,
+    "model.mjcf_import": 5,
+    "model.mjcf_path": 1,
+    "model.mjcf_spatial": 2,
+    "model.mjcf_update": 2,
+    "model.param_values": 1,
+    "model.params": 4,
+    "model.path_ratios": 5,
+    "model.ratio_curve": 10,
+    "model.reference": 1,
+    "model.robot_checks": 1,
+    "model.spatial_path": 5,
+    "model.spec": 11,
+    "model.spec_values": 3,
+    "model.stops": 6,
+    "model.subtree": 5,
+    "model.tendon": 3,
+    "model.transmission": 5,
+    "model.trust": 1,
+    "model.urdf_checks": 2,
+    "simulation.buildcache": 2,
+    "simulation.codegen": 3,
+    "simulation.loop": 4,
+    "simulation.lugre": 4,
+    "simulation.plants": 3,
+    "simulation.sampled": 1,
+    "simulation.sensitivity": 2,
+    "simulation.sensors": 8,
+    "simulation.stick": 2,
+    "simulation.variational": 2,
+    "studies.realism": 20,
+    "studies.realism_friction": 7,
+    "studies.sweep": 7,
+    "symbolic.elastic_tendon": 7,
+    "symbolic.lifted": 1,
+    "symbolic.link_terms": 3,
+    "symbolic.lugre": 3,
+    "symbolic.parametric": 17,
+}
+"""Of each module's own public callables -- the names of its ``__all__`` defined in it, which the API reference
+(``docs/api/``) renders -- how many do not yet document every argument as ``name : type``: 516 of 859 in 114
+modules at issue 52's audit (the packages' front doors above are clean). The count only falls
+(test_module_apis_only_improve): a module fixed leaves the list, none joins, none rises."""
+
+
+def _modules() -> list[str]:
+    """Every public module of the library (not a package's ``__init__``, not ``cli``, no ``_private`` part)."""
+    import alpes_dyn
+
+    return sorted(m.name for m in pkgutil.walk_packages(alpes_dyn.__path__, "alpes_dyn.")
+                  if not m.ispkg and not m.name.startswith("alpes_dyn.cli")
+                  and not any(p.startswith("_") for p in m.name.split(".")))
+
+
+def module_failures() -> dict[str, int]:
+    """Module (without ``alpes_dyn.``) -> how many of its own public callables (:func:`_callables` of the names
+    of its ``__all__`` defined in it) leave an argument undocumented; modules with none left out."""
+    out: dict[str, int] = {}
+    for name in _modules():
+        module = importlib.import_module(name)
+        own = {n for n in getattr(module, "__all__", ())
+               if getattr(getattr(module, n, None), "__module__", None) == name}
+        bad = sum(1 for qual, fn, doc in _callables((name,)) if qual[len(name) + 1:].split(".")[0] in own
+                  and _undocumented(fn, doc))
+        if bad:
+            out[name[len("alpes_dyn."):]] = bad
+    return out
+
+
+def test_module_apis_only_improve():
+    """No module has more callables with an undocumented argument than MODULES_NOT_YET allows (a new public
+    function documents its arguments in numpydoc's form); a module with fewer must lower its count."""
+    found = module_failures()
+    over = {m: n for m, n in found.items() if n > MODULES_NOT_YET.get(m, 0)}
+    assert not over, f"undocumented arguments (name : type) beyond MODULES_NOT_YET: {over}"
+    fixed = {m: found.get(m, 0) for m, n in MODULES_NOT_YET.items() if found.get(m, 0) < n}
+    assert not fixed, f"fewer than allowed: lower MODULES_NOT_YET to {fixed}"
