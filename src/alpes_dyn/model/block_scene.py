@@ -68,16 +68,48 @@ class BlockScene:
 
 
 def motor_tips(model: Any, motor: int) -> tuple[str, ...]:
-    """The tips of ``model`` (:attr:`Model.tips <alpes_dyn.Model.tips>`) that motor ``motor`` (row of S) moves:
-    a joint the motor drives is among the tip's supporting joints."""
+    """The tips of ``model`` (:attr:`Model.tips <alpes_dyn.Model.tips>`) that motor ``motor`` moves: a joint the
+    motor drives is among the tip's supporting joints.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        A model with a transmission (a URDF and its spec).
+    motor : int
+        The motor's index, its row of the transmission's S.
+
+    Returns
+    -------
+    tuple of str
+        The names of the tip frames the motor moves, in the order of ``model.tips``.
+    """
     pm = model.pin_model
     driven = {pm.getJointId(model.joint_names[i]) for i in np.flatnonzero(model.transmission.S[motor])}  # their ids
     return tuple(t for t in model.tips if driven & set(pm.supports[pm.frames[model.frame_id(t)].parentJoint]))
 
 
 def contact_frame_and_motor(model: Any, frame: str | None, motor: str | None) -> tuple[str, int]:
-    """(the tip frame, the motor's row of S) of a force loop, the defaults resolved: the motor, the only one, or the
-    only one moving ``frame``; the frame, the only tip the motor moves. InputError naming the candidates otherwise."""
+    """(the tip frame, the motor's row of S) of a force loop, the defaults resolved.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        A model with a transmission (a URDF and its spec).
+    frame : str or None
+        The tip frame (one of ``model.tips``); None: the only tip the motor moves.
+    motor : str or None
+        The motor's name; None: the only motor, or the only one moving ``frame``.
+
+    Returns
+    -------
+    tuple of (str, int)
+        The tip frame and the motor's index (row of S).
+
+    Raises
+    ------
+    InputError
+        No transmission, an unknown frame or motor, or no unique default (the candidates named).
+    """
     tr = model.transmission
     if tr is None:
         raise InputError(f"spec: model {model.name!r} has no transmission; force control needs its motors (a URDF "
@@ -171,12 +203,33 @@ def place_block(model: Any, frame: str | None = None, motor: str | None = None,
 
     Parameters
     ----------
-    model: a :class:`~alpes_dyn.Model` with a transmission (a URDF and its spec).
-    frame, motor: the tip frame and the motor (defaults: :func:`contact_frame_and_motor`).
-    contact_q: (n,) q_c, rad, inside the joint ranges; default: the equilibrium at ``approach`` (module doc).
-    approach: the fraction in (0, 1) of the motor's joints' way to their ranges' ends at the default q_c.
-    tip_radius: the tip sphere's radius, m (> 0: the sphere is what meets the block).
-    half_width: the box's half size along its face, m (default: module doc).
+    model : alpes_dyn.Model
+        A model with a transmission (a URDF and its spec).
+    frame : str or None, optional
+        The tip frame that presses the block (default None: :func:`contact_frame_and_motor`).
+    motor : str or None, optional
+        The motor that pulls (default None: :func:`contact_frame_and_motor`).
+    contact_q : sequence of float, shape (n,), optional
+        q_c, rad, the joint angles at contact, inside the joint ranges; default None: the equilibrium at
+        ``approach`` (module doc).
+    approach : float, optional
+        The fraction in (0, 1) of the motor's joints' way to their ranges' ends at the default q_c (default 0.25).
+    tip_radius : float, optional
+        The tip sphere's radius, m (> 0: the sphere is what meets the block; default 0.005).
+    half_width : float or None, optional
+        The box's half size along its face, m (default None: half the distance from the motor's first joint to the
+        tip at q_c, module doc).
+
+    Returns
+    -------
+    BlockScene
+        The block's placement, normal, rest configuration and lever.
+
+    Raises
+    ------
+    InputError
+        A bad ``approach``, ``tip_radius`` or ``contact_q``, a rest configuration outside the joint ranges, or a block
+        that cannot be placed (the reason named).
     """
     frame, k = contact_frame_and_motor(model, frame, motor)
     for name, x, lo in (("approach", approach, 0.0), ("tip_radius", tip_radius, 0.0)):
@@ -244,7 +297,24 @@ def place_block(model: Any, frame: str | None = None, motor: str | None = None,
 
 def block_scene_mjcf(model: Any, scene: BlockScene, *, timestep: float = 1e-4, integrator: str = "RK4") -> str:
     """MJCF text: :func:`~alpes_dyn.model.mjcf_export.model_mjcf` of ``model`` (joint limits on, tips of radius
-    ``scene.tip_radius``) with the block of ``scene`` in the world body (module doc)."""
+    ``scene.tip_radius``) with the block of ``scene`` in the world body (module doc).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model the scene was placed for.
+    scene : BlockScene
+        The block (:func:`place_block`).
+    timestep : float, optional
+        MuJoCo's time step, s (default 1e-4).
+    integrator : str, optional
+        MuJoCo's integrator, one of :data:`~alpes_dyn.model.mjcf_export.INTEGRATORS` (default ``"RK4"``).
+
+    Returns
+    -------
+    str
+        The MJCF text.
+    """
     from .mjcf_export import _v, model_mjcf
 
     xml = model_mjcf(model, timestep=timestep, integrator=integrator, tip_radius=scene.tip_radius)

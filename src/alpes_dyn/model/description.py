@@ -152,9 +152,29 @@ def _thumb_parts(p: HandParams) -> list[str]:
 
 
 def model_params(model: str, params: HandParams | str | Path | None = None, chain: str | None = None) -> HandParams:
-    """The parameters ``model`` is built from: ``params`` (default the shipped file), for a finger model with
-    ``chain`` (a finger's name) that finger's (:func:`~alpes_dyn.model.params.chain_params`). ``chain`` is
-    only for finger models (``"thumb"`` is a model of its own); :class:`ModelError` otherwise."""
+    """The parameters ``model`` is built from.
+
+    Parameters
+    ----------
+    model : str
+        ``finger2``, ``finger3``, ``hand`` or ``thumb``.
+    params : HandParams or str or Path or None, optional
+        The parameters, or a parameter file (default None: the shipped one).
+    chain : str or None, optional
+        For a finger model, a finger's name of the hand: that finger's parameters
+        (:func:`~alpes_dyn.model.params.chain_params`); only for finger models (``"thumb"`` is a model of its
+        own). Default None: the file's finger.
+
+    Returns
+    -------
+    HandParams
+        The parameters.
+
+    Raises
+    ------
+    ModelError
+        An unknown model, a ``chain`` for a model that is not a finger, or an unknown finger.
+    """
     check_model_name(model)
     p = params if isinstance(params, HandParams) else load_params(params)
     if chain is None:

@@ -45,7 +45,30 @@ masses within 2.4 % at 0.02 (62 % at 0.1). It needs RK4 steps of about 1/15 ms o
 
 
 def spring_stiffness(K: np.ndarray, spring: str, b: float, r: float) -> np.ndarray:
-    """Joint stiffness k (N m/rad) of springs with constants K under a spring model (eq. 2.14)."""
+    """Joint stiffness k (N m/rad) of springs with constants K under a spring model (eq. 2.14).
+
+    Parameters
+    ----------
+    K : numpy.ndarray, shape (n,)
+        The springs' constants K_i (Table 1.2, N m/rad).
+    spring : str
+        The spring model, one of :data:`SPRING_MODELS` (module doc): ``"torsional"`` k = K, ``"report"``
+        k = K (b/2 + r)^2, ``"none"`` k = 0.
+    b : float
+        The report's b, m (the ``"report"`` model's lever b/2 + r).
+    r : float
+        The report's r, m.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        k, N m/rad (a new array).
+
+    Raises
+    ------
+    ModelError
+        An unknown spring model.
+    """
     if spring == "torsional":
         return np.asarray(K, dtype=float).copy()
     if spring == "report":
@@ -60,9 +83,25 @@ def _as(xp: Any, a: np.ndarray) -> Any:
 
 
 def spring_law(k: Any, rest: np.ndarray | None, q: Any, xp: Any = np) -> Any:
-    """The spring torque k (q - q_rest) (N m): the one place it is written. ``k``: (n,) stiffness (N m/rad; a numpy
-    array, or a CasADi column such as the parametric model's fitted K); ``rest``: (n,) rest angles (rad) or None
-    (all zero: then k q, bit for bit what the springs gave before rest angles existed); ``q``: (n,) array or column."""
+    """The spring torque k (q - q_rest) (N m): the one place it is written.
+
+    Parameters
+    ----------
+    k : numpy.ndarray or casadi.SX or casadi.MX, shape (n,)
+        Stiffness, N m/rad: a numpy array, or a CasADi column such as the parametric model's fitted K.
+    rest : numpy.ndarray, shape (n,), or None
+        Rest angles q_rest, rad; None (or all zero): then k q, bit for bit what the springs gave before rest angles
+        existed.
+    q : numpy.ndarray or casadi.SX or casadi.MX, shape (n,)
+        Joint angles, rad: an array or a CasADi column.
+    xp : module, optional
+        The math namespace, ``numpy`` (default) or ``casadi`` (module doc).
+
+    Returns
+    -------
+    numpy.ndarray or casadi expression, shape (n,)
+        The spring torque, N m.
+    """
     k = _as(xp, k) if isinstance(k, np.ndarray) else k
     if rest is None or not np.any(np.asarray(rest) != 0):
         return k * q

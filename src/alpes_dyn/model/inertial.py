@@ -73,7 +73,16 @@ def check_inertials(urdf: str, mode: str = "strict") -> None:
 
     Parameters
     ----------
-    urdf: URDF text. mode: ``"strict"`` (with the triangle inequality) or ``"relaxed"``; see the module.
+    urdf : str
+        URDF text.
+    mode : str, optional
+        ``"strict"`` (default; with the triangle inequality) or ``"relaxed"`` (:data:`INERTIA_MODES`; see the
+        module).
+
+    Raises
+    ------
+    ModelError
+        An unknown mode, or the first link whose inertial is not physical, named.
     """
     if mode not in INERTIA_MODES:
         raise ModelError(f"check_inertia: unknown mode {mode!r} (expected one of {', '.join(INERTIA_MODES)})")

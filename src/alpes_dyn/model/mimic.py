@@ -70,8 +70,23 @@ def read_mimics(root: ET.Element) -> tuple[MimicJoint, ...]:
     """The ``<mimic>`` elements of a parsed URDF's moving joints (URDF's defaults: multiplier 1, offset 0), each
     checked: one per joint; it names a joint (``joint=``) that exists, moves, is of the same type and is not
     itself a mimic (a chain of mimics is refused: name the first joint); multiplier and offset decimal numbers
-    within their ranges (:func:`_attr_number`).
-    :class:`~alpes_dyn.ModelError` naming the joint. A fixed joint's ``<mimic>`` is ignored (it moves nothing)."""
+    within their ranges (:func:`_attr_number`). A fixed joint's ``<mimic>`` is ignored (it moves nothing).
+
+    Parameters
+    ----------
+    root : xml.etree.ElementTree.Element
+        The parsed URDF's ``<robot>`` element.
+
+    Returns
+    -------
+    tuple of MimicJoint
+        The mimic joints, in URDF order.
+
+    Raises
+    ------
+    ModelError
+        A ``<mimic>`` that is not as above, naming the joint.
+    """
     kinds = {str(j.get("name")): j.get("type") for j in root.iter("joint") if j.get("type") is not None}
     out: list[MimicJoint] = []
     for j in root.iter("joint"):
@@ -112,14 +127,15 @@ class MimicCoupling:
 
     Parameters
     ----------
-    mimics:
+    mimics : sequence of MimicJoint
         The mimic joints (:func:`read_mimics`).
-    names:
+    names : sequence of str
         The independent joints, in the model's order (the columns of G).
-    full_names:
+    full_names : sequence of str
         Every moving joint of the tree (the rows of G), e.g. the full Pinocchio model's order.
-    full_model:
-        The whole tree's ``pinocchio.Model`` (``full_names`` its joints), or None (only the map, e.g. for ADAM).
+    full_model : pinocchio.Model or None, optional
+        The whole tree's ``pinocchio.Model`` (``full_names`` its joints), or None (default; only the map, e.g. for
+        ADAM).
     """
 
     def __init__(self, mimics: Sequence[MimicJoint], names: Sequence[str], full_names: Sequence[str],
@@ -153,26 +169,56 @@ class MimicCoupling:
         return tuple(m.name for m in self.mimics)
 
     def of(self, name: str) -> MimicJoint | None:
-        """The :class:`MimicJoint` of joint ``name``, None for an independent joint."""
+        """The :class:`MimicJoint` of joint ``name``, None for an independent joint.
+
+        Parameters
+        ----------
+        name : str
+            A joint's name.
+        """
         return next((m for m in self.mimics if m.name == name), None)
 
     def full_q(self, q: np.ndarray) -> np.ndarray:
-        """q_full = G q + o, (n_full,) (or (..., n_full) for q (..., n))."""
+        """q_full = G q + o, (n_full,) (or (..., n_full) for q (..., n)).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,) or (..., n)
+            The independent joint angles, rad (m for a prismatic joint).
+        """
         return q @ self.G.T + self.offset
 
     def full_v(self, v: np.ndarray) -> np.ndarray:
-        """qd_full = G qd, (n_full,)."""
+        """qd_full = G qd, (n_full,).
+
+        Parameters
+        ----------
+        v : numpy.ndarray, shape (n,) or (..., n)
+            The independent joint velocities qd, rad/s (m/s for a prismatic joint).
+        """
         return v @ self.G.T
 
     def project(self, M: np.ndarray) -> np.ndarray:
-        """G^T M G (n, n) of a whole-tree matrix (n_full, n_full)."""
+        """G^T M G (n, n) of a whole-tree matrix (n_full, n_full).
+
+        Parameters
+        ----------
+        M : numpy.ndarray, shape (n_full, n_full)
+            A matrix of the whole tree's coordinates (e.g. its mass matrix, kg m^2).
+        """
         return self.G.T @ M @ self.G
 
     def mass_matrix(self, q: np.ndarray) -> np.ndarray:
         """A_red = G^T A(q_full) G, (n, n) symmetric, kg m^2 (the whole tree's CRBA, projected). Pinocchio 4.1's
         CRBA on its mimic model is right on a fresh ``Data`` only: each further call adds to the coupled entries
         (A[0, 1] of a 3-link finger whose DIP mimics its PIP: 4.66e-5, 7.30e-5, 9.95e-5 kg m^2 on three calls at
-        q = 0), so the model's inertia comes from here."""
+        q = 0), so the model's inertia comes from here.
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            The independent joint angles, rad (m for a prismatic joint).
+        """
         import pinocchio as pin
 
         A = pin.crba(self.full_model, self.full_data, self.full_q(q))
@@ -180,20 +226,40 @@ class MimicCoupling:
         return self.project(A)
 
     def coriolis_matrix(self, q: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """G^T C(q_full, G qd) G, (n, n), N m s (Pinocchio's, Christoffel-consistent, on the whole tree)."""
+        """G^T C(q_full, G qd) G, (n, n), N m s (Pinocchio's, Christoffel-consistent, on the whole tree).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            The independent joint angles, rad (m for a prismatic joint).
+        v : numpy.ndarray, shape (n,)
+            The independent joint velocities qd, rad/s.
+        """
         import pinocchio as pin
 
         C = pin.computeCoriolisMatrix(self.full_model, self.full_data, self.full_q(q), self.full_v(v))
         return self.project(C)
 
     def gravity_jacobian(self, q: np.ndarray) -> np.ndarray:
-        """G^T (dg/dq_full) G, (n, n), N m/rad (gravity only)."""
+        """G^T (dg/dq_full) G, (n, n), N m/rad (gravity only).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            The independent joint angles, rad (m for a prismatic joint).
+        """
         import pinocchio as pin
 
         return self.project(pin.computeGeneralizedGravityDerivatives(self.full_model, self.full_data, self.full_q(q)))
 
     def potential_energy(self, q: np.ndarray) -> float:
-        """The gravity potential energy of the whole tree at q_full (J)."""
+        """The gravity potential energy of the whole tree at q_full (J).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            The independent joint angles, rad (m for a prismatic joint).
+        """
         import pinocchio as pin
 
         return float(pin.computePotentialEnergy(self.full_model, self.full_data, self.full_q(q)))
@@ -202,7 +268,20 @@ class MimicCoupling:
 def refuse_mimic_names(spec: Any, coupling: MimicCoupling) -> None:
     """:class:`~alpes_dyn.ModelError` where a :class:`~alpes_dyn.model.spec.TransmissionSpec` names a mimic joint
     (a motor's joint, a spring, friction, armature, rest-angle or stop row): it has no coordinate of its own, so its row
-    is refused rather than moved onto the joint it follows (whose own values would then be ambiguous)."""
+    is refused rather than moved onto the joint it follows (whose own values would then be ambiguous).
+
+    Parameters
+    ----------
+    spec : TransmissionSpec
+        The spec (:class:`~alpes_dyn.model.spec.TransmissionSpec`) whose joint rows are checked.
+    coupling : MimicCoupling
+        The model's mimic coupling.
+
+    Raises
+    ------
+    ModelError
+        A row naming a mimic joint, naming the row and the joint to name instead.
+    """
     from .spec import JOINT_TABLES, REST_TABLE
 
     uses = [(f"motor {m.name!r}.joints", j) for m in spec.motors for j in m.joints]
@@ -217,6 +296,17 @@ def refuse_mimic_names(spec: Any, coupling: MimicCoupling) -> None:
 
 def tree_model(model: Any) -> Any:
     """The Pinocchio model of ``model``'s whole tree: with mimic joints the one beside Pinocchio's mimic model (every
-    joint its own coordinate, mimic joints included), else the model's own (the same joint ids)."""
+    joint its own coordinate, mimic joints included), else the model's own (the same joint ids).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model.
+
+    Returns
+    -------
+    pinocchio.Model
+        The whole tree's model.
+    """
     mimic = getattr(model, "mimic", None)
     return mimic.full_model if mimic is not None else model.pin_model

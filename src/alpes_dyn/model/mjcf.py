@@ -118,7 +118,18 @@ def _params(params: HandParams | str | Path | None) -> HandParams:
 
 def palm_down_params(params: HandParams) -> HandParams:
     """``params`` with gravity reversed: the hand turned palm down (the base frame's +z, toward which the
-    fingers flex, points down), so that a finger presses on an object under it."""
+    fingers flex, points down), so that a finger presses on an object under it.
+
+    Parameters
+    ----------
+    params : HandParams
+        The parameters (not changed).
+
+    Returns
+    -------
+    HandParams
+        A copy with ``gravity`` negated, m/s^2.
+    """
     import dataclasses
 
     return dataclasses.replace(params, gravity=-np.asarray(params.gravity, dtype=float))
@@ -128,7 +139,20 @@ def tilted_gravity(gravity: Sequence[float], tilt: float) -> np.ndarray:
     """Gravity (3,), m/s^2, in the base frame of a hand tilted by ``tilt`` (rad) in the finger's plane (x-z):
     R_y(tilt) g, the rotation about the base frame's y axis (the joints' axes are along -y). With the
     shipped palm-up gravity (0, 0, -g): (-g sin(tilt), 0, -g cos(tilt)). The same vector goes to
-    :class:`~alpes_dyn.Model` (``Model.copy(gravity=...)``) for the same tilted hand."""
+    :class:`~alpes_dyn.Model` (``Model.copy(gravity=...)``) for the same tilted hand.
+
+    Parameters
+    ----------
+    gravity : sequence of float, shape (3,)
+        Gravity in the untilted base frame, m/s^2.
+    tilt : float
+        The tilt about the base frame's y axis, rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        R_y(tilt) g, m/s^2.
+    """
     g = np.asarray(gravity, dtype=float)
     c, s_ = math.cos(tilt), math.sin(tilt)
     return np.array([c * g[0] + s_ * g[2], g[1], -s_ * g[0] + c * g[2]])
@@ -150,7 +174,20 @@ def hanging_gravity(gravity: Sequence[float]) -> np.ndarray:
 def block_normal(contact_q: Sequence[float], tilt: float = BLOCK_TILT) -> np.ndarray:
     """Unit normal n (3,) of the block scene's face, base frame, pointing from the fingertip into the block:
     the pad's normal at ``contact_q`` turned back by ``tilt`` (rad) so that the fingertip's end, not
-    the side of the distal phalanx, meets the face. The block pushes the finger with F = -F_z n."""
+    the side of the distal phalanx, meets the face. The block pushes the finger with F = -F_z n.
+
+    Parameters
+    ----------
+    contact_q : sequence of float, shape (n,)
+        The planar chain's joint angles at contact, rad (their sum is the pad's direction).
+    tilt : float, optional
+        The angle between the distal phalanx and the face, rad (default :data:`BLOCK_TILT`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        n = (-sin b, 0, cos b) with b = sum(contact_q) - tilt.
+    """
     b = float(np.sum(np.asarray(contact_q, dtype=float))) - float(tilt)
     return np.array([-math.sin(b), 0.0, math.cos(b)])
 
@@ -159,6 +196,18 @@ def contact_tip_position(chain: ChainParams, q: Sequence[float]) -> np.ndarray:
     """Tip-frame position (x, z) of a planar chain at joint angles q (m), in the chain's base frame.
 
     Positive q turns +x toward +z (joint axes along -y), as in the URDF.
+
+    Parameters
+    ----------
+    chain : ChainParams
+        The chain; its phalanx lengths L (m), the first ``len(q)`` used.
+    q : sequence of float, shape (n,)
+        Joint angles, rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (2,)
+        (x, z) = (sum L cos(a), sum L sin(a)) with a the cumulative angles, m.
     """
     q = np.asarray(q, dtype=float)
     a = np.cumsum(q)
@@ -241,38 +290,63 @@ def mjcf_string(model: str, params: HandParams | str | Path | None = None, *, ch
 
     Parameters
     ----------
-    model: ``finger2``, ``finger3``, ``hand`` or ``thumb``.
-    params: a :class:`~alpes_dyn.HandParams`, a parameter file, or ``None`` for the shipped one.
-    chain: a finger model built from that finger of the hand (as :meth:`Model.alpes <alpes_dyn.Model.alpes>`);
+    model : str
+        ``finger2``, ``finger3``, ``hand`` or ``thumb``.
+    params : HandParams or str or Path or None, optional
+        A :class:`~alpes_dyn.HandParams`, a parameter file, or ``None`` (default) for the shipped one.
+    chain : str or None, optional
+        A finger model built from that finger of the hand (as :meth:`Model.alpes <alpes_dyn.Model.alpes>`);
         the hand uses each finger's own values (``[finger.<name>]``), everywhere: inertias, springs, friction.
-    spring, friction, rotor_inertia: as :meth:`Model.alpes <alpes_dyn.Model.alpes>`, so that the MuJoCo
-        model and ``Model.alpes(model, spring, friction, rotor_inertia, params)`` are the same system.
-    limits: joint stops (``range``, ``limited``) from the parameter file's limits (default on).
-    contact: collisions (default on); ``False`` writes ``<flag contact="disable"/>``.
-    scene: ``"none"``, ``"block"`` (finger2/finger3: a fixed block on the fingertip pad at
+    spring : str, optional
+        The spring model (default ``"torsional"``), as :meth:`Model.alpes <alpes_dyn.Model.alpes>`, so that the
+        MuJoCo model and ``Model.alpes(model, spring, friction, rotor_inertia, params)`` are the same system.
+    friction : bool, optional
+        Joint friction F_s, F_v (default False), as :meth:`Model.alpes <alpes_dyn.Model.alpes>`.
+    rotor_inertia : bool, optional
+        The motors' rotor inertia (default False), as :meth:`Model.alpes <alpes_dyn.Model.alpes>`.
+    limits : bool, optional
+        Joint stops (``range``, ``limited``) from the parameter file's limits (default True).
+    contact : bool, optional
+        Collisions (default True); ``False`` writes ``<flag contact="disable"/>``.
+    scene : str, optional
+        ``"none"`` (default), ``"block"`` (finger2/finger3: a fixed block on the fingertip pad at
         ``contact_q``) or ``"cylinder"`` (hand: a fixed cylinder across the fingers, :data:`CYLINDER`).
-    contact_q: joint angles (rad) at which the block touches the fingertip (default :data:`BLOCK_CONTACT_Q`).
-    block_tilt: angle (rad) between the distal phalanx there and the block's face (:func:`block_normal`).
-    block_friction: friction coefficient of the block (default 0: frictionless, ``condim="1"``, so the
-        contact force is normal to the block, the report's no-sliding F = [0, 0, F_z] of eq. 2.13 in the
-        block's frame).
-    palm_down: the hand turned over, gravity reversed (see :func:`palm_down_params`): the fingers flex
+    contact_q : sequence of float or None, optional
+        Joint angles (rad) at which the block touches the fingertip (default None: :data:`BLOCK_CONTACT_Q`).
+    block_friction : float, optional
+        Friction coefficient of the block (default 0: frictionless, ``condim="1"``, so the contact force is normal
+        to the block, the report's no-sliding F = [0, 0, F_z] of eq. 2.13 in the block's frame).
+    block_tilt : float, optional
+        Angle (rad) between the distal phalanx there and the block's face (:func:`block_normal`; default
+        :data:`BLOCK_TILT`).
+    palm_down : bool, optional
+        The hand turned over, gravity reversed (see :func:`palm_down_params`; default False): the fingers flex
         with gravity, toward an object under them, as in the block scene of :mod:`alpes_dyn.control`.
-    timestep: MuJoCo's time step, s (default 0.25 ms, the estimation scenario's integration step).
-    stiction: time constant (s) of the dry-friction constraint (``solreffriction``), e.g.
-        :data:`STICTION_TIMECONST`: stick-slip friction, F_s and F_v written as with ``friction=True``.
-    tendon_stiffness, tendon_damping: k_t (N/m) and c_t (N s/m) of a series-elastic, pull-only tendon with its
-        own rotor joint (module docstring); None (default): the rigid tendon (with a warning where the parameter
-        file holds a tendon compliance C: its cable is k_t = 1 / (C r_m^2), refused if given otherwise).
-    tendon_dead_band: the cable's play, m (>= 0, with ``tendon_stiffness``): slack up to this stretch, the spring
-        pulling k_t (e - dead band) beyond it (``springlength="-1 <dead band>"``; default 0). The same system as
+    timestep : float, optional
+        MuJoCo's time step, s (default 2.5e-4, the estimation scenario's integration step).
+    stiction : float or None, optional
+        Time constant (s) of the dry-friction constraint (``solreffriction``), e.g. :data:`STICTION_TIMECONST`:
+        stick-slip friction, F_s and F_v written as with ``friction=True``; default None: none.
+    tendon_stiffness : float or None, optional
+        k_t (N/m) of a series-elastic, pull-only tendon with its own rotor joint (module docstring); None
+        (default): the rigid tendon (with a warning where the parameter file holds a tendon compliance C: its cable
+        is k_t = 1 / (C r_m^2), refused if given otherwise).
+    tendon_damping : float, optional
+        c_t (N s/m) of the series-elastic tendon (default 0).
+    tendon_rotor : bool, optional
+        The rotor inertia J_m / r_m^2 as the rigid tendon's ``armature`` (J_m S^T S on the joints; default False).
+    tilt : float, optional
+        The palm tilted in the finger's plane, rad (:func:`tilted_gravity`; default 0); applied after
+        ``palm_down``.
+    tendon_dead_band : float, optional
+        The cable's play, m (>= 0, with ``tendon_stiffness``; default 0): slack up to this stretch, the spring
+        pulling k_t (e - dead band) beyond it (``springlength="-1 <dead band>"``). The same system as
         :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` with ``ElasticTendon.from_cable``.
-    tendon_rotor: the rotor inertia J_m / r_m^2 as the rigid tendon's ``armature`` (J_m S^T S on the joints).
-    tilt: the palm tilted in the finger's plane, rad (:func:`tilted_gravity`); applied after ``palm_down``.
 
     Returns
     -------
-    str: MJCF text, deterministic for given arguments.
+    str
+        MJCF text, deterministic for given arguments.
     """
     _check_mjcf_arguments(model, spring, scene, timestep, block_friction, block_tilt, contact_q)
     p = model_params(model, _params(params), chain)
@@ -533,8 +607,23 @@ def _elastic_tendon(motor: str, joints: Sequence[str], p: HandParams, k_t: float
 
 
 def load_mujoco(xml: str):
-    """A ``mujoco.MjModel`` from MJCF text; a one-line :class:`~alpes_dyn.ModelError` if MuJoCo is
-    missing (``pip install 'alpes_dyn[mujoco]'``) or rejects the text."""
+    """A ``mujoco.MjModel`` from MJCF text.
+
+    Parameters
+    ----------
+    xml : str
+        MJCF text.
+
+    Returns
+    -------
+    mujoco.MjModel
+        The compiled model.
+
+    Raises
+    ------
+    ModelError
+        One line: MuJoCo is missing (``pip install 'alpes_dyn[mujoco]'``) or rejects the text.
+    """
     try:
         import mujoco
     except ImportError:
@@ -547,7 +636,25 @@ def load_mujoco(xml: str):
 
 
 def joint_permutation(mj_model, joint_names: Sequence[str]) -> np.ndarray:
-    """MuJoCo qpos index of each joint in ``joint_names`` (the library's order), (n,) int."""
+    """MuJoCo qpos index of each joint in ``joint_names`` (the library's order).
+
+    Parameters
+    ----------
+    mj_model : mujoco.MjModel
+        The MuJoCo model.
+    joint_names : sequence of str
+        The joints, in the library's order.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (n,)
+        The qpos address of each joint.
+
+    Raises
+    ------
+    ModelError
+        A joint the MuJoCo model does not have, named.
+    """
     names = [mj_model.joint(k).name for k in range(mj_model.njnt)]
     try:
         return np.array([mj_model.jnt_qposadr[names.index(nm)] for nm in joint_names], dtype=int)
