@@ -28,7 +28,26 @@ def _name(mujoco, m, kind, i: int, prefix: str) -> str:
 def joint_couplings(mujoco, m) -> dict[int, tuple[int, float, float]]:
     """{joint1: (joint2, a, b)} of the MJCF's joint equalities, joint1 = b + a joint2 (the URDF's ``<mimic>``):
     ``polycoef="b' a 0 0 0"`` about the joints' reference positions (qpos0), composed into b. Any other equality
-    (connect, weld, tendon, a joint held alone, a polynomial of degree > 1, one inactive at start) is refused."""
+    (connect, weld, tendon, a joint held alone, a polynomial of degree > 1, one inactive at start) is refused.
+
+    Parameters
+    ----------
+    mujoco : module
+        The ``mujoco`` module (imported by the caller).
+    m : mujoco.MjModel
+        The compiled MJCF.
+
+    Returns
+    -------
+    dict of int to tuple of (int, float, float)
+        {joint1 id: (joint2 id, a, b)}, each tied joint onto an independent one (chains composed), a dimensionless
+        (for joints of one type), b rad (m for a slide joint).
+
+    Raises
+    ------
+    ModelError
+        An equality other than a linear joint coupling, a joint coupled twice, or a cycle, named.
+    """
     out: dict[int, tuple[int, float, float]] = {}
     O = mujoco.mjtObj
     for e in range(m.neq):
@@ -78,7 +97,30 @@ def fold_couplings(motors: list, tables: dict, stops: dict, fold: dict) -> list:
     rho -> a rho (added to the primary's), armature and viscous x a^2, Coulomb x |a|, a spring k (q - r) -> a^2 k
     about (r - b) / a, summed with the primary's own (stiffness and rest angle combined). The tied joint's own
     limit stop is left to its range (named in :func:`not_imported`). A spatial tendon over a tied joint is refused.
-    ``tables`` and ``stops`` are changed in place; returns the motors."""
+    ``tables`` and ``stops`` are changed in place; returns the motors.
+
+    Parameters
+    ----------
+    motors : list of Motor
+        The spec's motors (:class:`~alpes_dyn.model.spec.Motor`); a motor's ratios on a tied joint are moved.
+    tables : dict
+        The spec's joint tables {table: {joint: value}} (``stiffness`` N m/rad, ``armature`` kg m^2, ``viscous``
+        N m s/rad, ``coulomb`` N m, ``rest_angle`` rad); changed in place.
+    stops : dict
+        The spec's limit stops {joint: ...}; the tied joints' entries are removed in place.
+    fold : dict
+        {joint: (primary, a, b)}: q_joint = a q_primary + b (b in rad).
+
+    Returns
+    -------
+    list of Motor
+        The motors, a tied joint's ratio moved onto its primary.
+
+    Raises
+    ------
+    ModelError
+        A spatial tendon (curved ratio) over a tied joint.
+    """
     out = []
     for mo in motors:
         tied = [j for j in mo.joints if j in fold]
@@ -119,7 +161,30 @@ def own_joint_values(mujoco, m, joints: dict, rest: dict) -> dict:
     values as compiled in ``m`` taken off (a^2 for armature and damping, |a| for friction; a spring K about the spec's
     rest angle ``rest`` {joint: rad} less a^2 k_l about (r_l - b) / a gives the joint's own ``stiffness`` and
     ``springref``). Returns a new dict; :class:`~alpes_dyn.ModelError` where a value falls below what the tied joints
-    hold (not written)."""
+    hold (not written).
+
+    Parameters
+    ----------
+    mujoco : module
+        The ``mujoco`` module (imported by the caller).
+    m : mujoco.MjModel
+        The compiled MJCF.
+    joints : dict
+        {joint: {MJCF attribute: value}} of the spec's rows (``stiffness`` N m/rad, ``damping`` N m s/rad,
+        ``frictionloss`` N m, ``armature`` kg m^2).
+    rest : dict
+        The spec's rest angles {joint: rad}.
+
+    Returns
+    -------
+    dict
+        A new {joint: {attribute: value}} with each joint's own values.
+
+    Raises
+    ------
+    ModelError
+        A value below what the tied joints hold, named.
+    """
     O = mujoco.mjtObj
     tied: dict[str, list] = {}
     for j1, (j2, a, b) in joint_couplings(mujoco, m).items():

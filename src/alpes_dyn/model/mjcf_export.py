@@ -214,7 +214,18 @@ def stop_solref(model: Any) -> dict[str, tuple[float, float]]:
     """{joint: (solreflimit's two numbers)} of the stops the export writes: empty without a spec ``[stops]`` table;
     else every limited joint's -k w and -d w, k and d :meth:`JointStops.of <alpes_dyn.model.stops.JointStops.of>`'s
     (N m/rad, N m s/rad), w = (A(0)^-1)_ii (1/(kg m^2): MuJoCo's ``dof_invweight0``, the whole tree's mass matrix
-    at qpos0 = 0 with armature and rotors, mimic joints as coordinates of their own)."""
+    at qpos0 = 0 with armature and rotors, mimic joints as coordinates of their own).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model (its spec's ``[stops]`` table, its mass matrix at q = 0).
+
+    Returns
+    -------
+    dict of str to tuple of (float, float)
+        {joint: (-k w, -d w)}, MuJoCo's direct ``solreflimit`` form, 1/s^2 and 1/s.
+    """
     import pinocchio as pin
 
     from .stops import JointStops
@@ -413,15 +424,21 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
 
     Parameters
     ----------
-    model: the model; its tree, inertias, joint limits, springs, armature, friction, motors (fixed tendons and
+    model : alpes_dyn.Model
+        The model; its tree, inertias, joint limits, springs, armature, friction, motors (fixed tendons and
         motor actuators), rotor inertia (tendon armature), tips and gravity are written (module doc).
-    limits: joint ranges from the URDF limits, ``limited="true"`` (default); ``False``: unlimited joints
+    limits : bool, optional
+        Joint ranges from the URDF limits, ``limited="true"`` (default True); ``False``: unlimited joints
         (then :meth:`Model.from_mjcf <alpes_dyn.Model.from_mjcf>` refuses the text: it needs ranges).
-    timestep: MuJoCo's time step, s (default 1e-4).
-    integrator: one of :data:`INTEGRATORS` (default ``RK4``).
-    tip_radius: radius (m) of the sphere geom at each tip, in the touch sensor's site (1.25 x as large);
+    timestep : float, optional
+        MuJoCo's time step, s (default 1e-4).
+    integrator : str, optional
+        One of :data:`INTEGRATORS` (default ``"RK4"``).
+    tip_radius : float, optional
+        Radius (m) of the sphere geom at each tip, in the touch sensor's site (1.25 x as large; default 0.005);
         0: the site alone (MuJoCo's default size, 5 mm), no geom.
-    tendon: an :class:`~alpes_dyn.model.tendon.ElasticTendon` of the model's motors: series-elastic, pull-only
+    tendon : ElasticTendon or None, optional
+        An :class:`~alpes_dyn.model.tendon.ElasticTendon` of the model's motors: series-elastic, pull-only
         cables, each motor driving a rotor hinge ``<motor>_rotor`` of its own (``armature`` J_m, the spec's
         ``rotor_inertia``, > 0) coupled to its joints through the fixed tendon ``<motor>`` = theta_m - S_k q with
         stiffness k_m, damping c_m and the play as a dead band; ``encoder_<motor>`` reads the rotor,
@@ -429,7 +446,8 @@ def model_mjcf(model: Any, *, limits: bool = True, timestep: float = 1e-4, integ
         :class:`~alpes_dyn.symbolic.elastic_tendon.SeriesElasticSystem` (tested against MuJoCo). A model with a
         tendon compliance needs it (``ElasticTendon.of(model)``: the quasi-static stretch is a sensor law MuJoCo
         cannot hold, the cable's dynamics are); default None: rigid tendons.
-    stiction: time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) on every joint with Coulomb
+    stiction : float or None, optional
+        Time constant (s) of MuJoCo's dry-friction constraint (``solreffriction``) on every joint with Coulomb
         friction, e.g. :data:`~alpes_dyn.model.mjcf.STICTION_TIMECONST` (0.5 ms), with the impedance
         :data:`STICTION_IMPEDANCE` (``solimpfriction``, as the Alpes writer's): a real stick-slip, where MuJoCo's
         default (20 ms, 0.9) is soft on a light finger (it slides below F_s); default None: MuJoCo's default.

@@ -74,7 +74,23 @@ def example_mjcf_path(name: str = "shadow_hand") -> Path:
     """Path of an MJCF shipped with the package: ``"shadow_hand"``, MuJoCo Menagerie's Shadow Hand E3M5 (right
     hand; 24 hinges, 20 position actuators, 4 of them on fixed tendons coupling each finger's two distal joints),
     its kinematics and dynamics as published, meshes replaced by primitive geoms (Apache-2.0; the folder's NOTICE
-    says what changed)."""
+    says what changed).
+
+    Parameters
+    ----------
+    name : str, optional
+        The example's name, a key of :data:`EXAMPLE_MJCF` (default ``"shadow_hand"``).
+
+    Returns
+    -------
+    pathlib.Path
+        The MJCF file's path.
+
+    Raises
+    ------
+    ModelError
+        An unknown name.
+    """
     from importlib import resources
 
     if not isinstance(name, str) or name not in EXAMPLE_MJCF:
@@ -85,7 +101,18 @@ def example_mjcf_path(name: str = "shadow_hand") -> Path:
 def tree_error(exc: ModelError) -> ModelError:
     """A refusal of the imported URDF (its message starting with ``URDF``, e.g. over
     :data:`~alpes_dyn.limits.MAX_URDF_JOINTS` hinges) said as the MJCF's (``mjcf: its tree ...``): the user gave an
-    MJCF, not a URDF. Any other error as it is."""
+    MJCF, not a URDF. Any other error as it is.
+
+    Parameters
+    ----------
+    exc : ModelError
+        The error the imported URDF raised.
+
+    Returns
+    -------
+    ModelError
+        The error to raise.
+    """
     msg = str(exc)
     if not msg.startswith("URDF"):
         return exc
@@ -94,7 +121,29 @@ def tree_error(exc: ModelError) -> ModelError:
 
 def mjcf_model(cls, mjcf: str | Path, hold: Sequence[str] = (), **kwargs):
     """``cls(urdf, spec, **kwargs)`` of :func:`mjcf_to_urdf` (``cls``: :class:`~alpes_dyn.model.robot.Model`), a
-    refusal of the imported URDF said of the MJCF (:func:`tree_error`)."""
+    refusal of the imported URDF said of the MJCF (:func:`tree_error`).
+
+    Parameters
+    ----------
+    cls : type
+        The model class to build, :class:`~alpes_dyn.model.robot.Model`.
+    mjcf : str or Path
+        MJCF text or the path of an MJCF file.
+    hold : sequence of str, optional
+        Hinges welded at their reference angle (:func:`mjcf_to_urdf`; default none).
+    **kwargs
+        Passed to ``cls``.
+
+    Returns
+    -------
+    Model
+        The model.
+
+    Raises
+    ------
+    ModelError
+        The MJCF or its imported tree refused, one line.
+    """
     urdf, spec = mjcf_to_urdf(mjcf, hold)
     try:
         return cls(urdf, spec, **kwargs)
@@ -327,7 +376,18 @@ def not_imported(m) -> list[str]:
     gravity acts on the whole mass), the range of a joint tied by a joint equality (the library's limits are
     those of the joint it follows), a joint's nonlinear ``stiffness`` and ``damping`` terms (MuJoCo 4's polynomials:
     the spec's are linear), ``springyield`` and ``actuatorfrcrange`` are named too. Collision geometry and the solver's options are never imported (the
-    library's contact is its own, :mod:`alpes_dyn.model.contact`)."""
+    library's contact is its own, :mod:`alpes_dyn.model.contact`).
+
+    Parameters
+    ----------
+    m : mujoco.MjModel
+        The compiled MJCF.
+
+    Returns
+    -------
+    list of str
+        One line per kind not imported (empty: everything is).
+    """
     mujoco = _mj()
     O = mujoco.mjtObj
     out = []
@@ -376,7 +436,25 @@ def mjcf_to_urdf(mjcf: str | Path, hold: Sequence[str] = ()) -> tuple[str, Trans
     """The URDF text and the spec of an MJCF (text or path); see the module docstring. What changes the motors'
     action and is not imported (:func:`not_imported`) is said in one :class:`MjcfImportWarning`. ``hold``: hinges
     welded at their reference angle, with the actuators on them dropped (e.g. a hand's wrist, so that each finger
-    is a branch of its own: :meth:`Model.subtree <alpes_dyn.model.robot.Model.subtree>`, ``--chain``)."""
+    is a branch of its own: :meth:`Model.subtree <alpes_dyn.model.robot.Model.subtree>`, ``--chain``).
+
+    Parameters
+    ----------
+    mjcf : str or Path
+        MJCF text (a string with ``<mujoco``) or the path of an MJCF file (its folder resolves includes).
+    hold : sequence of str, optional
+        Hinges welded at their reference angle, with the actuators on them dropped (default none).
+
+    Returns
+    -------
+    tuple of (str, TransmissionSpec)
+        The URDF text and the spec.
+
+    Raises
+    ------
+    ModelError
+        An MJCF that cannot be compiled or holds what is not modelled, one line.
+    """
     import warnings
 
     mujoco = _mj()

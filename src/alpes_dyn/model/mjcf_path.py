@@ -132,7 +132,35 @@ def _inside(mujoco, m, side: int, gname: str, where: str) -> str:
 def check_path(mujoco, m, t: int, path: SpatialPath, joint_names: list, states: np.ndarray, where: str) -> float:
     """The path's largest relative error against MuJoCo's ``ten_length`` and ``ten_J`` at ``states`` (N, nq) (qpos
     of hinges); a :class:`~alpes_dyn.errors.ModelError` naming the tendon where it exceeds :data:`AGREEMENT` (or the
-    side site where MuJoCo found it inside the geom: :func:`spatial_path`'s refusal)."""
+    side site where MuJoCo found it inside the geom: :func:`spatial_path`'s refusal).
+
+    Parameters
+    ----------
+    mujoco : module
+        The ``mujoco`` module.
+    m : mujoco.MjModel
+        The compiled model.
+    t : int
+        The tendon's id.
+    path : SpatialPath
+        The path read from it (:func:`spatial_path`).
+    joint_names : list of str
+        The names of m's joints, in order.
+    states : numpy.ndarray, shape (N, nq)
+        The hinges' qpos (rad) at which the path is compared.
+    where : str
+        The tendon and actuator as errors name them.
+
+    Returns
+    -------
+    float
+        The largest relative error of the length and the moment arms (at most :data:`AGREEMENT`).
+
+    Raises
+    ------
+    ModelError
+        The error exceeds :data:`AGREEMENT`, or a side site lies inside its geom.
+    """
     import casadi as cs
 
     from .mjcf_spatial import tendon_jacobian

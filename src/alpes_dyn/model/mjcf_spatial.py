@@ -69,10 +69,23 @@ class SpatialFit:
 
 
 def tendon_jacobian(m, d) -> np.ndarray:
-    """MuJoCo's tendon Jacobian dL/dqvel as a dense (ntendon, nv) array, m: ``mujoco.MjModel``, d: its ``MjData``
-    after the position stage. MuJoCo 3.3 and later store ``d.ten_J`` sparse, row t's non-zeros at
-    ``m.ten_J_rowadr[t]`` over the columns ``m.ten_J_colind`` (``m.ten_J_rownnz[t]`` of them: the dofs the tendon
-    can move); older versions store it dense (``ten_moment``/``ten_J`` of size ntendon * nv)."""
+    """MuJoCo's tendon Jacobian dL/dqvel as a dense (ntendon, nv) array. MuJoCo 3.3 and later store ``d.ten_J``
+    sparse, row t's non-zeros at ``m.ten_J_rowadr[t]`` over the columns ``m.ten_J_colind`` (``m.ten_J_rownnz[t]``
+    of them: the dofs the tendon can move); older versions store it dense (``ten_moment``/``ten_J`` of size
+    ntendon * nv).
+
+    Parameters
+    ----------
+    m : mujoco.MjModel
+        The model.
+    d : mujoco.MjData
+        Its data, after the position stage.
+
+    Returns
+    -------
+    numpy.ndarray, shape (ntendon, nv)
+        dL/dqvel, m/rad for hinges (a new array).
+    """
     J = np.asarray(d.ten_J, dtype=float).ravel()
     if not hasattr(m, "ten_J_rownnz"):  # dense storage
         return J.reshape(m.ntendon, m.nv).copy()
@@ -122,7 +135,27 @@ def _break(mujoco, m, before: tuple, after: tuple, where: str) -> str:
 
 def fit_spatial_tendon(mujoco, m, t: int, gear: float, joint_names: list[str]) -> SpatialFit:
     """The ratios g dL/dq of spatial tendon ``t`` of MuJoCo model ``m`` (hinges only, qpos = q), fitted per joint
-    (module doc). ``joint_names``: the names of m's joints in order."""
+    (module doc).
+
+    Parameters
+    ----------
+    mujoco : module
+        The ``mujoco`` module.
+    m : mujoco.MjModel
+        The compiled model.
+    t : int
+        The tendon's id.
+    gear : float
+        The actuator's gear g (rad of motor per m of tendon).
+    joint_names : list of str
+        The names of m's joints, in order.
+
+    Returns
+    -------
+    SpatialFit
+        The per-joint ratios and curves, their errors, and the reason where a joint's ratio is not a curve of its own
+        angle.
+    """
     d = mujoco.MjData(m)
     lo, hi = m.jnt_range[:, 0].copy(), m.jnt_range[:, 1].copy()
     ref = np.clip(m.qpos0.copy(), lo, hi)

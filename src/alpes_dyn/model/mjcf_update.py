@@ -267,9 +267,31 @@ def updated_mjcf(mjcf: str | Path, out: str | Path, *, masses: Mapping[str, floa
     """The text of the MJCF file ``mjcf`` with new values (module doc), to be written at ``out`` (its folder: the
     relative file names are rewritten for it, and MuJoCo's check compiles the text there; nothing else is written).
 
-    masses: {body: kg}; joints: {joint: {attribute of :data:`JOINT_ATTRIBUTES`: value}} (SI, ``springref`` in rad);
-    rotors: {actuator: J_m, kg m^2}; note: lines of an XML comment put before ``<mujoco>`` (``--`` escaped).
-    :class:`~alpes_dyn.ModelError` with one line for an MJCF or a value that cannot be written (module doc)."""
+    Parameters
+    ----------
+    mjcf : str or Path
+        The MJCF file.
+    out : str or Path
+        Where the text is to be written (its folder must exist).
+    masses : mapping of str to float or None, optional
+        {body: mass, kg} (default None: none).
+    joints : mapping of str to mapping or None, optional
+        {joint: {attribute of :data:`JOINT_ATTRIBUTES`: value}} (SI, ``springref`` in rad; default None: none).
+    rotors : mapping of str to float or None, optional
+        {actuator: J_m, kg m^2} (default None: none).
+    note : sequence of str, optional
+        Lines of an XML comment put before ``<mujoco>`` (``--`` escaped; default none).
+
+    Returns
+    -------
+    str
+        The updated MJCF text.
+
+    Raises
+    ------
+    ModelError
+        One line for an MJCF or a value that cannot be written (module doc).
+    """
     mujoco = _mj()
     path, out = Path(mjcf), Path(out)
     if not path.is_file():
@@ -370,7 +392,20 @@ def check_origin(model, mjcf: str | Path) -> None:
     """That ``model`` (a :class:`~alpes_dyn.Model`) was imported from the MJCF file ``mjcf``: each of its joints a
     hinge of the MJCF, each of its URDF's links with a mass a body of the same mass (to 1e-9); else
     :class:`~alpes_dyn.ModelError` naming the first that differs (before a fit whose values are to be written
-    into that file)."""
+    into that file).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model.
+    mjcf : str or Path
+        The MJCF file.
+
+    Raises
+    ------
+    ModelError
+        The first joint or link that differs, named.
+    """
     import xml.etree.ElementTree as ET
 
     mujoco = _mj()

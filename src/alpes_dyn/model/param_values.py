@@ -19,9 +19,30 @@ _NAME = re.compile(r"[A-Za-z][A-Za-z0-9_]{0,63}")
 
 
 def check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
-    """``value`` of field ``name`` checked: ``length`` entries (None: a scalar) of ``kind`` (``pos``, ``nonneg``,
-    ``any``, ``unit``, ``str``, ``law``); the value as read (float, array, tuple of names, the law's name), else
-    :class:`~alpes_dyn.ModelError` naming ``name``."""
+    """``value`` of field ``name`` checked.
+
+    Parameters
+    ----------
+    name : str
+        The field's name ("section.field"), as errors name it.
+    value : object
+        The value as the TOML file holds it (a number, a list of numbers or of strings).
+    length : int or None
+        The number of entries; None: a scalar.
+    kind : str
+        ``"pos"`` (> 0), ``"nonneg"`` (>= 0), ``"any"`` (finite), ``"unit"`` (a unit vector), ``"str"`` (unique
+        names) or ``"law"`` (a friction law's name).
+
+    Returns
+    -------
+    float or numpy.ndarray or tuple of str or str
+        The value as read: a float, an array, a tuple of names, the law's name.
+
+    Raises
+    ------
+    ModelError
+        A value not of its kind or length, naming ``name``.
+    """
     if kind == "law":  # a name from FRICTION_MODELS
         return check_law(value, name)
     if kind == "str":

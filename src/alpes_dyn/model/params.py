@@ -469,7 +469,22 @@ def _toml_value(x: Any) -> str:
 def params_toml(raw: dict[str, Param], header: str = "",
                 identification: dict[str, dict[str, Any]] | None = None) -> str:
     """TOML text of a parameter set (``HandParams.raw``, and its ``identification`` records), in the
-    schema's order; loads back to the same. The header's control characters are escaped."""
+    schema's order; loads back to the same.
+
+    Parameters
+    ----------
+    raw : dict of str to Param
+        "section.field" -> :class:`Param` (``HandParams.raw``).
+    header : str, optional
+        Comment lines put at the top (control characters escaped; default none).
+    identification : dict or None, optional
+        Records of ``[identification.<chain>]`` {chain: {field: value}} (default None: none).
+
+    Returns
+    -------
+    str
+        The TOML text.
+    """
     lines = [f"# {_header_line(h)}" for h in header.split("\n")] + ([""] if header else [])
 
     def section_lines(section: str, fields) -> None:
@@ -513,7 +528,29 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "",
                 identification: dict[str, dict[str, Any]] | None = None) -> HandParams:
     """``params`` with the entries ``updates`` ("section.field" -> :class:`Param`) replaced, validated
     exactly as a file is (the result is what :func:`load_params` reads from :func:`params_toml`);
-    ``identification``: records of ``[identification.<chain>]`` set (per chain, replacing)."""
+    ``identification``: records of ``[identification.<chain>]`` set (per chain, replacing).
+
+    Parameters
+    ----------
+    params : HandParams
+        The parameters (not changed).
+    updates : dict of str to Param
+        "section.field" -> the new :class:`Param`.
+    header : str, optional
+        Comment lines put at the top (control characters escaped; default none).
+    identification : dict or None, optional
+        Records of ``[identification.<chain>]`` {chain: {field: value}}, each replacing the chain's (default None).
+
+    Returns
+    -------
+    HandParams
+        The updated parameters.
+
+    Raises
+    ------
+    ModelError
+        An unknown field, or a value the file's checks refuse.
+    """
     raw = dict(params.raw)
     for name, prm in updates.items():
         section, _, key = name.partition(".")
@@ -528,7 +565,22 @@ def with_values(params: HandParams, updates: dict[str, Param], header: str = "",
 
 
 def write_params(params: HandParams, path: str | Path, header: str = "") -> Path:
-    """Write ``params`` as a parameter file (atomically: a temporary file renamed into place)."""
+    """Write ``params`` as a parameter file (atomically: a temporary file renamed into place).
+
+    Parameters
+    ----------
+    params : HandParams
+        The parameters (their ``raw`` values and ``identification`` records).
+    path : str or Path
+        The file to write.
+    header : str, optional
+        Comment lines put at the top (control characters escaped; default none).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     text = params_toml(params.raw, header, params.identification)
     return atomic_write(path, text, "parameter file", ModelError)
 
@@ -537,7 +589,25 @@ def chain_params(params: HandParams, chain: str) -> HandParams:
     """``params`` as seen by one chain: for a finger, the hand whose shared ``[finger]`` values are that
     finger's (its ``[finger.<name>]`` values merged in, every finger's own table dropped), so that
     ``finger2``/``finger3`` built from it is that finger; for ``"thumb"`` or ``"finger"``, ``params``
-    without per-finger values. Both the arrays and ``raw`` (what :func:`write_params` writes) change."""
+    without per-finger values. Both the arrays and ``raw`` (what :func:`write_params` writes) change.
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters.
+    chain : str
+        A finger's name, ``"thumb"`` or ``"finger"``.
+
+    Returns
+    -------
+    HandParams
+        The parameters as the chain sees them.
+
+    Raises
+    ------
+    ModelError
+        An unknown chain.
+    """
     own = params.chain(chain)  # an unknown chain: ModelError
     raw = {k: prm for k, prm in params.raw.items() if not (k.startswith("finger.") and k.count(".") == 2)}
     finger = params.finger
