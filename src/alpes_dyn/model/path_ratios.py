@@ -22,8 +22,24 @@ __all__ = ["PathRatios"]
 
 class PathRatios:
     """Ratios rho(q) (m, n) with the rows of ``paths`` {motor row: SpatialPath} from the tendon's length (module
-    doc), the others ``base``'s. ``names``: the motors' names, ``joint_names``: the model's joints (n) in order;
-    a :class:`~alpes_dyn.errors.ModelError` names a path's joint that is not the model's."""
+    doc), the others ``base``'s.
+
+    Parameters
+    ----------
+    base : RatioCurve
+        The ratios of every row (constant or polynomial); its path rows are replaced.
+    paths : mapping of int to SpatialPath
+        {motor row: the tendon's path} (:class:`~alpes_dyn.model.spatial_path.SpatialPath`).
+    names : sequence of str
+        The motors' names (m), as errors name them.
+    joint_names : sequence of str
+        The model's joints (n), in order.
+
+    Raises
+    ------
+    ModelError
+        A path's joint that is not the model's, or a path whose ratio at q = 0 is not the spec's.
+    """
 
     def __init__(self, base: RatioCurve, paths: Mapping[int, Any], names: Sequence[str],
                  joint_names: Sequence[str]) -> None:
@@ -82,7 +98,15 @@ class PathRatios:
         return out.reshape(r, N, -1).transpose(1, 0, 2).reshape(lead + (r, -1))
 
     def ratio(self, q: Any, xp: Any = np) -> Any:
-        """rho(q) (m, n) for q (n,); (..., m, n) for numpy q (..., n); CasADi for a CasADi q."""
+        """rho(q) (m, n) for q (n,); (..., m, n) for numpy q (..., n); CasADi for a CasADi q.
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,) or (..., n)
+            Joint angles, rad.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         if xp is np:
             out = np.array(self.base.ratio(q), dtype=float)
             out[..., self.rows, :] = self._batch("ratio", q)
@@ -91,7 +115,15 @@ class PathRatios:
             xp.DM(self._E), self._f["ratio"](q))
 
     def angle(self, q: Any, xp: Any = np) -> Any:
-        """s(q), rad of motor shaft: (..., m) for numpy q (..., n), an (m,) column for CasADi q."""
+        """s(q), rad of motor shaft: (..., m) for numpy q (..., n), an (m,) column for CasADi q.
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,) or (..., n)
+            Joint angles, rad.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         if xp is np:
             out = np.array(self.base.angle(q), dtype=float)
             out[..., self.rows] = self._batch("angle", q)[..., 0]
@@ -99,7 +131,17 @@ class PathRatios:
         return xp.DM(self._keep) * self.base.angle(q, xp) + xp.mtimes(xp.DM(self._E), self._f["angle"](q))
 
     def rate_product(self, q: Any, v: Any, xp: Any = np) -> Any:
-        """(drho/dt) qd (m,), rad/s^2, for q, v (n,) numpy or CasADi."""
+        """(drho/dt) qd (m,), rad/s^2, for q, v (n,) numpy or CasADi.
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : numpy.ndarray or casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         if xp is np:
             out = np.array(self.base.rate_product(q, v), dtype=float)
             out[self.rows] = np.asarray(self._f["rate"](q, v)).ravel()
@@ -107,7 +149,15 @@ class PathRatios:
         return xp.DM(self._keep) * self.base.rate_product(q, v, xp) + xp.mtimes(xp.DM(self._E), self._f["rate"](q, v))
 
     def torque_jacobian(self, q: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
-        """d(rho(q)^T tau_m)/dq (n, n), N m/rad, at q (n,) for motor torques tau_m (m,) (numpy)."""
+        """d(rho(q)^T tau_m)/dq (n, n), N m/rad (numpy).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            Joint angles, rad.
+        tau_m : numpy.ndarray, shape (m,)
+            Motor torques, N m.
+        """
         tau_m = np.asarray(tau_m, dtype=float)
         keep = tau_m * self._keep
         out = self.base.torque_jacobian(q, keep)

@@ -48,7 +48,18 @@ def _sparse(A: np.ndarray, cs: Any) -> Any:
 class RatioCurve:
     """The q-dependent ratios of a transmission: rho(q) = S + sum_p C_p diag(q)^p (module doc).
 
-    S: (m, n) the ratios at q = 0; C: (P, m, n) the coefficients of q^1 .. q^P (a non-zero only where S is).
+    Parameters
+    ----------
+    S : numpy.ndarray, shape (m, n)
+        The ratios at q = 0, rad of motor per rad of joint.
+    C : numpy.ndarray, shape (P, m, n)
+        The coefficients of q^1 .. q^P (rad/rad^(p+1); a non-zero only where S is), P in 1 ..
+        :data:`MAX_CURVE_DEGREE`.
+
+    Raises
+    ------
+    InputError
+        C of another shape, not finite, or non-zero where S is 0.
     """
 
     def __init__(self, S: np.ndarray, C: np.ndarray) -> None:
@@ -65,7 +76,15 @@ class RatioCurve:
         self._slope_coef = C * p[:, None, None]  # p c_p: drho/dq's
 
     def ratio(self, q: Any, xp: Any = np) -> Any:
-        """rho(q) = ds/dq, (m, n) for q (n,); (..., m, n) for numpy q (..., n)."""
+        """rho(q) = ds/dq, (m, n) for q (n,); (..., m, n) for numpy q (..., n).
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,) or (..., n)
+            Joint angles, rad.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         if xp is np:
             q = np.asarray(q, dtype=float)[..., None, :]
             out = self.S + self.C[0] * q
@@ -82,7 +101,15 @@ class RatioCurve:
 
     def angle(self, q: Any, xp: Any = np) -> Any:
         """s(q) = sum_i int_0^q_i rho_ki, rad of motor shaft: (..., m) for numpy q (..., n), an (m,) column for
-        CasADi q."""
+        CasADi q.
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,) or (..., n)
+            Joint angles, rad.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         if xp is np:
             q = np.asarray(q, dtype=float)
             out = q @ self.S.T
@@ -98,7 +125,13 @@ class RatioCurve:
         return out
 
     def slope(self, q: np.ndarray) -> np.ndarray:
-        """drho_ki/dq_i (m, n), rad/rad^2, at q (n,) (numpy)."""
+        """drho_ki/dq_i (m, n), rad/rad^2 (numpy).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            Joint angles, rad.
+        """
         q = np.asarray(q, dtype=float)
         out, qp = self._slope_coef[0].copy(), np.ones_like(q)
         for c in self._slope_coef[1:]:
@@ -107,8 +140,15 @@ class RatioCurve:
         return out
 
     def torque_jacobian(self, q: np.ndarray, tau_m: np.ndarray) -> np.ndarray:
-        """d(rho(q)^T tau_m)/dq (n, n), N m/rad: diagonal, each rho_ki depending on q_i alone (numpy q (n,), tau_m
-        (m,))."""
+        """d(rho(q)^T tau_m)/dq (n, n), N m/rad: diagonal, each rho_ki depending on q_i alone (numpy).
+
+        Parameters
+        ----------
+        q : numpy.ndarray, shape (n,)
+            Joint angles, rad.
+        tau_m : numpy.ndarray, shape (m,)
+            Motor torques, N m.
+        """
         return np.diag(np.asarray(tau_m, dtype=float) @ self.slope(q))
 
     @property
@@ -118,7 +158,17 @@ class RatioCurve:
 
     def rate_product(self, q: Any, v: Any, xp: Any = np) -> Any:
         """(drho/dt) qd, (m,): sum_i rho'_ki(q_i) qd_i^2, rad/s^2 (the rotor's acceleration that qdd does not
-        give). q, v: (n,) numpy or CasADi columns."""
+        give).
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : numpy.ndarray or casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         v2 = v * v
         if xp is np:
             out, qp = self._slope_coef[0] @ v2, np.ones_like(v2)
@@ -183,20 +233,48 @@ def check_ratio_range(transmission: Any, lower: np.ndarray, upper: np.ndarray, j
 
 def encoder_angles(enc: "np.ndarray | RatioCurve", q: np.ndarray) -> np.ndarray:
     """The motor angles (..., m), rad, of joint angles q (..., n): S q for a constant S (m, n), s(q) for a
-    :class:`RatioCurve` (the fit's encoder map, either form)."""
+    :class:`RatioCurve` (the fit's encoder map, either form).
+
+    Parameters
+    ----------
+    enc : numpy.ndarray, shape (m, n), or RatioCurve
+        The encoder map: a constant S (rad/rad) or a :class:`RatioCurve`.
+    q : numpy.ndarray, shape (..., n)
+        Joint angles, rad (for a constant S also (s, k, n)).
+    """
     if isinstance(enc, np.ndarray):  # (the fit's own forms, so that constant ratios give the same bits as before)
         return np.einsum("ij,skj->ski", enc, q) if q.ndim == 3 else q @ enc.T
     return enc.angle(q)
 
 
 def encoder_rates(enc: "np.ndarray | RatioCurve", q: np.ndarray, v: np.ndarray) -> np.ndarray:
-    """The motor velocities (..., m), rad/s: S v, or rho(q) v, for q, v (..., n)."""
+    """The motor velocities (..., m), rad/s: S v, or rho(q) v.
+
+    Parameters
+    ----------
+    enc : numpy.ndarray, shape (m, n), or RatioCurve
+        The encoder map: a constant S (rad/rad) or a :class:`RatioCurve`.
+    q : numpy.ndarray, shape (..., n)
+        Joint angles, rad (unused for a constant S).
+    v : numpy.ndarray, shape (..., n)
+        Joint velocities, rad/s.
+    """
     return v @ enc.T if isinstance(enc, np.ndarray) else np.einsum("...ij,...j->...i", enc.ratio(q), v)
 
 
 def encoder_sensitivity(enc: "np.ndarray | RatioCurve", q: np.ndarray, X: np.ndarray) -> np.ndarray:
     """The motor angles' sensitivities (..., m, d) from the joint angles' X (..., n, d) at q (..., n): S X, or
-    rho(q) X."""
+    rho(q) X.
+
+    Parameters
+    ----------
+    enc : numpy.ndarray, shape (m, n), or RatioCurve
+        The encoder map: a constant S (rad/rad) or a :class:`RatioCurve`.
+    q : numpy.ndarray, shape (..., n)
+        Joint angles, rad (unused for a constant S).
+    X : numpy.ndarray, shape (..., n, d)
+        The joint angles' sensitivities to d quantities.
+    """
     if isinstance(enc, np.ndarray):
         return np.einsum({4: "ij,skjd->skid", 3: "ij,kjd->kid"}.get(X.ndim, "ij,...jd->...id"), enc, X)
     return np.einsum("...ij,...jd->...id", enc.ratio(q), X)
@@ -206,7 +284,27 @@ def fit_ratio_curve(q: Any, ratio: Any, degree: int) -> tuple[np.ndarray, float]
     """A measured ratio curve as the spec's form: least squares of rho(q) = c_0 + c_1 q + ... + c_P q^P on samples
     (q (N,) rad, ratio (N,) rad/rad: a moment arm over the motor pulley's radius, r_i(q_i) / r_m), P = ``degree``
     (1 .. :data:`MAX_CURVE_DEGREE`). Returns (c (P + 1,) with c_0 the spec's ``joints`` ratio and c_1.. its
-    ``ratio_curve``, the largest |error| of the fit on the samples, rad/rad)."""
+    ``ratio_curve``, the largest |error| of the fit on the samples, rad/rad).
+
+    Parameters
+    ----------
+    q : array_like, shape (N,)
+        The joint angles sampled, rad.
+    ratio : array_like, shape (N,)
+        The ratio measured there, rad/rad.
+    degree : int
+        P, in 1 .. :data:`MAX_CURVE_DEGREE`.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, float)
+        c, shape (P + 1,), and the fit's largest |error| on the samples, rad/rad.
+
+    Raises
+    ------
+    InputError
+        A bad degree, or samples not finite, of unequal lengths or too few (at most ``degree``).
+    """
     q, r = np.asarray(q, dtype=float).ravel(), np.asarray(ratio, dtype=float).ravel()
     if isinstance(degree, bool) or not isinstance(degree, (int, np.integer)) or not 1 <= degree <= MAX_CURVE_DEGREE:
         raise InputError(f"degree: expected an integer in 1..{MAX_CURVE_DEGREE}, got {degree!r}")

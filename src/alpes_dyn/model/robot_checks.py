@@ -81,7 +81,31 @@ def _tips(pm: pin.Model, spec: Any, layout: Any) -> tuple[str, ...]:
 
 
 def newton_equilibrium(residual, jacobian, q0: np.ndarray, tol: float = 1e-12, iterations: int = 50) -> np.ndarray:
-    """Newton's method for residual(q) = 0 (N m) from q0, steps capped at 0.5 rad; :class:`InputError` on failure."""
+    """Newton's method for residual(q) = 0 (N m) from q0, steps capped at 0.5 rad.
+
+    Parameters
+    ----------
+    residual : callable
+        q (n,) -> the torque residual (n,), N m.
+    jacobian : callable
+        q (n,) -> d residual/dq (n, n), N m/rad.
+    q0 : numpy.ndarray, shape (n,)
+        The start, rad.
+    tol : float, optional
+        Converged when max |residual| < tol, N m (default 1e-12).
+    iterations : int, optional
+        The most Newton steps (default 50).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The equilibrium q, rad.
+
+    Raises
+    ------
+    InputError
+        A singular Jacobian, or no convergence within ``iterations``.
+    """
     q = np.array(q0, dtype=float)
     for _ in range(iterations):
         r = residual(q)
