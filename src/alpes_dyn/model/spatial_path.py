@@ -93,7 +93,25 @@ class PathFrame:
 
     @classmethod
     def from_table(cls, value: Any, where: str) -> "PathFrame":
-        """A frame from its spec table; ModelError naming the field."""
+        """A frame from its spec table.
+
+        Parameters
+        ----------
+        value : dict
+            The spec's table (parsed TOML).
+        where : str
+            Where the table is, as errors name it.
+
+        Returns
+        -------
+        PathFrame
+            The frame.
+
+        Raises
+        ------
+        ModelError
+            A field missing or not of its form, named.
+        """
         t = _table(value, ("name", "parent", "pos", "quat", "joints"), where)
         name, parent = t.get("name"), t.get("parent", "")
         if not isinstance(name, str) or not name or not isinstance(parent, str):
@@ -137,7 +155,25 @@ class PathPoint:
 
     @classmethod
     def from_table(cls, value: Any, where: str) -> "PathPoint":
-        """A point from its spec table; ModelError naming the field."""
+        """A point from its spec table.
+
+        Parameters
+        ----------
+        value : dict
+            The spec's table (parsed TOML).
+        where : str
+            Where the table is, as errors name it.
+
+        Returns
+        -------
+        PathPoint
+            The point.
+
+        Raises
+        ------
+        ModelError
+            A field missing or not of its form, named.
+        """
         t = _table(value, ("site", "geom", "pulley", "kind", "frame", "pos", "quat", "radius", "side"), where)
         if "pulley" in t:
             return cls("pulley", radius=_positive(t["pulley"], f"{where}.pulley"))
@@ -209,7 +245,25 @@ class SpatialPath:
 
     @classmethod
     def from_table(cls, value: Any, where: str) -> "SpatialPath":
-        """A path from the spec's ``path`` table of a motor (``where``: "motor 'name'"); ModelError naming the field."""
+        """A path from the spec's ``path`` table of a motor.
+
+        Parameters
+        ----------
+        value : dict
+            The spec's ``path`` table (``gear``, ``frames``, ``points``).
+        where : str
+            The motor, as errors name it ("motor 'name'").
+
+        Returns
+        -------
+        SpatialPath
+            The path.
+
+        Raises
+        ------
+        ModelError
+            A field missing or not of its form, named.
+        """
         t = _table(value, ("gear", "frames", "points"), f"{where}.path")
         for k in ("frames", "points"):
             if not isinstance(t.get(k), list):
@@ -232,7 +286,18 @@ class SpatialPath:
 
     def length(self, angle: Mapping[str, Any]) -> Any:
         """The tendon's length L (m), a CasADi SX of the joint angles ``angle`` {joint name: SX} (MuJoCo's
-        kinematics and ``mj_tendon``'s sum, its pulleys dividing the branches after them)."""
+        kinematics and ``mj_tendon``'s sum, its pulleys dividing the branches after them).
+
+        Parameters
+        ----------
+        angle : mapping of str to casadi.SX
+            {joint name: its angle, rad} for every joint of :attr:`joint_names`.
+
+        Returns
+        -------
+        casadi.SX
+            L, m.
+        """
         import casadi as cs
 
         from .wrap import wrap_length
@@ -271,7 +336,27 @@ class SpatialPath:
 
 def spatial_path(value: Any, curved: bool, where: str) -> SpatialPath:
     """A motor's ``path`` (a :class:`SpatialPath` or its spec table) validated; ``curved``: the motor also has a
-    ``ratio_curve`` (refused). ModelError naming ``where`` and the field."""
+    ``ratio_curve`` (refused).
+
+    Parameters
+    ----------
+    value : SpatialPath or dict
+        The path, or its spec table.
+    curved : bool
+        The motor also has a ``ratio_curve`` (refused).
+    where : str
+        The motor, as errors name it.
+
+    Returns
+    -------
+    SpatialPath
+        The path.
+
+    Raises
+    ------
+    ModelError
+        A path with a ratio curve, or a table not of its form, naming ``where`` and the field.
+    """
     if curved:
         raise ModelError(f"{where}.path: a motor has a path or a ratio_curve, not both")
     return value if isinstance(value, SpatialPath) else SpatialPath.from_table(value, where)

@@ -281,7 +281,23 @@ class TransmissionSpec:
     # ------------------------------------------------------------------ file form
     @classmethod
     def from_dict(cls, data: Mapping[str, Any]) -> "TransmissionSpec":
-        """A spec from the parsed TOML (see the module doc); unknown keys are refused."""
+        """A spec from the parsed TOML (see the module doc); unknown keys are refused.
+
+        Parameters
+        ----------
+        data : mapping
+            The parsed TOML (its top keys, ``motor`` an array of tables).
+
+        Returns
+        -------
+        TransmissionSpec
+            The spec.
+
+        Raises
+        ------
+        ModelError
+            An unknown or missing key, or a value not of its form, named.
+        """
         if not isinstance(data, Mapping):
             raise ModelError(f"spec: expected a table, got {type(data).__name__}")
         for k in data:
@@ -312,7 +328,25 @@ class TransmissionSpec:
     @classmethod
     def from_toml(cls, text: str, source: str = "spec") -> "TransmissionSpec":
         """Parse the TOML text of a spec; errors name ``source`` and the field. A file with nothing in it (empty, or
-        only comments: a truncated or wrong file) is refused; a spec of no motors says so with its other keys."""
+        only comments: a truncated or wrong file) is refused; a spec of no motors says so with its other keys.
+
+        Parameters
+        ----------
+        text : str
+            The TOML text.
+        source : str, optional
+            The file's name, as errors name it (default ``"spec"``).
+
+        Returns
+        -------
+        TransmissionSpec
+            The spec.
+
+        Raises
+        ------
+        ModelError
+            Text that is not TOML, holds nothing, or a field not of its form, naming ``source`` and the field.
+        """
         data = load_toml(text, f"spec file {source!r}", ModelError)
         if not data:
             raise ModelError(f"spec file {source!r}: holds nothing (no [[motor]], no table, no key); a spec names at "
@@ -377,7 +411,20 @@ class TransmissionSpec:
 
     # ------------------------------------------------------------------ applied to a URDF's joints
     def check(self, joint_names: Sequence[str], frame_names: Sequence[str] = ()) -> None:
-        """Every joint and tip the spec names exists (else :class:`~alpes_dyn.ModelError` naming it)."""
+        """Every joint and tip the spec names exists.
+
+        Parameters
+        ----------
+        joint_names : sequence of str
+            The model's joints, in its order.
+        frame_names : sequence of str, optional
+            The URDF's frames (default none: the tips are not checked).
+
+        Raises
+        ------
+        ModelError
+            A joint or tip that does not exist, named.
+        """
         known = set(joint_names)
         listing = ", ".join(joint_names)
         for m in self.motors:
@@ -398,7 +445,14 @@ class TransmissionSpec:
                     raise ModelError(f"tips: unknown frame {tip!r} in the URDF")
 
     def extras(self, joint_names: Sequence[str]) -> JointExtras:
-        """The per-joint tables as :class:`~alpes_dyn.JointExtras` in ``joint_names`` order."""
+        """The per-joint tables as :class:`~alpes_dyn.JointExtras` in ``joint_names`` order (0 where a table names
+        no value).
+
+        Parameters
+        ----------
+        joint_names : sequence of str
+            The model's joints, in its order.
+        """
         self.check(joint_names)
         idx = {j: i for i, j in enumerate(joint_names)}
         arrays = {}
@@ -412,13 +466,25 @@ class TransmissionSpec:
 
     def stop_values(self, joint_names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
         """The ``[stops]`` table in ``joint_names`` order (:func:`~alpes_dyn.model.spec_values.stop_values`):
-        stiffness (n,) N m/rad and damping (n,) N m s/rad, NaN where it gives none."""
+        stiffness (n,) N m/rad and damping (n,) N m s/rad, NaN where it gives none.
+
+        Parameters
+        ----------
+        joint_names : sequence of str
+            The model's joints, in its order.
+        """
         self.check(joint_names)
         return stop_values(self.stops, joint_names)
 
     def transmission(self, joint_names: Sequence[str]) -> Transmission | None:
         """The :class:`~alpes_dyn.Transmission` (S, its sum pattern, encoder) in ``joint_names`` order,
-        None without motors."""
+        None without motors.
+
+        Parameters
+        ----------
+        joint_names : sequence of str
+            The model's joints, in its order.
+        """
         if not self.motors:
             return None
         self.check(joint_names)
@@ -517,14 +583,46 @@ def _toml_key(s: str) -> str:
 
 
 def load_spec(path: str | Path) -> TransmissionSpec:
-    """Read a spec file (TOML, see the module doc); :class:`~alpes_dyn.ModelError` naming the file and field."""
+    """Read a spec file (TOML, see the module doc).
+
+    Parameters
+    ----------
+    path : str or Path
+        The spec file.
+
+    Returns
+    -------
+    TransmissionSpec
+        The spec.
+
+    Raises
+    ------
+    ModelError
+        A file that cannot be read or a field not of its form, naming the file and the field.
+    """
     text = read_text(path, "spec file", ModelError)
     return TransmissionSpec.from_toml(text, os.fspath(path))
 
 
 def example_spec_path(name: str = "allegro_hand") -> Path:
     """Path of a spec file shipped with the package (``"allegro_hand"``: the Allegro hand's tendon spec;
-    ``"finger_edu"``: the TriFinger finger_edu as a one-tendon finger, the force control's example)."""
+    ``"finger_edu"``: the TriFinger finger_edu as a one-tendon finger, the force control's example).
+
+    Parameters
+    ----------
+    name : str, optional
+        The spec's name (default ``"allegro_hand"``).
+
+    Returns
+    -------
+    pathlib.Path
+        The file's path.
+
+    Raises
+    ------
+    ModelError
+        An unknown name (the shipped ones listed).
+    """
     data = Path(str(resources.files("alpes_dyn") / "data"))
     p = data / f"{name}_spec.toml"
     if not isinstance(name, str) or "/" in name or not p.is_file():
@@ -538,7 +636,28 @@ def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float, rotor_inerti
     """The Alpes motors: one per chain (``ratio`` on each of its joints, chain order), then one per
     ab/adduction joint (``abduction_ratio``), named ``<chain>_abduction``; each with ``rotor_inertia``
     J_m (kg m^2 on the motor shaft); the chains' tendons with ``tendon_compliance`` (rad/(N m)) and the sheath
-    friction ``capstan`` (mu theta; the ab/adduction is a gear, rigid, without sheath)."""
+    friction ``capstan`` (mu theta; the ab/adduction is a gear, rigid, without sheath).
+
+    Parameters
+    ----------
+    lay : Layout
+        The model's layout (:func:`~alpes_dyn.model.description.layout`): its chains.
+    ratio : float
+        The chains' ratio r/r_m on each joint, rad of motor per rad of joint.
+    abduction_ratio : float
+        The ab/adduction motors' ratio.
+    rotor_inertia : float, optional
+        J_m, kg m^2 on the motor shaft (default 0).
+    tendon_compliance : float, optional
+        The chains' tendon compliance, rad/(N m) (default 0).
+    capstan : float, optional
+        The chains' sheath friction mu theta (default 0).
+
+    Returns
+    -------
+    tuple of Motor
+        The motors, chains first.
+    """
     motors = [Motor(ch.name, {j: ratio for j in ch.joints}, rotor_inertia, tendon_compliance, capstan=capstan)
               for ch in lay.chains]
     motors += [Motor(f"{ch.name}_abduction", {ch.abduction: abduction_ratio}, rotor_inertia)
@@ -549,7 +668,26 @@ def alpes_motors(lay: Layout, ratio: float, abduction_ratio: float, rotor_inerti
 def alpes_transmission(lay: Layout, joint_names: tuple[str, ...], ratio: float, abduction_ratio: float = 1.0,
                        counts_per_rev: float = 4096.0) -> Transmission:
     """The transmission of an Alpes layout: one motor per chain (``ratio`` on each of its joints), one per
-    ab/adduction joint (``abduction_ratio``); the same motors as :func:`alpes_spec` (Sec. 3, eq. 3.13)."""
+    ab/adduction joint (``abduction_ratio``); the same motors as :func:`alpes_spec` (Sec. 3, eq. 3.13).
+
+    Parameters
+    ----------
+    lay : Layout
+        The model's layout (:func:`~alpes_dyn.model.description.layout`): its chains.
+    joint_names : tuple of str
+        The model's joints, in its order.
+    ratio : float
+        The chains' ratio r/r_m on each joint, rad/rad.
+    abduction_ratio : float, optional
+        The ab/adduction motors' ratio (default 1).
+    counts_per_rev : float, optional
+        The encoders' counts per motor revolution (default 4096).
+
+    Returns
+    -------
+    Transmission
+        The transmission.
+    """
     tr = TransmissionSpec(motors=alpes_motors(lay, ratio, abduction_ratio),
                           encoder_counts=counts_per_rev).transmission(joint_names)
     assert tr is not None
@@ -570,6 +708,24 @@ def alpes_spec(lay: Layout, params: HandParams, spring: str = "torsional", frict
     tendon's ratio is r/r_m, which the file's N equals.) The file's ``transmission.tendon_compliance``
     (default 0) goes on every chain's motor: it changes the encoder reading only; so does its
     ``transmission.capstan`` (mu theta, default 0: the tendons' sheath friction).
+
+    Parameters
+    ----------
+    lay : Layout
+        The model's layout (:func:`~alpes_dyn.model.description.layout`): its chains.
+    params : HandParams
+        The parameter file's values.
+    spring : str, optional
+        The spring law, one of :data:`~alpes_dyn.model.extras.SPRING_MODELS` (default ``"torsional"``).
+    friction : bool, optional
+        F_s and F_v on every joint (default False: none).
+    rotor_inertia : bool, optional
+        The file's J_m on every motor (default False: none).
+
+    Returns
+    -------
+    TransmissionSpec
+        The spec.
     """
     ratio, abd = params.transmission_ratio, params.abduction_ratio
     motors = alpes_motors(lay, ratio, abd, params.J_m if rotor_inertia else 0.0, params.tendon_compliance,

@@ -65,7 +65,23 @@ def _stop_numbers(value: Any, where: str) -> dict[str, float]:
 
 def parse_stops(value: Any) -> Mapping[str, Any] | None:
     """The ``[stops]`` table validated (module doc): {"stiffness", "damping" (robot-wide, optional), "joints": {joint:
-    {"stiffness", "damping"}}}, or None."""
+    {"stiffness", "damping"}}}, or None.
+
+    Parameters
+    ----------
+    value : mapping or None
+        The spec's ``[stops]`` table as parsed (stiffness N m/rad, damping N m s/rad), or None (no table).
+
+    Returns
+    -------
+    mapping or None
+        The table, read-only, ``joints`` always present; None for None.
+
+    Raises
+    ------
+    ModelError
+        A table not of its form, an unknown key or a bad number, named.
+    """
     if value is None:
         return None
     if not isinstance(value, Mapping):
@@ -89,7 +105,20 @@ def parse_stops(value: Any) -> Mapping[str, Any] | None:
 
 def stop_values(stops: Mapping[str, Any] | None, joint_names: Sequence[str]) -> tuple[np.ndarray, np.ndarray]:
     """A ``[stops]`` table (:func:`parse_stops`'s) in ``joint_names`` order: stiffness (n,) N m/rad and damping (n,)
-    N m s/rad, a joint's own value over the robot-wide one, NaN where the table gives none (all NaN for None)."""
+    N m s/rad, a joint's own value over the robot-wide one, NaN where the table gives none (all NaN for None).
+
+    Parameters
+    ----------
+    stops : mapping or None
+        The table (:func:`parse_stops`'s), or None.
+    joint_names : sequence of str
+        The model's joints (n), in its order.
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray)
+        Stiffness (n,), N m/rad, and damping (n,), N m s/rad.
+    """
     n = len(joint_names)
     out = {k: np.full(n, np.nan) for k in STOP_KEYS}
     if stops is not None:
@@ -104,7 +133,20 @@ def stop_values(stops: Mapping[str, Any] | None, joint_names: Sequence[str]) -> 
 
 
 def stops_toml(stops: Mapping[str, Any] | None, key: Callable[[str], str]) -> list[str]:
-    """The TOML lines of a ``[stops]`` table (none for None); ``key`` quotes a joint name as a TOML key."""
+    """The TOML lines of a ``[stops]`` table (none for None).
+
+    Parameters
+    ----------
+    stops : mapping or None
+        The table (:func:`parse_stops`'s), or None.
+    key : callable
+        Quotes a joint name as a TOML key (str -> str).
+
+    Returns
+    -------
+    list of str
+        The lines, starting with a blank one (empty for None).
+    """
     if stops is None:
         return []
     out = ["", f"[{STOPS_TABLE}]"] + [f"{k} = {stops[k]!r}" for k in STOP_KEYS if k in stops]

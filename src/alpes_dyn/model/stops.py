@@ -69,15 +69,34 @@ class JointStops:
     def of(cls, model: Any, stiffness: Any = None, damping: Any = None, per_joint: bool = False) -> "JointStops":
         """Stops at a :class:`~alpes_dyn.Model`'s URDF limits (joints without finite limits get none).
 
-        ``stiffness`` k (N m/rad) and ``damping`` d (N m s/rad): a number (every joint), n numbers (one per joint,
-        in :attr:`~alpes_dyn.Model.joint_names` order), or None (default): the spec's ``[stops]`` table where it
-        gives them (:func:`spec_stops`; a joint it leaves out sized as below, a damping it leaves out sized to its
-        k); on an Alpes model (one with an Alpes parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad,
-        4e-3 N m s/rad) unless ``per_joint``; on any other robot sized to it by :func:`sized_stops` (the damping
-        sized to the k given, if only k is).
-        ``per_joint``: what is sized, sized per joint (arrays (n,): the same rule on each joint, so a light distal
-        joint gets a softer stop than the heavy proximal one); default False, one k and one d for the robot.
-        :class:`~alpes_dyn.InputError` where they cannot be sized (no torque toward any stop)."""
+        Parameters
+        ----------
+        model : alpes_dyn.Model
+            The model.
+        stiffness : float or array_like of shape (n,) or None, optional
+            k, N m/rad: a number (every joint), n numbers (one per joint, in
+            :attr:`~alpes_dyn.Model.joint_names` order), or None (default): the spec's ``[stops]`` table where it
+            gives them (:func:`spec_stops`; a joint it leaves out sized as below); on an Alpes model (one with an
+            Alpes parameter file) the Alpes stop's :data:`ALPES_STOP` (2 N m/rad) unless ``per_joint``; on any
+            other robot sized to it by :func:`sized_stops`.
+        damping : float or array_like of shape (n,) or None, optional
+            d, N m s/rad, given as ``stiffness`` is; None (default): the spec's, else :data:`ALPES_STOP`'s
+            (4e-3 N m s/rad) on an Alpes model unless ``per_joint``, else sized to the k (:func:`sized_stops`; a
+            damping the spec leaves out sized to its k).
+        per_joint : bool, optional
+            What is sized, sized per joint (arrays (n,): the same rule on each joint, so a light distal joint gets
+            a softer stop than the heavy proximal one); default False, one k and one d for the robot.
+
+        Returns
+        -------
+        JointStops
+            The stops.
+
+        Raises
+        ------
+        InputError
+            A bad value, or stops that cannot be sized (no torque toward any stop).
+        """
         if not isinstance(per_joint, (bool, np.bool_)):
             raise InputError(f"per_joint: expected True or False, got {per_joint!r}")
         stiffness = _stop_value(stiffness, "stiffness", "N m/rad", True, model.n)
@@ -94,7 +113,17 @@ class JointStops:
         return cls(lo, hi, _frozen(stiffness), _frozen(damping))
 
     def torque(self, q: Any, v: Any, xp: Any = np) -> Any:
-        """Stop torques (n,), N m, for joint angles q and velocities v (numpy arrays or CasADi columns)."""
+        """Stop torques (n,), N m: a spring k and a damper d past each stop, pushing back only.
+
+        Parameters
+        ----------
+        q : numpy.ndarray or casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : numpy.ndarray or casadi.SX, shape (n,)
+            Joint velocities, rad/s.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         lo = np.where(np.isfinite(self.lower), self.lower, -1e30)
         hi = np.where(np.isfinite(self.upper), self.upper, 1e30)
         if xp is not np:
@@ -115,7 +144,23 @@ def spec_stops(model: Any) -> tuple[np.ndarray, np.ndarray]:
     """The stop stiffness (n,) N m/rad and damping (n,) N m s/rad the model's spec gives (its ``[stops]`` table,
     :meth:`~alpes_dyn.model.spec.TransmissionSpec.stop_values`), NaN where it gives none (all NaN without a spec or
     table). :class:`~alpes_dyn.InputError` naming the field where it gives a value to a joint without a finite limit
-    (no stop to hold it)."""
+    (no stop to hold it).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model (its spec and joint limits).
+
+    Returns
+    -------
+    tuple of (numpy.ndarray, numpy.ndarray)
+        Stiffness (n,), N m/rad, and damping (n,), N m s/rad.
+
+    Raises
+    ------
+    InputError
+        A value given to a joint without a finite limit, naming the field.
+    """
     spec = getattr(model, "spec", None)
     if spec is None or getattr(spec, "stops", None) is None:
         return np.full(model.n, np.nan), np.full(model.n, np.nan)
@@ -268,10 +313,27 @@ def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> t
     3.4e-3, 7.5e-4 N m s/rad on j1, j2, j3. The Allegro hand with its shipped spec: k = 1.91 N m/rad, d = 8.9e-3
     N m s/rad (per joint 0.11-1.91 N m/rad). UR5: k = 2.42e3 N m/rad, d = 12.4 N m s/rad (per joint 6.34-2.42e3
     N m/rad: the shoulder pan's and the last two wrist joints' weight is across their axes, they get wrist_1's). A finger 20 times as heavy (masses and inertias) gets k and d
-    20 times as large. ``stiffness`` given (a number, or n with ``per_joint``): only d is sized.
+    20 times as large.
 
-    :class:`~alpes_dyn.InputError` where nothing sizes k: no torque pushes any joint into a stop (no gravity
-    across the joints and no spring resting beyond a limit) or no joint has a finite limit.
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model.
+    stiffness : float or array_like of shape (n,) or None, optional
+        k, N m/rad, given (a number, or n with ``per_joint``): only d is sized; default None: k sized too.
+    per_joint : bool, optional
+        Size each joint by its own torque and inertia (default False: one k and one d for the robot).
+
+    Returns
+    -------
+    tuple
+        (k, d): two floats, or with ``per_joint`` two arrays (n,); N m/rad and N m s/rad.
+
+    Raises
+    ------
+    InputError
+        Nothing sizes k: no torque pushes any joint into a stop (no gravity across the joints and no spring
+        resting beyond a limit) or no joint has a finite limit.
     """
     lo, hi = _limits(model)
     limited = np.isfinite(lo) | np.isfinite(hi)
@@ -298,7 +360,17 @@ def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:
     """What :meth:`JointStops.of` (``model``, ``per_joint``) gives each joint, and where it comes from: what
     ``alpes-dyn dynamics`` prints.
 
-    Returns a dict of lists in :attr:`~alpes_dyn.Model.joint_names` order: ``stiffness`` (N m/rad) and ``damping``
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model.
+    per_joint : bool, optional
+        As :meth:`JointStops.of`'s (default False).
+
+    Returns
+    -------
+    dict
+        A dict of lists in :attr:`~alpes_dyn.Model.joint_names` order: ``stiffness`` (N m/rad) and ``damping``
     (N m s/rad), None on a joint without a finite limit (no stop); ``source`` per joint: ``"spec"`` (the spec's
     ``[stops]`` table gives both; ``"spec k, sized d"`` or ``"sized k, spec d"`` where it gives one), ``"alpes"``
     (the Alpes models' :data:`ALPES_STOP`), ``"sized"`` (:func:`sized_stops`: the robot's largest static torque into a stop over
@@ -306,7 +378,13 @@ def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:
     of the others"`` (per joint, a limited joint that nothing pushes into a stop), ``"none"`` (no finite limit); and
     ``torque_into_stop`` (N m, the sizing's tau*_i), ``penetration_rad`` (p*). Where nothing sizes the stops
     (:func:`sized_stops` refuses) every stiffness and damping is None, the sources ``"not sized"`` and ``error`` the
-    reason; otherwise ``error`` is None."""
+    reason; otherwise ``error`` is None.
+
+    Raises
+    ------
+    InputError
+        ``model`` not a model, or ``per_joint`` not a bool.
+    """
     if not all(hasattr(model, a) for a in ("joint_names", "lower", "upper", "gravity_torque", "inertia_matrix")):
         raise InputError(f"model: expected an alpes_dyn Model, got {type(model).__name__}")
     if not isinstance(per_joint, (bool, np.bool_)):
@@ -342,10 +420,36 @@ def check_range(t: np.ndarray, q: np.ndarray, lower: np.ndarray, upper: np.ndarr
                 mode: str = "warn", tol: float = 1e-9, rest: np.ndarray | None = None) -> str:
     """Whether the trajectory q (N+1, n) at times t leaves [lower - tol, upper + tol].
 
-    Returns "" if it stays within, else a one-line message naming the first joint to leave, when and
-    how far, and (``rest``: the springs' rest angles, rad, NaN on a joint without spring) every spring that
-    rests outside its joint's range, with the spec field that moves it (``[rest_angle]``); ``mode`` ``"warn"`` also issues a :class:`JointRangeWarning`, ``"error"`` raises
-    :class:`~alpes_dyn.InputError`, ``"ignore"`` only returns the message.
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N+1,)
+        The times, s.
+    q : numpy.ndarray, shape (N+1, n)
+        The joint angles, rad.
+    lower : numpy.ndarray, shape (n,)
+        The joints' lower limits, rad.
+    upper : numpy.ndarray, shape (n,)
+        The joints' upper limits, rad.
+    names : sequence of str
+        The joints' names.
+    mode : str, optional
+        One of :data:`JOINT_RANGE_MODES`: ``"warn"`` (default) also issues a :class:`JointRangeWarning`,
+        ``"error"`` raises :class:`~alpes_dyn.InputError`, ``"ignore"`` only returns the message.
+    tol : float, optional
+        The tolerance beyond the limits, rad (default 1e-9).
+    rest : numpy.ndarray, shape (n,), or None, optional
+        The springs' rest angles, rad, NaN on a joint without spring: every spring that rests outside its joint's
+        range is named too, with the spec field that moves it (``[rest_angle]``); default None.
+
+    Returns
+    -------
+    str
+        "" if q stays within, else a one-line message naming the first joint to leave, when and how far.
+
+    Raises
+    ------
+    InputError
+        An unknown mode, or ``mode="error"`` and q leaves the range.
     """
     if mode not in JOINT_RANGE_MODES:
         raise InputError(f"joint_range: expected one of {', '.join(JOINT_RANGE_MODES)}, got {mode!r}")
