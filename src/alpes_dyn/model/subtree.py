@@ -115,7 +115,25 @@ def closed_motors(model: Any, motors: str | Sequence[str]) -> tuple[str, ...]:
     that nothing couples with the others: the branches of ``motors``, then those of every motor driving one of
     their joints and of every mimic joint following one of them (or followed by one), until none is added; the whole
     robot's motors at worst. :func:`subtree_model` of them is never refused (``identify --chain`` and ``estimate
-    --chain`` on a URDF: a chain whose tendon or mimic reaches into another branch takes that branch along)."""
+    --chain`` on a URDF: a chain whose tendon or mimic reaches into another branch takes that branch along).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        A model with a spec.
+    motors : str or sequence of str
+        The motors' names (one name or several).
+
+    Returns
+    -------
+    tuple of str
+        The motors of the closed branches.
+
+    Raises
+    ------
+    ModelError
+        An unknown motor, named.
+    """
     given = _motor_set(model, motors)
     top, tops = _given_branches(model, given)
     links = [set(m.joints) for m in model.spec.motors]
@@ -135,7 +153,20 @@ def branch_joints(model: Any, motors: str | Sequence[str]) -> tuple[tuple[str, .
     """(joints, motors) of the sub-model of ``motors``: every joint (``model.joint_names`` order) of the branches
     holding a joint those motors drive, and every motor (``model.motor_names`` order) that drives one of them.
     :class:`~alpes_dyn.ModelError` where a motor drives joints both in and out of those branches, or a mimic
-    joint and the joint it follows are on different sides (the module doc)."""
+    joint and the joint it follows are on different sides (the module doc).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        A model with a spec.
+    motors : str or sequence of str
+        The motors' names (one name or several).
+
+    Returns
+    -------
+    tuple of (tuple of str, tuple of str)
+        The joints and the motors.
+    """
     _, joints, kept_motors = _branches(model, motors)
     return joints, kept_motors
 
@@ -143,7 +174,22 @@ def branch_joints(model: Any, motors: str | Sequence[str]) -> tuple[tuple[str, .
 def subtree_urdf(urdf: str, joints: Sequence[str], all_joints: Sequence[str]) -> str:
     """The URDF text ``urdf`` with every movable joint of ``all_joints`` not in ``joints`` removed together
     with its child link and everything below it (joints, links, and the ``<transmission>`` and ``<gazebo>``
-    elements that name them). ``joints`` must be whole branches (:func:`branch_joints`)."""
+    elements that name them).
+
+    Parameters
+    ----------
+    urdf : str
+        The URDF text.
+    joints : sequence of str
+        The joints kept: whole branches (:func:`branch_joints`).
+    all_joints : sequence of str
+        Every movable joint of the URDF.
+
+    Returns
+    -------
+    str
+        The URDF text of the kept branches.
+    """
     root = ET.fromstring(urdf)
     drop_joints = set(all_joints) - set(joints)
     children: dict[str, list[ET.Element]] = {}
@@ -179,7 +225,24 @@ def subtree_spec(spec: TransmissionSpec, joints: Sequence[str], motors: Sequence
                  frames: Sequence[str]) -> TransmissionSpec:
     """``spec`` restricted to ``motors`` and ``joints``: their ``[[motor]]`` entries, the per-joint tables' and
     the rest angles' and the ``[stops]`` rows of those joints (its robot-wide values kept), the tips among ``frames`` (None where none is left), the
-    ``[identified]`` section's rows of those joints and motors (its record kept)."""
+    ``[identified]`` section's rows of those joints and motors (its record kept).
+
+    Parameters
+    ----------
+    spec : TransmissionSpec
+        The whole robot's spec.
+    joints : sequence of str
+        The joints kept.
+    motors : sequence of str
+        The motors kept.
+    frames : sequence of str
+        The frames left in the sub-model's URDF (the tips kept among them).
+
+    Returns
+    -------
+    TransmissionSpec
+        The restricted spec.
+    """
     keep_j, keep_m = set(joints), set(motors)
     tables = {t: {j: x for j, x in getattr(spec, t).items() if j in keep_j} for t in JOINT_TABLES + (REST_TABLE,)}
     tips = None
@@ -208,7 +271,25 @@ def subtree_model(model: Any, motors: str | Sequence[str]) -> Any:
     (:func:`subtree_spec`), the same gravity, named ``<model name>[<motors>]``. Its joints are
     :func:`branch_joints`'s, in the full model's order; where they are all of them, the sub-model is the whole
     robot again. :class:`~alpes_dyn.ModelError` naming the motor and the joint for what would couple the kept
-    branches with a removed one."""
+    branches with a removed one.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        A model with a spec.
+    motors : str or sequence of str
+        The motors' names (one name or several).
+
+    Returns
+    -------
+    alpes_dyn.Model
+        The sub-model.
+
+    Raises
+    ------
+    ModelError
+        An unknown motor, or what would couple the kept branches with a removed one, naming the motor and the joint.
+    """
     kept_full, joints, kept = _branches(model, motors)
     full = tree_model(model)
     urdf = subtree_urdf(model.urdf, tuple(kept_full), tuple(full.names[1:]))

@@ -61,7 +61,31 @@ class ElasticTendon:
         """The tendon of a cable of stiffness k_t (N/m, EA/L) and damping c_t (N s/m) wound on a motor shaft of
         radius r_m (m), with a dead band of ``dead_band`` m of cable: k_m = k_t r_m^2, c_m = c_t r_m^2,
         delta = dead_band / r_m. The same numbers as :func:`~alpes_dyn.model.mjcf.mjcf_string`'s
-        ``tendon_stiffness`` and ``tendon_damping``."""
+        ``tendon_stiffness`` and ``tendon_damping``.
+
+        Parameters
+        ----------
+        n_motors : int
+            m, the number of motors (>= 1).
+        cable_stiffness : float or array_like of shape (m,)
+            k_t, N/m (EA/L, > 0), one per motor or one for all.
+        shaft_radius : float
+            r_m, m (> 0).
+        cable_damping : float or array_like of shape (m,), optional
+            c_t, N s/m (>= 0; default 0).
+        dead_band : float or array_like of shape (m,), optional
+            The cable's play, m of cable (>= 0; default 0).
+
+        Returns
+        -------
+        ElasticTendon
+            The tendon on the motor shaft.
+
+        Raises
+        ------
+        InputError
+            A value not of its form, named.
+        """
         if not isinstance(n_motors, (int, np.integer)) or isinstance(n_motors, bool) or n_motors < 1:
             raise InputError(f"n_motors: expected a positive integer, got {n_motors!r}")
         r = _per_motor(shaft_radius, 1, "shaft_radius", "m", True)[0]
@@ -76,7 +100,27 @@ class ElasticTendon:
         (``[[motor]]``'s ``tendon_compliance``) or the parameter file (``transmission.tendon_compliance``), as
         ``alpes-dyn identify`` fits and writes it: k_m = 1 / C (each C > 0). ``damping`` c_m (N m s/rad) and
         ``dead_band`` delta (rad of motor shaft), per motor or one for all, are the rotor's dynamics that the
-        quasi-static limit does not see (default 0)."""
+        quasi-static limit does not see (default 0).
+
+        Parameters
+        ----------
+        model : alpes_dyn.Model
+            A model with motors, each with a tendon compliance C > 0 (rad/(N m)).
+        damping : float or array_like of shape (m,), optional
+            c_m, N m s/rad, per motor or one for all (default 0).
+        dead_band : float or array_like of shape (m,), optional
+            delta, rad of motor shaft, per motor or one for all (default 0).
+
+        Returns
+        -------
+        ElasticTendon
+            The tendon.
+
+        Raises
+        ------
+        InputError
+            A model without motors, a rigid tendon (C = 0), or a bad value, named.
+        """
         tr = getattr(model, "transmission", None)
         if tr is None:
             raise InputError("model: expected an alpes_dyn Model with motors")
@@ -109,7 +153,17 @@ class ElasticTendon:
 
     def tension(self, stretch: Any, rate: Any, xp: Any = np) -> Any:
         """T_m = k_m max(phi - delta, 0) + c_m dphi/dt (m,), N m on the motor shaft, for the stretch phi and its
-        rate (numpy arrays or CasADi columns; ``xp`` numpy or casadi)."""
+        rate.
+
+        Parameters
+        ----------
+        stretch : numpy.ndarray or casadi.SX, shape (m,)
+            phi, the cable's stretch, rad of motor shaft.
+        rate : numpy.ndarray or casadi.SX, shape (m,)
+            dphi/dt, rad/s.
+        xp : module, optional
+            ``numpy`` (default) or ``casadi``.
+        """
         k, c, band = self.stiffness, self.damping, self.dead_band
         if xp is not np:  # CasADi: constant columns
             k, c, band = xp.DM(k), xp.DM(c), xp.DM(band)

@@ -25,13 +25,33 @@ __all__ = ["Transmission", "acceleration_before", "torque_before", "capstan_loss
 def capstan_loss(mu_theta: Any, xp: Any = np) -> Any:
     """1 - exp(-mu theta): the fraction of a tendon's tension lost over a sheath or pulley of wrap angle theta (rad)
     and friction coefficient mu while the motor pulls the cable (the capstan equation T_out = T_in exp(-mu theta)).
-    ``mu_theta`` (m,) dimensionless, >= 0 (numpy array or CasADi column)."""
+
+    Parameters
+    ----------
+    mu_theta : numpy.ndarray or casadi.SX, shape (m,)
+        mu theta, dimensionless, >= 0.
+    xp : module, optional
+        ``numpy`` (default) or ``casadi``.
+
+    Returns
+    -------
+    numpy.ndarray or casadi.SX, shape (m,)
+        The fraction lost, in [0, 1).
+    """
     return 1.0 - xp.exp(-mu_theta)
 
 
 def capstan_velocity(S: np.ndarray, smooth_velocity: float) -> np.ndarray:
     """(m,) rad/s of motor shaft: the smooth sign's scale of each tendon, v_s max_i |S_ki| (the motor's velocity when
-    its fastest joint moves alone at the joints' v_s, so that the tendon's sign is as sharp as the joints')."""
+    its fastest joint moves alone at the joints' v_s, so that the tendon's sign is as sharp as the joints').
+
+    Parameters
+    ----------
+    S : numpy.ndarray, shape (m, n)
+        The ratios, rad of motor per rad of joint (a motor with none: scale 1).
+    smooth_velocity : float
+        The joints' v_s, rad/s.
+    """
     scale = np.max(np.abs(np.asarray(S, dtype=float)), axis=1)
     return float(smooth_velocity) * np.where(scale > 0, scale, 1.0)
 
@@ -48,9 +68,26 @@ def capstan_torque(tau_m: Any, v_m: Any, mu_theta: Any, v_c: Any, xp: Any = np) 
     (tau_m (2 - exp(-mu theta)) against tau_m exp(mu theta)), and it is a friction: its power
     -(1 - exp(-mu theta)) |tau_m| |v_m| tanh-smoothed never feeds energy in, and at v_m = 0 it vanishes smoothly
     (the exponential's jump in sign v would be a step in the joint torque at every reversal). The tension is the
-    motor torque (the rotor's inertia and the cable's stretch ignored: the tension the sheath sees). tau_m, v_m
-    (..., m) N m and rad/s of motor shaft; mu_theta (m,) dimensionless; v_c (m,) rad/s (:func:`capstan_velocity`);
-    numpy arrays or CasADi columns (``xp``)."""
+    motor torque (the rotor's inertia and the cable's stretch ignored: the tension the sheath sees).
+
+    Parameters
+    ----------
+    tau_m : numpy.ndarray or casadi.SX, shape (..., m)
+        Motor torques, N m.
+    v_m : numpy.ndarray or casadi.SX, shape (..., m)
+        Motor velocities, rad/s of motor shaft.
+    mu_theta : numpy.ndarray or casadi.SX, shape (m,)
+        mu theta, dimensionless.
+    v_c : numpy.ndarray or casadi.SX, shape (m,)
+        The smooth sign's scale, rad/s (:func:`capstan_velocity`).
+    xp : module, optional
+        ``numpy`` (default) or ``casadi``.
+
+    Returns
+    -------
+    numpy.ndarray or casadi.SX, shape (..., m)
+        The torque that reaches the joints, N m.
+    """
     if xp is np:
         return tau_m - capstan_loss(np.asarray(mu_theta, dtype=float)) * np.abs(tau_m) * np.tanh(v_m / v_c)
     if isinstance(mu_theta, np.ndarray):
@@ -67,7 +104,23 @@ def torque_before(tau_m: np.ndarray) -> np.ndarray:
     encoder reads at t_k is C tau_m,k-1 (:meth:`Transmission.encoder_angles`). Measured on MuJoCo's elastic tendon
     (finger3, 4 s, ``benchmarks/realism.py``'s cable): the stretch from the same sample's torque left the
     masses 9-12 % off (the dither's 20 Hz turns the half-period shift into a stretch in quadrature), from the
-    previous sample's 1.1 %. tau_m: (N, m) or (N,)."""
+    previous sample's 1.1 %.
+
+    Parameters
+    ----------
+    tau_m : numpy.ndarray, shape (N, m) or (N,)
+        The recorded motor torques, N m.
+
+    Returns
+    -------
+    numpy.ndarray, shape of ``tau_m``
+        tau_m,k-1 at each sample k (the first sample its own).
+
+    Raises
+    ------
+    InputError
+        No sample, or not numbers.
+    """
     tau_m = as_float_array(tau_m, "tau_m", "motor torques")
     if tau_m.ndim == 0 or tau_m.shape[0] == 0:
         raise InputError(f"tau_m: expected one row per sample, got shape {tau_m.shape}")
@@ -79,7 +132,27 @@ def acceleration_before(qd_m: np.ndarray, dt: float, axis: int = 0) -> np.ndarra
     (rad/s, the samples along ``axis``, every ``dt`` s; e.g. the motors' (N, m)); the first sample takes the first
     period's. With :func:`torque_before`, what the cable's tension balances at a reading: r_m T = tau_m,k-1 - J_m
     qdd_m (:meth:`Transmission.encoder_angles`; the fit's
-    :meth:`~alpes_dyn.estimation.identification.encoder_output.EncoderOutput.motor_acceleration`, per interval)."""
+    :meth:`~alpes_dyn.estimation.identification.encoder_output.EncoderOutput.motor_acceleration`, per interval).
+
+    Parameters
+    ----------
+    qd_m : numpy.ndarray
+        Velocities, rad/s, the samples along ``axis`` (e.g. the motors' (N, m)).
+    dt : float
+        The sample period, s.
+    axis : int, optional
+        The samples' axis (default 0).
+
+    Returns
+    -------
+    numpy.ndarray, shape of ``qd_m``
+        The accelerations, rad/s^2.
+
+    Raises
+    ------
+    InputError
+        Fewer than two samples along ``axis``.
+    """
     qd_m = as_float_array(qd_m, "qd_m", "motor velocities")
     if qd_m.ndim <= axis or qd_m.shape[axis] < 2:
         raise InputError(f"qd_m: expected two samples or more along axis {axis}, got shape {qd_m.shape}")

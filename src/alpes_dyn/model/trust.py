@@ -17,7 +17,18 @@ __all__ = ["check_trusted", "fitted_friction", "untrusted_reason"]
 
 def untrusted_reason(record: dict[str, Any]) -> str:
     """Why a fit's record (:data:`IDENTIFICATION_FIELDS`, or a spec's ``[identified]``) is not to be trusted, in its
-    own words: the fit that did not converge (its stop reason), the adequacy verdict."""
+    own words: the fit that did not converge (its stop reason), the adequacy verdict.
+
+    Parameters
+    ----------
+    record : dict
+        The fit's record (``converged``, ``stop``, ``adequate``, ``verdict``).
+
+    Returns
+    -------
+    str
+        The reasons, ``"; "``-joined (``"marked trustworthy = false"`` where the record gives none).
+    """
     why = ([f"the fit did not converge ({record.get('stop', '')})"] if record.get("converged") is False else []) + (
         [record.get("verdict") or "the model is not adequate"] if record.get("adequate") is False else [])
     return "; ".join(why) or "marked trustworthy = false"

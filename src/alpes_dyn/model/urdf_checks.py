@@ -26,7 +26,18 @@ _OTHER_TYPES = {
 
 def check_joint(j: ET.Element) -> None:
     """A ``<joint>`` element of a supported type (revolute, prismatic or fixed), and a moving joint's
-    ``<axis xyz>`` finite and non-zero (URDF's default, absent: 1 0 0). :class:`ModelError` naming it."""
+    ``<axis xyz>`` finite and non-zero (URDF's default, absent: 1 0 0).
+
+    Parameters
+    ----------
+    j : xml.etree.ElementTree.Element
+        The ``<joint>`` element (one without a type, a ``<transmission>``'s reference, is passed over).
+
+    Raises
+    ------
+    ModelError
+        An unsupported type or a bad axis, naming the joint.
+    """
     name, kind = j.get("name"), j.get("type")
     if kind is None:
         return  # a <transmission>'s or <gazebo>'s <joint> reference, not a joint (one without a type: urdfdom's)
@@ -57,7 +68,18 @@ def check_urdf_structure(urdf: str) -> None:
     tree at most :data:`~alpes_dyn.limits.MAX_URDF_DEPTH` joints deep (the parser recurses per level:
     a 10,000-link chain crashes it), every joint limit with lower <= upper, every ``<mimic>`` element well formed
     (:func:`~alpes_dyn.model.mimic.read_mimics`: it names an independent joint of its type), every joint of a
-    supported type (:func:`check_joint`) and every moving joint's axis non-zero. :class:`ModelError`."""
+    supported type (:func:`check_joint`) and every moving joint's axis non-zero.
+
+    Parameters
+    ----------
+    urdf : str
+        The URDF text.
+
+    Raises
+    ------
+    ModelError
+        The first of these checks that fails, one line.
+    """
     n_links = len(re.findall(r"<\s*link[\s/>]", urdf))
     if n_links > MAX_URDF_LINKS:
         raise ModelError(f"URDF: {n_links} links, over the limit of {MAX_URDF_LINKS}")
