@@ -21,7 +21,18 @@ hexadecimal)."""
 def urdf_number_problem(text: str) -> str | None:
     """Why urdfdom would not read ``text`` as one finite number (``None`` if it would): the words of an error
     message after the attribute's name, e.g. ``"has a blank after the number"``. Pinocchio builds a link whose
-    ``<inertial>`` urdfdom could not read as massless, without an error: its numbers are checked before."""
+    ``<inertial>`` urdfdom could not read as massless, without an error: its numbers are checked before.
+
+    Parameters
+    ----------
+    text : str
+        An attribute's text.
+
+    Returns
+    -------
+    str or None
+        The problem in words, or None.
+    """
     if URDF_DECIMAL.fullmatch(text):
         return None if math.isfinite(float(text)) else "is not a finite number"
     if URDF_DECIMAL.fullmatch(text.rstrip()):
@@ -38,8 +49,27 @@ def as_float_array(x: object, name: str, expected: str) -> np.ndarray:
 
     Only real numbers are accepted: complex values (whose imaginary part a float conversion would
     drop), masked arrays with masked entries (whose mask it would drop), booleans (``True`` is not 1.0
-    here), strings (``"1"`` is not a number either, nor a list of them), None and other objects raise :class:`~alpes_dyn.InputError`
-    ``"<name>: expected <expected>, got ..."``; an integer too large for a float too.
+    here), strings (``"1"`` is not a number either, nor a list of them), None and other objects are refused; an
+    integer too large for a float too.
+
+    Parameters
+    ----------
+    x : object
+        The value: a number, a sequence or an array of real numbers.
+    name : str
+        The field the error names.
+    expected : str
+        What was expected, in the error's words (e.g. ``"joint angles"``).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``x`` as floats, of its shape.
+
+    Raises
+    ------
+    InputError
+        ``"<name>: expected <expected>, got ..."`` for anything else.
     """
     if isinstance(x, (str, bytes)):
         raise InputError(f"{name}: expected {expected}, got a string {x!r:.60}")
@@ -65,7 +95,27 @@ def as_float_array(x: object, name: str, expected: str) -> np.ndarray:
 
 
 def as_positive_float(x: object, name: str, unit: str = "s") -> float:
-    """``x`` as a finite positive float (a time step, a duration): not a bool, a string or complex."""
+    """``x`` as a finite positive float (a time step, a duration): not a bool, a string or complex.
+
+    Parameters
+    ----------
+    x : object
+        The value.
+    name : str
+        The field the error names.
+    unit : str, optional
+        Its unit, in the error's words (default ``"s"``).
+
+    Returns
+    -------
+    float
+        The value.
+
+    Raises
+    ------
+    InputError
+        Not a positive finite real number, naming ``name``.
+    """
     if isinstance(x, (bool, np.bool_)) or not isinstance(x, numbers.Real):
         raise InputError(f"{name}: expected a positive number of {unit}, got {_describe(x)}")
     try:

@@ -71,6 +71,27 @@ def read_bytes(path: str | os.PathLike[str], what: str, error: type[AlpesDynErro
     The file is opened with ``O_NONBLOCK`` (a FIFO without a writer does not block) and checked with
     ``fstat`` before anything is read: a directory, FIFO, device or socket, or a file over ``limit``
     bytes, is ``error`` with one line naming ``what`` and the path.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file.
+    what : str
+        How the error names the file, e.g. ``"parameter file"``.
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+    limit : int, optional
+        The largest accepted size, bytes (default :data:`alpes_dyn.limits.MAX_TEXT_BYTES`).
+
+    Returns
+    -------
+    bytes
+        The file's content.
+
+    Raises
+    ------
+    AlpesDynError
+        ``error`` with one line: empty name, missing, a directory, FIFO or device, over ``limit``, unreadable.
     """
     p = _path(path, what, error)
     flags = os.O_RDONLY | getattr(os, "O_NONBLOCK", 0) | getattr(os, "O_NOCTTY", 0) | getattr(os, "O_CLOEXEC", 0)
@@ -104,7 +125,27 @@ def read_bytes(path: str | os.PathLike[str], what: str, error: type[AlpesDynErro
 
 
 def decode_utf8(data: bytes, what: str, error: type[AlpesDynError] = InputError) -> str:
-    """``data`` as UTF-8 text, a leading byte-order mark dropped; ``error`` naming the first bad byte."""
+    """``data`` as UTF-8 text, a leading byte-order mark dropped.
+
+    Parameters
+    ----------
+    data : bytes
+        The bytes.
+    what : str
+        How the error names their source.
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    AlpesDynError
+        ``error`` naming the first bad byte and its offset.
+    """
     try:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError as exc:
@@ -117,15 +158,25 @@ def read_text(path: str | os.PathLike[str], what: str, error: type[AlpesDynError
 
     Parameters
     ----------
-    path: the file.
-    what: how the error names it, e.g. ``"parameter file"``.
-    error: the :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
-    limit: the largest accepted size, bytes (default :data:`alpes_dyn.limits.MAX_TEXT_BYTES`).
+    path : str or os.PathLike
+        The file.
+    what : str
+        How the error names the file, e.g. ``"parameter file"``.
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+    limit : int, optional
+        The largest accepted size, bytes (default :data:`alpes_dyn.limits.MAX_TEXT_BYTES`).
+
+    Returns
+    -------
+    str
+        The text.
 
     Raises
     ------
-    ``error`` with one line: empty name, missing, a directory, FIFO or device, over ``limit``,
-    unreadable, or not UTF-8 text (with the offset of the first bad byte).
+    AlpesDynError
+        ``error`` with one line: empty name, missing, a directory, FIFO or device, over ``limit``, unreadable, or
+        not UTF-8 text (with the offset of the first bad byte).
     """
     data = read_bytes(path, what, error, limit)
     return decode_utf8(data, f"{what} {os.fspath(path)!r}", error)
@@ -166,7 +217,27 @@ def _toml_depth(text: str) -> int:
 def load_toml(text: str, what: str, error: type[AlpesDynError] = InputError) -> dict:
     """Parse TOML ``text`` with the limits of :mod:`alpes_dyn.limits` checked: nesting at most
     :data:`~alpes_dyn.limits.MAX_TOML_DEPTH` deep (before parsing), integers at most
-    :data:`~alpes_dyn.limits.MAX_TOML_INT` in magnitude; ``error`` naming ``what`` otherwise."""
+    :data:`~alpes_dyn.limits.MAX_TOML_INT` in magnitude.
+
+    Parameters
+    ----------
+    text : str
+        The TOML text.
+    what : str
+        How the error names its source.
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+
+    Returns
+    -------
+    dict
+        The parsed tables.
+
+    Raises
+    ------
+    AlpesDynError
+        ``error`` naming ``what``: invalid TOML, nested too deep, or an integer too large.
+    """
     import tomllib
 
     from .limits import MAX_TOML_DEPTH, MAX_TOML_INT
@@ -277,7 +348,18 @@ def _check_destination(p: Path, what: str, error: type[AlpesDynError]) -> None:
 def writable_directory(p: Path) -> bool:
     """Whether the directory ``p`` can take new files: ``os.access`` (which root always passes) and a write bit in
     its mode (a directory made read-only, 0555, is refused to root too: nothing is written where the mode says
-    no)."""
+    no).
+
+    Parameters
+    ----------
+    p : pathlib.Path
+        The directory.
+
+    Returns
+    -------
+    bool
+        True where new files can be written in it.
+    """
     try:
         return os.access(p, os.W_OK | os.X_OK) and bool(os.stat(p).st_mode & 0o222)
     except OSError:
@@ -308,7 +390,29 @@ def check_output_path(path: str | None, what: str, extensions: Sequence[str] | N
                       error: type[AlpesDynError] = InputError) -> Path:
     """Validate one output file name before any work: not empty, not ending in ``/``, not an existing
     directory, device, FIFO or symbolic link, its directory exists and is writable, and (if given) its
-    extension is one of ``extensions`` (lower-case, without dot)."""
+    extension is one of ``extensions`` (lower-case, without dot).
+
+    Parameters
+    ----------
+    path : str or None
+        The output file's name (None: refused as empty).
+    what : str
+        The option or field the error names.
+    extensions : sequence of str or None, optional
+        The accepted extensions, lower-case, without dot (default None: any).
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+
+    Returns
+    -------
+    pathlib.Path
+        The path.
+
+    Raises
+    ------
+    AlpesDynError
+        ``error`` with one line naming ``what``.
+    """
     p = _path(path if path is not None else "", what, error)
     text = os.fspath(path)  # type: ignore[arg-type]
     _check_output_name(p, what, error)
@@ -335,12 +439,19 @@ def check_outputs(outputs: Sequence[tuple[str, str | os.PathLike[str] | None]],
 
     Parameters
     ----------
-    outputs:
+    outputs : sequence of tuple of (str, str or os.PathLike or None)
         (option, path) of every file the run may write (None: not asked for).
-    inputs:
-        (option, path) of every file the run reads (None: the shipped default).
-    extensions:
-        option -> accepted extensions, for the outputs whose format is chosen by it.
+    inputs : sequence of tuple of (str, str or os.PathLike or None), optional
+        (option, path) of every file the run reads (None: the shipped default; default none).
+    extensions : dict of str to sequence of str, or None, optional
+        Option -> accepted extensions, for the outputs whose format is chosen by it (default None).
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+
+    Returns
+    -------
+    list of pathlib.Path
+        The outputs asked for, in order.
 
     Raises
     ------
@@ -380,6 +491,20 @@ def atomic_path(path: str | os.PathLike[str], what: str = "output",
     SIGHUP (:func:`signals_as_exceptions`), it is removed and the destination is left as it was. An
     existing destination that is a symbolic link, a directory, a device or a FIFO is refused
     (``error``) and never replaced. ``OSError`` becomes ``error`` naming ``what`` and the path.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The destination file.
+    what : str, optional
+        The option or field the error names (default ``"output"``).
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary path to write.
     """
     dest = _path(path, what, error)
     if os.fspath(path).endswith(("/", os.sep)):  # type: ignore[arg-type]
@@ -414,7 +539,24 @@ def atomic_path(path: str | os.PathLike[str], what: str = "output",
 
 def atomic_write(path: str | os.PathLike[str], data: str | bytes, what: str = "output",
                  error: type[AlpesDynError] = InputError) -> Path:
-    """Write ``data`` (str as UTF-8, or bytes) to ``path`` atomically (see :func:`atomic_path`)."""
+    """Write ``data`` to ``path`` atomically (see :func:`atomic_path`).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The destination file.
+    data : str or bytes
+        The content (str written as UTF-8).
+    what : str, optional
+        The option or field the error names (default ``"output"``).
+    error : type, optional
+        The :class:`~alpes_dyn.errors.AlpesDynError` subclass raised (default InputError).
+
+    Returns
+    -------
+    pathlib.Path
+        The path written.
+    """
     payload = data.encode("utf-8") if isinstance(data, str) else bytes(data)
     with atomic_path(path, what, error) as tmp:
         with open(tmp, "wb") as f:
@@ -426,7 +568,25 @@ def atomic_write(path: str | os.PathLike[str], data: str | bytes, what: str = "o
 
 def check_output_directory(directory: str | os.PathLike[str] | None, what: str = "-o") -> Path:
     """A directory to create: not empty, not an existing file, link or non-empty directory, its parent an
-    existing writable directory (:class:`~alpes_dyn.InputError` naming ``what``)."""
+    existing writable directory.
+
+    Parameters
+    ----------
+    directory : str or os.PathLike or None
+        The directory's name.
+    what : str, optional
+        The option the error names (default ``"-o"``).
+
+    Returns
+    -------
+    pathlib.Path
+        The directory's path (a trailing ``/`` dropped).
+
+    Raises
+    ------
+    InputError
+        One line naming ``what``.
+    """
     text = os.fspath(directory) if isinstance(directory, (str, os.PathLike)) else ""
     if not text or "\0" in text:
         raise InputError(f"{what}: expected a directory name, got {text!r}")
@@ -453,7 +613,27 @@ def check_output_directory(directory: str | os.PathLike[str] | None, what: str =
 def write_directory(files: dict[str, str], directory: str | os.PathLike[str], what: str = "-o") -> dict[str, Path]:
     """Write ``files`` ({name: text}) into ``directory``, a new (or empty) directory: into a temporary directory
     beside it first, which is then renamed to ``directory`` (never a partial directory; an error or an
-    interruption leaves nothing): the directory's twin of :func:`atomic_path`. Returns {file name: path}."""
+    interruption leaves nothing): the directory's twin of :func:`atomic_path`.
+
+    Parameters
+    ----------
+    files : dict of str to str
+        {plain file name: text}.
+    directory : str or os.PathLike
+        The new (or empty) directory (:func:`check_output_directory`).
+    what : str, optional
+        The option the error names (default ``"-o"``).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        {file name: path written}.
+
+    Raises
+    ------
+    InputError
+        A bad directory or file name, or a write that fails, one line.
+    """
     dest = check_output_directory(directory, what)
     for name, text in files.items():
         if not isinstance(name, str) or not name or "/" in name or "\0" in name or name.startswith(".") \
@@ -490,7 +670,13 @@ def _write_file(path: Path, text: str) -> None:
 def native_stderr_to(sink: list[str]) -> Iterator[None]:
     """Capture what native code writes to file descriptor 2 inside the block; its lines are appended
     to ``sink`` (Python's ``sys.stderr`` is flushed first and is captured as well). A closed file
-    descriptor 2 (``2>&-``) is left closed: nothing is captured."""
+    descriptor 2 (``2>&-``) is left closed: nothing is captured.
+
+    Parameters
+    ----------
+    sink : list of str
+        The list the captured lines (stripped, non-empty) are appended to.
+    """
     fd = 2  # the process's standard error, whatever sys.stderr is
     try:
         saved = os.dup(fd)

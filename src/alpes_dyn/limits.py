@@ -140,7 +140,18 @@ def within_hot_magnitude(a) -> bool:
     """Whether float64 vector ``a`` is finite with its Euclidean norm below :data:`MAX_HOT_MAGNITUDE`: one BLAS
     ``dnrm2`` call (about as cheap as a dot product; its scaling never overflows, so no numpy warning either).
     True implies every entry is below the bound; False (a NaN, an inf, an entry at or over the bound, or rarely
-    many entries whose norm only reaches it) sends the caller to its exact, slower check."""
+    many entries whose norm only reaches it) sends the caller to its exact, slower check.
+
+    Parameters
+    ----------
+    a : numpy.ndarray, shape (k,)
+        A contiguous float64 vector.
+
+    Returns
+    -------
+    bool
+        Whether it is finite and below the bound.
+    """
     return _NRM2(a) < MAX_HOT_MAGNITUDE
 
 
@@ -160,7 +171,29 @@ def hot_magnitude_error(a, name: str) -> InputError | None:
 
 
 def check_not_subnormal(x: float, field: str, unit: str = "", error: type[Exception] = InputError) -> float:
-    """``x`` unless it is a subnormal number (0 < abs(x) < 2.2e-308, e.g. 1e-320): ``error`` naming ``field``."""
+    """``x`` unless it is a subnormal number (0 < abs(x) < 2.2e-308, e.g. 1e-320).
+
+    Parameters
+    ----------
+    x : float
+        The value.
+    field : str
+        The field the error names.
+    unit : str, optional
+        Its unit, said in the error (default none; ``"-"``: dimensionless, not said).
+    error : type, optional
+        The exception class raised (default InputError).
+
+    Returns
+    -------
+    float
+        ``x``.
+
+    Raises
+    ------
+    Exception
+        ``error`` naming ``field`` for a subnormal ``x``.
+    """
     if x != 0.0 and abs(x) < _SMALLEST_NORMAL:
         raise error(f"{field}: {x!r}{' ' + unit if unit and unit != '-' else ''} is a subnormal number (below "
                     "2.2e-308, the smallest normal float): write 0 or a physical value")
@@ -171,9 +204,29 @@ def check_physical(value: object, field: str, unit: str, kind: str = "any", erro
     """``value`` (a float or an array of them, already finite) within the accepted range of its ``unit``
     (:data:`PHYSICAL_RANGES`), else ``error`` with one line naming ``field``, the value and the range.
 
-    ``kind``: ``"pos"`` (> 0, in [smallest, largest]), ``"nonneg"`` (in [0, largest]) or ``"any"`` (either sign, at
-    most the largest in magnitude); a unit absent from the table checks only for subnormal numbers. Returns
-    ``value``.
+    Parameters
+    ----------
+    value : float or numpy.ndarray
+        The value(s), already finite.
+    field : str
+        The field the error names.
+    unit : str
+        Its unit, a key of :data:`PHYSICAL_RANGES` (a unit absent from the table checks only for subnormal numbers).
+    kind : str, optional
+        ``"pos"`` (> 0, in [smallest, largest]), ``"nonneg"`` (in [0, largest]) or ``"any"`` (default; either
+        sign, at most the largest in magnitude).
+    error : type, optional
+        The exception class raised (default InputError).
+
+    Returns
+    -------
+    float or numpy.ndarray
+        ``value``.
+
+    Raises
+    ------
+    Exception
+        ``error`` with one line naming ``field``, the value and the range.
     """
     import numpy as np
 
@@ -224,7 +277,25 @@ def _human(n: float) -> str:
 
 
 def check_duration(value: object, field: str) -> float:
-    """``value`` as a finite duration in (0, :data:`MAX_DURATION_S`] s, else InputError naming ``field``."""
+    """``value`` as a finite duration in (0, :data:`MAX_DURATION_S`] s.
+
+    Parameters
+    ----------
+    value : object
+        The duration, s (a real number).
+    field : str
+        The field or option the error names.
+
+    Returns
+    -------
+    float
+        The duration, s.
+
+    Raises
+    ------
+    InputError
+        Not a finite number in that range, naming ``field``.
+    """
     if isinstance(value, bool) or not isinstance(value, numbers.Real):
         raise InputError(f"{field}: expected a number of seconds, got {type(value).__name__}")
     try:
@@ -241,8 +312,25 @@ def check_duration(value: object, field: str) -> float:
 
 
 def check_time_step(dt: float, field: str = "dt") -> float:
-    """``dt`` (already a finite positive float) within [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`] s, else
-    InputError naming ``field``."""
+    """``dt`` within [:data:`MIN_TIME_STEP_S`, :data:`MAX_DURATION_S`] s.
+
+    Parameters
+    ----------
+    dt : float
+        The time step, s (already a finite positive float).
+    field : str, optional
+        The field or option the error names (default ``"dt"``).
+
+    Returns
+    -------
+    float
+        ``dt``.
+
+    Raises
+    ------
+    InputError
+        ``dt`` outside the range, naming ``field``.
+    """
     if not MIN_TIME_STEP_S <= dt <= MAX_DURATION_S:
         raise InputError(f"{field}: {dt:g} s is outside [{MIN_TIME_STEP_S:g}, {MAX_DURATION_S:g}] s, the time steps "
                          "accepted")
@@ -252,7 +340,19 @@ def check_time_step(dt: float, field: str = "dt") -> float:
 def check_bytes(nbytes: float, field: str, detail: str) -> None:
     """InputError naming ``field`` if ``nbytes`` (an estimate) exceeds :func:`max_bytes`.
 
-    ``detail`` says what the size comes from, e.g. ``"1e+15 steps of 6 states"``.
+    Parameters
+    ----------
+    nbytes : float
+        The estimated size of the arrays, bytes.
+    field : str
+        The field or option the error names.
+    detail : str
+        What the size comes from, e.g. ``"1e+15 steps of 6 states"``.
+
+    Raises
+    ------
+    InputError
+        ``nbytes`` over the limit, naming ``field``.
     """
     limit = max_bytes()
     if not nbytes <= limit:
