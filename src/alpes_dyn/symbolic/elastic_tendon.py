@@ -65,15 +65,25 @@ class SeriesElasticSystem:
 
     Parameters
     ----------
-    model: a model with motors (``model.transmission``). Its rotors leave the joints: a model built with them
+    model : alpes_dyn.Model
+        A model with motors (``model.transmission``). Its rotors leave the joints: a model built with them
         there (a spec's ``rotor_inertia``, ``Model.alpes(..., rotor_inertia=True)``: J_m S^T S) is rebuilt without
         (:attr:`model`), each J_m becoming its rotor's own inertia.
-    tendon: the :class:`ElasticTendon` of its motors.
-    rotor_inertia: J_m > 0 of each motor (m,), kg m^2 (eq. 2.8's I_a); default the model's
-        ``transmission.rotor_inertia`` (a spec's ``rotor_inertia``), or on an Alpes model the parameter file's J_m.
-    smooth: the Coulomb sign of the joints' friction as tanh (differentiable; the symbolic path's law) in both the
+    tendon : ElasticTendon
+        The :class:`ElasticTendon` of its motors.
+    rotor_inertia : float or array_like of shape (m,) or None, optional
+        J_m > 0 of each motor, kg m^2 (eq. 2.8's I_a); default None: the model's ``transmission.rotor_inertia``
+        (a spec's ``rotor_inertia``), or on an Alpes model the parameter file's J_m.
+    smooth : bool, optional
+        True (default): the Coulomb sign of the joints' friction as tanh (differentiable; the symbolic path's law) in both the
         numeric and the symbolic right-hand side, so that the two are the same function; False: the sign itself
         (numeric only).
+
+    Raises
+    ------
+    InputError
+        A model without motors, with curved ratios or sheath friction, a tendon of another number of motors, or a
+        rotor inertia that is not > 0, named.
     """
 
     def __init__(self, model: Model, tendon: ElasticTendon, rotor_inertia: Any = None, smooth: bool = True) -> None:
@@ -119,7 +129,13 @@ class SeriesElasticSystem:
         return f"SeriesElasticSystem({self.model.name!r}, n={self.n} joints, m={self.m} rotors)"
 
     def split(self, x: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-        """(q, theta_m, qd, thetad_m) of a state x (2 (n + m),)."""
+        """(q, theta_m, qd, thetad_m) of a state x (2 (n + m),).
+
+        Parameters
+        ----------
+        x : array_like, shape (2 (n + m),)
+            The state [q; theta_m; qd; thetad_m], rad and rad/s.
+        """
         x = as_float_array(x, "x", "rad and rad/s")
         if x.shape != (self.n_states,) or not np.isfinite(x).all():
             raise InputError(f"x: expected {self.n_states} finite numbers [q; theta_m; qd; thetad_m], got shape "
@@ -135,17 +151,37 @@ class SeriesElasticSystem:
         return u
 
     def tension(self, x: Any) -> np.ndarray:
-        """T_m (m,), N m: each cable's pull on its rotor (r_m times the cable's tension in N)."""
+        """T_m (m,), N m: each cable's pull on its rotor (r_m times the cable's tension in N).
+
+        Parameters
+        ----------
+        x : array_like, shape (2 (n + m),)
+            The state [q; theta_m; qd; thetad_m], rad and rad/s.
+        """
         q, th, v, w = self.split(x)
         return self.tendon.tension(th - self.S @ q, w - self.S @ v)
 
     def encoder(self, x: Any) -> np.ndarray:
-        """y = theta_m (m,), rad: what each motor's encoder reads."""
+        """y = theta_m (m,), rad: what each motor's encoder reads.
+
+        Parameters
+        ----------
+        x : array_like, shape (2 (n + m),)
+            The state [q; theta_m; qd; thetad_m], rad and rad/s.
+        """
         return self.split(x)[1].copy()
 
     def f(self, x: Any, u: Any) -> np.ndarray:
         """xdot (2 (n + m),) at state x under motor torques u (m,), N m: Pinocchio's ABA for the joints under
-        S^T T_m, each rotor's J_m thetadd_m = tau_m - T_m."""
+        S^T T_m, each rotor's J_m thetadd_m = tau_m - T_m.
+
+        Parameters
+        ----------
+        x : array_like, shape (2 (n + m),)
+            The state [q; theta_m; qd; thetad_m], rad and rad/s.
+        u : array_like, shape (m,)
+            Motor torques tau_m, N m.
+        """
         q, th, v, w = self.split(x)
         u = self._torque(u)
         T = self.tendon.tension(th - self.S @ q, w - self.S @ v)
@@ -170,7 +206,20 @@ class SeriesElasticSystem:
         """The rest state x (2 (n + m),) under constant motor torques u >= 0 (m,), N m: the joints where the rigid
         model rests under S^T u (:meth:`Model.static_equilibrium <alpes_dyn.Model.static_equilibrium>`, from ``q0``),
         each cable pulling T_m = u, so stretched by delta + u / k_m: theta_m = S q + delta + u / k_m (the quasi-static
-        encoder reading S q + C u, C = 1 / k_m, beyond the dead band). A cable pulls only: u < 0 has no rest."""
+        encoder reading S q + C u, C = 1 / k_m, beyond the dead band). A cable pulls only: u < 0 has no rest.
+
+        Parameters
+        ----------
+        u : array_like, shape (m,)
+            Constant motor torques, N m, >= 0.
+        q0 : array_like, shape (n,), optional
+            The Newton start for the joints, rad (default None: zeros).
+
+        Raises
+        ------
+        InputError
+            A negative torque, or no equilibrium found.
+        """
         u = self._torque(u)
         if np.any(u < 0):
             raise InputError(f"u: a pull-only cable holds no negative motor torque, got {u.tolist()!r} N m")
@@ -183,7 +232,29 @@ class SeriesElasticSystem:
         """States (N+1, 2 (n + m)) from x0 under the motor torques u (N, m), u[k] held on [t_k, t_k+1) (N m),
         sampled every ``dt`` s: RK4 with ``substeps`` steps per sample, the N samples in one CasADi
         ``mapaccum`` call (no Python loop over time). The rotor's mode sqrt(k_m / J_m) needs
-        dt / substeps <= 2.8 / sqrt(k_m / J_m) (RK4's stability); a step beyond that is refused."""
+        dt / substeps <= 2.8 / sqrt(k_m / J_m) (RK4's stability); a step beyond that is refused.
+
+        Parameters
+        ----------
+        x0 : array_like, shape (2 (n + m),)
+            The initial state [q; theta_m; qd; thetad_m], rad and rad/s.
+        u : array_like, shape (N, m)
+            Motor torques, N m, u[k] held on [t_k, t_k+1) ((N,) for one motor).
+        dt : float
+            The sample period, s.
+        substeps : int, optional
+            RK4 steps per sample (default 4).
+
+        Returns
+        -------
+        numpy.ndarray, shape (N+1, 2 (n + m))
+            The states at t_0 .. t_N.
+
+        Raises
+        ------
+        InputError
+            Bad inputs, a step unstable on the rotor's mode, or a simulation that diverges.
+        """
         x0 = np.concatenate(self.split(x0))
         U = as_float_array(u, "u", "motor torques (N m)")
         U = U[:, None] if U.ndim == 1 and self.m == 1 else U

@@ -34,14 +34,25 @@ def lift_constants(f: cs.Function, name: str | None = None) -> tuple[cs.Function
 
     Parameters
     ----------
-    f: an SX function (``cs.Function`` of ``cs.SX`` symbols), any number of inputs and outputs.
-    name: the name of ``f_p`` (default ``f``'s).
+    f : casadi.Function
+        An SX function (``cs.Function`` of ``cs.SX`` symbols), any number of inputs and outputs.
+    name : str or None, optional
+        The name of ``f_p`` (default None: ``f``'s).
 
     Returns
     -------
-    f_p: ``casadi.Function`` with ``f``'s inputs, then ``p`` (np,); ``f``'s outputs, same sparsity.
-    values: (np,) the constants, one per use in ``f``'s algorithm (module doc), in its order.
+    f_p : casadi.Function
+        ``f``'s inputs, then ``p`` (np,); ``f``'s outputs, same sparsity.
+    values : numpy.ndarray, shape (np,)
+        The constants, one per use in ``f``'s algorithm (module doc), in its order.
 
+    Raises
+    ------
+    ModelError
+        ``f`` not an SX function.
+
+    Notes
+    -----
     The replay is one Python step per instruction of ``f`` (about 10 us each: 30 ms for finger3's right-hand side,
     a few thousand instructions); lift the model's right-hand side, not a filter step built from it.
     """

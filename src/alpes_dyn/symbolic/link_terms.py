@@ -111,19 +111,39 @@ class LinkTerms:
         self._P = sparse_dm(np.eye(self.n)[:, self.idx]) if self.idx else None  # (n, k) the branch's joints
 
     def mass_matrix(self, q: cs.SX) -> cs.SX:
-        """(n, n) kg m^2: J^T I J of the links, zero off their branch's joints."""
+        """(n, n) kg m^2: J^T I J of the links, zero off their branch's joints.
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            The model's joint angles, rad.
+        """
         if self._be is None:
             return cs.SX(self.n, self.n)
         return cs.mtimes(self._P, cs.mtimes(self._be.mass_matrix(q[self.idx]), self._P.T))
 
     def bias(self, q: cs.SX, v: cs.SX) -> cs.SX:
-        """(n,) N m: the links' C(q, qd) qd (no gravity)."""
+        """(n,) N m: the links' C(q, qd) qd (no gravity).
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            The model's joint angles, rad.
+        v : casadi.SX, shape (n,)
+            The joint velocities qd, rad/s.
+        """
         if self._be is None:
             return cs.SX(self.n, 1)
         return cs.mtimes(self._P, self._be.bias(q[self.idx], v[self.idx]))
 
     def com_position(self, q: cs.SX) -> Any:
-        """(3,) m: the links' centre of mass at q (n,) (zeros where no joint moves them: no gravity torque)."""
+        """(3,) m: the links' centre of mass at q (zeros where no joint moves them: no gravity torque).
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            The model's joint angles, rad.
+        """
         if self._be is None:
             return cs.SX.zeros(3)
         return self._be.com_position(q[self.idx])

@@ -53,7 +53,21 @@ def lugre_derivatives(ss: StateSpace, law: LuGre, q: cs.SX, v: cs.SX, z: cs.SX, 
 def bristle_relaxed(law: LuGre, coulomb: np.ndarray, z: cs.SX, v: cs.SX, h: float) -> cs.SX:
     """z after h seconds of eq. L1 at the velocity v held, exactly: z e^(-a h) + v (1 - e^(-a h)) / a with
     a = sigma0 |v| / F_s (v h where a h is tiny), (n,) rad; unconditionally stable however fast the bristle relaxes
-    (a joint sliding at 20 rad/s relaxes it at 2e4 1/s), and a joint without dry friction keeps z = 0."""
+    (a joint sliding at 20 rad/s relaxes it at 2e4 1/s), and a joint without dry friction keeps z = 0.
+
+    Parameters
+    ----------
+    law : LuGre
+        sigma0 (N m/rad).
+    coulomb : numpy.ndarray, shape (n,)
+        F_s, N m (g of eq. L1; 0: no bristle).
+    z : casadi.SX, shape (n,)
+        The bristle deflections at the step's start, rad.
+    v : casadi.SX, shape (n,)
+        The joint velocities held, rad/s.
+    h : float
+        The step, s.
+    """
     Fs = np.asarray(coulomb, dtype=float)
     dry = Fs > 0
     inv = cs.DM(np.where(dry, 1.0 / np.where(dry, Fs, 1.0), 0.0))
@@ -63,7 +77,21 @@ def bristle_relaxed(law: LuGre, coulomb: np.ndarray, z: cs.SX, v: cs.SX, h: floa
 def relax_exactly(z: cs.SX, v: cs.SX, a: cs.SX, dry: cs.DM, h: float) -> cs.SX:
     """z e^(-a h) + v (1 - e^(-a h)) / a, (n,) rad: eq. L1 over h seconds at the velocity v held, relaxing at the
     rate a (n,) 1/s (sigma0 |v| / F_s; symbols where the law's parameters are, e.g. fitted); 0 where ``dry`` (n,)
-    is 0 (a joint without a bristle)."""
+    is 0 (a joint without a bristle).
+
+    Parameters
+    ----------
+    z : casadi.SX, shape (n,)
+        The bristle deflections at the step's start, rad.
+    v : casadi.SX, shape (n,)
+        The joint velocities held, rad/s.
+    a : casadi.SX, shape (n,)
+        The relaxation rates, 1/s.
+    dry : casadi.DM, shape (n,)
+        1 on a joint with a bristle, 0 elsewhere.
+    h : float
+        The step, s.
+    """
     ah = a * h
     small = ah < 1e-6
     safe = cs.if_else(small, 1.0, ah)
@@ -76,7 +104,30 @@ def lugre_substep(ss: StateSpace, law: LuGre, q: cs.SX, v: cs.SX, z: cs.SX,
     """One step of h seconds, split (Lie): the bristles relaxed exactly at the step's velocity
     (:func:`bristle_relaxed`), then one classical RK4 step of [q; qd] with z held at that value (eq. L2's
     sigma1 z' following qd within the step). ``torques(q, v)`` -> (tau (n,) N m, F or None), the inputs' joint
-    torques at a stage. Returns (q+, qd+, z+)."""
+    torques at a stage.
+
+    Parameters
+    ----------
+    ss : StateSpace
+        The system (as :func:`lugre_derivatives`'s).
+    law : LuGre
+        sigma0 (N m/rad) and sigma1 (N m s/rad).
+    q : casadi.SX, shape (n,)
+        Joint angles at the step's start, rad.
+    v : casadi.SX, shape (n,)
+        Joint velocities, rad/s.
+    z : casadi.SX, shape (n,)
+        Bristle deflections, rad.
+    torques : callable
+        (q, v) -> (tau (n,) N m, F or None): the inputs' joint torques and contact force at a stage.
+    h : float
+        The step, s.
+
+    Returns
+    -------
+    tuple of casadi.SX
+        (q+, qd+, z+) after h seconds.
+    """
     n = ss.n
     zn = bristle_relaxed(law, ss.sym.extras.coulomb, z, v, h)
 

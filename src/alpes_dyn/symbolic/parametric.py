@@ -149,7 +149,23 @@ def _check_model(model: Any) -> None:
 def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     """Every parameter of ``model`` that :class:`ParametricDynamics` can make symbolic, nominal values
     from the model (stiffness, masses, friction of its extras; input gain 1; each motor's rotor inertia
-    J_m and encoder offset 0; the tilt angles 0; the LuGre law's sigma0 and sigma1 where the file's law is it)."""
+    J_m and encoder offset 0; the tilt angles 0; the LuGre law's sigma0 and sigma1 where the file's law is it).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The numeric model.
+
+    Returns
+    -------
+    list of PhysicalParameter
+        The parameters, by kind then joint (motor).
+
+    Raises
+    ------
+    ModelError
+        ``model`` not a :class:`~alpes_dyn.Model`.
+    """
     _check_model(model)
     ex = model.extras
     links = _child_links(model)
@@ -181,7 +197,18 @@ def unseen_masses(model: Model) -> tuple[str, ...]:
     act on those passive joints alone, whose only witness in the encoders is their coupling to the driven ones: the
     mass is seen together with the joint's spring (on finger_edu's 3 s experiment the Cramér-Rao bounds give it 2.9 %
     against 0.02 % for the other masses, correlated +0.99 with K of its joint) and the fit, freeing it, headed for
-    m = 0 and lost its basin. A mimic joint counts as moved where its primary joint is. Empty without motors."""
+    m = 0 and lost its basin. A mimic joint counts as moved where its primary joint is. Empty without motors.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The numeric model.
+
+    Returns
+    -------
+    tuple of str
+        The masses' parameter names (``m_<joint>``).
+    """
     _check_model(model)
     tr = model.transmission
     if tr is None:
@@ -209,7 +236,23 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
     LuGre law's sigma0, sigma1) where the model has friction (never the rotor inertia, encoder offsets or tilt: those are asked for by name). A kind
     selects only the joints (motors) where its nominal value is non-zero (a joint without a spring has no K, a motor
     without rotor inertia no J_m); ``input_gain``, ``encoder_offset`` and ``tilt`` are always selected.
-    Raises :class:`~alpes_dyn.ModelError` for an unknown name, a repeat, or an empty selection.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The numeric model.
+    spec : str or sequence of str or None, optional
+        The kinds and names, as above (default None: the default selection).
+
+    Returns
+    -------
+    tuple of PhysicalParameter
+        The selection, in the order asked.
+
+    Raises
+    ------
+    ModelError
+        An unknown name, a repeat, or an empty selection.
     """
     cat = parameter_catalogue(model)
     by_name = {p.name: p for p in cat}
@@ -246,7 +289,19 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
 
 def tilted_gravity(g: Any, tilt_x: Any, tilt_y: Any, xp: Any = np) -> Any:
     """R^T g (3,), m/s^2: gravity g in the frame of a base turned by R = R_x(tilt_x) R_y(tilt_y) (rad)
-    against the frame g is given in; ``xp`` numpy or casadi."""
+    against the frame g is given in.
+
+    Parameters
+    ----------
+    g : array_like or casadi.SX, shape (3,)
+        Gravity, m/s^2.
+    tilt_x : float or casadi.SX
+        The base's tilt about x, rad.
+    tilt_y : float or casadi.SX
+        The base's tilt about y, rad.
+    xp : module, optional
+        ``numpy`` (default) or ``casadi``.
+    """
     cx, sx, cy, sy = xp.cos(tilt_x), xp.sin(tilt_x), xp.cos(tilt_y), xp.sin(tilt_y)
     gx, gy, gz = g[0], g[1], g[2]
     a = gy * cx + gz * sx  # (R_x^T g)_y
@@ -260,7 +315,20 @@ def common_scale(model: Model, parameters: Sequence[PhysicalParameter]) -> bool:
     every body a joint moves, every non-zero spring, friction and rotor inertia (none held), no joint-side
     armature. Then theta -> c theta leaves qdd, hence the encoder, unchanged: only the ratios are seen. The
     torque constant's scale must come from something known -- the masses (the maker gives them) or a force
-    sensor: fit ``input_gain`` with the masses held."""
+    sensor: fit ``input_gain`` with the masses held.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The numeric model.
+    parameters : sequence of PhysicalParameter
+        The selection.
+
+    Returns
+    -------
+    bool
+        Whether the selection is seen only up to a common scale.
+    """
     names = {p.name for p in parameters}
     if "input_gain" not in names or np.any(model.extras.armature != 0):
         return False
@@ -273,15 +341,22 @@ class ParametricDynamics:
 
     Parameters
     ----------
-    model: the numeric model; parameters not selected keep its values.
-    parameters: a selection for :func:`select_parameters` (default K, m, and friction if any).
-    gravity_input: take the gravity vector g (3,), m/s^2, base frame, as an input (default: the
-        model's constant gravity).
+    model : alpes_dyn.Model
+        The numeric model; parameters not selected keep its values.
+    parameters : str or sequence of str or None, optional
+        A selection for :func:`select_parameters` (default None: K, m, and friction if any).
+    gravity_input : bool, optional
+        Take the gravity vector g (3,), m/s^2, base frame, as an input (default False: the model's constant
+        gravity).
 
     Attributes
     ----------
-    parameters: the selected :class:`PhysicalParameter` (length p); names; nominal (p,).
-    theta: SX (p,) symbol of the parameter values in their units; g: SX (3,) symbol or None.
+    parameters : tuple of PhysicalParameter
+        The selected parameters (length p); ``names`` their names, ``nominal`` (p,) their nominal values.
+    theta : casadi.SX, shape (p,)
+        Symbol of the parameter values in their units.
+    g : casadi.SX, shape (3,), or None
+        The gravity input's symbol, m/s^2, or None.
     """
 
     def __init__(self, model: Model, parameters: str | Sequence[str] | None = None,
@@ -348,7 +423,15 @@ class ParametricDynamics:
         return out
 
     def inertia_matrix(self, q: cs.SX, theta: cs.SX) -> cs.SX:
-        """A(q; theta) + I_a, (n, n), kg m^2."""
+        """A(q; theta) + I_a, (n, n), kg m^2.
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        """
         M = cs.SX.zeros(self.n, self.n)
         for k, m0, be in self._mass_params:
             M = M + (theta[k] / m0) * be.mass_matrix(q)
@@ -368,7 +451,17 @@ class ParametricDynamics:
 
     def rotor_bias(self, q: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX | float:
         """rho(q)^T diag(J_m) (drho/dt) qd (n,), N m, the rotors' velocity product where the ratios change with q
-        (:meth:`Transmission.rotor_bias <alpes_dyn.model.transmission.Transmission.rotor_bias>`); 0 otherwise."""
+        (:meth:`Transmission.rotor_bias <alpes_dyn.model.transmission.Transmission.rotor_bias>`); 0 otherwise.
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        """
         if self._curve is None or not (self._sel["J_m"] or self._rotor is not None):
             return 0.0
         J = self._vector("J_m", self._Jm, theta)
@@ -376,7 +469,19 @@ class ParametricDynamics:
 
     def bias_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, g: Any) -> cs.SX:
         """C(q, qd) qd + gravity torque (no springs) for gravity g (3,), N m; g turned by the tilt
-        angles where they are selected (:func:`tilted_gravity`)."""
+        angles where they are selected (:func:`tilted_gravity`).
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        g : casadi.SX or array_like, shape (3,), or None
+            Gravity, m/s^2, base frame (None: the model's).
+        """
         g = cs.DM(self.model.gravity) if g is None else g
         if self._sel["tilt"]:
             angles: list[Any] = [0.0, 0.0]
@@ -396,7 +501,19 @@ class ParametricDynamics:
     def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, z: cs.SX | None = None) -> cs.SX:
         """Springs K (q - q_rest) (torsional; K fitted, the rest angles q_rest the model's, :func:`~alpes_dyn.model.extras.
         spring_law`) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m; with the bristles ``z`` (n,) rad, the
-        LuGre friction sigma0 z + sigma1 z' + F_v qd instead (eq. L2, z' of :meth:`bristle_rate`)."""
+        LuGre friction sigma0 z + sigma1 z' + F_v qd instead (eq. L2, z' of :meth:`bristle_rate`).
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        z : casadi.SX, shape (n,), or None, optional
+            The bristle deflections, rad: the LuGre friction (default None: the smooth law).
+        """
         K = self._vector("K", self._K, theta)
         Fv = self._vector("F_v", self._Fv, theta)
         if z is not None:
@@ -412,22 +529,53 @@ class ParametricDynamics:
 
     def bristle_terms(self, v: cs.SX, theta: cs.SX) -> tuple[cs.SX, cs.DM]:
         """(sigma0 |qd| / F_s (n,) 1/s, the bristles' relaxation rate of eq. L1 (0 on a joint without dry friction),
-        the mask of the joints with a bristle (n,))."""
+        the mask of the joints with a bristle (n,)).
+
+        Parameters
+        ----------
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        """
         Fs = self._vector("F_s", self._Fs, theta)
         dry = cs.DM(self._dry)
         return dry * self._law("sigma0", theta) * cs.fabs(v) / (dry * Fs + (1 - dry)), dry
 
     def bristle_rate(self, z: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
-        """z' = qd - sigma0 |qd| z / F_s (eq. L1), (n,) rad/s; 0 on a joint without dry friction."""
+        """z' = qd - sigma0 |qd| z / F_s (eq. L1), (n,) rad/s; 0 on a joint without dry friction.
+
+        Parameters
+        ----------
+        z : casadi.SX, shape (n,)
+            The bristle deflections, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        """
         a, dry = self.bristle_terms(v, theta)
         return dry * v - a * z
 
     def encoder_offset(self, theta: cs.SX) -> cs.SX:
-        """(m,) the encoder offsets, rad: y = S q + offset (zeros where not selected)."""
+        """(m,) the encoder offsets, rad: y = S q + offset (zeros where not selected).
+
+        Parameters
+        ----------
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        """
         m = self.model.transmission.n_motors if self.model.transmission is not None else 0
         return self._vector("encoder_offset", cs.DM.zeros(m), theta)
 
     def input_gain(self, theta: cs.SX) -> Any:
+        """The input gain: theta's where selected, else 1 (dimensionless; it scales the joint torques).
+
+        Parameters
+        ----------
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units.
+        """
         sel = self._sel["input_gain"]
         return theta[sel[0][0]] if sel else 1.0
 
@@ -435,7 +583,19 @@ class ParametricDynamics:
         """The joint torques (n,), N m, of the motor torques u (m,) through the tendons: S^T u, rho(q)^T u on ratios
         that change with q, less the tendons' sheath friction where a ``capstan`` is fitted or the model has one
         (:func:`~alpes_dyn.model.transmission.capstan_torque` at the motor velocities rho(q) v, rad/s). The
-        transmission's :meth:`~alpes_dyn.model.transmission.Transmission.transmitted` with theta's values."""
+        transmission's :meth:`~alpes_dyn.model.transmission.Transmission.transmitted` with theta's values.
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        u : casadi.SX, shape (m,)
+            Motor torques, N m.
+        theta : casadi.SX, shape (p,), or None, optional
+            The parameter values, in their units (default None: :attr:`theta`).
+        """
         theta = self.theta if theta is None else theta
         tr = self.model.transmission
         rho = cs.DM(tr.S) if self._curve is None else self._curve.ratio(q, cs)
@@ -447,14 +607,50 @@ class ParametricDynamics:
     def forward_dynamics(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
                          F_torque: cs.SX | None = None, z: cs.SX | None = None) -> cs.SX:
         """qdd (n,) of eq. 2.10 with joint torques ``input_gain * tau`` (+ ``F_torque``, e.g. J^T F); with the
-        bristles ``z`` (n,) rad, the LuGre friction (:meth:`passive_torque`): M^-1 r of :meth:`dynamics_terms`."""
+        bristles ``z`` (n,) rad, the LuGre friction (:meth:`passive_torque`): M^-1 r of :meth:`dynamics_terms`.
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        tau : casadi.SX, shape (n,)
+            Joint torques of the inputs, N m (scaled by the input gain).
+        theta : casadi.SX, shape (p,), or None, optional
+            The parameter values, in their units (default None: :attr:`theta`).
+        g : casadi.SX or array_like, shape (3,), or None, optional
+            Gravity, m/s^2, base frame (default None: the model's).
+        F_torque : casadi.SX, shape (n,), or None, optional
+            Further joint torques, N m, e.g. J^T F (default None).
+        z : casadi.SX, shape (n,), or None, optional
+            The bristle deflections, rad: the LuGre friction (default None: the smooth law).
+        """
         return block_solve(*self.dynamics_terms(q, v, tau, theta, g, F_torque, z))
 
     def dynamics_terms(self, q: cs.SX, v: cs.SX, tau: cs.SX, theta: cs.SX | None = None, g: Any = None,
                        F_torque: cs.SX | None = None, z: cs.SX | None = None) -> tuple[cs.SX, cs.SX]:
         """(M (n, n), r (n,)) with M qdd = r, eq. 2.10: the inertia matrix and the torques but the inertial ones
         (``input_gain * tau`` + ``F_torque`` - bias - passive), as :meth:`forward_dynamics` solves them; what the
-        sensitivities of a large model differentiate (:mod:`~alpes_dyn.simulation.variational`)."""
+        sensitivities of a large model differentiate (:mod:`~alpes_dyn.simulation.variational`).
+
+        Parameters
+        ----------
+        q : casadi.SX, shape (n,)
+            Joint angles, rad.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        tau : casadi.SX, shape (n,)
+            Joint torques of the inputs, N m (scaled by the input gain).
+        theta : casadi.SX, shape (p,), or None, optional
+            The parameter values, in their units (default None: :attr:`theta`).
+        g : casadi.SX or array_like, shape (3,), or None, optional
+            Gravity, m/s^2, base frame (default None: the model's).
+        F_torque : casadi.SX, shape (n,), or None, optional
+            Further joint torques, N m, e.g. J^T F (default None).
+        z : casadi.SX, shape (n,), or None, optional
+            The bristle deflections, rad: the LuGre friction (default None: the smooth law).
+        """
         theta = self.theta if theta is None else theta
         rhs = (self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g)
                - self.passive_torque(q, v, theta, z))
