@@ -78,7 +78,20 @@ def _name_key(lib: Path) -> str:
 def verify_library(lib: Path, key: str | None = None) -> bool:
     """True if ``lib`` exists, its size and SHA-256 equal its record, and the record's ``model`` key is
     ``key`` (default: the key in the file's own name, ``<stem>_<key>.so``): the library is the one
-    built for this source, not another model's copied under its name (no loading)."""
+    built for this source, not another model's copied under its name (no loading).
+
+    Parameters
+    ----------
+    lib : pathlib.Path
+        The library, ``<stem>_<key>.so``, its record ``<lib>.sha256`` beside it.
+    key : str or None, optional
+        The expected key (default None: the one in the file's name).
+
+    Returns
+    -------
+    bool
+        Whether the library is the one recorded.
+    """
     try:
         fields = _record_path(lib).read_text(encoding="ascii").split()
         rec = dict(zip(fields[::2], fields[1::2]))
@@ -167,15 +180,37 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
 
     Parameters
     ----------
-    source: C source. stem: file name stem (letters, digits, ``_``). cc: compiler path.
-    cflags: compiler flags (must produce a shared library). directory: the cache.
+    source : str
+        The C source.
+    stem : str
+        The file name's stem (letters, digits, ``_``).
+    cc : str
+        The compiler's path.
+    cflags : sequence of str
+        Compiler flags (must produce a shared library).
+    directory : pathlib.Path
+        The cache's folder.
+    libs : sequence of str, optional
+        Libraries linked (default ``("-lm",)``).
 
     Returns
     -------
-    (path, compiled_now, seconds, library): ``compiled_now`` is False when a verified library was
-    loaded from the cache (``seconds`` 0), True when this call compiled it. A verified library of the same
-    ``key`` (the same source, compiler and flags) built under another ``stem`` is loaded, not compiled again:
-    ``path`` is then that library's.
+    path : pathlib.Path
+        The library.
+    compiled_now : bool
+        False when a verified library was
+        loaded from the cache (``seconds`` 0), True when this call compiled it. A verified library of the same
+        ``key`` (the same source, compiler and flags) built under another ``stem`` is loaded, not compiled again:
+        ``path`` is then that library's.
+    seconds : float
+        The compile's wall time, s.
+    library : ctypes.CDLL
+        The loaded library.
+
+    Raises
+    ------
+    CompilerError
+        The compiler is missing or fails, or the cache cannot be used.
     """
     key = hashlib.sha256((source + "\0" + " ".join(cflags) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
     name = f"{stem}_{key}"

@@ -58,7 +58,25 @@ class CacheFolderError(InputError):
 
 def check_cache_folder(d: Path, what: str) -> Path:
     """``d`` if it can be the cache's folder: an existing folder (not a symbolic link to one) that can be written,
-    or a path whose nearest existing parent is such a folder; else :class:`CacheFolderError` naming ``what``."""
+    or a path whose nearest existing parent is such a folder.
+
+    Parameters
+    ----------
+    d : pathlib.Path
+        The folder.
+    what : str
+        What the error names (the option or variable that gave the folder).
+
+    Returns
+    -------
+    pathlib.Path
+        ``d``.
+
+    Raises
+    ------
+    CacheFolderError
+        A folder that cannot be the cache's, naming ``what``.
+    """
     import stat
 
     where = f"{what} {str(d)[:200]!r}"
@@ -494,6 +512,22 @@ class CasadiStepLoop:
     The same operations as the generated C in the same order: the states agree with
     :class:`CompiledStepLoop`'s to rounding (tested). The margin of the generated driver (SIMD lanes, threads,
     a cached library) over this path is measured in ``benchmarks/rollout.py``.
+
+    Parameters
+    ----------
+    step : casadi.Function
+        The step (x (nx,), w (nw,)) -> x_next (nx,).
+    threads : int or None, optional
+        Threads over the batch, 1..64 (default None: the CPUs this process may use).
+    jit : bool, optional
+        JIT-compile the step through CasADi's ``shell`` compiler (default False: CasADi's virtual machine).
+
+    Raises
+    ------
+    ModelError
+        ``step`` not a function of two inputs and one output.
+    InputError
+        A bad ``threads``.
     """
 
     def __init__(self, step: cs.Function, threads: int | None = None, jit: bool = False) -> None:
@@ -519,7 +553,24 @@ class CasadiStepLoop:
         return self._maps[key]
 
     def run(self, x0: np.ndarray, W: np.ndarray, progress: bool = False, label: str = "rollout") -> np.ndarray:
-        """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), as :meth:`CompiledStepLoop.run`."""
+        """X (B, N+1, nx) from x0 (B, nx) and W (B, N, nw), as :meth:`CompiledStepLoop.run`.
+
+        Parameters
+        ----------
+        x0 : numpy.ndarray, shape (B, nx)
+            The initial states.
+        W : numpy.ndarray, shape (B, N, nw)
+            The inputs of each step.
+        progress : bool, optional
+            Unused here: the rollout is one CasADi evaluation (default False; :class:`CompiledStepLoop`'s interface).
+        label : str, optional
+            Unused here (default ``"rollout"``; :class:`CompiledStepLoop`'s interface).
+
+        Returns
+        -------
+        numpy.ndarray, shape (B, N+1, nx)
+            The states, X[:, 0] = x0.
+        """
         x0, W, X = _batch(x0, W, self.nx, self.nw)
         B, N = W.shape[0], W.shape[1]
         # mapaccum: x0 (nx, 1), W (nw, N) -> X (nx, N); map over the batch stacks columns: (nx, B), (nw, B N)

@@ -146,7 +146,22 @@ def _names(x: Any, what: str) -> tuple[str, ...]:
 class Source(Block):
     """Known signals from arrays: ``signals`` maps a name to an array with one row per sample (a sample signal;
     the row of t_k at sample k) -- a reference, a torque profile. ``period=True``: one row per period, written by
-    :meth:`update` (a period signal)."""
+    :meth:`update` (a period signal).
+
+    Parameters
+    ----------
+    name : str, optional
+        The block's name (default ``"source"``).
+    period : bool, optional
+        One row per period, written by :meth:`update` (default False: one row per sample).
+    **signals
+        Name -> array, one row per sample (or per period), any units.
+
+    Raises
+    ------
+    InputError
+        No signal, or a name that is not a non-empty string.
+    """
 
     has_response = True
 
@@ -180,7 +195,26 @@ class Source(Block):
 class Function(Block):
     """A static block (no state): ``outputs = fn(**inputs)`` at every sample, e.g. a known-input vector assembled
     from a torque reading and a force. ``fn`` returns one value or a tuple (one per output). ``vectorized``: ``fn``
-    also takes the whole record (arrays, one row per sample) and the block has :meth:`response`."""
+    also takes the whole record (arrays, one row per sample) and the block has :meth:`response`.
+
+    Parameters
+    ----------
+    fn : callable
+        ``fn(**inputs)`` -> one value or a tuple, one per output.
+    inputs : sequence of str
+        The signals read, passed to ``fn`` by name.
+    outputs : sequence of str or str
+        The signals written.
+    name : str, optional
+        The block's name (default ``"function"``).
+    vectorized : bool, optional
+        ``fn`` also takes the whole record (default False).
+
+    Raises
+    ------
+    InputError
+        ``fn`` not callable, or a signal name that is not a non-empty string.
+    """
 
     def __init__(self, fn: Callable[..., Any], inputs: Sequence[str], outputs: Sequence[str] | str, *,
                  name: str = "function", vectorized: bool = False) -> None:
@@ -200,7 +234,19 @@ class Function(Block):
 
 
 class Delay(Block):
-    """A unit delay: ``output`` at t_k is ``signal`` at t_k-1 (``initial`` at t_0)."""
+    """A unit delay: ``output`` at t_k is ``signal`` at t_k-1 (``initial`` at t_0).
+
+    Parameters
+    ----------
+    signal : str
+        The period signal read at each update.
+    output : str
+        The sample signal written.
+    initial : object, optional
+        The output at t_0 (default 0.0).
+    name : str, optional
+        The block's name (default ``"delay"``).
+    """
 
     def __init__(self, signal: str, output: str, initial: Any = 0.0, name: str = "delay") -> None:
         self.name = name
@@ -300,21 +346,30 @@ def run_loop(blocks: Sequence[Block], n_periods: int, dt: float, *, final: bool 
 
     Parameters
     ----------
-    blocks: the :class:`Block` objects, connected by their signal names (each signal written by one block);
-        started in this order. n_periods: N >= 1. dt: sample period, s.
-    final: evaluate the outputs at t_N too (sample signals then have N + 1 rows).
-    mode: ``"auto"`` (batch for an open loop of blocks that all have :meth:`Block.response`, else step),
+    blocks : sequence of Block
+        The :class:`Block` objects, connected by their signal names (each signal written by one block); started
+        in this order.
+    n_periods : int
+        N >= 1.
+    dt : float
+        The sample period, s.
+    final : bool, optional
+        Evaluate the outputs at t_N too (sample signals then have N + 1 rows; default False).
+    mode : str, optional
+        ``"auto"`` (default; batch for an open loop of blocks that all have :meth:`Block.response`, else step),
         ``"step"`` or ``"batch"`` (:data:`MODES`).
 
     Returns
     -------
-    :class:`LoopLog`.
+    LoopLog
+        Every named signal of the run.
 
     Raises
     ------
-    InputError: a signal read but not written or written twice, an algebraic loop (a cycle of direct
-    feedthroughs: put a :class:`Delay` in it), ``batch`` on a closed loop, a block writing a signal at some
-    samples only; and what the blocks raise (a source too short, an observer diverging...).
+    InputError
+        A signal read but not written or written twice, an algebraic loop (a cycle of direct feedthroughs: put a
+        :class:`Delay` in it), ``batch`` on a closed loop, a block writing a signal at some samples only; and what
+        the blocks raise (a source too short, an observer diverging...).
     """
     if mode not in MODES:
         raise InputError(f"mode: expected one of {', '.join(MODES)}, got {mode!r}")

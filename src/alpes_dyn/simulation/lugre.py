@@ -33,7 +33,20 @@ def lugre_rate_bound(model: Model, law: LuGre) -> float:
     """lambda, 1/s: the fastest rate of the split step's RK4 part, the larger of the presliding mode's
     sqrt(eig(A^-1 sigma0)) and its damping eig(A^-1 (2 sigma1 + F_v)) (d(sigma1 z')/dqd is at most 2 sigma1 on a
     bristle within its presliding range; A the mass matrix with the rotors, at the joints' mid-range and at q = 0);
-    0 without dry friction."""
+    0 without dry friction.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model: its mass matrix with the rotors, its F_s and F_v.
+    law : LuGre
+        sigma0 (N m/rad) and sigma1 (N m s/rad).
+
+    Returns
+    -------
+    float
+        lambda, 1/s.
+    """
     ex = model.extras
     if not np.any(ex.coulomb > 0):
         return 0.0
@@ -51,7 +64,24 @@ def lugre_rate_bound(model: Model, law: LuGre) -> float:
 
 def lugre_substeps(model: Model, law: LuGre, dt: float, minimum: int = 4) -> int:
     """Split steps per period ``dt`` (s) that keep h lambda <= RK4_REACH on :func:`lugre_rate_bound`; at least
-    ``minimum`` (4: a step of 0.25 ms at 1 kHz, the smooth law's)."""
+    ``minimum`` (4: a step of 0.25 ms at 1 kHz, the smooth law's).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model: its mass matrix with the rotors, its F_s and F_v.
+    law : LuGre
+        sigma0 (N m/rad) and sigma1 (N m s/rad).
+    dt : float
+        The sample period, s.
+    minimum : int, optional
+        The fewest steps (default 4).
+
+    Returns
+    -------
+    int
+        The split steps per period.
+    """
     dt = _check_dt(dt)
     return max(int(minimum), int(math.ceil(dt * lugre_rate_bound(model, law) / RK4_REACH - 1e-9)))
 
@@ -65,14 +95,51 @@ floor only at its iteration cap; at the same 6, within 7 %, at the floor in 40 i
 
 def fit_substeps(model: Model, dt: float, stiffest: float) -> int:
     """:data:`ACCURATE` times :func:`lugre_substeps` of ``model``'s LuGre law with its sigma0 times ``stiffest``
-    (the upper end of a fit's range for it); 1 where the model's law is the smooth one (no bristles)."""
+    (the upper end of a fit's range for it); 1 where the model's law is the smooth one (no bristles).
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model (its friction law).
+    dt : float
+        The sample period, s.
+    stiffest : float
+        The factor on the law's sigma0 at the upper end of the fit's range (dimensionless).
+
+    Returns
+    -------
+    int
+        The split steps per period.
+    """
     law = lugre_of(model)
     return 1 if law is None else ACCURATE * lugre_substeps(model, LuGre(stiffest * law.sigma0, law.sigma1), dt)
 
 
 def lugre_step_function(ss: StateSpace, law: LuGre, dt: float, substeps: int = 1) -> cs.Function:
     """``step(x (3n,), w (m[+3],)) -> x_next``: ``substeps`` split steps (module docstring) of [q; qd; z] over
-    ``dt`` s with the inputs w = [u; F] held (``ss``'s input torque, tip or contacts)."""
+    ``dt`` s with the inputs w = [u; F] held (``ss``'s input torque, tip or contacts).
+
+    Parameters
+    ----------
+    ss : StateSpace
+        The system (its input torque, tip or contacts).
+    law : LuGre
+        sigma0 (N m/rad) and sigma1 (N m s/rad).
+    dt : float
+        The sample period, s.
+    substeps : int, optional
+        Split steps per period, 1..1000 (default 1).
+
+    Returns
+    -------
+    casadi.Function
+        ``lugre_step(x, w) -> x_next``.
+
+    Raises
+    ------
+    InputError
+        A bad ``dt`` or ``substeps``.
+    """
     dt = _check_dt(dt)
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or not 1 <= substeps <= 1000:
         raise InputError(f"substeps: expected an integer in [1, 1000], got {substeps!r}")

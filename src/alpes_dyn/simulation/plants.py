@@ -35,11 +35,29 @@ class SimulatorPlant(Block):
 
     Parameters
     ----------
-    model: the true :class:`~alpes_dyn.Model` (with a tendon transmission). x0: (2n,) initial [q; qd], rad, rad/s.
-    substeps: RK4 steps per period. u, x, y: signal names of the motor torques (m,) N m (read), the state (2n,)
-        and the motor angles (m,) rad (written; y_k = S q_k + C tau_m,k-1, the tendons' stretch under the torque
-        held before t_k: :func:`~alpes_dyn.model.transmission.torque_before`; at t_0 the first torque's).
-    joint_range: :func:`~alpes_dyn.simulation.integrate.simulate`'s check of the joint range (default ``"ignore"``).
+    model : alpes_dyn.Model
+        The true model (with a tendon transmission).
+    x0 : array_like, shape (2n,)
+        The initial state [q; qd], rad, rad/s.
+    substeps : int, optional
+        RK4 steps per period (default 1).
+    u : str, optional
+        The signal of the motor torques (m,), N m, read (default ``"tau"``).
+    x : str, optional
+        The signal of the state (2n,), written (default ``"x"``).
+    y : str, optional
+        The signal of the motor angles (m,), rad, written (default ``"q_m"``): y_k = S q_k + C tau_m,k-1, the
+        tendons' stretch under the torque held before t_k (:func:`~alpes_dyn.model.transmission.torque_before`;
+        at t_0 the first torque's).
+    joint_range : str, optional
+        :func:`~alpes_dyn.simulation.integrate.simulate`'s check of the joint range (default ``"ignore"``).
+    name : str, optional
+        The block's name (default ``"plant"``).
+
+    Raises
+    ------
+    InputError
+        ``model`` not a Model with a tendon transmission, a bad ``x0`` or ``substeps``.
     """
 
     has_response = True
@@ -75,7 +93,19 @@ class SimulatorPlant(Block):
         self._before = np.asarray(u[self.u], dtype=float).copy()
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """One :func:`simulate` call over the record (``u``: one row per sample, the last used by y only)."""
+        """One :func:`simulate` call over the record.
+
+        Parameters
+        ----------
+        u : dict of str to numpy.ndarray
+            The signals read; the motor torques (N, m) or (N+1, m), N m, one row per sample (the last used by y
+            only).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            The state and the motor angles, one row per sample.
+        """
         U = np.asarray(u[self.u], dtype=float)
         N, sub = self.n_periods, self.substeps
         sim = simulate(self.model, self.x0, np.repeat(U[:N], sub, axis=0), N * self.dt, self.dt / sub, "rk4",
@@ -101,14 +131,35 @@ class MujocoPlant(Block):
 
     Parameters
     ----------
-    joints: {signal: joint names}: qpos of those joints (rad), in that order, at t_k.
-    sensors: {signal: sensor name, or names}: their sensordata at t_k (a float, or an array).
-    actuators: {signal: actuator name(s), or None for all}: the controls set from the signal at t_k, held over the
-        period. period_sensors: {signal: sensor name(s)}: sensordata once the period's steps are done (what a
-        sensor measured over the period: the torque applied), period signals.
-    nstep: one ``mj_step(nstep=substeps)`` call per period instead of ``substeps`` calls (the same steps).
-    sample_sensors: after the steps, recompute the position sensors at the new state (``mj_fwdPosition``,
-        ``mj_sensorPos``: ``mj_step``'s sensors are those of the state before its last integration).
+    model : mujoco.MjModel
+        The MuJoCo model.
+    data : mujoco.MjData
+        Its data, in its initial state.
+    substeps : int, optional
+        MuJoCo steps per period (default 1).
+    joints : mapping of str to sequence of str, optional
+        {signal: joint names}: qpos of those joints (rad), in that order, at t_k (default none).
+    sensors : mapping, optional
+        {signal: sensor name, or names}: their sensordata at t_k (a float, or an array; default none).
+    actuators : mapping, optional
+        {signal: actuator name(s), or None for all}: the controls set from the signal at t_k, held over the
+        period (default none).
+    period_sensors : mapping, optional
+        {signal: sensor name(s)}: sensordata once the period's steps are done (what a sensor measured over the
+        period: the torque applied), period signals (default none).
+    nstep : bool, optional
+        One ``mj_step(nstep=substeps)`` call per period instead of ``substeps`` calls (the same steps; default
+        False).
+    sample_sensors : bool, optional
+        After the steps, recompute the position sensors at the new state (``mj_fwdPosition``, ``mj_sensorPos``:
+        ``mj_step``'s sensors are those of the state before its last integration; default False).
+    name : str, optional
+        The block's name (default ``"mujoco"``).
+
+    Raises
+    ------
+    InputError
+        An unknown joint, sensor or actuator, or a bad ``substeps``.
     """
 
     def __init__(self, model: Any, data: Any, *, substeps: int = 1, joints: Mapping[str, Sequence[str]] = {},

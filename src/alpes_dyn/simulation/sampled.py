@@ -89,11 +89,37 @@ def sampled_rk4(model: Model, x0: np.ndarray, u: np.ndarray, dt: float, substeps
     ``dt / substeps`` per sample period ``dt`` (s), the input ``u`` (N, m) (motor torques, N m, with ``input``
     ``"motor"``; joint torques with ``"joint"``) held over each period. :func:`~alpes_dyn.simulation.integrate.
     simulate`'s ``"rk4"`` on ``np.repeat(u, substeps, axis=0)`` with step ``dt / substeps``, its states taken every
-    ``substeps`` steps, to the bit (module docstring); ``compiled`` False: in CasADi's virtual machine.
+    ``substeps`` steps, to the bit (module docstring). No joint-range check: the caller checks the samples
+    (:func:`~alpes_dyn.model.stops.check_range`).
 
-    Raises :class:`~alpes_dyn.InputError` where the states become non-finite (naming the time) or the shapes do
-    not fit. No joint-range check: the caller checks the samples
-    (:func:`~alpes_dyn.model.stops.check_range`)."""
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model.
+    x0 : numpy.ndarray, shape (2n,)
+        The initial state [q; qd], rad and rad/s.
+    u : numpy.ndarray, shape (N, m)
+        The inputs, held over each period: motor torques (N m) with ``input="motor"``, joint torques (N m, (N, n))
+        with ``"joint"``.
+    dt : float
+        The sample period, s.
+    substeps : int
+        RK4 steps per sample period (>= 1).
+    input : str, optional
+        ``"motor"`` (default) or ``"joint"``.
+    compiled : bool, optional
+        The generated C (default True); False: CasADi's virtual machine.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1, 2n)
+        The states at the samples, rad and rad/s.
+
+    Raises
+    ------
+    InputError
+        States that become non-finite (naming the time), or shapes that do not fit.
+    """
     ss = as_statespace(model, input, "encoder" if input == "motor" else "sum")
     dt = _check_dt(dt)
     if isinstance(substeps, bool) or not isinstance(substeps, (int, np.integer)) or substeps < 1:

@@ -45,12 +45,20 @@ class SensitivityModel:
 
     Parameters
     ----------
-    model: the model (motor input through its transmission if it has one, else joint torques).
-    parameters: selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters`.
-    dt: sample period, s. substeps: RK4 steps per sample (default 4: the smooth friction is fast).
-    threads: worker threads of the compiled loop.
-    input_basis: number b of basis functions of an input correction (see the module docstring);
-    input_offset: True is ``input_basis=1`` (a constant correction per segment).
+    model : alpes_dyn.Model
+        The model (motor input through its transmission if it has one, else joint torques).
+    parameters : str or sequence of str or None, optional
+        Selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters` (default None: its default).
+    dt : float, optional
+        The sample period, s (default 1e-3).
+    substeps : int, optional
+        RK4 steps per sample, 1..1000 (default 4: the smooth friction is fast).
+    threads : int or None, optional
+        Worker threads of the compiled loop (default None: the CPUs this process may use).
+    input_offset : bool, optional
+        True is ``input_basis=1`` (a constant correction per segment; default False).
+    input_basis : int, optional
+        The number b of basis functions of an input correction, 0..64 (see the module docstring; default 0).
 
     Attributes
     ----------
@@ -126,20 +134,33 @@ class SensitivityModel:
 
         Parameters
         ----------
-        x0: (B, 2n) initial states. U: (B, N, nu) inputs (N m), U[:, k] held on sample period k.
-        G: (B, N, 3) gravity (m/s^2, base frame) per sample period. theta: (p,) parameter values.
-        offset: the correction coefficients C, (B, nu, nb) per segment or (nu, nb) for all (with
-        ``input_offset=True`` also (B, nu)); default 0. basis: phi, (B, N, nb) per sample (default: ones,
-        which only makes sense for a constant offset). sensitivities: False for the states alone (the
-        same step without its derivatives, compiled on first use: what a line search's trial needs); ``"state"``
-        for the derivatives with respect to x0 alone (X (B, N+1, 2n, 2n), the first 2n columns of the full X by
-        the same operations; compiled on first use: a shooting fit's node sweeps, theta fixed, at a fraction of
-        the cost of all nd directions).
+        x0 : numpy.ndarray, shape (B, nx)
+            The initial states (nx = 2n, or 3n with the LuGre law's bristles).
+        U : numpy.ndarray, shape (B, N, nu)
+            The inputs, N m, U[:, k] held on sample period k.
+        G : numpy.ndarray, shape (B, N, 3)
+            Gravity, m/s^2, base frame, per sample period.
+        theta : numpy.ndarray, shape (p,)
+            The parameter values, in their units.
+        offset : numpy.ndarray or None, optional
+            The correction coefficients C, (B, nu, nb) per segment or (nu, nb) for all (with ``input_offset=True``
+            also (B, nu)); default None: 0.
+        progress : bool, optional
+            A progress bar on stderr (default False).
+        basis : numpy.ndarray, shape (B, N, nb), or None, optional
+            phi per sample (default None: ones, which only makes sense for a constant offset).
+        sensitivities : bool or str, optional
+            True (default): all nd directions; False: the states alone (the same step without its derivatives,
+            compiled on first use: what a line search's trial needs); ``"state"``: the derivatives with respect to
+            x0 alone (X (B, N+1, nx, nx), the first nx columns of the full X by the same operations; compiled on
+            first use: a shooting fit's node sweeps, theta fixed, at a fraction of the cost of all nd directions).
 
         Returns
         -------
-        x: (B, N+1, 2n) states at the samples; X: (B, N+1, 2n, nd) their derivatives with respect
-        to (x0, theta[, vec C]), None without ``sensitivities``.
+        x : numpy.ndarray, shape (B, N+1, nx)
+            The states at the samples.
+        X : numpy.ndarray, shape (B, N+1, nx, nd), or None
+            Their derivatives with respect to (x0, theta[, vec C]); None without ``sensitivities``.
         """
         x0 = np.asarray(x0, dtype=float)
         U = np.asarray(U, dtype=float)

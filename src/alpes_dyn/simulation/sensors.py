@@ -51,11 +51,29 @@ class Sensor(Block):
 
     Parameters
     ----------
-    signal, reading: the names of the signal read and of the reading written.
-    std: the noise's standard deviation, in the signal's units (0: no noise; still drawn when ``rng`` is given).
-    rng: a ``numpy.random.Generator``, or None (no noise drawn). shape: one reading's shape, () for a scalar.
-    draws: rows of noise drawn at the start (default: one per reading); more rows than readings are drawn and
-        left unused (a scenario's old draw kept). timing: ``"sample"`` or ``"period"`` (:data:`TIMINGS`).
+    signal : str
+        The name of the signal read.
+    reading : str
+        The name of the reading written.
+    std : float, optional
+        The noise's standard deviation, in the signal's units (default 0: no noise; still drawn when ``rng`` is
+        given).
+    rng : numpy.random.Generator or None, optional
+        The noise's generator (default None: no noise drawn).
+    shape : tuple of int, optional
+        One reading's shape (default (): a scalar).
+    draws : int or None, optional
+        Rows of noise drawn at the start (default None: one per reading); more rows than readings are drawn and
+        left unused (a scenario's old draw kept).
+    timing : str, optional
+        ``"sample"`` (default) or ``"period"`` (:data:`TIMINGS`).
+    name : str or None, optional
+        The block's name (default None: ``reading``).
+
+    Raises
+    ------
+    InputError
+        A bad name, timing, generator, draw count, noise or shape, named.
     """
 
     has_response = True
@@ -102,7 +120,20 @@ class Sensor(Block):
         self._row = self.noise.tolist() if self.shape == () else self.noise
 
     def measure(self, x: Any, noise: Any) -> Any:
-        """The reading of the true value ``x`` with the noise ``noise`` (same shape; whole records too)."""
+        """The reading of the true value ``x`` with the noise ``noise`` (whole records too).
+
+        Parameters
+        ----------
+        x : float or numpy.ndarray
+            The true value(s), in the signal's units: one reading, or a record (one row per reading).
+        noise : float or numpy.ndarray
+            The noise drawn for them, same shape, in the signal's units.
+
+        Returns
+        -------
+        float or numpy.ndarray
+            The reading(s).
+        """
         raise NotImplementedError
 
     def _shape_error(self, got: tuple[int, ...]) -> InputError:
@@ -126,7 +157,25 @@ class Sensor(Block):
 class Encoder(Sensor):
     """A motor encoder: ``signal`` (rad of motor shaft) + ``noise_counts`` counts of Gaussian noise, quantised to
     ``step`` = 2 pi / counts_per_rev: round((q + n) / step) step (rad), or ``counts=True`` round((q + n) / step +
-    offset) (counts, the zero ``offset`` counts off)."""
+    offset) (counts, the zero ``offset`` counts off).
+
+    Parameters
+    ----------
+    signal : str
+        The name of the signal read (rad of motor shaft).
+    reading : str
+        The name of the reading written (rad, or counts with ``counts``).
+    counts_per_rev : float
+        The encoder's counts per motor revolution (> 0).
+    noise_counts : float, optional
+        The Gaussian noise's standard deviation, counts (default 0).
+    counts : bool, optional
+        Read in counts (default False: in rad).
+    offset : float, optional
+        The zero's offset, counts (default 0).
+    **kw
+        :class:`Sensor`'s other arguments (``rng``, ``shape``, ``draws``, ``timing``, ``name``).
+    """
 
     def __init__(self, signal: str, reading: str, counts_per_rev: float, *, noise_counts: float = 0.0,
                  counts: bool = False, offset: float = 0.0, **kw: Any) -> None:
@@ -151,7 +200,21 @@ class Encoder(Sensor):
 
 class TorqueSensor(Sensor):
     """A motor torque from its current: ``gain`` x ``signal`` (N m) + ``noise`` N m of white noise (``gain`` = 1
-    + the torque constant's error)."""
+    + the torque constant's error).
+
+    Parameters
+    ----------
+    signal : str
+        The name of the signal read.
+    reading : str
+        The name of the reading written.
+    noise : float, optional
+        The white noise's standard deviation, N m (default 0).
+    gain : float, optional
+        The gain (> 0; default 1).
+    **kw
+        :class:`Sensor`'s other arguments (``rng``, ``shape``, ``draws``, ``timing``, ``name``).
+    """
 
     def __init__(self, signal: str, reading: str, *, noise: float = 0.0, gain: float = 1.0, **kw: Any) -> None:
         if isinstance(gain, bool) or not isinstance(gain, (int, float, np.integer, np.floating)) \
@@ -165,7 +228,21 @@ class TorqueSensor(Sensor):
 
 
 class ForceSensor(Sensor):
-    """A FlexiForce: max(0, round((F + n) / resolution) resolution), N (a scalar force: the sensor reads >= 0)."""
+    """A FlexiForce: max(0, round((F + n) / resolution) resolution), N (a scalar force: the sensor reads >= 0).
+
+    Parameters
+    ----------
+    signal : str
+        The name of the signal read.
+    reading : str
+        The name of the reading written.
+    noise : float, optional
+        The noise's standard deviation, N (default 0).
+    resolution : float, optional
+        The quantisation step, N (> 0; default 4.4 / 1024).
+    **kw
+        :class:`Sensor`'s other arguments (``rng``, ``shape``, ``draws``, ``timing``, ``name``).
+    """
 
     def __init__(self, signal: str, reading: str, *, noise: float = 0.0, resolution: float = 4.4 / 1024,
                  **kw: Any) -> None:

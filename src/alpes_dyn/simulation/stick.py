@@ -49,7 +49,23 @@ resolves: it enumerates 3^k modes (243 at 5; an Alpes finger has 3 joints, the t
 
 
 def check_friction_law(law: Any) -> str:
-    """``law`` if it is one of :data:`FRICTION_LAWS`, else :class:`~alpes_dyn.InputError` naming ``friction_law``."""
+    """``law`` if it is one of :data:`FRICTION_LAWS`.
+
+    Parameters
+    ----------
+    law : object
+        The friction law's name.
+
+    Returns
+    -------
+    str
+        ``law``.
+
+    Raises
+    ------
+    InputError
+        Not one of :data:`FRICTION_LAWS`, naming ``friction_law``.
+    """
     if not isinstance(law, str) or law not in FRICTION_LAWS:
         raise InputError(f"friction_law: expected one of {', '.join(FRICTION_LAWS)}, got {law!r:.40}")
     return law
@@ -159,7 +175,18 @@ def mass_blocks(model: Model) -> list[list[int]]:
     """The joints of each block of ``model``'s mass matrix (with its rotors), from its value at a generic
     configuration (the mid-point of each joint's range, or 0.3 rad where the range is open): two joints share a block
     where one drives the other through the tree or a tendon. A fixed-base tree's branches from the root never couple,
-    whatever q, so the blocks found at one q are those at every q."""
+    whatever q, so the blocks found at one q are those at every q.
+
+    Parameters
+    ----------
+    model : alpes_dyn.Model
+        The model.
+
+    Returns
+    -------
+    list of list of int
+        The joints' indices of each block, in order.
+    """
     lo, hi = model.lower, model.upper
     q = np.where(np.isfinite(lo) & np.isfinite(hi) & (hi - lo < 10.0), 0.5 * (lo + hi), 0.3)
     coupled = model.inertia_matrix(q) != 0.0
