@@ -370,15 +370,15 @@ def stop_table(model: Any, per_joint: bool = False) -> dict[str, Any]:
     Returns
     -------
     dict
-        A dict of lists in :attr:`~alpes_dyn.Model.joint_names` order: ``stiffness`` (N m/rad) and ``damping``
-    (N m s/rad), None on a joint without a finite limit (no stop); ``source`` per joint: ``"spec"`` (the spec's
-    ``[stops]`` table gives both; ``"spec k, sized d"`` or ``"sized k, spec d"`` where it gives one), ``"alpes"``
-    (the Alpes models' :data:`ALPES_STOP`), ``"sized"`` (:func:`sized_stops`: the robot's largest static torque into a stop over
-    :data:`STOP_PENETRATION`, critical damping on its lightest limited joint; per joint: that joint's own), ``"least
-    of the others"`` (per joint, a limited joint that nothing pushes into a stop), ``"none"`` (no finite limit); and
-    ``torque_into_stop`` (N m, the sizing's tau*_i), ``penetration_rad`` (p*). Where nothing sizes the stops
-    (:func:`sized_stops` refuses) every stiffness and damping is None, the sources ``"not sized"`` and ``error`` the
-    reason; otherwise ``error`` is None.
+        Lists in :attr:`~alpes_dyn.Model.joint_names` order: ``stiffness`` (N m/rad) and ``damping``
+        (N m s/rad), None on a joint without a finite limit (no stop); ``source`` per joint: ``"spec"`` (the spec's
+        ``[stops]`` table gives both; ``"spec k, sized d"`` or ``"sized k, spec d"`` where it gives one),
+        ``"alpes"`` (the Alpes models' :data:`ALPES_STOP`), ``"sized"`` (:func:`sized_stops`: the robot's largest
+        static torque into a stop over :data:`STOP_PENETRATION`, critical damping on its lightest limited joint; per
+        joint: that joint's own), ``"least of the others"`` (per joint, a limited joint that nothing pushes into a
+        stop), ``"none"`` (no finite limit); and ``torque_into_stop`` (N m, the sizing's tau*_i),
+        ``penetration_rad`` (p*). Where nothing sizes the stops (:func:`sized_stops` refuses) every stiffness and
+        damping is None, the sources ``"not sized"`` and ``error`` the reason; otherwise ``error`` is None.
 
     Raises
     ------
