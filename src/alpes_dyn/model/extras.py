@@ -55,9 +55,9 @@ def spring_stiffness(K: np.ndarray, spring: str, b: float, r: float) -> np.ndarr
         The spring model, one of :data:`SPRING_MODELS` (module doc): ``"torsional"`` k = K, ``"report"``
         k = K (b/2 + r)^2, ``"none"`` k = 0.
     b : float
-        The report's b, m (the ``"report"`` model's lever b/2 + r).
+        The spring's thickness b, m (eq. 2.14; used by ``"report"`` only).
     r : float
-        The report's r, m.
+        The phalanges' pulley radius r, m (used by ``"report"`` only).
 
     Returns
     -------
