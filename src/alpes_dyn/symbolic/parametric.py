@@ -348,8 +348,10 @@ class ParametricDynamics:
         return out
 
     def inertia_matrix(self, q: cs.SX, theta: cs.SX) -> cs.SX:
-        """A(q; theta) + I_a, (n, n), kg m^2."""
-        M = cs.SX.zeros(self.n, self.n)
+        """A(q; theta) + I_a, (n, n), kg m^2, with the tree's structural zeros (:func:`~alpes_dyn.symbolic.tree_sparsity.
+        tree_pattern`: the bodies' terms' own patterns, summed), so that :func:`block_solve` and the looped
+        sensitivities solve a hand's fingers apart."""
+        M = cs.SX(self.n, self.n)  # (structurally empty: SX.zeros would make every entry a structural 0)
         for k, m0, be in self._mass_params:
             M = M + (theta[k] / m0) * be.mass_matrix(q)
         if self._rest is not None:
