@@ -87,6 +87,22 @@ def test_parametric_forward_dynamics_matches_the_numeric_model(hand):
     assert np.abs(np.array(f(x, w, t)).ravel() - ref).max() <= 1e-9 * np.abs(ref).max()
 
 
+def test_parametric_mass_matrix_keeps_the_tree_pattern(hand):
+    """ParametricDynamics' M (what the fit's sensitivities and block_solve see) has the tree's pattern, not a dense
+    one of structural zeros (it was summed from SX.zeros, which made the hand's fingers one block), and equals
+    Pinocchio's CRBA at the nominal masses."""
+    pd = ParametricDynamics(hand, "m,K")
+    q = cs.SX.sym("q", hand.n)
+    M = pd.inertia_matrix(q, pd.theta)
+    assert np.array_equal(_pattern(M.sparsity()), _pattern(tree_pattern(PARENTS)))
+    fM = cs.Function("M", [q, pd.theta], [M])
+    rng = np.random.default_rng(8)
+    for _ in range(3):
+        x = hand.random_state(rng)[0]
+        A = hand.inertia_matrix(x)
+        assert np.abs(np.array(fM(x, pd.nominal)) - A).max() <= 1e-12 * np.abs(A).max()
+
+
 def test_block_solve_leaves_first_no_fill():
     sp = tree_pattern(PARENTS)
     order = elimination_order(sp, range(5))

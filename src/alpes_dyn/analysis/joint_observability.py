@@ -33,8 +33,8 @@ import numpy as np
 from ..checks import as_float_array
 from ..errors import InputError
 from ..model.robot import Model
-from ..simulation.integrate import joint_accelerations
 from ..symbolic.statespace import StateSpace
+from ..symbolic.tree_sparsity import block_solve
 
 __all__ = ["JointObservability", "joint_observability", "UNOBSERVED_LIMIT", "WINDOW", "STRIDE"]
 
@@ -82,47 +82,76 @@ class JointObservability:
                 "windows": int(self.t.size), "friction_unknown": list(self.friction)}
 
 
-def _linearised(model: Model) -> tuple[cs.Function, int]:
-    """(x, u) -> (A_c, E_c, H): the Jacobians of the continuous dynamics x' = f(x, u, b) driven by the motor
-    torques u (N m) plus a torque b on each joint with Coulomb friction (at b = 0), and of the encoders h(x); and
-    the number of those joints."""
+def _linearised(model: Model) -> tuple[cs.Function, int, np.ndarray]:
+    """(x, u) -> (M, g_x, H): the terms of the continuous dynamics x' = f(x, u, b) = [v; qdd], M qdd = r (eq. 3.3)
+    driven by the motor torques u (N m) plus a torque b on each joint with Coulomb friction (at b = 0), as
+    :func:`_jacobians` differentiates them (the implicit derivative: g = r - M a at a = qdd, so dqdd/dx = M^-1 g_x
+    and dqdd/db = M^-1 S_b, instead of the Jacobian through the solve: for the Shadow hand with its wrist free a
+    fifth of the instructions); the encoders' Jacobian H; the number of those joints and S_b (n, nb)."""
     ss = StateSpace(model, input="motor", output="encoder")
     n = model.n
     fr = np.flatnonzero(np.asarray(model.extras.coulomb) > 0)
-    x, u, b = cs.SX.sym("x", 2 * n), cs.SX.sym("u", ss.n_inputs), cs.SX.sym("b", fr.size)
+    x, u = cs.SX.sym("x", 2 * n), cs.SX.sym("u", ss.n_inputs)
     q, v = x[:n], x[n:]
     tau = ss.input_torque(q, u, v)
-    if fr.size:
-        Sb = np.zeros((n, fr.size))
-        Sb[fr, np.arange(fr.size)] = 1.0
-        tau = tau + cs.mtimes(cs.DM(Sb), b)
-    f = cs.vertcat(v, joint_accelerations(ss, q, v, tau, None))
-    A, E = cs.jacobian(f, x), cs.jacobian(f, b)
-    if fr.size:  # at b = 0
-        A, E = cs.substitute(A, b, cs.DM.zeros(fr.size)), cs.substitute(E, b, cs.DM.zeros(fr.size))
+    Sb = np.zeros((n, fr.size))
+    Sb[fr, np.arange(fr.size)] = 1.0
+    sym = ss.sym  # joint_accelerations' forward dynamics, its two terms apart
+    r = sym.net_torque(q, v, tau, sym.extras.passive_torque(q, v, ss.smooth, cs), None, ss.tip)
+    M = sym.inertia_matrix(q)
+    qdd = block_solve(M, r)
+    a = cs.SX.sym("a", n)
+    gx = cs.substitute(cs.jacobian(r - cs.mtimes(M, a), x), a, qdd)
     H = cs.jacobian(ss.h_function(x), x)
-    return cs.Function("lin", [x, u], cs.cse([cs.densify(A), cs.densify(E), cs.densify(H)])), int(fr.size)
+    return cs.Function("lin", [x, u], cs.cse([cs.densify(M), cs.densify(gx), cs.densify(H)])), int(fr.size), Sb
+
+
+def _jacobians(M: np.ndarray, gx: np.ndarray, Sb: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(A_c (N, 2n, 2n), E_c (N, 2n, nb)) of x' = [v; qdd] from :func:`_linearised`'s M (N, n, n) and g_x (N, n, 2n):
+    [[0, I], [M^-1 g_x]] and [[0], [M^-1 S_b]], every sample at once."""
+    N, n = M.shape[0], M.shape[1]
+    sol = np.linalg.solve(M, np.concatenate([gx, np.broadcast_to(Sb, (N,) + Sb.shape)], axis=2))
+    Ac = np.zeros((N, 2 * n, 2 * n))
+    Ac[:, :n, n:] = np.eye(n)
+    Ac[:, n:] = sol[:, :, :2 * n]
+    Ec = np.zeros((N, 2 * n, Sb.shape[1]))
+    Ec[:, n:] = sol[:, :, 2 * n:]
+    return Ac, Ec
+
+
+HELD_CHUNK = 512
+"""Samples per batch of :func:`_held` (its products' memory: the whole hand's 4000 samples at once held 0.8 GB)."""
 
 
 def _held(Ac: np.ndarray, Ec: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
-    """(A, E) of one sample with the input held (zero-order hold): exp([[A_c, E_c], [0, 0]] dt), every sample at
-    once, by scaling and squaring (the matrices scaled by 2^-s to a norm below 1/2, the Taylor series to its 12th
-    term, 2^-12 / 13! relative: below rounding, then squared s times; scipy's expm, a loop over the samples, took
-    10 s on 8000 of them); exact for the linearised dynamics however stiff the smooth friction law makes them."""
+    """(A, E) of one sample with the input held (zero-order hold): exp([[A_c, E_c], [0, 0]] dt) = [[A, E], [0, I]],
+    every sample at once, by scaling and squaring (each sample's matrix scaled by 2^-s to a 1-norm below 1/2, the
+    Taylor series to its 12th term, 2^-12 / 13! relative: below rounding, then squared s times; scipy's expm, a loop
+    over the samples, took 10 s on 8000 of them); exact for the linearised dynamics however stiff the smooth friction
+    makes them. The zero rows kept out of the products: with C = [A_c, E_c] dt 2^-s, each term is [T, U] with
+    [T_k, U_k] = T_k-1 C / k, and a squaring [P, Q] -> P [P, Q] + [0, Q]."""
     N, nx, nb = Ec.shape
-    M = np.zeros((N, nx + nb, nx + nb))
-    M[:, :nx, :nx], M[:, :nx, nx:] = Ac * dt, Ec * dt
-    norm = float(np.abs(M).sum(axis=1).max()) if N else 0.0  # the largest 1-norm
-    s = max(0, int(np.ceil(np.log2(norm / 0.5)))) if norm > 0.5 else 0
-    M /= 2.0**s
-    Phi = np.broadcast_to(np.eye(nx + nb), M.shape).copy()
-    term = Phi.copy()
-    for k in range(1, 13):  # the Taylor series, every sample at once
-        term = term @ M / k
-        Phi += term
-    for _ in range(s):
-        Phi = Phi @ Phi
-    return Phi[:, :nx, :nx], Phi[:, :nx, nx:]
+    A, E = np.empty((N, nx, nx)), np.empty((N, nx, nb))
+    for a in range(0, N, HELD_CHUNK):  # (a loop over chunks of samples)
+        sl = slice(a, min(a + HELD_CHUNK, N))
+        C = np.concatenate([Ac[sl], Ec[sl]], axis=2) * dt
+        norm = np.abs(C).sum(axis=1).max(axis=1)  # each sample's 1-norm (the zero rows add nothing)
+        s = np.where(norm > 0.5, np.ceil(np.log2(np.maximum(norm, 0.5) / 0.5)), 0.0).astype(int)
+        C /= (2.0 ** s)[:, None, None]
+        Phi = np.zeros(C.shape)
+        Phi[:, :, :nx] = np.eye(nx)
+        term = Phi.copy()
+        for k in range(1, 13):  # the Taylor series, the chunk's samples at once
+            term = term[:, :, :nx] @ C / k
+            Phi += term
+        for r in range(int(s.max(initial=0))):  # each sample squared its own s times
+            m = s > r
+            P = Phi[m]
+            sq = P[:, :, :nx] @ P
+            sq[:, :, nx:] += P[:, :, nx:]
+            Phi[m] = sq
+        A[sl], E[sl] = Phi[:, :, :nx], Phi[:, :, nx:]
+    return A, E
 
 
 def _window_std(A: np.ndarray, E: np.ndarray, H: np.ndarray, Rinv: np.ndarray, starts: np.ndarray, L: int,
@@ -181,13 +210,14 @@ def joint_observability(model: Model, states: Any, inputs: Any, dt: float, measu
             raise InputError(f"{name}: expected a positive number, got {x!r:.40}")
     L = min(N, max(1, int(round(window / dt))))
     starts = np.arange(0, N - L + 1, max(1, int(round(stride / dt))))
-    lin, nb = _linearised(model)
+    lin, nb, Sb = _linearised(model)
     # the Jacobians at every sample (the last one's input: the last held)
-    Ac, Ec, H = (np.asarray(a) for a in lin.map(N)(X[:, : 2 * n].T, np.vstack([U, U[-1:]]).T))
-    Ac = Ac.reshape(2 * n, N, 2 * n).transpose(1, 0, 2)  # the map stacks the samples side by side
-    Ec = Ec.reshape(2 * n, N, nb).transpose(1, 0, 2)
+    Mk, gx, H = (np.asarray(a) for a in lin.map(N)(X[:, : 2 * n].T, np.vstack([U, U[-1:]]).T))
+    Mk = Mk.reshape(n, N, n).transpose(1, 0, 2)  # the map stacks the samples side by side
+    gx = gx.reshape(n, N, 2 * n).transpose(1, 0, 2)
     H = H.reshape(m, N, 2 * n).transpose(1, 0, 2)
-    A, E = _held(Ac, Ec, float(dt))
+    A, E = _held(*_jacobians(Mk, gx, Sb), float(dt))
+    Mk = gx = None
     coulomb = np.asarray(model.extras.coulomb, dtype=float)
     fr = np.flatnonzero(coulomb > 0)
     prior = np.concatenate([np.full(n, PRIOR_STD[0] ** -2), np.full(n, PRIOR_STD[1] ** -2), coulomb[fr] ** -2.0])

@@ -97,6 +97,6 @@ def looped_variational_rk4_step(rhs: cs.SX, M: cs.SX, r: cs.SX, x: cs.SX, w: cs.
     X = cs.reshape(z[nx:], nx, nd)
     f = f_rhs(z[:nx], wm)
     Mm, gx, gp = terms(z[:nx], wm, f[n:])
-    dv = cs.solve(cs.densify(Mm), cs.mtimes(gx, X) + cs.horzcat(cs.MX(n, nx), cs.densify(gp)), "qr")
+    dv = cs.solve(Mm, cs.mtimes(gx, X) + cs.horzcat(cs.MX(n, nx), cs.densify(gp)), "ldl")
     fa = cs.Function("sens_rhs_x", [z, wm], [cs.vertcat(f, cs.vec(cs.vertcat(X[n:, :], dv)))])
     return _rk4_calling(fa, h, "sens_step")

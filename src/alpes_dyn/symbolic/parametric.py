@@ -423,7 +423,9 @@ class ParametricDynamics:
         return out
 
     def inertia_matrix(self, q: cs.SX, theta: cs.SX) -> cs.SX:
-        """A(q; theta) + I_a, (n, n), kg m^2.
+        """A(q; theta) + I_a, (n, n), kg m^2, with the tree's structural zeros (:func:`~alpes_dyn.symbolic.tree_sparsity.
+        tree_pattern`: the bodies' terms' own patterns, summed), so that :func:`block_solve` and the looped
+        sensitivities solve a hand's fingers apart.
 
         Parameters
         ----------
@@ -432,7 +434,7 @@ class ParametricDynamics:
         theta : casadi.SX, shape (p,)
             The parameter values, in their units.
         """
-        M = cs.SX.zeros(self.n, self.n)
+        M = cs.SX(self.n, self.n)  # (structurally empty: SX.zeros would make every entry a structural 0)
         for k, m0, be in self._mass_params:
             M = M + (theta[k] / m0) * be.mass_matrix(q)
         if self._rest is not None:

@@ -109,23 +109,27 @@ class GaussNewton:
         """Stage 1: the nodes alone (theta fixed, intervals decoupled), ``sweeps`` Levenberg-Marquardt steps per
         interval, from :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`; the
         Jacobians with respect to the start states alone (``evaluate(..., jac="state")``: the same numbers as the
-        first nx columns of the whole Jacobian, at a third to a fifth of its cost)."""
+        first nx columns of the whole Jacobian, at a third to a fifth of its cost). After the first sweep only the
+        intervals whose start moved are evaluated again (:meth:`~alpes_dyn.estimation.identification.shooting.
+        ShootingProblem.state_rows`; the intervals are decoupled, so the others' rows are the ones they had)."""
         nx, n_int = pb.nx, pb.n_int
         nodes = nodes.copy()
         mu_n = 1e-2 * np.ones(n_int)
-        for _ in range(sweeps):
-            e = pb.evaluate(nodes, offs, glob, jac="state")  # the start states' sensitivities alone
-            A = e.J
+        e = pb.evaluate(nodes, offs, glob, jac="state")  # the start states' sensitivities alone
+        r, A = e.r, e.J
+        e = None
+        for sweep in range(sweeps):
+            if sweep and better.any():
+                r[better], A[better] = pb.state_rows(nodes, offs, glob, np.flatnonzero(better))
             Hn = np.einsum("ski,skj->sij", A, A)
-            gn = np.einsum("sk,ski->si", e.r, A)
+            gn = np.einsum("sk,ski->si", r, A)
             Dn = np.einsum("sii->si", Hn)
             dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)),
                                   gn[:, :, None])
             r2 = pb.evaluate(nodes + dn[:, :, 0], offs, glob, jac=False).r
-            better = np.sum(r2**2, axis=1) < np.sum(e.r**2, axis=1)
+            better = np.sum(r2**2, axis=1) < np.sum(r**2, axis=1)
             nodes[better] += dn[better, :, 0]
             mu_n = np.where(better, mu_n / 10, mu_n * 10)
-            e = A = None  # this sweep's Jacobian freed before the next one's
         return nodes
 
     @staticmethod
