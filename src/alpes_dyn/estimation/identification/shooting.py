@@ -345,10 +345,28 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
 
     def state_rows(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                    only: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """(r (k, R), J (k, R, nx)): :meth:`evaluate`'s residuals and, as with ``jac="state"``, their Jacobian with
-        respect to the start states, of the intervals ``only`` (k indices) alone, by the same operations per interval
-        (stage 1's sweeps recompute the intervals whose start moved, the others' rows unchanged: on the Shadow hand
-        with its wrist free, 22 to 60 of 80 intervals per sweep)."""
+        """:meth:`evaluate`'s residuals and, as with ``jac="state"``, their Jacobian with respect to the start
+        states, of the intervals ``only`` alone, by the same operations per interval (stage 1's sweeps recompute
+        only the intervals whose start moved; the others' rows are unchanged).
+
+        Parameters
+        ----------
+        nodes : numpy.ndarray, shape (K, nx)
+            The intervals' start states (rad, rad/s).
+        offs : numpy.ndarray
+            The per-interval offsets, as :meth:`evaluate` takes them.
+        glob : numpy.ndarray, shape (p,)
+            The global parameters (log values), as :meth:`evaluate` takes them.
+        only : numpy.ndarray of int, shape (k,)
+            The indices of the intervals to evaluate.
+
+        Returns
+        -------
+        r : numpy.ndarray, shape (k, R)
+            The intervals' weighted residuals.
+        J : numpy.ndarray, shape (k, R, nx)
+            Their Jacobian with respect to each interval's start state.
+        """
         theta = self.values(glob)
         u_raw = self.torque_at(glob, offs, gained=False) if self.comp_cols else None
         g = self.gain(glob)
