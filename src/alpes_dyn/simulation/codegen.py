@@ -103,7 +103,10 @@ def check_cache_folder(d: Path, what: str) -> Path:
     return d
 
 
-_CFLAGS = ("-O3", "-fno-math-errno", "-shared", "-fPIC", "-pthread")
+_CFLAGS = ("-O3", "-fno-math-errno", "-ffp-contract=off", "-shared", "-fPIC", "-pthread")
+"""The compiled functions' flags. ``-ffp-contract=off``: no multiply and add fused into one rounding, so that two
+builds of the same operations (a compiled function and the exported C, built ``-std=c99``, which fuses none) give
+the same numbers on every target, those with a fused multiply-add (aarch64) too."""
 _LANES = 2
 _LARGE_SOURCE = 500_000
 """Generated C above this many characters is compiled at ``-O1`` instead of ``-O3``. Measured (2-core machine):
@@ -540,7 +543,7 @@ class CasadiStepLoop:
         if self.jit:  # the step JIT-compiled once (C through CasADi's shell compiler), the loops CasADi's
             ins = step.sx_in() if step.is_a("SXFunction") else step.mx_in()
             step = cs.Function("alpes_jit_step", ins, step.call(ins),
-                               {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2"]}})
+                               {"jit": True, "compiler": "shell", "jit_options": {"flags": ["-O2", "-ffp-contract=off"]}})
         self._step = step
         self._maps: dict[tuple[int, int], cs.Function] = {}
         self.library, self.compiled, self.compile_seconds = None, False, 0.0
