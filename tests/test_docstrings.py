@@ -148,8 +148,6 @@ MODULES_NOT_YET: dict[str, int] = {
     "analysis.observability": 1,
     "analysis.observability_matrix": 10,
     "bench.effects": 4,
-    "bench.mujoco_hand": 1,
-    "bench.mujoco_plant": 9,
     "estimation.cexport.cexport": 5,
     "estimation.cexport.cexport_chains": 3,
     "estimation.cexport.cexport_ekf": 1,
