@@ -148,8 +148,6 @@ MODULES_NOT_YET: dict[str, int] = {
     "estimation.cexport.cexport_chains": 3,
     "estimation.cexport.cexport_ekf": 1,
     "estimation.cexport.cexport_substeps": 1,
-    "estimation.experiments.hand_session": 4,
-    "estimation.experiments.on_hand": 2,
     "estimation.identification.adequacy": 12,
     "estimation.identification.bounds": 4,
     "estimation.identification.drift": 5,
