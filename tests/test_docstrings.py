@@ -180,9 +180,7 @@ MODULES_NOT_YET: dict[str, int] = {
     "estimation.observers.scenario": 6,
     "model.friction": 4,
     "simulation.variational": 2,
-    "studies.realism": 20,
     "studies.realism_friction": 7,
-    "studies.sweep": 7,
 }
 """Of each module's own public callables -- the names of its ``__all__`` defined in it, which the API reference
 (``docs/api/``) renders -- how many do not yet document every argument as ``name : type``: 516 of 859 in 114
