@@ -166,31 +166,61 @@ def fisher_information(model: Model, parameters: str | Sequence[str] | None = No
 
     Parameters
     ----------
-    model: the finger (:class:`~alpes_dyn.Model` with a transmission: the motor input, the encoder output
-        y = S q; a model without one: joint torques in, joint encoders y = q out, ``counts_per_rev`` given).
-    parameters: selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters`.
-    U: (N,) or (N, motors) motor torques, N m, held over each of the N sample periods.
-    G: gravity, m/s^2 (base frame): (3,) for the whole experiment or (N, 3) per period (several hand
-        orientations); default the model's.
-    dt: sample period, s (default 1e-3).
-    design: optional object with any of the fields ``dt``, ``substeps``, ``encoder_noise_counts``,
-        ``camera_times``, ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiments.experiment.ExperimentDesign`):
-        the defaults of the arguments of the same names.
-    x0: initial state (2n,); default the static equilibrium under U[0] and G[0] (where the balance alone
-        does not place a joint without spring, the thumb's ab/adduction, that joint held mid-range).
-    theta: parameter values (p,), default the model's (nominal).
-    encoder_noise_counts: Gaussian encoder noise, counts (default 0.5); with ``quantisation`` the
-        quantisation's step / sqrt(12) is added in quadrature.
-    camera_times: times (s, within the experiment, on the sample grid) where every joint angle is
-        measured once, with noise ``camera_noise`` (rad, default 0.1 degree).
-    initial_state: ``"unknown"`` (nuisance parameters, marginalised; default) or ``"known"``.
-    substeps: RK4 steps per sample period (default the design's, 4, or more where the model's friction asks for
-        them: :func:`~alpes_dyn.simulation.integrate.stable_substeps`, as the experiment's simulation; with 4 a
-        dry friction of v_s = 3 mrad/s made the Shadow finger's sensitivities overflow into a FIM of 1e39 with
+    model : Model
+        The finger (:class:`~alpes_dyn.Model` with a transmission: the motor input, the encoder output y = S q; a
+        model without one: joint torques in, joint encoders y = q out, ``counts_per_rev`` given).
+    parameters : str, sequence of str or None, optional
+        The selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters`.
+    U : array_like, shape (N,) or (N, motors)
+        The motor torques, N m, held over each of the N sample periods.
+    G : array_like, shape (3,) or (N, 3), optional
+        Gravity, m/s^2 (base frame): for the whole experiment or per period (several hand orientations); default
+        the model's.
+    dt : float or None, optional
+        The sample period, s (default 1e-3).
+    design : object, optional
+        Any object with any of the fields ``dt``, ``substeps``, ``encoder_noise_counts``, ``camera_times``,
+        ``camera_noise`` (e.g. :class:`alpes_dyn.estimation.experiments.experiment.ExperimentDesign`): the
+        defaults of the arguments of the same names.
+    x0 : array_like, shape (2n,), optional
+        The initial state; default the static equilibrium under U[0] and G[0] (where the balance alone does not
+        place a joint without spring, the thumb's ab/adduction, that joint held mid-range).
+    theta : array_like, shape (p,), optional
+        The parameter values, default the model's (nominal).
+    encoder_noise_counts : float or None, optional
+        The Gaussian encoder noise, counts (default 0.5).
+    quantisation : bool, optional
+        With it (default) the quantisation's step / sqrt(12) is added in quadrature to the encoder noise.
+    camera_times : sequence of float or None, optional
+        Times (s, within the experiment, on the sample grid) where every joint angle is measured once, with noise
+        ``camera_noise``.
+    camera_noise : float or None, optional
+        The camera's noise, rad (default 0.1 degree).
+    initial_state : str, optional
+        ``"unknown"`` (nuisance parameters, marginalised; default) or ``"known"``.
+    substeps : int or None, optional
+        RK4 steps per sample period (default the design's, 4, or more where the model's friction asks for them:
+        :func:`~alpes_dyn.simulation.integrate.stable_substeps`, as the experiment's simulation; with 4 a dry
+        friction of v_s = 3 mrad/s made the Shadow finger's sensitivities overflow into a FIM of 1e39 with
         negative diagonal entries).
-    sensitivity: a :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` of the same model, parameters, dt
-        and substeps to reuse (its compiled code), else one is built.
-    counts_per_rev: encoder resolution (default the transmission's; required without a transmission).
+    sensitivity : SensitivityModel, optional
+        A :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` of the same model, parameters, dt and
+        substeps to reuse (its compiled code), else one is built.
+    counts_per_rev : float or None, optional
+        The encoder resolution, counts per revolution (default the transmission's; required without a
+        transmission).
+
+    Returns
+    -------
+    FisherReport
+        The information, its bounds and the experiment's settings.
+
+    Raises
+    ------
+    ModelError
+        ``model`` is not a Model.
+    InputError
+        An unknown ``initial_state`` or a malformed input.
     """
     t0 = time.perf_counter()
     if not isinstance(model, Model):

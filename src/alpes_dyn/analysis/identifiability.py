@@ -122,7 +122,27 @@ def _fmt(c: float) -> str:
 def name_direction(v: Sequence[float], names: Sequence[str], tol: float = 1e-6) -> str:
     """Text for an unidentifiable direction ``v`` over parameter ``names`` in log coordinates (see the
     module doc): ``"K_2/m_2 only"``, ``"K_2·m_2 only"``, ``"common scale of ...: only their ratios"``
-    or ``"0.71·K_2 + 0.71·m_2 (log)"``. Components below ``tol`` times the largest are left out."""
+    or ``"0.71·K_2 + 0.71·m_2 (log)"``.
+
+    Parameters
+    ----------
+    v : sequence of float
+        The direction, one component per parameter, in log coordinates.
+    names : sequence of str
+        The parameters' names.
+    tol : float, optional
+        Components below ``tol`` times the largest are left out (default 1e-6).
+
+    Returns
+    -------
+    str
+        The text.
+
+    Raises
+    ------
+    InputError
+        ``v`` not one finite component per name, or zero.
+    """
     v = np.asarray(v, dtype=float).reshape(-1)
     if v.size != len(names):
         raise InputError(f"v: expected {len(names)} components (one per name), got {v.size}")
@@ -272,22 +292,44 @@ def identifiability(system: Model | str, parameters: str | Sequence[str] | None 
 
     Parameters
     ----------
-    system: a :class:`~alpes_dyn.Model` or an Alpes model name (built with ``friction``).
-    parameters: selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters` (``"K"``, ``"K,m"``,
+    system : Model or str
+        A :class:`~alpes_dyn.Model` or an Alpes model name (built with ``friction``).
+    parameters : str, sequence of str or None, optional
+        The selection for :func:`~alpes_dyn.symbolic.parametric.select_parameters` (``"K"``, ``"K,m"``,
         ``["K_1", "m_2"]``...; default K, m and friction where the model has it).
-    output: the measured output, as for :class:`~alpes_dyn.StateSpace` (default ``"encoder"``: S q,
-        the motor encoder; ``"sum"``, ``"joints"``, a matrix...).
-    input: ``"motor"`` (default when the model has a transmission) or ``"joint"``.
-    points, seed: random points of the generic rank (1 to 10000) and their seed.
-    theta: parameter values (p,) where O is evaluated (default the nominal ones; positive).
-    order: highest output derivative (default: up to 2n + p - 1, stopping at full rank or when the
-        rank stops growing, as ``order="auto"`` of :func:`~alpes_dyn.analysis.observability.check_observability`).
-    friction: for a model name, build it with friction (default: when ``parameters`` names F_s, F_v or
-        friction). The smooth Coulomb sign tanh(qd / v_s) makes the high output derivatives large and the
-        normalised singular values small (finger3, K: ~5e-7 with friction, ~1e-3 without).
-    max_operations: size cap of one derivative order's function (CasADi operations).
-    coordinates: ``"log"`` (default: parameter columns d/d log theta, unit-free) or ``"absolute"``
-        (d/d theta in the parameters' units; changes the singular values, not the rank).
+    output : str or array_like, optional
+        The measured output, as for :class:`~alpes_dyn.StateSpace` (default ``"encoder"``: S q, the motor
+        encoder; ``"sum"``, ``"joints"``, a matrix...).
+    input : str or None, optional
+        ``"motor"`` (default when the model has a transmission) or ``"joint"``.
+    points : int, optional
+        The random points of the generic rank, 1 to 10000 (default 8).
+    seed : int, optional
+        The points' seed (default 0).
+    theta : array_like, shape (p,), optional
+        The parameter values where O is evaluated (default the nominal ones; positive).
+    order : int or None, optional
+        The highest output derivative (default: up to 2n + p - 1, stopping at full rank or when the rank stops
+        growing, as ``order="auto"`` of :func:`~alpes_dyn.analysis.observability.check_observability`).
+    friction : bool or None, optional
+        For a model name, build it with friction (default: when ``parameters`` names F_s, F_v or friction). The
+        smooth Coulomb sign tanh(qd / v_s) makes the high output derivatives large and the normalised singular
+        values small (finger3, K: ~5e-7 with friction, ~1e-3 without).
+    max_operations : int, optional
+        The size cap of one derivative order's function, CasADi operations.
+    coordinates : str, optional
+        ``"log"`` (default: parameter columns d/d log theta, unit-free) or ``"absolute"`` (d/d theta in the
+        parameters' units; changes the singular values, not the rank).
+
+    Returns
+    -------
+    IdentifiabilityReport
+        The rank, the absent parameters and the unidentifiable directions named.
+
+    Raises
+    ------
+    InputError
+        ``points``, ``seed``, ``order`` or ``coordinates`` out of range.
     """
     t0 = time.perf_counter()
     points = _check_int(points, "points", 1, MAX_POINTS)

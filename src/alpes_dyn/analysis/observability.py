@@ -100,7 +100,29 @@ _SPEED = 2.0  # rad/s, bound of the sampled joint velocities (as Model.random_st
 # ----------------------------------------------------------------------------- sampling
 def sample_points(ss: StateSpace, points: int, rng: np.random.Generator, order: int,
                   constant_input: bool = False) -> tuple[np.ndarray, np.ndarray]:
-    """Random points (X (N, n_states), W (N, w_size)) for the generic rank, see the module doc."""
+    """Random points (X (N, n_states), W (N, w_size)) for the generic rank, see the module doc.
+
+    Parameters
+    ----------
+    ss : StateSpace
+        The system.
+    points : int
+        The number of points N.
+    rng : numpy.random.Generator
+        The random source.
+    order : int
+        The highest output derivative (the inputs' derivatives up to it are drawn).
+    constant_input : bool, optional
+        One input per point, its derivatives zero (default False).
+
+    Returns
+    -------
+    X : numpy.ndarray, shape (N, n_states)
+        The states [q; qd], joint velocities within 2 rad/s.
+    W : numpy.ndarray, shape (N, w_size)
+        The inputs and their derivatives, each input scaled by the largest gravity + spring torque of the joints it
+        drives.
+    """
     q, v = ss.model.random_state(rng, _SPEED, size=points)
     scale = _input_scale(ss, q)
     reps = 1 if constant_input else max(order, 1)

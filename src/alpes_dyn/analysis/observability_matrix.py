@@ -41,11 +41,27 @@ MAX_INSTRUCTIONS = 2_000_000
 def normalised_singular_values(O: np.ndarray, row_scale: np.ndarray | None = None) -> np.ndarray:
     """Singular values of the row-normalised O divided by the largest, zero-padded to the column count.
 
-    ``O``: (..., r, c). Each row is scaled to unit norm; zero rows stay zero, and so do rows whose norm
-    is at most max(r, c) * eps * ``row_scale`` (r,) (e.g. the row's largest norm over generic points,
-    so that rounding noise in a row that vanishes at a special point is not blown up to a unit row).
-    Returns (..., c), decreasing, the first entry 1 (0 if O is zero). The last entry is the normalised
-    smallest singular value s_c / s_1 (0 when r < c).
+    Each row is scaled to unit norm; zero rows stay zero, and so do rows whose norm is at most
+    max(r, c) * eps * ``row_scale``.
+
+    Parameters
+    ----------
+    O : numpy.ndarray, shape (..., r, c)
+        The matrix (or a stack of them).
+    row_scale : numpy.ndarray, shape (r,), or None, optional
+        Each row's scale, e.g. the row's largest norm over generic points, so that rounding noise in a row that
+        vanishes at a special point is not blown up to a unit row (default None: only zero rows stay zero).
+
+    Returns
+    -------
+    numpy.ndarray, shape (..., c)
+        Decreasing, the first entry 1 (0 if O is zero). The last entry is the normalised smallest singular value
+        s_c / s_1 (0 when r < c).
+
+    Raises
+    ------
+    InputError
+        ``O`` not a matrix, or not finite.
     """
     O = np.asarray(O, dtype=float)
     if O.ndim < 2:
@@ -66,7 +82,20 @@ def normalised_singular_values(O: np.ndarray, row_scale: np.ndarray | None = Non
 
 def numerical_rank(O: np.ndarray, row_scale: np.ndarray | None = None) -> np.ndarray | int:
     """Rank of O (..., r, c): singular values of the row-normalised O above max(r, c) * eps * s_1
-    (``row_scale``: see :func:`normalised_singular_values`)."""
+    (``row_scale``: see :func:`normalised_singular_values`).
+
+    Parameters
+    ----------
+    O : numpy.ndarray, shape (..., r, c)
+        The matrix (or a stack of them).
+    row_scale : numpy.ndarray, shape (r,), or None, optional
+        Each row's scale (see :func:`normalised_singular_values`; default None).
+
+    Returns
+    -------
+    int or numpy.ndarray of int, shape (...)
+        The rank.
+    """
     O = np.asarray(O, dtype=float)
     s = normalised_singular_values(O, row_scale)
     tol = max(O.shape[-2:]) * _EPS
@@ -80,12 +109,22 @@ class ObservabilityMatrix:
 
     Parameters
     ----------
-    ss: the state space x' = f(x, u[, F]), y = h(x). With ``force=True`` the contact force F is a
-        known input like u (w below holds [u; F] and its derivatives).
-    constant_input: u' = u'' = ... = 0 (default False: the input derivatives are free symbols).
-    max_operations: size cap of one derivative order's function (CasADi operations, default
-        :data:`MAX_INSTRUCTIONS`); an order estimated above it raises :class:`~alpes_dyn.InputError`.
+    ss : StateSpace
+        The state space x' = f(x, u[, F]), y = h(x). With ``force=True`` the contact force F is a known input
+        like u (w below holds [u; F] and its derivatives).
+    constant_input : bool, optional
+        u' = u'' = ... = 0 (default False: the input derivatives are free symbols).
+    max_operations : int, optional
+        The size cap of one derivative order's function (CasADi operations, default :data:`MAX_INSTRUCTIONS`);
+        an order estimated above it raises :class:`~alpes_dyn.InputError`.
 
+    Raises
+    ------
+    ModelError
+        ``ss`` is not a StateSpace.
+
+    Notes
+    -----
     Every function of order k takes ``(x, w)``: x (n_states,) and w = [v; v'; ...; v^(K-1)] with
     v = [u; F], K = max(k, 1) (time-varying input) or w = v (constant input); see :meth:`w_size`.
     Rows are ordered by derivative order: the p outputs' y, then their y', ... (eq. 3.14).
@@ -110,7 +149,17 @@ class ObservabilityMatrix:
 
     # -------------------------------------------------------------- symbols
     def w_size(self, order: int) -> int:
-        """Length of the input vector w of a function of this order (see the class doc)."""
+        """Length of the input vector w of a function of this order (see the class doc).
+
+        Parameters
+        ----------
+        order : int
+            The highest output derivative k, >= 0.
+
+        Returns
+        -------
+        int
+        """
         return self.m if self.constant_input else self.m * max(int(order), 1)
 
     def _v(self, j: int) -> cs.SX:
@@ -124,7 +173,17 @@ class ObservabilityMatrix:
         return cs.vertcat(*(self._v(j) for j in range(max(order, 1))))
 
     def lie_derivative(self, k: int) -> cs.SX:
-        """y^(k) (p,) as an SX expression of x and w (k >= 0)."""
+        """y^(k) (p,) as an SX expression of x and w (k >= 0).
+
+        Parameters
+        ----------
+        k : int
+            The derivative's order, >= 0.
+
+        Returns
+        -------
+        casadi.SX, shape (p,)
+        """
         k = _order(k)
         f = self.ss.f_expr
         while len(self._phi) <= k:
@@ -140,17 +199,52 @@ class ObservabilityMatrix:
         return self._phi[k]
 
     def expression(self, order: int) -> cs.SX:
-        """O_order (p (order + 1), n_states) as SX of x and w."""
+        """O_order (p (order + 1), n_states) as SX of x and w.
+
+        Parameters
+        ----------
+        order : int
+            The highest output derivative k, >= 0.
+
+        Returns
+        -------
+        casadi.SX, shape (p (order + 1), n_states)
+        """
         order = _order(order)
         return cs.jacobian(cs.vertcat(*(self.lie_derivative(k) for k in range(order + 1))), self.x)
 
     def function(self, order: int) -> cs.Function:
-        """``casadi.Function`` O(x, w) -> O_order, (p (order + 1), n_states)."""
+        """``casadi.Function`` O(x, w) -> O_order, (p (order + 1), n_states).
+
+        Parameters
+        ----------
+        order : int
+            The highest output derivative k, >= 0.
+
+        Returns
+        -------
+        casadi.Function
+        """
         order = _order(order)
         return cs.Function(f"O{order}", [self.x, self._w(order)], [self.expression(order)], ["x", "w"], ["O"])
 
     def block(self, k: int) -> cs.Function:
-        """``casadi.Function`` (x, w) -> d y^(k) / dx, (p, n_states), w of :meth:`w_size` (k)."""
+        """``casadi.Function`` (x, w) -> d y^(k) / dx, (p, n_states), w of :meth:`w_size` (k).
+
+        Parameters
+        ----------
+        k : int
+            The derivative's order, >= 0.
+
+        Returns
+        -------
+        casadi.Function
+
+        Raises
+        ------
+        InputError
+            The order's function would exceed ``max_operations``.
+        """
         k = _order(k)
         while len(self._blocks) <= k:
             j = len(self._blocks)
@@ -191,7 +285,26 @@ class ObservabilityMatrix:
 
     def evaluate(self, order: int, x: Any, w: Any) -> np.ndarray:
         """O_order at one point (x (n_states,), w (w_size,)) -> (rows, n_states), or at N points
-        (x (N, n_states), w (N, >= w_size)) -> (N, rows, n_states)."""
+        (x (N, n_states), w (N, >= w_size)) -> (N, rows, n_states).
+
+        Parameters
+        ----------
+        order : int
+            The highest output derivative k, >= 0.
+        x : array_like, shape (n_states,) or (N, n_states)
+            The state(s) [q; qd], rad and rad/s.
+        w : array_like, shape (w_size,) or (N, >= w_size)
+            The known inputs and their derivatives (:meth:`w_size`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (rows, n_states) or (N, rows, n_states)
+
+        Raises
+        ------
+        InputError
+            ``x`` or ``w`` of the wrong shape, or not finite.
+        """
         order = _order(order)
         single = np.asarray(x).ndim == 1
         X, W = self._points(x, w, order)
@@ -199,7 +312,21 @@ class ObservabilityMatrix:
         return O[0] if single else O
 
     def rank_at(self, order: int, x: Any, w: Any | None = None) -> int:
-        """Numerical rank of O_order at one point (w default zeros: u and its derivatives 0)."""
+        """Numerical rank of O_order at one point (w default zeros: u and its derivatives 0).
+
+        Parameters
+        ----------
+        order : int
+            The highest output derivative k, >= 0.
+        x : array_like, shape (n_states,)
+            The state [q; qd], rad and rad/s.
+        w : array_like, shape (w_size,), or None, optional
+            The known inputs and their derivatives (default zeros).
+
+        Returns
+        -------
+        int
+        """
         w = np.zeros(self.w_size(order)) if w is None else w
         return int(numerical_rank(self.evaluate(order, x, w)))
 

@@ -313,6 +313,18 @@ def scoring_truth(hw: MujocoHand) -> tuple[np.ndarray, float]:
     For the tests and benchmarks that score an estimate or a force loop (or check that no stop was reached) against
     the truth they drew; nothing that runs on a hand calls it (a real hand has no such reading). Raises
     :class:`~alpes_dyn.InputError` for anything but a :class:`MujocoHand`.
+
+    Parameters
+    ----------
+    hw : MujocoHand
+        The stand-in.
+
+    Returns
+    -------
+    q : numpy.ndarray, shape (n,)
+        The joint angles, rad.
+    force : float or numpy.ndarray
+        The contact force, N (a float in the block scene, (5,) in the cylinder scene, NaN in the free scene).
     """
     if not isinstance(hw, MujocoHand):
         raise InputError(f"hw: the truth is the MuJoCo stand-in's, got {type(hw).__name__}")

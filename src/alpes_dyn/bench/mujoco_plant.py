@@ -38,7 +38,17 @@ INTEGRATORS: tuple[str, ...] = ("rk4", "implicit", "implicitfast")
 
 
 def as_params(params: HandParams | str | None) -> HandParams:
-    """``params`` itself, or the parameter file at that path (None: the shipped file)."""
+    """``params`` itself, or the parameter file at that path (None: the shipped file).
+
+    Parameters
+    ----------
+    params : HandParams, str or None
+        The parameters, or their file's path (None: the shipped file).
+
+    Returns
+    -------
+    HandParams
+    """
     return params if isinstance(params, HandParams) else load_params(params)
 
 
@@ -46,7 +56,26 @@ def plant_mjcf(model: str, params: HandParams | str | None = None, effects: Plan
                chain: str | None = None, timestep: float = 1e-4) -> str:
     """MJCF text of the plant: ``model`` from ``params`` with the MJCF side of ``effects`` (joint stops on,
     contact off: a finger moving freely; friction as :func:`passive_forces` says, MuJoCo's ``frictionloss`` and
-    ``damping`` with ``stiction`` or ``soft_stiction``)."""
+    ``damping`` with ``stiction`` or ``soft_stiction``).
+
+    Parameters
+    ----------
+    model : str
+        ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`PLANT_MODELS`).
+    params : HandParams, str or None, optional
+        The parameters or their file (None: the shipped file).
+    effects : PlantEffects or None, optional
+        The plant's effects (None: none).
+    chain : str or None, optional
+        The hand's chain (None: the model's own).
+    timestep : float, optional
+        MuJoCo's step, s (default 0.1 ms).
+
+    Returns
+    -------
+    str
+        The MJCF text.
+    """
     e = (effects or PlantEffects()).check()
     p = as_params(params)
     if p.capstan > 0:  # not in the MJCF: the plant's passive callback adds the sheath friction
@@ -58,7 +87,23 @@ def plant_mjcf(model: str, params: HandParams | str | None = None, effects: Plan
 def plant_model(model: str, params: HandParams | str | None = None, effects: PlantEffects | None = None,
                 chain: str | None = None) -> Model:
     """The library's rigid model of the same finger (friction on), with the plant's tilted gravity: what the
-    plant is without its other effects (its rest states, its smooth friction law)."""
+    plant is without its other effects (its rest states, its smooth friction law).
+
+    Parameters
+    ----------
+    model : str
+        ``"finger2"``, ``"finger3"`` or ``"thumb"``.
+    params : HandParams, str or None, optional
+        The parameters or their file (None: the shipped file).
+    effects : PlantEffects or None, optional
+        The plant's effects (None: none; their ``tilt`` turns gravity).
+    chain : str or None, optional
+        The hand's chain (None: the model's own).
+
+    Returns
+    -------
+    Model
+    """
     e = (effects or PlantEffects()).check()
     m = Model.alpes(model, friction=True, params=as_params(params), chain=chain)
     return m if e.tilt == 0 else m.copy(gravity=tilted_gravity(m.gravity, e.tilt))
@@ -67,7 +112,30 @@ def plant_model(model: str, params: HandParams | str | None = None, effects: Pla
 def initial_qpos(mj: Any, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np.ndarray, p: HandParams,
                  effects: PlantEffects) -> np.ndarray:
     """qpos of the plant at joint angles q0 (rad), at rest: each rotor (series-elastic tendon) turned so that the
-    cable holds the motor torque u0 (the static tension T = tau_m / r_m, stretch T / k_t, plus the cable's slack)."""
+    cable holds the motor torque u0 (the static tension T = tau_m / r_m, stretch T / k_t, plus the cable's slack).
+
+    Parameters
+    ----------
+    mj : mujoco.MjModel
+        The plant's MuJoCo model.
+    truth : Model
+        The library's model of the plant (:func:`plant_model`).
+    perm : numpy.ndarray, shape (n,)
+        The MuJoCo qpos index of each of ``truth``'s joints.
+    q0 : numpy.ndarray, shape (n,)
+        The joint angles, rad.
+    u0 : numpy.ndarray, shape (m,)
+        The motor torque held, N m.
+    p : HandParams
+        The plant's parameters.
+    effects : PlantEffects
+        The plant's effects.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nq,)
+        MuJoCo's qpos.
+    """
     qpos = mj.qpos0.copy()
     qpos[perm] = q0
     if effects.tendon_stiffness is not None:
@@ -83,7 +151,27 @@ def initial_qpos(mj: Any, truth: Model, perm: np.ndarray, q0: np.ndarray, u0: np
 def plant_at_rest(mj: Any, truth: Model, q0: Sequence[float] | None, u0: np.ndarray, p: HandParams,
                   effects: PlantEffects) -> Any:
     """The plant's MjData at joint angles ``q0`` (rad; default the rest of ``truth`` under the torque ``u0``, N m)
-    at rest, its derived quantities computed (``mj_forward``); :class:`~alpes_dyn.InputError` naming ``q0``."""
+    at rest, its derived quantities computed (``mj_forward``); :class:`~alpes_dyn.InputError` naming ``q0``.
+
+    Parameters
+    ----------
+    mj : mujoco.MjModel
+        The plant's MuJoCo model.
+    truth : Model
+        The library's model of the plant (:func:`plant_model`).
+    q0 : sequence of float or None
+        The joint angles (n,), rad (None: the rest under ``u0``).
+    u0 : numpy.ndarray, shape (m,)
+        The motor torque held, N m.
+    p : HandParams
+        The plant's parameters.
+    effects : PlantEffects
+        The plant's effects.
+
+    Returns
+    -------
+    mujoco.MjData
+    """
     import mujoco
 
     d = mujoco.MjData(mj)
@@ -121,7 +209,27 @@ def passive_forces(mj: Any, truth: Model, e: PlantEffects) -> Callable[[Any, Any
     ``truth``'s joints): the library's smooth friction law (without ``stiction`` or ``soft_stiction``: MuJoCo's own dry friction then) and
     the tendons' sheath friction where ``truth`` has one (``capstan``: S^T of the capstan's loss at the actuators'
     torque, d.ctrl, and the motor velocity S qd); None where there is nothing to add. The callback is MuJoCo's
-    process-wide ``mjcb_passive``: its user sets it around its steps and restores the previous one."""
+    process-wide ``mjcb_passive``: its user sets it around its steps and restores the previous one.
+
+    Parameters
+    ----------
+    mj : mujoco.MjModel
+        The plant's MuJoCo model.
+    truth : Model
+        The library's model of the plant (:func:`plant_model`).
+    e : PlantEffects
+        The plant's effects.
+
+    Returns
+    -------
+    callable or None
+        ``passive(m, d)``, adding to ``d.qfrc_passive``; None.
+
+    Raises
+    ------
+    InputError
+        The sheath friction (``capstan``) with an elastic tendon.
+    """
     ex, tr = truth.extras, truth.transmission
     sheath = tr is not None and tr.has_capstan
     if sheath and e.tendon_stiffness is not None:
@@ -151,7 +259,36 @@ def free_plant(truth: Model, model: str, p: HandParams, e: PlantEffects, chain: 
     """The free finger: (MjModel, MjData at rest, the library's model of it) -- ``model`` (``chain``) of ``p`` with
     the effects ``e`` at MuJoCo step ``timestep`` (s) with ``integrator`` (:data:`INTEGRATORS`), at joint angles
     ``q0`` (rad; default its rest under the motor torque ``u0``, N m), in ``gravity`` (3,) m/s^2 if given (default
-    the MJCF's: the effects' tilt in it). ``truth``: :func:`plant_model` of the same (returned in ``gravity``)."""
+    the MJCF's: the effects' tilt in it). ``truth``: :func:`plant_model` of the same (returned in ``gravity``).
+
+    Parameters
+    ----------
+    truth : Model
+        The library's model of the plant (:func:`plant_model`).
+    model : str
+        ``"finger2"``, ``"finger3"`` or ``"thumb"``.
+    p : HandParams
+        The plant's parameters.
+    e : PlantEffects
+        The plant's effects.
+    chain : str or None
+        The hand's chain (None: the model's own).
+    timestep : float
+        MuJoCo's step, s.
+    integrator : str
+        One of :data:`INTEGRATORS`.
+    q0 : sequence of float or None
+        The joint angles (n,), rad (None: the rest under ``u0``).
+    u0 : numpy.ndarray, shape (m,)
+        The motor torque held, N m.
+    gravity : numpy.ndarray, shape (3,), or None, optional
+        The gravity, m/s^2 (None: the MJCF's).
+
+    Returns
+    -------
+    tuple
+        (MjModel, MjData, Model).
+    """
     import mujoco
 
     mj = load_mujoco(plant_mjcf(model, p, e, chain, timestep))
@@ -165,7 +302,23 @@ def free_plant(truth: Model, model: str, p: HandParams, e: PlantEffects, chain: 
 
 def rotor_rest(mj: Any, d: Any, motors: list[str], model: Model, q0: np.ndarray, effects: PlantEffects | None) -> None:
     """Each series-elastic rotor of ``motors`` (its MuJoCo joint ``<motor>_rotor``) where the cable is just slack at
-    joint angles ``q0`` (rad): theta = S q0 (the stretch e = r_m theta - r sum q at 0, the slack still to take up)."""
+    joint angles ``q0`` (rad): theta = S q0 (the stretch e = r_m theta - r sum q at 0, the slack still to take up).
+
+    Parameters
+    ----------
+    mj : mujoco.MjModel
+        The plant's MuJoCo model.
+    d : mujoco.MjData
+        Its data (qpos set in place).
+    motors : list of str
+        The motors' names.
+    model : Model
+        The library's model (its S).
+    q0 : numpy.ndarray, shape (n,)
+        The joint angles, rad.
+    effects : PlantEffects or None
+        The plant's effects (without ``tendon_stiffness``: nothing done).
+    """
     if effects is None or effects.tendon_stiffness is None:
         return
     S = model.transmission.S
@@ -180,7 +333,28 @@ def block_plant(model: str, p: HandParams, effects: PlantEffects | None, contact
     over the block met at ``contact_q`` (rad; None: :data:`~alpes_dyn.model.mjcf.BLOCK_CONTACT_Q`), contact on,
     MuJoCo's joint friction, ``effects`` (None: none), at MuJoCo step ``timestep`` (s); at joint angles ``q0`` (rad;
     default the finger hanging on its springs in the plant's gravity, motor off), each series-elastic rotor where the
-    cable is just slack (:func:`rotor_rest`); :class:`~alpes_dyn.InputError` naming ``q0``."""
+    cable is just slack (:func:`rotor_rest`); :class:`~alpes_dyn.InputError` naming ``q0``.
+
+    Parameters
+    ----------
+    model : str
+        ``"finger2"`` or ``"finger3"``.
+    p : HandParams
+        The plant's parameters.
+    effects : PlantEffects or None
+        The plant's effects (None: none).
+    contact_q : sequence of float or None
+        The joint angles where the block is met, rad (None: :data:`~alpes_dyn.model.mjcf.BLOCK_CONTACT_Q`).
+    timestep : float
+        MuJoCo's step, s.
+    q0 : sequence of float or None, optional
+        The initial joint angles (n,), rad (None: the rest on the springs, motor off).
+
+    Returns
+    -------
+    tuple
+        (MjModel, MjData, Model).
+    """
     import mujoco
 
     truth = Model.alpes(model, params=p)

@@ -37,10 +37,24 @@ class ForceLoop(Block):
 
     Parameters
     ----------
-    controller: the :class:`~alpes_dyn.control.controller.ForceController` (its state advances each sample).
-    reference, force: signals of F_ref and of the force fed back, N. estimate: the observer's estimate (its first
-        ``n`` entries are q_hat, rad) or None (the ``pi`` baseline). normal: a signal of the contact normal (3,)
-        or None (the controller's own). command: the torque command's signal.
+    controller : ForceController
+        The :class:`~alpes_dyn.control.controller.ForceController` (its state advances each sample).
+    reference, force : str, optional
+        The signals of F_ref and of the force fed back, N (default ``"F_ref"``, ``"F_fb"``).
+    estimate : str or None, optional
+        The observer's estimate's signal (its first ``n`` entries are q_hat, rad), or None (default: the ``pi``
+        baseline, no q_hat).
+    normal : str or None, optional
+        A signal of the contact normal (3,), or None (default: the controller's own).
+    command : str, optional
+        The torque command's signal, N m (default ``"tau"``).
+    name : str, optional
+        The block's name (default ``"controller"``).
+
+    Raises
+    ------
+    InputError
+        ``controller`` is not a ForceController.
     """
 
     def __init__(self, controller: ForceController, *, reference: str = "F_ref", force: str = "F_fb",
@@ -141,8 +155,30 @@ class SensorlessForce(Block):
 
 
 def force_input(force: str, output: str, normal: str | Sequence[float], name: str = "force_input") -> Function:
-    """A block writing ``output`` = -F n (3,), N: the contact force ``force`` (N) along the normal ``normal`` (a
-    constant (3,), or a signal's name), the fingertip pressing on the object: the EKF's force input."""
+    """A block writing ``output`` = -F n (3,), N: the contact force along the normal, the fingertip pressing on
+    the object: the EKF's force input.
+
+    Parameters
+    ----------
+    force : str
+        The signal of the contact force F, N.
+    output : str
+        The signal written, -F n, shape (3,), N.
+    normal : str or sequence of float
+        The contact normal: a signal's name, or a constant (3,) vector.
+    name : str, optional
+        The block's name (default ``"force_input"``).
+
+    Returns
+    -------
+    Function
+        The block.
+
+    Raises
+    ------
+    InputError
+        A constant ``normal`` is not 3 numbers.
+    """
     if isinstance(normal, str):
         return Function(lambda **u: -u[force] * u[normal], (force, normal), output, name=name)
     n = np.asarray(normal, dtype=float)
@@ -157,9 +193,31 @@ class EncoderPD(Block):
 
     Parameters
     ----------
-    target: rad of joint. kp: N m/rad. kd: N m s/rad. alpha: dt / (tau_f + dt). ratio: motor angle per joint
-    angle. u_max: N m. reading, command: the signals read (rad of motor) and written (N m). angle: a signal of the
-    joint angle y / ratio (rad), written too.
+    target : float
+        The joint angle aimed at, rad.
+    kp : float
+        The proportional gain, N m/rad.
+    kd : float
+        The derivative gain, N m s/rad.
+    alpha : float
+        The velocity low-pass's weight, dt / (tau_f + dt), in (0, 1].
+    ratio : float, optional
+        Motor angle per joint angle (default 1).
+    u_max : float, optional
+        The command's bound, N m (default inf: none).
+    reading : str, optional
+        The signal read, the encoder's angle y, rad of motor (default ``"y"``).
+    command : str, optional
+        The signal written, the command u, N m (default ``"u"``).
+    angle : str or None, optional
+        A signal of the joint angle y / ratio (rad), written too (default None: not written).
+    name : str, optional
+        The block's name (default ``"pd"``).
+
+    Raises
+    ------
+    InputError
+        ``alpha`` is not in (0, 1].
     """
 
     def __init__(self, target: float, kp: float, kd: float, alpha: float, *, ratio: float = 1.0,

@@ -343,7 +343,25 @@ def controller_c_sources(ctl: ForceController, *, prefix: str = "alpes_force") -
     """The C export of ``ctl.update``: ``{"<prefix>.h": ..., "<prefix>.c": ..., "force_main.c": ...}`` (see the
     module docstring): the settings (gains, notch) of ``ctl``, a fresh controller (not its state), compiled in; the
     surface normal ``ctl.normal`` that of ``<prefix>_update``, any other given at run time to
-    ``<prefix>_update_n``."""
+    ``<prefix>_update_n``.
+
+    Parameters
+    ----------
+    ctl : ForceController
+        The controller exported (its settings; its state is not).
+    prefix : str, optional
+        The C names' and files' prefix, a C identifier of at most 40 characters (default ``"alpes_force"``).
+
+    Returns
+    -------
+    dict of str to str
+        File name -> its text.
+
+    Raises
+    ------
+    InputError
+        ``ctl`` is not a ForceController, ``prefix`` not a C identifier, or a setting not finite.
+    """
     from .._version import __version__
 
     if not isinstance(ctl, ForceController):
@@ -396,7 +414,30 @@ def block_controller(kind: str = "sensor", model: str = "finger3", params: Any =
     :data:`~.controller.CONTROLLERS` with its :data:`~.controller.DEFAULT_GAINS`, on ``model`` (finger2,
     finger3) with the parameter file ``params``, the block's face normal, the scenario's period and
     ``tau_max``; a fresh one (its state at zero). A file marked not trustworthy: :class:`~alpes_dyn.ModelError`
-    naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
+    naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`).
+
+    Parameters
+    ----------
+    kind : str, optional
+        The controller, a key of :data:`~.controller.CONTROLLERS` (default ``"sensor"``).
+    model : str, optional
+        ``"finger2"`` or ``"finger3"`` (default ``"finger3"``).
+    params : HandParams, str, path or None, optional
+        The parameter file (or its loaded parameters); None: the defaults of
+        :func:`~alpes_dyn.model.params.load_params`.
+    force : bool, optional
+        Accept a file marked not trustworthy (default False).
+
+    Returns
+    -------
+    ForceController
+        A fresh controller.
+
+    Raises
+    ------
+    InputError
+        An unknown ``kind`` or a ``model`` other than finger2/finger3.
+    """
     from ..model.mjcf import BLOCK_CONTACT_Q, block_normal
     from ..model.params import HandParams, load_params
     from ..model.trust import check_trusted
@@ -423,7 +464,33 @@ def robot_controller(kind: str, model: Any, *, frame: str | None = None, motor: 
     its spec's friction, its motor ``motor`` pulling and its frame ``frame`` pressing the block placed from the
     robot's kinematics at ``contact_q`` (:func:`~alpes_dyn.model.block_scene.place_block`; the defaults those of
     ``control``), the motor limit ``tau_max`` (N m; default twice the static torque of the largest reference force);
-    a fresh one (its state at zero). The same controller as the loop's (tested against its commands)."""
+    a fresh one (its state at zero). The same controller as the loop's (tested against its commands).
+
+    Parameters
+    ----------
+    kind : str
+        The controller, a key of :data:`~.controller.CONTROLLERS`.
+    model : Model
+        The URDF + spec :class:`~alpes_dyn.Model` (with a transmission spec).
+    frame : str or None, optional
+        The frame pressing the block (None: ``control``'s default).
+    motor : str or None, optional
+        The motor pulling (None: ``control``'s default).
+    contact_q : array_like or None, optional
+        The joint angles (n,), rad, at which the block is placed (None: ``control``'s default).
+    tau_max : float or None, optional
+        The motor limit, N m (None: twice the static torque of the largest reference force).
+
+    Returns
+    -------
+    ForceController
+        A fresh controller.
+
+    Raises
+    ------
+    InputError
+        ``model`` is not a Model or has no transmission spec, or the scenario's check fails.
+    """
     from ..model.robot import Model
     from .finger_loop import ControlScenario, robot_control_settings
 
@@ -439,14 +506,47 @@ def robot_controller(kind: str, model: Any, *, frame: str | None = None, motor: 
 
 
 def force_main_input(F_ref: Any, F_fb: Any, q_hat: Any) -> str:
-    """The text ``force_main.c`` reads: F_ref F_fb q_hat per line (``repr``: read back exactly)."""
+    """The text ``force_main.c`` reads: F_ref F_fb q_hat per line (``repr``: read back exactly).
+
+    Parameters
+    ----------
+    F_ref : array_like
+        The reference forces, shape (N,), N.
+    F_fb : array_like
+        The forces fed back, shape (N,), N.
+    q_hat : array_like
+        The estimated joint angles, shape (N, n), rad.
+
+    Returns
+    -------
+    str
+        One line per sample.
+    """
     F_ref, F_fb = np.asarray(F_ref, float).reshape(-1), np.asarray(F_fb, float).reshape(-1)
     Q = np.asarray(q_hat, float).reshape(len(F_ref), -1)
     return "".join(" ".join(repr(float(x)) for x in np.r_[a, b, q]) + "\n" for a, b, q in zip(F_ref, F_fb, Q))
 
 
 def read_force_output(text: str) -> tuple[np.ndarray, np.ndarray]:
-    """``force_main.c``'s printout: (tau (N,) torque commands, N m; F_z (N,) the contact forces balancing them, N)."""
+    """``force_main.c``'s printout: (tau (N,) torque commands, N m; F_z (N,) the contact forces balancing them, N).
+
+    Parameters
+    ----------
+    text : str
+        ``force_main.c``'s standard output, two numbers per line.
+
+    Returns
+    -------
+    tau : numpy.ndarray, shape (N,)
+        The torque commands, N m.
+    F_z : numpy.ndarray, shape (N,)
+        The contact forces balancing them, N.
+
+    Raises
+    ------
+    InputError
+        A line is not two numbers.
+    """
     try:
         rows = np.array([[float(x) for x in line.split()] for line in text.splitlines() if line.strip()])
     except ValueError:

@@ -334,7 +334,29 @@ def write_c_hand(step: HandForceStep, directory: str | os.PathLike[str], *, what
                  **kwargs: Any) -> dict[str, Path]:
     """Write :func:`hand_c_sources` into ``directory``, a new (or empty) directory, atomically (no partial output).
     Returns {file name: path}. :class:`~alpes_dyn.InputError` naming ``what`` for an existing file or a non-empty
-    directory."""
+    directory.
+
+    Parameters
+    ----------
+    step : HandForceStep
+        The hand's step exported.
+    directory : str or os.PathLike
+        The output directory, new or empty.
+    what : str, optional
+        The option named in errors (default ``"-o"``).
+    **kwargs
+        Passed to :func:`hand_c_sources` (``about``).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        File name -> the path written.
+
+    Raises
+    ------
+    InputError
+        ``directory`` is an existing file or a non-empty directory.
+    """
     check_output_directory(directory, what)
     return write_sources(hand_c_sources(step, **kwargs), directory, what)
 
@@ -342,7 +364,28 @@ def write_c_hand(step: HandForceStep, directory: str | os.PathLike[str], *, what
 def hand_main_input(counts: Any, torque: Any, force: Any, reference: Any, normals: Any, states: Any = None) -> str:
     """The text ``main.c`` reads: per tick counts (N, 6), torque (N, 6), force (N, 5) (NaN: 0), reference (N, 5),
     normals (N, 5, 3); with ``states`` (N, S), each tick's state (:func:`hand_state_row` of the Python step before
-    that tick) after its readings, for ``main -s`` (one step from each given state); ``repr``: read back exactly."""
+    that tick) after its readings, for ``main -s`` (one step from each given state); ``repr``: read back exactly.
+
+    Parameters
+    ----------
+    counts : array_like
+        The encoder readings, shape (N, 6), counts.
+    torque : array_like
+        The motor torque readings, shape (N, 6), N m.
+    force : array_like
+        The fingertip force readings, shape (N, 5), N (NaN: no reading, written 0).
+    reference : array_like
+        The reference forces, shape (N, 5) (or broadcast to it), N.
+    normals : array_like
+        The contact normals, shape (N, 5, 3).
+    states : array_like or None, optional
+        Each tick's state, shape (N, S) (:func:`hand_state_row`); None (default): none written.
+
+    Returns
+    -------
+    str
+        One line per tick.
+    """
     counts = np.asarray(counts, float)
     N = len(counts)
     cols = [counts.reshape(N, 6), np.asarray(torque, float).reshape(N, 6),
@@ -357,7 +400,27 @@ def hand_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal
 
 def read_hand_output(text: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """``main.c``'s printout: (commands (N, 6) N m, the chains' estimates (N, :data:`HAND_NZ`), forces fed back
-    (N, 5) N)."""
+    (N, 5) N).
+
+    Parameters
+    ----------
+    text : str
+        ``main.c``'s standard output.
+
+    Returns
+    -------
+    commands : numpy.ndarray, shape (N, 6)
+        The motor torque commands, N m.
+    estimates : numpy.ndarray, shape (N, HAND_NZ)
+        The chains' estimates.
+    forces : numpy.ndarray, shape (N, 5)
+        The forces fed back, N.
+
+    Raises
+    ------
+    InputError
+        A line is not 6 + HAND_NZ + 5 numbers.
+    """
     try:
         rows = np.array([[float(x) for x in line.split()] for line in text.splitlines() if line.strip()])
     except ValueError:

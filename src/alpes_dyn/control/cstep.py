@@ -415,7 +415,29 @@ def write_c_step(step: ForceStep, directory: str | os.PathLike[str], *, what: st
                  **kwargs: Any) -> dict[str, Path]:
     """Write :func:`step_c_sources` into ``directory``, a new (or empty) directory, atomically (a temporary
     directory renamed: no partial output). Returns {file name: path}. :class:`~alpes_dyn.InputError` naming
-    ``what`` for an existing file or a non-empty directory."""
+    ``what`` for an existing file or a non-empty directory.
+
+    Parameters
+    ----------
+    step : ForceStep
+        The step exported.
+    directory : str or os.PathLike
+        The output directory, new or empty.
+    what : str, optional
+        The option named in errors (default ``"-o"``).
+    **kwargs
+        Passed to :func:`step_c_sources` (``about``, ``prefix``).
+
+    Returns
+    -------
+    dict of str to pathlib.Path
+        File name -> the path written.
+
+    Raises
+    ------
+    InputError
+        ``directory`` is an existing file or a non-empty directory.
+    """
     check_output_directory(directory, what)
     return write_sources(step_c_sources(step, **kwargs), directory, what)
 
@@ -424,7 +446,28 @@ def step_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal
     """The text ``main.c`` reads: per tick counts (N, m), torque (N, m), force (N,) (NaN: 0, unread by the
     sensorless step), reference (N,), normal (3,) or (N, 3); with ``states`` (N, S), each tick's state
     (:func:`step_state_row` of the Python step before that tick) after its readings, for ``main -s`` (one step from
-    each given state); ``repr``: read back exactly."""
+    each given state); ``repr``: read back exactly.
+
+    Parameters
+    ----------
+    counts : array_like
+        The encoder readings, shape (N, m), counts.
+    torque : array_like
+        The motor torque readings, shape (N, m), N m.
+    force : array_like
+        The fingertip force readings, shape (N,), N (NaN: no reading, written 0).
+    reference : array_like
+        The reference forces, shape (N,), N.
+    normal : array_like
+        The contact normal, shape (3,) or (N, 3).
+    states : array_like or None, optional
+        Each tick's state, shape (N, S) (:func:`step_state_row`); None (default): none written.
+
+    Returns
+    -------
+    str
+        One line per tick.
+    """
     counts = np.asarray(counts, float)
     N = len(counts)
     cols = [counts.reshape(N, -1), np.asarray(torque, float).reshape(N, -1),
@@ -463,7 +506,31 @@ def step_state_row(step: ForceStep) -> np.ndarray:
 
 
 def read_step_output(text: str, m: int, nz: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """``main.c``'s printout: (commands (N, m) N m, estimates [q_hat; qd_hat] (N, nz), forces fed back (N,) N)."""
+    """``main.c``'s printout: (commands (N, m) N m, estimates [q_hat; qd_hat] (N, nz), forces fed back (N,) N).
+
+    Parameters
+    ----------
+    text : str
+        ``main.c``'s standard output.
+    m : int
+        The number of motors.
+    nz : int
+        The estimate's length, 2n.
+
+    Returns
+    -------
+    commands : numpy.ndarray, shape (N, m)
+        The motor torque commands, N m.
+    estimates : numpy.ndarray, shape (N, nz)
+        The estimates [q_hat; qd_hat], rad and rad/s.
+    forces : numpy.ndarray, shape (N,)
+        The forces fed back, N.
+
+    Raises
+    ------
+    InputError
+        A line is not m + nz + 1 numbers.
+    """
     try:
         rows = np.array([[float(x) for x in line.split()] for line in text.splitlines() if line.strip()])
     except ValueError:

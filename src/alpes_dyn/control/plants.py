@@ -74,27 +74,48 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
 
     Parameters
     ----------
-    model: ``finger2``, ``finger3`` or ``thumb`` (:data:`~alpes_dyn.bench.mujoco_plant.PLANT_MODELS`).
-    true_params: the plant's parameters.
-    torque: (N+1, m) true motor torque, N m, torque[k] held on [t_k, t_k+1) (the last row is recorded only).
-    dt: sample period, s. timestep: MuJoCo's step, s (a divisor of dt; default 0.1 ms).
-    effects: :class:`~alpes_dyn.bench.effects.PlantEffects` (default none: the library's own model structure, its
+    model : str
+        ``finger2``, ``finger3`` or ``thumb`` (:data:`~alpes_dyn.bench.mujoco_plant.PLANT_MODELS`).
+    true_params : HandParams, str or None
+        The plant's parameters (or their file; None: the defaults).
+    torque : numpy.ndarray, shape (N+1, m) or (N+1,)
+        The true motor torque, N m, torque[k] held on [t_k, t_k+1) (the last row is recorded only).
+    dt : float, optional
+        The sample period, s (default 1 ms).
+    effects : PlantEffects or None, optional
+        :class:`~alpes_dyn.bench.effects.PlantEffects` (default none: the library's own model structure, its
         smooth friction).
-    q0: initial joint angles (rad; default the plant's rest under torque[0], as
+    q0 : sequence of float or None, optional
+        The initial joint angles, rad (default the plant's rest under torque[0], as
         :func:`~alpes_dyn.bench.mujoco_plant.plant_model` finds it), at rest (qd = 0), each series-elastic rotor
         holding the cable's static tension.
-    seed: seed of the sensor noise. integrator: ``rk4`` (default), ``implicit`` or ``implicitfast``.
-    encoder_noise_counts: Gaussian noise (counts) added before the encoder's quantisation. torque_noise: N m.
-    gravity: (N+1, 3) m/s^2, the gravity the plant feels at each sample (default its MJCF's, the ``tilt`` of
-        ``effects`` in it): the hand turned where it changes (the state carries on; the sensors' noise of each
-        orientation's run seeded apart); the recording holds no gravity columns (the rig's nominal
-        orientations are the caller's to write).
+    seed : int, optional
+        The seed of the sensor noise (default 0).
+    chain : str or None, optional
+        The hand's chain simulated (None: the model's own).
+    timestep : float, optional
+        MuJoCo's step, s, a divisor of ``dt`` (default 0.1 ms).
+    integrator : str, optional
+        ``"rk4"`` (default), ``"implicit"`` or ``"implicitfast"``.
+    encoder_noise_counts : float, optional
+        The Gaussian noise's standard deviation, counts, added before the encoder's quantisation (default 0.5).
+    torque_noise : float, optional
+        The torque sensor's noise's standard deviation, N m (default 5e-4).
+    gravity : numpy.ndarray, shape (N+1, 3), or None, optional
+        The gravity the plant feels at each sample, m/s^2 (default its MJCF's, the ``tilt`` of ``effects`` in it):
+        the hand turned where it changes (the state carries on; the sensors' noise of each orientation's run
+        seeded apart); the recording holds no gravity columns (the rig's nominal orientations are the caller's to
+        write).
 
     Returns
     -------
-    :class:`~alpes_dyn.estimation.experiments.recording.Recording`: ``encoder`` the plant's ``encoder_<motor>`` sensor
-    (the rotor with the elastic tendon) quantised, plus ``encoder_offset``; ``torque`` (1 +
-    ``torque_constant_error``) x torque + noise; ``true_q`` MuJoCo's joint angles; no gravity columns.
+    Recording
+        :class:`~alpes_dyn.estimation.experiments.recording.Recording`: ``encoder`` the plant's ``encoder_<motor>``
+        sensor (the rotor with the elastic tendon) quantised, plus ``encoder_offset``; ``torque`` (1 +
+        ``torque_constant_error``) x torque + noise; ``true_q`` MuJoCo's joint angles; no gravity columns.
+
+    Notes
+    -----
     Cost: the loop of :func:`~alpes_dyn.simulation.loop.run_loop` over the N samples, MuJoCo stepping each sample's
     substeps (``mj_step`` with ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
     callback, 0.9 s with ``stiction`` (no callback).
@@ -183,20 +204,44 @@ def mjcf_recording(mjcf: str | os.PathLike, model: Model, torque: np.ndarray, dt
                    torque_noise: float = 5e-4, gravity: np.ndarray | None = None) -> Recording:
     """Replay a motor torque on MuJoCo stepping an MJCF of any robot, and record it as :func:`mujoco_recording` does.
 
-    ``mjcf``: the MJCF text, or the path of its file -- e.g. what ``alpes-dyn mjcf --model ROBOT.urdf --spec
-    ROBOT.toml -o plant.xml`` (:func:`~alpes_dyn.model.mjcf_export.model_mjcf`) writes: a motor actuator and an
-    ``encoder_<motor>`` sensor per motor, the joints named as ``model``'s. Stepped as written (its ``timestep``, which
-    must divide ``dt``, its integrator, its friction: MuJoCo's ``frictionloss`` is stick-slip, not the library's
-    smooth law). ``model``: the :class:`~alpes_dyn.Model` whose joints, motors and encoder resolution the recording
-    names (the robot the MJCF was exported from); its static equilibrium under ``torque[0]`` is the initial state
-    unless ``q0`` (rad) is given. ``torque`` (N+1, m), N m, held over each period; ``dt`` the sample period, s;
-    ``seed``, ``encoder_noise_counts``, ``torque_noise`` as :func:`mujoco_recording`'s.
+    Stepped as written (its ``timestep``, which must divide ``dt``, its integrator, its friction: MuJoCo's
+    ``frictionloss`` is stick-slip, not the library's smooth law). A mimic joint starts at its rule's value of the
+    initial q.
 
-    Returns the :class:`~alpes_dyn.estimation.experiments.recording.Recording` (encoder counts, measured torque, MuJoCo's joint
-    angles as ``true_q``), which :func:`~alpes_dyn.estimation.experiments.recording.write_recording` writes for ``alpes-dyn
-    estimate --data``. A mimic joint starts at its rule's value of the initial q. ``gravity``: (N+1, 3) m/s^2, the
-    gravity the robot feels at each sample, as :func:`mujoco_recording`'s (default the MJCF's; the rest found in the
-    first orientation; no gravity columns written: the rig's nominal orientations are the caller's).
+    Parameters
+    ----------
+    mjcf : str or os.PathLike
+        The MJCF text, or the path of its file -- e.g. what ``alpes-dyn mjcf --model ROBOT.urdf --spec ROBOT.toml
+        -o plant.xml`` (:func:`~alpes_dyn.model.mjcf_export.model_mjcf`) writes: a motor actuator and an
+        ``encoder_<motor>`` sensor per motor, the joints named as ``model``'s.
+    model : Model
+        The :class:`~alpes_dyn.Model` whose joints, motors and encoder resolution the recording names (the robot
+        the MJCF was exported from); its static equilibrium under ``torque[0]`` is the initial state unless ``q0``
+        is given.
+    torque : numpy.ndarray, shape (N+1, m)
+        The motor torque, N m, held over each period.
+    dt : float, optional
+        The sample period, s (default 1 ms).
+    q0 : sequence of float or None, optional
+        The initial joint angles, rad (default: the static equilibrium under ``torque[0]``).
+    seed : int, optional
+        The seed of the sensor noise, as :func:`mujoco_recording`'s (default 0).
+    encoder_noise_counts : float, optional
+        The encoder's noise, counts, as :func:`mujoco_recording`'s (default 0.5).
+    torque_noise : float, optional
+        The torque sensor's noise, N m, as :func:`mujoco_recording`'s (default 5e-4).
+    gravity : numpy.ndarray, shape (N+1, 3), or None, optional
+        The gravity the robot feels at each sample, m/s^2, as :func:`mujoco_recording`'s (default the MJCF's; the
+        rest found in the first orientation; no gravity columns written: the rig's nominal orientations are the
+        caller's).
+
+    Returns
+    -------
+    Recording
+        The :class:`~alpes_dyn.estimation.experiments.recording.Recording` (encoder counts, measured torque,
+        MuJoCo's joint angles as ``true_q``), which
+        :func:`~alpes_dyn.estimation.experiments.recording.write_recording` writes for ``alpes-dyn estimate
+        --data``.
     """
     import mujoco  # load_mujoco below gives the one-line error when it is missing
 

@@ -124,7 +124,23 @@ class Compensation:
         return self
 
     def scale_of(self, chain: str | None = None) -> float:
-        """:attr:`force_scale` of a chain (None: the finger's, which takes one number)."""
+        """:attr:`force_scale` of a chain (None: the finger's, which takes one number).
+
+        Parameters
+        ----------
+        chain : str or None, optional
+            The hand's chain (default None: the finger's).
+
+        Returns
+        -------
+        float
+            The scale (1 for a chain the dict does not name).
+
+        Raises
+        ------
+        InputError
+            ``chain`` is None while :attr:`force_scale` is a dict.
+        """
         if isinstance(self.force_scale, Mapping):
             if chain is None:
                 raise InputError("force_scale: a finger's loop takes one number, got a dict")
@@ -133,7 +149,20 @@ class Compensation:
 
     def cable_mode_hz(self, model: Model, params: Any) -> float | None:
         """f_c (Hz) of the notch: the identified cable (C of ``model``'s first motor) on the file's rotor J_m; None
-        without the notch or with a rigid tendon."""
+        without the notch or with a rigid tendon.
+
+        Parameters
+        ----------
+        model : Model
+            The model (its transmission's tendon compliance C, rad/(N m)).
+        params : HandParams
+            The parameter file's values (its rotor inertia J_m, kg m^2).
+
+        Returns
+        -------
+        float or None
+            The cable mode's frequency, Hz.
+        """
         C = float(model.transmission.tendon_compliance[0])
         if not self.notch or C <= 0:
             return None
@@ -142,7 +171,22 @@ class Compensation:
     def notch_settings(self, model: Model, params: Any, dt: float) -> dict[str, float]:
         """The :class:`~alpes_dyn.control.controller.ForceController` settings of the notch (``notch_hz``,
         ``notch_zeta``) at :meth:`cable_mode_hz` when it lies below the Nyquist frequency of the period ``dt`` (s)
-        (0.45 / dt); none otherwise, or without ``params`` (a URDF robot: no rotor in a file)."""
+        (0.45 / dt); none otherwise, or without ``params`` (a URDF robot: no rotor in a file).
+
+        Parameters
+        ----------
+        model : Model
+            The model.
+        params : HandParams or None
+            The parameter file's values (None: a URDF robot, no notch).
+        dt : float
+            The control period, s.
+
+        Returns
+        -------
+        dict of str to float
+            ``{"notch_hz": ..., "notch_zeta": ...}`` or empty.
+        """
         f_c = None if params is None else self.cable_mode_hz(model, params)
         if f_c is None or not f_c < 0.45 / dt:
             return {}
@@ -152,25 +196,79 @@ class Compensation:
         """The encoder's reading y (rad of motor) without the encoder's zero ``offset`` (rad, :meth:`offset_of`)
         and without the tendon's stretch C tau (:meth:`~alpes_dyn.model.transmission.Transmission.unstretched`; tau
         the torque held over the period before the reading, N m): y - offset - C tau, what the rigid model's encoder
-        would read."""
+        would read.
+
+        Parameters
+        ----------
+        transmission : Transmission
+            The model's transmission.
+        y : float or numpy.ndarray
+            The encoder's reading, rad of motor (one per motor).
+        tau : float or numpy.ndarray
+            The motor torque held over the period before the reading, N m.
+        offset : float, optional
+            The encoder's zero, rad of motor (default 0).
+
+        Returns
+        -------
+        float or numpy.ndarray
+            y - offset - C tau, rad of motor.
+        """
         return transmission.unstretched(y - offset, tau)
 
     def offset_of(self, params: Any, motor: str, chain: str | None = None) -> float:
         """The encoder zero (rad of the motor) taken off the reading: :attr:`encoder_offset`, or where None the
-        controller's file's for ``motor`` (``params`` a HandParams, or None: 0)."""
+        controller's file's for ``motor`` (``params`` a HandParams, or None: 0).
+
+        Parameters
+        ----------
+        params : HandParams or None
+            The controller's parameter file's values (None: 0).
+        motor : str
+            The motor's name.
+        chain : str or None, optional
+            The hand's chain (default None: the finger's).
+
+        Returns
+        -------
+        float
+            The encoder zero, rad of motor.
+        """
         if self.encoder_offset is not None:
             return float(self.encoder_offset)
         return 0.0 if params is None else float(params.encoder_offset_of(motor, chain))
 
     def turned_gravity(self, gravity: Any) -> np.ndarray:
-        """``gravity`` (3,), m/s^2, turned by the identified palm orientation (:attr:`tilt`)."""
+        """``gravity`` (3,), m/s^2, turned by the identified palm orientation (:attr:`tilt`).
+
+        Parameters
+        ----------
+        gravity : array_like, shape (3,)
+            The gravity vector, m/s^2.
+
+        Returns
+        -------
+        numpy.ndarray, shape (3,)
+            The turned vector, m/s^2.
+        """
         from ..symbolic.parametric import tilted_gravity as turn
 
         g = np.asarray(gravity, dtype=float)
         return g if not any(self.tilt) else np.asarray(turn(g, float(self.tilt[0]), float(self.tilt[1])), dtype=float)
 
     def turned(self, model: Model) -> Model:
-        """``model`` in the identified palm orientation (:attr:`tilt`), or as it is when level."""
+        """``model`` in the identified palm orientation (:attr:`tilt`), or as it is when level.
+
+        Parameters
+        ----------
+        model : Model
+            The model.
+
+        Returns
+        -------
+        Model
+            A copy with the turned gravity (``model`` itself when level).
+        """
         if not any(self.tilt):
             return model
         from ..symbolic.parametric import tilted_gravity as turn
@@ -184,7 +282,26 @@ NO_COMPENSATION = Compensation(observer_compliance=False, command_input=False, n
 
 class SampleLag(Block):
     """A period signal seen ``samples`` whole periods late: ``output`` over period k is ``signal`` of period
-    k - samples (the first ``samples`` periods repeat ``initial``). ``samples`` = 0 passes the signal through."""
+    k - samples (the first ``samples`` periods repeat ``initial``). ``samples`` = 0 passes the signal through.
+
+    Parameters
+    ----------
+    signal : str
+        The period signal read.
+    output : str
+        The period signal written.
+    samples : int
+        The lag, whole periods, >= 0.
+    initial : float or array_like, optional
+        The value output over the first ``samples`` periods (default 0).
+    name : str, optional
+        The block's name (default ``"lag"``).
+
+    Raises
+    ------
+    InputError
+        ``samples`` is not a whole number >= 0.
+    """
 
     def __init__(self, signal: str, output: str, samples: int, initial: Any = 0.0, name: str = "lag") -> None:
         if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or samples < 0:
@@ -206,7 +323,24 @@ class SampleLag(Block):
 
 def torque_constant_blocks(effects: PlantEffects | None, command: str, applied: str, name: str = "motor") -> list:
     """The motor as the driver drives it: ``applied`` = ``command`` / (1 + e), N m (e the torque constant's error;
-    no block without one: the command is applied as it is, under the name ``applied``)."""
+    no block without one: the command is applied as it is, under the name ``applied``).
+
+    Parameters
+    ----------
+    effects : PlantEffects or None
+        The plant's effects (their ``torque_constant_error`` e; None: e = 0).
+    command : str
+        The signal of the torque commanded, N m.
+    applied : str
+        The signal of the torque applied, N m.
+    name : str, optional
+        The block's name (default ``"motor"``).
+
+    Returns
+    -------
+    list of Block
+        The block computing ``applied``.
+    """
     e = 0.0 if effects is None else float(effects.torque_constant_error)
     gain = 1.0 / (1.0 + e)
     return [Function(lambda **u: gain * u[command], (command,), applied, name=name)]

@@ -99,7 +99,30 @@ def alpes_design(name: str, params: HandParams, controller: str, contact_q: Sequ
     the file's tau_max, :data:`.DEFAULT_GAINS` of ``controller`` overridden by ``gains``; with ``observer_friction``
     the EKF's model is the finger with the file's friction (F_s tanh(v / v_s) + F_v v, eq. 2.6-2.7): the joints
     that friction holds in contact are then where the encoder's sum leaves them, not where a frictionless model
-    would let them slide."""
+    would let them slide.
+
+    Parameters
+    ----------
+    name : str
+        ``"finger2"`` or ``"finger3"``.
+    params : HandParams
+        The finger's parameters, already oriented (e.g. palm down).
+    controller : str
+        The controller's kind, a key of :data:`.DEFAULT_GAINS`.
+    contact_q : sequence of float or None
+        The joint angles at the contact, rad (None: :data:`BLOCK_CONTACT_Q`).
+    compensation : Compensation
+        The loop's compensation (its tilt turns the model).
+    gains : dict
+        Overrides of :data:`.DEFAULT_GAINS` of ``controller``.
+    observer_friction : bool, optional
+        The EKF's model with the file's friction (default True).
+
+    Returns
+    -------
+    LoopDesign
+        The controller's side of the loop.
+    """
     n = 2 if name == "finger2" else 3
     cq = tuple((BLOCK_CONTACT_Q if contact_q is None else contact_q)[:n])
     model = compensation.turned(Model.alpes(name, params=params))
@@ -122,7 +145,22 @@ def scaled_gains(controller: str, lever: float, tau_contact: float) -> dict[str,
     """:data:`.DEFAULT_GAINS` of ``controller`` for a robot whose motor needs ``lever`` (m) N m per newton pressed
     and ``tau_contact`` (N m) to bring the tip to the block: kp and ki times lever / finger3's lever (the same
     force-to-force loop gain), the approach rate times tau_contact / finger3's (the same approach time, about
-    0.4 s); the other settings (in newtons or seconds) as they are."""
+    0.4 s); the other settings (in newtons or seconds) as they are.
+
+    Parameters
+    ----------
+    controller : str
+        The controller's kind, a key of :data:`.DEFAULT_GAINS`.
+    lever : float
+        dtau_m/dF_z at the contact, m (N m per newton pressed).
+    tau_contact : float
+        The static motor torque bringing the tip to the block, N m.
+
+    Returns
+    -------
+    dict of str to float
+        The controller's settings.
+    """
     lever3, tau3 = finger3_contact()
     defaults = {f.name: f.default for f in dataclasses.fields(ForceController)}
     gains = dict(DEFAULT_GAINS[controller])
@@ -139,7 +177,37 @@ def robot_design(robot: Model, controller: str, *, frame: str | None = None, mot
     pulled by ``motor``: the controller's model (the robot without its spec's friction), the block's normal, the
     motor limit (``tau_max``, default twice the static-balance torque of ``F_max`` N at the contact), the gains of
     :func:`scaled_gains` overridden by ``gains``. :class:`~alpes_dyn.InputError` for a block that cannot be placed
-    or a contact the motor cannot press."""
+    or a contact the motor cannot press.
+
+    Parameters
+    ----------
+    robot : Model
+        The URDF + spec robot.
+    controller : str
+        The controller's kind, a key of :data:`.DEFAULT_GAINS`.
+    frame : str or None, optional
+        The frame pressing the block (None: :func:`~alpes_dyn.model.block_scene.place_block`'s default).
+    motor : str or None, optional
+        The motor pulling (None: place_block's default).
+    contact_q : sequence of float or None, optional
+        The joint angles at the contact, rad (None: place_block's default).
+    F_max : float, optional
+        The largest reference force, N, that sets the default ``tau_max`` (default 1).
+    tau_max : float or None, optional
+        The motor limit, N m (None: twice the static-balance torque of ``F_max``).
+    gains : dict or None, optional
+        Overrides of the scaled gains.
+
+    Returns
+    -------
+    LoopDesign
+        The controller's side of the loop.
+
+    Raises
+    ------
+    InputError
+        The block cannot be placed, or the motor cannot press it.
+    """
     block = place_block(robot, frame, motor, contact_q)
     model = robot
     if robot.spec is not None and (robot.spec.coulomb or robot.spec.viscous):  # the controller's model: no friction
@@ -170,7 +238,36 @@ def force_ekf(model: Model, dt: float, controller: str, *, torque_noise: float, 
     (motor off), standard deviations 0.05 rad and 0.1 rad/s. A model with friction is predicted with
     :func:`~alpes_dyn.simulation.integrate.stable_substeps` RK4 steps per period (at least 4: with one, the smooth
     law's slope F_s / v_s near rest put the step outside RK4's stable reach, and a 1e-12 rad difference in a
-    reading grew to 1.5e-3 rad of joint estimate within 0.3 s on finger3 in contact)."""
+    reading grew to 1.5e-3 rad of joint estimate within 0.3 s on finger3 in contact).
+
+    Parameters
+    ----------
+    model : Model
+        The EKF's model (with friction: RK4 substeps).
+    dt : float
+        The sample period, s.
+    controller : str
+        The controller's kind (``"sensor"``: the FlexiForce's variance on the force input).
+    torque_noise : float
+        The motor torque's noise's standard deviation, N m.
+    encoder_noise_counts : float
+        The encoder's noise's standard deviation, counts.
+    force_noise : float
+        The FlexiForce's noise's standard deviation, N.
+    force_resolution : float
+        The FlexiForce's quantisation step, N.
+    tip : str or None, optional
+        The contact frame (None: the model's default tip).
+
+    Returns
+    -------
+    ekf : observer
+        The filter.
+    z0 : numpy.ndarray, shape (2n,)
+        Its prior [q_rest; 0], rad and rad/s.
+    P0 : numpy.ndarray, shape (2n,)
+        Its prior variances, rad^2 and (rad/s)^2.
+    """
     n, m = model.n, len(model.transmission.motor_names)
     step = 2 * np.pi / model.transmission.counts_per_rev
     ss = StateSpace(model, input="motor", output="encoder", force=True, tip=tip)

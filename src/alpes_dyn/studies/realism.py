@@ -69,7 +69,22 @@ def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
     """k_t (N/m) and c_t (N s/m) for the tendon case, from the nominal finger's experiment on a rigid MuJoCo plant:
     under the experiment's mean tension mean(tau_m) / r_m the cable stretches by STRETCH times the tendon's travel
     from the springs' rest (q = 0) to the mean configuration, r mean(sum q). c_t gives the rotor-on-cable mode
-    (J_m on r_m^2 k_t) the damping ratio ZETA."""
+    (J_m on r_m^2 k_t) the damping ratio ZETA.
+
+    Parameters
+    ----------
+    design : ExperimentDesign
+        The experiment's design.
+
+    Returns
+    -------
+    k_t : float
+        The cable's stiffness, N/m.
+    c_t : float
+        Its damping, N s/m.
+    info : dict
+        The tension, travel and rotor mode behind them (N, m, Hz).
+    """
     p = load_params()
     t, u, x0 = experiment_torque(MODEL, p, design)
     rec = mujoco_recording(MODEL, p, u, design.dt, encoder_noise_counts=0.0, torque_noise=0.0)
@@ -86,7 +101,22 @@ def tendon_stiffness(design: ExperimentDesign) -> tuple[float, float, dict]:
 def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffects]:
     """Each case's plant effects; ``rig_tilt`` (rad): the rig's orientation (:func:`tilted_gravity`), under every
     plant (the tilt cases' error on top of it). ``slack``: the elastic tendon with :data:`SLACK_DEG` of backlash at
-    the motor shaft; ``delay``: the torque :data:`DELAY_SAMPLES` late; ``all``: every effect, these two included."""
+    the motor shaft; ``delay``: the torque :data:`DELAY_SAMPLES` late; ``all``: every effect, these two included.
+
+    Parameters
+    ----------
+    k_t : float
+        The tendon case's cable stiffness, N/m.
+    c_t : float
+        Its damping, N s/m.
+    rig_tilt : float, optional
+        The rig's orientation, rad (default 0).
+
+    Returns
+    -------
+    dict of str to PlantEffects
+        Case (:data:`CASE_NAMES`) -> its effects.
+    """
     slack = cable_slack()  # m of cable
     one = {
         "none": PlantEffects(),
@@ -108,7 +138,18 @@ def cases(k_t: float, c_t: float, rig_tilt: float = 0.0) -> dict[str, PlantEffec
 
 def verdict(res) -> str:
     """The fit's own word on itself (:mod:`alpes_dyn.estimation.identification.adequacy`): adequate, or why not (the stop reason,
-    the failed checks, the likely missing effect)."""
+    the failed checks, the likely missing effect).
+
+    Parameters
+    ----------
+    res : IdentificationResult
+        The fit.
+
+    Returns
+    -------
+    str
+        ``"adequate"`` or ``"FLAGGED: ..."``.
+    """
     if res.trustworthy:
         return "adequate"
     why = [] if res.converged else [f"not converged ({res.reason})"]
@@ -134,13 +175,34 @@ class Plant:
     base: str | None = None
 
     def true_params(self, seed: int):
-        """The plant's parameters: finger3 drawn +-20 % (default), or the whole hand, every chain drawn."""
+        """The plant's parameters: finger3 drawn +-20 % (default), or the whole hand, every chain drawn.
+
+        Parameters
+        ----------
+        seed : int
+            The draw's seed.
+
+        Returns
+        -------
+        HandParams
+        """
         if self.chain is None and self.model == MODEL:
             return perturbed_params(spread=0.2, seed=seed)
         nominal = load_params()
         return perturbed_params(nominal, spread=0.2, seed=seed, chains=nominal.chain_names)
 
     def alpes(self, **kwargs) -> Model:
+        """The plant's library model, friction on.
+
+        Parameters
+        ----------
+        **kwargs
+            Passed to :meth:`Model.alpes <alpes_dyn.Model.alpes>` (``params``, ``rotor_inertia``...).
+
+        Returns
+        -------
+        Model
+        """
         return Model.alpes(self.model, friction=True, chain=self.chain, **kwargs)
 
 
@@ -148,7 +210,22 @@ FINGER3 = Plant("finger3")
 
 
 def hand_plant(chain: str) -> Plant:
-    """The :class:`Plant` of one of the hand's chains (``thumb`` or a finger's name), as ``identify`` fits it."""
+    """The :class:`Plant` of one of the hand's chains (``thumb`` or a finger's name), as ``identify`` fits it.
+
+    Parameters
+    ----------
+    chain : str
+        ``"thumb"`` or a finger's name.
+
+    Returns
+    -------
+    Plant
+
+    Raises
+    ------
+    InputError
+        An unknown chain.
+    """
     known = load_params().chain_names
     if chain not in known:
         raise InputError(f"chain: unknown chain {chain!r} (expected one of {', '.join(known)})")
@@ -162,14 +239,40 @@ def ekf_run(rec, params_path: str, fitted: dict | None, transient: float = 1.0, 
             friction_law: str | None = None):
     """The EKF on ``params_path`` run on a recording's encoder and torque
     (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`, as ``alpes-dyn estimate --data``: friction on,
-    the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``; ``rig``:
-    the gravity of the rig's orientation, if not the file's, the tilt on top of it; ``torque_delay``: samples, as
-    fitted; ``stops``: the joints' end stops in the observer's model, as ``estimate --stops``); its metrics after
-    ``transient`` s. ``fitted`` None: the file's own rig side (its gravity, encoder zero and torque delay, as
-    ``estimate --data`` reads them; ``rig`` and ``torque_delay`` unused), e.g. a plant's truth written by
-    :func:`~alpes_dyn.bench.truth.write_truth`. ``friction_law``: the observer's (default
-    :func:`~alpes_dyn.estimation.observers.replay.estimate_recording`'s). Returns the
-    :class:`~alpes_dyn.estimation.observers.replay.RecordingEstimate`."""
+    the tendon's stretch of the file taken off, and the rig's encoder offset and palm tilt as ``fitted``); its
+    metrics after ``transient`` s.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (its encoder and torque).
+    params_path : str
+        The parameter file the EKF runs on.
+    fitted : dict or None
+        The fit's values (the rig's encoder offset ``encoder_offset_<motor>``, rad, and palm tilt ``tilt_x``,
+        ``tilt_y``, rad); None: the file's own rig side (its gravity, encoder zero and torque delay, as
+        ``estimate --data`` reads them; ``rig`` and ``torque_delay`` unused), e.g. a plant's truth written by
+        :func:`~alpes_dyn.bench.truth.write_truth`.
+    transient : float, optional
+        The metrics are taken after it, s (default 1).
+    rotor : bool, optional
+        The model with the file's rotor inertia J_m (default False).
+    plant : Plant, optional
+        The plant identified (default :data:`FINGER3`).
+    rig : numpy.ndarray, shape (3,), or None, optional
+        The gravity of the rig's orientation, m/s^2, if not the file's (the tilt on top of it).
+    torque_delay : int, optional
+        The torque's delay, samples, as fitted (default 0).
+    stops : bool, optional
+        The joints' end stops in the observer's model, as ``estimate --stops`` (default False).
+    friction_law : str or None, optional
+        The observer's friction law (default :func:`~alpes_dyn.estimation.observers.replay.estimate_recording`'s).
+
+    Returns
+    -------
+    RecordingEstimate
+        The :class:`~alpes_dyn.estimation.observers.replay.RecordingEstimate`.
+    """
     if fitted is None:
         return estimate_recording(rec, plant.alpes(rotor_inertia=rotor, params=params_path), "ekf",
                                   transient=transient, force=True, stops=stops, friction_law=friction_law)
@@ -185,7 +288,35 @@ def ekf_run(rec, params_path: str, fitted: dict | None, transient: float = 1.0, 
 
 def ekf_rmse(rec, params_path: str, fitted: dict, transient: float = 1.0, rotor: bool = False,
              plant: Plant = FINGER3, rig: np.ndarray | None = None, torque_delay: int = 0) -> np.ndarray:
-    """RMSE (rad, per joint) after ``transient`` s of :func:`ekf_run` (the same arguments)."""
+    """RMSE (rad, per joint) after ``transient`` s of :func:`ekf_run` (the same arguments).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (its encoder and torque).
+    params_path : str
+        The parameter file the EKF runs on.
+    fitted : dict or None
+        The fit's values (the rig's encoder offset ``encoder_offset_<motor>``, rad, and palm tilt ``tilt_x``,
+        ``tilt_y``, rad); None: the file's own rig side (its gravity, encoder zero and torque delay, as
+        ``estimate --data`` reads them; ``rig`` and ``torque_delay`` unused), e.g. a plant's truth written by
+        :func:`~alpes_dyn.bench.truth.write_truth`.
+    transient : float, optional
+        The metrics are taken after it, s (default 1).
+    rotor : bool, optional
+        The model with the file's rotor inertia J_m (default False).
+    plant : Plant, optional
+        The plant identified (default :data:`FINGER3`).
+    rig : numpy.ndarray, shape (3,), or None, optional
+        The gravity of the rig's orientation, m/s^2, if not the file's (the tilt on top of it).
+    torque_delay : int, optional
+        The torque's delay, samples, as fitted (default 0).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The RMSE per joint, rad.
+    """
     return ekf_run(rec, params_path, fitted, transient, rotor, plant, rig, torque_delay).rmse
 
 
@@ -193,7 +324,26 @@ _TORQUES: dict = {}
 
 
 def torque_of(seed: int, p, design: ExperimentDesign, gravity: np.ndarray, plant: Plant = FINGER3):
-    """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim)."""
+    """experiment_torque for a seed's finger (memoised: the cases of one seed share it, but for the tilt's trim).
+
+    Parameters
+    ----------
+    seed : int
+        The draw's seed.
+    p : HandParams
+        The true parameters.
+    design : ExperimentDesign
+        The experiment's design.
+    gravity : numpy.ndarray, shape (3,) or (k, 3)
+        The gravity the true finger feels, m/s^2.
+    plant : Plant, optional
+        The plant (default :data:`FINGER3`).
+
+    Returns
+    -------
+    tuple
+        (t, u, x0), :func:`~alpes_dyn.estimation.experiments.experiment.experiment_torque`'s.
+    """
     key = (plant, seed, design, np.round(np.asarray(gravity, dtype=float), 12).tobytes())
     if key not in _TORQUES:
         _TORQUES[key] = experiment_torque(plant.model, p, design, chain=plant.chain, true_gravity=gravity)
@@ -211,19 +361,59 @@ def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, pla
 
 
 def on_rig(model, rig: np.ndarray | None):
-    """``model`` in the rig's orientation (gravity ``rig``, m/s^2), or as it is (None: the file's)."""
+    """``model`` in the rig's orientation (gravity ``rig``, m/s^2), or as it is (None: the file's).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    rig : numpy.ndarray, shape (3,), or None
+        The rig's gravity, m/s^2.
+
+    Returns
+    -------
+    Model
+    """
     return model if rig is None else model.copy(gravity=rig)
 
 
 def rig_of(design: ExperimentDesign) -> np.ndarray | None:
-    """The rig's gravity (the design's orientation) where it is not the parameter file's, else None."""
+    """The rig's gravity (the design's orientation) where it is not the parameter file's, else None.
+
+    Parameters
+    ----------
+    design : ExperimentDesign
+        The experiment's design.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,), or None
+        m/s^2.
+    """
     g = np.asarray(design.orientations[0], dtype=float)
     return None if np.array_equal(g, load_params().gravity) else g
 
 
 def rig_design(rig: str = "level", duration: float | None = None) -> ExperimentDesign:
     """The documented experiment (:class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`; ``duration`` s if given) in
-    the rig's orientation (:data:`RIGS`: designed, trimmed and fitted there)."""
+    the rig's orientation (:data:`RIGS`: designed, trimmed and fitted there).
+
+    Parameters
+    ----------
+    rig : str, optional
+        One of :data:`RIGS` (default ``"level"``).
+    duration : float or None, optional
+        The experiment's duration, s (None: the documented one).
+
+    Returns
+    -------
+    ExperimentDesign
+
+    Raises
+    ------
+    InputError
+        An unknown rig.
+    """
     if rig not in RIGS:
         raise InputError(f"rig: expected one of {', '.join(RIGS)}, got {rig!r}")
     design = ExperimentDesign() if duration is None else ExperimentDesign(duration=duration)
@@ -236,7 +426,24 @@ def rig_design(rig: str = "level", duration: float | None = None) -> ExperimentD
 def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dict, float]:
     """The worst error (%) of each of :data:`KINDS` over the fitted ``values`` whose ``truth`` is known and not 0,
     plain and up to the common scale c = exp(mean log(value / truth)) over K and m (the torque constant scales
-    every parameter together: the encoder cannot see it); and c."""
+    every parameter together: the encoder cannot see it); and c.
+
+    Parameters
+    ----------
+    values : dict of str to float
+        The fitted values.
+    truth : dict of str to float
+        The true values.
+
+    Returns
+    -------
+    worst : dict
+        Kind -> the worst error, %.
+    worst_common : dict
+        Kind -> the worst error up to the common scale, %.
+    c : float
+        The common scale.
+    """
     kinds = {nm: kind for kind in KINDS for nm in values if nm.startswith(kind + "_") and truth.get(nm, 0.0) != 0.0}
     km = [values[nm] / truth[nm] for nm, kind in kinds.items() if kind in ("K", "m")]
     c = float(np.exp(np.mean(np.log(km))))
@@ -249,7 +456,21 @@ def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dic
 
 
 def fit_row(fit: Any, truth: dict[str, float], effects: list[str]) -> dict[str, Any]:
-    """A fit's part of a row: its worst errors (plain and up to the common scale), values, residual, verdict."""
+    """A fit's part of a row: its worst errors (plain and up to the common scale), values, residual, verdict.
+
+    Parameters
+    ----------
+    fit : IdentificationResult
+        The fit.
+    truth : dict of str to float
+        The true values.
+    effects : list of str
+        The effects the fit modelled.
+
+    Returns
+    -------
+    dict
+    """
     values = dict(zip(fit.names, fit.values.tolist()))
     worst, worst_c, c = errors(values, truth)
     return {"worst_error_pct": worst, "worst_error_common_scale_pct": worst_c, "common_scale": c, "values": values,
@@ -279,8 +500,34 @@ def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign,
     ``alpes-dyn experiment`` adapts it (:func:`~alpes_dyn.estimation.experiments.adapt.first_in_range`: the whole record checked
     against the joints' range; ``adapt``: its ``--rig``, ``auto`` hanging the hand where palm up the finger leaves
     its range, then smaller amplitudes), but on the plant's own joint angles -- what the experimenter sees of
-    the real finger on its stop. Returns (the recording, the design chosen, the plant's effects in its orientation
-    (the tilt error on top of the rig's), the :class:`~alpes_dyn.estimation.experiments.adapt.Adaptation`)."""
+    the real finger on its stop.
+
+    Parameters
+    ----------
+    effects : PlantEffects
+        The plant's effects.
+    seed : int
+        The sensor noise's seed (and the memoised torque's key).
+    design : ExperimentDesign
+        The experiment's design.
+    true : HandParams
+        The plant's true parameters.
+    plant : Plant, optional
+        The plant (default :data:`FINGER3`).
+    adapt : str, optional
+        One of :data:`ADAPT`, as ``--rig`` (default ``"auto"``).
+
+    Returns
+    -------
+    tuple
+        (the recording, the design chosen, the plant's effects in its orientation (the tilt error on top of the
+        rig's), the :class:`~alpes_dyn.estimation.experiments.adapt.Adaptation`).
+
+    Raises
+    ------
+    InputError
+        An unknown ``adapt``.
+    """
     if adapt not in ADAPT:
         raise InputError(f"adapt: expected one of {', '.join(ADAPT)}, got {adapt!r}")
     own = _rig_tilt(design)
@@ -310,14 +557,36 @@ def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign,
 
 def realism_case(case: str, effects: PlantEffects, seed: int, design: ExperimentDesign, tmp: Path,
                  plant: Plant = FINGER3, rigid: bool = True, adapt: str = "auto") -> dict[str, Any]:
-    """One row: the plant's recording with ``effects`` (seed ``seed``: the draw and the noise), the two fits (the
-    rigid one only where ``rigid``), the EKF runs (see the module docstring); the identified file written in
-    ``tmp``. Keys: case, seed, chain, rigid (absent without ``rigid``) and extended (each: worst errors in %,
-    plain and up to the common scale, values, residual in counts, converged, verdict, adequacy), joint_range_deg,
-    plant_seconds, ekf_seconds, ekf_rmse_deg and ekf_true_file_rmse_deg (per joint, deg), adaptation (the
-    experiment's, :func:`plant_experiment`; ``adapt``: ``auto`` (as ``alpes-dyn experiment``), ``level`` or
-    ``hanging`` (that orientation only, the amplitudes adapting), ``none`` (``design`` as given)); the rig, the
-    fits and the EKF on the orientation it chose."""
+    """One row: the plant's recording, the two fits, the EKF runs (see the module docstring); the rig, the fits and
+    the EKF on the orientation the adaptation chose.
+
+    Parameters
+    ----------
+    case : str
+        The case's name (:data:`CASE_NAMES`), written in the row.
+    effects : PlantEffects
+        The plant's effects.
+    seed : int
+        The draw's and the noise's seed.
+    design : ExperimentDesign
+        The experiment's design.
+    tmp : pathlib.Path
+        The directory the identified and true files are written in.
+    plant : Plant, optional
+        The plant (default :data:`FINGER3`).
+    rigid : bool, optional
+        Fit the rigid model too (default True).
+    adapt : str, optional
+        The experiment's adaptation (:func:`plant_experiment`): ``auto`` (as ``alpes-dyn experiment``), ``level``
+        or ``hanging`` (that orientation only, the amplitudes adapting), ``none`` (``design`` as given).
+
+    Returns
+    -------
+    dict
+        Keys: case, seed, chain, rigid (absent without ``rigid``) and extended (each: worst errors in %, plain and
+        up to the common scale, values, residual in counts, converged, verdict, adequacy), joint_range_deg,
+        plant_seconds, ekf_seconds, ekf_rmse_deg and ekf_true_file_rmse_deg (per joint, deg), adaptation.
+    """
     true = plant.true_params(seed)
     nominal = load_params()
     t0 = time.perf_counter()
@@ -362,11 +631,36 @@ def realism_case(case: str, effects: PlantEffects, seed: int, design: Experiment
 
 def realism_row(seed: int, case: str = "all", rig: str = "level", chain: str | None = None,
                 duration: float = 4.0, cable: tuple[float, float] | None = None, adapt: str = "auto") -> dict[str, Any]:
-    """:func:`realism_case` as a function of the seed (for :func:`~alpes_dyn.studies.sweep.sweep`): the plant
-    ``case`` (:data:`CASE_NAMES`), on finger3 drawn with ``seed`` or on the hand's ``chain`` (the hand drawn with
-    ``seed``), the experiment of ``duration`` s on the ``rig`` (:func:`rig_design`); ``cable``: the tendon case's
-    (k_t N/m, c_t N s/m), None: sized by :func:`tendon_stiffness` on the level rig (a MuJoCo run of its own);
-    ``adapt``: :func:`realism_case`'s."""
+    """:func:`realism_case` as a function of the seed (for :func:`~alpes_dyn.studies.sweep.sweep`).
+
+    Parameters
+    ----------
+    seed : int
+        The draw's seed (finger3, or the whole hand with ``chain``).
+    case : str, optional
+        The plant's case, one of :data:`CASE_NAMES` (default ``"all"``).
+    rig : str, optional
+        The rig (:func:`rig_design`; default ``"level"``).
+    chain : str or None, optional
+        The hand's chain (None: finger3).
+    duration : float, optional
+        The experiment's duration, s (default 4).
+    cable : tuple of (float, float) or None, optional
+        The tendon case's (k_t N/m, c_t N s/m); None: sized by :func:`tendon_stiffness` on the level rig (a MuJoCo
+        run of its own).
+    adapt : str, optional
+        :func:`realism_case`'s (default ``"auto"``).
+
+    Returns
+    -------
+    dict
+        :func:`realism_case`'s row.
+
+    Raises
+    ------
+    InputError
+        An unknown ``case`` or ``adapt``, or a ``cable`` out of range.
+    """
     if case not in CASE_NAMES:
         raise InputError(f"case: expected one of {', '.join(CASE_NAMES)}, got {case!r}")
     if adapt not in ADAPT:
@@ -387,7 +681,30 @@ def realism_draw(seed: int, case: str = "all", rig: str = "level", chain: str | 
                  duration: float = 4.0, cable: tuple[float, float] | None = None, adapt: str = "auto") -> dict[str, Any]:
     """:func:`realism_row` flattened to numbers: the worst errors up to the common scale (%), the residuals
     (counts), the verdicts (1: flagged), the extended fit's time (s, every round) and the EKF's RMSE per joint
-    (deg)."""
+    (deg).
+
+    Parameters
+    ----------
+    seed : int
+        The draw's seed (finger3, or the whole hand with ``chain``).
+    case : str, optional
+        The plant's case, one of :data:`CASE_NAMES` (default ``"all"``).
+    rig : str, optional
+        The rig (:func:`rig_design`; default ``"level"``).
+    chain : str or None, optional
+        The hand's chain (None: finger3).
+    duration : float, optional
+        The experiment's duration, s (default 4).
+    cable : tuple of (float, float) or None, optional
+        The tendon case's (k_t N/m, c_t N s/m); None: sized by :func:`tendon_stiffness` on the level rig (a MuJoCo
+        run of its own).
+    adapt : str, optional
+        :func:`realism_case`'s (default ``"auto"``).
+
+    Returns
+    -------
+    dict
+    """
     row = realism_row(seed, case, rig, chain, duration, cable, adapt)
     a, b = row["rigid"], row["extended"]
     out: dict[str, Any] = {"rigid_flagged": int(a["flagged"]), "rigid_residual_counts": a["residual_counts"]}
@@ -412,7 +729,22 @@ FIT_GOAL_S = 20.0
 
 def parse_seeds(text: str) -> list[int]:
     """The seeds of ``text``: comma-separated non-negative integers or ranges ``a-b`` (both ends in), e.g.
-    ``"301-320,5"``; :class:`~alpes_dyn.InputError` naming ``seeds`` on anything else or a seed named twice."""
+    ``"301-320,5"``.
+
+    Parameters
+    ----------
+    text : str
+        The seeds' text.
+
+    Returns
+    -------
+    list of int
+
+    Raises
+    ------
+    InputError
+        Naming ``seeds``, on anything else or a seed named twice.
+    """
     seeds: list[int] = []
     for item in str(text).split(","):
         a, sep, b = item.strip().partition("-")
@@ -442,7 +774,22 @@ def summarise(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG,
     than ``mass_goal`` % off (each as seed, EKF, m); ``refusals``: the flagged rows (each as seed and verdict);
     ``errors``: (seed, message); ``goal``: the goals (``ekf_deg``, ``K_pct``, ``m_pct``, ``fit_seconds``) and whether
     they are met: ``accuracy_met`` (no run raised, no silent miss, every adequate row's springs within ``K_pct``; a
-    refusal names its cause in its verdict), ``time_met`` (the median fit within ``fit_seconds``)."""
+    refusal names its cause in its verdict), ``time_met`` (the median fit within ``fit_seconds``).
+
+    Parameters
+    ----------
+    rows : list of dict
+        :func:`realism_case`'s rows.
+    ekf_goal : float, optional
+        The EKF's RMSE goal, deg (default :data:`EKF_GOAL_DEG`).
+    mass_goal : float, optional
+        The masses' error goal, % (default :data:`MASS_GOAL_PCT`).
+
+    Returns
+    -------
+    dict of str to dict
+        Case -> its summary.
+    """
     out: dict[str, dict[str, Any]] = {}
     for case in dict.fromkeys(r["case"] for r in rows):
         mine = [r for r in rows if r["case"] == case]

@@ -66,7 +66,18 @@ class SweepResult:
     def to_csv(self, path: str | Path) -> Path:
         """Write the table as CSV (one row per draw), atomically; a non-finite number is an empty cell (as
         :meth:`to_dict` writes it null: never ``nan`` or ``inf`` in a table); a nested value (a dict, or a list of a
-        row that is not flat) is its JSON text, which ``json.loads`` reads back (non-finite numbers in it null)."""
+        row that is not flat) is its JSON text, which ``json.loads`` reads back (non-finite numbers in it null).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The CSV file written.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+        """
         buf = io.StringIO()
         w = csv.DictWriter(buf, fieldnames=self.columns(), lineterminator="\n")
         w.writeheader()
@@ -77,7 +88,22 @@ class SweepResult:
 
     def table(self, columns: Sequence[str] | None = None) -> str:
         """A plain-text table of ``columns`` (default: all; an unknown one is refused); a non-finite number is
-        shown as ``-``."""
+        shown as ``-``.
+
+        Parameters
+        ----------
+        columns : sequence of str or None, optional
+            The columns shown (default: all).
+
+        Returns
+        -------
+        str
+
+        Raises
+        ------
+        InputError
+            An unknown column.
+        """
         cols = list(columns) if columns is not None else self.columns()
         unknown = [c for c in cols if c not in self.columns()]
         if unknown:
@@ -190,7 +216,17 @@ def local_client(workers: int) -> Any:
     steps. Measured in pairs, 8 draws with the fit: 41.7 / 30.8 / 33.4 s with it, 32.6 / 26.3 / 28.7 s without (the
     machine's own speed drifting between pairs). A user who wants it passes a client of their own. The workers get it in their whole Dask configuration
     (the Nanny's ``config``), so a worker the cluster restarts keeps it; a restarted worker is spawned, though (Dask
-    reads the start method from the calling process's configuration at each start)."""
+    reads the start method from the calling process's configuration at each start).
+
+    Parameters
+    ----------
+    workers : int
+        The number of worker processes.
+
+    Returns
+    -------
+    distributed.Client
+    """
     import copy
 
     import dask
@@ -213,17 +249,39 @@ def sweep(fn: Callable[..., dict[str, Any]], draws: int | None = None, *, seed: 
 
     Parameters
     ----------
-    fn: a module-level function (it travels to the workers by name) returning a dict of numbers, lists or strings.
-    draws: number of draws, 1..100000. seed: the first seed (>= 0).
-    seeds: the seeds themselves instead of ``draws`` and ``seed`` (distinct integers >= 0, at most 100000).
-    flat: each row flattened (lists and arrays as name_0, name_1, ...; default), or the draw's dict as it is
-        (nested values kept) with its ``seed``.
-    workers: processes of the local Dask cluster (one thread each), 1..256 (default 2).
-    scheduler: address of a running Dask scheduler instead of a local cluster.
-    client: a ``distributed.Client`` to use as it is.
-    serial: run in this process, one draw after another (the baseline; no Dask needed).
-    Each of ``serial``, ``scheduler``, ``client`` and ``workers`` says where the draws run: given together they
-    are refused (none is silently ignored); so is an option ``fn`` takes no argument of.
+    fn : callable
+        A module-level function (it travels to the workers by name) returning a dict of numbers, lists or strings.
+    draws : int or None, optional
+        The number of draws, 1..100000.
+    seed : int, optional
+        The first seed, >= 0 (default 0).
+    options : dict or None, optional
+        Keyword arguments of ``fn`` (not ``seed``), the same for every draw.
+    workers : int or None, optional
+        Processes of the local Dask cluster (one thread each), 1..256 (default 2).
+    scheduler : str or None, optional
+        The address of a running Dask scheduler instead of a local cluster.
+    client : distributed.Client, optional
+        A client to use as it is.
+    serial : bool, optional
+        Run in this process, one draw after another (the baseline; no Dask needed; default False).
+    seeds : sequence of int or None, optional
+        The seeds themselves instead of ``draws`` and ``seed`` (distinct integers >= 0, at most 100000).
+    flat : bool, optional
+        Each row flattened (lists and arrays as name_0, name_1, ...; default), or the draw's dict as it is (nested
+        values kept) with its ``seed``.
+
+    Returns
+    -------
+    SweepResult
+        The rows in the seeds' order.
+
+    Raises
+    ------
+    InputError
+        Each of ``serial``, ``scheduler``, ``client`` and ``workers`` says where the draws run: given together
+        they are refused (none is silently ignored); so is an option ``fn`` takes no argument of, a seed out of
+        range or given twice, or Dask absent without ``serial``.
     """
     if not callable(fn):
         raise InputError(f"fn: expected a function of the seed, got {type(fn).__name__}")
@@ -315,7 +373,25 @@ def robustness_draw(seed: int, model: str = "finger3", spread: float = 0.2, dura
     """One draw of the robustness study: a finger drawn within +-``spread`` per link (K, m, friction; seed
     ``seed``), its identification experiment of ``duration`` s (our simulator), the fit (``fit``), and the EKF
     on the recording with the nominal file (``rmse_deg_before``, degrees per joint) and the identified one
-    (``rmse_deg_after``); the worst parameter errors in %, the fit's time, convergence and residual (counts)."""
+    (``rmse_deg_after``); the worst parameter errors in %, the fit's time, convergence and residual (counts).
+
+    Parameters
+    ----------
+    seed : int
+        The draw's and the sensor noise's seed.
+    model : str, optional
+        The Alpes finger (default ``"finger3"``).
+    spread : float, optional
+        The draw's half-width, a fraction (default 0.2: +-20 %).
+    duration : float, optional
+        The experiment's duration, s (default 4).
+    fit : bool, optional
+        Run the fit (default True; False: the EKF with the nominal file only).
+
+    Returns
+    -------
+    dict
+    """
     from ..estimation.experiments.experiment import ExperimentDesign, experiment, perturbed_params
     from ..estimation.identification.identification import identified_params, identify
     from ..estimation.observers.replay import estimate_recording
@@ -346,7 +422,26 @@ def drawn_spec(spec: Any, spread: float, seed: int) -> Any:
     """A copy of the transmission spec ``spec`` whose stiffness, Coulomb and viscous friction values are each
     multiplied by U(1 - ``spread``, 1 + ``spread``) (seeded by ``seed``; in the spec's order: stiffness, coulomb,
     viscous, each table's joints as written); the rest (motors, ratios, rotor inertia, rest angles) as it is. What a
-    spec holds of a robot's tolerances (its masses are the URDF's, not drawn)."""
+    spec holds of a robot's tolerances (its masses are the URDF's, not drawn).
+
+    Parameters
+    ----------
+    spec : TransmissionSpec
+        The robot's spec.
+    spread : float
+        The draw's half-width, a fraction in [0, 1).
+    seed : int
+        The draw's seed.
+
+    Returns
+    -------
+    TransmissionSpec
+
+    Raises
+    ------
+    InputError
+        ``spread`` out of [0, 1).
+    """
     import dataclasses
 
     if not (isinstance(spread, (int, float)) and not isinstance(spread, bool) and 0 <= spread < 1):
@@ -420,7 +515,27 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
     residual 5.06 counts), and the second stage ends at the iteration cap at 1.63 counts, the springs 1.4 % off --
     while one stage from the spec's values converges at the sensor floor (0.580 counts) in 32 iterations (18 s,
     against 147 s for the failed two stages); the second draw above is the other way round. So where the two stages
-    do not converge, the fit is run in one stage too and the converged one kept (``one_stage_restart`` in the row)."""
+    do not converge, the fit is run in one stage too and the converged one kept (``one_stage_restart`` in the row).
+
+    Parameters
+    ----------
+    seed : int
+        The draw's and the sensor noise's seed.
+    urdf : str
+        The URDF file's path.
+    spec : str
+        The spec (TOML) file's path.
+    spread : float, optional
+        The draw's half-width, a fraction (default 0.2: +-20 %).
+    duration : float, optional
+        The experiment's duration, s (default 4).
+    fit : bool, optional
+        Run the fit (default True; False: the EKF with the nominal spec only).
+
+    Returns
+    -------
+    dict
+    """
     import warnings
 
     from ..estimation.identification.adequacy import AdequacyWarning

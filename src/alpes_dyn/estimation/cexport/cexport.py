@@ -295,21 +295,46 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
               z0: Any = None, P0: Any = None, code: str | None = None, chains: bool | None = None) -> dict[str, str]:
     """The C export of ``filt``'s step: ``{"<prefix>.h": ..., "<prefix>.c": ..., "main.c": ...}``.
 
-    ``prefix`` (default ``alpes_<kind>``: ``alpes_ekf``, ``alpes_ukf``) starts every external symbol; ``about``
-    is a line for the header's comment (the model, its parameter file); ``z0``, ``P0`` the prior it suggests
-    (documentation only). ``code``: ``"sparse"`` -- CasADi's code of the model and its Jacobian, the covariance
-    arithmetic as C loops over the nonzeros in the filter's own order of operations
-    (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`; the EKF only, where CasADi folded no constant in that arithmetic,
-    ``filt.exact_loops``); ``"casadi"`` -- CasADi's code of the filter's whole step. Both give the filter's
-    numbers to the last bit (but ``"sparse"`` on a model of several RK4 substeps per period, a friction model: its
-    code loops over one substep, :func:`~alpes_dyn.estimation.cexport.cexport_ekf.substep_model_source`, the
-    filter's numbers to rounding). Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large
-    (over :data:`_LOOPS_FROM` operations: the hand) or whose model takes substeps (a friction model: CasADi's
-    code of the whole step writes each substep out, 1.1-1.8 MB of C for finger3 that took 30 s to several
-    minutes to build at -O2), else ``"casadi"`` (a finger, the UKF). ``chains`` (``"sparse"``
-    only): the model's code by block, the blocks of one structure side by side
-    (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers; the default, None, is True there);
-    False: CasADi's code of the whole model. See the module docstring for the API.
+    See the module docstring for the API.
+
+    Parameters
+    ----------
+    filt : KalmanFilter
+        The filter exported.
+    prefix : str or None, optional
+        Starts every external symbol, a C identifier of at most 40 characters (default ``alpes_<kind>``:
+        ``alpes_ekf``, ``alpes_ukf``).
+    about : str, optional
+        A line for the header's comment (the model, its parameter file).
+    z0 : array_like, shape (nz,), optional
+        The prior state it suggests (documentation only).
+    P0 : array_like, shape (nz,) or (nz, nz), optional
+        The prior covariance it suggests (documentation only).
+    code : str or None, optional
+        ``"sparse"`` -- CasADi's code of the model and its Jacobian, the covariance arithmetic as C loops over the
+        nonzeros in the filter's own order of operations (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`; the
+        EKF only, where CasADi folded no constant in that arithmetic, ``filt.exact_loops``); ``"casadi"`` --
+        CasADi's code of the filter's whole step. Both give the filter's numbers to the last bit (but
+        ``"sparse"`` on a model of several RK4 substeps per period, a friction model: its code loops over one
+        substep, :func:`~alpes_dyn.estimation.cexport.cexport_substeps.substep_model_source`, the filter's
+        numbers to rounding). Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large (over
+        :data:`_LOOPS_FROM` operations: the hand) or whose model takes substeps (a friction model: CasADi's code
+        of the whole step writes each substep out, 1.1-1.8 MB of C for finger3 that took 30 s to several minutes
+        to build at -O2), else ``"casadi"`` (a finger, the UKF).
+    chains : bool or None, optional
+        (``"sparse"`` only) the model's code by block, the blocks of one structure side by side
+        (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers; the default, None, is True
+        there); False: CasADi's code of the whole model.
+
+    Returns
+    -------
+    dict of str to str
+        File name -> its text.
+
+    Raises
+    ------
+    InputError
+        ``filt`` not a KalmanFilter, ``prefix`` not a C identifier, or ``code`` unknown or not applicable.
     """
     if not isinstance(filt, KalmanFilter):
         raise InputError(f"filt: expected a KalmanFilter, got {type(filt).__name__}")
@@ -431,7 +456,25 @@ def write_c_observer(filt: KalmanFilter, directory: str | os.PathLike[str], *, w
 
 def main_input(z0: Any, P0: Any, y0: Any, W: Any, Y: Any) -> str:
     """The text ``main.c`` reads: z0, P0 (variances (nz,) or (nz, nz), written column-major), y0, then w_k y_k+1 per
-    sample (``repr``: read back exactly)."""
+    sample (``repr``: read back exactly).
+
+    Parameters
+    ----------
+    z0 : array_like, shape (nz,)
+        The prior state.
+    P0 : array_like, shape (nz,) or (nz, nz)
+        The prior covariance (or its variances).
+    y0 : array_like, shape (ny,)
+        The first measurement.
+    W : array_like, shape (N, nw)
+        The known inputs w_k.
+    Y : array_like, shape (N, ny)
+        The measurements y_k+1.
+
+    Returns
+    -------
+    str
+    """
     P0 = np.asarray(P0, float)
     P0 = np.diag(P0) if P0.ndim == 1 else P0
     W, Y = np.asarray(W, float), np.asarray(Y, float)
@@ -445,7 +488,27 @@ def main_input(z0: Any, P0: Any, y0: Any, W: Any, Y: Any) -> str:
 
 
 def read_main_output(text: str, nz: int) -> tuple[np.ndarray, np.ndarray]:
-    """``main.c``'s printout as (Z (N+1, nz), P (N+1, nz, nz))."""
+    """``main.c``'s printout as (Z (N+1, nz), P (N+1, nz, nz)).
+
+    Parameters
+    ----------
+    text : str
+        ``main.c``'s standard output.
+    nz : int
+        The state's length.
+
+    Returns
+    -------
+    Z : numpy.ndarray, shape (N+1, nz)
+        The estimates.
+    P : numpy.ndarray, shape (N+1, nz, nz)
+        Their covariances.
+
+    Raises
+    ------
+    InputError
+        A line is not nz + nz^2 numbers.
+    """
     S = np.array([[float(x) for x in line.split()] for line in text.splitlines() if line.strip()])
     if S.ndim != 2 or S.shape[1] != nz + nz * nz:
         raise InputError(f"main.c output: expected lines of {nz + nz * nz} numbers, got shape {S.shape}")
@@ -457,7 +520,37 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     """The observer of the estimation scenario (:func:`~alpes_dyn.estimation.observers.scenario.run_estimation`, no
     mismatch) on ``model`` with the parameter file ``params``: (filter, z0, P0), its noise settings, substeps and
     prior those of the scenario (the same filter: tested against its estimate). A file marked not trustworthy:
-    :class:`~alpes_dyn.ModelError` naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`)."""
+    :class:`~alpes_dyn.ModelError` naming it unless ``force`` (:func:`~alpes_dyn.model.trust.check_trusted`).
+
+    Parameters
+    ----------
+    observer : str, optional
+        One of :data:`~alpes_dyn.estimation.observers.observers.OBSERVERS` (default ``"ekf"``).
+    model : str, optional
+        The scenario's model (default ``"finger3"``).
+    params : HandParams, str, path or None, optional
+        The parameter file (None: the shipped one).
+    chain : str or None, optional
+        The hand's chain (None: the model's own).
+    friction : bool, optional
+        The model with the file's friction (default False).
+    force : bool, optional
+        Accept a file marked not trustworthy (default False).
+
+    Returns
+    -------
+    filt : KalmanFilter
+        The filter.
+    z0 : numpy.ndarray, shape (nz,)
+        The prior state.
+    P0 : numpy.ndarray, shape (nz,)
+        The prior variances.
+
+    Raises
+    ------
+    InputError
+        An unknown ``observer`` or a scenario that fails its check.
+    """
     from ...model.params import load_params
     from ...model.trust import check_trusted
     from ...model.robot import Model
@@ -499,8 +592,23 @@ def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> A
     a shared library in the cache (:func:`~alpes_dyn.simulation.buildcache.build_library`, ``-O2``) and called through
     ctypes; s = [z; P column-major] (nz + nz^2,), wy = [w; y]. The numbers of the exported C to the last bit; with
     substeps (a friction model) the C loops over one substep (seconds to build, where CasADi's code of the whole
-    step, each substep written out, took minutes). ``parameters``: the model's numbers (default the filter's).
-    None without a C compiler (:class:`~alpes_dyn.simulation.buildcache.CompilerError`)."""
+    step, each substep written out, took minutes).
+
+    Parameters
+    ----------
+    filt : KalmanFilter
+        The filter.
+    label : str
+        The cache entry's label.
+    parameters : array_like, optional
+        The model's numbers (default the filter's).
+
+    Returns
+    -------
+    callable or None
+        ``step(s, wy)`` -> s_next; None without a C compiler
+        (:class:`~alpes_dyn.simulation.buildcache.CompilerError`).
+    """
     import ctypes
 
     from ...simulation.codegen import _CFLAGS, _compiler, cache_dir

@@ -37,7 +37,20 @@ for twice, 1./x for inv)."""
 
 
 def components(n: int, pairs: Any) -> list[int]:
-    """The connected components of n items joined by ``pairs`` (i, j): each item's, numbered by their first item."""
+    """The connected components of n items joined by ``pairs`` (i, j): each item's, numbered by their first item.
+
+    Parameters
+    ----------
+    n : int
+        The number of items.
+    pairs : iterable of (int, int)
+        The pairs joined.
+
+    Returns
+    -------
+    list of int
+        Each item's component.
+    """
     parent = list(range(n))
 
     def root(i: int) -> int:
@@ -56,7 +69,22 @@ def model_blocks(f: cs.Function, n_states: int, state_input: int = 0) -> list[in
     """Each state's block: the connected components of the states that ``f``'s outputs couple -- an output
     nonzero in row i that depends on state k joins i and k, an entry (i, j) of a square output joins i and j
     (outputs with ``n_states`` rows) -- numbered by their first state. ``f``'s input ``state_input`` is the
-    state."""
+    state.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        The model's function.
+    n_states : int
+        The state's length.
+    state_input : int, optional
+        The index of ``f``'s input that is the state (default 0).
+
+    Returns
+    -------
+    list of int
+        Each state's block.
+    """
     pairs = []
     for o in range(f.n_out()):
         if f.size1_out(o) != n_states:
@@ -208,7 +236,22 @@ def chain_model_source(f: cs.Function, block: list[int], name: str) -> tuple[str
     outputs requested) by blocks, the blocks of one structure by one function; and the doubles of work it needs.
     ``block``: each state's block (:func:`model_blocks`); an output nonzero belongs to its row's block (outputs
     with one row per state). None when there is one block, an output that is not one row per state, a block's
-    computation reading another's states, or an operation outside :data:`_C_OPS`."""
+    computation reading another's states, or an operation outside :data:`_C_OPS`.
+
+    Parameters
+    ----------
+    f : casadi.Function
+        The model's function.
+    block : list of int
+        Each state's block (:func:`model_blocks`).
+    name : str
+        The C function's name.
+
+    Returns
+    -------
+    tuple of (str, int) or None
+        (source, doubles of work), or None.
+    """
     nz, nb = len(block), max(block) + 1
     if nb < 2 or any(f.size1_out(o) != nz for o in range(f.n_out())):
         return None

@@ -371,7 +371,24 @@ def _blocks(sA: cs.Sparsity, sN: cs.Sparsity, sH: cs.Sparsity, R: np.ndarray) ->
 def ekf_c_source(filt: ExtendedKalmanFilter, prefix: str, by_chain: bool = True) -> tuple[str, int]:
     """The C source of ``filt``'s step and update (the API of :mod:`~alpes_dyn.estimation.cexport.cexport`) and the
     doubles of its work array: (source, nwork). ``by_chain``: the model's code by block
-    (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`) where it has several, else CasADi's."""
+    (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`) where it has several, else CasADi's.
+
+    Parameters
+    ----------
+    filt : ExtendedKalmanFilter
+        The filter.
+    prefix : str
+        Starts every external symbol.
+    by_chain : bool, optional
+        The model's code by block where it has several (default True).
+
+    Returns
+    -------
+    source : str
+        The C source.
+    nwork : int
+        The doubles of its work array.
+    """
     nz, ny = filt.nz, filt.ny
     lin, meas = filt.linearized_p, filt.measurement  # the functions the filter's step calls (p: the model's numbers)
     if filt.looped:  # a large state: CasADi's code of the looped model (estimation.observers.looped), never expanded

@@ -190,7 +190,20 @@ def _rk4_substep(dm: Any, nz: int, nw: int, name: str) -> tuple[str, int, int, i
 def substep_model_source(filt: ExtendedKalmanFilter, name: str) -> tuple[str, int, cs.Function] | None:
     """C source of ``name(arg, res, iw, w, mem)``, the filter's ``linearized_p`` (z_next, A, N) as a loop over its
     model's RK4 substeps (the chain rule through CasADi's code of one substep and its Jacobians), the doubles of
-    work it needs and that one substep's function (to add to the code generator); None with one substep."""
+    work it needs and that one substep's function (to add to the code generator); None with one substep.
+
+    Parameters
+    ----------
+    filt : ExtendedKalmanFilter
+        The filter (its model's substeps and their functions).
+    name : str
+        The C function's name.
+
+    Returns
+    -------
+    tuple or None
+        (source, doubles of work, the substep's casadi.Function), or None.
+    """
     dm = filt.model
     if dm.substeps < 2 or getattr(dm, "substep_p", None) is None:
         return None

@@ -84,7 +84,22 @@ class Adaptation:
 def range_excess(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, margin: float = RANGE_MARGIN
                  ) -> tuple[float, int, float]:
     """(how far, rad, the joints ``q`` (N, n) go past [lower + margin, upper - margin] at worst -- 0 inside --, the
-    joint, its extreme angle, rad). Unbounded joints (an infinite limit) are not checked on that side."""
+    joint, its extreme angle, rad). Unbounded joints (an infinite limit) are not checked on that side.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (N, n)
+        The joint angles over the run, rad.
+    lower, upper : numpy.ndarray, shape (n,)
+        The joints' limits, rad (infinite: unbounded).
+    margin : float, optional
+        Kept inside each limit, rad (default :data:`RANGE_MARGIN`).
+
+    Returns
+    -------
+    tuple of (float, int, float)
+        (the excess, rad; the joint's index; its extreme angle, rad).
+    """
     lo = np.where(np.isfinite(lower), lower + margin, -np.inf)
     hi = np.where(np.isfinite(upper), upper - margin, np.inf)
     below = np.max(lo - q, axis=0)
@@ -108,7 +123,24 @@ def candidate_designs(design: ExperimentDesign, rig: str, gravity: np.ndarray,
     """The designs to try, in order, as (rig, amplitude scale, design): ``design`` as given (``level``: its own
     orientation) and hung fingers down (``hanging``: :func:`~alpes_dyn.model.mjcf.hanging_gravity` of ``gravity``,
     the parameter file's, m/s^2) as ``rig`` (one of :data:`RIGS`) allows (``both``: the design's first orientation
-    then hung, then each alone), then each scaled by ``scales``."""
+    then hung, then each alone), then each scaled by ``scales``.
+
+    Parameters
+    ----------
+    design : ExperimentDesign
+        The design as given.
+    rig : str
+        One of :data:`RIGS`.
+    gravity : numpy.ndarray, shape (3,)
+        The parameter file's gravity, m/s^2.
+    scales : sequence of float, optional
+        The amplitude scales tried after the unscaled designs (default :data:`AMPLITUDE_SCALES`).
+
+    Returns
+    -------
+    list of (str, float, ExperimentDesign)
+        (rig, amplitude scale, design), in the order to try.
+    """
     hung = tuple(float(x) for x in hanging_gravity(gravity))
     hanging = dataclasses.replace(design, orientations=(hung,))
     if rig == "hanging":
@@ -134,10 +166,25 @@ def first_in_range(run: Callable[[str, ExperimentDesign], tuple[Any, np.ndarray]
     """Run ``candidates`` (:func:`candidate_designs`) in turn until one keeps the joints inside [lower, upper] (rad,
     less :data:`RANGE_MARGIN`) over the whole run and its trim does not find the equilibria folding.
 
-    ``run(rig, design)`` returns (its result, the joints' angles (N, n), rad): the library's simulated hand
-    (:func:`adapted_experiment`) or any other plant (a MuJoCo finger: :func:`alpes_dyn.studies.realism.realism_case`).
-    Returns ((the chosen result, its excess in rad, its warnings, its index), every run tried as (rig, scale,
-    excess deg, joint, extreme angle rad, folded)): the first run in range, else the one that left it least."""
+    Parameters
+    ----------
+    run : callable
+        ``run(rig, design)`` -> (its result, the joints' angles (N, n), rad): the library's simulated hand
+        (:func:`adapted_experiment`) or any other plant (a MuJoCo finger:
+        :func:`alpes_dyn.studies.realism.realism_case`).
+    candidates : sequence of (str, float, ExperimentDesign)
+        The designs to try (:func:`candidate_designs`).
+    lower, upper : numpy.ndarray, shape (n,)
+        The joints' limits, rad.
+
+    Returns
+    -------
+    chosen : tuple
+        (the chosen result, its excess in rad, its warnings, its index): the first run in range, else the one that
+        left it least.
+    tried : list of tuple
+        Every run tried as (rig, scale, excess deg, joint, extreme angle rad, folded).
+    """
     tried: list[tuple[str, float, float, int, float, bool]] = []
     best = None
     for r, scale, d in candidates:
@@ -217,7 +264,21 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
 
 def adaptation_of(tried: list[tuple[str, float, float, int, float, bool]], k: int, model: Model) -> Adaptation:
     """The :class:`Adaptation` of the run ``k`` chosen among ``tried`` (rig, scale, excess deg, joint, extreme rad,
-    folded), with its note."""
+    folded), with its note.
+
+    Parameters
+    ----------
+    tried : list of tuple
+        Every run tried, as :func:`first_in_range` returns them.
+    k : int
+        The index of the run chosen.
+    model : Model
+        The finger (its joints' names and limits, for the note).
+
+    Returns
+    -------
+    Adaptation
+    """
     r, scale, excess, _, _, _ = tried[k]
     first = tried[0]
     why = (f"the finger left its range in the first run ({first[0]}, full excitation: joint "

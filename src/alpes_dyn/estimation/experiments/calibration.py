@@ -137,7 +137,18 @@ class Calibration:
 
     def torque_at(self, counts: np.ndarray) -> np.ndarray:
         """(m,) N m: the torque at which each motor's ramp read ``counts`` (m,) counts, on the curve below its fold
-        (its counts made non-decreasing; clipped to the curve's ends)."""
+        (its counts made non-decreasing; clipped to the curve's ends).
+
+        Parameters
+        ----------
+        counts : numpy.ndarray, shape (m,)
+            Each motor's encoder reading, counts.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m,)
+            The torques, N m.
+        """
         c = np.asarray(counts, dtype=float).reshape(len(self.motor_names))
         out = np.empty(c.size)
         for k in range(c.size):  # a loop over the motors (one to six)
@@ -156,14 +167,40 @@ class Calibration:
                 "curve_torque_nm": self.curve_torque.tolist(), "curve_counts": self.curve_counts.tolist()}
 
     def save(self, path: str | Path) -> Path:
-        """Write :meth:`to_dict` as JSON to ``path`` (atomically)."""
+        """Write :meth:`to_dict` as JSON to ``path`` (atomically).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The JSON file written.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+        """
         with atomic_path(path, "calibration") as tmp:
             tmp.write_text(json.dumps(self.to_dict(), indent=1) + "\n", encoding="utf-8")
         return Path(path)
 
 
 def load_calibration(path: str | Path) -> Calibration:
-    """The :class:`Calibration` saved at ``path``; InputError naming the file and the field otherwise."""
+    """The :class:`Calibration` saved at ``path``; InputError naming the file and the field otherwise.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The JSON file (:meth:`Calibration.save`'s).
+
+    Returns
+    -------
+    Calibration
+
+    Raises
+    ------
+    InputError
+        The file unreadable or a field missing or malformed.
+    """
     try:
         d = json.loads(read_bytes(path, "calibration", limit=1 << 20).decode("utf-8"))
         names = tuple(str(n) for n in d["motor_names"])

@@ -53,7 +53,20 @@ def empty_row(text: str) -> int | None:
 
 def refuse_empty_row(text: str, path: object) -> None:
     """:class:`~alpes_dyn.errors.RecordingError` naming the line of an empty row between data rows
-    (:func:`empty_row`) of the recording ``path``'s ``text``."""
+    (:func:`empty_row`) of the recording ``path``'s ``text``.
+
+    Parameters
+    ----------
+    text : str
+        The recording's CSV text.
+    path : object
+        The recording's path, named in the error.
+
+    Raises
+    ------
+    RecordingError
+        An empty row between data rows.
+    """
     line = empty_row(text)
     if line is not None:
         raise RecordingError(f"recording {str(path)!r}: line {line} is empty between data rows (a lost sample: fill "
@@ -67,7 +80,20 @@ class _LongLine(ValueError):
 def lines(text: str, start: int = 0):
     """The lines of ``text`` from offset ``start``, each with its "\\n", as ``io.StringIO(text)`` gives them (newline
     "\\n": no other line ending cuts a line), cut one at a time (no copy of the text: ``io.StringIO`` keeps one of 4
-    bytes a character, 1 GiB for 600 s of the hand)."""
+    bytes a character, 1 GiB for 600 s of the hand).
+
+    Parameters
+    ----------
+    text : str
+        The text.
+    start : int, optional
+        The offset of the first line, characters (default 0).
+
+    Yields
+    ------
+    str
+        Each line, with its newline.
+    """
     n = len(text)
     while start < n:  # a loop over the lines (csv.reader and loadtxt take one at a time)
         end = text.find("\n", start)
@@ -87,7 +113,20 @@ def _data_lines(text: str):
 
 def plain_rows(text: str, columns: int) -> np.ndarray | None:
     """(rows, ``columns``) the data rows of a recording's CSV ``text`` whose first line is its header, where every
-    cell of every other non-blank line is a plain finite number, normal or zero (the module doc); else None."""
+    cell of every other non-blank line is a plain finite number, normal or zero (the module doc); else None.
+
+    Parameters
+    ----------
+    text : str
+        The recording's CSV text, its header first.
+    columns : int
+        The number of columns expected.
+
+    Returns
+    -------
+    numpy.ndarray, shape (rows, columns), or None
+        The numbers, or None where the exact reader must read the text.
+    """
     first = text.find("\n")
     if first < 0 or not text[:first].strip() or '"' in text:
         return None  # one line, a blank first line, or quoted cells: the exact reader

@@ -54,7 +54,23 @@ class SmallExcursionWarning(AlpesDynWarning):
 
 def encoder_excursions(recording: Any) -> np.ndarray:
     """(m,) counts: each motor's encoder excursion, peak to peak over the recording (its ``encoder`` (N, m) in
-    counts; samples that are not finite left out, NaN for a motor without any)."""
+    counts; samples that are not finite left out, NaN for a motor without any).
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording (its ``encoder`` (N, m), counts, and ``motor_names``).
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        The excursions, counts.
+
+    Raises
+    ------
+    InputError
+        ``recording`` has no encoder counts (N, motors).
+    """
     enc = np.asarray(getattr(recording, "encoder", None), dtype=float)
     if enc.ndim != 2:
         raise InputError(f"recording: expected a Recording with encoder counts (N, motors), got "
@@ -69,7 +85,25 @@ def encoder_excursions(recording: Any) -> np.ndarray:
 
 def small_excursions(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) -> list[str]:
     """One line per motor whose encoder moved by less than ``threshold`` counts peak to peak over ``recording``,
-    naming the motor, its excursion and what to change; empty when every encoder moved enough."""
+    naming the motor, its excursion and what to change; empty when every encoder moved enough.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording (its ``encoder`` (N, m), counts, and ``motor_names``).
+    threshold : float, optional
+        The least excursion, counts peak to peak, >= 0 (default :data:`MIN_EXCURSION_COUNTS`).
+
+    Returns
+    -------
+    list of str
+        One line per motor below ``threshold``.
+
+    Raises
+    ------
+    InputError
+        ``threshold`` is not a number >= 0.
+    """
     return _lines(recording, encoder_excursions(recording), threshold)
 
 
@@ -86,7 +120,20 @@ def _lines(recording: Any, ex: np.ndarray, threshold: float) -> list[str]:
 
 def excursion_report(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) -> dict[str, Any]:
     """What ``alpes-dyn experiment`` and ``identify`` print of ``recording``: ``encoder_excursion_counts`` (each
-    motor's, by name), ``small_excursions`` (:func:`small_excursions`' lines) and ``min_excursion_counts``."""
+    motor's, by name), ``small_excursions`` (:func:`small_excursions`' lines) and ``min_excursion_counts``.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording (its ``encoder`` (N, m), counts, and ``motor_names``).
+    threshold : float, optional
+        The least excursion, counts peak to peak, >= 0 (default :data:`MIN_EXCURSION_COUNTS`).
+
+    Returns
+    -------
+    dict
+        ``encoder_excursion_counts``, ``small_excursions``, ``min_excursion_counts``.
+    """
     ex = encoder_excursions(recording)
     lines = _lines(recording, ex, threshold)
     return {"encoder_excursion_counts": {str(n): None if not np.isfinite(e) else float(e)
@@ -95,7 +142,25 @@ def excursion_report(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) ->
 
 
 def warn_small_excursions(recording: Any, threshold: float = MIN_EXCURSION_COUNTS) -> list[str]:
-    """:func:`small_excursions`, each line also issued as a :class:`SmallExcursionWarning`; returns the lines."""
+    """:func:`small_excursions`, each line also issued as a :class:`SmallExcursionWarning`; returns the lines.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording (its ``encoder`` (N, m), counts, and ``motor_names``).
+    threshold : float, optional
+        The least excursion, counts peak to peak, >= 0 (default :data:`MIN_EXCURSION_COUNTS`).
+
+    Returns
+    -------
+    list of str
+        One line per motor below ``threshold``.
+
+    Raises
+    ------
+    InputError
+        ``threshold`` is not a number >= 0.
+    """
     lines = small_excursions(recording, threshold)
     for line in lines:
         warnings.warn(SmallExcursionWarning(line), stacklevel=3)

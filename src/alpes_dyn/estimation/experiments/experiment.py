@@ -96,7 +96,22 @@ EXPERIMENT_MODELS: tuple[str, ...] = ("finger2", "finger3", "thumb")
 
 def excitation(model: Model, design: ExperimentDesign) -> tuple[float, float] | tuple[np.ndarray, np.ndarray]:
     """(tau_b, a): the multisine's bias and amplitude for ``model`` (see the module docstring), N m; numbers
-    for a one-motor model, arrays (m,) per motor otherwise (the thumb: flexion and ab/adduction)."""
+    for a one-motor model, arrays (m,) per motor otherwise (the thumb: flexion and ab/adduction).
+
+    Parameters
+    ----------
+    model : Model
+        The finger (nominal).
+    design : ExperimentDesign
+        The design.
+
+    Returns
+    -------
+    tau_b : float or numpy.ndarray, shape (m,)
+        The bias, N m.
+    a : float or numpy.ndarray, shape (m,)
+        The amplitude, N m.
+    """
     bias, amp = _excitation(model, design)
     if model.transmission.n_motors == 1:
         return float(bias[0]), float(amp[0])
@@ -272,7 +287,17 @@ def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndar
 
 def orientation_segments(design: ExperimentDesign) -> np.ndarray:
     """(N+1,) int: the index of the orientation (``design.orientations``) each sample of the record is taken in (the
-    record split evenly among them, in turn)."""
+    record split evenly among them, in turn).
+
+    Parameters
+    ----------
+    design : ExperimentDesign
+        The design.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (N+1,)
+    """
     return _schedule(design)[1]
 
 
@@ -427,10 +452,24 @@ def model_experiment_torque(nominal: Model, truth: Model | None = None, design: 
     (1.9 degrees over 16 s on the Shadow hand's first finger), a motion no model driven by the excitation
     explains: the fit's masses came 4-20 % off on MuJoCo, against 1.1 % replaying this torque.
 
+    Parameters
+    ----------
+    nominal : Model
+        The robot the experimenter knows, on which the excitation is designed.
+    truth : Model or None, optional
+        The robot run (default: ``nominal``).
+    design : ExperimentDesign or None, optional
+        The design (default: the documented one).
+
     Returns
     -------
-    t: (N+1,) s. u: (N+1, m) true motor torque, N m, u[k] held on [t_k, t_k+1). x0: (2n,) the initial state
-    (the true robot at rest under u[0], first orientation), rad and rad/s: the recording's first true state.
+    t : numpy.ndarray, shape (N+1,)
+        The sample times, s.
+    u : numpy.ndarray, shape (N+1, m)
+        The true motor torque, N m, u[k] held on [t_k, t_k+1).
+    x0 : numpy.ndarray, shape (2n,)
+        The initial state (the true robot at rest under u[0], first orientation), rad and rad/s: the recording's
+        first true state.
     """
     return _command(_checked_robots(nominal, truth), nominal, _checked_design(design))
 
@@ -507,18 +546,41 @@ def experiment_torque(model: str, true_params: HandParams | str | Path | None = 
     """The motor torque of the experiment that :func:`experiment` runs on ``true_params``, without sensors: the
     input to replay on another plant (a MuJoCo finger, :func:`alpes_dyn.control.plants.mujoco_recording`).
 
-    The arguments are :func:`experiment`'s (the bias trimmed on the true finger as there: what the
-    experimenter's slow loop on the encoder finds with the library's model of that finger).
-    ``true_gravity`` (3,) or (k, 3), m/s^2: the gravity the true finger feels in each of the design's k
-    orientations, if not the design's own (a palm tilted unknown to the experimenter: the excitation is designed
-    for the orientation the design names, the bias trimmed and the rest found on the finger as it is). Several
-    orientations: one run of the excitation each, in turn (:func:`_orientation_torques`); the plant turned
-    at the segments' first samples (:func:`~alpes_dyn.control.plants.mujoco_recording`'s ``gravity``).
+    The bias is trimmed on the true finger as in :func:`experiment` (what the experimenter's slow loop on the
+    encoder finds with the library's model of that finger). Several orientations: one run of the excitation each,
+    in turn (:func:`_orientation_torques`); the plant turned at the segments' first samples
+    (:func:`~alpes_dyn.control.plants.mujoco_recording`'s ``gravity``).
+
+    Parameters
+    ----------
+    model : str
+        ``"finger2"``, ``"finger3"`` or ``"thumb"`` (:data:`EXPERIMENT_MODELS`), as :func:`experiment`'s.
+    true_params : HandParams or str or Path or None, optional
+        The true parameters, or their file (default: the shipped one).
+    design : ExperimentDesign or None, optional
+        The design (default: the documented one).
+    nominal_params : HandParams or str or Path or None, optional
+        The parameters the experimenter knows, from which the excitation is designed (default: the shipped file).
+    chain : str or None, optional
+        For a finger model, the hand's finger it is, as :func:`experiment`'s.
+    true_gravity : sequence of float, shape (3,) or (k, 3), or None, optional
+        The gravity the true finger feels in each of the design's k orientations, m/s^2, if not the design's own
+        (a palm tilted unknown to the experimenter: the excitation is designed for the orientation the design
+        names, the bias trimmed and the rest found on the finger as it is).
 
     Returns
     -------
-    t: (N+1,) s. u: (N+1, m) true motor torque, N m, u[k] held on [t_k, t_k+1). x0: (2n,) the initial state
-    (the true finger at rest under u[0], first orientation), rad and rad/s.
+    t : numpy.ndarray, shape (N+1,)
+        The sample times, s.
+    u : numpy.ndarray, shape (N+1, m)
+        The true motor torque, N m, u[k] held on [t_k, t_k+1).
+    x0 : numpy.ndarray, shape (2n,)
+        The initial state (the true finger at rest under u[0], first orientation), rad and rad/s.
+
+    Raises
+    ------
+    InputError
+        An unknown ``model`` or a malformed ``true_gravity``.
     """
     if model not in EXPERIMENT_MODELS:
         raise InputError(f"model: the identification experiment is defined for one chain "

@@ -38,13 +38,36 @@ __all__ = ["hand_chains", "chain_model_name", "chain_names", "chain_recording", 
 
 
 def chain_model_name(chain: str) -> str:
-    """The one-chain model a chain of the hand is fitted as: ``"thumb"``, or ``"finger3"`` for a finger."""
+    """The one-chain model a chain of the hand is fitted as: ``"thumb"``, or ``"finger3"`` for a finger.
+
+    Parameters
+    ----------
+    chain : str
+        The hand's chain: a finger's name or ``"thumb"``.
+
+    Returns
+    -------
+    str
+    """
     return "thumb" if chain == "thumb" else "finger3"
 
 
 def chain_names(chain: str) -> tuple[dict[str, str], dict[str, str]]:
     """(motor, joint) renamings from the chain's model to the hand's: a finger's ``finger`` -> ``<name>``, ``j1`` ->
-    ``<name>_j1``...; the thumb's names are the hand's."""
+    ``<name>_j1``...; the thumb's names are the hand's.
+
+    Parameters
+    ----------
+    chain : str
+        The hand's chain: a finger's name or ``"thumb"``.
+
+    Returns
+    -------
+    motors : dict of str to str
+        The model's motor name -> the hand's.
+    joints : dict of str to str
+        The model's joint name -> the hand's.
+    """
     if chain == "thumb":
         return ({"thumb": "thumb", "thumb_abduction": "thumb_abduction"},
                 {j: j for j in ("thumb_abd", "thumb_j1", "thumb_j2")})
@@ -63,7 +86,25 @@ def _columns(rec: Recording, names: Sequence[str], wanted: Sequence[str], what: 
 def chain_recording(rec: Recording, chain: str) -> Recording:
     """The columns of ``chain`` (a finger's name or ``"thumb"``) of a recording of the whole hand, named as the
     chain's model (:func:`chain_model_name`) names its motors and joints. The time base, the gravity columns (the
-    hand's orientation, the same for every chain) and the true angles, where recorded, come along."""
+    hand's orientation, the same for every chain) and the true angles, where recorded, come along.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording of the whole hand.
+    chain : str
+        The chain: a finger's name or ``"thumb"``.
+
+    Returns
+    -------
+    Recording
+        The chain's columns.
+
+    Raises
+    ------
+    RecordingError
+        The recording lacks a motor or joint of the chain.
+    """
     motors, joints = chain_names(chain)
     mi = _columns(rec, rec.motor_names, list(motors.values()), "motor")
     ji = _columns(rec, rec.joint_names, list(joints.values()), "joint")
@@ -77,7 +118,19 @@ def chain_recording(rec: Recording, chain: str) -> Recording:
 def hand_recording(chains: dict[str, Recording], hand: Model) -> Recording:
     """One recording of the whole ``hand`` from its chains' (``chains``: chain -> recording named as its model names
     it, :func:`chain_names`), in the hand's motor and joint order. Raises :class:`~alpes_dyn.errors.RecordingError`
-    where the chains' time bases or orientations differ, or a chain of the hand is missing."""
+    where the chains' time bases or orientations differ, or a chain of the hand is missing.
+
+    Parameters
+    ----------
+    chains : dict of str to Recording
+        Chain -> its recording, named as its model names it (:func:`chain_names`).
+    hand : Model
+        The whole hand (its motor and joint order).
+
+    Returns
+    -------
+    Recording
+    """
     t0 = next(iter(chains.values())).t
     enc = np.zeros((t0.size, len(hand.motor_names)))
     tau = np.zeros_like(enc)

@@ -140,7 +140,20 @@ class HandSession:
 
     def step(self, command: np.ndarray, guarded: bool = True) -> Reading:
         """Write ``command`` (m,), N m, read the next tick and check it (unless not ``guarded``: the relaxing
-        ramp). Raises :class:`GuardTripped` after relaxing the finger."""
+        ramp). Raises :class:`GuardTripped` after relaxing the finger.
+
+        Parameters
+        ----------
+        command : numpy.ndarray, shape (m,)
+            The motor torque command, N m.
+        guarded : bool, optional
+            Check each reading against the guard (default True; False: the relaxing ramp).
+
+        Returns
+        -------
+        Reading
+            The next tick's reading.
+        """
         u = np.asarray(command, dtype=float).reshape(self.m)
         self.hw.write(u)
         self._command.append(u)
@@ -153,14 +166,42 @@ class HandSession:
 
     def run(self, commands: np.ndarray, guarded: bool = True) -> slice:
         """:meth:`step` through the rows of ``commands`` (K, m), N m; the log's rows at which they were written (the
-        reading each followed: row r holds the counts at t_r and the command held over [t_r, t_r+1))."""
+        reading each followed: row r holds the counts at t_r and the command held over [t_r, t_r+1)).
+
+        Parameters
+        ----------
+        commands : numpy.ndarray, shape (K, m)
+            The commands, N m, one a tick.
+        guarded : bool, optional
+            Check each reading against the guard (default True; False: the relaxing ramp).
+
+        Returns
+        -------
+        slice
+            The log's rows.
+        """
         start = self.k
         for u in np.asarray(commands, dtype=float).reshape(-1, self.m):  # the loop of the bench: one tick a row
             self.step(u, guarded)
         return slice(start, self.k)
 
     def ramp_to(self, target: np.ndarray, seconds: float, guarded: bool = True) -> slice:
-        """Ramp the command linearly from the last one written to ``target`` (m,), N m, over ``seconds``."""
+        """Ramp the command linearly from the last one written to ``target`` (m,), N m, over ``seconds``.
+
+        Parameters
+        ----------
+        target : numpy.ndarray, shape (m,)
+            The command at the ramp's end, N m.
+        seconds : float
+            The ramp's duration, s (at least one period).
+        guarded : bool, optional
+            Check each reading against the guard (default True; False: the relaxing ramp).
+
+        Returns
+        -------
+        slice
+            The log's rows (:meth:`run`'s).
+        """
         n = max(1, int(round(seconds / self.period)))
         w = np.arange(1, n + 1)[:, None] / n
         return self.run(self.last_command[None] * (1 - w) + np.asarray(target, dtype=float)[None] * w, guarded)
@@ -203,5 +244,16 @@ class HandSession:
 
     def held_torque(self, rows: slice) -> np.ndarray:
         """(len(rows), m) N m: the torque measured over each period [t_k, t_k+1) of the log's ``rows`` (those of
-        :meth:`run`), read at the next tick (the module docstring)."""
+        :meth:`run`), read at the next tick (the module docstring).
+
+        Parameters
+        ----------
+        rows : slice
+            The log's rows (those :meth:`run` returns).
+
+        Returns
+        -------
+        numpy.ndarray, shape (len(rows), m)
+            The torques, N m.
+        """
         return np.array(self._torque[rows.start + 1: rows.stop + 1]).reshape(-1, self.m)

@@ -82,7 +82,20 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     with the model's own structure the ab/adduction swept 24-57 degrees through its friction, which the fit
     holds at the nominal value (:data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`): 0.70
     counts, not converged. Without it: 41-52 degrees, 0.58 counts with the model's structure, 0.66 with every effect
-    (springs within 0.35 %)."""
+    (springs within 0.35 %).
+
+    Parameters
+    ----------
+    model : Model
+        The finger (its F_s, N m, and S).
+    design : ExperimentDesign
+        The design (its ``dither``, times the breakaway torque).
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        The amplitudes, N m.
+    """
     joints, _, free = _motor_groups(model)
     S = model.transmission.S
     out = np.zeros(S.shape[0])

@@ -200,6 +200,13 @@ def designed_torque(nominal: Model, design: ExperimentDesign | None = None
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The experiment's torque as designed on ``nominal`` alone (no trim: no finger to trim it on).
 
+    Parameters
+    ----------
+    nominal : Model
+        The finger (with motors) the excitation is designed on.
+    design : ExperimentDesign or None, optional
+        The design, one orientation (default: the documented one).
+
     Returns
     -------
     t : numpy.ndarray
@@ -231,7 +238,24 @@ def designed_torque(nominal: Model, design: ExperimentDesign | None = None
 def write_torque_profile(path: str | Path, t: np.ndarray, u: np.ndarray, motor_names: Sequence[str]) -> Path:
     """Write the torque profile as CSV (atomically): a header ``t,torque_<motor>,...``, one row per sample; ``t``
     in s (uniform, the rate 1 / dt), ``torque_<motor>`` in N m, held from that row's time to the next. The
-    recording's ``torque_<motor>`` columns are the same quantity."""
+    recording's ``torque_<motor>`` columns are the same quantity.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file written.
+    t : numpy.ndarray, shape (N,)
+        The sample times, s.
+    u : numpy.ndarray, shape (N, m)
+        The motor torques, N m.
+    motor_names : sequence of str
+        The motors' names, one per column of ``u``.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     cols = ["t"] + [f"torque_{n}" for n in motor_names]
     data = np.column_stack([np.asarray(t, dtype=float), np.asarray(u, dtype=float)])
     with atomic_path(path, "torque profile") as tmp, open(tmp, "w", encoding="utf-8", newline="") as f:

@@ -554,7 +554,17 @@ def join_runs(recordings: "list[Recording] | tuple[Recording, ...]") -> Recordin
     """One :class:`Recording` of several runs: ``recordings`` (of one model, at one sample period) one after
     the other, each its own run (``run`` 0, 1, ...; a recording that has runs already keeps them apart, numbered
     on), each its own time. Raises :class:`~alpes_dyn.errors.RecordingError` for recordings that do not go together
-    (other motors or joints, optional columns in some only, another sample period)."""
+    (other motors or joints, optional columns in some only, another sample period).
+
+    Parameters
+    ----------
+    recordings : list or tuple of Recording
+        The runs, in order.
+
+    Returns
+    -------
+    Recording
+    """
     recs = list(recordings)
     if not recs or not all(isinstance(r, Recording) for r in recs):
         raise RecordingError("join_runs: expected one or more Recordings")

@@ -19,7 +19,17 @@ orientations (an IMU's reading), one segment, the lines over the whole record.""
 def segment_starts(gravity: np.ndarray | None) -> np.ndarray:
     """Sample indices (k,) where a segment of constant gravity starts, 0 first: each row of ``gravity`` (N+1, 3),
     m/s^2, that differs from the row before, where there are at most :data:`MAX_SEGMENTS` segments; [0] without
-    gravity columns or where they change more often."""
+    gravity columns or where they change more often.
+
+    Parameters
+    ----------
+    gravity : numpy.ndarray, shape (N+1, 3), or None
+        The recording's gravity columns, m/s^2.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (k,)
+    """
     if gravity is None:
         return np.zeros(1, dtype=int)
     G = np.asarray(gravity, dtype=float)
@@ -34,6 +44,16 @@ def excitation_parts(rec: Any) -> np.ndarray:
     (:meth:`~alpes_dyn.estimation.experiments.recording.Recording.run_starts`) and, within a run, each orientation of
     a hand turned between runs of the excitation (:func:`segment_starts`: ``alpes-dyn experiment --rig both``) --
     then the number of samples. The fit takes each part on its own lines, the harmonics and the observer's check
-    part by part."""
+    part by part.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording.
+
+    Returns
+    -------
+    numpy.ndarray of int, shape (k+1,)
+    """
     return np.union1d(rec.run_starts(), segment_starts(rec.gravity)).astype(int)
 

@@ -23,7 +23,24 @@ TORQUE_SCALE_LIMIT = 10.0
 def check_counts(motor: str, e: np.ndarray, span: float, cpr: float) -> None:
     """An encoder column (counts, (N,)) that is not counts: most of its values not whole numbers and its swing within
     what the joints' range ``span`` (counts) makes in degrees of the motor -- the motor's angle in radians or
-    degrees, which a fit or an observer would read as a few counts of motion."""
+    degrees, which a fit or an observer would read as a few counts of motion.
+
+    Parameters
+    ----------
+    motor : str
+        The motor's name (the column ``encoder_<motor>``).
+    e : numpy.ndarray, shape (N,)
+        The column, counts.
+    span : float
+        What the joints' range makes at the encoder, counts.
+    cpr : float
+        The encoder's counts per revolution.
+
+    Raises
+    ------
+    RecordingError
+        The column reads as an angle in radians or degrees.
+    """
     e = np.asarray(e, dtype=float)
     if e.size == 0 or np.mean(e != np.round(e)) <= 0.5:
         return
@@ -40,7 +57,22 @@ def check_counts(motor: str, e: np.ndarray, span: float, cpr: float) -> None:
 def check_torque_scale(rec: Any, model: Any, column: str) -> None:
     """Each torque of ``rec`` (a Recording) within :data:`TORQUE_SCALE_LIMIT` times the parameter file's motor limit ``tau_max`` (an
     Alpes model's; none to check on another robot): far beyond it, the column is a current (in A, or in mA), not
-    N m. ``column``: ``torque`` or ``current`` (read with a torque constant), the column's name in the message."""
+    N m. ``column``: ``torque`` or ``current`` (read with a torque constant), the column's name in the message.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (its ``torque`` (N, m), N m).
+    model : Model
+        The model (an Alpes model's ``params.tau_max``, N m).
+    column : str
+        ``"torque"`` or ``"current"``, named in the message.
+
+    Raises
+    ------
+    RecordingError
+        A torque beyond :data:`TORQUE_SCALE_LIMIT` times ``tau_max``.
+    """
     params = getattr(model, "params", None)
     tau_max = getattr(params, "tau_max", None)
     if tau_max is None or rec.torque.size == 0:
