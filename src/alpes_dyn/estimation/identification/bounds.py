@@ -66,7 +66,18 @@ ADDITIVE_BOUNDED: tuple[str, ...] = ("tendon_compliance", "capstan")
 
 def physical_range(kind: str) -> tuple[float, float, bool]:
     """(lower, upper, lower bound closed) of a parameter kind (:data:`~alpes_dyn.symbolic.parametric.KINDS`): open
-    (0, inf) for the log-fitted kinds, [0, inf) for the tendon compliance, the whole line for the rig's own."""
+    (0, inf) for the log-fitted kinds, [0, inf) for the tendon compliance, the whole line for the rig's own.
+
+    Parameters
+    ----------
+    kind : str
+        The parameter's kind, one of :data:`~alpes_dyn.symbolic.parametric.KINDS`.
+
+    Returns
+    -------
+    tuple[float, float, bool]
+        The lower and upper bounds, in the fit's units, and whether the lower one is closed.
+    """
     if kind not in LOWER_BOUND:
         return -math.inf, math.inf, False
     return LOWER_BOUND[kind], math.inf, kind in ADDITIVE_BOUNDED
@@ -76,9 +87,31 @@ def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[flo
                 initial: Sequence[float], units: Sequence[str], held: bool = True) -> dict[str, str]:
     """The fitted parameters the data do not support, name -> why (one clause with the value +- its standard error
     and the effect, e.g. ``"-0.054 +- 0.032 rad/(N m): below its physical bound 0 (held there); the data do not
-    support an elastic tendon"``). The rules: the module docstring. Arrays (p,) in the fit's units. ``held``: the
-    parameters are held in a fit again (the clause says where); False: no fit again is made (a fit not to be
-    trusted), and the clause says so."""
+    support an elastic tendon"``). The rules: the module docstring.
+
+    Parameters
+    ----------
+    names : Sequence[str]
+        The p parameters' names.
+    kinds : Sequence[str]
+        Their kinds (:data:`~alpes_dyn.symbolic.parametric.KINDS`).
+    values : Sequence[float]
+        The fitted values (p,), in the fit's units.
+    std : Sequence[float]
+        Their standard errors (p,), in the fit's units (not finite: not seen, skipped).
+    initial : Sequence[float]
+        The fit's starts (p,), in the fit's units.
+    units : Sequence[str]
+        Each parameter's unit, as the clause prints it.
+    held : bool, optional
+        The parameters are held in a fit again (default True; the clause says where); False: no fit again is made
+        (a fit not to be trusted), and the clause says so.
+
+    Returns
+    -------
+    dict[str, str]
+        Name -> why, for the parameters not supported (empty where every one is).
+    """
     out: dict[str, str] = {}
     for name, kind, v, sd, v0, unit in zip(names, kinds, values, std, initial, units):
         if kind not in LOWER_BOUND or not math.isfinite(sd):
@@ -101,13 +134,39 @@ def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[flo
 
 def held_value(kind: str, value: float, start: float) -> float:
     """The value a parameter not identified is held at in the fit again: its bound where the fit crossed it, else
-    its start (the model's value, the file's prior)."""
+    its start (the model's value, the file's prior).
+
+    Parameters
+    ----------
+    kind : str
+        The parameter's kind (:data:`~alpes_dyn.symbolic.parametric.KINDS`).
+    value : float
+        Its fitted value, in the fit's units.
+    start : float
+        Its start, in the fit's units.
+
+    Returns
+    -------
+    float
+        The value it is held at.
+    """
     lo = LOWER_BOUND.get(kind, -math.inf)
     return lo if value < lo else start
 
 
 def describe(not_identified: dict[str, str]) -> str:
-    """One clause for a verdict: ``"not identified: NAME (WHY); ..."`` (empty where every parameter is)."""
+    """One clause for a verdict: ``"not identified: NAME (WHY); ..."`` (empty where every parameter is).
+
+    Parameters
+    ----------
+    not_identified : dict[str, str]
+        Name -> why (:func:`unsupported`).
+
+    Returns
+    -------
+    str
+        The clause.
+    """
     if not not_identified:
         return ""
     return "not identified: " + "; ".join(f"{n} ({why})" for n, why in not_identified.items())

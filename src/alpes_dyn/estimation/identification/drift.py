@@ -51,8 +51,23 @@ GAIN_NEEDS_LINES = ("drift: 'gain' needs the excitation's lines (excitation=...,
 
 
 def check_drift(drift: str | tuple[str, ...] | list[str] | None) -> tuple[str, ...]:
-    """The drifts ``drift`` names (None or an empty list: none; a comma-separated string or a list of :data:`DRIFTS`), in
-    :data:`DRIFTS`' order, or :class:`~alpes_dyn.InputError` naming an unknown, repeated or empty choice."""
+    """The drifts ``drift`` names, in :data:`DRIFTS`' order.
+
+    Parameters
+    ----------
+    drift : str, tuple[str, ...], list[str] or None
+        None or an empty list: none; a comma-separated string or a list of :data:`DRIFTS`.
+
+    Returns
+    -------
+    tuple[str, ...]
+        The drifts named.
+
+    Raises
+    ------
+    InputError
+        Naming ``drift``: an unknown, repeated or empty choice.
+    """
     if drift is None or (isinstance(drift, (list, tuple)) and not drift):
         return ()
     if isinstance(drift, str):
@@ -71,7 +86,18 @@ def check_drift(drift: str | tuple[str, ...] | list[str] | None) -> tuple[str, .
 
 def recorded_time(rec: Recording) -> np.ndarray:
     """(N+1,) s the time recorded up to each sample: t - t_0 within a run, each run after the earlier runs'
-    durations (their sample period apart)."""
+    durations (their sample period apart).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (one run or several).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1,)
+        The recorded time at each sample, s.
+    """
     b = rec.run_starts()
     tau = np.empty(rec.n_samples)
     base = 0.0
@@ -83,7 +109,20 @@ def recorded_time(rec: Recording) -> np.ndarray:
 
 def drift_basis(rec: Recording, knot: float = DRIFT_KNOT) -> np.ndarray:
     """(N+1, K) the hat functions of the knots 1..K (every ``knot`` seconds of :func:`recorded_time`, the last at
-    its end; knot 0 at the first sample left out: d(0) = 0) at each sample: d(tau) = H @ d_knots."""
+    its end; knot 0 at the first sample left out: d(0) = 0) at each sample: d(tau) = H @ d_knots.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording.
+    knot : float, optional
+        The knots' spacing, s of recorded time (default :data:`DRIFT_KNOT`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1, K)
+        H, the hat functions at each sample.
+    """
     tau = recorded_time(rec)
     K = max(1, math.ceil(tau[-1] / knot - 1e-9))
     x = tau / tau[-1] * K  # knot coordinates 0..K
@@ -97,7 +136,26 @@ def line_coefficients(QS: np.ndarray, U: np.ndarray, starts: np.ndarray, blk: np
     own block, :mod:`~alpes_dyn.estimation.identification.torque_lines`): U = QS A_r' on run r's rows, by least squares
     (exact where U is the projection on the lines, as
     :func:`~alpes_dyn.estimation.identification.torque_lines.torque_model` makes it). ``starts``: the runs' first rows
-    (R,), in order; ``blk`` (S,) each of the ``n_int`` intervals' run (None: one run)."""
+    (R,), in order; ``blk`` (S,) each of the ``n_int`` intervals' run (None: one run).
+
+    Parameters
+    ----------
+    QS : numpy.ndarray, shape (N, nphi)
+        The lines' basis at each row.
+    U : numpy.ndarray, shape (N, nu)
+        The torque, N m.
+    starts : numpy.ndarray, shape (R,)
+        The runs' first rows, in order.
+    blk : numpy.ndarray, shape (S,), or None
+        Each interval's run (None: one run).
+    n_int : int
+        S, the number of intervals.
+
+    Returns
+    -------
+    numpy.ndarray, shape (S, nu, nphi)
+        Each interval's run's coefficients A_r.
+    """
     edges = np.append(np.asarray(starts, dtype=int), U.shape[0])
     out = []
     for a, b in zip(edges[:-1], edges[1:]):  # a loop over the runs (a few): normal equations, nphi x nphi each
@@ -113,7 +171,24 @@ def gain_sensitivity(X_io: np.ndarray, W: np.ndarray, Hs: np.ndarray, nu: int) -
     line l) at l nu + i), the coefficients of the torque each interval is under, ungained, ``W`` (s, nu, nphi)
     (its run's :func:`line_coefficients` plus the fitted correction), and the hat functions at the intervals'
     middles ``Hs`` (s, K): the torque's direction is W's on the lines, so d x / d g_i = sum_l X_io[l, i] W[i, l], times
-    each knot's hat; motor i's knots at columns i K .. (i + 1) K - 1."""
+    each knot's hat; motor i's knots at columns i K .. (i + 1) K - 1.
+
+    Parameters
+    ----------
+    X_io : numpy.ndarray, shape (s, L+1, nx, nphi nu)
+        The states' sensitivities to the torque's line coefficients (coefficient (motor i, line l) at l nu + i).
+    W : numpy.ndarray, shape (s, nu, nphi)
+        The coefficients of the torque each interval is under, ungained.
+    Hs : numpy.ndarray, shape (s, K)
+        The hat functions at the intervals' middles (:func:`drift_basis`).
+    nu : int
+        The number of motors.
+
+    Returns
+    -------
+    numpy.ndarray, shape (s, L+1, nx, nu K)
+        The states' sensitivities to the knots of the gain drift.
+    """
     s, L1, nx, no = X_io.shape
     dg = np.einsum("sknli,sil->skni", X_io.reshape(s, L1, nx, no // nu, nu), W)  # (s, L+1, nx, nu)
     return (dg[..., :, None] * Hs[:, None, None, None, :]).reshape(s, L1, nx, nu * Hs.shape[1])

@@ -28,30 +28,89 @@ class EncoderOutput:
     rotor: np.ndarray | None
 
     def per_motor(self, theta: np.ndarray, cols: list[tuple[int, int]]) -> np.ndarray:
-        """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere."""
+        """(m,) the entries ``cols`` (index in theta, motor) of theta on their motors, 0 elsewhere.
+
+        Parameters
+        ----------
+        theta : numpy.ndarray, shape (p,)
+            The fitted parameters, in the fit's units.
+        cols : list[tuple[int, int]]
+            (index in theta, motor index) pairs.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m,)
+            The entries on their motors (summed where a motor has several).
+        """
         out = np.zeros(self.ny)
         for k, mo in cols:
             out[mo] += theta[k]
         return out
 
     def offset(self, theta: np.ndarray) -> np.ndarray:
-        """(m,) the encoder offsets, rad."""
+        """(m,) the encoder offsets, rad.
+
+        Parameters
+        ----------
+        theta : numpy.ndarray, shape (p,)
+            The fitted parameters, in the fit's units.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m,)
+            The offsets, rad (0 for a motor without one).
+        """
         return self.per_motor(theta, self.off_cols)
 
     def compliance(self, theta: np.ndarray) -> np.ndarray:
-        """(m,) the tendon compliances, rad / (N m)."""
+        """(m,) the tendon compliances, rad / (N m).
+
+        Parameters
+        ----------
+        theta : numpy.ndarray, shape (p,)
+            The fitted parameters, in the fit's units.
+
+        Returns
+        -------
+        numpy.ndarray, shape (m,)
+            The compliances, rad / (N m) (0 for a motor without one).
+        """
         return self.per_motor(theta, self.comp_cols)
 
     def stretch(self, theta: np.ndarray, u_k: np.ndarray | None) -> np.ndarray | float:
         """(S, L+1, m) the tendons' stretch C u seen by the encoders, rad, for the modelled torque u_k-1
-        (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.torque_at`; None without compliance: 0)."""
+        (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.torque_at`; None without compliance: 0).
+
+        Parameters
+        ----------
+        theta : numpy.ndarray, shape (p,)
+            The fitted parameters, in the fit's units.
+        u_k : numpy.ndarray, shape (S, L+1, m), or None
+            The modelled torque before each sample, N m (None: no compliance fitted).
+
+        Returns
+        -------
+        numpy.ndarray, shape (S, L+1, m), or float
+            The stretch, rad (0.0 for ``u_k`` None).
+        """
         return 0.0 if u_k is None else u_k * self.compliance(theta)
 
     def motor_acceleration(self, qd: np.ndarray) -> np.ndarray:
         """(s, L+1, m[, d]) the motors' acceleration S qdd over the period before each sample, rad/s^2, from the
         joint velocities qd (s, L+1, n[, d]) of each interval's samples (or their sensitivities, d columns):
         S (qd_k - qd_k-1) / dt; an interval's first sample takes its first period's (its own interval's states
-        only: the Jacobian keeps its block structure)."""
+        only: the Jacobian keeps its block structure).
+
+        Parameters
+        ----------
+        qd : numpy.ndarray, shape (s, L+1, n) or (s, L+1, n, d)
+            The joint velocities, rad/s, at each interval's samples (or their sensitivities).
+
+        Returns
+        -------
+        numpy.ndarray, shape (s, L+1, m) or (s, L+1, m, d)
+            The motors' acceleration, rad/s^2.
+        """
         return np.einsum("ij,skj...->ski...", self.S_enc, acceleration_before(qd, self.dt, axis=1))
 
     def tension_torque(self, u_k: np.ndarray | None, xs: np.ndarray) -> np.ndarray | None:
@@ -61,7 +120,20 @@ class EncoderOutput:
         its tension, r_m T = tau_m - J_m qdd_m, not by the motor's torque. Measured on MuJoCo's elastic tendon with
         its rotor (``benchmarks/realism.py``'s cable; the encoder corrected by the plant's own J_m qdd_m):
         4.1 counts RMS on finger2, 0.8 on finger3; a finger2 with all effects went from masses 2.2 % and the
-        EKF 1.09 degree off to 0.7 % and 0.24 degree; a finger3 with the cable alone, F_s_3 from 7.5 to 0.3 %."""
+        EKF 1.09 degree off to 0.7 % and 0.24 degree; a finger3 with the cable alone, F_s_3 from 7.5 to 0.3 %.
+
+        Parameters
+        ----------
+        u_k : numpy.ndarray, shape (s, L+1, m), or None
+            The modelled torque before each sample, N m (None: passed through).
+        xs : numpy.ndarray, shape (s, L+1, nx)
+            The states [q; qd] at each interval's samples (rad, rad/s).
+
+        Returns
+        -------
+        numpy.ndarray, shape (s, L+1, m), or None
+            The torque the tension balances, N m (``u_k`` itself without a rotor).
+        """
         if self.rotor is None or u_k is None:
             return u_k
         return u_k - self.rotor * self.motor_acceleration(xs[..., self.n: 2 * self.n])

@@ -39,12 +39,34 @@ class StandardErrors:
     RULE = "max(classical, robust) per parameter"
 
     def kind(self, i: int) -> str:
-        """``"robust"`` or ``"classical"``: which one parameter ``i`` reports."""
+        """``"robust"`` or ``"classical"``: which one parameter ``i`` reports.
+
+        Parameters
+        ----------
+        i : int
+            The parameter's index.
+
+        Returns
+        -------
+        str
+            ``"robust"`` or ``"classical"``.
+        """
         return "robust" if self.robust_larger[i] else "classical"
 
     def summary(self, names: tuple[str, ...]) -> str:
         """One line for the fit's table and file: the rule, the sandwich, the parameters whose robust error is
-        reported."""
+        reported.
+
+        Parameters
+        ----------
+        names : tuple[str, ...]
+            The parameters' names, in the fit's order.
+
+        Returns
+        -------
+        str
+            The line.
+        """
         which = [n for n, b in zip(names, self.robust_larger) if b]
         how = self.method.describe() if self.method is not None else "HAC sandwich"
         law = "" if self.law_spread is None else ", with the other friction law's fit's difference added"

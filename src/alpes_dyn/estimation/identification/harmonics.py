@@ -31,7 +31,27 @@ NONLINEARITY = ("a nonlinearity shaped otherwise than in the model (the residual
 
 def intermodulation(lines: Sequence[float], nyquist: float, orders: Sequence[int] = (2, 3)) -> np.ndarray:
     """The products |a f_i + b f_j| (Hz) of the excitation's ``lines`` (Hz) whose order |a| + |b| is in
-    ``orders`` (harmonics: i = j), below ``nyquist`` and above 0, not on a line, sorted, without repeats."""
+    ``orders`` (harmonics: i = j), below ``nyquist`` and above 0, not on a line, sorted, without repeats.
+
+    Parameters
+    ----------
+    lines : Sequence[float]
+        The excitation's frequencies, Hz (positive).
+    nyquist : float
+        The upper limit, Hz.
+    orders : Sequence[int], optional
+        The orders |a| + |b| kept, each at most 6 (|a|, |b| <= 3; default (2, 3)).
+
+    Returns
+    -------
+    numpy.ndarray
+        The products, Hz, sorted.
+
+    Raises
+    ------
+    InputError
+        Naming ``lines``: empty, not finite or not positive.
+    """
     f = np.asarray(lines, dtype=float).ravel()
     if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise InputError(f"lines: expected positive frequencies in Hz, got {list(lines)!r}")
@@ -55,7 +75,31 @@ def harmonic_ratio(e: np.ndarray, lines: Sequence[float], dt: float, halfwidth: 
     :meth:`~alpes_dyn.estimation.experiments.recording.Recording.run_starts`; the orientations of a turned one,
     :func:`~alpes_dyn.estimation.experiments.recording.segment_starts`): the ratio of each part apart (no spectrum
     across a jump or a restart, whose jump spreads the lines' power over the products' bins), their mean weighted
-    by the parts' lengths."""
+    by the parts' lengths.
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,) or (N, m)
+        The residual, counts.
+    lines : Sequence[float]
+        The excitation's frequencies, Hz.
+    dt : float
+        The sample time, s (> 0).
+    halfwidth : int, optional
+        The bins taken on each side of a product (default 1).
+    runs : Sequence[int] or None, optional
+        The first sample of each part whose excitation restarts, then N (default None: one part).
+
+    Returns
+    -------
+    float
+        The ratio (about 1 for a white residual).
+
+    Raises
+    ------
+    InputError
+        Naming ``dt`` or ``lines``.
+    """
     e = np.asarray(e, dtype=float)
     e = e[:, None] if e.ndim == 1 else e
     if not (isinstance(dt, (int, float)) and math.isfinite(dt) and dt > 0):

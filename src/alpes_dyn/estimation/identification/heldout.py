@@ -23,14 +23,44 @@ def project_torque(t: np.ndarray, torque: np.ndarray, frequencies: Sequence[floa
                    starts: Sequence[int] | None = None) -> np.ndarray:
     """The least-squares fit of each torque column (N, m) on 1, sin(2 pi f t), cos(2 pi f t) for f in
     ``frequencies`` (Hz), per part (``starts``, :func:`~alpes_dyn.estimation.identification.torque_lines.line_basis`;
-    default one): the excitation without the measurement noise off its lines."""
+    default one): the excitation without the measurement noise off its lines.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        The sample times, s.
+    torque : numpy.ndarray, shape (N, m)
+        The recorded torque, N m.
+    frequencies : Sequence[float]
+        The excitation's lines, Hz.
+    starts : Sequence[int] or None, optional
+        The parts' first rows (default None: one part).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, m)
+        The projected torque, N m.
+    """
     Q = np.linalg.qr(line_basis(t, frequencies, starts))[0]
     return Q @ (Q.T @ np.asarray(torque, dtype=float))
 
 
 def parts(bounds: np.ndarray, n: int) -> np.ndarray:
     """The residual's (n rows, one per sample) parts whose excitation restarts (``bounds``:
-    :func:`~alpes_dyn.estimation.experiments.recording.excitation_parts`): their first rows, then n."""
+    :func:`~alpes_dyn.estimation.experiments.recording.excitation_parts`): their first rows, then n.
+
+    Parameters
+    ----------
+    bounds : numpy.ndarray
+        The parts' first samples (:func:`~alpes_dyn.estimation.experiments.recording.excitation_parts`).
+    n : int
+        The residual's rows.
+
+    Returns
+    -------
+    numpy.ndarray
+        The first rows of the parts that start before n, then n.
+    """
     return np.append(bounds[bounds < n], n)
 
 
@@ -38,7 +68,32 @@ def validate(model: Model, sens: SensitivityModel, theta: np.ndarray, recording:
               excitation: Sequence[float] | None, prefix_s: float, offset: np.ndarray | None = None,
               compliance: np.ndarray | None = None) -> Validation:
     """:func:`validate_run` of each run of the held-out recording (module runs), each from its own initial state;
-    of several, the worst run's fit % and NRMSE per encoder, the RMS residual over all the scored samples."""
+    of several, the worst run's fit % and NRMSE per encoder, the RMS residual over all the scored samples.
+
+    Parameters
+    ----------
+    model : Model
+        The fitted model's structure.
+    sens : SensitivityModel
+        The fit's sensitivity model.
+    theta : numpy.ndarray, shape (p,)
+        The fitted parameters, in the fit's units.
+    recording : tuple[Recording, str]
+        The held-out recording and its path (as the report names it).
+    excitation : Sequence[float] or None
+        The excitation's lines, Hz, the torque is projected on (None: the torque as recorded).
+    prefix_s : float
+        The first seconds of each run on which its initial state is estimated, s.
+    offset : numpy.ndarray, shape (m,), optional
+        The fitted encoder offsets, rad (default None: none).
+    compliance : numpy.ndarray, shape (m,), optional
+        The fitted tendon compliances, rad/(N m) (default None: none).
+
+    Returns
+    -------
+    Validation
+        Fit % and NRMSE per encoder, the RMS residual.
+    """
     rec, path = recording
     vals = [validate_run(model, sens, theta, (r, path), excitation, prefix_s, offset, compliance) for r in split(rec)]
     if len(vals) == 1:
@@ -79,7 +134,22 @@ def validate_run(model: Model, sens: SensitivityModel, theta: np.ndarray, record
 def rest_guess(model: Model, u: np.ndarray, y0: np.ndarray) -> np.ndarray:
     """The static equilibrium under the motor torques ``u`` (m,), N m (S^T u, or rho(q)^T u where the ratios change
     with q), the joints without spring (the thumb's ab/adduction, which its own motor holds) held where the first
-    encoder reading ``y0`` puts them."""
+    encoder reading ``y0`` puts them.
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    u : numpy.ndarray, shape (m,)
+        The motor torques, N m.
+    y0 : numpy.ndarray, shape (m,)
+        The first encoder reading, rad.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The joint angles at rest, rad.
+    """
     held = model.springless_joints
     if not held:
         return model.static_equilibrium(None, tau_m=u)

@@ -45,18 +45,51 @@ _OF_THE_RECORDING = ("encoder_offset", "tilt", "input_gain")
 
 
 def spec_misfits(model: Model, names: Sequence[str]) -> list[str]:
-    """The parameters among ``names`` that a spec file cannot hold: the masses (the URDF's)."""
+    """The parameters among ``names`` that a spec file cannot hold: the masses (the URDF's).
+
+    Parameters
+    ----------
+    model : Model
+        The model the parameters are of.
+    names : Sequence[str]
+        Parameter names (:func:`~alpes_dyn.symbolic.parametric.parameter_catalogue`'s).
+
+    Returns
+    -------
+    list[str]
+        The masses among them, in their order.
+    """
     cat = {p.name: p for p in parameter_catalogue(model)}
     return [n for n in names if n in cat and cat[n].kind == "m"]
 
 
 def identified_spec(result: Any, base: TransmissionSpec, masses: str = "refuse") -> TransmissionSpec:
-    """``base`` with the fitted values of ``result`` (an
-    :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult` of a model built on ``base``, or
-    on its restriction to some branches, :meth:`~alpes_dyn.model.robot.Model.subtree`: the whole robot's spec with
-    those values replaced) and the ``[identified]`` section: their standard errors and the fit's record (the
-    module doc).
-    :class:`~alpes_dyn.ModelError` for a mass, or a result whose joints or motors are not the spec's."""
+    """``base`` with the fitted values of ``result`` and the ``[identified]`` section: their standard errors and
+    the fit's record (the module doc).
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        An :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult` of a model built on ``base``, or on
+        its restriction to some branches (:meth:`~alpes_dyn.model.robot.Model.subtree`: the whole robot's spec with
+        those values replaced).
+    base : TransmissionSpec
+        The spec the fitted model was built on.
+    masses : str, optional
+        ``"refuse"`` (default): a fitted mass is an error; ``"urdf"``: the masses are left out (to
+        :func:`identified_urdf`).
+
+    Returns
+    -------
+    TransmissionSpec
+        The spec with the fitted values.
+
+    Raises
+    ------
+    ModelError
+        For a mass (``masses="refuse"``), a result whose joints or motors are not the spec's, or an unknown
+        ``masses``.
+    """
     if not isinstance(base, TransmissionSpec):
         raise ModelError(f"base: expected a TransmissionSpec, got {type(base).__name__}")
     model = result.model
@@ -129,8 +162,25 @@ def identified_urdf(result: Any, urdf: str) -> str:
     have the same names) with each fitted mass ``m_<joint>`` of ``result`` written on the joint's child link: mass
     m [kg], inertia tensor times m / m0, centre of mass kept (the module doc), and an XML comment with the values and
     their standard errors (and, for a fit not trustworthy, written with ``--force``, a second comment saying so with
-    its status, as the spec's header does). :class:`~alpes_dyn.ModelError` if a fitted link is not in ``urdf`` or
-    has no mass."""
+    its status, as the spec's header does).
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        An :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult` with fitted masses ``m_<joint>``.
+    urdf : str
+        The URDF's text (of the robot fitted, or of the whole robot a ``--chain`` sub-model was cut from).
+
+    Returns
+    -------
+    str
+        The URDF's text with the fitted masses.
+
+    Raises
+    ------
+    ModelError
+        If a fitted link is not in ``urdf`` or has no mass.
+    """
     import xml.etree.ElementTree as ET
 
     from ...symbolic.parametric import _child_links
@@ -184,9 +234,32 @@ def identified_mjcf(result: Any, base: TransmissionSpec, mjcf: str | Path, out: 
     ``springref``, where MuJoCo's differs, set to the spec's rest angle), ``F_s_<joint>`` as ``frictionloss``,
     ``F_v_<joint>`` as ``damping``, ``J_m_<motor>`` as the rotor of the motor's actuator; an XML comment before
     ``<mujoco>`` with the values and standard errors (and, for a fit not trustworthy, written with ``--force``,
-    a second one saying so). Returns (text, the fitted parameters the MJCF cannot hold: ``tendon_compliance_<motor>``,
-    named in the comment). :class:`~alpes_dyn.ModelError` if a fitted mass's body has not the URDF's mass in the
-    MJCF (not the file the robot was imported from) or for what ``updated_mjcf`` refuses."""
+    a second one saying so).
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        An :class:`~alpes_dyn.estimation.identification.identification.IdentificationResult`: a fit on the imported URDF + ``base``,
+        or on a sub-model of it.
+    base : TransmissionSpec
+        The spec the fitted model was built on.
+    mjcf : str or pathlib.Path
+        The MJCF file the robot was imported from.
+    out : str or pathlib.Path
+        Where the text is to be saved (its relative paths are written for that place).
+
+    Returns
+    -------
+    tuple[str, list[str]]
+        The text, and the fitted parameters the MJCF cannot hold (``tendon_compliance_<motor>``, named in the
+        comment).
+
+    Raises
+    ------
+    ModelError
+        If a fitted mass's body has not the URDF's mass in the MJCF (not the file the robot was imported from) or
+        for what ``updated_mjcf`` refuses.
+    """
     from ...model.mjcf_equality import own_joint_values
     from ...model.mjcf_import import _compile, _mj, _name
     from ...model.mjcf_update import updated_mjcf

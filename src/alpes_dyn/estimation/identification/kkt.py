@@ -95,8 +95,27 @@ def _raw_blocks(J: "np.ndarray | NormalBlocks", nb: int) -> tuple[np.ndarray, np
 def normal_matrix(J: "np.ndarray | NormalBlocks", shape: Shape, mu: float, prior: np.ndarray, dense: bool = False):
     """The Gauss-Newton normal matrix J^T J of the interval-structured residuals, plus ``prior`` (ng,) on the
     global variables' diagonal, Levenberg-Marquardt damped: mu max(d, 1e-12 max(d_max, 1)) added to each diagonal
-    entry d. J: (S, rows, nb + ng) per interval, or its :class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`.
-    Returns an (nz, nz) CSC matrix (an array if dense)."""
+    entry d.
+
+    Parameters
+    ----------
+    J : numpy.ndarray or NormalBlocks
+        The residuals' Jacobian per interval, (S, rows, nb + ng), or its
+        :class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`.
+    shape : Shape
+        The problem's sizes.
+    mu : float
+        The Levenberg-Marquardt damping: mu max(d, 1e-12 max(d_max, 1)) added to each diagonal entry d.
+    prior : numpy.ndarray, shape (ng,)
+        Added on the global variables' diagonal.
+    dense : bool, optional
+        Return an array (default False: sparse).
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix or numpy.ndarray, shape (nz, nz)
+        The damped normal matrix.
+    """
     nb, nv, nz = shape.nb, shape.nv, shape.nz
     AA, AP, PP = _raw_blocks(J, nb)  # (S, nb, nb), (S, nb, ng), (ng, ng)
     PP = PP + np.diag(prior)
@@ -117,7 +136,24 @@ def normal_matrix(J: "np.ndarray | NormalBlocks", shape: Shape, mu: float, prior
 def continuity_jacobian(Cv: np.ndarray, Cr: np.ndarray, shape: Shape, dense: bool = False):
     """(nc, nz) Jacobian of the continuity defects x_end(j) - x_start(j+1): Cv (S-1, nx, nb) on interval j's
     local variables, -I on the next one's start state (0 at a cut, :attr:`Shape.cut`, where Cv and Cr are 0 too),
-    Cr (S-1, nx, ng) on the global ones. CSC (array if dense)."""
+    Cr (S-1, nx, ng) on the global ones.
+
+    Parameters
+    ----------
+    Cv : numpy.ndarray, shape (S-1, nx, nb)
+        The continuity defects' Jacobian on each interval's local variables (0 at a cut).
+    Cr : numpy.ndarray, shape (S-1, nx, ng)
+        Their Jacobian on the global variables (0 at a cut).
+    shape : Shape
+        The problem's sizes.
+    dense : bool, optional
+        Return an array (default False: sparse).
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix or numpy.ndarray, shape (nc, nz)
+        The continuity Jacobian.
+    """
     nx, nb, nv = shape.nx, shape.nb, shape.nv
     m = shape.n_int - 1
     i1, j1, v1 = _block_diagonal(Cv[:m])
@@ -133,7 +169,22 @@ def continuity_jacobian(Cv: np.ndarray, Cr: np.ndarray, shape: Shape, dense: boo
 
 def kkt_matrix(H, C, dropped: np.ndarray | None = None):
     """[[H, C^T], [C, D]]: the constrained Gauss-Newton system (sparse where H is, else an array); D = diag(``dropped``)
-    (nc,), 1 on the rows of the constraints cut (:attr:`Shape.dropped`, their rows of C zero), else 0."""
+    (nc,), 1 on the rows of the constraints cut (:attr:`Shape.dropped`, their rows of C zero), else 0.
+
+    Parameters
+    ----------
+    H : scipy.sparse matrix or numpy.ndarray, shape (nz, nz)
+        The normal matrix (:func:`normal_matrix`).
+    C : scipy.sparse matrix or numpy.ndarray, shape (nc, nz)
+        The continuity Jacobian (:func:`continuity_jacobian`).
+    dropped : numpy.ndarray, shape (nc,), optional
+        1 on the rows of the constraints cut, else 0 (default None: zeros).
+
+    Returns
+    -------
+    scipy.sparse.csc_matrix or numpy.ndarray, shape (nz + nc, nz + nc)
+        The KKT matrix.
+    """
     nz, nc = H.shape[0], C.shape[0]
     d = np.zeros(nc) if dropped is None else np.asarray(dropped, dtype=float)
     if sp.issparse(H):
@@ -150,7 +201,23 @@ def factorize(M) -> Callable[[np.ndarray], np.ndarray]:
     Sparse M: SuperLU; where it finds M exactly singular, the least-squares (minimum-norm) solution of the dense
     matrix if it has at most :data:`DENSE_LIMIT` rows (a parameter the recording does not see, e.g. tilt_x at a
     level palm; :func:`minimum_norm`, decomposed once), else a ``numpy.linalg.LinAlgError``. Dense M: LU, the
-    same least-squares fallback."""
+    same least-squares fallback.
+
+    Parameters
+    ----------
+    M : scipy.sparse matrix or numpy.ndarray, shape (n, n)
+        The matrix.
+
+    Returns
+    -------
+    Callable[[numpy.ndarray], numpy.ndarray]
+        ``solve(b)``: x (n,) or (n, k) for b (n,) or (n, k).
+
+    Raises
+    ------
+    numpy.linalg.LinAlgError
+        A sparse M found singular with more than :data:`DENSE_LIMIT` rows.
+    """
     if sp.issparse(M):
         try:
             lu = splu(sp.csc_matrix(M))
@@ -223,7 +290,18 @@ def _dense_lu(M: np.ndarray) -> Callable[[np.ndarray], np.ndarray]:
 def kkt_order(shape: Shape) -> np.ndarray:
     """(nz + nc,) the KKT matrix's rows and columns (:func:`kkt_matrix`: local variables, global ones, multipliers)
     in the order that makes all but its last ng banded: interval j's local variables then its continuity
-    multipliers (which tie them to interval j+1's start state), interval after interval, the global ones last."""
+    multipliers (which tie them to interval j+1's start state), interval after interval, the global ones last.
+
+    Parameters
+    ----------
+    shape : Shape
+        The problem's sizes.
+
+    Returns
+    -------
+    numpy.ndarray, shape (nz + nc,)
+        The permutation of the KKT matrix's rows and columns.
+    """
     nb, nx, nv, nz, m = shape.nb, shape.nx, shape.nv, shape.nz, shape.n_int - 1
     pairs = np.concatenate([np.arange(m)[:, None] * nb + np.arange(nb)[None, :],
                             nz + np.arange(m)[:, None] * nx + np.arange(nx)[None, :]], axis=1)
@@ -236,7 +314,22 @@ def bordered_factorize(M, order: np.ndarray, border: int) -> Solver:
     order). The banded block A by LAPACK's band LU with partial pivoting (``dgbtrf``), the border by its Schur
     complement D - B' A^-1 B (dense, border x border, :func:`factorize`: its least-squares solution where it is
     singular, a parameter the recording does not see). Where A itself is singular, :func:`factorize` of M (SuperLU).
-    Time O(n w (w + border)) and memory O(n (w + border)) for half-bandwidth w: linear in the record."""
+    Time O(n w (w + border)) and memory O(n (w + border)) for half-bandwidth w: linear in the record.
+
+    Parameters
+    ----------
+    M : scipy.sparse matrix, shape (N, N)
+        The matrix.
+    order : numpy.ndarray, shape (N,)
+        The permutation of its rows and columns that makes it banded but for its last ``border``.
+    border : int
+        The number of rows and columns of the border.
+
+    Returns
+    -------
+    Callable[[numpy.ndarray], numpy.ndarray]
+        ``solve(b)``: x (N,) or (N, k) for b (N,) or (N, k).
+    """
     M = sp.csr_matrix(M)
     M.sum_duplicates()
     N = M.shape[0]
@@ -329,7 +422,35 @@ def penalized_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, wv: np.
     variables ``hold`` (indices in 0..ng-1; d that diagonal), factorised in its natural order by band and border from
     the intervals' blocks (no sparse matrix formed). Returns (the solver of the whole system, the solver of its
     local variables' block H[:nv, :nv] (the band's LU itself), that block's border H[:nv, nv:] (nv, ng)); the first
-    is ``fallback()`` and the second raises ``numpy.linalg.LinAlgError`` where the band is singular."""
+    is ``fallback()`` and the second raises ``numpy.linalg.LinAlgError`` where the band is singular.
+
+    Parameters
+    ----------
+    J : numpy.ndarray or NormalBlocks
+        The residuals' Jacobian per interval, (S, rows, nb + ng), or its
+        :class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`.
+    Cv : numpy.ndarray, shape (S-1, nx, nb)
+        The continuity defects' Jacobian on each interval's local variables (0 at a cut).
+    Cr : numpy.ndarray, shape (S-1, nx, ng)
+        Their Jacobian on the global variables (0 at a cut).
+    wv : numpy.ndarray, shape (nx,)
+        The weights of the continuity defects' rows (the same for every defect; none at a cut).
+    shape : Shape
+        The problem's sizes.
+    mu : float
+        The Levenberg-Marquardt damping: mu max(d, 1e-12 max(d_max, 1)) added to each diagonal entry d.
+    prior : numpy.ndarray, shape (ng,)
+        Added on the global variables' diagonal.
+    hold : numpy.ndarray
+        Indices in 0..ng-1 of the global variables held (1e12 max(d, 1) added to their diagonal).
+    fallback : Callable[[], Callable[[numpy.ndarray], numpy.ndarray]]
+        Called for the solver where the band is singular (the sparse path's).
+
+    Returns
+    -------
+    tuple
+        (the whole system's solver, its local block's solver, the border H[:nv, nv:] (nv, ng)).
+    """
     nb, nx, ng, S = shape.nb, shape.nx, shape.ng, shape.n_int
     AA, AP, D = _normal_blocks(J, shape, mu, prior)
     W = shape.keep[:, None] * wv[None, :]**2  # (S-1, nx): no weight on a cut (Shape.cut)
@@ -365,7 +486,31 @@ def kkt_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, shape: Shape,
     Cr, shape)``) in :func:`kkt_order`, its band and border laid out from the intervals' blocks directly: no sparse
     matrix is formed (at 600 s its triplets, their CSC, CSR and slices peaked at about 400 MB above the Jacobian). The
     same numbers in the same band as the sparse path (the products J'J by the same einsums), so the same solution
-    to rounding. ``fallback()``: the solver where the band is singular (the sparse path's)."""
+    to rounding.
+
+    Parameters
+    ----------
+    J : numpy.ndarray or NormalBlocks
+        The residuals' Jacobian per interval, (S, rows, nb + ng), or its
+        :class:`~alpes_dyn.estimation.identification.normal_blocks.NormalBlocks`.
+    Cv : numpy.ndarray, shape (S-1, nx, nb)
+        The continuity defects' Jacobian on each interval's local variables (0 at a cut).
+    Cr : numpy.ndarray, shape (S-1, nx, ng)
+        Their Jacobian on the global variables (0 at a cut).
+    shape : Shape
+        The problem's sizes.
+    mu : float
+        The Levenberg-Marquardt damping: mu max(d, 1e-12 max(d_max, 1)) added to each diagonal entry d.
+    prior : numpy.ndarray, shape (ng,)
+        Added on the global variables' diagonal.
+    fallback : Callable[[], Callable[[numpy.ndarray], numpy.ndarray]]
+        Called for the solver where the band is singular (the sparse path's).
+
+    Returns
+    -------
+    Callable[[numpy.ndarray], numpy.ndarray]
+        ``solve(b)``: x (nz + nc,) or (nz + nc, k) of the KKT system for b of that shape.
+    """
     nb, nx, ng, S = shape.nb, shape.nx, shape.ng, shape.n_int
     m, w = S - 1, nb + nx
     AA, AP, D = _normal_blocks(J, shape, mu, prior)

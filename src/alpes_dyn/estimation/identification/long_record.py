@@ -141,7 +141,24 @@ def window_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest,
     :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians, or None where the record is not longer than :data:`LONG_RECORD` or the
     window's fit did not converge within :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the window's
     iterations). A record of several runs longer than :data:`RUNS_START`: :func:`runs_start` first, the window
-    where it gives no start."""
+    where it gives no start.
+
+    Parameters
+    ----------
+    pb : ShootingProblem
+        The fit's problem (:class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`).
+    solver : GaussNewton
+        The fit's solver (:class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`).
+    excitation : Sequence[float] or None
+        The excitation's lines, Hz, or None (the torque as recorded).
+    rest : Callable[[ShootingProblem], numpy.ndarray]
+        The rest q (n,), rad, a problem's model response starts from.
+
+    Returns
+    -------
+    tuple
+        (the start (nodes, offs, glob, evaluation) or None, the iterations spent).
+    """
     its = 0
     if pb.rec.n_runs > 1 and pb.rec.duration > RUNS_START:
         start, its = runs_start(pb, solver, excitation, rest)
@@ -166,7 +183,24 @@ def start_from(pb: ShootingProblem, solver: GaussNewton, theta: np.ndarray, q0: 
     earlier run): the model's response under them from the rest ``q0`` (rad) on the encoder, joined
     (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`), else stage 1's nodes and
     the homotopy's last phase (the module docstring), and the
-    :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians."""
+    :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` there with its Jacobians.
+
+    Parameters
+    ----------
+    pb : ShootingProblem
+        The fit's problem (:class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`).
+    solver : GaussNewton
+        The fit's solver (:class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`).
+    theta : numpy.ndarray, shape (p,)
+        The parameters of another fit, in the fit's units.
+    q0 : numpy.ndarray, shape (n,)
+        The rest the model's response starts from, rad.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray, numpy.ndarray, Evaluation]
+        nodes (S, nx), offs (S, no), glob (ng,) and the evaluation there.
+    """
     rho = (theta - pb.theta0) / pb.scale  # the additive parameters' (encoder offsets, tilt angles)
     mult = ~pb.additive
     rho[mult] = np.log(theta[mult] / pb.theta0[mult])
@@ -193,7 +227,24 @@ def runs_start(pb: ShootingProblem, solver: GaussNewton, excitation, rest) -> tu
     (stage 3 from there is not held to a window start's
     :data:`~alpes_dyn.estimation.identification.gauss_newton.WINDOW_ITERATIONS`). Returns (that start, or None
     where ``pb`` has one run or a run's fit did not converge within
-    :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the iterations of the runs' fits)."""
+    :data:`~alpes_dyn.estimation.identification.gauss_newton.BASIN_LIMIT`; the iterations of the runs' fits).
+
+    Parameters
+    ----------
+    pb : ShootingProblem
+        The fit's problem (:class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`).
+    solver : GaussNewton
+        The fit's solver (:class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`).
+    excitation : Sequence[float] or None
+        The excitation's lines, Hz, or None (the torque as recorded).
+    rest : Callable[[ShootingProblem], numpy.ndarray]
+        The rest q (n,), rad, a problem's model response starts from.
+
+    Returns
+    -------
+    tuple
+        (the start (nodes, offs, glob, None) or None, the iterations of the runs' fits).
+    """
     runs = split(pb.rec)
     if len(runs) < 2:
         return None, 0

@@ -36,19 +36,62 @@ COMPACT_BYTES = 2**27
 def blocks_of(J: np.ndarray, nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(A'A (s, nb, nb), A'P (s, nb, ng), the sum of the P'P (ng, ng)) of J (s, rows, nb + ng): A its first ``nb``
     columns (the intervals' local variables), P the others (the global ones). The one place these products are
-    taken (:func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`, :meth:`NormalBlocks.add`)."""
+    taken (:func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`, :meth:`NormalBlocks.add`).
+
+    Parameters
+    ----------
+    J : numpy.ndarray, shape (s, rows, nb + ng)
+        The intervals' rows of the Jacobian.
+    nb : int
+        The local variables per interval.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray, numpy.ndarray]
+        A'A (s, nb, nb), A'P (s, nb, ng), the sum of the P'P (ng, ng).
+    """
     A, P = J[:, :, :nb], J[:, :, nb:]
     return np.einsum("ski,skj->sij", A, A), np.einsum("ski,skj->sij", A, P), np.einsum("ski,skj->ij", P, P)
 
 
 def assembled(gs: np.ndarray, rg: np.ndarray | float, nb: int) -> np.ndarray:
     """(S nb + ng,) the vector J'r in the fit's layout from each interval's J_s'r_s ``gs`` (S, nb + ng): the local
-    variables' parts interval by interval, then the global ones summed (plus ``rg``)."""
+    variables' parts interval by interval, then the global ones summed (plus ``rg``).
+
+    Parameters
+    ----------
+    gs : numpy.ndarray, shape (S, nb + ng)
+        Each interval's J_s'r_s.
+    rg : numpy.ndarray, shape (ng,), or float
+        Added to the global variables' part (a prior's gradient; 0.0: none).
+    nb : int
+        The local variables per interval.
+
+    Returns
+    -------
+    numpy.ndarray, shape (S nb + ng,)
+        J'r.
+    """
     return np.concatenate([gs[:, :nb].reshape(-1), gs[:, nb:].sum(axis=0) + rg])
 
 
 def j_dot(J: np.ndarray, z_local: np.ndarray, z_glob: np.ndarray) -> np.ndarray:
-    """(s, rows) J z of J (s, rows, nb + ng) for z's local part ``z_local`` (s, nb) and global part ``z_glob`` (ng,)."""
+    """(s, rows) J z of J (s, rows, nb + ng) for z's local part ``z_local`` (s, nb) and global part ``z_glob`` (ng,).
+
+    Parameters
+    ----------
+    J : numpy.ndarray, shape (s, rows, nb + ng)
+        The intervals' rows of the Jacobian.
+    z_local : numpy.ndarray, shape (s, nb)
+        z's part on the intervals' local variables.
+    z_glob : numpy.ndarray, shape (ng,)
+        z's part on the global variables.
+
+    Returns
+    -------
+    numpy.ndarray, shape (s, rows)
+        J z.
+    """
     nb = z_local.shape[1]
     return np.einsum("skd,sd->sk", J[:, :, :nb], z_local) + J[:, :, nb:] @ z_glob
 
@@ -66,11 +109,37 @@ class NormalBlocks:
 
     @classmethod
     def empty(cls, n_int: int, nb: int, ng: int) -> "NormalBlocks":
+        """Blocks of zeros, to be filled by :meth:`add`.
+
+        Parameters
+        ----------
+        n_int : int
+            S, the number of intervals.
+        nb : int
+            The local variables per interval.
+        ng : int
+            The global variables.
+
+        Returns
+        -------
+        NormalBlocks
+            Its arrays zero.
+        """
         return cls(np.zeros((n_int, nb, nb)), np.zeros((n_int, nb, ng)), np.zeros((ng, ng)), np.zeros((n_int, nb + ng)))
 
     def add(self, sl: slice, J: np.ndarray, r: np.ndarray) -> None:
         """The intervals ``sl``' blocks from their rows of J (s, R, nb + ng), double precision, and residuals r (s, R),
-        by :func:`blocks_of`, as :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix` takes them."""
+        by :func:`blocks_of`, as :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix` takes them.
+
+        Parameters
+        ----------
+        sl : slice
+            The intervals.
+        J : numpy.ndarray, shape (s, R, nb + ng)
+            Their rows of the Jacobian, double precision.
+        r : numpy.ndarray, shape (s, R)
+            Their residuals.
+        """
         AA, AP, PP = blocks_of(J, self.AA.shape[1])
         self.AA[sl], self.AP[sl] = AA, AP
         self.PP += PP
@@ -78,7 +147,18 @@ class NormalBlocks:
 
     def gradient(self, rg: np.ndarray) -> np.ndarray:
         """(nz,) the cost's gradient J'r (+ ``rg`` for the global variables), as
-        :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.grad` gives it from J."""
+        :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.grad` gives it from J.
+
+        Parameters
+        ----------
+        rg : numpy.ndarray, shape (ng,)
+            Added to the global variables' part (a prior's gradient).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nz,)
+            J'r + [0; rg].
+        """
         return assembled(self.gs, rg, self.AA.shape[1])
 
 
@@ -87,7 +167,24 @@ def remainders(pb: Any, point: tuple[np.ndarray, np.ndarray, np.ndarray], solve:
     """(k, S, rows) each R_i - J z_i, in ``R`` itself (overwritten), z_i = ``solve``([J'R_i; 0]) (the KKT system's solver: the projection of R_i on
     the fit's tangent space, continuity kept), for ``R`` (k, S, rows) residual-shaped responses, J the Jacobian of
     ``pb`` (a :class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`) at ``point`` (nodes, offs, glob),
-    never held whole: one pass over its chunks for every J'R_i, one for every J z_i (module doc)."""
+    never held whole: one pass over its chunks for every J'R_i, one for every J z_i (module doc).
+
+    Parameters
+    ----------
+    pb : ShootingProblem
+        The fit's problem.
+    point : tuple[numpy.ndarray, numpy.ndarray, numpy.ndarray]
+        (nodes, offs, glob): where J is taken.
+    solve : Callable[[numpy.ndarray], numpy.ndarray]
+        The KKT system's solver (nz + nc,).
+    R : numpy.ndarray, shape (k, S, rows)
+        Residual-shaped responses (overwritten).
+
+    Returns
+    -------
+    numpy.ndarray, shape (k, S, rows)
+        R - J z, in ``R``'s memory.
+    """
     k, nb, nv, nz = R.shape[0], pb.nb, pb.nv, pb.nz
     G = np.zeros((k, pb.n_int, nb + pb.ng))
 

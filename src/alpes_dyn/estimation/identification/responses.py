@@ -31,7 +31,46 @@ def effect_responses(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     constant) and the torque's own forward
     difference u_k+1 - u_k (a torque read d samples late is the applied one less d times it, to first order: a
     torque delay): the signatures of :func:`~alpes_dyn.estimation.identification.adequacy.signatures`; finite
-    differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs."""
+    differences of batched runs, states only, in chunks of intervals of ``chunk_doubles`` per-sample inputs.
+
+    Parameters
+    ----------
+    sens : SensitivityModel
+        The fit's sensitivity model (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`).
+    nodes : numpy.ndarray, shape (B, nx)
+        The fitted nodes: each interval's start state.
+    Ub : numpy.ndarray, shape (B, L, nu)
+        The torque held over each period of each interval, N m, as the fit takes it.
+    Gb : numpy.ndarray, shape (B, L, 3)
+        Gravity, m/s^2, base frame, per period.
+    theta : numpy.ndarray, shape (p,)
+        The fitted parameters, in their units.
+    corr : numpy.ndarray or None
+        The fitted torque corrections (the run's ``offset`` coefficients), per interval (B, nu, nb) or for all;
+        None: none.
+    Psib : numpy.ndarray, shape (B, L, nb), or None
+        The corrections' basis per sample (None: ones).
+    valid : numpy.ndarray of bool, shape (B, L+1)
+        True on the samples scored (within the record; an interval's end counted once, as the next one's start).
+    S : numpy.ndarray
+        The transmission: its matrix (m, n), or its ratio curve (:func:`~alpes_dyn.model.ratio_curve.encoder_angles`).
+    x_fit : numpy.ndarray, shape (N+1, nx)
+        The fitted states at the record's samples.
+    step : float
+        The encoder's step, rad per count.
+    dt : float
+        The sample period, s.
+    chunk_doubles : int, optional
+        The per-sample inputs of a chunk of intervals run at once (default 2**20).
+    ramp : numpy.ndarray, shape (N+1,), optional
+        The recorded time's ramp a drifting torque constant multiplies the torque by (default None: no
+        ``gain_drift`` response).
+
+    Returns
+    -------
+    dict[str, numpy.ndarray]
+        Effect name -> the encoder's response (B, L+1, m), counts per N m (0 off the samples ``valid`` scores).
+    """
     n, (B, L) = sens.n, Ub.shape[:2]
     N1 = x_fit.shape[0]
     vm = encoder_rates(S, x_fit[:, :n], x_fit[:, n:2 * n])  # (N+1, m) motor velocity, rad/s
@@ -73,7 +112,38 @@ def torque_explained(sens: Any, nodes: np.ndarray, Ub: np.ndarray, Gb: np.ndarra
     """RMS encoder difference (counts) the recorded torque's white noise ``sigma`` (N m) makes through the
     fitted model, each interval from its fitted node, the noise's per-interval mean removed (the fit's
     per-interval corrections take it): a Monte Carlo of two draws (a fixed generator: the same number each call),
-    states only."""
+    states only.
+
+    Parameters
+    ----------
+    sens : SensitivityModel
+        The fit's sensitivity model (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`).
+    nodes : numpy.ndarray, shape (B, nx)
+        The fitted nodes: each interval's start state.
+    Ub : numpy.ndarray, shape (B, L, nu)
+        The torque held over each period of each interval, N m, as the fit takes it.
+    Gb : numpy.ndarray, shape (B, L, 3)
+        Gravity, m/s^2, base frame, per period.
+    theta : numpy.ndarray, shape (p,)
+        The fitted parameters, in their units.
+    offs : numpy.ndarray
+        The fitted per-interval torque corrections (the run's ``offset`` coefficients).
+    valid : numpy.ndarray of bool, shape (B, L+1)
+        True on the samples scored (within the record; an interval's end counted once, as the next one's start).
+    S : numpy.ndarray
+        The transmission: its matrix (m, n), or its ratio curve (:func:`~alpes_dyn.model.ratio_curve.encoder_angles`).
+    step : float
+        The encoder's step, rad per count.
+    sigma : float
+        The torque's white noise, N m.
+    L : int
+        The samples per interval.
+
+    Returns
+    -------
+    float
+        The RMS encoder difference, counts.
+    """
     rng = np.random.default_rng(0)
     R = 2
     w = sigma * rng.standard_normal((R,) + Ub.shape)

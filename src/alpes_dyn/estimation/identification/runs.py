@@ -27,8 +27,25 @@ __all__ = ["aligned", "run_cuts", "split", "encoder_noise"]
 
 def aligned(rec: Recording, L: int) -> Recording:
     """``rec`` with each run but the last cut to a whole number of intervals of ``L`` samples (its last samples
-    dropped, fewer than L); ``rec`` itself where it is one run or already so. :class:`~alpes_dyn.InputError` where a
-    run holds fewer than L samples (no whole interval)."""
+    dropped, fewer than L); ``rec`` itself where it is one run or already so.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (one run or several).
+    L : int
+        The samples per shooting interval.
+
+    Returns
+    -------
+    Recording
+        The recording cut.
+
+    Raises
+    ------
+    InputError
+        Naming ``interval``: a run holds fewer than L samples (no whole interval).
+    """
     b = rec.run_starts()
     if len(b) == 2:
         return rec
@@ -48,8 +65,27 @@ def run_cuts(rec: Recording, L: int, n_int: int) -> tuple[np.ndarray, np.ndarray
     """(cut (n_int - 1,) bool: interval j+1 starts a run; before (N+1,) int: the sample whose torque is held over
     the period before each sample, k - 1, or k itself at a run's first sample (its tension has seen no torque of
     that run before: :func:`~alpes_dyn.model.transmission.torque_before` within each run)) for ``rec`` cut into
-    ``n_int`` intervals of ``L`` samples. :class:`~alpes_dyn.InputError` where a run does not start on an interval
-    (:func:`aligned` first)."""
+    ``n_int`` intervals of ``L`` samples.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (one run or several).
+    L : int
+        The samples per shooting interval.
+    n_int : int
+        The number of intervals.
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray]
+        cut (n_int - 1,) bool and before (N+1,) int.
+
+    Raises
+    ------
+    InputError
+        Naming ``runs``: a run does not start on an interval (:func:`aligned` first).
+    """
     b = rec.run_starts()
     starts = b[1:-1]
     if np.any(starts % L):
@@ -64,7 +100,18 @@ def run_cuts(rec: Recording, L: int, n_int: int) -> tuple[np.ndarray, np.ndarray
 
 def split(rec: Recording) -> list[Recording]:
     """The runs of ``rec``, each a :class:`~alpes_dyn.estimation.experiments.recording.Recording` of its own
-    (without a ``run`` column); ``[rec]`` where it is one run."""
+    (without a ``run`` column); ``[rec]`` where it is one run.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (one run or several).
+
+    Returns
+    -------
+    list[Recording]
+        Its runs, in order.
+    """
     b = rec.run_starts()
     if len(b) == 2:
         return [rec]
@@ -75,7 +122,20 @@ def encoder_noise(rec: Recording, given: float | None) -> float | None:
     """The encoder's white noise beyond its quantisation, counts, for the sensor floor of a recording of several
     runs: ``given``, else estimated run by run (each run's fourth difference,
     :func:`~alpes_dyn.estimation.identification.adequacy.white_noise_level`: none across a jump between runs, which
-    made it 5 to 7 times the floor on three joined finger2 runs); None for one run (the floor's own estimate)."""
+    made it 5 to 7 times the floor on three joined finger2 runs); None for one run (the floor's own estimate).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (one run or several).
+    given : float or None
+        The noise given by the user, counts (None: estimated).
+
+    Returns
+    -------
+    float or None
+        The noise, counts.
+    """
     from .adequacy import encoder_resolution, white_noise_level
 
     if given is not None or rec.n_runs == 1:

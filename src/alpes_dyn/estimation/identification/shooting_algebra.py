@@ -63,19 +63,77 @@ class ShootingAlgebra:
     # --- the linear algebra (module kkt) ------------------------------------------------------------------------
 
     def normal(self, J: np.ndarray, mu: float):
-        """Gauss-Newton normal matrix of the interval-structured residuals, LM-damped by mu (:mod:`.kkt`)."""
+        """Gauss-Newton normal matrix of the interval-structured residuals, LM-damped by mu (:mod:`.kkt`).
+
+        Parameters
+        ----------
+        J : numpy.ndarray or NormalBlocks
+            The residuals' Jacobian per interval, (S, rows, nb + ng), or its compact blocks (:meth:`normal_of`).
+        mu : float
+            The Levenberg-Marquardt damping.
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix or numpy.ndarray, shape (nz, nz)
+            The damped normal matrix, with the prior (an array where :attr:`dense`).
+        """
         return normal_matrix(J, self.shape, mu, self.prior, self.dense)
 
     def continuity(self, Cv: np.ndarray, Cr: np.ndarray):
-        """(nc, nz) Jacobian of the continuity defects."""
+        """(nc, nz) Jacobian of the continuity defects.
+
+        Parameters
+        ----------
+        Cv : numpy.ndarray, shape (S-1, nx, nb)
+            The continuity defects' Jacobian on each interval's local variables.
+        Cr : numpy.ndarray, shape (S-1, nx, ng)
+            Their Jacobian on the global variables.
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix or numpy.ndarray, shape (nc, nz)
+            The continuity Jacobian (an array where :attr:`dense`).
+        """
         return continuity_jacobian(Cv, Cr, self.shape, self.dense)
 
     def kkt_system(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
-        """Normal equations of the interval-structured least squares, with the continuity constraints."""
+        """Normal equations of the interval-structured least squares, with the continuity constraints.
+
+        Parameters
+        ----------
+        J : numpy.ndarray or NormalBlocks
+            The residuals' Jacobian per interval, (S, rows, nb + ng), or its compact blocks (:meth:`normal_of`).
+        Cv : numpy.ndarray, shape (S-1, nx, nb)
+            The continuity defects' Jacobian on each interval's local variables.
+        Cr : numpy.ndarray, shape (S-1, nx, ng)
+            Their Jacobian on the global variables.
+        mu : float
+            The Levenberg-Marquardt damping.
+
+        Returns
+        -------
+        scipy.sparse.csc_matrix or numpy.ndarray, shape (nz + nc, nz + nc)
+            The KKT matrix (:func:`~alpes_dyn.estimation.identification.kkt.kkt_matrix`).
+        """
         return kkt_matrix(self.normal(J, mu), self.continuity(Cv, Cr), self.shape.dropped)
 
     def continuity_t(self, Cv: np.ndarray, Cr: np.ndarray, v: np.ndarray) -> np.ndarray:
-        """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks."""
+        """(nz,) C' v for the continuity Jacobian C (:meth:`continuity`) and v (S-1, nx), from its blocks.
+
+        Parameters
+        ----------
+        Cv : numpy.ndarray, shape (S-1, nx, nb)
+            The continuity defects' Jacobian on each interval's local variables.
+        Cr : numpy.ndarray, shape (S-1, nx, ng)
+            Their Jacobian on the global variables.
+        v : numpy.ndarray, shape (S-1, nx)
+            One value per continuity defect (e.g. the multipliers).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nz,)
+            C' v.
+        """
         out = np.zeros((self.n_int, self.nb))
         out[:-1] += np.einsum("sia,si->sa", Cv, v)
         out[1:, :self.nx] -= v * self.shape.keep[:, None]
@@ -86,7 +144,25 @@ class ShootingAlgebra:
         by ``wv`` (nx,)), 1e12 max(d, 1) added to the diagonal d of the global variables ``hold`` (indices 0..ng-1).
         Returns (its solver, the solver of its local variables' block H[:nv, :nv], that block's border H[:nv, nv:]):
         where :attr:`structured`, from the blocks (:func:`~alpes_dyn.estimation.identification.kkt.penalized_from_blocks`),
-        else from the matrices (dense or SuperLU)."""
+        else from the matrices (dense or SuperLU).
+
+        Parameters
+        ----------
+        e : Evaluation
+            The problem evaluated at a point, with its Jacobians
+            (:class:`~alpes_dyn.estimation.identification.shooting.Evaluation`).
+        mu : float
+            The Levenberg-Marquardt damping.
+        wv : numpy.ndarray, shape (nx,)
+            The weights of the defects' rows (the same for every defect).
+        hold : numpy.ndarray
+            Indices in 0..ng-1 of the global variables held.
+
+        Returns
+        -------
+        tuple
+            (the whole system's solver, its local block's solver, the border H[:nv, nv:] (nv, ng)).
+        """
         nv = self.nv
         if self.structured:
             def fallback():
@@ -110,7 +186,24 @@ class ShootingAlgebra:
     def kkt_solver(self, J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, mu: float):
         """A solver of :meth:`kkt_system` (J, Cv, Cr, mu): where :attr:`structured`, laid out in band and border from
         the intervals' blocks (:func:`~alpes_dyn.estimation.identification.kkt.kkt_from_blocks`: no sparse matrix
-        formed), else :meth:`factorize` of the matrix."""
+        formed), else :meth:`factorize` of the matrix.
+
+        Parameters
+        ----------
+        J : numpy.ndarray or NormalBlocks
+            The residuals' Jacobian per interval, (S, rows, nb + ng), or its compact blocks (:meth:`normal_of`).
+        Cv : numpy.ndarray, shape (S-1, nx, nb)
+            The continuity defects' Jacobian on each interval's local variables.
+        Cr : numpy.ndarray, shape (S-1, nx, ng)
+            Their Jacobian on the global variables.
+        mu : float
+            The Levenberg-Marquardt damping.
+
+        Returns
+        -------
+        Callable[[numpy.ndarray], numpy.ndarray]
+            ``solve(b)`` of the KKT system, b (nz + nc,) or (nz + nc, k).
+        """
         if not self.structured:
             return self.factorize(self.kkt_system(J, Cv, Cr, mu), "kkt")
         return kkt_from_blocks(J, Cv, Cr, self.shape, mu, self.prior,
@@ -120,7 +213,25 @@ class ShootingAlgebra:
         """A solver x = M^-1 b for one of the problem's matrices: ``system`` "kkt" (:meth:`kkt_system`), "normal"
         (the (nz, nz) normal matrix, with or without the continuity penalty C'WC) or "local" (its local variables'
         (nv, nv) block); by :func:`~alpes_dyn.estimation.identification.kkt.bordered_factorize` in the order that makes it banded
-        but for the global variables where :attr:`structured`, else :func:`~alpes_dyn.estimation.identification.kkt.factorize`."""
+        but for the global variables where :attr:`structured`, else :func:`~alpes_dyn.estimation.identification.kkt.factorize`.
+
+        Parameters
+        ----------
+        M : scipy.sparse matrix or numpy.ndarray
+            The matrix, (nz + nc) square for "kkt", (nz, nz) for "normal", (nv, nv) for "local".
+        system : str
+            ``"kkt"``, ``"normal"`` or ``"local"``.
+
+        Returns
+        -------
+        Callable[[numpy.ndarray], numpy.ndarray]
+            ``solve(b)``: x = M^-1 b, b (n,) or (n, k).
+
+        Raises
+        ------
+        ValueError
+            An unknown ``system`` (where :attr:`structured`).
+        """
         if not self.structured:
             return factorize(M)
         if system == "kkt":
@@ -130,14 +241,53 @@ class ShootingAlgebra:
         return bordered_factorize(M, np.arange(M.shape[0]), self.ng if system == "normal" else 0)
 
     def grad(self, r: np.ndarray, J: np.ndarray, rg: np.ndarray) -> np.ndarray:
-        """(nz,) the cost's gradient J^T r (+ rg for the global variables)."""
+        """(nz,) the cost's gradient J^T r (+ rg for the global variables).
+
+        Parameters
+        ----------
+        r : numpy.ndarray, shape (S, rows)
+            The residuals per interval.
+        J : numpy.ndarray, shape (S, rows, nb + ng)
+            Their Jacobian per interval.
+        rg : numpy.ndarray, shape (ng,)
+            Added to the global variables' part (a prior's gradient).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nz,)
+            The gradient.
+        """
         return assembled(np.einsum("sk,skd->sd", r, J), rg, self.nb)
 
     def gradient(self, e: Evaluation) -> np.ndarray:
-        """(nz,) the cost's gradient at ``e``: :meth:`grad`, or its compact Jacobian's (the same numbers)."""
+        """(nz,) the cost's gradient at ``e``: :meth:`grad`, or its compact Jacobian's (the same numbers).
+
+        Parameters
+        ----------
+        e : Evaluation
+            The problem evaluated at a point, with its Jacobians
+            (:class:`~alpes_dyn.estimation.identification.shooting.Evaluation`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nz,)
+            The gradient.
+        """
         return e.normal.gradient(e.rg) if e.normal is not None else self.grad(e.r, e.J, e.rg)
 
     @staticmethod
     def normal_of(e: Evaluation):
-        """What :meth:`kkt_solver` and :meth:`normal` take of ``e``: J, or its compact Jacobian's blocks."""
+        """What :meth:`kkt_solver` and :meth:`normal` take of ``e``: J, or its compact Jacobian's blocks.
+
+        Parameters
+        ----------
+        e : Evaluation
+            The problem evaluated at a point, with its Jacobians
+            (:class:`~alpes_dyn.estimation.identification.shooting.Evaluation`).
+
+        Returns
+        -------
+        numpy.ndarray or NormalBlocks
+            ``e.J`` (S, rows, nb + ng), or ``e.normal``.
+        """
         return e.normal if e.normal is not None else e.J

@@ -27,8 +27,28 @@ __all__ = ["TorqueModel", "torque_model", "line_basis", "CHOLESKY_QR_ROWS"]
 def line_basis(t: np.ndarray, frequencies: Sequence[float], starts: Sequence[int] | None = None) -> np.ndarray:
     """(N, k (2 n_f + 1)): per segment (``starts``, sample indices of :func:`segment_starts`; default one segment)
     1, sin(2 pi f (t - t_a)), cos(2 pi f (t - t_a)) for f in ``frequencies`` (Hz), t_a the segment's first time,
-    zero outside the segment. InputError naming a segment too short for the lines (fewer than 4 samples per
-    basis function)."""
+    zero outside the segment.
+
+    Parameters
+    ----------
+    t : numpy.ndarray, shape (N,)
+        The sample times, s (evenly spaced).
+    frequencies : Sequence[float]
+        The excitation's lines, Hz (positive, below the Nyquist frequency).
+    starts : Sequence[int] or None, optional
+        The segments' first samples (default None: one segment).
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, k (2 n_f + 1))
+        The basis, k the number of segments.
+
+    Raises
+    ------
+    InputError
+        Naming ``excitation``: frequencies not positive or not below the Nyquist frequency, or a segment too
+        short for the lines (fewer than 4 samples per basis function).
+    """
     f = as_float_array(frequencies, "excitation", "frequencies in Hz").reshape(-1)
     if f.size == 0 or not np.all(np.isfinite(f)) or np.any(f <= 0):
         raise InputError(f"excitation: expected positive frequencies in Hz, got {frequencies!r}")
@@ -118,7 +138,22 @@ def _thin_qr(Phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def torque_model(rec: Recording, excitation: Sequence[float] | None, torque_noise: float | None) -> TorqueModel:
     """The :class:`TorqueModel` of a recording: with ``excitation`` (Hz) the measured torque projected on the lines,
-    sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given."""
+    sigma_u (default) from what it has off them; without, the torque as it is, sigma_u 0 unless given.
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (one run or several; a turned hand's orientations each its own block of lines).
+    excitation : Sequence[float] or None
+        The excitation's lines, Hz (None: the torque as recorded).
+    torque_noise : float or None
+        sigma_u, the torque's noise, N m (None: estimated off the lines, or 0 without them).
+
+    Returns
+    -------
+    TorqueModel
+        The torque the fit takes and its noise.
+    """
     if excitation is None:
         return TorqueModel(rec.torque[:-1], rec.torque[-1:], 0.0 if torque_noise is None else torque_noise)
     b = rec.run_starts()

@@ -51,9 +51,26 @@ def batch_step_caller(step: Any, label: str, compiled: bool,
                       parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """S (B, ns), WY (B, nw) -> S_next (B, ns): one filter step of B filters of the same model, in one call
     of compiled C (cached, :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop`) when ``compiled`` and a C
-    compiler is there, else CasADi's virtual machine (one call per filter). ``step``: a filter's ``filter_step``,
-    or its ``filter_step_p`` with ``parameters`` its model's numbers (``filt.model.values``: the compiled library
-    then keyed on the model's structure, shared by models of other values)."""
+    compiler is there, else CasADi's virtual machine (one call per filter).
+
+    Parameters
+    ----------
+    step : casadi.Function
+        A filter's ``filter_step`` (s, wy) -> s_next, or its ``filter_step_p`` (s, wy, p) -> s_next; s = [z; vec P]
+        (ns,), wy = [w; y] (nw,).
+    label : str
+        The name of the compiled library (its cache key with the step's structure).
+    compiled : bool
+        Compile the step to C (when a C compiler is there); False: CasADi's virtual machine.
+    parameters : numpy.ndarray or None, optional
+        The model's numbers p of a ``filter_step_p`` (``filt.model.values``: the compiled library then keyed on
+        the model's structure, shared by models of other values); None (default) for a ``filter_step``.
+
+    Returns
+    -------
+    Callable[[numpy.ndarray, numpy.ndarray], numpy.ndarray]
+        S (B, ns), WY (B, nw) -> S_next (B, ns).
+    """
     vm = _vm_step(step, parameters)
     loop = _compiled_loop(step, label, parameters) if compiled else None
     if loop is not None:
@@ -74,7 +91,24 @@ def step_caller(step: Any, label: str, compiled: bool,
                 parameters: Any = None) -> Callable[[np.ndarray, np.ndarray], np.ndarray]:
     """s (ns,), wy (nw,) -> s_next (ns,): one filter step (:func:`batch_step_caller` with B = 1; compiled, one
     call of :meth:`CompiledStepLoop.step <alpes_dyn.simulation.codegen.CompiledStepLoop.step>` on buffers it
-    keeps: a control loop's call at each sample)."""
+    keeps: a control loop's call at each sample).
+
+    Parameters
+    ----------
+    step : casadi.Function
+        A filter's ``filter_step`` (s, wy) -> s_next, or its ``filter_step_p`` (s, wy, p) -> s_next.
+    label : str
+        The name of the compiled library.
+    compiled : bool
+        Compile the step to C (when a C compiler is there); False: CasADi's virtual machine.
+    parameters : numpy.ndarray or None, optional
+        The model's numbers p of a ``filter_step_p``; None (default) for a ``filter_step``.
+
+    Returns
+    -------
+    Callable[[numpy.ndarray, numpy.ndarray], numpy.ndarray]
+        s (ns,), wy (nw,) -> s_next (ns,), with s = [z; vec P].
+    """
     vm = _vm_step(step, parameters)
     loop = _compiled_loop(step, label, parameters) if compiled else None
     return loop.step if loop is not None else vm
@@ -85,17 +119,37 @@ class Observer(Block):
 
     Parameters
     ----------
-    filt: a :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` (EKF, UKF). z0: (nz,) prior mean; P0: (nz,)
-        variances or (nz, nz) covariance.
-    known: the signals whose values, flattened and concatenated, are the known input w (nw,) of the predict over
-        [t_k-1, t_k]: period signals (the previous period's: a torque held over it) or sample signals read at t_k.
-    measurement: the measurement's signal (ny,) at t_k. estimate, covariance: the signals written, z (nz,) and P
-        (nz, nz) at t_k (``covariance=None``: not written).
-    first_update: update the prior with the measurement at t_0 (as :meth:`KalmanFilter.run`); else the estimate
-        at t_0 is the prior.
-    step: the step s, wy -> s_next (:func:`step_caller`; default the filter's ``filter_step_p`` with its model's
-        numbers in CasADi's VM: :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run`'s step).
-    label: the name of its compiled step in an :class:`ObserverBank` (default ``<kind>_<model name>``).
+    filt : KalmanFilter
+        A :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` (EKF, UKF).
+    z0 : array_like, shape (nz,)
+        The prior mean.
+    P0 : array_like, shape (nz,) or (nz, nz)
+        The prior's variances or covariance.
+    known : Sequence[str], optional
+        The signals whose values, flattened and concatenated, are the known input w (nw,) of the predict over
+        [t_k-1, t_k]: period signals (the previous period's: a torque held over it) or sample signals read at t_k
+        (default ``("u",)``).
+    measurement : str, optional
+        The measurement's signal (ny,) at t_k (default ``"y"``).
+    estimate : str, optional
+        The signal written with the estimate z (nz,) at t_k (default ``"z"``).
+    covariance : str or None, optional
+        The signal written with the covariance P (nz, nz) at t_k (default ``"P"``; None: not written).
+    first_update : bool, optional
+        Update the prior with the measurement at t_0 (as :meth:`KalmanFilter.run`; the default); else the
+        estimate at t_0 is the prior.
+    step : Callable[[numpy.ndarray, numpy.ndarray], numpy.ndarray] or None, optional
+        The step s, wy -> s_next (:func:`step_caller`; default None: the filter's ``filter_step_p`` with its
+        model's numbers in CasADi's VM, :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run`'s step).
+    label : str or None, optional
+        The name of its compiled step in an :class:`ObserverBank` (default None: ``<kind>_<model name>``).
+    name : str, optional
+        The block's name in the loop (default ``"observer"``).
+
+    Raises
+    ------
+    InputError
+        ``filt`` not a KalmanFilter, or ``z0`` / ``P0`` of the wrong shape.
     """
 
     def __init__(self, filt: KalmanFilter, z0: Any, P0: Any, *, known: Sequence[str] = ("u",),
@@ -131,7 +185,18 @@ class Observer(Block):
         return out
 
     def first(self, u: dict[str, Any]) -> np.ndarray:
-        """The state s = [z; vec P] at t_0: the prior, updated with the first measurement or not."""
+        """The state s = [z; vec P] at t_0: the prior, updated with the first measurement or not.
+
+        Parameters
+        ----------
+        u : dict[str, Any]
+            The input signals at t_0 by name (the measurement's read).
+
+        Returns
+        -------
+        numpy.ndarray, shape (nz + nz * nz,)
+            s = [z; vec P] (P flattened column-major).
+        """
         z, P = self.z0, self.P0
         if self.first_update:
             z, P = self.filt._update(z, P, np.ravel(u[self.measurement]))
@@ -139,7 +204,18 @@ class Observer(Block):
         return self._s
 
     def wy(self, u: dict[str, Any]) -> np.ndarray:
-        """[w; y] (nw + ny,) from the input signals (a buffer reused at each sample)."""
+        """[w; y] (nw + ny,) from the input signals (a buffer reused at each sample).
+
+        Parameters
+        ----------
+        u : dict[str, Any]
+            The input signals at t_k by name: the ``known`` ones and the measurement.
+
+        Returns
+        -------
+        numpy.ndarray, shape (nw + ny,)
+            The known input w and the measurement y, concatenated.
+        """
         if self._slots is None:  # where each signal goes
             sizes = np.cumsum([0] + [np.size(u[s]) for s in self.inputs])
             self._slots = [(s, slice(int(a), int(b))) for s, a, b in zip(self.inputs, sizes[:-1], sizes[1:])]
@@ -157,7 +233,18 @@ class Observer(Block):
         return self._out()
 
     def response(self, u: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
-        """The filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` on the record."""
+        """The filter's :meth:`~alpes_dyn.estimation.observers.observers.KalmanFilter.run` on the record.
+
+        Parameters
+        ----------
+        u : dict[str, numpy.ndarray]
+            The whole record of the input signals by name, each (N + 1, ...) or (N, ...) (period signals).
+
+        Returns
+        -------
+        dict[str, numpy.ndarray]
+            The estimates z (N + 1, nz) and, where written, the covariances P (N + 1, nz, nz) by signal name.
+        """
         N = self.n_periods
         W = np.hstack([np.asarray(u[s], dtype=float).reshape(np.shape(u[s])[0], -1)[:N] for s in self.known])
         Y = np.asarray(u[self.measurement], dtype=float)
@@ -172,7 +259,22 @@ class ObserverBank(Block):
     """Several :class:`Observer` blocks as one: those whose filters share a step function and its numbers (the
     same model and noise settings: the hand's four fingers) advance together, in one call of compiled C per sample
     (:func:`batch_step_caller`; ``compiled=False``: CasADi's virtual machine); those of one structure but other
-    numbers load the same library. Each observer keeps its own signals."""
+    numbers load the same library. Each observer keeps its own signals.
+
+    Parameters
+    ----------
+    observers : Sequence[Observer]
+        The observers (a non-empty list).
+    compiled : bool, optional
+        Their steps as compiled C (default True; False: CasADi's virtual machine).
+    name : str, optional
+        The block's name in the loop (default ``"observers"``).
+
+    Raises
+    ------
+    InputError
+        ``observers`` empty or not all :class:`Observer` blocks.
+    """
 
     def __init__(self, observers: Sequence[Observer], *, compiled: bool = True, name: str = "observers") -> None:
         observers = list(observers)
@@ -218,6 +320,29 @@ class RecordingPlayback(Block):
     the period before t_k (the first sample's own at t_0: what the tendons' tension balances at the reading,
     :func:`~alpes_dyn.model.transmission.torque_before`), ``held`` the torque over [t_k, t_k+1) (a period signal:
     what a known input reads), and ``true_q`` (n,) rad where the recording has it.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording played back.
+    encoder : str, optional
+        The signal of the encoder counts (m,) at t_k (default ``"counts"``).
+    torque : str, optional
+        The signal of the motor torques (m,), N m, at t_k (default ``"tau"``).
+    held : str, optional
+        The period signal of the torque (m,), N m, held over [t_k, t_k+1) (default ``"tau_held"``).
+    true_q : str or None, optional
+        The signal of the true joint angles (n,), rad, where the recording has them (default ``"true_q"``; None:
+        not written).
+    before : str or None, optional
+        The signal of the torque (m,), N m, held over the period before t_k (default None: not written).
+    name : str, optional
+        The block's name in the loop (default ``"recording"``).
+
+    Raises
+    ------
+    InputError
+        ``recording`` not a Recording.
     """
 
     has_response = True

@@ -104,7 +104,24 @@ class Nees(Banded):
 def predicted_covariance(filt: Any, estimate: Estimate, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The filter's one-step prediction along its run, recomputed from its estimate: (A (N-1, nz, nz), P_pred
     (N-1, nz, nz)), A_k = dF/dz at (z_k, w_k) and P_pred,k = A_k P_k A_k^T + G Sigma_w G^T + Q (G = dF/dw), the
-    covariance of z_k+1|k. ``W`` (N-1, nw): the known inputs, row k held from sample k to k+1."""
+    covariance of z_k+1|k.
+
+    Parameters
+    ----------
+    filt : KalmanFilter
+        The filter that made ``estimate`` (a :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter`).
+    estimate : Estimate
+        Its run: z (N, nz), P (N, nz, nz).
+    W : numpy.ndarray, shape (N-1, nw)
+        The known inputs, row k held from sample k to k+1.
+
+    Returns
+    -------
+    A : numpy.ndarray, shape (N-1, nz, nz)
+        dF/dz at (z_k, w_k).
+    P_pred : numpy.ndarray, shape (N-1, nz, nz)
+        The covariance of z_k+1|k.
+    """
     from .ahead import linearised, predicted_step  # compiled (the VM's map over the samples without a compiler)
 
     N = W.shape[0]
@@ -148,21 +165,34 @@ def nees(estimate: Estimate, true_q: Any, filter: Any = None, inputs: Any = None
 
     Parameters
     ----------
-    estimate: the observer's :class:`~alpes_dyn.estimation.observers.observers.Estimate` (N samples, its first n
+    estimate : Estimate
+        The observer's :class:`~alpes_dyn.estimation.observers.observers.Estimate` (N samples, its first n
         states the joints, rad).
-    true_q: (N, n) the true joints, rad.
-    filter, inputs: the filter that made ``estimate`` (a :class:`~alpes_dyn.estimation.observers.observers.
-        KalmanFilter`) and its known inputs (N-1, nw), row k the input held from sample k to k+1: the band then
-        counts the samples by the filter's own model of its error's correlation (module docstring). Without them
-        the decimated samples are taken as independent.
-    start: the first time used, s from the estimate's first sample (after the transient).
-    every: one sample every ``every`` s (>= the sample period).
-    level: the band's probability, in (0, 1).
+    true_q : array_like, shape (N, n)
+        The true joints, rad.
+    filter : KalmanFilter or None, optional
+        The filter that made ``estimate`` (a :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter`):
+        with ``inputs``, the band then counts the samples by the filter's own model of its error's correlation
+        (module docstring). Without them (default None) the decimated samples are taken as independent.
+    inputs : array_like, shape (N-1, nw), optional
+        The filter's known inputs, row k the input held from sample k to k+1 (required with ``filter``).
+    start : float, optional
+        The first time used, s from the estimate's first sample (after the transient; default 0).
+    every : float, optional
+        One sample every ``every`` s (>= the sample period; default ``NEES_EVERY``).
+    level : float, optional
+        The band's probability, in (0, 1) (default 0.95).
 
     Returns
     -------
-    :class:`Nees`. Raises :class:`~alpes_dyn.InputError` naming the argument: ``true_q`` of another shape or not
-    finite, ``start`` past the run, ``every`` or ``level`` out of range, fewer than two samples left.
+    Nees
+        The average, its band and the per-joint averages.
+
+    Raises
+    ------
+    InputError
+        Naming the argument: ``true_q`` of another shape or not finite, ``start`` past the run, ``every`` or
+        ``level`` out of range, fewer than two samples left, ``inputs`` of another shape.
     """
     if not isinstance(estimate, Estimate):
         raise InputError(f"estimate: expected an Estimate, got {type(estimate).__name__}")
@@ -208,7 +238,22 @@ def nees(estimate: Estimate, true_q: Any, filter: Any = None, inputs: Any = None
 
 def chi2_band(dof: int, samples: float, level: float) -> tuple[float, float]:
     """The band of the average of ``samples`` independent chi-square variables of ``dof`` degrees of freedom at
-    probability ``level``: [chi2_{(1-level)/2}(dof M), chi2_{(1+level)/2}(dof M)] / M, M = ``samples``."""
+    probability ``level``: [chi2_{(1-level)/2}(dof M), chi2_{(1+level)/2}(dof M)] / M, M = ``samples``.
+
+    Parameters
+    ----------
+    dof : int
+        The degrees of freedom of each variable (the joints n of a NEES).
+    samples : float
+        M, the number of (effective) independent samples averaged; need not be whole.
+    level : float
+        The band's probability, in (0, 1).
+
+    Returns
+    -------
+    tuple[float, float]
+        The band's low and high ends.
+    """
     from scipy.special import gammaincinv  # chi2.ppf(p, k) = 2 gammaincinv(k / 2, p) (scipy.stats: seconds to import)
 
     low, high = 2.0 * gammaincinv(dof * samples / 2.0, np.array([(1 - level) / 2, (1 + level) / 2])) / samples
@@ -217,7 +262,22 @@ def chi2_band(dof: int, samples: float, level: float) -> tuple[float, float]:
 
 def joint_sigma(estimate: Estimate, n: int, start: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
     """Each joint's reported standard deviation along the run after ``start`` s: (median (n,), worst (n,)), rad,
-    of sqrt(P_ii) (:attr:`~alpes_dyn.estimation.observers.observers.Estimate.std`)."""
+    of sqrt(P_ii) (:attr:`~alpes_dyn.estimation.observers.observers.Estimate.std`).
+
+    Parameters
+    ----------
+    estimate : Estimate
+        The observer's run (its first n states the joints, rad).
+    n : int
+        The number of joints.
+    start : float, optional
+        The first time used, s from the estimate's first sample (default 0).
+
+    Returns
+    -------
+    tuple[numpy.ndarray, numpy.ndarray]
+        The median and the worst standard deviation of each joint, (n,) each, rad.
+    """
     k0 = int(round(start / (estimate.t[1] - estimate.t[0]))) if estimate.t.size > 1 else 0
     sd = estimate.std[min(k0, estimate.t.size - 1):, :n]
     return np.median(sd, axis=0), sd.max(axis=0)

@@ -67,9 +67,25 @@ def _mirrored(L: cs.SX) -> cs.SX:
 
 
 def predicted_covariance(A: cs.SX, N: cs.SX, P: cs.SX, folds: list[int]) -> cs.SX:
-    """A P A^T + N (nz x nz, dense, exactly symmetric): A (nz x nz) sparse, P (nz x nz), N the lower triangle of the
-    noise's share G Sigma_w G^T + Q (sparse, computed with the model: the C runs CasADi's code of it); products
-    CasADi folds are counted in ``folds`` (:func:`_count_folds`). T = A P, then T A^T (lower triangle), then + N."""
+    """A P A^T + N (nz x nz, dense, exactly symmetric). T = A P, then T A^T (lower triangle), then + N.
+
+    Parameters
+    ----------
+    A : casadi.SX, shape (nz, nz)
+        The step's Jacobian dF/dz (sparse).
+    N : casadi.SX, shape (nz, nz)
+        The lower triangle of the noise's share G Sigma_w G^T + Q (sparse, computed with the model: the C runs
+        CasADi's code of it).
+    P : casadi.SX, shape (nz, nz)
+        The covariance before the predict.
+    folds : list[int]
+        A counter of the products CasADi folds (:func:`_count_folds`), appended to in place.
+
+    Returns
+    -------
+    casadi.SX, shape (nz, nz)
+        The predicted covariance.
+    """
     T = cs.mtimes(A, P)
     _count_folds(A, P, folds)
     At = A.T
@@ -115,8 +131,30 @@ def updated_state(z: cs.SX, P: cs.SX, y: cs.SX, h: cs.SX, H: cs.SX, R: np.ndarra
     P H^T (PHt[i, r] += P[i, k] H[r, k], k ascending), S = R + H (P H^T) (S[r, j] from R[r, j], += H[r, k]
     PHt[k, j], k ascending), K (:func:`_gain`), z_upd[i] = z[i] + K[i, r] (y[r] - h[r]) for r ascending,
     M = P - K (P H^T)^T (M[i, j] -= K[i, r] PHt[j, r], r ascending), M H^T, K R (zeros of R skipped), and
-    P_upd[i, j] = M[i, j] + (KR[i, r] - MH^T[i, r]) K[j, r], r ascending, for i >= j, mirrored. Products CasADi
-    folds are counted in ``folds``."""
+    P_upd[i, j] = M[i, j] + (KR[i, r] - MH^T[i, r]) K[j, r], r ascending, for i >= j, mirrored.
+
+    Parameters
+    ----------
+    z : casadi.SX, shape (nz,)
+        The predicted state.
+    P : casadi.SX, shape (nz, nz)
+        The predicted covariance.
+    y : casadi.SX, shape (ny,)
+        The measurement.
+    h : casadi.SX, shape (ny,)
+        Its prediction h(z).
+    H : casadi.SX, shape (ny, nz)
+        dh/dz (sparse).
+    R : numpy.ndarray, shape (ny, ny)
+        The measurement noise's covariance (numeric).
+    folds : list[int]
+        A counter of the products CasADi folds (:func:`_count_folds`), appended to in place.
+
+    Returns
+    -------
+    tuple[casadi.SX, casadi.SX]
+        z_upd (nz,) and P_upd (nz, nz), dense, exactly symmetric.
+    """
     ny = H.shape[0]
     Ht = H.T
     PHt = cs.mtimes(P, Ht)
@@ -144,7 +182,18 @@ def updated_state(z: cs.SX, P: cs.SX, y: cs.SX, h: cs.SX, H: cs.SX, R: np.ndarra
 
 
 def chol_sym(P: cs.SX) -> cs.SX:
-    """Lower Cholesky factor of a symbolic symmetric positive definite matrix (unrolled)."""
+    """Lower Cholesky factor of a symbolic symmetric positive definite matrix (unrolled).
+
+    Parameters
+    ----------
+    P : casadi.SX, shape (n, n)
+        The symmetric positive definite matrix (its lower triangle read; each pivot floored at 1e-300).
+
+    Returns
+    -------
+    casadi.SX, shape (n, n)
+        L, lower triangular, with L L^T = P.
+    """
     n = P.shape[0]
     L = [[cs.SX(0) for _ in range(n)] for _ in range(n)]
     for j in range(n):

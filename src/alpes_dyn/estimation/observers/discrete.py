@@ -45,13 +45,22 @@ class DiscreteModel:
 
     Parameters
     ----------
-    system: the continuous state space (eq. 3.3); its output is the measurement.
-    dt: sample period, s. substeps: steps per sample period (default 1).
-    parameters: names from :data:`PARAMETERS` appended to the state as constants (z = [x; theta]).
-    friction_law: ``"smooth"`` (default: RK4 on the smooth sign), ``"stick"`` (the time-stepping Coulomb law,
+    system : StateSpace
+        The continuous state space (eq. 3.3); its output is the measurement.
+    dt : float
+        Sample period, s.
+    parameters : Sequence[str], optional
+        Names from :data:`PARAMETERS` (or ``disturbance_<motor>``, :data:`DISTURBANCE_PREFIX`) appended to the
+        state as constants (z = [x; theta]); default none.
+    substeps : int, optional
+        Steps per sample period, in [1, 64] (default 1).
+    friction_law : str, optional
+        ``"smooth"`` (default: RK4 on the smooth sign), ``"stick"`` (the time-stepping Coulomb law,
         :mod:`alpes_dyn.simulation.stick`) or ``"lugre"`` (a bristle state per joint); see the module docstring.
-    stops: the joints' end stops in the model (:class:`~alpes_dyn.model.stops.JointStops`, e.g.
-        ``JointStops.of(model)``: a stiff unilateral spring-damper at each end of the range); default none (eq. 3.3).
+    stops : JointStops or None, optional
+        The joints' end stops in the model (:class:`~alpes_dyn.model.stops.JointStops`, e.g.
+        ``JointStops.of(model)``: a stiff unilateral spring-damper at each end of the range); default None: none
+        (eq. 3.3).
 
     Attributes
     ----------

@@ -79,25 +79,39 @@ def nis(estimate: Estimate, measurement: Any, filter: Any, inputs: Any, *, start
 
     Parameters
     ----------
-    estimate: the filter's :class:`~alpes_dyn.estimation.observers.observers.Estimate` (N samples).
-    measurement: (N, m) what the filter read, in its output's units (the encoders in rad, as
+    estimate : Estimate
+        The filter's :class:`~alpes_dyn.estimation.observers.observers.Estimate` (N samples).
+    measurement : array_like, shape (N, m)
+        What the filter read, in its output's units (the encoders in rad, as
         :attr:`~alpes_dyn.estimation.observers.replay.RecordingEstimate.measurement`).
-    filter: the :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` that made ``estimate``.
-    inputs: (N-1, nw) its known inputs, row k held from sample k to k+1.
-    start: the first time used, s from the estimate's first sample (after the filter's transient).
-    level: the band's probability, in (0, 1).
-    lags: L, the autocorrelation's lags counted (module docstring); default :data:`NIS_LAGS`, at most a quarter of
-        the predictions (a short run's).
-    horizon: samples ahead of the prediction (1: the innovation). Further ahead, the measurement predicted from
+    filter : KalmanFilter
+        The :class:`~alpes_dyn.estimation.observers.observers.KalmanFilter` that made ``estimate``.
+    inputs : array_like, shape (N-1, nw)
+        Its known inputs, row k held from sample k to k+1.
+    start : float, optional
+        The first time used, s from the estimate's first sample (after the filter's transient; default 0).
+    level : float, optional
+        The band's probability, in (0, 1) (default 0.95).
+    lags : int or None, optional
+        L, the autocorrelation's lags counted (module docstring); default None: :data:`NIS_LAGS`, at most a
+        quarter of the predictions (a short run's).
+    horizon : int, optional
+        Samples ahead of the prediction (default 1: the innovation). Further ahead, the measurement predicted from
         z_k|k without update and its covariance propagated as the filter's prediction does: an error the encoder
         does not see at once (the split of joints it reads the sum of) reaches it through the dynamics.
-    stride: one prediction every ``stride`` samples.
+    stride : int, optional
+        One prediction every ``stride`` samples (default 1).
 
     Returns
     -------
-    :class:`Nis`. Raises :class:`~alpes_dyn.InputError` naming the argument: ``measurement`` or ``inputs`` of
-    another shape or not finite, ``start`` past the run, ``level``, ``lags``, ``horizon`` or ``stride`` out of
-    range.
+    Nis
+        The average, its band and the per-output figures.
+
+    Raises
+    ------
+    InputError
+        Naming the argument: ``measurement`` or ``inputs`` of another shape or not finite, ``start`` past the
+        run, ``level``, ``lags``, ``horizon`` or ``stride`` out of range.
     """
     if not isinstance(estimate, Estimate):
         raise InputError(f"estimate: expected an Estimate, got {type(estimate).__name__}")

@@ -75,8 +75,17 @@ OBSERVERS: tuple[str, ...] = ("ekf", "ukf", "ekf-params", "ukf-params")
 def true_gains(mass_scale: float, spring_scale: float) -> dict[str, float]:
     """Gains a, b that make an observer's mis-scaled model exact.
 
-    ``mass_scale`` = observer's masses (and inertias) / true ones, ``spring_scale`` = observer's
-    springs / true ones. Returns ``{"input_gain": mass_scale, "spring_gain": mass_scale / spring_scale}``.
+    Parameters
+    ----------
+    mass_scale : float
+        The observer's masses (and inertias) / the true ones.
+    spring_scale : float
+        The observer's springs / the true ones.
+
+    Returns
+    -------
+    dict[str, float]
+        ``{"input_gain": mass_scale, "spring_gain": mass_scale / spring_scale}``.
     """
     return {"input_gain": float(mass_scale), "spring_gain": float(mass_scale) / float(spring_scale)}
 

@@ -66,7 +66,25 @@ def advanced(recording: Recording, samples: int) -> Recording:
     """``recording`` with its torque read ``samples`` whole samples earlier: row k of the torque is row k + samples
     of the recorded one, the last ``samples`` rows repeat the last (the applied torque of a sensor that lags by
     ``samples``: :class:`~alpes_dyn.bench.effects.PlantEffects` ``torque_delay``), run by run where the recording
-    has several. The recording itself for 0."""
+    has several. The recording itself for 0.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording.
+    samples : int
+        The torque sensor's lag, whole samples from 0 to :data:`MAX_DELAY`.
+
+    Returns
+    -------
+    Recording
+        A copy with the torque advanced (``recording`` itself for 0).
+
+    Raises
+    ------
+    InputError
+        ``torque_delay``: ``samples`` not a whole number in range, or not fewer than the recording's samples.
+    """
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 0 <= samples <= MAX_DELAY:
         raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_DELAY}, got {samples!r}")
     if samples == 0:
@@ -90,7 +108,25 @@ def averaged(recording: Recording, samples: int) -> Recording:
     """``recording`` with its torque replaced by the causal moving average of its last ``samples`` rows (before the
     recording, the mean of its first ``samples`` rows: the hand at rest when it starts, the observer's first rest
     state found under that mean): what the observer reads, its white noise divided by sqrt(``samples``). The
-    recording itself for 1."""
+    recording itself for 1.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording.
+    samples : int
+        The window of the moving average, whole samples from 1 to :data:`MAX_DELAY`.
+
+    Returns
+    -------
+    Recording
+        A copy with the torque averaged (``recording`` itself for 1).
+
+    Raises
+    ------
+    InputError
+        ``torque_window``: ``samples`` not a whole number in range.
+    """
     if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= MAX_DELAY:
         raise InputError(f"torque_window: expected a whole number of samples from 1 to {MAX_DELAY}, got {samples!r}")
     if samples == 1:
@@ -159,7 +195,18 @@ class RecordingEstimate:
         return out
 
     def to_csv(self, path: str | Path) -> Path:
-        """Write t, q_hat_*, qd_hat_*, q_std_* (and d_hat_*) as CSV, atomically."""
+        """Write t, q_hat_*, qd_hat_*, q_std_* (and d_hat_*) as CSV, atomically.
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The CSV file written: t in s, q_hat_* and q_std_* in rad, qd_hat_* in rad/s, d_hat_* in N m.
+
+        Returns
+        -------
+        pathlib.Path
+            ``path``.
+        """
         n = len(self.joint_names)
         cols = {"t": self.t}
         cols.update({f"q_hat_{j}": self.estimate.z[:, i] for i, j in enumerate(self.joint_names)})
@@ -296,12 +343,38 @@ def _substeps(model: Model, dt: float, substeps: int | None, tension: Any = None
 def recording_filter(model: Model, observer: str = "ekf", dt: float = 1e-3, *, torque_noise: float = 5e-4,
                      encoder_noise_counts: float = 0.0, substeps: int | None = None,
                      u0: Any = None) -> tuple[Any, np.ndarray, np.ndarray]:
-    """The observer :func:`estimate_recording` runs on a recording of ``model`` sampled every ``dt`` s with the
-    torque noise ``torque_noise`` (N m) and the encoder noise ``encoder_noise_counts`` (counts beyond the
-    quantisation), without disturbance states: (filter, z0 (nz,), P0 (nz,) variances), z0 the rest under the motor
-    torques ``u0`` ((m,) N m, default 0). ``substeps`` as :func:`estimate_recording`'s (default: as many as the
-    model's friction asks, else 1). The C export of a URDF robot's observer (``alpes-dyn codegen``) is this
-    filter."""
+    """The observer :func:`estimate_recording` runs on a recording of ``model``, without disturbance states. The C
+    export of a URDF robot's observer (``alpes-dyn codegen``) is this filter.
+
+    Parameters
+    ----------
+    model : Model
+        The model, with motors (a URDF and its spec's ``[[motor]]`` tables).
+    observer : str, optional
+        One of :data:`~alpes_dyn.estimation.observers.observers.OBSERVERS` (default ``"ekf"``; ``*-params`` add
+        the gains ``input_gain`` and ``spring_gain`` to the state).
+    dt : float, optional
+        The sample period, s (> 0; default 1e-3).
+    torque_noise : float, optional
+        The motor torques' noise, N m (default 5e-4).
+    encoder_noise_counts : float, optional
+        The encoders' noise, counts beyond the quantisation (default 0).
+    substeps : int or None, optional
+        As :func:`estimate_recording`'s (default None: as many as the model's friction asks, else 1).
+    u0 : array_like, shape (m,), optional
+        The motor torques, N m, whose rest is z0 (default None: zeros).
+
+    Returns
+    -------
+    tuple
+        (filter, z0 (nz,), P0 (nz,) variances).
+
+    Raises
+    ------
+    InputError
+        Naming the argument: a model without motors, an unknown observer, a non-positive ``dt``, a negative
+        noise, ``u0`` of another size.
+    """
     if not isinstance(model, Model) or model.transmission is None:
         raise InputError("model: expected an alpes_dyn Model with motors (a URDF and its spec's [[motor]] tables)")
     if observer not in OBSERVERS:
@@ -484,7 +557,18 @@ def _torque_noise(rec: Recording) -> float:
 
 def file_encoder_offsets(model: Model) -> np.ndarray:
     """(m,) rad: the encoders' zeros the model's parameter file holds for its motors
-    (:meth:`~alpes_dyn.model.params.HandParams.encoder_offset_of`: written by ``identify``), zeros without a file."""
+    (:meth:`~alpes_dyn.model.params.HandParams.encoder_offset_of`: written by ``identify``), zeros without a file.
+
+    Parameters
+    ----------
+    model : Model
+        The model, with motors.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        The encoders' zeros, rad.
+    """
     p = model.params
     return np.array([0.0 if p is None else p.encoder_offset_of(mn, model.chain)
                      for mn in model.transmission.motor_names])

@@ -97,7 +97,22 @@ def _check_settings(sc: "EstimationScenario") -> None:
 
 def mismatched_params(params: HandParams, mass_scale: float, spring_scale: float) -> HandParams:
     """``params`` with finger (each finger's own values too) and thumb masses and inertias times ``mass_scale``,
-    springs times ``spring_scale``."""
+    springs times ``spring_scale``.
+
+    Parameters
+    ----------
+    params : HandParams
+        The hand's parameters.
+    mass_scale : float
+        The factor on the masses and inertias (the thumb base's mass too).
+    spring_scale : float
+        The factor on the springs (the ab/adduction spring too).
+
+    Returns
+    -------
+    HandParams
+        A copy with the scaled values.
+    """
     def chain(c):
         return dataclasses.replace(c, m=c.m * mass_scale, I=c.I * mass_scale, K=c.K * spring_scale)
 
@@ -216,6 +231,22 @@ def static_equilibrium(model: Model, tau: np.ndarray, q: np.ndarray | None = Non
 
     Kept for compatibility: :meth:`Model.static_equilibrium <alpes_dyn.Model.static_equilibrium>` (and
     :meth:`StateSpace.equilibrium <alpes_dyn.symbolic.statespace.StateSpace.equilibrium>` for a state and an input).
+
+    Parameters
+    ----------
+    model : Model
+        The model.
+    tau : numpy.ndarray, shape (n,)
+        The joint torques, N m.
+    q : numpy.ndarray, shape (n,), optional
+        The start of Newton's method, rad (default None: zeros).
+    tol : float, optional
+        Stop when max abs(G(q) - tau) < ``tol``, N m (default 1e-12).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n,)
+        The joint angles, rad.
     """
     return model.static_equilibrium(tau, q, tol)
 
@@ -236,7 +267,22 @@ def _torque(sc: EstimationScenario, t: np.ndarray, m: int, held: Sequence[int] =
 
 def scenario_torque(scenario: EstimationScenario, t: np.ndarray, m: int) -> np.ndarray:
     """(len(t), m) N m: the scenario's motor torque at the times ``t`` (s) on ``m`` motors, every motor biased (the
-    profile ``run_estimation`` drives a finger with; a plant of the caller's replays it)."""
+    profile ``run_estimation`` drives a finger with; a plant of the caller's replays it).
+
+    Parameters
+    ----------
+    scenario : EstimationScenario
+        The scenario (its torque bias, amplitudes and frequencies; motor j's sines phase-shifted by j rad).
+    t : numpy.ndarray, shape (N,)
+        The times, s.
+    m : int
+        The number of motors.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N, m)
+        The motor torques, N m.
+    """
     return _torque(scenario, np.asarray(t, dtype=float), int(m))
 
 
@@ -273,6 +319,24 @@ def default_noise(sc: EstimationScenario, n: int, m: int, n_params: int, meas_va
     each gain (a random walk: the gains may drift by 1e-3 in a second). With friction
     :func:`~alpes_dyn.estimation.observers.observers.make_observer` adds the smooth law's model error on qd
     (:func:`~alpes_dyn.estimation.observers.friction_noise.friction_process_noise`).
+
+    Parameters
+    ----------
+    sc : EstimationScenario
+        The scenario (its ``torque_noise``, N m).
+    n : int
+        The number of joints.
+    m : int
+        The number of motors (and of encoders).
+    n_params : int
+        The number of gains in the state.
+    meas_var : float
+        The measurement's variance per encoder, rad^2.
+
+    Returns
+    -------
+    dict[str, Any]
+        ``process_noise`` (2 n + n_params,), ``measurement_noise`` (m,) and ``input_noise`` (m,) variances.
     """
     Q = [1e-9**2] * n + [2e-4**2] * n + [2e-5**2] * n_params
     return {"process_noise": Q, "measurement_noise": [meas_var] * m, "input_noise": [sc.torque_noise**2] * m}
@@ -381,7 +445,23 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
 def check_plot_path(path: str) -> Path:
     """Validate a figure file name before a run (:class:`~alpes_dyn.InputError` naming ``--plot``): matplotlib
     installed, not empty, not a directory, an existing writable directory, a format matplotlib writes
-    (by extension: .png, .pdf, .svg, ...)."""
+    (by extension: .png, .pdf, .svg, ...).
+
+    Parameters
+    ----------
+    path : str
+        The figure's file name.
+
+    Returns
+    -------
+    pathlib.Path
+        The checked path.
+
+    Raises
+    ------
+    InputError
+        Naming ``--plot``.
+    """
     try:
         from matplotlib.backend_bases import FigureCanvasBase
     except ImportError:
@@ -394,6 +474,13 @@ def plot_estimation(result: EstimationResult, path: str) -> None:
 
     One panel per joint (degrees), a vertical line at the end of the transient; needs matplotlib. The
     format follows the extension (PNG, PDF, SVG...); the file is written atomically (never partial).
+
+    Parameters
+    ----------
+    result : EstimationResult
+        The run of :func:`run_estimation`.
+    path : str
+        The figure's file name (checked by :func:`check_plot_path`).
     """
     dest = check_plot_path(path)
     import matplotlib
