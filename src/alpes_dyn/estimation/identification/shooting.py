@@ -45,7 +45,14 @@ from .normal_blocks import NormalBlocks
 from .drift import GAIN_NEEDS_LINES, check_drift, drift_basis, gain_sensitivity, line_coefficients, recorded_time
 
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
-           "JACOBIAN_CHUNK"]
+           "JACOBIAN_CHUNK", "FitDiverged"]
+
+
+class FitDiverged(InputError):
+    """A fit's parameters or states overflowed to NaN or inf (:meth:`ShootingProblem.evaluate`): a trial step that
+    makes them is refused by the solver (:mod:`~alpes_dyn.estimation.identification.gauss_newton`), a round whose fit
+    runs away is a failed round (:class:`~alpes_dyn.estimation.identification.effects.RoundWalker`); raised out of
+    :func:`~alpes_dyn.estimation.identification.identification.identify` where no step was left to refuse."""
 
 JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
@@ -309,8 +316,7 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         over the Jacobian for its products: :func:`~alpes_dyn.estimation.identification.normal_blocks.remainders`)."""
         theta = self.values(glob)
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
-            raise InputError("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
-                             "the recording's encoders this model's, in counts, and its torques in N m?")
+            raise FitDiverged("identify: the fit diverged (its parameters or states overflowed to NaN or inf)")
         L = self.L
         u_raw = self.torque_at(glob, offs, gained=False) if self.comp_cols else None
         g = self.gain(glob)
