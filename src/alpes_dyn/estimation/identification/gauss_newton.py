@@ -428,8 +428,9 @@ class GaussNewton:
             if lost >= 3 and viol > 1e-3:
                 # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
                 # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
+                far_name = pb.sens.names[int(np.argmax(np.abs(d[nv:nv + p])))]
                 reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
-                          f"{100.0 * MAX_LOG_STEP:g} (iteration {it})")
+                          f"{100.0 * MAX_LOG_STEP:g} (iteration {it}; the farthest: {far_name})")
                 break
             stalled = self.stalled(history, cost)
             if viol < 1e-6 and (small_change or stalled or step_g < tol):

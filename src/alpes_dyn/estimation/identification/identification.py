@@ -71,7 +71,7 @@ from ..experiments.recording import Recording, check_recording, excitation_parts
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from ...simulation.lugre import fit_substeps
-from .bounds import SIGMA0_RANGE, held_value, unsupported
+from .bounds import EFFECT_OF, SIGMA0_RANGE, held_value, unsupported
 from .held import held_start
 from .shooting import FitDiverged, ShootingProblem, torque_model
 from .normal_blocks import j_dot, remainders
@@ -300,6 +300,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt, drift=drift)
     result = _within_bounds(model, recording, result, settings, t_start)
+    result = _friction_held(model, recording, result, settings, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
@@ -316,6 +317,36 @@ def _diverged(exc: FitDiverged, rec: Recording, model: Model) -> FitDiverged:
     check_torque_scale(rec, model, "torque")
     return FitDiverged(f"{exc} from its start, on a recording of plausible units (its encoders within the "
                        "joints' ranges, its torques within the motors' limits): fewer effects or parameters may hold")
+
+
+RUNAWAY_KINDS = ("F_s", "F_v")
+"""The kinds of parameter a lost basin's farthest step may name for the fit to be made again with it held
+(:func:`_friction_held`): a joint's friction the data do not see. On a finger2 of the MuJoCo stand-in (joint 1 over
+26 degrees) F_s_1 asked for steps of 100-700 in log theta: every step was cut to its trust region and the fit
+lost its basin at 39 counts in each round; with F_s_1 held it converged at 2.3."""
+
+
+def _friction_held(model: Model, recording: Recording | str | Path, result: IdentificationResult,
+                   settings: dict[str, Any], t_start: float) -> IdentificationResult:
+    """``result`` where it did not lose its basin on a friction parameter (the farthest step's, named in its
+    reason: :data:`RUNAWAY_KINDS`); else the fit again from the model's values with that one held at the model's
+    value, named in :attr:`~IdentificationResult.not_identified`, kept where it converged or fits better."""
+    far = result.reason.rpartition("the farthest: ")[2].rstrip(")") if result.reason.startswith("lost basin") else ""
+    kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}.get(far)
+    keep = [n for n in result.names if n != far]
+    if kind not in RUNAWAY_KINDS or not keep:
+        return result
+    with warnings.catch_warnings():  # the verdict is reported on the fit kept
+        warnings.simplefilter("ignore", AdequacyWarning)
+        again = identify(model, recording, keep, **settings)
+    if not (again.converged or again.residual_rms < result.residual_rms):
+        return result
+    again.not_identified = {far: "held at the model's value: the fit's steps ran it off (lost basin; the data do "
+                                 f"not see {EFFECT_OF[kind]} there)", **again.not_identified}
+    again.iterations += result.iterations
+    again.seconds = time.perf_counter() - t_start
+    again.reason += f" (fitted again with {far} held: {result.reason})"
+    return again
 
 
 def _unsupported(result: IdentificationResult, held: bool = True) -> dict[str, str]:
