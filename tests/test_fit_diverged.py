@@ -135,12 +135,12 @@ def test_identify_names_units_only_where_the_data_say_so(monkeypatch):
         ident_mod.identify(model, dataclasses.replace(rec, encoder=enc), "K", interval=0.05)
 
 
-def test_a_basin_lost_on_a_friction_is_fitted_again_with_it_held(monkeypatch):
+def test_a_basin_lost_on_a_friction_is_fitted_again_with_it_held():
     """A fit that lost its basin with a joint's dry friction asking for the farthest steps (named in its reason):
     the fit again from the model's values without it, it named not identified; a lost basin on a mass is left as
     it is (the staged start's), as is a converged fit."""
     from alpes_dyn import Model
-    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification import runaway
 
     model = Model.alpes("finger2", friction=True)
     names = ("K_1", "K_2", "m_1", "m_2", "F_s_1", "F_s_2")
@@ -151,15 +151,14 @@ def test_a_basin_lost_on_a_friction_is_fitted_again_with_it_held(monkeypatch):
         return SimpleNamespace(converged=True, residual_rms=2.3, not_identified={}, iterations=9, seconds=1.0,
                                reason="converged")
 
-    monkeypatch.setattr(ident_mod, "identify", again)
     lost = "lost basin: three Gauss-Newton steps in a row asked log theta to move by more than 30 (iteration 13; " \
            "the farthest: {})"
     first = SimpleNamespace(names=names, converged=False, residual_rms=39.2, iterations=13, reason=lost.format("F_s_1"))
-    out = ident_mod._friction_held(model, "rec.csv", first, {"interval": 0.05}, 0.0)
+    out = runaway.friction_held(again, model, "rec.csv", first, {"interval": 0.05}, 0.0)
     assert calls == [(("K_1", "K_2", "m_1", "m_2", "F_s_2"), {"interval": 0.05})]
     assert out.converged and list(out.not_identified) == ["F_s_1"] and "dry friction" in out.not_identified["F_s_1"]
     assert "fitted again with F_s_1 held" in out.reason and out.iterations == 22
     on_mass = SimpleNamespace(**{**vars(first), "reason": lost.format("m_2")})
-    assert ident_mod._friction_held(model, "rec.csv", on_mass, {}, 0.0) is on_mass
+    assert runaway.friction_held(again, model, "rec.csv", on_mass, {}, 0.0) is on_mass
     done = SimpleNamespace(**{**vars(first), "converged": True, "reason": "converged"})
-    assert ident_mod._friction_held(model, "rec.csv", done, {}, 0.0) is done and len(calls) == 1
+    assert runaway.friction_held(again, model, "rec.csv", done, {}, 0.0) is done and len(calls) == 1

@@ -347,6 +347,15 @@ class GaussNewton:
         return (*new, dataclasses.replace(trial, J=at.J, Cv=at.Cv, Cr=at.Cr, normal=at.normal,
                                                point=at.point))
 
+    @staticmethod
+    def lost(pb: ShootingProblem, d: np.ndarray, it: int) -> str:
+        """The reason of a start that lost its basin at iteration ``it``, naming the parameter whose step ``d`` asks
+        for the farthest move of log theta (:func:`~alpes_dyn.estimation.identification.runaway.friction_held` reads
+        it)."""
+        far = pb.sens.names[int(np.argmax(np.abs(d[pb.nv:pb.nv + pb.p])))]
+        return (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
+                f"{100.0 * MAX_LOG_STEP:g} (iteration {it}; the farthest: {far})")
+
     def constrained(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                     e: Evaluation, c_scale: np.ndarray, bar: _Progress) -> SolverResult:
         """Stage 3: the shooting problem, continuity as constraints (constrained Gauss-Newton, l1 merit), to the
@@ -428,9 +437,7 @@ class GaussNewton:
             if lost >= 3 and viol > 1e-3:
                 # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
                 # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
-                far_name = pb.sens.names[int(np.argmax(np.abs(d[nv:nv + p])))]
-                reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
-                          f"{100.0 * MAX_LOG_STEP:g} (iteration {it}; the farthest: {far_name})")
+                reason = self.lost(pb, d, it)
                 break
             stalled = self.stalled(history, cost)
             if viol < 1e-6 and (small_change or stalled or step_g < tol):

@@ -71,9 +71,10 @@ from ..experiments.recording import Recording, check_recording, excitation_parts
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from ...simulation.lugre import fit_substeps
-from .bounds import EFFECT_OF, SIGMA0_RANGE, held_value, unsupported
+from .bounds import SIGMA0_RANGE, held_value, unsupported
 from .held import held_start
 from .shooting import FitDiverged, ShootingProblem, torque_model
+from .runaway import diverged, friction_held
 from .normal_blocks import j_dot, remainders
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, MMAP_THRESHOLD, _map_large_blocks, check_fit_size, window_start  # noqa: F401
@@ -269,11 +270,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                 warm, warm_at = start_w[:3], [start_w[3]][:start_w[3] is not None]  # (runs: no cap, no evaluation)
             start_w = None
         out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
-    except FitDiverged as exc:
-        raise _diverged(exc, rec, model) from None
-    except np.linalg.LinAlgError:  # the normal matrices of a runaway fit (its trial steps refused): units first
-        _diverged(FitDiverged("identify"), rec, model)
-        raise
+    except (FitDiverged, np.linalg.LinAlgError) as exc:  # a fit that ran away: the units named where they are wrong
+        raise diverged(exc, rec, model) from None
     it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
@@ -300,53 +298,10 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt, drift=drift)
     result = _within_bounds(model, recording, result, settings, t_start)
-    result = _friction_held(model, recording, result, settings, t_start)
+    result = friction_held(identify, model, recording, result, settings, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result
-
-
-def _diverged(exc: FitDiverged, rec: Recording, model: Model) -> FitDiverged:
-    """The error of a fit that overflowed where no step was left to refuse (its start): the recording's unit
-    checks (:mod:`~alpes_dyn.estimation.experiments.units`, which :func:`identify` does not make on a Recording
-    object) raise the :class:`~alpes_dyn.errors.RecordingError` naming the column and the likely unit where the data
-    say so; else the fit itself is named, not the units (the error returned, for the caller to raise)."""
-    from ..experiments.units import _check_encoder_range, check_torque_scale
-
-    _check_encoder_range(rec, model)
-    check_torque_scale(rec, model, "torque")
-    return FitDiverged(f"{exc} from its start, on a recording of plausible units (its encoders within the "
-                       "joints' ranges, its torques within the motors' limits): fewer effects or parameters may hold")
-
-
-RUNAWAY_KINDS = ("F_s", "F_v")
-"""The kinds of parameter a lost basin's farthest step may name for the fit to be made again with it held
-(:func:`_friction_held`): a joint's friction the data do not see. On a finger2 of the MuJoCo stand-in (joint 1 over
-26 degrees) F_s_1 asked for steps of 100-700 in log theta: every step was cut to its trust region and the fit
-lost its basin at 39 counts in each round; with F_s_1 held it converged at 2.3."""
-
-
-def _friction_held(model: Model, recording: Recording | str | Path, result: IdentificationResult,
-                   settings: dict[str, Any], t_start: float) -> IdentificationResult:
-    """``result`` where it did not lose its basin on a friction parameter (the farthest step's, named in its
-    reason: :data:`RUNAWAY_KINDS`); else the fit again from the model's values with that one held at the model's
-    value, named in :attr:`~IdentificationResult.not_identified`, kept where it converged or fits better."""
-    far = result.reason.rpartition("the farthest: ")[2].rstrip(")") if result.reason.startswith("lost basin") else ""
-    kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}.get(far)
-    keep = [n for n in result.names if n != far]
-    if kind not in RUNAWAY_KINDS or not keep:
-        return result
-    with warnings.catch_warnings():  # the verdict is reported on the fit kept
-        warnings.simplefilter("ignore", AdequacyWarning)
-        again = identify(model, recording, keep, **settings)
-    if not (again.converged or again.residual_rms < result.residual_rms):
-        return result
-    again.not_identified = {far: "held at the model's value: the fit's steps ran it off (lost basin; the data do "
-                                 f"not see {EFFECT_OF[kind]} there)", **again.not_identified}
-    again.iterations += result.iterations
-    again.seconds = time.perf_counter() - t_start
-    again.reason += f" (fitted again with {far} held: {result.reason})"
-    return again
 
 
 def _unsupported(result: IdentificationResult, held: bool = True) -> dict[str, str]:
