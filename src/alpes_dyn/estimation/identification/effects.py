@@ -468,7 +468,8 @@ class RoundWalker:
 
     def play(self, rnd: Round, kept: Kept) -> bool:
         """One round from ``kept``: its fit made where :meth:`Round.proposal` proposes one (from the kept fit), kept
-        where the round accepts it (``kept`` updated). True where a fit was made."""
+        where the round accepts it (``kept`` updated). True where a fit was made, or tried and ran away (a failed
+        round: :meth:`attempt`, the kept fit standing)."""
         effs = rnd.proposal(kept.result, kept.effects, self.attempted)
         if effs is None:
             return False
