@@ -1578,7 +1578,8 @@ def _ident3(path, **kw):
 
 
 def _diverging():
-    """A Recording object (no reader's range check) whose encoder jumps to 1e15 counts: the fit overflows."""
+    """A Recording object (no reader's range check) whose encoder jumps to 1e15 counts: the fit overflows, and
+    identify names the column (its unit check made where a fit diverges)."""
     import dataclasses
 
     rec = _exp()
@@ -2310,8 +2311,8 @@ API: list[Api] = [
     A("identify", lambda c: _ident(c, kkt="qr"), InputError, "kkt: expected 'sparse', 'superlu' or 'dense', got 'qr'"),
     A("identify", lambda c: _ident(c, excitation=(0.0,)), InputError, "excitation: expected positive frequencies"),
     A("identify", lambda c: _ident(c, recording=c.f["latin1_toml"]), RecordingError, "not a UTF-8 text file"),
-    A("identify", lambda c: _ident(c, recording=_diverging()), InputError, "identify: the fit diverged (its parameters "
-      "or states overflowed to NaN or inf): are the recording's encoders this model's, in counts"),
+    A("identify", lambda c: _ident(c, recording=_diverging()), RecordingError, "column 'encoder_finger' line 102: "
+      "1e+15 counts is beyond what the joint ranges allow"),
     A("estimate_recording", lambda c: _replay(c, model="finger3"), InputError, "model: expected an alpes_dyn.Model"),
     A("estimate_recording", lambda c: _replay(c, observer="pf"), InputError, "observer: expected one of ekf"),
     A("estimate_recording", lambda c: _replay(c, torque_delay=1.5), InputError,

@@ -77,8 +77,8 @@ from ...model.friction import lugre_of
 from ...symbolic.parametric import parameter_catalogue, select_parameters, unseen_masses
 from .creep import name_creep
 from .law_spread import other_law, widen
-from .shooting import FitDiverged
 from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, named_effects, rounds_of
+from .shooting import FitDiverged
 from ..experiments.recording import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "LUGRE_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO",
@@ -417,11 +417,21 @@ class RoundWalker:
         for d in range(2, MAX_FIT_DELAY + 1):
             if "delay" not in named_effects(res):
                 break
-            nxt = self.one(effs, res, d)
-            if not (nxt.converged and nxt.residual_rms < res.residual_rms):
+            nxt = self.attempt(f"delay of {d} samples", effs, res, d)
+            if nxt is None or not (nxt.converged and nxt.residual_rms < res.residual_rms):
                 break
             res = nxt
         return res
+
+    def attempt(self, name: str, effs: tuple[str, ...], warm: Any = None, delay: int | None = None) -> Any:
+        """:meth:`run` (or :meth:`one` at ``delay`` samples where given) for the round ``name``; None where its fit
+        runs away (:class:`~alpes_dyn.estimation.identification.shooting.FitDiverged`): a failed round, named in
+        :attr:`notes`, the kept fit standing (a LuGre round from a lost basin overflowed; it ended ``identify``)."""
+        try:
+            return self.run(effs, warm) if delay is None else self.one(effs, warm, delay)
+        except FitDiverged as exc:
+            self.notes.append(f"round {name} ({'+'.join(effs) or 'rigid'}): {exc}; the fit kept before it stands")
+            return None
 
     def first(self, chosen: tuple[str, ...]) -> Kept:
         """The ``first`` stage: the fit with ``chosen``; where it lost its basin, the ``staged`` round."""
@@ -440,15 +450,17 @@ class RoundWalker:
         """The rigid fit, then the effects of ``target`` one by one, each round from the last; where a stage does
         not converge, the last converged one is kept and a note names the effect that broke it."""
         accepts = dict((r.name, r) for r in ROUNDS)["staged"].accepts
-        prev, stage = self.run(()), ()
-        if not accepts(prev, failed):
-            self.notes.append(f"staged start: the rigid fit itself did not converge ({prev.reason})")
+        prev, stage = self.attempt("staged", ()), ()
+        if prev is None or not accepts(prev, failed):
+            if prev is not None:
+                self.notes.append(f"staged start: the rigid fit itself did not converge ({prev.reason})")
             return failed, target
         for e in target:
-            nxt = self.run(stage + (e,), prev)
-            if not accepts(nxt, prev):
+            nxt = self.attempt("staged", stage + (e,), prev)
+            if nxt is None or not accepts(nxt, prev):
+                why = "it diverged" if nxt is None else nxt.reason
                 self.notes.append(f"staged start: adding {e} to the converged {'+'.join(stage) or 'rigid'} fit "
-                                  f"broke it ({nxt.reason}); kept without it")
+                                  f"broke it ({why}); kept without it")
                 self.attempted.add(e)
                 return prev, stage
             prev, stage = nxt, stage + (e,)
@@ -456,22 +468,16 @@ class RoundWalker:
 
     def play(self, rnd: Round, kept: Kept) -> bool:
         """One round from ``kept``: its fit made where :meth:`Round.proposal` proposes one (from the kept fit), kept
-        where the round accepts it (``kept`` updated). True where a fit was made."""
+        where the round accepts it (``kept`` updated). True where a fit was made, or tried and ran away (a failed
+        round: :meth:`attempt`, the kept fit standing)."""
         effs = rnd.proposal(kept.result, kept.effects, self.attempted)
         if effs is None:
             return False
         if rnd.stage == "auto":
             self.attempted.update(e for e in effs if e not in kept.effects)
-        with warnings.catch_warnings(record=True) as seen:  # a diverged round's overflow warnings: its note instead
-            warnings.simplefilter("always")
-            try:
-                res = self.run(effs, kept.result)
-            except FitDiverged:  # a round's fit that overflowed: refused, the kept fit stays
-                self.notes.append(f"round {rnd.name}: the fit with {'+'.join(effs) or 'rigid'} diverged (its "
-                                  "parameters or states overflowed); kept without it")
-                return True
-        for w in seen:
-            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        res = self.attempt(rnd.name, effs, kept.result)
+        if res is None:  # a round that ran away: failed, the kept fit stands
+            return True
         if rnd.accepts(res, kept.result):
             kept.take(res, effs)
         else:

@@ -28,10 +28,8 @@ from typing import Any, Callable
 
 import numpy as np
 
-from ...errors import InputError
-
 from ...progress import _Progress
-from .shooting import Evaluation, ShootingProblem
+from .shooting import Evaluation, FitDiverged, ShootingProblem
 
 __all__ = ["GaussNewton", "SolverResult", "MAX_LOG_STEP", "MAX_COEF_STEP", "COEF_STEP_RECORD", "MAX_COEF_GROWTH",
            "CRAWL_STEPS", "SOC_STEPS", "SOFT_PHASES", "BASIN_LIMIT", "JOIN_STEPS",
@@ -101,6 +99,18 @@ class GaussNewton:
     def __init__(self, max_iterations: int = 50, tol: float = 1e-6, show: bool = False) -> None:
         self.max_iterations, self.tol, self.show = max_iterations, tol, show
 
+    @staticmethod
+    def trial(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> Evaluation | None:
+        """The residuals and defects at a trial point (``evaluate(..., jac=False)``), or None where they are not
+        finite or the point overflows (:class:`~alpes_dyn.estimation.identification.shooting.FitDiverged`: a step
+        that sends a parameter or a state to NaN or inf is refused like a step that raises the cost; a LuGre
+        round's continuity correction from a lost basin overflowed exp of a log parameter)."""
+        try:
+            e = pb.evaluate(nodes, offs, glob, jac=False)
+        except FitDiverged:
+            return None
+        return e if np.isfinite(e.r).all() and np.isfinite(e.c).all() else None
+
     # --- stage 1 ----------------------------------------------------------------------------------------------
 
     @staticmethod
@@ -126,8 +136,12 @@ class GaussNewton:
             Dn = np.einsum("sii->si", Hn)
             dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)),
                                   gn[:, :, None])
-            r2 = pb.evaluate(nodes + dn[:, :, 0], offs, glob, jac=False).r
-            better = np.sum(r2**2, axis=1) < np.sum(r**2, axis=1)
+            t2 = GaussNewton.trial(pb, nodes + dn[:, :, 0], offs, glob)
+            if t2 is None:  # a sweep that overflows: the nodes kept, more damping
+                mu_n *= 10
+                better = np.zeros(n_int, dtype=bool)
+                continue
+            better = np.sum(t2.r**2, axis=1) < np.sum(r**2, axis=1)
             nodes[better] += dn[better, :, 0]
             mu_n = np.where(better, mu_n / 10, mu_n * 10)
         return nodes
@@ -164,8 +178,8 @@ class GaussNewton:
             nu = 1.5 * float(np.max(np.abs(lam), initial=0.0)) + 1e-12
             merit = e.cost + nu * float(np.sum(np.abs(e.c)))
             for alpha in (1.0, 0.5, 0.25, 0.125):
-                trial = pb.evaluate(nodes + alpha * d, offs, glob, jac=False)
-                if np.isfinite(trial.r).all() and trial.cost + nu * float(np.sum(np.abs(trial.c))) < merit:
+                trial = GaussNewton.trial(pb, nodes + alpha * d, offs, glob)
+                if trial is not None and trial.cost + nu * float(np.sum(np.abs(trial.c))) < merit:
                     break
             else:
                 break
@@ -255,9 +269,9 @@ class GaussNewton:
                         dv = solve_local(-g[:nv] - H_border @ dg).reshape(n_int, pb.nb)
                     except np.linalg.LinAlgError:
                         pass
-                trial = pb.evaluate(nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg, jac=False)
-                new_cost = 0.5 * float(np.sum(trial.r ** 2) + np.sum(trial.rg ** 2)
-                                       + np.sum((trial.c * wv) ** 2))
+                trial = self.trial(pb, nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg)
+                new_cost = math.inf if trial is None else 0.5 * float(np.sum(trial.r ** 2) + np.sum(trial.rg ** 2)
+                                                                     + np.sum((trial.c * wv) ** 2))
                 if np.isfinite(new_cost) and new_cost < soft_cost:
                     nodes, offs, glob = nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg
                     e = trial = solve_H = solve_local = H_border = None  # freed before the next Jacobian
@@ -291,11 +305,8 @@ class GaussNewton:
         while k_try < len(candidates):
             alpha, sv, sg = candidates[k_try]
             k_try += 1
-            try:
-                trial = pb.evaluate(nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg, jac=False)
-            except InputError:  # a correction that overflowed a parameter (exp of its log: a LuGre fit's): no step
-                continue
-            if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
+            trial = GaussNewton.trial(pb, nodes + alpha * sv[:, :nx], offs + alpha * sv[:, nx:], glob + alpha * sg)
+            if trial is None:  # a correction that overflowed a parameter (exp of its log: a LuGre fit's): no step
                 continue
             cost_new, c_now = trial.cost, float(np.sum(np.abs(trial.c)))
             if cost_new + nu_merit * c_now < merit or (c_now < 0.5 * c_at and cost_new <= cost * (1.0 + 1e-6)):
@@ -333,13 +344,22 @@ class GaussNewton:
             return None
         dv, dg = d2[:nv].reshape(pb.n_int, pb.nb), d2[nv:]
         new = (nodes + dv[:, :nx], offs + dv[:, nx:], glob + dg)
-        trial = pb.evaluate(*new, jac=False)
-        if not (np.isfinite(trial.r).all() and np.isfinite(trial.c).all()):
+        trial = GaussNewton.trial(pb, *new)
+        if trial is None:  # a correction from a lost basin that overflows (a LuGre round's): nothing restored
             return None
         if float(np.max(np.abs(trial.c) / c_scale, initial=0.0)) >= 1e-6 or trial.cost > at.cost + slack:
             return None
         return (*new, dataclasses.replace(trial, J=at.J, Cv=at.Cv, Cr=at.Cr, normal=at.normal,
                                                point=at.point))
+
+    @staticmethod
+    def lost(pb: ShootingProblem, d: np.ndarray, it: int) -> str:
+        """The reason of a start that lost its basin at iteration ``it``, naming the parameter whose step ``d`` asks
+        for the farthest move of log theta (:func:`~alpes_dyn.estimation.identification.runaway.friction_held` reads
+        it)."""
+        far = pb.sens.names[int(np.argmax(np.abs(d[pb.nv:pb.nv + pb.p])))]
+        return (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
+                f"{100.0 * MAX_LOG_STEP:g} (iteration {it}; the farthest: {far})")
 
     def constrained(self, pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                     e: Evaluation, c_scale: np.ndarray, bar: _Progress) -> SolverResult:
@@ -422,8 +442,7 @@ class GaussNewton:
             if lost >= 3 and viol > 1e-3:
                 # three Gauss-Newton steps in a row asking log theta to move by more than 30: the linearisation
                 # has lost the basin (on one +-20 % finger a mass headed for 0, the step for 1e6): this start fails
-                reason = (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
-                          f"{100.0 * MAX_LOG_STEP:g} (iteration {it})")
+                reason = self.lost(pb, d, it)
                 break
             stalled = self.stalled(history, cost)
             if viol < 1e-6 and (small_change or stalled or step_g < tol):

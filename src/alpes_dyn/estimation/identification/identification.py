@@ -73,7 +73,8 @@ from ...simulation.sensitivity import SensitivityModel
 from ...simulation.lugre import fit_substeps
 from .bounds import SIGMA0_RANGE, held_value, unsupported
 from .held import held_start
-from .shooting import ShootingProblem, torque_model
+from .shooting import FitDiverged, ShootingProblem, torque_model
+from .runaway import diverged, friction_held
 from .normal_blocks import j_dot, remainders
 from .gauss_newton import GaussNewton, SolverResult
 from .long_record import LONG_RECORD, MMAP_THRESHOLD, _map_large_blocks, check_fit_size, window_start  # noqa: F401
@@ -221,6 +222,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     InputError
         Bad settings, or a fit whose arrays would exceed :func:`~alpes_dyn.limits.max_bytes`
         (:func:`~alpes_dyn.estimation.identification.long_record.check_fit_size`).
+    ~alpes_dyn.estimation.identification.shooting.FitDiverged
+        A fit that overflowed from its start (an InputError; a recording whose units are not plausible raises the
+        RecordingError naming the column instead).
     ModelError
         A selection it cannot fit (:func:`check_selection`).
     """
@@ -259,12 +263,15 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     show = sys.stderr.isatty() if progress is None else bool(progress)
     solver = GaussNewton(max_iterations, tol, show)
     warm, warm_at, it_window = pb.warm_variables(solution), [], 0
-    if warm is None:  # several runs, each fitted alone first; a long record, from its first seconds (long_record)
-        start_w, it_window = window_start(pb, solver, excitation, rest)
-        if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
-            warm, warm_at = start_w[:3], [start_w[3]][:start_w[3] is not None]  # (runs: no cap, no evaluation)
-        start_w = None
-    out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
+    try:
+        if warm is None:  # several runs, each fitted alone first; a long record, from its first seconds (long_record)
+            start_w, it_window = window_start(pb, solver, excitation, rest)
+            if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
+                warm, warm_at = start_w[:3], [start_w[3]][:start_w[3] is not None]  # (runs: no cap, no evaluation)
+            start_w = None
+        out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
+    except (FitDiverged, np.linalg.LinAlgError) as exc:  # a fit that ran away: the units named where they are wrong
+        raise diverged(exc, rec, model) from None
     it, reason = out.iterations + it_window, out.reason
     rms = pb.encoder_rms(out.at.r)
     # a third chance where both starts ended far above the floor (not merely at the iteration cap)
@@ -291,6 +298,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
                     progress=progress, validation=validation, encoder_noise=encoder_noise, kkt=kkt, drift=drift)
     result = _within_bounds(model, recording, result, settings, t_start)
+    result = friction_held(identify, model, recording, result, settings, t_start)
     if not result.trustworthy:  # one line (the CLI reports it itself)
         warnings.warn(AdequacyWarning(f"identify: {result.status()}"), stacklevel=2)
     return result

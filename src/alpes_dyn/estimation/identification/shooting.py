@@ -47,16 +47,18 @@ from .drift import GAIN_NEEDS_LINES, check_drift, drift_basis, gain_sensitivity,
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
            "JACOBIAN_CHUNK", "FitDiverged"]
 
+
+class FitDiverged(InputError):
+    """A fit's parameters or states overflowed to NaN or inf (:meth:`ShootingProblem.evaluate`): a trial step that
+    makes them is refused by the solver (:mod:`~alpes_dyn.estimation.identification.gauss_newton`), a round whose fit
+    runs away is a failed round (:class:`~alpes_dyn.estimation.identification.effects.RoundWalker`); raised out of
+    :func:`~alpes_dyn.estimation.identification.identification.identify` where no step was left to refuse."""
+
+
 JACOBIAN_CHUNK = 2**20
 """Doubles of sensitivities (8 MiB) computed at a time by :meth:`ShootingProblem.evaluate`: the intervals in
 chunks of at most this many, each reduced to its rows of the Jacobian before the next (a 4 s record at 50 ms is
 two chunks); the states alone likewise, by the compiled step's per-sample inputs."""
-
-
-class FitDiverged(InputError):
-    """The fit's parameters or states overflowed to NaN or inf (:meth:`ShootingProblem.evaluate`): on a first fit,
-    the recording's units are the likely cause; a later round of ``--effects auto`` that diverges is refused, the
-    fit before it kept (:meth:`~alpes_dyn.estimation.identification.effects.RoundWalker.play`)."""
 
 
 class ShootingProblem(EncoderOutput, ShootingAlgebra):
@@ -315,8 +317,7 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         over the Jacobian for its products: :func:`~alpes_dyn.estimation.identification.normal_blocks.remainders`)."""
         theta = self.values(glob)
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
-            raise FitDiverged("identify: the fit diverged (its parameters or states overflowed to NaN or inf): are "
-                             "the recording's encoders this model's, in counts, and its torques in N m?")
+            raise FitDiverged("identify: the fit diverged (its parameters or states overflowed to NaN or inf)")
         L = self.L
         u_raw = self.torque_at(glob, offs, gained=False) if self.comp_cols else None
         g = self.gain(glob)

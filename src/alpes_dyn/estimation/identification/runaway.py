@@ -1,0 +1,70 @@
+"""A fit that runs away (issue 49): what :func:`~alpes_dyn.estimation.identification.identification.identify` does
+where its start overflows (:func:`diverged`: the units named only where the recording's checks say so) and where it
+lost its basin on a joint's friction (:func:`friction_held`: the fit again with it held). The solver's side (a step
+that overflows refused) is :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.trial`, the rounds'
+(a round that diverges is a failed round) :meth:`~alpes_dyn.estimation.identification.effects.RoundWalker.attempt`."""
+
+from __future__ import annotations
+
+import time
+import warnings
+from pathlib import Path
+from typing import Any, Callable
+
+from ...model.robot import Model
+from ...symbolic.parametric import parameter_catalogue
+from ..experiments.recording import Recording
+from .adequacy import AdequacyWarning
+from .bounds import EFFECT_OF
+from .fit_result import IdentificationResult
+from .shooting import FitDiverged
+
+__all__ = ["RUNAWAY_KINDS", "diverged", "friction_held"]
+
+
+def diverged(exc: Exception, rec: Recording, model: Model) -> Exception:
+    """The error of a fit that overflowed where no step was left to refuse (its start): the recording's unit
+    checks (:mod:`~alpes_dyn.estimation.experiments.units`, which ``identify`` does not make on a Recording object)
+    raise the :class:`~alpes_dyn.errors.RecordingError` naming the column and the likely unit where the data
+    say so; else the fit itself is named, not the units (the error returned, for the caller to raise). ``exc``: the
+    FitDiverged, or the LinAlgError of the normal matrices of a fit whose trial steps were refused (returned as it
+    is where the units are plausible)."""
+    from ..experiments.units import _check_encoder_range, check_torque_scale
+
+    _check_encoder_range(rec, model)
+    check_torque_scale(rec, model, "torque")
+    if not isinstance(exc, FitDiverged):
+        return exc
+    return FitDiverged(f"{exc} from its start, on a recording of plausible units (its encoders within the "
+                       "joints' ranges, its torques within the motors' limits): fewer effects or parameters may hold")
+
+
+RUNAWAY_KINDS = ("F_s", "F_v")
+"""The kinds of parameter a lost basin's farthest step may name for the fit to be made again with it held
+(:func:`friction_held`): a joint's friction the data do not see. On a finger2 of the MuJoCo stand-in (joint 1 over
+26 degrees) F_s_1 asked for steps of 100-700 in log theta: every step was cut to its trust region and the fit
+lost its basin at 39 counts in each round; with F_s_1 held it converged at 2.3."""
+
+
+def friction_held(fit: Callable[..., IdentificationResult], model: Model, recording: Recording | str | Path,
+                  result: IdentificationResult, settings: dict[str, Any], t_start: float) -> IdentificationResult:
+    """``result`` where it did not lose its basin on a friction parameter (the farthest step's, named in its
+    reason: :data:`RUNAWAY_KINDS`); else the fit again from the model's values with that one held at the model's
+    value (``fit``: :func:`~alpes_dyn.estimation.identification.identification.identify`, with ``settings``), named
+    in :attr:`~.fit_result.IdentificationResult.not_identified`, kept where it converged or fits better."""
+    far = result.reason.rpartition("the farthest: ")[2].rstrip(")") if result.reason.startswith("lost basin") else ""
+    kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}.get(far)
+    keep = [n for n in result.names if n != far]
+    if kind not in RUNAWAY_KINDS or not keep:
+        return result
+    with warnings.catch_warnings():  # the verdict is reported on the fit kept
+        warnings.simplefilter("ignore", AdequacyWarning)
+        again = fit(model, recording, keep, **settings)
+    if not (again.converged or again.residual_rms < result.residual_rms):
+        return result
+    again.not_identified = {far: "held at the model's value: the fit's steps ran it off (lost basin; the data do "
+                                 f"not see {EFFECT_OF[kind]} there)", **again.not_identified}
+    again.iterations += result.iterations
+    again.seconds = time.perf_counter() - t_start
+    again.reason += f" (fitted again with {far} held: {result.reason})"
+    return again
