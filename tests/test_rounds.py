@@ -181,8 +181,8 @@ def test_a_round_whose_fit_diverges_is_refused_the_kept_fit_stays(monkeypatch):
         warnings.simplefilter("always")
         assert walk.play(ROW["stiction"], kept) is True
     assert kept.result.residual_rms == pytest.approx(0.6) and kept.tried is None and not seen
-    assert walk.notes == ["round stiction: the fit with compliance+tilt+stiction diverged (its parameters or "
-                          "states overflowed); kept without it"]
+    assert walk.notes == ["round stiction (compliance+tilt+stiction): identify: the fit diverged; the fit kept before "
+                          "it stands"]
     monkeypatch.setattr(walk, "run", lambda effs, warm=None: (_ for _ in ()).throw(ValueError("other")))
     with pytest.raises(ValueError, match="other"):
         walk.play(ROW["rotor"], kept)

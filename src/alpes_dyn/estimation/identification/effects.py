@@ -426,12 +426,34 @@ class RoundWalker:
     def attempt(self, name: str, effs: tuple[str, ...], warm: Any = None, delay: int | None = None) -> Any:
         """:meth:`run` (or :meth:`one` at ``delay`` samples where given) for the round ``name``; None where its fit
         runs away (:class:`~alpes_dyn.estimation.identification.shooting.FitDiverged`): a failed round, named in
-        :attr:`notes`, the kept fit standing (a LuGre round from a lost basin overflowed; it ended ``identify``)."""
-        try:
-            return self.run(effs, warm) if delay is None else self.one(effs, warm, delay)
-        except FitDiverged as exc:
-            self.notes.append(f"round {name} ({'+'.join(effs) or 'rigid'}): {exc}; the fit kept before it stands")
-            return None
+        :attr:`notes`, its overflow warnings dropped, the kept fit standing.
+
+        Parameters
+        ----------
+        name : str
+            The round's name, for the note.
+        effs : tuple of str
+            The effects of the round's fit (:data:`EFFECTS`).
+        warm : IdentificationResult or None, optional
+            The fit it starts from (None: the model's values).
+        delay : int or None, optional
+            The torque delay in samples to fit at (:meth:`one`); None: :meth:`run`'s own.
+
+        Returns
+        -------
+        IdentificationResult or None
+            The round's fit, or None where it diverged.
+        """
+        with warnings.catch_warnings(record=True) as seen:  # a diverged round's overflow warnings: its note instead
+            warnings.simplefilter("always")
+            try:
+                res = self.run(effs, warm) if delay is None else self.one(effs, warm, delay)
+            except FitDiverged as exc:
+                self.notes.append(f"round {name} ({'+'.join(effs) or 'rigid'}): {exc}; the fit kept before it stands")
+                return None
+        for w in seen:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
+        return res
 
     def first(self, chosen: tuple[str, ...]) -> Kept:
         """The ``first`` stage: the fit with ``chosen``; where it lost its basin, the ``staged`` round."""

@@ -103,8 +103,24 @@ class GaussNewton:
     def trial(pb: ShootingProblem, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray) -> Evaluation | None:
         """The residuals and defects at a trial point (``evaluate(..., jac=False)``), or None where they are not
         finite or the point overflows (:class:`~alpes_dyn.estimation.identification.shooting.FitDiverged`: a step
-        that sends a parameter or a state to NaN or inf is refused like a step that raises the cost; a LuGre
-        round's continuity correction from a lost basin overflowed exp of a log parameter)."""
+        that sends a parameter or a state to NaN or inf is refused like a step that raises the cost).
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem.
+        nodes : numpy.ndarray, shape (K, nx)
+            The intervals' start states at the trial point (rad, rad/s).
+        offs : numpy.ndarray
+            The per-interval offsets at the trial point.
+        glob : numpy.ndarray, shape (p,)
+            The global parameters (log values) at the trial point.
+
+        Returns
+        -------
+        Evaluation or None
+            The evaluation without Jacobian, or None where the point is refused.
+        """
         try:
             e = pb.evaluate(nodes, offs, glob, jac=False)
         except FitDiverged:
@@ -354,9 +370,23 @@ class GaussNewton:
 
     @staticmethod
     def lost(pb: ShootingProblem, d: np.ndarray, it: int) -> str:
-        """The reason of a start that lost its basin at iteration ``it``, naming the parameter whose step ``d`` asks
-        for the farthest move of log theta (:func:`~alpes_dyn.estimation.identification.runaway.friction_held` reads
-        it)."""
+        """The reason of a start that lost its basin, naming the parameter whose step asks for the farthest move of
+        log theta (:func:`~alpes_dyn.estimation.identification.runaway.friction_held` reads it).
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem (its parameters' names).
+        d : numpy.ndarray
+            The Gauss-Newton step over the problem's variables (the states', then the parameters' log values).
+        it : int
+            The iteration at which the basin was lost.
+
+        Returns
+        -------
+        str
+            The reason, ``"lost basin: ... (iteration it; the farthest: NAME)"``.
+        """
         far = pb.sens.names[int(np.argmax(np.abs(d[pb.nv:pb.nv + pb.p])))]
         return (f"lost basin: three Gauss-Newton steps in a row asked log theta to move by more than "
                 f"{100.0 * MAX_LOG_STEP:g} (iteration {it}; the farthest: {far})")

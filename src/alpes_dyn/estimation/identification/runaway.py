@@ -26,9 +26,28 @@ def diverged(exc: Exception, rec: Recording, model: Model) -> Exception:
     """The error of a fit that overflowed where no step was left to refuse (its start): the recording's unit
     checks (:mod:`~alpes_dyn.estimation.experiments.units`, which ``identify`` does not make on a Recording object)
     raise the :class:`~alpes_dyn.errors.RecordingError` naming the column and the likely unit where the data
-    say so; else the fit itself is named, not the units (the error returned, for the caller to raise). ``exc``: the
-    FitDiverged, or the LinAlgError of the normal matrices of a fit whose trial steps were refused (returned as it
-    is where the units are plausible)."""
+    say so; else the fit itself is named, not the units (the error returned, for the caller to raise).
+
+    Parameters
+    ----------
+    exc : Exception
+        The FitDiverged, or the LinAlgError of the normal matrices of a fit whose trial steps were refused (returned
+        as it is where the units are plausible).
+    rec : Recording
+        The recording fitted (encoders in counts, torques in N m).
+    model : Model
+        The model fitted (its joints' ranges, its motors' limits).
+
+    Returns
+    -------
+    Exception
+        The error to raise.
+
+    Raises
+    ------
+    RecordingError
+        Where a column's values are implausible in its unit (naming the column and the likely unit).
+    """
     from ..experiments.units import _check_encoder_range, check_torque_scale
 
     _check_encoder_range(rec, model)
@@ -41,17 +60,39 @@ def diverged(exc: Exception, rec: Recording, model: Model) -> Exception:
 
 RUNAWAY_KINDS = ("F_s", "F_v")
 """The kinds of parameter a lost basin's farthest step may name for the fit to be made again with it held
-(:func:`friction_held`): a joint's friction the data do not see. On a finger2 of the MuJoCo stand-in (joint 1 over
-26 degrees) F_s_1 asked for steps of 100-700 in log theta: every step was cut to its trust region and the fit
-lost its basin at 39 counts in each round; with F_s_1 held it converged at 2.3."""
+(:func:`friction_held`): a joint's friction the data do not see (a joint that moves over a small part of its
+range: its F_s asks for steps of hundreds in log theta, each cut to the trust region, and every round loses its
+basin)."""
 
 
 def friction_held(fit: Callable[..., IdentificationResult], model: Model, recording: Recording | str | Path,
                   result: IdentificationResult, settings: dict[str, Any], t_start: float) -> IdentificationResult:
     """``result`` where it did not lose its basin on a friction parameter (the farthest step's, named in its
     reason: :data:`RUNAWAY_KINDS`); else the fit again from the model's values with that one held at the model's
-    value (``fit``: :func:`~alpes_dyn.estimation.identification.identification.identify`, with ``settings``), named
-    in :attr:`~.fit_result.IdentificationResult.not_identified`, kept where it converged or fits better."""
+    value, named in :attr:`~.fit_result.IdentificationResult.not_identified`, kept where it converged or fits
+    better.
+
+    Parameters
+    ----------
+    fit : callable
+        :func:`~alpes_dyn.estimation.identification.identification.identify`, called as ``fit(model, recording,
+        names, **settings)``.
+    model : Model
+        The model fitted.
+    recording : Recording, str or pathlib.Path
+        The recording fitted.
+    result : IdentificationResult
+        The fit that may have lost its basin.
+    settings : dict
+        ``fit``'s other keyword arguments, as the first fit had them.
+    t_start : float
+        ``time.perf_counter()`` at the start of the whole fit, s (the kept fit's ``seconds`` counts from it).
+
+    Returns
+    -------
+    IdentificationResult
+        ``result``, or the fit again with the friction parameter held.
+    """
     far = result.reason.rpartition("the farthest: ")[2].rstrip(")") if result.reason.startswith("lost basin") else ""
     kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}.get(far)
     keep = [n for n in result.names if n != far]
