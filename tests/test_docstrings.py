@@ -155,9 +155,7 @@ MODULES_NOT_YET: dict[str, int] = {
     "estimation.identification.robust_covariance": 2,
     "estimation.identification.shooting": 14,
     "estimation.observers.friction_noise": 4,
-    "estimation.observers.looped": 6,
     "model.friction": 4,
-    "simulation.variational": 2,
     "studies.realism_friction": 7,
 }
 """Of each module's own public callables -- the names of its ``__all__`` defined in it, which the API reference
