@@ -153,7 +153,6 @@ MODULES_NOT_YET: dict[str, int] = {
     "estimation.identification.noise_calibration": 1,
     "estimation.identification.observer_check": 7,
     "estimation.identification.robust_covariance": 2,
-    "estimation.identification.shooting": 14,
     "estimation.observers.friction_noise": 4,
     "model.friction": 4,
     "studies.realism_friction": 7,
