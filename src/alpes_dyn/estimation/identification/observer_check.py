@@ -76,8 +76,8 @@ itself, on our own simulator's recording of the experiment (the model's exact st
 ahead within 12.1-16.0 times the floor (three draws; the nominal file 310-385 times), finger3 on MuJoCo's stick-slip
 plant within 12.5 (the nominal 140); at 15 the default path refused two finger2 draws whose fits were within
 0.13 % of the truth. Fits missing the torque delay measured 28-43 times (``benchmarks/realism.py``; the fitted
-files' ratios on its draws are recorded in ``benchmarks/results/realism.json``, each row's ``extended.observer.prediction_ratio``,
-and ``benchmarks/results/realism.friction.json``). Why a
+files' ratios on its draws are recorded in ``benchmarks/results/realism.json`` (each row's
+``extended.observer.prediction_ratio``) and ``benchmarks/results/realism.friction.json``). Why a
 99 % band: two tests of a consistent filter at 95 % each refuse about one file in ten by chance; the true file on
 MuJoCo's stick-slip finger3 of ``tests/test_realism_draws.py`` (the EKF 0.15 degree off) had its 20 ms prediction
 at 1.51 against a 95 % band reaching 1.495, the nominal file's 133 (its innovation 8.4). ``split_horizon_s``: a
@@ -396,7 +396,8 @@ def judge(result: Any, recording: Recording, torque_delay: int = 0,
     Parameters
     ----------
     result : IdentificationResult
-        A fit's result, its ``adequacy`` updated in place (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`).
+        A fit's result (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`), its
+        ``adequacy`` updated in place.
     recording : Recording
         The recording the observer runs on (its first ``window_s`` s, within its first run and orientation):
         encoder counts, torques N m, joint angles rad where recorded.

@@ -761,8 +761,9 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
-        onto the measured encoder (the stretch of the start's compliance off): a start close to the data. (Not shifted, the response alone is no start on a long
-        record even with the parameters right: over 16 s of finger3 it drifted to 460 counts from the encoder.)
+        onto the measured encoder (the stretch of the start's compliance off): a start close to the data. (Not
+        shifted, the response alone is no start on a long record even with the parameters right: over 16 s of
+        finger3 it drifted to 460 counts from the encoder.)
 
         Parameters
         ----------
