@@ -147,17 +147,12 @@ MODULES_NOT_YET: dict[str, int] = {
     "estimation.identification.adequacy": 12,
     "estimation.identification.effects": 18,
     "estimation.identification.gauss_newton": 12,
-    "estimation.identification.held": 2,
     "estimation.identification.identification": 1,
     "estimation.identification.law_spread": 1,
     "estimation.identification.noise_calibration": 1,
-    "estimation.identification.observer_check": 7,
     "estimation.identification.robust_covariance": 2,
-    "estimation.identification.shooting": 14,
     "estimation.observers.friction_noise": 4,
-    "estimation.observers.looped": 6,
     "model.friction": 4,
-    "simulation.variational": 2,
     "studies.realism_friction": 7,
 }
 """Of each module's own public callables -- the names of its ``__all__`` defined in it, which the API reference

@@ -22,7 +22,21 @@ def _rk4_calling(fn: cs.Function, h: float, name: str) -> cs.Function:
 def repeated_step(step: cs.Function, count: int) -> cs.Function:
     """``step`` (x, w) -> x_next applied ``count`` times with the same w (an MX function calling it ``count``
     times): the substeps of one sample period in one compiled call, so the caller's inputs and states are per
-    sample (not repeated per substep: for a stick-slip fit's 15 substeps, 15x less memory in and out)."""
+    sample (not repeated per substep: for a stick-slip fit's 15 substeps, 15x less memory in and out).
+
+    Parameters
+    ----------
+    step : casadi.Function
+        One substep ``(x, w) -> x_next``: the state (its first input's size) and the input held over the substep.
+    count : int
+        Substeps per sample period (>= 1); 1 returns ``step`` itself.
+
+    Returns
+    -------
+    casadi.Function
+        ``(x, w) -> x`` after ``count`` substeps with the same ``w``, named ``step``'s name + ``_x{count}``
+        (``step`` itself when ``count`` is 1).
+    """
     if count == 1:
         return step
     z = cs.MX.sym("z", step.size1_in(0))
@@ -47,6 +61,26 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
     derivative inlined: for finger3's 12 parameters the source is 56 kB instead of 1.4 MB, it compiles in ~1 s instead
     of ~32 s at -O3 and runs ~2x faster (2-core machine; the SIMD lanes of
     :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop` are not used by a step with calls).
+
+    Parameters
+    ----------
+    rhs : casadi.SX
+        (nx,) the states' right-hand side x' = rhs(x, w), in ``x`` and ``w``.
+    x : casadi.SX
+        (nx,) the state's symbols.
+    w : casadi.SX
+        The input held over the step (torques, parameters, input corrections), the symbols ``rhs`` depends on
+        besides ``x``.
+    p : casadi.SX
+        (np,) the parameters the sensitivities are taken in: a subvector of ``w``.
+    h : float
+        The step, s.
+
+    Returns
+    -------
+    casadi.Function
+        ``sens_step([x; vec X], w) -> [x+; vec X+]``, X (nx, nx + np) column-major: an ``MX`` step calling one
+        ``SX`` function (the augmented right-hand side) four times.
     """
     nx = x.numel()
     X = cs.SX.sym("X", nx, nx + p.numel())
@@ -59,7 +93,9 @@ LOOPED_STATES = 40
 """States from which :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` builds its step by
 :func:`looped_variational_rk4_step`: the Shadow hand with its wrist free (48 states, 72 parameters) had Jacobians of
 its forward dynamics of 0.56 and 0.47 million instructions, 23 MB of C the compiler did not finish in minutes; the
-fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached libraries, bit for bit)."""
+fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached libraries, bit for bit).
+The Shadow hand's commands with the looped step are recorded in ``benchmarks/results/foreign_hands.json`` (its
+commands part)."""
 
 
 def looped_variational_rk4_step(rhs: cs.SX, M: cs.SX, r: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX,

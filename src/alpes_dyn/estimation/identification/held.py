@@ -56,8 +56,31 @@ class ShootingSolution:
 
 def start_values(theta0: np.ndarray, names: Sequence[str], additive: np.ndarray,
                  start: Mapping[str, float]) -> np.ndarray:
-    """``theta0`` with the values of ``start`` (by parameter name) put in; :class:`~alpes_dyn.InputError` naming
-    a parameter that is not fitted, or a value that is not a finite number (positive unless additive)."""
+    """``theta0`` with the values of ``start`` (by parameter name) put in.
+
+    Parameters
+    ----------
+    theta0 : numpy.ndarray, shape (p,)
+        The starting parameters (the model's), each in its own unit.
+    names : Sequence[str]
+        (p,) the fitted parameters' names, ``theta0``'s order.
+    additive : numpy.ndarray, shape (p,)
+        bool: the parameters fitted additively (encoder offsets, tilt angles: any finite value), the others by
+        their logarithm (a positive value).
+    start : Mapping[str, float]
+        The starting values by parameter name, in the parameters' units.
+
+    Returns
+    -------
+    numpy.ndarray, shape (p,)
+        A copy of ``theta0`` with ``start``'s values.
+
+    Raises
+    ------
+    InputError
+        ``start`` not a mapping, naming a parameter that is not fitted, or a value that is not a finite number
+        (positive unless additive).
+    """
     if not isinstance(start, Mapping):
         raise InputError(f"start: expected a mapping of parameter names to values (or an earlier "
                          f"IdentificationResult), got {type(start).__name__}")
@@ -81,7 +104,21 @@ def held_start(result: Any, held: Mapping[str, float]) -> Any | None:
     (the module docstring), to start ``identify(..., start=...)`` from. None where the result carries no response
     (:attr:`~alpes_dyn.estimation.identification.held.ShootingSolution.response`), a held value is not
     reachable in the fit's variables (a log-fitted one at or below 0: its bound, not a value), or the move (or a value it
-    gives) is not finite."""
+    gives) is not finite.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A fit's result, its ``solution`` carrying the optimum's response.
+    held : Mapping[str, float]
+        The parameters held, name -> the value each is held at, in its unit.
+
+    Returns
+    -------
+    IdentificationResult or None
+        A copy of ``result`` moved (its solution's response dropped), or None as above (also where ``held`` is
+        empty).
+    """
     sol = getattr(result, "solution", None)
     if sol is None or sol.response is None or not held:
         return None

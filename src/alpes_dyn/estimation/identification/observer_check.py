@@ -75,7 +75,9 @@ validation run, its EKF over-confident (joints' NEES 19) yet every test in its b
 itself, on our own simulator's recording of the experiment (the model's exact structure), predicts finger2 20 ms
 ahead within 12.1-16.0 times the floor (three draws; the nominal file 310-385 times), finger3 on MuJoCo's stick-slip
 plant within 12.5 (the nominal 140); at 15 the default path refused two finger2 draws whose fits were within
-0.13 % of the truth. Fits missing the torque delay measured 28-43 times (``benchmarks/realism.py``). Why a
+0.13 % of the truth. Fits missing the torque delay measured 28-43 times (``benchmarks/realism.py``; the fitted
+files' ratios on its draws are recorded in ``benchmarks/results/realism.json`` (each row's
+``extended.observer.prediction_ratio``) and ``benchmarks/results/realism.friction.json``). Why a
 99 % band: two tests of a consistent filter at 95 % each refuse about one file in ten by chance; the true file on
 MuJoCo's stick-slip finger3 of ``tests/test_realism_draws.py`` (the EKF 0.15 degree off) had its 20 ms prediction
 at 1.51 against a 95 % band reaching 1.495, the nominal file's 133 (its innovation 8.4). ``split_horizon_s``: a
@@ -150,7 +152,18 @@ def identified_model(result: Any) -> Model | None:
     """The observer's model of a fit (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`):
     the fitted model's kind (an Alpes finger or thumb, friction on, its rotor where it had one, its gravity) from the
     file the fit writes (:meth:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult.params`). None for
-    a model that has no parameter file (a URDF robot)."""
+    a model that has no parameter file (a URDF robot).
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A fit's result (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`).
+
+    Returns
+    -------
+    Model or None
+        The observer's model, with the fitted model's gravity, or None.
+    """
     m = getattr(result, "model", None)
     if not isinstance(m, Model) or m.params is None or m.layout is None or m.name not in ("finger2", "finger3", "thumb"):
         return None
@@ -161,7 +174,20 @@ def identified_model(result: Any) -> Model | None:
 
 
 def fitted_rig(result: Any) -> tuple[list[float] | None, list[float] | None]:
-    """(the encoders' offsets (m,) rad, the palm's (tilt_x, tilt_y) rad) a fit found, None where it fitted none."""
+    """The encoders' offsets and the palm's tilt a fit found.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A fit's result (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`).
+
+    Returns
+    -------
+    encoder_offset : list of float or None
+        (m,) the encoders' offsets, rad (an unfitted motor's 0.0), or None where the fit fitted none.
+    tilt : list of float or None
+        The palm's (tilt_x, tilt_y), rad (an unfitted one 0.0), or None where the fit fitted neither.
+    """
     v = dict(zip(result.names, np.asarray(result.values, dtype=float).tolist()))
     motors = result.model.transmission.motor_names
     off = [v.get(f"encoder_offset_{mo}", 0.0) for mo in motors] if any(f"encoder_offset_{mo}" in v
@@ -181,11 +207,30 @@ def _first(rec: Recording, seconds: float) -> Recording:
 def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
                    thresholds: Mapping[str, float] | None = None, calibrate: bool = True) -> ObserverCheck | None:
     """:func:`observer_statistics` of ``result``'s identified file (:func:`identified_model`, with the fit's encoder
-    offsets and tilt, :func:`fitted_rig`) on ``recording``; ``torque_delay``: samples by which the recorded torque
-    lags, as fitted. With ``calibrate`` (default), the observer's model error first calibrated on ``recording``
-    (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`), kept as
-    ``result.model_error`` (written to the file) and the statistics those at it; where none up to the ceiling makes
-    the filter consistent, its reason added. None where the fit's model has no file (a URDF robot)."""
+    offsets and tilt, :func:`fitted_rig`) on ``recording``.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A fit's result (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`).
+    recording : Recording
+        The recording the observer runs on (its first ``window_s`` s, within its first run and orientation):
+        encoder counts, torques N m, joint angles rad where recorded.
+    torque_delay : int, optional
+        Samples by which the recorded torque lags, as fitted (default 0).
+    thresholds : Mapping[str, float] or None, optional
+        Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+    calibrate : bool, optional
+        True (default): the observer's model error first calibrated on ``recording``
+        (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`), kept as
+        ``result.model_error`` (written to the file) and the statistics those at it; where none up to the ceiling
+        makes the filter consistent, its reason added. False: the statistics at the file's model error.
+
+    Returns
+    -------
+    ObserverCheck or None
+        The check, or None where the fit's model has no file (a URDF robot).
+    """
     model = identified_model(result)
     if model is None:
         return None
@@ -208,7 +253,29 @@ def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any =
     :func:`observer_statistics` with ``encoder_offset``, ``tilt``, ``torque_delay`` and ``thresholds`` as there):
     a :class:`~alpes_dyn.estimation.identification.noise_calibration.ModelErrorCalibration`. Any file, e.g. a true
     one on the record it would have been fitted on; write its ``value`` with
-    :func:`~alpes_dyn.estimation.observers.friction_noise.with_model_error`."""
+    :func:`~alpes_dyn.estimation.observers.friction_noise.with_model_error`.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording the observer runs on (its first ``window_s`` s, within its first run and orientation):
+        encoder counts, torques N m, joint angles rad where recorded.
+    model : Model
+        The observer's model (an Alpes finger or thumb with its parameter file).
+    encoder_offset : array_like or None, optional
+        (m,) the encoders' offsets, rad (default None: zero).
+    tilt : array_like or None, optional
+        (2,) the palm's (tilt_x, tilt_y), rad: the observer's gravity turned by it (default None: not turned).
+    torque_delay : int, optional
+        Samples by which the recorded torque lags, as fitted (default 0).
+    thresholds : Mapping[str, float] or None, optional
+        Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+
+    Returns
+    -------
+    ModelErrorCalibration
+        The calibrated model error (its ``value``, ``check`` and ``reason``).
+    """
     th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
     return calibrate_model_error(model, lambda m: observer_statistics(recording, m, encoder_offset, tilt,
                                                                       torque_delay, th))
@@ -220,7 +287,30 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     stick-slip one included, its tendon compliance; ``encoder_offset`` (m,) rad, ``tilt`` (2,) rad and
     ``torque_delay`` samples as there) run on ``recording``: its innovation and its prediction ``horizon_s`` ahead
     against the recording's sensor floor, after ``transient_s`` (:data:`OBSERVER_THRESHOLDS`, overridden by
-    ``thresholds``); the reasons where they exceed it."""
+    ``thresholds``); the reasons where they exceed it.
+
+    Parameters
+    ----------
+    recording : Recording
+        The recording the observer runs on (its first ``window_s`` s, within its first run and orientation):
+        encoder counts, torques N m, joint angles rad where recorded.
+    model : Model
+        The observer's model (an Alpes finger or thumb with its parameter file).
+    encoder_offset : array_like or None, optional
+        (m,) the encoders' offsets, rad (default None: zero).
+    tilt : array_like or None, optional
+        (2,) the palm's (tilt_x, tilt_y), rad: the observer's gravity turned by it (default None: not turned).
+    torque_delay : int, optional
+        Samples by which the recorded torque lags, as fitted (default 0).
+    thresholds : Mapping[str, float] or None, optional
+        Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+
+    Returns
+    -------
+    ObserverCheck
+        The innovation's and the prediction's RMS (counts), the sensor floor, the consistency tests and the
+        reasons (empty where the observer passes).
+    """
     th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
     t0 = time.perf_counter()
     recording = _first(recording, th["window_s"])
@@ -274,7 +364,19 @@ def mildly_coloured(adequacy: Any) -> bool:
     """True when a verdict's only reason is a residual coloured by the Ljung-Box test alone: every lag within
     ``max_acf_bands`` of the 99 % band (:data:`~alpes_dyn.estimation.identification.adequacy.THRESHOLDS`), the RMS at
     the floor, no correlation with the torque (MuJoCo's finger3 with all the effects at once, one draw: lags up to 0.05
-    against a band of 0.041, p = 1.2e-7, residual 1.0x the floor; K 0.7 %, m 0.5 %, the EKF 0.42 degree)."""
+    against a band of 0.041, p = 1.2e-7, residual 1.0x the floor; K 0.7 %, m 0.5 %, the EKF 0.42 degree).
+
+    Parameters
+    ----------
+    adequacy : Adequacy
+        A fit's verdict (:class:`~alpes_dyn.estimation.identification.adequacy.Adequacy`): its ``reasons`` and
+        ``whiteness``.
+
+    Returns
+    -------
+    bool
+        True when mildly coloured, as above.
+    """
     from .adequacy import THRESHOLDS
 
     w = getattr(adequacy, "whiteness", None)
@@ -289,7 +391,26 @@ def judge(result: Any, recording: Recording, torque_delay: int = 0,
     ``result.adequacy.observer``): where the observer fails, ``adequate`` False and its reasons appended; where the
     fit's own verdict failed only on a mildly coloured residual (:func:`mildly_coloured`) and the observer passes,
     adequate, the colour kept in the notes (the observer the file feeds shows it harmless). Judged only where the
-    fit converged and its verdict is adequate or mildly coloured (a fit refused for anything else stays refused)."""
+    fit converged and its verdict is adequate or mildly coloured (a fit refused for anything else stays refused).
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        A fit's result (:class:`~alpes_dyn.estimation.identification.fit_result.IdentificationResult`), its
+        ``adequacy`` updated in place.
+    recording : Recording
+        The recording the observer runs on (its first ``window_s`` s, within its first run and orientation):
+        encoder counts, torques N m, joint angles rad where recorded.
+    torque_delay : int, optional
+        Samples by which the recorded torque lags, as fitted (default 0).
+    thresholds : Mapping[str, float] or None, optional
+        Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+
+    Returns
+    -------
+    ObserverCheck or None
+        The check, or None where not judged (or the fit's model has no file).
+    """
     a = getattr(result, "adequacy", None)
     if a is None or not result.converged or not (a.adequate or mildly_coloured(a)):
         return None

@@ -66,18 +66,44 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
 
     Parameters
     ----------
-    model: the finger (its transmission reads the encoder). rec: the recording. sens: the compiled sensitivities of
-    the selection (with the torque model's correction: ``input_offset`` without the lines, ``input_basis`` with).
-    L: samples per interval. torque: :func:`torque_model`. camera_noise: sigma_q, rad. start: starting values by
-    name (the rest the model's). dense: the KKT matrices as arrays (the reference) instead of sparse.
-    structured: the sparse matrices factorised by their band and border (the default, kkt.bordered_factorize) or,
-    False, by SuperLU (the general sparse LU, the reference the structured one is tested against).
-    drift: ``"offset"``, ``"gain"`` or both (:func:`~alpes_dyn.estimation.identification.drift.check_drift`): the
-    encoders' offset drift (``nd_off`` knots' values, counts) and the torque constants' relative drift (``nd_gain``)
-    fitted too (module drift), after the line corrections in ``glob``. A recording of several runs (module runs: each run starting on a node, see
-    ``runs.aligned``) has no continuity into a run's first interval (``cut``) and each run's own line coefficients
-    (``blk``).
+    model : Model
+        The finger (:class:`~alpes_dyn.model.robot.Model`; its transmission reads the encoder).
+    rec : Recording
+        The recording (:class:`~alpes_dyn.estimation.experiments.recording.Recording`): encoder counts, torques
+        N m, joint angles rad where recorded. A recording of several runs (module runs: each run starting on a
+        node, see ``runs.aligned``) has no continuity into a run's first interval (``cut``) and each run's own line
+        coefficients (``blk``).
+    sens : SensitivityModel
+        The compiled sensitivities of the selection
+        (:class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`; with the torque model's correction:
+        ``input_offset`` without the lines, ``input_basis`` with).
+    L : int
+        Samples per interval.
+    torque : TorqueModel
+        The torque's model, :func:`torque_model`.
+    camera_noise : float
+        sigma_q, rad: the camera's joint-angle noise.
+    start : Mapping[str, float] or None, optional
+        Starting values by parameter name (default None: the rest, all, the model's).
+    dense : bool, optional
+        True: the KKT matrices as arrays (the reference) instead of sparse (default False).
+    structured : bool, optional
+        True (default): the sparse matrices factorised by their band and border (kkt.bordered_factorize); False:
+        by SuperLU (the general sparse LU, the reference the structured one is tested against).
+    drift : str or None, optional
+        ``"offset"``, ``"gain"`` or both (:func:`~alpes_dyn.estimation.identification.drift.check_drift`; default
+        None: neither): the encoders' offset drift (``nd_off`` knots' values, counts) and the torque constants'
+        relative drift (``nd_gain``) fitted too (module drift), after the line corrections in ``glob``.
 
+    Raises
+    ------
+    InputError
+        The gain's drift without the excitation's lines.
+    ModelError
+        A fitted multiplicative parameter whose starting value is not positive.
+
+    Notes
+    -----
     The unknowns are ``nodes`` (S, nx), ``offs`` (S, no) and ``glob`` (ng,): theta's (p), the line corrections (ncg),
     the drift's (nd); :meth:`values` maps ``glob`` to theta.
     """
@@ -208,7 +234,18 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
     # --- the parameters and the output ------------------------------------------------------------------------
 
     def values(self, glob: np.ndarray) -> np.ndarray:
-        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + scale rho for the additive ones."""
+        """theta from the fitted variables: theta_0 exp(rho), or theta_0 + scale rho for the additive ones.
+
+        Parameters
+        ----------
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+
+        Returns
+        -------
+        numpy.ndarray, shape (p,)
+            theta, in the parameters' own units (``sens.names``' order).
+        """
         p, additive = self.p, self.additive
         return np.where(additive, self.theta0 + self.scale * glob[:p],
                         self.theta0 * np.exp(np.where(additive, 0.0, glob[:p])))
@@ -229,14 +266,40 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
     def psik(self, sl: slice) -> np.ndarray:
         """(s, L+1, nphi) the lines' basis (times sigma_u) over the period before each residual's sample of the
         intervals ``sl`` (:func:`~alpes_dyn.model.transmission.torque_before`: the first residual's the period
-        before the interval, the others' the interval's own)."""
+        before the interval, the others' the interval's own).
+
+        Parameters
+        ----------
+        sl : slice
+            The intervals.
+
+        Returns
+        -------
+        numpy.ndarray, shape (s, L+1, nphi)
+            The basis, laid in each interval's run's block where the recording has several runs.
+        """
         return self._scatter(np.concatenate([self.Psi0[sl, None], self.Psib[sl]], axis=1), sl)
 
     def torque_at(self, glob: np.ndarray, offs: np.ndarray, gained: bool = True) -> np.ndarray:
         """(S, L+1, nu) the modelled torque (N m: the measured or projected one plus the fitted correction) that the
         tendons' tension balances at each residual's sample: the one held over the period before it
         (:func:`~alpes_dyn.model.transmission.torque_before`; the per-interval correction of the interval's own);
-        times the gain's drift where fitted (:meth:`gain`; ``gained=False``: without it)."""
+        times the gain's drift where fitted (:meth:`gain`).
+
+        Parameters
+        ----------
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+        gained : bool, optional
+            True (default): times the gain's drift where fitted; False: without it.
+
+        Returns
+        -------
+        numpy.ndarray, shape (S, L+1, nu)
+            The torque, N m.
+        """
         if self.nd_gain and gained:
             return self.torque_at(glob, offs, False) * self.gain(glob, per_sample=True)
         if self.torque.lines:
@@ -255,7 +318,21 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
 
     def correction(self, glob: np.ndarray, offs: np.ndarray) -> np.ndarray | None:
         """The torque correction the sensitivities take: the line coefficients (nu, nphi), the per-interval
-        constants (S, nu), or None."""
+        constants (S, nu), or None.
+
+        Parameters
+        ----------
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The line coefficients (nu, nphi) (with several runs each interval's run's, (S, nu, nphi)), the
+            per-interval constants ``offs`` (S, nu), N m, or None without a torque correction.
+        """
         if self.torque.lines:
             C = glob[self.p:self.p + self.ncg].reshape(self.torque.nlines, self.nu).T  # (nu, nlines), column-major
             if self.blk is None:
@@ -265,7 +342,20 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
 
     def drift_offset(self, glob: np.ndarray, sl: slice = slice(None)) -> np.ndarray | float:
         """(s, L+1, m) rad the encoders' drift at each residual's sample of the intervals ``sl`` (module drift:
-        the hat functions times the knots' values, counts, in ``glob`` after the line corrections), or 0.0."""
+        the hat functions times the knots' values, counts, in ``glob`` after the line corrections), or 0.0.
+
+        Parameters
+        ----------
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        sl : slice, optional
+            The intervals (default all).
+
+        Returns
+        -------
+        numpy.ndarray, shape (s, L+1, m), or float
+            The drift, or 0.0 without the offset's drift.
+        """
         if not self.nd_off:
             return 0.0
         d0 = self.p + self.ncg
@@ -275,7 +365,21 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
     def gain(self, glob: np.ndarray, per_sample: bool = False) -> np.ndarray | None:
         """(S, nu) each motor's torque-constant scale at each interval's middle sample, relative to the first
         sample's (module drift: 1 plus the hat functions times the knots' values, the last of ``glob``), or
-        ``per_sample`` (S, L+1, nu) at each residual's sample; None without the gain's drift."""
+        ``per_sample`` (S, L+1, nu) at each residual's sample; None without the gain's drift.
+
+        Parameters
+        ----------
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        per_sample : bool, optional
+            False (default): at each interval's middle sample, (S, nu); True: at each residual's sample,
+            (S, L+1, nu), piecewise linear in the recorded time.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            The scale (dimensionless, 1 at the first sample), or None without the gain's drift.
+        """
         if not self.nd_gain:
             return None
         D = glob[self.ng - self.nd_gain:].reshape(self.nu, -1)  # (nu, K)
@@ -289,7 +393,22 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         """(the torque per interval (S, L, nu), the correction the sensitivities take: :meth:`correction`) as the
         dynamics see them: with the gain's drift the torque times :meth:`gain` at each sample (piecewise linear in
         time, as drifted) and the correction (per interval, (S, nu, nphi); the noise's size) times its value at the
-        interval's middle; else as they are."""
+        interval's middle; else as they are.
+
+        Parameters
+        ----------
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+
+        Returns
+        -------
+        torque : numpy.ndarray, shape (S, L, nu)
+            The torque per interval, N m.
+        correction : numpy.ndarray or None
+            :meth:`correction`'s (times the gain at the interval's middle where the gain's drift is fitted).
+        """
         corr = self.correction(glob, offs)
         g = self.gain(glob)
         if g is None:
@@ -298,7 +417,19 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         return self.Ub * self.gain(glob, per_sample=True)[:, :self.L], C * g[:, :, None]
 
     def encoder_rms(self, r: np.ndarray) -> float:
-        """RMS of the encoder residuals in r, counts."""
+        """RMS of the encoder residuals in r, counts.
+
+        Parameters
+        ----------
+        r : numpy.ndarray, shape (S, R)
+            The residuals per interval (the :class:`Evaluation`'s ``r``), whitened: the first (L+1) ny of each
+            row the encoders' (divided by sigma_y); those of samples past the record's end zero.
+
+        Returns
+        -------
+        float
+            The RMS over the valid samples and encoders, counts.
+        """
         enc = r[:, : (self.L + 1) * self.ny] * self.sig_y / self.step
         return float(np.sqrt(np.sum(enc**2) / max(int(self.valid.sum()) * self.ny, 1)))
 
@@ -314,7 +445,32 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         its rows of J before the next (the sensitivities of a 60 s record at 100 ms are 180 MB, J a sixth of it).
         Where :attr:`compact` (module normal_blocks), J is not kept: its normal blocks are (``normal``; J None); or
         ``sink(sl, J_c, x_c)`` takes each chunk's rows of J (the intervals ``sl``, their states), J not kept (a pass
-        over the Jacobian for its products: :func:`~alpes_dyn.estimation.identification.normal_blocks.remainders`)."""
+        over the Jacobian for its products: :func:`~alpes_dyn.estimation.identification.normal_blocks.remainders`).
+
+        Parameters
+        ----------
+        nodes : numpy.ndarray, shape (S, nx)
+            Each interval's start state s_j ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        jac : bool or str, optional
+            True (default): all the Jacobians; False: none; ``"state"``: with respect to the start states alone.
+        sink : callable or None, optional
+            ``sink(sl, J_c, x_c)`` taking each chunk's rows of J (default None: J kept, or its normal blocks where
+            :attr:`compact`).
+
+        Returns
+        -------
+        Evaluation
+            r, J, c, Cv, Cr, rg and the states.
+
+        Raises
+        ------
+        FitDiverged
+            theta or the nodes not finite.
+        """
         theta = self.values(glob)
         if not (np.isfinite(theta).all() and np.isfinite(nodes).all()):  # not sens.run's "theta: expected finite"
             raise FitDiverged("identify: the fit diverged (its parameters or states overflowed to NaN or inf)")
@@ -531,7 +687,25 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
     def solution(self, nodes: np.ndarray, offs: np.ndarray, glob: np.ndarray,
                  response: np.ndarray | None = None) -> ShootingSolution:
         """The variables (``nodes``, ``offs``, ``glob``) as a :class:`ShootingSolution` (theta left out: it goes by
-        name, :func:`start_values`), with the optimum's ``response`` (nz, p) where given."""
+        name, :func:`start_values`), with the optimum's ``response`` (nz, p) where given.
+
+        Parameters
+        ----------
+        nodes : numpy.ndarray, shape (S, nx)
+            Each interval's start state s_j ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (p), the whitened line corrections (ncg), the drifts' knots (nd).
+        response : numpy.ndarray or None, optional
+            (nz, p) the optimum's response (default None).
+
+        Returns
+        -------
+        ShootingSolution
+            Copies of the variables, the interval ``L``, the drift's knots and the parameters' additive flags and
+            scales.
+        """
         return ShootingSolution(nodes.copy(), offs.copy(), glob[self.p:self.p + self.ncg].copy(), self.L,
                                 glob[self.p + self.ncg:].copy(), response, self.additive.copy(), self.scale.copy())
 
@@ -539,7 +713,18 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         """(nodes, offs, glob) of this problem from another fit's ``sol`` on the same recording: its trajectory and
         line corrections, theta at theta_0 (the start's values, given by name). None where the two problems are
         not cut alike (another interval, state size or torque model: another model's states, a retry at half the
-        interval), or where ``sol`` is None."""
+        interval), or where ``sol`` is None.
+
+        Parameters
+        ----------
+        sol : ShootingSolution or None
+            Another fit's solution (:meth:`solution`).
+
+        Returns
+        -------
+        tuple of numpy.ndarray, or None
+            (nodes (S, nx), offs (S, no), glob (ng,)), or None.
+        """
         nodes = None if sol is None else self.with_bristles(sol.nodes)
         if sol is None or sol.samples != self.L or nodes.shape != (self.n_int, self.nx) \
                 or sol.offs.shape != (self.n_int, self.no) or sol.lines.shape != (self.ncg,):
@@ -551,7 +736,18 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         """A copy of ``nodes`` (S, 2n) of a memoryless friction's fit with, where this problem's law is LuGre (nx =
         3n), each node's bristles z = F_s tanh(qd / v_s) / sigma0 appended (rad, theta_0's F_s and sigma0): the
         deflection whose spring gives the smooth law's torque at that velocity (eq. L2, z' = 0). Other nodes as they
-        are (copied)."""
+        are (copied).
+
+        Parameters
+        ----------
+        nodes : numpy.ndarray, shape (S, 2n) or (S, nx)
+            Start states [q; qd], rad and rad/s.
+
+        Returns
+        -------
+        numpy.ndarray, shape (S, nx)
+            The nodes, with the bristles (rad) appended where this problem's law is LuGre and ``nodes`` has none.
+        """
         n, lugre = self.n, self.sens.lugre
         if lugre is None or nodes.shape[1:] != (2 * n,):
             return nodes.copy()
@@ -566,9 +762,22 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
 
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
-        onto the measured encoder (the stretch of the start's compliance off): a start close to the data. ``theta``:
-        the parameters to simulate with (default theta_0). (Not shifted, the response alone is no start on a long
-        record even with the parameters right: over 16 s of finger3 it drifted to 460 counts from the encoder.)"""
+        onto the measured encoder (the stretch of the start's compliance off): a start close to the data. (Not
+        shifted, the response alone is no start on a long record even with the parameters right: over 16 s of
+        finger3 it drifted to 460 counts from the encoder.)
+
+        Parameters
+        ----------
+        q0 : numpy.ndarray, shape (n,)
+            The rest the response starts from (each run's), rad.
+        theta : numpy.ndarray or None, optional
+            (p,) the parameters to simulate with (default None: theta_0).
+
+        Returns
+        -------
+        numpy.ndarray, shape (S, nx)
+            The start states.
+        """
         n, L, n_int, nu, N = self.n, self.L, self.n_int, self.nu, self.N
         theta = self.theta0 if theta is None else theta
         C = np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None

@@ -37,9 +37,24 @@ states with its wrist held, 48 free, is looped."""
 
 def stage_jacobians(dm: Any, name: str = "stage", dense: bool = True) -> cs.Function:
     """``SX`` function (z, w, p) -> (k (nz,), dk/dz (nz, nz), dk/dw (nz, nw)): the right-hand side of ``dm``
-    (a :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`) and its Jacobians for RK4, or one substep
-    and its Jacobians for the stick and LuGre laws (``dm.rhs_p`` None); ``dense``: the Jacobians stored dense (the
-    exported C's arrays), else sparse (dq'/dz = [0 I]: the products by them skip the structural zeros)."""
+    and its Jacobians for RK4, or one substep and its Jacobians for the stick and LuGre laws (``dm.rhs_p`` None).
+
+    Parameters
+    ----------
+    dm : DiscreteModel
+        The observer's model (:class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`): its ``rhs_p``
+        (z, w, p) -> z' for RK4, or its ``substep_p`` when ``rhs_p`` is None.
+    name : str, optional
+        The function's name (default ``"stage"``).
+    dense : bool, optional
+        True (default): the Jacobians stored dense (the exported C's arrays); False: sparse (dq'/dz = [0 I]: the
+        products by them skip the structural zeros).
+
+    Returns
+    -------
+    casadi.Function
+        ``SX`` (z, w, p) -> (k, dk_dz, dk_dw).
+    """
     f = dm.rhs_p if dm.rhs_p is not None else dm.substep_p
     z, w, p = f.sx_in()
     k = f(z, w, p)
@@ -73,7 +88,19 @@ def _rk4(f: cs.Function, z: cs.MX, w: cs.MX, p: cs.MX, h: float) -> tuple[cs.MX,
 def linearization(dm: Any) -> cs.Function:
     """``MX`` function (z, w, p) -> (z_next (nz,), A = dz_next/dz (nz, nz), G = dz_next/dw (nz, nw)), dense, of
     ``dm``'s ``substeps`` steps over one period, by the chain rule over :func:`stage_jacobians` (RK4's four stages
-    per substep, or the stick / LuGre law's substep): the code of one right-hand side, called 4 x substeps times."""
+    per substep, or the stick / LuGre law's substep): the code of one right-hand side, called 4 x substeps times.
+
+    Parameters
+    ----------
+    dm : DiscreteModel
+        The observer's model (:class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`): its ``nz``,
+        ``nw``, ``values`` (the parameters p), period ``dt`` (s) and ``substeps`` per period.
+
+    Returns
+    -------
+    casadi.Function
+        ``MX`` (z, w, p) -> (z_next, A, G), A and G dense.
+    """
     f = stage_jacobians(dm, "stage_jacobians", dense=False)
     z, w, p = cs.MX.sym("z", dm.nz), cs.MX.sym("w", dm.nw), cs.MX.sym("p", dm.values.size)
     h = dm.dt / dm.substeps
@@ -91,16 +118,58 @@ def _symmetric(M: cs.MX) -> cs.MX:
 
 
 def predicted(A: cs.MX, G: cs.MX, P: cs.MX, Sw: np.ndarray, Q: np.ndarray) -> tuple[cs.MX, cs.MX]:
-    """(P_pred = A P A^T + G Sigma_w G^T + Q (nz, nz), dense, exactly symmetric; N = G Sigma_w G^T + Q) from A
-    (nz, nz), G (nz, nw), P (nz, nz) and the noises Sigma_w (nw, nw), Q (nz, nz) (numbers)."""
+    """The covariance's prediction A P A^T + G Sigma_w G^T + Q, dense, exactly symmetric.
+
+    Parameters
+    ----------
+    A : casadi.MX
+        (nz, nz) dz_next/dz over one period.
+    G : casadi.MX
+        (nz, nw) dz_next/dw over one period.
+    P : casadi.MX
+        (nz, nz) the state's covariance before the step.
+    Sw : numpy.ndarray, shape (nw, nw)
+        Sigma_w, the input noise's covariance (numbers).
+    Q : numpy.ndarray, shape (nz, nz)
+        The process noise's covariance (numbers).
+
+    Returns
+    -------
+    P_pred : casadi.MX
+        (nz, nz) A P A^T + G Sigma_w G^T + Q, exactly symmetric.
+    N : casadi.MX
+        (nz, nz) G Sigma_w G^T + Q.
+    """
     N = cs.mtimes([G, cs.MX(cs.DM(Sw)), G.T]) + cs.MX(cs.DM(Q))
     return _symmetric(cs.mtimes([A, P, A.T]) + N), N
 
 
 def updated(z: cs.MX, P: cs.MX, y: cs.MX, h: cs.MX, H: cs.MX, R: np.ndarray) -> tuple[cs.MX, cs.MX]:
-    """The measurement update in the Joseph form: (z_upd (nz,), P_upd (nz, nz), exactly symmetric) from z, P, the
-    measurement y (ny,), its prediction h (ny,), H = dh/dz (ny, nz) and R (ny, ny, numbers): S = H P H^T + R,
-    K = P H^T S^-1 (one solve), z + K (y - h), (I - K H) P (I - K H)^T + K R K^T."""
+    """The measurement update in the Joseph form: S = H P H^T + R, K = P H^T S^-1 (one solve), z + K (y - h),
+    (I - K H) P (I - K H)^T + K R K^T.
+
+    Parameters
+    ----------
+    z : casadi.MX
+        (nz,) the predicted state.
+    P : casadi.MX
+        (nz, nz) its covariance.
+    y : casadi.MX
+        (ny,) the measurement.
+    h : casadi.MX
+        (ny,) its prediction h(z).
+    H : casadi.MX
+        (ny, nz) dh/dz at z.
+    R : numpy.ndarray, shape (ny, ny)
+        The measurement noise's covariance (numbers).
+
+    Returns
+    -------
+    z_upd : casadi.MX
+        (nz,) the updated state.
+    P_upd : casadi.MX
+        (nz, nz) its covariance, exactly symmetric.
+    """
     nz = P.shape[0]
     H = cs.densify(H)
     PHt = cs.mtimes(P, H.T)
@@ -117,7 +186,20 @@ def looped_functions(filt: Any) -> dict[str, cs.Function]:
     attributes: ``measurement`` (``SX``, z -> (h, H)), ``_update`` (z, P, y) -> (z_upd, P_upd), ``linearized_p``
     (z, w, p) -> (z_next, A, the lower triangle of N = G Sigma_w G^T + Q), ``linearized`` the same at p = the model's
     numbers, ``_predict_fn`` (z, P, w) -> (z_pred, P_pred) there, and ``filter_step_p`` (s = [z; vec P], [w; y], p)
-    -> s_next; all ``MX`` but the first."""
+    -> s_next; all ``MX`` but the first.
+
+    Parameters
+    ----------
+    filt : ExtendedKalmanFilter
+        The filter (:class:`~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter`): its ``model``
+        (a :class:`~alpes_dyn.estimation.observers.discrete.DiscreteModel`), noises ``Sw`` (nw, nw), ``Q``
+        (nz, nz), ``R`` (ny, ny) and ``kind`` (the step's name prefix).
+
+    Returns
+    -------
+    dict of str to casadi.Function
+        The functions above, by attribute name.
+    """
     mdl = filt.model
     nz, nw, ny = mdl.nz, mdl.nw, mdl.ny
     zs = cs.SX.sym("zs", nz)
@@ -150,7 +232,19 @@ def step_jacobians(filt: Any) -> cs.Function:
     """(z, w) -> (z_next (nz,), A = dz_next/dz, G = dz_next/dw), dense, at the model's numbers: of a looped filter
     (``filt.looped``) by :func:`linearization` (``MX``), else by automatic differentiation of its unrolled step
     (``SX``); what the consistency checks (:mod:`~alpes_dyn.estimation.observers.consistency`,
-    :mod:`~alpes_dyn.estimation.observers.innovation`) evaluate along a run."""
+    :mod:`~alpes_dyn.estimation.observers.innovation`) evaluate along a run.
+
+    Parameters
+    ----------
+    filt : ExtendedKalmanFilter
+        The filter (:class:`~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter`): its ``model`` and
+        ``looped`` flag (absent: False).
+
+    Returns
+    -------
+    casadi.Function
+        (z, w) -> (z_next, A, G).
+    """
     mdl = filt.model
     if getattr(filt, "looped", False):
         z, w = cs.MX.sym("z", mdl.nz), cs.MX.sym("w", mdl.nw)
