@@ -26,13 +26,13 @@ TOL = 1e-9
 
 
 def _build(step, d):
-    """The test program of ``step``'s C in ``d`` (-O1: the same numbers as -O2, -std=c99, a quicker build)."""
+    """The test program of ``step``'s C in ``d`` (-O0: the same numbers as -O2, -std=c99, the quickest build)."""
     from alpes_dyn.control.cstep import write_c_step
 
     files = write_c_step(step, d)
     sources = [str(d / n) for n in sorted(files) if n.endswith(".c")]
     exe = d / "alpes_step_main"
-    subprocess.run([CC, "-O1", "-std=c99", "-Wall", "-Werror", "-Wno-unused-parameter", "-Wno-unused-function",
+    subprocess.run([CC, "-O0", "-std=c99", "-Wall", "-Werror", "-Wno-unused-parameter", "-Wno-unused-function",
                     "-Wno-unused-variable", "-Wno-unused-but-set-variable", "-o", str(exe), *sources, "-lm"],
                    check=True, capture_output=True, text=True, timeout=300)
     return exe
