@@ -36,7 +36,8 @@ went from 4.1-21 to 0.47-1.98 and the true file's from 3.8-11.4 to 0.53-2.42: 7 
 band, 11 below it (cautious), 6 above. From over-confident by 4 to 100 times to within a factor of about 2 of its band
 (with the stick-slip law kept, more cautious: 0.34-0.42 on finger2), but not into the band on every joint: it is
 an opt-in check (``estimate --data --law-spread``, three observer runs instead of one), not the filter's own sigma.
-What it cannot see: an error that every law shares (the identified file's own parameters' error; the fit's covariance is not drawn here).
+What it cannot see: an error that every law shares (the identified file's own parameters' error; the fit's
+covariance is not drawn here).
 """
 
 from __future__ import annotations
