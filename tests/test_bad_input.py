@@ -1148,6 +1148,7 @@ CLI: dict[str, list[Cli]] = {
         C("estimate", "--data", "{replay_csv}", "--torque-delay", "1.5", needle="--torque-delay"),
         C("estimate", "--friction-law", "stick", needle="--friction-law: applies to an observer on a recording"),
         C("estimate", "--stops", needle="--stops: applies to an observer on a recording"),
+        C("estimate", "--law-spread", needle="--law-spread: applies to an observer on a recording"),
         C("estimate", "--data", "{replay_csv}", "--friction-law", "dahl",
           needle="--friction-law: unknown friction law 'dahl' (expected one of smooth, stick, lugre)"),
         C("estimate", "--rotor-inertia", needle="--rotor-inertia: applies to an observer on a recording"),

@@ -44,7 +44,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay"),
-                       ("--friction-law", "friction_law"), ("--stops", "stops")):
+                       ("--friction-law", "friction_law"), ("--stops", "stops"), ("--law-spread", "law_spread")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -139,9 +139,13 @@ def _estimate_data(args: argparse.Namespace) -> int:
     rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
-    res = estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
-                             disturbance=args.disturbance, encoder_offset=offset, tilt=tilt, torque_delay=delay,
-                             friction_law=law, force=args.force, stops=args.stops)
+    def run(friction_law: str):
+        return estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
+                                  disturbance=args.disturbance, encoder_offset=offset, tilt=tilt,
+                                  torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
+
+    res = run(law)
+    spread = _law_spread(run, res) if args.law_spread else None
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -179,7 +183,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
                      + "  ".join(f"{mn} {d:.3g}" for mn, d in zip(res.motor_names, res.disturbance[-1])))
     more, extra = _uncertainty(res.estimate, res.filter, res.inputs, rec.true_q if res.rmse is not None else None,
                                res.settings["transient_s"], res.joint_names, limit, whole=res.segments == 1,
-                               measurement=res.measurement)
+                               measurement=res.measurement, spread=spread)
     obj.update(more)
     lines += extra
     obj["seconds"] = time.perf_counter() - t0
@@ -189,6 +193,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _law_spread(run: Any, res: Any) -> Any:
+    """``estimate --law-spread``: the observer run again with each other friction law, the joints' spread
+    (:func:`~alpes_dyn.estimation.observers.law_sigma.law_sigma`; ``run(law)`` the observer with that law, ``res``
+    the file's law's run)."""
+    from ..estimation.observers.law_sigma import law_sigma
+
+    return law_sigma(run, res)
 
 
 def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:

@@ -209,6 +209,9 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--friction-law", default=None, metavar="LAW", help=FRICTION_LAW_HELP)
     s.add_argument("--stops", action="store_true", help="with --data: the joints' end stops in the observer's model "
                    "(for a finger whose joints reach their stops)")
+    s.add_argument("--law-spread", action="store_true", help="with --data: each joint's sigma widened by the "
+                   "spread of its estimate between the friction laws (the observer run again with each other law: "
+                   "three runs)")
     s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_estimate)
 

@@ -10,8 +10,8 @@ from ..errors import InputError
 
 
 def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start: float, joints: tuple[str, ...],
-                 limit_deg: float, whole: bool = True, measurement: np.ndarray | None = None
-                 ) -> tuple[dict, list[str]]:
+                 limit_deg: float, whole: bool = True, measurement: np.ndarray | None = None,
+                 spread=None) -> tuple[dict, list[str]]:
     """What ``estimate`` says of its own uncertainty: each joint's reported sigma along the run after ``start`` s
     (median and worst), each joint's observability by the encoders along the estimated motion
     (:func:`~alpes_dyn.analysis.joint_observability.joint_observability`: flagged above ``limit_deg``), the sigma it
@@ -19,19 +19,28 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
     true joints the NEES and its band (:func:`~alpes_dyn.estimation.observers.consistency.nees`; the band from the
     filter's own error model when one filter ran the whole record, ``whole``); given the ``measurement`` the filter
     read (N, m) and one filter over the whole record, the NIS of its innovations and its band, which needs no true
-    joints (:func:`~alpes_dyn.estimation.observers.innovation.nis`). Returns (the JSON's keys, the table's
+    joints (:func:`~alpes_dyn.estimation.observers.innovation.nis`). Given the ``spread`` between the friction laws
+    (a :class:`~alpes_dyn.estimation.observers.law_sigma.LawSigma`, ``estimate --law-spread``), the sigma and the
+    NEES are the estimate's with it added to each joint's variance (the NEES's samples then taken as independent:
+    the filter's error model is its own P's), the NIS the filter's own. Returns (the JSON's keys, the table's
     lines)."""
     from ..analysis.joint_observability import joint_observability
     from ..estimation.observers.consistency import joint_sigma, nees
 
     n, deg = len(joints), np.degrees
+    own = est
+    if spread is not None:
+        est, whole_nees = spread.widened(est), False
+    else:
+        whole_nees = whole
     med, worst = joint_sigma(est, n, start)
     obs = joint_observability(filt.model.system.model, est.z, inputs, filt.dt, filt.R, limit=np.radians(limit_deg))
     flags = obs.unobserved
     sigma = reported_sigma(worst, obs)
     obj: dict = {"q_std_median_deg": deg(med).tolist(), "q_std_worst_deg": deg(worst).tolist(),
                  "q_sigma_deg": deg(sigma).tolist(),
-                 "observability": obs.to_dict(), "unobserved": list(flags), "nees": None, "nis": None}
+                 "observability": obs.to_dict(), "unobserved": list(flags), "nees": None, "nis": None,
+                 "law_spread": None}
     lines = [f"  {'sigma median/worst [deg]:':30s}"
              + "  ".join(f"{j} {deg(a):.3f}/{deg(b):.3f}" for j, a, b in zip(joints, med, worst)),
              f"  {'sigma reported [deg]:':30s}"
@@ -39,15 +48,20 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
              f"  {f'observed within [deg]:':30s}"
              + "  ".join(f"{j} {deg(b):.3f}{' NOT OBSERVED' if j in flags else ''}" for j, b in zip(joints, obs.best))
              + f" (best {obs.window:g} s window)"]
+    if spread is not None:
+        obj["law_spread"] = spread.to_dict(int(round(start / (est.t[1] - est.t[0]))) if est.t.size > 1 else 0)
+        lines.append(f"  {'friction laws spread [deg]:':30s}"
+                     + "  ".join(f"{j} {s:.3f}" for j, s in zip(joints, obj["law_spread"]["spread_rms_deg"]))
+                     + f" (RMS; the {spread.kept} law against {', '.join(spread.others)}: in the sigma)")
     if true_q is not None:
-        r = nees(est, true_q, filt if whole else None, inputs if whole else None, start=start)
+        r = nees(est, true_q, filt if whole_nees else None, inputs if whole_nees else None, start=start)
         obj["nees"] = r.to_dict()
         lines.append(f"  {'NEES of the joints:':30s}{r.value:.3g} (95 % band {r.low:.3g}-{r.high:.3g} for {r.dof} "
                      f"joints, {r.effective:.3g} independent samples): {r.verdict}")
     if measurement is not None and whole:
         from ..estimation.observers.innovation import nis
 
-        v = nis(est, measurement, filt, inputs, start=start)
+        v = nis(own, measurement, filt, inputs, start=start)
         obj["nis"] = v.to_dict()
         lines.append(f"  {'NIS of the encoders:':30s}{v.value:.3g} (95 % band {v.low:.3g}-{v.high:.3g}, "
                      f"{v.effective:.4g} independent samples): {v.verdict}")

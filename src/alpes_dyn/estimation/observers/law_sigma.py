@@ -1,0 +1,139 @@
+"""An observer's uncertainty from its friction law: the spread of the joints' estimates between the library's
+friction laws, added to the filter's own covariance.
+
+A Kalman filter's P is the noise's: the torque sensor's and the encoder's seen through its model. Where the model's
+friction law is not the plant's (MuJoCo's dry-friction constraint is none of the library's laws), the error it
+leaves is not in P: on MuJoCo's stick-slip finger3 (the friction study's ``stiff`` case, the true parameter file,
+the smooth law) the joints' errors were 0.13-0.23 degree and their NEES 5-11 against a band of about 0.7-1.3. The
+user cannot see the plant's law either, but can see how much the estimate moves when the law does: the same
+recording run through the filter with each other law of :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`
+(the smooth sign, the stick-slip law, LuGre's bristles), and each joint's variance widened by it,
+
+    sigma_i,k^2 = P_ii,k + w^2 sum_{l != kept} (q_hat^l_i,k - q_hat^kept_i,k)^2,                        (L1)
+
+w = :data:`LAW_SIGMA_WEIGHT` (Draper 1995, "Assessment and propagation of model uncertainty": the between-model
+variance added to the within-model one, each other law's estimate one standard deviation away, as
+:mod:`~alpes_dyn.estimation.identification.law_spread` widens the fit's standard errors). Nothing in it reads the
+true joints: only the recording and the file.
+
+Measured on the friction study's stick-slip plants (``nees_law`` of its rows; the band about 0.74-1.29), each
+joint's NEES with P alone, then with (L1):
+
+======================================= ============================== ==========================================
+plant, file (the kept law)              P alone                        with (L1)
+======================================= ============================== ==========================================
+finger3 ``stiff``, true file (smooth)   5.2, 7.1, 7.4                  0.61, 0.85, 0.66
+finger3 ``stiff``, identified (smooth)  7.9, 13.0, 7.8                 0.52, 0.83, 0.98
+finger3 ``all_stiff``, true (smooth)    8.1, 3.7, 11.1                 1.29, 1.08, 0.91
+finger3 ``all_stiff``, identified       78, 7.9, 19.6                  4.55, 0.56, 0.88
+(LuGre; a fit that did not converge)
+finger2 ``stiff``, true file (smooth)   20.4, 18.5                     0.65, 0.69
+finger2 ``stiff``, true file (LuGre)    96, 69                         0.56, 0.62
+======================================= ============================== ==========================================
+
+On four more draws of finger3's ``stiff`` case (drawn after the code was final) the identified file's per-joint NEES
+went from 4.1-21 to 0.47-1.98 and the true file's from 3.8-11.4 to 0.53-2.42: 7 of the 24 joint values in the
+band, 11 below it (cautious), 6 above. From over-confident by 4 to 100 times to within a factor of about 2 of its band
+(with the stick-slip law kept, more cautious: 0.34-0.42 on finger2), but not into the band on every joint: it is
+an opt-in check (``estimate --data --law-spread``, three observer runs instead of one), not the filter's own sigma.
+What it cannot see: an error that every law shares (the identified file's own parameters' error; the fit's
+covariance is not drawn here).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any, Callable
+
+import numpy as np
+
+from ...errors import InputError
+from ...simulation.stick import FRICTION_LAWS
+from .observers import Estimate
+
+__all__ = ["LAW_SIGMA_WEIGHT", "LawSigma", "law_sigma"]
+
+LAW_SIGMA_WEIGHT = 1.0
+"""w of (L1): each other friction law's estimate as one standard deviation of the law's error (module docstring)."""
+
+
+@dataclasses.dataclass(frozen=True)
+class LawSigma:
+    """The joints' spread between friction laws along a run (:func:`law_sigma`, (L1) of the module docstring).
+
+    Attributes
+    ----------
+    kept : str
+        The law of the estimate reported.
+    others : tuple of str
+        The other laws run.
+    spread : numpy.ndarray
+        (N, n) rad^2, w^2 sum_l (q_hat^l - q_hat^kept)^2 per sample and joint.
+    """
+
+    kept: str
+    others: tuple[str, ...]
+    spread: np.ndarray
+
+    def widened(self, estimate: Estimate) -> Estimate:
+        """``estimate`` (the kept law's) with the spread added to its joints' variances (the diagonal of P's
+        joints' block; the rest of P as it was)."""
+        N, n = self.spread.shape
+        if estimate.z.shape[0] != N or estimate.z.shape[1] < n:
+            raise InputError(f"estimate: expected {N} samples of at least {n} joints, got {estimate.z.shape}")
+        P = estimate.P.copy()
+        idx = np.arange(n)
+        P[:, idx, idx] += self.spread
+        return Estimate(t=estimate.t, z=estimate.z, P=P, names=estimate.names)
+
+    def to_dict(self, start: int = 0) -> dict[str, Any]:
+        """JSON: ``kept``, ``others``, ``spread_rms_deg`` (per joint, the RMS of sqrt of the spread from sample
+        ``start`` on)."""
+        rms = np.sqrt(np.mean(self.spread[start:], axis=0))
+        return {"kept": self.kept, "others": list(self.others), "spread_rms_deg": np.degrees(rms).tolist()}
+
+
+def law_sigma(run: Callable[[str], Any], kept: Any, weight: float = LAW_SIGMA_WEIGHT,
+              laws: tuple[str, ...] = FRICTION_LAWS) -> LawSigma:
+    """The joints' spread between friction laws, (L1) of the module docstring.
+
+    Parameters
+    ----------
+    run : callable
+        ``run(law)`` runs the observer on the same recording and file with the friction law ``law`` and returns
+        its :class:`~alpes_dyn.estimation.observers.replay.RecordingEstimate` (e.g. ``lambda law:
+        estimate_recording(rec, model, friction_law=law, ...)``, the other options as for ``kept``).
+    kept : RecordingEstimate
+        The estimate reported (its ``settings["friction_law"]`` the kept law).
+    weight : float, optional
+        w of (L1), finite and >= 0.
+    laws : tuple of str, optional
+        The laws to compare (default every one of :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`).
+
+    Returns
+    -------
+    LawSigma
+        The spread per sample and joint.
+
+    Raises
+    ------
+    InputError
+        ``weight`` not a finite number >= 0, ``laws`` not of :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, or
+        a run whose estimate is not the kept one's shape.
+    """
+    if isinstance(weight, bool) or not isinstance(weight, (int, float, np.floating)) or not (
+            np.isfinite(weight) and weight >= 0):
+        raise InputError(f"weight: expected a finite number >= 0, got {weight!r:.40}")
+    bad = [law for law in laws if law not in FRICTION_LAWS]
+    if bad:
+        raise InputError(f"laws: expected laws of {', '.join(FRICTION_LAWS)}, got {bad[0]!r:.40}")
+    law = kept.settings["friction_law"]
+    q = kept.q_hat
+    others = tuple(other for other in laws if other != law)
+    spread = np.zeros_like(q)
+    for other in others:  # a loop over the two other laws, each a whole run
+        q_other = run(other).q_hat
+        if q_other.shape != q.shape:
+            raise InputError(f"run: the {other} law's estimate is {q_other.shape}, the kept one's {q.shape}")
+        spread += (q_other - q) ** 2
+    return LawSigma(law, others, weight ** 2 * spread)
