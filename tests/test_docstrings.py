@@ -146,7 +146,6 @@ MODULES_NOT_YET: dict[str, int] = {
     "bench.effects": 4,
     "estimation.identification.adequacy": 12,
     "estimation.identification.effects": 18,
-    "estimation.identification.gauss_newton": 12,
     "estimation.identification.identification": 1,
     "estimation.identification.law_spread": 1,
     "estimation.identification.noise_calibration": 1,
