@@ -142,16 +142,7 @@ def test_the_front_door_is_clean(failing):
 
 # ----------------------------------------------------------------------------- the modules' own APIs
 MODULES_NOT_YET: dict[str, int] = {
-    "analysis.joint_observability": 1,
-    "bench.effects": 4,
-    "estimation.identification.adequacy": 12,
     "estimation.identification.effects": 18,
-    "estimation.identification.gauss_newton": 12,
-    "estimation.identification.identification": 1,
-    "estimation.identification.law_spread": 1,
-    "estimation.identification.noise_calibration": 1,
-    "estimation.identification.robust_covariance": 2,
-    "estimation.observers.friction_noise": 4,
     "model.friction": 4,
     "studies.realism_friction": 7,
 }

@@ -178,17 +178,36 @@ def joint_observability(model: Model, states: Any, inputs: Any, dt: float, measu
 
     Parameters
     ----------
-    model: the observer's :class:`~alpes_dyn.Model` (with motors and encoders).
-    states: (N, >= 2n) the trajectory [q; qd; ...] along which to linearise, rad and rad/s: the observer's estimate
-        (its extra states ignored).
-    inputs: (N-1, m) the motor torques held from each sample to the next, N m.
-    dt: the sample period, s. measurement_noise: the encoders' covariance, (m,) variances or (m, m), rad^2.
-    window, stride: s (a record shorter than ``window`` is one
-        window). limit: the flag's threshold, rad.
+    model : Model
+        The observer's :class:`~alpes_dyn.Model` (with motors and encoders).
+    states : array_like, shape (N, >= 2n)
+        The trajectory [q; qd; ...] along which to linearise, rad and rad/s: the observer's estimate (its extra
+        states ignored).
+    inputs : array_like, shape (N-1, m)
+        The motor torques held from each sample to the next, N m.
+    dt : float
+        The sample period, s.
+    measurement_noise : array_like, shape (m,) or (m, m)
+        The encoders' covariance: variances or a positive definite matrix, rad^2.
+    window : float, optional
+        The window's length, s (default :data:`WINDOW`; a record shorter than it is one window).
+    stride : float, optional
+        The step between windows' starts, s (default :data:`STRIDE`).
+    limit : float, optional
+        The flag's threshold on a joint's best standard deviation, rad (default :data:`UNOBSERVED_LIMIT`).
 
     Returns
     -------
-    :class:`JointObservability`. Raises :class:`~alpes_dyn.InputError` naming the argument.
+    JointObservability
+        Each joint's error standard deviation from each window (W, n), rad, its best over the windows and the
+        joints not observed (``unobserved``).
+
+    Raises
+    ------
+    InputError
+        Naming the argument: a model without motors and encoders, states or inputs of the wrong shape or not
+        finite, a covariance not positive definite, or ``dt``, ``window``, ``stride`` or ``limit`` not a positive
+        number.
     """
     if not isinstance(model, Model) or model.transmission is None:
         raise InputError("model: expected an alpes_dyn Model with motors and encoders")

@@ -123,8 +123,21 @@ MAX_TORQUE_DELAY = 100
 
 
 def delayed(signal: np.ndarray, samples: int) -> np.ndarray:
-    """``signal`` (N+1, ...) seen ``samples`` whole samples late: row k is row k - samples of ``signal``, the first
-    ``samples`` rows repeat row 0 (what a sensor that lags by a fixed number of samples reads from a held start)."""
+    """``signal`` seen ``samples`` whole samples late (what a sensor that lags by a fixed number of samples reads
+    from a held start).
+
+    Parameters
+    ----------
+    signal : numpy.ndarray, shape (N+1, ...)
+        The signal per sample (any unit), row k at sample k.
+    samples : int
+        The delay, whole samples (>= 0; 0: ``signal`` itself).
+
+    Returns
+    -------
+    numpy.ndarray, shape of ``signal``
+        Row k is row k - ``samples`` of ``signal``; the first ``samples`` rows repeat row 0.
+    """
     if samples == 0:
         return signal
     out = np.empty_like(signal)
@@ -134,14 +147,39 @@ def delayed(signal: np.ndarray, samples: int) -> np.ndarray:
 
 
 def effects_mjcf_kwargs(effects: PlantEffects) -> dict[str, Any]:
-    """The MJCF side of ``effects`` as keyword arguments of :func:`~alpes_dyn.model.mjcf.mjcf_string`."""
+    """The MJCF side of ``effects`` as keyword arguments of :func:`~alpes_dyn.model.mjcf.mjcf_string`.
+
+    Parameters
+    ----------
+    effects : PlantEffects
+        The plant's effects (checked: :meth:`PlantEffects.check`).
+
+    Returns
+    -------
+    dict[str, Any]
+        ``stiction``, ``tendon_stiffness``, ``tendon_damping``, ``tendon_dead_band``, ``tendon_rotor`` and ``tilt``,
+        in the units of :class:`PlantEffects`.
+    """
     e = effects.check()
     return {"stiction": e.stiction, "tendon_stiffness": e.tendon_stiffness, "tendon_damping": e.tendon_damping,
             "tendon_dead_band": e.tendon_dead_band, "tendon_rotor": e.tendon_rotor, "tilt": e.tilt}
 
 
 def plant_gravity(gravity: np.ndarray, effects: PlantEffects | None) -> np.ndarray:
-    """The plant's gravity (3,), m/s^2: ``gravity`` (the scene's, palm down) turned by the effects' tilt."""
+    """The plant's gravity: ``gravity`` turned by the effects' tilt (:func:`~alpes_dyn.model.mjcf.tilted_gravity`).
+
+    Parameters
+    ----------
+    gravity : numpy.ndarray, shape (3,)
+        The scene's gravity (palm down), m/s^2.
+    effects : PlantEffects or None
+        The plant's effects (its ``tilt``, rad); None: no tilt.
+
+    Returns
+    -------
+    numpy.ndarray, shape (3,)
+        The plant's gravity, m/s^2.
+    """
     g = np.asarray(gravity, dtype=float)
     return g if effects is None or effects.tilt == 0 else tilted_gravity(g, effects.tilt)
 
@@ -166,8 +204,19 @@ DELAY_SAMPLES = 1
 
 
 def cable_damping(tendon_stiffness: float) -> float:
-    """c_t (N s/m) that gives the rotor-on-cable mode (the shipped file's rotor J_m on r_m^2 k_t, ``tendon_stiffness``
-    k_t in N/m) the damping ratio :data:`ZETA`: 2 ZETA sqrt(k_t J_m) / r_m."""
+    """The cable's damping that gives the rotor-on-cable mode (the shipped file's rotor J_m on r_m^2 k_t) the
+    damping ratio :data:`ZETA`: c_t = 2 ZETA sqrt(k_t J_m) / r_m.
+
+    Parameters
+    ----------
+    tendon_stiffness : float
+        k_t, the cable's stiffness, N/m.
+
+    Returns
+    -------
+    float
+        c_t, N s/m.
+    """
     p = load_params()
     return 2 * ZETA * math.sqrt(tendon_stiffness * p.J_m) / p.r_m
 

@@ -94,8 +94,25 @@ RANGE_TOLERANCE = math.radians(1.0)  # rad: how far past a joint limit the fitte
 
 
 def range_exit(q: np.ndarray, lower: np.ndarray, upper: np.ndarray, names: Sequence[str]) -> str | None:
-    """Where the fitted joint angles q (N, n) rad leave [lower - tol, upper + tol] (:data:`RANGE_TOLERANCE`): one
-    phrase per joint ("q_1 down to -15.0 deg (limit 0)"), or None. Joints without finite limits are not judged."""
+    """Where the fitted joint angles leave [lower - tol, upper + tol] (:data:`RANGE_TOLERANCE`). Joints without
+    finite limits are not judged.
+
+    Parameters
+    ----------
+    q : numpy.ndarray, shape (N, n)
+        The fitted joint angles, rad.
+    lower : numpy.ndarray, shape (n,)
+        The joints' lower limits, rad (-inf: none).
+    upper : numpy.ndarray, shape (n,)
+        The joints' upper limits, rad (inf: none).
+    names : Sequence[str]
+        (n,) the joints' names, for the phrases.
+
+    Returns
+    -------
+    str or None
+        One phrase per joint that leaves its range, joined by "; " ("q_1 down to -15.0 deg (limit 0)"), or None.
+    """
     q = np.asarray(q, dtype=float)
     out = []
     for j, name in enumerate(names):
@@ -179,8 +196,25 @@ class Whiteness:
 def whiteness(e: np.ndarray, lags: int = 25) -> Whiteness:
     """Residual autocorrelation test (MATLAB ``resid``; Ljung & Box 1978).
 
-    e: (N,) or (N, m) residual. lags: M. r_ee(k) = sum_t e_t+k e_t / sum_t e_t^2 (means removed, the
-    biased estimate); Q = N (N + 2) sum_{k=1..M} r_ee(k)^2 / (N - k), chi^2_M under whiteness.
+    r_ee(k) = sum_t e_t+k e_t / sum_t e_t^2 (means removed, the biased estimate); Q = N (N + 2)
+    sum_{k=1..M} r_ee(k)^2 / (N - k), chi^2_M under whiteness.
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,) or (N, m)
+        The residual, one column per encoder, counts (N >= 10, finite).
+    lags : int, optional
+        M, the lags tested, 1 to N // 2 - 1 (default 25).
+
+    Returns
+    -------
+    Whiteness
+        The autocorrelation (M, m), the 99 % band, the Ljung-Box Q, its p-value and the lags outside the band.
+
+    Raises
+    ------
+    InputError
+        ``e`` not (N,) or (N, m) finite samples with N >= 10, or ``lags`` out of range.
     """
     e = _columns(e, "residual")
     n, m = e.shape
@@ -219,7 +253,28 @@ class CrossCorrelation:
 
 def cross_correlation(e: np.ndarray, u: np.ndarray, lags: int = 25) -> CrossCorrelation:
     """r_eu(k) = sum_t e_t+k u_t / sqrt(sum e^2 sum u^2) (means removed), k = -M..M (MATLAB ``resid``);
-    a positive lag: the residual after the input. e: (N,) or (N, m); u: (N,) or (N, nu)."""
+    a positive lag: the residual after the input.
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N,) or (N, m)
+        The residual, one column per encoder, counts (N >= 10, finite).
+    u : numpy.ndarray, shape (N,) or (N, nu)
+        The input: the recorded motor torque, N m.
+    lags : int, optional
+        M, the largest lag either way, 1 to N // 2 - 1 (default 25).
+
+    Returns
+    -------
+    CrossCorrelation
+        r_eu (2M+1, m, nu) for k = -M..M and the 99 % band 2.58 / sqrt(N).
+
+    Raises
+    ------
+    InputError
+        ``e`` or ``u`` not finite (N,) or (N, k) samples with N >= 10, of different lengths, or ``lags`` out of
+        range.
+    """
     e, u = _columns(e, "residual"), _columns(u, "input")
     if u.shape[0] != e.shape[0]:
         raise InputError(f"input: expected {e.shape[0]} samples, got {u.shape[0]}")
@@ -234,8 +289,19 @@ def cross_correlation(e: np.ndarray, u: np.ndarray, lags: int = 25) -> CrossCorr
 
 
 def encoder_resolution(counts: np.ndarray) -> float:
-    """The quantisation step of recorded encoder values, counts: 1 for integer counts, the grid's step
-    for values on a finer grid (e.g. interpolated quarter counts), 0 for unquantised values."""
+    """The quantisation step of recorded encoder values.
+
+    Parameters
+    ----------
+    counts : numpy.ndarray, shape (N,) or (N, m)
+        The recorded encoder values, counts (N >= 10, finite).
+
+    Returns
+    -------
+    float
+        The step, counts: 1 for integer counts, the grid's step for values on a finer grid (down to 1/64, e.g.
+        interpolated quarter counts), 0 for unquantised values.
+    """
     y = _columns(counts, "encoder")
     for step in (1.0, 0.5, 0.25, 0.125, 1.0 / 16, 1.0 / 32, 1.0 / 64):
         if np.allclose(y / step, np.round(y / step), rtol=0, atol=1e-6):
@@ -244,12 +310,23 @@ def encoder_resolution(counts: np.ndarray) -> float:
 
 
 def white_noise_level(counts: np.ndarray) -> np.ndarray:
-    """(m,) the standard deviation of the white part of each encoder column, counts, model-free: the
+    """The standard deviation of the white part of each encoder column, model-free: the
     fourth difference d4 = y_k - 4 y_k+1 + 6 y_k+2 - 4 y_k+3 + y_k+4 of a white sequence has variance
     70 sigma^2, that of a motion sampled far above its bandwidth almost none (a 11 Hz sine of 1000
     counts at 1 kHz: 0.02 count). The RMS of d4, not a robust scale: d4 of integer counts is an
     integer, and its median absolute deviation was biased by 11 % (0.45 for 0.5 count of noise).
-    Quantisation of a moving encoder included."""
+    Quantisation of a moving encoder included.
+
+    Parameters
+    ----------
+    counts : numpy.ndarray, shape (N,) or (N, m)
+        The recorded encoder values, counts (N >= 10, finite).
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        The white noise's standard deviation per column, counts.
+    """
     y = _columns(counts, "encoder")
     d4 = y[:-4] - 4 * y[1:-3] + 6 * y[2:-2] - 4 * y[3:-1] + y[4:]
     return np.sqrt(np.mean(d4**2, axis=0) / 70.0)
@@ -279,9 +356,28 @@ class SensorFloor:
 
 def sensor_floor(counts: np.ndarray, torque_explained: float = 0.0, encoder_noise: float | None = None) -> SensorFloor:
     """The sensor floor of a recording's encoder (counts): its quantisation step from its own values
-    (:func:`encoder_resolution`), its white noise beyond quantisation ``encoder_noise`` (counts; None:
-    estimated, :func:`white_noise_level`, minus the quantisation's share), and ``torque_explained``
-    (counts RMS; what the recorded torque's noise explains through the fitted model)."""
+    (:func:`encoder_resolution`), its white noise beyond quantisation and what the torque noise explains.
+
+    Parameters
+    ----------
+    counts : numpy.ndarray, shape (N,) or (N, m)
+        The recorded encoder values, counts (N >= 10, finite).
+    torque_explained : float, optional
+        What the recorded torque's noise explains through the fitted model, counts RMS (default 0).
+    encoder_noise : float or None, optional
+        The encoder's white noise beyond quantisation, counts (default None: estimated, :func:`white_noise_level`,
+        minus the quantisation's share).
+
+    Returns
+    -------
+    SensorFloor
+        The step, the quantisation (step / sqrt(12)), the noise, the torque's part and where the noise came from.
+
+    Raises
+    ------
+    InputError
+        ``counts`` not finite samples, or ``encoder_noise`` or ``torque_explained`` negative or not finite.
+    """
     step = encoder_resolution(counts)
     quant = step / math.sqrt(12.0)
     if encoder_noise is None:
@@ -297,12 +393,48 @@ def sensor_floor(counts: np.ndarray, torque_explained: float = 0.0, encoder_nois
 
 
 def fit_percent(y: np.ndarray, yhat: np.ndarray) -> np.ndarray:
-    """(m,) MATLAB ``compare``'s fit: 100 (1 - ||y - yhat|| / ||y - mean(y)||) per column, %."""
+    """MATLAB ``compare``'s fit: 100 (1 - ||y - yhat|| / ||y - mean(y)||) per column, %.
+
+    Parameters
+    ----------
+    y : numpy.ndarray, shape (N,) or (N, m)
+        The measured output (encoder counts; any unit, the same as ``yhat``'s).
+    yhat : numpy.ndarray, shape of ``y``
+        The model's output.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        The fit per column, % (100: perfect; 0: no better than the mean; negative: worse).
+
+    Raises
+    ------
+    InputError
+        As :func:`nrmse`.
+    """
     return 100.0 * (1.0 - nrmse(y, yhat))
 
 
 def nrmse(y: np.ndarray, yhat: np.ndarray) -> np.ndarray:
-    """(m,) ||y - yhat|| / ||y - mean(y)|| per column (0: perfect; 1: no better than the mean)."""
+    """||y - yhat|| / ||y - mean(y)|| per column.
+
+    Parameters
+    ----------
+    y : numpy.ndarray, shape (N,) or (N, m)
+        The measured output (encoder counts; any unit, the same as ``yhat``'s), N >= 2.
+    yhat : numpy.ndarray, shape of ``y``
+        The model's output.
+
+    Returns
+    -------
+    numpy.ndarray, shape (m,)
+        The normalised RMS error per column (0: perfect; 1: no better than the mean).
+
+    Raises
+    ------
+    InputError
+        ``y`` or ``yhat`` not finite, of different shapes, or a column of ``y`` constant.
+    """
     y, yhat = _columns(y, "y", 2), _columns(yhat, "yhat", 2)
     if y.shape != yhat.shape:
         raise InputError(f"yhat: expected shape {y.shape}, got {yhat.shape}")
@@ -313,11 +445,23 @@ def nrmse(y: np.ndarray, yhat: np.ndarray) -> np.ndarray:
 
 
 def signatures(e: np.ndarray, responses: Mapping[str, np.ndarray]) -> dict[str, dict[str, float]]:
-    """What each candidate missing effect explains of the residual: e (N, m) regressed jointly on the
-    effects' responses (name -> (N, m): the encoder's response, counts, to a unit of the effect through the
-    fitted model, see :func:`~alpes_dyn.estimation.identification.identification.identify`) and a constant (``"bias"``);
-    per effect its ``share``, the partial R^2 (the fraction of the residual's sum of squares that
-    the joint regression loses without that effect), and ``coefficient`` (counts per unit)."""
+    """What each candidate missing effect explains of the residual: the residual regressed jointly on the
+    effects' responses and a constant (``"bias"``).
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N, m)
+        The encoder residual, counts.
+    responses : Mapping[str, numpy.ndarray]
+        Effect name -> (N, m) the encoder's response, counts, to a unit of the effect through the fitted model
+        (see :func:`~alpes_dyn.estimation.identification.identification.identify`).
+
+    Returns
+    -------
+    dict[str, dict[str, float]]
+        Per effect (and ``"bias"``) its ``share``, the partial R^2 (the fraction of the residual's sum of squares
+        that the joint regression loses without that effect), and ``coefficient`` (counts per unit).
+    """
     e = _columns(e, "residual").reshape(-1)
     names = [k for k in responses] + ["bias"]
     A = np.empty((e.size, len(names)), order="F")
@@ -431,7 +575,23 @@ def _finite(x: Any) -> Any:
 def reversal_ratio(e: np.ndarray, velocity: np.ndarray, window: int = 20) -> float:
     """Mean square of the residual within ``window`` samples of a motor velocity reversal (a sign change),
     over its mean square elsewhere (1 for a residual that does not care; stick-slip friction makes it
-    large where the plant sticks and the model slides). e, velocity: (N, m); per encoder, the largest."""
+    large where the plant sticks and the model slides); per encoder, the largest.
+
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N, m)
+        The encoder residual, counts.
+    velocity : numpy.ndarray, shape (N, m)
+        The fitted motor velocity, rad/s (its sign changes are the reversals).
+    window : int, optional
+        Samples either side of a reversal counted as near it (default 20: 20 ms at 1 kHz).
+
+    Returns
+    -------
+    float
+        The largest ratio over the encoders, at least 1 (1 where an encoder has fewer than 10 samples near or
+        away from a reversal).
+    """
     e, v = _columns(e, "residual"), _columns(velocity, "velocity")
     best = 1.0
     for j in range(e.shape[1]):  # a loop over encoders
@@ -456,22 +616,54 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
            runs: Sequence[int] | None = None, stateful: bool = False) -> Adequacy:
     """The verdict on a fit's encoder residual.
 
-    e: (N, m) residual y - yhat, counts. u: (N, nu) recorded motor torque, N m. floor: the sensor floor.
-    regressors: name -> (N, m) the encoder's responses to candidate missing effects (keys of
-    :data:`SIGNATURES`, see :func:`signatures`; the tendon-sheath friction's ``tension_sign_velocity`` is judged in
-    the regression with the others, and theirs without it: it did not change what they name, e.g. a rotor's, whose
-    acceleration lost a third of its share to it on finger3). validation: a held-out recording's :class:`Validation`.
-    thresholds: overrides of :data:`THRESHOLDS`. velocity: (N, m) the fitted motor velocity, rad/s:
-    the residual at its reversals (:func:`reversal_ratio`) names stick-slip friction first when above
-    ``reversal_ratio``. range_exit: where the fitted joints leave their range, which and how far (the caller's
-    :func:`range_exit`): a reason of its own, and a joint stop named first among the likely missing effects.
-    lines: the excitation's frequencies (Hz) and dt the sample time (s): the residual's power at their harmonics
-    and intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature ``harmonics``)
-    names a nonlinearity shaped otherwise than in the model, after the others, above ``harmonic_ratio``; part by
-    part where ``runs`` gives the first sample of each part whose excitation restarts, then N (runs, a turned
-    recording's orientations). stateful: the fitted model's friction has a state already (the LuGre law); else a
-    residual at the reversals above ``reversal_ratio`` or a nonlinearity at the harmonics names a friction with
-    a state too (:data:`STATEFUL_FRICTION`, after stick-slip)."""
+    Parameters
+    ----------
+    e : numpy.ndarray, shape (N, m)
+        The residual y - yhat, counts.
+    u : numpy.ndarray, shape (N, nu)
+        The recorded motor torque, N m.
+    floor : SensorFloor
+        The recording's sensor floor (:func:`sensor_floor`).
+    regressors : Mapping[str, numpy.ndarray] or None, optional
+        Name -> (N, m) the encoder's responses to candidate missing effects (keys of :data:`SIGNATURES`, see
+        :func:`signatures`; the tendon-sheath friction's ``tension_sign_velocity`` is judged in the regression
+        with the others, and theirs without it: it did not change what they name, e.g. a rotor's, whose
+        acceleration lost a third of its share to it on finger3). Default None: no signature.
+    validation : Validation or None, optional
+        A held-out recording's :class:`Validation` (default None).
+    thresholds : Mapping[str, float] or None, optional
+        Overrides of :data:`THRESHOLDS` (default None).
+    velocity : numpy.ndarray or None, optional
+        (N, m) the fitted motor velocity, rad/s: the residual at its reversals (:func:`reversal_ratio`) names
+        stick-slip friction first when above ``reversal_ratio`` (default None: not judged).
+    range_exit : str or None, optional
+        Where the fitted joints leave their range, which and how far (the caller's :func:`range_exit`): a reason
+        of its own, and a joint stop named first among the likely missing effects (default None).
+    lines : Sequence[float] or None, optional
+        The excitation's frequencies, Hz: with ``dt``, the residual's power at their harmonics and
+        intermodulation (:func:`~alpes_dyn.estimation.identification.harmonics.harmonic_ratio`, signature
+        ``harmonics``) names a nonlinearity shaped otherwise than in the model, after the others, above
+        ``harmonic_ratio`` (default None: not judged).
+    dt : float or None, optional
+        The sample time, s (default None).
+    runs : Sequence[int] or None, optional
+        The first sample of each part whose excitation restarts, then N (runs, a turned recording's
+        orientations): the harmonics judged part by part (default None: one part).
+    stateful : bool, optional
+        The fitted model's friction has a state already (the LuGre law); else (default False) a residual at the
+        reversals above ``reversal_ratio`` or a nonlinearity at the harmonics names a friction with a state too
+        (:data:`STATEFUL_FRICTION`, after stick-slip).
+
+    Returns
+    -------
+    Adequacy
+        The verdict, its reasons, the likely missing effects and the statistics.
+
+    Raises
+    ------
+    InputError
+        ``e`` or ``u`` (or ``velocity``, a regressor) not finite samples of matching lengths.
+    """
     th = {**THRESHOLDS, **(thresholds or {})}
     e = _columns(e, "residual")
     rms = float(np.sqrt(np.mean(e**2)))
@@ -545,17 +737,39 @@ def assess(e: np.ndarray, u: np.ndarray, floor: SensorFloor, regressors: Mapping
 def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.ndarray, y: np.ndarray,
             S: np.ndarray, step: float, prefix: int, recording_path: str = "") -> Validation:
     """MATLAB ``compare`` on a held-out recording: the identified model simulated open-loop on its
-    measured torque, after its initial state is estimated on the first ``prefix`` samples only.
+    measured torque, after its initial state is estimated on the first ``prefix`` samples only. Why not the
+    fit's multiple shooting: restarting every 100 ms from states fitted to the data would hide a model that
+    drifts; open-loop is what an observer's prediction or a controller's feedforward does between corrections.
 
-    sens: the fit's :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`; theta (p,) its
-    identified parameters. x0 (2n,): a first guess of the initial state (the rest under U[0]).
-    U (N, nu) N m; G (N, 3) m/s^2; y (N+1, m) encoder, counts; S (m, n) the transmission or RatioCurve; step: rad per
-    count. prefix: samples (>= 2) of the initial-state estimate, excluded from the score: with the
-    start state unknown the finger's lightly damped modes would otherwise weigh on the score, and
-    scoring the samples that fixed it would flatter the model (MATLAB estimates it the same way, its
-    ``InitialCondition`` ``'e'``). Why not the fit's multiple shooting: restarting every 100 ms from
-    states fitted to the data would hide a model that drifts; open-loop is what an observer's
-    prediction or a controller's feedforward does between corrections.
+    Parameters
+    ----------
+    sens : SensitivityModel
+        The fit's :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel`.
+    theta : numpy.ndarray, shape (p,)
+        Its identified parameters, each in its unit.
+    x0 : numpy.ndarray, shape (2n,)
+        A first guess of the initial state [q; qd], rad and rad/s (the rest under U[0]).
+    U : numpy.ndarray, shape (N, nu)
+        The held-out recording's measured motor torque, N m.
+    G : numpy.ndarray, shape (N, 3)
+        The gravity vector per sample, m/s^2 (the recording's).
+    y : numpy.ndarray, shape (N+1, m)
+        The recorded encoders, counts.
+    S : numpy.ndarray, shape (m, n), or RatioCurve
+        The transmission from the joints to the encoders.
+    step : float
+        The encoder's resolution, rad per count.
+    prefix : int
+        Samples (>= 2) of the initial-state estimate, excluded from the score: with the start state unknown the
+        finger's lightly damped modes would otherwise weigh on the score, and scoring the samples that fixed it
+        would flatter the model (MATLAB estimates it the same way, its ``InitialCondition`` ``'e'``).
+    recording_path : str, optional
+        The held-out recording's path, for the report (default "").
+
+    Returns
+    -------
+    Validation
+        Fit % and NRMSE per encoder and the residual RMS (counts) on the samples after ``prefix``.
     """
     N = U.shape[0]
     nb = sens.nb

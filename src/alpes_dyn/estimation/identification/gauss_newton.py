@@ -93,8 +93,17 @@ class SolverResult:
 
 
 class GaussNewton:
-    """The solver; ``max_iterations`` per start of stage 3, ``tol`` the stopping rule's relative cost change,
-    ``show`` a progress line on stderr."""
+    """The solver of stages 1-3 (the module docstring).
+
+    Parameters
+    ----------
+    max_iterations : int, optional
+        The Gauss-Newton iterations at most per start of stage 3 (default 50).
+    tol : float, optional
+        The stopping rule's relative change of the cost (default 1e-6).
+    show : bool, optional
+        A progress line on stderr (default False).
+    """
 
     def __init__(self, max_iterations: int = 50, tol: float = 1e-6, show: bool = False) -> None:
         self.max_iterations, self.tol, self.show = max_iterations, tol, show
@@ -137,7 +146,26 @@ class GaussNewton:
         Jacobians with respect to the start states alone (``evaluate(..., jac="state")``: the same numbers as the
         first nx columns of the whole Jacobian, at a third to a fifth of its cost). After the first sweep only the
         intervals whose start moved are evaluated again (:meth:`~alpes_dyn.estimation.identification.shooting.
-        ShootingProblem.state_rows`; the intervals are decoupled, so the others' rows are the ones they had)."""
+        ShootingProblem.state_rows`; the intervals are decoupled, so the others' rows are the ones they had).
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem (residuals, defects, their Jacobians and KKT matrices).
+        nodes : numpy.ndarray, shape (S, nx)
+            The intervals' start states to start from ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (log theta, p), the whitened line corrections (ncg), the drifts' knots (nd).
+        sweeps : int, optional
+            Levenberg-Marquardt steps per interval (default 8).
+
+        Returns
+        -------
+        numpy.ndarray, shape (S, nx)
+            The nodes fitted (a copy; ``nodes`` is not changed).
+        """
         nx, n_int = pb.nx, pb.n_int
         nodes = nodes.copy()
         mu_n = 1e-2 * np.ones(n_int)
@@ -171,7 +199,28 @@ class GaussNewton:
         states alone (``evaluate(..., jac="state")``, a third to a fifth of the whole), the KKT system banded
         (:func:`~alpes_dyn.estimation.identification.kkt.kkt_from_blocks` with no global variable). Stops where the
         defects are below 1e-6 of ``c_scale``'s rule. A problem with per-interval torque corrections (``no``):
-        the nodes as given. Why: a long record's start from its window (:mod:`~alpes_dyn.estimation.identification.long_record`)."""
+        the nodes as given. Why: a long record's start from its window
+        (:mod:`~alpes_dyn.estimation.identification.long_record`).
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem (residuals, defects, their Jacobians and KKT matrices).
+        nodes : numpy.ndarray, shape (S, nx)
+            Each interval's start state ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m, held (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (log theta, p), the whitened line corrections (ncg), the drifts' knots (nd);
+            held.
+        steps : int, optional
+            Gauss-Newton steps at most (default :data:`JOIN_STEPS`).
+
+        Returns
+        -------
+        numpy.ndarray, shape (S, nx)
+            The nodes made continuous (a copy), or ``nodes`` itself where there is nothing to join.
+        """
         from .kkt import Shape, kkt_from_blocks
 
         nx, n_int = pb.nx, pb.n_int
@@ -209,7 +258,20 @@ class GaussNewton:
     @staticmethod
     def coef_cap(pb: ShootingProblem, coef_radius: float) -> float:
         """The line corrections' trust region per line, in whitened units: :data:`COEF_STEP_RECORD`'s rule
-        (MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1))) times ``coef_radius``."""
+        (MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1))) times ``coef_radius``.
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem (its N samples).
+        coef_radius : float
+            The multiple of the rule (1 at the start; up to :data:`MAX_COEF_GROWTH`, :meth:`next_radius`).
+
+        Returns
+        -------
+        float
+            The largest move of a whitened line coefficient per step, in prior standard deviations.
+        """
         return MAX_COEF_STEP * coef_radius * math.sqrt(max(pb.N / COEF_STEP_RECORD, 1.0))
 
     @staticmethod
@@ -218,8 +280,27 @@ class GaussNewton:
         torque's line corrections within :data:`COEF_STEP_RECORD`'s rule times ``coef_radius``, the whole step
         scaled down. In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
         for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
-        three of six +-20 % fingers to residuals of 50-1700 counts. Returns the local and global steps
-        and whether the step is whole."""
+        three of six +-20 % fingers to residuals of 50-1700 counts.
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem.
+        d : numpy.ndarray, shape (nz,)
+            The Gauss-Newton step over the variables: the intervals' local variables (nv = S nb: start state and
+            torque correction), then the global ones (ng: log theta, the line corrections, the drifts' knots).
+        coef_radius : float, optional
+            The multiple of :data:`COEF_STEP_RECORD`'s rule for the line corrections (default 1).
+
+        Returns
+        -------
+        dv : numpy.ndarray, shape (S, nb)
+            The local step, scaled down with the global one.
+        dg : numpy.ndarray, shape (ng,)
+            The global step.
+        whole : bool
+            Whether the step is whole (not scaled down).
+        """
         p = pb.p
         dv, dg = d[:pb.nv].reshape(pb.n_int, pb.nb), d[pb.nv:pb.nz]
         big = max(float(np.max(np.abs(dg[:p]), initial=0.0)) / MAX_LOG_STEP,
@@ -236,7 +317,29 @@ class GaussNewton:
         :data:`MAX_COEF_GROWTH`: a crawl down a valley the linearisation sees right); at any other step, one and
         no streak (the textbook rule, Nocedal and Wright ch. 4, on this one block, started late: doubling from
         the first such step sent a fit of the model's own structure on a path that met no stopping rule in 50
-        iterations, where it converged in 16 at one standard deviation)."""
+        iterations, where it converged in 16 at one standard deviation).
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem.
+        d : numpy.ndarray, shape (nz,)
+            The Gauss-Newton step before the trust region (local variables, then global ones, as in
+            :meth:`limited`).
+        coef_radius : float
+            The multiple of :data:`COEF_STEP_RECORD`'s rule that cut ``d``.
+        streak : int
+            Steps in a row so far cut by the line corrections alone and taken whole.
+        found : tuple or None
+            :meth:`line_search`'s result for the step ((alpha, dv, dg, cost)), or None where it found none.
+
+        Returns
+        -------
+        radius : float
+            The multiple of the rule for the next step (1 to :data:`MAX_COEF_GROWTH`).
+        streak : int
+            The streak after this step (0 where the step does not count).
+        """
         p = pb.p
         dg = d[pb.nv:pb.nz]
         coef = float(np.max(np.abs(dg[p:p + pb.ncg]), initial=0.0)) / GaussNewton.coef_cap(pb, coef_radius)
@@ -256,7 +359,31 @@ class GaussNewton:
         imposing continuity at once lets Gauss-Newton trade the fit for the defects and stall far from the truth.
         ``first``: the phase to start from (0: weight 1; a start already close, :mod:`~alpes_dyn.estimation.identification.long_record`,
         skips the softest).
-        (Its length: the loop of the phases and of Levenberg-Marquardt inside them, one block.)"""
+        (Its length: the loop of the phases and of Levenberg-Marquardt inside them, one block.)
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem (residuals, defects, their Jacobians and KKT matrices).
+        nodes : numpy.ndarray, shape (S, nx)
+            Each interval's start state at the start (stage 1's) ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (log theta, p), the whitened line corrections (ncg), the drifts' knots (nd).
+        freeze : bool
+            Friction (the ``F_`` and ``sigma`` parameters) and the torque's line corrections held through the
+            homotopy (the first start).
+        first : int, optional
+            The phase to start from, 0 to :data:`SOFT_PHASES` - 1 (default 0: the penalty's weight 1).
+
+        Returns
+        -------
+        nodes, offs, glob : numpy.ndarray
+            The variables at the end of the last phase (the shapes of the arguments).
+        e : Evaluation
+            The evaluation there, with its Jacobians.
+        """
         nx, nv, n_int = pb.nx, pb.nv, pb.n_int
         e = pb.evaluate(nodes, offs, glob)
         defect0 = np.maximum(np.abs(e.c).max(axis=0), 1e-9)  # per state component
@@ -312,8 +439,39 @@ class GaussNewton:
         corrections (Nocedal & Wright, 18.3), up to :data:`SOC_STEPS` in a row while each halves the defects: the
         step's own defects removed by a minimum-norm correction from the same factorised system ``solve_K``;
         the curvature of the shooting map makes a Gauss-Newton step raise the defects quadratically though the
-        cost falls, and without the corrections the line search crawls. Returns (alpha, dv, dg, the cost there)
-        or None where no candidate is accepted."""
+        cost falls, and without the corrections the line search crawls.
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem.
+        at : Evaluation
+            The evaluation at the current point (its cost and defects ``c``).
+        nodes : numpy.ndarray, shape (S, nx)
+            The current point's start states ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            The current point's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The current point's global variables: rho (log theta, p), the whitened line corrections (ncg), the
+            drifts' knots (nd).
+        dv : numpy.ndarray, shape (S, nb)
+            The local step (start states, then torque corrections), as :meth:`limited` left it.
+        dg : numpy.ndarray, shape (ng,)
+            The global step, as :meth:`limited` left it.
+        merit : float
+            The l1 merit at the current point, cost + ``nu_merit`` |c|_1.
+        nu_merit : float
+            The merit's penalty on the defects (1.5 times the largest multiplier, at least the last one).
+        solve_K : callable
+            The factorised KKT system of the step (:meth:`~alpes_dyn.estimation.identification.shooting.
+            ShootingProblem.kkt_solver`): right-hand side (nz + nc,) -> solution.
+
+        Returns
+        -------
+        tuple or None
+            (alpha, dv, dg, the cost there): the length, the step (corrected where a second-order correction was
+            taken) and the cost at the accepted point; None where no candidate is accepted.
+        """
         nx, nz, nv = pb.nx, pb.nz, pb.nv
         cost = at.cost
         candidates = [(1.0, dv, dg), (0.5, dv, dg), (0.25, dv, dg), (0.1, dv, dg), (0.03, dv, dg)]
@@ -338,7 +496,20 @@ class GaussNewton:
 
     def stalled(self, history: list[float], cost: float) -> bool:
         """The accepted costs ``history`` down by at most max(tol ``cost``, 0.5) over the last five steps (chi^2 by 1
-        in 5: the data's resolution)."""
+        in 5: the data's resolution).
+
+        Parameters
+        ----------
+        history : list of float
+            The costs (0.5 chi^2) of the accepted steps, oldest first.
+        cost : float
+            The current cost (0.5 chi^2).
+
+        Returns
+        -------
+        bool
+            True where more than five steps were taken and the last five lowered the cost by at most the bound.
+        """
         return len(history) > 5 and history[-6] - history[-1] <= max(self.tol * cost, 0.5)
 
     @staticmethod
@@ -352,7 +523,34 @@ class GaussNewton:
         error (the stopping rule that asks for it), so the Jacobians differ to second order in it, and the
         covariance and the verdict's projections taken with them are the same to that order; evaluating them again
         was the dearest evaluation of a fit (all the sensitivities of the whole record: 1.5 s of a 60 s record's,
-        twice in ``--effects auto``'s two fits)."""
+        twice in ``--effects auto``'s two fits).
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem.
+        nodes : numpy.ndarray, shape (S, nx)
+            The current point's start states ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            The current point's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The current point's global variables: rho (log theta, p), the whitened line corrections (ncg), the
+            drifts' knots (nd).
+        at : Evaluation
+            The evaluation at the current point (its defects ``c``; its Jacobians kept in the result).
+        solve_K : callable
+            The factorised KKT system at the point (:meth:`~alpes_dyn.estimation.identification.shooting.
+            ShootingProblem.kkt_solver`): right-hand side (nz + nc,) -> solution.
+        c_scale : numpy.ndarray, shape (nx,)
+            The defects' scale per state component (the nodes' largest magnitude, at least 1e-3; rad, rad/s).
+        slack : float
+            The most the cost (0.5 chi^2) may rise.
+
+        Returns
+        -------
+        tuple or None
+            (nodes, offs, glob, the evaluation there), or None as above.
+        """
         nx, nz, nv = pb.nx, pb.nz, pb.nv
         try:
             d2 = solve_K(np.concatenate([np.zeros(nz), -at.c.reshape(-1)]))[:nz]
@@ -400,7 +598,31 @@ class GaussNewton:
         iterations. On noisy data (the residual at least half the encoder's quantisation floor), where the next
         step is within a tenth of a standard error, chi^2 has stalled with the step within one, or no step
         within half of one lowers the merit, continuity is restored (:meth:`restore`) and the fit ends there.
-        (Its length: the stopping rule and the lost-basin rule read the iteration's own variables.)"""
+        (Its length: the stopping rule and the lost-basin rule read the iteration's own variables.)
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem (residuals, defects, their Jacobians and KKT matrices).
+        nodes : numpy.ndarray, shape (S, nx)
+            Each interval's start state at the start of the stage ([q; qd], rad and rad/s; LuGre's bristles after them).
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The global variables: rho (log theta, p), the whitened line corrections (ncg), the drifts' knots (nd).
+        e : Evaluation
+            The evaluation at the start, with its Jacobians.
+        c_scale : numpy.ndarray, shape (nx,)
+            The defects' scale per state component (the stage-1 nodes' largest magnitude, at least 1e-3; rad,
+            rad/s).
+        bar : _Progress
+            The progress line, advanced once per iteration.
+
+        Returns
+        -------
+        SolverResult
+            Where the stage ended: the variables, the evaluation, the iterations, converged and the reason.
+        """
         nv, nz, p, nx, tol = pb.nv, pb.nz, pb.p, pb.nx, self.tol
         nu_merit, mu, converged, lost, it, radius, streak = 1.0, 1e-3, False, 0, 0, 1.0, 0
         history: list[float] = []
@@ -497,7 +719,30 @@ class GaussNewton:
         stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
         ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
         Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:
-        one evaluation of the whole record fewer; stage 3 from there at most :data:`WINDOW_ITERATIONS`); taken out of the list, so that no reference outlives its use. The result's ``iterations`` count every start."""
+        one evaluation of the whole record fewer; stage 3 from there at most :data:`WINDOW_ITERATIONS`); taken out
+        of the list, so that no reference outlives its use. The result's ``iterations`` count every start.
+
+        Parameters
+        ----------
+        pb : ShootingProblem
+            The fit's problem.
+        nodes : numpy.ndarray, shape (S, nx), or callable
+            The intervals' start states to start from (rad, rad/s), or a function of no argument returning them.
+        offs : numpy.ndarray, shape (S, no)
+            Each interval's starting constant torque correction, N m (no = 0 without it).
+        glob : numpy.ndarray, shape (ng,)
+            The starting global variables: rho (log theta, p), the whitened line corrections (ncg), the drifts'
+            knots (nd).
+        warm : tuple of numpy.ndarray, optional
+            (nodes, offs, glob) of another fit of the recording (default None: no warm start).
+        warm_at : list of Evaluation, optional
+            [the evaluation at ``warm`` with its Jacobians], emptied by the call (default None).
+
+        Returns
+        -------
+        SolverResult
+            The last start's result; ``iterations`` the total over the starts.
+        """
         total_its = 0
         if warm is not None:
             bar = _Progress(self.max_iterations, "identify (warm start)", self.show)

@@ -107,9 +107,23 @@ its encoder: :func:`~alpes_dyn.estimation.identification.adequacy.sensor_floor`)
 
 
 def check_selection(model: Model, parameters: str | Sequence[str] | None) -> None:
-    """:class:`~alpes_dyn.ModelError` for a selection :func:`identify` cannot fit: an unknown or repeated
-    name (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), or the torque constant's common scale
-    (``input_gain`` with every mass, spring and friction, :func:`~alpes_dyn.symbolic.parametric.common_scale`)."""
+    """Refuse a selection :func:`identify` cannot fit.
+
+    Parameters
+    ----------
+    model : Model
+        The model whose parameters are selected.
+    parameters : str or Sequence[str] or None
+        The selection, as :func:`identify` takes it (:func:`~alpes_dyn.symbolic.parametric.select_parameters`;
+        None: the default, K, m and friction).
+
+    Raises
+    ------
+    ModelError
+        An unknown or repeated name (:func:`~alpes_dyn.symbolic.parametric.select_parameters`), or the torque
+        constant's common scale (``input_gain`` with every mass, spring and friction,
+        :func:`~alpes_dyn.symbolic.parametric.common_scale`).
+    """
     if common_scale(model, select_parameters(model, parameters)):
         raise ModelError("parameters: input_gain with every mass, spring and friction: the encoder sees only their "
                          "ratios (theta -> c theta leaves the motion unchanged); hold the masses (known from the "

@@ -36,8 +36,18 @@ SPREAD_WEIGHT = 1.0
 
 
 def other_law(effects: tuple[str, ...]) -> tuple[str, ...]:
-    """``effects`` with the other friction law: the smooth law where ``stiction`` or ``lugre`` is in (taken out),
-    ``stiction`` added where neither is."""
+    """``effects`` with the other friction law.
+
+    Parameters
+    ----------
+    effects : tuple of str
+        A fit's effects (``--effects`` names).
+
+    Returns
+    -------
+    tuple of str
+        The smooth law where ``stiction`` or ``lugre`` is in (taken out), ``stiction`` added where neither is.
+    """
     if "stiction" in effects or "lugre" in effects:
         return tuple(e for e in effects if e not in ("stiction", "lugre"))
     return effects + ("stiction",)

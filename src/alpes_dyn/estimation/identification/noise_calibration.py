@@ -83,9 +83,19 @@ class ModelErrorCalibration:
 
 
 def consistency_statistic(check: Any) -> float:
-    """The largest of an :class:`~alpes_dyn.estimation.identification.observer_check.ObserverCheck`'s normalised
-    innovation squared and its predictions' (each over its degrees of freedom; 1 for a consistent filter); nan where
-    none was made."""
+    """The largest of an observer check's normalised innovation squared and its predictions'.
+
+    Parameters
+    ----------
+    check : ObserverCheck
+        The :class:`~alpes_dyn.estimation.identification.observer_check.ObserverCheck` of an EKF on a record (its
+        ``nis``, ``prediction_nis`` and ``split_nis``, each None where not made).
+
+    Returns
+    -------
+    float
+        The largest statistic over its degrees of freedom (1 for a consistent filter); nan where none was made.
+    """
     vals = [v.value / v.dof for v in (check.nis, check.prediction_nis, check.split_nis) if v is not None]
     return float(max(vals)) if vals else float("nan")
 

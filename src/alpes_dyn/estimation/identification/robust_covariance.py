@@ -185,8 +185,12 @@ def robust_covariance(pb: Any, e: Any, Z: np.ndarray, s2: float, residual: np.nd
 
     Parameters
     ----------
-    pb, e, Z
-        As :func:`influence`.
+    pb : ShootingProblem
+        The fit's :class:`~alpes_dyn.estimation.identification.shooting.ShootingProblem`.
+    e : Evaluation
+        The fit's evaluation with its Jacobians, as :func:`influence` takes it.
+    Z : numpy.ndarray, shape (nz + nc, p)
+        The undamped KKT system's solutions for the parameters' unit vectors (``pb.unit_p``).
     s2 : float
         The residual variance of the classical covariance: the line corrections' prior (global residuals) enters
         as there, s2 Z_g' diag(prior) Z_g.
@@ -206,9 +210,23 @@ def robust_covariance(pb: Any, e: Any, Z: np.ndarray, s2: float, residual: np.nd
 
 
 def reported_covariance(classical: np.ndarray, robust: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The covariance a fit reports (module doc): ``robust`` (p, p) plus, on its diagonal, what ``classical``
-    (p, p) has more (positive semi-definite; each variance max(classical, robust)). Returns (it, (p,) bool where
-    the robust variance is the larger)."""
+    """The covariance a fit reports (module doc): ``robust`` plus, on its diagonal, what ``classical`` has more
+    (positive semi-definite; each variance max(classical, robust)).
+
+    Parameters
+    ----------
+    classical : numpy.ndarray, shape (p, p)
+        The classical covariance of the fitted rho (log theta / theta_0, the additive ones scaled).
+    robust : numpy.ndarray, shape (p, p)
+        The HAC sandwich covariance of rho (:func:`robust_covariance`), the same space.
+
+    Returns
+    -------
+    covariance : numpy.ndarray, shape (p, p)
+        The covariance reported.
+    larger : numpy.ndarray, shape (p,)
+        bool: where the robust variance is the larger.
+    """
     vc, vr = np.diag(classical), np.diag(robust)
     larger = vr > vc
     return robust + np.diag(np.where(larger, 0.0, vc - vr)), larger

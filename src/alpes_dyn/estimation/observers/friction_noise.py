@@ -65,25 +65,69 @@ friction). Finger2 held by 10 times the file's F_s on MuJoCo's stick-slip: 0.27 
 
 
 def model_error_of(model: Model) -> float | None:
-    """The calibrated model error e of ``model``'s parameter file (``friction.model_error``, in units of each joint's
-    F_s), or None (no file, or none written)."""
+    """The calibrated model error e of ``model``'s parameter file.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model (its ``params``, the parameter file it was built from, if any).
+
+    Returns
+    -------
+    float or None
+        ``friction.model_error``, in units of each joint's F_s, or None (no file, or none written).
+    """
     p = getattr(model, "params", None)
     e = getattr(p, "model_error", None)
     return None if e is None else float(e)
 
 
 def with_model_error(params: HandParams, error: float, reason: str = "calibrated on the record") -> HandParams:
-    """``params`` with ``friction.model_error`` = ``error`` (in units of F_s, >= 0; :func:`model_error_noise`), both
-    the field and what :func:`~alpes_dyn.model.params.write_params` writes (source ``identified``, ``reason``:
-    how it was calibrated); :class:`~alpes_dyn.ModelError` where ``error`` is not a finite number >= 0."""
+    """``params`` with ``friction.model_error`` = ``error``: both the field and what
+    :func:`~alpes_dyn.model.params.write_params` writes (source ``identified``).
+
+    Parameters
+    ----------
+    params : HandParams
+        The parameter file's values.
+    error : float
+        The observer's model error, in units of each joint's F_s, >= 0 (:func:`model_error_noise`).
+    reason : str, optional
+        How it was calibrated, written beside it (default "calibrated on the record").
+
+    Returns
+    -------
+    HandParams
+        A copy of ``params`` with the model error.
+
+    Raises
+    ------
+    ModelError
+        ``error`` not a finite number >= 0.
+    """
     prm = Param(float(error), "F_s", "identified", reason, "the observer's model error: a white torque per sample of "
                 "this times each joint's F_s (calibrated on the identification record)")
     return with_values(params, {"friction.model_error": prm})
 
 
 def model_error_noise(model: Model, dt: float, error: float) -> np.ndarray:
-    """(n, n) Q_v = dt^2 M^-1 diag(``error``^2 F_s^2) M^-1, (rad/s)^2 per sample: a white torque of ``error`` F_s,i
-    (N m) on each joint i, ``model``'s Coulomb F_s and inertia matrix at q = 0, ``dt`` the sample period (s)."""
+    """Q_v = dt^2 M^-1 diag(``error``^2 F_s^2) M^-1: a white torque of ``error`` F_s,i (N m) on each joint i, mapped
+    on the joint velocities.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model: its Coulomb F_s (N m) per joint and its inertia matrix M at q = 0.
+    dt : float
+        The sample period, s.
+    error : float
+        The model error, in units of each joint's F_s.
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        Q_v, (rad/s)^2 per sample (symmetric).
+    """
     n = model.n
     Fs = np.asarray(model.extras.coulomb, dtype=float)
     Minv = np.linalg.inv(model.inertia_matrix(np.zeros(n)))
@@ -93,10 +137,28 @@ def model_error_noise(model: Model, dt: float, error: float) -> np.ndarray:
 
 def friction_process_noise(model: Model, B: np.ndarray, dt: float, torque_noise: float,
                            fraction: float = FRICTION_MODEL_ERROR) -> np.ndarray:
-    """(n, n) the covariance Q_v added to the observer's process noise on the joint velocities, (rad/s)^2 per sample
-    (module docstring): ``model``'s Coulomb F_s (N m) and smooth band v_s (rad/s), its inertia matrix at q = 0,
-    ``B`` (n, m) the actuation matrix (joint torque per motor torque), ``dt`` the sample period (s),
-    ``torque_noise`` the recorded torque's white noise (N m). Zero without friction or torque noise."""
+    """The covariance Q_v added to the observer's process noise on the joint velocities (module docstring).
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model: its Coulomb F_s (N m) and smooth band v_s (rad/s) per joint, its inertia matrix M at
+        q = 0.
+    B : numpy.ndarray, shape (n, m)
+        The actuation matrix (joint torque per motor torque).
+    dt : float
+        The sample period, s.
+    torque_noise : float
+        The recorded torque's white noise, N m (standard deviation).
+    fraction : float, optional
+        The model error as a fraction of each joint's F_s where the kicks cover the law's band (default
+        :data:`FRICTION_MODEL_ERROR`).
+
+    Returns
+    -------
+    numpy.ndarray, shape (n, n)
+        Q_v, (rad/s)^2 per sample (symmetric); zero without friction or torque noise.
+    """
     n = model.n
     Fs = np.asarray(model.extras.coulomb, dtype=float)
     vs = float(model.extras.smooth_velocity)
