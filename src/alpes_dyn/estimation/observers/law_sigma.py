@@ -77,7 +77,23 @@ class LawSigma:
 
     def widened(self, estimate: Estimate) -> Estimate:
         """``estimate`` (the kept law's) with the spread added to its joints' variances (the diagonal of P's
-        joints' block; the rest of P as it was)."""
+        joints' block; the rest of P as it was).
+
+        Parameters
+        ----------
+        estimate : Estimate
+            The kept law's estimate: ``z`` (N, nz) with the n joints' angles first (rad), ``P`` (N, nz, nz).
+
+        Returns
+        -------
+        Estimate
+            The same estimate, its joints' variances (rad^2) widened by :attr:`spread`.
+
+        Raises
+        ------
+        InputError
+            ``estimate`` not of N samples with at least n joints.
+        """
         N, n = self.spread.shape
         if estimate.z.shape[0] != N or estimate.z.shape[1] < n:
             raise InputError(f"estimate: expected {N} samples of at least {n} joints, got {estimate.z.shape}")
@@ -88,7 +104,18 @@ class LawSigma:
 
     def to_dict(self, start: int = 0) -> dict[str, Any]:
         """JSON: ``kept``, ``others``, ``spread_rms_deg`` (per joint, the RMS of sqrt of the spread from sample
-        ``start`` on)."""
+        ``start`` on).
+
+        Parameters
+        ----------
+        start : int, optional
+            The first sample counted (e.g. past the observer's transient); default 0.
+
+        Returns
+        -------
+        dict
+            The JSON object.
+        """
         rms = np.sqrt(np.mean(self.spread[start:], axis=0))
         return {"kept": self.kept, "others": list(self.others), "spread_rms_deg": np.degrees(rms).tolist()}
 
