@@ -78,9 +78,10 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.extras import spring_law
-from ..model.friction import lugre_of
+from ..model.friction import creep_of, lugre_of
 from ..model.transmission import capstan_torque, capstan_velocity
 from ..model.robot import Model
+from .creep import band_inertia, creep_friction
 from .dynamics import block_solve, sparse_dm
 from .link_terms import LinkTerms
 
@@ -303,6 +304,7 @@ class ParametricDynamics:
         self._Fs = cs.DM(model.extras.coulomb)
         self._Fv = cs.DM(model.extras.viscous)
         self.lugre = lugre_of(model)  # the law with a state (module docstring), or None: the smooth sign
+        self.creep = creep_of(model)  # the soft dry friction solved with the dynamics (symbolic.creep), or None
         self._dry = (np.asarray(model.extras.coulomb) > 0).astype(float)  # the joints with a bristle
         idx = {j: i for i, j in enumerate(model.joint_names)}
         parameterised = set()
@@ -393,7 +395,7 @@ class ParametricDynamics:
             out = out + scale * (be.bias(q, v) + grav)
         return out
 
-    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, z: cs.SX | None = None) -> cs.SX:
+    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, z: cs.SX | None = None, dry: bool = True) -> cs.SX:
         """Springs K (q - q_rest) (torsional; K fitted, the rest angles q_rest the model's, :func:`~alpes_dyn.model.extras.
         spring_law`) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m; with the bristles ``z`` (n,) rad, the
         LuGre friction sigma0 z + sigma1 z' + F_v qd instead (eq. L2, z' of :meth:`bristle_rate`)."""
@@ -402,7 +404,7 @@ class ParametricDynamics:
         if z is not None:
             s0, s1 = self._law("sigma0", theta), self._law("sigma1", theta)
             return spring_law(K, self._q_rest, q, cs) + s0 * z + s1 * self.bristle_rate(z, v, theta) + Fv * v
-        Fs = self._vector("F_s", self._Fs, theta)
+        Fs = self._vector("F_s", self._Fs, theta) if dry else 0.0
         return spring_law(K, self._q_rest, q, cs) + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
 
     def _law(self, kind: str, theta: cs.SX) -> Any:
@@ -456,10 +458,33 @@ class ParametricDynamics:
         (``input_gain * tau`` + ``F_torque`` - bias - passive), as :meth:`forward_dynamics` solves them; what the
         sensitivities of a large model differentiate (:mod:`~alpes_dyn.simulation.variational`)."""
         theta = self.theta if theta is None else theta
+        creep = self.creep is not None and z is None
         rhs = (self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g)
-               - self.passive_torque(q, v, theta, z))
+               - self.passive_torque(q, v, theta, z, dry=not creep))
         if self._curve is not None:
             rhs = rhs - self.rotor_bias(q, v, theta)
         if F_torque is not None:
             rhs = rhs + F_torque
-        return self.inertia_matrix(q, theta), rhs
+        M = self.inertia_matrix(q, theta)
+        if creep:  # the soft dry friction of eq. C1, solved with M (symbolic.creep)
+            rhs = rhs - self.creep_torque(M, rhs, v, theta)
+        return M, rhs
+
+    def creep_torque(self, M: cs.SX, r: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
+        """The ``creep`` law's dry friction (n,), N m, with M qdd = r - it (:func:`~alpes_dyn.symbolic.creep.
+        creep_friction`): its band inertia from the links' inertia at q = 0 (theta's masses; the rotors and the
+        armature, which MuJoCo's constraint does not weigh on a joint, left out)."""
+        M0 = cs.SX.zeros(self.n, self.n)
+        q0 = cs.DM.zeros(self.n)
+        for k, m0, be in self._mass_params:
+            M0 = M0 + (theta[k] / m0) * be.mass_matrix(q0)
+        if self._rest is not None:
+            M0 = M0 + self._rest[1].mass_matrix(q0)
+        a = band_inertia(M0, self._creep_law("kappa", theta))
+        return creep_friction(M, r, v, self._vector("F_s", self._Fs, theta), a, self._creep_law("rate", theta))
+
+    def _creep_law(self, kind: str, theta: cs.SX) -> Any:
+        """The ``creep`` law's ``kappa`` or ``rate``: theta's where selected (``creep_kappa``/``creep_rate``), else
+        the file's."""
+        sel = self._sel.get("creep_" + kind, [])
+        return theta[sel[0][0]] if sel else float(getattr(self.creep, kind))
