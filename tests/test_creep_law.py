@@ -75,3 +75,43 @@ def test_creep_law_from_the_file():
         Creep(9.0, -1.0)
     with pytest.raises(ModelError, match="friction.creep_kappa"):
         Creep(float("nan"), 1.0)
+
+
+def test_library_simulator_reads_the_creep_file():
+    """The library's own simulator (simulate, SymbolicDynamics: the observers' dynamics) on a creep file follows
+    MuJoCo's soft plant as the fit's ParametricDynamics does (0.05 degree over 2 s of the scenario's torque)."""
+    from alpes_dyn.simulation.integrate import simulate
+
+    u = validation_torque(DT, 1)[:2001]
+    rec = mujoco_recording("finger3", FINGER3.true_params(SEED), u, DT, effects=PlantEffects(soft_stiction=True),
+                           seed=1)
+    qt = rec.true_q
+    res = simulate(_model("creep"), np.r_[qt[0], np.zeros(3)], u[:-1], duration=2.0, dt=DT, input="motor",
+                   joint_range="ignore")
+    assert np.degrees(np.abs(res.x[:, :3] - qt).max()) < 0.05
+
+
+def test_mjcf_export_writes_the_creep_law():
+    """A creep file's MJCF (the Alpes writer) holds its band as MuJoCo's soft constraint: a joint under a constant
+    torque below F_s creeps at tau / (a b) with a = kappa / dof_invweight0 (MuJoCo's own measurement, non-default
+    kappa and b)."""
+    import mujoco
+
+    from alpes_dyn.model.mjcf import mjcf_string
+
+    true = FINGER3.true_params(SEED)
+    p = with_values(true, {"friction.law": Param("creep", "-", "assumed", "test"),
+                           "friction.creep_kappa": Param(4.0, "-", "assumed", "test"),
+                           "friction.creep_rate": Param(50.0, "1/s", "assumed", "test")})
+    mj = mujoco.MjModel.from_xml_string(mjcf_string("finger3", p, friction=True, contact=False))
+    mj.opt.gravity[:] = 0.0
+    mj.jnt_stiffness[:] = 0.0
+    mj.dof_damping[:] = 0.0  # the friction alone
+    mj.jnt_limited[:] = 0
+    j = mj.joint("j3").dofadr[0]
+    d = mujoco.MjData(mj)
+    tau = 0.5 * mj.dof_frictionloss[j]
+    d.qfrc_applied[j] = tau
+    for _ in range(int(1.5 / mj.opt.timestep)):  # the band's slowest mode settled (its time constant 0.2 s)
+        mujoco.mj_step(mj, d)
+    assert d.qvel[j] == pytest.approx(tau / (4.0 / mj.dof_invweight0[j] * 50.0), rel=1e-3)
