@@ -75,6 +75,8 @@ def test_creep_law_from_the_file():
         Creep(9.0, -1.0)
     with pytest.raises(ModelError, match="friction.creep_kappa"):
         Creep(float("nan"), 1.0)
+    with pytest.raises(ModelError, match="friction.creep_kappa"):  # the file's field, read as a file is
+        with_values(FINGER3.true_params(SEED), {"friction.creep_kappa": Param(-1.0, "-", "assumed", "test")})
 
 
 def test_library_simulator_reads_the_creep_file():
