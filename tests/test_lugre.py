@@ -105,7 +105,7 @@ def test_parameter_file_law_round_trip(tmp_path):
 
 @pytest.mark.parametrize("field, entry, needle", [
     ("friction.law", {"value": "dahl", "unit": "-", "source": "assumed", "reason": "r"},
-     "friction.law: expected one of tanh, lugre, got 'dahl'"),
+     "friction.law: expected one of tanh, lugre, creep, got 'dahl'"),
     ("friction.law", {"value": 3, "unit": "-", "source": "assumed", "reason": "r"}, "friction.law: expected one of"),
     ("friction.sigma0", {"value": -1.0, "unit": "N m/rad", "source": "assumed", "reason": "r"},
      "friction.sigma0: value must be > 0"),

@@ -32,9 +32,10 @@ def test_the_table_is_the_documented_one():
     documented = re.findall(r"^``([a-z ]+)``\s+(\w+)\s", rd.__doc__, flags=re.M)
     assert documented == [(r.name, r.stage) for r in rd.ROUNDS]
     assert rd.FALLBACK == ("stiction", "rotor", "delay", "offset")
-    assert [r.name for r in rd.rounds_of("auto")] == ["asked", "lugre", "stiction", "rotor", "delay", "offset"]
-    assert all(r.start_from == "kept" for r in rd.rounds_of("auto") + rd.rounds_of("cable") if r.name != "lugre")
-    assert ROW["lugre"].start_from == "kept, its friction the file's"
+    assert [r.name for r in rd.rounds_of("auto")] == ["creep", "asked", "lugre", "stiction", "rotor", "delay", "offset"]
+    assert all(r.start_from == "kept" for r in rd.rounds_of("auto") + rd.rounds_of("cable")
+               if r.name not in ("lugre", "creep"))
+    assert ROW["lugre"].start_from == ROW["creep"].start_from == "kept, its friction the file's"
 
 
 def test_first_and_staged_rounds():
@@ -66,6 +67,32 @@ def test_the_asked_round():
     assert asked.proposal(fit(missing=[stick, sheath], **stretching), KEPT) == KEPT + ("capstan",)
     assert asked.proposal(fit(ok=True, missing=[stick]), KEPT) is None
     assert asked.accepts(fit(0.59), fit(0.6)) and not asked.accepts(fit(0.6), fit(0.6))
+
+
+def test_the_creep_round():
+    """A fit not to be trusted that drove a joint's F_s below a tenth of the file's (a dry friction read as viscous)
+    gets the creep law, the other friction laws taken off, once; not an adequate fit, not one whose F_s held, not a
+    model without a parameter file; the verdict's creep word alone makes it too. Kept on a lower residual."""
+    from alpes_dyn import Model
+    from alpes_dyn.estimation.identification.creep import CREEP
+
+    model = Model.alpes("finger3", friction=True)
+    Fs = model.extras.coulomb
+    gone = dict(names=("K_1", "F_s_1", "F_s_2"), values=[0.04, Fs[0], 0.05 * Fs[1]])
+    held = dict(names=("K_1", "F_s_1", "F_s_2"), values=[0.04, Fs[0], 0.5 * Fs[1]])
+    creep = ROW["creep"]
+    assert creep.proposal(_with(fit(converged=False, **gone), model), KEPT + ("stiction",)) == KEPT + ("creep",)
+    assert creep.proposal(_with(fit(**gone), model), KEPT, {"creep"}) is None
+    assert creep.proposal(_with(fit(ok=True, **gone), model), KEPT) is None
+    assert creep.proposal(_with(fit(**held), model), KEPT) is None
+    assert creep.proposal(_with(fit(missing=[CREEP], **held), model), KEPT) == KEPT + ("creep",)
+    assert creep.proposal(fit(**gone), KEPT) is None  # no model, no parameter file
+    assert creep.accepts(fit(0.5), fit(9.6)) and not creep.accepts(fit(9.7), fit(9.6))
+
+
+def _with(stand_in, model):
+    stand_in.model = model
+    return stand_in
 
 
 @pytest.mark.parametrize("effect", ["stiction", "rotor", "delay", "offset"])

@@ -374,9 +374,10 @@ def _fit_robot(args: argparse.Namespace, freqs):
         () if args.parameters is not None else parse_effects(None))
     if args.law_spread and "auto" not in effects:
         raise InputError("--law-spread: the friction law's spread is made by the rounds of --effects auto")
-    if "lugre" in effects:
-        raise InputError("--effects: lugre applies to the Alpes models (their parameter file's friction.law); a URDF "
-                         "--model has no parameter file to hold the law")
+    for law in ("lugre", "creep"):
+        if law in effects:
+            raise InputError(f"--effects: {law} applies to the Alpes models (their parameter file's friction.law); a "
+                             "URDF --model has no parameter file to hold the law")
     if "rotor" in effects:
         raise InputError("--effects: rotor applies to the Alpes models (their file's J_m put on the tendons); a URDF "
                          "--model's rotors are always on, its spec's motors' rotor_inertia (fit them with "

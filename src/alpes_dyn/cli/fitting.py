@@ -39,8 +39,9 @@ def _fit(args: argparse.Namespace, freqs, recordings=None):
         () if args.parameters is not None else parse_effects(None))
     if args.law_spread and "auto" not in effects:
         raise InputError("--law-spread: the friction law's spread is made by the rounds of --effects auto")
-    if args.parameters is not None and set(effects) - {"stiction", "rotor", "lugre"}:
-        raise InputError(f"--effects: {', '.join(e for e in effects if e not in ('stiction', 'rotor', 'lugre'))} with "
+    if args.parameters is not None and set(effects) - {"stiction", "rotor", "lugre", "creep"}:
+        bad = ", ".join(e for e in effects if e not in ("stiction", "rotor", "lugre", "creep"))
+        raise InputError(f"--effects: {bad} with "
                          "--parameters: name their parameters there (tendon_compliance, tilt_y or tilt, encoder_offset, "
                          "capstan)")
     model_of = alpes_models(args.model, load_params(args.params), rotor_inertia=args.rotor_inertia, chain=args.chain)

@@ -348,7 +348,9 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
                         "tilt (the palm's tilt, on top of the recording's gravity columns where it has them: the rig's "
                         "orientation as set up), offset (the "
                         "encoders' zero), delay, capstan (the tendons' sheath friction), lugre (the LuGre friction law: "
-                        "sigma0, sigma1 fitted, friction.law written); 'auto' (the default): "
+                        "sigma0, sigma1 fitted, friction.law written), creep (a dry friction that creeps before it "
+                        "slides, MuJoCo's default frictionloss: creep_kappa, creep_rate fitted, friction.law written); "
+                        "'auto' (the default): "
                         "compliance,tilt, then the fit again with what the first one's adequacy check names, the "
                         "lower residual kept; 'none' for the rigid, smooth-friction fit (with --parameters: none)")
     s.add_argument("--rotor-inertia", action="store_true",

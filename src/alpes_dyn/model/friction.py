@@ -36,10 +36,11 @@ import numpy as np
 from ..errors import ModelError
 
 __all__ = ["FRICTION_MODELS", "LuGre", "PRESLIDING", "SIGMA0", "SIGMA1", "lugre_rate", "lugre_torque",
-           "lugre_steady", "lugre_of", "check_law"]
+           "lugre_steady", "lugre_of", "check_law", "Creep", "CREEP_KAPPA", "CREEP_RATE", "creep_of"]
 
-FRICTION_MODELS: tuple[str, ...] = ("tanh", "lugre")
-"""The parameter file's ``friction.law``: ``tanh`` the memoryless smooth law, ``lugre`` the law of this module."""
+FRICTION_MODELS: tuple[str, ...] = ("tanh", "lugre", "creep")
+"""The parameter file's ``friction.law``: ``tanh`` the memoryless smooth law, ``lugre`` the law of this module,
+``creep`` the soft dry friction of :class:`Creep`."""
 
 PRESLIDING = 1e-3
 """rad: the default presliding displacement F_s / sigma0 of a joint, the angle a stuck joint yields elastically
@@ -141,3 +142,58 @@ def lugre_of(model: Any) -> LuGre | None:
     if p is None or getattr(p, "friction_law", "tanh") != "lugre":
         return None
     return LuGre(p.sigma0, p.sigma1)
+
+
+CREEP_KAPPA = 9.0
+"""-: the default band inertia of the ``creep`` law, d / (1 - d) at MuJoCo's default friction impedance d = 0.9
+(``solimpfriction``): the band's added inertia in units of the joint's own, 1 / (M(0)^-1)_jj."""
+
+CREEP_RATE = 2.0 / (0.95 * 0.02)
+"""1/s: the default band rate b of the ``creep`` law, 2 / (d_max t_c) at MuJoCo's default ``solreffriction``
+t_c = 0.02 s (damping ratio 1) and d_max = 0.95."""
+
+
+@dataclass(frozen=True)
+class Creep:
+    """A dry friction that creeps before it slides (``friction.law = "creep"``): MuJoCo's soft ``frictionloss``.
+
+    Measured on drawn finger3s (``benchmarks/soft_friction_law.py``): under a constant torque tau below F_s a
+    joint creeps at the steady velocity tau / (a_j b) (to 4 digits), and slides above; the friction is the clipped
+    row of :func:`~alpes_dyn.estimation.identification.creep.soft_constraint_friction`,
+
+        tau_f,j = clip(a_j (qdd_j + b qd_j), -F_s,j, F_s,j) + F_v,j qd_j,                 (C1)
+
+    with the band's added inertia a_j = kappa / (M(0)^-1)_jj (kg m^2, the joint's own inertia at the reference pose
+    times kappa) and its rate b (1/s): a viscous friction a_j b up to the band's edge v_c = F_s / (a_j b) plus an
+    inertia a_j, saturating at F_s. The friction depends on the acceleration, so neither a memoryless sign (any v_s)
+    nor a bristle (a spring) holds it; the dynamics solve it (:meth:`~alpes_dyn.symbolic.parametric.
+    ParametricDynamics.dynamics_terms`).
+
+    Parameters
+    ----------
+    kappa : float
+        The band's added inertia in units of the joint's own, > 0 (:data:`CREEP_KAPPA`).
+    rate : float
+        The band's rate b, 1/s, > 0 (:data:`CREEP_RATE`).
+
+    Raises
+    ------
+    ModelError
+        A value not finite or not > 0 (``friction.creep_kappa`` / ``friction.creep_rate`` named).
+    """
+
+    kappa: float = CREEP_KAPPA
+    rate: float = CREEP_RATE
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "kappa", _positive(self.kappa, "friction.creep_kappa", "(-)"))
+        object.__setattr__(self, "rate", _positive(self.rate, "friction.creep_rate", "1/s"))
+
+
+def creep_of(model: Any) -> Creep | None:
+    """The :class:`Creep` law of ``model``'s parameter file (``friction.law = "creep"``: its ``creep_kappa`` /
+    ``creep_rate``, else the defaults), or None (another law, or no file)."""
+    p = getattr(model, "params", None)
+    if p is None or getattr(p, "friction_law", "tanh") != "creep":
+        return None
+    return Creep(p.creep_kappa, p.creep_rate)

@@ -80,7 +80,8 @@ from ..checks import as_float_array
 from ..errors import AlpesDynWarning, InputError, ModelError
 from ..limits import check_physical
 from .extras import spring_stiffness
-from .mjcf_export import STICTION_IMPEDANCE, check_stiction, stiction_attributes
+from .friction import Creep
+from .mjcf_export import STICTION_IMPEDANCE, check_stiction, creep_attributes, stiction_attributes
 from .params import ChainParams, HandParams, load_params
 
 __all__ = ["SCENES", "STICTION_TIMECONST", "STICTION_IMPEDANCE", "tilted_gravity", "mjcf_string", "load_mujoco", "joint_permutation", "contact_tip_position", "palm_down_params",
@@ -244,6 +245,8 @@ class _Writer:
             attrs += [f'damping="{_f(Fv)}"', f'frictionloss="{_f(Fs)}"']
             if self.stiction is not None:
                 attrs.append(stiction_attributes(self.stiction))
+            elif self.p.friction_law == "creep":  # the file's creep law: MuJoCo's soft constraint of its band
+                attrs.append(creep_attributes(Creep(self.p.creep_kappa, self.p.creep_rate)))
         return f"{ind}<joint {' '.join(attrs)}/>\n"
 
     def chain(self, prefix: str, ch: ChainParams, n: int, K: np.ndarray, pos: Sequence[float], quat: Sequence[float],

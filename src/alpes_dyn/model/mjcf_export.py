@@ -62,10 +62,10 @@ from typing import Any, Sequence
 import numpy as np
 
 from ..errors import InputError, ModelError
-from .friction import lugre_of
+from .friction import creep_of, lugre_of
 from .mimic import tree_model
 
-__all__ = ["model_mjcf", "INTEGRATORS", "STOP_IMPEDANCE", "stop_solref"]
+__all__ = ["model_mjcf", "INTEGRATORS", "STOP_IMPEDANCE", "stop_solref", "creep_attributes"]
 
 STOP_IMPEDANCE = 1e-4
 """MuJoCo's least constraint impedance (``mjMINIMP``): the ``solimplimit`` of a joint stop from the spec's ``[stops]``
@@ -181,7 +181,18 @@ def _joint_xml(model: Any, i: int, limits: bool, solref: dict[str, tuple[float, 
             attrs.append(f'{attr}="{_f(values[e])}"')
     if stiction is not None and ex.coulomb[e] != 0 and not lugre:
         attrs.append(stiction_attributes(stiction))
+    elif creep_of(model) is not None and ex.coulomb[e] != 0:
+        attrs.append(creep_attributes(creep_of(model)))
     return f"<joint {' '.join(attrs)}/>"
+
+
+def creep_attributes(law: Any) -> str:
+    """The ``<joint>`` attributes of the creep law (:class:`~alpes_dyn.model.friction.Creep`): MuJoCo's soft
+    dry-friction constraint of impedance d = kappa / (1 + kappa) (``solimpfriction`` "d d 0.001": its added inertia
+    d / (1 - d) / ``dof_invweight0``) and time constant 2 / (d b) (``solreffriction``, critically damped: its rate
+    b = 2 / (d_max t_c)); MuJoCo's default constraint is the law's default."""
+    d = law.kappa / (1.0 + law.kappa)
+    return f'solreffriction="{_f(2.0 / (d * law.rate))} 1" solimpfriction="{_f(d)} {_f(d)} 0.001"'
 
 
 #: Impedance d of the dry-friction constraint that ``stiction`` writes (``solimpfriction``): a stuck joint creeps at

@@ -35,7 +35,7 @@ import numpy as np
 from ..errors import ModelError
 from ..fileio import atomic_write, load_toml, read_text
 from ..limits import check_physical
-from .friction import SIGMA0, SIGMA1
+from .friction import CREEP_KAPPA, CREEP_RATE, SIGMA0, SIGMA1
 from .param_values import check_value
 from .params_schema import (_ENTRY_KEYS, _INTEGER, _OPTIONAL, _SCHEMA, _UNITS, IDENTIFICATION_FIELDS,  # noqa: F401
                             OVERRIDE_FIELDS, SOURCES)  # (SOURCES, the *_FIELDS: importable from here, as before)
@@ -149,6 +149,10 @@ class HandParams:
     ``tanh`` (default) or ``lugre`` with ``sigma0`` (N m/rad) and ``sigma1`` (N m s/rad) (:mod:`~alpes_dyn.model.friction`)."""
     sigma0: float = SIGMA0
     sigma1: float = SIGMA1
+    creep_kappa: float = CREEP_KAPPA
+    """The ``creep`` law's band inertia (optional ``friction.creep_kappa``, :class:`~alpes_dyn.model.friction.Creep`)."""
+    creep_rate: float = CREEP_RATE
+    """The ``creep`` law's band rate, 1/s (optional ``friction.creep_rate``)."""
     model_error: float | None = None
     """The observer's model error, in units of each joint's F_s (optional ``friction.model_error``, >= 0, unit
     ``F_s``): a white torque per sample of standard deviation ``model_error`` F_s,i on each joint i, calibrated on
@@ -451,6 +455,8 @@ def _from_text(text: str, path: str) -> HandParams:
         abduction_encoder_offset=float(v.get("thumb.abduction_encoder_offset", 0.0)),
         friction_law=v.get("friction.law", "tanh"), sigma0=float(v.get("friction.sigma0", SIGMA0)),
         sigma1=float(v.get("friction.sigma1", SIGMA1)),
+        creep_kappa=float(v.get("friction.creep_kappa", CREEP_KAPPA)),
+        creep_rate=float(v.get("friction.creep_rate", CREEP_RATE)),
         model_error=None if "friction.model_error" not in v else float(v["friction.model_error"]),
     )
 

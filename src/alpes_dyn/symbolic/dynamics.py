@@ -25,9 +25,11 @@ import casadi as cs
 import numpy as np
 
 from ..errors import ModelError
+from ..model.friction import creep_of
 from ..model.contact import REFERENCE_FRAMES, as_contacts
 from ..model.mimic import MimicCoupling, urdf_mimics
 from ..model.robot import Model
+from .creep import band_inertia, creep_friction
 from .tree_sparsity import block_solve, sparse_dm, tree_pattern  # noqa: F401 (block_solve, sparse_dm re-exported)
 
 __all__ = ["SymbolicDynamics", "available_backends", "block_solve", "sparse_dm"]
@@ -430,15 +432,25 @@ class SymbolicDynamics:
         contacts : sequence or None, optional
             Several frames, forces or wrenches (:meth:`contact_torque`).
         smooth : bool, optional
-            tanh for the Coulomb sign (default True: the result is differentiable).
+            tanh for the Coulomb sign (default True: the result is differentiable); on a model whose file's
+            ``friction.law`` is ``creep``, the creep law instead (:class:`~alpes_dyn.model.friction.Creep`,
+            solved with the dynamics: :func:`~alpes_dyn.symbolic.creep.creep_friction`).
 
         Returns
         -------
         casadi.SX
             (n,) rad/s^2.
         """
-        rhs = self.net_torque(q, v, tau, self.extras.passive_torque(q, v, smooth, cs), F, tip, contacts)
-        return block_solve(self.inertia_matrix(q), rhs)
+        law = creep_of(self.model) if self.extras.has_friction else None
+        if law is None:
+            rhs = self.net_torque(q, v, tau, self.extras.passive_torque(q, v, smooth, cs), F, tip, contacts)
+            return block_solve(self.inertia_matrix(q), rhs)
+        # the creep law (model.friction.Creep): the dry friction solved with the dynamics (symbolic.creep)
+        passive = self.extras.spring_torque(q, cs) + cs.DM(self.extras.viscous) * v
+        rhs, M = self.net_torque(q, v, tau, passive, F, tip, contacts), self.inertia_matrix(q)
+        a = band_inertia(self._be.mass_matrix(cs.SX.zeros(self.n)), law.kappa)  # the links' at q = 0
+        Fs = np.asarray(self.extras.coulomb, dtype=float)
+        return block_solve(M, rhs - creep_friction(M, rhs, v, cs.DM(Fs), a, law.rate, Fs > 0))
 
     def net_torque(self, q: cs.SX, v: cs.SX, tau: cs.SX, passive: Any, F: Any = None, tip: str | None = None,
                    contacts: Any = None) -> cs.SX:

@@ -44,6 +44,10 @@ kind                  meaning                                                   
                       (eq. L1-L2 of :mod:`~alpes_dyn.model.friction`; a model
                       whose file's ``friction.law`` is ``lugre`` only)
 ``sigma1``            the LuGre law's bristle damping (likewise)                  N m s/rad
+``creep_kappa``       the ``creep`` law's band inertia, in units of the joint's    --
+                      own (eq. C1 of :class:`~alpes_dyn.model.friction.Creep`;
+                      a model whose file's ``friction.law`` is ``creep`` only)
+``creep_rate``        the ``creep`` law's band rate b (likewise)                   1/s
 ===================== =========================================================== ==========
 
 The LuGre law. On a model whose parameter file has ``friction.law = "lugre"``
@@ -78,24 +82,27 @@ import numpy as np
 
 from ..errors import ModelError
 from ..model.extras import spring_law
-from ..model.friction import lugre_of
+from ..model.friction import creep_of, lugre_of
 from ..model.transmission import capstan_torque, capstan_velocity
 from ..model.robot import Model
+from .creep import band_inertia, creep_friction
 from .dynamics import block_solve, sparse_dm
 from .link_terms import LinkTerms
 
 __all__ = ["KINDS", "ADDITIVE_KINDS", "OUTPUT_KINDS", "PhysicalParameter", "tilted_gravity", "common_scale", "parameter_catalogue", "select_parameters", "unseen_masses", "ParametricDynamics"]
 
 KINDS: tuple[str, ...] = ("K", "m", "F_s", "F_v", "input_gain", "J_m", "encoder_offset", "tilt", "tendon_compliance",
-                          "capstan", "sigma0", "sigma1")
+                          "capstan", "sigma0", "sigma1", "creep_kappa", "creep_rate")
 ADDITIVE_KINDS: tuple[str, ...] = ("encoder_offset", "tilt", "tendon_compliance", "capstan")
 """Kinds fitted as they are (nominal 0, either sign), not in log."""
 OUTPUT_KINDS: tuple[str, ...] = ("encoder_offset", "tendon_compliance")
 """Kinds that change the measured output only, not the dynamics."""
 _UNITS = {"K": "N m/rad", "m": "kg", "F_s": "N m", "F_v": "N m s/rad", "input_gain": "-", "J_m": "kg m^2",
           "encoder_offset": "rad", "tilt": "rad", "tendon_compliance": "rad/(N m)", "capstan": "-",
-          "sigma0": "N m/rad", "sigma1": "N m s/rad"}
-_GROUPS = {"friction": ("F_s", "F_v", "sigma0", "sigma1")}
+          "sigma0": "N m/rad", "sigma1": "N m s/rad", "creep_kappa": "-", "creep_rate": "1/s"}
+_GROUPS = {"friction": ("F_s", "F_v", "sigma0", "sigma1", "creep_kappa", "creep_rate")}
+_LAW_KINDS = {"sigma0": "lugre", "sigma1": "lugre", "creep_kappa": "creep", "creep_rate": "creep"}
+"""The kinds of a friction law's own constants, and the law (the file's ``friction.law``) that has them."""
 _ALWAYS = ("input_gain", "encoder_offset", "tilt", "tendon_compliance", "capstan")  # a kind selects these even at nominal 0
 
 
@@ -188,6 +195,10 @@ def parameter_catalogue(model: Model) -> list[PhysicalParameter]:
     law = lugre_of(model)
     if law is not None:
         out += [PhysicalParameter(k, k, None, float(getattr(law, k)), _UNITS[k]) for k in ("sigma0", "sigma1")]
+    creep = creep_of(model)
+    if creep is not None:
+        out += [PhysicalParameter(f"creep_{k}", f"creep_{k}", None, float(getattr(creep, k)), _UNITS[f"creep_{k}"])
+                for k in ("kappa", "rate")]
     return out
 
 
@@ -269,8 +280,9 @@ def select_parameters(model: Model, spec: str | Sequence[str] | None = None) -> 
         if not isinstance(it, str) or not it:
             raise ModelError(f"parameters: empty or non-string entry in {spec!r}")
         kinds = _GROUPS.get(it, (it,) if it in KINDS else ())
-        if it in ("sigma0", "sigma1") and lugre_of(model) is None:
-            raise ModelError(f"parameters: {it} is the LuGre law's; the model's friction.law is tanh")
+        if it in _LAW_KINDS and getattr(model.params, "friction_law", "tanh") != _LAW_KINDS[it]:
+            raise ModelError(f"parameters: {it} is the {_LAW_KINDS[it]} law's; the model's friction.law is "
+                             f"{getattr(model.params, 'friction_law', 'tanh')}")
         if kinds:
             new = [p for p in cat if p.kind in kinds and (p.kind in _ALWAYS or p.nominal != 0.0)]
         elif it in by_name:
@@ -378,6 +390,7 @@ class ParametricDynamics:
         self._Fs = cs.DM(model.extras.coulomb)
         self._Fv = cs.DM(model.extras.viscous)
         self.lugre = lugre_of(model)  # the law with a state (module docstring), or None: the smooth sign
+        self.creep = creep_of(model)  # the soft dry friction solved with the dynamics (symbolic.creep), or None
         self._dry = (np.asarray(model.extras.coulomb) > 0).astype(float)  # the joints with a bristle
         idx = {j: i for i, j in enumerate(model.joint_names)}
         parameterised = set()
@@ -391,9 +404,7 @@ class ParametricDynamics:
                 self._mass_params.append((k, masses[link], LinkTerms(model.urdf, {link}, model.joint_names)))
             elif prm.kind in ("J_m", "encoder_offset", "tendon_compliance", "capstan"):
                 self._sel[prm.kind].append((k, model.motor_index(prm.motor)))
-            elif prm.kind in ("sigma0", "sigma1"):
-                if self.lugre is None:
-                    raise ModelError(f"parameters: {prm.name} is the LuGre law's; the model's friction.law is tanh")
+            elif prm.kind in _LAW_KINDS:  # (the catalogue has them with their law only)
                 self._sel[prm.kind].append((k, -1))
             elif prm.kind == "tilt":
                 self._sel[prm.kind].append((k, "xy".index(prm.name[-1])))
@@ -500,7 +511,7 @@ class ParametricDynamics:
             out = out + scale * (be.bias(q, v) + grav)
         return out
 
-    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, z: cs.SX | None = None) -> cs.SX:
+    def passive_torque(self, q: cs.SX, v: cs.SX, theta: cs.SX, z: cs.SX | None = None, dry: bool = True) -> cs.SX:
         """Springs K (q - q_rest) (torsional; K fitted, the rest angles q_rest the model's, :func:`~alpes_dyn.model.extras.
         spring_law`) plus friction F_s tanh(qd / v_s) + F_v qd, (n,), N m; with the bristles ``z`` (n,) rad, the
         LuGre friction sigma0 z + sigma1 z' + F_v qd instead (eq. L2, z' of :meth:`bristle_rate`).
@@ -521,7 +532,7 @@ class ParametricDynamics:
         if z is not None:
             s0, s1 = self._law("sigma0", theta), self._law("sigma1", theta)
             return spring_law(K, self._q_rest, q, cs) + s0 * z + s1 * self.bristle_rate(z, v, theta) + Fv * v
-        Fs = self._vector("F_s", self._Fs, theta)
+        Fs = self._vector("F_s", self._Fs, theta) if dry else 0.0
         return spring_law(K, self._q_rest, q, cs) + Fs * cs.tanh(v / self.smooth_velocity) + Fv * v
 
     def _law(self, kind: str, theta: cs.SX) -> Any:
@@ -654,10 +665,34 @@ class ParametricDynamics:
             The bristle deflections, rad: the LuGre friction (default None: the smooth law).
         """
         theta = self.theta if theta is None else theta
+        creep = self.creep is not None and z is None
         rhs = (self.input_gain(theta) * tau - self.bias_torque(q, v, theta, g)
-               - self.passive_torque(q, v, theta, z))
+               - self.passive_torque(q, v, theta, z, dry=not creep))
         if self._curve is not None:
             rhs = rhs - self.rotor_bias(q, v, theta)
         if F_torque is not None:
             rhs = rhs + F_torque
-        return self.inertia_matrix(q, theta), rhs
+        M = self.inertia_matrix(q, theta)
+        if creep:  # the soft dry friction of eq. C1, solved with M (symbolic.creep)
+            rhs = rhs - self.creep_torque(M, rhs, v, theta)
+        return M, rhs
+
+    def creep_torque(self, M: cs.SX, r: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
+        """The ``creep`` law's dry friction (n,), N m, with M qdd = r - it (:func:`~alpes_dyn.symbolic.creep.
+        creep_friction`): its band inertia from the links' inertia at q = 0 (theta's masses; the rotors and the
+        armature, which MuJoCo's constraint does not weigh on a joint, left out)."""
+        M0 = cs.SX.zeros(self.n, self.n)
+        q0 = cs.DM.zeros(self.n)
+        for k, m0, be in self._mass_params:
+            M0 = M0 + (theta[k] / m0) * be.mass_matrix(q0)
+        if self._rest is not None:
+            M0 = M0 + self._rest[1].mass_matrix(q0)
+        a = band_inertia(M0, self._creep_law("kappa", theta))
+        return creep_friction(M, r, v, self._vector("F_s", self._Fs, theta), a, self._creep_law("rate", theta),
+                              self._dry > 0)
+
+    def _creep_law(self, kind: str, theta: cs.SX) -> Any:
+        """The ``creep`` law's ``kappa`` or ``rate``: theta's where selected (``creep_kappa``/``creep_rate``), else
+        the file's."""
+        sel = self._sel["creep_" + kind]
+        return theta[sel[0][0]] if sel else float(getattr(self.creep, kind))

@@ -18,6 +18,9 @@ sigma0 (LuGre)       (0, inf),      fitted as log theta; the bristles' stiffness
                      SIGMA0_RANGE   displacements F_s / sigma0 of 0.1 to 10 mrad around the default 1 mrad
                                     (:data:`~alpes_dyn.model.friction.PRESLIDING`); outside, not identified
 sigma1 (LuGre)       [0, inf)       fitted as log theta (every iterate > 0); 0 in effect where it runs off
+creep_kappa,         (0, inf),      fitted as log theta; the creep law's band (its added inertia, its rate)
+creep_rate           within         physical within :data:`CREEP_RANGE` times the file's (its start, by
+                     CREEP_RANGE    default MuJoCo's constraint); outside, not identified
 encoder_offset, tilt (-inf, inf)    of the rig and its sensors, either sign: never bounded
 ==================== ============== ===================================================================
 
@@ -37,7 +40,7 @@ from __future__ import annotations
 import math
 from typing import Sequence
 
-__all__ = ["Z_INTERVAL", "RUNAWAY", "SIGMA0_RANGE", "LOWER_BOUND", "EFFECT_OF", "physical_range", "unsupported", "held_value",
+__all__ = ["Z_INTERVAL", "RUNAWAY", "SIGMA0_RANGE", "CREEP_RANGE", "RANGES", "LOWER_BOUND", "EFFECT_OF", "physical_range", "unsupported", "held_value",
            "describe"]
 
 Z_INTERVAL = 1.96
@@ -49,14 +52,23 @@ SIGMA0_RANGE = (0.1, 10.0)
 """The LuGre bristles' stiffness sigma0 a fit may find, as factors of its start (the file's): a joint's presliding
 displacement F_s / sigma0 within 0.1 to 10 times the file's (0.1 to 10 mrad from the default 1 mrad: a bearing's or a
 bush's micrometres to a tendon's slack); the fit's RK4 substeps are set for the upper end's presliding mode."""
+CREEP_RANGE = (0.1, 10.0)
+"""The creep law's band inertia and rate a fit may find, as factors of its start (the file's; MuJoCo's default
+constraint unless the file says otherwise): a band edge v_c = F_s / (a b) within 0.01 to 100 times the start's."""
+RANGES: dict[str, tuple[float, float]] = {"sigma0": SIGMA0_RANGE, "creep_kappa": CREEP_RANGE,
+                                          "creep_rate": CREEP_RANGE}
+"""The kinds fitted within a range of factors of their start."""
 LOWER_BOUND: dict[str, float] = {"K": 0.0, "m": 0.0, "F_s": 0.0, "F_v": 0.0, "J_m": 0.0, "input_gain": 0.0,
-                                 "tendon_compliance": 0.0, "capstan": 0.0, "sigma0": 0.0, "sigma1": 0.0}
+                                 "tendon_compliance": 0.0, "capstan": 0.0, "sigma0": 0.0, "sigma1": 0.0,
+                                 "creep_kappa": 0.0, "creep_rate": 0.0}
 """The physical lower bound of each bounded kind (the unbounded ones, encoder offsets and tilts, are not listed)."""
 EFFECT_OF: dict[str, str] = {"K": "a return spring", "m": "a link's mass", "F_s": "dry friction",
                              "F_v": "viscous friction", "J_m": "the rotor inertia", "input_gain": "a torque-constant error",
                              "tendon_compliance": "an elastic tendon", "capstan": "tendon-sheath friction",
                              "sigma0": "the friction's presliding stiffness (the LuGre bristles)",
-                             "sigma1": "the friction's presliding damping (the LuGre bristles)"}
+                             "sigma1": "the friction's presliding damping (the LuGre bristles)",
+                             "creep_kappa": "the dry friction's band inertia (the creep law)",
+                             "creep_rate": "the dry friction's band rate (the creep law)"}
 """The effect a parameter of each kind stands for, as the verdict names it when the data do not support it."""
 
 
@@ -124,9 +136,10 @@ def unsupported(names: Sequence[str], kinds: Sequence[str], values: Sequence[flo
             out[name] = f"{what}: below its physical bound {lo:g} ({there}); {effect}"
         elif kind not in ADDITIVE_BOUNDED and v0 > 0 and not (1.0 / RUNAWAY <= v / v0 <= RUNAWAY):
             out[name] = f"{what}: ran off to its bound ({v / v0:.2g} times its start; {start}); {effect}"
-        elif kind == "sigma0" and v0 > 0 and not (SIGMA0_RANGE[0] <= v / v0 <= SIGMA0_RANGE[1]):
-            out[name] = (f"{what}: {v / v0:.2g} times its start, outside its physical range {SIGMA0_RANGE[0]:g}-"
-                         f"{SIGMA0_RANGE[1]:g} times ({start}); {effect}")
+        elif kind in RANGES and v0 > 0 and not (RANGES[kind][0] <= v / v0 <= RANGES[kind][1]):
+            lo_f, hi_f = RANGES[kind]
+            out[name] = (f"{what}: {v / v0:.2g} times its start, outside its physical range {lo_f:g}-"
+                         f"{hi_f:g} times ({start}); {effect}")
         elif v - Z_INTERVAL * sd <= lo:
             out[name] = f"{what}: its 95 % interval reaches past {lo:g} ({start}); {effect}"
     return out

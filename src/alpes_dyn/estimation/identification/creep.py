@@ -18,8 +18,10 @@ friction b / R_j (7-300 times F_v): no memoryless sign (the smooth law at any v_
 force only to 27 % of F_s RMS) and no bristle law (LuGre's and Dahl's presliding is a spring, this has none) holds
 it, and a fit with either reads the added inertia into the masses (12-149 % off in the study's soft cases). Holding
 the friction at the file's values keeps the fit in its basin but does not make the law right (the masses stay
-tens of per cent off): such a fit is refused, its verdict naming :data:`CREEP`. A law with the band's added inertia
-(an acceleration-dependent friction) is what would hold it; the library has none yet.
+tens of per cent off): such a fit is refused, its verdict naming :data:`CREEP`. The law with the band's added
+inertia is the file's ``creep`` law (:class:`~alpes_dyn.model.friction.Creep`, solved with the dynamics by
+:mod:`~alpes_dyn.symbolic.creep`): ``--effects creep``, and the ``creep`` round of ``--effects auto`` where a fit
+collapsed an F_s (:mod:`~alpes_dyn.estimation.identification.rounds`).
 
 :func:`collapsed` finds the joints whose F_s ended below :data:`CREEP_FRACTION` of its start (the file's value);
 :func:`name_creep` puts :data:`CREEP` first among a fit's likely missing effects where it is not to be trusted
@@ -42,7 +44,7 @@ CREEP_FRACTION = 0.1
 end within 0.5-2 times their start; a soft MuJoCo friction's lightest joint at 0.01)."""
 
 CREEP = ("a dry friction that creeps before it slides (F_s driven towards 0: its force grows with the velocity "
-         "over a wider band than the smooth law's v_s, read as viscous; a friction law with that band)")
+         "over a wider band than the smooth law's v_s, read as viscous; the creep law: --effects creep)")
 """The likely missing effect :func:`name_creep` names."""
 
 

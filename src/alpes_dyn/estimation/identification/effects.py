@@ -35,6 +35,11 @@ effect         what the fit does
 ``lugre``      (asked for; ``auto`` adds it where a fit's verdict names a friction with a state) the LuGre law
                (:mod:`~alpes_dyn.model.friction`): the bristles in the fit's state, ``sigma0`` and ``sigma1``
                fitted with F_s and F_v (:func:`lugre_params`); the file written has ``friction.law = "lugre"``.
+``creep``      (asked for; ``auto`` adds it where a fit drove a joint's F_s towards 0, a dry friction read as
+               viscous: :func:`~alpes_dyn.estimation.identification.creep.collapsed`) the creep law
+               (:class:`~alpes_dyn.model.friction.Creep`, MuJoCo's soft ``frictionloss``: a band of viscous
+               friction and added inertia up to F_s), its ``creep_kappa`` and ``creep_rate`` fitted with F_s and F_v
+               from the file's (:func:`creep_params`); the file written has ``friction.law = "creep"``.
 ``capstan``    (asked for; ``auto`` adds it where a fit's verdict names "tendon-sheath friction", the residual
                following the tension times the sign of the motor velocity) each tendon's sheath friction
                ``capstan_<motor>`` (mu theta: the joints get tau_m - (1 - exp(-mu theta)) |tau_m| tanh(v_m / v_c),
@@ -73,7 +78,7 @@ from ...errors import InputError
 from ...model.extras import STICTION_VELOCITY
 from ...model.params import HandParams, Param, with_values
 from ...model.robot import Model
-from ...model.friction import lugre_of
+from ...model.friction import creep_of, lugre_of
 from ...symbolic.parametric import parameter_catalogue, select_parameters, unseen_masses
 from .creep import name_creep
 from .law_spread import other_law, widen
@@ -82,10 +87,10 @@ from .shooting import FitDiverged
 from ..experiments.recording import segment_starts
 
 __all__ = ["EFFECTS", "DEFAULT_EFFECTS", "EFFECTS_INTERVAL", "LUGRE_INTERVAL", "MAX_FIT_DELAY", "OBSERVER_RESIDUAL_RATIO",
-           "STICTION_VELOCITY", "MOVED_RATIO", "parse_effects", "effect_parameters", "still_motors", "stiction_params", "lugre_params", "lugre_start", "alpes_models", "fit_effects",
+           "STICTION_VELOCITY", "MOVED_RATIO", "parse_effects", "effect_parameters", "still_motors", "stiction_params", "lugre_params", "lugre_start", "creep_params", "alpes_models", "fit_effects",
            "EffectsFit", "Kept", "RoundWalker", "unmatched_delay"]  # (NAMED_BY, named_effects: the rounds module's, imported here)
 
-EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan", "lugre")
+EFFECTS: tuple[str, ...] = ("stiction", "rotor", "compliance", "tilt", "offset", "delay", "capstan", "lugre", "creep")
 DEFAULT_EFFECTS: tuple[str, ...] = ("compliance", "tilt")
 MAX_FIT_DELAY = 3
 """The longest torque delay (samples) the ``delay`` effect tries: 1, 2, ... while the residual falls and the last
@@ -215,6 +220,15 @@ def lugre_params(params: HandParams) -> HandParams:
                                                       "--effects lugre", "the joints' friction law")})
 
 
+def creep_params(params: HandParams) -> HandParams:
+    """``params`` with the creep law (``friction.law = "creep"``; its band constants the file's, else MuJoCo's
+    default constraint's, :class:`~alpes_dyn.model.friction.Creep`: the fit's start)."""
+    if params.friction_law == "creep":
+        return params
+    return with_values(params, {"friction.law": Param("creep", "-", "assumed", "the dry friction that creeps of "
+                                                      "--effects creep", "the joints' friction law")})
+
+
 def lugre_start(result: Any) -> dict[str, float]:
     """The start of a fit with the LuGre law after ``result``, a fit with a memoryless law: its values by name but
     its friction's (F_s, F_v: the file's, as sigma0 and sigma1), without its trajectory. The smooth law's F_s takes
@@ -231,9 +245,9 @@ def alpes_models(model: str, params: HandParams, *, rotor_inertia: bool = False,
     made: dict[str, HandParams] = {}
 
     def model_of(effects: Sequence[str]) -> Model:
-        law = "lugre" if "lugre" in effects else ("stiction" if "stiction" in effects else None)
+        law = next((e for e in ("lugre", "creep", "stiction") if e in effects), None)
         if law is not None and law not in made:
-            made[law] = lugre_params(params) if law == "lugre" else stiction_params(params)
+            made[law] = {"lugre": lugre_params, "creep": creep_params, "stiction": stiction_params}[law](params)
         return Model.alpes(model, friction=True, rotor_inertia=rotor_inertia or "rotor" in effects,
                            params=made[law] if law is not None else params, chain=chain)
 
@@ -380,8 +394,9 @@ class RoundWalker:
             kw["interval"] = min(kw["interval"], LUGRE_INTERVAL)
         if warm is not None and warm.converged and "start" not in kw:
             kw["start"] = warm  # the next round from the last one's values and trajectory, in its basin
-            if lugre_of(model) is not None and lugre_of(warm.model) is None:
-                kw["start"] = lugre_start(warm)
+            if (lugre_of(model) is not None and lugre_of(warm.model) is None) or (
+                    creep_of(model) is not None and creep_of(warm.model) is None):
+                kw["start"] = lugre_start(warm)  # the friction from the file's: the memoryless law's is not its
         with warnings.catch_warnings():  # the caller reports the verdict of the fit it keeps
             warnings.simplefilter("ignore", AdequacyWarning)
             res = identify(model, advanced(self.recording, delay), selection, **kw)

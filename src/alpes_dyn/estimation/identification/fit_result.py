@@ -228,7 +228,8 @@ def identified_params(result: IdentificationResult, base: HandParams | None = No
       ``base_mass`` (m_thumb_abd), ``abduction_K``, ``abduction_F_s``, ``abduction_F_v``;
     * a rotor inertia ``J_m_<motor>`` (one motor's): ``transmission.J_m``;
     * the LuGre law's ``sigma0``, ``sigma1``: ``friction.sigma0``, ``friction.sigma1``, with ``friction.law =
-      "lugre"``;
+      "lugre"``; the creep law's ``creep_kappa``, ``creep_rate``: ``friction.creep_kappa``, ``friction.creep_rate``,
+      with ``friction.law = "creep"``;
     * the chain's tendon compliance ``tendon_compliance_<motor>``: ``transmission.tendon_compliance`` (the
       ab/adduction gear's stays in the result); its sheath friction ``capstan_<motor>``: ``transmission.capstan``
       (likewise);
@@ -342,7 +343,7 @@ def _fitted_values(result: IdentificationResult, own: Any, p: HandParams, thumb:
                 continue  # the ab/adduction gear's stretch or friction: of this rig's gear, kept in the result
             scalars[pp.kind] = (float(value), _sd(sd))
             continue
-        if pp is not None and pp.kind in ("sigma0", "sigma1"):  # the LuGre law's, one for every joint
+        if pp is not None and pp.kind in ("sigma0", "sigma1", "creep_kappa", "creep_rate"):  # a law's, every joint's
             scalars[pp.kind] = (float(value), _sd(sd))
             continue
         if pp is not None and pp.kind == "J_m":
@@ -406,6 +407,14 @@ def _scalar_params(p: HandParams, scalars: dict[str, tuple[float, Any]], reason:
             upd[f"friction.{field_}"] = Param(value, unit, "identified", reason, old.description if old is not None
                                               else f"the LuGre law's bristle {what}, every joint's", sd)
             upd["friction.law"] = Param("lugre", "-", "identified", reason, "the joints' friction law")
+            continue
+        if field_ in ("creep_kappa", "creep_rate"):  # with the law they belong to
+            unit, what = ("-", "band inertia (in units of each joint's own)") if field_ == "creep_kappa" else \
+                ("1/s", "band rate")
+            old = p.raw.get(f"friction.{field_}")
+            upd[f"friction.{field_}"] = Param(value, unit, "identified", reason, old.description if old is not None
+                                              else f"the creep law's {what}, every joint's", sd)
+            upd["friction.law"] = Param("creep", "-", "identified", reason, "the joints' friction law")
             continue
         if field_ == "J_m":
             old = p.raw.get("transmission.J_m")
