@@ -109,17 +109,15 @@ builds of the same operations (a compiled function and the exported C, built ``-
 the same numbers on every target, those with a fused multiply-add (aarch64) too."""
 _LANES = 2
 _LARGE_SOURCE = 500_000
-"""Generated C above this many characters is compiled at ``-O1`` instead of ``-O3``. Measured (2-core machine):
-the hand's EKF step (3.1 MB, quiet): ``-O3`` 150 s to compile, ``-O1`` 16 s, both 82 us per step (``-O2`` the same
-speed, ``-O0`` 433 us); an Allegro hand's sensitivities (730 kB): ``-O3`` 50 s, ``-O2`` 60 s,
-``-O1`` 22 s, the batch run 10 % slower at ``-O1`` (507 against 461 ms). Below it (finger3's sensitivities, 56 kB,
-about a second; the fingers' and the hand's roll-outs, 46-217 kB) ``-O3`` stays."""
+"""Generated C above this many characters is compiled at ``-O1`` instead of ``-O3``: for a source this large
+``-O3`` costs several times ``-O1``'s compile time for little or no speed per step; below it (the fingers'
+sensitivities and roll-outs) a build takes seconds and ``-O3`` stays."""
 
 
 _LARGE_LEVELS = ("-O1", "-O0")
 """The optimisation levels a caller may ask for a source over :data:`_LARGE_SOURCE` (:class:`CompiledStepLoop`'s
 ``large_level``): ``-O0`` for a loop run a few thousand steps per process, whose build at ``-O1`` would outlast its
-runs (the thumb's prediction covariance, 1.5 MB: about 25 s of gcc at ``-O1``, 3 s at ``-O0``)."""
+runs (a large source, e.g. the thumb's prediction covariance, builds several times faster at ``-O0``)."""
 
 
 def _cflags(source: str, large_level: str = "-O1") -> tuple[str, ...]:

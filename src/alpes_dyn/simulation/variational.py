@@ -58,8 +58,7 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
 
     ``p`` (np,) is a subvector of ``w`` (the parameters, input corrections). The augmented right-hand side is
     one SX function called four times by an MX step, so the generated C holds it once, not the RK4 step's
-    derivative inlined: for finger3's 12 parameters the source is 56 kB instead of 1.4 MB, it compiles in ~1 s instead
-    of ~32 s at -O3 and runs ~2x faster (2-core machine; the SIMD lanes of
+    derivative inlined: a source many times smaller, which compiles much faster and runs faster (the SIMD lanes of
     :class:`~alpes_dyn.simulation.integrate.CompiledStepLoop` are not used by a step with calls).
 
     Parameters
@@ -91,9 +90,8 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
 
 LOOPED_STATES = 40
 """States from which :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` builds its step by
-:func:`looped_variational_rk4_step`: the Shadow hand with its wrist free (48 states, 72 parameters) had Jacobians of
-its forward dynamics of 0.56 and 0.47 million instructions, 23 MB of C the compiler did not finish in minutes; the
-fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached libraries, bit for bit).
+:func:`looped_variational_rk4_step`: above it the Jacobians of the forward dynamics, inlined, make C too large
+for the compiler to finish; the fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached libraries, bit for bit).
 The Shadow hand's commands with the looped step are recorded in ``benchmarks/results/foreign_hands.json`` (its
 commands part)."""
 

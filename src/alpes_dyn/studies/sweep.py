@@ -204,17 +204,16 @@ def local_client(workers: int) -> Any:
 
     On Linux the worker processes are forked from this one (Dask's ``multiprocessing-method: fork``) instead of
     started afresh (``spawn``, Dask's default): they begin with the modules this process has imported (numpy,
-    CasADi, Pinocchio, alpes_dyn) instead of importing them again. Measured (2 workers on a busy 2-core machine):
-    the cluster up in 0.9-1.0 s instead of 6.7 s, closed in 0.07 s instead of 1.3 s; a sweep of 2 draws with the
-    fit, fork and spawn in turn: 29.1 / 22.2 s against 32.1 / 31.0 s (up 0.2-0.4 s against 2.2 s,
-    closed 0.1 s against 1.1-1.2 s, the draws no slower: the forked workers keep the parent's two BLAS threads, to
-    no measured cost). A script may then also start a sweep without an ``if __name__ == "__main__":`` guard,
-    which spawned workers need. Elsewhere (macOS, Windows: fork is unsafe or absent) Dask's default.
+    CasADi, Pinocchio, alpes_dyn) instead of importing them again: the cluster starts and closes several times
+    faster, and the draws run no slower (the forked workers keep the parent's BLAS threads). A script may then also
+    start a sweep without an ``if __name__ == "__main__":`` guard, which spawned workers need. Elsewhere (macOS,
+    Windows: fork is unsafe or absent) Dask's default.
 
     The workers' statistical profiler (``distributed.worker.profile.enabled``, the dashboard's profile) is off: it
-    samples the worker thread's stack every 10 ms, taking the GIL from a draw that calls compiled code in short
-    steps. Measured in pairs, 8 draws with the fit: 41.7 / 30.8 / 33.4 s with it, 32.6 / 26.3 / 28.7 s without (the
-    machine's own speed drifting between pairs). A user who wants it passes a client of their own. The workers get it in their whole Dask configuration
+    samples the worker thread's stack at a fixed interval, taking the GIL from a draw that calls compiled code in
+    short steps, which slows the draws. The sweep's times with this client: ``benchmarks/results/sweep.json``
+    (``median_dask_s``, ``median_speedup``). A user who wants it passes a client of their own. The workers get it
+    in their whole Dask configuration
     (the Nanny's ``config``), so a worker the cluster restarts keeps it; a restarted worker is spawned, though (Dask
     reads the start method from the calling process's configuration at each start).
 
@@ -494,28 +493,22 @@ def robot_robustness_draw(seed: int, urdf: str = "", spec: str = "", spread: flo
     fitted K, F_s, F_v in %, the fit's time, convergence and residual (counts).
 
     Why the passive joints' values are fitted too: the draw perturbs them, and a fit that held them at the spec's
-    values fitted a model that cannot reproduce the data. On finger_edu (its ab/adduction has no motor) one draw puts
-    that joint's spring 5.5 % and its viscous friction 16.5 % off: holding them, the fit of the driven joints ran into
-    the 50-iteration cap at 7.5 counts RMS (springs 21 % off); with the passive spring's nominal value but its
-    friction still drawn, 8.2 counts and the cap again; freed, it converged at the sensor floor (0.58 counts, the
-    three springs within 0.002 %, the passive spring's standard error 0.008 %): the encoders do see a passive joint
-    through its coupling to the driven ones. The masses are the URDF's in the draw and in the fit (a spec holds
-    none), so nothing drawn is held.
+    values fitted a model that cannot reproduce the data (on finger_edu, whose ab/adduction has no motor, the fit of
+    the driven joints then runs into the iteration cap, far above the sensor floor, its springs well off); freed,
+    it converges at the sensor floor: the encoders do see a passive joint through its coupling to the driven ones.
+    The masses are the URDF's in the draw and in the fit (a spec holds none), so nothing drawn is held.
 
-    Why in two stages: freed from the nominal start at once, a draw (the passive values 0.5 % and 3 % off) ran into
-    the iteration cap at 3.3 counts, the passive spring pulled 5.6 % away while the driven joints' values were still
-    wrong. So the driven joints' values are fitted first, the passive ones held, for at most
-    :data:`WARM_UP_ITERATIONS` (a warm-up: with wrong held values it cannot converge, and run longer it drifts:
-    the first draw was at 0.68 counts after 12 iterations, 7.5 after 50), then everything drawn from there. 4 s
-    experiments, those two draws: both converged at 0.575 and 0.572 counts, every spring within 0.006 %, 28 s per
-    fit. A robot whose motors drive every joint is fitted in one stage.
+    Why in two stages: freed from the nominal start at once, a draw with the passive values off can run into the
+    iteration cap, the passive spring pulled away while the driven joints' values are still wrong. So the driven
+    joints' values are fitted first, the passive ones held, for at most :data:`WARM_UP_ITERATIONS` (a warm-up:
+    with wrong held values it cannot converge, and run longer it drifts away), then everything drawn from there.
+    A robot whose motors drive every joint is fitted in one stage.
 
-    Why the one-stage restart (:func:`staged_fit`): a draw with the passive spring 17.7 % off fails the two stages
-    -- the warm-up, the passive values held that far off, pulls the distal spring to 0.505 N m/rad (true 0.595, the
-    residual 5.06 counts), and the second stage ends at the iteration cap at 1.63 counts, the springs 1.4 % off --
-    while one stage from the spec's values converges at the sensor floor (0.580 counts) in 32 iterations (18 s,
-    against 147 s for the failed two stages); the second draw above is the other way round. So where the two stages
-    do not converge, the fit is run in one stage too and the converged one kept (``one_stage_restart`` in the row).
+    Why the one-stage restart (:func:`staged_fit`): a draw with the passive spring far off fails the two stages
+    (the warm-up, the passive values held that far off, pulls a driven spring away, and the second stage ends at
+    the iteration cap) while one stage from the spec's values converges at the sensor floor, in less time; other
+    draws are the other way round. So where the two stages do not converge, the fit is run in one stage too and
+    the converged one kept (``one_stage_restart`` in the row).
 
     Parameters
     ----------

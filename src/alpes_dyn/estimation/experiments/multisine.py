@@ -60,29 +60,16 @@ def dither_amplitude(model: Model, design: ExperimentDesign) -> np.ndarray:
     for a designed experiment), so that every joint keeps sliding through its friction; 0 without friction.
 
     Why a dither: on a plant with stick-slip friction (MuJoCo's finger3, ``benchmarks/realism.py``) the multisine
-    alone leaves q_3 stuck half the time (|qd_3| < 0.01 rad/s on 53 % of the samples), where no
-    memoryless friction law matches it: the fit's springs came out 1-2 % off and the EKF on its file 1.2 degrees
-    off on q_3. A 20 Hz dither of 12 breakaway torques (3e-3 N m on finger3's motor, about 5 % of its mean torque)
-    brings the stuck time to about 1 % on every joint. Measured on two all-effects plants (4 s,
-    ``--effects auto``): dither 4 (x the breakaway torque) left q_3 stuck on 3-13 % of the samples and the EKF on
-    the identified file 0.76 degree off; 7: 0.58; 12: under 0.45 degree on every joint (springs within 1 %); a
-    10 Hz dither left q_3 stuck on 23-39 % of the samples. 20, with the multisine at 0.5 of its amplitude ceiling
-    instead of 0.6 (``amplitude_fraction``, so that the finger's range holds the larger swing): on two all-effects
-    plants where 12 had left the masses 7.1 and 5.8 % off (the stick-slip round trading the masses against the tilt
-    and the friction), 2.1 and 2.4 %, and 0.7 and 1.0 % on two more, not tuned on (``benchmarks/realism.py``,
-    ``benchmarks/results/realism.json``); with the dither at 20 and the multisine still at 0.6, the first one's q_3
-    swung 21 degrees peak to peak instead of 14.
+    alone leaves the distal joint stuck for a large share of the samples, where no memoryless friction law matches
+    it, and the fit's springs and the EKF on its file come out off. A fast dither of several breakaway torques keeps
+    every joint sliding: a smaller amplitude or a lower frequency leaves the joint stuck longer, a larger one needs
+    the multisine's share of the range lowered (``amplitude_fraction``) so that the finger's range holds the swing.
+    The fits on such plants with the default design: ``benchmarks/results/realism.json`` (its summary).
 
     Not on a motor of springless joints (the thumb's ab/adduction; 0 there): nothing but their dry friction holds
     them where the design places them, and a dither that keeps them sliding lets any torque the design did not
-    balance carry them away. Measured on a MuJoCo thumb of the hand (``benchmarks/realism.py --chains thumb``,
-    4 s): with the dither, a palm 3 degrees off (a gravity torque of 1e-4 N m at mid-range, 3.5e-4 at 0, below the
-    joint's breakaway torque of 4.5e-4) carried the ab/adduction from 45 degrees onto its 0 degree stop, and the
-    fit with every effect of a real hand ended at 12.3 counts, not converged, springs 12 % off; even on the plant
-    with the model's own structure the ab/adduction swept 24-57 degrees through its friction, which the fit
-    holds at the nominal value (:data:`~alpes_dyn.estimation.identification.identification.THUMB_PARAMETERS`): 0.70
-    counts, not converged. Without it: 41-52 degrees, 0.58 counts with the model's structure, 0.66 with every effect
-    (springs within 0.35 %).
+    balance (a palm slightly tilted: a gravity torque below the joint's breakaway torque) carry them away onto a
+    stop, and the fit with them does not converge.
 
     Parameters
     ----------

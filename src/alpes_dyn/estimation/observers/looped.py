@@ -4,7 +4,7 @@ The default step of :class:`~alpes_dyn.estimation.observers.observers.ExtendedKa
 expression: the model's RK4 substeps written out, their Jacobian A = dF/dz by automatic differentiation of that
 expression, and the covariance arithmetic (:mod:`~alpes_dyn.estimation.observers.covariance`) one scalar operation
 per entry. Its size grows with the state's cube and the substeps: on the Shadow hand with its wrist free (24 joints,
-48 states, 4 substeps) the Jacobian alone was 12 million instructions and the build passed 6 GB.
+48 states) the Jacobian alone is too large for a build to finish in the memory of a workstation.
 
 From :data:`LOOP_STATES` states on (or with ``looped=True``) the step is an ``MX`` graph of a few calls instead:
 
