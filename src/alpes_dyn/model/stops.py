@@ -307,13 +307,9 @@ def sized_stops(model: Any, stiffness: Any = None, per_joint: bool = False) -> t
       nothing pushes into a stop (tau*_i = 0: its weight is across its axis) gets the least k_i of the others; a
       joint without limits gets that k too (it has no stop: unused).
 
-    Numbers. finger3 (Alpes): tau* = 0.0409 N m (j1 at its lower stop under the finger's weight), k = 1.67
-    N m/rad and d = 2.9e-3 N m s/rad (I_min = 1.27e-6 kg m^2) -- the Alpes stop's 2 and 4e-3, which its models
-    keep (:data:`ALPES_STOP`), are 1.2 and 1.4 times these; per joint k = 1.67, 0.508, 0.111 N m/rad and d = 0.0213,
-    3.4e-3, 7.5e-4 N m s/rad on j1, j2, j3. The Allegro hand with its shipped spec: k = 1.91 N m/rad, d = 8.9e-3
-    N m s/rad (per joint 0.11-1.91 N m/rad). UR5: k = 2.42e3 N m/rad, d = 12.4 N m s/rad (per joint 6.34-2.42e3
-    N m/rad: the shoulder pan's and the last two wrist joints' weight is across their axes, they get wrist_1's). A finger 20 times as heavy (masses and inertias) gets k and d
-    20 times as large.
+    The Alpes stop that the Alpes models keep (:data:`ALPES_STOP`) is somewhat stiffer and more damped than the
+    one sized on finger3. k and d scale with the robot: a finger with masses and inertias c times as large gets k
+    and d c times as large.
 
     Parameters
     ----------

@@ -101,10 +101,9 @@ def torque_before(tau_m: np.ndarray) -> np.ndarray:
     """(N, m) the motor torque that each sample's tendon tension balances: the one held over the period before
     it, tau_m,k-1 (N m), the first sample its own. A recording's torque tau_m,k acts over [t_k, t_k+1) (zero-order
     hold), and the cable's tension at t_k has seen only the torques before t_k, so the elastic tendon's stretch the
-    encoder reads at t_k is C tau_m,k-1 (:meth:`Transmission.encoder_angles`). Measured on MuJoCo's elastic tendon
-    (finger3, 4 s, ``benchmarks/realism.py``'s cable): the stretch from the same sample's torque left the
-    masses 9-12 % off (the dither's 20 Hz turns the half-period shift into a stretch in quadrature), from the
-    previous sample's 1.1 %.
+    encoder reads at t_k is C tau_m,k-1 (:meth:`Transmission.encoder_angles`). The shift matters
+    with a dither: its half-period turns into a stretch in quadrature, and the stretch taken from the same sample's
+    torque biases the fitted masses (MuJoCo's elastic tendon, ``benchmarks/realism.py``'s cable).
 
     Parameters
     ----------

@@ -115,12 +115,12 @@ class EncoderOutput:
 
     def tension_torque(self, u_k: np.ndarray | None, xs: np.ndarray) -> np.ndarray | None:
         """(s, L+1, m) the torque that the tendon's tension balances at each sample, N m: the modelled torque u_k-1
-        (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.torque_at`) less what accelerates the rotor, J_m S qdd (:meth:`motor_acceleration`; xs (s, L+1, nx)
-        the states), where the model has a rotor and a compliance (else u_k itself). Why: the cable is stretched by
-        its tension, r_m T = tau_m - J_m qdd_m, not by the motor's torque. Measured on MuJoCo's elastic tendon with
-        its rotor (``benchmarks/realism.py``'s cable; the encoder corrected by the plant's own J_m qdd_m):
-        4.1 counts RMS on finger2, 0.8 on finger3; a finger2 with all effects went from masses 2.2 % and the
-        EKF 1.09 degree off to 0.7 % and 0.24 degree; a finger3 with the cable alone, F_s_3 from 7.5 to 0.3 %.
+        (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.torque_at`) less what accelerates the
+        rotor, J_m S qdd (:meth:`motor_acceleration`; xs (s, L+1, nx) the states), where the model has a rotor and a
+        compliance (else u_k itself). Why: the cable is stretched by its tension, r_m T = tau_m - J_m qdd_m, not by
+        the motor's torque; the stretch taken from the motor's torque leaves an encoder error that biases the fitted
+        masses, friction and the EKF on the identified file (MuJoCo's elastic tendon with its rotor,
+        ``benchmarks/realism.py``'s cable).
 
         Parameters
         ----------

@@ -4,13 +4,13 @@ The fit's unknowns are S intervals' local variables (each interval's start state
 per interval) and ``ng`` global ones (the parameters and the line-coefficient corrections). Its Gauss-Newton
 normal matrix is an arrow: S diagonal blocks (nb x nb), a dense border of ng columns, and the ng x ng corner;
 the continuity Jacobian is block-bidiagonal with the same border. Held densely, the KKT matrix of a record of
-T seconds at 50 ms intervals has (240 T)^2 entries: 16 s took 120 MB and a cubic solve, a 60 s record 1.7 GB.
-Held sparse, its nonzeros are linear in S; factorised by SuperLU (:func:`scipy.sparse.linalg.splu`, COLAMD
-ordering) its fill was not: at 60 s a factorisation took 0.5-2.6 s and 33 of them half of a 3-minute fit
-(issue 39). :func:`bordered_factorize` exploits the structure instead: with each interval's local variables and
-its continuity multipliers taken together, interval after interval, the matrix less its border is banded
-(half-bandwidth nb + nx - 1), factorised by LAPACK's band LU with partial pivoting, and the border by its dense
-ng x ng Schur complement: time and memory O(S (nb + nx)^2 ng), linear in the record.
+T seconds at 50 ms intervals has (240 T)^2 entries, its memory quadratic and its solve cubic in the record. Held
+sparse, its nonzeros are linear in S; factorised by SuperLU (:func:`scipy.sparse.linalg.splu`, COLAMD ordering)
+its fill was not, and on a long record the factorisations took most of the fit (issue 39).
+:func:`bordered_factorize` exploits the structure instead: with each interval's local variables and its continuity
+multipliers taken together, interval after interval, the matrix less its border is banded (half-bandwidth
+nb + nx - 1), factorised by LAPACK's band LU with partial pivoting, and the border by its dense ng x ng Schur
+complement: time and memory O(S (nb + nx)^2 ng), linear in the record.
 
 Every function takes the sizes of the problem, ``Shape``; ``dense=True`` gives the same matrices as arrays
 (the reference the sparse path is tested against).

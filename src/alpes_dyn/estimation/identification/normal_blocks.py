@@ -1,22 +1,22 @@
 """A long record's Jacobian held compact: its normal blocks, not itself (issue 39).
 
 The shooting fit's residual Jacobian J (S, R, nb + ng) (:class:`~alpes_dyn.estimation.identification.shooting.Evaluation`)
-is the largest array of a fit: for the hand's thumb on a 600 s record (12 000 intervals of 50 ms, two encoders,
-56 columns) 548 MB, above the 450-550 MB the record and its problem already hold, and the fit peaked at 1.48 GB
-(``benchmarks/fit_scaling.py``). Gauss-Newton needs only J's normal blocks -- each interval's A'A (nb, nb) and
-A'P (nb, ng), the sum of
-the P'P (ng, ng), with A the interval's local columns and P the global ones -- and each interval's J'r (nb + ng):
-accumulated chunk by chunk while the sensitivities are computed (:meth:`NormalBlocks.add`), by the einsums of
+is the largest array of a fit: on a long record (thousands of 50 ms intervals) larger than the record and its
+problem together, and it set the fit's peak memory. Gauss-Newton needs only J's normal blocks -- each interval's
+A'A (nb, nb) and A'P (nb, ng), the sum of the P'P (ng, ng), with A the interval's local columns and P the
+global ones -- and each interval's J'r (nb + ng): accumulated chunk by chunk while the sensitivities are computed
+(:meth:`NormalBlocks.add`), by the einsums of
 :func:`~alpes_dyn.estimation.identification.kkt.normal_matrix`, they are the same numbers as from the whole J (the sum
 of the P'P in another order: within 1e-12), and the steps, the covariance and the stopping rule read them alone.
 The one use of J itself is the verdict's projection of each missing effect's response R on the fit's tangent space
 (J'R, the KKT solve, then R - J z): :func:`remainders` takes it in two more passes over the sensitivities at the fit's
-end, chunk by chunk, instead of holding J (two evaluations of the whole record with its sensitivities: 10-13 s each
-for a chain of the hand at 600 s).
+end, chunk by chunk, instead of holding J (at the cost of two more evaluations of the whole record with its
+sensitivities).
 
 A problem holds its Jacobians compact where J would take more than :data:`COMPACT_BYTES`
 (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.evaluate`): a 600 s record; shorter ones keep
-the whole J, as before.
+the whole J. The fits' peak memory by record length: ``benchmarks/results/fit_scaling.json`` and
+``fit_scaling.hand.json`` (their rows' ``peak_rss_mib``).
 """
 
 from __future__ import annotations
