@@ -117,8 +117,8 @@ def mujoco_recording(model: str, true_params: HandParams | str | None, torque: n
     Notes
     -----
     Cost: the loop of :func:`~alpes_dyn.simulation.loop.run_loop` over the N samples, MuJoCo stepping each sample's
-    substeps (``mj_step`` with ``nstep``); measured for the 4 s experiment on a loaded 2-core machine: 2.3 s with the smooth-friction
-    callback, 0.9 s with ``stiction`` (no callback).
+    substeps (``mj_step`` with ``nstep``); the smooth friction's Python callback at every substep costs more than
+    MuJoCo's own step, so a plant with ``stiction`` (no callback) records more than twice as fast.
     """
     e = (effects or PlantEffects()).check()
     _check_recording_settings(model, seed, encoder_noise_counts, torque_noise)

@@ -319,8 +319,7 @@ def c_sources(filt: KalmanFilter, *, prefix: str | None = None, about: str = "",
         substep, :func:`~alpes_dyn.estimation.cexport.cexport_substeps.substep_model_source`, the filter's
         numbers to rounding). Default (None): ``"sparse"`` for an EKF whose covariance arithmetic is large (over
         :data:`_LOOPS_FROM` operations: the hand) or whose model takes substeps (a friction model: CasADi's code
-        of the whole step writes each substep out, 1.1-1.8 MB of C for finger3 that took 30 s to several minutes
-        to build at -O2), else ``"casadi"`` (a finger, the UKF).
+        of the whole step writes each substep out, a source that takes minutes to build), else ``"casadi"`` (a finger, the UKF).
     chains : bool or None, optional
         (``"sparse"`` only) the model's code by block, the blocks of one structure side by side
         (:mod:`~alpes_dyn.estimation.cexport.cexport_chains`: the hand's four fingers; the default, None, is True
@@ -382,8 +381,9 @@ int {prefix}_step(const double z[{P}_NZ], const double P[{P}_NZ * {P}_NZ], const
 
 _LOOPS_FROM = 5000
 """The EKF's default code is ``"sparse"`` when its covariance arithmetic takes more operations than this in the
-filter's step (the hand: 30,000; finger3: 700, where CasADi's straight-line code of the whole step took 3.7 us of
-processor time per step against the loops' 4.3, timed in turn: ``benchmarks/observer_step.py``)."""
+filter's step (the hand: 30,000; finger3: 700, where CasADi's straight-line code of the whole step runs a little
+faster than the loops). The default code's time per step: ``benchmarks/results/observer_step.json`` (its rows'
+``c_us``)."""
 
 
 def _covariance_operations(filt: ExtendedKalmanFilter) -> int:
@@ -592,7 +592,7 @@ def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> A
     a shared library in the cache (:func:`~alpes_dyn.simulation.buildcache.build_library`, ``-O2``) and called through
     ctypes; s = [z; P column-major] (nz + nz^2,), wy = [w; y]. The numbers of the exported C to the last bit; with
     substeps (a friction model) the C loops over one substep (seconds to build, where CasADi's code of the whole
-    step, each substep written out, took minutes).
+    step, each substep written out, takes minutes).
 
     Parameters
     ----------

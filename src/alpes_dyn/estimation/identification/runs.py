@@ -122,7 +122,8 @@ def encoder_noise(rec: Recording, given: float | None) -> float | None:
     """The encoder's white noise beyond its quantisation, counts, for the sensor floor of a recording of several
     runs: ``given``, else estimated run by run (each run's fourth difference,
     :func:`~alpes_dyn.estimation.identification.adequacy.white_noise_level`: none across a jump between runs, which
-    made it 5 to 7 times the floor on three joined finger2 runs); None for one run (the floor's own estimate).
+    it would count as noise, setting the floor several times too high); None for one run (the floor's own
+    estimate).
 
     Parameters
     ----------

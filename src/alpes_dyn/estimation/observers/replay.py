@@ -100,8 +100,8 @@ STICK_TORQUE_WINDOW = 10
 """Samples of the causal moving average of the recorded torque that the ``stick`` and ``lugre`` laws' observers
 read by default (:func:`averaged`): the law decides stick or slip from the torque, and a white torque noise as large
 as F_s (0.5 mN m on the Alpes finger) makes it slip where the joint holds (the LuGre bristle creeps under a torque
-that jitters: finger2 held by 10 times the file's F_s on MuJoCo, 0.78 degree RMS off with the raw torque, 0.17
-averaged); averaged over 10 ms its noise is a third, for a lag of 4.5 ms on a motion of a few hertz."""
+that jitters, and the estimate drifts several times further off than with the torque averaged); averaged over
+10 samples (10 ms at 1 kHz) its noise is about a third, for a lag of 4.5 samples on a motion of a few hertz."""
 
 
 def averaged(recording: Recording, samples: int) -> Recording:
