@@ -763,8 +763,8 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
     def initial_nodes(self, q0: np.ndarray, theta: np.ndarray | None = None) -> np.ndarray:
         """(S, nx) the model's own response from the rest ``q0`` under the torque, cut at the nodes, then shifted
         onto the measured encoder (the stretch of the start's compliance off): a start close to the data. (Not
-        shifted, the response alone is no start on a long record even with the parameters right: over 16 s of
-        finger3 it drifted to 460 counts from the encoder.)
+        shifted, the response alone is no start on a long record even with the parameters right: over a record of
+        seconds it drifts hundreds of counts from the encoder.)
 
         Parameters
         ----------
@@ -782,7 +782,7 @@ class ShootingProblem(EncoderOutput, ShootingAlgebra):
         theta = self.theta0 if theta is None else theta
         C = np.zeros((1, nu, self.sens.nb)) if self.sens.nb else None
         # the record in pieces of whole intervals, each from the last one's end (the same steps: its per-sample
-        # inputs 8 MiB at a time, not the whole record's at once: 264 MB at 600 s)
+        # inputs 8 MiB at a time, not the whole record's at once: hundreds of MB on a long record)
         K = L * max(1, JACOBIAN_CHUNK // (L * self.sens.nw))
         nodes = np.empty((n_int, self.nx))
         runs = self.rec.run_starts()
