@@ -11,8 +11,8 @@ F_s sign (each joint sliding). Q is positive definite, so one assignment of the 
 {-F_s, band, +F_s} meets the optimality conditions (the band's forces within the box, each sliding joint's gradient
 (Q f - c)_j of the sign that holds it on its face): :func:`creep_friction` writes every assignment (3^k for k joints
 with dry friction, each a solve of the band's joints) and keeps the one that does -- exact, where an iteration on
-the assignment cycles (measured: 10 % of the samples of a finger3's identification experiment off by more than
-1e-3 of their acceleration with three or six passes). Beyond :data:`MAX_ENUMERATED` joints with dry friction in
+the assignment can cycle and leave a share of an identification experiment's samples off, however many passes
+it makes. Beyond :data:`MAX_ENUMERATED` joints with dry friction in
 one block of M the assignments are too many; :func:`creep_friction` refuses them (:class:`~alpes_dyn.ModelError`).
 """
 

@@ -8,8 +8,8 @@ known inputs w_k .. w_k+H-1 with no update:
 and the measurement predicted, h(z_k+H), with its covariance H P_k+H|k H^T + R: what the consistency of the
 predictions (:func:`~alpes_dyn.estimation.observers.innovation.nis`) and the observer's check of a fit
 (:func:`~alpes_dyn.estimation.identification.observer_check.observer_statistics`) read. Its cost is B starts times
-H steps (the check's 0.1 s horizon from every fifth sample of a 4 s record: 68,000 steps of the covariance); CasADi's
-virtual machine took most of the observer check's time. Here the step (z, P) -> (z_next, P_next) is CasADi's code
+H steps (the check's 0.1 s horizon from every fifth sample of a 4 s record: 68,000 steps of the covariance); in
+CasADi's virtual machine they are most of the observer check's time. Here the step (z, P) -> (z_next, P_next) is CasADi's code
 compiled once and run by :class:`~alpes_dyn.simulation.codegen.CompiledStepLoop` over the starts: the same
 operations as the virtual machine's expression, the same numbers to rounding. The library is keyed on the model's
 structure: its numbers, Sigma_w and Q are the step's input p, so a model of other values or another noise setting
@@ -39,11 +39,11 @@ few tens of MB for the LuGre model's states and a 0.1 s horizon."""
 
 AHEAD_COMPILE_MAX = 100_000
 """CasADi instructions: a step above it is run by the virtual machine, not compiled. A finger's covariance step
-(finger3 with friction, four substeps: 47k instructions) builds in seconds; the Allegro hand's (32 states: 212k) kept
-gcc busy over 5 minutes and 4 GB, longer than the virtual machine's whole run of ``estimate``'s checks. A step whose
-C is over the compiled loops' large-source size (the thumb's covariance, 1.5 MB) is built at ``-O0``
-(:class:`~alpes_dyn.simulation.codegen.CompiledStepLoop`'s ``large_level``): seconds, where ``-O1`` took about 25 s
-of gcc, longer than the check's runs of it."""
+(finger3 with friction, four substeps) builds in seconds; a large hand's (the Allegro hand's 32 states) keeps the
+compiler busy for minutes and gigabytes, longer than the virtual machine's whole run of ``estimate``'s checks. A step
+whose C is over the compiled loops' large-source size (the thumb's covariance) is built at ``-O0``
+(:class:`~alpes_dyn.simulation.codegen.CompiledStepLoop`'s ``large_level``): faster to build than at ``-O1``, whose
+build would outlast the check's runs of it."""
 
 
 def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:

@@ -124,8 +124,8 @@ class DiscreteModel:
             one, self.values = lift_constants(cs.Function("rhs", [z, w], [self._rhs(z, w)]))
         p = cs.SX.sym("p", self.values.size)
         # the common subexpressions merged once, in the right-hand side or the stick step (milliseconds), not in the
-        # step that calls it 4 x substeps times (the step's cse took 0.3 s on finger3, 2-4 s on an Allegro finger,
-        # for the same instructions: each call is already one node per instruction of its merged expression)
+        # step that calls it 4 x substeps times (the step's cse costs seconds on a large finger for the same
+        # instructions: each call is already one node per instruction of its merged expression)
         merged = cs.Function("one", [z, w, p], [cs.cse(one(z, w, p))])
         advance: Callable[[Any], Any] = (
             (lambda x: merged(x, w, p)) if self.friction_law in ("stick", "lugre")

@@ -8,12 +8,11 @@ inertia matrix at rest, B the actuation matrix; the root sum of squares over the
 0.02, 0.23 and 0.77 rad/s, against the smooth law's F_s tanh(v / v_s) band of v_s = 0.1 rad/s. The filter then
 evaluates the friction at a velocity that is off by more than the law's band, where its linearisation (a slope F_s /
 v_s within it, none outside) no longer describes the friction's error: the error F_s (tanh(v / v_s) - tanh(v_hat /
-v_s)) is up to 2 F_s and changes sign from sample to sample, and nothing in P carries it. Measured on MuJoCo's
-finger3 with the library's own smooth law (the model exact but for the noise; 2 s of the estimation scenario's
-torque, 5e-4 N m): the NEES of the joints 15 to 22 against a 95 % band of 1.8-4.5 (errors of 0.06-0.10 degree, sigma
-0.02-0.04); with a process noise on the joints' velocities scaled uniformly by 3 to 30 it stayed at 12 to 20 (the
-error lies in the split the encoder does not see, and the friction's error is per joint); the unscented filter was
-at 30.
+v_s)) is up to 2 F_s and changes sign from sample to sample, and nothing in P carries it. On MuJoCo's
+finger3 with the library's own smooth law (the model exact but for the torque noise) the joints' NEES stays several
+times above its band, and a process noise on the joints' velocities scaled uniformly does not bring it down (the
+error lies in the split the encoder does not see, and the friction's error is per joint); the unscented filter is
+no better.
 
 Here the friction's error is a white torque on each joint i of standard deviation ``fraction`` sqrt(rho_i) F_s,i,
 rho_i = kick_i^2 / (kick_i^2 + v_s^2) the share of the law's band the kicks cover (0 without torque noise: the

@@ -16,26 +16,10 @@ variance added to the within-model one, each other law's estimate one standard d
 :mod:`~alpes_dyn.estimation.identification.law_spread` widens the fit's standard errors). Nothing in it reads the
 true joints: only the recording and the file.
 
-Measured on the friction study's stick-slip plants (``nees_law`` of its rows; the band about 0.74-1.29), each
-joint's NEES with P alone, then with (L1):
-
-======================================= ============================== ==========================================
-plant, file (the kept law)              P alone                        with (L1)
-======================================= ============================== ==========================================
-finger3 ``stiff``, true file (smooth)   5.2, 7.1, 7.4                  0.61, 0.85, 0.66
-finger3 ``stiff``, identified (smooth)  7.9, 13.0, 7.8                 0.52, 0.83, 0.98
-finger3 ``all_stiff``, true (smooth)    8.1, 3.7, 11.1                 1.29, 1.08, 0.91
-finger3 ``all_stiff``, identified       78, 7.9, 19.6                  4.55, 0.56, 0.88
-(LuGre; a fit that did not converge)
-finger2 ``stiff``, true file (smooth)   20.4, 18.5                     0.65, 0.69
-finger2 ``stiff``, true file (LuGre)    96, 69                         0.56, 0.62
-======================================= ============================== ==========================================
-
-On four more draws of finger3's ``stiff`` case (drawn after the code was final) the identified file's per-joint NEES
-went from 4.1-21 to 0.47-1.98 and the true file's from 3.8-11.4 to 0.53-2.42: 7 of the 24 joint values in the
-band, 11 below it (cautious), 6 above. From over-confident by 4 to 100 times to within a factor of about 2 of its band
-(with the stick-slip law kept, more cautious: 0.34-0.42 on finger2), but not into the band on every joint: it is
-an opt-in check (``estimate --data --law-spread``, three observer runs instead of one), not the filter's own sigma.
+On the friction study's stick-slip plants, the joints' NEES with P alone is far above its band (the filter
+over-confident), with (L1) within a factor of about 2 of it, on some joints below it (cautious), the stick-slip
+law kept more cautious still; not into the band on every joint: it is an opt-in check (``estimate --data
+--law-spread``, three observer runs instead of one), not the filter's own sigma.
 What it cannot see: an error that every law shares (the identified file's own parameters' error; the fit's
 covariance is not drawn here).
 """

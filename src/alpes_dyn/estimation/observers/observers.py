@@ -251,7 +251,7 @@ class KalmanFilter(Rebuilt):
         z, P, y = cs.SX.sym("z", nz), cs.SX.sym("P", nz, nz), cs.SX.sym("y", mdl.ny)
         # the update built once, on symbols (where it folds a product, it folds it on any P: the folds come from
         # the constant entries of H and R), and called on the prediction's expressions in the step (the same
-        # operations in the same order; building it twice took 3-6 s on the Allegro hand's 32 states)
+        # operations in the same order; building it twice costs seconds on a large state)
         self._update = cs.Function("update", [z, P, y], list(self._update_sym(z, P, y)), ["z", "P", "y"],
                                    ["z_upd", "P_upd"])
         # one step on s = [z; vec P] and [w; y], the prediction built from the expressions (so that the products
@@ -262,8 +262,8 @@ class KalmanFilter(Rebuilt):
         zu, Pu = self._update(zp, Pp, r[mdl.nw:])
         self.exact_loops = not self._folds
         out = cs.vertcat(zu, cs.vec(Pu))
-        # no cse of the whole step: built from merged pieces, it has 1-2 % more instructions than merged again, and
-        # merging them took 0.3 s on finger3, 2-4 s on an Allegro finger (benchmarks/observer_build.py)
+        # no cse of the whole step: built from merged pieces, it has only a few more instructions than merged again,
+        # and merging them costs seconds on a large finger (the build: benchmarks/results/observer_build.json)
         self._set_step(cs.Function(f"{self.kind}_step", [s, r, self._p], [out], ["s", "wy", "p"], ["s_next"]),
                        compiled)
 

@@ -18,8 +18,8 @@ class OnlineFilter:
     :meth:`step` copies w and y into a preallocated buffer, calls the compiled predict-update step once
     and returns the new estimate z as a view of the filter's buffer (valid until the next step: copy it to
     keep it); :attr:`P` is the covariance. No allocation and no check per step beyond the shapes of w and
-    y (numpy's assignment): what a 1 kHz loop from Python can afford. Measured in
-    ``benchmarks/observer_step.py``.
+    y (numpy's assignment): what a 1 kHz loop from Python can afford. Its time per step:
+    ``benchmarks/results/observer_step.json`` (its rows' ``online_us``).
 
     Parameters
     ----------

@@ -406,7 +406,7 @@ def run_estimation(observer: str = "ekf", scenario: EstimationScenario | None = 
     if abs(N * sc.dt - sc.duration) > 1e-9 * sc.duration:
         raise InputError(f"duration: {sc.duration:g} s is not a whole number of samples dt = {sc.dt:g} s")
     # the arrays kept per sample (truth at dt / substeps, filter states and covariances), times 6 for the
-    # copies CasADi and numpy make on the way (measured: 7.3 kB per sample for finger3 and the EKF)
+    # copies CasADi and numpy make on the way
     nz = 2 * n + (len(sc.parameters) if observer.endswith("-params") else 0)
     check_bytes(48.0 * (N + 1) * (sc.substeps * (4 * n + 2 * m + 1) + 2 * (nz + nz * nz) + 4 * n + 3 * m), "duration",
                 f"{sc.duration:g} s at dt = {sc.dt:g} s ({N} samples)")
