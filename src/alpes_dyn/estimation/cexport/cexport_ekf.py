@@ -20,7 +20,7 @@ skipped likewise.
 A model of several substeps per period (a friction model: :func:`~alpes_dyn.simulation.integrate.stable_substeps`)
 is not written out substep by substep: :func:`~alpes_dyn.estimation.cexport.cexport_substeps.substep_model_source` loops over them and over each RK4 step's four
 stages, composing A and G = dF/dw by the chain rule over CasADi's code of the right-hand side and its Jacobians
-(finger3's friction EKF: 49 kB of C instead of 1.1 MB, whose straight-line code GCC's -O2 took 30 s to minutes to
+(a source many times smaller than the straight-line code of every substep, which takes the compiler minutes to
 build); its numbers are the filter's to rounding, not bit for bit.
 
 A looped filter (a large state, :mod:`~alpes_dyn.estimation.observers.looped`: the Shadow hand's 48) is exported

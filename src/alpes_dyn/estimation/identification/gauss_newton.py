@@ -65,17 +65,17 @@ masses within 0.9 %."""
 SOFT_PHASES = 4
 """Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
 JOIN_STEPS = 2
-"""Gauss-Newton steps at most of :meth:`GaussNewton.join_nodes`: on 60 s of finger3 from the model's
-response at the window's parameters, the defects fell to 0.26 and 0.007 of the nodes' scale in two steps, and stage 3
-converged in as many iterations from there as after four steps (defects 9e-5) or after the homotopy."""
+"""Gauss-Newton steps at most of :meth:`GaussNewton.join_nodes`: from the model's response at the window's
+parameters two steps bring the defects down to a small fraction of the nodes' scale, and stage 3 converges in as
+many iterations from there as after more steps or after the homotopy."""
 WINDOW_ITERATIONS = 15
 """Stage 3's iterations at most from a long record's window start (:mod:`~alpes_dyn.estimation.identification.long_record`;
-then the whole fit of the whole record): the fingers' took 4-6 (finger3 at 16, 60 and 600 s, the hand's four
-fingers at 60 s), while the hand's thumb at 60 s crawled from it into the 50-iteration cap at 34.8 counts
-(100 s of a 271 s fit) before the whole fit converged in 8."""
+then the whole fit of the whole record): the fingers' converge well within it, while a start that crawls (the
+hand's thumb on a long record) would otherwise spend a large share of the fit reaching the iteration cap before
+the whole fit converges."""
 BASIN_LIMIT = 3.0 / math.sqrt(12.0)
 """counts: an encoder residual above three times the quantisation floor (1/sqrt(12) count) asks for the second
-start (the wrong basins leave 4-8 counts, the right one the encoder noise, 0.58)."""
+start (the wrong basins leave several counts, the right one the encoder noise, about 0.58)."""
 
 
 @dataclass
@@ -715,8 +715,8 @@ class GaussNewton:
         variables of another fit of the recording (:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.warm_variables`):
         stage 3 from them first, kept where it converges within :data:`BASIN_LIMIT`, else stages 1-3 as above (the
         homotopy brings a start from the model's own response near the data; a converged fit of a neighbouring
-        model already is: on MuJoCo's all-effects finger3 plants the rounds with the rotor and the
-        stick-slip law took 3.2-8.2 s from the last round's trajectory instead of 5.0-16.5 s, to the same values).
+        model already is: a round of ``--effects auto`` from the last round's trajectory reaches the same values in
+        less time).
         ``warm_at``: [the :class:`~alpes_dyn.estimation.identification.shooting.Evaluation` at ``warm`` with its
         Jacobians] where the caller has it (a long record's window start, :mod:`~alpes_dyn.estimation.identification.long_record`:
         one evaluation of the whole record fewer; stage 3 from there at most :data:`WINDOW_ITERATIONS`); taken out

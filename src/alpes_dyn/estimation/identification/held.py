@@ -6,7 +6,7 @@ Where a fitted parameter is not identified (:mod:`~alpes_dyn.estimation.identifi
 whose 95 % interval reaches past 0, say), :func:`~alpes_dyn.estimation.identification.identification.identify` fits
 again with it held. Started from the first fit's values and trajectory with only the held parameter moved, the
 other parameters, the torque's line corrections and the trajectory all have to follow it, which the constrained
-Gauss-Newton stage took 4 iterations of the whole record to do on a 60 s finger3 record (4.8 s of a 30 s fit).
+Gauss-Newton stage takes several iterations of the whole record to do (a sizeable share of a long record's fit).
 At the first fit's optimum the move is known to first order: holding the parameters H at rho_H + delta is the
 equality-constrained quadratic problem of the last Gauss-Newton step with E' z = delta added, whose solution is
 

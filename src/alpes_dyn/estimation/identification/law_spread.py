@@ -16,11 +16,11 @@ parameter's standard error becomes
     sigma^2 = sigma_noise^2 + (w |theta_kept - theta_other|)^2,                                   (S1)
 
 w = :data:`SPREAD_WEIGHT` (Draper 1995, "Assessment and propagation of model uncertainty": the between-model
-variance added to the within-model one; the truth's law is neither). Measured on those draws, the fraction within 3
-standard errors: 83 % with the noise's alone (w = 0), 89 % at w = 0.5 (RMS 1.79), 94 % at w = 1 (RMS 1.55; the
-unbiased variance of two values would be w = 0.71): w = 1, the other law's value one standard error away. Where
+variance added to the within-model one; the truth's law is neither). On those draws the fraction of errors within
+3 standard errors rises with w, and is closest to its nominal share at w = 1 (the unbiased variance of two values
+would be w = 0.71): w = 1, the other law's value one standard error away. Where
 the laws agree the fit's own covariance is left; where they disagree, so does the standard error. What it cannot
-see: an error both laws share (there F_s_2 stayed 4.1-4.2 standard errors high on two of the three draws).
+see: an error both laws share (there one joint's F_s stayed several standard errors high).
 """
 
 from __future__ import annotations

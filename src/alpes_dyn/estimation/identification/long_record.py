@@ -22,8 +22,8 @@ homotopy's last phase start stage 3 instead, as before the join. Where stage 3 d
 :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole
 record, as for any warm start: the answer is the same problem's, only its start differs.
 
-A recording of several runs (issue 51: four 16 s runs of the Shadow finger took 13 min, each 16 s run alone about
-a minute) starts from its runs fitted one by one (:func:`runs_start`): each run alone the whole fit (from its own
+A recording of several runs (issue 51: several runs fitted together took far longer than the runs fitted one by
+one) starts from its runs fitted one by one (:func:`runs_start`): each run alone the whole fit (from its own
 window where it is long), then the whole record from every run's own fitted trajectory and the runs' mean
 parameters, stage 3 alone. The window of the first run's first seconds left the other runs' starts to the model's
 response from rest, which on a springless finger drifts past :data:`JOIN_LIMIT` and sent the fit through the

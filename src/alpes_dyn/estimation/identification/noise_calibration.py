@@ -4,7 +4,7 @@ An observer built on a parameter file reports a covariance that covers its error
 the model's error: a smooth friction law on a joint that sticks, a joint that creeps, what the fit left. The
 library's default (:mod:`~alpes_dyn.estimation.observers.friction_noise`: a quarter of F_s where the torque noise
 covers the law's band) was chosen on the library's own plant; on MuJoCo's dry friction the filter with the *true*
-file was over-confident by 7-13 times (its joints' NEES). Here the model error is measured on the record the file was
+file is over-confident several times over (its joints' NEES). Here the model error is measured on the record the file was
 fitted on, from what a user has (the encoder, the torque, the filter's own covariance; never the true joints):
 
 * the model error is a white torque per sample of e F_s,i on each joint i (``friction.model_error`` = e, in units of

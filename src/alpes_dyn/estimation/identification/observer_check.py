@@ -68,28 +68,25 @@ OBSERVER_THRESHOLDS: dict[str, float] = {
 the sensor floor or the prediction's ``prediction_ratio`` times it, or where the filter is over-confident: its
 normalised innovation squared, or that of its prediction ``horizon_s`` ahead, above its chi-square band of
 probability ``nis_level`` (:func:`~alpes_dyn.estimation.observers.innovation.nis`); on the recording's first
-``window_s`` s (the hand at rest at its start, as the filter's prior: the stick-slip law's EKF runs at about 1.3 ms per sample, 18 RK4 steps
-each, in CasADi's virtual machine; a compiled one took minutes of gcc; 4 s rather than 2: on MuJoCo's stick-slip
-finger3 one draw in eight held its joints within the smooth law's reach for the first 2 s of the friction study's
-validation run, its EKF over-confident (joints' NEES 19) yet every test in its band, and refused on 4 s). Why 25 for the prediction: the true file
-itself, on our own simulator's recording of the experiment (the model's exact structure), predicts finger2 20 ms
-ahead within 12.1-16.0 times the floor (three draws; the nominal file 310-385 times), finger3 on MuJoCo's stick-slip
-plant within 12.5 (the nominal 140); at 15 the default path refused two finger2 draws whose fits were within
-0.13 % of the truth. Fits missing the torque delay measured 28-43 times (``benchmarks/realism.py``; the fitted
-files' ratios on its draws are recorded in ``benchmarks/results/realism.json`` (each row's
-``extended.observer.prediction_ratio``) and ``benchmarks/results/realism.friction.json``). Why a
-99 % band: two tests of a consistent filter at 95 % each refuse about one file in ten by chance; the true file on
-MuJoCo's stick-slip finger3 of ``tests/test_realism_draws.py`` (the EKF 0.15 degree off) had its 20 ms prediction
-at 1.51 against a 95 % band reaching 1.495, the nominal file's 133 (its innovation 8.4). ``split_horizon_s``: a
+``window_s`` s (the hand at rest at its start, as the filter's prior). The window bounds the check's cost (the
+stick-slip law's EKF takes many RK4 steps per sample in CasADi's virtual machine, and a compiled one minutes of
+the compiler); it is long enough that a plant whose joints stay within the smooth law's reach for the first
+seconds still shows its over-confident filter. Why 25 for the prediction: above the ratio of the true file itself
+on a recording of the model's exact structure and on MuJoCo's stick-slip plant, so that accurate fits are not
+refused, and below those of the nominal file and of fits missing an effect (the torque delay); the fitted files'
+ratios on the benchmark's draws are recorded in ``benchmarks/results/realism.json`` (each row's
+``extended.observer.prediction_ratio``) and ``benchmarks/results/realism.friction.json``. Why a 99 % band: two
+tests of a consistent filter at 95 % each refuse about one file in ten by chance, and a true file's prediction can
+sit just above a 95 % band while a wrong file's is far above it. ``split_horizon_s``: a
 third consistency test, the normalised error squared of the prediction that far ahead (s), against its band of
 probability ``nis_level``: where the encoder reads the sum of the joints, an error in their split (the smooth law on
 a stick-slip plant lets a stuck joint creep, and the filter's covariance holds the split tight) shows in the
 encoder only through the dynamics, over tens of milliseconds -- the innovation's NIS stays in or below its band
 (:mod:`~alpes_dyn.estimation.observers.friction_noise`, the observers guide's measurements). ``split_stride``: its
-predictions' starts, samples apart: each propagates its covariance ``split_horizon_s`` ahead (100 steps of the
-stick-slip law's 18 substeps), so at ``stride`` they were three quarters of the check's time (of each trial of the
-model error's calibration) while overlapping by 95 %; 20 ms apart (80 %) the statistic is the same within its
-sampling (its band counts the effective samples from their autocorrelation) at a quarter of the cost."""
+predictions' starts, samples apart: each propagates its covariance ``split_horizon_s`` ahead, so at ``stride``
+they would take most of the check's time (of each trial of the model error's calibration) while overlapping
+almost wholly; further apart the statistic is the same within its sampling (its band counts the effective samples
+from their autocorrelation) at a fraction of the cost."""
 
 
 @dataclass
