@@ -126,8 +126,8 @@ HELD_CHUNK = 512
 def _held(Ac: np.ndarray, Ec: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
     """(A, E) of one sample with the input held (zero-order hold): exp([[A_c, E_c], [0, 0]] dt) = [[A, E], [0, I]],
     every sample at once, by scaling and squaring (each sample's matrix scaled by 2^-s to a 1-norm below 1/2, the
-    Taylor series to its 12th term, 2^-12 / 13! relative: below rounding, then squared s times; scipy's expm, a loop
-    over the samples, took 10 s on 8000 of them); exact for the linearised dynamics however stiff the smooth friction
+    Taylor series to its 12th term, 2^-12 / 13! relative: below rounding, then squared s times; not scipy's expm, a
+    Python loop over the samples); exact for the linearised dynamics however stiff the smooth friction
     makes them. The zero rows kept out of the products: with C = [A_c, E_c] dt 2^-s, each term is [T, U] with
     [T_k, U_k] = T_k-1 C / k, and a squaring [P, Q] -> P [P, Q] + [0, Q]."""
     N, nx, nb = Ec.shape

@@ -24,9 +24,8 @@ only (no model of the finger is trusted for them).
    to its stops: the encoder growing by more than :data:`SNAP_FRACTION` of the range while the torque grows by
    less than :data:`FOLD_WINDOW` of the safe torque (the ramp holds its torque while the encoder runs, so a snap is
    a jump at one torque); its torque is where the experiment's bias must stay below. A steep but stable branch is no
-   fold: on the MuJoCo stand-in's finger3 palm up, q_1 sweeps from its 0 to its 90 degree stop between 0.020 and
-   0.026 N m (3100 counts, the same up and down in holds of 1.5 s: no hysteresis, no snap), 5.2e5 counts per N m,
-   which a window of 2 % of the safe torque (1e-3 N m) took for a fold;
+   fold: on the MuJoCo stand-in's finger3 palm up, q_1 sweeps from stop to stop over a narrow band of torque, the
+   same up and down (no hysteresis, no snap), which a narrower window took for a fold;
 4. the command ramped back to 0 N m, four times as fast (at ``rate``: unhindered by the speed hold).
 
 A motor whose joints have no spring (the thumb's ab/adduction) is not ramped: against no spring a torque above its

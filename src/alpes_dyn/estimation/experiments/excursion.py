@@ -7,25 +7,11 @@ figure, read off the recording itself at no cost: the encoder's noise is fixed i
 sqrt(12), and the design's 0.5 count), while every parameter's signature in the reading scales with the motion, so a
 parameter's standard error goes as 1 / excursion.
 
-Measured (the 2-joint finger of ``tests/test_urdf_identify.py``, whose DIP mimics its PIP, the documented 2 s
-experiment, springs 10 % off the spec's, the encoder's counts per revolution lowered to shrink its excursion; the
-default selection K, m, friction):
-
-=====================  =========  =========================  =======================
-excursion (counts)     converged  springs' error (mcp, pip)  standard error of K_mcp
-=====================  =========  =========================  =======================
-637 (4096 counts/rev)  yes        -0.34 %, +0.19 %           0.24 %
-161                    yes        -0.79 %, +0.48 %           0.82 %
-42                     yes        -1.4 %, +0.92 %            2.9 %
-12                     no         -8.9 %, +17 %              7.3 %
-7                      no         -28 %, +36 %               9.9 %
-5 (= ratios 0.01)      no         -24 %, +44 %               18 %
-=====================  =========  =========================  =======================
-
-The standard error goes as about 130 %-counts / excursion until the fit loses its way between 42 and 12 counts.
-:data:`MIN_EXCURSION_COUNTS` (30 counts) is in that gap (where the rule gives 4 %), below the 45 counts of the thumb's
-ab/adduction on the documented 1 s experiment (friction only, no spring) and far below the 730-1520 counts of the
-Alpes fingers' flexion (0.5-1 s) and the 583-637 of this finger at its test's ratios of 2.0 and 1.5. :func:`small_excursions` names each motor below it
+On a small finger whose encoder's counts per revolution are lowered to shrink its excursion (the 2-joint finger
+of ``tests/test_urdf_identify.py``), a spring's standard error grows as the inverse of the excursion until, a few
+tens of counts down, the fit loses its way and its springs come out far off. :data:`MIN_EXCURSION_COUNTS` lies in
+that gap, below the excursion of the thumb's ab/adduction on the documented experiment (friction only, no spring)
+and far below that of the Alpes fingers' flexion. :func:`small_excursions` names each motor below it
 (:func:`~alpes_dyn.estimation.experiments.experiment.experiment` and
 :func:`~alpes_dyn.estimation.experiments.experiment.model_experiment` warn with it, ``alpes-dyn experiment`` and
 ``identify`` print it); whether a selection is identified from a given experiment is the Fisher information's to say.
@@ -44,8 +30,8 @@ __all__ = ["MIN_EXCURSION_COUNTS", "SmallExcursionWarning", "encoder_excursions"
            "excursion_report", "warn_small_excursions"]
 
 MIN_EXCURSION_COUNTS = 30.0
-"""Counts peak to peak below which a motor's recorded encoder is named (the module doc: between 42 counts, where the
-fit converged with 2.9 % standard errors on the springs, and 12, where it did not)."""
+"""Counts peak to peak below which a motor's recorded encoder is named (the module doc: between the excursions where
+the fit still converged, with springs' standard errors of a few percent, and those where it did not)."""
 
 
 class SmallExcursionWarning(AlpesDynWarning):

@@ -42,9 +42,8 @@ the gravity it feels, not the design's), its amplitude searched down from four t
 
 Why this design (measured with :func:`~alpes_dyn.analysis.identifiability.fisher_information`, the Cramér-Rao
 bounds of K, m, F_s, F_v on finger3 from 4 s of encoder data, 0.5 count of noise plus quantisation):
-the estimation scenario's small torque wiggle leaves F_v_3 at 10 % and the masses at up to 0.64 %; the
-multisine across the joint range brings every parameter below 0.8 % (masses 0.08-0.26 %). See the
-identification user guide for the full comparison.
+the estimation scenario's small torque wiggle leaves the distal viscous friction and the masses poorly bounded;
+the multisine across the joint range bounds every parameter several times tighter.
 
 :func:`experiment` simulates it on a finger with given true parameters (friction included) and returns
 (and writes) a :class:`~alpes_dyn.estimation.experiments.recording.Recording` with the true joint angles in

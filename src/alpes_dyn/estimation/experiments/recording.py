@@ -276,7 +276,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     if n_lines > MAX_CSV_ROWS + 1:
         raise RecordingError(f"recording {str(p)!r}: more than {MAX_CSV_ROWS} rows (the limit of a recording)")
     refuse_empty_row(text, p)  # (never skipped: a lost sample)
-    # the rows parsed one at a time into the array (a list of every row's cells took 60 MB for a 60 s record), the
+    # the rows parsed one at a time into the array (a list of every row's cells is many times the array), the
     # lines cut from the text as read (csv_numbers.lines: no copy of the text)
     rows = (r for r in csv.reader(lines(text)) if r and any(c.strip() for c in r))
     header = _header(rows, p, model, ignore_others_of)

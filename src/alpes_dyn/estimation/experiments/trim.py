@@ -4,24 +4,20 @@ slow loop on the encoder settles to on the real finger (:func:`_trimmed_bias`).
 
 Why the trim is more than the nominal's encoder reading: palm up, the Alpes finger at mid-range is close to a fold of
 its static equilibria (gravity's torque nearly outgrows its springs: the nominal finger3's compliance there,
-d(S q)/d tau, is 1036 rad of encoder reading per N m, 6.2 times its compliance unloaded), so a finger within +-20 %
-per link of the nominal values (finger3, thirty draws of ``perturbed_params(spread=0.2)``) is 0.51 to 6.4 times as
-compliant at the nominal's reading, or has no rest there at all (two of them fold below it). The nominal
-design's room (its multisine at 0.5 of the amplitude that keeps a nominal run in range) covers about a factor of 2:
-on the softer fingers the multisine and the dither together (each alone stayed inside) swung q_1 past its 90 degree
-stop (to 95 and 99 degrees), and the folding ones, held below their fold, rested q_1 on its 0 degree
-stop (13-21 degrees past it). No one bias serves the whole +-20 % box palm up: over its 64 corners
-(K_i, m_i each 0.8 or 1.2 times nominal) the encoder readings at which a corner rests with every joint 0.05 rad
-inside its range do not overlap (one corner needs q_1 + q_2 + q_3 of at least 110 degrees, another at most 91).
+d(S q)/d tau, is several times its compliance unloaded), so a finger within +-20 % per link of the nominal values
+(``perturbed_params(spread=0.2)``) is from about half to several times as compliant at the nominal's reading, or
+has no rest there at all (it folds below it). The nominal design's room (its multisine at 0.5 of the amplitude
+that keeps a nominal run in range) covers about a factor of 2: on the softer fingers the multisine and the dither
+together swing q_1 past its upper stop, and the folding ones, held below their fold, rest q_1 on its lower stop.
+No one bias serves the whole +-20 % box palm up: over its 64 corners (K_i, m_i each 0.8 or 1.2 times nominal) the
+encoder readings at which a corner rests with every joint 0.05 rad inside its range do not overlap.
 The trim therefore measures the finger it holds: where it is more compliant than the nominal finger at its design
-point, it stops lower, where the compliances match (:func:`_matched_compliance`; 14 of those 30 draws), and the
-multisine and the dither shrink with the room the joints have left below that rest (:func:`_room_below`: 0.41-0.91
-of their amplitudes on those 14). All 30 then stay inside their range, 3.5 degrees or more (4 s, our simulator).
-The box's extreme corners remain at the edge: with every spring 20 % soft and every mass 20 % heavy, the matched
-rest would leave q_1 1.5 degrees above its stop, the fold lies within 1.25 multisine peaks above it, and held
-below that q_1 rests 0.8 degree past its stop and the dither swings it 5.3 degrees past (a range warning); such a
-finger is for the hanging rig (``ExperimentDesign(orientations=(hanging_gravity(g),))``), where the 30 draws stayed
-7.9 degrees or more inside their range (measured with the trim before this rule).
+point, it stops lower, where the compliances match (:func:`_matched_compliance`), and the multisine and the dither
+shrink with the room the joints have left below that rest (:func:`_room_below`), so that drawn fingers stay inside
+their range. The box's extreme corners remain at the edge (every spring 20 % soft and every mass 20 % heavy: the
+fold lies just above the lower stop, and the dither swings q_1 past it, a range warning); such a finger is for the
+hanging rig (``ExperimentDesign(orientations=(hanging_gravity(g),))``), where drawn fingers stay well inside their
+range.
 """
 
 from __future__ import annotations
@@ -217,13 +213,10 @@ def _room_below(nominal: Model, k: int, bias: np.ndarray, reading: float, gravit
     (rad) below the design's: of the room each of the motor's joints has between its rest and the limit that a
     slackening tendon moves it towards (the lower limit where S_kj > 0), the smallest share the nominal finger
     keeps at that reading, against its rest at the design point ``q_design`` (n,). The nominal model, not the
-    finger, gives the joints' split (the encoder reads their sum only); measured on thirty drawn finger3s: with the
-    multisine unshrunk, the matched rest left q_1 at 14-18 degrees and the excitation swung it to -0.8 to -5.5
-    degrees on four draws (the nominal finger's q_1 swings 18 degrees below its rest); the multisine
-    alone shrunk (0.41-0.68 there), q_1 stayed 3.1 degrees or more above it on every draw, but finger2's distal
-    joint, which the 20 Hz dither swings as far as the multisine, dipped 2.1 and 0.9 degrees below its stop (two draws;
-    2.2 degrees or more inside with the nominal's reading); both shrunk, finger3's q_1 stays 3.5 degrees or
-    more inside (4 s)."""
+    finger, gives the joints' split (the encoder reads their sum only). Why both shrink: with the multisine
+    unshrunk, the matched rest leaves some drawn fingers' q_1 close enough to its stop that the excitation swings it
+    past; the multisine alone shrunk, a distal joint that the dither swings as far as the multisine can still dip
+    past its stop; both shrunk, the joints stay inside their range."""
     S = nominal.transmission.S[k]
     upper = max(4.0 * float(bias[k]), _torque_ceiling(nominal, k))
     tau = _rest_torque(nominal, lambda q: float(_reading(nominal, q, k)), reading, gravity, upper,
