@@ -64,15 +64,14 @@ off the block on some draws of finger3 +-20 %, whatever the parameter file (the 
 #: for both). The sensor loop's 2-DOF structure is fixed before the grid: a first-order prefilter on the
 #: reference of the feedforward and the integral, the proportional term on the raw reference; its time
 #: constant, 25 ms, is the shortest of {15, 20, 25} ms with which the loop keeps the contact on the five
-#: plants drawn 10 % off (``benchmarks/control.py``; with 20 ms it is a little faster on the nominal plant
-#: but the FlexiForce reading drops to 0 on two of them as the fingertip rolls). The sensorless loop feeds
-#: back a noisier, model-dependent estimate and is made slower; it declares contact once its estimate
-#: stays above 0.1 N for 20 ms (the FlexiForce's loops: above 0.03 N). The sensor loop releases slower than it
-#: presses (``release_s`` 50 ms, the prefilter while the reference falls): unloading, the fingertip rolls back
-#: across the block (finger3's distal joint 14 degrees between 0.6 and 0.2 N) and with 25 ms its force fell 7-8 %
-#: of the step below the lower level on four finger3 drawn +-20 % of five (their true files, the CLI's default
-#: step) and 19 % on the fifth, where the fingertip bounced on the block (0 N for a tick with an identified
-#: file); with 50 ms 1-3 %, the rise and the up step as they were.
+#: plants drawn 10 % off (a shorter one is a little faster on the nominal plant but loses the FlexiForce's
+#: reading on some drawn plants as the fingertip rolls; the loops with these gains:
+#: ``benchmarks/results/control.json``). The sensorless loop feeds back a noisier, model-dependent estimate and
+#: is made slower; it declares contact once its estimate stays above 0.1 N for 20 ms (the FlexiForce's loops:
+#: above 0.03 N). The sensor loop releases slower than it presses (``release_s`` 50 ms, the prefilter while the
+#: reference falls): unloading, the fingertip rolls back across the block, and with the rise's time constant the
+#: force undershoots the lower level by a sizeable share of the step on drawn fingers (the fingertip can bounce
+#: off the block); with the slower release a few percent, the rise and the up step as they were.
 DEFAULT_GAINS: dict[str, dict[str, float]] = {
     "sensor": {"kp": 0.008, "ki": 1.6, "prefilter_s": 0.025, "prefilter_order": 1, "setpoint_weight": 1.0,
                "release_s": 0.05},

@@ -20,16 +20,15 @@ The plant starts at rest, motor off: the finger hanging on its springs in the pl
 series-elastic rotor where the cable is just slack (the approach takes the slack up).
 
 The controllers' side of the effects (:class:`Compensation`, on by default with ``effects``;
-:data:`NO_COMPENSATION` is the rigid design), measured by ``benchmarks/force_realism.py`` (finger3, one tuning draw,
-every effect, the sensor loop: the rigid design's 10-90 % "rise" of 1 ms is the cable's mode ringing at 250 Hz
-through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
+:data:`NO_COMPENSATION` is the rigid design; without the compensation, on a plant with every effect, the rigid
+design's force loop rings at the cable's mode; the loops with it: ``benchmarks/results/force_realism.json``):
 
 * ``notch``: the command through a notch at the cable's mode as identified, f_c = sqrt(1 / (C J_m)) / (2 pi) (the
   identified tendon compliance C on the file's rotor inertia J_m: about 200 Hz): the rotor on its elastic cable is a
   lightly damped mode that the force loop's proportional path (its set-point step and its feedback through a
   one-sample delay) excites;
 * ``observer_compliance``: the EKF on the encoder with the identified tendon's stretch taken off, y - C tau_m,k-1
-  (as ``alpes-dyn estimate --data`` does; the joints' estimate 2.5 -> 1.2 degrees on the worst joint), and
+  (as ``alpes-dyn estimate --data`` does; the joints' estimate markedly closer), and
   ``encoder_offset`` (rad of motor; default the controller's parameter file's, as ``identify`` wrote it);
 * ``command_input``: the EKF and the sensorless estimate take the command held over the last period (in the current
   sensor's units: what the reading shows, without its delay and its noise) as the motor torque, instead of the
@@ -40,20 +39,20 @@ through the force loop, overshoot 12.5 %; with the notch 92 ms and 8.4 %):
 * ``force_scale``: the sensorless estimate divided by its ratio to the fingertip sensor's reading, measured once
   (:func:`~alpes_dyn.control.grasp_calibration.force_scale_of`): the torque constant's error scales every
   identified torque parameter, and the estimate with them, by 1 + e (the encoder cannot see it) -- a floor of
-  e / (1 + e) on the uncalibrated sensorless loop (4.8 % for e = 5 %), which one press against the sensor removes.
+  e / (1 + e) on the uncalibrated sensorless loop, which one press against the sensor removes.
   The EKF's force input is multiplied by it (the sensor's reading, or the estimate, in the file's torque units):
   fed the sensor's newtons against the file's torques 1 + e too large, the observer's joints took the missing
-  e J^T F on their springs (the thumb's first joint 1-1.25 degrees off in contact).
+  e J^T F on their springs (the thumb's first joint visibly off in contact).
 
 The identified torque delay (the file's ``transmission.torque_delay``) needs no block of its own: with
 ``command_input`` the observer and the sensorless estimate take the command, which the reading's lag does not
 touch.
 
-Measured and left out: a smoothed Coulomb feedforward of the identified F_s, F_v on the observer's velocities (the
-overshoot 13.6 -> 16.3 %: the stick-slip the loop meets is the passive joints' redistribution as the fingertip rolls
-on the block, which the tendon's single torque does not drive), a 60-100 Hz dither (overshoot 14.5-18 %, the
-oscillation metric 1.5-2 %), a derivative of the force (unstable through the cable's mode), an integrator frozen
-while the joints move (overshoot 13-16 %, steady-state error up to 23 %). The PI's anti-windup is the controller's
+Tried and left out, each worse on the same plant: a smoothed Coulomb feedforward of the identified F_s, F_v on
+the observer's velocities (more overshoot: the stick-slip the loop meets is the passive joints' redistribution as
+the fingertip rolls on the block, which the tendon's single torque does not drive), a dither (more overshoot and
+oscillation), a derivative of the force (unstable through the cable's mode), an integrator frozen while the joints
+move (more overshoot, a large steady-state error). The PI's anti-windup is the controller's
 conditional integration at the torque's limits.
 """
 

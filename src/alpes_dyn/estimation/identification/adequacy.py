@@ -85,8 +85,8 @@ harmonics and intermodulation products is over ``harmonic_ratio`` times its powe
 drift (a ramp of the offset or the torque's response to a ramp of the gain, each judged alone, the one explaining
 more) named first from ``drift_share``, else where nothing else is (a rotor's misfit: 0.05); the tendon-sheath friction
 (judged in the regression with the others, theirs without it) named first from ``sheath_share``, beside what the
-others name (our simulator's finger2 with mu theta 0.02: 0.19-0.32 turned at 100 / 50 ms intervals, 0.25 level;
-without one, MuJoCo's finger3 on an elastic damped cable: 0.056, with a rotor the model lacks: 0.005)."""
+others name (set between the shares of a plant with a sheath friction the model lacks and those of plants without
+one, an elastic damped cable or a rotor the model lacks, well below)."""
 
 JOINT_STOP = ("a joint stop (the fitted joints leave their range: the experiment drives the finger into a stop the "
               "model does not have; lower the excitation or trim its bias)")  # named first (range_exit)

@@ -31,10 +31,10 @@ interval's start state alone on its encoder samples; (2) a homotopy, continuity 
 tightened tenfold per phase (four phases of Levenberg-Marquardt), friction held; (3) the constrained
 problem. In the homotopy a step whose parameter part the trust region shortens has its nodes solved
 again for the shortened step. If the encoder residual then stays above three times the quantisation floor (a wrong basin:
-4-8 counts against the noise's 0.58), or stage 3 asks three times in a row for a change of log theta
+several counts against the noise's floor), or stage 3 asks three times in a row for a change of log theta
 above 30 (the linearisation has lost the basin), stages 2-3 run again with friction free in the homotopy.
-If both starts miss, the whole fit runs again at half the interval (from 100 ms: 50 ms drifts less; one of
-three MuJoCo fingers with the effects of a real hand needed it).
+If both starts miss, the whole fit runs again at half the interval (from 100 ms: 50 ms drifts less; MuJoCo's
+fingers with the effects of a real hand can need it).
 
 Speed. A line search's trial needs the states, not their sensitivities: it runs the step without its
 derivatives (a tenth of the time), and the sensitivities are computed once a step is accepted. Near the
@@ -280,7 +280,7 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     try:
         if warm is None:  # several runs, each fitted alone first; a long record, from its first seconds (long_record)
             start_w, it_window = window_start(pb, solver, excitation, rest)
-            if start_w is not None:  # its evaluation handed over, not held here (a 600 s record's J: 190 MB)
+            if start_w is not None:  # its evaluation handed over, not held here (a long record's J is large)
                 warm, warm_at = start_w[:3], [start_w[3]][:start_w[3] is not None]  # (runs: no cap, no evaluation)
             start_w = None
         out = solver.solve(pb, nodes, offs, glob, warm=warm, warm_at=warm_at)
@@ -305,8 +305,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
     if not _held_again(result):  # judged here unless fitted again with parameters held (that fit's verdict kept)
         result.adequacy = judge()
     judge = None
-    # this fit's problem (with the lines' basis: 91 MB at 600 s), Jacobians and compiled sensitivities freed
-    # before a fit again (60 s, --effects auto: 437 -> 377 MiB at peak)
+    # this fit's problem (with the lines' basis), Jacobians and compiled sensitivities freed before a fit again
+    # (lowers the peak memory of --effects auto; the fits' peaks: benchmarks/results/fit_scaling*.json)
     pb = out = warm = sens = None
     settings = dict(excitation=excitation, interval=interval, substeps=substeps, torque_noise=torque_noise,
                     camera_noise=camera_noise, max_iterations=max_iterations, tol=tol, threads=threads,
@@ -403,7 +403,7 @@ def _retry_at_half_interval(model: Model, recording: Recording | str | Path, par
                             t_start: float) -> tuple[IdentificationResult | None, int, str]:
     """The fit again at half the shooting ``interval`` (s) where both starts ended above the basin limit (not merely
     at the iteration cap): shorter intervals drift less from a wrong start (on MuJoCo's +-20 % fingers with a real
-    hand's effects, one of three lost its basin from both starts at 100 ms, and fitted to the sensor floor at 50 ms).
+    hand's effects, a fit that lost its basin from both starts can reach the sensor floor at half the interval).
     Returns (the retry, kept if it converged to a lower residual than ``rms`` counts, else None; the iterations and
     the reason, with the retry's told) (on a plant with a rotor the model lacks, the retry's lost basin fitted lower
     and named the wrong effect: a lost basin again keeps the first)."""
@@ -484,7 +484,7 @@ def _conclude(pb: ShootingProblem, out: SolverResult, it: int, reason: str, val_
     Gauss-Newton KKT inverse, scaled by the residual variance) and the parameters the recording does not see; and
     a function giving the adequacy of the fitted model (module adequacy, each effect's regressor less what the fit
     absorbs of it), called by :func:`identify` unless the fit is made again with parameters held (the verdict is
-    the kept fit's: on a 600 s record the first's cost 17 s). Returns (result without its adequacy, that
+    the kept fit's: on a long record the first's costs many seconds). Returns (result without its adequacy, that
     function)."""
     e, sens, p, nv, nb = out.at, pb.sens, pb.p, pb.nv, pb.nb
     s2 = float(np.sum(e.r**2) + np.sum(e.rg**2)) / pb.dof
@@ -586,7 +586,7 @@ def _adequacy(pb: ShootingProblem, out: SolverResult, theta: np.ndarray, x_fit: 
         resp["drift"] = np.repeat(ramp[pb.kk][:, :, None], pb.ny, axis=2) * pb.valid[:, :, None]
     # the undamped KKT system of _conclude factorised again (the same numbers), after the effects' responses: not
     # held through them; then it and the Jacobians let go before the verdict's regressions, ``out``'s too (not read
-    # after the verdict: identify drops it): 150 + 190 MB at 600 s of finger3, whose peak was the regressions' QR
+    # after the verdict: identify drops it): on a long record they would add to the regressions' QR at its peak
     solve_Kz = held if held is not None else pb.kkt_solver(pb.normal_of(e), e.Cv, e.Cr, 0.0)
     Rr, names = np.zeros((len(resp),) + e.r.shape), list(resp)
     for i, name in enumerate(names):  # a loop over the four effects, each response let go once laid in Rr
