@@ -37,10 +37,10 @@ __all__ = ["SPRING_MODELS", "JointExtras", "spring_stiffness", "spring_law", "ST
 SPRING_MODELS: tuple[str, ...] = ("torsional", "report", "none")
 STICTION_VELOCITY = 0.02
 """v_s (rad/s) of the smooth sign tanh(qd / v_s) as a stick-slip law: under a torque below F_s a joint creeps at
-v_s atanh(tau / F_s) instead of sticking. Against MuJoCo's stick-slip finger (``frictionloss``, a 0.5 ms
-constraint), finger3 with its true values replayed open loop on the identification experiment: 0.39 / 0.13 /
-0.08 degrees RMS off at the file's v_s = 0.1 rad/s, 0.05 / 0.02 / 0.01 at 0.01; a fit on that plant lands its
-masses within 2.4 % at 0.02 (62 % at 0.1). It needs RK4 steps of about 1/15 ms on finger3
+v_s atanh(tau / F_s) instead of sticking. Against MuJoCo's stick-slip finger (``frictionloss``), finger3 with
+its true values replayed open loop on the identification experiment follows the plant several times closer at a
+small v_s than at the file's 0.1 rad/s, and a fit on that plant lands its masses close at 0.02, far off at 0.1; a
+smaller v_s costs more RK4 steps. It needs RK4 steps of about 1/15 ms on finger3
 (:func:`~alpes_dyn.simulation.integrate.stable_substeps`)."""
 
 

@@ -3,11 +3,11 @@
 :func:`~alpes_dyn.simulation.integrate.simulate` builds one CasADi ``mapaccum`` over every RK4 step of the run,
 evaluates it in CasADi's virtual machine and returns the states and outputs of every sub-step: on a 600 s record at
 1 kHz with 4 sub-steps, 2.4 million states of the finger (and a ``mapaccum`` whose construction alone grows with
-the run), so that the identification experiment of a ten-minute record took minutes and gigabytes per chain
+the run), so that the identification experiment of a ten-minute record cost minutes and gigabytes per chain
 (issue 39). :func:`sampled_rk4` runs the same RK4 step -- the model's numbers lifted into an input
 (:func:`~alpes_dyn.symbolic.lifted.lift_constants`) and the step length too, so that one compiled library serves
 every finger of that structure and every sub-step count -- in compiled C (:class:`~alpes_dyn.simulation.codegen.
-CompiledStepLoop`, cached on disk: about 0.3 s to build the first time for finger3), a chunk of samples at a time,
+CompiledStepLoop`, cached on disk: built once, in well under a second for a finger), a chunk of samples at a time,
 keeping the states at the samples: time linear in the record, memory of the record's samples plus one chunk.
 
 The same operations in the same order as :func:`simulate`'s ``"rk4"`` (a lifted constant is the same double as

@@ -25,9 +25,8 @@ def friction_rate(model: Model, tension: Any = None) -> float:
     with the rotor inertia, over q at the joint ranges' lower ends, middles and upper ends (0 without friction).
     ``tension``: the motors' largest torques |tau_m| (N m, (m,) or one for all; None: not counted): the tendons'
     sheath friction then adds its slope S^T diag((1 - exp(-mu theta)) |tau_m| / v_c) S
-    (:func:`~alpes_dyn.model.transmission.capstan_torque`), which grows with the tension (finger2 with mu theta
-    0.3 under the experiment's torque: 4 RK4 steps per ms left it 0.18 degree off a 10 us reference, against
-    0.009 without the sheath).
+    (:func:`~alpes_dyn.model.transmission.capstan_torque`), which grows with the tension (with a strong sheath
+    friction, the steps that suit the finger without it leave the simulation well off a fine-step reference).
 
     Parameters
     ----------

@@ -2,8 +2,8 @@
 
 The EKF's exported C (:mod:`~alpes_dyn.estimation.cexport.cexport_ekf`) calls the model -- the RK4 step, its Jacobian
 A and the noise's share N -- once per sample. On the hand, CasADi's generated code of it is one straight-line
-function of 41,500 operations (466 kB of machine code at -O1, more than the processor's instruction cache): the
-larger half of the step's time. Its outputs fall into independent blocks (:func:`model_blocks`: the hand's five
+function of tens of thousands of operations (more machine code than the processor's instruction cache holds):
+the larger half of the step's time. Its outputs fall into independent blocks (:func:`model_blocks`: the hand's five
 chains, the states A and N couple), and the four fingers' blocks are the same computation on other inputs.
 
 :func:`chain_model_source` writes the model as C from the instructions of CasADi's own function of each block:

@@ -28,10 +28,10 @@ from CasADi's code of its looped model -- the right-hand side and its Jacobians 
 chain rule as loops -- never expanded into one expression; its numbers are the filter's to rounding.
 
 Why: CasADi's expression of the whole step is straight-line code of every scalar operation of the dense
-nz x nz covariance algebra (the hand: 134,000 operations, a 2.3 MB program); the model's code is 41,500
-operations, 466 kB of machine code in one function, and the loops a few kilobytes. ``benchmarks/observer_step.py``
-measures the three codes: the default, the loops on CasADi's code of the whole model (``chains=False``) and
-CasADi's code of the whole step.
+nz x nz covariance algebra (on the hand a program of megabytes); the model's code is one function of tens of
+thousands of operations, and the loops a few kilobytes. ``benchmarks/observer_step.py`` measures the three codes:
+the default, the loops on CasADi's code of the whole model (``chains=False``) and CasADi's code of the whole
+step (``benchmarks/results/observer_step.json``).
 
 Bit for bit needs the C compiler's IEEE arithmetic as written: no ``-ffast-math``, and no contraction of a
 multiply and an add into one (``-std=c99``, or ``-ffp-contract=off`` on targets with a fused multiply-add); with

@@ -3,10 +3,10 @@
 
 A friction model is predicted with :func:`~alpes_dyn.simulation.integrate.stable_substeps` RK4 steps per period (4 on
 the fingers). CasADi's code of the filter's model writes each substep, and its forward-mode Jacobian, out in one
-straight-line function (finger3's friction EKF: 1.1 MB of C, 30 s to minutes at -O2: GCC's time grows faster than a
-function's size). Here the substeps are a loop, each RK4 step a loop over its four stages: the chain rule composes
-A = dF/dz and G = dF/dw over CasADi's code of the right-hand side and its Jacobians (49 kB of C, under a second of
-the compiler's processor time). The numbers are the filter's to rounding, not bit for bit: the sums run in another
+straight-line function (finger3's friction EKF: megabytes of C, minutes of the compiler: its time grows faster
+than a function's size). Here the substeps are a loop, each RK4 step a loop over its four stages: the chain rule
+composes A = dF/dz and G = dF/dw over CasADi's code of the right-hand side and its Jacobians (a source many times
+smaller, built in about a second). The numbers are the filter's to rounding, not bit for bit: the sums run in another
 order than CasADi's expression of the whole step.
 """
 

@@ -1,8 +1,8 @@
 """A recording's data rows read by NumPy's C parser where they are plain numbers (issue 39).
 
 :func:`~alpes_dyn.estimation.experiments.recording.read_recording` checks every cell on its own, in Python (the one
-line naming the column and the line of a bad cell): 26 s of a 600 s fit of the hand went there, for 600 001 rows of
-45 cells. Most recordings are a logger's plain numbers, and :func:`plain_rows` reads those with
+line naming the column and the line of a bad cell): on a long recording of the hand a large share of the fit's
+time. Most recordings are a logger's plain numbers, and :func:`plain_rows` reads those with
 :func:`numpy.loadtxt` (its C parser, ``comments=None``: no line is skipped as a comment). It gives up -- returns None,
 and the cell-by-cell reader runs and names what is wrong -- on anything else: a cell that is not a plain number (an
 empty one, a quoted one, digit separators, text), a row of another length, a NaN or an infinity anywhere (only the

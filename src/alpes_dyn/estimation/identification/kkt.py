@@ -484,7 +484,7 @@ def kkt_from_blocks(J: np.ndarray, Cv: np.ndarray, Cr: np.ndarray, shape: Shape,
                     fallback: Callable[[], Solver]) -> Solver:
     """:func:`bordered_factorize` of :func:`kkt_matrix` (``normal_matrix(J, shape, mu, prior)``, ``continuity_jacobian(Cv,
     Cr, shape)``) in :func:`kkt_order`, its band and border laid out from the intervals' blocks directly: no sparse
-    matrix is formed (at 600 s its triplets, their CSC, CSR and slices peaked at about 400 MB above the Jacobian). The
+    matrix is formed (on a long record its triplets, their CSC, CSR and slices were a peak above the Jacobian). The
     same numbers in the same band as the sparse path (the products J'J by the same einsums), so the same solution
     to rounding.
 

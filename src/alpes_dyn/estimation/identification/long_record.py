@@ -2,21 +2,20 @@
 
 The globalisation of the shooting fit (:class:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton`: stage 1, each
 interval's start state alone; stage 2, the homotopy, four phases of Levenberg-Marquardt; two starts) costs some
-twenty to thirty evaluations of the whole record with its sensitivities, each linear in its length: on a 60 s record
-of finger3 the compiled sensitivities were 48 s of a 60 s fit (``benchmarks/fit_scaling.py``), the linear algebra
-under 1 s. Its only purpose is to find the basin, and a few seconds of the record find it as well: a 4 s finger3
-record fits K within 0.1 % and m within 0.5 % (``benchmarks/fit_scaling.py``). So a record longer than
-:data:`LONG_RECORD` is fitted in two steps: the whole fit (stages 1-3, both starts) on its first :data:`WINDOW`
-seconds; then, on the whole record from the window's parameters, the model's response under them (the nodes on
-the encoder, :meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`) made continuous in
-the start states alone (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`: their
-sensitivities alone, a third of the whole's) and stage 3 from there. Stage 3 needs a continuous start: from stage 1's
-nodes (each interval fitted alone, defects of its noise) it crawled into the 50-iteration cap on 16 s and 60 s of
-finger3 with a 4 s or a 12 s window (the line search held to short steps by the defects). From the joined
-nodes, though their residual is some 12 counts (the window's parameters, and the torque's line corrections at 0,
-over a minute), it converges in 5 iterations on 60 s, as it did after the homotopy's last phase (five evaluations of
-the whole record with all its sensitivities, and stage 1's four sweeps, which the join replaces: the
-whole 60 s fit 22 s of CPU against 27). Where the join leaves the start discontinuous (:data:`JOIN_LIMIT`: a joint
+twenty to thirty evaluations of the whole record with its sensitivities, each linear in its length: on a long
+record the compiled sensitivities are most of the fit, the linear algebra little. Its only purpose is to find the
+basin, and a few seconds of the record find it as well (a 4 s record's fit: ``benchmarks/results/fit_scaling.json``,
+its first row). So a record longer than :data:`LONG_RECORD` is fitted in two steps: the whole fit (stages 1-3,
+both starts) on its first :data:`WINDOW` seconds; then, on the whole record from the window's parameters, the
+model's response under them (the nodes on the encoder,
+:meth:`~alpes_dyn.estimation.identification.shooting.ShootingProblem.initial_nodes`) made continuous in the start
+states alone (:meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.join_nodes`: their sensitivities
+alone, a third of the whole's) and stage 3 from there. Stage 3 needs a continuous start: from stage 1's nodes (each
+interval fitted alone, defects of its noise) it crawls into the iteration cap (the line search held to short steps
+by the defects). From the joined nodes, though their residual is well above the floor (the window's parameters,
+and the torque's line corrections at 0), it converges in a few iterations, as it did after the homotopy's last
+phase, whose evaluations of the whole record with all its sensitivities, and stage 1's sweeps, the join replaces
+(the fits by record length: ``benchmarks/results/fit_scaling.json``). Where the join leaves the start discontinuous (:data:`JOIN_LIMIT`: a joint
 without spring, whose response from rest drifts over minutes, the thumb's ab/adduction), stage 1's nodes and the
 homotopy's last phase start stage 3 instead, as before the join. Where stage 3 does not converge within the basin limit,
 :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole
@@ -62,9 +61,9 @@ of residual, defects 0.52 of the scale after the join's two steps, and stage 3 f
 RUNS_START = LONG_RECORD
 """s: a record of several runs longer than this (their durations summed) starts from its runs fitted one by one
 (:func:`runs_start`); a shorter one, cheap to fit whole, is fitted from the model's own response as before. From the
-runs' start stage 3 stops (its relative cost change) with the flat directions less polished: on four noise-free
-finger2 runs of 0.35 s the dry friction came 8e-3 off the truth against 6e-6 fitted whole; on noisy runs within a
-fifth of its standard error of the whole fit (``tests/test_runs_start.py``)."""
+runs' start stage 3 stops (its relative cost change) with the flat directions less polished: on noise-free runs
+the dry friction comes further off the truth than fitted whole; on noisy runs within a small fraction of its
+standard error of the whole fit (``tests/test_runs_start.py``)."""
 WINDOW_RUN = 0.5
 """s: a recording of several runs: the window ends at the start of its last run where that run would have less
 than this in it (a run of a few samples holds no line of the excitation)."""

@@ -27,10 +27,11 @@ for the cost of one Gauss-Newton iteration's Jacobian).
 
 What a fit reports (:func:`reported_covariance`): each parameter's variance the larger of the classical and the
 robust one. Not the robust alone: on a white residual the sandwich is the classical covariance plus its sampling
-error (a sum of squares of the data instead of s^2 times a model's matrix: 0.91-1.03 times it on 4 s fits of the
-library's own simulator) and Bartlett's weights bias it low; the classical is what the sensor noise alone leaves, a
-floor. Where the residual is coloured the robust one is the larger (up to 3 times on a MuJoCo stick-slip fit whose
-residual is correlated over 150 samples, where the errors were 5.7 classical standard errors RMS, 3.1 robust ones).
+error (a sum of squares of the data instead of s^2 times a model's matrix: within a few percent of it on fits of
+the library's own simulator) and Bartlett's weights bias it low; the classical is what the sensor noise alone
+leaves, a floor. Where the residual is coloured the robust one is the larger (several times on a MuJoCo stick-slip
+fit whose residual is correlated over many samples, where the errors measured in robust standard errors are
+closer to 1 than in classical ones).
 
 What it cannot see: a model error that leaves the residual white at the sensor floor. On MuJoCo's stick-slip
 finger3 palm up the fits called adequate have F_s_2 9-20 % high with a residual window of 6-8 samples; the sandwich

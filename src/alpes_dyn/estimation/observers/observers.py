@@ -194,7 +194,7 @@ class KalmanFilter(Rebuilt):
         springs or friction loads the same library; cached on disk, a few seconds of gcc; raises
         :class:`~alpes_dyn.simulation.integrate.CompilerError`
         without a C compiler): worth it for long or repeated runs. Default False: CasADi's
-        virtual machine (about 0.1-0.3 ms per step on finger3). Both give the same numbers.
+        virtual machine (slower per step, no build). Both give the same numbers.
 
     Attributes
     ----------
@@ -288,7 +288,7 @@ class KalmanFilter(Rebuilt):
 
     def _looped_loop(self) -> CompiledStepLoop | None:
         """A looped filter's step in compiled C, built on the first :meth:`run` (cached; None without a compiler:
-        then the virtual machine, 10-50 ms per sample on the Shadow hand's 48 states against 2-8 in C)."""
+        then the virtual machine, several times slower per sample on a large state)."""
         if self._online_loop is None:
             try:
                 self._online_loop = self._compiled_loop()
