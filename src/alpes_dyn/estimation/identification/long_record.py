@@ -15,9 +15,10 @@ interval fitted alone, defects of its noise) it crawls into the iteration cap (t
 by the defects). From the joined nodes, though their residual is well above the floor (the window's parameters,
 and the torque's line corrections at 0), it converges in a few iterations, as it did after the homotopy's last
 phase, whose evaluations of the whole record with all its sensitivities, and stage 1's sweeps, the join replaces
-(the fits by record length: ``benchmarks/results/fit_scaling.json``). Where the join leaves the start discontinuous (:data:`JOIN_LIMIT`: a joint
-without spring, whose response from rest drifts over minutes, the thumb's ab/adduction), stage 1's nodes and the
-homotopy's last phase start stage 3 instead, as before the join. Where stage 3 does not converge within the basin limit,
+(the fits by record length: ``benchmarks/results/fit_scaling.json``). Where the join leaves the start discontinuous
+(:data:`JOIN_LIMIT`: a joint without spring, whose response from rest drifts over minutes, the thumb's
+ab/adduction), stage 1's nodes and the homotopy's last phase start stage 3 instead, as before the join. Where stage
+3 does not converge within the basin limit,
 :meth:`~alpes_dyn.estimation.identification.gauss_newton.GaussNewton.solve` falls back to the whole fit of the whole
 record, as for any warm start: the answer is the same problem's, only its start differs.
 

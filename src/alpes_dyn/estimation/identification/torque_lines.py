@@ -116,8 +116,8 @@ def _thin_qr(Phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Q (N, k) with orthonormal columns and R (k, k) upper triangular with a positive diagonal, Phi = Q R, by
     Cholesky QR twice (Fukaya et al. 2014: the second pass restores orthogonality to rounding for cond(Phi) up to
     ~1e7; the lines' basis is near orthogonal). Each pass one product Q' Q (k x k) and one triangular solve, the
-    second in place: on a long record of the documented lines many times faster than Householder's QR (numpy.linalg.qr, whose R
-    may have negative entries on its diagonal: the columns' signs are the only difference, which the fit's
+    second in place: on a long record of the documented lines many times faster than Householder's QR (numpy.linalg.qr,
+    whose R may have negative entries on its diagonal: the columns' signs are the only difference, which the fit's
     whitened line coefficients do not see) and one copy of Phi, Q, instead of three. Householder's where Phi has
     at most :data:`CHOLESKY_QR_ROWS` rows (there it is cheap, and the fits are as they were) or where the Cholesky
     factorisation fails (lines too close for the record's length: Phi near singular)."""
