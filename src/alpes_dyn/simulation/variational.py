@@ -90,10 +90,10 @@ def variational_rk4_step(rhs: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float) -> 
 
 LOOPED_STATES = 40
 """States from which :class:`~alpes_dyn.simulation.sensitivity.SensitivityModel` builds its step by
-:func:`looped_variational_rk4_step`: above it the Jacobians of the forward dynamics, inlined, make C too large
-for the compiler to finish; the fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached libraries, bit for bit).
-The Shadow hand's commands with the looped step are recorded in ``benchmarks/results/foreign_hands.json`` (its
-commands part)."""
+:func:`looped_variational_rk4_step`: above it the Jacobians of the forward dynamics, inlined, make C too large for the
+compiler to finish; the fingers and the Alpes hand (30 states) keep :func:`variational_rk4_step` (their cached
+libraries, bit for bit). The Shadow hand's commands with the looped step are recorded in
+``benchmarks/results/foreign_hands.json`` (its commands part)."""
 
 
 def looped_variational_rk4_step(rhs: cs.SX, M: cs.SX, r: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX,

@@ -210,12 +210,11 @@ def local_client(workers: int) -> Any:
     Windows: fork is unsafe or absent) Dask's default.
 
     The workers' statistical profiler (``distributed.worker.profile.enabled``, the dashboard's profile) is off: it
-    samples the worker thread's stack at a fixed interval, taking the GIL from a draw that calls compiled code in
-    short steps, which slows the draws. The sweep's times with this client: ``benchmarks/results/sweep.json``
-    (``median_dask_s``, ``median_speedup``). A user who wants it passes a client of their own. The workers get it
-    in their whole Dask configuration
-    (the Nanny's ``config``), so a worker the cluster restarts keeps it; a restarted worker is spawned, though (Dask
-    reads the start method from the calling process's configuration at each start).
+    samples the worker thread's stack at a fixed interval, taking the GIL from a draw that calls compiled code in short
+    steps, which slows the draws. The sweep's times with this client: ``benchmarks/results/sweep.json``
+    (``median_dask_s``, ``median_speedup``). A user who wants it passes a client of their own. The workers get it in
+    their whole Dask configuration (the Nanny's ``config``), so a worker the cluster restarts keeps it; a restarted
+    worker is spawned, though (Dask reads the start method from the calling process's configuration at each start).
 
     Parameters
     ----------
