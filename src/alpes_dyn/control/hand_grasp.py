@@ -20,19 +20,18 @@ from .controller import _normal
 __all__ = ["HAND_LEVELS", "HAND_GAINS", "cylinder_normal", "cylinder_in_chain"]
 
 #: Default references of :func:`~alpes_dyn.control.hand_loop.run_hand_control` per chain, N: (before, after) the
-#: step at ``step_time``. Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` (the five motor torques ramped from 0
-#: to 0.05 N m over 4 s, palm down: the fingers' pads slide around the cylinder beyond 0.47-0.65 N, the thumb's
-#: beyond 1.48 N).
+#: step at ``step_time``. Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` before
+#: its pad slides around it (:func:`~alpes_dyn.control.grasp_calibration.grasp_limits`: the thumb holds more than
+#: the fingers).
 HAND_LEVELS: dict[str, tuple[float, float]] = {
     "index": (0.25, 0.4), "middle": (0.2, 0.35), "ring": (0.3, 0.4), "little": (0.25, 0.35), "thumb": (0.4, 0.7),
 }
 #: :class:`.ForceController` settings of the hand's loops over :data:`.DEFAULT_GAINS` (then the scenario's
-#: ``gains``): a slower approach (15 mN m/s; at 30 mN m/s the fingertips reach the cylinder faster and bounce on
-#: it for 0.3 s) and, for the model-based loops, a 40 ms prefilter, the shortest of {25, 30, 40, 50} ms with the
-#: fingers' overshoots near 10 % on :data:`HAND_LEVELS` (one noise draw): with 25 ms (the block's) the middle
-#: finger's pad slips on the curved surface at the up-step and its force falls to 0 (overshoot 175 %), with 30 ms 18 %; with
-#: 40 ms 7-10.5 %, 10-90 % rise 77-97 ms.
-#: The release (the prefilter while a reference falls) as the rise: the hand's loops as measured with it.
+#: ``gains``): a slower approach (15 mN m/s; faster, the fingertips reach the cylinder sooner and bounce on it)
+#: and, for the model-based loops, a 40 ms prefilter, the shortest of {25, 30, 40, 50} ms with the fingers'
+#: overshoots near 10 % on :data:`HAND_LEVELS` (with the block's shorter prefilter a pad slips on the curved
+#: surface at the up-step and its force falls to 0). The release (the prefilter while a reference falls) as the
+#: rise. The hand's loops with these settings: ``benchmarks/results/hand_control.json``.
 HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04, "release_s": 0.04}
 
 
