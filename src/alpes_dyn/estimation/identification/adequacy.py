@@ -72,8 +72,8 @@ THRESHOLDS: dict[str, float] = {
 data), and the other tests are skipped; coloured: the Ljung-Box p-value below ``ljung_box_p`` *or* some
 |r_ee(k)| above ``max_acf_bands`` times the 99 % band (MATLAB's rule, every lag inside the band, rejects
 white noise 22 % of the time over 25 lags; the multiple-shooting residual is not exactly white either:
-its fitted start states take a little of it, and fits of our own simulator gave p down to 1.1e-3 and
-lags up to 1.4 bands); correlated with the input: some |r_eu(k)| above ``max_xcorr_bands``
+its fitted start states take a little of it, and fits of our own simulator, the model exact, give small p-values
+and lags somewhat outside the band); correlated with the input: some |r_eu(k)| above ``max_xcorr_bands``
 bands; too large: residual RMS above ``floor_ratio`` times the sensor floor; a validation below
 ``validation_fit_percent`` %; a signature named, when the verdict is not adequate, where its effect
 explains at least ``signature_share`` of the residual and at least half what the strongest one does

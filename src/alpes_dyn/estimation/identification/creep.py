@@ -13,10 +13,10 @@ The law (:func:`soft_constraint_friction`, MuJoCo's own constraint force to mach
 friction row is a Huber cost, its force -clip((qdd_j + b qd_j) / R_j, -F_s, F_s) with b = 2 / (d_max t_c) (105 /s
 at the default ``solreffriction`` t_c = 0.02 s, ``solimpfriction`` d_max = 0.95) and R_j = (1 - d) / d w_j (d = 0.9,
 w_j MuJoCo's ``dof_invweight0``, the joint's inverse inertia at the reference pose). Inside its band the joint
-carries an added inertia 1 / R_j (9 / w_j: 0.6-1.7 times the joint's own on drawn finger3s) and a viscous
-friction b / R_j (7-300 times F_v): no memoryless sign (the smooth law at any v_s, one per joint fitting MuJoCo's
-force only to 27 % of F_s RMS) and no bristle law (LuGre's and Dahl's presliding is a spring, this has none) holds
-it, and a fit with either reads the added inertia into the masses (12-149 % off in the study's soft cases). Holding
+carries an added inertia 1 / R_j (9 / w_j: comparable to the joint's own) and a viscous friction b / R_j (many
+times F_v): no memoryless sign (the smooth law at any v_s, one per joint, fits MuJoCo's force only loosely) and no
+bristle law (LuGre's and Dahl's presliding is a spring, this has none) holds it, and a fit with either reads the
+added inertia into the masses (far off in the study's soft cases). Holding
 the friction at the file's values keeps the fit in its basin but does not make the law right (the masses stay
 tens of per cent off): such a fit is refused, its verdict naming :data:`CREEP`. The law with the band's added
 inertia is the file's ``creep`` law (:class:`~alpes_dyn.model.friction.Creep`, solved with the dynamics by

@@ -42,26 +42,24 @@ COEF_STEP_RECORD = 4000
 """The trust region on the torque's line corrections per iteration: a whitened coefficient by at most
 MAX_COEF_STEP sqrt(max(N / COEF_STEP_RECORD, 1)) prior standard deviations over N samples: one standard deviation up
 to a 4 s record at 1 kHz, growing as sqrt(N) beyond (a torque error of a given size is sqrt(N) times more standard
-deviations of a coefficient in a longer record). One standard deviation whatever the record left long fits
-crawling (finger3: 16 s, 37 iterations; 60 s, 78), the coefficients asking for tens of them per step. A cap
-of 0.1 sigma_u per line (4.5 standard deviations at 4 s) sent one MuJoCo plant's fits in
-``benchmarks/realism.py`` to other basins (masses 8-22 % off, four fits of eight not converged)."""
+deviations of a coefficient in a longer record). One standard deviation whatever the record leaves long fits
+crawling, the coefficients asking for tens of them per step; a much wider cap sends fits on MuJoCo's plants
+(``benchmarks/realism.py``) to other basins."""
 MAX_COEF_GROWTH = 16.0
 """The most the constrained stage (stage 3) widens the line corrections' trust region (:data:`COEF_STEP_RECORD`'s
 rule), doubling it at each step they alone cut and that is taken whole, from the :data:`CRAWL_STEPS`-th such step
-in a row (:meth:`GaussNewton.next_radius`). On MuJoCo's all-effects finger3 plants with
-the documented experiment (dither of 20 breakaway torques) the coefficients asked for 20-57 standard deviations per
-step and the fit crawled one per step: 40-48 iterations of stage 3 in each of two rounds (``benchmarks/realism.py``)."""
+in a row (:meth:`GaussNewton.next_radius`). On MuJoCo's all-effects finger3 plants with the documented experiment
+the coefficients ask for tens of standard deviations per step, and without the growth the fit crawls one per step
+through many iterations of stage 3 (``benchmarks/realism.py``)."""
 CRAWL_STEPS = 3
 """Steps in a row cut by the line corrections' trust region, each taken whole, before it grows (:meth:`GaussNewton.next_radius`)."""
 SOC_STEPS = 4
 """Second-order corrections at most, one after another, of a stage-3 step whose whole length the merit refuses
-(:meth:`GaussNewton.line_search`), each while the defects fall by half or more. On MuJoCo's finger3 plant with the
-palm 3 degrees off a Gauss-Newton step along the tilt-mass valley lowered the cost by 100 and raised the
-defects quadratically (to 0.5 from 1e-4); one correction left 4e-2, the merit (penalty 1.3e6) refused every length
-down to 1/30, and the fit crawled at the damped steps' 10-20 per iteration into the iteration cap (masses 9.9 % off).
-Two to three corrections bring the defects to 1e-3-1e-5 with the cost's fall intact: converged in 13 iterations,
-masses within 0.9 %."""
+(:meth:`GaussNewton.line_search`), each while the defects fall by half or more. A Gauss-Newton step along a curved
+valley (on MuJoCo's finger3 plant with the palm tilted: the tilt against the masses) lowers the cost and raises the
+defects quadratically; after one correction the merit may still refuse every length, and the fit crawls at damped
+steps into the iteration cap with its masses off. Two to three corrections bring the defects down by orders of
+magnitude with the cost's fall intact, and the fit converges."""
 SOFT_PHASES = 4
 """Phases of the homotopy (stage 2): the continuity penalty's weight 1, 10, 100, 1000 times 1 / |initial defect|."""
 JOIN_STEPS = 2
@@ -387,11 +385,11 @@ class GaussNewton:
         nx, nv, n_int = pb.nx, pb.nv, pb.n_int
         e = pb.evaluate(nodes, offs, glob)
         defect0 = np.maximum(np.abs(e.c).max(axis=0), 1e-9)  # per state component
-        # the softly-coupled problem lets friction absorb the defects (F_v_1 went to 8x, F_s_1 to 0.4x and the
-        # fit to another basin): during the homotopy only the springs, masses, gains and torque lines move; on the
+        # the softly-coupled problem lets friction absorb the defects (the friction driven far off and the fit to
+        # another basin): during the homotopy only the springs, masses, gains and torque lines move; on the
         # first start not the torque lines either: their trust region (a standard deviation per step) shortened
-        # every step to ~1 % and the springs stayed put (finger_edu, springs 12-15 % off: log K moved by -0.08,
-        # -0.02, +0.01 towards +0.14, -0.16, +0.11; held, 0.15, -0.16, 0.11)
+        # every step to a small fraction and the springs stayed put (finger_edu with its springs off: held, they
+        # move to their values)
         frozen = np.array([i for i, nm in enumerate(pb.sens.names) if freeze and nm.startswith(("F_", "sigma"))]
                           + (list(range(pb.p, pb.ng)) if freeze else []), dtype=int)  # friction waits for the hard phase
         for level in range(first, SOFT_PHASES):
@@ -406,8 +404,8 @@ class GaussNewton:
                 if not whole:
                     # the global step shortened, the local variables solved again for it: with continuity a
                     # penalty the data hold the nodes, and they follow the parameters (scaled with them, the
-                    # nodes crawled: the homotopy left the defects at 30-60 % and stage 3 needed 20-40
-                    # iterations at 1/10-1/60 of the Gauss-Newton step)
+                    # nodes crawled: the homotopy left large defects and stage 3 needed many iterations at a
+                    # small fraction of the Gauss-Newton step)
                     try:
                         dv = solve_local(-g[:nv] - H_border @ dg).reshape(n_int, pb.nb)
                     except np.linalg.LinAlgError:

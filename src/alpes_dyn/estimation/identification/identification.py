@@ -91,9 +91,9 @@ __all__ = ["IdentificationResult", "identify", "identified_params", "project_tor
 THUMB_PARAMETERS = "K,m_thumb_j1,m_thumb_j2,F_s_thumb_j1,F_s_thumb_j2,F_v_thumb_j1,F_v_thumb_j2"
 """What ``alpes-dyn identify --model thumb`` fits by default: the flexion joints' springs, masses and friction.
 Not the ab/adduction joint's own parameters: its base's mass sits on the axis (nothing the encoders see depends on
-it: standard error 100 %), and its friction is weak (F_v 21 % standard error: the joint only creeps) and, fitted
-from 20 % off, spoils the rest on some thumbs (0.66 counts after 50 iterations, a mass 2.8 % off; without it
-0.58 counts, 0.32 %). Ask for them by name (``F_s_thumb_abd``...)."""
+it: its standard error as large as the value), and its friction is weak (a large standard error: the joint only
+creeps) and, fitted from 20 % off, spoils the rest on some thumbs (the fit not converged, a mass off; without it
+at the sensor floor). Ask for them by name (``F_s_thumb_abd``...)."""
 
 VALIDATION_PREFIX = 0.1
 """s: the held-out recording's prefix that fixes its initial state (at least one shooting interval)."""

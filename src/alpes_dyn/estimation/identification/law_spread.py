@@ -3,10 +3,9 @@
 A fit's covariance (the classical s^2 (J'J)^-1 or the HAC sandwich of
 :mod:`~alpes_dyn.estimation.identification.robust_covariance`) is the noise's: it sees a model error only through
 the colour it leaves in the residual. On MuJoCo's stick-slip finger3 the fits called adequate reach the sensor
-floor with a residual window of 6-8 samples, the sandwich is the classical covariance again, and the springs',
-masses' and frictions' errors are still up to 4.6 of their standard errors (RMS 2.05, 83 % of them within 3, over
-the 36 springs, masses and frictions of three draws of the friction study's ``stiff`` case): the error is the
-friction law's, which the residual does not show.
+floor with a short residual window, the sandwich is the classical covariance again, and the springs', masses'
+and frictions' errors are still several of their standard errors (the friction study's ``stiff`` case): the error
+is the friction law's, which the residual does not show.
 
 What does show it is how much the parameters move when the law does. The fit is made again with the other of the
 library's two memoryless laws -- the smooth sign tanh(qd / v_s) at the file's v_s, and the stick-slip law at

@@ -3,7 +3,7 @@
 The fit's own verdict (:mod:`alpes_dyn.estimation.identification.adequacy`) judges the multiple-shooting residual: every
 50-100 ms the fit restarts from states it chose, so a model whose stick-slip or friction level is off can leave a white
 residual at the sensor floor while the EKF built on the file lags by degrees (MuJoCo's stick-slip finger3, issue
-38: adequate, F_s 19 % off, the EKF 1.9 degrees RMSE). Here the identified file is judged by what the observer does
+38: adequate, the friction well off, the EKF degrees off). Here the identified file is judged by what the observer does
 with it, on a recording (the fitted one, or a held-out one where given), from what a user has (no true joints):
 
 * the EKF of ``alpes-dyn estimate --data`` (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`) on the

@@ -34,8 +34,8 @@ fit whose residual is correlated over many samples, where the errors measured in
 closer to 1 than in classical ones).
 
 What it cannot see: a model error that leaves the residual white at the sensor floor. On MuJoCo's stick-slip
-finger3 palm up the fits called adequate have F_s_2 9-20 % high with a residual window of 6-8 samples; the sandwich
-is then the classical covariance and their friction errors stay 3-5 standard errors (springs and masses are
+finger3 palm up the fits called adequate have a friction well off with a short residual window; the sandwich is
+then the classical covariance and their friction errors stay several standard errors (springs and masses are
 covered). No covariance of the residual covers an error the residual does not show.
 """
 
