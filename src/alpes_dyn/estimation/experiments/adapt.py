@@ -52,10 +52,9 @@ fingers down), the orientation fixed (the amplitudes still adapt), or ``both``: 
 the second hung fingers down, the hand turned between two runs of the excitation (each designed and trimmed in its
 orientation: :func:`~alpes_dyn.estimation.experiments.experiment.experiment`); palm up alone, then hung alone,
 where the finger leaves its range in one of them. Why ``both``: one orientation leaves the split of the masses
-m_1 / m_2 to the friction and the cable's model error (MuJoCo's all-effects finger3, two draws of
-``benchmarks/realism.py``: m_1 -5.1 / -7.6 %, m_2 +6.5 / +8.1 % palm up, adequate, the fit's own standard error 1.4
-%); gravity across the finger, then along it, pins it (the same draws, 2 + 2 s: masses within 2.9 and 1.3 %, the
-EKF palm up within 0.21 degree)."""
+m_1 / m_2 to the friction and the cable's model error (on MuJoCo's all-effects finger3 the masses come out off
+in opposite directions, well beyond the fit's own standard error, yet the fit is called adequate); gravity across
+the finger, then along it, pins it (the fits with ``--rig both``: ``benchmarks/results/realism.json``)."""
 
 
 @dataclass(frozen=True)

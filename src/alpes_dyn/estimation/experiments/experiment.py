@@ -20,8 +20,8 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   multisine's and the dither's, are :attr:`ExperimentDesign.lines`: what ``identify(excitation=)`` takes;
 * the bias trimmed on the hand (``trim_bias``, default on; :mod:`alpes_dyn.estimation.experiments.trim`): before
   recording, a slow loop on the measured encoder moves the bias until the finger rests where the nominal one would (the
-  real finger, not the model, must sit mid-range: with springs 17 % softer than nominal the untrimmed bias drove
-  q_1 past its 90 degree stop), or, for a finger soft enough to snap through before it gets there (a fold of its
+  real finger, not the model, must sit mid-range: with springs softer than nominal the untrimmed bias drives
+  q_1 past its upper stop), or, for a finger soft enough to snap through before it gets there (a fold of its
   static equilibria), as high as the excitation keeps clear of the fold. Palm up a finger within +-20 % of the
   nominal values is up to 6.4 times as compliant mid-range as the nominal, and the excitation then swings it past
   its stops: :data:`alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits'
@@ -448,8 +448,8 @@ def model_experiment_torque(nominal: Model, truth: Model | None = None, design: 
 
     Replay this, not the recording's measured torque: the measured one carries the torque sensor's noise
     (``design.torque_noise``), which a plant driven by it feels. On a springless finger that noise walks the joints
-    (1.9 degrees over 16 s on the Shadow hand's first finger), a motion no model driven by the excitation
-    explains: the fit's masses came 4-20 % off on MuJoCo, against 1.1 % replaying this torque.
+    (on the Shadow hand's first finger), a motion no model driven by the excitation explains: the fit's masses
+    come out several times further off on MuJoCo than replaying this torque.
 
     Parameters
     ----------

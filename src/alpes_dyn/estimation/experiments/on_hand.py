@@ -101,8 +101,8 @@ step from below overshoots)."""
 
 ROOM_SHARE = 0.5
 """A run whose ``amplitude_scale`` is below this share of the designed amplitude is too small a record to trust the
-masses of (their standard errors grow as the amplitude falls; on the MuJoCo stand-in's finger3 palm up, a run left
-room for 0.22 of it: the fit called itself adequate with masses 25 % and springs 4.4 % off): turn the hand (hung
+masses of (their standard errors grow as the amplitude falls; on the MuJoCo stand-in's finger3 palm up, a run
+with little room gave a fit that called itself adequate with its masses and springs well off): turn the hand (hung
 fingers down, where the springs are not held near a fold by gravity), run again, and keep the run with more room
 (:func:`roomier`)."""
 

@@ -118,9 +118,8 @@ def _rest_torque(model: Model, reading: Callable[[np.ndarray], float], target: f
 MATCH_COMPLIANCE = False
 """Whether :func:`_trimmed_bias` holds a finger more compliant than the nominal lower, its excitation shrunk (the
 module docstring). Off by default: it keeps every drawn finger in its range, but the fits of the fingers
-it holds lower lose precision (two draws of ``benchmarks/identification.py``: masses 4.2 % off instead of 0.49 %;
-one of MuJoCo's all-effects plants: masses 12.4 % instead of 2.1 %; six tests then fail, among them a fit on a drawn
-finger, masses 6.3 % off against a 5 % bound, and the noise-free recoveries on drawn fingers), a trade-off to weigh.
+it holds lower lose precision (their masses several times further off, on the library's simulator and on MuJoCo's
+all-effects plants; the tests of fits on drawn fingers then fail), a trade-off to weigh.
 ``trim.MATCH_COMPLIANCE = True`` turns it on."""
 
 
@@ -135,8 +134,8 @@ def _trimmed_bias(truth: Model, nominal: Model, bias: np.ndarray, gravity: np.nd
     nominal design places them (mid-range) on ``truth`` under ``gravity``: what the same loop settles to on
     that motor's encoder. Their bias from the nominal model, which balances the gravity the design names,
     leaves an unknown tilt's torque unbalanced: with the palm 3 degrees off, the thumb's ab/adduction
-    (no spring) drifted from mid-range onto its 0 degree stop within the 4 s experiment (two MuJoCo plants of
-    the hand), which no fit without the stop explains (12 counts of residual, springs 12 % off).
+    (no spring) drifts from mid-range onto its stop within the experiment (MuJoCo plants of the hand), which
+    no fit without the stop explains (a residual far above the floor, springs well off).
 
     A finger more compliant there than the nominal one at its design point (:func:`_compliance`, the encoder's
     slope against the bias, which the same loop reads by stepping the bias) is held lower, where the compliances
