@@ -23,7 +23,7 @@ The documented experiment on one finger (``finger2``, ``finger3``):
   real finger, not the model, must sit mid-range: with springs softer than nominal the untrimmed bias drives
   q_1 past its upper stop), or, for a finger soft enough to snap through before it gets there (a fold of its
   static equilibria), as high as the excitation keeps clear of the fold. Palm up a finger within +-20 % of the
-  nominal values is up to 6.4 times as compliant mid-range as the nominal, and the excitation then swings it past
+  nominal values is up to several times as compliant mid-range as the nominal, and the excitation then swings it past
   its stops: :data:`alpes_dyn.estimation.experiments.trim.MATCH_COMPLIANCE` (off by default: its cost in the fits'
   precision) holds such a finger no higher than where it is as compliant as the nominal at its design point, its
   multisine and dither shrunk with the room its joints have left below;
