@@ -208,7 +208,7 @@ def adapted_experiment(model: str, true_params: HandParams | str | Path | None =
                        scales: Sequence[float] = AMPLITUDE_SCALES) -> tuple[Recording, Adaptation]:
     """:func:`~alpes_dyn.estimation.experiments.experiment.experiment` with the design adapted until the finger
     stays inside its range over the whole record (the module docstring). Each run tried costs one experiment's
-    simulation (about 1 s for 4 s of finger3).
+    simulation (shorter than the record on a finger).
 
     Parameters
     ----------

@@ -520,8 +520,8 @@ class GaussNewton:
         are the new point's, its Jacobians ``at``'s: the correction moves no parameter by a tenth of its standard
         error (the stopping rule that asks for it), so the Jacobians differ to second order in it, and the
         covariance and the verdict's projections taken with them are the same to that order; evaluating them again
-        was the dearest evaluation of a fit (all the sensitivities of the whole record: 1.5 s of a 60 s record's,
-        twice in ``--effects auto``'s two fits).
+        was the dearest evaluation of a fit (all the sensitivities of the whole record, twice in ``--effects
+        auto``'s two fits).
 
         Parameters
         ----------
