@@ -120,7 +120,7 @@ def _jacobians(M: np.ndarray, gx: np.ndarray, Sb: np.ndarray) -> tuple[np.ndarra
 
 
 HELD_CHUNK = 512
-"""Samples per batch of :func:`_held` (its products' memory: the whole hand's 4000 samples at once held 0.8 GB)."""
+"""Samples per batch of :func:`_held` (its products' memory: the whole hand's samples at once would hold gigabytes)."""
 
 
 def _held(Ac: np.ndarray, Ec: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:

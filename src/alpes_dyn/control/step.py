@@ -237,8 +237,8 @@ def force_ekf(model: Model, dt: float, controller: str, *, torque_noise: float, 
     :func:`~alpes_dyn.estimation.observers.scenario.default_noise`. The prior: the finger at rest on its springs
     (motor off), standard deviations 0.05 rad and 0.1 rad/s. A model with friction is predicted with
     :func:`~alpes_dyn.simulation.integrate.stable_substeps` RK4 steps per period (at least 4: with one, the smooth
-    law's slope F_s / v_s near rest put the step outside RK4's stable reach, and a 1e-12 rad difference in a
-    reading grew to 1.5e-3 rad of joint estimate within 0.3 s on finger3 in contact).
+    law's slope F_s / v_s near rest puts the step outside RK4's stable reach, and a difference in a reading at
+    rounding level grows to a visible error of the joint estimate within a fraction of a second).
 
     Parameters
     ----------

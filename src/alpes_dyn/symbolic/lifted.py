@@ -53,8 +53,8 @@ def lift_constants(f: cs.Function, name: str | None = None) -> tuple[cs.Function
 
     Notes
     -----
-    The replay is one Python step per instruction of ``f`` (about 10 us each: 30 ms for finger3's right-hand side,
-    a few thousand instructions); lift the model's right-hand side, not a filter step built from it.
+    The replay is one Python step per instruction of ``f`` (a finger's right-hand side, a few thousand instructions,
+    in a fraction of a second); lift the model's right-hand side, not a filter step built from it.
     """
     if not isinstance(f, cs.Function) or not f.is_a("SXFunction"):
         raise ModelError(f"lift_constants: expected an SX casadi.Function, got {type(f).__name__}")
