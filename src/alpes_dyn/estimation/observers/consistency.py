@@ -34,8 +34,8 @@ __all__ = ["Banded", "Nees", "nees", "joint_sigma", "predicted_covariance", "chi
 
 NEES_EVERY = 0.1
 """Default decimation of :func:`nees`, s: a filter's error at 1 kHz is correlated over tens of milliseconds (the
-autocorrelation of finger3's normalised error falls low within the default decimation on the estimation scenario); what remains
-beyond (a frictionless finger's internal mode rings for seconds) is counted by the filter's error model."""
+autocorrelation of finger3's normalised error falls low within the default decimation on the estimation scenario); what
+remains beyond (a frictionless finger's internal mode rings for seconds) is counted by the filter's error model."""
 
 
 class Banded:
