@@ -51,3 +51,25 @@ def test_the_pattern_finds_each_kind():
     for text in ("alpes-dyn sweep --seed 1 -o x.csv", "the loads of the joints", "a seed >= 0",
                  "alpes-dyn sweep --draws 8 --seed 1", "the test draws 1,500"):
         assert not NOTE.search(text), text
+
+
+TIMING = re.compile(
+    r"\btook (?:about |~|only )?\d"  # a run's time or size ("took 30 s", "took about 25 s")
+    r"|\b\d+-core machine"  # the machine it was measured on
+    r"|\bon a (?:loaded|busy|quiet) machine")
+"""What a measurement argued in a docstring looks like: it belongs in a benchmark record, cited by its file and key."""
+
+
+def test_no_timings_in_src():
+    """Times and sizes measured on a machine are not argued in ``src/`` (issue 52: cite the benchmark record)."""
+    found = [f"{path.relative_to(SRC)}:{i}: {line.strip()[:80]}" for path in sorted(SRC.rglob("*.py"))
+             for i, line in enumerate(path.read_text(encoding="utf-8").splitlines(), 1) if TIMING.search(line)]
+    assert not found, "measurements in src/ (cite the benchmark record): " + "; ".join(found)
+
+
+def test_the_timing_pattern_finds_each_kind():
+    for text in ("gcc took 30 s", "it took about 25 s of gcc", "(2-core machine)", "measured on a loaded machine"):
+        assert TIMING.search(text), text
+    for text in ("the fit took the pair whose chord", "a machine with 2 cores", "took its worst joint",
+                 "``benchmarks/results/observer_step.json`` (its rows' ``c_us``)"):
+        assert not TIMING.search(text), text
