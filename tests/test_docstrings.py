@@ -141,19 +141,6 @@ def test_the_front_door_is_clean(failing):
 
 
 # ----------------------------------------------------------------------------- the modules' own APIs
-MODULES_NOT_YET: dict[str, int] = {
-    "estimation.identification.effects": 19,
-    "model.friction": 5,
-    "model.mjcf_export": 1,
-    "studies.realism_friction": 7,
-    "symbolic.parametric": 2,
-}
-"""Of each module's own public callables -- the names of its ``__all__`` defined in it, which the API reference
-(``docs/api/``) renders -- how many do not yet document every argument as ``name : type``: 516 of 859 in 114
-modules at issue 52's audit (the packages' front doors above are clean). The count only falls
-(test_module_apis_only_improve): a module fixed leaves the list, none joins, none rises."""
-
-
 def _modules() -> list[str]:
     """Every public module of the library (not a package's ``__init__``, not ``cli``, no ``_private`` part)."""
     import alpes_dyn
@@ -178,11 +165,9 @@ def module_failures() -> dict[str, int]:
     return out
 
 
-def test_module_apis_only_improve():
-    """No module has more callables with an undocumented argument than MODULES_NOT_YET allows (a new public
-    function documents its arguments in numpydoc's form); a module with fewer must lower its count."""
+def test_module_apis_documented():
+    """Every module's own public callables (:func:`module_failures`) document each argument as ``name : type``:
+    none is left undocumented (issue 52's audit found 516 of 859 in 114 modules; all were documented since, and a
+    new public function documents its arguments in numpydoc's form)."""
     found = module_failures()
-    over = {m: n for m, n in found.items() if n > MODULES_NOT_YET.get(m, 0)}
-    assert not over, f"undocumented arguments (name : type) beyond MODULES_NOT_YET: {over}"
-    fixed = {m: found.get(m, 0) for m, n in MODULES_NOT_YET.items() if found.get(m, 0) < n}
-    assert not fixed, f"fewer than allowed: lower MODULES_NOT_YET to {fixed}"
+    assert not found, f"undocumented arguments (name : type), callables per module: {found}"

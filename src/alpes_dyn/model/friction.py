@@ -57,7 +57,25 @@ I = 4.8e-6 kg m^2 (finger3's third phalanx with its share of the rotor)."""
 
 
 def check_law(law: Any, field: str = "friction.law") -> str:
-    """``law`` if it is one of :data:`FRICTION_MODELS`, else :class:`~alpes_dyn.ModelError` naming ``field``."""
+    """``law`` if it is one of :data:`FRICTION_MODELS`, else :class:`~alpes_dyn.ModelError` naming ``field``.
+
+    Parameters
+    ----------
+    law : Any
+        The friction law read (``"tanh"``, ``"lugre"`` or ``"creep"``).
+    field : str, optional
+        The field the error names (default ``"friction.law"``).
+
+    Returns
+    -------
+    str
+        ``law``.
+
+    Raises
+    ------
+    ModelError
+        ``law`` not a string of :data:`FRICTION_MODELS`.
+    """
     if not isinstance(law, str) or law not in FRICTION_MODELS:
         raise ModelError(f"{field}: expected one of {', '.join(FRICTION_MODELS)}, got {law!r:.40}")
     return law
@@ -122,14 +140,53 @@ def lugre_rate(z: Any, v: Any, coulomb: np.ndarray, sigma0: Any, xp: Any = np) -
 
 
 def lugre_torque(z: Any, zdot: Any, v: Any, viscous: np.ndarray, law: LuGre, xp: Any = np) -> Any:
-    """tau_f of eq. L2, (n,) N m: sigma0 z + sigma1 z' + F_v v (``viscous`` (n,) F_v, N m s/rad)."""
+    """tau_f of eq. L2, (n,) N m: sigma0 z + sigma1 z' + F_v v.
+
+    Parameters
+    ----------
+    z : array_like or casadi column
+        (n,) bristle deflection, rad.
+    zdot : array_like or casadi column
+        (n,) its rate z' (eq. L1, :func:`lugre_rate`), rad/s.
+    v : array_like or casadi column
+        (n,) joint velocity, rad/s.
+    viscous : numpy.ndarray
+        (n,) F_v, N m s/rad.
+    law : LuGre
+        sigma0 (N m/rad) and sigma1 (N m s/rad).
+    xp : module, optional
+        ``numpy`` (default) or ``casadi``.
+
+    Returns
+    -------
+    numpy.ndarray or casadi column
+        (n,) friction torque, N m.
+    """
     Fv = np.asarray(viscous, dtype=float)
     return law.sigma0 * z + law.sigma1 * zdot + (Fv * v if xp is np else xp.DM(Fv) * v)
 
 
 def lugre_steady(v: Any, coulomb: np.ndarray, viscous: np.ndarray, sigma0: float) -> tuple[np.ndarray, np.ndarray]:
-    """The law in steady sliding (z' = 0) at velocity ``v`` (n,) rad/s, != 0: (z = F_s sign(v) / sigma0 (n,) rad,
-    tau_f = F_s sign(v) + F_v v (n,) N m), the sign law of eq. 2.6."""
+    """The law in steady sliding (z' = 0) at velocity ``v``: the sign law of eq. 2.6.
+
+    Parameters
+    ----------
+    v : array_like
+        (n,) joint velocity, rad/s, != 0.
+    coulomb : numpy.ndarray
+        (n,) F_s, N m.
+    viscous : numpy.ndarray
+        (n,) F_v, N m s/rad.
+    sigma0 : float
+        Bristle stiffness, N m/rad.
+
+    Returns
+    -------
+    z : numpy.ndarray
+        (n,) F_s sign(v) / sigma0, rad.
+    tau_f : numpy.ndarray
+        (n,) F_s sign(v) + F_v v, N m.
+    """
     v = np.asarray(v, dtype=float)
     Fs, Fv = np.asarray(coulomb, dtype=float), np.asarray(viscous, dtype=float)
     return Fs * np.sign(v) / sigma0, Fs * np.sign(v) + Fv * v
@@ -137,7 +194,17 @@ def lugre_steady(v: Any, coulomb: np.ndarray, viscous: np.ndarray, sigma0: float
 
 def lugre_of(model: Any) -> LuGre | None:
     """The LuGre law of ``model``'s parameter file (``friction.law = "lugre"``: its ``sigma0``/``sigma1``, else the
-    defaults :data:`SIGMA0`, :data:`SIGMA1`), or None (the file's law is ``tanh``, or the model has no file)."""
+    defaults :data:`SIGMA0`, :data:`SIGMA1`), or None (the file's law is ``tanh``, or the model has no file).
+
+    Parameters
+    ----------
+    model : Model
+        The model (its ``params``; anything without them: None).
+
+    Returns
+    -------
+    LuGre or None
+    """
     p = getattr(model, "params", None)
     if p is None or getattr(p, "friction_law", "tanh") != "lugre":
         return None
@@ -192,7 +259,17 @@ class Creep:
 
 def creep_of(model: Any) -> Creep | None:
     """The :class:`Creep` law of ``model``'s parameter file (``friction.law = "creep"``: its ``creep_kappa`` /
-    ``creep_rate``, else the defaults), or None (another law, or no file)."""
+    ``creep_rate``, else the defaults), or None (another law, or no file).
+
+    Parameters
+    ----------
+    model : Model
+        The model (its ``params``; anything without them: None).
+
+    Returns
+    -------
+    Creep or None
+    """
     p = getattr(model, "params", None)
     if p is None or getattr(p, "friction_law", "tanh") != "creep":
         return None

@@ -190,7 +190,19 @@ def creep_attributes(law: Any) -> str:
     """The ``<joint>`` attributes of the creep law (:class:`~alpes_dyn.model.friction.Creep`): MuJoCo's soft
     dry-friction constraint of impedance d = kappa / (1 + kappa) (``solimpfriction`` "d d 0.001": its added inertia
     d / (1 - d) / ``dof_invweight0``) and time constant 2 / (d b) (``solreffriction``, critically damped: its rate
-    b = 2 / (d_max t_c)); MuJoCo's default constraint is the law's default."""
+    b = 2 / (d_max t_c)); MuJoCo's default constraint is the law's default.
+
+    Parameters
+    ----------
+    law : ~alpes_dyn.model.friction.Creep
+        The creep law: its ``kappa`` (the band's added inertia in units of the joint's own, -) and ``rate``
+        (the band's rate b, 1/s).
+
+    Returns
+    -------
+    str
+        ``solreffriction="..." solimpfriction="..."``, the attributes to add to each ``<joint>``.
+    """
     d = law.kappa / (1.0 + law.kappa)
     return f'solreffriction="{_f(2.0 / (d * law.rate))} 1" solimpfriction="{_f(d)} {_f(d)} 0.001"'
 

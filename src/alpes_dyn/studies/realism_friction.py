@@ -98,7 +98,18 @@ class FrictionCase:
 
     def true_params(self, seed: int) -> HandParams:
         """The plant's parameters: finger3 drawn +-20 % with ``seed`` (:meth:`FINGER3.true_params
-        <alpes_dyn.studies.realism.Plant.true_params>`), its joints' F_s times :attr:`scale`."""
+        <alpes_dyn.studies.realism.Plant.true_params>`), its joints' F_s times :attr:`scale`.
+
+        Parameters
+        ----------
+        seed : int
+            The draw's seed.
+
+        Returns
+        -------
+        HandParams
+            The plant's true parameters.
+        """
         p = FINGER3.true_params(seed)
         if self.scale == 1.0:
             return p
@@ -125,9 +136,22 @@ quarter (1.3 mN m/s: the joints stick and slip in turn)."""
 
 
 def validation_torque(dt: float, m: int = 1) -> np.ndarray:
-    """(N+1, m) N m, the validation run's motor torque at a sample period ``dt`` (s): the ``estimate`` scenario's
+    """The validation run's motor torque: the ``estimate`` scenario's
     (:func:`~alpes_dyn.estimation.observers.scenario.scenario_torque`, its 5 s: the bias and its sines, which end at
-    the bias), then a slow triangle about the bias (:data:`RAMP_TORQUE`, :data:`RAMP_SECONDS`)."""
+    the bias), then a slow triangle about the bias (:data:`RAMP_TORQUE`, :data:`RAMP_SECONDS`).
+
+    Parameters
+    ----------
+    dt : float
+        The sample period, s.
+    m : int, optional
+        The number of motors (default 1), each given the same torque.
+
+    Returns
+    -------
+    numpy.ndarray, shape (N+1, m)
+        The motor torque, N m, N = round(5 s / dt) + round(:data:`RAMP_SECONDS` / dt).
+    """
     sc = EstimationScenario()
     n1, n2 = int(round(sc.duration / dt)), int(round(RAMP_SECONDS / dt))
     t = dt * np.arange(n1 + n2 + 1)
@@ -141,7 +165,24 @@ def standard_scores(values: dict[str, float], std: dict[str, float], truth: dict
                     scale: float) -> dict[str, float]:
     """Each fitted K, m, F_s, F_v (:data:`~alpes_dyn.studies.realism.KINDS`) whose truth is known and not 0: its
     error up to the common ``scale`` (:func:`~alpes_dyn.studies.realism.errors`) in units of its reported standard
-    error, (value / scale - truth) / (std / scale); |z| <= 3 where the reported uncertainty tells the truth."""
+    error, (value / scale - truth) / (std / scale); |z| <= 3 where the reported uncertainty tells the truth.
+
+    Parameters
+    ----------
+    values : dict of str to float
+        The fitted values by parameter name, in their units.
+    std : dict of str to float
+        Their reported standard errors, same units (a parameter without one, or 0, left out).
+    truth : dict of str to float
+        The plant's true values by name, same units.
+    scale : float
+        The common scale of the fit (the torque constant's, :func:`~alpes_dyn.studies.realism.errors`), -.
+
+    Returns
+    -------
+    dict of str to float
+        Parameter name -> its standard score z, -.
+    """
     out = {}
     for nm, v in values.items():
         if any(nm.startswith(k + "_") for k in KINDS) and truth.get(nm, 0.0) != 0.0 and std.get(nm, 0.0) > 0:
@@ -189,7 +230,33 @@ def true_file_row(case: FrictionCase | str, seed: int, laws: tuple[str, ...] = (
     temporary directory) and the EKF on it with each observer friction law of ``laws``
     (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`). Keys: ``case``, ``seed``, ``not_held``, ``rotor``, and per
     law in ``laws`` (a dict by law): ``rmse_deg`` (per joint, after ``transient`` s), ``nees``
-    (:func:`_consistency`), ``seconds``; :class:`~alpes_dyn.InputError` naming ``case`` on an unknown name."""
+    (:func:`_consistency`), ``seconds``.
+
+    Parameters
+    ----------
+    case : FrictionCase or str
+        The case, or its name (:data:`FRICTION_CASE_NAMES`).
+    seed : int
+        The draw's seed (the validation run's sensor noise ``seed + 1000``).
+    laws : tuple of str, optional
+        The observer friction laws to run the EKF with (default ``("smooth",)``).
+    tmp : pathlib.Path or None, optional
+        The directory the true file is written in (default None: a temporary directory).
+    transient : float, optional
+        The EKF's transient left out of the RMSE and NEES, s (default 1).
+    dt : float, optional
+        The validation run's sample period, s (default 1 ms).
+
+    Returns
+    -------
+    dict
+        The row (keys above).
+
+    Raises
+    ------
+    InputError
+        An unknown case name.
+    """
     case = _case(case)
     if tmp is None:
         with tempfile.TemporaryDirectory() as d:
@@ -221,7 +288,35 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     alone), ``law_spread`` (it was added), ``validation_s``, ``validation_range_deg`` (the true
     joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends),
     ``true_file_not_held`` (the plant's effects the true file cannot hold, :attr:`~alpes_dyn.bench.truth.TruthFile.
-    not_held`); :class:`~alpes_dyn.InputError` naming ``case`` on an unknown name."""
+    not_held`).
+
+    Parameters
+    ----------
+    case : FrictionCase or str
+        The case, or its name (:data:`FRICTION_CASE_NAMES`).
+    seed : int
+        The draw's seed, also the identification run's sensor noise (the validation run's is ``seed + 1000``).
+    design : ExperimentDesign or None, optional
+        The identification experiment (default None: the documented one on the level rig,
+        :func:`~alpes_dyn.studies.realism.rig_design`).
+    tmp : pathlib.Path or None, optional
+        The directory the identified and true files are written in (default None: a temporary directory).
+    adapt : str, optional
+        How the experiment is adapted, as ``--rig`` (default ``"auto"``;
+        :func:`~alpes_dyn.studies.realism.plant_experiment`).
+    transient : float, optional
+        The EKF's transient left out of the RMSE and NEES, s (default 1).
+
+    Returns
+    -------
+    dict
+        The row (keys above).
+
+    Raises
+    ------
+    InputError
+        An unknown case name or ``adapt``.
+    """
     case = _case(case)
     if tmp is None:
         with tempfile.TemporaryDirectory() as d:
@@ -280,7 +375,20 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
 
 
 def complete_seeds(rows: list[dict[str, Any]], names: tuple[str, ...] | list[str]) -> list[int]:
-    """The seeds whose rows hold every case of ``names`` (a run stopped part-way: the same draws for each case)."""
+    """The seeds whose rows hold every case of ``names`` (a run stopped part-way: the same draws for each case).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The study's rows (:func:`friction_row`; their ``seed`` and ``case``).
+    names : tuple or list of str
+        The case names a seed must hold.
+
+    Returns
+    -------
+    list of int
+        The seeds, in the order of their first row.
+    """
     have: dict[int, set] = {}
     for r in rows:
         have.setdefault(r["seed"], set()).add(r["case"])
@@ -302,7 +410,20 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
     ``z_within_3`` (the fraction of parameters within 3; ``z_noise_within_3`` with the noise's standard errors
     alone), ``verdicts`` (each row's, by seed); ``issue_goal_met``
     (issue 50's goal on every row: the EKF within ``ekf_goal`` on every joint with both files, every joint's NEES in
-    its band with both, every |z| within 3, springs and masses within their goals, no run that raised)."""
+    its band with both, every |z| within 3, springs and masses within their goals, no run that raised).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The study's rows (:func:`friction_row`; a row with ``error``: a run that raised).
+    ekf_goal : float, optional
+        The EKF's RMSE goal on every joint, deg (default :data:`~alpes_dyn.studies.realism.EKF_GOAL_DEG`).
+
+    Returns
+    -------
+    dict of str to dict
+        Case name -> its summary (keys above).
+    """
     out = summarise(rows, ekf_goal)
     for case, s in out.items():
         ok = [r for r in rows if r["case"] == case and "error" not in r]

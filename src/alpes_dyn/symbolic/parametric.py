@@ -526,6 +526,14 @@ class ParametricDynamics:
             The parameter values, in their units.
         z : casadi.SX, shape (n,), or None, optional
             The bristle deflections, rad: the LuGre friction (default None: the smooth law).
+        dry : bool, optional
+            With the smooth law's dry term F_s tanh(qd / v_s) (default True); False leaves it out (the ``creep``
+            law, whose dry friction :meth:`creep_torque` gives). Unused with ``z``.
+
+        Returns
+        -------
+        casadi.SX, shape (n,)
+            The springs' and friction's torque, N m.
         """
         K = self._vector("K", self._K, theta)
         Fv = self._vector("F_v", self._Fv, theta)
@@ -680,7 +688,25 @@ class ParametricDynamics:
     def creep_torque(self, M: cs.SX, r: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX:
         """The ``creep`` law's dry friction (n,), N m, with M qdd = r - it (:func:`~alpes_dyn.symbolic.creep.
         creep_friction`): its band inertia from the links' inertia at q = 0 (theta's masses; the rotors and the
-        armature, which MuJoCo's constraint does not weigh on a joint, left out)."""
+        armature, which MuJoCo's constraint does not weigh on a joint, left out).
+
+        Parameters
+        ----------
+        M : casadi.SX, shape (n, n)
+            The inertia matrix at q, kg m^2.
+        r : casadi.SX, shape (n,)
+            Every torque on the joints but the dry friction's (input, bias, springs, viscous), N m.
+        v : casadi.SX, shape (n,)
+            Joint velocities qd, rad/s.
+        theta : casadi.SX, shape (p,)
+            The parameter values, in their units (the masses, F_s, and ``creep_kappa``/``creep_rate`` where
+            selected).
+
+        Returns
+        -------
+        casadi.SX, shape (n,)
+            The dry friction tau_f of eq. C1, N m (subtracted from ``r``).
+        """
         M0 = cs.SX.zeros(self.n, self.n)
         q0 = cs.DM.zeros(self.n)
         for k, m0, be in self._mass_params:

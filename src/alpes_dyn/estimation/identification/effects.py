@@ -110,7 +110,24 @@ slides in the data's is far from the linearisation; on a LuGre finger3 (2 s, +-2
 def parse_effects(text: str | Sequence[str] | None) -> tuple[str, ...]:
     """The effects of a comma-separated list (``"none"``: the rigid, smooth-friction fit; None or ``"auto"``: the
     defaults plus ``"auto"``: the rounds of :func:`fit_effects`).
-    :class:`~alpes_dyn.InputError` naming an unknown or repeated one."""
+
+    Parameters
+    ----------
+    text : str or sequence of str or None
+        The effects: a comma-separated string (``"compliance,tilt"``), a list of effect names (of
+        :data:`EFFECTS`, or ``"auto"``), ``"none"`` alone, or None (as ``"auto"``).
+
+    Returns
+    -------
+    tuple of str
+        The effects named, in the order given (``"auto"`` kept among them); empty for ``"none"``.
+
+    Raises
+    ------
+    InputError
+        Naming an unknown or repeated effect, an empty list, ``"none"`` beside others, or a value neither a
+        string nor a list of strings.
+    """
     if text is None or text == "auto":
         return DEFAULT_EFFECTS + ("auto",)
     if not isinstance(text, (str, list, tuple)) or not all(isinstance(it, str) for it in text):
@@ -181,8 +198,28 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
     ``tilt_y`` or ``tilt`` (tilt, only where the recording has no gravity columns: else its
     orientation is known; :func:`fit_effects` fits it on a recording turned between orientations too: its
     columns the rig's nominal orientations, the mount's error on top of them unknown), ``encoder_offset`` (offset)
-    and ``capstan`` (capstan: each tendon's sheath friction, from the model's value, 0 without one) added. None
-    when nothing is added to the default."""
+    and ``capstan`` (capstan: each tendon's sheath friction, from the model's value, 0 without one) added.
+
+    Parameters
+    ----------
+    model : Model
+        The model fitted (its parameter catalogue; whether its joint axes are parallel, a planar finger, decides
+        ``tilt_y`` or ``tilt``).
+    effects : sequence of str
+        The fit's effects (:data:`EFFECTS`).
+    has_gravity : bool
+        The recording has gravity columns that are its orientation: the tilt is not fitted.
+    base : str or None, optional
+        The selection before the effects' parameters (default None: K, m and friction, or the default
+        selection less the unseen masses where the model has some).
+    still : sequence of str, optional
+        The motors whose torque did not move (:func:`still_motors`): their tendon compliance held (default: none).
+
+    Returns
+    -------
+    str or None
+        The comma-separated selection; None (``base``) when nothing is added to the default.
+    """
     extra = []
     if "compliance" in effects:
         extra += (["tendon_compliance"] if not still else
@@ -203,7 +240,18 @@ def effect_parameters(model: Model, effects: Sequence[str], has_gravity: bool,
 
 
 def stiction_params(params: HandParams) -> HandParams:
-    """``params`` with the friction's smooth sign at v_s = :data:`STICTION_VELOCITY` (the stick-slip law)."""
+    """``params`` with the friction's smooth sign at v_s = :data:`STICTION_VELOCITY` (the stick-slip law).
+
+    Parameters
+    ----------
+    params : HandParams
+        The model's parameters (its ``friction.smooth_velocity`` replaced, marked ``assumed``).
+
+    Returns
+    -------
+    HandParams
+        A copy with ``friction.smooth_velocity`` = :data:`STICTION_VELOCITY` rad/s.
+    """
     old = params.raw["friction.smooth_velocity"]
     new = dataclasses.replace(old, value=STICTION_VELOCITY, source="assumed",
                               reason="the stick-slip law of alpes_dyn.estimation.identification.effects: a joint creeps at "
@@ -213,7 +261,18 @@ def stiction_params(params: HandParams) -> HandParams:
 
 def lugre_params(params: HandParams) -> HandParams:
     """``params`` with the LuGre law (``friction.law = "lugre"``; its sigma0 and sigma1 the file's, else the
-    defaults of :mod:`~alpes_dyn.model.friction`: the fit's start)."""
+    defaults of :mod:`~alpes_dyn.model.friction`: the fit's start).
+
+    Parameters
+    ----------
+    params : HandParams
+        The model's parameters.
+
+    Returns
+    -------
+    HandParams
+        ``params`` itself where its law is already ``"lugre"``, else a copy with ``friction.law = "lugre"``.
+    """
     if params.friction_law == "lugre":
         return params
     return with_values(params, {"friction.law": Param("lugre", "-", "assumed", "the friction law with a state of "
@@ -222,7 +281,18 @@ def lugre_params(params: HandParams) -> HandParams:
 
 def creep_params(params: HandParams) -> HandParams:
     """``params`` with the creep law (``friction.law = "creep"``; its band constants the file's, else MuJoCo's
-    default constraint's, :class:`~alpes_dyn.model.friction.Creep`: the fit's start)."""
+    default constraint's, :class:`~alpes_dyn.model.friction.Creep`: the fit's start).
+
+    Parameters
+    ----------
+    params : HandParams
+        The model's parameters.
+
+    Returns
+    -------
+    HandParams
+        ``params`` itself where its law is already ``"creep"``, else a copy with ``friction.law = "creep"``.
+    """
     if params.friction_law == "creep":
         return params
     return with_values(params, {"friction.law": Param("creep", "-", "assumed", "the dry friction that creeps of "
@@ -233,7 +303,18 @@ def lugre_start(result: Any) -> dict[str, float]:
     """The start of a fit with the LuGre law after ``result``, a fit with a memoryless law: its values by name but
     its friction's (F_s, F_v: the file's, as sigma0 and sigma1), without its trajectory. The smooth law's F_s takes
     up the sticking of a stateful friction (+69 % on F_s_2 of a LuGre finger3): from those values the LuGre fit lost
-    its basin, from the file's friction with the smooth fit's springs and masses it met the sensor floor."""
+    its basin, from the file's friction with the smooth fit's springs and masses it met the sensor floor.
+
+    Parameters
+    ----------
+    result : IdentificationResult
+        The fit with a memoryless law (its ``names`` and ``values``).
+
+    Returns
+    -------
+    dict of str to float
+        Parameter name -> value, in the result's units, every fitted parameter but the ``F_s_*`` and ``F_v_*``.
+    """
     return {n: float(v) for n, v in zip(result.names, result.values) if not n.startswith(("F_s_", "F_v_"))}
 
 
@@ -241,7 +322,28 @@ def alpes_models(model: str, params: HandParams, *, rotor_inertia: bool = False,
                  chain: str | None = None) -> Callable[[Sequence[str]], Model]:
     """``model_of`` for :func:`fit_effects` on an Alpes model: ``Model.alpes(model, friction=True, ...)`` from
     ``params``, with the stick-slip law's parameters where the effects hold ``stiction``, the LuGre law where they
-    hold ``lugre`` (each made once, on first use) and the rotor on the tendon where they hold ``rotor`` (or ``rotor_inertia``)."""
+    hold ``lugre``, the creep law where they hold ``creep`` (each made once, on first use) and the rotor on the
+    tendon where they hold ``rotor`` (or ``rotor_inertia``).
+
+    Parameters
+    ----------
+    model : str
+        The Alpes model's name (``"finger2"``, ``"finger3"``, ``"hand"`` or ``"thumb"``:
+        :meth:`~alpes_dyn.model.robot.Model.alpes`).
+    params : HandParams
+        The parameters the models are built from (the fit's start).
+    rotor_inertia : bool, optional
+        Every model with the motor's rotor on its tendon, J_m S^T S, whatever the effects (default False: only
+        with ``rotor``).
+    chain : str or None, optional
+        A finger model built from that finger of the hand (a name of ``palm.finger_names``;
+        :meth:`~alpes_dyn.model.robot.Model.alpes`' ``chain``); default None: the model as named.
+
+    Returns
+    -------
+    callable
+        ``model_of(effects) -> Model``.
+    """
     made: dict[str, HandParams] = {}
 
     def model_of(effects: Sequence[str]) -> Model:
@@ -261,7 +363,22 @@ def unmatched_delay(best: Any, rounds: Sequence[tuple[tuple[str, ...], Any]], de
     off its likely missing effects and the note returned says why (None where nothing was changed). A residual
     that follows the torque's own rate is any lag of the plant behind the model, not only the sensor's: MuJoCo's
     default dry friction (``solreffriction`` 0.02 s), which creeps before it slides, lags the smooth law so, and a
-    refusal had named a one-sample delay that a fit at that delay made worse."""
+    refusal had named a one-sample delay that a fit at that delay made worse.
+
+    Parameters
+    ----------
+    best : IdentificationResult
+        The kept fit (its ``adequacy.likely_missing`` edited in place where the delay is taken off).
+    rounds : sequence of (tuple of str, IdentificationResult)
+        Every fit made, as (effects, result) (:attr:`EffectsFit.rounds`).
+    delay : int
+        The kept fit's torque delay, samples (0: none).
+
+    Returns
+    -------
+    str or None
+        The note saying why the delay was taken off, or None where nothing was changed.
+    """
     a = getattr(best, "adequacy", None)
     word = NAMED_BY["delay"]
     if delay or a is None or a.adequate or not any(word in m for m in a.likely_missing):
@@ -297,7 +414,20 @@ class EffectsFit:
 
     @classmethod
     def single(cls, result: Any, effects: tuple[str, ...]) -> "EffectsFit":
-        """The record of one fit made with ``effects``."""
+        """The record of one fit made with ``effects``.
+
+        Parameters
+        ----------
+        result : IdentificationResult
+            The fit.
+        effects : tuple of str
+            Its effects (:data:`EFFECTS`).
+
+        Returns
+        -------
+        EffectsFit
+            ``result`` kept, its only round.
+        """
         return cls(result, effects, rounds=((effects, result),))
 
     @property
@@ -343,11 +473,27 @@ class Kept:
     tried_effects: tuple[str, ...] | None = None
 
     def take(self, result: Any, effects: tuple[str, ...]) -> None:
-        """``result`` kept in place of the current fit, which becomes ``tried``."""
+        """``result`` kept in place of the current fit, which becomes ``tried``.
+
+        Parameters
+        ----------
+        result : IdentificationResult
+            The round's fit, now kept.
+        effects : tuple of str
+            Its effects.
+        """
         self.tried, self.tried_effects, self.result, self.effects = self.result, self.effects, result, effects
 
     def refuse(self, result: Any, effects: tuple[str, ...]) -> None:
-        """``result`` not kept: it becomes ``tried``."""
+        """``result`` not kept: it becomes ``tried``.
+
+        Parameters
+        ----------
+        result : IdentificationResult
+            The round's fit, refused.
+        effects : tuple of str
+            Its effects.
+        """
         self.tried, self.tried_effects = result, effects
 
 
@@ -381,7 +527,22 @@ class RoundWalker:
         self.still = still_motors(recording)  # motor -> (spread, noise): their compliance held, named
 
     def one(self, effs: tuple[str, ...], warm: Any, delay: int) -> Any:
-        """One fit with ``effs`` on the torque read ``delay`` samples earlier, from ``warm`` where it converged."""
+        """One fit with ``effs`` on the torque read ``delay`` samples earlier, from ``warm`` where it converged.
+
+        Parameters
+        ----------
+        effs : tuple of str
+            The fit's effects (:data:`EFFECTS`).
+        warm : IdentificationResult or None
+            The fit it starts from where converged (its values and trajectory); None: the model's values.
+        delay : int
+            The torque delay, samples: the fit made on the torque read this many samples earlier.
+
+        Returns
+        -------
+        IdentificationResult
+            The fit, recorded in :attr:`rounds` and its delay in :attr:`delays`.
+        """
         from .adequacy import AdequacyWarning
         from .identification import identify
         from ..observers.replay import advanced
@@ -421,7 +582,20 @@ class RoundWalker:
     def run(self, effs: tuple[str, ...], warm: Any = None) -> Any:
         """One fit with ``effs``; with ``delay`` among them, the torque read 1, 2, ... samples earlier (each from
         the last) while the residual falls and the last fit's verdict still names the delay, up to
-        :data:`MAX_FIT_DELAY`: the lowest kept."""
+        :data:`MAX_FIT_DELAY`: the lowest kept.
+
+        Parameters
+        ----------
+        effs : tuple of str
+            The fit's effects (:data:`EFFECTS`).
+        warm : IdentificationResult or None, optional
+            The fit it starts from (default None: the model's values).
+
+        Returns
+        -------
+        IdentificationResult
+            The fit (with ``delay``: the one of the lowest residual).
+        """
         if "delay" not in effs:
             return self.one(effs, warm, 0)
         if warm is not None and "delay" in next((e for e, r in self.rounds if r is warm), ()):
@@ -471,7 +645,18 @@ class RoundWalker:
         return res
 
     def first(self, chosen: tuple[str, ...]) -> Kept:
-        """The ``first`` stage: the fit with ``chosen``; where it lost its basin, the ``staged`` round."""
+        """The ``first`` stage: the fit with ``chosen``; where it lost its basin, the ``staged`` round.
+
+        Parameters
+        ----------
+        chosen : tuple of str
+            The effects asked for (``"auto"`` left out).
+
+        Returns
+        -------
+        Kept
+            The fit kept (the staged one where the first lost its basin, the first then ``tried``).
+        """
         first_round, staged = rounds_of("first")
         self.attempted.update(chosen)
         res = self.run(first_round.proposal(None, chosen))
@@ -485,7 +670,20 @@ class RoundWalker:
 
     def staged(self, target: tuple[str, ...], failed: Any) -> tuple[Any, tuple[str, ...]]:
         """The rigid fit, then the effects of ``target`` one by one, each round from the last; where a stage does
-        not converge, the last converged one is kept and a note names the effect that broke it."""
+        not converge, the last converged one is kept and a note names the effect that broke it.
+
+        Parameters
+        ----------
+        target : tuple of str
+            The effects to add one by one.
+        failed : IdentificationResult
+            The fit that lost its basin (kept where the rigid fit itself does not converge).
+
+        Returns
+        -------
+        tuple of (IdentificationResult, tuple of str)
+            The last converged stage's fit and its effects (``failed`` and ``target`` where none converged).
+        """
         accepts = dict((r.name, r) for r in ROUNDS)["staged"].accepts
         prev, stage = self.attempt("staged", ()), ()
         if prev is None or not accepts(prev, failed):
@@ -506,7 +704,20 @@ class RoundWalker:
     def play(self, rnd: Round, kept: Kept) -> bool:
         """One round from ``kept``: its fit made where :meth:`Round.proposal` proposes one (from the kept fit), kept
         where the round accepts it (``kept`` updated). True where a fit was made, or tried and ran away (a failed
-        round: :meth:`attempt`, the kept fit standing)."""
+        round: :meth:`attempt`, the kept fit standing).
+
+        Parameters
+        ----------
+        rnd : Round
+            The round (of :data:`~.rounds.ROUNDS`).
+        kept : Kept
+            The fit kept so far, updated in place.
+
+        Returns
+        -------
+        bool
+            Whether a fit was made or tried.
+        """
         effs = rnd.proposal(kept.result, kept.effects, self.attempted)
         if effs is None:
             return False
@@ -523,7 +734,13 @@ class RoundWalker:
 
     def auto(self, kept: Kept) -> None:
         """The ``auto`` stage: the first of its rounds that proposes a fit, again while one does; ends where none
-        does, or where a round is refused while the kept fit is adequate."""
+        does, or where a round is refused while the kept fit is adequate.
+
+        Parameters
+        ----------
+        kept : Kept
+            The fit kept so far, updated in place.
+        """
         while True:
             rnd = next((r for r in rounds_of("auto")
                         if r.proposal(kept.result, kept.effects, self.attempted) is not None), None)
@@ -535,14 +752,35 @@ class RoundWalker:
                 return
 
     def cable(self, kept: Kept) -> None:
-        """The ``cable`` stage: each of its rounds once."""
+        """The ``cable`` stage: each of its rounds once.
+
+        Parameters
+        ----------
+        kept : Kept
+            The fit kept so far, updated in place.
+        """
         for rnd in rounds_of("cable"):
             self.play(rnd, kept)
 
     def observe(self, kept: Kept, auto: bool, validation: Any = None) -> Any:
         """The kept fit judged by the observer it feeds (on ``validation`` where it is a recording, else the fitted
         one); with ``auto``, while it fails, the ``auto`` stage again, then the rounds as good a fit
-        (:func:`_observer_choice`). The last check, or None."""
+        (:func:`_observer_choice`).
+
+        Parameters
+        ----------
+        kept : Kept
+            The fit kept so far, updated in place (another round's fit taken where the observer passes it).
+        auto : bool
+            ``--effects auto``: while the observer fails the kept fit, try the rounds left.
+        validation : Recording or None, optional
+            The recording to judge on (default None, or anything not a recording: the fitted one).
+
+        Returns
+        -------
+        ObserverCheck or None
+            The last check (:func:`~alpes_dyn.estimation.identification.observer_check.judge`), or None.
+        """
         from .observer_check import judge
 
         on = validation if isinstance(validation, type(self.recording)) else self.recording
