@@ -74,9 +74,9 @@ KNEE_FRACTION = 0.3
 """The upper knee: the slope over the last window below this share of the steepest seen on the ramp (a joint reached
 its stop, or the springs balance the pull). Palm up, finger3's q_1 reaches its stop first and the slope falls to a
 sixth. Hung fingers down (the MuJoCo stand-in turned) q_2 reaches its stop first and the slope falls by a third only
-(q_1 and q_3 still move): this rule misses it and the range runs on to q_1's stop 900 counts later, while 0.6,
-which catches it, ends the palm-up range 700 counts early, on the slope's fall past the fold (a known limit: the
-calibration is for the palm-up rig)."""
+(q_1 and q_3 still move): this rule misses it and the range runs on to q_1's stop, while a larger share, which
+catches it, ends the palm-up range early, on the slope's fall past the fold (a known limit: the calibration is for
+the palm-up rig)."""
 LIFT_FRACTION = 0.3
 """The lower knee: the last window below the steepest slope whose slope is under this share of it (a joint lifting
 off its stop is a jump of the slope; a slope that grows smoothly, hung, keeps the rest as the lower end)."""
@@ -85,8 +85,8 @@ SNAP_FRACTION = 0.25
 usable range."""
 FOLD_WINDOW = 0.002
 """The fold test's torque window, a fraction of the safe torque (1e-4 N m of the Alpes fingers' 0.05): a snap moves
-the encoder at one held torque; the steepest stable branch seen (5.2e5 counts per N m) moves it by 52 counts over
-the window, a fiftieth of a finger3's range."""
+the encoder at one held torque; the steepest stable branch (the MuJoCo stand-in's finger3 palm up, q_1 sweeping
+from stop to stop) moves it by a small fraction of the range over the window."""
 CURVE_POINTS = 200
 """Points of the counts <-> torque curve kept (bins of the ramp's torque, the counts averaged in each)."""
 

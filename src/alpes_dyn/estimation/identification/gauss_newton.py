@@ -13,10 +13,10 @@ KKT matrices) and knows nothing of the model. Three stages:
    Wright, Section 18.3) and a filter's second chance against the Maratos effect.
 
 :meth:`GaussNewton.solve` runs stages 2-3 from two starts (friction held during the homotopy, then free) where the
-first ends above the basin limit (three times the quantisation floor: wrong basins leave 4-8 counts). Why each
+first ends above the basin limit (three times the quantisation floor: wrong basins leave several counts). Why each
 stage exists is told in :mod:`alpes_dyn.estimation.identification.identification` and at each rule below. Compared on the same
-problem with IPOPT (CasADi's ``nlpsol``): at parity on fit time (5.4 vs 5.5 s), and this one converges without
-tight bounds where IPOPT did not (the issue 18 measurement).
+problem with IPOPT (CasADi's ``nlpsol``): about as fast, and this one converges without tight bounds where IPOPT
+did not (issue 18).
 """
 
 from __future__ import annotations
@@ -278,7 +278,7 @@ class GaussNewton:
         torque's line corrections within :data:`COEF_STEP_RECORD`'s rule times ``coef_radius``, the whole step
         scaled down. In stage 3 the local variables are scaled with the global ones: there, re-solving the nodes
         for a shortened parameter step (continuity a hard constraint), or damping the whole step, sent
-        three of six +-20 % fingers to residuals of 50-1700 counts.
+        several +-20 % fingers to residuals far above the floor.
 
         Parameters
         ----------
@@ -643,7 +643,7 @@ class GaussNewton:
             if viol >= 1e-6 and noisy and (step_sigma < 0.1 or (stalled and step_sigma < 1.0)):
                 # the fit is done but for continuity (steps shortened by the line search leave part of each
                 # defect): the defects alone removed, from the same factorisation (on MuJoCo's stick-slip plants
-                # the tail spent 5-15 iterations of failed line searches on defects of 1e-6 to 5e-5). Only on
+                # the tail spent many iterations of failed line searches on tiny defects). Only on
                 # noisy data: on noise-free data (exact recovery) the standard errors are the residual's, not the
                 # sensor's, and Newton's own convergence is what takes the parameters to 1e-6.
                 restored = self.restore(pb, nodes, offs, glob, e, solve_K, c_scale, max(tol * cost, 0.5))

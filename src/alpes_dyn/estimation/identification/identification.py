@@ -179,8 +179,8 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         The standard deviation sigma_u of the recorded torque's white noise, N m. Default: with ``excitation``,
         estimated from what the measured torque has off the lines; without, 0 (the torque taken as exact). Without
         ``excitation`` a positive value gives each interval a constant torque correction with prior
-        sigma_u / sqrt(samples per interval) (near its gravity balance a finger turns 3e-5 N m of in-band torque
-        error into 13 counts of encoder misfit).
+        sigma_u / sqrt(samples per interval) (near its gravity balance a finger turns a tiny in-band torque
+        error into counts of encoder misfit).
     camera_noise : float, optional
         The standard deviation of the recording's joint-angle measurements, rad (weights them against the encoder,
         whose noise is its quantisation step / sqrt(12) plus the fit's residual).

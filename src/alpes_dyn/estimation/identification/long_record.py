@@ -55,10 +55,10 @@ WINDOW = 4.0
 JOIN_LIMIT = 0.1
 """The joined start is kept where its defects are at most this fraction of the nodes' scale (per state component);
 else stage 1's nodes and the homotopy's last phase start stage 3. The model's response from rest under the window's
-parameters drifts where a joint has no spring (the thumb's ab/adduction: the hand's 60 s record, 96 counts
-of residual, defects 0.52 of the scale after the join's two steps, and stage 3 from there crawled into its cap of
-:data:`~alpes_dyn.estimation.identification.gauss_newton.WINDOW_ITERATIONS`); a finger's, on springs, joins to 0.01
-(the same record's index finger)."""
+parameters drifts where a joint has no spring (the thumb's ab/adduction: after the join's steps the defects
+stay a large share of the scale, and stage 3 from there crawls into its cap of
+:data:`~alpes_dyn.estimation.identification.gauss_newton.WINDOW_ITERATIONS`); a finger's, on springs, joins to a
+small fraction of it."""
 RUNS_START = LONG_RECORD
 """s: a record of several runs longer than this (their durations summed) starts from its runs fitted one by one
 (:func:`runs_start`); a shorter one, cheap to fit whole, is fitted from the model's own response as before. From the

@@ -59,8 +59,8 @@ docstring)."""
 BRISTLE_WALK = 1e-3
 """The LuGre observer's random walk of each bristle per step, as a fraction of the presliding displacement
 F_s / sigma0 (the bristle's prior standard deviation is the whole of it: a joint at rest holds an unknown
-friction). Finger2 held by 10 times the file's F_s on MuJoCo's stick-slip: 0.27 degree RMS at 1e-3 and 1e-4,
-0.45 at 1e-2, 0.45 at 1e-1 (the bristle let free, the filter lets the split between the joints move)."""
+friction). On MuJoCo's stick-slip finger2, held: a small walk keeps the estimate as close as a smaller one, a
+larger walk lets the bristle free and the filter lets the split between the joints move."""
 
 
 def model_error_of(model: Model) -> float | None:
