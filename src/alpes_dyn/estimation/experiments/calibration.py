@@ -7,15 +7,15 @@ only (no model of the finger is trusted for them).
 1. the rest: the command held at 0 N m for ``settle`` s (the cable slack, the springs and gravity alone), the median
    of the encoder over its second half;
 2. a slow torque ramp from 0 at ``rate`` N m/s, the torque held while the encoder moves faster than ``speed``
-   counts/s (quasi-static where the finger is most compliant: near its fold a torque step of 1e-3 N m moves it
-   by 800 counts, and its slowest mode takes a few tenths of a second), up to ``safe_torque`` at most, stopped at the
+   counts/s (quasi-static where the finger is most compliant: near its fold a small torque step moves it by
+   hundreds of counts, and its slowest mode takes a few tenths of a second), up to ``safe_torque`` at most, stopped at the
    first
    knee, where the motion stops growing with the torque as it did: once the encoder has left the rest by
    :data:`MIN_MOVE_COUNTS`, the slope over the last :data:`KNEE_WINDOW` of the safe torque below
    :data:`KNEE_FRACTION` of the steepest one seen (a joint reached its stop, or the springs balance the pull). The
    encoder reads the joints' sum only, so the first joint's stop is the range's end: on the MuJoCo stand-in's
-   finger3 (palm up) q_1 reaches its 90 degree stop at 4900 counts, 0.026 N m, where the slope falls from 8e5 to
-   1.3e5 counts per N m, while the sum grows on to 6600 counts at the safe 0.05 N m as q_2 and q_3 follow. The
+   finger3 (palm up) q_1 reaches its upper stop well below the safe torque, where the slope falls to a fraction,
+   while the sum grows on up to the safe torque as q_2 and q_3 follow. The
    reading at the knee (or at the safe torque) is the usable range's upper end. Its lower end is the knee below the
    steepest slope, where a joint left its stop (:func:`_lower_end`, :data:`LIFT_FRACTION`), or the rest;
 3. the ramp's curve (counts against torque, :data:`CURVE_POINTS` points) kept: the static relation the trim of
@@ -347,8 +347,8 @@ def _upper_end(tau: np.ndarray, cnt: np.ndarray, knee: int, n_smooth: int) -> tu
 def _lower_end(tau: np.ndarray, cnt: np.ndarray, window: float, rest: float) -> tuple[float, float]:
     """(counts, torque) of the usable range's lower end on the binned curve (P,), (P,): below the steepest slope
     (over ``window`` N m), the middle of the last window whose slope is under :data:`LIFT_FRACTION` of it (palm up,
-    finger3's q_1 lies on its 0 degree stop until 1800 counts, 0.019 N m, while q_2 and q_3 move: a slope of 1e5
-    counts per N m, then 8e5 once it lifts off); the rest (0 N m) where the slope stays above it all the way."""
+    finger3's q_1 lies on its lower stop at first while q_2 and q_3 move, and the slope jumps several times over
+    once it lifts off); the rest (0 N m) where the slope stays above it all the way."""
     w = max(1, int(np.searchsorted(tau, tau[0] + window)))
     if tau.size <= w:
         return rest, 0.0

@@ -93,7 +93,7 @@ second correction of the bias at the full amplitude)."""
 START_SHARE = 0.5
 """The trim's first hold: the calibrated torque of this share of the way from the guard band's lower end to the target. The ramp that
 made the curve had no dither, whose sliding carries the finger further (on the MuJoCo stand-in's finger3 the torque
-of the target read 1200 counts above it, past the guard band), so the trim comes from below."""
+of the target reads past the guard band), so the trim comes from below."""
 
 STEP_GAIN = 0.7
 """The share of the curve's correction each hold applies (the finger's compliance grows towards its fold: a whole
@@ -509,7 +509,7 @@ def _nominal_mean(nominal: Model, clock: _Clock, excitation: np.ndarray, n: int)
     ``excitation`` (K, m), N m, every stage's so far about the nominal bias, from its rest under the first torque
     (the stages before spend its transient): what the hand's mean over the same ticks is trimmed to -- the designed
     trajectory's, not the static rest's: under the multisine the mean reading of a finger close to its fold moves
-    off its rest, by 150 counts on the MuJoCo stand-in's finger3."""
+    off its rest (by a visible share of the range on the MuJoCo stand-in's finger3)."""
     design = clock.design
     u = excitation + clock.bias0
     k = u.shape[0]
