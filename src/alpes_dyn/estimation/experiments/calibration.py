@@ -8,9 +8,8 @@ only (no model of the finger is trusted for them).
    of the encoder over its second half;
 2. a slow torque ramp from 0 at ``rate`` N m/s, the torque held while the encoder moves faster than ``speed``
    counts/s (quasi-static where the finger is most compliant: near its fold a small torque step moves it by
-   hundreds of counts, and its slowest mode takes a few tenths of a second), up to ``safe_torque`` at most, stopped at the
-   first
-   knee, where the motion stops growing with the torque as it did: once the encoder has left the rest by
+   hundreds of counts, and its slowest mode takes a few tenths of a second), up to ``safe_torque`` at most, stopped
+   at the first knee, where the motion stops growing with the torque as it did: once the encoder has left the rest by
    :data:`MIN_MOVE_COUNTS`, the slope over the last :data:`KNEE_WINDOW` of the safe torque below
    :data:`KNEE_FRACTION` of the steepest one seen (a joint reached its stop, or the springs balance the pull). The
    encoder reads the joints' sum only, so the first joint's stop is the range's end: on the MuJoCo stand-in's
