@@ -105,6 +105,9 @@ def test_the_flagged_rounds(effect):
     assert rnd.proposal(fit(), KEPT, {effect}) is None
     assert (rnd.proposal(fit(missing=[NONLINEARITY]), KEPT) is None) == (effect == "offset")
     assert rnd.accepts(fit(0.5), fit(0.6)) and not rnd.accepts(fit(0.7), fit(0.6))
+    # a fit stopped by its cap never replaces a converged one, only one that did not converge either
+    assert not rnd.accepts(fit(0.5, converged=False), fit(0.6))
+    assert rnd.accepts(fit(0.5, converged=False), fit(0.6, converged=False))
 
 
 def test_the_rigid_cable_round():

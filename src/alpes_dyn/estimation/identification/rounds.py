@@ -34,6 +34,8 @@ round           stage  made when (adds)                                         
                        errors (removes the compliance)
 =============== ====== =========================================================== ============== ===============
 
+"Lower residual" keeps a fit that did not converge only over a kept fit that did not either.
+
 Every round with the compliance fits it on the motors whose torque moved in the recording only
 (:func:`~alpes_dyn.estimation.identification.effects.still_motors`); the others' is held at the model's value and
 named in the fit's ``not_identified``.
@@ -114,8 +116,9 @@ def nonlinear(result: Any) -> bool:
 
 
 def _lower_residual(new: Any, kept: Any) -> bool:
-    """The new fit's residual below the kept one's."""
-    return bool(new.residual_rms < kept.residual_rms)
+    """The new fit's residual below the kept one's, the new fit converged where the kept one did (a fit stopped by
+    its iteration cap or a lost basin never replaces a converged one)."""
+    return bool(new.residual_rms < kept.residual_rms and (new.converged or not kept.converged))
 
 
 def _converged(new: Any, kept: Any) -> bool:
