@@ -445,11 +445,7 @@ class ParametricDynamics:
         theta : casadi.SX, shape (p,)
             The parameter values, in their units.
         """
-        M = cs.SX(self.n, self.n)  # (structurally empty: SX.zeros would make every entry a structural 0)
-        for k, m0, be in self._mass_params:
-            M = M + (theta[k] / m0) * be.mass_matrix(q)
-        if self._rest is not None:
-            M = M + self._rest[1].mass_matrix(q)
+        M = self._link_inertia(q, theta)
         if np.any(self._armature != 0):
             M = M + cs.diag(cs.DM(self._armature))
         if self._curve is not None and (self._sel["J_m"] or self._rotor is not None):  # rho(q)^T diag(J_m) rho(q)
@@ -460,6 +456,16 @@ class ParametricDynamics:
             M = M + cs.mtimes(self._S.T, cs.mtimes(cs.diag(J), self._S))
         elif self._rotor is not None:
             M = M + sparse_dm(self._rotor)
+        return M
+
+    def _link_inertia(self, q: Any, theta: cs.SX) -> cs.SX:
+        """A(q; theta) (n, n), kg m^2: the links' inertia alone (theta's masses and the rest of the links), without
+        the armature and the rotors; structurally sparse as the tree."""
+        M = cs.SX(self.n, self.n)  # (structurally empty: SX.zeros would make every entry a structural 0)
+        for k, m0, be in self._mass_params:
+            M = M + (theta[k] / m0) * be.mass_matrix(q)
+        if self._rest is not None:
+            M = M + self._rest[1].mass_matrix(q)
         return M
 
     def rotor_bias(self, q: cs.SX, v: cs.SX, theta: cs.SX) -> cs.SX | float:
@@ -707,13 +713,7 @@ class ParametricDynamics:
         casadi.SX, shape (n,)
             The dry friction tau_f of eq. C1, N m (subtracted from ``r``).
         """
-        M0 = cs.SX.zeros(self.n, self.n)
-        q0 = cs.DM.zeros(self.n)
-        for k, m0, be in self._mass_params:
-            M0 = M0 + (theta[k] / m0) * be.mass_matrix(q0)
-        if self._rest is not None:
-            M0 = M0 + self._rest[1].mass_matrix(q0)
-        a = band_inertia(M0, self._creep_law("kappa", theta))
+        a = band_inertia(self._link_inertia(cs.DM.zeros(self.n), theta), self._creep_law("kappa", theta))
         return creep_friction(M, r, v, self._vector("F_s", self._Fs, theta), a, self._creep_law("rate", theta),
                               self._dry > 0)
 

@@ -58,7 +58,7 @@ from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not
 from ...model.robot import Model
 from .csv_numbers import lines, plain_rows, refuse_empty_row
 from .segments import MAX_SEGMENTS, excitation_parts, segment_starts  # noqa: F401  (exported from here, as before)
-from .units import _check_encoder_columns, _check_encoder_range, check_torque_scale
+from .units import _check_encoder_columns, check_units
 
 __all__ = ["Recording", "read_recording", "write_recording", "join_runs", "MIN_SAMPLES", "MAX_SEGMENTS",
            "segment_starts", "excitation_parts"]
@@ -296,8 +296,7 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
                     force_z=col["force_z"].copy() if "force_z" in col else None, gravity=_gravity_columns(col),
                     true_q=_joint_columns(col, joints, "true_q"), run=_run_column(col))
     check_recording(rec)
-    _check_encoder_range(rec, model)
-    check_torque_scale(rec, model, "current" if torque_constant is not None else "torque")
+    check_units(rec, model, "current" if torque_constant is not None else "torque")
     if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
         others = {h[len("encoder_"):]: data[:, j] for j, h in enumerate(header)
                   if h not in own and h.startswith("encoder_")}

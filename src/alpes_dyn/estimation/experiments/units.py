@@ -14,7 +14,7 @@ import numpy as np
 from ...errors import RecordingError
 from ...model.robot import Model
 
-__all__ = ["TORQUE_SCALE_LIMIT", "check_counts", "check_torque_scale"]
+__all__ = ["TORQUE_SCALE_LIMIT", "check_counts", "check_torque_scale", "check_units"]
 
 TORQUE_SCALE_LIMIT = 10.0
 """A recorded torque beyond this many times the parameter file's ``tau_max`` is not N m (a current in A or mA)."""
@@ -84,6 +84,29 @@ def check_torque_scale(rec: Any, model: Any, column: str) -> None:
             unit = "N m" if column == "torque" else "A (times the torque constant, N m)"
             raise RecordingError(f"recording: column '{column}_{mn}': values up to {float(v):.6g} against tau_max "
                                  f"{tau_max:g} N m: {guess}? the recording's {column} is in {unit}")
+
+
+def check_units(rec: Any, model: Model, column: str = "torque") -> None:
+    """A recording's encoders and torques plausible in their units for ``model``: each encoder within what its
+    joints' ranges allow (counts) and the torques within the motors' limits (N m).
+
+    Parameters
+    ----------
+    rec : Recording
+        The recording (its ``encoder`` (N, m) counts and ``torque`` (N, m) N m).
+    model : Model
+        The model it is read for.
+    column : str, optional
+        The torque column's name in messages: ``"torque"`` (default) or ``"current"`` (read through a torque
+        constant).
+
+    Raises
+    ------
+    RecordingError
+        A column implausible in its unit, naming the column and the likely unit.
+    """
+    _check_encoder_range(rec, model)
+    check_torque_scale(rec, model, column)
 
 
 def _check_encoder_range(rec: Any, model: Model) -> None:

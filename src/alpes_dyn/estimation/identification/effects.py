@@ -273,10 +273,16 @@ def lugre_params(params: HandParams) -> HandParams:
     HandParams
         ``params`` itself where its law is already ``"lugre"``, else a copy with ``friction.law = "lugre"``.
     """
-    if params.friction_law == "lugre":
+    return _with_law(params, "lugre", "the friction law with a state")
+
+
+def _with_law(params: HandParams, law: str, what: str) -> HandParams:
+    """``params`` with ``friction.law = law`` (itself where it already has it), ``what`` the law in words for the
+    value's source: ``--effects LAW``."""
+    if params.friction_law == law:
         return params
-    return with_values(params, {"friction.law": Param("lugre", "-", "assumed", "the friction law with a state of "
-                                                      "--effects lugre", "the joints' friction law")})
+    return with_values(params, {"friction.law": Param(law, "-", "assumed", f"{what} of --effects {law}",
+                                                      "the joints' friction law")})
 
 
 def creep_params(params: HandParams) -> HandParams:
@@ -293,10 +299,7 @@ def creep_params(params: HandParams) -> HandParams:
     HandParams
         ``params`` itself where its law is already ``"creep"``, else a copy with ``friction.law = "creep"``.
     """
-    if params.friction_law == "creep":
-        return params
-    return with_values(params, {"friction.law": Param("creep", "-", "assumed", "the dry friction that creeps of "
-                                                      "--effects creep", "the joints' friction law")})
+    return _with_law(params, "creep", "the dry friction that creeps")
 
 
 def lugre_start(result: Any) -> dict[str, float]:

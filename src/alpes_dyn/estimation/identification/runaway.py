@@ -48,10 +48,9 @@ def diverged(exc: Exception, rec: Recording, model: Model) -> Exception:
     RecordingError
         Where a column's values are implausible in its unit (naming the column and the likely unit).
     """
-    from ..experiments.units import _check_encoder_range, check_torque_scale
+    from ..experiments.units import check_units
 
-    _check_encoder_range(rec, model)
-    check_torque_scale(rec, model, "torque")
+    check_units(rec, model)
     if not isinstance(exc, FitDiverged):
         return exc
     return FitDiverged(f"{exc} from its start, on a recording of plausible units (its encoders within the "
