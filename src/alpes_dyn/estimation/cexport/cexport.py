@@ -558,6 +558,9 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     from ...symbolic.statespace import StateSpace
     from ..observers.observers import OBSERVERS, PARAMETERS, make_observer
     from ..observers.scenario import EstimationScenario, default_noise
+    from ..observers.replay import _substeps
+    from ...model.friction import LuGre, lugre_of
+    from ...simulation.stick import observer_friction_law
 
     if observer not in OBSERVERS:
         raise InputError(f"unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
@@ -572,10 +575,13 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     pars = tuple(PARAMETERS) if observer.endswith("-params") else ()
     noise = default_noise(sc, n, nm, len(pars), meas_var)
     ss = StateSpace(m, input="motor", output="encoder")
-    filt = make_observer(observer, ss, sc.dt, parameters=pars,
-                         substeps=max(sc.substeps, stable_substeps(m, sc.dt)) if sc.friction else 1, **noise)
-    z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars))])
-    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(pars))
+    law = observer_friction_law(m) if sc.friction else "smooth"  # the file's law, as estimate's (lugre: bristles)
+    substeps = _substeps(m, sc.dt, None, friction_law=law) if law == "lugre" else (
+        max(sc.substeps, stable_substeps(m, sc.dt)) if sc.friction else 1)
+    filt = make_observer(observer, ss, sc.dt, parameters=pars, substeps=substeps, friction_law=law, **noise)
+    span = m.extras.coulomb[:filt.model.nb] / (lugre_of(m) or LuGre()).sigma0  # F_s / sigma0 (rad), as estimate's
+    z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars)), np.zeros(span.size)])
+    P0 = np.concatenate([[0.5**2] * n + [1.0**2] * n + [0.2**2] * len(pars), span**2])
     return filt, z0, P0
 
 
