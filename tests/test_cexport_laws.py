@@ -91,12 +91,17 @@ def test_observer_c_export_runs_the_file_law(files, scenario_data):
 
 
 def test_codegen_cli_exports_the_bristles(files, tmp_path, capsys):
-    """``codegen --params lugre.toml --friction``: the bristles in the exported state (as estimate's observer)."""
+    """``codegen --params lugre.toml --friction`` and ``codegen --step``: the bristles in the exported state (as
+    estimate's observer)."""
     assert cli.main(["codegen", "--model", "finger3", "--params", files["lugre"], "--friction",
                      "--out-dir", str(tmp_path / "c"), "--json"]) == 0
     obj = json.loads(capsys.readouterr().out)
     assert obj["nz"] == 9 and obj["states"][6:] == ["bristle_j1", "bristle_j2", "bristle_j3"]
     assert "#define ALPES_EKF_NZ 9" in (tmp_path / "c" / "alpes_ekf.h").read_text()
+    assert cli.main(["codegen", "--step", "--model", "finger3", "--params", files["lugre"], "--controller", "sensor",
+                     "--out-dir", str(tmp_path / "s"), "--json"]) == 0
+    assert json.loads(capsys.readouterr().out)["nz"] == 9
+    assert "#define ALPES_STEP_NZ 9" in (tmp_path / "s" / "alpes_step.h").read_text()
 
 
 @pytest.fixture(scope="module")

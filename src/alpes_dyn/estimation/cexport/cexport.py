@@ -533,7 +533,10 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     chain : str or None, optional
         The hand's chain (None: the model's own).
     friction : bool, optional
-        The model with the file's friction (default False).
+        The model with the file's friction (default False), in the file's law as ``estimate --data`` runs it
+        (:func:`~alpes_dyn.simulation.stick.observer_friction_law`: ``lugre`` with the joints' bristles as the
+        state's last entries, prior 0 and standard deviation F_s / sigma0, rad, and its split steps; ``creep`` solved
+        in the dynamics of each RK4 substep).
     force : bool, optional
         Accept a file marked not trustworthy (default False).
 
@@ -558,8 +561,8 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     from ...symbolic.statespace import StateSpace
     from ..observers.observers import OBSERVERS, PARAMETERS, make_observer
     from ..observers.scenario import EstimationScenario, default_noise
-    from ..observers.replay import _substeps
     from ...model.friction import LuGre, lugre_of
+    from ...simulation.lugre import lugre_substeps
     from ...simulation.stick import observer_friction_law
 
     if observer not in OBSERVERS:
@@ -576,7 +579,7 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     noise = default_noise(sc, n, nm, len(pars), meas_var)
     ss = StateSpace(m, input="motor", output="encoder")
     law = observer_friction_law(m) if sc.friction else "smooth"  # the file's law, as estimate's (lugre: bristles)
-    substeps = _substeps(m, sc.dt, None, friction_law=law) if law == "lugre" else (
+    substeps = lugre_substeps(m, lugre_of(m), sc.dt) if law == "lugre" else (
         max(sc.substeps, stable_substeps(m, sc.dt)) if sc.friction else 1)
     filt = make_observer(observer, ss, sc.dt, parameters=pars, substeps=substeps, friction_law=law, **noise)
     span = m.extras.coulomb[:filt.model.nb] / (lugre_of(m) or LuGre()).sigma0  # F_s / sigma0 (rad), as estimate's
