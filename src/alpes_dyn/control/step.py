@@ -100,9 +100,9 @@ def alpes_design(name: str, params: HandParams, controller: str, contact_q: Sequ
     """finger2/finger3 pressing the block scene's face at ``contact_q`` (default :data:`BLOCK_CONTACT_Q`): the
     model of ``params`` (already oriented, e.g. palm down) turned by the compensation's tilt, the block's normal,
     the file's tau_max, :data:`.DEFAULT_GAINS` of ``controller`` overridden by ``gains``; with ``observer_friction``
-    the EKF's model is the finger with the file's friction (F_s tanh(v / v_s) + F_v v, eq. 2.6-2.7): the joints
-    that friction holds in contact are then where the encoder's sum leaves them, not where a frictionless model
-    would let them slide.
+    the EKF's model is the finger with the file's friction (its law, :func:`force_ekf`; F_s tanh(v / v_s) + F_v v,
+    eq. 2.6-2.7, by default): the joints that friction holds in contact are then where the encoder's sum leaves
+    them, not where a frictionless model would let them slide.
 
     Parameters
     ----------
