@@ -42,8 +42,13 @@ every chain 0.3 N then 0.4 N after 2 s of a 2.5 s run; the normals the Python st
 under 200 us per step). "py build s" is the step's construction (its EKFs compiled or loaded from the shared cache);
 "build s" the C build alone.
 
+``--laws tanh,creep,lugre`` runs each model and controller once per friction law (the shipped file with its
+``friction.law`` set, the law's constants at their defaults; the EKF then runs that law, alpes_dyn.control.step.
+force_ekf), on the same stand-in seed for every law: the C step's time per step by law (column "law"; default: the
+file's own law only).
+
     python benchmarks/c_step.py [--models finger2,finger3,hand] [--controllers sensor[,sensorless,pi]] [--seed 9693]
-                                [--json]
+                                [--laws tanh,creep,lugre] [--json]
 """
 
 from __future__ import annotations
@@ -113,12 +118,20 @@ def _time_c(d: Path, row: dict) -> None:
     row["c_passes"] = PASSES
 
 
-def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> dict:
+def law_params(law: str | None):
+    """The shipped parameter file with ``friction.law`` = ``law`` (None: the shipped file as it is)."""
+    from alpes_dyn.model.params import Param, load_params, with_values
+
+    return None if law is None else with_values(load_params(), {"friction.law": Param(law, "-", "assumed",
+                                                                                     "benchmarks/c_step.py --laws")})
+
+
+def bench_hand(controller: str, seed: int, duration: float, cc: str | None, law: str | None = None) -> dict:
     """The whole hand's step (module docstring)."""
     from alpes_dyn.control.hand_step import HandForceStep
 
     t0 = time.perf_counter()
-    step = HandForceStep(controller=controller)
+    step = HandForceStep(law_params(law), controller=controller)
     py_build = time.perf_counter() - t0
     hw = MujocoHand("hand", scene="cylinder", seed=seed)
     keys = ("counts", "torque", "force", "ref", "normals", "command", "z", "F_fb")
@@ -135,7 +148,7 @@ def bench_hand(controller: str, seed: int, duration: float, cc: str | None) -> d
             rec[key].append(v)
     rec = {k: np.array(v) for k, v in rec.items()}
     n = len(rec["command"])
-    row = {"model": "hand", "controller": controller, "seed": seed, "steps": n, "py_build_s": py_build,
+    row = {"model": "hand", "controller": controller, "law": law, "seed": seed, "steps": n, "py_build_s": py_build,
            "py_us": 1e6 * py_s / n, "observer_friction": True, "substeps": None,
            "F_held_N": [float(x) for x in np.nanmean(rec["force"][-300:], axis=0)]}
     if cc is None:
@@ -179,14 +192,15 @@ def hand_c_columns(step, rec: dict, cc: str) -> dict:
     return row
 
 
-def bench(model: str, controller: str, seed: int, duration: float, cc: str | None) -> dict:
+def bench(model: str, controller: str, seed: int, duration: float, cc: str | None, law: str | None = None) -> dict:
     if model == "hand":
-        return bench_hand(controller, seed, max(duration, 2.5), cc)
+        return bench_hand(controller, seed, max(duration, 2.5), cc, law)
     t0 = time.perf_counter()
-    step = ForceStep(model, controller=controller)  # its EKF compiled (or loaded from the cache)
+    step = ForceStep(model, law_params(law), controller=controller)  # its EKF compiled (or loaded from the cache)
     py_build = time.perf_counter() - t0
     run = run_on_bench(MujocoHand(model, scene="block", seed=seed), step, 0.4, duration)
-    row = {"model": model, "controller": controller, "seed": seed, "steps": len(run.t), "py_build_s": py_build,
+    row = {"model": model, "controller": controller, "law": law, "seed": seed, "steps": len(run.t),
+           "py_build_s": py_build,
            "py_us": _python_us(step, run), "observer_friction": step.design.observer_model is not None,
            "substeps": step._ekf.model.substeps if step.filter_step is not None else None}
     if cc is None:
@@ -221,7 +235,7 @@ def c_columns(step: ForceStep, run, cc: str) -> dict:
         for key, flag, name in (("", [], "in.txt"), ("step_", ["-s"], "in_s.txt")):
             out = subprocess.run([str(d / "main"), *flag, str(d / name)], check=True, capture_output=True,
                                  text=True).stdout
-            U, Z, F = read_step_output(out, step.m, 2 * step.n)
+            U, Z, F = read_step_output(out, step.m, step.nz)
             row[key + "diff_command"] = float(np.abs(U - run.command).max())
             row[key + "diff_q"] = (float(np.nanmax(np.abs(Z[:, :step.n] - run.q_hat)))
                                    if step.filter_step is not None else None)
@@ -249,14 +263,18 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--controllers", default="sensor")
     ap.add_argument("--seed", type=int, default=9693, help="the stand-in's noise seed of the first row (then +1)")
     ap.add_argument("--duration", type=float, default=1.5, help="s of the run on the stand-in")
+    ap.add_argument("--laws", default=None, help="friction laws, e.g. tanh,creep,lugre (default: the file's own)")
     ap.add_argument("--json", action="store_true")
     a = ap.parse_args(argv)
     cc = shutil.which("cc") or shutil.which("gcc")
     load0 = os.getloadavg()[0]
-    rows = []
+    rows, pairs = [], 0
+    laws = [None] if a.laws is None else a.laws.split(",")
     for model in a.models.split(","):
         for controller in a.controllers.split(","):
-            rows.append(bench(model, controller, a.seed + len(rows), a.duration, cc))
+            for law in laws:  # every law on the same stand-in seed
+                rows.append(bench(model, controller, a.seed + pairs, a.duration, cc, law))
+            pairs += 1
     out = {"rows": rows, "load_avg": [load0, os.getloadavg()[0]], "goal_us": GOAL_US, "goal_hand_us": GOAL_HAND_US,
            "goal_build_s": GOAL_BUILD_S,
            "goal_diff": GOAL_DIFF, "goals_met": all(r.get("goals_met", False) for r in rows)}
@@ -265,7 +283,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     print(f"load average {load0:.1f} -> {out['load_avg'][1]:.1f}; us per step; differences C - Python")
     print("|du| |dq| |dF|: the free run; step: c_step_diff, one step from the same state (the goal)")
-    print(f"{'model':8s} {'ctl':10s} {'steps':>5s} {'py build s':>10s} {'py us':>7s} {'C kB':>6s} {'build s':>7s} "
+    print(f"{'model':8s} {'ctl':10s} {'law':6s} {'steps':>5s} {'py build s':>10s} {'py us':>7s} {'C kB':>6s} {'build s':>7s} "
           f"{'(cpu)':>6s} {'C us':>6s} {'(cpu)':>6s} {'C/py':>6s} {'|du| N m':>9s} {'|dq| rad':>9s} {'|dF| N':>9s} "
           f"{'step':>9s} goals")
     for r in rows:
@@ -274,7 +292,7 @@ def main(argv: list[str] | None = None) -> int:
              f"{r['diff_force']:9.1e} {r['c_step_diff']:9.1e} {'met' if r['goals_met'] else 'NOT met'}"
              if r["c_us"] is not None
              else "no C compiler")
-        print(f"{r['model']:8s} {r['controller']:10s} {r['steps']:5d} {r['py_build_s']:10.1f} {r['py_us']:7.1f} {c}")
+        print(f"{r['model']:8s} {r['controller']:10s} {r['law'] or 'file':6s} {r['steps']:5d} {r['py_build_s']:10.1f} {r['py_us']:7.1f} {c}")
     return 0
 
 

@@ -339,7 +339,7 @@ def _emit_step(args: argparse.Namespace, step: Any, name: str, written: Any, hea
     from ..control.cstep import C_STEP_BUILD
 
     obj = {**head, "controller": args.controller, "directory": args.out_dir, "files": sorted(written),
-           "nm": step.m, "nz": 2 * step.n, "dt": step.dt, "tau_max": step.tau_max,
+           "nm": step.m, "nz": step.nz, "dt": step.dt, "tau_max": step.tau_max,
            "normal": [float(x) for x in step.design.normal], "seconds": time.perf_counter() - t0}
     build = C_STEP_BUILD if step.filter_step is not None else C_STEP_BUILD.replace(" alpes_step_ekf.c", "")
     lines = [f"{name}: the {args.controller} force step written to {args.out_dir}/ ({', '.join(sorted(written))})",

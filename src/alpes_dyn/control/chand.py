@@ -277,7 +277,7 @@ def hand_c_sources(step: HandForceStep, *, about: str = "") -> dict[str, str]:
         files.update(chain)
         head = chain[f"alpes_hand_{c}.h"]
         nwork = max(nwork, int(head.split(f"#define ALPES_HAND_{c.upper()}_NWORK ")[1].split()[0]))
-        nzs.append(2 * s.n)
+        nzs.append(2 * s.n)  # its [q_hat; qd_hat], the first entries of its state (LuGre's bristles after them)
     if sum(nzs) != HAND_NZ:
         raise InputError(f"step: expected chains of {HAND_NZ} states in all, got {sum(nzs)}")
     pd, chains = step.abduction, step.chains

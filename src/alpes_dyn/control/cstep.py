@@ -84,7 +84,7 @@ _HEADER = r"""/* alpes_step.h -- the force step of {model} (alpes_dyn.control.st
    Returns 0, or 1 (the generated code failed), 2 (a reading not finite: counts, torque{force_read}, the
    reference; or a zero or non-finite normal), 3 (the EKF diverged: a joint estimate beyond 1e6 rad or
    rad/s: check the readings' units); on an error the state is left as it was. After a call, s.z holds
-   [q_hat (rad); qd_hat (rad/s)] ({nz}), s.P its covariance (column-major), s.F_fb the force fed back (N).
+   [q_hat (rad); qd_hat (rad/s)]{bristles} ({nz}), s.P its covariance (column-major), s.F_fb the force fed back (N).
    No heap, no global state; reentrant. Build: cc -O2 -std=c99 -c alpes_step.c{ekf_c} alpes_step_force.c
    (link with -lm); the test program:
      {build}
@@ -100,13 +100,13 @@ extern "C" {{
 
 #define ALPES_STEP_NM {nm}        /* motors */
 #define ALPES_STEP_NQ {n}        /* joints */
-#define ALPES_STEP_NZ {nz}        /* the EKF's states [q; qd] */
+#define ALPES_STEP_NZ {nz}        /* the EKF's states [q; qd]{bristles} */
 #define ALPES_STEP_NWORK {nwork}  /* doubles of the work array */
 #define ALPES_STEP_DT {dt!r}  /* the period, s */
 #define ALPES_STEP_TAU_MAX {tau_max!r}  /* the motor limit, N m */
 
 typedef struct {{
-  double z[ALPES_STEP_NZ];                   /* [q_hat; qd_hat] (rad, rad/s){z_note} */
+  double z[ALPES_STEP_NZ];                   /* [q_hat; qd_hat] (rad, rad/s){bristles}{z_note} */
   double P[ALPES_STEP_NZ * ALPES_STEP_NZ];   /* its covariance, column-major */
   double command[ALPES_STEP_NM];             /* the last command, N m */
   double F_fb;                               /* the force fed back at the last tick, N */
@@ -344,7 +344,7 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
     ctl = parts.controller
     files = controller_c_sources(ctl, prefix="alpes_step_force")
     del files["force_main.c"]
-    nz, nm, filt = 2 * parts.n, parts.m, parts.ekf is not None
+    nz, nm, filt = parts.z0.size, parts.m, parts.ekf is not None  # [q; qd], the LuGre law's bristles after them
     ekf_nwork = 0
     if filt:
         ekf = c_sources(parts.ekf, prefix="alpes_step_ekf", about=about)
@@ -378,7 +378,8 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
         force_read="" if parts.kind == "sensorless" else ", the force", motor_name=parts.motor_names[parts.motor],
         tau_max=parts.tau_max, gains="\n   ".join(_wrap(gains)), nm=nm, n=parts.n, nz=nz, nwork=nwork,
         observer_note=_observer_note(parts) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
-        z_note="" if filt else "; NaN: no observer", ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
+        z_note="" if filt else "; NaN: no observer", bristles="; z (rad), LuGre's" if nz > 2 * parts.n else "",
+        ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
     files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C,
                                    load_state=LOAD_STATE_C.format(name="load_state", type="alpes_step_state"))
     if prefix != "alpes_step":
@@ -481,8 +482,8 @@ def step_main_input(counts: Any, torque: Any, force: Any, reference: Any, normal
 
 def step_state_row(step: ForceStep) -> np.ndarray:
     """The state of ``step`` now (before its next :meth:`~alpes_dyn.control.step.ForceStep.step`) as the C step's
-    state, in :data:`LOAD_STATE_C`'s order: [z (2n); P (4n^2, column-major); the last command (m); the force fed
-    back; the ticks done; the controller's integral, tau_prev, F_ref_f, F_ref_f2, notch inputs (2), outputs (2),
+    state, in :data:`LOAD_STATE_C`'s order: [z (nz: 2n, 3n with LuGre's bristles); P (nz^2, column-major); the
+    last command (m); the force fed back; the ticks done; the controller's integral, tau_prev, F_ref_f, F_ref_f2, notch inputs (2), outputs (2),
     periods above and below the threshold, in contact, started, notch started] (z and P NaN for ``"pi"``).
 
     Parameters
@@ -493,9 +494,9 @@ def step_state_row(step: ForceStep) -> np.ndarray:
     Returns
     -------
     numpy.ndarray
-        (2n (2n + 1) + m + 15,) the row.
+        (nz (nz + 1) + m + 15,) the row.
     """
-    nz, c = 2 * step.n, step.controller
+    nz, c = step.nz, step.controller
     zP = step._s[:nz * (nz + 1)] if step.filter_step is not None else np.full(nz * (nz + 1), np.nan)
     notch = c._notch
     started = c.F_ref_f is not None

@@ -46,8 +46,11 @@ from ..model.block_scene import BlockScene, place_block
 from ..model.mjcf import BLOCK_CONTACT_Q, block_normal, palm_down_params
 from ..model.trust import check_trusted
 from ..model.params import HandParams, load_params
+from ..model.friction import lugre_of
 from ..model.robot import Model
 from ..simulation.integrate import stable_substeps
+from ..simulation.lugre import lugre_substeps
+from ..simulation.stick import observer_friction_law
 from ..symbolic.statespace import StateSpace
 from .blocks import SensorlessForce
 from .controller import CONTROLLERS, DEFAULT_GAINS, ForceController, _normal, static_motor_torque
@@ -97,9 +100,9 @@ def alpes_design(name: str, params: HandParams, controller: str, contact_q: Sequ
     """finger2/finger3 pressing the block scene's face at ``contact_q`` (default :data:`BLOCK_CONTACT_Q`): the
     model of ``params`` (already oriented, e.g. palm down) turned by the compensation's tilt, the block's normal,
     the file's tau_max, :data:`.DEFAULT_GAINS` of ``controller`` overridden by ``gains``; with ``observer_friction``
-    the EKF's model is the finger with the file's friction (F_s tanh(v / v_s) + F_v v, eq. 2.6-2.7): the joints
-    that friction holds in contact are then where the encoder's sum leaves them, not where a frictionless model
-    would let them slide.
+    the EKF's model is the finger with the file's friction (its law, :func:`force_ekf`; F_s tanh(v / v_s) + F_v v,
+    eq. 2.6-2.7, by default): the joints that friction holds in contact are then where the encoder's sum leaves
+    them, not where a frictionless model would let them slide.
 
     Parameters
     ----------
@@ -238,7 +241,11 @@ def force_ekf(model: Model, dt: float, controller: str, *, torque_noise: float, 
     (motor off), standard deviations 0.05 rad and 0.1 rad/s. A model with friction is predicted with
     :func:`~alpes_dyn.simulation.integrate.stable_substeps` RK4 steps per period (at least 4: with one, the smooth
     law's slope F_s / v_s near rest puts the step outside RK4's stable reach, and a difference in a reading at
-    rounding level grows to a visible error of the joint estimate within a fraction of a second).
+    rounding level grows to a visible error of the joint estimate within a fraction of a second). The friction law
+    is the file's (:func:`~alpes_dyn.simulation.stick.observer_friction_law`, as ``estimate``'s): ``creep`` solved
+    with the dynamics in each substep, ``lugre`` with the joints' bristle deflections z (n,) rad as the state's last
+    entries (prior 0, standard deviation F_s / sigma0; :func:`~alpes_dyn.simulation.lugre.lugre_substeps` split
+    steps per period).
 
     Parameters
     ----------
@@ -263,10 +270,10 @@ def force_ekf(model: Model, dt: float, controller: str, *, torque_noise: float, 
     -------
     ekf : observer
         The filter.
-    z0 : numpy.ndarray, shape (2n,)
-        Its prior [q_rest; 0], rad and rad/s.
-    P0 : numpy.ndarray, shape (2n,)
-        Its prior variances, rad^2 and (rad/s)^2.
+    z0 : numpy.ndarray, shape (nz,)
+        Its prior [q_rest; 0] (rad and rad/s; nz = 2n), with the LuGre law's bristles [q_rest; 0; 0] (nz = 3n).
+    P0 : numpy.ndarray, shape (nz,)
+        Its prior variances, rad^2 and (rad/s)^2 (the bristles' (F_s / sigma0)^2, rad^2).
     """
     n, m = model.n, len(model.transmission.motor_names)
     step = 2 * np.pi / model.transmission.counts_per_rev
@@ -276,10 +283,14 @@ def force_ekf(model: Model, dt: float, controller: str, *, torque_noise: float, 
     noise = default_noise(est_sc, n, m, 0, meas_var)
     f_var = (force_noise**2 + force_resolution**2 / 12) if controller == "sensor" else 0.05**2
     noise["input_noise"] = [torque_noise**2] * m + [f_var] * 3
-    substeps = stable_substeps(model, dt) if model.extras.has_friction else 1
-    ekf = make_observer("ekf", ss, dt, substeps=substeps, **noise)
-    z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n)])
-    return ekf, z0, np.array([0.05**2] * n + [0.1**2] * n)
+    law = observer_friction_law(model) if model.extras.has_friction else "smooth"
+    lugre = lugre_of(model) if law == "lugre" else None
+    substeps = (lugre_substeps(model, lugre, dt) if lugre is not None else stable_substeps(model, dt)) \
+        if model.extras.has_friction else 1
+    ekf = make_observer("ekf", ss, dt, substeps=substeps, friction_law=law, **noise)
+    span = model.extras.coulomb[:ekf.model.nb] / (lugre.sigma0 if lugre is not None else 1.0)  # F_s / sigma0, rad
+    z0 = np.concatenate([static_equilibrium(model, np.zeros(n)), np.zeros(n), np.zeros(span.size)])
+    return ekf, z0, np.concatenate([[0.05**2] * n + [0.1**2] * n, span**2])
 
 
 def _number(x: Any, name: str, what: str, positive: bool = False, nonneg: bool = False) -> float:
@@ -351,8 +362,9 @@ class ForceStep:
         Use a parameter file marked not trustworthy (refused otherwise: :class:`~alpes_dyn.ModelError` with the
         reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
     observer_friction : bool
-        The Alpes finger's EKF runs the file's friction (eq. 2.6-2.7, :func:`alpes_design`; the controller's static
-        balance stays frictionless, eq. 2.11). False: the frictionless model of version 0.2's loop.
+        The Alpes finger's EKF runs the file's friction (its ``friction.law``: tanh, eq. 2.6-2.7, creep or LuGre,
+        :func:`force_ekf`, :func:`alpes_design`; the controller's static balance stays frictionless, eq. 2.11).
+        False: the frictionless model of version 0.2's loop.
 
     Attributes
     ----------
@@ -364,6 +376,8 @@ class ForceStep:
         The motor limit, N m: every command lies in [0, tau_max].
     filter_step : callable or None
         The EKF's compiled step (s, wy) -> s_next, built once (None for ``"pi"``).
+    nz : int
+        The EKF's states: 2n ([q; qd]), 3n with the LuGre law's bristles (:func:`force_ekf`).
 
     Raises
     ------
@@ -466,9 +480,10 @@ class ForceStep:
                                      **tip, **design.gains, **comp.notch_settings(model, design.params, self.dt))
         ForceController(**self._controller_args)  # the settings checked here, not at the first sample
         self.filter_step: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None
+        self.nz = 2 * self.n  # the EKF's states: [q; qd], and the LuGre law's bristles (force_ekf)
         if kind != "pi":
             ekf, z0, P0 = force_ekf(design.observer_model or model, self.dt, kind, tip=design.frame, **noise)
-            self._ekf = ekf
+            self._ekf, self.nz = ekf, ekf.nz
             self._s0 = np.concatenate([np.array(ekf._z(z0, "z0")).reshape(-1),
                                        np.array(ekf._P(P0, "P0")).reshape(-1, order="F")])
             self.filter_step = self._compiled_c(ekf, label) if compiled and ekf.model.substeps > 1 else None
@@ -591,8 +606,9 @@ class ForceStep:
             The models, the EKF and its prior, the compensation's constants, the sensorless filter, a fresh
             controller with the step's settings.
         """
-        nz, tr, sl, comp = 2 * self.n, self._transmission, self._sensorless, self.compensation
+        tr, sl, comp = self._transmission, self._sensorless, self.compensation
         filt = self.filter_step is not None
+        nz = self.nz if filt else 2 * self.n
         return StepParts(
             model=self.model, observer_friction=self.design.observer_model is not None, kind=self.kind, dt=self.dt,
             motor=self.motor, motor_names=tuple(tr.motor_names), tau_max=self.tau_max,
@@ -627,10 +643,10 @@ class ForceStep:
     def covariance(self) -> np.ndarray:
         """(2n, 2n) the EKF's covariance of [q; qd] at the last sample (rad^2, rad^2/s^2, rad^2/s); NaN for
         ``"pi"``."""
-        nz = 2 * self.n
         if self.filter_step is None:
-            return np.full((nz, nz), np.nan)
-        return self._s[nz:].reshape(nz, nz, order="F").copy()
+            return np.full((2 * self.n, 2 * self.n), np.nan)
+        nz = self.nz
+        return self._s[nz:].reshape(nz, nz, order="F")[:2 * self.n, :2 * self.n].copy()
 
     @property
     def std(self) -> tuple[np.ndarray, np.ndarray]:

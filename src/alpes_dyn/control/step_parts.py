@@ -60,9 +60,10 @@ class StepParts:
         The EKF (:func:`~alpes_dyn.control.step.force_ekf`; its ``filter_step_p``, its model, its C export by
         :func:`~alpes_dyn.estimation.cexport.cexport.c_sources`); None for ``"pi"``.
     z0 : numpy.ndarray
-        (2n,) the EKF's prior [q; qd] (rad, rad/s) in the filter's coordinates; NaN for ``"pi"``.
+        (nz,) the EKF's prior [q; qd] (rad, rad/s; nz = 2n) in the filter's coordinates, with the LuGre law's
+        bristles (rad; nz = 3n) after them; NaN (2n) for ``"pi"``.
     P0 : numpy.ndarray
-        (2n * 2n,) its covariance, column-major; NaN for ``"pi"``.
+        (nz * nz,) its covariance, column-major; NaN for ``"pi"``.
     sensorless_alpha : float or None
         The sensorless estimate's low-pass weight dt / (tau_f + dt) (None: no sensorless estimate).
     force_scale : float

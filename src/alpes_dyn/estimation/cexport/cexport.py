@@ -533,7 +533,10 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     chain : str or None, optional
         The hand's chain (None: the model's own).
     friction : bool, optional
-        The model with the file's friction (default False).
+        The model with the file's friction (default False), in the file's law as ``estimate --data`` runs it
+        (:func:`~alpes_dyn.simulation.stick.observer_friction_law`: ``lugre`` with the joints' bristles as the
+        state's last entries, prior 0 and standard deviation F_s / sigma0, rad, and its split steps; ``creep`` solved
+        in the dynamics of each RK4 substep).
     force : bool, optional
         Accept a file marked not trustworthy (default False).
 
@@ -558,6 +561,9 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     from ...symbolic.statespace import StateSpace
     from ..observers.observers import OBSERVERS, PARAMETERS, make_observer
     from ..observers.scenario import EstimationScenario, default_noise
+    from ...model.friction import LuGre, lugre_of
+    from ...simulation.lugre import lugre_substeps
+    from ...simulation.stick import observer_friction_law
 
     if observer not in OBSERVERS:
         raise InputError(f"unknown observer {observer!r} (expected one of {', '.join(OBSERVERS)})")
@@ -572,10 +578,13 @@ def scenario_filter(observer: str = "ekf", model: str = "finger3", *, params: An
     pars = tuple(PARAMETERS) if observer.endswith("-params") else ()
     noise = default_noise(sc, n, nm, len(pars), meas_var)
     ss = StateSpace(m, input="motor", output="encoder")
-    filt = make_observer(observer, ss, sc.dt, parameters=pars,
-                         substeps=max(sc.substeps, stable_substeps(m, sc.dt)) if sc.friction else 1, **noise)
-    z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars))])
-    P0 = np.array([0.5**2] * n + [1.0**2] * n + [0.2**2] * len(pars))
+    law = observer_friction_law(m) if sc.friction else "smooth"  # the file's law, as estimate's (lugre: bristles)
+    substeps = lugre_substeps(m, lugre_of(m), sc.dt) if law == "lugre" else (
+        max(sc.substeps, stable_substeps(m, sc.dt)) if sc.friction else 1)
+    filt = make_observer(observer, ss, sc.dt, parameters=pars, substeps=substeps, friction_law=law, **noise)
+    span = m.extras.coulomb[:filt.model.nb] / (lugre_of(m) or LuGre()).sigma0  # F_s / sigma0 (rad), as estimate's
+    z0 = np.concatenate([np.zeros(2 * n), np.ones(len(pars)), np.zeros(span.size)])
+    P0 = np.concatenate([[0.5**2] * n + [1.0**2] * n + [0.2**2] * len(pars), span**2])
     return filt, z0, P0
 
 
