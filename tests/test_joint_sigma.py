@@ -52,8 +52,11 @@ def test_estimate_reports_each_joints_sigma_from_P(finger3_run, capsys, cli_text
     np.testing.assert_allclose(np.degrees(worst), out["q_std_worst_deg"], rtol=1e-12)
     assert 0.01 < min(out["q_std_median_deg"]) and max(out["q_std_worst_deg"]) < 0.5
     assert out["unobserved"] == [] and out["nees"]["verdict"] == "consistent"
+    n_eff = out["nees"]["measured_effective_samples"]  # the count the series shows, beside the filter's
+    assert 1 <= n_eff <= out["nees"]["samples"] and len(out["nees"]["joint_measured_effective_samples"]) == 3
     text = cli_text[0]  # the table of the same run, without --json
     assert "sigma median/worst [deg]:" in text and "NEES of the joints:" in text and "WARNING" not in text
+    assert "the series itself shows" in text
 
 
 def test_nees_on_our_simulator_is_in_its_band(finger3_run):

@@ -57,7 +57,8 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
         r = nees(est, true_q, filt if whole_nees else None, inputs if whole_nees else None, start=start)
         obj["nees"] = r.to_dict()
         lines.append(f"  {'NEES of the joints:':30s}{r.value:.3g} (95 % band {r.low:.3g}-{r.high:.3g} for {r.dof} "
-                     f"joints, {r.effective:.3g} independent samples): {r.verdict}")
+                     f"joints, {r.effective:.3g} independent samples; the series itself shows {r.measured:.3g}): "
+                     f"{r.verdict}")
     if measurement is not None and whole:
         from ..estimation.observers.innovation import nis
 

@@ -50,7 +50,7 @@ from ..control.plants import mujoco_recording
 from ..errors import InputError
 from ..estimation.experiments.design import ExperimentDesign
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
-from ..estimation.observers.consistency import nees
+from ..estimation.observers.consistency import chi2_band, nees
 from ..estimation.observers.law_sigma import law_sigma
 from ..estimation.observers.scenario import EstimationScenario, scenario_torque
 from ..model.mjcf import STICTION_TIMECONST
@@ -59,7 +59,8 @@ from ..symbolic.parametric import parameter_catalogue
 from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, MASS_GOAL_PCT, SPRING_GOAL_PCT, ekf_run, fit_row,
                       on_rig, plant_experiment, rig_design, rig_of, summarise)
 
-__all__ = ["FrictionCase", "FRICTION_CASES", "FRICTION_CASE_NAMES", "CONSTRAINTS", "STOP_MARGIN_DEG", "RAMP_TORQUE", "RAMP_SECONDS",
+__all__ = ["FrictionCase", "FRICTION_CASES", "FRICTION_CASE_NAMES", "CONSTRAINTS", "STUCK_SPEED", "STOP_MARGIN_DEG",
+           "RAMP_TORQUE", "RAMP_SECONDS",
            "validation_torque", "standard_scores", "true_file_row", "friction_row", "friction_summary", "complete_seeds"]
 
 CONSTRAINTS: dict[str, tuple[float, float]] = {"soft": (0.02, 1.0), "stiff": (STICTION_TIMECONST, 1.0)}
@@ -124,6 +125,10 @@ FRICTION_CASES: tuple[FrictionCase, ...] = tuple(
 """The eight cases: each constraint at 1 and 3 times F_s, alone and with every other effect."""
 FRICTION_CASE_NAMES: tuple[str, ...] = tuple(c.name for c in FRICTION_CASES)
 
+STUCK_SPEED = 0.01
+"""rad/s: a plant's joint slower than this is said to be stuck in the rows' phases of the NEES (``per_joint_stuck``;
+the stiff constraint holds a stuck joint to well below it, a sliding one on the validation ramp moves at 0.05 rad/s
+and more)."""
 STOP_MARGIN_DEG = 0.5
 """deg: a validation run's joint within this of an end of its range is said to reach its stop
 (``validation_at_stops``; the EKF runs with the stops in its model, as ``estimate --stops``)."""
@@ -192,12 +197,28 @@ def standard_scores(values: dict[str, float], std: dict[str, float], truth: dict
 
 def _consistency(est, true_q: np.ndarray, transient: float) -> dict[str, Any]:
     """The EKF's NEES after ``transient`` s (the filter's own model of its error's correlation) and each joint's
-    against its band (:meth:`~alpes_dyn.estimation.observers.consistency.Nees.joint_band`)."""
+    against its band (:meth:`~alpes_dyn.estimation.observers.consistency.Nees.joint_band`); where the filter's count
+    of independent samples is checked, each joint's counted from its own series and the band at that count
+    (``joint_measured_effective``, ``joint_band_measured``); and where the error lies, each joint's NEES while the
+    plant's joint is stuck (speed below :data:`STUCK_SPEED`) and while it slides (``per_joint_stuck``,
+    ``per_joint_sliding``, None where a phase has no sample; every sample after the transient)."""
     r = nees(est.estimate, true_q, est.filter, est.inputs, start=transient)
     lo, hi = r.joint_band()
+    k0 = int(round(transient / (est.t[1] - est.t[0])))
+    n = true_q.shape[1]
+    r2 = (est.q_hat[k0:] - true_q[k0:]) ** 2 / np.diagonal(est.estimate.P[k0:, :n, :n], axis1=1, axis2=2)
+    stuck = np.abs(np.gradient(true_q, est.t, axis=0)[k0:]) < STUCK_SPEED
+
+    def phase(mask):
+        return [float(np.mean(r2[mask[:, i], i])) if mask[:, i].any() else None for i in range(n)]
+
     return {"value": r.value, "band": [r.low, r.high], "verdict": r.verdict, "effective_samples": r.effective,
             "per_joint": r.per_joint.tolist(), "joint_band": [lo, hi],
-            "joints_consistent": [bool(lo <= x <= hi) for x in r.per_joint]}
+            "joints_consistent": [bool(lo <= x <= hi) for x in r.per_joint],
+            "joint_measured_effective": r.joint_measured.tolist(),
+            "joint_band_measured": [list(chi2_band(1, m, r.level)) for m in r.joint_measured],
+            "stuck_fraction": stuck.mean(axis=0).tolist(), "per_joint_stuck": phase(stuck),
+            "per_joint_sliding": phase(~stuck)}
 
 
 def _law_consistency(run, est, true_q: np.ndarray, transient: float) -> dict[str, Any]:

@@ -17,6 +17,13 @@ n M_eff degrees of freedom over M_eff for M_eff = 2 n / V (Satterthwaite's match
 error that rings for a second, as a frictionless finger's internal mode does, is fewer independent samples than
 its count). The band of the average: [chi2_{(1-level)/2}(n M_eff), chi2_{(1+level)/2}(n M_eff)]
 / M_eff. Above the band the filter is over-confident (its sigma too small), below it is cautious.
+
+The count is the filter's belief about its own error. An error the filter does not model (a friction law that is not
+the plant's: a bias that changes slowly) may be more correlated than it believes, and the band then too narrow.
+:func:`measured_effective` counts the same samples from the series itself, its autocorrelation summed over the lags
+up to Geyer's initial positive sequence (Geyer 1992, "Practical Markov chain Monte Carlo", Statist. Sci. 7:
+M_eff = M / (1 + 2 sum_l rho_l)); :class:`Nees` holds it beside the filter's, per joint and in all (a check of
+the band, not the band: it reads the true joints, which only a simulation has, and it is noisy on a short run).
 """
 
 from __future__ import annotations
@@ -30,7 +37,8 @@ from ...checks import as_float_array
 from ...errors import InputError
 from .observers import Estimate
 
-__all__ = ["Banded", "Nees", "nees", "joint_sigma", "predicted_covariance", "chi2_band", "NEES_EVERY"]
+__all__ = ["Banded", "Nees", "nees", "measured_effective", "joint_sigma", "predicted_covariance", "chi2_band",
+           "NEES_EVERY"]
 
 NEES_EVERY = 0.1
 """Default decimation of :func:`nees`, s: a filter's error at 1 kHz is correlated over tens of milliseconds (the
@@ -71,6 +79,8 @@ class Nees(Banded):
     effective: M_eff, the independent samples the M count for (M without the filter).
     per_joint: (n,) time average of (q_hat_i - q_i)^2 / P_ii (1 for a consistent filter).
     level: the band's probability. every: the decimation, s. start: the first time used, s.
+    measured: M_eff counted from the series of the NEES itself (:func:`measured_effective`, the module docstring).
+    joint_measured: (n,) the same for each joint's (q_hat_i - q_i)^2 / P_ii.
     """
 
     value: float
@@ -83,6 +93,8 @@ class Nees(Banded):
     level: float
     every: float
     start: float
+    measured: float = float("nan")
+    joint_measured: np.ndarray | None = None
 
     def joint_band(self) -> tuple[float, float]:
         """The band at ``level`` of one joint's NEES (:attr:`per_joint`, 1 for a consistent filter): chi2 of
@@ -98,7 +110,10 @@ class Nees(Banded):
         """The JSON of ``alpes-dyn estimate --json`` (its ``nees`` object)."""
         return {"value": self.value, "band": [self.low, self.high], "level": self.level, "dof": self.dof,
                 "samples": self.samples, "effective_samples": self.effective, "every_s": self.every,
-                "start_s": self.start, "per_joint": self.per_joint.tolist(), "verdict": self.verdict}
+                "start_s": self.start, "per_joint": self.per_joint.tolist(), "verdict": self.verdict,
+                "measured_effective_samples": self.measured,
+                "joint_measured_effective_samples": None if self.joint_measured is None else
+                self.joint_measured.tolist()}
 
 
 def predicted_covariance(filt: Any, estimate: Estimate, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -230,10 +245,46 @@ def nees(estimate: Estimate, true_q: Any, filter: Any = None, inputs: Any = None
         Phi = _error_transitions(filter, estimate, W)
         m_eff = min(m_eff, 2.0 * n / _predicted_variance(Phi, estimate.P, k, n))
     low, high = chi2_band(n, m_eff, level)
-    per_joint = np.mean(e**2 / np.diagonal(P, axis1=1, axis2=2), axis=0)
+    r2 = e**2 / np.diagonal(P, axis1=1, axis2=2)
     return Nees(value=float(eps.mean()), low=float(low), high=float(high), dof=n, samples=int(k.size),
-                effective=float(m_eff), per_joint=per_joint, level=float(level), every=float(every),
-                start=float(start))
+                effective=float(m_eff), per_joint=r2.mean(axis=0), level=float(level), every=float(every),
+                start=float(start), measured=measured_effective(eps),
+                joint_measured=np.array([measured_effective(x) for x in r2.T]))
+
+
+def measured_effective(series: Any) -> float:
+    """The independent samples a series of M counts for, measured from its own autocorrelation rho_l: M / (1 + 2
+    sum_{l >= 1} rho_l) = M / (2 sum_j Gamma_j - 1), Gamma_j = rho_2j + rho_2j+1 summed over Geyer's initial
+    positive sequence (while positive), within [1, M] (module docstring).
+
+    Parameters
+    ----------
+    series : array_like, shape (M,)
+        The samples in time order (e.g. the decimated NEES of :func:`nees`), M >= 2.
+
+    Returns
+    -------
+    float
+        The effective count, in [1, M]; M for a constant series.
+
+    Raises
+    ------
+    InputError
+        ``series`` not a finite (M,) array of at least two samples.
+    """
+    x = as_float_array(series, "series", "(M,) samples")
+    if x.ndim != 1 or x.size < 2 or not np.isfinite(x).all():
+        raise InputError(f"series: expected (M,) finite samples, M >= 2, got shape {x.shape}")
+    M = x.size
+    x = x - x.mean()
+    var = float(np.dot(x, x))
+    if var <= 0.0:
+        return float(M)
+    f = np.fft.rfft(x, 2 * M)  # the autocorrelation at every lag at once
+    rho = np.fft.irfft(f * np.conj(f))[:M] / var  # rho_0 = 1 first
+    pairs = rho[: M // 2 * 2].reshape(-1, 2).sum(axis=1)  # Gamma_j = rho_2j + rho_2j+1
+    stop = int(np.argmax(pairs <= 0)) if np.any(pairs <= 0) else pairs.size
+    return float(np.clip(M / (2.0 * pairs[:stop].sum() - 1.0), 1.0, M))
 
 
 def chi2_band(dof: int, samples: float, level: float) -> tuple[float, float]:
