@@ -63,7 +63,14 @@ def rigid_recording():
     return experiment("finger2", perturbed_params(spread=0.2, seed=3), ExperimentDesign(duration=1.5), seed=3)
 
 
-def test_a_compliance_the_data_do_not_support_is_held_and_never_written(rigid_recording, tmp_path):
+@pytest.fixture(scope="module")
+def rigid_fit(rigid_recording):
+    """K, m and the friction fitted on ``rigid_recording`` (the fit both tests below start from or compare with)."""
+    return identify(ad.Model.alpes("finger2", friction=True), rigid_recording, "K,m,friction", progress=False,
+                    excitation=LINES)
+
+
+def test_a_compliance_the_data_do_not_support_is_held_and_never_written(rigid_recording, rigid_fit, tmp_path):
     """Fitted with the compliance, the simulator's rigid cable gives one the data cannot tell from 0: the result
     names it not identified (with the effect), the values kept are those of a fresh fit that never had it (to a
     tenth of their standard errors), and the file written holds no compliance."""
@@ -72,7 +79,7 @@ def test_a_compliance_the_data_do_not_support_is_held_and_never_written(rigid_re
     assert list(res.not_identified) == ["tendon_compliance_finger"] and "tendon_compliance_finger" not in res.names
     assert "the data do not support an elastic tendon" in res.not_identified["tendon_compliance_finger"]
     assert "not identified: tendon_compliance_finger" in res.status() and "fitted again" in res.reason
-    ref = identify(model, rigid_recording, "K,m,friction", progress=False, excitation=LINES)
+    ref = rigid_fit
     assert ref.names == res.names and ref.not_identified == {}
     assert np.all(np.abs(res.values - ref.values) < 0.1 * ref.std)
     assert np.array_equal(res.initial, ref.initial)  # the start column is the first fit's start
@@ -81,14 +88,14 @@ def test_a_compliance_the_data_do_not_support_is_held_and_never_written(rigid_re
     assert p.identification["finger"]["not_identified"][0].startswith("tendon_compliance_finger: ")
 
 
-def test_the_fit_again_starts_from_the_first_fits_linearised_optimum(rigid_recording):
+def test_the_fit_again_starts_from_the_first_fits_linearised_optimum(rigid_recording, rigid_fit):
     """held_start: the first fit moved to the linearised optimum with a parameter held (issue 39) predicts the fit
     with it held (a fresh fit of the others from the first's start) to a small part of the move, and the fit from
     there converges to the same values in fewer iterations."""
     from alpes_dyn.estimation.identification.held import held_start
 
     model = ad.Model.alpes("finger2", friction=True)
-    first = identify(model, rigid_recording, "K,m,friction", progress=False, excitation=LINES)
+    first = rigid_fit
     assert first.solution.response.shape[1] == len(first.names)
     keep = [n for n in first.names if n != "F_v_1"]
     moved = held_start(first, {"F_v_1": 1e-4})  # the model's value (the fit found another)

@@ -78,6 +78,15 @@ def test_recording_round_trip_and_torque_projection(tmp_path):
     assert np.std(proj - clean.torque) < 0.25 * np.std(rec.torque - clean.torque)
 
 
+@pytest.fixture(scope="module")
+def ok_lines(tmp_path_factory):
+    """The lines of a valid finger2 recording's CSV (0.3 s, one line of excitation), written once for the rows of
+    test_recording_errors (each edits its own copy)."""
+    rec = experiment("finger2", None, ExperimentDesign(duration=0.3, torque_noise=0.0, frequencies=(2.0,),
+                                                       torque_amplitude=0.0, dither=0.0), seed=0)
+    return write_recording(rec, tmp_path_factory.mktemp("ok") / "ok.csv").read_text().splitlines()
+
+
 @pytest.mark.parametrize("edit,pattern", [
     (lambda h, r: (h.replace("encoder_finger", "encoder_thumb"), r), r"unknown column 'encoder_thumb'"),
     (lambda h, r: (h.replace(",torque_finger", ""), [x.rsplit(",", 1)[0] if False else ",".join(
@@ -88,11 +97,8 @@ def test_recording_round_trip_and_torque_projection(tmp_path):
     (lambda h, r: (h, [",".join(x.split(",")[:1] + [str(float(x.split(",")[1]) * 0 + 7)] + x.split(",")[2:])
                        for x in r]), r"no excitation"),
 ])
-def test_recording_errors(tmp_path, edit, pattern):
-    rec = experiment("finger2", None, ExperimentDesign(duration=0.3, torque_noise=0.0, frequencies=(2.0,),
-                                                       torque_amplitude=0.0, dither=0.0), seed=0)
-    lines = write_recording(rec, tmp_path / "ok.csv").read_text().splitlines()
-    header, rows = edit(lines[0], lines[1:])
+def test_recording_errors(tmp_path, ok_lines, edit, pattern):
+    header, rows = edit(ok_lines[0], list(ok_lines[1:]))
     bad = tmp_path / "bad.csv"
     bad.write_text("\n".join([header] + rows) + "\n")
     with pytest.raises(RecordingError, match=pattern) as exc:

@@ -6,8 +6,6 @@ from __future__ import annotations
 import dataclasses
 import json
 import math
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -264,12 +262,14 @@ def test_experiment_on_the_standin_stays_off_its_stops_and_near_the_design(tmp_p
     assert lag == DELAY_SAMPLES
 
 
-def test_cli_design_only_writes_the_documented_profile(tmp_path):
+def test_cli_design_only_writes_the_documented_profile(tmp_path, capsys):
+    """``experiment --design-only`` (in this process: the exit at the process boundary is test_bad_input's) writes
+    the designed torque profile."""
+    from alpes_dyn.cli import main
+
     out = tmp_path / "torque.csv"
-    run = subprocess.run([sys.executable, "-m", "alpes_dyn.cli", "experiment", "--design-only", "--duration", "1",
-                          "-o", str(out), "--json"], capture_output=True, text=True, timeout=120)
-    assert run.returncode == 0, run.stderr
-    obj = json.loads(run.stdout)
+    assert main(["experiment", "--design-only", "--duration", "1", "-o", str(out), "--json"]) == 0
+    obj = json.loads(capsys.readouterr().out)
     assert obj["columns"] == ["t", "torque_finger"] and obj["units"] == {"t": "s", "torque_finger": "N m"}
     assert obj["rate_hz"] == 1000.0 and obj["samples"] == 1001
     data = np.loadtxt(out, delimiter=",", skiprows=1)

@@ -6,8 +6,6 @@ from __future__ import annotations
 
 import dataclasses
 import json
-import subprocess
-import sys
 
 import numpy as np
 import pytest
@@ -86,16 +84,18 @@ def test_turned_recording_runs_each_orientation_in_turn():
     assert wrong.rmse.max() > 10 * turned.rmse.max()
 
 
-def test_cli_estimate_data(drawn, tmp_path):
+def test_cli_estimate_data(drawn, tmp_path, capsys):
+    """``estimate --data`` (in this process: the command's exit at the process boundary is test_bad_input's and
+    test_cli's) prints the API's RMSE and logs its estimate."""
     true, rec = drawn
+    from alpes_dyn.cli import main
     from alpes_dyn.model.params import write_params
 
     write_recording(rec, tmp_path / "rec.csv")
     write_params(true, tmp_path / "true.toml")
-    out = subprocess.run([sys.executable, "-m", "alpes_dyn.cli", "estimate", "--data", str(tmp_path / "rec.csv"),
-                          "--params", str(tmp_path / "true.toml"), "--friction", "--json", "--log",
-                          str(tmp_path / "est.csv")], capture_output=True, text=True, check=True)
-    obj = json.loads(out.stdout)
+    assert main(["estimate", "--data", str(tmp_path / "rec.csv"), "--params", str(tmp_path / "true.toml"),
+                 "--friction", "--json", "--log", str(tmp_path / "est.csv")]) == 0
+    obj = json.loads(capsys.readouterr().out)
     api = estimate_recording(read_recording(tmp_path / "rec.csv", ad.Model.alpes("finger3", friction=True)),
                              ad.Model.alpes("finger3", friction=True, params=tmp_path / "true.toml"))
     assert obj["joints"] == ["j1", "j2", "j3"] and len(obj["rmse"]) == 3
