@@ -111,6 +111,11 @@ def test_the_library_laws_on_a_file():
         np.testing.assert_allclose(m.extras.coulomb, creep.extras.coulomb, rtol=1e-12)
         raw, mine = m.params.raw, creep.params.raw
         assert {k for k in set(raw) | set(mine) if repr(raw.get(k)) != repr(mine.get(k))} <= {"friction.law"}
+    lugre = Model.alpes("finger3", friction=True, params=with_values(
+        load_params(), {"friction.law": Param("lugre", "-", "assumed", "test")}))
+    assert library_law(lugre, "lugre") == "lugre" and law_model(lugre, "lugre")[0] is lugre
+    assert [law_model(lugre, law)[0].params.friction_law for law in ("smooth", "stick", "creep")] == \
+        ["tanh", "tanh", "creep"]
     tanh = Model.alpes("finger3", friction=True)
     assert library_law(tanh, "smooth") == "smooth" and law_model(tanh, "smooth")[0] is tanh
     with pytest.raises(InputError, match="law"):
