@@ -139,13 +139,13 @@ def _estimate_data(args: argparse.Namespace) -> int:
     rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
-    def run(friction_law: str):
+    def run(friction_law: str, model: Any = model):
         return estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
                                   disturbance=args.disturbance, encoder_offset=offset, tilt=tilt,
                                   torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
 
     res = run(law)
-    spread = _law_spread(run, res) if args.law_spread else None
+    spread = _law_spread(run, res, model, law) if args.law_spread else None
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -195,13 +195,22 @@ def _estimate_data(args: argparse.Namespace) -> int:
     return 0
 
 
-def _law_spread(run: Any, res: Any) -> Any:
-    """``estimate --law-spread``: the observer run again with each other friction law, the joints' spread
-    (:func:`~alpes_dyn.estimation.observers.law_sigma.law_sigma`; ``run(law)`` the observer with that law, ``res``
-    the file's law's run)."""
+def _law_spread(run: Any, res: Any, model: Any, law: str) -> Any:
+    """``estimate --law-spread``: the observer run again with each other law of the library, the joints' spread
+    (:func:`~alpes_dyn.estimation.observers.law_sigma.law_sigma`; ``run(observer_law, model)`` the observer, ``res``
+    its run on ``model`` with the observer's law ``law``, named as the file's:
+    :func:`~alpes_dyn.simulation.stick.library_law`; each other law on the file with its ``friction.law``,
+    :func:`~alpes_dyn.simulation.stick.law_model`)."""
     from ..estimation.observers.law_sigma import law_sigma
+    from ..simulation.stick import LIBRARY_LAWS, law_model, library_law
 
-    return law_sigma(run, res)
+    def run_law(other: str) -> Any:
+        m, observer_law = law_model(model, other)
+        return run(observer_law, m)
+
+    # the creep law's band is read from a parameter file: without one (a URDF with its spec), not run
+    laws = tuple(name for name in LIBRARY_LAWS if model.params is not None or LIBRARY_LAWS[name][1] != "creep")
+    return law_sigma(run_law, res, laws=laws, kept_law=library_law(model, law))
 
 
 def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:

@@ -210,8 +210,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--stops", action="store_true", help="with --data: the joints' end stops in the observer's model "
                    "(for a finger whose joints reach their stops)")
     s.add_argument("--law-spread", action="store_true", help="with --data: each joint's sigma widened by the "
-                   "spread of its estimate between the friction laws (the observer run again with each other law: "
-                   "three runs)")
+                   "spread of its estimate between the library's friction laws (smooth, stick, lugre, creep: the "
+                   "observer run again with each other law on the same file, four runs in all)")
     s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_estimate)
 

@@ -394,7 +394,7 @@ class Model(DynamicsTerms, FrameKinematics):
         """
         return cls(read_text(path, "URDF file", ModelError), spec, **kwargs)
 
-    def copy(self, gravity: Sequence[float] | None = None) -> "Model":
+    def copy(self, gravity: Sequence[float] | None = None, params: HandParams | None = None) -> "Model":
         """An independent model (own Pinocchio data), e.g. for another thread.
 
         Parameters
@@ -402,6 +402,10 @@ class Model(DynamicsTerms, FrameKinematics):
         gravity : array_like, optional
             (3,), m/s^2: the same robot in another orientation (the spec's gravity replaced too); default this
             model's.
+        params : HandParams, optional
+            The parameter file's values the copy keeps in :attr:`params` (default this model's). Only what is read
+            from :attr:`params` when used changes (e.g. ``friction.law``: :func:`~alpes_dyn.model.friction.creep_of`,
+            :func:`~alpes_dyn.model.friction.lugre_of`); the links, springs and friction values stay this model's.
 
         Returns
         -------
@@ -413,14 +417,14 @@ class Model(DynamicsTerms, FrameKinematics):
             A gravity not 3 finite physical numbers.
         """
         g = self.gravity if gravity is None else gravity
+        p = self.params if params is None else params
         if self.spec is not None:
             spec = self.spec
             if gravity is not None and spec.gravity is not None:
                 spec = dataclasses.replace(spec, gravity=None)
-            return Model(self.urdf, spec, g, self.name, self.layout, self.params, self.spring,
-                         check_inertia=self.check_inertia)
-        return Model(self.urdf, None, g, self.name, self.layout, self.params, self.spring,
-                     extras=self.extras, check_inertia=self.check_inertia)
+            return Model(self.urdf, spec, g, self.name, self.layout, p, self.spring, check_inertia=self.check_inertia)
+        return Model(self.urdf, None, g, self.name, self.layout, p, self.spring, extras=self.extras,
+                     check_inertia=self.check_inertia)
 
     def __repr__(self) -> str:
         return f"Model({self.name!r}, n={self.n}, spring={self.spring!r}, tips={list(self.tips)})"

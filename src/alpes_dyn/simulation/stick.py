@@ -35,13 +35,25 @@ from ..model.robot import Model
 from ..symbolic.dynamics import block_solve
 from ..symbolic.statespace import StateSpace
 
-__all__ = ["FRICTION_LAWS", "observer_friction_law", "MAX_DRY_JOINTS", "check_friction_law", "coulomb_velocity", "mass_blocks",
+__all__ = ["FRICTION_LAWS", "LIBRARY_LAWS", "observer_friction_law", "library_law", "law_model", "MAX_DRY_JOINTS",
+           "check_friction_law", "coulomb_velocity", "mass_blocks",
            "stick_step_expression"]
 
 FRICTION_LAWS: tuple[str, ...] = ("smooth", "stick", "lugre")
 """The observers' dry-friction laws: ``smooth`` F_s tanh(v / v_s) through RK4, ``stick`` the time-stepping
 Coulomb law of this module, ``lugre`` the LuGre law with a bristle state per joint through RK4
 (:mod:`alpes_dyn.model.friction`, :mod:`alpes_dyn.simulation.lugre`)."""
+
+LIBRARY_LAWS: dict[str, tuple[str, str]] = {"smooth": ("smooth", "tanh"), "stick": ("stick", "tanh"),
+                                             "lugre": ("lugre", "lugre"), "creep": ("smooth", "creep")}
+"""The library's friction laws, each as the observer runs it: name -> (the observer's law of :data:`FRICTION_LAWS`,
+the parameter file's ``friction.law`` of :data:`~alpes_dyn.model.friction.FRICTION_MODELS`). ``smooth`` the tanh
+sign, ``stick`` the time-stepping Coulomb law (on a tanh file: the file's smooth sign unused), ``lugre`` the
+bristles (the file's sigma0/sigma1 where it is a LuGre file, else the defaults), ``creep`` MuJoCo's soft dry
+friction (:class:`~alpes_dyn.model.friction.Creep`, solved inside the smooth law's dynamics; the file's band
+constants where it is a creep file, else MuJoCo's defaults). The laws ``estimate --law-spread`` compares
+(:mod:`alpes_dyn.estimation.observers.law_sigma`): a law is its file's law, not the observer's alone (a creep file
+run with the smooth law is the creep law; the smooth law on it is the same file with ``friction.law = "tanh"``)."""
 
 MAX_DRY_JOINTS = 5
 """The most joints with dry friction in one coupled chain (a block of the mass matrix) that :func:`coulomb_velocity`
@@ -95,6 +107,75 @@ def observer_friction_law(model: Model) -> str:
     from ..model.friction import lugre_of
 
     return "lugre" if lugre_of(model) is not None else "smooth"
+
+
+def library_law(model: Model, friction_law: str) -> str:
+    """The name in :data:`LIBRARY_LAWS` of the law the observer runs on ``model`` with ``friction_law``: ``creep``
+    where ``friction_law`` is ``smooth`` and the file's ``friction.law`` is ``creep`` (the creep law solved in the
+    smooth law's dynamics), else ``friction_law``.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model (its parameter file's ``friction.law``; a model without a file: none).
+    friction_law : str
+        The observer's law, one of :data:`FRICTION_LAWS`.
+
+    Returns
+    -------
+    str
+        A key of :data:`LIBRARY_LAWS`.
+
+    Raises
+    ------
+    InputError
+        ``friction_law`` not of :data:`FRICTION_LAWS`.
+    """
+    from ..model.friction import creep_of
+
+    law = check_friction_law(friction_law)
+    return "creep" if law == "smooth" and creep_of(model) is not None else law
+
+
+def law_model(model: Model, law: str) -> tuple[Model, str]:
+    """``model`` with the library's law ``law`` (:data:`LIBRARY_LAWS`): the same model whose parameter file says
+    ``friction.law`` as the law needs (a copy, :meth:`~alpes_dyn.model.robot.Model.copy`: no refit, the file's
+    other values kept; ``model`` itself where its file already says it or where the law reads no file), and the
+    observer's law to run it with.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model.
+    law : str
+        A key of :data:`LIBRARY_LAWS`.
+
+    Returns
+    -------
+    tuple of (Model, str)
+        The model, and the observer's law of :data:`FRICTION_LAWS`.
+
+    Raises
+    ------
+    InputError
+        ``law`` not of :data:`LIBRARY_LAWS` (named ``law``), or ``creep`` on a model without a parameter file (the
+        law's band is read from it).
+    """
+    from ..model.params import Param, with_values
+
+    if not isinstance(law, str) or law not in LIBRARY_LAWS:
+        raise InputError(f"law: expected one of {', '.join(LIBRARY_LAWS)}, got {law!r:.40}")
+    observer, file_law = LIBRARY_LAWS[law]
+    p = model.params
+    if p is None:
+        if file_law == "creep":
+            raise InputError("law: creep needs a parameter file (friction.law, its band), the model has none")
+        return model, observer
+    if p.friction_law == file_law:
+        return model, observer
+    p = with_values(p, {"friction.law": Param(file_law, "-", "assumed", f"the {law} law of a law spread",
+                                              "the joints' friction law")})
+    return model.copy(params=p), observer
 
 
 def coulomb_velocity(A: cs.SX, b: cs.SX, limit: Any, blocks: Sequence[Sequence[int]] | None = None) -> cs.SX:

@@ -55,6 +55,7 @@ from ..estimation.observers.law_sigma import law_sigma
 from ..estimation.observers.scenario import EstimationScenario, scenario_torque
 from ..model.mjcf import STICTION_TIMECONST
 from ..model.params import HandParams, load_params, with_values
+from ..simulation.stick import FRICTION_LAWS
 from ..symbolic.parametric import parameter_catalogue
 from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, MASS_GOAL_PCT, SPRING_GOAL_PCT, ekf_run, fit_row,
                       on_rig, plant_experiment, rig_design, rig_of, summarise)
@@ -222,11 +223,12 @@ def _consistency(est, true_q: np.ndarray, transient: float) -> dict[str, Any]:
 
 
 def _law_consistency(run, est, true_q: np.ndarray, transient: float) -> dict[str, Any]:
-    """The NEES with each joint's variance widened by the spread between the friction laws
-    (:func:`~alpes_dyn.estimation.observers.law_sigma.law_sigma`; ``run(law)`` the EKF with that law, ``est`` the
-    kept one): its per-joint values against their band, the samples taken as independent (the filter's error model
-    is its own P's, not the widened one's), and the spread's RMS per joint."""
-    spread = law_sigma(run, est)
+    """The NEES with each joint's variance widened by the spread between the observer's friction laws
+    (:func:`~alpes_dyn.estimation.observers.law_sigma.law_sigma` over
+    :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, each on the file as it is; ``run(law)`` the EKF with that
+    observer's law, ``est`` the kept one): its per-joint values against their band, the samples taken as independent
+    (the filter's error model is its own P's, not the widened one's), and the spread's RMS per joint."""
+    spread = law_sigma(run, est, laws=FRICTION_LAWS)  # the observer's laws on the file as it is (no creep run)
     r = nees(spread.widened(est.estimate), true_q, start=transient)
     lo, hi = r.joint_band()
     return {"per_joint": r.per_joint.tolist(), "joint_band": [lo, hi],
