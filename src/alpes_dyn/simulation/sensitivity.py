@@ -34,7 +34,8 @@ from ..symbolic.dynamics import block_solve
 from ..symbolic.parametric import ParametricDynamics
 from .lugre_sensitivity import lugre_steps
 from .integrate import CompiledStepLoop, _check_dt
-from .variational import LOOPED_STATES, looped_variational_rk4_step
+from .variational import CHAINED_BASIS, LOOPED_STATES, chain_sample_jacobians, looped_variational_rk4_step
+from .variational import sample_jacobian_step
 from .variational import _rk4_calling, repeated_step, variational_rk4_step  # (re-exported: their home before)
 
 __all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
@@ -65,7 +66,9 @@ class SensitivityModel:
     dynamics: the :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; names, nominal (p,): parameters.
     nx = 2n (3n with the LuGre law's bristles, module lugre_sensitivity), p, nu (inputs: motors or joints), nb
     (basis functions), no = nu nb (correction coefficients), nd = nx + p + no (sensitivity directions).
-    compile_seconds: time spent compiling now (0 when the library came from the cache).
+    compile_seconds: time spent compiling now (0 when the library came from the cache). chained: the sensitivities
+    from each period's own Jacobian chained over the samples (a looped step with many basis functions,
+    :data:`~alpes_dyn.simulation.variational.CHAINED_BASIS`; the compiled step then carries that Jacobian).
     """
 
     def __init__(self, model: Model, parameters: str | Sequence[str] | None = None, dt: float = 1e-3,
@@ -116,7 +119,12 @@ class SensitivityModel:
                 return variational_rk4_step(rhs, x, w, directions, h)
         # one call per sample period: the substeps in the compiled step, the input held, the states at the samples
         self.plain_step = repeated_step(plain, self.substeps)
-        self.step = repeated_step(sens_of(cs.vertcat(pd.theta, off)), self.substeps)
+        # many coefficients (the Shadow hand's lines): each period's Jacobian to (x, p, u), chained in run
+        self.chained = pd.lugre is None and self.nx >= LOOPED_STATES and self.nb >= CHAINED_BASIS
+        if self.chained:
+            self.step = sample_jacobian_step(repeated_step(sens_of(cs.vertcat(pd.theta, u)), self.substeps), self.nx)
+        else:
+            self.step = repeated_step(sens_of(cs.vertcat(pd.theta, off)), self.substeps)
         # the sensitivities to the initial state alone (dx/dx_0, nx x nx), built on first use
         self._state_step = sens_of
         self._state_loop: CompiledStepLoop | None = None
@@ -203,6 +211,13 @@ class SensitivityModel:
             self._state_loop = CompiledStepLoop(step, self._label.replace("sens_", "xsens_", 1), self._threads)
             self.compile_seconds += self._state_loop.compile_seconds
         nd = self.nx if state else self.nd
+        if self.chained and not state:
+            nj = self.nx + self.p + self.nu
+            s0 = np.zeros((B, self.nx + self.nx * nj))
+            s0[:, : self.nx] = x0
+            S = self._loop.run(s0, W, progress, "sensitivities")
+            J = S[:, 1:, self.nx:].reshape(B, N, nj, self.nx).transpose(0, 1, 3, 2)
+            return S[:, :, : self.nx], chain_sample_jacobians(J, W[:, :, self.nu + 3 + self.p:][:, :, : self.nb], self.p)
         s0 = np.zeros((B, self.nx + self.nx * nd))
         s0[:, : self.nx] = x0
         s0[:, self.nx: self.nx + self.nx * self.nx] = np.eye(self.nx).ravel(order="F")
