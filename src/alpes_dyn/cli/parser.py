@@ -340,7 +340,8 @@ def _add_identify(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--law-spread", action="store_true",
                    help="widen each standard error by the friction law's model error: the fit made again with the "
                         "other friction law (smooth or stick-slip) from the kept one, each std widened by the "
-                        "difference (one fit more; with --effects auto on the Alpes models)")
+                        "difference and by the memoryless laws' model-form share of each spring, mass and friction "
+                        "(one fit more; with --effects auto on the Alpes models)")
     s.add_argument("--effects", default=None, metavar="LIST",
                    help="the real hand's effects to fit, comma-separated: stiction (the stick-slip friction law, "
                         "v_s = 0.02 rad/s, kept in the file), rotor (the file's rotor inertia J_m on each tendon, "

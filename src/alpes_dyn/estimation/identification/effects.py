@@ -835,7 +835,8 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     spread : bool, optional
         Add the model-form error to the kept fit's standard errors where it converged with friction
         (:mod:`~alpes_dyn.estimation.identification.law_spread`): the fit made again with the other friction law,
-        from the kept one (a round that made it already is reused), each std widened by the difference.
+        from the kept one (a round that made it already is reused), each std widened by the difference and the
+        memoryless laws' model-form term ((S2) there).
     **kwargs
         Passed to :func:`~alpes_dyn.estimation.identification.identification.identify` (``interval``:
         :data:`EFFECTS_INTERVAL` unless given).

@@ -28,13 +28,15 @@ class StandardErrors:
     the recording does not see one), ``robust_larger`` (p,) bool where the robust one is reported (the larger),
     ``method`` the sandwich (:class:`~alpes_dyn.estimation.identification.robust_covariance.RobustCovariance`);
     ``law_spread`` (p,) where the model-form error was added (:mod:`~alpes_dyn.estimation.identification.law_spread`:
-    |theta - theta_other law|, in the parameters' units), else None."""
+    |theta - theta_other law|, in the parameters' units), else None; ``model_form`` (p,) the model-form term of (S2)
+    there (c_kind |theta|, the parameters' units), else None."""
 
     classical: np.ndarray
     robust: np.ndarray
     robust_larger: np.ndarray
     method: Any = None
     law_spread: np.ndarray | None = None
+    model_form: np.ndarray | None = None
 
     RULE = "max(classical, robust) per parameter"
 
@@ -70,6 +72,7 @@ class StandardErrors:
         which = [n for n, b in zip(names, self.robust_larger) if b]
         how = self.method.describe() if self.method is not None else "HAC sandwich"
         law = "" if self.law_spread is None else ", with the other friction law's fit's difference added"
+        law += "" if self.model_form is None else " and the memoryless laws' model-form error"
         return (f"std = {self.RULE}{law} ({how}); robust for {', '.join(which)}" if which
                 else f"std = {self.RULE}{law} ({how}); classical for all")
 
@@ -77,6 +80,8 @@ class StandardErrors:
         out = {"rule": self.RULE}
         if self.law_spread is not None:
             out["law_spread"] = [float(x) for x in self.law_spread]
+        if self.model_form is not None:
+            out["model_form"] = [float(x) for x in self.model_form]
         if self.method is not None:
             out.update(self.method.to_dict())
         return out
