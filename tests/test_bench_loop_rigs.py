@@ -89,7 +89,7 @@ def test_finger3_is_recorded_in_both_rigs_and_joined(bench_loop, monkeypatch, tm
     hand's record, under 1.1 % joined: the TURNED docstring). finger2 keeps the rig rule: one rig."""
     from alpes_dyn.estimation.experiments.recording import Recording, read_recording
     from alpes_dyn.model.robot import Model
-    from alpes_dyn.studies.realism import rig_design
+    from alpes_dyn.estimation.experiments.turned import rig_design
 
     seeds, n = [], 200
 
@@ -113,8 +113,11 @@ def test_finger3_is_recorded_in_both_rigs_and_joined(bench_loop, monkeypatch, tm
         def __init__(self, hw):
             self.hw, self.q = hw, hw.q
 
+    from alpes_dyn.estimation.experiments import turned
+
     monkeypatch.setattr(bench_loop, "MujocoHand", Hand)
     monkeypatch.setattr(bench_loop, "Scored", Scored)
+    monkeypatch.setattr(turned, "run_experiment", experiment)  # the public turned experiment's (bench_loop's own: finger2)
     monkeypatch.setattr(bench_loop, "run_experiment", experiment)
     row, path = bench_loop.experiment_row("finger3", None, 7, tmp_path)
     assert seeds == [("level", 7), ("hanging", 8)] and row["rig"] == "level+hanging"
