@@ -131,3 +131,49 @@ def test_finger3_is_recorded_in_both_rigs_and_joined(bench_loop, monkeypatch, tm
     seeds.clear()
     row, _ = bench_loop.experiment_row("finger2", None, 7, tmp_path)
     assert seeds == [("level", 7)] and row["rig"] == "level" and "runs" not in row
+
+
+@pytest.mark.parametrize("trips, kept, tried", [
+    ((), ["level", "hanging"], []),
+    (("level",), ["hanging"], ["level"]),   # palm up's guard tripped (the fold): hung alone, its own seed
+    (("hanging",), ["level"], ["hanging"]),  # hung tripped: palm up's run kept
+    (("level", "hanging"), [], ["level", "hanging"]),
+])
+def test_turned_falls_back_to_the_rig_that_recorded(bench_loop, monkeypatch, trips, kept, tried):
+    """bench_loop.run_turned through the public turned.run_turned: a rig whose guard trips (RigTripped) is dropped,
+    the other kept, each stand-in seeded the draw's seed plus its rig's index and closed after its run."""
+    from alpes_dyn.estimation.experiments import turned
+
+    made = []
+
+    class Hand:
+        def __init__(self, model, truth, scene, seed, rig):
+            self.rig, self.seed, self.closed = rig, seed, False
+            made.append(self)
+
+        def close(self):
+            self.closed = True
+
+    class Scored:
+        def __init__(self, hw):
+            self.hw = hw
+
+        def close(self):
+            self.hw.close()
+
+    def experiment(hw, nominal, design, **kw):
+        if hw.hw.rig in trips:
+            raise GuardTripped(f"guard: {hw.hw.rig} tripped", "stop", 0.0, np.zeros(1), None)
+        return _result(1.0)
+
+    monkeypatch.setattr(bench_loop, "MujocoHand", Hand)
+    monkeypatch.setattr(bench_loop, "Scored", Scored)
+    monkeypatch.setattr(turned, "run_experiment", experiment)
+    monkeypatch.setattr(turned, "joined_runs", lambda runs, nominal: None)  # the fakes record nothing to join
+    from alpes_dyn.model.robot import Model
+
+    runs, why = bench_loop.run_turned("finger3", None, 7, Model.alpes("finger3", friction=True))
+    assert [r for r, _, _ in runs] == kept and [w.split(":")[0] for w in why] == tried
+    assert all(w.endswith(f"guard: {w.split(':')[0]} tripped") for w in why)
+    assert [(h.rig, h.seed) for h in made] == [(r, 7 + ("level", "hanging").index(r)) for r in
+                                               ("level", "hanging")] and all(h.closed for h in made)
