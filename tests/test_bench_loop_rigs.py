@@ -1,5 +1,6 @@
 """benchmarks/bench_loop.py's rig rule (on_hand.ROOM_SHARE, on_hand.roomier): palm up first; hung fingers down too
 where palm up found no room or left less than ROOM_SHARE of the designed amplitude; of two runs the roomier kept.
+finger3 (TURNED) recorded in both rigs through the public turned.run_turned, a rig whose guard trips dropped.
 
 The stand-in and the experiment are replaced by fakes whose amplitude scale the test sets (the rule is the
 benchmark's bookkeeping; the experiment itself is tested in test_on_hand.py and test_joint_stops.py).
