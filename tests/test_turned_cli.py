@@ -71,3 +71,23 @@ def test_design_only_one_profile_per_rig(tmp_path, capsys):
                      "--json")
     assert code == 0 and obj["rigs"] == ["hanging"] and obj["output"] == str(one)
     np.testing.assert_allclose(np.loadtxt(one, delimiter=",", skiprows=1)[:, 1], hanging, rtol=1e-12, atol=0)
+
+
+def test_bench_both_trip_names_the_rig_and_the_other(tmp_path, monkeypatch, capfd):
+    """--rig both where palm up trips (a soft finger near its fold: about half the +-20 % finger3 draws): exit 3,
+    one line naming the rig and the hung run alone as the way on, no file (the run replaced by one that trips)."""
+    pytest.importorskip("mujoco")
+    from alpes_dyn.estimation.experiments import turned
+    from alpes_dyn.estimation.experiments.hand_session import GuardTripped
+
+    def tripped(hw, nominal, design, **kw):
+        raise GuardTripped("guard: motor finger: encoder at 995 counts is below the guard band", "stop", 1.0,
+                           np.array([995.0]), None)
+
+    monkeypatch.setattr(turned, "run_experiment", tripped)
+    out = tmp_path / "rec.csv"
+    code = cli.main(["experiment", "--bench", "mujoco", "--rig", "both", "-o", str(out)])
+    _, err = capfd.readouterr()
+    assert code == 3 and not out.exists() and err.count("\n") == 1
+    assert "experiment stopped: rig level: guard: motor finger: encoder at 995" in err
+    assert "--rig hanging records the other rig alone" in err

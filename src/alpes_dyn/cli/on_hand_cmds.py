@@ -177,7 +177,9 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     try:
         res = run_turned(hand_in, nominal, design, _rigs(args), path=args.output)
     except RigTripped as trip:  # one line on stderr, exit 3 (GUARD_EXIT)
-        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written)") from None
+        other = [r for r in _rigs(args) if r != trip.rig]
+        hint = f"; --rig {other[0]} records the other rig alone" if other else ""
+        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written{hint})") from None
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters of the MuJoCo stand-in drawn by alpes-dyn "
                                                          f"experiment --bench (spread {args.perturb:g}, seed {args.seed})")
