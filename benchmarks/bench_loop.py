@@ -64,7 +64,6 @@ The thumb's row (:func:`thumb_row`):
 from __future__ import annotations
 
 import argparse
-import dataclasses
 import json
 import math
 import resource
@@ -91,10 +90,12 @@ from alpes_dyn.errors import AlpesDynError
 from alpes_dyn.estimation.experiments.draws import perturbed_params
 from alpes_dyn.estimation.experiments.hand_experiment import _chain_seeds
 from alpes_dyn.estimation.experiments.on_hand import ROOM_SHARE, roomier, run_experiment
-from alpes_dyn.estimation.experiments.recording import Recording, join_runs, write_recording
+from alpes_dyn.estimation.experiments.recording import write_recording
+from alpes_dyn.estimation.experiments.turned import RigTripped, joined_runs, rig_design
+from alpes_dyn.estimation.experiments.turned import run_turned as turned_experiment
 from alpes_dyn.model.params import chain_params
 from alpes_dyn.model.robot import Model
-from alpes_dyn.studies.realism import errors, rig_design
+from alpes_dyn.studies.realism import errors
 from alpes_dyn.symbolic.parametric import parameter_catalogue
 
 from c_step import GOAL_HAND_US, c_columns, c_goals_met, hand_c_columns
@@ -172,32 +173,31 @@ def run_rigs(model: str, truth: Any, seed: int, nominal: Model) -> tuple[tuple |
 
 def run_turned(model: str, truth: Any, seed: int, nominal: Model) -> tuple[list, list[str]]:
     """Calibration and the guarded experiment on the free stand-in in each of :data:`RIGS` (palm up, then hung
-    fingers down: the hand turned between two runs, as :mod:`~alpes_dyn.estimation.experiments.on_hand` says a
-    user does for another orientation), the hung run's noise seeded ``seed + 1``. Returns (the runs that recorded,
-    each (rig, the scored stand-in, the :class:`~alpes_dyn.estimation.experiments.on_hand.OnHandResult`); the
-    rigs whose guard refused, and why)."""
-    kept, tried = [], []
-    for i, rig in enumerate(RIGS):
-        hw = Scored(MujocoHand(model, truth, scene="free", seed=seed + i, rig=rig))
+    fingers down: :func:`~alpes_dyn.estimation.experiments.turned.run_turned`, the hand turned between two runs),
+    the hung run's noise seeded ``seed + 1``; where palm up fails (its guard trips), hung alone; where hung trips,
+    palm up's run alone. Returns (the runs that recorded, each (rig, the scored stand-in, the
+    :class:`~alpes_dyn.estimation.experiments.on_hand.OnHandResult`); the rigs that failed, and why)."""
+    hands: dict[str, Scored] = {}
+
+    def hand_in(rig: str) -> Scored:
+        hands[rig] = Scored(MujocoHand(model, truth, scene="free", seed=seed + RIGS.index(rig), rig=rig))
+        return hands[rig]
+
+    rigs, tried = RIGS, []
+    while rigs:
         try:
-            kept.append((rig, hw, run_experiment(hw, nominal, rig_design(rig))))
-        except AlpesDynError as e:
-            tried.append(f"{rig}: {e}")
-    return kept, tried
-
-
-def joined(runs: list, nominal: Model) -> Recording:
-    """The runs' recordings as one of several runs (:func:`~alpes_dyn.estimation.experiments.recording.join_runs`),
-    each with its gravity columns (a palm-up run's, which the experiment leaves out as the file's, written as the
-    nominal model's gravity): the fit then takes each run in its own orientation and fits the tilt."""
-    recs = []
-    for _, _, res in runs:
-        rec = res.recording
-        if rec.gravity is None:
-            rec = dataclasses.replace(rec, gravity=np.repeat(np.asarray(nominal.gravity, dtype=float)[None],
-                                                             rec.n_samples, 0))
-        recs.append(rec)
-    return join_runs(recs)
+            res = turned_experiment(hand_in, nominal, None, rigs)
+            return [(rig, hands[rig], r) for rig, r in zip(res.rigs, res.runs)], tried
+        except RigTripped as e:
+            tried.append(f"{e.rig}: {e.trip}")
+            if e.runs:  # the later rig tripped: the earlier runs kept
+                return [(rig, hands[rig], r) for rig, r in e.runs], tried
+            failed = e.rig
+        except AlpesDynError as e:  # a rig's settings (e.g. no encoder counts left for the excitation)
+            failed = list(hands)[-1]
+            tried.append(f"{failed}: {e}")
+        rigs = RIGS[RIGS.index(failed) + 1:]
+    return [], tried
 
 
 def _stops(hw: Scored, res: Any, nominal: Model) -> dict[str, Any]:
@@ -225,7 +225,8 @@ def _stops(hw: Scored, res: Any, nominal: Model) -> dict[str, Any]:
 
 def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "") -> tuple[dict, Path | None]:
     """The experiment's row and the recording's path (None if every rig failed): a model of :data:`TURNED` recorded
-    in both rigs and the runs joined (:func:`run_turned`, :func:`joined`; each run's figures under ``runs``, the
+    in both rigs and the runs joined (:func:`run_turned`,
+    :func:`~alpes_dyn.estimation.experiments.turned.joined_runs`; each run's figures under ``runs``, the
     stops of either counted), any other in one (:func:`run_rigs`: the rig rule)."""
     nominal = Model.alpes(model, friction=True)
     t0, c0 = time.perf_counter(), time.process_time()
@@ -248,7 +249,7 @@ def experiment_row(model: str, truth: Any, seed: int, tmp: Path, name: str = "")
         row["runs"] = scored
         row["amplitude_scale"] = min(x["amplitude_scale"] for x in scored)
     path = tmp / f"rec_{model}{name}_{seed}.csv"
-    write_recording(joined(runs, nominal) if len(runs) > 1 else runs[0][2].recording, path)
+    write_recording(joined_runs([r for _, _, r in runs], nominal) if len(runs) > 1 else runs[0][2].recording, path)
     return row, path
 
 

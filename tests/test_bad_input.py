@@ -315,6 +315,7 @@ def bad_files(d: Path) -> dict[str, str]:
     out.update(dir=str(d / "dir"), file=str(d / "file"), tmp=str(d))
     os.link(out["params_toml"], d / "hardlink.toml")  # the same file as params.toml under another name
     (d / "link.png").symlink_to(out["params_toml"])
+    (d / "rl_level.csv").symlink_to(out["params_toml"])  # experiment --design-only --rig both -o rl.csv's first file
     (d / "linked").mkdir()
     (d / "linked" / "finger2.urdf").symlink_to(out["params_toml"])  # write_urdfs would replace the link
     os.mkfifo(d / "fifo.toml")  # a FIFO with no writer: opening it to read would block forever
@@ -421,8 +422,10 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--design-only", "--perturb", "0.1", "-o", "{tmp}/t.csv",
           needle="--perturb: --design-only draws no true finger"),
         C("experiment", "--design-only", "--seed", "3", "-o", "{tmp}/t.csv", needle="--seed: --design-only has no noise"),
-        C("experiment", "--design-only", "--rig", "both", "-o", "{tmp}/t.csv", needle="--rig both: --design-only runs "
-          "palm up"),
+        # --design-only --rig both: one profile per rig beside -o (-o's name with _level, _hanging), each checked
+        C("experiment", "--design-only", "--rig", "both", "-o", "{tmp}/rl.csv",
+          needle="-o: '{tmp}/rl_level.csv' is a symbolic link; refusing to replace it"),
+        C("experiment", "--design-only", "--rig", "both", "-o", "{tmp}/t.toml", needle="-o: "),
         C("experiment", "--design-only", "--model", "hand", "-o", "{tmp}/t.csv",
           needle="--model: --design-only is defined for finger2, finger3, thumb, got 'hand'"),
         C("experiment", "--design-only", "--duration", "0.01", "-o", "{tmp}/t.csv",
@@ -438,8 +441,10 @@ CLI: dict[str, list[Cli]] = {
           needle="--chain: the MuJoCo stand-in is one finger"),
         C("experiment", "--bench", "mujoco", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv",
           needle="--true-params-out: goes with --perturb"),
-        C("experiment", "--bench", "mujoco", "--rig", "hanging", "-o", "{tmp}/r.csv",
-          needle="--rig hanging: --bench mujoco runs palm up"),
+        C("experiment", "--bench", "mujoco", "--rig", "both", "--model", "hand", "-o", "{tmp}/r.csv",
+          needle="--model: --bench mujoco is defined for finger2, finger3, thumb, got 'hand'"),
+        C("experiment", "--bench", "mujoco", "--rig", "both", "-o", "{params_toml}",
+          needle="-o: '{params_toml}' has extension"),
         C("experiment", "--bench", "real", "-o", "{tmp}/r.csv", needle="argument --bench: invalid choice: 'real'"),
         C("experiment", "--bench", "mujoco", "--model", "{robot_urdf}", "--spec", "{robot_toml}", "-o", "{tmp}/r.csv",
           needle="--spec: goes with a URDF --model's simulated experiment, not --bench mujoco"),
@@ -1387,6 +1392,12 @@ def _check_command(*args: Any, **kw: Any) -> Any:
     return check_command(*args, **kw)
 
 
+def _turned(name: str) -> Any:
+    from alpes_dyn.estimation.experiments import turned
+
+    return getattr(turned, name)
+
+
 def _loopback(motors: tuple[str, ...] = ("finger",)) -> Any:
     from alpes_dyn.bench.interface import Loopback
 
@@ -2157,6 +2168,27 @@ API: list[Api] = [
     A("run_experiment", lambda c: _on_hand("run_experiment")(3, c.m), InputError, "hw: expected a HardwareInterface"),
     A("run_experiment", lambda c: _on_hand("run_experiment")(_loopback(), c.m, path=c.d / "r.txt"), InputError,
       "path"),
+    # the experiment turned (estimation.experiments.turned): refused before any hand is asked for
+    A("run_turned", lambda c: _turned("run_turned")(3, c.m), InputError,
+      "hand_in: expected a callable rig -> HardwareInterface, got int"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), c.m, rigs="level"), InputError,
+      "rigs: expected a sequence of rigs (level, hanging), got 'level'"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), c.m, rigs=("level", "sideways")),
+      InputError, "rigs: expected each one of level, hanging, got 'sideways'"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), c.m, rigs=("level", "level")),
+      InputError, "rigs: each rig once, got ['level', 'level']"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), "finger3"), InputError,
+      "nominal: expected an alpes_dyn Model, got str"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), c.m, calibration=None), InputError,
+      "calibration: each rig is calibrated in its own orientation"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), c.m, path=c.d / "r.txt"), InputError,
+      "path"),
+    A("run_turned", lambda c: _turned("run_turned")(lambda rig: _loopback(), c.m, _design(orientations=(
+        (0, 0, -9.81), (0, 0, 9.81)))), InputError, "design: expected one orientation to turn, got 2"),
+    A("rig_design", lambda c: _turned("rig_design")("hanging", 2.0, design=_design()), InputError,
+      "duration: give the design's duration in design (one of them)"),
+    A("rig_design", lambda c: _turned("rig_design")("upside-down"), InputError,
+      "rig: expected one of level, hanging, got 'upside-down'"),
     A("designed_torque", lambda c: _on_hand("designed_torque")("finger3"), InputError,
       "nominal: expected an alpes_dyn Model with motors, got str"),
     A("check_command", lambda c: _check_command([0.0], 1, 0.05, both_ways=[True, False]), InputError,

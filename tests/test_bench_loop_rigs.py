@@ -1,5 +1,6 @@
 """benchmarks/bench_loop.py's rig rule (on_hand.ROOM_SHARE, on_hand.roomier): palm up first; hung fingers down too
 where palm up found no room or left less than ROOM_SHARE of the designed amplitude; of two runs the roomier kept.
+finger3 (TURNED) recorded in both rigs through the public turned.run_turned, a rig whose guard trips dropped.
 
 The stand-in and the experiment are replaced by fakes whose amplitude scale the test sets (the rule is the
 benchmark's bookkeeping; the experiment itself is tested in test_on_hand.py and test_joint_stops.py).
@@ -89,7 +90,7 @@ def test_finger3_is_recorded_in_both_rigs_and_joined(bench_loop, monkeypatch, tm
     hand's record, under 1.1 % joined: the TURNED docstring). finger2 keeps the rig rule: one rig."""
     from alpes_dyn.estimation.experiments.recording import Recording, read_recording
     from alpes_dyn.model.robot import Model
-    from alpes_dyn.studies.realism import rig_design
+    from alpes_dyn.estimation.experiments.turned import rig_design
 
     seeds, n = [], 200
 
@@ -113,8 +114,11 @@ def test_finger3_is_recorded_in_both_rigs_and_joined(bench_loop, monkeypatch, tm
         def __init__(self, hw):
             self.hw, self.q = hw, hw.q
 
+    from alpes_dyn.estimation.experiments import turned
+
     monkeypatch.setattr(bench_loop, "MujocoHand", Hand)
     monkeypatch.setattr(bench_loop, "Scored", Scored)
+    monkeypatch.setattr(turned, "run_experiment", experiment)  # the public turned experiment's (bench_loop's own: finger2)
     monkeypatch.setattr(bench_loop, "run_experiment", experiment)
     row, path = bench_loop.experiment_row("finger3", None, 7, tmp_path)
     assert seeds == [("level", 7), ("hanging", 8)] and row["rig"] == "level+hanging"
@@ -128,3 +132,49 @@ def test_finger3_is_recorded_in_both_rigs_and_joined(bench_loop, monkeypatch, tm
     seeds.clear()
     row, _ = bench_loop.experiment_row("finger2", None, 7, tmp_path)
     assert seeds == [("level", 7)] and row["rig"] == "level" and "runs" not in row
+
+
+@pytest.mark.parametrize("trips, kept, tried", [
+    ((), ["level", "hanging"], []),
+    (("level",), ["hanging"], ["level"]),   # palm up's guard tripped (the fold): hung alone, its own seed
+    (("hanging",), ["level"], ["hanging"]),  # hung tripped: palm up's run kept
+    (("level", "hanging"), [], ["level", "hanging"]),
+])
+def test_turned_falls_back_to_the_rig_that_recorded(bench_loop, monkeypatch, trips, kept, tried):
+    """bench_loop.run_turned through the public turned.run_turned: a rig whose guard trips (RigTripped) is dropped,
+    the other kept, each stand-in seeded the draw's seed plus its rig's index and closed after its run."""
+    from alpes_dyn.estimation.experiments import turned
+
+    made = []
+
+    class Hand:
+        def __init__(self, model, truth, scene, seed, rig):
+            self.rig, self.seed, self.closed = rig, seed, False
+            made.append(self)
+
+        def close(self):
+            self.closed = True
+
+    class Scored:
+        def __init__(self, hw):
+            self.hw = hw
+
+        def close(self):
+            self.hw.close()
+
+    def experiment(hw, nominal, design, **kw):
+        if hw.hw.rig in trips:
+            raise GuardTripped(f"guard: {hw.hw.rig} tripped", "stop", 0.0, np.zeros(1), None)
+        return _result(1.0)
+
+    monkeypatch.setattr(bench_loop, "MujocoHand", Hand)
+    monkeypatch.setattr(bench_loop, "Scored", Scored)
+    monkeypatch.setattr(turned, "run_experiment", experiment)
+    monkeypatch.setattr(turned, "joined_runs", lambda runs, nominal: None)  # the fakes record nothing to join
+    from alpes_dyn.model.robot import Model
+
+    runs, why = bench_loop.run_turned("finger3", None, 7, Model.alpes("finger3", friction=True))
+    assert [r for r, _, _ in runs] == kept and [w.split(":")[0] for w in why] == tried
+    assert all(w.endswith(f"guard: {w.split(':')[0]} tripped") for w in why)
+    assert [(h.rig, h.seed) for h in made] == [(r, 7 + ("level", "hanging").index(r)) for r in
+                                               ("level", "hanging")] and all(h.closed for h in made)

@@ -294,7 +294,7 @@ def test_cli_bench_guard_trip_is_exit_3_one_line_no_file(tmp_path, monkeypatch, 
     pytest.importorskip("mujoco")
     from alpes_dyn import cli
     from alpes_dyn.estimation.experiments import calibration as calib_mod
-    from alpes_dyn.estimation.experiments import on_hand as on_hand_mod
+    from alpes_dyn.estimation.experiments import turned as turned_mod
     from alpes_dyn.estimation.experiments.hand_session import SessionLog
 
     def tripped(*a, **kw):
@@ -302,9 +302,9 @@ def test_cli_bench_guard_trip_is_exit_3_one_line_no_file(tmp_path, monkeypatch, 
                            1.0, np.array([4695.0]), SessionLog(*(np.zeros((1, 1)),) * 5))
 
     monkeypatch.setattr(calib_mod, "calibrate", lambda hw, model, **kw: None)
-    monkeypatch.setattr(on_hand_mod, "run_experiment", tripped)
+    monkeypatch.setattr(turned_mod, "run_experiment", tripped)  # the CLI's run: turned.run_turned, one rig
     out = tmp_path / "rec.csv"
     code = cli.main(["experiment", "--bench", "mujoco", "-o", str(out)])
     _, err = capfd.readouterr()
     assert code == 3 and not out.exists()
-    assert err.count("\n") == 1 and "experiment stopped: guard: motor finger: encoder at 4695 counts" in err
+    assert err.count("\n") == 1 and "experiment stopped: rig level: guard: motor finger: encoder at 4695" in err

@@ -262,6 +262,23 @@ def _drift_lines(drift: dict | None) -> list[str]:
                "sample)" + at for motor, d in (drift or {}).get("torque_scale", {}).items()])
 
 
+def _data_lines(obj: dict, data: Any) -> list[str]:
+    """The fit's data into ``obj``: :func:`~alpes_dyn.estimation.experiments.excursion.excursion_report` (its motors
+    whose encoder barely moved: a WARNING line each) and ``runs`` (the recording's runs, each its ``samples`` and
+    its ``gravity``, m/s^2, as recorded, or None: the file's; a text line where there are several, e.g.
+    ``experiment --rig both``'s two orientations)."""
+    obj.update(excursion_report(data))
+    warn = [f"  WARNING: {line}" for line in obj["small_excursions"]]
+    b = data.run_starts()
+    obj["runs"] = [{"samples": int(e - a), "gravity": None if data.gravity is None else
+                    [float(x) for x in data.gravity[a]]} for a, e in zip(b[:-1], b[1:])]
+    if len(obj["runs"]) < 2:
+        return warn
+    return [f"  {len(obj['runs'])} runs, gravity " + "; ".join(
+        "the file's" if r["gravity"] is None else "(" + ", ".join(f"{x:.3g}" for x in r["gravity"]) + ") m/s^2"
+        for r in obj["runs"])] + warn
+
+
 def cmd_identify(args: argparse.Namespace) -> int:
     """Fit the parameters of a finger (or of a URDF robot) to a recording; write the identified parameter file
     (or, for a URDF robot, its identified spec: :mod:`alpes_dyn.estimation.identification.identified_spec`)."""
@@ -326,8 +343,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         lines.append(f"  torque delay: the recorded torque {fit.delay} sample{'s' if fit.delay > 1 else ''} late (the "
                      f"rig's sensors: transmission.torque_delay in the file, which estimate --data reads)")
     lines += [] if res.model_error is None else [f"  observer's model error: {res.model_error:.3g} F_s (calibrated)"]
-    obj.update(excursion_report(data))  # the fit's data: its motors whose encoder barely moved
-    lines += [f"  WARNING: {line}" for line in obj["small_excursions"]]
+    lines += _data_lines(obj, data)
     a = res.adequacy
     if a is not None:
         lines.append(f"  sensor floor {a.floor.total:.3g} counts (quantisation {a.floor.quantisation:.3g}, noise "

@@ -24,7 +24,20 @@ parameters drawn from ``--params`` by ``--perturb`` and ``--seed`` and hidden fr
 (:func:`~alpes_dyn.estimation.experiments.calibration.calibrate`), then the guarded experiment
 (:func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment`), designed on ``--params``; the recording is the
 documented CSV that ``alpes-dyn identify`` reads. A guard trip (the encoder near a stop, a missed period) relaxes the
-finger, writes nothing and exits 3 with its reason.
+finger, writes nothing and exits 3 with its reason, naming the rig.
+
+``--rig`` (:data:`RIG_RUNS`) turns the hand: ``level`` palm up, ``hanging`` hung fingers down (the design's gravity
+turned by :func:`~alpes_dyn.estimation.experiments.turned.rig_design`), ``both`` palm up then hung, each its own
+calibration and guarded run on the stand-in in that orientation (its noise seeded ``--seed`` plus the rig's index:
+level 0, hanging 1), the runs joined into one recording of two runs with their gravity columns
+(:func:`~alpes_dyn.estimation.experiments.turned.run_turned`): ``identify --data`` fits each run in its own
+orientation and the tilt, which pins finger3's masses that one orientation trades with its cable's compliance.
+``auto`` is palm up (``level``), as the stand-in always ran: on finger3 palm up trips its guard on some draws
+(then ``--rig hanging``), so ``both`` is not the default. ``--json`` names each run's ``rig``, ``calibration``,
+trim (``bias_nm``) and ``amplitude_scale`` under ``runs``. With ``--design-only``, ``--rig hanging`` writes the hung
+profile to ``-o``; ``--rig both`` writes one profile per rig beside it, ``-o``'s name with ``_level`` and
+``_hanging`` before ``.csv`` (``torque.csv``: ``torque_level.csv``, ``torque_hanging.csv``; ``-o`` itself is not
+written), each with its own target reading.
 """
 
 from __future__ import annotations
@@ -34,7 +47,12 @@ import argparse
 from ..errors import InputError
 from .common import EXIT_UNTRUSTED, _check_run_files, _emit, _Untrusted
 
-__all__ = ["add_options", "experiment_on_hand", "GUARD_EXIT"]
+__all__ = ["add_options", "experiment_on_hand", "GUARD_EXIT", "RIG_RUNS"]
+
+RIG_RUNS: dict[str, tuple[str, ...]] = {"auto": ("level",), "level": ("level",), "hanging": ("hanging",),
+                                       "both": ("level", "hanging")}
+"""``--rig`` with --design-only or --bench: the rigs run, in order (:data:`~alpes_dyn.estimation.experiments.turned.RIGS`;
+``auto`` palm up, as ``level``: the module docstring)."""
 
 GUARD_EXIT = EXIT_UNTRUSTED
 """The exit code of ``experiment --bench`` where the guard stopped the experiment (the finger relaxed, no file): 3,
@@ -70,9 +88,6 @@ def _checked(args: argparse.Namespace) -> None:
     models = ("finger2", "finger3", "thumb")  # the thumb: its ab/adduction held relaxed (estimation.experiments.on_hand)
     if args.model not in models:
         raise InputError(f"--model: {mode} is defined for {', '.join(models)}, got {args.model!r}")
-    if args.rig in ("hanging", "both"):
-        raise InputError(f"--rig {args.rig}: {mode} runs palm up (level); hang the hand and design for it in Python "
-                         "(ExperimentDesign(orientations=...))")
     if args.design_only:
         for flag, dest in (("--perturb", "perturb"), ("--true-params-out", "true_params_out")):
             if getattr(args, dest) is not None:
@@ -84,7 +99,21 @@ def _checked(args: argparse.Namespace) -> None:
             raise InputError(f"--chain: the MuJoCo stand-in is one finger ({args.model}) of the shipped file")
         if args.perturb is None and args.true_params_out is not None:
             raise InputError("--true-params-out: goes with --perturb (otherwise the true file is --params)")
-    _check_run_files(args, {"-o": ("csv",)})
+    _check_run_files(args, {"-o": ("csv",)}, more=[("-o", p) for p in _profile_paths(args)[1:]])
+
+
+def _rigs(args: argparse.Namespace) -> tuple[str, ...]:
+    """The rigs ``--rig`` runs in, in order (the module docstring): auto and level palm up, hanging hung, both."""
+    return RIG_RUNS[args.rig]
+
+
+def _profile_paths(args: argparse.Namespace) -> list[str]:
+    """``--design-only``'s torque profiles, one per rig: -o itself for one rig; for ``--rig both`` -o's name with
+    ``_level`` and ``_hanging`` before ``.csv`` (first entry -o itself, never written then: the rigs' files follow)."""
+    if not args.design_only or len(_rigs(args)) == 1:
+        return [args.output]
+    stem = args.output[:-4] if args.output.lower().endswith(".csv") else args.output
+    return [args.output] + [f"{stem}_{rig}.csv" for rig in _rigs(args)]
 
 
 def experiment_on_hand(args: argparse.Namespace) -> int:
@@ -104,61 +133,85 @@ def experiment_on_hand(args: argparse.Namespace) -> int:
 
 def _design_only(args: argparse.Namespace, nominal, design) -> int:
     from ..estimation.experiments.on_hand import designed_torque, write_torque_profile
+    from ..estimation.experiments.turned import rig_design
 
-    t, u, target = designed_torque(nominal, design)
+    rigs, paths = _rigs(args), _profile_paths(args)[-len(_rigs(args)):]
     names = nominal.transmission.motor_names
-    write_torque_profile(args.output, t, u, names)
+    made = [(rig, path, designed_torque(nominal, rig_design(rig, design=design, gravity=nominal.gravity)))
+            for rig, path in zip(rigs, paths)]  # every profile designed before any is written
+    for _, path, (t, u, _) in made:
+        write_torque_profile(path, t, u, names)
     cols = ["t"] + [f"torque_{n}" for n in names]
-    obj = {"model": args.model, "output": args.output, "samples": int(t.size), "rate_hz": 1.0 / design.dt,
-           "duration_s": float(t[-1]), "columns": cols, "units": {"t": "s", **{c: "N m" for c in cols[1:]}},
-           "target_counts": {n: float(c) for n, c in zip(names, target)},
-           "torque_range_nm": {n: [float(u[:, k].min()), float(u[:, k].max())] for k, n in enumerate(names)}}
+    t = made[0][2][0]
+    profiles = [{"rig": rig, "output": path, "target_counts": {n: float(c) for n, c in zip(names, target)},
+                 "torque_range_nm": {n: [float(u[:, k].min()), float(u[:, k].max())] for k, n in enumerate(names)}}
+                for rig, path, (_, u, target) in made]
+    obj = {"model": args.model, "rig": args.rig, "rigs": list(rigs), "output": paths[0] if len(paths) == 1 else paths,
+           "samples": int(t.size), "rate_hz": 1.0 / design.dt, "duration_s": float(t[-1]), "columns": cols,
+           "units": {"t": "s", **{c: "N m" for c in cols[1:]}}, "profiles": profiles}
+    if len(rigs) == 1:
+        obj.update({k: profiles[0][k] for k in ("target_counts", "torque_range_nm")})
     text = (f"{args.model}: the identification experiment's torque, {t.size} samples at {1 / design.dt:g} Hz "
-            f"({', '.join(cols)}; s, N m) written to {args.output}\n  designed on the nominal model: trim the bias "
-            "on your hand until the encoder rests at " + ", ".join(f"{c:.0f} counts ({n})" for n, c in
-                                                                     zip(names, target)))
+            f"({', '.join(cols)}; s, N m) designed on the nominal model")
+    for p in profiles:
+        text += (f"\n  {p['rig']}: written to {p['output']}; trim the bias on your hand until the encoder rests at "
+                 + ", ".join(f"{c:.0f} counts ({n})" for n, c in p["target_counts"].items()))
     _emit(obj, text, args.json)
     return 0
 
 
 def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     from ..bench.mujoco_hand import MujocoHand
-    from ..estimation.experiments.calibration import calibrate
     from ..estimation.experiments.draws import perturbed_params
     from ..estimation.experiments.excursion import excursion_report
-    from ..estimation.experiments.hand_session import GuardTripped
-    from ..estimation.experiments.on_hand import ROOM_SHARE, run_experiment
+    from ..estimation.experiments.turned import RIGS, RigTripped, run_turned
     from ..model.params import write_params
 
     chains = ("thumb",) if args.model == "thumb" else None  # the thumb's own values drawn (a finger's: [finger])
     truth = nominal_params if args.perturb is None else perturbed_params(nominal_params, args.perturb, args.seed,
                                                                           chains=chains)
-    hw = MujocoHand(args.model, truth, seed=args.seed)
+
+    def hand_in(rig: str) -> MujocoHand:  # the stand-in turned: its noise seeded --seed plus the rig's index
+        return MujocoHand(args.model, truth, seed=args.seed + list(RIGS).index(rig), rig=rig)
+
     try:
-        cal = calibrate(hw, nominal)
-        res = run_experiment(hw, nominal, design, cal, path=args.output)
-    except GuardTripped as trip:  # one line on stderr, exit 3 (GUARD_EXIT)
-        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written)") from None
-    finally:
-        hw.close()
+        res = run_turned(hand_in, nominal, design, _rigs(args), path=args.output)
+    except RigTripped as trip:  # one line on stderr, exit 3 (GUARD_EXIT)
+        other = [r for r in _rigs(args) if r != trip.rig]
+        hint = f"; --rig {other[0]} records the other rig alone" if other else ""
+        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written{hint})") from None
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters of the MuJoCo stand-in drawn by alpes-dyn "
                                                          f"experiment --bench (spread {args.perturb:g}, seed {args.seed})")
-    rec = res.recording
-    obj = {"model": args.model, "bench": args.bench, "output": args.output, "samples": rec.n_samples,
-           "duration_s": rec.duration, "dt_s": rec.dt, "columns": list(rec.columns()),
-           "true_params": args.true_params_out,
-           "calibration": {k: v for k, v in cal.to_dict().items() if not k.startswith("curve")},
-           "run": res.to_dict(), **excursion_report(rec)}
-    text = (f"{args.model}: identification experiment on the MuJoCo stand-in, {rec.n_samples} samples over "
-            f"{rec.duration:g} s written to {args.output}\n  calibration: rest "
-            f"{', '.join(f'{v:.0f}' for v in cal.rest)} counts, usable range {', '.join(f'{a:.0f}-{b:.0f}' for a, b in zip(cal.low, cal.high))} counts"
-            f"\n  trim: bias {', '.join(f'{b:.5g}' for b in res.bias)} N m (nominal "
-            f"{', '.join(f'{b:.5g}' for b in res.nominal_bias)}), multisine at {res.amplitude_scale:.2g} of the design's")
-    if res.amplitude_scale < ROOM_SHARE:  # too small a record for the masses: say so (on_hand.ROOM_SHARE)
-        obj["note"] = (f"the multisine ran at {res.amplitude_scale:.2g} of the designed amplitude, below "
-                       f"{ROOM_SHARE:g}: too small a record to trust the masses of; hang the hand (fingers down) and "
-                       "run again, keep the run with more room (on_hand.roomier)")
-        text += f"\n  note: {obj['note']}"
-    _emit(obj, text, args.json)
+    _emit(*_bench_report(args, res, excursion_report(res.recording)), args.json)
     return 0
+
+
+def _bench_report(args: argparse.Namespace, res, excursion: dict) -> tuple[dict, str]:
+    """(the JSON object, the text) of ``--bench``: the recording, each rig's calibration, trim and amplitude."""
+    from ..estimation.experiments.on_hand import ROOM_SHARE
+
+    rec, runs = res.recording, res.to_dict()
+    obj = {"model": args.model, "bench": args.bench, "rig": args.rig, "rigs": list(res.rigs), "output": args.output,
+           "samples": rec.n_samples, "duration_s": rec.duration, "dt_s": rec.dt, "columns": list(rec.columns()),
+           "true_params": args.true_params_out, "runs": runs, **excursion}
+    if len(runs) == 1:  # one rig: its calibration and run as before
+        obj["calibration"] = runs[0]["calibration"]
+        obj["run"] = {k: v for k, v in runs[0].items() if k not in ("rig", "calibration")}
+    text = (f"{args.model}: identification experiment on the MuJoCo stand-in ({' then '.join(res.rigs)}, "
+            f"{len(runs)} run{'s' if len(runs) > 1 else ''}), {rec.n_samples} samples written to {args.output}")
+    notes = []
+    for r, run in zip(runs, res.runs):
+        cal = run.calibration
+        text += (f"\n  {r['rig']}: calibration: rest {', '.join(f'{v:.0f}' for v in cal.rest)} counts, usable range "
+                 f"{', '.join(f'{a:.0f}-{b:.0f}' for a, b in zip(cal.low, cal.high))} counts; trim: bias "
+                 f"{', '.join(f'{b:.5g}' for b in run.bias)} N m (nominal {', '.join(f'{b:.5g}' for b in run.nominal_bias)}),"
+                 f" multisine at {run.amplitude_scale:.2g} of the design's")
+        if run.amplitude_scale < ROOM_SHARE:  # too small a record for the masses: say so (on_hand.ROOM_SHARE)
+            notes.append(f"{r['rig']}: the multisine ran at {run.amplitude_scale:.2g} of the designed amplitude, "
+                         f"below {ROOM_SHARE:g}: too small a record to trust the masses of; record the hand in another "
+                         "rig too (--rig hanging, both) and keep the run with more room (on_hand.roomier)")
+    if notes:
+        obj["note"] = "; ".join(notes)
+        text += f"\n  note: {obj['note']}"
+    return obj, text

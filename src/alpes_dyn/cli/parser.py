@@ -296,7 +296,9 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
                    help="an Alpes hand's orientation: auto (default): palm up unless the finger leaves its range "
                         "there, then hung fingers down, scaled down where even that leaves it; level: palm up; "
                         "hanging: fingers down; both (one finger): half palm up, half hung, each its own run (the "
-                        "masses' split pinned). Each checks the whole record first and says what it chose")
+                        "masses' split pinned). Each checks the whole record first and says what it chose. With --bench: auto and "
+                        "level palm up, hanging hung, both palm up then hung (two runs joined in -o); with "
+                        "--design-only --rig both: -o's name with _level and _hanging, one profile per rig")
     s.add_argument("--seed", type=_SEED, default=0, help="seed of the sensor noise (default %(default)s)")
     add_on_hand_options(s)  # --design-only, --bench, -o, --json (cli.on_hand_cmds)
     s.set_defaults(func=cmd_experiment)

@@ -30,12 +30,13 @@ from ..control.plants import mujoco_recording, plant_model
 from ..errors import InputError
 from ..estimation.experiments.adapt import Adaptation, adaptation_of, candidate_designs, first_in_range
 from ..estimation.experiments.design import ExperimentDesign
+from ..estimation.experiments.turned import rig_design  # noqa: F401 (the documented design in a rig; moved down)
 from ..estimation.experiments.draws import perturbed_params
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
 from ..estimation.experiments.experiment import experiment_torque, orientation_segments
 from ..estimation.identification.identification import THUMB_PARAMETERS, identify
 from ..estimation.observers.replay import estimate_recording
-from ..model.mjcf import HANGING_TILT, STICTION_TIMECONST, tilted_gravity
+from ..model.mjcf import HANGING_TILT, STICTION_TIMECONST
 from ..model.params import load_params, write_params
 from ..model.robot import Model
 from ..symbolic.parametric import parameter_catalogue
@@ -392,35 +393,6 @@ def rig_of(design: ExperimentDesign) -> np.ndarray | None:
     """
     g = np.asarray(design.orientations[0], dtype=float)
     return None if np.array_equal(g, load_params().gravity) else g
-
-
-def rig_design(rig: str = "level", duration: float | None = None) -> ExperimentDesign:
-    """The documented experiment (:class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`; ``duration`` s if given) in
-    the rig's orientation (:data:`RIGS`: designed, trimmed and fitted there).
-
-    Parameters
-    ----------
-    rig : str, optional
-        One of :data:`RIGS` (default ``"level"``).
-    duration : float or None, optional
-        The experiment's duration, s (None: the documented one).
-
-    Returns
-    -------
-    ExperimentDesign
-
-    Raises
-    ------
-    InputError
-        An unknown rig.
-    """
-    if rig not in RIGS:
-        raise InputError(f"rig: expected one of {', '.join(RIGS)}, got {rig!r}")
-    design = ExperimentDesign() if duration is None else ExperimentDesign(duration=duration)
-    design.check()
-    if RIGS[rig]:
-        design = dataclasses.replace(design, orientations=(tuple(tilted_gravity(load_params().gravity, RIGS[rig])),))
-    return design
 
 
 def errors(values: dict[str, float], truth: dict[str, float]) -> tuple[dict, dict, float]:

@@ -6,5 +6,6 @@ of eq. 2.11 (:mod:`.trim`), the experiment simulated (:mod:`.experiment`) and ad
 (:mod:`.adapt`, ``alpes-dyn experiment``'s default), the whole hand in one record (:mod:`.hand_experiment`), the
 encoder's excursion check (:mod:`.excursion`) and the seeded draws of a hand within its tolerances (:mod:`.draws`);
 on a hand through the hardware interface, with no truth: the guarded session (:mod:`.hand_session`), the
-calibration of its rest and range (:mod:`.calibration`) and the experiment trimmed and guarded on it (:mod:`.on_hand`).
+calibration of its rest and range (:mod:`.calibration`), the experiment trimmed and guarded on it (:mod:`.on_hand`)
+and in two orientations, the hand turned between the runs and the runs joined (:mod:`.turned`).
 Nothing here imports the observers or the fit: they read what this sub-package writes."""

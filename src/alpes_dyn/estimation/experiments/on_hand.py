@@ -3,8 +3,8 @@
 finger, with no truth anywhere (:func:`run_experiment`); and the designed torque alone, for a user who plays it
 with their own tools (:func:`designed_torque`, :func:`write_torque_profile`).
 
-:func:`run_experiment`, in order (one orientation, one run; turn the hand and run again for another, then
-:func:`~alpes_dyn.estimation.experiments.recording.join_runs`):
+:func:`run_experiment`, in order (one orientation, one run; turn the hand and run again for another, the runs
+joined: :func:`~alpes_dyn.estimation.experiments.turned.run_turned`):
 
 1. the excitation designed on the nominal model as :mod:`alpes_dyn.estimation.experiments.experiment` designs it
    (:class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`: the multisine's bias and amplitude, the
