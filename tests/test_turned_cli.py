@@ -74,8 +74,8 @@ def test_design_only_one_profile_per_rig(tmp_path, capsys):
 
 
 def test_bench_both_trip_names_the_rig_and_the_other(tmp_path, monkeypatch, capfd):
-    """--rig both where palm up trips (a soft finger near its fold: about half the +-20 % finger3 draws): exit 3,
-    one line naming the rig and the hung run alone as the way on, no file (the run replaced by one that trips)."""
+    """--rig both where every rig trips (the run replaced by one that trips): exit 3, one line naming the last
+    rig, no file."""
     pytest.importorskip("mujoco")
     from alpes_dyn.estimation.experiments import turned
     from alpes_dyn.estimation.experiments.hand_session import GuardTripped
@@ -89,5 +89,33 @@ def test_bench_both_trip_names_the_rig_and_the_other(tmp_path, monkeypatch, capf
     code = cli.main(["experiment", "--bench", "mujoco", "--rig", "both", "-o", str(out)])
     _, err = capfd.readouterr()
     assert code == 3 and not out.exists() and err.count("\n") == 1
-    assert "experiment stopped: rig level: guard: motor finger: encoder at 995" in err
-    assert "--rig hanging records the other rig alone" in err
+    assert "experiment stopped: rig hanging: guard: motor finger: encoder at 995" in err
+
+
+def test_bench_both_keeps_the_hung_run_where_palm_up_trips(tmp_path, monkeypatch, capsys):
+    """--rig both where palm up trips (a soft finger near its fold, as on about half the +-20 % finger3 draws):
+    the hung run is recorded alone (one run, the hung gravity), the trip named in --json's ``tripped`` and the
+    text's note; exit 0 (the recording is sound, of one orientation)."""
+    pytest.importorskip("mujoco")
+    from alpes_dyn.estimation.experiments import turned
+    from alpes_dyn.estimation.experiments.hand_session import GuardTripped
+
+    real = turned.run_experiment
+
+    def palm_up_trips(hw, nominal, design, **kw):
+        if design.orientations[0][2] < -9.0:  # palm up: gravity along -z
+            raise GuardTripped("guard: motor finger: encoder at 957 counts is below the guard band", "stop", 0.5,
+                               np.array([957.0]), None)
+        return real(hw, nominal, design, **kw)
+
+    monkeypatch.setattr(turned, "run_experiment", palm_up_trips)
+    out = tmp_path / "rec.csv"
+    code, obj = _run(capsys, "experiment", "--bench", "mujoco", "--rig", "both", "--duration", "0.5", "-o", str(out),
+                     "--json")
+    assert code == 0 and obj["rigs"] == ["hanging"] and [r["rig"] for r in obj["runs"]] == ["hanging"]
+    assert obj["tripped"] == [{"rig": "level", "reason": "guard: motor finger: encoder at 957 counts is below the "
+                                                         "guard band"}]
+    assert "level: the guard stopped its run" in obj["note"]
+    rec = read_recording(out, FINGER3)
+    assert rec.n_runs == 1 and rec.n_samples == obj["samples"] == 501
+    np.testing.assert_allclose(rec.gravity[0], [9.81, 0.0, 0.0], atol=1e-9)  # the hung orientation's

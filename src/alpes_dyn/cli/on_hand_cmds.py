@@ -24,7 +24,8 @@ parameters drawn from ``--params`` by ``--perturb`` and ``--seed`` and hidden fr
 (:func:`~alpes_dyn.estimation.experiments.calibration.calibrate`), then the guarded experiment
 (:func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment`), designed on ``--params``; the recording is the
 documented CSV that ``alpes-dyn identify`` reads. A guard trip (the encoder near a stop, a missed period) relaxes the
-finger, writes nothing and exits 3 with its reason, naming the rig.
+finger and names the rig; with ``--rig both`` that rig is left out and the other recorded (``tripped`` in
+``--json``, a note in the text), and where no rig recorded the command writes nothing and exits 3 with the reason.
 
 ``--rig`` (:data:`RIG_RUNS`) turns the hand: ``level`` palm up, ``hanging`` hung fingers down (the design's gravity
 turned by :func:`~alpes_dyn.estimation.experiments.turned.rig_design`), ``both`` palm up then hung, each its own
@@ -32,8 +33,7 @@ calibration and guarded run on the stand-in in that orientation (its noise seede
 level 0, hanging 1), the runs joined into one recording of two runs with their gravity columns
 (:func:`~alpes_dyn.estimation.experiments.turned.run_turned`): ``identify --data`` fits each run in its own
 orientation and the tilt, which pins finger3's masses that one orientation trades with its cable's compliance.
-``auto`` is palm up (``level``), as the stand-in always ran: on finger3 palm up trips its guard on some draws
-(then ``--rig hanging``), so ``both`` is not the default. ``--json`` names each run's ``rig``, ``calibration``,
+``auto`` is palm up (``level``), as the stand-in always ran. ``--json`` names each run's ``rig``, ``calibration``,
 trim (``bias_nm``) and ``amplitude_scale`` under ``runs``. With ``--design-only``, ``--rig hanging`` writes the hung
 profile to ``-o``; ``--rig both`` writes one profile per rig beside it, ``-o``'s name with ``_level`` and
 ``_hanging`` before ``.csv`` (``torque.csv``: ``torque_level.csv``, ``torque_hanging.csv``; ``-o`` itself is not
@@ -174,12 +174,10 @@ def _bench(args: argparse.Namespace, nominal, nominal_params, design) -> int:
     def hand_in(rig: str) -> MujocoHand:  # the stand-in turned: its noise seeded --seed plus the rig's index
         return MujocoHand(args.model, truth, seed=args.seed + list(RIGS).index(rig), rig=rig)
 
-    try:
-        res = run_turned(hand_in, nominal, design, _rigs(args), path=args.output)
-    except RigTripped as trip:  # one line on stderr, exit 3 (GUARD_EXIT)
-        other = [r for r in _rigs(args) if r != trip.rig]
-        hint = f"; --rig {other[0]} records the other rig alone" if other else ""
-        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written{hint})") from None
+    try:  # --rig both: a rig whose guard trips is left out, named in the output (run_turned's keep_going)
+        res = run_turned(hand_in, nominal, design, _rigs(args), path=args.output, keep_going=True)
+    except RigTripped as trip:  # no rig recorded: one line on stderr, exit 3 (GUARD_EXIT)
+        raise _Untrusted(f"alpes-dyn: experiment stopped: {trip} (no recording written)") from None
     if args.true_params_out is not None:
         write_params(truth, args.true_params_out, header=f"true parameters of the MuJoCo stand-in drawn by alpes-dyn "
                                                          f"experiment --bench (spread {args.perturb:g}, seed {args.seed})")
@@ -200,7 +198,9 @@ def _bench_report(args: argparse.Namespace, res, excursion: dict) -> tuple[dict,
         obj["run"] = {k: v for k, v in runs[0].items() if k not in ("rig", "calibration")}
     text = (f"{args.model}: identification experiment on the MuJoCo stand-in ({' then '.join(res.rigs)}, "
             f"{len(runs)} run{'s' if len(runs) > 1 else ''}), {rec.n_samples} samples written to {args.output}")
-    notes = []
+    notes = [f"{rig}: the guard stopped its run ({why}); the finger relaxed; the recording holds the other "
+             f"rig{'s' if len(runs) > 1 else ''} only" for rig, why in res.tripped]
+    obj["tripped"] = [{"rig": rig, "reason": why} for rig, why in res.tripped]
     for r, run in zip(runs, res.runs):
         cal = run.calibration
         text += (f"\n  {r['rig']}: calibration: rest {', '.join(f'{v:.0f}' for v in cal.rest)} counts, usable range "

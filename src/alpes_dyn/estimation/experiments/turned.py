@@ -13,7 +13,10 @@ each rig (turn it, then return its :class:`~alpes_dyn.bench.interface.HardwareIn
 guarded experiment there (:func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment`, designed in the rig's
 orientation: :func:`rig_design`), closes it, and joins the runs
 (:func:`~alpes_dyn.estimation.experiments.recording.join_runs`). A guard trip in either rig raises
-:class:`RigTripped` naming the rig: nothing is joined or written.
+:class:`RigTripped` naming the rig: nothing is joined or written. With ``keep_going=True`` a rig whose guard trips
+is left out instead (named in :attr:`TurnedResult.tripped`) and the next rig is run: a finger that folds palm up
+(its rest below the fold, no room for the excitation) is still recorded hung; :class:`RigTripped` only where no rig
+recorded.
 """
 
 from __future__ import annotations
@@ -66,11 +69,14 @@ class TurnedResult:
     recording : Recording
         The runs joined, one run each (``run`` 0, 1, ...), with the gravity columns (:func:`joined_runs`); one rig:
         its run's recording as it is.
+    tripped : tuple of (str, str)
+        With ``keep_going``: each rig left out, and its guard's reason (empty otherwise).
     """
 
     rigs: tuple[str, ...]
     runs: tuple[OnHandResult, ...]
     recording: Recording
+    tripped: tuple[tuple[str, str], ...] = ()
 
     def to_dict(self) -> list[dict[str, Any]]:
         """Each run's figures as plain JSON types: ``rig``, ``calibration`` (its rest and range, counts; its fold,
@@ -162,7 +168,8 @@ def _checked_rigs(hand_in: Any, rigs: Any) -> tuple[str, ...]:
 
 
 def run_turned(hand_in: Callable[[str], HardwareInterface], nominal: Model, design: ExperimentDesign | None = None,
-               rigs: Sequence[str] = TURNED_RIGS, *, path: str | Path | None = None, **options: Any) -> TurnedResult:
+               rigs: Sequence[str] = TURNED_RIGS, *, path: str | Path | None = None, keep_going: bool = False,
+               **options: Any) -> TurnedResult:
     """Run the identification experiment on the hand in each rig, the hand turned between them; join the runs
     (the module docstring).
 
@@ -180,6 +187,9 @@ def run_turned(hand_in: Callable[[str], HardwareInterface], nominal: Model, desi
         The rigs in order, each one of :data:`RIGS` once (default :data:`TURNED_RIGS`).
     path : str or Path, optional
         Write the joined recording there (CSV), checked before the hand moves.
+    keep_going : bool, optional
+        False (default): a guard trip stops it all (:class:`RigTripped`). True: the rig is left out (named in
+        ``tripped``) and the next one run; :class:`RigTripped` (the last trip) only where no rig recorded.
     **options
         Passed to :func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment` in every rig (``margin``,
         ``stages``, ``stage_seconds``, ``hold``, ``max_holds``, ``tolerance``); each rig is calibrated first
@@ -201,18 +211,24 @@ def run_turned(hand_in: Callable[[str], HardwareInterface], nominal: Model, desi
     if path is not None:
         check_outputs([("path", path)], extensions={"path": ("csv",)})
     runs: list = []
+    tripped: list[tuple[str, str]] = []
     for rig, d in zip(rigs, designs):
         hw = hand_in(rig)
         try:
             runs.append((rig, run_experiment(hw, nominal, d, **options)))
         except GuardTripped as trip:
-            raise RigTripped(rig, trip, runs) from trip
+            last = RigTripped(rig, trip, list(runs))
+            if not keep_going:
+                raise last from trip
+            tripped.append((rig, str(trip)))
         finally:
             close = getattr(hw, "close", None)
             if callable(close):
                 close()
+    if not runs:
+        raise last
     results = tuple(res for _, res in runs)
     rec = results[0].recording if len(results) == 1 else joined_runs(results, nominal)
     if path is not None:
         write_recording(rec, path)
-    return TurnedResult(rigs, results, rec)
+    return TurnedResult(tuple(r for r, _ in runs), results, rec, tuple(tripped))
