@@ -21,14 +21,13 @@ would be w = 0.71): w = 1, the other law's value one standard error away. Where
 the laws agree the fit's own covariance is left; where they disagree, so does the standard error. What it cannot
 see: an error both laws share (there one joint's F_s stayed several standard errors high).
 
-That shared error is the largest part (the friction study's ``stiff`` case, eight draws: the errors up to 16 % on
-F_s, 7 % on F_v, 3 % on a mass and 1 % on a spring, of one sign draw after draw on the same joint): a bias of the
-memoryless laws against a friction none of the library's laws is, which no statistic of the recording shows. The
-residual is white at the sensor floor (a Bartlett window of a few samples; on one draw the HAC sandwich at any
-window up to a fifth of the record moved the standard errors by 0-30 %, and the slowest tenth of the samples pulled
-the parameters by about one standard error), and the laws with a state fit that plant at about four times the floor
-(on one draw LuGre did not converge and the creep law ran 750 s): neither the residual's colour nor a third law
-covers it. So each parameter of a kind of :data:`MODEL_FORM` gets a model-form term too,
+That shared error is the largest part on MuJoCo's stick-slip finger (the friction study's ``stiff`` case,
+``benchmarks/realism.py --friction``): a bias of the memoryless laws against a friction none of the library's
+laws is, of one sign draw after draw on the same joint, which no statistic of the recording shows -- the residual
+is white at the sensor floor (the HAC sandwich, :mod:`~alpes_dyn.estimation.identification.robust_covariance`, at
+any window moves the standard errors little) and the laws with a state fit that plant well above the floor, so
+neither the residual's colour nor a third law covers it. So each parameter of a kind of :data:`MODEL_FORM` gets a
+model-form term too,
 
     sigma^2 = sigma_noise^2 + (w |theta_kept - theta_other|)^2 + (c_kind theta)^2,                 (S2)
 
@@ -51,8 +50,8 @@ __all__ = ["SPREAD_WEIGHT", "MODEL_FORM", "other_law", "model_form", "widen"]
 SPREAD_WEIGHT = 1.0
 """w of (S1): the two laws' difference as one standard deviation of the model-form error (module doc)."""
 MODEL_FORM = {"K": 0.002, "m": 0.01, "F_s": 0.05, "F_v": 0.03}
-"""c_kind of (S2), relative: the memoryless laws' model-form error per parameter kind (module doc; on the friction
-study's stiff draws the RMS of error / sigma 1 at 0.0021, 0.0093, 0.046, 0.027)."""
+"""c_kind of (S2), relative: the memoryless laws' model-form error per parameter kind (the module docstring: the c
+that brings the RMS of error / sigma to 1 on the friction study's stiff draws, rounded)."""
 
 
 def other_law(effects: tuple[str, ...]) -> tuple[str, ...]:
