@@ -141,6 +141,7 @@ def test_a_basin_lost_on_a_friction_is_fitted_again_with_it_held():
     it is (the staged start's), as is a converged fit."""
     from alpes_dyn import Model
     from alpes_dyn.estimation.identification import runaway
+    from alpes_dyn.estimation.identification.creep import RAN_DOWN
 
     model = Model.alpes("finger2", friction=True)
     names = ("K_1", "K_2", "m_1", "m_2", "F_s_1", "F_s_2")
@@ -153,12 +154,18 @@ def test_a_basin_lost_on_a_friction_is_fitted_again_with_it_held():
 
     lost = "lost basin: three Gauss-Newton steps in a row asked log theta to move by more than 30 (iteration 13; " \
            "the farthest: {})"
-    first = SimpleNamespace(names=names, converged=False, residual_rms=39.2, iterations=13, reason=lost.format("F_s_1"))
+    Fs = model.extras.coulomb
+    first = SimpleNamespace(names=names, converged=False, residual_rms=39.2, iterations=13, reason=lost.format("F_s_1"),
+                            values=np.array([0.04, 0.06, 0.02, 0.01, 3.0 * Fs[0], Fs[1]]))
     out = runaway.friction_held(again, model, "rec.csv", first, {"interval": 0.05}, 0.0)
     assert calls == [(("K_1", "K_2", "m_1", "m_2", "F_s_2"), {"interval": 0.05})]
     assert out.converged and list(out.not_identified) == ["F_s_1"] and "dry friction" in out.not_identified["F_s_1"]
+    assert RAN_DOWN not in out.not_identified["F_s_1"]  # it ran upwards: not the creep round's trigger
+    falling = SimpleNamespace(**{**vars(first), "values": np.array([0.04, 0.06, 0.02, 0.01, 0.3 * Fs[0], Fs[1]])})
+    clause = runaway.friction_held(again, model, "rec.csv", falling, {}, 0.0).not_identified["F_s_1"]
+    assert f"{RAN_DOWN}, to {0.3 * Fs[0]:.2g} from {Fs[0]:.2g}" in clause
     assert "fitted again with F_s_1 held" in out.reason and out.iterations == 22
     on_mass = SimpleNamespace(**{**vars(first), "reason": lost.format("m_2")})
     assert runaway.friction_held(again, model, "rec.csv", on_mass, {}, 0.0) is on_mass
     done = SimpleNamespace(**{**vars(first), "converged": True, "reason": "converged"})
-    assert runaway.friction_held(again, model, "rec.csv", done, {}, 0.0) is done and len(calls) == 1
+    assert runaway.friction_held(again, model, "rec.csv", done, {}, 0.0) is done and len(calls) == 2

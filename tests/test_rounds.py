@@ -90,6 +90,40 @@ def test_the_creep_round():
     assert creep.accepts(fit(0.5), fit(9.6)) and not creep.accepts(fit(9.7), fit(9.6))
 
 
+def test_the_creep_round_where_the_lost_basin_held_the_collapse():
+    """The fit kept on a soft MuJoCo friction (the study's soft case): F_s_1 at a third of the file's (no collapse),
+    F_s_2 and F_s_3 held at the file's after the fit's steps ran them towards 0 (runaway.friction_held's clause,
+    which hid the collapse from the rule): the creep round is made, first of the auto rows (before the asked round's
+    rotor and delay); not where the held F_s ran upwards, nor for a trusted fit, nor once tried; its verdict then
+    names the creep first."""
+    from alpes_dyn import Model
+    from alpes_dyn.estimation.identification.creep import CREEP, RAN_DOWN, name_creep
+
+    model = Model.alpes("finger3", friction=True)
+    Fs = model.extras.coulomb
+    names = ("K_1", "K_2", "K_3", "F_s_1", "F_v_1", "F_v_2", "F_v_3")
+    values = [0.04, 0.06, 0.06, Fs[0] / 3.0, 2e-4, 7e-5, 2e-4]
+    held = {f"F_s_{j}": f"held at the model's value: the fit's steps {RAN_DOWN}, to 3e-05 from 0.0005 (lost basin)"
+            for j in (2, 3)}
+    missing = ["rotor inertia (a torque following the motor acceleration)", SIGNATURES["torque_rate"]]
+
+    def kept(ok=False, clauses=held):
+        return _with(SimpleNamespace(**vars(fit(2.7, ok=ok, missing=missing, names=names, values=values)),
+                                     not_identified=dict(clauses)), model)
+
+    made = [(r.name, r.proposal(kept(), KEPT)) for r in rd.rounds_of("auto")]
+    assert next((n, e) for n, e in made if e is not None) == ("creep", KEPT + ("creep",))
+    up = {n: c.replace(f"{RAN_DOWN}, to 3e-05", "ran it off") for n, c in held.items()}
+    assert ROW["creep"].proposal(kept(clauses=up), KEPT) is None
+    assert ROW["creep"].proposal(kept(clauses={}), KEPT) is None
+    assert ROW["creep"].proposal(kept(ok=True), KEPT) is None
+    assert ROW["creep"].proposal(kept(), KEPT, {"creep"}) is None
+    refused = kept()
+    note = name_creep(refused, {"F_s_1": Fs[0], "F_s_2": Fs[1], "F_s_3": Fs[2]})
+    assert "F_s_2 held at the file's value" in note and "F_s_3" in note and "F_s_1" not in note
+    assert refused.adequacy.likely_missing[0] == CREEP and len(refused.adequacy.likely_missing) == 3
+
+
 def _with(stand_in, model):
     stand_in.model = model
     return stand_in

@@ -37,7 +37,7 @@ import numpy as np
 
 from ...errors import InputError
 
-__all__ = ["CREEP_FRACTION", "CREEP", "collapsed", "name_creep", "soft_constraint_friction"]
+__all__ = ["CREEP_FRACTION", "CREEP", "RAN_DOWN", "collapsed", "ran_down", "name_creep", "soft_constraint_friction"]
 
 CREEP_FRACTION = 0.1
 """A fitted F_s below this fraction of its start has collapsed (the +-20 % draws of a dry friction the law fits
@@ -46,6 +46,11 @@ end within 0.5-2 times their start; a soft MuJoCo friction's lightest joint at 0
 CREEP = ("a dry friction that creeps before it slides (F_s driven towards 0: its force grows with the velocity "
          "over a wider band than the smooth law's v_s, read as viscous; the creep law: --effects creep)")
 """The likely missing effect :func:`name_creep` names."""
+
+RAN_DOWN = "ran it off towards 0"
+"""The words of a ``not_identified`` clause of a parameter held at the file's value after the fit's steps drove it
+below its start until the basin was lost (:func:`~alpes_dyn.estimation.identification.runaway.friction_held`): the
+collapse the hold hides from :func:`collapsed` (:func:`ran_down` reads it)."""
 
 
 def collapsed(names: tuple[str, ...] | list[str], values: Any, start: Mapping[str, float]) -> dict[str, tuple[float, float]]:
@@ -73,9 +78,29 @@ def collapsed(names: tuple[str, ...] | list[str], values: Any, start: Mapping[st
     return out
 
 
+def ran_down(result: Any) -> dict[str, str]:
+    """The F_s parameters a fit holds at the file's value because its steps drove them towards 0 until the basin
+    was lost (their ``not_identified`` clause holds :data:`RAN_DOWN`): an F_s collapsing, which the hold hides from
+    :func:`collapsed` (on a soft MuJoCo friction the fit lost its basin on F_s_2, then on F_s_3, and was kept with
+    both held at the file's).
+
+    Parameters
+    ----------
+    result : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
+        A fit (anything with a ``not_identified`` mapping: parameter name -> clause; none: nothing held).
+
+    Returns
+    -------
+    dict of str to str
+        Name -> its clause, in the mapping's order; empty where no F_s ran down.
+    """
+    held = getattr(result, "not_identified", None) or {}
+    return {n: str(why) for n, why in held.items() if n.startswith("F_s_") and RAN_DOWN in str(why)}
+
+
 def name_creep(result: Any, start: Mapping[str, float]) -> str | None:
     """Where ``result`` is not to be trusted (not converged, or its verdict not adequate) and a joint's F_s
-    collapsed (:func:`collapsed`): :data:`CREEP` first among its verdict's likely missing effects (where it has a
+    collapsed (:func:`collapsed`) or was held after running towards 0 (:func:`ran_down`): :data:`CREEP` first among its verdict's likely missing effects (where it has a
     verdict) and the note returned; None (nothing changed) otherwise.
 
     Parameters
@@ -92,16 +117,18 @@ def name_creep(result: Any, start: Mapping[str, float]) -> str | None:
     """
     if result.trustworthy:
         return None
-    gone = collapsed(result.names, result.values, start)
-    if not gone:
+    gone, down = collapsed(result.names, result.values, start), ran_down(result)
+    if not (gone or down):
         return None
     a = getattr(result, "adequacy", None)
     if a is not None:
         if a.adequate:
-            a.adequate, a.reasons = False, [f"{', '.join(gone)} collapsed below {CREEP_FRACTION:g} of the file's"]
+            a.adequate, a.reasons = False, [f"{', '.join([*gone, *down])} collapsed below {CREEP_FRACTION:g} of the "
+                                            "file's or held after running towards 0"]
         a.likely_missing = [CREEP] + [m for m in a.likely_missing if m != CREEP]
-    where = ", ".join(f"{n} {s:.2g} -> {v:.2g} N m" for n, (s, v) in gone.items())
-    return f"dry friction read as viscous ({where}): {CREEP}"
+    where = [f"{n} {s:.2g} -> {v:.2g} N m" for n, (s, v) in gone.items()]
+    where += [f"{n} held at the file's value, the fit's steps having run it towards 0" for n in down]
+    return f"dry friction read as viscous ({', '.join(where)}): {CREEP}"
 
 
 def soft_constraint_friction(qdd: Any, qd: Any, F_s: Any, invweight: Any, timeconst: float = 0.02,

@@ -36,7 +36,8 @@ effect         what the fit does
                (:mod:`~alpes_dyn.model.friction`): the bristles in the fit's state, ``sigma0`` and ``sigma1``
                fitted with F_s and F_v (:func:`lugre_params`); the file written has ``friction.law = "lugre"``.
 ``creep``      (asked for; ``auto`` adds it where a fit drove a joint's F_s towards 0, a dry friction read as
-               viscous: :func:`~alpes_dyn.estimation.identification.creep.collapsed`) the creep law
+               viscous: :func:`~alpes_dyn.estimation.identification.creep.collapsed`, or held one its steps ran there:
+               :func:`~alpes_dyn.estimation.identification.creep.ran_down`) the creep law
                (:class:`~alpes_dyn.model.friction.Creep`, MuJoCo's soft ``frictionloss``: a band of viscous
                friction and added inertia up to F_s), its ``creep_kappa`` and ``creep_rate`` fitted with F_s and F_v
                from the file's (:func:`creep_params`); the file written has ``friction.law = "creep"``.

@@ -13,8 +13,10 @@ round           stage  made when (adds)                                         
                        one by one)                                                 stage
 ``creep``       auto   the kept fit, not to be trusted, drove a joint's F_s below  the kept fit's lower residual
                        a tenth of the file's (:func:`~.creep.collapsed`: a dry     values, its
-                       friction read as viscous) or its verdict names              friction the
-                       :data:`~.creep.CREEP`: the creep law, its band fitted with  file's
+                       friction read as viscous) or holds one the steps ran        friction the
+                       towards 0 (:func:`~.creep.ran_down`: the lost basin's       file's
+                       hold hides the collapse) or its verdict names
+                       :data:`~.creep.CREEP`: the creep law, its band fitted with
                        F_s (:class:`~alpes_dyn.model.friction.Creep`)
 ``asked``       auto   the kept fit's verdict names effects not yet tried          the kept fit   lower residual
                        (:func:`named_effects`), or it sees the cable stretching
@@ -56,7 +58,7 @@ from typing import Any, Callable, Collection
 import numpy as np
 
 from ...symbolic.parametric import parameter_catalogue
-from .creep import CREEP, collapsed
+from .creep import CREEP, collapsed, ran_down
 from .harmonics import NONLINEARITY
 
 STATEFUL_WORD = "a friction with a state"
@@ -169,15 +171,17 @@ def _stateful(result: Any, effects: tuple[str, ...], attempted: Collection[str])
 
 def _creeps(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
     """The kept effects with the creep law where the kept fit is not to be trusted and drove a joint's F_s below
-    :data:`~.creep.CREEP_FRACTION` of the file's (:func:`~.creep.collapsed`: a dry friction read as viscous) or its
-    verdict names :data:`~.creep.CREEP`, and the law was not tried (the other friction laws taken off)."""
+    :data:`~.creep.CREEP_FRACTION` of the file's (:func:`~.creep.collapsed`: a dry friction read as viscous), or
+    holds one at the file's value after its steps ran it towards 0 (:func:`~.creep.ran_down`: the same collapse,
+    hidden by the hold), or its verdict names :data:`~.creep.CREEP`, and the law was not tried (the other friction
+    laws taken off)."""
     model = getattr(result, "model", None)
     if "creep" in attempted or result.trustworthy or getattr(model, "params", None) is None:
         return None
     a = getattr(result, "adequacy", None)
     named = a is not None and any(CREEP in m for m in a.likely_missing)
     start = {p.name: p.nominal for p in parameter_catalogue(model)}
-    if not (named or collapsed(result.names, result.values, start)):
+    if not (named or collapsed(result.names, result.values, start) or ran_down(result)):
         return None
     return tuple(e for e in effects if e not in ("stiction", "lugre")) + ("creep",)
 
@@ -278,7 +282,8 @@ ROUNDS: tuple[Round, ...] = (
     Round("first", "first", (), "always", _first, "the model's values", _always),
     Round("staged", "first", (), "the first fit lost its basin", _staged, "the rigid fit, then the last stage",
           _converged),
-    Round("creep", "auto", ("creep",), "it drove a joint's F_s towards 0 (a dry friction read as viscous)", _creeps,
+    Round("creep", "auto", ("creep",), "it drove a joint's F_s towards 0, or held one its steps ran there (a dry "
+          "friction read as viscous)", _creeps,
           "kept, its friction the file's", _lower_residual),
     Round("asked", "auto", tuple(NAMED_BY), "its verdict names effects, or it sees the cable stretching", _asked,
           "kept", _lower_residual),

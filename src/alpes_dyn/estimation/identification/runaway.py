@@ -16,6 +16,7 @@ from ...symbolic.parametric import parameter_catalogue
 from ..experiments.recording import Recording
 from .adequacy import AdequacyWarning
 from .bounds import EFFECT_OF
+from .creep import RAN_DOWN
 from .fit_result import IdentificationResult
 from .shooting import FitDiverged
 
@@ -68,8 +69,9 @@ def friction_held(fit: Callable[..., IdentificationResult], model: Model, record
                   result: IdentificationResult, settings: dict[str, Any], t_start: float) -> IdentificationResult:
     """``result`` where it did not lose its basin on a friction parameter (the farthest step's, named in its
     reason: :data:`RUNAWAY_KINDS`); else the fit again from the model's values with that one held at the model's
-    value, named in :attr:`~.fit_result.IdentificationResult.not_identified`, kept where it converged or fits
-    better.
+    value, named in :attr:`~.fit_result.IdentificationResult.not_identified` (with
+    :data:`~.creep.RAN_DOWN` where the lost fit had driven it below that value: the creep round's trigger,
+    :func:`~.creep.ran_down`), kept where it converged or fits better.
 
     Parameters
     ----------
@@ -93,7 +95,8 @@ def friction_held(fit: Callable[..., IdentificationResult], model: Model, record
         ``result``, or the fit again with the friction parameter held.
     """
     far = result.reason.rpartition("the farthest: ")[2].rstrip(")") if result.reason.startswith("lost basin") else ""
-    kind = {pp.name: pp.kind for pp in parameter_catalogue(model)}.get(far)
+    catalogue = {pp.name: pp for pp in parameter_catalogue(model)}
+    kind = catalogue[far].kind if far in catalogue else None
     keep = [n for n in result.names if n != far]
     if kind not in RUNAWAY_KINDS or not keep:
         return result
@@ -102,7 +105,9 @@ def friction_held(fit: Callable[..., IdentificationResult], model: Model, record
         again = fit(model, recording, keep, **settings)
     if not (again.converged or again.residual_rms < result.residual_rms):
         return result
-    again.not_identified = {far: "held at the model's value: the fit's steps ran it off (lost basin; the data do "
+    lost_at, nominal = float(result.values[list(result.names).index(far)]), catalogue[far].nominal
+    way = f"{RAN_DOWN}, to {lost_at:.2g} from {nominal:.2g}" if lost_at < nominal else "ran it off"
+    again.not_identified = {far: f"held at the model's value: the fit's steps {way} (lost basin; the data do "
                                  f"not see {EFFECT_OF[kind]} there)", **again.not_identified}
     again.iterations += result.iterations
     again.seconds = time.perf_counter() - t_start
