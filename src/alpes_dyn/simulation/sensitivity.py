@@ -63,12 +63,18 @@ class SensitivityModel:
 
     Attributes
     ----------
-    dynamics: the :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; names, nominal (p,): parameters.
-    nx = 2n (3n with the LuGre law's bristles, module lugre_sensitivity), p, nu (inputs: motors or joints), nb
-    (basis functions), no = nu nb (correction coefficients), nd = nx + p + no (sensitivity directions).
-    compile_seconds: time spent compiling now (0 when the library came from the cache). chained: the sensitivities
-    from each period's own Jacobian chained over the samples (a looped step with many basis functions,
-    :data:`~alpes_dyn.simulation.variational.CHAINED_BASIS`; the compiled step then carries that Jacobian).
+    dynamics : ParametricDynamics
+        The model's :class:`~alpes_dyn.symbolic.parametric.ParametricDynamics`; ``names``, ``nominal`` (p,): its
+        parameters.
+    nx, p, nu, nb, no, nd : int
+        The states (2n; 3n with the LuGre law's bristles, module lugre_sensitivity), parameters, inputs (motors or
+        joints), basis functions, correction coefficients (nu nb) and sensitivity directions (nx + p + no).
+    compile_seconds : float
+        Time spent compiling now, s (0 when the library came from the cache).
+    chained : bool
+        Whether the sensitivities come from each period's own Jacobian chained over the samples (a looped step
+        with many basis functions, :data:`~alpes_dyn.simulation.variational.CHAINED_BASIS`; the compiled step then
+        carries that Jacobian).
     """
 
     def __init__(self, model: Model, parameters: str | Sequence[str] | None = None, dt: float = 1e-3,
