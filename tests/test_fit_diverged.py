@@ -169,3 +169,67 @@ def test_a_basin_lost_on_a_friction_is_fitted_again_with_it_held():
     assert runaway.friction_held(again, model, "rec.csv", on_mass, {}, 0.0) is on_mass
     done = SimpleNamespace(**{**vars(first), "converged": True, "reason": "converged"})
     assert runaway.friction_held(again, model, "rec.csv", done, {}, 0.0) is done and len(calls) == 2
+
+
+def _singular_kkt_error(monkeypatch):
+    """The LinAlgError of the shooting fit's undamped KKT system whose band is singular and too large for the dense
+    least-squares fallback (the joined two-rig record's LuGre round: interval 0's last state, a bristle deflection
+    relaxed within the interval, seen by nothing): the sparse fallback of a matrix over DENSE_LIMIT rows."""
+    from alpes_dyn.estimation.identification import kkt
+
+    shape = kkt.Shape(n_int=6, nb=3, nx=2, ng=2)
+    rng = np.random.default_rng(1)
+    J = rng.normal(size=(shape.n_int, 5, shape.nb + shape.ng))
+    Cv = rng.normal(size=(shape.n_int - 1, shape.nx, shape.nb))
+    Cr = rng.normal(size=(shape.n_int - 1, shape.nx, shape.ng))
+    J[0, :, shape.nb - 1] = 0.0  # interval 0's last local variable: no residual sees it, nor its continuity
+    Cv[0, :, shape.nb - 1] = 0.0
+    prior = np.zeros(shape.ng)
+    K = kkt.kkt_matrix(kkt.normal_matrix(J, shape, 0.0, prior), kkt.continuity_jacobian(Cv, Cr, shape))
+    monkeypatch.setattr(kkt, "DENSE_LIMIT", K.shape[0] - 1)  # the record's 5805 rows against 4000, made small
+    with pytest.raises(np.linalg.LinAlgError, match=f"{K.shape[0]}-row system is singular") as err:
+        kkt.kkt_from_blocks(J, Cv, Cr, shape, 0.0, prior, lambda: kkt.factorize(K))
+    return err.value
+
+
+@pytest.mark.parametrize("where", ["solve", "conclude"])
+def test_a_singular_system_beyond_the_fallback_is_a_failed_round_not_an_internal_error(monkeypatch, where):
+    """Issue 49's internal error (``the shooting fit's 5805-row system is singular`` out of the LuGre round of a
+    joined two-rig record): the LinAlgError of a singular KKT system too large for the least-squares fallback, in
+    the solver or in the covariance at the fit's end, leaves ``identify`` as a FitSingular (a FitDiverged, an
+    InputError: exit 2 with one line), and a round of ``--effects auto`` that raises it is a failed round, named."""
+    from alpes_dyn import Model
+    from alpes_dyn.errors import InputError
+    from alpes_dyn.estimation.experiments.experiment import ExperimentDesign, experiment
+    from alpes_dyn.estimation.identification import identification as ident_mod
+    from alpes_dyn.estimation.identification.shooting import FitSingular, ShootingProblem
+
+    exc = _singular_kkt_error(monkeypatch)
+    model = Model.alpes("finger2", friction=True)
+    rec = experiment("finger2", design=ExperimentDesign(duration=0.2), seed=3)
+
+    def singular(*args, **kw):
+        raise exc
+
+    if where == "solve":
+        monkeypatch.setattr(GaussNewton, "solve", singular)
+    else:  # the fit converged; the covariance's undamped system is the singular one
+        done = SimpleNamespace(iterations=3, reason="converged", at=SimpleNamespace(r=None))
+        monkeypatch.setattr(GaussNewton, "solve", lambda *a, **kw: done)
+        monkeypatch.setattr(ShootingProblem, "encoder_rms", lambda self, r: 0.0)
+        monkeypatch.setattr(ident_mod, "_conclude", singular)
+    with pytest.raises(FitSingular) as err:
+        ident_mod.identify(model, rec, "K", interval=0.05)
+    assert isinstance(err.value, InputError) and isinstance(err.value, FitDiverged)
+    msg = str(err.value)
+    assert "system is singular" in msg and "does not see" in msg and "\n" not in msg
+    first, rotor = fit(0.9), fit(0.7)
+
+    def one(effs):
+        if "lugre" in effs:
+            raise err.value
+        return rotor if effs[-1] == "rotor" else fit(0.8)
+
+    walk = walker(one)
+    assert walk.attempt("lugre", KEPT + ("lugre",), first) is None
+    assert walk.notes == [f"round lugre (compliance+tilt+lugre): {msg}; the fit kept before it stands"]

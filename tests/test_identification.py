@@ -537,7 +537,7 @@ def test_identify_cli_fits_the_real_hands_effects_by_default(tmp_path, capsys):
     capsys.readouterr()
     assert main(["identify", "--model", "finger2", "--data", str(rec), "-o", str(ident), "--json"]) == 0
     res = json.loads(capsys.readouterr().out)
-    assert res["effects"] == ["compliance", "tilt"] and res["tried"] is None
+    assert res["effects"] == ["compliance", "tilt"] and res["tried"] is None and res["notes"] == []  # none failed
     assert [r["effects"] for r in res["rounds"]] == [["compliance", "tilt"]]  # one fit: adequate
     assert res["fit_seconds_total"] == res["rounds"][0]["seconds"] == res["seconds"] > 0
     names = list(res["parameters"])

@@ -318,7 +318,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
         "verdict": fit.tried.status()}
     obj["rounds"] = [{"effects": list(e), "residual_rms": r.residual_rms, "converged": bool(r.converged),
                       "seconds": r.seconds} for e, r in fit.rounds]
-    obj["fit_seconds_total"] = fit.seconds
+    obj["fit_seconds_total"], obj["notes"] = fit.seconds, list(fit.notes)  # notes: a failed round's (EffectsFit)
     more = (f"; {len(fit.rounds)} fits in {fit.seconds:.1f} s: "
             + ", ".join(f"{'+'.join(e) or 'rigid'} {r.residual_rms:.3g} counts" for e, r in fit.rounds)
             if len(fit.rounds) > 1 else "")
@@ -332,6 +332,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
     lines += [f"  {res.standard_errors.summary(res.names)}"] if res.standard_errors is not None else []  # which std
     for n, why in res.not_identified.items():  # held in the fit kept, never written (estimation.identification.bounds)
         lines.append(f"  {n:{w}s} not identified: {why}")
+    lines += [f"  note: {n}" for n in fit.notes]
     lines += _drift_lines(res.drift)
     held = _held_masses(model, args) if urdf else ()
     obj["held"] = list(held)

@@ -238,7 +238,9 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
         (:func:`~alpes_dyn.estimation.identification.long_record.check_fit_size`).
     ~alpes_dyn.estimation.identification.shooting.FitDiverged
         A fit that overflowed from its start (an InputError; a recording whose units are not plausible raises the
-        RecordingError naming the column instead).
+        RecordingError naming the column instead); its subclass
+        :class:`~alpes_dyn.estimation.identification.shooting.FitSingular` where a system of the fit is singular
+        and too large for the least-squares fallback.
     ModelError
         A selection it cannot fit (:func:`check_selection`).
     """
@@ -301,9 +303,12 @@ def identify(model: Model, recording: Recording | str | Path, parameters: str | 
             if not again.trustworthy:
                 warnings.warn(AdequacyWarning(f"identify: {again.status()}"), stacklevel=2)
             return again
-    result, judge = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
-    if not _held_again(result):  # judged here unless fitted again with parameters held (that fit's verdict kept)
-        result.adequacy = judge()
+    try:  # the covariance's and the verdict's undamped systems: singular where a state is not seen (FitSingular)
+        result, judge = _conclude(pb, out, it, reason, val_rec, excitation, interval, encoder_noise, rec_path, t_start)
+        if not _held_again(result):  # judged here unless fitted again with parameters held (that fit's verdict kept)
+            result.adequacy = judge()
+    except np.linalg.LinAlgError as exc:
+        raise diverged(exc, rec, model) from None
     judge = None
     # this fit's problem (with the lines' basis), Jacobians and compiled sensitivities freed before a fit again
     # (lowers the peak memory of --effects auto; the fits' peaks: benchmarks/results/fit_scaling*.json)

@@ -11,6 +11,8 @@ import warnings
 from pathlib import Path
 from typing import Any, Callable
 
+import numpy as np
+
 from ...model.robot import Model
 from ...symbolic.parametric import parameter_catalogue
 from ..experiments.recording import Recording
@@ -18,7 +20,7 @@ from .adequacy import AdequacyWarning
 from .bounds import EFFECT_OF
 from .creep import RAN_DOWN
 from .fit_result import IdentificationResult
-from .shooting import FitDiverged
+from .shooting import FitDiverged, FitSingular
 
 __all__ = ["RUNAWAY_KINDS", "diverged", "friction_held"]
 
@@ -27,13 +29,15 @@ def diverged(exc: Exception, rec: Recording, model: Model) -> Exception:
     """The error of a fit that overflowed where no step was left to refuse (its start): the recording's unit
     checks (:mod:`~alpes_dyn.estimation.experiments.units`, which ``identify`` does not make on a Recording object)
     raise the :class:`~alpes_dyn.errors.RecordingError` naming the column and the likely unit where the data
-    say so; else the fit itself is named, not the units (the error returned, for the caller to raise).
+    say so; else the fit itself is named, not the units (the error returned, for the caller to raise): a
+    singular system (a ``numpy.linalg.LinAlgError``, no least-squares fallback for it) as a
+    :class:`~alpes_dyn.estimation.identification.shooting.FitSingular`.
 
     Parameters
     ----------
     exc : Exception
-        The FitDiverged, or the LinAlgError of the normal matrices of a fit whose trial steps were refused (returned
-        as it is where the units are plausible).
+        The FitDiverged, or the LinAlgError of a singular system (the normal matrices of a fit whose trial steps
+        were refused, or the covariance's KKT system at the fit's end).
     rec : Recording
         The recording fitted (encoders in counts, torques in N m).
     model : Model
@@ -52,8 +56,9 @@ def diverged(exc: Exception, rec: Recording, model: Model) -> Exception:
     from ..experiments.units import check_units
 
     check_units(rec, model)
-    if not isinstance(exc, FitDiverged):
-        return exc
+    if isinstance(exc, np.linalg.LinAlgError):
+        return FitSingular(f"identify: {exc}: a state or parameter the recording does not see (e.g. a LuGre "
+                           "bristle deflection relaxed within an interval); fewer effects or parameters may hold")
     return FitDiverged(f"{exc} from its start, on a recording of plausible units (its encoders within the "
                        "joints' ranges, its torques within the motors' limits): fewer effects or parameters may hold")
 

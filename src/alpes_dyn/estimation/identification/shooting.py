@@ -45,7 +45,7 @@ from .normal_blocks import NormalBlocks
 from .drift import GAIN_NEEDS_LINES, check_drift, drift_basis, gain_sensitivity, line_coefficients, recorded_time
 
 __all__ = ["TorqueModel", "torque_model", "ShootingProblem", "Evaluation", "ShootingSolution",
-           "JACOBIAN_CHUNK", "FitDiverged"]
+           "JACOBIAN_CHUNK", "FitDiverged", "FitSingular"]
 
 
 class FitDiverged(InputError):
@@ -53,6 +53,14 @@ class FitDiverged(InputError):
     makes them is refused by the solver (:mod:`~alpes_dyn.estimation.identification.gauss_newton`), a round whose fit
     runs away is a failed round (:class:`~alpes_dyn.estimation.identification.effects.RoundWalker`); raised out of
     :func:`~alpes_dyn.estimation.identification.identification.identify` where no step was left to refuse."""
+
+
+class FitSingular(FitDiverged):
+    """A fit whose linear system is singular where no least-squares fallback solves it (a sparse system of more
+    than :data:`~alpes_dyn.estimation.identification.kkt.DENSE_LIMIT` rows: a state or parameter the recording does
+    not see, e.g. a LuGre bristle deflection relaxed within an interval of a long or joined record): a failed round
+    like a fit that ran away (:class:`~alpes_dyn.estimation.identification.effects.RoundWalker`), an InputError out of
+    :func:`~alpes_dyn.estimation.identification.identification.identify`, never an internal error."""
 
 
 JACOBIAN_CHUNK = 2**20
