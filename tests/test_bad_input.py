@@ -1370,6 +1370,12 @@ class Api:
     needle: str
 
 
+def _creep_of_constraint(*args):
+    from alpes_dyn.model.friction import creep_of_constraint
+
+    return creep_of_constraint(*args)
+
+
 def A(api: str, call: Callable[[Any], Any], error: type[AlpesDynError], needle: str) -> Api:
     return Api(api, call, error, needle)
 
@@ -2575,6 +2581,12 @@ API: list[Api] = [
     A("PlantEffects", lambda c: _mjrec(effects=_eff(soft_stiction="yes")), InputError,
       "soft_stiction: expected True or False"),
     A("friction_row", lambda c: _friction_row("slippery"), InputError, "case: expected one of soft, soft_3x"),
+    A("creep_of_constraint", lambda c: _creep_of_constraint(-0.02, 0.9, 0.95), ModelError,
+      "solreffriction: expected a finite number > 0 s"),
+    A("creep_of_constraint", lambda c: _creep_of_constraint(0.02, np.nan, 0.95), ModelError,
+      "solimpfriction: expected a finite number > 0"),
+    A("creep_of_constraint", lambda c: _creep_of_constraint(0.02, 0.9, 1.0), ModelError,
+      "solimpfriction: expected impedances in (0, 1)"),
     A("PlantEffects", lambda c: _mjrec(effects=_eff(tendon_stiffness=1e4, tendon_dead_band=-1e-5)), InputError,
       "tendon_dead_band: expected a cable's play >= 0"),
     A("experiment_torque", lambda c: _exptorque(model="hand"), InputError, "defined for one chain"),

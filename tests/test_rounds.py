@@ -321,3 +321,24 @@ def test_compliance_of_a_still_motor_is_held_and_named():
     why = res.not_identified["tendon_compliance_thumb_abduction"]
     assert "did not move" in why and "held at 0" in why and res.not_identified["K_1"] == "kept"
     assert seen[1] is None and list(plain.not_identified) == ["K_1"]  # the default selection: no compliance
+
+
+def test_the_creep_round_where_the_verdict_names_the_band():
+    """The fits kept on two soft MuJoCo frictions (the study's soft case) held every F_s at 0.13-0.3 of the file's
+    (no collapse, nothing held) and their verdicts named viscous friction and a friction with a state: the creep
+    band's look, so the creep round is made, first of the auto rows; not for an adequate fit, not once tried, not
+    where the verdict names neither (a stick-slip)."""
+    from alpes_dyn import Model
+
+    model = Model.alpes("finger3", friction=True)
+    Fs = model.extras.coulomb
+    shrunk = dict(names=("K_1", "F_s_1", "F_s_2", "F_s_3"), values=[0.035, 0.3 * Fs[0], 0.134 * Fs[1], 0.27 * Fs[2]])
+    stateful = rd.STATEFUL_WORD + " (the residual at the velocity reversals or at the excitation's harmonics)"
+    for missing in ([SIGNATURES["velocity"], stateful, NONLINEARITY], [stateful], [SIGNATURES["velocity"]]):
+        made = [(r.name, r.proposal(_with(fit(2.66, missing=missing, **shrunk), model), KEPT + ("stiction",)))
+                for r in rd.rounds_of("auto")]
+        assert next((n, e) for n, e in made if e is not None) == ("creep", KEPT + ("creep",))
+    assert ROW["creep"].proposal(_with(fit(ok=True, missing=[stateful], **shrunk), model), KEPT) is None
+    assert ROW["creep"].proposal(_with(fit(missing=[stateful], **shrunk), model), KEPT, {"creep"}) is None
+    stick = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
+    assert ROW["creep"].proposal(_with(fit(missing=[stick], **shrunk), model), KEPT) is None

@@ -26,16 +26,18 @@ effect                      field of the file
                             LuGre law's sigma0/sigma1, tau_max) times (1 + e) and the compliance divided by it
                             -- the plant's dynamics in the reading's units, exactly the plant seen through the
                             sensor (the common scale a fit cannot resolve either)
+``soft_stiction``           ``friction.law = "creep"`` with ``creep_kappa`` and ``creep_rate`` of MuJoCo's
+                            default constraint (:func:`~alpes_dyn.model.friction.creep_of_constraint`: the
+                            inverse of the MJCF writers' map), the law as ``identify --effects creep`` writes it
 =========================== ==================================================================================
 
 What a file cannot hold is named (:attr:`TruthFile.not_held`), never dropped in silence: the cable's damping and
-slack and its rotor's own dynamics (the file's tendon is the quasi-static limit), MuJoCo's dry-friction
-constraint itself (``stiction``'s time constant, held as the stick-slip law; ``soft_stiction``, a friction that
-creeps: the file holds F_s, F_v and its smooth law). MuJoCo's soft constraint is, per joint, a viscous law
-saturated at F_s whose slope depends on the joint's inverse inertia: creeping at v = (1 - d) A_ii t_c tau / 2 under
-a torque tau below F_s (d = 0.9 the impedance, t_c = 0.02 s, A = M^-1), its velocity scale F_s (1 - d) A_ii t_c / 2
-about 0.01, 0.2 and 0.7 rad/s on the three joints of a drawn finger3 (three times that at 3x F_s), where the
-file has one v_s for every joint: no value of it is the plant's.
+slack and its rotor's own dynamics (the file's tendon is the quasi-static limit), MuJoCo's stiff dry-friction
+constraint itself (``stiction``'s time constant, held as the stick-slip law). MuJoCo's soft constraint is, per
+joint, a viscous law saturated at F_s whose slope depends on the joint's inverse inertia (creeping at
+v = (1 - d) A_ii t_c tau / 2 under a torque tau below F_s, d = 0.9 the impedance, t_c = 0.02 s, A = M^-1): no one
+v_s of the smooth law is the plant's (with it the EKF on the true file of a soft plant was worse than on a file
+identified with the creep law), and the creep law with MuJoCo's default parameters is.
 """
 
 from __future__ import annotations
@@ -48,6 +50,7 @@ import numpy as np
 
 from ..errors import InputError
 from ..model.extras import STICTION_VELOCITY
+from ..model.friction import creep_of_constraint
 from ..model.params import HandParams, Param, load_params, with_values, write_params
 from .effects import PlantEffects
 from .mujoco_plant import PLANT_MODELS, plant_model
@@ -128,9 +131,13 @@ def _held(p: HandParams, e: PlantEffects, model: str, chain: str | None) -> tupl
                                                 "the smooth sign's velocity scale of the stick-slip law")
         named.append(f"stiction ({e.stiction:.6g} s): MuJoCo's stiff dry-friction constraint, held as the stick-slip "
                      f"law's v_s = {STICTION_VELOCITY:g} rad/s")
-    if e.soft_stiction:
-        named.append("soft_stiction (MuJoCo's default constraint): a dry friction that creeps; the file holds F_s, F_v "
-                     "and its own law")
+    if e.soft_stiction:  # MuJoCo's default constraint, as identify writes its creep law (--effects creep)
+        law = creep_of_constraint()
+        upd["friction.law"] = Param("creep", "-", "assumed", why, "the joints' friction law: MuJoCo's soft dry friction")
+        upd["friction.creep_kappa"] = Param(law.kappa, "-", "assumed", why, "the creep band's added inertia, in "
+                                            "units of the joint's own: MuJoCo's default solimpfriction d / (1 - d)")
+        upd["friction.creep_rate"] = Param(law.rate, "1/s", "assumed", why, "the creep band's rate: MuJoCo's default "
+                                           "solreffriction and solimpfriction, 2 / (d_max t_c)")
     return upd, named
 
 

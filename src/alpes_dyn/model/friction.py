@@ -36,7 +36,8 @@ import numpy as np
 from ..errors import ModelError
 
 __all__ = ["FRICTION_MODELS", "LuGre", "PRESLIDING", "SIGMA0", "SIGMA1", "lugre_rate", "lugre_torque",
-           "lugre_steady", "lugre_of", "check_law", "Creep", "CREEP_KAPPA", "CREEP_RATE", "creep_of"]
+           "lugre_steady", "lugre_of", "check_law", "Creep", "CREEP_KAPPA", "CREEP_RATE", "creep_of",
+           "creep_of_constraint"]
 
 FRICTION_MODELS: tuple[str, ...] = ("tanh", "lugre", "creep")
 """The parameter file's ``friction.law``: ``tanh`` the memoryless smooth law, ``lugre`` the law of this module,
@@ -274,3 +275,36 @@ def creep_of(model: Any) -> Creep | None:
     if p is None or getattr(p, "friction_law", "tanh") != "creep":
         return None
     return Creep(p.creep_kappa, p.creep_rate)
+
+
+def creep_of_constraint(timeconst: float = 0.02, impedance: float = 0.9, d_max: float = 0.95) -> Creep:
+    """The :class:`Creep` law of a MuJoCo dry-friction constraint: kappa = d / (1 - d) and b = 2 / (d_max t_c),
+    the inverse of the MJCF writers' map (:func:`~alpes_dyn.model.mjcf_export.creep_attributes`, which writes
+    d_max = d); the defaults are MuJoCo's own (``solreffriction`` "0.02 1", ``solimpfriction`` "0.9 0.95 ...":
+    :data:`CREEP_KAPPA`, :data:`CREEP_RATE`).
+
+    Parameters
+    ----------
+    timeconst : float, optional
+        The constraint's time constant t_c, s, > 0 (``solreffriction``'s first number, damping ratio 1).
+    impedance : float, optional
+        Its impedance d at zero velocity, in (0, 1) (``solimpfriction``'s first number, d0).
+    d_max : float, optional
+        Its largest impedance, in (0, 1) (``solimpfriction``'s second number; MuJoCo scales the rate by it).
+
+    Returns
+    -------
+    Creep
+        The law (kappa -, rate 1/s).
+
+    Raises
+    ------
+    ModelError
+        ``timeconst`` not finite and > 0 (``solreffriction`` named), or ``impedance`` / ``d_max`` not in (0, 1)
+        (``solimpfriction`` named).
+    """
+    t = _positive(timeconst, "solreffriction", "s")
+    d, dm = (_positive(x, "solimpfriction", "(-)") for x in (impedance, d_max))
+    if d >= 1.0 or dm >= 1.0:
+        raise ModelError(f"solimpfriction: expected impedances in (0, 1), got {impedance!r:.40} and {d_max!r:.40}")
+    return Creep(d / (1.0 - d), 2.0 / (dm * t))

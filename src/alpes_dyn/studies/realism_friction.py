@@ -25,8 +25,8 @@ fits it (``--effects auto``), the file written; then a validation run that the f
 on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`, the joints' end
 stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops; the true file
 is the plant's whole truth, :func:`~alpes_dyn.bench.truth.write_truth`: the finger's true K, m and friction with the
-tilt, the encoder's zero, the delay, the cable's compliance and rotor and the torque constant in the fields
-``identify`` writes, its EKF reading them from the file; what a file cannot hold is named in the row,
+tilt, the encoder's zero, the delay, the cable's compliance and rotor, the torque constant and a soft plant's
+creep law (MuJoCo's default band) in the fields ``identify`` writes, its EKF reading them from the file; what a file cannot hold is named in the row,
 ``true_file_not_held``). A row holds
 what :func:`~alpes_dyn.studies.realism.summarise` reads (the verdict, the errors up to the torque constant's
 common scale, the EKF's RMSE per joint) and, for each file, the joints' NEES against their 95 % band

@@ -16,8 +16,9 @@ round           stage  made when (adds)                                         
                        friction read as viscous) or holds one the steps ran        friction the
                        towards 0 (:func:`~.creep.ran_down`: the lost basin's       file's
                        hold hides the collapse) or its verdict names
-                       :data:`~.creep.CREEP`: the creep law, its band fitted with
-                       F_s (:class:`~alpes_dyn.model.friction.Creep`)
+                       :data:`~.creep.CREEP`, viscous friction or a friction with
+                       a state (:data:`BAND_WORDS`): the creep law, its band
+                       fitted with F_s (:class:`~alpes_dyn.model.friction.Creep`)
 ``asked``       auto   the kept fit's verdict names effects not yet tried          the kept fit   lower residual
                        (:func:`named_effects`), or it sees the cable stretching
                        (the rotor); the tendon-sheath friction alone
@@ -58,6 +59,7 @@ from typing import Any, Callable, Collection
 import numpy as np
 
 from ...symbolic.parametric import parameter_catalogue
+from .adequacy import SIGNATURES
 from .creep import CREEP, collapsed, ran_down
 from .harmonics import NONLINEARITY
 
@@ -65,7 +67,12 @@ STATEFUL_WORD = "a friction with a state"
 """The words of the adequacy verdict's likely missing effect that make the ``lugre`` round
 (:data:`~alpes_dyn.estimation.identification.adequacy.STATEFUL_FRICTION` begins with them)."""
 
-__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
+BAND_WORDS: tuple[str, ...] = (SIGNATURES["velocity"], STATEFUL_WORD)
+"""The likely missing effects of a verdict on a fit not to be trusted that make the ``creep`` round too: a viscous
+friction (the band's velocity-proportional force, beyond the fit's F_v) or a friction with a state (the band's
+lag at the reversals)."""
+
+__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "BAND_WORDS", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
 
 NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
                             "capstan": "tendon-sheath friction"}
@@ -173,13 +180,15 @@ def _creeps(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -
     """The kept effects with the creep law where the kept fit is not to be trusted and drove a joint's F_s below
     :data:`~.creep.CREEP_FRACTION` of the file's (:func:`~.creep.collapsed`: a dry friction read as viscous), or
     holds one at the file's value after its steps ran it towards 0 (:func:`~.creep.ran_down`: the same collapse,
-    hidden by the hold), or its verdict names :data:`~.creep.CREEP`, and the law was not tried (the other friction
-    laws taken off)."""
+    hidden by the hold), or its verdict names :data:`~.creep.CREEP`, viscous friction or a friction with a state
+    (:data:`BAND_WORDS`: what the creep band looks like where its F_s shrank less than that, on soft MuJoCo plants
+    the fit kept F_s at 0.13-0.3 of the file's), and the law was not tried (the other friction laws taken off; the
+    round is kept only where it lowers the residual, so a wrong trigger costs a fit's time, not the result)."""
     model = getattr(result, "model", None)
     if "creep" in attempted or result.trustworthy or getattr(model, "params", None) is None:
         return None
     a = getattr(result, "adequacy", None)
-    named = a is not None and any(CREEP in m for m in a.likely_missing)
+    named = a is not None and any(w in m for m in a.likely_missing for w in (CREEP,) + BAND_WORDS)
     start = {p.name: p.nominal for p in parameter_catalogue(model)}
     if not (named or collapsed(result.names, result.values, start) or ran_down(result)):
         return None
@@ -282,8 +291,8 @@ ROUNDS: tuple[Round, ...] = (
     Round("first", "first", (), "always", _first, "the model's values", _always),
     Round("staged", "first", (), "the first fit lost its basin", _staged, "the rigid fit, then the last stage",
           _converged),
-    Round("creep", "auto", ("creep",), "it drove a joint's F_s towards 0, or held one its steps ran there (a dry "
-          "friction read as viscous)", _creeps,
+    Round("creep", "auto", ("creep",), "it drove a joint's F_s towards 0, or held one its steps ran there, or "
+          "its verdict names viscous friction or a friction with a state (a dry friction read as viscous)", _creeps,
           "kept, its friction the file's", _lower_residual),
     Round("asked", "auto", tuple(NAMED_BY), "its verdict names effects, or it sees the cable stretching", _asked,
           "kept", _lower_residual),
