@@ -23,7 +23,8 @@ def fit(residual=0.6, ok=False, missing=(), converged=True, reason="", names=(),
     """A stand-in fit: what the rounds read of an IdentificationResult."""
     return SimpleNamespace(residual_rms=residual, converged=converged, reason=reason, trustworthy=ok,
                            names=tuple(names), values=list(values), std=list(std),
-                           adequacy=SimpleNamespace(adequate=ok, likely_missing=list(missing)))
+                           adequacy=SimpleNamespace(adequate=ok, likely_missing=list(missing),
+                                                    floor_ratio=residual / 0.575))
 
 
 def test_the_table_is_the_documented_one():
@@ -342,3 +343,5 @@ def test_the_creep_round_where_the_verdict_names_the_band():
     assert ROW["creep"].proposal(_with(fit(missing=[stateful], **shrunk), model), KEPT, {"creep"}) is None
     stick = "stick-slip / Coulomb friction (a torque following the sign of the motor velocity)"
     assert ROW["creep"].proposal(_with(fit(missing=[stick], **shrunk), model), KEPT) is None
+    # a stick-slip plant's smooth fit at 1.2 floors names a friction with a state too: not the band (BAND_FLOOR_RATIO)
+    assert ROW["creep"].proposal(_with(fit(0.69, missing=[stateful], **shrunk), model), KEPT) is None

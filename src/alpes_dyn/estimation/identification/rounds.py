@@ -17,8 +17,9 @@ round           stage  made when (adds)                                         
                        towards 0 (:func:`~.creep.ran_down`: the lost basin's       file's
                        hold hides the collapse) or its verdict names
                        :data:`~.creep.CREEP`, viscous friction or a friction with
-                       a state (:data:`BAND_WORDS`): the creep law, its band
-                       fitted with F_s (:class:`~alpes_dyn.model.friction.Creep`)
+                       a state (:data:`BAND_WORDS`, from :data:`BAND_FLOOR_RATIO`
+                       sensor floors): the creep law, its band fitted with
+                       F_s (:class:`~alpes_dyn.model.friction.Creep`)
 ``asked``       auto   the kept fit's verdict names effects not yet tried          the kept fit   lower residual
                        (:func:`named_effects`), or it sees the cable stretching
                        (the rotor); the tendon-sheath friction alone
@@ -71,8 +72,13 @@ BAND_WORDS: tuple[str, ...] = (SIGNATURES["velocity"], STATEFUL_WORD)
 """The likely missing effects of a verdict on a fit not to be trusted that make the ``creep`` round too: a viscous
 friction (the band's velocity-proportional force, beyond the fit's F_v) or a friction with a state (the band's
 lag at the reversals)."""
+BAND_FLOOR_RATIO = 2.0
+"""The residual, in sensor floors (:attr:`~.adequacy.Adequacy.floor_ratio`), from which :data:`BAND_WORDS` make the
+``creep`` round: the soft plants' smooth fits the band misled sat at 4-5 floors, while a stick-slip plant's at 1.2
+names a friction with a state too (there the round costs minutes and the ``lugre`` and ``stiction`` rounds are the
+ones to try)."""
 
-__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "BAND_WORDS", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
+__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "BAND_WORDS", "BAND_FLOOR_RATIO", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
 
 NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
                             "capstan": "tendon-sheath friction"}
@@ -181,14 +187,16 @@ def _creeps(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -
     :data:`~.creep.CREEP_FRACTION` of the file's (:func:`~.creep.collapsed`: a dry friction read as viscous), or
     holds one at the file's value after its steps ran it towards 0 (:func:`~.creep.ran_down`: the same collapse,
     hidden by the hold), or its verdict names :data:`~.creep.CREEP`, viscous friction or a friction with a state
-    (:data:`BAND_WORDS`: what the creep band looks like where its F_s shrank less than that, on soft MuJoCo plants
+    (:data:`BAND_WORDS`, at a residual of :data:`BAND_FLOOR_RATIO` sensor floors or more: what the creep band looks
+    like where its F_s shrank less than that, on soft MuJoCo plants
     the fit kept F_s at 0.13-0.3 of the file's), and the law was not tried (the other friction laws taken off; the
     round is kept only where it lowers the residual, so a wrong trigger costs a fit's time, not the result)."""
     model = getattr(result, "model", None)
     if "creep" in attempted or result.trustworthy or getattr(model, "params", None) is None:
         return None
     a = getattr(result, "adequacy", None)
-    named = a is not None and any(w in m for m in a.likely_missing for w in (CREEP,) + BAND_WORDS)
+    words = (CREEP,) + (BAND_WORDS if a is not None and a.floor_ratio >= BAND_FLOOR_RATIO else ())
+    named = a is not None and any(w in m for m in a.likely_missing for w in words)
     start = {p.name: p.nominal for p in parameter_catalogue(model)}
     if not (named or collapsed(result.names, result.values, start) or ran_down(result)):
         return None
