@@ -19,15 +19,17 @@ from alpes_dyn.studies.realism_friction import (FRICTION_CASES, FRICTION_CASE_NA
 
 def friction_output(rows: list[dict], names: list[str], design: Any, rig: str, adapt: str,
                     case_seconds: dict[str, float], **extra: Any) -> dict[str, Any]:
-    """The ``--json`` object: the rows of the seeds that hold every case of ``names`` (the others listed apart; a
-    case and seed measured twice, by two runs sharing a log: the first row kept), the case table, the distribution
-    per case (:func:`~alpes_dyn.studies.realism_friction.friction_summary`)."""
+    """The ``--json`` object: the rows of the cases of ``names`` (a case and seed measured twice, by two runs sharing
+    a log: the first row kept), each case's seeds (``case_seeds``; ``incomplete_seeds``: the seeds some case of
+    ``names`` lacks), the case table, the distribution per case over its own draws
+    (:func:`~alpes_dyn.studies.realism_friction.friction_summary`)."""
     rows = list({(r["case"], r["seed"]): r for r in reversed(rows)}.values())[::-1]  # the first of each pair
-    seeds = complete_seeds(rows, names)
-    kept = sorted((r for r in rows if r["seed"] in seeds and r["case"] in names),
-                  key=lambda r: (seeds.index(r["seed"]), names.index(r["case"])))
+    complete = complete_seeds(rows, names)
+    seeds = list(dict.fromkeys(r["seed"] for r in rows if r["case"] in names))
+    kept = sorted((r for r in rows if r["case"] in names), key=lambda r: (seeds.index(r["seed"]), names.index(r["case"])))
     return {"model": "finger3", "friction": True, "seeds": seeds,
-            "incomplete_seeds": [s for s in dict.fromkeys(r["seed"] for r in rows) if s not in seeds],
+            "case_seeds": {c: [r["seed"] for r in kept if r["case"] == c] for c in names},
+            "incomplete_seeds": [s for s in seeds if s not in complete],
             "cases": [asdict(c) for c in FRICTION_CASES if c.name in names], "duration_s": design.duration,
             "rig": rig, "adapt": adapt, "fit_effects": FIT_EFFECTS,
             "validation": {"scenario_s": 5.0, "ramp_s": RAMP_SECONDS, "ramp_torque_Nm": RAMP_TORQUE},
@@ -74,7 +76,7 @@ def friction_text(out: dict) -> str:
     largest |error / standard error|; then the distribution per case with the silent misses and the refusals (the
     parameters within 3 standard errors, and within 3 of the noise's alone: the classical or HAC sandwich's)."""
     v = out["validation"]
-    lines = [f"finger3, friction cases, seeds {out['seeds']} (incomplete, left out: {out['incomplete_seeds']}), "
+    lines = [f"finger3, friction cases, seeds {out['seeds']} (not measured on every case: {out['incomplete_seeds']}), "
              f"{out['duration_s']:g} s experiment, rig {out['rig']} (adapt {out['adapt']}), identify --effects "
              f"{out['fit_effects']}; validation: the estimate scenario's torque ({v['scenario_s']:g} s) "
              f"then a {v['ramp_s']:g} s ramp of +-{1e3 * v['ramp_torque_Nm']:g} mN m",

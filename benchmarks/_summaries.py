@@ -364,7 +364,8 @@ def realism_friction(r: Result) -> list[str]:
     """``realism.py --friction`` (issue 50): per friction case the verdicts, the worst errors and EKF, the NEES and
     the standard scores."""
     v = r["validation"]
-    out = [f"{r['model']} drawn +-20 %, seeds {_seeds(r)} ({len(r['seeds'])} draws per case), {r['duration_s']:g} s "
+    per_case = ", ".join(f"{c} {len(s)}" for c, s in r.get("case_seeds", {}).items()) or f"{len(r['seeds'])} each"
+    out = [f"{r['model']} drawn +-20 %, seeds {_seeds(r)} (draws per case: {per_case}), {r['duration_s']:g} s "
            f"experiments (``--adapt {r['adapt']}``), ``identify --effects {r['fit_effects']}``; the EKF on a validation "
            f"run the fit never saw: the ``estimate`` scenario's torque ({v['scenario_s']:g} s) then a "
            f"{v['ramp_s']:g} s ramp of +-{1e3 * v['ramp_torque_Nm']:g} mN m through the stick band; cases: MuJoCo's "
