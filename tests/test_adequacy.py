@@ -207,17 +207,18 @@ def test_identify_cli_refuses_an_untrusted_fit_and_force_marks_it(tmp_path, fits
         capsys.readouterr()
         assert code == 0, argv
     # --effects auto: the first fit lost its basin, so a staged start (the rigid fit; the stand-in's loses it
-    # too: the first kept); the verdict names the rotor, so each of the three identify commands fits with it,
-    # then (the stand-in's residual not lower, the fit kept still flagged) with the LuGre law (the verdict names a
-    # friction with a state), the stick-slip law and the torque delay (one sample: not lower, none longer tried);
-    # not the encoder's offset, as its verdict names a nonlinearity too (the residual's power at the harmonics: a
-    # constant offset makes none): six fits each, the first kept and reported; each command read its --data once
-    # and gave every fit the same Recording (the file's encoder column), the delay's round the torque one sample
-    # earlier
+    # too: the first kept); its verdict names a friction with a state, well above two sensor floors, so each of
+    # the three identify commands fits with the creep law (rounds.BAND_WORDS), then with the rotor it names, then
+    # (the stand-in's residual not lower, the fit kept still flagged) with the LuGre law, the stick-slip law and the
+    # torque delay (one sample: not lower, none longer tried); not the encoder's offset, as its verdict names a
+    # nonlinearity too (the residual's power at the harmonics: a constant offset makes none): seven fits each, the
+    # first kept and reported; each command read its --data once and gave every fit the same Recording (the file's
+    # encoder column), the delay's round the torque one sample earlier
     assert any("nonlinearity" in m for m in fitted.adequacy.likely_missing)
-    assert len(seen) == 18 and all(m == "finger3" and v is None for m, _, v in seen)
-    assert seen[0][1] is seen[1][1] is seen[2][1] is seen[3][1] is seen[4][1] and seen[4][1] is not seen[5][1]
-    assert np.array_equal(seen[5][1].torque[:-1], seen[0][1].torque[1:])
+    assert fitted.adequacy.floor_ratio >= 2.0
+    assert len(seen) == 21 and all(m == "finger3" and v is None for m, _, v in seen)
+    assert all(seen[0][1] is seen[k][1] for k in range(1, 6)) and seen[5][1] is not seen[6][1]
+    assert np.array_equal(seen[6][1].torque[:-1], seen[0][1].torque[1:])
     assert np.array_equal(seen[0][1].encoder, read_recording(rec, Model.alpes("finger3")).encoder)
     # a file rewritten from it keeps the record; a trustworthy fit's file says so
     back = write_params(p, tmp_path / "copy.toml")
