@@ -25,7 +25,7 @@ def friction_output(rows: list[dict], names: list[str], design: Any, rig: str, a
     (:func:`~alpes_dyn.studies.realism_friction.friction_summary`)."""
     rows = list({(r["case"], r["seed"]): r for r in reversed(rows)}.values())[::-1]  # the first of each pair
     complete = complete_seeds(rows, names)
-    seeds = list(dict.fromkeys(r["seed"] for r in rows if r["case"] in names))
+    seeds = sorted({r["seed"] for r in rows if r["case"] in names})
     kept = sorted((r for r in rows if r["case"] in names), key=lambda r: (seeds.index(r["seed"]), names.index(r["case"])))
     return {"model": "finger3", "friction": True, "seeds": seeds,
             "case_seeds": {c: [r["seed"] for r in kept if r["case"] == c] for c in names},
