@@ -44,7 +44,8 @@ def cmd_estimate(args: argparse.Namespace) -> int:
     for flag, dest in (("--disturbance", "disturbance"), ("--torque-noise", "torque_noise"), ("--log", "log"),
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay"),
-                       ("--friction-law", "friction_law"), ("--stops", "stops"), ("--law-spread", "law_spread")):
+                       ("--friction-law", "friction_law"), ("--stops", "stops"), ("--law-spread", "law_spread"),
+                       ("--band-sigma", "band_sigma")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -145,7 +146,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
                                   torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
 
     res = run(law)
-    spread = _law_spread(run, res, model, law) if args.law_spread else None
+    spread, band = (_law_spread(run, res, model, law) if args.law_spread else None), _band_sigma(args, res)
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -183,7 +184,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
                      + "  ".join(f"{mn} {d:.3g}" for mn, d in zip(res.motor_names, res.disturbance[-1])))
     more, extra = _uncertainty(res.estimate, res.filter, res.inputs, rec.true_q if res.rmse is not None else None,
                                res.settings["transient_s"], res.joint_names, limit, whole=res.segments == 1,
-                               measurement=res.measurement, spread=spread)
+                               measurement=res.measurement, spread=spread, band=band)
     obj.update(more)
     lines += extra
     obj["seconds"] = time.perf_counter() - t0
@@ -211,6 +212,26 @@ def _law_spread(run: Any, res: Any, model: Any, law: str) -> Any:
     # the creep law's band is read from a parameter file: without one (a URDF with its spec), not run
     laws = tuple(name for name in LIBRARY_LAWS if model.params is not None or LIBRARY_LAWS[name][1] != "creep")
     return law_sigma(run_law, res, laws=laws, kept_law=library_law(model, law))
+
+
+def _band_sigma(args: argparse.Namespace, res: Any) -> Any:
+    """``estimate --band-sigma``: None without it, else the joints' variance from the dry-friction band along ``res``
+    (the observer's run; :func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on its model, estimate and
+    torque; before the log is written). An
+    :class:`~alpes_dyn.errors.InputError` naming ``--band-sigma`` where the observer's model has no dry friction
+    (nothing to widen by) or the recording holds several orientations (one filter each: their gravity differs)."""
+    from ..estimation.observers.band_sigma import band_sigma
+
+    if not args.band_sigma:
+        return None
+    model = res.filter.model.system.model
+    if not np.any(np.asarray(model.extras.coulomb) > 0):
+        raise InputError("--band-sigma: the observer's model has no dry friction (F_s 0 on every joint: give "
+                         "--friction, or a file with F_s)")
+    if res.segments != 1:
+        raise InputError(f"--band-sigma: the recording holds {res.segments} orientations (one filter each); run "
+                         "it on one orientation's part")
+    return band_sigma(model, res.estimate.z, res.inputs)
 
 
 def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:

@@ -11,7 +11,7 @@ from ..errors import InputError
 
 def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start: float, joints: tuple[str, ...],
                  limit_deg: float, whole: bool = True, measurement: np.ndarray | None = None,
-                 spread=None) -> tuple[dict, list[str]]:
+                 spread=None, band=None) -> tuple[dict, list[str]]:
     """What ``estimate`` says of its own uncertainty: each joint's reported sigma along the run after ``start`` s
     (median and worst), each joint's observability by the encoders along the estimated motion
     (:func:`~alpes_dyn.analysis.joint_observability.joint_observability`: flagged above ``limit_deg``), the sigma it
@@ -22,17 +22,17 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
     joints (:func:`~alpes_dyn.estimation.observers.innovation.nis`). Given the ``spread`` between the friction laws
     (a :class:`~alpes_dyn.estimation.observers.law_sigma.LawSigma`, ``estimate --law-spread``), the sigma and the
     NEES are the estimate's with it added to each joint's variance (the NEES's samples then taken as independent:
-    the filter's error model is its own P's), the NIS the filter's own. Returns (the JSON's keys, the table's
-    lines)."""
+    the filter's error model is its own P's), the NIS the filter's own; the same with the ``band`` of the dry
+    friction (a :class:`~alpes_dyn.estimation.observers.band_sigma.BandSigma`, ``estimate --band-sigma``; both
+    added where both are given). Returns (the JSON's keys, the table's lines)."""
     from ..analysis.joint_observability import joint_observability
     from ..estimation.observers.consistency import joint_sigma, nees
 
     n, deg = len(joints), np.degrees
     own = est
-    if spread is not None:
-        est, whole_nees = spread.widened(est), False
-    else:
-        whole_nees = whole
+    whole_nees = whole and spread is None and band is None
+    for term in (spread, band):
+        est = est if term is None else term.widened(est)
     med, worst = joint_sigma(est, n, start)
     obs = joint_observability(filt.model.system.model, est.z, inputs, filt.dt, filt.R, limit=np.radians(limit_deg))
     flags = obs.unobserved
@@ -40,7 +40,7 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
     obj: dict = {"q_std_median_deg": deg(med).tolist(), "q_std_worst_deg": deg(worst).tolist(),
                  "q_sigma_deg": deg(sigma).tolist(),
                  "observability": obs.to_dict(), "unobserved": list(flags), "nees": None, "nis": None,
-                 "law_spread": None}
+                 "law_spread": None, "band_sigma": None}
     lines = [f"  {'sigma median/worst [deg]:':30s}"
              + "  ".join(f"{j} {deg(a):.3f}/{deg(b):.3f}" for j, a, b in zip(joints, med, worst)),
              f"  {'sigma reported [deg]:':30s}"
@@ -53,6 +53,11 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
         lines.append(f"  {'friction laws spread [deg]:':30s}"
                      + "  ".join(f"{j} {s:.3f}" for j, s in zip(joints, obj["law_spread"]["spread_rms_deg"]))
                      + f" (RMS; the {spread.kept} law against {', '.join(spread.others)}: in the sigma)")
+    if band is not None:
+        obj["band_sigma"] = band.to_dict(int(round(start / (est.t[1] - est.t[0]))) if est.t.size > 1 else 0)
+        lines.append(f"  {'friction band sigma [deg]:':30s}"
+                     + "  ".join(f"{j} {s:.3f}" for j, s in zip(joints, obj["band_sigma"]["band_rms_deg"]))
+                     + f" (RMS; a friction torque of {band.fraction:g} F_s held at rest: in the sigma)")
     if true_q is not None:
         r = nees(est, true_q, filt if whole_nees else None, inputs if whole_nees else None, start=start)
         obj["nees"] = r.to_dict()

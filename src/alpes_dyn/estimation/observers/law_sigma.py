@@ -84,13 +84,9 @@ class LawSigma:
         InputError
             ``estimate`` not of N samples with at least n joints.
         """
-        N, n = self.spread.shape
-        if estimate.z.shape[0] != N or estimate.z.shape[1] < n:
-            raise InputError(f"estimate: expected {N} samples of at least {n} joints, got {estimate.z.shape}")
-        P = estimate.P.copy()
-        idx = np.arange(n)
-        P[:, idx, idx] += self.spread
-        return Estimate(t=estimate.t, z=estimate.z, P=P, names=estimate.names)
+        from .band_sigma import with_joint_variance
+
+        return with_joint_variance(estimate, self.spread)
 
     def to_dict(self, start: int = 0) -> dict[str, Any]:
         """JSON: ``kept``, ``others``, ``spread_rms_deg`` (per joint, the RMS of sqrt of the spread from sample

@@ -1,0 +1,233 @@
+"""An observer's uncertainty from the dry-friction band: where the joints a motor's encoder does not tell apart can
+rest, sized from the parameter file, added to the filter's own covariance.
+
+A filter whose friction law is smooth (or any of the library's, on a plant whose friction is none of them) reports
+in P the noise's uncertainty; its error on a plant that sticks is elsewhere. A joint held by dry friction rests
+anywhere its friction's torque f_i, |f_i| <= F_s,i, balances the rest: about an equilibrium q_e (the springs,
+gravity and the motors' torque in balance), a friction torque f moves the joints by K^-1 f, with
+
+    K(q, u) = -d/dq [Gamma(q, u) - G(q) - k (q - q_rest)]            (the static stiffness, N m/rad, n x n)
+
+the derivative of the net torque at rest (eq. 3.3 at qd = 0: the motors' torque Gamma through the tendons, gravity,
+the springs). The encoders see H K^-1 f (H = dh/dq, the encoders' Jacobian, m x n): a filter that takes the
+encoders as exact corrects that part and keeps the rest, the split between the joints, which no innovation shows.
+With f of covariance C_f = diag((c F_s)^2), the joints' position set has the covariance
+
+    C_q = X C_f X^T,    X = K^-1,
+    C_split = C_q - C_q H^T (H C_q H^T)^-1 H C_q,                                                      (B1)
+
+the Gaussian conditional of C_q given the encoders (the static limit of
+:mod:`~alpes_dyn.analysis.joint_observability`'s torque b of prior F_s on each joint with dry friction), and each
+joint's reported variance is
+
+    sigma_i,k^2 = P_ii,k + (C_split(q_hat_k, u_k))_ii.                                                 (B2)
+
+c = :data:`BAND_FRACTION`, the friction torque's standard deviation as a fraction of F_s: a uniform torque over
+the band would be 1/sqrt(3) = 0.58; a joint that stops from sliding holds less than the band, and an observer whose
+law creeps follows part of it. The value was chosen by measurement on MuJoCo's stick-slip finger3 (the friction
+study's ``stiff`` case, :mod:`~alpes_dyn.studies.realism_friction`, four development draws, the smooth law with the
+identified and with the true file): the joints' NEES against their band (0.74-1.29 at the validation run's 100
+samples) went from 2.7-17 with P alone (no joint in band) to 0.36-2.75 at c = 0.25, 15 of 24 joints in band (5-11 at
+c = 0.2, 0.22, 0.28, 0.3; 4 at 0.35). The joints' errors were the same while the plant's joints stuck as while they
+slid (the split a stick leaves stays through the next slide), so (B2) holds at every sample, not only where the
+observer thinks a joint stuck. What it does not get right is the share between the joints: (B1) gives them about
+the same sigma, the errors differ up to twofold from draw to draw (the out-of-band joints: a distal joint above, a
+middle joint below). Everything in (B1) is the file's (F_s, the springs, the masses' gravity, the ratios) and the
+estimate's (q_hat, the recorded torque): nothing reads the true joints. It does not change the estimate: the filter
+runs as it did (feeding a stuck joint's variance back made the errors worse), only the reported covariance is
+widened. It is opt-in (``estimate --data --band-sigma``): on a plant whose friction is the observer's own law the
+filter's P is already consistent, and the band would make it cautious.
+
+Where K is not positive definite (a joint without a spring that gravity does not hold: the band holds it nowhere),
+the set is unbounded: that joint's added standard deviation is the observers' prior,
+:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`'s 0.5 rad, and
+:func:`~alpes_dyn.analysis.joint_observability.joint_observability` flags it as not observed.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import Any
+
+import casadi as cs
+import numpy as np
+
+from ...errors import InputError
+from ...model.robot import Model
+from ...symbolic.statespace import StateSpace
+from .observers import Estimate
+
+__all__ = ["BAND_FRACTION", "UNBOUNDED_STD", "BandSigma", "band_sigma", "with_joint_variance"]
+
+BAND_FRACTION = 0.25
+"""c of (B1): the standard deviation of the friction torque a joint holds at rest, as a fraction of its F_s (module
+docstring: chosen by measurement; a uniform torque over the band would be 0.58)."""
+UNBOUNDED_STD = 0.5
+"""rad: the added standard deviation of a joint the friction band does not bound (K not positive definite), the
+observers' prior on a joint angle (:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`)."""
+
+
+def with_joint_variance(estimate: Estimate, variance: np.ndarray) -> Estimate:
+    """``estimate`` with ``variance`` added to its n joints' variances (the diagonal of P's first n rows and
+    columns; the rest of P and the estimate itself as they were).
+
+    Parameters
+    ----------
+    estimate : Estimate
+        An observer's estimate: ``z`` (N, nz) with the n joints' angles first (rad), ``P`` (N, nz, nz).
+    variance : numpy.ndarray
+        (N, n) rad^2, finite and >= 0.
+
+    Returns
+    -------
+    Estimate
+        A new estimate (P copied).
+
+    Raises
+    ------
+    InputError
+        ``estimate`` not of N samples with at least n joints, or ``variance`` not finite and >= 0.
+    """
+    N, n = variance.shape
+    if estimate.z.shape[0] != N or estimate.z.shape[1] < n:
+        raise InputError(f"estimate: expected {N} samples of at least {n} joints, got {estimate.z.shape}")
+    if not (np.isfinite(variance).all() and (variance >= 0).all()):
+        raise InputError("variance: expected finite variances >= 0")
+    P = estimate.P.copy()
+    idx = np.arange(n)
+    P[:, idx, idx] += variance
+    return Estimate(t=estimate.t, z=estimate.z, P=P, names=estimate.names)
+
+
+@dataclasses.dataclass(frozen=True)
+class BandSigma:
+    """The joints' variance from the friction band along a run (:func:`band_sigma`, (B1) of the module docstring).
+
+    Attributes
+    ----------
+    fraction : float
+        c of (B1).
+    variance : numpy.ndarray
+        (N, n) rad^2, the diagonal of C_split per sample and joint.
+    unbounded : tuple of str
+        The joints the band does not bound at some sample (K not positive definite there; :data:`UNBOUNDED_STD`).
+    """
+
+    fraction: float
+    variance: np.ndarray
+    unbounded: tuple[str, ...] = ()
+
+    def widened(self, estimate: Estimate) -> Estimate:
+        """``estimate`` with :attr:`variance` added to its joints' variances, (B2) (:func:`with_joint_variance`).
+
+        Parameters
+        ----------
+        estimate : Estimate
+            The observer's estimate the variance was computed along.
+
+        Returns
+        -------
+        Estimate
+            The same estimate, its joints' variances (rad^2) widened.
+
+        Raises
+        ------
+        InputError
+            ``estimate`` not of N samples with at least n joints.
+        """
+        return with_joint_variance(estimate, self.variance)
+
+    def to_dict(self, start: int = 0) -> dict[str, Any]:
+        """JSON: ``fraction``, ``band_rms_deg`` (per joint, the RMS of the added standard deviation from sample
+        ``start`` on), ``unbounded``.
+
+        Parameters
+        ----------
+        start : int, optional
+            The first sample counted (e.g. past the observer's transient); default 0.
+
+        Returns
+        -------
+        dict
+            The JSON object.
+        """
+        rms = np.sqrt(np.mean(self.variance[start:], axis=0))
+        return {"fraction": self.fraction, "band_rms_deg": np.degrees(rms).tolist(), "unbounded": list(self.unbounded)}
+
+
+def _static_terms(model: Model) -> cs.Function:
+    """(q, u) -> (K, H): the static stiffness of the module docstring (the net torque at rest differentiated in q,
+    the springs alone as the passive torque: the friction is the unknown) and the encoders' Jacobian dh/dq."""
+    ss = StateSpace(model, input="motor", output="encoder")
+    n = model.n
+    q, u = cs.SX.sym("q", n), cs.SX.sym("u", ss.n_inputs)
+    v = cs.SX.zeros(n)
+    sym = ss.sym
+    r = sym.net_torque(q, v, ss.input_torque(q, u, v), sym.extras.spring_torque(q, cs), None, ss.tip)
+    H = cs.jacobian(ss.h_function(cs.vertcat(q, v)), q)
+    return cs.Function("band_static", [q, u], [cs.densify(-cs.jacobian(r, q)), cs.densify(H)])
+
+
+def band_sigma(model: Model, states: Any, inputs: Any, fraction: float = BAND_FRACTION) -> BandSigma:
+    """The joints' variance from the friction band, (B1) of the module docstring, at every sample.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's :class:`~alpes_dyn.Model` (with motors and encoders; its F_s, springs, gravity, ratios).
+    states : array_like
+        (N, >= n) the observer's estimate, the n joints' angles first (rad; the rest ignored).
+    inputs : array_like
+        (N-1, m) the motor torques held from each sample to the next, N m (the last held at the last sample).
+    fraction : float, optional
+        c of (B1), finite and >= 0 (default :data:`BAND_FRACTION`).
+
+    Returns
+    -------
+    BandSigma
+        The diagonal of C_split per sample and joint, rad^2.
+
+    Raises
+    ------
+    InputError
+        Naming the argument: a model without motors and encoders, states or inputs of the wrong shape or not
+        finite, ``fraction`` not a finite number >= 0.
+    """
+    if not isinstance(model, Model) or model.transmission is None:
+        raise InputError("model: expected an alpes_dyn Model with motors and encoders")
+    if isinstance(fraction, bool) or not isinstance(fraction, (int, float, np.floating)) or not (
+            np.isfinite(fraction) and fraction >= 0):
+        raise InputError(f"fraction: expected a finite number >= 0, got {fraction!r:.40}")
+    n, m = model.n, model.transmission.n_motors
+    X = np.asarray(states, dtype=float)
+    if X.ndim != 2 or X.shape[0] < 2 or X.shape[1] < n or not np.isfinite(X[:, :n]).all():
+        raise InputError(f"states: expected (N >= 2, >= {n}) finite states, got shape {X.shape}")
+    N = X.shape[0]
+    U = np.asarray(inputs, dtype=float)
+    if U.shape != (N - 1, m) or not np.isfinite(U).all():
+        raise InputError(f"inputs: expected ({N - 1}, {m}) finite motor torques, got shape {U.shape}")
+    K, H = (np.asarray(a) for a in _static_terms(model).map(N)(X[:, :n].T, np.vstack([U, U[-1:]]).T))
+    K = K.reshape(n, N, n).transpose(1, 0, 2)  # the map stacks the samples side by side
+    H = H.reshape(m, N, n).transpose(1, 0, 2)
+    return _split(K, H, fraction * np.asarray(model.extras.coulomb, dtype=float), fraction, model.joint_names)
+
+
+def _split(K: np.ndarray, H: np.ndarray, band: np.ndarray, fraction: float, joints: tuple[str, ...]) -> BandSigma:
+    """(B1) at every sample from K (N, n, n), H (N, m, n) and the friction torques' standard deviations ``band``
+    (n,), N m; the samples whose K is not positive definite (symmetrised) get :data:`UNBOUNDED_STD` on every joint
+    with dry friction there."""
+    N, n = K.shape[0], K.shape[1]
+    Ks = 0.5 * (K + K.transpose(0, 2, 1))
+    bounded = np.linalg.eigvalsh(Ks)[:, 0] > 0
+    Kb = np.where(bounded[:, None, None], K, np.eye(n))
+    Xf = np.linalg.solve(Kb, np.broadcast_to(np.diag(band), (N, n, n)))  # K^-1 diag(c F_s): C_q = Xf Xf^T
+    Cq = Xf @ Xf.transpose(0, 2, 1)
+    HC = H @ Cq  # (N, m, n)
+    S = HC @ H.transpose(0, 2, 1)
+    held = np.abs(band) > 0
+    # (H C H^T)^+ H C: the pseudo-inverse, for an encoder that sees no joint with friction (its row of S zero)
+    C = Cq - HC.transpose(0, 2, 1) @ (np.linalg.pinv(S, hermitian=True) @ HC)
+    var = np.maximum(np.diagonal(C, axis1=1, axis2=2), 0.0)
+    var = np.where(bounded[:, None] | ~held[None, :], var, UNBOUNDED_STD ** 2)
+    unbounded = tuple(j for j, h in zip(joints, held) if h and not bounded.all())
+    return BandSigma(float(fraction), var, unbounded)
