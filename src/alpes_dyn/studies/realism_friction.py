@@ -50,6 +50,7 @@ from ..control.plants import mujoco_recording
 from ..errors import InputError
 from ..estimation.experiments.design import ExperimentDesign
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
+from ..estimation.observers.band_sigma import band_sigma
 from ..estimation.observers.consistency import chi2_band, nees
 from ..estimation.observers.law_sigma import law_sigma
 from ..estimation.observers.scenario import EstimationScenario, scenario_torque
@@ -236,6 +237,19 @@ def _law_consistency(run, est, true_q: np.ndarray, transient: float) -> dict[str
             **spread.to_dict(int(round(transient / (est.t[1] - est.t[0]))))}
 
 
+def _band_consistency(est, true_q: np.ndarray, transient: float) -> dict[str, Any]:
+    """The NEES with each joint's variance widened by the dry-friction band
+    (:func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on the observer's model, estimate and torque, as
+    ``estimate --band-sigma``): its per-joint values against their band, the samples taken as independent (as
+    :func:`_law_consistency`), and the band's RMS per joint."""
+    band = band_sigma(est.filter.model.system.model, est.estimate.z, est.inputs)
+    r = nees(band.widened(est.estimate), true_q, start=transient)
+    lo, hi = r.joint_band()
+    return {"per_joint": r.per_joint.tolist(), "joint_band": [lo, hi],
+            "joints_consistent": [bool(lo <= x <= hi) for x in r.per_joint],
+            **band.to_dict(int(round(transient / (est.t[1] - est.t[0]))))}
+
+
 def _case(case: FrictionCase | str) -> FrictionCase:
     """``case``, or the case of that name (:class:`~alpes_dyn.InputError` naming ``case`` on an unknown one)."""
     if isinstance(case, str):
@@ -306,7 +320,8 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     plant_experiment`), the files written in ``tmp`` (default a temporary directory). Keys: those of
     :func:`~alpes_dyn.studies.realism.realism_case` that :func:`~alpes_dyn.studies.realism.summarise` reads
     (``extended`` the fit, ``ekf_rmse_deg``, ``ekf_true_file_rmse_deg``), ``nees`` and ``nees_true_file``
-    (:func:`_consistency`), ``z`` (:func:`standard_scores`: the fit's standard errors with the model-form error of
+    (:func:`_consistency`), ``nees_band`` and ``nees_true_file_band`` (:func:`_band_consistency`), ``z``
+    (:func:`standard_scores`: the fit's standard errors with the model-form error of
     :mod:`~alpes_dyn.estimation.identification.law_spread` where the fit converged), ``z_noise`` (with the noise's
     alone), ``law_spread`` (it was added), ``validation_s``, ``validation_range_deg`` (the true
     joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends),
@@ -392,6 +407,8 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
                 "nees_true_file": _consistency(est_true, val.true_q, transient), "z": z,
                 "nees_law": _law_consistency(run, est, val.true_q, transient),
                 "nees_true_file_law": _law_consistency(run_true, est_true, val.true_q, transient),
+                "nees_band": _band_consistency(est, val.true_q, transient),
+                "nees_true_file_band": _band_consistency(est_true, val.true_q, transient),
                 "true_file_not_held": list(truth_file.not_held),
                 "ekf_seconds": time.perf_counter() - t0 - plant_s})
     return row
@@ -428,9 +445,9 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
     ``ekf_true_file_deg`` (the EKF with the true file, worst joint), ``nees_inconsistent`` and
     ``nees_true_file_inconsistent`` (the rows with a joint's NEES outside its 95 % band), ``nees_law_inconsistent``
     and ``nees_true_file_law_inconsistent`` (the same with the variance widened by the laws' spread, the rows that
-    hold it), ``nees_worst`` (the largest joint NEES, identified file), ``z_worst`` (the largest |error / standard
-    error| over the parameters),
-    ``z_within_3`` (the fraction of parameters within 3; ``z_noise_within_3`` with the noise's standard errors
+    hold it), ``nees_band_inconsistent`` and ``nees_true_file_band_inconsistent`` (widened by the dry-friction
+    band, ``estimate --band-sigma``), ``nees_worst`` (the largest joint NEES, identified file), ``z_worst`` (the
+    largest |error / standard error| over the parameters), ``z_within_3`` (the fraction of parameters within 3; ``z_noise_within_3`` with the noise's standard errors
     alone), ``verdicts`` (each row's, by seed); ``issue_goal_met``
     (issue 50's goal on every row: the EKF within ``ekf_goal`` on every joint with both files, every joint's NEES in
     its band with both, every |z| within 3, springs and masses within their goals, no run that raised).
@@ -460,7 +477,7 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
             "nees_worst": _worst([max(r["nees"]["per_joint"]) for r in ok]),
             "nees_true_file_worst": _worst([max(r["nees_true_file"]["per_joint"]) for r in ok]),
             **{f"{key}_inconsistent": sum(not all(r[key]["joints_consistent"]) for r in ok if key in r)
-               for key in ("nees_law", "nees_true_file_law")},  # rows recorded before the law's spread: left out
+               for key in ("nees_law", "nees_true_file_law", "nees_band", "nees_true_file_band")},  # older rows: left out
             "z_worst": _worst(zs), "z_within_3": float(np.mean([z <= 3 for z in zs])) if zs else None,
             "z_noise_within_3": float(np.mean([z <= 3 for z in zn])) if zn else None,
             "verdicts": {str(r["seed"]): r["extended"]["verdict"] for r in ok}})
