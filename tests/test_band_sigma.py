@@ -110,3 +110,14 @@ def test_on_a_stick_slip_plant_estimate_band_sigma_brings_the_nees_into_its_band
     np.testing.assert_allclose(out["rmse"], rmse, rtol=1e-6)
     assert out["unobserved"] == [] and out["band_sigma"]["fraction"] == bs.BAND_FRACTION
     assert (np.array(out["q_sigma_deg"]) > np.degrees(std[1000:].max(axis=0))).all()
+
+
+def test_a_stiffness_not_positive_definite_is_the_prior():
+    """A sample whose K is not positive definite (a springless joint gravity does not hold): every joint with dry
+    friction gets UNBOUNDED_STD there and is named; the bounded sample keeps (B1), a joint without friction 0."""
+    K = np.stack([np.diag([1.0, 2.0]), np.diag([1.0, 0.0])])
+    H = np.ones((2, 1, 2))
+    out = bs._split(K, H, np.array([0.1, 0.0]), 0.5, ("a", "b"))
+    assert out.unbounded == ("a",)
+    np.testing.assert_allclose(out.variance[1], [bs.UNBOUNDED_STD ** 2, 0.0])
+    np.testing.assert_allclose(out.variance[0], [0.0, 0.0], atol=1e-15)  # one joint with friction: the encoder sees it

@@ -29,20 +29,22 @@ study's ``stiff`` case, :mod:`~alpes_dyn.studies.realism_friction`, four develop
 identified and with the true file): the joints' NEES against their band (0.74-1.29 at the validation run's 100
 samples) went from 2.7-17 with P alone (no joint in band) to 0.36-2.75 at c = 0.25, 15 of 24 joints in band (5-11 at
 c = 0.2, 0.22, 0.28, 0.3; 4 at 0.35); on six fresh draws after c was fixed, from 1.8-42 to 0.32-4.4, 11 of 36 in
-band (their errors larger, 0.09-0.28 degree: the median NEES 1.34, most misses above the band). The joints' errors were the same while the plant's joints stuck as while they
-slid (the split a stick leaves stays through the next slide), so (B2) holds at every sample, not only where the
-observer thinks a joint stuck. What it does not get right is the share between the joints: (B1) gives them about
-the same sigma, the errors differ up to twofold from draw to draw (the out-of-band joints: a distal joint above, a
-middle joint below). Everything in (B1) is the file's (F_s, the springs, the masses' gravity, the ratios) and the
-estimate's (q_hat, the recorded torque): nothing reads the true joints. It does not change the estimate: the filter
-runs as it did (feeding a stuck joint's variance back made the errors worse), only the reported covariance is
-widened. It is opt-in (``estimate --data --band-sigma``): on a plant whose friction is the observer's own law the
-filter's P is already consistent, and the band would make it cautious.
+band (their errors larger, 0.09-0.28 degree: the median NEES 1.34, most misses above the band). The joints' errors
+were the same while the plant's joints stuck as while they slid (the split a stick leaves stays through the next
+slide), so (B2) holds at every sample, not only where the observer thinks a joint stuck. What it does not get right
+is the share between the joints: (B1) gives them about the same sigma, the errors differ up to twofold from draw to
+draw. Everything in (B1) is the file's (F_s, the springs, the masses' gravity, the ratios) and the estimate's
+(q_hat, the recorded torque): nothing reads the true joints. It does not change the estimate: the filter runs as it
+did (feeding a stuck joint's variance back made the errors worse), only the reported covariance is widened. It is
+opt-in (``estimate --data --band-sigma``): on a plant whose friction is the observer's own law the filter's P is
+already consistent, and the band would make it cautious. (H C_q H^T)^-1 is a pseudo-inverse: an encoder that sees
+no joint with dry friction conditions nothing.
 
 Where K is not positive definite (a joint without a spring that gravity does not hold: the band holds it nowhere),
-the set is unbounded: that joint's added standard deviation is the observers' prior,
-:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`'s 0.5 rad, and
-:func:`~alpes_dyn.analysis.joint_observability.joint_observability` flags it as not observed.
+the set is unbounded: at such a sample every joint with dry friction gets the observers' prior as its added
+standard deviation (:data:`UNBOUNDED_STD`, the 0.5 rad of
+:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`), and :attr:`BandSigma.unbounded` names them; whether the
+motion observes such a joint is :func:`~alpes_dyn.analysis.joint_observability.joint_observability`'s flag.
 """
 
 from __future__ import annotations
