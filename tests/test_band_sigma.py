@@ -112,12 +112,35 @@ def test_on_a_stick_slip_plant_estimate_band_sigma_brings_the_nees_into_its_band
     assert (np.array(out["q_sigma_deg"]) > np.degrees(std[1000:].max(axis=0))).all()
 
 
-def test_a_stiffness_not_positive_definite_is_the_prior():
-    """A sample whose K is not positive definite (a springless joint gravity does not hold): every joint with dry
-    friction gets UNBOUNDED_STD there and is named; the bounded sample keeps (B1), a joint without friction 0."""
-    K = np.stack([np.diag([1.0, 2.0]), np.diag([1.0, 0.0])])
-    H = np.ones((2, 1, 2))
-    out = bs._split(K, H, np.array([0.1, 0.0]), 0.5, ("a", "b"))
-    assert out.unbounded == ("a",)
-    np.testing.assert_allclose(out.variance[1], [bs.UNBOUNDED_STD ** 2, 0.0])
-    np.testing.assert_allclose(out.variance[0], [0.0, 0.0], atol=1e-15)  # one joint with friction: the encoder sees it
+def test_a_direction_the_band_does_not_bound_is_the_prior():
+    """(B1) on small systems by hand: two joints on one encoder, springs 1 and 2 N m/rad, the split direction
+    (1, -1) of information 1/0.1^2 + 4/0.05^2 over 2; two springless joints with friction: that direction unbounded,
+    each joint at UNBOUNDED_STD (the prior's 0.5 rad shared along it: half its variance each) and named; a
+    springless joint alone on its encoder: seen, 0; a springless joint without friction beside a sprung one: held
+    through the tendon by the other's band."""
+    H = np.ones((1, 1, 2))
+    out = bs._split(np.diag([1.0, 2.0])[None], H, np.array([0.1, 0.05]), 0.5, ("a", "b"))
+    info = (1 / 0.1**2 + 4 / 0.05**2) / 2  # along (1, -1) / sqrt(2)
+    np.testing.assert_allclose(out.variance[0], [0.5 / info, 0.5 / info], rtol=1e-9)
+    assert out.unbounded == ()
+    out = bs._split(np.zeros((1, 2, 2)), H, np.array([0.1, 0.05]), 0.5, ("a", "b"))
+    np.testing.assert_allclose(out.variance[0], [0.5 * bs.UNBOUNDED_STD ** 2] * 2, rtol=1e-9)
+    assert out.unbounded == ("a", "b")
+    out = bs._split(np.zeros((1, 1, 1)), np.ones((1, 1, 1)), np.array([0.1]), 0.5, ("a",))
+    np.testing.assert_allclose(out.variance, [[0.0]], atol=1e-15)
+    out = bs._split(np.diag([1.0, 0.0])[None], H, np.array([0.1, 0.0]), 0.5, ("a", "b"))
+    np.testing.assert_allclose(out.variance[0], [0.5 * 0.1**2 * 2, 0.5 * 0.1**2 * 2], rtol=1e-9)
+    assert out.unbounded == ()
+
+
+def test_the_hand_s_springless_thumb_abduction_seen_by_its_own_encoder_is_bounded():
+    """The hand: thumb_abd has no spring but its own motor, so its encoder sees it whole: no joint unbounded, the
+    abduction's band 0, each finger's joints as the lone finger3's at the same angles."""
+    hand = Model.alpes("hand", friction=True)
+    q = np.tile(np.full(hand.n, 0.3), (3, 1))
+    out = bs.band_sigma(hand, q, np.zeros((2, hand.transmission.n_motors)))
+    assert out.unbounded == ()
+    np.testing.assert_allclose(out.variance[:, hand.joint_names.index("thumb_abd")], 0.0, atol=1e-15)
+    f3 = bs.band_sigma(Model.alpes("finger3", friction=True), np.full((3, 3), 0.3), np.zeros((2, 1)))
+    idx = [hand.joint_names.index(f"index_{j}") for j in ("j1", "j2", "j3")]
+    np.testing.assert_allclose(out.variance[:, idx], f3.variance, rtol=1e-6)

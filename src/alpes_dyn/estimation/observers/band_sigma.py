@@ -37,14 +37,14 @@ draw. Everything in (B1) is the file's (F_s, the springs, the masses' gravity, t
 (q_hat, the recorded torque): nothing reads the true joints. It does not change the estimate: the filter runs as it
 did (feeding a stuck joint's variance back made the errors worse), only the reported covariance is widened. It is
 opt-in (``estimate --data --band-sigma``): on a plant whose friction is the observer's own law the filter's P is
-already consistent, and the band would make it cautious. (H C_q H^T)^-1 is a pseudo-inverse: an encoder that sees
-no joint with dry friction conditions nothing.
+already consistent, and the band would make it cautious.
 
-Where K is not positive definite (a joint without a spring that gravity does not hold: the band holds it nowhere),
-the set is unbounded: at such a sample every joint with dry friction gets the observers' prior as its added
-standard deviation (:data:`UNBOUNDED_STD`, the 0.5 rad of
-:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`), and :attr:`BandSigma.unbounded` names them; whether the
-motion observes such a joint is :func:`~alpes_dyn.analysis.joint_observability.joint_observability`'s flag.
+(B1) is computed in its information form (a basis of the split, no K^-1): so a joint without a spring that its own
+encoder sees (the hand's thumb abduction) is simply seen. Where the band does not bound a direction of the split
+(K not positive definite on it: two springless joints on one tendon, which gravity does not hold), that direction's
+variance is the observers' prior (:data:`UNBOUNDED_STD`, the 0.5 rad of
+:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`) and :attr:`BandSigma.unbounded` names its joints;
+whether the motion observes them is :func:`~alpes_dyn.analysis.joint_observability.joint_observability`'s flag.
 """
 
 from __future__ import annotations
@@ -113,7 +113,7 @@ class BandSigma:
     variance : numpy.ndarray
         (N, n) rad^2, the diagonal of C_split per sample and joint.
     unbounded : tuple of str
-        The joints the band does not bound at some sample (K not positive definite there; :data:`UNBOUNDED_STD`).
+        The joints of a direction the band does not bound at some sample (:data:`UNBOUNDED_STD` there).
     """
 
     fraction: float
@@ -217,20 +217,27 @@ def band_sigma(model: Model, states: Any, inputs: Any, fraction: float = BAND_FR
 
 def _split(K: np.ndarray, H: np.ndarray, band: np.ndarray, fraction: float, joints: tuple[str, ...]) -> BandSigma:
     """(B1) at every sample from K (N, n, n), H (N, m, n) and the friction torques' standard deviations ``band``
-    (n,), N m; the samples whose K is not positive definite (symmetrised) get :data:`UNBOUNDED_STD` on every joint
-    with dry friction there."""
+    (n,), N m, in its information form (no K^-1: a springless joint that its own encoder sees is not unbounded):
+    the joints' displacements dq = K^-1 f with f_i = 0 where ``band`` is 0 and H dq = 0 (what the encoders see)
+    are the null space of A = [H; K_nf] (K's rows of the joints without friction), of information
+    Lambda = K_f^T diag(band_f^-2) K_f there; C_split = N (N^T Lambda N)^-1 N^T, N an orthonormal basis of that
+    null space (A's right singular vectors beyond its rank), the Gaussian conditional of (B1). Each of its
+    directions' variance is capped at :data:`UNBOUNDED_STD`^2 (a direction the band does not bound: K not positive
+    definite on it), whose joints are named unbounded."""
     N, n = K.shape[0], K.shape[1]
-    Ks = 0.5 * (K + K.transpose(0, 2, 1))
-    bounded = np.linalg.eigvalsh(Ks)[:, 0] > 0
-    Kb = np.where(bounded[:, None, None], K, np.eye(n))
-    Xf = np.linalg.solve(Kb, np.broadcast_to(np.diag(band), (N, n, n)))  # K^-1 diag(c F_s): C_q = Xf Xf^T
-    Cq = Xf @ Xf.transpose(0, 2, 1)
-    HC = H @ Cq  # (N, m, n)
-    S = HC @ H.transpose(0, 2, 1)
-    held = np.abs(band) > 0
-    # (H C H^T)^+ H C: the pseudo-inverse, for an encoder that sees no joint with friction (its row of S zero)
-    C = Cq - HC.transpose(0, 2, 1) @ (np.linalg.pinv(S, hermitian=True) @ HC)
-    var = np.maximum(np.diagonal(C, axis1=1, axis2=2), 0.0)
-    var = np.where(bounded[:, None] | ~held[None, :], var, UNBOUNDED_STD ** 2)
-    unbounded = tuple(j for j, h in zip(joints, held) if h and not bounded.all())
-    return BandSigma(float(fraction), var, unbounded)
+    fr = np.abs(band) > 0
+    A = np.concatenate([H, K[:, ~fr, :]], axis=1)
+    _, sv, Vt = np.linalg.svd(A, full_matrices=True)
+    rank = np.sum(sv > 1e-9 * sv[:, :1], axis=1)
+    Kf = K[:, fr, :] / band[fr][None, :, None]
+    lam = Kf.transpose(0, 2, 1) @ Kf
+    var, loose = np.zeros((N, n)), np.zeros(n, dtype=bool)
+    cap = UNBOUNDED_STD ** 2
+    for r in np.unique(rank):  # the samples by A's rank: one group unless the ratios' structure changes
+        k = np.flatnonzero(rank == r)
+        basis = Vt[k, r:, :].transpose(0, 2, 1)  # (k, n, d)
+        w, W = np.linalg.eigh(basis.transpose(0, 2, 1) @ lam[k] @ basis)
+        V = basis @ W  # the directions, orthonormal, in the joints
+        var[k] = np.einsum("kij,kj->ki", V ** 2, np.minimum(1.0 / np.maximum(w, 1.0 / cap), cap))
+        loose |= np.any((w <= 1.0 / cap)[:, None, :] & (V ** 2 > 0.01), axis=(0, 2))
+    return BandSigma(float(fraction), var, tuple(j for j, h in zip(joints, loose) if h))
