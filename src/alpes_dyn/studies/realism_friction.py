@@ -447,10 +447,11 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
     and ``nees_true_file_law_inconsistent`` (the same with the variance widened by the laws' spread, the rows that
     hold it), ``nees_band_inconsistent`` and ``nees_true_file_band_inconsistent`` (widened by the dry-friction
     band, ``estimate --band-sigma``), ``nees_worst`` (the largest joint NEES, identified file), ``z_worst`` (the
-    largest |error / standard error| over the parameters), ``z_within_3`` (the fraction of parameters within 3; ``z_noise_within_3`` with the noise's standard errors
-    alone), ``verdicts`` (each row's, by seed); ``issue_goal_met``
-    (issue 50's goal on every row: the EKF within ``ekf_goal`` on every joint with both files, every joint's NEES in
-    its band with both, every |z| within 3, springs and masses within their goals, no run that raised).
+    largest |error / standard error| over the parameters), ``z_within_3`` (the fraction of parameters within 3;
+    ``z_noise_within_3`` with the noise's standard errors alone), ``verdicts`` (each row's, by seed);
+    ``issue_goal_met`` (issue 50's goal on every row: the EKF within ``ekf_goal`` on every joint with both
+    files, every joint's NEES in its band with both, every |z| within 3, springs and masses within their goals, no
+    run that raised).
 
     Parameters
     ----------
@@ -477,7 +478,7 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
             "nees_worst": _worst([max(r["nees"]["per_joint"]) for r in ok]),
             "nees_true_file_worst": _worst([max(r["nees_true_file"]["per_joint"]) for r in ok]),
             **{f"{key}_inconsistent": sum(not all(r[key]["joints_consistent"]) for r in ok if key in r)
-               for key in ("nees_law", "nees_true_file_law", "nees_band", "nees_true_file_band")},  # older rows: left out
+               for key in ("nees_law", "nees_true_file_law", "nees_band", "nees_true_file_band")},  # older rows: out
             "z_worst": _worst(zs), "z_within_3": float(np.mean([z <= 3 for z in zs])) if zs else None,
             "z_noise_within_3": float(np.mean([z <= 3 for z in zn])) if zn else None,
             "verdicts": {str(r["seed"]): r["extended"]["verdict"] for r in ok}})
