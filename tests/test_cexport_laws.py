@@ -90,6 +90,24 @@ def test_observer_c_export_runs_the_file_law(files, scenario_data):
         assert np.abs(q[law] - q["tanh"]).max() > 1e-3, law
 
 
+def test_the_library_source_is_generated_once_per_structure(files, monkeypatch):
+    """compiled_c_step's C is kept by its filter's structure (its step serialised): a second filter of the file (a
+    ForceStep built again, the hand's fingers) gets, without generating it again, the very source c_sources makes
+    for it afresh; a filter of another structure (finger2's) gets a source of its own."""
+    import alpes_dyn.estimation.cexport.cexport as cx
+
+    a, b, c = (cx.scenario_filter("ekf", model, params=files["tanh"], friction=True)[0]
+               for model in ("finger3", "finger3", "finger2"))
+    made, real = [], cx.c_sources
+    monkeypatch.setattr(cx, "c_sources", lambda filt, **kw: made.append(filt) or real(filt, **kw))
+    monkeypatch.setattr(cx, "_LIBRARY_SOURCES", {})
+    sa, sb, sc = (cx._library_source(f) for f in (a, b, c))
+    assert len(made) == 2 and made[0] is a and made[1] is c
+    assert sa == sb and sc[0] != sa[0]
+    monkeypatch.setattr(cx, "_LIBRARY_SOURCES", {})
+    assert cx._library_source(b) == sb and made[-1] is b  # afresh, from b itself
+
+
 def test_codegen_cli_exports_the_bristles(files, tmp_path, capsys):
     """``codegen --params lugre.toml --friction`` and ``codegen --step``: the bristles in the exported state (as
     estimate's observer)."""

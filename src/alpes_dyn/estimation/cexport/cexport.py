@@ -48,6 +48,7 @@ the fingers one after the other. All give the same numbers.
 
 from __future__ import annotations
 
+import hashlib
 import os
 import re
 from pathlib import Path
@@ -623,12 +624,7 @@ def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> A
     from ...simulation.codegen import _CFLAGS, _compiler, cache_dir
     from ...simulation.buildcache import CompilerError, build_library
 
-    prefix = "alpes_libstep"
-    files = c_sources(filt, prefix=prefix)
-    header, body = files[f"{prefix}.h"], files[f"{prefix}.c"]
-    body = re.sub(rf"(const double {prefix}_model_p\[{prefix.upper()}_NP\] = {{)[^}}]*(}};)", r"\g<1>0.0\g<2>", body)
-    # (the model's numbers are an input: the library is its structure's, shared by every file of that structure)
-    source = header + body.replace(f'#include "{prefix}.h"', "") + _LIBRARY_STEP.format(prefix=prefix, P=prefix.upper())
+    source, nwork = _library_source(filt)
     try:
         _, _, _, lib = build_library(source, label, _compiler(), ("-O2",) + _CFLAGS[1:], cache_dir())
     except CompilerError:
@@ -637,7 +633,6 @@ def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> A
     dp = ctypes.POINTER(ctypes.c_double)
     fn.argtypes = [dp, dp, dp, dp, dp]
     fn.restype = ctypes.c_int
-    nwork = int(header.split(f"#define {prefix.upper()}_NWORK ")[1].split()[0])
     p = np.ascontiguousarray(filt.model.values if parameters is None else parameters, dtype=float)
     ns = filt.nz + filt.nz * filt.nz
     s_in, wy_in, out, work = np.empty(ns), np.empty(filt.nw + filt.ny), np.empty(ns), np.empty(max(nwork, 1))
@@ -654,3 +649,39 @@ def compiled_c_step(filt: KalmanFilter, label: str, parameters: Any = None) -> A
         return out.copy()
 
     return step
+
+
+_LIBRARY_SOURCES: dict[str, tuple[str, int]] = {}
+""":func:`_library_source`'s sources by the filter's step serialised: filters of one structure (the hand's four
+fingers, every step of a finger built in a process) generate the C once (about 0.5 s of CPU on finger3)."""
+
+
+def _library_source(filt: KalmanFilter) -> tuple[str, int]:
+    """(the C of :func:`compiled_c_step`'s library, its work size): ``filt``'s :func:`c_sources` with the model's
+    numbers zeroed (an input: the library is its structure's, shared by every file of that structure). Kept by the
+    key of its step ``filter_step_p`` (the model's numbers an input p; the noises, the substeps and the law are
+    constants in it), serialised, as the observer blocks key their steps.
+
+    Parameters
+    ----------
+    filt : KalmanFilter
+        The filter.
+
+    Returns
+    -------
+    tuple of (str, int)
+        The library's C source and its work array's size (doubles).
+    """
+    key = type(filt).__name__ + hashlib.sha1(filt.filter_step_p.serialize().encode()).hexdigest()
+    made = _LIBRARY_SOURCES.get(key)
+    if made is None:
+        prefix = "alpes_libstep"
+        files = c_sources(filt, prefix=prefix)
+        header, body = files[f"{prefix}.h"], files[f"{prefix}.c"]
+        body = re.sub(rf"(const double {prefix}_model_p\[{prefix.upper()}_NP\] = {{)[^}}]*(}};)", r"\g<1>0.0\g<2>",
+                      body)
+        source = header + body.replace(f'#include "{prefix}.h"', "") + _LIBRARY_STEP.format(prefix=prefix,
+                                                                                            P=prefix.upper())
+        nwork = int(header.split(f"#define {prefix.upper()}_NWORK ")[1].split()[0])
+        made = _LIBRARY_SOURCES[key] = (source, nwork)
+    return made

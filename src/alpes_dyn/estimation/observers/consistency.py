@@ -284,7 +284,10 @@ def measured_effective(series: Any) -> float:
     rho = np.fft.irfft(f * np.conj(f))[:M] / var  # rho_0 = 1 first
     pairs = rho[: M // 2 * 2].reshape(-1, 2).sum(axis=1)  # Gamma_j = rho_2j + rho_2j+1
     stop = int(np.argmax(pairs <= 0)) if np.any(pairs <= 0) else pairs.size
-    return float(np.clip(M / (2.0 * pairs[:stop].sum() - 1.0), 1.0, M))
+    tau = 2.0 * pairs[:stop].sum() - 1.0  # the variance inflation 1 + 2 sum rho_l
+    if tau <= 1.0:  # anticorrelated (two samples always: rho_1 = -1/2, tau = 0): no fewer than its M samples
+        return float(M)
+    return float(np.clip(M / tau, 1.0, M))
 
 
 def chi2_band(dof: int, samples: float, level: float) -> tuple[float, float]:
