@@ -151,9 +151,10 @@ def legacy_hand(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
     """The old run_hand_control's loop: per chain c, ``<field>_<c>``; and ``q_abduction``."""
     import mujoco
 
-    from alpes_dyn.control.controller import DEFAULT_GAINS, ForceController, static_contact_force
+    from alpes_dyn.control.controller import ForceController, static_contact_force
     from alpes_dyn.control.finger_loop import _plant_and_params
-    from alpes_dyn.control.hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlScenario, chain_frame, chain_model,
+    from alpes_dyn.control.hand_grasp import hand_gains
+    from alpes_dyn.control.hand_loop import (HAND_LEVELS, HandControlScenario, chain_frame, chain_model,
                                              cylinder_normal, hand_chains)
     from alpes_dyn.model.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string
 
@@ -168,7 +169,7 @@ def legacy_hand(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
     t = sc.dt * np.arange(N)
     rng = np.random.default_rng(sc.seed)
     use_obs = sc.controller != "pi"
-    gains = {**DEFAULT_GAINS[sc.controller], **HAND_GAINS, **sc.gains}
+    gains = hand_gains(sc.controller, sc.gains)
     center = np.asarray(CYLINDER["center"], dtype=float)
     C = []
     for c in chains:
