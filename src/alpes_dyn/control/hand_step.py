@@ -12,7 +12,8 @@ It is the loop of :func:`~alpes_dyn.control.hand_loop.run_hand_control`, the han
 * each chain's model: :func:`~alpes_dyn.model.hand_chains.chain_model` of the parameter file palm down, the thumb's
   at the ab/adduction target (its EKF's with the file's friction, eq. 2.6-2.7);
 * the gains: :func:`~alpes_dyn.control.hand_grasp.hand_gains` (:data:`.DEFAULT_GAINS` overridden by
-  :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS` and the controller's own hand settings), then ``gains``;
+  :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS` and the controller's and the chain's own hand settings), then
+  ``gains``;
 * the contact normal of a chain at sample k: given to :meth:`HandForceStep.step` (``normals``, (5, 3), each in its
   chain's base frame: what the C step takes), or by default the cylinder's
   (:data:`~alpes_dyn.model.mjcf.CYLINDER`, :func:`~alpes_dyn.control.hand_grasp.cylinder_normal`) at the fingertip
@@ -135,7 +136,6 @@ class HandForceStep:
         self.chains = hand_chains(p)
         self.motor_names = (*self.chains, ABDUCTION)
         self.tau_max = float(p.tau_max)
-        settings = hand_gains(controller, gains)
         self.chain_steps: dict[str, ForceStep] = {}
         self._cylinder: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for c in self.chains:
@@ -144,7 +144,8 @@ class HandForceStep:
             self._cylinder[c] = cylinder_in_chain(p, c, abd)
             q_rest = model.static_equilibrium(np.zeros(model.n))
             design = LoopDesign(model, cylinder_normal(model, q_rest, *self._cylinder[c]), self.tau_max,
-                                dict(settings), params=p, contact_q=tuple(q_rest.tolist()), observer_model=observer)
+                                hand_gains(controller, gains, c), params=p, contact_q=tuple(q_rest.tolist()),
+                                observer_model=observer)
             chain_comp = comp if not isinstance(comp.force_scale, dict) else _one_scale(comp, c)
             self.chain_steps[c] = ForceStep.from_design(design, controller, dt, chain_comp, noise=noise,
                                                         force_filter_s=f_s, compiled=bool(compiled),
