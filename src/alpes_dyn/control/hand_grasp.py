@@ -41,8 +41,8 @@ HAND_CONTROLLER_GAINS: dict[str, dict[str, float]] = {"sensor": {"ki": 1.6}}
 #: One chain's settings over :data:`HAND_CONTROLLER_GAINS`, per controller: the thumb's sensor loop with the block's
 #: 25 ms prefilter. Its pad, opposite the fingers, holds more (:data:`HAND_LEVELS`) and did not slide with it; with
 #: the fingers' 40 ms (88 ms of rise alone) its 10-90 % rise was 91-100 ms on the +-20 % draws of the hand, with 25 ms
-#: about 55 ms, its overshoot and RMSE as they were (the block's ki 2.4 on top raised its RMSE to 3 % of the step on
-#: a draw). The hand's loops with these settings: ``benchmarks/results/hand_control.json``.
+#: 53-62 ms, its overshoot and RMSE within 0.6 and 0.2 points of the step of what they were (the block's ki 2.4 on
+#: top raised its RMSE to 3 % of the step on a draw). The hand's loops with these settings: ``benchmarks/results/hand_control.json``.
 HAND_CHAIN_GAINS: dict[str, dict[str, dict[str, float]]] = {"thumb": {"sensor": {"prefilter_s": 0.025}}}
 
 
