@@ -18,7 +18,8 @@ from ..model.params import HandParams
 from ..model.robot import Model
 from .controller import DEFAULT_GAINS, _normal
 
-__all__ = ["HAND_LEVELS", "HAND_GAINS", "HAND_CONTROLLER_GAINS", "HAND_CHAIN_GAINS", "hand_gains", "cylinder_normal", "cylinder_in_chain"]
+__all__ = ["HAND_LEVELS", "HAND_GAINS", "HAND_CONTROLLER_GAINS", "HAND_CHAIN_GAINS", "hand_gains", "cylinder_normal",
+           "cylinder_in_chain"]
 
 #: Default references of :func:`~alpes_dyn.control.hand_loop.run_hand_control` per chain, N: (before, after) the
 #: step at ``step_time``. Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` before
@@ -42,7 +43,8 @@ HAND_CONTROLLER_GAINS: dict[str, dict[str, float]] = {"sensor": {"ki": 1.6}}
 #: 25 ms prefilter. Its pad, opposite the fingers, holds more (:data:`HAND_LEVELS`) and did not slide with it; with
 #: the fingers' 40 ms (88 ms of rise alone) its 10-90 % rise was 91-100 ms on the +-20 % draws of the hand, with 25 ms
 #: 53-62 ms, its overshoot and RMSE within 0.6 and 0.2 points of the step of what they were (the block's ki 2.4 on
-#: top raised its RMSE to 3 % of the step on a draw). The hand's loops with these settings: ``benchmarks/results/hand_control.json``.
+#: top raised its RMSE to 3 % of the step on a draw). The hand's loops with these settings:
+#: ``benchmarks/results/hand_control.json``.
 HAND_CHAIN_GAINS: dict[str, dict[str, dict[str, float]]] = {"thumb": {"sensor": {"prefilter_s": 0.025}}}
 
 
