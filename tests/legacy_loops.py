@@ -151,9 +151,10 @@ def legacy_hand(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
     """The old run_hand_control's loop: per chain c, ``<field>_<c>``; and ``q_abduction``."""
     import mujoco
 
-    from alpes_dyn.control.controller import DEFAULT_GAINS, ForceController, static_contact_force
+    from alpes_dyn.control.controller import ForceController, static_contact_force
     from alpes_dyn.control.finger_loop import _plant_and_params
-    from alpes_dyn.control.hand_loop import (HAND_GAINS, HAND_LEVELS, HandControlScenario, chain_frame, chain_model,
+    from alpes_dyn.control.hand_grasp import hand_gains
+    from alpes_dyn.control.hand_loop import (HAND_LEVELS, HandControlScenario, chain_frame, chain_model,
                                              cylinder_normal, hand_chains)
     from alpes_dyn.model.mjcf import CYLINDER, joint_permutation, load_mujoco, mjcf_string
 
@@ -168,7 +169,6 @@ def legacy_hand(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
     t = sc.dt * np.arange(N)
     rng = np.random.default_rng(sc.seed)
     use_obs = sc.controller != "pi"
-    gains = {**DEFAULT_GAINS[sc.controller], **HAND_GAINS, **sc.gains}
     center = np.asarray(CYLINDER["center"], dtype=float)
     C = []
     for c in chains:
@@ -209,7 +209,7 @@ def legacy_hand(controller: str = "sensor", **kw) -> dict[str, np.ndarray]:
             z0 = np.concatenate([static_equilibrium(ch["model"], np.zeros(n)), np.zeros(n)])
             S.append(np.concatenate([z0, np.diag([0.05**2] * n + [0.1**2] * n).reshape(-1, order="F")]))
     ctls = [ForceController(sc.controller, ch["model"], cylinder_normal(ch["model"], ch["z0"], ch["center"], ch["axis"]),
-                            sc.dt, p.tau_max, **gains) for ch in C]
+                            sc.dt, p.tau_max, **hand_gains(sc.controller, sc.gains, ch["name"])) for ch in C]
     nc = len(C)
     out = {f"{k}_{ch['name']}": np.empty(N) for k in ("F_true", "F_meas", "F_hat", "tau_cmd", "tau_meas") for ch in C}
     for ch in C:

@@ -56,13 +56,13 @@ def test_sensor_loop_meets_goals_where_the_rigid_design_rings(ident):
     """Every effect on: the compensated sensor loop (the notch at the identified cable mode, the stretch off the
     encoder, the command as the observer's torque, the tilt) holds the step with overshoot < 10 %, 10-90 % rise
     within 100 ms and RMSE after the rise < 3 % of the step; the rigid design rings through the cable's mode (its
-    force crosses 90 % of the step within 5 ms of it) and overshoots more."""
+    force crosses 90 % of the step within 5 ms of it) and its joint estimates are worse. (With the sensor loop's
+    integral of ``DEFAULT_GAINS`` both overshoot alike, 7.4-7.5 %: the ringing, not the overshoot, tells them apart.)"""
     good = run_control("sensor", params=ident, effects=EFFECTS, compensation=Compensation(tilt=TILT), **RUN)
     rigid = run_control("sensor", params=ident, effects=EFFECTS, compensation=NO_COMPENSATION, **RUN)
     assert good.overshoot < 0.10 and 0.05 < good.rise_time_s < 0.10
     assert _after_rise_rmse(good) < 0.03 * 0.4 and good.steady_state_error < 0.01
     assert rigid.rise_time_s < 0.005 and _ringing(rigid) > 2.5 * _ringing(good)
-    assert rigid.overshoot > good.overshoot + 0.01  # 8.9 % against 7.7 % (the friction EKF at 4 RK4 steps per ms)
     assert max(good.q_rmse_deg) < 0.7 * max(rigid.q_rmse_deg)  # the tendon's stretch taken off the encoder
 
 

@@ -64,6 +64,24 @@ def test_hand_step_holds_every_fingertip(hand_run):
     assert step.motor_names == ("index", "middle", "ring", "little", "thumb", "thumb_abduction")
 
 
+def test_hand_chains_take_the_hand_gains(hand_run):
+    """Every chain's controller has the hand's settings (hand_gains): the cylinder's sensor integral, not the
+    block's (DEFAULT_GAINS, set for the rise on the block), the fingers' 40 ms prefilter and the thumb's own 25 ms;
+    the other controllers keep their own ki."""
+    from alpes_dyn.control.controller import DEFAULT_GAINS
+    from alpes_dyn.control.hand_grasp import HAND_CHAIN_GAINS, HAND_GAINS, hand_gains
+
+    step = hand_run[0]
+    for name, s in step.chain_steps.items():
+        c, want = s.controller, hand_gains("sensor", None, name)
+        prefilter = HAND_CHAIN_GAINS.get(name, {}).get("sensor", HAND_GAINS)["prefilter_s"]
+        assert (c.ki, c.kp, c.prefilter_s, c.approach_rate) == (want["ki"], DEFAULT_GAINS["sensor"]["kp"], prefilter,
+                                                                HAND_GAINS["approach_rate"])
+        assert want["ki"] < DEFAULT_GAINS["sensor"]["ki"]
+    assert step.chain_steps["thumb"].controller.prefilter_s < step.chain_steps["index"].controller.prefilter_s
+    assert hand_gains("pi")["ki"] == DEFAULT_GAINS["pi"]["ki"] and hand_gains("pi", {"ki": 0.5}, "thumb")["ki"] == 0.5
+
+
 @needs_cc
 def test_c_hand_step_equals_the_python_step(hand_run, tmp_path):
     from alpes_dyn.control.chand import hand_main_input, read_hand_output, write_c_hand

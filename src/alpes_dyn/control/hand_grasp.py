@@ -1,5 +1,6 @@
 """The hand's grasp of the cylinder: the default references and gains of its force loops and the cylinder's normal at
-a chain's fingertip (:data:`HAND_LEVELS`, :data:`HAND_GAINS`, :func:`cylinder_normal`, :func:`cylinder_in_chain`),
+a chain's fingertip (:data:`HAND_LEVELS`, :data:`HAND_GAINS`, :func:`hand_gains`, :func:`cylinder_normal`,
+:func:`cylinder_in_chain`),
 shared by the whole hand's step (:class:`~alpes_dyn.control.hand_step.HandForceStep`) and the simulated grasp
 (:func:`~alpes_dyn.control.hand_loop.run_hand_control`).
 """
@@ -15,9 +16,10 @@ from ..model.hand_chains import chain_frame
 from ..model.mjcf import CYLINDER
 from ..model.params import HandParams
 from ..model.robot import Model
-from .controller import _normal
+from .controller import DEFAULT_GAINS, _normal
 
-__all__ = ["HAND_LEVELS", "HAND_GAINS", "cylinder_normal", "cylinder_in_chain"]
+__all__ = ["HAND_LEVELS", "HAND_GAINS", "HAND_CONTROLLER_GAINS", "HAND_CHAIN_GAINS", "hand_gains", "cylinder_normal",
+           "cylinder_in_chain"]
 
 #: Default references of :func:`~alpes_dyn.control.hand_loop.run_hand_control` per chain, N: (before, after) the
 #: step at ``step_time``. Within what each fingertip holds on the :data:`~alpes_dyn.model.mjcf.CYLINDER` before
@@ -33,6 +35,40 @@ HAND_LEVELS: dict[str, tuple[float, float]] = {
 #: surface at the up-step and its force falls to 0). The release (the prefilter while a reference falls) as the
 #: rise. The hand's loops with these settings: ``benchmarks/results/hand_control.json``.
 HAND_GAINS: dict[str, float] = {"approach_rate": 0.015, "prefilter_s": 0.04, "release_s": 0.04}
+#: One controller's settings of the hand's loops over :data:`HAND_GAINS`: the sensor loop's integral as tuned on the
+#: cylinder (ki 1.6 N m/(N s)); the block's faster integral (:data:`.DEFAULT_GAINS`, set for the rise on the block)
+#: let a finger's pad slide off the cylinder at the end of its approach, its force falling to 0.
+HAND_CONTROLLER_GAINS: dict[str, dict[str, float]] = {"sensor": {"ki": 1.6}}
+#: One chain's settings over :data:`HAND_CONTROLLER_GAINS`, per controller: the thumb's sensor loop with the block's
+#: 25 ms prefilter. Its pad, opposite the fingers, holds more (:data:`HAND_LEVELS`) and did not slide with it; with
+#: the fingers' 40 ms (88 ms of rise alone) its 10-90 % rise was 91-100 ms on the +-20 % draws of the hand, with 25 ms
+#: 53-62 ms, its overshoot and RMSE within 0.6 and 0.2 points of the step of what they were (the block's ki 2.4 on
+#: top raised its RMSE to 3 % of the step on a draw). The hand's loops with these settings:
+#: ``benchmarks/results/hand_control.json``.
+HAND_CHAIN_GAINS: dict[str, dict[str, dict[str, float]]] = {"thumb": {"sensor": {"prefilter_s": 0.025}}}
+
+
+def hand_gains(controller: str, gains: dict | None = None, chain: str | None = None) -> dict[str, float]:
+    """The :class:`.ForceController` settings of a hand's chain: :data:`.DEFAULT_GAINS` of ``controller``, overridden
+    by :data:`HAND_GAINS`, by :data:`HAND_CONTROLLER_GAINS` of ``controller``, by :data:`HAND_CHAIN_GAINS` of
+    ``chain`` and ``controller``, then by ``gains``.
+
+    Parameters
+    ----------
+    controller : str
+        The controller's kind, a key of :data:`.DEFAULT_GAINS`.
+    gains : dict or None, optional
+        The caller's overrides (any :class:`.ForceController` field).
+    chain : str or None, optional
+        The chain (:func:`~alpes_dyn.model.hand_chains.hand_chains`); None: a finger's settings.
+
+    Returns
+    -------
+    dict of str to float
+        The settings.
+    """
+    return {**DEFAULT_GAINS[controller], **HAND_GAINS, **HAND_CONTROLLER_GAINS.get(controller, {}),
+            **HAND_CHAIN_GAINS.get(chain or "", {}).get(controller, {}), **(gains or {})}
 
 
 def cylinder_normal(model: Model, q: np.ndarray, center: Sequence[float], axis: Sequence[float] = (0.0, 1.0, 0.0),

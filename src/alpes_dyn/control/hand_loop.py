@@ -47,7 +47,7 @@ class HandControlScenario:
     fixed and frictionless), contact and joint stops on, joint friction on, palm down (the fingers flex with
     gravity toward the cylinder under the palm), at ``dt / substeps``; its parameters ``plant_params``
     (default: the controller's). Each chain (:func:`hand_chains`) has its own loop of :class:`.ForceController`
-    (``controller``, :data:`.DEFAULT_GAINS` overridden by :data:`HAND_GAINS`, then by ``gains``), its own EKF on its own encoder (the
+    (``controller``, :func:`~alpes_dyn.control.hand_grasp.hand_gains`, then ``gains``), its own EKF on its own encoder (the
     model of :func:`chain_model`) and its own FlexiForce, with the sensors of :class:`.ControlScenario`
     (``encoder_noise_counts``, ``torque_noise``, ``force_noise``, ``force_resolution``), at 1 kHz; the
     contact normal of the feedforward and of the EKF's force input is the cylinder's at the estimated

@@ -11,7 +11,9 @@ It is the loop of :func:`~alpes_dyn.control.hand_loop.run_hand_control`, the han
   :class:`~alpes_dyn.bench.mujoco_hand.MujocoHand`'s ``"cylinder"`` scene reads them;
 * each chain's model: :func:`~alpes_dyn.model.hand_chains.chain_model` of the parameter file palm down, the thumb's
   at the ab/adduction target (its EKF's with the file's friction, eq. 2.6-2.7);
-* the gains: :data:`.DEFAULT_GAINS` overridden by :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS`, then ``gains``;
+* the gains: :func:`~alpes_dyn.control.hand_grasp.hand_gains` (:data:`.DEFAULT_GAINS` overridden by
+  :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS` and the controller's and the chain's own hand settings), then
+  ``gains``;
 * the contact normal of a chain at sample k: given to :meth:`HandForceStep.step` (``normals``, (5, 3), each in its
   chain's base frame: what the C step takes), or by default the cylinder's
   (:data:`~alpes_dyn.model.mjcf.CYLINDER`, :func:`~alpes_dyn.control.hand_grasp.cylinder_normal`) at the fingertip
@@ -40,8 +42,7 @@ from ..model.mjcf import palm_down_params
 from ..model.params import HandParams, load_params
 from ..model.trust import check_trusted
 from .blocks import EncoderPD
-from .controller import DEFAULT_GAINS
-from .hand_grasp import HAND_GAINS, cylinder_in_chain, cylinder_normal
+from .hand_grasp import cylinder_in_chain, cylinder_normal, hand_gains
 from .realism_loop import Compensation
 from .step import ForceStep, LoopDesign, _checked_settings, _number
 
@@ -74,7 +75,7 @@ class HandForceStep:
         s: the PD's target ramped from 0 to ``thumb_abduction`` over it (a motor that cannot push back cannot
         brake an overshoot; 0: the target at once).
     gains : dict or None
-        Overrides of the chains' controller settings (after :data:`~alpes_dyn.control.hand_grasp.HAND_GAINS`).
+        Overrides of the chains' controller settings (after :func:`~alpes_dyn.control.hand_grasp.hand_gains`).
     compensation : Compensation or None
         The effects' compensation, every chain's (its ``force_scale`` a number or a dict by chain).
     compiled : bool
@@ -135,7 +136,6 @@ class HandForceStep:
         self.chains = hand_chains(p)
         self.motor_names = (*self.chains, ABDUCTION)
         self.tau_max = float(p.tau_max)
-        settings = {**DEFAULT_GAINS[controller], **HAND_GAINS, **(gains or {})}
         self.chain_steps: dict[str, ForceStep] = {}
         self._cylinder: dict[str, tuple[np.ndarray, np.ndarray]] = {}
         for c in self.chains:
@@ -144,7 +144,8 @@ class HandForceStep:
             self._cylinder[c] = cylinder_in_chain(p, c, abd)
             q_rest = model.static_equilibrium(np.zeros(model.n))
             design = LoopDesign(model, cylinder_normal(model, q_rest, *self._cylinder[c]), self.tau_max,
-                                dict(settings), params=p, contact_q=tuple(q_rest.tolist()), observer_model=observer)
+                                hand_gains(controller, gains, c), params=p, contact_q=tuple(q_rest.tolist()),
+                                observer_model=observer)
             chain_comp = comp if not isinstance(comp.force_scale, dict) else _one_scale(comp, c)
             self.chain_steps[c] = ForceStep.from_design(design, controller, dt, chain_comp, noise=noise,
                                                         force_filter_s=f_s, compiled=bool(compiled),
