@@ -21,7 +21,7 @@ PACKAGE = Path(alpes_dyn.__file__).parent
 # Floors from the ground up; a module may import its own floor and the floors below it. The top floor is the
 # package alpes_dyn.cli: its front door (main, exit codes), parser, common helpers and command-family modules.
 FLOORS = ("base", "model", "symbolic", "simulation", "bench", "estimation", "analysis", "control", "studies", "cli")
-BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "_moved", "_version"}
+BASE = {"errors", "checks", "limits", "fileio", "progress", "rebuild", "blas_threads", "_moved", "_version"}
 
 
 def floor_of(dotted: str) -> str:

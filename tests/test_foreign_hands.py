@@ -213,3 +213,30 @@ def test_held_wrist_makes_each_finger_a_branch(shadow):
     assert np.max(np.abs(bias - d.qfrc_bias)) <= 1e-12 * np.max(np.abs(d.qfrc_bias))
     assert set(closed_motors(held, "rh_A_FFJ0")) == {"rh_A_FFJ4", "rh_A_FFJ3", "rh_A_FFJ0"}
     assert len(closed_motors(shadow[0], "rh_A_FFJ0")) == 20  # with the wrist free: the whole hand
+
+
+def test_a_springless_hand_s_rest_refused_with_what_the_user_gives(shadow):
+    """The published hand has no spring (its joints held by position servos, imported as torque motors): with the
+    motors off gravity alone places the joints, 13 of 24 past their ranges. The force loop's block refuses that rest
+    naming every such joint's count and what the spec needs (springs, rest angles inside the ranges); the same hand
+    with springs at mid-range rests inside its ranges, where gravity and the springs balance (to 1e-9 N m)."""
+    import dataclasses
+
+    from alpes_dyn.model.block_scene import place_block
+
+    model = shadow[0]
+    with pytest.raises(ad.InputError) as err:
+        place_block(model, "rh_ffdistal", "rh_A_FFJ0")
+    msg = str(err.value)
+    assert "joint 'rh_WRJ2' at 0.7108 rad" in msg and "(and 12 more:" in msg, msg
+    assert "13 of them have no spring" in msg and "[stiffness]" in msg and "[rest_angle]" in msg, msg
+    mid = {j: 0.5 * (lo + hi) for j, lo, hi in zip(model.joint_names, model.lower, model.upper)}
+    spec = dataclasses.replace(model.spec, stiffness={j: 1.0 for j in model.joint_names}, rest_angle=mid,
+                               spring=None)
+    sprung = ad.Model(model.urdf, spec)
+    scene = place_block(sprung, "rh_ffdistal", "rh_A_FFJ0")
+    rest = sprung.static_equilibrium(np.zeros(sprung.n))
+    assert np.all((sprung.lower <= rest) & (rest <= sprung.upper))
+    spring = 1.0 * (rest - np.array([mid[j] for j in sprung.joint_names]))  # k (q - q_rest), k = 1 N m/rad
+    assert np.max(np.abs(model.gravity_torque(rest) + spring)) < 1e-9  # the springless hand's gravity alone
+    assert np.allclose(scene.rest_q, rest, atol=1e-12)

@@ -22,6 +22,7 @@ import sys
 import warnings
 from typing import Callable, Sequence
 
+from ..blas_threads import one_blas_thread
 from ..errors import AlpesDynError, InputError
 from ..fileio import native_stderr_to
 from ..limits import MAX_ARGS, max_bytes
@@ -111,6 +112,7 @@ def main(argv: Sequence[str] | None = None) -> int:
     nowhere, the exit code unchanged.
     """
     _tolerant_streams()
+    one_blas_thread()  # OpenBLAS's spinning workers off the cores the compiled loops use (blas_threads)
     argv = list(sys.argv[1:] if argv is None else argv)
     printed: list[str] = []
     with warnings.catch_warnings(record=True) as caught:

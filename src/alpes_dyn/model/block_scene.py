@@ -196,6 +196,31 @@ def _quat_z_to(n: np.ndarray) -> tuple[float, float, float, float]:
     return (float(w), float(x), float(y), float(z))
 
 
+def _rest(model: Any) -> np.ndarray:
+    """The rest configuration (motors off) q (n,), rad, inside the joint ranges; :class:`~alpes_dyn.InputError` where
+    there is none or a joint rests outside its range: every such joint counted, and where they have no spring (gravity
+    alone places them: a published MJCF's position servos held them, and its import keeps those as torque motors) what
+    the user gives them."""
+    try:
+        rest = model.static_equilibrium(np.zeros(model.n))
+    except InputError as exc:
+        raise InputError(f"spec: the rest configuration (motors off) cannot be found: {exc}") from None
+    out = [i for i in range(model.n) if not model.lower[i] <= rest[i] <= model.upper[i]]
+    if not out:
+        return rest
+    i, names = out[0], [model.joint_names[j] for j in out]
+    more = f" (and {len(out) - 1} more: {', '.join(names[1:4])}{', ...' if len(out) > 4 else ''})" if len(out) > 1 else ""
+    loose = sum(j in model.springless_joints for j in names)
+    what = ("move the rest inside: the spec's [rest_angle], stiffer springs" if not loose else
+            f"{'it has' if len(names) == 1 else f'{loose} of them have'} no spring: gravity alone places them, where "
+            "a published MJCF's position servos held them, which its import keeps as torque motors; give each a "
+            "spring in the spec: its [stiffness], a servo's kp times its gear squared, and a [rest_angle] inside "
+            "its range")
+    raise InputError(f"spec: the rest configuration (motors off) has joint {names[0]!r} at {rest[i]:.4g} rad, outside "
+                     f"its range [{model.lower[i]:.4g}, {model.upper[i]:.4g}]{more}: the plant would start on its "
+                     f"stop, which the controller's model does not hold ({what})")
+
+
 def place_block(model: Any, frame: str | None = None, motor: str | None = None,
                 contact_q: Sequence[float] | None = None, *, approach: float = 0.25, tip_radius: float = 0.005,
                 half_width: float | None = None) -> BlockScene:
@@ -238,17 +263,7 @@ def place_block(model: Any, frame: str | None = None, motor: str | None = None,
             raise InputError(f"{name}: expected a number in {'(0, 1)' if name == 'approach' else '(0, inf) m'}, "
                              f"got {x!r}")
     n_j, tr = model.n, model.transmission
-    try:
-        rest = model.static_equilibrium(np.zeros(n_j))
-    except InputError as exc:
-        raise InputError(f"spec: the rest configuration (motors off) cannot be found: {exc}") from None
-    out = [i for i in range(n_j) if not model.lower[i] <= rest[i] <= model.upper[i]]
-    if out:
-        i = out[0]
-        raise InputError(f"spec: the rest configuration (motors off) has joint {model.joint_names[i]!r} at "
-                         f"{rest[i]:.4g} rad, outside its range [{model.lower[i]:.4g}, {model.upper[i]:.4g}]: the "
-                         "plant would start on its stop, which the controller's model does not hold (move the rest "
-                         "inside: the spec's [rest_angle], stiffer springs)")
+    rest = _rest(model)
     if contact_q is None:
         q_c = _default_contact_q(model, k, rest, float(approach))
     else:

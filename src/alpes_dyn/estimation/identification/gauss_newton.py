@@ -173,8 +173,8 @@ class GaussNewton:
         for sweep in range(sweeps):
             if sweep and better.any():
                 r[better], A[better] = pb.state_rows(nodes, offs, glob, np.flatnonzero(better))
-            Hn = np.einsum("ski,skj->sij", A, A)
-            gn = np.einsum("sk,ski->si", r, A)
+            Hn = A.transpose(0, 2, 1) @ A  # (BLAS: einsum's loops took seconds on the whole Shadow hand)
+            gn = (r[:, None, :] @ A)[:, 0]
             Dn = np.einsum("sii->si", Hn)
             dn = -np.linalg.solve(Hn + mu_n[:, None, None] * np.einsum("si,ij->sij", Dn + 1e-12, np.eye(nx)),
                                   gn[:, :, None])
@@ -235,7 +235,7 @@ class GaussNewton:
             solve = kkt_from_blocks(e.J, e.Cv, Cr, shape, 1e-9, np.zeros(0), lambda: None)
             if solve is None:
                 break
-            gs = np.einsum("sk,skd->sd", e.r, e.J).reshape(-1)
+            gs = (e.r[:, None, :] @ e.J).reshape(-1)
             sol = solve(np.concatenate([-gs, -e.c.reshape(-1)]))
             d, lam = sol[:shape.nz].reshape(n_int, nx), sol[shape.nz:]
             nu = 1.5 * float(np.max(np.abs(lam), initial=0.0)) + 1e-12

@@ -51,7 +51,9 @@ def blocks_of(J: np.ndarray, nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
         A'A (s, nb, nb), A'P (s, nb, ng), the sum of the P'P (ng, ng).
     """
     A, P = J[:, :, :nb], J[:, :, nb:]
-    return np.einsum("ski,skj->sij", A, A), np.einsum("ski,skj->sij", A, P), np.einsum("ski,skj->ij", P, P)
+    At = A.transpose(0, 2, 1)
+    Pf = P.reshape(-1, P.shape[2])  # (a view: the intervals' rows stacked)
+    return At @ A, At @ P, Pf.T @ Pf
 
 
 def assembled(gs: np.ndarray, rg: np.ndarray | float, nb: int) -> np.ndarray:
@@ -93,7 +95,7 @@ def j_dot(J: np.ndarray, z_local: np.ndarray, z_glob: np.ndarray) -> np.ndarray:
         J z.
     """
     nb = z_local.shape[1]
-    return np.einsum("skd,sd->sk", J[:, :, :nb], z_local) + J[:, :, nb:] @ z_glob
+    return (J[:, :, :nb] @ z_local[:, :, None])[:, :, 0] + J[:, :, nb:] @ z_glob
 
 
 @dataclass
@@ -143,7 +145,7 @@ class NormalBlocks:
         AA, AP, PP = blocks_of(J, self.AA.shape[1])
         self.AA[sl], self.AP[sl] = AA, AP
         self.PP += PP
-        self.gs[sl] = np.einsum("sk,skd->sd", r, J)
+        self.gs[sl] = (r[:, None, :] @ J)[:, 0]
 
     def gradient(self, rg: np.ndarray) -> np.ndarray:
         """(nz,) the cost's gradient J'r (+ ``rg`` for the global variables), as
@@ -189,7 +191,7 @@ def remainders(pb: Any, point: tuple[np.ndarray, np.ndarray, np.ndarray], solve:
     G = np.zeros((k, pb.n_int, nb + pb.ng))
 
     def products(sl: slice, J_c: np.ndarray, x_c: np.ndarray) -> None:
-        G[:, sl] = np.einsum("esk,skd->esd", R[:, sl], J_c)
+        G[:, sl] = (R[:, sl].transpose(1, 0, 2) @ J_c).transpose(1, 0, 2)  # (BLAS, not einsum's loops)
     pb.evaluate(*point, sink=products)
     Z = [solve(np.concatenate([assembled(g, 0.0, nb), np.zeros(pb.nc)]))[:nz] for g in G]
     G = None
