@@ -2,6 +2,14 @@ import numpy as np
 import pytest
 
 
+def pytest_configure(config):
+    """Each test process runs BLAS on one thread, as ``alpes-dyn`` does (:mod:`alpes_dyn.blas_threads`): two
+    workers on two cores, each with spinning BLAS threads, would take the cores from each other."""
+    from alpes_dyn.blas_threads import one_blas_thread
+
+    one_blas_thread()
+
+
 @pytest.fixture
 def rng():
     return np.random.default_rng(12345)

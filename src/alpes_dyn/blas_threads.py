@@ -6,8 +6,8 @@ processes a small BLAS or LAPACK call then costs its spin, not its arithmetic: o
 identification (a band of 3840 columns, half-bandwidth 95) LAPACK's band LU took two hundred times its
 one-thread CPU time, the band's solve with 500 right-hand sides six times. :func:`one_blas_thread` sets every
 BLAS this process has loaded to one thread (through threadpoolctl, which knows each BLAS build's setter), unless
-``OPENBLAS_NUM_THREADS`` (or ``OMP_NUM_THREADS``) names the count; the library's compiled loops keep their own threads (:func:`alpes_dyn.simulation.codegen`'s ``threads``).
-``alpes-dyn`` calls it at start; a Python user calls it, or sets the environment variable before importing numpy.
+``OPENBLAS_NUM_THREADS`` (or ``OMP_NUM_THREADS``) names the count; the library's compiled loops keep their own
+threads (:func:`alpes_dyn.simulation.codegen`'s ``threads``). ``alpes-dyn`` calls it at start, the test suite too; a Python user calls it, or sets the environment variable before importing numpy.
 """
 
 from __future__ import annotations
