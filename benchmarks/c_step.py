@@ -37,9 +37,11 @@ its own: ``c_us_min``, the figure held against the goal, is the mean over the re
 minimum over the passes (every step of the record counts, the contact's and the free motion's alike, each at its
 own cost), and ``c_us_median`` the same of each step's median, kept beside it (their gap is the load's share). The
 earlier figures are kept: PASSES passes of ``main -t 1``, each its own process, their best processor time per step
-(``c_cpu_us``: on this shared machine a whole pass is rarely quiet, and other jobs sharing the core inflated it to
-50-57 us on identified finger chains of 30-40 us), their median (``c_cpu_us_median``) and the best pass's wall
-clock ("C us", ``c_us``).
+(``c_cpu_us``: on a shared machine a whole pass is rarely quiet; the hand's record had identified finger chains
+with the stick-slip law at 26-45 us on most rows and 50-57 us on a few), their median (``c_cpu_us_median``) and
+the best pass's wall clock ("C us", ``c_us``). At a load of 6-7 on two cores the per-step minimum was 2-4 % below
+the best pass's processor time (finger2 4.8 against 5.0 us, finger3 9.1 against 9.3, the hand 43.5 against 45.4;
+the hand with an identified thumb's file with the stick-slip law and the torque delay 130 against 133).
 
 The columns C/py give the C step's time as a fraction of the Python step's. The model "hand" is the whole hand's
 step (HandForceStep, alpes_dyn.control.chand's C: five chains and the ab/adduction PD; the stand-in's cylinder scene,
