@@ -178,3 +178,37 @@ def test_turned_falls_back_to_the_rig_that_recorded(bench_loop, monkeypatch, tri
     assert all(w.endswith(f"guard: {w.split(':')[0]} tripped") for w in why)
     assert [(h.rig, h.seed) for h in made] == [(r, 7 + ("level", "hanging").index(r)) for r in
                                                ("level", "hanging")] and all(h.closed for h in made)
+
+
+def test_turned_stops_on_a_rigs_other_error(bench_loop, monkeypatch):
+    """An error of a rig's run that is not a guard trip (its settings: no encoder counts left) stops the turned
+    experiment as it stops ``experiment --rig both``: no run, the rig named with the error (the row's
+    experiment_error), the next rig never turned to."""
+    from alpes_dyn.estimation.experiments import turned
+    from alpes_dyn.model.robot import Model
+
+    made = []
+
+    class Hand:
+        def __init__(self, model, truth, scene, seed, rig):
+            self.rig = rig
+            made.append(rig)
+
+        def close(self):
+            pass
+
+    class Scored:
+        def __init__(self, hw):
+            self.hw = hw
+
+        def close(self):
+            self.hw.close()
+
+    def experiment(hw, nominal, design, **kw):
+        raise InputError("margin: no encoder counts for the excitation")
+
+    monkeypatch.setattr(bench_loop, "MujocoHand", Hand)
+    monkeypatch.setattr(bench_loop, "Scored", Scored)
+    monkeypatch.setattr(turned, "run_experiment", experiment)
+    runs, why = bench_loop.run_turned("finger3", None, 7, Model.alpes("finger3", friction=True))
+    assert runs == [] and why == ["level: margin: no encoder counts for the excitation"] and made == ["level"]

@@ -85,6 +85,27 @@ def test_c_step_equals_the_python_step_on_the_stand_in(sensor, tmp_path):
 
 
 @needs_cc
+def test_c_step_timed_per_step(sensor, tmp_path):
+    """``main -t 3``: the record three times, each step timed on its own; its last command the free run's (each
+    pass from the first sample), each step's minimum over the passes (mean over the steps) at most its median and
+    at most the passes' wall clock per step (a step's minimum is at most its mean; the steps' sum at most the
+    passes' whole time)."""
+    import re
+
+    step, exe, run = sensor
+    U, _, _ = _run(exe, step, run, step.design.normal, tmp_path)
+    out = subprocess.run([str(exe), "-t", "3", str(tmp_path / "in.txt")], check=True, capture_output=True,
+                         text=True).stdout
+    m = re.fullmatch(r"(\d+) steps x 3: (\S+) us per step, (\S+) us of processor time \(command\[0\] = (\S+)\); "
+                     r"each step's minimum over the passes (\S+) us, its median (\S+) us \(means over the steps\)\n",
+                     out)
+    assert m, out
+    n, wall, cpu, u0, lo, med = (float(x) for x in m.groups())
+    assert n == len(run.t) and u0 == pytest.approx(U[-1, 0], abs=1e-15)
+    assert 0 < lo <= med * (1 + 1e-9) and lo <= wall * (1 + 1e-9) and cpu > 0
+
+
+@needs_cc
 def test_c_step_takes_the_normal_at_run_time(sensor, tmp_path):
     """Two other normals (one not of unit length) given to the same build: Python's ForceStep built with each."""
     from alpes_dyn.control.step import ForceStep

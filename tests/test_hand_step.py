@@ -101,6 +101,12 @@ def test_c_hand_step_equals_the_python_step(hand_run, tmp_path):
     np.testing.assert_allclose(U, rec["command"], rtol=0, atol=TOL)
     np.testing.assert_allclose(Z, rec["z"], rtol=0, atol=TOL)
     np.testing.assert_allclose(F, rec["F_fb"], rtol=0, atol=TOL)
+    # main -t 2: the record twice, each step timed (cstep.TIME_STEPS_C): its last command the free run's, each
+    # step's minimum over the passes at most its median and at most the passes' wall clock per step
+    timed = subprocess.run([str(d / "main"), "-t", "2", str(d / "in.txt")], check=True, capture_output=True,
+                           text=True).stdout.replace(";", "").replace(",", "").replace(")", "").split()
+    wall, u0, lo, med = (float(timed[i]) for i in (4, 15, 22, 26))
+    assert u0 == pytest.approx(U[-1, 0], abs=1e-15) and 0 < lo <= med * (1 + 1e-9) and lo <= wall * (1 + 1e-9)
     bad = rec["counts"][:2].copy()
     bad[1, 2] = np.nan
     (d / "bad.txt").write_text(hand_main_input(bad, rec["torque"][:2], rec["force"][:2], rec["ref"][:2],

@@ -52,8 +52,8 @@ def test_first_and_staged_rounds():
 
 def test_the_asked_round():
     """What the kept fit asks for: the effects its verdict names, not yet tried; the rotor where a compliance is
-    above three standard errors; the tendon-sheath friction alone; nothing for an adequate fit. Kept on a lower
-    residual."""
+    above three standard errors, in place of a kept tendon-sheath friction; the tendon-sheath friction alone;
+    nothing for an adequate fit. Kept on a lower residual."""
     asked = ROW["asked"]
     stick = "stick-slip / Coulomb friction"
     assert asked.proposal(fit(missing=[stick, SIGNATURES["torque_rate"]]), KEPT) == KEPT + ("stiction", "delay")
@@ -66,6 +66,9 @@ def test_the_asked_round():
     assert asked.proposal(fit(**within), KEPT) is None
     sheath = "tendon-sheath friction (a torque following the tension times the sign of the motor velocity)"
     assert asked.proposal(fit(missing=[stick, sheath], **stretching), KEPT) == KEPT + ("capstan",)
+    # the rotor in place of a kept sheath friction (the thumb's walk: capstan kept, then the cable seen stretching)
+    assert asked.proposal(fit(**stretching), KEPT + ("capstan",), {"capstan"}) == KEPT + ("rotor",)
+    assert asked.proposal(fit(missing=[stick]), KEPT + ("capstan",), {"capstan"}) == KEPT + ("capstan", "stiction")
     assert asked.proposal(fit(ok=True, missing=[stick]), KEPT) is None
     assert asked.accepts(fit(0.59), fit(0.6)) and not asked.accepts(fit(0.6), fit(0.6))
 

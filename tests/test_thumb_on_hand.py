@@ -88,3 +88,48 @@ def test_thumb_stand_in_bad_scene():
         MujocoHand("thumb", scene="block")
     with pytest.raises(InputError, match="^scene: the cylinder scene is the hand's, got model 'thumb'"):
         MujocoHand("thumb", scene="cylinder")
+
+
+def test_thumb_hung_records_with_its_abduction_where_gravity_holds_it(tmp_path):
+    """``experiment --bench mujoco --model thumb --rig hanging``'s run (turned.run_turned in the hung rig, the
+    stand-in turned, shortened): hung fingers down, gravity swings the relaxed ab/adduction off its palm-up stop
+    to where it hangs; the calibration finds that rest (its counts the stand-in's true ab/adduction angle through
+    the pulley, within a count), the ab/adduction's command stays 0 N m, its true joint stays within 0.5 degree of
+    where it hung, the flexion's true joints stay off their stops during the record, and the recording carries the
+    hung gravity (the file's turned a quarter turn about y: (g, 0, 0))."""
+    pytest.importorskip("mujoco")
+    from alpes_dyn.bench.effects import OFFSET_COUNTS, SLACK_DEG
+    from alpes_dyn.bench.mujoco_hand import MujocoHand
+    from alpes_dyn.estimation.experiments.recording import read_recording
+    from alpes_dyn.estimation.experiments.turned import run_turned
+    from alpes_dyn.model.mjcf import joint_permutation
+
+    q, hands = [], []
+
+    def hand_in(rig):
+        hw = MujocoHand("thumb", seed=12, rig=rig)
+        perm = joint_permutation(hw._plant.mj, list(THUMB.joint_names))
+        write = hw.write
+        hw.write = lambda u: (write(u), q.append(hw._data.qpos[perm].copy()))
+        hands.append(hw)
+        return hw
+
+    res = run_turned(hand_in, THUMB, ExperimentDesign(duration=0.5), ("hanging",), path=tmp_path / "rec.csv",
+                     stage_seconds=0.5, stages=(1.0,), hold=0.5, max_holds=4, tolerance=100.0)
+    run = res.runs[0]
+    cal, tr = run.calibration, THUMB.transmission
+    assert res.rigs == ("hanging",) and res.tripped == ()
+    q = np.array(q)
+    off = len(q) - len(run.log.t)  # q[off]: the truth when the experiment's log starts (after the calibration)
+    per_rad = float(np.abs(tr.S[1]).sum()) * tr.counts_per_rev / (2 * math.pi)
+    counts = float(tr.S[1] @ q[off]) * tr.counts_per_rev / (2 * math.pi)  # the abd's true angle through its pulley
+    assert math.degrees(q[off, 0]) > 10.0  # hung: off its palm-up stop at 0
+    # the rest read against the truth: the stand-in's encoder zero off by OFFSET_COUNTS, the relaxed cable's slack
+    assert abs(cal.rest[1] - counts) <= OFFSET_COUNTS + per_rad * math.radians(SLACK_DEG) + 2.0
+    written = run.log.command[~np.isnan(run.log.command[:, 1])]
+    assert np.all(written[:, 1] == 0.0) and run.bias[1] == 0.0
+    assert np.degrees(np.abs(q[off:, 0] - q[off, 0])).max() < 0.5
+    rows = slice(off + run.record_rows.start, off + run.record_rows.stop)
+    assert np.degrees(q[rows, 1:]).min() > 1.0 and np.degrees(q[rows, 1:]).max() < 89.0
+    rec = read_recording(tmp_path / "rec.csv", THUMB)
+    np.testing.assert_allclose(rec.gravity, np.tile([9.81, 0.0, 0.0], (rec.n_samples, 1)), atol=1e-9)

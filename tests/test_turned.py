@@ -104,3 +104,21 @@ def test_a_guard_trip_names_its_rig_and_joins_nothing(tmp_path):
     assert isinstance(e.value, GuardTripped) and e.value.rig == "hanging" and e.value.reason == "period"
     assert e.value.runs == [] and len(asked) == 1 and asked[0].closed == 1  # the level hand never asked for
     assert not path.exists()
+
+
+def test_keep_going_where_every_rig_trips_names_each(tmp_path):
+    """keep_going, both rigs' loops missing a period: the last rig's RigTripped, the earlier rig's trip in its
+    ``tripped`` (the benchmark and the CLI name every rig left out), both hands closed, no file."""
+    asked = []
+
+    def hand_in(rig):
+        asked.append(Closing(MujocoHand("finger3", seed=11, rig=rig), after=50, gap=0.01))
+        return asked[-1]
+
+    path = tmp_path / "rec.csv"
+    with pytest.raises(RigTripped, match=r"^rig level: .*period") as e:
+        run_turned(hand_in, FINGER3, ExperimentDesign(duration=0.5), ("hanging", "level"), path=path,
+                   keep_going=True, **FAST)
+    assert e.value.rig == "level" and e.value.runs == []
+    assert [rig for rig, _ in e.value.tripped] == ["hanging"] and "period" in e.value.tripped[0][1]
+    assert [h.closed for h in asked] == [1, 1] and not path.exists()

@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import InputError
 from ..estimation.cexport.cexport import check_output_directory, write_sources
 from .cexport import READ_ROWS_C
-from .cstep import LOAD_STATE_C, step_c_sources, step_state_row
+from .cstep import LOAD_STATE_C, TIME_STEPS_C, step_c_sources, step_state_row
 from .hand_step import HandForceStep
 
 __all__ = ["hand_c_sources", "write_c_hand", "hand_main_input", "hand_state_row", "read_hand_output", "C_HAND_BUILD",
@@ -173,7 +173,8 @@ _MAIN = r"""/* main.c -- test program of alpes_hand.c (alpes-dyn codegen --step 
                                        back (5)
    alpes_hand_main -s FILE|-           the same, each tick one step from the state given on its line (after the
                                        readings: STATE_ROW numbers, load_state's order), not from the tick before
-   alpes_hand_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor)
+   alpes_hand_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor;
+                                       each step's minimum and median over the passes)
 
    FILE: one tick per line: counts (6) torque (6) force (5) reference (5) normals (15).
    Build: {build}
@@ -220,26 +221,7 @@ int main(int argc, char** argv) {{
       for (i = 0; i < 5; ++i) printf(" %.17g", F[i]);
       printf("\n");
     }}
-  }} else {{
-    struct timespec t0, t1;
-    double sec;
-    clock_t c0 = clock(), c1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    for (r = 0; r < repeat; ++r) {{
-      alpes_hand_init(&s);
-      for (k = 0; k < n; ++k) {{
-        const double* x = rows + k * NR;
-        alpes_hand_step(&s, x, x + 6, x + 12, x + 17, x + 22, command, work);
-      }}
-    }}
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    c1 = clock();
-    sec = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
-    printf("%ld steps x %ld: %.4f us per step, %.4f us of processor time (command[0] = %.17g)\n", n, repeat,
-           1e6 * sec / (n * repeat > 0 ? n * repeat : 1),
-           1e6 * (double)(c1 - c0) / CLOCKS_PER_SEC / (n * repeat > 0 ? n * repeat : 1), command[0]);
-  }}
-  free(rows);
+{time_steps}  free(rows);
   return 0;
 }}
 """
@@ -304,6 +286,8 @@ def hand_c_sources(step: HandForceStep, *, about: str = "") -> dict[str, str]:
         **{k: v for k, v in settings.items() if k in ("dt", "target", "ramp", "kp", "kd", "alpha", "tau_max")})
     files["main.c"] = _MAIN.format(
         build=C_HAND_BUILD, read_rows=READ_ROWS_C, state_row=len(hand_state_row(step)),
+        time_steps=TIME_STEPS_C.format(init="alpes_hand_init(&s);",
+                                       step="alpes_hand_step(&s, x, x + 6, x + 12, x + 17, x + 22, command, work);"),
         load_chain="".join(LOAD_STATE_C.format(name=f"load_{c}", type=f"alpes_hand_{c}_state") for c in chains),
         load_chains="\n".join(f"  x = load_{c}(&s->{c}, x);" for c in chains))
     return dict(sorted(files.items()))

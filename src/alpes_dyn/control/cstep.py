@@ -49,7 +49,7 @@ from .step import ForceStep
 from .step_parts import StepParts
 
 __all__ = ["step_c_sources", "write_c_step", "step_main_input", "step_state_row", "read_step_output", "C_STEP_BUILD",
-           "STEP_ERRORS", "LOAD_STATE_C"]
+           "STEP_ERRORS", "LOAD_STATE_C", "TIME_STEPS_C"]
 
 C_STEP_BUILD = "cc -O2 -std=c99 -o alpes_step_main main.c alpes_step.c alpes_step_ekf.c alpes_step_force.c -lm"
 """The build of the test program (``alpes_step_ekf.c`` absent for ``"pi"``)."""
@@ -216,7 +216,8 @@ _MAIN = r"""/* main.c -- test program of alpes_step.c (alpes-dyn codegen --step)
    alpes_step_main FILE|-              per tick, one line: the command (NM), [q_hat; qd_hat] (NZ), the force fed back
    alpes_step_main -s FILE|-           the same, each tick one step from the state given on its line (after the
                                        readings: STATE_ROW numbers, load_state's order), not from the tick before
-   alpes_step_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor)
+   alpes_step_main -t REPEAT FILE|-    time the step: the record REPEAT times, us per step (wall clock, processor;
+                                       each step's minimum and median over the passes)
 
    FILE: one tick per line: counts (NM) torque (NM) force reference normal (3) (%.17g printed: read back exactly).
    Build: {build}
@@ -253,30 +254,52 @@ int main(int argc, char** argv) {{
       for (i = 0; i < ALPES_STEP_NZ; ++i) printf(" %.17g", s.z[i]);
       printf(" %.17g\n", s.F_fb);
     }}
-  }} else {{
-    struct timespec t0, t1;
-    double sec;
-    clock_t c0 = clock(), c1;
-    clock_gettime(CLOCK_MONOTONIC, &t0);
-    for (r = 0; r < repeat; ++r) {{
-      alpes_step_init(&s);
-      for (k = 0; k < n; ++k) {{
-        const double* x = rows + k * NR;
-        alpes_step(&s, x, x + NM, x[2 * NM], x[2 * NM + 1], x + 2 * NM + 2, command, work);
-      }}
-    }}
-    clock_gettime(CLOCK_MONOTONIC, &t1);
-    c1 = clock();
-    sec = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
-    printf("%ld steps x %ld: %.4f us per step, %.4f us of processor time (command[0] = %.17g)\n", n, repeat,
-           1e6 * sec / (n * repeat > 0 ? n * repeat : 1),
-           1e6 * (double)(c1 - c0) / CLOCKS_PER_SEC / (n * repeat > 0 ? n * repeat : 1), command[0]);
-  }}
-  free(rows);
+{time_steps}  free(rows);
   return 0;
 }}
 """
 
+
+TIME_STEPS_C = r"""  }} else {{  /* -t REPEAT: the record REPEAT times, each step timed on its own (wall clock) */
+    struct timespec t0, t1, a0, a1;
+    double sec, lo = 0.0, med = 0.0, v, *d, *dt = malloc(sizeof(double) * (n > 0 ? n : 1) * repeat);
+    clock_t c0, c1;
+    long j;
+    if (!dt) {{ fprintf(stderr, "%s: out of memory\n", argv[0]); return 2; }}
+    c0 = clock();
+    clock_gettime(CLOCK_MONOTONIC, &t0);
+    for (r = 0; r < repeat; ++r) {{
+      {init}
+      for (k = 0; k < n; ++k) {{
+        const double* x = rows + k * NR;
+        clock_gettime(CLOCK_MONOTONIC, &a0);
+        {step}
+        clock_gettime(CLOCK_MONOTONIC, &a1);
+        dt[k * repeat + r] = (a1.tv_sec - a0.tv_sec) + 1e-9 * (a1.tv_nsec - a0.tv_nsec);
+      }}
+    }}
+    clock_gettime(CLOCK_MONOTONIC, &t1);
+    c1 = clock();
+    for (k = 0; k < n; ++k) {{  /* each step's passes sorted: its minimum and median */
+      d = dt + k * repeat;
+      for (r = 1; r < repeat; ++r) for (v = d[r], j = r; j > 0 && d[j - 1] > v; --j) d[j] = d[j - 1], d[j - 1] = v;
+      lo += d[0];
+      med += 0.5 * (d[(repeat - 1) / 2] + d[repeat / 2]);
+    }}
+    sec = (t1.tv_sec - t0.tv_sec) + 1e-9 * (t1.tv_nsec - t0.tv_nsec);
+    printf("%ld steps x %ld: %.4f us per step, %.4f us of processor time (command[0] = %.17g); "
+           "each step's minimum over the passes %.4f us, its median %.4f us (means over the steps)\n", n, repeat,
+           1e6 * sec / (n * repeat > 0 ? n * repeat : 1),
+           1e6 * (double)(c1 - c0) / CLOCKS_PER_SEC / (n * repeat > 0 ? n * repeat : 1), command[0],
+           1e6 * lo / (n > 0 ? n : 1), 1e6 * med / (n > 0 ? n : 1));
+    free(dt);
+  }}
+"""
+"""The test programs' ``-t REPEAT`` (C, in ``main``; ``init`` and ``step`` the statements that start a pass and
+make one step of row ``x``): the record run REPEAT times, each step timed on its own (wall clock); one line: the
+passes' wall clock and processor time per step, then the mean over the steps of each step's minimum over the
+passes and of its median (the minimum the step's own cost, the rest the other processes': ``benchmarks/c_step.py``'s
+time rule). The two clock reads per step add about 0.05 us to each."""
 
 LOAD_STATE_C = r"""
 /* The state from a row (a test's, the Python step's state before a tick; cstep.step_state_row's order): the
@@ -380,7 +403,9 @@ def step_c_sources(step: ForceStep, *, about: str = "", prefix: str = "alpes_ste
         observer_note=_observer_note(parts) if filt else "No observer (the pi baseline): s.z and s.P are NaN.",
         z_note="" if filt else "; NaN: no observer", bristles="; z (rad), LuGre's" if nz > 2 * parts.n else "",
         ekf_c=" alpes_step_ekf.c" if filt else "", build=build)
-    files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C,
+    timed = TIME_STEPS_C.format(init="alpes_step_init(&s);", step="alpes_step(&s, x, x + NM, x[2 * NM], x[2 * NM + 1], "
+                                "x + 2 * NM + 2, command, work);")
+    files["main.c"] = _MAIN.format(build=build, read_rows=READ_ROWS_C, time_steps=timed,
                                    load_state=LOAD_STATE_C.format(name="load_state", type="alpes_step_state"))
     if prefix != "alpes_step":
         files = {k.replace("alpes_step", prefix): v.replace("alpes_step", prefix).replace("ALPES_STEP", prefix.upper())

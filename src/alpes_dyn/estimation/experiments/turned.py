@@ -49,11 +49,13 @@ TURNED_RIGS: tuple[str, ...] = ("level", "hanging")
 class RigTripped(GuardTripped):
     """The guard stopped the run in the rig ``rig`` (the finger relaxed first; nothing joined): ``trip`` the
     :class:`~alpes_dyn.estimation.experiments.hand_session.GuardTripped` it raised (its ``reason``, ``t``,
-    ``counts`` and ``log`` copied here), ``runs`` the rigs' runs that recorded before it, [(rig, OnHandResult)]."""
+    ``counts`` and ``log`` copied here), ``runs`` the rigs' runs that recorded before it, [(rig, OnHandResult)],
+    ``tripped`` the rigs left out before it with ``keep_going`` ((rig, reason) each, as
+    :attr:`TurnedResult.tripped`; this rig not among them)."""
 
-    def __init__(self, rig: str, trip: GuardTripped, runs: list) -> None:
+    def __init__(self, rig: str, trip: GuardTripped, runs: list, tripped: Sequence[tuple[str, str]] = ()) -> None:
         super().__init__(f"rig {rig}: {trip}", trip.reason, trip.t, trip.counts, trip.log)
-        self.rig, self.trip, self.runs = rig, trip, runs
+        self.rig, self.trip, self.runs, self.tripped = rig, trip, runs, tuple(tripped)
 
 
 @dataclass
@@ -189,7 +191,8 @@ def run_turned(hand_in: Callable[[str], HardwareInterface], nominal: Model, desi
         Write the joined recording there (CSV), checked before the hand moves.
     keep_going : bool, optional
         False (default): a guard trip stops it all (:class:`RigTripped`). True: the rig is left out (named in
-        ``tripped``) and the next one run; :class:`RigTripped` (the last trip) only where no rig recorded.
+        ``tripped``) and the next one run; :class:`RigTripped` (the last trip, the earlier ones in its ``tripped``)
+        only where no rig recorded.
     **options
         Passed to :func:`~alpes_dyn.estimation.experiments.on_hand.run_experiment` in every rig (``margin``,
         ``stages``, ``stage_seconds``, ``hold``, ``max_holds``, ``tolerance``); each rig is calibrated first
@@ -217,7 +220,7 @@ def run_turned(hand_in: Callable[[str], HardwareInterface], nominal: Model, desi
         try:
             runs.append((rig, run_experiment(hw, nominal, d, **options)))
         except GuardTripped as trip:
-            last = RigTripped(rig, trip, list(runs))
+            last = RigTripped(rig, trip, list(runs), tripped)
             if not keep_going:
                 raise last from trip
             tripped.append((rig, str(trip)))

@@ -22,7 +22,8 @@ round           stage  made when (adds)                                         
                        F_s (:class:`~alpes_dyn.model.friction.Creep`)
 ``asked``       auto   the kept fit's verdict names effects not yet tried          the kept fit   lower residual
                        (:func:`named_effects`), or it sees the cable stretching
-                       (the rotor); the tendon-sheath friction alone
+                       (the rotor, in place of a kept tendon-sheath friction);
+                       the tendon-sheath friction alone
 ``lugre``       auto   the kept fit's verdict names a friction with a state        the kept fit's lower residual
                        (its residual at the velocity reversals or the harmonics:   values, its
                        :data:`~.adequacy.STATEFUL_FRICTION`): the LuGre law,       friction the
@@ -162,13 +163,18 @@ def _asked(result: Any, effects: tuple[str, ...], attempted: Collection[str]) ->
     """The effects the kept fit asks for: those its verdict names, the rotor where it sees the cable stretching (the
     quasi-static cable carries the rotor's J_m S^T S to the joints, which the verdict does not tell from a wrong
     inertia); the tendon-sheath friction alone (a friction growing with the tension is also a cable stretching with
-    it: with the rotor its fit was worse)."""
+    it: with the rotor its fit was worse). The rotor replaces a kept tendon-sheath friction for the same reason:
+    the two read the same tension-following motion, and carried beside the rotor the sheath friction is fitted
+    towards 0 and its bound, where the later rounds' fits stop at their iteration cap (on the MuJoCo thumb the
+    torque delay's round, which its observer needed, was refused so); kept only on a lower residual."""
     more = tuple(e for e in named_effects(result) if e not in attempted)
     if "rotor" not in attempted and "rotor" not in more and elastic(result):
         more += ("rotor",)
     if "capstan" in more:
         more = ("capstan",)
-    return effects + more if more else None
+    if not more:
+        return None
+    return tuple(e for e in effects if not ("rotor" in more and e == "capstan")) + more
 
 
 def _stateful(result: Any, effects: tuple[str, ...], attempted: Collection[str]) -> tuple[str, ...] | None:
