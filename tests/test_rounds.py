@@ -348,3 +348,30 @@ def test_the_creep_round_where_the_verdict_names_the_band():
     assert ROW["creep"].proposal(_with(fit(missing=[stick], **shrunk), model), KEPT) is None
     # a stick-slip plant's smooth fit at 1.2 floors names a friction with a state too: not the band (BAND_FLOOR_RATIO)
     assert ROW["creep"].proposal(_with(fit(0.69, missing=[stateful], **shrunk), model), KEPT) is None
+
+
+def test_a_refused_stick_slip_fit_names_the_friction_that_sticks():
+    """A fit kept with the stick-slip law, refused naming a friction with a state within two sensor floors after the
+    LuGre round was not kept (MuJoCo's stiff frictionloss at three times F_s): its verdict names the dry friction
+    that sticks (the switched law of ``estimate --friction-law stick``) in place of LuGre's presliding, the rest
+    kept, and it stays refused; not where the LuGre law was not tried or was kept, not without the stick-slip law,
+    not at the creep band's residual, not on an adequate fit or a verdict naming no friction with a state."""
+    stateful = rd.STATEFUL_WORD + " (the residual at the velocity reversals or at the excitation's harmonics)"
+    stick = KEPT + ("stiction",)
+    tried = set(KEPT) | {"lugre", "stiction", "rotor"}
+    refused = fit(0.615, missing=[SIGNATURES["velocity"], stateful, NONLINEARITY])  # 1.07 floors
+    assert rd.sticking(refused, stick, tried)
+    note = rd.name_sticking(refused, stick, tried)
+    assert note is not None and "--friction-law stick" in note and "1.07x" in note
+    assert refused.adequacy.likely_missing == [rd.STUCK_FRICTION, SIGNATURES["velocity"], NONLINEARITY]
+    assert not refused.adequacy.adequate and "LuGre law;" not in " ".join(refused.adequacy.likely_missing)
+    for result, effects, attempted in (
+            (fit(0.615, missing=[stateful]), stick, tried - {"lugre"}),  # LuGre not tried
+            (fit(0.615, missing=[stateful]), KEPT + ("lugre",), tried),  # LuGre kept
+            (fit(0.615, missing=[stateful]), KEPT, tried),  # no stick-slip law
+            (fit(1.3, missing=[stateful]), stick, tried),  # 2.26 floors: the creep band's
+            (fit(0.615, missing=[NONLINEARITY]), stick, tried),  # no friction with a state named
+            (fit(0.615, ok=True), stick, tried)):  # adequate
+        before = list(result.adequacy.likely_missing)
+        assert rd.name_sticking(result, effects, attempted) is None
+        assert result.adequacy.likely_missing == before

@@ -326,7 +326,9 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     alone), ``law_spread`` (it was added), ``validation_s``, ``validation_range_deg`` (the true
     joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends),
     ``true_file_not_held`` (the plant's effects the true file cannot hold, :attr:`~alpes_dyn.bench.truth.TruthFile.
-    not_held`).
+    not_held`), ``ekf_law_rmse_deg`` and ``ekf_true_file_law_rmse_deg`` (each file's EKF with each observer law the
+    law spread runs, :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, and ``file`` the file's own: RMSE per joint,
+    deg, by law).
 
     Parameters
     ----------
@@ -374,15 +376,21 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     u = validation_torque(design.dt, FINGER3.alpes(params=true).transmission.n_motors)
     val = mujoco_recording(FINGER3.model, true, u, design.dt, effects=effects, seed=seed + 1000, chain=FINGER3.chain)
     fitted = dict(zip(res.names, res.values.tolist()))
+    laws: dict[str, dict[str, list]] = {"ekf_law_rmse_deg": {}, "ekf_true_file_law_rmse_deg": {}}
+
+    def kept(key, law, est):  # each observer law's RMSE per joint, deg, as the law spread runs it
+        laws[key][law or "file"] = np.degrees(est.rmse).tolist()
+        return est
+
     def run(law=None):  # the EKF on the identified file, with the file's law or another
-        return ekf_run(val, str(ident), fitted, transient, rotor="rotor" in fit.effects, rig=rig,
-                       torque_delay=fit.delay, stops=True, friction_law=law)
+        return kept("ekf_law_rmse_deg", law, ekf_run(val, str(ident), fitted, transient, rotor="rotor" in fit.effects,
+                                                     rig=rig, torque_delay=fit.delay, stops=True, friction_law=law))
 
     truth_file = write_truth(true, effects, tmp / f"true_{case.name}_{seed}.toml", FINGER3.model, FINGER3.chain)
 
     def run_true(law=None):
-        return ekf_run(val, str(truth_file.path), None, transient, rotor=truth_file.rotor, stops=True,
-                       friction_law=law)
+        return kept("ekf_true_file_law_rmse_deg", law, ekf_run(val, str(truth_file.path), None, transient,
+                                                               rotor=truth_file.rotor, stops=True, friction_law=law))
 
     est, est_true = run(), run_true()
     lo, hi = np.degrees(val.true_q.min(axis=0)), np.degrees(val.true_q.max(axis=0))
@@ -410,7 +418,7 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
                 "nees_band": _band_consistency(est, val.true_q, transient),
                 "nees_true_file_band": _band_consistency(est_true, val.true_q, transient),
                 "true_file_not_held": list(truth_file.not_held),
-                "ekf_seconds": time.perf_counter() - t0 - plant_s})
+                "ekf_seconds": time.perf_counter() - t0 - plant_s, **laws})
     return row
 
 

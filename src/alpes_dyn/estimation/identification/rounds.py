@@ -41,6 +41,11 @@ round           stage  made when (adds)                                         
 
 "Lower residual" keeps a fit that did not converge only over a kept fit that did not either.
 
+A fit the walk leaves refused with the stick-slip law, its verdict naming a friction with a state within
+:data:`BAND_FLOOR_RATIO` sensor floors after the LuGre law's fit was not kept (:func:`sticking`: a dry friction
+that sticks), has that verdict name :data:`STUCK_FRICTION` instead of the LuGre law (:func:`name_sticking`, a note
+of the walk): it stays refused.
+
 Every round with the compliance fits it on the motors whose torque moved in the recording only
 (:func:`~alpes_dyn.estimation.identification.effects.still_motors`); the others' is held at the model's value and
 named in the fit's ``not_identified``.
@@ -79,7 +84,15 @@ BAND_FLOOR_RATIO = 2.0
 names a friction with a state too (there the round costs minutes and the ``lugre`` and ``stiction`` rounds are the
 ones to try)."""
 
-__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "BAND_WORDS", "BAND_FLOOR_RATIO", "NAMED_BY", "FALLBACK", "named_effects", "rounds_of"]
+__all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "BAND_WORDS", "BAND_FLOOR_RATIO", "STUCK_FRICTION", "NAMED_BY", "FALLBACK",
+           "named_effects", "rounds_of", "sticking", "name_sticking"]
+
+STUCK_FRICTION = (STATEFUL_WORD + " that holds the joints at rest: dry friction that sticks, the switched "
+                  "stick-slip law (the fit's stick-slip law kept, its residual within two sensor floors, the LuGre "
+                  "law's fit not kept); no memoryless law of the fit holds a stuck joint, nor does the file's smooth "
+                  "observer where the joints stick: estimate with --friction-law stick")
+"""The likely missing effect a refused fit's verdict names, in place of the LuGre law's presliding, where
+:func:`sticking` holds (:func:`name_sticking`)."""
 
 NAMED_BY: dict[str, str] = {"stiction": "stick-slip", "rotor": "rotor inertia", "delay": "torque delay",
                             "capstan": "tendon-sheath friction"}
@@ -325,6 +338,63 @@ ROUNDS: tuple[Round, ...] = (
 FALLBACK: tuple[str, ...] = tuple(r.adds[0] for r in ROUNDS if r.when.startswith(_FLAGGED))
 """The effects tried, in order, on a flagged fit that asks for none (stick-slip, the rotor, the torque delay, the
 encoder's offset); the observer's failure walks them again."""
+
+
+def sticking(result: Any, effects: Collection[str], attempted: Collection[str]) -> bool:
+    """Whether the walk's refused fit is a dry friction that sticks: kept with the stick-slip law (``stiction`` among
+    ``effects``), its verdict naming a friction with a state (:data:`STATEFUL_WORD`) at a residual below
+    :data:`BAND_FLOOR_RATIO` sensor floors (not the creep band's), and the LuGre law tried (in ``attempted``) but
+    not kept. MuJoCo's stiff ``frictionloss`` at three times F_s is such a plant: the LuGre fit lost its basin, the
+    stick-slip law's kept one at 1.1 floors with its residual coloured at the low intermodulation lines, not at the
+    reversals (the experiment's dither keeps the joints sliding), while the joints stick on a slow validation motion
+    where the file's smooth observer is off by more than the EKF's goal and the switched law's holds them
+    (``benchmarks/results/realism.friction.json``, the case ``stiff_3x``).
+
+    Parameters
+    ----------
+    result : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
+        The fit kept (its ``adequacy``).
+    effects : collection of str
+        Its effects.
+    attempted : collection of str
+        The effects some round was made with (:attr:`~.effects.RoundWalker.attempted`).
+
+    Returns
+    -------
+    bool
+        True where all of the above hold.
+    """
+    a = getattr(result, "adequacy", None)
+    if a is None or a.adequate or "stiction" not in effects or "lugre" in effects or "lugre" not in attempted:
+        return False
+    return bool(a.floor_ratio < BAND_FLOOR_RATIO and any(STATEFUL_WORD in m for m in a.likely_missing))
+
+
+def name_sticking(result: Any, effects: Collection[str], attempted: Collection[str]) -> str | None:
+    """Where :func:`sticking` holds: :data:`STUCK_FRICTION` in place of the verdict's friction with a state (first
+    among its likely missing effects), and the note returned; None (nothing changed) otherwise. The verdict stays a
+    refusal: the file as ``estimate`` runs it by default (the smooth law) does not hold a stuck joint.
+
+    Parameters
+    ----------
+    result : ~alpes_dyn.estimation.identification.fit_result.IdentificationResult
+        The fit kept (its ``adequacy`` updated in place).
+    effects : collection of str
+        Its effects.
+    attempted : collection of str
+        The effects some round was made with.
+
+    Returns
+    -------
+    str or None
+        One line naming the cause.
+    """
+    if not sticking(result, effects, attempted):
+        return None
+    a = result.adequacy
+    a.likely_missing = [STUCK_FRICTION] + [m for m in a.likely_missing if STATEFUL_WORD not in m]
+    return (f"the residual ({a.floor_ratio:.2f}x the sensor floor, coloured) is a dry friction that sticks: "
+            f"{STUCK_FRICTION}")
 
 
 def rounds_of(stage: str) -> tuple[Round, ...]:
