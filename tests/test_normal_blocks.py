@@ -108,3 +108,17 @@ def _numbers(obj):
             yield from _numbers(v)
     elif isinstance(obj, (int, float)) and not isinstance(obj, bool) and np.isfinite(obj):
         yield float(obj)
+
+
+@pytest.mark.parametrize("ng", [0, 3])
+def test_the_blocks_are_the_products_of_the_stacked_rows(ng):
+    """blocks_of's BLAS products against the written-out sums, with global variables and without (a fit whose
+    every variable is an interval's own: ng = 0)."""
+    J = np.random.default_rng(5).standard_normal((4, 7, 2 + ng))
+    AA, AP, PP = normal_blocks.blocks_of(J, 2)
+    A, P = J[:, :, :2], J[:, :, 2:]
+    np.testing.assert_allclose(AA, np.einsum("ski,skj->sij", A, A), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(AP, np.einsum("ski,skj->sij", A, P), rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(PP, sum(P[s].T @ P[s] for s in range(4)) if ng else np.zeros((0, 0)), rtol=1e-12,
+                               atol=1e-12)
+    assert PP.shape == (ng, ng)

@@ -52,7 +52,7 @@ def blocks_of(J: np.ndarray, nb: int) -> tuple[np.ndarray, np.ndarray, np.ndarra
     """
     A, P = J[:, :, :nb], J[:, :, nb:]
     At = A.transpose(0, 2, 1)
-    Pf = P.reshape(-1, P.shape[2])  # (a view: the intervals' rows stacked)
+    Pf = P.reshape(P.shape[0] * P.shape[1], P.shape[2])  # the intervals' rows stacked (ng may be 0: no -1)
     return At @ A, At @ P, Pf.T @ Pf
 
 
