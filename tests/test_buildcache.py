@@ -231,3 +231,17 @@ def test_default_threads_follow_omp_num_threads(monkeypatch):
     for bad in ("0", "two", "", "-3"):
         monkeypatch.setenv("OMP_NUM_THREADS", bad)
         assert _default_threads() == cpus
+
+
+def test_expression_key_follows_the_expression_not_the_object():
+    """One key for two functions built apart from one expression (the compiled loops and the C sources are shared
+    by it); another for a changed expression; the numbers kept as an input do not enter it."""
+    from alpes_dyn.simulation.buildcache import expression_key
+
+    def made(power):
+        x, p = cs.SX.sym("x", 2), cs.SX.sym("p", 2)
+        return cs.Function("f", [x, p], [p * x ** power])
+
+    key = expression_key(made(2))
+    assert key == expression_key(made(2)) and len(key) == 40
+    assert key != expression_key(made(3))

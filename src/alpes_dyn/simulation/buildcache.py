@@ -36,7 +36,7 @@ import subprocess
 import tempfile
 import time
 from pathlib import Path
-from typing import Iterator, Sequence
+from typing import Any, Iterator, Sequence
 
 from ..errors import AlpesDynError
 from ..fileio import atomic_write, signals_as_exceptions
@@ -46,7 +46,7 @@ try:  # POSIX; elsewhere builds are not locked
 except ImportError:  # pragma: no cover - not POSIX
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["CompilerError", "build_library", "verify_library", "LEGACY_TMP_AGE_S"]
+__all__ = ["CompilerError", "build_library", "verify_library", "expression_key", "LEGACY_TMP_AGE_S"]
 
 LEGACY_TMP_AGE_S = 3600.0
 """Age (s) after which a ``tmp*`` folder of an older alpes_dyn in the cache is removed."""
@@ -56,6 +56,25 @@ _BUILD = ".build@"
 
 class CompilerError(AlpesDynError, RuntimeError):
     """The C compiler is missing or failed on generated code, or the cache cannot be used."""
+
+
+def expression_key(function: Any) -> str:
+    """The key of a CasADi function's expression: the SHA-1 of its serialised form (hex, 40 characters). Two
+    functions of one key generate the same C, so the code compiled or generated for one serves the other (the
+    compiled loops of :mod:`~alpes_dyn.simulation.sampled` and of the observer's predictions, the C library's source
+    of :mod:`~alpes_dyn.estimation.cexport.cexport`).
+
+    Parameters
+    ----------
+    function : casadi.Function
+        The function (its numbers included in the expression: a parameter vector kept as an input shares the key).
+
+    Returns
+    -------
+    str
+        The key.
+    """
+    return hashlib.sha1(function.serialize().encode()).hexdigest()
 
 
 def _digest(path: Path) -> str:

@@ -17,7 +17,6 @@ the literal; the step's ``dt / 6`` computed from the same double): the states ar
 
 from __future__ import annotations
 
-import hashlib
 import threading
 from typing import Any
 
@@ -27,7 +26,7 @@ import numpy as np
 from ..errors import InputError
 from ..model.robot import Model
 from ..symbolic.lifted import lift_constants
-from .buildcache import CompilerError
+from .buildcache import CompilerError, expression_key
 from .codegen import CasadiStepLoop, CompiledStepLoop
 from .integrate import _check_dt, _rhs_function, as_statespace, rk4_expression
 
@@ -68,7 +67,7 @@ def _loop(ss: Any, step: cs.Function, parameters: np.ndarray, compiled: bool) ->
     :meth:`CompiledStepLoop.run`'s interface)."""
     if compiled:
         loops = _LOOPS.__dict__.setdefault("loops", {})
-        key = hashlib.sha1(step.serialize().encode()).hexdigest()
+        key = expression_key(step)
         loop = loops.get(key)
         if loop is not None:
             np.copyto(loop.parameters, parameters)  # in place: the buffer the compiled loop reads

@@ -48,7 +48,6 @@ the fingers one after the other. All give the same numbers.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import re
 from pathlib import Path
@@ -58,6 +57,7 @@ import casadi as cs
 import numpy as np
 
 from ...errors import InputError
+from ...simulation.buildcache import expression_key
 from ...fileio import check_output_directory, write_directory as write_sources  # their home: fileio
 from .cexport_ekf import ekf_c_source
 from ..observers.observers import ExtendedKalmanFilter, KalmanFilter
@@ -672,7 +672,7 @@ def _library_source(filt: KalmanFilter) -> tuple[str, int]:
     tuple of (str, int)
         The library's C source and its work array's size (doubles).
     """
-    key = type(filt).__name__ + hashlib.sha1(filt.filter_step_p.serialize().encode()).hexdigest()
+    key = type(filt).__name__ + expression_key(filt.filter_step_p)
     made = _LIBRARY_SOURCES.get(key)
     if made is None:
         prefix = "alpes_libstep"

@@ -21,7 +21,6 @@ NIS's one-step prediction computed once for both).
 
 from __future__ import annotations
 
-import hashlib
 import threading
 import uuid
 from typing import Any
@@ -29,6 +28,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
+from ...simulation.buildcache import expression_key
 
 __all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "predicted_step", "linearised"]
 
@@ -94,8 +94,8 @@ def _structure(filt: Any) -> str:
     if key is None:
         mdl = filt.model
         z, w, pm = cs.SX.sym("z", mdl.nz), cs.SX.sym("w", mdl.nw), cs.SX.sym("p", mdl.values.size)
-        text = cs.Function("ahead_mean", [z, w, pm], [mdl.step_p(z, w, pm)]).serialize()
-        key = filt.__dict__["_ahead_key"] = hashlib.sha1(text.encode()).hexdigest()
+        key = filt.__dict__["_ahead_key"] = expression_key(cs.Function("ahead_mean", [z, w, pm],
+                                                                        [mdl.step_p(z, w, pm)]))
     return key
 
 
