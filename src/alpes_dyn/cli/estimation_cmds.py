@@ -45,7 +45,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay"),
                        ("--friction-law", "friction_law"), ("--stops", "stops"), ("--law-spread", "law_spread"),
-                       ("--band-sigma", "band_sigma")):
+                       ("--band-sigma", "band_sigma"), ("--no-band-sigma", "no_band_sigma")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -117,7 +117,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
-    from ..simulation.stick import FRICTION_LAWS, observer_friction_law
+    from ..simulation.stick import FRICTION_LAWS, library_law, observer_friction_law
 
     for flag, dest, default in _SCENARIO_ONLY:
         if getattr(args, dest) != default:
@@ -127,6 +127,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
     law = args.friction_law
     if law is not None:
         _one_of(law, FRICTION_LAWS, "--friction-law", "friction law")
+    if args.band_sigma and args.no_band_sigma:
+        raise InputError("--no-band-sigma: give either --band-sigma (the default) or --no-band-sigma")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     limit = _sigma_limit(args.sigma_limit)
     t0 = time.perf_counter()
@@ -146,7 +148,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
                                   torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
 
     res = run(law)
-    spread, band = (_law_spread(run, res, model, law) if args.law_spread else None), _band_sigma(args, res)
+    spread, band = (_law_spread(run, res, model, law) if args.law_spread else None), _band_sigma(args, res, library_law(model, law))
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -214,24 +216,31 @@ def _law_spread(run: Any, res: Any, model: Any, law: str) -> Any:
     return law_sigma(run_law, res, laws=laws, kept_law=library_law(model, law))
 
 
-def _band_sigma(args: argparse.Namespace, res: Any) -> Any:
-    """``estimate --band-sigma``: None without it, else the joints' variance from the dry-friction band along ``res``
-    (the observer's run; :func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on its model, estimate and
-    torque; before the log is written). An
-    :class:`~alpes_dyn.errors.InputError` naming ``--band-sigma`` where the observer's model has no dry friction
-    (nothing to widen by) or the recording holds several orientations (one filter each: their gravity differs)."""
-    from ..estimation.observers.band_sigma import band_sigma
+def _band_sigma(args: argparse.Namespace, res: Any, law: str) -> Any:
+    """``estimate --data``'s widening by the dry-friction band (by default; ``--no-band-sigma``: None): the joints'
+    variance from the band along ``res`` (the observer's run;
+    :func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on its model, estimate and torque, c that of the
+    observer's ``law`` as
+    :func:`~alpes_dyn.simulation.stick.library_law` names it; before the log is written). None where the observer's
+    model has no dry friction (nothing to widen by) or the recording holds several orientations (one filter each:
+    their gravity differs); there, an :class:`~alpes_dyn.errors.InputError` naming ``--band-sigma`` if it was asked
+    for by name, and ``--band-sigma`` with ``--no-band-sigma`` one naming both."""
+    from ..estimation.observers.band_sigma import band_fraction, band_sigma
 
-    if not args.band_sigma:
+    if args.no_band_sigma:
         return None
     model = res.filter.model.system.model
     if not np.any(np.asarray(model.extras.coulomb) > 0):
+        if not args.band_sigma:
+            return None
         raise InputError("--band-sigma: the observer's model has no dry friction (F_s 0 on every joint: give "
                          "--friction, or a file with F_s)")
     if res.segments != 1:
+        if not args.band_sigma:
+            return None
         raise InputError(f"--band-sigma: the recording holds {res.segments} orientations (one filter each); run "
                          "it on one orientation's part")
-    return band_sigma(model, res.estimate.z, res.inputs)
+    return band_sigma(model, res.estimate.z, res.inputs, fraction=band_fraction(law))
 
 
 def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:
