@@ -5,6 +5,7 @@ trusted); ``codegen`` is :mod:`~alpes_dyn.cli.codegen_cmds`."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 import warnings
 from typing import Any
@@ -220,11 +221,13 @@ def _band_sigma(args: argparse.Namespace, res: Any, law: str) -> Any:
     """``estimate --data``'s widening by the dry-friction band (by default; ``--no-band-sigma``: None): the joints'
     variance from the band along ``res`` (the observer's run;
     :func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on its model, estimate and torque, c that of the
-    observer's ``law`` as
-    :func:`~alpes_dyn.simulation.stick.library_law` names it; before the log is written). None where the observer's
-    model has no dry friction (nothing to widen by) or the recording holds several orientations (one filter each:
-    their gravity differs); there, an :class:`~alpes_dyn.errors.InputError` naming ``--band-sigma`` if it was asked
-    for by name, and ``--band-sigma`` with ``--no-band-sigma`` one naming both."""
+    observer's ``law`` as :func:`~alpes_dyn.simulation.stick.library_law` names it; before the log is written). None
+    where the observer's model has no dry friction (nothing to widen by) or the recording holds several orientations
+    (one filter each: their gravity differs); there, an :class:`~alpes_dyn.errors.InputError` naming
+    ``--band-sigma`` if it was asked for by name. By default, the joints of a direction the band does not bound
+    (:attr:`~alpes_dyn.estimation.observers.band_sigma.BandSigma.unbounded`) get nothing from it: the observability
+    analysis flags them and reports the data's bound (:func:`~alpes_dyn.cli.uncertainty.reported_sigma`), tighter
+    than the band's prior."""
     from ..estimation.observers.band_sigma import band_fraction, band_sigma
 
     if args.no_band_sigma:
@@ -240,7 +243,13 @@ def _band_sigma(args: argparse.Namespace, res: Any, law: str) -> Any:
             return None
         raise InputError(f"--band-sigma: the recording holds {res.segments} orientations (one filter each); run "
                          "it on one orientation's part")
-    return band_sigma(model, res.estimate.z, res.inputs, fraction=band_fraction(law))
+    band = band_sigma(model, res.estimate.z, res.inputs, fraction=band_fraction(law))
+    if args.band_sigma or not band.unbounded:
+        return band
+    # by default a joint the band does not bound is left to the observability analysis, whose data's bound it
+    # reports (reported_sigma) rather than the band's prior
+    keep = np.array([j not in band.unbounded for j in model.joint_names])
+    return dataclasses.replace(band, variance=band.variance * keep)
 
 
 def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:
