@@ -118,18 +118,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
-    from ..simulation.stick import FRICTION_LAWS, library_law, observer_friction_law
+    from ..simulation.stick import library_law, observer_friction_law
 
     for flag, dest, default in _SCENARIO_ONLY:
         if getattr(args, dest) != default:
             hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
             raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    _check_law_options(args)
     law = args.friction_law
-    if law is not None:
-        _one_of(law, FRICTION_LAWS, "--friction-law", "friction law")
-    if args.band_sigma and args.no_band_sigma:
-        raise InputError("--no-band-sigma: give either --band-sigma (the default) or --no-band-sigma")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     limit = _sigma_limit(args.sigma_limit)
     t0 = time.perf_counter()
@@ -197,6 +194,18 @@ def _estimate_data(args: argparse.Namespace) -> int:
     _note_untrusted(obj, lines, notes)
     _emit(obj, "\n".join(lines), args.json)
     return 0
+
+
+def _check_law_options(args: argparse.Namespace) -> None:
+    """``estimate --data``'s friction options, before the run: ``--friction-law`` one of
+    :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, not both ``--band-sigma`` and ``--no-band-sigma``
+    (:class:`~alpes_dyn.errors.InputError` naming the option)."""
+    from ..simulation.stick import FRICTION_LAWS
+
+    if args.friction_law is not None:
+        _one_of(args.friction_law, FRICTION_LAWS, "--friction-law", "friction law")
+    if args.band_sigma and args.no_band_sigma:
+        raise InputError("--no-band-sigma: give either --band-sigma (the default) or --no-band-sigma")
 
 
 def _law_spread(run: Any, res: Any, model: Any, law: str) -> Any:
