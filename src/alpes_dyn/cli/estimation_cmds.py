@@ -146,7 +146,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
                                   torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
 
     res = run(law)
-    spread, band = (_law_spread(run, res, model, law) if args.law_spread else None), _band_sigma(args, res, library_law(model, law))
+    spread = _law_spread(run, res, model, law) if args.law_spread else None
+    band = _band_sigma(args, res, library_law(model, law))
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()

@@ -241,8 +241,8 @@ def _band_consistency(est, true_q: np.ndarray, transient: float) -> dict[str, An
     """The NEES with each joint's variance widened by the dry-friction band
     (:func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on the observer's model, estimate and torque, as
     ``estimate --data`` by default, c of the observer's law,
-    :func:`~alpes_dyn.estimation.observers.band_sigma.band_fraction`): its per-joint values against their band, the samples taken as independent (as
-    :func:`_law_consistency`), and the band's RMS per joint."""
+    :func:`~alpes_dyn.estimation.observers.band_sigma.band_fraction`): its per-joint values against their band, the
+    samples taken as independent (as :func:`_law_consistency`), and the band's RMS per joint."""
     model = est.filter.model.system.model
     band = band_sigma(model, est.estimate.z, est.inputs,
                       fraction=band_fraction(library_law(model, est.settings["friction_law"])))
