@@ -32,7 +32,7 @@ alone (no joint in band) to 0.36-2.75 at c = 0.25, 15 of 24 joints in band (5-11
 0.35; on finger2 1.4-1.9 at 0.25, in band at 0.3). The stick-slip law holds a stuck joint where the plant holds
 it, and what it leaves is a smaller share of the band, spread over the joints about as (B1) spreads it; LuGre's
 bristles hold part of it: each law's c was measured the same way (the CHANGELOG's entry): with P alone (the torque
-noise's, a fortieth of a degree) the stick-slip law's NEES was 9-380, with its c 0.6-1.9. The creep law (MuJoCo's
+noise's, about 0.02 degree) the stick-slip law's NEES was 9-380, with its c 0.6-1.9. The creep law (MuJoCo's
 soft dry friction, a creep file's smooth-law run) is close to its plant: on MuJoCo's soft plant its P alone was
 already cautious on two joints (NEES 0.4-0.6) and over-confident on the first (6.8), its c a small one that brings
 that joint to 1.5 and leaves the others 0.4-0.6. What (B1) does not get
