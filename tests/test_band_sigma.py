@@ -144,3 +144,16 @@ def test_the_hand_s_springless_thumb_abduction_seen_by_its_own_encoder_is_bounde
     f3 = bs.band_sigma(Model.alpes("finger3", friction=True), np.full((3, 3), 0.3), np.zeros((2, 1)))
     idx = [hand.joint_names.index(f"index_{j}") for j in ("j1", "j2", "j3")]
     np.testing.assert_allclose(out.variance[:, idx], f3.variance, rtol=1e-6)
+
+
+def test_each_library_law_has_its_fraction_and_an_unknown_law_is_named():
+    """band_fraction: c for every law of the library (the smooth law's the default's, the stick-slip law's smaller:
+    it holds a stuck joint where the plant does), an unknown law refused naming ``law``."""
+    from alpes_dyn.simulation.stick import LIBRARY_LAWS
+
+    assert set(bs.BAND_FRACTIONS) == set(LIBRARY_LAWS)
+    assert bs.band_fraction("smooth") == bs.BAND_FRACTION
+    assert 0 < bs.band_fraction("stick") < bs.band_fraction("smooth") < 1 / np.sqrt(3)
+    for bad in ("dahl", None, 3):
+        with pytest.raises(InputError, match="law: expected one of smooth, stick, lugre, creep"):
+            bs.band_fraction(bad)

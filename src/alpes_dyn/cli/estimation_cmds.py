@@ -5,6 +5,7 @@ trusted); ``codegen`` is :mod:`~alpes_dyn.cli.codegen_cmds`."""
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import time
 import warnings
 from typing import Any
@@ -45,7 +46,7 @@ def cmd_estimate(args: argparse.Namespace) -> int:
                        ("--encoder-offset", "encoder_offset"), ("--tilt", "tilt"), ("--rotor-inertia", "rotor_inertia"),
                        ("--torque-constant", "torque_constant"), ("--torque-delay", "torque_delay"),
                        ("--friction-law", "friction_law"), ("--stops", "stops"), ("--law-spread", "law_spread"),
-                       ("--band-sigma", "band_sigma")):
+                       ("--band-sigma", "band_sigma"), ("--no-band-sigma", "no_band_sigma")):
         if _given(getattr(args, dest)):
             raise InputError(f"{flag}: applies to an observer on a recording (--data REC.csv)")
     if _is_urdf_path(args.model):
@@ -117,16 +118,15 @@ def _estimate_data(args: argparse.Namespace) -> int:
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
     from ..estimation.observers.replay import MAX_DELAY, estimate_recording
-    from ..simulation.stick import FRICTION_LAWS, observer_friction_law
+    from ..simulation.stick import library_law, observer_friction_law
 
     for flag, dest, default in _SCENARIO_ONLY:
         if getattr(args, dest) != default:
             hint = "; the observer's model is --params" if dest in ("true_params", "observer_params") else ""
             raise InputError(f"{flag}: applies to the simulated scenario, not to a recording (--data){hint}")
     _one_of(args.observer, OBSERVERS, "--observer", "observer")
+    _check_law_options(args)
     law = args.friction_law
-    if law is not None:
-        _one_of(law, FRICTION_LAWS, "--friction-law", "friction law")
     _check_run_files(args)  # the output policy: --log is not --data (nor --params...), not a link, a device...
     limit = _sigma_limit(args.sigma_limit)
     t0 = time.perf_counter()
@@ -146,7 +146,8 @@ def _estimate_data(args: argparse.Namespace) -> int:
                                   torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
 
     res = run(law)
-    spread, band = (_law_spread(run, res, model, law) if args.law_spread else None), _band_sigma(args, res)
+    spread = _law_spread(run, res, model, law) if args.law_spread else None
+    band = _band_sigma(args, res, library_law(model, law))
     if args.log is not None:
         res.to_csv(args.log)
     obj = res.to_dict()
@@ -196,6 +197,18 @@ def _estimate_data(args: argparse.Namespace) -> int:
     return 0
 
 
+def _check_law_options(args: argparse.Namespace) -> None:
+    """``estimate --data``'s friction options, before the run: ``--friction-law`` one of
+    :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, not both ``--band-sigma`` and ``--no-band-sigma``
+    (:class:`~alpes_dyn.errors.InputError` naming the option)."""
+    from ..simulation.stick import FRICTION_LAWS
+
+    if args.friction_law is not None:
+        _one_of(args.friction_law, FRICTION_LAWS, "--friction-law", "friction law")
+    if args.band_sigma and args.no_band_sigma:
+        raise InputError("--no-band-sigma: give either --band-sigma (the default) or --no-band-sigma")
+
+
 def _law_spread(run: Any, res: Any, model: Any, law: str) -> Any:
     """``estimate --law-spread``: the observer run again with each other law of the library, the joints' spread
     (:func:`~alpes_dyn.estimation.observers.law_sigma.law_sigma`; ``run(observer_law, model)`` the observer, ``res``
@@ -214,24 +227,39 @@ def _law_spread(run: Any, res: Any, model: Any, law: str) -> Any:
     return law_sigma(run_law, res, laws=laws, kept_law=library_law(model, law))
 
 
-def _band_sigma(args: argparse.Namespace, res: Any) -> Any:
-    """``estimate --band-sigma``: None without it, else the joints' variance from the dry-friction band along ``res``
-    (the observer's run; :func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on its model, estimate and
-    torque; before the log is written). An
-    :class:`~alpes_dyn.errors.InputError` naming ``--band-sigma`` where the observer's model has no dry friction
-    (nothing to widen by) or the recording holds several orientations (one filter each: their gravity differs)."""
-    from ..estimation.observers.band_sigma import band_sigma
+def _band_sigma(args: argparse.Namespace, res: Any, law: str) -> Any:
+    """``estimate --data``'s widening by the dry-friction band (by default; ``--no-band-sigma``: None): the joints'
+    variance from the band along ``res`` (the observer's run;
+    :func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on its model, estimate and torque, c that of the
+    observer's ``law`` as :func:`~alpes_dyn.simulation.stick.library_law` names it; before the log is written). None
+    where the observer's model has no dry friction (nothing to widen by) or the recording holds several orientations
+    (one filter each: their gravity differs); there, an :class:`~alpes_dyn.errors.InputError` naming
+    ``--band-sigma`` if it was asked for by name. By default, the joints of a direction the band does not bound
+    (:attr:`~alpes_dyn.estimation.observers.band_sigma.BandSigma.unbounded`) get nothing from it: the observability
+    analysis flags them and reports the data's bound (:func:`~alpes_dyn.cli.uncertainty.reported_sigma`), tighter
+    than the band's prior."""
+    from ..estimation.observers.band_sigma import band_fraction, band_sigma
 
-    if not args.band_sigma:
+    if args.no_band_sigma:
         return None
     model = res.filter.model.system.model
     if not np.any(np.asarray(model.extras.coulomb) > 0):
+        if not args.band_sigma:
+            return None
         raise InputError("--band-sigma: the observer's model has no dry friction (F_s 0 on every joint: give "
                          "--friction, or a file with F_s)")
     if res.segments != 1:
+        if not args.band_sigma:
+            return None
         raise InputError(f"--band-sigma: the recording holds {res.segments} orientations (one filter each); run "
                          "it on one orientation's part")
-    return band_sigma(model, res.estimate.z, res.inputs)
+    band = band_sigma(model, res.estimate.z, res.inputs, fraction=band_fraction(law))
+    if args.band_sigma or not band.unbounded:
+        return band
+    # by default a joint the band does not bound is left to the observability analysis, whose data's bound it
+    # reports (reported_sigma) rather than the band's prior
+    keep = np.array([j not in band.unbounded for j in model.joint_names])
+    return dataclasses.replace(band, variance=band.variance * keep)
 
 
 def _data_model(args: argparse.Namespace) -> tuple[Any, Any]:

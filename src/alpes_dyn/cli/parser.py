@@ -212,9 +212,12 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--law-spread", action="store_true", help="with --data: each joint's sigma widened by the "
                    "spread of its estimate between the library's friction laws (smooth, stick, lugre, creep: the "
                    "observer run again with each other law on the same file, four runs in all)")
-    s.add_argument("--band-sigma", action="store_true", help="with --data and friction: each joint's sigma widened "
-                   "by where the dry-friction band lets the joints the encoder does not tell apart rest (from the "
-                   "file's F_s, springs and gravity; the estimate unchanged)")
+    s.add_argument("--band-sigma", action="store_true", help="with --data and friction (the default there): each "
+                   "joint's sigma widened by where the dry-friction band lets the joints the encoder does not tell "
+                   "apart rest (from the file's F_s, springs and gravity, a share of F_s by the observer's friction "
+                   "law; the estimate unchanged); given, an error where it cannot apply")
+    s.add_argument("--no-band-sigma", action="store_true", help="with --data: each joint's sigma the filter's own "
+                   "covariance alone (without the dry-friction band of --band-sigma)")
     s.add_argument("--force", action="store_true", help=FORCE_USE_HELP)
     s.set_defaults(func=cmd_estimate)
 

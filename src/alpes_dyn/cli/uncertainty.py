@@ -23,7 +23,7 @@ def _uncertainty(est, filt, inputs: np.ndarray, true_q: np.ndarray | None, start
     (a :class:`~alpes_dyn.estimation.observers.law_sigma.LawSigma`, ``estimate --law-spread``), the sigma and the
     NEES are the estimate's with it added to each joint's variance (the NEES's samples then taken as independent:
     the filter's error model is its own P's), the NIS the filter's own; the same with the ``band`` of the dry
-    friction (a :class:`~alpes_dyn.estimation.observers.band_sigma.BandSigma`, ``estimate --band-sigma``; both
+    friction (a :class:`~alpes_dyn.estimation.observers.band_sigma.BandSigma`, ``estimate --data``'s default; both
     added where both are given). Returns (the JSON's keys, the table's lines)."""
     from ..analysis.joint_observability import joint_observability
     from ..estimation.observers.consistency import joint_sigma, nees

@@ -50,13 +50,13 @@ from ..control.plants import mujoco_recording
 from ..errors import InputError
 from ..estimation.experiments.design import ExperimentDesign
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
-from ..estimation.observers.band_sigma import band_sigma
+from ..estimation.observers.band_sigma import band_fraction, band_sigma
 from ..estimation.observers.consistency import chi2_band, nees
 from ..estimation.observers.law_sigma import law_sigma
 from ..estimation.observers.scenario import EstimationScenario, scenario_torque
 from ..model.mjcf import STICTION_TIMECONST
 from ..model.params import HandParams, load_params, with_values
-from ..simulation.stick import FRICTION_LAWS
+from ..simulation.stick import FRICTION_LAWS, library_law
 from ..symbolic.parametric import parameter_catalogue
 from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, MASS_GOAL_PCT, SPRING_GOAL_PCT, ekf_run, fit_row,
                       on_rig, plant_experiment, rig_design, rig_of, summarise)
@@ -240,9 +240,12 @@ def _law_consistency(run, est, true_q: np.ndarray, transient: float) -> dict[str
 def _band_consistency(est, true_q: np.ndarray, transient: float) -> dict[str, Any]:
     """The NEES with each joint's variance widened by the dry-friction band
     (:func:`~alpes_dyn.estimation.observers.band_sigma.band_sigma` on the observer's model, estimate and torque, as
-    ``estimate --band-sigma``): its per-joint values against their band, the samples taken as independent (as
-    :func:`_law_consistency`), and the band's RMS per joint."""
-    band = band_sigma(est.filter.model.system.model, est.estimate.z, est.inputs)
+    ``estimate --data`` by default, c of the observer's law,
+    :func:`~alpes_dyn.estimation.observers.band_sigma.band_fraction`): its per-joint values against their band, the
+    samples taken as independent (as :func:`_law_consistency`), and the band's RMS per joint."""
+    model = est.filter.model.system.model
+    band = band_sigma(model, est.estimate.z, est.inputs,
+                      fraction=band_fraction(library_law(model, est.settings["friction_law"])))
     r = nees(band.widened(est.estimate), true_q, start=transient)
     lo, hi = r.joint_band()
     return {"per_joint": r.per_joint.tolist(), "joint_band": [lo, hi],
@@ -454,7 +457,7 @@ def friction_summary(rows: list[dict[str, Any]], ekf_goal: float = EKF_GOAL_DEG)
     ``nees_true_file_inconsistent`` (the rows with a joint's NEES outside its 95 % band), ``nees_law_inconsistent``
     and ``nees_true_file_law_inconsistent`` (the same with the variance widened by the laws' spread, the rows that
     hold it), ``nees_band_inconsistent`` and ``nees_true_file_band_inconsistent`` (widened by the dry-friction
-    band, ``estimate --band-sigma``), ``nees_worst`` (the largest joint NEES, identified file), ``z_worst`` (the
+    band, ``estimate --data``'s default), ``nees_worst`` (the largest joint NEES, identified file), ``z_worst`` (the
     largest |error / standard error| over the parameters), ``z_within_3`` (the fraction of parameters within 3;
     ``z_noise_within_3`` with the noise's standard errors alone), ``verdicts`` (each row's, by seed);
     ``issue_goal_met`` (issue 50's goal on every row: the EKF within ``ekf_goal`` on every joint with both

@@ -22,22 +22,33 @@ joint's reported variance is
 
     sigma_i,k^2 = P_ii,k + (C_split(q_hat_k, u_k))_ii.                                                 (B2)
 
-c = :data:`BAND_FRACTION`, the friction torque's standard deviation as a fraction of F_s: a uniform torque over
-the band would be 1/sqrt(3) = 0.58; a joint that stops from sliding holds less than the band, and an observer whose
-law creeps follows part of it. The value was chosen by measurement on MuJoCo's stick-slip finger3 (the friction
-study's ``stiff`` case, :mod:`~alpes_dyn.studies.realism_friction`, four development draws, the smooth law with the
-identified and with the true file): the joints' NEES against their band (0.74-1.29 at the validation run's 100
-samples) went from 2.7-17 with P alone (no joint in band) to 0.36-2.75 at c = 0.25, 15 of 24 joints in band (5-11 at
-c = 0.2, 0.22, 0.28, 0.3; 4 at 0.35); on six fresh draws after c was fixed, from 1.8-42 to 0.32-4.4, 11 of 36 in
-band (their errors larger, 0.09-0.28 degree: the median NEES 1.34, most misses above the band). The joints' errors
-were the same while the plant's joints stuck as while they slid (the split a stick leaves stays through the next
-slide), so (B2) holds at every sample, not only where the observer thinks a joint stuck. What it does not get right
-is the share between the joints: (B1) gives them about the same sigma, the errors differ up to twofold from draw to
-draw. Everything in (B1) is the file's (F_s, the springs, the masses' gravity, the ratios) and the estimate's
-(q_hat, the recorded torque): nothing reads the true joints. It does not change the estimate: the filter runs as it
-did (feeding a stuck joint's variance back made the errors worse), only the reported covariance is widened. It is
-opt-in (``estimate --data --band-sigma``): on a plant whose friction is the observer's own law the filter's P is
-already consistent, and the band would make it cautious.
+c, the friction torque's standard deviation as a fraction of F_s, is the observer's law's
+(:data:`BAND_FRACTIONS`, :func:`band_fraction`): a uniform torque over the band would be 1/sqrt(3) = 0.58; a joint
+that stops from sliding holds less than the band, and an observer whose law creeps follows part of it. The smooth
+law's (:data:`BAND_FRACTION`, 0.25) was chosen by measurement on MuJoCo's stick-slip finger3 (the friction study's
+``stiff`` case, :mod:`~alpes_dyn.studies.realism_friction`, four development draws, the identified and the true
+file): the joints' NEES against their band (0.74-1.29 at the validation run's 100 samples) went from 2.7-17 with P
+alone (no joint in band) to 0.36-2.75 at c = 0.25, 15 of 24 joints in band (5-11 at c = 0.2, 0.22, 0.28, 0.3; 4 at
+0.35; on finger2 1.4-1.9 at 0.25, in band at 0.3). The stick-slip law holds a stuck joint where the plant holds
+it, and what it leaves is a smaller share of the band, spread over the joints about as (B1) spreads it; LuGre's
+bristles hold part of it: each law's c was measured the same way (the CHANGELOG's entry): with P alone (the torque
+noise's, about 0.02 degree) the stick-slip law's NEES was 9-380, with its c 0.6-1.9. The creep law (MuJoCo's
+soft dry friction, a creep file's smooth-law run) is close to its plant: on MuJoCo's soft plant its P alone was
+already cautious on two joints (NEES 0.4-0.6) and over-confident on the first (6.8), its c a small one that brings
+that joint to 1.5 and leaves the others 0.4-0.6. What (B1) does not get
+right is the smooth law's share between the joints: on finger3 its error is largest on the distal joint, which
+(B1), stiffest there, gives the smallest share, and smallest on the middle one (NEES about 2 and 0.6-1 at c = 0.25,
+with the true and the identified file alike); nor the size of a draw's error, up to twice another's where the file
+predicts the same. The joints' errors were the same while the plant's joints
+stuck as while they slid (the split a stick leaves stays through the next slide), so (B2) holds at every sample, not
+only where the observer thinks a joint stuck. Everything in (B1) is the file's (F_s, the springs, the masses'
+gravity, the ratios) and the estimate's (q_hat, the recorded torque): nothing reads the true joints. It does not
+change the estimate: the filter runs as it did (feeding a stuck joint's variance back made the errors worse), only
+the reported covariance is widened. ``estimate --data`` adds it by default where the observer's model has dry
+friction (``--no-band-sigma``: the filter's P alone): a recording's plant is never the observer's own law, and the
+filter's P alone claimed a tenth to a third of its error on every stick-slip draw measured. On a plant whose
+friction is the observer's own law (the library's simulator: the simulated ``estimate`` scenario, which does not add
+it) the filter's P is already consistent, and the band would make it cautious.
 
 (B1) is computed in its information form (a basis of the split, no K^-1): so a joint without a spring that its own
 encoder sees (the hand's thumb abduction) is simply seen. Where the band does not bound a direction of the split
@@ -60,14 +71,43 @@ from ...model.robot import Model
 from ...symbolic.statespace import StateSpace
 from .observers import Estimate
 
-__all__ = ["BAND_FRACTION", "UNBOUNDED_STD", "BandSigma", "band_sigma", "with_joint_variance"]
+__all__ = ["BAND_FRACTION", "BAND_FRACTIONS", "UNBOUNDED_STD", "band_fraction", "BandSigma", "band_sigma",
+           "with_joint_variance"]
 
-BAND_FRACTION = 0.25
-"""c of (B1): the standard deviation of the friction torque a joint holds at rest, as a fraction of its F_s (module
-docstring: chosen by measurement; a uniform torque over the band would be 0.58)."""
+BAND_FRACTIONS: dict[str, float] = {"smooth": 0.25, "stick": 0.18, "lugre": 0.2, "creep": 0.1}
+"""c of (B1) by the observer's law (a key of :data:`~alpes_dyn.simulation.stick.LIBRARY_LAWS`, the file's law as
+:func:`~alpes_dyn.simulation.stick.library_law` names it): the standard deviation of the friction torque a joint
+holds at rest that the law leaves unexplained, as a fraction of its F_s (module docstring: chosen by measurement; a
+uniform torque over the band would be 0.58)."""
+BAND_FRACTION = BAND_FRACTIONS["smooth"]
+"""c of (B1) for the smooth law, the default of :func:`band_sigma` (module docstring)."""
 UNBOUNDED_STD = 0.5
 """rad: the added standard deviation of a joint the friction band does not bound (K not positive definite), the
 observers' prior on a joint angle (:data:`~alpes_dyn.analysis.joint_observability.PRIOR_STD`)."""
+
+
+def band_fraction(law: str) -> float:
+    """c of (B1) for the observer's friction law (:data:`BAND_FRACTIONS`).
+
+    Parameters
+    ----------
+    law : str
+        The law the observer ran, as :func:`~alpes_dyn.simulation.stick.library_law` names it (``smooth``,
+        ``stick``, ``lugre``, ``creep``).
+
+    Returns
+    -------
+    float
+        c, in units of each joint's F_s.
+
+    Raises
+    ------
+    InputError
+        ``law`` not one of :data:`BAND_FRACTIONS`.
+    """
+    if not isinstance(law, str) or law not in BAND_FRACTIONS:
+        raise InputError(f"law: expected one of {', '.join(BAND_FRACTIONS)}, got {law!r:.40}")
+    return BAND_FRACTIONS[law]
 
 
 def with_joint_variance(estimate: Estimate, variance: np.ndarray) -> Estimate:
