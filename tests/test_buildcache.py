@@ -214,6 +214,31 @@ def test_a_large_source_at_O0_runs_the_steps_of_O3(tmp_path, monkeypatch):
         CompiledStepLoop(step, "large", large_level="-O3")
 
 
+def test_level_builds_any_source_at_it_with_the_steps_of_O3(tmp_path, monkeypatch):
+    """``level="-O0"`` (the observer check's prediction loops of a finger, whose source is under the size): a small
+    source is built at -O0 whatever its size, and steps the numbers of its -O3 build (to rounding; -ffp-contract=off
+    both); a level other than -O1 and -O0 is refused, naming ``level``."""
+    from alpes_dyn.errors import InputError
+    from alpes_dyn.simulation import codegen
+
+    assert codegen._cflags("x" * 1000, level="-O0") == ("-O0",) + _CFLAGS[1:]
+    assert codegen._cflags("x" * (codegen._LARGE_SOURCE + 1), "-O1", "-O0")[0] == "-O0"
+    x, w = cs.SX.sym("x", 2), cs.SX.sym("w", 1)
+    step = cs.Function("f", [x, w], [cs.vertcat(x[0] + 0.01 * x[1], x[1] + 0.01 * (w[0] - cs.sin(x[0])))])
+    X0, W = np.array([[0.3, -0.2], [1.0, 0.5]]), np.linspace(-1, 1, 2 * 50).reshape(2, 50, 1)
+    monkeypatch.setenv("ALPES_DYN_CACHE", str(tmp_path))
+    seen = []
+    monkeypatch.setattr(codegen, "build_library", lambda src, stem, cc, flags, d: seen.append(flags[0]) or
+                        build_library(src, stem, cc, flags, d))
+    ref = CompiledStepLoop(step, "levelled", threads=1, vectorize=False).run(X0, W)
+    loop = CompiledStepLoop(step, "levelled", threads=1, vectorize=False, level="-O0")
+    assert seen == ["-O3", "-O0"] and loop.compiled  # another key: built, not the -O3 library loaded
+    np.testing.assert_allclose(loop.run(X0, W), ref, rtol=1e-12, atol=1e-14)
+    for bad in ("-O3", "O0", 0):
+        with pytest.raises(InputError, match=r"^level: .* is not one of -O1, -O0$"):
+            CompiledStepLoop(step, "levelled", level=bad)
+
+
 def test_default_threads_follow_omp_num_threads(monkeypatch):
     """The compiled loops' default thread count: the CPUs this process may use, capped by OMP_NUM_THREADS where it
     is a positive integer (Dask's workers set it to their thread count), ignored where it is not."""

@@ -10,6 +10,7 @@ returning None: the fallback without a compiler).
 
 from __future__ import annotations
 
+import threading
 from unittest import mock
 
 import numpy as np
@@ -126,3 +127,26 @@ def test_filters_of_one_structure_share_one_compiled_loop_with_their_own_noise(s
     np.testing.assert_allclose(S2, S2_vm, rtol=1e-10, atol=1e-20)
     assert np.all(np.trace(S2, axis1=1, axis2=2) > 1.5 * np.trace(S1, axis1=1, axis2=2))
     np.testing.assert_allclose(ahead.predicted_ahead(f1, z, W, starts, H, P)[1], S1, rtol=1e-14, atol=0)
+
+
+def test_the_prediction_loops_are_built_at_O0_whatever_their_size(stick_slip_run):
+    """The check's prediction loops (the mean, its covariance, the Jacobians) are run a few thousand steps per
+    process: built at -O0 whatever their source's size (``level``; a finger's covariance loop, under the large-source
+    size, took 2.0 s of gcc at -O3, 0.4 s at -O0, its runs the same numbers: test_buildcache); each loop asked
+    once per structure in a thread."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.simulation import integrate
+
+    asked = []
+
+    def fake(step, label, **kw):
+        asked.append((label, kw.get("level"), kw.get("large_level")))
+        return SimpleNamespace(parameters=np.zeros(ahead._values(filt, cov).size))
+
+    filt = stick_slip_run[2].filter
+    with mock.patch.object(integrate, "CompiledStepLoop", fake), mock.patch.object(ahead, "_LOOPS", threading.local()):
+        for cov in (False, True, "jacobians", False):
+            ahead._loop(filt, cov)
+    name = filt.model.system.model.name
+    assert asked == [(f"ahead{k}_{name}", "-O0", None) for k in ("", "_cov", "_jac")]

@@ -120,9 +120,11 @@ _LARGE_LEVELS = ("-O1", "-O0")
 runs (a large source, e.g. the thumb's prediction covariance, builds several times faster at ``-O0``)."""
 
 
-def _cflags(source: str, large_level: str = "-O1") -> tuple[str, ...]:
+def _cflags(source: str, large_level: str = "-O1", level: str | None = None) -> tuple[str, ...]:
     """The compiler flags for ``source``: :data:`_CFLAGS`, with ``large_level`` (one of :data:`_LARGE_LEVELS`) for a
-    source over :data:`_LARGE_SOURCE`."""
+    source over :data:`_LARGE_SOURCE`, or with ``level`` (one of them too) whatever its size where given."""
+    if level is not None:
+        return (level,) + _CFLAGS[1:]
     return _CFLAGS if len(source) <= _LARGE_SOURCE else (large_level,) + _CFLAGS[1:]
 
 
@@ -139,11 +141,12 @@ def _compiler() -> str:
     return path
 
 
-def _build_library(source: str, stem: str, large_level: str = "-O1") -> tuple[Path, bool, float, ctypes.CDLL]:
+def _build_library(source: str, stem: str, large_level: str = "-O1",
+                   level: str | None = None) -> tuple[Path, bool, float, ctypes.CDLL]:
     """Compile ``source`` to a shared library in the cache (once) and load it; return (path,
     compiled_now, seconds, library). The cache is checked, locked and self-healing:
     :mod:`alpes_dyn.simulation.buildcache`."""
-    return build_library(source, stem, _compiler(), _cflags(source, large_level), cache_dir())
+    return build_library(source, stem, _compiler(), _cflags(source, large_level, level), cache_dir())
 
 
 _DRIVER = r"""
@@ -396,6 +399,11 @@ class CompiledStepLoop:
     large_level : str, optional
         The optimisation flag of a generated source over :data:`_LARGE_SOURCE` characters: ``"-O1"`` (default) or
         ``"-O0"`` (:data:`_LARGE_LEVELS`) for a loop whose build would cost more than its runs.
+    level : str or None, optional
+        The optimisation flag whatever the source's size, one of :data:`_LARGE_LEVELS` (default None: ``-O3`` up to
+        :data:`_LARGE_SOURCE` characters, ``large_level`` above): ``"-O0"`` for a loop run a few thousand steps per
+        process, whose ``-O3`` build costs more than its runs even below the size (the observer check's prediction
+        loops of a finger: a few seconds of the compiler, for runs of a fraction of a second).
 
     The C source is CasADi's code of ``step`` plus a driver looping over steps and splitting the
     sequences over POSIX threads; it is compiled once with ``$CC`` (default gcc) ``-O3`` and cached
@@ -405,9 +413,12 @@ class CompiledStepLoop:
     """
 
     def __init__(self, step: cs.Function, label: str = "steploop", threads: int | None = None,
-                 vectorize: bool = True, parameters: Any = None, large_level: str = "-O1") -> None:
+                 vectorize: bool = True, parameters: Any = None, large_level: str = "-O1",
+                 level: str | None = None) -> None:
         if large_level not in _LARGE_LEVELS:
             raise InputError(f"large_level: {large_level!r} is not one of {', '.join(_LARGE_LEVELS)}")
+        if level is not None and level not in _LARGE_LEVELS:
+            raise InputError(f"level: {level!r} is not one of {', '.join(_LARGE_LEVELS)}")
         if step.n_in() not in (2, 3) or step.n_out() != 1:
             raise ModelError(f"step: expected a function (x, w) -> x_next or (x, w, p) -> x_next, got {step}")
         self.parameters = _step_parameters(step, parameters)
@@ -428,13 +439,13 @@ class CompiledStepLoop:
         if vector is not None:
             try:
                 self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
-                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label, large_level)
+                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label, large_level, level)
                 self.lanes = _LANES
             except CompilerError:  # a compiler without GCC vector extensions: the scalar driver
                 vector = None
         if vector is None:
             self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
-                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label, large_level)
+                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label, large_level, level)
         fn = self._lib.alpes_rollout
         dp = ctypes.POINTER(ctypes.c_double)
         fn.argtypes = [dp, dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]

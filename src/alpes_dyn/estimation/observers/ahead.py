@@ -43,7 +43,8 @@ AHEAD_COMPILE_MAX = 100_000
 compiler busy for minutes and gigabytes, longer than the virtual machine's whole run of ``estimate``'s checks. A step
 whose C is over the compiled loops' large-source size (the thumb's covariance) is built at ``-O0``
 (:class:`~alpes_dyn.simulation.codegen.CompiledStepLoop`'s ``large_level``): faster to build than at ``-O1``, whose
-build would outlast the check's runs of it."""
+build would outlast the check's runs of it; a smaller one (a finger's) at ``-O0`` too (``level``): a quarter of
+``-O3``'s build, for runs of a fraction of a second (CHANGELOG)."""
 
 
 def _steps(filt: Any, covariance: bool | str) -> tuple[cs.Function, np.ndarray]:
@@ -140,9 +141,10 @@ def _loop(filt: Any, covariance: bool | str) -> Any:
             return None
         try:
             kind = {False: "", True: "_cov", "jacobians": "_jac", "looped": "_looped"}[covariance]
-            level = "-O1" if covariance == "looped" else "-O0"  # a looped filter's runs are long: optimised
+            # a looped filter's runs are long: optimised above the size; the others' -O0 whatever their size
+            level = {"large_level": "-O1"} if covariance == "looped" else {"level": "-O0"}
             loops[key] = CompiledStepLoop(step, f"ahead{kind}_{filt.model.system.model.name}", threads=1,
-                                          vectorize=False, parameters=values, large_level=level)
+                                          vectorize=False, parameters=values, **level)
         except CompilerError:
             loops[key] = None
     loop = loops[key]
