@@ -44,6 +44,7 @@ _STEP = r"""
 #define VNP {np_all}
 #define VSUB {substeps}
 #define VSEED {seed}
+#define VCB 32
 static const int v_live[VND] = {{{live}}};
 static const double v_h = {h}, v_h2 = {h2}, v_h6 = {h6};
 
@@ -64,27 +65,27 @@ static void v_udu(const double* M, double* Uf, double* D) {{
   }}
 }}
 
-/* T (n rows of VND) <- M^-1 T with M = U D U' */
-static void v_solve(const double* Uf, const double* D, double* T) {{
+/* columns c0..c1-1 of T (n rows of VND) <- M^-1 T with M = U D U' */
+static void v_solve(const double* Uf, const double* D, double* T, int c0, int c1) {{
   int i, k, c;
   for (i = VN - 1; i >= 0; --i) {{
     double* ti = T + i * VND;
     for (k = i + 1; k < VN; ++k) {{
       double u = Uf[i + VN * k];
       const double* tk = T + k * VND;
-      if (u != 0.0) for (c = 0; c < VND; ++c) ti[c] -= u * tk[c];
+      if (u != 0.0) for (c = c0; c < c1; ++c) ti[c] -= u * tk[c];
     }}
   }}
   for (i = 0; i < VN; ++i) {{
     double* ti = T + i * VND;
-    for (c = 0; c < VND; ++c) ti[c] /= D[i];
+    for (c = c0; c < c1; ++c) ti[c] /= D[i];
   }}
   for (i = 0; i < VN; ++i) {{
     double* ti = T + i * VND;
     for (k = 0; k < i; ++k) {{
       double u = Uf[k + VN * i];
       const double* tk = T + k * VND;
-      if (u != 0.0) for (c = 0; c < VND; ++c) ti[c] -= u * tk[c];
+      if (u != 0.0) for (c = c0; c < c1; ++c) ti[c] -= u * tk[c];
     }}
   }}
 }}
@@ -93,22 +94,25 @@ static void v_solve(const double* Uf, const double* D, double* T) {{
 static int v_stage(const double* x, const double* Z, const double* wv, double* kx, double* K, double* Mb,
                    double* gx, double* gp, double* Uf, double* D, const casadi_real** arg, casadi_real** res,
                    casadi_int* iw, casadi_real* w) {{
-  int r, i, c;
+  int r, i, c, c0;
   arg[0] = x; arg[1] = wv; res[0] = kx; res[1] = Mb; res[2] = gx; res[3] = gp;
   if (alpes_vterms(arg, res, iw, w, 0)) return 1;
   memcpy(K, Z + VN * VND, sizeof(double) * VN * VND);
-  for (r = 0; r < VN; ++r) {{
-    double* t = K + (VN + r) * VND;
-    for (c = 0; c < VND; ++c) t[c] = 0.0;
-    for (i = 0; i < VNX; ++i) {{
-      double g = gx[r + VN * i];
-      const double* zi = Z + i * VND;
-      if (g != 0.0) for (c = 0; c < VND; ++c) t[c] += g * zi[c];
-    }}
-    for (c = VNX; c < VND; ++c) t[c] += gp[r + VN * (v_live[c] - VNX)];
-  }}
   v_udu(Mb, Uf, D);
-  v_solve(Uf, D, K + VN * VND);
+  for (c0 = 0; c0 < VND; c0 += VCB) {{  /* the directions by blocks that stay in the first-level cache */
+    int c1 = c0 + VCB < VND ? c0 + VCB : VND;
+    for (r = 0; r < VN; ++r) {{
+      double* t = K + (VN + r) * VND;
+      for (c = c0; c < c1; ++c) t[c] = 0.0;
+      for (i = 0; i < VNX; ++i) {{
+        double g = gx[r + VN * i];
+        const double* zi = Z + i * VND;
+        if (g != 0.0) for (c = c0; c < c1; ++c) t[c] += g * zi[c];
+      }}
+      for (c = c0 > VNX ? c0 : VNX; c < c1; ++c) t[c] += gp[r + VN * (v_live[c] - VNX)];
+    }}
+    v_solve(Uf, D, K + VN * VND, c0, c1);
+  }}
   return 0;
 }}
 
