@@ -64,9 +64,10 @@ class SensitivityModel:
     kernel : str, optional
         How the compiled step computes the sensitivities of a smooth (not LuGre) law: ``"c"`` the stage's linear
         algebra written out in C (:class:`~alpes_dyn.simulation.variational_c.VariationalStepLoop`: the same
-        numbers to rounding, several times faster on the whole Shadow hand), ``"casadi"`` CasADi's code of the
-        step (the reference), ``"auto"`` (default) ``"c"`` from :data:`~alpes_dyn.simulation.variational.
-        LOOPED_STATES` states (the fingers and the Alpes hand keep their cached libraries).
+        numbers to rounding, 2-3 times faster on the whole Shadow hand), ``"casadi"`` CasADi's code of the
+        step (the reference), ``"auto"`` (default) ``"c"`` from
+        :data:`~alpes_dyn.simulation.variational.LOOPED_STATES` states (the fingers and the Alpes hand keep their
+        cached libraries).
 
     Raises
     ------
@@ -84,6 +85,8 @@ class SensitivityModel:
         joints), basis functions, correction coefficients (nu nb) and sensitivity directions (nx + p + no).
     compile_seconds : float
         Time spent compiling now, s (0 when the library came from the cache).
+    kernel : str
+        The kernel chosen: ``"c"`` or ``"casadi"``.
     chained : bool
         Whether the sensitivities come from each period's own Jacobian chained over the samples (a looped step
         with many basis functions, :data:`~alpes_dyn.simulation.variational.CHAINED_BASIS`; the compiled step then
