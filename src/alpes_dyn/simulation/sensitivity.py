@@ -154,12 +154,13 @@ class SensitivityModel:
         if self.kernel == "c":  # the same steps, the linear algebra written out (module variational_c)
             self.step = None
 
-            def loop_of(directions: cs.SX, seeded: bool, tag: str) -> VariationalStepLoop:
-                return VariationalStepLoop(rhs, M, r, x, w, directions, h, self.substeps, seeded,
-                                           label.replace("sens_", tag, 1), threads)
-            self._state_step = lambda: loop_of(cs.SX(0, 1), False, "xsensc_")
-            self._loop = (loop_of(cs.vertcat(pd.theta, u), True, "sensc_") if self.chained
-                          else loop_of(cs.vertcat(pd.theta, off), False, "sensc_"))
+            directions = cs.vertcat(pd.theta, u) if self.chained else cs.vertcat(pd.theta, off)
+
+            def loop_of(state: bool) -> VariationalStepLoop:  # (both from one library: one build)
+                return VariationalStepLoop(rhs, M, r, x, w, directions, h, self.substeps, self.chained,
+                                           label.replace("sens_", "sensc_", 1), threads, state)
+            self._state_step = lambda: loop_of(True)
+            self._loop = loop_of(False)
         else:
             if self.chained:
                 self.step = sample_jacobian_step(repeated_step(sens_of(cs.vertcat(pd.theta, u)), self.substeps),

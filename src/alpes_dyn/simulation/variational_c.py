@@ -45,11 +45,11 @@ _STEP = r"""
 #define VSUB {substeps}
 #define VSEED {seed}
 #define VCB 32
-static const int v_live[VND] = {{{live}}};
-static const double v_h = {h}, v_h2 = {h2}, v_h6 = {h6};
+static const int v_live{sfx}[VND] = {{{live}}};
+static const double v_h{sfx} = {h}, v_h2{sfx} = {h2}, v_h6{sfx} = {h6};
 
 /* M (n, n) column-major, symmetric positive definite -> U D U' (U unit upper, in Uf column-major; zeros skipped) */
-static void v_udu(const double* M, double* Uf, double* D) {{
+static void v_udu{sfx}(const double* M, double* Uf, double* D) {{
   int i, j, k;
   for (j = VN - 1; j >= 0; --j) {{
     double d = M[j + VN * j];
@@ -66,7 +66,7 @@ static void v_udu(const double* M, double* Uf, double* D) {{
 }}
 
 /* columns c0..c1-1 of T (n rows of VND) <- M^-1 T with M = U D U' */
-static void v_solve(const double* Uf, const double* D, double* T, int c0, int c1) {{
+static void v_solve{sfx}(const double* Uf, const double* D, double* T, int c0, int c1) {{
   int i, k, c;
   for (i = VN - 1; i >= 0; --i) {{
     double* ti = T + i * VND;
@@ -91,14 +91,14 @@ static void v_solve(const double* Uf, const double* D, double* T, int c0, int c1
 }}
 
 /* one stage: kx = rhs(x, w), K = [Z_v; M^-1 (g_x Z + [0 | g_p])]; Z, K (nx rows of VND) */
-static int v_stage(const double* x, const double* Z, const double* wv, double* kx, double* K, double* Mb,
+static int v_stage{sfx}(const double* x, const double* Z, const double* wv, double* kx, double* K, double* Mb,
                    double* gx, double* gp, double* Uf, double* D, const casadi_real** arg, casadi_real** res,
                    casadi_int* iw, casadi_real* w) {{
   int r, i, c, c0;
   arg[0] = x; arg[1] = wv; res[0] = kx; res[1] = Mb; res[2] = gx; res[3] = gp;
   if (alpes_vterms(arg, res, iw, w, 0)) return 1;
   memcpy(K, Z + VN * VND, sizeof(double) * VN * VND);
-  v_udu(Mb, Uf, D);
+  v_udu{sfx}(Mb, Uf, D);
   for (c0 = 0; c0 < VND; c0 += VCB) {{  /* the directions by blocks that stay in the first-level cache */
     int c1 = c0 + VCB < VND ? c0 + VCB : VND;
     for (r = 0; r < VN; ++r) {{
@@ -109,14 +109,14 @@ static int v_stage(const double* x, const double* Z, const double* wv, double* k
         const double* zi = Z + i * VND;
         if (g != 0.0) for (c = c0; c < c1; ++c) t[c] += g * zi[c];
       }}
-      for (c = c0 > VNX ? c0 : VNX; c < c1; ++c) t[c] += gp[r + VN * (v_live[c] - VNX)];
+      for (c = c0 > VNX ? c0 : VNX; c < c1; ++c) t[c] += gp[r + VN * (v_live{sfx}[c] - VNX)];
     }}
-    v_solve(Uf, D, K + VN * VND, c0, c1);
+    v_solve{sfx}(Uf, D, K + VN * VND, c0, c1);
   }}
   return 0;
 }}
 
-static int alpes_step(const casadi_real** arg0, casadi_real** res0, casadi_int* iw, casadi_real* w, int mem) {{
+static int alpes_step{sfx}(const casadi_real** arg0, casadi_real** res0, casadi_int* iw, casadi_real* w, int mem) {{
   const casadi_real* arg[VSZ_ARG];
   casadi_real* res[VSZ_RES];
   double* Z = w + VSZ_WF;
@@ -135,29 +135,48 @@ static int alpes_step(const casadi_real** arg0, casadi_real** res0, casadi_int* 
   int i, c, s, m = VNX * VND;
   for (i = 0; i < VNX; ++i) xb[i] = z0[i];
   for (i = 0; i < VNX; ++i) for (c = 0; c < VND; ++c)
-    Z[i * VND + c] = VSEED ? (double) (v_live[c] == i) : z0[VNX + i + VNX * v_live[c]];
+    Z[i * VND + c] = VSEED ? (double) (v_live{sfx}[c] == i) : z0[VNX + i + VNX * v_live{sfx}[c]];
   for (s = 0; s < VSUB; ++s) {{
-    if (v_stage(xb, Z, wv, k1, K1, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
-    for (i = 0; i < VNX; ++i) xs[i] = xb[i] + v_h2 * k1[i];
-    for (i = 0; i < m; ++i) Zs[i] = Z[i] + v_h2 * K1[i];
-    if (v_stage(xs, Zs, wv, k2, K2, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
-    for (i = 0; i < VNX; ++i) xs[i] = xb[i] + v_h2 * k2[i];
-    for (i = 0; i < m; ++i) Zs[i] = Z[i] + v_h2 * K2[i];
-    if (v_stage(xs, Zs, wv, k3, K3, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
-    for (i = 0; i < VNX; ++i) xs[i] = xb[i] + v_h * k3[i];
-    for (i = 0; i < m; ++i) Zs[i] = Z[i] + v_h * K3[i];
-    if (v_stage(xs, Zs, wv, k4, K4, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
-    for (i = 0; i < VNX; ++i) xb[i] = xb[i] + v_h6 * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i]);
-    for (i = 0; i < m; ++i) Z[i] = Z[i] + v_h6 * (((K1[i] + 2.0 * K2[i]) + 2.0 * K3[i]) + K4[i]);
+    if (v_stage{sfx}(xb, Z, wv, k1, K1, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
+    for (i = 0; i < VNX; ++i) xs[i] = xb[i] + v_h2{sfx} * k1[i];
+    for (i = 0; i < m; ++i) Zs[i] = Z[i] + v_h2{sfx} * K1[i];
+    if (v_stage{sfx}(xs, Zs, wv, k2, K2, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
+    for (i = 0; i < VNX; ++i) xs[i] = xb[i] + v_h2{sfx} * k2[i];
+    for (i = 0; i < m; ++i) Zs[i] = Z[i] + v_h2{sfx} * K2[i];
+    if (v_stage{sfx}(xs, Zs, wv, k3, K3, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
+    for (i = 0; i < VNX; ++i) xs[i] = xb[i] + v_h{sfx} * k3[i];
+    for (i = 0; i < m; ++i) Zs[i] = Z[i] + v_h{sfx} * K3[i];
+    if (v_stage{sfx}(xs, Zs, wv, k4, K4, Mb, gx, gp, Uf, D, arg, res, iw, w)) return 1;
+    for (i = 0; i < VNX; ++i) xb[i] = xb[i] + v_h6{sfx} * (((k1[i] + 2.0 * k2[i]) + 2.0 * k3[i]) + k4[i]);
+    for (i = 0; i < m; ++i) Z[i] = Z[i] + v_h6{sfx} * (((K1[i] + 2.0 * K2[i]) + 2.0 * K3[i]) + K4[i]);
   }}
   for (i = 0; i < VNX; ++i) out[i] = xb[i];
   memset(out + VNX, 0, sizeof(double) * VNX * VNDALL);
-  for (i = 0; i < VNX; ++i) for (c = 0; c < VND; ++c) out[VNX + i + VNX * v_live[c]] = Z[i * VND + c];
+  for (i = 0; i < VNX; ++i) for (c = 0; c < VND; ++c) out[VNX + i + VNX * v_live{sfx}[c]] = Z[i * VND + c];
   return 0;
 }}
 #if defined(__GNUC__) && !defined(__clang__)
 #pragma GCC pop_options
 #endif
+#undef VNX
+#undef VND
+#undef VNDALL
+#undef VSEED
+"""
+
+_SECOND = """
+/* ---- the second step's driver: its own names ---- */
+#undef NX
+#undef NW
+#undef SZ_ARG
+#undef SZ_RES
+#undef SZ_IW
+#undef SZ_W
+#undef LANES
+#define alpes_job alpes_job_x
+#define alpes_run alpes_run_x
+#define alpes_worker alpes_worker_x
+#define alpes_rollout alpes_rollout_x
 """
 
 
@@ -190,6 +209,9 @@ class VariationalStepLoop(CompiledStepLoop):
         Stem of the cached library's file name.
     threads : int or None, optional
         Worker threads, 1 to 64 (default None: the CPUs this process may use).
+    state : bool, optional
+        True: the loop of the start state's directions alone (X (nx, nx), from the input's; the same library as
+        the loop of all the directions of the same arguments: one build for both); default False.
 
     Attributes
     ----------
@@ -198,7 +220,7 @@ class VariationalStepLoop(CompiledStepLoop):
     """
 
     def __init__(self, rhs: cs.SX, M: cs.SX, r: cs.SX, x: cs.SX, w: cs.SX, p: cs.SX, h: float, substeps: int,
-                 seeded: bool, label: str, threads: int | None = None) -> None:
+                 seeded: bool, label: str, threads: int | None = None, state: bool = False) -> None:
         nx, n, np_all = x.numel(), M.size1(), p.numel()
         a = cs.SX.sym("a", n)
         g = r - cs.mtimes(M, a)
@@ -214,17 +236,23 @@ class VariationalStepLoop(CompiledStepLoop):
         nd_all, nd = nx + np_all, len(self.live)
         sz_w = f.sz_w() + 6 * nx * nd + 6 * nx + 2 * n * n + n * nx + n * max(np_all, 1) + n
         sizes = f"#define VSZ_ARG {f.sz_arg()}\n#define VSZ_RES {f.sz_res()}\n#define VSZ_WF {f.sz_w()}\n"
-        step = _STEP.format(n=n, nx=nx, nd=nd, nd_all=nd_all, np_all=np_all, substeps=int(substeps),
-                            seed=int(bool(seeded)), live=", ".join(str(int(c)) for c in self.live),
-                            h=float(h).hex(), h2=(0.5 * h).hex(), h6=(h / 6.0).hex())
-        self.nx, self.nw = nx + nx * nd_all, int(w.numel())
+        common = dict(n=n, nx=nx, np_all=np_all, substeps=int(substeps), h=float(h).hex(), h2=(0.5 * h).hex(),
+                      h6=(h / 6.0).hex())
+        # two steps in one library: all the directions, and the start state's alone (the same terms, one build)
+        steps = (_STEP.format(sfx="", nd=nd, nd_all=nd_all, seed=int(bool(seeded)),
+                              live=", ".join(str(int(c)) for c in self.live), **common)
+                 + _STEP.format(sfx="_x", nd=nx, nd_all=nx, seed=0, live=", ".join(map(str, range(nx))), **common))
+        fmt = dict(nw=int(w.numel()), sz_arg=2, sz_res=1, sz_iw=f.sz_iw(), sz_w=sz_w, parg="", lanes=1,
+                   vector_code="")
+        source = ("#define _GNU_SOURCE\n" + cg.dump() + sizes + steps
+                  + _DRIVER.format(nx=nx + nx * nd_all, step="alpes_step", **fmt) + _SECOND
+                  + _DRIVER.format(nx=nx + nx * nx, step="alpes_step_x", **fmt))
+        self.state = bool(state)
+        self.nx, self.nw = nx + nx * (nx if self.state else nd_all), int(w.numel())
         self.threads = _check_threads(threads)
         self.parameters, self.lanes = np.zeros(0), 1
-        fmt = dict(nx=self.nx, nw=self.nw, sz_arg=2, sz_res=1, sz_iw=f.sz_iw(),
-                   sz_w=sz_w, step="alpes_step", parg="", lanes=1, vector_code="")
-        source = "#define _GNU_SOURCE\n" + cg.dump() + sizes + step + _DRIVER.format(**fmt)
         self.library, self.compiled, self.compile_seconds, self._lib = _build_library(source, label)
-        fn = self._lib.alpes_rollout
+        fn = self._lib.alpes_rollout_x if self.state else self._lib.alpes_rollout
         dp = ctypes.POINTER(ctypes.c_double)
         fn.argtypes = [dp, dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
         fn.restype = ctypes.c_int
