@@ -42,6 +42,15 @@ from .variational import _rk4_calling, repeated_step, variational_rk4_step  # (r
 __all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
 
 
+def _check_kernel(kernel: str, lugre: bool) -> None:
+    """An InputError naming ``kernel`` where it is not one of :class:`SensitivityModel`'s, or ``"c"`` on a LuGre law
+    (``lugre``)."""
+    if kernel not in ("auto", "c", "casadi"):
+        raise InputError(f"kernel: expected 'auto', 'c' or 'casadi', got {kernel!r}")
+    if kernel == "c" and lugre:
+        raise InputError("kernel: 'c' is the smooth law's step; this model's friction law is LuGre")
+
+
 class SensitivityModel:
     """Batched simulation with sensitivities of a model with symbolic parameters.
 
@@ -115,10 +124,7 @@ class SensitivityModel:
             raise InputError(f"input_basis: expected an integer in [0, 64], got {input_basis!r}")
         if input_offset and input_basis not in (0, 1):
             raise InputError("input_offset: a constant offset is input_basis=1; pass one of them")
-        if kernel not in ("auto", "c", "casadi"):
-            raise InputError(f"kernel: expected 'auto', 'c' or 'casadi', got {kernel!r}")
-        if kernel == "c" and pd.lugre is not None:
-            raise InputError("kernel: 'c' is the smooth law's step; this model's friction law is LuGre")
+        _check_kernel(kernel, pd.lugre is not None)
         self.nb = 1 if input_offset else int(input_basis)
         self.input_offset = self.nb > 0
         self.no = self.nu * self.nb
@@ -151,22 +157,15 @@ class SensitivityModel:
             else "casadi"
         label = f"sens_{model.name}{'_lugre' if pd.lugre is not None else ''}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
         self._label, self._threads = label, threads
+        directions = cs.vertcat(pd.theta, u) if self.chained else cs.vertcat(pd.theta, off)
         if self.kernel == "c":  # the same steps, the linear algebra written out (module variational_c)
-            self.step = None
-
-            directions = cs.vertcat(pd.theta, u) if self.chained else cs.vertcat(pd.theta, off)
-
-            def loop_of(state: bool) -> VariationalStepLoop:  # (both from one library: one build)
-                return VariationalStepLoop(rhs, M, r, x, w, directions, h, self.substeps, self.chained,
-                                           label.replace("sens_", "sensc_", 1), threads, state)
-            self._state_step = lambda: loop_of(True)
-            self._loop = loop_of(False)
+            self.step, args = None, (rhs, M, r, x, w, directions, h, self.substeps, self.chained,
+                                     label.replace("sens_", "sensc_", 1), threads)
+            self._state_step = lambda: VariationalStepLoop(*args, state=True)  # (the same library: one build)
+            self._loop = VariationalStepLoop(*args)
         else:
-            if self.chained:
-                self.step = sample_jacobian_step(repeated_step(sens_of(cs.vertcat(pd.theta, u)), self.substeps),
-                                                 self.nx)
-            else:
-                self.step = repeated_step(sens_of(cs.vertcat(pd.theta, off)), self.substeps)
+            step = repeated_step(sens_of(directions), self.substeps)
+            self.step = sample_jacobian_step(step, self.nx) if self.chained else step
             # the sensitivities to the initial state alone (dx/dx_0, nx x nx), built on first use
             self._state_step = lambda: CompiledStepLoop(repeated_step(sens_of(cs.SX(0, 1)), self.substeps),
                                                         label.replace("sens_", "xsens_", 1), threads)
