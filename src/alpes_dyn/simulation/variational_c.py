@@ -12,16 +12,19 @@ with the directions held row by row (each state's nd derivatives contiguous, so 
 the directions, which the compiler vectorises), M factorised as U D U' (U unit upper triangular: no fill on a
 kinematic tree whose joints come after their parents, and the zeros of U and of g_x skipped where they fall), the
 parameter directions whose g_p column is structurally zero (an output-only parameter: an encoder offset, a tendon
-compliance) left out of the arithmetic and written as exact zeros. rhs, M, g_x and g_p are CasADi's own functions
-(:func:`~alpes_dyn.simulation.variational.looped_variational_rk4_step`'s), generated into the same source; the
-states follow the same RK4 operations in the same order as :func:`~alpes_dyn.simulation.integrate.rk4_expression`
-(bit for bit with the plain step), the sensitivities the same stage derivatives summed in another order (to
-rounding). The loop over samples, segments and threads is :class:`~alpes_dyn.simulation.codegen.CompiledStepLoop`'s.
+compliance) left out of the arithmetic and written as exact zeros. rhs, M, g_x and g_p
+(:func:`~alpes_dyn.simulation.variational.looped_variational_rk4_step`'s expressions) are one CasADi function
+generated into the same source (M and r computed once for rhs and the Jacobians); the states follow the same RK4
+operations in the same order as :func:`~alpes_dyn.simulation.integrate.rk4_expression` (bit for bit with the plain
+step), the sensitivities the same stage derivatives summed in another order (to rounding). One library holds two
+steps: all the directions, and the start state's alone (a shooting fit's node sweeps). The loop over samples,
+segments and threads is :class:`~alpes_dyn.simulation.codegen.CompiledStepLoop`'s (its driver, once per step).
 """
 
 from __future__ import annotations
 
 import ctypes
+
 import casadi as cs
 import numpy as np
 
