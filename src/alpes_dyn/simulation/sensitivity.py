@@ -36,9 +36,19 @@ from .lugre_sensitivity import lugre_steps
 from .integrate import CompiledStepLoop, _check_dt
 from .variational import CHAINED_BASIS, LOOPED_STATES, chain_sample_jacobians, looped_variational_rk4_step
 from .variational import sample_jacobian_step
+from .variational_c import VariationalStepLoop
 from .variational import _rk4_calling, repeated_step, variational_rk4_step  # (re-exported: their home before)
 
 __all__ = ["SensitivityModel", "variational_rk4_step", "repeated_step"]
+
+
+def _check_kernel(kernel: str, lugre: bool) -> None:
+    """An InputError naming ``kernel`` where it is not one of :class:`SensitivityModel`'s, or ``"c"`` on a LuGre law
+    (``lugre``)."""
+    if kernel not in ("auto", "c", "casadi"):
+        raise InputError(f"kernel: expected 'auto', 'c' or 'casadi', got {kernel!r}")
+    if kernel == "c" and lugre:
+        raise InputError("kernel: 'c' is the smooth law's step; this model's friction law is LuGre")
 
 
 class SensitivityModel:
@@ -60,6 +70,19 @@ class SensitivityModel:
         True is ``input_basis=1`` (a constant correction per segment; default False).
     input_basis : int, optional
         The number b of basis functions of an input correction, 0..64 (see the module docstring; default 0).
+    kernel : str, optional
+        How the compiled step computes the sensitivities of a smooth (not LuGre) law: ``"c"`` the stage's linear
+        algebra written out in C (:class:`~alpes_dyn.simulation.variational_c.VariationalStepLoop`: the same
+        numbers to rounding, 2-3 times faster on the whole Shadow hand), ``"casadi"`` CasADi's code of the
+        step (the reference), ``"auto"`` (default) ``"c"`` from
+        :data:`~alpes_dyn.simulation.variational.LOOPED_STATES` states (the fingers and the Alpes hand keep their
+        cached libraries).
+
+    Raises
+    ------
+    InputError
+        A bad ``substeps``, ``input_basis``, ``input_offset`` with another basis, or ``kernel`` (``"c"`` on a LuGre
+        law's model).
 
     Attributes
     ----------
@@ -71,6 +94,8 @@ class SensitivityModel:
         joints), basis functions, correction coefficients (nu nb) and sensitivity directions (nx + p + no).
     compile_seconds : float
         Time spent compiling now, s (0 when the library came from the cache).
+    kernel : str
+        The kernel chosen: ``"c"`` or ``"casadi"``.
     chained : bool
         Whether the sensitivities come from each period's own Jacobian chained over the samples (a looped step
         with many basis functions, :data:`~alpes_dyn.simulation.variational.CHAINED_BASIS`; the compiled step then
@@ -79,7 +104,7 @@ class SensitivityModel:
 
     def __init__(self, model: Model, parameters: str | Sequence[str] | None = None, dt: float = 1e-3,
                  substeps: int = 4, threads: int | None = None, input_offset: bool = False,
-                 input_basis: int = 0) -> None:
+                 input_basis: int = 0, kernel: str = "auto") -> None:
         self.model = model
         self.dt = _check_dt(dt)
         if isinstance(substeps, (bool, np.bool_)) or not isinstance(substeps, (int, np.integer)) or not 1 <= substeps <= 1000:
@@ -99,6 +124,7 @@ class SensitivityModel:
             raise InputError(f"input_basis: expected an integer in [0, 64], got {input_basis!r}")
         if input_offset and input_basis not in (0, 1):
             raise InputError("input_offset: a constant offset is input_basis=1; pass one of them")
+        _check_kernel(kernel, pd.lugre is not None)
         self.nb = 1 if input_offset else int(input_basis)
         self.input_offset = self.nb > 0
         self.no = self.nu * self.nb
@@ -127,16 +153,24 @@ class SensitivityModel:
         self.plain_step = repeated_step(plain, self.substeps)
         # many coefficients (the Shadow hand's lines): each period's Jacobian to (x, p, u), chained in run
         self.chained = pd.lugre is None and self.nx >= LOOPED_STATES and self.nb >= CHAINED_BASIS
-        if self.chained:
-            self.step = sample_jacobian_step(repeated_step(sens_of(cs.vertcat(pd.theta, u)), self.substeps), self.nx)
-        else:
-            self.step = repeated_step(sens_of(cs.vertcat(pd.theta, off)), self.substeps)
-        # the sensitivities to the initial state alone (dx/dx_0, nx x nx), built on first use
-        self._state_step = sens_of
-        self._state_loop: CompiledStepLoop | None = None
+        self.kernel = "c" if kernel == "c" or (kernel == "auto" and pd.lugre is None and self.nx >= LOOPED_STATES) \
+            else "casadi"
         label = f"sens_{model.name}{'_lugre' if pd.lugre is not None else ''}_{'-'.join(self.names)}{f'_b{self.nb}' if self.nb else ''}"[:90]
-        self._loop = CompiledStepLoop(self.step, label, threads)
         self._label, self._threads = label, threads
+        directions = cs.vertcat(pd.theta, u) if self.chained else cs.vertcat(pd.theta, off)
+        if self.kernel == "c":  # the same steps, the linear algebra written out (module variational_c)
+            self.step, args = None, (rhs, M, r, x, w, directions, h, self.substeps, self.chained,
+                                     label.replace("sens_", "sensc_", 1), threads)
+            self._state_step = lambda: VariationalStepLoop(*args, state=True)  # (the same library: one build)
+            self._loop = VariationalStepLoop(*args)
+        else:
+            step = repeated_step(sens_of(directions), self.substeps)
+            self.step = sample_jacobian_step(step, self.nx) if self.chained else step
+            # the sensitivities to the initial state alone (dx/dx_0, nx x nx), built on first use
+            self._state_step = lambda: CompiledStepLoop(repeated_step(sens_of(cs.SX(0, 1)), self.substeps),
+                                                        label.replace("sens_", "xsens_", 1), threads)
+            self._loop = CompiledStepLoop(self.step, label, threads)
+        self._state_loop: CompiledStepLoop | None = None
         self._plain_loop: CompiledStepLoop | None = None  # the states alone, compiled on first use
         self.compile_seconds = self._loop.compile_seconds
         self.nw = self.nu + 3 + self.p + self.nb + self.no
@@ -213,8 +247,7 @@ class SensitivityModel:
             return self._plain_loop.run(x0, W, progress, "states"), None
         state = sensitivities == "state"
         if state and self._state_loop is None:
-            step = repeated_step(self._state_step(cs.SX(0, 1)), self.substeps)
-            self._state_loop = CompiledStepLoop(step, self._label.replace("sens_", "xsens_", 1), self._threads)
+            self._state_loop = self._state_step()
             self.compile_seconds += self._state_loop.compile_seconds
         nd = self.nx if state else self.nd
         if self.chained and not state:
