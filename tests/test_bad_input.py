@@ -225,6 +225,8 @@ def bad_files(d: Path) -> dict[str, str]:
                                                   'unit = "F_s", source = "identified", reason = "x" }\n', 1).encode()
     files["model_error_unit_toml"] = BASE_TOML.replace("[friction]\n", '[friction]\nmodel_error = { value = 1.0, '
                                                        'unit = "N m", source = "identified", reason = "x" }\n', 1).encode()
+    files["observer_law_toml"] = BASE_TOML.replace("[friction]\n", '[friction]\nobserver_law = { value = "dahl", '
+                                                   'unit = "-", source = "identified", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files["untrusted_toml"] = (BASE_TOML + '\n[identification.finger]\nconverged = false\nstop = "lost basin"\n'
                                "trustworthy = false\n").encode()  # written by identify --force
@@ -869,6 +871,8 @@ CLI: dict[str, list[Cli]] = {
           needle="friction.model_error: value must be >= 0"),
         C("urdf", "--model", "finger3", "--params", "{model_error_unit_toml}",
           needle="friction.model_error.unit: the value is read in 'F_s', got 'N m'"),
+        C("estimate", "--model", "finger3", "--params", "{observer_law_toml}",
+          needle="friction.observer_law: expected one of smooth, stick, lugre, got 'dahl'"),
         C("urdf", "--model", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
         C("urdf", "--model", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
         C("urdf", "--model", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
