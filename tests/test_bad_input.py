@@ -2588,6 +2588,9 @@ API: list[Api] = [
     A("PlantEffects", lambda c: _mjrec(effects=_eff(soft_stiction="yes")), InputError,
       "soft_stiction: expected True or False"),
     A("friction_row", lambda c: _friction_row("slippery"), InputError, "case: expected one of soft, soft_3x"),
+    A("held_out_ramp", lambda c: _held_out_ramp("slippery"), InputError, "case: expected one of soft, soft_3x"),
+    A("check_observer_law", lambda c: _check_observer_law("tanh"), ModelError,
+      "friction.observer_law: expected one of smooth, stick, lugre, got 'tanh'"),
     A("creep_of_constraint", lambda c: _creep_of_constraint(-0.02, 0.9, 0.95), ModelError,
       "solreffriction: expected a finite number > 0 s"),
     A("creep_of_constraint", lambda c: _creep_of_constraint(0.02, np.nan, 0.95), ModelError,
@@ -2793,6 +2796,18 @@ def _friction_row(case):
     from alpes_dyn.studies.realism_friction import friction_row
 
     return friction_row(case, 0)
+
+
+def _held_out_ramp(case):
+    from alpes_dyn.studies.realism_friction import held_out_ramp
+
+    return held_out_ramp(case, 0, None)
+
+
+def _check_observer_law(law):
+    from alpes_dyn.model.friction import check_observer_law
+
+    return check_observer_law(law)
 
 
 def _mjrec(**kw):

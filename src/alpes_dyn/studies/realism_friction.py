@@ -334,6 +334,11 @@ def held_out_ramp(case: FrictionCase | str, seed: int, effects: PlantEffects, dt
     -------
     Recording
         The MuJoCo recording (encoder counts, torque N m, true joints rad).
+
+    Raises
+    ------
+    InputError
+        An unknown case name.
     """
     case = _case(case)
     true = case.true_params(seed)
