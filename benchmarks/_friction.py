@@ -37,16 +37,17 @@ def friction_output(rows: list[dict], names: list[str], design: Any, rig: str, a
 
 
 def run_friction(names: list[str], seeds: list[int], design: Any, adapt: str,
-                 log: Callable[[list[dict]], None]) -> dict[str, float]:
+                 log: Callable[[list[dict]], None], check_ramp: bool = False) -> dict[str, float]:
     """Each seed's rows, every case of ``names`` in turn (:func:`~alpes_dyn.studies.realism_friction.friction_row`),
-    each handed to ``log`` as measured (a run that raised: a row with ``error``); returns the seconds per case."""
+    each handed to ``log`` as measured (a run that raised: a row with ``error``); returns the seconds per case.
+    ``check_ramp``: the fit's observer check judged on a held-out slow record (``identify --validate``)."""
     seconds = dict.fromkeys(names, 0.0)
     with tempfile.TemporaryDirectory() as d:
         for s in seeds:
             for c in names:
                 t0 = time.perf_counter()
                 try:
-                    row = friction_row(c, s, design, Path(d), adapt)
+                    row = friction_row(c, s, design, Path(d), adapt, check_ramp=check_ramp)
                 except Exception as exc:  # a run that raised (the plant diverged, ...): counted apart
                     row = {"case": c, "seed": s, "chain": "finger3", "error": f"{type(exc).__name__}: {exc}"}
                 log([row])

@@ -147,6 +147,9 @@ def main(argv: list[str] | None = None) -> int:
                          "it (hung fingers down where palm up the finger leaves its range, then smaller amplitudes); "
                          "level / hanging: that orientation only, the amplitudes adapting; both: palm up then hung in "
                          "one record (alpes-dyn experiment --rig both); none: the design as given")
+    ap.add_argument("--check-ramp", action="store_true",
+                    help="with --friction: give identify a held-out slow record (the validation ramp, its own noise) "
+                         "as --validate does: its observer check and its choice of the friction law judged on it")
     ap.add_argument("--json", action="store_true")
     ap.add_argument("--no-rigid", action="store_true", help="skip the rigid fit (the extended fit and the EKF only)")
     ap.add_argument("--log", metavar="FILE", help="append each row to FILE as a JSON line as it is measured")
@@ -163,6 +166,8 @@ def main(argv: list[str] | None = None) -> int:
     args = ap.parse_args(argv)
     if args.friction:
         return _friction_main(ap, args)
+    if args.check_ramp:
+        ap.error("--check-ramp: only with --friction (the friction cases' held-out ramp)")
     if args.from_log is not None:
         return _from_log(ap, args)
     try:
@@ -276,7 +281,7 @@ def _friction_main(ap: argparse.ArgumentParser, args: argparse.Namespace) -> int
                 with open(args.log, "a", encoding="utf-8") as f:
                     f.writelines(json.dumps(r) + "\n" for r in new_rows)
 
-        seconds = run_friction(names, seeds[:1] if args.quick else seeds, design, args.adapt, log)
+        seconds = run_friction(names, seeds[:1] if args.quick else seeds, design, args.adapt, log, args.check_ramp)
         out = friction_output(rows, names, design, "level", args.adapt, seconds)
     print(json.dumps(out) if args.json else friction_text(out))
     return 0

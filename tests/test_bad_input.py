@@ -225,6 +225,8 @@ def bad_files(d: Path) -> dict[str, str]:
                                                   'unit = "F_s", source = "identified", reason = "x" }\n', 1).encode()
     files["model_error_unit_toml"] = BASE_TOML.replace("[friction]\n", '[friction]\nmodel_error = { value = 1.0, '
                                                        'unit = "N m", source = "identified", reason = "x" }\n', 1).encode()
+    files["observer_law_toml"] = BASE_TOML.replace("[friction]\n", '[friction]\nobserver_law = { value = "dahl", '
+                                                   'unit = "-", source = "identified", reason = "x" }\n', 1).encode()
     files["badident_toml"] = (BASE_TOML + "\n[identification.finger]\nconverged = 1\n").encode()
     files["untrusted_toml"] = (BASE_TOML + '\n[identification.finger]\nconverged = false\nstop = "lost basin"\n'
                                "trustworthy = false\n").encode()  # written by identify --force
@@ -869,6 +871,8 @@ CLI: dict[str, list[Cli]] = {
           needle="friction.model_error: value must be >= 0"),
         C("urdf", "--model", "finger3", "--params", "{model_error_unit_toml}",
           needle="friction.model_error.unit: the value is read in 'F_s', got 'N m'"),
+        C("estimate", "--model", "finger3", "--params", "{observer_law_toml}",
+          needle="friction.observer_law: expected one of smooth, stick, lugre, got 'dahl'"),
         C("urdf", "--model", "finger3", "--params", "{bigint_toml}", needle="transmission.N.value: integer of 401 digits, over the limit"),
         C("urdf", "--model", "finger3", "--params", "{deep_toml}", needle="arrays or tables nested more than 32 deep"),
         C("urdf", "--model", "finger3", "--params", "{half_count_toml}", needle="transmission.encoder_counts: value must be a "
@@ -2587,6 +2591,9 @@ API: list[Api] = [
     A("PlantEffects", lambda c: _mjrec(effects=_eff(soft_stiction="yes")), InputError,
       "soft_stiction: expected True or False"),
     A("friction_row", lambda c: _friction_row("slippery"), InputError, "case: expected one of soft, soft_3x"),
+    A("held_out_ramp", lambda c: _held_out_ramp("slippery"), InputError, "case: expected one of soft, soft_3x"),
+    A("check_observer_law", lambda c: _check_observer_law("tanh"), ModelError,
+      "friction.observer_law: expected one of smooth, stick, lugre, got 'tanh'"),
     A("creep_of_constraint", lambda c: _creep_of_constraint(-0.02, 0.9, 0.95), ModelError,
       "solreffriction: expected a finite number > 0 s"),
     A("creep_of_constraint", lambda c: _creep_of_constraint(0.02, np.nan, 0.95), ModelError,
@@ -2792,6 +2799,18 @@ def _friction_row(case):
     from alpes_dyn.studies.realism_friction import friction_row
 
     return friction_row(case, 0)
+
+
+def _held_out_ramp(case):
+    from alpes_dyn.studies.realism_friction import held_out_ramp
+
+    return held_out_ramp(case, 0, None)
+
+
+def _check_observer_law(law):
+    from alpes_dyn.model.friction import check_observer_law
+
+    return check_observer_law(law)
 
 
 def _mjrec(**kw):

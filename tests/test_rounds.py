@@ -353,8 +353,8 @@ def test_the_creep_round_where_the_verdict_names_the_band():
 def test_a_refused_stick_slip_fit_names_the_friction_that_sticks():
     """A fit kept with the stick-slip law, refused naming a friction with a state within two sensor floors after the
     LuGre round was not kept (MuJoCo's stiff frictionloss at three times F_s): its verdict names the dry friction
-    that sticks (the switched law of ``estimate --friction-law stick``) in place of LuGre's presliding, the rest
-    kept, and it stays refused; not where the LuGre law was not tried or was kept, not without the stick-slip law,
+    that sticks (the switched law, which the observer check did not choose on the record: friction.observer_law) in
+    place of LuGre's presliding, the rest kept, and it stays refused; not where the LuGre law was not tried or was kept, not without the stick-slip law,
     not at the creep band's residual, not on an adequate fit or a verdict naming no friction with a state."""
     stateful = rd.STATEFUL_WORD + " (the residual at the velocity reversals or at the excitation's harmonics)"
     stick = KEPT + ("stiction",)
@@ -362,7 +362,8 @@ def test_a_refused_stick_slip_fit_names_the_friction_that_sticks():
     refused = fit(0.615, missing=[SIGNATURES["velocity"], stateful, NONLINEARITY])  # 1.07 floors
     assert rd.sticking(refused, stick, tried)
     note = rd.name_sticking(refused, stick, tried)
-    assert note is not None and "--friction-law stick" in note and "1.07x" in note
+    assert note is not None and "1.07x" in note and "friction.observer_law" in note
+    assert "--friction-law stick" not in note  # the file says the law its observer runs: nothing to pass by hand
     assert refused.adequacy.likely_missing == [rd.STUCK_FRICTION, SIGNATURES["velocity"], NONLINEARITY]
     assert not refused.adequacy.adequate and "LuGre law;" not in " ".join(refused.adequacy.likely_missing)
     for result, effects, attempted in (

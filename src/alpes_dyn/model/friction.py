@@ -35,13 +35,19 @@ import numpy as np
 
 from ..errors import ModelError
 
-__all__ = ["FRICTION_MODELS", "LuGre", "PRESLIDING", "SIGMA0", "SIGMA1", "lugre_rate", "lugre_torque",
+__all__ = ["FRICTION_MODELS", "OBSERVER_LAWS", "check_observer_law",
+           "LuGre", "PRESLIDING", "SIGMA0", "SIGMA1", "lugre_rate", "lugre_torque",
            "lugre_steady", "lugre_of", "check_law", "Creep", "CREEP_KAPPA", "CREEP_RATE", "creep_of",
            "creep_of_constraint"]
 
 FRICTION_MODELS: tuple[str, ...] = ("tanh", "lugre", "creep")
 """The parameter file's ``friction.law``: ``tanh`` the memoryless smooth law, ``lugre`` the law of this module,
 ``creep`` the soft dry friction of :class:`Creep`."""
+
+OBSERVER_LAWS: tuple[str, ...] = ("smooth", "stick", "lugre")
+"""The observers' dry-friction laws (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`), which the parameter file's
+optional ``friction.observer_law`` names: the law its observer runs (``identify`` writes the one its observer
+check chose, :mod:`~alpes_dyn.estimation.identification.law_choice`)."""
 
 PRESLIDING = 1e-3
 """rad: the default presliding displacement F_s / sigma0 of a joint, the angle a stuck joint yields elastically
@@ -79,6 +85,31 @@ def check_law(law: Any, field: str = "friction.law") -> str:
     """
     if not isinstance(law, str) or law not in FRICTION_MODELS:
         raise ModelError(f"{field}: expected one of {', '.join(FRICTION_MODELS)}, got {law!r:.40}")
+    return law
+
+
+def check_observer_law(law: Any, field: str = "friction.observer_law") -> str:
+    """``law`` if it is one of :data:`OBSERVER_LAWS`, else :class:`~alpes_dyn.ModelError` naming ``field``.
+
+    Parameters
+    ----------
+    law : Any
+        The observer's law read (``"smooth"``, ``"stick"`` or ``"lugre"``).
+    field : str, optional
+        The field the error names (default ``"friction.observer_law"``).
+
+    Returns
+    -------
+    str
+        ``law``.
+
+    Raises
+    ------
+    ModelError
+        ``law`` not a string of :data:`OBSERVER_LAWS`.
+    """
+    if not isinstance(law, str) or law not in OBSERVER_LAWS:
+        raise ModelError(f"{field}: expected one of {', '.join(OBSERVER_LAWS)}, got {law!r:.40}")
     return law
 
 

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import ModelError
 from ..limits import check_not_subnormal
-from .friction import check_law
+from .friction import check_law, check_observer_law
 
 __all__ = ["check_value"]
 
@@ -31,7 +31,7 @@ def check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
         The number of entries; None: a scalar.
     kind : str
         ``"pos"`` (> 0), ``"nonneg"`` (>= 0), ``"any"`` (finite), ``"unit"`` (a unit vector), ``"str"`` (unique
-        names) or ``"law"`` (a friction law's name).
+        names), ``"law"`` (a friction law's name) or ``"observer_law"`` (an observer's friction law's name).
 
     Returns
     -------
@@ -45,6 +45,8 @@ def check_value(name: str, value: Any, length: int | None, kind: str) -> Any:
     """
     if kind == "law":  # a name from FRICTION_MODELS
         return check_law(value, name)
+    if kind == "observer_law":  # a name from OBSERVER_LAWS
+        return check_observer_law(value, name)
     if kind == "str":
         if not (isinstance(value, list) and len(value) == length and all(isinstance(v, str) and v for v in value)):
             raise ModelError(f"{name}: value must be a list of {length} non-empty strings (got {value!r})")

@@ -160,6 +160,11 @@ class HandParams:
     (:func:`~alpes_dyn.estimation.observers.noise_calibration.calibrate_model_error`); every observer built from
     the file carries it (:func:`~alpes_dyn.estimation.observers.friction_noise.with_friction_noise`). None: the
     library's default."""
+    observer_law: str | None = None
+    """The observers' dry-friction law on this file (optional ``friction.observer_law``,
+    :data:`~alpes_dyn.model.friction.OBSERVER_LAWS`): written by ``identify``, the law its observer check chose by
+    measurement (:mod:`~alpes_dyn.estimation.identification.law_choice`); read by every observer built from the
+    file (:func:`~alpes_dyn.simulation.stick.observer_friction_law`). None: the default for ``friction.law``."""
     identification: dict[str, dict[str, Any]] = field(default_factory=dict, repr=False)
     """Per chain fitted (``finger``, a finger's name, ``thumb``): the record of ``[identification.<chain>]``."""
 
@@ -458,6 +463,7 @@ def _from_text(text: str, path: str) -> HandParams:
         creep_kappa=float(v.get("friction.creep_kappa", CREEP_KAPPA)),
         creep_rate=float(v.get("friction.creep_rate", CREEP_RATE)),
         model_error=None if "friction.model_error" not in v else float(v["friction.model_error"]),
+        observer_law=v.get("friction.observer_law"),
     )
 
 

@@ -31,7 +31,8 @@ _SCHEMA: dict[str, dict[str, tuple[int | None, str]]] = {
     },
     "friction": {"F_s": (None, "nonneg"), "F_v": (None, "nonneg"), "smooth_velocity": (None, "pos"),
                  "law": (None, "law"), "sigma0": (None, "pos"), "sigma1": (None, "pos"),
-                 "creep_kappa": (None, "pos"), "creep_rate": (None, "pos"), "model_error": (None, "nonneg")},
+                 "creep_kappa": (None, "pos"), "creep_rate": (None, "pos"), "model_error": (None, "nonneg"),
+                 "observer_law": (None, "observer_law")},
     "environment": {"gravity": (3, "any")},
 }
 # per-joint friction of a chain: optional, overrides friction.F_s / friction.F_v on that chain's joints
@@ -39,7 +40,8 @@ _OPTIONAL = {"finger.F_s", "finger.F_v", "thumb.F_s", "thumb.F_v", "thumb.abduct
              "transmission.tendon_compliance", "transmission.capstan", "transmission.torque_delay",
              "finger.encoder_offset", "thumb.encoder_offset", "thumb.abduction_encoder_offset",
              "friction.law", "friction.sigma0", "friction.sigma1", "friction.creep_kappa",
-             "friction.creep_rate", "friction.model_error"}  # the law with a state: model.friction
+             "friction.creep_rate", "friction.model_error",
+             "friction.observer_law"}  # the law with a state: model.friction
 # the unit each field's value is read in: a file giving another one is refused (no conversion is made)
 _UNITS: dict[str, str] = {
     **{f"finger.{k}": "m" for k in ("L", "s", "r", "b", "radius")}, "finger.m": "kg", "finger.I": "kg m^2",
@@ -56,6 +58,7 @@ _UNITS: dict[str, str] = {
     "friction.F_s": "N m", "friction.F_v": "N m s/rad", "friction.smooth_velocity": "rad/s",
     "friction.law": "-", "friction.sigma0": "N m/rad", "friction.sigma1": "N m s/rad",
     "friction.creep_kappa": "-", "friction.creep_rate": "1/s", "friction.model_error": "F_s",
+    "friction.observer_law": "-",
     "environment.gravity": "m/s^2",
 }
 _INTEGER = {"transmission.encoder_counts", "transmission.torque_delay"}  # fields whose value must be a whole number

@@ -31,6 +31,7 @@ import casadi as cs
 import numpy as np
 
 from ..errors import InputError, ModelError
+from ..model.friction import OBSERVER_LAWS
 from ..model.robot import Model
 from ..symbolic.dynamics import block_solve
 from ..symbolic.statespace import StateSpace
@@ -39,8 +40,9 @@ __all__ = ["FRICTION_LAWS", "LIBRARY_LAWS", "observer_friction_law", "library_la
            "check_friction_law", "coulomb_velocity", "mass_blocks",
            "stick_step_expression"]
 
-FRICTION_LAWS: tuple[str, ...] = ("smooth", "stick", "lugre")
-"""The observers' dry-friction laws: ``smooth`` F_s tanh(v / v_s) through RK4, ``stick`` the time-stepping
+FRICTION_LAWS: tuple[str, ...] = OBSERVER_LAWS
+"""The observers' dry-friction laws (:data:`~alpes_dyn.model.friction.OBSERVER_LAWS`, which a parameter file's
+``friction.observer_law`` names): ``smooth`` F_s tanh(v / v_s) through RK4, ``stick`` the time-stepping
 Coulomb law of this module, ``lugre`` the LuGre law with a bristle state per joint through RK4
 (:mod:`alpes_dyn.model.friction`, :mod:`alpes_dyn.simulation.lugre`)."""
 
@@ -84,15 +86,18 @@ def check_friction_law(law: Any) -> str:
 
 
 def observer_friction_law(model: Model) -> str:
-    """The observer's friction law by default for ``model``'s parameter file (``estimate`` without
-    ``--friction-law``): ``"lugre"`` where the file says ``friction.law = "lugre"``, else ``"smooth"``.
+    """The observer's friction law for ``model``'s parameter file (``estimate`` without ``--friction-law``, the
+    force loop's step, ``codegen --step``): the file's ``friction.observer_law`` where it holds one (``identify``
+    writes the law its observer check chose by measurement, :mod:`~alpes_dyn.estimation.identification.law_choice`);
+    else ``"lugre"`` where the file says ``friction.law = "lugre"``, else ``"smooth"``.
 
-    The switched stick-slip law (``"stick"``) is asked for by name (``--friction-law stick``, ``friction_law=``).
-    Measured with the plants' true files on MuJoCo's dry friction (``benchmarks/observer_law.py``, recorded in
+    Without the field, the switched stick-slip law (``"stick"``) is asked for by name (``--friction-law stick``,
+    ``friction_law=``): measured with the plants' true files on MuJoCo's dry friction (``benchmarks/observer_law.py``,
     ``benchmarks/results/observer_law.json``), it holds the joints where they stick (the stiff constraint) closer
-    than the smooth law, and the smooth law is closer where they creep (the soft constraint); but as the default for
-    the files ``identify --effects stiction`` writes, its predictions failed identify's own observer check on every
-    draw of ``benchmarks/bench_loop.py``'s stand-in (the CHANGELOG's entry), so it is not the default.
+    than the smooth law, and the smooth law is closer where they creep (the soft constraint) or slide (the
+    identification record's dither); as a rule for the files ``identify --effects stiction`` writes its predictions
+    failed identify's observer check on every draw of ``benchmarks/bench_loop.py``'s stand-in (the CHANGELOG's
+    entry), hence the choice by measurement, per file.
 
     Parameters
     ----------
@@ -106,6 +111,9 @@ def observer_friction_law(model: Model) -> str:
     """
     from ..model.friction import lugre_of
 
+    law = getattr(model.params, "observer_law", None)
+    if law is not None:
+        return law
     return "lugre" if lugre_of(model) is not None else "smooth"
 
 

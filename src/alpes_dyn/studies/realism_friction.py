@@ -63,7 +63,7 @@ from .realism import (EKF_GOAL_DEG, FINGER3, FIT_EFFECTS, KINDS, MASS_GOAL_PCT, 
 
 __all__ = ["FrictionCase", "FRICTION_CASES", "FRICTION_CASE_NAMES", "CONSTRAINTS", "STUCK_SPEED", "STOP_MARGIN_DEG",
            "RAMP_TORQUE", "RAMP_SECONDS",
-           "validation_torque", "standard_scores", "true_file_row", "friction_row", "friction_summary", "complete_seeds"]
+           "validation_torque", "held_out_ramp", "standard_scores", "true_file_row", "friction_row", "friction_summary", "complete_seeds"]
 
 CONSTRAINTS: dict[str, tuple[float, float]] = {"soft": (0.02, 1.0), "stiff": (STICTION_TIMECONST, 1.0)}
 """The dry-friction constraint of each kind: MuJoCo's ``solreffriction`` (time constant s, damping ratio) the plant
@@ -315,8 +315,44 @@ def true_file_row(case: FrictionCase | str, seed: int, laws: tuple[str, ...] = (
     return row
 
 
+def held_out_ramp(case: FrictionCase | str, seed: int, effects: PlantEffects, dt: float = 1e-3) -> Any:
+    """A held-out slow record for ``identify --validate`` (the observer check judged on it,
+    :func:`~alpes_dyn.estimation.identification.effects.fit_effects` ``validation``): the validation run's ramp
+    alone (:func:`validation_torque` after the scenario's 5 s, :data:`RAMP_SECONDS`: the joints stick and slip in
+    turn) on the plant of ``case`` drawn with ``seed`` in its orientation (``effects``), its sensors' noise
+    ``seed + 2000`` (neither the fit's nor the validation run's).
+
+    Parameters
+    ----------
+    case : FrictionCase or str
+        The case, or its name (:data:`FRICTION_CASE_NAMES`).
+    seed : int
+        The draw's seed.
+    effects : PlantEffects
+        The plant's effects in the experiment's orientation (:func:`~alpes_dyn.studies.realism.plant_experiment`).
+    dt : float, optional
+        The sample period, s (default 1 ms).
+
+    Returns
+    -------
+    Recording
+        The MuJoCo recording (encoder counts, torque N m, true joints rad).
+
+    Raises
+    ------
+    InputError
+        An unknown case name.
+    """
+    case = _case(case)
+    true = case.true_params(seed)
+    u = validation_torque(dt, FINGER3.alpes(params=true).transmission.n_motors)
+    ramp = u[int(round(EstimationScenario().duration / dt)):]
+    return mujoco_recording(FINGER3.model, true, ramp, dt, effects=effects, seed=seed + 2000, chain=FINGER3.chain)
+
+
 def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign | None = None,
-                 tmp: Path | None = None, adapt: str = "auto", transient: float = 1.0) -> dict[str, Any]:
+                 tmp: Path | None = None, adapt: str = "auto", transient: float = 1.0,
+                 check_ramp: bool = False) -> dict[str, Any]:
     """One row of the friction study (module docstring): ``case`` (a :class:`FrictionCase` or its name) on finger3
     drawn with ``seed`` (also the sensors' noise; the validation run's is ``seed + 1000``), the experiment ``design``
     (default the documented one on the level rig) adapted as ``adapt`` (:func:`~alpes_dyn.studies.realism.
@@ -329,7 +365,8 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     alone), ``law_spread`` (it was added), ``validation_s``, ``validation_range_deg`` (the true
     joints' min and max), ``validation_at_stops`` (per joint, within :data:`STOP_MARGIN_DEG` of its range's ends),
     ``true_file_not_held`` (the plant's effects the true file cannot hold, :attr:`~alpes_dyn.bench.truth.TruthFile.
-    not_held`), ``ekf_law_rmse_deg`` and ``ekf_true_file_law_rmse_deg`` (each file's EKF with each observer law the
+    not_held`), ``extended.observer_law`` and ``extended.law_choice`` (the law the file's observer runs, chosen by
+    identify's check, :mod:`~alpes_dyn.estimation.identification.law_choice`), ``ekf_law_rmse_deg`` and ``ekf_true_file_law_rmse_deg`` (each file's EKF with each observer law the
     law spread runs, :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`, and ``file`` the file's own: RMSE per joint,
     deg, by law).
 
@@ -349,6 +386,10 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
         :func:`~alpes_dyn.studies.realism.plant_experiment`).
     transient : float, optional
         The EKF's transient left out of the RMSE and NEES, s (default 1).
+    check_ramp : bool, optional
+        Give the fit a held-out slow record (:func:`held_out_ramp`) as ``identify --validate`` does: the observer
+        check, and its choice of the friction law, judged on it (default False: on the fitted record). The row's
+        ``check_ramp`` says which.
 
     Returns
     -------
@@ -363,7 +404,7 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     case = _case(case)
     if tmp is None:
         with tempfile.TemporaryDirectory() as d:
-            return friction_row(case, seed, design, Path(d), adapt, transient)
+            return friction_row(case, seed, design, Path(d), adapt, transient, check_ramp)
     design = rig_design("level") if design is None else design
     true, nominal = case.true_params(seed), load_params()
     t0 = time.perf_counter()
@@ -371,8 +412,9 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     rig = rig_of(design)
     truth = {pp.name: pp.nominal for pp in parameter_catalogue(FINGER3.alpes(params=true))}
     model_of = alpes_models(FINGER3.model, nominal, chain=FINGER3.chain)
+    held = {"validation": held_out_ramp(case, seed, effects, design.dt)} if check_ramp else {}
     fit = fit_effects(lambda e: on_rig(model_of(e), rig), rec, parse_effects(FIT_EFFECTS), FINGER3.base,
-                      rec.gravity is not None, excitation=design.lines, progress=False, spread=True)
+                      rec.gravity is not None, excitation=design.lines, progress=False, spread=True, **held)
     res = fit.result
     ident = res.write(tmp / f"ident_{case.name}_{seed}.toml")  # marked NOT TRUSTWORTHY where the fit says so
     plant_s = time.perf_counter() - t0
@@ -399,10 +441,13 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     lo, hi = np.degrees(val.true_q.min(axis=0)), np.degrees(val.true_q.max(axis=0))
     limits = FINGER3.alpes(params=true)
     row = {"case": case.name, "seed": seed, "chain": FINGER3.label, "adaptation": adaptation.to_dict(),
+           "check_ramp": bool(check_ramp),
            "extended": fit_row(res, truth, list(fit.effects))}
     ext = row["extended"]
+    choice = getattr(fit.observer, "law_choice", None)
     ext.update({"fit_seconds_total": fit.seconds + (fit.observer.seconds if fit.observer is not None else 0.0),
-                "torque_delay": fit.delay, "notes": list(fit.notes)})
+                "torque_delay": fit.delay, "notes": list(fit.notes), "observer_law": res.observer_law,
+                "law_choice": None if choice is None else choice.to_dict()})
     z = standard_scores(fitted, dict(zip(res.names, res.std.tolist())), truth, ext["common_scale"])
     se = res.standard_errors  # the noise's alone (the larger of the classical and the HAC sandwich's): measured too
     noise = {} if se is None else dict(zip(res.names, np.maximum(se.classical, se.robust).tolist()))

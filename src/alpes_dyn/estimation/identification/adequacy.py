@@ -775,8 +775,9 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
     nb = sens.nb
     C = np.zeros((1, sens.nu, nb)) if nb else None
     phi = np.zeros((1, N, nb)) if nb else None
-    x = np.asarray(x0, dtype=float).copy()
     n = sens.n
+    x = np.zeros(getattr(sens, "nx", 2 * n))  # a LuGre model's bristles (beyond [q; qd]) start relaxed, at 0
+    x[: 2 * n] = np.asarray(x0, dtype=float)[: 2 * n]
     yp = y[: prefix + 1] * step
     mu = 1e-3
     for _ in range(10):  # Levenberg-Marquardt on the initial state alone, on the prefix
@@ -786,6 +787,7 @@ def compare(sens: Any, theta: np.ndarray, x0: np.ndarray, U: np.ndarray, G: np.n
         A = encoder_sensitivity(S, xs[0, :, :n], X[0, :, :n, : 2 * n]).reshape(-1, 2 * n)
         H = A.T @ A
         d = -np.linalg.lstsq(H + mu * np.diag(np.diag(H) + 1e-300), A.T @ r, rcond=None)[0]
+        d = np.concatenate([d, np.zeros(x.size - d.size)])  # the initial state's [q; qd] only
         xt, _ = sens.run((x + d)[None], U[None, :prefix], G[None, :prefix], theta, C,
                          basis=None if phi is None else phi[:, :prefix], sensitivities=False)
         if np.isfinite(xt).all() and np.sum((encoder_angles(S, xt[0, :, :n]) - yp) ** 2) < np.sum(r**2):

@@ -83,7 +83,7 @@ from ...model.friction import creep_of, lugre_of
 from ...symbolic.parametric import parameter_catalogue, select_parameters, unseen_masses
 from .creep import name_creep
 from .law_spread import other_law, widen
-from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, name_sticking, named_effects, rounds_of
+from .rounds import FALLBACK, NAMED_BY, ROUNDS, Round, name_sticking, named_effects, rounds_of, sticking
 from .shooting import FitDiverged
 from ..experiments.recording import segment_starts
 
@@ -860,6 +860,12 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
         walk.auto(kept)
         walk.cable(kept)
     check = walk.observe(kept, auto, kwargs.get("validation")) if observe else None
+    if observe and sticking(kept.result, kept.effects, walk.attempted):  # judged with the stick law among the laws
+        from .observer_check import judge
+
+        on = kwargs.get("validation")
+        on = on if isinstance(on, Recording) else recording
+        check = judge(kept.result, on, walk.delays[id(kept.result)], sticking=True) or check
     notes = [unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)]),
              name_sticking(kept.result, kept.effects, walk.attempted)]
     if not kept.result.trustworthy:  # a dry friction read as viscous (module creep): against the file's F_s

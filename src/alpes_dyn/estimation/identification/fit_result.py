@@ -134,6 +134,11 @@ class IdentificationResult:
     """The observer's model error calibrated on the fit's record, in units of each joint's F_s
     (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`, by the observer check);
     None where not calibrated; written to the file as ``friction.model_error``."""
+    observer_law: str | None = None
+    """The observer's friction law the observer check chose by measurement
+    (:func:`~alpes_dyn.estimation.identification.law_choice.choose_law`, one of
+    :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`); None where no choice was made; written to the file as
+    ``friction.observer_law``."""
     drift: dict[str, Any] | None = None
     """With ``identify(drift=...)``: the fitted drifts (:mod:`~alpes_dyn.estimation.identification.drift`),
     ``{"knots_s": [...] (K+1,) s of recorded time, "counts": {motor: [...] (K+1,) counts, 0 at the first knot}}`` (the
@@ -167,7 +172,7 @@ class IdentificationResult:
             "seconds": self.seconds, "compile_seconds": self.compile_seconds, "model": self.model.name,
             "adequacy": self.adequacy.to_dict() if self.adequacy is not None else None,
             "not_identified": dict(self.not_identified), "drift": self.drift, "torque_delay": self.torque_delay,
-            "model_error": self.model_error,
+            "model_error": self.model_error, "observer_law": self.observer_law,
         }
 
     def _std_fields(self, k: int) -> dict[str, Any]:
@@ -468,6 +473,11 @@ def _rig_params(result: IdentificationResult, p: HandParams, sec: str, reason: s
                                             "on the record: the EKF's consistency (noise_calibration)",
                                             "the observer's model error: a white torque per sample of this times "
                                             "each joint's F_s")
+    law = getattr(result, "observer_law", None)
+    if law is not None:
+        upd["friction.observer_law"] = Param(str(law), "-", "identified", f"{reason}; chosen by the "
+                                             "observer check among the candidate laws (law_choice)",
+                                             "the observers' dry-friction law on this file")
     return upd
 
 

@@ -49,8 +49,8 @@ from ..observers.ahead import predicted_ahead
 from ..observers.innovation import Nis, nis
 from ..observers.replay import advanced, estimate_recording
 
-__all__ = ["mildly_coloured", "OBSERVER_THRESHOLDS", "ObserverCheck", "identified_model", "observer_check", "observer_statistics",
-           "calibrate_observer", "judge", "fitted_rig"]
+__all__ = ["mildly_coloured", "OBSERVER_THRESHOLDS", "CHECK_TORQUE_WINDOW", "ObserverCheck", "identified_model",
+           "observer_check", "observer_statistics", "calibrate_observer", "judge", "fitted_rig"]
 
 OBSERVER_THRESHOLDS: dict[str, float] = {
     "horizon_s": 0.02,
@@ -89,6 +89,14 @@ almost wholly; further apart the statistic is the same within its sampling (its 
 from their autocorrelation) at a fraction of the cost."""
 
 
+CHECK_TORQUE_WINDOW = 1
+"""Samples of the moving average of the torque the check's observer reads, whatever its law: 1, the torque as
+recorded (its white noise as measured). The stick and LuGre laws' default average of ``estimate``
+(:data:`~alpes_dyn.estimation.observers.replay.STICK_TORQUE_WINDOW`, 10 samples) lags the identification record's
+20 Hz dither by 4.5 samples: on MuJoCo's stiff stick-slip at 3x F_s, the true file's stick-law innovation was 13.7x
+the sensor floor with it and 2.0x without (:mod:`~alpes_dyn.estimation.identification.law_choice`)."""
+
+
 @dataclass
 class ObserverCheck:
     """What the observer did with an identified file on a recording (see the module docstring).
@@ -124,6 +132,14 @@ class ObserverCheck:
     """The observer's model error calibrated on the recording
     (:class:`~alpes_dyn.estimation.identification.noise_calibration.ModelErrorCalibration`), where
     :func:`observer_check` made it; the statistics above are those at its value."""
+    split_rms: float | None = None
+    """The encoder's prediction error ``split_horizon_s`` ahead, counts RMS over the encoders (None where not
+    made): what :func:`~alpes_dyn.estimation.identification.law_choice.choose_law` ranks the laws by."""
+    law: str | None = None
+    """The observer's friction law the statistics are of (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`)."""
+    law_choice: Any = None
+    """The laws walked and the one kept (:class:`~alpes_dyn.estimation.identification.law_choice.LawChoice`),
+    where :func:`observer_check` chose among several; None otherwise."""
 
     @property
     def passed(self) -> bool:
@@ -142,7 +158,9 @@ class ObserverCheck:
                 "prediction_nis": None if self.prediction_nis is None else self.prediction_nis.to_dict(),
                 "split_nis": None if self.split_nis is None else self.split_nis.to_dict(),
                 "nees": None if self.nees is None else self.nees.to_dict(),
-                "calibration": None if self.calibration is None else self.calibration.to_dict()}
+                "calibration": None if self.calibration is None else self.calibration.to_dict(),
+                "split_rms": self.split_rms, "law": self.law,
+                "law_choice": None if self.law_choice is None else self.law_choice.to_dict()}
 
 
 def identified_model(result: Any) -> Model | None:
@@ -218,33 +236,43 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
     thresholds : Mapping[str, float] or None, optional
         Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
     calibrate : bool, optional
-        True (default): the observer's model error first calibrated on ``recording``
-        (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`), kept as
-        ``result.model_error`` (written to the file) and the statistics those at it; where none up to the ceiling
-        makes the filter consistent, its reason added. False: the statistics at the file's model error.
+        True (default): the observer's friction law chosen among the candidates
+        (:func:`~alpes_dyn.estimation.identification.law_choice.choose_law`, each law's model error calibrated on
+        ``recording``, :func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error`), the
+        law kept as ``result.observer_law`` and its model error as ``result.model_error`` (both written to the
+        file), the statistics those of that law at that error; where none up to the ceiling makes the filter
+        consistent, its reason added. False: the statistics of the file's own law at the file's model error.
 
     Returns
     -------
     ObserverCheck or None
         The check, or None where the fit's model has no file (a URDF robot).
     """
+    from .law_choice import choose_law
+
     model = identified_model(result)
     if model is None:
         return None
     off, tilt = fitted_rig(result)
     if not calibrate:
         return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
-    cal = calibrate_observer(recording, model, off, tilt, torque_delay, thresholds)
+    choice = choose_law(model, lambda m, law: calibrate_observer(recording, m, off, tilt, torque_delay, thresholds,
+                                                                 law))
+    cal = choice.calibration
     result.model_error = cal.value if cal.value is not None else getattr(model.params, "model_error", None)
+    if len(choice.calibrations) > 1:  # a choice made: the file says which law its observer runs
+        result.observer_law = choice.law
     check = cal.check
     if cal.reason:
         check.reasons.append(cal.reason)
     check.calibration = cal
+    check.law_choice = choice if len(choice.calibrations) > 1 else None
     return check
 
 
 def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
-                       torque_delay: int = 0, thresholds: Mapping[str, float] | None = None) -> Any:
+                       torque_delay: int = 0, thresholds: Mapping[str, float] | None = None,
+                       friction_law: str | None = None) -> Any:
     """The model error of ``model``'s file calibrated on ``recording``
     (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error` over
     :func:`observer_statistics` with ``encoder_offset``, ``tilt``, ``torque_delay`` and ``thresholds`` as there):
@@ -267,6 +295,9 @@ def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any =
         Samples by which the recorded torque lags, as fitted (default 0).
     thresholds : Mapping[str, float] or None, optional
         Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+    friction_law : str or None, optional
+        The observer's friction law (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`; default None: the file's,
+        :func:`~alpes_dyn.simulation.stick.observer_friction_law`).
 
     Returns
     -------
@@ -275,11 +306,12 @@ def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any =
     """
     th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
     return calibrate_model_error(model, lambda m: observer_statistics(recording, m, encoder_offset, tilt,
-                                                                      torque_delay, th))
+                                                                      torque_delay, th, friction_law))
 
 
 def observer_statistics(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
-                        torque_delay: int = 0, thresholds: Mapping[str, float] | None = None) -> ObserverCheck:
+                        torque_delay: int = 0, thresholds: Mapping[str, float] | None = None,
+                        friction_law: str | None = None) -> ObserverCheck:
     """The EKF of ``model`` (:func:`~alpes_dyn.estimation.observers.replay.estimate_recording`: its friction law, the
     stick-slip one included, its tendon compliance; ``encoder_offset`` (m,) rad, ``tilt`` (2,) rad and
     ``torque_delay`` samples as there) run on ``recording``: its innovation and its prediction ``horizon_s`` ahead
@@ -301,6 +333,10 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
         Samples by which the recorded torque lags, as fitted (default 0).
     thresholds : Mapping[str, float] or None, optional
         Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+    friction_law : str or None, optional
+        The observer's friction law (default None: the file's,
+        :func:`~alpes_dyn.simulation.stick.observer_friction_law`); the torque read as recorded
+        (:data:`CHECK_TORQUE_WINDOW`) whatever the law.
 
     Returns
     -------
@@ -317,7 +353,8 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     sensors = sensor_floor(recording.encoder)
     est = estimate_recording(recording, model, "ekf", encoder_offset=encoder_offset, tilt=tilt, transient=transient,
                              torque_delay=torque_delay, encoder_noise_counts=sensors.noise,  # the noise it measured
-                             force=True)  # a flagged fit is judged too
+                             force=True, friction_law=friction_law,  # a flagged fit is judged too
+                             torque_window=CHECK_TORQUE_WINDOW)
     filt, tr = est.filter, model.transmission
     step = 2 * np.pi / tr.counts_per_rev
     y = est.measurement  # (N, m) rad: the encoder as the filter reads it (zero and stretch taken off)
@@ -353,8 +390,11 @@ def observer_statistics(recording: Recording, model: Model, encoder_offset: Any 
     every = max(1, int(round(NEES_EVERY / recording.dt)))  # the NEES's decimation: two samples after the
     truth = None if recording.true_q is None or k0 + every > N - 1 else nees(  # transient, else none (too short)
         est.estimate, recording.true_q, filt, est.inputs, start=transient)
+    split = consistency[2]
     return ObserverCheck(i_rms, p_rms, floor, H * recording.dt, white, est.rmse, reasons,
-                         time.perf_counter() - t0, *consistency, truth)
+                         time.perf_counter() - t0, *consistency, truth,
+                         split_rms=None if split is None else float(np.sqrt(np.mean((split.innovation_rms / step)**2))),
+                         law=est.settings["friction_law"])
 
 
 def mildly_coloured(adequacy: Any) -> bool:
@@ -384,12 +424,16 @@ def mildly_coloured(adequacy: Any) -> bool:
 
 
 def judge(result: Any, recording: Recording, torque_delay: int = 0,
-          thresholds: Mapping[str, float] | None = None) -> ObserverCheck | None:
+          thresholds: Mapping[str, float] | None = None, sticking: bool = False) -> ObserverCheck | None:
     """:func:`observer_check` of a fit, written into the fit's adequacy (the check kept as
     ``result.adequacy.observer``): where the observer fails, ``adequate`` False and its reasons appended; where the
     fit's own verdict failed only on a mildly coloured residual (:func:`mildly_coloured`) and the observer passes,
     adequate, the colour kept in the notes (the observer the file feeds shows it harmless). Judged only where the
-    fit converged and its verdict is adequate or mildly coloured (a fit refused for anything else stays refused).
+    fit converged and its verdict is adequate or mildly coloured (a fit refused for anything else stays refused), or
+    ``sticking``: its verdict names the dry friction that sticks
+    (:func:`~alpes_dyn.estimation.identification.rounds.sticking`), which no memoryless law of the fit holds; there
+    the fit is adequate where the observer check passes with the stick law chosen (the file's
+    ``friction.observer_law``: its observer holds the stuck joints the residual shows), the cause kept in the notes.
 
     Parameters
     ----------
@@ -403,6 +447,8 @@ def judge(result: Any, recording: Recording, torque_delay: int = 0,
         Samples by which the recorded torque lags, as fitted (default 0).
     thresholds : Mapping[str, float] or None, optional
         Entries overriding :data:`OBSERVER_THRESHOLDS`' (default None: those).
+    sticking : bool, optional
+        The fit's verdict refused it naming the dry friction that sticks (default False).
 
     Returns
     -------
@@ -410,12 +456,23 @@ def judge(result: Any, recording: Recording, torque_delay: int = 0,
         The check, or None where not judged (or the fit's model has no file).
     """
     a = getattr(result, "adequacy", None)
-    if a is None or not result.converged or not (a.adequate or mildly_coloured(a)):
+    if a is None or not result.converged or not (a.adequate or mildly_coloured(a) or sticking):
         return None
     check = observer_check(result, recording, torque_delay, thresholds)
     if check is None:
         return None
     a.observer = check
+    if sticking and not a.adequate:
+        if check.passed and check.law == "stick":
+            first = a.reasons[0] if a.reasons else "the residual"
+            a.notes.append(f"{first}: the dry friction that sticks, which the fit's memoryless law does not "
+                           f"hold; the EKF on the file with the stick law (friction.observer_law, chosen by its "
+                           f"check) predicts the encoder {1e3 * check.horizon_s:.0f} ms ahead within "
+                           f"{check.prediction_rms / check.floor:.1f}x the sensor floor: judged adequate")
+            a.adequate, a.reasons, a.likely_missing = True, [], []
+        elif not check.passed:
+            a.reasons.extend(check.reasons)
+        return check
     if not check.passed:
         a.adequate = False
         a.reasons.extend(check.reasons)

@@ -44,7 +44,9 @@ round           stage  made when (adds)                                         
 A fit the walk leaves refused with the stick-slip law, its verdict naming a friction with a state within
 :data:`BAND_FLOOR_RATIO` sensor floors after the LuGre law's fit was not kept (:func:`sticking`: a dry friction
 that sticks), has that verdict name :data:`STUCK_FRICTION` instead of the LuGre law (:func:`name_sticking`, a note
-of the walk): it stays refused.
+of the walk): it stays refused, unless the observer check, made on it with the stick law among its laws, chooses
+that law and passes it (:func:`~alpes_dyn.estimation.identification.observer_check.judge` with ``sticking``:
+adequate, the file's ``friction.observer_law = "stick"``).
 
 Every round with the compliance fits it on the motors whose torque moved in the recording only
 (:func:`~alpes_dyn.estimation.identification.effects.still_motors`); the others' is held at the model's value and
@@ -89,8 +91,10 @@ __all__ = ["Round", "ROUNDS", "STATEFUL_WORD", "BAND_WORDS", "BAND_FLOOR_RATIO",
 
 STUCK_FRICTION = (STATEFUL_WORD + " that holds the joints at rest: dry friction that sticks, the switched "
                   "stick-slip law (the fit's stick-slip law kept, its residual within two sensor floors, the LuGre "
-                  "law's fit not kept); no memoryless law of the fit holds a stuck joint, nor does the file's smooth "
-                  "observer where the joints stick: estimate with --friction-law stick")
+                  "law's fit not kept); no memoryless law of the fit holds a stuck joint, nor does a smooth "
+                  "observer where the joints stick, and the observer check did not choose the stick law on this "
+                  "record (friction.observer_law: judge on a record where the joints stick, identify --validate "
+                  "REC2.csv with a slow motion)")
 """The likely missing effect a refused fit's verdict names, in place of the LuGre law's presliding, where
 :func:`sticking` holds (:func:`name_sticking`)."""
 
@@ -373,7 +377,9 @@ def sticking(result: Any, effects: Collection[str], attempted: Collection[str]) 
 def name_sticking(result: Any, effects: Collection[str], attempted: Collection[str]) -> str | None:
     """Where :func:`sticking` holds: :data:`STUCK_FRICTION` in place of the verdict's friction with a state (first
     among its likely missing effects), and the note returned; None (nothing changed) otherwise. The verdict stays a
-    refusal: the file as ``estimate`` runs it by default (the smooth law) does not hold a stuck joint.
+    refusal: called after the observer check was made with the stick law among its laws
+    (:func:`~alpes_dyn.estimation.identification.observer_check.judge` with ``sticking``), which did not choose it
+    and pass it (where it did, the fit is adequate and :func:`sticking` no longer holds).
 
     Parameters
     ----------

@@ -56,7 +56,7 @@ from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, seg
 from .scenario import held_mid_range, rest_with_held_joints
 
 __all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY",
-           "averaged", "STICK_TORQUE_WINDOW", "file_encoder_offsets"]
+           "averaged", "STICK_TORQUE_WINDOW", "default_torque_window", "file_encoder_offsets"]
 
 MAX_DELAY = 100
 """The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
@@ -135,6 +135,28 @@ def averaged(recording: Recording, samples: int) -> Recording:
     padded = np.concatenate([np.repeat(tau[:samples].mean(axis=0, keepdims=True), samples, axis=0), tau])
     c = np.cumsum(padded, axis=0)
     return dataclasses.replace(recording, torque=(c[samples:] - c[:-samples]) / samples)
+
+
+def default_torque_window(model: Model, friction_law: str) -> int:
+    """The window of :func:`averaged` by default: 1 where ``model``'s file holds ``friction.observer_law`` (its
+    law and model error chosen by ``identify``'s check on the torque as recorded), else :data:`STICK_TORQUE_WINDOW`
+    with the stick and LuGre laws, 1 with the smooth law.
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model (its parameter file's ``friction.observer_law``).
+    friction_law : str
+        The observer's law, one of :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`.
+
+    Returns
+    -------
+    int
+        The window, samples.
+    """
+    if getattr(model.params, "observer_law", None) is not None:
+        return 1
+    return STICK_TORQUE_WINDOW if friction_law in ("stick", "lugre") else 1
 
 
 DISTURBANCE_WALK = 2e-4
@@ -449,8 +471,9 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
         "lugre"``, else ``"smooth"``).
     torque_window : int or None, optional
         Samples of the causal moving average of the torque the observer reads (:func:`averaged`; its noise, given
-        or estimated, divided by sqrt(``torque_window``)). Default :data:`STICK_TORQUE_WINDOW` with the stick and LuGre
-        laws, else 1 (the torque as recorded).
+        or estimated, divided by sqrt(``torque_window``)). Default :func:`default_torque_window`: 1 (the torque as
+        recorded) where the file holds ``friction.observer_law`` (chosen by ``identify``'s check on the torque as
+        recorded), else :data:`STICK_TORQUE_WINDOW` with the stick and LuGre laws, 1 with the smooth law.
     force : bool, optional
         Run on a model whose parameter file is marked not trustworthy (refused otherwise:
         :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
@@ -472,8 +495,7 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     if friction_law is None:  # the parameter file's law
         friction_law = observer_friction_law(model)
     friction_law = check_friction_law(friction_law)
-    window = (STICK_TORQUE_WINDOW if friction_law in ("stick", "lugre") else 1) if torque_window is None else \
-        torque_window
+    window = default_torque_window(model, friction_law) if torque_window is None else torque_window
     raw_noise = _torque_noise(rec) if torque_noise is None else torque_noise
     rec = averaged(rec, window)
     encoder_noise_counts = _nonnegative(encoder_noise_counts, "encoder_noise_counts", "counts")
