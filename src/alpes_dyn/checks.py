@@ -10,7 +10,7 @@ import numpy as np
 
 from .errors import InputError
 
-__all__ = ["as_float_array", "as_positive_float", "URDF_DECIMAL", "urdf_number_problem"]
+__all__ = ["as_float_array", "as_positive_float", "one_of", "URDF_DECIMAL", "urdf_number_problem"]
 
 URDF_DECIMAL = re.compile(r"\s*[-+]?(?:\d+\.?\d*|\.\d+)(?:[eE][-+]?\d+)?")
 """A URDF number as urdfdom (Pinocchio's URDF parser) reads it, a C++ stream's ``>>`` that must reach the end:
@@ -38,6 +38,36 @@ def urdf_number_problem(text: str) -> str | None:
     if URDF_DECIMAL.fullmatch(text.rstrip()):
         return "has a blank after the number (URDF readers refuse it: remove it)"
     return "is not a finite number (write a decimal number, e.g. 0.5 or -1.2e-2)"
+
+
+def one_of(x: object, allowed: tuple[str, ...], name: str, error: type[Exception] = InputError) -> str:
+    """``x`` if it is one of the names ``allowed``, else ``error`` naming ``name`` and listing them in one line.
+
+    Parameters
+    ----------
+    x : object
+        The value read.
+    allowed : tuple of str
+        The names accepted.
+    name : str
+        The field or argument the error names.
+    error : type of Exception, optional
+        The error raised (default :class:`~alpes_dyn.errors.InputError`; a parameter file's field:
+        :class:`~alpes_dyn.errors.ModelError`).
+
+    Returns
+    -------
+    str
+        ``x``.
+
+    Raises
+    ------
+    Exception
+        ``error``: ``x`` not a string among ``allowed``.
+    """
+    if not isinstance(x, str) or x not in allowed:
+        raise error(f"{name}: expected one of {', '.join(allowed)}, got {x!r:.40}")
+    return x
 
 
 def _describe(x: object) -> str:

@@ -33,6 +33,7 @@ from typing import Any
 
 import numpy as np
 
+from ..checks import one_of
 from ..errors import ModelError
 
 __all__ = ["FRICTION_MODELS", "OBSERVER_LAWS", "check_observer_law",
@@ -83,9 +84,7 @@ def check_law(law: Any, field: str = "friction.law") -> str:
     ModelError
         ``law`` not a string of :data:`FRICTION_MODELS`.
     """
-    if not isinstance(law, str) or law not in FRICTION_MODELS:
-        raise ModelError(f"{field}: expected one of {', '.join(FRICTION_MODELS)}, got {law!r:.40}")
-    return law
+    return one_of(law, FRICTION_MODELS, field, ModelError)
 
 
 def check_observer_law(law: Any, field: str = "friction.observer_law") -> str:
@@ -108,9 +107,7 @@ def check_observer_law(law: Any, field: str = "friction.observer_law") -> str:
     ModelError
         ``law`` not a string of :data:`OBSERVER_LAWS`.
     """
-    if not isinstance(law, str) or law not in OBSERVER_LAWS:
-        raise ModelError(f"{field}: expected one of {', '.join(OBSERVER_LAWS)}, got {law!r:.40}")
-    return law
+    return one_of(law, OBSERVER_LAWS, field, ModelError)
 
 
 def _positive(x: Any, field: str, unit: str) -> float:

@@ -30,6 +30,7 @@ from typing import Any, Sequence
 import casadi as cs
 import numpy as np
 
+from ..checks import one_of
 from ..errors import InputError, ModelError
 from ..model.friction import OBSERVER_LAWS
 from ..model.robot import Model
@@ -80,9 +81,7 @@ def check_friction_law(law: Any) -> str:
     InputError
         Not one of :data:`FRICTION_LAWS`, naming ``friction_law``.
     """
-    if not isinstance(law, str) or law not in FRICTION_LAWS:
-        raise InputError(f"friction_law: expected one of {', '.join(FRICTION_LAWS)}, got {law!r:.40}")
-    return law
+    return one_of(law, FRICTION_LAWS, "friction_law")
 
 
 def observer_friction_law(model: Model) -> str:
