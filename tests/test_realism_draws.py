@@ -10,7 +10,8 @@ import pytest
 
 from alpes_dyn.control.plants import PlantEffects, mujoco_recording
 from alpes_dyn.errors import InputError
-from alpes_dyn.estimation.observers.replay import advanced, estimate_recording
+from alpes_dyn.estimation.observers.replay import estimate_recording
+from alpes_dyn.estimation.observers.torque_reading import advanced
 from alpes_dyn.studies.realism import cases, parse_seeds, summarise
 
 

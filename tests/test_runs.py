@@ -151,9 +151,9 @@ def test_the_harmonics_are_judged_run_by_run():
 
 
 def test_a_torque_delay_shifts_each_run_apart():
-    """observers.replay.advanced (the delay effect's torque read earlier) on two runs: each run's torque from its own
+    """observers.torque_reading.advanced (the delay effect's torque read earlier) on two runs: each run's torque from its own
     rows, its last rows repeating its own last, as each run advanced alone."""
-    from alpes_dyn.estimation.observers.replay import advanced
+    from alpes_dyn.estimation.observers.torque_reading import advanced
 
     finger2 = ad.Model.alpes("finger2", friction=True)
     a, b = _clean(finger2, 0.15, 1), _clean(finger2, 0.12, 2)

@@ -191,7 +191,8 @@ def test_ekf_holds_stuck_joints_on_mujoco(stick_slip_recording):
 def test_torque_average_is_causal_and_checked(stick_slip_recording):
     """averaged: row k is the mean of rows k-w+1..k (np.convolve here), the rows before the recording the mean of its
     first w; its white noise divided by about sqrt(w); bad windows and laws refused with one line naming them."""
-    from alpes_dyn.estimation.observers.replay import averaged, estimate_recording
+    from alpes_dyn.estimation.observers.replay import estimate_recording
+    from alpes_dyn.estimation.observers.torque_reading import averaged
 
     rec, model = stick_slip_recording
     w = 10

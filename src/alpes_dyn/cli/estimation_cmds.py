@@ -117,7 +117,7 @@ def _estimate_data(args: argparse.Namespace) -> int:
     """``estimate --data REC.csv``: the observer on a recorded encoder and torque (estimation.observers.replay)."""
     from ..estimation.observers.observers import OBSERVERS
     from ..estimation.experiments.recording import read_recording
-    from ..estimation.observers.replay import MAX_DELAY, estimate_recording
+    from ..estimation.observers import replay, torque_reading
     from ..simulation.stick import library_law, observer_friction_law
 
     for flag, dest, default in _SCENARIO_ONLY:
@@ -134,14 +134,14 @@ def _estimate_data(args: argparse.Namespace) -> int:
     model, whole = _data_model(args)
     law = law if law is not None else observer_friction_law(model)  # the file's law
     delay = args.torque_delay  # None: the file's (transmission.torque_delay, as identify wrote it)
-    if delay is not None and not 0 <= delay <= MAX_DELAY:
-        raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {MAX_DELAY} (identify's "
-                         f"torque_delay), got {delay}")
+    if delay is not None and not 0 <= delay <= torque_reading.MAX_DELAY:
+        raise InputError(f"--torque-delay: expected a whole number of samples from 0 to {torque_reading.MAX_DELAY} "
+                         f"(identify's torque_delay), got {delay}")
     rec = read_recording(args.data, model, args.torque_constant, ignore_others_of=whole)
     offset = parse_vector(args.encoder_offset, "--encoder-offset") if args.encoder_offset is not None else None
     tilt = parse_vector(args.tilt, "--tilt") if args.tilt is not None else None
     def run(friction_law: str, model: Any = model):
-        return estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
+        return replay.estimate_recording(rec, model, args.observer, torque_noise=args.torque_noise,
                                   disturbance=args.disturbance, encoder_offset=offset, tilt=tilt,
                                   torque_delay=delay, friction_law=friction_law, force=args.force, stops=args.stops)
 

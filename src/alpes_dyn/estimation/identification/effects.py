@@ -29,7 +29,7 @@ effect         what the fit does
 ``delay``      (asked for; ``auto`` adds it where a fit's verdict names "torque delay", the residual following
                the torque's own rate) the recorded torque lagging
                the motor's by whole samples (the current's filter and the bus): the fit made on the torque read
-               1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.observers.replay.advanced`) while the residual
+               1, 2, ... samples earlier (:func:`~alpes_dyn.estimation.observers.torque_reading.advanced`) while the residual
                falls and the verdict still names it, up to :data:`MAX_FIT_DELAY`; the delay kept in :attr:`EffectsFit.delay` (of the rig's
                sensors; written to the file, ``transmission.torque_delay``).
 ``lugre``      (asked for; ``auto`` adds it where a fit's verdict names a friction with a state) the LuGre law
@@ -549,7 +549,7 @@ class RoundWalker:
         """
         from .adequacy import AdequacyWarning
         from .identification import identify
-        from ..observers.replay import advanced
+        from ..observers.torque_reading import advanced
 
         model = self.model_of(tuple(e for e in effs if e != "delay"))
         selection = effect_parameters(model, effs, self.has_gravity, self.base, tuple(self.still))

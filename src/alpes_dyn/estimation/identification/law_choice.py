@@ -16,7 +16,7 @@ A law that fails the check is kept only where every law fails (then the first ca
 
 The check reads the torque as recorded (:data:`~.observer_check.CHECK_TORQUE_WINDOW` = 1, its white noise as
 measured) for every law: the stick and LuGre laws' 10-sample causal average
-(:data:`~alpes_dyn.estimation.observers.replay.STICK_TORQUE_WINDOW`) lags the identification record's 20 Hz dither
+(:data:`~alpes_dyn.estimation.observers.torque_reading.STICK_TORQUE_WINDOW`) lags the identification record's 20 Hz dither
 by 4.5 samples, and its innovation was 12x the sensor floor for a file whose innovation with the torque as recorded
 is 2x.
 """

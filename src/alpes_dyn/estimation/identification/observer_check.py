@@ -47,7 +47,8 @@ from ..experiments.recording import Recording, excitation_parts
 from ..observers.consistency import NEES_EVERY, nees
 from ..observers.ahead import predicted_ahead
 from ..observers.innovation import Nis, nis
-from ..observers.replay import advanced, estimate_recording
+from ..observers.replay import estimate_recording
+from ..observers.torque_reading import advanced
 
 __all__ = ["mildly_coloured", "OBSERVER_THRESHOLDS", "CHECK_TORQUE_WINDOW", "ObserverCheck", "identified_model",
            "observer_check", "observer_statistics", "calibrate_observer", "judge", "fitted_rig"]
@@ -92,7 +93,7 @@ from their autocorrelation) at a fraction of the cost."""
 CHECK_TORQUE_WINDOW = 1
 """Samples of the moving average of the torque the check's observer reads, whatever its law: 1, the torque as
 recorded (its white noise as measured). The stick and LuGre laws' default average of ``estimate``
-(:data:`~alpes_dyn.estimation.observers.replay.STICK_TORQUE_WINDOW`, 10 samples) lags the identification record's
+(:data:`~alpes_dyn.estimation.observers.torque_reading.STICK_TORQUE_WINDOW`, 10 samples) lags the identification record's
 20 Hz dither by 4.5 samples: on MuJoCo's stiff stick-slip at 3x F_s, the true file's stick-law innovation was 13.7x
 the sensor floor with it and 2.0x without (:mod:`~alpes_dyn.estimation.identification.law_choice`)."""
 

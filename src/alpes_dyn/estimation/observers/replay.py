@@ -28,7 +28,6 @@ model -- typically the one identified from another recording (``alpes-dyn identi
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 from pathlib import Path
@@ -54,110 +53,9 @@ from .blocks import Observer, RecordingPlayback
 from .observers import OBSERVERS, Estimate, make_observer
 from ..experiments.recording import MAX_SEGMENTS, Recording, read_recording, segment_starts
 from .scenario import held_mid_range, rest_with_held_joints
+from .torque_reading import MAX_DELAY, STICK_TORQUE_WINDOW, advanced, averaged, default_torque_window
 
-__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "advanced", "DISTURBANCE_WALK", "MAX_DELAY",
-           "averaged", "STICK_TORQUE_WINDOW", "default_torque_window", "file_encoder_offsets"]
-
-MAX_DELAY = 100
-"""The longest torque delay taken, samples (0.1 s at 1 kHz: beyond, it is a wrong clock, not a filter)."""
-
-
-def advanced(recording: Recording, samples: int) -> Recording:
-    """``recording`` with its torque read ``samples`` whole samples earlier: row k of the torque is row k + samples
-    of the recorded one, the last ``samples`` rows repeat the last (the applied torque of a sensor that lags by
-    ``samples``: :class:`~alpes_dyn.bench.effects.PlantEffects` ``torque_delay``), run by run where the recording
-    has several. The recording itself for 0.
-
-    Parameters
-    ----------
-    recording : Recording
-        The recording.
-    samples : int
-        The torque sensor's lag, whole samples from 0 to :data:`MAX_DELAY`.
-
-    Returns
-    -------
-    Recording
-        A copy with the torque advanced (``recording`` itself for 0).
-
-    Raises
-    ------
-    InputError
-        ``torque_delay``: ``samples`` not a whole number in range, or not fewer than the recording's samples.
-    """
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 0 <= samples <= MAX_DELAY:
-        raise InputError(f"torque_delay: expected a whole number of samples from 0 to {MAX_DELAY}, got {samples!r}")
-    if samples == 0:
-        return recording
-    if samples >= recording.n_samples:
-        raise InputError(f"torque_delay: {samples} samples, the recording has {recording.n_samples}")
-    b = recording.run_starts()  # a recording of several runs: each run's own torque, its last rows repeating its last
-    last = np.repeat(b[1:] - 1, np.diff(b))
-    tau = recording.torque[np.minimum(np.arange(recording.n_samples) + samples, last)]
-    return dataclasses.replace(recording, torque=tau)
-
-STICK_TORQUE_WINDOW = 10
-"""Samples of the causal moving average of the recorded torque that the ``stick`` and ``lugre`` laws' observers
-read by default (:func:`averaged`): the law decides stick or slip from the torque, and a white torque noise as large
-as F_s (0.5 mN m on the Alpes finger) makes it slip where the joint holds (the LuGre bristle creeps under a torque
-that jitters, and the estimate drifts several times further off than with the torque averaged); averaged over
-10 samples (10 ms at 1 kHz) its noise is about a third, for a lag of 4.5 samples on a motion of a few hertz."""
-
-
-def averaged(recording: Recording, samples: int) -> Recording:
-    """``recording`` with its torque replaced by the causal moving average of its last ``samples`` rows (before the
-    recording, the mean of its first ``samples`` rows: the hand at rest when it starts, the observer's first rest
-    state found under that mean): what the observer reads, its white noise divided by sqrt(``samples``). The
-    recording itself for 1.
-
-    Parameters
-    ----------
-    recording : Recording
-        The recording.
-    samples : int
-        The window of the moving average, whole samples from 1 to :data:`MAX_DELAY`.
-
-    Returns
-    -------
-    Recording
-        A copy with the torque averaged (``recording`` itself for 1).
-
-    Raises
-    ------
-    InputError
-        ``torque_window``: ``samples`` not a whole number in range.
-    """
-    if isinstance(samples, bool) or not isinstance(samples, (int, np.integer)) or not 1 <= samples <= MAX_DELAY:
-        raise InputError(f"torque_window: expected a whole number of samples from 1 to {MAX_DELAY}, got {samples!r}")
-    if samples == 1:
-        return recording
-    tau = recording.torque
-    padded = np.concatenate([np.repeat(tau[:samples].mean(axis=0, keepdims=True), samples, axis=0), tau])
-    c = np.cumsum(padded, axis=0)
-    return dataclasses.replace(recording, torque=(c[samples:] - c[:-samples]) / samples)
-
-
-def default_torque_window(model: Model, friction_law: str) -> int:
-    """The window of :func:`averaged` by default: 1 where ``model``'s file holds ``friction.observer_law`` (its
-    law and model error chosen by ``identify``'s check on the torque as recorded), else :data:`STICK_TORQUE_WINDOW`
-    with the stick and LuGre laws, 1 with the smooth law.
-
-    Parameters
-    ----------
-    model : Model
-        The observer's model (its parameter file's ``friction.observer_law``).
-    friction_law : str
-        The observer's law, one of :data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`.
-
-    Returns
-    -------
-    int
-        The window, samples.
-    """
-    if getattr(model.params, "observer_law", None) is not None:
-        return 1
-    return STICK_TORQUE_WINDOW if friction_law in ("stick", "lugre") else 1
-
+__all__ = ["RecordingEstimate", "estimate_recording", "recording_filter", "DISTURBANCE_WALK", "file_encoder_offsets"]
 
 DISTURBANCE_WALK = 2e-4
 """Default random walk of the disturbance torque states, N m per sqrt(s): over a second a disturbance may move by
@@ -460,20 +358,21 @@ def estimate_recording(recording: Recording | str | Path, model: Model, observer
     torque_delay : int or None, optional
         Whole samples by which the recorded torque lags the motor's (as identified,
         :func:`~alpes_dyn.estimation.identification.effects.fit_effects` with ``delay``): the observer reads the
-        torque of :func:`advanced` (a replay: the later samples are recorded). Default: the model's parameter
-        file's ``transmission.torque_delay`` (written by ``identify``), else 0.
+        torque of :func:`~.torque_reading.advanced` (a replay: the later samples are recorded). Default: the
+        model's parameter file's ``transmission.torque_delay`` (written by ``identify``), else 0.
     friction_law : {"smooth", "stick", "lugre"} or None, optional
         The observer's dry friction (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`): ``"smooth"``
         F_s tanh(v / v_s), ``"stick"``, the time-stepping Coulomb law that holds a joint at rest
         (:mod:`alpes_dyn.simulation.stick`), or ``"lugre"``, a bristle state per joint
         (:mod:`alpes_dyn.model.friction`). Default: the parameter file's,
-        :func:`~alpes_dyn.simulation.stick.observer_friction_law` (``"lugre"`` where it says ``friction.law =
-        "lugre"``, else ``"smooth"``).
+        :func:`~alpes_dyn.simulation.stick.observer_friction_law` (its ``friction.observer_law`` where it holds
+        one, else ``"lugre"`` where it says ``friction.law = "lugre"``, else ``"smooth"``).
     torque_window : int or None, optional
-        Samples of the causal moving average of the torque the observer reads (:func:`averaged`; its noise, given
-        or estimated, divided by sqrt(``torque_window``)). Default :func:`default_torque_window`: 1 (the torque as
-        recorded) where the file holds ``friction.observer_law`` (chosen by ``identify``'s check on the torque as
-        recorded), else :data:`STICK_TORQUE_WINDOW` with the stick and LuGre laws, 1 with the smooth law.
+        Samples of the causal moving average of the torque the observer reads (:func:`~.torque_reading.averaged`;
+        its noise, given or estimated, divided by sqrt(``torque_window``)). Default
+        :func:`~.torque_reading.default_torque_window`: 1 (the torque as recorded) where the file holds
+        ``friction.observer_law`` (chosen by ``identify``'s check on the torque as recorded), else
+        :data:`~.torque_reading.STICK_TORQUE_WINDOW` with the stick and LuGre laws, 1 with the smooth law.
     force : bool, optional
         Run on a model whose parameter file is marked not trustworthy (refused otherwise:
         :class:`~alpes_dyn.ModelError` with the reason the file records, :func:`~alpes_dyn.model.trust.check_trusted`).
