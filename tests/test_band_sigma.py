@@ -70,11 +70,11 @@ def test_bad_input_is_named(finger3, kwargs, field):
 def test_on_a_stick_slip_plant_estimate_band_sigma_brings_the_nees_into_its_band(tmp_path, capsys):
     """finger3 in MuJoCo with stick-slip (the stiff constraint), the estimate scenario's torque then the ramp (6 s),
     ``estimate --data --band-sigma`` on the plant's true file with the smooth law: each joint's NEES with the
-    filter's own sigma (its log's q_std, the log being the filter's own; every 0.1 s after 1 s) is above its band;
+    filter's own sigma (the log's q_std with ``--no-band-sigma``; every 0.1 s after 1 s) is above its band;
     widened by the band (the JSON's, same samples) most joints are in their band and none is off by more than a
-    factor of three, the estimate (its log) the filter's, no joint flagged unobserved (the flag reads the estimate,
-    which the widening leaves as it is: ``test_the_widened_estimate_adds_to_the_joints_alone``), the band's term in
-    the JSON."""
+    factor of three, the log's q_std the sigma reported (its NEES the JSON's), the estimate (its log) the filter's,
+    the same with and without the band, no joint flagged unobserved (the flag reads the estimate, which the widening
+    leaves as it is: ``test_the_widened_estimate_adds_to_the_joints_alone``), the band's term in the JSON."""
     import json
 
     from alpes_dyn.bench.effects import PlantEffects
@@ -92,24 +92,34 @@ def test_on_a_stick_slip_plant_estimate_band_sigma_brings_the_nees_into_its_band
     rec = mujoco_recording("finger3", true, validation_torque(1e-3)[:6001], 1e-3, effects=e, seed=5)
     t = write_truth(true, e, tmp_path / "truth.toml")
     write_recording(rec, tmp_path / "rec.csv")
-    assert main(["estimate", "--data", str(tmp_path / "rec.csv"), "--params", str(t.path), "--friction", "--stops",
-                 "--friction-law", "smooth", "--band-sigma", "--log", str(tmp_path / "log.csv"), "--json"]) == 0
+    base = ["estimate", "--data", str(tmp_path / "rec.csv"), "--params", str(t.path), "--friction", "--stops",
+            "--friction-law", "smooth", "--json"]
+    assert main(base + ["--band-sigma", "--log", str(tmp_path / "log.csv")]) == 0
     out = json.loads(capsys.readouterr().out)
-    log = np.genfromtxt(tmp_path / "log.csv", delimiter=",", names=True)
+    assert main(base + ["--no-band-sigma", "--log", str(tmp_path / "own.csv")]) == 0
+    capsys.readouterr()
+    log, own_log = (np.genfromtxt(tmp_path / f, delimiter=",", names=True) for f in ("log.csv", "own.csv"))
     names = ("j1", "j2", "j3")
     k = np.arange(1000, rec.true_q.shape[0], 100)
     assert out["nees"]["samples"] == k.size
     q_hat = np.column_stack([log[f"q_hat_{j}"] for j in names])
-    std = np.column_stack([log[f"q_std_{j}"] for j in names])
-    own = np.mean(((q_hat[k] - rec.true_q[k]) / std[k]) ** 2, axis=0)
+    np.testing.assert_allclose(q_hat, np.column_stack([own_log[f"q_hat_{j}"] for j in names]), atol=1e-12)
+
+    def nees_of(lg):
+        std = np.column_stack([lg[f"q_std_{j}"] for j in names])
+        return np.mean(((q_hat[k] - rec.true_q[k]) / std[k]) ** 2, axis=0)
+
+    own = nees_of(own_log)
     lo, hi = chi2_band(1, k.size, 0.95)
     assert (own > hi).all(), own
     widened = np.array(out["nees"]["per_joint"])
+    np.testing.assert_allclose(nees_of(log), widened, rtol=1e-3)  # the log holds the sigma reported
     assert ((widened >= lo) & (widened <= hi)).sum() >= 2 and ((widened > 1 / 3) & (widened < 3)).all(), widened
     rmse = np.sqrt(np.mean((q_hat[1000:] - rec.true_q[1000:]) ** 2, axis=0))
     np.testing.assert_allclose(out["rmse"], rmse, rtol=1e-6)
     assert out["unobserved"] == [] and out["band_sigma"]["fraction"] == bs.BAND_FRACTION
-    assert (np.array(out["q_sigma_deg"]) > np.degrees(std[1000:].max(axis=0))).all()
+    own_std = np.column_stack([own_log[f"q_std_{j}"] for j in names])
+    assert (np.array(out["q_sigma_deg"]) > np.degrees(own_std[1000:].max(axis=0))).all()
 
 
 def test_a_direction_the_band_does_not_bound_is_the_prior():

@@ -192,7 +192,8 @@ def _add_estimate(sub: argparse._SubParsersAction) -> None:
                         "columns (A) as motor torques (a recording with current columns needs it)")
     s.add_argument("--disturbance", action="store_true", help="with --data: also estimate a slowly varying torque per motor")
     s.add_argument("--log", default=None, metavar="FILE.csv",
-                   help="with --data: write the estimated joints, velocities and standard deviations as CSV")
+                   help="with --data: write the estimated joints, velocities and standard deviations as CSV (q_std_*: "
+                        "the filter's, widened by the dry-friction band unless --no-band-sigma)")
     s.add_argument("--rotor-inertia", action="store_true",
                    help="with --data: the observer's model with the file's rotor inertia J_m on each tendon (what "
                         "'identify' fitted with when its JSON's effects hold rotor)")
