@@ -766,6 +766,22 @@ class RoundWalker:
         for rnd in rounds_of("cable"):
             self.play(rnd, kept)
 
+    def judged_on(self, validation: Any = None) -> Any:
+        """The recording the observer check judges on: ``validation`` where it is a recording (``identify
+        --validate``), else the fitted one.
+
+        Parameters
+        ----------
+        validation : Recording or None, optional
+            A held-out recording (default None, or anything not a recording: the fitted one).
+
+        Returns
+        -------
+        Recording
+            The recording to judge on.
+        """
+        return validation if isinstance(validation, type(self.recording)) else self.recording
+
     def observe(self, kept: Kept, auto: bool, validation: Any = None) -> Any:
         """The kept fit judged by the observer it feeds (on ``validation`` where it is a recording, else the fitted
         one); with ``auto``, while it fails, the ``auto`` stage again, then the rounds as good a fit
@@ -787,7 +803,7 @@ class RoundWalker:
         """
         from .observer_check import judge
 
-        on = validation if isinstance(validation, type(self.recording)) else self.recording
+        on = self.judged_on(validation)
         check = judge(kept.result, on, self.delays[id(kept.result)])
         while auto and check is not None and not check.passed and any(e not in self.attempted for e in FALLBACK):
             before = dataclasses.replace(kept)
@@ -863,8 +879,7 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     if observe and sticking(kept.result, kept.effects, walk.attempted):  # judged with the stick law among the laws
         from .observer_check import judge
 
-        on = kwargs.get("validation")
-        on = on if isinstance(on, Recording) else recording
+        on = walk.judged_on(kwargs.get("validation"))
         check = judge(kept.result, on, walk.delays[id(kept.result)], sticking=True) or check
     notes = [unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)]),
              name_sticking(kept.result, kept.effects, walk.attempted)]

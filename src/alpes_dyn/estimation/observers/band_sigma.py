@@ -66,6 +66,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
+from ...checks import one_of
 from ...errors import InputError
 from ...model.robot import Model
 from ...symbolic.statespace import StateSpace
@@ -105,9 +106,7 @@ def band_fraction(law: str) -> float:
     InputError
         ``law`` not one of :data:`BAND_FRACTIONS`.
     """
-    if not isinstance(law, str) or law not in BAND_FRACTIONS:
-        raise InputError(f"law: expected one of {', '.join(BAND_FRACTIONS)}, got {law!r:.40}")
-    return BAND_FRACTIONS[law]
+    return BAND_FRACTIONS[one_of(law, tuple(BAND_FRACTIONS), "law")]
 
 
 def with_joint_variance(estimate: Estimate, variance: np.ndarray) -> Estimate:
