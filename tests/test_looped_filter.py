@@ -172,3 +172,32 @@ def test_one_step_prediction_of_a_looped_filter_shared_by_nees_and_nis():
         assert _rel(a, b) <= 1e-10
     assert ahead.predicted_step(looped, est.z, W, est.P)[1] is Pn  # kept: the NIS reads the NEES's run
     assert ahead.predicted_step(looped, est.z, W[::-1].copy(), est.P)[1] is not Pn
+
+
+def test_looped_run_keeps_its_prediction_for_the_nees_and_nis():
+    """A looped filter's run keeps each step's prediction and Jacobians (looped.kept_run): its estimates equal the
+    plain step's loop (or the virtual machine's) to 1e-13 and the kept z_k+1|k, P_k+1|k, A_k, G_k those of the
+    prediction stepped again from its estimates (ahead._looped) to 1e-12 (relative), on finger3 with friction; the
+    NEES's and the NIS's prediction read them (no second run); another run's inputs are stepped again."""
+    from alpes_dyn.estimation.observers import ahead
+
+    model = ad.Model.alpes("finger3", friction=True)
+    _, looped, W, x0 = _pair(model, 4)
+    W = W[:80]
+    Y = np.repeat(np.asarray(looped.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
+    Y[40:] += 1e-3  # a step in the readings: an update that moves the estimate
+    P0 = np.diag(np.full(looped.nz, 1e-4))
+    est = looped.run(x0, P0, W, Y)
+    kept = looped.__dict__["_predicted_step"][1]
+    z, P = looped._update(x0, P0, Y[0])
+    s0 = np.concatenate([np.asarray(z).reshape(-1), np.asarray(P).reshape(-1, order="F")])
+    ref = np.asarray(looped.filter_step_p.mapaccum(W.shape[0])(s0, np.hstack([W, Y[1:]]).T, looped.model.values)).T
+    nz = looped.nz
+    assert _rel(ref[:, :nz], est.z[1:]) <= 1e-13
+    assert _rel(ref[:, nz:], est.P[1:].transpose(0, 2, 1).reshape(W.shape[0], -1)) <= 1e-13
+    again = ahead._looped(looped, est.z[:-1], est.P[:-1], W[:, None, :])
+    for a, b in zip(again, kept):
+        assert a.shape == b.shape and _rel(a, b) <= 1e-12
+    assert np.abs(kept[2] - np.eye(nz)).max() > 1e-3  # (a step that moves: A is not I)
+    assert ahead.predicted_step(looped, est.z, W, est.P)[1] is kept[1]  # the NEES's and the NIS's: read, not run
+    assert ahead.predicted_step(looped, est.z, W[::-1].copy(), est.P)[1] is not kept[1]

@@ -30,7 +30,7 @@ import numpy as np
 
 from ...simulation.buildcache import expression_key
 
-__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "predicted_step", "linearised"]
+__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "predicted_step", "keep_predicted", "linearised"]
 
 AHEAD_BATCH = 256
 """Starts run per call of the compiled loop: its trajectory buffer (starts x (H + 1) x (nz + nz^2) doubles) stays a
@@ -201,7 +201,8 @@ def predicted_step(filt: Any, z: np.ndarray, W: np.ndarray, P: np.ndarray) -> tu
     """A looped filter's one-step prediction from each sample of its run, compiled: what the NEES's error model
     (:func:`~alpes_dyn.estimation.observers.consistency.predicted_covariance`) and the NIS of the innovations
     (:func:`predicted_ahead` at ``horizon`` 1) both read, computed once for both (the last run's kept on the filter,
-    keyed on its inputs' bytes).
+    keyed on its inputs' bytes; a filter's own run keeps its prediction there, :func:`~alpes_dyn.estimation.
+    observers.looped.kept_run`: then nothing is stepped again).
 
     Parameters
     ----------
@@ -220,16 +221,46 @@ def predicted_step(filt: Any, z: np.ndarray, W: np.ndarray, P: np.ndarray) -> tu
         (z_k+1|k (K, nz), P_k+1|k = A_k P_k A_k^T + G_k Sigma_w G_k^T + Q (K, nz, nz), A_k = dF/dz (K, nz, nz),
         G_k = dF/dw (K, nz, nw)).
     """
-    import hashlib
-
     K = W.shape[0]
-    z, P, W = (np.ascontiguousarray(a, dtype=float) for a in (z[:K], P[:K], W))
-    key = hashlib.blake2b(b"".join(a.tobytes() for a in (z, P, W)) + repr((z.shape, P.shape, W.shape)).encode(),
-                          digest_size=16).digest()
+    key = _step_key(z[:K], P[:K], W)
     kept = filt.__dict__.get("_predicted_step")
     if kept is None or kept[0] != key:
+        z, P, W = (np.ascontiguousarray(a, dtype=float) for a in (z[:K], P[:K], W))
         kept = filt.__dict__["_predicted_step"] = (key, _looped(filt, z, P, W[:, None, :]))
     return kept[1]
+
+
+def _step_key(z: np.ndarray, P: np.ndarray, W: np.ndarray) -> bytes:
+    """The key of :func:`predicted_step`'s kept prediction: a hash of its inputs' bytes and shapes."""
+    import hashlib
+
+    h = hashlib.blake2b(digest_size=16)
+    for a in (z, P, W):  # the bytes of each array made contiguous, a block of rows at a time (no copy of the whole)
+        for b in range(0, max(len(a), 1), 256):
+            h.update(np.ascontiguousarray(a[b: b + 256], dtype=float).tobytes())
+    h.update(repr((np.shape(z), np.shape(P), np.shape(W))).encode())
+    return h.digest()
+
+
+def keep_predicted(filt: Any, z: np.ndarray, P: np.ndarray, W: np.ndarray, predicted: tuple[np.ndarray, ...]
+                   ) -> None:
+    """Keep on ``filt`` the one-step prediction its run computed (:func:`~alpes_dyn.estimation.observers.looped.
+    kept_run`), for :func:`predicted_step` of the same estimates and inputs to return instead of stepping again.
+
+    Parameters
+    ----------
+    filt : ~alpes_dyn.estimation.observers.observers.ExtendedKalmanFilter
+        A looped filter.
+    z : ndarray
+        (K, nz) its estimates z_k|k, k = 0 .. K - 1.
+    P : ndarray
+        (K, nz, nz) their covariances.
+    W : ndarray
+        (K, nw) the known inputs.
+    predicted : tuple of ndarray
+        (z_k+1|k (K, nz), P_k+1|k (K, nz, nz), A_k (K, nz, nz), G_k (K, nz, nw)): :func:`predicted_step`'s.
+    """
+    filt.__dict__["_predicted_step"] = (_step_key(z, P, W), predicted)
 
 
 def linearised(filt: Any, z: np.ndarray, W: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

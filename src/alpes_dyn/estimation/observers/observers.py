@@ -63,7 +63,7 @@ from ...symbolic.statespace import StateSpace
 from .covariance import chol_sym, predicted_covariance, updated_state
 from .discrete import DISTURBANCE_PREFIX, PARAMETERS, DiscreteModel
 from .friction_noise import with_friction_noise
-from .looped import LOOP_STATES, looped_functions
+from .looped import LOOP_STATES, kept_run, looped_functions
 from .online_filter import OnlineFilter
 
 __all__ = [
@@ -458,10 +458,12 @@ class KalmanFilter(Rebuilt):
         z, P = self._update(z0, P0, Y[0])
         s0 = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
         WY = np.hstack([W, Y[1:]])
-        loop = self._loop if self._loop is not None or not self.looped else self._looped_loop()
+        S = kept_run(self, s0, WY, W) if self.looped else None  # (its prediction kept for the NEES and the NIS)
+        loop = None if S is not None else self._loop if self._loop is not None or not self.looped else \
+            self._looped_loop()
         if loop is not None:
             S = loop.run(s0[None], WY[None])[0]
-        else:
+        elif S is None:
             # the step of the compiled loop, the model's numbers as its input: the same numbers as online(), to the bit
             S = np.vstack([s0, np.array(self.filter_step_p.mapaccum(N)(s0, WY.T, self.model.values)).T])
         nz = self.nz
