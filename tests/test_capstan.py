@@ -199,3 +199,27 @@ def test_identified_spec_holds_the_fitted_sheath_friction():
     back = TransmissionSpec.from_toml(out.to_toml())
     assert back.motors[0].capstan == 0.023 and back.identified["capstan"]["flexor"] == 4e-4
     assert ad.Model(ad.urdf_string("finger2"), back).transmission.capstan.tolist() == [0.023]
+
+
+def test_identified_spec_writes_a_negative_tendon_compliance_at_its_bound():
+    """A fit whose tendon compliance crossed its bound 0 (the whole Shadow hand's ``identify --force`` on a 0.5 s
+    record: -6.6e-5 rad/(N m) on a wrist motor, then the written spec refused by its own check after the whole fit)
+    writes the bound, 0, with the fit's standard error; a positive one as fitted; the spec reads back."""
+    from alpes_dyn.estimation.identification.identification import IdentificationResult
+    from alpes_dyn.estimation.identification.identified_spec import identified_spec
+
+    spec = TransmissionSpec.from_toml('[[motor]]\nname = "flexor"\njoints = { j1 = 2.0, j2 = 2.0 }\n\n'
+                                      "[stiffness]\nj1 = 0.04\nj2 = 0.05\n")
+    model = ad.Model(ad.urdf_string("finger2"), spec)
+    names = ("K_1", "tendon_compliance_flexor")
+    for fitted, written in ((-6.6e-5, 0.0), (3e-4, 3e-4)):
+        res = IdentificationResult(names=names, values=np.array([0.041, fitted]), std=np.array([1e-5, 2e-5]),
+                                   initial=np.array([0.04, 0.0]), units=("N m/rad", "rad/(N m)"),
+                                   correlation=np.eye(2), residual_rms=0.5, iterations=1, converged=True,
+                                   seconds=0.0, compile_seconds=0.0, states=np.zeros((1, 4)), node_times=np.zeros(1),
+                                   model=model)
+        out = identified_spec(res, spec)
+        assert out.motors[0].tendon_compliance == written
+        assert dict(out.identified["tendon_compliance"]) == {"flexor": 2e-5}
+        back = TransmissionSpec.from_toml(out.to_toml())
+        assert back.motors[0].tendon_compliance == written

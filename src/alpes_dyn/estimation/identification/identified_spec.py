@@ -118,7 +118,9 @@ def identified_spec(result: Any, base: TransmissionSpec, masses: str = "refuse")
             tables[_TABLE[p.kind]][p.joint] = max(float(value), 0.0)
             std.setdefault(_TABLE[p.kind], {})[p.joint] = sd
         elif p.kind in _MOTOR_FIELD:
-            value = max(float(value), 0.0) if p.kind in ("J_m", "capstan") else float(value)
+            # at the bound 0 where the fit crossed it (module bounds: a cable that shortens under tension has the
+            # bound active); a negative tendon compliance made the file's own check refuse it after the whole fit
+            value = max(float(value), 0.0) if p.kind in ("J_m", "capstan", "tendon_compliance") else float(value)
             motors[p.motor][_MOTOR_FIELD[p.kind]] = value
             std.setdefault(_MOTOR_FIELD[p.kind], {})[p.motor] = sd
         else:
