@@ -60,6 +60,8 @@ def test_c_kernel_equals_casadi_looped_step(monkeypatch, nb):
     xs_b, Sb = fast.run(x0, U, G, theta, offset, basis=basis, sensitivities="state")
     assert np.array_equal(xs_a, xs_b) and np.array_equal(xs_b, xb)
     assert fast._state_loop.library == fast._loop.library  # one build for both steps
+    xp, none = fast.run(x0, U, G, theta, offset, basis=basis, sensitivities=False)  # the states alone, built at -O1
+    assert none is None and np.array_equal(xp, xb)
     assert np.abs(Sa - Sb).max() <= 1e-12 * np.abs(Sa).max()
     j = fast.names.index("m_2")
     d = 1e-6 * theta[j]
