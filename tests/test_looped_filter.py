@@ -201,3 +201,25 @@ def test_looped_run_keeps_its_prediction_for_the_nees_and_nis():
     assert np.abs(kept[2] - np.eye(nz)).max() > 1e-3  # (a step that moves: A is not I)
     assert ahead.predicted_step(looped, est.z, W, est.P)[1] is kept[1]  # the NEES's and the NIS's: read, not run
     assert ahead.predicted_step(looped, est.z, W[::-1].copy(), est.P)[1] is not kept[1]
+
+
+def test_looped_run_too_long_to_keep_runs_the_plain_step(monkeypatch):
+    """A record whose kept prediction would be over looped.MAX_KEPT_BYTES runs the looped filter's plain compiled
+    step (nothing kept on the filter): the same estimates as the kept run to 1e-13 (relative), on finger3 with
+    friction, and the NEES's prediction then stepped again from the estimates, equal to the kept one's to 1e-12."""
+    from alpes_dyn.estimation.observers import ahead, looped as looped_mod
+
+    model = ad.Model.alpes("finger3", friction=True)
+    _, looped, W, x0 = _pair(model, 4)
+    W = W[:60]
+    Y = np.repeat(np.asarray(looped.model.output(x0)).reshape(1, -1), W.shape[0] + 1, axis=0)
+    Y[30:] += 1e-3
+    P0 = np.diag(np.full(looped.nz, 1e-4))
+    kept_est = looped.run(x0, P0, W, Y)
+    kept = looped.__dict__.pop("_predicted_step")[1]
+    monkeypatch.setattr(looped_mod, "MAX_KEPT_BYTES", 8 * looped_mod._kept_size(looped.model))  # under two samples
+    est = looped.run(x0, P0, W, Y)
+    assert "_predicted_step" not in looped.__dict__ and looped._online_loop is not None
+    assert _rel(kept_est.z, est.z) <= 1e-13 and _rel(kept_est.P, est.P) <= 1e-13
+    for a, b in zip(ahead.predicted_step(looped, est.z, W, est.P), kept):
+        assert a.shape == b.shape and _rel(a, b) <= 1e-12

@@ -28,7 +28,7 @@ import casadi as cs
 import numpy as np
 
 __all__ = ["LOOP_STATES", "stage_jacobians", "linearization", "predicted", "updated", "looped_functions", "step_jacobians",
-           "kept_run"]
+           "kept_run", "MAX_KEPT_BYTES"]
 
 LOOP_STATES = 40
 """States from which the EKF's step is built as loops (:mod:`this module <alpes_dyn.estimation.observers.looped>`):
@@ -264,6 +264,14 @@ def step_jacobians(filt: Any) -> cs.Function:
     return cs.Function("jacobians", [z, w], [zn, cs.densify(cs.jacobian(zn, z)), cs.densify(cs.jacobian(zn, w))])
 
 
+MAX_KEPT_BYTES = 512 * 2**20
+"""Largest kept prediction of :func:`kept_run`, bytes: [z_pred; vec P_pred; vec A; vec G] per sample is about 3.4
+times the run's own [z; vec P] (64 kB per sample on the Shadow hand, so 512 MiB at about 8,000 samples). A longer
+record runs the filter's plain step instead (:func:`kept_run` returns None), its prediction recomputed where the
+consistency checks ask for it: one more pass along the run, not a run's memory grown past what
+:func:`~alpes_dyn.limits.check_bytes` admitted."""
+
+
 def _kept_size(dm: Any) -> int:
     """The length of the kept step's state (:func:`kept_run`): [z; vec P; z_pred; vec P_pred; vec A; vec G]."""
     nz, nw = dm.nz, dm.nw
@@ -292,11 +300,14 @@ def kept_run(filt: Any, s0: np.ndarray, WY: np.ndarray, W: np.ndarray) -> np.nda
     -------
     numpy.ndarray or None
         (N + 1, nz + nz^2) [z_k|k; vec P_k|k] (a view of the run's states) as the filter's step gives them (the
-        same numbers to the bit), or None without a C compiler (the caller's run then, its prediction recomputed where asked).
+        same numbers to the bit), or None without a C compiler or where the kept prediction would be over
+        :data:`MAX_KEPT_BYTES` (the caller's run then, its prediction recomputed where asked).
     """
     from ...simulation.integrate import CompiledStepLoop, CompilerError
     from .ahead import keep_predicted
 
+    if 8.0 * (WY.shape[0] + 1) * _kept_size(filt.model) > MAX_KEPT_BYTES:
+        return None
     loop = filt.__dict__.get("_kept_loop")
     if loop is None:
         try:

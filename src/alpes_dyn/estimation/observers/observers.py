@@ -57,7 +57,7 @@ from ...checks import as_float_array
 from ...errors import InputError, ModelError
 from ...limits import check_bytes
 from ...rebuild import Rebuilt
-from ...simulation.integrate import CompiledStepLoop, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
+from ...simulation.integrate import CompiledStepLoop, CompilerError, _check_dt, _n_known_inputs, joint_accelerations, rk4_expression
 from ...symbolic.lifted import lift_constants
 from ...symbolic.statespace import StateSpace
 from .covariance import chol_sym, predicted_covariance, updated_state
@@ -286,6 +286,16 @@ class KalmanFilter(Rebuilt):
         return CompiledStepLoop(self.filter_step_p, f"{self.kind}_{self.model.system.model.name}", threads=1,
                                 vectorize=False, parameters=self.model.values)
 
+    def _plain_looped_loop(self) -> CompiledStepLoop | None:
+        """A looped filter's plain compiled step (the one :meth:`online` runs), for a record too long to keep its
+        prediction (:data:`~.looped.MAX_KEPT_BYTES`); None without a compiler."""
+        if self._online_loop is None:
+            try:
+                self._online_loop = self._compiled_loop()
+            except CompilerError:
+                return None
+        return self._online_loop
+
     # ------------------------------------------------------------------ symbolic pieces
     @property
     def _predict(self) -> cs.Function:
@@ -448,10 +458,12 @@ class KalmanFilter(Rebuilt):
         z, P = self._update(z0, P0, Y[0])
         s0 = np.concatenate([np.array(z).reshape(-1), np.array(P).reshape(-1, order="F")])
         WY = np.hstack([W, Y[1:]])
-        # a looped filter: its compiled step keeping its prediction for the NEES and the NIS (None without a compiler)
+        # a looped filter: its compiled step keeping its prediction for the NEES and the NIS (None without a compiler
+        # or on a record too long to keep it: then its plain compiled step, as online() runs it)
         S = kept_run(self, s0, WY, W) if self.looped else None
-        if S is None and self._loop is not None and not self.looped:
-            S = self._loop.run(s0[None], WY[None])[0]
+        loop = self._loop if not self.looped else (self._plain_looped_loop() if S is None else None)
+        if S is None and loop is not None:
+            S = loop.run(s0[None], WY[None])[0]
         elif S is None:
             # the step of the compiled loop, the model's numbers as its input: the same numbers as online(), to the bit
             S = np.vstack([s0, np.array(self.filter_step_p.mapaccum(N)(s0, WY.T, self.model.values)).T])
