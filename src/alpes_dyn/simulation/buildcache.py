@@ -46,7 +46,7 @@ try:  # POSIX; elsewhere builds are not locked
 except ImportError:  # pragma: no cover - not POSIX
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["CompilerError", "build_library", "verify_library", "expression_key", "LEGACY_TMP_AGE_S"]
+__all__ = ["CompilerError", "build_library", "cached_library", "verify_library", "expression_key", "LEGACY_TMP_AGE_S"]
 
 LEGACY_TMP_AGE_S = 3600.0
 """Age (s) after which a ``tmp*`` folder of an older alpes_dyn in the cache is removed."""
@@ -193,6 +193,52 @@ def _remove(*paths: Path) -> None:
             raise CompilerError(f"cache: cannot remove the broken {str(p)!r} ({exc.strerror or exc})") from None
 
 
+def _source_key(source: str, cc: str, cflags: Sequence[str]) -> str:
+    """The key of a build: a hash of the source, the flags and the compiler's name (20 hex characters)."""
+    return hashlib.sha256((source + "\0" + " ".join(cflags) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
+
+
+def _find(lib: Path, key: str) -> tuple[Path, bool, float, ctypes.CDLL] | None:
+    """The verified library of ``key`` loaded: ``lib`` itself, or the same source built under another stem (the
+    hand's fingers); None if there is none."""
+    handle = _load(lib, key)
+    if handle is not None:
+        return lib, False, 0.0, handle
+    for same in sorted(lib.parent.glob(f"*_{key}.so")):
+        handle = _load(same, key)
+        if handle is not None:
+            return same, False, 0.0, handle
+    return None
+
+
+def cached_library(source: str, stem: str, cc: str, cflags: Sequence[str],
+                   directory: Path) -> tuple[Path, bool, float, ctypes.CDLL] | None:
+    """The library :func:`build_library` would return for these arguments if it is in the cache already (verified
+    and loaded), else None: nothing is compiled, nothing is written.
+
+    Parameters
+    ----------
+    source : str
+        The C source.
+    stem : str
+        The file name's stem.
+    cc : str
+        The compiler's path.
+    cflags : sequence of str
+        Compiler flags.
+    directory : pathlib.Path
+        The cache's folder (need not exist).
+
+    Returns
+    -------
+    tuple or None
+        ``(path, False, 0.0, library)`` as :func:`build_library`'s, or None when the cache holds no verified
+        library of this source, compiler and flags.
+    """
+    key = _source_key(source, cc, cflags)
+    return _find(Path(directory) / f"{stem}_{key}.so", key)
+
+
 def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], directory: Path,
                   libs: Sequence[str] = ("-lm",)) -> tuple[Path, bool, float, ctypes.CDLL]:
     """Compile ``source`` into a shared library in ``directory`` once, and load it.
@@ -231,7 +277,7 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
     CompilerError
         The compiler is missing or fails, or the cache cannot be used.
     """
-    key = hashlib.sha256((source + "\0" + " ".join(cflags) + "\0" + os.path.basename(cc)).encode()).hexdigest()[:20]
+    key = _source_key(source, cc, cflags)
     name = f"{stem}_{key}"
     d = Path(directory)
     try:
@@ -239,13 +285,9 @@ def build_library(source: str, stem: str, cc: str, cflags: Sequence[str], direct
     except OSError as exc:
         raise CompilerError(f"cache directory {str(d)!r}: cannot be created ({exc.strerror or exc})") from None
     lib = d / f"{name}.so"
-    handle = _load(lib, key)
-    if handle is not None:
-        return lib, False, 0.0, handle
-    for same in sorted(d.glob(f"*_{key}.so")):  # the same source built under another stem (the hand's fingers)
-        handle = _load(same, key)
-        if handle is not None:
-            return same, False, 0.0, handle
+    found = _find(lib, key)
+    if found is not None:
+        return found
     with _locked(d / f"{name}.lock"):
         _clean_stale(d, name)
         handle = _load(lib, key)  # built by another process while this one waited

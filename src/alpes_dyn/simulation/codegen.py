@@ -11,6 +11,7 @@ is wanted.
 
 from __future__ import annotations
 
+import contextlib
 import ctypes
 import os
 import re
@@ -21,7 +22,7 @@ from typing import Any
 import casadi as cs
 import numpy as np
 
-from .buildcache import CompilerError, build_library
+from .buildcache import CompilerError, build_library, cached_library
 from ..fileio import writable_directory
 from ..errors import InputError, ModelError
 from ..progress import _Progress
@@ -113,6 +114,13 @@ _LARGE_SOURCE = 500_000
 ``-O3`` costs several times ``-O1``'s compile time for little or no speed per step; below it (the fingers'
 sensitivities and roll-outs) a build takes seconds and ``-O3`` stays."""
 
+
+_QUICK_LEVEL = "-O1"
+_PROMOTE_STEPS = 200_000
+"""A loop's source up to :data:`_LARGE_SOURCE`, no level asked, not cached at ``-O3``: built at :data:`_QUICK_LEVEL`
+(about 2/3 of ``-O3``'s compiler time, steps up to a third slower), rebuilt at ``-O3`` once :meth:`CompiledStepLoop.
+run` has run this many steps (sequences x steps): when the slower steps have cost about an ``-O3`` build (CHANGELOG).
+The flags change no floating-point operation (``-ffp-contract=off``, no ``-ffast-math``): the same numbers."""
 
 _LARGE_LEVELS = ("-O1", "-O0")
 """The optimisation levels a caller may ask for a source over :data:`_LARGE_SOURCE` (:class:`CompiledStepLoop`'s
@@ -401,16 +409,21 @@ class CompiledStepLoop:
         ``"-O0"`` (:data:`_LARGE_LEVELS`) for a loop whose build would cost more than its runs.
     level : str or None, optional
         The optimisation flag whatever the source's size, one of :data:`_LARGE_LEVELS` (default None: ``-O3`` up to
-        :data:`_LARGE_SOURCE` characters, ``large_level`` above): ``"-O0"`` for a loop run a few thousand steps per
-        process, whose ``-O3`` build costs more than its runs even below the size (the observer check's prediction
-        loops of a finger: a few seconds of the compiler, for runs of a fraction of a second).
+        :data:`_LARGE_SOURCE` characters, quick first: below; ``large_level`` above): ``"-O0"`` for a loop run a few
+        thousand steps per process, whose ``-O3`` build costs more than its runs even below the size (the observer
+        check's prediction loops of a finger: a few seconds of the compiler, for runs of a fraction of a second).
 
     The C source is CasADi's code of ``step`` plus a driver looping over steps and splitting the
-    sequences over POSIX threads; it is compiled once with ``$CC`` (default gcc) ``-O3`` and cached
-    in :func:`cache_dir` under a hash of the source, so a later construction (in any process) only
-    loads it. ``compile_seconds`` is this instance's compilation time (0 when loaded from the cache),
-    ``library`` the path of the shared library.
+    sequences over POSIX threads; it is compiled with ``$CC`` (default gcc) and cached in :func:`cache_dir` under a
+    hash of the source and the flags, so a later construction (in any process) only loads it. Without ``level`` and
+    up to :data:`_LARGE_SOURCE` characters, the ``-O3`` build is loaded if the cache holds it, else the loop is built
+    at :data:`_QUICK_LEVEL` and :meth:`run` rebuilds it at ``-O3`` once it has run :data:`_PROMOTE_STEPS` steps (the
+    same numbers; :meth:`step` never builds). ``compile_seconds`` is this instance's compilation time (0 when
+    loaded from the cache), ``library`` the path of the shared library in use.
     """
+
+    _quick: str | None = None  # a quick build's source, until run() promotes it (steps run: _steps)
+    _steps = 0
 
     def __init__(self, step: cs.Function, label: str = "steploop", threads: int | None = None,
                  vectorize: bool = True, parameters: Any = None, large_level: str = "-O1",
@@ -438,22 +451,35 @@ class CompiledStepLoop:
         self.lanes = 1
         if vector is not None:
             try:
-                self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
-                    generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label, large_level, level)
+                self._open(generated + _DRIVER.format(lanes=_LANES, vector_code=vector, **fmt), label, large_level,
+                           level)
                 self.lanes = _LANES
             except CompilerError:  # a compiler without GCC vector extensions: the scalar driver
                 vector = None
         if vector is None:
-            self.library, self.compiled, self.compile_seconds, self._lib = _build_library(
-                generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label, large_level, level)
-        fn = self._lib.alpes_rollout
+            self._open(generated + _DRIVER.format(lanes=1, vector_code="", **fmt), label, large_level, level)
+        self._label = label
+        self._pp = self.parameters.ctypes.data_as(self._dp)  # the parameters' buffer, held by this loop
+        self._one: tuple | None = None  # step()'s buffers
+
+    def _open(self, source: str, label: str, large_level: str, level: str | None) -> None:
+        """Build or load ``source``'s library: at ``level`` or ``large_level`` (over the size); else its ``-O3``
+        build if cached, or a quick build that :meth:`run` promotes (:data:`_PROMOTE_STEPS`)."""
+        if level is None and len(source) <= _LARGE_SOURCE:
+            found = cached_library(source, label, _compiler(), _CFLAGS, cache_dir())
+            self._quick = None if found is not None else source
+            self._bind(*(found or _build_library(source, label, level=_QUICK_LEVEL)))
+        else:
+            self._bind(*_build_library(source, label, large_level, level))
+
+    def _bind(self, library: Path, compiled: bool, seconds: float, lib: ctypes.CDLL) -> None:
+        """Call ``lib``'s loop from now on (its path, whether it was compiled now and the compile's seconds)."""
+        fn = lib.alpes_rollout
         dp = ctypes.POINTER(ctypes.c_double)
         fn.argtypes = [dp, dp, dp, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_long, ctypes.c_int]
         fn.restype = ctypes.c_int
-        self._fn = fn
-        self._dp = dp
-        self._pp = self.parameters.ctypes.data_as(dp)  # the parameters' buffer, held by this loop
-        self._one: tuple | None = None  # step()'s buffers
+        self.library, self.compiled, self._lib, self._fn, self._dp = library, compiled, lib, fn, dp
+        self.compile_seconds = getattr(self, "compile_seconds", 0.0) + seconds
 
     def step(self, x: np.ndarray, w: np.ndarray) -> np.ndarray:
         """One step of one sequence, on buffers the loop keeps (a control loop's call at each sample, without
@@ -512,6 +538,11 @@ class CompiledStepLoop:
                     raise InputError(f"{label}: the compiled step failed")
                 bar.update(int(k1 - k0))
         bar.close()
+        self._steps += B * N
+        if self._quick is not None and self._steps >= _PROMOTE_STEPS:  # its -O3 build pays from here on
+            source, self._quick = self._quick, None
+            with contextlib.suppress(CompilerError):  # the quick build kept
+                self._bind(*_build_library(source, self._label))
         return X
 
 
