@@ -49,6 +49,7 @@ from ..bench.truth import write_truth
 from ..control.plants import mujoco_recording
 from ..errors import InputError
 from ..estimation.experiments.design import ExperimentDesign
+from ..estimation.experiments.stick_ramp import STICK_SECONDS
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
 from ..estimation.observers.band_sigma import band_fraction, band_sigma
 from ..estimation.observers.consistency import chi2_band, nees
@@ -405,7 +406,7 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     if tmp is None:
         with tempfile.TemporaryDirectory() as d:
             return friction_row(case, seed, design, Path(d), adapt, transient, check_ramp)
-    design = rig_design("level") if design is None else design
+    design = dataclasses.replace(rig_design("level"), stick_seconds=STICK_SECONDS) if design is None else design
     true, nominal = case.true_params(seed), load_params()
     t0 = time.perf_counter()
     rec, design, effects, adaptation = plant_experiment(case.effects(), seed, design, true, FINGER3, adapt)

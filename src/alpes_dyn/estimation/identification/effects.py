@@ -863,12 +863,15 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     EffectsFit
         The fit kept, its effects, the other rounds, its torque delay, the observer's check and the notes.
     """
+    from ..experiments.held_out import split_held_out
     from ..experiments.recording import Recording, read_recording
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")
     if not isinstance(recording, Recording):  # read once: every round fits it, the delay's on its torque advanced
         recording = read_recording(recording, model_of(chosen))
+    recording, judged = split_held_out(recording, kwargs.get("validation"))  # the stiction ramp: judged on, not fitted
+    kwargs = {**kwargs, "validation": judged} if judged is not None else kwargs
     has_gravity = has_gravity and segment_starts(recording.gravity).size == 1
     walk = RoundWalker(model_of, recording, has_gravity, base, kwargs)
     kept = walk.first(chosen)

@@ -31,11 +31,22 @@ import numpy as np
 from ...model.friction import lugre_of
 from ...model.robot import Model
 
-__all__ = ["CHECK_LAWS", "candidate_laws", "LawChoice", "law_score", "choose_law"]
+__all__ = ["CHECK_LAWS", "LAW_CALIBRATION", "candidate_laws", "LawChoice", "law_score", "choose_law"]
 
 CHECK_LAWS: tuple[str, ...] = ("smooth", "stick", "lugre")
 """The laws the observer check walks (after the file's own law, which comes first and wins a tie): ``lugre`` only on
 a LuGre file (the law's sigma0 and sigma1 are the file's), every law only where the file has dry friction."""
+
+LAW_CALIBRATION: dict[str, dict[str, float]] = {"smooth": {}, "stick": {"own_first": 0.0, "start": 0.25},
+                                                "lugre": {}}
+"""Each law's overrides of the model-error search's settings (:data:`~alpes_dyn.estimation.identification.
+noise_calibration.CALIBRATION`): each law is handed its own model error, the smallest that makes its own filter
+consistent on the record judged, never another law's. The library's default model error (a quarter of F_s,
+:data:`~alpes_dyn.estimation.observers.friction_noise.FRICTION_MODEL_ERROR`) is the smooth law's, for the joints'
+stick phases that law cannot hold; the stick law holds them, and that much noise lets its filter move the split of
+the joints the encoder reads the sum of (on a stuck MuJoCo finger2 with the true file, 0.59 degree off with it and
+0.03 with none). So the stick law's search does not try the file's own noise first and starts lower (its search down
+to 1/64 F_s, then 0)."""
 
 
 def candidate_laws(model: Model) -> tuple[str, ...]:

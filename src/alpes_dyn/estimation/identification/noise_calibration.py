@@ -41,11 +41,13 @@ from ..observers.friction_noise import with_model_error
 
 __all__ = ["CALIBRATION", "ModelErrorCalibration", "consistency_statistic", "calibrate_model_error"]
 
-CALIBRATION: dict[str, float] = {"start": 1.0, "ceiling": 16.0, "target": 1.0}
+CALIBRATION: dict[str, float] = {"start": 1.0, "ceiling": 16.0, "target": 1.0, "own_first": 1.0}
 """The search's settings: the first trial ``start`` (in units of F_s), doubled or halved from there up to
 ``ceiling`` (the largest model error a file may need: above it the observer is judged inconsistent), down to
 ``start`` / 16 (below: 0); the consistency statistic's ``target`` (1: the covariance the filter reports matches its
-errors)."""
+errors); ``own_first`` 1: the file's own noise tried first and kept where consistent, 0: not tried (the search
+alone: the smallest consistent e, the law's own; a law whose error the library's default, the smooth law's, would
+over-state, :data:`~alpes_dyn.estimation.identification.law_choice.LAW_CALIBRATION`)."""
 
 
 @dataclass
@@ -141,7 +143,7 @@ def calibrate_model_error(model: Model, statistics: Callable[[Model], Any],
                                      checks[tried[-1][0] if reason else value])
 
     ok = lambda s: bool(np.isfinite(s) and s <= st["target"])  # noqa: E731
-    if ok(stat(None)):  # the file's own noise (its model error, else the library's default) is consistent
+    if st["own_first"] and ok(stat(None)):  # the file's own noise (its model error, else the library's default) is consistent
         return done(None)
     lo, hi = None, None  # the largest e found inconsistent, the smallest found consistent
     e = float(st["start"])
