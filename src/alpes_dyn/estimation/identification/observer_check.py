@@ -249,7 +249,7 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
     ObserverCheck or None
         The check, or None where the fit's model has no file (a URDF robot).
     """
-    from .law_choice import LAW_CALIBRATION, choose_law
+    from .law_choice import choose_law, law_calibration
 
     model = identified_model(result)
     if model is None:
@@ -257,8 +257,8 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
     off, tilt = fitted_rig(result)
     if not calibrate:
         return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
-    choice = choose_law(model, lambda m, law: calibrate_observer(recording, m, off, tilt, torque_delay, thresholds,
-                                                                 law, LAW_CALIBRATION.get(law)))
+    choice = choose_law(model, lambda m, law: law_calibration(
+        lambda st: calibrate_observer(recording, m, off, tilt, torque_delay, thresholds, law, st), law))
     cal = choice.calibration
     result.model_error = cal.value if cal.value is not None else getattr(model.params, "model_error", None)
     if len(choice.calibrations) > 1:  # a choice made: the file says which law its observer runs
