@@ -154,8 +154,10 @@ def test_on_mujocos_stick_slip_the_ramp_shows_the_stick_law_the_dither_hides(muj
     on the ramp 39-45 %. The law walk on the ramp (each law its own model error): the stick law predicts the
     encoder 100 ms ahead better than the smooth law (measured 23.2 against 32.9 counts) and its EKF is closer to
     MuJoCo's joints (0.33 against 0.89 degree); on the dithered excitation the smooth law predicts better (13.6
-    against 22.3 counts). The check judged on the ramp sees what the dithered record hid."""
-    from alpes_dyn.estimation.identification.law_choice import LAW_CALIBRATION, choose_law
+    against 22.3 counts). The check judged on the ramp sees what the dithered record hid. (Here the stick law's
+    20 ms prediction is 25.5 sensor floors, just over the check's 25, and the smooth law is kept; on finger3's
+    stiff_3x draws the check on the ramp keeps the stick law: CHANGELOG.)"""
+    from alpes_dyn.estimation.identification.law_choice import choose_law, law_calibration
     from alpes_dyn.estimation.identification.observer_check import calibrate_observer
 
     rec, model = mujoco_ramp
@@ -164,10 +166,48 @@ def test_on_mujocos_stick_slip_the_ramp_shows_the_stick_law_the_dither_hides(muj
     assert np.all(slow(fit.true_q) < 0.01) and np.all(slow(ramp.true_q) > 0.3)
     walk = {}
     for name, r in (("ramp", ramp), ("excitation", fit)):
-        walk[name] = choose_law(model, lambda m, law: calibrate_observer(r, m, friction_law=law,
-                                                                         settings=LAW_CALIBRATION.get(law)))
+        walk[name] = choose_law(model, lambda m, law: law_calibration(
+            lambda st: calibrate_observer(r, m, friction_law=law, settings=st), law))
     on = walk["ramp"]
     assert on.scores["stick"] < 0.8 * on.scores["smooth"], on.scores
     err = {law: np.degrees(np.max(cal.check.ekf_rmse)) for law, cal in on.calibrations.items()}
     assert err["stick"] < 0.5 < 0.6 < err["smooth"], err
     assert walk["excitation"].scores["smooth"] < walk["excitation"].scores["stick"]
+
+
+def test_each_law_its_own_model_error_search():
+    """The stick law's searches (LAW_CALIBRATION): the first judges the innovation alone against its band's upper
+    end (here (0.1 / e)^2 times the band's end: 1 at e = 0.1), never tries the file's own noise, and finds the
+    smallest e it accepts within a factor sqrt(2) (0.125: 0.25 and 0.125 accepted, 0.0625 and 0.088 not);
+    law_calibration keeps it where its check passes,
+    else walks on to the next search (the smooth law: its one search)."""
+    from types import SimpleNamespace
+
+    from alpes_dyn.estimation.identification import law_choice as lc
+    from alpes_dyn.estimation.identification import noise_calibration as nc
+
+    def check(e):
+        e = 0.0 if e is None else e
+        nis = SimpleNamespace(value=2.0 * (0.1 / e) ** 2 if e else np.inf, high=2.0, dof=1)
+        return SimpleNamespace(nis=nis, prediction_nis=None, split_nis=None, reasons=[], passed=True)
+
+    first = lc.LAW_CALIBRATION["stick"][0]
+    cal = nc.calibrate_model_error(ad.Model.alpes("finger3", friction=True), lambda m: check(m.params.model_error),
+                                   first)
+    assert all(e is not None for e, _ in cal.tried) and cal.tried[0][0] == pytest.approx(0.25)
+    assert cal.value == pytest.approx(0.125) and [round(e, 4) for e, _ in cal.tried] == [0.25, 0.125, 0.0625, 0.0884]
+
+    calls = []
+
+    def calibrate(passes):
+        def one(settings):
+            calls.append(dict(settings))
+            return SimpleNamespace(check=SimpleNamespace(passed=passes.pop(0)), reason="", value=len(calls))
+        return one
+
+    assert lc.law_calibration(calibrate([False, False]), "stick").value == 2 and calls == list(
+        lc.LAW_CALIBRATION["stick"])
+    calls.clear()
+    assert lc.law_calibration(calibrate([True, False]), "stick").value == 1 and len(calls) == 1
+    calls.clear()
+    assert lc.law_calibration(calibrate([False]), "smooth").value == 1 and calls == [{}]

@@ -145,7 +145,8 @@ def calibrate_model_error(model: Model, statistics: Callable[[Model], Any],
             m = model.copy()
             m.params = with_model_error(model.params, e)
         checks[e] = statistics(m)
-        tried.append((e, consistency_statistic(checks[e], bool(st["innovation_only"]))))
+        tried.append((e, consistency_statistic(checks[e], True) if st["innovation_only"] else
+                      consistency_statistic(checks[e])))
         return tried[-1][1]
 
     def done(value: float | None, reason: str = "") -> ModelErrorCalibration:
