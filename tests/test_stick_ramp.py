@@ -18,7 +18,8 @@ from alpes_dyn.estimation.experiments.recording import join_runs, read_recording
 
 @pytest.fixture(scope="module")
 def ramp_record():
-    """finger3's documented experiment as ``alpes-dyn experiment`` records it (its 4 s excitation, then the 6 s ramp) on the library's model, seed 7."""
+    """finger3's documented experiment as ``alpes-dyn experiment`` records it (its 4 s excitation, then the 6 s
+    ramp) on the library's model, seed 7."""
     design = ExperimentDesign(stick_seconds=STICK_SECONDS)
     return design, experiment("finger3", design=design, seed=7)
 

@@ -355,7 +355,8 @@ def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, pla
     """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
     the fit never saw, in the joint range by the same design rule), from the plant's rest."""
     fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0,  # in use: no dither, stick phases
-                                orientations=design.orientations[:1], stick_seconds=0.0)  # no stiction ramp  # and palm up (the first orientation)
+                                orientations=design.orientations[:1],  # and palm up (the first orientation)
+                                stick_seconds=0.0)  # no stiction ramp
     _, u, x0 = torque_of(seed, p, fresh, plant_model(plant.model, p, effects, plant.chain).gravity, plant)
     return mujoco_recording(plant.model, p, u, fresh.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed + 1000,
                             chain=plant.chain)

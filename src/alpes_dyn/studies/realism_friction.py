@@ -21,7 +21,8 @@ all_soft ...    each of the four with every other effect of :func:`~alpes_dyn.be
 Per case and seed (:func:`friction_row`): the identification experiment on the plant as ``alpes-dyn experiment
 --rig auto`` adapts and records it (:func:`~alpes_dyn.studies.realism.plant_experiment`; its stiction ramp after the
 excitation, :data:`~alpes_dyn.estimation.experiments.stick_ramp.STICK_SECONDS`, held out of the fit and judged on by
-its observer check), fitted as ``alpes-dyn identify`` fits it (``--effects auto``), the file written; then a validation run that the fit never saw, a different motion
+its observer check), fitted as ``alpes-dyn identify`` fits it (``--effects auto``), the file written; then a
+validation run that the fit never saw, a different motion
 (:func:`validation_torque`: the ``estimate`` scenario's torque, then a slow ramp through the stick band), the EKF
 on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`, the joints' end
 stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops; the true file

@@ -86,7 +86,8 @@ from ...simulation.lugre import ACCURATE, lugre_substeps, simulate_lugre
 from ...model.friction import lugre_of
 from ...model.stops import JointRangeWarning, check_range
 
-__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments", "held_out_rows", "excitation", "model_experiment",
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments",
+           "held_out_rows", "excitation", "model_experiment",
            "model_experiment_torque",
            "perturbed_params", "dither_amplitude"]  # dither_amplitude: from .multisine
 

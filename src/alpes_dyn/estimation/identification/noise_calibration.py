@@ -155,7 +155,8 @@ def calibrate_model_error(model: Model, statistics: Callable[[Model], Any],
 
     target = 1.0 if st["innovation_only"] else st["target"]  # innovation_only: the statistic is over its band
     ok = lambda s: bool(np.isfinite(s) and s <= target)  # noqa: E731
-    if st["own_first"] and ok(stat(None)):  # the file's own noise (its model error, else the library's default) is consistent
+    # the file's own noise (its model error, else the library's default) tried first where the law's search says so
+    if st["own_first"] and ok(stat(None)):
         return done(None)
     lo, hi = None, None  # the largest e found inconsistent, the smallest found consistent
     e = float(st["start"])
