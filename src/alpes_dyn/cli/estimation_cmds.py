@@ -400,7 +400,7 @@ def cmd_identify(args: argparse.Namespace) -> int:
                      f"{a.floor.noise:.3g}, torque {a.floor.torque:.3g}); {a.summary()}")
         if a.validation is not None:
             v = a.validation
-            lines.append(f"  validation on {args.validate or 'the held-out samples'}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
+            lines.append(f"  validation on {args.validate}: fit {', '.join(f'{x:.1f}' for x in v.fit_percent)} %, "
                          f"NRMSE {', '.join(f'{x:.3g}' for x in v.nrmse)}")
     lines += _written_lines(obj, args, res, urdf and written, written, omitted)
     _emit(obj, "\n".join(lines), args.json)

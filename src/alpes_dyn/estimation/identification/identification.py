@@ -440,7 +440,7 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
     if model.transmission is None:
         raise ModelError(f"model {model.name!r} has no tendon transmission: nothing to read the encoder with")
     rec, rec_path = _as_recording(recording, model)
-    rec, validation = split_held_out(rec, validation)  # held-out samples (the stiction ramp): judged on, not fitted
+    rec, _ = split_held_out(rec)  # held-out samples (the stiction ramp): not fitted (fit_effects judges on them)
     if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or tuple(rec.joint_names) != model.joint_names:
         raise RecordingError(f"recording: motors {rec.motor_names} / joints {rec.joint_names} do not match model "
                              f"{model.name!r}")
