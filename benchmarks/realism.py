@@ -113,6 +113,7 @@ motor stays rigid).
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import json
 import sys
 import tempfile
@@ -121,6 +122,7 @@ import warnings
 from pathlib import Path
 
 from alpes_dyn.errors import InputError
+from alpes_dyn.estimation.experiments.stick_ramp import STICK_SECONDS
 from alpes_dyn.model.params import load_params
 from alpes_dyn.model.stops import JointRangeWarning
 from alpes_dyn.studies.realism import (ADAPT, CASE_NAMES, FINGER3, FIT_EFFECTS, MODEL, RIGS, STRETCH, cases, hand_plant,
@@ -261,7 +263,8 @@ def _friction_main(ap: argparse.ArgumentParser, args: argparse.Namespace) -> int
         ap.error(f"--cases: {'unknown case ' + repr(bad[0]) if bad else 'none or one named twice'} (expected some "
                  f"of {', '.join(FRICTION_CASE_NAMES)} with --friction)")
     warnings.simplefilter("ignore", JointRangeWarning)  # the library's simulator in the design; MuJoCo has stops
-    design = rig_design("level", 2.0 if args.quick else None)
+    # the experiment as alpes-dyn experiment records it: its stiction ramp after the excitation (held out, judged on)
+    design = dataclasses.replace(rig_design("level", 2.0 if args.quick else None), stick_seconds=STICK_SECONDS)
     if args.from_log is not None:
         try:
             rows = read_log(args.from_log)

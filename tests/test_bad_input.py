@@ -302,6 +302,10 @@ def bad_files(d: Path) -> dict[str, str]:
     for name, run in run_files.items():
         files[f"{name}_csv"] = "\n".join([lines[0] + ",run"] + [row + "," + run(i) for i, row in enumerate(lines[1:])]
                                          ).encode()
+    held_files = {"heldbad": lambda i: "2" if i == 7 else "0", "heldmid": lambda i: "1" if 50 <= i < 170 else "0"}
+    for name, held in held_files.items():  # the held_out column's defects (the stiction ramp's mark)
+        files[f"{name}_csv"] = "\n".join([lines[0] + ",held_out"] + [row + "," + held(i) for i, row in
+                                                                     enumerate(lines[1:])]).encode()
     files["gravok_csv"] = "\n".join([lines[0] + ",gravity_x,gravity_y,gravity_z"]
                                      + [row + ",0,0,-9.81" for row in lines[1:]]).encode()  # a good one, hung level
     files["unders_csv"] = "\n".join(lines[:5] + [lines[5].replace(",", ",1_0", 1)] + lines[6:]).encode()
@@ -406,6 +410,11 @@ CLI: dict[str, list[Cli]] = {
         C("experiment", "--model", "thumb", "--chain", "index", "-o", "{tmp}/r.csv", needle="chain: only a finger model"),
         C("experiment", "--duration", "0.01", "-o", "{tmp}/r.csv", needle="duration: expected a whole number of at least 100"),
         C("experiment", "--perturb", "1.5", "-o", "{tmp}/r.csv", needle="--perturb: expected a fraction in [0, 1)"),
+        C("experiment", "--stick-seconds", "-1", "-o", "{tmp}/r.csv",
+          needle="--stick-seconds: expected 0 (no stiction ramp) or a duration in s up to 600, got -1.0"),
+        C("experiment", "--stick-seconds", "nan", "-o", "{tmp}/r.csv", needle="--stick-seconds: expected 0"),
+        C("experiment", "--stick-seconds", "0.05", "-o", "{tmp}/r.csv",
+          needle="stick_seconds: expected a whole number of at least 100 samples of 0.001 s, got 0.05"),
         C("experiment", "--perturb", "nan", "-o", "{tmp}/r.csv", needle="--perturb: expected a fraction in [0, 1), got nan"),
         C("experiment", "--perturb", "1e-320", "-o", "{tmp}/r.csv", needle="--perturb: 1e-320 is a subnormal number"),
         C("experiment", "--true-params-out", "{tmp}/t.toml", "-o", "{tmp}/r.csv", needle="goes with --perturb"),
@@ -512,6 +521,11 @@ CLI: dict[str, list[Cli]] = {
           needle="column 'run' decreases at line 122 (1 then 0): each run's samples together, the runs in order"),
         C("identify", "--data", "{runshort_csv}", "-o", "{tmp}/i.toml",
           needle="run 1 (from line 152) has 51 samples; each run needs at least 100"),
+        C("identify", "--data", "{heldbad_csv}", "-o", "{tmp}/i.toml",
+          needle="column 'held_out' line 9: 2 is not 0 or 1 (1: a sample held out of the fit"),
+        C("identify", "--data", "{heldmid_csv}", "-o", "{tmp}/i.toml",
+          needle="column 'held_out' line 52: the held-out samples must be the last of their run (run 0: a fitted "
+          "sample follows them)"),
         C("identify", "--data", "{runhuge_csv}", "-o", "{tmp}/i.toml",
           needle="column 'run' line 112: 1e+17 is beyond the integers a float holds"),
         C("identify", "--data", "{rec3_csv}", "--torque-noise", "1e308", "-o", "{tmp}/i.toml",
@@ -1489,7 +1503,7 @@ def _rollout(c, **kw):
 def _design(**kw):
     from alpes_dyn.estimation.experiments.experiment import ExperimentDesign
 
-    return ExperimentDesign(**{"duration": 0.2, **kw})
+    return ExperimentDesign(**{"duration": 0.2, "stick_seconds": 0.0, **kw})  # no stiction ramp: 0.2 s to simulate
 
 
 def _exp(**kw):
@@ -2291,6 +2305,15 @@ API: list[Api] = [
       "dither_frequency: expected a frequency below Nyquist and off the multisine's lines, got 600.0 Hz"),
     A("experiment", lambda c: _exp(design=_design(dither_frequency=11.3)), InputError,
       "dither_frequency: expected a frequency below Nyquist and off the multisine's lines, got 11.3 Hz"),
+    A("experiment", lambda c: _exp(design=_design(stick_seconds=-1.0)), InputError,
+      "stick_seconds: expected 0 (no stiction ramp) or a duration in s up to 600, got -1.0"),
+    A("experiment", lambda c: _exp(design=_design(stick_seconds=0.05)), InputError,
+      "stick_seconds: expected a whole number of at least 100 samples of 0.001 s, got 0.05"),
+    A("experiment", lambda c: _exp(design=_design(stick_seconds="6")), InputError,
+      "stick_seconds: expected a real number, got str"),
+    A("experiment", lambda c: _exp(design=_design(stick_swing=float("nan"))), InputError,
+      "stick_swing: expected a number in [0, 100] (times each motor's breakaway torque), got nan"),
+    A("experiment", lambda c: _exp(design=_design(stick_swing=1e3)), InputError, "stick_swing: expected a number in"),
     A("perturbed_params", lambda c: _pp(spread=1.0), InputError, "spread: expected a fraction in [0, 1)"),
     A("perturbed_params", lambda c: _pp(kinds=("L",)), InputError, "kinds: unknown kind 'L'"),
     A("perturbed_params", lambda c: _pp(chains=("pinky",)), InputError,

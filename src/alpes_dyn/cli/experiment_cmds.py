@@ -25,6 +25,9 @@ def cmd_experiment(args: argparse.Namespace) -> int:
 
     if not (math.isfinite(args.amplitude) and 0 < args.amplitude <= 1):
         raise InputError(f"--amplitude: expected a fraction in (0, 1], got {args.amplitude!r}")
+    if not (math.isfinite(args.stick_seconds) and 0 <= args.stick_seconds <= 600):
+        raise InputError(f"--stick-seconds: expected 0 (no stiction ramp) or a duration in s up to 600, got "
+                         f"{args.stick_seconds!r}")
     if args.design_only or args.bench is not None:  # no simulated truth: the torque alone, or a hand through its interface
         from .on_hand_cmds import experiment_on_hand
 
@@ -49,7 +52,8 @@ def cmd_experiment(args: argparse.Namespace) -> int:
     if args.perturb is not None:  # the chain's own values drawn (the thumb's, a finger's, or the shared finger's)
         chains = ("thumb",) if args.model == "thumb" else ((args.chain,) if args.chain else None)
         truth = perturbed_params(truth, args.perturb, args.seed, chains=chains)
-    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude)
+    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude,
+                              stick_seconds=args.stick_seconds)
     with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
         warnings.simplefilter("ignore", SmallExcursionWarning)
         # the design checked over the whole record on the finger before it is written; --rig auto: palm up
@@ -104,7 +108,8 @@ def _experiment_robot(args: argparse.Namespace) -> int:
             raise InputError(f"{flag}: the true robot has joints {', '.join(truth.joint_names)} and motors "
                              f"{', '.join(truth.motor_names)}; expected the --model's {', '.join(nominal.joint_names)} "
                              f"and {', '.join(nominal.motor_names)}")
-    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude)
+    design = ExperimentDesign(duration=args.duration, amplitude_fraction=args.amplitude,
+                              stick_seconds=args.stick_seconds)
     with warnings.catch_warnings():  # its lines printed on stdout, one per motor: _excursion_lines
         warnings.simplefilter("ignore", SmallExcursionWarning)
         rec = model_experiment(nominal, truth, design, seed=args.seed, path=args.output)

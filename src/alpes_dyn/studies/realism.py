@@ -33,7 +33,7 @@ from ..estimation.experiments.design import ExperimentDesign
 from ..estimation.experiments.turned import rig_design  # noqa: F401 (the documented design in a rig; moved down)
 from ..estimation.experiments.draws import perturbed_params
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
-from ..estimation.experiments.experiment import experiment_torque, orientation_segments
+from ..estimation.experiments.experiment import experiment_torque, held_out_rows, orientation_segments
 from ..estimation.identification.identification import THUMB_PARAMETERS, identify
 from ..estimation.observers.replay import estimate_recording
 from ..model.mjcf import HANGING_TILT, STICTION_TIMECONST
@@ -355,7 +355,8 @@ def fresh_run(p, effects: PlantEffects, seed: int, design: ExperimentDesign, pla
     """A validation run of the plant: the experiment's design on other lines (:data:`FRESH_FREQUENCIES`: a torque
     the fit never saw, in the joint range by the same design rule), from the plant's rest."""
     fresh = dataclasses.replace(design, frequencies=FRESH_FREQUENCIES, dither=0.0,  # in use: no dither, stick phases
-                                orientations=design.orientations[:1])  # and palm up (the first orientation)
+                                orientations=design.orientations[:1],  # and palm up (the first orientation)
+                                stick_seconds=0.0)  # no stiction ramp
     _, u, x0 = torque_of(seed, p, fresh, plant_model(plant.model, p, effects, plant.chain).gravity, plant)
     return mujoco_recording(plant.model, p, u, fresh.dt, effects=effects, q0=x0[: x0.size // 2], seed=seed + 1000,
                             chain=plant.chain)
@@ -516,6 +517,8 @@ def plant_experiment(effects: PlantEffects, seed: int, design: ExperimentDesign,
                                chain=plant.chain, gravity=felt[seg] if turned else None)
         if turned:  # the rig's nominal orientations, as the experimenter writes them (the tilt fitted on top)
             rec.gravity = np.asarray(d.orientations, dtype=float)[seg]
+        held = held_out_rows(d)
+        rec.held_out = held if held.any() else None  # the stiction ramp: identify judges on it, does not fit it
         return (rec, d, e), rec.true_q
 
     if adapt == "none":

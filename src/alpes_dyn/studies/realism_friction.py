@@ -19,8 +19,10 @@ all_soft ...    each of the four with every other effect of :func:`~alpes_dyn.be
 =============== ==========================================================================================
 
 Per case and seed (:func:`friction_row`): the identification experiment on the plant as ``alpes-dyn experiment
---rig auto`` adapts it (:func:`~alpes_dyn.studies.realism.plant_experiment`), fitted as ``alpes-dyn identify``
-fits it (``--effects auto``), the file written; then a validation run that the fit never saw, a different motion
+--rig auto`` adapts and records it (:func:`~alpes_dyn.studies.realism.plant_experiment`; its stiction ramp after the
+excitation, :data:`~alpes_dyn.estimation.experiments.stick_ramp.STICK_SECONDS`, held out of the fit and judged on by
+its observer check), fitted as ``alpes-dyn identify`` fits it (``--effects auto``), the file written; then a
+validation run that the fit never saw, a different motion
 (:func:`validation_torque`: the ``estimate`` scenario's torque, then a slow ramp through the stick band), the EKF
 on it with the identified file and with the true one (:func:`~alpes_dyn.studies.realism.ekf_run`, the joints' end
 stops in its model as ``estimate --stops``: the scenario's torque takes a drawn finger onto its stops; the true file
@@ -49,6 +51,7 @@ from ..bench.truth import write_truth
 from ..control.plants import mujoco_recording
 from ..errors import InputError
 from ..estimation.experiments.design import ExperimentDesign
+from ..estimation.experiments.stick_ramp import STICK_SECONDS
 from ..estimation.identification.effects import alpes_models, fit_effects, parse_effects
 from ..estimation.observers.band_sigma import band_fraction, band_sigma
 from ..estimation.observers.consistency import chi2_band, nees
@@ -405,7 +408,7 @@ def friction_row(case: FrictionCase | str, seed: int, design: ExperimentDesign |
     if tmp is None:
         with tempfile.TemporaryDirectory() as d:
             return friction_row(case, seed, design, Path(d), adapt, transient, check_ramp)
-    design = rig_design("level") if design is None else design
+    design = dataclasses.replace(rig_design("level"), stick_seconds=STICK_SECONDS) if design is None else design
     true, nominal = case.true_params(seed), load_params()
     t0 = time.perf_counter()
     rec, design, effects, adaptation = plant_experiment(case.effects(), seed, design, true, FINGER3, adapt)

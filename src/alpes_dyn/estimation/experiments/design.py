@@ -38,6 +38,8 @@ class ExperimentDesign:
     amplitude_fraction: float = 0.5
     dither: float = 20.0
     dither_frequency: float = 20.0
+    stick_seconds: float = 0.0
+    stick_swing: float = 8.0
 
     @property
     def lines(self) -> tuple[float, ...]:
@@ -48,13 +50,22 @@ class ExperimentDesign:
 
     @property
     def n_samples(self) -> int:
+        """The excitation's samples, N + 1 (the stiction ramp's, :attr:`stick_samples`, come after them)."""
         return int(round(self.duration / self.dt)) + 1
+
+    @property
+    def stick_samples(self) -> int:
+        """The samples of the slow stiction ramp recorded after the excitation (0 without it: ``stick_seconds``
+        0), held out of the fit and judged on by the observer check
+        (:func:`~alpes_dyn.estimation.experiments.stick_ramp.stick_ramp`)."""
+        return int(round(self.stick_seconds / self.dt)) if self.stick_seconds > 0 else 0
 
     def check(self) -> "ExperimentDesign":
         """This design, every field checked (InputError naming the first bad one): real numbers only (a bool,
         a string or a complex number is refused, not read as 1 s or its real part), in their ranges."""
         for name in ("duration", "dt", "margin", "camera_noise", "encoder_noise_counts", "torque_noise",
-                     "amplitude_fraction", "dither", "dither_frequency", "torque_bias", "torque_amplitude"):
+                     "amplitude_fraction", "dither", "dither_frequency", "torque_bias", "torque_amplitude",
+                     "stick_seconds", "stick_swing"):
             v = getattr(self, name)
             if v is None and name in ("torque_bias", "torque_amplitude"):
                 continue
@@ -103,6 +114,7 @@ class ExperimentDesign:
                              f"got {fd!r} Hz")
         if not (math.isfinite(self.amplitude_fraction) and 0 < self.amplitude_fraction <= 1):
             raise InputError(f"amplitude_fraction: expected a number in (0, 1], got {self.amplitude_fraction!r}")
+        self._check_stick()
         for name in ("encoder_noise_counts", "torque_noise", "camera_noise", "margin"):
             v = getattr(self, name)
             if not (math.isfinite(v) and v >= 0):
@@ -111,6 +123,20 @@ class ExperimentDesign:
             if not (math.isfinite(t) and 0 <= t <= self.duration):
                 raise InputError(f"camera_times: {t!r} is outside [0, {self.duration:g}] s")
         return self
+
+    def _check_stick(self) -> None:
+        """``stick_seconds`` (0, or a whole number of at least 100 samples up to 600 s) and ``stick_swing`` (in
+        [0, 100] breakaway torques) checked, InputError naming the field."""
+        s = self.stick_seconds
+        if not (math.isfinite(s) and 0 <= s <= 600):
+            raise InputError(f"stick_seconds: expected 0 (no stiction ramp) or a duration in s up to 600, got {s!r}")
+        n = round(s / self.dt)
+        if s > 0 and (n < 100 or abs(n * self.dt - s) > 1e-9 * s):
+            raise InputError(f"stick_seconds: expected a whole number of at least 100 samples of {self.dt:g} s, "
+                             f"got {s!r}")
+        if not (math.isfinite(self.stick_swing) and 0 <= self.stick_swing <= 100):
+            raise InputError(f"stick_swing: expected a number in [0, 100] (times each motor's breakaway torque), got "
+                             f"{self.stick_swing!r}")
 
 
 def _checked_design(design: object) -> ExperimentDesign:

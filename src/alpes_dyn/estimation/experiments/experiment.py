@@ -71,6 +71,7 @@ from ...limits import MAX_SEED
 from ...model.robot import Model
 from ...model.params import HandParams, load_params
 from ...model.transmission import acceleration_before, torque_before
+from .stick_ramp import held_out_rows, stick_ramp, with_ramp  # noqa: F401 (held_out_rows re-exported)
 from .multisine import _motor_groups, _profile, _profiles, dither_amplitude  # noqa: F401 (re-exported)
 from .design import ExperimentDesign, _checked_design  # noqa: F401 (re-exported)
 from .draws import perturbed_params  # noqa: F401 (re-exported)
@@ -85,7 +86,8 @@ from ...simulation.lugre import ACCURATE, lugre_substeps, simulate_lugre
 from ...model.friction import lugre_of
 from ...model.stops import JointRangeWarning, check_range
 
-__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments", "excitation", "model_experiment",
+__all__ = ["EXPERIMENT_MODELS", "ExperimentDesign", "experiment", "experiment_torque", "orientation_segments",
+           "held_out_rows", "excitation", "model_experiment",
            "model_experiment_torque",
            "perturbed_params", "dither_amplitude"]  # dither_amplitude: from .multisine
 
@@ -284,9 +286,15 @@ def _schedule(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndar
     return t, seg, np.asarray(design.orientations, dtype=float)[seg]
 
 
+def _recorded(design: ExperimentDesign) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`_schedule` with the stiction ramp after it (:func:`~alpes_dyn.estimation.experiments.stick_ramp.
+    with_ramp`): times, segments, gravity, and which samples are the ramp's."""
+    return with_ramp(design, *_schedule(design)[:2])
+
+
 def orientation_segments(design: ExperimentDesign) -> np.ndarray:
-    """(N+1,) int: the index of the orientation (``design.orientations``) each sample of the record is taken in (the
-    record split evenly among them, in turn).
+    """(N+1 + ``design.stick_samples``,) int: the index of the orientation (``design.orientations``) each sample of
+    the record is taken in (the excitation split evenly among them, in turn; the stiction ramp in the last).
 
     Parameters
     ----------
@@ -297,7 +305,7 @@ def orientation_segments(design: ExperimentDesign) -> np.ndarray:
     -------
     numpy.ndarray of int, shape (N+1,)
     """
-    return _schedule(design)[1]
+    return _recorded(design)[1]
 
 
 def _simulate(truth: Model, design: ExperimentDesign, u: np.ndarray, G: np.ndarray, seg: np.ndarray) -> np.ndarray:
@@ -479,7 +487,7 @@ def _command(truth: Model, nominal: Model, design: ExperimentDesign, felt: np.nd
     ``nominal``, trimmed on ``truth`` under ``felt`` (k, 3), m/s^2, the gravity it feels in each orientation (default
     the design's own), and the truth at rest under u[0] in the first."""
     felt = np.asarray(design.orientations if felt is None else felt, dtype=float)
-    t, seg, _ = _schedule(design)
+    t, seg, _, _ = _recorded(design)
     u = _orientation_torques(truth, nominal, design, t, seg, felt)
     x0 = np.zeros(2 * truth.n)
     x0[: truth.n] = _mean_equilibrium(truth, u[0], felt[0])
@@ -496,20 +504,37 @@ def _orientation_torques(truth: Model, nominal: Model, design: ExperimentDesign,
     segment on its own lines (:func:`~alpes_dyn.estimation.identification.torque_lines.line_basis`). One orientation: the
     documented experiment as it was."""
     u = np.empty((t.shape[0], nominal.transmission.n_motors))
+    n_ex = t.shape[0] - design.stick_samples
     for i, g in enumerate(design.orientations):  # a loop over the orientations (one or two)
         one = dataclasses.replace(design, orientations=(tuple(g),))
-        rows = np.flatnonzero(seg == i)
+        rows = np.flatnonzero(seg[:n_ex] == i)
         ti = t[rows] - t[rows[0]]
         bias, amp = _excitation(nominal, one)
         dither = dither_amplitude(nominal, one)
         bias, amp, dither = _trim_on_hand(truth, nominal, one, ti, bias, amp, dither, np.asarray(felt[i], dtype=float))
         u[rows] = _profiles(one, ti, bias, amp, dither)
+    u[n_ex:] = stick_ramp(nominal, design, bias, _ramp_in_range(nominal, design, felt[-1]))  # about the last bias
     return u
+
+
+def _ramp_in_range(nominal: Model, design: ExperimentDesign, g: np.ndarray) -> Callable[[np.ndarray], bool]:
+    """Whether a stiction ramp's torque (n, m) run on ``nominal`` from rest under gravity ``g`` keeps its joints
+    ``design.margin`` inside their ranges (as :func:`_excitation` checks the multisine)."""
+    margin = _joint_margins(nominal, design.margin)
+    lo, hi = nominal.lower + margin, nominal.upper - margin
+
+    def in_range(u: np.ndarray) -> bool:
+        with warnings.catch_warnings():  # a trial swing may leave the range: that is what is tested
+            warnings.simplefilter("ignore", JointRangeWarning)
+            q = _simulate(nominal, design, u, np.repeat(np.asarray(g, dtype=float)[None], len(u), 0),
+                          np.zeros(len(u), int))[:, : nominal.n]
+        return bool(np.all((q >= lo) & (q <= hi)))
+    return in_range
 
 
 def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path: str | Path | None) -> Recording:
     """The experiment designed on ``nominal``, trimmed on and simulated with ``truth``, with the sensors."""
-    t, seg, G = _schedule(design)
+    t, seg, G, held = _recorded(design)
     u = _orientation_torques(truth, nominal, design, t, seg, np.asarray(design.orientations, dtype=float))
     rng = np.random.default_rng(seed)
     N = t.shape[0] - 1
@@ -531,7 +556,8 @@ def _run(truth: Model, nominal: Model, design: ExperimentDesign, seed: int, path
             q_meas[k] = x[k, : truth.n] + design.camera_noise * rng.standard_normal(truth.n)
     same_g = n_or == 1 and np.array_equal(G[0], truth.gravity)
     rec = Recording(t=t, encoder=counts, torque=torque, motor_names=tr.motor_names, joint_names=truth.joint_names,
-                    q=q_meas, gravity=None if same_g else G, true_q=x[:, : truth.n].copy())
+                    q=q_meas, gravity=None if same_g else G, true_q=x[:, : truth.n].copy(),
+                    held_out=held if held.any() else None)
     if path is not None:
         write_recording(rec, path)
     warn_small_excursions(rec)  # one SmallExcursionWarning per motor whose encoder barely moved

@@ -15,6 +15,9 @@ column                      unit     meaning
 ``q_<joint>``               rad      optional: a joint angle measured now and then (camera, jig); empty elsewhere
 ``gravity_x,_y,_z``         m/s^2    optional, all three: gravity in the hand's base frame (its orientation)
 ``true_q_<joint>``          rad      optional: the true joint angles of a simulated experiment; never read by a fit
+``held_out``                --       optional: 1 on the samples held out of the fit (each run's last ones: the
+                                     experiment's stiction ramp, :mod:`~alpes_dyn.estimation.experiments.held_out`),
+                                     0 elsewhere
 =========================== ======== ==========================================================================
 
 ``<motor>`` and ``<joint>`` are the model's names (:attr:`Transmission.motor_names
@@ -57,6 +60,7 @@ from ...fileio import atomic_path, read_bytes
 from ...limits import MAX_CSV_CELL, MAX_CSV_ROWS, MAX_RECORDING_BYTES, check_not_subnormal, check_physical
 from ...model.robot import Model
 from .csv_numbers import lines, plain_rows, refuse_empty_row
+from .held_out import check_held_out, held_out_column
 from .segments import MAX_SEGMENTS, excitation_parts, segment_starts  # noqa: F401  (exported from here, as before)
 from .units import _check_encoder_columns, check_units
 
@@ -91,6 +95,7 @@ class Recording:
     q: (N, n) rad, NaN where not measured, or None. force_z: (N,) N or None.
     gravity: (N, 3) m/s^2 or None. true_q: (N, n) rad or None (simulated experiments only).
     run: (N,) integers, non-decreasing: the run of each sample, or None (one run).
+    held_out: (N,) bool: the samples held out of the fit (:mod:`~alpes_dyn.estimation.experiments.held_out`), or None.
     """
 
     t: np.ndarray
@@ -103,6 +108,7 @@ class Recording:
     gravity: np.ndarray | None = None
     true_q: np.ndarray | None = None
     run: np.ndarray | None = None
+    held_out: np.ndarray | None = None
 
     @property
     def n_samples(self) -> int:
@@ -167,6 +173,8 @@ class Recording:
             out.update({f"gravity_{a}": self.gravity[:, i] for i, a in enumerate("xyz")})
         if self.true_q is not None:
             out.update({f"true_q_{jn}": self.true_q[:, i] for i, jn in enumerate(self.joint_names)})
+        if self.held_out is not None:
+            out["held_out"] = self.held_out
         return out
 
 
@@ -212,7 +220,7 @@ def write_recording(rec: Recording, path: str | Path) -> Path:
 def _column_text(name: str, values: np.ndarray) -> list[str]:
     """The cells of one column (N,) as :func:`write_recording` writes them: ``repr`` of the float, "" for NaN; the
     ``run`` column's as integers."""
-    if name == "run":
+    if name in ("run", "held_out"):
         return list(map(str, values.astype(np.int64).tolist()))
     cells = np.array(list(map(repr, values.tolist())), dtype=object)
     cells[np.isnan(values)] = ""
@@ -294,7 +302,8 @@ def read_recording(path: str | Path, model: Model, torque_constant: float | None
     rec = Recording(t=col["t"].copy(), encoder=np.column_stack(enc), torque=np.column_stack(torque),
                     motor_names=tuple(motors), joint_names=tuple(joints), q=_joint_columns(col, joints, "q"),
                     force_z=col["force_z"].copy() if "force_z" in col else None, gravity=_gravity_columns(col),
-                    true_q=_joint_columns(col, joints, "true_q"), run=_run_column(col))
+                    true_q=_joint_columns(col, joints, "true_q"), run=_run_column(col),
+                    held_out=held_out_column(col))
     check_recording(rec)
     check_units(rec, model, "current" if torque_constant is not None else "torque")
     if ignore_others_of is not None:  # the ignored encoders too: a reading far outside is no encoder in counts
@@ -328,7 +337,7 @@ def _read_text(path: str | Path) -> str:
 def _known_columns(model: Model) -> set[str]:
     """The columns a recording of ``model`` may hold (its motors' and joints' names in them)."""
     motors, joints = model.transmission.motor_names, model.joint_names
-    known = {"t", "run", "force_z", "gravity_x", "gravity_y", "gravity_z"}
+    known = {"t", "run", "held_out", "force_z", "gravity_x", "gravity_y", "gravity_z"}
     known |= {f"{k}_{mn}" for k in ("encoder", "torque", "current") for mn in motors}
     return known | {f"{k}_{jn}" for k in ("q", "true_q") for jn in joints}
 
@@ -509,6 +518,7 @@ def check_recording(rec: Recording) -> Recording:
         if a is not None and not np.isfinite(a).all():
             raise RecordingError(f"recording: {name} contains NaN or inf")
     b = _check_runs(rec, N)
+    check_held_out(rec.held_out, b, MIN_SAMPLES)
     dts = np.diff(t)
     within = np.ones(N - 1, dtype=bool)
     within[b[1:-1] - 1] = False  # the step from a run's last sample to the next one's first is no period
@@ -584,6 +594,9 @@ def join_runs(recordings: "list[Recording] | tuple[Recording, ...]") -> Recordin
             raise RecordingError(f"join_runs: {name} is in some of the recordings only")
         else:
             cols[name] = np.concatenate(parts)
+    held = [r.held_out for r in recs]  # a recording without the column: none of its samples held out
+    cols["held_out"] = None if all(h is None for h in held) else np.concatenate(
+        [np.zeros(r.n_samples, bool) if h is None else np.asarray(h, bool) for r, h in zip(recs, held)])
     run, base = [], 0
     for r in recs:  # a loop over the recordings (a few)
         own = np.repeat(np.arange(r.n_runs), np.diff(r.run_starts()))

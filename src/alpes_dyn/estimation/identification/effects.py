@@ -863,23 +863,27 @@ def fit_effects(model_of: Callable[[tuple[str, ...]], Model], recording: Any, ef
     EffectsFit
         The fit kept, its effects, the other rounds, its torque delay, the observer's check and the notes.
     """
+    from ..experiments.held_out import split_held_out
     from ..experiments.recording import Recording, read_recording
 
     auto = "auto" in effects
     chosen = tuple(e for e in effects if e != "auto")
     if not isinstance(recording, Recording):  # read once: every round fits it, the delay's on its torque advanced
         recording = read_recording(recording, model_of(chosen))
+    # the held-out samples (the stiction ramp): not fitted, the observer check and its law judged on them (not the
+    # open-loop validation: a memoryless law's simulation does not follow a joint that sticks); --validate's first
+    recording, judged = split_held_out(recording, kwargs.get("validation"))
     has_gravity = has_gravity and segment_starts(recording.gravity).size == 1
     walk = RoundWalker(model_of, recording, has_gravity, base, kwargs)
     kept = walk.first(chosen)
     if auto:
         walk.auto(kept)
         walk.cable(kept)
-    check = walk.observe(kept, auto, kwargs.get("validation")) if observe else None
+    check = walk.observe(kept, auto, judged) if observe else None
     if observe and sticking(kept.result, kept.effects, walk.attempted):  # judged with the stick law among the laws
         from .observer_check import judge
 
-        on = walk.judged_on(kwargs.get("validation"))
+        on = walk.judged_on(judged)
         check = judge(kept.result, on, walk.delays[id(kept.result)], sticking=True) or check
     notes = [unmatched_delay(kept.result, walk.rounds, walk.delays[id(kept.result)]),
              name_sticking(kept.result, kept.effects, walk.attempted)]

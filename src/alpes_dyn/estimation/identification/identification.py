@@ -68,6 +68,7 @@ from ...symbolic.parametric import common_scale, parameter_catalogue, select_par
 from ...model.ratio_curve import encoder_angles, encoder_rates
 from .adequacy import AdequacyWarning, assess, effect_responses, range_exit, sensor_floor, torque_explained
 from ..experiments.recording import Recording, check_recording, excitation_parts
+from ..experiments.held_out import split_held_out
 from ...simulation.integrate import stable_substeps
 from ...simulation.sensitivity import SensitivityModel
 from ...simulation.lugre import fit_substeps
@@ -439,6 +440,7 @@ def _check_inputs(model: Model, recording, validation, encoder_noise, interval, 
     if model.transmission is None:
         raise ModelError(f"model {model.name!r} has no tendon transmission: nothing to read the encoder with")
     rec, rec_path = _as_recording(recording, model)
+    rec, _ = split_held_out(rec)  # held-out samples (the stiction ramp): not fitted (fit_effects judges on them)
     if tuple(rec.motor_names) != tuple(model.transmission.motor_names) or tuple(rec.joint_names) != model.joint_names:
         raise RecordingError(f"recording: motors {rec.motor_names} / joints {rec.joint_names} do not match model "
                              f"{model.name!r}")

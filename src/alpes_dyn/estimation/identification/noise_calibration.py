@@ -41,11 +41,17 @@ from ..observers.friction_noise import with_model_error
 
 __all__ = ["CALIBRATION", "ModelErrorCalibration", "consistency_statistic", "calibrate_model_error"]
 
-CALIBRATION: dict[str, float] = {"start": 1.0, "ceiling": 16.0, "target": 1.0}
+CALIBRATION: dict[str, float] = {"start": 1.0, "ceiling": 16.0, "target": 1.0, "own_first": 1.0,
+                                 "innovation_only": 0.0}
 """The search's settings: the first trial ``start`` (in units of F_s), doubled or halved from there up to
 ``ceiling`` (the largest model error a file may need: above it the observer is judged inconsistent), down to
 ``start`` / 16 (below: 0); the consistency statistic's ``target`` (1: the covariance the filter reports matches its
-errors)."""
+errors); ``own_first`` 1: the file's own noise tried first and kept where consistent, 0: not tried (the search
+alone: the smallest consistent e, the law's own; a law whose error the library's default, the smooth law's, would
+over-state, :data:`~alpes_dyn.estimation.identification.law_choice.LAW_CALIBRATION`); ``innovation_only`` 1: the
+statistic the filter's normalised innovation squared alone, a trial consistent where it is within its chi-square
+band (``target`` unused), 0: the largest of the three statistics (:func:`consistency_statistic`) at most
+``target``."""
 
 
 @dataclass
@@ -82,7 +88,7 @@ class ModelErrorCalibration:
                 "reason": self.reason, "seconds": self.seconds}
 
 
-def consistency_statistic(check: Any) -> float:
+def consistency_statistic(check: Any, innovation_only: bool = False) -> float:
     """The largest of an observer check's normalised innovation squared and its predictions'.
 
     Parameters
@@ -90,12 +96,18 @@ def consistency_statistic(check: Any) -> float:
     check : ObserverCheck
         The :class:`~alpes_dyn.estimation.identification.observer_check.ObserverCheck` of an EKF on a record (its
         ``nis``, ``prediction_nis`` and ``split_nis``, each None where not made).
+    innovation_only : bool, optional
+        The normalised innovation squared alone, over its band's upper end (1 at the band's edge; default False:
+        the largest of the three over its degrees of freedom).
 
     Returns
     -------
     float
         The largest statistic over its degrees of freedom (1 for a consistent filter); nan where none was made.
     """
+    if innovation_only:
+        v = check.nis
+        return float(v.value / v.high) if v is not None and v.high > 0 else float("nan")
     vals = [v.value / v.dof for v in (check.nis, check.prediction_nis, check.split_nis) if v is not None]
     return float(max(vals)) if vals else float("nan")
 
@@ -133,15 +145,18 @@ def calibrate_model_error(model: Model, statistics: Callable[[Model], Any],
             m = model.copy()
             m.params = with_model_error(model.params, e)
         checks[e] = statistics(m)
-        tried.append((e, consistency_statistic(checks[e])))
+        tried.append((e, consistency_statistic(checks[e], True) if st["innovation_only"] else
+                      consistency_statistic(checks[e])))
         return tried[-1][1]
 
     def done(value: float | None, reason: str = "") -> ModelErrorCalibration:
         return ModelErrorCalibration(value, tried, reason, time.perf_counter() - t0,
                                      checks[tried[-1][0] if reason else value])
 
-    ok = lambda s: bool(np.isfinite(s) and s <= st["target"])  # noqa: E731
-    if ok(stat(None)):  # the file's own noise (its model error, else the library's default) is consistent
+    target = 1.0 if st["innovation_only"] else st["target"]  # innovation_only: the statistic is over its band
+    ok = lambda s: bool(np.isfinite(s) and s <= target)  # noqa: E731
+    # the file's own noise (its model error, else the library's default) tried first where the law's search says so
+    if st["own_first"] and ok(stat(None)):
         return done(None)
     lo, hi = None, None  # the largest e found inconsistent, the smallest found consistent
     e = float(st["start"])

@@ -249,7 +249,7 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
     ObserverCheck or None
         The check, or None where the fit's model has no file (a URDF robot).
     """
-    from .law_choice import choose_law
+    from .law_choice import choose_law, law_calibration
 
     model = identified_model(result)
     if model is None:
@@ -257,8 +257,8 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
     off, tilt = fitted_rig(result)
     if not calibrate:
         return observer_statistics(recording, model, off, tilt, torque_delay, thresholds)
-    choice = choose_law(model, lambda m, law: calibrate_observer(recording, m, off, tilt, torque_delay, thresholds,
-                                                                 law))
+    choice = choose_law(model, lambda m, law: law_calibration(
+        lambda st: calibrate_observer(recording, m, off, tilt, torque_delay, thresholds, law, st), law))
     cal = choice.calibration
     result.model_error = cal.value if cal.value is not None else getattr(model.params, "model_error", None)
     if len(choice.calibrations) > 1:  # a choice made: the file says which law its observer runs
@@ -273,7 +273,7 @@ def observer_check(result: Any, recording: Recording, torque_delay: int = 0,
 
 def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
                        torque_delay: int = 0, thresholds: Mapping[str, float] | None = None,
-                       friction_law: str | None = None) -> Any:
+                       friction_law: str | None = None, settings: Mapping[str, float] | None = None) -> Any:
     """The model error of ``model``'s file calibrated on ``recording``
     (:func:`~alpes_dyn.estimation.identification.noise_calibration.calibrate_model_error` over
     :func:`observer_statistics` with ``encoder_offset``, ``tilt``, ``torque_delay`` and ``thresholds`` as there):
@@ -299,6 +299,9 @@ def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any =
     friction_law : str or None, optional
         The observer's friction law (:data:`~alpes_dyn.simulation.stick.FRICTION_LAWS`; default None: the file's,
         :func:`~alpes_dyn.simulation.stick.observer_friction_law`).
+    settings : Mapping[str, float] or None, optional
+        Overrides of the search's settings (:data:`~alpes_dyn.estimation.identification.noise_calibration.
+        CALIBRATION`; the law's own, :data:`~alpes_dyn.estimation.identification.law_choice.LAW_CALIBRATION`).
 
     Returns
     -------
@@ -307,7 +310,7 @@ def calibrate_observer(recording: Recording, model: Model, encoder_offset: Any =
     """
     th = {**OBSERVER_THRESHOLDS, **(thresholds or {})}
     return calibrate_model_error(model, lambda m: observer_statistics(recording, m, encoder_offset, tilt,
-                                                                      torque_delay, th, friction_law))
+                                                                      torque_delay, th, friction_law), settings)
 
 
 def observer_statistics(recording: Recording, model: Model, encoder_offset: Any = None, tilt: Any = None,
