@@ -71,9 +71,18 @@ def _short(verdict: str) -> str:
     return "adequate" if verdict == "adequate" else "REFUSED"
 
 
+def _band(n: dict | None) -> str:
+    """A row's joints' NEES with the sigma ``estimate`` reports (the band's, ``nees_band``): 'lo-hi' over the
+    joints, ``!`` where one is outside its band; '--' in rows without it."""
+    if not n:
+        return "--"
+    return f"{min(n['per_joint']):.2f}-{max(n['per_joint']):.2f}{'' if all(n['joints_consistent']) else '!'}"
+
+
 def friction_text(out: dict) -> str:
     """The table: per row the verdict, the springs' and masses' worst errors up to the common scale, the EKF's worst
-    joint with the identified and the true file, the worst joint NEES of each (``!`` outside its band) and the
+    joint with the identified and the true file, the worst joint NEES of each with the filter's P alone (``!``
+    outside its band) and the range of the joints' NEES with the sigma ``estimate`` reports (the band's) and the
     largest |error / standard error|; then the distribution per case with the silent misses and the refusals (the
     parameters within 3 standard errors, and within 3 of the noise's alone: the classical or HAC sandwich's)."""
     v = out["validation"]
@@ -82,7 +91,8 @@ def friction_text(out: dict) -> str:
              f"{out['fit_effects']}; validation: the estimate scenario's torque ({v['scenario_s']:g} s) "
              f"then a {v['ramp_s']:g} s ramp of +-{1e3 * v['ramp_torque_Nm']:g} mN m",
              f"{'case':12} {'seed':>4} | {'verdict':>8} {'K%':>6} {'m%':>6} | {'EKF deg ident':>19} | "
-             f"{'EKF deg true':>19} | {'NEES ident':>10} {'NEES true':>10} | {'|z| max':>7}"]
+             f"{'EKF deg true':>19} | {'NEES ident':>10} {'NEES true':>10} | {'sigma ident':>11} {'sigma true':>10} | "
+             f"{'|z| max':>7}"]
     for r in out["rows"]:
         if "error" in r:
             lines.append(f"{r['case']:12} {r['seed']:>4} | RAISED {r['error'][:140]}")
@@ -95,11 +105,13 @@ def friction_text(out: dict) -> str:
             f"{' / '.join(f'{x:.2f}' for x in r['ekf_true_file_rmse_deg']):>19} | "
             f"{max(n_i['per_joint']):9.3g}{'' if all(n_i['joints_consistent']) else '!'} "
             f"{max(n_t['per_joint']):9.3g}{'' if all(n_t['joints_consistent']) else '!'} | "
+            f"{_band(r.get('nees_band')):>11} {_band(r.get('nees_true_file_band')):>10} | "
             f"{max(map(abs, r['z'].values()), default=0.0):7.2f}")
     lines.append(f"distribution per case (median / worst); silent miss: adequate but EKF > {EKF_GOAL_DEG:g} deg "
                  f"on a joint (or m over its goal); NEES: rows with a joint outside its 95 % band")
     lines.append(f"{'case':12} {'n':>3} | {'K %':>13} {'m %':>13} | {'EKF ident deg':>13} {'EKF true deg':>13} | "
-                 f"{'adequate':>8} {'silent':>6} {'refused':>7} {'raised':>6} | {'NEES out':>8} {'true':>4} | "
+                 f"{'adequate':>8} {'silent':>6} {'refused':>7} {'raised':>6} | {'NEES out':>8} {'true':>4} "
+                 f"{'sigma out':>9} {'true':>4} | "
                  f"{'|z| max':>7} {'<=3':>4} {'noise':>5}")
 
     mw = median_worst
@@ -110,6 +122,7 @@ def friction_text(out: dict) -> str:
         lines.append(f"{c:12} {s['n']:>3} | {mw(s['K_pct'], '5.2f'):>13} {mw(s['m_pct'], '5.1f'):>13} | "
                      f"{mw(s['ekf_deg'], '5.2f'):>13} {mw(s['ekf_true_file_deg'], '5.2f'):>13} | "
                      f"{s['adequate']:>8} {len(s['silent_misses']):>6} {len(s['refusals']):>7} {len(s['errors']):>6} | "
-                     f"{s['nees_inconsistent']:>8} {s['nees_true_file_inconsistent']:>4} | {z}")
+                     f"{s['nees_inconsistent']:>8} {s['nees_true_file_inconsistent']:>4} "
+                     f"{s['nees_band_inconsistent']:>9} {s['nees_true_file_band_inconsistent']:>4} | {z}")
         lines += case_notes(s)
     return "\n".join(lines)

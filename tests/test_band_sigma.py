@@ -60,7 +60,8 @@ def test_the_widened_estimate_adds_to_the_joints_alone(finger3):
 
 @pytest.mark.parametrize("kwargs, field", [({"fraction": -0.1}, "fraction"), ({"fraction": float("nan")}, "fraction"),
                                            ({"fraction": True}, "fraction"), ({"states": np.zeros((5, 2))}, "states"),
-                                           ({"inputs": np.zeros((5, 1))}, "inputs"), ({"model": "finger3"}, "model")])
+                                           ({"inputs": np.zeros((5, 1))}, "inputs"), ({"model": "finger3"}, "model"),
+                                           ({"law": "viscous"}, "law")])
 def test_bad_input_is_named(finger3, kwargs, field):
     args = {"model": finger3, "states": np.zeros((5, 6)), "inputs": np.zeros((4, 1))} | kwargs
     with pytest.raises(InputError, match=field):

@@ -253,7 +253,7 @@ def _band_sigma(args: argparse.Namespace, res: Any, law: str) -> Any:
             return None
         raise InputError(f"--band-sigma: the recording holds {res.segments} orientations (one filter each); run "
                          "it on one orientation's part")
-    band = band_sigma(model, res.estimate.z, res.inputs, fraction=band_fraction(law))
+    band = band_sigma(model, res.estimate.z, res.inputs, fraction=band_fraction(law), law=law)
     if args.band_sigma or not band.unbounded:
         return band
     # by default a joint the band does not bound is left to the observability analysis, whose data's bound it

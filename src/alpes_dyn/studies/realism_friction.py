@@ -247,8 +247,8 @@ def _band_consistency(est, true_q: np.ndarray, transient: float) -> dict[str, An
     :func:`~alpes_dyn.estimation.observers.band_sigma.band_fraction`): its per-joint values against their band, the
     samples taken as independent (as :func:`_law_consistency`), and the band's RMS per joint."""
     model = est.filter.model.system.model
-    band = band_sigma(model, est.estimate.z, est.inputs,
-                      fraction=band_fraction(library_law(model, est.settings["friction_law"])))
+    law = library_law(model, est.settings["friction_law"])
+    band = band_sigma(model, est.estimate.z, est.inputs, fraction=band_fraction(law), law=law)
     r = nees(band.widened(est.estimate), true_q, start=transient)
     lo, hi = r.joint_band()
     return {"per_joint": r.per_joint.tolist(), "joint_band": [lo, hi],

@@ -33,9 +33,17 @@ alone (no joint in band) to 0.36-2.75 at c = 0.25, 15 of 24 joints in band (5-11
 it, and what it leaves is a smaller share of the band, spread over the joints about as (B1) spreads it; LuGre's
 bristles hold part of it: each law's c was measured the same way (the CHANGELOG's entry): with P alone (the torque
 noise's, about 0.02 degree) the stick-slip law's NEES was 9-380, with its c 0.6-1.9. The creep law (MuJoCo's
-soft dry friction, a creep file's smooth-law run) is close to its plant: on MuJoCo's soft plant its P alone was
-already cautious on two joints (NEES 0.4-0.6) and over-confident on the first (6.8), its c a small one that brings
-that joint to 1.5 and leaves the others 0.4-0.6. What (B1) does not get
+soft dry friction, a creep file's smooth-law run) holds a joint within its creep band as the plant does, and where
+every joint with dry friction is within it (|qd_hat_j| <= F_s,j / (a_j b), :class:`~alpes_dyn.model.friction.Creep`)
+its filter's P is already of its error's size; the band is added only where a joint slides past that edge:
+
+    sigma_i,k^2 = P_ii,k + s_k (C_split(q_hat_k, u_k))_ii,   s_k = 1 where a joint slides, else 0     (B3)
+
+(:func:`sliding`; ``band_sigma(..., law="creep")``). Measured with the true file on MuJoCo's soft plants (the
+friction study's ``soft`` and ``soft_3x``, three development draws each): P alone 1.7-2.9 at 1x F_s (every joint
+over its band) and 0.12-10.9 at 3x; (B1) at every sample with c = 0.15 put 1x in its band (0.69-1.40) but 3x ten
+to a hundred times too cautious (0.00-0.05: its band grows with F_s, the error does not); (B3) with c = 0.2: 1x
+0.54-1.20 (8 of 9 joints in band), 3x 0.06-2.9 (what P alone leaves where the joints creep). What (B1) does not get
 right is the smooth law's share between the joints: on finger3 its error is largest on the distal joint, which
 (B1), stiffest there, gives the smallest share, and smallest on the middle one (NEES about 2 and 0.6-1 at c = 0.25,
 with the true and the identified file alike); nor the size of a draw's error, up to twice another's where the file
@@ -68,14 +76,15 @@ import numpy as np
 
 from ...checks import one_of
 from ...errors import InputError
+from ...model.friction import Creep, creep_of
 from ...model.robot import Model
 from ...symbolic.statespace import StateSpace
 from .observers import Estimate
 
 __all__ = ["BAND_FRACTION", "BAND_FRACTIONS", "UNBOUNDED_STD", "band_fraction", "BandSigma", "band_sigma",
-           "with_joint_variance"]
+           "sliding", "with_joint_variance"]
 
-BAND_FRACTIONS: dict[str, float] = {"smooth": 0.25, "stick": 0.18, "lugre": 0.2, "creep": 0.1}
+BAND_FRACTIONS: dict[str, float] = {"smooth": 0.25, "stick": 0.18, "lugre": 0.2, "creep": 0.2}
 """c of (B1) by the observer's law (a key of :data:`~alpes_dyn.simulation.stick.LIBRARY_LAWS`, the file's law as
 :func:`~alpes_dyn.simulation.stick.library_law` names it): the standard deviation of the friction torque a joint
 holds at rest that the law leaves unexplained, as a fraction of its F_s (module docstring: chosen by measurement; a
@@ -210,8 +219,10 @@ def _static_terms(model: Model) -> cs.Function:
     return cs.Function("band_static", [q, u], [cs.densify(-cs.jacobian(r, q)), cs.densify(H)])
 
 
-def band_sigma(model: Model, states: Any, inputs: Any, fraction: float = BAND_FRACTION) -> BandSigma:
-    """The joints' variance from the friction band, (B1) of the module docstring, at every sample.
+def band_sigma(model: Model, states: Any, inputs: Any, fraction: float = BAND_FRACTION,
+               law: str | None = None) -> BandSigma:
+    """The joints' variance from the friction band, (B1) of the module docstring, at every sample (with the creep
+    law, at the samples where a joint slides, (B3)).
 
     Parameters
     ----------
@@ -223,6 +234,10 @@ def band_sigma(model: Model, states: Any, inputs: Any, fraction: float = BAND_FR
         (N-1, m) the motor torques held from each sample to the next, N m (the last held at the last sample).
     fraction : float, optional
         c of (B1), finite and >= 0 (default :data:`BAND_FRACTION`).
+    law : str or None, optional
+        The observer's law as :func:`band_fraction` takes it; ``"creep"`` (where ``model``'s file holds the creep
+        law) keeps (B1) at the samples where the estimate has a joint with dry friction beyond its creep band's edge
+        (``states`` then [q; qd], (N, >= 2n)) and 0 elsewhere, (B3); default None: every sample.
 
     Returns
     -------
@@ -251,7 +266,38 @@ def band_sigma(model: Model, states: Any, inputs: Any, fraction: float = BAND_FR
     K, H = (np.asarray(a) for a in _static_terms(model).map(N)(X[:, :n].T, np.vstack([U, U[-1:]]).T))
     K = K.reshape(n, N, n).transpose(1, 0, 2)  # the map stacks the samples side by side
     H = H.reshape(m, N, n).transpose(1, 0, 2)
-    return _split(K, H, fraction * np.asarray(model.extras.coulomb, dtype=float), fraction, model.joint_names)
+    out = _split(K, H, fraction * np.asarray(model.extras.coulomb, dtype=float), fraction, model.joint_names)
+    creep = creep_of(model) if law is not None and one_of(law, tuple(BAND_FRACTIONS), "law") == "creep" else None
+    if creep is None:
+        return out
+    if X.shape[1] < 2 * n or not np.isfinite(X[:, n:2 * n]).all():
+        raise InputError(f"states: the creep law's band needs the joints' velocities, (N, >= {2 * n}) finite "
+                         f"states, got shape {X.shape}")
+    return dataclasses.replace(out, variance=out.variance * sliding(model, creep, X[:, n:2 * n])[:, None])
+
+
+def sliding(model: Model, creep: Creep, velocities: np.ndarray) -> np.ndarray:
+    """(N,) bool: the samples where a joint with dry friction moves faster than its creep band's edge
+    v_c,j = F_s,j / (a_j b) (:class:`~alpes_dyn.model.friction.Creep`, a_j = kappa / (M(0)^-1)_jj): (B3).
+
+    Parameters
+    ----------
+    model : Model
+        The observer's model (its F_s and its inertia matrix at q = 0).
+    creep : Creep
+        The creep law (kappa, b).
+    velocities : numpy.ndarray
+        (N, n) the joints' estimated velocities, rad/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        (N,) True where a joint slides.
+    """
+    Fs = np.asarray(model.extras.coulomb, dtype=float)
+    a = creep.kappa / np.diag(np.linalg.inv(model.inertia_matrix(np.zeros(model.n))))
+    edge = Fs / (a * creep.rate)
+    return np.any((np.abs(velocities) > edge) & (Fs > 0), axis=1)
 
 
 def _split(K: np.ndarray, H: np.ndarray, band: np.ndarray, fraction: float, joints: tuple[str, ...]) -> BandSigma:
