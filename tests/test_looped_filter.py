@@ -175,7 +175,7 @@ def test_one_step_prediction_of_a_looped_filter_shared_by_nees_and_nis():
 
 
 def test_looped_run_keeps_its_prediction_for_the_nees_and_nis():
-    """A looped filter's run keeps each step's prediction and Jacobians (looped.kept_run): its estimates equal the
+    """A looped filter's run keeps each step's prediction and Jacobians (ahead.kept_run): its estimates equal the
     plain step's loop (or the virtual machine's) to 1e-13 and the kept z_k+1|k, P_k+1|k, A_k, G_k those of the
     prediction stepped again from its estimates (ahead._looped) to 1e-12 (relative), on finger3 with friction; the
     NEES's and the NIS's prediction read them (no second run); another run's inputs are stepped again."""
@@ -204,10 +204,11 @@ def test_looped_run_keeps_its_prediction_for_the_nees_and_nis():
 
 
 def test_looped_run_too_long_to_keep_runs_the_plain_step(monkeypatch):
-    """A record whose kept prediction would be over looped.MAX_KEPT_BYTES runs the looped filter's plain compiled
+    """A record whose kept prediction would be over ahead.MAX_KEPT_BYTES runs the looped filter's plain compiled
     step (nothing kept on the filter): the same estimates as the kept run to 1e-13 (relative), on finger3 with
     friction, and the NEES's prediction then stepped again from the estimates, equal to the kept one's to 1e-12."""
-    from alpes_dyn.estimation.observers import ahead, looped as looped_mod
+    from alpes_dyn.estimation.observers import ahead
+    from alpes_dyn.estimation.observers.looped import kept_size
 
     model = ad.Model.alpes("finger3", friction=True)
     _, looped, W, x0 = _pair(model, 4)
@@ -217,7 +218,7 @@ def test_looped_run_too_long_to_keep_runs_the_plain_step(monkeypatch):
     P0 = np.diag(np.full(looped.nz, 1e-4))
     kept_est = looped.run(x0, P0, W, Y)
     kept = looped.__dict__.pop("_predicted_step")[1]
-    monkeypatch.setattr(looped_mod, "MAX_KEPT_BYTES", 8 * looped_mod._kept_size(looped.model))  # under two samples
+    monkeypatch.setattr(ahead, "MAX_KEPT_BYTES", 8 * kept_size(looped.model))  # under two samples
     est = looped.run(x0, P0, W, Y)
     assert "_predicted_step" not in looped.__dict__ and looped._online_loop is not None
     assert _rel(kept_est.z, est.z) <= 1e-13 and _rel(kept_est.P, est.P) <= 1e-13

@@ -30,7 +30,8 @@ import numpy as np
 
 from ...simulation.buildcache import expression_key
 
-__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "predicted_step", "keep_predicted", "linearised"]
+__all__ = ["AHEAD_BATCH", "AHEAD_COMPILE_MAX", "predicted_ahead", "predicted_step", "keep_predicted", "linearised",
+           "kept_run", "MAX_KEPT_BYTES"]
 
 AHEAD_BATCH = 256
 """Starts run per call of the compiled loop: its trajectory buffer (starts x (H + 1) x (nz + nz^2) doubles) stays a
@@ -202,7 +203,7 @@ def predicted_step(filt: Any, z: np.ndarray, W: np.ndarray, P: np.ndarray) -> tu
     (:func:`~alpes_dyn.estimation.observers.consistency.predicted_covariance`) and the NIS of the innovations
     (:func:`predicted_ahead` at ``horizon`` 1) both read, computed once for both (the last run's kept on the filter,
     keyed on its inputs' bytes; a filter's own run keeps its prediction there, :func:`~alpes_dyn.estimation.
-    observers.looped.kept_run`: then nothing is stepped again).
+    observers.ahead.kept_run`: then nothing is stepped again).
 
     Parameters
     ----------
@@ -340,3 +341,64 @@ def predicted_ahead(filt: Any, z: np.ndarray, W: np.ndarray, starts: np.ndarray,
     B, m = len(starts), mdl.ny
     Hs = np.asarray(Hs).reshape(m, B, nz).transpose(1, 0, 2)
     return y, Hs @ Pend @ Hs.transpose(0, 2, 1) + filt.R
+
+
+MAX_KEPT_BYTES = 512 * 2**20
+"""Largest kept prediction of :func:`kept_run`, bytes: [z_pred; vec P_pred; vec A; vec G] per sample is about 3.4
+times the run's own [z; vec P] (64 kB per sample on the Shadow hand, so 512 MiB at about 8,000 samples). A longer
+record runs the filter's plain step instead (:func:`kept_run` returns None), its prediction recomputed where the
+consistency checks ask for it: one more pass along the run, not a run's memory grown past what
+:func:`~alpes_dyn.limits.check_bytes` admitted."""
+
+
+def kept_run(filt: Any, s0: np.ndarray, WY: np.ndarray, W: np.ndarray) -> np.ndarray | None:
+    """A looped filter's run that keeps each step's prediction and Jacobians for its consistency checks: the NEES's
+    error model and the NIS's one-step prediction (:func:`~alpes_dyn.estimation.observers.ahead.predicted_step`)
+    read them from this run instead of stepping the model again along it (on the Shadow hand the same cost as the
+    filter's run). The filter's step compiled with its prediction z_k+1|k, P_k+1|k = A_k P_k|k A_k^T + G_k
+    Sigma_w G_k^T + Q and A_k = dF/dz, G_k = dF/dw as more outputs (``filt._kept_step_p`` of :func:`~.looped.looped_functions`), run once.
+
+    Parameters
+    ----------
+    filt : ExtendedKalmanFilter
+        A looped filter (``filt.looped``; :func:`looped_functions`'s ``_kept_step_p`` set).
+    s0 : numpy.ndarray
+        (nz + nz^2,) the state after the first measurement's update: [z_0|0; vec P_0|0] (column-major).
+    WY : numpy.ndarray
+        (N, nw + ny) the known inputs w_k and the measurements y_k+1.
+    W : numpy.ndarray
+        (N, nw) the known inputs alone (the key the prediction is kept under, with the run's estimates).
+
+    Returns
+    -------
+    numpy.ndarray or None
+        (N + 1, nz + nz^2) [z_k|k; vec P_k|k] (a view of the run's states) as the filter's step gives them (the
+        same numbers to the bit), or None without a C compiler or where the kept prediction would be over
+        :data:`MAX_KEPT_BYTES` (the caller's run then, its prediction recomputed where asked).
+    """
+    from ...simulation.integrate import CompiledStepLoop, CompilerError
+    from .looped import kept_size
+
+    if 8.0 * (WY.shape[0] + 1) * kept_size(filt.model) > MAX_KEPT_BYTES:
+        return None
+    loop = filt.__dict__.get("_kept_loop")
+    if loop is None:
+        try:
+            loop = filt.__dict__["_kept_loop"] = CompiledStepLoop(
+                filt._kept_step_p, f"{filt.kind}_kept_{filt.model.system.model.name}", threads=1, vectorize=False,
+                parameters=filt.model.values)
+        except CompilerError:
+            return None
+    mdl = filt.model
+    nz, nw, n2 = mdl.nz, mdl.nw, mdl.nz * mdl.nz
+    x0 = np.zeros(kept_size(mdl))
+    x0[: nz + n2] = s0
+    S = loop.run(x0[None], np.ascontiguousarray(WY)[None])[0]
+    N = WY.shape[0]
+    out = S[:, : nz + n2]  # (a view: the estimates and the kept prediction share the run's one array)
+    T = S[1:, nz + n2:]  # step k's prediction and Jacobians, k = 0 .. N - 1
+    pred = (T[:, :nz], T[:, nz: nz + n2].reshape(N, nz, nz).transpose(0, 2, 1),
+            T[:, nz + n2: nz + 2 * n2].reshape(N, nz, nz).transpose(0, 2, 1),
+            T[:, nz + 2 * n2:].reshape(N, nw, nz).transpose(0, 2, 1))
+    keep_predicted(filt, out[:N, :nz], out[:N, nz:].reshape(N, nz, nz).transpose(0, 2, 1), W, pred)
+    return out

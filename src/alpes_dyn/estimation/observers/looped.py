@@ -28,7 +28,7 @@ import casadi as cs
 import numpy as np
 
 __all__ = ["LOOP_STATES", "stage_jacobians", "linearization", "predicted", "updated", "looped_functions", "step_jacobians",
-           "kept_run", "MAX_KEPT_BYTES"]
+           "kept_size"]
 
 LOOP_STATES = 40
 """States from which the EKF's step is built as loops (:mod:`this module <alpes_dyn.estimation.observers.looped>`):
@@ -187,7 +187,7 @@ def looped_functions(filt: Any) -> dict[str, cs.Function]:
     attributes: ``measurement`` (``SX``, z -> (h, H)), ``_update`` (z, P, y) -> (z_upd, P_upd), ``linearized_p``
     (z, w, p) -> (z_next, A, the lower triangle of N = G Sigma_w G^T + Q), ``linearized`` the same at p = the model's
     numbers, ``_predict_fn`` (z, P, w) -> (z_pred, P_pred) there, ``filter_step_p`` (s = [z; vec P], [w; y], p)
-    -> s_next, and ``_kept_step_p``, the same step keeping its prediction and Jacobians (:func:`kept_run`); all
+    -> s_next, and ``_kept_step_p``, the same step keeping its prediction and Jacobians (:func:`~alpes_dyn.estimation.observers.ahead.kept_run`); all
     ``MX`` but the first.
 
     Parameters
@@ -222,7 +222,7 @@ def looped_functions(filt: Any) -> dict[str, cs.Function]:
     zu, Pu = update(zp, Pp, r[nw:])
     step = cs.Function(f"{filt.kind}_step", [s, r, p], [cs.vertcat(zu, cs.vec(Pu))], ["s", "wy", "p"], ["s_next"])
     # the same step keeping its prediction and Jacobians (kept_run): s = [z; vec P; the last step's, unread]
-    sk = cs.MX.sym("s", _kept_size(mdl))
+    sk = cs.MX.sym("s", kept_size(mdl))
     zk, Ak, Gk = lin(sk[:nz], r[:nw], p)
     Pk = predicted(Ak, Gk, cs.reshape(sk[nz: nz + nz * nz], nz, nz), filt.Sw, filt.Q)[0]
     zku, Pku = update(zk, Pk, r[nw:])
@@ -264,68 +264,19 @@ def step_jacobians(filt: Any) -> cs.Function:
     return cs.Function("jacobians", [z, w], [zn, cs.densify(cs.jacobian(zn, z)), cs.densify(cs.jacobian(zn, w))])
 
 
-MAX_KEPT_BYTES = 512 * 2**20
-"""Largest kept prediction of :func:`kept_run`, bytes: [z_pred; vec P_pred; vec A; vec G] per sample is about 3.4
-times the run's own [z; vec P] (64 kB per sample on the Shadow hand, so 512 MiB at about 8,000 samples). A longer
-record runs the filter's plain step instead (:func:`kept_run` returns None), its prediction recomputed where the
-consistency checks ask for it: one more pass along the run, not a run's memory grown past what
-:func:`~alpes_dyn.limits.check_bytes` admitted."""
-
-
-def _kept_size(dm: Any) -> int:
-    """The length of the kept step's state (:func:`kept_run`): [z; vec P; z_pred; vec P_pred; vec A; vec G]."""
-    nz, nw = dm.nz, dm.nw
-    return 2 * nz + 3 * nz * nz + nz * nw
-
-
-def kept_run(filt: Any, s0: np.ndarray, WY: np.ndarray, W: np.ndarray) -> np.ndarray | None:
-    """A looped filter's run that keeps each step's prediction and Jacobians for its consistency checks: the NEES's
-    error model and the NIS's one-step prediction (:func:`~alpes_dyn.estimation.observers.ahead.predicted_step`)
-    read them from this run instead of stepping the model again along it (on the Shadow hand the same cost as the
-    filter's run). The filter's step compiled with its prediction z_k+1|k, P_k+1|k = A_k P_k|k A_k^T + G_k
-    Sigma_w G_k^T + Q and A_k = dF/dz, G_k = dF/dw as more outputs (``filt._kept_step_p``), run once.
+def kept_size(dm: Any) -> int:
+    """The length of the kept step's state (:func:`~alpes_dyn.estimation.observers.ahead.kept_run`):
+    [z; vec P; z_pred; vec P_pred; vec A; vec G].
 
     Parameters
     ----------
-    filt : ExtendedKalmanFilter
-        A looped filter (``filt.looped``; :func:`looped_functions`'s ``_kept_step_p`` set).
-    s0 : numpy.ndarray
-        (nz + nz^2,) the state after the first measurement's update: [z_0|0; vec P_0|0] (column-major).
-    WY : numpy.ndarray
-        (N, nw + ny) the known inputs w_k and the measurements y_k+1.
-    W : numpy.ndarray
-        (N, nw) the known inputs alone (the key the prediction is kept under, with the run's estimates).
+    dm : DiscreteModel
+        The filter's discrete model (its ``nz`` states and ``nw`` known inputs).
 
     Returns
     -------
-    numpy.ndarray or None
-        (N + 1, nz + nz^2) [z_k|k; vec P_k|k] (a view of the run's states) as the filter's step gives them (the
-        same numbers to the bit), or None without a C compiler or where the kept prediction would be over
-        :data:`MAX_KEPT_BYTES` (the caller's run then, its prediction recomputed where asked).
+    int
+        2 nz + 3 nz^2 + nz nw, doubles per sample.
     """
-    from ...simulation.integrate import CompiledStepLoop, CompilerError
-    from .ahead import keep_predicted
-
-    if 8.0 * (WY.shape[0] + 1) * _kept_size(filt.model) > MAX_KEPT_BYTES:
-        return None
-    loop = filt.__dict__.get("_kept_loop")
-    if loop is None:
-        try:
-            loop = filt.__dict__["_kept_loop"] = CompiledStepLoop(
-                filt._kept_step_p, f"{filt.kind}_kept_{filt.model.system.model.name}", threads=1, vectorize=False,
-                parameters=filt.model.values)
-        except CompilerError:
-            return None
-    mdl = filt.model
-    nz, nw, n2 = mdl.nz, mdl.nw, mdl.nz * mdl.nz
-    x0 = np.zeros(_kept_size(mdl))
-    x0[: nz + n2] = s0
-    S = loop.run(x0[None], np.ascontiguousarray(WY)[None])[0]
-    N = WY.shape[0]
-    out = S[:, : nz + n2]  # (a view: the estimates and the kept prediction share the run's one array)
-    T = S[1:, nz + n2:]  # step k's prediction and Jacobians, k = 0 .. N - 1
-    pred = (T[:, :nz], T[:, nz: nz + n2].reshape(N, nz, nz).transpose(0, 2, 1),
-            T[:, nz + n2: nz + 2 * n2].reshape(N, nz, nz).transpose(0, 2, 1),
-            T[:, nz + 2 * n2:].reshape(N, nw, nz).transpose(0, 2, 1))
-    keep_predicted(filt, out[:N, :nz], out[:N, nz:].reshape(N, nz, nz).transpose(0, 2, 1), W, pred)
-    return out
+    nz, nw = dm.nz, dm.nw
+    return 2 * nz + 3 * nz * nz + nz * nw

@@ -63,7 +63,8 @@ from ...symbolic.statespace import StateSpace
 from .covariance import chol_sym, predicted_covariance, updated_state
 from .discrete import DISTURBANCE_PREFIX, PARAMETERS, DiscreteModel
 from .friction_noise import with_friction_noise
-from .looped import LOOP_STATES, kept_run, looped_functions
+from .ahead import kept_run
+from .looped import LOOP_STATES, looped_functions
 from .online_filter import OnlineFilter
 
 __all__ = [
@@ -288,7 +289,7 @@ class KalmanFilter(Rebuilt):
 
     def _plain_looped_loop(self) -> CompiledStepLoop | None:
         """A looped filter's plain compiled step (the one :meth:`online` runs), for a record too long to keep its
-        prediction (:data:`~.looped.MAX_KEPT_BYTES`); None without a compiler."""
+        prediction (:data:`~.ahead.MAX_KEPT_BYTES`); None without a compiler."""
         if self._online_loop is None:
             try:
                 self._online_loop = self._compiled_loop()
