@@ -299,10 +299,11 @@ def _add_experiment(sub: argparse._SubParsersAction) -> None:
     s.add_argument("--amplitude", type=_strict_float, default=0.5, metavar="FRACTION",
                    help="the multisine's amplitude, a fraction in (0, 1] of the largest keeping the nominal robot "
                         "in range (default %(default)s); 1 where friction hides the masses")
-    s.add_argument("--stick-seconds", type=_strict_float, default=6.0, metavar="S",
+    s.add_argument("--stick-seconds", type=_strict_float, default=0.0, metavar="S",
                    help="a slow, undithered torque ramp through stiction recorded after the excitation, S s "
-                        "(default %(default)s; 0: none), marked held_out: identify leaves it out of the fit and judges "
-                        "its observer check and the observer's friction law on it")
+                        "(default %(default)s: none; 6 where the joints' dry friction sticks), marked held_out: "
+                        "identify leaves it out of the fit and judges its observer check and the observer's friction "
+                        "law on it")
     s.add_argument("--rig", choices=("auto", "level", "hanging", "both"), default="auto",
                    help="an Alpes hand's orientation: auto (default): palm up unless the finger leaves its range "
                         "there, then hung fingers down, scaled down where even that leaves it; level: palm up; "

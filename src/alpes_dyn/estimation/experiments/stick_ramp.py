@@ -32,7 +32,8 @@ RAMP_SHAPE: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0, 0.25, 0.75, 1.0
 """The ramp's triangle: (fractions of the ramp's time, multiples of the swing), linearly between."""
 
 STICK_SECONDS = 6.0
-"""s: the ramp's length ``alpes-dyn experiment`` records by default (``--stick-seconds``; the realism study's
+"""s: the ramp's length advised where the joints' dry friction sticks (``alpes-dyn experiment --stick-seconds``,
+whose default 0 records none; the realism study's
 validation ramp's, ``alpes_dyn.studies.realism_friction.RAMP_SECONDS``: 1.3 mN m/s on finger3's nominal file, the
 joints stick and slip in turn). :class:`~alpes_dyn.estimation.experiments.design.ExperimentDesign`'s own default is
 0 (no ramp: a design built in code records what it did before)."""

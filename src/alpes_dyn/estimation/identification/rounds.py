@@ -93,8 +93,8 @@ STUCK_FRICTION = (STATEFUL_WORD + " that holds the joints at rest: dry friction 
                   "stick-slip law (the fit's stick-slip law kept, its residual within two sensor floors, the LuGre "
                   "law's fit not kept); no memoryless law of the fit holds a stuck joint, nor does a smooth "
                   "observer where the joints stick, and the observer check did not choose the stick law on this "
-                  "record (friction.observer_law: judge on a record where the joints stick, identify --validate "
-                  "REC2.csv with a slow motion)")
+                  "record (friction.observer_law: judge on a record where the joints stick: alpes-dyn experiment "
+                  "--stick-seconds 6, or identify --validate REC2.csv with a slow motion)")
 """The likely missing effect a refused fit's verdict names, in place of the LuGre law's presliding, where
 :func:`sticking` holds (:func:`name_sticking`)."""
 

@@ -257,7 +257,7 @@ class ShootingAlgebra:
         numpy.ndarray, shape (nz,)
             The gradient.
         """
-        return assembled(np.matmul(r[:, None, :], J)[:, 0], rg, self.nb)  # (BLAS: each interval's J_s' r_s)
+        return assembled(np.einsum("sk,skd->sd", r, J), rg, self.nb)
 
     def gradient(self, e: Evaluation) -> np.ndarray:
         """(nz,) the cost's gradient at ``e``: :meth:`grad`, or its compact Jacobian's (the same numbers).
