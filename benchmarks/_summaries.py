@@ -629,6 +629,7 @@ SUMMARIES: dict[str, Callable[[Result], list[str]]] = {
     "control": control, "hand_control": hand_control, "urdf_control": urdf_control, "any_robot": any_robot,
     "allegro_identify": allegro_identify, "foreign_hands": foreign_hands, "realism": realism, "default_path": default_path,
     "force_realism": force_realism, "force_realism.hand": force_realism, "realism.friction": realism_friction,
+    "realism.stick_ramp": realism_friction, "realism.creep": realism_friction,
     "observer_law": observer_law,
     "fit_scaling.hand": fit_scaling, "bench_loop": bench_loop, "bench_loop.hand": bench_loop,
     "bench_loop.thumb": bench_loop, "c_step": c_step,
