@@ -285,6 +285,24 @@ class Creep:
         object.__setattr__(self, "kappa", _positive(self.kappa, "friction.creep_kappa", "(-)"))
         object.__setattr__(self, "rate", _positive(self.rate, "friction.creep_rate", "1/s"))
 
+    def band(self, Minv0: Any, F_s: Any) -> tuple[np.ndarray, np.ndarray]:
+        """The band's added inertia a_j = kappa / (M(0)^-1)_jj and its edge v_c,j = F_s,j / (a_j b) (eq. C1).
+
+        Parameters
+        ----------
+        Minv0 : array_like
+            (n, n) the inverse inertia matrix at the reference pose q = 0, 1/(kg m^2).
+        F_s : array_like
+            (n,) the joints' dry friction, N m.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (a (n,) kg m^2, v_c (n,) rad/s).
+        """
+        a = self.kappa / np.diag(np.asarray(Minv0, dtype=float))
+        return a, np.asarray(F_s, dtype=float) / (a * self.rate)
+
 
 def creep_of(model: Any) -> Creep | None:
     """The :class:`Creep` law of ``model``'s parameter file (``friction.law = "creep"``: its ``creep_kappa`` /

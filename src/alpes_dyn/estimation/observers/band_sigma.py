@@ -295,8 +295,7 @@ def sliding(model: Model, creep: Creep, velocities: np.ndarray) -> np.ndarray:
         (N,) True where a joint slides.
     """
     Fs = np.asarray(model.extras.coulomb, dtype=float)
-    a = creep.kappa / np.diag(np.linalg.inv(model.inertia_matrix(np.zeros(model.n))))
-    edge = Fs / (a * creep.rate)
+    _, edge = creep.band(np.linalg.inv(model.inertia_matrix(np.zeros(model.n))), Fs)
     return np.any((np.abs(velocities) > edge) & (Fs > 0), axis=1)
 
 

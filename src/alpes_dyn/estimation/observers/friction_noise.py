@@ -187,8 +187,8 @@ def _kicked_inertia(model: Model, Minv: np.ndarray, Fs: np.ndarray, vs: float) -
     creep = creep_of(model)
     if creep is None:
         return Minv, np.full(Fs.shape, vs)
-    a = creep.kappa / np.diag(Minv)
-    return np.linalg.inv(np.linalg.inv(Minv) + np.diag(a)), np.maximum(Fs, 1e-300) / (a * creep.rate)
+    a, edge = creep.band(Minv, np.maximum(Fs, 1e-300))
+    return np.linalg.inv(np.linalg.inv(Minv) + np.diag(a)), edge
 
 
 def with_friction_noise(system: Any, dt: float, process_noise: Any, input_noise: Any = None,
